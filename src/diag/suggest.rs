@@ -1,0 +1,75 @@
+//! Did-you-mean suggestions for misspelt names and fields.
+
+/// Edit distance (Levenshtein, on characters) with an early exit once `limit` is exceeded.
+fn edit_distance(a: &str, b: &str, limit: usize) -> Option<usize> {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    if a.len().abs_diff(b.len()) > limit {
+        return None;
+    }
+    let mut previous: Vec<usize> = (0..=b.len()).collect();
+    let mut current = vec![0; b.len() + 1];
+    for (i, ca) in a.iter().enumerate() {
+        current[0] = i + 1;
+        let mut row_min = current[0];
+        for (j, cb) in b.iter().enumerate() {
+            let substitution = previous[j] + usize::from(!ca.eq_ignore_ascii_case(cb));
+            current[j + 1] = substitution.min(previous[j + 1] + 1).min(current[j] + 1);
+            row_min = row_min.min(current[j + 1]);
+        }
+        if row_min > limit {
+            return None;
+        }
+        std::mem::swap(&mut previous, &mut current);
+    }
+    let distance = previous[b.len()];
+    (distance <= limit).then_some(distance)
+}
+
+/// The candidate closest to `name`, if one is close enough to be a plausible typo.
+pub fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let limit = (name.chars().count() / 3).max(1);
+    let mut best: Option<(usize, &str)> = None;
+    for candidate in candidates {
+        if candidate == name {
+            continue;
+        }
+        if let Some(d) = edit_distance(name, candidate, limit) {
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, candidate));
+            }
+        }
+    }
+    best.map(|(_, c)| c)
+}
+
+/// The body number in the thesis's notation `S1`, `S_1`, `S12`: bodies are written `S_i`, so a
+/// user who types `S1` means the first body.
+pub fn thesis_body_number(name: &str) -> Option<usize> {
+    let digits = name.strip_prefix('S')?;
+    let digits = digits.strip_prefix('_').unwrap_or(digits);
+    if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse().ok().filter(|&n| n >= 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn close_names_are_suggested() {
+        assert_eq!(did_you_mean("satelite", ["earth", "satellite"]), Some("satellite"));
+        assert_eq!(did_you_mean("iframe", ["frame", "mass"]), Some("frame"));
+        assert_eq!(did_you_mean("zzz", ["satellite"]), None);
+    }
+
+    #[test]
+    fn thesis_body_names_are_recognised() {
+        assert_eq!(thesis_body_number("S1"), Some(1));
+        assert_eq!(thesis_body_number("S_12"), Some(12));
+        assert_eq!(thesis_body_number("S0"), None);
+        assert_eq!(thesis_body_number("Sx"), None);
+    }
+}

@@ -1,0 +1,12 @@
+//! lsdc: the compiler and simulator for LSD, a declarative language for describing mechanisms.
+//!
+//! The pipeline, one module per phase, data flowing one way:
+//! `syntax` (text to AST) → `load` (imports, libraries) → `check` (names and types) →
+//! `elab` (values: bodies, frames, links, joins, efforts, unknowns) → later phases.
+
+pub mod check;
+pub mod diag;
+pub mod elab;
+pub mod load;
+pub mod source;
+pub mod syntax;

@@ -1,0 +1,175 @@
+//! The abstract syntax of LSD, with a span on every node.
+
+use std::rc::Rc;
+
+use crate::syntax::span::Span;
+
+/// Identifiers are shared strings: the checker and elaborator copy names freely.
+pub type Name = Rc<str>;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ident {
+    pub name: Name,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Program {
+    pub decls: Vec<Decl>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decl {
+    pub kind: DeclKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum DeclKind {
+    /// `let a = e and b = e`
+    Let(Vec<Binding>),
+    /// `let f(a, b : vector) = e`: a parameterised definition.
+    Define { name: Ident, params: Vec<Param>, body: Expr },
+    /// `join <frame> and <frame> with <link>`
+    Join { first: Expr, second: Expr, link: Expr },
+    /// `apply <force> on <frame>` or `apply <torque> on <body>`
+    Apply { effort: Expr, target: Expr },
+    /// `package P = decls end`
+    Package { name: Ident, decls: Vec<Decl> },
+    /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`
+    Import { target: ImportTarget, alias: Option<Ident> },
+    /// A declaration the parser could not read; its error was already reported.
+    Error,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImportTarget {
+    /// `import joints`: `joints.lsd` on the search path, then in the standard library.
+    Module(Ident),
+    /// `import "path/file.lsd"`: relative to the importing file, then the search path.
+    Path { path: String, span: Span },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Binding {
+    pub name: Ident,
+    pub value: Expr,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Param {
+    pub name: Ident,
+    /// `a : vector`: an optional declared type, checked when the definition is used.
+    pub ty: Option<Ident>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expr {
+    pub kind: ExprKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BinaryOp {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+    /// `angle || axis`: a rotation.
+    Rotation,
+    /// `translation ++ rotation`: a displacement.
+    Displacement,
+    /// `displacement @ body`: a frame.
+    Frame,
+}
+
+impl BinaryOp {
+    pub fn symbol(self) -> &'static str {
+        match self {
+            BinaryOp::Add => "+",
+            BinaryOp::Sub => "-",
+            BinaryOp::Mul => "*",
+            BinaryOp::Div => "/",
+            BinaryOp::Pow => "^",
+            BinaryOp::Rotation => "||",
+            BinaryOp::Displacement => "++",
+            BinaryOp::Frame => "@",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConstructKind {
+    Body,
+    Link,
+    Force,
+    Torque,
+}
+
+impl ConstructKind {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            ConstructKind::Body => "body",
+            ConstructKind::Link => "link",
+            ConstructKind::Force => "force",
+            ConstructKind::Torque => "torque",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct FieldInit {
+    pub name: Ident,
+    pub value: Expr,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Arg {
+    /// `f(axis = [1,0,0])`: named arguments; positional ones have `None`.
+    pub name: Option<Ident>,
+    pub value: Expr,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Callee {
+    Name(Ident),
+    /// `P:f(...)`
+    Qualified { package: Ident, name: Ident },
+    /// `?fs(x, x')`: an unknown function.
+    Unknown(Ident),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum ExprKind {
+    Name(Ident),
+    /// `P:X`
+    Qualified { package: Ident, name: Ident },
+    /// `e.field`
+    Field { target: Box<Expr>, field: Ident },
+    /// `?s`: a fresh unknown scalar at each occurrence.
+    Unknown(Ident),
+    Int(i64),
+    Float(f64),
+    /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
+    Vector(Vec<Expr>),
+    Call { callee: Callee, args: Vec<Arg> },
+    Binary { op: BinaryOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    Neg(Box<Expr>),
+    /// `x'`: the time derivative of a joint coordinate.
+    Prime(Box<Expr>),
+    /// `body ... end`, `link(x) ... end`, `force ... end`, `torque ... end`
+    Construct { kind: ConstructKind, params: Vec<Ident>, fields: Vec<FieldInit> },
+    /// `local a = e and b = e in body end`
+    Local { bindings: Vec<Binding>, body: Box<Expr> },
+    /// An expression the parser could not read.
+    Error,
+}
+
+/// Builds a binary expression node (used by the grammar's actions).
+pub fn binary(file: crate::syntax::span::FileId, start: usize, end: usize, op: BinaryOp, lhs: Expr, rhs: Expr) -> Expr {
+    Expr {
+        kind: ExprKind::Binary { op, lhs: Box::new(lhs), rhs: Box::new(rhs) },
+        span: Span::new(file, start, end),
+    }
+}

@@ -1,0 +1,289 @@
+//! The LSD lexer (logos). Produces `(start, token, end)` triples for the LALRPOP parser and turns
+//! every lexical error into a diagnostic instead of stopping: the parser then sees the tokens
+//! around the bad character and can report the program's other errors in the same run.
+
+use logos::{FilterResult, Logos};
+
+use crate::diag::Diagnostic;
+use crate::syntax::span::{FileId, Span};
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum LexError {
+    #[default]
+    UnexpectedCharacter,
+    /// `(*` with no matching `*)`; the span of the error is the opening.
+    UnterminatedComment,
+    UnterminatedString,
+}
+
+#[derive(Logos, Clone, Copy, Debug, PartialEq)]
+#[logos(error = LexError)]
+#[logos(skip r"[ \t\r\n\f]+")]
+pub enum Tok<'input> {
+    #[token("(*", nested_comment)]
+    Comment,
+
+    #[token("and")]
+    And,
+    #[token("apply")]
+    Apply,
+    #[token("as")]
+    As,
+    #[token("body")]
+    Body,
+    #[token("end")]
+    End,
+    #[token("force")]
+    Force,
+    #[token("import")]
+    Import,
+    #[token("in")]
+    In,
+    #[token("join")]
+    Join,
+    #[token("let")]
+    Let,
+    #[token("link")]
+    Link,
+    #[token("local")]
+    Local,
+    #[token("on")]
+    On,
+    #[token("package")]
+    Package,
+    #[token("torque")]
+    Torque,
+    #[token("with")]
+    With,
+
+    #[token("^")]
+    Caret,
+    #[token(":")]
+    Colon,
+    #[token(",")]
+    Comma,
+    #[token("[")]
+    LBracket,
+    #[token("]")]
+    RBracket,
+    #[token("(")]
+    LParen,
+    #[token(")")]
+    RParen,
+    #[token(".")]
+    Dot,
+    #[token("=")]
+    Equal,
+    #[token("+")]
+    Plus,
+    #[token("++")]
+    PlusPlus,
+    #[token("*")]
+    Star,
+    #[token("-")]
+    Minus,
+    #[token("/")]
+    Slash,
+    #[token("@")]
+    At,
+    #[token("||")]
+    Parallel,
+    #[token(";")]
+    Semicolon,
+    #[token("'")]
+    Prime,
+
+    /// Integers; signs are unary operators, so `x -1` is a subtraction.
+    #[regex(r"[0-9]+", |lex| lex.slice())]
+    Int(&'input str),
+    #[regex(r"[0-9]+(\.[0-9]+([eE][+-]?[0-9]+)?|(\.[0-9]+)?[eE][+-]?[0-9]+)", |lex| lex.slice())]
+    Float(&'input str),
+    /// Identifiers are Unicode: a letter or `_`, then letters, marks, digits or `_` (`rotoïde`).
+    #[regex(r"[_\p{L}][_\p{L}\p{M}\p{N}]*", |lex| lex.slice())]
+    Ident(&'input str),
+    /// Unknowns: `?s`, `?fs`, `?k_2` (a letter, then letters, digits, underscores).
+    #[regex(r"\?\p{L}[_\p{L}\p{M}\p{N}]*", |lex| &lex.slice()[1..])]
+    Unknown(&'input str),
+    /// Import paths: `"lib/joints.lsd"`, no escapes.
+    #[regex(r#""[^"\n]*""#, |lex| { let s = lex.slice(); &s[1..s.len() - 1] })]
+    Str(&'input str),
+    #[regex(r#""[^"\n]*"#, unterminated_string)]
+    UnterminatedStr,
+}
+
+fn unterminated_string<'input>(_: &mut logos::Lexer<'input, Tok<'input>>) -> Result<(), LexError> {
+    Err(LexError::UnterminatedString)
+}
+
+/// Skips a comment `(* ... *)`, which may contain nested comments.
+fn nested_comment<'input>(lex: &mut logos::Lexer<'input, Tok<'input>>) -> FilterResult<(), LexError> {
+    let rest = lex.remainder().as_bytes();
+    let mut depth = 1usize;
+    let mut i = 0;
+    while i < rest.len() {
+        match (rest[i], rest.get(i + 1)) {
+            (b'(', Some(b'*')) => {
+                depth += 1;
+                i += 2;
+            }
+            (b'*', Some(b')')) => {
+                depth -= 1;
+                i += 2;
+                if depth == 0 {
+                    lex.bump(i);
+                    return FilterResult::Skip;
+                }
+            }
+            _ => i += 1,
+        }
+    }
+    FilterResult::Error(LexError::UnterminatedComment)
+}
+
+impl std::fmt::Display for Tok<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Tok::Int(s) | Tok::Float(s) | Tok::Ident(s) => write!(f, "`{s}`"),
+            Tok::Unknown(s) => write!(f, "`?{s}`"),
+            Tok::Str(s) => write!(f, "\"{s}\""),
+            other => write!(f, "`{}`", other.text()),
+        }
+    }
+}
+
+impl Tok<'_> {
+    /// The fixed text of keyword and punctuation tokens.
+    pub fn text(&self) -> &'static str {
+        match self {
+            Tok::Comment => "(*",
+            Tok::UnterminatedStr => "\"",
+            Tok::And => "and",
+            Tok::Apply => "apply",
+            Tok::As => "as",
+            Tok::Body => "body",
+            Tok::End => "end",
+            Tok::Force => "force",
+            Tok::Import => "import",
+            Tok::In => "in",
+            Tok::Join => "join",
+            Tok::Let => "let",
+            Tok::Link => "link",
+            Tok::Local => "local",
+            Tok::On => "on",
+            Tok::Package => "package",
+            Tok::Torque => "torque",
+            Tok::With => "with",
+            Tok::Caret => "^",
+            Tok::Colon => ":",
+            Tok::Comma => ",",
+            Tok::LBracket => "[",
+            Tok::RBracket => "]",
+            Tok::LParen => "(",
+            Tok::RParen => ")",
+            Tok::Dot => ".",
+            Tok::Equal => "=",
+            Tok::Plus => "+",
+            Tok::PlusPlus => "++",
+            Tok::Star => "*",
+            Tok::Minus => "-",
+            Tok::Slash => "/",
+            Tok::At => "@",
+            Tok::Parallel => "||",
+            Tok::Semicolon => ";",
+            Tok::Prime => "'",
+            Tok::Int(_) => "integer",
+            Tok::Float(_) => "number",
+            Tok::Ident(_) => "identifier",
+            Tok::Unknown(_) => "unknown",
+            Tok::Str(_) => "string",
+        }
+    }
+}
+
+pub type Spanned<'input> = (usize, Tok<'input>, usize);
+
+/// Lexes a whole file. Lexical errors are returned as diagnostics beside the good tokens.
+pub fn lex(file: FileId, text: &str) -> (Vec<Spanned<'_>>, Vec<Diagnostic>) {
+    let mut tokens = Vec::with_capacity(text.len() / 4);
+    let mut errors = Vec::new();
+    let mut lexer = Tok::lexer(text);
+    while let Some(result) = lexer.next() {
+        let range = lexer.span();
+        match result {
+            Ok(token) => tokens.push((range.start, token, range.end)),
+            Err(error) => errors.push(lex_diagnostic(error, Span::new(file, range.start, range.end), lexer.slice())),
+        }
+    }
+    (tokens, errors)
+}
+
+fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
+    match error {
+        LexError::UnterminatedComment => {
+            let opening = Span { end: span.start + 2, ..span };
+            Diagnostic::error("E0102", "unterminated comment")
+                .primary(opening, "this comment is never closed")
+                .help("close it with `*)`; comments nest, so every `(*` inside needs its own `*)`")
+        }
+        LexError::UnterminatedString => Diagnostic::error("E0103", "unterminated string")
+            .primary(span, "this string has no closing `\"` on its line"),
+        LexError::UnexpectedCharacter => {
+            let character = slice.chars().next().unwrap_or('?');
+            let diagnostic = Diagnostic::error("E0101", format!("unexpected character `{character}`"))
+                .primary(span, "not part of any LSD token");
+            match character {
+                '?' => diagnostic.help("an unknown is `?` followed by a letter, as in `?s` or `?fs(x, x')`"),
+                '|' => diagnostic.help("the rotation operator is `||`, as in `th || [1,0,0]`"),
+                '"' => diagnostic.help("strings appear only in `import \"file.lsd\";`"),
+                _ => diagnostic,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tokens(text: &str) -> Vec<Tok<'_>> {
+        let (tokens, errors) = lex(FileId(0), text);
+        assert!(errors.is_empty(), "{errors:?}");
+        tokens.into_iter().map(|(_, t, _)| t).collect()
+    }
+
+    #[test]
+    fn signs_are_operators() {
+        assert_eq!(tokens("x -1"), vec![Tok::Ident("x"), Tok::Minus, Tok::Int("1")]);
+    }
+
+    #[test]
+    fn numbers_primes_unknowns_and_unicode() {
+        assert_eq!(
+            tokens("1.5e-3 2E4 7 x' ?fs rotoïde ++ ||"),
+            vec![
+                Tok::Float("1.5e-3"),
+                Tok::Float("2E4"),
+                Tok::Int("7"),
+                Tok::Ident("x"),
+                Tok::Prime,
+                Tok::Unknown("fs"),
+                Tok::Ident("rotoïde"),
+                Tok::PlusPlus,
+                Tok::Parallel
+            ]
+        );
+    }
+
+    #[test]
+    fn nested_comments_are_skipped() {
+        assert_eq!(tokens("a (* b (* c *) d *) e"), vec![Tok::Ident("a"), Tok::Ident("e")]);
+    }
+
+    #[test]
+    fn unterminated_comment_points_at_its_opening() {
+        let (_, errors) = lex(FileId(0), "let a = 1; (* open (* inner *) ");
+        assert_eq!(errors.len(), 1);
+        assert_eq!(errors[0].code, "E0102");
+        assert_eq!(errors[0].primary_span().map(|s| s.range()), Some(11..13));
+    }
+}

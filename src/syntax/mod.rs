@@ -1,0 +1,7 @@
+//! Text to syntax tree: the lexer (logos), the grammar (LALRPOP, `grammar/lsd.lalrpop`) and the
+//! abstract syntax with spans.
+
+pub mod ast;
+pub mod lexer;
+pub mod parser;
+pub mod span;

@@ -1,0 +1,211 @@
+//! Glue between the lexer, the LALRPOP parser and diagnostics. One call parses a whole file and
+//! reports every lexical and syntax error the parser can recover from.
+
+use lalrpop_util::{lalrpop_mod, ErrorRecovery, ParseError};
+
+use crate::diag::Diagnostic;
+use crate::syntax::ast::Program;
+use crate::syntax::lexer::{lex, LexError, Spanned, Tok};
+use crate::syntax::span::{FileId, Span};
+
+lalrpop_mod!(
+    #[allow(clippy::all, unused_parens, unused_imports)]
+    grammar,
+    "/lsd.rs"
+);
+
+/// Parses one file. The program is returned even when there are errors: declarations that could
+/// not be read become `DeclKind::Error`.
+pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
+    let (tokens, mut diagnostics) = lex(file, text);
+    let mut recovered = Vec::new();
+    let parser = grammar::ProgramParser::new();
+    let result = parser.parse(file, &mut recovered, tokens.iter().copied().map(Ok::<_, LexError>));
+    let context = ErrorContext { file, tokens: &tokens, text_len: text.len() };
+    for error in recovered {
+        diagnostics.push(context.describe(error.error));
+    }
+    let program = match result {
+        Ok(program) => program,
+        Err(error) => {
+            diagnostics.push(context.describe(error));
+            Program { decls: Vec::new() }
+        }
+    };
+    (program, diagnostics)
+}
+
+/// Parses a single expression (for `--set` values and tests).
+pub fn parse_expr(file: FileId, text: &str) -> Result<crate::syntax::ast::Expr, Vec<Diagnostic>> {
+    let (tokens, mut diagnostics) = lex(file, text);
+    let mut recovered: Vec<ErrorRecovery<usize, Tok<'_>, LexError>> = Vec::new();
+    let result = grammar::ExprParser::new().parse(file, &mut recovered, tokens.iter().copied().map(Ok::<_, LexError>));
+    let context = ErrorContext { file, tokens: &tokens, text_len: text.len() };
+    diagnostics.extend(recovered.into_iter().map(|e| context.describe(e.error)));
+    match result {
+        Ok(expr) if diagnostics.is_empty() => Ok(expr),
+        Ok(_) => Err(diagnostics),
+        Err(error) => {
+            diagnostics.push(context.describe(error));
+            Err(diagnostics)
+        }
+    }
+}
+
+struct ErrorContext<'a, 'input> {
+    file: FileId,
+    tokens: &'a [Spanned<'input>],
+    text_len: usize,
+}
+
+impl ErrorContext<'_, '_> {
+    fn describe(&self, error: ParseError<usize, Tok<'_>, LexError>) -> Diagnostic {
+        match error {
+            ParseError::UnrecognizedToken { token: (start, token, end), expected } => {
+                self.unexpected_token(Span::new(self.file, start, end), start, token, &expected)
+            }
+            ParseError::ExtraToken { token: (start, token, end) } => {
+                Diagnostic::error("E0201", format!("unexpected {token}"))
+                    .primary(Span::new(self.file, start, end), "nothing can follow here")
+            }
+            ParseError::UnrecognizedEof { location, expected } => {
+                let at = location.min(self.text_len);
+                Diagnostic::error("E0202", format!("unexpected end of file, expected {}", expected_list(&expected)))
+                    .primary(Span::new(self.file, at, at), "the file ends here")
+                    .with_help(missing_terminator_help(&expected))
+            }
+            ParseError::InvalidToken { location } => Diagnostic::error("E0101", "invalid token")
+                .primary(Span::new(self.file, location, location + 1), "not part of any LSD token"),
+            ParseError::User { error } => Diagnostic::error("E0101", format!("{error:?}")),
+        }
+    }
+
+    fn unexpected_token(&self, span: Span, start: usize, token: Tok<'_>, expected: &[String]) -> Diagnostic {
+        let message = format!("expected {}, found {token}", expected_list(expected));
+        let diagnostic = Diagnostic::error("E0201", message);
+        if let Some(opening) = self.unmatched_closing(start, token) {
+            return diagnostic
+                .primary(span, format!("this `{}` closes no `{opening}`", token.text()))
+                .help(format!("remove the extra `{}`", token.text()));
+        }
+        if expected.len() == 1 && expected[0] == "\"=\"" {
+            let field = self.previous_token(start).map(|t| t.to_string()).unwrap_or_default();
+            return diagnostic
+                .primary(span, "expected `=` here")
+                .help(format!("a field is written `name = value`: insert `=` after {field}"));
+        }
+        let label = if token == Tok::Semicolon { "unexpected `;`".to_string() } else { format!("unexpected {token}") };
+        diagnostic.primary(span, label).with_help(missing_terminator_help(expected))
+    }
+
+    /// For `]` or `)`: the matching opening bracket's text when this one closes nothing.
+    fn unmatched_closing(&self, start: usize, token: Tok<'_>) -> Option<&'static str> {
+        let (open, close) = match token {
+            Tok::RBracket => (Tok::LBracket, Tok::RBracket),
+            Tok::RParen => (Tok::LParen, Tok::RParen),
+            _ => return None,
+        };
+        let mut depth = 0i64;
+        for (position, t, _) in self.tokens.iter() {
+            if *position >= start {
+                break;
+            }
+            if *t == open {
+                depth += 1;
+            } else if *t == close {
+                depth -= 1;
+            } else if *t == Tok::Semicolon {
+                depth = 0;
+            }
+        }
+        (depth <= 0).then_some(open.text())
+    }
+
+    fn previous_token(&self, start: usize) -> Option<Tok<'_>> {
+        let index = self.tokens.partition_point(|(s, _, _)| *s < start);
+        index.checked_sub(1).map(|i| self.tokens[i].1)
+    }
+}
+
+/// `"\"=\""` and `Identifier` as the parser names them, for people.
+fn describe_expected(token: &str) -> String {
+    match token {
+        "Identifier" => "a name".to_string(),
+        "Int" | "Float" => "a number".to_string(),
+        "UnknownName" => "an unknown".to_string(),
+        "Str" => "a string".to_string(),
+        quoted => format!("`{}`", quoted.trim_matches('"')),
+    }
+}
+
+fn expected_list(expected: &[String]) -> String {
+    let mut items: Vec<String> = expected.iter().map(|e| describe_expected(e)).collect();
+    items.dedup();
+    match items.len() {
+        0 => "nothing".to_string(),
+        1 => items.remove(0),
+        n if n > 6 => "an expression or a declaration".to_string(),
+        _ => {
+            let last = items.pop().unwrap_or_default();
+            format!("{} or {last}", items.join(", "))
+        }
+    }
+}
+
+fn missing_terminator_help(expected: &[String]) -> Option<String> {
+    let has = |t: &str| expected.iter().any(|e| e == t);
+    if has("\";\"") {
+        Some("every declaration ends with `;`".to_string())
+    } else if has("\"end\"") {
+        Some("`body`, `link`, `force`, `torque`, `local` and `package` are closed by `end`".to_string())
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::syntax::ast::{BinaryOp, ExprKind};
+
+    fn expr(text: &str) -> crate::syntax::ast::Expr {
+        parse_expr(FileId(0), text).unwrap_or_else(|d| panic!("{d:?}"))
+    }
+
+    #[test]
+    fn displacement_binds_tighter_than_frame() {
+        let e = expr("[0,0,?s] ++ 1 @ satellite");
+        let ExprKind::Binary { op: BinaryOp::Frame, lhs, .. } = e.kind else { panic!("{e:?}") };
+        assert!(matches!(lhs.kind, ExprKind::Binary { op: BinaryOp::Displacement, .. }));
+    }
+
+    #[test]
+    fn unknown_call_binds_tighter_than_product() {
+        let e = expr("?fs(x,x')*axe");
+        let ExprKind::Binary { op: BinaryOp::Mul, lhs, .. } = e.kind else { panic!("{e:?}") };
+        assert!(matches!(lhs.kind, ExprKind::Call { .. }));
+    }
+
+    #[test]
+    fn unary_minus_binds_tightest() {
+        let e = expr("-x^2");
+        let ExprKind::Binary { op: BinaryOp::Pow, lhs, .. } = e.kind else { panic!("{e:?}") };
+        assert!(matches!(lhs.kind, ExprKind::Neg(_)));
+        let e = expr("x - 1");
+        assert!(matches!(e.kind, ExprKind::Binary { op: BinaryOp::Sub, .. }));
+    }
+
+    #[test]
+    fn non_associative_operators_reject_chains() {
+        for text in ["a || b || c", "a @ b @ c", "a ++ b ++ c"] {
+            assert!(parse_expr(FileId(0), text).is_err(), "{text}");
+        }
+    }
+
+    #[test]
+    fn recovery_reports_several_errors() {
+        let (program, errors) = parse(FileId(0), "let a = ;\nlet b = 1;\njoin x and y with ;\nlet c = 2;");
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        assert_eq!(program.decls.len(), 4);
+    }
+}
