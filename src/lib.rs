@@ -6,6 +6,7 @@
 
 pub mod check;
 pub mod diag;
+pub mod driver;
 pub mod elab;
 pub mod load;
 pub mod source;

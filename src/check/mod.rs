@@ -1,1 +1,335 @@
+//! Name resolution and type checking. Walks every module once, in import order, and records for
+//! each name use where it resolves (for the elaborator). Parameterised definitions may have
+//! untyped parameters: their bodies are checked at each instantiation with the arguments' types,
+//! and an error inside one shows both the definition and the use.
 
+mod expr;
+pub mod scope;
+pub mod types;
+
+use std::collections::HashMap;
+
+use crate::diag::{Diagnostic, Diagnostics};
+use crate::load::{ModuleId, Workspace};
+use crate::syntax::ast::{Binding, Decl, DeclKind, Expr, Ident, Name, Param};
+use crate::syntax::span::Span;
+use scope::{Scope, ScopeId, Target};
+use types::{DefId, Ty};
+
+/// A parameterised definition `let f(a, b) = body`.
+pub struct Definition<'w> {
+    pub name: Name,
+    pub params: &'w [Param],
+    pub body: &'w Expr,
+    pub span: Span,
+    /// The scope it was defined in and how many of that scope's names it sees.
+    pub scope: ScopeId,
+    pub limit: u32,
+}
+
+/// The result of checking: scopes, definitions and name resolutions, for the elaborator.
+pub struct Checked<'w> {
+    pub scopes: Vec<Scope>,
+    pub definitions: Vec<Definition<'w>>,
+    pub resolutions: HashMap<Span, Target>,
+    pub module_scopes: HashMap<ModuleId, ScopeId>,
+    pub package_scopes: HashMap<Span, ScopeId>,
+}
+
+impl Checked<'_> {
+    pub fn scope(&self, id: ScopeId) -> &Scope {
+        &self.scopes[id.0 as usize]
+    }
+}
+
+/// A parameter, link coordinate or `local` binding in scope while checking an expression.
+#[derive(Clone, Debug)]
+struct Local {
+    name: Name,
+    ty: Ty,
+    /// Link coordinates are time-dependent: only they may be primed (`x'`).
+    coordinate: bool,
+}
+
+/// Where an expression is being checked.
+struct Ctx {
+    scope: ScopeId,
+    limit: u32,
+    locals: Vec<Local>,
+}
+
+pub struct Checker<'w> {
+    workspace: &'w Workspace,
+    out: Checked<'w>,
+    diagnostics: Diagnostics,
+    /// Use sites of the definitions being instantiated, innermost last.
+    instantiations: Vec<(Span, Name)>,
+    memo: HashMap<(DefId, Vec<Ty>), Ty>,
+    modules_in_progress: Vec<ModuleId>,
+}
+
+/// Checks every module of the workspace.
+pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
+    let mut checker = Checker {
+        workspace,
+        out: Checked {
+            scopes: Vec::new(),
+            definitions: Vec::new(),
+            resolutions: HashMap::new(),
+            module_scopes: HashMap::new(),
+            package_scopes: HashMap::new(),
+        },
+        diagnostics: Diagnostics::default(),
+        instantiations: Vec::new(),
+        memo: HashMap::new(),
+        modules_in_progress: Vec::new(),
+    };
+    for &root in &workspace.roots {
+        checker.module(root);
+    }
+    (checker.out, checker.diagnostics)
+}
+
+const MAX_INSTANTIATION_DEPTH: usize = 64;
+
+impl<'w> Checker<'w> {
+    fn new_scope(&mut self, parent: Option<(ScopeId, u32)>) -> ScopeId {
+        self.out.scopes.push(Scope { parent, ..Scope::default() });
+        ScopeId(self.out.scopes.len() as u32 - 1)
+    }
+
+    fn scope_mut(&mut self, id: ScopeId) -> &mut Scope {
+        &mut self.out.scopes[id.0 as usize]
+    }
+
+    /// Reports an error, adding the use sites of the definitions being instantiated.
+    fn report(&mut self, mut diagnostic: Diagnostic) {
+        for (site, name) in self.instantiations.iter().rev() {
+            diagnostic = diagnostic.secondary(*site, format!("in this use of `{name}`"));
+        }
+        self.diagnostics.push(diagnostic);
+    }
+
+    fn module(&mut self, id: ModuleId) -> ScopeId {
+        if let Some(&scope) = self.out.module_scopes.get(&id) {
+            return scope;
+        }
+        let scope = self.new_scope(None);
+        self.out.module_scopes.insert(id, scope);
+        if self.modules_in_progress.contains(&id) {
+            return scope;
+        }
+        self.modules_in_progress.push(id);
+        let decls = &self.workspace.module(id).program.decls;
+        self.decls(decls, scope);
+        self.modules_in_progress.pop();
+        scope
+    }
+
+    fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) {
+        for decl in decls {
+            for (name, span) in declared_names(decl) {
+                self.scope_mut(scope).declared_later.entry(name).or_insert(span);
+            }
+        }
+        for decl in decls {
+            self.decl(decl, scope);
+        }
+    }
+
+    fn ctx(&self, scope: ScopeId) -> Ctx {
+        Ctx { scope, limit: self.out.scope(scope).len(), locals: Vec::new() }
+    }
+
+    fn decl(&mut self, decl: &'w Decl, scope: ScopeId) {
+        match &decl.kind {
+            DeclKind::Let(bindings) => self.let_decl(bindings, scope),
+            DeclKind::Define { name, params, body } => self.define(name, params, body, scope),
+            DeclKind::Join { first, second, link } => {
+                let mut ctx = self.ctx(scope);
+                for (member, position) in [(first, "first"), (second, "second")] {
+                    let ty = self.expr(member, &mut ctx);
+                    if !ty.fits(Ty::Frame) {
+                        self.report(join_member_error(member.span, position, ty));
+                    }
+                }
+                let ty = self.expr(link, &mut ctx);
+                self.expect_value(link, ty, Ty::Link, "the link of `join ... with <link>`");
+            }
+            DeclKind::Apply { effort, target } => {
+                let mut ctx = self.ctx(scope);
+                let effort_ty = self.expr(effort, &mut ctx);
+                let target_ty = self.expr(target, &mut ctx);
+                self.apply(effort, effort_ty, target, target_ty);
+            }
+            DeclKind::Package { name, decls } => {
+                let limit = self.out.scope(scope).len();
+                let package = self.new_scope(Some((scope, limit)));
+                self.out.package_scopes.insert(decl.span, package);
+                self.decls(decls, package);
+                self.declare(scope, name, Ty::Package(package));
+            }
+            DeclKind::Import { alias, .. } => {
+                let Some(&module) = self.workspace.imports.get(&decl.span) else { return };
+                let imported = self.module(module);
+                match alias {
+                    Some(alias) => self.declare(scope, alias, Ty::Package(imported)),
+                    None => {
+                        let limit = self.out.scope(scope).len();
+                        self.scope_mut(scope).opened.push((imported, limit));
+                        let name: Name = self.workspace.module(module).name.as_str().into();
+                        if self.out.scope(scope).names.get(&name).is_none() {
+                            self.scope_mut(scope).insert(name, Ty::Package(imported), decl.span);
+                        }
+                    }
+                }
+            }
+            DeclKind::Error => {}
+        }
+    }
+
+    /// `let a = e and b = e`: the bindings are simultaneous, as in the thesis's grammar: none of
+    /// them sees the others.
+    fn let_decl(&mut self, bindings: &'w [Binding], scope: ScopeId) {
+        let mut ctx = self.ctx(scope);
+        let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, &mut ctx)).collect();
+        for (binding, ty) in bindings.iter().zip(types) {
+            self.declare(scope, &binding.name, ty);
+        }
+    }
+
+    fn define(&mut self, name: &'w Ident, params: &'w [Param], body: &'w Expr, scope: ScopeId) {
+        let limit = self.out.scope(scope).len();
+        let mut seen: HashMap<&str, Span> = HashMap::new();
+        let mut declared = Vec::with_capacity(params.len());
+        for param in params {
+            if let Some(first) = seen.insert(&param.name.name, param.name.span) {
+                self.report(
+                    Diagnostic::error("E0303", format!("parameter `{}` is declared twice", param.name.name))
+                        .primary(param.name.span, "second declaration")
+                        .secondary(first, "first declaration"),
+                );
+            }
+            declared.push(self.annotation(param));
+        }
+        let id = DefId(self.out.definitions.len() as u32);
+        self.out.definitions.push(Definition { name: name.name.clone(), params, body, span: name.span, scope, limit });
+        self.declare(scope, name, Ty::Definition(id));
+        // Check the body once now: names are resolved and typed parameters checked even if the
+        // definition is never used. Untyped parameters are `Error` here (they fit anywhere);
+        // their real types are checked at each use.
+        let locals = params
+            .iter()
+            .zip(declared)
+            .map(|(p, ty)| Local { name: p.name.name.clone(), ty: ty.unwrap_or(Ty::Error), coordinate: false })
+            .collect();
+        let mut ctx = Ctx { scope, limit, locals };
+        self.expr(body, &mut ctx);
+    }
+
+    fn annotation(&mut self, param: &Param) -> Option<Ty> {
+        let annotation = param.ty.as_ref()?;
+        let ty = Ty::from_annotation(&annotation.name);
+        if ty.is_none() {
+            let help = crate::diag::suggest::did_you_mean(&annotation.name, Ty::ANNOTATIONS)
+                .map(|s| format!("did you mean `{s}`?"))
+                .unwrap_or_else(|| format!("the types are: {}", Ty::ANNOTATIONS.join(", ")));
+            self.report(
+                Diagnostic::error("E0409", format!("unknown type `{}`", annotation.name))
+                    .primary(annotation.span, "not a type")
+                    .help(help),
+            );
+        }
+        ty
+    }
+
+    /// Binds a name in a scope, refusing a second declaration of the same name.
+    fn declare(&mut self, scope: ScopeId, name: &Ident, ty: Ty) {
+        if let Some(previous) = self.out.scope(scope).names.get(&name.name) {
+            let previous = previous.span;
+            self.report(
+                Diagnostic::error("E0302", format!("`{}` is already defined", name.name))
+                    .primary(name.span, "defined again here")
+                    .secondary(previous, "first defined here")
+                    .help("give the second definition another name"),
+            );
+            return;
+        }
+        self.scope_mut(scope).insert(name.name.clone(), ty, name.span);
+    }
+
+    fn apply(&mut self, effort: &Expr, effort_ty: Ty, target: &Expr, target_ty: Ty) {
+        match effort_ty {
+            Ty::Force => {
+                if !target_ty.fits(Ty::Frame) {
+                    self.report(
+                        Diagnostic::error("E0411", format!("a force is applied on a frame, not on {}", target_ty.with_article()))
+                            .primary(target.span, format!("this is {}", target_ty.with_article()))
+                            .help("the frame's origin is the point of application, as in `apply f on b.iframe`"),
+                    );
+                }
+            }
+            Ty::Torque => {
+                if !target_ty.fits(Ty::Body) {
+                    let help = if target_ty == Ty::Frame { "a torque acts on a whole body: write `<frame>.body`" } else { "write `apply <torque> on <body>`" };
+                    self.report(
+                        Diagnostic::error("E0411", format!("a torque is applied on a body, not on {}", target_ty.with_article()))
+                            .primary(target.span, format!("this is {}", target_ty.with_article()))
+                            .help(help),
+                    );
+                }
+            }
+            Ty::Error => {}
+            other => self.report(
+                Diagnostic::error("E0411", format!("`apply` needs a force or a torque, found {}", other.with_article()))
+                    .primary(effort.span, format!("this is {}", other.with_article()))
+                    .help("write `apply force value = ..., body = ... end on <frame>`"),
+            ),
+        }
+    }
+
+    /// Checks that an expression's type fits the expected one.
+    fn expect_value(&mut self, expr: &Expr, ty: Ty, expected: Ty, role: &str) -> bool {
+        if ty.fits(expected) {
+            return true;
+        }
+        let mut diagnostic = Diagnostic::error(
+            "E0401",
+            format!("{role} must be {}, found {}", expected.with_article(), ty.with_article()),
+        )
+        .primary(expr.span, format!("this is {}", ty.with_article()));
+        if let Some(help) = conversion_help(ty, expected) {
+            diagnostic = diagnostic.help(help);
+        }
+        self.report(diagnostic);
+        false
+    }
+}
+
+fn join_member_error(span: Span, position: &str, ty: Ty) -> Diagnostic {
+    Diagnostic::error("E0410", format!("`join` connects two frames, but its {position} member is {}", ty.with_article()))
+        .primary(span, format!("this is {}, not a frame", ty.with_article()))
+        .help("write `join <frame> and <frame> with <link>`; a frame is `<displacement> @ <body>`, `b.frame` or `b.iframe`")
+}
+
+fn conversion_help(found: Ty, expected: Ty) -> Option<String> {
+    Some(match (found, expected) {
+        (Ty::Scalar, Ty::Vector) => "a vector is written `[x, y, z]`".to_string(),
+        (Ty::Vector, Ty::Rotation) => "a rotation is written `angle || axis`".to_string(),
+        (Ty::Displacement, Ty::Frame) => "a frame is `<displacement> @ <body>`".to_string(),
+        (Ty::Body, Ty::Scalar | Ty::Vector) => "read a field: `b.mass`, `b.inertia`".to_string(),
+        (Ty::Definition(_), _) => "a parameterised definition must be called: `f(...)`".to_string(),
+        (Ty::Package(_), _) => "take a name from the package: `P:name`".to_string(),
+        _ => return None,
+    })
+}
+
+/// Names a declaration introduces in its scope.
+fn declared_names(decl: &Decl) -> Vec<(Name, Span)> {
+    match &decl.kind {
+        DeclKind::Let(bindings) => bindings.iter().map(|b| (b.name.name.clone(), b.name.span)).collect(),
+        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => vec![(name.name.clone(), name.span)],
+        DeclKind::Import { alias: Some(alias), .. } => vec![(alias.name.clone(), alias.span)],
+        _ => Vec::new(),
+    }
+}

@@ -93,8 +93,12 @@ pub struct Diagnostics {
 
 impl Diagnostics {
     pub fn push(&mut self, diagnostic: Diagnostic) {
-        // An instantiated definition can raise the same error at each use: report it once.
-        if !self.list.contains(&diagnostic) {
+        // A definition's body is checked when it is declared and again at each use: the same
+        // error at the same place is reported once, with the context of its first report.
+        let duplicate = self.list.iter().any(|d| {
+            d.code == diagnostic.code && d.message == diagnostic.message && d.primary_span() == diagnostic.primary_span()
+        });
+        if !duplicate {
             self.list.push(diagnostic);
         }
     }

@@ -1,1 +1,284 @@
+//! Loading a program and its libraries: parse the root files, follow `import` declarations along
+//! the search path (the importing file's directory, `-L` directories, `LSD_PATH`, then the
+//! standard library embedded in the binary), detect import cycles and missing files.
 
+pub mod stdlib;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use crate::diag::{suggest, Diagnostic, Diagnostics};
+use crate::source::SourceMap;
+use crate::syntax::ast::{Decl, DeclKind, ImportTarget, Program};
+use crate::syntax::parser::parse;
+use crate::syntax::span::{FileId, Span};
+
+/// Environment variable holding extra library directories, separated by `:`.
+pub const PATH_VARIABLE: &str = "LSD_PATH";
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ModuleId(pub u32);
+
+pub struct Module {
+    pub file: FileId,
+    pub program: Program,
+    /// The name a plain `import` gives this module (`joints` for `joints.lsd`).
+    pub name: String,
+    /// Directory imports are resolved against; `None` for the embedded standard library.
+    dir: Option<PathBuf>,
+    /// The import declaration that first brought this module in (`None` for root files).
+    pub imported_at: Option<(Span, ModuleId)>,
+}
+
+/// Every module of a compilation, and for each `import` declaration the module it names.
+pub struct Workspace {
+    pub sources: SourceMap,
+    pub modules: Vec<Module>,
+    pub roots: Vec<ModuleId>,
+    pub imports: HashMap<Span, ModuleId>,
+}
+
+impl Workspace {
+    pub fn module(&self, id: ModuleId) -> &Module {
+        &self.modules[id.0 as usize]
+    }
+
+    /// Adds "imported here" labels to diagnostics located in libraries, so an error in a library
+    /// is shown both where it is and where the user's program brought the library in.
+    pub fn add_import_context(&self, diagnostic: &mut Diagnostic) {
+        let Some(span) = diagnostic.primary_span() else { return };
+        let mut module = self.modules.iter().position(|m| m.file == span.file);
+        let mut hops = 0;
+        while let Some(index) = module {
+            let Some((site, importer)) = self.modules[index].imported_at else { break };
+            let name = &self.modules[index].name;
+            if !diagnostic.labels.iter().any(|l| l.span == site) {
+                diagnostic.labels.push(crate::diag::Label {
+                    span: site,
+                    message: format!("`{name}` imported here"),
+                    primary: false,
+                });
+            }
+            module = Some(importer.0 as usize);
+            hops += 1;
+            if hops > self.modules.len() {
+                break;
+            }
+        }
+    }
+}
+
+pub struct LoadOptions {
+    /// `-L` directories, searched after the importing file's directory.
+    pub library_dirs: Vec<PathBuf>,
+    /// Also search the directories of `LSD_PATH`.
+    pub use_environment: bool,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions { library_dirs: Vec::new(), use_environment: true }
+    }
+}
+
+/// Where a module's text comes from; also the key that makes a library load once.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+enum Origin {
+    File(PathBuf),
+    Stdlib(&'static str),
+    /// A root given as text (tests, `--expr`, fuzzing).
+    Text(String),
+}
+
+struct Loader {
+    search_dirs: Vec<PathBuf>,
+    workspace: Workspace,
+    by_origin: HashMap<Origin, ModuleId>,
+    /// Modules whose imports are being followed: an import of one of them is a cycle.
+    in_progress: Vec<ModuleId>,
+    diagnostics: Diagnostics,
+}
+
+/// Loads root files from disk and everything they import.
+pub fn load_files(paths: &[PathBuf], options: &LoadOptions) -> Result<(Workspace, Diagnostics), String> {
+    let mut loader = Loader::new(options);
+    for path in paths {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+        let dir = path.parent().map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() });
+        let key = path.canonicalize().unwrap_or_else(|_| path.clone());
+        let id = loader.add_module(Origin::File(key), path.display().to_string(), text, dir, None);
+        loader.workspace.roots.push(id);
+    }
+    Ok(loader.finish())
+}
+
+/// Loads a program given as text (its imports are resolved against `dir`).
+pub fn load_text(name: &str, text: &str, dir: Option<&Path>, options: &LoadOptions) -> (Workspace, Diagnostics) {
+    let mut loader = Loader::new(options);
+    let id = loader.add_module(Origin::Text(name.to_string()), name.to_string(), text.to_string(), dir.map(Path::to_path_buf), None);
+    loader.workspace.roots.push(id);
+    loader.finish()
+}
+
+impl Loader {
+    fn new(options: &LoadOptions) -> Loader {
+        let mut search_dirs = options.library_dirs.clone();
+        if options.use_environment {
+            if let Some(value) = std::env::var_os(PATH_VARIABLE) {
+                search_dirs.extend(std::env::split_paths(&value).filter(|p| !p.as_os_str().is_empty()));
+            }
+        }
+        Loader {
+            search_dirs,
+            workspace: Workspace { sources: SourceMap::new(), modules: Vec::new(), roots: Vec::new(), imports: HashMap::new() },
+            by_origin: HashMap::new(),
+            in_progress: Vec::new(),
+            diagnostics: Diagnostics::default(),
+        }
+    }
+
+    fn finish(self) -> (Workspace, Diagnostics) {
+        (self.workspace, self.diagnostics)
+    }
+
+    fn add_module(
+        &mut self,
+        origin: Origin,
+        display_name: String,
+        text: String,
+        dir: Option<PathBuf>,
+        imported_at: Option<(Span, ModuleId)>,
+    ) -> ModuleId {
+        let file = self.workspace.sources.add(display_name, text);
+        let (program, errors) = parse(file, &self.workspace.sources.file(file).text);
+        for error in errors {
+            self.diagnostics.push(error);
+        }
+        let name = module_name(&origin);
+        let id = ModuleId(self.workspace.modules.len() as u32);
+        self.workspace.modules.push(Module { file, program: Program { decls: Vec::new() }, name, dir, imported_at });
+        self.by_origin.insert(origin, id);
+        self.in_progress.push(id);
+        self.follow_imports(id, &program.decls);
+        self.in_progress.pop();
+        self.workspace.modules[id.0 as usize].program = program;
+        id
+    }
+
+    fn follow_imports(&mut self, importer: ModuleId, decls: &[Decl]) {
+        for decl in decls {
+            match &decl.kind {
+                DeclKind::Import { target, .. } => {
+                    if let Some(id) = self.resolve_import(importer, decl.span, target) {
+                        self.workspace.imports.insert(decl.span, id);
+                    }
+                }
+                DeclKind::Package { decls, .. } => self.follow_imports(importer, decls),
+                _ => {}
+            }
+        }
+    }
+
+    fn resolve_import(&mut self, importer: ModuleId, site: Span, target: &ImportTarget) -> Option<ModuleId> {
+        let (file_name, target_span) = match target {
+            ImportTarget::Module(ident) => (format!("{}.lsd", ident.name), ident.span),
+            ImportTarget::Path { path, span } => (path.clone(), *span),
+        };
+        let Some((origin, text, display)) = self.find(importer, &file_name, matches!(target, ImportTarget::Module(_))) else {
+            self.diagnostics.push(self.missing_import(importer, &file_name, target_span));
+            return None;
+        };
+        if let Some(&existing) = self.by_origin.get(&origin) {
+            if let Some(position) = self.in_progress.iter().position(|&m| m == existing) {
+                self.diagnostics.push(self.cycle(&self.in_progress[position..], target_span));
+                return None;
+            }
+            return Some(existing);
+        }
+        let dir = match &origin {
+            Origin::File(_) => Path::new(&display).parent().map(Path::to_path_buf),
+            Origin::Stdlib(_) | Origin::Text(_) => None,
+        };
+        Some(self.add_module(origin, display, text, dir, Some((site, importer))))
+    }
+
+    /// Finds an import: the importing file's directory, the search path, then (for module names)
+    /// the standard library. The standard library's own imports stay inside it.
+    fn find(&self, importer: ModuleId, file_name: &str, is_module_name: bool) -> Option<(Origin, String, String)> {
+        let importer_dir = self.workspace.module(importer).dir.clone();
+        let from_stdlib = importer_dir.is_none() && matches!(self.origin_of(importer), Some(Origin::Stdlib(_)));
+        if !from_stdlib {
+            let dirs = importer_dir.iter().chain(self.search_dirs.iter());
+            for dir in dirs {
+                let candidate = dir.join(file_name);
+                if candidate.is_file() {
+                    let text = std::fs::read_to_string(&candidate).ok()?;
+                    let display = candidate.display().to_string();
+                    let canonical = candidate.canonicalize().unwrap_or(candidate);
+                    return Some((Origin::File(canonical), text, display));
+                }
+            }
+        }
+        let stem = file_name.strip_suffix(".lsd").unwrap_or(file_name);
+        if is_module_name || from_stdlib {
+            if let Some((name, text)) = stdlib::find(stem) {
+                return Some((Origin::Stdlib(name), text.to_string(), format!("<stdlib>/{name}.lsd")));
+            }
+        }
+        None
+    }
+
+    fn origin_of(&self, id: ModuleId) -> Option<&Origin> {
+        self.by_origin.iter().find(|(_, &m)| m == id).map(|(o, _)| o)
+    }
+
+    fn missing_import(&self, importer: ModuleId, file_name: &str, span: Span) -> Diagnostic {
+        let mut searched: Vec<String> = self.workspace.module(importer).dir.iter().map(|d| d.display().to_string()).collect();
+        searched.extend(self.search_dirs.iter().map(|d| d.display().to_string()));
+        let stem = file_name.strip_suffix(".lsd").unwrap_or(file_name);
+        let mut diagnostic = Diagnostic::error("E0501", format!("cannot find library `{file_name}`"))
+            .primary(span, "no such file on the library search path")
+            .note(format!(
+                "searched: {}{}the standard library",
+                searched.join(", "),
+                if searched.is_empty() { "" } else { ", then " }
+            ));
+        let mut known: Vec<&str> = stdlib::names().collect();
+        known.sort();
+        diagnostic = match suggest::did_you_mean(stem, known.iter().copied()) {
+            Some(name) => diagnostic.help(format!("did you mean the standard library's `{name}`?")),
+            None => diagnostic.help(format!(
+                "add its directory with `-L DIR` or to `{PATH_VARIABLE}`; the standard library has: {}",
+                known.join(", ")
+            )),
+        };
+        diagnostic
+    }
+
+    fn cycle(&self, chain: &[ModuleId], span: Span) -> Diagnostic {
+        let names: Vec<String> = chain
+            .iter()
+            .map(|&m| self.workspace.sources.file(self.workspace.module(m).file).name.clone())
+            .collect();
+        let mut path = names.join(" → ");
+        path.push_str(&format!(" → {}", names[0]));
+        let mut diagnostic = Diagnostic::error("E0502", "import cycle")
+            .primary(span, format!("this imports `{}`, which is still being loaded", names[0]))
+            .note(format!("the cycle: {path}"))
+            .help("move the shared definitions into a library that both files import");
+        for &module in chain.iter().skip(1) {
+            if let Some((site, _)) = self.workspace.module(module).imported_at {
+                diagnostic = diagnostic.secondary(site, "part of the cycle");
+            }
+        }
+        diagnostic
+    }
+}
+
+fn module_name(origin: &Origin) -> String {
+    match origin {
+        Origin::File(path) => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+        Origin::Stdlib(name) => name.to_string(),
+        Origin::Text(name) => Path::new(name).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+    }
+}

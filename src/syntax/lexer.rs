@@ -137,6 +137,8 @@ fn nested_comment<'input>(lex: &mut logos::Lexer<'input, Tok<'input>>) -> Filter
             _ => i += 1,
         }
     }
+    // Everything after an unclosed `(*` is comment: consume it so it is not read as code.
+    lex.bump(rest.len());
     FilterResult::Error(LexError::UnterminatedComment)
 }
 

@@ -144,7 +144,7 @@ fn expected_list(expected: &[String]) -> String {
     match items.len() {
         0 => "nothing".to_string(),
         1 => items.remove(0),
-        n if n > 6 => "an expression or a declaration".to_string(),
+        n if n > 6 => "an expression".to_string(),
         _ => {
             let last = items.pop().unwrap_or_default();
             format!("{} or {last}", items.join(", "))

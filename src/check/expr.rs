@@ -1,0 +1,601 @@
+//! Typing of expressions.
+
+use std::collections::HashSet;
+
+use super::types::{self, DefId, Ty};
+use super::{Checker, Ctx, Local, Target, MAX_INSTANTIATION_DEPTH};
+use crate::diag::{suggest, Diagnostic};
+use crate::syntax::ast::{Arg, BinaryOp, Callee, ConstructKind, Expr, ExprKind, FieldInit, Ident};
+use crate::syntax::span::Span;
+
+impl<'w> Checker<'w> {
+    pub(super) fn expr(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
+        match &expr.kind {
+            ExprKind::Name(ident) => self.name(ident, ctx),
+            ExprKind::Qualified { package, name } => self.qualified(package, name, expr.span, ctx),
+            ExprKind::Field { target, field } => {
+                let ty = self.expr(target, ctx);
+                self.field(ty, field)
+            }
+            ExprKind::Unknown(ident) => unknown_kind(&ident.name).unwrap_or_else(|| {
+                self.report(
+                    Diagnostic::error("E0407", format!("unknown kind of unknown `?{}`", ident.name))
+                        .primary(ident.span, "not `?s` (scalar) or `?v` (vector)")
+                        .help("an unknown scalar is `?s`; an unknown function of coordinates is a call, `?fs(x, x')`"),
+                );
+                Ty::Error
+            }),
+            ExprKind::Int(0) => Ty::Zero,
+            ExprKind::Int(1) => Ty::One,
+            ExprKind::Int(_) | ExprKind::Float(_) => Ty::Scalar,
+            ExprKind::Vector(items) => self.vector(items, expr.span, ctx),
+            ExprKind::Call { callee, args } => self.call(callee, args, expr.span, ctx),
+            ExprKind::Binary { op, lhs, rhs } => {
+                let left = self.expr(lhs, ctx);
+                let right = self.expr(rhs, ctx);
+                self.binary(*op, lhs, left, rhs, right, expr.span)
+            }
+            ExprKind::Neg(inner) => match self.expr(inner, ctx).numeric() {
+                ty @ (Ty::Scalar | Ty::Vector | Ty::Matrix | Ty::Error) => ty,
+                other => {
+                    self.report(
+                        Diagnostic::error("E0402", format!("cannot negate {}", other.with_article()))
+                            .primary(inner.span, format!("this is {}", other.with_article())),
+                    );
+                    Ty::Error
+                }
+            },
+            ExprKind::Prime(inner) => self.prime(inner, ctx),
+            ExprKind::Construct { kind, params, fields } => self.construct(*kind, params, fields, ctx),
+            ExprKind::Local { bindings, body } => {
+                let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, ctx)).collect();
+                let depth = ctx.locals.len();
+                for (binding, ty) in bindings.iter().zip(types) {
+                    ctx.locals.push(Local { name: binding.name.name.clone(), ty, coordinate: false });
+                }
+                let ty = self.expr(body, ctx);
+                ctx.locals.truncate(depth);
+                ty
+            }
+            ExprKind::Error => Ty::Error,
+        }
+    }
+
+    fn name(&mut self, ident: &Ident, ctx: &Ctx) -> Ty {
+        if let Some(local) = ctx.locals.iter().rev().find(|l| l.name == ident.name) {
+            self.out.resolutions.insert(ident.span, Target::Local);
+            return local.ty;
+        }
+        if let Some((target, ty)) = self.lookup_global(&ident.name, ctx.scope, ctx.limit) {
+            self.out.resolutions.insert(ident.span, target);
+            return ty;
+        }
+        if let Some(ty) = types::builtin_constant(&ident.name) {
+            self.out.resolutions.insert(ident.span, Target::Builtin);
+            return ty;
+        }
+        let diagnostic = self.unknown_name(ident, ctx);
+        self.report(diagnostic);
+        Ty::Error
+    }
+
+    /// Looks a name up in a scope (its first `limit` names), its opened modules, then its parents.
+    fn lookup_global(&self, name: &str, scope: super::ScopeId, limit: u32) -> Option<(Target, Ty)> {
+        let mut current = Some((scope, limit));
+        while let Some((id, limit)) = current {
+            let s = self.out.scope(id);
+            if let Some(entry) = s.get(name, limit) {
+                return Some((Target::Global(id), entry.ty));
+            }
+            for &(opened, opened_at) in s.opened.iter().rev() {
+                if opened_at < limit {
+                    if let Some(entry) = self.out.scope(opened).names.get(name) {
+                        return Some((Target::Global(opened), entry.ty));
+                    }
+                }
+            }
+            current = s.parent;
+        }
+        None
+    }
+
+    fn unknown_name(&self, ident: &Ident, ctx: &Ctx) -> Diagnostic {
+        let name = &ident.name;
+        let mut diagnostic =
+            Diagnostic::error("E0301", format!("unknown name `{name}`")).primary(ident.span, "not defined here");
+        // Declared later in the same scope?
+        let mut current = Some(ctx.scope);
+        while let Some(id) = current {
+            let scope = self.out.scope(id);
+            if let Some(&later) = scope.declared_later.get(name.as_ref()) {
+                return diagnostic
+                    .secondary(later, "defined here, after its use")
+                    .help("a name is visible only after its declaration: move the declaration up");
+            }
+            if let Some(entry) = scope.names.get(name.as_ref()) {
+                return diagnostic
+                    .secondary(entry.span, "defined here, after this definition")
+                    .help("a definition sees only the names declared before it");
+            }
+            current = scope.parent.map(|(p, _)| p);
+        }
+        let visible = self.visible_names(ctx);
+        if let Some(number) = suggest::thesis_body_number(name) {
+            let bodies: Vec<&(String, Ty)> = visible.iter().filter(|(_, ty)| *ty == Ty::Body).collect();
+            if let Some((body, _)) = bodies.iter().filter(|(n, _)| n != "earth").nth(number - 1) {
+                return diagnostic.help(format!(
+                    "did you mean `{body}`? bodies are referred to by the names they are declared with (`S{number}` is the thesis's notation for body {number})"
+                ));
+            }
+        }
+        if let Some(candidate) = suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str())) {
+            diagnostic = diagnostic.help(format!("did you mean `{candidate}`?"));
+        }
+        diagnostic
+    }
+
+    /// Every name visible from a context, in declaration order (for suggestions).
+    fn visible_names(&self, ctx: &Ctx) -> Vec<(String, Ty)> {
+        let mut names: Vec<(String, Ty)> = Vec::new();
+        let mut seen = HashSet::new();
+        let mut push = |name: &str, ty: Ty, names: &mut Vec<(String, Ty)>| {
+            if seen.insert(name.to_string()) {
+                names.push((name.to_string(), ty));
+            }
+        };
+        for local in ctx.locals.iter().rev() {
+            push(&local.name, local.ty, &mut names);
+        }
+        let mut current = Some((ctx.scope, ctx.limit));
+        while let Some((id, limit)) = current {
+            let scope = self.out.scope(id);
+            for name in scope.order.iter().take(limit as usize) {
+                if let Some(entry) = scope.names.get(name) {
+                    push(name, entry.ty, &mut names);
+                }
+            }
+            for &(opened, _) in &scope.opened {
+                let module = self.out.scope(opened);
+                for name in &module.order {
+                    push(name, module.names[name].ty, &mut names);
+                }
+            }
+            current = scope.parent;
+        }
+        for name in types::BUILTIN_NAMES {
+            let ty = types::builtin_constant(name).unwrap_or(Ty::Scalar);
+            push(name, ty, &mut names);
+        }
+        names
+    }
+
+    fn qualified(&mut self, package: &Ident, name: &Ident, span: Span, ctx: &mut Ctx) -> Ty {
+        match self.package_member(package, name, ctx) {
+            Some((scope, ty)) => {
+                self.out.resolutions.insert(span, Target::Global(scope));
+                ty
+            }
+            None => Ty::Error,
+        }
+    }
+
+    /// Resolves `P:X` to the package's scope and X's type, reporting what is wrong.
+    fn package_member(&mut self, package: &Ident, name: &Ident, ctx: &mut Ctx) -> Option<(super::ScopeId, Ty)> {
+        let scope = match self.name(package, ctx) {
+            Ty::Package(scope) => scope,
+            Ty::Error => return None,
+            other => {
+                self.report(
+                    Diagnostic::error("E0404", format!("`{}` is {}, not a package", package.name, other.with_article()))
+                        .primary(package.span, "`:` selects a name in a package"),
+                );
+                return None;
+            }
+        };
+        let members = self.out.scope(scope);
+        if let Some(entry) = members.names.get(&name.name) {
+            return Some((scope, entry.ty));
+        }
+        let help = suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref()))
+            .map(|s| format!("did you mean `{}:{s}`?", package.name));
+        self.report(
+            Diagnostic::error("E0301", format!("package `{}` has no `{}`", package.name, name.name))
+                .primary(name.span, "not defined in the package")
+                .with_help(help),
+        );
+        None
+    }
+
+    fn field(&mut self, target: Ty, field: &Ident) -> Ty {
+        if target == Ty::Error {
+            return Ty::Error;
+        }
+        if let Some(ty) = types::field_type(target, &field.name) {
+            return ty;
+        }
+        let names = types::field_names(target);
+        let mut diagnostic = Diagnostic::error("E0405", format!("{} has no field `{}`", target.with_article(), field.name))
+            .primary(field.span, "unknown field");
+        diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
+            Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
+            None if names.is_empty() => diagnostic.note(format!("{} has no fields", target.with_article())),
+            None => diagnostic.help(format!("the fields of {} are: {}", target.with_article(), names.join(", "))),
+        };
+        self.report(diagnostic);
+        Ty::Error
+    }
+
+    fn vector(&mut self, items: &'w [Expr], span: Span, ctx: &mut Ctx) -> Ty {
+        let types: Vec<Ty> = items.iter().map(|e| self.expr(e, ctx)).collect();
+        if items.len() != 3 {
+            self.report(
+                Diagnostic::error("E0406", format!("a vector has 3 components, this one has {}", items.len()))
+                    .primary(span, "expected `[x, y, z]`"),
+            );
+            return Ty::Error;
+        }
+        if types.iter().all(|t| t.fits(Ty::Scalar)) {
+            return Ty::Vector;
+        }
+        if types.iter().all(|t| t.fits(Ty::Vector)) {
+            return Ty::Matrix;
+        }
+        for (item, ty) in items.iter().zip(types) {
+            if !ty.fits(Ty::Scalar) {
+                self.report(
+                    Diagnostic::error("E0401", format!("a vector's components must be scalars, found {}", ty.with_article()))
+                        .primary(item.span, format!("this is {}", ty.with_article())),
+                );
+                break;
+            }
+        }
+        Ty::Error
+    }
+
+    fn prime(&mut self, inner: &'w Expr, ctx: &mut Ctx) -> Ty {
+        let is_coordinate = match &inner.kind {
+            ExprKind::Name(ident) => ctx.locals.iter().rev().find(|l| l.name == ident.name).is_some_and(|l| l.coordinate),
+            ExprKind::Prime(_) => true,
+            _ => false,
+        };
+        let ty = self.expr(inner, ctx);
+        if !is_coordinate && ty != Ty::Error {
+            self.report(
+                Diagnostic::error("E0408", "`'` (time derivative) applies only to joint coordinates")
+                    .primary(inner.span, "not a coordinate of the enclosing `link(...)`")
+                    .help("declare the coordinate in the link's parameter list: `link(x) ... x' ... end`"),
+            );
+            return Ty::Error;
+        }
+        Ty::Scalar
+    }
+
+    fn call(&mut self, callee: &'w Callee, args: &'w [Arg], span: Span, ctx: &mut Ctx) -> Ty {
+        let arg_types: Vec<Ty> = args.iter().map(|a| self.expr(&a.value, ctx)).collect();
+        match callee {
+            Callee::Unknown(ident) => {
+                self.positional_only(args);
+                for (arg, ty) in args.iter().zip(&arg_types) {
+                    if !ty.fits(Ty::Scalar) {
+                        self.expect_value(&arg.value, *ty, Ty::Scalar, "an argument of an unknown function");
+                    }
+                }
+                if matches!(&*ident.name, "fv" | "vector") { Ty::Vector } else { Ty::Scalar }
+            }
+            Callee::Name(ident) => {
+                let is_local = ctx.locals.iter().any(|l| l.name == ident.name);
+                if !is_local && self.lookup_global(&ident.name, ctx.scope, ctx.limit).is_none() {
+                    if let Some((params, result)) = types::builtin_function(&ident.name) {
+                        self.out.resolutions.insert(ident.span, Target::Builtin);
+                        return self.builtin_call(ident, params, result, args, &arg_types, span);
+                    }
+                }
+                let ty = self.name(ident, ctx);
+                self.call_value(ident, ty, args, arg_types, span)
+            }
+            Callee::Qualified { package, name } => match self.package_member(package, name, ctx) {
+                Some((scope, ty)) => {
+                    self.out.resolutions.insert(name.span, Target::Global(scope));
+                    self.call_value(name, ty, args, arg_types, span)
+                }
+                None => Ty::Error,
+            },
+        }
+    }
+
+    fn positional_only(&mut self, args: &[Arg]) {
+        if let Some(named) = args.iter().find_map(|a| a.name.as_ref()) {
+            self.report(
+                Diagnostic::error("E0413", "this function takes positional arguments only")
+                    .primary(named.span, "named argument"),
+            );
+        }
+    }
+
+    fn builtin_call(&mut self, ident: &Ident, params: &[Ty], result: Ty, args: &'w [Arg], arg_types: &[Ty], span: Span) -> Ty {
+        self.positional_only(args);
+        if args.len() != params.len() {
+            self.report(arity_error(&ident.name, params.len(), args.len(), span, None));
+            return Ty::Error;
+        }
+        for ((arg, ty), param) in args.iter().zip(arg_types).zip(params) {
+            self.expect_value(&arg.value, *ty, *param, &format!("an argument of `{}`", ident.name));
+        }
+        result
+    }
+
+    fn call_value(&mut self, ident: &Ident, ty: Ty, args: &'w [Arg], arg_types: Vec<Ty>, span: Span) -> Ty {
+        let def = match ty {
+            Ty::Definition(def) => def,
+            Ty::Error => return Ty::Error,
+            other => {
+                self.report(
+                    Diagnostic::error("E0412", format!("`{}` is {}, not a parameterised definition", ident.name, other.with_article()))
+                        .primary(ident.span, "cannot be called"),
+                );
+                return Ty::Error;
+            }
+        };
+        match self.bind_arguments(def, args, arg_types, span) {
+            Some(types) => self.instantiate(def, types, span),
+            None => Ty::Error,
+        }
+    }
+
+    /// Matches positional and named arguments to the definition's parameters.
+    fn bind_arguments(&mut self, def: DefId, args: &'w [Arg], arg_types: Vec<Ty>, span: Span) -> Option<Vec<Ty>> {
+        let definition = &self.out.definitions[def.0 as usize];
+        let params = definition.params;
+        let (name, def_span) = (definition.name.clone(), definition.span);
+        let mut bound: Vec<Option<Ty>> = vec![None; params.len()];
+        let mut ok = true;
+        for (position, (arg, ty)) in args.iter().zip(arg_types).enumerate() {
+            let index = match &arg.name {
+                None if position < params.len() => position,
+                None => {
+                    self.report(arity_error(&name, params.len(), args.len(), span, Some(def_span)));
+                    return None;
+                }
+                Some(arg_name) => match params.iter().position(|p| p.name.name == arg_name.name) {
+                    Some(index) => index,
+                    None => {
+                        let help = suggest::did_you_mean(&arg_name.name, params.iter().map(|p| p.name.name.as_ref()))
+                            .map(|s| format!("did you mean `{s}`?"));
+                        self.report(
+                            Diagnostic::error("E0413", format!("`{name}` has no parameter `{}`", arg_name.name))
+                                .primary(arg_name.span, "unknown parameter")
+                                .secondary(def_span, "defined here")
+                                .with_help(help),
+                        );
+                        ok = false;
+                        continue;
+                    }
+                },
+            };
+            if bound[index].is_some() {
+                self.report(
+                    Diagnostic::error("E0413", format!("parameter `{}` is given twice", params[index].name.name))
+                        .primary(arg.value.span, "second value"),
+                );
+                ok = false;
+            }
+            if let Some(expected) = params[index].ty.as_ref().and_then(|a| Ty::from_annotation(&a.name)) {
+                ok &= self.expect_value(&arg.value, ty, expected, &format!("parameter `{}`", params[index].name.name));
+            }
+            bound[index] = Some(ty);
+        }
+        let missing: Vec<String> =
+            params.iter().zip(&bound).filter(|(_, b)| b.is_none()).map(|(p, _)| format!("`{}`", p.name.name)).collect();
+        if !missing.is_empty() {
+            self.report(
+                Diagnostic::error("E0413", format!("missing argument {} for `{name}`", missing.join(", ")))
+                    .primary(span, "in this call")
+                    .secondary(def_span, "defined here"),
+            );
+            return None;
+        }
+        ok.then(|| bound.into_iter().map(|b| b.unwrap_or(Ty::Error)).collect())
+    }
+
+    /// Checks a definition's body with the arguments' types (memoised per list of types).
+    fn instantiate(&mut self, def: DefId, arg_types: Vec<Ty>, use_site: Span) -> Ty {
+        if let Some(&ty) = self.memo.get(&(def, arg_types.clone())) {
+            return ty;
+        }
+        let definition = &self.out.definitions[def.0 as usize];
+        let (name, body, scope, limit) = (definition.name.clone(), definition.body, definition.scope, definition.limit);
+        if self.instantiations.len() >= MAX_INSTANTIATION_DEPTH {
+            self.report(
+                Diagnostic::error("E0414", format!("definitions nest more than {MAX_INSTANTIATION_DEPTH} deep"))
+                    .primary(use_site, format!("instantiating `{name}` here")),
+            );
+            return Ty::Error;
+        }
+        let locals = definition
+            .params
+            .iter()
+            .zip(&arg_types)
+            .map(|(p, &ty)| Local { name: p.name.name.clone(), ty, coordinate: false })
+            .collect();
+        let mut ctx = Ctx { scope, limit, locals };
+        self.instantiations.push((use_site, name));
+        let ty = self.expr(body, &mut ctx);
+        self.instantiations.pop();
+        self.memo.insert((def, arg_types), ty);
+        ty
+    }
+
+    fn construct(&mut self, kind: ConstructKind, params: &'w [Ident], fields: &'w [FieldInit], ctx: &mut Ctx) -> Ty {
+        let depth = ctx.locals.len();
+        for (i, param) in params.iter().enumerate() {
+            if let Some(first) = params[..i].iter().find(|p| p.name == param.name) {
+                self.report(
+                    Diagnostic::error("E0303", format!("coordinate `{}` is declared twice", param.name))
+                        .primary(param.span, "second declaration")
+                        .secondary(first.span, "first declaration"),
+                );
+            }
+            ctx.locals.push(Local { name: param.name.clone(), ty: Ty::Scalar, coordinate: true });
+        }
+        for (i, field) in fields.iter().enumerate() {
+            let ty = self.expr(&field.value, ctx);
+            if let Some(first) = fields[..i].iter().find(|f| f.name.name == field.name.name) {
+                self.report(
+                    Diagnostic::error("E0303", format!("field `{}` is given twice", field.name.name))
+                        .primary(field.name.span, "second value")
+                        .secondary(first.name.span, "first value"),
+                );
+                continue;
+            }
+            match types::constructor_field_type(kind, &field.name.name) {
+                Some(expected) => {
+                    self.expect_value(&field.value, ty, expected, &format!("field `{}`", field.name.name));
+                }
+                None => self.report(unknown_constructor_field(kind, &field.name)),
+            }
+        }
+        ctx.locals.truncate(depth);
+        if kind == ConstructKind::Link {
+            self.check_dof_fields(fields);
+        }
+        match kind {
+            ConstructKind::Body => Ty::Body,
+            ConstructKind::Link => Ty::Link,
+            ConstructKind::Force => Ty::Force,
+            ConstructKind::Torque => Ty::Torque,
+        }
+    }
+
+    /// `dof` alone, or `dof1`, `dof2`, … numbered from 1 without gaps.
+    fn check_dof_fields(&mut self, fields: &[FieldInit]) {
+        let plain = fields.iter().find(|f| &*f.name.name == "dof");
+        let mut numbered: Vec<(u32, &FieldInit)> = fields
+            .iter()
+            .filter_map(|f| f.name.name.strip_prefix("dof").and_then(|d| d.parse().ok()).map(|n| (n, f)))
+            .collect();
+        numbered.sort_by_key(|(n, _)| *n);
+        if let (Some(plain), Some((_, first))) = (plain, numbered.first()) {
+            self.report(
+                Diagnostic::error("E0415", "a link has either `dof` or `dof1`, `dof2`, …, not both")
+                    .primary(plain.name.span, "`dof` here")
+                    .secondary(first.name.span, "numbered dof here"),
+            );
+            return;
+        }
+        for (expected, (n, field)) in (1..).zip(&numbered) {
+            if *n != expected {
+                self.report(
+                    Diagnostic::error("E0415", format!("`dof{n}` without `dof{expected}`"))
+                        .primary(field.name.span, format!("expected `dof{expected}` before this"))
+                        .help("number the displacements of a link's dof chain from 1, in order"),
+                );
+                break;
+            }
+        }
+    }
+
+    fn binary(&mut self, op: BinaryOp, lhs: &Expr, left: Ty, rhs: &Expr, right: Ty, span: Span) -> Ty {
+        use Ty::*;
+        if left == Error || right == Error {
+            return match op {
+                BinaryOp::Rotation => Rotation,
+                BinaryOp::Displacement => Displacement,
+                BinaryOp::Frame => Frame,
+                _ => Error,
+            };
+        }
+        match op {
+            BinaryOp::Rotation => {
+                let angle_ok = self.expect_value(lhs, left, Scalar, "the angle of a rotation `angle || axis`");
+                let axis_ok = self.expect_value(rhs, right, Vector, "the axis of a rotation `angle || axis`");
+                if angle_ok && axis_ok { Rotation } else { Error }
+            }
+            BinaryOp::Displacement => {
+                let t = self.expect_value(lhs, left, Vector, "the translation of `translation ++ rotation`");
+                let r = self.expect_value(rhs, right, Rotation, "the rotation of `translation ++ rotation`");
+                if t && r { Displacement } else { Error }
+            }
+            BinaryOp::Frame => {
+                let d = self.expect_value(lhs, left, Displacement, "the displacement of `displacement @ body`");
+                let b = right.fits(Frame) || self.expect_value(rhs, right, Body, "the body of `displacement @ body`");
+                if d && b { Frame } else { Error }
+            }
+            _ => match arithmetic(op, left, right) {
+                Some(ty) => ty,
+                None => {
+                    let mut diagnostic = Diagnostic::error(
+                        "E0402",
+                        format!("cannot apply `{}` to {} and {}", op.symbol(), left.with_article(), right.with_article()),
+                    )
+                    .primary(span, "invalid operands")
+                    .secondary(lhs.span, format!("{}", left.with_article()))
+                    .secondary(rhs.span, format!("{}", right.with_article()));
+                    if op == BinaryOp::Mul && left.numeric() == Vector && right.numeric() == Vector {
+                        diagnostic = diagnostic.help("use `dot(a, b)` or `cross(a, b)`");
+                    }
+                    self.report(diagnostic);
+                    Error
+                }
+            },
+        }
+    }
+}
+
+/// Result type of `+ - * / ^` on numeric operands.
+fn arithmetic(op: BinaryOp, left: Ty, right: Ty) -> Option<Ty> {
+    use Ty::*;
+    // `0 + v` is `v`: the literal zero takes the other operand's type.
+    let (left, right) = match (left, right) {
+        (Zero, other @ (Vector | Matrix)) | (other @ (Vector | Matrix), Zero) if matches!(op, BinaryOp::Add | BinaryOp::Sub) => {
+            (other, other)
+        }
+        (l, r) => (l.numeric(), r.numeric()),
+    };
+    Some(match (op, left, right) {
+        (BinaryOp::Add | BinaryOp::Sub, a, b) if a == b && matches!(a, Scalar | Vector | Matrix) => a,
+        (BinaryOp::Mul, Scalar, b @ (Scalar | Vector | Matrix)) => b,
+        (BinaryOp::Mul, a @ (Vector | Matrix), Scalar) => a,
+        (BinaryOp::Mul, Matrix, Vector) | (BinaryOp::Mul, Rotation, Vector) => Vector,
+        (BinaryOp::Mul, Matrix, Matrix) => Matrix,
+        (BinaryOp::Mul, Rotation, Rotation) => Rotation,
+        (BinaryOp::Mul, Displacement | Vector | Rotation, Displacement) | (BinaryOp::Mul, Displacement, Vector | Rotation) => {
+            Displacement
+        }
+        (BinaryOp::Div, a @ (Scalar | Vector | Matrix), Scalar) => a,
+        (BinaryOp::Pow, Scalar, Scalar) => Scalar,
+        _ => return None,
+    })
+}
+
+fn unknown_kind(name: &str) -> Option<Ty> {
+    match name {
+        "s" | "scalar" => Some(Ty::Scalar),
+        "v" | "vector" => Some(Ty::Vector),
+        _ => None,
+    }
+}
+
+fn arity_error(name: &str, expected: usize, found: usize, span: Span, def_span: Option<Span>) -> Diagnostic {
+    let plural = if expected == 1 { "" } else { "s" };
+    let mut diagnostic = Diagnostic::error("E0413", format!("`{name}` takes {expected} argument{plural}, {found} given"))
+        .primary(span, "in this call");
+    if let Some(def_span) = def_span {
+        diagnostic = diagnostic.secondary(def_span, "defined here");
+    }
+    diagnostic
+}
+
+fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
+    let names = types::constructor_field_names(kind);
+    let keyword = kind.keyword();
+    let mut diagnostic = Diagnostic::error("E0405", format!("`{keyword}` has no field `{}`", field.name))
+        .primary(field.span, "unknown field");
+    if kind == ConstructKind::Body && &*field.name == "frame" {
+        return diagnostic.note("a body's reference frame is the body itself; other frames are `<displacement> @ <body>`");
+    }
+    diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
+        Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
+        None => diagnostic.help(format!("the fields of `{keyword}` are: {}", names.join(", "))),
+    };
+    diagnostic
+}

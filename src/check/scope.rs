@@ -1,0 +1,66 @@
+//! Scopes: the names a file, a package or the standard library defines, in declaration order.
+//! A name is visible after its declaration; a parameterised definition sees the names declared
+//! before it, whenever it is instantiated.
+
+use std::collections::HashMap;
+
+use crate::check::types::Ty;
+use crate::syntax::ast::Name;
+use crate::syntax::span::Span;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ScopeId(pub u32);
+
+#[derive(Clone, Debug)]
+pub struct Entry {
+    pub ty: Ty,
+    pub span: Span,
+    /// Position in the scope's declaration order.
+    pub index: u32,
+}
+
+#[derive(Default, Debug)]
+pub struct Scope {
+    pub names: HashMap<Name, Entry>,
+    /// Names in declaration order.
+    pub order: Vec<Name>,
+    /// The enclosing scope (a package's file) and how many of its names were visible then.
+    pub parent: Option<(ScopeId, u32)>,
+    /// Modules opened by a plain `import`, with the number of this scope's names declared before.
+    pub opened: Vec<(ScopeId, u32)>,
+    /// Names declared later in this scope: a use before the declaration gets a precise message.
+    pub declared_later: HashMap<Name, Span>,
+}
+
+impl Scope {
+    pub fn len(&self) -> u32 {
+        self.order.len() as u32
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.order.is_empty()
+    }
+
+    /// The entry for `name` if it was declared among the first `limit` names.
+    pub fn get(&self, name: &str, limit: u32) -> Option<&Entry> {
+        self.names.get(name).filter(|e| e.index < limit)
+    }
+
+    pub fn insert(&mut self, name: Name, ty: Ty, span: Span) {
+        let index = self.len();
+        self.declared_later.remove(&name);
+        self.order.push(name.clone());
+        self.names.insert(name, Entry { ty, span, index });
+    }
+}
+
+/// Where a name use was resolved; the elaborator follows these instead of resolving again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// A parameter, link coordinate or `local` binding: the innermost local of that name.
+    Local,
+    /// A declaration of a file or package scope.
+    Global(ScopeId),
+    /// `pi`, `earth`, `sin`, …
+    Builtin,
+}

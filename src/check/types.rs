@@ -1,0 +1,212 @@
+//! The types of LSD and the rules that relate them: which type fits where (the overloading of `0`
+//! and `1`, translations and rotations as displacements, a body as its reference frame), the
+//! fields of each kind of object, and the built-in constants and functions.
+
+use std::fmt;
+
+use crate::check::scope::ScopeId;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DefId(pub u32);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Ty {
+    Scalar,
+    Vector,
+    Matrix,
+    Rotation,
+    Displacement,
+    Frame,
+    Body,
+    Link,
+    Force,
+    Torque,
+    /// The literal `0`: zero scalar, vector, matrix or displacement, resolved by context.
+    Zero,
+    /// The literal `1`: one, identity rotation, identity displacement or identity matrix.
+    One,
+    Package(ScopeId),
+    Definition(DefId),
+    /// The type of an expression that already produced an error: it fits everywhere, so one
+    /// mistake gives one message.
+    Error,
+}
+
+impl Ty {
+    /// The type named in a parameter annotation `a : vector`.
+    pub fn from_annotation(name: &str) -> Option<Ty> {
+        Some(match name {
+            "scalar" => Ty::Scalar,
+            "vector" => Ty::Vector,
+            "matrix" => Ty::Matrix,
+            "rotation" => Ty::Rotation,
+            "displacement" => Ty::Displacement,
+            "frame" => Ty::Frame,
+            "body" => Ty::Body,
+            "link" => Ty::Link,
+            "force" => Ty::Force,
+            "torque" => Ty::Torque,
+            _ => return None,
+        })
+    }
+
+    pub const ANNOTATIONS: [&'static str; 10] =
+        ["scalar", "vector", "matrix", "rotation", "displacement", "frame", "body", "link", "force", "torque"];
+
+    /// Whether a value of type `self` can be used where `expected` is required.
+    pub fn fits(self, expected: Ty) -> bool {
+        use Ty::*;
+        match (self, expected) {
+            (Error, _) | (_, Error) => true,
+            (a, b) if a == b => true,
+            (Zero, Scalar | Vector | Matrix | Displacement) => true,
+            (One, Scalar | Rotation | Displacement | Matrix) => true,
+            // A translation and a rotation are displacements (subgroups of the displacements).
+            (Vector | Rotation, Displacement) => true,
+            // A body stands for its reference frame (`join satellite and earth`).
+            (Body, Frame) => true,
+            _ => false,
+        }
+    }
+
+    /// `0` and `1` in arithmetic are numbers.
+    pub fn numeric(self) -> Ty {
+        match self {
+            Ty::Zero | Ty::One => Ty::Scalar,
+            other => other,
+        }
+    }
+
+    /// The type's name with an article, for messages ("a vector", "an error").
+    pub fn with_article(self) -> String {
+        let name = self.to_string();
+        let article = if name.starts_with(['a', 'e', 'i', 'o', 'u']) { "an" } else { "a" };
+        match self {
+            Ty::Zero => "the literal `0`".to_string(),
+            Ty::One => "the literal `1`".to_string(),
+            _ => format!("{article} {name}"),
+        }
+    }
+}
+
+impl fmt::Display for Ty {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let name = match self {
+            Ty::Scalar => "scalar",
+            Ty::Vector => "vector",
+            Ty::Matrix => "matrix",
+            Ty::Rotation => "rotation",
+            Ty::Displacement => "displacement",
+            Ty::Frame => "frame",
+            Ty::Body => "body",
+            Ty::Link => "link",
+            Ty::Force => "force",
+            Ty::Torque => "torque",
+            Ty::Zero => "zero",
+            Ty::One => "one",
+            Ty::Package(_) => "package",
+            Ty::Definition(_) => "parameterised definition",
+            Ty::Error => "error",
+        };
+        f.write_str(name)
+    }
+}
+
+/// Fields that can be read with `x.field`, by kind of object.
+pub fn field_type(target: Ty, field: &str) -> Option<Ty> {
+    Some(match (target, field) {
+        (Ty::Body, "frame" | "iframe") => Ty::Frame,
+        (Ty::Body, "mass") => Ty::Scalar,
+        (Ty::Body, "inertia") => Ty::Vector,
+        (Ty::Link, f) if is_numbered(f, "dof") => Ty::Displacement,
+        (Ty::Link, f) if is_numbered(f, "force") || is_numbered(f, "torque") => Ty::Vector,
+        (Ty::Force | Ty::Torque, "value") => Ty::Vector,
+        (Ty::Force | Ty::Torque, "body") => Ty::Body,
+        (Ty::Frame, "body") => Ty::Body,
+        (Ty::Frame, "displ") => Ty::Displacement,
+        _ => return None,
+    })
+}
+
+/// Field names readable on a kind of object (for did-you-mean).
+pub fn field_names(target: Ty) -> Vec<String> {
+    let fixed: &[&str] = match target {
+        Ty::Body => &["frame", "iframe", "mass", "inertia"],
+        Ty::Force | Ty::Torque => &["value", "body"],
+        Ty::Frame => &["body", "displ"],
+        Ty::Link => &[],
+        _ => &[],
+    };
+    let mut names: Vec<String> = fixed.iter().map(|s| s.to_string()).collect();
+    if target == Ty::Link {
+        for base in ["dof", "force", "torque"] {
+            names.push(base.to_string());
+            names.extend((1..=6).map(|i| format!("{base}{i}")));
+        }
+    }
+    names
+}
+
+/// Fields a constructor accepts, with the type of their value.
+pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &str) -> Option<Ty> {
+    use crate::syntax::ast::ConstructKind::*;
+    Some(match (kind, field) {
+        (Body, "mass") => Ty::Scalar,
+        (Body, "iframe") => Ty::Displacement,
+        (Body, "inertia") => Ty::Vector,
+        (Link, f) if is_numbered(f, "dof") => Ty::Displacement,
+        (Link, f) if is_numbered(f, "force") || is_numbered(f, "torque") => Ty::Vector,
+        (Force | Torque, "value") => Ty::Vector,
+        (Force | Torque, "body") => Ty::Body,
+        _ => return None,
+    })
+}
+
+pub fn constructor_field_names(kind: crate::syntax::ast::ConstructKind) -> Vec<String> {
+    use crate::syntax::ast::ConstructKind::*;
+    match kind {
+        Body => ["mass", "iframe", "inertia"].iter().map(|s| s.to_string()).collect(),
+        Link => field_names(Ty::Link),
+        Force | Torque => ["value", "body"].iter().map(|s| s.to_string()).collect(),
+    }
+}
+
+/// `dof`, `dof1` … `dof6` (likewise `force`, `torque`).
+pub fn is_numbered(field: &str, base: &str) -> bool {
+    match field.strip_prefix(base) {
+        Some("") => true,
+        Some(digit) => matches!(digit, "1" | "2" | "3" | "4" | "5" | "6"),
+        None => false,
+    }
+}
+
+/// Built-in constants.
+pub fn builtin_constant(name: &str) -> Option<Ty> {
+    match name {
+        "pi" => Some(Ty::Scalar),
+        "earth" => Some(Ty::Body),
+        _ => None,
+    }
+}
+
+/// Built-in functions: parameter types and result type.
+pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
+    use Ty::*;
+    const S1: &[Ty] = &[Scalar];
+    const S2: &[Ty] = &[Scalar, Scalar];
+    const V1: &[Ty] = &[Vector];
+    const V2: &[Ty] = &[Vector, Vector];
+    Some(match name {
+        "sin" | "cos" | "tan" | "asin" | "acos" | "atan" | "sqrt" | "exp" | "log" | "abs" => (S1, Scalar),
+        "atan2" => (S2, Scalar),
+        "norm" => (V1, Scalar),
+        "dot" => (V2, Scalar),
+        "cross" => (V2, Vector),
+        _ => return None,
+    })
+}
+
+pub const BUILTIN_NAMES: &[&str] = &[
+    "pi", "earth", "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2", "norm", "dot",
+    "cross",
+];

@@ -1,0 +1,541 @@
+//! Evaluation of declarations and expressions.
+
+use std::rc::Rc;
+
+use super::mechanism::*;
+use super::value::*;
+use super::{internal, Elaborator};
+use crate::check::scope::{ScopeId, Target};
+use crate::check::types::Ty;
+use crate::diag::Diagnostic;
+use crate::load::ModuleId;
+use crate::syntax::ast::{Arg, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, Name};
+use crate::syntax::span::Span;
+
+type Result<T> = std::result::Result<T, Diagnostic>;
+
+/// Local bindings while evaluating an expression: parameters, coordinates, `local` names.
+type Locals = Vec<(Name, Value)>;
+
+const MAX_DEPTH: usize = 64;
+
+impl<'c, 'w> Elaborator<'c, 'w> {
+    pub(super) fn module(&mut self, id: ModuleId) -> Result<()> {
+        if self.elaborated_modules.contains(&id) {
+            return Ok(());
+        }
+        self.elaborated_modules.push(id);
+        let scope = *self.checked.module_scopes.get(&id).ok_or_else(|| internal("module was not checked"))?;
+        let decls = &self.workspace.module(id).program.decls;
+        self.decls(decls, scope)
+    }
+
+    fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) -> Result<()> {
+        decls.iter().try_for_each(|decl| self.decl(decl, scope))
+    }
+
+    fn decl(&mut self, decl: &'w Decl, scope: ScopeId) -> Result<()> {
+        let mut locals = Locals::new();
+        match &decl.kind {
+            DeclKind::Let(bindings) => self.let_decl(bindings, scope),
+            DeclKind::Define { name, .. } => {
+                let entry = self.checked.scope(scope).names.get(&name.name).ok_or_else(|| internal("definition not in scope"))?;
+                let Ty::Definition(def) = entry.ty else { return Err(internal("not a definition")) };
+                self.globals.insert((scope, name.name.clone()), Value::Definition(def));
+                Ok(())
+            }
+            DeclKind::Join { first, second, link } => {
+                let first = self.expr(first, &mut locals).and_then(|v| as_frame(v, first.span))?;
+                let second = self.expr(second, &mut locals).and_then(|v| as_frame(v, second.span))?;
+                let Value::Link(link) = self.expr(link, &mut locals)? else { return Err(internal("join without a link")) };
+                self.mechanism.joins.push(Join { first, second, link, span: decl.span });
+                Ok(())
+            }
+            DeclKind::Apply { effort, target } => {
+                let effort = match self.expr(effort, &mut locals)? {
+                    Value::Force(id) | Value::Torque(id) => id,
+                    _ => return Err(internal("apply without an effort")),
+                };
+                let target = self.expr(target, &mut locals).and_then(|v| as_frame(v, target.span))?;
+                self.mechanism.applications.push(Application { effort, target, span: decl.span });
+                Ok(())
+            }
+            DeclKind::Package { name, decls } => {
+                let package = *self.checked.package_scopes.get(&decl.span).ok_or_else(|| internal("package not checked"))?;
+                self.decls(decls, package)?;
+                self.globals.insert((scope, name.name.clone()), Value::Package(package));
+                Ok(())
+            }
+            DeclKind::Import { .. } => match self.workspace.imports.get(&decl.span) {
+                Some(&module) => self.module(module),
+                None => Err(internal("unresolved import")),
+            },
+            DeclKind::Error => Err(internal("declaration with a syntax error")),
+        }
+    }
+
+    fn let_decl(&mut self, bindings: &'w [Binding], scope: ScopeId) -> Result<()> {
+        let mut locals = Locals::new();
+        let mut values = Vec::with_capacity(bindings.len());
+        for binding in bindings {
+            let value = self.expr(&binding.value, &mut locals)?;
+            self.name_object(&value, &binding.name.name);
+            values.push(value);
+        }
+        for (binding, value) in bindings.iter().zip(values) {
+            self.globals.insert((scope, binding.name.name.clone()), value);
+        }
+        Ok(())
+    }
+
+    /// Gives an unnamed body, link, effort or unknown the name it is first bound to.
+    fn name_object(&mut self, value: &Value, name: &Name) {
+        let slot = match value {
+            Value::Body(BodyRef::Body(id)) => &mut self.mechanism.bodies[id.0 as usize].name,
+            Value::Link(id) => &mut self.mechanism.links[id.0 as usize].name,
+            Value::Force(id) | Value::Torque(id) => &mut self.mechanism.efforts[id.0 as usize].name,
+            Value::Scalar(s) => match **s {
+                SExpr::Unknown(id) => &mut self.mechanism.unknowns[id.0 as usize].name,
+                _ => return,
+            },
+            _ => return,
+        };
+        if slot.is_none() {
+            *slot = Some(name.clone());
+        }
+    }
+
+    fn resolution(&self, span: Span) -> Result<Target> {
+        self.checked.resolutions.get(&span).copied().ok_or_else(|| internal("unresolved name"))
+    }
+
+    fn lookup(&self, ident: &Ident, target: Target, locals: &Locals) -> Result<Value> {
+        match target {
+            Target::Local => locals
+                .iter()
+                .rev()
+                .find(|(n, _)| *n == ident.name)
+                .map(|(_, v)| v.clone())
+                .ok_or_else(|| internal(format!("local `{}` missing", ident.name))),
+            Target::Global(scope) => self
+                .globals
+                .get(&(scope, ident.name.clone()))
+                .cloned()
+                .ok_or_else(|| internal(format!("`{}` has no value", ident.name))),
+            Target::Builtin => match &*ident.name {
+                "pi" => Ok(Value::Scalar(num(std::f64::consts::PI))),
+                "earth" => Ok(Value::Body(BodyRef::Earth)),
+                other => Err(internal(format!("`{other}` is not a constant"))),
+            },
+        }
+    }
+
+    pub(super) fn expr(&mut self, expr: &'w Expr, locals: &mut Locals) -> Result<Value> {
+        Ok(match &expr.kind {
+            ExprKind::Name(ident) => {
+                let target = self.resolution(ident.span)?;
+                self.lookup(ident, target, locals)?
+            }
+            ExprKind::Qualified { name, .. } => {
+                let target = self.resolution(expr.span)?;
+                self.lookup(name, target, locals)?
+            }
+            ExprKind::Field { target, field } => {
+                let value = self.expr(target, locals)?;
+                self.field(value, &field.name)?
+            }
+            ExprKind::Unknown(ident) => {
+                let kind = if matches!(&*ident.name, "v" | "vector") { UnknownKind::Vector } else { UnknownKind::Scalar };
+                let id = self.new_unknown(kind, ident.span);
+                match kind {
+                    UnknownKind::Vector => Value::Vector(vector_unknown(self, id, ident.span)),
+                    _ => Value::Scalar(Rc::new(SExpr::Unknown(id))),
+                }
+            }
+            ExprKind::Int(0) => Value::Zero,
+            ExprKind::Int(1) => Value::One,
+            ExprKind::Int(n) => Value::Scalar(num(*n as f64)),
+            ExprKind::Float(x) => Value::Scalar(num(*x)),
+            ExprKind::Vector(items) => {
+                let values = items.iter().map(|e| self.expr(e, locals)).collect::<Result<Vec<_>>>()?;
+                vector_or_matrix(values, expr.span)?
+            }
+            ExprKind::Call { callee, args } => self.call(callee, args, locals, expr.span)?,
+            ExprKind::Binary { op, lhs, rhs } => {
+                let left = self.expr(lhs, locals)?;
+                let right = self.expr(rhs, locals)?;
+                binary(*op, left, right, expr.span)?
+            }
+            ExprKind::Neg(inner) => match self.expr(inner, locals)? {
+                Value::Zero => Value::Zero,
+                Value::One => Value::Scalar(num(-1.0)),
+                Value::Scalar(s) => Value::Scalar(negate(&s)),
+                Value::Vector(v) => Value::Vector(v.map(|s| negate(&s))),
+                Value::Matrix(m) => Value::Matrix(m.map(|row| row.map(|s| negate(&s)))),
+                _ => return Err(internal("negation of a non-number")),
+            },
+            ExprKind::Prime(inner) => match self.expr(inner, locals)? {
+                Value::Scalar(s) => match *s {
+                    SExpr::Coordinate { index, order } => Value::Scalar(Rc::new(SExpr::Coordinate { index, order: order + 1 })),
+                    _ => return Err(internal("prime of a non-coordinate")),
+                },
+                _ => return Err(internal("prime of a non-scalar")),
+            },
+            ExprKind::Construct { kind, params, fields } => self.construct(*kind, params, fields, locals, expr.span)?,
+            ExprKind::Local { bindings, body } => {
+                let depth = locals.len();
+                let mut values = Vec::with_capacity(bindings.len());
+                for binding in bindings {
+                    values.push((binding.name.name.clone(), self.expr(&binding.value, locals)?));
+                }
+                locals.extend(values);
+                let value = self.expr(body, locals);
+                locals.truncate(depth);
+                value?
+            }
+            ExprKind::Error => return Err(internal("expression with a syntax error")),
+        })
+    }
+
+    fn new_unknown(&mut self, kind: UnknownKind, span: Span) -> UnknownId {
+        self.mechanism.unknowns.push(Unknown { kind, span, name: None });
+        UnknownId(self.mechanism.unknowns.len() as u32 - 1)
+    }
+
+    fn field(&self, value: Value, field: &str) -> Result<Value> {
+        let missing = || internal(format!("field `{field}` missing"));
+        Ok(match (value, field) {
+            (Value::Body(body), "frame") => Value::Frame(Frame { body, displacement: Displacement::default() }),
+            (Value::Body(BodyRef::Body(id)), "iframe") => {
+                let displacement = self.mechanism.body(id).iframe.clone().unwrap_or_default();
+                Value::Frame(Frame { body: BodyRef::Body(id), displacement })
+            }
+            (Value::Body(BodyRef::Earth), "iframe") => Value::Frame(Frame { body: BodyRef::Earth, displacement: Displacement::default() }),
+            (Value::Body(BodyRef::Body(id)), "mass") => {
+                self.mechanism.body(id).mass.clone().map(Value::Scalar).ok_or_else(missing)?
+            }
+            (Value::Body(BodyRef::Body(id)), "inertia") => {
+                self.mechanism.body(id).inertia.clone().map(Value::Vector).ok_or_else(missing)?
+            }
+            (Value::Frame(frame), "body") => Value::Body(frame.body),
+            (Value::Frame(frame), "displ") => Value::Displacement(frame.displacement),
+            (Value::Force(id) | Value::Torque(id), "value") => {
+                self.mechanism.effort(id).value.clone().map(Value::Vector).ok_or_else(missing)?
+            }
+            (Value::Force(id) | Value::Torque(id), "body") => self.mechanism.effort(id).basis.map(Value::Body).ok_or_else(missing)?,
+            (Value::Link(id), f) => {
+                let link = self.mechanism.link(id);
+                let index = f.trim_start_matches(|c: char| c.is_alphabetic()).parse::<usize>().unwrap_or(0);
+                if f.starts_with("dof") {
+                    let dof = if index == 0 { link.dofs.iter().fold(Displacement::default(), |a, d| a.then(d)) } else { link.dofs.get(index - 1).cloned().ok_or_else(missing)? };
+                    Value::Displacement(dof)
+                } else {
+                    let list = if f.starts_with("force") { &link.forces } else { &link.torques };
+                    list.iter().find(|(i, _)| *i as usize == index).map(|(_, v)| Value::Vector(v.clone())).ok_or_else(missing)?
+                }
+            }
+            _ => return Err(missing()),
+        })
+    }
+
+    fn call(&mut self, callee: &'w Callee, args: &'w [Arg], locals: &mut Locals, span: Span) -> Result<Value> {
+        let values = args.iter().map(|a| self.expr(&a.value, locals)).collect::<Result<Vec<_>>>()?;
+        let (ident, target) = match callee {
+            Callee::Unknown(ident) => {
+                let id = self.new_unknown(UnknownKind::Function, ident.span);
+                let scalars = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
+                return Ok(Value::Scalar(Rc::new(SExpr::UnknownFunction(id, scalars))));
+            }
+            Callee::Name(ident) => (ident, self.resolution(ident.span)?),
+            Callee::Qualified { name, .. } => (name, self.resolution(name.span)?),
+        };
+        if target == Target::Builtin {
+            return builtin_call(&ident.name, values, span);
+        }
+        let Value::Definition(def) = self.lookup(ident, target, locals)? else { return Err(internal("call of a non-definition")) };
+        let definition = &self.checked.definitions[def.0 as usize];
+        let (params, body, name) = (definition.params, definition.body, definition.name.clone());
+        let mut bound: Vec<Option<Value>> = vec![None; params.len()];
+        for (position, (arg, value)) in args.iter().zip(values).enumerate() {
+            let index = match &arg.name {
+                None => position,
+                Some(n) => params.iter().position(|p| p.name.name == n.name).ok_or_else(|| internal("unknown parameter"))?,
+            };
+            *bound.get_mut(index).ok_or_else(|| internal("too many arguments"))? = Some(value);
+        }
+        let mut frame: Locals = Vec::with_capacity(params.len());
+        for (param, value) in params.iter().zip(bound) {
+            frame.push((param.name.name.clone(), value.ok_or_else(|| internal(format!("missing argument for `{name}`")))?));
+        }
+        if self.depth >= MAX_DEPTH {
+            return Err(internal("definitions nest too deep"));
+        }
+        self.depth += 1;
+        let result = self.expr(body, &mut frame);
+        self.depth -= 1;
+        result
+    }
+
+    fn construct(&mut self, kind: ConstructKind, params: &'w [Ident], fields: &'w [FieldInit], locals: &mut Locals, span: Span) -> Result<Value> {
+        let depth = locals.len();
+        for (index, param) in params.iter().enumerate() {
+            locals.push((param.name.clone(), Value::Scalar(Rc::new(SExpr::Coordinate { index: index as u32, order: 0 }))));
+        }
+        let mut values = Vec::with_capacity(fields.len());
+        for field in fields {
+            match self.expr(&field.value, locals) {
+                Ok(v) => values.push((&*field.name.name, v, field.value.span)),
+                Err(e) => {
+                    locals.truncate(depth);
+                    return Err(e);
+                }
+            }
+        }
+        locals.truncate(depth);
+        match kind {
+            ConstructKind::Body => self.body(values, span),
+            ConstructKind::Link => self.link(params, values, span),
+            ConstructKind::Force | ConstructKind::Torque => self.effort(kind, values, span),
+        }
+    }
+
+    fn body(&mut self, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
+        let mut body = Body { name: None, span, mass: None, iframe: None, inertia: None };
+        for (name, value, at) in fields {
+            match name {
+                "mass" => body.mass = Some(as_scalar(value, at)?),
+                "iframe" => body.iframe = Some(as_displacement(value, at)?),
+                "inertia" => body.inertia = Some(as_vector(value, at)?),
+                _ => return Err(internal(format!("body field `{name}`"))),
+            }
+        }
+        self.mechanism.bodies.push(body);
+        Ok(Value::Body(BodyRef::Body(BodyId(self.mechanism.bodies.len() as u32 - 1))))
+    }
+
+    fn link(&mut self, params: &[Ident], fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
+        let mut link = Link {
+            name: None,
+            span,
+            coordinates: params.iter().map(|p| p.name.clone()).collect(),
+            dofs: Vec::new(),
+            forces: Vec::new(),
+            torques: Vec::new(),
+        };
+        let mut dofs: Vec<(u8, Displacement)> = Vec::new();
+        for (name, value, at) in fields {
+            let base = name.trim_end_matches(|c: char| c.is_ascii_digit());
+            let index = name[base.len()..].parse::<u8>().unwrap_or(0);
+            match base {
+                "dof" => dofs.push((index, as_displacement(value, at)?)),
+                "force" => link.forces.push((index, as_vector(value, at)?)),
+                "torque" => link.torques.push((index, as_vector(value, at)?)),
+                _ => return Err(internal(format!("link field `{name}`"))),
+            }
+        }
+        dofs.sort_by_key(|(i, _)| *i);
+        link.dofs = dofs.into_iter().map(|(_, d)| d).collect();
+        self.mechanism.links.push(link);
+        Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
+    }
+
+    fn effort(&mut self, kind: ConstructKind, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
+        let effort_kind = if kind == ConstructKind::Force { EffortKind::Force } else { EffortKind::Torque };
+        let mut effort = Effort { kind: effort_kind, name: None, span, value: None, basis: None };
+        for (name, value, at) in fields {
+            match (name, value) {
+                ("value", v) => effort.value = Some(as_vector(v, at)?),
+                ("body", Value::Body(b)) => effort.basis = Some(b),
+                _ => return Err(internal(format!("effort field `{name}`"))),
+            }
+        }
+        self.mechanism.efforts.push(effort);
+        let id = EffortId(self.mechanism.efforts.len() as u32 - 1);
+        Ok(if effort_kind == EffortKind::Force { Value::Force(id) } else { Value::Torque(id) })
+    }
+}
+
+/// `?v`: a vector of three unknown components sharing the occurrence's span.
+fn vector_unknown(elaborator: &mut Elaborator<'_, '_>, first: UnknownId, span: Span) -> Vector {
+    elaborator.mechanism.unknowns[first.0 as usize].kind = UnknownKind::Vector;
+    let component = |id: UnknownId| Rc::new(SExpr::Unknown(id));
+    let second = elaborator.new_unknown(UnknownKind::Vector, span);
+    let third = elaborator.new_unknown(UnknownKind::Vector, span);
+    [component(first), component(second), component(third)]
+}
+
+fn as_scalar(value: Value, span: Span) -> Result<Scalar> {
+    match value {
+        Value::Scalar(s) => Ok(s),
+        Value::Zero => Ok(num(0.0)),
+        Value::One => Ok(num(1.0)),
+        _ => Err(internal(format!("expected a scalar at {span:?}"))),
+    }
+}
+
+fn as_vector(value: Value, span: Span) -> Result<Vector> {
+    match value {
+        Value::Vector(v) => Ok(v),
+        Value::Zero => Ok(zero_vector()),
+        _ => Err(internal(format!("expected a vector at {span:?}"))),
+    }
+}
+
+fn as_displacement(value: Value, span: Span) -> Result<Displacement> {
+    match value {
+        Value::Displacement(d) | Value::Rotation(d) => Ok(d),
+        Value::Vector(t) => Ok(Displacement(vec![Elementary::Translation(t)])),
+        Value::Zero | Value::One => Ok(Displacement::default()),
+        _ => Err(internal(format!("expected a displacement at {span:?}"))),
+    }
+}
+
+fn as_rotation(value: Value, span: Span) -> Result<Displacement> {
+    match value {
+        Value::Rotation(d) => Ok(d),
+        Value::One => Ok(Displacement::default()),
+        _ => Err(internal(format!("expected a rotation at {span:?}"))),
+    }
+}
+
+fn as_frame(value: Value, span: Span) -> Result<Frame> {
+    match value {
+        Value::Frame(f) => Ok(f),
+        Value::Body(body) => Ok(Frame { body, displacement: Displacement::default() }),
+        _ => Err(internal(format!("expected a frame at {span:?}"))),
+    }
+}
+
+fn vector_or_matrix(values: Vec<Value>, span: Span) -> Result<Value> {
+    if values.iter().all(|v| matches!(v, Value::Scalar(_) | Value::Zero | Value::One)) {
+        let scalars = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
+        let vector: Vector = scalars.try_into().map_err(|_| internal("vector of the wrong size"))?;
+        return Ok(Value::Vector(vector));
+    }
+    let rows = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
+    let matrix: Matrix = rows.try_into().map_err(|_| internal("matrix of the wrong size"))?;
+    Ok(Value::Matrix(matrix))
+}
+
+fn binary(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Value> {
+    match op {
+        BinaryOp::Rotation => {
+            let angle = as_scalar(left, span)?;
+            let axis = as_vector(right, span)?;
+            Ok(Value::Rotation(Displacement(vec![Elementary::Rotation { angle, axis }])))
+        }
+        BinaryOp::Displacement => {
+            let translation = as_vector(left, span)?;
+            let rotation = as_rotation(right, span)?;
+            Ok(Value::Displacement(Displacement(vec![Elementary::Translation(translation)]).then(&rotation)))
+        }
+        BinaryOp::Frame => {
+            let displacement = as_displacement(left, span)?;
+            let base = as_frame(right, span)?;
+            Ok(Value::Frame(Frame { body: base.body, displacement: base.displacement.then(&displacement) }))
+        }
+        _ => arithmetic(op, left, right, span),
+    }
+}
+
+fn symbol(op: BinaryOp) -> char {
+    match op {
+        BinaryOp::Add => '+',
+        BinaryOp::Sub => '-',
+        BinaryOp::Mul => '*',
+        BinaryOp::Div => '/',
+        _ => '^',
+    }
+}
+
+fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Value> {
+    use Value::*;
+    let c = symbol(op);
+    Ok(match (left, right) {
+        (Zero, Vector(v)) | (Vector(v), Zero) if matches!(op, BinaryOp::Add) => Vector(v),
+        (Vector(v), Zero) if matches!(op, BinaryOp::Sub) => Vector(v),
+        (Zero, Vector(v)) if matches!(op, BinaryOp::Sub) => Vector(v.map(|s| negate(&s))),
+        (Vector(a), Vector(b)) => Vector([0, 1, 2].map(|i| arith(c, &a[i], &b[i]))),
+        (Matrix(a), Matrix(b)) if matches!(op, BinaryOp::Add | BinaryOp::Sub) => {
+            Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| arith(c, &a[i][j], &b[i][j]))))
+        }
+        (Matrix(a), Matrix(b)) => Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| dot_row(&a[i], &[b[0][j].clone(), b[1][j].clone(), b[2][j].clone()])))),
+        (Matrix(a), Vector(v)) => Vector([0, 1, 2].map(|i| dot_row(&a[i], &v))),
+        (Rotation(a), Rotation(b)) => Rotation(a.then(&b)),
+        (a @ (Displacement(_) | Rotation(_) | Vector(_)), b @ (Displacement(_) | Rotation(_) | Vector(_))) => {
+            Displacement(as_displacement(a, span)?.then(&as_displacement(b, span)?))
+        }
+        (Vector(v), s) => {
+            let s = as_scalar(s, span)?;
+            Vector(v.map(|x| arith(c, &x, &s)))
+        }
+        (s, Vector(v)) => {
+            let s = as_scalar(s, span)?;
+            Vector(v.map(|x| arith(c, &s, &x)))
+        }
+        (Matrix(m), s) => {
+            let s = as_scalar(s, span)?;
+            Matrix(m.map(|row| row.map(|x| arith(c, &x, &s))))
+        }
+        (s, Matrix(m)) => {
+            let s = as_scalar(s, span)?;
+            Matrix(m.map(|row| row.map(|x| arith(c, &s, &x))))
+        }
+        (a, b) => Scalar(arith(c, &as_scalar(a, span)?, &as_scalar(b, span)?)),
+    })
+}
+
+fn dot_row(a: &Vector, b: &Vector) -> Scalar {
+    let products: Vec<Scalar> = (0..3).map(|i| arith('*', &a[i], &b[i])).collect();
+    arith('+', &arith('+', &products[0], &products[1]), &products[2])
+}
+
+fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
+    let static_name: &'static str = crate::check::types::BUILTIN_NAMES
+        .iter()
+        .find(|n| **n == name)
+        .copied()
+        .ok_or_else(|| internal(format!("unknown builtin `{name}`")))?;
+    match name {
+        "norm" | "dot" | "cross" => {
+            let vectors = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
+            let a = vectors.first().ok_or_else(|| internal("missing argument"))?;
+            Ok(match name {
+                "norm" => Value::Scalar(Rc::new(SExpr::Call("sqrt", vec![dot_row(a, a)]))),
+                "dot" => Value::Scalar(dot_row(a, vectors.get(1).ok_or_else(|| internal("missing argument"))?)),
+                _ => {
+                    let b = vectors.get(1).ok_or_else(|| internal("missing argument"))?;
+                    let term = |i: usize, j: usize| arith('-', &arith('*', &a[i], &b[j]), &arith('*', &a[j], &b[i]));
+                    Value::Vector([term(1, 2), term(2, 0), term(0, 1)])
+                }
+            })
+        }
+        _ => {
+            let args = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
+            if let Some(folded) = fold_builtin(name, &args) {
+                return Ok(Value::Scalar(num(folded)));
+            }
+            Ok(Value::Scalar(Rc::new(SExpr::Call(static_name, args))))
+        }
+    }
+}
+
+/// Evaluates a built-in function on numbers (`sin(pi/2)` is the number 1).
+fn fold_builtin(name: &str, args: &[Scalar]) -> Option<f64> {
+    let x = constant(args.first()?)?;
+    let value = match name {
+        "sin" => x.sin(),
+        "cos" => x.cos(),
+        "tan" => x.tan(),
+        "asin" => x.asin(),
+        "acos" => x.acos(),
+        "atan" => x.atan(),
+        "sqrt" => x.sqrt(),
+        "exp" => x.exp(),
+        "log" => x.ln(),
+        "abs" => x.abs(),
+        "atan2" => x.atan2(constant(args.get(1)?)?),
+        _ => return None,
+    };
+    value.is_finite().then_some(value)
+}

@@ -1,0 +1,187 @@
+//! Values of LSD programs: symbolic scalars (numbers, unknowns, joint coordinates and the
+//! operations between them), vectors, matrices, rotations, displacements, and references to the
+//! mechanical objects of the [`Mechanism`](super::mechanism::Mechanism).
+
+use std::fmt;
+use std::rc::Rc;
+
+use crate::check::scope::ScopeId;
+use crate::check::types::DefId;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct UnknownId(pub u32);
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyId(pub u32);
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct LinkId(pub u32);
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct EffortId(pub u32);
+
+pub type Scalar = Rc<SExpr>;
+
+/// A symbolic scalar expression.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SExpr {
+    Num(f64),
+    /// `?s`, or a `let` name bound to one.
+    Unknown(UnknownId),
+    /// `?fs(x, x')`
+    UnknownFunction(UnknownId, Vec<Scalar>),
+    /// The `index`-th coordinate of the enclosing link, differentiated `order` times.
+    Coordinate { index: u32, order: u32 },
+    Neg(Scalar),
+    Add(Scalar, Scalar),
+    Sub(Scalar, Scalar),
+    Mul(Scalar, Scalar),
+    Div(Scalar, Scalar),
+    Pow(Scalar, Scalar),
+    Call(&'static str, Vec<Scalar>),
+}
+
+pub fn num(value: f64) -> Scalar {
+    Rc::new(SExpr::Num(value))
+}
+
+pub fn constant(s: &Scalar) -> Option<f64> {
+    match **s {
+        SExpr::Num(v) => Some(v),
+        _ => None,
+    }
+}
+
+/// Builds `a op b`, folding numbers and the neutral elements 0 and 1.
+pub fn arith(op: char, a: &Scalar, b: &Scalar) -> Scalar {
+    let (ca, cb) = (constant(a), constant(b));
+    if let (Some(x), Some(y)) = (ca, cb) {
+        let folded = match op {
+            '+' => x + y,
+            '-' => x - y,
+            '*' => x * y,
+            '/' => x / y,
+            _ => x.powf(y),
+        };
+        if folded.is_finite() {
+            return num(folded);
+        }
+    }
+    match (op, ca, cb) {
+        ('+', Some(z), _) if z == 0.0 => return b.clone(),
+        ('+' | '-', _, Some(z)) if z == 0.0 => return a.clone(),
+        ('*', Some(z), _) | ('*', _, Some(z)) if z == 0.0 => return num(0.0),
+        ('*', Some(o), _) if o == 1.0 => return b.clone(),
+        ('*' | '/', _, Some(o)) if o == 1.0 => return a.clone(),
+        ('-', Some(z), _) if z == 0.0 => return negate(b),
+        _ => {}
+    }
+    let (a, b) = (a.clone(), b.clone());
+    Rc::new(match op {
+        '+' => SExpr::Add(a, b),
+        '-' => SExpr::Sub(a, b),
+        '*' => SExpr::Mul(a, b),
+        '/' => SExpr::Div(a, b),
+        _ => SExpr::Pow(a, b),
+    })
+}
+
+pub fn negate(a: &Scalar) -> Scalar {
+    match constant(a) {
+        Some(v) => num(-v),
+        None => Rc::new(SExpr::Neg(a.clone())),
+    }
+}
+
+pub type Vector = [Scalar; 3];
+pub type Matrix = [Vector; 3];
+
+pub fn zero_vector() -> Vector {
+    [num(0.0), num(0.0), num(0.0)]
+}
+
+/// One step of a displacement chain.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Elementary {
+    Translation(Vector),
+    Rotation { angle: Scalar, axis: Vector },
+}
+
+/// A displacement as a chain of translations and rotations, each expressed in the frame the
+/// previous ones produce (the thesis's `dof1`, `dof2`, … convention). The empty chain is the
+/// identity.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Displacement(pub Vec<Elementary>);
+
+impl Displacement {
+    pub fn then(mut self, other: &Displacement) -> Displacement {
+        self.0.extend(other.0.iter().cloned());
+        self
+    }
+
+    pub fn is_identity(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BodyRef {
+    Earth,
+    Body(BodyId),
+}
+
+/// A frame: a body's reference frame moved by a displacement.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub body: BodyRef,
+    pub displacement: Displacement,
+}
+
+#[derive(Clone, Debug)]
+pub enum Value {
+    Scalar(Scalar),
+    Vector(Vector),
+    Matrix(Matrix),
+    /// Rotations are displacement chains made of rotations only.
+    Rotation(Displacement),
+    Displacement(Displacement),
+    Frame(Frame),
+    Body(BodyRef),
+    Link(LinkId),
+    Force(EffortId),
+    Torque(EffortId),
+    /// The literal `0`, until its context says what it is.
+    Zero,
+    /// The literal `1`, until its context says what it is.
+    One,
+    Package(ScopeId),
+    Definition(DefId),
+}
+
+impl SExpr {
+    /// Text of the expression, naming unknowns with `unknown` (`?s` numbering is the caller's).
+    pub fn render(&self, unknown: &mut dyn FnMut(UnknownId) -> String) -> String {
+        let list = |args: &[Scalar], unknown: &mut dyn FnMut(UnknownId) -> String| {
+            args.iter().map(|a| a.render(unknown)).collect::<Vec<_>>().join(", ")
+        };
+        match self {
+            SExpr::Num(v) => format!("{v}"),
+            SExpr::Unknown(id) => format!("?{}", unknown(*id)),
+            SExpr::UnknownFunction(id, args) => {
+                let name = unknown(*id);
+                format!("?{name}({})", list(args, unknown))
+            }
+            SExpr::Coordinate { index, order } => format!("q{index}{}", "'".repeat(*order as usize)),
+            SExpr::Neg(a) => format!("-({})", a.render(unknown)),
+            SExpr::Add(a, b) => format!("({} + {})", a.render(unknown), b.render(unknown)),
+            SExpr::Sub(a, b) => format!("({} - {})", a.render(unknown), b.render(unknown)),
+            SExpr::Mul(a, b) => format!("({} * {})", a.render(unknown), b.render(unknown)),
+            SExpr::Div(a, b) => format!("({} / {})", a.render(unknown), b.render(unknown)),
+            SExpr::Pow(a, b) => format!("({} ^ {})", a.render(unknown), b.render(unknown)),
+            SExpr::Call(name, args) => format!("{name}({})", list(args, unknown)),
+        }
+    }
+}
+
+impl fmt::Display for SExpr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.render(&mut |id| id.0.to_string()))
+    }
+}

@@ -1,0 +1,61 @@
+//! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked and its rendered
+//! diagnostics are compared with `tests/golden/NAME.stderr`. The error text is reviewed like code.
+//! Set `UPDATE_GOLDEN=1` to rewrite the expected files after an intended change.
+
+use std::path::{Path, PathBuf};
+
+use lsdc::diag::render;
+use lsdc::driver::compile_files;
+use lsdc::load::LoadOptions;
+
+fn golden_inputs() -> Vec<PathBuf> {
+    let mut inputs: Vec<PathBuf> = std::fs::read_dir("tests/golden")
+        .expect("tests/golden exists")
+        .map(|e| e.expect("readable entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "lsd"))
+        .collect();
+    inputs.sort();
+    inputs
+}
+
+fn render_diagnostics(input: &Path) -> String {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_files(&[input.to_path_buf()], &options).expect("input readable");
+    assert!(compilation.has_errors(), "{} should not check clean", input.display());
+    render::to_text(&compilation.workspace.sources, &compilation.diagnostics)
+}
+
+#[test]
+fn diagnostics_match_golden_files() {
+    let update = std::env::var_os("UPDATE_GOLDEN").is_some();
+    let mut failures = Vec::new();
+    let inputs = golden_inputs();
+    assert!(inputs.len() >= 11, "the golden suite lost files");
+    for input in inputs {
+        let actual = render_diagnostics(&input);
+        let expected_path = input.with_extension("stderr");
+        if update {
+            std::fs::write(&expected_path, &actual).expect("writable golden file");
+            continue;
+        }
+        let expected = std::fs::read_to_string(&expected_path).unwrap_or_default();
+        if actual != expected {
+            failures.push(format!("--- {}\n{actual}", expected_path.display()));
+        }
+    }
+    assert!(failures.is_empty(), "diagnostics differ from golden files:\n{}", failures.join("\n"));
+}
+
+#[test]
+fn json_diagnostics_carry_positions_and_labels() {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_files(&[PathBuf::from("tests/golden/library_error.lsd")], &options).expect("readable");
+    let json = render::to_json_value(&compilation.workspace.sources, &compilation.diagnostics);
+    let first = &json[0];
+    assert_eq!(first["code"], "E0401");
+    assert_eq!(first["file"], "tests/golden/lib/broken.lsd");
+    assert_eq!(first["line"], 3);
+    assert_eq!(first["column"], 32);
+    let labels = first["labels"].as_array().expect("labels");
+    assert!(labels.iter().any(|l| l["file"] == "tests/golden/library_error.lsd" && l["primary"] == false));
+}
