@@ -1,0 +1,82 @@
+//! The `lsdc` binary: exit codes, summary, JSON diagnostics, library search path.
+
+use std::process::Command;
+
+fn lsdc(args: &[&str]) -> (i32, String, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_lsdc"))
+        .args(args)
+        .env_remove("LSD_PATH")
+        .output()
+        .expect("lsdc runs");
+    (
+        output.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn clean_program_exits_zero_with_a_summary() {
+    let (code, stdout, stderr) = lsdc(&["check", "examples/satellite.lsd"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("bodies    4 (satellite, bras_primaire, bras_secondaire, reflecteur)"), "{stdout}");
+    assert!(stdout.contains("2 scalars (?s)"), "{stdout}");
+    assert!(stdout.contains("3 functions (?f)"), "{stdout}");
+}
+
+#[test]
+fn program_errors_exit_one() {
+    let (code, _, stderr) = lsdc(&["check", "tests/golden/wrong_field.lsd"]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("tests/golden/wrong_field.lsd:2:47"), "{stderr}");
+}
+
+#[test]
+fn usage_errors_exit_two() {
+    assert_eq!(lsdc(&["check"]).0, 2);
+    assert_eq!(lsdc(&["frobnicate"]).0, 2);
+    let (code, _, stderr) = lsdc(&["check", "no/such/file.lsd"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("cannot read"), "{stderr}");
+}
+
+#[test]
+fn json_format_reports_diagnostics_and_summaries() {
+    let (code, stdout, _) = lsdc(&["check", "--format", "json", "examples/satellite.lsd", "tests/golden/unknown_name_thesis.lsd"]);
+    assert_eq!(code, 1);
+    let value: serde_json::Value = serde_json::from_str(&stdout).expect("valid JSON");
+    assert_eq!(value["ok"], false);
+    assert_eq!(value["files"][0]["summary"]["bodies"], 4);
+    let diagnostic = &value["files"][1]["diagnostics"][0];
+    assert_eq!(diagnostic["code"], "E0301");
+    assert_eq!((diagnostic["line"].as_u64(), diagnostic["column"].as_u64()), (Some(4), Some(6)));
+    assert!(diagnostic["help"].as_str().is_some_and(|h| h.contains("satellite")));
+}
+
+#[test]
+fn library_directories_come_from_flags() {
+    let dir = std::env::temp_dir().join(format!("lsdc-cli-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("libs")).expect("temp dir");
+    std::fs::write(dir.join("libs/hinges.lsd"), "let hinge = link(q) dof = q || [0,0,1] end;\n").expect("write");
+    std::fs::write(dir.join("main.lsd"), "import hinges;\nlet a = body end;\njoin earth and a with hinge;\n").expect("write");
+    let main = dir.join("main.lsd");
+    let main = main.to_str().expect("utf-8");
+    assert_eq!(lsdc(&["check", main]).0, 1, "not found without -L");
+    let libs = dir.join("libs");
+    let (code, _, stderr) = lsdc(&["check", "-L", libs.to_str().expect("utf-8"), main]);
+    assert_eq!(code, 0, "{stderr}");
+    let status = Command::new(env!("CARGO_BIN_EXE_lsdc"))
+        .args(["check", main])
+        .env("LSD_PATH", libs.to_str().expect("utf-8"))
+        .status()
+        .expect("runs");
+    assert_eq!(status.code(), Some(0), "found through LSD_PATH");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn parse_prints_the_syntax_tree() {
+    let (code, stdout, _) = lsdc(&["parse", "examples/link_forms.lsd"]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("Join"), "{stdout}");
+}
