@@ -17,14 +17,7 @@ impl<'w> Checker<'w> {
                 let ty = self.expr(target, ctx);
                 self.field(ty, field)
             }
-            ExprKind::Unknown(ident) => unknown_kind(&ident.name).unwrap_or_else(|| {
-                self.report(
-                    Diagnostic::error("E0407", format!("unknown kind of unknown `?{}`", ident.name))
-                        .primary(ident.span, "not `?s` (scalar) or `?v` (vector)")
-                        .help("an unknown scalar is `?s`; an unknown function of coordinates is a call, `?fs(x, x')`"),
-                );
-                Ty::Error
-            }),
+            ExprKind::Unknown(ident) => unknown_type(&ident.name),
             ExprKind::Int(0) => Ty::Zero,
             ExprKind::Int(1) => Ty::One,
             ExprKind::Int(_) | ExprKind::Float(_) => Ty::Scalar,
@@ -88,7 +81,7 @@ impl<'w> Checker<'w> {
                 return Some((Target::Global(id), entry.ty));
             }
             for &(opened, opened_at) in s.opened.iter().rev() {
-                if opened_at < limit {
+                if opened_at <= limit {
                     if let Some(entry) = self.out.scope(opened).names.get(name) {
                         return Some((Target::Global(opened), entry.ty));
                     }
@@ -108,6 +101,11 @@ impl<'w> Checker<'w> {
         while let Some(id) = current {
             let scope = self.out.scope(id);
             if let Some(&later) = scope.declared_later.get(name.as_ref()) {
+                if later.file == ident.span.file && later.start < ident.span.start {
+                    return diagnostic
+                        .secondary(later, "defined in the same `let ... and ...`")
+                        .help("bindings joined by `and` are simultaneous and do not see each other: use two `let` declarations");
+                }
                 return diagnostic
                     .secondary(later, "defined here, after its use")
                     .help("a name is visible only after its declaration: move the declaration up");
@@ -280,7 +278,8 @@ impl<'w> Checker<'w> {
                         self.expect_value(&arg.value, *ty, Ty::Scalar, "an argument of an unknown function");
                     }
                 }
-                if matches!(&*ident.name, "fv" | "vector") { Ty::Vector } else { Ty::Scalar }
+                let _ = ident;
+                Ty::Scalar
             }
             Callee::Name(ident) => {
                 let is_local = ctx.locals.iter().any(|l| l.name == ident.name);
@@ -457,6 +456,7 @@ impl<'w> Checker<'w> {
         ctx.locals.truncate(depth);
         if kind == ConstructKind::Link {
             self.check_dof_fields(fields);
+            self.check_coordinates_used(params, fields);
         }
         match kind {
             ConstructKind::Body => Ty::Body,
@@ -466,30 +466,63 @@ impl<'w> Checker<'w> {
         }
     }
 
-    /// `dof` alone, or `dof1`, `dof2`, … numbered from 1 without gaps.
+    /// A coordinate that no dof mentions is a mistake: the link would have a useless parameter.
+    fn check_coordinates_used(&mut self, params: &[Ident], fields: &[FieldInit]) {
+        for param in params {
+            let used = fields
+                .iter()
+                .filter(|f| types::is_numbered(&f.name.name, "dof"))
+                .any(|f| mentions(&f.value, &param.name));
+            if !used {
+                self.report(
+                    Diagnostic::warning("W0401", format!("coordinate `{}` does not appear in the link's dof", param.name))
+                        .primary(param.span, "unused coordinate")
+                        .help("use it in `dof = ...`, or remove it from the parameter list"),
+                );
+            }
+        }
+    }
+
+    /// The plain form (`dof`, `force`, `torque`) or the numbered one (`dof1`, `force1`, …), not
+    /// both; `dof1`, `dof2`, … numbered from 1 without gaps; `forceN`/`torqueN` only with `dofN`.
     fn check_dof_fields(&mut self, fields: &[FieldInit]) {
-        let plain = fields.iter().find(|f| &*f.name.name == "dof");
-        let mut numbered: Vec<(u32, &FieldInit)> = fields
-            .iter()
-            .filter_map(|f| f.name.name.strip_prefix("dof").and_then(|d| d.parse().ok()).map(|n| (n, f)))
-            .collect();
-        numbered.sort_by_key(|(n, _)| *n);
-        if let (Some(plain), Some((_, first))) = (plain, numbered.first()) {
+        let number = |f: &FieldInit| -> Option<u32> {
+            let digits = f.name.name.trim_start_matches(|c: char| c.is_alphabetic());
+            digits.parse().ok()
+        };
+        let plain = fields.iter().find(|f| number(f).is_none());
+        let numbered = fields.iter().find(|f| number(f).is_some());
+        if let (Some(plain), Some(numbered)) = (plain, numbered) {
             self.report(
-                Diagnostic::error("E0415", "a link has either `dof` or `dof1`, `dof2`, …, not both")
-                    .primary(plain.name.span, "`dof` here")
-                    .secondary(first.name.span, "numbered dof here"),
+                Diagnostic::error("E0415", "a link uses either `dof`, `force`, `torque` or `dof1`, `force1`, `torque1`, …, not both")
+                    .primary(numbered.name.span, "numbered field here")
+                    .secondary(plain.name.span, "plain field here"),
             );
             return;
         }
-        for (expected, (n, field)) in (1..).zip(&numbered) {
+        let mut dofs: Vec<(u32, &FieldInit)> = fields
+            .iter()
+            .filter(|f| f.name.name.starts_with("dof"))
+            .filter_map(|f| number(f).map(|n| (n, f)))
+            .collect();
+        dofs.sort_by_key(|(n, _)| *n);
+        for (expected, (n, field)) in (1..).zip(&dofs) {
             if *n != expected {
                 self.report(
                     Diagnostic::error("E0415", format!("`dof{n}` without `dof{expected}`"))
                         .primary(field.name.span, format!("expected `dof{expected}` before this"))
                         .help("number the displacements of a link's dof chain from 1, in order"),
                 );
-                break;
+                return;
+            }
+        }
+        for field in fields.iter().filter(|f| !f.name.name.starts_with("dof")) {
+            if let Some(n) = number(field).filter(|&n| n as usize > dofs.len()) {
+                self.report(
+                    Diagnostic::error("E0415", format!("`{}` goes with `dof{n}`, which this link does not have", field.name.name))
+                        .primary(field.name.span, "no matching dof")
+                        .help("`forceN` and `torqueN` are the known efforts along the N-th step of the dof chain"),
+                );
             }
         }
     }
@@ -567,11 +600,12 @@ fn arithmetic(op: BinaryOp, left: Ty, right: Ty) -> Option<Ty> {
     })
 }
 
-fn unknown_kind(name: &str) -> Option<Ty> {
+/// `?v` and `?vector` are unknown vectors; every other `?name` is an unknown scalar (the name is
+/// a reminder for the reader, as `?s` is in the thesis).
+fn unknown_type(name: &str) -> Ty {
     match name {
-        "s" | "scalar" => Some(Ty::Scalar),
-        "v" | "vector" => Some(Ty::Vector),
-        _ => None,
+        "v" | "vector" => Ty::Vector,
+        _ => Ty::Scalar,
     }
 }
 
@@ -598,4 +632,18 @@ fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
         None => diagnostic.help(format!("the fields of `{keyword}` are: {}", names.join(", "))),
     };
     diagnostic
+}
+
+/// Whether an expression mentions a name (a conservative syntactic test).
+fn mentions(expr: &Expr, name: &str) -> bool {
+    match &expr.kind {
+        ExprKind::Name(ident) => &*ident.name == name,
+        ExprKind::Field { target, .. } | ExprKind::Neg(target) | ExprKind::Prime(target) => mentions(target, name),
+        ExprKind::Binary { lhs, rhs, .. } => mentions(lhs, name) || mentions(rhs, name),
+        ExprKind::Vector(items) => items.iter().any(|e| mentions(e, name)),
+        ExprKind::Call { args, .. } => args.iter().any(|a| mentions(&a.value, name)),
+        ExprKind::Local { bindings, body } => bindings.iter().any(|b| mentions(&b.value, name)) || mentions(body, name),
+        ExprKind::Construct { fields, .. } => fields.iter().any(|f| mentions(&f.value, name)),
+        ExprKind::Qualified { .. } | ExprKind::Unknown(_) | ExprKind::Int(_) | ExprKind::Float(_) | ExprKind::Error => false,
+    }
 }

@@ -142,14 +142,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             ExprKind::Field { target, field } => {
                 let value = self.expr(target, locals)?;
-                self.field(value, &field.name)?
+                self.field(value, field)?
             }
             ExprKind::Unknown(ident) => {
-                let kind = if matches!(&*ident.name, "v" | "vector") { UnknownKind::Vector } else { UnknownKind::Scalar };
-                let id = self.new_unknown(kind, ident.span);
-                match kind {
-                    UnknownKind::Vector => Value::Vector(vector_unknown(self, id, ident.span)),
-                    _ => Value::Scalar(Rc::new(SExpr::Unknown(id))),
+                if matches!(&*ident.name, "v" | "vector") {
+                    Value::Vector([0, 1, 2].map(|c| self.unknown(UnknownKind::Vector, Origin::Written, c, ident.span)))
+                } else {
+                    Value::Scalar(self.unknown(UnknownKind::Scalar, Origin::Written, 0, ident.span))
                 }
             }
             ExprKind::Int(0) => Value::Zero,
@@ -197,52 +196,82 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         })
     }
 
-    fn new_unknown(&mut self, kind: UnknownKind, span: Span) -> UnknownId {
-        self.mechanism.unknowns.push(Unknown { kind, span, name: None });
+    fn new_unknown(&mut self, kind: UnknownKind, origin: Origin, component: u8, span: Span) -> UnknownId {
+        self.mechanism.unknowns.push(Unknown { kind, origin, component, span, name: None });
         UnknownId(self.mechanism.unknowns.len() as u32 - 1)
     }
 
-    fn field(&self, value: Value, field: &str) -> Result<Value> {
-        let missing = || internal(format!("field `{field}` missing"));
-        Ok(match (value, field) {
+    fn unknown(&mut self, kind: UnknownKind, origin: Origin, component: u8, span: Span) -> Scalar {
+        Rc::new(SExpr::Unknown(self.new_unknown(kind, origin, component, span)))
+    }
+
+    fn generic(&mut self, origin: impl Fn(u8) -> Origin, i: u8, span: Span) -> Scalar {
+        self.unknown(UnknownKind::Generic, origin(i), 0, span)
+    }
+
+    fn generic_vector(&mut self, origin: impl Fn(u8) -> Origin + Copy, span: Span) -> Vector {
+        [0, 1, 2].map(|i| self.generic(origin, i, span))
+    }
+
+    fn field(&self, value: Value, field: &Ident) -> Result<Value> {
+        let name = &*field.name;
+        Ok(match (value, name) {
             (Value::Body(body), "frame") => Value::Frame(Frame { body, displacement: Displacement::default() }),
-            (Value::Body(BodyRef::Body(id)), "iframe") => {
-                let displacement = self.mechanism.body(id).iframe.clone().unwrap_or_default();
-                Value::Frame(Frame { body: BodyRef::Body(id), displacement })
-            }
             (Value::Body(BodyRef::Earth), "iframe") => Value::Frame(Frame { body: BodyRef::Earth, displacement: Displacement::default() }),
-            (Value::Body(BodyRef::Body(id)), "mass") => {
-                self.mechanism.body(id).mass.clone().map(Value::Scalar).ok_or_else(missing)?
+            (Value::Body(BodyRef::Earth), _) => {
+                return Err(Diagnostic::error("E0601", format!("`earth` has no {name}"))
+                    .primary(field.span, "earth is the fixed frame, not a body with mass")
+                    .help("masses and inertias belong to the bodies you declare"))
             }
-            (Value::Body(BodyRef::Body(id)), "inertia") => {
-                self.mechanism.body(id).inertia.clone().map(Value::Vector).ok_or_else(missing)?
-            }
-            (Value::Frame(frame), "body") => Value::Body(frame.body),
-            (Value::Frame(frame), "displ") => Value::Displacement(frame.displacement),
-            (Value::Force(id) | Value::Torque(id), "value") => {
-                self.mechanism.effort(id).value.clone().map(Value::Vector).ok_or_else(missing)?
-            }
-            (Value::Force(id) | Value::Torque(id), "body") => self.mechanism.effort(id).basis.map(Value::Body).ok_or_else(missing)?,
-            (Value::Link(id), f) => {
-                let link = self.mechanism.link(id);
-                let index = f.trim_start_matches(|c: char| c.is_alphabetic()).parse::<usize>().unwrap_or(0);
-                if f.starts_with("dof") {
-                    let dof = if index == 0 { link.dofs.iter().fold(Displacement::default(), |a, d| a.then(d)) } else { link.dofs.get(index - 1).cloned().ok_or_else(missing)? };
-                    Value::Displacement(dof)
-                } else {
-                    let list = if f.starts_with("force") { &link.forces } else { &link.torques };
-                    list.iter().find(|(i, _)| *i as usize == index).map(|(_, v)| Value::Vector(v.clone())).ok_or_else(missing)?
+            (Value::Body(BodyRef::Body(id)), f) => {
+                let body = self.mechanism.body(id);
+                match f {
+                    "iframe" => Value::Frame(Frame { body: BodyRef::Body(id), displacement: body.iframe.value().clone() }),
+                    "mass" => Value::Scalar(body.mass.value().clone()),
+                    _ => Value::Vector(body.inertia.value().clone()),
                 }
             }
-            _ => return Err(missing()),
+            (Value::Frame(frame), "body") => Value::Body(frame.body),
+            (Value::Frame(frame), _) => Value::Displacement(frame.displacement),
+            (Value::Force(id) | Value::Torque(id), "value") => Value::Vector(self.mechanism.effort(id).value.value().clone()),
+            (Value::Force(id) | Value::Torque(id), _) => Value::Body(self.mechanism.effort(id).basis),
+            (Value::Link(id), f) => self.link_field(id, f, field.span)?,
+            _ => return Err(internal(format!("field `{name}` of a value without fields"))),
         })
+    }
+
+    fn link_field(&self, id: LinkId, field: &str, span: Span) -> Result<Value> {
+        let link = self.mechanism.link(id);
+        let base = field.trim_end_matches(|c: char| c.is_ascii_digit());
+        let index = field[base.len()..].parse::<usize>().unwrap_or(0);
+        let missing = |what: String| {
+            Diagnostic::error("E0602", format!("this link has no `{field}`"))
+                .primary(span, what)
+                .secondary(link.span, "the link is declared here")
+        };
+        if base == "dof" {
+            if index == 0 {
+                return Ok(Value::Displacement(link.dofs.iter().fold(Displacement::default(), |a, d| a.then(d))));
+            }
+            let count = link.dofs.len();
+            return link
+                .dofs
+                .get(index - 1)
+                .map(|d| Value::Displacement(d.clone()))
+                .ok_or_else(|| missing(format!("its dof chain has {count} step{}", if count == 1 { "" } else { "s" })));
+        }
+        let list = if base == "force" { &link.forces } else { &link.torques };
+        list.iter()
+            .find(|(i, _)| *i as usize == index)
+            .map(|(_, v)| Value::Vector(v.clone()))
+            .ok_or_else(|| missing(format!("the link declares no `{field}`; unknown link efforts are not values")))
     }
 
     fn call(&mut self, callee: &'w Callee, args: &'w [Arg], locals: &mut Locals, span: Span) -> Result<Value> {
         let values = args.iter().map(|a| self.expr(&a.value, locals)).collect::<Result<Vec<_>>>()?;
         let (ident, target) = match callee {
             Callee::Unknown(ident) => {
-                let id = self.new_unknown(UnknownKind::Function, ident.span);
+                let id = self.new_unknown(UnknownKind::Function, Origin::Written, 0, ident.span);
                 let scalars = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
                 return Ok(Value::Scalar(Rc::new(SExpr::UnknownFunction(id, scalars))));
             }
@@ -300,17 +329,42 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     }
 
     fn body(&mut self, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
-        let mut body = Body { name: None, span, mass: None, iframe: None, inertia: None };
+        let id = BodyId(self.mechanism.bodies.len() as u32);
+        let (mut mass, mut iframe, mut inertia) = (None, None, None);
         for (name, value, at) in fields {
             match name {
-                "mass" => body.mass = Some(as_scalar(value, at)?),
-                "iframe" => body.iframe = Some(as_displacement(value, at)?),
-                "inertia" => body.inertia = Some(as_vector(value, at)?),
+                "mass" => mass = Some(as_scalar(value, at)?),
+                "iframe" => iframe = Some(as_displacement(value, at)?),
+                "inertia" => inertia = Some(as_vector(value, at)?),
                 _ => return Err(internal(format!("body field `{name}`"))),
             }
         }
-        self.mechanism.bodies.push(body);
-        Ok(Value::Body(BodyRef::Body(BodyId(self.mechanism.bodies.len() as u32 - 1))))
+        let mass = match mass {
+            Some(m) => Quantity::Declared(m),
+            None => Quantity::Generic(self.generic(|_| Origin::Mass(id), 0, span)),
+        };
+        let inertia = match inertia {
+            Some(i) => Quantity::Declared(i),
+            None => Quantity::Generic(self.generic_vector(|i| Origin::Inertia(id, i), span)),
+        };
+        let iframe = match iframe {
+            Some(d) => Quantity::Declared(d),
+            None => Quantity::Generic(self.generic_displacement(id, span)),
+        };
+        self.mechanism.bodies.push(Body { name: None, span, mass, iframe, inertia });
+        Ok(Value::Body(BodyRef::Body(id)))
+    }
+
+    /// An unspecified inertia frame: a translation, then rotations about x, y and z.
+    fn generic_displacement(&mut self, body: BodyId, span: Span) -> Displacement {
+        let origin = move |i| Origin::InertiaFrame(body, i);
+        let translation = self.generic_vector(origin, span);
+        let mut steps = vec![Elementary::Translation(translation)];
+        for (i, axis) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].into_iter().enumerate() {
+            let angle = self.generic(origin, 3 + i as u8, span);
+            steps.push(Elementary::Rotation { angle, axis: axis.map(num) });
+        }
+        Displacement(steps)
     }
 
     fn link(&mut self, params: &[Ident], fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
@@ -340,28 +394,23 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     }
 
     fn effort(&mut self, kind: ConstructKind, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
+        let id = EffortId(self.mechanism.efforts.len() as u32);
         let effort_kind = if kind == ConstructKind::Force { EffortKind::Force } else { EffortKind::Torque };
-        let mut effort = Effort { kind: effort_kind, name: None, span, value: None, basis: None };
-        for (name, value, at) in fields {
-            match (name, value) {
-                ("value", v) => effort.value = Some(as_vector(v, at)?),
-                ("body", Value::Body(b)) => effort.basis = Some(b),
+        let (mut value, mut basis) = (None, BodyRef::Earth);
+        for (name, field_value, at) in fields {
+            match (name, field_value) {
+                ("value", v) => value = Some(as_vector(v, at)?),
+                ("body", Value::Body(b)) => basis = b,
                 _ => return Err(internal(format!("effort field `{name}`"))),
             }
         }
-        self.mechanism.efforts.push(effort);
-        let id = EffortId(self.mechanism.efforts.len() as u32 - 1);
+        let value = match value {
+            Some(v) => Quantity::Declared(v),
+            None => Quantity::Generic(self.generic_vector(|i| Origin::EffortValue(id, i), span)),
+        };
+        self.mechanism.efforts.push(Effort { kind: effort_kind, name: None, span, value, basis });
         Ok(if effort_kind == EffortKind::Force { Value::Force(id) } else { Value::Torque(id) })
     }
-}
-
-/// `?v`: a vector of three unknown components sharing the occurrence's span.
-fn vector_unknown(elaborator: &mut Elaborator<'_, '_>, first: UnknownId, span: Span) -> Vector {
-    elaborator.mechanism.unknowns[first.0 as usize].kind = UnknownKind::Vector;
-    let component = |id: UnknownId| Rc::new(SExpr::Unknown(id));
-    let second = elaborator.new_unknown(UnknownKind::Vector, span);
-    let third = elaborator.new_unknown(UnknownKind::Vector, span);
-    [component(first), component(second), component(third)]
 }
 
 fn as_scalar(value: Value, span: Span) -> Result<Scalar> {
@@ -462,6 +511,7 @@ fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Val
         (Matrix(a), Matrix(b)) => Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| dot_row(&a[i], &[b[0][j].clone(), b[1][j].clone(), b[2][j].clone()])))),
         (Matrix(a), Vector(v)) => Vector([0, 1, 2].map(|i| dot_row(&a[i], &v))),
         (Rotation(a), Rotation(b)) => Rotation(a.then(&b)),
+        (Rotation(r), Vector(v)) => Vector(rotate(&r, v)),
         (a @ (Displacement(_) | Rotation(_) | Vector(_)), b @ (Displacement(_) | Rotation(_) | Vector(_))) => {
             Displacement(as_displacement(a, span)?.then(&as_displacement(b, span)?))
         }
@@ -485,6 +535,39 @@ fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Val
     })
 }
 
+/// Applies a rotation chain to a vector (Rodrigues' formula, symbolic).
+fn rotate(rotation: &Displacement, v: Vector) -> Vector {
+    rotation.0.iter().rev().fold(v, |v, step| match step {
+        Elementary::Rotation { angle, axis } => rotate_about(angle, axis, &v),
+        Elementary::Translation(_) => v,
+    })
+}
+
+fn rotate_about(angle: &Scalar, axis: &Vector, v: &Vector) -> Vector {
+    let length = builtin_scalar("sqrt", &dot_row(axis, axis));
+    let k = axis.clone().map(|c| arith('/', &c, &length));
+    let (c, s) = (builtin_scalar("cos", angle), builtin_scalar("sin", angle));
+    let k_cross_v = cross(&k, v);
+    let k_dot_v = dot_row(&k, v);
+    let one_minus_c = arith('-', &num(1.0), &c);
+    [0, 1, 2].map(|i| {
+        let along = arith('*', &arith('*', &k[i], &k_dot_v), &one_minus_c);
+        arith('+', &arith('+', &arith('*', &v[i], &c), &arith('*', &k_cross_v[i], &s)), &along)
+    })
+}
+
+fn builtin_scalar(name: &'static str, x: &Scalar) -> Scalar {
+    match fold_builtin(name, std::slice::from_ref(x)) {
+        Some(v) => num(v),
+        None => Rc::new(SExpr::Call(name, vec![x.clone()])),
+    }
+}
+
+fn cross(a: &Vector, b: &Vector) -> Vector {
+    let term = |i: usize, j: usize| arith('-', &arith('*', &a[i], &b[j]), &arith('*', &a[j], &b[i]));
+    [term(1, 2), term(2, 0), term(0, 1)]
+}
+
 fn dot_row(a: &Vector, b: &Vector) -> Scalar {
     let products: Vec<Scalar> = (0..3).map(|i| arith('*', &a[i], &b[i])).collect();
     arith('+', &arith('+', &products[0], &products[1]), &products[2])
@@ -501,13 +584,9 @@ fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
             let vectors = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
             let a = vectors.first().ok_or_else(|| internal("missing argument"))?;
             Ok(match name {
-                "norm" => Value::Scalar(Rc::new(SExpr::Call("sqrt", vec![dot_row(a, a)]))),
+                "norm" => Value::Scalar(builtin_scalar("sqrt", &dot_row(a, a))),
                 "dot" => Value::Scalar(dot_row(a, vectors.get(1).ok_or_else(|| internal("missing argument"))?)),
-                _ => {
-                    let b = vectors.get(1).ok_or_else(|| internal("missing argument"))?;
-                    let term = |i: usize, j: usize| arith('-', &arith('*', &a[i], &b[j]), &arith('*', &a[j], &b[i]));
-                    Value::Vector([term(1, 2), term(2, 0), term(0, 1)])
-                }
+                _ => Value::Vector(cross(a, vectors.get(1).ok_or_else(|| internal("missing argument"))?)),
             })
         }
         _ => {

@@ -10,15 +10,38 @@ use super::value::*;
 use crate::syntax::ast::Name;
 use crate::syntax::span::Span;
 
+/// A quantity the program either declares or leaves generic. A generic quantity is made of
+/// generated unknowns (kind [`UnknownKind::Generic`]) that the compiler names, as the thesis's
+/// compiler does for `mu_1` or `MIg_1`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Quantity<T> {
+    Declared(T),
+    Generic(T),
+}
+
+impl<T> Quantity<T> {
+    pub fn value(&self) -> &T {
+        match self {
+            Quantity::Declared(v) | Quantity::Generic(v) => v,
+        }
+    }
+
+    pub fn is_declared(&self) -> bool {
+        matches!(self, Quantity::Declared(_))
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Body {
     /// The `let` name the body was first bound to.
     pub name: Option<Name>,
     pub span: Span,
-    /// `None`: generic (the compiler names it). Likewise for `iframe` and `inertia`.
-    pub mass: Option<Scalar>,
-    pub iframe: Option<Displacement>,
-    pub inertia: Option<Vector>,
+    pub mass: Quantity<Scalar>,
+    /// Displacement from the reference frame to the principal inertia frame; a generic one is a
+    /// translation followed by Bryant angles (rotations about x, y, z).
+    pub iframe: Quantity<Displacement>,
+    /// Principal moments of inertia.
+    pub inertia: Quantity<Vector>,
 }
 
 /// A link: its joint coordinates, its dof chain in them, and the known link efforts.
@@ -54,10 +77,9 @@ pub struct Effort {
     pub kind: EffortKind,
     pub name: Option<Name>,
     pub span: Span,
-    /// `None`: a generic vector.
-    pub value: Option<Vector>,
-    /// The body whose basis the vector is written in (`None`: generic, `earth`: the fixed basis).
-    pub basis: Option<BodyRef>,
+    pub value: Quantity<Vector>,
+    /// The body whose basis the vector is written in; `earth` (the fixed basis) when omitted.
+    pub basis: BodyRef,
 }
 
 /// `apply <effort> on <frame>`; for a torque the frame is the body's reference frame.
@@ -71,15 +93,36 @@ pub struct Application {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum UnknownKind {
+    /// `?s` (or any `?name` but `?v`).
     Scalar,
+    /// One component of a `?v`.
     Vector,
+    /// `?fs(x, x')`
     Function,
+    /// A quantity the program left generic (a mass, an inertia, an effort's value).
+    Generic,
+}
+
+/// What a generic unknown stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Origin {
+    /// Written in the program (`?s`, `?v`, `?fs(...)`).
+    Written,
+    Mass(BodyId),
+    /// Principal moment about the inertia frame's x, y or z axis.
+    Inertia(BodyId, u8),
+    /// Of the inertia frame: translation x, y, z (0..3), then Bryant angles (3..6).
+    InertiaFrame(BodyId, u8),
+    EffortValue(EffortId, u8),
 }
 
 #[derive(Clone, Debug)]
 pub struct Unknown {
     pub kind: UnknownKind,
-    /// The `?s` occurrence that created it.
+    pub origin: Origin,
+    /// Component of a `?v` (0, 1, 2); 0 otherwise.
+    pub component: u8,
+    /// Where it comes from: the `?s` occurrence, or the declaration that left it generic.
     pub span: Span,
     /// Set by `let L = ?s;`.
     pub name: Option<Name>,
@@ -188,24 +231,14 @@ impl Mechanism {
         for application in &self.applications {
             reached.frame(&application.target);
             let effort = self.effort(application.effort);
-            if let Some(v) = &effort.value {
-                reached.vector(v);
-            }
-            if let Some(basis) = effort.basis {
-                reached.body_ref(basis);
-            }
+            reached.vector(effort.value.value());
+            reached.body_ref(effort.basis);
         }
         for &id in &reached.bodies.clone() {
             let body = self.body(id);
-            if let Some(m) = &body.mass {
-                reached.scalar(m);
-            }
-            if let Some(d) = &body.iframe {
-                reached.displacement(d);
-            }
-            if let Some(i) = &body.inertia {
-                reached.vector(i);
-            }
+            reached.scalar(body.mass.value());
+            reached.displacement(body.iframe.value());
+            reached.vector(body.inertia.value());
         }
         for &id in &reached.links.clone() {
             let link = self.link(id);
@@ -217,7 +250,10 @@ impl Mechanism {
 
     pub fn summary(&self) -> Summary {
         let reached = self.reached();
-        let count = |kind| reached.unknowns.iter().filter(|id| self.unknowns[id.0 as usize].kind == kind).count();
+        let count = |kind| {
+            let unknowns = reached.unknowns.iter().map(|id| &self.unknowns[id.0 as usize]);
+            unknowns.filter(|u| u.kind == kind && u.component == 0).count()
+        };
         let applied = |kind| self.applications.iter().filter(|a| self.effort(a.effort).kind == kind).count();
         Summary {
             bodies: reached.bodies.len(),
@@ -229,6 +265,24 @@ impl Mechanism {
             unknown_vectors: count(UnknownKind::Vector),
             unknown_functions: count(UnknownKind::Function),
             body_names: reached.bodies.iter().map(|&id| self.body_name(BodyRef::Body(id))).collect(),
+        }
+    }
+
+    /// A readable name for a generic quantity: `mass(satellite)`, `inertia_y(arm)`.
+    pub fn generic_name(&self, origin: Origin) -> String {
+        const AXES: [&str; 3] = ["x", "y", "z"];
+        const FRAME: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+        let body = |id| self.body_name(BodyRef::Body(id));
+        match origin {
+            Origin::Written => "unknown".to_string(),
+            Origin::Mass(id) => format!("mass({})", body(id)),
+            Origin::Inertia(id, i) => format!("inertia_{}({})", AXES[i as usize % 3], body(id)),
+            Origin::InertiaFrame(id, i) => format!("iframe_{}({})", FRAME[i as usize % 6], body(id)),
+            Origin::EffortValue(id, i) => {
+                let effort = self.effort(id);
+                let name = effort.name.as_deref().map_or_else(|| format!("effort#{}", id.0 + 1), str::to_string);
+                format!("{}_{}({name})", if effort.kind == EffortKind::Force { "force" } else { "torque" }, AXES[i as usize % 3])
+            }
         }
     }
 
@@ -254,22 +308,23 @@ impl Mechanism {
             }
             for (label, efforts) in [("force", &link.forces), ("torque", &link.torques)] {
                 for (index, v) in efforts.iter() {
-                    let _ = writeln!(out, "  {label}{index} = {}", text.vector(v));
+                    let number = if *index == 0 { String::new() } else { index.to_string() };
+                    let _ = writeln!(out, "  {label}{number} = {}", text.vector(v));
                 }
             }
         }
         for application in &self.applications {
             let effort = self.effort(application.effort);
-            let value = effort.value.as_ref().map_or("generic".to_string(), |v| text.vector(v));
-            let basis = effort.basis.map_or("generic".to_string(), |b| self.body_name(b));
+            let value = text.vector(effort.value.value());
+            let basis = self.body_name(effort.basis);
             let target = text.frame(&application.target);
             let _ = writeln!(out, "apply {:?} value {value} basis {basis} on {target}", effort.kind);
         }
         for &id in &self.reached().bodies {
             let body = self.body(id);
-            let mass = body.mass.as_ref().map_or("generic".to_string(), |m| text.scalar(m));
-            let iframe = body.iframe.as_ref().map_or("generic".to_string(), |d| text.displacement(d));
-            let inertia = body.inertia.as_ref().map_or("generic".to_string(), |v| text.vector(v));
+            let mass = text.scalar(body.mass.value());
+            let iframe = text.displacement(body.iframe.value());
+            let inertia = text.vector(body.inertia.value());
             let _ = writeln!(out, "body {}: mass {mass}, iframe {iframe}, inertia {inertia}", self.body_name(BodyRef::Body(id)));
         }
         out
@@ -285,12 +340,16 @@ struct Dumper<'m> {
 impl Dumper<'_> {
     fn scalar(&mut self, s: &Scalar) -> String {
         let numbering = &mut self.numbering;
-        let unknowns = &self.mechanism.unknowns;
+        let mechanism = self.mechanism;
         s.render(&mut |id| {
+            let unknown = &mechanism.unknowns[id.0 as usize];
+            if unknown.origin != Origin::Written {
+                return mechanism.generic_name(unknown.origin);
+            }
             let next = numbering.len() + 1;
             let n = *numbering.entry(id).or_insert(next);
-            let prefix = if unknowns[id.0 as usize].kind == UnknownKind::Function { "f" } else { "s" };
-            format!("{prefix}{n}")
+            let prefix = if unknown.kind == UnknownKind::Function { "f" } else { "s" };
+            format!("?{prefix}{n}")
         })
     }
 

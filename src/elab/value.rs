@@ -156,17 +156,17 @@ pub enum Value {
 }
 
 impl SExpr {
-    /// Text of the expression, naming unknowns with `unknown` (`?s` numbering is the caller's).
+    /// Text of the expression; `unknown` writes the name of each unknown.
     pub fn render(&self, unknown: &mut dyn FnMut(UnknownId) -> String) -> String {
         let list = |args: &[Scalar], unknown: &mut dyn FnMut(UnknownId) -> String| {
             args.iter().map(|a| a.render(unknown)).collect::<Vec<_>>().join(", ")
         };
         match self {
             SExpr::Num(v) => format!("{v}"),
-            SExpr::Unknown(id) => format!("?{}", unknown(*id)),
+            SExpr::Unknown(id) => unknown(*id),
             SExpr::UnknownFunction(id, args) => {
                 let name = unknown(*id);
-                format!("?{name}({})", list(args, unknown))
+                format!("{name}({})", list(args, unknown))
             }
             SExpr::Coordinate { index, order } => format!("q{index}{}", "'".repeat(*order as usize)),
             SExpr::Neg(a) => format!("-({})", a.render(unknown)),
@@ -182,6 +182,6 @@ impl SExpr {
 
 impl fmt::Display for SExpr {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.render(&mut |id| id.0.to_string()))
+        f.write_str(&self.render(&mut |id| format!("?{}", id.0)))
     }
 }

@@ -184,8 +184,9 @@ impl Loader {
             ImportTarget::Module(ident) => (format!("{}.lsd", ident.name), ident.span),
             ImportTarget::Path { path, span } => (path.clone(), *span),
         };
-        let Some((origin, text, display)) = self.find(importer, &file_name, matches!(target, ImportTarget::Module(_))) else {
-            self.diagnostics.push(self.missing_import(importer, &file_name, target_span));
+        let is_module_name = matches!(target, ImportTarget::Module(_));
+        let Some((origin, text, display)) = self.find(importer, &file_name, is_module_name) else {
+            self.diagnostics.push(self.missing_import(importer, &file_name, is_module_name, target_span));
             return None;
         };
         if let Some(&existing) = self.by_origin.get(&origin) {
@@ -232,17 +233,17 @@ impl Loader {
         self.by_origin.iter().find(|(_, &m)| m == id).map(|(o, _)| o)
     }
 
-    fn missing_import(&self, importer: ModuleId, file_name: &str, span: Span) -> Diagnostic {
+    fn missing_import(&self, importer: ModuleId, file_name: &str, is_module_name: bool, span: Span) -> Diagnostic {
         let mut searched: Vec<String> = self.workspace.module(importer).dir.iter().map(|d| d.display().to_string()).collect();
         searched.extend(self.search_dirs.iter().map(|d| d.display().to_string()));
         let stem = file_name.strip_suffix(".lsd").unwrap_or(file_name);
         let mut diagnostic = Diagnostic::error("E0501", format!("cannot find library `{file_name}`"))
             .primary(span, "no such file on the library search path")
-            .note(format!(
-                "searched: {}{}the standard library",
-                searched.join(", "),
-                if searched.is_empty() { "" } else { ", then " }
-            ));
+            .note(match (is_module_name, searched.is_empty()) {
+                (true, true) => "searched: the standard library".to_string(),
+                (true, false) => format!("searched: {}, then the standard library", searched.join(", ")),
+                (false, _) => format!("searched: {}", searched.join(", ")),
+            });
         let mut known: Vec<&str> = stdlib::names().collect();
         known.sort();
         diagnostic = match suggest::did_you_mean(stem, known.iter().copied()) {
