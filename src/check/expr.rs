@@ -254,6 +254,7 @@ impl<'w> Checker<'w> {
         let is_coordinate = match &inner.kind {
             ExprKind::Name(ident) => ctx.locals.iter().rev().find(|l| l.name == ident.name).is_some_and(|l| l.coordinate),
             ExprKind::Prime(_) => true,
+            ExprKind::Field { target, .. } => self.expr_type_silently(target, ctx) == Ty::Join,
             _ => false,
         };
         let ty = self.expr(inner, ctx);
@@ -261,7 +262,7 @@ impl<'w> Checker<'w> {
             self.report(
                 Diagnostic::error("E0408", "`'` (time derivative) applies only to joint coordinates")
                     .primary(inner.span, "not a coordinate of the enclosing `link(...)`")
-                    .help("declare the coordinate in the link's parameter list: `link(x) ... x' ... end`"),
+                    .help("prime a coordinate of the enclosing `link(x) ... end`, or of a named join: `crank.q'`"),
             );
             return Ty::Error;
         }

@@ -145,7 +145,7 @@ impl<'w> Checker<'w> {
         match &decl.kind {
             DeclKind::Let(bindings) => self.let_decl(bindings, scope),
             DeclKind::Define { name, params, body } => self.define(name, params, body, scope),
-            DeclKind::Join { first, second, link } => {
+            DeclKind::Join { first, second, link, name } => {
                 let mut ctx = self.ctx(scope);
                 for (member, position) in [(first, "first"), (second, "second")] {
                     let ty = self.expr(member, &mut ctx);
@@ -155,6 +155,15 @@ impl<'w> Checker<'w> {
                 }
                 let ty = self.expr(link, &mut ctx);
                 self.expect_value(link, ty, Ty::Link, "the link of `join ... with <link>`");
+                if let Some(name) = name {
+                    self.declare(scope, name, Ty::Join);
+                }
+            }
+            DeclKind::Initial(values) => {
+                let mut ctx = self.ctx(scope);
+                for initial in values {
+                    self.initial_value(initial, &mut ctx);
+                }
             }
             DeclKind::Apply { effort, target } => {
                 let mut ctx = self.ctx(scope);
@@ -258,6 +267,48 @@ impl<'w> Checker<'w> {
         self.scope_mut(scope).insert(name.name.clone(), ty, name.span);
     }
 
+    /// `initial crank.q = e [fixed]`: the target is a coordinate of a named join, or its
+    /// derivative (a starting velocity, which cannot be `fixed`).
+    fn initial_value(&mut self, initial: &'w crate::syntax::ast::InitialValue, ctx: &mut Ctx) {
+        let (coordinate, primes) = strip_primes(&initial.target);
+        let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field { .. });
+        let ty = self.expr(&initial.target, ctx);
+        let target_ty = match &coordinate.kind {
+            crate::syntax::ast::ExprKind::Field { target, .. } => self.expr_type_silently(target, ctx),
+            _ => ty,
+        };
+        if !is_coordinate || target_ty != Ty::Join {
+            if ty != Ty::Error && target_ty != Ty::Error {
+                self.report(
+                    Diagnostic::error("E0416", "`initial` gives values to joint coordinates: `<join>.<coordinate>`")
+                        .primary(initial.target.span, "not a coordinate of a named join")
+                        .help("name the join with `join ... with <link> as crank;`, then write `initial crank.q = ...`"),
+                );
+            }
+        } else if primes > 1 {
+            self.report(
+                Diagnostic::error("E0416", "`initial` gives positions (`crank.q`) or velocities (`crank.q'`) only")
+                    .primary(initial.target.span, "a second derivative"),
+            );
+        } else if primes == 1 && initial.fixed {
+            self.report(
+                Diagnostic::error("E0416", "a starting velocity cannot be `fixed`")
+                    .primary(initial.target.span, "a velocity")
+                    .help("`fixed` holds a coordinate during assembly; velocities are projected onto the constraints"),
+            );
+        }
+        let value_ty = self.expr(&initial.value, ctx);
+        self.expect_value(&initial.value, value_ty, Ty::Scalar, "an initial value");
+    }
+
+    /// The type of an expression already checked (its diagnostics were reported then).
+    fn expr_type_silently(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
+        let reported = self.diagnostics.list.len();
+        let ty = self.expr(expr, ctx);
+        self.diagnostics.list.truncate(reported);
+        ty
+    }
+
     fn apply(&mut self, effort: &Expr, effort_ty: Ty, target: &Expr, target_ty: Ty) {
         match effort_ty {
             Ty::Force => {
@@ -324,12 +375,24 @@ fn conversion_help(found: Ty, expected: Ty) -> Option<String> {
     })
 }
 
+/// `crank.q''` → (`crank.q`, 2).
+fn strip_primes(expr: &Expr) -> (&Expr, usize) {
+    match &expr.kind {
+        crate::syntax::ast::ExprKind::Prime(inner) => {
+            let (base, n) = strip_primes(inner);
+            (base, n + 1)
+        }
+        _ => (expr, 0),
+    }
+}
+
 /// Names a declaration introduces in its scope.
 fn declared_names(decl: &Decl) -> Vec<(Name, Span)> {
     match &decl.kind {
         DeclKind::Let(bindings) => bindings.iter().map(|b| (b.name.name.clone(), b.name.span)).collect(),
         DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => vec![(name.name.clone(), name.span)],
         DeclKind::Import { alias: Some(alias), .. } => vec![(alias.name.clone(), alias.span)],
+        DeclKind::Join { name: Some(name), .. } => vec![(name.name.clone(), name.span)],
         _ => Vec::new(),
     }
 }

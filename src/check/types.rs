@@ -21,6 +21,8 @@ pub enum Ty {
     Link,
     Force,
     Torque,
+    /// A named join: its fields are its joint coordinates (`crank.q`).
+    Join,
     /// The literal `0`: zero scalar, vector, matrix or displacement, resolved by context.
     Zero,
     /// The literal `1`: one, identity rotation, identity displacement or identity matrix.
@@ -102,6 +104,7 @@ impl fmt::Display for Ty {
             Ty::Link => "link",
             Ty::Force => "force",
             Ty::Torque => "torque",
+            Ty::Join => "join",
             Ty::Zero => "zero",
             Ty::One => "one",
             Ty::Package(_) => "package",
@@ -124,6 +127,8 @@ pub fn field_type(target: Ty, field: &str) -> Option<Ty> {
         (Ty::Force | Ty::Torque, "body") => Ty::Body,
         (Ty::Frame, "body") => Ty::Body,
         (Ty::Frame, "displ") => Ty::Displacement,
+        // Coordinate names depend on the link's value: checked during elaboration.
+        (Ty::Join, _) => Ty::Scalar,
         _ => return None,
     })
 }

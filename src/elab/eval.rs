@@ -44,11 +44,36 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 self.globals.insert((scope, name.name.clone()), Value::Definition(def));
                 Ok(())
             }
-            DeclKind::Join { first, second, link } => {
+            DeclKind::Join { first, second, link, name } => {
                 let first = self.expr(first, &mut locals).and_then(|v| as_frame(v, first.span))?;
                 let second = self.expr(second, &mut locals).and_then(|v| as_frame(v, second.span))?;
                 let Value::Link(link) = self.expr(link, &mut locals)? else { return Err(internal("join without a link")) };
-                self.mechanism.joins.push(Join { first, second, link, span: decl.span });
+                let id = JoinId(self.mechanism.joins.len() as u32);
+                let join_name = name.as_ref().map(|n| n.name.clone());
+                self.mechanism.joins.push(Join { name: join_name, first, second, link, span: decl.span });
+                if let Some(name) = name {
+                    self.globals.insert((scope, name.name.clone()), Value::Join(id));
+                }
+                Ok(())
+            }
+            DeclKind::Initial(values) => {
+                for initial in values {
+                    let Value::Scalar(target) = self.expr(&initial.target, &mut locals)? else {
+                        return Err(internal("initial value of a non-coordinate"));
+                    };
+                    let SExpr::JoinCoordinate { join, index, order } = *target else {
+                        return Err(internal("initial value of a non-coordinate"));
+                    };
+                    let value = self.expr(&initial.value, &mut locals).and_then(|v| as_scalar(v, initial.value.span))?;
+                    self.mechanism.initial.push(InitialValue {
+                        join,
+                        coordinate: index as usize,
+                        order,
+                        value,
+                        fixed: initial.fixed,
+                        span: initial.target.span,
+                    });
+                }
                 Ok(())
             }
             DeclKind::Apply { effort, target } => {
@@ -176,6 +201,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Prime(inner) => match self.expr(inner, locals)? {
                 Value::Scalar(s) => match *s {
                     SExpr::Coordinate { index, order } => Value::Scalar(Rc::new(SExpr::Coordinate { index, order: order + 1 })),
+                    SExpr::JoinCoordinate { join, index, order } => {
+                        Value::Scalar(Rc::new(SExpr::JoinCoordinate { join, index, order: order + 1 }))
+                    }
                     _ => return Err(internal("prime of a non-coordinate")),
                 },
                 _ => return Err(internal("prime of a non-scalar")),
@@ -236,8 +264,30 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             (Value::Force(id) | Value::Torque(id), "value") => Value::Vector(self.mechanism.effort(id).value.value().clone()),
             (Value::Force(id) | Value::Torque(id), _) => Value::Body(self.mechanism.effort(id).basis),
             (Value::Link(id), f) => self.link_field(id, f, field.span)?,
+            (Value::Join(id), f) => self.join_coordinate(id, f, field.span)?,
             _ => return Err(internal(format!("field `{name}` of a value without fields"))),
         })
+    }
+
+    fn join_coordinate(&self, id: JoinId, coordinate: &str, span: Span) -> Result<Value> {
+        let join = self.mechanism.join(id);
+        let coordinates = &self.mechanism.link(join.link).coordinates;
+        match coordinates.iter().position(|c| &**c == coordinate) {
+            Some(index) => Ok(Value::Scalar(Rc::new(SExpr::JoinCoordinate { join: id, index: index as u32, order: 0 }))),
+            None => {
+                let name = self.mechanism.join_name(id);
+                let listed: Vec<String> = coordinates.iter().map(|c| format!("`{c}`")).collect();
+                let help = match crate::diag::suggest::did_you_mean(coordinate, coordinates.iter().map(|c| &**c)) {
+                    Some(s) => format!("did you mean `{name}.{s}`?"),
+                    None if listed.is_empty() => format!("`{name}` is a weld: it has no coordinates"),
+                    None => format!("the coordinates of `{name}` are {}", listed.join(", ")),
+                };
+                Err(Diagnostic::error("E0603", format!("join `{name}` has no coordinate `{coordinate}`"))
+                    .primary(span, "not a coordinate of this join's link")
+                    .secondary(join.span, "the join")
+                    .help(help))
+            }
+        }
     }
 
     fn link_field(&self, id: LinkId, field: &str, span: Span) -> Result<Value> {

@@ -57,11 +57,26 @@ pub struct Link {
     pub torques: Vec<(u8, Vector)>,
 }
 
+/// `join first and second with link`: the link's dof chain, in its own coordinates, carries the
+/// first frame onto the second.
 #[derive(Clone, Debug)]
 pub struct Join {
+    /// `as crank`; unnamed joins are called `join1`, `join2`, … in declaration order.
+    pub name: Option<Name>,
     pub first: Frame,
     pub second: Frame,
     pub link: LinkId,
+    pub span: Span,
+}
+
+/// `initial crank.q = 0.3 fixed` (order 0) or `initial crank.q' = 1` (order 1).
+#[derive(Clone, Debug)]
+pub struct InitialValue {
+    pub join: JoinId,
+    pub coordinate: usize,
+    pub order: u32,
+    pub value: Scalar,
+    pub fixed: bool,
     pub span: Span,
 }
 
@@ -136,6 +151,7 @@ pub struct Mechanism {
     pub efforts: Vec<Effort>,
     pub applications: Vec<Application>,
     pub unknowns: Vec<Unknown>,
+    pub initial: Vec<InitialValue>,
 }
 
 /// Counts `lsdc check` prints: only what the joins and applications reach.
@@ -163,7 +179,7 @@ struct Reached {
 impl Reached {
     fn scalar(&mut self, s: &SExpr) {
         match s {
-            SExpr::Num(_) | SExpr::Coordinate { .. } => {}
+            SExpr::Num(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
             SExpr::Unknown(id) => {
                 self.unknowns.insert(*id);
             }
@@ -209,6 +225,15 @@ impl Reached {
 }
 
 impl Mechanism {
+    pub fn join(&self, id: JoinId) -> &Join {
+        &self.joins[id.0 as usize]
+    }
+
+    /// The join's name: `as crank`, or `join3` for the third join declared.
+    pub fn join_name(&self, id: JoinId) -> String {
+        self.join(id).name.as_deref().map_or_else(|| format!("join{}", id.0 + 1), str::to_string)
+    }
+
     pub fn body(&self, id: BodyId) -> &Body {
         &self.bodies[id.0 as usize]
     }

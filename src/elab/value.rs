@@ -16,6 +16,8 @@ pub struct BodyId(pub u32);
 pub struct LinkId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct EffortId(pub u32);
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct JoinId(pub u32);
 
 pub type Scalar = Rc<SExpr>;
 
@@ -29,6 +31,8 @@ pub enum SExpr {
     UnknownFunction(UnknownId, Vec<Scalar>),
     /// The `index`-th coordinate of the enclosing link, differentiated `order` times.
     Coordinate { index: u32, order: u32 },
+    /// A coordinate of a join (`crank.q`, `crank.q'`), usable anywhere after the join.
+    JoinCoordinate { join: JoinId, index: u32, order: u32 },
     Neg(Scalar),
     Add(Scalar, Scalar),
     Sub(Scalar, Scalar),
@@ -147,6 +151,7 @@ pub enum Value {
     Link(LinkId),
     Force(EffortId),
     Torque(EffortId),
+    Join(JoinId),
     /// The literal `0`, until its context says what it is.
     Zero,
     /// The literal `1`, until its context says what it is.
@@ -169,6 +174,9 @@ impl SExpr {
                 format!("{name}({})", list(args, unknown))
             }
             SExpr::Coordinate { index, order } => format!("q{index}{}", "'".repeat(*order as usize)),
+            SExpr::JoinCoordinate { join, index, order } => {
+                format!("join{}.q{index}{}", join.0 + 1, "'".repeat(*order as usize))
+            }
             SExpr::Neg(a) => format!("-({})", a.render(unknown)),
             SExpr::Add(a, b) => format!("({} + {})", a.render(unknown), b.render(unknown)),
             SExpr::Sub(a, b) => format!("({} - {})", a.render(unknown), b.render(unknown)),

@@ -30,8 +30,10 @@ pub enum DeclKind {
     Let(Vec<Binding>),
     /// `let f(a, b : vector) = e`: a parameterised definition.
     Define { name: Ident, params: Vec<Param>, body: Expr },
-    /// `join <frame> and <frame> with <link>`
-    Join { first: Expr, second: Expr, link: Expr },
+    /// `join <frame> and <frame> with <link> [as <name>]`
+    Join { first: Expr, second: Expr, link: Expr, name: Option<Ident> },
+    /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
+    Initial(Vec<InitialValue>),
     /// `apply <force> on <frame>` or `apply <torque> on <body>`
     Apply { effort: Expr, target: Expr },
     /// `package P = decls end`
@@ -48,6 +50,15 @@ pub enum ImportTarget {
     Module(Ident),
     /// `import "path/file.lsd"`: relative to the importing file, then the search path.
     Path { path: String, span: Span },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitialValue {
+    /// `join.coordinate`, possibly primed.
+    pub target: Expr,
+    pub value: Expr,
+    /// `fixed`: held at this value when the mechanism is assembled.
+    pub fixed: bool,
 }
 
 #[derive(Clone, Debug, PartialEq)]

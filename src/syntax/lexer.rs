@@ -37,8 +37,12 @@ pub enum Tok<'input> {
     Force,
     #[token("import")]
     Import,
+    #[token("fixed")]
+    Fixed,
     #[token("in")]
     In,
+    #[token("initial")]
+    Initial,
     #[token("join")]
     Join,
     #[token("let")]
@@ -166,7 +170,9 @@ impl Tok<'_> {
             Tok::End => "end",
             Tok::Force => "force",
             Tok::Import => "import",
+            Tok::Fixed => "fixed",
             Tok::In => "in",
+            Tok::Initial => "initial",
             Tok::Join => "join",
             Tok::Let => "let",
             Tok::Link => "link",
