@@ -4,10 +4,13 @@
 //! `syntax` (text to AST) → `load` (imports, libraries) → `check` (names and types) →
 //! `elab` (values: bodies, frames, links, joins, efforts, unknowns) → later phases.
 
+pub mod analysis;
 pub mod check;
 pub mod diag;
 pub mod driver;
 pub mod elab;
+pub mod kinematics;
 pub mod load;
 pub mod source;
 pub mod syntax;
+pub mod topology;

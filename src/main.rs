@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+use lsdc::analysis;
 use lsdc::diag::render;
 use lsdc::driver::{self, Compilation};
 use lsdc::elab::Summary;
@@ -49,6 +50,23 @@ enum Command {
         #[arg(long, value_enum, default_value = "text")]
         format: Format,
     },
+    /// Show the breadth-first numbering, principal and complementary links, joint kinds and
+    /// the mobility.
+    Tree {
+        file: PathBuf,
+        #[command(flatten)]
+        libraries: LibraryArgs,
+        #[arg(long, value_enum, default_value = "text")]
+        format: Format,
+    },
+    /// Assemble the mechanism from its `initial` values and print the coordinates.
+    Assemble {
+        file: PathBuf,
+        #[command(flatten)]
+        libraries: LibraryArgs,
+        #[arg(long, value_enum, default_value = "text")]
+        format: Format,
+    },
     /// Print the syntax tree of a file (for debugging the parser).
     Parse { file: PathBuf },
 }
@@ -57,6 +75,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check { files, libraries, format } => check(&files, &libraries.options(), format),
+        Command::Tree { file, libraries, format } => tree(&file, &libraries.options(), format),
+        Command::Assemble { file, libraries, format } => assemble(&file, &libraries.options(), format),
         Command::Parse { file } => parse(&file),
     }
 }
@@ -119,7 +139,7 @@ fn summary_text(file: &std::path::Path, s: &Summary) -> String {
     out += &format!(
         "  unknowns  {} (?s), {} (?v), {} (?f)\n",
         plural(s.unknown_scalars, "scalar"),
-        plural(s.unknown_vectors / 3, "vector"),
+        plural(s.unknown_vectors, "vector"),
         plural(s.unknown_functions, "function")
     );
     out
@@ -132,6 +152,138 @@ fn json_report(file: &std::path::Path, compilation: &Compilation) -> serde_json:
         "diagnostics": render::to_json_value(&compilation.workspace.sources, &compilation.diagnostics),
         "summary": compilation.mechanism.as_ref().map(|m| m.summary()),
     })
+}
+
+/// Compiles one file, printing its diagnostics; the mechanism if it has no errors.
+fn compile_one(file: &std::path::Path, options: &LoadOptions, format: Format) -> Result<Compilation, ExitCode> {
+    let compilation = driver::compile_files(&[file.to_path_buf()], options).map_err(|m| usage_error(&m))?;
+    if compilation.has_errors() || (format == Format::Text && !compilation.diagnostics.is_empty()) {
+        report_diagnostics(&compilation, &compilation.diagnostics, format);
+    }
+    if compilation.has_errors() {
+        return Err(ExitCode::from(1));
+    }
+    Ok(compilation)
+}
+
+fn report_diagnostics(compilation: &Compilation, diagnostics: &[lsdc::diag::Diagnostic], format: Format) {
+    let mut diagnostics = diagnostics.to_vec();
+    for d in &mut diagnostics {
+        compilation.workspace.add_import_context(d);
+    }
+    match format {
+        Format::Text => eprint!("{}", render::to_text(&compilation.workspace.sources, &diagnostics)),
+        Format::Json => {
+            let value = serde_json::json!({ "ok": false, "diagnostics": render::to_json_value(&compilation.workspace.sources, &diagnostics) });
+            println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        }
+    }
+}
+
+fn tree(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
+    let compilation = match compile_one(file, options, format) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    match analysis::tree(mechanism) {
+        Ok(report) => {
+            match format {
+                Format::Text => print!("{}", tree_text(&report)),
+                Format::Json => println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default()),
+            }
+            ExitCode::SUCCESS
+        }
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, format);
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn joint_text(link: &analysis::LinkReport) -> String {
+    match &link.joint {
+        Some(j) => format!("{:?}, {} dof", j.kind, j.dof).to_lowercase(),
+        None => "not analysed".to_string(),
+    }
+}
+
+fn tree_text(report: &analysis::TreeReport) -> String {
+    let name_of = |n: usize| if n == 0 { "earth".to_string() } else { report.bodies[n - 1].name.clone() };
+    let mut out = String::from("bodies (breadth-first from earth)\n");
+    for body in &report.bodies {
+        out += &format!(
+            "  {:>3}  {:<20} parent {:<20} link {:>3}  {} ({})\n",
+            body.number,
+            body.name,
+            name_of(body.parent),
+            body.link.number,
+            body.link.join,
+            joint_text(&body.link)
+        );
+    }
+    if report.complementary.is_empty() {
+        out += "complementary links: none\n";
+    } else {
+        out += "complementary links\n";
+        for link in &report.complementary {
+            out += &format!(
+                "  {:>3}  {:<20} {} – {} ({}, constraint {})\n",
+                link.number,
+                link.join,
+                name_of(link.first_body),
+                name_of(link.second_body),
+                joint_text(link),
+                link.joint.as_ref().map_or("?".to_string(), |j| j.constraint.to_string())
+            );
+        }
+    }
+    match (&report.mobility, &report.mobility_unavailable) {
+        (Some(m), _) => {
+            out += &format!(
+                "mobility {} = tree dof {} - rank {} ({} constraint rows, {} redundant; rank tolerance {:e})\n",
+                m.mobility, m.tree_dof, m.rank, m.constraint_rows, m.redundant, m.tolerance
+            );
+            if m.singular {
+                out += &format!("singular configuration: the rank is {} here and {} at nearby configurations\n", m.rank, m.generic_rank);
+            }
+            for (body, count) in &m.internal {
+                out += &format!("internal mobility: {} can move alone ({count} way{})\n", name_of(*body), if *count == 1 { "" } else { "s" });
+            }
+        }
+        (None, Some(reason)) => out += &format!("mobility not computed: {reason}\n"),
+        (None, None) => {}
+    }
+    out
+}
+
+fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
+    let compilation = match compile_one(file, options, format) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    let result = lsdc::topology::build(mechanism)
+        .and_then(|topology| analysis::assembled_model(mechanism, topology, &Default::default()));
+    match result {
+        Ok((_, report)) => {
+            match format {
+                Format::Text => {
+                    for (name, value) in &report.coordinates {
+                        let held = if report.fixed.contains(name) { "  (fixed)" } else { "" };
+                        println!("{name:<24} {value:>22.15e}{held}");
+                    }
+                    println!("assembled in {} iterations, largest residual {:.1e}", report.iterations, report.residual);
+                }
+                Format::Json => println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default()),
+            }
+            ExitCode::SUCCESS
+        }
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, format);
+            ExitCode::from(1)
+        }
+    }
 }
 
 fn parse(file: &std::path::Path) -> ExitCode {

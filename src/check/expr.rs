@@ -42,6 +42,9 @@ impl<'w> Checker<'w> {
             ExprKind::Construct { kind, params, fields } => self.construct(*kind, params, fields, ctx),
             ExprKind::Local { bindings, body } => {
                 let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, ctx)).collect();
+                for (binding, ty) in bindings.iter().zip(&types) {
+                    self.expect_first_class(&binding.value, *ty);
+                }
                 let depth = ctx.locals.len();
                 for (binding, ty) in bindings.iter().zip(types) {
                     ctx.locals.push(Local { name: binding.name.name.clone(), ty, coordinate: false });
@@ -66,6 +69,14 @@ impl<'w> Checker<'w> {
         if let Some(ty) = types::builtin_constant(&ident.name) {
             self.out.resolutions.insert(ident.span, Target::Builtin);
             return ty;
+        }
+        if types::builtin_function(&ident.name).is_some() {
+            self.report(
+                Diagnostic::error("E0417", format!("`{}` is a built-in function, not a value", ident.name))
+                    .primary(ident.span, "not called")
+                    .help(format!("call it: `{}(x)`", ident.name)),
+            );
+            return Ty::Error;
         }
         let diagnostic = self.unknown_name(ident, ctx);
         self.report(diagnostic);
@@ -100,7 +111,13 @@ impl<'w> Checker<'w> {
         let mut current = Some(ctx.scope);
         while let Some(id) = current {
             let scope = self.out.scope(id);
-            if let Some(&later) = scope.declared_later.get(name.as_ref()) {
+            if let Some(&(later, extent)) = scope.declared_later.get(name.as_ref()) {
+                let inside = extent.file == ident.span.file && extent.start <= ident.span.start && ident.span.end <= extent.end;
+                if inside {
+                    return diagnostic
+                        .secondary(later, "the name being defined")
+                        .help("a definition cannot refer to itself; LSD has no recursion");
+                }
                 if later.file == ident.span.file && later.start < ident.span.start {
                     return diagnostic
                         .secondary(later, "defined in the same `let ... and ...`")
@@ -350,6 +367,7 @@ impl<'w> Checker<'w> {
         let mut bound: Vec<Option<Ty>> = vec![None; params.len()];
         let mut ok = true;
         for (position, (arg, ty)) in args.iter().zip(arg_types).enumerate() {
+            ok &= self.expect_first_class(&arg.value, ty);
             let index = match &arg.name {
                 None if position < params.len() => position,
                 None => {
@@ -491,6 +509,12 @@ impl<'w> Checker<'w> {
             let digits = f.name.name.trim_start_matches(|c: char| c.is_alphabetic());
             digits.parse().ok()
         };
+        // Fields that are not link fields were reported already.
+        let fields: Vec<&FieldInit> = fields
+            .iter()
+            .filter(|f| ["dof", "force", "torque"].iter().any(|base| types::is_numbered(&f.name.name, base)))
+            .collect();
+        let fields = fields.as_slice();
         let plain = fields.iter().find(|f| number(f).is_none());
         let numbered = fields.iter().find(|f| number(f).is_some());
         if let (Some(plain), Some(numbered)) = (plain, numbered) {
@@ -504,7 +528,7 @@ impl<'w> Checker<'w> {
         let mut dofs: Vec<(u32, &FieldInit)> = fields
             .iter()
             .filter(|f| f.name.name.starts_with("dof"))
-            .filter_map(|f| number(f).map(|n| (n, f)))
+            .filter_map(|f| number(f).map(|n| (n, *f)))
             .collect();
         dofs.sort_by_key(|(n, _)| *n);
         for (expected, (n, field)) in (1..).zip(&dofs) {

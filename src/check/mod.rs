@@ -128,8 +128,8 @@ impl<'w> Checker<'w> {
 
     fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) {
         for decl in decls {
-            for (name, span) in declared_names(decl) {
-                self.scope_mut(scope).declared_later.entry(name).or_insert(span);
+            for (name, span, extent) in declared_names(decl) {
+                self.scope_mut(scope).declared_later.entry(name).or_insert((span, extent));
             }
         }
         for decl in decls {
@@ -203,6 +203,7 @@ impl<'w> Checker<'w> {
         let mut ctx = self.ctx(scope);
         let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, &mut ctx)).collect();
         for (binding, ty) in bindings.iter().zip(types) {
+            self.expect_first_class(&binding.value, ty);
             self.declare(scope, &binding.name, ty);
         }
     }
@@ -339,6 +340,22 @@ impl<'w> Checker<'w> {
         }
     }
 
+    /// Packages and parameterised definitions are not values: they cannot be bound or passed.
+    fn expect_first_class(&mut self, expr: &Expr, ty: Ty) -> bool {
+        let what = match ty {
+            Ty::Package(_) => "a package",
+            Ty::Definition(_) => "a parameterised definition",
+            _ => return true,
+        };
+        let help = if matches!(ty, Ty::Package(_)) { "take a name from it: `P:name`" } else { "call it: `f(...)`" };
+        self.report(
+            Diagnostic::error("E0417", format!("{what} is not a value"))
+                .primary(expr.span, format!("this is {what}"))
+                .help(help),
+        );
+        false
+    }
+
     /// Checks that an expression's type fits the expected one.
     fn expect_value(&mut self, expr: &Expr, ty: Ty, expected: Ty, role: &str) -> bool {
         if ty.fits(expected) {
@@ -386,13 +403,16 @@ fn strip_primes(expr: &Expr) -> (&Expr, usize) {
     }
 }
 
-/// Names a declaration introduces in its scope.
-fn declared_names(decl: &Decl) -> Vec<(Name, Span)> {
+/// Names a declaration introduces in its scope, with the span of the name and of its whole
+/// definition.
+fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
     match &decl.kind {
-        DeclKind::Let(bindings) => bindings.iter().map(|b| (b.name.name.clone(), b.name.span)).collect(),
-        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => vec![(name.name.clone(), name.span)],
-        DeclKind::Import { alias: Some(alias), .. } => vec![(alias.name.clone(), alias.span)],
-        DeclKind::Join { name: Some(name), .. } => vec![(name.name.clone(), name.span)],
+        DeclKind::Let(bindings) => {
+            bindings.iter().map(|b| (b.name.name.clone(), b.name.span, b.name.span.to(b.value.span))).collect()
+        }
+        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => vec![(name.name.clone(), name.span, decl.span)],
+        DeclKind::Import { alias: Some(alias), .. } => vec![(alias.name.clone(), alias.span, decl.span)],
+        DeclKind::Join { name: Some(name), .. } => vec![(name.name.clone(), name.span, decl.span)],
         _ => Vec::new(),
     }
 }

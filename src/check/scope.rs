@@ -28,8 +28,9 @@ pub struct Scope {
     pub parent: Option<(ScopeId, u32)>,
     /// Modules opened by a plain `import`, with the number of this scope's names declared before.
     pub opened: Vec<(ScopeId, u32)>,
-    /// Names declared later in this scope: a use before the declaration gets a precise message.
-    pub declared_later: HashMap<Name, Span>,
+    /// Names declared later in this scope, with the extent of their declaration: a use before
+    /// the declaration gets a precise message.
+    pub declared_later: HashMap<Name, (Span, Span)>,
 }
 
 impl Scope {

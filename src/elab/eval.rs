@@ -347,7 +347,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             frame.push((param.name.name.clone(), value.ok_or_else(|| internal(format!("missing argument for `{name}`")))?));
         }
         if self.depth >= MAX_DEPTH {
-            return Err(internal("definitions nest too deep"));
+            return Err(Diagnostic::error("E0414", format!("definitions nest more than {MAX_DEPTH} deep"))
+                .primary(span, format!("instantiating `{name}` here")));
         }
         self.depth += 1;
         let result = self.expr(body, &mut frame);

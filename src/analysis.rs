@@ -1,0 +1,152 @@
+//! What `lsdc tree` and `lsdc assemble` report: the numbering, the joints, the assembled
+//! configuration and the mobility. Plain serialisable data; the command line only prints it.
+
+use serde::Serialize;
+
+use crate::diag::Diagnostic;
+use crate::elab::mechanism::Mechanism;
+use crate::elab::value::BodyRef;
+use crate::kinematics::assembly::{assemble, AssemblyError, AssemblyOptions};
+use crate::kinematics::eval::UnknownValues;
+use crate::kinematics::joint::{analyse, JointAnalysis};
+use crate::kinematics::mobility::{mobility, Mobility};
+use crate::kinematics::model::{self, KinematicModel};
+use crate::kinematics::{initial_coordinates, joint};
+use crate::topology::{self, Topology};
+
+#[derive(Clone, Debug, Serialize)]
+pub struct LinkReport {
+    /// The link's number: j for the principal link of body j, n+1… for complementary links.
+    pub number: usize,
+    /// The join's name (`as crank`, or `joinK`).
+    pub join: String,
+    /// Body numbers of the first and second frames of the join (0 is earth).
+    pub first_body: usize,
+    pub second_body: usize,
+    pub coordinates: Vec<String>,
+    /// `None` when the joint cannot be analysed (a value is missing).
+    pub joint: Option<JointAnalysis>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BodyReport {
+    pub number: usize,
+    pub name: String,
+    pub parent: usize,
+    pub link: LinkReport,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TreeReport {
+    pub bodies: Vec<BodyReport>,
+    pub complementary: Vec<LinkReport>,
+    /// The mobility at the assembled configuration (for a tree: the sum of link DOF).
+    pub mobility: Option<Mobility>,
+    /// Why the mobility could not be computed.
+    pub mobility_unavailable: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct AssemblyReport {
+    /// Coordinate name → value.
+    pub coordinates: Vec<(String, f64)>,
+    pub fixed: Vec<String>,
+    pub iterations: usize,
+    pub residual: f64,
+}
+
+fn link_report(mechanism: &Mechanism, topology: &Topology, join: crate::elab::value::JoinId, number: usize, unknowns: &UnknownValues) -> LinkReport {
+    let j = mechanism.join(join);
+    let joint = model::link_only(mechanism, join, unknowns).ok().and_then(|m| analyse(&m, unknowns).ok());
+    LinkReport {
+        number,
+        join: mechanism.join_name(join),
+        first_body: topology.number(j.first.body),
+        second_body: topology.number(j.second.body),
+        coordinates: mechanism.link(j.link).coordinates.iter().map(|c| c.to_string()).collect(),
+        joint,
+    }
+}
+
+/// The numbered tree, the joints and, when all values are known, the mobility.
+pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
+    let topology = topology::build(mechanism)?;
+    let unknowns = UnknownValues::new();
+    let bodies = topology
+        .principal
+        .iter()
+        .map(|link| BodyReport {
+            number: link.child,
+            name: mechanism.body_name(BodyRef::Body(topology.bodies[link.child - 1])),
+            parent: link.parent,
+            link: link_report(mechanism, &topology, link.join, link.number, &unknowns),
+        })
+        .collect();
+    let complementary = topology
+        .complementary
+        .iter()
+        .map(|link| link_report(mechanism, &topology, link.join, link.number, &unknowns))
+        .collect();
+    let (mobility, mobility_unavailable) = match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
+        Ok((model, assembled)) => match mobility(&model, &assembled.coordinates_vector()) {
+            Ok(m) => (Some(m), None),
+            Err(e) => (None, Some(format!("{e:?}"))),
+        },
+        Err(diagnostics) => (None, Some(diagnostics.iter().map(|d| d.message.clone()).collect::<Vec<_>>().join("; "))),
+    };
+    Ok(TreeReport { bodies, complementary, mobility, mobility_unavailable })
+}
+
+impl AssemblyReport {
+    pub fn coordinates_vector(&self) -> Vec<f64> {
+        self.coordinates.iter().map(|(_, v)| *v).collect()
+    }
+}
+
+/// Builds the numeric model and assembles it from the program's `initial` values.
+pub fn assembled_model(
+    mechanism: &Mechanism,
+    topology: Topology,
+    options: &AssemblyOptions,
+) -> Result<(KinematicModel, AssemblyReport), Vec<Diagnostic>> {
+    let model = model::build(mechanism, topology, UnknownValues::new())?;
+    let (start, fixed) = initial_coordinates(mechanism, &model).map_err(|d| vec![d])?;
+    let names = model.coordinate_names();
+    match assemble(&model, &start, &fixed, options) {
+        Ok(assembled) => {
+            let report = AssemblyReport {
+                coordinates: names.iter().cloned().zip(assembled.q.iter().copied()).collect(),
+                fixed: names.iter().zip(&fixed).filter(|(_, f)| **f).map(|(n, _)| n.clone()).collect(),
+                iterations: assembled.iterations,
+                residual: assembled.residual,
+            };
+            Ok((model, report))
+        }
+        Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error("E0804", format!("cannot evaluate the geometry: {e:?}"))]),
+        Err(AssemblyError::NoAssembly { loop_errors, .. }) => Err(vec![no_assembly(mechanism, &model, &loop_errors)]),
+    }
+}
+
+fn no_assembly(mechanism: &Mechanism, model: &KinematicModel, loop_errors: &[(f64, f64)]) -> Diagnostic {
+    let worst = loop_errors
+        .iter()
+        .enumerate()
+        .max_by(|a, b| (a.1 .0 + a.1 .1).total_cmp(&(b.1 .0 + b.1 .1)))
+        .map(|(k, _)| k)
+        .unwrap_or(0);
+    let joint = &model.complementary()[worst];
+    let (position, rotation) = loop_errors[worst];
+    let join = mechanism.join(joint.join);
+    let mut diagnostic = Diagnostic::error("E0805", format!("the loop closed by join `{}` cannot be assembled", joint.name))
+        .primary(join.span, format!("still {position:.3e} m and {rotation:.3e} rad apart"))
+        .help("check the geometry, or give starting values closer to an assembled configuration with `initial`");
+    for (k, (p, r)) in loop_errors.iter().enumerate() {
+        if k != worst && (p + r) > 1e-9 {
+            let other = &model.complementary()[k];
+            diagnostic = diagnostic.note(format!("the loop closed by `{}` is also open ({p:.3e} m, {r:.3e} rad)", other.name));
+        }
+    }
+    diagnostic
+}
+
+pub use joint::JointKind;

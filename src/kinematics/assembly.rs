@@ -1,0 +1,110 @@
+//! Assembly: from the user's starting values, solve the closure equations for a consistent
+//! configuration, keeping the `fixed` coordinates at their values (Levenberg–Marquardt on the
+//! exact closure Jacobian; near the solution it takes Gauss–Newton steps and converges
+//! quadratically).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::closure::closure;
+use super::eval::EvalError;
+use super::model::KinematicModel;
+
+#[derive(Clone, Debug)]
+pub struct AssemblyOptions {
+    /// Largest residual component accepted (metres for positions, ≈ radians for rotations).
+    pub tolerance: f64,
+    pub max_iterations: usize,
+}
+
+impl Default for AssemblyOptions {
+    fn default() -> Self {
+        AssemblyOptions { tolerance: 1e-12, max_iterations: 200 }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Assembled {
+    pub q: Vec<f64>,
+    pub iterations: usize,
+    /// Largest residual component at the solution.
+    pub residual: f64,
+}
+
+#[derive(Clone, Debug)]
+pub enum AssemblyError {
+    Evaluation(EvalError),
+    /// No configuration closes the loops from these starting values: the best found, and the
+    /// position and rotation errors left in each loop.
+    NoAssembly { q: Vec<f64>, loop_errors: Vec<(f64, f64)> },
+}
+
+impl From<EvalError> for AssemblyError {
+    fn from(e: EvalError) -> Self {
+        AssemblyError::Evaluation(e)
+    }
+}
+
+pub fn assemble(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &AssemblyOptions) -> Result<Assembled, AssemblyError> {
+    let free: Vec<usize> = (0..model.coordinate_count).filter(|&i| !fixed[i]).collect();
+    let mut q = start.to_vec();
+    let mut current = closure(model, &q)?;
+    let mut cost = current.residual.norm_squared();
+    let mut damping = 1e-6;
+    for iteration in 0..options.max_iterations {
+        if current.residual.amax() <= options.tolerance {
+            return Ok(Assembled { q, iterations: iteration, residual: current.residual.amax() });
+        }
+        let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| current.jacobian[(r, free[c])]);
+        let gradient = jacobian.transpose() * &current.residual;
+        let normal = jacobian.transpose() * &jacobian;
+        let mut improved = false;
+        for _ in 0..30 {
+            let scale = normal.diagonal().map(|d| d.max(1e-12));
+            let mut damped = normal.clone();
+            for i in 0..free.len() {
+                damped[(i, i)] += damping * scale[i];
+            }
+            let Some(step) = damped.cholesky().map(|c| c.solve(&(-&gradient))) else {
+                damping *= 10.0;
+                continue;
+            };
+            let mut trial = q.clone();
+            for (i, &index) in free.iter().enumerate() {
+                trial[index] += step[i];
+            }
+            let candidate = closure(model, &trial)?;
+            let trial_cost = candidate.residual.norm_squared();
+            if trial_cost < cost {
+                q = trial;
+                current = candidate;
+                cost = trial_cost;
+                damping = (damping / 10.0).max(1e-15);
+                improved = true;
+                break;
+            }
+            damping *= 10.0;
+            if step.amax() < 1e-16 {
+                break;
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    if current.residual.amax() <= options.tolerance {
+        let residual = current.residual.amax();
+        return Ok(Assembled { q, iterations: options.max_iterations, residual });
+    }
+    let loop_errors = (0..model.complementary().len()).map(|k| current.loop_errors(k)).collect();
+    Err(AssemblyError::NoAssembly { q, loop_errors })
+}
+
+/// Singular values of a matrix, largest first.
+pub fn singular_values(m: &DMatrix<f64>) -> DVector<f64> {
+    if m.nrows() == 0 || m.ncols() == 0 {
+        return DVector::zeros(0);
+    }
+    let mut values = m.clone().svd(false, false).singular_values;
+    values.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
+    values
+}

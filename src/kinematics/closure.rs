@@ -1,0 +1,76 @@
+//! Closure of the complementary links: for a join `A on a`, `B on b` with chain D(q), the loop is
+//! closed when pose(a)·A·D(q) = pose(b)·B. The residual has 6 rows per loop: the skew part of the
+//! relative rotation (zero when the frames agree) and the position difference, both in the world
+//! frame; its Jacobian is exact (not a finite difference).
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use super::eval::EvalError;
+use super::forward::{forward, Configuration};
+use super::model::KinematicModel;
+use super::spatial::{self, Twist};
+
+pub struct Closure {
+    /// 6 rows per complementary link, in link order.
+    pub residual: DVector<f64>,
+    /// ∂residual/∂q, 6 rows per complementary link.
+    pub jacobian: DMatrix<f64>,
+    pub configuration: Configuration,
+}
+
+impl Closure {
+    /// Largest position error and largest rotation error (skew part, ≈ angle) of loop k.
+    pub fn loop_errors(&self, k: usize) -> (f64, f64) {
+        let rows = self.residual.rows(6 * k, 6);
+        let rotation = rows.rows(0, 3).amax();
+        let position = rows.rows(3, 3).amax();
+        (position, rotation)
+    }
+}
+
+pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> {
+    let configuration = forward(model, q)?;
+    let loops = model.complementary();
+    let nq = model.coordinate_count;
+    let mut residual = DVector::zeros(6 * loops.len());
+    let mut jacobian = DMatrix::zeros(6 * loops.len(), nq);
+    for (k, joint) in loops.iter().enumerate() {
+        let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
+        let (chain, subspace) = joint.chain(coordinates, &model.unknowns)?;
+        let base = configuration.poses[joint.first_body] * joint.first;
+        let end = base * chain;
+        let target = configuration.poses[joint.second_body] * joint.second;
+        let (r_end, r_target) = (end.rotation.to_rotation_matrix(), target.rotation.to_rotation_matrix());
+        let (p_end, p_target) = (end.translation.vector, target.translation.vector);
+        let relative = r_end.matrix().transpose() * r_target.matrix();
+        let rotation_error = spatial::skew_vector(&relative);
+        let position_error = p_target - p_end;
+        for r in 0..3 {
+            residual[6 * k + r] = rotation_error[r];
+            residual[6 * k + 3 + r] = position_error[r];
+        }
+        // Twists of the chain's end and of the target frame per coordinate.
+        let mut end_twists = configuration.jacobians[joint.first_body].clone();
+        for c in 0..joint.coordinate_count() {
+            let column = Twist::from_column_slice(subspace.column(c).as_slice());
+            let world = spatial::transform_twist(&base, &column);
+            for r in 0..6 {
+                end_twists[(r, joint.offset + c)] += world[r];
+            }
+        }
+        let target_twists = &configuration.jacobians[joint.second_body];
+        for c in 0..nq {
+            let v_end = Twist::from_column_slice(end_twists.column(c).as_slice());
+            let v_target = Twist::from_column_slice(target_twists.column(c).as_slice());
+            let dw: Vector3<f64> = spatial::angular(&v_target) - spatial::angular(&v_end);
+            let d_relative = r_end.matrix().transpose() * spatial::hat(&dw) * r_target.matrix();
+            let d_rotation = spatial::skew_vector(&d_relative);
+            let d_position = spatial::point_velocity(&v_target, &p_target) - spatial::point_velocity(&v_end, &p_end);
+            for r in 0..3 {
+                jacobian[(6 * k + r, c)] = d_rotation[r];
+                jacobian[(6 * k + 3 + r, c)] = d_position[r];
+            }
+        }
+    }
+    Ok(Closure { residual, jacobian, configuration })
+}

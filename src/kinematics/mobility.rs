@@ -1,0 +1,127 @@
+//! Mobility by rank, never by counting: at an assembled configuration, the closure Jacobian's
+//! rank gives the number of independent constraints, rank(Δ), and the mobility is the tree's
+//! degrees of freedom minus rank(Δ). Also: redundant constraints, singular configurations (a rank
+//! lower than at nearby assembled configurations), and internal mobilities (a body that can move
+//! while every other body stands still, such as a rod spinning between two ball joints).
+
+use nalgebra::DMatrix;
+use serde::Serialize;
+
+use super::assembly::{assemble, singular_values, AssemblyOptions};
+use super::closure::closure;
+use super::eval::EvalError;
+use super::model::KinematicModel;
+
+/// Relative tolerance on singular values: σ counts if σ > RANK_TOLERANCE · σ_max.
+pub const RANK_TOLERANCE: f64 = 1e-9;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Mobility {
+    /// Degrees of freedom of the spanning tree (coordinates of the principal links).
+    pub tree_dof: usize,
+    /// Constraint equations of the complementary links (Σ of their degrees of constraint).
+    pub constraint_rows: usize,
+    /// Independent constraints at this configuration: rank(Δ).
+    pub rank: usize,
+    pub mobility: usize,
+    /// constraint_rows − rank.
+    pub redundant: usize,
+    /// rank(Δ) at nearby assembled configurations, when higher than here (a singular
+    /// configuration).
+    pub generic_rank: usize,
+    pub singular: bool,
+    /// Bodies that can move alone (body number, how many ways).
+    pub internal: Vec<(usize, usize)>,
+    pub tolerance: f64,
+}
+
+pub fn rank(m: &DMatrix<f64>) -> usize {
+    let values = singular_values(m);
+    let largest = values.iter().copied().fold(0.0, f64::max);
+    if largest == 0.0 {
+        return 0;
+    }
+    values.iter().filter(|&&s| s > RANK_TOLERANCE * largest).count()
+}
+
+/// rank(Δ) at q: rank of the full closure Jacobian minus the ranks of the cut joints' own motion
+/// subspaces (their columns only appear in their own loop's rows).
+pub fn constraint_rank(model: &KinematicModel, q: &[f64]) -> Result<(usize, usize), EvalError> {
+    let closure = closure(model, q)?;
+    let mut cut_rank = 0;
+    let mut rows = 0;
+    for joint in model.complementary() {
+        let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
+        let (_, subspace) = joint.chain(coordinates, &model.unknowns)?;
+        let r = rank(&subspace);
+        cut_rank += r;
+        rows += 6 - r;
+    }
+    Ok((rank(&closure.jacobian).saturating_sub(cut_rank), rows))
+}
+
+pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError> {
+    let (rank_here, rows) = constraint_rank(model, q)?;
+    let tree_dof = model.tree_coordinate_count();
+    let generic_rank = nearby_rank(model, q)?.max(rank_here);
+    Ok(Mobility {
+        tree_dof,
+        constraint_rows: rows,
+        rank: rank_here,
+        mobility: tree_dof.saturating_sub(rank_here),
+        redundant: rows.saturating_sub(rank_here),
+        generic_rank,
+        singular: generic_rank > rank_here,
+        internal: internal_mobilities(model, q)?,
+        tolerance: RANK_TOLERANCE,
+    })
+}
+
+/// The largest rank(Δ) at assembled configurations near q (deterministic perturbations).
+fn nearby_rank(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
+    if model.complementary().is_empty() {
+        return Ok(0);
+    }
+    let fixed = vec![false; model.coordinate_count];
+    let options = AssemblyOptions { tolerance: 1e-10, max_iterations: 100 };
+    let mut best = 0;
+    for sample in 0..4 {
+        let perturbed: Vec<f64> = q
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x + 0.05 * ((1.0 + i as f64 * 0.7548776662 + sample as f64 * 0.5698402910) * 12.9898).sin())
+            .collect();
+        if let Ok(assembled) = assemble(model, &perturbed, &fixed, &options) {
+            best = best.max(constraint_rank(model, &assembled.q)?.0);
+        }
+    }
+    Ok(best)
+}
+
+/// For each body, the number of independent motions of the mechanism in which it alone moves:
+/// the motions that keep every other body still, less those that keep all bodies still.
+fn internal_mobilities(model: &KinematicModel, q: &[f64]) -> Result<Vec<(usize, usize)>, EvalError> {
+    let closure = closure(model, q)?;
+    let n = model.topology.body_count();
+    let jacobians = &closure.configuration.jacobians;
+    let stack = |bodies: &[usize]| {
+        let rows = closure.jacobian.nrows() + 6 * bodies.len();
+        let mut stacked = DMatrix::zeros(rows.max(1), model.coordinate_count);
+        stacked.rows_mut(0, closure.jacobian.nrows()).copy_from(&closure.jacobian);
+        for (i, &b) in bodies.iter().enumerate() {
+            stacked.rows_mut(closure.jacobian.nrows() + 6 * i, 6).copy_from(&jacobians[b]);
+        }
+        rank(&stacked)
+    };
+    let all: Vec<usize> = (1..=n).collect();
+    let still = stack(&all);
+    let mut internal = Vec::new();
+    for body in 1..=n {
+        let others: Vec<usize> = all.iter().copied().filter(|&b| b != body).collect();
+        let moving_alone = still - stack(&others);
+        if moving_alone > 0 {
+            internal.push((body, moving_alone));
+        }
+    }
+    Ok(internal)
+}

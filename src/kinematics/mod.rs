@@ -1,0 +1,32 @@
+//! Kinematics of the numbered mechanism: the numeric model, forward kinematics with analytic
+//! Jacobians, closure of the complementary links, assembly, joint analysis and mobility.
+
+pub mod assembly;
+pub mod closure;
+pub mod eval;
+pub mod forward;
+pub mod joint;
+pub mod mobility;
+pub mod model;
+pub mod spatial;
+
+use crate::diag::Diagnostic;
+use crate::elab::mechanism::Mechanism;
+use model::KinematicModel;
+
+/// Starting coordinates and which of them are held, from the program's `initial` declarations
+/// (coordinates without one start at 0).
+pub fn initial_coordinates(mechanism: &Mechanism, model: &KinematicModel) -> Result<(Vec<f64>, Vec<bool>), Diagnostic> {
+    let mut q = vec![0.0; model.coordinate_count];
+    let mut fixed = vec![false; model.coordinate_count];
+    for initial in mechanism.initial.iter().filter(|i| i.order == 0) {
+        let Some(joint) = model.joint_of_join(initial.join) else { continue };
+        let value = eval::eval(&initial.value, &model.unknowns, &[]).map_err(|_| {
+            Diagnostic::error("E0803", "an initial value must be a number")
+                .primary(initial.span, "its value depends on something without a value")
+        })?;
+        q[joint.offset + initial.coordinate] = value;
+        fixed[joint.offset + initial.coordinate] |= initial.fixed;
+    }
+    Ok((q, fixed))
+}

@@ -1,0 +1,252 @@
+//! The numeric kinematic model: for every join, its two frames as rigid transforms on their bodies
+//! and its dof chain as steps to evaluate at given coordinates; the coordinates of the whole
+//! mechanism in one vector, principal links first (by number), then complementary links.
+
+use nalgebra::{DMatrix, Vector3};
+
+use super::eval::{eval, eval_dual, EvalError, UnknownValues};
+use super::spatial::{self, Pose, Twist};
+use crate::diag::Diagnostic;
+use crate::elab::mechanism::Mechanism;
+use crate::elab::value::{Displacement, Elementary, JoinId, Scalar};
+use crate::syntax::span::Span;
+use crate::topology::Topology;
+
+#[derive(Clone, Debug)]
+pub enum Step {
+    Translation([Scalar; 3]),
+    Rotation { angle: Scalar, axis: Vector3<f64> },
+}
+
+#[derive(Clone, Debug)]
+pub struct JointModel {
+    pub join: JoinId,
+    pub name: String,
+    /// Body numbers (0 = earth) of the first and second frames.
+    pub first_body: usize,
+    pub second_body: usize,
+    /// The frames on their bodies.
+    pub first: Pose,
+    pub second: Pose,
+    pub steps: Vec<Step>,
+    pub coordinate_names: Vec<String>,
+    /// Index of the joint's first coordinate in the mechanism's coordinate vector.
+    pub offset: usize,
+}
+
+impl JointModel {
+    pub fn coordinate_count(&self) -> usize {
+        self.coordinate_names.len()
+    }
+
+    /// The dof chain's transform at coordinates `q`, and its motion subspace: column k is the
+    /// twist, in the joint's first frame, produced by a unit rate of coordinate k.
+    pub fn chain(&self, q: &[f64], unknowns: &UnknownValues) -> Result<(Pose, DMatrix<f64>), EvalError> {
+        let n = self.coordinate_count();
+        let mut pose = Pose::identity();
+        let mut subspace = DMatrix::zeros(6, n);
+        for step in &self.steps {
+            let (transform, local): (Pose, Vec<Twist>) = match step {
+                Step::Translation(v) => {
+                    let value = Vector3::new(eval(&v[0], unknowns, q)?, eval(&v[1], unknowns, q)?, eval(&v[2], unknowns, q)?);
+                    let mut columns = Vec::with_capacity(n);
+                    for k in 0..n {
+                        let d = |i: usize| eval_dual(&v[i], unknowns, q, Some(k)).map(|d| d.derivative);
+                        columns.push(spatial::twist(Vector3::zeros(), Vector3::new(d(0)?, d(1)?, d(2)?)));
+                    }
+                    (spatial::translation(value), columns)
+                }
+                Step::Rotation { angle, axis } => {
+                    let value = eval(angle, unknowns, q)?;
+                    let mut columns = Vec::with_capacity(n);
+                    for k in 0..n {
+                        let rate = eval_dual(angle, unknowns, q, Some(k))?.derivative;
+                        columns.push(spatial::twist(axis * rate, Vector3::zeros()));
+                    }
+                    (spatial::rotation(axis, value), columns)
+                }
+            };
+            for (k, column) in local.iter().enumerate() {
+                let moved = spatial::transform_twist(&pose, column);
+                for r in 0..6 {
+                    subspace[(r, k)] += moved[r];
+                }
+            }
+            pose *= transform;
+        }
+        Ok((pose, subspace))
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct KinematicModel {
+    pub topology: Topology,
+    /// Principal joints (index j - 1 for body j), then complementary ones.
+    pub joints: Vec<JointModel>,
+    pub unknowns: UnknownValues,
+    pub coordinate_count: usize,
+}
+
+impl KinematicModel {
+    pub fn principal(&self) -> &[JointModel] {
+        &self.joints[..self.topology.body_count()]
+    }
+
+    pub fn complementary(&self) -> &[JointModel] {
+        &self.joints[self.topology.body_count()..]
+    }
+
+    /// Coordinates of the tree (principal links).
+    pub fn tree_coordinate_count(&self) -> usize {
+        self.principal().iter().map(JointModel::coordinate_count).sum()
+    }
+
+    /// `crank.q`, … for every coordinate, in vector order.
+    pub fn coordinate_names(&self) -> Vec<String> {
+        self.joints.iter().flat_map(|j| j.coordinate_names.iter().map(move |c| format!("{}.{c}", j.name))).collect()
+    }
+
+    pub fn joint_of_join(&self, join: JoinId) -> Option<&JointModel> {
+        self.joints.iter().find(|j| j.join == join)
+    }
+}
+
+/// Builds the numeric model. Every quantity the geometry uses must have a value.
+pub fn build(mechanism: &Mechanism, topology: Topology, unknowns: UnknownValues) -> Result<KinematicModel, Vec<Diagnostic>> {
+    let mut joints = Vec::new();
+    let mut errors = Vec::new();
+    let mut offset = 0;
+    let order = topology.principal.iter().map(|l| l.join).chain(topology.complementary.iter().map(|l| l.join));
+    for join_id in order {
+        match joint_model(mechanism, &topology, join_id, &unknowns, offset) {
+            Ok(joint) => {
+                offset += joint.coordinate_count();
+                joints.push(joint);
+            }
+            Err(e) => errors.push(e),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    Ok(KinematicModel { topology, joints, unknowns, coordinate_count: offset })
+}
+
+fn joint_model(
+    mechanism: &Mechanism,
+    topology: &Topology,
+    id: JoinId,
+    unknowns: &UnknownValues,
+    offset: usize,
+) -> Result<JointModel, Diagnostic> {
+    let join = mechanism.join(id);
+    let link = mechanism.link(join.link);
+    let name = mechanism.join_name(id);
+    let frame = |d: &Displacement| constant_pose(d, unknowns).map_err(|e| geometry_error(mechanism, e, join.span, &name));
+    let first = frame(&join.first.displacement)?;
+    let second = frame(&join.second.displacement)?;
+    let steps = link_steps(mechanism, id, unknowns)?;
+    Ok(JointModel {
+        join: id,
+        name,
+        first_body: topology.number(join.first.body),
+        second_body: topology.number(join.second.body),
+        first,
+        second,
+        steps,
+        coordinate_names: link.coordinates.iter().map(|c| c.to_string()).collect(),
+        offset,
+    })
+}
+
+/// The steps of a join's dof chain, with rotation axes evaluated and normalised.
+pub fn link_steps(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) -> Result<Vec<Step>, Diagnostic> {
+    let join = mechanism.join(id);
+    let link = mechanism.link(join.link);
+    let name = mechanism.join_name(id);
+    let mut steps = Vec::new();
+    for step in link.dofs.iter().flat_map(|d| d.0.iter()) {
+        steps.push(match step {
+            Elementary::Translation(v) => Step::Translation(v.clone()),
+            Elementary::Rotation { angle, axis } => {
+                let axis = constant_vector(axis, unknowns).map_err(|e| geometry_error(mechanism, e, link.span, &name))?;
+                let norm = axis.norm();
+                if norm == 0.0 || !norm.is_finite() {
+                    return Err(Diagnostic::error("E0704", format!("a rotation of join `{name}` has a zero axis"))
+                        .primary(link.span, "in this link's dof chain"));
+                }
+                Step::Rotation { angle: angle.clone(), axis: axis / norm }
+            }
+        });
+    }
+    Ok(steps)
+}
+
+/// A joint model of the link alone (frames at identity): enough to analyse the joint.
+pub fn link_only(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) -> Result<JointModel, Diagnostic> {
+    let join = mechanism.join(id);
+    Ok(JointModel {
+        join: id,
+        name: mechanism.join_name(id),
+        first_body: 0,
+        second_body: 0,
+        first: Pose::identity(),
+        second: Pose::identity(),
+        steps: link_steps(mechanism, id, unknowns)?,
+        coordinate_names: mechanism.link(join.link).coordinates.iter().map(|c| c.to_string()).collect(),
+        offset: 0,
+    })
+}
+
+fn constant_vector(v: &[Scalar; 3], unknowns: &UnknownValues) -> Result<Vector3<f64>, EvalError> {
+    let value = |s: &Scalar| {
+        eval(s, unknowns, &[]).map_err(|e| match e {
+            EvalError::NotGeometric(_) => EvalError::NotGeometric("a coordinate (rotation axes and frames are constant)"),
+            other => other,
+        })
+    };
+    Ok(Vector3::new(value(&v[0])?, value(&v[1])?, value(&v[2])?))
+}
+
+/// A displacement without coordinates, as a rigid transform.
+pub fn constant_pose(d: &Displacement, unknowns: &UnknownValues) -> Result<Pose, EvalError> {
+    let mut pose = Pose::identity();
+    for step in &d.0 {
+        pose *= match step {
+            Elementary::Translation(v) => spatial::translation(constant_vector(v, unknowns)?),
+            Elementary::Rotation { angle, axis } => {
+                let axis = constant_vector(axis, unknowns)?;
+                let angle = eval(angle, unknowns, &[])?;
+                let norm = axis.norm();
+                if norm == 0.0 {
+                    Pose::identity()
+                } else {
+                    spatial::rotation(&(axis / norm), angle)
+                }
+            }
+        };
+    }
+    Ok(pose)
+}
+
+fn geometry_error(mechanism: &Mechanism, error: EvalError, span: Span, join: &str) -> Diagnostic {
+    match error {
+        EvalError::Missing(id) => {
+            let unknown = &mechanism.unknowns[id.0 as usize];
+            let what = match unknown.origin {
+                crate::elab::mechanism::Origin::Written => match &unknown.name {
+                    Some(name) => format!("the unknown `{name}`"),
+                    None => "this unknown".to_string(),
+                },
+                origin => format!("`{}`", mechanism.generic_name(origin)),
+            };
+            Diagnostic::error("E0801", format!("the geometry of join `{join}` needs a value for {what}"))
+                .primary(unknown.span, "no value given")
+                .secondary(span, "used by this join")
+                .help("give it a value: `let L = 0.5;` and use `L` instead of `?s`")
+        }
+        EvalError::NotGeometric(what) => Diagnostic::error("E0802", format!("the geometry of join `{join}` depends on {what}"))
+            .primary(span, "here")
+            .help("frames and rotation axes are constant; only the link's own coordinates vary"),
+    }
+}
