@@ -72,7 +72,7 @@ fn link_report(mechanism: &Mechanism, topology: &Topology, join: crate::elab::va
 pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
     let unknowns = UnknownValues::new();
-    let bodies = topology
+    let bodies: Vec<BodyReport> = topology
         .principal
         .iter()
         .map(|link| BodyReport {
@@ -87,6 +87,15 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         .iter()
         .map(|link| link_report(mechanism, &topology, link.join, link.number, &unknowns))
         .collect();
+    if topology.complementary.is_empty() {
+        // A tree: no constraint, the mobility is the sum of the links' degrees of freedom.
+        let joints: Option<Vec<&JointAnalysis>> = bodies.iter().map(|b: &BodyReport| b.link.joint.as_ref()).collect();
+        let (mobility, unavailable) = match joints {
+            Some(joints) => (Some(Mobility::of_tree(joints.iter().map(|j| j.dof).sum())), None),
+            None => (None, Some("a joint could not be analysed".to_string())),
+        };
+        return Ok(TreeReport { bodies, complementary, mobility, mobility_unavailable: unavailable });
+    }
     let (mobility, mobility_unavailable) = match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
         Ok((model, assembled)) => match mobility(&model, &assembled.coordinates_vector()) {
             Ok(m) => (Some(m), None),

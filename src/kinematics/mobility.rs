@@ -35,6 +35,23 @@ pub struct Mobility {
     pub tolerance: f64,
 }
 
+impl Mobility {
+    /// A tree: no constraints.
+    pub fn of_tree(tree_dof: usize) -> Mobility {
+        Mobility {
+            tree_dof,
+            constraint_rows: 0,
+            rank: 0,
+            mobility: tree_dof,
+            redundant: 0,
+            generic_rank: 0,
+            singular: false,
+            internal: Vec::new(),
+            tolerance: RANK_TOLERANCE,
+        }
+    }
+}
+
 pub fn rank(m: &DMatrix<f64>) -> usize {
     let values = singular_values(m);
     let largest = values.iter().copied().fold(0.0, f64::max);

@@ -1,0 +1,226 @@
+//! Topology and kinematics against independent oracles: the thesis's numbering of the satellite,
+//! the Delta ISIR88 poses computed in closed form (fixture `tests/fixtures/delta.json`, made by
+//! `bench/delta_reference.py`), analytic Jacobians against finite differences, and numbering
+//! invariants on random mechanisms.
+
+use std::path::PathBuf;
+
+use lsdc::analysis;
+use lsdc::driver::{compile_files, compile_text};
+use lsdc::elab::mechanism::Mechanism;
+use lsdc::elab::value::BodyRef;
+use lsdc::kinematics::assembly::{assemble, AssemblyOptions};
+use lsdc::kinematics::closure::closure;
+use lsdc::kinematics::eval::UnknownValues;
+use lsdc::kinematics::forward::forward;
+use lsdc::kinematics::model::{self, KinematicModel};
+use lsdc::kinematics::{initial_coordinates, spatial};
+use lsdc::load::LoadOptions;
+use lsdc::topology;
+use proptest::prelude::*;
+
+fn options() -> LoadOptions {
+    LoadOptions { library_dirs: Vec::new(), use_environment: false }
+}
+
+fn mechanism(path: &str) -> Mechanism {
+    let compilation = compile_files(&[PathBuf::from(path)], &options()).expect("readable");
+    assert!(!compilation.has_errors(), "{path}: {:?}", compilation.diagnostics);
+    compilation.mechanism.expect("elaborates")
+}
+
+fn kinematic_model(m: &Mechanism) -> KinematicModel {
+    let topology = topology::build(m).expect("connected");
+    model::build(m, topology, UnknownValues::new()).expect("numeric geometry")
+}
+
+fn body_number(m: &Mechanism, model: &KinematicModel, name: &str) -> usize {
+    let index = m.bodies.iter().position(|b| b.name.as_deref() == Some(name)).expect("body exists");
+    model.topology.number(BodyRef::Body(lsdc::elab::value::BodyId(index as u32)))
+}
+
+fn coordinate_index(model: &KinematicModel, name: &str) -> usize {
+    model.coordinate_names().iter().position(|n| n == name).unwrap_or_else(|| panic!("no coordinate {name}"))
+}
+
+#[test]
+fn satellite_numbering_follows_the_thesis() {
+    let m = mechanism("examples/satellite.lsd");
+    let report = analysis::tree(&m).expect("tree");
+    let names: Vec<&str> = report.bodies.iter().map(|b| b.name.as_str()).collect();
+    assert_eq!(names, ["satellite", "bras_primaire", "bras_secondaire", "reflecteur"]);
+    let parents: Vec<usize> = report.bodies.iter().map(|b| b.parent).collect();
+    assert_eq!(parents, [0, 1, 2, 3]);
+    assert!(report.complementary.is_empty());
+    assert_eq!(report.mobility.expect("tree mobility").mobility, 9);
+    let kinds: Vec<String> =
+        report.bodies.iter().map(|b| format!("{:?}", b.link.joint.as_ref().expect("analysed").kind)).collect();
+    assert_eq!(kinds, ["Free", "Revolute", "Prismatic", "Revolute"]);
+}
+
+fn fixture() -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string("tests/fixtures/delta.json").expect("fixture")).expect("json")
+}
+
+fn vector(value: &serde_json::Value) -> Vec<f64> {
+    value.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
+}
+
+/// Assembles with the given coordinates held, moving them in small steps from the program's
+/// own assembled configuration so the mechanism stays on the same assembly branch.
+fn assemble_with(model: &KinematicModel, m: &Mechanism, held: &[(&str, f64)]) -> Vec<f64> {
+    let (start, mut fixed) = initial_coordinates(m, model).expect("initial values");
+    let options = AssemblyOptions::default();
+    let mut q = assemble(model, &start, &fixed, &options).expect("the program's configuration assembles").q;
+    let indices: Vec<usize> = held.iter().map(|(name, _)| coordinate_index(model, name)).collect();
+    let from: Vec<f64> = indices.iter().map(|&i| q[i]).collect();
+    for &i in &indices {
+        fixed[i] = true;
+    }
+    let steps = 20;
+    for step in 1..=steps {
+        let t = step as f64 / steps as f64;
+        for (k, &i) in indices.iter().enumerate() {
+            q[i] = from[k] + t * (held[k].1 - from[k]);
+        }
+        q = assemble(model, &q, &fixed, &options).expect("assembles").q;
+    }
+    q
+}
+
+#[test]
+fn delta_forward_kinematics_matches_the_closed_form() {
+    let fixture = fixture();
+    for path in ["examples/delta_isir88_reduced.lsd", "examples/delta_isir88.lsd"] {
+        let m = mechanism(path);
+        let model = kinematic_model(&m);
+        let nacelle = body_number(&m, &model, "nacelle");
+        for row in fixture["forward"].as_array().expect("rows") {
+            let alpha = vector(&row["alpha"]);
+            let expected = vector(&row["position"]);
+            let held = [("A1.q", alpha[0]), ("A2.q", alpha[1]), ("A3.q", alpha[2])];
+            let q = assemble_with(&model, &m, &held);
+            let position = forward(&model, &q).expect("evaluates").poses[nacelle].translation.vector;
+            for k in 0..3 {
+                assert!((position[k] - expected[k]).abs() < 1e-9, "{path} α={alpha:?}: {position:?} vs {expected:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn delta_inverse_kinematics_matches_the_closed_form() {
+    let fixture = fixture();
+    let m = mechanism("examples/delta_isir88_ik.lsd");
+    let model = kinematic_model(&m);
+    for row in fixture["inverse"].as_array().expect("rows") {
+        let p = vector(&row["position"]);
+        let expected = vector(&row["alpha"]);
+        let held = [("position.x", p[0]), ("position.y", p[1]), ("position.z", p[2])];
+        let q = assemble_with(&model, &m, &held);
+        for (k, name) in ["A1.q", "A2.q", "A3.q"].iter().enumerate() {
+            let alpha = q[coordinate_index(&model, name)];
+            // 1e-9 m at the arm's 0.2 m length is 5e-9 rad.
+            assert!((alpha - expected[k]).abs() < 5e-9, "P={p:?} {name}: {alpha} vs {}", expected[k]);
+        }
+    }
+}
+
+#[test]
+fn delta_mobility_counts_rod_spins_as_internal() {
+    let full = analysis::tree(&mechanism("examples/delta_isir88.lsd")).expect("tree");
+    assert_eq!((full.bodies.len(), full.complementary.len()), (10, 5));
+    let mobility = full.mobility.expect("computed");
+    assert_eq!((mobility.tree_dof, mobility.rank, mobility.mobility), (24, 15, 9));
+    assert_eq!(mobility.internal.len(), 6);
+    for &(body, ways) in &mobility.internal {
+        assert_eq!(ways, 1);
+        assert!(full.bodies[body - 1].name.starts_with("rod"), "{}", full.bodies[body - 1].name);
+    }
+    let reduced = analysis::tree(&mechanism("examples/delta_isir88_reduced.lsd")).expect("tree");
+    assert_eq!((reduced.bodies.len(), reduced.complementary.len()), (7, 2));
+    assert_eq!(reduced.mobility.expect("computed").mobility, 3);
+}
+
+/// Central differences of the closure residual and of body poses against the analytic Jacobians.
+fn check_jacobians(model: &KinematicModel, q: &[f64]) {
+    let h = 1e-6;
+    let analytic = closure(model, q).expect("evaluates");
+    for c in 0..model.coordinate_count {
+        let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
+        plus[c] += h;
+        minus[c] -= h;
+        let (rp, rm) = (closure(model, &plus).expect(""), closure(model, &minus).expect(""));
+        let numeric = (&rp.residual - &rm.residual) / (2.0 * h);
+        let difference = (&numeric - analytic.jacobian.column(c)).amax();
+        assert!(difference < 1e-6 * (1.0 + numeric.amax()), "closure column {c}: {difference}");
+        for body in 1..=model.topology.body_count() {
+            let (xp, xm) = (rp.configuration.poses[body], rm.configuration.poses[body]);
+            let x = analytic.configuration.poses[body];
+            // World angular velocity from the rotation difference, and the origin's velocity.
+            let omega = (xp.rotation * xm.rotation.inverse()).scaled_axis() / (2.0 * h);
+            let velocity = (xp.translation.vector - xm.translation.vector) / (2.0 * h);
+            let twist = spatial::Twist::from_column_slice(analytic.configuration.jacobians[body].column(c).as_slice());
+            let expected_velocity = spatial::point_velocity(&twist, &x.translation.vector);
+            assert!((omega - spatial::angular(&twist)).amax() < 1e-6, "body {body} column {c} angular");
+            assert!((velocity - expected_velocity).amax() < 1e-6, "body {body} column {c} linear");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn analytic_jacobians_match_finite_differences(example in 0usize..4, seed in prop::collection::vec(-3.0f64..3.0, 40)) {
+        let path = ["examples/delta_isir88.lsd", "examples/delta_isir88_reduced.lsd", "examples/delta_isir88_ik.lsd", "examples/satellite_numeric.lsd"][example];
+        let m = mechanism(path);
+        let model = kinematic_model(&m);
+        let q: Vec<f64> = (0..model.coordinate_count).map(|i| seed[i % seed.len()]).collect();
+        check_jacobians(&model, &q);
+    }
+
+    #[test]
+    fn numbering_invariants_hold_on_random_mechanisms(
+        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..25),
+        extra in prop::collection::vec((any::<prop::sample::Index>(), any::<prop::sample::Index>()), 0..10),
+    ) {
+        // Body k joins a random earlier body (or earth) so all are connected; extra joins close loops.
+        let n = parents.len();
+        let mut text = String::new();
+        for k in 1..=n {
+            text += &format!("let b{k} = body end;\n");
+        }
+        let name = |i: usize| if i == 0 { "earth".to_string() } else { format!("b{i}") };
+        let mut joins = Vec::new();
+        for (k, p) in parents.iter().enumerate() {
+            joins.push((p.index(k + 1), k + 1));
+        }
+        for (a, b) in &extra {
+            let (a, b) = (a.index(n + 1), b.index(n + 1));
+            if a != b {
+                joins.push((a, b));
+            }
+        }
+        for (a, b) in &joins {
+            text += &format!("join {} and {} with link(q) dof = q || [0,0,1] end;\n", name(*a), name(*b));
+        }
+        let compilation = compile_text("random.lsd", &text, None, &options());
+        let m = compilation.mechanism.expect("elaborates");
+        let t = topology::build(&m).expect("connected");
+        prop_assert_eq!(t.body_count(), n);
+        prop_assert_eq!(t.complementary.len(), joins.len() - n);
+        for (j, link) in t.principal.iter().enumerate() {
+            prop_assert_eq!(link.child, j + 1);
+            prop_assert_eq!(link.number, j + 1);
+            prop_assert!(link.parent < link.child);
+        }
+        // Breadth-first: parents appear in non-decreasing order.
+        for pair in t.principal.windows(2) {
+            prop_assert!(pair[0].parent <= pair[1].parent);
+        }
+        for (k, link) in t.complementary.iter().enumerate() {
+            prop_assert_eq!(link.number, n + 1 + k);
+        }
+    }
+}
