@@ -203,29 +203,67 @@ class Mechanism:
         assert not missing and not extra, f"{self.key}: missing {missing}, extra {extra}"
         return np.array([float(values[c]) for c in self.coords])
 
-    def solve(self, values, max_iter=200):
+    def solve(self, values, max_iter=2000):
+        """Levenberg-Marquardt (damped Gauss-Newton); the damping goes to zero near a solution,
+        where the steps become minimum-norm Gauss-Newton steps."""
         q = self.vec(values)
         r = self.residual(q.astype(complex)).real
+        mu = 1e-3
+        stall = 0
         for _ in range(max_iter):
-            if np.linalg.norm(r) < 1e-15:
+            if np.linalg.norm(r) < 1e-15 or stall > 30:
                 break
             J = self.jacobian(q)
-            step = np.linalg.lstsq(J, -r, rcond=None)[0]
-            t = 1.0
-            while True:
-                qn = q + t * step
-                rn = self.residual(qn.astype(complex)).real
-                if np.linalg.norm(rn) < np.linalg.norm(r) or t < 1e-6:
-                    break
-                t /= 2
-            if np.linalg.norm(rn) >= np.linalg.norm(r):
-                break
-            q, r = qn, rn
+            if mu < 1e-14:
+                step = np.linalg.lstsq(J, -r, rcond=None)[0]
+            else:
+                n = J.shape[1]
+                step = np.linalg.solve(J.T @ J + mu * np.eye(n), -(J.T @ r))
+            qn = q + step
+            rn = self.residual(qn.astype(complex)).real
+            if np.linalg.norm(rn) < np.linalg.norm(r):
+                q, r = qn, rn
+                mu /= 10
+                stall = 0
+            else:
+                mu = max(mu * 10, 1e-12)
+                stall += 1
         norm = float(np.linalg.norm(r))
         mismatch = self.full_mismatch(q.astype(complex))
         assert norm < CLOSE_TOL and mismatch < CLOSE_TOL, \
             f"{self.key}: did not close (residual {norm:.3e}, mismatch {mismatch:.3e})"
         return q, norm
+
+    def polish(self, q, rows):
+        """Move a numerically closed q exactly onto the closed set by Gauss-Newton on the closure
+        rows augmented with linear conditions sum_c rows[i][c] * q_c = 0 (mod 2 pi) that hold on
+        the closed set but are only implied at second order by the closure rows (see maille)."""
+        A = np.array([[row.get(c, 0) for c in self.coords] for row in rows], dtype=float)
+        k = np.round(A @ q / (2 * math.pi))
+        assert np.max(np.abs(A @ q - 2 * math.pi * k)) < 1e-5, f"{self.key}: conditions far from met"
+        for _ in range(100):
+            r = np.concatenate([self.residual(q.astype(complex)).real, A @ q - 2 * math.pi * k])
+            if np.linalg.norm(r) < 1e-15:
+                break
+            J = np.vstack([self.jacobian(q), A])
+            q = q + np.linalg.lstsq(J, -r, rcond=None)[0]
+        norm = float(np.linalg.norm(self.residual(q.astype(complex)).real))
+        assert norm < CLOSE_TOL and self.full_mismatch(q.astype(complex)) < CLOSE_TOL
+        return q, norm
+
+    def closed_set_dimension(self, q, rows=None, samples=16, size=1e-3, seed=11):
+        """Local dimension of the closed set at q: close `samples` random perturbations of q (size
+        `size`) with the plain Gauss-Newton solver, and count the singular values of the matrix of
+        displacements above 1e-2 of the largest (tangent directions give ~size, directions only
+        allowed to first order give ~1e-8, curvature ~size^2)."""
+        rng = np.random.default_rng(seed)
+        D = []
+        for _ in range(samples):
+            start = q + size * rng.standard_normal(len(q))
+            qi, _ = self.solve({c: v for c, v in zip(self.coords, start)})
+            D.append(qi - q)
+        s = np.linalg.svd(np.array(D), compute_uv=False)
+        return int(np.sum(s > 1e-2 * s[0])), [float(x / s[0]) for x in s]
 
     def rank(self, q):
         J = self.jacobian(q)
@@ -245,7 +283,7 @@ class Mechanism:
                 "mobility": self.tree_dof - rank_delta, "singular_values": sv}
 
     def as_dict(self, q):
-        return {c: float(round(v, 15)) + 0.0 for c, v in zip(self.coords, q)}
+        return {c: float(v) + 0.0 for c, v in zip(self.coords, q)}
 
 
 def lsd_initials(path):
@@ -269,10 +307,9 @@ def four_bar():
     m.join("coupler", ("bar1", disp([l1, 0, 0])), ("bar2", ID), revolute(Z))
     m.join("c", ("bar2", disp([l2, 0, 0])), ("bar3", disp([l3, 0, 0])), revolute(Z))
     m.join("rocker", ("earth", disp([l0, 0, 0])), ("bar3", ID), revolute(Z))
-    initial = {"crank.q": 1.0, "coupler.q": 0.4, "rocker.q": 1.7, "c.q": 0.3}
+    initial = {"crank.q": 1.0, "coupler.q": -0.36, "rocker.q": 1.79, "c.q": 1.15}
 
-    def thesis(v):  # §1.7 (L1340), cut at the rocker's ground pivot: relative angles
-        # Cut here at C instead; check the loop vector O->B->C = O->D->C.
+    def thesis(v):  # the loop equations of §1.7 (L1340), written for the cut at C: OB + BC = OD + DC
         t1 = v["crank.q"]
         t2 = t1 + v["coupler.q"]
         t3 = v["rocker.q"]
@@ -370,12 +407,29 @@ def _maille_level1(m, L):
     return PL433, PL800, y
 
 
+# On the closed set every arm keeps the two principal rods it joins at their relative
+# orientation, so the signed sum of its three angles is 0 (mod 2 pi).  The closure rows imply this
+# only at second order: the arm axes of a principal rod are the common tangent of two cones
+# (z, n2, n3 are coplanar at 120 degrees), so a first-order tilt of the rods survives in the
+# Jacobian.  The sums are used only to polish the Gauss-Newton point exactly onto the closed set;
+# the signs follow the join directions (j80, j103, j126, j140 run against the arm).
+ARMS_LEVEL1 = [{"j10.q": 1, "j21.q": 1, "j32.q": 1},
+               {"j43.q": 1, "j54.q": 1, "j65.q": 1},
+               {"j76.q": 1, "j87.q": 1, "j80.q": -1}]
+ARMS_LEVEL2 = [{"j90.q": 1, "j109.q": 1, "j103.q": -1},
+               {"j113.q": 1, "j1211.q": 1, "j126.q": -1},
+               {"j136.q": 1, "j1413.q": 1, "j140.q": -1}]
+MAILLE_INITIAL = {"j10.q": 0.485, "j21.q": -1.080, "j32.q": 0.595,
+                  "j43.q": 0.372, "j54.q": -1.046, "j65.q": 0.674,
+                  "j76.q": 0.710, "j87.q": -1.012, "j80.q": -0.302}
+
+
 def maille1():
     L = 1.0
     m = Mechanism("maille1", "examples/maille1.lsd", [f"b{i}" for i in range(1, 9)])
     _maille_level1(m, L)
-    initial = {"j10.q": 0.45, "j21.q": -0.9, "j32.q": 0.5, "j43.q": 0.3, "j54.q": -0.8,
-               "j65.q": 0.45, "j76.q": 0.55, "j87.q": -1.0, "j80.q": -0.5}
+    m.polish_rows = ARMS_LEVEL1
+    initial = dict(MAILLE_INITIAL)
     return m, initial, None, {"tree_dof": 8, "complementary": ["j54"], "mobility": 3, "rank_delta": 5}
 
 
@@ -393,10 +447,13 @@ def maille2():
     m.join("j136", ("b6", low @ PL433), ("b13", ID), revolute(Z))
     m.join("j1413", ("b13", y), ("b14", ID), revolute(Z))
     m.join("j140", ("earth", low @ PL800), ("b14", y), revolute(Z))
-    initial = {"j10.q": 0.45, "j21.q": -0.9, "j32.q": 0.5, "j43.q": 0.3, "j54.q": -0.8,
-               "j65.q": 0.45, "j76.q": 0.55, "j87.q": -1.0, "j80.q": -0.5,
-               "j90.q": 0.45, "j109.q": -0.9, "j103.q": 0.5, "j113.q": 0.3, "j1211.q": -0.8,
-               "j126.q": 0.45, "j136.q": 0.55, "j1413.q": -1.0, "j140.q": -0.5}
+    m.polish_rows = ARMS_LEVEL1 + ARMS_LEVEL2
+    # The lower level folded like the upper one (a translated copy).
+    i = MAILLE_INITIAL
+    initial = dict(i)
+    initial.update({"j90.q": i["j10.q"], "j109.q": i["j21.q"], "j103.q": -i["j32.q"],
+                    "j113.q": i["j43.q"], "j1211.q": i["j54.q"], "j126.q": -i["j65.q"],
+                    "j136.q": i["j76.q"], "j1413.q": i["j87.q"], "j140.q": i["j80.q"]})
     return m, initial, None, {"tree_dof": 14, "complementary": ["j54", "j103", "j1211", "j136"],
                               "mobility": 3, "rank_delta": 11}
 
@@ -444,8 +501,17 @@ def main():
         check_initials(m, initial)
         assert sorted(initial) == sorted(m.coords), f"{m.key}: initial guesses must cover every coordinate"
         q, norm = m.solve(initial)
+        polish_rows = getattr(m, "polish_rows", None)
+        gn_only = None
+        if polish_rows:
+            gn = m.analyse(q)
+            q_gn = q
+            q, norm = m.polish(q, polish_rows)
+            gn_only = {"rank_delta": gn["rank_delta"], "singular_values": gn["singular_values"],
+                       "distance_to_polished": float(np.linalg.norm(q - q_gn))}
         a = m.analyse(q)
         closed = m.as_dict(q)
+        dim, dim_sv = m.closed_set_dimension(q)
         entry = {
             "file": m.file,
             "tree_dof": m.tree_dof,
@@ -460,8 +526,12 @@ def main():
             "closed_residual_norm": norm,
             "singular_values": a["singular_values"],
             "body_order": m.order,
+            "closed_set_dimension": dim,
+            "closed_set_dimension_svd": dim_sv,
             "singular": None,
         }
+        if gn_only is not None:
+            entry["plain_gauss_newton_point"] = gn_only
         if thesis is not None:
             t = thesis(closed)
             assert max(abs(v) for v in t) < 1e-10, f"{m.key}: thesis closure equations not met: {t}"
@@ -477,7 +547,7 @@ def main():
         out["mechanisms"][m.key] = entry
         print(f"{m.key:16s} tree_dof {m.tree_dof:2d}  comp {entry['complementary']}  "
               f"rank_full {a['rank_full']:2d}  rank_delta {a['rank_delta']:2d}  "
-              f"mobility {a['mobility']}  residual {norm:.1e}")
+              f"mobility {a['mobility']}  dim V {dim}  residual {norm:.1e}")
     path = os.path.join(ROOT, "tests", "fixtures", "loops.json")
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w", encoding="utf-8") as f:

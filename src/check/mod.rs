@@ -34,6 +34,8 @@ pub struct Checked<'w> {
     pub resolutions: HashMap<Span, Target>,
     pub module_scopes: HashMap<ModuleId, ScopeId>,
     pub package_scopes: HashMap<Span, ScopeId>,
+    /// The `let` binding of each declared name, by the span of the name.
+    pub bindings: HashMap<Span, &'w Binding>,
 }
 
 impl Checked<'_> {
@@ -78,6 +80,7 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
             resolutions: HashMap::new(),
             module_scopes: HashMap::new(),
             package_scopes: HashMap::new(),
+            bindings: HashMap::new(),
         },
         diagnostics: Diagnostics::default(),
         instantiations: Vec::new(),
@@ -205,6 +208,7 @@ impl<'w> Checker<'w> {
         for (binding, ty) in bindings.iter().zip(types) {
             self.expect_first_class(&binding.value, ty);
             self.declare(scope, &binding.name, ty);
+            self.out.bindings.insert(binding.name.span, binding);
         }
     }
 

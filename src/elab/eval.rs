@@ -4,7 +4,7 @@ use std::rc::Rc;
 
 use super::mechanism::*;
 use super::value::*;
-use super::{internal, Elaborator};
+use super::{internal, Elaborator, Global};
 use crate::check::scope::{ScopeId, Target};
 use crate::check::types::Ty;
 use crate::diag::Diagnostic;
@@ -37,13 +37,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     fn decl(&mut self, decl: &'w Decl, scope: ScopeId) -> Result<()> {
         let mut locals = Locals::new();
         match &decl.kind {
-            DeclKind::Let(bindings) => self.let_decl(bindings, scope),
-            DeclKind::Define { name, .. } => {
-                let entry = self.checked.scope(scope).names.get(&name.name).ok_or_else(|| internal("definition not in scope"))?;
-                let Ty::Definition(def) = entry.ty else { return Err(internal("not a definition")) };
-                self.globals.insert((scope, name.name.clone()), Value::Definition(def));
-                Ok(())
-            }
+            // Definitions are evaluated when first used (see `global`).
+            DeclKind::Let(_) | DeclKind::Define { .. } => Ok(()),
             DeclKind::Join { first, second, link, name } => {
                 let first = self.expr(first, &mut locals).and_then(|v| as_frame(v, first.span))?;
                 let second = self.expr(second, &mut locals).and_then(|v| as_frame(v, second.span))?;
@@ -52,7 +47,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let join_name = name.as_ref().map(|n| n.name.clone());
                 self.mechanism.joins.push(Join { name: join_name, first, second, link, span: decl.span });
                 if let Some(name) = name {
-                    self.globals.insert((scope, name.name.clone()), Value::Join(id));
+                    self.globals.insert((scope, name.name.clone()), Global::Ready(Value::Join(id)));
                 }
                 Ok(())
             }
@@ -85,11 +80,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 self.mechanism.applications.push(Application { effort, target, span: decl.span });
                 Ok(())
             }
-            DeclKind::Package { name, decls } => {
+            DeclKind::Package { decls, .. } => {
                 let package = *self.checked.package_scopes.get(&decl.span).ok_or_else(|| internal("package not checked"))?;
-                self.decls(decls, package)?;
-                self.globals.insert((scope, name.name.clone()), Value::Package(package));
-                Ok(())
+                self.decls(decls, package)
             }
             DeclKind::Import { .. } => match self.workspace.imports.get(&decl.span) {
                 Some(&module) => self.module(module),
@@ -99,18 +92,30 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         }
     }
 
-    fn let_decl(&mut self, bindings: &'w [Binding], scope: ScopeId) -> Result<()> {
-        let mut locals = Locals::new();
-        let mut values = Vec::with_capacity(bindings.len());
-        for binding in bindings {
-            let value = self.expr(&binding.value, &mut locals)?;
-            self.name_object(&value, &binding.name.name);
-            values.push(value);
+    /// The value of a declared name. A `let` is evaluated on first use: unused definitions of a
+    /// library cost nothing here.
+    fn global(&mut self, scope: ScopeId, name: &Name) -> Result<Value> {
+        let key = (scope, name.clone());
+        match self.globals.get(&key) {
+            Some(Global::Ready(value)) => return Ok(value.clone()),
+            Some(Global::InProgress) => return Err(internal(format!("`{name}` depends on itself"))),
+            None => {}
         }
-        for (binding, value) in bindings.iter().zip(values) {
-            self.globals.insert((scope, binding.name.name.clone()), value);
-        }
-        Ok(())
+        let entry = self.checked.scope(scope).names.get(name).ok_or_else(|| internal(format!("`{name}` not declared")))?;
+        let value = match entry.ty {
+            Ty::Definition(def) => Value::Definition(def),
+            Ty::Package(package) => Value::Package(package),
+            _ => {
+                let binding: &'w Binding =
+                    self.checked.bindings.get(&entry.span).copied().ok_or_else(|| internal(format!("`{name}` has no value")))?;
+                self.globals.insert(key.clone(), Global::InProgress);
+                let value = self.expr(&binding.value, &mut Locals::new())?;
+                self.name_object(&value, &binding.name.name);
+                value
+            }
+        };
+        self.globals.insert(key, Global::Ready(value.clone()));
+        Ok(value)
     }
 
     /// Gives an unnamed body, link, effort or unknown the name it is first bound to.
@@ -134,7 +139,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         self.checked.resolutions.get(&span).copied().ok_or_else(|| internal("unresolved name"))
     }
 
-    fn lookup(&self, ident: &Ident, target: Target, locals: &Locals) -> Result<Value> {
+    fn lookup(&mut self, ident: &Ident, target: Target, locals: &Locals) -> Result<Value> {
         match target {
             Target::Local => locals
                 .iter()
@@ -142,11 +147,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 .find(|(n, _)| *n == ident.name)
                 .map(|(_, v)| v.clone())
                 .ok_or_else(|| internal(format!("local `{}` missing", ident.name))),
-            Target::Global(scope) => self
-                .globals
-                .get(&(scope, ident.name.clone()))
-                .cloned()
-                .ok_or_else(|| internal(format!("`{}` has no value", ident.name))),
+            Target::Global(scope) => self.global(scope, &ident.name),
             Target::Builtin => match &*ident.name {
                 "pi" => Ok(Value::Scalar(num(std::f64::consts::PI))),
                 "earth" => Ok(Value::Body(BodyRef::Earth)),

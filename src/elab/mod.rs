@@ -1,6 +1,7 @@
 //! Elaboration: evaluates a checked program into a [`Mechanism`]. Runs only on programs without
 //! errors, following the checker's name resolutions. Each `?s` occurrence evaluated creates a
-//! fresh unknown; a `let` evaluates its value once, so `let L = ?s;` is one shared unknown.
+//! fresh unknown; a `let` evaluates its value once, when first used, so `let L = ?s;` is one
+//! shared unknown and an unused definition costs nothing.
 
 mod eval;
 pub mod mechanism;
@@ -16,10 +17,17 @@ use crate::syntax::ast::Name;
 pub use mechanism::{Mechanism, Summary};
 use value::Value;
 
+/// A declared name's value. `let` bindings are evaluated when first used, so a library costs
+/// only what the mechanism takes from it.
+enum Global {
+    Ready(Value),
+    InProgress,
+}
+
 pub struct Elaborator<'c, 'w> {
     workspace: &'w Workspace,
     checked: &'c Checked<'w>,
-    globals: HashMap<(ScopeId, Name), Value>,
+    globals: HashMap<(ScopeId, Name), Global>,
     mechanism: Mechanism,
     elaborated_modules: Vec<ModuleId>,
     depth: usize,
