@@ -136,6 +136,15 @@ pub fn assembled_model(
     }
 }
 
+/// A residual for people: three significant digits, and "< 1e-6" for what is only round-off.
+fn gap(value: f64) -> String {
+    if value < 1e-6 {
+        "< 1e-6".to_string()
+    } else {
+        format!("{value:.3}")
+    }
+}
+
 fn no_assembly(mechanism: &Mechanism, model: &KinematicModel, loop_errors: &[(f64, f64)]) -> Diagnostic {
     let worst = loop_errors
         .iter()
@@ -147,12 +156,12 @@ fn no_assembly(mechanism: &Mechanism, model: &KinematicModel, loop_errors: &[(f6
     let (position, rotation) = loop_errors[worst];
     let join = mechanism.join(joint.join);
     let mut diagnostic = Diagnostic::error("E0805", format!("the loop closed by join `{}` cannot be assembled", joint.name))
-        .primary(join.span, format!("still {position:.3e} m and {rotation:.3e} rad apart"))
+        .primary(join.span, format!("still {} m and {} rad apart", gap(position), gap(rotation)))
         .help("check the geometry, or give starting values closer to an assembled configuration with `initial`");
     for (k, (p, r)) in loop_errors.iter().enumerate() {
         if k != worst && (p + r) > 1e-9 {
             let other = &model.complementary()[k];
-            diagnostic = diagnostic.note(format!("the loop closed by `{}` is also open ({p:.3e} m, {r:.3e} rad)", other.name));
+            diagnostic = diagnostic.note(format!("the loop closed by `{}` is also open ({} m, {} rad)", other.name, gap(*p), gap(*r)));
         }
     }
     diagnostic

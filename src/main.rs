@@ -25,6 +25,11 @@ enum Format {
     Json,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Emit {
+    Notation,
+}
+
 #[derive(clap::Args)]
 struct LibraryArgs {
     /// Add a directory to the library search path (searched after the importing file's
@@ -67,6 +72,16 @@ enum Command {
         #[arg(long, value_enum, default_value = "text")]
         format: Format,
     },
+    /// Compile a program and print what `--emit` asks for.
+    Compile {
+        file: PathBuf,
+        #[command(flatten)]
+        libraries: LibraryArgs,
+        /// `notation`: the thesis-style notation table (structure, variables, declared and
+        /// deduced assignments).
+        #[arg(long, value_enum)]
+        emit: Emit,
+    },
     /// Print the syntax tree of a file (for debugging the parser).
     Parse { file: PathBuf },
 }
@@ -77,6 +92,7 @@ fn main() -> ExitCode {
         Command::Check { files, libraries, format } => check(&files, &libraries.options(), format),
         Command::Tree { file, libraries, format } => tree(&file, &libraries.options(), format),
         Command::Assemble { file, libraries, format } => assemble(&file, &libraries.options(), format),
+        Command::Compile { file, libraries, emit } => compile(&file, &libraries.options(), emit),
         Command::Parse { file } => parse(&file),
     }
 }
@@ -283,6 +299,26 @@ fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> Ex
             report_diagnostics(&compilation, &diagnostics, format);
             ExitCode::from(1)
         }
+    }
+}
+
+fn compile(file: &std::path::Path, options: &LoadOptions, emit: Emit) -> ExitCode {
+    let compilation = match compile_one(file, options, Format::Text) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    match emit {
+        Emit::Notation => match lsdc::topology::build(mechanism) {
+            Ok(topology) => {
+                print!("{}", lsdc::topology::notation::notation(mechanism, &topology));
+                ExitCode::SUCCESS
+            }
+            Err(diagnostics) => {
+                report_diagnostics(&compilation, &diagnostics, Format::Text);
+                ExitCode::from(1)
+            }
+        },
     }
 }
 

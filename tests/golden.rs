@@ -18,11 +18,23 @@ fn golden_inputs() -> Vec<PathBuf> {
     inputs
 }
 
+/// The diagnostics of the front end, then of the topology and assembly when it is clean.
 fn render_diagnostics(input: &Path) -> String {
     let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
     let compilation = compile_files(&[input.to_path_buf()], &options).expect("input readable");
-    assert!(compilation.has_errors(), "{} should not check clean", input.display());
-    render::to_text(&compilation.workspace.sources, &compilation.diagnostics)
+    let mut diagnostics = compilation.diagnostics.clone();
+    if let (false, Some(mechanism)) = (compilation.has_errors(), &compilation.mechanism) {
+        match lsdc::topology::build(mechanism) {
+            Err(errors) => diagnostics.extend(errors),
+            Ok(topology) => {
+                if let Err(errors) = lsdc::analysis::assembled_model(mechanism, topology, &Default::default()) {
+                    diagnostics.extend(errors);
+                }
+            }
+        }
+    }
+    assert!(diagnostics.iter().any(|d| d.is_error()), "{} should not check clean", input.display());
+    render::to_text(&compilation.workspace.sources, &diagnostics)
 }
 
 #[test]
@@ -58,4 +70,24 @@ fn json_diagnostics_carry_positions_and_labels() {
     assert_eq!(first["column"], 32);
     let labels = first["labels"].as_array().expect("labels");
     assert!(labels.iter().any(|l| l["file"] == "tests/golden/library_error.lsd" && l["primary"] == false));
+}
+
+/// The notation table of `examples/NAME.lsd` is compared with `tests/notation/NAME.txt`.
+#[test]
+fn notation_tables_match_golden_files() {
+    let update = std::env::var_os("UPDATE_GOLDEN").is_some();
+    for name in ["satellite", "delta_isir88"] {
+        let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+        let compilation = compile_files(&[PathBuf::from(format!("examples/{name}.lsd"))], &options).expect("readable");
+        let mechanism = compilation.mechanism.expect("elaborates");
+        let topology = lsdc::topology::build(&mechanism).expect("connected");
+        let actual = lsdc::topology::notation::notation(&mechanism, &topology);
+        let path = format!("tests/notation/{name}.txt");
+        if update {
+            std::fs::write(&path, &actual).expect("writable");
+            continue;
+        }
+        let expected = std::fs::read_to_string(&path).unwrap_or_default();
+        assert_eq!(actual, expected, "notation table of {name} differs from {path}");
+    }
 }

@@ -163,8 +163,13 @@ pub enum Value {
 impl SExpr {
     /// Text of the expression; `unknown` writes the name of each unknown.
     pub fn render(&self, unknown: &mut dyn FnMut(UnknownId) -> String) -> String {
+        self.render_with(unknown, &|index, order| format!("q{index}{}", "'".repeat(order as usize)))
+    }
+
+    /// Text of the expression, with `coordinate(index, order)` naming the link's coordinates.
+    pub fn render_with(&self, unknown: &mut dyn FnMut(UnknownId) -> String, coordinate: &dyn Fn(u32, u32) -> String) -> String {
         let list = |args: &[Scalar], unknown: &mut dyn FnMut(UnknownId) -> String| {
-            args.iter().map(|a| a.render(unknown)).collect::<Vec<_>>().join(", ")
+            args.iter().map(|a| a.render_with(unknown, coordinate)).collect::<Vec<_>>().join(", ")
         };
         match self {
             SExpr::Num(v) => format!("{v}"),
@@ -173,16 +178,16 @@ impl SExpr {
                 let name = unknown(*id);
                 format!("{name}({})", list(args, unknown))
             }
-            SExpr::Coordinate { index, order } => format!("q{index}{}", "'".repeat(*order as usize)),
+            SExpr::Coordinate { index, order } => coordinate(*index, *order),
             SExpr::JoinCoordinate { join, index, order } => {
                 format!("join{}.q{index}{}", join.0 + 1, "'".repeat(*order as usize))
             }
-            SExpr::Neg(a) => format!("-({})", a.render(unknown)),
-            SExpr::Add(a, b) => format!("({} + {})", a.render(unknown), b.render(unknown)),
-            SExpr::Sub(a, b) => format!("({} - {})", a.render(unknown), b.render(unknown)),
-            SExpr::Mul(a, b) => format!("({} * {})", a.render(unknown), b.render(unknown)),
-            SExpr::Div(a, b) => format!("({} / {})", a.render(unknown), b.render(unknown)),
-            SExpr::Pow(a, b) => format!("({} ^ {})", a.render(unknown), b.render(unknown)),
+            SExpr::Neg(a) => format!("-({})", a.render_with(unknown, coordinate)),
+            SExpr::Add(a, b) => format!("({} + {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
+            SExpr::Sub(a, b) => format!("({} - {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
+            SExpr::Mul(a, b) => format!("({} * {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
+            SExpr::Div(a, b) => format!("({} / {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
+            SExpr::Pow(a, b) => format!("({} ^ {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
             SExpr::Call(name, args) => format!("{name}({})", list(args, unknown)),
         }
     }

@@ -44,7 +44,44 @@ impl From<EvalError> for AssemblyError {
     }
 }
 
+/// Solves the closure from `start`; if that stalls (a start on a stationary point, such as a
+/// mechanism stretched flat), retries from a few deterministic perturbations of the free
+/// coordinates before giving up.
 pub fn assemble(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &AssemblyOptions) -> Result<Assembled, AssemblyError> {
+    let mut failure = match solve(model, start, fixed, options) {
+        Ok(assembled) => return Ok(assembled),
+        Err(e @ AssemblyError::Evaluation(_)) => return Err(e),
+        Err(e) => e,
+    };
+    for attempt in 1..=RESTARTS {
+        let perturbed: Vec<f64> = start
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| if fixed[i] { x } else { x + 0.5 * ((i as f64 + 1.0) * 1.618_033_988_7 * attempt as f64).sin() })
+            .collect();
+        match solve(model, &perturbed, fixed, options) {
+            Ok(assembled) => return Ok(assembled),
+            Err(e @ AssemblyError::Evaluation(_)) => return Err(e),
+            Err(e) => {
+                if total_error(&e) < total_error(&failure) {
+                    failure = e;
+                }
+            }
+        }
+    }
+    Err(failure)
+}
+
+const RESTARTS: usize = 4;
+
+fn total_error(error: &AssemblyError) -> f64 {
+    match error {
+        AssemblyError::NoAssembly { loop_errors, .. } => loop_errors.iter().map(|(p, r)| p + r).sum(),
+        AssemblyError::Evaluation(_) => f64::INFINITY,
+    }
+}
+
+fn solve(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &AssemblyOptions) -> Result<Assembled, AssemblyError> {
     let free: Vec<usize> = (0..model.coordinate_count).filter(|&i| !fixed[i]).collect();
     let mut q = start.to_vec();
     let mut current = closure(model, &q)?;

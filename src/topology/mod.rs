@@ -10,6 +10,8 @@
 
 use std::collections::{HashMap, VecDeque};
 
+pub mod notation;
+
 use serde::Serialize;
 
 use crate::diag::Diagnostic;
