@@ -541,6 +541,8 @@ def main():
         if computed != expected:
             entry["expected_by_notes"] = expected
             disagreements.append((m.key, computed, expected))
+        if m.key in NOTES:
+            entry["note"] = NOTES[m.key]
         extra = EXTRAS.get(m.key)
         if extra:
             extra(m, entry)
@@ -654,6 +656,33 @@ def _fit_cut(m, values, free):
             return {c: float(v) for c, v in zip(m.coords, q)}
     raise AssertionError(f"{m.key}: {values} does not close by adjusting {free}")
 
+
+MAILLE_NOTE = (
+    "Disagrees with the notes (rank {thesis_rank}, mobility 3). The closed set near `closed` is "
+    "3-dimensional (closed_set_dimension), as the thesis says, but rank(J_full) on it is one less "
+    "than the notes expect: rank_delta = {rank}, so tree_dof - rank_delta = 4. Reason: on the "
+    "closed set every principal rod keeps its orientation (each arm's signed angle sum is 0), but "
+    "the closure rows imply this only at second order: the arm axes z, Rx(-120)z, Rx(120)z are "
+    "coplanar, and tilting rod b3 about z by t while rod b6 tilts about its arm-3 axis by -t "
+    "moves the arm-2 axis on two cones that are tangent, so the best residual for a tilt t is "
+    "(sqrt 3 / 4) t^2 (checked numerically on maille1 for t = 1e-3..1e-1; maille2 has the same "
+    "upper level). The thesis's rank {thesis_rank} "
+    "was computed at random non-closed points (an upper bound), and the notes' check used "
+    "points with residual ~1e-8. Numerical trap: plain double-precision Gauss-Newton stops "
+    "~1e-7 from the closed set (the residual there is ~1e-15), where the extra singular value "
+    "is ~1e-8 relative, so a relative SVD tolerance of 1e-9 reports rank {thesis_rank} "
+    "(see plain_gauss_newton_point); `closed` was polished exactly onto the closed set by adding "
+    "the arm-sum conditions, where that singular value is ~1e-16. Test with a tolerance well "
+    "above 1e-7 (e.g. 1e-6) or at `closed` itself.")
+NOTES = {
+    "maille1": MAILLE_NOTE.format(thesis_rank=5, rank=4),
+    "maille2": MAILLE_NOTE.format(thesis_rank=11, rank=10),
+    "saliere": ("`closed` lies on branch (a), alpha1 = l1.q = 0 and alpha2 = l2.q = alpha3 = l4.q; "
+                "`branches` gives generic points of the other branches, `singular` and "
+                "`other_crossings` the four crossings (rank_delta 1, apparent mobility 2)."),
+    "homocinetic": ("alpha1 = l1.q, beta2 = l2.a, gamma2 = l2.b, alpha4 = l4.q, z4 = l5.q; on the "
+                    "closed set l1.q = l4.q (equal shaft speeds) and l5.q = l = 1."),
+}
 
 EXTRAS = {"saliere": saliere_extra, "homocinetic": homocinetic_extra,
           "maille1": maille_extra, "maille2": maille_extra}

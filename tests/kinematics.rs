@@ -224,3 +224,45 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn joints_are_classified_with_their_degrees_of_constraint() {
+    // Papegay 1992, §1.2.2 and notes §9.4: revolute 5/1, prismatic 5/1, helical 5/1, weld 6/0,
+    // universal 4/2, cylindrical 4/2, spherical 3/3, planar 3/3, planar translation 4/2, free 0/6.
+    let text = "import joints;\nlet a = body end;\n\
+        join earth and a with weld;\n\
+        join earth and a with revolute([0,0,1]);\n\
+        join earth and a with prismatic([1,1,0]);\n\
+        join earth and a with helical([0,0,1], 0.01);\n\
+        join earth and a with cylindrical([0,1,0]);\n\
+        join earth and a with universal([1,0,0], [0,1,0]);\n\
+        join earth and a with spherical;\n\
+        join earth and a with planar;\n\
+        join earth and a with link(x, y) dof = [x, y, 0] end;\n\
+        join earth and a with free;\n\
+        join earth and a with link(a, b) dof1 = b || [1,0,0], dof2 = [0,a,0] end;\n\
+        join earth and a with link(x) dof = [x, x, 0] end;\n";
+    let compilation = compile_text("joints.lsd", text, None, &options());
+    let m = compilation.mechanism.expect("elaborates");
+    let expected = [
+        ("Weld", 0),
+        ("Revolute", 1),
+        ("Prismatic", 1),
+        ("Helical", 1),
+        ("Cylindrical", 2),
+        ("Universal", 2),
+        ("Spherical", 3),
+        ("Planar", 3),
+        ("Translational", 2),
+        ("Free", 6),
+        ("General", 2),
+        ("Prismatic", 1),
+    ];
+    for (k, (kind, dof)) in expected.iter().enumerate() {
+        let join = lsdc::elab::value::JoinId(k as u32);
+        let joint = model::link_only(&m, join, &UnknownValues::new()).expect("numeric");
+        let analysis = lsdc::kinematics::joint::analyse(&joint, &UnknownValues::new()).expect("analysed");
+        assert_eq!((format!("{:?}", analysis.kind).as_str(), analysis.dof), (*kind, *dof), "join {}", k + 1);
+        assert_eq!(analysis.constraint, 6 - dof);
+    }
+}
