@@ -26,8 +26,16 @@ Semantics implemented (independently of lsdc):
   * rank by SVD with relative tolerance 1e-9; rank_delta = rank(J_full) - number of coordinates
     of the complementary joins; mobility = tree DOF - rank_delta.
 
-Closed configurations are found by damped Gauss-Newton with minimum-norm steps (lstsq) from
-the initial guesses, down to a residual norm below 1e-12 (typically ~1e-16).
+Closed configurations are found by Levenberg-Marquardt (minimum-norm Gauss-Newton steps once the
+damping has vanished) from the initial guesses, down to a residual norm below 1e-12 (typically
+~1e-16).  For the two meshes the point is then polished exactly onto the closed set (see the
+comment above ARMS_LEVEL1): there the closure equations are not transversal, and a plain
+double-precision solve stops ~1e-7 away, where the rank looks one higher.
+
+Every mechanism also gets `closed_set_dimension`, the local dimension of the closed set measured
+by closing random perturbations of the closed point, as a check of mobility = tree_dof - rank.
+
+Run: python3 bench/loops_reference.py   (from anywhere; writes tests/fixtures/loops.json)
 """
 
 import itertools
@@ -484,9 +492,10 @@ def main():
             "kinematics from the LSD semantics (t ++ r = Trans(t)Rot(r); frame d @ b = pose(b)d; "
             "join F1 and F2 with L: pose(F1) D_L(q) = pose(F2); dof chains multiply left to "
             "right), BFS from earth over joins in declaration order to split tree/complementary "
-            "joins, damped Gauss-Newton (minimum-norm lstsq steps) from the LSD files' initial "
+            "joins, Levenberg-Marquardt (damping going to 0, i.e. minimum-norm Gauss-Newton steps) from the LSD files' initial "
             "values to a closed configuration (residual norm < 1e-12 and 4x4 closure mismatch "
-            "< 1e-12), Jacobian of the 6 closure rows per complementary join (position "
+            "< 1e-12; for maille1/maille2 then polished exactly onto the closed set, see their notes), "
+            "Jacobian of the 6 closure rows per complementary join (position "
             "difference; vee of the skew part of Ra^T Rb) w.r.t. all join coordinates by "
             "complex-step differentiation, rank by SVD with relative tolerance 1e-9. "
             "rank_delta = rank(J_full) - coordinates of complementary joins; mobility = "

@@ -11,6 +11,7 @@ pub mod driver;
 pub mod elab;
 pub mod kinematics;
 pub mod load;
+pub mod output;
 pub mod source;
 pub mod syntax;
 pub mod topology;

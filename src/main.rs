@@ -9,8 +9,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use lsdc::analysis;
 use lsdc::diag::render;
 use lsdc::driver::{self, Compilation};
-use lsdc::elab::Summary;
 use lsdc::load::LoadOptions;
+use lsdc::output::text;
 
 #[derive(Parser)]
 #[command(name = "lsdc", version, about = "Compiler and simulator for LSD mechanism descriptions")]
@@ -131,34 +131,12 @@ fn print_text_report(file: &std::path::Path, compilation: &Compilation) {
     let rendered = render::to_text(&compilation.workspace.sources, &compilation.diagnostics);
     eprint!("{rendered}");
     match &compilation.mechanism {
-        Some(mechanism) => print!("{}", summary_text(file, &mechanism.summary())),
+        Some(mechanism) => print!("{}", text::summary(file, &mechanism.summary())),
         None => {
             let errors = compilation.diagnostics.iter().filter(|d| d.is_error()).count();
             eprintln!("{}: {errors} error{}", file.display(), if errors == 1 { "" } else { "s" });
         }
     }
-}
-
-fn summary_text(file: &std::path::Path, s: &Summary) -> String {
-    let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
-    let mut out = format!("{}: ok\n", file.display());
-    out += &format!("  bodies    {}", s.bodies);
-    if !s.body_names.is_empty() {
-        out += &format!(" ({})", s.body_names.join(", "));
-    }
-    out += &format!("\n  links     {}\n  joins     {}\n", s.links, s.joins);
-    out += &format!(
-        "  applied   {}, {}\n",
-        plural(s.applied_forces, "force"),
-        plural(s.applied_torques, "torque")
-    );
-    out += &format!(
-        "  unknowns  {} (?s), {} (?v), {} (?f)\n",
-        plural(s.unknown_scalars, "scalar"),
-        plural(s.unknown_vectors, "vector"),
-        plural(s.unknown_functions, "function")
-    );
-    out
 }
 
 fn json_report(file: &std::path::Path, compilation: &Compilation) -> serde_json::Value {
@@ -205,7 +183,7 @@ fn tree(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCo
     match analysis::tree(mechanism) {
         Ok(report) => {
             match format {
-                Format::Text => print!("{}", tree_text(&report)),
+                Format::Text => print!("{}", text::tree(&report)),
                 Format::Json => println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default()),
             }
             ExitCode::SUCCESS
@@ -215,62 +193,6 @@ fn tree(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCo
             ExitCode::from(1)
         }
     }
-}
-
-fn joint_text(link: &analysis::LinkReport) -> String {
-    match &link.joint {
-        Some(j) => format!("{:?}, {} dof", j.kind, j.dof).to_lowercase(),
-        None => "not analysed".to_string(),
-    }
-}
-
-fn tree_text(report: &analysis::TreeReport) -> String {
-    let name_of = |n: usize| if n == 0 { "earth".to_string() } else { report.bodies[n - 1].name.clone() };
-    let mut out = String::from("bodies (breadth-first from earth)\n");
-    for body in &report.bodies {
-        out += &format!(
-            "  {:>3}  {:<20} parent {:<20} link {:>3}  {} ({})\n",
-            body.number,
-            body.name,
-            name_of(body.parent),
-            body.link.number,
-            body.link.join,
-            joint_text(&body.link)
-        );
-    }
-    if report.complementary.is_empty() {
-        out += "complementary links: none\n";
-    } else {
-        out += "complementary links\n";
-        for link in &report.complementary {
-            out += &format!(
-                "  {:>3}  {:<20} {} – {} ({}, constraint {})\n",
-                link.number,
-                link.join,
-                name_of(link.first_body),
-                name_of(link.second_body),
-                joint_text(link),
-                link.joint.as_ref().map_or("?".to_string(), |j| j.constraint.to_string())
-            );
-        }
-    }
-    match (&report.mobility, &report.mobility_unavailable) {
-        (Some(m), _) => {
-            out += &format!(
-                "mobility {} = tree dof {} - rank {} ({} constraint rows, {} redundant; rank tolerance {:e})\n",
-                m.mobility, m.tree_dof, m.rank, m.constraint_rows, m.redundant, m.tolerance
-            );
-            if m.singular {
-                out += &format!("singular configuration: the rank is {} here and {} at nearby configurations\n", m.rank, m.generic_rank);
-            }
-            for (body, count) in &m.internal {
-                out += &format!("internal mobility: {} can move alone ({count} way{})\n", name_of(*body), if *count == 1 { "" } else { "s" });
-            }
-        }
-        (None, Some(reason)) => out += &format!("mobility not computed: {reason}\n"),
-        (None, None) => {}
-    }
-    out
 }
 
 fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
@@ -284,13 +206,7 @@ fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> Ex
     match result {
         Ok((_, report)) => {
             match format {
-                Format::Text => {
-                    for (name, value) in &report.coordinates {
-                        let held = if report.fixed.contains(name) { "  (fixed)" } else { "" };
-                        println!("{name:<24} {value:>22.15e}{held}");
-                    }
-                    println!("assembled in {} iterations, largest residual {:.1e}", report.iterations, report.residual);
-                }
+                Format::Text => print!("{}", text::assembly(&report)),
                 Format::Json => println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default()),
             }
             ExitCode::SUCCESS

@@ -1,0 +1,3 @@
+//! Output: text renderings of reports (JSON comes from their `Serialize` forms).
+
+pub mod text;

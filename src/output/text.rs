@@ -1,0 +1,92 @@
+//! Text renderings of the reports, as the command line prints them.
+
+use crate::analysis::{AssemblyReport, LinkReport, TreeReport};
+use crate::elab::Summary;
+
+pub fn summary(file: &std::path::Path, s: &Summary) -> String {
+    let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
+    let mut out = format!("{}: ok\n", file.display());
+    out += &format!("  bodies    {}", s.bodies);
+    if !s.body_names.is_empty() {
+        out += &format!(" ({})", s.body_names.join(", "));
+    }
+    out += &format!("\n  links     {}\n  joins     {}\n", s.links, s.joins);
+    out += &format!(
+        "  applied   {}, {}\n",
+        plural(s.applied_forces, "force"),
+        plural(s.applied_torques, "torque")
+    );
+    out += &format!(
+        "  unknowns  {} (?s), {} (?v), {} (?f)\n",
+        plural(s.unknown_scalars, "scalar"),
+        plural(s.unknown_vectors, "vector"),
+        plural(s.unknown_functions, "function")
+    );
+    out
+}
+
+fn joint_text(link: &LinkReport) -> String {
+    match &link.joint {
+        Some(j) => format!("{:?}, {} dof", j.kind, j.dof).to_lowercase(),
+        None => "not analysed".to_string(),
+    }
+}
+
+pub fn tree(report: &TreeReport) -> String {
+    let name_of = |n: usize| if n == 0 { "earth".to_string() } else { report.bodies[n - 1].name.clone() };
+    let mut out = String::from("bodies (breadth-first from earth)\n");
+    for body in &report.bodies {
+        out += &format!(
+            "  {:>3}  {:<20} parent {:<20} link {:>3}  {} ({})\n",
+            body.number,
+            body.name,
+            name_of(body.parent),
+            body.link.number,
+            body.link.join,
+            joint_text(&body.link)
+        );
+    }
+    if report.complementary.is_empty() {
+        out += "complementary links: none\n";
+    } else {
+        out += "complementary links\n";
+        for link in &report.complementary {
+            out += &format!(
+                "  {:>3}  {:<20} {} – {} ({}, constraint {})\n",
+                link.number,
+                link.join,
+                name_of(link.first_body),
+                name_of(link.second_body),
+                joint_text(link),
+                link.joint.as_ref().map_or("?".to_string(), |j| j.constraint.to_string())
+            );
+        }
+    }
+    match (&report.mobility, &report.mobility_unavailable) {
+        (Some(m), _) => {
+            out += &format!(
+                "mobility {} = tree dof {} - rank {} ({} constraint rows, {} redundant; rank tolerance {:e})\n",
+                m.mobility, m.tree_dof, m.rank, m.constraint_rows, m.redundant, m.tolerance
+            );
+            if m.singular {
+                out += &format!("singular configuration: the rank is {} here and {} at nearby configurations\n", m.rank, m.generic_rank);
+            }
+            for (body, count) in &m.internal {
+                out += &format!("internal mobility: {} can move alone ({count} way{})\n", name_of(*body), if *count == 1 { "" } else { "s" });
+            }
+        }
+        (None, Some(reason)) => out += &format!("mobility not computed: {reason}\n"),
+        (None, None) => {}
+    }
+    out
+}
+
+pub fn assembly(report: &AssemblyReport) -> String {
+    let mut out = String::new();
+    for (name, value) in &report.coordinates {
+        let held = if report.fixed.contains(name) { "  (fixed)" } else { "" };
+        out += &format!("{name:<24} {value:>22.15e}{held}\n");
+    }
+    out += &format!("assembled in {} iterations, largest residual {:.1e}\n", report.iterations, report.residual);
+    out
+}
