@@ -1,8 +1,12 @@
 //! Mobility by rank, never by counting: at an assembled configuration, the closure Jacobian's
-//! rank gives the number of independent constraints, rank(Δ), and the mobility is the tree's
-//! degrees of freedom minus rank(Δ). Also: redundant constraints, singular configurations (a rank
-//! lower than at nearby assembled configurations), and internal mobilities (a body that can move
-//! while every other body stands still, such as a rod spinning between two ball joints).
+//! rank gives the number of independent constraints, rank(Δ), and tree DOF − rank(Δ) is the
+//! first-order mobility. The mobility itself is the dimension of the set of closed
+//! configurations around the assembled one, measured by assembling from small perturbations:
+//! it equals the first-order mobility unless some constraint acts only at second order (as in
+//! the thesis's meshes, where the tangent space is one dimension larger than the closed set).
+//! Also: redundant constraints, singular configurations (a rank lower than at nearby assembled
+//! configurations), and internal mobilities (a body that can move while every other body stands
+//! still, such as a rod spinning between two ball joints).
 
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -12,8 +16,16 @@ use super::closure::closure;
 use super::eval::EvalError;
 use super::model::KinematicModel;
 
-/// Relative tolerance on singular values: σ counts if σ > RANK_TOLERANCE · σ_max.
-pub const RANK_TOLERANCE: f64 = 1e-9;
+/// Relative tolerance on singular values: σ counts if σ > RANK_TOLERANCE · σ_max. Assembly
+/// leaves residuals near 1e-15; along directions where constraints act only at second order the
+/// configuration can then be 1e-7 from the closed set, which shows as singular values near
+/// 1e-8 · σ_max: they must count as zero.
+pub const RANK_TOLERANCE: f64 = 1e-6;
+
+/// Size of the perturbations used to sample the closed set, and the relative singular value
+/// below which a sampled direction is a second-order effect, not a direction of motion.
+const SAMPLE_STEP: f64 = 1e-3;
+const SAMPLE_TOLERANCE: f64 = 2e-2;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Mobility {
@@ -23,6 +35,9 @@ pub struct Mobility {
     pub constraint_rows: usize,
     /// Independent constraints at this configuration: rank(Δ).
     pub rank: usize,
+    /// tree_dof − rank.
+    pub first_order_mobility: usize,
+    /// Dimension of the set of closed configurations around this one.
     pub mobility: usize,
     /// constraint_rows − rank.
     pub redundant: usize,
@@ -42,6 +57,7 @@ impl Mobility {
             tree_dof,
             constraint_rows: 0,
             rank: 0,
+            first_order_mobility: tree_dof,
             mobility: tree_dof,
             redundant: 0,
             generic_rank: 0,
@@ -81,11 +97,13 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
     let (rank_here, rows) = constraint_rank(model, q)?;
     let tree_dof = model.tree_coordinate_count();
     let generic_rank = nearby_rank(model, q)?.max(rank_here);
+    let first_order = tree_dof.saturating_sub(rank_here);
     Ok(Mobility {
         tree_dof,
         constraint_rows: rows,
         rank: rank_here,
-        mobility: tree_dof.saturating_sub(rank_here),
+        first_order_mobility: first_order,
+        mobility: closed_set_dimension(model, q)?.unwrap_or(first_order),
         redundant: rows.saturating_sub(rank_here),
         generic_rank,
         singular: generic_rank > rank_here,
@@ -94,13 +112,51 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
     })
 }
 
+/// A deterministic pseudo-random number in [-1, 1] for sample `sample`, coordinate `i`
+/// (SplitMix64 of the pair).
+fn jitter(sample: usize, i: usize) -> f64 {
+    let mut z = (sample as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (i as u64).wrapping_add(0x632B_E59B_D9B4_E019);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+}
+
+/// Dimension of the set of closed configurations near q: assemble from perturbations of size
+/// SAMPLE_STEP and count the independent directions of the displacements, ignoring those a
+/// hundred times smaller than the largest (second-order effects). `None` when too few samples
+/// assemble.
+fn closed_set_dimension(model: &KinematicModel, q: &[f64]) -> Result<Option<usize>, EvalError> {
+    let nq = model.coordinate_count;
+    let fixed = vec![false; nq];
+    let options = AssemblyOptions::default();
+    let samples = nq + 4;
+    let mut displacements = DMatrix::zeros(nq, samples);
+    let mut assembled = 0;
+    for sample in 0..samples {
+        let start: Vec<f64> = (0..nq).map(|i| q[i] + SAMPLE_STEP * jitter(sample, i)).collect();
+        if let Ok(result) = assemble(model, &start, &fixed, &options) {
+            for i in 0..nq {
+                displacements[(i, assembled)] = (result.q[i] - q[i]) / SAMPLE_STEP;
+            }
+            assembled += 1;
+        }
+    }
+    if assembled < nq {
+        return Ok(None);
+    }
+    let values = singular_values(&displacements.columns(0, assembled).into_owned());
+    let largest = values.iter().copied().fold(0.0, f64::max);
+    Ok(Some(values.iter().filter(|&&s| s > SAMPLE_TOLERANCE * largest).count()))
+}
+
 /// The largest rank(Δ) at assembled configurations near q (deterministic perturbations).
 fn nearby_rank(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
     if model.complementary().is_empty() {
         return Ok(0);
     }
     let fixed = vec![false; model.coordinate_count];
-    let options = AssemblyOptions { tolerance: 1e-10, max_iterations: 100 };
+    let options = AssemblyOptions::default();
     let mut best = 0;
     for sample in 0..4 {
         let perturbed: Vec<f64> = q

@@ -65,9 +65,24 @@ pub fn tree(report: &TreeReport) -> String {
     match (&report.mobility, &report.mobility_unavailable) {
         (Some(m), _) => {
             out += &format!(
-                "mobility {} = tree dof {} - rank {} ({} constraint rows, {} redundant; rank tolerance {:e})\n",
-                m.mobility, m.tree_dof, m.rank, m.constraint_rows, m.redundant, m.tolerance
+                "{} {} = tree dof {} - rank {} ({} constraint rows, {} redundant; rank tolerance {:e})\n",
+                if m.mobility == m.first_order_mobility { "mobility" } else { "first-order mobility" },
+                m.first_order_mobility,
+                m.tree_dof,
+                m.rank,
+                m.constraint_rows,
+                m.redundant,
+                m.tolerance
             );
+            if m.mobility != m.first_order_mobility {
+                out += &format!(
+                    "mobility {}: the closed configurations nearby form a {}-dimensional set; {} constraint{} only at second order\n",
+                    m.mobility,
+                    m.mobility,
+                    m.first_order_mobility.abs_diff(m.mobility),
+                    if m.first_order_mobility.abs_diff(m.mobility) == 1 { " acts" } else { "s act" }
+                );
+            }
             if m.singular {
                 out += &format!("singular configuration: the rank is {} here and {} at nearby configurations\n", m.rank, m.generic_rank);
             }
