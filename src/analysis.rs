@@ -47,11 +47,20 @@ pub struct TreeReport {
 }
 
 #[derive(Clone, Debug, Serialize)]
+pub struct CoordinateValue {
+    /// `join.coordinate`
+    pub name: String,
+    pub value: f64,
+    /// Held at its `initial` value during assembly.
+    pub fixed: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
 pub struct AssemblyReport {
-    /// Coordinate name → value.
-    pub coordinates: Vec<(String, f64)>,
-    pub fixed: Vec<String>,
+    /// Every joint coordinate, principal links first (by number), then complementary links.
+    pub coordinates: Vec<CoordinateValue>,
     pub iterations: usize,
+    /// Largest component of the closure residual at the solution.
     pub residual: f64,
 }
 
@@ -108,7 +117,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
 
 impl AssemblyReport {
     pub fn coordinates_vector(&self) -> Vec<f64> {
-        self.coordinates.iter().map(|(_, v)| *v).collect()
+        self.coordinates.iter().map(|c| c.value).collect()
     }
 }
 
@@ -123,12 +132,13 @@ pub fn assembled_model(
     let names = model.coordinate_names();
     match assemble(&model, &start, &fixed, options) {
         Ok(assembled) => {
-            let report = AssemblyReport {
-                coordinates: names.iter().cloned().zip(assembled.q.iter().copied()).collect(),
-                fixed: names.iter().zip(&fixed).filter(|(_, f)| **f).map(|(n, _)| n.clone()).collect(),
-                iterations: assembled.iterations,
-                residual: assembled.residual,
-            };
+            let coordinates = names
+                .into_iter()
+                .zip(&assembled.q)
+                .zip(&fixed)
+                .map(|((name, &value), &fixed)| CoordinateValue { name, value, fixed })
+                .collect();
+            let report = AssemblyReport { coordinates, iterations: assembled.iterations, residual: assembled.residual };
             Ok((model, report))
         }
         Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error("E0804", format!("cannot evaluate the geometry: {e:?}"))]),

@@ -7,7 +7,8 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use lsdc::analysis;
-use lsdc::diag::render;
+use lsdc::diag::{render, Diagnostic};
+use lsdc::elab::Mechanism;
 use lsdc::driver::{self, Compilation};
 use lsdc::load::LoadOptions;
 use lsdc::output::text;
@@ -97,6 +98,17 @@ fn main() -> ExitCode {
     }
 }
 
+/// Writes to standard output. A closed pipe (`lsdc tree f.lsd | head`) is not an error worth a
+/// message: the reader has what it wanted.
+fn out(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
+fn json(value: &impl serde::Serialize) -> String {
+    serde_json::to_string_pretty(value).unwrap_or_default() + "\n"
+}
+
 fn usage_error(message: &str) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(2)
@@ -118,7 +130,7 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
     }
     if format == Format::Json {
         let value = serde_json::json!({ "ok": all_ok, "files": reports });
-        println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        out(&json(&value));
     }
     if all_ok {
         ExitCode::SUCCESS
@@ -131,7 +143,7 @@ fn print_text_report(file: &std::path::Path, compilation: &Compilation) {
     let rendered = render::to_text(&compilation.workspace.sources, &compilation.diagnostics);
     eprint!("{rendered}");
     match &compilation.mechanism {
-        Some(mechanism) => print!("{}", text::summary(file, &mechanism.summary())),
+        Some(mechanism) => out(&text::summary(file, &mechanism.summary())),
         None => {
             let errors = compilation.diagnostics.iter().filter(|d| d.is_error()).count();
             eprintln!("{}: {errors} error{}", file.display(), if errors == 1 { "" } else { "s" });
@@ -169,72 +181,61 @@ fn report_diagnostics(compilation: &Compilation, diagnostics: &[lsdc::diag::Diag
         Format::Text => eprint!("{}", render::to_text(&compilation.workspace.sources, &diagnostics)),
         Format::Json => {
             let value = serde_json::json!({ "ok": false, "diagnostics": render::to_json_value(&compilation.workspace.sources, &diagnostics) });
-            println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+            out(&json(&value));
+        }
+    }
+}
+
+/// Compiles a file and prints what `analyse` makes of its mechanism: as text with `text`, or as
+/// JSON.
+fn report<R: serde::Serialize>(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    format: Format,
+    analyse: impl Fn(&Mechanism) -> Result<R, Vec<Diagnostic>>,
+    text: impl Fn(&R) -> String,
+) -> ExitCode {
+    let compilation = match compile_one(file, options, format) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    match analyse(mechanism) {
+        Ok(result) => {
+            match format {
+                Format::Text => out(&text(&result)),
+                Format::Json => out(&json(&result)),
+            }
+            ExitCode::SUCCESS
+        }
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, format);
+            ExitCode::from(1)
         }
     }
 }
 
 fn tree(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
-    let compilation = match compile_one(file, options, format) {
-        Ok(c) => c,
-        Err(code) => return code,
-    };
-    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
-    match analysis::tree(mechanism) {
-        Ok(report) => {
-            match format {
-                Format::Text => print!("{}", text::tree(&report)),
-                Format::Json => println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default()),
-            }
-            ExitCode::SUCCESS
-        }
-        Err(diagnostics) => {
-            report_diagnostics(&compilation, &diagnostics, format);
-            ExitCode::from(1)
-        }
-    }
+    report(file, options, format, analysis::tree, text::tree)
 }
 
 fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
-    let compilation = match compile_one(file, options, format) {
-        Ok(c) => c,
-        Err(code) => return code,
+    let analyse = |mechanism: &Mechanism| {
+        let topology = lsdc::topology::build(mechanism)?;
+        analysis::assembled_model(mechanism, topology, &Default::default()).map(|(_, report)| report)
     };
-    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
-    let result = lsdc::topology::build(mechanism)
-        .and_then(|topology| analysis::assembled_model(mechanism, topology, &Default::default()));
-    match result {
-        Ok((_, report)) => {
-            match format {
-                Format::Text => print!("{}", text::assembly(&report)),
-                Format::Json => println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default()),
-            }
-            ExitCode::SUCCESS
-        }
-        Err(diagnostics) => {
-            report_diagnostics(&compilation, &diagnostics, format);
-            ExitCode::from(1)
-        }
-    }
+    report(file, options, format, analyse, text::assembly)
 }
 
 fn compile(file: &std::path::Path, options: &LoadOptions, emit: Emit) -> ExitCode {
-    let compilation = match compile_one(file, options, Format::Text) {
-        Ok(c) => c,
-        Err(code) => return code,
-    };
-    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
     match emit {
-        Emit::Notation => match lsdc::topology::build(mechanism) {
-            Ok(topology) => {
-                print!("{}", lsdc::topology::notation::notation(mechanism, &topology));
-                ExitCode::SUCCESS
-            }
-            Err(diagnostics) => {
-                report_diagnostics(&compilation, &diagnostics, Format::Text);
-                ExitCode::from(1)
-            }
-        },
+        Emit::Notation => {
+            let analyse = |mechanism: &Mechanism| {
+                let topology = lsdc::topology::build(mechanism)?;
+                Ok(lsdc::topology::notation::notation(mechanism, &topology))
+            };
+            report(file, options, Format::Text, analyse, String::clone)
+        }
     }
 }
 
@@ -246,7 +247,7 @@ fn parse(file: &std::path::Path) -> ExitCode {
     let mut sources = lsdc::source::SourceMap::new();
     let id = sources.add(file.display().to_string(), text);
     let (program, diagnostics) = lsdc::syntax::parser::parse(id, &sources.file(id).text);
-    println!("{program:#?}");
+    out(&format!("{program:#?}\n"));
     eprint!("{}", render::to_text(&sources, &diagnostics));
     if diagnostics.is_empty() {
         ExitCode::SUCCESS

@@ -98,9 +98,9 @@ pub fn tree(report: &TreeReport) -> String {
 
 pub fn assembly(report: &AssemblyReport) -> String {
     let mut out = String::new();
-    for (name, value) in &report.coordinates {
-        let held = if report.fixed.contains(name) { "  (fixed)" } else { "" };
-        out += &format!("{name:<24} {value:>22.15e}{held}\n");
+    for c in &report.coordinates {
+        let held = if c.fixed { "  (fixed)" } else { "" };
+        out += &format!("{:<24} {:>22.15e}{held}\n", c.name, c.value);
     }
     out += &format!("assembled in {} iterations, largest residual {:.1e}\n", report.iterations, report.residual);
     out
