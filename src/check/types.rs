@@ -188,7 +188,7 @@ pub fn is_numbered(field: &str, base: &str) -> bool {
 /// Built-in constants.
 pub fn builtin_constant(name: &str) -> Option<Ty> {
     match name {
-        "pi" => Some(Ty::Scalar),
+        "pi" | "time" => Some(Ty::Scalar),
         "earth" => Some(Ty::Body),
         _ => None,
     }
@@ -212,6 +212,6 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
 }
 
 pub const BUILTIN_NAMES: &[&str] = &[
-    "pi", "earth", "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2", "norm", "dot",
+    "pi", "time", "earth", "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2", "norm", "dot",
     "cross",
 ];

@@ -150,6 +150,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Target::Global(scope) => self.global(scope, &ident.name),
             Target::Builtin => match &*ident.name {
                 "pi" => Ok(Value::Scalar(num(std::f64::consts::PI))),
+                "time" => Ok(Value::Scalar(Rc::new(SExpr::Time))),
                 "earth" => Ok(Value::Body(BodyRef::Earth)),
                 other => Err(internal(format!("`{other}` is not a constant"))),
             },

@@ -179,7 +179,7 @@ struct Reached {
 impl Reached {
     fn scalar(&mut self, s: &SExpr) {
         match s {
-            SExpr::Num(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
+            SExpr::Num(_) | SExpr::Time | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
             SExpr::Unknown(id) => {
                 self.unknowns.insert(*id);
             }

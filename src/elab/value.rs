@@ -25,6 +25,8 @@ pub type Scalar = Rc<SExpr>;
 #[derive(Clone, Debug, PartialEq)]
 pub enum SExpr {
     Num(f64),
+    /// The time `t` of a simulation (`time` in programs).
+    Time,
     /// `?s`, or a `let` name bound to one.
     Unknown(UnknownId),
     /// `?fs(x, x')`
@@ -173,6 +175,7 @@ impl SExpr {
         };
         match self {
             SExpr::Num(v) => format!("{v}"),
+            SExpr::Time => "t".to_string(),
             SExpr::Unknown(id) => unknown(*id),
             SExpr::UnknownFunction(id, args) => {
                 let name = unknown(*id);

@@ -35,6 +35,7 @@ pub fn eval_dual(s: &SExpr, unknowns: &UnknownValues, q: &[f64], wrt: Option<usi
     let go = |e: &SExpr| eval_dual(e, unknowns, q, wrt);
     Ok(match s {
         SExpr::Num(v) => Dual::constant(*v),
+        SExpr::Time => return Err(EvalError::NotGeometric("the time")),
         SExpr::Unknown(id) => Dual::constant(*unknowns.get(id).ok_or(EvalError::Missing(*id))?),
         SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
         SExpr::Coordinate { index, order: 0 } => {
