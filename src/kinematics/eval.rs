@@ -1,9 +1,11 @@
-//! Numeric evaluation of symbolic scalars, with forward-mode derivatives with respect to one
-//! coordinate of a link (for motion subspaces and Jacobians).
+//! Numeric evaluation of symbolic scalars, with forward-mode derivatives: the value, and the
+//! first and second derivatives along a direction of the link's coordinates (a "jet"). The
+//! direction is a unit vector for partial derivatives, or the coordinate rates for time
+//! derivatives of a motion.
 
 use std::collections::HashMap;
 
-use crate::elab::value::{SExpr, UnknownId};
+use crate::elab::value::{JoinId, SExpr, UnknownId};
 
 /// Values of the program's unknowns (written `?s` and generic quantities).
 pub type UnknownValues = HashMap<UnknownId, f64>;
@@ -13,97 +15,147 @@ pub enum EvalError {
     /// An unknown without a value.
     Missing(UnknownId),
     /// Something that is not a function of the link's coordinates alone (a derivative `x'`,
-    /// another join's coordinate): not allowed in geometry.
+    /// another join's coordinate, the time): not allowed in geometry.
     NotGeometric(&'static str),
 }
 
-/// A value and its derivative with respect to the chosen coordinate.
-#[derive(Clone, Copy, Debug)]
-pub struct Dual {
-    pub value: f64,
-    pub derivative: f64,
+/// What an expression may refer to besides numbers and unknowns.
+#[derive(Clone, Copy, Default)]
+pub struct Env<'a> {
+    /// The enclosing link's coordinates (`Coordinate { order: 0 }`) and their rates (`order: 1`).
+    pub coordinates: &'a [f64],
+    pub rates: Option<&'a [f64]>,
+    /// Positions and velocities of every join's coordinates (`crank.q`, `crank.q'`).
+    pub joins: Option<&'a dyn Fn(JoinId, usize, u32) -> Option<f64>>,
+    pub time: Option<f64>,
 }
 
-impl Dual {
-    fn constant(value: f64) -> Dual {
-        Dual { value, derivative: 0.0 }
+/// A value with its first and second derivatives along a direction.
+#[derive(Clone, Copy, Debug)]
+pub struct Jet {
+    pub value: f64,
+    pub first: f64,
+    pub second: f64,
+}
+
+impl Jet {
+    fn constant(value: f64) -> Jet {
+        Jet { value, first: 0.0, second: 0.0 }
+    }
+
+    /// f(self), given f, f' and f'' at self.value.
+    fn chain(self, f: f64, f1: f64, f2: f64) -> Jet {
+        Jet { value: f, first: f1 * self.first, second: f2 * self.first * self.first + f1 * self.second }
+    }
+
+    fn mul(self, b: Jet) -> Jet {
+        Jet {
+            value: self.value * b.value,
+            first: self.first * b.value + self.value * b.first,
+            second: self.second * b.value + 2.0 * self.first * b.first + self.value * b.second,
+        }
+    }
+
+    fn div(self, b: Jet) -> Jet {
+        let value = self.value / b.value;
+        let first = (self.first - value * b.first) / b.value;
+        let second = (self.second - 2.0 * first * b.first - value * b.second) / b.value;
+        Jet { value, first, second }
     }
 }
 
-/// Evaluates `s` at link coordinates `q`, differentiating with respect to `q[wrt]` if given.
-pub fn eval_dual(s: &SExpr, unknowns: &UnknownValues, q: &[f64], wrt: Option<usize>) -> Result<Dual, EvalError> {
-    let go = |e: &SExpr| eval_dual(e, unknowns, q, wrt);
+/// Evaluates `s` with its derivatives along `direction` (over the link's coordinates).
+pub fn eval_jet(s: &SExpr, unknowns: &UnknownValues, env: &Env<'_>, direction: &[f64]) -> Result<Jet, EvalError> {
+    let go = |e: &SExpr| eval_jet(e, unknowns, env, direction);
     Ok(match s {
-        SExpr::Num(v) => Dual::constant(*v),
-        SExpr::Time => return Err(EvalError::NotGeometric("the time")),
-        SExpr::Unknown(id) => Dual::constant(*unknowns.get(id).ok_or(EvalError::Missing(*id))?),
+        SExpr::Num(v) => Jet::constant(*v),
+        SExpr::Time => Jet::constant(env.time.ok_or(EvalError::NotGeometric("the time"))?),
+        SExpr::Unknown(id) => Jet::constant(*unknowns.get(id).ok_or(EvalError::Missing(*id))?),
         SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
         SExpr::Coordinate { index, order: 0 } => {
             let i = *index as usize;
-            let value = *q.get(i).ok_or(EvalError::NotGeometric("a coordinate of another link"))?;
-            Dual { value, derivative: if wrt == Some(i) { 1.0 } else { 0.0 } }
+            let value = *env.coordinates.get(i).ok_or(EvalError::NotGeometric("a coordinate of another link"))?;
+            Jet { value, first: direction.get(i).copied().unwrap_or(0.0), second: 0.0 }
         }
-        SExpr::Coordinate { .. } => return Err(EvalError::NotGeometric("a time derivative")),
-        SExpr::JoinCoordinate { .. } => return Err(EvalError::NotGeometric("a coordinate of a join")),
+        SExpr::Coordinate { index, order: 1 } => {
+            let rates = env.rates.ok_or(EvalError::NotGeometric("a time derivative"))?;
+            Jet::constant(*rates.get(*index as usize).ok_or(EvalError::NotGeometric("a time derivative"))?)
+        }
+        SExpr::Coordinate { .. } => return Err(EvalError::NotGeometric("a second time derivative")),
+        SExpr::JoinCoordinate { join, index, order } => {
+            let joins = env.joins.ok_or(EvalError::NotGeometric("a coordinate of a join"))?;
+            Jet::constant(joins(*join, *index as usize, *order).ok_or(EvalError::NotGeometric("a second time derivative"))?)
+        }
         SExpr::Neg(a) => {
             let a = go(a)?;
-            Dual { value: -a.value, derivative: -a.derivative }
+            Jet { value: -a.value, first: -a.first, second: -a.second }
         }
         SExpr::Add(a, b) => {
             let (a, b) = (go(a)?, go(b)?);
-            Dual { value: a.value + b.value, derivative: a.derivative + b.derivative }
+            Jet { value: a.value + b.value, first: a.first + b.first, second: a.second + b.second }
         }
         SExpr::Sub(a, b) => {
             let (a, b) = (go(a)?, go(b)?);
-            Dual { value: a.value - b.value, derivative: a.derivative - b.derivative }
+            Jet { value: a.value - b.value, first: a.first - b.first, second: a.second - b.second }
         }
-        SExpr::Mul(a, b) => {
-            let (a, b) = (go(a)?, go(b)?);
-            Dual { value: a.value * b.value, derivative: a.derivative * b.value + a.value * b.derivative }
-        }
-        SExpr::Div(a, b) => {
-            let (a, b) = (go(a)?, go(b)?);
-            let value = a.value / b.value;
-            Dual { value, derivative: (a.derivative - value * b.derivative) / b.value }
-        }
+        SExpr::Mul(a, b) => go(a)?.mul(go(b)?),
+        SExpr::Div(a, b) => go(a)?.div(go(b)?),
         SExpr::Pow(a, b) => {
             let (a, b) = (go(a)?, go(b)?);
-            let value = a.value.powf(b.value);
-            let mut derivative = if a.derivative != 0.0 { b.value * a.value.powf(b.value - 1.0) * a.derivative } else { 0.0 };
-            if b.derivative != 0.0 {
-                derivative += value * a.value.ln() * b.derivative;
+            if b.first == 0.0 && b.second == 0.0 {
+                let n = b.value;
+                a.chain(a.value.powf(n), n * a.value.powf(n - 1.0), n * (n - 1.0) * a.value.powf(n - 2.0))
+            } else {
+                // a^b = exp(b ln a)
+                let ln = a.chain(a.value.ln(), 1.0 / a.value, -1.0 / (a.value * a.value));
+                let exponent = b.mul(ln);
+                let e = exponent.value.exp();
+                exponent.chain(e, e, e)
             }
-            Dual { value, derivative }
         }
         SExpr::Call(name, args) => {
             let x = go(args.first().ok_or(EvalError::NotGeometric("a call without arguments"))?)?;
-            let (value, slope) = match *name {
-                "sin" => (x.value.sin(), x.value.cos()),
-                "cos" => (x.value.cos(), -x.value.sin()),
-                "tan" => (x.value.tan(), 1.0 / x.value.cos().powi(2)),
-                "asin" => (x.value.asin(), 1.0 / (1.0 - x.value * x.value).sqrt()),
-                "acos" => (x.value.acos(), -1.0 / (1.0 - x.value * x.value).sqrt()),
-                "atan" => (x.value.atan(), 1.0 / (1.0 + x.value * x.value)),
-                "sqrt" => (x.value.sqrt(), 0.5 / x.value.sqrt()),
-                "exp" => (x.value.exp(), x.value.exp()),
-                "log" => (x.value.ln(), 1.0 / x.value),
-                "abs" => (x.value.abs(), x.value.signum()),
+            let v = x.value;
+            match *name {
+                "sin" => x.chain(v.sin(), v.cos(), -v.sin()),
+                "cos" => x.chain(v.cos(), -v.sin(), -v.cos()),
+                "tan" => {
+                    let sec2 = 1.0 / v.cos().powi(2);
+                    x.chain(v.tan(), sec2, 2.0 * sec2 * v.tan())
+                }
+                "asin" => x.chain(v.asin(), 1.0 / (1.0 - v * v).sqrt(), v / (1.0 - v * v).powf(1.5)),
+                "acos" => x.chain(v.acos(), -1.0 / (1.0 - v * v).sqrt(), -v / (1.0 - v * v).powf(1.5)),
+                "atan" => x.chain(v.atan(), 1.0 / (1.0 + v * v), -2.0 * v / (1.0 + v * v).powi(2)),
+                "sqrt" => x.chain(v.sqrt(), 0.5 / v.sqrt(), -0.25 / v.powf(1.5)),
+                "exp" => x.chain(v.exp(), v.exp(), v.exp()),
+                "log" => x.chain(v.ln(), 1.0 / v, -1.0 / (v * v)),
+                "abs" => x.chain(v.abs(), v.signum(), 0.0),
                 "atan2" => {
                     let y = x;
                     let x = go(args.get(1).ok_or(EvalError::NotGeometric("atan2 needs two arguments"))?)?;
-                    let r2 = x.value * x.value + y.value * y.value;
-                    let derivative = (x.value * y.derivative - y.value * x.derivative) / r2;
-                    return Ok(Dual { value: y.value.atan2(x.value), derivative });
+                    let n = x.value * y.first - y.value * x.first;
+                    let d = x.value * x.value + y.value * y.value;
+                    let n1 = x.value * y.second - y.value * x.second;
+                    let d1 = 2.0 * (x.value * x.first + y.value * y.first);
+                    Jet { value: y.value.atan2(x.value), first: n / d, second: (n1 * d - n * d1) / (d * d) }
                 }
                 _ => return Err(EvalError::NotGeometric("an unknown function")),
-            };
-            Dual { value, derivative: if x.derivative != 0.0 { slope * x.derivative } else { 0.0 } }
+            }
         }
     })
 }
 
+/// The value of `s` at link coordinates `q` and its derivative with respect to `q[wrt]`.
+pub fn eval_dual(s: &SExpr, unknowns: &UnknownValues, q: &[f64], wrt: Option<usize>) -> Result<Jet, EvalError> {
+    let mut direction = vec![0.0; q.len()];
+    if let Some(k) = wrt.filter(|&k| k < q.len()) {
+        direction[k] = 1.0;
+    }
+    eval_jet(s, unknowns, &Env { coordinates: q, ..Env::default() }, &direction)
+}
+
 pub fn eval(s: &SExpr, unknowns: &UnknownValues, q: &[f64]) -> Result<f64, EvalError> {
-    eval_dual(s, unknowns, q, None).map(|d| d.value)
+    eval_jet(s, unknowns, &Env { coordinates: q, ..Env::default() }, &[]).map(|j| j.value)
 }
 
 #[cfg(test)]
@@ -112,16 +164,21 @@ mod tests {
     use crate::elab::value::{arith, num};
     use std::rc::Rc;
 
-    #[test]
-    fn derivatives_match_finite_differences() {
+    fn expression() -> Rc<SExpr> {
         let q0 = Rc::new(SExpr::Coordinate { index: 0, order: 0 });
         let q1 = Rc::new(SExpr::Coordinate { index: 1, order: 0 });
         let e = arith('*', &Rc::new(SExpr::Call("sin", vec![arith('*', &num(2.0), &q0)])), &arith('^', &q1, &num(3.0)));
         let e = arith('+', &e, &Rc::new(SExpr::Call("atan2", vec![q1.clone(), q0.clone()])));
+        arith('/', &e, &Rc::new(SExpr::Call("sqrt", vec![arith('+', &q0, &num(4.0))])))
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let e = expression();
         let unknowns = UnknownValues::new();
         let q = [0.3, 1.7];
         for k in 0..2 {
-            let d = eval_dual(&e, &unknowns, &q, Some(k)).expect("evaluates").derivative;
+            let d = eval_dual(&e, &unknowns, &q, Some(k)).expect("evaluates").first;
             let h = 1e-6;
             let mut plus = q;
             plus[k] += h;
@@ -130,5 +187,21 @@ mod tests {
             let fd = (eval(&e, &unknowns, &plus).expect("") - eval(&e, &unknowns, &minus).expect("")) / (2.0 * h);
             assert!((d - fd).abs() < 1e-8, "{d} vs {fd}");
         }
+    }
+
+    #[test]
+    fn second_directional_derivative_matches_finite_differences() {
+        let e = expression();
+        let unknowns = UnknownValues::new();
+        let (q, direction) = ([0.3, 1.7], [0.8, -0.5]);
+        let at = |t: f64| {
+            let point = [q[0] + t * direction[0], q[1] + t * direction[1]];
+            eval(&e, &unknowns, &point).expect("evaluates")
+        };
+        let jet = eval_jet(&e, &unknowns, &Env { coordinates: &q, ..Env::default() }, &direction).expect("evaluates");
+        let h = 1e-4;
+        let fd = (at(h) - 2.0 * at(0.0) + at(-h)) / (h * h);
+        assert!((jet.second - fd).abs() < 1e-5, "{} vs {fd}", jet.second);
+        assert!((jet.first - (at(1e-6) - at(-1e-6)) / 2e-6).abs() < 1e-8);
     }
 }

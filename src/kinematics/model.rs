@@ -4,7 +4,7 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use super::eval::{eval, eval_dual, EvalError, UnknownValues};
+use super::eval::{eval, eval_jet, Env, EvalError, UnknownValues};
 use super::spatial::{self, Pose, Twist};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
@@ -42,40 +42,87 @@ impl JointModel {
     /// The dof chain's transform at coordinates `q`, and its motion subspace: column k is the
     /// twist, in the joint's first frame, produced by a unit rate of coordinate k.
     pub fn chain(&self, q: &[f64], unknowns: &UnknownValues) -> Result<(Pose, DMatrix<f64>), EvalError> {
+        let motion = self.chain_motion(q, None, unknowns)?;
+        Ok((motion.pose, motion.subspace))
+    }
+
+    /// The chain's transform, motion subspace and, when rates are given, the acceleration of the
+    /// chain's end (in the first frame, as a twist derivative) when the coordinates move at those
+    /// rates with no coordinate acceleration: the bias term of the joint.
+    pub fn chain_motion(&self, q: &[f64], rates: Option<&[f64]>, unknowns: &UnknownValues) -> Result<ChainMotion, EvalError> {
         let n = self.coordinate_count();
+        let env = Env { coordinates: q, ..Env::default() };
+        let zero_rates = vec![0.0; n];
+        let rates = rates.unwrap_or(&zero_rates);
         let mut pose = Pose::identity();
         let mut subspace = DMatrix::zeros(6, n);
+        let mut velocity = Twist::zeros();
+        let mut bias = Twist::zeros();
+        let mut unit = vec![0.0; n];
         for step in &self.steps {
-            let (transform, local): (Pose, Vec<Twist>) = match step {
+            // Value and derivatives of the step's parameters: per coordinate, and along the rates.
+            let (transform, columns, local_velocity, local_bias) = match step {
                 Step::Translation(v) => {
-                    let value = Vector3::new(eval(&v[0], unknowns, q)?, eval(&v[1], unknowns, q)?, eval(&v[2], unknowns, q)?);
+                    let along = [0, 1, 2].map(|i| eval_jet(&v[i], unknowns, &env, rates));
+                    let [x, y, z] = along;
+                    let (x, y, z) = (x?, y?, z?);
                     let mut columns = Vec::with_capacity(n);
                     for k in 0..n {
-                        let d = |i: usize| eval_dual(&v[i], unknowns, q, Some(k)).map(|d| d.derivative);
+                        unit[k] = 1.0;
+                        let d = |i: usize| eval_jet(&v[i], unknowns, &env, &unit).map(|j| j.first);
                         columns.push(spatial::twist(Vector3::zeros(), Vector3::new(d(0)?, d(1)?, d(2)?)));
+                        unit[k] = 0.0;
                     }
-                    (spatial::translation(value), columns)
+                    let value = Vector3::new(x.value, y.value, z.value);
+                    let velocity = spatial::twist(Vector3::zeros(), Vector3::new(x.first, y.first, z.first));
+                    let bias = spatial::twist(Vector3::zeros(), Vector3::new(x.second, y.second, z.second));
+                    (spatial::translation(value), columns, velocity, bias)
                 }
                 Step::Rotation { angle, axis } => {
-                    let value = eval(angle, unknowns, q)?;
+                    let jet = eval_jet(angle, unknowns, &env, rates)?;
                     let mut columns = Vec::with_capacity(n);
                     for k in 0..n {
-                        let rate = eval_dual(angle, unknowns, q, Some(k))?.derivative;
+                        unit[k] = 1.0;
+                        let rate = eval_jet(angle, unknowns, &env, &unit)?.first;
                         columns.push(spatial::twist(axis * rate, Vector3::zeros()));
+                        unit[k] = 0.0;
                     }
-                    (spatial::rotation(axis, value), columns)
+                    let velocity = spatial::twist(axis * jet.first, Vector3::zeros());
+                    let bias = spatial::twist(axis * jet.second, Vector3::zeros());
+                    (spatial::rotation(axis, jet.value), columns, velocity, bias)
                 }
             };
-            for (k, column) in local.iter().enumerate() {
+            for (k, column) in columns.iter().enumerate() {
                 let moved = spatial::transform_twist(&pose, column);
                 for r in 0..6 {
                     subspace[(r, k)] += moved[r];
                 }
             }
+            // d/dt of Ad(P) ξ is V_P × Ad(P) ξ + Ad(P) ξ̇ (spatial twists in the first frame).
+            let step_velocity = spatial::transform_twist(&pose, &local_velocity);
+            bias += cross(&velocity, &step_velocity) + spatial::transform_twist(&pose, &local_bias);
+            velocity += step_velocity;
             pose *= transform;
         }
-        Ok((pose, subspace))
+        Ok(ChainMotion { pose, subspace, velocity, bias })
     }
+}
+
+/// A dof chain at given coordinates and rates, in the joint's first frame.
+pub struct ChainMotion {
+    pub pose: Pose,
+    pub subspace: DMatrix<f64>,
+    /// Twist of the chain's end: `subspace · rates`.
+    pub velocity: Twist,
+    /// Its derivative when the coordinates have no acceleration.
+    pub bias: Twist,
+}
+
+/// `a × b` for two twists `[ω; v]`.
+fn cross(a: &Twist, b: &Twist) -> Twist {
+    let (wa, va) = (spatial::angular(a), spatial::linear(a));
+    let (wb, vb) = (spatial::angular(b), spatial::linear(b));
+    spatial::twist(wa.cross(&wb), wa.cross(&vb) + va.cross(&wb))
 }
 
 #[derive(Clone, Debug)]

@@ -1,0 +1,124 @@
+//! Spatial algebra for the dynamics, in body coordinates (Featherstone's convention with the
+//! angular part first): motions `[ω; v]`, forces `[n; f]` (moment about the frame's origin, then
+//! force), spatial inertias as 6×6 matrices, and rigid transforms acting on them.
+
+use nalgebra::{Isometry3, Matrix3, Matrix6, Vector3, Vector6};
+
+pub type Motion = Vector6<f64>;
+pub type Force = Vector6<f64>;
+pub type Inertia = Matrix6<f64>;
+pub type Pose = Isometry3<f64>;
+
+fn top(x: &Vector6<f64>) -> Vector3<f64> {
+    Vector3::new(x[0], x[1], x[2])
+}
+
+fn bottom(x: &Vector6<f64>) -> Vector3<f64> {
+    Vector3::new(x[3], x[4], x[5])
+}
+
+fn join(a: Vector3<f64>, b: Vector3<f64>) -> Vector6<f64> {
+    Vector6::new(a.x, a.y, a.z, b.x, b.y, b.z)
+}
+
+pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// Motion given in the frame of `pose` (a child), expressed in the frame `pose` is relative to.
+pub fn motion_to_parent(pose: &Pose, m: &Motion) -> Motion {
+    let w = pose.rotation * top(m);
+    join(w, pose.rotation * bottom(m) + pose.translation.vector.cross(&w))
+}
+
+/// Motion given in the parent frame, expressed in the frame of `pose` (the child).
+pub fn motion_to_child(pose: &Pose, m: &Motion) -> Motion {
+    let inverse = pose.rotation.inverse();
+    let w = top(m);
+    join(inverse * w, inverse * (bottom(m) - pose.translation.vector.cross(&w)))
+}
+
+/// Force given in the child frame, expressed in the parent frame.
+pub fn force_to_parent(pose: &Pose, f: &Force) -> Force {
+    let force = pose.rotation * bottom(f);
+    join(pose.rotation * top(f) + pose.translation.vector.cross(&force), force)
+}
+
+/// Force given in the parent frame, expressed in the child frame.
+pub fn force_to_child(pose: &Pose, f: &Force) -> Force {
+    let inverse = pose.rotation.inverse();
+    let force = bottom(f);
+    join(inverse * (top(f) - pose.translation.vector.cross(&force)), inverse * force)
+}
+
+/// `a × b` for two motions.
+pub fn cross_motion(a: &Motion, b: &Motion) -> Motion {
+    let (w, v) = (top(a), bottom(a));
+    join(w.cross(&top(b)), w.cross(&bottom(b)) + v.cross(&top(b)))
+}
+
+/// `a ×* f`: a motion acting on a force.
+pub fn cross_force(a: &Motion, f: &Force) -> Force {
+    let (w, v) = (top(a), bottom(a));
+    join(w.cross(&top(f)) + v.cross(&bottom(f)), w.cross(&bottom(f)))
+}
+
+/// The 6×6 matrix of `motion_to_child(pose, ·)`.
+pub fn motion_matrix_to_child(pose: &Pose) -> Matrix6<f64> {
+    let r_t = pose.rotation.to_rotation_matrix().matrix().transpose();
+    let mut x = Matrix6::zeros();
+    x.fixed_view_mut::<3, 3>(0, 0).copy_from(&r_t);
+    x.fixed_view_mut::<3, 3>(3, 3).copy_from(&r_t);
+    x.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-r_t * skew(&pose.translation.vector)));
+    x
+}
+
+/// Spatial inertia about a frame's origin, of a body with mass `mass`, centre of mass `com` and
+/// rotational inertia `central` about the centre of mass (both in that frame).
+pub fn inertia(mass: f64, com: &Vector3<f64>, central: &Matrix3<f64>) -> Inertia {
+    let c = skew(com);
+    let mut i = Matrix6::zeros();
+    i.fixed_view_mut::<3, 3>(0, 0).copy_from(&(central - mass * c * c));
+    i.fixed_view_mut::<3, 3>(0, 3).copy_from(&(mass * c));
+    i.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-mass * c));
+    i.fixed_view_mut::<3, 3>(3, 3).copy_from(&(Matrix3::identity() * mass));
+    i
+}
+
+/// Inertia given in the child frame, expressed in the parent frame: X* I X⁻¹.
+pub fn inertia_to_parent(pose: &Pose, i: &Inertia) -> Inertia {
+    let x = motion_matrix_to_child(pose);
+    x.transpose() * i * x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Translation3, UnitQuaternion};
+
+    fn pose() -> Pose {
+        Isometry3::from_parts(Translation3::new(0.3, -1.2, 0.7), UnitQuaternion::from_euler_angles(0.4, -0.9, 2.1))
+    }
+
+    #[test]
+    fn power_is_invariant_under_change_of_frame() {
+        let m = Motion::new(0.1, 0.2, -0.3, 1.0, -2.0, 0.5);
+        let f = Force::new(-0.7, 0.4, 0.9, 2.0, 1.5, -1.0);
+        let p = pose();
+        let power_child = m.dot(&f);
+        let power_parent = motion_to_parent(&p, &m).dot(&force_to_parent(&p, &f));
+        assert!((power_child - power_parent).abs() < 1e-12);
+        assert!((motion_to_child(&p, &motion_to_parent(&p, &m)) - m).amax() < 1e-12);
+        assert!((force_to_child(&p, &force_to_parent(&p, &f)) - f).amax() < 1e-12);
+        assert!((motion_matrix_to_child(&p) * motion_to_parent(&p, &m) - m).amax() < 1e-12);
+    }
+
+    #[test]
+    fn kinetic_energy_of_a_point_mass() {
+        let com = Vector3::new(0.0, 0.0, 2.0);
+        let i = inertia(3.0, &com, &Matrix3::zeros());
+        let m = Motion::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        // Rotation about x through the origin: the point moves at speed 2.
+        assert!((0.5 * m.dot(&(i * m)) - 0.5 * 3.0 * 4.0).abs() < 1e-12);
+    }
+}
