@@ -8,6 +8,7 @@ pub mod analysis;
 pub mod check;
 pub mod diag;
 pub mod driver;
+pub mod dynamics;
 pub mod elab;
 pub mod kinematics;
 pub mod load;

@@ -1,0 +1,165 @@
+//! The angles a program declared for a spherical or free joint, recovered from the quaternion
+//! the dynamics integrates (and back). Three rotations about axes a1, a2, a3 with a1 ⊥ a2 and
+//! a2 ⊥ a3 (Euler and Bryant angles) reach every rotation; at the singularity (the middle angle
+//! makes a1 and a3 parallel) only the sum or difference of the outer angles is defined, and the
+//! previous values choose among the solutions, so reported angles stay continuous.
+
+use std::f64::consts::PI;
+
+use nalgebra::{DVector, Rotation3, Unit, UnitQuaternion, Vector3};
+
+use super::joint::{quaternion, Joint, JointType};
+use super::spatial::{motion_to_parent, Motion, Pose};
+use crate::kinematics::eval::{EvalError, UnknownValues};
+
+fn rotate(axis: &Vector3<f64>, angle: f64, v: &Vector3<f64>) -> Vector3<f64> {
+    Rotation3::from_axis_angle(&Unit::new_normalize(*axis), angle) * v
+}
+
+/// Angle of the rotation about `axis` that carries `from` onto `to` (their components normal to
+/// the axis).
+fn angle_between(axis: &Vector3<f64>, from: &Vector3<f64>, to: &Vector3<f64>) -> f64 {
+    let sine = axis.dot(&from.cross(to));
+    let cosine = from.dot(to) - axis.dot(from) * axis.dot(to);
+    sine.atan2(cosine)
+}
+
+/// `angle + 2πk` closest to `reference`.
+fn unwrap(angle: f64, reference: f64) -> f64 {
+    angle + 2.0 * PI * ((reference - angle) / (2.0 * PI)).round()
+}
+
+pub fn rotation_from_angles(axes: &[Vector3<f64>; 3], angles: &[f64]) -> UnitQuaternion<f64> {
+    (0..3).fold(UnitQuaternion::identity(), |r, k| r * UnitQuaternion::from_axis_angle(&Unit::new_normalize(axes[k]), angles[k]))
+}
+
+/// Angles (θ1, θ2, θ3) with R = R(a1, θ1) R(a2, θ2) R(a3, θ3), closest to `previous`.
+pub fn angles_from_rotation(axes: &[Vector3<f64>; 3], r: &UnitQuaternion<f64>, previous: &[f64; 3]) -> [f64; 3] {
+    let [a1, a2, a3] = axes;
+    // a1·R a3 = a1·R(a2, θ2) a3 = α cos θ2 + β sin θ2.
+    let target = a1.dot(&(r * a3));
+    let (alpha, beta) = (a1.dot(a3), a1.dot(&a2.cross(a3)));
+    let rho = (alpha * alpha + beta * beta).sqrt();
+    let phi = beta.atan2(alpha);
+    let spread = (target / rho).clamp(-1.0, 1.0).acos();
+    let mut best = [0.0; 3];
+    let mut best_distance = f64::INFINITY;
+    for middle in [phi + spread, phi - spread] {
+        let middle = unwrap(middle, previous[1]);
+        let w = rotate(a2, middle, a3);
+        let first_raw = angle_between(a1, &w, &(r * a3));
+        let w_back = rotate(a2, -middle, a1);
+        let third_raw = -angle_between(a3, &w_back, &(r.inverse() * a1));
+        // Near the singularity the outer angles are coupled: keep the first where it was and
+        // solve for the third from the whole rotation.
+        let singular = spread.abs() < 1e-7 || (PI - spread).abs() < 1e-7;
+        let (first, third) = if singular {
+            let first = previous[0];
+            let rest = UnitQuaternion::from_axis_angle(&Unit::new_normalize(*a2), middle).inverse()
+                * UnitQuaternion::from_axis_angle(&Unit::new_normalize(*a1), first).inverse()
+                * r;
+            let third = angle_between(a3, &a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2), &(rest * a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2)));
+            (first, unwrap(third, previous[2]))
+        } else {
+            (unwrap(first_raw, previous[0]), unwrap(third_raw, previous[2]))
+        };
+        let candidate = [first, middle, third];
+        let distance: f64 = candidate.iter().zip(previous).map(|(a, b)| (a - b).abs()).sum();
+        if distance < best_distance {
+            best_distance = distance;
+            best = candidate;
+        }
+    }
+    best
+}
+
+impl Joint {
+    /// Declared coordinates and their rates from the joint's positions and velocities.
+    /// `previous` (declared coordinates at the last output) keeps angles continuous.
+    pub fn declared(&self, q: &[f64], v: &[f64], previous: &[f64], unknowns: &UnknownValues) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+        let axes = match &self.kind {
+            JointType::Chain => return Ok((q.to_vec(), v.to_vec())),
+            JointType::Spherical { axes } | JointType::Free { axes } => axes,
+        };
+        let free = matches!(self.kind, JointType::Free { .. });
+        let (translation, rotation) = if free { (Vector3::new(q[0], q[1], q[2]), quaternion(&q[3..7])) } else { (Vector3::zeros(), quaternion(&q[0..4])) };
+        let moving = Pose::from_parts(translation.into(), rotation);
+        let chain = if self.first_on_parent { moving } else { moving.inverse() };
+        let angle_start = if free { 3 } else { 0 };
+        let reference = [previous[angle_start], previous[angle_start + 1], previous[angle_start + 2]];
+        let angles = angles_from_rotation(axes, &chain.rotation, &reference);
+        let mut coordinates = Vec::with_capacity(6);
+        if free {
+            coordinates.extend_from_slice(chain.translation.vector.as_slice());
+        }
+        coordinates.extend_from_slice(&angles);
+        // Rates: the chain's spatial twist equals S(declared) · rates.
+        let body_twist = body_twist(v, free);
+        let spatial_twist = if self.first_on_parent { motion_to_parent(&moving, &body_twist) } else { -body_twist };
+        let motion = self.chain.chain_motion(&coordinates, None, unknowns)?;
+        let rates = solve_least_squares(&motion.subspace, &spatial_twist);
+        Ok((coordinates, rates))
+    }
+
+    /// The joint's positions and velocities from declared coordinates and rates.
+    pub fn from_declared(&self, coordinates: &[f64], rates: &[f64], unknowns: &UnknownValues) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+        if self.kind == JointType::Chain {
+            return Ok((coordinates.to_vec(), rates.to_vec()));
+        }
+        let free = matches!(self.kind, JointType::Free { .. });
+        let motion = self.chain.chain_motion(coordinates, Some(rates), unknowns)?;
+        let moving = if self.first_on_parent { motion.pose } else { motion.pose.inverse() };
+        let body = if self.first_on_parent { super::spatial::motion_to_child(&motion.pose, &motion.velocity) } else { -motion.velocity };
+        let r = moving.rotation;
+        let mut q = Vec::with_capacity(7);
+        if free {
+            q.extend_from_slice(moving.translation.vector.as_slice());
+        }
+        q.extend_from_slice(&[r.w, r.i, r.j, r.k]);
+        let v = if free { body.as_slice().to_vec() } else { body.as_slice()[0..3].to_vec() };
+        Ok((q, v))
+    }
+}
+
+fn body_twist(v: &[f64], free: bool) -> Motion {
+    if free { Motion::from_column_slice(v) } else { Motion::new(v[0], v[1], v[2], 0.0, 0.0, 0.0) }
+}
+
+/// Minimum-norm least-squares solution of `a x = b` (the rates at a singular configuration).
+fn solve_least_squares(a: &nalgebra::DMatrix<f64>, b: &Motion) -> Vec<f64> {
+    let rhs = DVector::from_column_slice(b.as_slice());
+    a.clone().svd(true, true).solve(&rhs, 1e-12).map(|x| x.as_slice().to_vec()).unwrap_or_else(|_| vec![f64::NAN; a.ncols()])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(axes: [Vector3<f64>; 3], angles: [f64; 3]) {
+        let r = rotation_from_angles(&axes, &angles);
+        let recovered = angles_from_rotation(&axes, &r, &angles.map(|a| a + 0.01));
+        let back = rotation_from_angles(&axes, &recovered);
+        assert!(r.angle_to(&back) < 1e-12, "{angles:?} → {recovered:?}");
+        for k in 0..3 {
+            assert!((recovered[k] - angles[k]).abs() < 1e-9, "{angles:?} → {recovered:?}");
+        }
+    }
+
+    #[test]
+    fn euler_and_bryant_angles_round_trip() {
+        let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
+        check([z, x, z], [0.3, 1.1, -2.0]);
+        check([x, y, z], [0.3, -1.1, 2.5]);
+        check([z, y, x], [-2.9, 0.4, 0.1]);
+    }
+
+    #[test]
+    fn at_gimbal_lock_the_rotation_is_still_exact() {
+        let (x, z) = (Vector3::x(), Vector3::z());
+        let axes = [z, x, z];
+        let r = rotation_from_angles(&axes, &[0.7, 0.0, 0.2]);
+        let recovered = angles_from_rotation(&axes, &r, &[0.6, 0.01, 0.3]);
+        assert!(r.angle_to(&rotation_from_angles(&axes, &recovered)) < 1e-12, "{recovered:?}");
+        assert!((recovered[0] + recovered[2] - 0.9).abs() < 1e-9);
+    }
+}

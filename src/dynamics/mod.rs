@@ -1,0 +1,9 @@
+//! Dynamics of tree mechanisms: an immutable [`model::Model`] compiled from the mechanism, scratch
+//! [`data::Data`], and the recursive algorithms on them: inverse dynamics (RNEA), the mass
+//! matrix (CRBA), forward dynamics (ABA), energy and momentum.
+
+pub mod algorithms;
+pub mod angles;
+pub mod joint;
+pub mod model;
+pub mod spatial;

@@ -1,0 +1,116 @@
+//! The dynamics algorithms against each other on random trees of 1 to 30 bodies with mixed
+//! joints: RNEA(q, v, ABA(q, v, τ)) = τ, CRBA equal to the matrix built column by column from
+//! RNEA, symmetric positive definite.
+
+use lsdc::driver::compile_text;
+use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
+use lsdc::dynamics::model::{self, Model};
+use lsdc::dynamics::spatial::Force;
+use lsdc::kinematics::eval::UnknownValues;
+use lsdc::kinematics::model as kinematic_model;
+use lsdc::load::LoadOptions;
+use proptest::prelude::*;
+
+const JOINTS: [&str; 10] = [
+    "revolute([0.3, -0.5, 0.8])",
+    "prismatic([1, 0, 0])",
+    "helical([0, 0, 1], 0.05)",
+    "cylindrical([0, 1, 0])",
+    "universal([1, 0, 0], [0, 1, 0])",
+    "spherical",
+    "planar",
+    "free",
+    "link(a, b) dof1 = [a, sin(b), 0.2 * a * b], dof2 = (2 * b) || [1, 1, 0] end",
+    "link(x, y, z) dof1 = x || [0, 0, 1], dof2 = y || [1, 0, 0], dof3 = z || [0, 0, 1] end",
+];
+
+fn tree_program(parents: &[usize], kinds: &[usize], numbers: &[f64]) -> String {
+    let mut text = String::from("import joints;\n");
+    let value = |k: usize| numbers[k % numbers.len()];
+    for (i, _) in parents.iter().enumerate() {
+        let b = i + 1;
+        text += &format!(
+            "let b{b} = body mass = {m}, iframe = [{x}, {y}, {z}] ++ ({a} || [{ax}, 1, {az}]), inertia = [{i1}, {i2}, {i3}] end;\n",
+            m = 0.5 + value(7 * b).abs(),
+            x = value(7 * b + 1),
+            y = value(7 * b + 2),
+            z = value(7 * b + 3),
+            a = value(7 * b + 4),
+            ax = value(7 * b + 5),
+            az = value(7 * b + 6),
+            i1 = 0.2 + value(7 * b + 7).abs(),
+            i2 = 0.3 + value(7 * b + 8).abs(),
+            i3 = 0.4 + value(7 * b + 9).abs(),
+        );
+    }
+    for (i, &p) in parents.iter().enumerate() {
+        let b = i + 1;
+        let parent = if p == 0 { "earth".to_string() } else { format!("b{p}") };
+        let offset = format!("[{}, {}, {}] ++ ({} || [1, 0, 0])", value(3 * b), value(3 * b + 1), value(3 * b + 2), value(5 * b));
+        // Alternate the direction of the join so both traversals are exercised.
+        if b % 3 == 0 {
+            text += &format!("join b{b} and {offset} @ {parent} with {} as j{b};\n", JOINTS[kinds[i] % JOINTS.len()]);
+        } else {
+            text += &format!("join {offset} @ {parent} and b{b} with {} as j{b};\n", JOINTS[kinds[i] % JOINTS.len()]);
+        }
+    }
+    text
+}
+
+fn model_of(text: &str) -> Model {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_text("tree.lsd", text, None, &options);
+    assert!(!compilation.has_errors(), "{:?}\n{text}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let topology = lsdc::topology::build(&mechanism).expect("connected");
+    let kinematics = kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric");
+    model::build(&mechanism, &kinematics).expect("dynamic model")
+}
+
+fn random_state(model: &Model, numbers: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = model.declared_count;
+    let coordinates: Vec<f64> = (0..n).map(|i| numbers[(3 * i + 1) % numbers.len()]).collect();
+    let rates: Vec<f64> = (0..n).map(|i| numbers[(5 * i + 2) % numbers.len()]).collect();
+    model.state_from_declared(&coordinates, &rates).expect("state")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 40, ..ProptestConfig::default() })]
+
+    #[test]
+    fn inverse_and_forward_dynamics_agree(
+        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..30),
+        kinds in prop::collection::vec(0usize..10, 30),
+        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+    ) {
+        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
+        let model = model_of(&tree_program(&parents, &kinds, &numbers));
+        let mut data = Data::new(&model);
+        let (q, v) = random_state(&model, &numbers);
+        let tau: Vec<f64> = (0..model.nv).map(|i| numbers[(7 * i + 3) % numbers.len()]).collect();
+        let external: Vec<Force> = (0..=model.body_count())
+            .map(|i| Force::from_fn(|r, _| numbers[(11 * i + r) % numbers.len()] * 0.3))
+            .collect();
+        let acceleration = aba(&model, &mut data, &q, &v, &tau, &external).expect("regular");
+        let back = rnea(&model, &mut data, &q, &v, acceleration.as_slice(), &external).expect("evaluates");
+        let scale = 1.0 + tau.iter().fold(0.0f64, |m, t| m.max(t.abs()));
+        for k in 0..model.nv {
+            prop_assert!((back[k] - tau[k]).abs() < 1e-12 * scale * (1.0 + acceleration.amax()), "τ{k}: {} vs {}", back[k], tau[k]);
+        }
+
+        let mass = crba(&model, &mut data, &q).expect("evaluates");
+        let none = vec![Force::zeros(); model.body_count() + 1];
+        let zero_v = vec![0.0; model.nv];
+        let bias = rnea(&model, &mut data, &q, &zero_v, &vec![0.0; model.nv], &none).expect("evaluates");
+        for c in 0..model.nv {
+            let mut unit = vec![0.0; model.nv];
+            unit[c] = 1.0;
+            let column = rnea(&model, &mut data, &q, &zero_v, &unit, &none).expect("evaluates") - &bias;
+            for r in 0..model.nv {
+                prop_assert!((mass[(r, c)] - column[r]).abs() < 1e-11 * (1.0 + mass.amax()), "M[{r},{c}]");
+            }
+        }
+        prop_assert!((&mass - mass.transpose()).amax() < 1e-12 * (1.0 + mass.amax()));
+        prop_assert!(mass.clone().cholesky().is_some(), "positive definite");
+    }
+}
