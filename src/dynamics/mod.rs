@@ -4,6 +4,7 @@
 
 pub mod algorithms;
 pub mod angles;
+pub mod efforts;
 pub mod joint;
 pub mod model;
 pub mod spatial;

@@ -1,0 +1,152 @@
+//! The efforts at a state: forces applied on frames and torques on bodies (from `apply`), as
+//! spatial forces in body frames, and the known link efforts (`force`, `torque`, `forceN`,
+//! `torqueN` of the links) as generalised forces. Their values may depend on every join's
+//! coordinates and rates and on the time.
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use super::algorithms::Data;
+use super::joint::JointType;
+use super::model::{LinkEffort, Model};
+use super::spatial::{self, Force};
+use crate::elab::mechanism::EffortKind;
+use crate::elab::value::{JoinId, Vector};
+use crate::kinematics::eval::{eval_jet, Env, EvalError};
+use crate::kinematics::model::Step;
+
+/// The efforts at one state.
+pub struct Efforts {
+    /// Per body (index = body number, 0 unused), in the body's frame.
+    pub external: Vec<Force>,
+    /// Generalised forces of the link efforts.
+    pub tau: DVector<f64>,
+}
+
+/// Declared coordinates and rates of every join, for expressions.
+pub struct Declared<'a> {
+    pub model: &'a Model,
+    pub coordinates: &'a [f64],
+    pub rates: &'a [f64],
+}
+
+impl Declared<'_> {
+    fn value(&self, join: JoinId, index: usize, order: u32) -> Option<f64> {
+        let joint = self.model.joint_of(join)?;
+        let offset = self.model.declared_offsets[joint] + index;
+        match order {
+            0 => self.coordinates.get(offset).copied(),
+            1 => self.rates.get(offset).copied(),
+            _ => None,
+        }
+    }
+}
+
+fn vector(v: &Vector, model: &Model, env: &Env<'_>) -> Result<Vector3<f64>, EvalError> {
+    let value = |i: usize| eval_jet(&v[i], &model.unknowns, env, &[]).map(|j| j.value);
+    Ok(Vector3::new(value(0)?, value(1)?, value(2)?))
+}
+
+/// Evaluates every effort; `data` must hold the forward kinematics of the state.
+pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) -> Result<Efforts, EvalError> {
+    let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
+    let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time) };
+    let mut external = vec![Force::zeros(); model.body_count() + 1];
+    for effort in &model.applied {
+        let value = vector(&effort.value, model, &env)?;
+        let in_world = if effort.basis == 0 { value } else { data.world[effort.basis].rotation * value };
+        let in_body = data.world[effort.body].rotation.inverse() * in_world;
+        external[effort.body] += match effort.kind {
+            EffortKind::Force => spatial_force(effort.point.cross(&in_body), in_body),
+            EffortKind::Torque => spatial_force(in_body, Vector3::zeros()),
+        };
+    }
+    let mut tau = DVector::zeros(model.nv);
+    for effort in &model.link_efforts {
+        let generalised = link_effort(model, effort, declared, &joins, time)?;
+        let joint = &model.joints[effort.joint];
+        let mut rows = tau.rows_mut(joint.v_offset, joint.nv());
+        rows += generalised;
+    }
+    Ok(Efforts { external, tau })
+}
+
+fn spatial_force(moment: Vector3<f64>, force: Vector3<f64>) -> Force {
+    Force::new(moment.x, moment.y, moment.z, force.x, force.y, force.z)
+}
+
+/// A link effort as generalised forces on the joint's velocities.
+fn link_effort(
+    model: &Model,
+    effort: &LinkEffort,
+    declared: &Declared<'_>,
+    joins: &dyn Fn(JoinId, usize, u32) -> Option<f64>,
+    time: f64,
+) -> Result<DVector<f64>, EvalError> {
+    let joint = &model.joints[effort.joint];
+    let offset = model.declared_offsets[effort.joint];
+    let n = joint.chain.coordinate_count();
+    let coordinates = &declared.coordinates[offset..offset + n];
+    let rates = &declared.rates[offset..offset + n];
+    let env = Env { coordinates, rates: Some(rates), joins: Some(joins), time: Some(time) };
+    let value = vector(&effort.value, model, &env)?;
+    let wrench = match effort.kind {
+        EffortKind::Force => spatial_force(Vector3::zeros(), value),
+        EffortKind::Torque => spatial_force(value, Vector3::zeros()),
+    };
+    // Generalised forces on the declared coordinates: the wrench against each coordinate's twist.
+    let twists = if effort.step == 0 {
+        joint.chain.chain_motion(coordinates, None, &model.unknowns)?.subspace
+    } else {
+        step_columns(&joint.chain.steps[effort.step as usize - 1], coordinates, model)?
+    };
+    let on_declared = twists.transpose() * DVector::from_column_slice(wrench.as_slice());
+    if joint.kind == JointType::Chain {
+        return Ok(on_declared);
+    }
+    // Quaternion joints: map through the declared rates' dependence on the velocities.
+    let jacobian = declared_rate_jacobian(model, effort.joint, coordinates)?;
+    Ok(jacobian.transpose() * on_declared)
+}
+
+/// Twists of one step of a chain per unit rate of each coordinate, in the step's own frame.
+fn step_columns(step: &Step, coordinates: &[f64], model: &Model) -> Result<DMatrix<f64>, EvalError> {
+    let n = coordinates.len();
+    let env = Env { coordinates, ..Env::default() };
+    let mut columns = DMatrix::zeros(6, n);
+    let mut unit = vec![0.0; n];
+    for k in 0..n {
+        unit[k] = 1.0;
+        let d = |s| eval_jet(s, &model.unknowns, &env, &unit).map(|j| j.first);
+        match step {
+            Step::Translation(v) => {
+                for i in 0..3 {
+                    columns[(3 + i, k)] = d(&v[i])?;
+                }
+            }
+            Step::Rotation { angle, axis } => {
+                let rate = d(angle)?;
+                for i in 0..3 {
+                    columns[(i, k)] = axis[i] * rate;
+                }
+            }
+        }
+        unit[k] = 0.0;
+    }
+    Ok(columns)
+}
+
+/// ∂(declared rates)/∂(velocities) of a quaternion joint at given declared coordinates.
+fn declared_rate_jacobian(model: &Model, joint: usize, coordinates: &[f64]) -> Result<DMatrix<f64>, EvalError> {
+    let joint = &model.joints[joint];
+    let motion = joint.chain.chain_motion(coordinates, None, &model.unknowns)?;
+    let nv = joint.nv();
+    let mut chain_twists = DMatrix::zeros(6, nv);
+    for k in 0..nv {
+        let mut unit = spatial::Motion::zeros();
+        unit[k] = 1.0;
+        let twist = if joint.first_on_parent { spatial::motion_to_parent(&motion.pose, &unit) } else { -unit };
+        chain_twists.set_column(k, &twist);
+    }
+    let pseudo_inverse = motion.subspace.clone().pseudo_inverse(1e-12).map_err(|_| EvalError::NotGeometric("a degenerate joint"))?;
+    Ok(pseudo_inverse * chain_twists)
+}
