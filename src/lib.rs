@@ -13,6 +13,7 @@ pub mod elab;
 pub mod kinematics;
 pub mod load;
 pub mod output;
+pub mod simulate;
 pub mod source;
 pub mod syntax;
 pub mod topology;

@@ -68,6 +68,7 @@ pub struct Checker<'w> {
     instantiations: Vec<(Span, Name)>,
     memo: HashMap<(DefId, Vec<Ty>), Ty>,
     modules_in_progress: Vec<ModuleId>,
+    simulate_seen: Option<Span>,
 }
 
 /// Checks every module of the workspace.
@@ -86,6 +87,7 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
         instantiations: Vec::new(),
         memo: HashMap::new(),
         modules_in_progress: Vec::new(),
+        simulate_seen: None,
     };
     for &root in &workspace.roots {
         checker.module(root);
@@ -168,6 +170,23 @@ impl<'w> Checker<'w> {
                     self.initial_value(initial, &mut ctx);
                 }
             }
+            DeclKind::Given(values) => {
+                let mut ctx = self.ctx(scope);
+                for given in values {
+                    let target = self.expr(&given.target, &mut ctx);
+                    let value = self.expr(&given.value, &mut ctx);
+                    let expected = if target.numeric() == Ty::Vector { Ty::Vector } else { Ty::Scalar };
+                    if !matches!(target.numeric(), Ty::Scalar | Ty::Vector | Ty::Error) {
+                        self.report(
+                            Diagnostic::error("E0419", format!("`given` gives values to unknowns, not to {}", target.with_article()))
+                                .primary(given.target.span, format!("this is {}", target.with_article()))
+                                .help("name an unknown (`let L = ?s;` then `given L = 0.5`) or a generic quantity (`given arm.mass = 2`)"),
+                        );
+                    }
+                    self.expect_value(&given.value, value, expected, "a given value");
+                }
+            }
+            DeclKind::Simulate(fields) => self.simulate(fields, decl.span, scope),
             DeclKind::Apply { effort, target } => {
                 let mut ctx = self.ctx(scope);
                 let effort_ty = self.expr(effort, &mut ctx);
@@ -270,6 +289,53 @@ impl<'w> Checker<'w> {
             return;
         }
         self.scope_mut(scope).insert(name.name.clone(), ty, name.span);
+    }
+
+    /// `simulate duration = 10, integrator = dopri5, ... end`.
+    fn simulate(&mut self, fields: &'w [crate::syntax::ast::FieldInit], span: Span, scope: ScopeId) {
+        if let Some(previous) = self.simulate_seen.replace(span) {
+            self.report(
+                Diagnostic::error("E0418", "a program has one `simulate` declaration")
+                    .primary(span, "a second one")
+                    .secondary(previous, "the first one"),
+            );
+        }
+        let mut ctx = self.ctx(scope);
+        for field in fields {
+            let name = &*field.name.name;
+            if name == "integrator" {
+                let known = crate::check::types::INTEGRATORS;
+                let given = match &field.value.kind {
+                    crate::syntax::ast::ExprKind::Name(ident) => Some(ident),
+                    _ => None,
+                };
+                if given.is_none_or(|g| !known.contains(&&*g.name)) {
+                    let help = given
+                        .and_then(|g| crate::diag::suggest::did_you_mean(&g.name, known.iter().copied()))
+                        .map(|s| format!("did you mean `{s}`?"))
+                        .unwrap_or_else(|| format!("the integrators are: {}", known.join(", ")));
+                    self.report(
+                        Diagnostic::error("E0420", "unknown integrator")
+                            .primary(field.value.span, "not an integrator")
+                            .help(help),
+                    );
+                }
+                continue;
+            }
+            if !crate::check::types::SIMULATE_FIELDS.contains(&name) {
+                let help = crate::diag::suggest::did_you_mean(name, crate::check::types::SIMULATE_FIELDS.iter().copied())
+                    .map(|s| format!("did you mean `{s}`?"))
+                    .unwrap_or_else(|| format!("the fields of `simulate` are: integrator, {}", crate::check::types::SIMULATE_FIELDS.join(", ")));
+                self.report(
+                    Diagnostic::error("E0405", format!("`simulate` has no field `{name}`"))
+                        .primary(field.name.span, "unknown field")
+                        .help(help),
+                );
+                continue;
+            }
+            let ty = self.expr(&field.value, &mut ctx);
+            self.expect_value(&field.value, ty, Ty::Scalar, &format!("field `{name}`"));
+        }
     }
 
     /// `initial crank.q = e [fixed]`: the target is a coordinate of a named join, or its

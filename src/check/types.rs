@@ -211,6 +211,12 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
     })
 }
 
+/// The integrators `simulate integrator = ...` accepts.
+pub const INTEGRATORS: &[&str] = &["rk4", "dopri5", "implicit", "symplectic"];
+
+/// The numeric fields of `simulate`.
+pub const SIMULATE_FIELDS: &[&str] = &["duration", "output", "step", "max_step", "tolerance", "rtol", "atol"];
+
 pub const BUILTIN_NAMES: &[&str] = &[
     "pi", "time", "earth", "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2", "norm", "dot",
     "cross",

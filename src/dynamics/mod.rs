@@ -5,6 +5,7 @@
 pub mod algorithms;
 pub mod angles;
 pub mod efforts;
+pub mod energy;
 pub mod joint;
 pub mod model;
 pub mod spatial;

@@ -51,6 +51,40 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
+            DeclKind::Given(values) => {
+                for given in values {
+                    let target = self.expr(&given.target, &mut locals)?;
+                    let value = self.expr(&given.value, &mut locals)?;
+                    let pairs: Vec<(Scalar, Scalar)> = match (target, value) {
+                        (Value::Vector(t), v) => t.into_iter().zip(as_vector(v, given.value.span)?).collect(),
+                        (t, v) => vec![(as_scalar(t, given.target.span)?, as_scalar(v, given.value.span)?)],
+                    };
+                    for (target, value) in pairs {
+                        let SExpr::Unknown(id) = *target else {
+                            return Err(Diagnostic::error("E0604", "`given` gives values to unknowns and generic quantities only")
+                                .primary(given.target.span, "this already has a value")
+                                .help("values written in the program need no `given`"));
+                        };
+                        self.mechanism.given.push((id, value, given.target.span));
+                    }
+                }
+                Ok(())
+            }
+            DeclKind::Simulate(fields) => {
+                let mut scenario = crate::elab::mechanism::Scenario { span: Some(decl.span), ..Default::default() };
+                for field in fields {
+                    if &*field.name.name == "integrator" {
+                        if let ExprKind::Name(ident) = &field.value.kind {
+                            scenario.integrator = Some((ident.name.to_string(), ident.span));
+                        }
+                        continue;
+                    }
+                    let value = self.expr(&field.value, &mut locals).and_then(|v| as_scalar(v, field.value.span))?;
+                    scenario.settings.push((field.name.name.to_string(), value, field.value.span));
+                }
+                self.mechanism.scenario = Some(scenario);
+                Ok(())
+            }
             DeclKind::Initial(values) => {
                 for initial in values {
                     let Value::Scalar(target) = self.expr(&initial.target, &mut locals)? else {

@@ -152,6 +152,23 @@ pub struct Mechanism {
     pub applications: Vec<Application>,
     pub unknowns: Vec<Unknown>,
     pub initial: Vec<InitialValue>,
+    /// `given` values of unknowns.
+    pub given: Vec<(UnknownId, Scalar, Span)>,
+    pub scenario: Option<Scenario>,
+}
+
+/// The `simulate` declaration: numeric settings by field name, and the integrator's name.
+#[derive(Clone, Debug, Default)]
+pub struct Scenario {
+    pub settings: Vec<(String, Scalar, Span)>,
+    pub integrator: Option<(String, Span)>,
+    pub span: Option<Span>,
+}
+
+impl Scenario {
+    pub fn setting(&self, name: &str) -> Option<&(String, Scalar, Span)> {
+        self.settings.iter().find(|(n, _, _)| n == name)
+    }
 }
 
 /// Counts `lsdc check` prints: only what the joins and applications reach.

@@ -34,6 +34,10 @@ pub enum DeclKind {
     Join { first: Expr, second: Expr, link: Expr, name: Option<Ident> },
     /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
     Initial(Vec<InitialValue>),
+    /// `given L = 0.8, arm.mass = 2`: values of unknowns and generic quantities for simulation.
+    Given(Vec<GivenValue>),
+    /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
+    Simulate(Vec<FieldInit>),
     /// `apply <force> on <frame>` or `apply <torque> on <body>`
     Apply { effort: Expr, target: Expr },
     /// `package P = decls end`
@@ -59,6 +63,13 @@ pub struct InitialValue {
     pub value: Expr,
     /// `fixed`: held at this value when the mechanism is assembled.
     pub fixed: bool,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct GivenValue {
+    /// An unknown (`L` bound by `let L = ?s;`) or a generic quantity (`arm.mass`, `arm.inertia`).
+    pub target: Expr,
+    pub value: Expr,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -35,6 +35,8 @@ pub enum Tok<'input> {
     End,
     #[token("force")]
     Force,
+    #[token("given")]
+    Given,
     #[token("import")]
     Import,
     #[token("fixed")]
@@ -55,6 +57,8 @@ pub enum Tok<'input> {
     On,
     #[token("package")]
     Package,
+    #[token("simulate")]
+    Simulate,
     #[token("torque")]
     Torque,
     #[token("with")]
@@ -169,6 +173,7 @@ impl Tok<'_> {
             Tok::Body => "body",
             Tok::End => "end",
             Tok::Force => "force",
+            Tok::Given => "given",
             Tok::Import => "import",
             Tok::Fixed => "fixed",
             Tok::In => "in",
@@ -179,6 +184,7 @@ impl Tok<'_> {
             Tok::Local => "local",
             Tok::On => "on",
             Tok::Package => "package",
+            Tok::Simulate => "simulate",
             Tok::Torque => "torque",
             Tok::With => "with",
             Tok::Caret => "^",

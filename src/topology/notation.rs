@@ -117,6 +117,16 @@ fn displacement_lines(names: &mut Names<'_>, body: usize, frame: &str, d: &Displ
 }
 
 pub fn notation(mechanism: &Mechanism, topology: &Topology) -> String {
+    notation_and_names(mechanism, topology).0
+}
+
+/// The names the notation table gives the written unknowns (`v4T_4_G_z`, `cL2_x`, `u1`, …):
+/// the names `--set` accepts for unknowns the program did not name.
+pub fn unknown_names(mechanism: &Mechanism, topology: &Topology) -> HashMap<UnknownId, String> {
+    notation_and_names(mechanism, topology).1
+}
+
+fn notation_and_names(mechanism: &Mechanism, topology: &Topology) -> (String, HashMap<UnknownId, String>) {
     let mut names = Names { mechanism, assigned: HashMap::new(), next_anonymous: 0, link: 0 };
     let n = topology.body_count();
     let mut out = String::new();
@@ -222,7 +232,7 @@ pub fn notation(mechanism: &Mechanism, topology: &Topology) -> String {
     for line in relations {
         let _ = writeln!(out, "{line} ;");
     }
-    out
+    (out, names.assigned)
 }
 
 fn link_number(topology: &Topology, join: crate::elab::value::JoinId) -> usize {

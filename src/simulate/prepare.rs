@@ -1,0 +1,298 @@
+//! Everything a simulation needs before it starts: values for every unknown the motion depends
+//! on (from `given` and `--set`), the dynamic model, the initial state from `initial`, and the
+//! settings from `simulate` and the command line. Every missing value is reported at once.
+
+use std::collections::{BTreeSet, HashMap};
+
+use crate::diag::{suggest, Diagnostic};
+use crate::dynamics::model::{self as dynamic_model, Model};
+use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
+use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, Scalar, UnknownId, Vector};
+use crate::kinematics::eval::{eval, UnknownValues};
+use crate::kinematics::model as kinematic_model;
+use crate::topology::{self, notation, Topology};
+
+/// A value given on the command line: `--set NAME=VALUE`.
+#[derive(Clone, Debug)]
+pub struct Override {
+    pub name: String,
+    pub value: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Integrator {
+    Rk4,
+    DormandPrince,
+    Implicit,
+    Symplectic,
+}
+
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub integrator: Integrator,
+    pub duration: f64,
+    /// Time between outputs.
+    pub output: f64,
+    /// Fixed step (RK4, symplectic) or initial step (adaptive methods).
+    pub step: Option<f64>,
+    pub max_step: f64,
+    pub rtol: f64,
+    pub atol: f64,
+}
+
+pub struct Prepared {
+    pub model: Model,
+    pub topology: Topology,
+    /// Declared coordinates and rates at t = 0 (in the model's joint order).
+    pub coordinates: Vec<f64>,
+    pub rates: Vec<f64>,
+    pub settings: Settings,
+    /// `join.coordinate` for every declared coordinate.
+    pub coordinate_names: Vec<String>,
+}
+
+fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
+    match s {
+        SExpr::Unknown(id) | SExpr::UnknownFunction(id, _) => {
+            into.insert(*id);
+            if let SExpr::UnknownFunction(_, args) = s {
+                args.iter().for_each(|a| collect(a, into));
+            }
+        }
+        SExpr::Neg(a) => collect(a, into),
+        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+            collect(a, into);
+            collect(b, into);
+        }
+        SExpr::Call(_, args) => args.iter().for_each(|a| collect(a, into)),
+        SExpr::Num(_) | SExpr::Time | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
+    }
+}
+
+fn collect_vector(v: &Vector, into: &mut BTreeSet<UnknownId>) {
+    v.iter().for_each(|s| collect(s, into));
+}
+
+fn collect_displacement(d: &Displacement, into: &mut BTreeSet<UnknownId>) {
+    for step in &d.0 {
+        match step {
+            Elementary::Translation(t) => collect_vector(t, into),
+            Elementary::Rotation { angle, axis } => {
+                collect(angle, into);
+                collect_vector(axis, into);
+            }
+        }
+    }
+}
+
+/// The unknowns the motion depends on: geometry, the inertia of massive bodies (a body declared
+/// without mass and inertia needs no inertia frame), and the efforts.
+fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<UnknownId> {
+    let mut required = BTreeSet::new();
+    for join in &mechanism.joins {
+        collect_displacement(&join.first.displacement, &mut required);
+        collect_displacement(&join.second.displacement, &mut required);
+        let link = mechanism.link(join.link);
+        link.dofs.iter().for_each(|d| collect_displacement(d, &mut required));
+        link.forces.iter().chain(&link.torques).for_each(|(_, v)| collect_vector(v, &mut required));
+    }
+    for &id in &topology.bodies {
+        let body = mechanism.body(id);
+        let mut inertia = BTreeSet::new();
+        collect(body.mass.value(), &mut inertia);
+        collect_vector(body.inertia.value(), &mut inertia);
+        let declared_massless = body.mass.is_declared()
+            && body.inertia.is_declared()
+            && eval(body.mass.value(), &UnknownValues::new(), &[]) == Ok(0.0)
+            && body.inertia.value().iter().all(|s| eval(s, &UnknownValues::new(), &[]) == Ok(0.0));
+        if !declared_massless {
+            required.extend(inertia);
+            collect_displacement(body.iframe.value(), &mut required);
+        }
+    }
+    for application in &mechanism.applications {
+        collect_displacement(&application.target.displacement, &mut required);
+        collect_vector(mechanism.effort(application.effort).value.value(), &mut required);
+    }
+    required
+}
+
+/// Every name an unknown answers to: its `let` name, its generated name, its generic name.
+fn names_of(mechanism: &Mechanism, generated: &HashMap<UnknownId, String>, id: UnknownId) -> Vec<String> {
+    let unknown = &mechanism.unknowns[id.0 as usize];
+    let mut names = Vec::new();
+    if let Some(name) = &unknown.name {
+        names.push(name.to_string());
+    }
+    if unknown.origin != Origin::Written {
+        names.push(mechanism.generic_name(unknown.origin));
+    }
+    if let Some(name) = generated.get(&id) {
+        names.push(name.clone());
+    }
+    names
+}
+
+fn constant(s: &Scalar, values: &UnknownValues) -> Option<f64> {
+    eval(s, values, &[]).ok()
+}
+
+/// Values of the unknowns from `given` declarations, then the command line.
+fn unknown_values(
+    mechanism: &Mechanism,
+    generated: &HashMap<UnknownId, String>,
+    overrides: &[Override],
+) -> Result<UnknownValues, Vec<Diagnostic>> {
+    let mut values = UnknownValues::new();
+    let mut errors = Vec::new();
+    for (id, value, span) in &mechanism.given {
+        match constant(value, &values) {
+            Some(v) => {
+                values.insert(*id, v);
+            }
+            None => errors.push(Diagnostic::error("E0810", "a given value must be a number").primary(*span, "here")),
+        }
+    }
+    let mut by_name: HashMap<String, UnknownId> = HashMap::new();
+    for index in 0..mechanism.unknowns.len() {
+        let id = UnknownId(index as u32);
+        for name in names_of(mechanism, generated, id) {
+            by_name.entry(name).or_insert(id);
+        }
+    }
+    for o in overrides {
+        match by_name.get(&o.name) {
+            Some(&id) => {
+                values.insert(id, o.value);
+            }
+            None => {
+                let help = suggest::did_you_mean(&o.name, by_name.keys().map(String::as_str))
+                    .map(|s| format!("did you mean `{s}`?"))
+                    .unwrap_or_else(|| "`lsdc compile FILE --emit notation` lists the generated names".to_string());
+                errors.push(Diagnostic::error("E0811", format!("`--set {}`: the program has no unknown of that name", o.name)).help(help));
+            }
+        }
+    }
+    if errors.is_empty() { Ok(values) } else { Err(errors) }
+}
+
+fn missing_value(mechanism: &Mechanism, generated: &HashMap<UnknownId, String>, id: UnknownId) -> Diagnostic {
+    let unknown = &mechanism.unknowns[id.0 as usize];
+    let names = names_of(mechanism, generated, id);
+    let shown = names.first().cloned().unwrap_or_else(|| "an unknown".to_string());
+    if unknown.kind == UnknownKind::Function {
+        return Diagnostic::error("E0812", format!("the unknown function `{shown}` has no law to simulate"))
+            .primary(unknown.span, "an unknown function of the coordinates")
+            .help("replace it with the law, for example `-k * x - c * x'`");
+    }
+    let also = if names.len() > 1 { format!(" (also called {})", names[1..].iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")) } else { String::new() };
+    let setter = names.last().cloned().unwrap_or_default();
+    let given_target = unknown.name.as_ref().map(|n| n.to_string()).or_else(|| match unknown.origin {
+        Origin::Mass(b) => Some(format!("{}.mass", mechanism.body_name(BodyRef::Body(b)))),
+        Origin::Inertia(b, _) => Some(format!("{}.inertia", mechanism.body_name(BodyRef::Body(b)))),
+        _ => None,
+    });
+    let help = match given_target {
+        Some(target) => format!("write `given {target} = ...;` in the program, or pass `--set {setter}=VALUE`"),
+        None => format!("pass `--set {setter}=VALUE`, or write the number in the program"),
+    };
+    Diagnostic::error("E0813", format!("no value for `{shown}`{also}"))
+        .primary(unknown.span, "needed to simulate; it comes from here")
+        .help(help)
+}
+
+/// Builds the model and initial state. `overrides` come from `--set`; `settings` from the
+/// program's `simulate` declaration completed by `defaults`.
+pub fn prepare(mechanism: &Mechanism, overrides: &[Override], defaults: &Settings) -> Result<Prepared, Vec<Diagnostic>> {
+    let topology = topology::build(mechanism)?;
+    let generated = notation::unknown_names(mechanism, &topology);
+    let values = unknown_values(mechanism, &generated, overrides)?;
+    let missing: Vec<Diagnostic> = required_unknowns(mechanism, &topology)
+        .into_iter()
+        .filter(|id| !values.contains_key(id))
+        .map(|id| missing_value(mechanism, &generated, id))
+        .collect();
+    if !missing.is_empty() {
+        return Err(missing);
+    }
+    let kinematics = kinematic_model::build(mechanism, topology.clone(), values)?;
+    let model = dynamic_model::build(mechanism, &kinematics)?;
+    let (coordinates, rates) = initial_state(mechanism, &model)?;
+    let settings = settings(mechanism, &model, defaults)?;
+    let coordinate_names = model
+        .joints
+        .iter()
+        .flat_map(|j| j.chain.coordinate_names.iter().map(move |c| format!("{}.{c}", j.chain.name)))
+        .collect();
+    Ok(Prepared { model, topology, coordinates, rates, settings, coordinate_names })
+}
+
+fn initial_state(mechanism: &Mechanism, model: &Model) -> Result<(Vec<f64>, Vec<f64>), Vec<Diagnostic>> {
+    let mut coordinates = vec![0.0; model.declared_count];
+    let mut rates = vec![0.0; model.declared_count];
+    for initial in &mechanism.initial {
+        let Some(joint) = model.joint_of(initial.join) else { continue };
+        let value = constant(&initial.value, &model.unknowns)
+            .ok_or_else(|| vec![Diagnostic::error("E0803", "an initial value must be a number").primary(initial.span, "here")])?;
+        let index = model.declared_offsets[joint] + initial.coordinate;
+        if initial.order == 0 {
+            coordinates[index] = value;
+        } else {
+            rates[index] = value;
+        }
+    }
+    Ok((coordinates, rates))
+}
+
+fn settings(mechanism: &Mechanism, model: &Model, defaults: &Settings) -> Result<Settings, Vec<Diagnostic>> {
+    let mut settings = defaults.clone();
+    let Some(scenario) = &mechanism.scenario else { return Ok(settings) };
+    let mut errors = Vec::new();
+    let mut number = |name: &str| -> Option<f64> {
+        let (_, value, span) = scenario.setting(name)?;
+        match constant(value, &model.unknowns).filter(|v| v.is_finite() && *v > 0.0) {
+            Some(v) => Some(v),
+            None => {
+                errors.push(Diagnostic::error("E0814", format!("`{name}` must be a positive number")).primary(*span, "here"));
+                None
+            }
+        }
+    };
+    if let Some(v) = number("duration") {
+        settings.duration = v;
+    }
+    if let Some(v) = number("output") {
+        settings.output = v;
+    }
+    if let Some(v) = number("step") {
+        settings.step = Some(v);
+    }
+    if let Some(v) = number("max_step") {
+        settings.max_step = v;
+    }
+    if let Some(v) = number("tolerance") {
+        settings.rtol = v;
+        settings.atol = v;
+    }
+    if let Some(v) = number("rtol") {
+        settings.rtol = v;
+    }
+    if let Some(v) = number("atol") {
+        settings.atol = v;
+    }
+    if let Some((name, _)) = &scenario.integrator {
+        settings.integrator = match name.as_str() {
+            "rk4" => Integrator::Rk4,
+            "implicit" => Integrator::Implicit,
+            "symplectic" => Integrator::Symplectic,
+            _ => Integrator::DormandPrince,
+        };
+    }
+    if errors.is_empty() { Ok(settings) } else { Err(errors) }
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { integrator: Integrator::DormandPrince, duration: 1.0, output: 0.01, step: None, max_step: f64::INFINITY, rtol: 1e-8, atol: 1e-10 }
+    }
+}

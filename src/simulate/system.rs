@@ -1,0 +1,66 @@
+//! The equations of motion of a tree mechanism as a first-order system y' = f(t, y), with
+//! y = (positions, velocities): positions move with the joint velocities (quaternions included),
+//! velocities with the accelerations from the articulated-body algorithm under the efforts.
+
+use crate::dynamics::algorithms::{aba, forward_kinematics, Data, DynamicsError};
+use crate::dynamics::efforts::{evaluate, Declared};
+use crate::dynamics::model::Model;
+use crate::kinematics::eval::EvalError;
+
+pub struct MechanicalSystem<'m> {
+    pub model: &'m Model,
+    pub data: Data,
+    /// Declared coordinates at the last accepted output: keeps recovered angles continuous.
+    pub reference: Vec<f64>,
+}
+
+impl<'m> MechanicalSystem<'m> {
+    pub fn new(model: &'m Model, reference: Vec<f64>) -> MechanicalSystem<'m> {
+        MechanicalSystem { model, data: Data::new(model), reference }
+    }
+
+    pub fn dimension(&self) -> usize {
+        self.model.nq + self.model.nv
+    }
+
+    /// dy/dt at (t, y), or why it cannot be computed.
+    pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+        let model = self.model;
+        let (q, v) = y.split_at(model.nq);
+        let mut q = q.to_vec();
+        for joint in &model.joints {
+            joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
+        }
+        forward_kinematics(model, &mut self.data, &q, v).map_err(|e| evaluation_message(&e))?;
+        let (coordinates, rates) = model.declared(&q, v, &self.reference).map_err(|e| evaluation_message(&e))?;
+        let declared = Declared { model, coordinates: &coordinates, rates: &rates };
+        let efforts = evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))?;
+        let accelerations = aba(model, &mut self.data, &q, v, efforts.tau.as_slice(), &efforts.external)
+            .map_err(|e| self.dynamics_message(&e))?;
+        let (dq, dv) = dydt.split_at_mut(model.nq);
+        for joint in &model.joints {
+            let range = joint.q_offset..joint.q_offset + joint.nq();
+            joint.position_rate(&q[range.clone()], &v[joint.v_offset..joint.v_offset + joint.nv()], &mut dq[range]);
+        }
+        dv.copy_from_slice(accelerations.as_slice());
+        Ok(())
+    }
+
+    fn dynamics_message(&self, error: &DynamicsError) -> String {
+        match error {
+            DynamicsError::Evaluation(e) => evaluation_message(e),
+            DynamicsError::Singular { joint, body } => format!(
+                "the mass matrix is singular: join `{}` carries no inertia along its motion (body `{}` and the bodies beyond it)",
+                self.model.joints[*joint].chain.name,
+                self.model.body_names[body - 1]
+            ),
+        }
+    }
+}
+
+fn evaluation_message(error: &EvalError) -> String {
+    match error {
+        EvalError::Missing(_) => "an effort needs a value that was not given".to_string(),
+        EvalError::NotGeometric(what) => format!("cannot evaluate {what}"),
+    }
+}
