@@ -108,7 +108,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     let (mobility, mobility_unavailable) = match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
         Ok((model, assembled)) => match mobility(&model, &assembled.coordinates_vector()) {
             Ok(m) => (Some(m), None),
-            Err(e) => (None, Some(format!("{e:?}"))),
+            Err(e) => (None, Some(crate::kinematics::eval::describe(&e, mechanism))),
         },
         Err(diagnostics) => (None, Some(diagnostics.iter().map(|d| d.message.clone()).collect::<Vec<_>>().join("; "))),
     };
@@ -141,7 +141,10 @@ pub fn assembled_model(
             let report = AssemblyReport { coordinates, iterations: assembled.iterations, residual: assembled.residual };
             Ok((model, report))
         }
-        Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error("E0804", format!("cannot evaluate the geometry: {e:?}"))]),
+        Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error(
+            "E0804",
+            format!("cannot evaluate the geometry: {}", crate::kinematics::eval::describe(&e, mechanism)),
+        )]),
         Err(AssemblyError::NoAssembly { loop_errors, .. }) => Err(vec![no_assembly(mechanism, &model, &loop_errors)]),
     }
 }

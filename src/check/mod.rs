@@ -365,7 +365,7 @@ impl<'w> Checker<'w> {
             self.report(
                 Diagnostic::error("E0416", "a starting velocity cannot be `fixed`")
                     .primary(initial.target.span, "a velocity")
-                    .help("`fixed` holds a coordinate during assembly; velocities are projected onto the constraints"),
+                    .help("`fixed` holds a coordinate during assembly; a velocity is a simulation's starting rate"),
             );
         }
         let value_ty = self.expr(&initial.value, ctx);

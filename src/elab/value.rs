@@ -165,11 +165,18 @@ pub enum Value {
 impl SExpr {
     /// Text of the expression; `unknown` writes the name of each unknown.
     pub fn render(&self, unknown: &mut dyn FnMut(UnknownId) -> String) -> String {
-        self.render_with(unknown, &|index, order| format!("q{index}{}", "'".repeat(order as usize)))
+        self.render_with(unknown, &|join, index, order| {
+            let primes = "'".repeat(order as usize);
+            match join {
+                Some(join) => format!("join{}.q{index}{primes}", join.0 + 1),
+                None => format!("q{index}{primes}"),
+            }
+        })
     }
 
-    /// Text of the expression, with `coordinate(index, order)` naming the link's coordinates.
-    pub fn render_with(&self, unknown: &mut dyn FnMut(UnknownId) -> String, coordinate: &dyn Fn(u32, u32) -> String) -> String {
+    /// Text of the expression, with `coordinate(join, index, order)` naming coordinates: those
+    /// of the enclosing link (`join` is `None`) and those of named joins.
+    pub fn render_with(&self, unknown: &mut dyn FnMut(UnknownId) -> String, coordinate: &dyn Fn(Option<JoinId>, u32, u32) -> String) -> String {
         let list = |args: &[Scalar], unknown: &mut dyn FnMut(UnknownId) -> String| {
             args.iter().map(|a| a.render_with(unknown, coordinate)).collect::<Vec<_>>().join(", ")
         };
@@ -181,10 +188,8 @@ impl SExpr {
                 let name = unknown(*id);
                 format!("{name}({})", list(args, unknown))
             }
-            SExpr::Coordinate { index, order } => coordinate(*index, *order),
-            SExpr::JoinCoordinate { join, index, order } => {
-                format!("join{}.q{index}{}", join.0 + 1, "'".repeat(*order as usize))
-            }
+            SExpr::Coordinate { index, order } => coordinate(None, *index, *order),
+            SExpr::JoinCoordinate { join, index, order } => coordinate(Some(*join), *index, *order),
             SExpr::Neg(a) => format!("-({})", a.render_with(unknown, coordinate)),
             SExpr::Add(a, b) => format!("({} + {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
             SExpr::Sub(a, b) => format!("({} - {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),

@@ -144,6 +144,9 @@ fn solve(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &Assemb
 /// where constraints act at second order, a residual of 1e-12 can leave the configuration 1e-6
 /// from the closed set, and every halving of the residual matters to the rank computed there.
 fn polish(model: &KinematicModel, mut q: Vec<f64>, mut norm: f64, free: &[usize]) -> Result<(Vec<f64>, f64), AssemblyError> {
+    if free.is_empty() || model.complementary().is_empty() {
+        return Ok((q, norm));
+    }
     for _ in 0..8 {
         let current = closure(model, &q)?;
         let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| current.jacobian[(r, free[c])]);

@@ -19,6 +19,21 @@ pub enum EvalError {
     NotGeometric(&'static str),
 }
 
+/// A sentence for people about an evaluation error.
+pub fn describe(error: &EvalError, mechanism: &crate::elab::mechanism::Mechanism) -> String {
+    match error {
+        EvalError::Missing(id) => {
+            let unknown = &mechanism.unknowns[id.0 as usize];
+            match (&unknown.name, unknown.origin) {
+                (Some(name), _) => format!("no value for `{name}`"),
+                (None, crate::elab::mechanism::Origin::Written) => "no value for an unknown `?s`".to_string(),
+                (None, origin) => format!("no value for `{}`", mechanism.generic_name(origin)),
+            }
+        }
+        EvalError::NotGeometric(what) => format!("it depends on {what}"),
+    }
+}
+
 /// What an expression may refer to besides numbers and unknowns.
 #[derive(Clone, Copy, Default)]
 pub struct Env<'a> {

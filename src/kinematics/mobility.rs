@@ -95,7 +95,13 @@ pub fn constraint_rank(model: &KinematicModel, q: &[f64]) -> Result<(usize, usiz
 
 pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError> {
     let (rank_here, rows) = constraint_rank(model, q)?;
-    let tree_dof = model.tree_coordinate_count();
+    // Degrees of freedom of the tree: the ranks of the principal joints' motion subspaces (the
+    // coordinate count, unless a link's coordinates are redundant).
+    let mut tree_dof = 0;
+    for joint in model.principal() {
+        let (_, subspace) = joint.chain(&q[joint.offset..joint.offset + joint.coordinate_count()], &model.unknowns)?;
+        tree_dof += rank(&subspace);
+    }
     let generic_rank = nearby_rank(model, q)?.max(rank_here);
     let first_order = tree_dof.saturating_sub(rank_here);
     Ok(Mobility {

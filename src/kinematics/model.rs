@@ -248,7 +248,7 @@ pub fn link_only(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) ->
 fn constant_vector(v: &[Scalar; 3], unknowns: &UnknownValues) -> Result<Vector3<f64>, EvalError> {
     let value = |s: &Scalar| {
         eval(s, unknowns, &[]).map_err(|e| match e {
-            EvalError::NotGeometric(_) => EvalError::NotGeometric("a coordinate (rotation axes and frames are constant)"),
+            EvalError::NotGeometric("a coordinate of another link") => EvalError::NotGeometric("a coordinate (rotation axes and frames are constant)"),
             other => other,
         })
     };

@@ -29,6 +29,8 @@ struct Names<'m> {
     next_anonymous: usize,
     /// Number of the link whose coordinates the current expression uses.
     link: usize,
+    /// Link number of every join.
+    link_numbers: HashMap<crate::elab::value::JoinId, usize>,
 }
 
 impl Names<'_> {
@@ -51,6 +53,7 @@ impl Names<'_> {
 
     fn scalar(&mut self, s: &Scalar, slot: &str) -> String {
         let link = self.link;
+        let numbers = self.link_numbers.clone();
         let mut render = |id: UnknownId| {
             let origin = self.mechanism.unknowns[id.0 as usize].origin;
             if origin != crate::elab::mechanism::Origin::Written {
@@ -58,7 +61,10 @@ impl Names<'_> {
             }
             self.name(id, slot)
         };
-        s.render_with(&mut render, &|index, order| format!("x{link}[{}]{}(t)", index + 1, "'".repeat(order as usize)))
+        s.render_with(&mut render, &|join, index, order| {
+            let number = join.and_then(|j| numbers.get(&j).copied()).unwrap_or(link);
+            format!("x{number}[{}]{}(t)", index + 1, "'".repeat(order as usize))
+        })
     }
 
     fn vector(&mut self, v: &Vector, slot: &str) -> String {
@@ -127,7 +133,8 @@ pub fn unknown_names(mechanism: &Mechanism, topology: &Topology) -> HashMap<Unkn
 }
 
 fn notation_and_names(mechanism: &Mechanism, topology: &Topology) -> (String, HashMap<UnknownId, String>) {
-    let mut names = Names { mechanism, assigned: HashMap::new(), next_anonymous: 0, link: 0 };
+    let link_numbers = topology.principal.iter().map(|l| (l.join, l.number)).chain(topology.complementary.iter().map(|l| (l.join, l.number))).collect();
+    let mut names = Names { mechanism, assigned: HashMap::new(), next_anonymous: 0, link: 0, link_numbers };
     let n = topology.body_count();
     let mut out = String::new();
     let _ = writeln!(out, "(* structure *)\nN := {n} ;");

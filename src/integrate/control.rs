@@ -1,0 +1,68 @@
+//! Error norms and step-size control shared by the adaptive methods.
+
+/// Fraction of the optimal step actually taken, so that the next step is likely accepted.
+const SAFETY: f64 = 0.9;
+/// Largest shrink of one step, so that a single bad estimate cannot collapse the step size.
+const MIN_FACTOR: f64 = 0.2;
+
+/// Root-mean-square of the local error estimate, each component measured against
+/// `atol + rtol * max(|y_old|, |y_new|)`: a value at most 1 means the step meets the tolerances.
+pub(super) fn error_norm(error: &[f64], y_old: &[f64], y_new: &[f64], rtol: f64, atol: f64) -> f64 {
+    let sum: f64 = (0..error.len())
+        .map(|i| {
+            let scale = atol + rtol * y_old[i].abs().max(y_new[i].abs());
+            (error[i] / scale).powi(2)
+        })
+        .sum();
+    (sum / error.len().max(1) as f64).sqrt()
+}
+
+/// Step-size controller: proportional-integral when `beta > 0`, elementary when `beta == 0`.
+/// The integral part remembers the previous error so that the step varies smoothly.
+#[derive(Clone, Debug)]
+pub(super) struct StepController {
+    /// 1 / (order of the error estimate + 1): the local error behaves like h to that power's inverse.
+    exponent: f64,
+    beta: f64,
+    max_factor: f64,
+    previous_error: f64,
+    just_rejected: bool,
+}
+
+impl StepController {
+    /// `estimate_order` is q when the local error estimate behaves like h^(q+1).
+    pub(super) fn new(estimate_order: u32, beta: f64, max_factor: f64) -> Self {
+        StepController {
+            exponent: 1.0 / (estimate_order as f64 + 1.0),
+            beta,
+            max_factor,
+            previous_error: 1e-4,
+            just_rejected: false,
+        }
+    }
+
+    /// The step to try after accepting a step of size `h` with error norm `error` (<= 1).
+    pub(super) fn after_accept(&mut self, h: f64, error: f64) -> f64 {
+        let error = error.max(1e-10);
+        let alpha = self.exponent - 0.75 * self.beta;
+        let factor = SAFETY * error.powf(-alpha) * self.previous_error.powf(self.beta);
+        // Growing right after a rejection tends to be rejected again.
+        let max_factor = if self.just_rejected { 1.0 } else { self.max_factor };
+        self.previous_error = error.max(1e-4);
+        self.just_rejected = false;
+        h * factor.clamp(MIN_FACTOR, max_factor)
+    }
+
+    /// The step to retry with after rejecting a step of size `h` with error norm `error` (> 1).
+    pub(super) fn after_reject(&mut self, h: f64, error: f64) -> f64 {
+        self.just_rejected = true;
+        let factor = if error.is_finite() { SAFETY * error.powf(-self.exponent) } else { MIN_FACTOR };
+        h * factor.clamp(MIN_FACTOR, 1.0)
+    }
+
+    /// The step to retry with after an attempt produced non-finite values.
+    pub(super) fn after_not_finite(&mut self, h: f64) -> f64 {
+        self.just_rejected = true;
+        h * 0.25
+    }
+}

@@ -1,0 +1,145 @@
+//! The explicit Runge–Kutta pair of Dormand and Prince, order 5 with an embedded order-4 error
+//! estimate, "first same as last" (the last stage is dy/dt at the new point, reused as the next
+//! step's first stage), and Dormand and Prince's continuous extension of order 4 for dense output.
+//! Coefficients from Hairer, Nørsett and Wanner, Solving ODEs I, II.5 (Table 5.2) and II.6.
+
+use super::control::{error_norm, StepController};
+use super::driver::AdaptiveStepper;
+use super::evaluator::{Evaluator, Halt};
+use super::Settings;
+
+const STAGES: usize = 7;
+
+/// Fractions of the step at which the stages are evaluated.
+const C: [f64; STAGES] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
+
+/// Weights of earlier stages in each stage's state (row i has i entries).
+const A: [&[f64]; STAGES] = [
+    &[],
+    &[1.0 / 5.0],
+    &[3.0 / 40.0, 9.0 / 40.0],
+    &[44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0],
+    &[19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0],
+    &[9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0],
+    // The fifth-order solution itself: its derivative is the last stage.
+    &[35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0],
+];
+
+/// Fifth-order minus fourth-order weights: the local error estimate.
+const ERROR: [f64; STAGES] = [
+    71.0 / 57600.0,
+    0.0,
+    -71.0 / 16695.0,
+    71.0 / 1920.0,
+    -17253.0 / 339200.0,
+    22.0 / 525.0,
+    -1.0 / 40.0,
+];
+
+/// Weights of the stages in the last coefficient of the order-4 continuous extension.
+const DENSE: [f64; STAGES] = [
+    -12715105075.0 / 11282082432.0,
+    0.0,
+    87487479700.0 / 32700410799.0,
+    -10690763975.0 / 1880347072.0,
+    701980252875.0 / 199316789632.0,
+    -1453857185.0 / 822651844.0,
+    69997945.0 / 29380423.0,
+];
+
+pub(super) struct DormandPrince {
+    /// Stage derivatives of the current attempt; `stages[0]` is dy/dt at the current point.
+    stages: [Vec<f64>; STAGES],
+    stage_state: Vec<f64>,
+    error: Vec<f64>,
+    /// Coefficients of the interpolating polynomial over the last accepted step.
+    dense: [Vec<f64>; 5],
+    dense_start: f64,
+    dense_step: f64,
+    rtol: f64,
+    atol: f64,
+}
+
+impl DormandPrince {
+    pub(super) fn new(dimension: usize, settings: &Settings) -> Self {
+        let zeros = vec![0.0; dimension];
+        DormandPrince {
+            stages: std::array::from_fn(|_| zeros.clone()),
+            stage_state: zeros.clone(),
+            error: zeros.clone(),
+            dense: std::array::from_fn(|_| zeros.clone()),
+            dense_start: 0.0,
+            dense_step: 0.0,
+            rtol: settings.rtol,
+            atol: settings.atol,
+        }
+    }
+}
+
+/// y + h * (the stages before `stage`, weighted by its row of A), into `out`.
+fn stage_state_into(stages: &[Vec<f64>], stage: usize, y: &[f64], h: f64, out: &mut [f64]) {
+    let weights = A[stage];
+    for (i, value) in out.iter_mut().enumerate() {
+        let increment: f64 = weights.iter().zip(stages).map(|(a, k)| a * k[i]).sum();
+        *value = y[i] + h * increment;
+    }
+}
+
+impl AdaptiveStepper for DormandPrince {
+    fn order(&self) -> u32 {
+        5
+    }
+
+    fn controller(&self) -> StepController {
+        // The error estimate is that of the order-4 solution; the PI gain is Hairer's for DOPRI5.
+        StepController::new(4, 0.04, 10.0)
+    }
+
+    fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {
+        eval.rhs(t, y, &mut self.stages[0])
+    }
+
+    fn derivative(&self) -> &[f64] {
+        &self.stages[0]
+    }
+
+    fn attempt(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64, y_new: &mut [f64]) -> Result<f64, Halt> {
+        for stage in 1..STAGES - 1 {
+            stage_state_into(&self.stages, stage, y, h, &mut self.stage_state);
+            eval.rhs(t + C[stage] * h, &self.stage_state, &mut self.stages[stage])?;
+        }
+        stage_state_into(&self.stages, STAGES - 1, y, h, y_new);
+        eval.rhs(t + h, y_new, &mut self.stages[STAGES - 1])?;
+        for (i, error) in self.error.iter_mut().enumerate() {
+            *error = h * ERROR.iter().zip(&self.stages).map(|(e, k)| e * k[i]).sum::<f64>();
+        }
+        Ok(error_norm(&self.error, y, y_new, self.rtol, self.atol))
+    }
+
+    fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
+        let [first, .., last] = &self.stages;
+        let [r0, r1, r2, r3, r4] = &mut self.dense;
+        for i in 0..y.len() {
+            let change = y_new[i] - y[i];
+            let start_bulge = h * first[i] - change;
+            r0[i] = y[i];
+            r1[i] = change;
+            r2[i] = start_bulge;
+            r3[i] = change - h * last[i] - start_bulge;
+            r4[i] = h * DENSE.iter().zip(&self.stages).map(|(d, k)| d * k[i]).sum::<f64>();
+        }
+        self.dense_start = t;
+        self.dense_step = h;
+        // First same as last: dy/dt at the new point starts the next step.
+        self.stages.swap(0, STAGES - 1);
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        let theta = (t - self.dense_start) / self.dense_step;
+        let rest = 1.0 - theta;
+        let [r0, r1, r2, r3, r4] = &self.dense;
+        for i in 0..out.len() {
+            out[i] = r0[i] + theta * (r1[i] + rest * (r2[i] + theta * (r3[i] + rest * r4[i])));
+        }
+    }
+}

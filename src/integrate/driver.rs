@@ -1,0 +1,189 @@
+//! The loop shared by the adaptive methods: step-size selection, acceptance, output delivery and
+//! failure detection. Each method supplies only how to attempt and interpolate one step.
+
+use super::control::StepController;
+use super::evaluator::{all_finite, Evaluator, Halt};
+use super::output::{Observer, Outputs};
+use super::{Failure, IntegrationError, OdeSystem, Settings, Stats};
+
+/// What to integrate, already checked for consistency.
+pub(super) struct Problem<'a> {
+    pub(super) t0: f64,
+    pub(super) y0: &'a [f64],
+    pub(super) t_end: f64,
+    pub(super) outputs: &'a [f64],
+    pub(super) settings: &'a Settings,
+}
+
+/// One adaptive method, stepping from the current point of the solution.
+pub(super) trait AdaptiveStepper {
+    /// Order of the method (for the initial step estimate).
+    fn order(&self) -> u32;
+    /// The step-size controller suited to the method's error estimate.
+    fn controller(&self) -> StepController;
+    /// Prepares stepping from the initial point (e.g. evaluates dy/dt there).
+    fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt>;
+    /// dy/dt at the current point.
+    fn derivative(&self) -> &[f64];
+    /// Attempts a step of size `h` from (t, y): writes the new state into `y_new` and returns the
+    /// norm of the local error estimate (at most 1 means acceptable).
+    fn attempt(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64, y_new: &mut [f64]) -> Result<f64, Halt>;
+    /// Makes the last attempt the current step, preparing dense output over it.
+    fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]);
+    /// The dense output of the last accepted step at `t`.
+    fn interpolate(&self, t: f64, out: &mut [f64]);
+}
+
+pub(super) fn integrate_adaptive(
+    stepper: &mut dyn AdaptiveStepper,
+    system: &mut dyn OdeSystem,
+    problem: &Problem,
+    observer: &mut Observer,
+) -> Result<(Vec<f64>, Stats), IntegrationError> {
+    let mut eval = Evaluator::new(system);
+    match run(stepper, &mut eval, problem, observer) {
+        Ok(y) => Ok((y, eval.stats)),
+        Err(halt) => Err(halt.made_fatal().into_error(eval.stats)),
+    }
+}
+
+fn run(
+    stepper: &mut dyn AdaptiveStepper,
+    eval: &mut Evaluator,
+    problem: &Problem,
+    observer: &mut Observer,
+) -> Result<Vec<f64>, Halt> {
+    let Problem { t0, y0, t_end, settings, .. } = *problem;
+    let mut outputs = Outputs::new(problem.outputs, y0.len());
+    if !all_finite(y0) {
+        return Err(Halt::fatal(t0, Failure::NotFinite));
+    }
+    outputs.deliver_start(t0, y0, observer)?;
+    if t0 == t_end {
+        return Ok(y0.to_vec());
+    }
+    // A non-finite derivative at a point of the solution cannot be avoided by a shorter step.
+    stepper.start(eval, t0, y0).map_err(Halt::made_fatal)?;
+    let h = match settings.initial_step {
+        Some(h) => h,
+        None => initial_step(stepper, eval, problem)?,
+    };
+    let mut march = March { t: t0, y: y0.to_vec(), y_new: vec![0.0; y0.len()], h, attempts: 0 };
+    let mut controller = stepper.controller();
+    while march.t < t_end {
+        march.step(stepper, eval, problem, &mut controller, &mut outputs, observer)?;
+    }
+    outputs.deliver_rest(&march.y, observer)?;
+    Ok(march.y)
+}
+
+/// The state of the integration between steps.
+struct March {
+    t: f64,
+    y: Vec<f64>,
+    y_new: Vec<f64>,
+    h: f64,
+    attempts: usize,
+}
+
+impl March {
+    /// One attempt: either advances the solution or shrinks the step.
+    fn step(
+        &mut self,
+        stepper: &mut dyn AdaptiveStepper,
+        eval: &mut Evaluator,
+        problem: &Problem,
+        controller: &mut StepController,
+        outputs: &mut Outputs,
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
+        let h = self.next_step_size(problem)?;
+        let attempt = stepper.attempt(eval, self.t, &self.y, h, &mut self.y_new);
+        let attempt = attempt.and_then(|error| match all_finite(&self.y_new) {
+            true => Ok(error),
+            false => Err(Halt::NotFinite { time: self.t + h }),
+        });
+        match attempt {
+            Ok(error) if error <= 1.0 => {
+                stepper.accept(self.t, &self.y, h, &self.y_new);
+                let lands_on_end = h >= problem.t_end - self.t || self.t + h >= problem.t_end;
+                let t_new = if lands_on_end { problem.t_end } else { self.t + h };
+                let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
+                outputs.deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
+                std::mem::swap(&mut self.y, &mut self.y_new);
+                self.t = t_new;
+                eval.stats.steps += 1;
+                self.h = controller.after_accept(h, error);
+            }
+            Ok(error) => {
+                eval.stats.rejected += 1;
+                self.h = controller.after_reject(h, error);
+            }
+            Err(Halt::NotFinite { time }) => {
+                eval.stats.rejected += 1;
+                self.h = controller.after_not_finite(h);
+                if self.h < smallest_step(problem, self.t) {
+                    return Err(Halt::fatal(time, Failure::NotFinite));
+                }
+            }
+            Err(fatal) => return Err(fatal),
+        }
+        Ok(())
+    }
+
+    /// The proposed step limited by the settings and stretched to land exactly on the end time.
+    fn next_step_size(&mut self, problem: &Problem) -> Result<f64, Halt> {
+        let settings = problem.settings;
+        if self.attempts >= settings.max_steps {
+            return Err(Halt::fatal(self.t, Failure::TooManySteps));
+        }
+        self.attempts += 1;
+        let remaining = problem.t_end - self.t;
+        let h = self.h.min(settings.max_step);
+        if h < smallest_step(problem, self.t) && h < remaining {
+            return Err(Halt::fatal(self.t, Failure::StepUnderflow { step: h }));
+        }
+        // Stretching a step that nearly reaches the end avoids a sliver of a last step.
+        Ok(if self.t + 1.01 * h >= problem.t_end { remaining } else { h })
+    }
+}
+
+/// Below this a step is either forbidden by the settings or lost in the rounding of t.
+fn smallest_step(problem: &Problem, t: f64) -> f64 {
+    let resolution = 8.0 * f64::EPSILON * t.abs().max(problem.t0.abs()).max(problem.t_end.abs());
+    problem.settings.min_step.max(resolution).max(f64::MIN_POSITIVE)
+}
+
+/// A first step from the sizes of y and dy/dt and an estimate of the second derivative, after
+/// Hairer, Nørsett and Wanner (Solving ODEs I, II.4): such that the first step's error is modest.
+fn initial_step(stepper: &mut dyn AdaptiveStepper, eval: &mut Evaluator, problem: &Problem) -> Result<f64, Halt> {
+    let Problem { t0, y0, t_end, settings, .. } = *problem;
+    let f0 = stepper.derivative().to_vec();
+    let scale: Vec<f64> = y0.iter().map(|y| settings.atol + settings.rtol * y.abs()).collect();
+    let size_y = scaled_rms(y0, &scale);
+    let size_f = scaled_rms(&f0, &scale);
+    let guess = if size_y < 1e-5 || size_f < 1e-5 { 1e-6 } else { 0.01 * size_y / size_f };
+    let guess = if guess.is_finite() { guess } else { 1e-6 };
+    let guess = guess.min(settings.max_step).min(t_end - t0);
+    let y1: Vec<f64> = (0..y0.len()).map(|i| y0[i] + guess * f0[i]).collect();
+    let mut f1 = vec![0.0; y0.len()];
+    match eval.rhs(t0 + guess, &y1, &mut f1) {
+        Ok(()) => {}
+        // Whatever lies ahead is not finite: start small and let the step control find out more.
+        Err(Halt::NotFinite { .. }) => return Ok(guess * 1e-3),
+        Err(fatal) => return Err(fatal),
+    }
+    let change: Vec<f64> = (0..y0.len()).map(|i| (f1[i] - f0[i]) / guess).collect();
+    let size_change = scaled_rms(&change, &scale);
+    let largest = size_f.max(size_change);
+    let from_curvature = match largest <= 1e-15 {
+        true => (guess * 1e-3).max(1e-6),
+        false => (0.01 / largest).powf(1.0 / (stepper.order() as f64 + 1.0)),
+    };
+    Ok((100.0 * guess).min(from_curvature).min(settings.max_step))
+}
+
+fn scaled_rms(values: &[f64], scale: &[f64]) -> f64 {
+    let sum: f64 = values.iter().zip(scale).map(|(v, s)| (v / s).powi(2)).sum();
+    (sum / values.len().max(1) as f64).sqrt()
+}

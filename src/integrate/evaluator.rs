@@ -1,0 +1,63 @@
+//! Calls the system's right-hand side, counting calls and catching non-finite values.
+
+use super::{Failure, IntegrationError, OdeSystem, Stats};
+
+/// Why a step attempt, or the integration, stopped.
+#[derive(Clone, Debug)]
+pub(super) enum Halt {
+    /// A NaN or infinity appeared at `time`; a shorter step may avoid it.
+    NotFinite { time: f64 },
+    /// Nothing the integrator can do about it.
+    Fatal { time: f64, failure: Failure },
+}
+
+impl Halt {
+    pub(super) fn fatal(time: f64, failure: Failure) -> Halt {
+        Halt::Fatal { time, failure }
+    }
+
+    /// The same halt, no longer open to a retry with a shorter step.
+    pub(super) fn made_fatal(self) -> Halt {
+        match self {
+            Halt::NotFinite { time } => Halt::fatal(time, Failure::NotFinite),
+            fatal => fatal,
+        }
+    }
+
+    pub(super) fn into_error(self, stats: Stats) -> IntegrationError {
+        let (time, failure) = match self {
+            Halt::NotFinite { time } => (time, Failure::NotFinite),
+            Halt::Fatal { time, failure } => (time, failure),
+        };
+        IntegrationError { time, failure, stats }
+    }
+}
+
+/// The system with the bookkeeping every method needs around it.
+pub(super) struct Evaluator<'s> {
+    system: &'s mut dyn OdeSystem,
+    pub(super) stats: Stats,
+}
+
+impl<'s> Evaluator<'s> {
+    pub(super) fn new(system: &'s mut dyn OdeSystem) -> Self {
+        Evaluator { system, stats: Stats::default() }
+    }
+
+    /// dy/dt at (t, y); a non-finite state or derivative becomes `Halt::NotFinite` at `t`.
+    pub(super) fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), Halt> {
+        if !all_finite(y) {
+            return Err(Halt::NotFinite { time: t });
+        }
+        self.stats.rhs_evaluations += 1;
+        self.system.rhs(t, y, dydt).map_err(|message| Halt::fatal(t, Failure::System(message)))?;
+        if !all_finite(dydt) {
+            return Err(Halt::NotFinite { time: t });
+        }
+        Ok(())
+    }
+}
+
+pub(super) fn all_finite(values: &[f64]) -> bool {
+    values.iter().all(|v| v.is_finite())
+}
