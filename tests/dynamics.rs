@@ -184,3 +184,28 @@ fn body_accelerations_are_derivatives_of_body_velocities() {
         assert!((numeric - accelerations[i]).amax() < 1e-6, "body {i}: {numeric} vs {}", accelerations[i]);
     }
 }
+
+/// ∂T/∂q at fixed velocities against central differences of the kinetic energy.
+#[test]
+fn kinetic_energy_gradient_matches_finite_differences() {
+    let chain_joints = [0usize, 1, 2, 3, 4, 8];
+    let parents = [0usize, 1, 1, 2, 4, 0, 6, 3, 8];
+    let kinds: Vec<usize> = (0..parents.len()).map(|i| chain_joints[(i + 2) % chain_joints.len()]).collect();
+    let numbers: Vec<f64> = (0..64).map(|i| ((i as f64) * 2.3).cos()).collect();
+    let model = model_of(&tree_program(&parents, &kinds, &numbers));
+    let mut data = Data::new(&model);
+    let (q, v) = random_state(&model, &numbers);
+    let gradient = lsdc::dynamics::derivatives::kinetic_energy_gradient(&model, &mut data, &q, &v).expect("chain joints");
+    let energy = |q: &[f64], data: &mut Data| {
+        lsdc::dynamics::algorithms::forward_kinematics(&model, data, q, &v).expect("evaluates");
+        lsdc::dynamics::energy::kinetic_energy(&model, data)
+    };
+    let h = 1e-6;
+    for k in 0..model.nv {
+        let (mut plus, mut minus) = (q.clone(), q.clone());
+        plus[k] += h;
+        minus[k] -= h;
+        let numeric = (energy(&plus, &mut data) - energy(&minus, &mut data)) / (2.0 * h);
+        assert!((numeric - gradient[k]).abs() < 1e-6 * (1.0 + numeric.abs()), "∂T/∂q{k}: {} vs {numeric}", gradient[k]);
+    }
+}

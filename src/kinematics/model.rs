@@ -297,3 +297,54 @@ fn geometry_error(mechanism: &Mechanism, error: EvalError, span: Span, join: &st
             .help("frames and rotation axes are constant; only the link's own coordinates vary"),
     }
 }
+
+impl JointModel {
+    /// ∂/∂q along `direction` of the chain's twist `S(q)·rates` (in the first frame): how the
+    /// joint's velocity changes when its coordinates move while the rates stay put. With
+    /// `direction = rates` this is the bias of `chain_motion`.
+    pub fn velocity_derivative(&self, q: &[f64], rates: &[f64], direction: &[f64], unknowns: &UnknownValues) -> Result<Twist, EvalError> {
+        let env = Env { coordinates: q, ..Env::default() };
+        let sum: Vec<f64> = rates.iter().zip(direction).map(|(a, b)| a + b).collect();
+        // Mixed second derivative by polarisation: D²f[u, w] = (D²f[u + w] − D²f[u] − D²f[w]) / 2.
+        let mixed = |s: &Scalar| -> Result<(f64, f64, f64), EvalError> {
+            let along_rates = eval_jet(s, unknowns, &env, rates)?;
+            let along_direction = eval_jet(s, unknowns, &env, direction)?;
+            let along_sum = eval_jet(s, unknowns, &env, &sum)?;
+            let second = 0.5 * (along_sum.second - along_rates.second - along_direction.second);
+            Ok((along_rates.first, along_direction.first, second))
+        };
+        let mut pose = Pose::identity();
+        let mut moved_frame = Twist::zeros();
+        let mut derivative = Twist::zeros();
+        for step in &self.steps {
+            let (transform, local_rates, local_direction, local_mixed) = match step {
+                Step::Translation(v) => {
+                    let (x, y, z) = (mixed(&v[0])?, mixed(&v[1])?, mixed(&v[2])?);
+                    let value = Vector3::new(eval(&v[0], unknowns, q)?, eval(&v[1], unknowns, q)?, eval(&v[2], unknowns, q)?);
+                    let zero = Vector3::zeros();
+                    (
+                        spatial::translation(value),
+                        spatial::twist(zero, Vector3::new(x.0, y.0, z.0)),
+                        spatial::twist(zero, Vector3::new(x.1, y.1, z.1)),
+                        spatial::twist(zero, Vector3::new(x.2, y.2, z.2)),
+                    )
+                }
+                Step::Rotation { angle, axis } => {
+                    let (rate, along, second) = mixed(angle)?;
+                    let zero = Vector3::zeros();
+                    (
+                        spatial::rotation(axis, eval(angle, unknowns, q)?),
+                        spatial::twist(axis * rate, zero),
+                        spatial::twist(axis * along, zero),
+                        spatial::twist(axis * second, zero),
+                    )
+                }
+            };
+            let step_velocity = spatial::transform_twist(&pose, &local_rates);
+            derivative += cross(&moved_frame, &step_velocity) + spatial::transform_twist(&pose, &local_mixed);
+            moved_frame += spatial::transform_twist(&pose, &local_direction);
+            pose *= transform;
+        }
+        Ok(derivative)
+    }
+}
