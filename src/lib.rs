@@ -10,6 +10,7 @@ pub mod diag;
 pub mod driver;
 pub mod dynamics;
 pub mod elab;
+pub mod integrate;
 pub mod kinematics;
 pub mod load;
 pub mod output;

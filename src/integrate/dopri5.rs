@@ -26,15 +26,8 @@ const A: [&[f64]; STAGES] = [
 ];
 
 /// Fifth-order minus fourth-order weights: the local error estimate.
-const ERROR: [f64; STAGES] = [
-    71.0 / 57600.0,
-    0.0,
-    -71.0 / 16695.0,
-    71.0 / 1920.0,
-    -17253.0 / 339200.0,
-    22.0 / 525.0,
-    -1.0 / 40.0,
-];
+const ERROR: [f64; STAGES] =
+    [71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0];
 
 /// Weights of the stages in the last coefficient of the order-4 continuous extension.
 const DENSE: [f64; STAGES] = [
@@ -104,9 +97,9 @@ impl AdaptiveStepper for DormandPrince {
     }
 
     fn attempt(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64, y_new: &mut [f64]) -> Result<f64, Halt> {
-        for stage in 1..STAGES - 1 {
+        for (stage, fraction) in C.iter().enumerate().take(STAGES - 1).skip(1) {
             stage_state_into(&self.stages, stage, y, h, &mut self.stage_state);
-            eval.rhs(t + C[stage] * h, &self.stage_state, &mut self.stages[stage])?;
+            eval.rhs(t + fraction * h, &self.stage_state, &mut self.stages[stage])?;
         }
         stage_state_into(&self.stages, STAGES - 1, y, h, y_new);
         eval.rhs(t + h, y_new, &mut self.stages[STAGES - 1])?;
@@ -141,5 +134,26 @@ impl AdaptiveStepper for DormandPrince {
         for i in 0..out.len() {
             out[i] = r0[i] + theta * (r1[i] + rest * (r2[i] + theta * (r3[i] + rest * r4[i])));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_stage_sits_at_the_sum_of_its_weights() {
+        for (row, c) in A.iter().zip(C) {
+            assert!((row.iter().sum::<f64>() - c).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn error_and_dense_weights_vanish_for_constant_derivatives() {
+        // The error weights are a difference of two sets of weights summing to one each.
+        assert!(ERROR.iter().sum::<f64>().abs() < 1e-14);
+        // The dense output's last coefficient must vanish for constant derivatives, where the
+        // interpolant is the straight line.
+        assert!(DENSE.iter().sum::<f64>().abs() < 1e-14);
     }
 }

@@ -3,8 +3,8 @@
 
 use super::control::StepController;
 use super::evaluator::{all_finite, Evaluator, Halt};
-use super::output::{Observer, Outputs};
-use super::{Failure, IntegrationError, OdeSystem, Settings, Stats};
+use super::output::Outputs;
+use super::{Failure, IntegrationError, Observer, OdeSystem, Settings, Stats};
 
 /// What to integrate, already checked for consistency.
 pub(super) struct Problem<'a> {
@@ -68,33 +68,41 @@ fn run(
         Some(h) => h,
         None => initial_step(stepper, eval, problem)?,
     };
-    let mut march = March { t: t0, y: y0.to_vec(), y_new: vec![0.0; y0.len()], h, attempts: 0 };
-    let mut controller = stepper.controller();
+    let mut march = March {
+        t: t0,
+        y: y0.to_vec(),
+        y_new: vec![0.0; y0.len()],
+        h,
+        attempts: 0,
+        controller: stepper.controller(),
+        outputs,
+    };
     while march.t < t_end {
-        march.step(stepper, eval, problem, &mut controller, &mut outputs, observer)?;
+        march.step(stepper, eval, problem, observer)?;
     }
-    outputs.deliver_rest(&march.y, observer)?;
+    march.outputs.deliver_rest(&march.y, observer)?;
     Ok(march.y)
 }
 
 /// The state of the integration between steps.
-struct March {
+struct March<'a> {
     t: f64,
     y: Vec<f64>,
     y_new: Vec<f64>,
+    /// The step to try next.
     h: f64,
     attempts: usize,
+    controller: StepController,
+    outputs: Outputs<'a>,
 }
 
-impl March {
+impl March<'_> {
     /// One attempt: either advances the solution or shrinks the step.
     fn step(
         &mut self,
         stepper: &mut dyn AdaptiveStepper,
         eval: &mut Evaluator,
         problem: &Problem,
-        controller: &mut StepController,
-        outputs: &mut Outputs,
         observer: &mut Observer,
     ) -> Result<(), Halt> {
         let h = self.next_step_size(problem)?;
@@ -105,29 +113,41 @@ impl March {
         });
         match attempt {
             Ok(error) if error <= 1.0 => {
-                stepper.accept(self.t, &self.y, h, &self.y_new);
-                let lands_on_end = h >= problem.t_end - self.t || self.t + h >= problem.t_end;
-                let t_new = if lands_on_end { problem.t_end } else { self.t + h };
-                let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
-                outputs.deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
-                std::mem::swap(&mut self.y, &mut self.y_new);
-                self.t = t_new;
+                self.advance(stepper, problem, h, observer)?;
                 eval.stats.steps += 1;
-                self.h = controller.after_accept(h, error);
+                self.h = self.controller.after_accept(h, error);
             }
             Ok(error) => {
                 eval.stats.rejected += 1;
-                self.h = controller.after_reject(h, error);
+                self.h = self.controller.after_reject(h, error);
             }
             Err(Halt::NotFinite { time }) => {
                 eval.stats.rejected += 1;
-                self.h = controller.after_not_finite(h);
+                self.h = self.controller.after_not_finite(h);
                 if self.h < smallest_step(problem, self.t) {
                     return Err(Halt::fatal(time, Failure::NotFinite));
                 }
             }
             Err(fatal) => return Err(fatal),
         }
+        Ok(())
+    }
+
+    /// Moves to the end of the accepted step of size `h`, delivering the outputs it passes.
+    fn advance(
+        &mut self,
+        stepper: &mut dyn AdaptiveStepper,
+        problem: &Problem,
+        h: f64,
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
+        stepper.accept(self.t, &self.y, h, &self.y_new);
+        let lands_on_end = h >= problem.t_end - self.t || self.t + h >= problem.t_end;
+        let t_new = if lands_on_end { problem.t_end } else { self.t + h };
+        let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
+        self.outputs.deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
+        std::mem::swap(&mut self.y, &mut self.y_new);
+        self.t = t_new;
         Ok(())
     }
 
@@ -144,7 +164,8 @@ impl March {
             return Err(Halt::fatal(self.t, Failure::StepUnderflow { step: h }));
         }
         // Stretching a step that nearly reaches the end avoids a sliver of a last step.
-        Ok(if self.t + 1.01 * h >= problem.t_end { remaining } else { h })
+        let stretch = self.t + 1.01 * h >= problem.t_end && remaining <= settings.max_step;
+        Ok(if stretch { remaining } else { h })
     }
 }
 
@@ -163,7 +184,7 @@ fn initial_step(stepper: &mut dyn AdaptiveStepper, eval: &mut Evaluator, problem
     let size_y = scaled_rms(y0, &scale);
     let size_f = scaled_rms(&f0, &scale);
     let guess = if size_y < 1e-5 || size_f < 1e-5 { 1e-6 } else { 0.01 * size_y / size_f };
-    let guess = if guess.is_finite() { guess } else { 1e-6 };
+    let guess = if guess.is_normal() { guess } else { 1e-6 };
     let guess = guess.min(settings.max_step).min(t_end - t0);
     let y1: Vec<f64> = (0..y0.len()).map(|i| y0[i] + guess * f0[i]).collect();
     let mut f1 = vec![0.0; y0.len()];
@@ -180,6 +201,8 @@ fn initial_step(stepper: &mut dyn AdaptiveStepper, eval: &mut Evaluator, problem
         true => (guess * 1e-3).max(1e-6),
         false => (0.01 / largest).powf(1.0 / (stepper.order() as f64 + 1.0)),
     };
+    // A curvature too large to represent would suggest a zero step: fall back to the guess.
+    let from_curvature = if from_curvature.is_normal() { from_curvature } else { guess };
     Ok((100.0 * guess).min(from_curvature).min(settings.max_step))
 }
 

@@ -28,6 +28,9 @@ pub trait OdeSystem {
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String>;
 }
 
+/// Receives the state at each output time; an `Err` stops the integration with that message.
+pub type Observer<'o> = dyn FnMut(f64, &[f64]) -> Result<(), String> + 'o;
+
 /// Which integration method to use.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
@@ -141,6 +144,33 @@ impl std::error::Error for IntegrationError {}
 /// Values at output times between steps come from dense output (cubic Hermite for RK4 and
 /// Rosenbrock, the order-4 interpolant for Dormand–Prince); an output time that coincides with a
 /// step end gets that step's state exactly. Outputs delivered before a failure stay delivered.
+///
+/// ```
+/// use lsdc::integrate::{integrate, Method, OdeSystem, Settings};
+///
+/// struct Decay;
+/// impl OdeSystem for Decay {
+///     fn dimension(&self) -> usize {
+///         1
+///     }
+///     fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+///         dydt[0] = -y[0];
+///         Ok(())
+///     }
+/// }
+///
+/// let mut samples = Vec::new();
+/// let mut observer = |t: f64, y: &[f64]| {
+///     samples.push((t, y[0]));
+///     Ok(())
+/// };
+/// let settings = Settings { rtol: 1e-8, atol: 1e-10, ..Settings::default() };
+/// let (y, stats) =
+///     integrate(&Method::DormandPrince, &mut Decay, 0.0, &[1.0], 2.0, &[0.5, 1.0], &settings, &mut observer).unwrap();
+/// assert!((y[0] - (-2.0f64).exp()).abs() < 1e-8);
+/// assert_eq!(samples.len(), 2);
+/// assert!(stats.steps > 0);
+/// ```
 #[allow(clippy::too_many_arguments)]
 pub fn integrate(
     method: &Method,
@@ -150,7 +180,7 @@ pub fn integrate(
     t_end: f64,
     outputs: &[f64],
     settings: &Settings,
-    observer: &mut dyn FnMut(f64, &[f64]) -> Result<(), String>,
+    observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
     let invalid = |message: String| IntegrationError {
         time: t0,
@@ -162,8 +192,12 @@ pub fn integrate(
     let problem = driver::Problem { t0, y0, t_end, outputs, settings };
     match method {
         Method::Rk4 { step } => rk4::integrate(system, &problem, *step, observer),
-        Method::DormandPrince => driver::integrate_adaptive(&mut dopri5::DormandPrince::new(y0.len()), system, &problem, observer),
-        Method::Rosenbrock => driver::integrate_adaptive(&mut rosenbrock::Rodas3::new(y0.len()), system, &problem, observer),
+        Method::DormandPrince => {
+            driver::integrate_adaptive(&mut dopri5::DormandPrince::new(y0.len(), settings), system, &problem, observer)
+        }
+        Method::Rosenbrock => {
+            driver::integrate_adaptive(&mut rosenbrock::Rodas3::new(y0.len(), settings), system, &problem, observer)
+        }
     }
 }
 

@@ -1,7 +1,7 @@
 //! Hands the states at the requested output times to the observer as the integration passes them.
 
 use super::evaluator::Halt;
-use super::Failure;
+use super::{Failure, Observer};
 
 /// Fraction of a step within which an output time counts as the step's end, so that output times
 /// computed with rounding (3 * 0.1 against 0.3) still get the step's own state.
@@ -13,8 +13,6 @@ pub(super) struct Outputs<'a> {
     next: usize,
     value: Vec<f64>,
 }
-
-pub(super) type Observer<'o> = dyn FnMut(f64, &[f64]) -> Result<(), String> + 'o;
 
 impl<'a> Outputs<'a> {
     pub(super) fn new(times: &'a [f64], dimension: usize) -> Self {

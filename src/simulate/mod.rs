@@ -2,4 +2,6 @@
 //! program's initial values, with outputs and a run report.
 
 pub mod prepare;
+pub mod run;
 pub mod system;
+pub mod variational;

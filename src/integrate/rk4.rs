@@ -1,0 +1,126 @@
+//! The classic Runge–Kutta method of order 4 with a fixed step on the grid t0 + k * step, the last
+//! step shortened to land on the end time. Outputs between grid points come from the cubic Hermite
+//! interpolant through the step's ends, whose end slope is then reused as the next step's first
+//! stage, so outputs cost at most one extra evaluation (at the very end).
+
+use super::driver::Problem;
+use super::evaluator::{all_finite, Evaluator, Halt};
+use super::hermite::HermiteSegment;
+use super::output::Outputs;
+use super::{Failure, IntegrationError, Observer, OdeSystem, Stats};
+
+/// A remainder below this fraction of a step joins the last full step instead of making a sliver.
+const SLIVER: f64 = 1e-9;
+
+pub(super) fn integrate(
+    system: &mut dyn OdeSystem,
+    problem: &Problem,
+    step: f64,
+    observer: &mut Observer,
+) -> Result<(Vec<f64>, Stats), IntegrationError> {
+    let mut eval = Evaluator::new(system);
+    match run(&mut eval, problem, step, observer) {
+        Ok(y) => Ok((y, eval.stats)),
+        Err(halt) => Err(halt.made_fatal().into_error(eval.stats)),
+    }
+}
+
+fn run(eval: &mut Evaluator, problem: &Problem, step: f64, observer: &mut Observer) -> Result<Vec<f64>, Halt> {
+    let Problem { t0, y0, t_end, .. } = *problem;
+    let mut outputs = Outputs::new(problem.outputs, y0.len());
+    if !all_finite(y0) {
+        return Err(Halt::fatal(t0, Failure::NotFinite));
+    }
+    outputs.deliver_start(t0, y0, observer)?;
+    let step_count = ((t_end - t0) / step - SLIVER).ceil().max(0.0);
+    let mut rk4 = Rk4::new(t0, y0);
+    let mut k = 0usize;
+    while (k as f64) < step_count {
+        if k >= problem.settings.max_steps {
+            return Err(Halt::fatal(rk4.t, Failure::TooManySteps));
+        }
+        k += 1;
+        // Grid points by multiplication, so that rounding does not accumulate over many steps.
+        let t_new = if k as f64 >= step_count { t_end } else { t0 + k as f64 * step };
+        rk4.step(eval, t_new)?;
+        if outputs.wants_interior(rk4.t, t_new) {
+            rk4.prepare_interpolation(eval)?;
+        }
+        let segment = &rk4.segment;
+        outputs.deliver_step((rk4.t, t_new), &rk4.y_new, |t, out| segment.evaluate(t, out), observer)?;
+        rk4.advance(t_new);
+        eval.stats.steps += 1;
+    }
+    outputs.deliver_rest(&rk4.y, observer)?;
+    Ok(rk4.y)
+}
+
+/// The current point, the step just taken from it, and the stage buffers.
+struct Rk4 {
+    t: f64,
+    y: Vec<f64>,
+    y_new: Vec<f64>,
+    h: f64,
+    /// dy/dt at the current point when already known (from the previous step's interpolation).
+    derivative_known: bool,
+    stages: [Vec<f64>; 4],
+    end_derivative: Vec<f64>,
+    stage_state: Vec<f64>,
+    segment: HermiteSegment,
+}
+
+impl Rk4 {
+    fn new(t0: f64, y0: &[f64]) -> Self {
+        let zeros = vec![0.0; y0.len()];
+        Rk4 {
+            t: t0,
+            y: y0.to_vec(),
+            y_new: zeros.clone(),
+            h: 0.0,
+            derivative_known: false,
+            stages: std::array::from_fn(|_| zeros.clone()),
+            end_derivative: zeros.clone(),
+            stage_state: zeros,
+            segment: HermiteSegment::new(y0.len()),
+        }
+    }
+
+    /// Computes y_new at `t_new` from the current point.
+    fn step(&mut self, eval: &mut Evaluator, t_new: f64) -> Result<(), Halt> {
+        let (t, h) = (self.t, t_new - self.t);
+        self.h = h;
+        if !self.derivative_known {
+            eval.rhs(t, &self.y, &mut self.stages[0])?;
+        }
+        self.derivative_known = false;
+        for (stage, fraction) in [(1, 0.5), (2, 0.5), (3, 1.0)] {
+            for i in 0..self.y.len() {
+                self.stage_state[i] = self.y[i] + fraction * h * self.stages[stage - 1][i];
+            }
+            eval.rhs(t + fraction * h, &self.stage_state, &mut self.stages[stage])?;
+        }
+        let [k1, k2, k3, k4] = &self.stages;
+        for i in 0..self.y.len() {
+            self.y_new[i] = self.y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+        Ok(())
+    }
+
+    /// Evaluates dy/dt at the step's end and sets up the Hermite interpolant over the step.
+    fn prepare_interpolation(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
+        eval.rhs(self.t + self.h, &self.y_new, &mut self.end_derivative)?;
+        let ends = [&self.y[..], &self.stages[0], &self.y_new, &self.end_derivative];
+        self.segment.set(self.t, self.h, ends);
+        self.derivative_known = true;
+        Ok(())
+    }
+
+    /// Moves the current point to the end of the step just taken.
+    fn advance(&mut self, t_new: f64) {
+        if self.derivative_known {
+            std::mem::swap(&mut self.stages[0], &mut self.end_derivative);
+        }
+        std::mem::swap(&mut self.y, &mut self.y_new);
+        self.t = t_new;
+    }
+}

@@ -1,0 +1,227 @@
+//! Running a simulation: the integrator the settings name, outputs at regular times with the
+//! declared coordinates, energy and momentum, and a report of the work and the accuracy. A run
+//! that fails keeps every output computed before the failure.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::prepare::{Integrator, Prepared};
+use super::system::MechanicalSystem;
+use super::variational;
+use crate::dynamics::algorithms::{forward_kinematics, Data};
+use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum, potential_energy};
+use crate::dynamics::joint::JointType;
+use crate::dynamics::model::Model;
+use crate::integrate::{integrate, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings, Stats};
+
+impl OdeSystem for MechanicalSystem<'_> {
+    fn dimension(&self) -> usize {
+        MechanicalSystem::dimension(self)
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+        self.derivative(t, y, dydt)
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Sample {
+    pub time: f64,
+    /// Declared coordinates and their rates, in `Simulation::coordinate_names` order.
+    pub coordinates: Vec<f64>,
+    pub rates: Vec<f64>,
+    pub kinetic_energy: f64,
+    /// Potential of the constant forces in the fixed basis, when all efforts are such.
+    pub potential_energy: Option<f64>,
+    /// Total momentum in the fixed frame: angular (about the origin), then linear.
+    pub momentum: [f64; 6],
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RunFailure {
+    pub time: f64,
+    pub message: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub integrator: String,
+    pub duration: f64,
+    pub steps: usize,
+    pub rejected_steps: usize,
+    pub function_evaluations: usize,
+    pub cpu_seconds: f64,
+    /// Largest |E(t) − E(0)| / |E(0)| over the outputs, when the system is conservative.
+    pub energy_drift: Option<f64>,
+    /// Largest change of the total linear and angular momentum, when nothing outside acts on the
+    /// mechanism (its root joints are free and no effort is applied).
+    pub momentum_drift: Option<[f64; 2]>,
+    pub failure: Option<RunFailure>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Simulation {
+    pub coordinate_names: Vec<String>,
+    pub samples: Vec<Sample>,
+    pub report: Report,
+}
+
+fn integrator_name(integrator: &Integrator) -> &'static str {
+    match integrator {
+        Integrator::Rk4 => "rk4",
+        Integrator::DormandPrince => "dopri5",
+        Integrator::Implicit => "implicit",
+        Integrator::Symplectic => "symplectic",
+    }
+}
+
+fn output_times(duration: f64, interval: f64) -> Vec<f64> {
+    let count = (duration / interval + 1e-9).floor() as usize;
+    let mut times: Vec<f64> = (0..=count).map(|k| (k as f64 * interval).min(duration)).collect();
+    if times.last().is_some_and(|&t| t < duration - 1e-12 * duration.max(1.0)) {
+        times.push(duration);
+    }
+    times
+}
+
+/// Samples a state: declared coordinates (continuous with the previous sample), energy, momentum.
+struct Sampler<'m> {
+    model: &'m Model,
+    data: Data,
+    previous: Rc<RefCell<Vec<f64>>>,
+    conservative: Option<Vec<(usize, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>)>>,
+}
+
+impl Sampler<'_> {
+    fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, String> {
+        let model = self.model;
+        let (q, v) = y.split_at(model.nq);
+        let mut q = q.to_vec();
+        for joint in &model.joints {
+            joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
+        }
+        let previous = self.previous.borrow().clone();
+        let (coordinates, rates) = model.declared(&q, v, &previous).map_err(|e| format!("{e:?}"))?;
+        *self.previous.borrow_mut() = coordinates.clone();
+        forward_kinematics(model, &mut self.data, &q, v).map_err(|e| format!("{e:?}"))?;
+        let h = momentum(model, &self.data);
+        Ok(Sample {
+            time,
+            coordinates,
+            rates,
+            kinetic_energy: kinetic_energy(model, &self.data),
+            potential_energy: self.conservative.as_ref().map(|forces| potential_energy(forces, &self.data)),
+            momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
+        })
+    }
+}
+
+/// Runs the prepared simulation; `progress(t)` is called at every output.
+pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
+    let model = &prepared.model;
+    let settings = &prepared.settings;
+    let (q0, v0) = match model.state_from_declared(&prepared.coordinates, &prepared.rates) {
+        Ok(state) => state,
+        Err(e) => return failed_at_start(prepared, format!("{e:?}")),
+    };
+    let mut y0 = q0;
+    y0.extend_from_slice(&v0);
+    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let mut system = MechanicalSystem::new(model, prepared.coordinates.clone());
+    let mut sampler = Sampler { model, data: Data::new(model), previous: reference.clone(), conservative: conservative_forces(model) };
+    let outputs = output_times(settings.duration, settings.output);
+    let mut samples = Vec::with_capacity(outputs.len());
+    let started = Instant::now();
+    let mut observer = |t: f64, y: &[f64]| -> Result<(), String> {
+        samples.push(sampler.sample(t, y)?);
+        progress(t);
+        Ok(())
+    };
+    let integrator_settings = IntegratorSettings {
+        rtol: settings.rtol,
+        atol: settings.atol,
+        initial_step: settings.step,
+        max_step: settings.max_step,
+        ..IntegratorSettings::default()
+    };
+    let fixed_step = settings.step.unwrap_or(settings.output.min(1e-3));
+    let result: Result<(Vec<f64>, Stats), IntegrationError> = match settings.integrator {
+        Integrator::Rk4 => integrate(&Method::Rk4 { step: fixed_step }, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
+        Integrator::DormandPrince => integrate(&Method::DormandPrince, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
+        Integrator::Implicit => integrate(&Method::Rosenbrock, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
+        Integrator::Symplectic => {
+            if model.joints.iter().any(|j| j.kind != JointType::Chain) {
+                Err(IntegrationError {
+                    time: 0.0,
+                    failure: crate::integrate::Failure::InvalidInput(
+                        "the symplectic integrator needs joints in their own coordinates; this mechanism has a spherical or free joint (use dopri5)".to_string(),
+                    ),
+                    stats: Stats::default(),
+                })
+            } else {
+                variational::integrate(&mut system, 0.0, &y0, settings.duration, fixed_step, &outputs, &mut observer)
+            }
+        }
+    };
+    let cpu_seconds = started.elapsed().as_secs_f64();
+    let _ = reference;
+    let (stats, failure) = match result {
+        Ok((_, stats)) => (stats, None),
+        Err(e) => (e.stats.clone(), Some(RunFailure { time: e.time, message: e.failure.to_string() })),
+    };
+    let report = Report {
+        integrator: integrator_name(&settings.integrator).to_string(),
+        duration: settings.duration,
+        steps: stats.steps,
+        rejected_steps: stats.rejected,
+        function_evaluations: stats.rhs_evaluations,
+        cpu_seconds,
+        energy_drift: energy_drift(&samples),
+        momentum_drift: momentum_drift(model, &samples),
+        failure,
+    };
+    Simulation { coordinate_names: prepared.coordinate_names.clone(), samples, report }
+}
+
+fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
+    let report = Report {
+        integrator: integrator_name(&prepared.settings.integrator).to_string(),
+        duration: prepared.settings.duration,
+        steps: 0,
+        rejected_steps: 0,
+        function_evaluations: 0,
+        cpu_seconds: 0.0,
+        energy_drift: None,
+        momentum_drift: None,
+        failure: Some(RunFailure { time: 0.0, message }),
+    };
+    Simulation { coordinate_names: prepared.coordinate_names.clone(), samples: Vec::new(), report }
+}
+
+fn energy_drift(samples: &[Sample]) -> Option<f64> {
+    let energy = |s: &Sample| s.potential_energy.map(|p| p + s.kinetic_energy);
+    let first = energy(samples.first()?)?;
+    let scale = samples.iter().map(|s| s.kinetic_energy.abs()).fold(first.abs(), f64::max);
+    if scale == 0.0 {
+        return Some(0.0);
+    }
+    samples.iter().map(|s| energy(s).map(|e| (e - first).abs() / scale)).try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
+}
+
+fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<[f64; 2]> {
+    let free = model.joints.iter().filter(|j| j.parent == 0).all(|j| matches!(j.kind, JointType::Free { .. }));
+    if !free || !model.applied.is_empty() {
+        return None;
+    }
+    let first = samples.first()?.momentum;
+    let mut drift = [0.0f64; 2];
+    for s in samples {
+        let angular = (0..3).map(|i| (s.momentum[i] - first[i]).abs()).fold(0.0, f64::max);
+        let linear = (3..6).map(|i| (s.momentum[i] - first[i]).abs()).fold(0.0, f64::max);
+        drift = [drift[0].max(linear), drift[1].max(angular)];
+    }
+    Some(drift)
+}
