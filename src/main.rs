@@ -26,6 +26,57 @@ enum Format {
     Json,
 }
 
+#[derive(clap::Args)]
+struct SimulateArgs {
+    file: PathBuf,
+    #[command(flatten)]
+    libraries: LibraryArgs,
+    /// Value of an unknown or generic quantity: its `let` name, its generated name (see
+    /// `lsdc compile --emit notation`) or its generic name (`mass(arm)`). Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    sets: Vec<String>,
+    /// Overrides the program's `simulate` declaration.
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Time between outputs.
+    #[arg(long = "every")]
+    output_interval: Option<f64>,
+    /// Relative and absolute tolerance of the adaptive integrators.
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Fixed step (rk4, symplectic) or first step (adaptive).
+    #[arg(long)]
+    step: Option<f64>,
+    /// Format of the samples.
+    #[arg(long, value_enum, default_value = "csv")]
+    format: SampleFormat,
+    /// Write the samples to this file instead of standard output.
+    #[arg(short = 'o', long = "out")]
+    out: Option<PathBuf>,
+    /// Format of the run report (written to standard error).
+    #[arg(long, value_enum, default_value = "text")]
+    report: Format,
+    /// Draw the coordinates and the energy over time to an .svg or .png file.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum IntegratorArg {
+    Rk4,
+    Dopri5,
+    Implicit,
+    Symplectic,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SampleFormat {
+    Csv,
+    Json,
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Emit {
     Notation,
@@ -73,6 +124,9 @@ enum Command {
         #[arg(long, value_enum, default_value = "text")]
         format: Format,
     },
+    /// Simulate a tree mechanism from its `initial` values; write the samples (CSV or JSON) and
+    /// a run report.
+    Simulate(SimulateArgs),
     /// Compile a program and print what `--emit` asks for.
     Compile {
         file: PathBuf,
@@ -94,6 +148,7 @@ fn main() -> ExitCode {
         Command::Tree { file, libraries, format } => tree(&file, &libraries.options(), format),
         Command::Assemble { file, libraries, format } => assemble(&file, &libraries.options(), format),
         Command::Compile { file, libraries, emit } => compile(&file, &libraries.options(), emit),
+        Command::Simulate(args) => simulate(&args),
         Command::Parse { file } => parse(&file),
     }
 }
@@ -237,6 +292,108 @@ fn compile(file: &std::path::Path, options: &LoadOptions, emit: Emit) -> ExitCod
             report(file, options, Format::Text, analyse, String::clone)
         }
     }
+}
+
+fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, String> {
+    sets.iter()
+        .map(|s| {
+            let (name, value) = s.rsplit_once('=').ok_or_else(|| format!("`--set {s}`: write NAME=VALUE"))?;
+            let value: f64 = value.trim().parse().map_err(|_| format!("`--set {s}`: `{value}` is not a number"))?;
+            Ok(lsdc::simulate::prepare::Override { name: name.trim().to_string(), value })
+        })
+        .collect()
+}
+
+fn simulate(args: &SimulateArgs) -> ExitCode {
+    use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+    let overrides = match parse_sets(&args.sets) {
+        Ok(o) => o,
+        Err(message) => return usage_error(&message),
+    };
+    let compilation = match compile_one(&args.file, &args.libraries.options(), args.report) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    let mut prepared = match prepare(mechanism, &overrides, &Settings::default()) {
+        Ok(p) => p,
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, args.report);
+            return ExitCode::from(1);
+        }
+    };
+    let settings = &mut prepared.settings;
+    if let Some(integrator) = args.integrator {
+        settings.integrator = match integrator {
+            IntegratorArg::Rk4 => Integrator::Rk4,
+            IntegratorArg::Dopri5 => Integrator::DormandPrince,
+            IntegratorArg::Implicit => Integrator::Implicit,
+            IntegratorArg::Symplectic => Integrator::Symplectic,
+        };
+    }
+    for (flag, value) in [("duration", args.duration), ("every", args.output_interval), ("tolerance", args.tolerance), ("step", args.step)] {
+        if value.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+            return usage_error(&format!("`--{flag}` must be a positive number"));
+        }
+    }
+    settings.duration = args.duration.unwrap_or(settings.duration);
+    settings.output = args.output_interval.unwrap_or(settings.output);
+    settings.step = args.step.or(settings.step);
+    if let Some(t) = args.tolerance {
+        (settings.rtol, settings.atol) = (t, t);
+    }
+    let simulation = {
+        let bar = progress_bar(prepared.settings.duration);
+        let mut progress = |t: f64| {
+            if let Some(bar) = &bar {
+                bar.set_position((t * 1000.0) as u64);
+            }
+        };
+        let simulation = lsdc::simulate::run::run(&prepared, &mut progress);
+        if let Some(bar) = bar {
+            bar.finish_and_clear();
+        }
+        simulation
+    };
+    let samples = match args.format {
+        SampleFormat::Csv => lsdc::output::csv::to_csv(&simulation),
+        SampleFormat::Json => json(&simulation),
+    };
+    match &args.out {
+        Some(path) => {
+            if let Err(e) = std::fs::write(path, samples) {
+                return usage_error(&format!("cannot write `{}`: {e}", path.display()));
+            }
+        }
+        None => out(&samples),
+    }
+    if let Some(path) = &args.plot {
+        if let Err(message) = lsdc::output::plot::plot(&simulation, path) {
+            eprintln!("error: cannot draw `{}`: {message}", path.display());
+        }
+    }
+    match args.report {
+        Format::Text => eprint!("{}", text::run_report(&simulation.report)),
+        Format::Json => eprintln!("{}", json(&simulation.report)),
+    }
+    if simulation.report.failure.is_some() {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    }
+}
+
+/// A progress bar on a terminal; nothing when standard error is not one (CI, pipes).
+fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new((duration * 1000.0) as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} ms simulated, {elapsed} elapsed") {
+        bar.set_style(style);
+    }
+    Some(bar)
 }
 
 fn parse(file: &std::path::Path) -> ExitCode {

@@ -1,3 +1,6 @@
-//! Output: text renderings of reports (JSON comes from their `Serialize` forms).
+//! Output: text renderings of reports, simulation samples as CSV, plots (JSON comes from the
+//! reports' `Serialize` forms).
 
+pub mod csv;
+pub mod plot;
 pub mod text;

@@ -105,3 +105,21 @@ pub fn assembly(report: &AssemblyReport) -> String {
     out += &format!("assembled in {} iterations, largest residual {:.1e}\n", report.iterations, report.residual);
     out
 }
+
+/// The run report of a simulation, for people.
+pub fn run_report(report: &crate::simulate::run::Report) -> String {
+    let mut out = format!(
+        "{}: {} steps ({} rejected), {} function evaluations, {:.3} s CPU for {} s simulated\n",
+        report.integrator, report.steps, report.rejected_steps, report.function_evaluations, report.cpu_seconds, report.duration
+    );
+    if let Some(drift) = report.energy_drift {
+        out += &format!("energy drift (relative): {drift:.3e}\n");
+    }
+    if let Some([linear, angular]) = report.momentum_drift {
+        out += &format!("momentum drift: linear {linear:.3e}, angular {angular:.3e}\n");
+    }
+    if let Some(failure) = &report.failure {
+        out += &format!("the run FAILED at t = {}: {}\n", failure.time, failure.message);
+    }
+    out
+}

@@ -201,17 +201,33 @@ fn missing_value(mechanism: &Mechanism, generated: &HashMap<UnknownId, String>, 
         .help(help)
 }
 
+fn missing_inertia_frame(mechanism: &Mechanism, body: crate::elab::value::BodyId) -> Diagnostic {
+    let name = mechanism.body_name(BodyRef::Body(body));
+    Diagnostic::error("E0813", format!("no inertia frame for `{name}`"))
+        .primary(mechanism.body(body).span, "a body with mass needs its centre of mass and principal axes")
+        .help(format!(
+            "declare `iframe = ...` in the body (`iframe = 0` when its reference frame is its principal inertia frame), or pass `--set iframe_x({name})=VALUE` … `--set iframe_rz({name})=VALUE`"
+        ))
+}
+
 /// Builds the model and initial state. `overrides` come from `--set`; `settings` from the
 /// program's `simulate` declaration completed by `defaults`.
 pub fn prepare(mechanism: &Mechanism, overrides: &[Override], defaults: &Settings) -> Result<Prepared, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
     let generated = notation::unknown_names(mechanism, &topology);
     let values = unknown_values(mechanism, &generated, overrides)?;
-    let missing: Vec<Diagnostic> = required_unknowns(mechanism, &topology)
-        .into_iter()
-        .filter(|id| !values.contains_key(id))
-        .map(|id| missing_value(mechanism, &generated, id))
-        .collect();
+    let mut missing = Vec::new();
+    let mut frames_reported = BTreeSet::new();
+    for id in required_unknowns(mechanism, &topology).into_iter().filter(|id| !values.contains_key(id)) {
+        // The six generic values of an inertia frame are one thing to declare.
+        if let Origin::InertiaFrame(body, _) = mechanism.unknowns[id.0 as usize].origin {
+            if frames_reported.insert(body) {
+                missing.push(missing_inertia_frame(mechanism, body));
+            }
+            continue;
+        }
+        missing.push(missing_value(mechanism, &generated, id));
+    }
     if !missing.is_empty() {
         return Err(missing);
     }

@@ -170,7 +170,10 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     let _ = reference;
     let (stats, failure) = match result {
         Ok((_, stats)) => (stats, None),
-        Err(e) => (e.stats.clone(), Some(RunFailure { time: e.time, message: e.failure.to_string() })),
+        Err(e) => {
+            let message = format!("{}{}", e.failure, fastest_coordinate(&prepared.coordinate_names, &samples));
+            (e.stats.clone(), Some(RunFailure { time: e.time, message }))
+        }
     };
     let report = Report {
         integrator: integrator_name(&settings.integrator).to_string(),
@@ -184,6 +187,18 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         failure,
     };
     Simulation { coordinate_names: prepared.coordinate_names.clone(), samples, report }
+}
+
+/// Where a failing run was heading: the coordinate moving fastest at the last output.
+fn fastest_coordinate(names: &[String], samples: &[Sample]) -> String {
+    let Some(last) = samples.last() else { return String::new() };
+    let fastest = last.rates.iter().enumerate().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()).then(a.1.is_nan().cmp(&b.1.is_nan())));
+    match fastest {
+        Some((i, rate)) if i < names.len() => {
+            format!(" (at t = {}, the fastest coordinate was `{}`, moving at {rate:.3e})", last.time, names[i])
+        }
+        _ => String::new(),
+    }
 }
 
 fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
