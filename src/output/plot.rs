@@ -17,18 +17,27 @@ use std::sync::OnceLock;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle};
 
 use crate::simulate::run::{Sample, Simulation};
 
 const WIDTH: u32 = 1200;
 const HEIGHT: u32 = 900;
+/// PNGs are drawn this many times larger and then averaged down, which smooths the lines (the
+/// bitmap backend does not anti-alias them).
+const SUPERSAMPLING: u32 = 3;
 /// Share of the height given to the coordinates panel.
 const UPPER_SHARE: f64 = 0.55;
 const FONT_FAMILY: &str = "sans-serif";
 const CAPTION_SIZE: f64 = 24.0;
 const LABEL_SIZE: f64 = 16.0;
-const LINE_WIDTH: u32 = 2;
+const LINE_WIDTH: f64 = 2.0;
+/// Legend geometry: sample line length, gap before the label, row height, padding.
+const LEGEND_LINE: f64 = 28.0;
+const LEGEND_GAP: f64 = 8.0;
+const LEGEND_ROW: f64 = 24.0;
+const LEGEND_PAD: f64 = 14.0;
 
 /// Tableau 10, the default line colours of matplotlib: distinct and readable on white.
 const PALETTE: [RGBColor; 10] = [
@@ -67,17 +76,18 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
     match format {
         Format::Svg => {
             let root = SVGBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
-            draw(&root, simulation)?;
+            draw(&root, simulation, 1.0)?;
             root.present().map_err(|e| e.to_string())
         }
         Format::Png => {
-            let mut pixels = vec![0u8; WIDTH as usize * HEIGHT as usize * 3];
+            let (width, height) = (WIDTH * SUPERSAMPLING, HEIGHT * SUPERSAMPLING);
+            let mut pixels = vec![0u8; width as usize * height as usize * 3];
             {
-                let root = BitMapBackend::with_buffer(&mut pixels, (WIDTH, HEIGHT)).into_drawing_area();
-                draw(&root, simulation)?;
+                let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
+                draw(&root, simulation, SUPERSAMPLING as f64)?;
                 root.present().map_err(|e| e.to_string())?;
             }
-            write_png(path, &pixels)
+            write_png(path, &downsample(&pixels, SUPERSAMPLING))
         }
     }
 }
@@ -92,6 +102,28 @@ fn register_fonts() -> Result<(), String> {
     } else {
         Err("the embedded font could not be loaded".to_string())
     }
+}
+
+/// Averages each `factor` × `factor` block of an RGB image `factor` times the plot's size.
+fn downsample(rgb: &[u8], factor: u32) -> Vec<u8> {
+    let (factor, width, height) = (factor as usize, WIDTH as usize, HEIGHT as usize);
+    let big_width = width * factor;
+    let mut out = vec![0u8; width * height * 3];
+    for y in 0..height {
+        for x in 0..width {
+            for c in 0..3 {
+                let mut sum = 0usize;
+                for dy in 0..factor {
+                    let row = (y * factor + dy) * big_width;
+                    for dx in 0..factor {
+                        sum += rgb[(row + x * factor + dx) * 3 + c] as usize;
+                    }
+                }
+                out[(y * width + x) * 3 + c] = ((sum + factor * factor / 2) / (factor * factor)) as u8;
+            }
+        }
+    }
+    out
 }
 
 fn write_png(path: &Path, rgb: &[u8]) -> Result<(), String> {
@@ -121,72 +153,102 @@ impl Line {
     }
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, simulation: &Simulation) -> Result<(), String> {
+/// Draws both panels; `scale` multiplies every length (fonts, margins, lines) for supersampling.
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, simulation: &Simulation, scale: f64) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let samples = &simulation.samples;
-    let (upper, lower) = root.split_vertically((HEIGHT as f64 * UPPER_SHARE) as u32);
-
     let coordinates: Vec<Line> = simulation
         .coordinate_names
         .iter()
         .enumerate()
         .map(|(i, name)| Line::new(name, samples, |s| s.coordinates.get(i).copied()))
         .collect();
-    let time = time_range(samples);
-    panel(&upper, "Coordinates", "coordinate", time.clone(), &coordinates)?;
-
     let mut energy = vec![Line::new("kinetic", samples, |s| Some(s.kinetic_energy))];
     if samples.iter().any(|s| s.potential_energy.is_some()) {
         energy.push(Line::new("total (kinetic + potential)", samples, |s| {
             s.potential_energy.map(|p| s.kinetic_energy + p)
         }));
     }
-    panel(&lower, "Energy", "energy", time, &energy)
+
+    let (_, height) = root.dim_in_pixel();
+    let (upper, lower) = root.split_vertically((height as f64 * UPPER_SHARE) as u32);
+    // Both panels get a legend column of the same width, so that their time axes line up.
+    let upper_rows = legend_rows(&upper, coordinates.len(), scale);
+    let label_style = TextStyle::from((FONT_FAMILY, LABEL_SIZE * scale).into_font());
+    let mut column = 0u32;
+    for line in coordinates.iter().chain(&energy) {
+        let (text_width, _) = root.estimate_text_size(&line.label, &label_style).map_err(|e| e.to_string())?;
+        column = column.max(text_width);
+    }
+    let column = column + ((LEGEND_LINE + LEGEND_GAP + LEGEND_PAD) * scale) as u32;
+    let columns = coordinates.len().div_ceil(upper_rows).max(1) as u32;
+    let legend_width = column * columns + (LEGEND_PAD * scale) as u32;
+
+    let time = time_range(samples);
+    panel(&upper, "Coordinates", "coordinate", time.clone(), &coordinates, legend_width, column, scale)?;
+    panel(&lower, "Energy", "energy", time, &energy, legend_width, column, scale)
 }
 
-/// One panel: a caption, axes with a light grid, the lines and their legend.
+/// How many legend rows fit beside a panel's plot.
+fn legend_rows<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lines: usize, scale: f64) -> usize {
+    let (_, height) = area.dim_in_pixel();
+    let usable = height as f64 - (CAPTION_SIZE + 2.0 * LEGEND_PAD) * scale;
+    ((usable / (LEGEND_ROW * scale)).floor().max(1.0) as usize).min(lines.max(1))
+}
+
+/// One panel: a caption, axes with a light grid and the lines, and their legend to the right.
+#[allow(clippy::too_many_arguments)]
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     caption: &str,
     y_description: &str,
     time: Range<f64>,
     lines: &[Line],
+    legend_width: u32,
+    column: u32,
+    scale: f64,
 ) -> Result<(), String> {
+    let px = |length: f64| (length * scale).round() as u32;
+    let (width, _) = area.dim_in_pixel();
+    let (plot_area, legend_area) = area.split_horizontally(width.saturating_sub(legend_width));
     let values = value_range(lines.iter().flat_map(|l| l.points.iter().map(|&(_, v)| v)));
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT_FAMILY, CAPTION_SIZE))
-        .margin(12)
-        .x_label_area_size(48)
-        .y_label_area_size(90)
+    let mut chart = ChartBuilder::on(&plot_area)
+        .caption(caption, (FONT_FAMILY, CAPTION_SIZE * scale))
+        .margin(px(12.0))
+        .x_label_area_size(px(48.0))
+        .y_label_area_size(px(90.0))
         .build_cartesian_2d(time, values)
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .x_desc("time")
         .y_desc(y_description)
-        .label_style((FONT_FAMILY, LABEL_SIZE))
-        .axis_desc_style((FONT_FAMILY, LABEL_SIZE))
-        .bold_line_style(BLACK.mix(0.15))
-        .light_line_style(BLACK.mix(0.05))
+        .label_style((FONT_FAMILY, LABEL_SIZE * scale))
+        .axis_desc_style((FONT_FAMILY, LABEL_SIZE * scale))
+        .axis_style(BLACK.stroke_width(px(1.0)))
+        .bold_line_style(BLACK.mix(0.15).stroke_width(px(1.0)))
+        .light_line_style(BLACK.mix(0.05).stroke_width(px(1.0)))
+        .set_all_tick_mark_size(px(5.0))
         .draw()
         .map_err(|e| e.to_string())?;
     for (i, line) in lines.iter().enumerate() {
-        let color = PALETTE[i % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(line.points.iter().copied(), color.stroke_width(LINE_WIDTH)))
-            .map_err(|e| e.to_string())?
-            .label(line.label.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(LINE_WIDTH)));
+        let style = PALETTE[i % PALETTE.len()].stroke_width(px(LINE_WIDTH));
+        chart.draw_series(LineSeries::new(line.points.iter().copied(), style)).map_err(|e| e.to_string())?;
     }
-    if !lines.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FONT_FAMILY, LABEL_SIZE))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .draw()
+
+    // The legend, in columns of as many rows as fit, level with the top of the plot.
+    let rows = legend_rows(area, lines.len(), scale);
+    let label_style = TextStyle::from((FONT_FAMILY, LABEL_SIZE * scale).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+    let top = ((CAPTION_SIZE + 12.0 + LEGEND_PAD) * scale) as i32;
+    for (i, line) in lines.iter().enumerate() {
+        let x = (column * (i / rows) as u32) as i32 + px(LEGEND_PAD) as i32;
+        let y = top + ((i % rows) as f64 * LEGEND_ROW * scale) as i32;
+        let style = PALETTE[i % PALETTE.len()].stroke_width(px(LINE_WIDTH + 1.0));
+        legend_area
+            .draw(&PathElement::new(vec![(x, y), (x + px(LEGEND_LINE) as i32, y)], style))
             .map_err(|e| e.to_string())?;
+        let text_x = x + px(LEGEND_LINE + LEGEND_GAP) as i32;
+        legend_area.draw_text(&line.label, &label_style, (text_x, y)).map_err(|e| e.to_string())?;
     }
     Ok(())
 }
