@@ -1,0 +1,83 @@
+//! The integrators on mechanisms: the variational integrator keeps the energy of a long
+//! conservative run bounded, the implicit one agrees with Dormand–Prince, and an ill-posed
+//! mechanism (a massless body that nothing holds) fails with the join named.
+
+use lsdc::driver::compile_text;
+use lsdc::load::LoadOptions;
+use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+use lsdc::simulate::run::{run, Simulation};
+
+const DOUBLE_PENDULUM: &str = "import joints;\n\
+    let upper = body mass = 1.0, iframe = [0, 0, -0.5] ++ 1, inertia = [0.02, 0.02, 0.001] end;\n\
+    let lower = body mass = 0.7, iframe = [0, 0, -0.4] ++ 1, inertia = [0.01, 0.01, 0.001] end;\n\
+    join earth and upper with revolute([1, 0, 0]) as shoulder;\n\
+    join [0, 0, -1] ++ 1 @ upper and lower with revolute([1, 0, 0]) as elbow;\n\
+    apply force value = [0, 0, -9.81 * upper.mass], body = earth end on upper.iframe;\n\
+    apply force value = [0, 0, -9.81 * lower.mass], body = earth end on lower.iframe;\n\
+    initial shoulder.q = 1.2, elbow.q = -0.5;\n";
+
+fn simulate(text: &str, settings: Settings) -> Simulation {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_text("test.lsd", text, None, &options);
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let prepared = prepare(&compilation.mechanism.expect("elaborates"), &[], &settings).unwrap_or_else(|d| panic!("{d:?}"));
+    run(&prepared, &mut |_| {})
+}
+
+#[test]
+fn variational_integrator_keeps_the_energy_bounded_over_long_runs() {
+    let settings = |duration| Settings { integrator: Integrator::Symplectic, duration, output: 0.5, step: Some(2e-3), ..Settings::default() };
+    let short = simulate(DOUBLE_PENDULUM, settings(20.0));
+    let long = simulate(DOUBLE_PENDULUM, settings(200.0));
+    assert!(long.report.failure.is_none(), "{:?}", long.report.failure);
+    let (short_drift, long_drift) = (short.report.energy_drift.expect("conservative"), long.report.energy_drift.expect("conservative"));
+    // A symplectic method's energy error oscillates without growing: ten times longer, not ten
+    // times worse (a drifting method would be), and small for this step.
+    assert!(long_drift < 1e-4, "energy error {long_drift:e}");
+    assert!(long_drift < 3.0 * short_drift, "energy error grows: {short_drift:e} over 20 s, {long_drift:e} over 200 s");
+}
+
+#[test]
+fn implicit_and_explicit_integrators_agree() {
+    let tight = Settings { integrator: Integrator::DormandPrince, duration: 2.0, output: 0.5, rtol: 1e-12, atol: 1e-12, ..Settings::default() };
+    let implicit = Settings { integrator: Integrator::Implicit, rtol: 1e-9, atol: 1e-9, ..tight.clone() };
+    let reference = simulate(DOUBLE_PENDULUM, tight);
+    let stiff = simulate(DOUBLE_PENDULUM, implicit);
+    assert!(stiff.report.failure.is_none(), "{:?}", stiff.report.failure);
+    let (a, b) = (reference.samples.last().expect("samples"), stiff.samples.last().expect("samples"));
+    for k in 0..2 {
+        assert!((a.coordinates[k] - b.coordinates[k]).abs() < 1e-6, "{:?} vs {:?}", a.coordinates, b.coordinates);
+    }
+}
+
+#[test]
+fn rk4_converges_at_fourth_order() {
+    let error = |step: f64| {
+        let reference = simulate(DOUBLE_PENDULUM, Settings { integrator: Integrator::DormandPrince, duration: 1.0, output: 1.0, rtol: 1e-13, atol: 1e-13, ..Settings::default() });
+        let fixed = simulate(DOUBLE_PENDULUM, Settings { integrator: Integrator::Rk4, duration: 1.0, output: 1.0, step: Some(step), ..Settings::default() });
+        (reference.samples.last().expect("").coordinates[1] - fixed.samples.last().expect("").coordinates[1]).abs()
+    };
+    let ratio = error(0.005) / error(0.0025);
+    assert!((12.0..20.0).contains(&ratio), "error ratio {ratio} for a halved step");
+}
+
+#[test]
+fn a_massless_body_with_nothing_to_move_stops_the_run_with_the_join_named() {
+    let text = "import joints;\nlet arm = body mass = 1, iframe = 0, inertia = [1, 1, 1] end;\n\
+        let ghost = body mass = 0, inertia = 0 end;\n\
+        join earth and arm with revolute([0, 0, 1]) as hinge;\n\
+        join [1, 0, 0] ++ 1 @ arm and ghost with revolute([0, 0, 1]) as flap;\n\
+        initial hinge.q' = 1;\n";
+    let simulation = simulate(text, Settings { duration: 1.0, ..Settings::default() });
+    let failure = simulation.report.failure.expect("the run fails");
+    assert!(failure.message.contains("`flap`") && failure.message.contains("singular"), "{}", failure.message);
+    assert_eq!(failure.time, 0.0);
+}
+
+#[test]
+fn massless_arm_segments_carrying_a_mass_are_well_posed() {
+    // The satellite's arms have no mass, but the reflector at their end gives every joint inertia.
+    let text = std::fs::read_to_string("examples/satellite_fixed.lsd").expect("example");
+    let simulation = simulate(&text, Settings { duration: 0.5, ..Settings::default() });
+    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+}
