@@ -125,9 +125,18 @@ fn body_twist(v: &[f64], free: bool) -> Motion {
     if free { Motion::from_column_slice(v) } else { Motion::new(v[0], v[1], v[2], 0.0, 0.0, 0.0) }
 }
 
-/// Minimum-norm least-squares solution of `a x = b` (the rates at a singular configuration).
+/// Least-squares solution of `a x = b`: by QR while `a` has full column rank (accurate to
+/// round-off), by the minimum-norm SVD solution at a singular configuration (gimbal lock).
 fn solve_least_squares(a: &nalgebra::DMatrix<f64>, b: &Motion) -> Vec<f64> {
     let rhs = DVector::from_column_slice(b.as_slice());
+    let qr = a.clone().qr();
+    let r = qr.r();
+    let largest = r.diagonal().amax();
+    if r.diagonal().iter().all(|d| d.abs() > 1e-10 * largest) {
+        if let Some(x) = r.solve_upper_triangular(&(qr.q().transpose() * &rhs)) {
+            return x.as_slice().to_vec();
+        }
+    }
     a.clone().svd(true, true).solve(&rhs, 1e-12).map(|x| x.as_slice().to_vec()).unwrap_or_else(|_| vec![f64::NAN; a.ncols()])
 }
 

@@ -27,6 +27,8 @@ const HEIGHT: u32 = 900;
 /// PNGs are drawn this many times larger and then averaged down, which smooths the lines (the
 /// bitmap backend does not anti-alias them).
 const SUPERSAMPLING: u32 = 3;
+/// SVG user units per pixel of the SVG's displayed size (its `viewBox` is this much larger).
+const SVG_UNITS_PER_PIXEL: u32 = 4;
 /// Share of the height given to the coordinates panel.
 const UPPER_SHARE: f64 = 0.55;
 const FONT_FAMILY: &str = "sans-serif";
@@ -38,6 +40,9 @@ const LEGEND_LINE: f64 = 28.0;
 const LEGEND_GAP: f64 = 8.0;
 const LEGEND_ROW: f64 = 24.0;
 const LEGEND_PAD: f64 = 14.0;
+/// The bitmap backend's vertically centred text sits this share of its size too high (SVG
+/// viewers centre on the x-height themselves).
+const BITMAP_CENTRE_SHIFT: f64 = 0.14;
 
 /// Tableau 10, the default line colours of matplotlib: distinct and readable on white.
 const PALETTE: [RGBColor; 10] = [
@@ -75,16 +80,28 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
     register_fonts()?;
     match format {
         Format::Svg => {
-            let root = SVGBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
-            draw(&root, simulation, 1.0)?;
-            root.present().map_err(|e| e.to_string())
+            // Drawn in a finer grid than it is shown in, since the backend rounds every point to
+            // the grid: at 1 unit per pixel the curves would come out as staircases.
+            let (width, height) = (WIDTH * SVG_UNITS_PER_PIXEL, HEIGHT * SVG_UNITS_PER_PIXEL);
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
+                draw(&root, simulation, Render { scale: SVG_UNITS_PER_PIXEL as f64, bitmap: false })?;
+                root.present().map_err(|e| e.to_string())?;
+            }
+            let svg = svg.replacen(
+                &format!("<svg width=\"{width}\" height=\"{height}\""),
+                &format!("<svg width=\"{WIDTH}\" height=\"{HEIGHT}\""),
+                1,
+            );
+            std::fs::write(path, svg).map_err(|e| e.to_string())
         }
         Format::Png => {
             let (width, height) = (WIDTH * SUPERSAMPLING, HEIGHT * SUPERSAMPLING);
             let mut pixels = vec![0u8; width as usize * height as usize * 3];
             {
                 let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
-                draw(&root, simulation, SUPERSAMPLING as f64)?;
+                draw(&root, simulation, Render { scale: SUPERSAMPLING as f64, bitmap: true })?;
                 root.present().map_err(|e| e.to_string())?;
             }
             write_png(path, &downsample(&pixels, SUPERSAMPLING))
@@ -136,10 +153,12 @@ fn write_png(path: &Path, rgb: &[u8]) -> Result<(), String> {
     writer.finish().map_err(|e| e.to_string())
 }
 
-/// One line of a panel: its legend label and its points (non-finite values left out).
+/// One line of a panel: its legend label, its points (non-finite values left out) and whether
+/// it is dashed (so that a line drawn over another identical one leaves it visible).
 struct Line {
     label: String,
     points: Vec<(f64, f64)>,
+    dashed: bool,
 }
 
 impl Line {
@@ -149,13 +168,42 @@ impl Line {
             .filter_map(|s| value(s).map(|v| (s.time, v)))
             .filter(|(t, v)| t.is_finite() && v.is_finite())
             .collect();
-        Line { label: label.to_string(), points }
+        Line { label: label.to_string(), points, dashed: false }
     }
 }
 
-/// Draws both panels; `scale` multiplies every length (fonts, margins, lines) for supersampling.
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, simulation: &Simulation, scale: f64) -> Result<(), String> {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+/// How the plot is rendered: `scale` multiplies every length (fonts, margins, lines) for a
+/// supersampled bitmap or a fine SVG grid, and `bitmap` tells that the text is rasterised here
+/// rather than by an SVG viewer.
+#[derive(Clone, Copy)]
+struct Render {
+    scale: f64,
+    bitmap: bool,
+}
+
+impl Render {
+    fn px(self, length: f64) -> u32 {
+        (length * self.scale).round() as u32
+    }
+
+    fn font(self, size: f64) -> TextStyle<'static> {
+        TextStyle::from((FONT_FAMILY, size * self.scale).into_font())
+    }
+}
+
+/// The layout both panels share, so that their time axes line up.
+struct Layout {
+    render: Render,
+    time: Axis,
+    y_label_width: u32,
+    legend_width: u32,
+    legend_column: u32,
+    legend_columns: usize,
+}
+
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, simulation: &Simulation, render: Render) -> Result<(), String> {
+    let error = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(error)?;
     let samples = &simulation.samples;
     let coordinates: Vec<Line> = simulation
         .coordinate_names
@@ -165,119 +213,253 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, simulation: &Simulati
         .collect();
     let mut energy = vec![Line::new("kinetic", samples, |s| Some(s.kinetic_energy))];
     if samples.iter().any(|s| s.potential_energy.is_some()) {
-        energy.push(Line::new("total (kinetic + potential)", samples, |s| {
+        let mut total = Line::new("total (kinetic + potential)", samples, |s| {
             s.potential_energy.map(|p| s.kinetic_energy + p)
-        }));
+        });
+        total.dashed = true;
+        energy.push(total);
     }
+    let coordinate_axis = Axis::new(values(&coordinates), true);
+    let energy_axis = Axis::new(values(&energy), true);
 
     let (_, height) = root.dim_in_pixel();
     let (upper, lower) = root.split_vertically((height as f64 * UPPER_SHARE) as u32);
-    // Both panels get a legend column of the same width, so that their time axes line up.
-    let upper_rows = legend_rows(&upper, coordinates.len(), scale);
-    let label_style = TextStyle::from((FONT_FAMILY, LABEL_SIZE * scale).into_font());
-    let mut column = 0u32;
-    for line in coordinates.iter().chain(&energy) {
-        let (text_width, _) = root.estimate_text_size(&line.label, &label_style).map_err(|e| e.to_string())?;
-        column = column.max(text_width);
+    let label_style = render.font(LABEL_SIZE);
+    let text_width = |text: &str| root.estimate_text_size(text, &label_style).map(|(w, _)| w).map_err(error);
+    let mut y_label_width = 0;
+    for axis in [&coordinate_axis, &energy_axis] {
+        for value in [axis.range.start, axis.range.end] {
+            y_label_width = y_label_width.max(text_width(&axis.label(value))?);
+        }
     }
-    let column = column + ((LEGEND_LINE + LEGEND_GAP + LEGEND_PAD) * scale) as u32;
-    let columns = coordinates.len().div_ceil(upper_rows).max(1) as u32;
-    let legend_width = column * columns + (LEGEND_PAD * scale) as u32;
+    let mut legend_column = 0;
+    for line in coordinates.iter().chain(&energy) {
+        legend_column = legend_column.max(text_width(&line.label)?);
+    }
+    let legend_column = legend_column + render.px(LEGEND_LINE + LEGEND_GAP + LEGEND_PAD);
+    // As many columns as the coordinates need, within half the width.
+    let (width, _) = root.dim_in_pixel();
+    let needed = coordinates.len().div_ceil(legend_rows(&upper, coordinates.len(), render)).max(1) as u32;
+    let columns = needed.min(((width / 2).saturating_sub(render.px(LEGEND_PAD)) / legend_column).max(1));
+    let layout = Layout {
+        render,
+        time: Axis::new(samples.iter().map(|s| s.time), false),
+        y_label_width,
+        legend_width: legend_column * columns + render.px(LEGEND_PAD),
+        legend_column,
+        legend_columns: columns as usize,
+    };
+    panel(&upper, "Coordinates", "coordinate", &coordinate_axis, &coordinates, &layout)?;
+    panel(&lower, "Energy", "energy", &energy_axis, &energy, &layout)
+}
 
-    let time = time_range(samples);
-    panel(&upper, "Coordinates", "coordinate", time.clone(), &coordinates, legend_width, column, scale)?;
-    panel(&lower, "Energy", "energy", time, &energy, legend_width, column, scale)
+fn values(lines: &[Line]) -> impl Iterator<Item = f64> + '_ {
+    lines.iter().flat_map(|l| l.points.iter().map(|&(_, v)| v))
 }
 
 /// How many legend rows fit beside a panel's plot.
-fn legend_rows<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lines: usize, scale: f64) -> usize {
+fn legend_rows<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lines: usize, render: Render) -> usize {
     let (_, height) = area.dim_in_pixel();
-    let usable = height as f64 - (CAPTION_SIZE + 2.0 * LEGEND_PAD) * scale;
-    ((usable / (LEGEND_ROW * scale)).floor().max(1.0) as usize).min(lines.max(1))
+    let usable = height as f64 - (CAPTION_SIZE + 2.0 * LEGEND_PAD) * render.scale;
+    ((usable / (LEGEND_ROW * render.scale)).floor().max(1.0) as usize).min(lines.max(1))
 }
 
 /// One panel: a caption, axes with a light grid and the lines, and their legend to the right.
-#[allow(clippy::too_many_arguments)]
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     caption: &str,
     y_description: &str,
-    time: Range<f64>,
+    axis: &Axis,
     lines: &[Line],
-    legend_width: u32,
-    column: u32,
-    scale: f64,
+    layout: &Layout,
 ) -> Result<(), String> {
-    let px = |length: f64| (length * scale).round() as u32;
+    let error = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let render = layout.render;
+    let px = |length: f64| render.px(length);
     let (width, _) = area.dim_in_pixel();
-    let (plot_area, legend_area) = area.split_horizontally(width.saturating_sub(legend_width));
-    let values = value_range(lines.iter().flat_map(|l| l.points.iter().map(|&(_, v)| v)));
+    let (plot_area, legend_area) = area.split_horizontally(width.saturating_sub(layout.legend_width));
     let mut chart = ChartBuilder::on(&plot_area)
-        .caption(caption, (FONT_FAMILY, CAPTION_SIZE * scale))
+        .caption(caption, render.font(CAPTION_SIZE))
         .margin(px(12.0))
         .x_label_area_size(px(48.0))
-        .y_label_area_size(px(90.0))
-        .build_cartesian_2d(time, values)
-        .map_err(|e| e.to_string())?;
+        .y_label_area_size(layout.y_label_width + px(44.0))
+        .build_cartesian_2d(layout.time.range.clone(), axis.range.clone())
+        .map_err(error)?;
+    let x_label = |t: &f64| layout.time.label(*t);
+    let y_label = |v: &f64| axis.label(*v);
     chart
         .configure_mesh()
         .x_desc("time")
-        .y_desc(y_description)
-        .label_style((FONT_FAMILY, LABEL_SIZE * scale))
-        .axis_desc_style((FONT_FAMILY, LABEL_SIZE * scale))
+        .y_desc(axis.description(y_description))
+        .x_label_formatter(&x_label)
+        .y_label_formatter(&y_label)
+        .label_style(render.font(LABEL_SIZE))
+        .axis_desc_style(render.font(LABEL_SIZE))
         .axis_style(BLACK.stroke_width(px(1.0)))
         .bold_line_style(BLACK.mix(0.15).stroke_width(px(1.0)))
         .light_line_style(BLACK.mix(0.05).stroke_width(px(1.0)))
         .set_all_tick_mark_size(px(5.0))
         .draw()
-        .map_err(|e| e.to_string())?;
+        .map_err(error)?;
     for (i, line) in lines.iter().enumerate() {
         let style = PALETTE[i % PALETTE.len()].stroke_width(px(LINE_WIDTH));
-        chart.draw_series(LineSeries::new(line.points.iter().copied(), style)).map_err(|e| e.to_string())?;
+        let points = line.points.iter().map(|&(t, v)| (t, v - axis.offset));
+        if line.dashed {
+            chart.draw_series(DashedLineSeries::new(points, px(10.0), px(6.0), style)).map_err(error)?;
+        } else {
+            chart.draw_series(LineSeries::new(points, style)).map_err(error)?;
+        }
     }
 
-    // The legend, in columns of as many rows as fit, level with the top of the plot.
-    let rows = legend_rows(area, lines.len(), scale);
-    let label_style = TextStyle::from((FONT_FAMILY, LABEL_SIZE * scale).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
-    let top = ((CAPTION_SIZE + 12.0 + LEGEND_PAD) * scale) as i32;
-    for (i, line) in lines.iter().enumerate() {
-        let x = (column * (i / rows) as u32) as i32 + px(LEGEND_PAD) as i32;
-        let y = top + ((i % rows) as f64 * LEGEND_ROW * scale) as i32;
+    // The legend, in columns of as many rows as fit, level with the top of the plot; when the
+    // lines are too many for it, its last entry says how many it leaves out.
+    let rows = legend_rows(area, lines.len(), render);
+    let capacity = rows * layout.legend_columns;
+    let shown = if lines.len() > capacity { capacity - 1 } else { lines.len() };
+    let label_style = render.font(LABEL_SIZE).pos(Pos::new(HPos::Left, VPos::Center));
+    let top = ((CAPTION_SIZE + 12.0 + LEGEND_PAD) * render.scale) as i32;
+    let text_shift = if render.bitmap { (BITMAP_CENTRE_SHIFT * LABEL_SIZE * render.scale) as i32 } else { 0 };
+    let position = |i: usize| {
+        let x = (layout.legend_column * (i / rows) as u32 + px(LEGEND_PAD)) as i32;
+        (x, top + ((i % rows) as f64 * LEGEND_ROW * render.scale) as i32)
+    };
+    if shown < lines.len() {
+        let (x, y) = position(shown);
+        let text = format!("… and {} more", lines.len() - shown);
+        legend_area.draw_text(&text, &label_style, (x, y + text_shift)).map_err(error)?;
+    }
+    for (i, line) in lines.iter().enumerate().take(shown) {
+        let (x, y) = position(i);
         let style = PALETTE[i % PALETTE.len()].stroke_width(px(LINE_WIDTH + 1.0));
-        legend_area
-            .draw(&PathElement::new(vec![(x, y), (x + px(LEGEND_LINE) as i32, y)], style))
-            .map_err(|e| e.to_string())?;
+        let length = px(LEGEND_LINE) as i32;
+        if line.dashed {
+            let (dash, gap) = (px(10.0) as i32, px(6.0) as i32);
+            for start in (0..length).step_by((dash + gap) as usize) {
+                let end = (start + dash).min(length);
+                legend_area.draw(&PathElement::new(vec![(x + start, y), (x + end, y)], style)).map_err(error)?;
+            }
+        } else {
+            legend_area.draw(&PathElement::new(vec![(x, y), (x + length, y)], style)).map_err(error)?;
+        }
         let text_x = x + px(LEGEND_LINE + LEGEND_GAP) as i32;
-        legend_area.draw_text(&line.label, &label_style, (text_x, y)).map_err(|e| e.to_string())?;
+        legend_area.draw_text(&line.label, &label_style, (text_x, y + text_shift)).map_err(error)?;
     }
     Ok(())
 }
 
-fn time_range(samples: &[Sample]) -> Range<f64> {
-    let times = samples.iter().map(|s| s.time).filter(|t| t.is_finite());
-    let (start, end) = times.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)));
-    if start > end {
-        0.0..1.0
-    } else if end > start {
-        start..end
-    } else {
-        start..start + 1.0
+/// Most significant digits a tick label may need before the axis shows its values relative to
+/// an offset (as in "energy − 4.0052") instead.
+const MAX_DIGITS: i32 = 6;
+/// The number of labelled ticks plotters puts on an axis at most.
+const MAX_TICKS: f64 = 11.0;
+
+/// A value axis: the plotted range, the offset subtracted from the values to get it, and how its
+/// tick labels are written.
+struct Axis {
+    range: Range<f64>,
+    offset: f64,
+    offset_text: String,
+    /// The step between labelled ticks, and how their labels are written.
+    step: f64,
+    format: LabelFormat,
+}
+
+#[derive(Debug, PartialEq)]
+enum LabelFormat {
+    /// This many decimals.
+    Fixed(usize),
+    /// Scientific notation with this many decimals in the mantissa.
+    Scientific(usize),
+}
+
+impl Axis {
+    /// The axis over the finite values, with a margin of 5% on each side when `margin`; a
+    /// constant (or no) value gets a range around it of its own size, at least one unit.
+    fn new(values: impl Iterator<Item = f64>, margin: bool) -> Axis {
+        let (lo, hi) = values
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        if lo > hi {
+            return Axis::plain(-1.0..1.0);
+        }
+        let span = hi - lo;
+        let magnitude = lo.abs().max(hi.abs());
+        if span <= 1e-13 * magnitude || span == 0.0 {
+            let half = if margin { magnitude.max(1.0) } else { 1.0 };
+            return Axis::plain(if margin { lo - half..hi + half } else { lo..hi + half });
+        }
+        let pad = if margin { 0.05 * span } else { 0.0 };
+        let (lo, hi) = (lo - pad, hi + pad);
+        let step = tick_step(lo, hi);
+        if magnitude.log10().floor() - step.log10().floor() + 1.0 <= MAX_DIGITS as f64 {
+            return Axis::plain(lo..hi);
+        }
+        let unit = 10f64.powf(span.log10().floor() + 1.0);
+        let offset = ((lo + hi) / 2.0 / unit).round() * unit;
+        let decimals = (-unit.log10().round()).max(0.0) as usize;
+        let mut offset_text = format!("{:.*}", decimals, offset.abs());
+        if offset_text.contains('.') {
+            offset_text = offset_text.trim_end_matches('0').trim_end_matches('.').to_string();
+        }
+        Axis { offset, offset_text, ..Axis::plain(lo - offset..hi - offset) }
+    }
+
+    fn plain(range: Range<f64>) -> Axis {
+        let step = tick_step(range.start, range.end);
+        let format = label_format(range.start, range.end, step);
+        Axis { range, offset: 0.0, offset_text: String::new(), step, format }
+    }
+
+    fn label(&self, value: f64) -> String {
+        // A tick at zero comes out of plotters' arithmetic as, say, -8e-28.
+        let value = if value.abs() < 1e-6 * self.step { 0.0 } else { value };
+        if value == 0.0 {
+            return if let LabelFormat::Fixed(decimals) = self.format { format!("{:.decimals$}", 0.0) } else { "0".into() };
+        }
+        let text = match self.format {
+            LabelFormat::Fixed(decimals) => format!("{value:.decimals$}"),
+            LabelFormat::Scientific(decimals) => format!("{value:.decimals$e}"),
+        };
+        // No "-0.0" for a tick that is zero up to rounding.
+        match text.strip_prefix('-') {
+            Some(rest) if rest.chars().take_while(|c| *c != 'e').all(|c| c == '0' || c == '.') => rest.to_string(),
+            _ => text,
+        }
+    }
+
+    fn description(&self, name: &str) -> String {
+        match self.offset {
+            o if o > 0.0 => format!("{name} − {}", self.offset_text),
+            o if o < 0.0 => format!("{name} + {}", self.offset_text),
+            _ => name.to_string(),
+        }
     }
 }
 
-/// The range of the values with a margin of 5% on each side; a constant (or no) value gets a
-/// range around it of its own size (at least one unit).
-fn value_range(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
-    if lo > hi {
-        return -1.0..1.0;
+/// The step between plotters' labelled ticks over `lo..hi`: the smallest of 1, 2 and 5 times a
+/// power of ten that gives at most `MAX_TICKS` ticks.
+fn tick_step(lo: f64, hi: f64) -> f64 {
+    let first = (hi - lo).log10().floor() as i32 - 2;
+    for power in first..first + 6 {
+        for factor in [1.0, 2.0, 5.0] {
+            let step = factor * 10f64.powi(power);
+            if (hi / step + 1e-9).floor() - (lo / step - 1e-9).ceil() + 1.0 <= MAX_TICKS {
+                return step;
+            }
+        }
     }
-    let span = hi - lo;
-    if span <= 1e-12 * lo.abs().max(hi.abs()) {
-        let half = lo.abs().max(1.0);
-        return lo - half..hi + half;
+    hi - lo
+}
+
+/// Enough decimals to tell the ticks apart; scientific notation for large or small magnitudes.
+fn label_format(lo: f64, hi: f64, step: f64) -> LabelFormat {
+    let magnitude = lo.abs().max(hi.abs());
+    let (top, bottom) = (magnitude.log10().floor() as i32, (step.log10() + 1e-9).floor() as i32);
+    if !(1e-3..1e5).contains(&magnitude) {
+        LabelFormat::Scientific((top - bottom).max(0) as usize)
+    } else {
+        LabelFormat::Fixed((-bottom).max(0) as usize)
     }
-    lo - 0.05 * span..hi + 0.05 * span
 }
 
 #[cfg(test)]
@@ -329,7 +511,7 @@ mod tests {
         let svg = temp_path("test.svg");
         plot(&simulation, &svg).unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
-        assert!(text.starts_with("<svg"));
+        assert!(text.starts_with(&format!("<svg width=\"{WIDTH}\" height=\"{HEIGHT}\" viewBox=")));
         for name in &simulation.coordinate_names {
             assert!(text.contains(name.as_str()), "the SVG names {name}");
         }
@@ -351,6 +533,27 @@ mod tests {
         plot(&simulation(1, false), &path).unwrap();
         assert!(std::fs::metadata(&path).unwrap().len() > 0);
         std::fs::remove_file(path).unwrap();
+    }
+
+    #[test]
+    fn tick_labels_tell_the_ticks_apart() {
+        let axis = Axis::new([-1.05, 1.05].into_iter(), false);
+        assert_eq!((axis.offset, &axis.format), (0.0, &LabelFormat::Fixed(1)));
+        assert_eq!(axis.label(-1e-17), "0.0");
+        assert_eq!(axis.label(-0.4), "-0.4");
+        assert_eq!(Axis::new([0.0, 4500.0].into_iter(), false).label(500.0), "500");
+        assert_eq!(Axis::new([0.0, 2e-6].into_iter(), false).label(1e-6), "1.0e-6");
+        // A conserved energy that drifts by parts in 10¹²: labelled relative to an offset.
+        let axis = Axis::new([4.005_2, 4.005_2 + 3e-11].into_iter(), true);
+        assert_eq!(axis.description("energy"), "energy − 4.0052");
+        assert!(axis.range.start > -1e-10 && axis.range.end < 1e-10);
+        assert_eq!(axis.label(2e-11), "2.0e-11");
+        assert_eq!(axis.label(-8e-28), "0");
+        let axis = Axis::new([-2.96, -2.96 - 1e-9].into_iter(), true);
+        assert!(axis.description("energy").starts_with("energy + 2.96"), "{}", axis.description("energy"));
+        // Constant or missing values still get a range.
+        assert_eq!(Axis::new([3.0, 3.0].into_iter(), true).range, 0.0..6.0);
+        assert_eq!(Axis::new(std::iter::empty(), true).range, -1.0..1.0);
     }
 
     #[test]

@@ -194,7 +194,7 @@ fn fastest_coordinate(names: &[String], samples: &[Sample]) -> String {
     let Some(last) = samples.last() else { return String::new() };
     let fastest = last.rates.iter().enumerate().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()).then(a.1.is_nan().cmp(&b.1.is_nan())));
     match fastest {
-        Some((i, rate)) if i < names.len() => {
+        Some((i, rate)) if i < names.len() && *rate != 0.0 => {
             format!(" (at t = {}, the fastest coordinate was `{}`, moving at {rate:.3e})", last.time, names[i])
         }
         _ => String::new(),
@@ -227,6 +227,9 @@ fn energy_drift(samples: &[Sample]) -> Option<f64> {
 }
 
 fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<[f64; 2]> {
+    if samples.len() < 2 {
+        return None;
+    }
     let free = model.joints.iter().filter(|j| j.parent == 0).all(|j| matches!(j.kind, JointType::Free { .. }));
     if !free || !model.applied.is_empty() {
         return None;
