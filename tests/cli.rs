@@ -80,3 +80,49 @@ fn parse_prints_the_syntax_tree() {
     assert_eq!(code, 0);
     assert!(stdout.contains("Join"), "{stdout}");
 }
+
+#[test]
+fn simulate_writes_csv_samples_and_a_report() {
+    let (code, stdout, stderr) = lsdc(&["simulate", "examples/pendulum.lsd"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.starts_with("time,swing.q,swing.q',kinetic_energy,potential_energy\n"), "{stdout}");
+    assert_eq!(stdout.lines().count(), 1 + 101, "a header and one row per output");
+    assert!(stderr.contains("dopri5:") && stderr.contains("energy drift"), "{stderr}");
+}
+
+#[test]
+fn simulate_takes_values_and_overrides_from_the_command_line() {
+    let (code, stdout, stderr) = lsdc(&[
+        "simulate", "tests/golden/../../examples/pendulum.lsd", "--duration", "0.5", "--every", "0.25",
+        "--integrator", "rk4", "--step", "0.001", "--format", "json", "--report", "json",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let value: serde_json::Value = serde_json::from_str(&stdout).expect("JSON samples");
+    assert_eq!(value["samples"].as_array().map(Vec::len), Some(3));
+    let report: serde_json::Value = serde_json::from_str(&stderr).expect("JSON report");
+    assert_eq!(report["integrator"], "rk4");
+    assert_eq!(report["steps"], 500);
+}
+
+#[test]
+fn simulate_lists_every_missing_value() {
+    let (code, _, stderr) = lsdc(&["simulate", "examples/satellite.lsd"]);
+    assert_eq!(code, 1);
+    for missing in ["mass(satellite)", "inertia_x(satellite)", "v1T_1_2_z", "v4T_4_G_z", "cL2_x", "fL3_y", "cL4_y"] {
+        assert!(stderr.contains(missing), "{missing} not listed:\n{stderr}");
+    }
+    let (code, _, stderr) = lsdc(&["simulate", "examples/pendulum.lsd", "--set", "nonsense=1"]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("no unknown of that name"), "{stderr}");
+    assert_eq!(lsdc(&["simulate", "examples/pendulum.lsd", "--set", "oops"]).0, 2);
+}
+
+#[test]
+fn a_failing_simulation_keeps_its_output_and_says_so() {
+    let (code, stdout, stderr) = lsdc(&["simulate", "examples/runaway.lsd"]);
+    assert_eq!(code, 1);
+    let last = stdout.lines().last().expect("output");
+    assert!(last.starts_with("# the run failed at t = 1.55"), "{last}");
+    assert!(stdout.lines().count() > 150, "rows before the failure are kept");
+    assert!(stderr.contains("FAILED") && stderr.contains("`slide.x`"), "{stderr}");
+}

@@ -81,3 +81,29 @@ fn massless_arm_segments_carrying_a_mass_are_well_posed() {
     let simulation = simulate(&text, Settings { duration: 0.5, ..Settings::default() });
     assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
 }
+
+#[test]
+fn an_effort_that_is_not_a_number_stops_the_run_when_and_where_it_happens() {
+    // The spring force sqrt(1 - x) has no value once the slider passes x = 1.
+    let text = "import joints;\nlet block = body mass = 1, iframe = 0, inertia = [1, 1, 1] end;\n\
+        join earth and block with link(x) dof = [x, 0, 0], force = [sqrt(1 - x), 0, 0] end as slide;\n";
+    let simulation = simulate(text, Settings { duration: 3.0, output: 0.1, ..Settings::default() });
+    let failure = simulation.report.failure.expect("the run fails");
+    assert!(failure.message.contains("`slide`") && failure.message.contains("not a number"), "{}", failure.message);
+    // x = t²/2 under a unit force: x reaches 1 at t = √2.
+    assert!(failure.time > 1.2 && failure.time < 1.5, "{}", failure.time);
+    let last = simulation.samples.last().expect("outputs before the failure are kept");
+    assert!(last.time <= failure.time && last.time > 1.2);
+}
+
+#[test]
+fn gravity_from_the_standard_library_weighs_each_body() {
+    let text = "import joints; import gravity;\n\
+        let rod = body mass = 2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.01] end;\n\
+        join earth and rod with prismatic([0, 0, 1]) as drop;\n\
+        apply weight(rod) on rod.iframe;\n";
+    let simulation = simulate(text, Settings { duration: 1.0, output: 1.0, rtol: 1e-12, atol: 1e-12, ..Settings::default() });
+    let last = simulation.samples.last().expect("samples");
+    // Free fall: z = -g t²/2.
+    assert!((last.coordinates[0] + 0.5 * 9.80665).abs() < 1e-10, "{:?}", last.coordinates);
+}

@@ -70,9 +70,7 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
     let format = match extension.as_deref() {
         Some("svg") => Format::Svg,
         Some("png") => Format::Png,
-        _ => {
-            return Err("a plot's file name must end in .svg (vector) or .png (bitmap)".to_string())
-        }
+        _ => return Err("a plot's file name must end in .svg (vector) or .png (bitmap)".to_string()),
     };
     if simulation.samples.is_empty() {
         return Err("the simulation has no outputs to plot".to_string());
@@ -112,8 +110,8 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
 /// Registers the embedded font once per process, under the family the plots use.
 fn register_fonts() -> Result<(), String> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let registered =
-        *REGISTERED.get_or_init(|| register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular()).is_ok());
+    let registered = *REGISTERED
+        .get_or_init(|| register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular()).is_ok());
     if registered {
         Ok(())
     } else {
@@ -201,7 +199,11 @@ struct Layout {
     legend_columns: usize,
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, simulation: &Simulation, render: Render) -> Result<(), String> {
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    simulation: &Simulation,
+    render: Render,
+) -> Result<(), String> {
     let error = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(error)?;
     let samples = &simulation.samples;
@@ -336,7 +338,9 @@ fn panel<DB: DrawingBackend>(
             let (dash, gap) = (px(10.0) as i32, px(6.0) as i32);
             for start in (0..length).step_by((dash + gap) as usize) {
                 let end = (start + dash).min(length);
-                legend_area.draw(&PathElement::new(vec![(x + start, y), (x + end, y)], style)).map_err(error)?;
+                legend_area
+                    .draw(&PathElement::new(vec![(x + start, y), (x + end, y)], style))
+                    .map_err(error)?;
             }
         } else {
             legend_area.draw(&PathElement::new(vec![(x, y), (x + length, y)], style)).map_err(error)?;
@@ -414,7 +418,11 @@ impl Axis {
         // A tick at zero comes out of plotters' arithmetic as, say, -8e-28.
         let value = if value.abs() < 1e-6 * self.step { 0.0 } else { value };
         if value == 0.0 {
-            return if let LabelFormat::Fixed(decimals) = self.format { format!("{:.decimals$}", 0.0) } else { "0".into() };
+            return if let LabelFormat::Fixed(decimals) = self.format {
+                format!("{:.decimals$}", 0.0)
+            } else {
+                "0".into()
+            };
         }
         let text = match self.format {
             LabelFormat::Fixed(decimals) => format!("{value:.decimals$}"),
@@ -422,7 +430,9 @@ impl Axis {
         };
         // No "-0.0" for a tick that is zero up to rounding.
         match text.strip_prefix('-') {
-            Some(rest) if rest.chars().take_while(|c| *c != 'e').all(|c| c == '0' || c == '.') => rest.to_string(),
+            Some(rest) if rest.chars().take_while(|c| *c != 'e').all(|c| c == '0' || c == '.') => {
+                rest.to_string()
+            }
             _ => text,
         }
     }
@@ -479,7 +489,7 @@ mod tests {
                     coordinates: vec![angle, slide],
                     rates: vec![rate, slide_rate],
                     kinetic_energy: kinetic,
-                    potential_energy: conservative.then(|| 2.0 - kinetic + 0.01 * t),
+                    potential_energy: conservative.then_some(2.0 - kinetic + 0.01 * t),
                     momentum: [0.0; 6],
                 }
             })

@@ -37,6 +37,16 @@ impl<'m> MechanicalSystem<'m> {
         let efforts = evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))?;
         let accelerations = aba(model, &mut self.data, &q, v, efforts.tau.as_slice(), &efforts.external)
             .map_err(|e| self.dynamics_message(&e))?;
+        if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
+            let joint = model.joints.iter().find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k));
+            let name = joint.map_or("?".to_string(), |j| j.chain.name.clone());
+            let cause = if efforts.tau.iter().all(|x| x.is_finite()) && efforts.external.iter().all(|f| f.iter().all(|x| x.is_finite())) {
+                "the state became too large"
+            } else {
+                "an effort is not a number (a square root or logarithm of a negative value, a division by zero)"
+            };
+            return Err(format!("the acceleration of join `{name}` is not finite: {cause}"));
+        }
         let (dq, dv) = dydt.split_at_mut(model.nq);
         for joint in &model.joints {
             let range = joint.q_offset..joint.q_offset + joint.nq();
