@@ -75,13 +75,9 @@ impl Model {
 fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
     match error {
         EvalError::Missing(id) => {
-            let unknown = &mechanism.unknowns[id.0 as usize];
-            let name = match unknown.origin {
-                crate::elab::mechanism::Origin::Written => unknown.name.as_deref().map_or("this unknown".to_string(), |n| format!("`{n}`")),
-                origin => format!("`{}`", mechanism.generic_name(origin)),
-            };
+            let name = crate::kinematics::eval::unknown_label(mechanism, id);
             Diagnostic::error("E0806", format!("{what} needs a value for {name}"))
-                .primary(unknown.span, "no value given")
+                .primary(mechanism.unknowns[id.0 as usize].span, "no value given")
                 .help("give it a number in the program (`mass = 2`), or a value with `--set`")
         }
         EvalError::NotGeometric(detail) => Diagnostic::error("E0807", format!("{what} cannot depend on {detail}")),

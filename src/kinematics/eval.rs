@@ -19,17 +19,21 @@ pub enum EvalError {
     NotGeometric(&'static str),
 }
 
+/// How messages name an unknown: `` `L` `` (its `let` name), `` `mass(arm)` `` (a generic
+/// quantity) or "an unknown `?s`".
+pub fn unknown_label(mechanism: &crate::elab::mechanism::Mechanism, id: UnknownId) -> String {
+    let unknown = &mechanism.unknowns[id.0 as usize];
+    match (&unknown.name, unknown.origin) {
+        (Some(name), _) => format!("`{name}`"),
+        (None, crate::elab::mechanism::Origin::Written) => "an unknown `?s`".to_string(),
+        (None, origin) => format!("`{}`", mechanism.generic_name(origin)),
+    }
+}
+
 /// A sentence for people about an evaluation error.
 pub fn describe(error: &EvalError, mechanism: &crate::elab::mechanism::Mechanism) -> String {
     match error {
-        EvalError::Missing(id) => {
-            let unknown = &mechanism.unknowns[id.0 as usize];
-            match (&unknown.name, unknown.origin) {
-                (Some(name), _) => format!("no value for `{name}`"),
-                (None, crate::elab::mechanism::Origin::Written) => "no value for an unknown `?s`".to_string(),
-                (None, origin) => format!("no value for `{}`", mechanism.generic_name(origin)),
-            }
-        }
+        EvalError::Missing(id) => format!("no value for {}", unknown_label(mechanism, *id)),
         EvalError::NotGeometric(what) => format!("it depends on {what}"),
     }
 }

@@ -279,16 +279,9 @@ pub fn constant_pose(d: &Displacement, unknowns: &UnknownValues) -> Result<Pose,
 fn geometry_error(mechanism: &Mechanism, error: EvalError, span: Span, join: &str) -> Diagnostic {
     match error {
         EvalError::Missing(id) => {
-            let unknown = &mechanism.unknowns[id.0 as usize];
-            let what = match unknown.origin {
-                crate::elab::mechanism::Origin::Written => match &unknown.name {
-                    Some(name) => format!("the unknown `{name}`"),
-                    None => "this unknown".to_string(),
-                },
-                origin => format!("`{}`", mechanism.generic_name(origin)),
-            };
+            let what = super::eval::unknown_label(mechanism, id);
             Diagnostic::error("E0801", format!("the geometry of join `{join}` needs a value for {what}"))
-                .primary(unknown.span, "no value given")
+                .primary(mechanism.unknowns[id.0 as usize].span, "no value given")
                 .secondary(span, "used by this join")
                 .help("give it a value: `let L = 0.5;` and use `L` instead of `?s`")
         }
