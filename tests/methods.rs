@@ -107,3 +107,22 @@ fn gravity_from_the_standard_library_weighs_each_body() {
     // Free fall: z = -g t²/2.
     assert!((last.coordinates[0] + 0.5 * 9.80665).abs() < 1e-10, "{:?}", last.coordinates);
 }
+
+#[test]
+fn satellite_passes_through_the_euler_angle_singularity() {
+    // The satellite's free link uses Z-X-Z Euler angles (ps, th, ph), singular at th = 0: start
+    // there, with the nutation rate carrying it through, and the run goes on, reporting angles
+    // that keep describing the same attitude.
+    let text = std::fs::read_to_string("examples/satellite_springs.lsd")
+        .expect("example")
+        .replace("initial base.th = 0.5,", "initial base.th = 0,")
+        .replace("base.th' = 0.01", "base.th' = -0.2");
+    let simulation = simulate(&text, Settings { duration: 2.0, output: 0.01, rtol: 1e-10, atol: 1e-10, ..Settings::default() });
+    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+    let th = simulation.coordinate_names.iter().position(|n| n == "base.th").expect("th");
+    assert_eq!(simulation.samples[0].coordinates[th], 0.0, "starts at the singularity");
+    let farthest = simulation.samples.iter().map(|s| s.coordinates[th].abs()).fold(0.0, f64::max);
+    assert!(farthest > 0.3, "th leaves the singularity: at most {farthest}");
+    assert!(simulation.samples.iter().all(|s| s.coordinates.iter().chain(&s.rates).all(|x| x.is_finite())), "finite outputs");
+    assert!(simulation.report.momentum_drift.expect("free")[1] < 1e-8, "{:?}", simulation.report.momentum_drift);
+}
