@@ -92,7 +92,7 @@ fn main() {
             r.duration,
             r.steps,
             r.function_evaluations,
-            r.steps as f64 / r.cpu_seconds
+            r.steps as f64 / r.run_seconds
         );
     }
 }

@@ -367,14 +367,16 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
         }
         None => out(&samples),
     }
-    if let Some(path) = &args.plot {
-        if let Err(message) = lsdc::output::plot::plot(&simulation, path) {
-            eprintln!("error: cannot draw `{}`: {message}", path.display());
-        }
-    }
+    let plotted = match &args.plot {
+        Some(path) => lsdc::output::plot::plot(&simulation, path).map_err(|message| format!("cannot draw `{}`: {message}", path.display())),
+        None => Ok(()),
+    };
     match args.report {
         Format::Text => eprint!("{}", text::run_report(&simulation.report)),
         Format::Json => eprintln!("{}", json(&simulation.report)),
+    }
+    if let Err(message) = plotted {
+        return usage_error(&message);
     }
     if simulation.report.failure.is_some() {
         ExitCode::from(1)

@@ -291,7 +291,7 @@ fn free_body_flips_through_the_angle_singularity_and_keeps_its_momentum() {
         }
         previous = Some(s);
     }
-    let [linear, angular] = simulation.report.momentum_drift.expect("a free body without efforts");
+    let lsdc::simulate::run::MomentumDrift { linear, angular } = simulation.report.momentum_drift.expect("a free body without efforts");
     eprintln!(
         "free body: angular momentum drift {angular_drift:e} (|L| = {:.6}), report {angular:e}; linear {linear_drift:e}, report {linear:e}; \
          kinetic energy from the angles {energy_gap:e}; first crossing of π/2 + kπ at t = {crossing:?}; smallest |cos b| {smallest_cosine:e}; \
@@ -345,7 +345,7 @@ fn satellite_with_joint_springs_keeps_its_momentum() {
         hinge_min = hinge_min.min(s.coordinates[6]);
         hinge_max = hinge_max.max(s.coordinates[6]);
     }
-    let [linear, angular] = simulation.report.momentum_drift.expect("nothing outside acts on the satellite");
+    let lsdc::simulate::run::MomentumDrift { linear, angular } = simulation.report.momentum_drift.expect("nothing outside acts on the satellite");
     let (linear, angular) = (linear / norm(&p0), angular / norm(&l0));
     eprintln!(
         "satellite: |p| = {:.6}, |L| = {:.6}; relative momentum drift: linear {linear:e}, angular {angular:e} (report), \

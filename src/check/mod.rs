@@ -301,8 +301,16 @@ impl<'w> Checker<'w> {
             );
         }
         let mut ctx = self.ctx(scope);
-        for field in fields {
+        for (i, field) in fields.iter().enumerate() {
             let name = &*field.name.name;
+            if let Some(first) = fields[..i].iter().find(|f| f.name.name == field.name.name) {
+                self.report(
+                    Diagnostic::error("E0303", format!("field `{name}` is given twice"))
+                        .primary(field.name.span, "second value")
+                        .secondary(first.name.span, "first value"),
+                );
+                continue;
+            }
             if name == "integrator" {
                 let known = crate::check::types::INTEGRATORS;
                 let given = match &field.value.kind {

@@ -503,7 +503,7 @@ mod tests {
                 steps: count,
                 rejected_steps: 0,
                 function_evaluations: 4 * count,
-                cpu_seconds: 0.0,
+                run_seconds: 0.0,
                 energy_drift: None,
                 momentum_drift: None,
                 failure: None,

@@ -109,14 +109,14 @@ pub fn assembly(report: &AssemblyReport) -> String {
 /// The run report of a simulation, for people.
 pub fn run_report(report: &crate::simulate::run::Report) -> String {
     let mut out = format!(
-        "{}: {} steps ({} rejected), {} function evaluations, {:.3} s CPU for {} s simulated\n",
-        report.integrator, report.steps, report.rejected_steps, report.function_evaluations, report.cpu_seconds, report.duration
+        "{}: {} steps ({} rejected), {} function evaluations, {:.3} s to simulate {} s\n",
+        report.integrator, report.steps, report.rejected_steps, report.function_evaluations, report.run_seconds, report.duration
     );
     if let Some(drift) = report.energy_drift {
         out += &format!("energy drift (relative): {drift:.3e}\n");
     }
-    if let Some([linear, angular]) = report.momentum_drift {
-        out += &format!("momentum drift: linear {linear:.3e}, angular {angular:.3e}\n");
+    if let Some(drift) = report.momentum_drift {
+        out += &format!("momentum drift: linear {:.3e}, angular {:.3e}\n", drift.linear, drift.angular);
     }
     if let Some(failure) = &report.failure {
         out += &format!("the run FAILED at t = {}: {}\n", failure.time, failure.message);

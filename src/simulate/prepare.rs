@@ -130,6 +130,11 @@ fn names_of(mechanism: &Mechanism, generated: &HashMap<UnknownId, String>, id: U
     if let Some(name) = generated.get(&id) {
         names.push(name.clone());
     }
+    if names.is_empty() {
+        // Written somewhere the notation table does not name (an applied effort): number it.
+        names.push(format!("unknown{}", id.0 + 1));
+    }
+    names.dedup();
     names
 }
 
@@ -162,6 +167,12 @@ fn unknown_values(
     }
     for o in overrides {
         match by_name.get(&o.name) {
+            Some(&id) if mechanism.unknowns[id.0 as usize].kind == UnknownKind::Function => {
+                errors.push(
+                    Diagnostic::error("E0811", format!("`--set {}`: an unknown function takes a law, not a value", o.name))
+                        .help("write the law in the program, for example `torque = [-k * x - c * x', 0, 0]`"),
+                );
+            }
             Some(&id) => {
                 values.insert(id, o.value);
             }

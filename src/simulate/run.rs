@@ -53,13 +53,21 @@ pub struct Report {
     pub steps: usize,
     pub rejected_steps: usize,
     pub function_evaluations: usize,
-    pub cpu_seconds: f64,
-    /// Largest |E(t) − E(0)| / |E(0)| over the outputs, when the system is conservative.
+    /// Time the integration took (wall clock; the computation is single-threaded).
+    pub run_seconds: f64,
+    /// Largest |E(t) − E(0)| over the outputs, relative to the larger of |E(0)| and the largest
+    /// kinetic energy, when the system is conservative.
     pub energy_drift: Option<f64>,
-    /// Largest change of the total linear and angular momentum, when nothing outside acts on the
+    /// Largest change of a component of the total momentum, when nothing outside acts on the
     /// mechanism (its root joints are free and no effort is applied).
-    pub momentum_drift: Option<[f64; 2]>,
+    pub momentum_drift: Option<MomentumDrift>,
     pub failure: Option<RunFailure>,
+}
+
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct MomentumDrift {
+    pub linear: f64,
+    pub angular: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -113,7 +121,8 @@ impl Sampler<'_> {
             coordinates,
             rates,
             kinetic_energy: kinetic_energy(model, &self.data),
-            potential_energy: self.conservative.as_ref().map(|forces| potential_energy(forces, &self.data)),
+            // `+ 0.0` turns a −0 into 0 for the outputs.
+            potential_energy: self.conservative.as_ref().map(|forces| potential_energy(forces, &self.data) + 0.0),
             momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
         })
     }
@@ -125,12 +134,12 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     let settings = &prepared.settings;
     let (q0, v0) = match model.state_from_declared(&prepared.coordinates, &prepared.rates) {
         Ok(state) => state,
-        Err(e) => return failed_at_start(prepared, format!("{e:?}")),
+        Err(e) => return failed_at_start(prepared, format!("the initial state cannot be evaluated: {}", describe_error(&e))),
     };
     let mut y0 = q0;
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
-    let mut system = MechanicalSystem::new(model, prepared.coordinates.clone());
+    let mut system = MechanicalSystem::new(model, reference.clone());
     let mut sampler = Sampler { model, data: Data::new(model), previous: reference.clone(), conservative: conservative_forces(model) };
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::with_capacity(outputs.len());
@@ -166,8 +175,7 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
             }
         }
     };
-    let cpu_seconds = started.elapsed().as_secs_f64();
-    let _ = reference;
+    let run_seconds = started.elapsed().as_secs_f64();
     let (stats, failure) = match result {
         Ok((_, stats)) => (stats, None),
         Err(e) => {
@@ -181,7 +189,7 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         steps: stats.steps,
         rejected_steps: stats.rejected,
         function_evaluations: stats.rhs_evaluations,
-        cpu_seconds,
+        run_seconds,
         energy_drift: energy_drift(&samples),
         momentum_drift: momentum_drift(model, &samples),
         failure,
@@ -201,6 +209,13 @@ fn fastest_coordinate(names: &[String], samples: &[Sample]) -> String {
     }
 }
 
+fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
+    match e {
+        crate::kinematics::eval::EvalError::Missing(_) => "a value is missing".to_string(),
+        crate::kinematics::eval::EvalError::NotGeometric(what) => format!("it depends on {what}"),
+    }
+}
+
 fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
     let report = Report {
         integrator: integrator_name(&prepared.settings.integrator).to_string(),
@@ -208,7 +223,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         steps: 0,
         rejected_steps: 0,
         function_evaluations: 0,
-        cpu_seconds: 0.0,
+        run_seconds: 0.0,
         energy_drift: None,
         momentum_drift: None,
         failure: Some(RunFailure { time: 0.0, message }),
@@ -217,6 +232,9 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
 }
 
 fn energy_drift(samples: &[Sample]) -> Option<f64> {
+    if samples.len() < 2 {
+        return None;
+    }
     let energy = |s: &Sample| s.potential_energy.map(|p| p + s.kinetic_energy);
     let first = energy(samples.first()?)?;
     let scale = samples.iter().map(|s| s.kinetic_energy.abs()).fold(first.abs(), f64::max);
@@ -226,7 +244,7 @@ fn energy_drift(samples: &[Sample]) -> Option<f64> {
     samples.iter().map(|s| energy(s).map(|e| (e - first).abs() / scale)).try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
 }
 
-fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<[f64; 2]> {
+fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<MomentumDrift> {
     if samples.len() < 2 {
         return None;
     }
@@ -235,11 +253,11 @@ fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<[f64; 2]> {
         return None;
     }
     let first = samples.first()?.momentum;
-    let mut drift = [0.0f64; 2];
+    let mut drift = MomentumDrift { linear: 0.0, angular: 0.0 };
     for s in samples {
         let angular = (0..3).map(|i| (s.momentum[i] - first[i]).abs()).fold(0.0, f64::max);
         let linear = (3..6).map(|i| (s.momentum[i] - first[i]).abs()).fold(0.0, f64::max);
-        drift = [drift[0].max(linear), drift[1].max(angular)];
+        drift = MomentumDrift { linear: drift.linear.max(linear), angular: drift.angular.max(angular) };
     }
     Some(drift)
 }

@@ -2,6 +2,9 @@
 //! y = (positions, velocities): positions move with the joint velocities (quaternions included),
 //! velocities with the accelerations from the articulated-body algorithm under the efforts.
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use crate::dynamics::algorithms::{aba, forward_kinematics, Data, DynamicsError};
 use crate::dynamics::efforts::{evaluate, Declared};
 use crate::dynamics::model::Model;
@@ -10,12 +13,13 @@ use crate::kinematics::eval::EvalError;
 pub struct MechanicalSystem<'m> {
     pub model: &'m Model,
     pub data: Data,
-    /// Declared coordinates at the last accepted output: keeps recovered angles continuous.
-    pub reference: Vec<f64>,
+    /// Declared coordinates at the last output, shared with the sampler: recovered angles stay
+    /// continuous (a spring on an angle sees 3π/2, not −π/2, after one and a half turns).
+    pub reference: Rc<RefCell<Vec<f64>>>,
 }
 
 impl<'m> MechanicalSystem<'m> {
-    pub fn new(model: &'m Model, reference: Vec<f64>) -> MechanicalSystem<'m> {
+    pub fn new(model: &'m Model, reference: Rc<RefCell<Vec<f64>>>) -> MechanicalSystem<'m> {
         MechanicalSystem { model, data: Data::new(model), reference }
     }
 
@@ -32,7 +36,8 @@ impl<'m> MechanicalSystem<'m> {
             joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
         }
         forward_kinematics(model, &mut self.data, &q, v).map_err(|e| evaluation_message(&e))?;
-        let (coordinates, rates) = model.declared(&q, v, &self.reference).map_err(|e| evaluation_message(&e))?;
+        let reference = self.reference.borrow().clone();
+        let (coordinates, rates) = model.declared(&q, v, &reference).map_err(|e| evaluation_message(&e))?;
         let declared = Declared { model, coordinates: &coordinates, rates: &rates };
         let efforts = evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))?;
         let accelerations = aba(model, &mut self.data, &q, v, efforts.tau.as_slice(), &efforts.external)
@@ -71,6 +76,6 @@ impl<'m> MechanicalSystem<'m> {
 fn evaluation_message(error: &EvalError) -> String {
     match error {
         EvalError::Missing(_) => "an effort needs a value that was not given".to_string(),
-        EvalError::NotGeometric(what) => format!("cannot evaluate {what}"),
+        EvalError::NotGeometric(what) => format!("an expression cannot depend on {what} there"),
     }
 }

@@ -83,8 +83,12 @@ pub fn integrate(
                 break;
             }
         }
-        if !converged || q1.iter().any(|x| !x.is_finite()) {
-            return Err(fail(t, if converged { Failure::NotFinite } else { Failure::StepUnderflow { step } }, &stats));
+        if q1.iter().any(|x| !x.is_finite()) {
+            return Err(fail(t, Failure::NotFinite, &stats));
+        }
+        if !converged {
+            let message = format!("the implicit equations of the step from t = {t} did not converge: use a smaller `step` than {step}");
+            return Err(fail(t, Failure::System(message), &stats));
         }
         let mean = (&q1 - &q) / step;
         p = &mass_mid * &mean + &terms * (0.5 * step);
