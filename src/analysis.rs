@@ -80,7 +80,7 @@ fn link_report(mechanism: &Mechanism, topology: &Topology, join: crate::elab::va
 /// The numbered tree, the joints and, when all values are known, the mobility.
 pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
-    let unknowns = UnknownValues::new();
+    let unknowns = crate::simulate::prepare::given_values(mechanism)?;
     let bodies: Vec<BodyReport> = topology
         .principal
         .iter()
@@ -127,7 +127,7 @@ pub fn assembled_model(
     topology: Topology,
     options: &AssemblyOptions,
 ) -> Result<(KinematicModel, AssemblyReport), Vec<Diagnostic>> {
-    let model = model::build(mechanism, topology, UnknownValues::new())?;
+    let model = model::build(mechanism, topology, crate::simulate::prepare::given_values(mechanism)?)?;
     let (start, fixed) = initial_coordinates(mechanism, &model).map_err(|d| vec![d])?;
     let names = model.coordinate_names();
     match assemble(&model, &start, &fixed, options) {

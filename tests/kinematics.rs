@@ -266,3 +266,16 @@ fn joints_are_classified_with_their_degrees_of_constraint() {
         assert_eq!(analysis.constraint, 6 - dof);
     }
 }
+
+#[test]
+fn tree_and_assembly_use_given_values() {
+    let text = "import joints;\nlet L = ?s;\nlet a = body end; let b = body end; let c = body end;\n\
+        join earth and a with revolute([0,0,1]) as j1;\n\
+        join [L,0,0] ++ 1 @ a and b with revolute([0,0,1]) as j2;\n\
+        join [3,0,0] ++ 1 @ earth and c with revolute([0,0,1]) as j3;\n\
+        join [2.5,0,0] ++ 1 @ b and [2,0,0] ++ 1 @ c with revolute([0,0,1]) as j4;\n\
+        given L = 1;\ninitial j1.q = 1, j2.q = -0.8, j3.q = 1.6, j4.q = 0.5;\n";
+    let m = compile_text("given.lsd", text, None, &options()).mechanism.expect("elaborates");
+    let report = analysis::tree(&m).expect("tree");
+    assert_eq!(report.mobility.expect("computed with L = 1").mobility, 1);
+}

@@ -142,6 +142,11 @@ fn constant(s: &Scalar, values: &UnknownValues) -> Option<f64> {
     eval(s, values, &[]).ok()
 }
 
+/// Values of the unknowns from the program's `given` declarations.
+pub fn given_values(mechanism: &Mechanism) -> Result<UnknownValues, Vec<Diagnostic>> {
+    unknown_values(mechanism, &HashMap::new(), &[])
+}
+
 /// Values of the unknowns from `given` declarations, then the command line.
 fn unknown_values(
     mechanism: &Mechanism,
