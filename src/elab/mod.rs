@@ -4,6 +4,7 @@
 //! shared unknown and an unused definition costs nothing.
 
 mod eval;
+mod operations;
 pub mod mechanism;
 pub mod value;
 

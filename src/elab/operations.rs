@@ -1,0 +1,219 @@
+//! Operations on values: coercions (the literal `0` as a zero vector, a body as its frame…),
+//! arithmetic on scalars, vectors and matrices, rotations applied to vectors, and the built-in
+//! functions, folded to numbers when their arguments are numbers.
+
+use std::rc::Rc;
+
+use super::internal;
+use super::value::*;
+use crate::diag::Diagnostic;
+use crate::syntax::ast::BinaryOp;
+use crate::syntax::span::Span;
+
+type Result<T> = std::result::Result<T, Diagnostic>;
+
+pub(super) fn as_scalar(value: Value, span: Span) -> Result<Scalar> {
+    match value {
+        Value::Scalar(s) => Ok(s),
+        Value::Zero => Ok(num(0.0)),
+        Value::One => Ok(num(1.0)),
+        _ => Err(internal(format!("expected a scalar at {span:?}"))),
+    }
+}
+
+pub(super) fn as_vector(value: Value, span: Span) -> Result<Vector> {
+    match value {
+        Value::Vector(v) => Ok(v),
+        Value::Zero => Ok(zero_vector()),
+        _ => Err(internal(format!("expected a vector at {span:?}"))),
+    }
+}
+
+pub(super) fn as_displacement(value: Value, span: Span) -> Result<Displacement> {
+    match value {
+        Value::Displacement(d) | Value::Rotation(d) => Ok(d),
+        Value::Vector(t) => Ok(Displacement(vec![Elementary::Translation(t)])),
+        Value::Zero | Value::One => Ok(Displacement::default()),
+        _ => Err(internal(format!("expected a displacement at {span:?}"))),
+    }
+}
+
+pub(super) fn as_rotation(value: Value, span: Span) -> Result<Displacement> {
+    match value {
+        Value::Rotation(d) => Ok(d),
+        Value::One => Ok(Displacement::default()),
+        _ => Err(internal(format!("expected a rotation at {span:?}"))),
+    }
+}
+
+pub(super) fn as_frame(value: Value, span: Span) -> Result<Frame> {
+    match value {
+        Value::Frame(f) => Ok(f),
+        Value::Body(body) => Ok(Frame { body, displacement: Displacement::default() }),
+        _ => Err(internal(format!("expected a frame at {span:?}"))),
+    }
+}
+
+pub(super) fn vector_or_matrix(values: Vec<Value>, span: Span) -> Result<Value> {
+    if values.iter().all(|v| matches!(v, Value::Scalar(_) | Value::Zero | Value::One)) {
+        let scalars = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
+        let vector: Vector = scalars.try_into().map_err(|_| internal("vector of the wrong size"))?;
+        return Ok(Value::Vector(vector));
+    }
+    let rows = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
+    let matrix: Matrix = rows.try_into().map_err(|_| internal("matrix of the wrong size"))?;
+    Ok(Value::Matrix(matrix))
+}
+
+pub(super) fn binary(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Value> {
+    match op {
+        BinaryOp::Rotation => {
+            let angle = as_scalar(left, span)?;
+            let axis = as_vector(right, span)?;
+            Ok(Value::Rotation(Displacement(vec![Elementary::Rotation { angle, axis }])))
+        }
+        BinaryOp::Displacement => {
+            let translation = as_vector(left, span)?;
+            let rotation = as_rotation(right, span)?;
+            Ok(Value::Displacement(Displacement(vec![Elementary::Translation(translation)]).then(&rotation)))
+        }
+        BinaryOp::Frame => {
+            let displacement = as_displacement(left, span)?;
+            let base = as_frame(right, span)?;
+            Ok(Value::Frame(Frame { body: base.body, displacement: base.displacement.then(&displacement) }))
+        }
+        _ => arithmetic(op, left, right, span),
+    }
+}
+
+fn symbol(op: BinaryOp) -> char {
+    match op {
+        BinaryOp::Add => '+',
+        BinaryOp::Sub => '-',
+        BinaryOp::Mul => '*',
+        BinaryOp::Div => '/',
+        _ => '^',
+    }
+}
+
+fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Value> {
+    use Value::*;
+    let c = symbol(op);
+    Ok(match (left, right) {
+        (Zero, Vector(v)) | (Vector(v), Zero) if matches!(op, BinaryOp::Add) => Vector(v),
+        (Vector(v), Zero) if matches!(op, BinaryOp::Sub) => Vector(v),
+        (Zero, Vector(v)) if matches!(op, BinaryOp::Sub) => Vector(v.map(|s| negate(&s))),
+        (Vector(a), Vector(b)) => Vector([0, 1, 2].map(|i| arith(c, &a[i], &b[i]))),
+        (Matrix(a), Matrix(b)) if matches!(op, BinaryOp::Add | BinaryOp::Sub) => {
+            Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| arith(c, &a[i][j], &b[i][j]))))
+        }
+        (Matrix(a), Matrix(b)) => Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| dot_row(&a[i], &[b[0][j].clone(), b[1][j].clone(), b[2][j].clone()])))),
+        (Matrix(a), Vector(v)) => Vector([0, 1, 2].map(|i| dot_row(&a[i], &v))),
+        (Rotation(a), Rotation(b)) => Rotation(a.then(&b)),
+        (Rotation(r), Vector(v)) => Vector(rotate(&r, v)),
+        (a @ (Displacement(_) | Rotation(_) | Vector(_)), b @ (Displacement(_) | Rotation(_) | Vector(_))) => {
+            Displacement(as_displacement(a, span)?.then(&as_displacement(b, span)?))
+        }
+        (Vector(v), s) => {
+            let s = as_scalar(s, span)?;
+            Vector(v.map(|x| arith(c, &x, &s)))
+        }
+        (s, Vector(v)) => {
+            let s = as_scalar(s, span)?;
+            Vector(v.map(|x| arith(c, &s, &x)))
+        }
+        (Matrix(m), s) => {
+            let s = as_scalar(s, span)?;
+            Matrix(m.map(|row| row.map(|x| arith(c, &x, &s))))
+        }
+        (s, Matrix(m)) => {
+            let s = as_scalar(s, span)?;
+            Matrix(m.map(|row| row.map(|x| arith(c, &s, &x))))
+        }
+        (a, b) => Scalar(arith(c, &as_scalar(a, span)?, &as_scalar(b, span)?)),
+    })
+}
+
+/// Applies a rotation chain to a vector (Rodrigues' formula, symbolic).
+fn rotate(rotation: &Displacement, v: Vector) -> Vector {
+    rotation.0.iter().rev().fold(v, |v, step| match step {
+        Elementary::Rotation { angle, axis } => rotate_about(angle, axis, &v),
+        Elementary::Translation(_) => v,
+    })
+}
+
+fn rotate_about(angle: &Scalar, axis: &Vector, v: &Vector) -> Vector {
+    let length = builtin_scalar("sqrt", &dot_row(axis, axis));
+    let k = axis.clone().map(|c| arith('/', &c, &length));
+    let (c, s) = (builtin_scalar("cos", angle), builtin_scalar("sin", angle));
+    let k_cross_v = cross(&k, v);
+    let k_dot_v = dot_row(&k, v);
+    let one_minus_c = arith('-', &num(1.0), &c);
+    [0, 1, 2].map(|i| {
+        let along = arith('*', &arith('*', &k[i], &k_dot_v), &one_minus_c);
+        arith('+', &arith('+', &arith('*', &v[i], &c), &arith('*', &k_cross_v[i], &s)), &along)
+    })
+}
+
+fn builtin_scalar(name: &'static str, x: &Scalar) -> Scalar {
+    match fold_builtin(name, std::slice::from_ref(x)) {
+        Some(v) => num(v),
+        None => Rc::new(SExpr::Call(name, vec![x.clone()])),
+    }
+}
+
+fn cross(a: &Vector, b: &Vector) -> Vector {
+    let term = |i: usize, j: usize| arith('-', &arith('*', &a[i], &b[j]), &arith('*', &a[j], &b[i]));
+    [term(1, 2), term(2, 0), term(0, 1)]
+}
+
+fn dot_row(a: &Vector, b: &Vector) -> Scalar {
+    let products: Vec<Scalar> = (0..3).map(|i| arith('*', &a[i], &b[i])).collect();
+    arith('+', &arith('+', &products[0], &products[1]), &products[2])
+}
+
+pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
+    let static_name: &'static str = crate::check::types::BUILTIN_NAMES
+        .iter()
+        .find(|n| **n == name)
+        .copied()
+        .ok_or_else(|| internal(format!("unknown builtin `{name}`")))?;
+    match name {
+        "norm" | "dot" | "cross" => {
+            let vectors = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
+            let a = vectors.first().ok_or_else(|| internal("missing argument"))?;
+            Ok(match name {
+                "norm" => Value::Scalar(builtin_scalar("sqrt", &dot_row(a, a))),
+                "dot" => Value::Scalar(dot_row(a, vectors.get(1).ok_or_else(|| internal("missing argument"))?)),
+                _ => Value::Vector(cross(a, vectors.get(1).ok_or_else(|| internal("missing argument"))?)),
+            })
+        }
+        _ => {
+            let args = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
+            if let Some(folded) = fold_builtin(name, &args) {
+                return Ok(Value::Scalar(num(folded)));
+            }
+            Ok(Value::Scalar(Rc::new(SExpr::Call(static_name, args))))
+        }
+    }
+}
+
+/// Evaluates a built-in function on numbers (`sin(pi/2)` is the number 1).
+fn fold_builtin(name: &str, args: &[Scalar]) -> Option<f64> {
+    let x = constant(args.first()?)?;
+    let value = match name {
+        "sin" => x.sin(),
+        "cos" => x.cos(),
+        "tan" => x.tan(),
+        "asin" => x.asin(),
+        "acos" => x.acos(),
+        "atan" => x.atan(),
+        "sqrt" => x.sqrt(),
+        "exp" => x.exp(),
+        "log" => x.ln(),
+        "abs" => x.abs(),
+        "atan2" => x.atan2(constant(args.get(1)?)?),
+        _ => return None,
+    };
+    value.is_finite().then_some(value)
+}
