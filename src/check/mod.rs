@@ -3,6 +3,7 @@
 //! untyped parameters: their bodies are checked at each instantiation with the arguments' types,
 //! and an error inside one shows both the definition and the use.
 
+mod calls;
 mod expr;
 pub mod scope;
 pub mod types;
