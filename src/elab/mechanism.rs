@@ -195,22 +195,7 @@ struct Reached {
 
 impl Reached {
     fn scalar(&mut self, s: &SExpr) {
-        match s {
-            SExpr::Num(_) | SExpr::Time | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
-            SExpr::Unknown(id) => {
-                self.unknowns.insert(*id);
-            }
-            SExpr::UnknownFunction(id, args) => {
-                self.unknowns.insert(*id);
-                args.iter().for_each(|a| self.scalar(a));
-            }
-            SExpr::Neg(a) => self.scalar(a),
-            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
-                self.scalar(a);
-                self.scalar(b);
-            }
-            SExpr::Call(_, args) => args.iter().for_each(|a| self.scalar(a)),
-        }
+        s.collect_unknowns(&mut self.unknowns);
     }
 
     fn vector(&mut self, v: &Vector) {

@@ -163,6 +163,26 @@ pub enum Value {
 }
 
 impl SExpr {
+    /// Adds every unknown (scalar or function) the expression mentions to `into`.
+    pub fn collect_unknowns(&self, into: &mut std::collections::BTreeSet<UnknownId>) {
+        match self {
+            SExpr::Num(_) | SExpr::Time | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
+            SExpr::Unknown(id) => {
+                into.insert(*id);
+            }
+            SExpr::UnknownFunction(id, args) => {
+                into.insert(*id);
+                args.iter().for_each(|a| a.collect_unknowns(into));
+            }
+            SExpr::Neg(a) => a.collect_unknowns(into),
+            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+                a.collect_unknowns(into);
+                b.collect_unknowns(into);
+            }
+            SExpr::Call(_, args) => args.iter().for_each(|a| a.collect_unknowns(into)),
+        }
+    }
+
     /// Text of the expression; `unknown` writes the name of each unknown.
     pub fn render(&self, unknown: &mut dyn FnMut(UnknownId) -> String) -> String {
         self.render_with(unknown, &|join, index, order| {

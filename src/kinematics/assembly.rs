@@ -57,7 +57,7 @@ pub fn assemble(model: &KinematicModel, start: &[f64], fixed: &[bool], options: 
         let perturbed: Vec<f64> = start
             .iter()
             .enumerate()
-            .map(|(i, &x)| if fixed[i] { x } else { x + 0.5 * ((i as f64 + 1.0) * 1.618_033_988_7 * attempt as f64).sin() })
+            .map(|(i, &x)| if fixed[i] { x } else { x + 0.5 * super::jitter(attempt, i) })
             .collect();
         match solve(model, &perturbed, fixed, options) {
             Ok(assembled) => return Ok(assembled),

@@ -14,6 +14,7 @@ use serde::Serialize;
 use super::assembly::{assemble, singular_values, AssemblyOptions};
 use super::closure::closure;
 use super::eval::EvalError;
+use super::jitter;
 use super::model::KinematicModel;
 
 /// Relative tolerance on singular values: σ counts if σ > RANK_TOLERANCE · σ_max. Assembly
@@ -116,16 +117,6 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
         internal: internal_mobilities(model, q)?,
         tolerance: RANK_TOLERANCE,
     })
-}
-
-/// A deterministic pseudo-random number in [-1, 1] for sample `sample`, coordinate `i`
-/// (SplitMix64 of the pair).
-fn jitter(sample: usize, i: usize) -> f64 {
-    let mut z = (sample as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (i as u64).wrapping_add(0x632B_E59B_D9B4_E019);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
 }
 
 /// Dimension of the set of closed configurations near q: assemble from perturbations of size

@@ -52,21 +52,7 @@ pub struct Prepared {
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
-    match s {
-        SExpr::Unknown(id) | SExpr::UnknownFunction(id, _) => {
-            into.insert(*id);
-            if let SExpr::UnknownFunction(_, args) = s {
-                args.iter().for_each(|a| collect(a, into));
-            }
-        }
-        SExpr::Neg(a) => collect(a, into),
-        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
-            collect(a, into);
-            collect(b, into);
-        }
-        SExpr::Call(_, args) => args.iter().for_each(|a| collect(a, into)),
-        SExpr::Num(_) | SExpr::Time | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
-    }
+    s.collect_unknowns(into);
 }
 
 fn collect_vector(v: &Vector, into: &mut BTreeSet<UnknownId>) {
