@@ -72,6 +72,13 @@ impl Model {
     }
 }
 
+/// The model describes trees: a complementary link is refused, naming it.
+pub fn loops_not_supported(mechanism: &Mechanism, join: JoinId) -> Diagnostic {
+    Diagnostic::error("E0808", "closed loops cannot be simulated yet")
+        .primary(mechanism.join(join).span, format!("join `{}` closes a loop", mechanism.join_name(join)))
+        .help("`lsdc tree` and `lsdc assemble` handle loops; simulation handles trees")
+}
+
 fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
     match error {
         EvalError::Missing(id) => {
@@ -95,10 +102,7 @@ fn constant(s: &Scalar, unknowns: &UnknownValues) -> Result<f64, EvalError> {
 /// Builds the dynamic model of a tree mechanism.
 pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model, Vec<Diagnostic>> {
     if let Some(joint) = kinematics.complementary().first() {
-        let join = mechanism.join(joint.join);
-        return Err(vec![Diagnostic::error("E0808", "closed loops cannot be simulated yet")
-            .primary(join.span, format!("join `{}` closes a loop", joint.name))
-            .help("`lsdc tree` and `lsdc assemble` handle loops; simulation handles trees")]);
+        return Err(vec![loops_not_supported(mechanism, joint.join)]);
     }
     let unknowns = &kinematics.unknowns;
     let topology = &kinematics.topology;

@@ -216,6 +216,10 @@ fn missing_inertia_frame(mechanism: &Mechanism, body: crate::elab::value::BodyId
 /// program's `simulate` declaration completed by `defaults`.
 pub fn prepare(mechanism: &Mechanism, overrides: &[Override], defaults: &Settings) -> Result<Prepared, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
+    // Say it before asking for values the simulation could not use anyway.
+    if let Some(link) = topology.complementary.first() {
+        return Err(vec![dynamic_model::loops_not_supported(mechanism, link.join)]);
+    }
     let generated = notation::unknown_names(mechanism, &topology);
     let values = unknown_values(mechanism, &generated, overrides)?;
     let mut missing = Vec::new();
