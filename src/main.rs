@@ -342,6 +342,9 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     if let Some(t) = args.tolerance {
         (settings.rtol, settings.atol) = (t, t);
     }
+    if let Err(message) = settings.check_outputs() {
+        return usage_error(&message);
+    }
     let simulation = {
         let bar = progress_bar(prepared.settings.duration);
         let mut progress = |t: f64| {

@@ -310,7 +310,24 @@ fn settings(mechanism: &Mechanism, model: &Model, defaults: &Settings) -> Result
             _ => Integrator::DormandPrince,
         };
     }
+    if let (Err(message), Some(span)) = (settings.check_outputs(), scenario.span) {
+        errors.push(Diagnostic::error("E0814", message).primary(span, "in this `simulate`"));
+    }
     if errors.is_empty() { Ok(settings) } else { Err(errors) }
+}
+
+impl Settings {
+    /// Every output is kept in memory: refuses a request that could not fit.
+    pub fn check_outputs(&self) -> Result<(), String> {
+        const MAX_OUTPUTS: f64 = 1e7;
+        if self.duration / self.output > MAX_OUTPUTS {
+            return Err(format!(
+                "{} s of simulation with an output every {} s makes more than {MAX_OUTPUTS:e} outputs: raise the output interval",
+                self.duration, self.output
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for Settings {
