@@ -41,7 +41,7 @@ fn examples_reproduce_their_expected_results() {
     let mut simulated = 0;
     for path in examples {
         let name = path.file_stem().and_then(|s| s.to_str()).expect("name").to_string();
-        let compilation = compile_files(&[path.clone()], &options).expect("readable");
+        let compilation = compile_files(std::slice::from_ref(&path), &options).expect("readable");
         let mechanism = compilation.mechanism.expect("examples check clean");
         let topology = lsdc::topology::build(&mechanism).expect("connected");
         if !topology.complementary.is_empty() {

@@ -429,8 +429,8 @@ impl<'w> Checker<'w> {
                         format!("cannot apply `{}` to {} and {}", op.symbol(), left.with_article(), right.with_article()),
                     )
                     .primary(span, "invalid operands")
-                    .secondary(lhs.span, format!("{}", left.with_article()))
-                    .secondary(rhs.span, format!("{}", right.with_article()));
+                    .secondary(lhs.span, left.with_article().to_string())
+                    .secondary(rhs.span, right.with_article().to_string());
                     if op == BinaryOp::Mul && left.numeric() == Vector && right.numeric() == Vector {
                         diagnostic = diagnostic.help("use `dot(a, b)` or `cross(a, b)`");
                     }

@@ -210,7 +210,7 @@ impl<'w> Checker<'w> {
                         let limit = self.out.scope(scope).len();
                         self.scope_mut(scope).opened.push((imported, limit));
                         let name: Name = self.workspace.module(module).name.as_str().into();
-                        if self.out.scope(scope).names.get(&name).is_none() {
+                        if !self.out.scope(scope).names.contains_key(&name) {
                             self.scope_mut(scope).insert(name, Ty::Package(imported), decl.span);
                         }
                     }

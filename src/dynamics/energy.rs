@@ -22,7 +22,10 @@ pub fn kinetic_energy(model: &Model, data: &Data) -> f64 {
 /// The constant forces written in the fixed basis, with their points: a potential −F·p each.
 /// `None` if some applied effort or link effort is not of that kind (then the efforts can do work
 /// that no potential accounts for).
-pub fn conservative_forces(model: &Model) -> Option<Vec<(usize, Vector3<f64>, Vector3<f64>)>> {
+/// A constant force in the fixed basis: (body number, point in the body frame, force).
+pub type ConstantForce = (usize, Vector3<f64>, Vector3<f64>);
+
+pub fn conservative_forces(model: &Model) -> Option<Vec<ConstantForce>> {
     if !model.link_efforts.is_empty() {
         return None;
     }
@@ -39,7 +42,7 @@ pub fn conservative_forces(model: &Model) -> Option<Vec<(usize, Vector3<f64>, Ve
         .collect()
 }
 
-pub fn potential_energy(forces: &[(usize, Vector3<f64>, Vector3<f64>)], data: &Data) -> f64 {
+pub fn potential_energy(forces: &[ConstantForce], data: &Data) -> f64 {
     forces.iter().map(|(body, point, force)| -force.dot(&(data.world[*body] * nalgebra::Point3::from(*point)).coords)).sum()
 }
 

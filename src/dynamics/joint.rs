@@ -5,6 +5,7 @@
 //!   gimbal lock;
 //! - `Free`: a translation `[x, y, z]` followed by three such rotations: position and unit
 //!   quaternion, with the body twist as velocity.
+//!
 //! The angles the program declared are recovered from the quaternion for outputs and for the
 //! expressions that use them.
 //!

@@ -100,7 +100,7 @@ struct Sampler<'m> {
     model: &'m Model,
     data: Data,
     previous: Rc<RefCell<Vec<f64>>>,
-    conservative: Option<Vec<(usize, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>)>>,
+    conservative: Option<Vec<crate::dynamics::energy::ConstantForce>>,
 }
 
 impl Sampler<'_> {

@@ -12,7 +12,7 @@ use super::system::MechanicalSystem;
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
-use crate::integrate::{Failure, IntegrationError, Stats};
+use crate::integrate::{Failure, IntegrationError, Observer, Stats};
 
 const MAX_ITERATIONS: usize = 50;
 
@@ -51,7 +51,7 @@ pub fn integrate(
     t_end: f64,
     h: f64,
     outputs: &[f64],
-    observer: &mut dyn FnMut(f64, &[f64]) -> Result<(), String>,
+    observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
     let n = system.model.nv;
     let mut stats = Stats::default();
