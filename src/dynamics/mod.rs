@@ -4,6 +4,7 @@
 
 pub mod algorithms;
 pub mod angles;
+pub mod constrained;
 pub mod derivatives;
 pub mod efforts;
 pub mod energy;
