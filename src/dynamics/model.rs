@@ -217,6 +217,16 @@ impl Joint {
 }
 
 impl Model {
+    /// Splits a state (positions, velocities) and brings its quaternions back to unit length.
+    pub fn split_state<'y>(&self, y: &'y [f64]) -> (Vec<f64>, &'y [f64]) {
+        let (q, v) = y.split_at(self.nq);
+        let mut q = q.to_vec();
+        for joint in &self.joints {
+            joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
+        }
+        (q, v)
+    }
+
     /// Positions and velocities from the declared coordinates and rates of every join (in the
     /// joints' order).
     pub fn state_from_declared(&self, coordinates: &[f64], rates: &[f64]) -> Result<(Vec<f64>, Vec<f64>), EvalError> {

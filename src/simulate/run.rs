@@ -106,11 +106,7 @@ struct Sampler<'m> {
 impl Sampler<'_> {
     fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, String> {
         let model = self.model;
-        let (q, v) = y.split_at(model.nq);
-        let mut q = q.to_vec();
-        for joint in &model.joints {
-            joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
-        }
+        let (q, v) = model.split_state(y);
         let previous = self.previous.borrow().clone();
         let (coordinates, rates) = model.declared(&q, v, &previous).map_err(|e| format!("{e:?}"))?;
         *self.previous.borrow_mut() = coordinates.clone();

@@ -30,11 +30,7 @@ impl<'m> MechanicalSystem<'m> {
     /// dy/dt at (t, y), or why it cannot be computed.
     pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
         let model = self.model;
-        let (q, v) = y.split_at(model.nq);
-        let mut q = q.to_vec();
-        for joint in &model.joints {
-            joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
-        }
+        let (q, v) = model.split_state(y);
         forward_kinematics(model, &mut self.data, &q, v).map_err(|e| evaluation_message(&e))?;
         let reference = self.reference.borrow().clone();
         let (coordinates, rates) = model.declared(&q, v, &reference).map_err(|e| evaluation_message(&e))?;
