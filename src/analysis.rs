@@ -158,7 +158,7 @@ fn gap(value: f64) -> String {
     }
 }
 
-fn no_assembly(mechanism: &Mechanism, model: &KinematicModel, loop_errors: &[(f64, f64)]) -> Diagnostic {
+pub(crate) fn no_assembly(mechanism: &Mechanism, model: &KinematicModel, loop_errors: &[(f64, f64)]) -> Diagnostic {
     let worst = loop_errors
         .iter()
         .enumerate()

@@ -61,6 +61,24 @@ struct SimulateArgs {
     /// Draw the coordinates and the energy over time to an .svg or .png file.
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// How loops are kept closed: project the state onto the constraints after each step
+    /// (exact), Baumgarte's feedback in the accelerations, or nothing.
+    #[arg(long, value_enum, default_value = "projection")]
+    stabilisation: StabilisationArg,
+    /// Rate of Baumgarte's feedback, in 1/s (critically damped).
+    #[arg(long, default_value_t = 10.0)]
+    baumgarte_rate: f64,
+    /// Output the reaction in every join: the wrench it transmits to its second body, at the
+    /// join, in the fixed axes (moment then force).
+    #[arg(long)]
+    reactions: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum StabilisationArg {
+    Projection,
+    Baumgarte,
+    None,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -124,9 +142,24 @@ enum Command {
         #[arg(long, value_enum, default_value = "text")]
         format: Format,
     },
-    /// Simulate a tree mechanism from its `initial` values; write the samples (CSV or JSON) and
-    /// a run report.
+    /// Simulate a mechanism (tree or closed loops) from its `initial` values; write the samples
+    /// (CSV or JSON) and a run report.
     Simulate(SimulateArgs),
+    /// The efforts actuators must apply along the given coordinates to hold the mechanism at
+    /// rest in its initial (assembled) configuration.
+    Statics {
+        file: PathBuf,
+        #[command(flatten)]
+        libraries: LibraryArgs,
+        /// A coordinate an actuator drives, `join.coordinate` (repeatable).
+        #[arg(long = "actuate", value_name = "JOIN.COORDINATE", required = true)]
+        actuated: Vec<String>,
+        /// Value of an unknown, as for `simulate`. Repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+        #[arg(long, value_enum, default_value = "text")]
+        format: Format,
+    },
     /// Compile a program and print what `--emit` asks for.
     Compile {
         file: PathBuf,
@@ -149,6 +182,7 @@ fn main() -> ExitCode {
         Command::Assemble { file, libraries, format } => assemble(&file, &libraries.options(), format),
         Command::Compile { file, libraries, emit } => compile(&file, &libraries.options(), emit),
         Command::Simulate(args) => simulate(&args),
+        Command::Statics { file, libraries, actuated, sets, format } => statics(&file, &libraries.options(), &actuated, &sets, format),
         Command::Parse { file } => parse(&file),
     }
 }
@@ -336,6 +370,15 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             return usage_error(&format!("`--{flag}` must be a positive number"));
         }
     }
+    if !(args.baumgarte_rate.is_finite() && args.baumgarte_rate > 0.0) {
+        return usage_error("`--baumgarte-rate` must be a positive number");
+    }
+    settings.stabilisation = match args.stabilisation {
+        StabilisationArg::Projection => lsdc::dynamics::loops::Stabilisation::Projection,
+        StabilisationArg::Baumgarte => lsdc::dynamics::loops::Stabilisation::Baumgarte(args.baumgarte_rate),
+        StabilisationArg::None => lsdc::dynamics::loops::Stabilisation::None,
+    };
+    settings.reactions = args.reactions;
     settings.duration = args.duration.unwrap_or(settings.duration);
     settings.output = args.output_interval.unwrap_or(settings.output);
     settings.step = args.step.or(settings.step);
@@ -386,6 +429,35 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     } else {
         ExitCode::SUCCESS
     }
+}
+
+fn statics(file: &std::path::Path, options: &LoadOptions, actuated: &[String], sets: &[String], format: Format) -> ExitCode {
+    use lsdc::simulate::prepare::{prepare, Settings};
+    let overrides = match parse_sets(sets) {
+        Ok(o) => o,
+        Err(message) => return usage_error(&message),
+    };
+    let compilation = match compile_one(file, options, format) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    let prepared = match prepare(mechanism, &overrides, &Settings::default()) {
+        Ok(p) => p,
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, format);
+            return ExitCode::from(1);
+        }
+    };
+    let holding = match lsdc::simulate::statics::holding_efforts(&prepared, actuated) {
+        Ok(h) => h,
+        Err(message) => return usage_error(&message),
+    };
+    match format {
+        Format::Text => out(&text::holding(&holding)),
+        Format::Json => out(&json(&holding)),
+    }
+    ExitCode::SUCCESS
 }
 
 /// A progress bar on a terminal; nothing when standard error is not one (CI, pipes).

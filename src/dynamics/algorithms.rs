@@ -78,6 +78,15 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
     Ok(())
 }
 
+/// Fills `data.acceleration` with the bodies' accelerations when every joint acceleration is
+/// zero (the velocity-product terms alone); `data` must hold the forward kinematics of (q, v).
+pub fn bias_accelerations(model: &Model, data: &mut Data) {
+    for (k, joint) in model.joints.iter().enumerate() {
+        let (i, parent) = (joint.child, joint.parent);
+        data.acceleration[i] = spatial::motion_to_child(&data.states[k].pose, &data.acceleration[parent]) + data.coriolis[i];
+    }
+}
+
 /// Inverse dynamics: the generalised forces that give accelerations `a` at (q, v) under the
 /// external forces `external` (one per body, in its frame; index 0 unused).
 pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], external: &[Force]) -> Result<DVector<f64>, EvalError> {

@@ -31,8 +31,7 @@ pub struct Declared<'a> {
 
 impl Declared<'_> {
     fn value(&self, join: JoinId, index: usize, order: u32) -> Option<f64> {
-        let joint = self.model.joint_of(join)?;
-        let offset = self.model.declared_offsets[joint] + index;
+        let offset = self.model.declared_offset(join)? + index;
         match order {
             0 => self.coordinates.get(offset).copied(),
             1 => self.rates.get(offset).copied(),
@@ -60,11 +59,17 @@ pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) 
             EffortKind::Torque => spatial_force(in_body, Vector3::zeros()),
         };
     }
-    let mut tau = DVector::zeros(model.nv);
+    let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
         let generalised = link_effort(model, effort, declared, &joins, time)?;
-        let joint = &model.joints[effort.joint];
-        let mut rows = tau.rows_mut(joint.v_offset, joint.nv());
+        let (start, count) = match model.joints.get(effort.joint) {
+            Some(joint) => (joint.v_offset, joint.nv()),
+            None => {
+                let k = effort.joint - model.joints.len();
+                (model.nv + model.loop_offset(k), model.loops[k].coordinate_count())
+            }
+        };
+        let mut rows = tau.rows_mut(start, count);
         rows += generalised;
     }
     Ok(Efforts { external, tau })
@@ -82,9 +87,13 @@ fn link_effort(
     joins: &dyn Fn(JoinId, usize, u32) -> Option<f64>,
     time: f64,
 ) -> Result<DVector<f64>, EvalError> {
-    let joint = &model.joints[effort.joint];
-    let offset = model.declared_offsets[effort.joint];
-    let n = joint.chain.coordinate_count();
+    // A complementary link's coordinates are its velocities: no quaternion to map through.
+    let (chain, joint) = match model.joints.get(effort.joint) {
+        Some(joint) => (&joint.chain, Some(joint)),
+        None => (&model.loops[effort.joint - model.joints.len()], None),
+    };
+    let offset = model.declared_offset(chain.join).unwrap_or(0);
+    let n = chain.coordinate_count();
     let coordinates = &declared.coordinates[offset..offset + n];
     let rates = &declared.rates[offset..offset + n];
     let env = Env { coordinates, rates: Some(rates), joins: Some(joins), time: Some(time) };
@@ -95,12 +104,12 @@ fn link_effort(
     };
     // Generalised forces on the declared coordinates: the wrench against each coordinate's twist.
     let twists = if effort.step == 0 {
-        joint.chain.chain_motion(coordinates, None, &model.unknowns)?.subspace
+        chain.chain_motion(coordinates, None, &model.unknowns)?.subspace
     } else {
-        step_columns(&joint.chain.steps[effort.step as usize - 1], coordinates, model)?
+        step_columns(&chain.steps[effort.step as usize - 1], coordinates, model)?
     };
     let on_declared = twists.transpose() * DVector::from_column_slice(wrench.as_slice());
-    if joint.kind == JointType::Chain {
+    if joint.is_none_or(|j| j.kind == JointType::Chain) {
         return Ok(on_declared);
     }
     // Quaternion joints: map through the declared rates' dependence on the velocities.

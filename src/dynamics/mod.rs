@@ -9,5 +9,6 @@ pub mod derivatives;
 pub mod efforts;
 pub mod energy;
 pub mod joint;
+pub mod loops;
 pub mod model;
 pub mod spatial;

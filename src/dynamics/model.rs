@@ -9,7 +9,7 @@ use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
-use crate::kinematics::model::{constant_pose, KinematicModel};
+use crate::kinematics::model::{constant_pose, JointModel, KinematicModel};
 
 #[derive(Clone, Debug)]
 pub struct BodyInertia {
@@ -38,7 +38,7 @@ pub struct AppliedEffort {
 /// A known link effort (`force`, `torque`, `forceN`, `torqueN`).
 #[derive(Clone, Debug)]
 pub struct LinkEffort {
-    /// Index into `Model::joints`.
+    /// Index into `Model::joints`, then into `Model::loops` (`joints.len() + k`).
     pub joint: usize,
     pub kind: EffortKind,
     /// 0 for the plain form (in the chain's first frame), N for the N-th step's frame.
@@ -57,9 +57,20 @@ pub struct Model {
     pub applied: Vec<AppliedEffort>,
     pub link_efforts: Vec<LinkEffort>,
     pub unknowns: UnknownValues,
-    /// Join of each joint, and where each join's declared coordinates start.
+    /// Where each tree joint's declared coordinates start.
     pub declared_offsets: Vec<usize>,
+    /// Declared coordinates of the whole mechanism: the tree's, then the complementary links'.
     pub declared_count: usize,
+    /// The complementary links, which close the loops: their chains, with `offset` the index of
+    /// their first coordinate among the declared coordinates. Their coordinates follow the
+    /// tree's in the state, in position and in velocity alike (they carry no inertia).
+    pub loops: Vec<JointModel>,
+    /// Coordinates of the complementary links.
+    pub nc: usize,
+    /// For each complementary link that is a ball joint (three rotations about independent axes
+    /// through one point), its axes: it constrains only the point, and its angles are recovered
+    /// from the bodies' poses rather than integrated (no gimbal lock).
+    pub loop_balls: Vec<Option<[Vector3<f64>; 3]>>,
 }
 
 impl Model {
@@ -70,13 +81,48 @@ impl Model {
     pub fn joint_of(&self, join: JoinId) -> Option<usize> {
         self.joints.iter().position(|j| j.chain.join == join)
     }
-}
 
-/// The model describes trees: a complementary link is refused, naming it.
-pub fn loops_not_supported(mechanism: &Mechanism, join: JoinId) -> Diagnostic {
-    Diagnostic::error("E0808", "closed loops cannot be simulated yet")
-        .primary(mechanism.join(join).span, format!("join `{}` closes a loop", mechanism.join_name(join)))
-        .help("`lsdc tree` and `lsdc assemble` handle loops; simulation handles trees")
+    /// Where the declared coordinates of a join (tree or complementary) start.
+    pub fn declared_offset(&self, join: JoinId) -> Option<usize> {
+        match self.joint_of(join) {
+            Some(joint) => Some(self.declared_offsets[joint]),
+            None => self.loops.iter().find(|l| l.join == join).map(|l| l.offset),
+        }
+    }
+
+    pub fn has_loops(&self) -> bool {
+        !self.loops.is_empty()
+    }
+
+    /// Length of the position part of the state: the tree's, then the complementary links'.
+    pub fn positions(&self) -> usize {
+        self.nq + self.nc
+    }
+
+    /// Length of the velocity part of the state.
+    pub fn velocities(&self) -> usize {
+        self.nv + self.nc
+    }
+
+    /// A state velocity for people: `crank.q` for a coordinate, `ball.ω_x` for a quaternion
+    /// joint's angular velocity (body axes), `free.v_x` for its linear one.
+    pub fn velocity_name(&self, index: usize) -> String {
+        if index >= self.nv {
+            let names: Vec<String> = self.loops.iter().flat_map(|l| l.coordinate_names.iter().map(move |c| format!("{}.{c}", l.name))).collect();
+            return names.get(index - self.nv).cloned().unwrap_or_default();
+        }
+        let Some(joint) = self.joints.iter().find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&index)) else { return String::new() };
+        let k = index - joint.v_offset;
+        match joint.kind {
+            JointType::Chain => format!("{}.{}", joint.chain.name, joint.chain.coordinate_names[k]),
+            _ => format!("{}.{}", joint.chain.name, ["ω_x", "ω_y", "ω_z", "v_x", "v_y", "v_z"][k]),
+        }
+    }
+
+    /// Where complementary link `k`'s coordinates start in the complementary block.
+    pub fn loop_offset(&self, k: usize) -> usize {
+        self.loops[k].offset - (self.declared_count - self.nc)
+    }
 }
 
 fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
@@ -99,11 +145,9 @@ fn constant(s: &Scalar, unknowns: &UnknownValues) -> Result<f64, EvalError> {
     eval(s, unknowns, &[])
 }
 
-/// Builds the dynamic model of a tree mechanism.
+/// Builds the dynamic model: the tree of principal links, and the complementary links as
+/// constraints.
 pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model, Vec<Diagnostic>> {
-    if let Some(joint) = kinematics.complementary().first() {
-        return Err(vec![loops_not_supported(mechanism, joint.join)]);
-    }
     let unknowns = &kinematics.unknowns;
     let topology = &kinematics.topology;
     let mut errors = Vec::new();
@@ -141,11 +185,34 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
         body_names.push(name);
     }
     let applied = applied_efforts(mechanism, kinematics, &mut errors);
-    let link_efforts = link_efforts(mechanism, &joints);
+    let loops = kinematics.complementary().to_vec();
+    let loop_balls = loops
+        .iter()
+        .map(|l| match classify(l) {
+            JointType::Spherical { axes } => Some(axes),
+            _ => None,
+        })
+        .collect();
+    let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
+    let link_efforts = link_efforts(mechanism, &joints, &loops);
     if !errors.is_empty() {
         return Err(errors);
     }
-    Ok(Model { joints, bodies, body_names, nq, nv, applied, link_efforts, unknowns: unknowns.clone(), declared_offsets, declared_count: declared })
+    Ok(Model {
+        joints,
+        bodies,
+        body_names,
+        nq,
+        nv,
+        applied,
+        link_efforts,
+        unknowns: unknowns.clone(),
+        declared_offsets,
+        declared_count: declared + nc,
+        loops,
+        nc,
+        loop_balls,
+    })
 }
 
 fn body_inertia(mechanism: &Mechanism, id: crate::elab::value::BodyId, unknowns: &UnknownValues) -> Result<BodyInertia, EvalError> {
@@ -197,10 +264,12 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
     applied
 }
 
-fn link_efforts(mechanism: &Mechanism, joints: &[Joint]) -> Vec<LinkEffort> {
+/// The efforts written in the links; `joint` indexes the tree's joints, then the loops'.
+fn link_efforts(mechanism: &Mechanism, joints: &[Joint], loops: &[JointModel]) -> Vec<LinkEffort> {
     let mut efforts = Vec::new();
-    for (index, joint) in joints.iter().enumerate() {
-        let link = mechanism.link(mechanism.join(joint.chain.join).link);
+    let chains = joints.iter().map(|j| &j.chain).chain(loops);
+    for (index, chain) in chains.enumerate() {
+        let link = mechanism.link(mechanism.join(chain.join).link);
         for (kind, list) in [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)] {
             for (step, value) in list {
                 efforts.push(LinkEffort { joint: index, kind, step: *step, value: value.clone() });
@@ -219,7 +288,7 @@ impl Joint {
 impl Model {
     /// Splits a state (positions, velocities) and brings its quaternions back to unit length.
     pub fn split_state<'y>(&self, y: &'y [f64]) -> (Vec<f64>, &'y [f64]) {
-        let (q, v) = y.split_at(self.nq);
+        let (q, v) = y.split_at(self.positions());
         let mut q = q.to_vec();
         for joint in &self.joints {
             joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
@@ -227,11 +296,29 @@ impl Model {
         (q, v)
     }
 
+    /// Moves the positions `q` (state length) by the small velocity-space step `dv`: the joints'
+    /// coordinates by their rates, quaternions along the rotation and back to unit length.
+    pub fn retract(&self, q: &mut [f64], dv: &[f64]) {
+        for joint in &self.joints {
+            let (qs, vs) = (joint.q_offset..joint.q_offset + joint.nq(), joint.v_offset..joint.v_offset + joint.nv());
+            let mut rate = vec![0.0; joint.nq()];
+            joint.position_rate(&q[qs.clone()], &dv[vs], &mut rate);
+            q[qs.clone()].iter_mut().zip(&rate).for_each(|(x, r)| *x += r);
+            joint.normalize(&mut q[qs]);
+        }
+        for i in 0..self.nc {
+            q[self.nq + i] += dv[self.nv + i];
+        }
+    }
+
     /// Positions and velocities from the declared coordinates and rates of every join (in the
     /// joints' order).
     pub fn state_from_declared(&self, coordinates: &[f64], rates: &[f64]) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
-        let mut q = vec![0.0; self.nq];
-        let mut v = vec![0.0; self.nv];
+        let mut q = vec![0.0; self.positions()];
+        let mut v = vec![0.0; self.velocities()];
+        let tree = self.declared_count - self.nc;
+        q[self.nq..].copy_from_slice(&coordinates[tree..]);
+        v[self.nv..].copy_from_slice(&rates[tree..]);
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
             let n = joint.chain.coordinate_count();
             let (jq, jv) = joint.from_declared(&coordinates[offset..offset + n], &rates[offset..offset + n], &self.unknowns)?;
@@ -257,6 +344,9 @@ impl Model {
             coordinates[offset..offset + n].copy_from_slice(&c);
             rates[offset..offset + n].copy_from_slice(&r);
         }
+        let tree = self.declared_count - self.nc;
+        coordinates[tree..].copy_from_slice(&q[self.nq..self.nq + self.nc]);
+        rates[tree..].copy_from_slice(&v[self.nv..self.nv + self.nc]);
         Ok((coordinates, rates))
     }
 }

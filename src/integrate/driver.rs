@@ -21,7 +21,8 @@ pub(super) trait AdaptiveStepper {
     fn order(&self) -> u32;
     /// The step-size controller suited to the method's error estimate.
     fn controller(&self) -> StepController;
-    /// Prepares stepping from the initial point (e.g. evaluates dy/dt there).
+    /// Prepares stepping from a point the last accepted step did not compute: the initial point,
+    /// or a step end moved by [`OdeSystem::project`] (e.g. evaluates dy/dt there).
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt>;
     /// dy/dt at the current point.
     fn derivative(&self) -> &[f64];
@@ -113,7 +114,7 @@ impl March<'_> {
         });
         match attempt {
             Ok(error) if error <= 1.0 => {
-                self.advance(stepper, problem, h, observer)?;
+                self.advance(stepper, eval, problem, h, observer)?;
                 eval.stats.steps += 1;
                 self.h = self.controller.after_accept(h, error);
             }
@@ -133,17 +134,24 @@ impl March<'_> {
         Ok(())
     }
 
-    /// Moves to the end of the accepted step of size `h`, delivering the outputs it passes.
+    /// Moves to the end of the accepted step of size `h`, projected onto the system's manifold,
+    /// delivering the outputs it passes.
     fn advance(
         &mut self,
         stepper: &mut dyn AdaptiveStepper,
+        eval: &mut Evaluator,
         problem: &Problem,
         h: f64,
         observer: &mut Observer,
     ) -> Result<(), Halt> {
+        // The interpolant is built from the unprojected end, consistent with the step's stages.
         stepper.accept(self.t, &self.y, h, &self.y_new);
         let lands_on_end = h >= problem.t_end - self.t || self.t + h >= problem.t_end;
         let t_new = if lands_on_end { problem.t_end } else { self.t + h };
+        if eval.project(t_new, &mut self.y_new)? {
+            // What the stepper cached at the step's end (dy/dt) belongs to the unprojected state.
+            stepper.start(eval, t_new, &self.y_new).map_err(Halt::made_fatal)?;
+        }
         let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
         self.outputs.deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
         std::mem::swap(&mut self.y, &mut self.y_new);

@@ -1,4 +1,4 @@
-//! Calls the system's right-hand side, counting calls and catching non-finite values.
+//! Calls the system's right-hand side and projection, counting calls and catching non-finite values.
 
 use super::{Failure, IntegrationError, OdeSystem, Stats};
 
@@ -55,6 +55,17 @@ impl<'s> Evaluator<'s> {
             return Err(Halt::NotFinite { time: t });
         }
         Ok(())
+    }
+
+    /// Lets the system move the end (t, y) of an accepted step onto its invariant manifold;
+    /// returns whether `y` changed. Errors stop the integration like those of `rhs`.
+    pub(super) fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, Halt> {
+        let moved = self.system.project(t, y).map_err(|message| Halt::fatal(t, Failure::System(message)))?;
+        // The step is already accepted: a shorter one cannot undo a projection gone wrong.
+        if moved && !all_finite(y) {
+            return Err(Halt::fatal(t, Failure::NotFinite));
+        }
+        Ok(moved)
     }
 }
 

@@ -26,6 +26,16 @@ pub trait OdeSystem {
     /// Writes dy/dt at (t, y) into `dydt`. An `Err` stops the integration with that message
     /// (e.g. a singular mass matrix).
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String>;
+    /// Called after each accepted step with the new state: may move it back onto an invariant
+    /// manifold (constraints of a closed-loop mechanism). Returns whether `y` changed.
+    ///
+    /// The integration continues from the projected state, and outputs at the step's end get it;
+    /// outputs strictly inside a step still come from the step's interpolant. Not called on the
+    /// initial state, which the caller makes consistent. An `Err` stops the integration like an
+    /// `Err` from [`OdeSystem::rhs`].
+    fn project(&mut self, _t: f64, _y: &mut [f64]) -> Result<bool, String> {
+        Ok(false)
+    }
 }
 
 /// Receives the state at each output time; an `Err` stops the integration with that message.
@@ -99,7 +109,7 @@ pub enum Failure {
     StepUnderflow { step: f64 },
     /// `max_steps` were taken before reaching the end time.
     TooManySteps,
-    /// The system's `rhs` returned this error.
+    /// The system's `rhs` or `project` returned this error.
     System(String),
     /// The observer returned this error.
     Observer(String),
@@ -143,7 +153,8 @@ impl std::error::Error for IntegrationError {}
 ///
 /// Values at output times between steps come from dense output (cubic Hermite for RK4 and
 /// Rosenbrock, the order-4 interpolant for Dormand–Prince); an output time that coincides with a
-/// step end gets that step's state exactly. Outputs delivered before a failure stay delivered.
+/// step end gets that step's state exactly, after [`OdeSystem::project`]. Outputs delivered before
+/// a failure stay delivered.
 ///
 /// ```
 /// use lsdc::integrate::{integrate, Method, OdeSystem, Settings};

@@ -1,7 +1,8 @@
 //! The classic Runge–Kutta method of order 4 with a fixed step on the grid t0 + k * step, the last
 //! step shortened to land on the end time. Outputs between grid points come from the cubic Hermite
 //! interpolant through the step's ends, whose end slope is then reused as the next step's first
-//! stage, so outputs cost at most one extra evaluation (at the very end).
+//! stage, so outputs cost at most one extra evaluation (at the very end). Each step's end is
+//! projected before anything is derived from it, so a projection costs no evaluation here.
 
 use super::driver::Problem;
 use super::evaluator::{all_finite, Evaluator, Halt};
@@ -43,6 +44,9 @@ fn run(eval: &mut Evaluator, problem: &Problem, step: f64, observer: &mut Observ
         // Grid points by multiplication, so that rounding does not accumulate over many steps.
         let t_new = if k as f64 >= step_count { t_end } else { t0 + k as f64 * step };
         rk4.step(eval, t_new)?;
+        // Before the end derivative is evaluated, so that what the next step reuses is taken at
+        // the projected state and the interpolant joins the projected ends.
+        eval.project(t_new, &mut rk4.y_new)?;
         if outputs.wants_interior(rk4.t, t_new) {
             rk4.prepare_interpolation(eval)?;
         }

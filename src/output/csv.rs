@@ -14,14 +14,24 @@ pub fn to_csv(simulation: &Simulation) -> String {
     for name in &simulation.coordinate_names {
         let _ = write!(out, ",{name}'");
     }
-    out.push_str(",kinetic_energy,potential_energy\n");
+    out.push_str(",kinetic_energy,potential_energy");
+    for name in &simulation.reaction_names {
+        for part in ["mx", "my", "mz", "fx", "fy", "fz"] {
+            let _ = write!(out, ",{name}.reaction.{part}");
+        }
+    }
+    out.push('\n');
     for sample in &simulation.samples {
         let _ = write!(out, "{:e}", sample.time);
         for value in sample.coordinates.iter().chain(&sample.rates) {
             let _ = write!(out, ",{value:e}");
         }
         let potential = sample.potential_energy.map_or(String::new(), |p| format!("{p:e}"));
-        let _ = writeln!(out, ",{:e},{potential}", sample.kinetic_energy);
+        let _ = write!(out, ",{:e},{potential}", sample.kinetic_energy);
+        for value in &sample.reactions {
+            let _ = write!(out, ",{value:e}");
+        }
+        out.push('\n');
     }
     if let Some(failure) = &simulation.report.failure {
         let _ = writeln!(out, "# the run failed at t = {}: {}", failure.time, failure.message);

@@ -491,11 +491,13 @@ mod tests {
                     kinetic_energy: kinetic,
                     potential_energy: conservative.then_some(2.0 - kinetic + 0.01 * t),
                     momentum: [0.0; 6],
+                    reactions: Vec::new(),
                 }
             })
             .collect();
         Simulation {
             coordinate_names: vec!["crank.q".to_string(), "slider.x".to_string()],
+            reaction_names: Vec::new(),
             samples,
             report: Report {
                 integrator: "rk4".to_string(),
@@ -506,6 +508,7 @@ mod tests {
                 run_seconds: 0.0,
                 energy_drift: None,
                 momentum_drift: None,
+                constraints: None,
                 failure: None,
             },
         }

@@ -118,8 +118,49 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     if let Some(drift) = report.momentum_drift {
         out += &format!("momentum drift: linear {:.3e}, angular {:.3e}\n", drift.linear, drift.angular);
     }
+    if let Some(c) = &report.constraints {
+        out += &constraint_report(c);
+    }
     if let Some(failure) = &report.failure {
         out += &format!("the run FAILED at t = {}: {}\n", failure.time, failure.message);
+    }
+    out
+}
+
+fn constraint_report(c: &crate::simulate::constraints::ConstraintReport) -> String {
+    let mut out = format!("loops: {} constraint rows, rank {} at the start; stabilisation: {}\n", c.rows, c.rank, c.stabilisation);
+    if !c.redundant.is_empty() {
+        out += &format!("  {} redundant (implied by the others): {}\n", c.redundant.len(), c.redundant.join(", "));
+    }
+    out += &format!(
+        "  largest residuals: position {:.3e}, velocity {:.3e} (before projection: {:.3e}, {:.3e})\n",
+        c.position_residual, c.velocity_residual, c.position_residual_before_projection, c.velocity_residual_before_projection
+    );
+    for passage in &c.singular {
+        let end = passage.end.map_or("the end of the run".to_string(), |t| format!("t = {t}"));
+        out += &format!(
+            "  near a singular configuration from t = {} to {}: the loop closed by `{}` loses a constraint direction (singular value down to {:.1e} of the largest); the run went on\n",
+            passage.start, end, passage.loop_name, passage.smallest_ratio
+        );
+    }
+    if let Some(closest) = &c.closest {
+        out += &format!(
+            "  closest to a singular configuration at t = {}: smallest singular value {:.1e} of the largest, loop `{}`\n",
+            closest.time, closest.ratio, closest.loop_name
+        );
+    }
+    out
+}
+
+/// Holding efforts, one coordinate per line.
+pub fn holding(h: &crate::simulate::statics::Holding) -> String {
+    let width = h.efforts.iter().map(|e| e.name.len()).max().unwrap_or(0);
+    let mut out = String::from("efforts that hold the mechanism at rest (along each coordinate):\n");
+    for e in &h.efforts {
+        out += &format!("  {:width$}  {:.6e}\n", e.name, e.effort);
+    }
+    if h.unbalanced > 1e-9 {
+        out += &format!("these actuators cannot hold it: {:.3e} of generalised force is left unbalanced on a motion they do not drive\n", h.unbalanced);
     }
     out
 }

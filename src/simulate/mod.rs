@@ -1,7 +1,10 @@
-//! Simulation of tree mechanisms: the equations of motion as an ODE system, integrated from the
+//! Simulation of mechanisms (trees and closed loops): the equations of motion as an ODE system, integrated from the
 //! program's initial values, with outputs and a run report.
 
+pub mod consistent;
+pub mod constraints;
 pub mod prepare;
 pub mod run;
+pub mod statics;
 pub mod system;
 pub mod variational;

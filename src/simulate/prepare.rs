@@ -5,6 +5,7 @@
 use std::collections::{BTreeSet, HashMap};
 
 use crate::diag::{suggest, Diagnostic};
+use crate::dynamics::loops::Stabilisation;
 use crate::dynamics::model::{self as dynamic_model, Model};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
 use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, Scalar, UnknownId, Vector};
@@ -38,6 +39,10 @@ pub struct Settings {
     pub max_step: f64,
     pub rtol: f64,
     pub atol: f64,
+    /// How loops are kept closed.
+    pub stabilisation: Stabilisation,
+    /// Output the reactions in every join.
+    pub reactions: bool,
 }
 
 pub struct Prepared {
@@ -216,10 +221,6 @@ fn missing_inertia_frame(mechanism: &Mechanism, body: crate::elab::value::BodyId
 /// program's `simulate` declaration completed by `defaults`.
 pub fn prepare(mechanism: &Mechanism, overrides: &[Override], defaults: &Settings) -> Result<Prepared, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
-    // Say it before asking for values the simulation could not use anyway.
-    if let Some(link) = topology.complementary.first() {
-        return Err(vec![dynamic_model::loops_not_supported(mechanism, link.join)]);
-    }
     let generated = notation::unknown_names(mechanism, &topology);
     let values = unknown_values(mechanism, &generated, overrides)?;
     let mut missing = Vec::new();
@@ -239,13 +240,12 @@ pub fn prepare(mechanism: &Mechanism, overrides: &[Override], defaults: &Setting
     }
     let kinematics = kinematic_model::build(mechanism, topology.clone(), values)?;
     let model = dynamic_model::build(mechanism, &kinematics)?;
-    let (coordinates, rates) = initial_state(mechanism, &model)?;
+    let (mut coordinates, mut rates) = initial_state(mechanism, &model)?;
+    if model.has_loops() {
+        (coordinates, rates) = super::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
+    }
     let settings = settings(mechanism, &model, defaults)?;
-    let coordinate_names = model
-        .joints
-        .iter()
-        .flat_map(|j| j.chain.coordinate_names.iter().map(move |c| format!("{}.{c}", j.chain.name)))
-        .collect();
+    let coordinate_names = kinematics.coordinate_names();
     Ok(Prepared { model, topology, coordinates, rates, settings, coordinate_names })
 }
 
@@ -253,10 +253,10 @@ fn initial_state(mechanism: &Mechanism, model: &Model) -> Result<(Vec<f64>, Vec<
     let mut coordinates = vec![0.0; model.declared_count];
     let mut rates = vec![0.0; model.declared_count];
     for initial in &mechanism.initial {
-        let Some(joint) = model.joint_of(initial.join) else { continue };
+        let Some(offset) = model.declared_offset(initial.join) else { continue };
         let value = constant(&initial.value, &model.unknowns)
             .ok_or_else(|| vec![Diagnostic::error("E0803", "an initial value must be a number").primary(initial.span, "here")])?;
-        let index = model.declared_offsets[joint] + initial.coordinate;
+        let index = offset + initial.coordinate;
         if initial.order == 0 {
             coordinates[index] = value;
         } else {
@@ -332,6 +332,16 @@ impl Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { integrator: Integrator::DormandPrince, duration: 1.0, output: 0.01, step: None, max_step: f64::INFINITY, rtol: 1e-8, atol: 1e-10 }
+        Settings {
+            integrator: Integrator::DormandPrince,
+            duration: 1.0,
+            output: 0.01,
+            step: None,
+            max_step: f64::INFINITY,
+            rtol: 1e-8,
+            atol: 1e-10,
+            stabilisation: Stabilisation::Projection,
+            reactions: false,
+        }
     }
 }

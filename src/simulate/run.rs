@@ -9,9 +9,10 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::prepare::{Integrator, Prepared};
+use super::constraints::ConstraintReport;
 use super::system::MechanicalSystem;
 use super::variational;
-use crate::dynamics::algorithms::{forward_kinematics, Data};
+use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum, potential_energy};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
@@ -24,6 +25,10 @@ impl OdeSystem for MechanicalSystem<'_> {
 
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
         self.derivative(t, y, dydt)
+    }
+
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, String> {
+        self.keep_closed(t, y)
     }
 }
 
@@ -38,6 +43,10 @@ pub struct Sample {
     pub potential_energy: Option<f64>,
     /// Total momentum in the fixed frame: angular (about the origin), then linear.
     pub momentum: [f64; 6],
+    /// When asked for: the wrench each join transmits to its second body, at the join, in the
+    /// fixed axes (moment, then force; 6 per join, in `Simulation::reaction_names` order).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub reactions: Vec<f64>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -61,6 +70,8 @@ pub struct Report {
     /// Largest change of a component of the total momentum, when nothing outside acts on the
     /// mechanism (its root joints are free and no effort is applied).
     pub momentum_drift: Option<MomentumDrift>,
+    /// The loops: redundancy, residuals, singular configurations (mechanisms with loops).
+    pub constraints: Option<ConstraintReport>,
     pub failure: Option<RunFailure>,
 }
 
@@ -73,6 +84,8 @@ pub struct MomentumDrift {
 #[derive(Clone, Debug, Serialize)]
 pub struct Simulation {
     pub coordinate_names: Vec<String>,
+    /// The joins whose reactions the samples carry (empty unless asked for).
+    pub reaction_names: Vec<String>,
     pub samples: Vec<Sample>,
     pub report: Report,
 }
@@ -95,31 +108,38 @@ fn output_times(duration: f64, interval: f64) -> Vec<f64> {
     times
 }
 
-/// Samples a state: declared coordinates (continuous with the previous sample), energy, momentum.
+/// Samples a state: declared coordinates (continuous with the previous sample), energy, momentum
+/// and, when asked for, the reactions. An output between two steps comes from the integrator's
+/// interpolant: with loops it is projected onto the constraints like the steps are.
 struct Sampler<'m> {
-    model: &'m Model,
-    data: Data,
+    system: MechanicalSystem<'m>,
     previous: Rc<RefCell<Vec<f64>>>,
     conservative: Option<Vec<crate::dynamics::energy::ConstantForce>>,
+    reactions: bool,
 }
 
 impl Sampler<'_> {
     fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, String> {
-        let model = self.model;
-        let (q, v) = model.split_state(y);
+        let model = self.system.model;
+        let mut y = y.to_vec();
+        self.system.keep_closed(time, &mut y)?;
+        let (q, v) = model.split_state(&y);
         let previous = self.previous.borrow().clone();
         let (coordinates, rates) = model.declared(&q, v, &previous).map_err(|e| format!("{e:?}"))?;
         *self.previous.borrow_mut() = coordinates.clone();
-        forward_kinematics(model, &mut self.data, &q, v).map_err(|e| format!("{e:?}"))?;
-        let h = momentum(model, &self.data);
+        let reactions = if self.reactions { self.system.reactions(time, &q, v)? } else { Vec::new() };
+        let data = &mut self.system.data;
+        forward_kinematics(model, data, &q, v).map_err(|e| format!("{e:?}"))?;
+        let h = momentum(model, data);
         Ok(Sample {
             time,
             coordinates,
             rates,
-            kinetic_energy: kinetic_energy(model, &self.data),
+            kinetic_energy: kinetic_energy(model, data),
             // `+ 0.0` turns a −0 into 0 for the outputs.
-            potential_energy: self.conservative.as_ref().map(|forces| potential_energy(forces, &self.data) + 0.0),
+            potential_energy: self.conservative.as_ref().map(|forces| potential_energy(forces, data) + 0.0),
             momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
+            reactions,
         })
     }
 }
@@ -135,8 +155,19 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     let mut y0 = q0;
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
-    let mut system = MechanicalSystem::new(model, reference.clone());
-    let mut sampler = Sampler { model, data: Data::new(model), previous: reference.clone(), conservative: conservative_forces(model) };
+    let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
+    if let Err(message) = system.start_loops(&mut y0) {
+        return failed_at_start(prepared, message);
+    }
+    let mut sampler = Sampler {
+        system: MechanicalSystem::new(model, reference.clone(), settings.stabilisation),
+        previous: reference.clone(),
+        conservative: conservative_forces(model),
+        reactions: settings.reactions,
+    };
+    if let Err(message) = sampler.system.start_loops(&mut y0.clone()) {
+        return failed_at_start(prepared, message);
+    }
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::with_capacity(outputs.len());
     let started = Instant::now();
@@ -158,6 +189,8 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         Integrator::DormandPrince => integrate(&Method::DormandPrince, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
         Integrator::Implicit => integrate(&Method::Rosenbrock, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
         Integrator::Symplectic => {
+            // The RATTLE steps keep the loops closed themselves.
+            system.loops.stabilisation = crate::dynamics::loops::Stabilisation::Integrator;
             if model.joints.iter().any(|j| j.kind != JointType::Chain) {
                 Err(IntegrationError {
                     time: 0.0,
@@ -188,9 +221,19 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         run_seconds,
         energy_drift: energy_drift(&samples),
         momentum_drift: momentum_drift(model, &samples),
+        constraints: model.has_loops().then(|| {
+            system.loops.absorb(&sampler.system.loops);
+            system.loops.report()
+        }),
         failure,
     };
-    Simulation { coordinate_names: prepared.coordinate_names.clone(), samples, report }
+    let reaction_names = if settings.reactions { reaction_names(model) } else { Vec::new() };
+    Simulation { coordinate_names: prepared.coordinate_names.clone(), reaction_names, samples, report }
+}
+
+/// The joins in the order of the reactions: the tree's, then the complementary links.
+fn reaction_names(model: &Model) -> Vec<String> {
+    model.joints.iter().map(|j| j.chain.name.clone()).chain(model.loops.iter().map(|l| l.name.clone())).collect()
 }
 
 /// Where a failing run was heading: the coordinate moving fastest at the last output.
@@ -222,9 +265,10 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         run_seconds: 0.0,
         energy_drift: None,
         momentum_drift: None,
+        constraints: None,
         failure: Some(RunFailure { time: 0.0, message }),
     };
-    Simulation { coordinate_names: prepared.coordinate_names.clone(), samples: Vec::new(), report }
+    Simulation { coordinate_names: prepared.coordinate_names.clone(), reaction_names: Vec::new(), samples: Vec::new(), report }
 }
 
 fn energy_drift(samples: &[Sample]) -> Option<f64> {

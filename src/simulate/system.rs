@@ -1,12 +1,16 @@
-//! The equations of motion of a tree mechanism as a first-order system y' = f(t, y), with
-//! y = (positions, velocities): positions move with the joint velocities (quaternions included),
-//! velocities with the accelerations from the articulated-body algorithm under the efforts.
+//! The equations of motion as a first-order system y' = f(t, y), with y = (positions,
+//! velocities): positions move with the joint velocities (quaternions included), velocities with
+//! the accelerations from the articulated-body algorithm under the efforts (trees), or from the
+//! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (loops).
 
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use crate::dynamics::algorithms::{aba, forward_kinematics, Data, DynamicsError};
-use crate::dynamics::efforts::{evaluate, Declared};
+use super::constraints::LoopMonitor;
+use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea, Data, DynamicsError};
+use crate::dynamics::efforts::{evaluate, Declared, Efforts};
+use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation};
+use crate::dynamics::spatial;
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
@@ -16,28 +20,56 @@ pub struct MechanicalSystem<'m> {
     /// Declared coordinates at the last output, shared with the sampler: recovered angles stay
     /// continuous (a spring on an angle sees 3π/2, not −π/2, after one and a half turns).
     pub reference: Rc<RefCell<Vec<f64>>>,
+    /// How the loops are kept closed, and what the run has seen of them.
+    pub loops: LoopMonitor,
 }
 
 impl<'m> MechanicalSystem<'m> {
-    pub fn new(model: &'m Model, reference: Rc<RefCell<Vec<f64>>>) -> MechanicalSystem<'m> {
-        MechanicalSystem { model, data: Data::new(model), reference }
+    pub fn new(model: &'m Model, reference: Rc<RefCell<Vec<f64>>>, stabilisation: Stabilisation) -> MechanicalSystem<'m> {
+        MechanicalSystem { model, data: Data::new(model), reference, loops: LoopMonitor::new(stabilisation) }
     }
 
     pub fn dimension(&self) -> usize {
-        self.model.nq + self.model.nv
+        self.model.positions() + self.model.velocities()
+    }
+
+    /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
+    pub fn efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Efforts, String> {
+        let model = self.model;
+        forward_kinematics(model, &mut self.data, q, v).map_err(|e| evaluation_message(&e))?;
+        let reference = self.reference.borrow().clone();
+        let (coordinates, rates) = model.declared(q, v, &reference).map_err(|e| evaluation_message(&e))?;
+        let declared = Declared { model, coordinates: &coordinates, rates: &rates };
+        evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))
+    }
+
+    /// The accelerations and constraint forces of a mechanism with loops at (t, q, v).
+    pub fn constrained(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(Solution, Efforts), String> {
+        let model = self.model;
+        let efforts = self.efforts(t, q, v)?;
+        let mass = crba(model, &mut self.data, q).map_err(|e| evaluation_message(&e))?;
+        let bias = rnea(model, &mut self.data, q, v, &vec![0.0; model.nv], &efforts.external).map_err(|e| evaluation_message(&e))?;
+        let mut force = efforts.tau.clone();
+        let mut tree = force.rows_mut(0, model.nv);
+        tree -= &bias;
+        let constraints = loops::constraints(model, &mut self.data, q, v, true).map_err(|e| evaluation_message(&e))?;
+        let solution = loops::solve(&mass, &force, &constraints, self.loops.stabilisation).map_err(|e| self.loop_message(&e))?;
+        Ok((solution, efforts))
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.
     pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
         let model = self.model;
         let (q, v) = model.split_state(y);
-        forward_kinematics(model, &mut self.data, &q, v).map_err(|e| evaluation_message(&e))?;
-        let reference = self.reference.borrow().clone();
-        let (coordinates, rates) = model.declared(&q, v, &reference).map_err(|e| evaluation_message(&e))?;
-        let declared = Declared { model, coordinates: &coordinates, rates: &rates };
-        let efforts = evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))?;
-        let accelerations = aba(model, &mut self.data, &q, v, efforts.tau.as_slice(), &efforts.external)
-            .map_err(|e| self.dynamics_message(&e))?;
+        let (accelerations, efforts) = if model.has_loops() {
+            let (solution, efforts) = self.constrained(t, &q, v)?;
+            (solution.accelerations, efforts)
+        } else {
+            let efforts = self.efforts(t, &q, v)?;
+            let accelerations = aba(model, &mut self.data, &q, v, efforts.tau.as_slice(), &efforts.external)
+                .map_err(|e| self.dynamics_message(&e))?;
+            (accelerations, efforts)
+        };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model.joints.iter().find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k));
             let name = joint.map_or("?".to_string(), |j| j.chain.name.clone());
@@ -48,13 +80,98 @@ impl<'m> MechanicalSystem<'m> {
             };
             return Err(format!("the acceleration of join `{name}` is not finite: {cause}"));
         }
-        let (dq, dv) = dydt.split_at_mut(model.nq);
+        let (dq, dv) = dydt.split_at_mut(model.positions());
         for joint in &model.joints {
             let range = joint.q_offset..joint.q_offset + joint.nq();
             joint.position_rate(&q[range.clone()], &v[joint.v_offset..joint.v_offset + joint.nv()], &mut dq[range]);
         }
+        dq[model.nq..].copy_from_slice(&v[model.nv..]);
         dv.copy_from_slice(accelerations.as_slice());
         Ok(())
+    }
+
+    /// Keeps the loops closed after a step (see `LoopMonitor::keep`); nothing for a tree.
+    pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, String> {
+        let model = self.model;
+        if !model.has_loops() {
+            return Ok(false);
+        }
+        let (mut q, v) = model.split_state(y);
+        let mut v = v.to_vec();
+        let moved = self.loops.keep(model, &mut self.data, t, &mut q, &mut v).map_err(|e| evaluation_message(&e))?;
+        if moved {
+            y[..q.len()].copy_from_slice(&q);
+            y[q.len()..].copy_from_slice(&v);
+        }
+        Ok(moved)
+    }
+
+    /// Records the loops' residuals at y without moving it.
+    pub fn measure_loops(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
+        let model = self.model;
+        if !model.has_loops() {
+            return Ok(());
+        }
+        let (q, v) = model.split_state(y);
+        self.loops.measure(model, &mut self.data, t, &q, v).map_err(|e| evaluation_message(&e))
+    }
+
+    /// Closes the loops of the initial state at round-off and records their rank and redundancy.
+    pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), String> {
+        let model = self.model;
+        if !model.has_loops() {
+            return Ok(());
+        }
+        let (mut q, v) = model.split_state(y);
+        let mut v = v.to_vec();
+        loops::project(model, &mut self.data, &mut q, &mut v).map_err(|e| evaluation_message(&e))?;
+        self.loops.start(model, &mut self.data, &q, &v).map_err(|e| evaluation_message(&e))?;
+        y[..q.len()].copy_from_slice(&q);
+        y[q.len()..].copy_from_slice(&v);
+        Ok(())
+    }
+
+    /// The wrench each join transmits to its second body, at the join, in the fixed axes
+    /// (moment, then force): the tree's joins from inverse dynamics with the accelerations of the
+    /// motion and the loops' forces, then the loops' from their multipliers.
+    pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
+        let model = self.model;
+        let (accelerations, mut external, multipliers) = if model.has_loops() {
+            let (solution, efforts) = self.constrained(t, q, v)?;
+            let c = loops::constraints(model, &mut self.data, q, v, false).map_err(|e| evaluation_message(&e))?;
+            let on_bodies = loops::constraint_forces(model, &self.data, &c, &solution.multipliers);
+            let external: Vec<_> = efforts.external.iter().zip(&on_bodies).map(|(a, b)| a + b).collect();
+            (solution.accelerations, external, Some(solution.multipliers))
+        } else {
+            let efforts = self.efforts(t, q, v)?;
+            let a = aba(model, &mut self.data, q, v, efforts.tau.as_slice(), &efforts.external).map_err(|e| self.dynamics_message(&e))?;
+            (a, efforts.external, None)
+        };
+        // The link efforts act across their joints: they are not part of the reaction.
+        external.truncate(model.body_count() + 1);
+        rnea(model, &mut self.data, q, v, &accelerations.as_slice()[..model.nv], &external).map_err(|e| evaluation_message(&e))?;
+        let mut reactions = Vec::with_capacity(6 * (model.joints.len() + model.loops.len()));
+        for joint in &model.joints {
+            let frame = self.data.world[joint.child] * joint.on_child;
+            let about_origin = spatial::force_to_parent(&self.data.world[joint.child], &self.data.force[joint.child]);
+            let at_join = spatial::force_to_child(&spatial::Pose::translation(frame.translation.x, frame.translation.y, frame.translation.z), &about_origin);
+            // The tree carries the child; a join written from the child's side has it first.
+            let on_second = if joint.first_on_parent { at_join } else { -at_join };
+            reactions.extend_from_slice(on_second.as_slice());
+        }
+        if let Some(multipliers) = multipliers {
+            reactions.extend_from_slice(multipliers.as_slice());
+        }
+        Ok(reactions)
+    }
+
+    fn loop_message(&self, error: &LoopError) -> String {
+        match error {
+            LoopError::MasslessMotion { velocity } => format!(
+                "an effort drives a motion that moves no mass (it moves `{}` most): give the bodies it moves mass or inertia",
+                self.model.velocity_name(*velocity)
+            ),
+        }
     }
 
     fn dynamics_message(&self, error: &DynamicsError) -> String {

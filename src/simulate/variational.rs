@@ -5,6 +5,12 @@
 //!   p_k = M(q̄) v̄ − h/2 (∂T/∂q(q̄, v̄) + Q(q̄, v̄))   for q_{k+1},
 //! then p_{k+1} = M(q̄) v̄ + h/2 (∂T/∂q(q̄, v̄) + Q(q̄, v̄)), with q̄, v̄ the midpoint and mean
 //! velocity of the step and Q the generalised efforts. Needs chain joints (no quaternions).
+//!
+//! With loops the same discrete Lagrangian is constrained (RATTLE): the step also solves for the
+//! impulse h·Gᵀλ of the constraint forces at its start so that the positions at its end close
+//! every loop, and the end momentum is projected so that the velocities satisfy G v = 0. The
+//! complementary links' coordinates carry no inertia; the saddle-point systems are solved in the
+//! least-squares sense, so redundant constraints and motions without mass cost nothing special.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -12,6 +18,7 @@ use super::system::MechanicalSystem;
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
+use crate::dynamics::loops;
 use crate::integrate::{Failure, IntegrationError, Observer, Stats};
 
 const MAX_ITERATIONS: usize = 50;
@@ -26,17 +33,56 @@ impl MechanicalSystem<'_> {
         let efforts = evaluate(model, &self.data, &declared, t).map_err(|e| format!("{e:?}"))?;
         let zero = vec![0.0; model.nv];
         let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external).map_err(|e| format!("{e:?}"))?;
-        Ok(efforts.tau - applied)
+        let mut forcing = efforts.tau;
+        let mut tree = forcing.rows_mut(0, model.nv);
+        tree -= applied;
+        Ok(forcing)
     }
 
-    /// ∂T/∂q + Q at the step's midpoint, and the mass matrix there.
+    /// ∂T/∂q + Q at the step's midpoint, and the mass matrix there (the complementary links'
+    /// coordinates, if any, with no inertia).
     fn midpoint_terms(&mut self, q: &[f64], v: &[f64], t: f64) -> Result<(DMatrix<f64>, DVector<f64>), String> {
         let model = self.model;
         let gradient = kinetic_energy_gradient(model, &mut self.data, q, v).map_err(|e| format!("{e:?}"))?;
-        let forcing = self.generalised_efforts(q, v, t)?;
-        let mass = crba(model, &mut self.data, q).map_err(|e| format!("{e:?}"))?;
-        Ok((mass, gradient + forcing))
+        let mut terms = self.generalised_efforts(q, v, t)?;
+        let mut tree = terms.rows_mut(0, model.nv);
+        tree += gradient;
+        Ok((self.mass(q)?, terms))
     }
+
+    /// The mass matrix over the state's velocities.
+    fn mass(&mut self, q: &[f64]) -> Result<DMatrix<f64>, String> {
+        let model = self.model;
+        let tree = crba(model, &mut self.data, q).map_err(|e| format!("{e:?}"))?;
+        if !model.has_loops() {
+            return Ok(tree);
+        }
+        let mut mass = DMatrix::zeros(model.velocities(), model.velocities());
+        mass.view_mut((0, 0), (model.nv, model.nv)).copy_from(&tree);
+        Ok(mass)
+    }
+
+    /// Position rows and their Jacobian G at q.
+    fn closure(&mut self, q: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>), String> {
+        let rest = vec![0.0; self.model.velocities()];
+        let c = loops::constraints(self.model, &mut self.data, q, &rest, false).map_err(|e| format!("{e:?}"))?;
+        Ok((c.residual, c.jacobian))
+    }
+}
+
+/// Solves the saddle-point system [[a, −bᵀ], [c, 0]] [x; y] = [f; g] in the least-squares sense
+/// (minimum norm where it is singular: redundant constraints, motions without mass).
+fn saddle_point(a: &DMatrix<f64>, b: &DMatrix<f64>, c: &DMatrix<f64>, f: &DVector<f64>, g: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
+    let (n, m) = (a.nrows(), b.nrows());
+    let mut k = DMatrix::zeros(n + m, n + m);
+    k.view_mut((0, 0), (n, n)).copy_from(a);
+    k.view_mut((0, n), (n, m)).copy_from(&(-b.transpose()));
+    k.view_mut((n, 0), (m, n)).copy_from(c);
+    let mut rhs = DVector::zeros(n + m);
+    rhs.rows_mut(0, n).copy_from(f);
+    rhs.rows_mut(n, m).copy_from(g);
+    let solution = loops::decompose_with(&k, 1e-13).pseudo_inverse * rhs;
+    (solution.rows(0, n).into_owned(), solution.rows(n, m).into_owned())
 }
 
 fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, String> {
@@ -53,6 +99,9 @@ pub fn integrate(
     outputs: &[f64],
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
+    if system.model.has_loops() {
+        return integrate_constrained(system, t0, y0, t_end, h, outputs, observer);
+    }
     let n = system.model.nv;
     let mut stats = Stats::default();
     let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError { time, failure, stats: stats.clone() };
@@ -65,8 +114,9 @@ pub fn integrate(
         observer(t0, y0).map_err(|m| fail(t0, Failure::Observer(m), &stats))?;
         next_output += 1;
     }
-    while t < t_end {
-        let step = h.min(t_end - t);
+    let count = step_count(t0, t_end, h);
+    for k in 0..count {
+        let step = (t0 + (t_end - t0) * (k + 1) as f64 / count as f64) - t;
         let mut q1 = &q + &v * step;
         let mut converged = false;
         let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
@@ -108,6 +158,13 @@ pub fn integrate(
     Ok((y, stats))
 }
 
+/// Steps of equal size at most h from t0 to t_end, their ends computed from their number rather
+/// than accumulated: never a sliver of a last step, whose mean velocity (q1 − q)/step would be
+/// round-off divided by almost nothing.
+fn step_count(t0: f64, t_end: f64, h: f64) -> usize {
+    ((t_end - t0) / h * (1.0 - 1e-12)).ceil().max(1.0) as usize
+}
+
 /// Cubic Hermite interpolation of positions (and its derivative for velocities) at fraction s.
 fn hermite(q0: &DVector<f64>, v0: &DVector<f64>, q1: &DVector<f64>, v1: &DVector<f64>, s: f64, h: f64) -> Vec<f64> {
     let (h00, h10, h01, h11) = (2.0 * s * s * s - 3.0 * s * s + 1.0, s * s * s - 2.0 * s * s + s, -2.0 * s * s * s + 3.0 * s * s, s * s * s - s * s);
@@ -117,4 +174,82 @@ fn hermite(q0: &DVector<f64>, v0: &DVector<f64>, q1: &DVector<f64>, v1: &DVector
     let mut y = q.as_slice().to_vec();
     y.extend_from_slice(v.as_slice());
     y
+}
+
+/// The RATTLE form of the midpoint variational integrator for mechanisms with loops.
+fn integrate_constrained(
+    system: &mut MechanicalSystem<'_>,
+    t0: f64,
+    y0: &[f64],
+    t_end: f64,
+    h: f64,
+    outputs: &[f64],
+    observer: &mut Observer,
+) -> Result<(Vec<f64>, Stats), IntegrationError> {
+    let n = system.model.velocities();
+    let mut stats = Stats::default();
+    let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError { time, failure, stats: stats.clone() };
+    let (mut q, mut v) = (DVector::from_column_slice(&y0[..n]), DVector::from_column_slice(&y0[n..]));
+    let mut t = t0;
+    let mass = system.mass(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
+    let mut p = &mass * &v;
+    let mut next_output = 0;
+    while next_output < outputs.len() && outputs[next_output] <= t0 {
+        observer(t0, y0).map_err(|m| fail(t0, Failure::Observer(m), &stats))?;
+        next_output += 1;
+    }
+    let count = step_count(t0, t_end, h);
+    for k in 0..count {
+        let step = (t0 + (t_end - t0) * (k + 1) as f64 / count as f64) - t;
+        let (_, g_start) = system.closure(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
+        let mut q1 = &q + &v * step;
+        let mut impulse = DVector::zeros(g_start.nrows());
+        let mut converged = false;
+        let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
+        for _ in 0..MAX_ITERATIONS {
+            let (mid, mean) = ((&q + &q1) * 0.5, (&q1 - &q) / step);
+            (mass_mid, terms) = system.midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step).map_err(|m| fail(t, Failure::System(m), &stats))?;
+            stats.rhs_evaluations += 1;
+            let (closure, g_end) = system.closure(q1.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
+            // Unknowns: q1 and the constraint impulse at the start of the step.
+            let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p - g_start.transpose() * &impulse;
+            // Scaled by h so that the blocks are of one size: the unknowns are dq and h·d(impulse).
+            let (dq, scaled_impulse) = saddle_point(&mass_mid, &g_start, &g_end, &(-momentum * step), &(-&closure));
+            q1 += &dq;
+            impulse += &scaled_impulse / step;
+            if dq.amax() <= 1e-15 * (1.0 + q1.amax()) && closure.amax() <= 1e-13 {
+                converged = true;
+                break;
+            }
+        }
+        if q1.iter().any(|x| !x.is_finite()) {
+            return Err(fail(t, Failure::NotFinite, &stats));
+        }
+        if !converged {
+            let message = format!("the implicit equations of the step from t = {t} did not converge: use a smaller `step` than {step}");
+            return Err(fail(t, Failure::System(message), &stats));
+        }
+        let mean = (&q1 - &q) / step;
+        let p_end = &mass_mid * &mean + &terms * (0.5 * step);
+        // Project the end momentum so that the velocities keep the loops closed.
+        let mass_end = system.mass(q1.as_slice()).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+        let (_, g_end) = system.closure(q1.as_slice()).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+        let (v1, _) = saddle_point(&mass_end, &g_end, &g_end, &p_end, &DVector::zeros(g_end.nrows()));
+        p = &mass_end * &v1;
+        stats.steps += 1;
+        let mut end_state = q1.as_slice().to_vec();
+        // Only recorded: projecting would spoil the symplectic map.
+        end_state.extend_from_slice(v1.as_slice());
+        system.measure_loops(t + step, &end_state).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+        while next_output < outputs.len() && outputs[next_output] <= t + step {
+            let s = (outputs[next_output] - t) / step;
+            let y = hermite(&q, &v, &q1, &v1, s, step);
+            observer(outputs[next_output], &y).map_err(|m| fail(outputs[next_output], Failure::Observer(m), &stats))?;
+            next_output += 1;
+        }
+        (q, v, t) = (q1, v1, t + step);
+    }
+    let mut y = q.as_slice().to_vec();
+    y.extend_from_slice(v.as_slice());
+    Ok((y, stats))
 }

@@ -1,0 +1,94 @@
+//! Consistent initial conditions for a mechanism with loops: the configuration is assembled from
+//! the `initial` values (holding the `fixed` ones), then the initial rates are completed so the
+//! loops stay closed: the rates the program gives are kept, the others are the smallest that
+//! satisfy the velocity constraints.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::diag::Diagnostic;
+use crate::dynamics::algorithms::Data;
+use crate::dynamics::loops::{constraints, decompose, project};
+use crate::dynamics::model::Model;
+use crate::elab::mechanism::Mechanism;
+use crate::kinematics::assembly::{assemble, AssemblyError, AssemblyOptions};
+use crate::kinematics::initial_coordinates;
+use crate::kinematics::model::KinematicModel;
+
+/// Declared coordinates and rates (of the whole mechanism) that close every loop.
+pub fn initial_state(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+    model: &Model,
+    rates: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>), Vec<Diagnostic>> {
+    let coordinates = assembled(mechanism, kinematics)?;
+    let evaluation = |e| vec![Diagnostic::error("E0804", format!("cannot evaluate the initial state: {}", crate::kinematics::eval::describe(&e, mechanism)))];
+    let (mut q, mut v) = model.state_from_declared(&coordinates, rates).map_err(evaluation)?;
+    let given = given_velocities(mechanism, model);
+    let mut data = Data::new(model);
+    let c = constraints(model, &mut data, &q, &v, false).map_err(evaluation)?;
+    complete_rates(&c.jacobian, &given, &mut v).map_err(|message| vec![incompatible_rates(mechanism, &given, message)])?;
+    // Assembly stops at 1e-12: finish at round-off.
+    project(model, &mut data, &mut q, &mut v).map_err(evaluation)?;
+    model.declared(&q, &v, &coordinates).map_err(evaluation)
+}
+
+fn assembled(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Vec<f64>, Vec<Diagnostic>> {
+    let (start, fixed) = initial_coordinates(mechanism, kinematics).map_err(|d| vec![d])?;
+    match assemble(kinematics, &start, &fixed, &AssemblyOptions::default()) {
+        Ok(assembled) => Ok(assembled.q),
+        Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error(
+            "E0804",
+            format!("cannot evaluate the geometry: {}", crate::kinematics::eval::describe(&e, mechanism)),
+        )]),
+        Err(AssemblyError::NoAssembly { loop_errors, .. }) => Err(vec![crate::analysis::no_assembly(mechanism, kinematics, &loop_errors)]),
+    }
+}
+
+/// State velocities whose value the program gives (`initial j.q' = …`). A quaternion joint's
+/// velocities are not its declared rates, so they are never held.
+fn given_velocities(mechanism: &Mechanism, model: &Model) -> Vec<(usize, String)> {
+    let mut given = Vec::new();
+    for initial in mechanism.initial.iter().filter(|i| i.order == 1) {
+        let name = mechanism.join_name(initial.join);
+        let index = match model.joint_of(initial.join) {
+            Some(j) if !model.joints[j].is_quaternion() => model.joints[j].v_offset + initial.coordinate,
+            Some(_) => continue,
+            None => match model.loops.iter().position(|l| l.join == initial.join) {
+                Some(k) => model.nv + model.loop_offset(k) + initial.coordinate,
+                None => continue,
+            },
+        };
+        let coordinate = &mechanism.link(mechanism.join(initial.join).link).coordinates[initial.coordinate];
+        given.push((index, format!("{name}.{coordinate}'")));
+    }
+    given
+}
+
+/// Changes the velocities not given as little as possible so that G v = 0.
+fn complete_rates(jacobian: &DMatrix<f64>, given: &[(usize, String)], v: &mut [f64]) -> Result<(), String> {
+    let free: Vec<usize> = (0..v.len()).filter(|i| !given.iter().any(|(g, _)| g == i)).collect();
+    let velocity = DVector::from_column_slice(v);
+    let error = jacobian * &velocity;
+    let free_columns = DMatrix::from_fn(jacobian.nrows(), free.len(), |r, c| jacobian[(r, free[c])]);
+    let correction = decompose(&free_columns).pseudo_inverse * &error;
+    for (k, &i) in free.iter().enumerate() {
+        v[i] -= correction[k];
+    }
+    let left = (jacobian * DVector::from_column_slice(v)).amax();
+    let scale = velocity.amax().max(1e-300) * jacobian.amax().max(1e-300);
+    if left > 1e-9 * scale {
+        return Err(format!("they leave the loops opening at {left:.3e} (m/s or rad/s)"));
+    }
+    Ok(())
+}
+
+fn incompatible_rates(mechanism: &Mechanism, given: &[(usize, String)], message: String) -> Diagnostic {
+    let names: Vec<String> = given.iter().map(|(_, n)| format!("`{n}`")).collect();
+    let mut diagnostic = Diagnostic::error("E0815", format!("the initial rates {} are not compatible with the loops: {message}", names.join(", ")))
+        .help("give the rates of independent coordinates only (as many as the mobility); the others follow from the loops");
+    if let Some(initial) = mechanism.initial.iter().find(|i| i.order == 1) {
+        diagnostic = diagnostic.primary(initial.span, "given here");
+    }
+    diagnostic
+}

@@ -1,0 +1,193 @@
+//! What a run sees of its loops: the redundant constraints at the start, the residuals before
+//! and after each projection, and the passages through singular configurations (where the
+//! constraints lose rank), for the run report.
+
+use nalgebra::DVector;
+use serde::Serialize;
+
+use crate::dynamics::algorithms::Data;
+use crate::dynamics::loops::{self, Decomposition, Residuals, Stabilisation, ROW_NAMES};
+use crate::dynamics::model::Model;
+use crate::kinematics::eval::EvalError;
+
+/// Below this ratio of the smallest singular value of G (among those independent at the start)
+/// to the largest, the loops are near a singular configuration: constraint forces and
+/// accelerations are amplified by more than its inverse. The run goes on; the report says when.
+const NEAR_SINGULAR: f64 = 1e-3;
+
+/// The state closest to a singular configuration the run saw.
+#[derive(Clone, Debug, Serialize)]
+pub struct ClosestApproach {
+    pub time: f64,
+    /// Ratio of the smallest singular value of G (among those independent at the start) to the
+    /// largest: 1 is far from any singularity, 0 is singular.
+    pub ratio: f64,
+    pub loop_name: String,
+}
+
+/// A stretch of time where the constraints lost rank.
+#[derive(Clone, Debug, Serialize)]
+pub struct SingularPassage {
+    /// First and last accepted steps seen singular (`end` is None if the run ended there).
+    pub start: f64,
+    pub end: Option<f64>,
+    /// The loop taking the largest part in the lost direction.
+    pub loop_name: String,
+    /// Smallest ratio of the lost singular value to the largest one.
+    pub smallest_ratio: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ConstraintReport {
+    pub stabilisation: String,
+    /// Constraint rows (6 per complementary link) and their rank at the start.
+    pub rows: usize,
+    pub rank: usize,
+    /// Rows implied by earlier ones at the start: `join: rotation about x`, …
+    pub redundant: Vec<String>,
+    /// Largest residuals reached by the integration before each projection (metres or radians,
+    /// and their rates).
+    pub position_residual_before_projection: f64,
+    pub velocity_residual_before_projection: f64,
+    /// Largest residuals of the states the run continued from and of every output.
+    pub position_residual: f64,
+    pub velocity_residual: f64,
+    pub singular: Vec<SingularPassage>,
+    pub closest: Option<ClosestApproach>,
+}
+
+pub struct LoopMonitor {
+    pub stabilisation: Stabilisation,
+    rank: usize,
+    redundant: Vec<String>,
+    rows: usize,
+    before: Residuals,
+    after: Residuals,
+    singular: Vec<SingularPassage>,
+    closest: Option<ClosestApproach>,
+}
+
+fn max(a: Residuals, b: Residuals) -> Residuals {
+    Residuals { position: a.position.max(b.position), velocity: a.velocity.max(b.velocity) }
+}
+
+impl LoopMonitor {
+    pub fn new(stabilisation: Stabilisation) -> LoopMonitor {
+        LoopMonitor {
+            stabilisation,
+            rank: 0,
+            redundant: Vec::new(),
+            rows: 0,
+            before: Residuals::default(),
+            after: Residuals::default(),
+            singular: Vec::new(),
+            closest: None,
+        }
+    }
+
+    /// Records the rank and the redundant rows at the (consistent) initial state.
+    pub fn start(&mut self, model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+        let c = loops::constraints(model, data, q, v, false)?;
+        let active = loops::active_rows(model);
+        self.rows = active.iter().filter(|&&a| a).count();
+        self.rank = loops::decompose_with(&c.jacobian, loops::RANK_TOLERANCE).rank;
+        self.redundant = loops::redundant_rows(&c.jacobian, &active)
+            .into_iter()
+            .map(|row| format!("{}: {}", model.loops[row / 6].name, ROW_NAMES[row % 6]))
+            .collect();
+        let residuals = Residuals { position: c.residual.amax(), velocity: c.velocity.amax() };
+        (self.before, self.after) = (residuals, residuals);
+        Ok(())
+    }
+
+    /// Moves (q, v) onto the constraints when the stabilisation is by projection, and records the
+    /// residuals and the rank there. Returns whether the state changed.
+    pub fn keep(&mut self, model: &Model, data: &mut Data, time: f64, q: &mut [f64], v: &mut [f64]) -> Result<bool, EvalError> {
+        if self.stabilisation == Stabilisation::Projection {
+            let projection = loops::project(model, data, q, v)?;
+            self.observe(model, time, projection.before, projection.after, &projection.basis);
+            return Ok(true);
+        }
+        self.measure(model, data, time, q, v)?;
+        loops::seat_ball_angles(model, data, q, v)
+    }
+
+    /// Records the residuals and the rank at (q, v) without moving it.
+    pub fn measure(&mut self, model: &Model, data: &mut Data, time: f64, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+        let c = loops::constraints(model, data, q, v, false)?;
+        let residuals = Residuals { position: c.residual.amax(), velocity: c.velocity.amax() };
+        self.observe(model, time, residuals, residuals, &loops::decompose(&c.jacobian));
+        Ok(())
+    }
+
+    fn observe(&mut self, model: &Model, time: f64, before: Residuals, after: Residuals, basis: &Decomposition) {
+        self.before = max(self.before, before);
+        self.after = max(self.after, after);
+        if self.rank == 0 || basis.singular_values.len() < self.rank {
+            return;
+        }
+        let ratio = basis.singular_values[self.rank - 1] / basis.singular_values[0];
+        let loop_name = || {
+            let direction: DVector<f64> = basis.left.column(self.rank - 1).into_owned();
+            model.loops[loops::loop_of_direction(&direction)].name.clone()
+        };
+        if self.closest.as_ref().is_none_or(|c| ratio < c.ratio) {
+            self.closest = Some(ClosestApproach { time, ratio, loop_name: loop_name() });
+        }
+        let open = self.singular.last_mut().filter(|p| p.end.is_none());
+        match open {
+            Some(passage) if ratio >= NEAR_SINGULAR => passage.end = Some(time),
+            Some(passage) => passage.smallest_ratio = passage.smallest_ratio.min(ratio),
+            None if ratio < NEAR_SINGULAR => {
+                self.singular.push(SingularPassage { start: time, end: None, loop_name: loop_name(), smallest_ratio: ratio });
+            }
+            None => {}
+        }
+    }
+
+    /// Takes in what another monitor saw (the outputs', which may fall inside a long step).
+    pub fn absorb(&mut self, other: &LoopMonitor) {
+        self.before = max(self.before, other.before);
+        self.after = max(self.after, other.after);
+        if let Some(theirs) = &other.closest {
+            if self.closest.as_ref().is_none_or(|c| theirs.ratio < c.ratio) {
+                self.closest = Some(theirs.clone());
+            }
+        }
+        let mut passages: Vec<SingularPassage> = self.singular.drain(..).chain(other.singular.iter().cloned()).collect();
+        passages.sort_by(|a, b| a.start.total_cmp(&b.start));
+        for passage in passages {
+            match self.singular.last_mut() {
+                Some(last) if last.end.is_none_or(|end| passage.start <= end) => {
+                    last.end = match (last.end, passage.end) {
+                        (Some(a), Some(b)) => Some(a.max(b)),
+                        _ => None,
+                    };
+                    last.smallest_ratio = last.smallest_ratio.min(passage.smallest_ratio);
+                }
+                _ => self.singular.push(passage),
+            }
+        }
+    }
+
+    pub fn report(&self) -> ConstraintReport {
+        let stabilisation = match self.stabilisation {
+            Stabilisation::Projection => "projection".to_string(),
+            Stabilisation::Baumgarte(rate) => format!("baumgarte ({rate} 1/s)"),
+            Stabilisation::Integrator => "the integrator's constraint equations (RATTLE)".to_string(),
+            Stabilisation::None => "none".to_string(),
+        };
+        ConstraintReport {
+            stabilisation,
+            rows: self.rows,
+            rank: self.rank,
+            redundant: self.redundant.clone(),
+            position_residual_before_projection: self.before.position,
+            velocity_residual_before_projection: self.before.velocity,
+            position_residual: self.after.position,
+            velocity_residual: self.after.velocity,
+            singular: self.singular.clone(),
+            closest: self.closest.clone(),
+        }
+    }
+}
