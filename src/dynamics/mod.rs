@@ -4,7 +4,6 @@
 
 pub mod algorithms;
 pub mod angles;
-pub mod constrained;
 pub mod derivatives;
 pub mod efforts;
 pub mod energy;

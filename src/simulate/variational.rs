@@ -9,8 +9,9 @@
 //! With loops the same discrete Lagrangian is constrained (RATTLE): the step also solves for the
 //! impulse h·Gᵀλ of the constraint forces at its start so that the positions at its end close
 //! every loop, and the end momentum is projected so that the velocities satisfy G v = 0. The
-//! complementary links' coordinates carry no inertia; the saddle-point systems are solved in the
-//! least-squares sense, so redundant constraints and motions without mass cost nothing special.
+//! complementary links' coordinates carry no inertia; the constrained systems are solved by the
+//! null-space method in the least-squares sense, so redundant constraints and motions without
+//! mass cost nothing special.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -70,19 +71,18 @@ impl MechanicalSystem<'_> {
     }
 }
 
-/// Solves the saddle-point system [[a, −bᵀ], [c, 0]] [x; y] = [f; g] in the least-squares sense
-/// (minimum norm where it is singular: redundant constraints, motions without mass).
-fn saddle_point(a: &DMatrix<f64>, b: &DMatrix<f64>, c: &DMatrix<f64>, f: &DVector<f64>, g: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
-    let (n, m) = (a.nrows(), b.nrows());
-    let mut k = DMatrix::zeros(n + m, n + m);
-    k.view_mut((0, 0), (n, n)).copy_from(a);
-    k.view_mut((0, n), (n, m)).copy_from(&(-b.transpose()));
-    k.view_mut((n, 0), (m, n)).copy_from(c);
-    let mut rhs = DVector::zeros(n + m);
-    rhs.rows_mut(0, n).copy_from(f);
-    rhs.rows_mut(n, m).copy_from(g);
-    let solution = loops::decompose_with(&k, 1e-13).pseudo_inverse * rhs;
-    (solution.rows(0, n).into_owned(), solution.rows(n, m).into_owned())
+/// Solves `a x − g_startᵀ w = f` (for some w) with `g_end x = c` by the null-space method: x is
+/// the minimum-norm solution of the constraints plus a motion they allow, chosen so that the
+/// first equation holds on the motions the start's constraints allow. Least squares throughout,
+/// so redundant constraints and motions without mass cost nothing special.
+fn constrained_solve(a: &DMatrix<f64>, g_start: &DMatrix<f64>, g_end: &DMatrix<f64>, f: &DVector<f64>, c: &DVector<f64>) -> DVector<f64> {
+    let end = loops::decompose(g_end);
+    let particular = &end.pseudo_inverse * c;
+    let allowed_start = loops::decompose(g_start).null_space;
+    let reduced = allowed_start.transpose() * a * &end.null_space;
+    let rhs = allowed_start.transpose() * (f - a * &particular);
+    let z = loops::decompose_with(&reduced, 1e-12).pseudo_inverse * rhs;
+    particular + &end.null_space * z
 }
 
 fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, String> {
@@ -203,7 +203,6 @@ fn integrate_constrained(
         let step = (t0 + (t_end - t0) * (k + 1) as f64 / count as f64) - t;
         let (_, g_start) = system.closure(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
         let mut q1 = &q + &v * step;
-        let mut impulse = DVector::zeros(g_start.nrows());
         let mut converged = false;
         let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
         for _ in 0..MAX_ITERATIONS {
@@ -211,12 +210,12 @@ fn integrate_constrained(
             (mass_mid, terms) = system.midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step).map_err(|m| fail(t, Failure::System(m), &stats))?;
             stats.rhs_evaluations += 1;
             let (closure, g_end) = system.closure(q1.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
-            // Unknowns: q1 and the constraint impulse at the start of the step.
-            let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p - g_start.transpose() * &impulse;
-            // Scaled by h so that the blocks are of one size: the unknowns are dq and h·d(impulse).
-            let (dq, scaled_impulse) = saddle_point(&mass_mid, &g_start, &g_end, &(-momentum * step), &(-&closure));
+            // The momentum balance holds up to the constraint impulse at the start of the step,
+            // Gᵀ(q)·(h λ): only its part on the motions G(q) allows is an equation for q1.
+            let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p;
+            // Newton with the leading part of the Jacobian (M/h), scaled by h.
+            let dq = constrained_solve(&mass_mid, &g_start, &g_end, &(-&momentum * step), &(-&closure));
             q1 += &dq;
-            impulse += &scaled_impulse / step;
             if dq.amax() <= 1e-15 * (1.0 + q1.amax()) && closure.amax() <= 1e-13 {
                 converged = true;
                 break;
@@ -234,7 +233,7 @@ fn integrate_constrained(
         // Project the end momentum so that the velocities keep the loops closed.
         let mass_end = system.mass(q1.as_slice()).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
         let (_, g_end) = system.closure(q1.as_slice()).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
-        let (v1, _) = saddle_point(&mass_end, &g_end, &g_end, &p_end, &DVector::zeros(g_end.nrows()));
+        let v1 = constrained_solve(&mass_end, &g_end, &g_end, &p_end, &DVector::zeros(g_end.nrows()));
         p = &mass_end * &v1;
         stats.steps += 1;
         let mut end_state = q1.as_slice().to_vec();
