@@ -126,3 +126,28 @@ fn a_failing_simulation_keeps_its_output_and_says_so() {
     assert!(stdout.lines().count() > 150, "rows before the failure are kept");
     assert!(stderr.contains("FAILED") && stderr.contains("`slide.x`"), "{stderr}");
 }
+
+#[test]
+fn statics_prints_the_holding_efforts() {
+    let args = ["statics", "examples/delta_isir88_reduced.lsd", "--actuate", "A1.q", "--actuate", "A2.q", "--actuate", "A3.q"];
+    let (code, stdout, stderr) = lsdc(&args);
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(stdout.matches("-2.31009").count(), 3, "{stdout}");
+    let (code, _, stderr) = lsdc(&["statics", "examples/delta_isir88_reduced.lsd", "--actuate", "A1.z"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("did you mean `A1.q`?"), "{stderr}");
+}
+
+#[test]
+fn loop_simulations_report_their_constraints_and_reactions() {
+    let args = ["simulate", "examples/slider_crank.lsd", "--duration", "0.1", "--reactions", "--report", "json"];
+    let (code, stdout, stderr) = lsdc(&args);
+    assert_eq!(code, 0, "{stderr}");
+    let header = stdout.lines().next().expect("header");
+    assert!(header.ends_with("pin.reaction.mx,pin.reaction.my,pin.reaction.mz,pin.reaction.fx,pin.reaction.fy,pin.reaction.fz"), "{header}");
+    let report: serde_json::Value = serde_json::from_str(&stderr).expect("JSON report");
+    let constraints = &report["constraints"];
+    assert_eq!(constraints["rank"], 3);
+    assert_eq!(constraints["redundant"].as_array().map(Vec::len), Some(3));
+    assert!(constraints["position_residual"].as_f64().expect("number") < 1e-12);
+}

@@ -109,7 +109,8 @@ fn given_initial_rates_are_kept_and_the_others_close_the_loops() {
     // The slider moves as the closure says: x3 = λ1 cos α1 + λ2 cos(α1 + α12).
     let (a1, a12) = (first.coordinates[column(&simulation, "crank.q")], first.coordinates[column(&simulation, "coupler.q")]);
     let (r1, r12) = (first.rates[column(&simulation, "crank.q")], first.rates[column(&simulation, "coupler.q")]);
-    let slider_rate = -1.0 * a1.sin() * r1 - 3.0 * (a1 + a12).sin() * (r1 + r12);
+    let (lambda1, lambda2) = (1.0, 3.0);
+    let slider_rate = -lambda1 * a1.sin() * r1 - lambda2 * (a1 + a12).sin() * (r1 + r12);
     assert!((first.rates[column(&simulation, "slider.q")] - slider_rate).abs() < 1e-12);
     assert!(constraints(&simulation).velocity_residual < 1e-12);
 }
