@@ -1,0 +1,196 @@
+//! Closed loops: cost per step and error against a tight-tolerance reference, for the four-bar
+//! and the Delta robot (full ball-jointed model and reduced model). Run with
+//! `cargo bench --bench loops`. Times are medians of a few runs on whatever machine runs this.
+
+use std::cell::RefCell;
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::rc::Rc;
+use std::time::Instant;
+
+use lsdc::driver::compile_files;
+use lsdc::load::LoadOptions;
+use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
+use lsdc::simulate::run::{run, Sample, Simulation};
+use lsdc::simulate::system::MechanicalSystem;
+
+/// Tolerances tried for the reference, tightest first: 1e-13 may fail to converge near round-off.
+const REFERENCE_TOLERANCES: [f64; 2] = [1e-13, 1e-12];
+/// Timed repetitions of each run; the median is reported (runs take milliseconds to seconds).
+const REPEATS: usize = 5;
+
+struct Case {
+    file: &'static str,
+    /// Fixed steps for RK4 (two or three), and the step for the symplectic integrator.
+    rk4_steps: &'static [f64],
+    symplectic_steps: &'static [f64],
+}
+
+const CASES: [Case; 3] = [
+    Case { file: "four_bar", rk4_steps: &[1e-2, 1e-3, 1e-4], symplectic_steps: &[1e-2, 1e-3] },
+    Case { file: "delta_isir88", rk4_steps: &[1e-3, 1e-4, 1e-5], symplectic_steps: &[1e-3, 1e-4] },
+    Case { file: "delta_isir88_reduced", rk4_steps: &[1e-3, 1e-4, 1e-5], symplectic_steps: &[1e-3, 1e-4] },
+];
+
+/// One integrator configuration of the table.
+struct Method {
+    label: String,
+    integrator: Integrator,
+    tolerance: Option<f64>,
+    step: Option<f64>,
+}
+
+fn methods(case: &Case) -> Vec<Method> {
+    let adaptive = |integrator: Integrator, name: &str, tol: f64| Method {
+        label: format!("{name} {tol:.0e}"),
+        integrator,
+        tolerance: Some(tol),
+        step: None,
+    };
+    let fixed = |integrator: Integrator, name: &str, h: f64| Method { label: format!("{name} h={h:.0e}"), integrator, tolerance: None, step: Some(h) };
+    let mut list: Vec<Method> = [1e-6, 1e-8, 1e-10].iter().map(|&t| adaptive(Integrator::DormandPrince, "dopri5", t)).collect();
+    list.extend(case.rk4_steps.iter().map(|&h| fixed(Integrator::Rk4, "rk4", h)));
+    list.extend([1e-6, 1e-8].iter().map(|&t| adaptive(Integrator::Implicit, "implicit", t)));
+    list.extend(case.symplectic_steps.iter().map(|&h| fixed(Integrator::Symplectic, "symplectic", h)));
+    list
+}
+
+fn load(file: &str) -> Prepared {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_files(&[PathBuf::from(format!("examples/{file}.lsd"))], &options).expect("example loads");
+    let mechanism = compilation.mechanism.expect("example elaborates");
+    prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|_| panic!("{file}: prepares"))
+}
+
+/// The example's own scenario (duration, outputs) with the method's integrator and accuracy.
+fn configure(base: &Prepared, file: &str, method: &Method) -> Prepared {
+    let mut prepared = load(file);
+    prepared.settings = base.settings.clone();
+    prepared.settings.integrator = method.integrator.clone();
+    prepared.settings.step = method.step;
+    if let Some(tol) = method.tolerance {
+        (prepared.settings.rtol, prepared.settings.atol) = (tol, tol);
+    }
+    prepared
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// Runs `REPEATS` times; returns the last simulation and the median integration time (the
+/// report's `run_seconds`, which leaves out preparation but includes sampling the outputs).
+fn timed_run(prepared: &Prepared) -> (Simulation, f64) {
+    let mut seconds = Vec::new();
+    let mut last = None;
+    for _ in 0..REPEATS {
+        let simulation = run(prepared, &mut |_| {});
+        seconds.push(simulation.report.run_seconds);
+        last = Some(simulation);
+    }
+    (last.expect("at least one run"), median(seconds))
+}
+
+/// The largest |coordinate − reference| over the output times both runs reached.
+fn max_error(samples: &[Sample], reference: &[Sample]) -> f64 {
+    samples
+        .iter()
+        .zip(reference)
+        .take_while(|(s, r)| (s.time - r.time).abs() <= 1e-9)
+        .flat_map(|(s, r)| s.coordinates.iter().zip(&r.coordinates).map(|(a, b)| (a - b).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// The reference at the tightest tolerance that completes without failure.
+fn reference(base: &Prepared, file: &str) -> (Simulation, f64) {
+    for tol in REFERENCE_TOLERANCES {
+        let method = Method { label: String::new(), integrator: Integrator::DormandPrince, tolerance: Some(tol), step: None };
+        let simulation = run(&configure(base, file, &method), &mut |_| {});
+        match &simulation.report.failure {
+            None => return (simulation, tol),
+            Some(f) => println!("reference at {tol:e} failed at t = {}: {}", f.time, f.message),
+        }
+    }
+    panic!("{file}: no reference run completed");
+}
+
+/// Median time of one call of `f` over batches of about 10 ms.
+fn time_per_call(mut f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    let mut calls = 0u64;
+    while start.elapsed().as_secs_f64() < 0.01 {
+        f();
+        calls += 1;
+    }
+    let batches = (0..9)
+        .map(|_| {
+            let start = Instant::now();
+            (0..calls).for_each(|_| f());
+            start.elapsed().as_secs_f64() / calls as f64
+        })
+        .collect();
+    median(batches)
+}
+
+/// Median cost (µs) of one constrained right-hand side and of one projection onto the loops,
+/// at the initial state.
+fn call_costs(prepared: &Prepared) -> (f64, f64) {
+    let model = &prepared.model;
+    let (mut y, v) = model.state_from_declared(&prepared.coordinates, &prepared.rates).expect("initial state");
+    y.extend_from_slice(&v);
+    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
+    system.start_loops(&mut y).expect("loops close");
+    let mut dydt = vec![0.0; y.len()];
+    let rhs = time_per_call(|| system.derivative(0.0, black_box(&y), &mut dydt).expect("evaluates"));
+    // Projection from the closed state still does the full Gauss–Newton solve and basis.
+    let projection = time_per_call(|| {
+        let mut z = y.clone();
+        black_box(system.keep_closed(0.0, &mut z).expect("projects"));
+    });
+    (rhs * 1e6, projection * 1e6)
+}
+
+fn optional(value: Option<f64>) -> String {
+    value.map_or("—".to_string(), |v| format!("{v:.1e}"))
+}
+
+fn row(method: &Method, simulation: &Simulation, seconds: f64, reference: &[Sample]) -> String {
+    let r = &simulation.report;
+    if let Some(failure) = r.failure.as_ref().filter(|_| r.steps == 0) {
+        return format!("| {} | failed: {} | | | | | |", method.label, failure.message);
+    }
+    let failed = r.failure.as_ref().map_or(String::new(), |f| format!(" (failed at t = {:.3})", f.time));
+    format!(
+        "| {}{failed} | {} | {:.2} | {:.2} | {:.1e} | {} | {} |",
+        method.label,
+        r.steps,
+        seconds / r.steps as f64 * 1e6,
+        seconds / r.function_evaluations as f64 * 1e6,
+        max_error(&simulation.samples, reference),
+        optional(r.energy_drift),
+        optional(r.constraints.as_ref().map(|c| c.position_residual)),
+    )
+}
+
+fn main() {
+    println!("Timings are from the machine running this benchmark (release build), medians of {REPEATS} runs.");
+    for case in &CASES {
+        let base = load(case.file);
+        let (reference, tol) = reference(&base, case.file);
+        let (rhs, projection) = call_costs(&base);
+        let s = &base.settings;
+        println!("\n### {} ({} s, output every {} s)\n", case.file, s.duration, s.output);
+        println!(
+            "Reference: dopri5 at rtol = atol = {tol:.0e}, {} steps. One constrained right-hand side: {rhs:.2} µs; one projection: {projection:.2} µs.\n",
+            reference.report.steps
+        );
+        println!("| method | steps | µs per step | µs per evaluation | max coordinate error | energy drift | position residual |");
+        println!("|---|---:|---:|---:|---:|---:|---:|");
+        for method in methods(case) {
+            let (simulation, seconds) = timed_run(&configure(&base, case.file, &method));
+            println!("{}", row(&method, &simulation, seconds, &reference.samples));
+        }
+    }
+}
