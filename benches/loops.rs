@@ -63,9 +63,8 @@ fn load(file: &str) -> Prepared {
 }
 
 /// The example's own scenario (duration, outputs) with the method's integrator and accuracy.
-fn configure(base: &Prepared, file: &str, method: &Method) -> Prepared {
+fn configure(file: &str, method: &Method) -> Prepared {
     let mut prepared = load(file);
-    prepared.settings = base.settings.clone();
     prepared.settings.integrator = method.integrator.clone();
     prepared.settings.step = method.step;
     if let Some(tol) = method.tolerance {
@@ -103,10 +102,10 @@ fn max_error(samples: &[Sample], reference: &[Sample]) -> f64 {
 }
 
 /// The reference at the tightest tolerance that completes without failure.
-fn reference(base: &Prepared, file: &str) -> (Simulation, f64) {
+fn reference(file: &str) -> (Simulation, f64) {
     for tol in REFERENCE_TOLERANCES {
         let method = Method { label: String::new(), integrator: Integrator::DormandPrince, tolerance: Some(tol), step: None };
-        let simulation = run(&configure(base, file, &method), &mut |_| {});
+        let simulation = run(&configure(file, &method), &mut |_| {});
         match &simulation.report.failure {
             None => return (simulation, tol),
             Some(f) => println!("reference at {tol:e} failed at t = {}: {}", f.time, f.message),
@@ -178,7 +177,7 @@ fn main() {
     println!("Timings are from the machine running this benchmark (release build), medians of {REPEATS} runs.");
     for case in &CASES {
         let base = load(case.file);
-        let (reference, tol) = reference(&base, case.file);
+        let (reference, tol) = reference(case.file);
         let (rhs, projection) = call_costs(&base);
         let s = &base.settings;
         println!("\n### {} ({} s, output every {} s)\n", case.file, s.duration, s.output);
@@ -189,7 +188,7 @@ fn main() {
         println!("| method | steps | µs per step | µs per evaluation | max coordinate error | energy drift | position residual |");
         println!("|---|---:|---:|---:|---:|---:|---:|");
         for method in methods(case) {
-            let (simulation, seconds) = timed_run(&configure(&base, case.file, &method));
+            let (simulation, seconds) = timed_run(&configure(case.file, &method));
             println!("{}", row(&method, &simulation, seconds, &reference.samples));
         }
     }

@@ -63,6 +63,35 @@ impl MechanicalSystem<'_> {
         Ok(mass)
     }
 
+    /// The constraint Jacobian at the start of a step (None for a tree).
+    fn allowed_motions(&mut self, q: &[f64]) -> Result<Option<DMatrix<f64>>, String> {
+        if !self.model.has_loops() {
+            return Ok(None);
+        }
+        Ok(Some(self.closure(q)?.1))
+    }
+
+    /// The Newton correction of q1 for the momentum residual `rhs` (scaled by h), and how far
+    /// q1 leaves the loops open. With loops, the balance holds up to the constraint impulse at
+    /// the start of the step, Gᵀ(q)·(h λ): only its part on the motions G(q) allows is an
+    /// equation for q1, and the closure at q1 is the other.
+    fn correction(&mut self, mass: &DMatrix<f64>, start: &Option<DMatrix<f64>>, q1: &[f64], rhs: &DVector<f64>) -> Result<(DVector<f64>, f64), String> {
+        let Some(g_start) = start else { return Ok((solve(mass, rhs)?, 0.0)) };
+        let (closure, g_end) = self.closure(q1)?;
+        Ok((constrained_solve(mass, g_start, &g_end, rhs, &(-&closure)), closure.amax()))
+    }
+
+    /// The velocities of momentum p at q1 (projected onto the loops' velocity constraints: the
+    /// RATTLE step), and the mass matrix there.
+    fn end_velocity(&mut self, q1: &[f64], p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), String> {
+        let mass = self.mass(q1)?;
+        if !self.model.has_loops() {
+            return Ok((solve(&mass, p)?, mass));
+        }
+        let (_, g) = self.closure(q1)?;
+        Ok((constrained_solve(&mass, &g, &g, p, &DVector::zeros(g.nrows())), mass))
+    }
+
     /// Position rows and their Jacobian G at q.
     fn closure(&mut self, q: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>), String> {
         let rest = vec![0.0; self.model.velocities()];
@@ -99,15 +128,12 @@ pub fn integrate(
     outputs: &[f64],
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    if system.model.has_loops() {
-        return integrate_constrained(system, t0, y0, t_end, h, outputs, observer);
-    }
-    let n = system.model.nv;
+    let n = system.model.velocities();
     let mut stats = Stats::default();
     let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError { time, failure, stats: stats.clone() };
     let (mut q, mut v) = (DVector::from_column_slice(&y0[..n]), DVector::from_column_slice(&y0[n..]));
     let mut t = t0;
-    let mass = crba(system.model, &mut system.data, q.as_slice()).map_err(|e| fail(t, Failure::System(format!("{e:?}")), &stats))?;
+    let mass = system.mass(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
     let mut p = &mass * &v;
     let mut next_output = 0;
     while next_output < outputs.len() && outputs[next_output] <= t0 {
@@ -117,6 +143,7 @@ pub fn integrate(
     let count = step_count(t0, t_end, h);
     for k in 0..count {
         let step = (t0 + (t_end - t0) * (k + 1) as f64 / count as f64) - t;
+        let start = system.allowed_motions(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
         let mut q1 = &q + &v * step;
         let mut converged = false;
         let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
@@ -124,11 +151,12 @@ pub fn integrate(
             let (mid, mean) = ((&q + &q1) * 0.5, (&q1 - &q) / step);
             (mass_mid, terms) = system.midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step).map_err(|m| fail(t, Failure::System(m), &stats))?;
             stats.rhs_evaluations += 1;
-            let residual = &mass_mid * &mean - &terms * (0.5 * step) - &p;
-            // Newton with the leading part of the Jacobian, M/h: converges quickly for small h.
-            let correction = solve(&mass_mid, &(-residual * step)).map_err(|m| fail(t, Failure::System(m), &stats))?;
+            let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p;
+            // Newton with the leading part of the Jacobian, M/h (scaled by h): converges quickly
+            // for small h.
+            let (correction, open) = system.correction(&mass_mid, &start, q1.as_slice(), &(-momentum * step)).map_err(|m| fail(t, Failure::System(m), &stats))?;
             q1 += &correction;
-            if correction.amax() <= 1e-15 * (1.0 + q1.amax()) {
+            if correction.amax() <= 1e-15 * (1.0 + q1.amax()) && open <= 1e-13 {
                 converged = true;
                 break;
             }
@@ -141,10 +169,14 @@ pub fn integrate(
             return Err(fail(t, Failure::System(message), &stats));
         }
         let mean = (&q1 - &q) / step;
-        p = &mass_mid * &mean + &terms * (0.5 * step);
-        let mass_end = crba(system.model, &mut system.data, q1.as_slice()).map_err(|e| fail(t, Failure::System(format!("{e:?}")), &stats))?;
-        let v1 = solve(&mass_end, &p).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+        let p_end = &mass_mid * &mean + &terms * (0.5 * step);
+        let (v1, mass_end) = system.end_velocity(q1.as_slice(), &p_end).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+        p = &mass_end * &v1;
         stats.steps += 1;
+        let mut end_state = q1.as_slice().to_vec();
+        end_state.extend_from_slice(v1.as_slice());
+        // Only recorded: projecting would spoil the symplectic map.
+        system.measure_loops(t + step, &end_state).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
         while next_output < outputs.len() && outputs[next_output] <= t + step {
             let s = (outputs[next_output] - t) / step;
             let y = hermite(&q, &v, &q1, &v1, s, step);
@@ -174,81 +206,4 @@ fn hermite(q0: &DVector<f64>, v0: &DVector<f64>, q1: &DVector<f64>, v1: &DVector
     let mut y = q.as_slice().to_vec();
     y.extend_from_slice(v.as_slice());
     y
-}
-
-/// The RATTLE form of the midpoint variational integrator for mechanisms with loops.
-fn integrate_constrained(
-    system: &mut MechanicalSystem<'_>,
-    t0: f64,
-    y0: &[f64],
-    t_end: f64,
-    h: f64,
-    outputs: &[f64],
-    observer: &mut Observer,
-) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    let n = system.model.velocities();
-    let mut stats = Stats::default();
-    let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError { time, failure, stats: stats.clone() };
-    let (mut q, mut v) = (DVector::from_column_slice(&y0[..n]), DVector::from_column_slice(&y0[n..]));
-    let mut t = t0;
-    let mass = system.mass(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
-    let mut p = &mass * &v;
-    let mut next_output = 0;
-    while next_output < outputs.len() && outputs[next_output] <= t0 {
-        observer(t0, y0).map_err(|m| fail(t0, Failure::Observer(m), &stats))?;
-        next_output += 1;
-    }
-    let count = step_count(t0, t_end, h);
-    for k in 0..count {
-        let step = (t0 + (t_end - t0) * (k + 1) as f64 / count as f64) - t;
-        let (_, g_start) = system.closure(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
-        let mut q1 = &q + &v * step;
-        let mut converged = false;
-        let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
-        for _ in 0..MAX_ITERATIONS {
-            let (mid, mean) = ((&q + &q1) * 0.5, (&q1 - &q) / step);
-            (mass_mid, terms) = system.midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step).map_err(|m| fail(t, Failure::System(m), &stats))?;
-            stats.rhs_evaluations += 1;
-            let (closure, g_end) = system.closure(q1.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
-            // The momentum balance holds up to the constraint impulse at the start of the step,
-            // Gᵀ(q)·(h λ): only its part on the motions G(q) allows is an equation for q1.
-            let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p;
-            // Newton with the leading part of the Jacobian (M/h), scaled by h.
-            let dq = constrained_solve(&mass_mid, &g_start, &g_end, &(-&momentum * step), &(-&closure));
-            q1 += &dq;
-            if dq.amax() <= 1e-15 * (1.0 + q1.amax()) && closure.amax() <= 1e-13 {
-                converged = true;
-                break;
-            }
-        }
-        if q1.iter().any(|x| !x.is_finite()) {
-            return Err(fail(t, Failure::NotFinite, &stats));
-        }
-        if !converged {
-            let message = format!("the implicit equations of the step from t = {t} did not converge: use a smaller `step` than {step}");
-            return Err(fail(t, Failure::System(message), &stats));
-        }
-        let mean = (&q1 - &q) / step;
-        let p_end = &mass_mid * &mean + &terms * (0.5 * step);
-        // Project the end momentum so that the velocities keep the loops closed.
-        let mass_end = system.mass(q1.as_slice()).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
-        let (_, g_end) = system.closure(q1.as_slice()).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
-        let v1 = constrained_solve(&mass_end, &g_end, &g_end, &p_end, &DVector::zeros(g_end.nrows()));
-        p = &mass_end * &v1;
-        stats.steps += 1;
-        let mut end_state = q1.as_slice().to_vec();
-        // Only recorded: projecting would spoil the symplectic map.
-        end_state.extend_from_slice(v1.as_slice());
-        system.measure_loops(t + step, &end_state).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
-        while next_output < outputs.len() && outputs[next_output] <= t + step {
-            let s = (outputs[next_output] - t) / step;
-            let y = hermite(&q, &v, &q1, &v1, s, step);
-            observer(outputs[next_output], &y).map_err(|m| fail(outputs[next_output], Failure::Observer(m), &stats))?;
-            next_output += 1;
-        }
-        (q, v, t) = (q1, v1, t + step);
-    }
-    let mut y = q.as_slice().to_vec();
-    y.extend_from_slice(v.as_slice());
-    Ok((y, stats))
 }
