@@ -135,21 +135,23 @@ pub fn active_rows(model: &Model) -> Vec<bool> {
     model.loop_balls.iter().flat_map(|ball| (0..6).map(move |r| ball.is_none() || r >= 3)).collect()
 }
 
-/// Recovers the angles and rates of the complementary ball joints at (q, v); returns whether
-/// there are any.
-pub fn seat_ball_angles(model: &Model, data: &mut Data, q: &mut [f64], v: &mut [f64]) -> Result<bool, EvalError> {
+/// Recovers the angles of the complementary ball joints at (q, v), and their rates when
+/// `with_rates` (for outputs); otherwise their rates are set to zero: the state the integrator
+/// carries then holds them still between recoveries, instead of moving them with rates nothing
+/// updates (which would only feed its error estimate). Returns whether there are any.
+pub fn seat_ball_angles(model: &Model, data: &mut Data, q: &mut [f64], v: &mut [f64], with_rates: bool) -> Result<bool, EvalError> {
     if model.loop_balls.iter().all(Option::is_none) {
         return Ok(false);
     }
     forward_kinematics(model, data, q, v)?;
-    seat_balls(model, data, q, v)?;
+    seat_balls(model, data, q, v, with_rates)?;
     Ok(true)
 }
 
 /// Sets the angles of the complementary ball joints to those of the bodies' relative rotation
 /// (continuing from their previous values) and their rates to match the relative angular
 /// velocity; `data` must hold the forward kinematics of (q, v).
-fn seat_balls(model: &Model, data: &Data, q: &mut [f64], v: &mut [f64]) -> Result<(), EvalError> {
+fn seat_balls(model: &Model, data: &Data, q: &mut [f64], v: &mut [f64], with_rates: bool) -> Result<(), EvalError> {
     for (k, axes) in model.loop_balls.iter().enumerate() {
         let Some(axes) = axes else { continue };
         let joint = &model.loops[k];
@@ -160,6 +162,10 @@ fn seat_balls(model: &Model, data: &Data, q: &mut [f64], v: &mut [f64]) -> Resul
         let previous = [q[model.nq + start], q[model.nq + start + 1], q[model.nq + start + 2]];
         let angles = super::angles::angles_from_rotation(axes, &relative, &previous);
         q[model.nq + start..model.nq + start + 3].copy_from_slice(&angles);
+        if !with_rates {
+            v[model.nv + start..model.nv + start + 3].fill(0.0);
+            continue;
+        }
         // Relative angular velocity in the first frame, then the angle rates that give it.
         let world = |body: usize| spatial::motion_to_parent(&data.world[body], &data.velocity[body]);
         let omega = base.rotation.inverse() * (world(joint.second_body) - world(joint.first_body)).fixed_rows::<3>(0);
@@ -364,7 +370,7 @@ pub fn project(model: &Model, data: &mut Data, q: &mut [f64], v: &mut [f64]) -> 
     let corrected = DVector::from_column_slice(v) - &basis.pseudo_inverse * &velocity;
     let after_velocity = (&current.jacobian * &corrected).amax();
     v.copy_from_slice(corrected.as_slice());
-    seat_ball_angles(model, data, q, v)?;
+    seat_ball_angles(model, data, q, v, false)?;
     Ok(Projection {
         before: Residuals { position: before_position, velocity: velocity.amax() },
         after: Residuals { position: error, velocity: after_velocity },

@@ -109,7 +109,7 @@ impl LoopMonitor {
             return Ok(true);
         }
         self.measure(model, data, time, q, v)?;
-        loops::seat_ball_angles(model, data, q, v)
+        loops::seat_ball_angles(model, data, q, v, false)
     }
 
     /// Records the residuals and the rank at (q, v) without moving it.

@@ -123,6 +123,7 @@ impl Sampler<'_> {
         let model = self.system.model;
         let mut y = y.to_vec();
         self.system.keep_closed(time, &mut y)?;
+        self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let previous = self.previous.borrow().clone();
         let (coordinates, rates) = model.declared(&q, v, &previous).map_err(|e| format!("{e:?}"))?;

@@ -106,6 +106,17 @@ impl<'m> MechanicalSystem<'m> {
         Ok(moved)
     }
 
+    /// Sets the rates of the complementary ball joints' angles in y (for outputs).
+    pub fn ball_rates(&mut self, y: &mut [f64]) -> Result<(), String> {
+        let model = self.model;
+        let (mut q, v) = model.split_state(y);
+        let mut v = v.to_vec();
+        if loops::seat_ball_angles(model, &mut self.data, &mut q, &mut v, true).map_err(|e| evaluation_message(&e))? {
+            y[q.len()..].copy_from_slice(&v);
+        }
+        Ok(())
+    }
+
     /// Records the loops' residuals at y without moving it.
     pub fn measure_loops(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
         let model = self.model;
