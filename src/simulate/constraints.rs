@@ -56,6 +56,7 @@ pub struct ConstraintReport {
     pub closest: Option<ClosestApproach>,
 }
 
+#[derive(Clone)]
 pub struct LoopMonitor {
     pub stabilisation: Stabilisation,
     rank: usize,

@@ -112,8 +112,9 @@ fn output_times(duration: f64, interval: f64) -> Vec<f64> {
 /// and, when asked for, the reactions. An output between two steps comes from the integrator's
 /// interpolant: with loops it is projected onto the constraints like the steps are.
 struct Sampler<'m> {
+    /// Its `reference` is shared with the integrated system: the declared coordinates of the
+    /// last output, which keep recovered angles continuous.
     system: MechanicalSystem<'m>,
-    previous: Rc<RefCell<Vec<f64>>>,
     conservative: Option<Vec<crate::dynamics::energy::ConstantForce>>,
     reactions: bool,
 }
@@ -125,9 +126,9 @@ impl Sampler<'_> {
         self.system.keep_closed(time, &mut y)?;
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
-        let previous = self.previous.borrow().clone();
+        let previous = self.system.reference.borrow().clone();
         let (coordinates, rates) = model.declared(&q, v, &previous).map_err(|e| format!("{e:?}"))?;
-        *self.previous.borrow_mut() = coordinates.clone();
+        *self.system.reference.borrow_mut() = coordinates.clone();
         let reactions = if self.reactions { self.system.reactions(time, &q, v)? } else { Vec::new() };
         let data = &mut self.system.data;
         forward_kinematics(model, data, &q, v).map_err(|e| format!("{e:?}"))?;
@@ -162,13 +163,11 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     }
     let mut sampler = Sampler {
         system: MechanicalSystem::new(model, reference.clone(), settings.stabilisation),
-        previous: reference.clone(),
         conservative: conservative_forces(model),
         reactions: settings.reactions,
     };
-    if let Err(message) = sampler.system.start_loops(&mut y0.clone()) {
-        return failed_at_start(prepared, message);
-    }
+    // What the start found of the loops (rank, redundant rows) holds for the outputs too.
+    sampler.system.loops = system.loops.clone();
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::with_capacity(outputs.len());
     let started = Instant::now();
