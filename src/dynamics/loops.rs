@@ -54,6 +54,11 @@ pub struct Constraints {
 /// Leaves the forward kinematics of (q, v) in `data`.
 pub fn constraints(model: &Model, data: &mut Data, q: &[f64], v: &[f64], with_bias: bool) -> Result<Constraints, EvalError> {
     forward_kinematics(model, data, q, v)?;
+    constraints_after_kinematics(model, data, q, v, with_bias)
+}
+
+/// `constraints` when `data` already holds the forward kinematics of (q, v) (after RNEA, say).
+pub fn constraints_after_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64], with_bias: bool) -> Result<Constraints, EvalError> {
     if with_bias {
         bias_accelerations(model, data);
     }

@@ -43,8 +43,9 @@ impl<'m> MechanicalSystem<'m> {
         evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))
     }
 
-    /// The accelerations and constraint forces of a mechanism with loops at (t, q, v).
-    pub fn constrained(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(Solution, Efforts), String> {
+    /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), with the
+    /// efforts and the constraint rows they come from.
+    pub fn constrained(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(Solution, Efforts, loops::Constraints), String> {
         let model = self.model;
         let efforts = self.efforts(t, q, v)?;
         let mass = crba(model, &mut self.data, q).map_err(|e| evaluation_message(&e))?;
@@ -52,9 +53,10 @@ impl<'m> MechanicalSystem<'m> {
         let mut force = efforts.tau.clone();
         let mut tree = force.rows_mut(0, model.nv);
         tree -= &bias;
-        let constraints = loops::constraints(model, &mut self.data, q, v, true).map_err(|e| evaluation_message(&e))?;
+        // RNEA left the forward kinematics of (q, v) in `data`.
+        let constraints = loops::constraints_after_kinematics(model, &mut self.data, q, v, true).map_err(|e| evaluation_message(&e))?;
         let solution = loops::solve(&mass, &force, &constraints, self.loops.stabilisation).map_err(|e| self.loop_message(&e))?;
-        Ok((solution, efforts))
+        Ok((solution, efforts, constraints))
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.
@@ -62,7 +64,7 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         let (q, v) = model.split_state(y);
         let (accelerations, efforts) = if model.has_loops() {
-            let (solution, efforts) = self.constrained(t, &q, v)?;
+            let (solution, efforts, _) = self.constrained(t, &q, v)?;
             (solution.accelerations, efforts)
         } else {
             let efforts = self.efforts(t, &q, v)?;
@@ -148,8 +150,7 @@ impl<'m> MechanicalSystem<'m> {
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
-            let (solution, efforts) = self.constrained(t, q, v)?;
-            let c = loops::constraints(model, &mut self.data, q, v, false).map_err(|e| evaluation_message(&e))?;
+            let (solution, efforts, c) = self.constrained(t, q, v)?;
             let on_bodies = loops::constraint_forces(model, &self.data, &c, &solution.multipliers);
             let external: Vec<_> = efforts.external.iter().zip(&on_bodies).map(|(a, b)| a + b).collect();
             (solution.accelerations, external, Some(solution.multipliers))
