@@ -15,7 +15,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use super::algorithms::{bias_accelerations, forward_kinematics, Data};
+use super::algorithms::{bias_accelerations, crba, forward_kinematics, Data};
 use super::model::Model;
 use super::spatial::{self, Force, Motion};
 use crate::kinematics::eval::EvalError;
@@ -265,8 +265,9 @@ pub enum LoopError {
 }
 
 /// Solves `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` (γ with Baumgarte's terms when asked for); `mass` is
-/// the tree's mass matrix, `force` has the state's length.
-pub fn solve(mass: &DMatrix<f64>, force: &DVector<f64>, c: &Constraints, stabilisation: Stabilisation) -> Result<Solution, LoopError> {
+/// the tree's mass matrix, `force` has the state's length, `massless` the mechanism's number of
+/// allowed motions without mass (`massless_count`).
+pub fn solve(mass: &DMatrix<f64>, force: &DVector<f64>, c: &Constraints, stabilisation: Stabilisation, massless: usize) -> Result<Solution, LoopError> {
     let n = force.len();
     let nt = mass.nrows();
     let mut full_mass = DMatrix::zeros(n, n);
@@ -280,7 +281,7 @@ pub fn solve(mass: &DMatrix<f64>, force: &DVector<f64>, c: &Constraints, stabili
     let null = &basis.null_space;
     let reduced_mass = null.transpose() * &full_mass * null;
     let reduced_force = null.transpose() * (force - &full_mass * &particular);
-    let z = massive_solve(reduced_mass, &reduced_force).map_err(|k| LoopError::MasslessMotion { velocity: null.column(k).iamax() })?;
+    let z = massive_solve(reduced_mass, &reduced_force, massless).map_err(|k| LoopError::MasslessMotion { velocity: null.column(k).iamax() })?;
     let accelerations = particular + null * z;
     let multipliers = basis.pseudo_inverse.transpose() * (&full_mass * &accelerations - force);
     Ok(Solution { accelerations, multipliers, rank: basis.rank })
@@ -298,32 +299,53 @@ const MASSLESS_FORCE: f64 = 1e-3;
 
 /// Solves the symmetric positive semi-definite system `a z = b` in the span of the eigenvectors
 /// that carry mass; a motion without mass stays at rest unless a force acts on it (then its
-/// eigenvector index is the error).
-fn massive_solve(a: DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>, usize> {
+/// eigenvector index is the error). The `massless` smallest eigenvalues count as without mass
+/// whatever their value (see `massless_count`), and so does any below `MASSLESS`.
+fn massive_solve(a: DMatrix<f64>, b: &DVector<f64>, massless: usize) -> Result<DVector<f64>, usize> {
     if a.nrows() == 0 {
         return Ok(DVector::zeros(0));
     }
-    if let Some(cholesky) = a.clone().cholesky() {
-        // Well conditioned (every pivot carries mass): the fast path.
-        let pivots = cholesky.l_dirty().diagonal();
-        if pivots.min() * pivots.min() > MASSLESS * pivots.max() * pivots.max() {
-            return Ok(cholesky.solve(b));
+    if massless == 0 {
+        if let Some(cholesky) = a.clone().cholesky() {
+            // Well conditioned (every pivot carries mass): the fast path.
+            let pivots = cholesky.l_dirty().diagonal();
+            if pivots.min() * pivots.min() > MASSLESS * pivots.max() * pivots.max() {
+                return Ok(cholesky.solve(b));
+            }
         }
     }
     let eigen = a.symmetric_eigen();
     let largest = eigen.eigenvalues.amax();
+    let mut order: Vec<usize> = (0..eigen.eigenvalues.len()).collect();
+    order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));
     let scale = b.amax().max(f64::MIN_POSITIVE);
     let mut z = DVector::zeros(b.len());
-    for (k, &value) in eigen.eigenvalues.iter().enumerate() {
-        let vector = eigen.eigenvectors.column(k);
+    for (rank, &k) in order.iter().enumerate() {
+        let (value, vector) = (eigen.eigenvalues[k], eigen.eigenvectors.column(k));
         let component = vector.dot(b);
-        if value > MASSLESS * largest {
+        if rank >= massless && value > MASSLESS * largest {
             z += vector * (component / value);
         } else if component.abs() > MASSLESS_FORCE * scale {
             return Err(k);
         }
     }
     Ok(z)
+}
+
+/// How many of the motions the loops allow at (q) move no mass (rod spins, the angles of
+/// complementary ball joints), counted on the constraint manifold. The count is a property of
+/// the mechanism: between projections, in the integrator's trial states slightly off the
+/// manifold, these motions pick up inertias of 1e-9 of the largest or so, and dividing the
+/// residue of forces that balance exactly by such inertias makes a spurious fast motion.
+pub fn massless_count(model: &Model, data: &mut Data, q: &[f64]) -> Result<usize, EvalError> {
+    let rest = vec![0.0; model.velocities()];
+    let allowed = decompose(&constraints(model, data, q, &rest, false)?.jacobian).null_space;
+    let n = model.velocities();
+    let mut mass = DMatrix::zeros(n, n);
+    mass.view_mut((0, 0), (model.nv, model.nv)).copy_from(&crba(model, data, q)?);
+    let eigenvalues = (allowed.transpose() * mass * &allowed).symmetric_eigenvalues();
+    let largest = eigenvalues.amax();
+    Ok(eigenvalues.iter().filter(|&&value| value <= MASSLESS * largest).count())
 }
 
 /// Constraint residuals before and after a projection: largest position row (metres or

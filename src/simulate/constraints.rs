@@ -59,6 +59,8 @@ pub struct ConstraintReport {
 #[derive(Clone)]
 pub struct LoopMonitor {
     pub stabilisation: Stabilisation,
+    /// Allowed motions without mass, counted at the start (see `loops::massless_count`).
+    pub massless: usize,
     rank: usize,
     redundant: Vec<String>,
     rows: usize,
@@ -76,6 +78,7 @@ impl LoopMonitor {
     pub fn new(stabilisation: Stabilisation) -> LoopMonitor {
         LoopMonitor {
             stabilisation,
+            massless: 0,
             rank: 0,
             redundant: Vec::new(),
             rows: 0,
@@ -88,6 +91,7 @@ impl LoopMonitor {
 
     /// Records the rank and the redundant rows at the (consistent) initial state.
     pub fn start(&mut self, model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+        self.massless = loops::massless_count(model, data, q)?;
         let c = loops::constraints(model, data, q, v, false)?;
         let active = loops::active_rows(model);
         self.rows = active.iter().filter(|&&a| a).count();

@@ -55,7 +55,7 @@ impl<'m> MechanicalSystem<'m> {
         tree -= &bias;
         // RNEA left the forward kinematics of (q, v) in `data`.
         let constraints = loops::constraints_after_kinematics(model, &mut self.data, q, v, true).map_err(|e| evaluation_message(&e))?;
-        let solution = loops::solve(&mass, &force, &constraints, self.loops.stabilisation).map_err(|e| self.loop_message(&e))?;
+        let solution = loops::solve(&mass, &force, &constraints, self.loops.stabilisation, self.loops.massless).map_err(|e| self.loop_message(&e))?;
         Ok((solution, efforts, constraints))
     }
 
