@@ -18,3 +18,4 @@ pub mod simulate;
 pub mod source;
 pub mod syntax;
 pub mod topology;
+pub mod urdf;

@@ -1,0 +1,1 @@
+//! Reading a URDF file as an LSD program.
