@@ -170,6 +170,19 @@ enum Command {
         #[arg(long, value_enum)]
         emit: Emit,
     },
+    /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
+    /// bodies' poses at a list of states; print JSON.
+    Eval {
+        file: PathBuf,
+        #[command(flatten)]
+        libraries: LibraryArgs,
+        /// JSON file of states: {"states": [{"q": [..], "v": [..], "a": [..], "tau": [..]}]}.
+        #[arg(long)]
+        states: PathBuf,
+        /// Value of an unknown, as for `simulate`. Repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+    },
     /// Print the syntax tree of a file (for debugging the parser).
     Parse { file: PathBuf },
 }
@@ -183,6 +196,7 @@ fn main() -> ExitCode {
         Command::Compile { file, libraries, emit } => compile(&file, &libraries.options(), emit),
         Command::Simulate(args) => simulate(&args),
         Command::Statics { file, libraries, actuated, sets, format } => statics(&file, &libraries.options(), &actuated, &sets, format),
+        Command::Eval { file, libraries, states, sets } => eval(&file, &libraries.options(), &states, &sets),
         Command::Parse { file } => parse(&file),
     }
 }
@@ -458,6 +472,41 @@ fn statics(file: &std::path::Path, options: &LoadOptions, actuated: &[String], s
         Format::Json => out(&json(&holding)),
     }
     ExitCode::SUCCESS
+}
+
+fn eval(file: &std::path::Path, options: &LoadOptions, states: &std::path::Path, sets: &[String]) -> ExitCode {
+    use lsdc::simulate::batch::{evaluate_states, parse_states};
+    use lsdc::simulate::prepare::{prepare, Settings};
+    let overrides = match parse_sets(sets) {
+        Ok(o) => o,
+        Err(message) => return usage_error(&message),
+    };
+    let inputs = match std::fs::read_to_string(states).map_err(|e| e.to_string()).and_then(|text| parse_states(&text)) {
+        Ok(inputs) => inputs,
+        Err(message) => return usage_error(&format!("cannot read states from `{}`: {message}", states.display())),
+    };
+    let compilation = match compile_one(file, options, Format::Text) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    let prepared = match prepare(mechanism, &overrides, &Settings::default()) {
+        Ok(p) => p,
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, Format::Text);
+            return ExitCode::from(1);
+        }
+    };
+    match evaluate_states(&prepared, &inputs) {
+        Ok(evaluation) => {
+            out(&json(&evaluation));
+            ExitCode::SUCCESS
+        }
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::from(1)
+        }
+    }
 }
 
 /// A progress bar on a terminal; nothing when standard error is not one (CI, pipes).

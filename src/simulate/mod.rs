@@ -1,6 +1,7 @@
 //! Simulation of mechanisms (trees and closed loops): the equations of motion as an ODE system, integrated from the
 //! program's initial values, with outputs and a run report.
 
+pub mod batch;
 pub mod consistent;
 pub mod constraints;
 pub mod prepare;

@@ -186,7 +186,7 @@ impl<'m> MechanicalSystem<'m> {
         }
     }
 
-    fn dynamics_message(&self, error: &DynamicsError) -> String {
+    pub fn dynamics_message(&self, error: &DynamicsError) -> String {
         match error {
             DynamicsError::Evaluation(e) => evaluation_message(e),
             DynamicsError::Singular { joint, body } => format!(
@@ -198,7 +198,7 @@ impl<'m> MechanicalSystem<'m> {
     }
 }
 
-fn evaluation_message(error: &EvalError) -> String {
+pub fn evaluation_message(error: &EvalError) -> String {
     match error {
         EvalError::Missing(_) => "an effort needs a value that was not given".to_string(),
         EvalError::NotGeometric(what) => format!("an expression cannot depend on {what} there"),
