@@ -2,9 +2,9 @@
 //! velocities, inverse dynamics (RNEA: one pass out, one back), the mass matrix (CRBA) and
 //! forward dynamics (ABA: three passes). Bodies without mass cost nothing.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
-use super::joint::JointState;
+use super::joint::{JointState, Subspace};
 use super::model::Model;
 use super::spatial::{self, Force, Inertia, Motion, Pose};
 use crate::kinematics::eval::EvalError;
@@ -21,9 +21,10 @@ pub struct Data {
     articulated: Vec<Inertia>,
     bias: Vec<Force>,
     coriolis: Vec<Motion>,
-    u: Vec<DMatrix<f64>>,
-    d_inverse: Vec<DMatrix<f64>>,
-    u_vector: Vec<DVector<f64>>,
+    /// ABA per joint: U = I S (one force per velocity), D⁻¹ = (Sᵀ U)⁻¹ and u = τ − Sᵀ p.
+    u: Vec<[Force; 6]>,
+    d_inverse: Vec<Matrix6<f64>>,
+    u_vector: Vec<Vector6<f64>>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -44,7 +45,7 @@ impl Data {
     pub fn new(model: &Model) -> Data {
         let n = model.body_count();
         Data {
-            states: Vec::with_capacity(n),
+            states: vec![JointState::new(); n],
             world: vec![Pose::identity(); n + 1],
             velocity: vec![Motion::zeros(); n + 1],
             acceleration: vec![Motion::zeros(); n + 1],
@@ -53,9 +54,9 @@ impl Data {
             articulated: vec![Inertia::zeros(); n + 1],
             bias: vec![Force::zeros(); n + 1],
             coriolis: vec![Motion::zeros(); n + 1],
-            u: vec![DMatrix::zeros(0, 0); n + 1],
-            d_inverse: vec![DMatrix::zeros(0, 0); n + 1],
-            u_vector: vec![DVector::zeros(0); n + 1],
+            u: vec![[Force::zeros(); 6]; n + 1],
+            d_inverse: vec![Matrix6::zeros(); n + 1],
+            u_vector: vec![Vector6::zeros(); n + 1],
         }
     }
 }
@@ -66,14 +67,13 @@ fn slice(values: &[f64], offset: usize, count: usize) -> &[f64] {
 
 /// Joint states, world poses and body velocities at (q, v).
 pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
-    data.states.clear();
-    for joint in &model.joints {
-        let state = joint.state(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns)?;
+    for (k, joint) in model.joints.iter().enumerate() {
+        let state = &mut data.states[k];
+        joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, state)?;
         let (i, parent) = (joint.child, joint.parent);
         data.world[i] = data.world[parent] * state.pose;
-        data.velocity[i] = spatial::motion_to_child(&state.pose, &data.velocity[parent]) + state.velocity;
+        data.velocity[i] = state.transform.motion_to_child(&data.velocity[parent]) + state.velocity;
         data.coriolis[i] = state.bias + spatial::cross_motion(&data.velocity[i], &state.velocity);
-        data.states.push(state);
     }
     Ok(())
 }
@@ -83,7 +83,7 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
 pub fn bias_accelerations(model: &Model, data: &mut Data) {
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.parent);
-        data.acceleration[i] = spatial::motion_to_child(&data.states[k].pose, &data.acceleration[parent]) + data.coriolis[i];
+        data.acceleration[i] = data.states[k].transform.motion_to_child(&data.acceleration[parent]) + data.coriolis[i];
     }
 }
 
@@ -94,10 +94,8 @@ pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], ext
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.parent);
         let state = &data.states[k];
-        let joint_acceleration = &state.subspace * DVector::from_column_slice(slice(a, joint.v_offset, joint.nv()));
-        data.acceleration[i] = spatial::motion_to_child(&state.pose, &data.acceleration[parent])
-            + Motion::from_column_slice(joint_acceleration.as_slice())
-            + data.coriolis[i];
+        let joint_acceleration = state.subspace.apply(slice(a, joint.v_offset, joint.nv()));
+        data.acceleration[i] = state.transform.motion_to_child(&data.acceleration[parent]) + joint_acceleration + data.coriolis[i];
         let body = &model.bodies[i - 1];
         data.force[i] = if body.massless {
             -external[i]
@@ -110,10 +108,9 @@ pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], ext
     for (k, joint) in model.joints.iter().enumerate().rev() {
         let (i, parent) = (joint.child, joint.parent);
         let state = &data.states[k];
-        let generalised = state.subspace.transpose() * DVector::from_column_slice(data.force[i].as_slice());
-        tau.rows_mut(joint.v_offset, joint.nv()).copy_from(&generalised);
+        state.subspace.project(&data.force[i], &mut tau.as_mut_slice()[joint.v_offset..joint.v_offset + joint.nv()]);
         if parent != 0 {
-            let transmitted = spatial::force_to_parent(&state.pose, &data.force[i]);
+            let transmitted = state.transform.force_to_parent(&data.force[i]);
             data.force[parent] += transmitted;
         }
     }
@@ -122,6 +119,13 @@ pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], ext
 
 /// The joint-space mass matrix M(q) (composite rigid bodies).
 pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, EvalError> {
+    let mut mass = DMatrix::zeros(model.nv, model.nv);
+    crba_into(model, data, q, &mut mass)?;
+    Ok(mass)
+}
+
+/// The mass matrix written into `mass` (nv × nv), which is entirely overwritten.
+pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f64>) -> Result<(), EvalError> {
     let zero_v = vec![0.0; model.nv];
     forward_kinematics(model, data, q, &zero_v)?;
     for (i, body) in model.bodies.iter().enumerate() {
@@ -129,30 +133,41 @@ pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, E
     }
     for (k, joint) in model.joints.iter().enumerate().rev() {
         if joint.parent != 0 && data.composite[joint.child] != Inertia::zeros() {
-            let moved = spatial::inertia_to_parent(&data.states[k].pose, &data.composite[joint.child]);
+            let moved = data.states[k].transform.inertia_to_parent(&data.composite[joint.child]);
             data.composite[joint.parent] += moved;
         }
     }
-    let mut mass = DMatrix::zeros(model.nv, model.nv);
+    mass.fill(0.0);
+    let mut forces = [Force::zeros(); 6];
     for (k, joint) in model.joints.iter().enumerate() {
         let subspace = &data.states[k].subspace;
-        let mut forces = DMatrix::from_fn(6, joint.nv(), |r, c| (data.composite[joint.child] * subspace.column(c))[r]);
-        let block = subspace.transpose() * &forces;
-        mass.view_mut((joint.v_offset, joint.v_offset), (joint.nv(), joint.nv())).copy_from(&block);
+        let n = subspace.len();
+        for (f, s) in forces.iter_mut().zip(subspace.columns()) {
+            *f = data.composite[joint.child] * s;
+        }
+        fill_block(mass, subspace, &forces[..n], joint.v_offset, joint.v_offset);
         let mut j = k;
         while model.joints[j].parent != 0 {
-            for c in 0..forces.ncols() {
-                let f = Force::from_column_slice(forces.column(c).as_slice());
-                forces.set_column(c, &spatial::force_to_parent(&data.states[j].pose, &f));
+            let transform = &data.states[j].transform;
+            for f in &mut forces[..n] {
+                *f = transform.force_to_parent(f);
             }
             j = model.joints[j].parent - 1;
-            let ancestor = &model.joints[j];
-            let block = data.states[j].subspace.transpose() * &forces;
-            mass.view_mut((ancestor.v_offset, joint.v_offset), (ancestor.nv(), joint.nv())).copy_from(&block);
-            mass.view_mut((joint.v_offset, ancestor.v_offset), (joint.nv(), ancestor.nv())).copy_from(&block.transpose());
+            fill_block(mass, &data.states[j].subspace, &forces[..n], model.joints[j].v_offset, joint.v_offset);
         }
     }
-    Ok(mass)
+    Ok(())
+}
+
+/// M[rows, cols] = Sᵀ F and its transpose, the symmetric block.
+fn fill_block(mass: &mut DMatrix<f64>, subspace: &Subspace, forces: &[Force], row: usize, col: usize) {
+    for (r, s) in subspace.columns().iter().enumerate() {
+        for (c, f) in forces.iter().enumerate() {
+            let value = s.dot(f);
+            mass[(row + r, col + c)] = value;
+            mass[(col + c, row + r)] = value;
+        }
+    }
 }
 
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.
@@ -168,36 +183,80 @@ pub fn aba(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], ex
         };
     }
     for (k, joint) in model.joints.iter().enumerate().rev() {
-        let (i, parent) = (joint.child, joint.parent);
-        let subspace = &data.states[k].subspace;
-        let inertia = data.articulated[i];
-        let u = DMatrix::from_fn(6, joint.nv(), |r, c| (inertia * subspace.column(c))[r]);
-        let d = subspace.transpose() * &u;
-        let d_inverse = d.clone().try_inverse().filter(|inv| inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > 1e-300);
-        let Some(d_inverse) = d_inverse else { return Err(DynamicsError::Singular { joint: k, body: i }) };
-        let u_vector = DVector::from_column_slice(slice(tau, joint.v_offset, joint.nv()))
-            - subspace.transpose() * DVector::from_column_slice(data.bias[i].as_slice());
-        if parent != 0 {
-            let ud = &u * &d_inverse;
-            let reduced = inertia - Inertia::from_fn(|r, c| (&ud * u.transpose())[(r, c)]);
-            let correction = &ud * &u_vector;
-            let bias = data.bias[i] + reduced * data.coriolis[i] + Force::from_column_slice(correction.as_slice());
-            let pose = data.states[k].pose;
-            data.articulated[parent] += spatial::inertia_to_parent(&pose, &reduced);
-            data.bias[parent] += spatial::force_to_parent(&pose, &bias);
-        }
-        data.u[i] = u;
-        data.d_inverse[i] = d_inverse;
-        data.u_vector[i] = u_vector;
+        aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?;
     }
     let mut accelerations = DVector::zeros(model.nv);
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.parent);
         let state = &data.states[k];
-        let a = spatial::motion_to_child(&state.pose, &data.acceleration[parent]) + data.coriolis[i];
-        let qdd = &data.d_inverse[i] * (&data.u_vector[i] - data.u[i].transpose() * DVector::from_column_slice(a.as_slice()));
-        data.acceleration[i] = a + Motion::from_column_slice((&state.subspace * &qdd).as_slice());
-        accelerations.rows_mut(joint.v_offset, joint.nv()).copy_from(&qdd);
+        let n = joint.nv();
+        let a = state.transform.motion_to_child(&data.acceleration[parent]) + data.coriolis[i];
+        // q̈ = D⁻¹ (u − Uᵀ a)
+        let mut rhs = Vector6::zeros();
+        for c in 0..n {
+            rhs[c] = data.u_vector[i][c] - data.u[i][c].dot(&a);
+        }
+        let out = &mut accelerations.as_mut_slice()[joint.v_offset..joint.v_offset + n];
+        for (r, o) in out.iter_mut().enumerate() {
+            *o = (0..n).map(|c| data.d_inverse[i][(r, c)] * rhs[c]).sum();
+        }
+        data.acceleration[i] = a + state.subspace.apply(out);
     }
     Ok(accelerations)
+}
+
+/// One joint of ABA's backward pass: U, D⁻¹ and u, then the articulated inertia and bias
+/// handed to the parent.
+fn aba_backward_step(model: &Model, data: &mut Data, k: usize, tau: &[f64]) -> Result<(), DynamicsError> {
+    let joint = &model.joints[k];
+    let (i, parent) = (joint.child, joint.parent);
+    let subspace = data.states[k].subspace;
+    let n = subspace.len();
+    let inertia = data.articulated[i];
+    let mut u = [Force::zeros(); 6];
+    for (uc, s) in u.iter_mut().zip(subspace.columns()) {
+        *uc = inertia * s;
+    }
+    // D padded with the identity beyond n, so the fixed-size inverse serves every joint.
+    let mut d = Matrix6::identity();
+    for r in 0..n {
+        for c in 0..n {
+            d[(r, c)] = subspace.column(r).dot(&u[c]);
+        }
+    }
+    let d_inverse = match n {
+        0 => Matrix6::identity(),
+        1 if d[(0, 0)].abs() > 1e-300 && d[(0, 0)].is_finite() => {
+            let mut m = Matrix6::identity();
+            m[(0, 0)] = 1.0 / d[(0, 0)];
+            m
+        }
+        1 => return Err(DynamicsError::Singular { joint: k, body: i }),
+        _ => match d.try_inverse().filter(|inv| inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > 1e-300) {
+            Some(inv) => inv,
+            None => return Err(DynamicsError::Singular { joint: k, body: i }),
+        },
+    };
+    let mut u_vector = Vector6::zeros();
+    for c in 0..n {
+        u_vector[c] = tau[c] - subspace.column(c).dot(&data.bias[i]);
+    }
+    if parent != 0 {
+        // Ia − U D⁻¹ Uᵀ and pa + Ia c + U D⁻¹ u, with W = U D⁻¹.
+        let mut reduced = inertia;
+        let mut correction = Force::zeros();
+        for c in 0..n {
+            let w: Force = (0..n).fold(Force::zeros(), |sum, r| sum + u[r] * d_inverse[(r, c)]);
+            reduced -= w * u[c].transpose();
+            correction += w * u_vector[c];
+        }
+        let bias = data.bias[i] + reduced * data.coriolis[i] + correction;
+        let transform = data.states[k].transform;
+        data.articulated[parent] += transform.inertia_to_parent(&reduced);
+        data.bias[parent] += transform.force_to_parent(&bias);
+    }
+    data.u[i] = u;
+    data.d_inverse[i] = d_inverse;
+    data.u_vector[i] = u_vector;
+    Ok(())
 }

@@ -14,9 +14,9 @@
 //! child's pose in the parent is F_p · M · F_c⁻¹ with F_p, F_c the join's frames on the parent
 //! and the child.
 
-use nalgebra::{DMatrix, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 
-use super::spatial::{self, Motion, Pose};
+use super::spatial::{self, Force, Motion, Pose, Transform};
 use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::kinematics::model::{JointModel, Step};
 use crate::elab::value::SExpr;
@@ -41,17 +41,108 @@ pub struct Joint {
     pub on_child: Pose,
     pub q_offset: usize,
     pub v_offset: usize,
+    pub kernel: Kernel,
+}
+
+/// A joint's motion subspace in the child's frame: one column (a motion) per velocity, at most
+/// six, stored inline so the algorithms allocate nothing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Subspace {
+    columns: [Motion; 6],
+    len: usize,
+}
+
+impl Subspace {
+    pub fn empty() -> Subspace {
+        Subspace { columns: [Motion::zeros(); 6], len: 0 }
+    }
+
+    pub fn single(column: Motion) -> Subspace {
+        let mut s = Subspace::empty();
+        s.push(column);
+        s
+    }
+
+    pub fn push(&mut self, column: Motion) {
+        self.columns[self.len] = column;
+        self.len += 1;
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn column(&self, k: usize) -> &Motion {
+        &self.columns[..self.len][k]
+    }
+
+    pub fn columns(&self) -> &[Motion] {
+        &self.columns[..self.len]
+    }
+
+    /// `S x`: the motion of the joint velocities (or accelerations) `x`.
+    #[inline]
+    pub fn apply(&self, x: &[f64]) -> Motion {
+        self.columns().iter().zip(x).fold(Motion::zeros(), |sum, (c, xi)| sum + c * *xi)
+    }
+
+    /// `Sᵀ f` into `out`: the generalised forces of a spatial force.
+    #[inline]
+    pub fn project(&self, f: &Force, out: &mut [f64]) {
+        for (o, c) in out.iter_mut().zip(self.columns()) {
+            *o = c.dot(f);
+        }
+    }
+}
+
+/// How a joint's pose and subspace are computed, decided once when the model is built. Most
+/// joints of real robots are one rotation or one translation along a fixed axis, or a weld:
+/// these need no evaluation of the dof chain, and their subspace is constant in the child frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Kernel {
+    /// No coordinate: the child's pose in the parent is constant.
+    Weld { pose: Pose },
+    /// The moving part M is a rotation by `scale · q` about the unit `axis` (of the join's first
+    /// frame), or a translation by `scale · q` along it; `column` is the constant subspace.
+    Rotation { axis: Unit<Vector3<f64>>, scale: f64, column: Motion },
+    Translation { axis: Vector3<f64>, scale: f64, column: Motion },
+    /// Anything else: the dof chain is evaluated at each state.
+    General,
 }
 
 /// A joint at given positions and velocities, in the child's frame.
+#[derive(Clone, Debug)]
 pub struct JointState {
-    /// Pose of the child in the parent.
+    /// Pose of the child in the parent, and the same as a matrix transform.
     pub pose: Pose,
+    pub transform: Transform,
     /// Motion subspace, 6 × nv.
-    pub subspace: DMatrix<f64>,
+    pub subspace: Subspace,
     /// Joint velocity `S v` and its bias `Ṡ v`.
     pub velocity: Motion,
     pub bias: Motion,
+}
+
+impl JointState {
+    pub fn new() -> JointState {
+        JointState {
+            pose: Pose::identity(),
+            transform: Transform::identity(),
+            subspace: Subspace::empty(),
+            velocity: Motion::zeros(),
+            bias: Motion::zeros(),
+        }
+    }
+}
+
+impl Default for JointState {
+    fn default() -> Self {
+        JointState::new()
+    }
 }
 
 fn is_coordinate(s: &SExpr, index: u32) -> bool {
@@ -88,6 +179,64 @@ pub fn classify(chain: &JointModel) -> JointType {
     }
 }
 
+/// The coefficient c when `s` is c · (coordinate 0), structurally (no evaluation).
+fn linear_in_first(s: &SExpr) -> Option<f64> {
+    match s {
+        SExpr::Num(x) if *x == 0.0 => Some(0.0),
+        SExpr::Coordinate { index: 0, order: 0 } => Some(1.0),
+        SExpr::Neg(a) => linear_in_first(a).map(|c| -c),
+        SExpr::Mul(a, b) => match (&**a, &**b) {
+            (SExpr::Num(x), other) | (other, SExpr::Num(x)) => linear_in_first(other).map(|c| c * x),
+            _ => None,
+        },
+        SExpr::Div(a, b) => match &**b {
+            SExpr::Num(x) if *x != 0.0 => linear_in_first(a).map(|c| c / x),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The kernel for a joint: a weld, one rotation or translation linear in the joint's single
+/// coordinate, or the general evaluation.
+pub fn kernel(joint: &Joint, unknowns: &UnknownValues) -> Kernel {
+    let chain = &joint.chain;
+    if chain.coordinate_count() == 0 {
+        return match chain.chain_motion(&[], None, unknowns) {
+            Ok(motion) => {
+                let moving = if joint.first_on_parent { motion.pose } else { motion.pose.inverse() };
+                Kernel::Weld { pose: joint.on_parent * moving * joint.on_child.inverse() }
+            }
+            Err(_) => Kernel::General,
+        };
+    }
+    if chain.coordinate_count() != 1 || joint.kind != JointType::Chain {
+        return Kernel::General;
+    }
+    // The moving part is D when the first frame is on the parent, D⁻¹ otherwise: the sign.
+    let sign = if joint.first_on_parent { 1.0 } else { -1.0 };
+    let on_child = joint.on_child;
+    match chain.steps.as_slice() {
+        [Step::Rotation { angle, axis }] => match (linear_in_first(angle), Unit::try_new(*axis, 1e-12)) {
+            (Some(scale), Some(unit)) if scale != 0.0 => {
+                let unit_twist = Motion::new(unit.x, unit.y, unit.z, 0.0, 0.0, 0.0);
+                let column = spatial::motion_to_parent(&on_child, &unit_twist) * (sign * scale);
+                Kernel::Rotation { axis: unit, scale: sign * scale, column }
+            }
+            _ => Kernel::General,
+        },
+        [Step::Translation(t)] => match (linear_in_first(&t[0]), linear_in_first(&t[1]), linear_in_first(&t[2])) {
+            (Some(x), Some(y), Some(z)) if (x, y, z) != (0.0, 0.0, 0.0) => {
+                let direction = Vector3::new(x, y, z);
+                let column = spatial::motion_to_parent(&on_child, &Motion::new(0.0, 0.0, 0.0, x, y, z)) * sign;
+                Kernel::Translation { axis: direction, scale: sign, column }
+            }
+            _ => Kernel::General,
+        },
+        _ => Kernel::General,
+    }
+}
+
 impl Joint {
     pub fn nq(&self) -> usize {
         match self.kind {
@@ -107,54 +256,76 @@ impl Joint {
 
     /// Position, subspace, velocity and bias at the joint's positions `q` and velocities `v`.
     pub fn state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues) -> Result<JointState, EvalError> {
-        match self.kind {
-            JointType::Chain => self.chain_state(q, v, unknowns),
-            JointType::Spherical { .. } | JointType::Free { .. } => Ok(self.quaternion_state(q, v)),
-        }
+        let mut state = JointState::new();
+        self.update(q, v, unknowns, &mut state)?;
+        Ok(state)
     }
 
-    fn chain_state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues) -> Result<JointState, EvalError> {
+    /// Writes the joint's state at (q, v) into `state`, reusing its storage.
+    pub fn update(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
+        match (&self.kernel, &self.kind) {
+            (Kernel::Weld { pose }, _) => {
+                state.pose = *pose;
+                state.subspace = Subspace::empty();
+                state.velocity = Motion::zeros();
+            }
+            (Kernel::Rotation { axis, scale, column }, _) => {
+                let moving = Pose::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(axis, scale * q[0]));
+                state.pose = self.on_parent * moving * self.on_child.inverse();
+                state.subspace = Subspace::single(*column);
+                state.velocity = column * v[0];
+            }
+            (Kernel::Translation { axis, scale, column }, _) => {
+                let moving = Pose::from_parts(Translation3::from(axis * (scale * q[0])), UnitQuaternion::identity());
+                state.pose = self.on_parent * moving * self.on_child.inverse();
+                state.subspace = Subspace::single(*column);
+                state.velocity = column * v[0];
+            }
+            (Kernel::General, JointType::Chain) => self.chain_state(q, v, unknowns, state)?,
+            (Kernel::General, _) => self.quaternion_state(q, v, state),
+        }
+        if !matches!(self.kernel, Kernel::General) {
+            state.bias = Motion::zeros();
+        }
+        state.transform = Transform::from_pose(&state.pose);
+        Ok(())
+    }
+
+    fn chain_state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
         let motion = self.chain.chain_motion(q, Some(v), unknowns)?;
         let d = motion.pose;
-        let n = self.nv();
-        let mut subspace = DMatrix::zeros(6, n);
         // Twists of D (in the first frame) seen in the child frame: through B·D⁻¹ when the first
         // frame is on the parent, through −A when it is on the child (the child moves with D⁻¹).
         let (to_child, sign) = if self.first_on_parent { (self.on_child * d.inverse(), 1.0) } else { (self.on_child, -1.0) };
-        for k in 0..n {
+        state.subspace = Subspace::empty();
+        for k in 0..self.nv() {
             let column = Motion::from_column_slice(motion.subspace.column(k).as_slice());
-            subspace.set_column(k, &(sign * spatial::motion_to_parent(&to_child, &column)));
+            state.subspace.push(sign * spatial::motion_to_parent(&to_child, &column));
         }
         let moving = if self.first_on_parent { d } else { d.inverse() };
-        Ok(JointState {
-            pose: self.on_parent * moving * self.on_child.inverse(),
-            subspace,
-            velocity: sign * spatial::motion_to_parent(&to_child, &motion.velocity),
-            bias: sign * spatial::motion_to_parent(&to_child, &motion.bias),
-        })
+        state.pose = self.on_parent * moving * self.on_child.inverse();
+        state.velocity = sign * spatial::motion_to_parent(&to_child, &motion.velocity);
+        state.bias = sign * spatial::motion_to_parent(&to_child, &motion.bias);
+        Ok(())
     }
 
     /// Spherical and free joints: M = Trans(p)·Rot(Q) with the body twist of M as velocity, so
     /// the subspace is constant in the child frame and the bias vanishes.
-    fn quaternion_state(&self, q: &[f64], v: &[f64]) -> JointState {
+    fn quaternion_state(&self, q: &[f64], v: &[f64], state: &mut JointState) {
         let (moving, n) = match self.kind {
             JointType::Free { .. } => (Pose::from_parts(Translation3::new(q[0], q[1], q[2]), quaternion(&q[3..7])), 6),
             _ => (Pose::from_parts(Translation3::identity(), quaternion(&q[0..4])), 3),
         };
-        let mut subspace = DMatrix::zeros(6, n);
+        state.subspace = Subspace::empty();
         for k in 0..n {
             // Velocity layout: angular velocity first, then (free joints) linear velocity.
             let mut unit = Motion::zeros();
             unit[k] = 1.0;
-            subspace.set_column(k, &spatial::motion_to_parent(&self.on_child, &unit));
+            state.subspace.push(spatial::motion_to_parent(&self.on_child, &unit));
         }
-        let velocity = &subspace * nalgebra::DVector::from_column_slice(v);
-        JointState {
-            pose: self.on_parent * moving * self.on_child.inverse(),
-            subspace,
-            velocity: Motion::from_column_slice(velocity.as_slice()),
-            bias: Motion::zeros(),
-        }
+        state.velocity = state.subspace.apply(v);
+        state.pose = self.on_parent * moving * self.on_child.inverse();
+        state.bias = Motion::zeros();
     }
 
     /// dq/dt from the velocities.

@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::joint::{classify, Joint, JointType};
+use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::spatial::{self, Inertia, Pose};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
@@ -157,7 +157,7 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
     let mut declared = 0;
     for (link, chain) in topology.principal.iter().zip(kinematics.principal()) {
         let (on_parent, on_child) = if link.first_on_parent { (chain.first, chain.second) } else { (chain.second, chain.first) };
-        let joint = Joint {
+        let mut joint = Joint {
             chain: chain.clone(),
             kind: classify(chain),
             parent: link.parent,
@@ -167,7 +167,9 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
             on_child,
             q_offset: nq,
             v_offset: nv,
+            kernel: Kernel::General,
         };
+        joint.kernel = kernel(&joint, unknowns);
         nq += joint.nq();
         nv += joint.nv();
         declared_offsets.push(declared);

@@ -4,6 +4,14 @@
 
 use nalgebra::{Isometry3, Matrix3, Matrix6, Vector3, Vector6};
 
+/// A rigid transform with its rotation as a matrix: the form the recursive algorithms use,
+/// where rotating a vector costs 9 products instead of the quaternion's 18.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    pub rotation: Matrix3<f64>,
+    pub translation: Vector3<f64>,
+}
+
 pub type Motion = Vector6<f64>;
 pub type Force = Vector6<f64>;
 pub type Inertia = Matrix6<f64>;
@@ -73,6 +81,61 @@ pub fn motion_matrix_to_child(pose: &Pose) -> Matrix6<f64> {
     x
 }
 
+impl Transform {
+    pub fn identity() -> Transform {
+        Transform { rotation: Matrix3::identity(), translation: Vector3::zeros() }
+    }
+
+    pub fn from_pose(pose: &Pose) -> Transform {
+        Transform { rotation: *pose.rotation.to_rotation_matrix().matrix(), translation: pose.translation.vector }
+    }
+
+    /// Motion given in the parent frame, expressed in this (child) frame.
+    #[inline]
+    pub fn motion_to_child(&self, m: &Motion) -> Motion {
+        let w = top(m);
+        let rt = self.rotation.transpose();
+        join(rt * w, rt * (bottom(m) - self.translation.cross(&w)))
+    }
+
+    /// Force given in this (child) frame, expressed in the parent frame.
+    #[inline]
+    pub fn force_to_parent(&self, f: &Force) -> Force {
+        let force = self.rotation * bottom(f);
+        join(self.rotation * top(f) + self.translation.cross(&force), force)
+    }
+
+    /// Motion given in this (child) frame, expressed in the parent frame.
+    #[inline]
+    pub fn motion_to_parent(&self, m: &Motion) -> Motion {
+        let w = self.rotation * top(m);
+        join(w, self.rotation * bottom(m) + self.translation.cross(&w))
+    }
+
+    /// Inertia given in this (child) frame, expressed in the parent frame, by 3 × 3 blocks:
+    /// with I = [A B; Bᵀ D], rotating gives A₁ = RARᵀ, B₁ = RBRᵀ, D₁ = RDRᵀ, and moving the
+    /// origin by p gives [A₁ − B₁p̂ + p̂B₁ᵀ − p̂D₁p̂, B₁ + p̂D₁; ·, D₁]. About half the products
+    /// of X*ᵀ I X with 6 × 6 matrices.
+    pub fn inertia_to_parent(&self, i: &Inertia) -> Inertia {
+        let r = &self.rotation;
+        let rotate = |block: Matrix3<f64>| r * block * r.transpose();
+        let a = rotate(i.fixed_view::<3, 3>(0, 0).into_owned());
+        let b = rotate(i.fixed_view::<3, 3>(0, 3).into_owned());
+        let d = rotate(i.fixed_view::<3, 3>(3, 3).into_owned());
+        let p = skew(&self.translation);
+        let pd = p * d;
+        let b_p = b * p;
+        let top_left = a - b_p - b_p.transpose() - pd * p;
+        let top_right = b + pd;
+        let mut out = Matrix6::zeros();
+        out.fixed_view_mut::<3, 3>(0, 0).copy_from(&top_left);
+        out.fixed_view_mut::<3, 3>(0, 3).copy_from(&top_right);
+        out.fixed_view_mut::<3, 3>(3, 0).copy_from(&top_right.transpose());
+        out.fixed_view_mut::<3, 3>(3, 3).copy_from(&d);
+        out
+    }
+}
+
 /// Spatial inertia about a frame's origin, of a body with mass `mass`, centre of mass `com` and
 /// rotational inertia `central` about the centre of mass (both in that frame).
 pub fn inertia(mass: f64, com: &Vector3<f64>, central: &Matrix3<f64>) -> Inertia {
@@ -111,6 +174,20 @@ mod tests {
         assert!((motion_to_child(&p, &motion_to_parent(&p, &m)) - m).amax() < 1e-12);
         assert!((force_to_child(&p, &force_to_parent(&p, &f)) - f).amax() < 1e-12);
         assert!((motion_matrix_to_child(&p) * motion_to_parent(&p, &m) - m).amax() < 1e-12);
+    }
+
+    #[test]
+    fn transforms_agree_with_poses() {
+        let p = pose();
+        let t = Transform::from_pose(&p);
+        let m = Motion::new(0.1, 0.2, -0.3, 1.0, -2.0, 0.5);
+        let f = Force::new(-0.7, 0.4, 0.9, 2.0, 1.5, -1.0);
+        assert!((t.motion_to_child(&m) - motion_to_child(&p, &m)).amax() < 1e-14);
+        assert!((t.motion_to_parent(&m) - motion_to_parent(&p, &m)).amax() < 1e-14);
+        assert!((t.force_to_parent(&f) - force_to_parent(&p, &f)).amax() < 1e-14);
+        let central = Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.5, 0.03, -0.02, 0.03, 0.4);
+        let i = inertia(2.5, &Vector3::new(0.1, -0.4, 0.8), &central);
+        assert!((t.inertia_to_parent(&i) - inertia_to_parent(&p, &i)).amax() < 1e-13);
     }
 
     #[test]
