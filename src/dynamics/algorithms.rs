@@ -87,15 +87,25 @@ pub fn bias_accelerations(model: &Model, data: &mut Data) {
     }
 }
 
+/// The acceleration given to the base (earth) so that the bodies feel the gravity field: an
+/// upward acceleration g is the same as a downward field −g (Einstein's elevator). The bodies'
+/// accelerations in `Data` after RNEA and ABA include it.
+fn base_acceleration(model: &Model) -> Motion {
+    let g = model.gravity;
+    Motion::new(0.0, 0.0, 0.0, -g.x, -g.y, -g.z)
+}
+
 /// Inverse dynamics: the generalised forces that give accelerations `a` at (q, v) under the
 /// external forces `external` (one per body, in its frame; index 0 unused).
 pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], external: &[Force]) -> Result<DVector<f64>, EvalError> {
     forward_kinematics(model, data, q, v)?;
+    let base = base_acceleration(model);
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.parent);
         let state = &data.states[k];
         let joint_acceleration = state.subspace.apply(slice(a, joint.v_offset, joint.nv()));
-        data.acceleration[i] = state.transform.motion_to_child(&data.acceleration[parent]) + joint_acceleration + data.coriolis[i];
+        let parent_acceleration = if parent == 0 { &base } else { &data.acceleration[parent] };
+        data.acceleration[i] = state.transform.motion_to_child(parent_acceleration) + joint_acceleration + data.coriolis[i];
         let body = &model.bodies[i - 1];
         data.force[i] = if body.massless {
             -external[i]
@@ -186,11 +196,13 @@ pub fn aba(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], ex
         aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?;
     }
     let mut accelerations = DVector::zeros(model.nv);
+    let base = base_acceleration(model);
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.parent);
         let state = &data.states[k];
         let n = joint.nv();
-        let a = state.transform.motion_to_child(&data.acceleration[parent]) + data.coriolis[i];
+        let parent_acceleration = if parent == 0 { &base } else { &data.acceleration[parent] };
+        let a = state.transform.motion_to_child(parent_acceleration) + data.coriolis[i];
         // q̈ = D⁻¹ (u − Uᵀ a)
         let mut rhs = Vector6::zeros();
         for c in 0..n {

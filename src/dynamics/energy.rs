@@ -29,6 +29,7 @@ pub fn conservative_forces(model: &Model) -> Option<Vec<ConstantForce>> {
     if !model.link_efforts.is_empty() {
         return None;
     }
+    let weights = model.bodies.iter().enumerate().filter(|(_, b)| !b.massless).map(|(k, b)| Some((k + 1, b.com, b.mass * model.gravity)));
     model
         .applied
         .iter()
@@ -39,6 +40,7 @@ pub fn conservative_forces(model: &Model) -> Option<Vec<ConstantForce>> {
             let value = |i: usize| eval(&e.value[i], &model.unknowns, &[]).ok();
             Some((e.body, e.point, Vector3::new(value(0)?, value(1)?, value(2)?)))
         })
+        .chain(weights)
         .collect()
 }
 

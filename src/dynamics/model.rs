@@ -55,6 +55,11 @@ pub struct Model {
     pub nq: usize,
     pub nv: usize,
     pub applied: Vec<AppliedEffort>,
+    /// A uniform gravity field (m/s², fixed basis), zero when there is none: the weights the
+    /// program applies to every body with mass, recognised when the model is built and taken
+    /// out of `applied`. The algorithms then give the base the acceleration −g, which costs
+    /// nothing per body, instead of evaluating one force per body at each state.
+    pub gravity: Vector3<f64>,
     pub link_efforts: Vec<LinkEffort>,
     pub unknowns: UnknownValues,
     /// Where each tree joint's declared coordinates start.
@@ -187,6 +192,7 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
         body_names.push(name);
     }
     let applied = applied_efforts(mechanism, kinematics, &mut errors);
+    let (gravity, applied) = gravity_field(applied, &bodies, unknowns);
     let loops = kinematics.complementary().to_vec();
     let loop_balls = loops
         .iter()
@@ -207,6 +213,7 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
         nq,
         nv,
         applied,
+        gravity,
         link_efforts,
         unknowns: unknowns.clone(),
         declared_offsets,
@@ -264,6 +271,31 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
         applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis });
     }
     applied
+}
+
+/// Splits the weights off the applied efforts when every body with mass carries exactly one
+/// constant force in the fixed basis, at its centre of mass, equal to its mass times one common
+/// vector g: that is a uniform field g. Otherwise the efforts stay as they are (g = 0).
+fn gravity_field(applied: Vec<AppliedEffort>, bodies: &[BodyInertia], unknowns: &UnknownValues) -> (Vector3<f64>, Vec<AppliedEffort>) {
+    let constant_force = |e: &AppliedEffort| -> Option<Vector3<f64>> {
+        (e.kind == EffortKind::Force && e.basis == 0).then(|| constant_vector(&e.value, unknowns).ok()).flatten()
+    };
+    let mut field: Option<Vector3<f64>> = None;
+    let mut is_weight = vec![false; applied.len()];
+    for (k, body) in bodies.iter().enumerate().filter(|(_, b)| !b.massless && b.mass != 0.0) {
+        let at_centre = |e: &AppliedEffort| e.body == k + 1 && (e.point - body.com).norm() <= 1e-12 * (1.0 + body.com.norm());
+        let weights: Vec<usize> = (0..applied.len()).filter(|&i| at_centre(&applied[i]) && constant_force(&applied[i]).is_some()).collect();
+        let [only] = weights.as_slice() else { return (Vector3::zeros(), applied) };
+        let g = constant_force(&applied[*only]).unwrap_or_default() / body.mass;
+        match field {
+            Some(f) if (f - g).norm() > 1e-14 * f.norm().max(1e-300) => return (Vector3::zeros(), applied),
+            _ => field = Some(g),
+        }
+        is_weight[*only] = true;
+    }
+    let Some(g) = field else { return (Vector3::zeros(), applied) };
+    let rest = applied.into_iter().zip(is_weight).filter(|(_, w)| !w).map(|(e, _)| e).collect();
+    (g, rest)
 }
 
 /// The efforts written in the links; `joint` indexes the tree's joints, then the loops'.

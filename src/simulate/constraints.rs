@@ -107,14 +107,29 @@ impl LoopMonitor {
 
     /// Moves (q, v) onto the constraints when the stabilisation is by projection, and records the
     /// residuals and the rank there. Returns whether the state changed.
+    ///
+    /// Near a singular configuration the projection is skipped: where two branches of the closed
+    /// set cross, the nearest closed point may lie on the other branch, and projecting there
+    /// would switch branches against the momentum. The accelerations keep the constraints to
+    /// the integration's accuracy through the short passage, and projection resumes after it.
     pub fn keep(&mut self, model: &Model, data: &mut Data, time: f64, q: &mut [f64], v: &mut [f64]) -> Result<bool, EvalError> {
-        if self.stabilisation == Stabilisation::Projection {
+        if self.stabilisation == Stabilisation::Projection && !self.near_singular(model, data, q)? {
             let projection = loops::project(model, data, q, v)?;
             self.observe(model, time, projection.before, projection.after, &projection.basis);
             return Ok(true);
         }
         self.measure(model, data, time, q, v)?;
         loops::seat_ball_angles(model, data, q, v, false)
+    }
+
+    /// Whether the constraints at q are within `NEAR_SINGULAR` of losing rank.
+    fn near_singular(&self, model: &Model, data: &mut Data, q: &[f64]) -> Result<bool, EvalError> {
+        if self.rank == 0 {
+            return Ok(false);
+        }
+        let c = loops::constraints(model, data, q, &vec![0.0; model.velocities()], false)?;
+        let s = loops::decompose(&c.jacobian).singular_values;
+        Ok(s.len() >= self.rank && s[self.rank - 1] < NEAR_SINGULAR * s[0])
     }
 
     /// Records the residuals and the rank at (q, v) without moving it.

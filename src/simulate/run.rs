@@ -289,7 +289,7 @@ fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<MomentumDrift> {
         return None;
     }
     let free = model.joints.iter().filter(|j| j.parent == 0).all(|j| matches!(j.kind, JointType::Free { .. }));
-    if !free || !model.applied.is_empty() {
+    if !free || !model.applied.is_empty() || model.gravity != nalgebra::Vector3::zeros() {
         return None;
     }
     let first = samples.first()?.momentum;
