@@ -183,6 +183,34 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
+    /// Write a tree mechanism as a URDF robot description: a link per body, a joint per join.
+    ExportUrdf {
+        file: PathBuf,
+        #[command(flatten)]
+        libraries: LibraryArgs,
+        /// Value of an unknown, as for `simulate`. Repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+        /// Write the URDF to this file instead of standard output.
+        #[arg(short = 'o', long = "out")]
+        out: Option<PathBuf>,
+        /// The robot's name (default: the file's name without its extension).
+        #[arg(long)]
+        name: Option<String>,
+    },
+    /// Translate a URDF robot description into an LSD program (standard output, or `-o`).
+    ImportUrdf {
+        file: PathBuf,
+        /// Join the root link to earth by a free joint instead of welding it.
+        #[arg(long)]
+        floating_base: bool,
+        /// Leave gravity out (by default every link with mass has its weight along -z).
+        #[arg(long)]
+        no_gravity: bool,
+        /// Write the program to this file instead of standard output.
+        #[arg(short = 'o', long = "out")]
+        out: Option<PathBuf>,
+    },
     /// Print the syntax tree of a file (for debugging the parser).
     Parse { file: PathBuf },
 }
@@ -197,6 +225,13 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate(&args),
         Command::Statics { file, libraries, actuated, sets, format } => statics(&file, &libraries.options(), &actuated, &sets, format),
         Command::Eval { file, libraries, states, sets } => eval(&file, &libraries.options(), &states, &sets),
+        Command::ExportUrdf { file, libraries, sets, out: output, name } => {
+            export_urdf(&file, &libraries.options(), &sets, output.as_deref(), name.as_deref())
+        }
+        Command::ImportUrdf { file, floating_base, no_gravity, out: output } => {
+            let options = lsdc::urdf::import::ImportOptions { floating_base, gravity: !no_gravity };
+            import_urdf(&file, &options, output.as_deref())
+        }
         Command::Parse { file } => parse(&file),
     }
 }
@@ -509,6 +544,45 @@ fn eval(file: &std::path::Path, options: &LoadOptions, states: &std::path::Path,
     }
 }
 
+/// Prepares a file's mechanism as `simulate` does (values from `given` and `--set`), printing
+/// the diagnostics when it cannot.
+fn prepare_file(file: &std::path::Path, options: &LoadOptions, sets: &[String], format: Format) -> Result<lsdc::simulate::prepare::Prepared, ExitCode> {
+    use lsdc::simulate::prepare::{prepare, Settings};
+    let overrides = parse_sets(sets).map_err(|message| usage_error(&message))?;
+    let compilation = compile_one(file, options, format)?;
+    let Some(mechanism) = &compilation.mechanism else { return Err(ExitCode::from(1)) };
+    prepare(mechanism, &overrides, &Settings::default()).map_err(|diagnostics| {
+        report_diagnostics(&compilation, &diagnostics, format);
+        ExitCode::from(1)
+    })
+}
+
+fn export_urdf(file: &std::path::Path, options: &LoadOptions, sets: &[String], output: Option<&std::path::Path>, name: Option<&str>) -> ExitCode {
+    let prepared = match prepare_file(file, options, sets, Format::Text) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned());
+    let name = name.map(str::to_string).or(stem).unwrap_or_else(|| "robot".to_string());
+    let urdf = match lsdc::urdf::export::export_urdf(&prepared.model, &name) {
+        Ok(text) => text,
+        Err(e) => {
+            eprintln!("error: {}", e.message(&file.display().to_string()));
+            return ExitCode::from(1);
+        }
+    };
+    match output {
+        Some(path) => match std::fs::write(path, urdf) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => usage_error(&format!("cannot write `{}`: {e}", path.display())),
+        },
+        None => {
+            out(&urdf);
+            ExitCode::SUCCESS
+        }
+    }
+}
+
 /// A progress bar on a terminal; nothing when standard error is not one (CI, pipes).
 fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
     use std::io::IsTerminal;
@@ -520,6 +594,34 @@ fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
         bar.set_style(style);
     }
     Some(bar)
+}
+
+/// Prints the LSD program imported from a URDF file, its warnings to standard error.
+fn import_urdf(file: &std::path::Path, options: &lsdc::urdf::import::ImportOptions, output: Option<&std::path::Path>) -> ExitCode {
+    let text = match std::fs::read_to_string(file) {
+        Ok(t) => t,
+        Err(e) => return usage_error(&format!("cannot read `{}`: {e}", file.display())),
+    };
+    let mut sources = lsdc::source::SourceMap::new();
+    let name = file.display().to_string();
+    let id = sources.add(name.clone(), text);
+    let imported = match lsdc::urdf::import::import_urdf_at(id, &name, &sources.file(id).text, options) {
+        Ok(imported) => imported,
+        Err(error) => {
+            eprint!("{}", render::to_text(&sources, &[error]));
+            return ExitCode::from(1);
+        }
+    };
+    eprint!("{}", render::to_text(&sources, &imported.warnings));
+    match output {
+        Some(path) => {
+            if let Err(e) = std::fs::write(path, &imported.text) {
+                return usage_error(&format!("cannot write `{}`: {e}", path.display()));
+            }
+        }
+        None => out(&imported.text),
+    }
+    ExitCode::SUCCESS
 }
 
 fn parse(file: &std::path::Path) -> ExitCode {

@@ -12,6 +12,7 @@ use crate::source::SourceMap;
 use crate::syntax::ast::{Decl, DeclKind, ImportTarget, Program};
 use crate::syntax::parser::parse;
 use crate::syntax::span::{FileId, Span};
+use crate::urdf::import::{import_urdf_at, ImportOptions};
 
 /// Environment variable holding extra library directories, separated by `:`.
 pub const PATH_VARIABLE: &str = "LSD_PATH";
@@ -99,17 +100,28 @@ struct Loader {
     diagnostics: Diagnostics,
 }
 
-/// Loads root files from disk and everything they import.
+/// Loads root files from disk and everything they import. A `.urdf` file is imported as the
+/// LSD program `lsdc import-urdf` writes for it, with the default options.
 pub fn load_files(paths: &[PathBuf], options: &LoadOptions) -> Result<(Workspace, Diagnostics), String> {
     let mut loader = Loader::new(options);
     for path in paths {
         let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-        let dir = path.parent().map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() });
         let key = path.canonicalize().unwrap_or_else(|_| path.clone());
+        if is_urdf(path) {
+            if let Some(id) = loader.add_urdf(Origin::File(key), path.display().to_string(), text) {
+                loader.workspace.roots.push(id);
+            }
+            continue;
+        }
+        let dir = path.parent().map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() });
         let id = loader.add_module(Origin::File(key), path.display().to_string(), text, dir, None);
         loader.workspace.roots.push(id);
     }
     Ok(loader.finish())
+}
+
+fn is_urdf(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
 }
 
 /// Loads a program given as text (its imports are resolved against `dir`).
@@ -163,6 +175,27 @@ impl Loader {
         self.in_progress.pop();
         self.workspace.modules[id.0 as usize].program = program;
         id
+    }
+
+    /// A URDF root: its text joins the source map, so the import's diagnostics point into it,
+    /// and the LSD program imported from it becomes the module. That program's imports are
+    /// looked up on the search path and in the standard library, not beside the URDF file: it
+    /// was written for the standard `joints` and `gravity`.
+    fn add_urdf(&mut self, origin: Origin, display_name: String, xml: String) -> Option<ModuleId> {
+        let file = self.workspace.sources.add(display_name.clone(), xml);
+        let xml = &self.workspace.sources.file(file).text;
+        match import_urdf_at(file, &display_name, xml, &ImportOptions::default()) {
+            Ok(imported) => {
+                for warning in imported.warnings {
+                    self.diagnostics.push(warning);
+                }
+                Some(self.add_module(origin, format!("{display_name} (imported as LSD)"), imported.text, None, None))
+            }
+            Err(error) => {
+                self.diagnostics.push(error);
+                None
+            }
+        }
     }
 
     fn follow_imports(&mut self, importer: ModuleId, decls: &[Decl]) {

@@ -1,0 +1,492 @@
+//! Importing URDF: the generated program compiles, reproduces the URDF's mass properties and
+//! joint placements, reports what it leaves out at the right lines, renames what it must, and
+//! turns bad input into diagnostics. Also `lsdc import-urdf` and `.urdf` files given to `lsdc`.
+
+use std::process::Command;
+
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
+
+use lsdc::diag::Diagnostic;
+use lsdc::driver::{compile_text, Compilation};
+use lsdc::dynamics::model::{self as dynamic_model, Model};
+use lsdc::dynamics::spatial;
+use lsdc::elab::value::BodyRef;
+use lsdc::kinematics::eval::UnknownValues;
+use lsdc::kinematics::forward::forward;
+use lsdc::kinematics::model::{self as kinematic_model, KinematicModel};
+use lsdc::load::LoadOptions;
+use lsdc::source::SourceMap;
+use lsdc::urdf::import::{import_urdf, lsd_name, ImportOptions, Imported};
+
+/// A two-link arm with a prismatic tool on a fixed flange: off-diagonal inertia tensors, rpy
+/// origins, a continuous joint that mimics the shoulder, limits, damping, a safety controller,
+/// a calibration, a non-unit axis, geometry and elements that are not imported.
+const ARM: &str = r#"<?xml version="1.0"?>
+<robot name="arm">
+  <material name="grey"><color rgba="0.5 0.5 0.5 1"/></material>
+  <link name="base"/>
+  <link name="upper">
+    <inertial>
+      <origin xyz="0.01 -0.02 0.25" rpy="0.1 -0.2 0.3"/>
+      <mass value="1.5"/>
+      <inertia ixx="0.03" ixy="0.002" ixz="-0.003" iyy="0.025" iyz="0.001" izz="0.02"/>
+    </inertial>
+    <visual><geometry><box size="0.1 0.1 0.5"/></geometry></visual>
+  </link>
+  <link name="lower">
+    <inertial>
+      <origin xyz="0 0 0.2" rpy="0 0.5 0"/>
+      <mass value="0.8"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.012" iyz="0" izz="0.003"/>
+    </inertial>
+    <collision><geometry><cylinder radius="0.02" length="0.4"/></geometry></collision>
+  </link>
+  <link name="slider">
+    <inertial>
+      <origin xyz="0.001 0.002 0.003"/>
+      <mass value="0.1"/>
+      <inertia ixx="2e-4" ixy="-1e-5" ixz="2e-5" iyy="1.5e-4" iyz="-3e-5" izz="1e-4"/>
+    </inertial>
+  </link>
+  <link name="flange"/>
+  <joint name="shoulder" type="revolute">
+    <origin xyz="0 0 0.1" rpy="0.2 0.3 1.5707963267948966"/>
+    <parent link="base"/>
+    <child link="upper"/>
+    <axis xyz="0 1 0"/>
+    <limit lower="-1.57" upper="1.57" effort="10" velocity="2"/>
+    <dynamics damping="0.1" friction="0.01"/>
+  </joint>
+  <joint name="elbow" type="continuous">
+    <origin xyz="0.05 0 0.5" rpy="-0.4 0 0"/>
+    <parent link="upper"/>
+    <child link="lower"/>
+    <axis xyz="0 2 2"/>
+    <mimic joint="shoulder" multiplier="-2" offset="0.1"/>
+    <calibration rising="0.3"/>
+  </joint>
+  <joint name="fixed" type="fixed">
+    <origin xyz="0 0 0.4"/>
+    <parent link="lower"/>
+    <child link="flange"/>
+  </joint>
+  <joint name="slide" type="prismatic">
+    <origin xyz="0.01 0 0.02" rpy="0 0 -0.7"/>
+    <parent link="flange"/>
+    <child link="slider"/>
+    <axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.1" effort="5" velocity="1"/>
+    <safety_controller soft_lower_limit="0.01" soft_upper_limit="0.09" k_position="10" k_velocity="1"/>
+  </joint>
+  <transmission name="t1"><type>transmission_interface/SimpleTransmission</type></transmission>
+  <gazebo reference="upper"><material>Gazebo/Grey</material></gazebo>
+  <gazebo reference="lower"><material>Gazebo/Grey</material></gazebo>
+</robot>
+"#;
+
+fn import(xml: &str) -> Imported {
+    import_urdf("arm.urdf", xml, &ImportOptions::default()).unwrap_or_else(|d| panic!("{d:?}"))
+}
+
+fn options() -> LoadOptions {
+    LoadOptions { library_dirs: Vec::new(), use_environment: false }
+}
+
+fn compile(text: &str) -> Compilation {
+    let compilation = compile_text("imported.lsd", text, None, &options());
+    assert!(!compilation.has_errors(), "{:?}\n{text}", compilation.diagnostics);
+    assert!(compilation.mechanism.is_some());
+    compilation
+}
+
+fn models(text: &str) -> (Compilation, KinematicModel, Model) {
+    let compilation = compile(text);
+    let mechanism = compilation.mechanism.as_ref().expect("elaborates");
+    let topology = lsdc::topology::build(mechanism).expect("a tree");
+    let kinematics = kinematic_model::build(mechanism, topology, UnknownValues::new()).expect("numeric");
+    let dynamics = dynamic_model::build(mechanism, &kinematics).expect("dynamic model");
+    (compilation, kinematics, dynamics)
+}
+
+/// URDF's rpy: Rz(yaw) · Ry(pitch) · Rx(roll).
+fn rpy(roll: f64, pitch: f64, yaw: f64) -> Rotation3<f64> {
+    Rotation3::from_euler_angles(roll, pitch, yaw)
+}
+
+fn pose(xyz: [f64; 3], rotation: Rotation3<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::new(xyz[0], xyz[1], xyz[2]), UnitQuaternion::from_rotation_matrix(&rotation))
+}
+
+/// One-based line of the first occurrence of `needle` in `xml`.
+fn line_of(xml: &str, needle: &str) -> usize {
+    let at = xml.find(needle).unwrap_or_else(|| panic!("`{needle}` in the URDF"));
+    xml[..at].matches('\n').count() + 1
+}
+
+fn line(sources: &SourceMap, diagnostic: &Diagnostic) -> usize {
+    let span = diagnostic.primary_span().expect("located");
+    sources.file(span.file).line_column(span.start as usize).0
+}
+
+#[test]
+fn the_arm_compiles_with_one_join_per_joint() {
+    let imported = import(ARM);
+    let text = &imported.text;
+    assert!(text.starts_with("(* Robot `arm`, imported from the URDF file `arm.urdf`."), "{text}");
+    for expected in [
+        "import joints ;",
+        "import gravity ;",
+        "let base = body mass = 0, inertia = 0 end ;",
+        "let flange = body mass = 0, inertia = 0 end ;",
+        // A diagonal tensor keeps its axes and the order of its moments.
+        "let lower = body mass = 0.8, iframe = [0, 0, 0.2] ++ (0.5 || [0, 1, 0]), inertia = [0.01, 0.012, 0.003] end ;",
+        "join earth and base with weld as world_joint ;",
+        "join [0, 0, 0.1] ++ (1.5707963267948966 || [0, 0, 1]) * (0.3 || [0, 1, 0]) * (0.2 || [1, 0, 0]) @ base and upper with revolute([0, 1, 0]) as shoulder ;",
+        "with continuous([0, 0.7071067811865475, 0.7071067811865475]) as elbow ;",
+        "join [0, 0, 0.4] ++ 1 @ lower and flange with weld as fixed_ ; (* URDF joint \"fixed\" *)",
+        "with prismatic([1, 0, 0]) as slide ;",
+        "apply weight(upper) on upper.iframe ;",
+        "apply weight(slider) on slider.iframe ;",
+    ] {
+        assert!(text.contains(expected), "missing `{expected}` in\n{text}");
+    }
+    assert!(!text.contains("weight(base)"), "{text}");
+    let (_, kinematics, _) = models(text);
+    assert_eq!(kinematics.topology.body_count(), 5);
+    assert_eq!(kinematics.coordinate_count, 3);
+}
+
+#[test]
+fn inertia_is_the_urdf_tensor_about_the_principal_axes() {
+    let (_, _, model) = models(&import(ARM).text);
+    let cases = [
+        ("upper", 1.5, [0.01, -0.02, 0.25], rpy(0.1, -0.2, 0.3), [0.03, 0.002, -0.003, 0.025, 0.001, 0.02]),
+        ("lower", 0.8, [0.0, 0.0, 0.2], rpy(0.0, 0.5, 0.0), [0.01, 0.0, 0.0, 0.012, 0.0, 0.003]),
+        ("slider", 0.1, [0.001, 0.002, 0.003], Rotation3::identity(), [2e-4, -1e-5, 2e-5, 1.5e-4, -3e-5, 1e-4]),
+    ];
+    for (name, mass, com, rotation, [ixx, ixy, ixz, iyy, iyz, izz]) in cases {
+        let index = model.body_names.iter().position(|n| n == name).expect("body");
+        let body = &model.bodies[index];
+        let tensor = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
+        let central = rotation.matrix() * tensor * rotation.matrix().transpose();
+        let expected = spatial::inertia(mass, &Vector3::from(com), &central);
+        let error = (body.inertia - expected).norm() / expected.norm();
+        assert!(error < 1e-12, "{name}: relative error {error:e}\n{}\n{expected}", body.inertia);
+        assert_eq!(body.mass, mass);
+    }
+    for name in ["base", "flange"] {
+        let index = model.body_names.iter().position(|n| n == name).expect("body");
+        assert!(model.bodies[index].massless, "{name}");
+    }
+}
+
+/// Tensors turned far from their principal axes, some with equal moments: whatever rotation the
+/// importer picks, the body's inertia is the URDF's.
+#[test]
+fn rotated_and_degenerate_tensors_are_reproduced() {
+    let turns = [(2.5, [1.0, 2.0, 3.0]), (3.1, [0.0, 0.0, 1.0]), (std::f64::consts::PI, [1.0, 1.0, 0.0]), (0.9, [-1.0, 0.5, 0.2])];
+    let moments = [[0.01, 0.02, 0.025], [0.02, 0.02, 0.03], [0.01, 0.015, 0.015], [0.02, 0.02, 0.02]];
+    for (angle, axis) in turns {
+        for diagonal in moments {
+            let turn = Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::from(axis)), angle);
+            let tensor = turn.matrix() * Matrix3::from_diagonal(&Vector3::from(diagonal)) * turn.matrix().transpose();
+            let t = |i: usize, j: usize| tensor[(i, j)];
+            let xml = format!(
+                r#"<robot name="r"><link name="a"><inertial><origin xyz="0.1 0.2 0.3" rpy="0.4 0.5 0.6"/><mass value="2"/>
+                <inertia ixx="{}" ixy="{}" ixz="{}" iyy="{}" iyz="{}" izz="{}"/></inertial></link></robot>"#,
+                t(0, 0), t(0, 1), t(0, 2), t(1, 1), t(1, 2), t(2, 2)
+            );
+            let imported = import(&xml);
+            assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
+            let (_, _, model) = models(&imported.text);
+            let rotation = rpy(0.4, 0.5, 0.6);
+            let expected = spatial::inertia(2.0, &Vector3::new(0.1, 0.2, 0.3), &(rotation.matrix() * tensor * rotation.matrix().transpose()));
+            let error = (model.bodies[0].inertia - expected).norm() / expected.norm();
+            assert!(error < 1e-12, "{angle} {axis:?} {diagonal:?}: {error:e}\n{}", imported.text);
+        }
+    }
+}
+
+/// Every prefix of a URDF file is an error or a program, never a panic.
+#[test]
+fn truncated_files_never_panic() {
+    for (end, _) in ARM.char_indices() {
+        if let Ok(imported) = import_urdf("cut.urdf", &ARM[..end], &ImportOptions::default()) {
+            compile(&imported.text);
+        }
+    }
+}
+
+#[test]
+fn joints_place_the_child_at_parent_origin_motion() {
+    let (compilation, kinematics, _) = models(&import(ARM).text);
+    let mechanism = compilation.mechanism.as_ref().expect("mechanism");
+    let (shoulder, elbow, slide) = (0.7, -1.3, 0.04);
+    let mut q = vec![0.0; kinematics.coordinate_count];
+    for joint in kinematics.principal() {
+        match mechanism.join_name(joint.join).as_str() {
+            "shoulder" => q[joint.offset] = shoulder,
+            "elbow" => q[joint.offset] = elbow,
+            "slide" => q[joint.offset] = slide,
+            _ => assert_eq!(joint.coordinate_count(), 0),
+        }
+    }
+    let revolve = |axis: Vector3<f64>, angle: f64| pose([0.0; 3], Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle));
+    let base = Isometry3::identity();
+    let upper = base * pose([0.0, 0.0, 0.1], rpy(0.2, 0.3, std::f64::consts::FRAC_PI_2)) * revolve(Vector3::y(), shoulder);
+    let lower = upper * pose([0.05, 0.0, 0.5], rpy(-0.4, 0.0, 0.0)) * revolve(Vector3::new(0.0, 1.0, 1.0), elbow);
+    let flange = lower * pose([0.0, 0.0, 0.4], Rotation3::identity());
+    let slider = flange * pose([0.01, 0.0, 0.02], rpy(0.0, 0.0, -0.7)) * pose([slide, 0.0, 0.0], Rotation3::identity());
+    let configuration = forward(&kinematics, &q).expect("forward kinematics");
+    for (name, expected) in [("base", base), ("upper", upper), ("lower", lower), ("flange", flange), ("slider", slider)] {
+        let number = (1..=kinematics.topology.body_count())
+            .find(|&j| mechanism.body_name(BodyRef::Body(kinematics.topology.bodies[j - 1])) == name)
+            .expect("body");
+        let error = (configuration.poses[number].to_homogeneous() - expected.to_homogeneous()).amax();
+        assert!(error < 1e-12, "{name}: {error:e}");
+    }
+}
+
+#[test]
+fn warnings_point_at_what_is_not_imported() {
+    let imported = import(ARM);
+    let mut sources = SourceMap::new();
+    sources.add("arm.urdf", ARM);
+    let found: Vec<(&str, usize)> = imported.warnings.iter().map(|d| (d.code, line(&sources, d))).collect();
+    let expected = [
+        ("W1007", line_of(ARM, "<material name=\"grey\"")),
+        ("W1002", line_of(ARM, "<limit lower=\"-1.57\"")),
+        ("W1004", line_of(ARM, "<dynamics")),
+        ("W1009", line_of(ARM, "<axis xyz=\"0 2 2\"")),
+        ("W1003", line_of(ARM, "<mimic")),
+        ("W1006", line_of(ARM, "<calibration")),
+        ("W1001", line_of(ARM, "<joint name=\"fixed\"")),
+        ("W1002", line_of(ARM, "<limit lower=\"0\"")),
+        ("W1005", line_of(ARM, "<safety_controller")),
+        ("W1008", line_of(ARM, "<transmission")),
+        ("W1008", line_of(ARM, "<gazebo")),
+    ];
+    assert_eq!(found, expected, "{:#?}", imported.warnings);
+    assert!(imported.warnings.iter().all(|d| !d.is_error()));
+    let mimic = imported.warnings.iter().find(|d| d.code == "W1003").expect("mimic");
+    assert!(mimic.message.contains("`elbow` mimics joint `shoulder`"), "{}", mimic.message);
+    assert!(mimic.notes.iter().any(|n| n.contains("-2 × `shoulder` + 0.1")), "{:?}", mimic.notes);
+    let gazebo = imported.warnings.iter().find(|d| d.message.contains("gazebo")).expect("gazebo");
+    assert!(gazebo.message.starts_with("2 `<gazebo>` elements"), "{}", gazebo.message);
+    let limit = imported.warnings.iter().find(|d| d.code == "W1002").expect("limit");
+    assert!(limit.notes.iter().any(|n| n.contains("lower = -1.57, upper = 1.57, effort = 10, velocity = 2")), "{:?}", limit.notes);
+    let rendered = lsdc::diag::render::to_text(&sources, &imported.warnings);
+    assert!(rendered.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))), "{rendered}");
+}
+
+const RENAMED: &str = r#"<robot name="names">
+  <link name="base-link"/>
+  <link name="with"/>
+  <link name="2nd"/>
+  <link name="earth"/>
+  <link name="g"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+  <link name="base_link"/>
+  <joint name="with" type="fixed"><parent link="base-link"/><child link="with"/></joint>
+  <joint name="j" type="fixed"><parent link="with"/><child link="2nd"/></joint>
+  <joint name="k" type="fixed"><parent link="2nd"/><child link="earth"/></joint>
+  <joint name="world_joint" type="fixed"><parent link="earth"/><child link="g"/></joint>
+  <joint name="l" type="fixed"><parent link="g"/><child link="base_link"/></joint>
+</robot>
+"#;
+
+#[test]
+fn names_that_are_not_lsd_names_are_renamed_and_reported() {
+    let imported = import(RENAMED);
+    let text = &imported.text;
+    for expected in [
+        // A valid name keeps it; the invalid one that would become it takes the next.
+        "let base_link_ = body mass = 0, inertia = 0 end ; (* URDF link \"base-link\" *)",
+        "let base_link = body",
+        "let with_ = body",
+        "let _2nd = body",
+        "let earth_ = body",
+        "let g_ = body mass = 1,",
+        "with weld as with__ ; (* URDF joint \"with\" *)",
+        "with weld as world_joint ;",
+        "join earth and base_link_ with weld as world_joint_ ;",
+        "apply weight(g_) on g_.iframe ;",
+    ] {
+        assert!(text.contains(expected), "missing `{expected}` in\n{text}");
+    }
+    let renames: Vec<&str> = imported.warnings.iter().filter(|d| d.code == "W1001").map(|d| d.message.as_str()).collect();
+    assert_eq!(renames.len(), 6, "{renames:#?}");
+    assert!(renames.contains(&"link `2nd` is called `_2nd` in LSD"), "{renames:#?}");
+    compile(text);
+    assert_eq!(lsd_name("base-link"), "base_link");
+    assert_eq!(lsd_name("planar"), "planar_");
+}
+
+#[test]
+fn other_joint_types_compile() {
+    let xml = r#"<robot name="kinds">
+  <link name="a"/>
+  <link name="b"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <link name="c"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <link name="d"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <joint name="p1" type="planar"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+  <joint name="p2" type="planar"><parent link="b"/><child link="c"/></joint>
+  <joint name="f" type="floating"><parent link="c"/><child link="d"/></joint>
+</robot>"#;
+    let imported = import(xml);
+    assert!(imported.text.contains("with planar as p1 ;"), "{}", imported.text);
+    assert!(imported.text.contains("link(x, y, q) dof1 = x * [0, 1, 0] + y * [0, 0, 1], dof2 = q || [1, 0, 0] end as p2 ;"), "{}", imported.text);
+    assert!(imported.text.contains("with free as f ;"), "{}", imported.text);
+    let (_, kinematics, _) = models(&imported.text);
+    assert_eq!(kinematics.coordinate_count, 3 + 3 + 6);
+}
+
+#[test]
+fn floating_base_without_gravity() {
+    let options = ImportOptions { floating_base: true, gravity: false };
+    let imported = import_urdf("arm.urdf", ARM, &options).expect("imports");
+    assert!(imported.text.contains("join earth and base with free as root_joint ;"), "{}", imported.text);
+    assert!(!imported.text.contains("import gravity"), "{}", imported.text);
+    assert!(!imported.text.contains("weight("), "{}", imported.text);
+    let (_, kinematics, _) = models(&imported.text);
+    assert_eq!(kinematics.coordinate_count, 6 + 3);
+    let default = ImportOptions::default();
+    assert!(!default.floating_base && default.gravity);
+}
+
+#[test]
+fn numbers_are_written_without_loss() {
+    let xml = r#"<robot name="tiny">
+  <link name="a"><inertial><origin xyz="1e-7 -123456.789 1.23456789012345"/><mass value="1e-7"/><inertia ixx="1e-30" ixy="0" ixz="0" iyy="2e-30" iyz="0" izz="2.5e-30"/></inertial></link>
+</robot>"#;
+    let imported = import(xml);
+    assert!(imported.text.contains("mass = 1e-7, iframe = [1e-7, -123456.789, 1.23456789012345] ++ 1, inertia = [1e-30, 2e-30, 2.5e-30]"), "{}", imported.text);
+    let (_, _, model) = models(&imported.text);
+    let body = &model.bodies[0];
+    assert_eq!(body.mass, 1e-7);
+    assert_eq!(body.com, Vector3::new(1e-7, -123456.789, 1.23456789012345));
+}
+
+#[test]
+fn impossible_inertia_is_reported_but_imported() {
+    let xml = r#"<robot name="bad">
+  <link name="a"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="3"/></inertial></link>
+  <link name="b"><inertial><mass value="1"/><inertia ixx="1" ixy="2" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+  <link name="c"><inertial><mass value="2"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <joint name="j" type="fixed"><parent link="a"/><child link="b"/></joint>
+  <joint name="k" type="fixed"><parent link="a"/><child link="c"/></joint>
+</robot>"#;
+    let imported = import(xml);
+    let messages: Vec<&str> = imported.warnings.iter().filter(|d| d.code == "W1010").map(|d| d.message.as_str()).collect();
+    assert_eq!(messages.len(), 3, "{messages:#?}");
+    assert!(messages[0].contains("link `a`") && messages[0].contains("triangle inequality"), "{}", messages[0]);
+    assert!(messages[1].contains("link `b`") && messages[1].contains("not positive definite"), "{}", messages[1]);
+    assert!(messages[2].contains("link `c`") && messages[2].contains("not positive definite"), "{}", messages[2]);
+    compile(&imported.text);
+}
+
+#[test]
+fn bad_urdf_is_a_located_error() {
+    let cases = [
+        ("<robot name=\"r\">\n  <link name=\"a\">\n</robot>\n", "E1001", "</robot>"),
+        ("<robot name=\"r\"><link name=\"a\"/><!-- never closed </robot>", "E1001", "<"),
+        ("<robot name=\"r\"><link name=\"a\"/></robot>\n<robot/>", "E1001", "<robot/>"),
+        ("<rob name=\"r\"/>", "E1002", "<rob name=\"r\"/>"),
+        ("<robot name=\"r\"><link/></robot>", "E1002", "<link/>"),
+        ("<robot name=\"r\"><link name=\"a\"><inertial><mass value=\"x\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link></robot>", "E1002", "value=\"x\""),
+        ("<robot name=\"r\"><link name=\"a\"><inertial><origin xyz=\"1 2\"/><mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link></robot>", "E1002", "xyz=\"1 2\""),
+        ("<robot name=\"r\"><link name=\"a\"><inertial><mass value=\"1\"/></inertial></link></robot>", "E1002", "<inertial>"),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"hinge\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>", "E1002", "type=\"hinge\""),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"fixed\"><parent link=\"a\"/></joint></robot>", "E1002", "<joint name=\"j\" type=\"fixed\">"),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"c\"/></joint></robot>", "E1003", "link=\"c\""),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"a\"/></robot>", "E1004", "name=\"a\""),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><link name=\"c\"/><joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"c\"/></joint><joint name=\"k\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint></robot>", "E1005", "<child link=\"c\"/>"),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint><joint name=\"k\" type=\"fixed\"><parent link=\"b\"/><child link=\"a\"/></joint></robot>", "E1006", "<joint name=\"j\" type=\"fixed\">"),
+        ("<robot name=\"r\"></robot>", "E1007", "<robot name=\"r\">"),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/></robot>", "E1007", "<link name=\"b\"/>"),
+        ("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"0 0 0\"/></joint></robot>", "E1008", "xyz=\"0 0 0\""),
+    ];
+    for (xml, code, located) in cases {
+        let error = import_urdf("bad.urdf", xml, &ImportOptions::default()).expect_err(xml);
+        assert!(error.is_error(), "{xml}");
+        assert_eq!(error.code, code, "{xml}: {error:?}");
+        let span = error.primary_span().unwrap_or_else(|| panic!("{xml}: no position"));
+        assert!(xml[span.range()].starts_with(located), "{xml}: `{}`", &xml[span.range()]);
+    }
+    for xml in ["", "   ", "not xml", "<", "<robot name=\"r\"", "<robot name='r>", "<robot></robot></robot>", "\u{feff}<é/>"] {
+        let error = import_urdf("bad.urdf", xml, &ImportOptions::default()).expect_err(xml);
+        assert!(error.is_error(), "{xml}");
+    }
+}
+
+fn lsdc(args: &[&str]) -> (i32, String, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_lsdc")).args(args).env_remove("LSD_PATH").output().expect("lsdc runs");
+    (
+        output.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("lsdc-urdf-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+#[test]
+fn urdf_files_are_programs_for_every_command() {
+    let dir = temp_dir("commands");
+    let path = dir.join("arm.urdf");
+    std::fs::write(&path, ARM).expect("write");
+    let file = path.to_str().expect("utf-8 path");
+    let (code, stdout, stderr) = lsdc(&["check", file]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("bodies    5 (base, upper, lower, flange, slider)"), "{stdout}");
+    assert!(stderr.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))), "{stderr}");
+    assert!(stderr.contains("warning[W1003]"), "{stderr}");
+    let (code, stdout, stderr) = lsdc(&["tree", file]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("shoulder"), "{stdout}");
+    let (code, _, stderr) = lsdc(&["simulate", file, "--duration", "0.02"]);
+    assert_eq!(code, 0, "{stderr}");
+    // A joint next to the URDF file does not replace the standard one the program was written for.
+    std::fs::write(dir.join("joints.lsd"), "let unrelated = 1 ;\n").expect("write");
+    let (code, _, stderr) = lsdc(&["check", file]);
+    assert_eq!(code, 0, "{stderr}");
+    std::fs::write(&path, "<robot name=\"r\"><link name=\"a\"/><joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>").expect("write");
+    let (code, _, stderr) = lsdc(&["check", file]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("error[E1003]") && stderr.contains("arm.urdf:1:"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn import_urdf_prints_a_program_that_compiles() {
+    let dir = temp_dir("cli");
+    let path = dir.join("arm.urdf");
+    std::fs::write(&path, ARM).expect("write");
+    let file = path.to_str().expect("utf-8 path");
+    let (code, stdout, stderr) = lsdc(&["import-urdf", file]);
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(stdout, import_urdf(file, ARM, &ImportOptions::default()).expect("imports").text);
+    assert!(stderr.contains("warning[W1002]"), "{stderr}");
+    compile(&stdout);
+
+    let out = dir.join("arm.lsd");
+    let (code, stdout, stderr) = lsdc(&["import-urdf", file, "--floating-base", "--no-gravity", "-o", out.to_str().expect("utf-8")]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.is_empty(), "{stdout}");
+    let written = std::fs::read_to_string(&out).expect("written");
+    assert!(written.contains("with free as root_joint ;") && !written.contains("weight("), "{written}");
+    let (code, _, stderr) = lsdc(&["check", out.to_str().expect("utf-8")]);
+    assert_eq!(code, 0, "{stderr}");
+
+    std::fs::write(&path, "<robot name=\"r\">\n  <link name=\"a\">\n</robot>\n").expect("write");
+    let (code, stdout, stderr) = lsdc(&["import-urdf", file]);
+    assert_eq!(code, 1);
+    assert!(stdout.is_empty(), "{stdout}");
+    assert!(stderr.contains("error[E1001]") && stderr.contains("arm.urdf:3:1"), "{stderr}");
+    let (code, _, _) = lsdc(&["import-urdf", "no/such/file.urdf"]);
+    assert_eq!(code, 2);
+    let _ = std::fs::remove_dir_all(&dir);
+}
