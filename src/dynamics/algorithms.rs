@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
 use super::joint::{JointState, Subspace};
 use super::model::Model;
-use super::spatial::{self, Force, Inertia, Motion, Pose};
+use super::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
 use crate::kinematics::eval::EvalError;
 
 /// Scratch space for the algorithms; `Data::new(&model)` once, reuse for every call.
@@ -17,7 +17,10 @@ pub struct Data {
     pub velocity: Vec<Motion>,
     pub acceleration: Vec<Motion>,
     pub force: Vec<Force>,
-    composite: Vec<Inertia>,
+    /// CRBA: poses, composite inertias and motion columns in the fixed frame.
+    world_transform: Vec<Transform>,
+    composite_world: Vec<RigidInertia>,
+    world_columns: Vec<Subspace>,
     articulated: Vec<Inertia>,
     bias: Vec<Force>,
     coriolis: Vec<Motion>,
@@ -50,7 +53,9 @@ impl Data {
             velocity: vec![Motion::zeros(); n + 1],
             acceleration: vec![Motion::zeros(); n + 1],
             force: vec![Force::zeros(); n + 1],
-            composite: vec![Inertia::zeros(); n + 1],
+            world_transform: vec![Transform::identity(); n + 1],
+            composite_world: vec![RigidInertia::zeros(); n + 1],
+            world_columns: vec![Subspace::empty(); n],
             articulated: vec![Inertia::zeros(); n + 1],
             bias: vec![Force::zeros(); n + 1],
             coriolis: vec![Motion::zeros(); n + 1],
@@ -67,11 +72,22 @@ fn slice(values: &[f64], offset: usize, count: usize) -> &[f64] {
 
 /// Joint states, world poses and body velocities at (q, v).
 pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+    joint_motions(model, data, q, v)?;
+    for (k, joint) in model.joints.iter().enumerate() {
+        let state = &mut data.states[k];
+        joint.fill_pose(state);
+        data.world[joint.child] = data.world[joint.parent] * state.pose;
+    }
+    Ok(())
+}
+
+/// What the recursive algorithms need of the kinematics: joint states and body velocities at
+/// (q, v), without the world poses (RNEA and ABA leave `data.world` as it was).
+fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
     for (k, joint) in model.joints.iter().enumerate() {
         let state = &mut data.states[k];
         joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, state)?;
         let (i, parent) = (joint.child, joint.parent);
-        data.world[i] = data.world[parent] * state.pose;
         data.velocity[i] = state.transform.motion_to_child(&data.velocity[parent]) + state.velocity;
         data.coriolis[i] = state.bias + spatial::cross_motion(&data.velocity[i], &state.velocity);
     }
@@ -98,7 +114,15 @@ fn base_acceleration(model: &Model) -> Motion {
 /// Inverse dynamics: the generalised forces that give accelerations `a` at (q, v) under the
 /// external forces `external` (one per body, in its frame; index 0 unused).
 pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], external: &[Force]) -> Result<DVector<f64>, EvalError> {
-    forward_kinematics(model, data, q, v)?;
+    let mut tau = DVector::zeros(model.nv);
+    rnea_into(model, data, q, v, a, external, &mut tau)?;
+    Ok(tau)
+}
+
+/// RNEA writing the generalised forces into `tau` (length nv).
+#[allow(clippy::too_many_arguments)]
+pub fn rnea_into(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], external: &[Force], tau: &mut DVector<f64>) -> Result<(), EvalError> {
+    joint_motions(model, data, q, v)?;
     let base = base_acceleration(model);
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.parent);
@@ -114,7 +138,6 @@ pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], ext
             body.inertia * data.acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum) - external[i]
         };
     }
-    let mut tau = DVector::zeros(model.nv);
     for (k, joint) in model.joints.iter().enumerate().rev() {
         let (i, parent) = (joint.child, joint.parent);
         let state = &data.states[k];
@@ -124,7 +147,7 @@ pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], ext
             data.force[parent] += transmitted;
         }
     }
-    Ok(tau)
+    Ok(())
 }
 
 /// The joint-space mass matrix M(q) (composite rigid bodies).
@@ -135,35 +158,49 @@ pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, E
 }
 
 /// The mass matrix written into `mass` (nv × nv), which is entirely overwritten.
+///
+/// Composite rigid bodies in the fixed frame: each body's inertia is moved to the fixed frame
+/// once, composites are then plain sums, and every entry is a dot product of a joint's motion
+/// column (in the fixed frame) with a composite momentum: no force is carried from joint to
+/// joint. Leaves the joint states of (q, 0) in `data`, not the world poses.
 pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f64>) -> Result<(), EvalError> {
-    let zero_v = vec![0.0; model.nv];
-    forward_kinematics(model, data, q, &zero_v)?;
-    for (i, body) in model.bodies.iter().enumerate() {
-        data.composite[i + 1] = body.inertia;
+    let zero_v = [0.0; 6];
+    for (k, joint) in model.joints.iter().enumerate() {
+        let state = &mut data.states[k];
+        joint.update(slice(q, joint.q_offset, joint.nq()), &zero_v[..joint.nv()], &model.unknowns, state)?;
+        let (i, parent) = (joint.child, joint.parent);
+        let world = data.world_transform[parent] * state.transform;
+        data.world_transform[i] = world;
+        let body = &model.bodies[i - 1];
+        data.composite_world[i] = if body.massless { RigidInertia::zeros() } else { body.rigid.to_parent(&world) };
+        let mut columns = Subspace::empty();
+        for column in state.subspace.columns() {
+            columns.push(world.motion_to_parent(column));
+        }
+        data.world_columns[k] = columns;
     }
-    for (k, joint) in model.joints.iter().enumerate().rev() {
-        if joint.parent != 0 && data.composite[joint.child] != Inertia::zeros() {
-            let moved = data.states[k].transform.inertia_to_parent(&data.composite[joint.child]);
-            data.composite[joint.parent] += moved;
+    for joint in model.joints.iter().rev() {
+        if joint.parent != 0 {
+            let child = data.composite_world[joint.child];
+            data.composite_world[joint.parent] += child;
         }
     }
     mass.fill(0.0);
     let mut forces = [Force::zeros(); 6];
     for (k, joint) in model.joints.iter().enumerate() {
-        let subspace = &data.states[k].subspace;
-        let n = subspace.len();
-        for (f, s) in forces.iter_mut().zip(subspace.columns()) {
-            *f = data.composite[joint.child] * s;
+        let columns = &data.world_columns[k];
+        let composite = &data.composite_world[joint.child];
+        for (f, s) in forces.iter_mut().zip(columns.columns()) {
+            *f = composite.times(s);
         }
-        fill_block(mass, subspace, &forces[..n], joint.v_offset, joint.v_offset);
+        let forces = &forces[..columns.len()];
         let mut j = k;
-        while model.joints[j].parent != 0 {
-            let transform = &data.states[j].transform;
-            for f in &mut forces[..n] {
-                *f = transform.force_to_parent(f);
+        loop {
+            fill_block(mass, &data.world_columns[j], forces, model.joints[j].v_offset, joint.v_offset);
+            match model.joints[j].parent {
+                0 => break,
+                parent => j = parent - 1,
             }
-            j = model.joints[j].parent - 1;
-            fill_block(mass, &data.states[j].subspace, &forces[..n], model.joints[j].v_offset, joint.v_offset);
         }
     }
     Ok(())
@@ -171,18 +208,37 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
 
 /// M[rows, cols] = Sᵀ F and its transpose, the symmetric block.
 fn fill_block(mass: &mut DMatrix<f64>, subspace: &Subspace, forces: &[Force], row: usize, col: usize) {
+    let n = mass.nrows();
+    let entries = mass.as_mut_slice();
     for (r, s) in subspace.columns().iter().enumerate() {
         for (c, f) in forces.iter().enumerate() {
             let value = s.dot(f);
-            mass[(row + r, col + c)] = value;
-            mass[(col + c, row + r)] = value;
+            // Column-major storage.
+            entries[(row + r) + (col + c) * n] = value;
+            entries[(col + c) + (row + r) * n] = value;
         }
     }
 }
 
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.
 pub fn aba(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], external: &[Force]) -> Result<DVector<f64>, DynamicsError> {
-    forward_kinematics(model, data, q, v)?;
+    let mut accelerations = DVector::zeros(model.nv);
+    aba_into(model, data, q, v, tau, external, &mut accelerations)?;
+    Ok(accelerations)
+}
+
+/// ABA writing the accelerations into `accelerations` (length nv).
+#[allow(clippy::too_many_arguments)]
+pub fn aba_into(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    external: &[Force],
+    accelerations: &mut DVector<f64>,
+) -> Result<(), DynamicsError> {
+    joint_motions(model, data, q, v)?;
     for (i, body) in model.bodies.iter().enumerate() {
         let i = i + 1;
         data.articulated[i] = body.inertia;
@@ -195,7 +251,6 @@ pub fn aba(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], ex
     for (k, joint) in model.joints.iter().enumerate().rev() {
         aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?;
     }
-    let mut accelerations = DVector::zeros(model.nv);
     let base = base_acceleration(model);
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.parent);
@@ -214,7 +269,7 @@ pub fn aba(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], ex
         }
         data.acceleration[i] = a + state.subspace.apply(out);
     }
-    Ok(accelerations)
+    Ok(())
 }
 
 /// One joint of ABA's backward pass: U, D⁻¹ and u, then the articulated inertia and bias

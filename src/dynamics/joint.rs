@@ -14,7 +14,7 @@
 //! child's pose in the parent is F_p · M · F_c⁻¹ with F_p, F_c the join's frames on the parent
 //! and the child.
 
-use nalgebra::{Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 
 use super::spatial::{self, Force, Motion, Pose, Transform};
 use crate::kinematics::eval::{EvalError, UnknownValues};
@@ -101,15 +101,21 @@ impl Subspace {
 
 /// How a joint's pose and subspace are computed, decided once when the model is built. Most
 /// joints of real robots are one rotation or one translation along a fixed axis, or a weld:
-/// these need no evaluation of the dof chain, and their subspace is constant in the child frame.
+/// these need no evaluation of the dof chain, their subspace is constant in the child frame,
+/// and their transform is computed directly as a matrix.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Kernel {
     /// No coordinate: the child's pose in the parent is constant.
-    Weld { pose: Pose },
-    /// The moving part M is a rotation by `scale · q` about the unit `axis` (of the join's first
-    /// frame), or a translation by `scale · q` along it; `column` is the constant subspace.
-    Rotation { axis: Unit<Vector3<f64>>, scale: f64, column: Motion },
-    Translation { axis: Vector3<f64>, scale: f64, column: Motion },
+    Weld { transform: Transform },
+    /// The moving part M is a rotation by θ = `scale` · q about a unit axis a of the join's
+    /// first frame. With the join frame on the parent (P) first, P·M has the rotation
+    /// cos θ · R_P + sin θ · R_P â + (1 − cos θ) · R_P a aᵀ (Rodrigues, the three matrices
+    /// computed once) and the translation of P; `after` is the child's join frame inverted,
+    /// absent when it is the identity.
+    Rotation { terms: [Matrix3<f64>; 3], origin: Vector3<f64>, scale: f64, after: Option<Transform>, column: Motion },
+    /// The moving part M is a translation by q · d: P·M has P's rotation and the translation
+    /// origin + q · R_P d.
+    Translation { rotation: Matrix3<f64>, origin: Vector3<f64>, direction: Vector3<f64>, after: Option<Transform>, column: Motion },
     /// Anything else: the dof chain is evaluated at each state.
     General,
 }
@@ -197,6 +203,11 @@ fn linear_in_first(s: &SExpr) -> Option<f64> {
     }
 }
 
+/// The child's join frame inverted, or nothing when it is the identity (as in imported URDF).
+fn after_motion(on_child: &Pose) -> Option<Transform> {
+    (*on_child != Pose::identity()).then(|| Transform::from_pose(&on_child.inverse()))
+}
+
 /// The kernel for a joint: a weld, one rotation or translation linear in the joint's single
 /// coordinate, or the general evaluation.
 pub fn kernel(joint: &Joint, unknowns: &UnknownValues) -> Kernel {
@@ -205,7 +216,7 @@ pub fn kernel(joint: &Joint, unknowns: &UnknownValues) -> Kernel {
         return match chain.chain_motion(&[], None, unknowns) {
             Ok(motion) => {
                 let moving = if joint.first_on_parent { motion.pose } else { motion.pose.inverse() };
-                Kernel::Weld { pose: joint.on_parent * moving * joint.on_child.inverse() }
+                Kernel::Weld { transform: Transform::from_pose(&(joint.on_parent * moving * joint.on_child.inverse())) }
             }
             Err(_) => Kernel::General,
         };
@@ -215,21 +226,24 @@ pub fn kernel(joint: &Joint, unknowns: &UnknownValues) -> Kernel {
     }
     // The moving part is D when the first frame is on the parent, D⁻¹ otherwise: the sign.
     let sign = if joint.first_on_parent { 1.0 } else { -1.0 };
-    let on_child = joint.on_child;
+    let (on_parent, on_child) = (Transform::from_pose(&joint.on_parent), joint.on_child);
+    let after = after_motion(&on_child);
     match chain.steps.as_slice() {
         [Step::Rotation { angle, axis }] => match (linear_in_first(angle), Unit::try_new(*axis, 1e-12)) {
             (Some(scale), Some(unit)) if scale != 0.0 => {
                 let unit_twist = Motion::new(unit.x, unit.y, unit.z, 0.0, 0.0, 0.0);
                 let column = spatial::motion_to_parent(&on_child, &unit_twist) * (sign * scale);
-                Kernel::Rotation { axis: unit, scale: sign * scale, column }
+                let r = on_parent.rotation;
+                let terms = [r, r * spatial::skew(&unit), r * (unit.into_inner() * unit.transpose())];
+                Kernel::Rotation { terms, origin: on_parent.translation, scale: sign * scale, after, column }
             }
             _ => Kernel::General,
         },
         [Step::Translation(t)] => match (linear_in_first(&t[0]), linear_in_first(&t[1]), linear_in_first(&t[2])) {
             (Some(x), Some(y), Some(z)) if (x, y, z) != (0.0, 0.0, 0.0) => {
-                let direction = Vector3::new(x, y, z);
                 let column = spatial::motion_to_parent(&on_child, &Motion::new(0.0, 0.0, 0.0, x, y, z)) * sign;
-                Kernel::Translation { axis: direction, scale: sign, column }
+                let direction = on_parent.rotation * Vector3::new(x, y, z) * sign;
+                Kernel::Translation { rotation: on_parent.rotation, origin: on_parent.translation, direction, after, column }
             }
             _ => Kernel::General,
         },
@@ -258,37 +272,57 @@ impl Joint {
     pub fn state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues) -> Result<JointState, EvalError> {
         let mut state = JointState::new();
         self.update(q, v, unknowns, &mut state)?;
+        self.fill_pose(&mut state);
         Ok(state)
     }
 
-    /// Writes the joint's state at (q, v) into `state`, reusing its storage.
+    /// Writes the joint's state at (q, v) into `state`, reusing its storage: its transform,
+    /// subspace, velocity and bias. `state.pose` is left as it was for the one-rotation,
+    /// one-translation and weld kernels; `forward_kinematics` sets it (see `fill_pose`).
     pub fn update(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
+        let fixed_part = |transform: Transform, after: &Option<Transform>| match after {
+            Some(after) => transform * *after,
+            None => transform,
+        };
         match (&self.kernel, &self.kind) {
-            (Kernel::Weld { pose }, _) => {
-                state.pose = *pose;
+            (Kernel::Weld { transform }, _) => {
+                state.transform = *transform;
                 state.subspace = Subspace::empty();
                 state.velocity = Motion::zeros();
+                state.bias = Motion::zeros();
             }
-            (Kernel::Rotation { axis, scale, column }, _) => {
-                let moving = Pose::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(axis, scale * q[0]));
-                state.pose = self.on_parent * moving * self.on_child.inverse();
+            (Kernel::Rotation { terms, origin, scale, after, column }, _) => {
+                let (sin, cos) = (scale * q[0]).sin_cos();
+                let rotation = terms[0] * cos + terms[1] * sin + terms[2] * (1.0 - cos);
+                state.transform = fixed_part(Transform { rotation, translation: *origin }, after);
                 state.subspace = Subspace::single(*column);
                 state.velocity = column * v[0];
+                state.bias = Motion::zeros();
             }
-            (Kernel::Translation { axis, scale, column }, _) => {
-                let moving = Pose::from_parts(Translation3::from(axis * (scale * q[0])), UnitQuaternion::identity());
-                state.pose = self.on_parent * moving * self.on_child.inverse();
+            (Kernel::Translation { rotation, origin, direction, after, column }, _) => {
+                state.transform = fixed_part(Transform { rotation: *rotation, translation: origin + direction * q[0] }, after);
                 state.subspace = Subspace::single(*column);
                 state.velocity = column * v[0];
+                state.bias = Motion::zeros();
             }
-            (Kernel::General, JointType::Chain) => self.chain_state(q, v, unknowns, state)?,
-            (Kernel::General, _) => self.quaternion_state(q, v, state),
+            (Kernel::General, JointType::Chain) => {
+                self.chain_state(q, v, unknowns, state)?;
+                state.transform = Transform::from_pose(&state.pose);
+            }
+            (Kernel::General, _) => {
+                self.quaternion_state(q, v, state);
+                state.transform = Transform::from_pose(&state.pose);
+            }
         }
-        if !matches!(self.kernel, Kernel::General) {
-            state.bias = Motion::zeros();
-        }
-        state.transform = Transform::from_pose(&state.pose);
         Ok(())
+    }
+
+    /// Sets `state.pose` from the transform where `update` did not compute it.
+    pub fn fill_pose(&self, state: &mut JointState) {
+        if !matches!(self.kernel, Kernel::General) {
+            let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(state.transform.rotation));
+            state.pose = Pose::from_parts(Translation3::from(state.transform.translation), rotation);
+        }
     }
 
     fn chain_state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {

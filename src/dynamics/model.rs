@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
-use super::spatial::{self, Inertia, Pose};
+use super::spatial::{self, Inertia, Pose, RigidInertia};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
@@ -16,8 +16,9 @@ pub struct BodyInertia {
     pub mass: f64,
     /// Centre of mass in the body frame.
     pub com: Vector3<f64>,
-    /// Spatial inertia about the body frame's origin.
+    /// Spatial inertia about the body frame's origin, and the same in compact form.
     pub inertia: Inertia,
+    pub rigid: RigidInertia,
     /// Zero mass and inertia: skipped by the algorithms.
     pub massless: bool,
 }
@@ -229,13 +230,14 @@ fn body_inertia(mechanism: &Mechanism, id: crate::elab::value::BodyId, unknowns:
     let mass = constant(body.mass.value(), unknowns)?;
     let moments = constant_vector(body.inertia.value(), unknowns)?;
     if mass == 0.0 && moments == Vector3::zeros() {
-        return Ok(BodyInertia { mass, com: Vector3::zeros(), inertia: Inertia::zeros(), massless: true });
+        return Ok(BodyInertia { mass, com: Vector3::zeros(), inertia: Inertia::zeros(), rigid: RigidInertia::zeros(), massless: true });
     }
     let frame: Pose = constant_pose(body.iframe.value(), unknowns)?;
     let rotation = frame.rotation.to_rotation_matrix();
     let central = rotation.matrix() * Matrix3::from_diagonal(&moments) * rotation.matrix().transpose();
     let com = frame.translation.vector;
-    Ok(BodyInertia { mass, com, inertia: spatial::inertia(mass, &com, &central), massless: false })
+    let inertia = spatial::inertia(mass, &com, &central);
+    Ok(BodyInertia { mass, com, inertia, rigid: RigidInertia::from_matrix(&inertia), massless: false })
 }
 
 fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &mut Vec<Diagnostic>) -> Vec<AppliedEffort> {

@@ -136,6 +136,62 @@ impl Transform {
     }
 }
 
+impl std::ops::Mul for Transform {
+    type Output = Transform;
+
+    /// Composition: `a * b` maps b's frame through a's.
+    fn mul(self, b: Transform) -> Transform {
+        Transform { rotation: self.rotation * b.rotation, translation: self.rotation * b.translation + self.translation }
+    }
+}
+
+/// The inertia of a rigid body (or a rigid set of bodies) about a frame's origin in compact
+/// form: mass m, first moment h = m c and rotational inertia J about the origin. The 6 × 6
+/// matrix is [J ĥ; ĥᵀ m·1]. Sums of inertias about one origin are plain sums of the three.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RigidInertia {
+    pub mass: f64,
+    pub first: Vector3<f64>,
+    pub rotational: Matrix3<f64>,
+}
+
+impl RigidInertia {
+    pub fn zeros() -> RigidInertia {
+        RigidInertia { mass: 0.0, first: Vector3::zeros(), rotational: Matrix3::zeros() }
+    }
+
+    /// From the 6 × 6 matrix of a rigid body's inertia.
+    pub fn from_matrix(i: &Inertia) -> RigidInertia {
+        RigidInertia { mass: i[(3, 3)], first: Vector3::new(i[(2, 4)], i[(0, 5)], i[(1, 3)]), rotational: i.fixed_view::<3, 3>(0, 0).into_owned() }
+    }
+
+    /// The inertia expressed in the parent frame of `t`: h' = R h + m p and
+    /// J' = R J Rᵀ − ĥ₁p̂ − p̂ĥ₁ − m p̂p̂ with h₁ = R h (the 3 × 3 form of `inertia_to_parent`).
+    pub fn to_parent(&self, t: &Transform) -> RigidInertia {
+        let r = &t.rotation;
+        let h1 = r * self.first;
+        let (hs, p) = (skew(&h1), skew(&t.translation));
+        let hp = hs * p;
+        let rotational = r * self.rotational * r.transpose() - hp - hp.transpose() - self.mass * p * p;
+        RigidInertia { mass: self.mass, first: h1 + self.mass * t.translation, rotational }
+    }
+
+    /// The momentum of motion m: [J ω + h × v; m v − h × ω].
+    #[inline]
+    pub fn times(&self, m: &Motion) -> Force {
+        let (w, v) = (top(m), bottom(m));
+        join(self.rotational * w + self.first.cross(&v), self.mass * v - self.first.cross(&w))
+    }
+}
+
+impl std::ops::AddAssign for RigidInertia {
+    fn add_assign(&mut self, other: RigidInertia) {
+        self.mass += other.mass;
+        self.first += other.first;
+        self.rotational += other.rotational;
+    }
+}
+
 /// Spatial inertia about a frame's origin, of a body with mass `mass`, centre of mass `com` and
 /// rotational inertia `central` about the centre of mass (both in that frame).
 pub fn inertia(mass: f64, com: &Vector3<f64>, central: &Matrix3<f64>) -> Inertia {
@@ -188,6 +244,21 @@ mod tests {
         let central = Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.5, 0.03, -0.02, 0.03, 0.4);
         let i = inertia(2.5, &Vector3::new(0.1, -0.4, 0.8), &central);
         assert!((t.inertia_to_parent(&i) - inertia_to_parent(&p, &i)).amax() < 1e-13);
+    }
+
+    #[test]
+    fn compact_inertias_agree_with_matrices() {
+        let t = Transform::from_pose(&pose());
+        let central = Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.5, 0.03, -0.02, 0.03, 0.4);
+        let i = inertia(2.5, &Vector3::new(0.1, -0.4, 0.8), &central);
+        let compact = RigidInertia::from_matrix(&i);
+        let m = Motion::new(0.1, 0.2, -0.3, 1.0, -2.0, 0.5);
+        assert!((compact.times(&m) - i * m).amax() < 1e-14);
+        let moved = compact.to_parent(&t);
+        assert!((moved.times(&m) - t.inertia_to_parent(&i) * m).amax() < 1e-13);
+        let composed = t * t;
+        let twice = t.motion_to_parent(&t.motion_to_parent(&m));
+        assert!((composed.motion_to_parent(&m) - twice).amax() < 1e-13);
     }
 
     #[test]

@@ -1,0 +1,103 @@
+//! The lsdc side of the speed comparison with Pinocchio (`bench/speed_vs_pinocchio.sh`): RNEA,
+//! CRBA and ABA per call on URDF robots, read through `lsdc`'s URDF import with a fixed base and
+//! gravity. Run with `cargo bench --bench pinocchio_peer -- ROBOT.urdf...`; prints one line per
+//! robot: `NAME rnea_ns crba_ns aba_ns nv`.
+//!
+//! The states are 256 random (q, v, a, τ), q uniform in [−π, π], the rest in [−1, 1], cycled;
+//! each time is the best of 7 batches of about 20 ms, as on the Pinocchio side.
+
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use lsdc::driver::compile_files;
+use lsdc::dynamics::algorithms::{aba_into, crba_into, rnea_into, Data};
+use lsdc::dynamics::model::Model;
+use lsdc::dynamics::spatial::Force;
+use lsdc::load::LoadOptions;
+use lsdc::simulate::prepare::{prepare, Settings};
+use nalgebra::{DMatrix, DVector};
+
+/// A small deterministic generator (xorshift64*), so both runs see the same kind of states.
+struct Random(u64);
+
+impl Random {
+    fn uniform(&mut self, low: f64, high: f64) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let unit = (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
+        low + (high - low) * unit
+    }
+
+    fn vector(&mut self, n: usize, bound: f64) -> Vec<f64> {
+        (0..n).map(|_| self.uniform(-bound, bound)).collect()
+    }
+}
+
+fn load(path: &PathBuf) -> Model {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_files(std::slice::from_ref(path), &options).expect("readable");
+    let mechanism = compilation.mechanism.unwrap_or_else(|| panic!("{} does not compile: {:?}", path.display(), compilation.diagnostics));
+    let prepared = prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message));
+    prepared.model
+}
+
+/// Best time per call over 7 batches of about 20 ms.
+fn time_per_call(mut f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    let mut calls = 0u64;
+    while start.elapsed().as_secs_f64() < 0.02 {
+        f();
+        calls += 1;
+    }
+    (0..7)
+        .map(|_| {
+            let start = Instant::now();
+            for _ in 0..calls {
+                f();
+            }
+            start.elapsed().as_secs_f64() / calls as f64
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn main() {
+    let paths: Vec<PathBuf> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).map(PathBuf::from).collect();
+    for path in paths {
+        let model = load(&path);
+        // Gravity is a field of the model (no per-body effort to evaluate), as in Pinocchio.
+        assert!(model.applied.is_empty() && model.link_efforts.is_empty(), "{}: efforts other than gravity", path.display());
+        let mut data = Data::new(&model);
+        let external = vec![Force::zeros(); model.body_count() + 1];
+        let mut random = Random(0x9E37_79B9_7F4A_7C15);
+        let states: Vec<[Vec<f64>; 4]> = (0..256)
+            .map(|_| [random.vector(model.nq, std::f64::consts::PI), random.vector(model.nv, 1.0), random.vector(model.nv, 1.0), random.vector(model.nv, 1.0)])
+            .collect();
+        let mut tau = DVector::zeros(model.nv);
+        let mut mass = DMatrix::zeros(model.nv, model.nv);
+        let mut accelerations = DVector::zeros(model.nv);
+        let mut k = 0;
+        let mut next = || {
+            k = (k + 1) % states.len();
+            &states[k]
+        };
+        let rnea_ns = time_per_call(|| {
+            let [q, v, a, _] = next();
+            rnea_into(&model, &mut data, q, v, a, &external, &mut tau).expect("rnea");
+            black_box(&tau);
+        });
+        let crba_ns = time_per_call(|| {
+            let [q, ..] = next();
+            crba_into(&model, &mut data, q, &mut mass).expect("crba");
+            black_box(&mass);
+        });
+        let aba_ns = time_per_call(|| {
+            let [q, v, _, t] = next();
+            aba_into(&model, &mut data, q, v, t, &external, &mut accelerations).expect("aba");
+            black_box(&accelerations);
+        });
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
+        println!("{name} {:.0} {:.0} {:.0} {}", rnea_ns * 1e9, crba_ns * 1e9, aba_ns * 1e9, model.nv);
+    }
+}
