@@ -171,13 +171,13 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
         let (i, parent) = (joint.child, joint.parent);
         let world = data.world_transform[parent] * state.transform;
         data.world_transform[i] = world;
-        let body = &model.bodies[i - 1];
-        data.composite_world[i] = if body.massless { RigidInertia::zeros() } else { body.rigid.to_parent(&world) };
-        let mut columns = Subspace::empty();
+        let own = &model.welded_inertias[i - 1];
+        data.composite_world[i] = if *own == RigidInertia::zeros() { *own } else { own.to_parent(&world) };
+        let columns = &mut data.world_columns[k];
+        columns.clear();
         for column in state.subspace.columns() {
             columns.push(world.motion_to_parent(column));
         }
-        data.world_columns[k] = columns;
     }
     for joint in model.joints.iter().rev() {
         if joint.parent != 0 {
@@ -185,7 +185,7 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
             data.composite_world[joint.parent] += child;
         }
     }
-    mass.fill(0.0);
+    mass.as_mut_slice().fill(0.0);
     let mut forces = [Force::zeros(); 6];
     for (k, joint) in model.joints.iter().enumerate() {
         let columns = &data.world_columns[k];
@@ -273,40 +273,40 @@ pub fn aba_into(
 }
 
 /// One joint of ABA's backward pass: U, D⁻¹ and u, then the articulated inertia and bias
-/// handed to the parent.
+/// handed to the parent. Works in place in `data` (these blocks are a few hundred bytes each).
 fn aba_backward_step(model: &Model, data: &mut Data, k: usize, tau: &[f64]) -> Result<(), DynamicsError> {
     let joint = &model.joints[k];
     let (i, parent) = (joint.child, joint.parent);
-    let subspace = data.states[k].subspace;
+    let Data { states, articulated, bias, coriolis, u, d_inverse, u_vector, .. } = data;
+    let state = &states[k];
+    let subspace = &state.subspace;
     let n = subspace.len();
-    let inertia = data.articulated[i];
-    let mut u = [Force::zeros(); 6];
+    let inertia = articulated[i];
+    let (u, d_inverse, u_vector) = (&mut u[i], &mut d_inverse[i], &mut u_vector[i]);
     for (uc, s) in u.iter_mut().zip(subspace.columns()) {
         *uc = inertia * s;
     }
-    // D padded with the identity beyond n, so the fixed-size inverse serves every joint.
-    let mut d = Matrix6::identity();
-    for r in 0..n {
-        for c in 0..n {
-            d[(r, c)] = subspace.column(r).dot(&u[c]);
+    if n == 1 {
+        let d = subspace.column(0).dot(&u[0]);
+        if !(d.abs() > 1e-300 && d.is_finite()) {
+            return Err(DynamicsError::Singular { joint: k, body: i });
+        }
+        d_inverse[(0, 0)] = 1.0 / d;
+    } else if n > 1 {
+        // D padded with the identity beyond n, so the fixed-size inverse serves every joint.
+        let mut d = Matrix6::identity();
+        for r in 0..n {
+            for c in 0..n {
+                d[(r, c)] = subspace.column(r).dot(&u[c]);
+            }
+        }
+        match d.try_inverse().filter(|inv| inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > 1e-300) {
+            Some(inv) => *d_inverse = inv,
+            None => return Err(DynamicsError::Singular { joint: k, body: i }),
         }
     }
-    let d_inverse = match n {
-        0 => Matrix6::identity(),
-        1 if d[(0, 0)].abs() > 1e-300 && d[(0, 0)].is_finite() => {
-            let mut m = Matrix6::identity();
-            m[(0, 0)] = 1.0 / d[(0, 0)];
-            m
-        }
-        1 => return Err(DynamicsError::Singular { joint: k, body: i }),
-        _ => match d.try_inverse().filter(|inv| inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > 1e-300) {
-            Some(inv) => inv,
-            None => return Err(DynamicsError::Singular { joint: k, body: i }),
-        },
-    };
-    let mut u_vector = Vector6::zeros();
     for c in 0..n {
-        u_vector[c] = tau[c] - subspace.column(c).dot(&data.bias[i]);
+        u_vector[c] = tau[c] - subspace.column(c).dot(&bias[i]);
     }
     if parent != 0 {
         // Ia − U D⁻¹ Uᵀ and pa + Ia c + U D⁻¹ u, with W = U D⁻¹.
@@ -317,13 +317,9 @@ fn aba_backward_step(model: &Model, data: &mut Data, k: usize, tau: &[f64]) -> R
             reduced -= w * u[c].transpose();
             correction += w * u_vector[c];
         }
-        let bias = data.bias[i] + reduced * data.coriolis[i] + correction;
-        let transform = data.states[k].transform;
-        data.articulated[parent] += transform.inertia_to_parent(&reduced);
-        data.bias[parent] += transform.force_to_parent(&bias);
+        let handed = bias[i] + reduced * coriolis[i] + correction;
+        articulated[parent] += state.transform.inertia_to_parent(&reduced);
+        bias[parent] += state.transform.force_to_parent(&handed);
     }
-    data.u[i] = u;
-    data.d_inverse[i] = d_inverse;
-    data.u_vector[i] = u_vector;
     Ok(())
 }

@@ -63,6 +63,17 @@ impl Subspace {
         s
     }
 
+    /// Empties the subspace without touching its storage.
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// Makes the subspace the single column `column`, writing only that column.
+    pub fn set_single(&mut self, column: Motion) {
+        self.columns[0] = column;
+        self.len = 1;
+    }
+
     pub fn push(&mut self, column: Motion) {
         self.columns[self.len] = column;
         self.len += 1;
@@ -287,7 +298,7 @@ impl Joint {
         match (&self.kernel, &self.kind) {
             (Kernel::Weld { transform }, _) => {
                 state.transform = *transform;
-                state.subspace = Subspace::empty();
+                state.subspace.clear();
                 state.velocity = Motion::zeros();
                 state.bias = Motion::zeros();
             }
@@ -295,13 +306,13 @@ impl Joint {
                 let (sin, cos) = (scale * q[0]).sin_cos();
                 let rotation = terms[0] * cos + terms[1] * sin + terms[2] * (1.0 - cos);
                 state.transform = fixed_part(Transform { rotation, translation: *origin }, after);
-                state.subspace = Subspace::single(*column);
+                state.subspace.set_single(*column);
                 state.velocity = column * v[0];
                 state.bias = Motion::zeros();
             }
             (Kernel::Translation { rotation, origin, direction, after, column }, _) => {
                 state.transform = fixed_part(Transform { rotation: *rotation, translation: origin + direction * q[0] }, after);
-                state.subspace = Subspace::single(*column);
+                state.subspace.set_single(*column);
                 state.velocity = column * v[0];
                 state.bias = Motion::zeros();
             }
@@ -331,7 +342,7 @@ impl Joint {
         // Twists of D (in the first frame) seen in the child frame: through B·D⁻¹ when the first
         // frame is on the parent, through −A when it is on the child (the child moves with D⁻¹).
         let (to_child, sign) = if self.first_on_parent { (self.on_child * d.inverse(), 1.0) } else { (self.on_child, -1.0) };
-        state.subspace = Subspace::empty();
+        state.subspace.clear();
         for k in 0..self.nv() {
             let column = Motion::from_column_slice(motion.subspace.column(k).as_slice());
             state.subspace.push(sign * spatial::motion_to_parent(&to_child, &column));
@@ -350,7 +361,7 @@ impl Joint {
             JointType::Free { .. } => (Pose::from_parts(Translation3::new(q[0], q[1], q[2]), quaternion(&q[3..7])), 6),
             _ => (Pose::from_parts(Translation3::identity(), quaternion(&q[0..4])), 3),
         };
-        state.subspace = Subspace::empty();
+        state.subspace.clear();
         for k in 0..n {
             // Velocity layout: angular velocity first, then (free joints) linear velocity.
             let mut unit = Motion::zeros();

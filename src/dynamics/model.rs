@@ -53,6 +53,11 @@ pub struct Model {
     pub joints: Vec<Joint>,
     pub bodies: Vec<BodyInertia>,
     pub body_names: Vec<String>,
+    /// Per body, its inertia with the inertias of the bodies welded to it (through chains of
+    /// welds) added, for the mass matrix: a welded body's motion is its parent's, so CRBA
+    /// moves one inertia per rigidly connected group instead of one per body. Zero for the
+    /// welded bodies themselves.
+    pub welded_inertias: Vec<RigidInertia>,
     pub nq: usize,
     pub nv: usize,
     pub applied: Vec<AppliedEffort>,
@@ -207,7 +212,9 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
     if !errors.is_empty() {
         return Err(errors);
     }
+    let welded_inertias = welded_inertias(&joints, &bodies);
     Ok(Model {
+        welded_inertias,
         joints,
         bodies,
         body_names,
@@ -273,6 +280,19 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
         applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis });
     }
     applied
+}
+
+/// Each body's inertia with its welded descendants' added (see `Model::welded_inertias`).
+fn welded_inertias(joints: &[Joint], bodies: &[BodyInertia]) -> Vec<RigidInertia> {
+    let mut inertias: Vec<RigidInertia> = bodies.iter().map(|b| if b.massless { RigidInertia::zeros() } else { b.rigid }).collect();
+    for joint in joints.iter().rev() {
+        if let (Kernel::Weld { transform }, true) = (&joint.kernel, joint.parent != 0) {
+            let moved = inertias[joint.child - 1].to_parent(transform);
+            inertias[joint.parent - 1] += moved;
+            inertias[joint.child - 1] = RigidInertia::zeros();
+        }
+    }
+    inertias
 }
 
 /// Splits the weights off the applied efforts when every body with mass carries exactly one
