@@ -171,7 +171,9 @@ enum Command {
         emit: Emit,
     },
     /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
-    /// bodies' poses at a list of states; print JSON.
+    /// bodies' poses at a list of states; print JSON. A quantity that cannot be computed at a
+    /// state (ABA with a singular mass matrix) is null, with the reason in the state's `errors`
+    /// and a warning on standard error.
     Eval {
         file: PathBuf,
         #[command(flatten)]
@@ -534,6 +536,10 @@ fn eval(file: &std::path::Path, options: &LoadOptions, states: &std::path::Path,
     };
     match evaluate_states(&prepared, &inputs) {
         Ok(evaluation) => {
+            for (index, state) in evaluation.states.iter().enumerate().filter(|(_, s)| !s.errors.is_empty()) {
+                let errors: Vec<String> = state.errors.iter().map(|(quantity, message)| format!("{quantity}: {message}")).collect();
+                eprintln!("warning: state {index}: {}", errors.join("; "));
+            }
             out(&json(&evaluation));
             ExitCode::SUCCESS
         }

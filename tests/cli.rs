@@ -151,3 +151,49 @@ fn loop_simulations_report_their_constraints_and_reactions() {
     assert_eq!(constraints["redundant"].as_array().map(Vec::len), Some(3));
     assert!(constraints["position_residual"].as_f64().expect("number") < 1e-12);
 }
+
+#[test]
+fn eval_reports_a_singular_mass_matrix_for_aba_only() {
+    let dir = std::env::temp_dir().join(format!("lsdc-cli-eval-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    // The wrist turns a massless body: the mass matrix is singular, ABA has no answer.
+    let program = "import joints ;\n\
+        let upper = body mass = 1, iframe = [0.5, 0, 0] ++ 1, inertia = [0.1, 0.2, 0.3] end ;\n\
+        let tip = body mass = 0, inertia = 0 end ;\n\
+        join earth and upper with revolute([0, 0, 1]) as shoulder ;\n\
+        join [1, 0, 0] ++ 1 @ upper and tip with revolute([0, 0, 1]) as wrist ;\n";
+    std::fs::write(dir.join("arm.lsd"), program).expect("write");
+    let states = r#"{"states": [{"q": [0.5, 0], "v": [1, 0], "a": [1, 0], "tau": [1, 0]}, {"q": [0, 0]}]}"#;
+    std::fs::write(dir.join("states.json"), states).expect("write");
+    let (file, states_file) = (dir.join("arm.lsd"), dir.join("states.json"));
+    let args = ["eval", file.to_str().expect("utf-8"), "--states", states_file.to_str().expect("utf-8")];
+    let (code, stdout, stderr) = lsdc(&args);
+    assert_eq!(code, 0, "{stderr}");
+    let value: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+    assert_eq!(value["positions"], serde_json::json!(["shoulder.q", "wrist.q"]));
+    let first = &value["states"][0];
+    assert!(first["aba"].is_null() && first.as_object().is_some_and(|o| o.contains_key("aba")), "{first}");
+    let reason = first["errors"]["aba"].as_str().expect("the reason");
+    assert!(reason.contains("singular") && reason.contains("`wrist`"), "{reason}");
+    assert_eq!(first["errors"].as_object().map(|o| o.len()), Some(1), "{first}");
+    // RNEA, CRBA and the frames are kept: M = [[0.3 + 1 * 0.5², 0], [0, 0]], τ = M a.
+    let rnea: Vec<f64> = first["rnea"].as_array().expect("rnea").iter().filter_map(|x| x.as_f64()).collect();
+    assert!((rnea[0] - 0.55).abs() < 1e-12 && rnea[1].abs() < 1e-12, "{rnea:?}");
+    assert!((first["crba"][0][0].as_f64().expect("number") - 0.55).abs() < 1e-12, "{first}");
+    assert_eq!(first["frames"].as_array().map(Vec::len), Some(2), "{first}");
+    let tip = first["frames"][1]["translation"][0].as_f64().expect("number");
+    assert!((tip - 0.5f64.cos()).abs() < 1e-12, "{tip}");
+    // The second state asks for neither: no `rnea`, no `aba`, no `errors`.
+    let second = value["states"][1].as_object().expect("a state");
+    assert!(!second.contains_key("aba") && !second.contains_key("rnea") && !second.contains_key("errors"), "{second:?}");
+    let warnings: Vec<&str> = stderr.lines().filter(|l| l.starts_with("warning: state")).collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(warnings[0].starts_with("warning: state 0: aba: the mass matrix is singular"), "{stderr}");
+
+    // A wrong input still fails, with the state's index.
+    std::fs::write(&states_file, r#"[{"q": [0, 0]}, {"q": [0]}]"#).expect("write");
+    let (code, stdout, stderr) = lsdc(&args);
+    assert_eq!(code, 1, "{stdout}");
+    assert!(stderr.contains("error: state 1: `q` has 1 entries, the mechanism has 2"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}

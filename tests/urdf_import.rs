@@ -490,3 +490,103 @@ fn import_urdf_prints_a_program_that_compiles() {
     assert_eq!(code, 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Materials with an empty `<texture />` (iCub's and Romeo's in example-robot-data): urdf-rs
+/// requires a `filename`, but materials are not imported, so the import goes on and reports them
+/// with the geometry.
+const EMPTY_TEXTURES: &str = r#"<robot name="textures">
+  <material name="grey">
+    <texture />
+    <color rgba="0.9 0.9 0.9 1"/>
+  </material>
+  <link name="base"/>
+  <link name="arm">
+    <inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+    <visual>
+      <geometry><box size="0.1 0.1 0.5"/></geometry>
+      <material name="metal"><texture name="rouillé">
+      </texture><color rgba="0 0 0 1"/></material>
+    </visual>
+    <visual>
+      <geometry><sphere radius="0.1"/></geometry>
+      <material name="skin"><texture filename="package://skin.png"/></material>
+    </visual>
+  </link>
+  <joint name="hinge" type="revolute">
+    <parent link="base"/>
+    <child link="arm"/>
+    <axis xyz="0 0 1"/>
+  </joint>
+</robot>
+"#;
+
+#[test]
+fn empty_textures_are_tolerated_and_materials_reported() {
+    let imported = import(EMPTY_TEXTURES);
+    assert!(imported.text.contains("with revolute([0, 0, 1]) as hinge ;"), "{}", imported.text);
+    let mut sources = SourceMap::new();
+    sources.add("textures.urdf", EMPTY_TEXTURES);
+    let found: Vec<(&str, usize)> = imported.warnings.iter().map(|d| (d.code, line(&sources, d))).collect();
+    assert_eq!(found, [("W1007", line_of(EMPTY_TEXTURES, "<material name=\"grey\""))], "{:#?}", imported.warnings);
+    let geometry = &imported.warnings[0];
+    assert_eq!(geometry.message, "the visual and collision geometry of 1 link is not imported");
+    assert!(geometry.notes.iter().any(|n| n == "the robot defines 1 material"), "{:?}", geometry.notes);
+    compile(&imported.text);
+
+    // The errors found after the textures are blanked out still point at their line.
+    let broken = EMPTY_TEXTURES.replace("<parent link=\"base\"/>", "<parent link=\"bas\"/>");
+    let error = import_urdf("textures.urdf", &broken, &ImportOptions::default()).expect_err("no link `bas`");
+    assert_eq!(error.code, "E1003");
+    let mut sources = SourceMap::new();
+    sources.add("textures.urdf", &broken);
+    assert_eq!(line(&sources, &error), line_of(&broken, "<parent link=\"bas\""));
+}
+
+/// Pinocchio's `<collision_checking>` in a link (simple_humanoid.urdf of example-robot-data):
+/// its `<capsule name="test"/>` names a collision shape to turn into a capsule, it is not a shape.
+const COLLISION_CHECKING: &str = r#"<robot name="checking">
+  <link name="base"/>
+  <link name="torso">
+    <inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+    <collision name="test">
+      <geometry><cylinder radius="0.1" length="0.2"/></geometry>
+    </collision>
+    <collision_checking>
+      <capsule name="test"/>
+      <convex name="box"/>
+    </collision_checking>
+  </link>
+  <joint name="hinge" type="continuous">
+    <parent link="base"/>
+    <child link="torso"/>
+    <axis xyz="1 0 0"/>
+    <actuator name="motor"/>
+  </joint>
+</robot>
+"#;
+
+#[test]
+fn extensions_inside_links_are_reported_not_checked_as_shapes() {
+    let imported = import(COLLISION_CHECKING);
+    let mut sources = SourceMap::new();
+    sources.add("checking.urdf", COLLISION_CHECKING);
+    let found: Vec<(&str, usize)> = imported.warnings.iter().map(|d| (d.code, line(&sources, d))).collect();
+    let expected = [
+        ("W1007", line_of(COLLISION_CHECKING, "<collision name=")),
+        ("W1008", line_of(COLLISION_CHECKING, "<collision_checking>")),
+        ("W1008", line_of(COLLISION_CHECKING, "<actuator")),
+    ];
+    assert_eq!(found, expected, "{:#?}", imported.warnings);
+    assert_eq!(imported.warnings[1].message, "`<collision_checking>` of link `torso` is not imported");
+    assert_eq!(imported.warnings[2].message, "`<actuator>` of joint `hinge` is not imported");
+    compile(&imported.text);
+
+    // A shape inside `<geometry>` is still checked.
+    let broken = COLLISION_CHECKING.replace("<cylinder radius=\"0.1\" length=\"0.2\"/>", "<capsule name=\"test\"/>");
+    let error = import_urdf("checking.urdf", &broken, &ImportOptions::default()).expect_err("a capsule without radius");
+    assert_eq!(error.code, "E1002");
+    assert_eq!(error.message, "`<capsule>` has no `radius` attribute");
+    let span = error.primary_span().expect("located");
+    assert_eq!(&broken[span.range()], "<capsule name=\"test\"/>");
+    assert!(span.range().end < broken.find("<collision_checking>").expect("there"), "the one in `<geometry>`");
+}

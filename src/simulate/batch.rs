@@ -6,16 +6,37 @@
 //! The efforts are the program's own (`apply` and link efforts, evaluated at time 0): a URDF
 //! imported with gravity applies each link's weight. A mechanism with loops is evaluated on its
 //! spanning tree, without the complementary links; the output names them.
+//!
+//! Errors are per quantity: when one cannot be computed at a state (ABA where the mass matrix
+//! is singular, as with massless links on moving joints; RNEA and ABA when an effort cannot be
+//! evaluated), it is `null` and the state's `errors` gives the reason under its name, while the
+//! other quantities of the state are kept. A state fails as a whole, stopping the batch with its
+//! index, only for its input (a list of the wrong length, a number that is not finite, a
+//! quaternion that is not unit) or when the mechanism's geometry cannot be evaluated at it.
+//!
+//! The JSON output:
+//!
+//! ```text
+//! {"positions": [names of q], "velocities": [names of v],
+//!  "complementary_links_ignored": [...],            (only for a mechanism with loops)
+//!  "states": [{"rnea": [τ] | null,                  (only when `a` is given)
+//!              "crba": [[M by rows]],
+//!              "aba": [a] | null,                   (only when `tau` is given)
+//!              "frames": [{"body", "translation", "rotation": [rows]}],
+//!              "errors": {"aba": "message"}}]}      (only when a quantity failed)
+//! ```
 
 use std::cell::RefCell;
+use std::collections::BTreeMap;
 use std::rc::Rc;
 
 use nalgebra::DVector;
-use serde::{Deserialize, Serialize};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Serialize, Serializer};
 
 use super::prepare::Prepared;
 use super::system::{evaluation_message, MechanicalSystem};
-use crate::dynamics::algorithms::{aba, crba, rnea};
+use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
 use crate::dynamics::model::Model;
@@ -61,17 +82,49 @@ pub struct FramePose {
     pub rotation: [[f64; 3]; 3],
 }
 
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// The quantities at one state. In JSON, `rnea` (`aba`) is present when `a` (`tau`) was given,
+/// `null` when it could not be computed, and `errors` only when a quantity could not be.
+#[derive(Clone, Debug, Deserialize)]
 pub struct StateOutput {
-    /// Generalised forces that give the accelerations `a` (present when `a` was given).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Generalised forces that give the accelerations `a` (when `a` was given and they could be
+    /// computed).
+    #[serde(default)]
     pub rnea: Option<Vec<f64>>,
     /// The mass matrix, by rows.
     pub crba: Vec<Vec<f64>>,
-    /// Accelerations under the generalised forces `tau` (present when `tau` was given).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Accelerations under the generalised forces `tau` (when `tau` was given and they could be
+    /// computed: not where the mass matrix is singular).
+    #[serde(default)]
     pub aba: Option<Vec<f64>>,
     pub frames: Vec<FramePose>,
+    /// Why a quantity could not be computed, by its name (`rnea`, `aba`).
+    #[serde(default)]
+    pub errors: BTreeMap<String, String>,
+}
+
+impl StateOutput {
+    /// Whether the JSON shows `quantity`: it was computed, or it was asked for and failed.
+    fn shows(&self, value: &Option<Vec<f64>>, quantity: &str) -> bool {
+        value.is_some() || self.errors.contains_key(quantity)
+    }
+}
+
+impl Serialize for StateOutput {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(None)?;
+        if self.shows(&self.rnea, "rnea") {
+            map.serialize_entry("rnea", &self.rnea)?;
+        }
+        map.serialize_entry("crba", &self.crba)?;
+        if self.shows(&self.aba, "aba") {
+            map.serialize_entry("aba", &self.aba)?;
+        }
+        map.serialize_entry("frames", &self.frames)?;
+        if !self.errors.is_empty() {
+            map.serialize_entry("errors", &self.errors)?;
+        }
+        map.end()
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -100,8 +153,9 @@ pub fn position_names(model: &Model) -> Vec<String> {
     names
 }
 
-/// Evaluates every state; the first state that cannot be evaluated stops the batch with its
-/// index and the reason.
+/// Evaluates every state. A quantity that cannot be computed at a state is left out of it, with
+/// the reason in its `errors`; a state whose input is wrong, or at which the geometry cannot be
+/// evaluated, stops the batch with its index and the reason.
 pub fn evaluate_states(prepared: &Prepared, states: &[StateInput]) -> Result<Evaluation, String> {
     let model = &prepared.model;
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
@@ -151,32 +205,49 @@ fn evaluate_state(system: &mut MechanicalSystem<'_>, state: &StateInput) -> Resu
     let v = state.v.as_deref().unwrap_or(&zero);
     check_length("q", &state.q, model.nq)?;
     check_length("v", v, model.nv)?;
+    if let Some(a) = &state.a {
+        check_length("a", a, model.nv)?;
+    }
+    if let Some(tau) = &state.tau {
+        check_length("tau", tau, model.nv)?;
+    }
     check_quaternions(model, &state.q)?;
     let q_full = [state.q.as_slice(), &vec![0.0; model.nc]].concat();
     let v_full = [v, &vec![0.0; model.nc]].concat();
-    let efforts = system.efforts(0.0, &q_full, &v_full)?;
-    let link_tau = efforts.tau.rows(0, model.nv).into_owned();
+    let efforts = system.efforts(0.0, &q_full, &v_full);
+    if efforts.is_err() {
+        // Without the kinematics nothing can be computed; with it, only RNEA and ABA need the
+        // efforts.
+        forward_kinematics(model, &mut system.data, &state.q, v).map_err(|e| evaluation_message(&e))?;
+    }
     let frames = frame_poses(system);
-    let rnea_tau = match &state.a {
-        Some(a) => {
-            check_length("a", a, model.nv)?;
-            let tau = rnea(model, &mut system.data, &state.q, v, a, &efforts.external).map_err(|e| evaluation_message(&e))?;
-            Some((tau - &link_tau).iter().copied().collect())
+    let mut errors = BTreeMap::new();
+    let efforts = efforts.as_ref().map_err(String::clone);
+    let rnea_tau = match (&state.a, &efforts) {
+        (None, _) => None,
+        (Some(_), Err(e)) => kept(&mut errors, "rnea", Err(e.clone())),
+        (Some(a), Ok(efforts)) => {
+            let tau = rnea(model, &mut system.data, &state.q, v, a, &efforts.external).map_err(|e| evaluation_message(&e));
+            kept(&mut errors, "rnea", tau.map(|tau| (tau - efforts.tau.rows(0, model.nv)).iter().copied().collect()))
         }
-        None => None,
     };
-    let accelerations = match &state.tau {
-        Some(tau) => {
-            check_length("tau", tau, model.nv)?;
-            let total = DVector::from_column_slice(tau) + &link_tau;
-            let a = aba(model, &mut system.data, &state.q, v, total.as_slice(), &efforts.external).map_err(|e| system.dynamics_message(&e))?;
-            Some(a.iter().copied().collect())
+    let accelerations = match (&state.tau, &efforts) {
+        (None, _) => None,
+        (Some(_), Err(e)) => kept(&mut errors, "aba", Err(e.clone())),
+        (Some(tau), Ok(efforts)) => {
+            let total = DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv);
+            let a = aba(model, &mut system.data, &state.q, v, total.as_slice(), &efforts.external).map_err(|e| system.dynamics_message(&e));
+            kept(&mut errors, "aba", a.map(|a| a.iter().copied().collect()))
         }
-        None => None,
     };
     let mass = crba(model, &mut system.data, &state.q).map_err(|e| evaluation_message(&e))?;
     let crba_rows = mass.row_iter().map(|row| row.iter().copied().collect()).collect();
-    Ok(StateOutput { rnea: rnea_tau, crba: crba_rows, aba: accelerations, frames })
+    Ok(StateOutput { rnea: rnea_tau, crba: crba_rows, aba: accelerations, frames, errors })
+}
+
+/// The value of a quantity, or `None` with its error recorded under its name.
+fn kept(errors: &mut BTreeMap<String, String>, quantity: &str, value: Result<Vec<f64>, String>) -> Option<Vec<f64>> {
+    value.map_err(|e| errors.insert(quantity.to_string(), e)).ok()
 }
 
 /// World poses of the bodies; the system's data must hold the forward kinematics of the state.

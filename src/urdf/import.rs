@@ -15,8 +15,13 @@
 //! Nothing is dropped silently: what LSD does not express (limits, mimic, damping, geometry,
 //! transmissions...) is a warning at the URDF element, and so is every name that had to change.
 //! urdf-rs reads the values but keeps no positions, so the text is also scanned here, to point
-//! each diagnostic at its element and to report malformed XML where it is.
+//! each diagnostic at its element and to report malformed XML where it is. The checks apply to
+//! the elements urdf-rs reads ([`READ`]): an element it does not read, such as Pinocchio's
+//! `<collision_checking>` in a link, is a warning, and what is inside it is not checked. A
+//! `<texture>` without `filename`, which urdf-rs rejects, is blanked out of the text it reads:
+//! materials are not imported.
 
+use std::borrow::Cow;
 use std::collections::HashSet;
 use std::sync::OnceLock;
 
@@ -65,7 +70,7 @@ pub fn import_urdf(name: &str, xml: &str, options: &ImportOptions) -> Result<Imp
 pub fn import_urdf_at(file: FileId, name: &str, xml: &str, options: &ImportOptions) -> Result<Imported, Diagnostic> {
     let source = Source::scan(file, xml)?;
     source.check_structure()?;
-    let robot = urdf_rs::read_from_string(xml).map_err(|e| source.rejected(&e.to_string()))?;
+    let robot = urdf_rs::read_from_string(&source.urdf_text()).map_err(|e| source.rejected(&e.to_string()))?;
     let tree = Tree::build(&robot, &source)?;
     let mut importer = Importer { robot: &robot, source: &source, tree: &tree, options, names: Names::default(), warnings: Vec::new() };
     let text = importer.program(name)?;
@@ -140,6 +145,9 @@ struct Element {
     tag: String,
     /// Byte range of the start tag, `<` to `>`.
     range: (usize, usize),
+    /// Byte offset after the element: after its end tag, or after the start tag of an empty
+    /// element (`<tag ... />`).
+    end: usize,
     attributes: Vec<Attribute>,
     parent: Option<usize>,
 }
@@ -185,7 +193,8 @@ fn scan(xml: &str) -> Result<Vec<Element>, XmlError> {
             past(xml, start, close, what)?
         } else if rest.starts_with("</") {
             let end = past(xml, start, ">", "end tag")?;
-            close_element(&elements, &mut open, xml[start + 2..end - 1].trim(), (start, end))?;
+            let closed = close_element(&elements, &mut open, xml[start + 2..end - 1].trim(), (start, end))?;
+            elements[closed].end = end;
             end
         } else {
             let (element, end, empty) = start_tag(xml, start, open.last().copied())?;
@@ -218,9 +227,10 @@ fn past(xml: &str, start: usize, close: &str, what: &str) -> Result<usize, XmlEr
     }
 }
 
-fn close_element(elements: &[Element], open: &mut Vec<usize>, tag: &str, range: (usize, usize)) -> Result<(), XmlError> {
+/// Closes the innermost open element, which must be `tag`: its index.
+fn close_element(elements: &[Element], open: &mut Vec<usize>, tag: &str, range: (usize, usize)) -> Result<usize, XmlError> {
     match open.pop() {
-        Some(index) if elements[index].tag == tag => Ok(()),
+        Some(index) if elements[index].tag == tag => Ok(index),
         Some(index) => {
             let message = format!("`</{tag}>` closes `<{}>`", elements[index].tag);
             Err(XmlError { message, range, label: "mismatched end tag" })
@@ -252,7 +262,7 @@ fn start_tag(xml: &str, start: usize, parent: Option<usize>) -> Result<(Element,
                 continue;
             }
         };
-        let element = Element { tag: xml[start + 1..name_end].to_string(), range: (start, end), attributes, parent };
+        let element = Element { tag: xml[start + 1..name_end].to_string(), range: (start, end), end, attributes, parent };
         return Ok((element, end, empty));
     }
 }
@@ -333,6 +343,27 @@ struct Source<'a> {
     xml: &'a str,
     elements: Vec<Element>,
     children: Vec<Vec<usize>>,
+    /// Whether urdf-rs reads each element (see [`READ`]).
+    read: Vec<bool>,
+}
+
+/// The elements urdf-rs reads, by the element they are in, from `<robot>` down. Any other
+/// element, and everything inside it, is skipped by urdf-rs: an extension such as Pinocchio's
+/// `<collision_checking>` in a link, whose `<capsule name="..."/>` is not a shape.
+const READ: &[(&str, &[&str])] = &[
+    ("robot", &["link", "joint", "material"]),
+    ("link", &["inertial", "visual", "collision"]),
+    ("inertial", &["origin", "mass", "inertia"]),
+    ("visual", &["origin", "geometry", "material"]),
+    ("collision", &["origin", "geometry"]),
+    ("geometry", &["box", "cylinder", "capsule", "sphere", "mesh"]),
+    ("material", &["color", "texture"]),
+    ("joint", &["origin", "parent", "child", "axis", "calibration", "dynamics", "limit", "mimic", "safety_controller"]),
+];
+
+/// Whether urdf-rs reads a `<tag>` inside a `<parent>`.
+fn reads(parent: &str, tag: &str) -> bool {
+    READ.iter().any(|(outer, inner)| *outer == parent && inner.contains(&tag))
 }
 
 /// URDF's joint types (urdf-rs also reads `spherical`).
@@ -383,12 +414,49 @@ impl<'a> Source<'a> {
                 .help("a URDF file is an XML document whose root element is `<robot>`")
         })?;
         let mut children = vec![Vec::new(); elements.len()];
+        // Parents come before their children, so `read[parent]` is known when it is needed.
+        let mut read = Vec::with_capacity(elements.len());
         for (index, element) in elements.iter().enumerate() {
+            read.push(match element.parent {
+                Some(parent) => read[parent] && reads(&elements[parent].tag, &element.tag),
+                None => element.tag == "robot",
+            });
             if let Some(parent) = element.parent {
                 children[parent].push(index);
             }
         }
-        Ok(Source { file, xml, elements, children })
+        Ok(Source { file, xml, elements, children, read })
+    }
+
+    /// The text handed to urdf-rs: the URDF with the elements that urdf-rs would reject but
+    /// the import does not use blanked out, byte for byte and keeping the line breaks, so that
+    /// offsets and lines stay those of the file. These are the `<texture>` elements without a
+    /// `filename` (`<texture />` in the materials of some robots): urdf-rs requires the
+    /// attribute, and materials are not imported (W1007).
+    fn urdf_text(&self) -> Cow<'a, str> {
+        let xml = self.xml;
+        let mut blanked = self.elements.iter().filter(|e| e.tag == "texture" && e.attribute("filename").is_none()).peekable();
+        if blanked.peek().is_none() {
+            return Cow::Borrowed(xml);
+        }
+        let mut text = String::with_capacity(xml.len());
+        let mut at = 0;
+        for element in blanked {
+            let (start, end) = (element.range.0, element.end);
+            if start < at {
+                continue; // inside an element already blanked
+            }
+            text.push_str(&xml[at..start]);
+            for c in xml[start..end].chars() {
+                match c {
+                    '\n' | '\r' => text.push(c),
+                    _ => text.extend(std::iter::repeat_n(' ', c.len_utf8())),
+                }
+            }
+            at = end;
+        }
+        text.push_str(&xml[at..]);
+        Cow::Owned(text)
     }
 
     fn span(&self, index: usize) -> Span {
@@ -512,7 +580,12 @@ impl<'a> Source<'a> {
         (top..end).try_for_each(|index| self.check_numbers(index))
     }
 
+    /// Checks the numbers of an element urdf-rs reads: the same tag elsewhere is not read
+    /// (`<capsule name="test"/>` in Pinocchio's `<collision_checking>` is not a shape).
     fn check_numbers(&self, index: usize) -> Result<(), Diagnostic> {
+        if !self.read[index] {
+            return Ok(());
+        }
         let element = &self.elements[index];
         for &(tag, name, count, required) in NUMBERS.iter().filter(|(tag, ..)| *tag == element.tag) {
             let Some(attribute) = element.attribute(name) else {
@@ -989,21 +1062,45 @@ impl Importer<'_> {
         self.warnings.push(diagnostic.help(help));
     }
 
-    /// A warning for each kind of element of the robot that is not a link, joint or material.
+    /// A warning for each kind of element that urdf-rs does not read: in the robot, any element
+    /// but a link, joint or material; in a link or a joint, any element urdf-rs does not read
+    /// there (see [`READ`]), such as Pinocchio's `<collision_checking>`.
     fn unsupported_warnings(&mut self) {
         let source = self.source;
-        let mut tags: Vec<&str> = Vec::new();
+        // (the link or joint the elements are in, or `None` for the robot; their tag; them)
+        let mut groups: Vec<(Option<&str>, &str, Vec<usize>)> = Vec::new();
         for &top in &source.children[0] {
-            let tag = source.elements[top].tag.as_str();
-            if !matches!(tag, "link" | "joint" | "material") && !tags.contains(&tag) {
-                tags.push(tag);
+            let top_tag = source.elements[top].tag.as_str();
+            let found: Vec<(Option<&str>, usize)> = match top_tag {
+                "link" | "joint" => {
+                    source.children[top].iter().filter(|&&c| !reads(top_tag, &source.elements[c].tag)).map(|&c| (Some(top_tag), c)).collect()
+                }
+                "material" => Vec::new(),
+                _ => vec![(None, top)],
+            };
+            for (owner, element) in found {
+                let tag = source.elements[element].tag.as_str();
+                match groups.iter_mut().find(|(o, t, _)| *o == owner && *t == tag) {
+                    Some((_, _, all)) => all.push(element),
+                    None => groups.push((owner, tag, vec![element])),
+                }
             }
         }
-        for tag in tags {
-            let all: Vec<usize> = source.top_level(tag).collect();
+        for (owner, tag, all) in groups {
+            let place = match owner {
+                None => String::new(),
+                Some(owner) => {
+                    let mut names: Vec<&str> = all.iter().filter_map(|&e| source.elements[e].parent).map(|p| source.attribute(p, "name").unwrap_or("")).collect();
+                    names.dedup();
+                    match names.as_slice() {
+                        [name] => format!(" of {owner} `{name}`"),
+                        _ => format!(" of {} {owner}s", names.len()),
+                    }
+                }
+            };
             let message = match all.len() {
-                1 => format!("`<{tag}>` is not imported"),
-                n => format!("{n} `<{tag}>` elements are not imported"),
+                1 => format!("`<{tag}>`{place} is not imported"),
+                n => format!("{n} `<{tag}>` elements{place} are not imported"),
             };
             let mut diagnostic = Diagnostic::warning("W1008", message).primary(source.span(all[0]), "not imported");
             if all.len() > 1 {
@@ -1011,12 +1108,15 @@ impl Importer<'_> {
                 let others = if lines.len() == 1 { "the other is at line" } else { "the others are at lines" };
                 diagnostic = diagnostic.note(format!("{others} {}", lines.join(", ")));
             }
-            let help = match tag {
-                "transmission" => {
+            let help = match (owner, tag) {
+                (None, "transmission") => {
                     "transmissions (actuators, gear ratios) are outside the mechanism: apply the actuators' efforts with `apply` or link efforts"
                 }
-                "gazebo" => "settings for the Gazebo simulator have no meaning in LSD",
-                _ => "LSD imports a robot's links and joints",
+                (None, "gazebo") => "settings for the Gazebo simulator have no meaning in LSD",
+                (None, _) => "LSD imports a robot's links and joints",
+                (Some(_), "collision_checking") => "Pinocchio's collision-checking settings are about shapes, which LSD does not describe",
+                (Some("link"), _) => "LSD imports a link's mass properties, its `<inertial>`",
+                (Some(_), _) => "LSD imports a joint's `type`, `<origin>`, `<parent>`, `<child>` and `<axis>`",
             };
             self.warnings.push(diagnostic.help(help));
         }
@@ -1252,6 +1352,19 @@ mod tests {
         assert_eq!(elements[0].attribute("name").map(|a| a.value.as_str()), Some("a&bA"));
         assert_eq!(elements[1].parent, Some(0));
         assert_eq!(elements[1].attribute("name").map(|a| a.value.as_str()), Some("l"));
+    }
+
+    #[test]
+    fn textures_without_file_are_blanked_for_urdf_rs() {
+        let xml = "<robot name=\"r\"><material name=\"m\"><texture a=\"é\">\n</texture><texture filename=\"t.png\"/></material><link name=\"a\"/></robot>";
+        let source = Source::scan(FileId(0), xml).expect("scans");
+        let text = source.urdf_text();
+        assert_eq!(text.len(), xml.len());
+        assert_eq!(text.matches('\n').count(), 1);
+        assert!(!text.contains("<texture a=") && !text.contains("</texture>"), "{text}");
+        assert!(text.contains("<texture filename=\"t.png\"/>"), "{text}");
+        assert!(urdf_rs::read_from_string(&text).is_ok());
+        assert!(matches!(Source::scan(FileId(0), "<robot/>").expect("scans").urdf_text(), Cow::Borrowed(_)));
     }
 
     #[test]
