@@ -2,8 +2,9 @@
 //! links), and simulation throughput on the examples. Run with `cargo bench --bench dynamics`.
 //! Times are the best of several batches; ABA's time per link shows its O(n) growth.
 
+mod common;
+use common::best_time_per_call;
 use std::hint::black_box;
-use std::time::Instant;
 
 use lsdc::driver::{compile_files, compile_text};
 use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
@@ -35,24 +36,6 @@ fn chain(n: usize) -> Model {
     model::build(&mechanism, &kinematics).expect("model")
 }
 
-/// Best time per call over 7 batches sized to about 20 ms each.
-fn time_per_call(mut f: impl FnMut()) -> f64 {
-    let start = Instant::now();
-    let mut calls = 0u64;
-    while start.elapsed().as_secs_f64() < 0.02 {
-        f();
-        calls += 1;
-    }
-    let mut best = f64::INFINITY;
-    for _ in 0..7 {
-        let start = Instant::now();
-        for _ in 0..calls {
-            f();
-        }
-        best = best.min(start.elapsed().as_secs_f64() / calls as f64);
-    }
-    best
-}
 
 fn main() {
     println!("{:>6} {:>12} {:>12} {:>12} {:>14}", "links", "RNEA ns", "CRBA ns", "ABA ns", "ABA ns/link");
@@ -63,17 +46,17 @@ fn main() {
         let v: Vec<f64> = (0..model.nv).map(|i| (i as f64 * 0.91).cos()).collect();
         let tau: Vec<f64> = (0..model.nv).map(|i| (i as f64 * 0.13).sin()).collect();
         let external = vec![Force::zeros(); n + 1];
-        let rnea_ns = time_per_call(|| {
+        let rnea_ns = best_time_per_call(|| {
             black_box(rnea(&model, &mut data, &q, &v, &tau, &external).expect("evaluates"));
         }) * 1e9;
         let crba_ns = if n <= 300 {
-            time_per_call(|| {
+            best_time_per_call(|| {
                 black_box(crba(&model, &mut data, &q).expect("evaluates"));
             }) * 1e9
         } else {
             f64::NAN
         };
-        let aba_ns = time_per_call(|| {
+        let aba_ns = best_time_per_call(|| {
             black_box(aba(&model, &mut data, &q, &v, &tau, &external).expect("regular"));
         }) * 1e9;
         println!("{n:>6} {rnea_ns:>12.0} {crba_ns:>12.0} {aba_ns:>12.0} {:>14.1}", aba_ns / n as f64);

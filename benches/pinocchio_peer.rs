@@ -6,9 +6,10 @@
 //! The states are 256 random (q, v, a, τ), q uniform in [−π, π], the rest in [−1, 1], cycled;
 //! each time is the best of 7 batches of about 20 ms, as on the Pinocchio side.
 
+mod common;
+use common::best_time_per_call;
 use std::hint::black_box;
 use std::path::PathBuf;
-use std::time::Instant;
 
 use lsdc::driver::compile_files;
 use lsdc::dynamics::algorithms::{aba_into, crba_into, rnea_into, Data};
@@ -43,24 +44,6 @@ fn load(path: &PathBuf) -> Model {
     prepared.model
 }
 
-/// Best time per call over 7 batches of about 20 ms.
-fn time_per_call(mut f: impl FnMut()) -> f64 {
-    let start = Instant::now();
-    let mut calls = 0u64;
-    while start.elapsed().as_secs_f64() < 0.02 {
-        f();
-        calls += 1;
-    }
-    (0..7)
-        .map(|_| {
-            let start = Instant::now();
-            for _ in 0..calls {
-                f();
-            }
-            start.elapsed().as_secs_f64() / calls as f64
-        })
-        .fold(f64::INFINITY, f64::min)
-}
 
 fn main() {
     let paths: Vec<PathBuf> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).map(PathBuf::from).collect();
@@ -82,17 +65,17 @@ fn main() {
             k = (k + 1) % states.len();
             &states[k]
         };
-        let rnea_ns = time_per_call(|| {
+        let rnea_ns = best_time_per_call(|| {
             let [q, v, a, _] = next();
             rnea_into(&model, &mut data, q, v, a, &external, &mut tau).expect("rnea");
             black_box(&tau);
         });
-        let crba_ns = time_per_call(|| {
+        let crba_ns = best_time_per_call(|| {
             let [q, ..] = next();
             crba_into(&model, &mut data, q, &mut mass).expect("crba");
             black_box(&mass);
         });
-        let aba_ns = time_per_call(|| {
+        let aba_ns = best_time_per_call(|| {
             let [q, v, _, t] = next();
             aba_into(&model, &mut data, q, v, t, &external, &mut accelerations).expect("aba");
             black_box(&accelerations);

@@ -483,22 +483,9 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
 }
 
 fn statics(file: &std::path::Path, options: &LoadOptions, actuated: &[String], sets: &[String], format: Format) -> ExitCode {
-    use lsdc::simulate::prepare::{prepare, Settings};
-    let overrides = match parse_sets(sets) {
-        Ok(o) => o,
-        Err(message) => return usage_error(&message),
-    };
-    let compilation = match compile_one(file, options, format) {
-        Ok(c) => c,
-        Err(code) => return code,
-    };
-    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
-    let prepared = match prepare(mechanism, &overrides, &Settings::default()) {
+    let prepared = match prepare_file(file, options, sets, format) {
         Ok(p) => p,
-        Err(diagnostics) => {
-            report_diagnostics(&compilation, &diagnostics, format);
-            return ExitCode::from(1);
-        }
+        Err(code) => return code,
     };
     let holding = match lsdc::simulate::statics::holding_efforts(&prepared, actuated) {
         Ok(h) => h,
@@ -513,26 +500,13 @@ fn statics(file: &std::path::Path, options: &LoadOptions, actuated: &[String], s
 
 fn eval(file: &std::path::Path, options: &LoadOptions, states: &std::path::Path, sets: &[String]) -> ExitCode {
     use lsdc::simulate::batch::{evaluate_states, parse_states};
-    use lsdc::simulate::prepare::{prepare, Settings};
-    let overrides = match parse_sets(sets) {
-        Ok(o) => o,
-        Err(message) => return usage_error(&message),
-    };
     let inputs = match std::fs::read_to_string(states).map_err(|e| e.to_string()).and_then(|text| parse_states(&text)) {
         Ok(inputs) => inputs,
         Err(message) => return usage_error(&format!("cannot read states from `{}`: {message}", states.display())),
     };
-    let compilation = match compile_one(file, options, Format::Text) {
-        Ok(c) => c,
-        Err(code) => return code,
-    };
-    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
-    let prepared = match prepare(mechanism, &overrides, &Settings::default()) {
+    let prepared = match prepare_file(file, options, sets, Format::Text) {
         Ok(p) => p,
-        Err(diagnostics) => {
-            report_diagnostics(&compilation, &diagnostics, Format::Text);
-            return ExitCode::from(1);
-        }
+        Err(code) => return code,
     };
     match evaluate_states(&prepared, &inputs) {
         Ok(evaluation) => {
