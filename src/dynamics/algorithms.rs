@@ -157,7 +157,9 @@ pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, E
     Ok(mass)
 }
 
-/// The mass matrix written into `mass` (nv × nv), which is entirely overwritten.
+/// The mass matrix written into `mass` (nv × nv). Only the entries between joints on one
+/// branch (a joint and its ancestors) are written: the others are zero in every mass matrix,
+/// so `mass` must be zero there (a zero matrix, or one this function filled before).
 ///
 /// Composite rigid bodies in the fixed frame: each body's inertia is moved to the fixed frame
 /// once, composites are then plain sums, and every entry is a dot product of a joint's motion
@@ -185,7 +187,6 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
             data.composite_world[joint.parent] += child;
         }
     }
-    mass.as_mut_slice().fill(0.0);
     let mut forces = [Force::zeros(); 6];
     for (k, joint) in model.joints.iter().enumerate() {
         let columns = &data.world_columns[k];
