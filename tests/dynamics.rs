@@ -11,7 +11,7 @@ use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
 use proptest::prelude::*;
 
-const JOINTS: [&str; 10] = [
+const JOINTS: [&str; 11] = [
     "revolute([0.3, -0.5, 0.8])",
     "prismatic([1, 0, 0])",
     "helical([0, 0, 1], 0.05)",
@@ -22,6 +22,8 @@ const JOINTS: [&str; 10] = [
     "free",
     "link(a, b) dof1 = [a, sin(b), 0.2 * a * b], dof2 = (2 * b) || [1, 1, 0] end",
     "link(x, y, z) dof1 = x || [0, 0, 1], dof2 = y || [1, 0, 0], dof3 = z || [0, 0, 1] end",
+    // Welded bodies are merged into their anchor by the recursions.
+    "weld",
 ];
 
 fn tree_program(parents: &[usize], kinds: &[usize], numbers: &[f64]) -> String {
@@ -188,7 +190,7 @@ fn body_accelerations_are_derivatives_of_body_velocities() {
 /// ∂T/∂q at fixed velocities against central differences of the kinetic energy.
 #[test]
 fn kinetic_energy_gradient_matches_finite_differences() {
-    let chain_joints = [0usize, 1, 2, 3, 4, 8];
+    let chain_joints = [0usize, 1, 2, 3, 4, 8, 10];
     let parents = [0usize, 1, 1, 2, 4, 0, 6, 3, 8];
     let kinds: Vec<usize> = (0..parents.len()).map(|i| chain_joints[(i + 2) % chain_joints.len()]).collect();
     let numbers: Vec<f64> = (0..64).map(|i| ((i as f64) * 2.3).cos()).collect();

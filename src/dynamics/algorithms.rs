@@ -72,25 +72,33 @@ fn slice(values: &[f64], offset: usize, count: usize) -> &[f64] {
 
 /// Joint states, world poses and body velocities at (q, v).
 pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
-    joint_motions(model, data, q, v)?;
-    for (k, joint) in model.joints.iter().enumerate() {
+    for k in 0..model.joints.len() {
+        joint_motion(model, data, k, q, v)?;
+        let joint = &model.joints[k];
         let state = &mut data.states[k];
         joint.fill_pose(state);
-        data.world[joint.child] = data.world[joint.parent] * state.pose;
+        data.world[joint.child] = data.world[joint.dynamic_parent] * state.pose;
     }
     Ok(())
 }
 
-/// What the recursive algorithms need of the kinematics: joint states and body velocities at
-/// (q, v), without the world poses (RNEA and ABA leave `data.world` as it was).
+/// What the recursive algorithms need of the kinematics: the states and body velocities of the
+/// joints they visit at (q, v), without the world poses (RNEA and ABA leave `data.world` and the
+/// merged bodies as they were).
 fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
-    for (k, joint) in model.joints.iter().enumerate() {
-        let state = &mut data.states[k];
-        joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, state)?;
-        let (i, parent) = (joint.child, joint.parent);
-        data.velocity[i] = state.transform.motion_to_child(&data.velocity[parent]) + state.velocity;
-        data.coriolis[i] = state.bias + spatial::cross_motion(&data.velocity[i], &state.velocity);
+    for &k in &model.dynamic_joints {
+        joint_motion(model, data, k, q, v)?;
     }
+    Ok(())
+}
+
+fn joint_motion(model: &Model, data: &mut Data, k: usize, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+    let joint = &model.joints[k];
+    let state = &mut data.states[k];
+    joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, state)?;
+    let (i, parent) = (joint.child, joint.dynamic_parent);
+    data.velocity[i] = state.transform.motion_to_child(&data.velocity[parent]) + state.velocity;
+    data.coriolis[i] = state.bias + spatial::cross_motion(&data.velocity[i], &state.velocity);
     Ok(())
 }
 
@@ -98,7 +106,7 @@ fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result
 /// zero (the velocity-product terms alone); `data` must hold the forward kinematics of (q, v).
 pub fn bias_accelerations(model: &Model, data: &mut Data) {
     for (k, joint) in model.joints.iter().enumerate() {
-        let (i, parent) = (joint.child, joint.parent);
+        let (i, parent) = (joint.child, joint.dynamic_parent);
         data.acceleration[i] = data.states[k].transform.motion_to_child(&data.acceleration[parent]) + data.coriolis[i];
     }
 }
@@ -124,13 +132,14 @@ pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], ext
 pub fn rnea_into(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], external: &[Force], tau: &mut DVector<f64>) -> Result<(), EvalError> {
     joint_motions(model, data, q, v)?;
     let base = base_acceleration(model);
-    for (k, joint) in model.joints.iter().enumerate() {
-        let (i, parent) = (joint.child, joint.parent);
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        let (i, parent) = (joint.child, joint.dynamic_parent);
         let state = &data.states[k];
         let joint_acceleration = state.subspace.apply(slice(a, joint.v_offset, joint.nv()));
         let parent_acceleration = if parent == 0 { &base } else { &data.acceleration[parent] };
         data.acceleration[i] = state.transform.motion_to_child(parent_acceleration) + joint_acceleration + data.coriolis[i];
-        let body = &model.bodies[i - 1];
+        let body = &model.dynamic_bodies[i - 1];
         data.force[i] = if body.massless {
             -external[i]
         } else {
@@ -138,8 +147,9 @@ pub fn rnea_into(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64]
             body.inertia * data.acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum) - external[i]
         };
     }
-    for (k, joint) in model.joints.iter().enumerate().rev() {
-        let (i, parent) = (joint.child, joint.parent);
+    for &k in model.dynamic_joints.iter().rev() {
+        let joint = &model.joints[k];
+        let (i, parent) = (joint.child, joint.dynamic_parent);
         let state = &data.states[k];
         state.subspace.project(&data.force[i], &mut tau.as_mut_slice()[joint.v_offset..joint.v_offset + joint.nv()]);
         if parent != 0 {
@@ -148,6 +158,38 @@ pub fn rnea_into(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64]
         }
     }
     Ok(())
+}
+
+/// The wrench each joint transmits to its child (and the bodies beyond), in the child's frame,
+/// after `rnea` with the same external forces: every body counts, merged welds included, so a
+/// weld's reaction is its own. `data` must also hold the forward kinematics of the state.
+pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> Vec<Force> {
+    let n = model.body_count();
+    let mut acceleration = data.acceleration.clone();
+    let mut force = vec![Force::zeros(); n + 1];
+    for (k, joint) in model.joints.iter().enumerate() {
+        let i = joint.child;
+        if !model.dynamic_joints.contains(&k) {
+            // A merged body moves with its anchor: its transform is its pose there.
+            acceleration[i] = data.states[k].transform.motion_to_child(&acceleration[joint.dynamic_parent]);
+        }
+        let body = &model.bodies[i - 1];
+        force[i] = if body.massless {
+            -external[i]
+        } else {
+            let momentum = body.inertia * data.velocity[i];
+            body.inertia * acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum) - external[i]
+        };
+    }
+    for (k, joint) in model.joints.iter().enumerate().rev() {
+        if joint.parent != 0 {
+            // The child's pose in its parent: through the parent's pose in their common anchor.
+            let in_parent = model.anchor_offsets[joint.parent].inverse() * data.states[k].transform;
+            let transmitted = in_parent.force_to_parent(&force[joint.child]);
+            force[joint.parent] += transmitted;
+        }
+    }
+    force
 }
 
 /// The joint-space mass matrix M(q) (composite rigid bodies).
@@ -167,28 +209,31 @@ pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, E
 /// joint. Leaves the joint states of (q, 0) in `data`, not the world poses.
 pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f64>) -> Result<(), EvalError> {
     let zero_v = [0.0; 6];
-    for (k, joint) in model.joints.iter().enumerate() {
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
         let state = &mut data.states[k];
         joint.update(slice(q, joint.q_offset, joint.nq()), &zero_v[..joint.nv()], &model.unknowns, state)?;
-        let (i, parent) = (joint.child, joint.parent);
+        let (i, parent) = (joint.child, joint.dynamic_parent);
         let world = data.world_transform[parent] * state.transform;
         data.world_transform[i] = world;
-        let own = &model.welded_inertias[i - 1];
-        data.composite_world[i] = if *own == RigidInertia::zeros() { *own } else { own.to_parent(&world) };
+        let own = &model.dynamic_bodies[i - 1];
+        data.composite_world[i] = if own.massless { RigidInertia::zeros() } else { own.rigid.to_parent(&world) };
         let columns = &mut data.world_columns[k];
         columns.clear();
         for column in state.subspace.columns() {
             columns.push(world.motion_to_parent(column));
         }
     }
-    for joint in model.joints.iter().rev() {
-        if joint.parent != 0 {
+    for &k in model.dynamic_joints.iter().rev() {
+        let joint = &model.joints[k];
+        if joint.dynamic_parent != 0 {
             let child = data.composite_world[joint.child];
-            data.composite_world[joint.parent] += child;
+            data.composite_world[joint.dynamic_parent] += child;
         }
     }
     let mut forces = [Force::zeros(); 6];
-    for (k, joint) in model.joints.iter().enumerate() {
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
         let columns = &data.world_columns[k];
         let composite = &data.composite_world[joint.child];
         for (f, s) in forces.iter_mut().zip(columns.columns()) {
@@ -198,7 +243,7 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
         let mut j = k;
         loop {
             fill_block(mass, &data.world_columns[j], forces, model.joints[j].v_offset, joint.v_offset);
-            match model.joints[j].parent {
+            match model.joints[j].dynamic_parent {
                 0 => break,
                 parent => j = parent - 1,
             }
@@ -240,8 +285,9 @@ pub fn aba_into(
     accelerations: &mut DVector<f64>,
 ) -> Result<(), DynamicsError> {
     joint_motions(model, data, q, v)?;
-    for (i, body) in model.bodies.iter().enumerate() {
-        let i = i + 1;
+    for &k in &model.dynamic_joints {
+        let i = model.joints[k].child;
+        let body = &model.dynamic_bodies[i - 1];
         data.articulated[i] = body.inertia;
         data.bias[i] = if body.massless {
             -external[i]
@@ -249,12 +295,14 @@ pub fn aba_into(
             spatial::cross_force(&data.velocity[i], &(body.inertia * data.velocity[i])) - external[i]
         };
     }
-    for (k, joint) in model.joints.iter().enumerate().rev() {
+    for &k in model.dynamic_joints.iter().rev() {
+        let joint = &model.joints[k];
         aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?;
     }
     let base = base_acceleration(model);
-    for (k, joint) in model.joints.iter().enumerate() {
-        let (i, parent) = (joint.child, joint.parent);
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        let (i, parent) = (joint.child, joint.dynamic_parent);
         let state = &data.states[k];
         let n = joint.nv();
         let parent_acceleration = if parent == 0 { &base } else { &data.acceleration[parent] };
@@ -277,7 +325,7 @@ pub fn aba_into(
 /// handed to the parent. Works in place in `data` (these blocks are a few hundred bytes each).
 fn aba_backward_step(model: &Model, data: &mut Data, k: usize, tau: &[f64]) -> Result<(), DynamicsError> {
     let joint = &model.joints[k];
-    let (i, parent) = (joint.child, joint.parent);
+    let (i, parent) = (joint.child, joint.dynamic_parent);
     let Data { states, articulated, bias, coriolis, u, d_inverse, u_vector, .. } = data;
     let state = &states[k];
     let subspace = &state.subspace;

@@ -21,9 +21,9 @@ pub fn kinetic_energy_gradient(model: &Model, data: &mut Data, q: &[f64], v: &[f
         if !body.massless {
             momentum[joint.child] += body.inertia * data.velocity[joint.child];
         }
-        if joint.parent != 0 {
+        if joint.dynamic_parent != 0 {
             let moved = spatial::force_to_parent(&data.states[k].pose, &momentum[joint.child]);
-            momentum[joint.parent] += moved;
+            momentum[joint.dynamic_parent] += moved;
         }
     }
     let mut gradient = DVector::zeros(model.nv);
@@ -35,7 +35,7 @@ pub fn kinetic_energy_gradient(model: &Model, data: &mut Data, q: &[f64], v: &[f
         let n_joint = joint.nv();
         let rates = &v[joint.v_offset..joint.v_offset + n_joint];
         let coordinates = &q[joint.q_offset..joint.q_offset + n_joint];
-        let parent_seen = spatial::motion_to_child(&state.pose, &data.velocity[joint.parent]);
+        let parent_seen = spatial::motion_to_child(&state.pose, &data.velocity[joint.dynamic_parent]);
         let d = joint.chain.chain_motion(coordinates, None, &model.unknowns)?.pose;
         for c in 0..n_joint {
             let mut direction = vec![0.0; n_joint];

@@ -42,6 +42,9 @@ pub struct Joint {
     pub q_offset: usize,
     pub v_offset: usize,
     pub kernel: Kernel,
+    /// The body the joint's transform is relative to: `parent`, or the body a welded parent is
+    /// merged into (see `welds`).
+    pub dynamic_parent: usize,
 }
 
 /// A joint's motion subspace in the child's frame: one column (a motion) per velocity, at most

@@ -11,3 +11,4 @@ pub mod joint;
 pub mod loops;
 pub mod model;
 pub mod spatial;
+pub mod welds;

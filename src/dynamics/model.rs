@@ -4,7 +4,8 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
-use super::spatial::{self, Inertia, Pose, RigidInertia};
+use super::spatial::{self, Inertia, Pose, RigidInertia, Transform};
+use super::welds;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
@@ -53,11 +54,12 @@ pub struct Model {
     pub joints: Vec<Joint>,
     pub bodies: Vec<BodyInertia>,
     pub body_names: Vec<String>,
-    /// Per body, its inertia with the inertias of the bodies welded to it (through chains of
-    /// welds) added, for the mass matrix: a welded body's motion is its parent's, so CRBA
-    /// moves one inertia per rigidly connected group instead of one per body. Zero for the
-    /// welded bodies themselves.
-    pub welded_inertias: Vec<RigidInertia>,
+    /// The joints RNEA, CRBA and ABA visit (all but the merged welds), the bodies' inertias as
+    /// they see them (merged ones added to their anchor), and each body's pose in its anchor:
+    /// see `welds`.
+    pub dynamic_joints: Vec<usize>,
+    pub dynamic_bodies: Vec<BodyInertia>,
+    pub anchor_offsets: Vec<Transform>,
     pub nq: usize,
     pub nv: usize,
     pub applied: Vec<AppliedEffort>,
@@ -179,6 +181,7 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
             q_offset: nq,
             v_offset: nv,
             kernel: Kernel::General,
+            dynamic_parent: link.parent,
         };
         joint.kernel = kernel(&joint, unknowns);
         nq += joint.nq();
@@ -212,9 +215,11 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
     if !errors.is_empty() {
         return Err(errors);
     }
-    let welded_inertias = welded_inertias(&joints, &bodies);
+    let merged = welds::merge(&mut joints, &bodies, &applied, &link_efforts, !loops.is_empty());
     Ok(Model {
-        welded_inertias,
+        dynamic_joints: merged.dynamic_joints,
+        dynamic_bodies: merged.dynamic_bodies,
+        anchor_offsets: merged.anchor_offsets,
         joints,
         bodies,
         body_names,
@@ -280,19 +285,6 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
         applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis });
     }
     applied
-}
-
-/// Each body's inertia with its welded descendants' added (see `Model::welded_inertias`).
-fn welded_inertias(joints: &[Joint], bodies: &[BodyInertia]) -> Vec<RigidInertia> {
-    let mut inertias: Vec<RigidInertia> = bodies.iter().map(|b| if b.massless { RigidInertia::zeros() } else { b.rigid }).collect();
-    for joint in joints.iter().rev() {
-        if let (Kernel::Weld { transform }, true) = (&joint.kernel, joint.parent != 0) {
-            let moved = inertias[joint.child - 1].to_parent(transform);
-            inertias[joint.parent - 1] += moved;
-            inertias[joint.child - 1] = RigidInertia::zeros();
-        }
-    }
-    inertias
 }
 
 /// Splits the weights off the applied efforts when every body with mass carries exactly one

@@ -86,6 +86,11 @@ impl Transform {
         Transform { rotation: Matrix3::identity(), translation: Vector3::zeros() }
     }
 
+    pub fn inverse(&self) -> Transform {
+        let rt = self.rotation.transpose();
+        Transform { rotation: rt, translation: -(rt * self.translation) }
+    }
+
     pub fn from_pose(pose: &Pose) -> Transform {
         Transform { rotation: *pose.rotation.to_rotation_matrix().matrix(), translation: pose.translation.vector }
     }
@@ -176,6 +181,17 @@ impl RigidInertia {
         RigidInertia { mass: self.mass, first: h1 + self.mass * t.translation, rotational }
     }
 
+    /// The 6 × 6 matrix [J ĥ; ĥᵀ m·1].
+    pub fn matrix(&self) -> Inertia {
+        let h = skew(&self.first);
+        let mut i = Matrix6::zeros();
+        i.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.rotational);
+        i.fixed_view_mut::<3, 3>(0, 3).copy_from(&h);
+        i.fixed_view_mut::<3, 3>(3, 0).copy_from(&h.transpose());
+        i.fixed_view_mut::<3, 3>(3, 3).copy_from(&(Matrix3::identity() * self.mass));
+        i
+    }
+
     /// The momentum of motion m: [J ω + h × v; m v − h × ω].
     #[inline]
     pub fn times(&self, m: &Motion) -> Force {
@@ -254,6 +270,7 @@ mod tests {
         let compact = RigidInertia::from_matrix(&i);
         let m = Motion::new(0.1, 0.2, -0.3, 1.0, -2.0, 0.5);
         assert!((compact.times(&m) - i * m).amax() < 1e-14);
+        assert!((compact.matrix() - i).amax() < 1e-15);
         let moved = compact.to_parent(&t);
         assert!((moved.times(&m) - t.inertia_to_parent(&i) * m).amax() < 1e-13);
         let composed = t * t;

@@ -7,7 +7,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
-use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea, Data, DynamicsError};
+use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea, transmitted_wrenches, Data, DynamicsError};
 use crate::dynamics::efforts::{evaluate, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation};
 use crate::dynamics::spatial;
@@ -162,10 +162,11 @@ impl<'m> MechanicalSystem<'m> {
         // The link efforts act across their joints: they are not part of the reaction.
         external.truncate(model.body_count() + 1);
         rnea(model, &mut self.data, q, v, &accelerations.as_slice()[..model.nv], &external).map_err(|e| evaluation_message(&e))?;
+        let transmitted = transmitted_wrenches(model, &self.data, &external);
         let mut reactions = Vec::with_capacity(6 * (model.joints.len() + model.loops.len()));
         for joint in &model.joints {
             let frame = self.data.world[joint.child] * joint.on_child;
-            let about_origin = spatial::force_to_parent(&self.data.world[joint.child], &self.data.force[joint.child]);
+            let about_origin = spatial::force_to_parent(&self.data.world[joint.child], &transmitted[joint.child]);
             let at_join = spatial::force_to_child(&spatial::Pose::translation(frame.translation.x, frame.translation.y, frame.translation.z), &about_origin);
             // The tree carries the child; a join written from the child's side has it first.
             let on_second = if joint.first_on_parent { at_join } else { -at_join };
