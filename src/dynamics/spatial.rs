@@ -172,13 +172,27 @@ impl RigidInertia {
 
     /// The inertia expressed in the parent frame of `t`: h' = R h + m p and
     /// J' = R J Rᵀ − ĥ₁p̂ − p̂ĥ₁ − m p̂p̂ with h₁ = R h (the 3 × 3 form of `inertia_to_parent`).
+    ///
+    /// With â b̂ = b aᵀ − (a·b) 1 the skew products are outer products:
+    /// J' = R J Rᵀ + (2 h₁·p + m |p|²) 1 − p h₁ᵀ − h₁ pᵀ − m p pᵀ.
     pub fn to_parent(&self, t: &Transform) -> RigidInertia {
         let r = &t.rotation;
+        let p = t.translation;
         let h1 = r * self.first;
-        let (hs, p) = (skew(&h1), skew(&t.translation));
-        let hp = hs * p;
-        let rotational = r * self.rotational * r.transpose() - hp - hp.transpose() - self.mass * p * p;
-        RigidInertia { mass: self.mass, first: h1 + self.mass * t.translation, rotational }
+        let m = self.mass;
+        let rj = r * self.rotational;
+        let diagonal = 2.0 * h1.dot(&p) + m * p.norm_squared();
+        // (R J) Rᵀ is symmetric: compute the upper triangle only.
+        let mut rotational = Matrix3::zeros();
+        for i in 0..3 {
+            for j in i..3 {
+                let rotated = rj.row(i).dot(&r.row(j));
+                let value = rotated - p[i] * h1[j] - h1[i] * p[j] - m * p[i] * p[j] + if i == j { diagonal } else { 0.0 };
+                rotational[(i, j)] = value;
+                rotational[(j, i)] = value;
+            }
+        }
+        RigidInertia { mass: m, first: h1 + m * p, rotational }
     }
 
     /// The 6 × 6 matrix [J ĥ; ĥᵀ m·1].
