@@ -48,7 +48,7 @@ impl Data {
     pub fn new(model: &Model) -> Data {
         let n = model.body_count();
         Data {
-            states: vec![JointState::new(); n],
+            states: model.joints.iter().map(|j| j.new_state()).collect(),
             world: vec![Pose::identity(); n + 1],
             velocity: vec![Motion::zeros(); n + 1],
             acceleration: vec![Motion::zeros(); n + 1],
@@ -206,13 +206,12 @@ pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, E
 /// Composite rigid bodies in the fixed frame: each body's inertia is moved to the fixed frame
 /// once, composites are then plain sums, and every entry is a dot product of a joint's motion
 /// column (in the fixed frame) with a composite momentum: no force is carried from joint to
-/// joint. Leaves the joint states of (q, 0) in `data`, not the world poses.
+/// joint. Leaves the joint transforms at q in `data` (not the velocities, nor the world poses).
 pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f64>) -> Result<(), EvalError> {
-    let zero_v = [0.0; 6];
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         let state = &mut data.states[k];
-        joint.update(slice(q, joint.q_offset, joint.nq()), &zero_v[..joint.nv()], &model.unknowns, state)?;
+        joint.update_transform(slice(q, joint.q_offset, joint.nq()), &model.unknowns, state)?;
         let (i, parent) = (joint.child, joint.dynamic_parent);
         let world = data.world_transform[parent] * state.transform;
         data.world_transform[i] = world;

@@ -219,6 +219,24 @@ fn linear_in_first(s: &SExpr) -> Option<f64> {
     }
 }
 
+/// The transform of a one-rotation kernel at angle θ.
+fn rotation_transform(terms: &[Matrix3<f64>; 3], aligned: Option<usize>, origin: &Vector3<f64>, angle: f64, after: &Option<Transform>) -> Transform {
+    let (sin, cos) = angle.sin_cos();
+    let rotation = match aligned {
+        Some(k) => turn_columns(&terms[0], k, sin, cos),
+        None => terms[0] * cos + terms[1] * sin + terms[2] * (1.0 - cos),
+    };
+    with_after(Transform { rotation, translation: *origin }, after)
+}
+
+/// The constant part on the child's side, when there is one.
+fn with_after(transform: Transform, after: &Option<Transform>) -> Transform {
+    match after {
+        Some(after) => transform * *after,
+        None => transform,
+    }
+}
+
 /// R · Rot(e_k, θ) from sin θ and cos θ: column k stays, the two others turn in their plane.
 fn turn_columns(r: &Matrix3<f64>, k: usize, sin: f64, cos: f64) -> Matrix3<f64> {
     let (i, j) = ((k + 1) % 3, (k + 2) % 3);
@@ -305,20 +323,41 @@ impl Joint {
 
     /// Position, subspace, velocity and bias at the joint's positions `q` and velocities `v`.
     pub fn state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues) -> Result<JointState, EvalError> {
-        let mut state = JointState::new();
+        let mut state = self.new_state();
         self.update(q, v, unknowns, &mut state)?;
         self.fill_pose(&mut state);
         Ok(state)
     }
 
-    /// Writes the joint's state at (q, v) into `state`, reusing its storage: its transform,
-    /// subspace, velocity and bias. `state.pose` is left as it was for the one-rotation,
+    /// A state for this joint: the constant subspace of a one-rotation or one-translation
+    /// kernel is written here, once, and `update` leaves it alone.
+    pub fn new_state(&self) -> JointState {
+        let mut state = JointState::new();
+        if let Kernel::Rotation { column, .. } | Kernel::Translation { column, .. } = &self.kernel {
+            state.subspace.set_single(*column);
+        }
+        state
+    }
+
+    /// The transform alone at positions q (for the mass matrix, which needs no velocities).
+    pub fn update_transform(&self, q: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
+        match &self.kernel {
+            Kernel::Weld { transform } => state.transform = *transform,
+            Kernel::Rotation { terms, aligned, origin, scale, after, .. } => {
+                state.transform = rotation_transform(terms, *aligned, origin, scale * q[0], after);
+            }
+            Kernel::Translation { rotation, origin, direction, after, .. } => {
+                state.transform = with_after(Transform { rotation: *rotation, translation: origin + direction * q[0] }, after);
+            }
+            Kernel::General => self.update(q, &[0.0; 6][..self.nv()], unknowns, state)?,
+        }
+        Ok(())
+    }
+
+    /// Writes the joint's state at (q, v) into `state` (made by `new_state`), reusing its
+    /// storage: its transform, subspace, velocity and bias. `state.pose` is left as it was for the one-rotation,
     /// one-translation and weld kernels; `forward_kinematics` sets it (see `fill_pose`).
     pub fn update(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
-        let fixed_part = |transform: Transform, after: &Option<Transform>| match after {
-            Some(after) => transform * *after,
-            None => transform,
-        };
         match (&self.kernel, &self.kind) {
             (Kernel::Weld { transform }, _) => {
                 state.transform = *transform;
@@ -327,19 +366,12 @@ impl Joint {
                 state.bias = Motion::zeros();
             }
             (Kernel::Rotation { terms, aligned, origin, scale, after, column }, _) => {
-                let (sin, cos) = (scale * q[0]).sin_cos();
-                let rotation = match aligned {
-                    Some(k) => turn_columns(&terms[0], *k, sin, cos),
-                    None => terms[0] * cos + terms[1] * sin + terms[2] * (1.0 - cos),
-                };
-                state.transform = fixed_part(Transform { rotation, translation: *origin }, after);
-                state.subspace.set_single(*column);
+                state.transform = rotation_transform(terms, *aligned, origin, scale * q[0], after);
                 state.velocity = column * v[0];
                 state.bias = Motion::zeros();
             }
             (Kernel::Translation { rotation, origin, direction, after, column }, _) => {
-                state.transform = fixed_part(Transform { rotation: *rotation, translation: origin + direction * q[0] }, after);
-                state.subspace.set_single(*column);
+                state.transform = with_after(Transform { rotation: *rotation, translation: origin + direction * q[0] }, after);
                 state.velocity = column * v[0];
                 state.bias = Motion::zeros();
             }
