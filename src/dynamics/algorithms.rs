@@ -4,7 +4,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
-use super::joint::{JointState, Subspace};
+use super::joint::JointState;
 use super::model::Model;
 use super::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
 use crate::kinematics::eval::EvalError;
@@ -20,7 +20,8 @@ pub struct Data {
     /// CRBA: poses, composite inertias and motion columns in the fixed frame.
     world_transform: Vec<Transform>,
     composite_world: Vec<RigidInertia>,
-    world_columns: Vec<Subspace>,
+    /// CRBA: each velocity's motion column in the fixed frame.
+    world_columns: Vec<Motion>,
     articulated: Vec<Inertia>,
     bias: Vec<Force>,
     coriolis: Vec<Motion>,
@@ -55,7 +56,7 @@ impl Data {
             force: vec![Force::zeros(); n + 1],
             world_transform: vec![Transform::identity(); n + 1],
             composite_world: vec![RigidInertia::zeros(); n + 1],
-            world_columns: vec![Subspace::empty(); n],
+            world_columns: vec![Motion::zeros(); model.nv],
             articulated: vec![Inertia::zeros(); n + 1],
             bias: vec![Force::zeros(); n + 1],
             coriolis: vec![Motion::zeros(); n + 1],
@@ -217,10 +218,8 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
         data.world_transform[i] = world;
         let own = &model.dynamic_bodies[i - 1];
         data.composite_world[i] = if own.massless { RigidInertia::zeros() } else { own.rigid.to_parent(&world) };
-        let columns = &mut data.world_columns[k];
-        columns.clear();
-        for column in state.subspace.columns() {
-            columns.push(world.motion_to_parent(column));
+        for (r, column) in state.subspace.columns().iter().enumerate() {
+            data.world_columns[joint.v_offset + r] = world.motion_to_parent(column);
         }
     }
     for &k in model.dynamic_joints.iter().rev() {
@@ -230,39 +229,22 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
             data.composite_world[joint.dynamic_parent] += child;
         }
     }
-    let mut forces = [Force::zeros(); 6];
+    let nv = model.nv;
+    let entries = mass.as_mut_slice();
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
-        let columns = &data.world_columns[k];
         let composite = &data.composite_world[joint.child];
-        for (f, s) in forces.iter_mut().zip(columns.columns()) {
-            *f = composite.times(s);
-        }
-        let forces = &forces[..columns.len()];
-        let mut j = k;
-        loop {
-            fill_block(mass, &data.world_columns[j], forces, model.joints[j].v_offset, joint.v_offset);
-            match model.joints[j].dynamic_parent {
-                0 => break,
-                parent => j = parent - 1,
+        for column in joint.v_offset..joint.v_offset + joint.nv() {
+            let force = composite.times(&data.world_columns[column]);
+            // Column-major storage; the joint's branch lists its own and its ancestors' velocities.
+            for &row in &model.branch_velocities[k] {
+                let value = data.world_columns[row].dot(&force);
+                entries[row + column * nv] = value;
+                entries[column + row * nv] = value;
             }
         }
     }
     Ok(())
-}
-
-/// M[rows, cols] = Sᵀ F and its transpose, the symmetric block.
-fn fill_block(mass: &mut DMatrix<f64>, subspace: &Subspace, forces: &[Force], row: usize, col: usize) {
-    let n = mass.nrows();
-    let entries = mass.as_mut_slice();
-    for (r, s) in subspace.columns().iter().enumerate() {
-        for (c, f) in forces.iter().enumerate() {
-            let value = s.dot(f);
-            // Column-major storage.
-            entries[(row + r) + (col + c) * n] = value;
-            entries[(col + c) + (row + r) * n] = value;
-        }
-    }
 }
 
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.

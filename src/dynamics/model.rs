@@ -60,6 +60,9 @@ pub struct Model {
     pub dynamic_joints: Vec<usize>,
     pub dynamic_bodies: Vec<BodyInertia>,
     pub anchor_offsets: Vec<Transform>,
+    /// Per joint, the velocities of the joint and of its ancestors among the dynamic joints:
+    /// the rows of the mass matrix its columns reach.
+    pub branch_velocities: Vec<Vec<usize>>,
     pub nq: usize,
     pub nv: usize,
     pub applied: Vec<AppliedEffort>,
@@ -216,7 +219,9 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
         return Err(errors);
     }
     let merged = welds::merge(&mut joints, &bodies, &applied, &link_efforts, !loops.is_empty());
+    let branch_velocities = branch_velocities(&joints);
     Ok(Model {
+        branch_velocities,
         dynamic_joints: merged.dynamic_joints,
         dynamic_bodies: merged.dynamic_bodies,
         anchor_offsets: merged.anchor_offsets,
@@ -285,6 +290,24 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
         applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis });
     }
     applied
+}
+
+/// The velocities of each joint and its ancestors (through dynamic parents).
+fn branch_velocities(joints: &[Joint]) -> Vec<Vec<usize>> {
+    (0..joints.len())
+        .map(|k| {
+            let mut rows = Vec::new();
+            let mut j = k;
+            loop {
+                rows.extend(joints[j].v_offset..joints[j].v_offset + joints[j].nv());
+                match joints[j].dynamic_parent {
+                    0 => break,
+                    parent => j = parent - 1,
+                }
+            }
+            rows
+        })
+        .collect()
 }
 
 /// Splits the weights off the applied efforts when every body with mass carries exactly one
