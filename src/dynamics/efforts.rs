@@ -22,6 +22,20 @@ pub struct Efforts {
     pub tau: DVector<f64>,
 }
 
+impl Efforts {
+    /// No effort at all (a model whose only load is its gravity field, or none).
+    pub fn none(model: &Model) -> Efforts {
+        Efforts { external: vec![Force::zeros(); model.body_count() + 1], tau: DVector::zeros(model.velocities()) }
+    }
+}
+
+impl Model {
+    /// Whether the program applies any effort besides the gravity field.
+    pub fn has_efforts(&self) -> bool {
+        !self.applied.is_empty() || !self.link_efforts.is_empty()
+    }
+}
+
 /// Declared coordinates and rates of every join, for expressions.
 pub struct Declared<'a> {
     pub model: &'a Model,

@@ -67,7 +67,8 @@ impl<'m> MechanicalSystem<'m> {
             let (solution, efforts, _) = self.constrained(t, &q, v)?;
             (solution.accelerations, efforts)
         } else {
-            let efforts = self.efforts(t, &q, v)?;
+            // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
+            let efforts = if model.has_efforts() { self.efforts(t, &q, v)? } else { Efforts::none(model) };
             let accelerations = aba(model, &mut self.data, &q, v, efforts.tau.as_slice(), &efforts.external)
                 .map_err(|e| self.dynamics_message(&e))?;
             (accelerations, efforts)
