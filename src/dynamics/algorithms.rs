@@ -209,10 +209,14 @@ pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, E
 /// column (in the fixed frame) with a composite momentum: no force is carried from joint to
 /// joint. Leaves the joint transforms at q in `data` (not the velocities, nor the world poses).
 pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f64>) -> Result<(), EvalError> {
+    // The joints' transforms first: independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
-        let state = &mut data.states[k];
-        joint.update_transform(slice(q, joint.q_offset, joint.nq()), &model.unknowns, state)?;
+        joint.update_transform(slice(q, joint.q_offset, joint.nq()), &model.unknowns, &mut data.states[k])?;
+    }
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        let state = &data.states[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
         let world = data.world_transform[parent] * state.transform;
         data.world_transform[i] = world;
