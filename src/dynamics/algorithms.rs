@@ -87,20 +87,31 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
 /// joints they visit at (q, v), without the world poses (RNEA and ABA leave `data.world` and the
 /// merged bodies as they were).
 fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+    // The joints' own states first: independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
-        joint_motion(model, data, k, q, v)?;
+        let joint = &model.joints[k];
+        joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, &mut data.states[k])?;
+    }
+    for &k in &model.dynamic_joints {
+        body_velocity(model, data, k);
     }
     Ok(())
 }
 
 fn joint_motion(model: &Model, data: &mut Data, k: usize, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
     let joint = &model.joints[k];
-    let state = &mut data.states[k];
-    joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, state)?;
+    joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, &mut data.states[k])?;
+    body_velocity(model, data, k);
+    Ok(())
+}
+
+/// The velocity of joint k's child and its velocity-product acceleration, from its parent's.
+fn body_velocity(model: &Model, data: &mut Data, k: usize) {
+    let joint = &model.joints[k];
+    let state = &data.states[k];
     let (i, parent) = (joint.child, joint.dynamic_parent);
     data.velocity[i] = state.transform.motion_to_child(&data.velocity[parent]) + state.velocity;
     data.coriolis[i] = state.bias + spatial::cross_motion(&data.velocity[i], &state.velocity);
-    Ok(())
 }
 
 /// Fills `data.acceleration` with the bodies' accelerations when every joint acceleration is
