@@ -15,6 +15,7 @@ pub mod kinematics;
 pub mod load;
 pub mod output;
 pub mod simulate;
+pub mod symbolic;
 pub mod source;
 pub mod syntax;
 pub mod topology;
