@@ -60,12 +60,6 @@ impl Subspace {
         Subspace { columns: [Motion::zeros(); 6], len: 0 }
     }
 
-    pub fn single(column: Motion) -> Subspace {
-        let mut s = Subspace::empty();
-        s.push(column);
-        s
-    }
-
     /// Empties the subspace without touching its storage.
     pub fn clear(&mut self) {
         self.len = 0;
@@ -150,7 +144,7 @@ pub struct JointState {
 }
 
 impl JointState {
-    pub fn new() -> JointState {
+    fn empty() -> JointState {
         JointState {
             pose: Pose::identity(),
             transform: Transform::identity(),
@@ -158,12 +152,6 @@ impl JointState {
             velocity: Motion::zeros(),
             bias: Motion::zeros(),
         }
-    }
-}
-
-impl Default for JointState {
-    fn default() -> Self {
-        JointState::new()
     }
 }
 
@@ -321,18 +309,10 @@ impl Joint {
         }
     }
 
-    /// Position, subspace, velocity and bias at the joint's positions `q` and velocities `v`.
-    pub fn state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues) -> Result<JointState, EvalError> {
-        let mut state = self.new_state();
-        self.update(q, v, unknowns, &mut state)?;
-        self.fill_pose(&mut state);
-        Ok(state)
-    }
-
     /// A state for this joint: the constant subspace of a one-rotation or one-translation
     /// kernel is written here, once, and `update` leaves it alone.
     pub fn new_state(&self) -> JointState {
-        let mut state = JointState::new();
+        let mut state = JointState::empty();
         if let Kernel::Rotation { column, .. } | Kernel::Translation { column, .. } = &self.kernel {
             state.subspace.set_single(*column);
         }

@@ -179,13 +179,9 @@ impl Pool {
         }
     }
 
-    /// Whether the node for `id` is one of the absorbing or neutral constants.
+    /// Whether `id` is the constant 0.
     pub fn is_zero(&self, id: ExprId) -> bool {
         self.is(id, 0.0)
-    }
-
-    pub fn is_one(&self, id: ExprId) -> bool {
-        self.is(id, 1.0)
     }
 }
 
