@@ -179,9 +179,13 @@ pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> V
     let n = model.body_count();
     let mut acceleration = data.acceleration.clone();
     let mut force = vec![Force::zeros(); n + 1];
+    let mut merged = vec![true; model.joints.len()];
+    for &k in &model.dynamic_joints {
+        merged[k] = false;
+    }
     for (k, joint) in model.joints.iter().enumerate() {
         let i = joint.child;
-        if !model.dynamic_joints.contains(&k) {
+        if merged[k] {
             // A merged body moves with its anchor: its transform is its pose there.
             acceleration[i] = data.states[k].transform.motion_to_child(&acceleration[joint.dynamic_parent]);
         }
