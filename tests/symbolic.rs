@@ -88,7 +88,7 @@ proptest! {
         let size = pool.len();
         prop_assert_eq!(build(&t, &mut pool), root);
         prop_assert_eq!(pool.len(), size);
-        let value = Tape::new(&pool, &[root]).eval(&pool, &x)[0];
+        let value = Tape::new(&pool, &[root]).eval(&x)[0];
         let expected = direct(&t, &x);
         prop_assert!((value - expected).abs() <= 1e-12 * (1.0 + expected.abs()), "{} vs {}", value, expected);
     }

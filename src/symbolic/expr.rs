@@ -11,6 +11,13 @@ use std::collections::HashMap;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ExprId(u32);
 
+impl ExprId {
+    /// The node's position in its pool: a stable name for emitted temporaries.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
 /// One node. Constants are stored by their bits so that nodes can be hashed; -0.0 is stored as
 /// 0.0 so that the two zeros are one node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -22,9 +29,75 @@ pub enum Node {
     Mul(ExprId, ExprId),
     Neg(ExprId),
     Div(ExprId, ExprId),
-    Sin(ExprId),
-    Cos(ExprId),
-    Sqrt(ExprId),
+    /// `a ^ b`; integer exponents are emitted as products.
+    Pow(ExprId, ExprId),
+    /// `atan2(y, x)`.
+    Atan2(ExprId, ExprId),
+    Apply(Function, ExprId),
+}
+
+/// The functions of one argument LSD programs may call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Function {
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Sqrt,
+    Exp,
+    Log,
+    Abs,
+}
+
+impl Function {
+    pub fn from_name(name: &str) -> Option<Function> {
+        Some(match name {
+            "sin" => Function::Sin,
+            "cos" => Function::Cos,
+            "tan" => Function::Tan,
+            "asin" => Function::Asin,
+            "acos" => Function::Acos,
+            "atan" => Function::Atan,
+            "sqrt" => Function::Sqrt,
+            "exp" => Function::Exp,
+            "log" => Function::Log,
+            "abs" => Function::Abs,
+            _ => return None,
+        })
+    }
+
+    /// The name in LSD, C, Rust (as a method) and SymPy alike.
+    pub fn name(self) -> &'static str {
+        match self {
+            Function::Sin => "sin",
+            Function::Cos => "cos",
+            Function::Tan => "tan",
+            Function::Asin => "asin",
+            Function::Acos => "acos",
+            Function::Atan => "atan",
+            Function::Sqrt => "sqrt",
+            Function::Exp => "exp",
+            Function::Log => "log",
+            Function::Abs => "abs",
+        }
+    }
+
+    pub fn eval(self, x: f64) -> f64 {
+        match self {
+            Function::Sin => x.sin(),
+            Function::Cos => x.cos(),
+            Function::Tan => x.tan(),
+            Function::Asin => x.asin(),
+            Function::Acos => x.acos(),
+            Function::Atan => x.atan(),
+            Function::Sqrt => x.sqrt(),
+            Function::Exp => x.exp(),
+            Function::Log => x.ln(),
+            Function::Abs => x.abs(),
+        }
+    }
 }
 
 #[derive(Default)]
@@ -149,24 +222,154 @@ impl Pool {
         }
     }
 
-    pub fn sin(&mut self, a: ExprId) -> ExprId {
+    pub fn apply(&mut self, f: Function, a: ExprId) -> ExprId {
         match self.as_constant(a) {
-            Some(x) => self.constant(x.sin()),
-            None => self.intern(Node::Sin(a)),
+            Some(x) if f.eval(x).is_finite() => self.constant(f.eval(x)),
+            _ => self.intern(Node::Apply(f, a)),
         }
+    }
+
+    pub fn sin(&mut self, a: ExprId) -> ExprId {
+        self.apply(Function::Sin, a)
     }
 
     pub fn cos(&mut self, a: ExprId) -> ExprId {
-        match self.as_constant(a) {
-            Some(x) => self.constant(x.cos()),
-            None => self.intern(Node::Cos(a)),
-        }
+        self.apply(Function::Cos, a)
     }
 
     pub fn sqrt(&mut self, a: ExprId) -> ExprId {
-        match self.as_constant(a) {
-            Some(x) if x >= 0.0 => self.constant(x.sqrt()),
-            _ => self.intern(Node::Sqrt(a)),
+        self.apply(Function::Sqrt, a)
+    }
+
+    /// `a ^ b`: folded for constants, `a` for b = 1, 1 for b = 0.
+    pub fn pow(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        match (self.as_constant(a), self.as_constant(b)) {
+            (Some(x), Some(y)) if x.powf(y).is_finite() => self.constant(x.powf(y)),
+            (_, Some(1.0)) => a,
+            (_, Some(0.0)) => self.constant(1.0),
+            _ => self.intern(Node::Pow(a, b)),
+        }
+    }
+
+    pub fn atan2(&mut self, y: ExprId, x: ExprId) -> ExprId {
+        match (self.as_constant(y), self.as_constant(x)) {
+            (Some(a), Some(b)) => self.constant(a.atan2(b)),
+            _ => self.intern(Node::Atan2(y, x)),
+        }
+    }
+
+    /// The sum of `terms` (0 when empty).
+    pub fn sum(&mut self, terms: impl IntoIterator<Item = ExprId>) -> ExprId {
+        let zero = self.constant(0.0);
+        terms.into_iter().fold(zero, |sum, t| self.add(sum, t))
+    }
+
+    /// ∂e/∂x for a symbol x. `memo` keeps the derivatives already taken with respect to x, so
+    /// that shared subexpressions are differentiated once: pass the same map for the same x.
+    pub fn derivative(&mut self, e: ExprId, x: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+        if let Some(&d) = memo.get(&e) {
+            return d;
+        }
+        let d = match self.node(e) {
+            Node::Constant(_) => self.constant(0.0),
+            Node::Symbol(_) => self.constant(if e == x { 1.0 } else { 0.0 }),
+            Node::Add(a, b) => {
+                let (da, db) = (self.derivative(a, x, memo), self.derivative(b, x, memo));
+                self.add(da, db)
+            }
+            Node::Mul(a, b) => {
+                let (da, db) = (self.derivative(a, x, memo), self.derivative(b, x, memo));
+                let (l, r) = (self.mul(da, b), self.mul(a, db));
+                self.add(l, r)
+            }
+            Node::Neg(a) => {
+                let da = self.derivative(a, x, memo);
+                self.neg(da)
+            }
+            Node::Div(a, b) => {
+                // (a/b)' = a'/b − (a/b)·b'/b
+                let (da, db) = (self.derivative(a, x, memo), self.derivative(b, x, memo));
+                let first = self.div(da, b);
+                let ratio = self.div(db, b);
+                let second = self.mul(e, ratio);
+                self.sub(first, second)
+            }
+            Node::Pow(a, b) => self.pow_derivative(e, a, b, x, memo),
+            Node::Atan2(y, w) => {
+                // (w y' − y w') / (w² + y²)
+                let (dy, dw) = (self.derivative(y, x, memo), self.derivative(w, x, memo));
+                let (l, r) = (self.mul(w, dy), self.mul(y, dw));
+                let numerator = self.sub(l, r);
+                let (ww, yy) = (self.mul(w, w), self.mul(y, y));
+                let denominator = self.add(ww, yy);
+                self.div(numerator, denominator)
+            }
+            Node::Apply(f, a) => {
+                let da = self.derivative(a, x, memo);
+                if self.is_zero(da) {
+                    da
+                } else {
+                    let outer = self.outer_derivative(f, e, a);
+                    self.mul(outer, da)
+                }
+            }
+        };
+        memo.insert(e, d);
+        d
+    }
+
+    fn pow_derivative(&mut self, e: ExprId, a: ExprId, b: ExprId, x: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+        let (da, db) = (self.derivative(a, x, memo), self.derivative(b, x, memo));
+        if self.is_zero(db) {
+            // b a^(b−1) a'
+            let one = self.constant(1.0);
+            let exponent = self.sub(b, one);
+            let power = self.pow(a, exponent);
+            let scaled = self.mul(b, power);
+            return self.mul(scaled, da);
+        }
+        // a^b (b' log a + b a'/a)
+        let log = self.apply(Function::Log, a);
+        let first = self.mul(db, log);
+        let ratio = self.div(da, a);
+        let second = self.mul(b, ratio);
+        let rate = self.add(first, second);
+        self.mul(e, rate)
+    }
+
+    /// f'(a), given e = f(a).
+    fn outer_derivative(&mut self, f: Function, e: ExprId, a: ExprId) -> ExprId {
+        let one = self.constant(1.0);
+        match f {
+            Function::Sin => self.cos(a),
+            Function::Cos => {
+                let s = self.sin(a);
+                self.neg(s)
+            }
+            Function::Tan => {
+                let ee = self.mul(e, e);
+                self.add(one, ee)
+            }
+            Function::Asin | Function::Acos => {
+                let aa = self.mul(a, a);
+                let rest = self.sub(one, aa);
+                let root = self.sqrt(rest);
+                let inverse = self.div(one, root);
+                if f == Function::Asin { inverse } else { self.neg(inverse) }
+            }
+            Function::Atan => {
+                let aa = self.mul(a, a);
+                let d = self.add(one, aa);
+                self.div(one, d)
+            }
+            Function::Sqrt => {
+                let two = self.constant(2.0);
+                let twice = self.mul(two, e);
+                self.div(one, twice)
+            }
+            Function::Exp => e,
+            Function::Log => self.div(one, a),
+            Function::Abs => self.div(a, e),
         }
     }
 
@@ -174,8 +377,8 @@ impl Pool {
     pub fn operands(&self, id: ExprId) -> Vec<ExprId> {
         match self.node(id) {
             Node::Constant(_) | Node::Symbol(_) => Vec::new(),
-            Node::Add(a, b) | Node::Mul(a, b) | Node::Div(a, b) => vec![a, b],
-            Node::Neg(a) | Node::Sin(a) | Node::Cos(a) | Node::Sqrt(a) => vec![a],
+            Node::Add(a, b) | Node::Mul(a, b) | Node::Div(a, b) | Node::Pow(a, b) | Node::Atan2(a, b) => vec![a, b],
+            Node::Neg(a) | Node::Apply(_, a) => vec![a],
         }
     }
 
@@ -191,6 +394,21 @@ pub struct Tape {
     pub order: Vec<ExprId>,
     /// For each root, its position in `order`.
     pub roots: Vec<usize>,
+    /// Each node of `order` with its operands replaced by their positions in `order`.
+    steps: Vec<Step>,
+}
+
+#[derive(Clone, Copy)]
+enum Step {
+    Constant(f64),
+    Symbol(usize),
+    Add(usize, usize),
+    Mul(usize, usize),
+    Neg(usize),
+    Div(usize, usize),
+    Pow(usize, usize),
+    Atan2(usize, usize),
+    Apply(Function, usize),
 }
 
 impl Tape {
@@ -213,8 +431,23 @@ impl Tape {
                 }
             }
         }
+        let at = |id: ExprId| position[&id];
+        let steps = order
+            .iter()
+            .map(|&id| match pool.node(id) {
+                Node::Constant(bits) => Step::Constant(f64::from_bits(bits)),
+                Node::Symbol(i) => Step::Symbol(i as usize),
+                Node::Add(a, b) => Step::Add(at(a), at(b)),
+                Node::Mul(a, b) => Step::Mul(at(a), at(b)),
+                Node::Neg(a) => Step::Neg(at(a)),
+                Node::Div(a, b) => Step::Div(at(a), at(b)),
+                Node::Pow(a, b) => Step::Pow(at(a), at(b)),
+                Node::Atan2(a, b) => Step::Atan2(at(a), at(b)),
+                Node::Apply(f, a) => Step::Apply(f, at(a)),
+            })
+            .collect();
         let roots = roots.iter().map(|r| position[r]).collect();
-        Tape { order, roots }
+        Tape { order, roots, steps }
     }
 
     /// Number of distinct nodes the roots reach.
@@ -223,24 +456,22 @@ impl Tape {
     }
 
     /// Evaluates every node with `symbols[i]` the value of symbol i; returns the roots' values.
-    pub fn eval(&self, pool: &Pool, symbols: &[f64]) -> Vec<f64> {
-        let mut value: HashMap<ExprId, f64> = HashMap::with_capacity(self.order.len());
-        for &id in &self.order {
-            let v = |o: ExprId| value[&o];
-            let x = match pool.node(id) {
-                Node::Constant(bits) => f64::from_bits(bits),
-                Node::Symbol(i) => symbols[i as usize],
-                Node::Add(a, b) => v(a) + v(b),
-                Node::Mul(a, b) => v(a) * v(b),
-                Node::Neg(a) => -v(a),
-                Node::Div(a, b) => v(a) / v(b),
-                Node::Sin(a) => v(a).sin(),
-                Node::Cos(a) => v(a).cos(),
-                Node::Sqrt(a) => v(a).sqrt(),
+    pub fn eval(&self, symbols: &[f64]) -> Vec<f64> {
+        let mut value = vec![0.0; self.steps.len()];
+        for (k, step) in self.steps.iter().enumerate() {
+            value[k] = match *step {
+                Step::Constant(c) => c,
+                Step::Symbol(i) => symbols[i],
+                Step::Add(a, b) => value[a] + value[b],
+                Step::Mul(a, b) => value[a] * value[b],
+                Step::Neg(a) => -value[a],
+                Step::Div(a, b) => value[a] / value[b],
+                Step::Pow(a, b) => value[a].powf(value[b]),
+                Step::Atan2(a, b) => value[a].atan2(value[b]),
+                Step::Apply(f, a) => f.eval(value[a]),
             };
-            value.insert(id, x);
         }
-        self.roots.iter().map(|&r| value[&self.order[r]]).collect()
+        self.roots.iter().map(|&r| value[r]).collect()
     }
 }
 
@@ -291,7 +522,7 @@ mod tests {
         let tape = Tape::new(&p, &[e1, e2]);
         // q, sin q, cos q, sin q cos q, e1, −cos q, e2.
         assert_eq!(tape.size(), 7);
-        let values = tape.eval(&p, &[0.3]);
+        let values = tape.eval(&[0.3]);
         let (sv, cv) = (0.3f64.sin(), 0.3f64.cos());
         assert!((values[0] - (sv * cv + sv)).abs() < 1e-15);
         assert!((values[1] - (sv * cv - cv)).abs() < 1e-15);

@@ -1,5 +1,13 @@
-//! Symbolic expressions for the equations of motion: a hash-consed expression DAG (`expr`),
-//! where equal subexpressions are one node, and its evaluation in topological order (`Tape`), the
-//! form code emitters walk.
+//! The equations of motion as expressions (Papegay 1992, §3.3): a hash-consed expression DAG
+//! (`expr`) where equal subexpressions are one node, vectors and matrices of expressions
+//! (`vector`), program scalars lowered to it (`lower`), frames moving with the mechanism
+//! (`kinematics`), the equations M q̇ = S + F + Δᵀ Λ, Δ q = 0 (`equations`), and their
+//! emitters (`emit`).
 
+pub mod equations;
 pub mod expr;
+pub mod kinematics;
+pub mod lower;
+pub mod vector;
+
+pub use equations::{generate, Equations};

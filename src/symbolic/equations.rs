@@ -1,0 +1,585 @@
+//! The equations of motion as expressions, by the formalism of Papegay (1992, §3.3):
+//!
+//! - each body i is a free body with kinematic vector 𝐪ᵢ = (v(Oᵢ), ωᵢ) in the fixed axes and its
+//!   Newton–Euler block at its origin, 𝔐ᵢ 𝐪̇ᵢ = 𝔖ᵢ + 𝔉ᵢ, with
+//!   𝔐ᵢ = [[μ Id, −μ r̃], [μ r̃, I(Oᵢ)]], 𝔖ᵢ = (−μ ω∧(ω∧r), −ω∧I(Oᵢ)ω), r = OᵢGᵢ;
+//! - the tree's coordinates parametrise every body: 𝐪 = Ψ(p) q, built parent first
+//!   (`kinematics`), so 𝐪̇ = Ψ q̇ + Ψ̇ q;
+//! - premultiplying by Ψᵀ eliminates the tree's reactions: M(p) q̇ = S(p, q) + F(p, q) with
+//!   M = Ψᵀ𝔐Ψ, S = Ψᵀ(𝔖 − 𝔐Ψ̇q), F = Ψᵀ𝔉 plus the links' own efforts;
+//! - each complementary link adds six rows Δ(p) q = 0 (the difference of the twists of its two
+//!   frames) and the term Δᵀ Λ.
+//!
+//! Ψᵀ is applied in its product form, Ψᵀ = Ψ₁ᵀ⋯Ψₙᵀ: a sweep from the last body to the first that
+//! carries each body's force and moment to its parent's origin. So the work and the size of the
+//! result grow with the number of entries of M, not with bodies × entries.
+//!
+//! The complementary links' own coordinates are variables of the equations (after the tree's),
+//! with no inertia: their rows of M and S are zero, their rows of F hold their links' efforts.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::expr::{ExprId, Pool, Tape};
+use super::kinematics::{Derivatives, LinkCoordinates, Moving, Step};
+use super::lower::{LowerError, Lowering, Variables};
+use super::vector::{self as v, Mat3, Vec3};
+use crate::diag::Diagnostic;
+use crate::elab::mechanism::{EffortKind, Mechanism};
+use crate::elab::value::{BodyRef, Displacement, Elementary, JoinId};
+use crate::topology::Topology;
+
+/// Names of the six rows of a complementary link.
+pub const ROW_NAMES: [&str; 6] = ["rx", "ry", "rz", "x", "y", "z"];
+
+pub struct Equations {
+    pub pool: Pool,
+    pub variables: Variables,
+    /// The first `tree_coordinates` positions are the tree's; the others the complementary
+    /// links'.
+    pub tree_coordinates: usize,
+    /// M, row-major, n × n with n the number of positions.
+    pub mass: Vec<ExprId>,
+    /// S: the velocity-product terms.
+    pub second_member: Vec<ExprId>,
+    /// F: the generalised forces of the applied efforts and of the links' efforts.
+    pub forces: Vec<ExprId>,
+    /// Δ, row-major, 6 rows per complementary link: rotation then translation, fixed axes.
+    pub constraints: Vec<ExprId>,
+    /// Δ̇ q: the constraints' acceleration at zero q̇, so that Δ q̇ + Δ̇ q = 0.
+    pub constraint_bias: Vec<ExprId>,
+    /// One name per constraint row, which is also the name of its multiplier: `c.rx`, `c.x`.
+    pub constraint_names: Vec<String>,
+}
+
+impl Equations {
+    /// Number of coordinates (rows of M).
+    pub fn dimension(&self) -> usize {
+        self.variables.positions.len()
+    }
+
+    pub fn constraint_rows(&self) -> usize {
+        self.constraint_names.len()
+    }
+
+    /// Every expression the equations are made of: M, S, F, Δ, Δ̇q.
+    pub fn roots(&self) -> Vec<ExprId> {
+        [&self.mass, &self.second_member, &self.forces, &self.constraints, &self.constraint_bias].into_iter().flatten().copied().collect()
+    }
+
+    /// Number of distinct nodes of the equations: their size once common subexpressions are
+    /// shared.
+    pub fn size(&self) -> usize {
+        self.tape().size()
+    }
+
+    /// The tape that evaluates every root, in the order of `roots`.
+    pub fn tape(&self) -> Tape {
+        Tape::new(&self.pool, &self.roots())
+    }
+
+    /// Values for every symbol of the pool, by name; the name of the first symbol without one
+    /// otherwise.
+    pub fn symbol_values(&self, value: impl Fn(&str) -> Option<f64>) -> Result<Vec<f64>, String> {
+        (0..self.pool.symbol_count() as u32)
+            .map(|i| {
+                let name = self.pool.symbol_name(i);
+                value(name).ok_or_else(|| name.to_string())
+            })
+            .collect()
+    }
+
+    /// The equations at `symbols` (one value per pool symbol), evaluated by `tape`.
+    pub fn evaluate(&self, tape: &Tape, symbols: &[f64]) -> Values {
+        let values = tape.eval(symbols);
+        let (n, m) = (self.dimension(), self.constraint_rows());
+        let mut rest = values.as_slice();
+        let mut take = |count: usize| {
+            let (head, tail) = rest.split_at(count);
+            rest = tail;
+            head.to_vec()
+        };
+        Values {
+            mass: DMatrix::from_row_slice(n, n, &take(n * n)),
+            second_member: DVector::from_vec(take(n)),
+            forces: DVector::from_vec(take(n)),
+            constraints: DMatrix::from_row_slice(m, n, &take(m * n)),
+            constraint_bias: DVector::from_vec(take(m)),
+        }
+    }
+}
+
+/// The equations' values at one point.
+#[derive(Clone, Debug)]
+pub struct Values {
+    pub mass: DMatrix<f64>,
+    pub second_member: DVector<f64>,
+    pub forces: DVector<f64>,
+    pub constraints: DMatrix<f64>,
+    pub constraint_bias: DVector<f64>,
+}
+
+/// A body's mass properties, in the fixed axes at its origin.
+struct Inertia {
+    mass: ExprId,
+    /// OG.
+    centre: Vec3,
+    /// I(O).
+    at_origin: Mat3,
+}
+
+impl Inertia {
+    /// 𝔐 (v, ω): the momentum μ(v + ω∧r) and the angular momentum at O, μ r∧v + I(O) ω.
+    fn times(&self, pool: &mut Pool, angular: &Vec3, linear: &Vec3) -> [Vec3; 2] {
+        let spin = v::cross(pool, angular, &self.centre);
+        let velocity_of_centre = v::add(pool, linear, &spin);
+        let momentum = v::scale(pool, self.mass, &velocity_of_centre);
+        let lever = v::cross(pool, &self.centre, linear);
+        let lever = v::scale(pool, self.mass, &lever);
+        let turning = v::mat_vec(pool, &self.at_origin, angular);
+        [momentum, v::add(pool, &lever, &turning)]
+    }
+
+    /// 𝔖 − 𝔐 Ψ̇q for a body moving as `body`.
+    fn velocity_terms(&self, pool: &mut Pool, body: &Moving) -> [Vec3; 2] {
+        let w = body.angular_velocity;
+        let spin = v::cross(pool, &w, &self.centre);
+        let centripetal = v::cross(pool, &w, &spin);
+        let force = v::scale(pool, self.mass, &centripetal);
+        let turning = v::mat_vec(pool, &self.at_origin, &w);
+        let gyroscopic = v::cross(pool, &w, &turning);
+        let [bias_force, bias_moment] = self.times(pool, &body.angular_bias, &body.bias);
+        let force = v::add(pool, &force, &bias_force);
+        let moment = v::add(pool, &gyroscopic, &bias_moment);
+        [v::neg(pool, &force), v::neg(pool, &moment)]
+    }
+}
+
+/// Generates the equations of a mechanism whose bodies are numbered by `topology`.
+pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {
+    Generator::new(mechanism, topology).run().map_err(|e| {
+        vec![Diagnostic::error("E1101", format!("the equations of motion cannot be written: they would depend on {}", e.0))
+            .help("frames and rotation axes are constant; efforts may depend on coordinates, their first derivatives and time")]
+    })
+}
+
+struct Generator<'a> {
+    mechanism: &'a Mechanism,
+    topology: &'a Topology,
+    pool: Pool,
+    lowering: Lowering<'a>,
+    derivatives: Derivatives,
+    /// Indexed by body number, 0 = earth.
+    bodies: Vec<Moving>,
+    inertias: Vec<Option<Inertia>>,
+}
+
+type Wrench = [Vec3; 2];
+
+impl<'a> Generator<'a> {
+    fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
+        let mut pool = Pool::new();
+        let lowering = Lowering::new(&mut pool, mechanism, topology);
+        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new() }
+    }
+
+    fn columns(&self) -> usize {
+        self.lowering.variables.positions.len()
+    }
+
+    fn run(mut self) -> Result<Equations, LowerError> {
+        self.place_bodies()?;
+        let mut inertias = vec![None];
+        for i in 1..=self.topology.body_count() {
+            inertias.push(self.inertia(i)?);
+        }
+        self.inertias = inertias;
+        let tree_coordinates = self.tree_coordinates();
+        let mass = self.mass_matrix(tree_coordinates);
+        let velocity_terms: Vec<Option<Wrench>> =
+            (0..=self.topology.body_count()).map(|i| self.inertias[i].as_ref().map(|m| m.velocity_terms(&mut self.pool, &self.bodies[i]))).collect();
+        let second_member = self.project(velocity_terms);
+        let applied = self.applied_wrenches()?;
+        let mut forces = self.project(applied);
+        self.add_link_efforts(&mut forces)?;
+        let (constraints, constraint_bias, constraint_names) = self.loops()?;
+        Ok(Equations {
+            pool: self.pool,
+            variables: self.lowering.variables,
+            tree_coordinates,
+            mass,
+            second_member,
+            forces,
+            constraints,
+            constraint_bias,
+            constraint_names,
+        })
+    }
+
+    fn tree_coordinates(&self) -> usize {
+        self.topology.principal.iter().map(|l| self.mechanism.link(self.mechanism.join(l.join).link).coordinates.len()).sum()
+    }
+
+    /// The coordinates of a join, with their columns.
+    fn link_coordinates(&self, join: JoinId) -> LinkCoordinates {
+        let offset = self.lowering.join_offset(join);
+        let count = self.mechanism.link(self.mechanism.join(join).link).coordinates.len();
+        let variables = &self.lowering.variables;
+        LinkCoordinates {
+            positions: variables.positions[offset..offset + count].iter().map(|p| p.symbol).collect(),
+            rates: variables.rates[offset..offset + count].iter().map(|p| p.symbol).collect(),
+            columns: (offset..offset + count).collect(),
+        }
+    }
+
+    /// The steps of a displacement; `link` is the join whose coordinates they may use.
+    fn steps(&mut self, d: &Displacement, link: Option<JoinId>) -> Result<Vec<Step>, LowerError> {
+        d.0.iter()
+            .map(|step| match step {
+                Elementary::Translation(t) => Ok(Step::Translation(self.lowering.vector(&mut self.pool, t, link)?)),
+                Elementary::Rotation { angle, axis } => {
+                    let axis = self.lowering.vector(&mut self.pool, axis, None)?;
+                    let axis = unit(&mut self.pool, &axis)?;
+                    Ok(Step::Rotation { axis, angle: self.lowering.scalar(&mut self.pool, angle, link)? })
+                }
+            })
+            .collect()
+    }
+
+    fn inverse_steps(&mut self, d: &Displacement) -> Result<Vec<Step>, LowerError> {
+        let steps = self.steps(d, None)?;
+        Ok(steps.iter().rev().map(|s| s.inverse(&mut self.pool)).collect())
+    }
+
+    /// The link's dof chain, in order.
+    fn chain(&mut self, join: JoinId) -> Result<Vec<Step>, LowerError> {
+        let link = self.mechanism.link(self.mechanism.join(join).link);
+        let chain = Displacement(link.dofs.iter().flat_map(|d| d.0.iter().cloned()).collect());
+        self.steps(&chain, Some(join))
+    }
+
+    fn walk(&mut self, frame: &mut Moving, steps: &[Step], link: &LinkCoordinates) {
+        for step in steps {
+            frame.walk(&mut self.pool, &mut self.derivatives, step, link);
+        }
+    }
+
+    /// Every body's frame, parent first.
+    fn place_bodies(&mut self) -> Result<(), LowerError> {
+        let columns = self.columns();
+        let fixed = Moving::fixed(&mut self.pool, columns);
+        self.bodies = vec![fixed];
+        for link in &self.topology.principal {
+            let join = self.mechanism.join(link.join);
+            let (on_parent, on_child) = if link.first_on_parent { (&join.first, &join.second) } else { (&join.second, &join.first) };
+            let to_joint = self.steps(&on_parent.displacement, None)?;
+            let mut chain = self.chain(link.join)?;
+            if !link.first_on_parent {
+                chain = chain.iter().rev().map(|s| s.inverse(&mut self.pool)).collect();
+            }
+            let to_body = self.inverse_steps(&on_child.displacement)?;
+            let coordinates = self.link_coordinates(link.join);
+            let mut frame = self.bodies[link.parent].clone();
+            self.walk(&mut frame, &to_joint, &LinkCoordinates::default());
+            self.walk(&mut frame, &chain, &coordinates);
+            self.walk(&mut frame, &to_body, &LinkCoordinates::default());
+            self.bodies.push(frame);
+        }
+        Ok(())
+    }
+
+    /// Rotation and translation of a constant displacement.
+    fn pose(&mut self, d: &Displacement) -> Result<(Mat3, Vec3), LowerError> {
+        let mut rotation = v::identity(&mut self.pool);
+        let mut origin = v::zero(&mut self.pool);
+        for step in self.steps(d, None)? {
+            match step {
+                Step::Translation(t) => {
+                    let moved = v::mat_vec(&mut self.pool, &rotation, &t);
+                    origin = v::add(&mut self.pool, &origin, &moved);
+                }
+                Step::Rotation { axis, angle } => {
+                    let turn = v::rotation(&mut self.pool, &axis, angle);
+                    rotation = v::mat_mul(&mut self.pool, &rotation, &turn);
+                }
+            }
+        }
+        Ok((rotation, origin))
+    }
+
+    /// Body `i`'s mass, centre and inertia at its origin in the fixed axes (I(O) = I(G) − μ r̃ r̃);
+    /// `None` for a body declared without mass or inertia.
+    fn inertia(&mut self, i: usize) -> Result<Option<Inertia>, LowerError> {
+        let body = self.mechanism.body(self.topology.bodies[i - 1]);
+        let mass = self.lowering.scalar(&mut self.pool, body.mass.value(), None)?;
+        let moments = self.lowering.vector(&mut self.pool, body.inertia.value(), None)?;
+        if self.pool.is_zero(mass) && v::is_zero(&self.pool, &moments) {
+            return Ok(None);
+        }
+        let (principal, centre) = self.pose(body.iframe.value())?;
+        let pool = &mut self.pool;
+        let frame = self.bodies[i].rotation;
+        let axes = v::mat_mul(pool, &frame, &principal);
+        let centre = v::mat_vec(pool, &frame, &centre);
+        // I(G) = Σₖ Iₖ eₖ eₖᵀ over the principal axes eₖ (columns of `axes`).
+        let squared = v::dot(pool, &centre, &centre);
+        let mut at_origin = v::identity(pool);
+        for (r, row) in at_origin.iter_mut().enumerate() {
+            for (c, entry) in row.iter_mut().enumerate() {
+                let terms: Vec<ExprId> = (0..3)
+                    .map(|k| {
+                        let product = pool.mul(axes[r][k], axes[c][k]);
+                        pool.mul(moments[k], product)
+                    })
+                    .collect();
+                let central = pool.sum(terms);
+                // − μ r̃ r̃ = μ (|r|² Id − r rᵀ)
+                let outer = pool.mul(centre[r], centre[c]);
+                let shifted = if r == c { pool.sub(squared, outer) } else { pool.neg(outer) };
+                let shift = pool.mul(mass, shifted);
+                *entry = pool.add(central, shift);
+            }
+        }
+        Ok(Some(Inertia { mass, centre, at_origin }))
+    }
+
+    /// The body that owns each tree column, and its parent.
+    fn owner(&self, column: usize) -> usize {
+        let mut end = 0;
+        for link in &self.topology.principal {
+            end += self.mechanism.link(self.mechanism.join(link.join).link).coordinates.len();
+            if column < end {
+                return link.child;
+            }
+        }
+        0
+    }
+
+    /// Ψᵀ applied to per-body wrenches (force, moment at the body's origin), from the last body
+    /// to the first: the generalised forces on every tree coordinate (zero on the others).
+    fn project(&mut self, mut wrenches: Vec<Option<Wrench>>) -> Vec<ExprId> {
+        let zero = self.pool.constant(0.0);
+        let mut generalised = vec![zero; self.columns()];
+        for b in (1..=self.topology.body_count()).rev() {
+            let Some(wrench) = wrenches[b] else { continue };
+            for column in self.own_columns(b) {
+                generalised[column] = self.power(b, column, &wrench);
+            }
+            self.carry_to_parent(b, wrench, &mut wrenches);
+        }
+        generalised
+    }
+
+    fn own_columns(&self, b: usize) -> std::ops::Range<usize> {
+        let link = &self.topology.principal[b - 1];
+        let offset = self.lowering.join_offset(link.join);
+        offset..offset + self.mechanism.link(self.mechanism.join(link.join).link).coordinates.len()
+    }
+
+    /// The power of `wrench` on body `b` per unit rate of `column`: Ψᵀ's entry.
+    fn power(&mut self, b: usize, column: usize, wrench: &Wrench) -> ExprId {
+        match self.bodies[b].column(column) {
+            Some([angular, linear]) => {
+                let (angular, linear) = (*angular, *linear);
+                let f = v::dot(&mut self.pool, &linear, &wrench[0]);
+                let m = v::dot(&mut self.pool, &angular, &wrench[1]);
+                self.pool.add(f, m)
+            }
+            None => self.pool.constant(0.0),
+        }
+    }
+
+    /// Adds body b's wrench, moved to its parent's origin, to the parent's.
+    fn carry_to_parent(&mut self, b: usize, wrench: Wrench, wrenches: &mut [Option<Wrench>]) {
+        let parent = self.topology.parent(b);
+        if parent == 0 {
+            return;
+        }
+        let pool = &mut self.pool;
+        let arm = v::sub(pool, &self.bodies[b].origin, &self.bodies[parent].origin);
+        let lever = v::cross(pool, &arm, &wrench[0]);
+        let moment = v::add(pool, &wrench[1], &lever);
+        wrenches[parent] = Some(match wrenches[parent] {
+            Some([f, m]) => [v::add(pool, &f, &wrench[0]), v::add(pool, &m, &moment)],
+            None => [wrench[0], moment],
+        });
+    }
+
+    /// M = Ψᵀ𝔐Ψ column by column: each column's momenta swept to the root; only the entries on
+    /// and above the diagonal are formed, the others are their mirror.
+    fn mass_matrix(&mut self, tree_coordinates: usize) -> Vec<ExprId> {
+        let n = self.columns();
+        let zero = self.pool.constant(0.0);
+        let mut mass = vec![zero; n * n];
+        for l in 0..tree_coordinates {
+            let mut wrenches: Vec<Option<Wrench>> = vec![None; self.topology.body_count() + 1];
+            for b in 1..=self.topology.body_count() {
+                if let (Some(inertia), Some([angular, linear])) = (&self.inertias[b], self.bodies[b].column(l)) {
+                    wrenches[b] = Some(inertia.times(&mut self.pool, angular, linear));
+                }
+            }
+            for b in (self.owner(l)..=self.topology.body_count()).rev().filter(|&b| b > 0) {
+                let Some(wrench) = wrenches[b] else { continue };
+                for row in self.own_columns(b).filter(|&row| row <= l) {
+                    let entry = self.power(b, row, &wrench);
+                    mass[row * n + l] = entry;
+                    mass[l * n + row] = entry;
+                }
+                self.carry_to_parent(b, wrench, &mut wrenches);
+            }
+            // Above the column's own body only ancestors remain: keep sweeping to the root.
+            let mut b = self.topology.parent(self.owner(l).max(1));
+            while b > 0 {
+                if let Some(wrench) = wrenches[b] {
+                    for row in self.own_columns(b) {
+                        let entry = self.power(b, row, &wrench);
+                        mass[row * n + l] = entry;
+                        mass[l * n + row] = entry;
+                    }
+                    self.carry_to_parent(b, wrench, &mut wrenches);
+                }
+                b = self.topology.parent(b);
+            }
+        }
+        mass
+    }
+
+    /// 𝔉: every `apply` as a wrench at its body's origin, fixed axes.
+    fn applied_wrenches(&mut self) -> Result<Vec<Option<Wrench>>, LowerError> {
+        let mut wrenches: Vec<Option<Wrench>> = vec![None; self.topology.body_count() + 1];
+        for application in &self.mechanism.applications {
+            let b = self.topology.number(application.target.body);
+            if b == 0 {
+                continue;
+            }
+            let effort = self.mechanism.effort(application.effort);
+            let value = self.lowering.vector(&mut self.pool, effort.value.value(), None)?;
+            let value = match effort.basis {
+                BodyRef::Earth => value,
+                BodyRef::Body(id) => {
+                    let basis = self.topology.number_of.get(&id).copied().ok_or_else(|| LowerError("a body outside the mechanism".to_string()))?;
+                    v::mat_vec(&mut self.pool, &self.bodies[basis].rotation, &value)
+                }
+            };
+            let zero = v::zero(&mut self.pool);
+            let wrench = match effort.kind {
+                EffortKind::Torque => [zero, value],
+                EffortKind::Force => {
+                    let (_, point) = self.pose(&application.target.displacement)?;
+                    let arm = v::mat_vec(&mut self.pool, &self.bodies[b].rotation, &point);
+                    [value, v::cross(&mut self.pool, &arm, &value)]
+                }
+            };
+            wrenches[b] = Some(match wrenches[b] {
+                Some([f, m]) => [v::add(&mut self.pool, &f, &wrench[0]), v::add(&mut self.pool, &m, &wrench[1])],
+                None => wrench,
+            });
+        }
+        Ok(wrenches)
+    }
+
+    /// The links' own efforts (`force`, `torque`, `forceN`, `torqueN`): the wrench, in the frame
+    /// of the chain's start (or of step N), against the twist each coordinate gives there.
+    fn add_link_efforts(&mut self, forces: &mut [ExprId]) -> Result<(), LowerError> {
+        let joins: Vec<JoinId> = self.topology.principal.iter().map(|l| l.join).chain(self.topology.complementary.iter().map(|l| l.join)).collect();
+        for join in joins {
+            let link = self.mechanism.link(self.mechanism.join(join).link);
+            let efforts: Vec<_> = [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)]
+                .into_iter()
+                .flat_map(|(kind, list)| list.iter().map(move |(step, value)| (kind, *step, value.clone())))
+                .collect();
+            if efforts.is_empty() {
+                continue;
+            }
+            let coordinates = self.link_coordinates(join);
+            let chain = self.chain(join)?;
+            for (kind, step, value) in efforts {
+                let value = self.lowering.vector(&mut self.pool, &value, Some(join))?;
+                let twists = self.chain_twists(&chain, step, &coordinates);
+                for (k, [angular, linear]) in twists.into_iter().enumerate() {
+                    let along = match kind {
+                        EffortKind::Force => v::dot(&mut self.pool, &linear, &value),
+                        EffortKind::Torque => v::dot(&mut self.pool, &angular, &value),
+                    };
+                    let column = coordinates.columns[k];
+                    forces[column] = self.pool.add(forces[column], along);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Per coordinate of the link, the twist (angular, linear at the frame's origin) a unit rate
+    /// gives: of the chain's end in its first frame (`step` 0), or of step N in its own frame.
+    fn chain_twists(&mut self, chain: &[Step], step: u8, coordinates: &LinkCoordinates) -> Vec<[Vec3; 2]> {
+        let columns = self.columns();
+        let mut frame = Moving::fixed(&mut self.pool, columns);
+        let steps = if step == 0 { chain } else { &chain[step as usize - 1..step as usize] };
+        self.walk(&mut frame, steps, coordinates);
+        let zero = v::zero(&mut self.pool);
+        coordinates
+            .columns
+            .iter()
+            .map(|&c| {
+                let [angular, linear] = frame.column(c).copied().unwrap_or([zero, zero]);
+                if step != 0 {
+                    return [angular, linear];
+                }
+                // At the first frame's origin: v − ω ∧ (end origin).
+                let lever = v::cross(&mut self.pool, &angular, &frame.origin);
+                [angular, v::sub(&mut self.pool, &linear, &lever)]
+            })
+            .collect()
+    }
+
+    /// Six rows per complementary link: the twist of its target frame minus that of its chain's
+    /// end, whose time derivative gives the acceleration rows.
+    fn loops(&mut self) -> Result<(Vec<ExprId>, Vec<ExprId>, Vec<String>), LowerError> {
+        let n = self.columns();
+        let (mut rows, mut bias, mut names) = (Vec::new(), Vec::new(), Vec::new());
+        for link in &self.topology.complementary {
+            let join = self.mechanism.join(link.join);
+            let to_start = self.steps(&join.first.displacement, None)?;
+            let chain = self.chain(link.join)?;
+            let to_target = self.steps(&join.second.displacement, None)?;
+            let coordinates = self.link_coordinates(link.join);
+            let mut end = self.bodies[link.first].clone();
+            self.walk(&mut end, &to_start, &LinkCoordinates::default());
+            self.walk(&mut end, &chain, &coordinates);
+            let mut target = self.bodies[link.second].clone();
+            self.walk(&mut target, &to_target, &LinkCoordinates::default());
+            let name = self.mechanism.join_name(link.join);
+            for r in 0..6 {
+                let (part, i) = (r / 3, r % 3);
+                for c in 0..n {
+                    let component = |frame: &Moving| frame.column(c).map(|twist| twist[part][i]);
+                    let zero = self.pool.constant(0.0);
+                    let (t, e) = (component(&target).unwrap_or(zero), component(&end).unwrap_or(zero));
+                    rows.push(self.pool.sub(t, e));
+                }
+                let pick = |frame: &Moving| if part == 0 { frame.angular_bias[i] } else { frame.bias[i] };
+                bias.push(self.pool.sub(pick(&target), pick(&end)));
+                names.push(format!("{name}.{}", ROW_NAMES[r]));
+            }
+        }
+        Ok((rows, bias, names))
+    }
+}
+
+/// The unit vector along `axis`: normalised now when it is a number, symbolically otherwise.
+fn unit(pool: &mut Pool, axis: &Vec3) -> Result<Vec3, LowerError> {
+    let values: Option<Vec<f64>> = axis.iter().map(|&a| pool.as_constant(a)).collect();
+    match values {
+        Some(x) => {
+            let norm = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+            if norm == 0.0 || !norm.is_finite() {
+                return Err(LowerError("a rotation about a zero axis".to_string()));
+            }
+            Ok(v::constant(pool, [x[0] / norm, x[1] / norm, x[2] / norm]))
+        }
+        None => {
+            let squared = v::dot(pool, axis, axis);
+            let norm = pool.sqrt(squared);
+            Ok(axis.map(|a| pool.div(a, norm)))
+        }
+    }
+}

@@ -1,0 +1,214 @@
+//! From the elaborated program's scalars (`SExpr`) to pool expressions: coordinates, rates,
+//! time, unknowns and unknown functions become named symbols, the variables of the equations.
+
+use std::collections::HashMap;
+
+use super::expr::{ExprId, Function, Pool};
+use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
+use crate::elab::value::{JoinId, SExpr, UnknownId};
+use crate::topology::Topology;
+
+/// A symbol of the equations and what it stands for.
+#[derive(Clone, Debug)]
+pub struct Variable {
+    /// A name for people and for SymPy: `hinge.x`, `hinge.x'`, `mu_1`, `z34`.
+    pub name: String,
+    pub symbol: ExprId,
+    /// What the program says it is: `coordinate x of join hinge`, `mass(satellite)`, …
+    pub meaning: String,
+    /// Its `given` value, if the program gives one (parameters only).
+    pub given: Option<f64>,
+}
+
+/// An unknown function applied to arguments (`?fs(x, x')`): its value is an input of the
+/// equations, standing for the law the program left open.
+#[derive(Clone, Debug)]
+pub struct FunctionUse {
+    /// The function's name (`cL2_x`).
+    pub name: String,
+    pub symbol: ExprId,
+    pub arguments: Vec<ExprId>,
+}
+
+/// The variables of a mechanism's equations.
+#[derive(Clone, Debug)]
+pub struct Variables {
+    /// Declared coordinates: the principal links' by number, then the complementary links'.
+    pub positions: Vec<Variable>,
+    /// Their first derivatives, in the same order.
+    pub rates: Vec<Variable>,
+    /// Unknown scalars of the program, in order of first use.
+    pub parameters: Vec<Variable>,
+    pub functions: Vec<FunctionUse>,
+    pub time: ExprId,
+}
+
+/// Lowers scalars of one mechanism, creating the variables as they are met.
+pub struct Lowering<'a> {
+    mechanism: &'a Mechanism,
+    generated: HashMap<UnknownId, String>,
+    /// Body numbers, for the generic names (`mu_1`).
+    body_numbers: HashMap<crate::elab::value::BodyId, usize>,
+    /// Index of each join's first coordinate among `positions`.
+    join_offsets: HashMap<JoinId, usize>,
+    parameters: HashMap<UnknownId, usize>,
+    functions: HashMap<(UnknownId, Vec<ExprId>), usize>,
+    pub variables: Variables,
+}
+
+#[derive(Debug)]
+pub struct LowerError(pub String);
+
+impl<'a> Lowering<'a> {
+    pub fn new(pool: &mut Pool, mechanism: &'a Mechanism, topology: &Topology) -> Lowering<'a> {
+        let generated = crate::topology::notation::unknown_names(mechanism, topology);
+        let mut positions = Vec::new();
+        let mut rates = Vec::new();
+        let mut join_offsets = HashMap::new();
+        let joins = topology.principal.iter().map(|l| l.join).chain(topology.complementary.iter().map(|l| l.join));
+        for join in joins {
+            join_offsets.insert(join, positions.len());
+            let name = mechanism.join_name(join);
+            for coordinate in &mechanism.link(mechanism.join(join).link).coordinates {
+                let position = format!("{name}.{coordinate}");
+                let rate = format!("{position}'");
+                let meaning = format!("coordinate `{coordinate}` of join `{name}`");
+                positions.push(Variable { symbol: pool.symbol(&position), name: position, meaning: meaning.clone(), given: None });
+                rates.push(Variable { symbol: pool.symbol(&rate), name: rate, meaning: format!("rate of the {meaning}"), given: None });
+            }
+        }
+        let time = pool.symbol("t");
+        let body_numbers = topology.number_of.clone();
+        Lowering {
+            mechanism,
+            generated,
+            body_numbers,
+            join_offsets,
+            parameters: HashMap::new(),
+            functions: HashMap::new(),
+            variables: Variables { positions, rates, parameters: Vec::new(), functions: Vec::new(), time },
+        }
+    }
+
+    /// Index among `positions` of a join's first coordinate.
+    pub fn join_offset(&self, join: JoinId) -> usize {
+        self.join_offsets[&join]
+    }
+
+    /// The expression of `s`; `link` is the join whose link encloses it (for `x`, `x'`).
+    pub fn scalar(&mut self, pool: &mut Pool, s: &SExpr, link: Option<JoinId>) -> Result<ExprId, LowerError> {
+        Ok(match s {
+            SExpr::Num(v) => pool.constant(*v),
+            SExpr::Time => self.variables.time,
+            SExpr::Unknown(id) => self.parameter(pool, *id),
+            SExpr::UnknownFunction(id, args) => {
+                let arguments = args.iter().map(|a| self.scalar(pool, a, link)).collect::<Result<Vec<_>, _>>()?;
+                self.function(pool, *id, arguments)
+            }
+            SExpr::Coordinate { index, order } => {
+                let join = link.ok_or_else(|| LowerError("a link coordinate outside its link".to_string()))?;
+                self.coordinate(join, *index, *order)?
+            }
+            SExpr::JoinCoordinate { join, index, order } => self.coordinate(*join, *index, *order)?,
+            SExpr::Neg(a) => {
+                let a = self.scalar(pool, a, link)?;
+                pool.neg(a)
+            }
+            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+                let (x, y) = (self.scalar(pool, a, link)?, self.scalar(pool, b, link)?);
+                match s {
+                    SExpr::Add(..) => pool.add(x, y),
+                    SExpr::Sub(..) => pool.sub(x, y),
+                    SExpr::Mul(..) => pool.mul(x, y),
+                    SExpr::Div(..) => pool.div(x, y),
+                    _ if pool.as_constant(y) == Some(2.0) => pool.mul(x, x),
+                    _ => pool.pow(x, y),
+                }
+            }
+            SExpr::Call(name, args) => {
+                let args = args.iter().map(|a| self.scalar(pool, a, link)).collect::<Result<Vec<_>, _>>()?;
+                match (Function::from_name(name), args.as_slice()) {
+                    (Some(f), [a]) => pool.apply(f, *a),
+                    (None, [y, x]) if *name == "atan2" => pool.atan2(*y, *x),
+                    _ => return Err(LowerError(format!("the function `{name}` with {} arguments", args.len()))),
+                }
+            }
+        })
+    }
+
+    pub fn vector(&mut self, pool: &mut Pool, v: &crate::elab::value::Vector, link: Option<JoinId>) -> Result<[ExprId; 3], LowerError> {
+        Ok([self.scalar(pool, &v[0], link)?, self.scalar(pool, &v[1], link)?, self.scalar(pool, &v[2], link)?])
+    }
+
+    fn coordinate(&self, join: JoinId, index: u32, order: u32) -> Result<ExprId, LowerError> {
+        let k = self.join_offsets.get(&join).ok_or_else(|| LowerError("a coordinate of a join outside the mechanism".to_string()))? + index as usize;
+        match order {
+            0 => Ok(self.variables.positions[k].symbol),
+            1 => Ok(self.variables.rates[k].symbol),
+            _ => Err(LowerError(format!("the second derivative of `{}`", self.variables.positions[k].name))),
+        }
+    }
+
+    fn parameter(&mut self, pool: &mut Pool, id: UnknownId) -> ExprId {
+        if let Some(&k) = self.parameters.get(&id) {
+            return self.variables.parameters[k].symbol;
+        }
+        let unknown = &self.mechanism.unknowns[id.0 as usize];
+        let meaning = match unknown.origin {
+            Origin::Written => "an unknown of the program".to_string(),
+            origin => self.mechanism.generic_name(origin),
+        };
+        let mut name = self.parameter_name(id);
+        while self.variables.parameters.iter().any(|p| p.name == name) || self.variables.positions.iter().any(|p| p.name == name) {
+            name.push('_');
+        }
+        let given = self.mechanism.given.iter().find(|(g, _, _)| *g == id).and_then(|(_, v, _)| crate::elab::value::constant(v));
+        let variable = Variable { symbol: pool.symbol(&name), name, meaning, given };
+        self.parameters.insert(id, self.variables.parameters.len());
+        self.variables.parameters.push(variable);
+        self.variables.parameters.last().map(|v| v.symbol).unwrap_or(self.variables.time)
+    }
+
+    /// The `let` name, else the notation table's, else a thesis-style name built from the body
+    /// number (`mu_1`, `mIg_1_x`).
+    fn parameter_name(&self, id: UnknownId) -> String {
+        let unknown = &self.mechanism.unknowns[id.0 as usize];
+        if let Some(name) = &unknown.name {
+            return name.to_string();
+        }
+        if let Some(name) = self.generated.get(&id) {
+            return name.clone();
+        }
+        const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+        let number = |body| self.body_numbers.get(&body).copied().unwrap_or(0);
+        match unknown.origin {
+            Origin::Mass(body) => format!("mu_{}", number(body)),
+            Origin::Inertia(body, axis) => format!("mIg_{}_{}", number(body), AXES[axis as usize % 3]),
+            Origin::InertiaFrame(body, k) => format!("vGT_{}_{}", number(body), AXES[k as usize % 6]),
+            Origin::EffortValue(effort, axis) => format!("effort{}_{}", effort.0 + 1, AXES[axis as usize % 3]),
+            Origin::Written if unknown.kind == UnknownKind::Function => format!("f{}", id.0 + 1),
+            Origin::Written => format!("u{}", id.0 + 1),
+        }
+    }
+
+    fn function(&mut self, pool: &mut Pool, id: UnknownId, arguments: Vec<ExprId>) -> ExprId {
+        let key = (id, arguments);
+        if let Some(&k) = self.functions.get(&key) {
+            return self.variables.functions[k].symbol;
+        }
+        let name = self.parameter_name(id);
+        // The symbol stands for the value of the application; its name shows the arguments.
+        let shown: Vec<String> = key.1.iter().map(|&a| self.argument_name(pool, a)).collect();
+        let symbol = pool.symbol(&format!("{name}({})", shown.join(", ")));
+        self.functions.insert(key.clone(), self.variables.functions.len());
+        self.variables.functions.push(FunctionUse { name, symbol, arguments: key.1 });
+        symbol
+    }
+
+    fn argument_name(&self, pool: &Pool, a: ExprId) -> String {
+        match pool.node(a) {
+            super::expr::Node::Symbol(i) => pool.symbol_name(i).to_string(),
+            _ => format!("e{}", a.index()),
+        }
+    }
+}
