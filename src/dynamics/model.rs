@@ -164,6 +164,13 @@ fn constant(s: &Scalar, unknowns: &UnknownValues) -> Result<f64, EvalError> {
 /// Builds the dynamic model: the tree of principal links, and the complementary links as
 /// constraints.
 pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model, Vec<Diagnostic>> {
+    build_with(mechanism, kinematics, true)
+}
+
+/// `build`, with `quaternions` false keeping every joint a plain chain in its declared
+/// coordinates (velocities are the coordinates' rates): the form of the symbolic equations,
+/// for comparing the two.
+pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternions: bool) -> Result<Model, Vec<Diagnostic>> {
     let unknowns = &kinematics.unknowns;
     let topology = &kinematics.topology;
     let mut errors = Vec::new();
@@ -175,7 +182,7 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
         let (on_parent, on_child) = if link.first_on_parent { (chain.first, chain.second) } else { (chain.second, chain.first) };
         let mut joint = Joint {
             chain: chain.clone(),
-            kind: classify(chain),
+            kind: if quaternions { classify(chain) } else { JointType::Chain },
             parent: link.parent,
             child: link.child,
             first_on_parent: link.first_on_parent,

@@ -18,6 +18,8 @@ pub struct Variable {
     pub meaning: String,
     /// Its `given` value, if the program gives one (parameters only).
     pub given: Option<f64>,
+    /// The unknown of the program it stands for (parameters only).
+    pub unknown: Option<UnknownId>,
 }
 
 /// An unknown function applied to arguments (`?fs(x, x')`): its value is an input of the
@@ -73,8 +75,8 @@ impl<'a> Lowering<'a> {
                 let position = format!("{name}.{coordinate}");
                 let rate = format!("{position}'");
                 let meaning = format!("coordinate `{coordinate}` of join `{name}`");
-                positions.push(Variable { symbol: pool.symbol(&position), name: position, meaning: meaning.clone(), given: None });
-                rates.push(Variable { symbol: pool.symbol(&rate), name: rate, meaning: format!("rate of the {meaning}"), given: None });
+                positions.push(Variable { symbol: pool.symbol(&position), name: position, meaning: meaning.clone(), given: None, unknown: None });
+                rates.push(Variable { symbol: pool.symbol(&rate), name: rate, meaning: format!("rate of the {meaning}"), given: None, unknown: None });
             }
         }
         let time = pool.symbol("t");
@@ -163,7 +165,7 @@ impl<'a> Lowering<'a> {
             name.push('_');
         }
         let given = self.mechanism.given.iter().find(|(g, _, _)| *g == id).and_then(|(_, v, _)| crate::elab::value::constant(v));
-        let variable = Variable { symbol: pool.symbol(&name), name, meaning, given };
+        let variable = Variable { symbol: pool.symbol(&name), name, meaning, given, unknown: Some(id) };
         self.parameters.insert(id, self.variables.parameters.len());
         self.variables.parameters.push(variable);
         self.variables.parameters.last().map(|v| v.symbol).unwrap_or(self.variables.time)
@@ -187,7 +189,7 @@ impl<'a> Lowering<'a> {
             Origin::InertiaFrame(body, k) => format!("vGT_{}_{}", number(body), AXES[k as usize % 6]),
             Origin::EffortValue(effort, axis) => format!("effort{}_{}", effort.0 + 1, AXES[axis as usize % 3]),
             Origin::Written if unknown.kind == UnknownKind::Function => format!("f{}", id.0 + 1),
-            Origin::Written => format!("u{}", id.0 + 1),
+            Origin::Written => format!("unknown{}", id.0 + 1),
         }
     }
 
