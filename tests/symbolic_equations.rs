@@ -317,3 +317,49 @@ proptest! {
         prop_assert!(worst < 1e-12, "symbolic and numeric differ by {worst:e}\n{text}");
     }
 }
+
+/// Notes §9.8: the fixed satellite's generalised forces with joint efforts C12, F23, C34 and a
+/// force F4 (fixed axes) on the reflector's centre, all left unknown.
+#[test]
+fn fixed_satellite_generalised_forces_equal_the_closed_forms() {
+    let text = "let z12 = 0.8 ; let z34 = 0.5 ;
+        let C12 = ?s ; let F23 = ?s ; let C34 = ?s ; let F4 = ?v ;
+        let bras_primaire = body mass = 0, inertia = 0 end ;
+        let bras_secondaire = body mass = 0, inertia = 0 end ;
+        let reflecteur = body mass = 40, iframe = [0,0,z34] ++ 1, inertia = 0 end ;
+        join [0,0,z12] ++ 1 @ earth and bras_primaire.frame with link(x) dof = x || [1,0,0], torque = [C12,0,0] end as hinge ;
+        join bras_primaire.frame and bras_secondaire.frame with link(x) dof = [0,x,0], force = [0,F23,0] end as slide ;
+        join bras_secondaire.frame and reflecteur.frame with link(x) dof = x || [0,1,0], torque = [0,C34,0] end as tilt ;
+        apply force value = F4, body = earth end on reflecteur.iframe ;";
+    let compilation = lsdc::driver::compile_text("efforts.lsd", text, None, &LoadOptions::default());
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
+    let eq = symbolic::generate(mechanism, &lsdc::topology::build(mechanism).expect("a topology")).expect("equations");
+    let tape = eq.tape();
+    let mut random = Sequence(17);
+    let z34 = 0.5;
+    for _ in 0..10 {
+        let mut values: HashMap<String, f64> = HashMap::new();
+        for v in eq.variables.positions.iter().chain(&eq.variables.rates).chain(&eq.variables.parameters) {
+            values.insert(v.name.clone(), 2.0 * random.next());
+        }
+        values.insert("t".to_string(), 0.0);
+        let symbols = eq.symbol_values(|n| values.get(n).copied()).expect("values");
+        let forces = eq.evaluate(&tape, &symbols).forces;
+        let (q7, q8, q9) = (values["hinge.x"], values["slide.x"], values["tilt.x"]);
+        let (c12, f23, c34) = (values["C12"], values["F23"], values["C34"]);
+        // `?v` components are named after their unknowns, in order.
+        let mut components: Vec<_> = eq.variables.parameters.iter().filter(|p| p.name.starts_with("unknown")).collect();
+        components.sort_by_key(|p| p.unknown);
+        let f4: Vec<f64> = components.iter().map(|p| values[&p.name]).collect();
+        let (s7, c7, s9, c9) = (q7.sin(), q7.cos(), q9.sin(), q9.cos());
+        let expected = [
+            c12 + f4[1] * (-s7 * q8 - c7 * c9 * z34) + f4[2] * (c7 * q8 - s7 * c9 * z34),
+            f23 + f4[1] * c7 + f4[2] * s7,
+            c34 + f4[0] * c9 * z34 + f4[1] * s7 * s9 * z34 - f4[2] * c7 * s9 * z34,
+        ];
+        for i in 0..3 {
+            assert!((forces[i] - expected[i]).abs() < 1e-13 * (1.0 + expected[i].abs()), "Q{}: {} ≠ {}", i + 7, forces[i], expected[i]);
+        }
+    }
+}

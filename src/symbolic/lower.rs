@@ -176,7 +176,11 @@ impl<'a> Lowering<'a> {
     fn parameter_name(&self, id: UnknownId) -> String {
         let unknown = &self.mechanism.unknowns[id.0 as usize];
         if let Some(name) = &unknown.name {
-            return name.to_string();
+            // The components of a `?v` share its name.
+            return match unknown.kind {
+                UnknownKind::Vector => format!("{name}_{}", ["x", "y", "z"][unknown.component as usize % 3]),
+                _ => name.to_string(),
+            };
         }
         if let Some(name) = self.generated.get(&id) {
             return name.clone();
