@@ -455,6 +455,20 @@ impl Tape {
         self.order.len()
     }
 
+    /// Number of nodes the roots would have written as trees, without sharing (as f64: it grows
+    /// exponentially with depth): what common subexpressions save.
+    pub fn expanded_size(&self) -> f64 {
+        let mut size = vec![0.0; self.steps.len()];
+        for (k, step) in self.steps.iter().enumerate() {
+            size[k] = 1.0 + match *step {
+                Step::Constant(_) | Step::Symbol(_) => 0.0,
+                Step::Neg(a) | Step::Apply(_, a) => size[a],
+                Step::Add(a, b) | Step::Mul(a, b) | Step::Div(a, b) | Step::Pow(a, b) | Step::Atan2(a, b) => size[a] + size[b],
+            };
+        }
+        self.roots.iter().map(|&r| size[r]).sum()
+    }
+
     /// Evaluates every node with `symbols[i]` the value of symbol i; returns the roots' values.
     pub fn eval(&self, symbols: &[f64]) -> Vec<f64> {
         let mut value = vec![0.0; self.steps.len()];
