@@ -151,6 +151,12 @@ fn compare(mechanism: &Mechanism, eq: &Equations, unknowns: &UnknownValues, coor
     assert!(at.mass.rows(nv, n - nv).iter().all(|&m| m == 0.0));
     let rhs = if with_efforts { &at.second_member + &at.forces } else { at.second_member.clone() };
     gaps.push(relative_gap(rhs.as_slice(), expected.right_hand_side.as_slice()));
+    if let Some(accelerations) = at.accelerations.as_ref().filter(|_| n > 0) {
+        // The articulated-body recursion against solving M q̇ = S + F.
+        if let Some(solved) = at.mass.clone().lu().solve(&(&at.second_member + &at.forces)) {
+            gaps.push(relative_gap(accelerations.as_slice(), solved.as_slice()));
+        }
+    }
     for (r, active) in expected.active_rows.iter().enumerate() {
         if *active {
             let row: Vec<f64> = at.constraints.row(r).iter().copied().collect();

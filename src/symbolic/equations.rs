@@ -19,6 +19,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::articulated::{self, Matrix6};
 use super::expr::{ExprId, Pool, Tape};
 use super::kinematics::{Derivatives, LinkCoordinates, Moving, Step};
 use super::lower::{LowerError, Lowering, Variables};
@@ -49,6 +50,9 @@ pub struct Equations {
     pub constraint_bias: Vec<ExprId>,
     /// One name per constraint row, which is also the name of its multiplier: `c.rx`, `c.x`.
     pub constraint_names: Vec<String>,
+    /// For trees, the coordinates' second derivatives q̇ = M⁻¹(S + F), written by the
+    /// articulated-body recursion (O(n) expressions rather than a solve).
+    pub accelerations: Option<Vec<ExprId>>,
 }
 
 impl Equations {
@@ -61,9 +65,10 @@ impl Equations {
         self.constraint_names.len()
     }
 
-    /// Every expression the equations are made of: M, S, F, Δ, Δ̇q.
+    /// Every expression the equations are made of: M, S, F, Δ, Δ̇q, then the accelerations.
     pub fn roots(&self) -> Vec<ExprId> {
-        [&self.mass, &self.second_member, &self.forces, &self.constraints, &self.constraint_bias].into_iter().flatten().copied().collect()
+        let accelerations = self.accelerations.iter().flatten();
+        [&self.mass, &self.second_member, &self.forces, &self.constraints, &self.constraint_bias].into_iter().flatten().chain(accelerations).copied().collect()
     }
 
     /// Number of distinct nodes of the equations: their size once common subexpressions are
@@ -104,6 +109,7 @@ impl Equations {
             forces: DVector::from_vec(take(n)),
             constraints: DMatrix::from_row_slice(m, n, &take(m * n)),
             constraint_bias: DVector::from_vec(take(m)),
+            accelerations: self.accelerations.as_ref().map(|a| DVector::from_vec(take(a.len()))),
         }
     }
 }
@@ -116,6 +122,7 @@ pub struct Values {
     pub forces: DVector<f64>,
     pub constraints: DMatrix<f64>,
     pub constraint_bias: DVector<f64>,
+    pub accelerations: Option<DVector<f64>>,
 }
 
 /// A body's mass properties, in the fixed axes at its origin.
@@ -139,18 +146,41 @@ impl Inertia {
         [momentum, v::add(pool, &lever, &turning)]
     }
 
-    /// 𝔖 − 𝔐 Ψ̇q for a body moving as `body`.
-    fn velocity_terms(&self, pool: &mut Pool, body: &Moving) -> [Vec3; 2] {
+    /// 𝔖 = (−μ ω∧(ω∧r), −ω∧I(O)ω) for a body moving as `body`.
+    fn velocity_products(&self, pool: &mut Pool, body: &Moving) -> Wrench {
         let w = body.angular_velocity;
         let spin = v::cross(pool, &w, &self.centre);
         let centripetal = v::cross(pool, &w, &spin);
         let force = v::scale(pool, self.mass, &centripetal);
         let turning = v::mat_vec(pool, &self.at_origin, &w);
         let gyroscopic = v::cross(pool, &w, &turning);
+        [v::neg(pool, &force), v::neg(pool, &gyroscopic)]
+    }
+
+    /// 𝔖 − 𝔐 Ψ̇q.
+    fn velocity_terms(&self, pool: &mut Pool, body: &Moving) -> Wrench {
+        let [force, moment] = self.velocity_products(pool, body);
         let [bias_force, bias_moment] = self.times(pool, &body.angular_bias, &body.bias);
-        let force = v::add(pool, &force, &bias_force);
-        let moment = v::add(pool, &gyroscopic, &bias_moment);
-        [v::neg(pool, &force), v::neg(pool, &moment)]
+        [v::sub(pool, &force, &bias_force), v::sub(pool, &moment, &bias_moment)]
+    }
+
+    /// 𝔐 as a 6 × 6 matrix on (v, ω): [[μ Id, −μ r̃], [μ r̃, I(O)]].
+    fn matrix(&self, pool: &mut Pool) -> Matrix6 {
+        let zero = pool.constant(0.0);
+        let mut m = [[zero; 6]; 6];
+        let r = v::scale(pool, self.mass, &self.centre);
+        let minus = v::neg(pool, &r);
+        // μ r̃
+        let skew = [[zero, minus[2], r[1]], [r[2], zero, minus[0]], [minus[1], r[0], zero]];
+        for i in 0..3 {
+            m[i][i] = self.mass;
+            for j in 0..3 {
+                m[3 + i][j] = skew[i][j];
+                m[j][3 + i] = skew[i][j];
+                m[3 + i][3 + j] = self.at_origin[i][j];
+            }
+        }
+        m
     }
 }
 
@@ -199,8 +229,14 @@ impl<'a> Generator<'a> {
             (0..=self.topology.body_count()).map(|i| self.inertias[i].as_ref().map(|m| m.velocity_terms(&mut self.pool, &self.bodies[i]))).collect();
         let second_member = self.project(velocity_terms);
         let applied = self.applied_wrenches()?;
-        let mut forces = self.project(applied);
-        self.add_link_efforts(&mut forces)?;
+        let mut forces = self.project(applied.clone());
+        let zero = self.pool.constant(0.0);
+        let mut link_forces = vec![zero; self.columns()];
+        self.add_link_efforts(&mut link_forces)?;
+        for (f, l) in forces.iter_mut().zip(&link_forces) {
+            *f = self.pool.add(*f, *l);
+        }
+        let accelerations = self.topology.complementary.is_empty().then(|| self.articulated(&applied, &link_forces));
         let (constraints, constraint_bias, constraint_names) = self.loops()?;
         Ok(Equations {
             pool: self.pool,
@@ -212,7 +248,49 @@ impl<'a> Generator<'a> {
             constraints,
             constraint_bias,
             constraint_names,
+            accelerations,
         })
+    }
+
+    /// The trees' forward dynamics by the articulated-body recursion (`articulated`).
+    fn articulated(&mut self, applied: &[Option<Wrench>], link_forces: &[ExprId]) -> Vec<ExprId> {
+        let pool = &mut self.pool;
+        let zero = pool.constant(0.0);
+        let spatial = |linear: &Vec3, angular: &Vec3| [linear[0], linear[1], linear[2], angular[0], angular[1], angular[2]];
+        let mut bodies = vec![articulated::Body {
+            parent: 0,
+            origin: self.bodies[0].origin,
+            columns: Vec::new(),
+            bias: [zero; 6],
+            inertia: None,
+            bias_force: [zero; 6],
+        }];
+        for b in 1..=self.topology.body_count() {
+            let frame = &self.bodies[b];
+            let link = &self.topology.principal[b - 1];
+            let offset = self.lowering.join_offset(link.join);
+            let count = self.mechanism.link(self.mechanism.join(link.join).link).coordinates.len();
+            let columns = (offset..offset + count)
+                .map(|k| match frame.column(k) {
+                    Some([angular, linear]) => (k, spatial(linear, angular)),
+                    None => (k, [zero; 6]),
+                })
+                .collect();
+            let inertia = self.inertias[b].as_ref();
+            let products = inertia.map(|m| m.velocity_products(pool, frame)).unwrap_or([frame.origin.map(|_| zero); 2]);
+            let loads = applied[b].unwrap_or([frame.origin.map(|_| zero); 2]);
+            let total = [v::add(pool, &products[0], &loads[0]), v::add(pool, &products[1], &loads[1])];
+            let bias_force = spatial(&v::neg(pool, &total[0]), &v::neg(pool, &total[1]));
+            bodies.push(articulated::Body {
+                parent: link.parent,
+                origin: frame.origin,
+                columns,
+                bias: spatial(&frame.bias, &frame.angular_bias),
+                inertia: inertia.map(|m| m.matrix(pool)),
+                bias_force,
+            });
+        }
+        articulated::accelerations(pool, &bodies, link_forces)
     }
 
     fn tree_coordinates(&self) -> usize {

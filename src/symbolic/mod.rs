@@ -4,6 +4,7 @@
 //! (`kinematics`), the equations M q̇ = S + F + Δᵀ Λ, Δ q = 0 (`equations`), and their
 //! emitters (`emit`).
 
+pub mod articulated;
 pub mod equations;
 pub mod expr;
 pub mod kinematics;
