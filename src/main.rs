@@ -98,6 +98,18 @@ enum SampleFormat {
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Emit {
     Notation,
+    Equations,
+    Rust,
+    C,
+}
+
+/// How `--emit equations` writes them.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum EquationsFormat {
+    Text,
+    Latex,
+    Sympy,
+    Json,
 }
 
 #[derive(clap::Args)]
@@ -166,9 +178,17 @@ enum Command {
         #[command(flatten)]
         libraries: LibraryArgs,
         /// `notation`: the thesis-style notation table (structure, variables, declared and
-        /// deduced assignments).
+        /// deduced assignments). `equations`: the equations of motion M q' = S + F + Δᵀ Λ,
+        /// Δ q' + Δ̇q = 0 in the `--format` given. `rust`, `c`: source code that evaluates them
+        /// and the forward dynamics.
         #[arg(long, value_enum)]
         emit: Emit,
+        /// Format of `--emit equations` (default text).
+        #[arg(long, value_enum)]
+        format: Option<EquationsFormat>,
+        /// Write to this file instead of standard output.
+        #[arg(short = 'o', long = "out")]
+        out: Option<PathBuf>,
     },
     /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
     /// bodies' poses at a list of states; print JSON. A quantity that cannot be computed at a
@@ -223,7 +243,7 @@ fn main() -> ExitCode {
         Command::Check { files, libraries, format } => check(&files, &libraries.options(), format),
         Command::Tree { file, libraries, format } => tree(&file, &libraries.options(), format),
         Command::Assemble { file, libraries, format } => assemble(&file, &libraries.options(), format),
-        Command::Compile { file, libraries, emit } => compile(&file, &libraries.options(), emit),
+        Command::Compile { file, libraries, emit, format, out: output } => compile(&file, &libraries.options(), emit, format, output.as_deref()),
         Command::Simulate(args) => simulate(&args),
         Command::Statics { file, libraries, actuated, sets, format } => statics(&file, &libraries.options(), &actuated, &sets, format),
         Command::Eval { file, libraries, states, sets } => eval(&file, &libraries.options(), &states, &sets),
@@ -335,12 +355,7 @@ fn report<R: serde::Serialize>(
     analyse: impl Fn(&Mechanism) -> Result<R, Vec<Diagnostic>>,
     text: impl Fn(&R) -> String,
 ) -> ExitCode {
-    let compilation = match compile_one(file, options, format) {
-        Ok(c) => c,
-        Err(code) => return code,
-    };
-    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
-    match analyse(mechanism) {
+    match analysed(file, options, format, analyse) {
         Ok(result) => {
             match format {
                 Format::Text => out(&text(&result)),
@@ -348,11 +363,19 @@ fn report<R: serde::Serialize>(
             }
             ExitCode::SUCCESS
         }
-        Err(diagnostics) => {
-            report_diagnostics(&compilation, &diagnostics, format);
-            ExitCode::from(1)
-        }
+        Err(code) => code,
     }
+}
+
+/// Compiles a file and returns what `analyse` makes of its mechanism, or the exit code once
+/// the diagnostics are printed.
+fn analysed<R>(file: &std::path::Path, options: &LoadOptions, format: Format, analyse: impl Fn(&Mechanism) -> Result<R, Vec<Diagnostic>>) -> Result<R, ExitCode> {
+    let compilation = compile_one(file, options, format)?;
+    let Some(mechanism) = &compilation.mechanism else { return Err(ExitCode::from(1)) };
+    analyse(mechanism).map_err(|diagnostics| {
+        report_diagnostics(&compilation, &diagnostics, format);
+        ExitCode::from(1)
+    })
 }
 
 fn tree(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
@@ -367,14 +390,39 @@ fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> Ex
     report(file, options, format, analyse, text::assembly)
 }
 
-fn compile(file: &std::path::Path, options: &LoadOptions, emit: Emit) -> ExitCode {
-    match emit {
-        Emit::Notation => {
-            let analyse = |mechanism: &Mechanism| {
-                let topology = lsdc::topology::build(mechanism)?;
-                Ok(lsdc::topology::notation::notation(mechanism, &topology))
-            };
-            report(file, options, Format::Text, analyse, String::clone)
+fn compile(file: &std::path::Path, options: &LoadOptions, emit: Emit, format: Option<EquationsFormat>, output: Option<&std::path::Path>) -> ExitCode {
+    if format.is_some() && emit != Emit::Equations {
+        return usage_error("`--format` applies to `--emit equations` only");
+    }
+    let source = file.display().to_string();
+    let analyse = |mechanism: &Mechanism| {
+        let topology = lsdc::topology::build(mechanism)?;
+        if emit == Emit::Notation {
+            return Ok(lsdc::topology::notation::notation(mechanism, &topology));
+        }
+        let equations = lsdc::symbolic::generate(mechanism, &topology)?;
+        use lsdc::symbolic::emit;
+        Ok(match (emit, format.unwrap_or(EquationsFormat::Text)) {
+            (Emit::Rust, _) => emit::rust(&equations, &source),
+            (Emit::C, _) => emit::c(&equations, &source),
+            (_, EquationsFormat::Text) => emit::text(&equations, &source),
+            (_, EquationsFormat::Latex) => emit::latex(&equations, &source),
+            (_, EquationsFormat::Sympy) => emit::sympy(&equations, &source),
+            (_, EquationsFormat::Json) => emit::json(&equations, &source),
+        })
+    };
+    let text = match analysed(file, options, Format::Text, analyse) {
+        Ok(text) => text,
+        Err(code) => return code,
+    };
+    match output {
+        Some(path) => match std::fs::write(path, text) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => usage_error(&format!("cannot write `{}`: {e}", path.display())),
+        },
+        None => {
+            out(&text);
+            ExitCode::SUCCESS
         }
     }
 }

@@ -25,8 +25,8 @@ use super::kinematics::{Derivatives, LinkCoordinates, Moving, Step};
 use super::lower::{LowerError, Lowering, Variables};
 use super::vector::{self as v, Mat3, Vec3};
 use crate::diag::Diagnostic;
-use crate::elab::mechanism::{EffortKind, Mechanism};
-use crate::elab::value::{BodyRef, Displacement, Elementary, JoinId};
+use crate::elab::mechanism::Mechanism;
+use crate::elab::value::{Displacement, Elementary, JoinId};
 use crate::topology::Topology;
 
 /// Names of the six rows of a complementary link.
@@ -192,18 +192,19 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
     })
 }
 
-struct Generator<'a> {
-    mechanism: &'a Mechanism,
-    topology: &'a Topology,
-    pool: Pool,
-    lowering: Lowering<'a>,
+pub(super) struct Generator<'a> {
+    pub(super) mechanism: &'a Mechanism,
+    pub(super) topology: &'a Topology,
+    pub(super) pool: Pool,
+    pub(super) lowering: Lowering<'a>,
     derivatives: Derivatives,
     /// Indexed by body number, 0 = earth.
-    bodies: Vec<Moving>,
+    pub(super) bodies: Vec<Moving>,
     inertias: Vec<Option<Inertia>>,
 }
 
-type Wrench = [Vec3; 2];
+/// A force and a moment at a body's origin, fixed axes.
+pub(super) type Wrench = [Vec3; 2];
 
 impl<'a> Generator<'a> {
     fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
@@ -212,7 +213,7 @@ impl<'a> Generator<'a> {
         Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new() }
     }
 
-    fn columns(&self) -> usize {
+    pub(super) fn columns(&self) -> usize {
         self.lowering.variables.positions.len()
     }
 
@@ -237,7 +238,7 @@ impl<'a> Generator<'a> {
             *f = self.pool.add(*f, *l);
         }
         let accelerations = self.topology.complementary.is_empty().then(|| self.articulated(&applied, &link_forces));
-        let (constraints, constraint_bias, constraint_names) = self.loops()?;
+        let closure = self.loops()?;
         Ok(Equations {
             pool: self.pool,
             variables: self.lowering.variables,
@@ -245,9 +246,9 @@ impl<'a> Generator<'a> {
             mass,
             second_member,
             forces,
-            constraints,
-            constraint_bias,
-            constraint_names,
+            constraints: closure.rows,
+            constraint_bias: closure.bias,
+            constraint_names: closure.names,
             accelerations,
         })
     }
@@ -265,7 +266,7 @@ impl<'a> Generator<'a> {
             inertia: None,
             bias_force: [zero; 6],
         }];
-        for b in 1..=self.topology.body_count() {
+        for (b, loads) in applied.iter().enumerate().skip(1) {
             let frame = &self.bodies[b];
             let link = &self.topology.principal[b - 1];
             let offset = self.lowering.join_offset(link.join);
@@ -278,7 +279,7 @@ impl<'a> Generator<'a> {
                 .collect();
             let inertia = self.inertias[b].as_ref();
             let products = inertia.map(|m| m.velocity_products(pool, frame)).unwrap_or([frame.origin.map(|_| zero); 2]);
-            let loads = applied[b].unwrap_or([frame.origin.map(|_| zero); 2]);
+            let loads = loads.unwrap_or([frame.origin.map(|_| zero); 2]);
             let total = [v::add(pool, &products[0], &loads[0]), v::add(pool, &products[1], &loads[1])];
             let bias_force = spatial(&v::neg(pool, &total[0]), &v::neg(pool, &total[1]));
             bodies.push(articulated::Body {
@@ -298,7 +299,7 @@ impl<'a> Generator<'a> {
     }
 
     /// The coordinates of a join, with their columns.
-    fn link_coordinates(&self, join: JoinId) -> LinkCoordinates {
+    pub(super) fn link_coordinates(&self, join: JoinId) -> LinkCoordinates {
         let offset = self.lowering.join_offset(join);
         let count = self.mechanism.link(self.mechanism.join(join).link).coordinates.len();
         let variables = &self.lowering.variables;
@@ -310,7 +311,7 @@ impl<'a> Generator<'a> {
     }
 
     /// The steps of a displacement; `link` is the join whose coordinates they may use.
-    fn steps(&mut self, d: &Displacement, link: Option<JoinId>) -> Result<Vec<Step>, LowerError> {
+    pub(super) fn steps(&mut self, d: &Displacement, link: Option<JoinId>) -> Result<Vec<Step>, LowerError> {
         d.0.iter()
             .map(|step| match step {
                 Elementary::Translation(t) => Ok(Step::Translation(self.lowering.vector(&mut self.pool, t, link)?)),
@@ -329,13 +330,13 @@ impl<'a> Generator<'a> {
     }
 
     /// The link's dof chain, in order.
-    fn chain(&mut self, join: JoinId) -> Result<Vec<Step>, LowerError> {
+    pub(super) fn chain(&mut self, join: JoinId) -> Result<Vec<Step>, LowerError> {
         let link = self.mechanism.link(self.mechanism.join(join).link);
         let chain = Displacement(link.dofs.iter().flat_map(|d| d.0.iter().cloned()).collect());
         self.steps(&chain, Some(join))
     }
 
-    fn walk(&mut self, frame: &mut Moving, steps: &[Step], link: &LinkCoordinates) {
+    pub(super) fn walk(&mut self, frame: &mut Moving, steps: &[Step], link: &LinkCoordinates) {
         for step in steps {
             frame.walk(&mut self.pool, &mut self.derivatives, step, link);
         }
@@ -366,7 +367,7 @@ impl<'a> Generator<'a> {
     }
 
     /// Rotation and translation of a constant displacement.
-    fn pose(&mut self, d: &Displacement) -> Result<(Mat3, Vec3), LowerError> {
+    pub(super) fn pose(&mut self, d: &Displacement) -> Result<(Mat3, Vec3), LowerError> {
         let mut rotation = v::identity(&mut self.pool);
         let mut origin = v::zero(&mut self.pool);
         for step in self.steps(d, None)? {
@@ -490,9 +491,9 @@ impl<'a> Generator<'a> {
         let mut mass = vec![zero; n * n];
         for l in 0..tree_coordinates {
             let mut wrenches: Vec<Option<Wrench>> = vec![None; self.topology.body_count() + 1];
-            for b in 1..=self.topology.body_count() {
+            for (b, wrench) in wrenches.iter_mut().enumerate().skip(1) {
                 if let (Some(inertia), Some([angular, linear])) = (&self.inertias[b], self.bodies[b].column(l)) {
-                    wrenches[b] = Some(inertia.times(&mut self.pool, angular, linear));
+                    *wrench = Some(inertia.times(&mut self.pool, angular, linear));
                 }
             }
             for b in (self.owner(l)..=self.topology.body_count()).rev().filter(|&b| b > 0) {
@@ -519,127 +520,6 @@ impl<'a> Generator<'a> {
             }
         }
         mass
-    }
-
-    /// 𝔉: every `apply` as a wrench at its body's origin, fixed axes.
-    fn applied_wrenches(&mut self) -> Result<Vec<Option<Wrench>>, LowerError> {
-        let mut wrenches: Vec<Option<Wrench>> = vec![None; self.topology.body_count() + 1];
-        for application in &self.mechanism.applications {
-            let b = self.topology.number(application.target.body);
-            if b == 0 {
-                continue;
-            }
-            let effort = self.mechanism.effort(application.effort);
-            let value = self.lowering.vector(&mut self.pool, effort.value.value(), None)?;
-            let value = match effort.basis {
-                BodyRef::Earth => value,
-                BodyRef::Body(id) => {
-                    let basis = self.topology.number_of.get(&id).copied().ok_or_else(|| LowerError("a body outside the mechanism".to_string()))?;
-                    v::mat_vec(&mut self.pool, &self.bodies[basis].rotation, &value)
-                }
-            };
-            let zero = v::zero(&mut self.pool);
-            let wrench = match effort.kind {
-                EffortKind::Torque => [zero, value],
-                EffortKind::Force => {
-                    let (_, point) = self.pose(&application.target.displacement)?;
-                    let arm = v::mat_vec(&mut self.pool, &self.bodies[b].rotation, &point);
-                    [value, v::cross(&mut self.pool, &arm, &value)]
-                }
-            };
-            wrenches[b] = Some(match wrenches[b] {
-                Some([f, m]) => [v::add(&mut self.pool, &f, &wrench[0]), v::add(&mut self.pool, &m, &wrench[1])],
-                None => wrench,
-            });
-        }
-        Ok(wrenches)
-    }
-
-    /// The links' own efforts (`force`, `torque`, `forceN`, `torqueN`): the wrench, in the frame
-    /// of the chain's start (or of step N), against the twist each coordinate gives there.
-    fn add_link_efforts(&mut self, forces: &mut [ExprId]) -> Result<(), LowerError> {
-        let joins: Vec<JoinId> = self.topology.principal.iter().map(|l| l.join).chain(self.topology.complementary.iter().map(|l| l.join)).collect();
-        for join in joins {
-            let link = self.mechanism.link(self.mechanism.join(join).link);
-            let efforts: Vec<_> = [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)]
-                .into_iter()
-                .flat_map(|(kind, list)| list.iter().map(move |(step, value)| (kind, *step, value.clone())))
-                .collect();
-            if efforts.is_empty() {
-                continue;
-            }
-            let coordinates = self.link_coordinates(join);
-            let chain = self.chain(join)?;
-            for (kind, step, value) in efforts {
-                let value = self.lowering.vector(&mut self.pool, &value, Some(join))?;
-                let twists = self.chain_twists(&chain, step, &coordinates);
-                for (k, [angular, linear]) in twists.into_iter().enumerate() {
-                    let along = match kind {
-                        EffortKind::Force => v::dot(&mut self.pool, &linear, &value),
-                        EffortKind::Torque => v::dot(&mut self.pool, &angular, &value),
-                    };
-                    let column = coordinates.columns[k];
-                    forces[column] = self.pool.add(forces[column], along);
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Per coordinate of the link, the twist (angular, linear at the frame's origin) a unit rate
-    /// gives: of the chain's end in its first frame (`step` 0), or of step N in its own frame.
-    fn chain_twists(&mut self, chain: &[Step], step: u8, coordinates: &LinkCoordinates) -> Vec<[Vec3; 2]> {
-        let columns = self.columns();
-        let mut frame = Moving::fixed(&mut self.pool, columns);
-        let steps = if step == 0 { chain } else { &chain[step as usize - 1..step as usize] };
-        self.walk(&mut frame, steps, coordinates);
-        let zero = v::zero(&mut self.pool);
-        coordinates
-            .columns
-            .iter()
-            .map(|&c| {
-                let [angular, linear] = frame.column(c).copied().unwrap_or([zero, zero]);
-                if step != 0 {
-                    return [angular, linear];
-                }
-                // At the first frame's origin: v − ω ∧ (end origin).
-                let lever = v::cross(&mut self.pool, &angular, &frame.origin);
-                [angular, v::sub(&mut self.pool, &linear, &lever)]
-            })
-            .collect()
-    }
-
-    /// Six rows per complementary link: the twist of its target frame minus that of its chain's
-    /// end, whose time derivative gives the acceleration rows.
-    fn loops(&mut self) -> Result<(Vec<ExprId>, Vec<ExprId>, Vec<String>), LowerError> {
-        let n = self.columns();
-        let (mut rows, mut bias, mut names) = (Vec::new(), Vec::new(), Vec::new());
-        for link in &self.topology.complementary {
-            let join = self.mechanism.join(link.join);
-            let to_start = self.steps(&join.first.displacement, None)?;
-            let chain = self.chain(link.join)?;
-            let to_target = self.steps(&join.second.displacement, None)?;
-            let coordinates = self.link_coordinates(link.join);
-            let mut end = self.bodies[link.first].clone();
-            self.walk(&mut end, &to_start, &LinkCoordinates::default());
-            self.walk(&mut end, &chain, &coordinates);
-            let mut target = self.bodies[link.second].clone();
-            self.walk(&mut target, &to_target, &LinkCoordinates::default());
-            let name = self.mechanism.join_name(link.join);
-            for r in 0..6 {
-                let (part, i) = (r / 3, r % 3);
-                for c in 0..n {
-                    let component = |frame: &Moving| frame.column(c).map(|twist| twist[part][i]);
-                    let zero = self.pool.constant(0.0);
-                    let (t, e) = (component(&target).unwrap_or(zero), component(&end).unwrap_or(zero));
-                    rows.push(self.pool.sub(t, e));
-                }
-                let pick = |frame: &Moving| if part == 0 { frame.angular_bias[i] } else { frame.bias[i] };
-                bias.push(self.pool.sub(pick(&target), pick(&end)));
-                names.push(format!("{name}.{}", ROW_NAMES[r]));
-            }
-        }
-        Ok((rows, bias, names))
     }
 }
 

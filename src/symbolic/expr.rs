@@ -201,6 +201,15 @@ impl Pool {
             (_, Some(-1.0)) => return self.neg(a),
             _ => {}
         }
+        // Signs move onto constants or cancel; negation is exact, so the value is unchanged.
+        match (self.node(a), self.node(b)) {
+            (Node::Neg(x), Node::Neg(y)) => return self.mul(x, y),
+            (Node::Constant(c), Node::Neg(x)) | (Node::Neg(x), Node::Constant(c)) => {
+                let minus = self.constant(-f64::from_bits(c));
+                return self.mul(minus, x);
+            }
+            _ => {}
+        }
         self.intern(Node::Mul(a.min(b), a.max(b)))
     }
 
@@ -208,6 +217,12 @@ impl Pool {
         match self.node(a) {
             Node::Constant(bits) => self.constant(-f64::from_bits(bits)),
             Node::Neg(inner) => inner,
+            // −(c x) = (−c) x, exactly.
+            Node::Mul(x, y) if self.as_constant(x).is_some() || self.as_constant(y).is_some() => {
+                let (c, other) = if self.as_constant(x).is_some() { (x, y) } else { (y, x) };
+                let minus = self.neg(c);
+                self.mul(minus, other)
+            }
             _ => self.intern(Node::Neg(a)),
         }
     }

@@ -161,7 +161,7 @@ impl<'a> Lowering<'a> {
             origin => self.mechanism.generic_name(origin),
         };
         let mut name = self.parameter_name(id);
-        while self.variables.parameters.iter().any(|p| p.name == name) || self.variables.positions.iter().any(|p| p.name == name) {
+        while name == "t" || self.variables.parameters.iter().any(|p| p.name == name) || self.variables.positions.iter().any(|p| p.name == name) {
             name.push('_');
         }
         let given = self.mechanism.given.iter().find(|(g, _, _)| *g == id).and_then(|(_, v, _)| crate::elab::value::constant(v));

@@ -4,10 +4,13 @@
 //! (`kinematics`), the equations M q̇ = S + F + Δᵀ Λ, Δ q = 0 (`equations`), and their
 //! emitters (`emit`).
 
+pub mod emit;
 pub mod articulated;
+mod closure;
 pub mod equations;
 pub mod expr;
 pub mod kinematics;
+mod loads;
 pub mod lower;
 pub mod vector;
 

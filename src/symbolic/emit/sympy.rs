@@ -1,0 +1,211 @@
+//! The equations as a Python module that needs only SymPy: the variables as `sp.Symbol`s named
+//! as in the program, the unknown functions as `sp.Function`s, the temporaries, then the
+//! matrices `M`, `S`, `F`, `Delta`, `Delta_bias`.
+
+use std::collections::HashSet;
+use std::fmt::Write;
+
+use super::shared::{nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role, Symbols};
+use crate::symbolic::expr::{ExprId, Function};
+use crate::symbolic::lower::Variable;
+use crate::symbolic::Equations;
+
+const KEYWORDS: [&str; 35] = [
+    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class", "continue", "def", "del", "elif", "else", "except", "finally",
+    "for", "from", "global", "if", "import", "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return", "try", "while", "with", "yield",
+];
+
+/// Names the module defines itself.
+const RESERVED: [&str; 14] =
+    ["sp", "M", "S", "F", "Delta", "Delta_bias", "positions", "rates", "parameters", "given", "functions", "constraint_names", "source", "t"];
+
+/// The Python name of every variable.
+struct PythonNames {
+    positions: Vec<String>,
+    rates: Vec<String>,
+    parameters: Vec<String>,
+    /// One per distinct unknown function name, by that name.
+    functions: Vec<(String, String)>,
+    temporary_prefix: String,
+}
+
+impl PythonNames {
+    fn new(equations: &Equations) -> PythonNames {
+        let v = &equations.variables;
+        let mut taken: HashSet<String> = KEYWORDS.iter().chain(&RESERVED).map(|s| s.to_string()).collect();
+        let mut unique = |name: &str| {
+            let mut candidate = sanitize(name);
+            while taken.contains(&candidate) {
+                candidate.push('_');
+            }
+            taken.insert(candidate.clone());
+            candidate
+        };
+        let mut names = |list: &[Variable]| list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>();
+        let (positions, rates, parameters) = (names(&v.positions), names(&v.rates), names(&v.parameters));
+        let mut functions: Vec<(String, String)> = Vec::new();
+        for f in &v.functions {
+            if !functions.iter().any(|(name, _)| *name == f.name) {
+                functions.push((f.name.clone(), unique(&f.name)));
+            }
+        }
+        let every: Vec<String> = positions.iter().chain(&rates).chain(&parameters).chain(functions.iter().map(|(_, p)| p)).cloned().collect();
+        let temporary_prefix = temporary_prefix(&every);
+        PythonNames { positions, rates, parameters, functions, temporary_prefix }
+    }
+
+    fn function<'a>(&'a self, name: &'a str) -> &'a str {
+        self.functions.iter().find(|(n, _)| n == name).map(|(_, p)| p.as_str()).unwrap_or(name)
+    }
+}
+
+/// A Python identifier for a name: `hinge.x'` is `hinge_x_dot`.
+fn sanitize(name: &str) -> String {
+    let mut out = String::new();
+    for c in name.chars() {
+        match c {
+            '\'' => out.push_str("_dot"),
+            c if c.is_ascii_alphanumeric() || c == '_' => out.push(c),
+            _ => out.push('_'),
+        }
+    }
+    if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
+        out.insert(0, '_');
+    }
+    out
+}
+
+struct Python<'a> {
+    names: &'a PythonNames,
+}
+
+impl Language for Python<'_> {
+    fn infinity(&self) -> String {
+        "sp.oo".to_string()
+    }
+    fn not_a_number(&self) -> String {
+        "sp.nan".to_string()
+    }
+    fn symbol(&self, role: Role, name: &str) -> String {
+        match role {
+            Role::Position(i) => self.names.positions[i].clone(),
+            Role::Rate(i) => self.names.rates[i].clone(),
+            Role::Parameter(i) => self.names.parameters[i].clone(),
+            Role::Time => "t".to_string(),
+            Role::Function(_) => sanitize(name),
+        }
+    }
+    fn temporary(&self, k: usize) -> String {
+        format!("{}{k}", self.names.temporary_prefix)
+    }
+    fn unknown_function(&self, _index: usize, name: &str, arguments: &[String]) -> String {
+        format!("{}({})", self.names.function(name), arguments.join(", "))
+    }
+    fn function(&self, f: Function, argument: &str) -> String {
+        let name = if f == Function::Abs { "Abs" } else { f.name() };
+        format!("sp.{name}({argument})")
+    }
+    fn atan2(&self, y: &str, x: &str) -> String {
+        format!("sp.atan2({y}, {x})")
+    }
+    fn power_syntax(&self) -> PowerSyntax {
+        PowerSyntax::Operator { exponent: Precedence::Unary }
+    }
+    fn power_operator(&self, base: &str, exponent: &str) -> String {
+        format!("{base}**{exponent}")
+    }
+}
+
+/// The equations of `source` as a Python module.
+pub fn sympy(equations: &Equations, source: &str) -> String {
+    let symbols = Symbols::new(equations);
+    let names = PythonNames::new(equations);
+    let entries = nonzero_entries(equations);
+    let roots: Vec<ExprId> = entries.iter().map(|(_, id)| *id).collect();
+    let listing = Listing::new(&symbols, &roots);
+    let language = Python { names: &names };
+    let printer = Printer { symbols: &symbols, listing: &listing, language: &language };
+    let mut out = header(source);
+    declare_variables(&mut out, equations, &names);
+    if !listing.temporaries.is_empty() {
+        out.push_str("\n# Subexpressions used more than once.\n");
+        for (k, &id) in listing.temporaries.iter().enumerate() {
+            let _ = writeln!(out, "{} = {}", language.temporary(k), printer.definition(id));
+        }
+    }
+    let (n, m) = (equations.dimension(), equations.constraint_rows());
+    let _ = writeln!(out, "\nM = sp.zeros({n}, {n})\nS = sp.zeros({n}, 1)\nF = sp.zeros({n}, 1)\nDelta = sp.zeros({m}, {n})\nDelta_bias = sp.zeros({m}, 1)");
+    for (entry, id) in entries {
+        let value = printer.expression(id);
+        let _ = writeln!(out, "{} = {value}", target(entry));
+    }
+    lists(&mut out, equations, &names, &language);
+    out
+}
+
+fn header(source: &str) -> String {
+    format!(
+        "\"\"\"Equations of motion of `{}`, written by lsdc:\n\n    \
+         M(p) q' = S(p, q) + F(p, q, t) + Delta^T Lambda,   Delta(p) q' + Delta_bias(p, q) = 0\n\n\
+         with p the positions, q their rates, q' the rates' derivatives and Lambda the constraints'\n\
+         multipliers. M is symmetric. Needs only SymPy.\n\"\"\"\n\nimport sympy as sp\n\nsource = {}\n",
+        source.replace('\\', "\\\\").replace('"', "\\\""),
+        python_string(source)
+    )
+}
+
+fn python_string(text: &str) -> String {
+    format!("'{}'", text.replace('\\', "\\\\").replace('\'', "\\'"))
+}
+
+fn declare_variables(out: &mut String, equations: &Equations, names: &PythonNames) {
+    let v = &equations.variables;
+    let mut declare = |title: &str, list: &[Variable], python: &[String]| {
+        if list.is_empty() {
+            return;
+        }
+        let _ = writeln!(out, "\n# {title}");
+        for (variable, name) in list.iter().zip(python) {
+            let _ = writeln!(out, "{name} = sp.Symbol({})  # {}", python_string(&variable.name), variable.meaning);
+        }
+    };
+    declare("Positions.", &v.positions, &names.positions);
+    declare("Rates.", &v.rates, &names.rates);
+    declare("Parameters.", &v.parameters, &names.parameters);
+    let _ = writeln!(out, "\n# Time.\nt = sp.Symbol('t')");
+    if !names.functions.is_empty() {
+        let _ = writeln!(out, "\n# Unknown functions of the program.");
+        for (name, python) in &names.functions {
+            let _ = writeln!(out, "{python} = sp.Function({})", python_string(name));
+        }
+    }
+}
+
+/// The Python assignment target of an entry; M's mirror entry is assigned too.
+fn target(entry: Entry) -> String {
+    match entry {
+        Entry::Mass(i, j) if i == j => format!("M[{i}, {j}]"),
+        Entry::Mass(i, j) => format!("M[{i}, {j}] = M[{j}, {i}]"),
+        Entry::SecondMember(i) => format!("S[{i}]"),
+        Entry::Force(i) => format!("F[{i}]"),
+        Entry::Constraint(r, c) => format!("Delta[{r}, {c}]"),
+        Entry::Bias(r) => format!("Delta_bias[{r}]"),
+    }
+}
+
+fn lists(out: &mut String, equations: &Equations, names: &PythonNames, language: &Python) {
+    let v = &equations.variables;
+    let list = |items: &[String]| format!("[{}]", items.join(", "));
+    let _ = writeln!(out, "\npositions = {}", list(&names.positions));
+    let _ = writeln!(out, "rates = {}", list(&names.rates));
+    let _ = writeln!(out, "parameters = {}", list(&names.parameters));
+    let given: Vec<String> = v.parameters.iter().zip(&names.parameters).filter_map(|(p, name)| p.given.map(|g| format!("{name}: {g:?}"))).collect();
+    let _ = writeln!(out, "# The parameters' values given by the program.\ngiven = {{{}}}", given.join(", "));
+    let symbols = Symbols::new(equations);
+    let whole = Listing::inline(&symbols, &v.functions.iter().map(|f| f.symbol).collect::<Vec<_>>());
+    let printer = Printer { symbols: &symbols, listing: &whole, language };
+    let applications: Vec<String> = v.functions.iter().map(|f| printer.definition(f.symbol)).collect();
+    let _ = writeln!(out, "# The unknown functions as applied in the equations.\nfunctions = {}", list(&applications));
+    let rows: Vec<String> = equations.constraint_names.iter().map(|n| python_string(n)).collect();
+    let _ = writeln!(out, "constraint_names = {}", list(&rows));
+}
