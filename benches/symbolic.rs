@@ -8,6 +8,11 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use lsdc::driver::compile_text;
+use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
+use lsdc::dynamics::model;
+use lsdc::dynamics::spatial::Force;
+use lsdc::kinematics::eval::UnknownValues;
+use lsdc::kinematics::model as kinematic_model;
 use lsdc::elab::Mechanism;
 use lsdc::load::LoadOptions;
 use lsdc::symbolic::expr::Tape;
@@ -69,7 +74,102 @@ fn generation() {
     }
 }
 
+/// A program that times the generated functions of one pendulum and prints ns per call, by the
+/// same best-of-batches rule as `best_time_per_call`.
+const HARNESS: &str = r#"
+fn best(mut f: impl FnMut()) -> f64 {
+    let start = std::time::Instant::now();
+    let mut calls = 0u64;
+    while start.elapsed().as_secs_f64() < 0.02 { f(); calls += 1; }
+    (0..7).map(|_| {
+        let start = std::time::Instant::now();
+        for _ in 0..calls { f(); }
+        start.elapsed().as_secs_f64() / calls as f64
+    }).fold(f64::INFINITY, f64::min)
+}
+
+fn main() {
+    let p: Vec<f64> = (0..N).map(|i| (i as f64 * 0.37).sin()).collect();
+    let q: Vec<f64> = (0..N).map(|i| (i as f64 * 0.91).cos()).collect();
+    let k = [0.0; 0];
+    let mut m = vec![0.0; N * N];
+    let mut rhs = vec![0.0; N];
+    let mut qdd = vec![0.0; N];
+    let fd = best(|| { forward_dynamics(0.0, std::hint::black_box(&p), &q, &k, &mut qdd).unwrap(); std::hint::black_box(&qdd); });
+    let mm = best(|| { mass_matrix(std::hint::black_box(&p), &k, &mut m); std::hint::black_box(&m); });
+    let rh = best(|| { right_hand_side(0.0, std::hint::black_box(&p), &q, &k, &mut rhs); std::hint::black_box(&rhs); });
+    println!("{} {} {}", fd * 1e9, mm * 1e9, rh * 1e9);
+    for x in &qdd { println!("{x:e}"); }
+}
+"#;
+
+/// Emits, compiles (rustc -C opt-level=3, as the release profile) and runs the generated code
+/// of `equations`: ns per call of forward dynamics, mass matrix and right-hand side, the
+/// compile time, and the accelerations at the harness's state.
+fn time_generated(equations: &Equations, n: usize) -> Option<([f64; 3], f64, Vec<f64>)> {
+    let dir = std::env::temp_dir().join(format!("lsdc-symbolic-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).ok()?;
+    let source = dir.join(format!("pendulum{n}.rs"));
+    std::fs::write(&source, symbolic::emit::rust(equations, "pendulum") + HARNESS).ok()?;
+    let binary = dir.join(format!("pendulum{n}"));
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".to_string());
+    let start = Instant::now();
+    let status = std::process::Command::new(rustc).args(["-C", "opt-level=3", "--edition", "2021"]).arg(&source).arg("-o").arg(&binary).status().ok()?;
+    let compile = start.elapsed().as_secs_f64();
+    if !status.success() {
+        return None;
+    }
+    let output = std::process::Command::new(&binary).output().ok()?;
+    let text = String::from_utf8(output.stdout).ok()?;
+    let mut lines = text.lines();
+    let times: Vec<f64> = lines.next()?.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+    let accelerations = lines.filter_map(|x| x.parse().ok()).collect();
+    Some(([times[0], times[1], times[2]], compile, accelerations))
+}
+
+/// The generated code against the numeric algorithms on the same pendulums, in the same run.
+fn evaluation() {
+    println!("\nGenerated Rust against the numeric algorithms (ns per call, best of 7 batches):");
+    println!(
+        "{:>5} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10}",
+        "links", "gen. q̈", "ABA", "ratio", "gen. M", "CRBA", "ratio", "gen. S+F", "RNEA", "ratio", "compile s", "max |Δq̈|"
+    );
+    for n in SIZES {
+        let text = pendulum_program(n);
+        let (mechanism, topology) = mechanism(&text);
+        let eq = symbolic::generate(&mechanism, &topology).expect("equations");
+        let Some(([fd, mm, rh], compile, generated)) = time_generated(&eq, n) else {
+            println!("{n:>5} (rustc unavailable or failed)");
+            continue;
+        };
+        let kinematics = kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric");
+        let model = model::build(&mechanism, &kinematics).expect("model");
+        let mut data = Data::new(&model);
+        let q: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let v: Vec<f64> = (0..n).map(|i| (i as f64 * 0.91).cos()).collect();
+        let zero = vec![0.0; n];
+        let none = vec![Force::zeros(); n + 1];
+        let aba_ns = best_time_per_call(|| {
+            black_box(aba(&model, &mut data, black_box(&q), &v, &zero, &none).expect("regular"));
+        }) * 1e9;
+        let crba_ns = best_time_per_call(|| {
+            black_box(crba(&model, &mut data, black_box(&q)).expect("evaluates"));
+        }) * 1e9;
+        let rnea_ns = best_time_per_call(|| {
+            black_box(rnea(&model, &mut data, black_box(&q), &v, &zero, &none).expect("evaluates"));
+        }) * 1e9;
+        let numeric = aba(&model, &mut data, &q, &v, &zero, &none).expect("regular");
+        let gap = numeric.iter().zip(&generated).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        println!(
+            "{n:>5} {fd:>10.0} {aba_ns:>10.0} {:>8.2} {mm:>10.0} {crba_ns:>10.0} {:>8.2} {rh:>10.0} {rnea_ns:>10.0} {:>8.2} {compile:>10.1} {gap:>10.1e}",
+            fd / aba_ns,
+            mm / crba_ns,
+            rh / rnea_ns
+        );
+    }
+}
+
 fn main() {
     generation();
-    let _ = best_time_per_call(|| {});
+    evaluation();
 }
