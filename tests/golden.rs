@@ -1,4 +1,5 @@
-//! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked and its rendered
+//! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked (then numbered, assembled
+//! and its equations written, while it stays clean) and its rendered
 //! diagnostics are compared with `tests/golden/NAME.stderr`. The error text is reviewed like code.
 //! Set `UPDATE_GOLDEN=1` to rewrite the expected files after an intended change.
 
@@ -27,8 +28,10 @@ fn render_diagnostics(input: &Path) -> String {
         match lsdc::topology::build(mechanism) {
             Err(errors) => diagnostics.extend(errors),
             Ok(topology) => {
-                if let Err(errors) = lsdc::analysis::assembled_model(mechanism, topology, &Default::default()) {
-                    diagnostics.extend(errors);
+                match lsdc::analysis::assembled_model(mechanism, topology.clone(), &Default::default()) {
+                    Err(errors) => diagnostics.extend(errors),
+                    // The equations' phase, for what only it rejects.
+                    Ok(_) => diagnostics.extend(lsdc::symbolic::generate(mechanism, &topology).err().unwrap_or_default()),
                 }
             }
         }

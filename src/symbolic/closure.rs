@@ -21,6 +21,7 @@ impl Generator<'_> {
         let (mut rows, mut bias, mut names) = (Vec::new(), Vec::new(), Vec::new());
         for link in &self.topology.complementary {
             let join = self.mechanism.join(link.join);
+            self.context = Some(join.span);
             let to_start = self.steps(&join.first.displacement, None)?;
             let chain = self.chain(link.join)?;
             let to_target = self.steps(&join.second.displacement, None)?;

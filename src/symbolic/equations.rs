@@ -27,6 +27,7 @@ use super::vector::{self as v, Mat3, Vec3};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId};
+use crate::syntax::span::Span;
 use crate::topology::Topology;
 
 /// Names of the six rows of a complementary link.
@@ -186,9 +187,13 @@ impl Inertia {
 
 /// Generates the equations of a mechanism whose bodies are numbered by `topology`.
 pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {
-    Generator::new(mechanism, topology).run().map_err(|e| {
-        vec![Diagnostic::error("E1101", format!("the equations of motion cannot be written: they would depend on {}", e.0))
-            .help("frames and rotation axes are constant; efforts may depend on coordinates, their first derivatives and time")]
+    let mut generator = Generator::new(mechanism, topology);
+    generator.run().map_err(|e| {
+        let error = Diagnostic::error("E1101", format!("the equations of motion cannot be written: {}", e.0));
+        vec![match generator.context {
+            Some(span) => error.primary(span, "in this declaration"),
+            None => error,
+        }]
     })
 }
 
@@ -201,6 +206,8 @@ pub(super) struct Generator<'a> {
     /// Indexed by body number, 0 = earth.
     pub(super) bodies: Vec<Moving>,
     inertias: Vec<Option<Inertia>>,
+    /// The declaration being written, to locate an error.
+    pub(super) context: Option<Span>,
 }
 
 /// A force and a moment at a body's origin, fixed axes.
@@ -210,14 +217,14 @@ impl<'a> Generator<'a> {
     fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
         let mut pool = Pool::new();
         let lowering = Lowering::new(&mut pool, mechanism, topology);
-        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new() }
+        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new(), context: None }
     }
 
     pub(super) fn columns(&self) -> usize {
         self.lowering.variables.positions.len()
     }
 
-    fn run(mut self) -> Result<Equations, LowerError> {
+    fn run(&mut self) -> Result<Equations, LowerError> {
         self.place_bodies()?;
         let mut inertias = vec![None];
         for i in 1..=self.topology.body_count() {
@@ -240,8 +247,8 @@ impl<'a> Generator<'a> {
         let accelerations = self.topology.complementary.is_empty().then(|| self.articulated(&applied, &link_forces));
         let closure = self.loops()?;
         Ok(Equations {
-            pool: self.pool,
-            variables: self.lowering.variables,
+            pool: std::mem::take(&mut self.pool),
+            variables: self.lowering.variables.clone(),
             tree_coordinates,
             mass,
             second_member,
@@ -349,6 +356,7 @@ impl<'a> Generator<'a> {
         self.bodies = vec![fixed];
         for link in &self.topology.principal {
             let join = self.mechanism.join(link.join);
+            self.context = Some(join.span);
             let (on_parent, on_child) = if link.first_on_parent { (&join.first, &join.second) } else { (&join.second, &join.first) };
             let to_joint = self.steps(&on_parent.displacement, None)?;
             let mut chain = self.chain(link.join)?;
@@ -389,6 +397,7 @@ impl<'a> Generator<'a> {
     /// `None` for a body declared without mass or inertia.
     fn inertia(&mut self, i: usize) -> Result<Option<Inertia>, LowerError> {
         let body = self.mechanism.body(self.topology.bodies[i - 1]);
+        self.context = Some(body.span);
         let mass = self.lowering.scalar(&mut self.pool, body.mass.value(), None)?;
         let moments = self.lowering.vector(&mut self.pool, body.inertia.value(), None)?;
         if self.pool.is_zero(mass) && v::is_zero(&self.pool, &moments) {
@@ -530,7 +539,7 @@ fn unit(pool: &mut Pool, axis: &Vec3) -> Result<Vec3, LowerError> {
         Some(x) => {
             let norm = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
             if norm == 0.0 || !norm.is_finite() {
-                return Err(LowerError("a rotation about a zero axis".to_string()));
+                return Err(LowerError("a rotation has a zero axis".to_string()));
             }
             Ok(v::constant(pool, [x[0] / norm, x[1] / norm, x[2] / norm]))
         }

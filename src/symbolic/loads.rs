@@ -18,12 +18,13 @@ impl Generator<'_> {
             if b == 0 {
                 continue;
             }
+            self.context = Some(application.span);
             let effort = self.mechanism.effort(application.effort);
             let value = self.lowering.vector(&mut self.pool, effort.value.value(), None)?;
             let value = match effort.basis {
                 BodyRef::Earth => value,
                 BodyRef::Body(id) => {
-                    let basis = self.topology.number_of.get(&id).copied().ok_or_else(|| LowerError("a body outside the mechanism".to_string()))?;
+                    let basis = self.topology.number_of.get(&id).copied().ok_or_else(|| LowerError("an effort is written in the basis of a body outside the mechanism".to_string()))?;
                     v::mat_vec(&mut self.pool, &self.bodies[basis].rotation, &value)
                 }
             };
@@ -49,6 +50,7 @@ impl Generator<'_> {
     pub(super) fn add_link_efforts(&mut self, forces: &mut [ExprId]) -> Result<(), LowerError> {
         let joins: Vec<JoinId> = self.topology.principal.iter().map(|l| l.join).chain(self.topology.complementary.iter().map(|l| l.join)).collect();
         for join in joins {
+            self.context = Some(self.mechanism.join(join).span);
             let link = self.mechanism.link(self.mechanism.join(join).link);
             let efforts: Vec<_> = [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)]
                 .into_iter()

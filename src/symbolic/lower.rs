@@ -132,7 +132,7 @@ impl<'a> Lowering<'a> {
                 match (Function::from_name(name), args.as_slice()) {
                     (Some(f), [a]) => pool.apply(f, *a),
                     (None, [y, x]) if *name == "atan2" => pool.atan2(*y, *x),
-                    _ => return Err(LowerError(format!("the function `{name}` with {} arguments", args.len()))),
+                    _ => return Err(LowerError(format!("`{name}` is called with {} arguments", args.len()))),
                 }
             }
         })
@@ -147,7 +147,10 @@ impl<'a> Lowering<'a> {
         match order {
             0 => Ok(self.variables.positions[k].symbol),
             1 => Ok(self.variables.rates[k].symbol),
-            _ => Err(LowerError(format!("the second derivative of `{}`", self.variables.positions[k].name))),
+            _ => Err(LowerError(format!(
+                "it uses the second derivative of `{}`; efforts may use coordinates, their first derivatives and time",
+                self.variables.positions[k].name
+            ))),
         }
     }
 
