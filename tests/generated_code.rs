@@ -1,15 +1,15 @@
 //! The emitted equations against `Equations::evaluate`: the Rust and C code compiled and run at
 //! a few states, the JSON DAG evaluated again, and the text formats' shape.
 
+mod common;
+use common::symbolic::{equations_of, Sequence};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::process::Command;
 
-use lsdc::driver::compile_files;
-use lsdc::load::LoadOptions;
 use lsdc::symbolic::equations::Values;
 use lsdc::symbolic::expr::Tape;
-use lsdc::symbolic::{self, emit, Equations};
+use lsdc::symbolic::{emit, Equations};
 use nalgebra::{DMatrix, DVector};
 
 /// Tree examples, one with loops (`four_bar`), and one with unknown functions and parameters
@@ -20,22 +20,7 @@ const EXAMPLES: [&str; 6] = ["pendulum", "double_pendulum", "satellite_fixed", "
 const TOLERANCE: f64 = 1e-12;
 
 fn equations(name: &str) -> Equations {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{name}.lsd"));
-    let compilation = compile_files(&[path], &LoadOptions::default()).expect("readable");
-    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
-    let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
-    let topology = lsdc::topology::build(mechanism).expect("a topology");
-    symbolic::generate(mechanism, &topology).expect("equations")
-}
-
-/// A deterministic pseudo-random sequence in [-1, 1).
-struct Sequence(u64);
-
-impl Sequence {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
+    equations_of(&format!("examples/{name}.lsd"))
 }
 
 /// The unknown functions' law in every harness: f_i(a) = (i + 1)/4 + Σⱼ sin((j + 1) aⱼ).

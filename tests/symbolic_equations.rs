@@ -21,25 +21,11 @@ use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 
 mod common;
+use common::symbolic::{equations_of, Sequence};
 use common::trees::tree_program;
 
 fn equations(path: &str) -> Equations {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(path);
-    let compilation = compile_files(&[path], &LoadOptions::default()).expect("readable");
-    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
-    let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
-    let topology = lsdc::topology::build(mechanism).expect("a topology");
-    symbolic::generate(mechanism, &topology).expect("equations")
-}
-
-/// A deterministic pseudo-random sequence in [-1, 1).
-struct Sequence(u64);
-
-impl Sequence {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
+    equations_of(path)
 }
 
 #[test]
