@@ -358,3 +358,21 @@ fn fixed_satellite_generalised_forces_equal_the_closed_forms() {
         }
     }
 }
+
+/// What the program declares simplifies the equations as they are built: declared zero masses
+/// and rotations about coordinate axes leave fewer nodes than the same mechanism with tiny masses
+/// or slightly oblique axes, whose equations are numerically almost the same.
+#[test]
+fn declared_values_simplify_the_equations() {
+    let program = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/satellite_fixed.lsd")).expect("example");
+    let size = |text: &str| {
+        let compilation = lsdc::driver::compile_text("variant.lsd", text, None, &LoadOptions::default());
+        let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
+        symbolic::generate(mechanism, &lsdc::topology::build(mechanism).expect("a topology")).expect("equations").size()
+    };
+    let declared = size(&program);
+    let with_masses = size(&program.replace("mass = 0, inertia = 0", "mass = 1e-9, inertia = [1e-9, 1e-9, 1e-9]"));
+    let oblique = size(&program.replace("x || [1,0,0]", "x || [1,1e-9,0]"));
+    println!("declared {declared}, tiny masses {with_masses}, oblique axis {oblique}");
+    assert!(declared < with_masses && declared < oblique, "declared {declared}, tiny masses {with_masses}, oblique axis {oblique}");
+}
