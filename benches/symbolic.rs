@@ -7,7 +7,7 @@ use common::best_time_per_call;
 use std::hint::black_box;
 use std::time::Instant;
 
-use lsdc::driver::compile_text;
+use lsdc::driver::{compile_files, compile_text};
 use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
 use lsdc::dynamics::model;
 use lsdc::dynamics::spatial::Force;
@@ -106,12 +106,13 @@ fn main() {
 /// Emits, compiles (rustc -C opt-level=3, as the release profile) and runs the generated code
 /// of `equations`: ns per call of forward dynamics, mass matrix and right-hand side, the
 /// compile time, and the accelerations at the harness's state.
-fn time_generated(equations: &Equations, n: usize) -> Option<([f64; 3], f64, Vec<f64>)> {
+fn time_generated(equations: &Equations, label: &str) -> Option<([f64; 3], f64, Vec<f64>)> {
+    let name: String = label.chars().filter(char::is_ascii_alphanumeric).collect();
     let dir = std::env::temp_dir().join(format!("lsdc-symbolic-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).ok()?;
-    let source = dir.join(format!("pendulum{n}.rs"));
-    std::fs::write(&source, symbolic::emit::rust(equations, "pendulum") + HARNESS).ok()?;
-    let binary = dir.join(format!("pendulum{n}"));
+    let source = dir.join(format!("{name}.rs"));
+    std::fs::write(&source, symbolic::emit::rust(equations, label) + HARNESS).ok()?;
+    let binary = dir.join(&name);
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".to_string());
     let start = Instant::now();
     let status = std::process::Command::new(rustc).args(["-C", "opt-level=3", "--edition", "2021"]).arg(&source).arg("-o").arg(&binary).status().ok()?;
@@ -127,46 +128,58 @@ fn time_generated(equations: &Equations, n: usize) -> Option<([f64; 3], f64, Vec
     Some(([times[0], times[1], times[2]], compile, accelerations))
 }
 
-/// The generated code against the numeric algorithms on the same pendulums, in the same run.
+/// The generated code against the numeric algorithms on the same mechanisms, in the same run:
+/// the pendulums, then real robots (URDF fixtures).
 fn evaluation() {
     println!("\nGenerated Rust against the numeric algorithms (ns per call, best of 7 batches):");
     println!(
-        "{:>5} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10}",
-        "links", "gen. q̈", "ABA", "ratio", "gen. M", "CRBA", "ratio", "gen. S+F", "RNEA", "ratio", "compile s", "max |Δq̈|"
+        "{:>14} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10}",
+        "mechanism", "gen. q̈", "ABA", "ratio", "gen. M", "CRBA", "ratio", "gen. S+F", "RNEA", "ratio", "compile s", "max |Δq̈|"
     );
     for n in SIZES {
-        let text = pendulum_program(n);
-        let (mechanism, topology) = mechanism(&text);
-        let eq = symbolic::generate(&mechanism, &topology).expect("equations");
-        let Some(([fd, mm, rh], compile, generated)) = time_generated(&eq, n) else {
-            println!("{n:>5} (rustc unavailable or failed)");
-            continue;
-        };
-        let kinematics = kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric");
-        let model = model::build(&mechanism, &kinematics).expect("model");
-        let mut data = Data::new(&model);
-        let q: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-        let v: Vec<f64> = (0..n).map(|i| (i as f64 * 0.91).cos()).collect();
-        let zero = vec![0.0; n];
-        let none = vec![Force::zeros(); n + 1];
-        let aba_ns = best_time_per_call(|| {
-            black_box(aba(&model, &mut data, black_box(&q), &v, &zero, &none).expect("regular"));
-        }) * 1e9;
-        let crba_ns = best_time_per_call(|| {
-            black_box(crba(&model, &mut data, black_box(&q)).expect("evaluates"));
-        }) * 1e9;
-        let rnea_ns = best_time_per_call(|| {
-            black_box(rnea(&model, &mut data, black_box(&q), &v, &zero, &none).expect("evaluates"));
-        }) * 1e9;
-        let numeric = aba(&model, &mut data, &q, &v, &zero, &none).expect("regular");
-        let gap = numeric.iter().zip(&generated).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        println!(
-            "{n:>5} {fd:>10.0} {aba_ns:>10.0} {:>8.2} {mm:>10.0} {crba_ns:>10.0} {:>8.2} {rh:>10.0} {rnea_ns:>10.0} {:>8.2} {compile:>10.1} {gap:>10.1e}",
-            fd / aba_ns,
-            mm / crba_ns,
-            rh / rnea_ns
-        );
+        let (mechanism, topology) = mechanism(&pendulum_program(n));
+        compare_generated(&format!("{n} links"), &mechanism, topology);
     }
+    for robot in ["ur5", "panda", "talos_reduced"] {
+        let path = std::path::PathBuf::from(format!("tests/fixtures/urdf/{robot}.urdf"));
+        let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+        let Some(mechanism) = compile_files(&[path], &options).ok().and_then(|c| c.mechanism) else { continue };
+        let topology = lsdc::topology::build(&mechanism).expect("connected");
+        compare_generated(robot, &mechanism, topology);
+    }
+}
+
+fn compare_generated(label: &str, mechanism: &Mechanism, topology: Topology) {
+    let eq = symbolic::generate(mechanism, &topology).expect("equations");
+    let n = eq.dimension();
+    let Some(([fd, mm, rh], compile, generated)) = time_generated(&eq, label) else {
+        println!("{label:>14} (rustc unavailable or failed)");
+        return;
+    };
+    let kinematics = kinematic_model::build(mechanism, topology, UnknownValues::new()).expect("numeric");
+    let model = model::build(mechanism, &kinematics).expect("model");
+    let mut data = Data::new(&model);
+    let q: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+    let v: Vec<f64> = (0..n).map(|i| (i as f64 * 0.91).cos()).collect();
+    let zero = vec![0.0; n];
+    let none = vec![Force::zeros(); model.body_count() + 1];
+    let aba_ns = best_time_per_call(|| {
+        black_box(aba(&model, &mut data, black_box(&q), &v, &zero, &none).expect("regular"));
+    }) * 1e9;
+    let crba_ns = best_time_per_call(|| {
+        black_box(crba(&model, &mut data, black_box(&q)).expect("evaluates"));
+    }) * 1e9;
+    let rnea_ns = best_time_per_call(|| {
+        black_box(rnea(&model, &mut data, black_box(&q), &v, &zero, &none).expect("evaluates"));
+    }) * 1e9;
+    let numeric = aba(&model, &mut data, &q, &v, &zero, &none).expect("regular");
+    let gap = numeric.iter().zip(&generated).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    println!(
+        "{label:>14} {fd:>10.0} {aba_ns:>10.0} {:>8.2} {mm:>10.0} {crba_ns:>10.0} {:>8.2} {rh:>10.0} {rnea_ns:>10.0} {:>8.2} {compile:>10.1} {gap:>10.1e}",
+        fd / aba_ns,
+        mm / crba_ns,
+        rh / rnea_ns
+    );
 }
 
 fn main() {
