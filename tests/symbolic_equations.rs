@@ -171,10 +171,16 @@ fn values_for_unknowns(mechanism: &Mechanism, eq: &Equations) -> Vec<Override> {
         .collect()
 }
 
+/// The examples, then the URDF robots of the fixtures (welded links, many bodies).
 fn example_paths() -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples");
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir).expect("examples").map(|e| e.expect("entry").path()).filter(|p| p.extension().is_some_and(|e| e == "lsd")).collect();
-    paths.sort();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut paths = Vec::new();
+    for (dir, extension) in [("examples", "lsd"), ("tests/fixtures/urdf", "urdf")] {
+        let mut found: Vec<PathBuf> =
+            std::fs::read_dir(root.join(dir)).expect("a directory").map(|e| e.expect("entry").path()).filter(|p| p.extension().is_some_and(|e| e == extension)).collect();
+        found.sort();
+        paths.extend(found);
+    }
     paths
 }
 

@@ -19,7 +19,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::articulated::{self, Matrix6};
+use super::inertia::Inertia;
 use super::expr::{ExprId, Pool, Tape};
 use super::kinematics::{Derivatives, LinkCoordinates, Moving, Step};
 use super::lower::{LowerError, Lowering, Variables};
@@ -126,65 +126,6 @@ pub struct Values {
     pub accelerations: Option<DVector<f64>>,
 }
 
-/// A body's mass properties, in the fixed axes at its origin.
-struct Inertia {
-    mass: ExprId,
-    /// OG.
-    centre: Vec3,
-    /// I(O).
-    at_origin: Mat3,
-}
-
-impl Inertia {
-    /// 𝔐 (v, ω): the momentum μ(v + ω∧r) and the angular momentum at O, μ r∧v + I(O) ω.
-    fn times(&self, pool: &mut Pool, angular: &Vec3, linear: &Vec3) -> [Vec3; 2] {
-        let spin = v::cross(pool, angular, &self.centre);
-        let velocity_of_centre = v::add(pool, linear, &spin);
-        let momentum = v::scale(pool, self.mass, &velocity_of_centre);
-        let lever = v::cross(pool, &self.centre, linear);
-        let lever = v::scale(pool, self.mass, &lever);
-        let turning = v::mat_vec(pool, &self.at_origin, angular);
-        [momentum, v::add(pool, &lever, &turning)]
-    }
-
-    /// 𝔖 = (−μ ω∧(ω∧r), −ω∧I(O)ω) for a body moving as `body`.
-    fn velocity_products(&self, pool: &mut Pool, body: &Moving) -> Wrench {
-        let w = body.angular_velocity;
-        let spin = v::cross(pool, &w, &self.centre);
-        let centripetal = v::cross(pool, &w, &spin);
-        let force = v::scale(pool, self.mass, &centripetal);
-        let turning = v::mat_vec(pool, &self.at_origin, &w);
-        let gyroscopic = v::cross(pool, &w, &turning);
-        [v::neg(pool, &force), v::neg(pool, &gyroscopic)]
-    }
-
-    /// 𝔖 − 𝔐 Ψ̇q.
-    fn velocity_terms(&self, pool: &mut Pool, body: &Moving) -> Wrench {
-        let [force, moment] = self.velocity_products(pool, body);
-        let [bias_force, bias_moment] = self.times(pool, &body.angular_bias, &body.bias);
-        [v::sub(pool, &force, &bias_force), v::sub(pool, &moment, &bias_moment)]
-    }
-
-    /// 𝔐 as a 6 × 6 matrix on (v, ω): [[μ Id, −μ r̃], [μ r̃, I(O)]].
-    fn matrix(&self, pool: &mut Pool) -> Matrix6 {
-        let zero = pool.constant(0.0);
-        let mut m = [[zero; 6]; 6];
-        let r = v::scale(pool, self.mass, &self.centre);
-        let minus = v::neg(pool, &r);
-        // μ r̃
-        let skew = [[zero, minus[2], r[1]], [r[2], zero, minus[0]], [minus[1], r[0], zero]];
-        for i in 0..3 {
-            m[i][i] = self.mass;
-            for j in 0..3 {
-                m[3 + i][j] = skew[i][j];
-                m[j][3 + i] = skew[i][j];
-                m[3 + i][3 + j] = self.at_origin[i][j];
-            }
-        }
-        m
-    }
-}
-
 /// Generates the equations of a mechanism whose bodies are numbered by `topology`.
 pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {
     let mut generator = Generator::new(mechanism, topology);
@@ -205,7 +146,12 @@ pub(super) struct Generator<'a> {
     derivatives: Derivatives,
     /// Indexed by body number, 0 = earth.
     pub(super) bodies: Vec<Moving>,
-    inertias: Vec<Option<Inertia>>,
+    pub(super) inertias: Vec<Option<Inertia>>,
+    /// Per body, the steps from its parent's frame to its own (empty for earth).
+    pub(super) link_steps: Vec<Vec<Step>>,
+    /// Per body, the body its motion is computed with: itself, or for a body welded to its
+    /// parent, the anchor of the parent (0 for a body welded to earth). See `inertia`.
+    pub(super) anchors: Vec<usize>,
     /// The declaration being written, to locate an error.
     pub(super) context: Option<Span>,
 }
@@ -217,7 +163,7 @@ impl<'a> Generator<'a> {
     fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
         let mut pool = Pool::new();
         let lowering = Lowering::new(&mut pool, mechanism, topology);
-        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new(), context: None }
+        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new(), link_steps: Vec::new(), anchors: Vec::new(), context: None }
     }
 
     pub(super) fn columns(&self) -> usize {
@@ -226,11 +172,8 @@ impl<'a> Generator<'a> {
 
     fn run(&mut self) -> Result<Equations, LowerError> {
         self.place_bodies()?;
-        let mut inertias = vec![None];
-        for i in 1..=self.topology.body_count() {
-            inertias.push(self.inertia(i)?);
-        }
-        self.inertias = inertias;
+        self.anchors = self.anchors();
+        self.inertias = self.merged_inertias()?;
         let tree_coordinates = self.tree_coordinates();
         let mass = self.mass_matrix(tree_coordinates);
         let velocity_terms: Vec<Option<Wrench>> =
@@ -258,47 +201,6 @@ impl<'a> Generator<'a> {
             constraint_names: closure.names,
             accelerations,
         })
-    }
-
-    /// The trees' forward dynamics by the articulated-body recursion (`articulated`).
-    fn articulated(&mut self, applied: &[Option<Wrench>], link_forces: &[ExprId]) -> Vec<ExprId> {
-        let pool = &mut self.pool;
-        let zero = pool.constant(0.0);
-        let spatial = |linear: &Vec3, angular: &Vec3| [linear[0], linear[1], linear[2], angular[0], angular[1], angular[2]];
-        let mut bodies = vec![articulated::Body {
-            parent: 0,
-            origin: self.bodies[0].origin,
-            columns: Vec::new(),
-            bias: [zero; 6],
-            inertia: None,
-            bias_force: [zero; 6],
-        }];
-        for (b, loads) in applied.iter().enumerate().skip(1) {
-            let frame = &self.bodies[b];
-            let link = &self.topology.principal[b - 1];
-            let offset = self.lowering.join_offset(link.join);
-            let count = self.mechanism.link(self.mechanism.join(link.join).link).coordinates.len();
-            let columns = (offset..offset + count)
-                .map(|k| match frame.column(k) {
-                    Some([angular, linear]) => (k, spatial(linear, angular)),
-                    None => (k, [zero; 6]),
-                })
-                .collect();
-            let inertia = self.inertias[b].as_ref();
-            let products = inertia.map(|m| m.velocity_products(pool, frame)).unwrap_or([frame.origin.map(|_| zero); 2]);
-            let loads = loads.unwrap_or([frame.origin.map(|_| zero); 2]);
-            let total = [v::add(pool, &products[0], &loads[0]), v::add(pool, &products[1], &loads[1])];
-            let bias_force = spatial(&v::neg(pool, &total[0]), &v::neg(pool, &total[1]));
-            bodies.push(articulated::Body {
-                parent: link.parent,
-                origin: frame.origin,
-                columns,
-                bias: spatial(&frame.bias, &frame.angular_bias),
-                inertia: inertia.map(|m| m.matrix(pool)),
-                bias_force,
-            });
-        }
-        articulated::accelerations(pool, &bodies, link_forces)
     }
 
     fn tree_coordinates(&self) -> usize {
@@ -354,6 +256,7 @@ impl<'a> Generator<'a> {
         let columns = self.columns();
         let fixed = Moving::fixed(&mut self.pool, columns);
         self.bodies = vec![fixed];
+        self.link_steps = vec![Vec::new()];
         for link in &self.topology.principal {
             let join = self.mechanism.join(link.join);
             self.context = Some(join.span);
@@ -370,64 +273,34 @@ impl<'a> Generator<'a> {
             self.walk(&mut frame, &chain, &coordinates);
             self.walk(&mut frame, &to_body, &LinkCoordinates::default());
             self.bodies.push(frame);
+            self.link_steps.push([to_joint, chain, to_body].concat());
         }
         Ok(())
     }
 
     /// Rotation and translation of a constant displacement.
     pub(super) fn pose(&mut self, d: &Displacement) -> Result<(Mat3, Vec3), LowerError> {
+        let steps = self.steps(d, None)?;
+        Ok(self.compose(&steps))
+    }
+
+    /// Rotation and translation of steps that depend on no coordinate.
+    pub(super) fn compose(&mut self, steps: &[Step]) -> (Mat3, Vec3) {
         let mut rotation = v::identity(&mut self.pool);
         let mut origin = v::zero(&mut self.pool);
-        for step in self.steps(d, None)? {
+        for step in steps {
             match step {
                 Step::Translation(t) => {
-                    let moved = v::mat_vec(&mut self.pool, &rotation, &t);
+                    let moved = v::mat_vec(&mut self.pool, &rotation, t);
                     origin = v::add(&mut self.pool, &origin, &moved);
                 }
                 Step::Rotation { axis, angle } => {
-                    let turn = v::rotation(&mut self.pool, &axis, angle);
+                    let turn = v::rotation(&mut self.pool, axis, *angle);
                     rotation = v::mat_mul(&mut self.pool, &rotation, &turn);
                 }
             }
         }
-        Ok((rotation, origin))
-    }
-
-    /// Body `i`'s mass, centre and inertia at its origin in the fixed axes (I(O) = I(G) − μ r̃ r̃);
-    /// `None` for a body declared without mass or inertia.
-    fn inertia(&mut self, i: usize) -> Result<Option<Inertia>, LowerError> {
-        let body = self.mechanism.body(self.topology.bodies[i - 1]);
-        self.context = Some(body.span);
-        let mass = self.lowering.scalar(&mut self.pool, body.mass.value(), None)?;
-        let moments = self.lowering.vector(&mut self.pool, body.inertia.value(), None)?;
-        if self.pool.is_zero(mass) && v::is_zero(&self.pool, &moments) {
-            return Ok(None);
-        }
-        let (principal, centre) = self.pose(body.iframe.value())?;
-        let pool = &mut self.pool;
-        let frame = self.bodies[i].rotation;
-        let axes = v::mat_mul(pool, &frame, &principal);
-        let centre = v::mat_vec(pool, &frame, &centre);
-        // I(G) = Σₖ Iₖ eₖ eₖᵀ over the principal axes eₖ (columns of `axes`).
-        let squared = v::dot(pool, &centre, &centre);
-        let mut at_origin = v::identity(pool);
-        for (r, row) in at_origin.iter_mut().enumerate() {
-            for (c, entry) in row.iter_mut().enumerate() {
-                let terms: Vec<ExprId> = (0..3)
-                    .map(|k| {
-                        let product = pool.mul(axes[r][k], axes[c][k]);
-                        pool.mul(moments[k], product)
-                    })
-                    .collect();
-                let central = pool.sum(terms);
-                // − μ r̃ r̃ = μ (|r|² Id − r rᵀ)
-                let outer = pool.mul(centre[r], centre[c]);
-                let shifted = if r == c { pool.sub(squared, outer) } else { pool.neg(outer) };
-                let shift = pool.mul(mass, shifted);
-                *entry = pool.add(central, shift);
-            }
-        }
-        Ok(Some(Inertia { mass, centre, at_origin }))
+        (rotation, origin)
     }
 
     /// The body that owns each tree column, and its parent.
@@ -457,7 +330,7 @@ impl<'a> Generator<'a> {
         generalised
     }
 
-    fn own_columns(&self, b: usize) -> std::ops::Range<usize> {
+    pub(super) fn own_columns(&self, b: usize) -> std::ops::Range<usize> {
         let link = &self.topology.principal[b - 1];
         let offset = self.lowering.join_offset(link.join);
         offset..offset + self.mechanism.link(self.mechanism.join(link.join).link).coordinates.len()
@@ -476,9 +349,10 @@ impl<'a> Generator<'a> {
         }
     }
 
-    /// Adds body b's wrench, moved to its parent's origin, to the parent's.
+    /// Adds body b's wrench, moved to its parent's anchor's origin, to the anchor's.
     fn carry_to_parent(&mut self, b: usize, wrench: Wrench, wrenches: &mut [Option<Wrench>]) {
-        let parent = self.topology.parent(b);
+        // Straight to the anchor: a welded parent between them has no coordinate to project on.
+        let parent = self.anchors[self.topology.parent(b)];
         if parent == 0 {
             return;
         }

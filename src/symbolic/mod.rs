@@ -9,6 +9,7 @@ pub mod articulated;
 mod closure;
 pub mod equations;
 pub mod expr;
+mod inertia;
 pub mod kinematics;
 mod loads;
 pub mod lower;

@@ -1,0 +1,244 @@
+//! Bodies' mass properties: each body's in its own frame, merged into the body it is welded to,
+//! then in the fixed axes at the body's origin (the thesis's 𝔐ᵢ and 𝔖ᵢ); and the tree's forward
+//! dynamics set up for the articulated-body recursion.
+//!
+//! A body welded to its parent has no coordinate of its own: it moves with the nearest ancestor
+//! that has one, its anchor. Its mass properties are moved into the anchor's frame while they are
+//! still constants of the program (so numbers fold), and the recursions skip it: welds cost
+//! nothing, as in the numeric model (`dynamics::welds`).
+
+use super::articulated::{self, Matrix6, Spatial};
+use super::equations::{Generator, Wrench};
+use super::expr::{ExprId, Pool};
+use super::kinematics::Moving;
+use super::lower::LowerError;
+use super::vector::{self as v, Mat3, Vec3};
+
+/// Mass properties about a frame's origin, in that frame's axes (or the fixed axes).
+#[derive(Clone, Copy)]
+pub(super) struct Inertia {
+    pub mass: ExprId,
+    /// h = μ OG.
+    pub first_moment: Vec3,
+    /// I(O) = I(G) + μ (|OG|² Id − OG OGᵀ).
+    pub at_origin: Mat3,
+}
+
+impl Inertia {
+    /// The same mass seen from a frame in which this one has `rotation` and `origin` p:
+    /// h' = μ p + R h, I'(O') = R I(O) Rᵀ + μ (|p|² Id − p pᵀ) + 2 (p·h') Id − p h'ᵀ − h' pᵀ
+    /// with h' = R h.
+    fn moved(&self, pool: &mut Pool, rotation: &Mat3, origin: &Vec3) -> Inertia {
+        let turned = v::mat_vec(pool, rotation, &self.first_moment);
+        let carried = v::scale(pool, self.mass, origin);
+        let first_moment = v::add(pool, &carried, &turned);
+        let half = v::mat_mul(pool, rotation, &self.at_origin);
+        let rotated = v::mat_mul(pool, &half, &v::transpose(rotation));
+        let squared = v::dot(pool, origin, origin);
+        let lever = v::dot(pool, origin, &turned);
+        let mut at_origin = rotated;
+        for r in 0..3 {
+            for c in 0..3 {
+                let outer = pool.mul(origin[r], origin[c]);
+                let point = if r == c { pool.sub(squared, outer) } else { pool.neg(outer) };
+                let point = pool.mul(self.mass, point);
+                let cross_terms = {
+                    let (a, b) = (pool.mul(origin[r], turned[c]), pool.mul(turned[r], origin[c]));
+                    let both = pool.add(a, b);
+                    if r == c {
+                        let two = pool.constant(2.0);
+                        let twice = pool.mul(two, lever);
+                        pool.sub(twice, both)
+                    } else {
+                        pool.neg(both)
+                    }
+                };
+                let shift = pool.add(point, cross_terms);
+                at_origin[r][c] = pool.add(rotated[r][c], shift);
+            }
+        }
+        Inertia { mass: self.mass, first_moment, at_origin }
+    }
+
+    fn plus(&self, pool: &mut Pool, other: &Inertia) -> Inertia {
+        let mut at_origin = self.at_origin;
+        for (row, other_row) in at_origin.iter_mut().zip(&other.at_origin) {
+            for (entry, o) in row.iter_mut().zip(other_row) {
+                *entry = pool.add(*entry, *o);
+            }
+        }
+        Inertia { mass: pool.add(self.mass, other.mass), first_moment: v::add(pool, &self.first_moment, &other.first_moment), at_origin }
+    }
+
+    /// 𝔐 (v, ω): the momentum μ v + ω∧h and the angular momentum at O, h∧v + I(O) ω.
+    pub fn times(&self, pool: &mut Pool, angular: &Vec3, linear: &Vec3) -> Wrench {
+        let translating = v::scale(pool, self.mass, linear);
+        let spin = v::cross(pool, angular, &self.first_moment);
+        let lever = v::cross(pool, &self.first_moment, linear);
+        let turning = v::mat_vec(pool, &self.at_origin, angular);
+        [v::add(pool, &translating, &spin), v::add(pool, &lever, &turning)]
+    }
+
+    /// 𝔖 = (−ω∧(ω∧h), −ω∧I(O)ω) for a body moving as `body`.
+    pub fn velocity_products(&self, pool: &mut Pool, body: &Moving) -> Wrench {
+        let w = body.angular_velocity;
+        let spin = v::cross(pool, &w, &self.first_moment);
+        let centripetal = v::cross(pool, &w, &spin);
+        let turning = v::mat_vec(pool, &self.at_origin, &w);
+        let gyroscopic = v::cross(pool, &w, &turning);
+        [v::neg(pool, &centripetal), v::neg(pool, &gyroscopic)]
+    }
+
+    /// 𝔖 − 𝔐 Ψ̇q.
+    pub fn velocity_terms(&self, pool: &mut Pool, body: &Moving) -> Wrench {
+        let [force, moment] = self.velocity_products(pool, body);
+        let [bias_force, bias_moment] = self.times(pool, &body.angular_bias, &body.bias);
+        [v::sub(pool, &force, &bias_force), v::sub(pool, &moment, &bias_moment)]
+    }
+
+    /// 𝔐 as a 6 × 6 matrix on (v, ω): [[μ Id, −h̃], [h̃, I(O)]].
+    pub fn matrix(&self, pool: &mut Pool) -> Matrix6 {
+        let zero = pool.constant(0.0);
+        let mut m = [[zero; 6]; 6];
+        let h = self.first_moment;
+        let minus = v::neg(pool, &h);
+        let skew = [[zero, minus[2], h[1]], [h[2], zero, minus[0]], [minus[1], h[0], zero]];
+        for i in 0..3 {
+            m[i][i] = self.mass;
+            for j in 0..3 {
+                m[3 + i][j] = skew[i][j];
+                m[j][3 + i] = skew[i][j];
+                m[3 + i][3 + j] = self.at_origin[i][j];
+            }
+        }
+        m
+    }
+}
+
+impl Generator<'_> {
+    /// Each body's anchor: itself when its link has coordinates, its parent's anchor when it is
+    /// welded (0, earth, for a body welded to earth).
+    pub(super) fn anchors(&self) -> Vec<usize> {
+        let mut anchors = vec![0];
+        for link in &self.topology.principal {
+            let moves = !self.mechanism.link(self.mechanism.join(link.join).link).coordinates.is_empty();
+            anchors.push(if moves { link.child } else { anchors[link.parent] });
+        }
+        anchors
+    }
+
+    /// Per body, its mass properties and those of the bodies welded to it, in the fixed axes at
+    /// its origin; `None` for bodies without mass and for welded bodies.
+    pub(super) fn merged_inertias(&mut self) -> Result<Vec<Option<Inertia>>, LowerError> {
+        let n = self.topology.body_count();
+        let mut local: Vec<Option<Inertia>> = vec![None; n + 1];
+        for b in 1..=n {
+            local[b] = self.local_inertia(b)?;
+        }
+        // Children after parents: carry welded bodies' inertias up to their anchors, in the
+        // frames of the bodies on the way.
+        for b in (1..=n).rev() {
+            let anchor = self.anchors[b];
+            let Some(inertia) = local[b].filter(|_| anchor != b) else { continue };
+            local[b] = None;
+            let parent = self.topology.parent(b);
+            if anchor == 0 {
+                continue; // Welded to earth: it never moves.
+            }
+            let steps = self.link_steps[b].clone();
+            let (rotation, origin) = self.compose(&steps);
+            let moved = inertia.moved(&mut self.pool, &rotation, &origin);
+            local[parent] = Some(match local[parent] {
+                Some(existing) => existing.plus(&mut self.pool, &moved),
+                None => moved,
+            });
+        }
+        Ok((0..=n)
+            .map(|b| local[b].map(|inertia| {
+                let zero = v::zero(&mut self.pool);
+                inertia.moved(&mut self.pool, &self.bodies[b].rotation, &zero)
+            }))
+            .collect())
+    }
+
+    /// Body `b`'s mass properties about its origin, in its own axes (numbers when the program
+    /// gives numbers); `None` for a body declared without mass or inertia.
+    fn local_inertia(&mut self, b: usize) -> Result<Option<Inertia>, LowerError> {
+        let body = self.mechanism.body(self.topology.bodies[b - 1]);
+        self.context = Some(body.span);
+        let mass = self.lowering.scalar(&mut self.pool, body.mass.value(), None)?;
+        let moments = self.lowering.vector(&mut self.pool, body.inertia.value(), None)?;
+        if self.pool.is_zero(mass) && v::is_zero(&self.pool, &moments) {
+            return Ok(None);
+        }
+        let (principal, centre) = self.pose(body.iframe.value())?;
+        let pool = &mut self.pool;
+        let zero = pool.constant(0.0);
+        let mut diagonal = [[zero; 3]; 3];
+        for k in 0..3 {
+            diagonal[k][k] = moments[k];
+        }
+        let central = Inertia { mass, first_moment: v::zero(pool), at_origin: diagonal };
+        Ok(Some(central.moved(pool, &principal, &centre)))
+    }
+
+    /// The tree's forward dynamics by the articulated-body recursion, over the bodies that have
+    /// coordinates; loads on welded bodies are carried to their anchors.
+    pub(super) fn articulated(&mut self, applied: &[Option<Wrench>], link_forces: &[ExprId]) -> Vec<ExprId> {
+        let zero = self.pool.constant(0.0);
+        let nothing = [v::zero(&mut self.pool); 2];
+        let mut loads: Vec<Wrench> = vec![nothing; applied.len()];
+        for (b, wrench) in applied.iter().enumerate().skip(1) {
+            let (Some(wrench), anchor) = (wrench, self.anchors[b]) else { continue };
+            if anchor == 0 {
+                continue;
+            }
+            let pool = &mut self.pool;
+            let arm = v::sub(pool, &self.bodies[b].origin, &self.bodies[anchor].origin);
+            let lever = v::cross(pool, &arm, &wrench[0]);
+            let moment = v::add(pool, &wrench[1], &lever);
+            loads[anchor] = [v::add(pool, &loads[anchor][0], &wrench[0]), v::add(pool, &loads[anchor][1], &moment)];
+        }
+        let moving: Vec<usize> = (1..=self.topology.body_count()).filter(|&b| self.anchors[b] == b).collect();
+        let mut index = vec![0; self.topology.body_count() + 1];
+        let mut bodies = vec![articulated::Body {
+            parent: 0,
+            origin: self.bodies[0].origin,
+            columns: Vec::new(),
+            bias: [zero; 6],
+            inertia: None,
+            bias_force: [zero; 6],
+        }];
+        for &b in &moving {
+            index[b] = bodies.len();
+            let parent = index[self.anchors[self.topology.parent(b)]];
+            bodies.push(self.articulated_body(b, parent, &loads[b]));
+        }
+        articulated::accelerations(&mut self.pool, &bodies, link_forces)
+    }
+
+    fn articulated_body(&mut self, b: usize, parent: usize, loads: &Wrench) -> articulated::Body {
+        let zero = self.pool.constant(0.0);
+        let spatial = |linear: &Vec3, angular: &Vec3| -> Spatial { [linear[0], linear[1], linear[2], angular[0], angular[1], angular[2]] };
+        let own = self.own_columns(b);
+        let pool = &mut self.pool;
+        let frame = &self.bodies[b];
+        let columns = own
+            .map(|k| match frame.column(k) {
+                Some([angular, linear]) => (k, spatial(linear, angular)),
+                None => (k, [zero; 6]),
+            })
+            .collect();
+        let inertia = self.inertias[b].as_ref();
+        let products = inertia.map(|m| m.velocity_products(pool, frame)).unwrap_or([v::zero(pool); 2]);
+        let total = [v::add(pool, &products[0], &loads[0]), v::add(pool, &products[1], &loads[1])];
+        articulated::Body {
+            parent,
+            origin: frame.origin,
+            columns,
+            bias: spatial(&frame.bias, &frame.angular_bias),
+            inertia: inertia.map(|m| m.matrix(pool)),
+            bias_force: spatial(&v::neg(pool, &total[0]), &v::neg(pool, &total[1])),
+        }
+    }
+}
