@@ -132,8 +132,8 @@ impl Generator<'_> {
     pub(super) fn merged_inertias(&mut self) -> Result<Vec<Option<Inertia>>, LowerError> {
         let n = self.topology.body_count();
         let mut local: Vec<Option<Inertia>> = vec![None; n + 1];
-        for b in 1..=n {
-            local[b] = self.local_inertia(b)?;
+        for (b, slot) in local.iter_mut().enumerate().skip(1) {
+            *slot = self.local_inertia(b)?;
         }
         // Children after parents: carry welded bodies' inertias up to their anchors, in the
         // frames of the bodies on the way.
