@@ -1,37 +1,38 @@
-//! Forward dynamics of a tree as expressions: the articulated-body recursion written on the
-//! thesis's kinematic vectors 𝐪ᵢ = (v(Oᵢ), ωᵢ) in the fixed axes. Solving M q̇ = S + F costs
-//! O(n³) at each evaluation; this recursion costs O(n), so its generated code stays ahead of the
-//! numeric algorithms however many bodies the mechanism has.
+//! Forward dynamics of a tree as expressions: the articulated-body recursion. Solving
+//! M q̇ = S + F costs O(n³) at each evaluation; this recursion costs O(n), so its generated code
+//! stays ahead of the numeric algorithms however many bodies the mechanism has.
 //!
-//! With T the transport from a parent's origin to its child's (v ↦ v + ω ∧ r), a child moves as
-//! 𝐪̇_c = T 𝐪̇_p + S_c q̇_c + c_c, where S_c holds its joint's columns of Ψ and
-//! c_c = Ψ̇_c q − T Ψ̇_p q. Each body obeys 𝔐 𝐪̇ + p = reactions with the bias force
-//! p = −(𝔖 + 𝔉).
-//! - From the leaves: I^A = 𝔐 + Σ Tᵀ Iᵃ T, p^A = p + Σ Tᵀ pᵃ, U = I^A S, D = Sᵀ U,
+//! Each body's quantities are spatial vectors (linear part first) at its origin in its own axes,
+//! where its inertia and its joint's columns are mostly the program's constants. A child c of p
+//! sits at `arm` in p's axes, turned by `rotation` (c's axes in p's); X takes p's motions to c's.
+//! A child moves as a_c = X a_p + S_c q̇_c + c_c, and obeys I a + p = reactions with the bias
+//! force p (velocity products minus applied efforts).
+//! - From the leaves: I^A = I + Σ Xᵀ Iᵃ X, p^A = p + Σ Xᵀ pᵃ, U = I^A S, D = Sᵀ U,
 //!   u = τ − Sᵀ p^A, Iᵃ = I^A − U D⁻¹ Uᵀ, pᵃ = p^A + Iᵃ c + U D⁻¹ u.
-//! - From the root: a = T 𝐪̇_p + c, q̇ = D⁻¹ (u − Uᵀ a), 𝐪̇ = a + S q̇.
+//! - From the root: a = X a_p + c, q̇ = D⁻¹ (u − Uᵀ a), a += S q̇.
 
 use super::expr::{ExprId, Pool};
-use super::vector::Vec3;
+use super::vector::{self as v, Mat3, Vec3};
 
 /// A 6-vector (linear part, then angular): a kinematic vector or a wrench (force, moment).
 pub type Spatial = [ExprId; 6];
 /// Row-major 6 × 6.
 pub type Matrix6 = [[ExprId; 6]; 6];
 
-/// What the recursion needs of one body (index = body number, 0 = earth, unused).
+/// What the recursion needs of one body (index 0 is the fixed base, unused).
 pub struct Body {
     pub parent: usize,
-    /// Origin in the fixed axes, to transport between bodies.
-    pub origin: Vec3,
-    /// The body's own joint's columns of Ψ, as (linear, angular) 6-vectors, and their
-    /// coordinates' indices.
+    /// The body's origin in its parent's axes, from the parent's origin.
+    pub arm: Vec3,
+    /// The body's axes in its parent's (`None`: the same axes).
+    pub rotation: Option<Mat3>,
+    /// Its joint's columns (motion per unit rate), with their coordinates' indices.
     pub columns: Vec<(usize, Spatial)>,
-    /// Ψ̇ q of the body: (acceleration of the origin, angular acceleration) at q̇ = 0.
+    /// c: the body's acceleration at zero second derivatives, less its parent's moved to it.
     pub bias: Spatial,
-    /// 𝔐, or `None` for a body without mass or inertia.
+    /// I, or `None` for a body without mass or inertia.
     pub inertia: Option<Matrix6>,
-    /// p = −(𝔖 + 𝔉).
+    /// p.
     pub bias_force: Spatial,
 }
 
@@ -42,27 +43,30 @@ pub fn accelerations(pool: &mut Pool, bodies: &[Body], tau: &[ExprId]) -> Vec<Ex
     let mut articulated: Vec<Option<Matrix6>> = bodies.iter().map(|b| b.inertia).collect();
     let mut bias_forces: Vec<Spatial> = bodies.iter().map(|b| b.bias_force).collect();
     let mut joints: Vec<Option<Joint>> = (0..=n).map(|_| None).collect();
-    let mut local_bias: Vec<Spatial> = vec![[zero; 6]; n + 1];
     for b in (1..=n).rev() {
         let body = &bodies[b];
-        let parent = &bodies[body.parent];
-        let arm = super::vector::sub(pool, &body.origin, &parent.origin);
-        let moved_bias = if body.parent == 0 { [zero; 6] } else { transport_motion(pool, &arm, &parent.bias) };
-        local_bias[b] = sub(pool, &body.bias, &moved_bias);
         let inertia = articulated[b].unwrap_or([[zero; 6]; 6]);
         let joint = Joint::new(pool, &inertia, &body.columns, &bias_forces[b], tau);
         // What the parent feels: Iᵃ = I^A − U D⁻¹ Uᵀ and pᵃ = p^A + Iᵃ c + U D⁻¹ u.
         let reduced = joint.reduce(pool, &inertia);
-        let carried = mat_vec(pool, &reduced, &local_bias[b]);
+        let carried = mat_vec(pool, &reduced, &body.bias);
         let mut force = add(pool, &bias_forces[b], &carried);
         force = add(pool, &force, &joint.u_d_inverse_u);
         if body.parent != 0 {
-            let moved = transport_inertia(pool, &arm, &reduced);
+            let turned = match &body.rotation {
+                Some(r) => rotate_inertia(pool, r, &reduced),
+                None => reduced,
+            };
+            let moved = transport_inertia(pool, &body.arm, &turned);
             articulated[body.parent] = Some(match articulated[body.parent] {
                 Some(existing) => add_matrix(pool, &existing, &moved),
                 None => moved,
             });
-            let moved_force = transport_force(pool, &arm, &force);
+            let turned = match &body.rotation {
+                Some(r) => rotate(pool, r, &force),
+                None => force,
+            };
+            let moved_force = transport_force(pool, &body.arm, &turned);
             bias_forces[body.parent] = add(pool, &bias_forces[body.parent], &moved_force);
         }
         joints[b] = Some(joint);
@@ -71,9 +75,8 @@ pub fn accelerations(pool: &mut Pool, bodies: &[Body], tau: &[ExprId]) -> Vec<Ex
     let mut motion: Vec<Spatial> = vec![[zero; 6]; n + 1];
     for b in 1..=n {
         let body = &bodies[b];
-        let arm = super::vector::sub(pool, &body.origin, &bodies[body.parent].origin);
-        let moved = if body.parent == 0 { [zero; 6] } else { transport_motion(pool, &arm, &motion[body.parent]) };
-        let mut a = add(pool, &moved, &local_bias[b]);
+        let moved = if body.parent == 0 { [zero; 6] } else { motion_to_child(pool, body, &motion[body.parent]) };
+        let mut a = add(pool, &moved, &body.bias);
         let Some(joint) = &joints[b] else { continue };
         let rates = joint.rates(pool, &a);
         for ((column, s), rate) in body.columns.iter().zip(&rates) {
@@ -84,6 +87,40 @@ pub fn accelerations(pool: &mut Pool, bodies: &[Body], tau: &[ExprId]) -> Vec<Ex
         motion[b] = a;
     }
     result
+}
+
+/// X x: a motion of the parent, seen at the child's origin in the child's axes.
+pub fn motion_to_child(pool: &mut Pool, body: &Body, x: &Spatial) -> Spatial {
+    let moved = transport_motion(pool, &body.arm, x);
+    match &body.rotation {
+        Some(r) => rotate(pool, &v::transpose(r), &moved),
+        None => moved,
+    }
+}
+
+/// Both 3-vector parts of a spatial vector turned by `r`.
+fn rotate(pool: &mut Pool, r: &Mat3, x: &Spatial) -> Spatial {
+    let linear = v::mat_vec(pool, r, &[x[0], x[1], x[2]]);
+    let angular = v::mat_vec(pool, r, &[x[3], x[4], x[5]]);
+    [linear[0], linear[1], linear[2], angular[0], angular[1], angular[2]]
+}
+
+/// blockdiag(r, r) I blockdiag(r, r)ᵀ: an inertia turned from the child's axes to the parent's.
+fn rotate_inertia(pool: &mut Pool, r: &Mat3, inertia: &Matrix6) -> Matrix6 {
+    let block = |i: usize, j: usize| -> Mat3 { std::array::from_fn(|a| std::array::from_fn(|b| inertia[3 * i + a][3 * j + b])) };
+    let rt = v::transpose(r);
+    let mut turned = *inertia;
+    for (i, j) in [(0, 0), (0, 1), (1, 1)] {
+        let half = v::mat_mul(pool, r, &block(i, j));
+        let full = v::mat_mul(pool, &half, &rt);
+        for a in 0..3 {
+            for b in 0..3 {
+                turned[3 * i + a][3 * j + b] = full[a][b];
+                turned[3 * j + b][3 * i + a] = full[a][b];
+            }
+        }
+    }
+    turned
 }
 
 /// One joint's articulated quantities: U = I^A S (columns), D⁻¹ through its LDLᵀ factors,
@@ -207,11 +244,11 @@ impl Ldl {
     }
 }
 
-fn add(pool: &mut Pool, a: &Spatial, b: &Spatial) -> Spatial {
+pub fn add(pool: &mut Pool, a: &Spatial, b: &Spatial) -> Spatial {
     std::array::from_fn(|i| pool.add(a[i], b[i]))
 }
 
-fn sub(pool: &mut Pool, a: &Spatial, b: &Spatial) -> Spatial {
+pub fn sub(pool: &mut Pool, a: &Spatial, b: &Spatial) -> Spatial {
     std::array::from_fn(|i| pool.sub(a[i], b[i]))
 }
 
@@ -241,7 +278,7 @@ fn combine(pool: &mut Pool, columns: &[Spatial], weights: &[ExprId]) -> Spatial 
 
 /// T x: the parent's kinematic vector seen at the child's origin, `arm` away
 /// (v + ω ∧ arm, ω).
-fn transport_motion(pool: &mut Pool, arm: &Vec3, x: &Spatial) -> Spatial {
+pub fn transport_motion(pool: &mut Pool, arm: &Vec3, x: &Spatial) -> Spatial {
     let angular = [x[3], x[4], x[5]];
     let spin = super::vector::cross(pool, &angular, arm);
     [pool.add(x[0], spin[0]), pool.add(x[1], spin[1]), pool.add(x[2], spin[2]), x[3], x[4], x[5]]

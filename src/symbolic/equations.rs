@@ -143,10 +143,12 @@ pub(super) struct Generator<'a> {
     pub(super) topology: &'a Topology,
     pub(super) pool: Pool,
     pub(super) lowering: Lowering<'a>,
-    derivatives: Derivatives,
+    pub(super) derivatives: Derivatives,
     /// Indexed by body number, 0 = earth.
     pub(super) bodies: Vec<Moving>,
     pub(super) inertias: Vec<Option<Inertia>>,
+    /// The same in each body's own axes.
+    pub(super) local_inertias: Vec<Option<Inertia>>,
     /// Per body, the steps from its parent's frame to its own (empty for earth).
     pub(super) link_steps: Vec<Vec<Step>>,
     /// Per body, the body its motion is computed with: itself, or for a body welded to its
@@ -163,7 +165,7 @@ impl<'a> Generator<'a> {
     fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
         let mut pool = Pool::new();
         let lowering = Lowering::new(&mut pool, mechanism, topology);
-        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new(), link_steps: Vec::new(), anchors: Vec::new(), context: None }
+        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new(), local_inertias: Vec::new(), link_steps: Vec::new(), anchors: Vec::new(), context: None }
     }
 
     pub(super) fn columns(&self) -> usize {
@@ -173,7 +175,7 @@ impl<'a> Generator<'a> {
     fn run(&mut self) -> Result<Equations, LowerError> {
         self.place_bodies()?;
         self.anchors = self.anchors();
-        self.inertias = self.merged_inertias()?;
+        (self.local_inertias, self.inertias) = self.merged_inertias()?;
         let tree_coordinates = self.tree_coordinates();
         let mass = self.mass_matrix(tree_coordinates);
         let velocity_terms: Vec<Option<Wrench>> =

@@ -1,13 +1,12 @@
 //! Bodies' mass properties: each body's in its own frame, merged into the body it is welded to,
-//! then in the fixed axes at the body's origin (the thesis's 𝔐ᵢ and 𝔖ᵢ); and the tree's forward
-//! dynamics set up for the articulated-body recursion.
+//! then in the fixed axes at the body's origin (the thesis's 𝔐ᵢ and 𝔖ᵢ).
 //!
 //! A body welded to its parent has no coordinate of its own: it moves with the nearest ancestor
 //! that has one, its anchor. Its mass properties are moved into the anchor's frame while they are
 //! still constants of the program (so numbers fold), and the recursions skip it: welds cost
 //! nothing, as in the numeric model (`dynamics::welds`).
 
-use super::articulated::{self, Matrix6, Spatial};
+use super::articulated::Matrix6;
 use super::equations::{Generator, Wrench};
 use super::expr::{ExprId, Pool};
 use super::kinematics::Moving;
@@ -127,9 +126,9 @@ impl Generator<'_> {
         anchors
     }
 
-    /// Per body, its mass properties and those of the bodies welded to it, in the fixed axes at
-    /// its origin; `None` for bodies without mass and for welded bodies.
-    pub(super) fn merged_inertias(&mut self) -> Result<Vec<Option<Inertia>>, LowerError> {
+    /// Per body, its mass properties and those of the bodies welded to it at its origin, in its
+    /// own axes and in the fixed axes; `None` for bodies without mass and for welded bodies.
+    pub(super) fn merged_inertias(&mut self) -> Result<(Vec<Option<Inertia>>, Vec<Option<Inertia>>), LowerError> {
         let n = self.topology.body_count();
         let mut local: Vec<Option<Inertia>> = vec![None; n + 1];
         for (b, slot) in local.iter_mut().enumerate().skip(1) {
@@ -153,12 +152,15 @@ impl Generator<'_> {
                 None => moved,
             });
         }
-        Ok((0..=n)
-            .map(|b| local[b].map(|inertia| {
-                let zero = v::zero(&mut self.pool);
-                inertia.moved(&mut self.pool, &self.bodies[b].rotation, &zero)
-            }))
-            .collect())
+        let world = (0..=n)
+            .map(|b| {
+                local[b].map(|inertia| {
+                    let zero = v::zero(&mut self.pool);
+                    inertia.moved(&mut self.pool, &self.bodies[b].rotation, &zero)
+                })
+            })
+            .collect();
+        Ok((local, world))
     }
 
     /// Body `b`'s mass properties about its origin, in its own axes (numbers when the program
@@ -180,65 +182,5 @@ impl Generator<'_> {
         }
         let central = Inertia { mass, first_moment: v::zero(pool), at_origin: diagonal };
         Ok(Some(central.moved(pool, &principal, &centre)))
-    }
-
-    /// The tree's forward dynamics by the articulated-body recursion, over the bodies that have
-    /// coordinates; loads on welded bodies are carried to their anchors.
-    pub(super) fn articulated(&mut self, applied: &[Option<Wrench>], link_forces: &[ExprId]) -> Vec<ExprId> {
-        let zero = self.pool.constant(0.0);
-        let nothing = [v::zero(&mut self.pool); 2];
-        let mut loads: Vec<Wrench> = vec![nothing; applied.len()];
-        for (b, wrench) in applied.iter().enumerate().skip(1) {
-            let (Some(wrench), anchor) = (wrench, self.anchors[b]) else { continue };
-            if anchor == 0 {
-                continue;
-            }
-            let pool = &mut self.pool;
-            let arm = v::sub(pool, &self.bodies[b].origin, &self.bodies[anchor].origin);
-            let lever = v::cross(pool, &arm, &wrench[0]);
-            let moment = v::add(pool, &wrench[1], &lever);
-            loads[anchor] = [v::add(pool, &loads[anchor][0], &wrench[0]), v::add(pool, &loads[anchor][1], &moment)];
-        }
-        let moving: Vec<usize> = (1..=self.topology.body_count()).filter(|&b| self.anchors[b] == b).collect();
-        let mut index = vec![0; self.topology.body_count() + 1];
-        let mut bodies = vec![articulated::Body {
-            parent: 0,
-            origin: self.bodies[0].origin,
-            columns: Vec::new(),
-            bias: [zero; 6],
-            inertia: None,
-            bias_force: [zero; 6],
-        }];
-        for &b in &moving {
-            index[b] = bodies.len();
-            let parent = index[self.anchors[self.topology.parent(b)]];
-            bodies.push(self.articulated_body(b, parent, &loads[b]));
-        }
-        articulated::accelerations(&mut self.pool, &bodies, link_forces)
-    }
-
-    fn articulated_body(&mut self, b: usize, parent: usize, loads: &Wrench) -> articulated::Body {
-        let zero = self.pool.constant(0.0);
-        let spatial = |linear: &Vec3, angular: &Vec3| -> Spatial { [linear[0], linear[1], linear[2], angular[0], angular[1], angular[2]] };
-        let own = self.own_columns(b);
-        let pool = &mut self.pool;
-        let frame = &self.bodies[b];
-        let columns = own
-            .map(|k| match frame.column(k) {
-                Some([angular, linear]) => (k, spatial(linear, angular)),
-                None => (k, [zero; 6]),
-            })
-            .collect();
-        let inertia = self.inertias[b].as_ref();
-        let products = inertia.map(|m| m.velocity_products(pool, frame)).unwrap_or([v::zero(pool); 2]);
-        let total = [v::add(pool, &products[0], &loads[0]), v::add(pool, &products[1], &loads[1])];
-        articulated::Body {
-            parent,
-            origin: frame.origin,
-            columns,
-            bias: spatial(&frame.bias, &frame.angular_bias),
-            inertia: inertia.map(|m| m.matrix(pool)),
-            bias_force: spatial(&v::neg(pool, &total[0]), &v::neg(pool, &total[1])),
-        }
     }
 }

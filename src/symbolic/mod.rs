@@ -9,6 +9,7 @@ pub mod articulated;
 mod closure;
 pub mod equations;
 pub mod expr;
+mod forward;
 mod inertia;
 pub mod kinematics;
 mod loads;
