@@ -114,6 +114,9 @@ impl Inertia {
     }
 }
 
+/// One entry per body number (0 = earth).
+pub(super) type PerBody = Vec<Option<Inertia>>;
+
 impl Generator<'_> {
     /// Each body's anchor: itself when its link has coordinates, its parent's anchor when it is
     /// welded (0, earth, for a body welded to earth).
@@ -128,7 +131,7 @@ impl Generator<'_> {
 
     /// Per body, its mass properties and those of the bodies welded to it at its origin, in its
     /// own axes and in the fixed axes; `None` for bodies without mass and for welded bodies.
-    pub(super) fn merged_inertias(&mut self) -> Result<(Vec<Option<Inertia>>, Vec<Option<Inertia>>), LowerError> {
+    pub(super) fn merged_inertias(&mut self) -> Result<(PerBody, PerBody), LowerError> {
         let n = self.topology.body_count();
         let mut local: Vec<Option<Inertia>> = vec![None; n + 1];
         for (b, slot) in local.iter_mut().enumerate().skip(1) {
