@@ -4,7 +4,7 @@
 
 use std::fmt::Write;
 
-use super::code::{comment, Routine, Routines, Statements};
+use super::code::{array_symbol, comment, Routine, Routines, Statements};
 use super::shared::{described, Language, PowerSyntax, Role, Symbols};
 use crate::symbolic::expr::{ExprId, Function, Node};
 use crate::symbolic::lower::Variable;
@@ -20,13 +20,7 @@ impl Language for C {
         "NAN".to_string()
     }
     fn symbol(&self, role: Role, name: &str) -> String {
-        match role {
-            Role::Position(i) => format!("p[{i}]"),
-            Role::Rate(i) => format!("q[{i}]"),
-            Role::Parameter(i) => format!("k[{i}]"),
-            Role::Time => "t".to_string(),
-            Role::Function(_) => name.to_string(),
-        }
+        array_symbol(role, name)
     }
     fn temporary(&self, k: usize) -> String {
         format!("x{k}")

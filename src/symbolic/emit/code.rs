@@ -102,6 +102,18 @@ impl Routines {
     }
 }
 
+/// A variable in the generated functions: an element of the argument arrays `p` (positions),
+/// `q` (rates) and `k` (parameters), the time `t`, or an unknown function's value by its name.
+pub fn array_symbol(role: Role, name: &str) -> String {
+    match role {
+        Role::Position(i) => format!("p[{i}]"),
+        Role::Rate(i) => format!("q[{i}]"),
+        Role::Parameter(i) => format!("k[{i}]"),
+        Role::Time => "t".to_string(),
+        Role::Function(_) => name.to_string(),
+    }
+}
+
 /// Text safe inside a comment of either language.
 pub fn comment(text: &str) -> String {
     text.replace("*/", "* /").replace('\n', " ")
