@@ -28,6 +28,7 @@ pub fn json(equations: &Equations, source: &str) -> String {
         "forces": equations.forces.iter().map(at).collect::<Vec<_>>(),
         "constraints": if n == 0 { Vec::new() } else { rows(&equations.constraints) },
         "constraint_bias": equations.constraint_bias.iter().map(at).collect::<Vec<_>>(),
+        "accelerations": equations.accelerations.as_ref().map(|a| a.iter().map(at).collect::<Vec<_>>()),
         "constraint_names": equations.constraint_names,
         "size": listing.order.len(),
     });

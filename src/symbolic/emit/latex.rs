@@ -148,6 +148,7 @@ fn label(entry: Entry, equations: &Equations) -> String {
         Entry::Force(i) => format!("F_{{{}}}", i + 1),
         Entry::Constraint(r, c) => format!("\\Delta_{{{},{}}}", row(r), c + 1),
         Entry::Bias(r) => format!("(\\dot\\Delta q)_{{{}}}", row(r)),
+        Entry::Acceleration(i) => format!("\\dot q_{{{}}}", i + 1),
     }
 }
 

@@ -375,10 +375,12 @@ pub enum Entry {
     Constraint(usize, usize),
     /// Δ̇q[row].
     Bias(usize),
+    /// q'[i], for a tree: the forward dynamics.
+    Acceleration(usize),
 }
 
 /// The entries of the equations that are not the constant 0, M's upper triangle only, in the
-/// order M, S, F, Δ, Δ̇q.
+/// order M, S, F, Δ, Δ̇q, then for a tree the accelerations q'.
 pub fn nonzero_entries(equations: &Equations) -> Vec<(Entry, ExprId)> {
     let n = equations.dimension();
     let mut entries: Vec<(Entry, ExprId)> = upper_triangle(equations).into_iter().map(|(i, j, id)| (Entry::Mass(i, j), id)).collect();
@@ -386,6 +388,7 @@ pub fn nonzero_entries(equations: &Equations) -> Vec<(Entry, ExprId)> {
     entries.extend(equations.forces.iter().enumerate().map(|(i, &id)| (Entry::Force(i), id)));
     entries.extend(equations.constraints.iter().enumerate().map(|(k, &id)| (Entry::Constraint(k / n, k % n), id)));
     entries.extend(equations.constraint_bias.iter().enumerate().map(|(r, &id)| (Entry::Bias(r), id)));
+    entries.extend(equations.accelerations.iter().flatten().enumerate().map(|(i, &id)| (Entry::Acceleration(i), id)));
     entries.retain(|(_, id)| !equations.pool.is_zero(*id));
     entries
 }

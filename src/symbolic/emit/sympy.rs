@@ -16,8 +16,8 @@ const KEYWORDS: [&str; 35] = [
 ];
 
 /// Names the module defines itself.
-const RESERVED: [&str; 14] =
-    ["sp", "M", "S", "F", "Delta", "Delta_bias", "positions", "rates", "parameters", "given", "functions", "constraint_names", "source", "t"];
+const RESERVED: [&str; 15] =
+    ["sp", "M", "S", "F", "Delta", "Delta_bias", "accelerations", "positions", "rates", "parameters", "given", "functions", "constraint_names", "source", "t"];
 
 /// The Python name of every variable.
 struct PythonNames {
@@ -135,6 +135,9 @@ pub fn sympy(equations: &Equations, source: &str) -> String {
     }
     let (n, m) = (equations.dimension(), equations.constraint_rows());
     let _ = writeln!(out, "\nM = sp.zeros({n}, {n})\nS = sp.zeros({n}, 1)\nF = sp.zeros({n}, 1)\nDelta = sp.zeros({m}, {n})\nDelta_bias = sp.zeros({m}, 1)");
+    // For a tree, the forward dynamics q' = M⁻¹ (S + F) by the articulated-body recursion.
+    let accelerations = if equations.accelerations.is_some() { format!("sp.zeros({n}, 1)") } else { "None".to_string() };
+    let _ = writeln!(out, "accelerations = {accelerations}");
     for (entry, id) in entries {
         let value = printer.expression(id);
         let _ = writeln!(out, "{} = {value}", target(entry));
@@ -190,6 +193,7 @@ fn target(entry: Entry) -> String {
         Entry::Force(i) => format!("F[{i}]"),
         Entry::Constraint(r, c) => format!("Delta[{r}, {c}]"),
         Entry::Bias(r) => format!("Delta_bias[{r}]"),
+        Entry::Acceleration(i) => format!("accelerations[{i}]"),
     }
 }
 

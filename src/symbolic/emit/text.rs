@@ -68,7 +68,8 @@ fn header(source: &str) -> String {
          #   M(p) q' = S(p, q) + F(p, q, t) + Δᵀ Λ,   Δ(p) q' + Δ̇q = 0\n\
          # p the positions, q their rates, q' the rates' derivatives, Λ the constraints' multipliers.\n\
          # Indices count from 1 in the order of the positions; constraint rows go by name.\n\
-         # M is symmetric: only M[i,j] with i ≤ j is listed. Entries equal to zero are left out.\n"
+         # M is symmetric: only M[i,j] with i ≤ j is listed. Entries equal to zero are left out.\n\
+         # For a tree, q'[i] is the forward dynamics, by the articulated-body recursion.\n"
     )
 }
 
@@ -112,5 +113,6 @@ fn label(entry: Entry, equations: &Equations) -> String {
         Entry::Force(i) => format!("F[{}]", i + 1),
         Entry::Constraint(r, c) => format!("Δ[{},{}]", names[r], c + 1),
         Entry::Bias(r) => format!("Δ̇q[{}]", names[r]),
+        Entry::Acceleration(i) => format!("q'[{}]", i + 1),
     }
 }
