@@ -201,12 +201,18 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
     const S2: &[Ty] = &[Scalar, Scalar];
     const V1: &[Ty] = &[Vector];
     const V2: &[Ty] = &[Vector, Vector];
+    const F1: &[Ty] = &[Frame];
+    const F2: &[Ty] = &[Frame, Frame];
     Some(match name {
         "sin" | "cos" | "tan" | "asin" | "acos" | "atan" | "sqrt" | "exp" | "log" | "abs" => (S1, Scalar),
         "atan2" => (S2, Scalar),
         "norm" => (V1, Scalar),
         "dot" => (V2, Scalar),
         "cross" => (V2, Vector),
+        // The state of a frame at the current instant, in the fixed axes (efforts only).
+        "position" | "velocity" | "angular_velocity" => (F1, Vector),
+        "orientation" => (F1, Matrix),
+        "distance" => (F2, Scalar),
         _ => return None,
     })
 }
@@ -219,5 +225,5 @@ pub const SIMULATE_FIELDS: &[&str] = &["duration", "output", "step", "max_step",
 
 pub const BUILTIN_NAMES: &[&str] = &[
     "pi", "time", "earth", "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2", "norm", "dot",
-    "cross",
+    "cross", "position", "velocity", "angular_velocity", "orientation", "distance",
 ];

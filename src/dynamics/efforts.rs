@@ -10,9 +10,9 @@ use super::joint::JointType;
 use super::model::{LinkEffort, Model};
 use super::spatial::{self, Force};
 use crate::elab::mechanism::EffortKind;
-use crate::elab::value::{JoinId, Vector};
+use crate::elab::value::{BodyRef, Frame, FrameQuantity, JoinId, Vector};
 use crate::kinematics::eval::{eval_jet, Env, EvalError};
-use crate::kinematics::model::Step;
+use crate::kinematics::model::{constant_pose, Step};
 
 /// The efforts at one state.
 pub struct Efforts {
@@ -59,10 +59,31 @@ fn vector(v: &Vector, model: &Model, env: &Env<'_>) -> Result<Vector3<f64>, Eval
     Ok(Vector3::new(value(0)?, value(1)?, value(2)?))
 }
 
+/// Component `quantity` of a frame's state, in the fixed axes; `data` holds the forward
+/// kinematics of the state.
+fn frame_state(model: &Model, data: &Data, frame: &Frame, quantity: FrameQuantity) -> Result<f64, EvalError> {
+    let body = match frame.body {
+        BodyRef::Earth => 0,
+        BodyRef::Body(id) => *model.body_numbers.get(&id).ok_or(EvalError::NotGeometric("a body outside the mechanism"))?,
+    };
+    let offset = constant_pose(&frame.displacement, &model.unknowns)?;
+    let pose = data.world[body] * offset;
+    let velocity = &data.velocity[body];
+    let (spin, linear) = (Vector3::new(velocity[0], velocity[1], velocity[2]), Vector3::new(velocity[3], velocity[4], velocity[5]));
+    let turn = |v: Vector3<f64>| data.world[body].rotation * v;
+    Ok(match quantity {
+        FrameQuantity::Position(i) => pose.translation.vector[i as usize],
+        FrameQuantity::Velocity(i) => turn(linear + spin.cross(&offset.translation.vector))[i as usize],
+        FrameQuantity::AngularVelocity(i) => turn(spin)[i as usize],
+        FrameQuantity::Orientation(i, j) => pose.rotation.to_rotation_matrix()[(i as usize, j as usize)],
+    })
+}
+
 /// Evaluates every effort; `data` must hold the forward kinematics of the state.
 pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) -> Result<Efforts, EvalError> {
     let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
-    let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time) };
+    let frames = |frame: &Frame, quantity: FrameQuantity| frame_state(model, data, frame, quantity);
+    let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time), frames: Some(&frames) };
     let mut external = vec![Force::zeros(); model.body_count() + 1];
     for effort in &model.applied {
         let value = vector(&effort.value, model, &env)?;
@@ -75,7 +96,7 @@ pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) 
     }
     let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
-        let generalised = link_effort(model, effort, declared, &joins, time)?;
+        let generalised = link_effort(model, effort, declared, &joins, &frames, time)?;
         let (start, count) = match model.joints.get(effort.joint) {
             Some(joint) => (joint.v_offset, joint.nv()),
             None => {
@@ -99,6 +120,7 @@ fn link_effort(
     effort: &LinkEffort,
     declared: &Declared<'_>,
     joins: &dyn Fn(JoinId, usize, u32) -> Option<f64>,
+    frames: &dyn Fn(&Frame, FrameQuantity) -> Result<f64, EvalError>,
     time: f64,
 ) -> Result<DVector<f64>, EvalError> {
     // A complementary link's coordinates are its velocities: no quaternion to map through.
@@ -110,7 +132,7 @@ fn link_effort(
     let n = chain.coordinate_count();
     let coordinates = &declared.coordinates[offset..offset + n];
     let rates = &declared.rates[offset..offset + n];
-    let env = Env { coordinates, rates: Some(rates), joins: Some(joins), time: Some(time) };
+    let env = Env { coordinates, rates: Some(rates), joins: Some(joins), time: Some(time), frames: Some(frames) };
     let value = vector(&effort.value, model, &env)?;
     let wrench = match effort.kind {
         EffortKind::Force => spatial_force(Vector3::zeros(), value),

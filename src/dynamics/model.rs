@@ -54,6 +54,8 @@ pub struct Model {
     pub joints: Vec<Joint>,
     pub bodies: Vec<BodyInertia>,
     pub body_names: Vec<String>,
+    /// The number of each body of the tree, for efforts that refer to frames.
+    pub body_numbers: std::collections::HashMap<crate::elab::value::BodyId, usize>,
     /// The joints RNEA, CRBA and ABA visit (all but the merged welds), the bodies' inertias as
     /// they see them (merged ones added to their anchor), and each body's pose in its anchor:
     /// see `welds`.
@@ -235,6 +237,7 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
         joints,
         bodies,
         body_names,
+        body_numbers: topology.number_of.clone(),
         nq,
         nv,
         applied,

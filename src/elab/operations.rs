@@ -179,6 +179,7 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
         .copied()
         .ok_or_else(|| internal(format!("unknown builtin `{name}`")))?;
     match name {
+        "position" | "velocity" | "angular_velocity" | "orientation" | "distance" => frame_state(name, values, span),
         "norm" | "dot" | "cross" => {
             let vectors = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
             let a = vectors.first().ok_or_else(|| internal("missing argument"))?;
@@ -196,6 +197,27 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
             Ok(Value::Scalar(Rc::new(SExpr::Call(static_name, args))))
         }
     }
+}
+
+/// `position(F)`, `velocity(F)`, `angular_velocity(F)`, `orientation(F)`, `distance(A, B)`: the
+/// state of frames at the current instant, in the fixed axes, as components to evaluate then.
+fn frame_state(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
+    let frames = values.into_iter().map(|v| as_frame(v, span).map(Rc::new)).collect::<Result<Vec<_>>>()?;
+    let frame = frames.first().ok_or_else(|| internal("missing argument"))?;
+    let component = |frame: &Rc<Frame>, quantity: FrameQuantity| Rc::new(SExpr::FrameState(frame.clone(), quantity));
+    let vector = |frame: &Rc<Frame>, make: fn(u8) -> FrameQuantity| -> Vector { [0, 1, 2].map(|i| component(frame, make(i))) };
+    Ok(match name {
+        "position" => Value::Vector(vector(frame, FrameQuantity::Position)),
+        "velocity" => Value::Vector(vector(frame, FrameQuantity::Velocity)),
+        "angular_velocity" => Value::Vector(vector(frame, FrameQuantity::AngularVelocity)),
+        "orientation" => Value::Matrix([0u8, 1, 2].map(|i| [0u8, 1, 2].map(|j| component(frame, FrameQuantity::Orientation(i, j))))),
+        _ => {
+            let other = frames.get(1).ok_or_else(|| internal("missing argument"))?;
+            let (a, b) = (vector(frame, FrameQuantity::Position), vector(other, FrameQuantity::Position));
+            let gap: Vector = [0, 1, 2].map(|i| arith('-', &b[i], &a[i]));
+            Value::Scalar(builtin_scalar("sqrt", &dot_row(&gap, &gap)))
+        }
+    })
 }
 
 /// Evaluates a built-in function on numbers (`sin(pi/2)` is the number 1).

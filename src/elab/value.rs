@@ -42,6 +42,22 @@ pub enum SExpr {
     Div(Scalar, Scalar),
     Pow(Scalar, Scalar),
     Call(&'static str, Vec<Scalar>),
+    /// One component of the state of a frame at the current instant, in the fixed axes
+    /// (`position(F)`, `velocity(F)`, …): only efforts may depend on it.
+    FrameState(Rc<Frame>, FrameQuantity),
+}
+
+/// A component of a frame's state, in the fixed axes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FrameQuantity {
+    /// Component i of its origin's position.
+    Position(u8),
+    /// Component i of its origin's velocity.
+    Velocity(u8),
+    /// Component i of its angular velocity.
+    AngularVelocity(u8),
+    /// Entry (i, j) of its rotation matrix (columns: the frame's axes).
+    Orientation(u8, u8),
 }
 
 pub fn num(value: f64) -> Scalar {
@@ -127,6 +143,19 @@ impl Displacement {
     pub fn is_identity(&self) -> bool {
         self.0.is_empty()
     }
+
+    /// Adds every unknown the displacement's parameters mention to `into`.
+    pub fn collect_unknowns(&self, into: &mut std::collections::BTreeSet<UnknownId>) {
+        for step in &self.0 {
+            match step {
+                Elementary::Translation(t) => t.iter().for_each(|s| s.collect_unknowns(into)),
+                Elementary::Rotation { angle, axis } => {
+                    angle.collect_unknowns(into);
+                    axis.iter().for_each(|s| s.collect_unknowns(into));
+                }
+            }
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -182,6 +211,18 @@ impl SExpr {
                 b.collect_unknowns(into);
             }
             SExpr::Call(_, args) => args.iter().for_each(|a| a.collect_unknowns(into)),
+            SExpr::FrameState(frame, _) => frame.displacement.collect_unknowns(into),
+        }
+    }
+
+    /// Whether the expression uses the state of a frame (`position(F)`, …).
+    pub fn uses_frame_state(&self) -> bool {
+        match self {
+            SExpr::FrameState(..) => true,
+            SExpr::Neg(a) => a.uses_frame_state(),
+            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => a.uses_frame_state() || b.uses_frame_state(),
+            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => args.iter().any(|a| a.uses_frame_state()),
+            SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => false,
         }
     }
 
@@ -219,6 +260,12 @@ impl SExpr {
             SExpr::Div(a, b) => format!("({} / {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
             SExpr::Pow(a, b) => format!("({} ^ {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
             SExpr::Call(name, args) => format!("{name}({})", list(args, unknown)),
+            SExpr::FrameState(_, quantity) => match quantity {
+                FrameQuantity::Position(i) => format!("position(frame)[{i}]"),
+                FrameQuantity::Velocity(i) => format!("velocity(frame)[{i}]"),
+                FrameQuantity::AngularVelocity(i) => format!("angular_velocity(frame)[{i}]"),
+                FrameQuantity::Orientation(i, j) => format!("orientation(frame)[{i}][{j}]"),
+            },
         }
     }
 }

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use crate::elab::value::{JoinId, SExpr, UnknownId};
+use crate::elab::value::{Frame, FrameQuantity, JoinId, SExpr, UnknownId};
 
 /// Values of the program's unknowns (written `?s` and generic quantities).
 pub type UnknownValues = HashMap<UnknownId, f64>;
@@ -47,6 +47,8 @@ pub struct Env<'a> {
     /// Positions and velocities of every join's coordinates (`crank.q`, `crank.q'`).
     pub joins: Option<&'a dyn Fn(JoinId, usize, u32) -> Option<f64>>,
     pub time: Option<f64>,
+    /// The state of frames at the current instant (`position(F)`, …), for efforts.
+    pub frames: Option<&'a dyn Fn(&Frame, FrameQuantity) -> Result<f64, EvalError>>,
 }
 
 /// A value with its first and second derivatives along a direction.
@@ -89,6 +91,10 @@ pub fn eval_jet(s: &SExpr, unknowns: &UnknownValues, env: &Env<'_>, direction: &
     Ok(match s {
         SExpr::Num(v) => Jet::constant(*v),
         SExpr::Time => Jet::constant(env.time.ok_or(EvalError::NotGeometric("the time"))?),
+        SExpr::FrameState(frame, quantity) => {
+            let state = env.frames.ok_or(EvalError::NotGeometric("the state of a frame (position, velocity, …)"))?;
+            Jet::constant(state(frame, *quantity)?)
+        }
         SExpr::Unknown(id) => Jet::constant(*unknowns.get(id).ok_or(EvalError::Missing(*id))?),
         SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
         SExpr::Coordinate { index, order: 0 } => {

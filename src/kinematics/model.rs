@@ -212,7 +212,15 @@ pub fn link_steps(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) -
     let link = mechanism.link(join.link);
     let name = mechanism.join_name(id);
     let mut steps = Vec::new();
+    let uses_frame_state = |s: &Scalar| s.uses_frame_state();
     for step in link.dofs.iter().flat_map(|d| d.0.iter()) {
+        let parameters: Vec<&Scalar> = match step {
+            Elementary::Translation(v) => v.iter().collect(),
+            Elementary::Rotation { angle, axis } => std::iter::once(angle).chain(axis.iter()).collect(),
+        };
+        if parameters.into_iter().any(uses_frame_state) {
+            return Err(geometry_error(mechanism, EvalError::NotGeometric("the state of a frame (position, velocity, …)"), link.span, &name));
+        }
         steps.push(match step {
             Elementary::Translation(v) => Step::Translation(v.clone()),
             Elementary::Rotation { angle, axis } => {

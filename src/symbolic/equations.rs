@@ -181,6 +181,7 @@ impl<'a> Generator<'a> {
         let velocity_terms: Vec<Option<Wrench>> =
             (0..=self.topology.body_count()).map(|i| self.inertias[i].as_ref().map(|m| m.velocity_terms(&mut self.pool, &self.bodies[i]))).collect();
         let second_member = self.project(velocity_terms);
+        self.frame_states()?;
         let applied = self.applied_wrenches()?;
         let mut forces = self.project(applied.clone());
         let zero = self.pool.constant(0.0);

@@ -4,12 +4,39 @@
 use super::equations::{Generator, Wrench};
 use super::expr::ExprId;
 use super::kinematics::{LinkCoordinates, Moving, Step};
-use super::lower::LowerError;
+use super::lower::{frames_used, FrameState, LowerError};
 use super::vector::{self as v, Vec3};
 use crate::elab::mechanism::EffortKind;
 use crate::elab::value::{BodyRef, JoinId};
 
 impl Generator<'_> {
+    /// The state of every frame the efforts refer to (`position(F)`, …), for the lowering.
+    pub(super) fn frame_states(&mut self) -> Result<(), LowerError> {
+        let mut frames = Vec::new();
+        let applied = self.mechanism.applications.iter().flat_map(|a| self.mechanism.effort(a.effort).value.value().iter());
+        let links = self.mechanism.links.iter().flat_map(|l| l.forces.iter().chain(&l.torques).flat_map(|(_, v)| v.iter()));
+        for s in applied.chain(links) {
+            frames_used(s, &mut frames);
+        }
+        for frame in frames {
+            let steps = self.steps(&frame.displacement, None)?;
+            let body = match frame.body {
+                BodyRef::Earth => 0,
+                BodyRef::Body(id) => *self.topology.number_of.get(&id).ok_or_else(|| LowerError("the state of a frame on a body outside the mechanism".to_string()))?,
+            };
+            let mut moving = self.bodies[body].clone();
+            self.walk(&mut moving, &steps, &LinkCoordinates::default());
+            let state = FrameState {
+                position: moving.origin,
+                velocity: moving.velocity,
+                angular_velocity: moving.angular_velocity,
+                orientation: moving.rotation,
+            };
+            self.lowering.frames.push((frame, state));
+        }
+        Ok(())
+    }
+
     /// 𝔉: every `apply` as a wrench at its body's origin, fixed axes.
     pub(super) fn applied_wrenches(&mut self) -> Result<Vec<Option<Wrench>>, LowerError> {
         let mut wrenches: Vec<Option<Wrench>> = vec![None; self.topology.body_count() + 1];

@@ -2,10 +2,12 @@
 //! time, unknowns and unknown functions become named symbols, the variables of the equations.
 
 use std::collections::HashMap;
+use std::rc::Rc;
 
 use super::expr::{ExprId, Function, Pool};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
-use crate::elab::value::{JoinId, SExpr, UnknownId};
+
+use crate::elab::value::{Frame, FrameQuantity, JoinId, SExpr, UnknownId};
 use crate::topology::Topology;
 
 /// A symbol of the equations and what it stands for.
@@ -56,6 +58,36 @@ pub struct Lowering<'a> {
     parameters: HashMap<UnknownId, usize>,
     functions: HashMap<(UnknownId, Vec<ExprId>), usize>,
     pub variables: Variables,
+    /// The frames whose state efforts use, with that state as expressions (set by the
+    /// generator before it lowers the efforts).
+    pub frames: Vec<(Rc<Frame>, FrameState)>,
+}
+
+/// A frame's state in the fixed axes, as expressions.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameState {
+    pub position: [ExprId; 3],
+    pub velocity: [ExprId; 3],
+    pub angular_velocity: [ExprId; 3],
+    pub orientation: [[ExprId; 3]; 3],
+}
+
+/// Every frame whose state `s` uses, once each.
+pub fn frames_used(s: &SExpr, into: &mut Vec<Rc<Frame>>) {
+    match s {
+        SExpr::FrameState(frame, _) => {
+            if !into.iter().any(|f| f == frame) {
+                into.push(frame.clone());
+            }
+        }
+        SExpr::Neg(a) => frames_used(a, into),
+        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+            frames_used(a, into);
+            frames_used(b, into);
+        }
+        SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => args.iter().for_each(|a| frames_used(a, into)),
+        SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
+    }
 }
 
 #[derive(Debug)]
@@ -88,6 +120,7 @@ impl<'a> Lowering<'a> {
             join_offsets,
             parameters: HashMap::new(),
             functions: HashMap::new(),
+            frames: Vec::new(),
             variables: Variables { positions, rates, parameters: Vec::new(), functions: Vec::new(), time },
         }
     }
@@ -127,6 +160,7 @@ impl<'a> Lowering<'a> {
                     _ => pool.pow(x, y),
                 }
             }
+            SExpr::FrameState(frame, quantity) => self.frame_state(frame, *quantity)?,
             SExpr::Call(name, args) => {
                 let args = args.iter().map(|a| self.scalar(pool, a, link)).collect::<Result<Vec<_>, _>>()?;
                 match (Function::from_name(name), args.as_slice()) {
@@ -140,6 +174,16 @@ impl<'a> Lowering<'a> {
 
     pub fn vector(&mut self, pool: &mut Pool, v: &crate::elab::value::Vector, link: Option<JoinId>) -> Result<[ExprId; 3], LowerError> {
         Ok([self.scalar(pool, &v[0], link)?, self.scalar(pool, &v[1], link)?, self.scalar(pool, &v[2], link)?])
+    }
+
+    fn frame_state(&self, frame: &Frame, quantity: FrameQuantity) -> Result<ExprId, LowerError> {
+        let (_, state) = self.frames.iter().find(|(f, _)| **f == *frame).ok_or_else(|| LowerError("the state of a frame outside an effort".to_string()))?;
+        Ok(match quantity {
+            FrameQuantity::Position(i) => state.position[i as usize],
+            FrameQuantity::Velocity(i) => state.velocity[i as usize],
+            FrameQuantity::AngularVelocity(i) => state.angular_velocity[i as usize],
+            FrameQuantity::Orientation(i, j) => state.orientation[i as usize][j as usize],
+        })
     }
 
     fn coordinate(&self, join: JoinId, index: u32, order: u32) -> Result<ExprId, LowerError> {
