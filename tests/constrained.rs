@@ -8,7 +8,7 @@
 use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::algorithms::{crba, rnea};
-use lsdc::dynamics::energy::{conservative_forces, kinetic_energy, potential_energy};
+use lsdc::dynamics::energy::{conservative_forces, constant_potential, kinetic_energy};
 use lsdc::dynamics::model::{self, Model};
 use lsdc::dynamics::spatial::Force;
 use lsdc::kinematics::assembly::{assemble, AssemblyOptions};
@@ -147,7 +147,7 @@ fn derivative(model: &Model, kinematics: &KinematicModel, data: &mut Data, q: &[
 fn energy(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> f64 {
     let nt = model.nv;
     forward_kinematics(model, data, &q[..nt], &v[..nt]).expect("evaluates");
-    kinetic_energy(model, data) + potential_energy(&conservative_forces(model).expect("gravity only"), data)
+    kinetic_energy(model, data) + constant_potential(&conservative_forces(model).expect("gravity only").constant, data)
 }
 
 #[test]

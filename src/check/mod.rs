@@ -188,11 +188,13 @@ impl<'w> Checker<'w> {
                 }
             }
             DeclKind::Simulate(fields) => self.simulate(fields, decl.span, scope),
-            DeclKind::Apply { effort, target } => {
+            DeclKind::Apply { effort, target, reaction } => {
                 let mut ctx = self.ctx(scope);
                 let effort_ty = self.expr(effort, &mut ctx);
-                let target_ty = self.expr(target, &mut ctx);
-                self.apply(effort, effort_ty, target, target_ty);
+                for target in std::iter::once(target).chain(reaction) {
+                    let target_ty = self.expr(target, &mut ctx);
+                    self.apply(effort, effort_ty, target, target_ty);
+                }
             }
             DeclKind::Package { name, decls } => {
                 let limit = self.out.scope(scope).len();

@@ -163,6 +163,7 @@ pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &s
         (Link, f) if is_numbered(f, "force") || is_numbered(f, "torque") => Ty::Vector,
         (Force | Torque, "value") => Ty::Vector,
         (Force | Torque, "body") => Ty::Body,
+        (Force | Torque | Link, "potential") => Ty::Scalar,
         _ => return None,
     })
 }
@@ -171,8 +172,8 @@ pub fn constructor_field_names(kind: crate::syntax::ast::ConstructKind) -> Vec<S
     use crate::syntax::ast::ConstructKind::*;
     match kind {
         Body => ["mass", "iframe", "inertia"].iter().map(|s| s.to_string()).collect(),
-        Link => field_names(Ty::Link),
-        Force | Torque => ["value", "body"].iter().map(|s| s.to_string()).collect(),
+        Link => field_names(Ty::Link).into_iter().chain(["potential".to_string()]).collect(),
+        Force | Torque => ["value", "body", "potential"].iter().map(|s| s.to_string()).collect(),
     }
 }
 

@@ -6,6 +6,7 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::algorithms::Data;
+use super::energy::{constant_potential, Conservative};
 use super::joint::JointType;
 use super::model::{LinkEffort, Model};
 use super::spatial::{self, Force};
@@ -77,6 +78,32 @@ fn frame_state(model: &Model, data: &Data, frame: &Frame, quantity: FrameQuantit
         FrameQuantity::AngularVelocity(i) => turn(spin)[i as usize],
         FrameQuantity::Orientation(i, j) => pose.rotation.to_rotation_matrix()[(i as usize, j as usize)],
     })
+}
+
+/// The potential energy of a conservative mechanism at a state: the constant forces' and the
+/// declared potentials; `data` must hold the forward kinematics of the state.
+pub fn potential_energy(model: &Model, data: &Data, conservative: &Conservative, declared: &Declared<'_>, time: f64) -> Result<f64, EvalError> {
+    let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
+    let frames = |frame: &Frame, quantity: FrameQuantity| frame_state(model, data, frame, quantity);
+    let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time), frames: Some(&frames) };
+    let mut total = constant_potential(&conservative.constant, data);
+    for &k in &conservative.applied {
+        if let Some(potential) = &model.applied[k].potential {
+            total += eval_jet(potential, &model.unknowns, &env, &[])?.value;
+        }
+    }
+    for (joint, potential) in model.link_potentials.iter().filter(|_| conservative.links) {
+        let chain = model.joints.get(*joint).map(|j| &j.chain).unwrap_or_else(|| &model.loops[joint - model.joints.len()]);
+        let offset = model.declared_offset(chain.join).unwrap_or(0);
+        let n = chain.coordinate_count();
+        let link = Env {
+            coordinates: &declared.coordinates[offset..offset + n],
+            rates: Some(&declared.rates[offset..offset + n]),
+            ..env
+        };
+        total += eval_jet(potential, &model.unknowns, &link, &[])?.value;
+    }
+    Ok(total)
 }
 
 /// Evaluates every effort; `data` must hold the forward kinematics of the state.

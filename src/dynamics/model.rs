@@ -35,6 +35,8 @@ pub struct AppliedEffort {
     pub value: Vector,
     /// Body whose basis the value is written in (0 = the fixed basis).
     pub basis: usize,
+    /// The potential energy it derives from, if the program declares one.
+    pub potential: Option<Scalar>,
 }
 
 /// A known link effort (`force`, `torque`, `forceN`, `torqueN`).
@@ -74,6 +76,8 @@ pub struct Model {
     /// nothing per body, instead of evaluating one force per body at each state.
     pub gravity: Vector3<f64>,
     pub link_efforts: Vec<LinkEffort>,
+    /// The links' declared potentials, by joint (index into `joints`, then into `loops`).
+    pub link_potentials: Vec<(usize, Scalar)>,
     pub unknowns: UnknownValues,
     /// Where each tree joint's declared coordinates start.
     pub declared_offsets: Vec<usize>,
@@ -224,6 +228,13 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
         .collect();
     let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
     let link_efforts = link_efforts(mechanism, &joints, &loops);
+    let link_potentials = joints
+        .iter()
+        .map(|j| &j.chain)
+        .chain(&loops)
+        .enumerate()
+        .filter_map(|(k, chain)| mechanism.link(mechanism.join(chain.join).link).potential.clone().map(|p| (k, p)))
+        .collect();
     if !errors.is_empty() {
         return Err(errors);
     }
@@ -243,6 +254,7 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
         applied,
         gravity,
         link_efforts,
+        link_potentials,
         unknowns: unknowns.clone(),
         declared_offsets,
         declared_count: declared + nc,
@@ -297,7 +309,7 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
                 }
             },
         };
-        applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis });
+        applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis, potential: effort.potential.clone() });
     }
     applied
 }

@@ -106,13 +106,18 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
-            DeclKind::Apply { effort, target } => {
+            DeclKind::Apply { effort, target, reaction } => {
                 let effort = match self.expr(effort, &mut locals)? {
                     Value::Force(id) | Value::Torque(id) => id,
                     _ => return Err(internal("apply without an effort")),
                 };
                 let target = self.expr(target, &mut locals).and_then(|v| as_frame(v, target.span))?;
                 self.mechanism.applications.push(Application { effort, target, span: decl.span });
+                if let Some(reaction) = reaction {
+                    let on = self.expr(reaction, &mut locals).and_then(|v| as_frame(v, reaction.span))?;
+                    let opposite = self.opposite(effort);
+                    self.mechanism.applications.push(Application { effort: opposite, target: on, span: decl.span });
+                }
                 Ok(())
             }
             DeclKind::Package { decls, .. } => {
@@ -463,6 +468,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             dofs: Vec::new(),
             forces: Vec::new(),
             torques: Vec::new(),
+            potential: None,
         };
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {
@@ -472,6 +478,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 "dof" => dofs.push((index, as_displacement(value, at)?)),
                 "force" => link.forces.push((index, as_vector(value, at)?)),
                 "torque" => link.torques.push((index, as_vector(value, at)?)),
+                "potential" => link.potential = Some(as_scalar(value, at)?),
                 _ => return Err(internal(format!("link field `{name}`"))),
             }
         }
@@ -481,13 +488,25 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }
 
+    /// The reaction of an effort: its value negated, same basis. The element's potential is
+    /// counted once, with the effort itself: the reaction's is 0 when the effort declares one.
+    fn opposite(&mut self, id: EffortId) -> EffortId {
+        let effort = self.mechanism.effort(id).clone();
+        let value = effort.value.value().clone().map(|s| negate(&s));
+        let potential = effort.potential.as_ref().map(|_| num(0.0));
+        let opposite = Effort { value: Quantity::Declared(value), potential, ..effort };
+        self.mechanism.efforts.push(opposite);
+        EffortId(self.mechanism.efforts.len() as u32 - 1)
+    }
+
     fn effort(&mut self, kind: ConstructKind, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
         let id = EffortId(self.mechanism.efforts.len() as u32);
         let effort_kind = if kind == ConstructKind::Force { EffortKind::Force } else { EffortKind::Torque };
-        let (mut value, mut basis) = (None, BodyRef::Earth);
+        let (mut value, mut basis, mut potential) = (None, BodyRef::Earth, None);
         for (name, field_value, at) in fields {
             match (name, field_value) {
                 ("value", v) => value = Some(as_vector(v, at)?),
+                ("potential", v) => potential = Some(as_scalar(v, at)?),
                 ("body", Value::Body(b)) => basis = b,
                 _ => return Err(internal(format!("effort field `{name}`"))),
             }
@@ -496,7 +515,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Some(v) => Quantity::Declared(v),
             None => Quantity::Generic(self.generic_vector(|i| Origin::EffortValue(id, i), span)),
         };
-        self.mechanism.efforts.push(Effort { kind: effort_kind, name: None, span, value, basis });
+        self.mechanism.efforts.push(Effort { kind: effort_kind, name: None, span, value, basis, potential });
         Ok(if effort_kind == EffortKind::Force { Value::Force(id) } else { Value::Torque(id) })
     }
 }

@@ -55,6 +55,8 @@ pub struct Link {
     /// `force`/`torque` (index 0) and `forceN`/`torqueN` (index N), vectors in the joint frame.
     pub forces: Vec<(u8, Vector)>,
     pub torques: Vec<(u8, Vector)>,
+    /// `potential = ...`: the potential energy its efforts derive from, for the energy report.
+    pub potential: Option<Scalar>,
 }
 
 /// `join first and second with link`: the link's dof chain, in its own coordinates, carries the
@@ -95,6 +97,8 @@ pub struct Effort {
     pub value: Quantity<Vector>,
     /// The body whose basis the vector is written in; `earth` (the fixed basis) when omitted.
     pub basis: BodyRef,
+    /// `potential = ...`: the potential energy the effort derives from, for the energy report.
+    pub potential: Option<Scalar>,
 }
 
 /// `apply <effort> on <frame>`; for a torque the frame is the body's reference frame.

@@ -38,6 +38,9 @@ pub fn describe(error: &EvalError, mechanism: &crate::elab::mechanism::Mechanism
     }
 }
 
+/// A component of a frame's state at the current instant.
+pub type FrameStates<'a> = dyn Fn(&Frame, FrameQuantity) -> Result<f64, EvalError> + 'a;
+
 /// What an expression may refer to besides numbers and unknowns.
 #[derive(Clone, Copy, Default)]
 pub struct Env<'a> {
@@ -48,7 +51,7 @@ pub struct Env<'a> {
     pub joins: Option<&'a dyn Fn(JoinId, usize, u32) -> Option<f64>>,
     pub time: Option<f64>,
     /// The state of frames at the current instant (`position(F)`, …), for efforts.
-    pub frames: Option<&'a dyn Fn(&Frame, FrameQuantity) -> Result<f64, EvalError>>,
+    pub frames: Option<&'a FrameStates<'a>>,
 }
 
 /// A value with its first and second derivatives along a direction.

@@ -1,6 +1,7 @@
 //! The standard library, embedded in the binary so `import joints;` works from any directory.
 
 const MODULES: &[(&str, &str)] = &[
+    ("forces", include_str!("../../stdlib/forces.lsd")),
     ("gravity", include_str!("../../stdlib/gravity.lsd")),
     ("joints", include_str!("../../stdlib/joints.lsd")),
 ];

@@ -13,7 +13,8 @@ use super::constraints::ConstraintReport;
 use super::system::MechanicalSystem;
 use super::variational;
 use crate::dynamics::algorithms::forward_kinematics;
-use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum, potential_energy};
+use crate::dynamics::efforts::{potential_energy, Declared};
+use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
 use crate::integrate::{integrate, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings, Stats};
@@ -39,7 +40,8 @@ pub struct Sample {
     pub coordinates: Vec<f64>,
     pub rates: Vec<f64>,
     pub kinetic_energy: f64,
-    /// Potential of the constant forces in the fixed basis, when all efforts are such.
+    /// Potential energy, when every effort is a constant force in the fixed basis or declares
+    /// its potential.
     pub potential_energy: Option<f64>,
     /// Total momentum in the fixed frame: angular (about the origin), then linear.
     pub momentum: [f64; 6],
@@ -115,7 +117,7 @@ struct Sampler<'m> {
     /// Its `reference` is shared with the integrated system: the declared coordinates of the
     /// last output, which keep recovered angles continuous.
     system: MechanicalSystem<'m>,
-    conservative: Option<Vec<crate::dynamics::energy::ConstantForce>>,
+    conservative: Option<crate::dynamics::energy::Conservative>,
     reactions: bool,
 }
 
@@ -133,13 +135,18 @@ impl Sampler<'_> {
         let data = &mut self.system.data;
         forward_kinematics(model, data, &q, v).map_err(|e| format!("{e:?}"))?;
         let h = momentum(model, data);
+        let declared = Declared { model, coordinates: &coordinates, rates: &rates };
+        let potential = match &self.conservative {
+            // `+ 0.0` turns a −0 into 0 for the outputs.
+            Some(conservative) => Some(potential_energy(model, data, conservative, &declared, time).map_err(|e| format!("{e:?}"))? + 0.0),
+            None => None,
+        };
         Ok(Sample {
             time,
             coordinates,
             rates,
             kinetic_energy: kinetic_energy(model, data),
-            // `+ 0.0` turns a −0 into 0 for the outputs.
-            potential_energy: self.conservative.as_ref().map(|forces| potential_energy(forces, data) + 0.0),
+            potential_energy: potential,
             momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
             reactions,
         })

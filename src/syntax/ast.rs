@@ -39,7 +39,8 @@ pub enum DeclKind {
     /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
     Simulate(Vec<FieldInit>),
     /// `apply <force> on <frame>` or `apply <torque> on <body>`
-    Apply { effort: Expr, target: Expr },
+    /// `apply E on T`, or `apply E between R and T`: E on T and its opposite on R (`reaction`).
+    Apply { effort: Expr, target: Expr, reaction: Option<Expr> },
     /// `package P = decls end`
     Package { name: Ident, decls: Vec<Decl> },
     /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`

@@ -29,6 +29,8 @@ pub enum Tok<'input> {
     Apply,
     #[token("as")]
     As,
+    #[token("between")]
+    Between,
     #[token("body")]
     Body,
     #[token("end")]
@@ -170,6 +172,7 @@ impl Tok<'_> {
             Tok::And => "and",
             Tok::Apply => "apply",
             Tok::As => "as",
+            Tok::Between => "between",
             Tok::Body => "body",
             Tok::End => "end",
             Tok::Force => "force",

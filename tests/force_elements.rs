@@ -1,0 +1,86 @@
+//! Force elements of the standard library (`import forces;`) against closed forms: two bodies on
+//! prismatic links joined by a spring (and a damper), and the elastic pendulum's energy.
+
+use lsdc::driver::compile_text;
+use lsdc::load::LoadOptions;
+use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::simulate::run::{run, Simulation};
+
+fn simulate(text: &str) -> Simulation {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_text("elements.lsd", text, None, &options);
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.expect("a mechanism");
+    let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepares");
+    let simulation = run(&prepared, &mut |_| {});
+    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+    simulation
+}
+
+/// Bodies of masses 2 and 3 on parallel slides, 1 m apart at rest, joined by `elements`.
+fn two_bodies(elements: &str) -> String {
+    format!(
+        "import forces ;
+        let b1 = body mass = 2, iframe = 0, inertia = [1, 1, 1] end ;
+        let b2 = body mass = 3, iframe = 0, inertia = [1, 1, 1] end ;
+        join earth and b1.frame with link(x) dof = [x, 0, 0] end as s1 ;
+        join [1, 0, 0] ++ 1 @ earth and b2.frame with link(x) dof = [x, 0, 0] end as s2 ;
+        {elements}
+        initial s1.x = 0, s2.x = 0.1 ;
+        simulate duration = 3, output = 0.05, tolerance = 1e-13 end ;"
+    )
+}
+
+/// The gap s = 1 + x2 − x1 against `expected(t)`, and the centre of mass at rest.
+fn check_relative_motion(simulation: &Simulation, expected: impl Fn(f64) -> f64) {
+    let mut worst = 0.0f64;
+    for sample in &simulation.samples {
+        let (x1, x2) = (sample.coordinates[0], sample.coordinates[1]);
+        let gap = 1.0 + x2 - x1;
+        worst = worst.max((gap - expected(sample.time)).abs());
+        assert!((gap - expected(sample.time)).abs() < 1e-10, "t = {}: s = {gap}, closed form {}", sample.time, expected(sample.time));
+        assert!((2.0 * x1 + 3.0 * x2 - 0.3).abs() < 1e-10, "the centre of mass moved");
+    }
+    println!("largest gap from the closed form: {worst:.1e}");
+}
+
+#[test]
+fn a_spring_between_two_bodies_oscillates_as_the_closed_form() {
+    let simulation = simulate(&two_bodies("apply spring(b1, b2, 150, 0.8) between b1 and b2 ;"));
+    // Relative motion: reduced mass 1.2, ω² = k / μ; s(0) = 1.1, at rest.
+    let omega = (150.0f64 / 1.2).sqrt();
+    check_relative_motion(&simulation, |t| 0.8 + 0.3 * (omega * t).cos());
+    let drift = simulation.report.energy_drift.expect("conservative: the spring declares its potential");
+    println!("energy drift {drift:.1e}");
+    assert!(drift < 1e-10, "energy drift {drift:e}");
+}
+
+#[test]
+fn a_damped_spring_decays_as_the_closed_form() {
+    let simulation = simulate(&two_bodies("apply spring(b1, b2, 150, 0.8) between b1 and b2 ;\n apply damper(b1, b2, 4) between b1 and b2 ;"));
+    // μ s̈ = −k (s − l0) − c ṡ, underdamped.
+    let (mu, k, c) = (1.2f64, 150.0, 4.0);
+    let omega = (k / mu).sqrt();
+    let zeta = c / (2.0 * (k * mu).sqrt());
+    let damped = omega * (1.0 - zeta * zeta).sqrt();
+    check_relative_motion(&simulation, |t| 0.8 + 0.3 * (-zeta * omega * t).exp() * ((damped * t).cos() + zeta * omega / damped * (damped * t).sin()));
+    assert!(simulation.report.energy_drift.is_none(), "a damper has no potential: no drift to report");
+}
+
+#[test]
+fn the_elastic_pendulum_keeps_its_energy() {
+    let simulation = simulate(
+        "import forces ; import gravity ;
+        let rod = body mass = 0, inertia = 0 end ;
+        let bob = body mass = 1.5, iframe = 0, inertia = [0.01, 0.02, 0.03] end ;
+        join earth and rod.frame with link(a) dof = a || [0,1,0] end as swing ;
+        join rod.frame and bob.frame with link(r) dof = [0,0,-r] end as stretch ;
+        apply spring(earth, bob, 200, 0.5) between earth and bob ;
+        apply weight(bob) on bob.iframe ;
+        initial swing.a = 0.6, stretch.r = 0.7, swing.a' = 0.4, stretch.r' = -0.1 ;
+        simulate duration = 10, output = 0.1, tolerance = 1e-13 end ;",
+    );
+    let drift = simulation.report.energy_drift.expect("conservative");
+    println!("elastic pendulum: energy drift {drift:.1e} over 10 s");
+    assert!(drift < 1e-10, "energy drift {drift:e} over 10 s");
+}
