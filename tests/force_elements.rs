@@ -84,3 +84,30 @@ fn the_elastic_pendulum_keeps_its_energy() {
     println!("elastic pendulum: energy drift {drift:.1e} over 10 s");
     assert!(drift < 1e-10, "energy drift {drift:e} over 10 s");
 }
+
+/// A chain of ten links under `weights`, simulated for 1 s.
+fn chain(weights: &str) -> Simulation {
+    let mut text = String::from("import joints ; import gravity ;\n");
+    for i in 1..=10 {
+        text += &format!("let b{i} = body mass = {}, iframe = [0.15, 0, 0] ++ 1, inertia = [0.01, 0.02, 0.02] end ;\n", 0.5 + 0.1 * i as f64);
+        let parent = if i == 1 { "earth".to_string() } else { format!("[0.3, 0, 0] ++ 1 @ b{}", i - 1) };
+        text += &format!("join {parent} and b{i} with revolute([0, {}, 1]) as j{i} ;\n", i % 3);
+    }
+    text += weights;
+    text += "initial j1.q = 0.4, j5.q = -0.3 ;\nsimulate duration = 1, output = 0.1 end ;";
+    simulate(&text)
+}
+
+#[test]
+fn a_gravity_field_equals_the_weights_applied_one_by_one_to_the_last_bit() {
+    let field = chain("apply gravity_field ;\n");
+    let explicit: String = (1..=10).map(|i| format!("apply weight(b{i}) on b{i}.iframe ;\n")).collect();
+    let one_by_one = chain(&explicit);
+    assert_eq!(field.samples.len(), one_by_one.samples.len());
+    for (a, b) in field.samples.iter().zip(&one_by_one.samples) {
+        assert_eq!(a.coordinates, b.coordinates, "t = {}", a.time);
+        assert_eq!(a.rates, b.rates, "t = {}", a.time);
+        assert_eq!(a.potential_energy, b.potential_energy);
+    }
+    assert!(field.report.energy_drift.is_some(), "a gravity field is conservative");
+}

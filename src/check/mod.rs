@@ -191,7 +191,7 @@ impl<'w> Checker<'w> {
             DeclKind::Apply { effort, target, reaction } => {
                 let mut ctx = self.ctx(scope);
                 let effort_ty = self.expr(effort, &mut ctx);
-                for target in std::iter::once(target).chain(reaction) {
+                for target in target.iter().chain(reaction) {
                     let target_ty = self.expr(target, &mut ctx);
                     self.apply(effort, effort_ty, target, target_ty);
                 }

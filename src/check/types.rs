@@ -164,6 +164,7 @@ pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &s
         (Force | Torque, "value") => Ty::Vector,
         (Force | Torque, "body") => Ty::Body,
         (Force | Torque | Link, "potential") => Ty::Scalar,
+        (Force, "field") => Ty::Vector,
         _ => return None,
     })
 }
@@ -173,7 +174,8 @@ pub fn constructor_field_names(kind: crate::syntax::ast::ConstructKind) -> Vec<S
     match kind {
         Body => ["mass", "iframe", "inertia"].iter().map(|s| s.to_string()).collect(),
         Link => field_names(Ty::Link).into_iter().chain(["potential".to_string()]).collect(),
-        Force | Torque => ["value", "body", "potential"].iter().map(|s| s.to_string()).collect(),
+        Force => ["value", "body", "potential", "field"].iter().map(|s| s.to_string()).collect(),
+        Torque => ["value", "body", "potential"].iter().map(|s| s.to_string()).collect(),
     }
 }
 

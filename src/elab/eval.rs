@@ -111,6 +111,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     Value::Force(id) | Value::Torque(id) => id,
                     _ => return Err(internal("apply without an effort")),
                 };
+                let Some(target) = target else {
+                    self.fields.push((effort, decl.span));
+                    return Ok(());
+                };
                 let target = self.expr(target, &mut locals).and_then(|v| as_frame(v, target.span))?;
                 self.mechanism.applications.push(Application { effort, target, span: decl.span });
                 if let Some(reaction) = reaction {
@@ -502,10 +506,11 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     fn effort(&mut self, kind: ConstructKind, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
         let id = EffortId(self.mechanism.efforts.len() as u32);
         let effort_kind = if kind == ConstructKind::Force { EffortKind::Force } else { EffortKind::Torque };
-        let (mut value, mut basis, mut potential) = (None, BodyRef::Earth, None);
+        let (mut value, mut basis, mut potential, mut field) = (None, BodyRef::Earth, None, None);
         for (name, field_value, at) in fields {
             match (name, field_value) {
                 ("value", v) => value = Some(as_vector(v, at)?),
+                ("field", v) => field = Some(as_vector(v, at)?),
                 ("potential", v) => potential = Some(as_scalar(v, at)?),
                 ("body", Value::Body(b)) => basis = b,
                 _ => return Err(internal(format!("effort field `{name}`"))),
@@ -515,7 +520,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Some(v) => Quantity::Declared(v),
             None => Quantity::Generic(self.generic_vector(|i| Origin::EffortValue(id, i), span)),
         };
-        self.mechanism.efforts.push(Effort { kind: effort_kind, name: None, span, value, basis, potential });
+        // A field's own value is zero: `apply F` gives each body its weight instead.
+        let value = if field.is_some() { Quantity::Declared(zero_vector()) } else { value };
+        self.mechanism.efforts.push(Effort { kind: effort_kind, name: None, span, value, basis, potential, field });
         Ok(if effort_kind == EffortKind::Force { Value::Force(id) } else { Value::Torque(id) })
     }
 }

@@ -99,6 +99,9 @@ pub struct Effort {
     pub basis: BodyRef,
     /// `potential = ...`: the potential energy the effort derives from, for the energy report.
     pub potential: Option<Scalar>,
+    /// `field = g` of a force: a uniform field (an acceleration, fixed basis) that `apply F`
+    /// turns into the weight m g of every body with mass.
+    pub field: Option<Vector>,
 }
 
 /// `apply <effort> on <frame>`; for a torque the frame is the body's reference frame.

@@ -4,6 +4,7 @@
 //! shared unknown and an unused definition costs nothing.
 
 mod eval;
+mod fields;
 mod operations;
 pub mod mechanism;
 pub mod value;
@@ -32,6 +33,8 @@ pub struct Elaborator<'c, 'w> {
     mechanism: Mechanism,
     elaborated_modules: Vec<ModuleId>,
     depth: usize,
+    /// `apply F` declarations of uniform fields, expanded once every body is known.
+    fields: Vec<(value::EffortId, crate::syntax::span::Span)>,
 }
 
 /// Evaluates every module of a checked workspace into one mechanism.
@@ -43,10 +46,12 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
         mechanism: Mechanism::default(),
         elaborated_modules: Vec::new(),
         depth: 0,
+        fields: Vec::new(),
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;
     }
+    elaborator.apply_fields()?;
     Ok(elaborator.mechanism)
 }
 

@@ -38,9 +38,9 @@ pub enum DeclKind {
     Given(Vec<GivenValue>),
     /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
     Simulate(Vec<FieldInit>),
-    /// `apply <force> on <frame>` or `apply <torque> on <body>`
-    /// `apply E on T`, or `apply E between R and T`: E on T and its opposite on R (`reaction`).
-    Apply { effort: Expr, target: Expr, reaction: Option<Expr> },
+    /// `apply E on T`; `apply E between R and T`: E on T and its opposite on R (`reaction`);
+    /// `apply F` for a force with a `field`: on every body with mass (a uniform field).
+    Apply { effort: Expr, target: Option<Expr>, reaction: Option<Expr> },
     /// `package P = decls end`
     Package { name: Ident, decls: Vec<Decl> },
     /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`
