@@ -111,3 +111,32 @@ fn a_gravity_field_equals_the_weights_applied_one_by_one_to_the_last_bit() {
     }
     assert!(field.report.energy_drift.is_some(), "a gravity field is conservative");
 }
+
+#[test]
+fn link_elements_act_as_written() {
+    // A torsion spring alone: a harmonic oscillator of frequency sqrt(k / I) about q0.
+    let spring = simulate(
+        "import forces ;
+        let wheel = body mass = 1, iframe = 0, inertia = [0.5, 0.5, 2] end ;
+        join earth and wheel with revolute_spring([0, 0, 1], 8, 0.2) as hub ;
+        initial hub.q = 0.5 ;
+        simulate duration = 3, output = 0.1, tolerance = 1e-13 end ;",
+    );
+    let omega = (8.0f64 / 2.0).sqrt();
+    for s in &spring.samples {
+        let expected = 0.2 + 0.3 * (omega * s.time).cos();
+        assert!((s.coordinates[0] - expected).abs() < 1e-10, "t = {}: {} ≠ {expected}", s.time, s.coordinates[0]);
+    }
+    assert!(spring.report.energy_drift.is_some_and(|d| d < 1e-10), "the spring declares its potential");
+    // A geared motor with a constant torque: q = ratio τ t² / (2 I).
+    let motor = simulate(
+        "import forces ;
+        let wheel = body mass = 1, iframe = 0, inertia = [0.5, 0.5, 2] end ;
+        join earth and wheel with geared_motor([0, 0, 1], 0.25, 12) as hub ;
+        simulate duration = 2, output = 0.1, tolerance = 1e-13 end ;",
+    );
+    for s in &motor.samples {
+        let expected = 12.0 * 0.25 * s.time * s.time / (2.0 * 2.0);
+        assert!((s.coordinates[0] - expected).abs() < 1e-10 * (1.0 + expected), "t = {}", s.time);
+    }
+}
