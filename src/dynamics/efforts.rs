@@ -3,13 +3,15 @@
 //! `torqueN` of the links) as generalised forces. Their values may depend on every join's
 //! coordinates and rates and on the time.
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use std::rc::Rc;
+
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::algorithms::Data;
 use super::energy::{constant_potential, Conservative};
 use super::joint::JointType;
 use super::model::{LinkEffort, Model};
-use super::spatial::{self, Force};
+use super::spatial::{self, Force, Pose};
 use crate::elab::mechanism::EffortKind;
 use crate::elab::value::{BodyRef, Frame, FrameQuantity, JoinId, Vector};
 use crate::kinematics::eval::{eval_jet, Env, EvalError};
@@ -60,31 +62,73 @@ fn vector(v: &Vector, model: &Model, env: &Env<'_>) -> Result<Vector3<f64>, Eval
     Ok(Vector3::new(value(0)?, value(1)?, value(2)?))
 }
 
-/// Component `quantity` of a frame's state, in the fixed axes; `data` holds the forward
-/// kinematics of the state.
-fn frame_state(model: &Model, data: &Data, frame: &Frame, quantity: FrameQuantity) -> Result<f64, EvalError> {
-    let body = match frame.body {
-        BodyRef::Earth => 0,
-        BodyRef::Body(id) => *model.body_numbers.get(&id).ok_or(EvalError::NotGeometric("a body outside the mechanism"))?,
-    };
-    let offset = constant_pose(&frame.displacement, &model.unknowns)?;
-    let pose = data.world[body] * offset;
-    let velocity = &data.velocity[body];
-    let (spin, linear) = (Vector3::new(velocity[0], velocity[1], velocity[2]), Vector3::new(velocity[3], velocity[4], velocity[5]));
-    let turn = |v: Vector3<f64>| data.world[body].rotation * v;
-    Ok(match quantity {
-        FrameQuantity::Position(i) => pose.translation.vector[i as usize],
-        FrameQuantity::Velocity(i) => turn(linear + spin.cross(&offset.translation.vector))[i as usize],
-        FrameQuantity::AngularVelocity(i) => turn(spin)[i as usize],
-        FrameQuantity::Orientation(i, j) => pose.rotation.to_rotation_matrix()[(i as usize, j as usize)],
-    })
+/// A frame's state at one instant, in the fixed axes.
+struct FrameValues {
+    position: Vector3<f64>,
+    velocity: Vector3<f64>,
+    angular_velocity: Vector3<f64>,
+    orientation: Matrix3<f64>,
+}
+
+impl FrameValues {
+    /// The frame at `offset` on `body`; `data` holds the forward kinematics of the state.
+    fn new(data: &Data, body: usize, offset: &Pose) -> FrameValues {
+        let pose = data.world[body] * offset;
+        let velocity = &data.velocity[body];
+        let (spin, linear) = (Vector3::new(velocity[0], velocity[1], velocity[2]), Vector3::new(velocity[3], velocity[4], velocity[5]));
+        let turn = |v: Vector3<f64>| data.world[body].rotation * v;
+        FrameValues {
+            position: pose.translation.vector,
+            velocity: turn(linear + spin.cross(&offset.translation.vector)),
+            angular_velocity: turn(spin),
+            orientation: *pose.rotation.to_rotation_matrix().matrix(),
+        }
+    }
+
+    fn component(&self, quantity: FrameQuantity) -> f64 {
+        match quantity {
+            FrameQuantity::Position(i) => self.position[i as usize],
+            FrameQuantity::Velocity(i) => self.velocity[i as usize],
+            FrameQuantity::AngularVelocity(i) => self.angular_velocity[i as usize],
+            FrameQuantity::Orientation(i, j) => self.orientation[(i as usize, j as usize)],
+        }
+    }
+}
+
+/// The state of every frame the efforts use, computed once per evaluation (efforts mention the
+/// same frames many times: a spring's direction, its length, its rate).
+struct FrameStates<'a> {
+    model: &'a Model,
+    data: &'a Data,
+    known: Vec<FrameValues>,
+}
+
+impl<'a> FrameStates<'a> {
+    fn new(model: &'a Model, data: &'a Data) -> FrameStates<'a> {
+        let known = model.effort_frames.iter().map(|f| FrameValues::new(data, f.body, &f.offset)).collect();
+        FrameStates { model, data, known }
+    }
+
+    /// Component `quantity` of `frame`'s state.
+    fn get(&self, frame: &Frame, quantity: FrameQuantity) -> Result<f64, EvalError> {
+        if let Some(k) = self.model.effort_frames.iter().position(|f| std::ptr::eq(Rc::as_ptr(&f.frame), frame)) {
+            return Ok(self.known[k].component(quantity));
+        }
+        let body = match frame.body {
+            BodyRef::Earth => 0,
+            BodyRef::Body(id) => *self.model.body_numbers.get(&id).ok_or(EvalError::NotGeometric("a body outside the mechanism"))?,
+        };
+        let offset = constant_pose(&frame.displacement, &self.model.unknowns)?;
+        Ok(FrameValues::new(self.data, body, &offset).component(quantity))
+    }
 }
 
 /// The potential energy of a conservative mechanism at a state: the constant forces' and the
 /// declared potentials; `data` must hold the forward kinematics of the state.
 pub fn potential_energy(model: &Model, data: &Data, conservative: &Conservative, declared: &Declared<'_>, time: f64) -> Result<f64, EvalError> {
     let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
-    let frames = |frame: &Frame, quantity: FrameQuantity| frame_state(model, data, frame, quantity);
+    let states = FrameStates::new(model, data);
+    let frames = |frame: &Frame, quantity: FrameQuantity| states.get(frame, quantity);
     let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time), frames: Some(&frames) };
     let mut total = constant_potential(&conservative.constant, data);
     for &k in &conservative.applied {
@@ -109,7 +153,8 @@ pub fn potential_energy(model: &Model, data: &Data, conservative: &Conservative,
 /// Evaluates every effort; `data` must hold the forward kinematics of the state.
 pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) -> Result<Efforts, EvalError> {
     let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
-    let frames = |frame: &Frame, quantity: FrameQuantity| frame_state(model, data, frame, quantity);
+    let states = FrameStates::new(model, data);
+    let frames = |frame: &Frame, quantity: FrameQuantity| states.get(frame, quantity);
     let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time), frames: Some(&frames) };
     let mut external = vec![Force::zeros(); model.body_count() + 1];
     for effort in &model.applied {

@@ -39,6 +39,15 @@ pub struct AppliedEffort {
     pub potential: Option<Scalar>,
 }
 
+/// A frame an effort refers to: the frame as the expressions hold it (found by identity), its
+/// body's number and its pose on the body.
+#[derive(Clone, Debug)]
+pub struct EffortFrame {
+    pub frame: std::rc::Rc<crate::elab::value::Frame>,
+    pub body: usize,
+    pub offset: Pose,
+}
+
 /// A known link effort (`force`, `torque`, `forceN`, `torqueN`).
 #[derive(Clone, Debug)]
 pub struct LinkEffort {
@@ -78,6 +87,8 @@ pub struct Model {
     pub link_efforts: Vec<LinkEffort>,
     /// The links' declared potentials, by joint (index into `joints`, then into `loops`).
     pub link_potentials: Vec<(usize, Scalar)>,
+    /// The frames whose state the efforts use (`position(F)`, …), placed on their bodies.
+    pub effort_frames: Vec<EffortFrame>,
     pub unknowns: UnknownValues,
     /// Where each tree joint's declared coordinates start.
     pub declared_offsets: Vec<usize>,
@@ -228,6 +239,7 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
         .collect();
     let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
     let link_efforts = link_efforts(mechanism, &joints, &loops);
+    let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
         .map(|j| &j.chain)
@@ -255,6 +267,7 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
         gravity,
         link_efforts,
         link_potentials,
+        effort_frames,
         unknowns: unknowns.clone(),
         declared_offsets,
         declared_count: declared + nc,
@@ -312,6 +325,37 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
         applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis, potential: effort.potential.clone() });
     }
     applied
+}
+
+/// The frames the efforts' values and potentials use, placed on their bodies.
+fn effort_frames(mechanism: &Mechanism, kinematics: &KinematicModel, applied: &[AppliedEffort], links: &[LinkEffort], errors: &mut Vec<Diagnostic>) -> Vec<EffortFrame> {
+    let mut frames = Vec::new();
+    let expressions = applied
+        .iter()
+        .flat_map(|e| e.value.iter().chain(&e.potential))
+        .chain(links.iter().flat_map(|e| e.value.iter()))
+        .chain(mechanism.links.iter().flat_map(|l| &l.potential));
+    for s in expressions {
+        s.frames_used(&mut frames);
+    }
+    let mut placed = Vec::new();
+    for frame in frames {
+        let body = match frame.body {
+            BodyRef::Earth => 0,
+            BodyRef::Body(id) => match kinematics.topology.number_of.get(&id) {
+                Some(&n) => n,
+                None => {
+                    errors.push(Diagnostic::error("E0809", "an effort uses the state of a frame on a body outside the mechanism"));
+                    continue;
+                }
+            },
+        };
+        match constant_pose(&frame.displacement, &kinematics.unknowns) {
+            Ok(offset) => placed.push(EffortFrame { frame, body, offset }),
+            Err(e) => errors.push(missing(mechanism, e, "a frame an effort uses")),
+        }
+    }
+    placed
 }
 
 /// The velocities of each joint and its ancestors (through dynamic parents).

@@ -215,6 +215,24 @@ impl SExpr {
         }
     }
 
+    /// Every frame whose state the expression uses, once each.
+    pub fn frames_used(&self, into: &mut Vec<Rc<Frame>>) {
+        match self {
+            SExpr::FrameState(frame, _) => {
+                if !into.iter().any(|f| f == frame) {
+                    into.push(frame.clone());
+                }
+            }
+            SExpr::Neg(a) => a.frames_used(into),
+            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+                a.frames_used(into);
+                b.frames_used(into);
+            }
+            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => args.iter().for_each(|a| a.frames_used(into)),
+            SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
+        }
+    }
+
     /// Whether the expression uses the state of a frame (`position(F)`, …).
     pub fn uses_frame_state(&self) -> bool {
         match self {

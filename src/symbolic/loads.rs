@@ -4,7 +4,7 @@
 use super::equations::{Generator, Wrench};
 use super::expr::ExprId;
 use super::kinematics::{LinkCoordinates, Moving, Step};
-use super::lower::{frames_used, FrameState, LowerError};
+use super::lower::{FrameState, LowerError};
 use super::vector::{self as v, Vec3};
 use crate::elab::mechanism::EffortKind;
 use crate::elab::value::{BodyRef, JoinId};
@@ -16,7 +16,7 @@ impl Generator<'_> {
         let applied = self.mechanism.applications.iter().flat_map(|a| self.mechanism.effort(a.effort).value.value().iter());
         let links = self.mechanism.links.iter().flat_map(|l| l.forces.iter().chain(&l.torques).flat_map(|(_, v)| v.iter()));
         for s in applied.chain(links) {
-            frames_used(s, &mut frames);
+            s.frames_used(&mut frames);
         }
         for frame in frames {
             let steps = self.steps(&frame.displacement, None)?;

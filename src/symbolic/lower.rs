@@ -72,23 +72,6 @@ pub struct FrameState {
     pub orientation: [[ExprId; 3]; 3],
 }
 
-/// Every frame whose state `s` uses, once each.
-pub fn frames_used(s: &SExpr, into: &mut Vec<Rc<Frame>>) {
-    match s {
-        SExpr::FrameState(frame, _) => {
-            if !into.iter().any(|f| f == frame) {
-                into.push(frame.clone());
-            }
-        }
-        SExpr::Neg(a) => frames_used(a, into),
-        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
-            frames_used(a, into);
-            frames_used(b, into);
-        }
-        SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => args.iter().for_each(|a| frames_used(a, into)),
-        SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
-    }
-}
 
 #[derive(Debug)]
 pub struct LowerError(pub String);
