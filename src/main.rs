@@ -487,6 +487,9 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     if let Err(message) = settings.check_outputs() {
         return usage_error(&message);
     }
+    if let Some(warning) = lsdc::simulate::stiffness::warning(&prepared) {
+        report_diagnostics(&compilation, &[warning], args.report);
+    }
     let simulation = {
         let bar = progress_bar(prepared.settings.duration);
         let mut progress = |t: f64| {

@@ -140,3 +140,46 @@ fn link_elements_act_as_written() {
         assert!((s.coordinates[0] - expected).abs() < 1e-10 * (1.0 + expected), "t = {}", s.time);
     }
 }
+
+/// A light mass (10 g) held to a heavy pendulum by a spring-damper of k = 1e8 N/m whose damping
+/// makes the fast mode heavily damped (ζ = 10), run with `integrator`.
+fn stiff_chain(integrator: &str, tolerance: f64) -> (Simulation, Option<lsdc::diag::Diagnostic>) {
+    let text = format!(
+        "import forces ; import gravity ;
+        let arm = body mass = 10, iframe = [0, 0, -0.5] ++ 1, inertia = [0.8, 0.8, 0.05] end ;
+        let tip = body mass = 0.01, iframe = 0, inertia = [1e-6, 1e-6, 1e-6] end ;
+        let end_of_arm = [0, 0, -1] ++ 1 @ arm ;
+        join earth and arm with link(a) dof = a || [0, 1, 0] end as swing ;
+        join end_of_arm and tip with link(s) dof = [0, 0, -s] end as slide ;
+        apply spring(end_of_arm, tip, 1e8, 0.05) between end_of_arm and tip ;
+        apply damper(end_of_arm, tip, 2e4) between end_of_arm and tip ;
+        apply gravity_field ;
+        initial swing.a = 0.5, slide.s = 0.05 ;
+        simulate duration = 0.01, output = 0.001, integrator = {integrator}, tolerance = {tolerance:e} end ;"
+    );
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let compilation = compile_text("stiff.lsd", &text, None, &options);
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.expect("a mechanism");
+    let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepares");
+    let warning = lsdc::simulate::stiffness::warning(&prepared);
+    (run(&prepared, &mut |_| {}), warning)
+}
+
+#[test]
+fn the_implicit_integrator_handles_a_stiff_chain_with_a_hundredth_of_the_evaluations() {
+    let (reference, _) = stiff_chain("implicit", 1e-10);
+    let (explicit, warning) = stiff_chain("dopri5", 1e-6);
+    let (implicit, no_warning) = stiff_chain("implicit", 1e-6);
+    let angle = |s: &Simulation| s.samples.last().expect("samples").coordinates[0];
+    let (e, i) = ((angle(&explicit) - angle(&reference)).abs(), (angle(&implicit) - angle(&reference)).abs());
+    let (fe, fi) = (explicit.report.function_evaluations, implicit.report.function_evaluations);
+    println!("swing angle error: dopri5 {e:.1e} ({fe} evaluations), implicit {i:.1e} ({fi} evaluations)");
+    assert!(e < 1e-6 && i < 1e-6, "both reach the tolerance on the slow motion: {e:e}, {i:e}");
+    assert!(100 * fi < fe, "implicit {fi} evaluations, explicit {fe}");
+    let warning = warning.expect("the explicit run is warned");
+    assert_eq!(warning.code, "W0901");
+    assert!(warning.message.contains("stiff"), "{}", warning.message);
+    assert!(!warning.labels.is_empty(), "the stiffest element is named");
+    assert!(no_warning.is_none(), "no warning for the implicit integrator");
+}

@@ -37,6 +37,8 @@ pub struct AppliedEffort {
     pub basis: usize,
     /// The potential energy it derives from, if the program declares one.
     pub potential: Option<Scalar>,
+    /// The `apply` it comes from, for messages.
+    pub span: crate::syntax::span::Span,
 }
 
 /// A frame an effort refers to: the frame as the expressions hold it (found by identity), its
@@ -57,6 +59,8 @@ pub struct LinkEffort {
     /// 0 for the plain form (in the chain's first frame), N for the N-th step's frame.
     pub step: u8,
     pub value: Vector,
+    /// The join whose link declares it, for messages.
+    pub span: crate::syntax::span::Span,
 }
 
 #[derive(Clone, Debug)]
@@ -322,7 +326,8 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
                 }
             },
         };
-        applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis, potential: effort.potential.clone() });
+        let potential = effort.potential.clone();
+        applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis, potential, span: application.span });
     }
     applied
 }
@@ -409,7 +414,7 @@ fn link_efforts(mechanism: &Mechanism, joints: &[Joint], loops: &[JointModel]) -
         let link = mechanism.link(mechanism.join(chain.join).link);
         for (kind, list) in [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)] {
             for (step, value) in list {
-                efforts.push(LinkEffort { joint: index, kind, step: *step, value: value.clone() });
+                efforts.push(LinkEffort { joint: index, kind, step: *step, value: value.clone(), span: mechanism.join(chain.join).span });
             }
         }
     }

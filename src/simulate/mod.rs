@@ -7,5 +7,6 @@ pub mod constraints;
 pub mod prepare;
 pub mod run;
 pub mod statics;
+pub mod stiffness;
 pub mod system;
 pub mod variational;
