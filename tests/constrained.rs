@@ -147,7 +147,9 @@ fn derivative(model: &Model, kinematics: &KinematicModel, data: &mut Data, q: &[
 fn energy(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> f64 {
     let nt = model.nv;
     forward_kinematics(model, data, &q[..nt], &v[..nt]).expect("evaluates");
-    kinetic_energy(model, data) + constant_potential(&conservative_forces(model).expect("gravity only").constant, data)
+    let conservative = conservative_forces(model);
+    assert!(conservative.complete, "gravity only");
+    kinetic_energy(model, data) + constant_potential(&conservative.constant, data)
 }
 
 #[test]

@@ -183,3 +183,28 @@ fn the_implicit_integrator_handles_a_stiff_chain_with_a_hundredth_of_the_evaluat
     assert!(!warning.labels.is_empty(), "the stiffest element is named");
     assert!(no_warning.is_none(), "no warning for the implicit integrator");
 }
+
+#[test]
+fn the_energy_balance_holds_on_a_driven_damped_mechanism() {
+    // A double pendulum driven at its shoulder by a geared motor following a law in time, with a
+    // torsion spring-damper at its elbow and a spring-damper from earth to its tip.
+    let simulation = simulate(
+        "import forces ; import gravity ;
+        let upper = body mass = 2, iframe = [0, 0, -0.25] ++ 1, inertia = [0.05, 0.05, 0.01] end ;
+        let lower = body mass = 1, iframe = [0, 0, -0.25] ++ 1, inertia = [0.02, 0.02, 0.005] end ;
+        let tip = [0, 0, -0.5] ++ 1 @ lower ;
+        join earth and upper with geared_motor([0, 1, 0], 0.4 * sin(3 * time), 12) as shoulder ;
+        join [0, 0, -0.5] ++ 1 @ upper and lower with revolute_spring_damper([0, 1, 0], 3, 0.2, 0) as elbow ;
+        apply spring([0.3, 0, -0.8] ++ 1 @ earth, tip, 40, 0.2) between [0.3, 0, -0.8] ++ 1 @ earth and tip ;
+        apply damper([0.3, 0, -0.8] ++ 1 @ earth, tip, 1.5) between [0.3, 0, -0.8] ++ 1 @ earth and tip ;
+        apply gravity_field ;
+        initial shoulder.q = 0.3, elbow.q = -0.2 ;
+        simulate duration = 5, output = 0.05, tolerance = 1e-11 end ;",
+    );
+    assert!(simulation.report.energy_drift.is_none(), "not conservative");
+    let balance = simulation.report.energy_balance.expect("the work of the motor and dampers is integrated");
+    let [kinetic, potential, work] = simulation.report.final_energies.expect("energies");
+    println!("energy balance {balance:.1e}; at the end kinetic {kinetic:.3}, potential {potential:.3}, work {work:.3}");
+    assert!(work.abs() > 0.1, "the motor and dampers do work");
+    assert!(balance < 1e-8, "energy balance {balance:e}");
+}

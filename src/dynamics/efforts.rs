@@ -23,12 +23,15 @@ pub struct Efforts {
     pub external: Vec<Force>,
     /// Generalised forces of the link efforts.
     pub tau: DVector<f64>,
+    /// The power of the efforts that derive from no potential (dampers, motors, …): the rate
+    /// of the work the energy balance counts.
+    pub power: f64,
 }
 
 impl Efforts {
     /// No effort at all (a model whose only load is its gravity field, or none).
     pub fn none(model: &Model) -> Efforts {
-        Efforts { external: vec![Force::zeros(); model.body_count() + 1], tau: DVector::zeros(model.velocities()) }
+        Efforts { external: vec![Force::zeros(); model.body_count() + 1], tau: DVector::zeros(model.velocities()), power: 0.0 }
     }
 }
 
@@ -136,7 +139,7 @@ pub fn potential_energy(model: &Model, data: &Data, conservative: &Conservative,
             total += eval_jet(potential, &model.unknowns, &env, &[])?.value;
         }
     }
-    for (joint, potential) in model.link_potentials.iter().filter(|_| conservative.links) {
+    for (joint, potential) in &model.link_potentials {
         let chain = model.joints.get(*joint).map(|j| &j.chain).unwrap_or_else(|| &model.loops[joint - model.joints.len()]);
         let offset = model.declared_offset(chain.join).unwrap_or(0);
         let n = chain.coordinate_count();
@@ -157,18 +160,26 @@ pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) 
     let frames = |frame: &Frame, quantity: FrameQuantity| states.get(frame, quantity);
     let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time), frames: Some(&frames) };
     let mut external = vec![Force::zeros(); model.body_count() + 1];
+    let mut power = 0.0;
     for effort in &model.applied {
         let value = vector(&effort.value, model, &env)?;
         let in_world = if effort.basis == 0 { value } else { data.world[effort.basis].rotation * value };
         let in_body = data.world[effort.body].rotation.inverse() * in_world;
-        external[effort.body] += match effort.kind {
+        let wrench = match effort.kind {
             EffortKind::Force => spatial_force(effort.point.cross(&in_body), in_body),
             EffortKind::Torque => spatial_force(in_body, Vector3::zeros()),
         };
+        if !effort.conservative {
+            power += wrench.dot(&data.velocity[effort.body]);
+        }
+        external[effort.body] += wrench;
     }
     let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
-        let generalised = link_effort(model, effort, declared, &joins, &frames, time)?;
+        let (generalised, link_power) = link_effort(model, effort, declared, &joins, &frames, time)?;
+        if !model.link_potentials.iter().any(|(k, _)| *k == effort.joint) {
+            power += link_power;
+        }
         let (start, count) = match model.joints.get(effort.joint) {
             Some(joint) => (joint.v_offset, joint.nv()),
             None => {
@@ -179,7 +190,7 @@ pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) 
         let mut rows = tau.rows_mut(start, count);
         rows += generalised;
     }
-    Ok(Efforts { external, tau })
+    Ok(Efforts { external, tau, power })
 }
 
 fn spatial_force(moment: Vector3<f64>, force: Vector3<f64>) -> Force {
@@ -194,7 +205,7 @@ fn link_effort(
     joins: &dyn Fn(JoinId, usize, u32) -> Option<f64>,
     frames: &dyn Fn(&Frame, FrameQuantity) -> Result<f64, EvalError>,
     time: f64,
-) -> Result<DVector<f64>, EvalError> {
+) -> Result<(DVector<f64>, f64), EvalError> {
     // A complementary link's coordinates are its velocities: no quaternion to map through.
     let (chain, joint) = match model.joints.get(effort.joint) {
         Some(joint) => (&joint.chain, Some(joint)),
@@ -217,12 +228,13 @@ fn link_effort(
         step_columns(&chain.steps[effort.step as usize - 1], coordinates, model)?
     };
     let on_declared = twists.transpose() * DVector::from_column_slice(wrench.as_slice());
+    let power = on_declared.dot(&DVector::from_column_slice(rates));
     if joint.is_none_or(|j| j.kind == JointType::Chain) {
-        return Ok(on_declared);
+        return Ok((on_declared, power));
     }
     // Quaternion joints: map through the declared rates' dependence on the velocities.
     let jacobian = declared_rate_jacobian(model, effort.joint, coordinates)?;
-    Ok(jacobian.transpose() * on_declared)
+    Ok((jacobian.transpose() * on_declared, power))
 }
 
 /// Twists of one step of a chain per unit rate of each coordinate, in the step's own frame.

@@ -7,8 +7,7 @@ use nalgebra::Vector3;
 use super::algorithms::Data;
 use super::model::Model;
 use super::spatial::{self, Force};
-use crate::elab::mechanism::EffortKind;
-use crate::kinematics::eval::eval;
+use super::model::constant_fixed_force;
 
 pub fn kinetic_energy(model: &Model, data: &Data) -> f64 {
     model
@@ -30,33 +29,26 @@ pub struct Conservative {
     pub constant: Vec<ConstantForce>,
     /// Indices into `Model::applied` of the efforts with a declared potential.
     pub applied: Vec<usize>,
-    /// Whether the links' declared potentials count (every link effort belongs to a link that
-    /// declares one).
-    pub links: bool,
+    /// Whether every effort is conservative: then the energy is conserved, and its drift
+    /// measures the integration.
+    pub complete: bool,
 }
 
-/// `None` if some effort is neither a constant force in the fixed basis nor declares a
-/// potential: then the efforts can do work that no potential accounts for.
-pub fn conservative_forces(model: &Model) -> Option<Conservative> {
+/// The conservative efforts of a mechanism: those whose potential the energy report counts.
+pub fn conservative_forces(model: &Model) -> Conservative {
     let declared = |joint: usize| model.link_potentials.iter().any(|(k, _)| *k == joint);
-    if !model.link_efforts.iter().all(|e| declared(e.joint)) {
-        return None;
-    }
     let weights = model.bodies.iter().enumerate().filter(|(_, b)| !b.massless).map(|(k, b)| (k + 1, b.com, b.mass * model.gravity));
     let mut constant: Vec<ConstantForce> = weights.collect();
     let mut applied = Vec::new();
     for (k, e) in model.applied.iter().enumerate() {
         if e.potential.is_some() {
             applied.push(k);
-            continue;
+        } else if let Some(force) = constant_fixed_force(e, &model.unknowns) {
+            constant.push((e.body, e.point, force));
         }
-        if e.kind != EffortKind::Force || e.basis != 0 {
-            return None;
-        }
-        let value = |i: usize| eval(&e.value[i], &model.unknowns, &[]).ok();
-        constant.push((e.body, e.point, Vector3::new(value(0)?, value(1)?, value(2)?)));
     }
-    Some(Conservative { constant, applied, links: !model.link_potentials.is_empty() })
+    let complete = model.applied.iter().all(|e| e.conservative) && model.link_efforts.iter().all(|e| declared(e.joint));
+    Conservative { constant, applied, complete }
 }
 
 /// The potential of the constant forces.

@@ -39,6 +39,9 @@ pub struct AppliedEffort {
     pub potential: Option<Scalar>,
     /// The `apply` it comes from, for messages.
     pub span: crate::syntax::span::Span,
+    /// Whether it derives from a potential the energy report counts: a constant force in the
+    /// fixed basis, or an effort that declares its potential. Set when the model is built.
+    pub conservative: bool,
 }
 
 /// A frame an effort refers to: the frame as the expressions hold it (found by identity), its
@@ -327,7 +330,9 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
             },
         };
         let potential = effort.potential.clone();
-        applied.push(AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis, potential, span: application.span });
+        let mut applied_effort = AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis, potential, span: application.span, conservative: false };
+        applied_effort.conservative = applied_effort.potential.is_some() || constant_fixed_force(&applied_effort, &kinematics.unknowns).is_some();
+        applied.push(applied_effort);
     }
     applied
 }
@@ -361,6 +366,11 @@ fn effort_frames(mechanism: &Mechanism, kinematics: &KinematicModel, applied: &[
         }
     }
     placed
+}
+
+/// The value of a constant force written in the fixed basis, or `None`.
+pub fn constant_fixed_force(e: &AppliedEffort, unknowns: &UnknownValues) -> Option<Vector3<f64>> {
+    (e.kind == EffortKind::Force && e.basis == 0).then(|| constant_vector(&e.value, unknowns).ok()).flatten()
 }
 
 /// The velocities of each joint and its ancestors (through dynamic parents).

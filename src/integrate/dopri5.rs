@@ -50,6 +50,8 @@ pub(super) struct DormandPrince {
     dense_start: f64,
     dense_step: f64,
     rtol: f64,
+    /// Components of the state the error control watches (the leading ones).
+    controlled: usize,
     atol: f64,
 }
 
@@ -64,6 +66,7 @@ impl DormandPrince {
             dense_start: 0.0,
             dense_step: 0.0,
             rtol: settings.rtol,
+            controlled: settings.controlled.unwrap_or(dimension).min(dimension),
             atol: settings.atol,
         }
     }
@@ -106,7 +109,7 @@ impl AdaptiveStepper for DormandPrince {
         for (i, error) in self.error.iter_mut().enumerate() {
             *error = h * ERROR.iter().zip(&self.stages).map(|(e, k)| e * k[i]).sum::<f64>();
         }
-        Ok(error_norm(&self.error, y, y_new, self.rtol, self.atol))
+        Ok(error_norm(&self.error[..self.controlled], &y[..self.controlled], &y_new[..self.controlled], self.rtol, self.atol))
     }
 
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {

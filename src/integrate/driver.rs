@@ -188,9 +188,10 @@ fn smallest_step(problem: &Problem, t: f64) -> f64 {
 fn initial_step(stepper: &mut dyn AdaptiveStepper, eval: &mut Evaluator, problem: &Problem) -> Result<f64, Halt> {
     let Problem { t0, y0, t_end, settings, .. } = *problem;
     let f0 = stepper.derivative().to_vec();
-    let scale: Vec<f64> = y0.iter().map(|y| settings.atol + settings.rtol * y.abs()).collect();
-    let size_y = scaled_rms(y0, &scale);
-    let size_f = scaled_rms(&f0, &scale);
+    let controlled = settings.controlled.unwrap_or(y0.len()).min(y0.len());
+    let scale: Vec<f64> = y0[..controlled].iter().map(|y| settings.atol + settings.rtol * y.abs()).collect();
+    let size_y = scaled_rms(&y0[..controlled], &scale);
+    let size_f = scaled_rms(&f0[..controlled], &scale);
     let guess = if size_y < 1e-5 || size_f < 1e-5 { 1e-6 } else { 0.01 * size_y / size_f };
     let guess = if guess.is_normal() { guess } else { 1e-6 };
     let guess = guess.min(settings.max_step).min(t_end - t0);
@@ -203,7 +204,7 @@ fn initial_step(stepper: &mut dyn AdaptiveStepper, eval: &mut Evaluator, problem
         Err(fatal) => return Err(fatal),
     }
     let change: Vec<f64> = (0..y0.len()).map(|i| (f1[i] - f0[i]) / guess).collect();
-    let size_change = scaled_rms(&change, &scale);
+    let size_change = scaled_rms(&change[..controlled], &scale);
     let largest = size_f.max(size_change);
     let from_curvature = match largest <= 1e-15 {
         true => (guess * 1e-3).max(1e-6),

@@ -68,6 +68,9 @@ pub struct Settings {
     pub min_step: f64,
     /// Most steps (accepted and rejected) before giving up with [`Failure::TooManySteps`].
     pub max_steps: usize,
+    /// How many leading components the step control watches (all when `None`): the others are
+    /// carried along, like a quadrature of the solution, without changing the steps.
+    pub controlled: Option<usize>,
 }
 
 impl Default for Settings {
@@ -79,6 +82,7 @@ impl Default for Settings {
             max_step: f64::INFINITY,
             min_step: 0.0,
             max_steps: 1_000_000,
+            controlled: None,
         }
     }
 }

@@ -44,6 +44,8 @@ const E: [f64; STAGES] = [0.0, 0.0, 0.0, 1.0];
 
 pub(super) struct Rodas3 {
     rtol: f64,
+    /// Components of the state the error control watches (the leading ones).
+    controlled: usize,
     atol: f64,
     /// dy/dt at the current point.
     derivative: Vec<f64>,
@@ -64,6 +66,7 @@ impl Rodas3 {
         let zeros = vec![0.0; dimension];
         Rodas3 {
             rtol: settings.rtol,
+            controlled: settings.controlled.unwrap_or(dimension).min(dimension),
             atol: settings.atol,
             derivative: zeros.clone(),
             jacobian: DMatrix::zeros(dimension, dimension),
@@ -179,7 +182,7 @@ impl AdaptiveStepper for Rodas3 {
             y_new[i] = y[i] + (0..STAGES).map(|s| M[s] * self.increments[s][i]).sum::<f64>();
             self.error[i] = (0..STAGES).map(|s| E[s] * self.increments[s][i]).sum::<f64>();
         }
-        let error = error_norm(&self.error, y, y_new, self.rtol, self.atol);
+        let error = error_norm(&self.error[..self.controlled], &y[..self.controlled], &y_new[..self.controlled], self.rtol, self.atol);
         if error <= 1.0 && all_finite(y_new) {
             eval.rhs(t + h, y_new, &mut self.end_derivative)?;
         }

@@ -490,6 +490,8 @@ mod tests {
                     rates: vec![rate, slide_rate],
                     kinetic_energy: kinetic,
                     potential_energy: conservative.then_some(2.0 - kinetic + 0.01 * t),
+                    work: None,
+                    balance: None,
                     momentum: [0.0; 6],
                     reactions: Vec::new(),
                 }
@@ -507,6 +509,8 @@ mod tests {
                 function_evaluations: 4 * count,
                 run_seconds: 0.0,
                 energy_drift: None,
+                energy_balance: None,
+                final_energies: None,
                 momentum_drift: None,
                 constraints: None,
                 failure: None,

@@ -115,6 +115,12 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     if let Some(drift) = report.energy_drift {
         out += &format!("energy drift (relative): {drift:.3e}\n");
     }
+    if let Some([kinetic, potential, work]) = report.final_energies {
+        out += &format!("energy at the end: kinetic {kinetic:.6e}, potential {potential:.6e}, work of non-conservative efforts {work:.6e}\n");
+    }
+    if let Some(balance) = report.energy_balance {
+        out += &format!("energy balance (kinetic + potential - work, relative): {balance:.3e}\n");
+    }
     if let Some(drift) = report.momentum_drift {
         out += &format!("momentum drift: linear {:.3e}, angular {:.3e}\n", drift.linear, drift.angular);
     }

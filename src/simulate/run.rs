@@ -33,6 +33,29 @@ impl OdeSystem for MechanicalSystem<'_> {
     }
 }
 
+/// The mechanism with one more state, the work W of its non-conservative efforts (W' = their
+/// power), integrated with the motion; the step control watches the motion only, so the steps
+/// are those of the mechanism alone.
+struct WithWork<'s, 'm>(&'s mut MechanicalSystem<'m>);
+
+impl OdeSystem for WithWork<'_, '_> {
+    fn dimension(&self) -> usize {
+        self.0.dimension() + 1
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+        let n = self.0.dimension();
+        self.0.derivative(t, &y[..n], &mut dydt[..n])?;
+        dydt[n] = self.0.power;
+        Ok(())
+    }
+
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, String> {
+        let n = self.0.dimension();
+        self.0.keep_closed(t, &mut y[..n])
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Sample {
     pub time: f64,
@@ -43,6 +66,14 @@ pub struct Sample {
     /// Potential energy, when every effort is a constant force in the fixed basis or declares
     /// its potential.
     pub potential_energy: Option<f64>,
+    /// The work done since the start by the efforts that derive from no potential (dampers,
+    /// motors, …), when there are such efforts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub work: Option<f64>,
+    /// Kinetic energy + potential energy of the conservative efforts − `work`: constant up to
+    /// the integration's error.
+    #[serde(skip)]
+    pub balance: Option<f64>,
     /// Total momentum in the fixed frame: angular (about the origin), then linear.
     pub momentum: [f64; 6],
     /// When asked for: the wrench each join transmits to its second body, at the join, in the
@@ -69,6 +100,12 @@ pub struct Report {
     /// Largest |E(t) − E(0)| over the outputs, relative to the larger of |E(0)| and the largest
     /// kinetic energy, when the system is conservative.
     pub energy_drift: Option<f64>,
+    /// For a mechanism with non-conservative efforts: the largest change of kinetic + potential
+    /// − work since the start, over the largest of those energies (the energy balance).
+    pub energy_balance: Option<f64>,
+    /// Kinetic energy, potential energy (of the conservative efforts) and work of the others at
+    /// the end of the run, when the work is integrated.
+    pub final_energies: Option<[f64; 3]>,
     /// Largest change of a component of the total momentum, when nothing outside acts on the
     /// mechanism (its root joints are free and no effort is applied).
     pub momentum_drift: Option<MomentumDrift>,
@@ -117,14 +154,17 @@ struct Sampler<'m> {
     /// Its `reference` is shared with the integrated system: the declared coordinates of the
     /// last output, which keep recovered angles continuous.
     system: MechanicalSystem<'m>,
-    conservative: Option<crate::dynamics::energy::Conservative>,
+    conservative: crate::dynamics::energy::Conservative,
     reactions: bool,
 }
 
 impl Sampler<'_> {
     fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, String> {
         let model = self.system.model;
-        let mut y = y.to_vec();
+        // After the motion, the work of the non-conservative efforts when it is integrated.
+        let n = self.system.dimension();
+        let work = y.get(n).copied();
+        let mut y = y[..n].to_vec();
         self.system.keep_closed(time, &mut y)?;
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
@@ -136,17 +176,17 @@ impl Sampler<'_> {
         forward_kinematics(model, data, &q, v).map_err(|e| format!("{e:?}"))?;
         let h = momentum(model, data);
         let declared = Declared { model, coordinates: &coordinates, rates: &rates };
-        let potential = match &self.conservative {
-            // `+ 0.0` turns a −0 into 0 for the outputs.
-            Some(conservative) => Some(potential_energy(model, data, conservative, &declared, time).map_err(|e| format!("{e:?}"))? + 0.0),
-            None => None,
-        };
+        // `+ 0.0` turns a −0 into 0 for the outputs.
+        let potential = potential_energy(model, data, &self.conservative, &declared, time).map_err(|e| format!("{e:?}"))? + 0.0;
+        let kinetic = kinetic_energy(model, data);
         Ok(Sample {
             time,
             coordinates,
             rates,
-            kinetic_energy: kinetic_energy(model, data),
-            potential_energy: potential,
+            kinetic_energy: kinetic,
+            potential_energy: self.conservative.complete.then_some(potential),
+            work: work.map(|w| w + 0.0),
+            balance: work.map(|w| kinetic + potential - w),
             momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
             reactions,
         })
@@ -175,6 +215,13 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     };
     // What the start found of the loops (rank, redundant rows) holds for the outputs too.
     sampler.system.loops = system.loops.clone();
+    // The work of non-conservative efforts rides along as one more state (not with the
+    // variational integrator, whose steps are its own).
+    let motion = y0.len();
+    let tracks_work = !sampler.conservative.complete && settings.integrator != Integrator::Symplectic;
+    if tracks_work {
+        y0.push(0.0);
+    }
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::with_capacity(outputs.len());
     let started = Instant::now();
@@ -188,14 +235,18 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         atol: settings.atol,
         initial_step: settings.step,
         max_step: settings.max_step,
+        controlled: Some(motion),
         ..IntegratorSettings::default()
     };
+    let mut with_work = WithWork(&mut system);
+    let ode: &mut dyn OdeSystem = if tracks_work { &mut with_work } else { with_work.0 };
     let fixed_step = settings.step.unwrap_or(settings.output.min(1e-3));
     let result: Result<(Vec<f64>, Stats), IntegrationError> = match settings.integrator {
-        Integrator::Rk4 => integrate(&Method::Rk4 { step: fixed_step }, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
-        Integrator::DormandPrince => integrate(&Method::DormandPrince, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
-        Integrator::Implicit => integrate(&Method::Rosenbrock, &mut system, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
+        Integrator::Rk4 => integrate(&Method::Rk4 { step: fixed_step }, ode, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
+        Integrator::DormandPrince => integrate(&Method::DormandPrince, ode, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
+        Integrator::Implicit => integrate(&Method::Rosenbrock, ode, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
         Integrator::Symplectic => {
+            let system = &mut *with_work.0;
             // The RATTLE steps keep the loops closed themselves.
             system.loops.stabilisation = crate::dynamics::loops::Stabilisation::Integrator;
             if model.joints.iter().any(|j| j.kind != JointType::Chain) {
@@ -207,7 +258,7 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
                     stats: Stats::default(),
                 })
             } else {
-                variational::integrate(&mut system, 0.0, &y0, settings.duration, fixed_step, &outputs, &mut observer)
+                variational::integrate(system, 0.0, &y0, settings.duration, fixed_step, &outputs, &mut observer)
             }
         }
     };
@@ -227,6 +278,8 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         function_evaluations: stats.rhs_evaluations,
         run_seconds,
         energy_drift: energy_drift(&samples),
+        energy_balance: energy_balance(&samples),
+        final_energies: samples.last().and_then(|s| Some([s.kinetic_energy, s.balance? - s.kinetic_energy + s.work?, s.work?])),
         momentum_drift: momentum_drift(model, &samples),
         constraints: model.has_loops().then(|| {
             system.loops.absorb(&sampler.system.loops);
@@ -271,6 +324,8 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         function_evaluations: 0,
         run_seconds: 0.0,
         energy_drift: None,
+        energy_balance: None,
+        final_energies: None,
         momentum_drift: None,
         constraints: None,
         failure: Some(RunFailure { time: 0.0, message }),
@@ -289,6 +344,18 @@ fn energy_drift(samples: &[Sample]) -> Option<f64> {
         return Some(0.0);
     }
     samples.iter().map(|s| energy(s).map(|e| (e - first).abs() / scale)).try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
+}
+
+fn energy_balance(samples: &[Sample]) -> Option<f64> {
+    let first = samples.first()?.balance?;
+    let scale = samples
+        .iter()
+        .map(|s| s.kinetic_energy.abs().max(s.work.unwrap_or(0.0).abs()).max((s.balance.unwrap_or(0.0) - s.kinetic_energy + s.work.unwrap_or(0.0)).abs()))
+        .fold(first.abs(), f64::max);
+    if scale == 0.0 {
+        return Some(0.0);
+    }
+    samples.iter().map(|s| s.balance.map(|b| (b - first).abs() / scale)).try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
 }
 
 fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<MomentumDrift> {

@@ -22,11 +22,13 @@ pub struct MechanicalSystem<'m> {
     pub reference: Rc<RefCell<Vec<f64>>>,
     /// How the loops are kept closed, and what the run has seen of them.
     pub loops: LoopMonitor,
+    /// The power of the non-conservative efforts at the last `derivative`.
+    pub power: f64,
 }
 
 impl<'m> MechanicalSystem<'m> {
     pub fn new(model: &'m Model, reference: Rc<RefCell<Vec<f64>>>, stabilisation: Stabilisation) -> MechanicalSystem<'m> {
-        MechanicalSystem { model, data: Data::new(model), reference, loops: LoopMonitor::new(stabilisation) }
+        MechanicalSystem { model, data: Data::new(model), reference, loops: LoopMonitor::new(stabilisation), power: 0.0 }
     }
 
     pub fn dimension(&self) -> usize {
@@ -73,6 +75,7 @@ impl<'m> MechanicalSystem<'m> {
                 .map_err(|e| self.dynamics_message(&e))?;
             (accelerations, efforts)
         };
+        self.power = efforts.power;
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model.joints.iter().find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k));
             let name = joint.map_or("?".to_string(), |j| j.chain.name.clone());
