@@ -208,3 +208,20 @@ fn the_energy_balance_holds_on_a_driven_damped_mechanism() {
     assert!(work.abs() > 0.1, "the motor and dampers do work");
     assert!(balance < 1e-8, "energy balance {balance:e}");
 }
+
+#[test]
+fn a_target_spring_pulls_towards_a_moving_point() {
+    // m x'' = k (0.1 t − x), at rest at 0: x = 0.1 t − 0.1 sin(ω t) / ω, ω² = k / m.
+    let simulation = simulate(
+        "import forces ;
+        let cursor = body mass = 0.5, iframe = 0, inertia = [1, 1, 1] end ;
+        join earth and cursor with link(x) dof = [x, 0, 0] end as slide ;
+        apply target_spring(cursor, [0.1 * time, 0, 0], 18) on cursor ;
+        simulate duration = 2, output = 0.05, tolerance = 1e-13 end ;",
+    );
+    let omega = (18.0f64 / 0.5).sqrt();
+    for s in &simulation.samples {
+        let expected = 0.1 * s.time - 0.1 * (omega * s.time).sin() / omega;
+        assert!((s.coordinates[0] - expected).abs() < 1e-10, "t = {}: {} ≠ {expected}", s.time, s.coordinates[0]);
+    }
+}
