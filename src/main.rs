@@ -415,13 +415,18 @@ fn compile(file: &std::path::Path, options: &LoadOptions, emit: Emit, format: Op
         Ok(text) => text,
         Err(code) => return code,
     };
+    write_output(output, &text)
+}
+
+/// Writes a command's result to `output`, or to standard output without one.
+fn write_output(output: Option<&std::path::Path>, text: &str) -> ExitCode {
     match output {
         Some(path) => match std::fs::write(path, text) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => usage_error(&format!("cannot write `{}`: {e}", path.display())),
         },
         None => {
-            out(&text);
+            out(text);
             ExitCode::SUCCESS
         }
     }
@@ -602,16 +607,7 @@ fn export_urdf(file: &std::path::Path, options: &LoadOptions, sets: &[String], o
             return ExitCode::from(1);
         }
     };
-    match output {
-        Some(path) => match std::fs::write(path, urdf) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => usage_error(&format!("cannot write `{}`: {e}", path.display())),
-        },
-        None => {
-            out(&urdf);
-            ExitCode::SUCCESS
-        }
-    }
+    write_output(output, &urdf)
 }
 
 /// A progress bar on a terminal; nothing when standard error is not one (CI, pipes).
@@ -644,15 +640,7 @@ fn import_urdf(file: &std::path::Path, options: &lsdc::urdf::import::ImportOptio
         }
     };
     eprint!("{}", render::to_text(&sources, &imported.warnings));
-    match output {
-        Some(path) => {
-            if let Err(e) = std::fs::write(path, &imported.text) {
-                return usage_error(&format!("cannot write `{}`: {e}", path.display()));
-            }
-        }
-        None => out(&imported.text),
-    }
-    ExitCode::SUCCESS
+    write_output(output, &imported.text)
 }
 
 fn parse(file: &std::path::Path) -> ExitCode {

@@ -395,9 +395,7 @@ fn branch_velocities(joints: &[Joint]) -> Vec<Vec<usize>> {
 /// constant force in the fixed basis, at its centre of mass, equal to its mass times one common
 /// vector g: that is a uniform field g. Otherwise the efforts stay as they are (g = 0).
 fn gravity_field(applied: Vec<AppliedEffort>, bodies: &[BodyInertia], unknowns: &UnknownValues) -> (Vector3<f64>, Vec<AppliedEffort>) {
-    let constant_force = |e: &AppliedEffort| -> Option<Vector3<f64>> {
-        (e.kind == EffortKind::Force && e.basis == 0).then(|| constant_vector(&e.value, unknowns).ok()).flatten()
-    };
+    let constant_force = |e: &AppliedEffort| constant_fixed_force(e, unknowns);
     let mut field: Option<Vector3<f64>> = None;
     let mut is_weight = vec![false; applied.len()];
     for (k, body) in bodies.iter().enumerate().filter(|(_, b)| !b.massless && b.mass != 0.0) {
