@@ -177,7 +177,7 @@ pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) 
     let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
         let (generalised, link_power) = link_effort(model, effort, declared, &joins, &frames, time)?;
-        if !model.link_potentials.iter().any(|(k, _)| *k == effort.joint) {
+        if !effort.conservative {
             power += link_power;
         }
         let (start, count) = match model.joints.get(effort.joint) {

@@ -36,7 +36,6 @@ pub struct Conservative {
 
 /// The conservative efforts of a mechanism: those whose potential the energy report counts.
 pub fn conservative_forces(model: &Model) -> Conservative {
-    let declared = |joint: usize| model.link_potentials.iter().any(|(k, _)| *k == joint);
     let weights = model.bodies.iter().enumerate().filter(|(_, b)| !b.massless).map(|(k, b)| (k + 1, b.com, b.mass * model.gravity));
     let mut constant: Vec<ConstantForce> = weights.collect();
     let mut applied = Vec::new();
@@ -47,7 +46,7 @@ pub fn conservative_forces(model: &Model) -> Conservative {
             constant.push((e.body, e.point, force));
         }
     }
-    let complete = model.applied.iter().all(|e| e.conservative) && model.link_efforts.iter().all(|e| declared(e.joint));
+    let complete = model.applied.iter().all(|e| e.conservative) && model.link_efforts.iter().all(|e| e.conservative);
     Conservative { constant, applied, complete }
 }
 

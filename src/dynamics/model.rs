@@ -64,6 +64,8 @@ pub struct LinkEffort {
     pub value: Vector,
     /// The join whose link declares it, for messages.
     pub span: crate::syntax::span::Span,
+    /// Whether its link declares the potential it derives from.
+    pub conservative: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -422,7 +424,8 @@ fn link_efforts(mechanism: &Mechanism, joints: &[Joint], loops: &[JointModel]) -
         let link = mechanism.link(mechanism.join(chain.join).link);
         for (kind, list) in [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)] {
             for (step, value) in list {
-                efforts.push(LinkEffort { joint: index, kind, step: *step, value: value.clone(), span: mechanism.join(chain.join).span });
+                let conservative = link.potential.is_some();
+                efforts.push(LinkEffort { joint: index, kind, step: *step, value: value.clone(), span: mechanism.join(chain.join).span, conservative });
             }
         }
     }
