@@ -79,16 +79,9 @@ fn symbol_values(eq: &Equations, state: &State) -> Vec<f64> {
     let mut symbols = eq.symbol_values(|name| Some(named.get(name).copied().unwrap_or(0.0))).expect("values");
     for (index, use_) in v.functions.iter().enumerate() {
         let arguments = Tape::new(&eq.pool, &use_.arguments).eval(&symbols);
-        symbols[symbol_index(eq, use_.symbol)] = unknown(index, &arguments);
+        symbols[eq.pool.symbol_index(use_.symbol).expect("a function use's value is a symbol")] = unknown(index, &arguments);
     }
     symbols
-}
-
-fn symbol_index(eq: &Equations, id: lsdc::symbolic::expr::ExprId) -> usize {
-    match eq.pool.node(id) {
-        lsdc::symbolic::expr::Node::Symbol(i) => i as usize,
-        _ => panic!("a function use's value is a symbol"),
-    }
 }
 
 /// The accelerations the equations give: M q' = S + F for a tree; for loops, the KKT system's

@@ -97,13 +97,6 @@ fn numeric(mechanism: &Mechanism, unknowns: &UnknownValues, coordinates: &[f64],
     Numeric { mass, right_hand_side, constraints: c.jacobian, constraint_bias: c.bias, active_rows: active_rows(&model) }
 }
 
-fn symbol_index(eq: &Equations, symbol: lsdc::symbolic::expr::ExprId) -> u32 {
-    match eq.pool.node(symbol) {
-        lsdc::symbolic::expr::Node::Symbol(i) => i,
-        _ => panic!("not a symbol"),
-    }
-}
-
 /// Largest |a − b| over max(1, largest |b|).
 fn relative_gap(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
@@ -126,7 +119,7 @@ fn compare(mechanism: &Mechanism, eq: &Equations, unknowns: &UnknownValues, coor
     named.insert("t".to_string(), time);
     // Unknown laws act only in F, which is then left out of the comparison.
     for function in &eq.variables.functions {
-        named.insert(eq.pool.symbol_name(symbol_index(eq, function.symbol)).to_string(), 0.3);
+        named.insert(eq.pool.name_of(function.symbol).expect("a symbol").to_string(), 0.3);
     }
     let symbols = eq.symbol_values(|n| named.get(n).copied()).expect("every symbol has a value");
     let at = eq.evaluate(&eq.tape(), &symbols);

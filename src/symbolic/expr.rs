@@ -160,6 +160,22 @@ impl Pool {
         id
     }
 
+    /// The name of a symbol node (`None` for any other node).
+    pub fn name_of(&self, id: ExprId) -> Option<&str> {
+        match self.node(id) {
+            Node::Symbol(i) => Some(self.symbol_name(i)),
+            _ => None,
+        }
+    }
+
+    /// The index of a symbol node among the symbols (`None` for any other node).
+    pub fn symbol_index(&self, id: ExprId) -> Option<usize> {
+        match self.node(id) {
+            Node::Symbol(i) => Some(i as usize),
+            _ => None,
+        }
+    }
+
     /// The value of a constant node.
     pub fn as_constant(&self, id: ExprId) -> Option<f64> {
         match self.node(id) {
@@ -426,26 +442,33 @@ enum Step {
     Apply(Function, usize),
 }
 
-impl Tape {
-    pub fn new(pool: &Pool, roots: &[ExprId]) -> Tape {
-        let mut position: HashMap<ExprId, usize> = HashMap::new();
-        let mut order = Vec::new();
-        for &root in roots {
-            // Depth-first with an explicit stack: expression DAGs can be deep.
-            let mut stack = vec![(root, false)];
-            while let Some((id, expanded)) = stack.pop() {
-                if position.contains_key(&id) {
-                    continue;
-                }
-                if expanded {
-                    position.insert(id, order.len());
-                    order.push(id);
-                } else {
-                    stack.push((id, true));
-                    stack.extend(pool.operands(id).into_iter().filter(|o| !position.contains_key(o)).map(|o| (o, false)));
-                }
+/// The nodes `roots` reach through `operands`, operands before the nodes that use them, each
+/// once; depth-first with an explicit stack, since expression DAGs can be deep.
+pub fn topological_order(roots: &[ExprId], operands: impl Fn(ExprId) -> Vec<ExprId>) -> Vec<ExprId> {
+    let mut placed: std::collections::HashSet<ExprId> = std::collections::HashSet::new();
+    let mut order = Vec::new();
+    for &root in roots {
+        let mut stack = vec![(root, false)];
+        while let Some((id, expanded)) = stack.pop() {
+            if placed.contains(&id) {
+                continue;
+            }
+            if expanded {
+                placed.insert(id);
+                order.push(id);
+            } else {
+                stack.push((id, true));
+                stack.extend(operands(id).into_iter().filter(|o| !placed.contains(o)).map(|o| (o, false)));
             }
         }
+    }
+    order
+}
+
+impl Tape {
+    pub fn new(pool: &Pool, roots: &[ExprId]) -> Tape {
+        let order = topological_order(roots, |id| pool.operands(id));
+        let position: HashMap<ExprId, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
         let at = |id: ExprId| position[&id];
         let steps = order
             .iter()

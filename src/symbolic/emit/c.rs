@@ -6,7 +6,7 @@ use std::fmt::Write;
 
 use super::code::{array_symbol, comment, Routine, Routines, Statements};
 use super::shared::{described, Language, PowerSyntax, Role, Symbols};
-use crate::symbolic::expr::{ExprId, Function, Node};
+use crate::symbolic::expr::Function;
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
 
@@ -119,7 +119,7 @@ fn header(equations: &Equations, source: &str) -> String {
     names(&mut out, "Their rates, in the order of q:", "RATES", &v.rates);
     names(&mut out, "The parameters, in the order of k:", "PARAMETERS", &v.parameters);
     if !v.functions.is_empty() {
-        let list: Vec<String> = v.functions.iter().map(|f| c_string(equations.pool.symbol_name(symbol_index(equations, f.symbol)))).collect();
+        let list: Vec<String> = v.functions.iter().map(|f| c_string(equations.pool.name_of(f.symbol).unwrap_or_default())).collect();
         let _ = writeln!(
             out,
             "\n/* The unknown functions as applied: a function taking f calls f(i, arguments) for the value\n   \
@@ -156,12 +156,6 @@ fn c_string(text: &str) -> String {
     format!("\"{}\"", text.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
-fn symbol_index(equations: &Equations, id: ExprId) -> u32 {
-    match equations.pool.node(id) {
-        Node::Symbol(i) => i,
-        _ => 0,
-    }
-}
 
 /// `forward_dynamics`: the articulated-body recursion for a tree, the KKT system for loops.
 fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {

@@ -117,7 +117,7 @@ fn header(equations: &Equations, source: &str) -> String {
     names(&mut out, "Their rates, in the order of `q`:", "RATES", "N", &v.rates);
     names(&mut out, "The parameters, in the order of `k`:", "PARAMETERS", &v.parameters.len().to_string(), &v.parameters);
     if !v.functions.is_empty() {
-        let list: Vec<String> = v.functions.iter().map(|f| format!("{:?}", equations.pool.symbol_name(symbol_index(equations, f.symbol)))).collect();
+        let list: Vec<String> = v.functions.iter().map(|f| format!("{:?}", equations.pool.name_of(f.symbol).unwrap_or_default())).collect();
         let _ = writeln!(
             out,
             "\n/// The unknown functions as applied: a function taking `f` calls `f(i, &arguments)` for the\n\
@@ -148,12 +148,6 @@ fn names(out: &mut String, title: &str, constant: &str, length: &str, list: &[Va
     let _ = writeln!(out, "pub const {constant}: [&str; {length}] = [{}];", quoted.join(", "));
 }
 
-fn symbol_index(equations: &Equations, id: crate::symbolic::expr::ExprId) -> u32 {
-    match equations.pool.node(id) {
-        crate::symbolic::expr::Node::Symbol(i) => i,
-        _ => 0,
-    }
-}
 
 /// `forward_dynamics`: the articulated-body recursion for a tree, the KKT system for loops.
 fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {

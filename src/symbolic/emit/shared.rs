@@ -131,27 +131,10 @@ impl Listing {
     }
 }
 
-/// The nodes `roots` reach through `Symbols::operands`, operands before users (as `Tape` orders
-/// them, with an explicit stack: expression DAGs can be deep).
+/// The nodes `roots` reach through `Symbols::operands` (an unknown function's arguments count as
+/// its operands), operands before users.
 fn reachable(symbols: &Symbols, roots: &[ExprId]) -> Vec<ExprId> {
-    let mut placed: HashMap<ExprId, ()> = HashMap::new();
-    let mut order = Vec::new();
-    for &root in roots {
-        let mut stack = vec![(root, false)];
-        while let Some((id, expanded)) = stack.pop() {
-            if placed.contains_key(&id) {
-                continue;
-            }
-            if expanded {
-                placed.insert(id, ());
-                order.push(id);
-            } else {
-                stack.push((id, true));
-                stack.extend(symbols.operands(id).into_iter().filter(|o| !placed.contains_key(o)).map(|o| (o, false)));
-            }
-        }
-    }
-    order
+    crate::symbolic::expr::topological_order(roots, |id| symbols.operands(id))
 }
 
 /// A prefix for temporaries (`x`, else `xx`, …) that no variable name followed by digits uses.

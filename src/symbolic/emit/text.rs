@@ -92,18 +92,12 @@ fn variables(out: &mut String, equations: &Equations) {
     if !v.functions.is_empty() {
         out.push_str("\nunknown functions applied\n");
         for f in &v.functions {
-            let _ = writeln!(out, "  {}", equations.pool.symbol_name(symbol_index(equations, f.symbol)));
+            let _ = writeln!(out, "  {}", equations.pool.name_of(f.symbol).unwrap_or_default());
         }
     }
     out.push_str("\ntime\n  t\n");
 }
 
-fn symbol_index(equations: &Equations, id: ExprId) -> u32 {
-    match equations.pool.node(id) {
-        crate::symbolic::expr::Node::Symbol(i) => i,
-        _ => 0,
-    }
-}
 
 fn label(entry: Entry, equations: &Equations) -> String {
     let names = &equations.constraint_names;
