@@ -12,9 +12,15 @@ fn chain_program(n: usize) -> String {
     text.push_str("let g = 9.81;\nlet hinge(axis) = link(q) dof = q || axis, torque = -0.1 * q' * axis end;\n");
     for i in 1..=n {
         text.push_str(&format!("let b{i} = body mass = 1.5, iframe = [0.25,0,0] ++ 1, inertia = [0.01,0.02,0.02] end;\n"));
-        let parent = if i == 1 { "earth".to_string() } else { format!("[0.5,0,0] ++ 1 @ b{}", i - 1) };
+        let parent = if i == 1 {
+            "earth".to_string()
+        } else {
+            format!("[0.5,0,0] ++ 1 @ b{}", i - 1)
+        };
         text.push_str(&format!("join {parent} and b{i} with hinge([0,0,1]);\n"));
-        text.push_str(&format!("apply force value = [0,0,-g * b{i}.mass], body = earth end on b{i}.iframe;\n"));
+        text.push_str(&format!(
+            "apply force value = [0,0,-g * b{i}.mass], body = earth end on b{i}.iframe;\n"
+        ));
     }
     text
 }
@@ -26,7 +32,10 @@ struct Timing {
 }
 
 fn run(text: &str) -> Timing {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let start = Instant::now();
     let (workspace, diagnostics) = load_text("chain.lsd", text, None, &options);
     let parse = start.elapsed();
@@ -39,7 +48,11 @@ fn run(text: &str) -> Timing {
     let mechanism = lsdc::elab::elaborate(&workspace, &checked).expect("elaborates");
     let elaborate = start.elapsed();
     assert_eq!(mechanism.summary().joins, mechanism.joins.len());
-    Timing { parse, check, elaborate }
+    Timing {
+        parse,
+        check,
+        elaborate,
+    }
 }
 
 fn best_of(runs: usize, text: &str) -> Timing {
@@ -72,15 +85,24 @@ fn library_program(definitions: usize) -> String {
 
 fn library_cost() {
     println!("\nA library of N definitions of which 3 are used (parse, check, elaborate; ms, best of 20):");
-    println!("{:>6} {:>9} {:>9} {:>9} {:>9}", "N", "parse", "check", "elab", "bodies");
+    println!(
+        "{:>6} {:>9} {:>9} {:>9} {:>9}",
+        "N", "parse", "check", "elab", "bodies"
+    );
     let mut elab = Vec::new();
     for n in [4, 1_000] {
         let text = library_program(n);
         let t = best_of(20, &text);
-        let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+        let options = LoadOptions {
+            library_dirs: Vec::new(),
+            use_environment: false,
+        };
         let (workspace, _) = load_text("library.lsd", &text, None, &options);
         let (checked, _) = lsdc::check::check(&workspace);
-        let bodies = lsdc::elab::elaborate(&workspace, &checked).expect("elaborates").bodies.len();
+        let bodies = lsdc::elab::elaborate(&workspace, &checked)
+            .expect("elaborates")
+            .bodies
+            .len();
         println!(
             "{n:>6} {:>9.3} {:>9.3} {:>9.3} {bodies:>9}",
             t.parse.as_secs_f64() * 1e3,
@@ -89,11 +111,17 @@ fn library_cost() {
         );
         elab.push(t.elaborate.as_secs_f64());
     }
-    println!("elaboration time, 1,000 definitions vs 4: ratio {:.2}", elab[1] / elab[0]);
+    println!(
+        "elaboration time, 1,000 definitions vs 4: ratio {:.2}",
+        elab[1] / elab[0]
+    );
 }
 
 fn main() {
-    println!("{:>8} {:>9} {:>11} {:>11} {:>11} {:>11} {:>13}", "bodies", "bytes", "parse ms", "check ms", "elab ms", "total ms", "µs per body");
+    println!(
+        "{:>8} {:>9} {:>11} {:>11} {:>11} {:>11} {:>13}",
+        "bodies", "bytes", "parse ms", "check ms", "elab ms", "total ms", "µs per body"
+    );
     let mut per_body = Vec::new();
     for n in [1_000, 10_000, 100_000] {
         let text = chain_program(n);

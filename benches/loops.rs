@@ -28,9 +28,21 @@ struct Case {
 }
 
 const CASES: [Case; 3] = [
-    Case { file: "four_bar", rk4_steps: &[1e-2, 1e-3, 1e-4], symplectic_steps: &[1e-2, 1e-3] },
-    Case { file: "delta_isir88", rk4_steps: &[5e-3, 1e-3, 1e-4], symplectic_steps: &[1e-3, 1e-4] },
-    Case { file: "delta_isir88_reduced", rk4_steps: &[5e-3, 1e-3, 1e-4], symplectic_steps: &[1e-3, 1e-4] },
+    Case {
+        file: "four_bar",
+        rk4_steps: &[1e-2, 1e-3, 1e-4],
+        symplectic_steps: &[1e-2, 1e-3],
+    },
+    Case {
+        file: "delta_isir88",
+        rk4_steps: &[5e-3, 1e-3, 1e-4],
+        symplectic_steps: &[1e-3, 1e-4],
+    },
+    Case {
+        file: "delta_isir88_reduced",
+        rk4_steps: &[5e-3, 1e-3, 1e-4],
+        symplectic_steps: &[1e-3, 1e-4],
+    },
 ];
 
 /// One integrator configuration of the table.
@@ -48,17 +60,41 @@ fn methods(case: &Case) -> Vec<Method> {
         tolerance: Some(tol),
         step: None,
     };
-    let fixed = |integrator: Integrator, name: &str, h: f64| Method { label: format!("{name} h={h:.0e}"), integrator, tolerance: None, step: Some(h) };
-    let mut list: Vec<Method> = [1e-6, 1e-8, 1e-10].iter().map(|&t| adaptive(Integrator::DormandPrince, "dopri5", t)).collect();
-    list.extend(case.rk4_steps.iter().map(|&h| fixed(Integrator::Rk4, "rk4", h)));
-    list.extend([1e-6, 1e-8].iter().map(|&t| adaptive(Integrator::Implicit, "implicit", t)));
-    list.extend(case.symplectic_steps.iter().map(|&h| fixed(Integrator::Symplectic, "symplectic", h)));
+    let fixed = |integrator: Integrator, name: &str, h: f64| Method {
+        label: format!("{name} h={h:.0e}"),
+        integrator,
+        tolerance: None,
+        step: Some(h),
+    };
+    let mut list: Vec<Method> = [1e-6, 1e-8, 1e-10]
+        .iter()
+        .map(|&t| adaptive(Integrator::DormandPrince, "dopri5", t))
+        .collect();
+    list.extend(
+        case.rk4_steps
+            .iter()
+            .map(|&h| fixed(Integrator::Rk4, "rk4", h)),
+    );
+    list.extend(
+        [1e-6, 1e-8]
+            .iter()
+            .map(|&t| adaptive(Integrator::Implicit, "implicit", t)),
+    );
+    list.extend(
+        case.symplectic_steps
+            .iter()
+            .map(|&h| fixed(Integrator::Symplectic, "symplectic", h)),
+    );
     list
 }
 
 fn load(file: &str) -> Prepared {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
-    let compilation = compile_files(&[PathBuf::from(format!("examples/{file}.lsd"))], &options).expect("example loads");
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let compilation = compile_files(&[PathBuf::from(format!("examples/{file}.lsd"))], &options)
+        .expect("example loads");
     let mechanism = compilation.mechanism.expect("example elaborates");
     prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|_| panic!("{file}: prepares"))
 }
@@ -87,7 +123,13 @@ fn timed_run(file: &str, method: &Method) -> (f64, Report) {
     prepared.settings.output = prepared.settings.duration;
     let mut seconds = Vec::new();
     let mut report = None;
-    while seconds.len() < if seconds.iter().any(|&s| s > 1.0) { REPEATS_SLOW } else { REPEATS } {
+    while seconds.len()
+        < if seconds.iter().any(|&s| s > 1.0) {
+            REPEATS_SLOW
+        } else {
+            REPEATS
+        }
+    {
         let simulation = run(&prepared, &mut |_| {});
         seconds.push(simulation.report.run_seconds);
         report = Some(simulation.report);
@@ -101,18 +143,31 @@ fn max_error(samples: &[Sample], reference: &[Sample]) -> f64 {
         .iter()
         .zip(reference)
         .take_while(|(s, r)| (s.time - r.time).abs() <= 1e-9)
-        .flat_map(|(s, r)| s.coordinates.iter().zip(&r.coordinates).map(|(a, b)| (a - b).abs()))
+        .flat_map(|(s, r)| {
+            s.coordinates
+                .iter()
+                .zip(&r.coordinates)
+                .map(|(a, b)| (a - b).abs())
+        })
         .fold(0.0, f64::max)
 }
 
 /// The reference at the tightest tolerance that completes without failure.
 fn reference(file: &str) -> (Simulation, f64) {
     for tol in REFERENCE_TOLERANCES {
-        let method = Method { label: String::new(), integrator: Integrator::DormandPrince, tolerance: Some(tol), step: None };
+        let method = Method {
+            label: String::new(),
+            integrator: Integrator::DormandPrince,
+            tolerance: Some(tol),
+            step: None,
+        };
         let simulation = run(&configure(file, &method), &mut |_| {});
         match &simulation.report.failure {
             None => return (simulation, tol),
-            Some(f) => println!("reference at {tol:e} failed at t = {}: {}", f.time, f.message),
+            Some(f) => println!(
+                "reference at {tol:e} failed at t = {}: {}",
+                f.time, f.message
+            ),
         }
     }
     panic!("{file}: no reference run completed");
@@ -140,13 +195,19 @@ fn time_per_call(mut f: impl FnMut()) -> f64 {
 /// at the initial state.
 fn call_costs(prepared: &Prepared) -> (f64, f64) {
     let model = &prepared.model;
-    let (mut y, v) = model.state_from_declared(&prepared.coordinates, &prepared.rates).expect("initial state");
+    let (mut y, v) = model
+        .state_from_declared(&prepared.coordinates, &prepared.rates)
+        .expect("initial state");
     y.extend_from_slice(&v);
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     system.start_loops(&mut y).expect("loops close");
     let mut dydt = vec![0.0; y.len()];
-    let rhs = time_per_call(|| system.derivative(0.0, black_box(&y), &mut dydt).expect("evaluates"));
+    let rhs = time_per_call(|| {
+        system
+            .derivative(0.0, black_box(&y), &mut dydt)
+            .expect("evaluates")
+    });
     // At the closed initial state (round-off residual) the projection still tries a Newton step
     // and corrects the velocities: about its cost after an integration step.
     let projection = time_per_call(|| {
@@ -167,9 +228,15 @@ fn row(file: &str, method: &Method, reference: &[Sample]) -> String {
     let simulation = run(&configure(file, method), &mut |_| {});
     let r = &simulation.report;
     if let Some(failure) = r.failure.as_ref().filter(|_| r.steps == 0) {
-        return format!("| {} | failed: {} | | | | | | |", method.label, failure.message);
+        return format!(
+            "| {} | failed: {} | | | | | | |",
+            method.label, failure.message
+        );
     }
-    let failed = r.failure.as_ref().map_or(String::new(), |f| format!(" (failed at t = {:.3})", f.time));
+    let failed = r
+        .failure
+        .as_ref()
+        .map_or(String::new(), |f| format!(" (failed at t = {:.3})", f.time));
     format!(
         "| {}{failed} | {} ({} rejected) | {:.1} | {:.1} | {:.1} | {:.1e} | {} | {} |",
         method.label,
@@ -191,7 +258,10 @@ fn main() {
         let (reference, tol) = reference(case.file);
         let (rhs, projection) = call_costs(&base);
         let s = &base.settings;
-        println!("\n### {} ({} s, output every {} s)\n", case.file, s.duration, s.output);
+        println!(
+            "\n### {} ({} s, output every {} s)\n",
+            case.file, s.duration, s.output
+        );
         println!(
             "Reference: dopri5 at rtol = atol = {tol:.0e}, {} steps. One constrained right-hand side: {rhs:.2} µs; one projection: {projection:.2} µs.\n",
             reference.report.steps

@@ -37,25 +37,49 @@ impl Random {
 }
 
 fn load(path: &PathBuf) -> Model {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_files(std::slice::from_ref(path), &options).expect("readable");
-    let mechanism = compilation.mechanism.unwrap_or_else(|| panic!("{} does not compile: {:?}", path.display(), compilation.diagnostics));
-    let prepared = prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message));
+    let mechanism = compilation.mechanism.unwrap_or_else(|| {
+        panic!(
+            "{} does not compile: {:?}",
+            path.display(),
+            compilation.diagnostics
+        )
+    });
+    let prepared = prepare(&mechanism, &[], &Settings::default())
+        .unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message));
     prepared.model
 }
 
-
 fn main() {
-    let paths: Vec<PathBuf> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).map(PathBuf::from).collect();
+    let paths: Vec<PathBuf> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .map(PathBuf::from)
+        .collect();
     for path in paths {
         let model = load(&path);
         // Gravity is a field of the model (no per-body effort to evaluate), as in Pinocchio.
-        assert!(model.applied.is_empty() && model.link_efforts.is_empty(), "{}: efforts other than gravity", path.display());
+        assert!(
+            model.applied.is_empty() && model.link_efforts.is_empty(),
+            "{}: efforts other than gravity",
+            path.display()
+        );
         let mut data = Data::new(&model);
         let external = vec![Force::zeros(); model.body_count() + 1];
         let mut random = Random(0x9E37_79B9_7F4A_7C15);
         let states: Vec<[Vec<f64>; 4]> = (0..256)
-            .map(|_| [random.vector(model.nq, std::f64::consts::PI), random.vector(model.nv, 1.0), random.vector(model.nv, 1.0), random.vector(model.nv, 1.0)])
+            .map(|_| {
+                [
+                    random.vector(model.nq, std::f64::consts::PI),
+                    random.vector(model.nv, 1.0),
+                    random.vector(model.nv, 1.0),
+                    random.vector(model.nv, 1.0),
+                ]
+            })
             .collect();
         let mut tau = DVector::zeros(model.nv);
         let mut mass = DMatrix::zeros(model.nv, model.nv);
@@ -81,6 +105,12 @@ fn main() {
             black_box(&accelerations);
         });
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
-        println!("{name} {:.0} {:.0} {:.0} {}", rnea_ns * 1e9, crba_ns * 1e9, aba_ns * 1e9, model.nv);
+        println!(
+            "{name} {:.0} {:.0} {:.0} {}",
+            rnea_ns * 1e9,
+            crba_ns * 1e9,
+            aba_ns * 1e9,
+            model.nv
+        );
     }
 }

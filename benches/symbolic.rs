@@ -11,9 +11,9 @@ use lsdc::driver::{compile_files, compile_text};
 use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
 use lsdc::dynamics::model;
 use lsdc::dynamics::spatial::Force;
+use lsdc::elab::Mechanism;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::model as kinematic_model;
-use lsdc::elab::Mechanism;
 use lsdc::load::LoadOptions;
 use lsdc::symbolic::expr::Tape;
 use lsdc::symbolic::{self, Equations};
@@ -27,15 +27,26 @@ pub fn pendulum_program(n: usize) -> String {
     let mut text = String::from("let g = 9.81 ;\n");
     for i in 1..=n {
         text += &format!("let l{i} = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.08, 0.08, 0.01] end ;\n");
-        let parent = if i == 1 { "earth".to_string() } else { format!("[0, 0, -1] ++ 1 @ l{}", i - 1) };
-        text += &format!("join {parent} and l{i}.frame with link(q) dof = q || [0, 1, 0] end as j{i} ;\n");
-        text += &format!("apply force value = [0, 0, -g * l{i}.mass], body = earth end on l{i}.iframe ;\n");
+        let parent = if i == 1 {
+            "earth".to_string()
+        } else {
+            format!("[0, 0, -1] ++ 1 @ l{}", i - 1)
+        };
+        text += &format!(
+            "join {parent} and l{i}.frame with link(q) dof = q || [0, 1, 0] end as j{i} ;\n"
+        );
+        text += &format!(
+            "apply force value = [0, 0, -g * l{i}.mass], body = earth end on l{i}.iframe ;\n"
+        );
     }
     text
 }
 
 fn mechanism(text: &str) -> (Mechanism, Topology) {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("pendulum.lsd", text, None, &options);
     let mechanism = compilation.mechanism.expect("elaborates");
     let topology = lsdc::topology::build(&mechanism).expect("connected");
@@ -115,7 +126,13 @@ fn time_generated(equations: &Equations, label: &str) -> Option<([f64; 3], f64, 
     let binary = dir.join(&name);
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".to_string());
     let start = Instant::now();
-    let status = std::process::Command::new(rustc).args(["-C", "opt-level=3", "--edition", "2021"]).arg(&source).arg("-o").arg(&binary).status().ok()?;
+    let status = std::process::Command::new(rustc)
+        .args(["-C", "opt-level=3", "--edition", "2021"])
+        .arg(&source)
+        .arg("-o")
+        .arg(&binary)
+        .status()
+        .ok()?;
     let compile = start.elapsed().as_secs_f64();
     if !status.success() {
         return None;
@@ -123,7 +140,11 @@ fn time_generated(equations: &Equations, label: &str) -> Option<([f64; 3], f64, 
     let output = std::process::Command::new(&binary).output().ok()?;
     let text = String::from_utf8(output.stdout).ok()?;
     let mut lines = text.lines();
-    let times: Vec<f64> = lines.next()?.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+    let times: Vec<f64> = lines
+        .next()?
+        .split_whitespace()
+        .filter_map(|x| x.parse().ok())
+        .collect();
     let accelerations = lines.filter_map(|x| x.parse().ok()).collect();
     Some(([times[0], times[1], times[2]], compile, accelerations))
 }
@@ -134,7 +155,18 @@ fn evaluation() {
     println!("\nGenerated Rust against the numeric algorithms (ns per call, best of 7 batches):");
     println!(
         "{:>14} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8} {:>10} {:>10}",
-        "mechanism", "gen. q̈", "ABA", "ratio", "gen. M", "CRBA", "ratio", "gen. S+F", "RNEA", "ratio", "compile s", "max |Δq̈|"
+        "mechanism",
+        "gen. q̈",
+        "ABA",
+        "ratio",
+        "gen. M",
+        "CRBA",
+        "ratio",
+        "gen. S+F",
+        "RNEA",
+        "ratio",
+        "compile s",
+        "max |Δq̈|"
     );
     for n in SIZES {
         let (mechanism, topology) = mechanism(&pendulum_program(n));
@@ -142,8 +174,16 @@ fn evaluation() {
     }
     for robot in ["ur5", "panda", "talos_reduced"] {
         let path = std::path::PathBuf::from(format!("tests/fixtures/urdf/{robot}.urdf"));
-        let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
-        let Some(mechanism) = compile_files(&[path], &options).ok().and_then(|c| c.mechanism) else { continue };
+        let options = LoadOptions {
+            library_dirs: Vec::new(),
+            use_environment: false,
+        };
+        let Some(mechanism) = compile_files(&[path], &options)
+            .ok()
+            .and_then(|c| c.mechanism)
+        else {
+            continue;
+        };
         let topology = lsdc::topology::build(&mechanism).expect("connected");
         compare_generated(robot, &mechanism, topology);
     }
@@ -156,7 +196,8 @@ fn compare_generated(label: &str, mechanism: &Mechanism, topology: Topology) {
         println!("{label:>14} (rustc unavailable or failed)");
         return;
     };
-    let kinematics = kinematic_model::build(mechanism, topology, UnknownValues::new()).expect("numeric");
+    let kinematics =
+        kinematic_model::build(mechanism, topology, UnknownValues::new()).expect("numeric");
     let model = model::build(mechanism, &kinematics).expect("model");
     let mut data = Data::new(&model);
     let q: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
@@ -173,7 +214,10 @@ fn compare_generated(label: &str, mechanism: &Mechanism, topology: Topology) {
         black_box(rnea(&model, &mut data, black_box(&q), &v, &zero, &none).expect("evaluates"));
     }) * 1e9;
     let numeric = aba(&model, &mut data, &q, &v, &zero, &none).expect("regular");
-    let gap = numeric.iter().zip(&generated).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let gap = numeric
+        .iter()
+        .zip(&generated)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     println!(
         "{label:>14} {fd:>10.0} {aba_ns:>10.0} {:>8.2} {mm:>10.0} {crba_ns:>10.0} {:>8.2} {rh:>10.0} {rnea_ns:>10.0} {:>8.2} {compile:>10.1} {gap:>10.1e}",
         fd / aba_ns,

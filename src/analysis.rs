@@ -64,15 +64,28 @@ pub struct AssemblyReport {
     pub residual: f64,
 }
 
-fn link_report(mechanism: &Mechanism, topology: &Topology, join: crate::elab::value::JoinId, number: usize, unknowns: &UnknownValues) -> LinkReport {
+fn link_report(
+    mechanism: &Mechanism,
+    topology: &Topology,
+    join: crate::elab::value::JoinId,
+    number: usize,
+    unknowns: &UnknownValues,
+) -> LinkReport {
     let j = mechanism.join(join);
-    let joint = model::link_only(mechanism, join, unknowns).ok().and_then(|m| analyse(&m, unknowns).ok());
+    let joint = model::link_only(mechanism, join, unknowns)
+        .ok()
+        .and_then(|m| analyse(&m, unknowns).ok());
     LinkReport {
         number,
         join: mechanism.join_name(join),
         first_body: topology.number(j.first.body),
         second_body: topology.number(j.second.body),
-        coordinates: mechanism.link(j.link).coordinates.iter().map(|c| c.to_string()).collect(),
+        coordinates: mechanism
+            .link(j.link)
+            .coordinates
+            .iter()
+            .map(|c| c.to_string())
+            .collect(),
         joint,
     }
 }
@@ -98,21 +111,47 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         .collect();
     if topology.complementary.is_empty() {
         // A tree: no constraint, the mobility is the sum of the links' degrees of freedom.
-        let joints: Option<Vec<&JointAnalysis>> = bodies.iter().map(|b: &BodyReport| b.link.joint.as_ref()).collect();
+        let joints: Option<Vec<&JointAnalysis>> = bodies
+            .iter()
+            .map(|b: &BodyReport| b.link.joint.as_ref())
+            .collect();
         let (mobility, unavailable) = match joints {
-            Some(joints) => (Some(Mobility::of_tree(joints.iter().map(|j| j.dof).sum())), None),
+            Some(joints) => (
+                Some(Mobility::of_tree(joints.iter().map(|j| j.dof).sum())),
+                None,
+            ),
             None => (None, Some("a joint could not be analysed".to_string())),
         };
-        return Ok(TreeReport { bodies, complementary, mobility, mobility_unavailable: unavailable });
+        return Ok(TreeReport {
+            bodies,
+            complementary,
+            mobility,
+            mobility_unavailable: unavailable,
+        });
     }
-    let (mobility, mobility_unavailable) = match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
-        Ok((model, assembled)) => match mobility(&model, &assembled.coordinates_vector()) {
-            Ok(m) => (Some(m), None),
-            Err(e) => (None, Some(crate::kinematics::eval::describe(&e, mechanism))),
-        },
-        Err(diagnostics) => (None, Some(diagnostics.iter().map(|d| d.message.clone()).collect::<Vec<_>>().join("; "))),
-    };
-    Ok(TreeReport { bodies, complementary, mobility, mobility_unavailable })
+    let (mobility, mobility_unavailable) =
+        match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
+            Ok((model, assembled)) => match mobility(&model, &assembled.coordinates_vector()) {
+                Ok(m) => (Some(m), None),
+                Err(e) => (None, Some(crate::kinematics::eval::describe(&e, mechanism))),
+            },
+            Err(diagnostics) => (
+                None,
+                Some(
+                    diagnostics
+                        .iter()
+                        .map(|d| d.message.clone())
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                ),
+            ),
+        };
+    Ok(TreeReport {
+        bodies,
+        complementary,
+        mobility,
+        mobility_unavailable,
+    })
 }
 
 impl AssemblyReport {
@@ -127,7 +166,11 @@ pub fn assembled_model(
     topology: Topology,
     options: &AssemblyOptions,
 ) -> Result<(KinematicModel, AssemblyReport), Vec<Diagnostic>> {
-    let model = model::build(mechanism, topology, crate::simulate::prepare::given_values(mechanism)?)?;
+    let model = model::build(
+        mechanism,
+        topology,
+        crate::simulate::prepare::given_values(mechanism)?,
+    )?;
     let (start, fixed) = initial_coordinates(mechanism, &model).map_err(|d| vec![d])?;
     let names = model.coordinate_names();
     match assemble(&model, &start, &fixed, options) {
@@ -138,14 +181,23 @@ pub fn assembled_model(
                 .zip(&fixed)
                 .map(|((name, &value), &fixed)| CoordinateValue { name, value, fixed })
                 .collect();
-            let report = AssemblyReport { coordinates, iterations: assembled.iterations, residual: assembled.residual };
+            let report = AssemblyReport {
+                coordinates,
+                iterations: assembled.iterations,
+                residual: assembled.residual,
+            };
             Ok((model, report))
         }
         Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error(
             "E0804",
-            format!("cannot evaluate the geometry: {}", crate::kinematics::eval::describe(&e, mechanism)),
+            format!(
+                "cannot evaluate the geometry: {}",
+                crate::kinematics::eval::describe(&e, mechanism)
+            ),
         )]),
-        Err(AssemblyError::NoAssembly { loop_errors, .. }) => Err(vec![no_assembly(mechanism, &model, &loop_errors)]),
+        Err(AssemblyError::NoAssembly { loop_errors, .. }) => {
+            Err(vec![no_assembly(mechanism, &model, &loop_errors)])
+        }
     }
 }
 
@@ -158,7 +210,11 @@ fn gap(value: f64) -> String {
     }
 }
 
-pub(crate) fn no_assembly(mechanism: &Mechanism, model: &KinematicModel, loop_errors: &[(f64, f64)]) -> Diagnostic {
+pub(crate) fn no_assembly(
+    mechanism: &Mechanism,
+    model: &KinematicModel,
+    loop_errors: &[(f64, f64)],
+) -> Diagnostic {
     let worst = loop_errors
         .iter()
         .enumerate()
@@ -174,7 +230,12 @@ pub(crate) fn no_assembly(mechanism: &Mechanism, model: &KinematicModel, loop_er
     for (k, (p, r)) in loop_errors.iter().enumerate() {
         if k != worst && (p + r) > 1e-9 {
             let other = &model.complementary()[k];
-            diagnostic = diagnostic.note(format!("the loop closed by `{}` is also open ({} m, {} rad)", other.name, gap(*p), gap(*r)));
+            diagnostic = diagnostic.note(format!(
+                "the loop closed by `{}` is also open ({} m, {} rad)",
+                other.name,
+                gap(*p),
+                gap(*r)
+            ));
         }
     }
     diagnostic

@@ -28,7 +28,12 @@ pub fn compile_files(paths: &[PathBuf], options: &LoadOptions) -> Result<Compila
 }
 
 /// Compiles a program given as text; `dir` is where its relative imports are looked up.
-pub fn compile_text(name: &str, text: &str, dir: Option<&std::path::Path>, options: &LoadOptions) -> Compilation {
+pub fn compile_text(
+    name: &str,
+    text: &str,
+    dir: Option<&std::path::Path>,
+    options: &LoadOptions,
+) -> Compilation {
     let (workspace, diagnostics) = load::load_text(name, text, dir, options);
     finish(workspace, diagnostics.list)
 }
@@ -49,5 +54,9 @@ fn finish(workspace: Workspace, mut diagnostics: Vec<Diagnostic>) -> Compilation
     for diagnostic in &mut diagnostics {
         workspace.add_import_context(diagnostic);
     }
-    Compilation { workspace, diagnostics, mechanism }
+    Compilation {
+        workspace,
+        diagnostics,
+        mechanism,
+    }
 }

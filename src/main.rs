@@ -8,13 +8,17 @@ use clap::{Parser, Subcommand, ValueEnum};
 
 use lsdc::analysis;
 use lsdc::diag::{render, Diagnostic};
-use lsdc::elab::Mechanism;
 use lsdc::driver::{self, Compilation};
+use lsdc::elab::Mechanism;
 use lsdc::load::LoadOptions;
 use lsdc::output::text;
 
 #[derive(Parser)]
-#[command(name = "lsdc", version, about = "Compiler and simulator for LSD mechanism descriptions")]
+#[command(
+    name = "lsdc",
+    version,
+    about = "Compiler and simulator for LSD mechanism descriptions"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -122,7 +126,10 @@ struct LibraryArgs {
 
 impl LibraryArgs {
     fn options(&self) -> LoadOptions {
-        LoadOptions { library_dirs: self.library_dirs.clone(), use_environment: true }
+        LoadOptions {
+            library_dirs: self.library_dirs.clone(),
+            use_environment: true,
+        }
     }
 }
 
@@ -240,18 +247,65 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Check { files, libraries, format } => check(&files, &libraries.options(), format),
-        Command::Tree { file, libraries, format } => tree(&file, &libraries.options(), format),
-        Command::Assemble { file, libraries, format } => assemble(&file, &libraries.options(), format),
-        Command::Compile { file, libraries, emit, format, out: output } => compile(&file, &libraries.options(), emit, format, output.as_deref()),
+        Command::Check {
+            files,
+            libraries,
+            format,
+        } => check(&files, &libraries.options(), format),
+        Command::Tree {
+            file,
+            libraries,
+            format,
+        } => tree(&file, &libraries.options(), format),
+        Command::Assemble {
+            file,
+            libraries,
+            format,
+        } => assemble(&file, &libraries.options(), format),
+        Command::Compile {
+            file,
+            libraries,
+            emit,
+            format,
+            out: output,
+        } => compile(&file, &libraries.options(), emit, format, output.as_deref()),
         Command::Simulate(args) => simulate(&args),
-        Command::Statics { file, libraries, actuated, sets, format } => statics(&file, &libraries.options(), &actuated, &sets, format),
-        Command::Eval { file, libraries, states, sets } => eval(&file, &libraries.options(), &states, &sets),
-        Command::ExportUrdf { file, libraries, sets, out: output, name } => {
-            export_urdf(&file, &libraries.options(), &sets, output.as_deref(), name.as_deref())
-        }
-        Command::ImportUrdf { file, floating_base, no_gravity, out: output } => {
-            let options = lsdc::urdf::import::ImportOptions { floating_base, gravity: !no_gravity };
+        Command::Statics {
+            file,
+            libraries,
+            actuated,
+            sets,
+            format,
+        } => statics(&file, &libraries.options(), &actuated, &sets, format),
+        Command::Eval {
+            file,
+            libraries,
+            states,
+            sets,
+        } => eval(&file, &libraries.options(), &states, &sets),
+        Command::ExportUrdf {
+            file,
+            libraries,
+            sets,
+            out: output,
+            name,
+        } => export_urdf(
+            &file,
+            &libraries.options(),
+            &sets,
+            output.as_deref(),
+            name.as_deref(),
+        ),
+        Command::ImportUrdf {
+            file,
+            floating_base,
+            no_gravity,
+            out: output,
+        } => {
+            let options = lsdc::urdf::import::ImportOptions {
+                floating_base,
+                gravity: !no_gravity,
+            };
             import_urdf(&file, &options, output.as_deref())
         }
         Command::Parse { file } => parse(&file),
@@ -305,8 +359,16 @@ fn print_text_report(file: &std::path::Path, compilation: &Compilation) {
     match &compilation.mechanism {
         Some(mechanism) => out(&text::summary(file, &mechanism.summary())),
         None => {
-            let errors = compilation.diagnostics.iter().filter(|d| d.is_error()).count();
-            eprintln!("{}: {errors} error{}", file.display(), if errors == 1 { "" } else { "s" });
+            let errors = compilation
+                .diagnostics
+                .iter()
+                .filter(|d| d.is_error())
+                .count();
+            eprintln!(
+                "{}: {errors} error{}",
+                file.display(),
+                if errors == 1 { "" } else { "s" }
+            );
         }
     }
 }
@@ -321,8 +383,13 @@ fn json_report(file: &std::path::Path, compilation: &Compilation) -> serde_json:
 }
 
 /// Compiles one file, printing its diagnostics; the mechanism if it has no errors.
-fn compile_one(file: &std::path::Path, options: &LoadOptions, format: Format) -> Result<Compilation, ExitCode> {
-    let compilation = driver::compile_files(&[file.to_path_buf()], options).map_err(|m| usage_error(&m))?;
+fn compile_one(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    format: Format,
+) -> Result<Compilation, ExitCode> {
+    let compilation =
+        driver::compile_files(&[file.to_path_buf()], options).map_err(|m| usage_error(&m))?;
     if compilation.has_errors() || (format == Format::Text && !compilation.diagnostics.is_empty()) {
         report_diagnostics(&compilation, &compilation.diagnostics, format);
     }
@@ -332,13 +399,20 @@ fn compile_one(file: &std::path::Path, options: &LoadOptions, format: Format) ->
     Ok(compilation)
 }
 
-fn report_diagnostics(compilation: &Compilation, diagnostics: &[lsdc::diag::Diagnostic], format: Format) {
+fn report_diagnostics(
+    compilation: &Compilation,
+    diagnostics: &[lsdc::diag::Diagnostic],
+    format: Format,
+) {
     let mut diagnostics = diagnostics.to_vec();
     for d in &mut diagnostics {
         compilation.workspace.add_import_context(d);
     }
     match format {
-        Format::Text => eprint!("{}", render::to_text(&compilation.workspace.sources, &diagnostics)),
+        Format::Text => eprint!(
+            "{}",
+            render::to_text(&compilation.workspace.sources, &diagnostics)
+        ),
         Format::Json => {
             let value = serde_json::json!({ "ok": false, "diagnostics": render::to_json_value(&compilation.workspace.sources, &diagnostics) });
             out(&json(&value));
@@ -369,9 +443,16 @@ fn report<R: serde::Serialize>(
 
 /// Compiles a file and returns what `analyse` makes of its mechanism, or the exit code once
 /// the diagnostics are printed.
-fn analysed<R>(file: &std::path::Path, options: &LoadOptions, format: Format, analyse: impl Fn(&Mechanism) -> Result<R, Vec<Diagnostic>>) -> Result<R, ExitCode> {
+fn analysed<R>(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    format: Format,
+    analyse: impl Fn(&Mechanism) -> Result<R, Vec<Diagnostic>>,
+) -> Result<R, ExitCode> {
     let compilation = compile_one(file, options, format)?;
-    let Some(mechanism) = &compilation.mechanism else { return Err(ExitCode::from(1)) };
+    let Some(mechanism) = &compilation.mechanism else {
+        return Err(ExitCode::from(1));
+    };
     analyse(mechanism).map_err(|diagnostics| {
         report_diagnostics(&compilation, &diagnostics, format);
         ExitCode::from(1)
@@ -385,12 +466,19 @@ fn tree(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCo
 fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
     let analyse = |mechanism: &Mechanism| {
         let topology = lsdc::topology::build(mechanism)?;
-        analysis::assembled_model(mechanism, topology, &Default::default()).map(|(_, report)| report)
+        analysis::assembled_model(mechanism, topology, &Default::default())
+            .map(|(_, report)| report)
     };
     report(file, options, format, analyse, text::assembly)
 }
 
-fn compile(file: &std::path::Path, options: &LoadOptions, emit: Emit, format: Option<EquationsFormat>, output: Option<&std::path::Path>) -> ExitCode {
+fn compile(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    emit: Emit,
+    format: Option<EquationsFormat>,
+    output: Option<&std::path::Path>,
+) -> ExitCode {
     if format.is_some() && emit != Emit::Equations {
         return usage_error("`--format` applies to `--emit equations` only");
     }
@@ -435,9 +523,17 @@ fn write_output(output: Option<&std::path::Path>, text: &str) -> ExitCode {
 fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, String> {
     sets.iter()
         .map(|s| {
-            let (name, value) = s.rsplit_once('=').ok_or_else(|| format!("`--set {s}`: write NAME=VALUE"))?;
-            let value: f64 = value.trim().parse().map_err(|_| format!("`--set {s}`: `{value}` is not a number"))?;
-            Ok(lsdc::simulate::prepare::Override { name: name.trim().to_string(), value })
+            let (name, value) = s
+                .rsplit_once('=')
+                .ok_or_else(|| format!("`--set {s}`: write NAME=VALUE"))?;
+            let value: f64 = value
+                .trim()
+                .parse()
+                .map_err(|_| format!("`--set {s}`: `{value}` is not a number"))?;
+            Ok(lsdc::simulate::prepare::Override {
+                name: name.trim().to_string(),
+                value,
+            })
         })
         .collect()
 }
@@ -452,7 +548,9 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
         Ok(c) => c,
         Err(code) => return code,
     };
-    let Some(mechanism) = &compilation.mechanism else { return ExitCode::from(1) };
+    let Some(mechanism) = &compilation.mechanism else {
+        return ExitCode::from(1);
+    };
     let mut prepared = match prepare(mechanism, &overrides, &Settings::default()) {
         Ok(p) => p,
         Err(diagnostics) => {
@@ -469,7 +567,12 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             IntegratorArg::Symplectic => Integrator::Symplectic,
         };
     }
-    for (flag, value) in [("duration", args.duration), ("every", args.output_interval), ("tolerance", args.tolerance), ("step", args.step)] {
+    for (flag, value) in [
+        ("duration", args.duration),
+        ("every", args.output_interval),
+        ("tolerance", args.tolerance),
+        ("step", args.step),
+    ] {
         if value.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
             return usage_error(&format!("`--{flag}` must be a positive number"));
         }
@@ -479,7 +582,9 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     }
     settings.stabilisation = match args.stabilisation {
         StabilisationArg::Projection => lsdc::dynamics::loops::Stabilisation::Projection,
-        StabilisationArg::Baumgarte => lsdc::dynamics::loops::Stabilisation::Baumgarte(args.baumgarte_rate),
+        StabilisationArg::Baumgarte => {
+            lsdc::dynamics::loops::Stabilisation::Baumgarte(args.baumgarte_rate)
+        }
         StabilisationArg::None => lsdc::dynamics::loops::Stabilisation::None,
     };
     settings.reactions = args.reactions;
@@ -521,7 +626,8 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
         None => out(&samples),
     }
     let plotted = match &args.plot {
-        Some(path) => lsdc::output::plot::plot(&simulation, path).map_err(|message| format!("cannot draw `{}`: {message}", path.display())),
+        Some(path) => lsdc::output::plot::plot(&simulation, path)
+            .map_err(|message| format!("cannot draw `{}`: {message}", path.display())),
         None => Ok(()),
     };
     match args.report {
@@ -538,7 +644,13 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     }
 }
 
-fn statics(file: &std::path::Path, options: &LoadOptions, actuated: &[String], sets: &[String], format: Format) -> ExitCode {
+fn statics(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    actuated: &[String],
+    sets: &[String],
+    format: Format,
+) -> ExitCode {
     let prepared = match prepare_file(file, options, sets, format) {
         Ok(p) => p,
         Err(code) => return code,
@@ -554,11 +666,24 @@ fn statics(file: &std::path::Path, options: &LoadOptions, actuated: &[String], s
     ExitCode::SUCCESS
 }
 
-fn eval(file: &std::path::Path, options: &LoadOptions, states: &std::path::Path, sets: &[String]) -> ExitCode {
+fn eval(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    states: &std::path::Path,
+    sets: &[String],
+) -> ExitCode {
     use lsdc::simulate::batch::{evaluate_states, parse_states};
-    let inputs = match std::fs::read_to_string(states).map_err(|e| e.to_string()).and_then(|text| parse_states(&text)) {
+    let inputs = match std::fs::read_to_string(states)
+        .map_err(|e| e.to_string())
+        .and_then(|text| parse_states(&text))
+    {
         Ok(inputs) => inputs,
-        Err(message) => return usage_error(&format!("cannot read states from `{}`: {message}", states.display())),
+        Err(message) => {
+            return usage_error(&format!(
+                "cannot read states from `{}`: {message}",
+                states.display()
+            ))
+        }
     };
     let prepared = match prepare_file(file, options, sets, Format::Text) {
         Ok(p) => p,
@@ -566,8 +691,17 @@ fn eval(file: &std::path::Path, options: &LoadOptions, states: &std::path::Path,
     };
     match evaluate_states(&prepared, &inputs) {
         Ok(evaluation) => {
-            for (index, state) in evaluation.states.iter().enumerate().filter(|(_, s)| !s.errors.is_empty()) {
-                let errors: Vec<String> = state.errors.iter().map(|(quantity, message)| format!("{quantity}: {message}")).collect();
+            for (index, state) in evaluation
+                .states
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| !s.errors.is_empty())
+            {
+                let errors: Vec<String> = state
+                    .errors
+                    .iter()
+                    .map(|(quantity, message)| format!("{quantity}: {message}"))
+                    .collect();
                 eprintln!("warning: state {index}: {}", errors.join("; "));
             }
             out(&json(&evaluation));
@@ -582,24 +716,40 @@ fn eval(file: &std::path::Path, options: &LoadOptions, states: &std::path::Path,
 
 /// Prepares a file's mechanism as `simulate` does (values from `given` and `--set`), printing
 /// the diagnostics when it cannot.
-fn prepare_file(file: &std::path::Path, options: &LoadOptions, sets: &[String], format: Format) -> Result<lsdc::simulate::prepare::Prepared, ExitCode> {
+fn prepare_file(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    sets: &[String],
+    format: Format,
+) -> Result<lsdc::simulate::prepare::Prepared, ExitCode> {
     use lsdc::simulate::prepare::{prepare, Settings};
     let overrides = parse_sets(sets).map_err(|message| usage_error(&message))?;
     let compilation = compile_one(file, options, format)?;
-    let Some(mechanism) = &compilation.mechanism else { return Err(ExitCode::from(1)) };
+    let Some(mechanism) = &compilation.mechanism else {
+        return Err(ExitCode::from(1));
+    };
     prepare(mechanism, &overrides, &Settings::default()).map_err(|diagnostics| {
         report_diagnostics(&compilation, &diagnostics, format);
         ExitCode::from(1)
     })
 }
 
-fn export_urdf(file: &std::path::Path, options: &LoadOptions, sets: &[String], output: Option<&std::path::Path>, name: Option<&str>) -> ExitCode {
+fn export_urdf(
+    file: &std::path::Path,
+    options: &LoadOptions,
+    sets: &[String],
+    output: Option<&std::path::Path>,
+    name: Option<&str>,
+) -> ExitCode {
     let prepared = match prepare_file(file, options, sets, Format::Text) {
         Ok(p) => p,
         Err(code) => return code,
     };
     let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned());
-    let name = name.map(str::to_string).or(stem).unwrap_or_else(|| "robot".to_string());
+    let name = name
+        .map(str::to_string)
+        .or(stem)
+        .unwrap_or_else(|| "robot".to_string());
     let urdf = match lsdc::urdf::export::export_urdf(&prepared.model, &name) {
         Ok(text) => text,
         Err(e) => {
@@ -617,14 +767,20 @@ fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
         return None;
     }
     let bar = indicatif::ProgressBar::new((duration * 1000.0) as u64);
-    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} ms simulated, {elapsed} elapsed") {
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{bar:40} {pos}/{len} ms simulated, {elapsed} elapsed",
+    ) {
         bar.set_style(style);
     }
     Some(bar)
 }
 
 /// Prints the LSD program imported from a URDF file, its warnings to standard error.
-fn import_urdf(file: &std::path::Path, options: &lsdc::urdf::import::ImportOptions, output: Option<&std::path::Path>) -> ExitCode {
+fn import_urdf(
+    file: &std::path::Path,
+    options: &lsdc::urdf::import::ImportOptions,
+    output: Option<&std::path::Path>,
+) -> ExitCode {
     let text = match std::fs::read_to_string(file) {
         Ok(t) => t,
         Err(e) => return usage_error(&format!("cannot read `{}`: {e}", file.display())),
@@ -632,13 +788,14 @@ fn import_urdf(file: &std::path::Path, options: &lsdc::urdf::import::ImportOptio
     let mut sources = lsdc::source::SourceMap::new();
     let name = file.display().to_string();
     let id = sources.add(name.clone(), text);
-    let imported = match lsdc::urdf::import::import_urdf_at(id, &name, &sources.file(id).text, options) {
-        Ok(imported) => imported,
-        Err(error) => {
-            eprint!("{}", render::to_text(&sources, &[error]));
-            return ExitCode::from(1);
-        }
-    };
+    let imported =
+        match lsdc::urdf::import::import_urdf_at(id, &name, &sources.file(id).text, options) {
+            Ok(imported) => imported,
+            Err(error) => {
+                eprint!("{}", render::to_text(&sources, &[error]));
+                return ExitCode::from(1);
+            }
+        };
     eprint!("{}", render::to_text(&sources, &imported.warnings));
     write_output(output, &imported.text)
 }

@@ -19,7 +19,10 @@ fn lsdc(args: &[&str]) -> (i32, String, String) {
 fn clean_program_exits_zero_with_a_summary() {
     let (code, stdout, stderr) = lsdc(&["check", "examples/satellite.lsd"]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("bodies    4 (satellite, bras_primaire, bras_secondaire, reflecteur)"), "{stdout}");
+    assert!(
+        stdout.contains("bodies    4 (satellite, bras_primaire, bras_secondaire, reflecteur)"),
+        "{stdout}"
+    );
     assert!(stdout.contains("2 scalars (?s)"), "{stdout}");
     assert!(stdout.contains("3 functions (?f)"), "{stdout}");
 }
@@ -28,7 +31,10 @@ fn clean_program_exits_zero_with_a_summary() {
 fn program_errors_exit_one() {
     let (code, _, stderr) = lsdc(&["check", "tests/golden/wrong_field.lsd"]);
     assert_eq!(code, 1);
-    assert!(stderr.contains("tests/golden/wrong_field.lsd:2:47"), "{stderr}");
+    assert!(
+        stderr.contains("tests/golden/wrong_field.lsd:2:47"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -42,23 +48,42 @@ fn usage_errors_exit_two() {
 
 #[test]
 fn json_format_reports_diagnostics_and_summaries() {
-    let (code, stdout, _) = lsdc(&["check", "--format", "json", "examples/satellite.lsd", "tests/golden/unknown_name_thesis.lsd"]);
+    let (code, stdout, _) = lsdc(&[
+        "check",
+        "--format",
+        "json",
+        "examples/satellite.lsd",
+        "tests/golden/unknown_name_thesis.lsd",
+    ]);
     assert_eq!(code, 1);
     let value: serde_json::Value = serde_json::from_str(&stdout).expect("valid JSON");
     assert_eq!(value["ok"], false);
     assert_eq!(value["files"][0]["summary"]["bodies"], 4);
     let diagnostic = &value["files"][1]["diagnostics"][0];
     assert_eq!(diagnostic["code"], "E0301");
-    assert_eq!((diagnostic["line"].as_u64(), diagnostic["column"].as_u64()), (Some(4), Some(6)));
-    assert!(diagnostic["help"].as_str().is_some_and(|h| h.contains("satellite")));
+    assert_eq!(
+        (diagnostic["line"].as_u64(), diagnostic["column"].as_u64()),
+        (Some(4), Some(6))
+    );
+    assert!(diagnostic["help"]
+        .as_str()
+        .is_some_and(|h| h.contains("satellite")));
 }
 
 #[test]
 fn library_directories_come_from_flags() {
     let dir = std::env::temp_dir().join(format!("lsdc-cli-{}", std::process::id()));
     std::fs::create_dir_all(dir.join("libs")).expect("temp dir");
-    std::fs::write(dir.join("libs/hinges.lsd"), "let hinge = link(q) dof = q || [0,0,1] end;\n").expect("write");
-    std::fs::write(dir.join("main.lsd"), "import hinges;\nlet a = body end;\njoin earth and a with hinge;\n").expect("write");
+    std::fs::write(
+        dir.join("libs/hinges.lsd"),
+        "let hinge = link(q) dof = q || [0,0,1] end;\n",
+    )
+    .expect("write");
+    std::fs::write(
+        dir.join("main.lsd"),
+        "import hinges;\nlet a = body end;\njoin earth and a with hinge;\n",
+    )
+    .expect("write");
     let main = dir.join("main.lsd");
     let main = main.to_str().expect("utf-8");
     assert_eq!(lsdc(&["check", main]).0, 1, "not found without -L");
@@ -85,16 +110,38 @@ fn parse_prints_the_syntax_tree() {
 fn simulate_writes_csv_samples_and_a_report() {
     let (code, stdout, stderr) = lsdc(&["simulate", "examples/pendulum.lsd"]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.starts_with("time,swing.q,swing.q',kinetic_energy,potential_energy\n"), "{stdout}");
-    assert_eq!(stdout.lines().count(), 1 + 101, "a header and one row per output");
-    assert!(stderr.contains("dopri5:") && stderr.contains("energy drift"), "{stderr}");
+    assert!(
+        stdout.starts_with("time,swing.q,swing.q',kinetic_energy,potential_energy\n"),
+        "{stdout}"
+    );
+    assert_eq!(
+        stdout.lines().count(),
+        1 + 101,
+        "a header and one row per output"
+    );
+    assert!(
+        stderr.contains("dopri5:") && stderr.contains("energy drift"),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn simulate_takes_values_and_overrides_from_the_command_line() {
     let (code, stdout, stderr) = lsdc(&[
-        "simulate", "tests/golden/../../examples/pendulum.lsd", "--duration", "0.5", "--every", "0.25",
-        "--integrator", "rk4", "--step", "0.001", "--format", "json", "--report", "json",
+        "simulate",
+        "tests/golden/../../examples/pendulum.lsd",
+        "--duration",
+        "0.5",
+        "--every",
+        "0.25",
+        "--integrator",
+        "rk4",
+        "--step",
+        "0.001",
+        "--format",
+        "json",
+        "--report",
+        "json",
     ]);
     assert_eq!(code, 0, "{stderr}");
     let value: serde_json::Value = serde_json::from_str(&stdout).expect("JSON samples");
@@ -108,13 +155,24 @@ fn simulate_takes_values_and_overrides_from_the_command_line() {
 fn simulate_lists_every_missing_value() {
     let (code, _, stderr) = lsdc(&["simulate", "examples/satellite.lsd"]);
     assert_eq!(code, 1);
-    for missing in ["mass(satellite)", "inertia_x(satellite)", "v1T_1_2_z", "v4T_4_G_z", "cL2_x", "fL3_y", "cL4_y"] {
+    for missing in [
+        "mass(satellite)",
+        "inertia_x(satellite)",
+        "v1T_1_2_z",
+        "v4T_4_G_z",
+        "cL2_x",
+        "fL3_y",
+        "cL4_y",
+    ] {
         assert!(stderr.contains(missing), "{missing} not listed:\n{stderr}");
     }
     let (code, _, stderr) = lsdc(&["simulate", "examples/pendulum.lsd", "--set", "nonsense=1"]);
     assert_eq!(code, 1);
     assert!(stderr.contains("no unknown of that name"), "{stderr}");
-    assert_eq!(lsdc(&["simulate", "examples/pendulum.lsd", "--set", "oops"]).0, 2);
+    assert_eq!(
+        lsdc(&["simulate", "examples/pendulum.lsd", "--set", "oops"]).0,
+        2
+    );
 }
 
 #[test]
@@ -123,24 +181,52 @@ fn a_failing_simulation_keeps_its_output_and_says_so() {
     assert_eq!(code, 1);
     let last = stdout.lines().last().expect("output");
     assert!(last.starts_with("# the run failed at t = 1.55"), "{last}");
-    assert!(stdout.lines().count() > 150, "rows before the failure are kept");
-    assert!(stderr.contains("FAILED") && stderr.contains("`slide.x`"), "{stderr}");
+    assert!(
+        stdout.lines().count() > 150,
+        "rows before the failure are kept"
+    );
+    assert!(
+        stderr.contains("FAILED") && stderr.contains("`slide.x`"),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn statics_prints_the_holding_efforts() {
-    let args = ["statics", "examples/delta_isir88_reduced.lsd", "--actuate", "A1.q", "--actuate", "A2.q", "--actuate", "A3.q"];
+    let args = [
+        "statics",
+        "examples/delta_isir88_reduced.lsd",
+        "--actuate",
+        "A1.q",
+        "--actuate",
+        "A2.q",
+        "--actuate",
+        "A3.q",
+    ];
     let (code, stdout, stderr) = lsdc(&args);
     assert_eq!(code, 0, "{stderr}");
     assert_eq!(stdout.matches("-2.31009").count(), 3, "{stdout}");
-    let (code, _, stderr) = lsdc(&["statics", "examples/delta_isir88_reduced.lsd", "--actuate", "A1.z"]);
+    let (code, _, stderr) = lsdc(&[
+        "statics",
+        "examples/delta_isir88_reduced.lsd",
+        "--actuate",
+        "A1.z",
+    ]);
     assert_eq!(code, 2);
     assert!(stderr.contains("did you mean `A1.q`?"), "{stderr}");
 }
 
 #[test]
 fn loop_simulations_report_their_constraints_and_reactions() {
-    let args = ["simulate", "examples/slider_crank.lsd", "--duration", "0.1", "--reactions", "--report", "json"];
+    let args = [
+        "simulate",
+        "examples/slider_crank.lsd",
+        "--duration",
+        "0.1",
+        "--reactions",
+        "--report",
+        "json",
+    ];
     let (code, stdout, stderr) = lsdc(&args);
     assert_eq!(code, 0, "{stderr}");
     let header = stdout.lines().next().expect("header");
@@ -163,37 +249,83 @@ fn eval_reports_a_singular_mass_matrix_for_aba_only() {
         join earth and upper with revolute([0, 0, 1]) as shoulder ;\n\
         join [1, 0, 0] ++ 1 @ upper and tip with revolute([0, 0, 1]) as wrist ;\n";
     std::fs::write(dir.join("arm.lsd"), program).expect("write");
-    let states = r#"{"states": [{"q": [0.5, 0], "v": [1, 0], "a": [1, 0], "tau": [1, 0]}, {"q": [0, 0]}]}"#;
+    let states =
+        r#"{"states": [{"q": [0.5, 0], "v": [1, 0], "a": [1, 0], "tau": [1, 0]}, {"q": [0, 0]}]}"#;
     std::fs::write(dir.join("states.json"), states).expect("write");
     let (file, states_file) = (dir.join("arm.lsd"), dir.join("states.json"));
-    let args = ["eval", file.to_str().expect("utf-8"), "--states", states_file.to_str().expect("utf-8")];
+    let args = [
+        "eval",
+        file.to_str().expect("utf-8"),
+        "--states",
+        states_file.to_str().expect("utf-8"),
+    ];
     let (code, stdout, stderr) = lsdc(&args);
     assert_eq!(code, 0, "{stderr}");
     let value: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
-    assert_eq!(value["positions"], serde_json::json!(["shoulder.q", "wrist.q"]));
+    assert_eq!(
+        value["positions"],
+        serde_json::json!(["shoulder.q", "wrist.q"])
+    );
     let first = &value["states"][0];
-    assert!(first["aba"].is_null() && first.as_object().is_some_and(|o| o.contains_key("aba")), "{first}");
+    assert!(
+        first["aba"].is_null() && first.as_object().is_some_and(|o| o.contains_key("aba")),
+        "{first}"
+    );
     let reason = first["errors"]["aba"].as_str().expect("the reason");
-    assert!(reason.contains("singular") && reason.contains("`wrist`"), "{reason}");
-    assert_eq!(first["errors"].as_object().map(|o| o.len()), Some(1), "{first}");
+    assert!(
+        reason.contains("singular") && reason.contains("`wrist`"),
+        "{reason}"
+    );
+    assert_eq!(
+        first["errors"].as_object().map(|o| o.len()),
+        Some(1),
+        "{first}"
+    );
     // RNEA, CRBA and the frames are kept: M = [[0.3 + 1 * 0.5², 0], [0, 0]], τ = M a.
-    let rnea: Vec<f64> = first["rnea"].as_array().expect("rnea").iter().filter_map(|x| x.as_f64()).collect();
-    assert!((rnea[0] - 0.55).abs() < 1e-12 && rnea[1].abs() < 1e-12, "{rnea:?}");
-    assert!((first["crba"][0][0].as_f64().expect("number") - 0.55).abs() < 1e-12, "{first}");
+    let rnea: Vec<f64> = first["rnea"]
+        .as_array()
+        .expect("rnea")
+        .iter()
+        .filter_map(|x| x.as_f64())
+        .collect();
+    assert!(
+        (rnea[0] - 0.55).abs() < 1e-12 && rnea[1].abs() < 1e-12,
+        "{rnea:?}"
+    );
+    assert!(
+        (first["crba"][0][0].as_f64().expect("number") - 0.55).abs() < 1e-12,
+        "{first}"
+    );
     assert_eq!(first["frames"].as_array().map(Vec::len), Some(2), "{first}");
-    let tip = first["frames"][1]["translation"][0].as_f64().expect("number");
+    let tip = first["frames"][1]["translation"][0]
+        .as_f64()
+        .expect("number");
     assert!((tip - 0.5f64.cos()).abs() < 1e-12, "{tip}");
     // The second state asks for neither: no `rnea`, no `aba`, no `errors`.
     let second = value["states"][1].as_object().expect("a state");
-    assert!(!second.contains_key("aba") && !second.contains_key("rnea") && !second.contains_key("errors"), "{second:?}");
-    let warnings: Vec<&str> = stderr.lines().filter(|l| l.starts_with("warning: state")).collect();
+    assert!(
+        !second.contains_key("aba")
+            && !second.contains_key("rnea")
+            && !second.contains_key("errors"),
+        "{second:?}"
+    );
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning: state"))
+        .collect();
     assert_eq!(warnings.len(), 1, "{stderr}");
-    assert!(warnings[0].starts_with("warning: state 0: aba: the mass matrix is singular"), "{stderr}");
+    assert!(
+        warnings[0].starts_with("warning: state 0: aba: the mass matrix is singular"),
+        "{stderr}"
+    );
 
     // A wrong input still fails, with the state's index.
     std::fs::write(&states_file, r#"[{"q": [0, 0]}, {"q": [0]}]"#).expect("write");
     let (code, stdout, stderr) = lsdc(&args);
     assert_eq!(code, 1, "{stdout}");
-    assert!(stderr.contains("error: state 1: `q` has 1 entries, the mechanism has 2"), "{stderr}");
+    assert!(
+        stderr.contains("error: state 1: `q` has 1 entries, the mechanism has 2"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -23,26 +23,55 @@ fn example_text(name: &str, replacements: &[(&str, &str)]) -> String {
 }
 
 fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let text = example_text(name, replacements);
-    let compilation = compile_text(&format!("{name}.lsd"), &text, Some(std::path::Path::new("examples")), &options);
-    assert!(!compilation.has_errors(), "{name}: {:?}", compilation.diagnostics);
+    let compilation = compile_text(
+        &format!("{name}.lsd"),
+        &text,
+        Some(std::path::Path::new("examples")),
+        &options,
+    );
+    assert!(
+        !compilation.has_errors(),
+        "{name}: {:?}",
+        compilation.diagnostics
+    );
     let mechanism = compilation.mechanism.expect("elaborates");
-    prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| panic!("{name}: {:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()))
+    prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| {
+        panic!(
+            "{name}: {:?}",
+            d.iter().map(|d| &d.message).collect::<Vec<_>>()
+        )
+    })
 }
 
 fn simulated(prepared: &Prepared) -> Simulation {
     let simulation = run(prepared, &mut |_| {});
-    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
     simulation
 }
 
 fn constraints(simulation: &Simulation) -> &ConstraintReport {
-    simulation.report.constraints.as_ref().expect("a mechanism with loops")
+    simulation
+        .report
+        .constraints
+        .as_ref()
+        .expect("a mechanism with loops")
 }
 
 fn column(simulation: &Simulation, name: &str) -> usize {
-    simulation.coordinate_names.iter().position(|n| n == name).unwrap_or_else(|| panic!("no coordinate {name}"))
+    simulation
+        .coordinate_names
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no coordinate {name}"))
 }
 
 #[test]
@@ -53,12 +82,28 @@ fn four_bar_and_slider_crank_conserve_energy_and_stay_closed() {
         let drift = simulation.report.energy_drift.expect("conservative");
         let c = constraints(&simulation);
         assert!(drift < 1e-8, "{name}: energy drift {drift:e}");
-        assert!(c.position_residual < 1e-10, "{name}: position residual {:e}", c.position_residual);
-        assert!(c.velocity_residual < 1e-10, "{name}: velocity residual {:e}", c.velocity_residual);
+        assert!(
+            c.position_residual < 1e-10,
+            "{name}: position residual {:e}",
+            c.position_residual
+        );
+        assert!(
+            c.velocity_residual < 1e-10,
+            "{name}: velocity residual {:e}",
+            c.velocity_residual
+        );
         // Something happened: the mechanism moved through a good part of its range.
         let crank = column(&simulation, "crank.q");
-        let range = simulation.samples.iter().map(|s| s.coordinates[crank]).fold(f64::NEG_INFINITY, f64::max)
-            - simulation.samples.iter().map(|s| s.coordinates[crank]).fold(f64::INFINITY, f64::min);
+        let range = simulation
+            .samples
+            .iter()
+            .map(|s| s.coordinates[crank])
+            .fold(f64::NEG_INFINITY, f64::max)
+            - simulation
+                .samples
+                .iter()
+                .map(|s| s.coordinates[crank])
+                .fold(f64::INFINITY, f64::min);
         assert!(range > 1.0, "{name}: the crank moved {range} rad");
     }
 }
@@ -68,18 +113,47 @@ fn every_integrator_keeps_the_four_bar_closed() {
     let cases = [
         (Integrator::Rk4, Some(1e-3), Stabilisation::Projection, 1e-7),
         (Integrator::Implicit, None, Stabilisation::Projection, 1e-6),
-        (Integrator::Symplectic, Some(1e-3), Stabilisation::Projection, 1e-4),
-        (Integrator::DormandPrince, None, Stabilisation::Baumgarte(10.0), 1e-6),
+        (
+            Integrator::Symplectic,
+            Some(1e-3),
+            Stabilisation::Projection,
+            1e-4,
+        ),
+        (
+            Integrator::DormandPrince,
+            None,
+            Stabilisation::Baumgarte(10.0),
+            1e-6,
+        ),
     ];
     for (integrator, step, stabilisation, energy_bound) in cases {
         let mut p = prepared("four_bar", &[]);
-        p.settings = Settings { integrator: integrator.clone(), duration: 2.0, step, rtol: 1e-9, atol: 1e-9, stabilisation, ..p.settings };
+        p.settings = Settings {
+            integrator: integrator.clone(),
+            duration: 2.0,
+            step,
+            rtol: 1e-9,
+            atol: 1e-9,
+            stabilisation,
+            ..p.settings
+        };
         let simulation = simulated(&p);
         let c = constraints(&simulation);
         let drift = simulation.report.energy_drift.expect("conservative");
-        assert!(drift < energy_bound, "{integrator:?}: energy drift {drift:e}");
-        let closure_bound = if stabilisation == Stabilisation::Projection { 1e-12 } else { 1e-6 };
-        assert!(c.position_residual < closure_bound, "{integrator:?}: position residual {:e}", c.position_residual);
+        assert!(
+            drift < energy_bound,
+            "{integrator:?}: energy drift {drift:e}"
+        );
+        let closure_bound = if stabilisation == Stabilisation::Projection {
+            1e-12
+        } else {
+            1e-6
+        };
+        assert!(
+            c.position_residual < closure_bound,
+            "{integrator:?}: position residual {:e}",
+            c.position_residual
+        );
     }
 }
 
@@ -88,27 +162,56 @@ fn without_stabilisation_the_loop_drifts_open() {
     // The control experiment for the test above: the same run with nothing keeping the loop
     // closed drifts by far more than the projection leaves.
     let mut p = prepared("four_bar", &[]);
-    p.settings = Settings { duration: 10.0, rtol: 1e-6, atol: 1e-6, stabilisation: Stabilisation::None, ..p.settings };
+    p.settings = Settings {
+        duration: 10.0,
+        rtol: 1e-6,
+        atol: 1e-6,
+        stabilisation: Stabilisation::None,
+        ..p.settings
+    };
     let simulation = simulated(&p);
-    assert!(constraints(&simulation).position_residual > 1e-8, "{:e}", constraints(&simulation).position_residual);
+    assert!(
+        constraints(&simulation).position_residual > 1e-8,
+        "{:e}",
+        constraints(&simulation).position_residual
+    );
 }
 
 #[test]
 fn a_planar_loop_of_spatial_revolutes_reports_its_redundant_constraints() {
-    let simulation = simulated(&prepared("four_bar", &[("duration = 10", "duration = 0.5")]));
+    let simulation = simulated(&prepared(
+        "four_bar",
+        &[("duration = 10", "duration = 0.5")],
+    ));
     let c = constraints(&simulation);
     assert_eq!((c.rows, c.rank), (6, 3));
-    assert_eq!(c.redundant, ["c: rotation about x", "c: rotation about y", "c: translation along z"]);
+    assert_eq!(
+        c.redundant,
+        [
+            "c: rotation about x",
+            "c: rotation about y",
+            "c: translation along z"
+        ]
+    );
 }
 
 #[test]
 fn given_initial_rates_are_kept_and_the_others_close_the_loops() {
-    let simulation = simulated(&prepared("slider_crank", &[("duration = 10", "duration = 0.1")]));
+    let simulation = simulated(&prepared(
+        "slider_crank",
+        &[("duration = 10", "duration = 0.1")],
+    ));
     let first = &simulation.samples[0];
     assert!((first.rates[column(&simulation, "crank.q")] - 3.0).abs() < 1e-12);
     // The slider moves as the closure says: x3 = λ1 cos α1 + λ2 cos(α1 + α12).
-    let (a1, a12) = (first.coordinates[column(&simulation, "crank.q")], first.coordinates[column(&simulation, "coupler.q")]);
-    let (r1, r12) = (first.rates[column(&simulation, "crank.q")], first.rates[column(&simulation, "coupler.q")]);
+    let (a1, a12) = (
+        first.coordinates[column(&simulation, "crank.q")],
+        first.coordinates[column(&simulation, "coupler.q")],
+    );
+    let (r1, r12) = (
+        first.rates[column(&simulation, "crank.q")],
+        first.rates[column(&simulation, "coupler.q")],
+    );
     let (lambda1, lambda2) = (1.0, 3.0);
     let slider_rate = -lambda1 * a1.sin() * r1 - lambda2 * (a1 + a12).sin() * (r1 + r12);
     assert!((first.rates[column(&simulation, "slider.q")] - slider_rate).abs() < 1e-12);
@@ -117,12 +220,26 @@ fn given_initial_rates_are_kept_and_the_others_close_the_loops() {
 
 #[test]
 fn incompatible_initial_rates_are_an_error() {
-    let text = example_text("four_bar", &[("c.q = 1.15 ;", "c.q = 1.15, crank.q' = 1, rocker.q' = 5 ;")]);
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
-    let mechanism = compile_text("four_bar.lsd", &text, None, &options).mechanism.expect("elaborates");
-    let errors = prepare(&mechanism, &[], &Settings::default()).err().expect("refused");
+    let text = example_text(
+        "four_bar",
+        &[("c.q = 1.15 ;", "c.q = 1.15, crank.q' = 1, rocker.q' = 5 ;")],
+    );
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let mechanism = compile_text("four_bar.lsd", &text, None, &options)
+        .mechanism
+        .expect("elaborates");
+    let errors = prepare(&mechanism, &[], &Settings::default())
+        .err()
+        .expect("refused");
     assert_eq!(errors[0].code, "E0815", "{:?}", errors[0].message);
-    assert!(errors[0].message.contains("crank.q'") && errors[0].message.contains("rocker.q'"), "{}", errors[0].message);
+    assert!(
+        errors[0].message.contains("crank.q'") && errors[0].message.contains("rocker.q'"),
+        "{}",
+        errors[0].message
+    );
 }
 
 #[test]
@@ -130,18 +247,41 @@ fn reactions_at_the_ground_balance_the_change_of_momentum() {
     // Momentum theorem: the forces earth exerts through the crank and rocker joins plus the
     // weights equal the rate of change of the linear momentum (central differences of outputs).
     let mut p = prepared("four_bar", &[]);
-    p.settings = Settings { duration: 0.5, output: 1e-3, rtol: 1e-13, atol: 1e-13, reactions: true, ..p.settings };
+    p.settings = Settings {
+        duration: 0.5,
+        output: 1e-3,
+        rtol: 1e-13,
+        atol: 1e-13,
+        reactions: true,
+        ..p.settings
+    };
     let simulation = simulated(&p);
-    let join = |name: &str| 6 * simulation.reaction_names.iter().position(|n| n == name).expect("join");
+    let join = |name: &str| {
+        6 * simulation
+            .reaction_names
+            .iter()
+            .position(|n| n == name)
+            .expect("join")
+    };
     let (crank, rocker) = (join("crank"), join("rocker"));
     let weight = -9.81 * (1.0 + 3.5 + 3.0);
     let h = 1e-3;
     for k in (1..simulation.samples.len() - 1).step_by(25) {
-        let (before, now, after) = (&simulation.samples[k - 1], &simulation.samples[k], &simulation.samples[k + 1]);
+        let (before, now, after) = (
+            &simulation.samples[k - 1],
+            &simulation.samples[k],
+            &simulation.samples[k + 1],
+        );
         for axis in 0..2 {
             let rate = (after.momentum[3 + axis] - before.momentum[3 + axis]) / (2.0 * h);
-            let force = now.reactions[crank + 3 + axis] + now.reactions[rocker + 3 + axis] + if axis == 1 { weight } else { 0.0 };
-            assert!((rate - force).abs() < 1e-4 * weight.abs(), "t = {}, axis {axis}: dp/dt {rate} vs forces {force}", now.time);
+            let force = now.reactions[crank + 3 + axis]
+                + now.reactions[rocker + 3 + axis]
+                + if axis == 1 { weight } else { 0.0 };
+            assert!(
+                (rate - force).abs() < 1e-4 * weight.abs(),
+                "t = {}, axis {axis}: dp/dt {rate} vs forces {force}",
+                now.time
+            );
         }
     }
 }
@@ -191,10 +331,23 @@ fn delta_holding_torques_match_the_thesis_lumped_model() {
     for name in ["delta_isir88", "delta_isir88_reduced"] {
         for (angles, expected) in poses {
             let p = delta_at(name, angles);
-            let holding = holding_efforts(&p, &["A1.q".to_string(), "A2.q".to_string(), "A3.q".to_string()]).expect("holds");
-            assert!(holding.unbalanced < 1e-12, "{name}: unbalanced {:e}", holding.unbalanced);
+            let holding = holding_efforts(
+                &p,
+                &["A1.q".to_string(), "A2.q".to_string(), "A3.q".to_string()],
+            )
+            .expect("holds");
+            assert!(
+                holding.unbalanced < 1e-12,
+                "{name}: unbalanced {:e}",
+                holding.unbalanced
+            );
             for (held, want) in holding.efforts.iter().zip(expected) {
-                assert!((held.effort + want).abs() < 6e-6, "{name} at {angles:?}: {} holds with {} N·m, the thesis {want}", held.name, held.effort);
+                assert!(
+                    (held.effort + want).abs() < 6e-6,
+                    "{name} at {angles:?}: {} holds with {} N·m, the thesis {want}",
+                    held.name,
+                    held.effort
+                );
             }
         }
     }
@@ -203,13 +356,19 @@ fn delta_holding_torques_match_the_thesis_lumped_model() {
 /// The nacelle's position at every output.
 fn nacelle_path(p: &Prepared, simulation: &Simulation) -> Vec<[f64; 3]> {
     let model = &p.model;
-    let nacelle = 1 + model.body_names.iter().position(|n| n == "nacelle").expect("nacelle");
+    let nacelle = 1 + model
+        .body_names
+        .iter()
+        .position(|n| n == "nacelle")
+        .expect("nacelle");
     let mut data = Data::new(model);
     simulation
         .samples
         .iter()
         .map(|s| {
-            let (q, v) = model.state_from_declared(&s.coordinates, &s.rates).expect("state");
+            let (q, v) = model
+                .state_from_declared(&s.coordinates, &s.rates)
+                .expect("state");
             forward_kinematics(model, &mut data, &q, &v).expect("poses");
             let t = data.world[nacelle].translation.vector;
             [t.x, t.y, t.z]
@@ -219,19 +378,32 @@ fn nacelle_path(p: &Prepared, simulation: &Simulation) -> Vec<[f64; 3]> {
 
 #[test]
 fn delta_released_from_rest_stays_closed_and_both_models_agree() {
-    let (full, reduced) = (prepared("delta_isir88", &[]), prepared("delta_isir88_reduced", &[]));
+    let (full, reduced) = (
+        prepared("delta_isir88", &[]),
+        prepared("delta_isir88_reduced", &[]),
+    );
     let (full_run, reduced_run) = (simulated(&full), simulated(&reduced));
     for run in [&full_run, &reduced_run] {
-        assert!(constraints(run).position_residual < 1e-12, "{:e}", constraints(run).position_residual);
+        assert!(
+            constraints(run).position_residual < 1e-12,
+            "{:e}",
+            constraints(run).position_residual
+        );
         assert!(run.report.energy_drift.expect("conservative") < 1e-8);
     }
-    let (a, b) = (nacelle_path(&full, &full_run), nacelle_path(&reduced, &reduced_run));
+    let (a, b) = (
+        nacelle_path(&full, &full_run),
+        nacelle_path(&reduced, &reduced_run),
+    );
     assert_eq!(a.len(), b.len());
     let fall = a.last().expect("outputs")[2] - a[0][2];
     assert!(fall < -0.05, "the nacelle fell {fall} m");
     for (k, (p, q)) in a.iter().zip(&b).enumerate() {
         for i in 0..3 {
-            assert!((p[i] - q[i]).abs() < 1e-8, "output {k}: nacelle at {p:?} (full) and {q:?} (reduced)");
+            assert!(
+                (p[i] - q[i]).abs() < 1e-8,
+                "output {k}: nacelle at {p:?} (full) and {q:?} (reduced)"
+            );
         }
     }
 }
@@ -241,10 +413,19 @@ fn meshes_deploy_under_a_driving_torque_and_stay_closed() {
     for name in ["maille1", "maille2"] {
         let simulation = simulated(&prepared(name, &[]));
         let c = constraints(&simulation);
-        assert!(c.position_residual < 1e-12, "{name}: {:e}", c.position_residual);
-        assert!(c.velocity_residual < 1e-12, "{name}: {:e}", c.velocity_residual);
+        assert!(
+            c.position_residual < 1e-12,
+            "{name}: {:e}",
+            c.position_residual
+        );
+        assert!(
+            c.velocity_residual < 1e-12,
+            "{name}: {:e}",
+            c.velocity_residual
+        );
         let j10 = column(&simulation, "j10.q");
-        let moved = simulation.samples.last().expect("outputs").coordinates[j10] - simulation.samples[0].coordinates[j10];
+        let moved = simulation.samples.last().expect("outputs").coordinates[j10]
+            - simulation.samples[0].coordinates[j10];
         assert!(moved < -0.3, "{name}: j10 moved {moved} rad");
     }
 }
@@ -252,19 +433,38 @@ fn meshes_deploy_under_a_driving_torque_and_stay_closed() {
 #[test]
 fn saliere_is_driven_through_its_crossing() {
     let simulation = simulated(&prepared("saliere", &[]));
-    let (a1, a2, a3) = (column(&simulation, "l1.q"), column(&simulation, "l2.q"), column(&simulation, "l4.q"));
+    let (a1, a2, a3) = (
+        column(&simulation, "l1.q"),
+        column(&simulation, "l2.q"),
+        column(&simulation, "l4.q"),
+    );
     let first = &simulation.samples[0];
     for s in &simulation.samples {
         // Branch (a): α1 = 0 and α2 = α3, on both sides of the crossing (0, 0, 0).
-        assert!(s.coordinates[a1].abs() < 1e-9 && (s.coordinates[a2] - s.coordinates[a3]).abs() < 1e-9, "t = {}", s.time);
+        assert!(
+            s.coordinates[a1].abs() < 1e-9 && (s.coordinates[a2] - s.coordinates[a3]).abs() < 1e-9,
+            "t = {}",
+            s.time
+        );
         // Energy balance: the motor's work −0.5 N·m × Δα3 is the kinetic energy gained.
         let work = -0.5 * (s.coordinates[a3] - first.coordinates[a3]);
-        assert!((s.kinetic_energy - first.kinetic_energy - work).abs() < 1e-8 * (1.0 + s.kinetic_energy), "t = {}", s.time);
+        assert!(
+            (s.kinetic_energy - first.kinetic_energy - work).abs()
+                < 1e-8 * (1.0 + s.kinetic_energy),
+            "t = {}",
+            s.time
+        );
     }
-    assert!(first.coordinates[a2] > 0.5 && simulation.samples.last().expect("outputs").coordinates[a2] < -0.5);
+    assert!(
+        first.coordinates[a2] > 0.5
+            && simulation.samples.last().expect("outputs").coordinates[a2] < -0.5
+    );
     let c = constraints(&simulation);
     let closest = c.closest.as_ref().expect("measured");
-    assert!(closest.ratio < 1e-2 && (0.5..0.7).contains(&closest.time), "{closest:?}");
+    assert!(
+        closest.ratio < 1e-2 && (0.5..0.7).contains(&closest.time),
+        "{closest:?}"
+    );
     assert!(c.position_residual < 1e-12);
 }
 
@@ -274,11 +474,22 @@ fn homocinetic_joint_turns_both_shafts_at_one_speed() {
     let (input, output) = (column(&simulation, "l1.q"), column(&simulation, "l4.q"));
     let first = &simulation.samples[0];
     for s in &simulation.samples {
-        assert!((s.rates[input] - s.rates[output]).abs() < 1e-9 * (1.0 + s.rates[input].abs()), "t = {}", s.time);
+        assert!(
+            (s.rates[input] - s.rates[output]).abs() < 1e-9 * (1.0 + s.rates[input].abs()),
+            "t = {}",
+            s.time
+        );
         let work = 0.2 * (s.coordinates[input] - first.coordinates[input]);
-        assert!((s.kinetic_energy - first.kinetic_energy - work).abs() < 1e-8 * (1.0 + s.kinetic_energy), "t = {}", s.time);
+        assert!(
+            (s.kinetic_energy - first.kinetic_energy - work).abs()
+                < 1e-8 * (1.0 + s.kinetic_energy),
+            "t = {}",
+            s.time
+        );
     }
-    let turns = (simulation.samples.last().expect("outputs").coordinates[input] - first.coordinates[input]) / std::f64::consts::TAU;
+    let turns = (simulation.samples.last().expect("outputs").coordinates[input]
+        - first.coordinates[input])
+        / std::f64::consts::TAU;
     assert!(turns > 10.0, "{turns} turns");
 }
 
@@ -295,7 +506,11 @@ fn a_driven_motion_without_mass_is_an_error() {
     p.settings.duration = 0.1;
     let simulation = run(&p, &mut |_| {});
     let failure = simulation.report.failure.as_ref().expect("fails");
-    assert!(failure.message.contains("moves no mass"), "{}", failure.message);
+    assert!(
+        failure.message.contains("moves no mass"),
+        "{}",
+        failure.message
+    );
 }
 
 #[test]
@@ -314,11 +529,19 @@ fn a_parallelogram_runs_through_its_flat_configurations() {
         ],
     );
     let simulation = simulated(&p);
-    let (crank, rocker) = (column(&simulation, "crank.q"), column(&simulation, "rocker.q"));
+    let (crank, rocker) = (
+        column(&simulation, "crank.q"),
+        column(&simulation, "rocker.q"),
+    );
     for s in &simulation.samples {
-        assert!((s.coordinates[crank] - s.coordinates[rocker]).abs() < 1e-9, "t = {}: off the parallelogram branch", s.time);
+        assert!(
+            (s.coordinates[crank] - s.coordinates[rocker]).abs() < 1e-9,
+            "t = {}: off the parallelogram branch",
+            s.time
+        );
     }
-    let turns = (simulation.samples.last().expect("outputs").coordinates[crank] - 1.0) / std::f64::consts::TAU;
+    let turns = (simulation.samples.last().expect("outputs").coordinates[crank] - 1.0)
+        / std::f64::consts::TAU;
     assert!(turns > 3.0, "{turns} turns");
     let c = constraints(&simulation);
     assert!(c.singular.len() >= 2, "{:?}", c.singular);
@@ -344,9 +567,15 @@ fn a_loop_closed_by_a_prismatic_link_conserves_energy() {
         apply weight_in(block, [0, -9.81, 0]) on block.iframe;\n\
         simulate duration = 5, output = 0.01, tolerance = 1e-12 end;\n\
         initial turn.q = 1.2 fixed, rock.q = 0.4, pin.q = -0.8, slide.q = 2.5, turn.q' = 4;\n";
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
-    let mechanism = compile_text("lever.lsd", text, None, &options).mechanism.expect("elaborates");
-    let p = prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| panic!("{:?}", d[0].message));
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let mechanism = compile_text("lever.lsd", text, None, &options)
+        .mechanism
+        .expect("elaborates");
+    let p = prepare(&mechanism, &[], &Settings::default())
+        .unwrap_or_else(|d| panic!("{:?}", d[0].message));
     let simulation = simulated(&p);
     assert_eq!(p.model.loops.len(), 1);
     assert_eq!(p.model.loops[0].name, "slide");
@@ -355,13 +584,26 @@ fn a_loop_closed_by_a_prismatic_link_conserves_energy() {
     assert!(c.position_residual < 1e-12, "{:e}", c.position_residual);
     assert!(simulation.report.energy_drift.expect("conservative") < 1e-9);
     // Closed form: the lever points from D to the crank's end A, and the block is |A − D| from D.
-    let (turn, rock, slide) = (column(&simulation, "turn.q"), column(&simulation, "rock.q"), column(&simulation, "slide.q"));
+    let (turn, rock, slide) = (
+        column(&simulation, "turn.q"),
+        column(&simulation, "rock.q"),
+        column(&simulation, "slide.q"),
+    );
     for s in &simulation.samples {
         let a = s.coordinates[turn];
         let (x, y) = (a.cos() + 2.0, a.sin());
-        assert!((s.coordinates[rock] - y.atan2(x)).sin().abs() < 1e-10, "t = {}", s.time);
-        assert!((s.coordinates[slide] - x.hypot(y)).abs() < 1e-10, "t = {}", s.time);
+        assert!(
+            (s.coordinates[rock] - y.atan2(x)).sin().abs() < 1e-10,
+            "t = {}",
+            s.time
+        );
+        assert!(
+            (s.coordinates[slide] - x.hypot(y)).abs() < 1e-10,
+            "t = {}",
+            s.time
+        );
     }
-    let turns = (simulation.samples.last().expect("outputs").coordinates[turn] - 1.2) / std::f64::consts::TAU;
+    let turns = (simulation.samples.last().expect("outputs").coordinates[turn] - 1.2)
+        / std::f64::consts::TAU;
     assert!(turns.abs() > 1.0, "the crank turns: {turns}");
 }

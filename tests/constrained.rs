@@ -6,8 +6,8 @@
 //! agree with the simulator's right-hand side.
 
 use lsdc::driver::compile_text;
-use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::algorithms::{crba, rnea};
+use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::energy::{conservative_forces, constant_potential, kinetic_energy};
 use lsdc::dynamics::model::{self, Model};
 use lsdc::dynamics::spatial::Force;
@@ -34,12 +34,18 @@ struct ConstrainedAccelerations {
 }
 
 /// J̇ q̇ by a central difference of the closure Jacobian along q̇.
-fn jacobian_rate_times_velocity(kinematics: &KinematicModel, q: &[f64], v: &[f64]) -> Result<DVector<f64>, String> {
+fn jacobian_rate_times_velocity(
+    kinematics: &KinematicModel,
+    q: &[f64],
+    v: &[f64],
+) -> Result<DVector<f64>, String> {
     let speed = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let step = 1e-6 / (1.0 + speed);
     let shifted = |sign: f64| -> Result<DMatrix<f64>, String> {
         let moved: Vec<f64> = q.iter().zip(v).map(|(x, r)| x + sign * step * r).collect();
-        closure(kinematics, &moved).map(|c| c.jacobian).map_err(|e| format!("{e:?}"))
+        closure(kinematics, &moved)
+            .map(|c| c.jacobian)
+            .map_err(|e| format!("{e:?}"))
     };
     let derivative = (shifted(1.0)? - shifted(-1.0)?) / (2.0 * step);
     Ok(derivative * DVector::from_column_slice(v))
@@ -52,7 +58,9 @@ fn null_space_and_pseudo_inverse(j: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64
     let mut square = DMatrix::zeros(rows, n);
     square.rows_mut(0, j.nrows()).copy_from(j);
     let svd = square.svd(true, true);
-    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else { return (DMatrix::identity(n, n), DMatrix::zeros(n, j.nrows())) };
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+        return (DMatrix::identity(n, n), DMatrix::zeros(n, j.nrows()));
+    };
     let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
     let mut null = Vec::new();
     let mut pseudo = DMatrix::zeros(n, rows);
@@ -63,7 +71,11 @@ fn null_space_and_pseudo_inverse(j: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64
             pseudo += v_t.row(k).transpose() * u.column(k).transpose() / sigma;
         }
     }
-    let basis = if null.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_columns(&null) };
+    let basis = if null.is_empty() {
+        DMatrix::zeros(n, 0)
+    } else {
+        DMatrix::from_columns(&null)
+    };
     (basis, pseudo.columns(0, j.nrows()).into_owned())
 }
 
@@ -80,15 +92,22 @@ fn constrained_accelerations(
 ) -> Result<ConstrainedAccelerations, String> {
     let (nt, n) = (model.nv, kinematics.coordinate_count);
     if model.nq != model.nv {
-        return Err("closed loops need joints in their own coordinates (no quaternion joints)".to_string());
+        return Err(
+            "closed loops need joints in their own coordinates (no quaternion joints)".to_string(),
+        );
     }
     let mass_tree = crba(model, data, &q[..nt]).map_err(|e| format!("{e:?}"))?;
-    let bias = rnea(model, data, &q[..nt], &v[..nt], &vec![0.0; nt], external).map_err(|e| format!("{e:?}"))?;
+    let bias = rnea(model, data, &q[..nt], &v[..nt], &vec![0.0; nt], external)
+        .map_err(|e| format!("{e:?}"))?;
     let mut mass = DMatrix::zeros(n, n);
     mass.view_mut((0, 0), (nt, nt)).copy_from(&mass_tree);
     let mut force = DVector::zeros(n);
-    force.rows_mut(0, nt).copy_from(&(DVector::from_column_slice(tau) - bias));
-    let jacobian = closure(kinematics, q).map_err(|e| format!("{e:?}"))?.jacobian;
+    force
+        .rows_mut(0, nt)
+        .copy_from(&(DVector::from_column_slice(tau) - bias));
+    let jacobian = closure(kinematics, q)
+        .map_err(|e| format!("{e:?}"))?
+        .jacobian;
     let rate = jacobian_rate_times_velocity(kinematics, q, v)?;
     let (null, pseudo_inverse) = null_space_and_pseudo_inverse(&jacobian);
     let particular = -(&pseudo_inverse * &rate);
@@ -96,12 +115,18 @@ fn constrained_accelerations(
     let reduced_force = null.transpose() * (&force - &mass * &particular);
     let z = reduced_mass
         .cholesky()
-        .ok_or_else(|| "the mechanism has a motion that moves no mass: the constrained mass matrix is singular".to_string())?
+        .ok_or_else(|| {
+            "the mechanism has a motion that moves no mass: the constrained mass matrix is singular"
+                .to_string()
+        })?
         .solve(&reduced_force);
     let accelerations = particular + &null * z;
     let residual_force = &mass * &accelerations - &force;
     let multipliers = pseudo_inverse.transpose() * residual_force;
-    Ok(ConstrainedAccelerations { accelerations, multipliers })
+    Ok(ConstrainedAccelerations {
+        accelerations,
+        multipliers,
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -120,28 +145,54 @@ const FOUR_BAR: &str = "import joints; import gravity;\n\
     initial a.q = 1.0, b.q = -0.8, d.q = 1.6, c.q = 0.5;\n";
 
 fn models() -> (lsdc::elab::Mechanism, KinematicModel, Model) {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("four_bar.lsd", FOUR_BAR, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.expect("elaborates");
     let topology = lsdc::topology::build(&mechanism).expect("connected");
-    let kinematics = kinematic_model::build(&mechanism, topology.clone(), UnknownValues::new()).expect("numeric");
+    let kinematics = kinematic_model::build(&mechanism, topology.clone(), UnknownValues::new())
+        .expect("numeric");
     // The tree's dynamic model: the same mechanism with its complementary link left out.
-    let tree_kinematics = KinematicModel { joints: kinematics.principal().to_vec(), coordinate_count: kinematics.tree_coordinate_count(), topology: lsdc::topology::Topology { complementary: Vec::new(), ..topology }, unknowns: UnknownValues::new() };
+    let tree_kinematics = KinematicModel {
+        joints: kinematics.principal().to_vec(),
+        coordinate_count: kinematics.tree_coordinate_count(),
+        topology: lsdc::topology::Topology {
+            complementary: Vec::new(),
+            ..topology
+        },
+        unknowns: UnknownValues::new(),
+    };
     let model = model::build(&mechanism, &tree_kinematics).expect("tree model");
     (mechanism, kinematics, model)
 }
 
 fn external_forces(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Vec<Force> {
     forward_kinematics(model, data, q, v).expect("evaluates");
-    let declared = lsdc::dynamics::efforts::Declared { model, coordinates: q, rates: v };
-    lsdc::dynamics::efforts::evaluate(model, data, &declared, 0.0).expect("efforts").external
+    let declared = lsdc::dynamics::efforts::Declared {
+        model,
+        coordinates: q,
+        rates: v,
+    };
+    lsdc::dynamics::efforts::evaluate(model, data, &declared, 0.0)
+        .expect("efforts")
+        .external
 }
 
-fn derivative(model: &Model, kinematics: &KinematicModel, data: &mut Data, q: &[f64], v: &[f64]) -> DVector<f64> {
+fn derivative(
+    model: &Model,
+    kinematics: &KinematicModel,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> DVector<f64> {
     let nt = model.nv;
     let external = external_forces(model, data, &q[..nt], &v[..nt]);
-    constrained_accelerations(model, kinematics, data, q, v, &vec![0.0; nt], &external).expect("regular").accelerations
+    constrained_accelerations(model, kinematics, data, q, v, &vec![0.0; nt], &external)
+        .expect("regular")
+        .accelerations
 }
 
 fn energy(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> f64 {
@@ -157,7 +208,9 @@ fn accelerations_satisfy_the_constraints() {
     let (mechanism, kinematics, model) = models();
     let mut data = Data::new(&model);
     let (start, fixed) = initial_coordinates(&mechanism, &kinematics).expect("initial");
-    let q = assemble(&kinematics, &start, &fixed, &AssemblyOptions::default()).expect("assembles").q;
+    let q = assemble(&kinematics, &start, &fixed, &AssemblyOptions::default())
+        .expect("assembles")
+        .q;
     let j = closure(&kinematics, &q).expect("closure").jacobian;
     // A velocity compatible with the loop.
     let svd = {
@@ -165,18 +218,32 @@ fn accelerations_satisfy_the_constraints() {
         square.rows_mut(0, j.nrows()).copy_from(&j);
         square.svd(false, true)
     };
-    let smallest = (0..svd.singular_values.len()).min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b])).expect("values");
-    let v: Vec<f64> = svd.v_t.expect("vectors").row(smallest).iter().map(|x| 2.0 * x).collect();
+    let smallest = (0..svd.singular_values.len())
+        .min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))
+        .expect("values");
+    let v: Vec<f64> = svd
+        .v_t
+        .expect("vectors")
+        .row(smallest)
+        .iter()
+        .map(|x| 2.0 * x)
+        .collect();
     assert!((&j * DVector::from_column_slice(&v)).amax() < 1e-10);
     let a = derivative(&model, &kinematics, &mut data, &q, &v);
     // d²/dt² of the closure residual: J a + J̇ v, the latter by differences along the motion.
     let h = 1e-5;
     let at = |t: f64| {
-        let moved: Vec<f64> = (0..q.len()).map(|i| q[i] + t * v[i] + 0.5 * t * t * a[i]).collect();
+        let moved: Vec<f64> = (0..q.len())
+            .map(|i| q[i] + t * v[i] + 0.5 * t * t * a[i])
+            .collect();
         closure(&kinematics, &moved).expect("closure").residual
     };
     let second = (at(h) - 2.0 * at(0.0) + at(-h)) / (h * h);
-    assert!(second.amax() < 1e-4, "closure acceleration {}", second.amax());
+    assert!(
+        second.amax() < 1e-4,
+        "closure acceleration {}",
+        second.amax()
+    );
 }
 
 #[test]
@@ -184,7 +251,9 @@ fn projected_integration_conserves_the_energy() {
     let (mechanism, kinematics, model) = models();
     let mut data = Data::new(&model);
     let (start, fixed) = initial_coordinates(&mechanism, &kinematics).expect("initial");
-    let mut q = assemble(&kinematics, &start, &fixed, &AssemblyOptions::default()).expect("assembles").q;
+    let mut q = assemble(&kinematics, &start, &fixed, &AssemblyOptions::default())
+        .expect("assembles")
+        .q;
     let mut v = vec![0.0; q.len()];
     let free = vec![false; q.len()];
     let e0 = energy(&model, &mut data, &q, &v);
@@ -192,8 +261,13 @@ fn projected_integration_conserves_the_energy() {
     let mut worst: f64 = 0.0;
     let mut moved: f64 = 0.0;
     for _ in 0..2000 {
-        let add = |x: &[f64], dx: &DVector<f64>, s: f64| -> Vec<f64> { x.iter().zip(dx.iter()).map(|(a, b)| a + s * b).collect() };
-        let (q0, v0) = (DVector::from_column_slice(&q), DVector::from_column_slice(&v));
+        let add = |x: &[f64], dx: &DVector<f64>, s: f64| -> Vec<f64> {
+            x.iter().zip(dx.iter()).map(|(a, b)| a + s * b).collect()
+        };
+        let (q0, v0) = (
+            DVector::from_column_slice(&q),
+            DVector::from_column_slice(&v),
+        );
         let k1v = derivative(&model, &kinematics, &mut data, &q, &v);
         let k1q = v0.clone();
         let (q2, v2) = (add(&q, &k1q, h / 2.0), add(&v, &k1v, h / 2.0));
@@ -208,16 +282,27 @@ fn projected_integration_conserves_the_energy() {
         let q_next = q0 + (k1q + k2q * 2.0 + k3q * 2.0 + k4q) * (h / 6.0);
         let v_next = v0 + (k1v + k2v * 2.0 + k3v * 2.0 + k4v) * (h / 6.0);
         // Projection onto the constraints: positions by assembly, velocities onto the null space.
-        q = assemble(&kinematics, q_next.as_slice(), &free, &AssemblyOptions::default()).expect("stays assembled").q;
+        q = assemble(
+            &kinematics,
+            q_next.as_slice(),
+            &free,
+            &AssemblyOptions::default(),
+        )
+        .expect("stays assembled")
+        .q;
         let j = closure(&kinematics, &q).expect("closure").jacobian;
         let v_vector = v_next.clone();
-        let correction = j.clone().pseudo_inverse(1e-12).expect("pseudo-inverse") * (&j * &v_vector);
+        let correction =
+            j.clone().pseudo_inverse(1e-12).expect("pseudo-inverse") * (&j * &v_vector);
         v = (v_vector - correction).as_slice().to_vec();
         worst = worst.max((energy(&model, &mut data, &q, &v) - e0).abs());
         moved = moved.max((q[0] - start[0]).abs());
     }
     assert!(moved > 0.3, "the crank falls: moved {moved}");
-    assert!(worst < 1e-6 * e0.abs().max(1.0), "energy error {worst:e} (E0 = {e0})");
+    assert!(
+        worst < 1e-6 * e0.abs().max(1.0),
+        "energy error {worst:e} (E0 = {e0})"
+    );
 }
 
 #[test]
@@ -227,20 +312,38 @@ fn the_simulator_agrees_with_the_reference_formulation() {
     let (mechanism, kinematics, tree_model) = models();
     // The simulator's model of the whole mechanism (loops included).
     let topology = lsdc::topology::build(&mechanism).expect("connected");
-    let full = model::build(&mechanism, &kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric")).expect("model");
+    let full = model::build(
+        &mechanism,
+        &kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric"),
+    )
+    .expect("model");
     let mut data = Data::new(&tree_model);
     let (start, fixed) = initial_coordinates(&mechanism, &kinematics).expect("initial");
     let reference = Rc::new(RefCell::new(start.clone()));
-    let mut system = lsdc::simulate::system::MechanicalSystem::new(&full, reference, lsdc::dynamics::loops::Stabilisation::Projection);
+    let mut system = lsdc::simulate::system::MechanicalSystem::new(
+        &full,
+        reference,
+        lsdc::dynamics::loops::Stabilisation::Projection,
+    );
     for (k, crank) in [0.3, 1.0, 2.2, 4.0].into_iter().enumerate() {
         let mut guess = start.clone();
         guess[0] = crank;
-        let q = assemble(&kinematics, &guess, &fixed, &AssemblyOptions::default()).expect("assembles").q;
+        let q = assemble(&kinematics, &guess, &fixed, &AssemblyOptions::default())
+            .expect("assembles")
+            .q;
         // A velocity of the loop: the null space of the closure Jacobian, scaled.
         let j = closure(&kinematics, &q).expect("closure").jacobian;
         let svd = j.clone().svd(false, true);
-        let smallest = (0..svd.singular_values.len()).min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b])).expect("values");
-        let v: Vec<f64> = svd.v_t.expect("v").row(smallest).iter().map(|x| (1.0 + k as f64) * x).collect();
+        let smallest = (0..svd.singular_values.len())
+            .min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))
+            .expect("values");
+        let v: Vec<f64> = svd
+            .v_t
+            .expect("v")
+            .row(smallest)
+            .iter()
+            .map(|x| (1.0 + k as f64) * x)
+            .collect();
         assert!((&j * DVector::from_column_slice(&v)).amax() < 1e-10);
         let expected = derivative(&tree_model, &kinematics, &mut data, &q, &v);
         let mut y = q.clone();
@@ -249,7 +352,12 @@ fn the_simulator_agrees_with_the_reference_formulation() {
         system.derivative(0.0, &y, &mut dydt).expect("evaluates");
         let actual = &dydt[q.len()..];
         for i in 0..q.len() {
-            assert!((actual[i] - expected[i]).abs() < 1e-6 * (1.0 + expected.amax()), "crank {crank}: acceleration {i}: {} vs {}", actual[i], expected[i]);
+            assert!(
+                (actual[i] - expected[i]).abs() < 1e-6 * (1.0 + expected.amax()),
+                "crank {crank}: acceleration {i}: {} vs {}",
+                actual[i],
+                expected[i]
+            );
         }
     }
 }

@@ -15,20 +15,34 @@ mod common;
 use common::trees::tree_program;
 
 fn model_of(text: &str) -> Model {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("tree.lsd", text, None, &options);
-    assert!(!compilation.has_errors(), "{:?}\n{text}", compilation.diagnostics);
+    assert!(
+        !compilation.has_errors(),
+        "{:?}\n{text}",
+        compilation.diagnostics
+    );
     let mechanism = compilation.mechanism.expect("elaborates");
     let topology = lsdc::topology::build(&mechanism).expect("connected");
-    let kinematics = kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric");
+    let kinematics =
+        kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric");
     model::build(&mechanism, &kinematics).expect("dynamic model")
 }
 
 fn random_state(model: &Model, numbers: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let n = model.declared_count;
-    let coordinates: Vec<f64> = (0..n).map(|i| numbers[(3 * i + 1) % numbers.len()]).collect();
-    let rates: Vec<f64> = (0..n).map(|i| numbers[(5 * i + 2) % numbers.len()]).collect();
-    model.state_from_declared(&coordinates, &rates).expect("state")
+    let coordinates: Vec<f64> = (0..n)
+        .map(|i| numbers[(3 * i + 1) % numbers.len()])
+        .collect();
+    let rates: Vec<f64> = (0..n)
+        .map(|i| numbers[(5 * i + 2) % numbers.len()])
+        .collect();
+    model
+        .state_from_declared(&coordinates, &rates)
+        .expect("state")
 }
 
 proptest! {
@@ -86,31 +100,56 @@ fn fixed_satellite_matches_the_closed_form_equations() {
     let none = vec![Force::zeros(); model.body_count() + 1];
     for sample in 0..20 {
         let s = sample as f64;
-        let q = [0.3 + 0.7 * s.sin(), 1.2 + 0.5 * (1.3 * s).cos(), -0.4 + 0.9 * (0.7 * s).sin()];
-        let qd = [0.5 * (2.1 * s).cos(), -0.2 + 0.3 * s.sin(), 0.7 * (0.3 * s).cos()];
+        let q = [
+            0.3 + 0.7 * s.sin(),
+            1.2 + 0.5 * (1.3 * s).cos(),
+            -0.4 + 0.9 * (0.7 * s).sin(),
+        ];
+        let qd = [
+            0.5 * (2.1 * s).cos(),
+            -0.2 + 0.3 * s.sin(),
+            0.7 * (0.3 * s).cos(),
+        ];
         let qdd = [0.1 * s.cos(), -0.4 * (1.7 * s).sin(), 0.25 + 0.1 * s];
         let (q7, q8, q9) = (q[0], q[1], q[2]);
         let (s7, c9, s9) = (q7.sin(), q9.cos(), q9.sin());
         let _ = s7;
         let expected = nalgebra::Matrix3::new(
-            q8 * q8 + z34 * z34 * c9 * c9, -z34 * c9, -z34 * q8 * s9,
-            -z34 * c9, 1.0, 0.0,
-            -z34 * q8 * s9, 0.0, z34 * z34,
+            q8 * q8 + z34 * z34 * c9 * c9,
+            -z34 * c9,
+            -z34 * q8 * s9,
+            -z34 * c9,
+            1.0,
+            0.0,
+            -z34 * q8 * s9,
+            0.0,
+            z34 * z34,
         ) * mu4;
         let mass = crba(&model, &mut data, &q).expect("evaluates");
-        assert!((mass.fixed_view::<3, 3>(0, 0) - expected).amax() < 1e-12 * mu4, "M at {q:?}:\n{mass}\n{expected}");
+        assert!(
+            (mass.fixed_view::<3, 3>(0, 0) - expected).amax() < 1e-12 * mu4,
+            "M at {q:?}:\n{mass}\n{expected}"
+        );
         let (d7, d8, d9) = (qd[0], qd[1], qd[2]);
         let (a7, a8, a9) = (qdd[0], qdd[1], qdd[2]);
         let lagrange = [
-            mu4 * ((q8 * q8 + z34 * z34 * c9 * c9) * a7 - z34 * c9 * a8 - z34 * q8 * s9 * a9 + 2.0 * q8 * d7 * d8
+            mu4 * ((q8 * q8 + z34 * z34 * c9 * c9) * a7 - z34 * c9 * a8 - z34 * q8 * s9 * a9
+                + 2.0 * q8 * d7 * d8
                 - 2.0 * z34 * z34 * s9 * c9 * d7 * d9
                 - z34 * q8 * c9 * d9 * d9),
             mu4 * (a8 - z34 * c9 * a7 - q8 * d7 * d7 + 2.0 * z34 * s9 * d7 * d9),
-            mu4 * (z34 * z34 * a9 - z34 * q8 * s9 * a7 + z34 * z34 * s9 * c9 * d7 * d7 - 2.0 * z34 * s9 * d7 * d8),
+            mu4 * (z34 * z34 * a9 - z34 * q8 * s9 * a7 + z34 * z34 * s9 * c9 * d7 * d7
+                - 2.0 * z34 * s9 * d7 * d8),
         ];
         let tau = rnea(&model, &mut data, &q, &qd, &qdd, &none).expect("evaluates");
         for k in 0..3 {
-            assert!((tau[k] - lagrange[k]).abs() < 1e-11 * mu4, "Q{} at {q:?}: {} vs {}", k + 7, tau[k], lagrange[k]);
+            assert!(
+                (tau[k] - lagrange[k]).abs() < 1e-11 * mu4,
+                "Q{} at {q:?}: {} vs {}",
+                k + 7,
+                tau[k],
+                lagrange[k]
+            );
         }
     }
 }
@@ -121,7 +160,9 @@ fn fixed_satellite_matches_the_closed_form_equations() {
 fn body_accelerations_are_derivatives_of_body_velocities() {
     let chain_joints = [0usize, 1, 2, 3, 4, 8];
     let parents = [0usize, 1, 1, 2, 4, 0, 6, 3];
-    let kinds: Vec<usize> = (0..parents.len()).map(|i| chain_joints[i % chain_joints.len()]).collect();
+    let kinds: Vec<usize> = (0..parents.len())
+        .map(|i| chain_joints[i % chain_joints.len()])
+        .collect();
     let numbers: Vec<f64> = (0..64).map(|i| ((i as f64) * 1.7).sin()).collect();
     let model = model_of(&tree_program(&parents, &kinds, &numbers));
     let mut data = Data::new(&model);
@@ -132,13 +173,18 @@ fn body_accelerations_are_derivatives_of_body_velocities() {
     let h = 1e-6;
     let at = |t: f64, data: &mut Data| {
         let moved: Vec<f64> = q.iter().zip(&v).map(|(x, r)| x + t * r).collect();
-        lsdc::dynamics::algorithms::forward_kinematics(&model, data, &moved, &v).expect("evaluates");
+        lsdc::dynamics::algorithms::forward_kinematics(&model, data, &moved, &v)
+            .expect("evaluates");
         data.velocity.clone()
     };
     let (plus, minus) = (at(h, &mut data), at(-h, &mut data));
     for i in 1..=model.body_count() {
         let numeric = (plus[i] - minus[i]) / (2.0 * h);
-        assert!((numeric - accelerations[i]).amax() < 1e-6, "body {i}: {numeric} vs {}", accelerations[i]);
+        assert!(
+            (numeric - accelerations[i]).amax() < 1e-6,
+            "body {i}: {numeric} vs {}",
+            accelerations[i]
+        );
     }
 }
 
@@ -147,12 +193,15 @@ fn body_accelerations_are_derivatives_of_body_velocities() {
 fn kinetic_energy_gradient_matches_finite_differences() {
     let chain_joints = [0usize, 1, 2, 3, 4, 8, 10];
     let parents = [0usize, 1, 1, 2, 4, 0, 6, 3, 8];
-    let kinds: Vec<usize> = (0..parents.len()).map(|i| chain_joints[(i + 2) % chain_joints.len()]).collect();
+    let kinds: Vec<usize> = (0..parents.len())
+        .map(|i| chain_joints[(i + 2) % chain_joints.len()])
+        .collect();
     let numbers: Vec<f64> = (0..64).map(|i| ((i as f64) * 2.3).cos()).collect();
     let model = model_of(&tree_program(&parents, &kinds, &numbers));
     let mut data = Data::new(&model);
     let (q, v) = random_state(&model, &numbers);
-    let gradient = lsdc::dynamics::derivatives::kinetic_energy_gradient(&model, &mut data, &q, &v).expect("chain joints");
+    let gradient = lsdc::dynamics::derivatives::kinetic_energy_gradient(&model, &mut data, &q, &v)
+        .expect("chain joints");
     let energy = |q: &[f64], data: &mut Data| {
         lsdc::dynamics::algorithms::forward_kinematics(&model, data, q, &v).expect("evaluates");
         lsdc::dynamics::energy::kinetic_energy(&model, data)
@@ -163,6 +212,10 @@ fn kinetic_energy_gradient_matches_finite_differences() {
         plus[k] += h;
         minus[k] -= h;
         let numeric = (energy(&plus, &mut data) - energy(&minus, &mut data)) / (2.0 * h);
-        assert!((numeric - gradient[k]).abs() < 1e-6 * (1.0 + numeric.abs()), "∂T/∂q{k}: {} vs {numeric}", gradient[k]);
+        assert!(
+            (numeric - gradient[k]).abs() < 1e-6 * (1.0 + numeric.abs()),
+            "∂T/∂q{k}: {} vs {numeric}",
+            gradient[k]
+        );
     }
 }

@@ -7,18 +7,28 @@ use lsdc::elab::Summary;
 use lsdc::load::LoadOptions;
 
 fn options() -> LoadOptions {
-    LoadOptions { library_dirs: Vec::new(), use_environment: false }
+    LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    }
 }
 
 fn compile(path: &str) -> Compilation {
     let compilation = compile_files(&[PathBuf::from(path)], &options()).expect("example readable");
-    let text = lsdc::diag::render::to_text(&compilation.workspace.sources, &compilation.diagnostics);
-    assert!(compilation.diagnostics.is_empty(), "{path} should check clean:\n{text}");
+    let text =
+        lsdc::diag::render::to_text(&compilation.workspace.sources, &compilation.diagnostics);
+    assert!(
+        compilation.diagnostics.is_empty(),
+        "{path} should check clean:\n{text}"
+    );
     compilation
 }
 
 fn summary(path: &str) -> Summary {
-    compile(path).mechanism.expect("clean programs elaborate").summary()
+    compile(path)
+        .mechanism
+        .expect("clean programs elaborate")
+        .summary()
 }
 
 #[test]
@@ -28,15 +38,30 @@ fn satellite_checks_clean_with_the_expected_summary() {
     assert_eq!(s.joins, 4);
     assert_eq!(s.applied_forces, 2);
     assert_eq!(s.applied_torques, 0);
-    assert_eq!(s.unknown_scalars, 2, "the two `?s` are independent (z12 and z34)");
+    assert_eq!(
+        s.unknown_scalars, 2,
+        "the two `?s` are independent (z12 and z34)"
+    );
     assert_eq!(s.unknown_functions, 3);
-    assert_eq!(s.body_names, ["satellite", "bras_primaire", "bras_secondaire", "reflecteur"]);
+    assert_eq!(
+        s.body_names,
+        [
+            "satellite",
+            "bras_primaire",
+            "bras_secondaire",
+            "reflecteur"
+        ]
+    );
 }
 
 #[test]
 fn library_form_elaborates_to_the_same_mechanism() {
-    let inline = compile("examples/satellite.lsd").mechanism.expect("elaborates");
-    let library = compile("examples/satellite_library.lsd").mechanism.expect("elaborates");
+    let inline = compile("examples/satellite.lsd")
+        .mechanism
+        .expect("elaborates");
+    let library = compile("examples/satellite_library.lsd")
+        .mechanism
+        .expect("elaborates");
     assert_eq!(inline.summary(), library.summary());
     assert_eq!(inline.dump(), library.dump());
 }
@@ -45,7 +70,11 @@ fn library_form_elaborates_to_the_same_mechanism() {
 fn the_five_link_forms_check_clean() {
     let compilation = compile("examples/link_forms.lsd");
     let mechanism = compilation.mechanism.expect("elaborates");
-    let dof_counts: Vec<usize> = mechanism.links.iter().map(|l| l.coordinates.len()).collect();
+    let dof_counts: Vec<usize> = mechanism
+        .links
+        .iter()
+        .map(|l| l.coordinates.len())
+        .collect();
     assert_eq!(dof_counts, [1, 2, 2, 2, 6]);
     let chain_lengths: Vec<usize> = mechanism.links.iter().map(|l| l.dofs.len()).collect();
     assert_eq!(chain_lengths, [1, 1, 2, 2, 4]);
@@ -75,9 +104,17 @@ fn the_standard_library_checks_clean_and_provides_every_joint() {
         join a and b with joints:free;\n\
         join a and b with rotoïde([1,0,0]);\n";
     let compilation = compile_text("joints_test.lsd", text, None, &options());
-    assert!(compilation.diagnostics.is_empty(), "{:?}", compilation.diagnostics);
+    assert!(
+        compilation.diagnostics.is_empty(),
+        "{:?}",
+        compilation.diagnostics
+    );
     let mechanism = compilation.mechanism.expect("elaborates");
-    let coordinates: Vec<usize> = mechanism.joins.iter().map(|j| mechanism.link(j.link).coordinates.len()).collect();
+    let coordinates: Vec<usize> = mechanism
+        .joins
+        .iter()
+        .map(|j| mechanism.link(j.link).coordinates.len())
+        .collect();
     assert_eq!(coordinates, [0, 1, 1, 1, 2, 2, 3, 3, 6, 1]);
 }
 
@@ -98,7 +135,11 @@ fn zero_and_one_take_the_type_their_context_requires() {
         let f = force value = 0, body = earth end;\n\
         apply f on 1 @ a;\n";
     let compilation = compile_text("overloading.lsd", text, None, &options());
-    assert!(compilation.diagnostics.is_empty(), "{:?}", compilation.diagnostics);
+    assert!(
+        compilation.diagnostics.is_empty(),
+        "{:?}",
+        compilation.diagnostics
+    );
 }
 
 #[test]
@@ -108,18 +149,38 @@ fn packages_and_local_bindings_resolve() {
         join earth and z ++ 1 @ P:arm with P:hinge([0,0,1]);\n\
         apply force value = [0,0,-9.81 * P:arm.mass], body = earth end on P:arm.iframe;\n";
     let compilation = compile_text("packages.lsd", text, None, &options());
-    assert!(compilation.diagnostics.is_empty(), "{:?}", compilation.diagnostics);
+    assert!(
+        compilation.diagnostics.is_empty(),
+        "{:?}",
+        compilation.diagnostics
+    );
     let s = compilation.mechanism.expect("elaborates").summary();
     assert_eq!((s.bodies, s.joins, s.applied_forces), (1, 1, 1));
 }
 
 #[test]
 fn dump_shows_the_satellite_structure() {
-    let dump = compile("examples/satellite.lsd").mechanism.expect("elaborates").dump();
-    assert!(dump.contains("join T[0, 0, ?s1] @ satellite and 1 @ bras_primaire with link(x)"), "{dump}");
+    let dump = compile("examples/satellite.lsd")
+        .mechanism
+        .expect("elaborates")
+        .dump();
+    assert!(
+        dump.contains("join T[0, 0, ?s1] @ satellite and 1 @ bras_primaire with link(x)"),
+        "{dump}"
+    );
     assert!(dump.contains("torque = [?f2(q0, q0'), 0, 0]"), "{dump}");
-    assert!(dump.contains("body reflecteur: mass mass(reflecteur), iframe T[0, 0, ?s5], inertia [0, 0, 0]"), "{dump}");
-    assert!(dump.contains("body satellite: mass mass(satellite), iframe 1, inertia [inertia_x(satellite), "), "{dump}");
+    assert!(
+        dump.contains(
+            "body reflecteur: mass mass(reflecteur), iframe T[0, 0, ?s5], inertia [0, 0, 0]"
+        ),
+        "{dump}"
+    );
+    assert!(
+        dump.contains(
+            "body satellite: mass mass(satellite), iframe 1, inertia [inertia_x(satellite), "
+        ),
+        "{dump}"
+    );
 }
 
 #[test]
@@ -128,7 +189,11 @@ fn generic_quantities_can_be_read_and_are_not_counted_as_written_unknowns() {
         join earth and a with link(x) dof = x || [0,0,1], torque = [0, 0, -a.mass * x] end;\n\
         apply force value = 2 * f.value + a.inertia, body = f.body end on a.iframe;\n";
     let compilation = compile_text("generic.lsd", text, None, &options());
-    assert!(compilation.diagnostics.is_empty(), "{:?}", compilation.diagnostics);
+    assert!(
+        compilation.diagnostics.is_empty(),
+        "{:?}",
+        compilation.diagnostics
+    );
     let mechanism = compilation.mechanism.expect("elaborates");
     let s = mechanism.summary();
     assert_eq!((s.unknown_scalars, s.unknown_functions), (0, 0));
@@ -146,16 +211,30 @@ fn rotation_applied_to_a_vector_rotates_it() {
         join earth and a with link(x) dof = x || [0,0,1] end;\n";
     let compilation = compile_text("rotate.lsd", text, None, &options());
     let mechanism = compilation.mechanism.expect("elaborates");
-    let lsdc::elab::mechanism::Quantity::Declared(iframe) = &mechanism.bodies[0].iframe else { panic!("declared") };
-    let lsdc::elab::value::Elementary::Translation(t) = &iframe.0[0] else { panic!("translation") };
-    let numbers: Vec<f64> = t.iter().map(|s| lsdc::elab::value::constant(s).expect("a number")).collect();
-    assert!((numbers[0]).abs() < 1e-15 && (numbers[1] - 1.0).abs() < 1e-15 && numbers[2].abs() < 1e-15, "{numbers:?}");
+    let lsdc::elab::mechanism::Quantity::Declared(iframe) = &mechanism.bodies[0].iframe else {
+        panic!("declared")
+    };
+    let lsdc::elab::value::Elementary::Translation(t) = &iframe.0[0] else {
+        panic!("translation")
+    };
+    let numbers: Vec<f64> = t
+        .iter()
+        .map(|s| lsdc::elab::value::constant(s).expect("a number"))
+        .collect();
+    assert!(
+        (numbers[0]).abs() < 1e-15 && (numbers[1] - 1.0).abs() < 1e-15 && numbers[2].abs() < 1e-15,
+        "{numbers:?}"
+    );
 }
 
 #[test]
 fn any_unknown_name_is_a_fresh_scalar() {
-    let text = "let a = body mass = ?k_2 + ?mass end;\njoin earth and a with link(x) dof = [0,0,x] end;\n";
-    let s = compile_text("unknowns.lsd", text, None, &options()).mechanism.expect("elaborates").summary();
+    let text =
+        "let a = body mass = ?k_2 + ?mass end;\njoin earth and a with link(x) dof = [0,0,x] end;\n";
+    let s = compile_text("unknowns.lsd", text, None, &options())
+        .mechanism
+        .expect("elaborates")
+        .summary();
     assert_eq!(s.unknown_scalars, 2);
 }
 
@@ -163,5 +242,9 @@ fn any_unknown_name_is_a_fresh_scalar() {
 fn an_import_opens_its_names_to_the_declarations_after_it() {
     let text = "let joints = 1;\nimport joints;\nlet a = body end;\njoin earth and a with revolute([0,0,1]);\n";
     let compilation = compile_text("open.lsd", text, None, &options());
-    assert!(compilation.diagnostics.is_empty(), "{:?}", compilation.diagnostics);
+    assert!(
+        compilation.diagnostics.is_empty(),
+        "{:?}",
+        compilation.diagnostics
+    );
 }

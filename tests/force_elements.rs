@@ -7,13 +7,20 @@ use lsdc::simulate::prepare::{prepare, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 fn simulate(text: &str) -> Simulation {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("elements.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.expect("a mechanism");
     let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepares");
     let simulation = run(&prepared, &mut |_| {});
-    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
     simulation
 }
 
@@ -38,19 +45,32 @@ fn check_relative_motion(simulation: &Simulation, expected: impl Fn(f64) -> f64)
         let (x1, x2) = (sample.coordinates[0], sample.coordinates[1]);
         let gap = 1.0 + x2 - x1;
         worst = worst.max((gap - expected(sample.time)).abs());
-        assert!((gap - expected(sample.time)).abs() < 1e-10, "t = {}: s = {gap}, closed form {}", sample.time, expected(sample.time));
-        assert!((2.0 * x1 + 3.0 * x2 - 0.3).abs() < 1e-10, "the centre of mass moved");
+        assert!(
+            (gap - expected(sample.time)).abs() < 1e-10,
+            "t = {}: s = {gap}, closed form {}",
+            sample.time,
+            expected(sample.time)
+        );
+        assert!(
+            (2.0 * x1 + 3.0 * x2 - 0.3).abs() < 1e-10,
+            "the centre of mass moved"
+        );
     }
     println!("largest gap from the closed form: {worst:.1e}");
 }
 
 #[test]
 fn a_spring_between_two_bodies_oscillates_as_the_closed_form() {
-    let simulation = simulate(&two_bodies("apply spring(b1, b2, 150, 0.8) between b1 and b2 ;"));
+    let simulation = simulate(&two_bodies(
+        "apply spring(b1, b2, 150, 0.8) between b1 and b2 ;",
+    ));
     // Relative motion: reduced mass 1.2, ω² = k / μ; s(0) = 1.1, at rest.
     let omega = (150.0f64 / 1.2).sqrt();
     check_relative_motion(&simulation, |t| 0.8 + 0.3 * (omega * t).cos());
-    let drift = simulation.report.energy_drift.expect("conservative: the spring declares its potential");
+    let drift = simulation
+        .report
+        .energy_drift
+        .expect("conservative: the spring declares its potential");
     println!("energy drift {drift:.1e}");
     assert!(drift < 1e-10, "energy drift {drift:e}");
 }
@@ -63,8 +83,15 @@ fn a_damped_spring_decays_as_the_closed_form() {
     let omega = (k / mu).sqrt();
     let zeta = c / (2.0 * (k * mu).sqrt());
     let damped = omega * (1.0 - zeta * zeta).sqrt();
-    check_relative_motion(&simulation, |t| 0.8 + 0.3 * (-zeta * omega * t).exp() * ((damped * t).cos() + zeta * omega / damped * (damped * t).sin()));
-    assert!(simulation.report.energy_drift.is_none(), "a damper has no potential: no drift to report");
+    check_relative_motion(&simulation, |t| {
+        0.8 + 0.3
+            * (-zeta * omega * t).exp()
+            * ((damped * t).cos() + zeta * omega / damped * (damped * t).sin())
+    });
+    assert!(
+        simulation.report.energy_drift.is_none(),
+        "a damper has no potential: no drift to report"
+    );
 }
 
 #[test]
@@ -90,8 +117,15 @@ fn chain(weights: &str) -> Simulation {
     let mut text = String::from("import joints ; import gravity ;\n");
     for i in 1..=10 {
         text += &format!("let b{i} = body mass = {}, iframe = [0.15, 0, 0] ++ 1, inertia = [0.01, 0.02, 0.02] end ;\n", 0.5 + 0.1 * i as f64);
-        let parent = if i == 1 { "earth".to_string() } else { format!("[0.3, 0, 0] ++ 1 @ b{}", i - 1) };
-        text += &format!("join {parent} and b{i} with revolute([0, {}, 1]) as j{i} ;\n", i % 3);
+        let parent = if i == 1 {
+            "earth".to_string()
+        } else {
+            format!("[0.3, 0, 0] ++ 1 @ b{}", i - 1)
+        };
+        text += &format!(
+            "join {parent} and b{i} with revolute([0, {}, 1]) as j{i} ;\n",
+            i % 3
+        );
     }
     text += weights;
     text += "initial j1.q = 0.4, j5.q = -0.3 ;\nsimulate duration = 1, output = 0.1 end ;";
@@ -101,7 +135,9 @@ fn chain(weights: &str) -> Simulation {
 #[test]
 fn a_gravity_field_equals_the_weights_applied_one_by_one_to_the_last_bit() {
     let field = chain("apply gravity_field ;\n");
-    let explicit: String = (1..=10).map(|i| format!("apply weight(b{i}) on b{i}.iframe ;\n")).collect();
+    let explicit: String = (1..=10)
+        .map(|i| format!("apply weight(b{i}) on b{i}.iframe ;\n"))
+        .collect();
     let one_by_one = chain(&explicit);
     assert_eq!(field.samples.len(), one_by_one.samples.len());
     for (a, b) in field.samples.iter().zip(&one_by_one.samples) {
@@ -109,7 +145,10 @@ fn a_gravity_field_equals_the_weights_applied_one_by_one_to_the_last_bit() {
         assert_eq!(a.rates, b.rates, "t = {}", a.time);
         assert_eq!(a.potential_energy, b.potential_energy);
     }
-    assert!(field.report.energy_drift.is_some(), "a gravity field is conservative");
+    assert!(
+        field.report.energy_drift.is_some(),
+        "a gravity field is conservative"
+    );
 }
 
 #[test]
@@ -125,9 +164,17 @@ fn link_elements_act_as_written() {
     let omega = (8.0f64 / 2.0).sqrt();
     for s in &spring.samples {
         let expected = 0.2 + 0.3 * (omega * s.time).cos();
-        assert!((s.coordinates[0] - expected).abs() < 1e-10, "t = {}: {} ≠ {expected}", s.time, s.coordinates[0]);
+        assert!(
+            (s.coordinates[0] - expected).abs() < 1e-10,
+            "t = {}: {} ≠ {expected}",
+            s.time,
+            s.coordinates[0]
+        );
     }
-    assert!(spring.report.energy_drift.is_some_and(|d| d < 1e-10), "the spring declares its potential");
+    assert!(
+        spring.report.energy_drift.is_some_and(|d| d < 1e-10),
+        "the spring declares its potential"
+    );
     // A geared motor with a constant torque: q = ratio τ t² / (2 I).
     let motor = simulate(
         "import forces ;
@@ -137,7 +184,11 @@ fn link_elements_act_as_written() {
     );
     for s in &motor.samples {
         let expected = 12.0 * 0.25 * s.time * s.time / (2.0 * 2.0);
-        assert!((s.coordinates[0] - expected).abs() < 1e-10 * (1.0 + expected), "t = {}", s.time);
+        assert!(
+            (s.coordinates[0] - expected).abs() < 1e-10 * (1.0 + expected),
+            "t = {}",
+            s.time
+        );
     }
 }
 
@@ -157,7 +208,10 @@ fn stiff_chain(integrator: &str, tolerance: f64) -> (Simulation, Option<lsdc::di
         initial swing.a = 0.5, slide.s = 0.05 ;
         simulate duration = 0.01, output = 0.001, integrator = {integrator}, tolerance = {tolerance:e} end ;"
     );
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("stiff.lsd", &text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.expect("a mechanism");
@@ -172,16 +226,30 @@ fn the_implicit_integrator_handles_a_stiff_chain_with_a_hundredth_of_the_evaluat
     let (explicit, warning) = stiff_chain("dopri5", 1e-6);
     let (implicit, no_warning) = stiff_chain("implicit", 1e-6);
     let angle = |s: &Simulation| s.samples.last().expect("samples").coordinates[0];
-    let (e, i) = ((angle(&explicit) - angle(&reference)).abs(), (angle(&implicit) - angle(&reference)).abs());
-    let (fe, fi) = (explicit.report.function_evaluations, implicit.report.function_evaluations);
-    println!("swing angle error: dopri5 {e:.1e} ({fe} evaluations), implicit {i:.1e} ({fi} evaluations)");
-    assert!(e < 1e-6 && i < 1e-6, "both reach the tolerance on the slow motion: {e:e}, {i:e}");
+    let (e, i) = (
+        (angle(&explicit) - angle(&reference)).abs(),
+        (angle(&implicit) - angle(&reference)).abs(),
+    );
+    let (fe, fi) = (
+        explicit.report.function_evaluations,
+        implicit.report.function_evaluations,
+    );
+    println!(
+        "swing angle error: dopri5 {e:.1e} ({fe} evaluations), implicit {i:.1e} ({fi} evaluations)"
+    );
+    assert!(
+        e < 1e-6 && i < 1e-6,
+        "both reach the tolerance on the slow motion: {e:e}, {i:e}"
+    );
     assert!(100 * fi < fe, "implicit {fi} evaluations, explicit {fe}");
     let warning = warning.expect("the explicit run is warned");
     assert_eq!(warning.code, "W0901");
     assert!(warning.message.contains("stiff"), "{}", warning.message);
     assert!(!warning.labels.is_empty(), "the stiffest element is named");
-    assert!(no_warning.is_none(), "no warning for the implicit integrator");
+    assert!(
+        no_warning.is_none(),
+        "no warning for the implicit integrator"
+    );
 }
 
 #[test]
@@ -202,7 +270,10 @@ fn the_energy_balance_holds_on_a_driven_damped_mechanism() {
         simulate duration = 5, output = 0.05, tolerance = 1e-11 end ;",
     );
     assert!(simulation.report.energy_drift.is_none(), "not conservative");
-    let balance = simulation.report.energy_balance.expect("the work of the motor and dampers is integrated");
+    let balance = simulation
+        .report
+        .energy_balance
+        .expect("the work of the motor and dampers is integrated");
     let [kinetic, potential, work] = simulation.report.final_energies.expect("energies");
     println!("energy balance {balance:.1e}; at the end kinetic {kinetic:.3}, potential {potential:.3}, work {work:.3}");
     assert!(work.abs() > 0.1, "the motor and dampers do work");
@@ -222,6 +293,11 @@ fn a_target_spring_pulls_towards_a_moving_point() {
     let omega = (18.0f64 / 0.5).sqrt();
     for s in &simulation.samples {
         let expected = 0.1 * s.time - 0.1 * (omega * s.time).sin() / omega;
-        assert!((s.coordinates[0] - expected).abs() < 1e-10, "t = {}: {} ≠ {expected}", s.time, s.coordinates[0]);
+        assert!(
+            (s.coordinates[0] - expected).abs() < 1e-10,
+            "t = {}: {} ≠ {expected}",
+            s.time,
+            s.coordinates[0]
+        );
     }
 }

@@ -22,22 +22,43 @@ const IN_COORDINATES: &str = "let k = 200 ; let l0 = 0.5 ; let c = 3 ; let kt = 
 /// S + F of a program at (coordinates, rates): −RNEA(q, v, 0) with the applied efforts, plus
 /// the links' efforts.
 fn right_hand_side(text: &str, coordinates: &[f64], rates: &[f64]) -> Vec<f64> {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("program.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.expect("a mechanism");
-    let model = prepare(&mechanism, &[], &Settings::default()).expect("prepares").model;
+    let model = prepare(&mechanism, &[], &Settings::default())
+        .expect("prepares")
+        .model;
     let mut data = Data::new(&model);
     forward_kinematics(&model, &mut data, coordinates, rates).expect("kinematics");
-    let declared = Declared { model: &model, coordinates, rates };
+    let declared = Declared {
+        model: &model,
+        coordinates,
+        rates,
+    };
     let efforts = efforts::evaluate(&model, &data, &declared, 0.0).expect("efforts");
-    let bias = rnea(&model, &mut data, coordinates, rates, &[0.0, 0.0], &efforts.external).expect("RNEA");
+    let bias = rnea(
+        &model,
+        &mut data,
+        coordinates,
+        rates,
+        &[0.0, 0.0],
+        &efforts.external,
+    )
+    .expect("RNEA");
     (0..2).map(|k| efforts.tau[k] - bias[k]).collect()
 }
 
 #[test]
 fn frame_states_give_the_efforts_written_in_coordinates() {
-    let with_frames = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/elastic_pendulum.lsd")).expect("example");
+    let with_frames = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/elastic_pendulum.lsd"
+    ))
+    .expect("example");
     let mut random = Sequence(23);
     for _ in 0..20 {
         let coordinates = [1.5 * random.next(), 0.6 + 0.3 * random.next()];
@@ -45,7 +66,12 @@ fn frame_states_give_the_efforts_written_in_coordinates() {
         let expected = right_hand_side(IN_COORDINATES, &coordinates, &rates);
         let actual = right_hand_side(&with_frames, &coordinates, &rates);
         for k in 0..2 {
-            assert!((actual[k] - expected[k]).abs() < 1e-12 * (1.0 + expected[k].abs()), "{k}: {} ≠ {}", actual[k], expected[k]);
+            assert!(
+                (actual[k] - expected[k]).abs() < 1e-12 * (1.0 + expected[k].abs()),
+                "{k}: {} ≠ {}",
+                actual[k],
+                expected[k]
+            );
         }
     }
 }
@@ -54,10 +80,15 @@ fn frame_states_give_the_efforts_written_in_coordinates() {
 fn frame_states_are_refused_where_the_geometry_must_be_constant() {
     let text = "let b = body mass = 1, iframe = 0, inertia = [1, 1, 1] end ;
         join earth and b.frame with link(x) dof = distance(earth, b) || [0, 0, 1] end ;";
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("geometry.lsd", text, None, &options);
     let mechanism = compilation.mechanism.expect("a mechanism");
-    let errors = prepare(&mechanism, &[], &Settings::default()).err().expect("refused");
+    let errors = prepare(&mechanism, &[], &Settings::default())
+        .err()
+        .expect("refused");
     let message = format!("{errors:?}");
     assert!(message.contains("the state of a frame"), "{message}");
 }

@@ -14,7 +14,14 @@ use nalgebra::{DMatrix, DVector};
 
 /// Tree examples, one with loops (`four_bar`), and one with unknown functions and parameters
 /// (`satellite`).
-const EXAMPLES: [&str; 6] = ["pendulum", "double_pendulum", "satellite_fixed", "four_bar", "satellite_numeric", "satellite"];
+const EXAMPLES: [&str; 6] = [
+    "pendulum",
+    "double_pendulum",
+    "satellite_fixed",
+    "four_bar",
+    "satellite_numeric",
+    "satellite",
+];
 
 /// Entries agree when |a − b| ≤ TOLERANCE · max(|b|, largest |entry| of the quantity).
 const TOLERANCE: f64 = 1e-12;
@@ -25,7 +32,12 @@ fn equations(name: &str) -> Equations {
 
 /// The unknown functions' law in every harness: f_i(a) = (i + 1)/4 + Σⱼ sin((j + 1) aⱼ).
 fn unknown(index: usize, arguments: &[f64]) -> f64 {
-    0.25 * (index + 1) as f64 + arguments.iter().enumerate().map(|(j, a)| ((j + 1) as f64 * a).sin()).sum::<f64>()
+    0.25 * (index + 1) as f64
+        + arguments
+            .iter()
+            .enumerate()
+            .map(|(j, a)| ((j + 1) as f64 * a).sin())
+            .sum::<f64>()
 }
 
 const RUST_UNKNOWN: &str = "fn unknown(index: usize, arguments: &[f64]) -> f64 {
@@ -34,7 +46,13 @@ const RUST_UNKNOWN: &str = "fn unknown(index: usize, arguments: &[f64]) -> f64 {
 
 /// The same law in C, which needs each function's number of arguments.
 fn c_unknown(eq: &Equations) -> String {
-    let arities: Vec<String> = eq.variables.functions.iter().map(|f| f.arguments.len().to_string()).chain(["0".to_string()]).collect();
+    let arities: Vec<String> = eq
+        .variables
+        .functions
+        .iter()
+        .map(|f| f.arguments.len().to_string())
+        .chain(["0".to_string()])
+        .collect();
     format!(
         "static double unknown(int index, const double *arguments) {{
     static const int arity[] = {{{}}};
@@ -63,7 +81,12 @@ fn states(eq: &Equations, count: usize) -> Vec<State> {
             t: random.next(),
             p: (0..n).map(|_| 1.5 * random.next()).collect(),
             q: (0..n).map(|_| random.next()).collect(),
-            k: eq.variables.parameters.iter().map(|_| 1.0 + 0.5 * random.next()).collect(),
+            k: eq
+                .variables
+                .parameters
+                .iter()
+                .map(|_| 1.0 + 0.5 * random.next())
+                .collect(),
         })
         .collect()
 }
@@ -73,13 +96,33 @@ fn states(eq: &Equations, count: usize) -> Vec<State> {
 fn symbol_values(eq: &Equations, state: &State) -> Vec<f64> {
     let v = &eq.variables;
     let mut named: HashMap<String, f64> = HashMap::from([("t".to_string(), state.t)]);
-    named.extend(v.positions.iter().zip(&state.p).map(|(x, &value)| (x.name.clone(), value)));
-    named.extend(v.rates.iter().zip(&state.q).map(|(x, &value)| (x.name.clone(), value)));
-    named.extend(v.parameters.iter().zip(&state.k).map(|(x, &value)| (x.name.clone(), value)));
-    let mut symbols = eq.symbol_values(|name| Some(named.get(name).copied().unwrap_or(0.0))).expect("values");
+    named.extend(
+        v.positions
+            .iter()
+            .zip(&state.p)
+            .map(|(x, &value)| (x.name.clone(), value)),
+    );
+    named.extend(
+        v.rates
+            .iter()
+            .zip(&state.q)
+            .map(|(x, &value)| (x.name.clone(), value)),
+    );
+    named.extend(
+        v.parameters
+            .iter()
+            .zip(&state.k)
+            .map(|(x, &value)| (x.name.clone(), value)),
+    );
+    let mut symbols = eq
+        .symbol_values(|name| Some(named.get(name).copied().unwrap_or(0.0)))
+        .expect("values");
     for (index, use_) in v.functions.iter().enumerate() {
         let arguments = Tape::new(&eq.pool, &use_.arguments).eval(&symbols);
-        symbols[eq.pool.symbol_index(use_.symbol).expect("a function use's value is a symbol")] = unknown(index, &arguments);
+        symbols[eq
+            .pool
+            .symbol_index(use_.symbol)
+            .expect("a function use's value is a symbol")] = unknown(index, &arguments);
     }
     symbols
 }
@@ -91,18 +134,27 @@ fn accelerations(values: &Values) -> DVector<f64> {
     let rhs = &values.second_member + &values.forces;
     let m = values.constraints.nrows();
     if m == 0 {
-        return values.mass.clone().cholesky().expect("M positive definite").solve(&rhs);
+        return values
+            .mass
+            .clone()
+            .cholesky()
+            .expect("M positive definite")
+            .solve(&rhs);
     }
     let mut kkt = DMatrix::zeros(n + m, n + m);
     kkt.view_mut((0, 0), (n, n)).copy_from(&values.mass);
     kkt.view_mut((n, 0), (m, n)).copy_from(&values.constraints);
-    kkt.view_mut((0, n), (n, m)).copy_from(&values.constraints.transpose());
+    kkt.view_mut((0, n), (n, m))
+        .copy_from(&values.constraints.transpose());
     let mut b = DVector::zeros(n + m);
     b.rows_mut(0, n).copy_from(&rhs);
     b.rows_mut(n, m).copy_from(&(-&values.constraint_bias));
     let svd = kkt.svd(true, true);
     let cutoff = 1e-12 * svd.singular_values.max();
-    svd.solve(&b, cutoff).expect("SVD solve").rows(0, n).into_owned()
+    svd.solve(&b, cutoff)
+        .expect("SVD solve")
+        .rows(0, n)
+        .into_owned()
 }
 
 /// The largest relative deviation of `got` from `expected` (relative to max(|entry|, the
@@ -110,7 +162,16 @@ fn accelerations(values: &Values) -> DVector<f64> {
 fn deviation(got: &[f64], expected: &[f64]) -> f64 {
     assert_eq!(got.len(), expected.len(), "number of values");
     let scale = expected.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-    got.iter().zip(expected).map(|(g, e)| if g == e { 0.0 } else { (g - e).abs() / e.abs().max(scale).max(f64::MIN_POSITIVE) }).fold(0.0, f64::max)
+    got.iter()
+        .zip(expected)
+        .map(|(g, e)| {
+            if g == e {
+                0.0
+            } else {
+                (g - e).abs() / e.abs().max(scale).max(f64::MIN_POSITIVE)
+            }
+        })
+        .fold(0.0, f64::max)
 }
 
 /// What a harness printed: label → values, one line per quantity per state.
@@ -123,8 +184,16 @@ fn parse_output(text: &str) -> Vec<HashMap<String, Vec<f64>>> {
             states.push(HashMap::new());
             continue;
         }
-        let values = words.map(|w| w.parse::<f64>().unwrap_or_else(|_| panic!("a number in `{line}`"))).collect();
-        states.last_mut().expect("a STATE line first").insert(label.to_string(), values);
+        let values = words
+            .map(|w| {
+                w.parse::<f64>()
+                    .unwrap_or_else(|_| panic!("a number in `{line}`"))
+            })
+            .collect();
+        states
+            .last_mut()
+            .expect("a STATE line first")
+            .insert(label.to_string(), values);
     }
     states
 }
@@ -134,27 +203,44 @@ fn parse_output(text: &str) -> Vec<HashMap<String, Vec<f64>>> {
 fn compare(eq: &Equations, states: &[State], output: &str, what: &str) -> (f64, f64) {
     let tape = eq.tape();
     let printed = parse_output(output);
-    assert_eq!(printed.len(), states.len(), "{what}: one block per state in\n{output}");
+    assert_eq!(
+        printed.len(),
+        states.len(),
+        "{what}: one block per state in\n{output}"
+    );
     let (mut values_deviation, mut dynamics_deviation) = (0.0f64, 0.0f64);
     for (state, printed) in states.iter().zip(&printed) {
         let values = eq.evaluate(&tape, &symbol_values(eq, state));
         let row_major = |m: &DMatrix<f64>| m.transpose().iter().copied().collect::<Vec<f64>>();
-        let rhs: Vec<f64> = (&values.second_member + &values.forces).iter().copied().collect();
+        let rhs: Vec<f64> = (&values.second_member + &values.forces)
+            .iter()
+            .copied()
+            .collect();
         let mut expected = vec![("M", row_major(&values.mass)), ("RHS", rhs)];
         if eq.constraint_rows() > 0 {
             expected.push(("DELTA", row_major(&values.constraints)));
             expected.push(("BIAS", values.constraint_bias.iter().copied().collect()));
         }
         for (label, expected) in expected {
-            let got = printed.get(label).unwrap_or_else(|| panic!("{what}: no {label} in\n{output}"));
+            let got = printed
+                .get(label)
+                .unwrap_or_else(|| panic!("{what}: no {label} in\n{output}"));
             let d = deviation(got, &expected);
-            assert!(d <= TOLERANCE, "{what}: {label} deviates by {d:e}\n got {got:?}\nwant {expected:?}");
+            assert!(
+                d <= TOLERANCE,
+                "{what}: {label} deviates by {d:e}\n got {got:?}\nwant {expected:?}"
+            );
             values_deviation = values_deviation.max(d);
         }
-        let qdd = printed.get("QDD").unwrap_or_else(|| panic!("{what}: forward dynamics failed:\n{output}"));
+        let qdd = printed
+            .get("QDD")
+            .unwrap_or_else(|| panic!("{what}: forward dynamics failed:\n{output}"));
         let expected: Vec<f64> = accelerations(&values).iter().copied().collect();
         let d = deviation(qdd, &expected);
-        assert!(d <= TOLERANCE, "{what}: q' deviates by {d:e}\n got {qdd:?}\nwant {expected:?}");
+        assert!(
+            d <= TOLERANCE,
+            "{what}: q' deviates by {d:e}\n got {qdd:?}\nwant {expected:?}"
+        );
         dynamics_deviation = dynamics_deviation.max(d);
     }
     (values_deviation, dynamics_deviation)
@@ -162,7 +248,10 @@ fn compare(eq: &Equations, states: &[State], output: &str, what: &str) -> (f64, 
 
 /// Whether the generated function `name` takes `parameter` (the time or the unknown functions).
 fn takes(source: &str, name: &str, parameter: &str) -> bool {
-    source.lines().find(|l| l.contains(&format!(" {name}("))).is_some_and(|l| l.contains(parameter))
+    source
+        .lines()
+        .find(|l| l.contains(&format!(" {name}(")))
+        .is_some_and(|l| l.contains(parameter))
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -173,7 +262,12 @@ fn scratch(name: &str) -> PathBuf {
 
 fn run(command: &mut Command, what: &str) -> String {
     let output = command.output().unwrap_or_else(|e| panic!("{what}: {e}"));
-    assert!(output.status.success(), "{what} failed:\n{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    assert!(
+        output.status.success(),
+        "{what} failed:\n{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
     String::from_utf8_lossy(&output.stdout).into_owned()
 }
 
@@ -185,8 +279,20 @@ fn list(values: &[f64], open: &str, close: &str) -> String {
 
 /// A `main` that prints every quantity at the states.
 fn rust_harness(eq: &Equations, source: &str, states: &[State]) -> String {
-    let f = |name: &str| if takes(source, name, "f: &dyn") { ", &unknown" } else { "" };
-    let t = |name: &str| if takes(source, name, "t: f64") { "t, " } else { "" };
+    let f = |name: &str| {
+        if takes(source, name, "f: &dyn") {
+            ", &unknown"
+        } else {
+            ""
+        }
+    };
+    let t = |name: &str| {
+        if takes(source, name, "t: f64") {
+            "t, "
+        } else {
+            ""
+        }
+    };
     let mut body = format!(
         "    let mut m = [0.0; N * N];\n    mass_matrix({}p, k, &mut m{});\n    show(\"M\", &m);\n\
          \x20   let mut rhs = [0.0; N];\n    right_hand_side(t, p, q, k, &mut rhs{});\n    show(\"RHS\", &rhs);\n",
@@ -205,7 +311,18 @@ fn rust_harness(eq: &Equations, source: &str, states: &[State]) -> String {
         );
     }
     body += &format!("    let mut qdd = [0.0; N];\n    if forward_dynamics(t, p, q, k, &mut qdd{}).is_ok() {{ show(\"QDD\", &qdd); }}\n", f("forward_dynamics"));
-    let calls: Vec<String> = states.iter().map(|s| format!("    at({:?}, &{}, &{}, &{});", s.t, list(&s.p, "[", "]"), list(&s.q, "[", "]"), list(&s.k, "[", "]"))).collect();
+    let calls: Vec<String> = states
+        .iter()
+        .map(|s| {
+            format!(
+                "    at({:?}, &{}, &{}, &{});",
+                s.t,
+                list(&s.p, "[", "]"),
+                list(&s.q, "[", "]"),
+                list(&s.k, "[", "]")
+            )
+        })
+        .collect();
     format!(
         "mod equations;\nuse equations::*;\n\n{RUST_UNKNOWN}\n\n\
          fn show(label: &str, values: &[f64]) {{\n    let text: Vec<String> = values.iter().map(|v| format!(\"{{v:?}}\")).collect();\n    println!(\"{{label}} {{}}\", text.join(\" \"));\n}}\n\n\
@@ -216,8 +333,20 @@ fn rust_harness(eq: &Equations, source: &str, states: &[State]) -> String {
 }
 
 fn c_harness(eq: &Equations, source: &str, states: &[State]) -> String {
-    let f = |name: &str| if takes(source, name, "(*f)") { ", unknown" } else { "" };
-    let t = |name: &str| if takes(source, name, "double t,") && name != "right_hand_side" { "t, " } else { "" };
+    let f = |name: &str| {
+        if takes(source, name, "(*f)") {
+            ", unknown"
+        } else {
+            ""
+        }
+    };
+    let t = |name: &str| {
+        if takes(source, name, "double t,") && name != "right_hand_side" {
+            "t, "
+        } else {
+            ""
+        }
+    };
     let mut body = format!(
         "    double m[N * N], rhs[N], qdd[N];\n    mass_matrix({}p, k, m{});\n    show(\"M\", m, N * N);\n\
          \x20   right_hand_side(t, p, q, k, rhs{});\n    show(\"RHS\", rhs, N);\n",
@@ -235,13 +364,26 @@ fn c_harness(eq: &Equations, source: &str, states: &[State]) -> String {
             f("constraint_bias")
         );
     }
-    body += &format!("    if (forward_dynamics(t, p, q, k, qdd{}) == 0) show(\"QDD\", qdd, N);\n", f("forward_dynamics"));
+    body += &format!(
+        "    if (forward_dynamics(t, p, q, k, qdd{}) == 0) show(\"QDD\", qdd, N);\n",
+        f("forward_dynamics")
+    );
     // C has no empty arrays: a mechanism without parameters gets one unused.
     let calls: Vec<String> = states
         .iter()
         .map(|s| {
-            let k = if s.k.is_empty() { vec![0.0] } else { s.k.clone() };
-            format!("    at({:?}, (const double[]){}, (const double[]){}, (const double[]){});", s.t, list(&s.p, "{", "}"), list(&s.q, "{", "}"), list(&k, "{", "}"))
+            let k = if s.k.is_empty() {
+                vec![0.0]
+            } else {
+                s.k.clone()
+            };
+            format!(
+                "    at({:?}, (const double[]){}, (const double[]){}, (const double[]){});",
+                s.t,
+                list(&s.p, "{", "}"),
+                list(&s.q, "{", "}"),
+                list(&k, "{", "}")
+            )
         })
         .collect();
     format!(
@@ -260,8 +402,15 @@ fn rustc() -> String {
 
 /// The first C compiler found: `CC`, `cc`, `gcc`, `clang`.
 fn c_compiler() -> Option<String> {
-    let candidates = std::env::var("CC").into_iter().chain(["cc", "gcc", "clang"].map(String::from));
-    candidates.into_iter().find(|c| Command::new(c).arg("--version").output().is_ok_and(|o| o.status.success()))
+    let candidates = std::env::var("CC")
+        .into_iter()
+        .chain(["cc", "gcc", "clang"].map(String::from));
+    candidates.into_iter().find(|c| {
+        Command::new(c)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    })
 }
 
 fn build_and_run_rust(name: &str, eq: &Equations, states: &[State]) -> String {
@@ -270,8 +419,18 @@ fn build_and_run_rust(name: &str, eq: &Equations, states: &[State]) -> String {
     std::fs::write(dir.join("equations.rs"), &source).expect("written");
     std::fs::write(dir.join("main.rs"), rust_harness(eq, &source, states)).expect("written");
     let binary = dir.join("harness");
-    run(Command::new(rustc()).args(["-O", "--edition", "2021"]).arg(dir.join("main.rs")).arg("-o").arg(&binary), &format!("rustc on {name}"));
-    let output = run(&mut Command::new(&binary), &format!("the Rust harness of {name}"));
+    run(
+        Command::new(rustc())
+            .args(["-O", "--edition", "2021"])
+            .arg(dir.join("main.rs"))
+            .arg("-o")
+            .arg(&binary),
+        &format!("rustc on {name}"),
+    );
+    let output = run(
+        &mut Command::new(&binary),
+        &format!("the Rust harness of {name}"),
+    );
     let _ = std::fs::remove_dir_all(&dir);
     output
 }
@@ -282,10 +441,28 @@ fn build_and_run_c(compiler: &str, name: &str, eq: &Equations, states: &[State])
     std::fs::write(dir.join("equations.c"), &source).expect("written");
     std::fs::write(dir.join("main.c"), c_harness(eq, &source, states)).expect("written");
     let binary = dir.join("harness");
-    let compile = Command::new(compiler).args(["-std=c99", "-O2", "-Wall", "-Werror=implicit-function-declaration"]).arg(dir.join("main.c")).arg("-o").arg(&binary).arg("-lm").output();
+    let compile = Command::new(compiler)
+        .args([
+            "-std=c99",
+            "-O2",
+            "-Wall",
+            "-Werror=implicit-function-declaration",
+        ])
+        .arg(dir.join("main.c"))
+        .arg("-o")
+        .arg(&binary)
+        .arg("-lm")
+        .output();
     let output = compile.unwrap_or_else(|e| panic!("{compiler}: {e}"));
-    assert!(output.status.success(), "{compiler} on {name} failed:\n{}", String::from_utf8_lossy(&output.stderr));
-    let printed = run(&mut Command::new(&binary), &format!("the C harness of {name}"));
+    assert!(
+        output.status.success(),
+        "{compiler} on {name} failed:\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let printed = run(
+        &mut Command::new(&binary),
+        &format!("the C harness of {name}"),
+    );
     let _ = std::fs::remove_dir_all(&dir);
     printed
 }
@@ -305,7 +482,10 @@ fn generated_rust_computes_the_equations_and_the_forward_dynamics() {
                 })
             })
             .collect();
-        handles.into_iter().map(|h| h.join().expect("no failure")).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("no failure"))
+            .collect()
     });
     println!("{}", results.join("\n"));
 }
@@ -340,25 +520,50 @@ fn evaluate_json(document: &serde_json::Value, value_of: &dyn Fn(&str) -> f64) -
             "pow" => arg(0).powf(arg(1)),
             "atan2" => arg(0).atan2(arg(1)),
             "neg" => -arg(0),
-            function => lsdc::symbolic::expr::Function::from_name(function).expect("a known function").eval(arg(0)),
+            function => lsdc::symbolic::expr::Function::from_name(function)
+                .expect("a known function")
+                .eval(arg(0)),
         };
         values.push(value);
     }
     let indices = |v: &serde_json::Value| -> Vec<f64> {
-        let flat: Vec<&serde_json::Value> = v.as_array().expect("a list").iter().flat_map(|x| x.as_array().map(|row| row.iter().collect()).unwrap_or_else(|| vec![x])).collect();
-        flat.iter().map(|i| values[i.as_u64().expect("a node index") as usize]).collect()
+        let flat: Vec<&serde_json::Value> = v
+            .as_array()
+            .expect("a list")
+            .iter()
+            .flat_map(|x| {
+                x.as_array()
+                    .map(|row| row.iter().collect())
+                    .unwrap_or_else(|| vec![x])
+            })
+            .collect();
+        flat.iter()
+            .map(|i| values[i.as_u64().expect("a node index") as usize])
+            .collect()
     };
-    ["mass", "second_member", "forces", "constraints", "constraint_bias"].iter().map(|key| indices(&document[key])).collect()
+    [
+        "mass",
+        "second_member",
+        "forces",
+        "constraints",
+        "constraint_bias",
+    ]
+    .iter()
+    .map(|key| indices(&document[key]))
+    .collect()
 }
 
 #[test]
 fn json_holds_the_dag_that_gives_the_same_values() {
     for name in ["satellite", "four_bar", "double_pendulum"] {
         let eq = equations(name);
-        let document: serde_json::Value = serde_json::from_str(&emit::json(&eq, name)).expect("valid JSON");
+        let document: serde_json::Value =
+            serde_json::from_str(&emit::json(&eq, name)).expect("valid JSON");
         let state = states(&eq, 1).remove(0);
         let symbols = symbol_values(&eq, &state);
-        let by_name: HashMap<String, f64> = (0..eq.pool.symbol_count()).map(|i| (eq.pool.symbol_name(i as u32).to_string(), symbols[i])).collect();
+        let by_name: HashMap<String, f64> = (0..eq.pool.symbol_count())
+            .map(|i| (eq.pool.symbol_name(i as u32).to_string(), symbols[i]))
+            .collect();
         let from_json = evaluate_json(&document, &|n| by_name[n]);
         let values = eq.evaluate(&eq.tape(), &symbols);
         let row_major = |m: &DMatrix<f64>| m.transpose().iter().copied().collect::<Vec<f64>>();
@@ -372,8 +577,16 @@ fn json_holds_the_dag_that_gives_the_same_values() {
         for (got, want) in from_json.iter().zip(&expected) {
             assert_eq!(got, want, "{name}: the JSON DAG evaluates to other values");
         }
-        assert_eq!(document["size"].as_u64(), Some(document["nodes"].as_array().map_or(0, |n| n.len()) as u64));
-        assert_eq!(document["variables"]["positions"].as_array().map(|p| p.len()), Some(eq.dimension()));
+        assert_eq!(
+            document["size"].as_u64(),
+            Some(document["nodes"].as_array().map_or(0, |n| n.len()) as u64)
+        );
+        assert_eq!(
+            document["variables"]["positions"]
+                .as_array()
+                .map(|p| p.len()),
+            Some(eq.dimension())
+        );
     }
 }
 
@@ -385,22 +598,39 @@ fn text_latex_and_sympy_have_their_shape() {
     assert!(text.contains("swing.q"), "{text}");
     assert!(text.contains("distinct nodes"), "{text}");
     let latex = emit::latex(&eq, "examples/pendulum.lsd");
-    assert!(latex.contains("\\begin{align*}") && latex.contains("\\end{document}") && latex.contains("M_{1,1} &="), "{latex}");
+    assert!(
+        latex.contains("\\begin{align*}")
+            && latex.contains("\\end{document}")
+            && latex.contains("M_{1,1} &="),
+        "{latex}"
+    );
     assert!(latex.contains("q_{\\mathrm{swing}}"), "{latex}");
     let loops = equations("four_bar");
     let text = emit::text(&loops, "examples/four_bar.lsd");
     assert!(text.contains("Δ[c.") && text.contains("Δ̇q[c."), "{text}");
     let sympy = emit::sympy(&eq, "examples/pendulum.lsd");
-    assert!(sympy.contains("import sympy as sp") && sympy.contains("swing_q = sp.Symbol('swing.q')") && sympy.contains("M[0, 0] = "), "{sympy}");
+    assert!(
+        sympy.contains("import sympy as sp")
+            && sympy.contains("swing_q = sp.Symbol('swing.q')")
+            && sympy.contains("M[0, 0] = "),
+        "{sympy}"
+    );
     let satellite = emit::sympy(&equations("satellite"), "examples/satellite.lsd");
-    assert!(satellite.contains("cL2_x = sp.Function('cL2_x')") && satellite.contains("cL2_x(join2_x, join2_x_dot)"), "{satellite}");
+    assert!(
+        satellite.contains("cL2_x = sp.Function('cL2_x')")
+            && satellite.contains("cL2_x(join2_x, join2_x_dot)"),
+        "{satellite}"
+    );
 }
 
 #[test]
 fn temporaries_are_named_once_and_constants_are_literals_of_every_language() {
     let eq = equations("satellite_fixed");
     let source = emit::rust(&eq, "x");
-    let definitions: Vec<&str> = source.lines().filter(|l| l.trim_start().starts_with("let x")).collect();
+    let definitions: Vec<&str> = source
+        .lines()
+        .filter(|l| l.trim_start().starts_with("let x"))
+        .collect();
     assert!(!definitions.is_empty());
     let c = emit::c(&eq, "x");
     assert!(c.contains("const double x0 = "));

@@ -21,22 +21,37 @@ fn golden_inputs() -> Vec<PathBuf> {
 
 /// The diagnostics of the front end, then of the topology and assembly when it is clean.
 fn render_diagnostics(input: &Path) -> String {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_files(&[input.to_path_buf()], &options).expect("input readable");
     let mut diagnostics = compilation.diagnostics.clone();
     if let (false, Some(mechanism)) = (compilation.has_errors(), &compilation.mechanism) {
         match lsdc::topology::build(mechanism) {
             Err(errors) => diagnostics.extend(errors),
             Ok(topology) => {
-                match lsdc::analysis::assembled_model(mechanism, topology.clone(), &Default::default()) {
+                match lsdc::analysis::assembled_model(
+                    mechanism,
+                    topology.clone(),
+                    &Default::default(),
+                ) {
                     Err(errors) => diagnostics.extend(errors),
                     // The equations' phase, for what only it rejects.
-                    Ok(_) => diagnostics.extend(lsdc::symbolic::generate(mechanism, &topology).err().unwrap_or_default()),
+                    Ok(_) => diagnostics.extend(
+                        lsdc::symbolic::generate(mechanism, &topology)
+                            .err()
+                            .unwrap_or_default(),
+                    ),
                 }
             }
         }
     }
-    assert!(diagnostics.iter().any(|d| d.is_error()), "{} should not check clean", input.display());
+    assert!(
+        diagnostics.iter().any(|d| d.is_error()),
+        "{} should not check clean",
+        input.display()
+    );
     render::to_text(&compilation.workspace.sources, &diagnostics)
 }
 
@@ -58,13 +73,21 @@ fn diagnostics_match_golden_files() {
             failures.push(format!("--- {}\n{actual}", expected_path.display()));
         }
     }
-    assert!(failures.is_empty(), "diagnostics differ from golden files:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "diagnostics differ from golden files:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
 fn json_diagnostics_carry_positions_and_labels() {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
-    let compilation = compile_files(&[PathBuf::from("tests/golden/library_error.lsd")], &options).expect("readable");
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let compilation = compile_files(&[PathBuf::from("tests/golden/library_error.lsd")], &options)
+        .expect("readable");
     let json = render::to_json_value(&compilation.workspace.sources, &compilation.diagnostics);
     let first = &json[0];
     assert_eq!(first["code"], "E0401");
@@ -72,7 +95,9 @@ fn json_diagnostics_carry_positions_and_labels() {
     assert_eq!(first["line"], 3);
     assert_eq!(first["column"], 32);
     let labels = first["labels"].as_array().expect("labels");
-    assert!(labels.iter().any(|l| l["file"] == "tests/golden/library_error.lsd" && l["primary"] == false));
+    assert!(labels
+        .iter()
+        .any(|l| l["file"] == "tests/golden/library_error.lsd" && l["primary"] == false));
 }
 
 /// The notation table of `examples/NAME.lsd` is compared with `tests/notation/NAME.txt`.
@@ -80,8 +105,12 @@ fn json_diagnostics_carry_positions_and_labels() {
 fn notation_tables_match_golden_files() {
     let update = std::env::var_os("UPDATE_GOLDEN").is_some();
     for name in ["satellite", "delta_isir88"] {
-        let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
-        let compilation = compile_files(&[PathBuf::from(format!("examples/{name}.lsd"))], &options).expect("readable");
+        let options = LoadOptions {
+            library_dirs: Vec::new(),
+            use_environment: false,
+        };
+        let compilation = compile_files(&[PathBuf::from(format!("examples/{name}.lsd"))], &options)
+            .expect("readable");
         let mechanism = compilation.mechanism.expect("elaborates");
         let topology = lsdc::topology::build(&mechanism).expect("connected");
         let actual = lsdc::topology::notation::notation(&mechanism, &topology);
@@ -91,6 +120,9 @@ fn notation_tables_match_golden_files() {
             continue;
         }
         let expected = std::fs::read_to_string(&path).unwrap_or_default();
-        assert_eq!(actual, expected, "notation table of {name} differs from {path}");
+        assert_eq!(
+            actual, expected,
+            "notation table of {name} differs from {path}"
+        );
     }
 }

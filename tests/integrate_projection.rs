@@ -61,7 +61,11 @@ impl OdeSystem for ProjectedCircle {
 const START: [f64; 4] = [1.0, 0.0, 0.0, 1.0];
 
 fn methods() -> [Method; 3] {
-    [Method::Rk4 { step: 0.1 }, Method::DormandPrince, Method::Rosenbrock]
+    [
+        Method::Rk4 { step: 0.1 },
+        Method::DormandPrince,
+        Method::Rosenbrock,
+    ]
 }
 
 /// The (t, state) pairs handed to the observer.
@@ -91,7 +95,16 @@ fn solve_with(
         observed.push((t, y.to_vec()));
         Ok(())
     };
-    let (y, stats) = integrate(method, system, 0.0, y0, t_end, outputs, settings, &mut observer)?;
+    let (y, stats) = integrate(
+        method,
+        system,
+        0.0,
+        y0,
+        t_end,
+        outputs,
+        settings,
+        &mut observer,
+    )?;
     Ok((y, stats, observed))
 }
 
@@ -105,16 +118,30 @@ fn projection_keeps_the_point_on_the_circle_for_100_periods() {
     for method in methods() {
         let mut system = ProjectedCircle::default();
         let (y, stats, observed) = solve(&method, &mut system, &START, t_end, &[t_end]).unwrap();
-        assert!(radius_error(&y) < 1e-14, "{method:?}: radius off by {:e}", radius_error(&y));
+        assert!(
+            radius_error(&y) < 1e-14,
+            "{method:?}: radius off by {:e}",
+            radius_error(&y)
+        );
         // The output at the end time is the projected state the integration ended with.
         assert_eq!(observed, vec![(t_end, y.clone())], "{method:?}");
-        assert_eq!(system.times.len(), stats.steps, "{method:?}: one projection per accepted step");
-        assert!(system.times.windows(2).all(|pair| pair[0] < pair[1]), "{method:?}");
+        assert_eq!(
+            system.times.len(),
+            stats.steps,
+            "{method:?}: one projection per accepted step"
+        );
+        assert!(
+            system.times.windows(2).all(|pair| pair[0] < pair[1]),
+            "{method:?}"
+        );
         assert_eq!(system.times.last(), Some(&t_end), "{method:?}");
         // The projection does not spoil the motion along the circle: after 100 periods the point
         // is back near angle 0 (within the methods' phase errors of up to 0.03).
         assert!(y[1].atan2(y[0]).abs() < 0.05, "{method:?}: ended at {y:?}");
-        assert!((y[0] * y[2] + y[1] * y[3]).abs() < 1e-14, "{method:?}: radial velocity left");
+        assert!(
+            (y[0] * y[2] + y[1] * y[3]).abs() < 1e-14,
+            "{method:?}: radial velocity left"
+        );
     }
 }
 
@@ -122,7 +149,11 @@ fn projection_keeps_the_point_on_the_circle_for_100_periods() {
 fn without_projection_the_point_drifts_off_the_circle() {
     let t_end = 200.0 * PI;
     let (y, ..) = solve(&Method::Rk4 { step: 0.1 }, &mut Circle, &START, t_end, &[]).unwrap();
-    assert!(radius_error(&y) > 1e-10, "radius off by only {:e}", radius_error(&y));
+    assert!(
+        radius_error(&y) > 1e-10,
+        "radius off by only {:e}",
+        radius_error(&y)
+    );
 }
 
 #[test]
@@ -131,13 +162,21 @@ fn outputs_at_step_ends_see_projected_states() {
     let step = 0.1;
     let outputs: Vec<f64> = (1..=1000).map(|k| k as f64 * step).collect();
     let mut system = ProjectedCircle::default();
-    let (_, stats, observed) = solve(&Method::Rk4 { step }, &mut system, &START, 100.0, &outputs).unwrap();
+    let (_, stats, observed) =
+        solve(&Method::Rk4 { step }, &mut system, &START, 100.0, &outputs).unwrap();
     assert_eq!(stats.steps, 1000);
     assert_eq!(observed.len(), 1000);
     for (t, s) in &observed {
-        assert!(radius_error(s) < 1e-14, "t = {t}: radius off by {:e}", radius_error(s));
+        assert!(
+            radius_error(s) < 1e-14,
+            "t = {t}: radius off by {:e}",
+            radius_error(s)
+        );
         let radial_velocity = s[0] * s[2] + s[1] * s[3];
-        assert!(radial_velocity.abs() < 1e-14, "t = {t}: radial velocity {radial_velocity:e}");
+        assert!(
+            radial_velocity.abs() < 1e-14,
+            "t = {t}: radial velocity {radial_velocity:e}"
+        );
     }
 }
 
@@ -172,7 +211,11 @@ fn each_step_starts_from_the_derivative_at_the_projected_state() {
     // Many outputs, so that RK4 caches the end derivative for its interpolant; tolerances tight
     // enough that a stale slope shows well above the local error.
     let outputs: Vec<f64> = (0..=200).map(|k| k as f64 * 0.005).collect();
-    let settings = Settings { rtol: 1e-8, atol: 1e-10, ..Settings::default() };
+    let settings = Settings {
+        rtol: 1e-8,
+        atol: 1e-10,
+        ..Settings::default()
+    };
     for method in methods() {
         let method = match method {
             Method::Rk4 { .. } => Method::Rk4 { step: 0.01 },
@@ -184,7 +227,10 @@ fn each_step_starts_from_the_derivative_at_the_projected_state() {
         let mut t_start = 0.0;
         for &(t, y_end) in &system.step_ends {
             let exact = (t - t_start).exp();
-            assert!((y_end - exact).abs() < 1e-8 * exact, "{method:?}: step to t = {t} ends at {y_end}, not {exact}");
+            assert!(
+                (y_end - exact).abs() < 1e-8 * exact,
+                "{method:?}: step to t = {t} ends at {y_end}, not {exact}"
+            );
             t_start = t;
         }
     }
@@ -197,8 +243,14 @@ fn a_reprojection_costs_one_evaluation_only_when_the_state_moved() {
     // attempt, and one to refresh the first-same-as-last stage after each projection that moved.
     let mut system = ProjectedCircle::default();
     let (_, stats, _) = solve(&Method::DormandPrince, &mut system, &START, t_end, &[]).unwrap();
-    assert!(system.moved > stats.steps / 2, "the projection should usually move the state");
-    assert_eq!(stats.rhs_evaluations, 2 + 6 * (stats.steps + stats.rejected) + system.moved);
+    assert!(
+        system.moved > stats.steps / 2,
+        "the projection should usually move the state"
+    );
+    assert_eq!(
+        stats.rhs_evaluations,
+        2 + 6 * (stats.steps + stats.rejected) + system.moved
+    );
     // RK4 projects before deriving anything from a step's end: four evaluations per step.
     let mut system = ProjectedCircle::default();
     let (_, stats, _) = solve(&Method::Rk4 { step: 0.1 }, &mut system, &START, t_end, &[]).unwrap();
@@ -263,8 +315,16 @@ impl OdeSystem for FailingProjection {
 fn a_failing_projection_stops_the_integration_like_a_failing_rhs() {
     for method in methods() {
         let error = solve(&method, &mut FailingProjection, &START, 2.0, &[]).unwrap_err();
-        assert_eq!(error.failure, Failure::System("the constraints cannot be satisfied".to_string()), "{method:?}");
-        assert!((1.0..2.0).contains(&error.time), "{method:?}: stopped at {}", error.time);
+        assert_eq!(
+            error.failure,
+            Failure::System("the constraints cannot be satisfied".to_string()),
+            "{method:?}"
+        );
+        assert!(
+            (1.0..2.0).contains(&error.time),
+            "{method:?}: stopped at {}",
+            error.time
+        );
         assert!(error.stats.steps > 0, "{method:?}");
     }
 }

@@ -27,7 +27,11 @@ fn ode<F: FnMut(f64, &[f64], &mut [f64])>(dimension: usize, f: F) -> Ode<F> {
 }
 
 fn tolerances(rtol: f64, atol: f64) -> Settings {
-    Settings { rtol, atol, ..Settings::default() }
+    Settings {
+        rtol,
+        atol,
+        ..Settings::default()
+    }
 }
 
 /// The (t, y) pairs handed to the observer.
@@ -47,18 +51,32 @@ fn solve(
         observed.push((t, y.to_vec()));
         Ok(())
     };
-    match integrate(method, system, span.0, y0, span.1, outputs, settings, &mut observer) {
+    match integrate(
+        method,
+        system,
+        span.0,
+        y0,
+        span.1,
+        outputs,
+        settings,
+        &mut observer,
+    ) {
         Ok((y, stats)) => Ok((y, stats, observed)),
         Err(error) => Err((error, observed)),
     }
 }
 
 fn max_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
 
 fn linspace(start: f64, end: f64, count: usize) -> Vec<f64> {
-    (0..count).map(|i| start + (end - start) * i as f64 / (count - 1) as f64).collect()
+    (0..count)
+        .map(|i| start + (end - start) * i as f64 / (count - 1) as f64)
+        .collect()
 }
 
 fn oscillator() -> Ode<impl FnMut(f64, &[f64], &mut [f64])> {
@@ -71,7 +89,15 @@ fn oscillator() -> Ode<impl FnMut(f64, &[f64], &mut [f64])> {
 /// Harmonic oscillator x'' = −x from (1, 0): after 100 periods x = cos t returns to (1, 0).
 fn oscillator_after_100_periods(method: &Method, settings: &Settings) -> (f64, f64, Stats) {
     let t_end = 200.0 * PI;
-    let (y, stats, _) = solve(method, &mut oscillator(), &[1.0, 0.0], (0.0, t_end), &[], settings).unwrap();
+    let (y, stats, _) = solve(
+        method,
+        &mut oscillator(),
+        &[1.0, 0.0],
+        (0.0, t_end),
+        &[],
+        settings,
+    )
+    .unwrap();
     let amplitude_error = (y[0].hypot(y[1]) - 1.0).abs();
     let phase_error = (-y[1]).atan2(y[0]).abs();
     (amplitude_error, phase_error, stats)
@@ -79,35 +105,65 @@ fn oscillator_after_100_periods(method: &Method, settings: &Settings) -> (f64, f
 
 #[test]
 fn dormand_prince_keeps_phase_and_amplitude_of_an_oscillator_over_100_periods() {
-    let (amplitude, phase, stats) = oscillator_after_100_periods(&Method::DormandPrince, &tolerances(1e-13, 1e-13));
+    let (amplitude, phase, stats) =
+        oscillator_after_100_periods(&Method::DormandPrince, &tolerances(1e-13, 1e-13));
     eprintln!("oscillator DOPRI5 1e-13: amplitude {amplitude:.1e} phase {phase:.1e} {stats:?}");
-    assert!(amplitude < 1e-10 && phase < 1e-10, "amplitude error {amplitude:e}, phase error {phase:e}");
+    assert!(
+        amplitude < 1e-10 && phase < 1e-10,
+        "amplitude error {amplitude:e}, phase error {phase:e}"
+    );
 }
 
 #[test]
 fn rk4_and_rosenbrock_follow_an_oscillator_over_100_periods() {
-    let (amplitude, phase, stats) = oscillator_after_100_periods(&Method::Rk4 { step: 0.01 }, &Settings::default());
+    let (amplitude, phase, stats) =
+        oscillator_after_100_periods(&Method::Rk4 { step: 0.01 }, &Settings::default());
     eprintln!("oscillator RK4 h=0.01: amplitude {amplitude:.1e} phase {phase:.1e} {stats:?}");
-    assert!(amplitude < 1e-7 && phase < 1e-7, "amplitude error {amplitude:e}, phase error {phase:e}");
-    let (amplitude, phase, stats) = oscillator_after_100_periods(&Method::Rosenbrock, &tolerances(1e-6, 1e-9));
+    assert!(
+        amplitude < 1e-7 && phase < 1e-7,
+        "amplitude error {amplitude:e}, phase error {phase:e}"
+    );
+    let (amplitude, phase, stats) =
+        oscillator_after_100_periods(&Method::Rosenbrock, &tolerances(1e-6, 1e-9));
     eprintln!("oscillator Rosenbrock 1e-6: amplitude {amplitude:.1e} phase {phase:.1e} {stats:?}");
     // L-stable methods damp oscillations: the amplitude suffers more than the phase.
-    assert!(amplitude < 1e-3 && phase < 1e-5, "amplitude error {amplitude:e}, phase error {phase:e}");
+    assert!(
+        amplitude < 1e-3 && phase < 1e-5,
+        "amplitude error {amplitude:e}, phase error {phase:e}"
+    );
 }
 
 #[test]
 fn every_method_follows_exponential_decay() {
     let times = linspace(0.0, 10.0, 21);
-    let cases = [(Method::Rk4 { step: 0.05 }, 1e-7), (Method::DormandPrince, 1e-9), (Method::Rosenbrock, 1e-7)];
+    let cases = [
+        (Method::Rk4 { step: 0.05 }, 1e-7),
+        (Method::DormandPrince, 1e-9),
+        (Method::Rosenbrock, 1e-7),
+    ];
     for (method, bound) in cases {
         let mut decay = ode(1, |_, y, dydt| dydt[0] = -0.7 * y[0]);
-        let (y, stats, observed) =
-            solve(&method, &mut decay, &[2.0], (0.0, 10.0), &times, &tolerances(1e-9, 1e-12)).unwrap();
-        let worst = observed.iter().map(|(t, y)| (y[0] - 2.0 * (-0.7 * t).exp()).abs()).fold(0.0, f64::max);
+        let (y, stats, observed) = solve(
+            &method,
+            &mut decay,
+            &[2.0],
+            (0.0, 10.0),
+            &times,
+            &tolerances(1e-9, 1e-12),
+        )
+        .unwrap();
+        let worst = observed
+            .iter()
+            .map(|(t, y)| (y[0] - 2.0 * (-0.7 * t).exp()).abs())
+            .fold(0.0, f64::max);
         eprintln!("decay {method:?}: max error {worst:.1e} {stats:?}");
         assert_eq!(observed.len(), times.len());
         assert!(worst < bound, "{method:?}: error {worst:e}");
-        assert_eq!(y, observed.last().unwrap().1, "the last output is the final state");
+        assert_eq!(
+            y,
+            observed.last().unwrap().1,
+            "the last output is the final state"
+        );
     }
 }
 
@@ -116,9 +172,19 @@ fn dormand_prince_reaches_relative_accuracy_1e_12_on_a_blowing_up_solution() {
     // y' = y² from 1 is 1 / (1 − t), which grows tenfold by t = 0.9.
     let mut square = ode(1, |_, y, dydt| dydt[0] = y[0] * y[0]);
     let times = linspace(0.0, 0.9, 10);
-    let (_, stats, observed) =
-        solve(&Method::DormandPrince, &mut square, &[1.0], (0.0, 0.9), &times, &tolerances(1e-14, 1e-14)).unwrap();
-    let worst = observed.iter().map(|(t, y)| (y[0] * (1.0 - t) - 1.0).abs()).fold(0.0, f64::max);
+    let (_, stats, observed) = solve(
+        &Method::DormandPrince,
+        &mut square,
+        &[1.0],
+        (0.0, 0.9),
+        &times,
+        &tolerances(1e-14, 1e-14),
+    )
+    .unwrap();
+    let worst = observed
+        .iter()
+        .map(|(t, y)| (y[0] * (1.0 - t) - 1.0).abs())
+        .fold(0.0, f64::max);
     eprintln!("y' = y^2 DOPRI5 1e-14: max relative error {worst:.1e} {stats:?}");
     assert!(worst < 1e-12, "relative error {worst:e}");
 }
@@ -129,9 +195,19 @@ fn rosenbrock_follows_a_blowing_up_solution() {
     // Riccati equation exactly, which would test nothing.)
     let mut cube = ode(1, |_, y, dydt| dydt[0] = y[0].powi(3));
     let times = linspace(0.0, 0.45, 10);
-    let (_, stats, observed) =
-        solve(&Method::Rosenbrock, &mut cube, &[1.0], (0.0, 0.45), &times, &tolerances(1e-9, 1e-9)).unwrap();
-    let worst = observed.iter().map(|(t, y)| (y[0] * (1.0 - 2.0 * t).sqrt() - 1.0).abs()).fold(0.0, f64::max);
+    let (_, stats, observed) = solve(
+        &Method::Rosenbrock,
+        &mut cube,
+        &[1.0],
+        (0.0, 0.45),
+        &times,
+        &tolerances(1e-9, 1e-9),
+    )
+    .unwrap();
+    let worst = observed
+        .iter()
+        .map(|(t, y)| (y[0] * (1.0 - 2.0 * t).sqrt() - 1.0).abs())
+        .fold(0.0, f64::max);
     eprintln!("y' = y^3 Rosenbrock 1e-9: max relative error {worst:.1e} {stats:?}");
     assert!(worst < 1e-7, "relative error {worst:e}");
 }
@@ -170,17 +246,32 @@ fn dormand_prince_keeps_energy_and_period_of_a_kepler_orbit() {
     let y0 = kepler_orbit(e, 0.0);
     let periods = 10.0;
     let times = linspace(0.0, periods * 2.0 * PI, 401);
-    let (y, stats, observed) =
-        solve(&Method::DormandPrince, &mut kepler(), &y0, (0.0, times[400]), &times, &tolerances(1e-12, 1e-12))
-            .unwrap();
-    let energy_drift = observed.iter().map(|(_, y)| (kepler_energy(y) + 0.5).abs()).fold(0.0, f64::max);
-    let path_error = observed.iter().map(|(t, y)| max_difference(y, &kepler_orbit(e, *t))).fold(0.0, f64::max);
+    let (y, stats, observed) = solve(
+        &Method::DormandPrince,
+        &mut kepler(),
+        &y0,
+        (0.0, times[400]),
+        &times,
+        &tolerances(1e-12, 1e-12),
+    )
+    .unwrap();
+    let energy_drift = observed
+        .iter()
+        .map(|(_, y)| (kepler_energy(y) + 0.5).abs())
+        .fold(0.0, f64::max);
+    let path_error = observed
+        .iter()
+        .map(|(t, y)| max_difference(y, &kepler_orbit(e, *t)))
+        .fold(0.0, f64::max);
     let period_error = max_difference(&y, &y0);
     eprintln!(
         "Kepler DOPRI5 1e-12: energy {energy_drift:.1e}, path {path_error:.1e}, return {period_error:.1e} {stats:?}"
     );
     assert!(energy_drift < 1e-9, "energy drift {energy_drift:e}");
-    assert!(period_error < 1e-8, "after {periods} periods the state is {y:?}");
+    assert!(
+        period_error < 1e-8,
+        "after {periods} periods the state is {y:?}"
+    );
     assert!(path_error < 1e-8, "path error {path_error:e}");
 }
 
@@ -188,12 +279,24 @@ fn dormand_prince_keeps_energy_and_period_of_a_kepler_orbit() {
 fn rosenbrock_keeps_a_kepler_orbit_at_moderate_tolerance() {
     let e = 0.5;
     let y0 = kepler_orbit(e, 0.0);
-    let (y, stats, _) =
-        solve(&Method::Rosenbrock, &mut kepler(), &y0, (0.0, 2.0 * PI), &[], &tolerances(1e-9, 1e-9)).unwrap();
+    let (y, stats, _) = solve(
+        &Method::Rosenbrock,
+        &mut kepler(),
+        &y0,
+        (0.0, 2.0 * PI),
+        &[],
+        &tolerances(1e-9, 1e-9),
+    )
+    .unwrap();
     let period_error = max_difference(&y, &y0);
     let energy_error = (kepler_energy(&y) + 0.5).abs();
-    eprintln!("Kepler Rosenbrock 1e-9: return {period_error:.1e}, energy {energy_error:.1e} {stats:?}");
-    assert!(period_error < 1e-5 && energy_error < 1e-6, "return error {period_error:e}, energy error {energy_error:e}");
+    eprintln!(
+        "Kepler Rosenbrock 1e-9: return {period_error:.1e}, energy {energy_error:.1e} {stats:?}"
+    );
+    assert!(
+        period_error < 1e-5 && energy_error < 1e-6,
+        "return error {period_error:e}, energy error {energy_error:e}"
+    );
 }
 
 /// y' = A y with A symmetric, eigenvalues −1 and −1e6 (eigenvectors (1, 1) and (1, −1)), from (1, 0).
@@ -216,19 +319,45 @@ fn rosenbrock_solves_a_stiff_system_with_a_hundredth_of_the_work_of_dormand_prin
     let t_end = 0.2;
     let settings = tolerances(1e-6, 1e-9);
     let exact = stiff_linear_exact(t_end);
-    let (implicit, implicit_stats, _) =
-        solve(&Method::Rosenbrock, &mut stiff_linear(), &[1.0, 0.0], (0.0, t_end), &[], &settings).unwrap();
-    let (explicit, explicit_stats, _) =
-        solve(&Method::DormandPrince, &mut stiff_linear(), &[1.0, 0.0], (0.0, t_end), &[], &settings).unwrap();
-    eprintln!("stiff Rosenbrock: error {:.1e} {implicit_stats:?}", max_difference(&implicit, &exact));
-    eprintln!("stiff DOPRI5: error {:.1e} {explicit_stats:?}", max_difference(&explicit, &exact));
+    let (implicit, implicit_stats, _) = solve(
+        &Method::Rosenbrock,
+        &mut stiff_linear(),
+        &[1.0, 0.0],
+        (0.0, t_end),
+        &[],
+        &settings,
+    )
+    .unwrap();
+    let (explicit, explicit_stats, _) = solve(
+        &Method::DormandPrince,
+        &mut stiff_linear(),
+        &[1.0, 0.0],
+        (0.0, t_end),
+        &[],
+        &settings,
+    )
+    .unwrap();
+    eprintln!(
+        "stiff Rosenbrock: error {:.1e} {implicit_stats:?}",
+        max_difference(&implicit, &exact)
+    );
+    eprintln!(
+        "stiff DOPRI5: error {:.1e} {explicit_stats:?}",
+        max_difference(&explicit, &exact)
+    );
     assert!(max_difference(&implicit, &exact) < 1e-6);
     assert!(max_difference(&explicit, &exact) < 1e-6);
     assert!(max_difference(&implicit, &explicit) < 1e-6);
     let ratio = implicit_stats.rhs_evaluations as f64 / explicit_stats.rhs_evaluations as f64;
-    assert!(ratio < 0.01, "Rosenbrock used {ratio} of Dormand–Prince's evaluations");
+    assert!(
+        ratio < 0.01,
+        "Rosenbrock used {ratio} of Dormand–Prince's evaluations"
+    );
     assert!(implicit_stats.jacobian_evaluations <= implicit_stats.steps + 1);
-    assert_eq!(explicit_stats.jacobian_evaluations + explicit_stats.lu_decompositions, 0);
+    assert_eq!(
+        explicit_stats.jacobian_evaluations + explicit_stats.lu_decompositions,
+        0
+    );
 }
 
 fn van_der_pol(mu: f64) -> Ode<impl FnMut(f64, &[f64], &mut [f64])> {
@@ -255,11 +384,28 @@ fn rosenbrock_crosses_a_relaxation_jump_of_van_der_pol_with_mu_1000() {
     };
     let (coarse, stats, observed) = run(1e-6);
     let (fine, fine_stats, _) = run(1e-9);
-    eprintln!("Van der Pol mu=1000 Rosenbrock 1e-6: x(1000) = {:.8} {stats:?}", coarse[0]);
-    eprintln!("Van der Pol mu=1000 Rosenbrock 1e-9: x(1000) = {:.8} {fine_stats:?}", fine[0]);
-    assert!(observed.iter().all(|(_, y)| y[0].abs() < 2.1), "x leaves the limit cycle");
-    assert!(observed[50].1[0] > 1.0 && coarse[0] < -1.0, "no jump between t = 500 and t = 1000");
-    assert!((coarse[0] - fine[0]).abs() < 1e-4, "x(1000) is {} at 1e-6 and {} at 1e-9", coarse[0], fine[0]);
+    eprintln!(
+        "Van der Pol mu=1000 Rosenbrock 1e-6: x(1000) = {:.8} {stats:?}",
+        coarse[0]
+    );
+    eprintln!(
+        "Van der Pol mu=1000 Rosenbrock 1e-9: x(1000) = {:.8} {fine_stats:?}",
+        fine[0]
+    );
+    assert!(
+        observed.iter().all(|(_, y)| y[0].abs() < 2.1),
+        "x leaves the limit cycle"
+    );
+    assert!(
+        observed[50].1[0] > 1.0 && coarse[0] < -1.0,
+        "no jump between t = 500 and t = 1000"
+    );
+    assert!(
+        (coarse[0] - fine[0]).abs() < 1e-4,
+        "x(1000) is {} at 1e-6 and {} at 1e-9",
+        coarse[0],
+        fine[0]
+    );
     assert!(stats.steps < 2000, "{stats:?}");
 }
 
@@ -273,15 +419,38 @@ fn dense_output_agrees_with_the_solution_between_steps() {
         (Method::Rk4 { step: 0.05 }, Settings::default(), 1e-6),
     ];
     for (method, settings, bound) in cases {
-        let (_, stats, observed) =
-            solve(&method, &mut oscillator(), &[0.0, 1.0], (0.0, 20.0), &times, &settings).unwrap();
-        let (_, bare_stats, _) = solve(&method, &mut oscillator(), &[0.0, 1.0], (0.0, 20.0), &[], &settings).unwrap();
-        let worst =
-            observed.iter().map(|(t, y)| (y[0] - t.sin()).abs().max((y[1] - t.cos()).abs())).fold(0.0, f64::max);
-        eprintln!("dense {method:?}: max error {worst:.1e} over {} outputs, {stats:?}", observed.len());
+        let (_, stats, observed) = solve(
+            &method,
+            &mut oscillator(),
+            &[0.0, 1.0],
+            (0.0, 20.0),
+            &times,
+            &settings,
+        )
+        .unwrap();
+        let (_, bare_stats, _) = solve(
+            &method,
+            &mut oscillator(),
+            &[0.0, 1.0],
+            (0.0, 20.0),
+            &[],
+            &settings,
+        )
+        .unwrap();
+        let worst = observed
+            .iter()
+            .map(|(t, y)| (y[0] - t.sin()).abs().max((y[1] - t.cos()).abs()))
+            .fold(0.0, f64::max);
+        eprintln!(
+            "dense {method:?}: max error {worst:.1e} over {} outputs, {stats:?}",
+            observed.len()
+        );
         assert_eq!(observed.iter().map(|(t, _)| *t).collect::<Vec<_>>(), times);
         assert!(worst < bound, "{method:?}: dense output error {worst:e}");
-        assert_eq!(stats.steps, bare_stats.steps, "{method:?}: outputs changed the steps");
+        assert_eq!(
+            stats.steps, bare_stats.steps,
+            "{method:?}: outputs changed the steps"
+        );
         assert!(stats.steps < times.len() / 4, "{method:?}: {stats:?}");
     }
 }
@@ -290,31 +459,60 @@ fn dense_output_agrees_with_the_solution_between_steps() {
 fn rk4_outputs_on_the_grid_are_the_step_states() {
     let times = linspace(0.0, 1.0, 11);
     let mut decay = ode(1, |_, y, dydt| dydt[0] = -y[0]);
-    let (y, stats, observed) =
-        solve(&Method::Rk4 { step: 0.1 }, &mut decay, &[1.0], (0.0, 1.0), &times, &Settings::default()).unwrap();
+    let (y, stats, observed) = solve(
+        &Method::Rk4 { step: 0.1 },
+        &mut decay,
+        &[1.0],
+        (0.0, 1.0),
+        &times,
+        &Settings::default(),
+    )
+    .unwrap();
     // One RK4 step of y' = −y multiplies by this polynomial of h = 0.1.
     let factor: f64 = 1.0 - 0.1 + 0.01 / 2.0 - 0.001 / 6.0 + 0.0001 / 24.0;
     for (k, (_, value)) in observed.iter().enumerate() {
-        assert!((value[0] - factor.powi(k as i32)).abs() < 1e-15, "output {k} is {value:?}");
+        assert!(
+            (value[0] - factor.powi(k as i32)).abs() < 1e-15,
+            "output {k} is {value:?}"
+        );
     }
     assert_eq!(y, observed[10].1);
     assert_eq!(stats.steps, 10);
-    assert_eq!(stats.rhs_evaluations, 40, "outputs on the grid need no interpolation");
+    assert_eq!(
+        stats.rhs_evaluations, 40,
+        "outputs on the grid need no interpolation"
+    );
 }
 
 /// Error of x(2) for x'' = −x with a fixed step `h` (adaptive methods forced to it by a tolerance
 /// they always meet).
 fn fixed_step_error(method: &Method, h: f64) -> f64 {
-    let settings = Settings { rtol: 1e6, atol: 1e6, initial_step: Some(h), max_step: h, ..Settings::default() };
-    let (y, _, _) = solve(method, &mut oscillator(), &[1.0, 0.0], (0.0, 2.0), &[], &settings).unwrap();
+    let settings = Settings {
+        rtol: 1e6,
+        atol: 1e6,
+        initial_step: Some(h),
+        max_step: h,
+        ..Settings::default()
+    };
+    let (y, _, _) = solve(
+        method,
+        &mut oscillator(),
+        &[1.0, 0.0],
+        (0.0, 2.0),
+        &[],
+        &settings,
+    )
+    .unwrap();
     max_difference(&y, &[2.0f64.cos(), -(2.0f64).sin()])
 }
 
 #[test]
 fn halving_the_step_divides_the_error_by_two_to_the_order() {
-    for (method, h, order) in
-        [(Method::Rk4 { step: 0.1 }, 0.1, 4), (Method::DormandPrince, 0.2, 5), (Method::Rosenbrock, 0.1, 3)]
-    {
+    for (method, h, order) in [
+        (Method::Rk4 { step: 0.1 }, 0.1, 4),
+        (Method::DormandPrince, 0.2, 5),
+        (Method::Rosenbrock, 0.1, 3),
+    ] {
         let method_with = |h: f64| match method {
             Method::Rk4 { .. } => Method::Rk4 { step: h },
             _ => method.clone(),
@@ -324,7 +522,10 @@ fn halving_the_step_divides_the_error_by_two_to_the_order() {
         let ratio = coarse / fine;
         let expected = 2f64.powi(order);
         eprintln!("order {method:?}: errors {coarse:.2e} {fine:.2e}, ratio {ratio:.2} (expected {expected})");
-        assert!((ratio / expected - 1.0).abs() < 0.15, "{method:?}: ratio {ratio}");
+        assert!(
+            (ratio / expected - 1.0).abs() < 0.15,
+            "{method:?}: ratio {ratio}"
+        );
     }
 }
 
@@ -354,7 +555,11 @@ impl OdeSystem for BreaksAtHalf {
 }
 
 fn all_methods() -> [Method; 3] {
-    [Method::Rk4 { step: 0.01 }, Method::DormandPrince, Method::Rosenbrock]
+    [
+        Method::Rk4 { step: 0.01 },
+        Method::DormandPrince,
+        Method::Rosenbrock,
+    ]
 }
 
 #[test]
@@ -362,14 +567,31 @@ fn a_nan_derivative_stops_at_its_time_after_the_earlier_outputs() {
     let times = [0.0, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8];
     for method in all_methods() {
         let mut system = BreaksAtHalf { with_error: false };
-        let (error, observed) =
-            solve(&method, &mut system, &[0.0], (0.0, 1.0), &times, &Settings::default()).unwrap_err();
-        eprintln!("NaN at 0.5 {method:?}: stopped at {} {:?}", error.time, error.stats);
+        let (error, observed) = solve(
+            &method,
+            &mut system,
+            &[0.0],
+            (0.0, 1.0),
+            &times,
+            &Settings::default(),
+        )
+        .unwrap_err();
+        eprintln!(
+            "NaN at 0.5 {method:?}: stopped at {} {:?}",
+            error.time, error.stats
+        );
         assert_eq!(error.failure, Failure::NotFinite, "{method:?}");
-        assert!((error.time - 0.5).abs() < 0.011, "{method:?} stopped at {}", error.time);
+        assert!(
+            (error.time - 0.5).abs() < 0.011,
+            "{method:?} stopped at {}",
+            error.time
+        );
         let delivered: Vec<f64> = observed.iter().map(|(t, _)| *t).collect();
         assert_eq!(delivered, [0.0, 0.1, 0.2, 0.3, 0.4], "{method:?}");
-        assert!(observed.iter().all(|(t, y)| (y[0] - t).abs() < 1e-9), "{method:?}: {observed:?}");
+        assert!(
+            observed.iter().all(|(t, y)| (y[0] - t).abs() < 1e-9),
+            "{method:?}: {observed:?}"
+        );
     }
 }
 
@@ -377,11 +599,30 @@ fn a_nan_derivative_stops_at_its_time_after_the_earlier_outputs() {
 fn an_error_from_the_system_stops_with_its_message() {
     for method in all_methods() {
         let mut system = BreaksAtHalf { with_error: true };
-        let settings = Settings { max_step: 0.1, ..Settings::default() };
-        let (error, observed) = solve(&method, &mut system, &[0.0], (0.0, 1.0), &[0.0, 0.25], &settings).unwrap_err();
-        assert_eq!(error.failure, Failure::System("singular mass matrix".to_string()), "{method:?}");
+        let settings = Settings {
+            max_step: 0.1,
+            ..Settings::default()
+        };
+        let (error, observed) = solve(
+            &method,
+            &mut system,
+            &[0.0],
+            (0.0, 1.0),
+            &[0.0, 0.25],
+            &settings,
+        )
+        .unwrap_err();
+        assert_eq!(
+            error.failure,
+            Failure::System("singular mass matrix".to_string()),
+            "{method:?}"
+        );
         // The time of the evaluation that failed: a stage of a step that reached past 0.5.
-        assert!((0.5..=1.0).contains(&error.time), "{method:?} stopped at {}", error.time);
+        assert!(
+            (0.5..=1.0).contains(&error.time),
+            "{method:?} stopped at {}",
+            error.time
+        );
         assert_eq!(observed.len(), 2, "{method:?}");
         assert!(error.stats.rhs_evaluations > 0);
     }
@@ -390,12 +631,30 @@ fn an_error_from_the_system_stops_with_its_message() {
 #[test]
 fn an_error_from_the_observer_stops_the_integration() {
     for method in all_methods() {
-        let mut observer = |t: f64, _: &[f64]| if t > 0.3 { Err("enough".to_string()) } else { Ok(()) };
+        let mut observer = |t: f64, _: &[f64]| {
+            if t > 0.3 {
+                Err("enough".to_string())
+            } else {
+                Ok(())
+            }
+        };
         let times = [0.1, 0.2, 0.4, 0.5];
-        let result =
-            integrate(&method, &mut oscillator(), 0.0, &[1.0, 0.0], 1.0, &times, &Settings::default(), &mut observer);
+        let result = integrate(
+            &method,
+            &mut oscillator(),
+            0.0,
+            &[1.0, 0.0],
+            1.0,
+            &times,
+            &Settings::default(),
+            &mut observer,
+        );
         let error = result.unwrap_err();
-        assert_eq!((error.time, error.failure), (0.4, Failure::Observer("enough".to_string())), "{method:?}");
+        assert_eq!(
+            (error.time, error.failure),
+            (0.4, Failure::Observer("enough".to_string())),
+            "{method:?}"
+        );
     }
 }
 
@@ -404,52 +663,137 @@ fn a_solution_that_blows_up_ends_in_a_failure_near_the_singularity() {
     // y' = y³ from 1 is infinite at t = 0.5.
     for method in [Method::DormandPrince, Method::Rosenbrock] {
         let mut cube = ode(1, |_, y, dydt| dydt[0] = y[0].powi(3));
-        let (error, _) = solve(&method, &mut cube, &[1.0], (0.0, 1.0), &[], &Settings::default()).unwrap_err();
+        let (error, _) = solve(
+            &method,
+            &mut cube,
+            &[1.0],
+            (0.0, 1.0),
+            &[],
+            &Settings::default(),
+        )
+        .unwrap_err();
         eprintln!("blow-up {method:?}: {error}, {:?}", error.stats);
-        assert!(matches!(error.failure, Failure::StepUnderflow { .. } | Failure::NotFinite), "{method:?}: {error}");
+        assert!(
+            matches!(
+                error.failure,
+                Failure::StepUnderflow { .. } | Failure::NotFinite
+            ),
+            "{method:?}: {error}"
+        );
         assert!((error.time - 0.5).abs() < 1e-4, "{method:?}: {error}");
     }
 }
 
 #[test]
 fn limits_on_steps_are_enforced() {
-    let settings = Settings { max_steps: 10, ..Settings::default() };
+    let settings = Settings {
+        max_steps: 10,
+        ..Settings::default()
+    };
     for method in all_methods() {
-        let (error, _) = solve(&method, &mut oscillator(), &[1.0, 0.0], (0.0, 100.0), &[], &settings).unwrap_err();
+        let (error, _) = solve(
+            &method,
+            &mut oscillator(),
+            &[1.0, 0.0],
+            (0.0, 100.0),
+            &[],
+            &settings,
+        )
+        .unwrap_err();
         assert_eq!(error.failure, Failure::TooManySteps, "{method:?}");
         assert_eq!(error.stats.steps + error.stats.rejected, 10, "{method:?}");
     }
-    let settings = Settings { min_step: 0.1, ..tolerances(1e-12, 1e-12) };
+    let settings = Settings {
+        min_step: 0.1,
+        ..tolerances(1e-12, 1e-12)
+    };
     for method in [Method::DormandPrince, Method::Rosenbrock] {
-        let (error, _) = solve(&method, &mut oscillator(), &[1.0, 0.0], (0.0, 10.0), &[], &settings).unwrap_err();
-        assert!(matches!(error.failure, Failure::StepUnderflow { step } if step < 0.1), "{method:?}: {error}");
+        let (error, _) = solve(
+            &method,
+            &mut oscillator(),
+            &[1.0, 0.0],
+            (0.0, 10.0),
+            &[],
+            &settings,
+        )
+        .unwrap_err();
+        assert!(
+            matches!(error.failure, Failure::StepUnderflow { step } if step < 0.1),
+            "{method:?}: {error}"
+        );
     }
 }
 
 #[test]
 fn inconsistent_input_is_reported_not_panicked_on() {
     let settings = Settings::default();
-    let reject = |method: &Method, y0: &[f64], span: (f64, f64), outputs: &[f64], settings: &Settings| {
-        let (error, observed) = solve(method, &mut oscillator(), y0, span, outputs, settings).unwrap_err();
-        assert!(matches!(error.failure, Failure::InvalidInput(_)), "{error}");
-        assert!(observed.is_empty());
-    };
+    let reject =
+        |method: &Method, y0: &[f64], span: (f64, f64), outputs: &[f64], settings: &Settings| {
+            let (error, observed) =
+                solve(method, &mut oscillator(), y0, span, outputs, settings).unwrap_err();
+            assert!(matches!(error.failure, Failure::InvalidInput(_)), "{error}");
+            assert!(observed.is_empty());
+        };
     reject(&Method::DormandPrince, &[1.0], (0.0, 1.0), &[], &settings);
-    reject(&Method::DormandPrince, &[1.0, 0.0], (1.0, 0.0), &[], &settings);
-    reject(&Method::DormandPrince, &[1.0, 0.0], (0.0, 1.0), &[0.5, 0.2], &settings);
-    reject(&Method::Rosenbrock, &[1.0, 0.0], (0.0, 1.0), &[2.0], &settings);
-    reject(&Method::Rk4 { step: 0.0 }, &[1.0, 0.0], (0.0, 1.0), &[], &settings);
-    reject(&Method::DormandPrince, &[1.0, 0.0], (0.0, 1.0), &[], &tolerances(-1.0, 0.0));
-    let (error, _) =
-        solve(&Method::Rosenbrock, &mut oscillator(), &[f64::NAN, 0.0], (0.0, 1.0), &[], &settings).unwrap_err();
+    reject(
+        &Method::DormandPrince,
+        &[1.0, 0.0],
+        (1.0, 0.0),
+        &[],
+        &settings,
+    );
+    reject(
+        &Method::DormandPrince,
+        &[1.0, 0.0],
+        (0.0, 1.0),
+        &[0.5, 0.2],
+        &settings,
+    );
+    reject(
+        &Method::Rosenbrock,
+        &[1.0, 0.0],
+        (0.0, 1.0),
+        &[2.0],
+        &settings,
+    );
+    reject(
+        &Method::Rk4 { step: 0.0 },
+        &[1.0, 0.0],
+        (0.0, 1.0),
+        &[],
+        &settings,
+    );
+    reject(
+        &Method::DormandPrince,
+        &[1.0, 0.0],
+        (0.0, 1.0),
+        &[],
+        &tolerances(-1.0, 0.0),
+    );
+    let (error, _) = solve(
+        &Method::Rosenbrock,
+        &mut oscillator(),
+        &[f64::NAN, 0.0],
+        (0.0, 1.0),
+        &[],
+        &settings,
+    )
+    .unwrap_err();
     assert_eq!((error.time, error.failure), (0.0, Failure::NotFinite));
 }
 
 #[test]
 fn an_empty_span_returns_the_initial_state_at_every_output() {
     for method in all_methods() {
-        let (y, stats, observed) =
-            solve(&method, &mut oscillator(), &[1.0, 2.0], (3.0, 3.0), &[3.0, 3.0], &Settings::default()).unwrap();
+        let (y, stats, observed) = solve(
+            &method,
+            &mut oscillator(),
+            &[1.0, 2.0],
+            (3.0, 3.0),
+            &[3.0, 3.0],
+            &Settings::default(),
+        )
+        .unwrap();
         assert_eq!(y, [1.0, 2.0]);
         assert_eq!(stats.steps, 0);
         assert_eq!(observed, [(3.0, vec![1.0, 2.0]), (3.0, vec![1.0, 2.0])]);

@@ -20,12 +20,19 @@ use lsdc::topology;
 use proptest::prelude::*;
 
 fn options() -> LoadOptions {
-    LoadOptions { library_dirs: Vec::new(), use_environment: false }
+    LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    }
 }
 
 fn mechanism(path: &str) -> Mechanism {
     let compilation = compile_files(&[PathBuf::from(path)], &options()).expect("readable");
-    assert!(!compilation.has_errors(), "{path}: {:?}", compilation.diagnostics);
+    assert!(
+        !compilation.has_errors(),
+        "{path}: {:?}",
+        compilation.diagnostics
+    );
     compilation.mechanism.expect("elaborates")
 }
 
@@ -35,12 +42,22 @@ fn kinematic_model(m: &Mechanism) -> KinematicModel {
 }
 
 fn body_number(m: &Mechanism, model: &KinematicModel, name: &str) -> usize {
-    let index = m.bodies.iter().position(|b| b.name.as_deref() == Some(name)).expect("body exists");
-    model.topology.number(BodyRef::Body(lsdc::elab::value::BodyId(index as u32)))
+    let index = m
+        .bodies
+        .iter()
+        .position(|b| b.name.as_deref() == Some(name))
+        .expect("body exists");
+    model
+        .topology
+        .number(BodyRef::Body(lsdc::elab::value::BodyId(index as u32)))
 }
 
 fn coordinate_index(model: &KinematicModel, name: &str) -> usize {
-    model.coordinate_names().iter().position(|n| n == name).unwrap_or_else(|| panic!("no coordinate {name}"))
+    model
+        .coordinate_names()
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no coordinate {name}"))
 }
 
 #[test]
@@ -48,22 +65,39 @@ fn satellite_numbering_follows_the_thesis() {
     let m = mechanism("examples/satellite.lsd");
     let report = analysis::tree(&m).expect("tree");
     let names: Vec<&str> = report.bodies.iter().map(|b| b.name.as_str()).collect();
-    assert_eq!(names, ["satellite", "bras_primaire", "bras_secondaire", "reflecteur"]);
+    assert_eq!(
+        names,
+        [
+            "satellite",
+            "bras_primaire",
+            "bras_secondaire",
+            "reflecteur"
+        ]
+    );
     let parents: Vec<usize> = report.bodies.iter().map(|b| b.parent).collect();
     assert_eq!(parents, [0, 1, 2, 3]);
     assert!(report.complementary.is_empty());
     assert_eq!(report.mobility.expect("tree mobility").mobility, 9);
-    let kinds: Vec<String> =
-        report.bodies.iter().map(|b| format!("{:?}", b.link.joint.as_ref().expect("analysed").kind)).collect();
+    let kinds: Vec<String> = report
+        .bodies
+        .iter()
+        .map(|b| format!("{:?}", b.link.joint.as_ref().expect("analysed").kind))
+        .collect();
     assert_eq!(kinds, ["Free", "Revolute", "Prismatic", "Revolute"]);
 }
 
 fn fixture() -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string("tests/fixtures/delta.json").expect("fixture")).expect("json")
+    serde_json::from_str(&std::fs::read_to_string("tests/fixtures/delta.json").expect("fixture"))
+        .expect("json")
 }
 
 fn vector(value: &serde_json::Value) -> Vec<f64> {
-    value.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
+    value
+        .as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
 }
 
 /// Assembles with the given coordinates held, moving them in small steps from the program's
@@ -71,8 +105,13 @@ fn vector(value: &serde_json::Value) -> Vec<f64> {
 fn assemble_with(model: &KinematicModel, m: &Mechanism, held: &[(&str, f64)]) -> Vec<f64> {
     let (start, mut fixed) = initial_coordinates(m, model).expect("initial values");
     let options = AssemblyOptions::default();
-    let mut q = assemble(model, &start, &fixed, &options).expect("the program's configuration assembles").q;
-    let indices: Vec<usize> = held.iter().map(|(name, _)| coordinate_index(model, name)).collect();
+    let mut q = assemble(model, &start, &fixed, &options)
+        .expect("the program's configuration assembles")
+        .q;
+    let indices: Vec<usize> = held
+        .iter()
+        .map(|(name, _)| coordinate_index(model, name))
+        .collect();
     let from: Vec<f64> = indices.iter().map(|&i| q[i]).collect();
     for &i in &indices {
         fixed[i] = true;
@@ -91,7 +130,10 @@ fn assemble_with(model: &KinematicModel, m: &Mechanism, held: &[(&str, f64)]) ->
 #[test]
 fn delta_forward_kinematics_matches_the_closed_form() {
     let fixture = fixture();
-    for path in ["examples/delta_isir88_reduced.lsd", "examples/delta_isir88.lsd"] {
+    for path in [
+        "examples/delta_isir88_reduced.lsd",
+        "examples/delta_isir88.lsd",
+    ] {
         let m = mechanism(path);
         let model = kinematic_model(&m);
         let nacelle = body_number(&m, &model, "nacelle");
@@ -100,9 +142,14 @@ fn delta_forward_kinematics_matches_the_closed_form() {
             let expected = vector(&row["position"]);
             let held = [("A1.q", alpha[0]), ("A2.q", alpha[1]), ("A3.q", alpha[2])];
             let q = assemble_with(&model, &m, &held);
-            let position = forward(&model, &q).expect("evaluates").poses[nacelle].translation.vector;
+            let position = forward(&model, &q).expect("evaluates").poses[nacelle]
+                .translation
+                .vector;
             for k in 0..3 {
-                assert!((position[k] - expected[k]).abs() < 1e-9, "{path} α={alpha:?}: {position:?} vs {expected:?}");
+                assert!(
+                    (position[k] - expected[k]).abs() < 1e-9,
+                    "{path} α={alpha:?}: {position:?} vs {expected:?}"
+                );
             }
         }
     }
@@ -116,12 +163,20 @@ fn delta_inverse_kinematics_matches_the_closed_form() {
     for row in fixture["inverse"].as_array().expect("rows") {
         let p = vector(&row["position"]);
         let expected = vector(&row["alpha"]);
-        let held = [("position.x", p[0]), ("position.y", p[1]), ("position.z", p[2])];
+        let held = [
+            ("position.x", p[0]),
+            ("position.y", p[1]),
+            ("position.z", p[2]),
+        ];
         let q = assemble_with(&model, &m, &held);
         for (k, name) in ["A1.q", "A2.q", "A3.q"].iter().enumerate() {
             let alpha = q[coordinate_index(&model, name)];
             // 1e-9 m at the arm's 0.2 m length is 5e-9 rad.
-            assert!((alpha - expected[k]).abs() < 5e-9, "P={p:?} {name}: {alpha} vs {}", expected[k]);
+            assert!(
+                (alpha - expected[k]).abs() < 5e-9,
+                "P={p:?} {name}: {alpha} vs {}",
+                expected[k]
+            );
         }
     }
 }
@@ -131,11 +186,18 @@ fn delta_mobility_counts_rod_spins_as_internal() {
     let full = analysis::tree(&mechanism("examples/delta_isir88.lsd")).expect("tree");
     assert_eq!((full.bodies.len(), full.complementary.len()), (10, 5));
     let mobility = full.mobility.expect("computed");
-    assert_eq!((mobility.tree_dof, mobility.rank, mobility.mobility), (24, 15, 9));
+    assert_eq!(
+        (mobility.tree_dof, mobility.rank, mobility.mobility),
+        (24, 15, 9)
+    );
     assert_eq!(mobility.internal.len(), 6);
     for &(body, ways) in &mobility.internal {
         assert_eq!(ways, 1);
-        assert!(full.bodies[body - 1].name.starts_with("rod"), "{}", full.bodies[body - 1].name);
+        assert!(
+            full.bodies[body - 1].name.starts_with("rod"),
+            "{}",
+            full.bodies[body - 1].name
+        );
     }
     let reduced = analysis::tree(&mechanism("examples/delta_isir88_reduced.lsd")).expect("tree");
     assert_eq!((reduced.bodies.len(), reduced.complementary.len()), (7, 2));
@@ -150,20 +212,34 @@ fn check_jacobians(model: &KinematicModel, q: &[f64]) {
         let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
         plus[c] += h;
         minus[c] -= h;
-        let (rp, rm) = (closure(model, &plus).expect(""), closure(model, &minus).expect(""));
+        let (rp, rm) = (
+            closure(model, &plus).expect(""),
+            closure(model, &minus).expect(""),
+        );
         let numeric = (&rp.residual - &rm.residual) / (2.0 * h);
         let difference = (&numeric - analytic.jacobian.column(c)).amax();
-        assert!(difference < 1e-6 * (1.0 + numeric.amax()), "closure column {c}: {difference}");
+        assert!(
+            difference < 1e-6 * (1.0 + numeric.amax()),
+            "closure column {c}: {difference}"
+        );
         for body in 1..=model.topology.body_count() {
             let (xp, xm) = (rp.configuration.poses[body], rm.configuration.poses[body]);
             let x = analytic.configuration.poses[body];
             // World angular velocity from the rotation difference, and the origin's velocity.
             let omega = (xp.rotation * xm.rotation.inverse()).scaled_axis() / (2.0 * h);
             let velocity = (xp.translation.vector - xm.translation.vector) / (2.0 * h);
-            let twist = spatial::Twist::from_column_slice(analytic.configuration.jacobians[body].column(c).as_slice());
+            let twist = spatial::Twist::from_column_slice(
+                analytic.configuration.jacobians[body].column(c).as_slice(),
+            );
             let expected_velocity = spatial::point_velocity(&twist, &x.translation.vector);
-            assert!((omega - spatial::angular(&twist)).amax() < 1e-6, "body {body} column {c} angular");
-            assert!((velocity - expected_velocity).amax() < 1e-6, "body {body} column {c} linear");
+            assert!(
+                (omega - spatial::angular(&twist)).amax() < 1e-6,
+                "body {body} column {c} angular"
+            );
+            assert!(
+                (velocity - expected_velocity).amax() < 1e-6,
+                "body {body} column {c} linear"
+            );
         }
     }
 }
@@ -261,21 +337,30 @@ fn joints_are_classified_with_their_degrees_of_constraint() {
     for (k, (kind, dof)) in expected.iter().enumerate() {
         let join = lsdc::elab::value::JoinId(k as u32);
         let joint = model::link_only(&m, join, &UnknownValues::new()).expect("numeric");
-        let analysis = lsdc::kinematics::joint::analyse(&joint, &UnknownValues::new()).expect("analysed");
-        assert_eq!((format!("{:?}", analysis.kind).as_str(), analysis.dof), (*kind, *dof), "join {}", k + 1);
+        let analysis =
+            lsdc::kinematics::joint::analyse(&joint, &UnknownValues::new()).expect("analysed");
+        assert_eq!(
+            (format!("{:?}", analysis.kind).as_str(), analysis.dof),
+            (*kind, *dof),
+            "join {}",
+            k + 1
+        );
         assert_eq!(analysis.constraint, 6 - dof);
     }
 }
 
 #[test]
 fn tree_and_assembly_use_given_values() {
-    let text = "import joints;\nlet L = ?s;\nlet a = body end; let b = body end; let c = body end;\n\
+    let text =
+        "import joints;\nlet L = ?s;\nlet a = body end; let b = body end; let c = body end;\n\
         join earth and a with revolute([0,0,1]) as j1;\n\
         join [L,0,0] ++ 1 @ a and b with revolute([0,0,1]) as j2;\n\
         join [3,0,0] ++ 1 @ earth and c with revolute([0,0,1]) as j3;\n\
         join [2.5,0,0] ++ 1 @ b and [2,0,0] ++ 1 @ c with revolute([0,0,1]) as j4;\n\
         given L = 1;\ninitial j1.q = 1, j2.q = -0.8, j3.q = 1.6, j4.q = 0.5;\n";
-    let m = compile_text("given.lsd", text, None, &options()).mechanism.expect("elaborates");
+    let m = compile_text("given.lsd", text, None, &options())
+        .mechanism
+        .expect("elaborates");
     let report = analysis::tree(&m).expect("tree");
     assert_eq!(report.mobility.expect("computed with L = 1").mobility, 1);
 }

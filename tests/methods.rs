@@ -17,48 +17,108 @@ const DOUBLE_PENDULUM: &str = "import joints;\n\
     initial shoulder.q = 1.2, elbow.q = -0.5;\n";
 
 fn simulate(text: &str, settings: Settings) -> Simulation {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("test.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
-    let prepared = prepare(&compilation.mechanism.expect("elaborates"), &[], &settings).unwrap_or_else(|d| panic!("{d:?}"));
+    let prepared = prepare(&compilation.mechanism.expect("elaborates"), &[], &settings)
+        .unwrap_or_else(|d| panic!("{d:?}"));
     run(&prepared, &mut |_| {})
 }
 
 #[test]
 fn variational_integrator_keeps_the_energy_bounded_over_long_runs() {
-    let settings = |duration| Settings { integrator: Integrator::Symplectic, duration, output: 0.5, step: Some(2e-3), ..Settings::default() };
+    let settings = |duration| Settings {
+        integrator: Integrator::Symplectic,
+        duration,
+        output: 0.5,
+        step: Some(2e-3),
+        ..Settings::default()
+    };
     let short = simulate(DOUBLE_PENDULUM, settings(20.0));
     let long = simulate(DOUBLE_PENDULUM, settings(200.0));
     assert!(long.report.failure.is_none(), "{:?}", long.report.failure);
-    let (short_drift, long_drift) = (short.report.energy_drift.expect("conservative"), long.report.energy_drift.expect("conservative"));
+    let (short_drift, long_drift) = (
+        short.report.energy_drift.expect("conservative"),
+        long.report.energy_drift.expect("conservative"),
+    );
     // A symplectic method's energy error oscillates without growing: ten times longer, not ten
     // times worse (a drifting method would be), and small for this step.
     assert!(long_drift < 1e-4, "energy error {long_drift:e}");
-    assert!(long_drift < 3.0 * short_drift, "energy error grows: {short_drift:e} over 20 s, {long_drift:e} over 200 s");
+    assert!(
+        long_drift < 3.0 * short_drift,
+        "energy error grows: {short_drift:e} over 20 s, {long_drift:e} over 200 s"
+    );
 }
 
 #[test]
 fn implicit_and_explicit_integrators_agree() {
-    let tight = Settings { integrator: Integrator::DormandPrince, duration: 2.0, output: 0.5, rtol: 1e-12, atol: 1e-12, ..Settings::default() };
-    let implicit = Settings { integrator: Integrator::Implicit, rtol: 1e-9, atol: 1e-9, ..tight.clone() };
+    let tight = Settings {
+        integrator: Integrator::DormandPrince,
+        duration: 2.0,
+        output: 0.5,
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..Settings::default()
+    };
+    let implicit = Settings {
+        integrator: Integrator::Implicit,
+        rtol: 1e-9,
+        atol: 1e-9,
+        ..tight.clone()
+    };
     let reference = simulate(DOUBLE_PENDULUM, tight);
     let stiff = simulate(DOUBLE_PENDULUM, implicit);
     assert!(stiff.report.failure.is_none(), "{:?}", stiff.report.failure);
-    let (a, b) = (reference.samples.last().expect("samples"), stiff.samples.last().expect("samples"));
+    let (a, b) = (
+        reference.samples.last().expect("samples"),
+        stiff.samples.last().expect("samples"),
+    );
     for k in 0..2 {
-        assert!((a.coordinates[k] - b.coordinates[k]).abs() < 1e-6, "{:?} vs {:?}", a.coordinates, b.coordinates);
+        assert!(
+            (a.coordinates[k] - b.coordinates[k]).abs() < 1e-6,
+            "{:?} vs {:?}",
+            a.coordinates,
+            b.coordinates
+        );
     }
 }
 
 #[test]
 fn rk4_converges_at_fourth_order() {
     let error = |step: f64| {
-        let reference = simulate(DOUBLE_PENDULUM, Settings { integrator: Integrator::DormandPrince, duration: 1.0, output: 1.0, rtol: 1e-13, atol: 1e-13, ..Settings::default() });
-        let fixed = simulate(DOUBLE_PENDULUM, Settings { integrator: Integrator::Rk4, duration: 1.0, output: 1.0, step: Some(step), ..Settings::default() });
-        (reference.samples.last().expect("").coordinates[1] - fixed.samples.last().expect("").coordinates[1]).abs()
+        let reference = simulate(
+            DOUBLE_PENDULUM,
+            Settings {
+                integrator: Integrator::DormandPrince,
+                duration: 1.0,
+                output: 1.0,
+                rtol: 1e-13,
+                atol: 1e-13,
+                ..Settings::default()
+            },
+        );
+        let fixed = simulate(
+            DOUBLE_PENDULUM,
+            Settings {
+                integrator: Integrator::Rk4,
+                duration: 1.0,
+                output: 1.0,
+                step: Some(step),
+                ..Settings::default()
+            },
+        );
+        (reference.samples.last().expect("").coordinates[1]
+            - fixed.samples.last().expect("").coordinates[1])
+            .abs()
     };
     let ratio = error(0.005) / error(0.0025);
-    assert!((12.0..20.0).contains(&ratio), "error ratio {ratio} for a halved step");
+    assert!(
+        (12.0..20.0).contains(&ratio),
+        "error ratio {ratio} for a halved step"
+    );
 }
 
 #[test]
@@ -68,9 +128,19 @@ fn a_massless_body_with_nothing_to_move_stops_the_run_with_the_join_named() {
         join earth and arm with revolute([0, 0, 1]) as hinge;\n\
         join [1, 0, 0] ++ 1 @ arm and ghost with revolute([0, 0, 1]) as flap;\n\
         initial hinge.q' = 1;\n";
-    let simulation = simulate(text, Settings { duration: 1.0, ..Settings::default() });
+    let simulation = simulate(
+        text,
+        Settings {
+            duration: 1.0,
+            ..Settings::default()
+        },
+    );
     let failure = simulation.report.failure.expect("the run fails");
-    assert!(failure.message.contains("`flap`") && failure.message.contains("singular"), "{}", failure.message);
+    assert!(
+        failure.message.contains("`flap`") && failure.message.contains("singular"),
+        "{}",
+        failure.message
+    );
     assert_eq!(failure.time, 0.0);
 }
 
@@ -78,8 +148,18 @@ fn a_massless_body_with_nothing_to_move_stops_the_run_with_the_join_named() {
 fn massless_arm_segments_carrying_a_mass_are_well_posed() {
     // The satellite's arms have no mass, but the reflector at their end gives every joint inertia.
     let text = std::fs::read_to_string("examples/satellite_fixed.lsd").expect("example");
-    let simulation = simulate(&text, Settings { duration: 0.5, ..Settings::default() });
-    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+    let simulation = simulate(
+        &text,
+        Settings {
+            duration: 0.5,
+            ..Settings::default()
+        },
+    );
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
 }
 
 #[test]
@@ -87,12 +167,26 @@ fn an_effort_that_is_not_a_number_stops_the_run_when_and_where_it_happens() {
     // The spring force sqrt(1 - x) has no value once the slider passes x = 1.
     let text = "import joints;\nlet block = body mass = 1, iframe = 0, inertia = [1, 1, 1] end;\n\
         join earth and block with link(x) dof = [x, 0, 0], force = [sqrt(1 - x), 0, 0] end as slide;\n";
-    let simulation = simulate(text, Settings { duration: 3.0, output: 0.1, ..Settings::default() });
+    let simulation = simulate(
+        text,
+        Settings {
+            duration: 3.0,
+            output: 0.1,
+            ..Settings::default()
+        },
+    );
     let failure = simulation.report.failure.expect("the run fails");
-    assert!(failure.message.contains("`slide`") && failure.message.contains("not a number"), "{}", failure.message);
+    assert!(
+        failure.message.contains("`slide`") && failure.message.contains("not a number"),
+        "{}",
+        failure.message
+    );
     // x = t²/2 under a unit force: x reaches 1 at t = √2.
     assert!(failure.time > 1.2 && failure.time < 1.5, "{}", failure.time);
-    let last = simulation.samples.last().expect("outputs before the failure are kept");
+    let last = simulation
+        .samples
+        .last()
+        .expect("outputs before the failure are kept");
     assert!(last.time <= failure.time && last.time > 1.2);
 }
 
@@ -102,10 +196,23 @@ fn gravity_from_the_standard_library_weighs_each_body() {
         let rod = body mass = 2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.01] end;\n\
         join earth and rod with prismatic([0, 0, 1]) as drop;\n\
         apply weight(rod) on rod.iframe;\n";
-    let simulation = simulate(text, Settings { duration: 1.0, output: 1.0, rtol: 1e-12, atol: 1e-12, ..Settings::default() });
+    let simulation = simulate(
+        text,
+        Settings {
+            duration: 1.0,
+            output: 1.0,
+            rtol: 1e-12,
+            atol: 1e-12,
+            ..Settings::default()
+        },
+    );
     let last = simulation.samples.last().expect("samples");
     // Free fall: z = -g t²/2.
-    assert!((last.coordinates[0] + 0.5 * 9.80665).abs() < 1e-10, "{:?}", last.coordinates);
+    assert!(
+        (last.coordinates[0] + 0.5 * 9.80665).abs() < 1e-10,
+        "{:?}",
+        last.coordinates
+    );
 }
 
 #[test]
@@ -117,12 +224,50 @@ fn satellite_passes_through_the_euler_angle_singularity() {
         .expect("example")
         .replace("initial base.th = 0.5,", "initial base.th = 0,")
         .replace("base.th' = 0.01", "base.th' = -0.2");
-    let simulation = simulate(&text, Settings { duration: 2.0, output: 0.01, rtol: 1e-10, atol: 1e-10, ..Settings::default() });
-    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
-    let th = simulation.coordinate_names.iter().position(|n| n == "base.th").expect("th");
-    assert_eq!(simulation.samples[0].coordinates[th], 0.0, "starts at the singularity");
-    let farthest = simulation.samples.iter().map(|s| s.coordinates[th].abs()).fold(0.0, f64::max);
-    assert!(farthest > 0.3, "th leaves the singularity: at most {farthest}");
-    assert!(simulation.samples.iter().all(|s| s.coordinates.iter().chain(&s.rates).all(|x| x.is_finite())), "finite outputs");
-    assert!(simulation.report.momentum_drift.expect("free").angular < 1e-8, "{:?}", simulation.report.momentum_drift);
+    let simulation = simulate(
+        &text,
+        Settings {
+            duration: 2.0,
+            output: 0.01,
+            rtol: 1e-10,
+            atol: 1e-10,
+            ..Settings::default()
+        },
+    );
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
+    let th = simulation
+        .coordinate_names
+        .iter()
+        .position(|n| n == "base.th")
+        .expect("th");
+    assert_eq!(
+        simulation.samples[0].coordinates[th], 0.0,
+        "starts at the singularity"
+    );
+    let farthest = simulation
+        .samples
+        .iter()
+        .map(|s| s.coordinates[th].abs())
+        .fold(0.0, f64::max);
+    assert!(
+        farthest > 0.3,
+        "th leaves the singularity: at most {farthest}"
+    );
+    assert!(
+        simulation.samples.iter().all(|s| s
+            .coordinates
+            .iter()
+            .chain(&s.rates)
+            .all(|x| x.is_finite())),
+        "finite outputs"
+    );
+    assert!(
+        simulation.report.momentum_drift.expect("free").angular < 1e-8,
+        "{:?}",
+        simulation.report.momentum_drift
+    );
 }

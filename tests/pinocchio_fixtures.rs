@@ -26,11 +26,19 @@ const TOLERANCE: f64 = 1e-10;
 const FIXTURES: &str = "tests/fixtures/pinocchio";
 
 /// The robots with a fixture, each checked by its own test below.
-const ROBOTS: &[&str] = &["double_pendulum", "kinova", "panda", "solo12", "talos_reduced", "ur5"];
+const ROBOTS: &[&str] = &[
+    "double_pendulum",
+    "kinova",
+    "panda",
+    "solo12",
+    "talos_reduced",
+    "ur5",
+];
 
 fn fixture(robot: &str) -> Value {
     let path = Path::new(FIXTURES).join(format!("{robot}.json"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read `{}`: {e}", path.display()));
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("cannot read `{}`: {e}", path.display()));
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("`{}` is not JSON: {e}", path.display()))
 }
 
@@ -39,7 +47,10 @@ fn numbers(value: &Value, what: &str) -> Vec<f64> {
         .as_array()
         .unwrap_or_else(|| panic!("`{what}` is not a list"))
         .iter()
-        .map(|x| x.as_f64().unwrap_or_else(|| panic!("`{what}` has an entry that is not a number: {x}")))
+        .map(|x| {
+            x.as_f64()
+                .unwrap_or_else(|| panic!("`{what}` has an entry that is not a number: {x}"))
+        })
         .collect()
 }
 
@@ -48,39 +59,75 @@ fn strings(value: &Value, what: &str) -> Vec<String> {
         .as_array()
         .unwrap_or_else(|| panic!("`{what}` is not a list"))
         .iter()
-        .map(|x| x.as_str().unwrap_or_else(|| panic!("`{what}` has an entry that is not a string")).to_string())
+        .map(|x| {
+            x.as_str()
+                .unwrap_or_else(|| panic!("`{what}` has an entry that is not a string"))
+                .to_string()
+        })
         .collect()
 }
 
 fn checked(compilation: Compilation, robot: &str) -> Compilation {
     if compilation.has_errors() {
-        panic!("{robot}: the URDF does not compile:\n{}", render::to_text(&compilation.workspace.sources, &compilation.diagnostics));
+        panic!(
+            "{robot}: the URDF does not compile:\n{}",
+            render::to_text(&compilation.workspace.sources, &compilation.diagnostics)
+        );
     }
     compilation
 }
 
 /// The robot as `lsdc eval` sees it: the URDF file itself, or the floating-base import.
 fn load(robot: &str, fixture: &Value) -> Prepared {
-    let urdf = fixture["urdf"].as_str().unwrap_or_else(|| panic!("{robot}: no `urdf` path"));
-    let floating = fixture["floating_base"].as_bool().unwrap_or_else(|| panic!("{robot}: no `floating_base`"));
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let urdf = fixture["urdf"]
+        .as_str()
+        .unwrap_or_else(|| panic!("{robot}: no `urdf` path"));
+    let floating = fixture["floating_base"]
+        .as_bool()
+        .unwrap_or_else(|| panic!("{robot}: no `floating_base`"));
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = if floating {
-        let xml = std::fs::read_to_string(urdf).unwrap_or_else(|e| panic!("{robot}: cannot read `{urdf}`: {e}"));
-        let imported = import_urdf(urdf, &xml, &ImportOptions { floating_base: true, gravity: true })
-            .unwrap_or_else(|d| panic!("{robot}: the floating-base import fails: {}: {}", d.code, d.message));
+        let xml = std::fs::read_to_string(urdf)
+            .unwrap_or_else(|e| panic!("{robot}: cannot read `{urdf}`: {e}"));
+        let imported = import_urdf(
+            urdf,
+            &xml,
+            &ImportOptions {
+                floating_base: true,
+                gravity: true,
+            },
+        )
+        .unwrap_or_else(|d| {
+            panic!(
+                "{robot}: the floating-base import fails: {}: {}",
+                d.code, d.message
+            )
+        });
         compile_text(&format!("{robot}.lsd"), &imported.text, None, &options)
     } else {
-        compile_files(&[PathBuf::from(urdf)], &options).unwrap_or_else(|e| panic!("{robot}: cannot load `{urdf}`: {e}"))
+        compile_files(&[PathBuf::from(urdf)], &options)
+            .unwrap_or_else(|e| panic!("{robot}: cannot load `{urdf}`: {e}"))
     };
     let compilation = checked(compilation, robot);
-    let mechanism = compilation.mechanism.as_ref().expect("a compiled mechanism");
+    let mechanism = compilation
+        .mechanism
+        .as_ref()
+        .expect("a compiled mechanism");
     prepare(mechanism, &[], &Settings::default()).unwrap_or_else(|diagnostics| {
-        panic!("{robot}: cannot prepare the model:\n{}", render::to_text(&compilation.workspace.sources, &diagnostics))
+        panic!(
+            "{robot}: cannot prepare the model:\n{}",
+            render::to_text(&compilation.workspace.sources, &diagnostics)
+        )
     })
 }
 
 fn inputs(robot: &str, fixture: &Value) -> Vec<StateInput> {
-    let states = fixture["states"].as_array().unwrap_or_else(|| panic!("{robot}: no `states`"));
+    let states = fixture["states"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{robot}: no `states`"));
     states
         .iter()
         .enumerate()
@@ -98,12 +145,25 @@ type Entries = Vec<(String, f64)>;
 
 /// Compares one quantity; panics with the worst entry when the disagreement is too large.
 fn compare(robot: &str, state: usize, quantity: &str, mine: &Entries, reference: &Entries) {
-    assert_eq!(mine.len(), reference.len(), "{robot}, state {state}, {quantity}: lsdc has {} entries, Pinocchio {}", mine.len(), reference.len());
+    assert_eq!(
+        mine.len(),
+        reference.len(),
+        "{robot}, state {state}, {quantity}: lsdc has {} entries, Pinocchio {}",
+        mine.len(),
+        reference.len()
+    );
     let scale = reference.iter().fold(1.0_f64, |m, (_, y)| m.max(y.abs()));
     let mut worst: Option<(f64, usize)> = None;
     for (k, ((label, x), (other, y))) in mine.iter().zip(reference).enumerate() {
-        assert_eq!(label, other, "{robot}, state {state}, {quantity}: entries in different orders");
-        let d = if x.is_finite() && y.is_finite() { (x - y).abs() / scale } else { f64::INFINITY };
+        assert_eq!(
+            label, other,
+            "{robot}, state {state}, {quantity}: entries in different orders"
+        );
+        let d = if x.is_finite() && y.is_finite() {
+            (x - y).abs() / scale
+        } else {
+            f64::INFINITY
+        };
         if worst.is_none_or(|(w, _)| d > w) {
             worst = Some((d, k));
         }
@@ -126,14 +186,26 @@ fn vector_entries(names: &[String], values: &[f64]) -> Entries {
 fn matrix_entries(names: &[String], rows: &[Vec<f64>]) -> Entries {
     rows.iter()
         .enumerate()
-        .flat_map(|(i, row)| row.iter().enumerate().map(move |(j, &x)| (format!("[{}, {}]", names[i], names[j]), x)))
+        .flat_map(|(i, row)| {
+            row.iter()
+                .enumerate()
+                .map(move |(j, &x)| (format!("[{}, {}]", names[i], names[j]), x))
+        })
         .collect()
 }
 
 fn pose_entries(body: &str, translation: &[f64], rotation: &[Vec<f64>]) -> Entries {
-    let mut entries: Entries = translation.iter().enumerate().map(|(k, &x)| (format!("{body}.translation[{k}]"), x)).collect();
+    let mut entries: Entries = translation
+        .iter()
+        .enumerate()
+        .map(|(k, &x)| (format!("{body}.translation[{k}]"), x))
+        .collect();
     for (r, row) in rotation.iter().enumerate() {
-        entries.extend(row.iter().enumerate().map(|(c, &x)| (format!("{body}.rotation[{r}][{c}]"), x)));
+        entries.extend(
+            row.iter()
+                .enumerate()
+                .map(|(c, &x)| (format!("{body}.rotation[{r}][{c}]"), x)),
+        );
     }
     entries
 }
@@ -143,12 +215,16 @@ fn check_robot(robot: &str) {
     let prepared = load(robot, &fixture);
     let states = inputs(robot, &fixture);
     assert!(!states.is_empty(), "{robot}: the fixture has no states");
-    let evaluation: Evaluation = evaluate_states(&prepared, &states).unwrap_or_else(|e| panic!("{robot}: {e}"));
+    let evaluation: Evaluation =
+        evaluate_states(&prepared, &states).unwrap_or_else(|e| panic!("{robot}: {e}"));
 
     let positions = strings(&fixture["positions"], "positions");
     let velocities = strings(&fixture["velocities"], "velocities");
     assert_eq!(evaluation.positions, positions, "{robot}: lsdc's positions are not the fixture's (rerun bench/pinocchio_fixtures.py if the order changed on purpose)");
-    assert_eq!(evaluation.velocities, velocities, "{robot}: lsdc's velocities are not the fixture's");
+    assert_eq!(
+        evaluation.velocities, velocities,
+        "{robot}: lsdc's velocities are not the fixture's"
+    );
 
     let expected_states = fixture["states"].as_array().expect("states");
     for (index, (output, expected)) in evaluation.states.iter().zip(expected_states).enumerate() {
@@ -156,16 +232,41 @@ fn check_robot(robot: &str) {
         let aba = output.aba.as_ref().expect("aba, since tau is given");
         let reference_rnea = numbers(&expected["rnea"], "rnea");
         let reference_aba = numbers(&expected["aba"], "aba");
-        let reference_crba: Vec<Vec<f64>> =
-            expected["crba"].as_array().expect("crba rows").iter().map(|row| numbers(row, "crba row")).collect();
-        compare(robot, index, "rnea", &vector_entries(&velocities, rnea), &vector_entries(&velocities, &reference_rnea));
-        compare(robot, index, "crba", &matrix_entries(&velocities, &output.crba), &matrix_entries(&velocities, &reference_crba));
-        compare(robot, index, "aba", &vector_entries(&velocities, aba), &vector_entries(&velocities, &reference_aba));
+        let reference_crba: Vec<Vec<f64>> = expected["crba"]
+            .as_array()
+            .expect("crba rows")
+            .iter()
+            .map(|row| numbers(row, "crba row"))
+            .collect();
+        compare(
+            robot,
+            index,
+            "rnea",
+            &vector_entries(&velocities, rnea),
+            &vector_entries(&velocities, &reference_rnea),
+        );
+        compare(
+            robot,
+            index,
+            "crba",
+            &matrix_entries(&velocities, &output.crba),
+            &matrix_entries(&velocities, &reference_crba),
+        );
+        compare(
+            robot,
+            index,
+            "aba",
+            &vector_entries(&velocities, aba),
+            &vector_entries(&velocities, &reference_aba),
+        );
 
         let frames = expected["frames"].as_object().expect("frames by body");
         let mine: BTreeSet<&str> = output.frames.iter().map(|f| f.body.as_str()).collect();
         let theirs: BTreeSet<&str> = frames.keys().map(String::as_str).collect();
-        assert_eq!(mine, theirs, "{robot}, state {index}: lsdc's bodies are not the fixture's");
+        assert_eq!(
+            mine, theirs,
+            "{robot}, state {index}: lsdc's bodies are not the fixture's"
+        );
         let mut lsdc_poses = Entries::new();
         let mut reference_poses = Entries::new();
         for frame in &output.frames {
@@ -173,8 +274,12 @@ fn check_robot(robot: &str) {
             lsdc_poses.extend(pose_entries(&frame.body, &frame.translation, &rotation));
             let pose = &frames[&frame.body];
             let translation = numbers(&pose["translation"], "translation");
-            let rotation: Vec<Vec<f64>> =
-                pose["rotation"].as_array().expect("rotation rows").iter().map(|row| numbers(row, "rotation row")).collect();
+            let rotation: Vec<Vec<f64>> = pose["rotation"]
+                .as_array()
+                .expect("rotation rows")
+                .iter()
+                .map(|row| numbers(row, "rotation row"))
+                .collect();
             reference_poses.extend(pose_entries(&frame.body, &translation, &rotation));
         }
         compare(robot, index, "frames", &lsdc_poses, &reference_poses);
@@ -191,7 +296,10 @@ fn every_fixture_is_checked() {
         })
         .collect();
     found.sort();
-    assert_eq!(found, ROBOTS, "each fixture of {FIXTURES} needs its test in tests/pinocchio_fixtures.rs");
+    assert_eq!(
+        found, ROBOTS,
+        "each fixture of {FIXTURES} needs its test in tests/pinocchio_fixtures.rs"
+    );
 }
 
 #[test]

@@ -9,27 +9,101 @@ use lsdc::load::LoadOptions;
 
 /// Token texts of LSD, including the ones only errors use.
 const TOKENS: &[&str] = &[
-    "let", "join", "and", "with", "apply", "on", "package", "import", "as", "local", "in", "end", "body", "link",
-    "force", "torque", "=", ";", ",", ":", ".", "(", ")", "[", "]", "+", "-", "*", "/", "^", "++", "||", "@", "'",
-    "0", "1", "2.5", "1e3", "x", "y", "axe", "rotoïde", "earth", "pi", "sin", "?s", "?fs", "?v", "mass", "frame",
-    "iframe", "inertia", "dof", "dof1", "dof2", "value", "joints", "revolute", "\"lib.lsd\"", "(*", "*)", "?", "|",
+    "let",
+    "join",
+    "and",
+    "with",
+    "apply",
+    "on",
+    "package",
+    "import",
+    "as",
+    "local",
+    "in",
+    "end",
+    "body",
+    "link",
+    "force",
+    "torque",
+    "=",
+    ";",
+    ",",
+    ":",
+    ".",
+    "(",
+    ")",
+    "[",
+    "]",
+    "+",
+    "-",
+    "*",
+    "/",
+    "^",
+    "++",
+    "||",
+    "@",
+    "'",
+    "0",
+    "1",
+    "2.5",
+    "1e3",
+    "x",
+    "y",
+    "axe",
+    "rotoïde",
+    "earth",
+    "pi",
+    "sin",
+    "?s",
+    "?fs",
+    "?v",
+    "mass",
+    "frame",
+    "iframe",
+    "inertia",
+    "dof",
+    "dof1",
+    "dof2",
+    "value",
+    "joints",
+    "revolute",
+    "\"lib.lsd\"",
+    "(*",
+    "*)",
+    "?",
+    "|",
     "#",
 ];
 
 fn examples() -> Vec<String> {
-    ["examples/satellite.lsd", "examples/satellite_library.lsd", "examples/link_forms.lsd", "stdlib/joints.lsd"]
-        .iter()
-        .map(|p| std::fs::read_to_string(p).expect("example readable"))
-        .collect()
+    [
+        "examples/satellite.lsd",
+        "examples/satellite_library.lsd",
+        "examples/link_forms.lsd",
+        "stdlib/joints.lsd",
+    ]
+    .iter()
+    .map(|p| std::fs::read_to_string(p).expect("example readable"))
+    .collect()
 }
 
 fn run_front_end(text: &str) {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
-    let compilation = compile_text("random.lsd", text, Some(std::path::Path::new("examples")), &options);
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let compilation = compile_text(
+        "random.lsd",
+        text,
+        Some(std::path::Path::new("examples")),
+        &options,
+    );
     for diagnostic in &compilation.diagnostics {
         for label in &diagnostic.labels {
             let file = compilation.workspace.sources.file(label.span.file);
-            assert!(label.span.start <= label.span.end && label.span.end as usize <= file.text.len());
+            assert!(
+                label.span.start <= label.span.end && label.span.end as usize <= file.text.len()
+            );
         }
     }
     let text = render::to_text(&compilation.workspace.sources, &compilation.diagnostics);
@@ -61,7 +135,9 @@ fn apply(text: &str, mutation: &Mutation) -> String {
         }
         Mutation::Insert { at, token } => {
             let at = (at % n).min(chars.len());
-            let inserted: Vec<char> = format!(" {} ", TOKENS[token % TOKENS.len()]).chars().collect();
+            let inserted: Vec<char> = format!(" {} ", TOKENS[token % TOKENS.len()])
+                .chars()
+                .collect();
             out.splice(at..at, inserted);
         }
         Mutation::Duplicate { at, len } => {

@@ -6,13 +6,20 @@ use lsdc::simulate::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 fn simulate(text: &str, settings: Settings) -> Simulation {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("test.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.expect("elaborates");
     let prepared = prepare(&mechanism, &[], &settings).unwrap_or_else(|d| panic!("{d:?}"));
     let simulation = run(&prepared, &mut |_| {});
-    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
     simulation
 }
 
@@ -38,12 +45,23 @@ fn pendulum_period_matches_the_elliptic_integral() {
              apply force value = [0, 0, -{g} * bob.mass], body = earth end on bob.iframe;\n\
              initial swing.q = {amplitude};\n"
         );
-        let settings = Settings { integrator: Integrator::DormandPrince, duration: 2.0 * period + period / 4.0, output: period / 4.0, rtol: 1e-14, atol: 1e-14, ..Settings::default() };
+        let settings = Settings {
+            integrator: Integrator::DormandPrince,
+            duration: 2.0 * period + period / 4.0,
+            output: period / 4.0,
+            rtol: 1e-14,
+            atol: 1e-14,
+            ..Settings::default()
+        };
         let simulation = simulate(&text, settings);
         // At t = T/4 + k T/2 the pendulum passes the vertical: θ = 0 and the timing error is θ/θ̇.
         for sample in simulation.samples.iter().skip(1).step_by(2) {
             let timing_error = sample.coordinates[0] / sample.rates[0];
-            assert!(timing_error.abs() < 1e-9 * period, "amplitude {amplitude}: t = {}, θ/θ̇ = {timing_error:e}", sample.time);
+            assert!(
+                timing_error.abs() < 1e-9 * period,
+                "amplitude {amplitude}: t = {}, θ/θ̇ = {timing_error:e}",
+                sample.time
+            );
         }
     }
 }
@@ -67,7 +85,11 @@ fn simulate_example(name: &str, duration: f64) -> Simulation {
     let started = std::time::Instant::now();
     let simulation = simulate(&example(name), Settings::default());
     let last = simulation.samples.last().expect("samples");
-    assert!((last.time - duration).abs() < 1e-9, "{name}: the run stopped at {} instead of {duration}", last.time);
+    assert!(
+        (last.time - duration).abs() < 1e-9,
+        "{name}: the run stopped at {} instead of {duration}",
+        last.time
+    );
     assert_eq!(simulation.report.integrator, "dopri5");
     eprintln!(
         "{name}: {} steps, {} rejected, {:.3} s wall",
@@ -123,7 +145,11 @@ fn dot(a: &V3, b: &V3) -> f64 {
 }
 
 fn cross(a: &V3, b: &V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 fn norm(a: &V3) -> f64 {
@@ -140,7 +166,10 @@ fn bryant(angles: &[f64], rates: &[f64]) -> (M3, V3, V3) {
     let rx = rot(0, angles[0]);
     let rxy = mul(&rx, &rot(1, angles[1]));
     let r = mul(&rxy, &rot(2, angles[2]));
-    let fixed = add(&add(&scale(rates[0], &X), &scale(rates[1], &apply(&rx, &Y))), &scale(rates[2], &apply(&rxy, &Z)));
+    let fixed = add(
+        &add(&scale(rates[0], &X), &scale(rates[1], &apply(&rx, &Y))),
+        &scale(rates[2], &apply(&rxy, &Z)),
+    );
     let body = apply(&transpose(&r), &fixed);
     (r, fixed, body)
 }
@@ -155,7 +184,10 @@ fn linear_momentum(sample: &Sample) -> V3 {
 
 /// The scale `energy_drift` divides by: the largest of |E(0)| and the kinetic energies.
 fn energy_scale(samples: &[Sample], e0: f64) -> f64 {
-    samples.iter().map(|s| s.kinetic_energy.abs()).fold(e0.abs(), f64::max)
+    samples
+        .iter()
+        .map(|s| s.kinetic_energy.abs())
+        .fold(e0.abs(), f64::max)
 }
 
 /// Item 1: the double pendulum keeps its energy to 1e-9 over 10 s (dopri5, tolerance 1e-12).
@@ -172,8 +204,14 @@ fn double_pendulum_keeps_its_energy() {
         let (t1, t2, w1, w2) = (s.coordinates[0], s.coordinates[1], s.rates[0], s.rates[1]);
         let (phi, wphi) = (t1 + t2, w1 + w2);
         let v1 = [c1 * w1 * t1.cos(), c1 * w1 * t1.sin()];
-        let v2 = [l1 * w1 * t1.cos() + c2 * wphi * phi.cos(), l1 * w1 * t1.sin() + c2 * wphi * phi.sin()];
-        let kinetic = 0.5 * m1 * (v1[0] * v1[0] + v1[1] * v1[1]) + 0.5 * i1 * w1 * w1 + 0.5 * m2 * (v2[0] * v2[0] + v2[1] * v2[1]) + 0.5 * i2 * wphi * wphi;
+        let v2 = [
+            l1 * w1 * t1.cos() + c2 * wphi * phi.cos(),
+            l1 * w1 * t1.sin() + c2 * wphi * phi.sin(),
+        ];
+        let kinetic = 0.5 * m1 * (v1[0] * v1[0] + v1[1] * v1[1])
+            + 0.5 * i1 * w1 * w1
+            + 0.5 * m2 * (v2[0] * v2[0] + v2[1] * v2[1])
+            + 0.5 * i2 * wphi * wphi;
         let (z1, z2) = (-c1 * t1.cos(), -l1 * t1.cos() - c2 * phi.cos());
         (kinetic, kinetic + g * (m1 * z1 + m2 * z2))
     };
@@ -184,8 +222,17 @@ fn double_pendulum_keeps_its_energy() {
     for s in samples {
         let (kinetic, total) = energy(s);
         let reported = s.kinetic_energy + s.potential_energy.expect("gravity has a potential");
-        assert!((s.kinetic_energy - kinetic).abs() < 1e-12 * scale, "t = {}: kinetic energy {} against {kinetic}", s.time, s.kinetic_energy);
-        assert!((reported - total).abs() < 1e-12 * scale, "t = {}: energy {reported} against {total}", s.time);
+        assert!(
+            (s.kinetic_energy - kinetic).abs() < 1e-12 * scale,
+            "t = {}: kinetic energy {} against {kinetic}",
+            s.time,
+            s.kinetic_energy
+        );
+        assert!(
+            (reported - total).abs() < 1e-12 * scale,
+            "t = {}: energy {reported} against {total}",
+            s.time
+        );
         drift = drift.max((total - e0).abs() / scale);
     }
     let reported = simulation.report.energy_drift.expect("conservative");
@@ -199,7 +246,10 @@ fn double_pendulum_keeps_its_energy() {
 #[test]
 fn heavy_top_keeps_energy_spin_and_vertical_momentum() {
     let simulation = simulate_example("heavy_top", 10.0);
-    assert_eq!(simulation.coordinate_names, ["pivot.a", "pivot.b", "pivot.c"]);
+    assert_eq!(
+        simulation.coordinate_names,
+        ["pivot.a", "pivot.b", "pivot.c"]
+    );
     // The example's top: centre of mass at l on the body's z axis, moments about it.
     let (g, m, l, transverse, axial) = (9.81, 1.0, 0.1, 0.01, 0.015);
     // Moments about the fixed point (the origin): parallel axes for the transverse ones.
@@ -221,13 +271,28 @@ fn heavy_top_keeps_energy_spin_and_vertical_momentum() {
     for s in samples {
         let (kinetic, energy, spin, momentum) = state(s);
         let reported = s.kinetic_energy + s.potential_energy.expect("gravity has a potential");
-        assert!((s.kinetic_energy - kinetic).abs() < 1e-10 * scale, "t = {}: kinetic energy {} against {kinetic}", s.time, s.kinetic_energy);
-        assert!((reported - energy).abs() < 1e-10 * scale, "t = {}: energy {reported} against {energy}", s.time);
+        assert!(
+            (s.kinetic_energy - kinetic).abs() < 1e-10 * scale,
+            "t = {}: kinetic energy {} against {kinetic}",
+            s.time,
+            s.kinetic_energy
+        );
+        assert!(
+            (reported - energy).abs() < 1e-10 * scale,
+            "t = {}: energy {reported} against {energy}",
+            s.time
+        );
         let gap = norm(&sub(&angular_momentum(s), &momentum));
-        assert!(gap < 1e-10 * norm(&momentum0), "t = {}: angular momentum {:?} against {momentum:?}", s.time, angular_momentum(s));
+        assert!(
+            gap < 1e-10 * norm(&momentum0),
+            "t = {}: angular momentum {:?} against {momentum:?}",
+            s.time,
+            angular_momentum(s)
+        );
         energy_drift = energy_drift.max((energy - e0).abs() / scale);
         spin_drift = spin_drift.max((spin - spin0).abs() / spin0.abs());
-        vertical_drift = vertical_drift.max((s.momentum[2] - samples[0].momentum[2]).abs() / norm(&momentum0));
+        vertical_drift =
+            vertical_drift.max((s.momentum[2] - samples[0].momentum[2]).abs() / norm(&momentum0));
         let axis = apply(&bryant(&s.coordinates, &s.rates).0, &Z);
         largest_tilt_change = largest_tilt_change.max((axis[2] - 0.3f64.cos()).abs());
     }
@@ -238,11 +303,17 @@ fn heavy_top_keeps_energy_spin_and_vertical_momentum() {
         norm(&momentum0)
     );
     // The top does precess and nutate: the axis does not stay where it started.
-    assert!(largest_tilt_change > 1e-4, "the axis barely moved: {largest_tilt_change:e}");
+    assert!(
+        largest_tilt_change > 1e-4,
+        "the axis barely moved: {largest_tilt_change:e}"
+    );
     assert!(reported < 1e-9, "energy drift {reported:e}");
     assert!(energy_drift < 1e-9, "energy drift {energy_drift:e}");
     assert!(spin_drift < 1e-9, "spin drift {spin_drift:e}");
-    assert!(vertical_drift < 1e-9, "vertical angular momentum drift {vertical_drift:e}");
+    assert!(
+        vertical_drift < 1e-9,
+        "vertical angular momentum drift {vertical_drift:e}"
+    );
 }
 
 /// Item 3: a free asymmetric body spun about its intermediate axis flips over (Dzhanibekov);
@@ -251,12 +322,18 @@ fn heavy_top_keeps_energy_spin_and_vertical_momentum() {
 #[test]
 fn free_body_flips_through_the_angle_singularity_and_keeps_its_momentum() {
     let simulation = simulate_example("free_body", 10.0);
-    assert_eq!(simulation.coordinate_names, ["drift.x", "drift.y", "drift.z", "drift.a", "drift.b", "drift.c"]);
+    assert_eq!(
+        simulation.coordinate_names,
+        ["drift.x", "drift.y", "drift.z", "drift.a", "drift.b", "drift.c"]
+    );
     let (m, moments) = (1.0, [1.0, 2.0, 3.0]);
     let samples = &simulation.samples;
     let l0 = angular_momentum(&samples[0]);
     let p0 = linear_momentum(&samples[0]);
-    assert!((norm(&p0) - 0.1).abs() < 1e-12 && (norm(&l0) - 4.0).abs() < 1e-3, "initial momenta {p0:?}, {l0:?}");
+    assert!(
+        (norm(&p0) - 0.1).abs() < 1e-12 && (norm(&l0) - 4.0).abs() < 1e-3,
+        "initial momenta {p0:?}, {l0:?}"
+    );
     let direction = scale(1.0 / norm(&l0), &l0);
     let (mut angular_drift, mut linear_drift, mut energy_gap) = (0.0f64, 0.0f64, 0.0f64);
     let (mut smallest_cosine, mut crossing) = (f64::INFINITY, None);
@@ -265,33 +342,51 @@ fn free_body_flips_through_the_angle_singularity_and_keeps_its_momentum() {
     for s in samples {
         angular_drift = angular_drift.max(norm(&sub(&angular_momentum(s), &l0)));
         linear_drift = linear_drift.max(norm(&sub(&linear_momentum(s), &p0)));
-        let (position, velocity) = ([s.coordinates[0], s.coordinates[1], s.coordinates[2]], [s.rates[0], s.rates[1], s.rates[2]]);
+        let (position, velocity) = (
+            [s.coordinates[0], s.coordinates[1], s.coordinates[2]],
+            [s.rates[0], s.rates[1], s.rates[2]],
+        );
         let (r, _, w) = bryant(&s.coordinates[3..], &s.rates[3..]);
         // The rotation from the angles alone (exact even at the singularity) with the conserved
         // momenta gives the kinetic energy: p² / 2m + ½ Σ L_k² / I_k, L = L0 − r × p0 in the
         // body's axes. (Positions and angles only: no declared rate enters.)
         let spin = apply(&transpose(&r), &sub(&l0, &cross(&position, &p0)));
-        let kinetic = 0.5 * dot(&p0, &p0) / m + (0..3).map(|k| 0.5 * spin[k] * spin[k] / moments[k]).sum::<f64>();
+        let kinetic = 0.5 * dot(&p0, &p0) / m
+            + (0..3)
+                .map(|k| 0.5 * spin[k] * spin[k] / moments[k])
+                .sum::<f64>();
         energy_gap = energy_gap.max((kinetic - s.kinetic_energy).abs() / s.kinetic_energy);
         // Away from the singularity the angle rates are well conditioned: R I ω + m r × v is
         // the momentum the simulation reports.
         if s.coordinates[4].cos().abs() > 0.1 {
-            let own = add(&apply(&r, &std::array::from_fn(|k| moments[k] * w[k])), &scale(m, &cross(&position, &velocity)));
-            assert!(norm(&sub(&own, &angular_momentum(s))) < 1e-10 * norm(&l0), "t = {}: {own:?} against {:?}", s.time, angular_momentum(s));
+            let own = add(
+                &apply(&r, &std::array::from_fn(|k| moments[k] * w[k])),
+                &scale(m, &cross(&position, &velocity)),
+            );
+            assert!(
+                norm(&sub(&own, &angular_momentum(s))) < 1e-10 * norm(&l0),
+                "t = {}: {own:?} against {:?}",
+                s.time,
+                angular_momentum(s)
+            );
         }
         let alignment = dot(&apply(&r, &Y), &direction);
         alignment_min = alignment_min.min(alignment);
         alignment_max = alignment_max.max(alignment);
         smallest_cosine = smallest_cosine.min(s.coordinates[4].cos().abs());
         if let Some(p) = previous {
-            let branch = |b: f64| ((b - std::f64::consts::FRAC_PI_2) / std::f64::consts::PI).floor();
+            let branch =
+                |b: f64| ((b - std::f64::consts::FRAC_PI_2) / std::f64::consts::PI).floor();
             if crossing.is_none() && branch(p.coordinates[4]) != branch(s.coordinates[4]) {
                 crossing = Some(s.time);
             }
         }
         previous = Some(s);
     }
-    let lsdc::simulate::run::MomentumDrift { linear, angular } = simulation.report.momentum_drift.expect("a free body without efforts");
+    let lsdc::simulate::run::MomentumDrift { linear, angular } = simulation
+        .report
+        .momentum_drift
+        .expect("a free body without efforts");
     eprintln!(
         "free body: angular momentum drift {angular_drift:e} (|L| = {:.6}), report {angular:e}; linear {linear_drift:e}, report {linear:e}; \
          kinetic energy from the angles {energy_gap:e}; first crossing of π/2 + kπ at t = {crossing:?}; smallest |cos b| {smallest_cosine:e}; \
@@ -299,12 +394,27 @@ fn free_body_flips_through_the_angle_singularity_and_keeps_its_momentum() {
         norm(&l0),
         simulation.report.energy_drift
     );
-    assert!(crossing.is_some(), "the middle angle never crossed π/2 + kπ (smallest |cos b| = {smallest_cosine:e})");
+    assert!(
+        crossing.is_some(),
+        "the middle angle never crossed π/2 + kπ (smallest |cos b| = {smallest_cosine:e})"
+    );
     // The flip: the intermediate axis starts along L and turns to point against it.
-    assert!(alignment_max > 0.99 && alignment_min < -0.99, "no flip: y·L/|L| within [{alignment_min}, {alignment_max}]");
-    assert!(angular_drift < 1e-10, "angular momentum drift {angular_drift:e}");
-    assert!(angular < 1e-10, "reported angular momentum drift {angular:e}");
-    assert!(energy_gap < 1e-10, "kinetic energy from the angles differs by {energy_gap:e}");
+    assert!(
+        alignment_max > 0.99 && alignment_min < -0.99,
+        "no flip: y·L/|L| within [{alignment_min}, {alignment_max}]"
+    );
+    assert!(
+        angular_drift < 1e-10,
+        "angular momentum drift {angular_drift:e}"
+    );
+    assert!(
+        angular < 1e-10,
+        "reported angular momentum drift {angular:e}"
+    );
+    assert!(
+        energy_gap < 1e-10,
+        "kinetic energy from the angles differs by {energy_gap:e}"
+    );
 }
 
 /// Item 4: the satellite of `satellite_numeric.lsd`, free, with springs and dampers in its arm's
@@ -315,7 +425,10 @@ fn satellite_with_joint_springs_keeps_its_momentum() {
     let simulation = simulate_example("satellite_springs", 10.0);
     assert_eq!(
         simulation.coordinate_names,
-        ["base.x", "base.y", "base.z", "base.ps", "base.th", "base.ph", "hinge.x", "slide.x", "tilt.x"]
+        [
+            "base.x", "base.y", "base.z", "base.ps", "base.th", "base.ph", "hinge.x", "slide.x",
+            "tilt.x"
+        ]
     );
     let (m_satellite, m_reflector, z12, z34) = (1200.0, 40.0, 0.8, 0.5);
     let total = m_satellite + m_reflector;
@@ -331,7 +444,13 @@ fn satellite_with_joint_springs_keeps_its_momentum() {
         let arm = add(&[0.0, q[7], 0.0], &apply(&rot(1, q[8]), &[0.0, 0.0, z34]));
         let reflector_local = add(&[0.0, 0.0, z12], &apply(&rot(0, q[6]), &arm));
         let reflector = apply(&back, &sub(&reflector_local, &translation));
-        scale(1.0 / total, &add(&scale(m_satellite, &satellite), &scale(m_reflector, &reflector)))
+        scale(
+            1.0 / total,
+            &add(
+                &scale(m_satellite, &satellite),
+                &scale(m_reflector, &reflector),
+            ),
+        )
     };
     let samples = &simulation.samples;
     let (p0, l0) = (linear_momentum(&samples[0]), angular_momentum(&samples[0]));
@@ -339,13 +458,19 @@ fn satellite_with_joint_springs_keeps_its_momentum() {
     let (mut straight, mut linear_drift, mut angular_drift) = (0.0f64, 0.0f64, 0.0f64);
     let (mut hinge_min, mut hinge_max) = (f64::INFINITY, f64::NEG_INFINITY);
     for s in samples {
-        straight = straight.max(norm(&sub(&centre_of_mass(s), &add(&r0, &scale(s.time, &v0)))));
+        straight = straight.max(norm(&sub(
+            &centre_of_mass(s),
+            &add(&r0, &scale(s.time, &v0)),
+        )));
         linear_drift = linear_drift.max(norm(&sub(&linear_momentum(s), &p0)));
         angular_drift = angular_drift.max(norm(&sub(&angular_momentum(s), &l0)));
         hinge_min = hinge_min.min(s.coordinates[6]);
         hinge_max = hinge_max.max(s.coordinates[6]);
     }
-    let lsdc::simulate::run::MomentumDrift { linear, angular } = simulation.report.momentum_drift.expect("nothing outside acts on the satellite");
+    let lsdc::simulate::run::MomentumDrift { linear, angular } = simulation
+        .report
+        .momentum_drift
+        .expect("nothing outside acts on the satellite");
     let (linear, angular) = (linear / norm(&p0), angular / norm(&l0));
     eprintln!(
         "satellite: |p| = {:.6}, |L| = {:.6}; relative momentum drift: linear {linear:e}, angular {angular:e} (report), \
@@ -355,11 +480,17 @@ fn satellite_with_joint_springs_keeps_its_momentum() {
         linear_drift / norm(&p0),
         angular_drift / norm(&l0)
     );
-    assert!(hinge_max - hinge_min > 0.1, "the arm barely moved: hinge within [{hinge_min}, {hinge_max}]");
+    assert!(
+        hinge_max - hinge_min > 0.1,
+        "the arm barely moved: hinge within [{hinge_min}, {hinge_max}]"
+    );
     assert!(norm(&v0) > 0.05, "the centre of mass should drift: {v0:?}");
     assert!(linear < 1e-9, "linear momentum drift {linear:e} of |p|");
     assert!(angular < 1e-9, "angular momentum drift {angular:e} of |L|");
-    assert!(straight < 1e-9, "the centre of mass left its straight line by {straight:e} m");
+    assert!(
+        straight < 1e-9,
+        "the centre of mass left its straight line by {straight:e} m"
+    );
 }
 
 /// Item 5: Euler's elliptic pendulum (a cart of mass m1 = 2 on a rail, a point mass m2 = 1 on
@@ -383,19 +514,30 @@ fn elliptic_pendulum_small_oscillation_period() {
         let (m0, m1) = (a.rates[1] * h, b.rates[1] * h);
         let hermite = |s: f64| {
             let (s2, s3) = (s * s, s * s * s);
-            (2.0 * s3 - 3.0 * s2 + 1.0) * p0 + (s3 - 2.0 * s2 + s) * m0 + (-2.0 * s3 + 3.0 * s2) * p1 + (s3 - s2) * m1
+            (2.0 * s3 - 3.0 * s2 + 1.0) * p0
+                + (s3 - 2.0 * s2 + s) * m0
+                + (-2.0 * s3 + 3.0 * s2) * p1
+                + (s3 - s2) * m1
         };
         let (mut lo, mut hi) = (0.0f64, 1.0f64);
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
-            if hermite(mid).signum() == p0.signum() { lo = mid } else { hi = mid }
+            if hermite(mid).signum() == p0.signum() {
+                lo = mid
+            } else {
+                hi = mid
+            }
         }
         crossings.push(a.time + 0.5 * (lo + hi) * h);
     }
     assert!(crossings.len() >= 8, "{} crossings", crossings.len());
-    let period = 2.0 * (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+    let period =
+        2.0 * (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
     let half_periods: Vec<f64> = crossings.windows(2).map(|w| w[1] - w[0]).collect();
-    let spread = half_periods.iter().map(|d| (2.0 * d - period).abs()).fold(0.0, f64::max);
+    let spread = half_periods
+        .iter()
+        .map(|d| (2.0 * d - period).abs())
+        .fold(0.0, f64::max);
     let (m1, m2, a, g) = (2.0f64, 1.0f64, 0.5f64, 9.81f64);
     let linear = 2.0 * std::f64::consts::PI * (m1 * a / (g * (m1 + m2))).sqrt();
     eprintln!(
@@ -405,7 +547,10 @@ fn elliptic_pendulum_small_oscillation_period() {
         (period - 1.158203) / 1.158203,
         (period - linear) / linear
     );
-    assert!(((period - 1.158203) / 1.158203).abs() < 1e-6, "period {period}");
+    assert!(
+        ((period - 1.158203) / 1.158203).abs() < 1e-6,
+        "period {period}"
+    );
     // A sharper oracle: with p_x = 0 the angle obeys L = ½ m2 a² (1 − μ cos²θ) θ̇² + m2 g a cos θ,
     // μ = m2 / (m1 + m2): an inertia (1 − μ)(1 + α θ²), α = μ / (1 − μ), and the pendulum's
     // potential. At amplitude A the period is T0 (1 + (α/4 + 1/16) A² + O(A⁴)).
@@ -413,7 +558,10 @@ fn elliptic_pendulum_small_oscillation_period() {
     let alpha = mu / (1.0 - mu);
     let corrected = linear * (1.0 + (alpha / 4.0 + 1.0 / 16.0) * amplitude * amplitude);
     eprintln!("elliptic pendulum: period {period:.12} against {corrected:.12} at amplitude {amplitude}: relative {:e}", (period - corrected) / corrected);
-    assert!(((period - corrected) / corrected).abs() < 1e-9, "period {period} against {corrected} with the amplitude correction");
+    assert!(
+        ((period - corrected) / corrected).abs() < 1e-9,
+        "period {period} against {corrected} with the amplitude correction"
+    );
 }
 
 /// The declared rates of a free joint are the body's velocity in the program's coordinates: the
@@ -443,7 +591,20 @@ fn free_body_declared_rates_match_its_velocity() {
             worst_angular = (angular, s.time);
         }
     }
-    eprintln!("free body: declared rates off by {:e} (linear, t = {}), {:e} (angular, t = {})", worst_linear.0, worst_linear.1, worst_angular.0, worst_angular.1);
-    assert!(worst_linear.0 < 1e-10, "x', y', z' off the velocity by {:e} of |v| at t = {}", worst_linear.0, worst_linear.1);
-    assert!(worst_angular.0 < 1e-10, "angle rates off the angular velocity by {:e} of |ω| at t = {}", worst_angular.0, worst_angular.1);
+    eprintln!(
+        "free body: declared rates off by {:e} (linear, t = {}), {:e} (angular, t = {})",
+        worst_linear.0, worst_linear.1, worst_angular.0, worst_angular.1
+    );
+    assert!(
+        worst_linear.0 < 1e-10,
+        "x', y', z' off the velocity by {:e} of |v| at t = {}",
+        worst_linear.0,
+        worst_linear.1
+    );
+    assert!(
+        worst_angular.0 < 1e-10,
+        "angle rates off the angular velocity by {:e} of |ω| at t = {}",
+        worst_angular.0,
+        worst_angular.1
+    );
 }

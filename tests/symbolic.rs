@@ -19,7 +19,10 @@ enum Tree {
 }
 
 fn tree() -> impl Strategy<Value = Tree> {
-    let leaf = prop_oneof![(0usize..3).prop_map(Tree::Symbol), prop_oneof![Just(0.0), Just(1.0), Just(-1.0), -3.0..3.0f64].prop_map(Tree::Constant)];
+    let leaf = prop_oneof![
+        (0usize..3).prop_map(Tree::Symbol),
+        prop_oneof![Just(0.0), Just(1.0), Just(-1.0), -3.0..3.0f64].prop_map(Tree::Constant)
+    ];
     leaf.prop_recursive(6, 64, 2, |inner| {
         prop_oneof![
             (inner.clone(), inner.clone()).prop_map(|(a, b)| Tree::Add(Box::new(a), Box::new(b))),

@@ -10,11 +10,11 @@ use lsdc::dynamics::algorithms::{crba, forward_kinematics, rnea, Data};
 use lsdc::dynamics::efforts::{self, Declared, Efforts};
 use lsdc::dynamics::loops::{active_rows, constraints};
 use lsdc::dynamics::model;
+use lsdc::elab::mechanism::Origin;
 use lsdc::elab::Mechanism;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
-use lsdc::elab::mechanism::Origin;
 use lsdc::simulate::prepare::{prepare, Override, Settings};
 use lsdc::symbolic::{self, Equations};
 use nalgebra::{DMatrix, DVector};
@@ -35,34 +35,57 @@ fn fixed_satellite_equals_the_closed_forms_of_section_9_8() {
     let mut random = Sequence(7);
     let (mu4, z34) = (40.0, 0.5);
     for _ in 0..20 {
-        let values: HashMap<String, f64> =
-            ["hinge.x", "slide.x", "tilt.x", "hinge.x'", "slide.x'", "tilt.x'", "t"].iter().map(|n| (n.to_string(), 2.0 * random.next())).collect();
-        let symbols = eq.symbol_values(|n| values.get(n).copied()).expect("every symbol has a value");
+        let values: HashMap<String, f64> = [
+            "hinge.x", "slide.x", "tilt.x", "hinge.x'", "slide.x'", "tilt.x'", "t",
+        ]
+        .iter()
+        .map(|n| (n.to_string(), 2.0 * random.next()))
+        .collect();
+        let symbols = eq
+            .symbol_values(|n| values.get(n).copied())
+            .expect("every symbol has a value");
         let at = eq.evaluate(&tape, &symbols);
         let (q8, q9) = (values["slide.x"], values["tilt.x"]);
         let (d7, d8, d9) = (values["hinge.x'"], values["slide.x'"], values["tilt.x'"]);
         let expected = [
-            [q8 * q8 + z34 * z34 * q9.cos().powi(2), -z34 * q9.cos(), -z34 * q8 * q9.sin()],
+            [
+                q8 * q8 + z34 * z34 * q9.cos().powi(2),
+                -z34 * q9.cos(),
+                -z34 * q8 * q9.sin(),
+            ],
             [-z34 * q9.cos(), 1.0, 0.0],
             [-z34 * q8 * q9.sin(), 0.0, z34 * z34],
         ];
         for i in 0..3 {
             for j in 0..3 {
-                assert!((at.mass[(i, j)] - mu4 * expected[i][j]).abs() < 1e-12 * mu4, "M[{i}][{j}] = {} ≠ {}", at.mass[(i, j)], mu4 * expected[i][j]);
+                assert!(
+                    (at.mass[(i, j)] - mu4 * expected[i][j]).abs() < 1e-12 * mu4,
+                    "M[{i}][{j}] = {} ≠ {}",
+                    at.mass[(i, j)],
+                    mu4 * expected[i][j]
+                );
             }
         }
         // Lagrange's equations with q̈ = 0 give −S.
         let velocity_terms = [
-            2.0 * q8 * d7 * d8 - 2.0 * z34 * z34 * q9.sin() * q9.cos() * d7 * d9 - z34 * q8 * q9.cos() * d9 * d9,
+            2.0 * q8 * d7 * d8
+                - 2.0 * z34 * z34 * q9.sin() * q9.cos() * d7 * d9
+                - z34 * q8 * q9.cos() * d9 * d9,
             -q8 * d7 * d7 + 2.0 * z34 * q9.sin() * d7 * d9,
             z34 * z34 * q9.sin() * q9.cos() * d7 * d7 - 2.0 * z34 * q9.sin() * d7 * d8,
         ];
         for i in 0..3 {
-            assert!((at.second_member[i] + mu4 * velocity_terms[i]).abs() < 1e-12 * mu4, "S[{i}]");
+            assert!(
+                (at.second_member[i] + mu4 * velocity_terms[i]).abs() < 1e-12 * mu4,
+                "S[{i}]"
+            );
         }
         let det = at.mass.determinant();
         let closed = mu4.powi(3) * q8 * q8 * z34 * z34 * q9.cos().powi(2);
-        assert!((det - closed).abs() < 1e-12 * mu4.powi(3), "det M = {det} ≠ {closed}");
+        assert!(
+            (det - closed).abs() < 1e-12 * mu4.powi(3),
+            "det M = {det} ≠ {closed}"
+        );
     }
 }
 
@@ -78,34 +101,73 @@ struct Numeric {
 
 /// Without `with_efforts`, the right-hand side is S alone (for programs whose efforts are
 /// unknown laws).
-fn numeric(mechanism: &Mechanism, unknowns: &UnknownValues, coordinates: &[f64], rates: &[f64], time: f64, with_efforts: bool) -> Numeric {
+fn numeric(
+    mechanism: &Mechanism,
+    unknowns: &UnknownValues,
+    coordinates: &[f64],
+    rates: &[f64],
+    time: f64,
+    with_efforts: bool,
+) -> Numeric {
     let topology = lsdc::topology::build(mechanism).expect("a topology");
-    let kinematics = kinematic_model::build(mechanism, topology, unknowns.clone()).expect("kinematics");
+    let kinematics =
+        kinematic_model::build(mechanism, topology, unknowns.clone()).expect("kinematics");
     let model = model::build_with(mechanism, &kinematics, false).expect("model");
     let mut data = Data::new(&model);
     let mass = crba(&model, &mut data, coordinates).expect("CRBA");
     forward_kinematics(&model, &mut data, coordinates, rates).expect("kinematics");
-    let declared = Declared { model: &model, coordinates, rates };
-    let efforts = if with_efforts { efforts::evaluate(&model, &data, &declared, time).expect("efforts") } else { Efforts::none(&model) };
+    let declared = Declared {
+        model: &model,
+        coordinates,
+        rates,
+    };
+    let efforts = if with_efforts {
+        efforts::evaluate(&model, &data, &declared, time).expect("efforts")
+    } else {
+        Efforts::none(&model)
+    };
     let zero = vec![0.0; model.nv];
-    let bias = rnea(&model, &mut data, coordinates, rates, &zero, &efforts.external).expect("RNEA");
+    let bias = rnea(
+        &model,
+        &mut data,
+        coordinates,
+        rates,
+        &zero,
+        &efforts.external,
+    )
+    .expect("RNEA");
     let mut right_hand_side = efforts.tau.clone();
     for k in 0..model.nv {
         right_hand_side[k] -= bias[k];
     }
     let c = constraints(&model, &mut data, coordinates, rates, true).expect("constraints");
-    Numeric { mass, right_hand_side, constraints: c.jacobian, constraint_bias: c.bias, active_rows: active_rows(&model) }
+    Numeric {
+        mass,
+        right_hand_side,
+        constraints: c.jacobian,
+        constraint_bias: c.bias,
+        active_rows: active_rows(&model),
+    }
 }
 
 /// Largest |a − b| over max(1, largest |b|).
 fn relative_gap(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
 }
 
 /// Symbolic against numeric at (coordinates, rates); the largest relative gap of M, S + F, Δ
 /// and Δ̇q.
-fn compare(mechanism: &Mechanism, eq: &Equations, unknowns: &UnknownValues, coordinates: &[f64], rates: &[f64]) -> f64 {
+fn compare(
+    mechanism: &Mechanism,
+    eq: &Equations,
+    unknowns: &UnknownValues,
+    coordinates: &[f64],
+    rates: &[f64],
+) -> f64 {
     let with_efforts = eq.variables.functions.is_empty();
     let time = 0.25;
     let mut named: HashMap<String, f64> = HashMap::new();
@@ -114,37 +176,64 @@ fn compare(mechanism: &Mechanism, eq: &Equations, unknowns: &UnknownValues, coor
         named.insert(eq.variables.rates[k].name.clone(), rates[k]);
     }
     for parameter in &eq.variables.parameters {
-        named.insert(parameter.name.clone(), unknowns[&parameter.unknown.expect("an unknown")]);
+        named.insert(
+            parameter.name.clone(),
+            unknowns[&parameter.unknown.expect("an unknown")],
+        );
     }
     named.insert("t".to_string(), time);
     // Unknown laws act only in F, which is then left out of the comparison.
     for function in &eq.variables.functions {
-        named.insert(eq.pool.name_of(function.symbol).expect("a symbol").to_string(), 0.3);
+        named.insert(
+            eq.pool
+                .name_of(function.symbol)
+                .expect("a symbol")
+                .to_string(),
+            0.3,
+        );
     }
-    let symbols = eq.symbol_values(|n| named.get(n).copied()).expect("every symbol has a value");
+    let symbols = eq
+        .symbol_values(|n| named.get(n).copied())
+        .expect("every symbol has a value");
     let at = eq.evaluate(&eq.tape(), &symbols);
     let expected = numeric(mechanism, unknowns, coordinates, rates, time, with_efforts);
     let nv = expected.mass.nrows();
     let n = eq.dimension();
-    let mut gaps = vec![relative_gap(at.mass.view((0, 0), (nv, nv)).transpose().as_slice(), expected.mass.transpose().as_slice())];
+    let mut gaps = vec![relative_gap(
+        at.mass.view((0, 0), (nv, nv)).transpose().as_slice(),
+        expected.mass.transpose().as_slice(),
+    )];
     // The complementary coordinates carry no inertia.
     assert!(at.mass.rows(nv, n - nv).iter().all(|&m| m == 0.0));
-    let rhs = if with_efforts { &at.second_member + &at.forces } else { at.second_member.clone() };
-    gaps.push(relative_gap(rhs.as_slice(), expected.right_hand_side.as_slice()));
+    let rhs = if with_efforts {
+        &at.second_member + &at.forces
+    } else {
+        at.second_member.clone()
+    };
+    gaps.push(relative_gap(
+        rhs.as_slice(),
+        expected.right_hand_side.as_slice(),
+    ));
     if let Some(accelerations) = &at.accelerations {
         // The articulated-body recursion solves M q̇ = S + F: its residual, relative to the
         // terms' size (a backward error, free of M's conditioning).
         let applied = &at.mass * accelerations;
         let total = &at.second_member + &at.forces;
         let scale = at.mass.amax() * accelerations.amax() + total.amax();
-        gaps.push(relative_gap(applied.as_slice(), total.as_slice()) * total.amax().max(1.0) / scale.max(1.0));
+        gaps.push(
+            relative_gap(applied.as_slice(), total.as_slice()) * total.amax().max(1.0)
+                / scale.max(1.0),
+        );
     }
     for (r, active) in expected.active_rows.iter().enumerate() {
         if *active {
             let row: Vec<f64> = at.constraints.row(r).iter().copied().collect();
             let numeric_row: Vec<f64> = expected.constraints.row(r).iter().copied().collect();
             gaps.push(relative_gap(&row, &numeric_row));
-            gaps.push(relative_gap(&[at.constraint_bias[r]], &[expected.constraint_bias[r]]));
+            gaps.push(relative_gap(
+                &[at.constraint_bias[r]],
+                &[expected.constraint_bias[r]],
+            ));
         }
     }
     gaps.into_iter().fold(0.0, f64::max)
@@ -158,8 +247,15 @@ fn values_for_unknowns(mechanism: &Mechanism, eq: &Equations) -> Vec<Override> {
         .iter()
         .map(|p| {
             let unknown = &mechanism.unknowns[p.unknown.expect("an unknown").0 as usize];
-            let name = if unknown.origin == Origin::Written { p.name.clone() } else { p.meaning.clone() };
-            Override { name, value: 1.0 + 0.5 * random.next() }
+            let name = if unknown.origin == Origin::Written {
+                p.name.clone()
+            } else {
+                p.meaning.clone()
+            };
+            Override {
+                name,
+                value: 1.0 + 0.5 * random.next(),
+            }
         })
         .collect()
 }
@@ -169,8 +265,11 @@ fn example_paths() -> Vec<PathBuf> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mut paths = Vec::new();
     for (dir, extension) in [("examples", "lsd"), ("tests/fixtures/urdf", "urdf")] {
-        let mut found: Vec<PathBuf> =
-            std::fs::read_dir(root.join(dir)).expect("a directory").map(|e| e.expect("entry").path()).filter(|p| p.extension().is_some_and(|e| e == extension)).collect();
+        let mut found: Vec<PathBuf> = std::fs::read_dir(root.join(dir))
+            .expect("a directory")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == extension))
+            .collect();
         found.sort();
         paths.extend(found);
     }
@@ -181,25 +280,44 @@ fn example_paths() -> Vec<PathBuf> {
 fn symbolic_and_numeric_back_ends_agree_on_every_example() {
     let mut compared = Vec::new();
     for path in example_paths() {
-        let compilation = compile_files(std::slice::from_ref(&path), &LoadOptions::default()).expect("readable");
+        let compilation =
+            compile_files(std::slice::from_ref(&path), &LoadOptions::default()).expect("readable");
         let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
         let topology = lsdc::topology::build(mechanism).expect("a topology");
-        let eq = symbolic::generate(mechanism, &topology).unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
-        let name = path.file_name().unwrap_or_default().to_string_lossy().to_string();
+        let eq = symbolic::generate(mechanism, &topology)
+            .unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
+        let name = path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .to_string();
         // Unknown laws have no numeric value: M and S are compared at random parameters.
         if !eq.variables.functions.is_empty() {
             let mut random = Sequence(5);
-            let unknowns: UnknownValues = eq.variables.parameters.iter().map(|p| (p.unknown.expect("an unknown"), 1.0 + 0.5 * random.next())).collect();
+            let unknowns: UnknownValues = eq
+                .variables
+                .parameters
+                .iter()
+                .map(|p| (p.unknown.expect("an unknown"), 1.0 + 0.5 * random.next()))
+                .collect();
             let coordinates: Vec<f64> = (0..eq.dimension()).map(|_| random.next()).collect();
             let rates: Vec<f64> = (0..eq.dimension()).map(|_| random.next()).collect();
             let worst = compare(mechanism, &eq, &unknowns, &coordinates, &rates);
-            assert!(worst < 1e-12, "{name}: symbolic and numeric M and S differ by {worst:e} (relative)");
+            assert!(
+                worst < 1e-12,
+                "{name}: symbolic and numeric M and S differ by {worst:e} (relative)"
+            );
             compared.push((name + " (M, S)", worst, eq.size()));
             continue;
         }
         let prepared = match prepare(mechanism, &[], &Settings::default()) {
             Ok(prepared) => prepared,
-            Err(_) => prepare(mechanism, &values_for_unknowns(mechanism, &eq), &Settings::default()).expect("prepares with values"),
+            Err(_) => prepare(
+                mechanism,
+                &values_for_unknowns(mechanism, &eq),
+                &Settings::default(),
+            )
+            .expect("prepares with values"),
         };
         let unknowns = &prepared.model.unknowns;
         let (coordinates, rates) = (prepared.coordinates.clone(), prepared.rates.clone());
@@ -212,13 +330,20 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
                 worst = worst.max(compare(mechanism, &eq, unknowns, &p, &q));
             }
         }
-        assert!(worst < 1e-12, "{name}: symbolic and numeric differ by {worst:e} (relative)");
+        assert!(
+            worst < 1e-12,
+            "{name}: symbolic and numeric differ by {worst:e} (relative)"
+        );
         compared.push((name, worst, eq.size()));
     }
     for (name, worst, size) in &compared {
         println!("{name:28} {worst:9.1e} {size:8} nodes");
     }
-    assert!(compared.len() >= 15, "only {} examples compared", compared.len());
+    assert!(
+        compared.len() >= 15,
+        "only {} examples compared",
+        compared.len()
+    );
 }
 
 /// The full satellite's mass matrix determinant at random points (notes §9.8):
@@ -226,7 +351,11 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
 /// program orients the satellite by Z-X-Z Euler angles (ψ, θ, φ) instead; their angular velocity
 /// map has determinant sin θ where Bryant's has cos q2, so there det M has sin²θ in place of
 /// cos²q2.
-fn satellite_determinants(eq: &Equations, angle_factor: impl Fn(&HashMap<String, f64>) -> f64, names: [&str; 5]) {
+fn satellite_determinants(
+    eq: &Equations,
+    angle_factor: impl Fn(&HashMap<String, f64>) -> f64,
+    names: [&str; 5],
+) {
     let [mass1, inertia, mass4, z34, q8] = names;
     let tape = eq.tape();
     let mut random = Sequence(3);
@@ -236,20 +365,53 @@ fn satellite_determinants(eq: &Equations, angle_factor: impl Fn(&HashMap<String,
             values.insert(v.name.clone(), 1.5 * random.next());
         }
         for p in &eq.variables.parameters {
-            let key = if p.meaning.contains('(') { p.meaning.clone() } else { p.name.clone() };
+            let key = if p.meaning.contains('(') {
+                p.meaning.clone()
+            } else {
+                p.name.clone()
+            };
             values.insert(key, 1.0 + 0.5 * random.next());
         }
-        let named = |p: &lsdc::symbolic::lower::Variable| if p.meaning.contains('(') { values[&p.meaning] } else { values[&p.name] };
+        let named = |p: &lsdc::symbolic::lower::Variable| {
+            if p.meaning.contains('(') {
+                values[&p.meaning]
+            } else {
+                values[&p.name]
+            }
+        };
         let symbols = eq
             .symbol_values(|n| {
-                values.get(n).copied().or_else(|| eq.variables.parameters.iter().find(|p| p.name == n).map(named)).or((n == "t" || n.contains('(')).then_some(0.0))
+                values
+                    .get(n)
+                    .copied()
+                    .or_else(|| {
+                        eq.variables
+                            .parameters
+                            .iter()
+                            .find(|p| p.name == n)
+                            .map(named)
+                    })
+                    .or((n == "t" || n.contains('(')).then_some(0.0))
             })
             .expect("values");
         let det = eq.evaluate(&tape, &symbols).mass.determinant();
-        let moments: f64 = ["x", "y", "z"].iter().map(|a| values[&format!("{inertia}_{a}(satellite)")]).product();
+        let moments: f64 = ["x", "y", "z"]
+            .iter()
+            .map(|a| values[&format!("{inertia}_{a}(satellite)")])
+            .product();
         let cos9 = values["join4.x"].cos();
-        let closed = moments * values[mass1].powi(3) * values[mass4].powi(3) * values[q8].powi(2) * values[z34].powi(2) * angle_factor(&values) * cos9 * cos9;
-        assert!((det - closed).abs() < 1e-10 * closed.abs(), "det M = {det:e}, closed form {closed:e}");
+        let closed = moments
+            * values[mass1].powi(3)
+            * values[mass4].powi(3)
+            * values[q8].powi(2)
+            * values[z34].powi(2)
+            * angle_factor(&values)
+            * cos9
+            * cos9;
+        assert!(
+            (det - closed).abs() < 1e-10 * closed.abs(),
+            "det M = {det:e}, closed form {closed:e}"
+        );
     }
 }
 
@@ -259,12 +421,32 @@ fn satellite_mass_matrix_determinant_equals_the_closed_form() {
     let thesis = equations("examples/satellite.lsd");
     assert_eq!(thesis.dimension(), 9);
     let sin_theta = |v: &HashMap<String, f64>| v["join1.th"].sin().powi(2);
-    satellite_determinants(&thesis, sin_theta, ["mass(satellite)", "inertia", "mass(reflecteur)", "v4T_4_G_z", "join3.x"]);
+    satellite_determinants(
+        &thesis,
+        sin_theta,
+        [
+            "mass(satellite)",
+            "inertia",
+            "mass(reflecteur)",
+            "v4T_4_G_z",
+            "join3.x",
+        ],
+    );
 
     // The same satellite with Bryant angles, as in §9.8.
     let bryant = thesis_with_bryant_angles();
     let cos_q2 = |v: &HashMap<String, f64>| v["join1.b"].cos().powi(2);
-    satellite_determinants(&bryant, cos_q2, ["mass(satellite)", "inertia", "mass(reflecteur)", "z34", "join3.x"]);
+    satellite_determinants(
+        &bryant,
+        cos_q2,
+        [
+            "mass(satellite)",
+            "inertia",
+            "mass(reflecteur)",
+            "z34",
+            "join3.x",
+        ],
+    );
 }
 
 fn thesis_with_bryant_angles() -> Equations {
@@ -325,25 +507,43 @@ fn fixed_satellite_generalised_forces_equal_the_closed_forms() {
         join bras_primaire.frame and bras_secondaire.frame with link(x) dof = [0,x,0], force = [0,F23,0] end as slide ;
         join bras_secondaire.frame and reflecteur.frame with link(x) dof = x || [0,1,0], torque = [0,C34,0] end as tilt ;
         apply force value = F4, body = earth end on reflecteur.iframe ;";
-    let compilation = lsdc::driver::compile_text("efforts.lsd", text, None, &LoadOptions::default());
+    let compilation =
+        lsdc::driver::compile_text("efforts.lsd", text, None, &LoadOptions::default());
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
-    let eq = symbolic::generate(mechanism, &lsdc::topology::build(mechanism).expect("a topology")).expect("equations");
+    let eq = symbolic::generate(
+        mechanism,
+        &lsdc::topology::build(mechanism).expect("a topology"),
+    )
+    .expect("equations");
     let tape = eq.tape();
     let mut random = Sequence(17);
     let z34 = 0.5;
     for _ in 0..10 {
         let mut values: HashMap<String, f64> = HashMap::new();
-        for v in eq.variables.positions.iter().chain(&eq.variables.rates).chain(&eq.variables.parameters) {
+        for v in eq
+            .variables
+            .positions
+            .iter()
+            .chain(&eq.variables.rates)
+            .chain(&eq.variables.parameters)
+        {
             values.insert(v.name.clone(), 2.0 * random.next());
         }
         values.insert("t".to_string(), 0.0);
-        let symbols = eq.symbol_values(|n| values.get(n).copied()).expect("values");
+        let symbols = eq
+            .symbol_values(|n| values.get(n).copied())
+            .expect("values");
         let forces = eq.evaluate(&tape, &symbols).forces;
         let (q7, q8, q9) = (values["hinge.x"], values["slide.x"], values["tilt.x"]);
         let (c12, f23, c34) = (values["C12"], values["F23"], values["C34"]);
         // `?v` components are named after their unknowns, in order.
-        let mut components: Vec<_> = eq.variables.parameters.iter().filter(|p| p.name.starts_with("unknown")).collect();
+        let mut components: Vec<_> = eq
+            .variables
+            .parameters
+            .iter()
+            .filter(|p| p.name.starts_with("unknown"))
+            .collect();
         components.sort_by_key(|p| p.unknown);
         let f4: Vec<f64> = components.iter().map(|p| values[&p.name]).collect();
         let (s7, c7, s9, c9) = (q7.sin(), q7.cos(), q9.sin(), q9.cos());
@@ -353,7 +553,13 @@ fn fixed_satellite_generalised_forces_equal_the_closed_forms() {
             c34 + f4[0] * c9 * z34 + f4[1] * s7 * s9 * z34 - f4[2] * c7 * s9 * z34,
         ];
         for i in 0..3 {
-            assert!((forces[i] - expected[i]).abs() < 1e-13 * (1.0 + expected[i].abs()), "Q{}: {} ≠ {}", i + 7, forces[i], expected[i]);
+            assert!(
+                (forces[i] - expected[i]).abs() < 1e-13 * (1.0 + expected[i].abs()),
+                "Q{}: {} ≠ {}",
+                i + 7,
+                forces[i],
+                expected[i]
+            );
         }
     }
 }
@@ -363,15 +569,31 @@ fn fixed_satellite_generalised_forces_equal_the_closed_forms() {
 /// or slightly oblique axes, whose equations are numerically almost the same.
 #[test]
 fn declared_values_simplify_the_equations() {
-    let program = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/satellite_fixed.lsd")).expect("example");
+    let program = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/satellite_fixed.lsd"
+    ))
+    .expect("example");
     let size = |text: &str| {
-        let compilation = lsdc::driver::compile_text("variant.lsd", text, None, &LoadOptions::default());
+        let compilation =
+            lsdc::driver::compile_text("variant.lsd", text, None, &LoadOptions::default());
         let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
-        symbolic::generate(mechanism, &lsdc::topology::build(mechanism).expect("a topology")).expect("equations").size()
+        symbolic::generate(
+            mechanism,
+            &lsdc::topology::build(mechanism).expect("a topology"),
+        )
+        .expect("equations")
+        .size()
     };
     let declared = size(&program);
-    let with_masses = size(&program.replace("mass = 0, inertia = 0", "mass = 1e-9, inertia = [1e-9, 1e-9, 1e-9]"));
+    let with_masses = size(&program.replace(
+        "mass = 0, inertia = 0",
+        "mass = 1e-9, inertia = [1e-9, 1e-9, 1e-9]",
+    ));
     let oblique = size(&program.replace("x || [1,0,0]", "x || [1,1e-9,0]"));
     println!("declared {declared}, tiny masses {with_masses}, oblique axis {oblique}");
-    assert!(declared < with_masses && declared < oblique, "declared {declared}, tiny masses {with_masses}, oblique axis {oblique}");
+    assert!(
+        declared < with_masses && declared < oblique,
+        "declared {declared}, tiny masses {with_masses}, oblique axis {oblique}"
+    );
 }

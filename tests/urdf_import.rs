@@ -89,12 +89,19 @@ fn import(xml: &str) -> Imported {
 }
 
 fn options() -> LoadOptions {
-    LoadOptions { library_dirs: Vec::new(), use_environment: false }
+    LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    }
 }
 
 fn compile(text: &str) -> Compilation {
     let compilation = compile_text("imported.lsd", text, None, &options());
-    assert!(!compilation.has_errors(), "{:?}\n{text}", compilation.diagnostics);
+    assert!(
+        !compilation.has_errors(),
+        "{:?}\n{text}",
+        compilation.diagnostics
+    );
     assert!(compilation.mechanism.is_some());
     compilation
 }
@@ -103,7 +110,8 @@ fn models(text: &str) -> (Compilation, KinematicModel, Model) {
     let compilation = compile(text);
     let mechanism = compilation.mechanism.as_ref().expect("elaborates");
     let topology = lsdc::topology::build(mechanism).expect("a tree");
-    let kinematics = kinematic_model::build(mechanism, topology, UnknownValues::new()).expect("numeric");
+    let kinematics =
+        kinematic_model::build(mechanism, topology, UnknownValues::new()).expect("numeric");
     let dynamics = dynamic_model::build(mechanism, &kinematics).expect("dynamic model");
     (compilation, kinematics, dynamics)
 }
@@ -114,12 +122,17 @@ fn rpy(roll: f64, pitch: f64, yaw: f64) -> Rotation3<f64> {
 }
 
 fn pose(xyz: [f64; 3], rotation: Rotation3<f64>) -> Isometry3<f64> {
-    Isometry3::from_parts(Translation3::new(xyz[0], xyz[1], xyz[2]), UnitQuaternion::from_rotation_matrix(&rotation))
+    Isometry3::from_parts(
+        Translation3::new(xyz[0], xyz[1], xyz[2]),
+        UnitQuaternion::from_rotation_matrix(&rotation),
+    )
 }
 
 /// One-based line of the first occurrence of `needle` in `xml`.
 fn line_of(xml: &str, needle: &str) -> usize {
-    let at = xml.find(needle).unwrap_or_else(|| panic!("`{needle}` in the URDF"));
+    let at = xml
+        .find(needle)
+        .unwrap_or_else(|| panic!("`{needle}` in the URDF"));
     xml[..at].matches('\n').count() + 1
 }
 
@@ -132,7 +145,10 @@ fn line(sources: &SourceMap, diagnostic: &Diagnostic) -> usize {
 fn the_arm_compiles_with_one_join_per_joint() {
     let imported = import(ARM);
     let text = &imported.text;
-    assert!(text.starts_with("(* Robot `arm`, imported from the URDF file `arm.urdf`."), "{text}");
+    assert!(
+        text.starts_with("(* Robot `arm`, imported from the URDF file `arm.urdf`."),
+        "{text}"
+    );
     for expected in [
         "import joints ;",
         "import gravity ;",
@@ -160,22 +176,52 @@ fn the_arm_compiles_with_one_join_per_joint() {
 fn inertia_is_the_urdf_tensor_about_the_principal_axes() {
     let (_, _, model) = models(&import(ARM).text);
     let cases = [
-        ("upper", 1.5, [0.01, -0.02, 0.25], rpy(0.1, -0.2, 0.3), [0.03, 0.002, -0.003, 0.025, 0.001, 0.02]),
-        ("lower", 0.8, [0.0, 0.0, 0.2], rpy(0.0, 0.5, 0.0), [0.01, 0.0, 0.0, 0.012, 0.0, 0.003]),
-        ("slider", 0.1, [0.001, 0.002, 0.003], Rotation3::identity(), [2e-4, -1e-5, 2e-5, 1.5e-4, -3e-5, 1e-4]),
+        (
+            "upper",
+            1.5,
+            [0.01, -0.02, 0.25],
+            rpy(0.1, -0.2, 0.3),
+            [0.03, 0.002, -0.003, 0.025, 0.001, 0.02],
+        ),
+        (
+            "lower",
+            0.8,
+            [0.0, 0.0, 0.2],
+            rpy(0.0, 0.5, 0.0),
+            [0.01, 0.0, 0.0, 0.012, 0.0, 0.003],
+        ),
+        (
+            "slider",
+            0.1,
+            [0.001, 0.002, 0.003],
+            Rotation3::identity(),
+            [2e-4, -1e-5, 2e-5, 1.5e-4, -3e-5, 1e-4],
+        ),
     ];
     for (name, mass, com, rotation, [ixx, ixy, ixz, iyy, iyz, izz]) in cases {
-        let index = model.body_names.iter().position(|n| n == name).expect("body");
+        let index = model
+            .body_names
+            .iter()
+            .position(|n| n == name)
+            .expect("body");
         let body = &model.bodies[index];
         let tensor = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
         let central = rotation.matrix() * tensor * rotation.matrix().transpose();
         let expected = spatial::inertia(mass, &Vector3::from(com), &central);
         let error = (body.inertia - expected).norm() / expected.norm();
-        assert!(error < 1e-12, "{name}: relative error {error:e}\n{}\n{expected}", body.inertia);
+        assert!(
+            error < 1e-12,
+            "{name}: relative error {error:e}\n{}\n{expected}",
+            body.inertia
+        );
         assert_eq!(body.mass, mass);
     }
     for name in ["base", "flange"] {
-        let index = model.body_names.iter().position(|n| n == name).expect("body");
+        let index = model
+            .body_names
+            .iter()
+            .position(|n| n == name)
+            .expect("body");
         assert!(model.bodies[index].massless, "{name}");
     }
 }
@@ -184,25 +230,50 @@ fn inertia_is_the_urdf_tensor_about_the_principal_axes() {
 /// importer picks, the body's inertia is the URDF's.
 #[test]
 fn rotated_and_degenerate_tensors_are_reproduced() {
-    let turns = [(2.5, [1.0, 2.0, 3.0]), (3.1, [0.0, 0.0, 1.0]), (std::f64::consts::PI, [1.0, 1.0, 0.0]), (0.9, [-1.0, 0.5, 0.2])];
-    let moments = [[0.01, 0.02, 0.025], [0.02, 0.02, 0.03], [0.01, 0.015, 0.015], [0.02, 0.02, 0.02]];
+    let turns = [
+        (2.5, [1.0, 2.0, 3.0]),
+        (3.1, [0.0, 0.0, 1.0]),
+        (std::f64::consts::PI, [1.0, 1.0, 0.0]),
+        (0.9, [-1.0, 0.5, 0.2]),
+    ];
+    let moments = [
+        [0.01, 0.02, 0.025],
+        [0.02, 0.02, 0.03],
+        [0.01, 0.015, 0.015],
+        [0.02, 0.02, 0.02],
+    ];
     for (angle, axis) in turns {
         for diagonal in moments {
             let turn = Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::from(axis)), angle);
-            let tensor = turn.matrix() * Matrix3::from_diagonal(&Vector3::from(diagonal)) * turn.matrix().transpose();
+            let tensor = turn.matrix()
+                * Matrix3::from_diagonal(&Vector3::from(diagonal))
+                * turn.matrix().transpose();
             let t = |i: usize, j: usize| tensor[(i, j)];
             let xml = format!(
                 r#"<robot name="r"><link name="a"><inertial><origin xyz="0.1 0.2 0.3" rpy="0.4 0.5 0.6"/><mass value="2"/>
                 <inertia ixx="{}" ixy="{}" ixz="{}" iyy="{}" iyz="{}" izz="{}"/></inertial></link></robot>"#,
-                t(0, 0), t(0, 1), t(0, 2), t(1, 1), t(1, 2), t(2, 2)
+                t(0, 0),
+                t(0, 1),
+                t(0, 2),
+                t(1, 1),
+                t(1, 2),
+                t(2, 2)
             );
             let imported = import(&xml);
             assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
             let (_, _, model) = models(&imported.text);
             let rotation = rpy(0.4, 0.5, 0.6);
-            let expected = spatial::inertia(2.0, &Vector3::new(0.1, 0.2, 0.3), &(rotation.matrix() * tensor * rotation.matrix().transpose()));
+            let expected = spatial::inertia(
+                2.0,
+                &Vector3::new(0.1, 0.2, 0.3),
+                &(rotation.matrix() * tensor * rotation.matrix().transpose()),
+            );
             let error = (model.bodies[0].inertia - expected).norm() / expected.norm();
-            assert!(error < 1e-12, "{angle} {axis:?} {diagonal:?}: {error:e}\n{}", imported.text);
+            assert!(
+                error < 1e-12,
+                "{angle} {axis:?} {diagonal:?}: {error:e}\n{}",
+                imported.text
+            );
         }
     }
 }
@@ -231,18 +302,38 @@ fn joints_place_the_child_at_parent_origin_motion() {
             _ => assert_eq!(joint.coordinate_count(), 0),
         }
     }
-    let revolve = |axis: Vector3<f64>, angle: f64| pose([0.0; 3], Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle));
+    let revolve = |axis: Vector3<f64>, angle: f64| {
+        pose(
+            [0.0; 3],
+            Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle),
+        )
+    };
     let base = Isometry3::identity();
-    let upper = base * pose([0.0, 0.0, 0.1], rpy(0.2, 0.3, std::f64::consts::FRAC_PI_2)) * revolve(Vector3::y(), shoulder);
-    let lower = upper * pose([0.05, 0.0, 0.5], rpy(-0.4, 0.0, 0.0)) * revolve(Vector3::new(0.0, 1.0, 1.0), elbow);
+    let upper = base
+        * pose([0.0, 0.0, 0.1], rpy(0.2, 0.3, std::f64::consts::FRAC_PI_2))
+        * revolve(Vector3::y(), shoulder);
+    let lower = upper
+        * pose([0.05, 0.0, 0.5], rpy(-0.4, 0.0, 0.0))
+        * revolve(Vector3::new(0.0, 1.0, 1.0), elbow);
     let flange = lower * pose([0.0, 0.0, 0.4], Rotation3::identity());
-    let slider = flange * pose([0.01, 0.0, 0.02], rpy(0.0, 0.0, -0.7)) * pose([slide, 0.0, 0.0], Rotation3::identity());
+    let slider = flange
+        * pose([0.01, 0.0, 0.02], rpy(0.0, 0.0, -0.7))
+        * pose([slide, 0.0, 0.0], Rotation3::identity());
     let configuration = forward(&kinematics, &q).expect("forward kinematics");
-    for (name, expected) in [("base", base), ("upper", upper), ("lower", lower), ("flange", flange), ("slider", slider)] {
+    for (name, expected) in [
+        ("base", base),
+        ("upper", upper),
+        ("lower", lower),
+        ("flange", flange),
+        ("slider", slider),
+    ] {
         let number = (1..=kinematics.topology.body_count())
-            .find(|&j| mechanism.body_name(BodyRef::Body(kinematics.topology.bodies[j - 1])) == name)
+            .find(|&j| {
+                mechanism.body_name(BodyRef::Body(kinematics.topology.bodies[j - 1])) == name
+            })
             .expect("body");
-        let error = (configuration.poses[number].to_homogeneous() - expected.to_homogeneous()).amax();
+        let error =
+            (configuration.poses[number].to_homogeneous() - expected.to_homogeneous()).amax();
         assert!(error < 1e-12, "{name}: {error:e}");
     }
 }
@@ -252,7 +343,11 @@ fn warnings_point_at_what_is_not_imported() {
     let imported = import(ARM);
     let mut sources = SourceMap::new();
     sources.add("arm.urdf", ARM);
-    let found: Vec<(&str, usize)> = imported.warnings.iter().map(|d| (d.code, line(&sources, d))).collect();
+    let found: Vec<(&str, usize)> = imported
+        .warnings
+        .iter()
+        .map(|d| (d.code, line(&sources, d)))
+        .collect();
     let expected = [
         ("W1007", line_of(ARM, "<material name=\"grey\"")),
         ("W1002", line_of(ARM, "<limit lower=\"-1.57\"")),
@@ -268,15 +363,52 @@ fn warnings_point_at_what_is_not_imported() {
     ];
     assert_eq!(found, expected, "{:#?}", imported.warnings);
     assert!(imported.warnings.iter().all(|d| !d.is_error()));
-    let mimic = imported.warnings.iter().find(|d| d.code == "W1003").expect("mimic");
-    assert!(mimic.message.contains("`elbow` mimics joint `shoulder`"), "{}", mimic.message);
-    assert!(mimic.notes.iter().any(|n| n.contains("-2 × `shoulder` + 0.1")), "{:?}", mimic.notes);
-    let gazebo = imported.warnings.iter().find(|d| d.message.contains("gazebo")).expect("gazebo");
-    assert!(gazebo.message.starts_with("2 `<gazebo>` elements"), "{}", gazebo.message);
-    let limit = imported.warnings.iter().find(|d| d.code == "W1002").expect("limit");
-    assert!(limit.notes.iter().any(|n| n.contains("lower = -1.57, upper = 1.57, effort = 10, velocity = 2")), "{:?}", limit.notes);
+    let mimic = imported
+        .warnings
+        .iter()
+        .find(|d| d.code == "W1003")
+        .expect("mimic");
+    assert!(
+        mimic.message.contains("`elbow` mimics joint `shoulder`"),
+        "{}",
+        mimic.message
+    );
+    assert!(
+        mimic
+            .notes
+            .iter()
+            .any(|n| n.contains("-2 × `shoulder` + 0.1")),
+        "{:?}",
+        mimic.notes
+    );
+    let gazebo = imported
+        .warnings
+        .iter()
+        .find(|d| d.message.contains("gazebo"))
+        .expect("gazebo");
+    assert!(
+        gazebo.message.starts_with("2 `<gazebo>` elements"),
+        "{}",
+        gazebo.message
+    );
+    let limit = imported
+        .warnings
+        .iter()
+        .find(|d| d.code == "W1002")
+        .expect("limit");
+    assert!(
+        limit
+            .notes
+            .iter()
+            .any(|n| n.contains("lower = -1.57, upper = 1.57, effort = 10, velocity = 2")),
+        "{:?}",
+        limit.notes
+    );
     let rendered = lsdc::diag::render::to_text(&sources, &imported.warnings);
-    assert!(rendered.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))), "{rendered}");
+    assert!(
+        rendered.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))),
+        "{rendered}"
+    );
 }
 
 const RENAMED: &str = r#"<robot name="names">
@@ -313,9 +445,17 @@ fn names_that_are_not_lsd_names_are_renamed_and_reported() {
     ] {
         assert!(text.contains(expected), "missing `{expected}` in\n{text}");
     }
-    let renames: Vec<&str> = imported.warnings.iter().filter(|d| d.code == "W1001").map(|d| d.message.as_str()).collect();
+    let renames: Vec<&str> = imported
+        .warnings
+        .iter()
+        .filter(|d| d.code == "W1001")
+        .map(|d| d.message.as_str())
+        .collect();
     assert_eq!(renames.len(), 6, "{renames:#?}");
-    assert!(renames.contains(&"link `2nd` is called `_2nd` in LSD"), "{renames:#?}");
+    assert!(
+        renames.contains(&"link `2nd` is called `_2nd` in LSD"),
+        "{renames:#?}"
+    );
     compile(text);
     assert_eq!(lsd_name("base-link"), "base_link");
     assert_eq!(lsd_name("planar"), "planar_");
@@ -333,19 +473,46 @@ fn other_joint_types_compile() {
   <joint name="f" type="floating"><parent link="c"/><child link="d"/></joint>
 </robot>"#;
     let imported = import(xml);
-    assert!(imported.text.contains("with planar as p1 ;"), "{}", imported.text);
-    assert!(imported.text.contains("link(x, y, q) dof1 = x * [0, 1, 0] + y * [0, 0, 1], dof2 = q || [1, 0, 0] end as p2 ;"), "{}", imported.text);
-    assert!(imported.text.contains("with free as f ;"), "{}", imported.text);
+    assert!(
+        imported.text.contains("with planar as p1 ;"),
+        "{}",
+        imported.text
+    );
+    assert!(
+        imported.text.contains(
+            "link(x, y, q) dof1 = x * [0, 1, 0] + y * [0, 0, 1], dof2 = q || [1, 0, 0] end as p2 ;"
+        ),
+        "{}",
+        imported.text
+    );
+    assert!(
+        imported.text.contains("with free as f ;"),
+        "{}",
+        imported.text
+    );
     let (_, kinematics, _) = models(&imported.text);
     assert_eq!(kinematics.coordinate_count, 3 + 3 + 6);
 }
 
 #[test]
 fn floating_base_without_gravity() {
-    let options = ImportOptions { floating_base: true, gravity: false };
+    let options = ImportOptions {
+        floating_base: true,
+        gravity: false,
+    };
     let imported = import_urdf("arm.urdf", ARM, &options).expect("imports");
-    assert!(imported.text.contains("join earth and base with free as root_joint ;"), "{}", imported.text);
-    assert!(!imported.text.contains("import gravity"), "{}", imported.text);
+    assert!(
+        imported
+            .text
+            .contains("join earth and base with free as root_joint ;"),
+        "{}",
+        imported.text
+    );
+    assert!(
+        !imported.text.contains("import gravity"),
+        "{}",
+        imported.text
+    );
     assert!(!imported.text.contains("weight("), "{}", imported.text);
     let (_, kinematics, _) = models(&imported.text);
     assert_eq!(kinematics.coordinate_count, 6 + 3);
@@ -376,11 +543,28 @@ fn impossible_inertia_is_reported_but_imported() {
   <joint name="k" type="fixed"><parent link="a"/><child link="c"/></joint>
 </robot>"#;
     let imported = import(xml);
-    let messages: Vec<&str> = imported.warnings.iter().filter(|d| d.code == "W1010").map(|d| d.message.as_str()).collect();
+    let messages: Vec<&str> = imported
+        .warnings
+        .iter()
+        .filter(|d| d.code == "W1010")
+        .map(|d| d.message.as_str())
+        .collect();
     assert_eq!(messages.len(), 3, "{messages:#?}");
-    assert!(messages[0].contains("link `a`") && messages[0].contains("triangle inequality"), "{}", messages[0]);
-    assert!(messages[1].contains("link `b`") && messages[1].contains("not positive definite"), "{}", messages[1]);
-    assert!(messages[2].contains("link `c`") && messages[2].contains("not positive definite"), "{}", messages[2]);
+    assert!(
+        messages[0].contains("link `a`") && messages[0].contains("triangle inequality"),
+        "{}",
+        messages[0]
+    );
+    assert!(
+        messages[1].contains("link `b`") && messages[1].contains("not positive definite"),
+        "{}",
+        messages[1]
+    );
+    assert!(
+        messages[2].contains("link `c`") && messages[2].contains("not positive definite"),
+        "{}",
+        messages[2]
+    );
     compile(&imported.text);
 }
 
@@ -409,17 +593,36 @@ fn bad_urdf_is_a_located_error() {
         let error = import_urdf("bad.urdf", xml, &ImportOptions::default()).expect_err(xml);
         assert!(error.is_error(), "{xml}");
         assert_eq!(error.code, code, "{xml}: {error:?}");
-        let span = error.primary_span().unwrap_or_else(|| panic!("{xml}: no position"));
-        assert!(xml[span.range()].starts_with(located), "{xml}: `{}`", &xml[span.range()]);
+        let span = error
+            .primary_span()
+            .unwrap_or_else(|| panic!("{xml}: no position"));
+        assert!(
+            xml[span.range()].starts_with(located),
+            "{xml}: `{}`",
+            &xml[span.range()]
+        );
     }
-    for xml in ["", "   ", "not xml", "<", "<robot name=\"r\"", "<robot name='r>", "<robot></robot></robot>", "\u{feff}<é/>"] {
+    for xml in [
+        "",
+        "   ",
+        "not xml",
+        "<",
+        "<robot name=\"r\"",
+        "<robot name='r>",
+        "<robot></robot></robot>",
+        "\u{feff}<é/>",
+    ] {
         let error = import_urdf("bad.urdf", xml, &ImportOptions::default()).expect_err(xml);
         assert!(error.is_error(), "{xml}");
     }
 }
 
 fn lsdc(args: &[&str]) -> (i32, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_lsdc")).args(args).env_remove("LSD_PATH").output().expect("lsdc runs");
+    let output = Command::new(env!("CARGO_BIN_EXE_lsdc"))
+        .args(args)
+        .env_remove("LSD_PATH")
+        .output()
+        .expect("lsdc runs");
     (
         output.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&output.stdout).into_owned(),
@@ -441,8 +644,14 @@ fn urdf_files_are_programs_for_every_command() {
     let file = path.to_str().expect("utf-8 path");
     let (code, stdout, stderr) = lsdc(&["check", file]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("bodies    5 (base, upper, lower, flange, slider)"), "{stdout}");
-    assert!(stderr.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))), "{stderr}");
+    assert!(
+        stdout.contains("bodies    5 (base, upper, lower, flange, slider)"),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))),
+        "{stderr}"
+    );
     assert!(stderr.contains("warning[W1003]"), "{stderr}");
     let (code, stdout, stderr) = lsdc(&["tree", file]);
     assert_eq!(code, 0, "{stderr}");
@@ -456,7 +665,10 @@ fn urdf_files_are_programs_for_every_command() {
     std::fs::write(&path, "<robot name=\"r\"><link name=\"a\"/><joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>").expect("write");
     let (code, _, stderr) = lsdc(&["check", file]);
     assert_eq!(code, 1);
-    assert!(stderr.contains("error[E1003]") && stderr.contains("arm.urdf:1:"), "{stderr}");
+    assert!(
+        stderr.contains("error[E1003]") && stderr.contains("arm.urdf:1:"),
+        "{stderr}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -468,16 +680,31 @@ fn import_urdf_prints_a_program_that_compiles() {
     let file = path.to_str().expect("utf-8 path");
     let (code, stdout, stderr) = lsdc(&["import-urdf", file]);
     assert_eq!(code, 0, "{stderr}");
-    assert_eq!(stdout, import_urdf(file, ARM, &ImportOptions::default()).expect("imports").text);
+    assert_eq!(
+        stdout,
+        import_urdf(file, ARM, &ImportOptions::default())
+            .expect("imports")
+            .text
+    );
     assert!(stderr.contains("warning[W1002]"), "{stderr}");
     compile(&stdout);
 
     let out = dir.join("arm.lsd");
-    let (code, stdout, stderr) = lsdc(&["import-urdf", file, "--floating-base", "--no-gravity", "-o", out.to_str().expect("utf-8")]);
+    let (code, stdout, stderr) = lsdc(&[
+        "import-urdf",
+        file,
+        "--floating-base",
+        "--no-gravity",
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.is_empty(), "{stdout}");
     let written = std::fs::read_to_string(&out).expect("written");
-    assert!(written.contains("with free as root_joint ;") && !written.contains("weight("), "{written}");
+    assert!(
+        written.contains("with free as root_joint ;") && !written.contains("weight("),
+        "{written}"
+    );
     let (code, _, stderr) = lsdc(&["check", out.to_str().expect("utf-8")]);
     assert_eq!(code, 0, "{stderr}");
 
@@ -485,7 +712,10 @@ fn import_urdf_prints_a_program_that_compiles() {
     let (code, stdout, stderr) = lsdc(&["import-urdf", file]);
     assert_eq!(code, 1);
     assert!(stdout.is_empty(), "{stdout}");
-    assert!(stderr.contains("error[E1001]") && stderr.contains("arm.urdf:3:1"), "{stderr}");
+    assert!(
+        stderr.contains("error[E1001]") && stderr.contains("arm.urdf:3:1"),
+        "{stderr}"
+    );
     let (code, _, _) = lsdc(&["import-urdf", "no/such/file.urdf"]);
     assert_eq!(code, 2);
     let _ = std::fs::remove_dir_all(&dir);
@@ -523,23 +753,52 @@ const EMPTY_TEXTURES: &str = r#"<robot name="textures">
 #[test]
 fn empty_textures_are_tolerated_and_materials_reported() {
     let imported = import(EMPTY_TEXTURES);
-    assert!(imported.text.contains("with revolute([0, 0, 1]) as hinge ;"), "{}", imported.text);
+    assert!(
+        imported
+            .text
+            .contains("with revolute([0, 0, 1]) as hinge ;"),
+        "{}",
+        imported.text
+    );
     let mut sources = SourceMap::new();
     sources.add("textures.urdf", EMPTY_TEXTURES);
-    let found: Vec<(&str, usize)> = imported.warnings.iter().map(|d| (d.code, line(&sources, d))).collect();
-    assert_eq!(found, [("W1007", line_of(EMPTY_TEXTURES, "<material name=\"grey\""))], "{:#?}", imported.warnings);
+    let found: Vec<(&str, usize)> = imported
+        .warnings
+        .iter()
+        .map(|d| (d.code, line(&sources, d)))
+        .collect();
+    assert_eq!(
+        found,
+        [("W1007", line_of(EMPTY_TEXTURES, "<material name=\"grey\""))],
+        "{:#?}",
+        imported.warnings
+    );
     let geometry = &imported.warnings[0];
-    assert_eq!(geometry.message, "the visual and collision geometry of 1 link is not imported");
-    assert!(geometry.notes.iter().any(|n| n == "the robot defines 1 material"), "{:?}", geometry.notes);
+    assert_eq!(
+        geometry.message,
+        "the visual and collision geometry of 1 link is not imported"
+    );
+    assert!(
+        geometry
+            .notes
+            .iter()
+            .any(|n| n == "the robot defines 1 material"),
+        "{:?}",
+        geometry.notes
+    );
     compile(&imported.text);
 
     // The errors found after the textures are blanked out still point at their line.
     let broken = EMPTY_TEXTURES.replace("<parent link=\"base\"/>", "<parent link=\"bas\"/>");
-    let error = import_urdf("textures.urdf", &broken, &ImportOptions::default()).expect_err("no link `bas`");
+    let error = import_urdf("textures.urdf", &broken, &ImportOptions::default())
+        .expect_err("no link `bas`");
     assert_eq!(error.code, "E1003");
     let mut sources = SourceMap::new();
     sources.add("textures.urdf", &broken);
-    assert_eq!(line(&sources, &error), line_of(&broken, "<parent link=\"bas\""));
+    assert_eq!(
+        line(&sources, &error),
+        line_of(&broken, "<parent link=\"bas\"")
+    );
 }
 
 /// Pinocchio's `<collision_checking>` in a link (simple_humanoid.urdf of example-robot-data):
@@ -570,23 +829,40 @@ fn extensions_inside_links_are_reported_not_checked_as_shapes() {
     let imported = import(COLLISION_CHECKING);
     let mut sources = SourceMap::new();
     sources.add("checking.urdf", COLLISION_CHECKING);
-    let found: Vec<(&str, usize)> = imported.warnings.iter().map(|d| (d.code, line(&sources, d))).collect();
+    let found: Vec<(&str, usize)> = imported
+        .warnings
+        .iter()
+        .map(|d| (d.code, line(&sources, d)))
+        .collect();
     let expected = [
         ("W1007", line_of(COLLISION_CHECKING, "<collision name=")),
         ("W1008", line_of(COLLISION_CHECKING, "<collision_checking>")),
         ("W1008", line_of(COLLISION_CHECKING, "<actuator")),
     ];
     assert_eq!(found, expected, "{:#?}", imported.warnings);
-    assert_eq!(imported.warnings[1].message, "`<collision_checking>` of link `torso` is not imported");
-    assert_eq!(imported.warnings[2].message, "`<actuator>` of joint `hinge` is not imported");
+    assert_eq!(
+        imported.warnings[1].message,
+        "`<collision_checking>` of link `torso` is not imported"
+    );
+    assert_eq!(
+        imported.warnings[2].message,
+        "`<actuator>` of joint `hinge` is not imported"
+    );
     compile(&imported.text);
 
     // A shape inside `<geometry>` is still checked.
-    let broken = COLLISION_CHECKING.replace("<cylinder radius=\"0.1\" length=\"0.2\"/>", "<capsule name=\"test\"/>");
-    let error = import_urdf("checking.urdf", &broken, &ImportOptions::default()).expect_err("a capsule without radius");
+    let broken = COLLISION_CHECKING.replace(
+        "<cylinder radius=\"0.1\" length=\"0.2\"/>",
+        "<capsule name=\"test\"/>",
+    );
+    let error = import_urdf("checking.urdf", &broken, &ImportOptions::default())
+        .expect_err("a capsule without radius");
     assert_eq!(error.code, "E1002");
     assert_eq!(error.message, "`<capsule>` has no `radius` attribute");
     let span = error.primary_span().expect("located");
     assert_eq!(&broken[span.range()], "<capsule name=\"test\"/>");
-    assert!(span.range().end < broken.find("<collision_checking>").expect("there"), "the one in `<geometry>`");
+    assert!(
+        span.range().end < broken.find("<collision_checking>").expect("there"),
+        "the one in `<geometry>`"
+    );
 }

@@ -10,7 +10,11 @@ use lsdc::simulate::run::{run, Simulation};
 /// An arm on a revolute shoulder: a heavy sensor welded off its axis, a tool welded to the
 /// sensor, and a forearm on a revolute elbow hanging from the tool. Gravity on every body.
 fn arm(keep_welds: bool) -> String {
-    let pin = if keep_welds { "apply force value = [0, 0, 0] end on sensor ;\napply force value = [0, 0, 0] end on tool ;\n" } else { "" };
+    let pin = if keep_welds {
+        "apply force value = [0, 0, 0] end on sensor ;\napply force value = [0, 0, 0] end on tool ;\n"
+    } else {
+        ""
+    };
     format!(
         "import joints ; import gravity ;
 let upper = body mass = 2, iframe = [0.2, 0, 0] ++ 1, inertia = [0.01, 0.05, 0.05] end ;
@@ -30,10 +34,16 @@ simulate duration = 1, output = 0.05, tolerance = 1e-12 end ;
 }
 
 fn prepared(keep_welds: bool) -> Prepared {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let compilation = compile_text("arm.lsd", &arm(keep_welds), None, &options);
-    let mechanism = compilation.mechanism.unwrap_or_else(|| panic!("{:?}", compilation.diagnostics));
-    let mut prepared = prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| panic!("{:?}", d[0].message));
+    let mechanism = compilation
+        .mechanism
+        .unwrap_or_else(|| panic!("{:?}", compilation.diagnostics));
+    let mut prepared = prepare(&mechanism, &[], &Settings::default())
+        .unwrap_or_else(|d| panic!("{:?}", d[0].message));
     prepared.settings.reactions = true;
     prepared
 }
@@ -41,7 +51,11 @@ fn prepared(keep_welds: bool) -> Prepared {
 fn simulate(keep_welds: bool) -> (Prepared, Simulation) {
     let p = prepared(keep_welds);
     let simulation = run(&p, &mut |_| {});
-    assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
     (p, simulation)
 }
 
@@ -49,13 +63,25 @@ fn simulate(keep_welds: bool) -> (Prepared, Simulation) {
 fn merged_welds_move_and_react_as_bodies_of_their_own() {
     let (merged, with_merging) = simulate(false);
     let (kept, without) = simulate(true);
-    assert_eq!(merged.model.dynamic_joints.len(), 2, "the two welds are merged");
-    assert_eq!(kept.model.dynamic_joints.len(), 4, "efforts on the welded bodies keep them");
+    assert_eq!(
+        merged.model.dynamic_joints.len(),
+        2,
+        "the two welds are merged"
+    );
+    assert_eq!(
+        kept.model.dynamic_joints.len(),
+        4,
+        "efforts on the welded bodies keep them"
+    );
     assert_eq!(with_merging.samples.len(), without.samples.len());
     for (a, b) in with_merging.samples.iter().zip(&without.samples) {
         let close = |x: &[f64], y: &[f64], what: &str| {
             for (k, (u, w)) in x.iter().zip(y).enumerate() {
-                assert!((u - w).abs() <= 1e-9 * (1.0 + w.abs()), "t = {}: {what}[{k}]: {u} vs {w}", a.time);
+                assert!(
+                    (u - w).abs() <= 1e-9 * (1.0 + w.abs()),
+                    "t = {}: {what}[{k}]: {u} vs {w}",
+                    a.time
+                );
             }
         };
         close(&a.coordinates, &b.coordinates, "coordinates");
@@ -66,6 +92,9 @@ fn merged_welds_move_and_react_as_bodies_of_their_own() {
     // The weld carrying the tool and the forearm holds at least their weight.
     let last = with_merging.samples.last().expect("samples");
     let flange = 6 * 2;
-    let force = (3..6).map(|i| last.reactions[flange + i].powi(2)).sum::<f64>().sqrt();
+    let force = (3..6)
+        .map(|i| last.reactions[flange + i].powi(2))
+        .sum::<f64>()
+        .sqrt();
     assert!(force > 0.5 * 1.3 * 9.80665, "{force}");
 }

@@ -9,14 +9,25 @@ use crate::syntax::ast::{Arg, Callee, Ident};
 use crate::syntax::span::Span;
 
 impl<'w> Checker<'w> {
-    pub(super) fn call(&mut self, callee: &'w Callee, args: &'w [Arg], span: Span, ctx: &mut Ctx) -> Ty {
+    pub(super) fn call(
+        &mut self,
+        callee: &'w Callee,
+        args: &'w [Arg],
+        span: Span,
+        ctx: &mut Ctx,
+    ) -> Ty {
         let arg_types: Vec<Ty> = args.iter().map(|a| self.expr(&a.value, ctx)).collect();
         match callee {
             Callee::Unknown(ident) => {
                 self.positional_only(args);
                 for (arg, ty) in args.iter().zip(&arg_types) {
                     if !ty.fits(Ty::Scalar) {
-                        self.expect_value(&arg.value, *ty, Ty::Scalar, "an argument of an unknown function");
+                        self.expect_value(
+                            &arg.value,
+                            *ty,
+                            Ty::Scalar,
+                            "an argument of an unknown function",
+                        );
                     }
                 }
                 let _ = ident;
@@ -24,7 +35,11 @@ impl<'w> Checker<'w> {
             }
             Callee::Name(ident) => {
                 let is_local = ctx.locals.iter().any(|l| l.name == ident.name);
-                if !is_local && self.lookup_global(&ident.name, ctx.scope, ctx.limit).is_none() {
+                if !is_local
+                    && self
+                        .lookup_global(&ident.name, ctx.scope, ctx.limit)
+                        .is_none()
+                {
                     if let Some((params, result)) = types::builtin_function(&ident.name) {
                         self.out.resolutions.insert(ident.span, Target::Builtin);
                         return self.builtin_call(ident, params, result, args, &arg_types, span);
@@ -35,7 +50,9 @@ impl<'w> Checker<'w> {
             }
             Callee::Qualified { package, name } => match self.package_member(package, name, ctx) {
                 Some((scope, ty)) => {
-                    self.out.resolutions.insert(name.span, Target::Global(scope));
+                    self.out
+                        .resolutions
+                        .insert(name.span, Target::Global(scope));
                     self.call_value(name, ty, args, arg_types, span)
                 }
                 None => Ty::Error,
@@ -52,26 +69,59 @@ impl<'w> Checker<'w> {
         }
     }
 
-    fn builtin_call(&mut self, ident: &Ident, params: &[Ty], result: Ty, args: &'w [Arg], arg_types: &[Ty], span: Span) -> Ty {
+    fn builtin_call(
+        &mut self,
+        ident: &Ident,
+        params: &[Ty],
+        result: Ty,
+        args: &'w [Arg],
+        arg_types: &[Ty],
+        span: Span,
+    ) -> Ty {
         self.positional_only(args);
         if args.len() != params.len() {
-            self.report(arity_error(&ident.name, params.len(), args.len(), span, None));
+            self.report(arity_error(
+                &ident.name,
+                params.len(),
+                args.len(),
+                span,
+                None,
+            ));
             return Ty::Error;
         }
         for ((arg, ty), param) in args.iter().zip(arg_types).zip(params) {
-            self.expect_value(&arg.value, *ty, *param, &format!("an argument of `{}`", ident.name));
+            self.expect_value(
+                &arg.value,
+                *ty,
+                *param,
+                &format!("an argument of `{}`", ident.name),
+            );
         }
         result
     }
 
-    fn call_value(&mut self, ident: &Ident, ty: Ty, args: &'w [Arg], arg_types: Vec<Ty>, span: Span) -> Ty {
+    fn call_value(
+        &mut self,
+        ident: &Ident,
+        ty: Ty,
+        args: &'w [Arg],
+        arg_types: Vec<Ty>,
+        span: Span,
+    ) -> Ty {
         let def = match ty {
             Ty::Definition(def) => def,
             Ty::Error => return Ty::Error,
             other => {
                 self.report(
-                    Diagnostic::error("E0412", format!("`{}` is {}, not a parameterised definition", ident.name, other.with_article()))
-                        .primary(ident.span, "cannot be called"),
+                    Diagnostic::error(
+                        "E0412",
+                        format!(
+                            "`{}` is {}, not a parameterised definition",
+                            ident.name,
+                            other.with_article()
+                        ),
+                    )
+                    .primary(ident.span, "cannot be called"),
                 );
                 return Ty::Error;
             }
@@ -83,7 +133,13 @@ impl<'w> Checker<'w> {
     }
 
     /// Matches positional and named arguments to the definition's parameters.
-    fn bind_arguments(&mut self, def: DefId, args: &'w [Arg], arg_types: Vec<Ty>, span: Span) -> Option<Vec<Ty>> {
+    fn bind_arguments(
+        &mut self,
+        def: DefId,
+        args: &'w [Arg],
+        arg_types: Vec<Ty>,
+        span: Span,
+    ) -> Option<Vec<Ty>> {
         let definition = &self.out.definitions[def.0 as usize];
         let params = definition.params;
         let (name, def_span) = (definition.name.clone(), definition.span);
@@ -94,19 +150,31 @@ impl<'w> Checker<'w> {
             let index = match &arg.name {
                 None if position < params.len() => position,
                 None => {
-                    self.report(arity_error(&name, params.len(), args.len(), span, Some(def_span)));
+                    self.report(arity_error(
+                        &name,
+                        params.len(),
+                        args.len(),
+                        span,
+                        Some(def_span),
+                    ));
                     return None;
                 }
                 Some(arg_name) => match params.iter().position(|p| p.name.name == arg_name.name) {
                     Some(index) => index,
                     None => {
-                        let help = suggest::did_you_mean(&arg_name.name, params.iter().map(|p| p.name.name.as_ref()))
-                            .map(|s| format!("did you mean `{s}`?"));
+                        let help = suggest::did_you_mean(
+                            &arg_name.name,
+                            params.iter().map(|p| p.name.name.as_ref()),
+                        )
+                        .map(|s| format!("did you mean `{s}`?"));
                         self.report(
-                            Diagnostic::error("E0413", format!("`{name}` has no parameter `{}`", arg_name.name))
-                                .primary(arg_name.span, "unknown parameter")
-                                .secondary(def_span, "defined here")
-                                .with_help(help),
+                            Diagnostic::error(
+                                "E0413",
+                                format!("`{name}` has no parameter `{}`", arg_name.name),
+                            )
+                            .primary(arg_name.span, "unknown parameter")
+                            .secondary(def_span, "defined here")
+                            .with_help(help),
                         );
                         ok = false;
                         continue;
@@ -115,23 +183,42 @@ impl<'w> Checker<'w> {
             };
             if bound[index].is_some() {
                 self.report(
-                    Diagnostic::error("E0413", format!("parameter `{}` is given twice", params[index].name.name))
-                        .primary(arg.value.span, "second value"),
+                    Diagnostic::error(
+                        "E0413",
+                        format!("parameter `{}` is given twice", params[index].name.name),
+                    )
+                    .primary(arg.value.span, "second value"),
                 );
                 ok = false;
             }
-            if let Some(expected) = params[index].ty.as_ref().and_then(|a| Ty::from_annotation(&a.name)) {
-                ok &= self.expect_value(&arg.value, ty, expected, &format!("parameter `{}`", params[index].name.name));
+            if let Some(expected) = params[index]
+                .ty
+                .as_ref()
+                .and_then(|a| Ty::from_annotation(&a.name))
+            {
+                ok &= self.expect_value(
+                    &arg.value,
+                    ty,
+                    expected,
+                    &format!("parameter `{}`", params[index].name.name),
+                );
             }
             bound[index] = Some(ty);
         }
-        let missing: Vec<String> =
-            params.iter().zip(&bound).filter(|(_, b)| b.is_none()).map(|(p, _)| format!("`{}`", p.name.name)).collect();
+        let missing: Vec<String> = params
+            .iter()
+            .zip(&bound)
+            .filter(|(_, b)| b.is_none())
+            .map(|(p, _)| format!("`{}`", p.name.name))
+            .collect();
         if !missing.is_empty() {
             self.report(
-                Diagnostic::error("E0413", format!("missing argument {} for `{name}`", missing.join(", ")))
-                    .primary(span, "in this call")
-                    .secondary(def_span, "defined here"),
+                Diagnostic::error(
+                    "E0413",
+                    format!("missing argument {} for `{name}`", missing.join(", ")),
+                )
+                .primary(span, "in this call")
+                .secondary(def_span, "defined here"),
             );
             return None;
         }
@@ -144,11 +231,19 @@ impl<'w> Checker<'w> {
             return ty;
         }
         let definition = &self.out.definitions[def.0 as usize];
-        let (name, body, scope, limit) = (definition.name.clone(), definition.body, definition.scope, definition.limit);
+        let (name, body, scope, limit) = (
+            definition.name.clone(),
+            definition.body,
+            definition.scope,
+            definition.limit,
+        );
         if self.instantiations.len() >= MAX_INSTANTIATION_DEPTH {
             self.report(
-                Diagnostic::error("E0414", format!("definitions nest more than {MAX_INSTANTIATION_DEPTH} deep"))
-                    .primary(use_site, format!("instantiating `{name}` here")),
+                Diagnostic::error(
+                    "E0414",
+                    format!("definitions nest more than {MAX_INSTANTIATION_DEPTH} deep"),
+                )
+                .primary(use_site, format!("instantiating `{name}` here")),
             );
             return Ty::Error;
         }
@@ -156,9 +251,17 @@ impl<'w> Checker<'w> {
             .params
             .iter()
             .zip(&arg_types)
-            .map(|(p, &ty)| Local { name: p.name.name.clone(), ty, coordinate: false })
+            .map(|(p, &ty)| Local {
+                name: p.name.name.clone(),
+                ty,
+                coordinate: false,
+            })
             .collect();
-        let mut ctx = Ctx { scope, limit, locals };
+        let mut ctx = Ctx {
+            scope,
+            limit,
+            locals,
+        };
         self.instantiations.push((use_site, name));
         let ty = self.expr(body, &mut ctx);
         self.instantiations.pop();
@@ -167,13 +270,21 @@ impl<'w> Checker<'w> {
     }
 }
 
-fn arity_error(name: &str, expected: usize, found: usize, span: Span, def_span: Option<Span>) -> Diagnostic {
+fn arity_error(
+    name: &str,
+    expected: usize,
+    found: usize,
+    span: Span,
+    def_span: Option<Span>,
+) -> Diagnostic {
     let plural = if expected == 1 { "" } else { "s" };
-    let mut diagnostic = Diagnostic::error("E0413", format!("`{name}` takes {expected} argument{plural}, {found} given"))
-        .primary(span, "in this call");
+    let mut diagnostic = Diagnostic::error(
+        "E0413",
+        format!("`{name}` takes {expected} argument{plural}, {found} given"),
+    )
+    .primary(span, "in this call");
     if let Some(def_span) = def_span {
         diagnostic = diagnostic.secondary(def_span, "defined here");
     }
     diagnostic
 }
-

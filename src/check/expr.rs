@@ -32,14 +32,21 @@ impl<'w> Checker<'w> {
                 ty @ (Ty::Scalar | Ty::Vector | Ty::Matrix | Ty::Error) => ty,
                 other => {
                     self.report(
-                        Diagnostic::error("E0402", format!("cannot negate {}", other.with_article()))
-                            .primary(inner.span, format!("this is {}", other.with_article())),
+                        Diagnostic::error(
+                            "E0402",
+                            format!("cannot negate {}", other.with_article()),
+                        )
+                        .primary(inner.span, format!("this is {}", other.with_article())),
                     );
                     Ty::Error
                 }
             },
             ExprKind::Prime(inner) => self.prime(inner, ctx),
-            ExprKind::Construct { kind, params, fields } => self.construct(*kind, params, fields, ctx),
+            ExprKind::Construct {
+                kind,
+                params,
+                fields,
+            } => self.construct(*kind, params, fields, ctx),
             ExprKind::Local { bindings, body } => {
                 let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, ctx)).collect();
                 for (binding, ty) in bindings.iter().zip(&types) {
@@ -47,7 +54,11 @@ impl<'w> Checker<'w> {
                 }
                 let depth = ctx.locals.len();
                 for (binding, ty) in bindings.iter().zip(types) {
-                    ctx.locals.push(Local { name: binding.name.name.clone(), ty, coordinate: false });
+                    ctx.locals.push(Local {
+                        name: binding.name.name.clone(),
+                        ty,
+                        coordinate: false,
+                    });
                 }
                 let ty = self.expr(body, ctx);
                 ctx.locals.truncate(depth);
@@ -72,9 +83,12 @@ impl<'w> Checker<'w> {
         }
         if types::builtin_function(&ident.name).is_some() {
             self.report(
-                Diagnostic::error("E0417", format!("`{}` is a built-in function, not a value", ident.name))
-                    .primary(ident.span, "not called")
-                    .help(format!("call it: `{}(x)`", ident.name)),
+                Diagnostic::error(
+                    "E0417",
+                    format!("`{}` is a built-in function, not a value", ident.name),
+                )
+                .primary(ident.span, "not called")
+                .help(format!("call it: `{}(x)`", ident.name)),
             );
             return Ty::Error;
         }
@@ -84,7 +98,12 @@ impl<'w> Checker<'w> {
     }
 
     /// Looks a name up in a scope (its first `limit` names), its opened modules, then its parents.
-    pub(super) fn lookup_global(&self, name: &str, scope: super::ScopeId, limit: u32) -> Option<(Target, Ty)> {
+    pub(super) fn lookup_global(
+        &self,
+        name: &str,
+        scope: super::ScopeId,
+        limit: u32,
+    ) -> Option<(Target, Ty)> {
         let mut current = Some((scope, limit));
         while let Some((id, limit)) = current {
             let s = self.out.scope(id);
@@ -105,14 +124,16 @@ impl<'w> Checker<'w> {
 
     fn unknown_name(&self, ident: &Ident, ctx: &Ctx) -> Diagnostic {
         let name = &ident.name;
-        let mut diagnostic =
-            Diagnostic::error("E0301", format!("unknown name `{name}`")).primary(ident.span, "not defined here");
+        let mut diagnostic = Diagnostic::error("E0301", format!("unknown name `{name}`"))
+            .primary(ident.span, "not defined here");
         // Declared later in the same scope?
         let mut current = Some(ctx.scope);
         while let Some(id) = current {
             let scope = self.out.scope(id);
             if let Some(&(later, extent)) = scope.declared_later.get(name.as_ref()) {
-                let inside = extent.file == ident.span.file && extent.start <= ident.span.start && ident.span.end <= extent.end;
+                let inside = extent.file == ident.span.file
+                    && extent.start <= ident.span.start
+                    && ident.span.end <= extent.end;
                 if inside {
                     return diagnostic
                         .secondary(later, "the name being defined")
@@ -136,14 +157,17 @@ impl<'w> Checker<'w> {
         }
         let visible = self.visible_names(ctx);
         if let Some(number) = suggest::thesis_body_number(name) {
-            let bodies: Vec<&(String, Ty)> = visible.iter().filter(|(_, ty)| *ty == Ty::Body).collect();
+            let bodies: Vec<&(String, Ty)> =
+                visible.iter().filter(|(_, ty)| *ty == Ty::Body).collect();
             if let Some((body, _)) = bodies.iter().filter(|(n, _)| n != "earth").nth(number - 1) {
                 return diagnostic.help(format!(
                     "did you mean `{body}`? bodies are referred to by the names they are declared with (`S{number}` is the thesis's notation for body {number})"
                 ));
             }
         }
-        if let Some(candidate) = suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str())) {
+        if let Some(candidate) =
+            suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()))
+        {
             diagnostic = diagnostic.help(format!("did you mean `{candidate}`?"));
         }
         diagnostic
@@ -195,14 +219,26 @@ impl<'w> Checker<'w> {
     }
 
     /// Resolves `P:X` to the package's scope and X's type, reporting what is wrong.
-    pub(super) fn package_member(&mut self, package: &Ident, name: &Ident, ctx: &mut Ctx) -> Option<(super::ScopeId, Ty)> {
+    pub(super) fn package_member(
+        &mut self,
+        package: &Ident,
+        name: &Ident,
+        ctx: &mut Ctx,
+    ) -> Option<(super::ScopeId, Ty)> {
         let scope = match self.name(package, ctx) {
             Ty::Package(scope) => scope,
             Ty::Error => return None,
             other => {
                 self.report(
-                    Diagnostic::error("E0404", format!("`{}` is {}, not a package", package.name, other.with_article()))
-                        .primary(package.span, "`:` selects a name in a package"),
+                    Diagnostic::error(
+                        "E0404",
+                        format!(
+                            "`{}` is {}, not a package",
+                            package.name,
+                            other.with_article()
+                        ),
+                    )
+                    .primary(package.span, "`:` selects a name in a package"),
                 );
                 return None;
             }
@@ -214,9 +250,12 @@ impl<'w> Checker<'w> {
         let help = suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref()))
             .map(|s| format!("did you mean `{}:{s}`?", package.name));
         self.report(
-            Diagnostic::error("E0301", format!("package `{}` has no `{}`", package.name, name.name))
-                .primary(name.span, "not defined in the package")
-                .with_help(help),
+            Diagnostic::error(
+                "E0301",
+                format!("package `{}` has no `{}`", package.name, name.name),
+            )
+            .primary(name.span, "not defined in the package")
+            .with_help(help),
         );
         None
     }
@@ -229,12 +268,21 @@ impl<'w> Checker<'w> {
             return ty;
         }
         let names = types::field_names(target);
-        let mut diagnostic = Diagnostic::error("E0405", format!("{} has no field `{}`", target.with_article(), field.name))
-            .primary(field.span, "unknown field");
+        let mut diagnostic = Diagnostic::error(
+            "E0405",
+            format!("{} has no field `{}`", target.with_article(), field.name),
+        )
+        .primary(field.span, "unknown field");
         diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
             Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
-            None if names.is_empty() => diagnostic.note(format!("{} has no fields", target.with_article())),
-            None => diagnostic.help(format!("the fields of {} are: {}", target.with_article(), names.join(", "))),
+            None if names.is_empty() => {
+                diagnostic.note(format!("{} has no fields", target.with_article()))
+            }
+            None => diagnostic.help(format!(
+                "the fields of {} are: {}",
+                target.with_article(),
+                names.join(", ")
+            )),
         };
         self.report(diagnostic);
         Ty::Error
@@ -244,8 +292,11 @@ impl<'w> Checker<'w> {
         let types: Vec<Ty> = items.iter().map(|e| self.expr(e, ctx)).collect();
         if items.len() != 3 {
             self.report(
-                Diagnostic::error("E0406", format!("a vector has 3 components, this one has {}", items.len()))
-                    .primary(span, "expected `[x, y, z]`"),
+                Diagnostic::error(
+                    "E0406",
+                    format!("a vector has 3 components, this one has {}", items.len()),
+                )
+                .primary(span, "expected `[x, y, z]`"),
             );
             return Ty::Error;
         }
@@ -258,8 +309,14 @@ impl<'w> Checker<'w> {
         for (item, ty) in items.iter().zip(types) {
             if !ty.fits(Ty::Scalar) {
                 self.report(
-                    Diagnostic::error("E0401", format!("a vector's components must be scalars, found {}", ty.with_article()))
-                        .primary(item.span, format!("this is {}", ty.with_article())),
+                    Diagnostic::error(
+                        "E0401",
+                        format!(
+                            "a vector's components must be scalars, found {}",
+                            ty.with_article()
+                        ),
+                    )
+                    .primary(item.span, format!("this is {}", ty.with_article())),
                 );
                 break;
             }
@@ -269,7 +326,12 @@ impl<'w> Checker<'w> {
 
     fn prime(&mut self, inner: &'w Expr, ctx: &mut Ctx) -> Ty {
         let is_coordinate = match &inner.kind {
-            ExprKind::Name(ident) => ctx.locals.iter().rev().find(|l| l.name == ident.name).is_some_and(|l| l.coordinate),
+            ExprKind::Name(ident) => ctx
+                .locals
+                .iter()
+                .rev()
+                .find(|l| l.name == ident.name)
+                .is_some_and(|l| l.coordinate),
             ExprKind::Prime(_) => true,
             ExprKind::Field { target, .. } => self.expr_type_silently(target, ctx) == Ty::Join,
             _ => false,
@@ -286,31 +348,52 @@ impl<'w> Checker<'w> {
         Ty::Scalar
     }
 
-    fn construct(&mut self, kind: ConstructKind, params: &'w [Ident], fields: &'w [FieldInit], ctx: &mut Ctx) -> Ty {
+    fn construct(
+        &mut self,
+        kind: ConstructKind,
+        params: &'w [Ident],
+        fields: &'w [FieldInit],
+        ctx: &mut Ctx,
+    ) -> Ty {
         let depth = ctx.locals.len();
         for (i, param) in params.iter().enumerate() {
             if let Some(first) = params[..i].iter().find(|p| p.name == param.name) {
                 self.report(
-                    Diagnostic::error("E0303", format!("coordinate `{}` is declared twice", param.name))
-                        .primary(param.span, "second declaration")
-                        .secondary(first.span, "first declaration"),
+                    Diagnostic::error(
+                        "E0303",
+                        format!("coordinate `{}` is declared twice", param.name),
+                    )
+                    .primary(param.span, "second declaration")
+                    .secondary(first.span, "first declaration"),
                 );
             }
-            ctx.locals.push(Local { name: param.name.clone(), ty: Ty::Scalar, coordinate: true });
+            ctx.locals.push(Local {
+                name: param.name.clone(),
+                ty: Ty::Scalar,
+                coordinate: true,
+            });
         }
         for (i, field) in fields.iter().enumerate() {
             let ty = self.expr(&field.value, ctx);
             if let Some(first) = fields[..i].iter().find(|f| f.name.name == field.name.name) {
                 self.report(
-                    Diagnostic::error("E0303", format!("field `{}` is given twice", field.name.name))
-                        .primary(field.name.span, "second value")
-                        .secondary(first.name.span, "first value"),
+                    Diagnostic::error(
+                        "E0303",
+                        format!("field `{}` is given twice", field.name.name),
+                    )
+                    .primary(field.name.span, "second value")
+                    .secondary(first.name.span, "first value"),
                 );
                 continue;
             }
             match types::constructor_field_type(kind, &field.name.name) {
                 Some(expected) => {
-                    self.expect_value(&field.value, ty, expected, &format!("field `{}`", field.name.name));
+                    self.expect_value(
+                        &field.value,
+                        ty,
+                        expected,
+                        &format!("field `{}`", field.name.name),
+                    );
                 }
                 None => self.report(unknown_constructor_field(kind, &field.name)),
             }
@@ -337,9 +420,15 @@ impl<'w> Checker<'w> {
                 .any(|f| mentions(&f.value, &param.name));
             if !used {
                 self.report(
-                    Diagnostic::warning("W0401", format!("coordinate `{}` does not appear in the link's dof", param.name))
-                        .primary(param.span, "unused coordinate")
-                        .help("use it in `dof = ...`, or remove it from the parameter list"),
+                    Diagnostic::warning(
+                        "W0401",
+                        format!(
+                            "coordinate `{}` does not appear in the link's dof",
+                            param.name
+                        ),
+                    )
+                    .primary(param.span, "unused coordinate")
+                    .help("use it in `dof = ...`, or remove it from the parameter list"),
                 );
             }
         }
@@ -355,7 +444,11 @@ impl<'w> Checker<'w> {
         // Fields that are not link fields were reported already.
         let fields: Vec<&FieldInit> = fields
             .iter()
-            .filter(|f| ["dof", "force", "torque"].iter().any(|base| types::is_numbered(&f.name.name, base)))
+            .filter(|f| {
+                ["dof", "force", "torque"]
+                    .iter()
+                    .any(|base| types::is_numbered(&f.name.name, base))
+            })
             .collect();
         let fields = fields.as_slice();
         let plain = fields.iter().find(|f| number(f).is_none());
@@ -378,7 +471,10 @@ impl<'w> Checker<'w> {
             if *n != expected {
                 self.report(
                     Diagnostic::error("E0415", format!("`dof{n}` without `dof{expected}`"))
-                        .primary(field.name.span, format!("expected `dof{expected}` before this"))
+                        .primary(
+                            field.name.span,
+                            format!("expected `dof{expected}` before this"),
+                        )
                         .help("number the displacements of a link's dof chain from 1, in order"),
                 );
                 return;
@@ -395,7 +491,15 @@ impl<'w> Checker<'w> {
         }
     }
 
-    fn binary(&mut self, op: BinaryOp, lhs: &Expr, left: Ty, rhs: &Expr, right: Ty, span: Span) -> Ty {
+    fn binary(
+        &mut self,
+        op: BinaryOp,
+        lhs: &Expr,
+        left: Ty,
+        rhs: &Expr,
+        right: Ty,
+        span: Span,
+    ) -> Ty {
         use Ty::*;
         if left == Error || right == Error {
             return match op {
@@ -407,31 +511,67 @@ impl<'w> Checker<'w> {
         }
         match op {
             BinaryOp::Rotation => {
-                let angle_ok = self.expect_value(lhs, left, Scalar, "the angle of a rotation `angle || axis`");
-                let axis_ok = self.expect_value(rhs, right, Vector, "the axis of a rotation `angle || axis`");
-                if angle_ok && axis_ok { Rotation } else { Error }
+                let angle_ok =
+                    self.expect_value(lhs, left, Scalar, "the angle of a rotation `angle || axis`");
+                let axis_ok =
+                    self.expect_value(rhs, right, Vector, "the axis of a rotation `angle || axis`");
+                if angle_ok && axis_ok {
+                    Rotation
+                } else {
+                    Error
+                }
             }
             BinaryOp::Displacement => {
-                let t = self.expect_value(lhs, left, Vector, "the translation of `translation ++ rotation`");
-                let r = self.expect_value(rhs, right, Rotation, "the rotation of `translation ++ rotation`");
-                if t && r { Displacement } else { Error }
+                let t = self.expect_value(
+                    lhs,
+                    left,
+                    Vector,
+                    "the translation of `translation ++ rotation`",
+                );
+                let r = self.expect_value(
+                    rhs,
+                    right,
+                    Rotation,
+                    "the rotation of `translation ++ rotation`",
+                );
+                if t && r {
+                    Displacement
+                } else {
+                    Error
+                }
             }
             BinaryOp::Frame => {
-                let d = self.expect_value(lhs, left, Displacement, "the displacement of `displacement @ body`");
-                let b = right.fits(Frame) || self.expect_value(rhs, right, Body, "the body of `displacement @ body`");
-                if d && b { Frame } else { Error }
+                let d = self.expect_value(
+                    lhs,
+                    left,
+                    Displacement,
+                    "the displacement of `displacement @ body`",
+                );
+                let b = right.fits(Frame)
+                    || self.expect_value(rhs, right, Body, "the body of `displacement @ body`");
+                if d && b {
+                    Frame
+                } else {
+                    Error
+                }
             }
             _ => match arithmetic(op, left, right) {
                 Some(ty) => ty,
                 None => {
                     let mut diagnostic = Diagnostic::error(
                         "E0402",
-                        format!("cannot apply `{}` to {} and {}", op.symbol(), left.with_article(), right.with_article()),
+                        format!(
+                            "cannot apply `{}` to {} and {}",
+                            op.symbol(),
+                            left.with_article(),
+                            right.with_article()
+                        ),
                     )
                     .primary(span, "invalid operands")
                     .secondary(lhs.span, left.with_article().to_string())
                     .secondary(rhs.span, right.with_article().to_string());
-                    if op == BinaryOp::Mul && left.numeric() == Vector && right.numeric() == Vector {
+                    if op == BinaryOp::Mul && left.numeric() == Vector && right.numeric() == Vector
+                    {
                         diagnostic = diagnostic.help("use `dot(a, b)` or `cross(a, b)`");
                     }
                     self.report(diagnostic);
@@ -447,21 +587,26 @@ fn arithmetic(op: BinaryOp, left: Ty, right: Ty) -> Option<Ty> {
     use Ty::*;
     // `0 + v` is `v`: the literal zero takes the other operand's type.
     let (left, right) = match (left, right) {
-        (Zero, other @ (Vector | Matrix)) | (other @ (Vector | Matrix), Zero) if matches!(op, BinaryOp::Add | BinaryOp::Sub) => {
+        (Zero, other @ (Vector | Matrix)) | (other @ (Vector | Matrix), Zero)
+            if matches!(op, BinaryOp::Add | BinaryOp::Sub) =>
+        {
             (other, other)
         }
         (l, r) => (l.numeric(), r.numeric()),
     };
     Some(match (op, left, right) {
-        (BinaryOp::Add | BinaryOp::Sub, a, b) if a == b && matches!(a, Scalar | Vector | Matrix) => a,
+        (BinaryOp::Add | BinaryOp::Sub, a, b)
+            if a == b && matches!(a, Scalar | Vector | Matrix) =>
+        {
+            a
+        }
         (BinaryOp::Mul, Scalar, b @ (Scalar | Vector | Matrix)) => b,
         (BinaryOp::Mul, a @ (Vector | Matrix), Scalar) => a,
         (BinaryOp::Mul, Matrix, Vector) | (BinaryOp::Mul, Rotation, Vector) => Vector,
         (BinaryOp::Mul, Matrix, Matrix) => Matrix,
         (BinaryOp::Mul, Rotation, Rotation) => Rotation,
-        (BinaryOp::Mul, Displacement | Vector | Rotation, Displacement) | (BinaryOp::Mul, Displacement, Vector | Rotation) => {
-            Displacement
-        }
+        (BinaryOp::Mul, Displacement | Vector | Rotation, Displacement)
+        | (BinaryOp::Mul, Displacement, Vector | Rotation) => Displacement,
         (BinaryOp::Div, a @ (Scalar | Vector | Matrix), Scalar) => a,
         (BinaryOp::Pow, Scalar, Scalar) => Scalar,
         _ => return None,
@@ -480,14 +625,20 @@ fn unknown_type(name: &str) -> Ty {
 fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
     let names = types::constructor_field_names(kind);
     let keyword = kind.keyword();
-    let mut diagnostic = Diagnostic::error("E0405", format!("`{keyword}` has no field `{}`", field.name))
-        .primary(field.span, "unknown field");
+    let mut diagnostic = Diagnostic::error(
+        "E0405",
+        format!("`{keyword}` has no field `{}`", field.name),
+    )
+    .primary(field.span, "unknown field");
     if kind == ConstructKind::Body && &*field.name == "frame" {
         return diagnostic.note("a body's reference frame is the body itself; other frames are `<displacement> @ <body>`");
     }
     diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
         Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
-        None => diagnostic.help(format!("the fields of `{keyword}` are: {}", names.join(", "))),
+        None => diagnostic.help(format!(
+            "the fields of `{keyword}` are: {}",
+            names.join(", ")
+        )),
     };
     diagnostic
 }
@@ -496,12 +647,20 @@ fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
 fn mentions(expr: &Expr, name: &str) -> bool {
     match &expr.kind {
         ExprKind::Name(ident) => &*ident.name == name,
-        ExprKind::Field { target, .. } | ExprKind::Neg(target) | ExprKind::Prime(target) => mentions(target, name),
+        ExprKind::Field { target, .. } | ExprKind::Neg(target) | ExprKind::Prime(target) => {
+            mentions(target, name)
+        }
         ExprKind::Binary { lhs, rhs, .. } => mentions(lhs, name) || mentions(rhs, name),
         ExprKind::Vector(items) => items.iter().any(|e| mentions(e, name)),
         ExprKind::Call { args, .. } => args.iter().any(|a| mentions(&a.value, name)),
-        ExprKind::Local { bindings, body } => bindings.iter().any(|b| mentions(&b.value, name)) || mentions(body, name),
+        ExprKind::Local { bindings, body } => {
+            bindings.iter().any(|b| mentions(&b.value, name)) || mentions(body, name)
+        }
         ExprKind::Construct { fields, .. } => fields.iter().any(|f| mentions(&f.value, name)),
-        ExprKind::Qualified { .. } | ExprKind::Unknown(_) | ExprKind::Int(_) | ExprKind::Float(_) | ExprKind::Error => false,
+        ExprKind::Qualified { .. }
+        | ExprKind::Unknown(_)
+        | ExprKind::Int(_)
+        | ExprKind::Float(_)
+        | ExprKind::Error => false,
     }
 }

@@ -100,7 +100,10 @@ const MAX_INSTANTIATION_DEPTH: usize = 64;
 
 impl<'w> Checker<'w> {
     fn new_scope(&mut self, parent: Option<(ScopeId, u32)>) -> ScopeId {
-        self.out.scopes.push(Scope { parent, ..Scope::default() });
+        self.out.scopes.push(Scope {
+            parent,
+            ..Scope::default()
+        });
         ScopeId(self.out.scopes.len() as u32 - 1)
     }
 
@@ -135,7 +138,10 @@ impl<'w> Checker<'w> {
     fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) {
         for decl in decls {
             for (name, span, extent) in declared_names(decl) {
-                self.scope_mut(scope).declared_later.entry(name).or_insert((span, extent));
+                self.scope_mut(scope)
+                    .declared_later
+                    .entry(name)
+                    .or_insert((span, extent));
             }
         }
         for decl in decls {
@@ -144,14 +150,23 @@ impl<'w> Checker<'w> {
     }
 
     fn ctx(&self, scope: ScopeId) -> Ctx {
-        Ctx { scope, limit: self.out.scope(scope).len(), locals: Vec::new() }
+        Ctx {
+            scope,
+            limit: self.out.scope(scope).len(),
+            locals: Vec::new(),
+        }
     }
 
     fn decl(&mut self, decl: &'w Decl, scope: ScopeId) {
         match &decl.kind {
             DeclKind::Let(bindings) => self.let_decl(bindings, scope),
             DeclKind::Define { name, params, body } => self.define(name, params, body, scope),
-            DeclKind::Join { first, second, link, name } => {
+            DeclKind::Join {
+                first,
+                second,
+                link,
+                name,
+            } => {
                 let mut ctx = self.ctx(scope);
                 for (member, position) in [(first, "first"), (second, "second")] {
                     let ty = self.expr(member, &mut ctx);
@@ -176,7 +191,11 @@ impl<'w> Checker<'w> {
                 for given in values {
                     let target = self.expr(&given.target, &mut ctx);
                     let value = self.expr(&given.value, &mut ctx);
-                    let expected = if target.numeric() == Ty::Vector { Ty::Vector } else { Ty::Scalar };
+                    let expected = if target.numeric() == Ty::Vector {
+                        Ty::Vector
+                    } else {
+                        Ty::Scalar
+                    };
                     if !matches!(target.numeric(), Ty::Scalar | Ty::Vector | Ty::Error) {
                         self.report(
                             Diagnostic::error("E0419", format!("`given` gives values to unknowns, not to {}", target.with_article()))
@@ -188,7 +207,11 @@ impl<'w> Checker<'w> {
                 }
             }
             DeclKind::Simulate(fields) => self.simulate(fields, decl.span, scope),
-            DeclKind::Apply { effort, target, reaction } => {
+            DeclKind::Apply {
+                effort,
+                target,
+                reaction,
+            } => {
                 let mut ctx = self.ctx(scope);
                 let effort_ty = self.expr(effort, &mut ctx);
                 for target in target.iter().chain(reaction) {
@@ -204,7 +227,9 @@ impl<'w> Checker<'w> {
                 self.declare(scope, name, Ty::Package(package));
             }
             DeclKind::Import { alias, .. } => {
-                let Some(&module) = self.workspace.imports.get(&decl.span) else { return };
+                let Some(&module) = self.workspace.imports.get(&decl.span) else {
+                    return;
+                };
                 let imported = self.module(module);
                 match alias {
                     Some(alias) => self.declare(scope, alias, Ty::Package(imported)),
@@ -213,7 +238,8 @@ impl<'w> Checker<'w> {
                         self.scope_mut(scope).opened.push((imported, limit));
                         let name: Name = self.workspace.module(module).name.as_str().into();
                         if !self.out.scope(scope).names.contains_key(&name) {
-                            self.scope_mut(scope).insert(name, Ty::Package(imported), decl.span);
+                            self.scope_mut(scope)
+                                .insert(name, Ty::Package(imported), decl.span);
                         }
                     }
                 }
@@ -226,7 +252,10 @@ impl<'w> Checker<'w> {
     /// them sees the others.
     fn let_decl(&mut self, bindings: &'w [Binding], scope: ScopeId) {
         let mut ctx = self.ctx(scope);
-        let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, &mut ctx)).collect();
+        let types: Vec<Ty> = bindings
+            .iter()
+            .map(|b| self.expr(&b.value, &mut ctx))
+            .collect();
         for (binding, ty) in bindings.iter().zip(types) {
             self.expect_first_class(&binding.value, ty);
             self.declare(scope, &binding.name, ty);
@@ -241,15 +270,25 @@ impl<'w> Checker<'w> {
         for param in params {
             if let Some(first) = seen.insert(&param.name.name, param.name.span) {
                 self.report(
-                    Diagnostic::error("E0303", format!("parameter `{}` is declared twice", param.name.name))
-                        .primary(param.name.span, "second declaration")
-                        .secondary(first, "first declaration"),
+                    Diagnostic::error(
+                        "E0303",
+                        format!("parameter `{}` is declared twice", param.name.name),
+                    )
+                    .primary(param.name.span, "second declaration")
+                    .secondary(first, "first declaration"),
                 );
             }
             declared.push(self.annotation(param));
         }
         let id = DefId(self.out.definitions.len() as u32);
-        self.out.definitions.push(Definition { name: name.name.clone(), params, body, span: name.span, scope, limit });
+        self.out.definitions.push(Definition {
+            name: name.name.clone(),
+            params,
+            body,
+            span: name.span,
+            scope,
+            limit,
+        });
         self.declare(scope, name, Ty::Definition(id));
         // Check the body once now: names are resolved and typed parameters checked even if the
         // definition is never used. Untyped parameters are `Error` here (they fit anywhere);
@@ -257,9 +296,17 @@ impl<'w> Checker<'w> {
         let locals = params
             .iter()
             .zip(declared)
-            .map(|(p, ty)| Local { name: p.name.name.clone(), ty: ty.unwrap_or(Ty::Error), coordinate: false })
+            .map(|(p, ty)| Local {
+                name: p.name.name.clone(),
+                ty: ty.unwrap_or(Ty::Error),
+                coordinate: false,
+            })
             .collect();
-        let mut ctx = Ctx { scope, limit, locals };
+        let mut ctx = Ctx {
+            scope,
+            limit,
+            locals,
+        };
         self.expr(body, &mut ctx);
     }
 
@@ -291,11 +338,17 @@ impl<'w> Checker<'w> {
             );
             return;
         }
-        self.scope_mut(scope).insert(name.name.clone(), ty, name.span);
+        self.scope_mut(scope)
+            .insert(name.name.clone(), ty, name.span);
     }
 
     /// `simulate duration = 10, integrator = dopri5, ... end`.
-    fn simulate(&mut self, fields: &'w [crate::syntax::ast::FieldInit], span: Span, scope: ScopeId) {
+    fn simulate(
+        &mut self,
+        fields: &'w [crate::syntax::ast::FieldInit],
+        span: Span,
+        scope: ScopeId,
+    ) {
         if let Some(previous) = self.simulate_seen.replace(span) {
             self.report(
                 Diagnostic::error("E0418", "a program has one `simulate` declaration")
@@ -322,7 +375,9 @@ impl<'w> Checker<'w> {
                 };
                 if given.is_none_or(|g| !known.contains(&&*g.name)) {
                     let help = given
-                        .and_then(|g| crate::diag::suggest::did_you_mean(&g.name, known.iter().copied()))
+                        .and_then(|g| {
+                            crate::diag::suggest::did_you_mean(&g.name, known.iter().copied())
+                        })
                         .map(|s| format!("did you mean `{s}`?"))
                         .unwrap_or_else(|| format!("the integrators are: {}", known.join(", ")));
                     self.report(
@@ -334,9 +389,17 @@ impl<'w> Checker<'w> {
                 continue;
             }
             if !crate::check::types::SIMULATE_FIELDS.contains(&name) {
-                let help = crate::diag::suggest::did_you_mean(name, crate::check::types::SIMULATE_FIELDS.iter().copied())
-                    .map(|s| format!("did you mean `{s}`?"))
-                    .unwrap_or_else(|| format!("the fields of `simulate` are: integrator, {}", crate::check::types::SIMULATE_FIELDS.join(", ")));
+                let help = crate::diag::suggest::did_you_mean(
+                    name,
+                    crate::check::types::SIMULATE_FIELDS.iter().copied(),
+                )
+                .map(|s| format!("did you mean `{s}`?"))
+                .unwrap_or_else(|| {
+                    format!(
+                        "the fields of `simulate` are: integrator, {}",
+                        crate::check::types::SIMULATE_FIELDS.join(", ")
+                    )
+                });
                 self.report(
                     Diagnostic::error("E0405", format!("`simulate` has no field `{name}`"))
                         .primary(field.name.span, "unknown field")
@@ -356,7 +419,9 @@ impl<'w> Checker<'w> {
         let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field { .. });
         let ty = self.expr(&initial.target, ctx);
         let target_ty = match &coordinate.kind {
-            crate::syntax::ast::ExprKind::Field { target, .. } => self.expr_type_silently(target, ctx),
+            crate::syntax::ast::ExprKind::Field { target, .. } => {
+                self.expr_type_silently(target, ctx)
+            }
             _ => ty,
         };
         if !is_coordinate || target_ty != Ty::Join {
@@ -369,8 +434,11 @@ impl<'w> Checker<'w> {
             }
         } else if primes > 1 {
             self.report(
-                Diagnostic::error("E0416", "`initial` gives positions (`crank.q`) or velocities (`crank.q'`) only")
-                    .primary(initial.target.span, "a second derivative"),
+                Diagnostic::error(
+                    "E0416",
+                    "`initial` gives positions (`crank.q`) or velocities (`crank.q'`) only",
+                )
+                .primary(initial.target.span, "a second derivative"),
             );
         } else if primes == 1 && initial.fixed {
             self.report(
@@ -404,19 +472,35 @@ impl<'w> Checker<'w> {
             }
             Ty::Torque => {
                 if !target_ty.fits(Ty::Body) {
-                    let help = if target_ty == Ty::Frame { "a torque acts on a whole body: write `<frame>.body`" } else { "write `apply <torque> on <body>`" };
+                    let help = if target_ty == Ty::Frame {
+                        "a torque acts on a whole body: write `<frame>.body`"
+                    } else {
+                        "write `apply <torque> on <body>`"
+                    };
                     self.report(
-                        Diagnostic::error("E0411", format!("a torque is applied on a body, not on {}", target_ty.with_article()))
-                            .primary(target.span, format!("this is {}", target_ty.with_article()))
-                            .help(help),
+                        Diagnostic::error(
+                            "E0411",
+                            format!(
+                                "a torque is applied on a body, not on {}",
+                                target_ty.with_article()
+                            ),
+                        )
+                        .primary(target.span, format!("this is {}", target_ty.with_article()))
+                        .help(help),
                     );
                 }
             }
             Ty::Error => {}
             other => self.report(
-                Diagnostic::error("E0411", format!("`apply` needs a force or a torque, found {}", other.with_article()))
-                    .primary(effort.span, format!("this is {}", other.with_article()))
-                    .help("write `apply force value = ..., body = ... end on <frame>`"),
+                Diagnostic::error(
+                    "E0411",
+                    format!(
+                        "`apply` needs a force or a torque, found {}",
+                        other.with_article()
+                    ),
+                )
+                .primary(effort.span, format!("this is {}", other.with_article()))
+                .help("write `apply force value = ..., body = ... end on <frame>`"),
             ),
         }
     }
@@ -428,7 +512,11 @@ impl<'w> Checker<'w> {
             Ty::Definition(_) => "a parameterised definition",
             _ => return true,
         };
-        let help = if matches!(ty, Ty::Package(_)) { "take a name from it: `P:name`" } else { "call it: `f(...)`" };
+        let help = if matches!(ty, Ty::Package(_)) {
+            "take a name from it: `P:name`"
+        } else {
+            "call it: `f(...)`"
+        };
         self.report(
             Diagnostic::error("E0417", format!("{what} is not a value"))
                 .primary(expr.span, format!("this is {what}"))
@@ -444,7 +532,11 @@ impl<'w> Checker<'w> {
         }
         let mut diagnostic = Diagnostic::error(
             "E0401",
-            format!("{role} must be {}, found {}", expected.with_article(), ty.with_article()),
+            format!(
+                "{role} must be {}, found {}",
+                expected.with_article(),
+                ty.with_article()
+            ),
         )
         .primary(expr.span, format!("this is {}", ty.with_article()));
         if let Some(help) = conversion_help(ty, expected) {
@@ -488,12 +580,25 @@ fn strip_primes(expr: &Expr) -> (&Expr, usize) {
 /// definition.
 fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
     match &decl.kind {
-        DeclKind::Let(bindings) => {
-            bindings.iter().map(|b| (b.name.name.clone(), b.name.span, b.name.span.to(b.value.span))).collect()
+        DeclKind::Let(bindings) => bindings
+            .iter()
+            .map(|b| {
+                (
+                    b.name.name.clone(),
+                    b.name.span,
+                    b.name.span.to(b.value.span),
+                )
+            })
+            .collect(),
+        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => {
+            vec![(name.name.clone(), name.span, decl.span)]
         }
-        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => vec![(name.name.clone(), name.span, decl.span)],
-        DeclKind::Import { alias: Some(alias), .. } => vec![(alias.name.clone(), alias.span, decl.span)],
-        DeclKind::Join { name: Some(name), .. } => vec![(name.name.clone(), name.span, decl.span)],
+        DeclKind::Import {
+            alias: Some(alias), ..
+        } => vec![(alias.name.clone(), alias.span, decl.span)],
+        DeclKind::Join {
+            name: Some(name), ..
+        } => vec![(name.name.clone(), name.span, decl.span)],
         _ => Vec::new(),
     }
 }

@@ -52,8 +52,18 @@ impl Ty {
         })
     }
 
-    pub const ANNOTATIONS: [&'static str; 10] =
-        ["scalar", "vector", "matrix", "rotation", "displacement", "frame", "body", "link", "force", "torque"];
+    pub const ANNOTATIONS: [&'static str; 10] = [
+        "scalar",
+        "vector",
+        "matrix",
+        "rotation",
+        "displacement",
+        "frame",
+        "body",
+        "link",
+        "force",
+        "torque",
+    ];
 
     /// Whether a value of type `self` can be used where `expected` is required.
     pub fn fits(self, expected: Ty) -> bool {
@@ -82,7 +92,11 @@ impl Ty {
     /// The type's name with an article, for messages ("a vector", "an error").
     pub fn with_article(self) -> String {
         let name = self.to_string();
-        let article = if name.starts_with(['a', 'e', 'i', 'o', 'u']) { "an" } else { "a" };
+        let article = if name.starts_with(['a', 'e', 'i', 'o', 'u']) {
+            "an"
+        } else {
+            "a"
+        };
         match self {
             Ty::Zero => "the literal `0`".to_string(),
             Ty::One => "the literal `1`".to_string(),
@@ -172,10 +186,22 @@ pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &s
 pub fn constructor_field_names(kind: crate::syntax::ast::ConstructKind) -> Vec<String> {
     use crate::syntax::ast::ConstructKind::*;
     match kind {
-        Body => ["mass", "iframe", "inertia"].iter().map(|s| s.to_string()).collect(),
-        Link => field_names(Ty::Link).into_iter().chain(["potential".to_string()]).collect(),
-        Force => ["value", "body", "potential", "field"].iter().map(|s| s.to_string()).collect(),
-        Torque => ["value", "body", "potential"].iter().map(|s| s.to_string()).collect(),
+        Body => ["mass", "iframe", "inertia"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+        Link => field_names(Ty::Link)
+            .into_iter()
+            .chain(["potential".to_string()])
+            .collect(),
+        Force => ["value", "body", "potential", "field"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+        Torque => ["value", "body", "potential"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
     }
 }
 
@@ -207,7 +233,9 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
     const F1: &[Ty] = &[Frame];
     const F2: &[Ty] = &[Frame, Frame];
     Some(match name {
-        "sin" | "cos" | "tan" | "asin" | "acos" | "atan" | "sqrt" | "exp" | "log" | "abs" => (S1, Scalar),
+        "sin" | "cos" | "tan" | "asin" | "acos" | "atan" | "sqrt" | "exp" | "log" | "abs" => {
+            (S1, Scalar)
+        }
         "atan2" => (S2, Scalar),
         "norm" => (V1, Scalar),
         "dot" => (V2, Scalar),
@@ -224,9 +252,37 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
 pub const INTEGRATORS: &[&str] = &["rk4", "dopri5", "implicit", "symplectic"];
 
 /// The numeric fields of `simulate`.
-pub const SIMULATE_FIELDS: &[&str] = &["duration", "output", "step", "max_step", "tolerance", "rtol", "atol"];
+pub const SIMULATE_FIELDS: &[&str] = &[
+    "duration",
+    "output",
+    "step",
+    "max_step",
+    "tolerance",
+    "rtol",
+    "atol",
+];
 
 pub const BUILTIN_NAMES: &[&str] = &[
-    "pi", "time", "earth", "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2", "norm", "dot",
-    "cross", "position", "velocity", "angular_velocity", "orientation", "distance",
+    "pi",
+    "time",
+    "earth",
+    "sin",
+    "cos",
+    "tan",
+    "asin",
+    "acos",
+    "atan",
+    "sqrt",
+    "exp",
+    "log",
+    "abs",
+    "atan2",
+    "norm",
+    "dot",
+    "cross",
+    "position",
+    "velocity",
+    "angular_velocity",
+    "orientation",
+    "distance",
 ];

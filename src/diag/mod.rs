@@ -45,16 +45,27 @@ impl Diagnostic {
     }
 
     pub fn warning(code: &'static str, message: impl Into<String>) -> Diagnostic {
-        Diagnostic { severity: Severity::Warning, ..Diagnostic::error(code, message) }
+        Diagnostic {
+            severity: Severity::Warning,
+            ..Diagnostic::error(code, message)
+        }
     }
 
     pub fn primary(mut self, span: Span, message: impl Into<String>) -> Diagnostic {
-        self.labels.push(Label { span, message: message.into(), primary: true });
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: true,
+        });
         self
     }
 
     pub fn secondary(mut self, span: Span, message: impl Into<String>) -> Diagnostic {
-        self.labels.push(Label { span, message: message.into(), primary: false });
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: false,
+        });
         self
     }
 
@@ -96,7 +107,9 @@ impl Diagnostics {
         // A definition's body is checked when it is declared and again at each use: the same
         // error at the same place is reported once, with the context of its first report.
         let duplicate = self.list.iter().any(|d| {
-            d.code == diagnostic.code && d.message == diagnostic.message && d.primary_span() == diagnostic.primary_span()
+            d.code == diagnostic.code
+                && d.message == diagnostic.message
+                && d.primary_span() == diagnostic.primary_span()
         });
         if !duplicate {
             self.list.push(diagnostic);

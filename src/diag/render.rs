@@ -31,7 +31,10 @@ impl<'a> Files<'a> for SourceMap {
 
     fn line_range(&'a self, id: FileId, line_index: usize) -> Result<Range<usize>, FilesError> {
         let text = &self.file(id).text;
-        let start = line_start(text, line_index).ok_or(FilesError::LineTooLarge { given: line_index, max: 0 })?;
+        let start = line_start(text, line_index).ok_or(FilesError::LineTooLarge {
+            given: line_index,
+            max: 0,
+        })?;
         let end = line_start(text, line_index + 1).unwrap_or(text.len());
         Ok(start..end)
     }
@@ -42,7 +45,9 @@ fn line_start(text: &str, line_index: usize) -> Option<usize> {
     if line_index == 0 {
         return Some(0);
     }
-    text.match_indices('\n').nth(line_index - 1).map(|(i, _)| i + 1)
+    text.match_indices('\n')
+        .nth(line_index - 1)
+        .map(|(i, _)| i + 1)
 }
 
 /// Renders diagnostics as plain text, as a terminal shows them.
@@ -52,7 +57,11 @@ pub fn to_text(sources: &SourceMap, diagnostics: &[Diagnostic]) -> String {
     for diagnostic in diagnostics {
         let rendered = to_codespan(diagnostic);
         if term::emit_to_string(&mut out, &config, sources, &rendered).is_err() {
-            out.push_str(&format!("{}: {}\n", severity_word(diagnostic.severity), diagnostic.message));
+            out.push_str(&format!(
+                "{}: {}\n",
+                severity_word(diagnostic.severity),
+                diagnostic.message
+            ));
         }
     }
     out
@@ -74,11 +83,20 @@ fn to_codespan(diagnostic: &Diagnostic) -> cs::Diagnostic<FileId> {
         .labels
         .iter()
         .map(|label| {
-            let style = if label.primary { cs::LabelStyle::Primary } else { cs::LabelStyle::Secondary };
-            cs::Label::new(style, label.span.file, label.span.range()).with_message(label.message.clone())
+            let style = if label.primary {
+                cs::LabelStyle::Primary
+            } else {
+                cs::LabelStyle::Secondary
+            };
+            cs::Label::new(style, label.span.file, label.span.range())
+                .with_message(label.message.clone())
         })
         .collect();
-    let mut notes = diagnostic.notes.iter().map(|n| format!("note: {n}")).collect::<Vec<_>>();
+    let mut notes = diagnostic
+        .notes
+        .iter()
+        .map(|n| format!("note: {n}"))
+        .collect::<Vec<_>>();
     if let Some(help) = &diagnostic.help {
         notes.push(format!("help: {help}"));
     }
@@ -123,7 +141,13 @@ fn position(sources: &SourceMap, span: Span) -> JsonPosition {
     let file = sources.file(span.file);
     let (line, column) = file.line_column(span.start as usize);
     let (end_line, end_column) = file.line_column(span.end as usize);
-    JsonPosition { file: file.name.clone(), line, column, end_line, end_column }
+    JsonPosition {
+        file: file.name.clone(),
+        line,
+        column,
+        end_line,
+        end_column,
+    }
 }
 
 /// The JSON form of diagnostics: one object per diagnostic, with one-based lines and columns.
@@ -138,7 +162,11 @@ pub fn to_json_value(sources: &SourceMap, diagnostics: &[Diagnostic]) -> serde_j
             labels: d
                 .labels
                 .iter()
-                .map(|l| JsonLabel { position: position(sources, l.span), message: l.message.clone(), primary: l.primary })
+                .map(|l| JsonLabel {
+                    position: position(sources, l.span),
+                    message: l.message.clone(),
+                    primary: l.primary,
+                })
                 .collect(),
             notes: d.notes.clone(),
             help: d.help.clone(),

@@ -27,7 +27,10 @@ fn edit_distance(a: &str, b: &str, limit: usize) -> Option<usize> {
 }
 
 /// The candidate closest to `name`, if one is close enough to be a plausible typo.
-pub fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+pub fn did_you_mean<'a>(
+    name: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Option<&'a str> {
     let limit = (name.chars().count() / 3).max(1);
     let mut best: Option<(usize, &str)> = None;
     for candidate in candidates {
@@ -60,7 +63,10 @@ mod tests {
 
     #[test]
     fn close_names_are_suggested() {
-        assert_eq!(did_you_mean("satelite", ["earth", "satellite"]), Some("satellite"));
+        assert_eq!(
+            did_you_mean("satelite", ["earth", "satellite"]),
+            Some("satellite")
+        );
         assert_eq!(did_you_mean("iframe", ["frame", "mass"]), Some("frame"));
         assert_eq!(did_you_mean("zzz", ["satellite"]), None);
     }

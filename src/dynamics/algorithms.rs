@@ -36,7 +36,10 @@ pub enum DynamicsError {
     Evaluation(EvalError),
     /// The articulated inertia of a joint is singular: the bodies it carries have no inertia
     /// along some of its motions (joint index, body number).
-    Singular { joint: usize, body: usize },
+    Singular {
+        joint: usize,
+        body: usize,
+    },
 }
 
 impl From<EvalError> for DynamicsError {
@@ -72,7 +75,12 @@ fn slice(values: &[f64], offset: usize, count: usize) -> &[f64] {
 }
 
 /// Joint states, world poses and body velocities at (q, v).
-pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+pub fn forward_kinematics(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<(), EvalError> {
     for k in 0..model.joints.len() {
         joint_motion(model, data, k, q, v)?;
         let joint = &model.joints[k];
@@ -90,7 +98,12 @@ fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result
     // The joints' own states first: independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
-        joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, &mut data.states[k])?;
+        joint.update(
+            slice(q, joint.q_offset, joint.nq()),
+            slice(v, joint.v_offset, joint.nv()),
+            &model.unknowns,
+            &mut data.states[k],
+        )?;
     }
     for &k in &model.dynamic_joints {
         body_velocity(model, data, k);
@@ -98,9 +111,20 @@ fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result
     Ok(())
 }
 
-fn joint_motion(model: &Model, data: &mut Data, k: usize, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+fn joint_motion(
+    model: &Model,
+    data: &mut Data,
+    k: usize,
+    q: &[f64],
+    v: &[f64],
+) -> Result<(), EvalError> {
     let joint = &model.joints[k];
-    joint.update(slice(q, joint.q_offset, joint.nq()), slice(v, joint.v_offset, joint.nv()), &model.unknowns, &mut data.states[k])?;
+    joint.update(
+        slice(q, joint.q_offset, joint.nq()),
+        slice(v, joint.v_offset, joint.nv()),
+        &model.unknowns,
+        &mut data.states[k],
+    )?;
     body_velocity(model, data, k);
     Ok(())
 }
@@ -119,7 +143,10 @@ fn body_velocity(model: &Model, data: &mut Data, k: usize) {
 pub fn bias_accelerations(model: &Model, data: &mut Data) {
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.dynamic_parent);
-        data.acceleration[i] = data.states[k].transform.motion_to_child(&data.acceleration[parent]) + data.coriolis[i];
+        data.acceleration[i] = data.states[k]
+            .transform
+            .motion_to_child(&data.acceleration[parent])
+            + data.coriolis[i];
     }
 }
 
@@ -133,7 +160,14 @@ fn base_acceleration(model: &Model) -> Motion {
 
 /// Inverse dynamics: the generalised forces that give accelerations `a` at (q, v) under the
 /// external forces `external` (one per body, in its frame; index 0 unused).
-pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], external: &[Force]) -> Result<DVector<f64>, EvalError> {
+pub fn rnea(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    external: &[Force],
+) -> Result<DVector<f64>, EvalError> {
     let mut tau = DVector::zeros(model.nv);
     rnea_into(model, data, q, v, a, external, &mut tau)?;
     Ok(tau)
@@ -141,7 +175,15 @@ pub fn rnea(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], ext
 
 /// RNEA writing the generalised forces into `tau` (length nv).
 #[allow(clippy::too_many_arguments)]
-pub fn rnea_into(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64], external: &[Force], tau: &mut DVector<f64>) -> Result<(), EvalError> {
+pub fn rnea_into(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    external: &[Force],
+    tau: &mut DVector<f64>,
+) -> Result<(), EvalError> {
     joint_motions(model, data, q, v)?;
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
@@ -149,21 +191,31 @@ pub fn rnea_into(model: &Model, data: &mut Data, q: &[f64], v: &[f64], a: &[f64]
         let (i, parent) = (joint.child, joint.dynamic_parent);
         let state = &data.states[k];
         let joint_acceleration = state.subspace.apply(slice(a, joint.v_offset, joint.nv()));
-        let parent_acceleration = if parent == 0 { &base } else { &data.acceleration[parent] };
-        data.acceleration[i] = state.transform.motion_to_child(parent_acceleration) + joint_acceleration + data.coriolis[i];
+        let parent_acceleration = if parent == 0 {
+            &base
+        } else {
+            &data.acceleration[parent]
+        };
+        data.acceleration[i] = state.transform.motion_to_child(parent_acceleration)
+            + joint_acceleration
+            + data.coriolis[i];
         let body = &model.dynamic_bodies[i - 1];
         data.force[i] = if body.massless {
             -external[i]
         } else {
             let momentum = body.inertia * data.velocity[i];
-            body.inertia * data.acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum) - external[i]
+            body.inertia * data.acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum)
+                - external[i]
         };
     }
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
         let state = &data.states[k];
-        state.subspace.project(&data.force[i], &mut tau.as_mut_slice()[joint.v_offset..joint.v_offset + joint.nv()]);
+        state.subspace.project(
+            &data.force[i],
+            &mut tau.as_mut_slice()[joint.v_offset..joint.v_offset + joint.nv()],
+        );
         if parent != 0 {
             let transmitted = state.transform.force_to_parent(&data.force[i]);
             data.force[parent] += transmitted;
@@ -187,14 +239,17 @@ pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> V
         let i = joint.child;
         if merged[k] {
             // A merged body moves with its anchor: its transform is its pose there.
-            acceleration[i] = data.states[k].transform.motion_to_child(&acceleration[joint.dynamic_parent]);
+            acceleration[i] = data.states[k]
+                .transform
+                .motion_to_child(&acceleration[joint.dynamic_parent]);
         }
         let body = &model.bodies[i - 1];
         force[i] = if body.massless {
             -external[i]
         } else {
             let momentum = body.inertia * data.velocity[i];
-            body.inertia * acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum) - external[i]
+            body.inertia * acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum)
+                - external[i]
         };
     }
     for (k, joint) in model.joints.iter().enumerate().rev() {
@@ -223,11 +278,20 @@ pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, E
 /// once, composites are then plain sums, and every entry is a dot product of a joint's motion
 /// column (in the fixed frame) with a composite momentum: no force is carried from joint to
 /// joint. Leaves the joint transforms at q in `data` (not the velocities, nor the world poses).
-pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f64>) -> Result<(), EvalError> {
+pub fn crba_into(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    mass: &mut DMatrix<f64>,
+) -> Result<(), EvalError> {
     // The joints' transforms first: independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
-        joint.update_transform(slice(q, joint.q_offset, joint.nq()), &model.unknowns, &mut data.states[k])?;
+        joint.update_transform(
+            slice(q, joint.q_offset, joint.nq()),
+            &model.unknowns,
+            &mut data.states[k],
+        )?;
     }
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
@@ -236,7 +300,11 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
         let world = data.world_transform[parent] * state.transform;
         data.world_transform[i] = world;
         let own = &model.dynamic_bodies[i - 1];
-        data.composite_world[i] = if own.massless { RigidInertia::zeros() } else { own.rigid.to_parent(&world) };
+        data.composite_world[i] = if own.massless {
+            RigidInertia::zeros()
+        } else {
+            own.rigid.to_parent(&world)
+        };
         for (r, column) in state.subspace.columns().iter().enumerate() {
             data.world_columns[joint.v_offset + r] = world.motion_to_parent(column);
         }
@@ -267,7 +335,14 @@ pub fn crba_into(model: &Model, data: &mut Data, q: &[f64], mass: &mut DMatrix<f
 }
 
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.
-pub fn aba(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], external: &[Force]) -> Result<DVector<f64>, DynamicsError> {
+pub fn aba(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    external: &[Force],
+) -> Result<DVector<f64>, DynamicsError> {
     let mut accelerations = DVector::zeros(model.nv);
     aba_into(model, data, q, v, tau, external, &mut accelerations)?;
     Ok(accelerations)
@@ -292,7 +367,8 @@ pub fn aba_into(
         data.bias[i] = if body.massless {
             -external[i]
         } else {
-            spatial::cross_force(&data.velocity[i], &(body.inertia * data.velocity[i])) - external[i]
+            spatial::cross_force(&data.velocity[i], &(body.inertia * data.velocity[i]))
+                - external[i]
         };
     }
     for &k in model.dynamic_joints.iter().rev() {
@@ -305,7 +381,11 @@ pub fn aba_into(
         let (i, parent) = (joint.child, joint.dynamic_parent);
         let state = &data.states[k];
         let n = joint.nv();
-        let parent_acceleration = if parent == 0 { &base } else { &data.acceleration[parent] };
+        let parent_acceleration = if parent == 0 {
+            &base
+        } else {
+            &data.acceleration[parent]
+        };
         let a = state.transform.motion_to_child(parent_acceleration) + data.coriolis[i];
         // q̈ = D⁻¹ (u − Uᵀ a)
         let mut rhs = Vector6::zeros();
@@ -323,10 +403,24 @@ pub fn aba_into(
 
 /// One joint of ABA's backward pass: U, D⁻¹ and u, then the articulated inertia and bias
 /// handed to the parent. Works in place in `data` (these blocks are a few hundred bytes each).
-fn aba_backward_step(model: &Model, data: &mut Data, k: usize, tau: &[f64]) -> Result<(), DynamicsError> {
+fn aba_backward_step(
+    model: &Model,
+    data: &mut Data,
+    k: usize,
+    tau: &[f64],
+) -> Result<(), DynamicsError> {
     let joint = &model.joints[k];
     let (i, parent) = (joint.child, joint.dynamic_parent);
-    let Data { states, articulated, bias, coriolis, u, d_inverse, u_vector, .. } = data;
+    let Data {
+        states,
+        articulated,
+        bias,
+        coriolis,
+        u,
+        d_inverse,
+        u_vector,
+        ..
+    } = data;
     let state = &states[k];
     let subspace = &state.subspace;
     let n = subspace.len();
@@ -349,7 +443,10 @@ fn aba_backward_step(model: &Model, data: &mut Data, k: usize, tau: &[f64]) -> R
                 d[(r, c)] = subspace.column(r).dot(&u[c]);
             }
         }
-        match d.try_inverse().filter(|inv| inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > 1e-300) {
+        match d
+            .try_inverse()
+            .filter(|inv| inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > 1e-300)
+        {
             Some(inv) => *d_inverse = inv,
             None => return Err(DynamicsError::Singular { joint: k, body: i }),
         }

@@ -30,11 +30,17 @@ fn unwrap(angle: f64, reference: f64) -> f64 {
 }
 
 pub fn rotation_from_angles(axes: &[Vector3<f64>; 3], angles: &[f64]) -> UnitQuaternion<f64> {
-    (0..3).fold(UnitQuaternion::identity(), |r, k| r * UnitQuaternion::from_axis_angle(&Unit::new_normalize(axes[k]), angles[k]))
+    (0..3).fold(UnitQuaternion::identity(), |r, k| {
+        r * UnitQuaternion::from_axis_angle(&Unit::new_normalize(axes[k]), angles[k])
+    })
 }
 
 /// Angles (θ1, θ2, θ3) with R = R(a1, θ1) R(a2, θ2) R(a3, θ3), closest to `previous`.
-pub fn angles_from_rotation(axes: &[Vector3<f64>; 3], r: &UnitQuaternion<f64>, previous: &[f64; 3]) -> [f64; 3] {
+pub fn angles_from_rotation(
+    axes: &[Vector3<f64>; 3],
+    r: &UnitQuaternion<f64>,
+    previous: &[f64; 3],
+) -> [f64; 3] {
     let [a1, a2, a3] = axes;
     // a1·R a3 = a1·R(a2, θ2) a3 = α cos θ2 + β sin θ2.
     let target = a1.dot(&(r * a3));
@@ -58,13 +64,24 @@ pub fn angles_from_rotation(axes: &[Vector3<f64>; 3], r: &UnitQuaternion<f64>, p
             let rest = UnitQuaternion::from_axis_angle(&Unit::new_normalize(*a2), middle).inverse()
                 * UnitQuaternion::from_axis_angle(&Unit::new_normalize(*a1), first).inverse()
                 * r;
-            let third = angle_between(a3, &a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2), &(rest * a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2)));
+            let third = angle_between(
+                a3,
+                &a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2),
+                &(rest * a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2)),
+            );
             (first, unwrap(third, previous[2]))
         } else {
-            (unwrap(first_raw, previous[0]), unwrap(third_raw, previous[2]))
+            (
+                unwrap(first_raw, previous[0]),
+                unwrap(third_raw, previous[2]),
+            )
         };
         let candidate = [first, middle, third];
-        let distance: f64 = candidate.iter().zip(previous).map(|(a, b)| (a - b).abs()).sum();
+        let distance: f64 = candidate
+            .iter()
+            .zip(previous)
+            .map(|(a, b)| (a - b).abs())
+            .sum();
         if distance < best_distance {
             best_distance = distance;
             best = candidate;
@@ -76,17 +93,35 @@ pub fn angles_from_rotation(axes: &[Vector3<f64>; 3], r: &UnitQuaternion<f64>, p
 impl Joint {
     /// Declared coordinates and their rates from the joint's positions and velocities.
     /// `previous` (declared coordinates at the last output) keeps angles continuous.
-    pub fn declared(&self, q: &[f64], v: &[f64], previous: &[f64], unknowns: &UnknownValues) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+    pub fn declared(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        previous: &[f64],
+        unknowns: &UnknownValues,
+    ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let axes = match &self.kind {
             JointType::Chain => return Ok((q.to_vec(), v.to_vec())),
             JointType::Spherical { axes } | JointType::Free { axes } => axes,
         };
         let free = matches!(self.kind, JointType::Free { .. });
-        let (translation, rotation) = if free { (Vector3::new(q[0], q[1], q[2]), quaternion(&q[3..7])) } else { (Vector3::zeros(), quaternion(&q[0..4])) };
+        let (translation, rotation) = if free {
+            (Vector3::new(q[0], q[1], q[2]), quaternion(&q[3..7]))
+        } else {
+            (Vector3::zeros(), quaternion(&q[0..4]))
+        };
         let moving = Pose::from_parts(translation.into(), rotation);
-        let chain = if self.first_on_parent { moving } else { moving.inverse() };
+        let chain = if self.first_on_parent {
+            moving
+        } else {
+            moving.inverse()
+        };
         let angle_start = if free { 3 } else { 0 };
-        let reference = [previous[angle_start], previous[angle_start + 1], previous[angle_start + 2]];
+        let reference = [
+            previous[angle_start],
+            previous[angle_start + 1],
+            previous[angle_start + 2],
+        ];
         let angles = angles_from_rotation(axes, &chain.rotation, &reference);
         let mut coordinates = Vec::with_capacity(6);
         if free {
@@ -95,34 +130,61 @@ impl Joint {
         coordinates.extend_from_slice(&angles);
         // Rates: the chain's spatial twist equals S(declared) · rates.
         let body_twist = body_twist(v, free);
-        let spatial_twist = if self.first_on_parent { motion_to_parent(&moving, &body_twist) } else { -body_twist };
+        let spatial_twist = if self.first_on_parent {
+            motion_to_parent(&moving, &body_twist)
+        } else {
+            -body_twist
+        };
         let motion = self.chain.chain_motion(&coordinates, None, unknowns)?;
         let rates = solve_least_squares(&motion.subspace, &spatial_twist);
         Ok((coordinates, rates))
     }
 
     /// The joint's positions and velocities from declared coordinates and rates.
-    pub fn from_declared(&self, coordinates: &[f64], rates: &[f64], unknowns: &UnknownValues) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+    pub fn from_declared(
+        &self,
+        coordinates: &[f64],
+        rates: &[f64],
+        unknowns: &UnknownValues,
+    ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         if self.kind == JointType::Chain {
             return Ok((coordinates.to_vec(), rates.to_vec()));
         }
         let free = matches!(self.kind, JointType::Free { .. });
-        let motion = self.chain.chain_motion(coordinates, Some(rates), unknowns)?;
-        let moving = if self.first_on_parent { motion.pose } else { motion.pose.inverse() };
-        let body = if self.first_on_parent { super::spatial::motion_to_child(&motion.pose, &motion.velocity) } else { -motion.velocity };
+        let motion = self
+            .chain
+            .chain_motion(coordinates, Some(rates), unknowns)?;
+        let moving = if self.first_on_parent {
+            motion.pose
+        } else {
+            motion.pose.inverse()
+        };
+        let body = if self.first_on_parent {
+            super::spatial::motion_to_child(&motion.pose, &motion.velocity)
+        } else {
+            -motion.velocity
+        };
         let r = moving.rotation;
         let mut q = Vec::with_capacity(7);
         if free {
             q.extend_from_slice(moving.translation.vector.as_slice());
         }
         q.extend_from_slice(&[r.w, r.i, r.j, r.k]);
-        let v = if free { body.as_slice().to_vec() } else { body.as_slice()[0..3].to_vec() };
+        let v = if free {
+            body.as_slice().to_vec()
+        } else {
+            body.as_slice()[0..3].to_vec()
+        };
         Ok((q, v))
     }
 }
 
 fn body_twist(v: &[f64], free: bool) -> Motion {
-    if free { Motion::from_column_slice(v) } else { Motion::new(v[0], v[1], v[2], 0.0, 0.0, 0.0) }
+    if free {
+        Motion::from_column_slice(v)
+    } else {
+        Motion::new(v[0], v[1], v[2], 0.0, 0.0, 0.0)
+    }
 }
 
 /// Least-squares solution of `a x = b`: by QR while `a` has full column rank (accurate to
@@ -137,7 +199,11 @@ fn solve_least_squares(a: &nalgebra::DMatrix<f64>, b: &Motion) -> Vec<f64> {
             return x.as_slice().to_vec();
         }
     }
-    a.clone().svd(true, true).solve(&rhs, 1e-12).map(|x| x.as_slice().to_vec()).unwrap_or_else(|_| vec![f64::NAN; a.ncols()])
+    a.clone()
+        .svd(true, true)
+        .solve(&rhs, 1e-12)
+        .map(|x| x.as_slice().to_vec())
+        .unwrap_or_else(|_| vec![f64::NAN; a.ncols()])
 }
 
 #[cfg(test)]
@@ -150,7 +216,10 @@ mod tests {
         let back = rotation_from_angles(&axes, &recovered);
         assert!(r.angle_to(&back) < 1e-12, "{angles:?} → {recovered:?}");
         for k in 0..3 {
-            assert!((recovered[k] - angles[k]).abs() < 1e-9, "{angles:?} → {recovered:?}");
+            assert!(
+                (recovered[k] - angles[k]).abs() < 1e-9,
+                "{angles:?} → {recovered:?}"
+            );
         }
     }
 
@@ -168,7 +237,10 @@ mod tests {
         let axes = [z, x, z];
         let r = rotation_from_angles(&axes, &[0.7, 0.0, 0.2]);
         let recovered = angles_from_rotation(&axes, &r, &[0.6, 0.01, 0.3]);
-        assert!(r.angle_to(&rotation_from_angles(&axes, &recovered)) < 1e-12, "{recovered:?}");
+        assert!(
+            r.angle_to(&rotation_from_angles(&axes, &recovered)) < 1e-12,
+            "{recovered:?}"
+        );
         assert!((recovered[0] + recovered[2] - 0.9).abs() < 1e-9);
     }
 }

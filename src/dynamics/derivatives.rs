@@ -12,7 +12,12 @@ use super::model::Model;
 use super::spatial::{self, Force, Motion};
 use crate::kinematics::eval::EvalError;
 
-pub fn kinetic_energy_gradient(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<DVector<f64>, EvalError> {
+pub fn kinetic_energy_gradient(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<DVector<f64>, EvalError> {
     forward_kinematics(model, data, q, v)?;
     let n = model.body_count();
     let mut momentum = vec![Force::zeros(); n + 1];
@@ -29,21 +34,31 @@ pub fn kinetic_energy_gradient(model: &Model, data: &mut Data, q: &[f64], v: &[f
     let mut gradient = DVector::zeros(model.nv);
     for (k, joint) in model.joints.iter().enumerate() {
         if joint.kind != JointType::Chain {
-            return Err(EvalError::NotGeometric("a spherical or free joint (use another integrator)"));
+            return Err(EvalError::NotGeometric(
+                "a spherical or free joint (use another integrator)",
+            ));
         }
         let state = &data.states[k];
         let n_joint = joint.nv();
         let rates = &v[joint.v_offset..joint.v_offset + n_joint];
         let coordinates = &q[joint.q_offset..joint.q_offset + n_joint];
-        let parent_seen = spatial::motion_to_child(&state.pose, &data.velocity[joint.dynamic_parent]);
-        let d = joint.chain.chain_motion(coordinates, None, &model.unknowns)?.pose;
+        let parent_seen =
+            spatial::motion_to_child(&state.pose, &data.velocity[joint.dynamic_parent]);
+        let d = joint
+            .chain
+            .chain_motion(coordinates, None, &model.unknowns)?
+            .pose;
         for c in 0..n_joint {
             let mut direction = vec![0.0; n_joint];
             direction[c] = 1.0;
             let column = Motion::from_column_slice(state.subspace.column(c).as_slice());
-            let base = joint.chain.velocity_derivative(coordinates, rates, &direction, &model.unknowns)?;
+            let base =
+                joint
+                    .chain
+                    .velocity_derivative(coordinates, rates, &direction, &model.unknowns)?;
             let own = if joint.first_on_parent {
-                spatial::motion_to_parent(&(joint.on_child * d.inverse()), &base) - spatial::cross_motion(&column, &state.velocity)
+                spatial::motion_to_parent(&(joint.on_child * d.inverse()), &base)
+                    - spatial::cross_motion(&column, &state.velocity)
             } else {
                 -spatial::motion_to_parent(&joint.on_child, &base)
             };

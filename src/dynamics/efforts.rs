@@ -31,7 +31,11 @@ pub struct Efforts {
 impl Efforts {
     /// No effort at all (a model whose only load is its gravity field, or none).
     pub fn none(model: &Model) -> Efforts {
-        Efforts { external: vec![Force::zeros(); model.body_count() + 1], tau: DVector::zeros(model.velocities()), power: 0.0 }
+        Efforts {
+            external: vec![Force::zeros(); model.body_count() + 1],
+            tau: DVector::zeros(model.velocities()),
+            power: 0.0,
+        }
     }
 }
 
@@ -78,7 +82,10 @@ impl FrameValues {
     fn new(data: &Data, body: usize, offset: &Pose) -> FrameValues {
         let pose = data.world[body] * offset;
         let velocity = &data.velocity[body];
-        let (spin, linear) = (Vector3::new(velocity[0], velocity[1], velocity[2]), Vector3::new(velocity[3], velocity[4], velocity[5]));
+        let (spin, linear) = (
+            Vector3::new(velocity[0], velocity[1], velocity[2]),
+            Vector3::new(velocity[3], velocity[4], velocity[5]),
+        );
         let turn = |v: Vector3<f64>| data.world[body].rotation * v;
         FrameValues {
             position: pose.translation.vector,
@@ -108,18 +115,31 @@ struct FrameStates<'a> {
 
 impl<'a> FrameStates<'a> {
     fn new(model: &'a Model, data: &'a Data) -> FrameStates<'a> {
-        let known = model.effort_frames.iter().map(|f| FrameValues::new(data, f.body, &f.offset)).collect();
+        let known = model
+            .effort_frames
+            .iter()
+            .map(|f| FrameValues::new(data, f.body, &f.offset))
+            .collect();
         FrameStates { model, data, known }
     }
 
     /// Component `quantity` of `frame`'s state.
     fn get(&self, frame: &Frame, quantity: FrameQuantity) -> Result<f64, EvalError> {
-        if let Some(k) = self.model.effort_frames.iter().position(|f| std::ptr::eq(Rc::as_ptr(&f.frame), frame)) {
+        if let Some(k) = self
+            .model
+            .effort_frames
+            .iter()
+            .position(|f| std::ptr::eq(Rc::as_ptr(&f.frame), frame))
+        {
             return Ok(self.known[k].component(quantity));
         }
         let body = match frame.body {
             BodyRef::Earth => 0,
-            BodyRef::Body(id) => *self.model.body_numbers.get(&id).ok_or(EvalError::NotGeometric("a body outside the mechanism"))?,
+            BodyRef::Body(id) => *self
+                .model
+                .body_numbers
+                .get(&id)
+                .ok_or(EvalError::NotGeometric("a body outside the mechanism"))?,
         };
         let offset = constant_pose(&frame.displacement, &self.model.unknowns)?;
         Ok(FrameValues::new(self.data, body, &offset).component(quantity))
@@ -128,11 +148,23 @@ impl<'a> FrameStates<'a> {
 
 /// The potential energy of a conservative mechanism at a state: the constant forces' and the
 /// declared potentials; `data` must hold the forward kinematics of the state.
-pub fn potential_energy(model: &Model, data: &Data, conservative: &Conservative, declared: &Declared<'_>, time: f64) -> Result<f64, EvalError> {
+pub fn potential_energy(
+    model: &Model,
+    data: &Data,
+    conservative: &Conservative,
+    declared: &Declared<'_>,
+    time: f64,
+) -> Result<f64, EvalError> {
     let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
     let states = FrameStates::new(model, data);
     let frames = |frame: &Frame, quantity: FrameQuantity| states.get(frame, quantity);
-    let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time), frames: Some(&frames) };
+    let env = Env {
+        coordinates: &[],
+        rates: None,
+        joins: Some(&joins),
+        time: Some(time),
+        frames: Some(&frames),
+    };
     let mut total = constant_potential(&conservative.constant, data);
     for &k in &conservative.applied {
         if let Some(potential) = &model.applied[k].potential {
@@ -140,7 +172,11 @@ pub fn potential_energy(model: &Model, data: &Data, conservative: &Conservative,
         }
     }
     for (joint, potential) in &model.link_potentials {
-        let chain = model.joints.get(*joint).map(|j| &j.chain).unwrap_or_else(|| &model.loops[joint - model.joints.len()]);
+        let chain = model
+            .joints
+            .get(*joint)
+            .map(|j| &j.chain)
+            .unwrap_or_else(|| &model.loops[joint - model.joints.len()]);
         let offset = model.declared_offset(chain.join).unwrap_or(0);
         let n = chain.coordinate_count();
         let link = Env {
@@ -154,16 +190,31 @@ pub fn potential_energy(model: &Model, data: &Data, conservative: &Conservative,
 }
 
 /// Evaluates every effort; `data` must hold the forward kinematics of the state.
-pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) -> Result<Efforts, EvalError> {
+pub fn evaluate(
+    model: &Model,
+    data: &Data,
+    declared: &Declared<'_>,
+    time: f64,
+) -> Result<Efforts, EvalError> {
     let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
     let states = FrameStates::new(model, data);
     let frames = |frame: &Frame, quantity: FrameQuantity| states.get(frame, quantity);
-    let env = Env { coordinates: &[], rates: None, joins: Some(&joins), time: Some(time), frames: Some(&frames) };
+    let env = Env {
+        coordinates: &[],
+        rates: None,
+        joins: Some(&joins),
+        time: Some(time),
+        frames: Some(&frames),
+    };
     let mut external = vec![Force::zeros(); model.body_count() + 1];
     let mut power = 0.0;
     for effort in &model.applied {
         let value = vector(&effort.value, model, &env)?;
-        let in_world = if effort.basis == 0 { value } else { data.world[effort.basis].rotation * value };
+        let in_world = if effort.basis == 0 {
+            value
+        } else {
+            data.world[effort.basis].rotation * value
+        };
         let in_body = data.world[effort.body].rotation.inverse() * in_world;
         let wrench = match effort.kind {
             EffortKind::Force => spatial_force(effort.point.cross(&in_body), in_body),
@@ -176,7 +227,8 @@ pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) 
     }
     let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
-        let (generalised, link_power) = link_effort(model, effort, declared, &joins, &frames, time)?;
+        let (generalised, link_power) =
+            link_effort(model, effort, declared, &joins, &frames, time)?;
         if !effort.conservative {
             power += link_power;
         }
@@ -184,13 +236,20 @@ pub fn evaluate(model: &Model, data: &Data, declared: &Declared<'_>, time: f64) 
             Some(joint) => (joint.v_offset, joint.nv()),
             None => {
                 let k = effort.joint - model.joints.len();
-                (model.nv + model.loop_offset(k), model.loops[k].coordinate_count())
+                (
+                    model.nv + model.loop_offset(k),
+                    model.loops[k].coordinate_count(),
+                )
             }
         };
         let mut rows = tau.rows_mut(start, count);
         rows += generalised;
     }
-    Ok(Efforts { external, tau, power })
+    Ok(Efforts {
+        external,
+        tau,
+        power,
+    })
 }
 
 fn spatial_force(moment: Vector3<f64>, force: Vector3<f64>) -> Force {
@@ -215,7 +274,13 @@ fn link_effort(
     let n = chain.coordinate_count();
     let coordinates = &declared.coordinates[offset..offset + n];
     let rates = &declared.rates[offset..offset + n];
-    let env = Env { coordinates, rates: Some(rates), joins: Some(joins), time: Some(time), frames: Some(frames) };
+    let env = Env {
+        coordinates,
+        rates: Some(rates),
+        joins: Some(joins),
+        time: Some(time),
+        frames: Some(frames),
+    };
     let value = vector(&effort.value, model, &env)?;
     let wrench = match effort.kind {
         EffortKind::Force => spatial_force(Vector3::zeros(), value),
@@ -223,7 +288,9 @@ fn link_effort(
     };
     // Generalised forces on the declared coordinates: the wrench against each coordinate's twist.
     let twists = if effort.step == 0 {
-        chain.chain_motion(coordinates, None, &model.unknowns)?.subspace
+        chain
+            .chain_motion(coordinates, None, &model.unknowns)?
+            .subspace
     } else {
         step_columns(&chain.steps[effort.step as usize - 1], coordinates, model)?
     };
@@ -238,9 +305,16 @@ fn link_effort(
 }
 
 /// Twists of one step of a chain per unit rate of each coordinate, in the step's own frame.
-fn step_columns(step: &Step, coordinates: &[f64], model: &Model) -> Result<DMatrix<f64>, EvalError> {
+fn step_columns(
+    step: &Step,
+    coordinates: &[f64],
+    model: &Model,
+) -> Result<DMatrix<f64>, EvalError> {
     let n = coordinates.len();
-    let env = Env { coordinates, ..Env::default() };
+    let env = Env {
+        coordinates,
+        ..Env::default()
+    };
     let mut columns = DMatrix::zeros(6, n);
     let mut unit = vec![0.0; n];
     for k in 0..n {
@@ -265,17 +339,31 @@ fn step_columns(step: &Step, coordinates: &[f64], model: &Model) -> Result<DMatr
 }
 
 /// ∂(declared rates)/∂(velocities) of a quaternion joint at given declared coordinates.
-fn declared_rate_jacobian(model: &Model, joint: usize, coordinates: &[f64]) -> Result<DMatrix<f64>, EvalError> {
+fn declared_rate_jacobian(
+    model: &Model,
+    joint: usize,
+    coordinates: &[f64],
+) -> Result<DMatrix<f64>, EvalError> {
     let joint = &model.joints[joint];
-    let motion = joint.chain.chain_motion(coordinates, None, &model.unknowns)?;
+    let motion = joint
+        .chain
+        .chain_motion(coordinates, None, &model.unknowns)?;
     let nv = joint.nv();
     let mut chain_twists = DMatrix::zeros(6, nv);
     for k in 0..nv {
         let mut unit = spatial::Motion::zeros();
         unit[k] = 1.0;
-        let twist = if joint.first_on_parent { spatial::motion_to_parent(&motion.pose, &unit) } else { -unit };
+        let twist = if joint.first_on_parent {
+            spatial::motion_to_parent(&motion.pose, &unit)
+        } else {
+            -unit
+        };
         chain_twists.set_column(k, &twist);
     }
-    let pseudo_inverse = motion.subspace.clone().pseudo_inverse(1e-12).map_err(|_| EvalError::NotGeometric("a degenerate joint"))?;
+    let pseudo_inverse = motion
+        .subspace
+        .clone()
+        .pseudo_inverse(1e-12)
+        .map_err(|_| EvalError::NotGeometric("a degenerate joint"))?;
     Ok(pseudo_inverse * chain_twists)
 }

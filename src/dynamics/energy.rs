@@ -5,9 +5,9 @@
 use nalgebra::Vector3;
 
 use super::algorithms::Data;
+use super::model::constant_fixed_force;
 use super::model::Model;
 use super::spatial::{self, Force};
-use super::model::constant_fixed_force;
 
 pub fn kinetic_energy(model: &Model, data: &Data) -> f64 {
     model
@@ -36,7 +36,12 @@ pub struct Conservative {
 
 /// The conservative efforts of a mechanism: those whose potential the energy report counts.
 pub fn conservative_forces(model: &Model) -> Conservative {
-    let weights = model.bodies.iter().enumerate().filter(|(_, b)| !b.massless).map(|(k, b)| (k + 1, b.com, b.mass * model.gravity));
+    let weights = model
+        .bodies
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| !b.massless)
+        .map(|(k, b)| (k + 1, b.com, b.mass * model.gravity));
     let mut constant: Vec<ConstantForce> = weights.collect();
     let mut applied = Vec::new();
     for (k, e) in model.applied.iter().enumerate() {
@@ -46,13 +51,23 @@ pub fn conservative_forces(model: &Model) -> Conservative {
             constant.push((e.body, e.point, force));
         }
     }
-    let complete = model.applied.iter().all(|e| e.conservative) && model.link_efforts.iter().all(|e| e.conservative);
-    Conservative { constant, applied, complete }
+    let complete = model.applied.iter().all(|e| e.conservative)
+        && model.link_efforts.iter().all(|e| e.conservative);
+    Conservative {
+        constant,
+        applied,
+        complete,
+    }
 }
 
 /// The potential of the constant forces.
 pub fn constant_potential(forces: &[ConstantForce], data: &Data) -> f64 {
-    forces.iter().map(|(body, point, force)| -force.dot(&(data.world[*body] * nalgebra::Point3::from(*point)).coords)).sum()
+    forces
+        .iter()
+        .map(|(body, point, force)| {
+            -force.dot(&(data.world[*body] * nalgebra::Point3::from(*point)).coords)
+        })
+        .sum()
 }
 
 /// Total momentum in the fixed frame: angular momentum about its origin, then linear momentum.

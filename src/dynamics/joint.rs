@@ -17,9 +17,9 @@
 use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 
 use super::spatial::{self, Force, Motion, Pose, Transform};
+use crate::elab::value::SExpr;
 use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::kinematics::model::{JointModel, Step};
-use crate::elab::value::SExpr;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum JointType {
@@ -57,7 +57,10 @@ pub struct Subspace {
 
 impl Subspace {
     pub fn empty() -> Subspace {
-        Subspace { columns: [Motion::zeros(); 6], len: 0 }
+        Subspace {
+            columns: [Motion::zeros(); 6],
+            len: 0,
+        }
     }
 
     /// Empties the subspace without touching its storage.
@@ -95,7 +98,10 @@ impl Subspace {
     /// `S x`: the motion of the joint velocities (or accelerations) `x`.
     #[inline]
     pub fn apply(&self, x: &[f64]) -> Motion {
-        self.columns().iter().zip(x).fold(Motion::zeros(), |sum, (c, xi)| sum + c * *xi)
+        self.columns()
+            .iter()
+            .zip(x)
+            .fold(Motion::zeros(), |sum, (c, xi)| sum + c * *xi)
     }
 
     /// `Sᵀ f` into `out`: the generalised forces of a spatial force.
@@ -122,10 +128,23 @@ pub enum Kernel {
     /// absent when it is the identity.
     /// When the axis is ±x, ±y or ±z (`aligned`, the sign folded into `scale`), only two columns
     /// of R_P turn: 12 products instead of Rodrigues's 27.
-    Rotation { terms: [Matrix3<f64>; 3], aligned: Option<usize>, origin: Vector3<f64>, scale: f64, after: Option<Transform>, column: Motion },
+    Rotation {
+        terms: [Matrix3<f64>; 3],
+        aligned: Option<usize>,
+        origin: Vector3<f64>,
+        scale: f64,
+        after: Option<Transform>,
+        column: Motion,
+    },
     /// The moving part M is a translation by q · d: P·M has P's rotation and the translation
     /// origin + q · R_P d.
-    Translation { rotation: Matrix3<f64>, origin: Vector3<f64>, direction: Vector3<f64>, after: Option<Transform>, column: Motion },
+    Translation {
+        rotation: Matrix3<f64>,
+        origin: Vector3<f64>,
+        direction: Vector3<f64>,
+        after: Option<Transform>,
+        column: Motion,
+    },
     /// Anything else: the dof chain is evaluated at each state.
     General,
 }
@@ -165,19 +184,24 @@ pub fn classify(chain: &JointModel) -> JointType {
         let mut axes = [Vector3::zeros(); 3];
         for (k, step) in steps.iter().enumerate() {
             match step {
-                Step::Rotation { angle, axis } if is_coordinate(angle, first + k as u32) => axes[k] = *axis,
+                Step::Rotation { angle, axis } if is_coordinate(angle, first + k as u32) => {
+                    axes[k] = *axis
+                }
                 _ => return None,
             }
         }
         // Consecutive axes must not be parallel, or the three angles do not span rotations.
-        let independent = axes[0].cross(&axes[1]).norm() > 1e-9 && axes[1].cross(&axes[2]).norm() > 1e-9;
+        let independent =
+            axes[0].cross(&axes[1]).norm() > 1e-9 && axes[1].cross(&axes[2]).norm() > 1e-9;
         independent.then_some(axes)
     };
     match chain.steps.as_slice() {
-        [a, b, c] if chain.coordinate_count() == 3 => match rotations(&[a.clone(), b.clone(), c.clone()], 0) {
-            Some(axes) => JointType::Spherical { axes },
-            None => JointType::Chain,
-        },
+        [a, b, c] if chain.coordinate_count() == 3 => {
+            match rotations(&[a.clone(), b.clone(), c.clone()], 0) {
+                Some(axes) => JointType::Spherical { axes },
+                None => JointType::Chain,
+            }
+        }
         [Step::Translation(t), rest @ ..] if rest.len() == 3 && chain.coordinate_count() == 6 => {
             let translation = (0..3).all(|i| is_coordinate(&t[i], i as u32));
             match rotations(rest, 3) {
@@ -196,7 +220,9 @@ fn linear_in_first(s: &SExpr) -> Option<f64> {
         SExpr::Coordinate { index: 0, order: 0 } => Some(1.0),
         SExpr::Neg(a) => linear_in_first(a).map(|c| -c),
         SExpr::Mul(a, b) => match (&**a, &**b) {
-            (SExpr::Num(x), other) | (other, SExpr::Num(x)) => linear_in_first(other).map(|c| c * x),
+            (SExpr::Num(x), other) | (other, SExpr::Num(x)) => {
+                linear_in_first(other).map(|c| c * x)
+            }
             _ => None,
         },
         SExpr::Div(a, b) => match &**b {
@@ -208,13 +234,25 @@ fn linear_in_first(s: &SExpr) -> Option<f64> {
 }
 
 /// The transform of a one-rotation kernel at angle θ.
-fn rotation_transform(terms: &[Matrix3<f64>; 3], aligned: Option<usize>, origin: &Vector3<f64>, angle: f64, after: &Option<Transform>) -> Transform {
+fn rotation_transform(
+    terms: &[Matrix3<f64>; 3],
+    aligned: Option<usize>,
+    origin: &Vector3<f64>,
+    angle: f64,
+    after: &Option<Transform>,
+) -> Transform {
     let (sin, cos) = angle.sin_cos();
     let rotation = match aligned {
         Some(k) => turn_columns(&terms[0], k, sin, cos),
         None => terms[0] * cos + terms[1] * sin + terms[2] * (1.0 - cos),
     };
-    with_after(Transform { rotation, translation: *origin }, after)
+    with_after(
+        Transform {
+            rotation,
+            translation: *origin,
+        },
+        after,
+    )
 }
 
 /// The constant part on the child's side, when there is one.
@@ -237,7 +275,9 @@ fn turn_columns(r: &Matrix3<f64>, k: usize, sin: f64, cos: f64) -> Matrix3<f64> 
 
 /// The index of the coordinate axis `axis` lies along, and the sign, if it does.
 fn coordinate_axis(axis: &Vector3<f64>) -> Option<(usize, f64)> {
-    (0..3).find(|&k| axis[k].abs() == 1.0 && (0..3).all(|m| m == k || axis[m] == 0.0)).map(|k| (k, axis[k]))
+    (0..3)
+        .find(|&k| axis[k].abs() == 1.0 && (0..3).all(|m| m == k || axis[m] == 0.0))
+        .map(|k| (k, axis[k]))
 }
 
 /// The child's join frame inverted, or nothing when it is the identity (as in imported URDF).
@@ -252,8 +292,16 @@ pub fn kernel(joint: &Joint, unknowns: &UnknownValues) -> Kernel {
     if chain.coordinate_count() == 0 {
         return match chain.chain_motion(&[], None, unknowns) {
             Ok(motion) => {
-                let moving = if joint.first_on_parent { motion.pose } else { motion.pose.inverse() };
-                Kernel::Weld { transform: Transform::from_pose(&(joint.on_parent * moving * joint.on_child.inverse())) }
+                let moving = if joint.first_on_parent {
+                    motion.pose
+                } else {
+                    motion.pose.inverse()
+                };
+                Kernel::Weld {
+                    transform: Transform::from_pose(
+                        &(joint.on_parent * moving * joint.on_child.inverse()),
+                    ),
+                }
             }
             Err(_) => Kernel::General,
         };
@@ -266,25 +314,50 @@ pub fn kernel(joint: &Joint, unknowns: &UnknownValues) -> Kernel {
     let (on_parent, on_child) = (Transform::from_pose(&joint.on_parent), joint.on_child);
     let after = after_motion(&on_child);
     match chain.steps.as_slice() {
-        [Step::Rotation { angle, axis }] => match (linear_in_first(angle), Unit::try_new(*axis, 1e-12)) {
-            (Some(scale), Some(unit)) if scale != 0.0 => {
-                let unit_twist = Motion::new(unit.x, unit.y, unit.z, 0.0, 0.0, 0.0);
-                let column = spatial::motion_to_parent(&on_child, &unit_twist) * (sign * scale);
-                let r = on_parent.rotation;
-                let terms = [r, r * spatial::skew(&unit), r * (unit.into_inner() * unit.transpose())];
-                let (aligned, scale) = match coordinate_axis(&unit) {
-                    Some((k, direction)) => (Some(k), sign * scale * direction),
-                    None => (None, sign * scale),
-                };
-                Kernel::Rotation { terms, aligned, origin: on_parent.translation, scale, after, column }
+        [Step::Rotation { angle, axis }] => {
+            match (linear_in_first(angle), Unit::try_new(*axis, 1e-12)) {
+                (Some(scale), Some(unit)) if scale != 0.0 => {
+                    let unit_twist = Motion::new(unit.x, unit.y, unit.z, 0.0, 0.0, 0.0);
+                    let column = spatial::motion_to_parent(&on_child, &unit_twist) * (sign * scale);
+                    let r = on_parent.rotation;
+                    let terms = [
+                        r,
+                        r * spatial::skew(&unit),
+                        r * (unit.into_inner() * unit.transpose()),
+                    ];
+                    let (aligned, scale) = match coordinate_axis(&unit) {
+                        Some((k, direction)) => (Some(k), sign * scale * direction),
+                        None => (None, sign * scale),
+                    };
+                    Kernel::Rotation {
+                        terms,
+                        aligned,
+                        origin: on_parent.translation,
+                        scale,
+                        after,
+                        column,
+                    }
+                }
+                _ => Kernel::General,
             }
-            _ => Kernel::General,
-        },
-        [Step::Translation(t)] => match (linear_in_first(&t[0]), linear_in_first(&t[1]), linear_in_first(&t[2])) {
+        }
+        [Step::Translation(t)] => match (
+            linear_in_first(&t[0]),
+            linear_in_first(&t[1]),
+            linear_in_first(&t[2]),
+        ) {
             (Some(x), Some(y), Some(z)) if (x, y, z) != (0.0, 0.0, 0.0) => {
-                let column = spatial::motion_to_parent(&on_child, &Motion::new(0.0, 0.0, 0.0, x, y, z)) * sign;
+                let column =
+                    spatial::motion_to_parent(&on_child, &Motion::new(0.0, 0.0, 0.0, x, y, z))
+                        * sign;
                 let direction = on_parent.rotation * Vector3::new(x, y, z) * sign;
-                Kernel::Translation { rotation: on_parent.rotation, origin: on_parent.translation, direction, after, column }
+                Kernel::Translation {
+                    rotation: on_parent.rotation,
+                    origin: on_parent.translation,
+                    direction,
+                    after,
+                    column,
+                }
             }
             _ => Kernel::General,
         },
@@ -320,14 +393,38 @@ impl Joint {
     }
 
     /// The transform alone at positions q (for the mass matrix, which needs no velocities).
-    pub fn update_transform(&self, q: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
+    pub fn update_transform(
+        &self,
+        q: &[f64],
+        unknowns: &UnknownValues,
+        state: &mut JointState,
+    ) -> Result<(), EvalError> {
         match &self.kernel {
             Kernel::Weld { transform } => state.transform = *transform,
-            Kernel::Rotation { terms, aligned, origin, scale, after, .. } => {
+            Kernel::Rotation {
+                terms,
+                aligned,
+                origin,
+                scale,
+                after,
+                ..
+            } => {
                 state.transform = rotation_transform(terms, *aligned, origin, scale * q[0], after);
             }
-            Kernel::Translation { rotation, origin, direction, after, .. } => {
-                state.transform = with_after(Transform { rotation: *rotation, translation: origin + direction * q[0] }, after);
+            Kernel::Translation {
+                rotation,
+                origin,
+                direction,
+                after,
+                ..
+            } => {
+                state.transform = with_after(
+                    Transform {
+                        rotation: *rotation,
+                        translation: origin + direction * q[0],
+                    },
+                    after,
+                );
             }
             Kernel::General => self.update(q, &[0.0; 6][..self.nv()], unknowns, state)?,
         }
@@ -337,7 +434,13 @@ impl Joint {
     /// Writes the joint's state at (q, v) into `state` (made by `new_state`), reusing its
     /// storage: its transform, subspace, velocity and bias. `state.pose` is left as it was for the one-rotation,
     /// one-translation and weld kernels; `forward_kinematics` sets it (see `fill_pose`).
-    pub fn update(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
+    pub fn update(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        unknowns: &UnknownValues,
+        state: &mut JointState,
+    ) -> Result<(), EvalError> {
         match (&self.kernel, &self.kind) {
             (Kernel::Weld { transform }, _) => {
                 state.transform = *transform;
@@ -345,13 +448,38 @@ impl Joint {
                 state.velocity = Motion::zeros();
                 state.bias = Motion::zeros();
             }
-            (Kernel::Rotation { terms, aligned, origin, scale, after, column }, _) => {
+            (
+                Kernel::Rotation {
+                    terms,
+                    aligned,
+                    origin,
+                    scale,
+                    after,
+                    column,
+                },
+                _,
+            ) => {
                 state.transform = rotation_transform(terms, *aligned, origin, scale * q[0], after);
                 state.velocity = column * v[0];
                 state.bias = Motion::zeros();
             }
-            (Kernel::Translation { rotation, origin, direction, after, column }, _) => {
-                state.transform = with_after(Transform { rotation: *rotation, translation: origin + direction * q[0] }, after);
+            (
+                Kernel::Translation {
+                    rotation,
+                    origin,
+                    direction,
+                    after,
+                    column,
+                },
+                _,
+            ) => {
+                state.transform = with_after(
+                    Transform {
+                        rotation: *rotation,
+                        translation: origin + direction * q[0],
+                    },
+                    after,
+                );
                 state.velocity = column * v[0];
                 state.bias = Motion::zeros();
             }
@@ -370,21 +498,36 @@ impl Joint {
     /// Sets `state.pose` from the transform where `update` did not compute it.
     pub fn fill_pose(&self, state: &mut JointState) {
         if !matches!(self.kernel, Kernel::General) {
-            let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(state.transform.rotation));
-            state.pose = Pose::from_parts(Translation3::from(state.transform.translation), rotation);
+            let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+                state.transform.rotation,
+            ));
+            state.pose =
+                Pose::from_parts(Translation3::from(state.transform.translation), rotation);
         }
     }
 
-    fn chain_state(&self, q: &[f64], v: &[f64], unknowns: &UnknownValues, state: &mut JointState) -> Result<(), EvalError> {
+    fn chain_state(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        unknowns: &UnknownValues,
+        state: &mut JointState,
+    ) -> Result<(), EvalError> {
         let motion = self.chain.chain_motion(q, Some(v), unknowns)?;
         let d = motion.pose;
         // Twists of D (in the first frame) seen in the child frame: through B·D⁻¹ when the first
         // frame is on the parent, through −A when it is on the child (the child moves with D⁻¹).
-        let (to_child, sign) = if self.first_on_parent { (self.on_child * d.inverse(), 1.0) } else { (self.on_child, -1.0) };
+        let (to_child, sign) = if self.first_on_parent {
+            (self.on_child * d.inverse(), 1.0)
+        } else {
+            (self.on_child, -1.0)
+        };
         state.subspace.clear();
         for k in 0..self.nv() {
             let column = Motion::from_column_slice(motion.subspace.column(k).as_slice());
-            state.subspace.push(sign * spatial::motion_to_parent(&to_child, &column));
+            state
+                .subspace
+                .push(sign * spatial::motion_to_parent(&to_child, &column));
         }
         let moving = if self.first_on_parent { d } else { d.inverse() };
         state.pose = self.on_parent * moving * self.on_child.inverse();
@@ -397,15 +540,23 @@ impl Joint {
     /// the subspace is constant in the child frame and the bias vanishes.
     fn quaternion_state(&self, q: &[f64], v: &[f64], state: &mut JointState) {
         let (moving, n) = match self.kind {
-            JointType::Free { .. } => (Pose::from_parts(Translation3::new(q[0], q[1], q[2]), quaternion(&q[3..7])), 6),
-            _ => (Pose::from_parts(Translation3::identity(), quaternion(&q[0..4])), 3),
+            JointType::Free { .. } => (
+                Pose::from_parts(Translation3::new(q[0], q[1], q[2]), quaternion(&q[3..7])),
+                6,
+            ),
+            _ => (
+                Pose::from_parts(Translation3::identity(), quaternion(&q[0..4])),
+                3,
+            ),
         };
         state.subspace.clear();
         for k in 0..n {
             // Velocity layout: angular velocity first, then (free joints) linear velocity.
             let mut unit = Motion::zeros();
             unit[k] = 1.0;
-            state.subspace.push(spatial::motion_to_parent(&self.on_child, &unit));
+            state
+                .subspace
+                .push(spatial::motion_to_parent(&self.on_child, &unit));
         }
         state.velocity = state.subspace.apply(v);
         state.pose = self.on_parent * moving * self.on_child.inverse();

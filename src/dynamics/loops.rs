@@ -33,8 +33,14 @@ pub const RANK_TOLERANCE: f64 = crate::kinematics::mobility::RANK_TOLERANCE;
 pub const SOLVE_TOLERANCE: f64 = 1e-9;
 
 /// Names of the six rows of a loop.
-pub const ROW_NAMES: [&str; 6] =
-    ["rotation about x", "rotation about y", "rotation about z", "translation along x", "translation along y", "translation along z"];
+pub const ROW_NAMES: [&str; 6] = [
+    "rotation about x",
+    "rotation about y",
+    "rotation about z",
+    "translation along x",
+    "translation along y",
+    "translation along z",
+];
 
 /// The loops' constraint rows at a state.
 pub struct Constraints {
@@ -52,13 +58,25 @@ pub struct Constraints {
 
 /// The constraint rows at (q, v), both of the state's length. With `with_bias` γ is computed too.
 /// Leaves the forward kinematics of (q, v) in `data`.
-pub fn constraints(model: &Model, data: &mut Data, q: &[f64], v: &[f64], with_bias: bool) -> Result<Constraints, EvalError> {
+pub fn constraints(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    with_bias: bool,
+) -> Result<Constraints, EvalError> {
     forward_kinematics(model, data, q, v)?;
     constraints_after_kinematics(model, data, q, v, with_bias)
 }
 
 /// `constraints` when `data` already holds the forward kinematics of (q, v) (after RNEA, say).
-pub fn constraints_after_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64], with_bias: bool) -> Result<Constraints, EvalError> {
+pub fn constraints_after_kinematics(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    with_bias: bool,
+) -> Result<Constraints, EvalError> {
     if with_bias {
         bias_accelerations(model, data);
     }
@@ -77,15 +95,31 @@ pub fn constraints_after_kinematics(model: &Model, data: &mut Data, q: &[f64], v
     Ok(c)
 }
 
-fn loop_rows(model: &Model, data: &Data, q: &[f64], v: &[f64], k: usize, with_bias: bool, c: &mut Constraints) -> Result<(), EvalError> {
+fn loop_rows(
+    model: &Model,
+    data: &Data,
+    q: &[f64],
+    v: &[f64],
+    k: usize,
+    with_bias: bool,
+    c: &mut Constraints,
+) -> Result<(), EvalError> {
     let joint = &model.loops[k];
     let (offset, n) = (model.loop_offset(k), joint.coordinate_count());
     // A ball joint's rotation is free: only its centre is constrained, which its angles do not
     // move; its angle rates are left out.
     let ball = model.loop_balls[k].is_some();
     let no_rates = vec![0.0; n];
-    let rates = if ball { &no_rates[..] } else { &v[model.nv + offset..model.nv + offset + n] };
-    let chain = joint.chain_motion(&q[model.nq + offset..model.nq + offset + n], Some(rates), &model.unknowns)?;
+    let rates = if ball {
+        &no_rates[..]
+    } else {
+        &v[model.nv + offset..model.nv + offset + n]
+    };
+    let chain = joint.chain_motion(
+        &q[model.nq + offset..model.nq + offset + n],
+        Some(rates),
+        &model.unknowns,
+    )?;
     let base = data.world[joint.first_body] * joint.first;
     let end = base * chain.pose;
     let target = data.world[joint.second_body] * joint.second;
@@ -98,31 +132,60 @@ fn loop_rows(model: &Model, data: &Data, q: &[f64], v: &[f64], k: usize, with_bi
     c.points.push(point);
     // Rates are taken at the loop point, in fixed axes: a motion seen from `at_point`.
     let at_point = translation(point);
-    add_body_columns(model, data, joint.second_body, &at_point, 1.0, row, &mut c.jacobian);
-    add_body_columns(model, data, joint.first_body, &at_point, -1.0, row, &mut c.jacobian);
+    add_body_columns(
+        model,
+        data,
+        joint.second_body,
+        &at_point,
+        1.0,
+        row,
+        &mut c.jacobian,
+    );
+    add_body_columns(
+        model,
+        data,
+        joint.first_body,
+        &at_point,
+        -1.0,
+        row,
+        &mut c.jacobian,
+    );
     for column in (0..n).filter(|_| !ball) {
-        let twist = transform_twist(&base, &Motion::from_column_slice(chain.subspace.column(column).as_slice()));
+        let twist = transform_twist(
+            &base,
+            &Motion::from_column_slice(chain.subspace.column(column).as_slice()),
+        );
         let moved = spatial::motion_to_child(&at_point, &twist);
-        let mut target_column = c.jacobian.view_mut((row, model.nv + offset + column), (6, 1));
+        let mut target_column = c
+            .jacobian
+            .view_mut((row, model.nv + offset + column), (6, 1));
         target_column -= moved;
     }
     if with_bias {
         // World-frame spatial accelerations are the derivatives of world-frame spatial twists, so
         // γ is the difference of the two frames' accelerations at zero joint accelerations.
-        let world = |motions: &[Motion], body: usize| spatial::motion_to_parent(&data.world[body], &motions[body]);
+        let world = |motions: &[Motion], body: usize| {
+            spatial::motion_to_parent(&data.world[body], &motions[body])
+        };
         let first_velocity = world(&data.velocity, joint.first_body);
         let chain_velocity = transform_twist(&base, &chain.velocity);
         let end_acceleration = world(&data.acceleration, joint.first_body)
             + spatial::cross_motion(&first_velocity, &chain_velocity)
             + transform_twist(&base, &chain.bias);
         let difference = world(&data.acceleration, joint.second_body) - end_acceleration;
-        c.bias.rows_mut(row, 6).copy_from(&spatial::motion_to_child(&at_point, &difference));
+        c.bias
+            .rows_mut(row, 6)
+            .copy_from(&spatial::motion_to_child(&at_point, &difference));
         if ball {
             // The point rows are the relative velocity at a moving point p: d/dt adds
             // (ω_T − ω_E) × ṗ, which vanishes when the rotation rows hold (ω_T = ω_E).
             let second_velocity = world(&data.velocity, joint.second_body);
-            let relative_spin = (second_velocity - first_velocity).fixed_rows::<3>(0).into_owned();
-            let point_velocity = spatial::motion_to_child(&at_point, &first_velocity).fixed_rows::<3>(3).into_owned();
+            let relative_spin = (second_velocity - first_velocity)
+                .fixed_rows::<3>(0)
+                .into_owned();
+            let point_velocity = spatial::motion_to_child(&at_point, &first_velocity)
+                .fixed_rows::<3>(3)
+                .into_owned();
             let mut linear = c.bias.rows_mut(row + 3, 3);
             linear += relative_spin.cross(&point_velocity);
         }
@@ -137,14 +200,24 @@ fn loop_rows(model: &Model, data: &Data, q: &[f64], v: &[f64], k: usize, with_bi
 
 /// Whether each constraint row constrains anything: a ball joint's three rotation rows do not.
 pub fn active_rows(model: &Model) -> Vec<bool> {
-    model.loop_balls.iter().flat_map(|ball| (0..6).map(move |r| ball.is_none() || r >= 3)).collect()
+    model
+        .loop_balls
+        .iter()
+        .flat_map(|ball| (0..6).map(move |r| ball.is_none() || r >= 3))
+        .collect()
 }
 
 /// Recovers the angles of the complementary ball joints at (q, v), and their rates when
 /// `with_rates` (for outputs); otherwise their rates are set to zero: the state the integrator
 /// carries then holds them still between recoveries, instead of moving them with rates nothing
 /// updates (which would only feed its error estimate). Returns whether there are any.
-pub fn seat_ball_angles(model: &Model, data: &mut Data, q: &mut [f64], v: &mut [f64], with_rates: bool) -> Result<bool, EvalError> {
+pub fn seat_ball_angles(
+    model: &Model,
+    data: &mut Data,
+    q: &mut [f64],
+    v: &mut [f64],
+    with_rates: bool,
+) -> Result<bool, EvalError> {
     if model.loop_balls.iter().all(Option::is_none) {
         return Ok(false);
     }
@@ -156,7 +229,13 @@ pub fn seat_ball_angles(model: &Model, data: &mut Data, q: &mut [f64], v: &mut [
 /// Sets the angles of the complementary ball joints to those of the bodies' relative rotation
 /// (continuing from their previous values) and their rates to match the relative angular
 /// velocity; `data` must hold the forward kinematics of (q, v).
-fn seat_balls(model: &Model, data: &Data, q: &mut [f64], v: &mut [f64], with_rates: bool) -> Result<(), EvalError> {
+fn seat_balls(
+    model: &Model,
+    data: &Data,
+    q: &mut [f64],
+    v: &mut [f64],
+    with_rates: bool,
+) -> Result<(), EvalError> {
     for (k, axes) in model.loop_balls.iter().enumerate() {
         let Some(axes) = axes else { continue };
         let joint = &model.loops[k];
@@ -164,7 +243,11 @@ fn seat_balls(model: &Model, data: &Data, q: &mut [f64], v: &mut [f64], with_rat
         let base = data.world[joint.first_body] * joint.first;
         let target = data.world[joint.second_body] * joint.second;
         let relative = base.rotation.inverse() * target.rotation;
-        let previous = [q[model.nq + start], q[model.nq + start + 1], q[model.nq + start + 2]];
+        let previous = [
+            q[model.nq + start],
+            q[model.nq + start + 1],
+            q[model.nq + start + 2],
+        ];
         let angles = super::angles::angles_from_rotation(axes, &relative, &previous);
         q[model.nq + start..model.nq + start + 3].copy_from_slice(&angles);
         if !with_rates {
@@ -172,23 +255,41 @@ fn seat_balls(model: &Model, data: &Data, q: &mut [f64], v: &mut [f64], with_rat
             continue;
         }
         // Relative angular velocity in the first frame, then the angle rates that give it.
-        let world = |body: usize| spatial::motion_to_parent(&data.world[body], &data.velocity[body]);
-        let omega = base.rotation.inverse() * (world(joint.second_body) - world(joint.first_body)).fixed_rows::<3>(0);
+        let world =
+            |body: usize| spatial::motion_to_parent(&data.world[body], &data.velocity[body]);
+        let omega = base.rotation.inverse()
+            * (world(joint.second_body) - world(joint.first_body)).fixed_rows::<3>(0);
         let subspace = joint.chain(&angles, &model.unknowns)?.1;
-        let rates = subspace.rows(0, 3).into_owned().pseudo_inverse(1e-12).map(|p| p * omega).unwrap_or_else(|_| DVector::zeros(3));
+        let rates = subspace
+            .rows(0, 3)
+            .into_owned()
+            .pseudo_inverse(1e-12)
+            .map(|p| p * omega)
+            .unwrap_or_else(|_| DVector::zeros(3));
         v[model.nv + start..model.nv + start + 3].copy_from_slice(rates.as_slice());
     }
     Ok(())
 }
 
 /// Adds `sign` times the rates of `body`'s frame per velocity of the joints between it and earth.
-fn add_body_columns(model: &Model, data: &Data, body: usize, at_point: &Pose, sign: f64, row: usize, jacobian: &mut DMatrix<f64>) {
+fn add_body_columns(
+    model: &Model,
+    data: &Data,
+    body: usize,
+    at_point: &Pose,
+    sign: f64,
+    row: usize,
+    jacobian: &mut DMatrix<f64>,
+) {
     let mut current = body;
     while current != 0 {
         let joint = &model.joints[current - 1];
         let subspace = &data.states[current - 1].subspace;
         for column in 0..joint.nv() {
-            let world = spatial::motion_to_parent(&data.world[current], &Motion::from_column_slice(subspace.column(column).as_slice()));
+            let world = spatial::motion_to_parent(
+                &data.world[current],
+                &Motion::from_column_slice(subspace.column(column).as_slice()),
+            );
             let moved = spatial::motion_to_child(at_point, &world);
             let mut target = jacobian.view_mut((row, joint.v_offset + column), (6, 1));
             target += sign * moved;
@@ -226,15 +327,32 @@ pub fn decompose_with(g: &DMatrix<f64>, tolerance: f64) -> Decomposition {
     order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
     let singular_values: Vec<f64> = order.iter().map(|&k| svd.singular_values[k]).collect();
     let largest = singular_values.first().copied().unwrap_or(0.0);
-    let rank = singular_values.iter().take_while(|&&s| s > tolerance * largest && s > 0.0).count();
+    let rank = singular_values
+        .iter()
+        .take_while(|&&s| s > tolerance * largest && s > 0.0)
+        .count();
     let mut pseudo_inverse = DMatrix::zeros(n, m);
     for &k in &order[..rank] {
-        pseudo_inverse += v_t.row(k).transpose() * u.column(k).rows(0, m).transpose() / svd.singular_values[k];
+        pseudo_inverse +=
+            v_t.row(k).transpose() * u.column(k).rows(0, m).transpose() / svd.singular_values[k];
     }
-    let null: Vec<DVector<f64>> = order[rank..].iter().map(|&k| v_t.row(k).transpose()).collect();
-    let null_space = if null.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_columns(&null) };
+    let null: Vec<DVector<f64>> = order[rank..]
+        .iter()
+        .map(|&k| v_t.row(k).transpose())
+        .collect();
+    let null_space = if null.is_empty() {
+        DMatrix::zeros(n, 0)
+    } else {
+        DMatrix::from_columns(&null)
+    };
     let left = DMatrix::from_fn(m, order.len().min(m), |r, c| u[(r, order[c])]);
-    Decomposition { rank, pseudo_inverse, null_space, singular_values, left }
+    Decomposition {
+        rank,
+        pseudo_inverse,
+        null_space,
+        singular_values,
+        left,
+    }
 }
 
 /// How the constraints are kept: by projecting the state after each step (exact), by Baumgarte's
@@ -267,7 +385,13 @@ pub enum LoopError {
 /// Solves `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` (γ with Baumgarte's terms when asked for); `mass` is
 /// the tree's mass matrix, `force` has the state's length, `massless` the mechanism's number of
 /// allowed motions without mass (`massless_count`).
-pub fn solve(mass: &DMatrix<f64>, force: &DVector<f64>, c: &Constraints, stabilisation: Stabilisation, massless: usize) -> Result<Solution, LoopError> {
+pub fn solve(
+    mass: &DMatrix<f64>,
+    force: &DVector<f64>,
+    c: &Constraints,
+    stabilisation: Stabilisation,
+    massless: usize,
+) -> Result<Solution, LoopError> {
     let n = force.len();
     let nt = mass.nrows();
     let mut full_mass = DMatrix::zeros(n, n);
@@ -281,10 +405,18 @@ pub fn solve(mass: &DMatrix<f64>, force: &DVector<f64>, c: &Constraints, stabili
     let null = &basis.null_space;
     let reduced_mass = null.transpose() * &full_mass * null;
     let reduced_force = null.transpose() * (force - &full_mass * &particular);
-    let z = massive_solve(reduced_mass, &reduced_force, massless).map_err(|k| LoopError::MasslessMotion { velocity: null.column(k).iamax() })?;
+    let z = massive_solve(reduced_mass, &reduced_force, massless).map_err(|k| {
+        LoopError::MasslessMotion {
+            velocity: null.column(k).iamax(),
+        }
+    })?;
     let accelerations = particular + null * z;
     let multipliers = basis.pseudo_inverse.transpose() * (&full_mass * &accelerations - force);
-    Ok(Solution { accelerations, multipliers, rank: basis.rank })
+    Ok(Solution {
+        accelerations,
+        multipliers,
+        rank: basis.rank,
+    })
 }
 
 /// A motion whose inertia is below this fraction of the largest counts as without mass (a point
@@ -301,7 +433,11 @@ const MASSLESS_FORCE: f64 = 1e-3;
 /// that carry mass; a motion without mass stays at rest unless a force acts on it (then its
 /// eigenvector index is the error). The `massless` smallest eigenvalues count as without mass
 /// whatever their value (see `massless_count`), and so does any below `MASSLESS`.
-fn massive_solve(a: DMatrix<f64>, b: &DVector<f64>, massless: usize) -> Result<DVector<f64>, usize> {
+fn massive_solve(
+    a: DMatrix<f64>,
+    b: &DVector<f64>,
+    massless: usize,
+) -> Result<DVector<f64>, usize> {
     if a.nrows() == 0 {
         return Ok(DVector::zeros(0));
     }
@@ -342,10 +478,14 @@ pub fn massless_count(model: &Model, data: &mut Data, q: &[f64]) -> Result<usize
     let allowed = decompose(&constraints(model, data, q, &rest, false)?.jacobian).null_space;
     let n = model.velocities();
     let mut mass = DMatrix::zeros(n, n);
-    mass.view_mut((0, 0), (model.nv, model.nv)).copy_from(&crba(model, data, q)?);
+    mass.view_mut((0, 0), (model.nv, model.nv))
+        .copy_from(&crba(model, data, q)?);
     let eigenvalues = (allowed.transpose() * mass * &allowed).symmetric_eigenvalues();
     let largest = eigenvalues.amax();
-    Ok(eigenvalues.iter().filter(|&&value| value <= MASSLESS * largest).count())
+    Ok(eigenvalues
+        .iter()
+        .filter(|&&value| value <= MASSLESS * largest)
+        .count())
 }
 
 /// Constraint residuals before and after a projection: largest position row (metres or
@@ -368,7 +508,12 @@ const NEWTON_ITERATIONS: usize = 8;
 /// Moves (q, v) onto the constraints: Gauss–Newton steps on the positions (minimum-norm
 /// corrections, so the free motions are not disturbed), then the orthogonal projection of the
 /// velocities onto G v = 0.
-pub fn project(model: &Model, data: &mut Data, q: &mut [f64], v: &mut [f64]) -> Result<Projection, EvalError> {
+pub fn project(
+    model: &Model,
+    data: &mut Data,
+    q: &mut [f64],
+    v: &mut [f64],
+) -> Result<Projection, EvalError> {
     let rest = vec![0.0; v.len()];
     let mut current = constraints(model, data, q, &rest, false)?;
     let mut error = current.residual.amax();
@@ -399,15 +544,23 @@ pub fn project(model: &Model, data: &mut Data, q: &mut [f64], v: &mut [f64]) -> 
     v.copy_from_slice(corrected.as_slice());
     seat_ball_angles(model, data, q, v, false)?;
     Ok(Projection {
-        before: Residuals { position: before_position, velocity: velocity.amax() },
-        after: Residuals { position: error, velocity: after_velocity },
+        before: Residuals {
+            position: before_position,
+            velocity: velocity.amax(),
+        },
+        after: Residuals {
+            position: error,
+            velocity: after_velocity,
+        },
         basis,
     })
 }
 
 /// The active rows that depend on earlier ones (in loop order, then row order), at a configuration.
 pub fn redundant_rows(jacobian: &DMatrix<f64>, active: &[bool]) -> Vec<usize> {
-    let largest = (0..jacobian.nrows()).map(|r| jacobian.row(r).norm()).fold(0.0, f64::max);
+    let largest = (0..jacobian.nrows())
+        .map(|r| jacobian.row(r).norm())
+        .fold(0.0, f64::max);
     let mut basis: Vec<DVector<f64>> = Vec::new();
     let mut redundant = Vec::new();
     for r in (0..jacobian.nrows()).filter(|&r| active[r]) {
@@ -431,13 +584,23 @@ pub fn redundant_rows(jacobian: &DMatrix<f64>, active: &[bool]) -> Vec<usize> {
 /// The loop whose rows take the largest part in a left singular vector (a lost direction).
 pub fn loop_of_direction(direction: &DVector<f64>) -> usize {
     (0..direction.len() / 6)
-        .max_by(|&a, &b| direction.rows(6 * a, 6).norm_squared().total_cmp(&direction.rows(6 * b, 6).norm_squared()))
+        .max_by(|&a, &b| {
+            direction
+                .rows(6 * a, 6)
+                .norm_squared()
+                .total_cmp(&direction.rows(6 * b, 6).norm_squared())
+        })
         .unwrap_or(0)
 }
 
 /// The constraint wrenches as forces on the bodies (in their frames, about their origins):
 /// +λ on each loop's second body, −λ on its first.
-pub fn constraint_forces(model: &Model, data: &Data, c: &Constraints, multipliers: &DVector<f64>) -> Vec<Force> {
+pub fn constraint_forces(
+    model: &Model,
+    data: &Data,
+    c: &Constraints,
+    multipliers: &DVector<f64>,
+) -> Vec<Force> {
     let mut forces = vec![Force::zeros(); model.body_count() + 1];
     for (k, joint) in model.loops.iter().enumerate() {
         let wrench = Force::from_column_slice(multipliers.rows(6 * k, 6).as_slice());

@@ -150,14 +150,32 @@ impl Model {
     /// joint's angular velocity (body axes), `free.v_x` for its linear one.
     pub fn velocity_name(&self, index: usize) -> String {
         if index >= self.nv {
-            let names: Vec<String> = self.loops.iter().flat_map(|l| l.coordinate_names.iter().map(move |c| format!("{}.{c}", l.name))).collect();
+            let names: Vec<String> = self
+                .loops
+                .iter()
+                .flat_map(|l| {
+                    l.coordinate_names
+                        .iter()
+                        .map(move |c| format!("{}.{c}", l.name))
+                })
+                .collect();
             return names.get(index - self.nv).cloned().unwrap_or_default();
         }
-        let Some(joint) = self.joints.iter().find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&index)) else { return String::new() };
+        let Some(joint) = self
+            .joints
+            .iter()
+            .find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&index))
+        else {
+            return String::new();
+        };
         let k = index - joint.v_offset;
         match joint.kind {
             JointType::Chain => format!("{}.{}", joint.chain.name, joint.chain.coordinate_names[k]),
-            _ => format!("{}.{}", joint.chain.name, ["ω_x", "ω_y", "ω_z", "v_x", "v_y", "v_z"][k]),
+            _ => format!(
+                "{}.{}",
+                joint.chain.name,
+                ["ω_x", "ω_y", "ω_z", "v_x", "v_y", "v_z"][k]
+            ),
         }
     }
 
@@ -175,12 +193,18 @@ fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
                 .primary(mechanism.unknowns[id.0 as usize].span, "no value given")
                 .help("give it a number in the program (`mass = 2`), or a value with `--set`")
         }
-        EvalError::NotGeometric(detail) => Diagnostic::error("E0807", format!("{what} cannot depend on {detail}")),
+        EvalError::NotGeometric(detail) => {
+            Diagnostic::error("E0807", format!("{what} cannot depend on {detail}"))
+        }
     }
 }
 
 fn constant_vector(v: &Vector, unknowns: &UnknownValues) -> Result<Vector3<f64>, EvalError> {
-    Ok(Vector3::new(eval(&v[0], unknowns, &[])?, eval(&v[1], unknowns, &[])?, eval(&v[2], unknowns, &[])?))
+    Ok(Vector3::new(
+        eval(&v[0], unknowns, &[])?,
+        eval(&v[1], unknowns, &[])?,
+        eval(&v[2], unknowns, &[])?,
+    ))
 }
 
 fn constant(s: &Scalar, unknowns: &UnknownValues) -> Result<f64, EvalError> {
@@ -196,7 +220,11 @@ pub fn build(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Model
 /// `build`, with `quaternions` false keeping every joint a plain chain in its declared
 /// coordinates (velocities are the coordinates' rates): the form of the symbolic equations,
 /// for comparing the two.
-pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternions: bool) -> Result<Model, Vec<Diagnostic>> {
+pub fn build_with(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+    quaternions: bool,
+) -> Result<Model, Vec<Diagnostic>> {
     let unknowns = &kinematics.unknowns;
     let topology = &kinematics.topology;
     let mut errors = Vec::new();
@@ -205,10 +233,18 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
     let mut declared_offsets = Vec::new();
     let mut declared = 0;
     for (link, chain) in topology.principal.iter().zip(kinematics.principal()) {
-        let (on_parent, on_child) = if link.first_on_parent { (chain.first, chain.second) } else { (chain.second, chain.first) };
+        let (on_parent, on_child) = if link.first_on_parent {
+            (chain.first, chain.second)
+        } else {
+            (chain.second, chain.first)
+        };
         let mut joint = Joint {
             chain: chain.clone(),
-            kind: if quaternions { classify(chain) } else { JointType::Chain },
+            kind: if quaternions {
+                classify(chain)
+            } else {
+                JointType::Chain
+            },
             parent: link.parent,
             child: link.child,
             first_on_parent: link.first_on_parent,
@@ -254,12 +290,24 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
         .map(|j| &j.chain)
         .chain(&loops)
         .enumerate()
-        .filter_map(|(k, chain)| mechanism.link(mechanism.join(chain.join).link).potential.clone().map(|p| (k, p)))
+        .filter_map(|(k, chain)| {
+            mechanism
+                .link(mechanism.join(chain.join).link)
+                .potential
+                .clone()
+                .map(|p| (k, p))
+        })
         .collect();
     if !errors.is_empty() {
         return Err(errors);
     }
-    let merged = welds::merge(&mut joints, &bodies, &applied, &link_efforts, !loops.is_empty());
+    let merged = welds::merge(
+        &mut joints,
+        &bodies,
+        &applied,
+        &link_efforts,
+        !loops.is_empty(),
+    );
     let branch_velocities = branch_velocities(&joints);
     Ok(Model {
         branch_velocities,
@@ -286,22 +334,43 @@ pub fn build_with(mechanism: &Mechanism, kinematics: &KinematicModel, quaternion
     })
 }
 
-fn body_inertia(mechanism: &Mechanism, id: crate::elab::value::BodyId, unknowns: &UnknownValues) -> Result<BodyInertia, EvalError> {
+fn body_inertia(
+    mechanism: &Mechanism,
+    id: crate::elab::value::BodyId,
+    unknowns: &UnknownValues,
+) -> Result<BodyInertia, EvalError> {
     let body = mechanism.body(id);
     let mass = constant(body.mass.value(), unknowns)?;
     let moments = constant_vector(body.inertia.value(), unknowns)?;
     if mass == 0.0 && moments == Vector3::zeros() {
-        return Ok(BodyInertia { mass, com: Vector3::zeros(), inertia: Inertia::zeros(), rigid: RigidInertia::zeros(), massless: true });
+        return Ok(BodyInertia {
+            mass,
+            com: Vector3::zeros(),
+            inertia: Inertia::zeros(),
+            rigid: RigidInertia::zeros(),
+            massless: true,
+        });
     }
     let frame: Pose = constant_pose(body.iframe.value(), unknowns)?;
     let rotation = frame.rotation.to_rotation_matrix();
-    let central = rotation.matrix() * Matrix3::from_diagonal(&moments) * rotation.matrix().transpose();
+    let central =
+        rotation.matrix() * Matrix3::from_diagonal(&moments) * rotation.matrix().transpose();
     let com = frame.translation.vector;
     let inertia = spatial::inertia(mass, &com, &central);
-    Ok(BodyInertia { mass, com, inertia, rigid: RigidInertia::from_matrix(&inertia), massless: false })
+    Ok(BodyInertia {
+        mass,
+        com,
+        inertia,
+        rigid: RigidInertia::from_matrix(&inertia),
+        massless: false,
+    })
 }
 
-fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &mut Vec<Diagnostic>) -> Vec<AppliedEffort> {
+fn applied_efforts(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+    errors: &mut Vec<Diagnostic>,
+) -> Vec<AppliedEffort> {
     let topology = &kinematics.topology;
     let mut applied = Vec::new();
     for application in &mechanism.applications {
@@ -313,34 +382,61 @@ fn applied_efforts(mechanism: &Mechanism, kinematics: &KinematicModel, errors: &
         let point = match constant_pose(&application.target.displacement, &kinematics.unknowns) {
             Ok(p) => p.translation.vector,
             Err(e) => {
-                errors.push(missing(mechanism, e, "the point of application of an effort"));
+                errors.push(missing(
+                    mechanism,
+                    e,
+                    "the point of application of an effort",
+                ));
                 continue;
             }
         };
-        let point = if effort.kind == EffortKind::Torque { Vector3::zeros() } else { point };
+        let point = if effort.kind == EffortKind::Torque {
+            Vector3::zeros()
+        } else {
+            point
+        };
         let basis = match effort.basis {
             BodyRef::Earth => 0,
             BodyRef::Body(id) => match topology.number_of.get(&id) {
                 Some(&n) => n,
                 None => {
                     errors.push(
-                        Diagnostic::error("E0809", "an effort is written in the basis of a body outside the mechanism")
-                            .primary(effort.span, "this effort"),
+                        Diagnostic::error(
+                            "E0809",
+                            "an effort is written in the basis of a body outside the mechanism",
+                        )
+                        .primary(effort.span, "this effort"),
                     );
                     continue;
                 }
             },
         };
         let potential = effort.potential.clone();
-        let mut applied_effort = AppliedEffort { kind: effort.kind, body, point, value: effort.value.value().clone(), basis, potential, span: application.span, conservative: false };
-        applied_effort.conservative = applied_effort.potential.is_some() || constant_fixed_force(&applied_effort, &kinematics.unknowns).is_some();
+        let mut applied_effort = AppliedEffort {
+            kind: effort.kind,
+            body,
+            point,
+            value: effort.value.value().clone(),
+            basis,
+            potential,
+            span: application.span,
+            conservative: false,
+        };
+        applied_effort.conservative = applied_effort.potential.is_some()
+            || constant_fixed_force(&applied_effort, &kinematics.unknowns).is_some();
         applied.push(applied_effort);
     }
     applied
 }
 
 /// The frames the efforts' values and potentials use, placed on their bodies.
-fn effort_frames(mechanism: &Mechanism, kinematics: &KinematicModel, applied: &[AppliedEffort], links: &[LinkEffort], errors: &mut Vec<Diagnostic>) -> Vec<EffortFrame> {
+fn effort_frames(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+    applied: &[AppliedEffort],
+    links: &[LinkEffort],
+    errors: &mut Vec<Diagnostic>,
+) -> Vec<EffortFrame> {
     let mut frames = Vec::new();
     let expressions = applied
         .iter()
@@ -357,13 +453,20 @@ fn effort_frames(mechanism: &Mechanism, kinematics: &KinematicModel, applied: &[
             BodyRef::Body(id) => match kinematics.topology.number_of.get(&id) {
                 Some(&n) => n,
                 None => {
-                    errors.push(Diagnostic::error("E0809", "an effort uses the state of a frame on a body outside the mechanism"));
+                    errors.push(Diagnostic::error(
+                        "E0809",
+                        "an effort uses the state of a frame on a body outside the mechanism",
+                    ));
                     continue;
                 }
             },
         };
         match constant_pose(&frame.displacement, &kinematics.unknowns) {
-            Ok(offset) => placed.push(EffortFrame { frame, body, offset }),
+            Ok(offset) => placed.push(EffortFrame {
+                frame,
+                body,
+                offset,
+            }),
             Err(e) => errors.push(missing(mechanism, e, "a frame an effort uses")),
         }
     }
@@ -372,7 +475,9 @@ fn effort_frames(mechanism: &Mechanism, kinematics: &KinematicModel, applied: &[
 
 /// The value of a constant force written in the fixed basis, or `None`.
 pub fn constant_fixed_force(e: &AppliedEffort, unknowns: &UnknownValues) -> Option<Vector3<f64>> {
-    (e.kind == EffortKind::Force && e.basis == 0).then(|| constant_vector(&e.value, unknowns).ok()).flatten()
+    (e.kind == EffortKind::Force && e.basis == 0)
+        .then(|| constant_vector(&e.value, unknowns).ok())
+        .flatten()
 }
 
 /// The velocities of each joint and its ancestors (through dynamic parents).
@@ -396,23 +501,46 @@ fn branch_velocities(joints: &[Joint]) -> Vec<Vec<usize>> {
 /// Splits the weights off the applied efforts when every body with mass carries exactly one
 /// constant force in the fixed basis, at its centre of mass, equal to its mass times one common
 /// vector g: that is a uniform field g. Otherwise the efforts stay as they are (g = 0).
-fn gravity_field(applied: Vec<AppliedEffort>, bodies: &[BodyInertia], unknowns: &UnknownValues) -> (Vector3<f64>, Vec<AppliedEffort>) {
+fn gravity_field(
+    applied: Vec<AppliedEffort>,
+    bodies: &[BodyInertia],
+    unknowns: &UnknownValues,
+) -> (Vector3<f64>, Vec<AppliedEffort>) {
     let constant_force = |e: &AppliedEffort| constant_fixed_force(e, unknowns);
     let mut field: Option<Vector3<f64>> = None;
     let mut is_weight = vec![false; applied.len()];
-    for (k, body) in bodies.iter().enumerate().filter(|(_, b)| !b.massless && b.mass != 0.0) {
-        let at_centre = |e: &AppliedEffort| e.body == k + 1 && (e.point - body.com).norm() <= 1e-12 * (1.0 + body.com.norm());
-        let weights: Vec<usize> = (0..applied.len()).filter(|&i| at_centre(&applied[i]) && constant_force(&applied[i]).is_some()).collect();
-        let [only] = weights.as_slice() else { return (Vector3::zeros(), applied) };
+    for (k, body) in bodies
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| !b.massless && b.mass != 0.0)
+    {
+        let at_centre = |e: &AppliedEffort| {
+            e.body == k + 1 && (e.point - body.com).norm() <= 1e-12 * (1.0 + body.com.norm())
+        };
+        let weights: Vec<usize> = (0..applied.len())
+            .filter(|&i| at_centre(&applied[i]) && constant_force(&applied[i]).is_some())
+            .collect();
+        let [only] = weights.as_slice() else {
+            return (Vector3::zeros(), applied);
+        };
         let g = constant_force(&applied[*only]).unwrap_or_default() / body.mass;
         match field {
-            Some(f) if (f - g).norm() > 1e-14 * f.norm().max(1e-300) => return (Vector3::zeros(), applied),
+            Some(f) if (f - g).norm() > 1e-14 * f.norm().max(1e-300) => {
+                return (Vector3::zeros(), applied)
+            }
             _ => field = Some(g),
         }
         is_weight[*only] = true;
     }
-    let Some(g) = field else { return (Vector3::zeros(), applied) };
-    let rest = applied.into_iter().zip(is_weight).filter(|(_, w)| !w).map(|(e, _)| e).collect();
+    let Some(g) = field else {
+        return (Vector3::zeros(), applied);
+    };
+    let rest = applied
+        .into_iter()
+        .zip(is_weight)
+        .filter(|(_, w)| !w)
+        .map(|(e, _)| e)
+        .collect();
     (g, rest)
 }
 
@@ -422,10 +550,20 @@ fn link_efforts(mechanism: &Mechanism, joints: &[Joint], loops: &[JointModel]) -
     let chains = joints.iter().map(|j| &j.chain).chain(loops);
     for (index, chain) in chains.enumerate() {
         let link = mechanism.link(mechanism.join(chain.join).link);
-        for (kind, list) in [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)] {
+        for (kind, list) in [
+            (EffortKind::Force, &link.forces),
+            (EffortKind::Torque, &link.torques),
+        ] {
             for (step, value) in list {
                 let conservative = link.potential.is_some();
-                efforts.push(LinkEffort { joint: index, kind, step: *step, value: value.clone(), span: mechanism.join(chain.join).span, conservative });
+                efforts.push(LinkEffort {
+                    joint: index,
+                    kind,
+                    step: *step,
+                    value: value.clone(),
+                    span: mechanism.join(chain.join).span,
+                    conservative,
+                });
             }
         }
     }
@@ -453,10 +591,16 @@ impl Model {
     /// coordinates by their rates, quaternions along the rotation and back to unit length.
     pub fn retract(&self, q: &mut [f64], dv: &[f64]) {
         for joint in &self.joints {
-            let (qs, vs) = (joint.q_offset..joint.q_offset + joint.nq(), joint.v_offset..joint.v_offset + joint.nv());
+            let (qs, vs) = (
+                joint.q_offset..joint.q_offset + joint.nq(),
+                joint.v_offset..joint.v_offset + joint.nv(),
+            );
             let mut rate = vec![0.0; joint.nq()];
             joint.position_rate(&q[qs.clone()], &dv[vs], &mut rate);
-            q[qs.clone()].iter_mut().zip(&rate).for_each(|(x, r)| *x += r);
+            q[qs.clone()]
+                .iter_mut()
+                .zip(&rate)
+                .for_each(|(x, r)| *x += r);
             joint.normalize(&mut q[qs]);
         }
         for i in 0..self.nc {
@@ -466,7 +610,11 @@ impl Model {
 
     /// Positions and velocities from the declared coordinates and rates of every join (in the
     /// joints' order).
-    pub fn state_from_declared(&self, coordinates: &[f64], rates: &[f64]) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+    pub fn state_from_declared(
+        &self,
+        coordinates: &[f64],
+        rates: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let mut q = vec![0.0; self.positions()];
         let mut v = vec![0.0; self.velocities()];
         let tree = self.declared_count - self.nc;
@@ -474,7 +622,11 @@ impl Model {
         v[self.nv..].copy_from_slice(&rates[tree..]);
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
             let n = joint.chain.coordinate_count();
-            let (jq, jv) = joint.from_declared(&coordinates[offset..offset + n], &rates[offset..offset + n], &self.unknowns)?;
+            let (jq, jv) = joint.from_declared(
+                &coordinates[offset..offset + n],
+                &rates[offset..offset + n],
+                &self.unknowns,
+            )?;
             q[joint.q_offset..joint.q_offset + joint.nq()].copy_from_slice(&jq);
             v[joint.v_offset..joint.v_offset + joint.nv()].copy_from_slice(&jv);
         }
@@ -483,7 +635,12 @@ impl Model {
 
     /// Declared coordinates and rates at (q, v); `previous` declared coordinates keep recovered
     /// angles continuous.
-    pub fn declared(&self, q: &[f64], v: &[f64], previous: &[f64]) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+    pub fn declared(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        previous: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let mut coordinates = vec![0.0; self.declared_count];
         let mut rates = vec![0.0; self.declared_count];
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {

@@ -36,27 +36,39 @@ pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 /// Motion given in the frame of `pose` (a child), expressed in the frame `pose` is relative to.
 pub fn motion_to_parent(pose: &Pose, m: &Motion) -> Motion {
     let w = pose.rotation * top(m);
-    join(w, pose.rotation * bottom(m) + pose.translation.vector.cross(&w))
+    join(
+        w,
+        pose.rotation * bottom(m) + pose.translation.vector.cross(&w),
+    )
 }
 
 /// Motion given in the parent frame, expressed in the frame of `pose` (the child).
 pub fn motion_to_child(pose: &Pose, m: &Motion) -> Motion {
     let inverse = pose.rotation.inverse();
     let w = top(m);
-    join(inverse * w, inverse * (bottom(m) - pose.translation.vector.cross(&w)))
+    join(
+        inverse * w,
+        inverse * (bottom(m) - pose.translation.vector.cross(&w)),
+    )
 }
 
 /// Force given in the child frame, expressed in the parent frame.
 pub fn force_to_parent(pose: &Pose, f: &Force) -> Force {
     let force = pose.rotation * bottom(f);
-    join(pose.rotation * top(f) + pose.translation.vector.cross(&force), force)
+    join(
+        pose.rotation * top(f) + pose.translation.vector.cross(&force),
+        force,
+    )
 }
 
 /// Force given in the parent frame, expressed in the child frame.
 pub fn force_to_child(pose: &Pose, f: &Force) -> Force {
     let inverse = pose.rotation.inverse();
     let force = bottom(f);
-    join(inverse * (top(f) - pose.translation.vector.cross(&force)), inverse * force)
+    join(
+        inverse * (top(f) - pose.translation.vector.cross(&force)),
+        inverse * force,
+    )
 }
 
 /// `a × b` for two motions.
@@ -77,22 +89,32 @@ pub fn motion_matrix_to_child(pose: &Pose) -> Matrix6<f64> {
     let mut x = Matrix6::zeros();
     x.fixed_view_mut::<3, 3>(0, 0).copy_from(&r_t);
     x.fixed_view_mut::<3, 3>(3, 3).copy_from(&r_t);
-    x.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-r_t * skew(&pose.translation.vector)));
+    x.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(-r_t * skew(&pose.translation.vector)));
     x
 }
 
 impl Transform {
     pub fn identity() -> Transform {
-        Transform { rotation: Matrix3::identity(), translation: Vector3::zeros() }
+        Transform {
+            rotation: Matrix3::identity(),
+            translation: Vector3::zeros(),
+        }
     }
 
     pub fn inverse(&self) -> Transform {
         let rt = self.rotation.transpose();
-        Transform { rotation: rt, translation: -(rt * self.translation) }
+        Transform {
+            rotation: rt,
+            translation: -(rt * self.translation),
+        }
     }
 
     pub fn from_pose(pose: &Pose) -> Transform {
-        Transform { rotation: *pose.rotation.to_rotation_matrix().matrix(), translation: pose.translation.vector }
+        Transform {
+            rotation: *pose.rotation.to_rotation_matrix().matrix(),
+            translation: pose.translation.vector,
+        }
     }
 
     /// Motion given in the parent frame, expressed in this (child) frame.
@@ -107,7 +129,10 @@ impl Transform {
     #[inline]
     pub fn force_to_parent(&self, f: &Force) -> Force {
         let force = self.rotation * bottom(f);
-        join(self.rotation * top(f) + self.translation.cross(&force), force)
+        join(
+            self.rotation * top(f) + self.translation.cross(&force),
+            force,
+        )
     }
 
     /// Motion given in this (child) frame, expressed in the parent frame.
@@ -135,7 +160,8 @@ impl Transform {
         let mut out = Matrix6::zeros();
         out.fixed_view_mut::<3, 3>(0, 0).copy_from(&top_left);
         out.fixed_view_mut::<3, 3>(0, 3).copy_from(&top_right);
-        out.fixed_view_mut::<3, 3>(3, 0).copy_from(&top_right.transpose());
+        out.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&top_right.transpose());
         out.fixed_view_mut::<3, 3>(3, 3).copy_from(&d);
         out
     }
@@ -146,7 +172,10 @@ impl std::ops::Mul for Transform {
 
     /// Composition: `a * b` maps b's frame through a's.
     fn mul(self, b: Transform) -> Transform {
-        Transform { rotation: self.rotation * b.rotation, translation: self.rotation * b.translation + self.translation }
+        Transform {
+            rotation: self.rotation * b.rotation,
+            translation: self.rotation * b.translation + self.translation,
+        }
     }
 }
 
@@ -162,12 +191,20 @@ pub struct RigidInertia {
 
 impl RigidInertia {
     pub fn zeros() -> RigidInertia {
-        RigidInertia { mass: 0.0, first: Vector3::zeros(), rotational: Matrix3::zeros() }
+        RigidInertia {
+            mass: 0.0,
+            first: Vector3::zeros(),
+            rotational: Matrix3::zeros(),
+        }
     }
 
     /// From the 6 × 6 matrix of a rigid body's inertia.
     pub fn from_matrix(i: &Inertia) -> RigidInertia {
-        RigidInertia { mass: i[(3, 3)], first: Vector3::new(i[(2, 4)], i[(0, 5)], i[(1, 3)]), rotational: i.fixed_view::<3, 3>(0, 0).into_owned() }
+        RigidInertia {
+            mass: i[(3, 3)],
+            first: Vector3::new(i[(2, 4)], i[(0, 5)], i[(1, 3)]),
+            rotational: i.fixed_view::<3, 3>(0, 0).into_owned(),
+        }
     }
 
     /// The inertia expressed in the parent frame of `t`: h' = R h + m p and
@@ -187,12 +224,17 @@ impl RigidInertia {
         for i in 0..3 {
             for j in i..3 {
                 let rotated = rj.row(i).dot(&r.row(j));
-                let value = rotated - p[i] * h1[j] - h1[i] * p[j] - m * p[i] * p[j] + if i == j { diagonal } else { 0.0 };
+                let value = rotated - p[i] * h1[j] - h1[i] * p[j] - m * p[i] * p[j]
+                    + if i == j { diagonal } else { 0.0 };
                 rotational[(i, j)] = value;
                 rotational[(j, i)] = value;
             }
         }
-        RigidInertia { mass: m, first: h1 + m * p, rotational }
+        RigidInertia {
+            mass: m,
+            first: h1 + m * p,
+            rotational,
+        }
     }
 
     /// The 6 × 6 matrix [J ĥ; ĥᵀ m·1].
@@ -202,7 +244,8 @@ impl RigidInertia {
         i.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.rotational);
         i.fixed_view_mut::<3, 3>(0, 3).copy_from(&h);
         i.fixed_view_mut::<3, 3>(3, 0).copy_from(&h.transpose());
-        i.fixed_view_mut::<3, 3>(3, 3).copy_from(&(Matrix3::identity() * self.mass));
+        i.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&(Matrix3::identity() * self.mass));
         i
     }
 
@@ -210,7 +253,10 @@ impl RigidInertia {
     #[inline]
     pub fn times(&self, m: &Motion) -> Force {
         let (w, v) = (top(m), bottom(m));
-        join(self.rotational * w + self.first.cross(&v), self.mass * v - self.first.cross(&w))
+        join(
+            self.rotational * w + self.first.cross(&v),
+            self.mass * v - self.first.cross(&w),
+        )
     }
 }
 
@@ -227,10 +273,12 @@ impl std::ops::AddAssign for RigidInertia {
 pub fn inertia(mass: f64, com: &Vector3<f64>, central: &Matrix3<f64>) -> Inertia {
     let c = skew(com);
     let mut i = Matrix6::zeros();
-    i.fixed_view_mut::<3, 3>(0, 0).copy_from(&(central - mass * c * c));
+    i.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(central - mass * c * c));
     i.fixed_view_mut::<3, 3>(0, 3).copy_from(&(mass * c));
     i.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-mass * c));
-    i.fixed_view_mut::<3, 3>(3, 3).copy_from(&(Matrix3::identity() * mass));
+    i.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(Matrix3::identity() * mass));
     i
 }
 
@@ -246,7 +294,10 @@ mod tests {
     use nalgebra::{Translation3, UnitQuaternion};
 
     fn pose() -> Pose {
-        Isometry3::from_parts(Translation3::new(0.3, -1.2, 0.7), UnitQuaternion::from_euler_angles(0.4, -0.9, 2.1))
+        Isometry3::from_parts(
+            Translation3::new(0.3, -1.2, 0.7),
+            UnitQuaternion::from_euler_angles(0.4, -0.9, 2.1),
+        )
     }
 
     #[test]

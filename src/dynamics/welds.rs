@@ -27,7 +27,13 @@ pub struct Merged {
 }
 
 /// Whether the weld of `joint` can be merged (see the module's comment).
-fn mergeable(k: usize, joints: &[Joint], applied: &[AppliedEffort], link_efforts: &[LinkEffort], has_loops: bool) -> bool {
+fn mergeable(
+    k: usize,
+    joints: &[Joint],
+    applied: &[AppliedEffort],
+    link_efforts: &[LinkEffort],
+    has_loops: bool,
+) -> bool {
     let joint = &joints[k];
     let child = joint.child;
     !has_loops
@@ -35,11 +41,20 @@ fn mergeable(k: usize, joints: &[Joint], applied: &[AppliedEffort], link_efforts
         && matches!(joint.kernel, Kernel::Weld { .. })
         && !applied.iter().any(|e| e.body == child)
         && !link_efforts.iter().any(|e| e.joint == k)
-        && joints.iter().filter(|j| j.parent == child).all(|j| !matches!(j.kernel, Kernel::General))
+        && joints
+            .iter()
+            .filter(|j| j.parent == child)
+            .all(|j| !matches!(j.kernel, Kernel::General))
 }
 
 /// Merges the welds that can be, rewriting the joints' kernels and dynamic parents.
-pub fn merge(joints: &mut [Joint], bodies: &[BodyInertia], applied: &[AppliedEffort], link_efforts: &[LinkEffort], has_loops: bool) -> Merged {
+pub fn merge(
+    joints: &mut [Joint],
+    bodies: &[BodyInertia],
+    applied: &[AppliedEffort],
+    link_efforts: &[LinkEffort],
+    has_loops: bool,
+) -> Merged {
     let n = joints.len();
     let mut offsets = vec![Transform::identity(); n + 1];
     let mut anchor: Vec<usize> = (0..=n).collect();
@@ -48,11 +63,15 @@ pub fn merge(joints: &mut [Joint], bodies: &[BodyInertia], applied: &[AppliedEff
         let (parent, child) = (joints[k].parent, joints[k].child);
         let parent_offset = offsets[parent];
         if mergeable(k, joints, applied, link_efforts, has_loops) {
-            let Kernel::Weld { transform } = joints[k].kernel else { unreachable!("mergeable welds only") };
+            let Kernel::Weld { transform } = joints[k].kernel else {
+                unreachable!("mergeable welds only")
+            };
             offsets[child] = parent_offset * transform;
             anchor[child] = anchor[parent];
             merged[k] = true;
-            joints[k].kernel = Kernel::Weld { transform: offsets[child] };
+            joints[k].kernel = Kernel::Weld {
+                transform: offsets[child],
+            };
         } else if anchor[parent] != parent {
             joints[k].kernel = fold(&joints[k].kernel, &parent_offset);
         }
@@ -66,17 +85,35 @@ pub fn merge(joints: &mut [Joint], bodies: &[BodyInertia], applied: &[AppliedEff
         if !bodies[child - 1].massless {
             add_inertia(target, moved);
         }
-        dynamic_bodies[child - 1] = BodyInertia { mass: 0.0, com: Default::default(), inertia: Inertia::zeros(), rigid: RigidInertia::zeros(), massless: true };
+        dynamic_bodies[child - 1] = BodyInertia {
+            mass: 0.0,
+            com: Default::default(),
+            inertia: Inertia::zeros(),
+            rigid: RigidInertia::zeros(),
+            massless: true,
+        };
     }
-    Merged { dynamic_joints: (0..n).filter(|&k| !merged[k]).collect(), dynamic_bodies, anchor_offsets: offsets }
+    Merged {
+        dynamic_joints: (0..n).filter(|&k| !merged[k]).collect(),
+        dynamic_bodies,
+        anchor_offsets: offsets,
+    }
 }
 
 /// Adds a rigid inertia (about the same origin) to a body's.
 fn add_inertia(body: &mut BodyInertia, other: RigidInertia) {
-    let mut rigid = if body.massless { RigidInertia::zeros() } else { body.rigid };
+    let mut rigid = if body.massless {
+        RigidInertia::zeros()
+    } else {
+        body.rigid
+    };
     rigid += other;
     body.mass = rigid.mass;
-    body.com = if rigid.mass > 0.0 { rigid.first / rigid.mass } else { body.com };
+    body.com = if rigid.mass > 0.0 {
+        rigid.first / rigid.mass
+    } else {
+        body.com
+    };
     body.rigid = rigid;
     body.inertia = rigid.matrix();
     body.massless = rigid == RigidInertia::zeros();
@@ -87,8 +124,17 @@ fn add_inertia(body: &mut BodyInertia, other: RigidInertia) {
 fn fold(kernel: &Kernel, offset: &Transform) -> Kernel {
     let (r, t) = (offset.rotation, offset.translation);
     match kernel {
-        Kernel::Weld { transform } => Kernel::Weld { transform: *offset * *transform },
-        Kernel::Rotation { terms, aligned, origin, scale, after, column } => Kernel::Rotation {
+        Kernel::Weld { transform } => Kernel::Weld {
+            transform: *offset * *transform,
+        },
+        Kernel::Rotation {
+            terms,
+            aligned,
+            origin,
+            scale,
+            after,
+            column,
+        } => Kernel::Rotation {
             terms: terms.map(|m| r * m),
             aligned: *aligned,
             origin: r * origin + t,
@@ -96,7 +142,13 @@ fn fold(kernel: &Kernel, offset: &Transform) -> Kernel {
             after: *after,
             column: *column,
         },
-        Kernel::Translation { rotation, origin, direction, after, column } => Kernel::Translation {
+        Kernel::Translation {
+            rotation,
+            origin,
+            direction,
+            after,
+            column,
+        } => Kernel::Translation {
             rotation: r * rotation,
             origin: r * origin + t,
             direction: r * direction,

@@ -3,14 +3,18 @@
 use std::rc::Rc;
 
 use super::mechanism::*;
+use super::operations::{
+    as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix,
+};
 use super::value::*;
-use super::operations::{as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix};
 use super::{internal, Elaborator, Global};
 use crate::check::scope::{ScopeId, Target};
 use crate::check::types::Ty;
 use crate::diag::Diagnostic;
 use crate::load::ModuleId;
-use crate::syntax::ast::{Arg, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, Name};
+use crate::syntax::ast::{
+    Arg, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, Name,
+};
 use crate::syntax::span::Span;
 
 type Result<T> = std::result::Result<T, Diagnostic>;
@@ -26,7 +30,11 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             return Ok(());
         }
         self.elaborated_modules.push(id);
-        let scope = *self.checked.module_scopes.get(&id).ok_or_else(|| internal("module was not checked"))?;
+        let scope = *self
+            .checked
+            .module_scopes
+            .get(&id)
+            .ok_or_else(|| internal("module was not checked"))?;
         let decls = &self.workspace.module(id).program.decls;
         self.decls(decls, scope)
     }
@@ -40,15 +48,33 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         match &decl.kind {
             // Definitions are evaluated when first used (see `global`).
             DeclKind::Let(_) | DeclKind::Define { .. } => Ok(()),
-            DeclKind::Join { first, second, link, name } => {
-                let first = self.expr(first, &mut locals).and_then(|v| as_frame(v, first.span))?;
-                let second = self.expr(second, &mut locals).and_then(|v| as_frame(v, second.span))?;
-                let Value::Link(link) = self.expr(link, &mut locals)? else { return Err(internal("join without a link")) };
+            DeclKind::Join {
+                first,
+                second,
+                link,
+                name,
+            } => {
+                let first = self
+                    .expr(first, &mut locals)
+                    .and_then(|v| as_frame(v, first.span))?;
+                let second = self
+                    .expr(second, &mut locals)
+                    .and_then(|v| as_frame(v, second.span))?;
+                let Value::Link(link) = self.expr(link, &mut locals)? else {
+                    return Err(internal("join without a link"));
+                };
                 let id = JoinId(self.mechanism.joins.len() as u32);
                 let join_name = name.as_ref().map(|n| n.name.clone());
-                self.mechanism.joins.push(Join { name: join_name, first, second, link, span: decl.span });
+                self.mechanism.joins.push(Join {
+                    name: join_name,
+                    first,
+                    second,
+                    link,
+                    span: decl.span,
+                });
                 if let Some(name) = name {
-                    self.globals.insert((scope, name.name.clone()), Global::Ready(Value::Join(id)));
+                    self.globals
+                        .insert((scope, name.name.clone()), Global::Ready(Value::Join(id)));
                 }
                 Ok(())
             }
@@ -57,14 +83,22 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     let target = self.expr(&given.target, &mut locals)?;
                     let value = self.expr(&given.value, &mut locals)?;
                     let pairs: Vec<(Scalar, Scalar)> = match (target, value) {
-                        (Value::Vector(t), v) => t.into_iter().zip(as_vector(v, given.value.span)?).collect(),
-                        (t, v) => vec![(as_scalar(t, given.target.span)?, as_scalar(v, given.value.span)?)],
+                        (Value::Vector(t), v) => {
+                            t.into_iter().zip(as_vector(v, given.value.span)?).collect()
+                        }
+                        (t, v) => vec![(
+                            as_scalar(t, given.target.span)?,
+                            as_scalar(v, given.value.span)?,
+                        )],
                     };
                     for (target, value) in pairs {
                         let SExpr::Unknown(id) = *target else {
-                            return Err(Diagnostic::error("E0604", "`given` gives values to unknowns and generic quantities only")
-                                .primary(given.target.span, "this already has a value")
-                                .help("values written in the program need no `given`"));
+                            return Err(Diagnostic::error(
+                                "E0604",
+                                "`given` gives values to unknowns and generic quantities only",
+                            )
+                            .primary(given.target.span, "this already has a value")
+                            .help("values written in the program need no `given`"));
                         };
                         self.mechanism.given.push((id, value, given.target.span));
                     }
@@ -72,7 +106,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 Ok(())
             }
             DeclKind::Simulate(fields) => {
-                let mut scenario = crate::elab::mechanism::Scenario { span: Some(decl.span), ..Default::default() };
+                let mut scenario = crate::elab::mechanism::Scenario {
+                    span: Some(decl.span),
+                    ..Default::default()
+                };
                 for field in fields {
                     if &*field.name.name == "integrator" {
                         if let ExprKind::Name(ident) = &field.value.kind {
@@ -80,8 +117,12 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                         }
                         continue;
                     }
-                    let value = self.expr(&field.value, &mut locals).and_then(|v| as_scalar(v, field.value.span))?;
-                    scenario.settings.push((field.name.name.to_string(), value, field.value.span));
+                    let value = self
+                        .expr(&field.value, &mut locals)
+                        .and_then(|v| as_scalar(v, field.value.span))?;
+                    scenario
+                        .settings
+                        .push((field.name.name.to_string(), value, field.value.span));
                 }
                 self.mechanism.scenario = Some(scenario);
                 Ok(())
@@ -94,7 +135,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     let SExpr::JoinCoordinate { join, index, order } = *target else {
                         return Err(internal("initial value of a non-coordinate"));
                     };
-                    let value = self.expr(&initial.value, &mut locals).and_then(|v| as_scalar(v, initial.value.span))?;
+                    let value = self
+                        .expr(&initial.value, &mut locals)
+                        .and_then(|v| as_scalar(v, initial.value.span))?;
                     self.mechanism.initial.push(InitialValue {
                         join,
                         coordinate: index as usize,
@@ -106,7 +149,11 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
-            DeclKind::Apply { effort, target, reaction } => {
+            DeclKind::Apply {
+                effort,
+                target,
+                reaction,
+            } => {
                 let effort = match self.expr(effort, &mut locals)? {
                     Value::Force(id) | Value::Torque(id) => id,
                     _ => return Err(internal("apply without an effort")),
@@ -115,17 +162,33 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     self.fields.push((effort, decl.span));
                     return Ok(());
                 };
-                let target = self.expr(target, &mut locals).and_then(|v| as_frame(v, target.span))?;
-                self.mechanism.applications.push(Application { effort, target, span: decl.span });
+                let target = self
+                    .expr(target, &mut locals)
+                    .and_then(|v| as_frame(v, target.span))?;
+                self.mechanism.applications.push(Application {
+                    effort,
+                    target,
+                    span: decl.span,
+                });
                 if let Some(reaction) = reaction {
-                    let on = self.expr(reaction, &mut locals).and_then(|v| as_frame(v, reaction.span))?;
+                    let on = self
+                        .expr(reaction, &mut locals)
+                        .and_then(|v| as_frame(v, reaction.span))?;
                     let opposite = self.opposite(effort);
-                    self.mechanism.applications.push(Application { effort: opposite, target: on, span: decl.span });
+                    self.mechanism.applications.push(Application {
+                        effort: opposite,
+                        target: on,
+                        span: decl.span,
+                    });
                 }
                 Ok(())
             }
             DeclKind::Package { decls, .. } => {
-                let package = *self.checked.package_scopes.get(&decl.span).ok_or_else(|| internal("package not checked"))?;
+                let package = *self
+                    .checked
+                    .package_scopes
+                    .get(&decl.span)
+                    .ok_or_else(|| internal("package not checked"))?;
                 self.decls(decls, package)
             }
             DeclKind::Import { .. } => match self.workspace.imports.get(&decl.span) {
@@ -142,16 +205,27 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let key = (scope, name.clone());
         match self.globals.get(&key) {
             Some(Global::Ready(value)) => return Ok(value.clone()),
-            Some(Global::InProgress) => return Err(internal(format!("`{name}` depends on itself"))),
+            Some(Global::InProgress) => {
+                return Err(internal(format!("`{name}` depends on itself")))
+            }
             None => {}
         }
-        let entry = self.checked.scope(scope).names.get(name).ok_or_else(|| internal(format!("`{name}` not declared")))?;
+        let entry = self
+            .checked
+            .scope(scope)
+            .names
+            .get(name)
+            .ok_or_else(|| internal(format!("`{name}` not declared")))?;
         let value = match entry.ty {
             Ty::Definition(def) => Value::Definition(def),
             Ty::Package(package) => Value::Package(package),
             _ => {
-                let binding: &'w Binding =
-                    self.checked.bindings.get(&entry.span).copied().ok_or_else(|| internal(format!("`{name}` has no value")))?;
+                let binding: &'w Binding = self
+                    .checked
+                    .bindings
+                    .get(&entry.span)
+                    .copied()
+                    .ok_or_else(|| internal(format!("`{name}` has no value")))?;
                 self.globals.insert(key.clone(), Global::InProgress);
                 let value = self.expr(&binding.value, &mut Locals::new())?;
                 self.name_object(&value, &binding.name.name);
@@ -180,7 +254,11 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     }
 
     fn resolution(&self, span: Span) -> Result<Target> {
-        self.checked.resolutions.get(&span).copied().ok_or_else(|| internal("unresolved name"))
+        self.checked
+            .resolutions
+            .get(&span)
+            .copied()
+            .ok_or_else(|| internal("unresolved name"))
     }
 
     fn lookup(&mut self, ident: &Ident, target: Target, locals: &Locals) -> Result<Value> {
@@ -217,7 +295,11 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             ExprKind::Unknown(ident) => {
                 if matches!(&*ident.name, "v" | "vector") {
-                    Value::Vector([0, 1, 2].map(|c| self.unknown(UnknownKind::Vector, Origin::Written, c, ident.span)))
+                    Value::Vector(
+                        [0, 1, 2].map(|c| {
+                            self.unknown(UnknownKind::Vector, Origin::Written, c, ident.span)
+                        }),
+                    )
                 } else {
                     Value::Scalar(self.unknown(UnknownKind::Scalar, Origin::Written, 0, ident.span))
                 }
@@ -227,7 +309,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Int(n) => Value::Scalar(num(*n as f64)),
             ExprKind::Float(x) => Value::Scalar(num(*x)),
             ExprKind::Vector(items) => {
-                let values = items.iter().map(|e| self.expr(e, locals)).collect::<Result<Vec<_>>>()?;
+                let values = items
+                    .iter()
+                    .map(|e| self.expr(e, locals))
+                    .collect::<Result<Vec<_>>>()?;
                 vector_or_matrix(values, expr.span)?
             }
             ExprKind::Call { callee, args } => self.call(callee, args, locals, expr.span)?,
@@ -246,20 +331,36 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             },
             ExprKind::Prime(inner) => match self.expr(inner, locals)? {
                 Value::Scalar(s) => match *s {
-                    SExpr::Coordinate { index, order } => Value::Scalar(Rc::new(SExpr::Coordinate { index, order: order + 1 })),
+                    SExpr::Coordinate { index, order } => {
+                        Value::Scalar(Rc::new(SExpr::Coordinate {
+                            index,
+                            order: order + 1,
+                        }))
+                    }
                     SExpr::JoinCoordinate { join, index, order } => {
-                        Value::Scalar(Rc::new(SExpr::JoinCoordinate { join, index, order: order + 1 }))
+                        Value::Scalar(Rc::new(SExpr::JoinCoordinate {
+                            join,
+                            index,
+                            order: order + 1,
+                        }))
                     }
                     _ => return Err(internal("prime of a non-coordinate")),
                 },
                 _ => return Err(internal("prime of a non-scalar")),
             },
-            ExprKind::Construct { kind, params, fields } => self.construct(*kind, params, fields, locals, expr.span)?,
+            ExprKind::Construct {
+                kind,
+                params,
+                fields,
+            } => self.construct(*kind, params, fields, locals, expr.span)?,
             ExprKind::Local { bindings, body } => {
                 let depth = locals.len();
                 let mut values = Vec::with_capacity(bindings.len());
                 for binding in bindings {
-                    values.push((binding.name.name.clone(), self.expr(&binding.value, locals)?));
+                    values.push((
+                        binding.name.name.clone(),
+                        self.expr(&binding.value, locals)?,
+                    ));
                 }
                 locals.extend(values);
                 let value = self.expr(body, locals);
@@ -270,13 +371,27 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         })
     }
 
-    fn new_unknown(&mut self, kind: UnknownKind, origin: Origin, component: u8, span: Span) -> UnknownId {
-        self.mechanism.unknowns.push(Unknown { kind, origin, component, span, name: None });
+    fn new_unknown(
+        &mut self,
+        kind: UnknownKind,
+        origin: Origin,
+        component: u8,
+        span: Span,
+    ) -> UnknownId {
+        self.mechanism.unknowns.push(Unknown {
+            kind,
+            origin,
+            component,
+            span,
+            name: None,
+        });
         UnknownId(self.mechanism.unknowns.len() as u32 - 1)
     }
 
     fn unknown(&mut self, kind: UnknownKind, origin: Origin, component: u8, span: Span) -> Scalar {
-        Rc::new(SExpr::Unknown(self.new_unknown(kind, origin, component, span)))
+        Rc::new(SExpr::Unknown(
+            self.new_unknown(kind, origin, component, span),
+        ))
     }
 
     fn generic(&mut self, origin: impl Fn(u8) -> Origin, i: u8, span: Span) -> Scalar {
@@ -290,8 +405,14 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     fn field(&self, value: Value, field: &Ident) -> Result<Value> {
         let name = &*field.name;
         Ok(match (value, name) {
-            (Value::Body(body), "frame") => Value::Frame(Frame { body, displacement: Displacement::default() }),
-            (Value::Body(BodyRef::Earth), "iframe") => Value::Frame(Frame { body: BodyRef::Earth, displacement: Displacement::default() }),
+            (Value::Body(body), "frame") => Value::Frame(Frame {
+                body,
+                displacement: Displacement::default(),
+            }),
+            (Value::Body(BodyRef::Earth), "iframe") => Value::Frame(Frame {
+                body: BodyRef::Earth,
+                displacement: Displacement::default(),
+            }),
             (Value::Body(BodyRef::Earth), _) => {
                 return Err(Diagnostic::error("E0601", format!("`earth` has no {name}"))
                     .primary(field.span, "earth is the fixed frame, not a body with mass")
@@ -300,18 +421,29 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             (Value::Body(BodyRef::Body(id)), f) => {
                 let body = self.mechanism.body(id);
                 match f {
-                    "iframe" => Value::Frame(Frame { body: BodyRef::Body(id), displacement: body.iframe.value().clone() }),
+                    "iframe" => Value::Frame(Frame {
+                        body: BodyRef::Body(id),
+                        displacement: body.iframe.value().clone(),
+                    }),
                     "mass" => Value::Scalar(body.mass.value().clone()),
                     _ => Value::Vector(body.inertia.value().clone()),
                 }
             }
             (Value::Frame(frame), "body") => Value::Body(frame.body),
             (Value::Frame(frame), _) => Value::Displacement(frame.displacement),
-            (Value::Force(id) | Value::Torque(id), "value") => Value::Vector(self.mechanism.effort(id).value.value().clone()),
-            (Value::Force(id) | Value::Torque(id), _) => Value::Body(self.mechanism.effort(id).basis),
+            (Value::Force(id) | Value::Torque(id), "value") => {
+                Value::Vector(self.mechanism.effort(id).value.value().clone())
+            }
+            (Value::Force(id) | Value::Torque(id), _) => {
+                Value::Body(self.mechanism.effort(id).basis)
+            }
             (Value::Link(id), f) => self.link_field(id, f, field.span)?,
             (Value::Join(id), f) => self.join_coordinate(id, f, field.span)?,
-            _ => return Err(internal(format!("field `{name}` of a value without fields"))),
+            _ => {
+                return Err(internal(format!(
+                    "field `{name}` of a value without fields"
+                )))
+            }
         })
     }
 
@@ -319,19 +451,31 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let join = self.mechanism.join(id);
         let coordinates = &self.mechanism.link(join.link).coordinates;
         match coordinates.iter().position(|c| &**c == coordinate) {
-            Some(index) => Ok(Value::Scalar(Rc::new(SExpr::JoinCoordinate { join: id, index: index as u32, order: 0 }))),
+            Some(index) => Ok(Value::Scalar(Rc::new(SExpr::JoinCoordinate {
+                join: id,
+                index: index as u32,
+                order: 0,
+            }))),
             None => {
                 let name = self.mechanism.join_name(id);
                 let listed: Vec<String> = coordinates.iter().map(|c| format!("`{c}`")).collect();
-                let help = match crate::diag::suggest::did_you_mean(coordinate, coordinates.iter().map(|c| &**c)) {
+                let help = match crate::diag::suggest::did_you_mean(
+                    coordinate,
+                    coordinates.iter().map(|c| &**c),
+                ) {
                     Some(s) => format!("did you mean `{name}.{s}`?"),
-                    None if listed.is_empty() => format!("`{name}` is a weld: it has no coordinates"),
+                    None if listed.is_empty() => {
+                        format!("`{name}` is a weld: it has no coordinates")
+                    }
                     None => format!("the coordinates of `{name}` are {}", listed.join(", ")),
                 };
-                Err(Diagnostic::error("E0603", format!("join `{name}` has no coordinate `{coordinate}`"))
-                    .primary(span, "not a coordinate of this join's link")
-                    .secondary(join.span, "the join")
-                    .help(help))
+                Err(Diagnostic::error(
+                    "E0603",
+                    format!("join `{name}` has no coordinate `{coordinate}`"),
+                )
+                .primary(span, "not a coordinate of this join's link")
+                .secondary(join.span, "the join")
+                .help(help))
             }
         }
     }
@@ -347,28 +491,57 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         };
         if base == "dof" {
             if index == 0 {
-                return Ok(Value::Displacement(link.dofs.iter().fold(Displacement::default(), |a, d| a.then(d))));
+                return Ok(Value::Displacement(
+                    link.dofs
+                        .iter()
+                        .fold(Displacement::default(), |a, d| a.then(d)),
+                ));
             }
             let count = link.dofs.len();
             return link
                 .dofs
                 .get(index - 1)
                 .map(|d| Value::Displacement(d.clone()))
-                .ok_or_else(|| missing(format!("its dof chain has {count} step{}", if count == 1 { "" } else { "s" })));
+                .ok_or_else(|| {
+                    missing(format!(
+                        "its dof chain has {count} step{}",
+                        if count == 1 { "" } else { "s" }
+                    ))
+                });
         }
-        let list = if base == "force" { &link.forces } else { &link.torques };
+        let list = if base == "force" {
+            &link.forces
+        } else {
+            &link.torques
+        };
         list.iter()
             .find(|(i, _)| *i as usize == index)
             .map(|(_, v)| Value::Vector(v.clone()))
-            .ok_or_else(|| missing(format!("the link declares no `{field}`; unknown link efforts are not values")))
+            .ok_or_else(|| {
+                missing(format!(
+                    "the link declares no `{field}`; unknown link efforts are not values"
+                ))
+            })
     }
 
-    fn call(&mut self, callee: &'w Callee, args: &'w [Arg], locals: &mut Locals, span: Span) -> Result<Value> {
-        let values = args.iter().map(|a| self.expr(&a.value, locals)).collect::<Result<Vec<_>>>()?;
+    fn call(
+        &mut self,
+        callee: &'w Callee,
+        args: &'w [Arg],
+        locals: &mut Locals,
+        span: Span,
+    ) -> Result<Value> {
+        let values = args
+            .iter()
+            .map(|a| self.expr(&a.value, locals))
+            .collect::<Result<Vec<_>>>()?;
         let (ident, target) = match callee {
             Callee::Unknown(ident) => {
                 let id = self.new_unknown(UnknownKind::Function, Origin::Written, 0, ident.span);
-                let scalars = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
+                let scalars = values
+                    .into_iter()
+                    .map(|v| as_scalar(v, span))
+                    .collect::<Result<Vec<_>>>()?;
                 return Ok(Value::Scalar(Rc::new(SExpr::UnknownFunction(id, scalars))));
             }
             Callee::Name(ident) => (ident, self.resolution(ident.span)?),
@@ -377,24 +550,37 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         if target == Target::Builtin {
             return builtin_call(&ident.name, values, span);
         }
-        let Value::Definition(def) = self.lookup(ident, target, locals)? else { return Err(internal("call of a non-definition")) };
+        let Value::Definition(def) = self.lookup(ident, target, locals)? else {
+            return Err(internal("call of a non-definition"));
+        };
         let definition = &self.checked.definitions[def.0 as usize];
         let (params, body, name) = (definition.params, definition.body, definition.name.clone());
         let mut bound: Vec<Option<Value>> = vec![None; params.len()];
         for (position, (arg, value)) in args.iter().zip(values).enumerate() {
             let index = match &arg.name {
                 None => position,
-                Some(n) => params.iter().position(|p| p.name.name == n.name).ok_or_else(|| internal("unknown parameter"))?,
+                Some(n) => params
+                    .iter()
+                    .position(|p| p.name.name == n.name)
+                    .ok_or_else(|| internal("unknown parameter"))?,
             };
-            *bound.get_mut(index).ok_or_else(|| internal("too many arguments"))? = Some(value);
+            *bound
+                .get_mut(index)
+                .ok_or_else(|| internal("too many arguments"))? = Some(value);
         }
         let mut frame: Locals = Vec::with_capacity(params.len());
         for (param, value) in params.iter().zip(bound) {
-            frame.push((param.name.name.clone(), value.ok_or_else(|| internal(format!("missing argument for `{name}`")))?));
+            frame.push((
+                param.name.name.clone(),
+                value.ok_or_else(|| internal(format!("missing argument for `{name}`")))?,
+            ));
         }
         if self.depth >= MAX_DEPTH {
-            return Err(Diagnostic::error("E0414", format!("definitions nest more than {MAX_DEPTH} deep"))
-                .primary(span, format!("instantiating `{name}` here")));
+            return Err(Diagnostic::error(
+                "E0414",
+                format!("definitions nest more than {MAX_DEPTH} deep"),
+            )
+            .primary(span, format!("instantiating `{name}` here")));
         }
         self.depth += 1;
         let result = self.expr(body, &mut frame);
@@ -402,10 +588,23 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         result
     }
 
-    fn construct(&mut self, kind: ConstructKind, params: &'w [Ident], fields: &'w [FieldInit], locals: &mut Locals, span: Span) -> Result<Value> {
+    fn construct(
+        &mut self,
+        kind: ConstructKind,
+        params: &'w [Ident],
+        fields: &'w [FieldInit],
+        locals: &mut Locals,
+        span: Span,
+    ) -> Result<Value> {
         let depth = locals.len();
         for (index, param) in params.iter().enumerate() {
-            locals.push((param.name.clone(), Value::Scalar(Rc::new(SExpr::Coordinate { index: index as u32, order: 0 }))));
+            locals.push((
+                param.name.clone(),
+                Value::Scalar(Rc::new(SExpr::Coordinate {
+                    index: index as u32,
+                    order: 0,
+                })),
+            ));
         }
         let mut values = Vec::with_capacity(fields.len());
         for field in fields {
@@ -448,7 +647,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Some(d) => Quantity::Declared(d),
             None => Quantity::Generic(self.generic_displacement(id, span)),
         };
-        self.mechanism.bodies.push(Body { name: None, span, mass, iframe, inertia });
+        self.mechanism.bodies.push(Body {
+            name: None,
+            span,
+            mass,
+            iframe,
+            inertia,
+        });
         Ok(Value::Body(BodyRef::Body(id)))
     }
 
@@ -457,14 +662,25 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let origin = move |i| Origin::InertiaFrame(body, i);
         let translation = self.generic_vector(origin, span);
         let mut steps = vec![Elementary::Translation(translation)];
-        for (i, axis) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].into_iter().enumerate() {
+        for (i, axis) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+            .into_iter()
+            .enumerate()
+        {
             let angle = self.generic(origin, 3 + i as u8, span);
-            steps.push(Elementary::Rotation { angle, axis: axis.map(num) });
+            steps.push(Elementary::Rotation {
+                angle,
+                axis: axis.map(num),
+            });
         }
         Displacement(steps)
     }
 
-    fn link(&mut self, params: &[Ident], fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
+    fn link(
+        &mut self,
+        params: &[Ident],
+        fields: Vec<(&str, Value, Span)>,
+        span: Span,
+    ) -> Result<Value> {
         let mut link = Link {
             name: None,
             span,
@@ -498,14 +714,27 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let effort = self.mechanism.effort(id).clone();
         let value = effort.value.value().clone().map(|s| negate(&s));
         let potential = effort.potential.as_ref().map(|_| num(0.0));
-        let opposite = Effort { value: Quantity::Declared(value), potential, ..effort };
+        let opposite = Effort {
+            value: Quantity::Declared(value),
+            potential,
+            ..effort
+        };
         self.mechanism.efforts.push(opposite);
         EffortId(self.mechanism.efforts.len() as u32 - 1)
     }
 
-    fn effort(&mut self, kind: ConstructKind, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
+    fn effort(
+        &mut self,
+        kind: ConstructKind,
+        fields: Vec<(&str, Value, Span)>,
+        span: Span,
+    ) -> Result<Value> {
         let id = EffortId(self.mechanism.efforts.len() as u32);
-        let effort_kind = if kind == ConstructKind::Force { EffortKind::Force } else { EffortKind::Torque };
+        let effort_kind = if kind == ConstructKind::Force {
+            EffortKind::Force
+        } else {
+            EffortKind::Torque
+        };
         let (mut value, mut basis, mut potential, mut field) = (None, BodyRef::Earth, None, None);
         for (name, field_value, at) in fields {
             match (name, field_value) {
@@ -521,8 +750,24 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             None => Quantity::Generic(self.generic_vector(|i| Origin::EffortValue(id, i), span)),
         };
         // A field's own value is zero: `apply F` gives each body its weight instead.
-        let value = if field.is_some() { Quantity::Declared(zero_vector()) } else { value };
-        self.mechanism.efforts.push(Effort { kind: effort_kind, name: None, span, value, basis, potential, field });
-        Ok(if effort_kind == EffortKind::Force { Value::Force(id) } else { Value::Torque(id) })
+        let value = if field.is_some() {
+            Quantity::Declared(zero_vector())
+        } else {
+            value
+        };
+        self.mechanism.efforts.push(Effort {
+            kind: effort_kind,
+            name: None,
+            span,
+            value,
+            basis,
+            potential,
+            field,
+        });
+        Ok(if effort_kind == EffortKind::Force {
+            Value::Force(id)
+        } else {
+            Value::Torque(id)
+        })
     }
 }

@@ -37,12 +37,30 @@ impl Elaborator<'_, '_> {
                     continue;
                 }
                 // The same operation as `b.mass * field` in a program.
-                let weight = binary(BinaryOp::Mul, Value::Scalar(body.mass.value().clone()), Value::Vector(field.clone()), span)?;
+                let weight = binary(
+                    BinaryOp::Mul,
+                    Value::Scalar(body.mass.value().clone()),
+                    Value::Vector(field.clone()),
+                    span,
+                )?;
                 let value = Quantity::Declared(as_vector(weight, span)?);
-                self.mechanism.efforts.push(Effort { value, basis: BodyRef::Earth, potential: None, field: None, ..effort.clone() });
+                self.mechanism.efforts.push(Effort {
+                    value,
+                    basis: BodyRef::Earth,
+                    potential: None,
+                    field: None,
+                    ..effort.clone()
+                });
                 let weight_id = super::value::EffortId(self.mechanism.efforts.len() as u32 - 1);
-                let target = Frame { body: BodyRef::Body(body_id), displacement: body.iframe.value().clone() };
-                self.mechanism.applications.push(Application { effort: weight_id, target, span });
+                let target = Frame {
+                    body: BodyRef::Body(body_id),
+                    displacement: body.iframe.value().clone(),
+                };
+                self.mechanism.applications.push(Application {
+                    effort: weight_id,
+                    target,
+                    span,
+                });
             }
         }
         Ok(())

@@ -240,7 +240,10 @@ impl Mechanism {
 
     /// The join's name: `as crank`, or `join3` for the third join declared.
     pub fn join_name(&self, id: JoinId) -> String {
-        self.join(id).name.as_deref().map_or_else(|| format!("join{}", id.0 + 1), str::to_string)
+        self.join(id)
+            .name
+            .as_deref()
+            .map_or_else(|| format!("join{}", id.0 + 1), str::to_string)
     }
 
     pub fn body(&self, id: BodyId) -> &Body {
@@ -277,7 +280,10 @@ impl Mechanism {
         for &id in &reached.links.clone() {
             let link = self.link(id);
             link.dofs.iter().for_each(|d| reached.displacement(d));
-            link.forces.iter().chain(&link.torques).for_each(|(_, v)| reached.vector(v));
+            link.forces
+                .iter()
+                .chain(&link.torques)
+                .for_each(|(_, v)| reached.vector(v));
         }
         reached
     }
@@ -285,10 +291,20 @@ impl Mechanism {
     pub fn summary(&self) -> Summary {
         let reached = self.reached();
         let count = |kind| {
-            let unknowns = reached.unknowns.iter().map(|id| &self.unknowns[id.0 as usize]);
-            unknowns.filter(|u| u.kind == kind && u.component == 0).count()
+            let unknowns = reached
+                .unknowns
+                .iter()
+                .map(|id| &self.unknowns[id.0 as usize]);
+            unknowns
+                .filter(|u| u.kind == kind && u.component == 0)
+                .count()
         };
-        let applied = |kind| self.applications.iter().filter(|a| self.effort(a.effort).kind == kind).count();
+        let applied = |kind| {
+            self.applications
+                .iter()
+                .filter(|a| self.effort(a.effort).kind == kind)
+                .count()
+        };
         Summary {
             bodies: reached.bodies.len(),
             links: reached.links.len(),
@@ -298,7 +314,11 @@ impl Mechanism {
             unknown_scalars: count(UnknownKind::Scalar),
             unknown_vectors: count(UnknownKind::Vector),
             unknown_functions: count(UnknownKind::Function),
-            body_names: reached.bodies.iter().map(|&id| self.body_name(BodyRef::Body(id))).collect(),
+            body_names: reached
+                .bodies
+                .iter()
+                .map(|&id| self.body_name(BodyRef::Body(id)))
+                .collect(),
         }
     }
 
@@ -311,11 +331,24 @@ impl Mechanism {
             Origin::Written => "unknown".to_string(),
             Origin::Mass(id) => format!("mass({})", body(id)),
             Origin::Inertia(id, i) => format!("inertia_{}({})", AXES[i as usize % 3], body(id)),
-            Origin::InertiaFrame(id, i) => format!("iframe_{}({})", FRAME[i as usize % 6], body(id)),
+            Origin::InertiaFrame(id, i) => {
+                format!("iframe_{}({})", FRAME[i as usize % 6], body(id))
+            }
             Origin::EffortValue(id, i) => {
                 let effort = self.effort(id);
-                let name = effort.name.as_deref().map_or_else(|| format!("effort#{}", id.0 + 1), str::to_string);
-                format!("{}_{}({name})", if effort.kind == EffortKind::Force { "force" } else { "torque" }, AXES[i as usize % 3])
+                let name = effort
+                    .name
+                    .as_deref()
+                    .map_or_else(|| format!("effort#{}", id.0 + 1), str::to_string);
+                format!(
+                    "{}_{}({name})",
+                    if effort.kind == EffortKind::Force {
+                        "force"
+                    } else {
+                        "torque"
+                    },
+                    AXES[i as usize % 3]
+                )
             }
         }
     }
@@ -323,26 +356,41 @@ impl Mechanism {
     pub fn body_name(&self, body: BodyRef) -> String {
         match body {
             BodyRef::Earth => "earth".to_string(),
-            BodyRef::Body(id) => self.body(id).name.as_deref().map_or_else(|| format!("body#{}", id.0 + 1), str::to_string),
+            BodyRef::Body(id) => self
+                .body(id)
+                .name
+                .as_deref()
+                .map_or_else(|| format!("body#{}", id.0 + 1), str::to_string),
         }
     }
 
     /// A canonical text form of what the joins and applications reach, with unknowns numbered in
     /// order of appearance: two programs describing the same mechanism dump the same text.
     pub fn dump(&self) -> String {
-        let mut text = Dumper { mechanism: self, numbering: HashMap::new() };
+        let mut text = Dumper {
+            mechanism: self,
+            numbering: HashMap::new(),
+        };
         let mut out = String::new();
         for join in &self.joins {
             let link = self.link(join.link);
             let first = text.frame(&join.first);
             let second = text.frame(&join.second);
-            let _ = writeln!(out, "join {first} and {second} with link({})", link.coordinates.join(", "));
+            let _ = writeln!(
+                out,
+                "join {first} and {second} with link({})",
+                link.coordinates.join(", ")
+            );
             for (i, dof) in link.dofs.iter().enumerate() {
                 let _ = writeln!(out, "  dof{} = {}", i + 1, text.displacement(dof));
             }
             for (label, efforts) in [("force", &link.forces), ("torque", &link.torques)] {
                 for (index, v) in efforts.iter() {
-                    let number = if *index == 0 { String::new() } else { index.to_string() };
+                    let number = if *index == 0 {
+                        String::new()
+                    } else {
+                        index.to_string()
+                    };
                     let _ = writeln!(out, "  {label}{number} = {}", text.vector(v));
                 }
             }
@@ -352,14 +400,22 @@ impl Mechanism {
             let value = text.vector(effort.value.value());
             let basis = self.body_name(effort.basis);
             let target = text.frame(&application.target);
-            let _ = writeln!(out, "apply {:?} value {value} basis {basis} on {target}", effort.kind);
+            let _ = writeln!(
+                out,
+                "apply {:?} value {value} basis {basis} on {target}",
+                effort.kind
+            );
         }
         for &id in &self.reached().bodies {
             let body = self.body(id);
             let mass = text.scalar(body.mass.value());
             let iframe = text.displacement(body.iframe.value());
             let inertia = text.vector(body.inertia.value());
-            let _ = writeln!(out, "body {}: mass {mass}, iframe {iframe}, inertia {inertia}", self.body_name(BodyRef::Body(id)));
+            let _ = writeln!(
+                out,
+                "body {}: mass {mass}, iframe {iframe}, inertia {inertia}",
+                self.body_name(BodyRef::Body(id))
+            );
         }
         out
     }
@@ -382,31 +438,45 @@ impl Dumper<'_> {
             }
             let next = numbering.len() + 1;
             let n = *numbering.entry(id).or_insert(next);
-            let prefix = if unknown.kind == UnknownKind::Function { "f" } else { "s" };
+            let prefix = if unknown.kind == UnknownKind::Function {
+                "f"
+            } else {
+                "s"
+            };
             format!("?{prefix}{n}")
         })
     }
 
     fn vector(&mut self, v: &Vector) -> String {
-        format!("[{}, {}, {}]", self.scalar(&v[0]), self.scalar(&v[1]), self.scalar(&v[2]))
+        format!(
+            "[{}, {}, {}]",
+            self.scalar(&v[0]),
+            self.scalar(&v[1]),
+            self.scalar(&v[2])
+        )
     }
 
     fn displacement(&mut self, d: &Displacement) -> String {
         if d.is_identity() {
             return "1".to_string();
         }
-        let steps: Vec<String> = d
-            .0
-            .iter()
-            .map(|step| match step {
-                Elementary::Translation(t) => format!("T{}", self.vector(t)),
-                Elementary::Rotation { angle, axis } => format!("R({}, {})", self.scalar(angle), self.vector(axis)),
-            })
-            .collect();
+        let steps: Vec<String> =
+            d.0.iter()
+                .map(|step| match step {
+                    Elementary::Translation(t) => format!("T{}", self.vector(t)),
+                    Elementary::Rotation { angle, axis } => {
+                        format!("R({}, {})", self.scalar(angle), self.vector(axis))
+                    }
+                })
+                .collect();
         steps.join(" ")
     }
 
     fn frame(&mut self, frame: &Frame) -> String {
-        format!("{} @ {}", self.displacement(&frame.displacement), self.mechanism.body_name(frame.body))
+        format!(
+            "{} @ {}",
+            self.displacement(&frame.displacement),
+            self.mechanism.body_name(frame.body)
+        )
     }
 }

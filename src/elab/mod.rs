@@ -5,8 +5,8 @@
 
 mod eval;
 mod fields;
-mod operations;
 pub mod mechanism;
+mod operations;
 pub mod value;
 
 use std::collections::HashMap;
@@ -57,6 +57,9 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
 
 /// An inconsistency between checker and elaborator: reported, never a panic.
 fn internal(message: impl Into<String>) -> Diagnostic {
-    Diagnostic::error("E0900", format!("internal error during elaboration: {}", message.into()))
-        .note("this is a bug in lsdc; please report it with the program that triggers it")
+    Diagnostic::error(
+        "E0900",
+        format!("internal error during elaboration: {}", message.into()),
+    )
+    .note("this is a bug in lsdc; please report it with the program that triggers it")
 }

@@ -49,19 +49,35 @@ pub(super) fn as_rotation(value: Value, span: Span) -> Result<Displacement> {
 pub(super) fn as_frame(value: Value, span: Span) -> Result<Frame> {
     match value {
         Value::Frame(f) => Ok(f),
-        Value::Body(body) => Ok(Frame { body, displacement: Displacement::default() }),
+        Value::Body(body) => Ok(Frame {
+            body,
+            displacement: Displacement::default(),
+        }),
         _ => Err(internal(format!("expected a frame at {span:?}"))),
     }
 }
 
 pub(super) fn vector_or_matrix(values: Vec<Value>, span: Span) -> Result<Value> {
-    if values.iter().all(|v| matches!(v, Value::Scalar(_) | Value::Zero | Value::One)) {
-        let scalars = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
-        let vector: Vector = scalars.try_into().map_err(|_| internal("vector of the wrong size"))?;
+    if values
+        .iter()
+        .all(|v| matches!(v, Value::Scalar(_) | Value::Zero | Value::One))
+    {
+        let scalars = values
+            .into_iter()
+            .map(|v| as_scalar(v, span))
+            .collect::<Result<Vec<_>>>()?;
+        let vector: Vector = scalars
+            .try_into()
+            .map_err(|_| internal("vector of the wrong size"))?;
         return Ok(Value::Vector(vector));
     }
-    let rows = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
-    let matrix: Matrix = rows.try_into().map_err(|_| internal("matrix of the wrong size"))?;
+    let rows = values
+        .into_iter()
+        .map(|v| as_vector(v, span))
+        .collect::<Result<Vec<_>>>()?;
+    let matrix: Matrix = rows
+        .try_into()
+        .map_err(|_| internal("matrix of the wrong size"))?;
     Ok(Value::Matrix(matrix))
 }
 
@@ -70,17 +86,25 @@ pub(super) fn binary(op: BinaryOp, left: Value, right: Value, span: Span) -> Res
         BinaryOp::Rotation => {
             let angle = as_scalar(left, span)?;
             let axis = as_vector(right, span)?;
-            Ok(Value::Rotation(Displacement(vec![Elementary::Rotation { angle, axis }])))
+            Ok(Value::Rotation(Displacement(vec![Elementary::Rotation {
+                angle,
+                axis,
+            }])))
         }
         BinaryOp::Displacement => {
             let translation = as_vector(left, span)?;
             let rotation = as_rotation(right, span)?;
-            Ok(Value::Displacement(Displacement(vec![Elementary::Translation(translation)]).then(&rotation)))
+            Ok(Value::Displacement(
+                Displacement(vec![Elementary::Translation(translation)]).then(&rotation),
+            ))
         }
         BinaryOp::Frame => {
             let displacement = as_displacement(left, span)?;
             let base = as_frame(right, span)?;
-            Ok(Value::Frame(Frame { body: base.body, displacement: base.displacement.then(&displacement) }))
+            Ok(Value::Frame(Frame {
+                body: base.body,
+                displacement: base.displacement.then(&displacement),
+            }))
         }
         _ => arithmetic(op, left, right, span),
     }
@@ -107,13 +131,16 @@ fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Val
         (Matrix(a), Matrix(b)) if matches!(op, BinaryOp::Add | BinaryOp::Sub) => {
             Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| arith(c, &a[i][j], &b[i][j]))))
         }
-        (Matrix(a), Matrix(b)) => Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| dot_row(&a[i], &[b[0][j].clone(), b[1][j].clone(), b[2][j].clone()])))),
+        (Matrix(a), Matrix(b)) => Matrix([0, 1, 2].map(|i| {
+            [0, 1, 2].map(|j| dot_row(&a[i], &[b[0][j].clone(), b[1][j].clone(), b[2][j].clone()]))
+        })),
         (Matrix(a), Vector(v)) => Vector([0, 1, 2].map(|i| dot_row(&a[i], &v))),
         (Rotation(a), Rotation(b)) => Rotation(a.then(&b)),
         (Rotation(r), Vector(v)) => Vector(rotate(&r, v)),
-        (a @ (Displacement(_) | Rotation(_) | Vector(_)), b @ (Displacement(_) | Rotation(_) | Vector(_))) => {
-            Displacement(as_displacement(a, span)?.then(&as_displacement(b, span)?))
-        }
+        (
+            a @ (Displacement(_) | Rotation(_) | Vector(_)),
+            b @ (Displacement(_) | Rotation(_) | Vector(_)),
+        ) => Displacement(as_displacement(a, span)?.then(&as_displacement(b, span)?)),
         (Vector(v), s) => {
             let s = as_scalar(s, span)?;
             Vector(v.map(|x| arith(c, &x, &s)))
@@ -151,7 +178,11 @@ fn rotate_about(angle: &Scalar, axis: &Vector, v: &Vector) -> Vector {
     let one_minus_c = arith('-', &num(1.0), &c);
     [0, 1, 2].map(|i| {
         let along = arith('*', &arith('*', &k[i], &k_dot_v), &one_minus_c);
-        arith('+', &arith('+', &arith('*', &v[i], &c), &arith('*', &k_cross_v[i], &s)), &along)
+        arith(
+            '+',
+            &arith('+', &arith('*', &v[i], &c), &arith('*', &k_cross_v[i], &s)),
+            &along,
+        )
     })
 }
 
@@ -163,7 +194,8 @@ fn builtin_scalar(name: &'static str, x: &Scalar) -> Scalar {
 }
 
 fn cross(a: &Vector, b: &Vector) -> Vector {
-    let term = |i: usize, j: usize| arith('-', &arith('*', &a[i], &b[j]), &arith('*', &a[j], &b[i]));
+    let term =
+        |i: usize, j: usize| arith('-', &arith('*', &a[i], &b[j]), &arith('*', &a[j], &b[i]));
     [term(1, 2), term(2, 0), term(0, 1)]
 }
 
@@ -179,18 +211,34 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
         .copied()
         .ok_or_else(|| internal(format!("unknown builtin `{name}`")))?;
     match name {
-        "position" | "velocity" | "angular_velocity" | "orientation" | "distance" => frame_state(name, values, span),
+        "position" | "velocity" | "angular_velocity" | "orientation" | "distance" => {
+            frame_state(name, values, span)
+        }
         "norm" | "dot" | "cross" => {
-            let vectors = values.into_iter().map(|v| as_vector(v, span)).collect::<Result<Vec<_>>>()?;
-            let a = vectors.first().ok_or_else(|| internal("missing argument"))?;
+            let vectors = values
+                .into_iter()
+                .map(|v| as_vector(v, span))
+                .collect::<Result<Vec<_>>>()?;
+            let a = vectors
+                .first()
+                .ok_or_else(|| internal("missing argument"))?;
             Ok(match name {
                 "norm" => Value::Scalar(builtin_scalar("sqrt", &dot_row(a, a))),
-                "dot" => Value::Scalar(dot_row(a, vectors.get(1).ok_or_else(|| internal("missing argument"))?)),
-                _ => Value::Vector(cross(a, vectors.get(1).ok_or_else(|| internal("missing argument"))?)),
+                "dot" => Value::Scalar(dot_row(
+                    a,
+                    vectors.get(1).ok_or_else(|| internal("missing argument"))?,
+                )),
+                _ => Value::Vector(cross(
+                    a,
+                    vectors.get(1).ok_or_else(|| internal("missing argument"))?,
+                )),
             })
         }
         _ => {
-            let args = values.into_iter().map(|v| as_scalar(v, span)).collect::<Result<Vec<_>>>()?;
+            let args = values
+                .into_iter()
+                .map(|v| as_scalar(v, span))
+                .collect::<Result<Vec<_>>>()?;
             if let Some(folded) = fold_builtin(name, &args) {
                 return Ok(Value::Scalar(num(folded)));
             }
@@ -202,18 +250,31 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
 /// `position(F)`, `velocity(F)`, `angular_velocity(F)`, `orientation(F)`, `distance(A, B)`: the
 /// state of frames at the current instant, in the fixed axes, as components to evaluate then.
 fn frame_state(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
-    let frames = values.into_iter().map(|v| as_frame(v, span).map(Rc::new)).collect::<Result<Vec<_>>>()?;
+    let frames = values
+        .into_iter()
+        .map(|v| as_frame(v, span).map(Rc::new))
+        .collect::<Result<Vec<_>>>()?;
     let frame = frames.first().ok_or_else(|| internal("missing argument"))?;
-    let component = |frame: &Rc<Frame>, quantity: FrameQuantity| Rc::new(SExpr::FrameState(frame.clone(), quantity));
-    let vector = |frame: &Rc<Frame>, make: fn(u8) -> FrameQuantity| -> Vector { [0, 1, 2].map(|i| component(frame, make(i))) };
+    let component = |frame: &Rc<Frame>, quantity: FrameQuantity| {
+        Rc::new(SExpr::FrameState(frame.clone(), quantity))
+    };
+    let vector = |frame: &Rc<Frame>, make: fn(u8) -> FrameQuantity| -> Vector {
+        [0, 1, 2].map(|i| component(frame, make(i)))
+    };
     Ok(match name {
         "position" => Value::Vector(vector(frame, FrameQuantity::Position)),
         "velocity" => Value::Vector(vector(frame, FrameQuantity::Velocity)),
         "angular_velocity" => Value::Vector(vector(frame, FrameQuantity::AngularVelocity)),
-        "orientation" => Value::Matrix([0u8, 1, 2].map(|i| [0u8, 1, 2].map(|j| component(frame, FrameQuantity::Orientation(i, j))))),
+        "orientation" => Value::Matrix(
+            [0u8, 1, 2]
+                .map(|i| [0u8, 1, 2].map(|j| component(frame, FrameQuantity::Orientation(i, j)))),
+        ),
         _ => {
             let other = frames.get(1).ok_or_else(|| internal("missing argument"))?;
-            let (a, b) = (vector(frame, FrameQuantity::Position), vector(other, FrameQuantity::Position));
+            let (a, b) = (
+                vector(frame, FrameQuantity::Position),
+                vector(other, FrameQuantity::Position),
+            );
             let gap: Vector = [0, 1, 2].map(|i| arith('-', &b[i], &a[i]));
             Value::Scalar(builtin_scalar("sqrt", &dot_row(&gap, &gap)))
         }

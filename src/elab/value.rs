@@ -32,9 +32,16 @@ pub enum SExpr {
     /// `?fs(x, x')`
     UnknownFunction(UnknownId, Vec<Scalar>),
     /// The `index`-th coordinate of the enclosing link, differentiated `order` times.
-    Coordinate { index: u32, order: u32 },
+    Coordinate {
+        index: u32,
+        order: u32,
+    },
     /// A coordinate of a join (`crank.q`, `crank.q'`), usable anywhere after the join.
-    JoinCoordinate { join: JoinId, index: u32, order: u32 },
+    JoinCoordinate {
+        join: JoinId,
+        index: u32,
+        order: u32,
+    },
     Neg(Scalar),
     Add(Scalar, Scalar),
     Sub(Scalar, Scalar),
@@ -197,7 +204,10 @@ impl SExpr {
     /// Adds every unknown (scalar or function) the expression mentions to `into`.
     pub fn collect_unknowns(&self, into: &mut std::collections::BTreeSet<UnknownId>) {
         match self {
-            SExpr::Num(_) | SExpr::Time | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
+            SExpr::Num(_)
+            | SExpr::Time
+            | SExpr::Coordinate { .. }
+            | SExpr::JoinCoordinate { .. } => {}
             SExpr::Unknown(id) => {
                 into.insert(*id);
             }
@@ -206,7 +216,11 @@ impl SExpr {
                 args.iter().for_each(|a| a.collect_unknowns(into));
             }
             SExpr::Neg(a) => a.collect_unknowns(into),
-            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+            SExpr::Add(a, b)
+            | SExpr::Sub(a, b)
+            | SExpr::Mul(a, b)
+            | SExpr::Div(a, b)
+            | SExpr::Pow(a, b) => {
                 a.collect_unknowns(into);
                 b.collect_unknowns(into);
             }
@@ -224,12 +238,22 @@ impl SExpr {
                 }
             }
             SExpr::Neg(a) => a.frames_used(into),
-            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+            SExpr::Add(a, b)
+            | SExpr::Sub(a, b)
+            | SExpr::Mul(a, b)
+            | SExpr::Div(a, b)
+            | SExpr::Pow(a, b) => {
                 a.frames_used(into);
                 b.frames_used(into);
             }
-            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => args.iter().for_each(|a| a.frames_used(into)),
-            SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => {}
+            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => {
+                args.iter().for_each(|a| a.frames_used(into))
+            }
+            SExpr::Num(_)
+            | SExpr::Time
+            | SExpr::Unknown(_)
+            | SExpr::Coordinate { .. }
+            | SExpr::JoinCoordinate { .. } => {}
         }
     }
 
@@ -238,9 +262,19 @@ impl SExpr {
         match self {
             SExpr::FrameState(..) => true,
             SExpr::Neg(a) => a.uses_frame_state(),
-            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => a.uses_frame_state() || b.uses_frame_state(),
-            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => args.iter().any(|a| a.uses_frame_state()),
-            SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } => false,
+            SExpr::Add(a, b)
+            | SExpr::Sub(a, b)
+            | SExpr::Mul(a, b)
+            | SExpr::Div(a, b)
+            | SExpr::Pow(a, b) => a.uses_frame_state() || b.uses_frame_state(),
+            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => {
+                args.iter().any(|a| a.uses_frame_state())
+            }
+            SExpr::Num(_)
+            | SExpr::Time
+            | SExpr::Unknown(_)
+            | SExpr::Coordinate { .. }
+            | SExpr::JoinCoordinate { .. } => false,
         }
     }
 
@@ -257,9 +291,16 @@ impl SExpr {
 
     /// Text of the expression, with `coordinate(join, index, order)` naming coordinates: those
     /// of the enclosing link (`join` is `None`) and those of named joins.
-    pub fn render_with(&self, unknown: &mut dyn FnMut(UnknownId) -> String, coordinate: &dyn Fn(Option<JoinId>, u32, u32) -> String) -> String {
+    pub fn render_with(
+        &self,
+        unknown: &mut dyn FnMut(UnknownId) -> String,
+        coordinate: &dyn Fn(Option<JoinId>, u32, u32) -> String,
+    ) -> String {
         let list = |args: &[Scalar], unknown: &mut dyn FnMut(UnknownId) -> String| {
-            args.iter().map(|a| a.render_with(unknown, coordinate)).collect::<Vec<_>>().join(", ")
+            args.iter()
+                .map(|a| a.render_with(unknown, coordinate))
+                .collect::<Vec<_>>()
+                .join(", ")
         };
         match self {
             SExpr::Num(v) => format!("{v}"),
@@ -272,11 +313,31 @@ impl SExpr {
             SExpr::Coordinate { index, order } => coordinate(None, *index, *order),
             SExpr::JoinCoordinate { join, index, order } => coordinate(Some(*join), *index, *order),
             SExpr::Neg(a) => format!("-({})", a.render_with(unknown, coordinate)),
-            SExpr::Add(a, b) => format!("({} + {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
-            SExpr::Sub(a, b) => format!("({} - {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
-            SExpr::Mul(a, b) => format!("({} * {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
-            SExpr::Div(a, b) => format!("({} / {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
-            SExpr::Pow(a, b) => format!("({} ^ {})", a.render_with(unknown, coordinate), b.render_with(unknown, coordinate)),
+            SExpr::Add(a, b) => format!(
+                "({} + {})",
+                a.render_with(unknown, coordinate),
+                b.render_with(unknown, coordinate)
+            ),
+            SExpr::Sub(a, b) => format!(
+                "({} - {})",
+                a.render_with(unknown, coordinate),
+                b.render_with(unknown, coordinate)
+            ),
+            SExpr::Mul(a, b) => format!(
+                "({} * {})",
+                a.render_with(unknown, coordinate),
+                b.render_with(unknown, coordinate)
+            ),
+            SExpr::Div(a, b) => format!(
+                "({} / {})",
+                a.render_with(unknown, coordinate),
+                b.render_with(unknown, coordinate)
+            ),
+            SExpr::Pow(a, b) => format!(
+                "({} ^ {})",
+                a.render_with(unknown, coordinate),
+                b.render_with(unknown, coordinate)
+            ),
             SExpr::Call(name, args) => format!("{name}({})", list(args, unknown)),
             SExpr::FrameState(_, quantity) => match quantity {
                 FrameQuantity::Position(i) => format!("position(frame)[{i}]"),

@@ -47,7 +47,11 @@ impl StepController {
         let alpha = self.exponent - 0.75 * self.beta;
         let factor = SAFETY * error.powf(-alpha) * self.previous_error.powf(self.beta);
         // Growing right after a rejection tends to be rejected again.
-        let max_factor = if self.just_rejected { 1.0 } else { self.max_factor };
+        let max_factor = if self.just_rejected {
+            1.0
+        } else {
+            self.max_factor
+        };
         self.previous_error = error.max(1e-4);
         self.just_rejected = false;
         h * factor.clamp(MIN_FACTOR, max_factor)
@@ -56,7 +60,11 @@ impl StepController {
     /// The step to retry with after rejecting a step of size `h` with error norm `error` (> 1).
     pub(super) fn after_reject(&mut self, h: f64, error: f64) -> f64 {
         self.just_rejected = true;
-        let factor = if error.is_finite() { SAFETY * error.powf(-self.exponent) } else { MIN_FACTOR };
+        let factor = if error.is_finite() {
+            SAFETY * error.powf(-self.exponent)
+        } else {
+            MIN_FACTOR
+        };
         h * factor.clamp(MIN_FACTOR, 1.0)
     }
 

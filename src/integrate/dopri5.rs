@@ -19,15 +19,40 @@ const A: [&[f64]; STAGES] = [
     &[1.0 / 5.0],
     &[3.0 / 40.0, 9.0 / 40.0],
     &[44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0],
-    &[19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0],
-    &[9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0],
+    &[
+        19372.0 / 6561.0,
+        -25360.0 / 2187.0,
+        64448.0 / 6561.0,
+        -212.0 / 729.0,
+    ],
+    &[
+        9017.0 / 3168.0,
+        -355.0 / 33.0,
+        46732.0 / 5247.0,
+        49.0 / 176.0,
+        -5103.0 / 18656.0,
+    ],
     // The fifth-order solution itself: its derivative is the last stage.
-    &[35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0],
+    &[
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+    ],
 ];
 
 /// Fifth-order minus fourth-order weights: the local error estimate.
-const ERROR: [f64; STAGES] =
-    [71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0];
+const ERROR: [f64; STAGES] = [
+    71.0 / 57600.0,
+    0.0,
+    -71.0 / 16695.0,
+    71.0 / 1920.0,
+    -17253.0 / 339200.0,
+    22.0 / 525.0,
+    -1.0 / 40.0,
+];
 
 /// Weights of the stages in the last coefficient of the order-4 continuous extension.
 const DENSE: [f64; STAGES] = [
@@ -99,7 +124,14 @@ impl AdaptiveStepper for DormandPrince {
         &self.stages[0]
     }
 
-    fn attempt(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64, y_new: &mut [f64]) -> Result<f64, Halt> {
+    fn attempt(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+    ) -> Result<f64, Halt> {
         for (stage, fraction) in C.iter().enumerate().take(STAGES - 1).skip(1) {
             stage_state_into(&self.stages, stage, y, h, &mut self.stage_state);
             eval.rhs(t + fraction * h, &self.stage_state, &mut self.stages[stage])?;
@@ -107,9 +139,19 @@ impl AdaptiveStepper for DormandPrince {
         stage_state_into(&self.stages, STAGES - 1, y, h, y_new);
         eval.rhs(t + h, y_new, &mut self.stages[STAGES - 1])?;
         for (i, error) in self.error.iter_mut().enumerate() {
-            *error = h * ERROR.iter().zip(&self.stages).map(|(e, k)| e * k[i]).sum::<f64>();
+            *error = h * ERROR
+                .iter()
+                .zip(&self.stages)
+                .map(|(e, k)| e * k[i])
+                .sum::<f64>();
         }
-        Ok(error_norm(&self.error[..self.controlled], &y[..self.controlled], &y_new[..self.controlled], self.rtol, self.atol))
+        Ok(error_norm(
+            &self.error[..self.controlled],
+            &y[..self.controlled],
+            &y_new[..self.controlled],
+            self.rtol,
+            self.atol,
+        ))
     }
 
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
@@ -122,7 +164,11 @@ impl AdaptiveStepper for DormandPrince {
             r1[i] = change;
             r2[i] = start_bulge;
             r3[i] = change - h * last[i] - start_bulge;
-            r4[i] = h * DENSE.iter().zip(&self.stages).map(|(d, k)| d * k[i]).sum::<f64>();
+            r4[i] = h * DENSE
+                .iter()
+                .zip(&self.stages)
+                .map(|(d, k)| d * k[i])
+                .sum::<f64>();
         }
         self.dense_start = t;
         self.dense_step = h;

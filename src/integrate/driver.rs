@@ -28,7 +28,14 @@ pub(super) trait AdaptiveStepper {
     fn derivative(&self) -> &[f64];
     /// Attempts a step of size `h` from (t, y): writes the new state into `y_new` and returns the
     /// norm of the local error estimate (at most 1 means acceptable).
-    fn attempt(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64, y_new: &mut [f64]) -> Result<f64, Halt>;
+    fn attempt(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+    ) -> Result<f64, Halt>;
     /// Makes the last attempt the current step, preparing dense output over it.
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]);
     /// The dense output of the last accepted step at `t`.
@@ -54,7 +61,13 @@ fn run(
     problem: &Problem,
     observer: &mut Observer,
 ) -> Result<Vec<f64>, Halt> {
-    let Problem { t0, y0, t_end, settings, .. } = *problem;
+    let Problem {
+        t0,
+        y0,
+        t_end,
+        settings,
+        ..
+    } = *problem;
     let mut outputs = Outputs::new(problem.outputs, y0.len());
     if !all_finite(y0) {
         return Err(Halt::fatal(t0, Failure::NotFinite));
@@ -147,13 +160,20 @@ impl March<'_> {
         // The interpolant is built from the unprojected end, consistent with the step's stages.
         stepper.accept(self.t, &self.y, h, &self.y_new);
         let lands_on_end = h >= problem.t_end - self.t || self.t + h >= problem.t_end;
-        let t_new = if lands_on_end { problem.t_end } else { self.t + h };
+        let t_new = if lands_on_end {
+            problem.t_end
+        } else {
+            self.t + h
+        };
         if eval.project(t_new, &mut self.y_new)? {
             // What the stepper cached at the step's end (dy/dt) belongs to the unprojected state.
-            stepper.start(eval, t_new, &self.y_new).map_err(Halt::made_fatal)?;
+            stepper
+                .start(eval, t_new, &self.y_new)
+                .map_err(Halt::made_fatal)?;
         }
         let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
-        self.outputs.deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
+        self.outputs
+            .deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
         std::mem::swap(&mut self.y, &mut self.y_new);
         self.t = t_new;
         Ok(())
@@ -180,19 +200,40 @@ impl March<'_> {
 /// Below this a step is either forbidden by the settings or lost in the rounding of t.
 fn smallest_step(problem: &Problem, t: f64) -> f64 {
     let resolution = 8.0 * f64::EPSILON * t.abs().max(problem.t0.abs()).max(problem.t_end.abs());
-    problem.settings.min_step.max(resolution).max(f64::MIN_POSITIVE)
+    problem
+        .settings
+        .min_step
+        .max(resolution)
+        .max(f64::MIN_POSITIVE)
 }
 
 /// A first step from the sizes of y and dy/dt and an estimate of the second derivative, after
 /// Hairer, Nørsett and Wanner (Solving ODEs I, II.4): such that the first step's error is modest.
-fn initial_step(stepper: &mut dyn AdaptiveStepper, eval: &mut Evaluator, problem: &Problem) -> Result<f64, Halt> {
-    let Problem { t0, y0, t_end, settings, .. } = *problem;
+fn initial_step(
+    stepper: &mut dyn AdaptiveStepper,
+    eval: &mut Evaluator,
+    problem: &Problem,
+) -> Result<f64, Halt> {
+    let Problem {
+        t0,
+        y0,
+        t_end,
+        settings,
+        ..
+    } = *problem;
     let f0 = stepper.derivative().to_vec();
     let controlled = settings.controlled.unwrap_or(y0.len()).min(y0.len());
-    let scale: Vec<f64> = y0[..controlled].iter().map(|y| settings.atol + settings.rtol * y.abs()).collect();
+    let scale: Vec<f64> = y0[..controlled]
+        .iter()
+        .map(|y| settings.atol + settings.rtol * y.abs())
+        .collect();
     let size_y = scaled_rms(&y0[..controlled], &scale);
     let size_f = scaled_rms(&f0[..controlled], &scale);
-    let guess = if size_y < 1e-5 || size_f < 1e-5 { 1e-6 } else { 0.01 * size_y / size_f };
+    let guess = if size_y < 1e-5 || size_f < 1e-5 {
+        1e-6
+    } else {
+        0.01 * size_y / size_f
+    };
     let guess = if guess.is_normal() { guess } else { 1e-6 };
     let guess = guess.min(settings.max_step).min(t_end - t0);
     let y1: Vec<f64> = (0..y0.len()).map(|i| y0[i] + guess * f0[i]).collect();
@@ -211,7 +252,11 @@ fn initial_step(stepper: &mut dyn AdaptiveStepper, eval: &mut Evaluator, problem
         false => (0.01 / largest).powf(1.0 / (stepper.order() as f64 + 1.0)),
     };
     // A curvature too large to represent would suggest a zero step: fall back to the guess.
-    let from_curvature = if from_curvature.is_normal() { from_curvature } else { guess };
+    let from_curvature = if from_curvature.is_normal() {
+        from_curvature
+    } else {
+        guess
+    };
     Ok((100.0 * guess).min(from_curvature).min(settings.max_step))
 }
 

@@ -29,7 +29,11 @@ impl Halt {
             Halt::NotFinite { time } => (time, Failure::NotFinite),
             Halt::Fatal { time, failure } => (time, failure),
         };
-        IntegrationError { time, failure, stats }
+        IntegrationError {
+            time,
+            failure,
+            stats,
+        }
     }
 }
 
@@ -41,7 +45,10 @@ pub(super) struct Evaluator<'s> {
 
 impl<'s> Evaluator<'s> {
     pub(super) fn new(system: &'s mut dyn OdeSystem) -> Self {
-        Evaluator { system, stats: Stats::default() }
+        Evaluator {
+            system,
+            stats: Stats::default(),
+        }
     }
 
     /// dy/dt at (t, y); a non-finite state or derivative becomes `Halt::NotFinite` at `t`.
@@ -50,7 +57,9 @@ impl<'s> Evaluator<'s> {
             return Err(Halt::NotFinite { time: t });
         }
         self.stats.rhs_evaluations += 1;
-        self.system.rhs(t, y, dydt).map_err(|message| Halt::fatal(t, Failure::System(message)))?;
+        self.system
+            .rhs(t, y, dydt)
+            .map_err(|message| Halt::fatal(t, Failure::System(message)))?;
         if !all_finite(dydt) {
             return Err(Halt::NotFinite { time: t });
         }
@@ -60,7 +69,10 @@ impl<'s> Evaluator<'s> {
     /// Lets the system move the end (t, y) of an accepted step onto its invariant manifold;
     /// returns whether `y` changed. Errors stop the integration like those of `rhs`.
     pub(super) fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, Halt> {
-        let moved = self.system.project(t, y).map_err(|message| Halt::fatal(t, Failure::System(message)))?;
+        let moved = self
+            .system
+            .project(t, y)
+            .map_err(|message| Halt::fatal(t, Failure::System(message)))?;
         // The step is already accepted: a shorter one cannot undo a projection gone wrong.
         if moved && !all_finite(y) {
             return Err(Halt::fatal(t, Failure::NotFinite));

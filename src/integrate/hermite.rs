@@ -45,8 +45,9 @@ impl HermiteSegment {
         for (i, value) in out.iter_mut().enumerate() {
             let (y0, y1) = (self.y_start[i], self.y_end[i]);
             let chord = (1.0 - theta) * y0 + theta * y1;
-            let slopes =
-                (1.0 - 2.0 * theta) * (y1 - y0) + (theta - 1.0) * h * self.f_start[i] + theta * h * self.f_end[i];
+            let slopes = (1.0 - 2.0 * theta) * (y1 - y0)
+                + (theta - 1.0) * h * self.f_start[i]
+                + theta * h * self.f_end[i];
             *value = chord + bump * slopes;
         }
     }

@@ -145,7 +145,11 @@ impl fmt::Display for Failure {
 
 impl fmt::Display for IntegrationError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "integration stopped at t = {}: {}", self.time, self.failure)
+        write!(
+            f,
+            "integration stopped at t = {}: {}",
+            self.time, self.failure
+        )
     }
 }
 
@@ -204,24 +208,47 @@ pub fn integrate(
     };
     check_problem(system.dimension(), t0, y0, t_end, outputs).map_err(invalid)?;
     check_settings(method, settings).map_err(invalid)?;
-    let problem = driver::Problem { t0, y0, t_end, outputs, settings };
+    let problem = driver::Problem {
+        t0,
+        y0,
+        t_end,
+        outputs,
+        settings,
+    };
     match method {
         Method::Rk4 { step } => rk4::integrate(system, &problem, *step, observer),
-        Method::DormandPrince => {
-            driver::integrate_adaptive(&mut dopri5::DormandPrince::new(y0.len(), settings), system, &problem, observer)
-        }
-        Method::Rosenbrock => {
-            driver::integrate_adaptive(&mut rosenbrock::Rodas3::new(y0.len(), settings), system, &problem, observer)
-        }
+        Method::DormandPrince => driver::integrate_adaptive(
+            &mut dopri5::DormandPrince::new(y0.len(), settings),
+            system,
+            &problem,
+            observer,
+        ),
+        Method::Rosenbrock => driver::integrate_adaptive(
+            &mut rosenbrock::Rodas3::new(y0.len(), settings),
+            system,
+            &problem,
+            observer,
+        ),
     }
 }
 
-fn check_problem(dimension: usize, t0: f64, y0: &[f64], t_end: f64, outputs: &[f64]) -> Result<(), String> {
+fn check_problem(
+    dimension: usize,
+    t0: f64,
+    y0: &[f64],
+    t_end: f64,
+    outputs: &[f64],
+) -> Result<(), String> {
     if y0.len() != dimension {
-        return Err(format!("the initial state has {} values, the system {dimension}", y0.len()));
+        return Err(format!(
+            "the initial state has {} values, the system {dimension}",
+            y0.len()
+        ));
     }
     if !(t0.is_finite() && t_end.is_finite() && t0 <= t_end) {
-        return Err(format!("the time span [{t0}, {t_end}] is not a finite forward interval"));
+        return Err(format!(
+            "the time span [{t0}, {t_end}] is not a finite forward interval"
+        ));
     }
     if outputs.iter().any(|&t| !(t0..=t_end).contains(&t)) {
         return Err(format!("an output time lies outside [{t0}, {t_end}]"));
@@ -239,12 +266,24 @@ fn check_settings(method: &Method, settings: &Settings) -> Result<(), String> {
         }
         return Ok(());
     }
-    let Settings { rtol, atol, initial_step, max_step, min_step, .. } = settings;
-    if !(*rtol >= 0.0 && *atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite()) {
-        return Err(format!("the tolerances rtol = {rtol}, atol = {atol} must be non-negative, not both zero"));
+    let Settings {
+        rtol,
+        atol,
+        initial_step,
+        max_step,
+        min_step,
+        ..
+    } = settings;
+    if !(*rtol >= 0.0 && *atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite())
+    {
+        return Err(format!(
+            "the tolerances rtol = {rtol}, atol = {atol} must be non-negative, not both zero"
+        ));
     }
     if !(*max_step > 0.0 && *min_step >= 0.0 && min_step <= max_step) {
-        return Err(format!("the step limits [{min_step}, {max_step}] are not an interval of positive steps"));
+        return Err(format!(
+            "the step limits [{min_step}, {max_step}] are not an interval of positive steps"
+        ));
     }
     if initial_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
         return Err("the initial step must be a positive number".to_string());

@@ -16,11 +16,20 @@ pub(super) struct Outputs<'a> {
 
 impl<'a> Outputs<'a> {
     pub(super) fn new(times: &'a [f64], dimension: usize) -> Self {
-        Outputs { times, next: 0, value: vec![0.0; dimension] }
+        Outputs {
+            times,
+            next: 0,
+            value: vec![0.0; dimension],
+        }
     }
 
     /// Delivers the outputs at the start time.
-    pub(super) fn deliver_start(&mut self, t0: f64, y0: &[f64], observer: &mut Observer) -> Result<(), Halt> {
+    pub(super) fn deliver_start(
+        &mut self,
+        t0: f64,
+        y0: &[f64],
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
         while let Some(&t) = self.times.get(self.next).filter(|&&t| t <= t0) {
             self.next += 1;
             observe(observer, t, y0)?;
@@ -30,7 +39,9 @@ impl<'a> Outputs<'a> {
 
     /// Whether an output falls strictly inside the step, i.e. needs the interpolant.
     pub(super) fn wants_interior(&self, t_start: f64, t_end: f64) -> bool {
-        self.times.get(self.next).is_some_and(|&t| t < t_end - COINCIDENCE * (t_end - t_start))
+        self.times
+            .get(self.next)
+            .is_some_and(|&t| t < t_end - COINCIDENCE * (t_end - t_start))
     }
 
     /// Delivers the outputs up to the end of the accepted step from `t_start` to `t_end`,
@@ -43,7 +54,11 @@ impl<'a> Outputs<'a> {
         observer: &mut Observer,
     ) -> Result<(), Halt> {
         let tolerance = COINCIDENCE * (t_end - t_start);
-        while let Some(&t) = self.times.get(self.next).filter(|&&t| t <= t_end + tolerance) {
+        while let Some(&t) = self
+            .times
+            .get(self.next)
+            .filter(|&&t| t <= t_end + tolerance)
+        {
             self.next += 1;
             if t < t_end - tolerance {
                 interpolate(t, &mut self.value);
@@ -56,7 +71,11 @@ impl<'a> Outputs<'a> {
     }
 
     /// Delivers whatever is left (times that rounding put a hair past the final step).
-    pub(super) fn deliver_rest(&mut self, y_end: &[f64], observer: &mut Observer) -> Result<(), Halt> {
+    pub(super) fn deliver_rest(
+        &mut self,
+        y_end: &[f64],
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
         while let Some(&t) = self.times.get(self.next) {
             self.next += 1;
             observe(observer, t, y_end)?;

@@ -26,7 +26,12 @@ pub(super) fn integrate(
     }
 }
 
-fn run(eval: &mut Evaluator, problem: &Problem, step: f64, observer: &mut Observer) -> Result<Vec<f64>, Halt> {
+fn run(
+    eval: &mut Evaluator,
+    problem: &Problem,
+    step: f64,
+    observer: &mut Observer,
+) -> Result<Vec<f64>, Halt> {
     let Problem { t0, y0, t_end, .. } = *problem;
     let mut outputs = Outputs::new(problem.outputs, y0.len());
     if !all_finite(y0) {
@@ -42,7 +47,11 @@ fn run(eval: &mut Evaluator, problem: &Problem, step: f64, observer: &mut Observ
         }
         k += 1;
         // Grid points by multiplication, so that rounding does not accumulate over many steps.
-        let t_new = if k as f64 >= step_count { t_end } else { t0 + k as f64 * step };
+        let t_new = if k as f64 >= step_count {
+            t_end
+        } else {
+            t0 + k as f64 * step
+        };
         rk4.step(eval, t_new)?;
         // Before the end derivative is evaluated, so that what the next step reuses is taken at
         // the projected state and the interpolant joins the projected ends.
@@ -51,7 +60,12 @@ fn run(eval: &mut Evaluator, problem: &Problem, step: f64, observer: &mut Observ
             rk4.prepare_interpolation(eval)?;
         }
         let segment = &rk4.segment;
-        outputs.deliver_step((rk4.t, t_new), &rk4.y_new, |t, out| segment.evaluate(t, out), observer)?;
+        outputs.deliver_step(
+            (rk4.t, t_new),
+            &rk4.y_new,
+            |t, out| segment.evaluate(t, out),
+            observer,
+        )?;
         rk4.advance(t_new);
         eval.stats.steps += 1;
     }
@@ -113,7 +127,12 @@ impl Rk4 {
     /// Evaluates dy/dt at the step's end and sets up the Hermite interpolant over the step.
     fn prepare_interpolation(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
         eval.rhs(self.t + self.h, &self.y_new, &mut self.end_derivative)?;
-        let ends = [&self.y[..], &self.stages[0], &self.y_new, &self.end_derivative];
+        let ends = [
+            &self.y[..],
+            &self.stages[0],
+            &self.y_new,
+            &self.end_derivative,
+        ];
         self.segment.set(self.t, self.h, ends);
         self.derivative_known = true;
         Ok(())

@@ -27,10 +27,19 @@ const GAMMA: f64 = 0.5;
 //   (I / (h γ) − J) K_i = f(t + α_i h, y + Σ_j A_ij K_j) + Σ_j C_ij K_j / h + γ_i h ∂f/∂t.
 
 /// Weights of earlier increments in each stage's state.
-const A: [[f64; STAGES]; STAGES] = [[0.0; 4], [0.0; 4], [2.0, 0.0, 0.0, 0.0], [2.0, 0.0, 1.0, 0.0]];
+const A: [[f64; STAGES]; STAGES] = [
+    [0.0; 4],
+    [0.0; 4],
+    [2.0, 0.0, 0.0, 0.0],
+    [2.0, 0.0, 1.0, 0.0],
+];
 /// Weights of earlier increments (divided by h) in each stage's right-hand side.
-const C: [[f64; STAGES]; STAGES] =
-    [[0.0; 4], [4.0, 0.0, 0.0, 0.0], [1.0, -1.0, 0.0, 0.0], [1.0, -1.0, -8.0 / 3.0, 0.0]];
+const C: [[f64; STAGES]; STAGES] = [
+    [0.0; 4],
+    [4.0, 0.0, 0.0, 0.0],
+    [1.0, -1.0, 0.0, 0.0],
+    [1.0, -1.0, -8.0 / 3.0, 0.0],
+];
 /// Whether a stage evaluates f anew; the second stage's state and time equal the first's.
 const NEW_F: [bool; STAGES] = [true, false, true, true];
 /// Fractions of the step at which the stages evaluate f.
@@ -129,12 +138,21 @@ impl Rodas3 {
             self.stage_derivative.copy_from_slice(&self.derivative);
         } else if NEW_F[stage] {
             for (i, state) in self.stage_state.iter_mut().enumerate() {
-                *state = y[i] + (0..stage).map(|j| A[stage][j] * self.increments[j][i]).sum::<f64>();
+                *state = y[i]
+                    + (0..stage)
+                        .map(|j| A[stage][j] * self.increments[j][i])
+                        .sum::<f64>();
             }
-            eval.rhs(t + ALPHA[stage] * h, &self.stage_state, &mut self.stage_derivative)?;
+            eval.rhs(
+                t + ALPHA[stage] * h,
+                &self.stage_state,
+                &mut self.stage_derivative,
+            )?;
         }
         let mut rhs = DVector::from_fn(y.len(), |i, _| {
-            let coupling: f64 = (0..stage).map(|j| C[stage][j] * self.increments[j][i]).sum();
+            let coupling: f64 = (0..stage)
+                .map(|j| C[stage][j] * self.increments[j][i])
+                .sum();
             self.stage_derivative[i] + coupling / h + GAMMA_SUM[stage] * h * self.time_derivative[i]
         });
         // nalgebra's triangular solves do not accept an empty system.
@@ -166,7 +184,14 @@ impl AdaptiveStepper for Rodas3 {
         &self.derivative
     }
 
-    fn attempt(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64, y_new: &mut [f64]) -> Result<f64, Halt> {
+    fn attempt(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+    ) -> Result<f64, Halt> {
         if !self.jacobian_is_current {
             self.form_jacobian(eval, t, y)?;
             self.jacobian_is_current = true;
@@ -179,10 +204,21 @@ impl AdaptiveStepper for Rodas3 {
             self.solve_stage(eval, &lu, stage, t, y, h)?;
         }
         for i in 0..y.len() {
-            y_new[i] = y[i] + (0..STAGES).map(|s| M[s] * self.increments[s][i]).sum::<f64>();
-            self.error[i] = (0..STAGES).map(|s| E[s] * self.increments[s][i]).sum::<f64>();
+            y_new[i] = y[i]
+                + (0..STAGES)
+                    .map(|s| M[s] * self.increments[s][i])
+                    .sum::<f64>();
+            self.error[i] = (0..STAGES)
+                .map(|s| E[s] * self.increments[s][i])
+                .sum::<f64>();
         }
-        let error = error_norm(&self.error[..self.controlled], &y[..self.controlled], &y_new[..self.controlled], self.rtol, self.atol);
+        let error = error_norm(
+            &self.error[..self.controlled],
+            &y[..self.controlled],
+            &y_new[..self.controlled],
+            self.rtol,
+            self.atol,
+        );
         if error <= 1.0 && all_finite(y_new) {
             eval.rhs(t + h, y_new, &mut self.end_derivative)?;
         }
@@ -190,7 +226,8 @@ impl AdaptiveStepper for Rodas3 {
     }
 
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
-        self.segment.set(t, h, [y, &self.derivative, y_new, &self.end_derivative]);
+        self.segment
+            .set(t, h, [y, &self.derivative, y_new, &self.end_derivative]);
         std::mem::swap(&mut self.derivative, &mut self.end_derivative);
         self.jacobian_is_current = false;
     }
@@ -214,7 +251,9 @@ mod tests {
 
     fn gamma_matrix() -> DMatrix<f64> {
         let inverse = DMatrix::identity(STAGES, STAGES) / GAMMA - matrix(&C);
-        inverse.try_inverse().expect("I/γ − C is triangular with a nonzero diagonal")
+        inverse
+            .try_inverse()
+            .expect("I/γ − C is triangular with a nonzero diagonal")
     }
 
     /// Σ b_i, Σ b_i β'_i, Σ b_i α_i², Σ b_i β_ij β'_j for weights `weights` (in the transformed form).

@@ -18,7 +18,10 @@ pub struct AssemblyOptions {
 
 impl Default for AssemblyOptions {
     fn default() -> Self {
-        AssemblyOptions { tolerance: 1e-12, max_iterations: 200 }
+        AssemblyOptions {
+            tolerance: 1e-12,
+            max_iterations: 200,
+        }
     }
 }
 
@@ -35,7 +38,10 @@ pub enum AssemblyError {
     Evaluation(EvalError),
     /// No configuration closes the loops from these starting values: the best found, and the
     /// position and rotation errors left in each loop.
-    NoAssembly { q: Vec<f64>, loop_errors: Vec<(f64, f64)> },
+    NoAssembly {
+        q: Vec<f64>,
+        loop_errors: Vec<(f64, f64)>,
+    },
 }
 
 impl From<EvalError> for AssemblyError {
@@ -47,7 +53,12 @@ impl From<EvalError> for AssemblyError {
 /// Solves the closure from `start`; if that stalls (a start on a stationary point, such as a
 /// mechanism stretched flat), retries from a few deterministic perturbations of the free
 /// coordinates before giving up.
-pub fn assemble(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &AssemblyOptions) -> Result<Assembled, AssemblyError> {
+pub fn assemble(
+    model: &KinematicModel,
+    start: &[f64],
+    fixed: &[bool],
+    options: &AssemblyOptions,
+) -> Result<Assembled, AssemblyError> {
     let mut failure = match solve(model, start, fixed, options) {
         Ok(assembled) => return Ok(assembled),
         Err(e @ AssemblyError::Evaluation(_)) => return Err(e),
@@ -57,7 +68,13 @@ pub fn assemble(model: &KinematicModel, start: &[f64], fixed: &[bool], options: 
         let perturbed: Vec<f64> = start
             .iter()
             .enumerate()
-            .map(|(i, &x)| if fixed[i] { x } else { x + 0.5 * super::jitter(attempt, i) })
+            .map(|(i, &x)| {
+                if fixed[i] {
+                    x
+                } else {
+                    x + 0.5 * super::jitter(attempt, i)
+                }
+            })
             .collect();
         match solve(model, &perturbed, fixed, options) {
             Ok(assembled) => return Ok(assembled),
@@ -76,12 +93,19 @@ const RESTARTS: usize = 4;
 
 fn total_error(error: &AssemblyError) -> f64 {
     match error {
-        AssemblyError::NoAssembly { loop_errors, .. } => loop_errors.iter().map(|(p, r)| p + r).sum(),
+        AssemblyError::NoAssembly { loop_errors, .. } => {
+            loop_errors.iter().map(|(p, r)| p + r).sum()
+        }
         AssemblyError::Evaluation(_) => f64::INFINITY,
     }
 }
 
-fn solve(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &AssemblyOptions) -> Result<Assembled, AssemblyError> {
+fn solve(
+    model: &KinematicModel,
+    start: &[f64],
+    fixed: &[bool],
+    options: &AssemblyOptions,
+) -> Result<Assembled, AssemblyError> {
     let free: Vec<usize> = (0..model.coordinate_count).filter(|&i| !fixed[i]).collect();
     let mut q = start.to_vec();
     let mut current = closure(model, &q)?;
@@ -90,9 +114,15 @@ fn solve(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &Assemb
     for iteration in 0..options.max_iterations {
         if current.residual.amax() <= options.tolerance {
             let (q, residual) = polish(model, q, current.residual.norm(), &free)?;
-            return Ok(Assembled { q, iterations: iteration, residual });
+            return Ok(Assembled {
+                q,
+                iterations: iteration,
+                residual,
+            });
         }
-        let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| current.jacobian[(r, free[c])]);
+        let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| {
+            current.jacobian[(r, free[c])]
+        });
         let gradient = jacobian.transpose() * &current.residual;
         let normal = jacobian.transpose() * &jacobian;
         let mut improved = false;
@@ -134,23 +164,38 @@ fn solve(model: &KinematicModel, start: &[f64], fixed: &[bool], options: &Assemb
     }
     if current.residual.amax() <= options.tolerance {
         let residual = current.residual.amax();
-        return Ok(Assembled { q, iterations: options.max_iterations, residual });
+        return Ok(Assembled {
+            q,
+            iterations: options.max_iterations,
+            residual,
+        });
     }
-    let loop_errors = (0..model.complementary().len()).map(|k| current.loop_errors(k)).collect();
+    let loop_errors = (0..model.complementary().len())
+        .map(|k| current.loop_errors(k))
+        .collect();
     Err(AssemblyError::NoAssembly { q, loop_errors })
 }
 
 /// A few more minimum-norm Gauss–Newton steps after convergence, while they reduce the residual:
 /// where constraints act at second order, a residual of 1e-12 can leave the configuration 1e-6
 /// from the closed set, and every halving of the residual matters to the rank computed there.
-fn polish(model: &KinematicModel, mut q: Vec<f64>, mut norm: f64, free: &[usize]) -> Result<(Vec<f64>, f64), AssemblyError> {
+fn polish(
+    model: &KinematicModel,
+    mut q: Vec<f64>,
+    mut norm: f64,
+    free: &[usize],
+) -> Result<(Vec<f64>, f64), AssemblyError> {
     if free.is_empty() || model.complementary().is_empty() {
         return Ok((q, norm));
     }
     for _ in 0..8 {
         let current = closure(model, &q)?;
-        let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| current.jacobian[(r, free[c])]);
-        let Ok(step) = jacobian.svd(true, true).solve(&(-&current.residual), 1e-14) else { break };
+        let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| {
+            current.jacobian[(r, free[c])]
+        });
+        let Ok(step) = jacobian.svd(true, true).solve(&(-&current.residual), 1e-14) else {
+            break;
+        };
         let mut trial = q.clone();
         for (i, &index) in free.iter().enumerate() {
             trial[index] += step[i];

@@ -40,7 +40,10 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
         let base = configuration.poses[joint.first_body] * joint.first;
         let end = base * chain;
         let target = configuration.poses[joint.second_body] * joint.second;
-        let (r_end, r_target) = (end.rotation.to_rotation_matrix(), target.rotation.to_rotation_matrix());
+        let (r_end, r_target) = (
+            end.rotation.to_rotation_matrix(),
+            target.rotation.to_rotation_matrix(),
+        );
         let (p_end, p_target) = (end.translation.vector, target.translation.vector);
         let relative = r_end.matrix().transpose() * r_target.matrix();
         let rotation_error = spatial::skew_vector(&relative);
@@ -65,12 +68,17 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
             let dw: Vector3<f64> = spatial::angular(&v_target) - spatial::angular(&v_end);
             let d_relative = r_end.matrix().transpose() * spatial::hat(&dw) * r_target.matrix();
             let d_rotation = spatial::skew_vector(&d_relative);
-            let d_position = spatial::point_velocity(&v_target, &p_target) - spatial::point_velocity(&v_end, &p_end);
+            let d_position = spatial::point_velocity(&v_target, &p_target)
+                - spatial::point_velocity(&v_end, &p_end);
             for r in 0..3 {
                 jacobian[(6 * k + r, c)] = d_rotation[r];
                 jacobian[(6 * k + 3 + r, c)] = d_position[r];
             }
         }
     }
-    Ok(Closure { residual, jacobian, configuration })
+    Ok(Closure {
+        residual,
+        jacobian,
+        configuration,
+    })
 }

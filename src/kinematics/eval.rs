@@ -64,12 +64,20 @@ pub struct Jet {
 
 impl Jet {
     fn constant(value: f64) -> Jet {
-        Jet { value, first: 0.0, second: 0.0 }
+        Jet {
+            value,
+            first: 0.0,
+            second: 0.0,
+        }
     }
 
     /// f(self), given f, f' and f'' at self.value.
     fn chain(self, f: f64, f1: f64, f2: f64) -> Jet {
-        Jet { value: f, first: f1 * self.first, second: f2 * self.first * self.first + f1 * self.second }
+        Jet {
+            value: f,
+            first: f1 * self.first,
+            second: f2 * self.first * self.first + f1 * self.second,
+        }
     }
 
     fn mul(self, b: Jet) -> Jet {
@@ -84,47 +92,90 @@ impl Jet {
         let value = self.value / b.value;
         let first = (self.first - value * b.first) / b.value;
         let second = (self.second - 2.0 * first * b.first - value * b.second) / b.value;
-        Jet { value, first, second }
+        Jet {
+            value,
+            first,
+            second,
+        }
     }
 }
 
 /// Evaluates `s` with its derivatives along `direction` (over the link's coordinates).
-pub fn eval_jet(s: &SExpr, unknowns: &UnknownValues, env: &Env<'_>, direction: &[f64]) -> Result<Jet, EvalError> {
+pub fn eval_jet(
+    s: &SExpr,
+    unknowns: &UnknownValues,
+    env: &Env<'_>,
+    direction: &[f64],
+) -> Result<Jet, EvalError> {
     let go = |e: &SExpr| eval_jet(e, unknowns, env, direction);
     Ok(match s {
         SExpr::Num(v) => Jet::constant(*v),
         SExpr::Time => Jet::constant(env.time.ok_or(EvalError::NotGeometric("the time"))?),
         SExpr::FrameState(frame, quantity) => {
-            let state = env.frames.ok_or(EvalError::NotGeometric("the state of a frame (position, velocity, …)"))?;
+            let state = env.frames.ok_or(EvalError::NotGeometric(
+                "the state of a frame (position, velocity, …)",
+            ))?;
             Jet::constant(state(frame, *quantity)?)
         }
         SExpr::Unknown(id) => Jet::constant(*unknowns.get(id).ok_or(EvalError::Missing(*id))?),
         SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
         SExpr::Coordinate { index, order: 0 } => {
             let i = *index as usize;
-            let value = *env.coordinates.get(i).ok_or(EvalError::NotGeometric("a coordinate of another link"))?;
-            Jet { value, first: direction.get(i).copied().unwrap_or(0.0), second: 0.0 }
+            let value = *env
+                .coordinates
+                .get(i)
+                .ok_or(EvalError::NotGeometric("a coordinate of another link"))?;
+            Jet {
+                value,
+                first: direction.get(i).copied().unwrap_or(0.0),
+                second: 0.0,
+            }
         }
         SExpr::Coordinate { index, order: 1 } => {
-            let rates = env.rates.ok_or(EvalError::NotGeometric("a time derivative"))?;
-            Jet::constant(*rates.get(*index as usize).ok_or(EvalError::NotGeometric("a time derivative"))?)
+            let rates = env
+                .rates
+                .ok_or(EvalError::NotGeometric("a time derivative"))?;
+            Jet::constant(
+                *rates
+                    .get(*index as usize)
+                    .ok_or(EvalError::NotGeometric("a time derivative"))?,
+            )
         }
-        SExpr::Coordinate { .. } => return Err(EvalError::NotGeometric("a second time derivative")),
+        SExpr::Coordinate { .. } => {
+            return Err(EvalError::NotGeometric("a second time derivative"))
+        }
         SExpr::JoinCoordinate { join, index, order } => {
-            let joins = env.joins.ok_or(EvalError::NotGeometric("a coordinate of a join"))?;
-            Jet::constant(joins(*join, *index as usize, *order).ok_or(EvalError::NotGeometric("a second time derivative"))?)
+            let joins = env
+                .joins
+                .ok_or(EvalError::NotGeometric("a coordinate of a join"))?;
+            Jet::constant(
+                joins(*join, *index as usize, *order)
+                    .ok_or(EvalError::NotGeometric("a second time derivative"))?,
+            )
         }
         SExpr::Neg(a) => {
             let a = go(a)?;
-            Jet { value: -a.value, first: -a.first, second: -a.second }
+            Jet {
+                value: -a.value,
+                first: -a.first,
+                second: -a.second,
+            }
         }
         SExpr::Add(a, b) => {
             let (a, b) = (go(a)?, go(b)?);
-            Jet { value: a.value + b.value, first: a.first + b.first, second: a.second + b.second }
+            Jet {
+                value: a.value + b.value,
+                first: a.first + b.first,
+                second: a.second + b.second,
+            }
         }
         SExpr::Sub(a, b) => {
             let (a, b) = (go(a)?, go(b)?);
-            Jet { value: a.value - b.value, first: a.first - b.first, second: a.second - b.second }
+            Jet {
+                value: a.value - b.value,
+                first: a.first - b.first,
+                second: a.second - b.second,
+            }
         }
         SExpr::Mul(a, b) => go(a)?.mul(go(b)?),
         SExpr::Div(a, b) => go(a)?.div(go(b)?),
@@ -132,7 +183,11 @@ pub fn eval_jet(s: &SExpr, unknowns: &UnknownValues, env: &Env<'_>, direction: &
             let (a, b) = (go(a)?, go(b)?);
             if b.first == 0.0 && b.second == 0.0 {
                 let n = b.value;
-                a.chain(a.value.powf(n), n * a.value.powf(n - 1.0), n * (n - 1.0) * a.value.powf(n - 2.0))
+                a.chain(
+                    a.value.powf(n),
+                    n * a.value.powf(n - 1.0),
+                    n * (n - 1.0) * a.value.powf(n - 2.0),
+                )
             } else {
                 // a^b = exp(b ln a)
                 let ln = a.chain(a.value.ln(), 1.0 / a.value, -1.0 / (a.value * a.value));
@@ -142,7 +197,9 @@ pub fn eval_jet(s: &SExpr, unknowns: &UnknownValues, env: &Env<'_>, direction: &
             }
         }
         SExpr::Call(name, args) => {
-            let x = go(args.first().ok_or(EvalError::NotGeometric("a call without arguments"))?)?;
+            let x = go(args
+                .first()
+                .ok_or(EvalError::NotGeometric("a call without arguments"))?)?;
             let v = x.value;
             match *name {
                 "sin" => x.chain(v.sin(), v.cos(), -v.sin()),
@@ -151,21 +208,39 @@ pub fn eval_jet(s: &SExpr, unknowns: &UnknownValues, env: &Env<'_>, direction: &
                     let sec2 = 1.0 / v.cos().powi(2);
                     x.chain(v.tan(), sec2, 2.0 * sec2 * v.tan())
                 }
-                "asin" => x.chain(v.asin(), 1.0 / (1.0 - v * v).sqrt(), v / (1.0 - v * v).powf(1.5)),
-                "acos" => x.chain(v.acos(), -1.0 / (1.0 - v * v).sqrt(), -v / (1.0 - v * v).powf(1.5)),
-                "atan" => x.chain(v.atan(), 1.0 / (1.0 + v * v), -2.0 * v / (1.0 + v * v).powi(2)),
+                "asin" => x.chain(
+                    v.asin(),
+                    1.0 / (1.0 - v * v).sqrt(),
+                    v / (1.0 - v * v).powf(1.5),
+                ),
+                "acos" => x.chain(
+                    v.acos(),
+                    -1.0 / (1.0 - v * v).sqrt(),
+                    -v / (1.0 - v * v).powf(1.5),
+                ),
+                "atan" => x.chain(
+                    v.atan(),
+                    1.0 / (1.0 + v * v),
+                    -2.0 * v / (1.0 + v * v).powi(2),
+                ),
                 "sqrt" => x.chain(v.sqrt(), 0.5 / v.sqrt(), -0.25 / v.powf(1.5)),
                 "exp" => x.chain(v.exp(), v.exp(), v.exp()),
                 "log" => x.chain(v.ln(), 1.0 / v, -1.0 / (v * v)),
                 "abs" => x.chain(v.abs(), v.signum(), 0.0),
                 "atan2" => {
                     let y = x;
-                    let x = go(args.get(1).ok_or(EvalError::NotGeometric("atan2 needs two arguments"))?)?;
+                    let x = go(args
+                        .get(1)
+                        .ok_or(EvalError::NotGeometric("atan2 needs two arguments"))?)?;
                     let n = x.value * y.first - y.value * x.first;
                     let d = x.value * x.value + y.value * y.value;
                     let n1 = x.value * y.second - y.value * x.second;
                     let d1 = 2.0 * (x.value * x.first + y.value * y.first);
-                    Jet { value: y.value.atan2(x.value), first: n / d, second: (n1 * d - n * d1) / (d * d) }
+                    Jet {
+                        value: y.value.atan2(x.value),
+                        first: n / d,
+                        second: (n1 * d - n * d1) / (d * d),
+                    }
                 }
                 _ => return Err(EvalError::NotGeometric("an unknown function")),
             }
@@ -174,16 +249,38 @@ pub fn eval_jet(s: &SExpr, unknowns: &UnknownValues, env: &Env<'_>, direction: &
 }
 
 /// The value of `s` at link coordinates `q` and its derivative with respect to `q[wrt]`.
-pub fn eval_dual(s: &SExpr, unknowns: &UnknownValues, q: &[f64], wrt: Option<usize>) -> Result<Jet, EvalError> {
+pub fn eval_dual(
+    s: &SExpr,
+    unknowns: &UnknownValues,
+    q: &[f64],
+    wrt: Option<usize>,
+) -> Result<Jet, EvalError> {
     let mut direction = vec![0.0; q.len()];
     if let Some(k) = wrt.filter(|&k| k < q.len()) {
         direction[k] = 1.0;
     }
-    eval_jet(s, unknowns, &Env { coordinates: q, ..Env::default() }, &direction)
+    eval_jet(
+        s,
+        unknowns,
+        &Env {
+            coordinates: q,
+            ..Env::default()
+        },
+        &direction,
+    )
 }
 
 pub fn eval(s: &SExpr, unknowns: &UnknownValues, q: &[f64]) -> Result<f64, EvalError> {
-    eval_jet(s, unknowns, &Env { coordinates: q, ..Env::default() }, &[]).map(|j| j.value)
+    eval_jet(
+        s,
+        unknowns,
+        &Env {
+            coordinates: q,
+            ..Env::default()
+        },
+        &[],
+    )
+    .map(|j| j.value)
 }
 
 #[cfg(test)]
@@ -195,9 +292,21 @@ mod tests {
     fn expression() -> Rc<SExpr> {
         let q0 = Rc::new(SExpr::Coordinate { index: 0, order: 0 });
         let q1 = Rc::new(SExpr::Coordinate { index: 1, order: 0 });
-        let e = arith('*', &Rc::new(SExpr::Call("sin", vec![arith('*', &num(2.0), &q0)])), &arith('^', &q1, &num(3.0)));
-        let e = arith('+', &e, &Rc::new(SExpr::Call("atan2", vec![q1.clone(), q0.clone()])));
-        arith('/', &e, &Rc::new(SExpr::Call("sqrt", vec![arith('+', &q0, &num(4.0))])))
+        let e = arith(
+            '*',
+            &Rc::new(SExpr::Call("sin", vec![arith('*', &num(2.0), &q0)])),
+            &arith('^', &q1, &num(3.0)),
+        );
+        let e = arith(
+            '+',
+            &e,
+            &Rc::new(SExpr::Call("atan2", vec![q1.clone(), q0.clone()])),
+        );
+        arith(
+            '/',
+            &e,
+            &Rc::new(SExpr::Call("sqrt", vec![arith('+', &q0, &num(4.0))])),
+        )
     }
 
     #[test]
@@ -206,13 +315,17 @@ mod tests {
         let unknowns = UnknownValues::new();
         let q = [0.3, 1.7];
         for k in 0..2 {
-            let d = eval_dual(&e, &unknowns, &q, Some(k)).expect("evaluates").first;
+            let d = eval_dual(&e, &unknowns, &q, Some(k))
+                .expect("evaluates")
+                .first;
             let h = 1e-6;
             let mut plus = q;
             plus[k] += h;
             let mut minus = q;
             minus[k] -= h;
-            let fd = (eval(&e, &unknowns, &plus).expect("") - eval(&e, &unknowns, &minus).expect("")) / (2.0 * h);
+            let fd = (eval(&e, &unknowns, &plus).expect("")
+                - eval(&e, &unknowns, &minus).expect(""))
+                / (2.0 * h);
             assert!((d - fd).abs() < 1e-8, "{d} vs {fd}");
         }
     }
@@ -226,7 +339,16 @@ mod tests {
             let point = [q[0] + t * direction[0], q[1] + t * direction[1]];
             eval(&e, &unknowns, &point).expect("evaluates")
         };
-        let jet = eval_jet(&e, &unknowns, &Env { coordinates: &q, ..Env::default() }, &direction).expect("evaluates");
+        let jet = eval_jet(
+            &e,
+            &unknowns,
+            &Env {
+                coordinates: &q,
+                ..Env::default()
+            },
+            &direction,
+        )
+        .expect("evaluates");
         let h = 1e-4;
         let fd = (at(h) - 2.0 * at(0.0) + at(-h)) / (h * h);
         assert!((jet.second - fd).abs() < 1e-5, "{} vs {fd}", jet.second);

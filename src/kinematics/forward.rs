@@ -45,7 +45,11 @@ pub fn forward(model: &KinematicModel, q: &[f64]) -> Result<Configuration, EvalE
             let column = Twist::from_column_slice(subspace.column(k).as_slice());
             // Reversed traversal: the child moves with the inverse chain, whose twist in the
             // base frame is -Ad(D⁻¹) S.
-            let local = if link.first_on_parent { column } else { -spatial::transform_twist(&inverse_chain, &column) };
+            let local = if link.first_on_parent {
+                column
+            } else {
+                -spatial::transform_twist(&inverse_chain, &column)
+            };
             let world = spatial::transform_twist(&base, &local);
             for r in 0..6 {
                 jacobian[(r, joint.offset + k)] += world[r];

@@ -45,11 +45,18 @@ pub fn analyse(joint: &JointModel, unknowns: &UnknownValues) -> Result<JointAnal
     let (_, subspace) = joint.chain(&generic_coordinates(n), unknowns)?;
     let dof = rank(&subspace);
     let kind = classify(&subspace, dof);
-    Ok(JointAnalysis { kind, coordinates: n, dof, constraint: 6 - dof })
+    Ok(JointAnalysis {
+        kind,
+        coordinates: n,
+        dof,
+        constraint: 6 - dof,
+    })
 }
 
 fn columns(subspace: &DMatrix<f64>) -> Vec<Twist> {
-    (0..subspace.ncols()).map(|k| Twist::from_column_slice(subspace.column(k).as_slice())).collect()
+    (0..subspace.ncols())
+        .map(|k| Twist::from_column_slice(subspace.column(k).as_slice()))
+        .collect()
 }
 
 fn angular_rank(twists: &[Twist]) -> usize {
@@ -68,7 +75,9 @@ fn common_fixed_point(twists: &[Twist]) -> bool {
         a.view_mut((3 * k, 0), (3, 3)).copy_from(&hat);
         b.rows_mut(3 * k, 3).copy_from(&linear(t));
     }
-    let Ok(c) = a.clone().svd(true, true).solve(&b, 1e-12) else { return false };
+    let Ok(c) = a.clone().svd(true, true).solve(&b, 1e-12) else {
+        return false;
+    };
     (a * c - b).amax() < 1e-9
 }
 
@@ -81,24 +90,48 @@ fn classify(subspace: &DMatrix<f64>, dof: usize) -> JointKind {
         (6, _) => JointKind::Free,
         (1, 0) => JointKind::Prismatic,
         (1, _) => {
-            let t = twists.iter().find(|t| angular(t).norm() > tolerance).copied().unwrap_or_else(Twist::zeros);
+            let t = twists
+                .iter()
+                .find(|t| angular(t).norm() > tolerance)
+                .copied()
+                .unwrap_or_else(Twist::zeros);
             let w = angular(&t);
             let pitch = w.dot(&linear(&t)) / w.norm_squared();
-            if pitch.abs() < tolerance { JointKind::Revolute } else { JointKind::Helical }
+            if pitch.abs() < tolerance {
+                JointKind::Revolute
+            } else {
+                JointKind::Helical
+            }
         }
         (2 | 3, 0) => JointKind::Translational,
         (2, 1) => {
             // Rotation about an axis plus translation along the same axis.
-            let axis = twists.iter().map(angular).find(|w| w.norm() > tolerance).map(|w| w.normalize());
+            let axis = twists
+                .iter()
+                .map(angular)
+                .find(|w| w.norm() > tolerance)
+                .map(|w| w.normalize());
             let along = axis.map(|a| spans(subspace, &Twist::new(0.0, 0.0, 0.0, a.x, a.y, a.z)));
-            if along == Some(true) { JointKind::Cylindrical } else { JointKind::General }
+            if along == Some(true) {
+                JointKind::Cylindrical
+            } else {
+                JointKind::General
+            }
         }
         (2, 2) if common_fixed_point(&twists) => JointKind::Universal,
         (3, 3) if common_fixed_point(&twists) => JointKind::Spherical,
         (3, 1) => {
-            let normal = twists.iter().map(angular).find(|w| w.norm() > tolerance).map(|w| w.normalize());
+            let normal = twists
+                .iter()
+                .map(angular)
+                .find(|w| w.norm() > tolerance)
+                .map(|w| w.normalize());
             let in_plane = |v: Vector3<f64>| normal.is_some_and(|n| n.dot(&v).abs() < tolerance);
-            if twists.iter().all(|t| in_plane(linear(t))) { JointKind::Planar } else { JointKind::General }
+            if twists.iter().all(|t| in_plane(linear(t))) {
+                JointKind::Planar
+            } else {
+                JointKind::General
+            }
         }
         _ => JointKind::General,
     }
@@ -107,7 +140,9 @@ fn classify(subspace: &DMatrix<f64>, dof: usize) -> JointKind {
 /// Whether twist `t` lies in the column span of `subspace`.
 fn spans(subspace: &DMatrix<f64>, t: &Twist) -> bool {
     let mut extended = DMatrix::zeros(6, subspace.ncols() + 1);
-    extended.columns_mut(0, subspace.ncols()).copy_from(subspace);
+    extended
+        .columns_mut(0, subspace.ncols())
+        .copy_from(subspace);
     extended.column_mut(subspace.ncols()).copy_from(t);
     rank(&extended) == rank(subspace)
 }

@@ -75,7 +75,10 @@ pub fn rank(m: &DMatrix<f64>) -> usize {
     if largest == 0.0 {
         return 0;
     }
-    values.iter().filter(|&&s| s > RANK_TOLERANCE * largest).count()
+    values
+        .iter()
+        .filter(|&&s| s > RANK_TOLERANCE * largest)
+        .count()
 }
 
 /// rank(Δ) at q: rank of the full closure Jacobian minus the ranks of the cut joints' own motion
@@ -100,7 +103,10 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
     // coordinate count, unless a link's coordinates are redundant).
     let mut tree_dof = 0;
     for joint in model.principal() {
-        let (_, subspace) = joint.chain(&q[joint.offset..joint.offset + joint.coordinate_count()], &model.unknowns)?;
+        let (_, subspace) = joint.chain(
+            &q[joint.offset..joint.offset + joint.coordinate_count()],
+            &model.unknowns,
+        )?;
         tree_dof += rank(&subspace);
     }
     let generic_rank = nearby_rank(model, q)?.max(rank_here);
@@ -131,7 +137,9 @@ fn closed_set_dimension(model: &KinematicModel, q: &[f64]) -> Result<Option<usiz
     let mut displacements = DMatrix::zeros(nq, samples);
     let mut assembled = 0;
     for sample in 0..samples {
-        let start: Vec<f64> = (0..nq).map(|i| q[i] + SAMPLE_STEP * jitter(sample, i)).collect();
+        let start: Vec<f64> = (0..nq)
+            .map(|i| q[i] + SAMPLE_STEP * jitter(sample, i))
+            .collect();
         if let Ok(result) = assemble(model, &start, &fixed, &options) {
             for i in 0..nq {
                 displacements[(i, assembled)] = (result.q[i] - q[i]) / SAMPLE_STEP;
@@ -144,7 +152,12 @@ fn closed_set_dimension(model: &KinematicModel, q: &[f64]) -> Result<Option<usiz
     }
     let values = singular_values(&displacements.columns(0, assembled).into_owned());
     let largest = values.iter().copied().fold(0.0, f64::max);
-    Ok(Some(values.iter().filter(|&&s| s > SAMPLE_TOLERANCE * largest).count()))
+    Ok(Some(
+        values
+            .iter()
+            .filter(|&&s| s > SAMPLE_TOLERANCE * largest)
+            .count(),
+    ))
 }
 
 /// The largest rank(Δ) at assembled configurations near q (deterministic perturbations).
@@ -159,7 +172,11 @@ fn nearby_rank(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
         let perturbed: Vec<f64> = q
             .iter()
             .enumerate()
-            .map(|(i, x)| x + 0.05 * ((1.0 + i as f64 * 0.7548776662 + sample as f64 * 0.5698402910) * 12.9898).sin())
+            .map(|(i, x)| {
+                x + 0.05
+                    * ((1.0 + i as f64 * 0.7548776662 + sample as f64 * 0.5698402910) * 12.9898)
+                        .sin()
+            })
             .collect();
         if let Ok(assembled) = assemble(model, &perturbed, &fixed, &options) {
             best = best.max(constraint_rank(model, &assembled.q)?.0);
@@ -170,16 +187,23 @@ fn nearby_rank(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
 
 /// For each body, the number of independent motions of the mechanism in which it alone moves:
 /// the motions that keep every other body still, less those that keep all bodies still.
-fn internal_mobilities(model: &KinematicModel, q: &[f64]) -> Result<Vec<(usize, usize)>, EvalError> {
+fn internal_mobilities(
+    model: &KinematicModel,
+    q: &[f64],
+) -> Result<Vec<(usize, usize)>, EvalError> {
     let closure = closure(model, q)?;
     let n = model.topology.body_count();
     let jacobians = &closure.configuration.jacobians;
     let stack = |bodies: &[usize]| {
         let rows = closure.jacobian.nrows() + 6 * bodies.len();
         let mut stacked = DMatrix::zeros(rows.max(1), model.coordinate_count);
-        stacked.rows_mut(0, closure.jacobian.nrows()).copy_from(&closure.jacobian);
+        stacked
+            .rows_mut(0, closure.jacobian.nrows())
+            .copy_from(&closure.jacobian);
         for (i, &b) in bodies.iter().enumerate() {
-            stacked.rows_mut(closure.jacobian.nrows() + 6 * i, 6).copy_from(&jacobians[b]);
+            stacked
+                .rows_mut(closure.jacobian.nrows() + 6 * i, 6)
+                .copy_from(&jacobians[b]);
         }
         rank(&stacked)
     };

@@ -41,7 +41,11 @@ impl JointModel {
 
     /// The dof chain's transform at coordinates `q`, and its motion subspace: column k is the
     /// twist, in the joint's first frame, produced by a unit rate of coordinate k.
-    pub fn chain(&self, q: &[f64], unknowns: &UnknownValues) -> Result<(Pose, DMatrix<f64>), EvalError> {
+    pub fn chain(
+        &self,
+        q: &[f64],
+        unknowns: &UnknownValues,
+    ) -> Result<(Pose, DMatrix<f64>), EvalError> {
         let motion = self.chain_motion(q, None, unknowns)?;
         Ok((motion.pose, motion.subspace))
     }
@@ -49,9 +53,17 @@ impl JointModel {
     /// The chain's transform, motion subspace and, when rates are given, the acceleration of the
     /// chain's end (in the first frame, as a twist derivative) when the coordinates move at those
     /// rates with no coordinate acceleration: the bias term of the joint.
-    pub fn chain_motion(&self, q: &[f64], rates: Option<&[f64]>, unknowns: &UnknownValues) -> Result<ChainMotion, EvalError> {
+    pub fn chain_motion(
+        &self,
+        q: &[f64],
+        rates: Option<&[f64]>,
+        unknowns: &UnknownValues,
+    ) -> Result<ChainMotion, EvalError> {
         let n = self.coordinate_count();
-        let env = Env { coordinates: q, ..Env::default() };
+        let env = Env {
+            coordinates: q,
+            ..Env::default()
+        };
         let zero_rates = vec![0.0; n];
         let rates = rates.unwrap_or(&zero_rates);
         let mut pose = Pose::identity();
@@ -70,12 +82,19 @@ impl JointModel {
                     for k in 0..n {
                         unit[k] = 1.0;
                         let d = |i: usize| eval_jet(&v[i], unknowns, &env, &unit).map(|j| j.first);
-                        columns.push(spatial::twist(Vector3::zeros(), Vector3::new(d(0)?, d(1)?, d(2)?)));
+                        columns.push(spatial::twist(
+                            Vector3::zeros(),
+                            Vector3::new(d(0)?, d(1)?, d(2)?),
+                        ));
                         unit[k] = 0.0;
                     }
                     let value = Vector3::new(x.value, y.value, z.value);
-                    let velocity = spatial::twist(Vector3::zeros(), Vector3::new(x.first, y.first, z.first));
-                    let bias = spatial::twist(Vector3::zeros(), Vector3::new(x.second, y.second, z.second));
+                    let velocity =
+                        spatial::twist(Vector3::zeros(), Vector3::new(x.first, y.first, z.first));
+                    let bias = spatial::twist(
+                        Vector3::zeros(),
+                        Vector3::new(x.second, y.second, z.second),
+                    );
                     (spatial::translation(value), columns, velocity, bias)
                 }
                 Step::Rotation { angle, axis } => {
@@ -104,7 +123,12 @@ impl JointModel {
             velocity += step_velocity;
             pose *= transform;
         }
-        Ok(ChainMotion { pose, subspace, velocity, bias })
+        Ok(ChainMotion {
+            pose,
+            subspace,
+            velocity,
+            bias,
+        })
     }
 }
 
@@ -145,12 +169,22 @@ impl KinematicModel {
 
     /// Coordinates of the tree (principal links).
     pub fn tree_coordinate_count(&self) -> usize {
-        self.principal().iter().map(JointModel::coordinate_count).sum()
+        self.principal()
+            .iter()
+            .map(JointModel::coordinate_count)
+            .sum()
     }
 
     /// `crank.q`, … for every coordinate, in vector order.
     pub fn coordinate_names(&self) -> Vec<String> {
-        self.joints.iter().flat_map(|j| j.coordinate_names.iter().map(move |c| format!("{}.{c}", j.name))).collect()
+        self.joints
+            .iter()
+            .flat_map(|j| {
+                j.coordinate_names
+                    .iter()
+                    .map(move |c| format!("{}.{c}", j.name))
+            })
+            .collect()
     }
 
     pub fn joint_of_join(&self, join: JoinId) -> Option<&JointModel> {
@@ -159,11 +193,19 @@ impl KinematicModel {
 }
 
 /// Builds the numeric model. Every quantity the geometry uses must have a value.
-pub fn build(mechanism: &Mechanism, topology: Topology, unknowns: UnknownValues) -> Result<KinematicModel, Vec<Diagnostic>> {
+pub fn build(
+    mechanism: &Mechanism,
+    topology: Topology,
+    unknowns: UnknownValues,
+) -> Result<KinematicModel, Vec<Diagnostic>> {
     let mut joints = Vec::new();
     let mut errors = Vec::new();
     let mut offset = 0;
-    let order = topology.principal.iter().map(|l| l.join).chain(topology.complementary.iter().map(|l| l.join));
+    let order = topology
+        .principal
+        .iter()
+        .map(|l| l.join)
+        .chain(topology.complementary.iter().map(|l| l.join));
     for join_id in order {
         match joint_model(mechanism, &topology, join_id, &unknowns, offset) {
             Ok(joint) => {
@@ -176,7 +218,12 @@ pub fn build(mechanism: &Mechanism, topology: Topology, unknowns: UnknownValues)
     if !errors.is_empty() {
         return Err(errors);
     }
-    Ok(KinematicModel { topology, joints, unknowns, coordinate_count: offset })
+    Ok(KinematicModel {
+        topology,
+        joints,
+        unknowns,
+        coordinate_count: offset,
+    })
 }
 
 fn joint_model(
@@ -189,7 +236,9 @@ fn joint_model(
     let join = mechanism.join(id);
     let link = mechanism.link(join.link);
     let name = mechanism.join_name(id);
-    let frame = |d: &Displacement| constant_pose(d, unknowns).map_err(|e| geometry_error(mechanism, e, join.span, &name));
+    let frame = |d: &Displacement| {
+        constant_pose(d, unknowns).map_err(|e| geometry_error(mechanism, e, join.span, &name))
+    };
     let first = frame(&join.first.displacement)?;
     let second = frame(&join.second.displacement)?;
     let steps = link_steps(mechanism, id, unknowns)?;
@@ -207,7 +256,11 @@ fn joint_model(
 }
 
 /// The steps of a join's dof chain, with rotation axes evaluated and normalised.
-pub fn link_steps(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) -> Result<Vec<Step>, Diagnostic> {
+pub fn link_steps(
+    mechanism: &Mechanism,
+    id: JoinId,
+    unknowns: &UnknownValues,
+) -> Result<Vec<Step>, Diagnostic> {
     let join = mechanism.join(id);
     let link = mechanism.link(join.link);
     let name = mechanism.join_name(id);
@@ -216,21 +269,35 @@ pub fn link_steps(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) -
     for step in link.dofs.iter().flat_map(|d| d.0.iter()) {
         let parameters: Vec<&Scalar> = match step {
             Elementary::Translation(v) => v.iter().collect(),
-            Elementary::Rotation { angle, axis } => std::iter::once(angle).chain(axis.iter()).collect(),
+            Elementary::Rotation { angle, axis } => {
+                std::iter::once(angle).chain(axis.iter()).collect()
+            }
         };
         if parameters.into_iter().any(uses_frame_state) {
-            return Err(geometry_error(mechanism, EvalError::NotGeometric("the state of a frame (position, velocity, …)"), link.span, &name));
+            return Err(geometry_error(
+                mechanism,
+                EvalError::NotGeometric("the state of a frame (position, velocity, …)"),
+                link.span,
+                &name,
+            ));
         }
         steps.push(match step {
             Elementary::Translation(v) => Step::Translation(v.clone()),
             Elementary::Rotation { angle, axis } => {
-                let axis = constant_vector(axis, unknowns).map_err(|e| geometry_error(mechanism, e, link.span, &name))?;
+                let axis = constant_vector(axis, unknowns)
+                    .map_err(|e| geometry_error(mechanism, e, link.span, &name))?;
                 let norm = axis.norm();
                 if norm == 0.0 || !norm.is_finite() {
-                    return Err(Diagnostic::error("E0704", format!("a rotation of join `{name}` has a zero axis"))
-                        .primary(link.span, "in this link's dof chain"));
+                    return Err(Diagnostic::error(
+                        "E0704",
+                        format!("a rotation of join `{name}` has a zero axis"),
+                    )
+                    .primary(link.span, "in this link's dof chain"));
                 }
-                Step::Rotation { angle: angle.clone(), axis: axis / norm }
+                Step::Rotation {
+                    angle: angle.clone(),
+                    axis: axis / norm,
+                }
             }
         });
     }
@@ -238,7 +305,11 @@ pub fn link_steps(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) -
 }
 
 /// A joint model of the link alone (frames at identity): enough to analyse the joint.
-pub fn link_only(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) -> Result<JointModel, Diagnostic> {
+pub fn link_only(
+    mechanism: &Mechanism,
+    id: JoinId,
+    unknowns: &UnknownValues,
+) -> Result<JointModel, Diagnostic> {
     let join = mechanism.join(id);
     Ok(JointModel {
         join: id,
@@ -248,7 +319,12 @@ pub fn link_only(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) ->
         first: Pose::identity(),
         second: Pose::identity(),
         steps: link_steps(mechanism, id, unknowns)?,
-        coordinate_names: mechanism.link(join.link).coordinates.iter().map(|c| c.to_string()).collect(),
+        coordinate_names: mechanism
+            .link(join.link)
+            .coordinates
+            .iter()
+            .map(|c| c.to_string())
+            .collect(),
         offset: 0,
     })
 }
@@ -256,7 +332,9 @@ pub fn link_only(mechanism: &Mechanism, id: JoinId, unknowns: &UnknownValues) ->
 fn constant_vector(v: &[Scalar; 3], unknowns: &UnknownValues) -> Result<Vector3<f64>, EvalError> {
     let value = |s: &Scalar| {
         eval(s, unknowns, &[]).map_err(|e| match e {
-            EvalError::NotGeometric("a coordinate of another link") => EvalError::NotGeometric("a coordinate (rotation axes and frames are constant)"),
+            EvalError::NotGeometric("a coordinate of another link") => {
+                EvalError::NotGeometric("a coordinate (rotation axes and frames are constant)")
+            }
             other => other,
         })
     };
@@ -288,14 +366,20 @@ fn geometry_error(mechanism: &Mechanism, error: EvalError, span: Span, join: &st
     match error {
         EvalError::Missing(id) => {
             let what = super::eval::unknown_label(mechanism, id);
-            Diagnostic::error("E0801", format!("the geometry of join `{join}` needs a value for {what}"))
-                .primary(mechanism.unknowns[id.0 as usize].span, "no value given")
-                .secondary(span, "used by this join")
-                .help("give it a value: `let L = 0.5;` and use `L` instead of `?s`")
+            Diagnostic::error(
+                "E0801",
+                format!("the geometry of join `{join}` needs a value for {what}"),
+            )
+            .primary(mechanism.unknowns[id.0 as usize].span, "no value given")
+            .secondary(span, "used by this join")
+            .help("give it a value: `let L = 0.5;` and use `L` instead of `?s`")
         }
-        EvalError::NotGeometric(what) => Diagnostic::error("E0802", format!("the geometry of join `{join}` depends on {what}"))
-            .primary(span, "here")
-            .help("frames and rotation axes are constant; only the link's own coordinates vary"),
+        EvalError::NotGeometric(what) => Diagnostic::error(
+            "E0802",
+            format!("the geometry of join `{join}` depends on {what}"),
+        )
+        .primary(span, "here")
+        .help("frames and rotation axes are constant; only the link's own coordinates vary"),
     }
 }
 
@@ -303,8 +387,17 @@ impl JointModel {
     /// ∂/∂q along `direction` of the chain's twist `S(q)·rates` (in the first frame): how the
     /// joint's velocity changes when its coordinates move while the rates stay put. With
     /// `direction = rates` this is the bias of `chain_motion`.
-    pub fn velocity_derivative(&self, q: &[f64], rates: &[f64], direction: &[f64], unknowns: &UnknownValues) -> Result<Twist, EvalError> {
-        let env = Env { coordinates: q, ..Env::default() };
+    pub fn velocity_derivative(
+        &self,
+        q: &[f64],
+        rates: &[f64],
+        direction: &[f64],
+        unknowns: &UnknownValues,
+    ) -> Result<Twist, EvalError> {
+        let env = Env {
+            coordinates: q,
+            ..Env::default()
+        };
         let sum: Vec<f64> = rates.iter().zip(direction).map(|(a, b)| a + b).collect();
         // Mixed second derivative by polarisation: D²f[u, w] = (D²f[u + w] − D²f[u] − D²f[w]) / 2.
         let mixed = |s: &Scalar| -> Result<(f64, f64, f64), EvalError> {
@@ -321,7 +414,11 @@ impl JointModel {
             let (transform, local_rates, local_direction, local_mixed) = match step {
                 Step::Translation(v) => {
                     let (x, y, z) = (mixed(&v[0])?, mixed(&v[1])?, mixed(&v[2])?);
-                    let value = Vector3::new(eval(&v[0], unknowns, q)?, eval(&v[1], unknowns, q)?, eval(&v[2], unknowns, q)?);
+                    let value = Vector3::new(
+                        eval(&v[0], unknowns, q)?,
+                        eval(&v[1], unknowns, q)?,
+                        eval(&v[2], unknowns, q)?,
+                    );
                     let zero = Vector3::zeros();
                     (
                         spatial::translation(value),
@@ -342,7 +439,8 @@ impl JointModel {
                 }
             };
             let step_velocity = spatial::transform_twist(&pose, &local_rates);
-            derivative += cross(&moved_frame, &step_velocity) + spatial::transform_twist(&pose, &local_mixed);
+            derivative +=
+                cross(&moved_frame, &step_velocity) + spatial::transform_twist(&pose, &local_mixed);
             moved_frame += spatial::transform_twist(&pose, &local_direction);
             pose *= transform;
         }

@@ -7,7 +7,9 @@ pub type Twist = Vector6<f64>;
 pub type Pose = Isometry3<f64>;
 
 pub fn twist(angular: Vector3<f64>, linear: Vector3<f64>) -> Twist {
-    Twist::new(angular.x, angular.y, angular.z, linear.x, linear.y, linear.z)
+    Twist::new(
+        angular.x, angular.y, angular.z, linear.x, linear.y, linear.z,
+    )
 }
 
 pub fn angular(t: &Twist) -> Vector3<f64> {
@@ -37,12 +39,19 @@ pub fn translation(v: Vector3<f64>) -> Pose {
 
 /// Rotation by `angle` about the unit vector `axis`.
 pub fn rotation(axis: &Vector3<f64>, angle: f64) -> Pose {
-    Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_scaled_axis(axis * angle))
+    Isometry3::from_parts(
+        Translation3::identity(),
+        UnitQuaternion::from_scaled_axis(axis * angle),
+    )
 }
 
 /// The vector of the skew-symmetric part of `m`: `vee((m - mᵀ)/2)`.
 pub fn skew_vector(m: &Matrix3<f64>) -> Vector3<f64> {
-    Vector3::new(m[(2, 1)] - m[(1, 2)], m[(0, 2)] - m[(2, 0)], m[(1, 0)] - m[(0, 1)]) * 0.5
+    Vector3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    ) * 0.5
 }
 
 pub fn hat(v: &Vector3<f64>) -> Matrix3<f64> {

@@ -47,11 +47,15 @@ impl Workspace {
     /// Adds "imported here" labels to diagnostics located in libraries, so an error in a library
     /// is shown both where it is and where the user's program brought the library in.
     pub fn add_import_context(&self, diagnostic: &mut Diagnostic) {
-        let Some(span) = diagnostic.primary_span() else { return };
+        let Some(span) = diagnostic.primary_span() else {
+            return;
+        };
         let mut module = self.modules.iter().position(|m| m.file == span.file);
         let mut hops = 0;
         while let Some(index) = module {
-            let Some((site, importer)) = self.modules[index].imported_at else { break };
+            let Some((site, importer)) = self.modules[index].imported_at else {
+                break;
+            };
             let name = &self.modules[index].name;
             if !diagnostic.labels.iter().any(|l| l.span == site) {
                 diagnostic.labels.push(crate::diag::Label {
@@ -78,7 +82,10 @@ pub struct LoadOptions {
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        LoadOptions { library_dirs: Vec::new(), use_environment: true }
+        LoadOptions {
+            library_dirs: Vec::new(),
+            use_environment: true,
+        }
     }
 }
 
@@ -102,10 +109,14 @@ struct Loader {
 
 /// Loads root files from disk and everything they import. A `.urdf` file is imported as the
 /// LSD program `lsdc import-urdf` writes for it, with the default options.
-pub fn load_files(paths: &[PathBuf], options: &LoadOptions) -> Result<(Workspace, Diagnostics), String> {
+pub fn load_files(
+    paths: &[PathBuf],
+    options: &LoadOptions,
+) -> Result<(Workspace, Diagnostics), String> {
     let mut loader = Loader::new(options);
     for path in paths {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
         let key = path.canonicalize().unwrap_or_else(|_| path.clone());
         if is_urdf(path) {
             if let Some(id) = loader.add_urdf(Origin::File(key), path.display().to_string(), text) {
@@ -113,21 +124,45 @@ pub fn load_files(paths: &[PathBuf], options: &LoadOptions) -> Result<(Workspace
             }
             continue;
         }
-        let dir = path.parent().map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() });
-        let id = loader.add_module(Origin::File(key), path.display().to_string(), text, dir, None);
+        let dir = path.parent().map(|p| {
+            if p.as_os_str().is_empty() {
+                PathBuf::from(".")
+            } else {
+                p.to_path_buf()
+            }
+        });
+        let id = loader.add_module(
+            Origin::File(key),
+            path.display().to_string(),
+            text,
+            dir,
+            None,
+        );
         loader.workspace.roots.push(id);
     }
     Ok(loader.finish())
 }
 
 fn is_urdf(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
 }
 
 /// Loads a program given as text (its imports are resolved against `dir`).
-pub fn load_text(name: &str, text: &str, dir: Option<&Path>, options: &LoadOptions) -> (Workspace, Diagnostics) {
+pub fn load_text(
+    name: &str,
+    text: &str,
+    dir: Option<&Path>,
+    options: &LoadOptions,
+) -> (Workspace, Diagnostics) {
     let mut loader = Loader::new(options);
-    let id = loader.add_module(Origin::Text(name.to_string()), name.to_string(), text.to_string(), dir.map(Path::to_path_buf), None);
+    let id = loader.add_module(
+        Origin::Text(name.to_string()),
+        name.to_string(),
+        text.to_string(),
+        dir.map(Path::to_path_buf),
+        None,
+    );
     loader.workspace.roots.push(id);
     loader.finish()
 }
@@ -137,12 +172,18 @@ impl Loader {
         let mut search_dirs = options.library_dirs.clone();
         if options.use_environment {
             if let Some(value) = std::env::var_os(PATH_VARIABLE) {
-                search_dirs.extend(std::env::split_paths(&value).filter(|p| !p.as_os_str().is_empty()));
+                search_dirs
+                    .extend(std::env::split_paths(&value).filter(|p| !p.as_os_str().is_empty()));
             }
         }
         Loader {
             search_dirs,
-            workspace: Workspace { sources: SourceMap::new(), modules: Vec::new(), roots: Vec::new(), imports: HashMap::new() },
+            workspace: Workspace {
+                sources: SourceMap::new(),
+                modules: Vec::new(),
+                roots: Vec::new(),
+                imports: HashMap::new(),
+            },
             by_origin: HashMap::new(),
             in_progress: Vec::new(),
             diagnostics: Diagnostics::default(),
@@ -168,7 +209,13 @@ impl Loader {
         }
         let name = module_name(&origin);
         let id = ModuleId(self.workspace.modules.len() as u32);
-        self.workspace.modules.push(Module { file, program: Program { decls: Vec::new() }, name, dir, imported_at });
+        self.workspace.modules.push(Module {
+            file,
+            program: Program { decls: Vec::new() },
+            name,
+            dir,
+            imported_at,
+        });
         self.by_origin.insert(origin, id);
         self.in_progress.push(id);
         self.follow_imports(id, &program.decls);
@@ -189,7 +236,13 @@ impl Loader {
                 for warning in imported.warnings {
                     self.diagnostics.push(warning);
                 }
-                Some(self.add_module(origin, format!("{display_name} (imported as LSD)"), imported.text, None, None))
+                Some(self.add_module(
+                    origin,
+                    format!("{display_name} (imported as LSD)"),
+                    imported.text,
+                    None,
+                    None,
+                ))
             }
             Err(error) => {
                 self.diagnostics.push(error);
@@ -212,19 +265,30 @@ impl Loader {
         }
     }
 
-    fn resolve_import(&mut self, importer: ModuleId, site: Span, target: &ImportTarget) -> Option<ModuleId> {
+    fn resolve_import(
+        &mut self,
+        importer: ModuleId,
+        site: Span,
+        target: &ImportTarget,
+    ) -> Option<ModuleId> {
         let (file_name, target_span) = match target {
             ImportTarget::Module(ident) => (format!("{}.lsd", ident.name), ident.span),
             ImportTarget::Path { path, span } => (path.clone(), *span),
         };
         let is_module_name = matches!(target, ImportTarget::Module(_));
         let Some((origin, text, display)) = self.find(importer, &file_name, is_module_name) else {
-            self.diagnostics.push(self.missing_import(importer, &file_name, is_module_name, target_span));
+            self.diagnostics.push(self.missing_import(
+                importer,
+                &file_name,
+                is_module_name,
+                target_span,
+            ));
             return None;
         };
         if let Some(&existing) = self.by_origin.get(&origin) {
             if let Some(position) = self.in_progress.iter().position(|&m| m == existing) {
-                self.diagnostics.push(self.cycle(&self.in_progress[position..], target_span));
+                self.diagnostics
+                    .push(self.cycle(&self.in_progress[position..], target_span));
                 return None;
             }
             return Some(existing);
@@ -238,9 +302,15 @@ impl Loader {
 
     /// Finds an import: the importing file's directory, the search path, then (for module names)
     /// the standard library. The standard library's own imports stay inside it.
-    fn find(&self, importer: ModuleId, file_name: &str, is_module_name: bool) -> Option<(Origin, String, String)> {
+    fn find(
+        &self,
+        importer: ModuleId,
+        file_name: &str,
+        is_module_name: bool,
+    ) -> Option<(Origin, String, String)> {
         let importer_dir = self.workspace.module(importer).dir.clone();
-        let from_stdlib = importer_dir.is_none() && matches!(self.origin_of(importer), Some(Origin::Stdlib(_)));
+        let from_stdlib =
+            importer_dir.is_none() && matches!(self.origin_of(importer), Some(Origin::Stdlib(_)));
         if !from_stdlib {
             let dirs = importer_dir.iter().chain(self.search_dirs.iter());
             for dir in dirs {
@@ -256,27 +326,50 @@ impl Loader {
         let stem = file_name.strip_suffix(".lsd").unwrap_or(file_name);
         if is_module_name || from_stdlib {
             if let Some((name, text)) = stdlib::find(stem) {
-                return Some((Origin::Stdlib(name), text.to_string(), format!("<stdlib>/{name}.lsd")));
+                return Some((
+                    Origin::Stdlib(name),
+                    text.to_string(),
+                    format!("<stdlib>/{name}.lsd"),
+                ));
             }
         }
         None
     }
 
     fn origin_of(&self, id: ModuleId) -> Option<&Origin> {
-        self.by_origin.iter().find(|(_, &m)| m == id).map(|(o, _)| o)
+        self.by_origin
+            .iter()
+            .find(|(_, &m)| m == id)
+            .map(|(o, _)| o)
     }
 
-    fn missing_import(&self, importer: ModuleId, file_name: &str, is_module_name: bool, span: Span) -> Diagnostic {
-        let mut searched: Vec<String> = self.workspace.module(importer).dir.iter().map(|d| d.display().to_string()).collect();
+    fn missing_import(
+        &self,
+        importer: ModuleId,
+        file_name: &str,
+        is_module_name: bool,
+        span: Span,
+    ) -> Diagnostic {
+        let mut searched: Vec<String> = self
+            .workspace
+            .module(importer)
+            .dir
+            .iter()
+            .map(|d| d.display().to_string())
+            .collect();
         searched.extend(self.search_dirs.iter().map(|d| d.display().to_string()));
         let stem = file_name.strip_suffix(".lsd").unwrap_or(file_name);
-        let mut diagnostic = Diagnostic::error("E0501", format!("cannot find library `{file_name}`"))
-            .primary(span, "no such file on the library search path")
-            .note(match (is_module_name, searched.is_empty()) {
-                (true, true) => "searched: the standard library".to_string(),
-                (true, false) => format!("searched: {}, then the standard library", searched.join(", ")),
-                (false, _) => format!("searched: {}", searched.join(", ")),
-            });
+        let mut diagnostic =
+            Diagnostic::error("E0501", format!("cannot find library `{file_name}`"))
+                .primary(span, "no such file on the library search path")
+                .note(match (is_module_name, searched.is_empty()) {
+                    (true, true) => "searched: the standard library".to_string(),
+                    (true, false) => format!(
+                        "searched: {}, then the standard library",
+                        searched.join(", ")
+                    ),
+                    (false, _) => format!("searched: {}", searched.join(", ")),
+                });
         let mut known: Vec<&str> = stdlib::names().collect();
         known.sort();
         diagnostic = match suggest::did_you_mean(stem, known.iter().copied()) {
@@ -292,12 +385,21 @@ impl Loader {
     fn cycle(&self, chain: &[ModuleId], span: Span) -> Diagnostic {
         let names: Vec<String> = chain
             .iter()
-            .map(|&m| self.workspace.sources.file(self.workspace.module(m).file).name.clone())
+            .map(|&m| {
+                self.workspace
+                    .sources
+                    .file(self.workspace.module(m).file)
+                    .name
+                    .clone()
+            })
             .collect();
         let mut path = names.join(" → ");
         path.push_str(&format!(" → {}", names[0]));
         let mut diagnostic = Diagnostic::error("E0502", "import cycle")
-            .primary(span, format!("this imports `{}`, which is still being loaded", names[0]))
+            .primary(
+                span,
+                format!("this imports `{}`, which is still being loaded", names[0]),
+            )
             .note(format!("the cycle: {path}"))
             .help("move the shared definitions into a library that both files import");
         for &module in chain.iter().skip(1) {
@@ -311,8 +413,14 @@ impl Loader {
 
 fn module_name(origin: &Origin) -> String {
     match origin {
-        Origin::File(path) => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+        Origin::File(path) => path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         Origin::Stdlib(name) => name.to_string(),
-        Origin::Text(name) => Path::new(name).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+        Origin::Text(name) => Path::new(name)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
     }
 }

@@ -26,7 +26,9 @@ pub fn to_csv(simulation: &Simulation) -> String {
         for value in sample.coordinates.iter().chain(&sample.rates) {
             let _ = write!(out, ",{value:e}");
         }
-        let potential = sample.potential_energy.map_or(String::new(), |p| format!("{p:e}"));
+        let potential = sample
+            .potential_energy
+            .map_or(String::new(), |p| format!("{p:e}"));
         let _ = write!(out, ",{:e},{potential}", sample.kinetic_energy);
         for value in &sample.reactions {
             let _ = write!(out, ",{value:e}");
@@ -34,7 +36,11 @@ pub fn to_csv(simulation: &Simulation) -> String {
         out.push('\n');
     }
     if let Some(failure) = &simulation.report.failure {
-        let _ = writeln!(out, "# the run failed at t = {}: {}", failure.time, failure.message);
+        let _ = writeln!(
+            out,
+            "# the run failed at t = {}: {}",
+            failure.time, failure.message
+        );
     }
     out
 }

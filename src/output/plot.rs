@@ -66,11 +66,16 @@ enum Format {
 /// Draws the simulation's coordinates and energy over time to `path`, an SVG when it ends in
 /// `.svg` and a PNG when it ends in `.png`.
 pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
-    let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     let format = match extension.as_deref() {
         Some("svg") => Format::Svg,
         Some("png") => Format::Png,
-        _ => return Err("a plot's file name must end in .svg (vector) or .png (bitmap)".to_string()),
+        _ => {
+            return Err("a plot's file name must end in .svg (vector) or .png (bitmap)".to_string())
+        }
     };
     if simulation.samples.is_empty() {
         return Err("the simulation has no outputs to plot".to_string());
@@ -84,7 +89,14 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
             let mut svg = String::new();
             {
                 let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-                draw(&root, simulation, Render { scale: SVG_UNITS_PER_PIXEL as f64, bitmap: false })?;
+                draw(
+                    &root,
+                    simulation,
+                    Render {
+                        scale: SVG_UNITS_PER_PIXEL as f64,
+                        bitmap: false,
+                    },
+                )?;
                 root.present().map_err(|e| e.to_string())?;
             }
             let svg = svg.replacen(
@@ -98,8 +110,16 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
             let (width, height) = (WIDTH * SUPERSAMPLING, HEIGHT * SUPERSAMPLING);
             let mut pixels = vec![0u8; width as usize * height as usize * 3];
             {
-                let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
-                draw(&root, simulation, Render { scale: SUPERSAMPLING as f64, bitmap: true })?;
+                let root =
+                    BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
+                draw(
+                    &root,
+                    simulation,
+                    Render {
+                        scale: SUPERSAMPLING as f64,
+                        bitmap: true,
+                    },
+                )?;
                 root.present().map_err(|e| e.to_string())?;
             }
             write_png(path, &downsample(&pixels, SUPERSAMPLING))
@@ -110,8 +130,9 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
 /// Registers the embedded font once per process, under the family the plots use.
 fn register_fonts() -> Result<(), String> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let registered = *REGISTERED
-        .get_or_init(|| register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular()).is_ok());
+    let registered = *REGISTERED.get_or_init(|| {
+        register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular()).is_ok()
+    });
     if registered {
         Ok(())
     } else {
@@ -134,7 +155,8 @@ fn downsample(rgb: &[u8], factor: u32) -> Vec<u8> {
                         sum += rgb[(row + x * factor + dx) * 3 + c] as usize;
                     }
                 }
-                out[(y * width + x) * 3 + c] = ((sum + factor * factor / 2) / (factor * factor)) as u8;
+                out[(y * width + x) * 3 + c] =
+                    ((sum + factor * factor / 2) / (factor * factor)) as u8;
             }
         }
     }
@@ -166,7 +188,11 @@ impl Line {
             .filter_map(|s| value(s).map(|v| (s.time, v)))
             .filter(|(t, v)| t.is_finite() && v.is_finite())
             .collect();
-        Line { label: label.to_string(), points, dashed: false }
+        Line {
+            label: label.to_string(),
+            points,
+            dashed: false,
+        }
     }
 }
 
@@ -227,7 +253,11 @@ fn draw<DB: DrawingBackend>(
     let (_, height) = root.dim_in_pixel();
     let (upper, lower) = root.split_vertically((height as f64 * UPPER_SHARE) as u32);
     let label_style = render.font(LABEL_SIZE);
-    let text_width = |text: &str| root.estimate_text_size(text, &label_style).map(|(w, _)| w).map_err(error);
+    let text_width = |text: &str| {
+        root.estimate_text_size(text, &label_style)
+            .map(|(w, _)| w)
+            .map_err(error)
+    };
     let mut y_label_width = 0;
     for axis in [&coordinate_axis, &energy_axis] {
         for value in [axis.range.start, axis.range.end] {
@@ -241,8 +271,12 @@ fn draw<DB: DrawingBackend>(
     let legend_column = legend_column + render.px(LEGEND_LINE + LEGEND_GAP + LEGEND_PAD);
     // As many columns as the coordinates need, within half the width.
     let (width, _) = root.dim_in_pixel();
-    let needed = coordinates.len().div_ceil(legend_rows(&upper, coordinates.len(), render)).max(1) as u32;
-    let columns = needed.min(((width / 2).saturating_sub(render.px(LEGEND_PAD)) / legend_column).max(1));
+    let needed = coordinates
+        .len()
+        .div_ceil(legend_rows(&upper, coordinates.len(), render))
+        .max(1) as u32;
+    let columns =
+        needed.min(((width / 2).saturating_sub(render.px(LEGEND_PAD)) / legend_column).max(1));
     let layout = Layout {
         render,
         time: Axis::new(samples.iter().map(|s| s.time), false),
@@ -251,7 +285,14 @@ fn draw<DB: DrawingBackend>(
         legend_column,
         legend_columns: columns as usize,
     };
-    panel(&upper, "Coordinates", "coordinate", &coordinate_axis, &coordinates, &layout)?;
+    panel(
+        &upper,
+        "Coordinates",
+        "coordinate",
+        &coordinate_axis,
+        &coordinates,
+        &layout,
+    )?;
     panel(&lower, "Energy", "energy", &energy_axis, &energy, &layout)
 }
 
@@ -260,7 +301,11 @@ fn values(lines: &[Line]) -> impl Iterator<Item = f64> + '_ {
 }
 
 /// How many legend rows fit beside a panel's plot.
-fn legend_rows<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lines: usize, render: Render) -> usize {
+fn legend_rows<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    lines: usize,
+    render: Render,
+) -> usize {
     let (_, height) = area.dim_in_pixel();
     let usable = height as f64 - (CAPTION_SIZE + 2.0 * LEGEND_PAD) * render.scale;
     ((usable / (LEGEND_ROW * render.scale)).floor().max(1.0) as usize).min(lines.max(1))
@@ -279,7 +324,8 @@ fn panel<DB: DrawingBackend>(
     let render = layout.render;
     let px = |length: f64| render.px(length);
     let (width, _) = area.dim_in_pixel();
-    let (plot_area, legend_area) = area.split_horizontally(width.saturating_sub(layout.legend_width));
+    let (plot_area, legend_area) =
+        area.split_horizontally(width.saturating_sub(layout.legend_width));
     let mut chart = ChartBuilder::on(&plot_area)
         .caption(caption, render.font(CAPTION_SIZE))
         .margin(px(12.0))
@@ -307,9 +353,13 @@ fn panel<DB: DrawingBackend>(
         let style = PALETTE[i % PALETTE.len()].stroke_width(px(LINE_WIDTH));
         let points = line.points.iter().map(|&(t, v)| (t, v - axis.offset));
         if line.dashed {
-            chart.draw_series(DashedLineSeries::new(points, px(10.0), px(6.0), style)).map_err(error)?;
+            chart
+                .draw_series(DashedLineSeries::new(points, px(10.0), px(6.0), style))
+                .map_err(error)?;
         } else {
-            chart.draw_series(LineSeries::new(points, style)).map_err(error)?;
+            chart
+                .draw_series(LineSeries::new(points, style))
+                .map_err(error)?;
         }
     }
 
@@ -317,18 +367,33 @@ fn panel<DB: DrawingBackend>(
     // lines are too many for it, its last entry says how many it leaves out.
     let rows = legend_rows(area, lines.len(), render);
     let capacity = rows * layout.legend_columns;
-    let shown = if lines.len() > capacity { capacity - 1 } else { lines.len() };
-    let label_style = render.font(LABEL_SIZE).pos(Pos::new(HPos::Left, VPos::Center));
+    let shown = if lines.len() > capacity {
+        capacity - 1
+    } else {
+        lines.len()
+    };
+    let label_style = render
+        .font(LABEL_SIZE)
+        .pos(Pos::new(HPos::Left, VPos::Center));
     let top = ((CAPTION_SIZE + 12.0 + LEGEND_PAD) * render.scale) as i32;
-    let text_shift = if render.bitmap { (BITMAP_CENTRE_SHIFT * LABEL_SIZE * render.scale) as i32 } else { 0 };
+    let text_shift = if render.bitmap {
+        (BITMAP_CENTRE_SHIFT * LABEL_SIZE * render.scale) as i32
+    } else {
+        0
+    };
     let position = |i: usize| {
         let x = (layout.legend_column * (i / rows) as u32 + px(LEGEND_PAD)) as i32;
-        (x, top + ((i % rows) as f64 * LEGEND_ROW * render.scale) as i32)
+        (
+            x,
+            top + ((i % rows) as f64 * LEGEND_ROW * render.scale) as i32,
+        )
     };
     if shown < lines.len() {
         let (x, y) = position(shown);
         let text = format!("… and {} more", lines.len() - shown);
-        legend_area.draw_text(&text, &label_style, (x, y + text_shift)).map_err(error)?;
+        legend_area
+            .draw_text(&text, &label_style, (x, y + text_shift))
+            .map_err(error)?;
     }
     for (i, line) in lines.iter().enumerate().take(shown) {
         let (x, y) = position(i);
@@ -343,10 +408,14 @@ fn panel<DB: DrawingBackend>(
                     .map_err(error)?;
             }
         } else {
-            legend_area.draw(&PathElement::new(vec![(x, y), (x + length, y)], style)).map_err(error)?;
+            legend_area
+                .draw(&PathElement::new(vec![(x, y), (x + length, y)], style))
+                .map_err(error)?;
         }
         let text_x = x + px(LEGEND_LINE + LEGEND_GAP) as i32;
-        legend_area.draw_text(&line.label, &label_style, (text_x, y + text_shift)).map_err(error)?;
+        legend_area
+            .draw_text(&line.label, &label_style, (text_x, y + text_shift))
+            .map_err(error)?;
     }
     Ok(())
 }
@@ -382,7 +451,9 @@ impl Axis {
     fn new(values: impl Iterator<Item = f64>, margin: bool) -> Axis {
         let (lo, hi) = values
             .filter(|v| v.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
         if lo > hi {
             return Axis::plain(-1.0..1.0);
         }
@@ -390,7 +461,11 @@ impl Axis {
         let magnitude = lo.abs().max(hi.abs());
         if span <= 1e-13 * magnitude || span == 0.0 {
             let half = if margin { magnitude.max(1.0) } else { 1.0 };
-            return Axis::plain(if margin { lo - half..hi + half } else { lo..hi + half });
+            return Axis::plain(if margin {
+                lo - half..hi + half
+            } else {
+                lo..hi + half
+            });
         }
         let pad = if margin { 0.05 * span } else { 0.0 };
         let (lo, hi) = (lo - pad, hi + pad);
@@ -403,20 +478,37 @@ impl Axis {
         let decimals = (-unit.log10().round()).max(0.0) as usize;
         let mut offset_text = format!("{:.*}", decimals, offset.abs());
         if offset_text.contains('.') {
-            offset_text = offset_text.trim_end_matches('0').trim_end_matches('.').to_string();
+            offset_text = offset_text
+                .trim_end_matches('0')
+                .trim_end_matches('.')
+                .to_string();
         }
-        Axis { offset, offset_text, ..Axis::plain(lo - offset..hi - offset) }
+        Axis {
+            offset,
+            offset_text,
+            ..Axis::plain(lo - offset..hi - offset)
+        }
     }
 
     fn plain(range: Range<f64>) -> Axis {
         let step = tick_step(range.start, range.end);
         let format = label_format(range.start, range.end, step);
-        Axis { range, offset: 0.0, offset_text: String::new(), step, format }
+        Axis {
+            range,
+            offset: 0.0,
+            offset_text: String::new(),
+            step,
+            format,
+        }
     }
 
     fn label(&self, value: f64) -> String {
         // A tick at zero comes out of plotters' arithmetic as, say, -8e-28.
-        let value = if value.abs() < 1e-6 * self.step { 0.0 } else { value };
+        let value = if value.abs() < 1e-6 * self.step {
+            0.0
+        } else {
+            value
+        };
         if value == 0.0 {
             return if let LabelFormat::Fixed(decimals) = self.format {
                 format!("{:.decimals$}", 0.0)
@@ -430,7 +522,12 @@ impl Axis {
         };
         // No "-0.0" for a tick that is zero up to rounding.
         match text.strip_prefix('-') {
-            Some(rest) if rest.chars().take_while(|c| *c != 'e').all(|c| c == '0' || c == '.') => {
+            Some(rest)
+                if rest
+                    .chars()
+                    .take_while(|c| *c != 'e')
+                    .all(|c| c == '0' || c == '.') =>
+            {
                 rest.to_string()
             }
             _ => text,
@@ -464,7 +561,10 @@ fn tick_step(lo: f64, hi: f64) -> f64 {
 /// Enough decimals to tell the ticks apart; scientific notation for large or small magnitudes.
 fn label_format(lo: f64, hi: f64, step: f64) -> LabelFormat {
     let magnitude = lo.abs().max(hi.abs());
-    let (top, bottom) = (magnitude.log10().floor() as i32, (step.log10() + 1e-9).floor() as i32);
+    let (top, bottom) = (
+        magnitude.log10().floor() as i32,
+        (step.log10() + 1e-9).floor() as i32,
+    );
     if !(1e-3..1e5).contains(&magnitude) {
         LabelFormat::Scientific((top - bottom).max(0) as usize)
     } else {
@@ -528,7 +628,9 @@ mod tests {
         let svg = temp_path("test.svg");
         plot(&simulation, &svg).unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
-        assert!(text.starts_with(&format!("<svg width=\"{WIDTH}\" height=\"{HEIGHT}\" viewBox=")));
+        assert!(text.starts_with(&format!(
+            "<svg width=\"{WIDTH}\" height=\"{HEIGHT}\" viewBox="
+        )));
         for name in &simulation.coordinate_names {
             assert!(text.contains(name.as_str()), "the SVG names {name}");
         }
@@ -558,8 +660,14 @@ mod tests {
         assert_eq!((axis.offset, &axis.format), (0.0, &LabelFormat::Fixed(1)));
         assert_eq!(axis.label(-1e-17), "0.0");
         assert_eq!(axis.label(-0.4), "-0.4");
-        assert_eq!(Axis::new([0.0, 4500.0].into_iter(), false).label(500.0), "500");
-        assert_eq!(Axis::new([0.0, 2e-6].into_iter(), false).label(1e-6), "1.0e-6");
+        assert_eq!(
+            Axis::new([0.0, 4500.0].into_iter(), false).label(500.0),
+            "500"
+        );
+        assert_eq!(
+            Axis::new([0.0, 2e-6].into_iter(), false).label(1e-6),
+            "1.0e-6"
+        );
         // A conserved energy that drifts by parts in 10¹²: labelled relative to an offset.
         let axis = Axis::new([4.005_2, 4.005_2 + 3e-11].into_iter(), true);
         assert_eq!(axis.description("energy"), "energy − 4.0052");
@@ -567,7 +675,11 @@ mod tests {
         assert_eq!(axis.label(2e-11), "2.0e-11");
         assert_eq!(axis.label(-8e-28), "0");
         let axis = Axis::new([-2.96, -2.96 - 1e-9].into_iter(), true);
-        assert!(axis.description("energy").starts_with("energy + 2.96"), "{}", axis.description("energy"));
+        assert!(
+            axis.description("energy").starts_with("energy + 2.96"),
+            "{}",
+            axis.description("energy")
+        );
         // Constant or missing values still get a range.
         assert_eq!(Axis::new([3.0, 3.0].into_iter(), true).range, 0.0..6.0);
         assert_eq!(Axis::new(std::iter::empty(), true).range, -1.0..1.0);

@@ -33,7 +33,13 @@ fn joint_text(link: &LinkReport) -> String {
 }
 
 pub fn tree(report: &TreeReport) -> String {
-    let name_of = |n: usize| if n == 0 { "earth".to_string() } else { report.bodies[n - 1].name.clone() };
+    let name_of = |n: usize| {
+        if n == 0 {
+            "earth".to_string()
+        } else {
+            report.bodies[n - 1].name.clone()
+        }
+    };
     let mut out = String::from("bodies (breadth-first from earth)\n");
     for body in &report.bodies {
         out += &format!(
@@ -58,7 +64,9 @@ pub fn tree(report: &TreeReport) -> String {
                 name_of(link.first_body),
                 name_of(link.second_body),
                 joint_text(link),
-                link.joint.as_ref().map_or("?".to_string(), |j| j.constraint.to_string())
+                link.joint
+                    .as_ref()
+                    .map_or("?".to_string(), |j| j.constraint.to_string())
             );
         }
     }
@@ -84,10 +92,17 @@ pub fn tree(report: &TreeReport) -> String {
                 );
             }
             if m.singular {
-                out += &format!("singular configuration: the rank is {} here and {} at nearby configurations\n", m.rank, m.generic_rank);
+                out += &format!(
+                    "singular configuration: the rank is {} here and {} at nearby configurations\n",
+                    m.rank, m.generic_rank
+                );
             }
             for (body, count) in &m.internal {
-                out += &format!("internal mobility: {} can move alone ({count} way{})\n", name_of(*body), if *count == 1 { "" } else { "s" });
+                out += &format!(
+                    "internal mobility: {} can move alone ({count} way{})\n",
+                    name_of(*body),
+                    if *count == 1 { "" } else { "s" }
+                );
             }
         }
         (None, Some(reason)) => out += &format!("mobility not computed: {reason}\n"),
@@ -102,7 +117,10 @@ pub fn assembly(report: &AssemblyReport) -> String {
         let held = if c.fixed { "  (fixed)" } else { "" };
         out += &format!("{:<24} {:>22.15e}{held}\n", c.name, c.value);
     }
-    out += &format!("assembled in {} iterations, largest residual {:.1e}\n", report.iterations, report.residual);
+    out += &format!(
+        "assembled in {} iterations, largest residual {:.1e}\n",
+        report.iterations, report.residual
+    );
     out
 }
 
@@ -110,7 +128,12 @@ pub fn assembly(report: &AssemblyReport) -> String {
 pub fn run_report(report: &crate::simulate::run::Report) -> String {
     let mut out = format!(
         "{}: {} steps ({} rejected), {} function evaluations, {:.3} s to simulate {} s\n",
-        report.integrator, report.steps, report.rejected_steps, report.function_evaluations, report.run_seconds, report.duration
+        report.integrator,
+        report.steps,
+        report.rejected_steps,
+        report.function_evaluations,
+        report.run_seconds,
+        report.duration
     );
     if let Some(drift) = report.energy_drift {
         out += &format!("energy drift (relative): {drift:.3e}\n");
@@ -122,28 +145,43 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
         out += &format!("energy balance (kinetic + potential - work, relative): {balance:.3e}\n");
     }
     if let Some(drift) = report.momentum_drift {
-        out += &format!("momentum drift: linear {:.3e}, angular {:.3e}\n", drift.linear, drift.angular);
+        out += &format!(
+            "momentum drift: linear {:.3e}, angular {:.3e}\n",
+            drift.linear, drift.angular
+        );
     }
     if let Some(c) = &report.constraints {
         out += &constraint_report(c);
     }
     if let Some(failure) = &report.failure {
-        out += &format!("the run FAILED at t = {}: {}\n", failure.time, failure.message);
+        out += &format!(
+            "the run FAILED at t = {}: {}\n",
+            failure.time, failure.message
+        );
     }
     out
 }
 
 fn constraint_report(c: &crate::simulate::constraints::ConstraintReport) -> String {
-    let mut out = format!("loops: {} constraint rows, rank {} at the start; stabilisation: {}\n", c.rows, c.rank, c.stabilisation);
+    let mut out = format!(
+        "loops: {} constraint rows, rank {} at the start; stabilisation: {}\n",
+        c.rows, c.rank, c.stabilisation
+    );
     if !c.redundant.is_empty() {
-        out += &format!("  {} redundant (implied by the others): {}\n", c.redundant.len(), c.redundant.join(", "));
+        out += &format!(
+            "  {} redundant (implied by the others): {}\n",
+            c.redundant.len(),
+            c.redundant.join(", ")
+        );
     }
     out += &format!(
         "  largest residuals: position {:.3e}, velocity {:.3e} (before projection: {:.3e}, {:.3e})\n",
         c.position_residual, c.velocity_residual, c.position_residual_before_projection, c.velocity_residual_before_projection
     );
     for passage in &c.singular {
-        let end = passage.end.map_or("the end of the run".to_string(), |t| format!("t = {t}"));
+        let end = passage
+            .end
+            .map_or("the end of the run".to_string(), |t| format!("t = {t}"));
         out += &format!(
             "  near a singular configuration from t = {} to {}: the loop closed by `{}` loses a constraint direction (singular value down to {:.1e} of the largest); the run went on\n",
             passage.start, end, passage.loop_name, passage.smallest_ratio
@@ -161,7 +199,8 @@ fn constraint_report(c: &crate::simulate::constraints::ConstraintReport) -> Stri
 /// Holding efforts, one coordinate per line.
 pub fn holding(h: &crate::simulate::statics::Holding) -> String {
     let width = h.efforts.iter().map(|e| e.name.len()).max().unwrap_or(0);
-    let mut out = String::from("efforts that hold the mechanism at rest (along each coordinate):\n");
+    let mut out =
+        String::from("efforts that hold the mechanism at rest (along each coordinate):\n");
     for e in &h.efforts {
         out += &format!("  {:width$}  {:.6e}\n", e.name, e.effort);
     }

@@ -145,9 +145,18 @@ pub fn position_names(model: &Model) -> Vec<String> {
     for joint in &model.joints {
         let name = &joint.chain.name;
         match joint.kind {
-            JointType::Chain => names.extend(joint.chain.coordinate_names.iter().map(|c| format!("{name}.{c}"))),
-            JointType::Spherical { .. } => names.extend(["qw", "qx", "qy", "qz"].map(|c| format!("{name}.{c}"))),
-            JointType::Free { .. } => names.extend(["px", "py", "pz", "qw", "qx", "qy", "qz"].map(|c| format!("{name}.{c}"))),
+            JointType::Chain => names.extend(
+                joint
+                    .chain
+                    .coordinate_names
+                    .iter()
+                    .map(|c| format!("{name}.{c}")),
+            ),
+            JointType::Spherical { .. } => {
+                names.extend(["qw", "qx", "qy", "qz"].map(|c| format!("{name}.{c}")))
+            }
+            JointType::Free { .. } => names
+                .extend(["px", "py", "pz", "qw", "qx", "qy", "qz"].map(|c| format!("{name}.{c}"))),
         }
     }
     names
@@ -162,7 +171,8 @@ pub fn evaluate_states(prepared: &Prepared, states: &[StateInput]) -> Result<Eva
     let mut system = MechanicalSystem::new(model, reference, Stabilisation::None);
     let mut outputs = Vec::with_capacity(states.len());
     for (index, state) in states.iter().enumerate() {
-        let output = evaluate_state(&mut system, state).map_err(|e| format!("state {index}: {e}"))?;
+        let output =
+            evaluate_state(&mut system, state).map_err(|e| format!("state {index}: {e}"))?;
         outputs.push(output);
     }
     Ok(Evaluation {
@@ -175,7 +185,10 @@ pub fn evaluate_states(prepared: &Prepared, states: &[StateInput]) -> Result<Eva
 
 fn check_length(what: &str, values: &[f64], expected: usize) -> Result<(), String> {
     if values.len() != expected {
-        return Err(format!("`{what}` has {} entries, the mechanism has {expected}", values.len()));
+        return Err(format!(
+            "`{what}` has {} entries, the mechanism has {expected}",
+            values.len()
+        ));
     }
     if let Some(i) = values.iter().position(|x| !x.is_finite()) {
         return Err(format!("`{what}[{i}]` is not a finite number"));
@@ -191,15 +204,26 @@ fn check_quaternions(model: &Model, q: &[f64]) -> Result<(), String> {
             JointType::Spherical { .. } => joint.q_offset,
             JointType::Free { .. } => joint.q_offset + 3,
         };
-        let norm = q[start..start + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+        let norm = q[start..start + 4]
+            .iter()
+            .map(|x| x * x)
+            .sum::<f64>()
+            .sqrt();
         if (norm - 1.0).abs() > 1e-9 {
-            return Err(format!("the quaternion of `{}` (q[{start}..{}]) has norm {norm}, not 1", joint.chain.name, start + 4));
+            return Err(format!(
+                "the quaternion of `{}` (q[{start}..{}]) has norm {norm}, not 1",
+                joint.chain.name,
+                start + 4
+            ));
         }
     }
     Ok(())
 }
 
-fn evaluate_state(system: &mut MechanicalSystem<'_>, state: &StateInput) -> Result<StateOutput, String> {
+fn evaluate_state(
+    system: &mut MechanicalSystem<'_>,
+    state: &StateInput,
+) -> Result<StateOutput, String> {
     let model = system.model;
     let zero = vec![0.0; model.nv];
     let v = state.v.as_deref().unwrap_or(&zero);
@@ -218,7 +242,8 @@ fn evaluate_state(system: &mut MechanicalSystem<'_>, state: &StateInput) -> Resu
     if efforts.is_err() {
         // Without the kinematics nothing can be computed; with it, only RNEA and ABA need the
         // efforts.
-        forward_kinematics(model, &mut system.data, &state.q, v).map_err(|e| evaluation_message(&e))?;
+        forward_kinematics(model, &mut system.data, &state.q, v)
+            .map_err(|e| evaluation_message(&e))?;
     }
     let frames = frame_poses(system);
     let mut errors = BTreeMap::new();
@@ -227,8 +252,18 @@ fn evaluate_state(system: &mut MechanicalSystem<'_>, state: &StateInput) -> Resu
         (None, _) => None,
         (Some(_), Err(e)) => kept(&mut errors, "rnea", Err(e.clone())),
         (Some(a), Ok(efforts)) => {
-            let tau = rnea(model, &mut system.data, &state.q, v, a, &efforts.external).map_err(|e| evaluation_message(&e));
-            kept(&mut errors, "rnea", tau.map(|tau| (tau - efforts.tau.rows(0, model.nv)).iter().copied().collect()))
+            let tau = rnea(model, &mut system.data, &state.q, v, a, &efforts.external)
+                .map_err(|e| evaluation_message(&e));
+            kept(
+                &mut errors,
+                "rnea",
+                tau.map(|tau| {
+                    (tau - efforts.tau.rows(0, model.nv))
+                        .iter()
+                        .copied()
+                        .collect()
+                }),
+            )
         }
     };
     let accelerations = match (&state.tau, &efforts) {
@@ -236,18 +271,41 @@ fn evaluate_state(system: &mut MechanicalSystem<'_>, state: &StateInput) -> Resu
         (Some(_), Err(e)) => kept(&mut errors, "aba", Err(e.clone())),
         (Some(tau), Ok(efforts)) => {
             let total = DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv);
-            let a = aba(model, &mut system.data, &state.q, v, total.as_slice(), &efforts.external).map_err(|e| system.dynamics_message(&e));
+            let a = aba(
+                model,
+                &mut system.data,
+                &state.q,
+                v,
+                total.as_slice(),
+                &efforts.external,
+            )
+            .map_err(|e| system.dynamics_message(&e));
             kept(&mut errors, "aba", a.map(|a| a.iter().copied().collect()))
         }
     };
     let mass = crba(model, &mut system.data, &state.q).map_err(|e| evaluation_message(&e))?;
-    let crba_rows = mass.row_iter().map(|row| row.iter().copied().collect()).collect();
-    Ok(StateOutput { rnea: rnea_tau, crba: crba_rows, aba: accelerations, frames, errors })
+    let crba_rows = mass
+        .row_iter()
+        .map(|row| row.iter().copied().collect())
+        .collect();
+    Ok(StateOutput {
+        rnea: rnea_tau,
+        crba: crba_rows,
+        aba: accelerations,
+        frames,
+        errors,
+    })
 }
 
 /// The value of a quantity, or `None` with its error recorded under its name.
-fn kept(errors: &mut BTreeMap<String, String>, quantity: &str, value: Result<Vec<f64>, String>) -> Option<Vec<f64>> {
-    value.map_err(|e| errors.insert(quantity.to_string(), e)).ok()
+fn kept(
+    errors: &mut BTreeMap<String, String>,
+    quantity: &str,
+    value: Result<Vec<f64>, String>,
+) -> Option<Vec<f64>> {
+    value
+        .map_err(|e| errors.insert(quantity.to_string(), e))
+        .ok()
 }
 
 /// World poses of the bodies; the system's data must hold the forward kinematics of the state.

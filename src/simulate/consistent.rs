@@ -22,26 +22,49 @@ pub fn initial_state(
     rates: &[f64],
 ) -> Result<(Vec<f64>, Vec<f64>), Vec<Diagnostic>> {
     let coordinates = assembled(mechanism, kinematics)?;
-    let evaluation = |e| vec![Diagnostic::error("E0804", format!("cannot evaluate the initial state: {}", crate::kinematics::eval::describe(&e, mechanism)))];
-    let (mut q, mut v) = model.state_from_declared(&coordinates, rates).map_err(evaluation)?;
+    let evaluation = |e| {
+        vec![Diagnostic::error(
+            "E0804",
+            format!(
+                "cannot evaluate the initial state: {}",
+                crate::kinematics::eval::describe(&e, mechanism)
+            ),
+        )]
+    };
+    let (mut q, mut v) = model
+        .state_from_declared(&coordinates, rates)
+        .map_err(evaluation)?;
     let given = given_velocities(mechanism, model);
     let mut data = Data::new(model);
     let c = constraints(model, &mut data, &q, &v, false).map_err(evaluation)?;
-    complete_rates(&c.jacobian, &given, &mut v).map_err(|message| vec![incompatible_rates(mechanism, &given, message)])?;
+    complete_rates(&c.jacobian, &given, &mut v)
+        .map_err(|message| vec![incompatible_rates(mechanism, &given, message)])?;
     // Assembly stops at 1e-12: finish at round-off.
     project(model, &mut data, &mut q, &mut v).map_err(evaluation)?;
     model.declared(&q, &v, &coordinates).map_err(evaluation)
 }
 
-fn assembled(mechanism: &Mechanism, kinematics: &KinematicModel) -> Result<Vec<f64>, Vec<Diagnostic>> {
+fn assembled(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+) -> Result<Vec<f64>, Vec<Diagnostic>> {
     let (start, fixed) = initial_coordinates(mechanism, kinematics).map_err(|d| vec![d])?;
     match assemble(kinematics, &start, &fixed, &AssemblyOptions::default()) {
         Ok(assembled) => Ok(assembled.q),
         Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error(
             "E0804",
-            format!("cannot evaluate the geometry: {}", crate::kinematics::eval::describe(&e, mechanism)),
+            format!(
+                "cannot evaluate the geometry: {}",
+                crate::kinematics::eval::describe(&e, mechanism)
+            ),
         )]),
-        Err(AssemblyError::NoAssembly { loop_errors, .. }) => Err(vec![crate::analysis::no_assembly(mechanism, kinematics, &loop_errors)]),
+        Err(AssemblyError::NoAssembly { loop_errors, .. }) => {
+            Err(vec![crate::analysis::no_assembly(
+                mechanism,
+                kinematics,
+                &loop_errors,
+            )])
+        }
     }
 }
 
@@ -52,25 +75,36 @@ fn given_velocities(mechanism: &Mechanism, model: &Model) -> Vec<(usize, String)
     for initial in mechanism.initial.iter().filter(|i| i.order == 1) {
         let name = mechanism.join_name(initial.join);
         let index = match model.joint_of(initial.join) {
-            Some(j) if !model.joints[j].is_quaternion() => model.joints[j].v_offset + initial.coordinate,
+            Some(j) if !model.joints[j].is_quaternion() => {
+                model.joints[j].v_offset + initial.coordinate
+            }
             Some(_) => continue,
             None => match model.loops.iter().position(|l| l.join == initial.join) {
                 Some(k) => model.nv + model.loop_offset(k) + initial.coordinate,
                 None => continue,
             },
         };
-        let coordinate = &mechanism.link(mechanism.join(initial.join).link).coordinates[initial.coordinate];
+        let coordinate = &mechanism
+            .link(mechanism.join(initial.join).link)
+            .coordinates[initial.coordinate];
         given.push((index, format!("{name}.{coordinate}'")));
     }
     given
 }
 
 /// Changes the velocities not given as little as possible so that G v = 0.
-fn complete_rates(jacobian: &DMatrix<f64>, given: &[(usize, String)], v: &mut [f64]) -> Result<(), String> {
-    let free: Vec<usize> = (0..v.len()).filter(|i| !given.iter().any(|(g, _)| g == i)).collect();
+fn complete_rates(
+    jacobian: &DMatrix<f64>,
+    given: &[(usize, String)],
+    v: &mut [f64],
+) -> Result<(), String> {
+    let free: Vec<usize> = (0..v.len())
+        .filter(|i| !given.iter().any(|(g, _)| g == i))
+        .collect();
     let velocity = DVector::from_column_slice(v);
     let error = jacobian * &velocity;
-    let free_columns = DMatrix::from_fn(jacobian.nrows(), free.len(), |r, c| jacobian[(r, free[c])]);
+    let free_columns =
+        DMatrix::from_fn(jacobian.nrows(), free.len(), |r, c| jacobian[(r, free[c])]);
     let correction = decompose(&free_columns).pseudo_inverse * &error;
     for (k, &i) in free.iter().enumerate() {
         v[i] -= correction[k];
@@ -78,12 +112,18 @@ fn complete_rates(jacobian: &DMatrix<f64>, given: &[(usize, String)], v: &mut [f
     let left = (jacobian * DVector::from_column_slice(v)).amax();
     let scale = velocity.amax().max(1e-300) * jacobian.amax().max(1e-300);
     if left > 1e-9 * scale {
-        return Err(format!("they leave the loops opening at {left:.3e} (m/s or rad/s)"));
+        return Err(format!(
+            "they leave the loops opening at {left:.3e} (m/s or rad/s)"
+        ));
     }
     Ok(())
 }
 
-fn incompatible_rates(mechanism: &Mechanism, given: &[(usize, String)], message: String) -> Diagnostic {
+fn incompatible_rates(
+    mechanism: &Mechanism,
+    given: &[(usize, String)],
+    message: String,
+) -> Diagnostic {
     let names: Vec<String> = given.iter().map(|(_, n)| format!("`{n}`")).collect();
     let mut diagnostic = Diagnostic::error("E0815", format!("the initial rates {} are not compatible with the loops: {message}", names.join(", ")))
         .help("give the rates of independent coordinates only (as many as the mobility); the others follow from the loops");

@@ -71,7 +71,10 @@ pub struct LoopMonitor {
 }
 
 fn max(a: Residuals, b: Residuals) -> Residuals {
-    Residuals { position: a.position.max(b.position), velocity: a.velocity.max(b.velocity) }
+    Residuals {
+        position: a.position.max(b.position),
+        velocity: a.velocity.max(b.velocity),
+    }
 }
 
 impl LoopMonitor {
@@ -90,7 +93,13 @@ impl LoopMonitor {
     }
 
     /// Records the rank and the redundant rows at the (consistent) initial state.
-    pub fn start(&mut self, model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+    pub fn start(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), EvalError> {
         self.massless = loops::massless_count(model, data, q)?;
         let c = loops::constraints(model, data, q, v, false)?;
         let active = loops::active_rows(model);
@@ -100,7 +109,10 @@ impl LoopMonitor {
             .into_iter()
             .map(|row| format!("{}: {}", model.loops[row / 6].name, ROW_NAMES[row % 6]))
             .collect();
-        let residuals = Residuals { position: c.residual.amax(), velocity: c.velocity.amax() };
+        let residuals = Residuals {
+            position: c.residual.amax(),
+            velocity: c.velocity.amax(),
+        };
         (self.before, self.after) = (residuals, residuals);
         Ok(())
     }
@@ -112,10 +124,23 @@ impl LoopMonitor {
     /// set cross, the nearest closed point may lie on the other branch, and projecting there
     /// would switch branches against the momentum. The accelerations keep the constraints to
     /// the integration's accuracy through the short passage, and projection resumes after it.
-    pub fn keep(&mut self, model: &Model, data: &mut Data, time: f64, q: &mut [f64], v: &mut [f64]) -> Result<bool, EvalError> {
+    pub fn keep(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        time: f64,
+        q: &mut [f64],
+        v: &mut [f64],
+    ) -> Result<bool, EvalError> {
         if self.stabilisation == Stabilisation::Projection && !self.near_singular(model, data, q)? {
             let projection = loops::project(model, data, q, v)?;
-            self.observe(model, time, projection.before, projection.after, &projection.basis);
+            self.observe(
+                model,
+                time,
+                projection.before,
+                projection.after,
+                &projection.basis,
+            );
             return Ok(true);
         }
         self.measure(model, data, time, q, v)?;
@@ -133,14 +158,37 @@ impl LoopMonitor {
     }
 
     /// Records the residuals and the rank at (q, v) without moving it.
-    pub fn measure(&mut self, model: &Model, data: &mut Data, time: f64, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+    pub fn measure(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        time: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), EvalError> {
         let c = loops::constraints(model, data, q, v, false)?;
-        let residuals = Residuals { position: c.residual.amax(), velocity: c.velocity.amax() };
-        self.observe(model, time, residuals, residuals, &loops::decompose(&c.jacobian));
+        let residuals = Residuals {
+            position: c.residual.amax(),
+            velocity: c.velocity.amax(),
+        };
+        self.observe(
+            model,
+            time,
+            residuals,
+            residuals,
+            &loops::decompose(&c.jacobian),
+        );
         Ok(())
     }
 
-    fn observe(&mut self, model: &Model, time: f64, before: Residuals, after: Residuals, basis: &Decomposition) {
+    fn observe(
+        &mut self,
+        model: &Model,
+        time: f64,
+        before: Residuals,
+        after: Residuals,
+        basis: &Decomposition,
+    ) {
         self.before = max(self.before, before);
         self.after = max(self.after, after);
         if self.rank == 0 || basis.singular_values.len() < self.rank {
@@ -149,17 +197,28 @@ impl LoopMonitor {
         let ratio = basis.singular_values[self.rank - 1] / basis.singular_values[0];
         let loop_name = || {
             let direction: DVector<f64> = basis.left.column(self.rank - 1).into_owned();
-            model.loops[loops::loop_of_direction(&direction)].name.clone()
+            model.loops[loops::loop_of_direction(&direction)]
+                .name
+                .clone()
         };
         if self.closest.as_ref().is_none_or(|c| ratio < c.ratio) {
-            self.closest = Some(ClosestApproach { time, ratio, loop_name: loop_name() });
+            self.closest = Some(ClosestApproach {
+                time,
+                ratio,
+                loop_name: loop_name(),
+            });
         }
         let open = self.singular.last_mut().filter(|p| p.end.is_none());
         match open {
             Some(passage) if ratio >= NEAR_SINGULAR => passage.end = Some(time),
             Some(passage) => passage.smallest_ratio = passage.smallest_ratio.min(ratio),
             None if ratio < NEAR_SINGULAR => {
-                self.singular.push(SingularPassage { start: time, end: None, loop_name: loop_name(), smallest_ratio: ratio });
+                self.singular.push(SingularPassage {
+                    start: time,
+                    end: None,
+                    loop_name: loop_name(),
+                    smallest_ratio: ratio,
+                });
             }
             None => {}
         }
@@ -174,7 +233,11 @@ impl LoopMonitor {
                 self.closest = Some(theirs.clone());
             }
         }
-        let mut passages: Vec<SingularPassage> = self.singular.drain(..).chain(other.singular.iter().cloned()).collect();
+        let mut passages: Vec<SingularPassage> = self
+            .singular
+            .drain(..)
+            .chain(other.singular.iter().cloned())
+            .collect();
         passages.sort_by(|a, b| a.start.total_cmp(&b.start));
         for passage in passages {
             match self.singular.last_mut() {
@@ -194,7 +257,9 @@ impl LoopMonitor {
         let stabilisation = match self.stabilisation {
             Stabilisation::Projection => "projection".to_string(),
             Stabilisation::Baumgarte(rate) => format!("baumgarte ({rate} 1/s)"),
-            Stabilisation::Integrator => "the integrator's constraint equations (RATTLE)".to_string(),
+            Stabilisation::Integrator => {
+                "the integrator's constraint equations (RATTLE)".to_string()
+            }
             Stabilisation::None => "none".to_string(),
         };
         ConstraintReport {

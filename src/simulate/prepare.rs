@@ -84,8 +84,13 @@ fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<Unk
         collect_displacement(&join.first.displacement, &mut required);
         collect_displacement(&join.second.displacement, &mut required);
         let link = mechanism.link(join.link);
-        link.dofs.iter().for_each(|d| collect_displacement(d, &mut required));
-        link.forces.iter().chain(&link.torques).for_each(|(_, v)| collect_vector(v, &mut required));
+        link.dofs
+            .iter()
+            .for_each(|d| collect_displacement(d, &mut required));
+        link.forces
+            .iter()
+            .chain(&link.torques)
+            .for_each(|(_, v)| collect_vector(v, &mut required));
     }
     for &id in &topology.bodies {
         let body = mechanism.body(id);
@@ -95,7 +100,11 @@ fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<Unk
         let declared_massless = body.mass.is_declared()
             && body.inertia.is_declared()
             && eval(body.mass.value(), &UnknownValues::new(), &[]) == Ok(0.0)
-            && body.inertia.value().iter().all(|s| eval(s, &UnknownValues::new(), &[]) == Ok(0.0));
+            && body
+                .inertia
+                .value()
+                .iter()
+                .all(|s| eval(s, &UnknownValues::new(), &[]) == Ok(0.0));
         if !declared_massless {
             required.extend(inertia);
             collect_displacement(body.iframe.value(), &mut required);
@@ -103,13 +112,20 @@ fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<Unk
     }
     for application in &mechanism.applications {
         collect_displacement(&application.target.displacement, &mut required);
-        collect_vector(mechanism.effort(application.effort).value.value(), &mut required);
+        collect_vector(
+            mechanism.effort(application.effort).value.value(),
+            &mut required,
+        );
     }
     required
 }
 
 /// Every name an unknown answers to: its `let` name, its generated name, its generic name.
-fn names_of(mechanism: &Mechanism, generated: &HashMap<UnknownId, String>, id: UnknownId) -> Vec<String> {
+fn names_of(
+    mechanism: &Mechanism,
+    generated: &HashMap<UnknownId, String>,
+    id: UnknownId,
+) -> Vec<String> {
     let unknown = &mechanism.unknowns[id.0 as usize];
     let mut names = Vec::new();
     if let Some(name) = &unknown.name {
@@ -151,7 +167,9 @@ fn unknown_values(
             Some(v) => {
                 values.insert(*id, v);
             }
-            None => errors.push(Diagnostic::error("E0810", "a given value must be a number").primary(*span, "here")),
+            None => errors.push(
+                Diagnostic::error("E0810", "a given value must be a number").primary(*span, "here"),
+            ),
         }
     }
     let mut by_name: HashMap<String, UnknownId> = HashMap::new();
@@ -175,32 +193,77 @@ fn unknown_values(
             None => {
                 let help = suggest::did_you_mean(&o.name, by_name.keys().map(String::as_str))
                     .map(|s| format!("did you mean `{s}`?"))
-                    .unwrap_or_else(|| "`lsdc compile FILE --emit notation` lists the generated names".to_string());
-                errors.push(Diagnostic::error("E0811", format!("`--set {}`: the program has no unknown of that name", o.name)).help(help));
+                    .unwrap_or_else(|| {
+                        "`lsdc compile FILE --emit notation` lists the generated names".to_string()
+                    });
+                errors.push(
+                    Diagnostic::error(
+                        "E0811",
+                        format!(
+                            "`--set {}`: the program has no unknown of that name",
+                            o.name
+                        ),
+                    )
+                    .help(help),
+                );
             }
         }
     }
-    if errors.is_empty() { Ok(values) } else { Err(errors) }
+    if errors.is_empty() {
+        Ok(values)
+    } else {
+        Err(errors)
+    }
 }
 
-fn missing_value(mechanism: &Mechanism, generated: &HashMap<UnknownId, String>, id: UnknownId) -> Diagnostic {
+fn missing_value(
+    mechanism: &Mechanism,
+    generated: &HashMap<UnknownId, String>,
+    id: UnknownId,
+) -> Diagnostic {
     let unknown = &mechanism.unknowns[id.0 as usize];
     let names = names_of(mechanism, generated, id);
-    let shown = names.first().cloned().unwrap_or_else(|| "an unknown".to_string());
+    let shown = names
+        .first()
+        .cloned()
+        .unwrap_or_else(|| "an unknown".to_string());
     if unknown.kind == UnknownKind::Function {
-        return Diagnostic::error("E0812", format!("the unknown function `{shown}` has no law to simulate"))
-            .primary(unknown.span, "an unknown function of the coordinates")
-            .help("replace it with the law, for example `-k * x - c * x'`");
+        return Diagnostic::error(
+            "E0812",
+            format!("the unknown function `{shown}` has no law to simulate"),
+        )
+        .primary(unknown.span, "an unknown function of the coordinates")
+        .help("replace it with the law, for example `-k * x - c * x'`");
     }
-    let also = if names.len() > 1 { format!(" (also called {})", names[1..].iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")) } else { String::new() };
+    let also = if names.len() > 1 {
+        format!(
+            " (also called {})",
+            names[1..]
+                .iter()
+                .map(|n| format!("`{n}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    } else {
+        String::new()
+    };
     let setter = names.last().cloned().unwrap_or_default();
-    let given_target = unknown.name.as_ref().map(|n| n.to_string()).or_else(|| match unknown.origin {
-        Origin::Mass(b) => Some(format!("{}.mass", mechanism.body_name(BodyRef::Body(b)))),
-        Origin::Inertia(b, _) => Some(format!("{}.inertia", mechanism.body_name(BodyRef::Body(b)))),
-        _ => None,
-    });
+    let given_target =
+        unknown
+            .name
+            .as_ref()
+            .map(|n| n.to_string())
+            .or_else(|| match unknown.origin {
+                Origin::Mass(b) => Some(format!("{}.mass", mechanism.body_name(BodyRef::Body(b)))),
+                Origin::Inertia(b, _) => {
+                    Some(format!("{}.inertia", mechanism.body_name(BodyRef::Body(b))))
+                }
+                _ => None,
+            });
     let help = match given_target {
-        Some(target) => format!("write `given {target} = ...;` in the program, or pass `--set {setter}=VALUE`"),
+        Some(target) => {
+            format!("write `given {target} = ...;` in the program, or pass `--set {setter}=VALUE`")
+        }
         None => format!("pass `--set {setter}=VALUE`, or write the number in the program"),
     };
     Diagnostic::error("E0813", format!("no value for `{shown}`{also}"))
@@ -219,13 +282,20 @@ fn missing_inertia_frame(mechanism: &Mechanism, body: crate::elab::value::BodyId
 
 /// Builds the model and initial state. `overrides` come from `--set`; `settings` from the
 /// program's `simulate` declaration completed by `defaults`.
-pub fn prepare(mechanism: &Mechanism, overrides: &[Override], defaults: &Settings) -> Result<Prepared, Vec<Diagnostic>> {
+pub fn prepare(
+    mechanism: &Mechanism,
+    overrides: &[Override],
+    defaults: &Settings,
+) -> Result<Prepared, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
     let generated = notation::unknown_names(mechanism, &topology);
     let values = unknown_values(mechanism, &generated, overrides)?;
     let mut missing = Vec::new();
     let mut frames_reported = BTreeSet::new();
-    for id in required_unknowns(mechanism, &topology).into_iter().filter(|id| !values.contains_key(id)) {
+    for id in required_unknowns(mechanism, &topology)
+        .into_iter()
+        .filter(|id| !values.contains_key(id))
+    {
         // The six generic values of an inertia frame are one thing to declare.
         if let Origin::InertiaFrame(body, _) = mechanism.unknowns[id.0 as usize].origin {
             if frames_reported.insert(body) {
@@ -242,20 +312,37 @@ pub fn prepare(mechanism: &Mechanism, overrides: &[Override], defaults: &Setting
     let model = dynamic_model::build(mechanism, &kinematics)?;
     let (mut coordinates, mut rates) = initial_state(mechanism, &model)?;
     if model.has_loops() {
-        (coordinates, rates) = super::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
+        (coordinates, rates) =
+            super::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
     }
     let settings = settings(mechanism, &model, defaults)?;
     let coordinate_names = kinematics.coordinate_names();
-    Ok(Prepared { model, topology, coordinates, rates, settings, coordinate_names })
+    Ok(Prepared {
+        model,
+        topology,
+        coordinates,
+        rates,
+        settings,
+        coordinate_names,
+    })
 }
 
-fn initial_state(mechanism: &Mechanism, model: &Model) -> Result<(Vec<f64>, Vec<f64>), Vec<Diagnostic>> {
+fn initial_state(
+    mechanism: &Mechanism,
+    model: &Model,
+) -> Result<(Vec<f64>, Vec<f64>), Vec<Diagnostic>> {
     let mut coordinates = vec![0.0; model.declared_count];
     let mut rates = vec![0.0; model.declared_count];
     for initial in &mechanism.initial {
-        let Some(offset) = model.declared_offset(initial.join) else { continue };
-        let value = constant(&initial.value, &model.unknowns)
-            .ok_or_else(|| vec![Diagnostic::error("E0803", "an initial value must be a number").primary(initial.span, "here")])?;
+        let Some(offset) = model.declared_offset(initial.join) else {
+            continue;
+        };
+        let value = constant(&initial.value, &model.unknowns).ok_or_else(|| {
+            vec![
+                Diagnostic::error("E0803", "an initial value must be a number")
+                    .primary(initial.span, "here"),
+            ]
+        })?;
         let index = offset + initial.coordinate;
         if initial.order == 0 {
             coordinates[index] = value;
@@ -266,16 +353,25 @@ fn initial_state(mechanism: &Mechanism, model: &Model) -> Result<(Vec<f64>, Vec<
     Ok((coordinates, rates))
 }
 
-fn settings(mechanism: &Mechanism, model: &Model, defaults: &Settings) -> Result<Settings, Vec<Diagnostic>> {
+fn settings(
+    mechanism: &Mechanism,
+    model: &Model,
+    defaults: &Settings,
+) -> Result<Settings, Vec<Diagnostic>> {
     let mut settings = defaults.clone();
-    let Some(scenario) = &mechanism.scenario else { return Ok(settings) };
+    let Some(scenario) = &mechanism.scenario else {
+        return Ok(settings);
+    };
     let mut errors = Vec::new();
     let mut number = |name: &str| -> Option<f64> {
         let (_, value, span) = scenario.setting(name)?;
         match constant(value, &model.unknowns).filter(|v| v.is_finite() && *v > 0.0) {
             Some(v) => Some(v),
             None => {
-                errors.push(Diagnostic::error("E0814", format!("`{name}` must be a positive number")).primary(*span, "here"));
+                errors.push(
+                    Diagnostic::error("E0814", format!("`{name}` must be a positive number"))
+                        .primary(*span, "here"),
+                );
                 None
             }
         }
@@ -313,7 +409,11 @@ fn settings(mechanism: &Mechanism, model: &Model, defaults: &Settings) -> Result
     if let (Err(message), Some(span)) = (settings.check_outputs(), scenario.span) {
         errors.push(Diagnostic::error("E0814", message).primary(span, "in this `simulate`"));
     }
-    if errors.is_empty() { Ok(settings) } else { Err(errors) }
+    if errors.is_empty() {
+        Ok(settings)
+    } else {
+        Err(errors)
+    }
 }
 
 impl Settings {

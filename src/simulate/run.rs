@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::prepare::{Integrator, Prepared};
 use super::constraints::ConstraintReport;
+use super::prepare::{Integrator, Prepared};
 use super::system::MechanicalSystem;
 use super::variational;
 use crate::dynamics::algorithms::forward_kinematics;
@@ -17,7 +17,9 @@ use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
-use crate::integrate::{integrate, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings, Stats};
+use crate::integrate::{
+    integrate, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings, Stats,
+};
 
 impl OdeSystem for MechanicalSystem<'_> {
     fn dimension(&self) -> usize {
@@ -140,8 +142,13 @@ fn integrator_name(integrator: &Integrator) -> &'static str {
 
 fn output_times(duration: f64, interval: f64) -> Vec<f64> {
     let count = (duration / interval + 1e-9).floor() as usize;
-    let mut times: Vec<f64> = (0..=count).map(|k| (k as f64 * interval).min(duration)).collect();
-    if times.last().is_some_and(|&t| t < duration - 1e-12 * duration.max(1.0)) {
+    let mut times: Vec<f64> = (0..=count)
+        .map(|k| (k as f64 * interval).min(duration))
+        .collect();
+    if times
+        .last()
+        .is_some_and(|&t| t < duration - 1e-12 * duration.max(1.0))
+    {
         times.push(duration);
     }
     times
@@ -169,15 +176,27 @@ impl Sampler<'_> {
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let previous = self.system.reference.borrow().clone();
-        let (coordinates, rates) = model.declared(&q, v, &previous).map_err(|e| format!("{e:?}"))?;
+        let (coordinates, rates) = model
+            .declared(&q, v, &previous)
+            .map_err(|e| format!("{e:?}"))?;
         *self.system.reference.borrow_mut() = coordinates.clone();
-        let reactions = if self.reactions { self.system.reactions(time, &q, v)? } else { Vec::new() };
+        let reactions = if self.reactions {
+            self.system.reactions(time, &q, v)?
+        } else {
+            Vec::new()
+        };
         let data = &mut self.system.data;
         forward_kinematics(model, data, &q, v).map_err(|e| format!("{e:?}"))?;
         let h = momentum(model, data);
-        let declared = Declared { model, coordinates: &coordinates, rates: &rates };
+        let declared = Declared {
+            model,
+            coordinates: &coordinates,
+            rates: &rates,
+        };
         // `+ 0.0` turns a −0 into 0 for the outputs.
-        let potential = potential_energy(model, data, &self.conservative, &declared, time).map_err(|e| format!("{e:?}"))? + 0.0;
+        let potential = potential_energy(model, data, &self.conservative, &declared, time)
+            .map_err(|e| format!("{e:?}"))?
+            + 0.0;
         let kinetic = kinetic_energy(model, data);
         Ok(Sample {
             time,
@@ -199,7 +218,15 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     let settings = &prepared.settings;
     let (q0, v0) = match model.state_from_declared(&prepared.coordinates, &prepared.rates) {
         Ok(state) => state,
-        Err(e) => return failed_at_start(prepared, format!("the initial state cannot be evaluated: {}", describe_error(&e))),
+        Err(e) => {
+            return failed_at_start(
+                prepared,
+                format!(
+                    "the initial state cannot be evaluated: {}",
+                    describe_error(&e)
+                ),
+            )
+        }
     };
     let mut y0 = q0;
     y0.extend_from_slice(&v0);
@@ -218,7 +245,8 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     // The work of non-conservative efforts rides along as one more state (not with the
     // variational integrator, whose steps are its own).
     let motion = y0.len();
-    let tracks_work = !sampler.conservative.complete && settings.integrator != Integrator::Symplectic;
+    let tracks_work =
+        !sampler.conservative.complete && settings.integrator != Integrator::Symplectic;
     if tracks_work {
         y0.push(0.0);
     }
@@ -239,12 +267,43 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         ..IntegratorSettings::default()
     };
     let mut with_work = WithWork(&mut system);
-    let ode: &mut dyn OdeSystem = if tracks_work { &mut with_work } else { with_work.0 };
+    let ode: &mut dyn OdeSystem = if tracks_work {
+        &mut with_work
+    } else {
+        with_work.0
+    };
     let fixed_step = settings.step.unwrap_or(settings.output.min(1e-3));
     let result: Result<(Vec<f64>, Stats), IntegrationError> = match settings.integrator {
-        Integrator::Rk4 => integrate(&Method::Rk4 { step: fixed_step }, ode, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
-        Integrator::DormandPrince => integrate(&Method::DormandPrince, ode, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
-        Integrator::Implicit => integrate(&Method::Rosenbrock, ode, 0.0, &y0, settings.duration, &outputs, &integrator_settings, &mut observer),
+        Integrator::Rk4 => integrate(
+            &Method::Rk4 { step: fixed_step },
+            ode,
+            0.0,
+            &y0,
+            settings.duration,
+            &outputs,
+            &integrator_settings,
+            &mut observer,
+        ),
+        Integrator::DormandPrince => integrate(
+            &Method::DormandPrince,
+            ode,
+            0.0,
+            &y0,
+            settings.duration,
+            &outputs,
+            &integrator_settings,
+            &mut observer,
+        ),
+        Integrator::Implicit => integrate(
+            &Method::Rosenbrock,
+            ode,
+            0.0,
+            &y0,
+            settings.duration,
+            &outputs,
+            &integrator_settings,
+            &mut observer,
+        ),
         Integrator::Symplectic => {
             let system = &mut *with_work.0;
             // The RATTLE steps keep the loops closed themselves.
@@ -258,7 +317,15 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
                     stats: Stats::default(),
                 })
             } else {
-                variational::integrate(system, 0.0, &y0, settings.duration, fixed_step, &outputs, &mut observer)
+                variational::integrate(
+                    system,
+                    0.0,
+                    &y0,
+                    settings.duration,
+                    fixed_step,
+                    &outputs,
+                    &mut observer,
+                )
             }
         }
     };
@@ -266,8 +333,18 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     let (stats, failure) = match result {
         Ok((_, stats)) => (stats, None),
         Err(e) => {
-            let message = format!("{}{}", e.failure, fastest_coordinate(&prepared.coordinate_names, &samples));
-            (e.stats.clone(), Some(RunFailure { time: e.time, message }))
+            let message = format!(
+                "{}{}",
+                e.failure,
+                fastest_coordinate(&prepared.coordinate_names, &samples)
+            );
+            (
+                e.stats.clone(),
+                Some(RunFailure {
+                    time: e.time,
+                    message,
+                }),
+            )
         }
     };
     let report = Report {
@@ -279,7 +356,13 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         run_seconds,
         energy_drift: energy_drift(&samples),
         energy_balance: energy_balance(&samples),
-        final_energies: samples.last().and_then(|s| Some([s.kinetic_energy, s.balance? - s.kinetic_energy + s.work?, s.work?])),
+        final_energies: samples.last().and_then(|s| {
+            Some([
+                s.kinetic_energy,
+                s.balance? - s.kinetic_energy + s.work?,
+                s.work?,
+            ])
+        }),
         momentum_drift: momentum_drift(model, &samples),
         constraints: model.has_loops().then(|| {
             system.loops.absorb(&sampler.system.loops);
@@ -287,22 +370,45 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
         }),
         failure,
     };
-    let reaction_names = if settings.reactions { reaction_names(model) } else { Vec::new() };
-    Simulation { coordinate_names: prepared.coordinate_names.clone(), reaction_names, samples, report }
+    let reaction_names = if settings.reactions {
+        reaction_names(model)
+    } else {
+        Vec::new()
+    };
+    Simulation {
+        coordinate_names: prepared.coordinate_names.clone(),
+        reaction_names,
+        samples,
+        report,
+    }
 }
 
 /// The joins in the order of the reactions: the tree's, then the complementary links.
 fn reaction_names(model: &Model) -> Vec<String> {
-    model.joints.iter().map(|j| j.chain.name.clone()).chain(model.loops.iter().map(|l| l.name.clone())).collect()
+    model
+        .joints
+        .iter()
+        .map(|j| j.chain.name.clone())
+        .chain(model.loops.iter().map(|l| l.name.clone()))
+        .collect()
 }
 
 /// Where a failing run was heading: the coordinate moving fastest at the last output.
 fn fastest_coordinate(names: &[String], samples: &[Sample]) -> String {
-    let Some(last) = samples.last() else { return String::new() };
-    let fastest = last.rates.iter().enumerate().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()).then(a.1.is_nan().cmp(&b.1.is_nan())));
+    let Some(last) = samples.last() else {
+        return String::new();
+    };
+    let fastest = last.rates.iter().enumerate().max_by(|a, b| {
+        a.1.abs()
+            .total_cmp(&b.1.abs())
+            .then(a.1.is_nan().cmp(&b.1.is_nan()))
+    });
     match fastest {
         Some((i, rate)) if i < names.len() && *rate != 0.0 => {
-            format!(" (at t = {}, the fastest coordinate was `{}`, moving at {rate:.3e})", last.time, names[i])
+            format!(
+                " (at t = {}, the fastest coordinate was `{}`, moving at {rate:.3e})",
+                last.time, names[i]
+            )
         }
         _ => String::new(),
     }
@@ -330,7 +436,12 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         constraints: None,
         failure: Some(RunFailure { time: 0.0, message }),
     };
-    Simulation { coordinate_names: prepared.coordinate_names.clone(), reaction_names: Vec::new(), samples: Vec::new(), report }
+    Simulation {
+        coordinate_names: prepared.coordinate_names.clone(),
+        reaction_names: Vec::new(),
+        samples: Vec::new(),
+        report,
+    }
 }
 
 fn energy_drift(samples: &[Sample]) -> Option<f64> {
@@ -339,39 +450,67 @@ fn energy_drift(samples: &[Sample]) -> Option<f64> {
     }
     let energy = |s: &Sample| s.potential_energy.map(|p| p + s.kinetic_energy);
     let first = energy(samples.first()?)?;
-    let scale = samples.iter().map(|s| s.kinetic_energy.abs()).fold(first.abs(), f64::max);
+    let scale = samples
+        .iter()
+        .map(|s| s.kinetic_energy.abs())
+        .fold(first.abs(), f64::max);
     if scale == 0.0 {
         return Some(0.0);
     }
-    samples.iter().map(|s| energy(s).map(|e| (e - first).abs() / scale)).try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
+    samples
+        .iter()
+        .map(|s| energy(s).map(|e| (e - first).abs() / scale))
+        .try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
 }
 
 fn energy_balance(samples: &[Sample]) -> Option<f64> {
     let first = samples.first()?.balance?;
     let scale = samples
         .iter()
-        .map(|s| s.kinetic_energy.abs().max(s.work.unwrap_or(0.0).abs()).max((s.balance.unwrap_or(0.0) - s.kinetic_energy + s.work.unwrap_or(0.0)).abs()))
+        .map(|s| {
+            s.kinetic_energy
+                .abs()
+                .max(s.work.unwrap_or(0.0).abs())
+                .max((s.balance.unwrap_or(0.0) - s.kinetic_energy + s.work.unwrap_or(0.0)).abs())
+        })
         .fold(first.abs(), f64::max);
     if scale == 0.0 {
         return Some(0.0);
     }
-    samples.iter().map(|s| s.balance.map(|b| (b - first).abs() / scale)).try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
+    samples
+        .iter()
+        .map(|s| s.balance.map(|b| (b - first).abs() / scale))
+        .try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
 }
 
 fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<MomentumDrift> {
     if samples.len() < 2 {
         return None;
     }
-    let free = model.joints.iter().filter(|j| j.parent == 0).all(|j| matches!(j.kind, JointType::Free { .. }));
+    let free = model
+        .joints
+        .iter()
+        .filter(|j| j.parent == 0)
+        .all(|j| matches!(j.kind, JointType::Free { .. }));
     if !free || !model.applied.is_empty() || model.gravity != nalgebra::Vector3::zeros() {
         return None;
     }
     let first = samples.first()?.momentum;
-    let mut drift = MomentumDrift { linear: 0.0, angular: 0.0 };
+    let mut drift = MomentumDrift {
+        linear: 0.0,
+        angular: 0.0,
+    };
     for s in samples {
-        let angular = (0..3).map(|i| (s.momentum[i] - first[i]).abs()).fold(0.0, f64::max);
-        let linear = (3..6).map(|i| (s.momentum[i] - first[i]).abs()).fold(0.0, f64::max);
-        drift = MomentumDrift { linear: drift.linear.max(linear), angular: drift.angular.max(angular) };
+        let angular = (0..3)
+            .map(|i| (s.momentum[i] - first[i]).abs())
+            .fold(0.0, f64::max);
+        let linear = (3..6)
+            .map(|i| (s.momentum[i] - first[i]).abs())
+            .fold(0.0, f64::max);
+        drift = MomentumDrift {
+            linear: drift.linear.max(linear),
+            angular: drift.angular.max(angular),
+        };
     }
     Some(drift)
 }

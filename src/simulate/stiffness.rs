@@ -44,7 +44,11 @@ pub fn warning(prepared: &Prepared) -> Option<Diagnostic> {
     if stiffness.stability_steps < 1000.0 || stiffness.stability_steps < 100.0 * outputs {
         return None;
     }
-    let name = if settings.integrator == Integrator::Rk4 { "rk4" } else { "dopri5" };
+    let name = if settings.integrator == Integrator::Rk4 {
+        "rk4"
+    } else {
+        "dopri5"
+    };
     let message = format!(
         "the mechanism is stiff for `{name}`: its fastest mode decays or turns at {:.1e} /s, so every step must stay below {:.1e} s, about {:.0} steps for this run",
         stiffness.rate,
@@ -79,12 +83,18 @@ pub fn estimate(prepared: &Prepared, limit: f64) -> Option<Stiffness> {
             (lowest, element) = (r, Some(removed.span));
         }
     }
-    Some(Stiffness { rate, stability_steps, element })
+    Some(Stiffness {
+        rate,
+        stability_steps,
+        element,
+    })
 }
 
 /// The largest |λ| of the Jacobian of y' = f(t, y) at the initial state, by forward differences.
 fn fastest_rate(model: &Model, prepared: &Prepared) -> Option<f64> {
-    let (q0, v0) = model.state_from_declared(&prepared.coordinates, &prepared.rates).ok()?;
+    let (q0, v0) = model
+        .state_from_declared(&prepared.coordinates, &prepared.rates)
+        .ok()?;
     let mut y0 = q0;
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
@@ -107,5 +117,9 @@ fn fastest_rate(model: &Model, prepared: &Prepared) -> Option<f64> {
     if !jacobian.iter().all(|x| x.is_finite()) {
         return None;
     }
-    jacobian.complex_eigenvalues().iter().map(|l| l.norm()).fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
+    jacobian
+        .complex_eigenvalues()
+        .iter()
+        .map(|l| l.norm())
+        .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
 }

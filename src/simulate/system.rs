@@ -7,11 +7,13 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
-use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea, transmitted_wrenches, Data, DynamicsError};
+use crate::dynamics::algorithms::{
+    aba, crba, forward_kinematics, rnea, transmitted_wrenches, Data, DynamicsError,
+};
 use crate::dynamics::efforts::{evaluate, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation};
-use crate::dynamics::spatial;
 use crate::dynamics::model::Model;
+use crate::dynamics::spatial;
 use crate::kinematics::eval::EvalError;
 
 pub struct MechanicalSystem<'m> {
@@ -27,8 +29,18 @@ pub struct MechanicalSystem<'m> {
 }
 
 impl<'m> MechanicalSystem<'m> {
-    pub fn new(model: &'m Model, reference: Rc<RefCell<Vec<f64>>>, stabilisation: Stabilisation) -> MechanicalSystem<'m> {
-        MechanicalSystem { model, data: Data::new(model), reference, loops: LoopMonitor::new(stabilisation), power: 0.0 }
+    pub fn new(
+        model: &'m Model,
+        reference: Rc<RefCell<Vec<f64>>>,
+        stabilisation: Stabilisation,
+    ) -> MechanicalSystem<'m> {
+        MechanicalSystem {
+            model,
+            data: Data::new(model),
+            reference,
+            loops: LoopMonitor::new(stabilisation),
+            power: 0.0,
+        }
     }
 
     pub fn dimension(&self) -> usize {
@@ -40,24 +52,51 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v).map_err(|e| evaluation_message(&e))?;
         let reference = self.reference.borrow().clone();
-        let (coordinates, rates) = model.declared(q, v, &reference).map_err(|e| evaluation_message(&e))?;
-        let declared = Declared { model, coordinates: &coordinates, rates: &rates };
+        let (coordinates, rates) = model
+            .declared(q, v, &reference)
+            .map_err(|e| evaluation_message(&e))?;
+        let declared = Declared {
+            model,
+            coordinates: &coordinates,
+            rates: &rates,
+        };
         evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))
     }
 
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), with the
     /// efforts and the constraint rows they come from.
-    pub fn constrained(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(Solution, Efforts, loops::Constraints), String> {
+    pub fn constrained(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(Solution, Efforts, loops::Constraints), String> {
         let model = self.model;
         let efforts = self.efforts(t, q, v)?;
         let mass = crba(model, &mut self.data, q).map_err(|e| evaluation_message(&e))?;
-        let bias = rnea(model, &mut self.data, q, v, &vec![0.0; model.nv], &efforts.external).map_err(|e| evaluation_message(&e))?;
+        let bias = rnea(
+            model,
+            &mut self.data,
+            q,
+            v,
+            &vec![0.0; model.nv],
+            &efforts.external,
+        )
+        .map_err(|e| evaluation_message(&e))?;
         let mut force = efforts.tau.clone();
         let mut tree = force.rows_mut(0, model.nv);
         tree -= &bias;
         // RNEA left the forward kinematics of (q, v) in `data`.
-        let constraints = loops::constraints_after_kinematics(model, &mut self.data, q, v, true).map_err(|e| evaluation_message(&e))?;
-        let solution = loops::solve(&mass, &force, &constraints, self.loops.stabilisation, self.loops.massless).map_err(|e| self.loop_message(&e))?;
+        let constraints = loops::constraints_after_kinematics(model, &mut self.data, q, v, true)
+            .map_err(|e| evaluation_message(&e))?;
+        let solution = loops::solve(
+            &mass,
+            &force,
+            &constraints,
+            self.loops.stabilisation,
+            self.loops.massless,
+        )
+        .map_err(|e| self.loop_message(&e))?;
         Ok((solution, efforts, constraints))
     }
 
@@ -70,26 +109,51 @@ impl<'m> MechanicalSystem<'m> {
             (solution.accelerations, efforts)
         } else {
             // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
-            let efforts = if model.has_efforts() { self.efforts(t, &q, v)? } else { Efforts::none(model) };
-            let accelerations = aba(model, &mut self.data, &q, v, efforts.tau.as_slice(), &efforts.external)
-                .map_err(|e| self.dynamics_message(&e))?;
+            let efforts = if model.has_efforts() {
+                self.efforts(t, &q, v)?
+            } else {
+                Efforts::none(model)
+            };
+            let accelerations = aba(
+                model,
+                &mut self.data,
+                &q,
+                v,
+                efforts.tau.as_slice(),
+                &efforts.external,
+            )
+            .map_err(|e| self.dynamics_message(&e))?;
             (accelerations, efforts)
         };
         self.power = efforts.power;
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
-            let joint = model.joints.iter().find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k));
+            let joint = model
+                .joints
+                .iter()
+                .find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k));
             let name = joint.map_or("?".to_string(), |j| j.chain.name.clone());
-            let cause = if efforts.tau.iter().all(|x| x.is_finite()) && efforts.external.iter().all(|f| f.iter().all(|x| x.is_finite())) {
+            let cause = if efforts.tau.iter().all(|x| x.is_finite())
+                && efforts
+                    .external
+                    .iter()
+                    .all(|f| f.iter().all(|x| x.is_finite()))
+            {
                 "the state became too large"
             } else {
                 "an effort is not a number (a square root or logarithm of a negative value, a division by zero)"
             };
-            return Err(format!("the acceleration of join `{name}` is not finite: {cause}"));
+            return Err(format!(
+                "the acceleration of join `{name}` is not finite: {cause}"
+            ));
         }
         let (dq, dv) = dydt.split_at_mut(model.positions());
         for joint in &model.joints {
             let range = joint.q_offset..joint.q_offset + joint.nq();
-            joint.position_rate(&q[range.clone()], &v[joint.v_offset..joint.v_offset + joint.nv()], &mut dq[range]);
+            joint.position_rate(
+                &q[range.clone()],
+                &v[joint.v_offset..joint.v_offset + joint.nv()],
+                &mut dq[range],
+            );
         }
         dq[model.nq..].copy_from_slice(&v[model.nv..]);
         dv.copy_from_slice(accelerations.as_slice());
@@ -104,7 +168,10 @@ impl<'m> MechanicalSystem<'m> {
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        let moved = self.loops.keep(model, &mut self.data, t, &mut q, &mut v).map_err(|e| evaluation_message(&e))?;
+        let moved = self
+            .loops
+            .keep(model, &mut self.data, t, &mut q, &mut v)
+            .map_err(|e| evaluation_message(&e))?;
         if moved {
             y[..q.len()].copy_from_slice(&q);
             y[q.len()..].copy_from_slice(&v);
@@ -117,7 +184,9 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        if loops::seat_ball_angles(model, &mut self.data, &mut q, &mut v, true).map_err(|e| evaluation_message(&e))? {
+        if loops::seat_ball_angles(model, &mut self.data, &mut q, &mut v, true)
+            .map_err(|e| evaluation_message(&e))?
+        {
             y[q.len()..].copy_from_slice(&v);
         }
         Ok(())
@@ -130,7 +199,9 @@ impl<'m> MechanicalSystem<'m> {
             return Ok(());
         }
         let (q, v) = model.split_state(y);
-        self.loops.measure(model, &mut self.data, t, &q, v).map_err(|e| evaluation_message(&e))
+        self.loops
+            .measure(model, &mut self.data, t, &q, v)
+            .map_err(|e| evaluation_message(&e))
     }
 
     /// Closes the loops of the initial state at round-off and records their rank and redundancy.
@@ -141,8 +212,11 @@ impl<'m> MechanicalSystem<'m> {
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        loops::project(model, &mut self.data, &mut q, &mut v).map_err(|e| evaluation_message(&e))?;
-        self.loops.start(model, &mut self.data, &q, &v).map_err(|e| evaluation_message(&e))?;
+        loops::project(model, &mut self.data, &mut q, &mut v)
+            .map_err(|e| evaluation_message(&e))?;
+        self.loops
+            .start(model, &mut self.data, &q, &v)
+            .map_err(|e| evaluation_message(&e))?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
         Ok(())
@@ -156,24 +230,57 @@ impl<'m> MechanicalSystem<'m> {
         let (accelerations, mut external, multipliers) = if model.has_loops() {
             let (solution, efforts, c) = self.constrained(t, q, v)?;
             let on_bodies = loops::constraint_forces(model, &self.data, &c, &solution.multipliers);
-            let external: Vec<_> = efforts.external.iter().zip(&on_bodies).map(|(a, b)| a + b).collect();
+            let external: Vec<_> = efforts
+                .external
+                .iter()
+                .zip(&on_bodies)
+                .map(|(a, b)| a + b)
+                .collect();
             (solution.accelerations, external, Some(solution.multipliers))
         } else {
             let efforts = self.efforts(t, q, v)?;
-            let a = aba(model, &mut self.data, q, v, efforts.tau.as_slice(), &efforts.external).map_err(|e| self.dynamics_message(&e))?;
+            let a = aba(
+                model,
+                &mut self.data,
+                q,
+                v,
+                efforts.tau.as_slice(),
+                &efforts.external,
+            )
+            .map_err(|e| self.dynamics_message(&e))?;
             (a, efforts.external, None)
         };
         // The link efforts act across their joints: they are not part of the reaction.
         external.truncate(model.body_count() + 1);
-        rnea(model, &mut self.data, q, v, &accelerations.as_slice()[..model.nv], &external).map_err(|e| evaluation_message(&e))?;
+        rnea(
+            model,
+            &mut self.data,
+            q,
+            v,
+            &accelerations.as_slice()[..model.nv],
+            &external,
+        )
+        .map_err(|e| evaluation_message(&e))?;
         let transmitted = transmitted_wrenches(model, &self.data, &external);
         let mut reactions = Vec::with_capacity(6 * (model.joints.len() + model.loops.len()));
         for joint in &model.joints {
             let frame = self.data.world[joint.child] * joint.on_child;
-            let about_origin = spatial::force_to_parent(&self.data.world[joint.child], &transmitted[joint.child]);
-            let at_join = spatial::force_to_child(&spatial::Pose::translation(frame.translation.x, frame.translation.y, frame.translation.z), &about_origin);
+            let about_origin =
+                spatial::force_to_parent(&self.data.world[joint.child], &transmitted[joint.child]);
+            let at_join = spatial::force_to_child(
+                &spatial::Pose::translation(
+                    frame.translation.x,
+                    frame.translation.y,
+                    frame.translation.z,
+                ),
+                &about_origin,
+            );
             // The tree carries the child; a join written from the child's side has it first.
-            let on_second = if joint.first_on_parent { at_join } else { -at_join };
+            let on_second = if joint.first_on_parent {
+                at_join
+            } else {
+                -at_join
+            };
             reactions.extend_from_slice(on_second.as_slice());
         }
         if let Some(multipliers) = multipliers {

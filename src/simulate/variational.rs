@@ -27,13 +27,23 @@ const MAX_ITERATIONS: usize = 50;
 impl MechanicalSystem<'_> {
     /// The generalised efforts at (q, v, t): link efforts plus the applied efforts seen through
     /// the Jacobians (computed as −RNEA with no motion).
-    fn generalised_efforts(&mut self, q: &[f64], v: &[f64], t: f64) -> Result<DVector<f64>, String> {
+    fn generalised_efforts(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+        t: f64,
+    ) -> Result<DVector<f64>, String> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v).map_err(|e| format!("{e:?}"))?;
-        let declared = Declared { model, coordinates: q, rates: v };
+        let declared = Declared {
+            model,
+            coordinates: q,
+            rates: v,
+        };
         let efforts = evaluate(model, &self.data, &declared, t).map_err(|e| format!("{e:?}"))?;
         let zero = vec![0.0; model.nv];
-        let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external).map_err(|e| format!("{e:?}"))?;
+        let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external)
+            .map_err(|e| format!("{e:?}"))?;
         let mut forcing = efforts.tau;
         let mut tree = forcing.rows_mut(0, model.nv);
         tree -= applied;
@@ -42,9 +52,15 @@ impl MechanicalSystem<'_> {
 
     /// ∂T/∂q + Q at the step's midpoint, and the mass matrix there (the complementary links'
     /// coordinates, if any, with no inertia).
-    fn midpoint_terms(&mut self, q: &[f64], v: &[f64], t: f64) -> Result<(DMatrix<f64>, DVector<f64>), String> {
+    fn midpoint_terms(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+        t: f64,
+    ) -> Result<(DMatrix<f64>, DVector<f64>), String> {
         let model = self.model;
-        let gradient = kinetic_energy_gradient(model, &mut self.data, q, v).map_err(|e| format!("{e:?}"))?;
+        let gradient =
+            kinetic_energy_gradient(model, &mut self.data, q, v).map_err(|e| format!("{e:?}"))?;
         let mut terms = self.generalised_efforts(q, v, t)?;
         let mut tree = terms.rows_mut(0, model.nv);
         tree += gradient;
@@ -75,27 +91,46 @@ impl MechanicalSystem<'_> {
     /// q1 leaves the loops open. With loops, the balance holds up to the constraint impulse at
     /// the start of the step, Gᵀ(q)·(h λ): only its part on the motions G(q) allows is an
     /// equation for q1, and the closure at q1 is the other.
-    fn correction(&mut self, mass: &DMatrix<f64>, start: &Option<DMatrix<f64>>, q1: &[f64], rhs: &DVector<f64>) -> Result<(DVector<f64>, f64), String> {
-        let Some(g_start) = start else { return Ok((solve(mass, rhs)?, 0.0)) };
+    fn correction(
+        &mut self,
+        mass: &DMatrix<f64>,
+        start: &Option<DMatrix<f64>>,
+        q1: &[f64],
+        rhs: &DVector<f64>,
+    ) -> Result<(DVector<f64>, f64), String> {
+        let Some(g_start) = start else {
+            return Ok((solve(mass, rhs)?, 0.0));
+        };
         let (closure, g_end) = self.closure(q1)?;
-        Ok((constrained_solve(mass, g_start, &g_end, rhs, &(-&closure)), closure.amax()))
+        Ok((
+            constrained_solve(mass, g_start, &g_end, rhs, &(-&closure)),
+            closure.amax(),
+        ))
     }
 
     /// The velocities of momentum p at q1 (projected onto the loops' velocity constraints: the
     /// RATTLE step), and the mass matrix there.
-    fn end_velocity(&mut self, q1: &[f64], p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), String> {
+    fn end_velocity(
+        &mut self,
+        q1: &[f64],
+        p: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DMatrix<f64>), String> {
         let mass = self.mass(q1)?;
         if !self.model.has_loops() {
             return Ok((solve(&mass, p)?, mass));
         }
         let (_, g) = self.closure(q1)?;
-        Ok((constrained_solve(&mass, &g, &g, p, &DVector::zeros(g.nrows())), mass))
+        Ok((
+            constrained_solve(&mass, &g, &g, p, &DVector::zeros(g.nrows())),
+            mass,
+        ))
     }
 
     /// Position rows and their Jacobian G at q.
     fn closure(&mut self, q: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>), String> {
         let rest = vec![0.0; self.model.velocities()];
-        let c = loops::constraints(self.model, &mut self.data, q, &rest, false).map_err(|e| format!("{e:?}"))?;
+        let c = loops::constraints(self.model, &mut self.data, q, &rest, false)
+            .map_err(|e| format!("{e:?}"))?;
         Ok((c.residual, c.jacobian))
     }
 }
@@ -104,7 +139,13 @@ impl MechanicalSystem<'_> {
 /// the minimum-norm solution of the constraints plus a motion they allow, chosen so that the
 /// first equation holds on the motions the start's constraints allow. Least squares throughout,
 /// so redundant constraints and motions without mass cost nothing special.
-fn constrained_solve(a: &DMatrix<f64>, g_start: &DMatrix<f64>, g_end: &DMatrix<f64>, f: &DVector<f64>, c: &DVector<f64>) -> DVector<f64> {
+fn constrained_solve(
+    a: &DMatrix<f64>,
+    g_start: &DMatrix<f64>,
+    g_end: &DMatrix<f64>,
+    f: &DVector<f64>,
+    c: &DVector<f64>,
+) -> DVector<f64> {
     let end = loops::decompose(g_end);
     let particular = &end.pseudo_inverse * c;
     let allowed_start = loops::decompose(g_start).null_space;
@@ -115,7 +156,10 @@ fn constrained_solve(a: &DMatrix<f64>, g_start: &DMatrix<f64>, g_end: &DMatrix<f
 }
 
 fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, String> {
-    mass.clone().cholesky().map(|c| c.solve(rhs)).ok_or_else(|| "the mass matrix is singular".to_string())
+    mass.clone()
+        .cholesky()
+        .map(|c| c.solve(rhs))
+        .ok_or_else(|| "the mass matrix is singular".to_string())
 }
 
 /// Integrates with fixed step `h`, reporting the state (positions, velocities) at each output.
@@ -130,10 +174,19 @@ pub fn integrate(
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
     let n = system.model.velocities();
     let mut stats = Stats::default();
-    let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError { time, failure, stats: stats.clone() };
-    let (mut q, mut v) = (DVector::from_column_slice(&y0[..n]), DVector::from_column_slice(&y0[n..]));
+    let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError {
+        time,
+        failure,
+        stats: stats.clone(),
+    };
+    let (mut q, mut v) = (
+        DVector::from_column_slice(&y0[..n]),
+        DVector::from_column_slice(&y0[n..]),
+    );
     let mut t = t0;
-    let mass = system.mass(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
+    let mass = system
+        .mass(q.as_slice())
+        .map_err(|m| fail(t, Failure::System(m), &stats))?;
     let mut p = &mass * &v;
     let mut next_output = 0;
     while next_output < outputs.len() && outputs[next_output] <= t0 {
@@ -143,18 +196,24 @@ pub fn integrate(
     let count = step_count(t0, t_end, h);
     for k in 0..count {
         let step = (t0 + (t_end - t0) * (k + 1) as f64 / count as f64) - t;
-        let start = system.allowed_motions(q.as_slice()).map_err(|m| fail(t, Failure::System(m), &stats))?;
+        let start = system
+            .allowed_motions(q.as_slice())
+            .map_err(|m| fail(t, Failure::System(m), &stats))?;
         let mut q1 = &q + &v * step;
         let mut converged = false;
         let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
         for _ in 0..MAX_ITERATIONS {
             let (mid, mean) = ((&q + &q1) * 0.5, (&q1 - &q) / step);
-            (mass_mid, terms) = system.midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step).map_err(|m| fail(t, Failure::System(m), &stats))?;
+            (mass_mid, terms) = system
+                .midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step)
+                .map_err(|m| fail(t, Failure::System(m), &stats))?;
             stats.rhs_evaluations += 1;
             let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p;
             // Newton with the leading part of the Jacobian, M/h (scaled by h): converges quickly
             // for small h.
-            let (correction, open) = system.correction(&mass_mid, &start, q1.as_slice(), &(-momentum * step)).map_err(|m| fail(t, Failure::System(m), &stats))?;
+            let (correction, open) = system
+                .correction(&mass_mid, &start, q1.as_slice(), &(-momentum * step))
+                .map_err(|m| fail(t, Failure::System(m), &stats))?;
             q1 += &correction;
             if correction.amax() <= 1e-15 * (1.0 + q1.amax()) && open <= 1e-13 {
                 converged = true;
@@ -170,17 +229,22 @@ pub fn integrate(
         }
         let mean = (&q1 - &q) / step;
         let p_end = &mass_mid * &mean + &terms * (0.5 * step);
-        let (v1, mass_end) = system.end_velocity(q1.as_slice(), &p_end).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+        let (v1, mass_end) = system
+            .end_velocity(q1.as_slice(), &p_end)
+            .map_err(|m| fail(t + step, Failure::System(m), &stats))?;
         p = &mass_end * &v1;
         stats.steps += 1;
         let mut end_state = q1.as_slice().to_vec();
         end_state.extend_from_slice(v1.as_slice());
         // Only recorded: projecting would spoil the symplectic map.
-        system.measure_loops(t + step, &end_state).map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+        system
+            .measure_loops(t + step, &end_state)
+            .map_err(|m| fail(t + step, Failure::System(m), &stats))?;
         while next_output < outputs.len() && outputs[next_output] <= t + step {
             let s = (outputs[next_output] - t) / step;
             let y = hermite(&q, &v, &q1, &v1, s, step);
-            observer(outputs[next_output], &y).map_err(|m| fail(outputs[next_output], Failure::Observer(m), &stats))?;
+            observer(outputs[next_output], &y)
+                .map_err(|m| fail(outputs[next_output], Failure::Observer(m), &stats))?;
             next_output += 1;
         }
         (q, v, t) = (q1, v1, t + step);
@@ -198,9 +262,26 @@ fn step_count(t0: f64, t_end: f64, h: f64) -> usize {
 }
 
 /// Cubic Hermite interpolation of positions (and its derivative for velocities) at fraction s.
-fn hermite(q0: &DVector<f64>, v0: &DVector<f64>, q1: &DVector<f64>, v1: &DVector<f64>, s: f64, h: f64) -> Vec<f64> {
-    let (h00, h10, h01, h11) = (2.0 * s * s * s - 3.0 * s * s + 1.0, s * s * s - 2.0 * s * s + s, -2.0 * s * s * s + 3.0 * s * s, s * s * s - s * s);
-    let (d00, d10, d01, d11) = (6.0 * s * s - 6.0 * s, 3.0 * s * s - 4.0 * s + 1.0, -6.0 * s * s + 6.0 * s, 3.0 * s * s - 2.0 * s);
+fn hermite(
+    q0: &DVector<f64>,
+    v0: &DVector<f64>,
+    q1: &DVector<f64>,
+    v1: &DVector<f64>,
+    s: f64,
+    h: f64,
+) -> Vec<f64> {
+    let (h00, h10, h01, h11) = (
+        2.0 * s * s * s - 3.0 * s * s + 1.0,
+        s * s * s - 2.0 * s * s + s,
+        -2.0 * s * s * s + 3.0 * s * s,
+        s * s * s - s * s,
+    );
+    let (d00, d10, d01, d11) = (
+        6.0 * s * s - 6.0 * s,
+        3.0 * s * s - 4.0 * s + 1.0,
+        -6.0 * s * s + 6.0 * s,
+        3.0 * s * s - 2.0 * s,
+    );
     let q = q0 * h00 + v0 * (h10 * h) + q1 * h01 + v1 * (h11 * h);
     let v = (q0 * d00 + q1 * d01) / h + v0 * d10 + v1 * d11;
     let mut y = q.as_slice().to_vec();

@@ -75,7 +75,11 @@ pub fn accelerations(pool: &mut Pool, bodies: &[Body], tau: &[ExprId]) -> Vec<Ex
     let mut motion: Vec<Spatial> = vec![[zero; 6]; n + 1];
     for b in 1..=n {
         let body = &bodies[b];
-        let moved = if body.parent == 0 { [zero; 6] } else { motion_to_child(pool, body, &motion[body.parent]) };
+        let moved = if body.parent == 0 {
+            [zero; 6]
+        } else {
+            motion_to_child(pool, body, &motion[body.parent])
+        };
         let mut a = add(pool, &moved, &body.bias);
         let Some(joint) = &joints[b] else { continue };
         let rates = joint.rates(pool, &a);
@@ -102,12 +106,16 @@ pub fn motion_to_child(pool: &mut Pool, body: &Body, x: &Spatial) -> Spatial {
 fn rotate(pool: &mut Pool, r: &Mat3, x: &Spatial) -> Spatial {
     let linear = v::mat_vec(pool, r, &[x[0], x[1], x[2]]);
     let angular = v::mat_vec(pool, r, &[x[3], x[4], x[5]]);
-    [linear[0], linear[1], linear[2], angular[0], angular[1], angular[2]]
+    [
+        linear[0], linear[1], linear[2], angular[0], angular[1], angular[2],
+    ]
 }
 
 /// blockdiag(r, r) I blockdiag(r, r)ᵀ: an inertia turned from the child's axes to the parent's.
 fn rotate_inertia(pool: &mut Pool, r: &Mat3, inertia: &Matrix6) -> Matrix6 {
-    let block = |i: usize, j: usize| -> Mat3 { std::array::from_fn(|a| std::array::from_fn(|b| inertia[3 * i + a][3 * j + b])) };
+    let block = |i: usize, j: usize| -> Mat3 {
+        std::array::from_fn(|a| std::array::from_fn(|b| inertia[3 * i + a][3 * j + b]))
+    };
     let rt = v::transpose(r);
     let mut turned = *inertia;
     for (i, j) in [(0, 0), (0, 1), (1, 1)] {
@@ -134,9 +142,21 @@ struct Joint {
 }
 
 impl Joint {
-    fn new(pool: &mut Pool, inertia: &Matrix6, columns: &[(usize, Spatial)], bias_force: &Spatial, tau: &[ExprId]) -> Joint {
-        let u: Vec<Spatial> = columns.iter().map(|(_, s)| mat_vec(pool, inertia, s)).collect();
-        let d: Vec<Vec<ExprId>> = columns.iter().map(|(_, s)| u.iter().map(|ui| dot(pool, s, ui)).collect()).collect();
+    fn new(
+        pool: &mut Pool,
+        inertia: &Matrix6,
+        columns: &[(usize, Spatial)],
+        bias_force: &Spatial,
+        tau: &[ExprId],
+    ) -> Joint {
+        let u: Vec<Spatial> = columns
+            .iter()
+            .map(|(_, s)| mat_vec(pool, inertia, s))
+            .collect();
+        let d: Vec<Vec<ExprId>> = columns
+            .iter()
+            .map(|(_, s)| u.iter().map(|ui| dot(pool, s, ui)).collect())
+            .collect();
         let small_u: Vec<ExprId> = columns
             .iter()
             .map(|(k, s)| {
@@ -147,7 +167,12 @@ impl Joint {
         let factors = Ldl::new(pool, &d);
         let solved = factors.solve(pool, &small_u);
         let u_d_inverse_u = combine(pool, &u, &solved);
-        Joint { u, factors, small_u, u_d_inverse_u }
+        Joint {
+            u,
+            factors,
+            small_u,
+            u_d_inverse_u,
+        }
     }
 
     /// I^A − U D⁻¹ Uᵀ, symmetric by construction (upper triangle mirrored).
@@ -157,11 +182,21 @@ impl Joint {
             return reduced;
         }
         // D⁻¹ Uᵀ, one 6-vector per joint coordinate: W = D⁻¹ [U rows].
-        let rows: Vec<Vec<ExprId>> = (0..6).map(|r| self.u.iter().map(|ui| ui[r]).collect()).collect();
-        let solved: Vec<Vec<ExprId>> = rows.iter().map(|row| self.factors.solve(pool, row)).collect();
+        let rows: Vec<Vec<ExprId>> = (0..6)
+            .map(|r| self.u.iter().map(|ui| ui[r]).collect())
+            .collect();
+        let solved: Vec<Vec<ExprId>> = rows
+            .iter()
+            .map(|row| self.factors.solve(pool, row))
+            .collect();
         for i in 0..6 {
             for j in i..6 {
-                let terms: Vec<ExprId> = self.u.iter().zip(&solved[j]).map(|(ui, w)| pool.mul(ui[i], *w)).collect();
+                let terms: Vec<ExprId> = self
+                    .u
+                    .iter()
+                    .zip(&solved[j])
+                    .map(|(ui, w)| pool.mul(ui[i], *w))
+                    .collect();
                 let correction = pool.sum(terms);
                 reduced[i][j] = pool.sub(inertia[i][j], correction);
                 reduced[j][i] = reduced[i][j];
@@ -281,14 +316,28 @@ fn combine(pool: &mut Pool, columns: &[Spatial], weights: &[ExprId]) -> Spatial 
 pub fn transport_motion(pool: &mut Pool, arm: &Vec3, x: &Spatial) -> Spatial {
     let angular = [x[3], x[4], x[5]];
     let spin = super::vector::cross(pool, &angular, arm);
-    [pool.add(x[0], spin[0]), pool.add(x[1], spin[1]), pool.add(x[2], spin[2]), x[3], x[4], x[5]]
+    [
+        pool.add(x[0], spin[0]),
+        pool.add(x[1], spin[1]),
+        pool.add(x[2], spin[2]),
+        x[3],
+        x[4],
+        x[5],
+    ]
 }
 
 /// Tᵀ f: a wrench at the child's origin moved to the parent's (f, m + arm ∧ f).
 fn transport_force(pool: &mut Pool, arm: &Vec3, f: &Spatial) -> Spatial {
     let force = [f[0], f[1], f[2]];
     let lever = super::vector::cross(pool, arm, &force);
-    [f[0], f[1], f[2], pool.add(f[3], lever[0]), pool.add(f[4], lever[1]), pool.add(f[5], lever[2])]
+    [
+        f[0],
+        f[1],
+        f[2],
+        pool.add(f[3], lever[0]),
+        pool.add(f[4], lever[1]),
+        pool.add(f[5], lever[2]),
+    ]
 }
 
 /// Tᵀ I T, as the upper triangle mirrored: with I = [[A, B], [Bᵀ, C]] and r̃ the cross-product
@@ -303,17 +352,23 @@ fn transport_inertia(pool: &mut Pool, arm: &Vec3, inertia: &Matrix6) -> Matrix6 
     }
     let minus = arm.map(|a| pool.neg(a));
     // −r̃ in the top-right block: (v − r̃ ω) = v + ω ∧ r.
-    let skew = [[zero, arm[2], minus[1]], [minus[2], zero, arm[0]], [arm[1], minus[0], zero]];
+    let skew = [
+        [zero, arm[2], minus[1]],
+        [minus[2], zero, arm[0]],
+        [arm[1], minus[0], zero],
+    ];
     for i in 0..3 {
         for j in 0..3 {
             t[i][3 + j] = skew[i][j];
         }
     }
     let mut moved = [[zero; 6]; 6];
-    let it: Matrix6 = std::array::from_fn(|i| std::array::from_fn(|j| {
-        let terms: Vec<ExprId> = (0..6).map(|k| pool.mul(inertia[i][k], t[k][j])).collect();
-        pool.sum(terms)
-    }));
+    let it: Matrix6 = std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let terms: Vec<ExprId> = (0..6).map(|k| pool.mul(inertia[i][k], t[k][j])).collect();
+            pool.sum(terms)
+        })
+    });
     for i in 0..6 {
         for j in i..6 {
             let terms: Vec<ExprId> = (0..6).map(|k| pool.mul(t[k][i], it[k][j])).collect();

@@ -37,10 +37,19 @@ impl Generator<'_> {
                 for c in 0..n {
                     let component = |frame: &Moving| frame.column(c).map(|twist| twist[part][i]);
                     let zero = self.pool.constant(0.0);
-                    let (t, e) = (component(&target).unwrap_or(zero), component(&end).unwrap_or(zero));
+                    let (t, e) = (
+                        component(&target).unwrap_or(zero),
+                        component(&end).unwrap_or(zero),
+                    );
                     rows.push(self.pool.sub(t, e));
                 }
-                let pick = |frame: &Moving| if part == 0 { frame.angular_bias[i] } else { frame.bias[i] };
+                let pick = |frame: &Moving| {
+                    if part == 0 {
+                        frame.angular_bias[i]
+                    } else {
+                        frame.bias[i]
+                    }
+                };
                 bias.push(self.pool.sub(pick(&target), pick(&end)));
                 names.push(format!("{name}.{row}"));
             }

@@ -19,8 +19,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::inertia::Inertia;
 use super::expr::{ExprId, Pool, Tape};
+use super::inertia::Inertia;
 use super::kinematics::{Derivatives, LinkCoordinates, Moving, Step};
 use super::lower::{LowerError, Lowering, Variables};
 use super::vector::{self as v, Mat3, Vec3};
@@ -69,7 +69,18 @@ impl Equations {
     /// Every expression the equations are made of: M, S, F, Δ, Δ̇q, then the accelerations.
     pub fn roots(&self) -> Vec<ExprId> {
         let accelerations = self.accelerations.iter().flatten();
-        [&self.mass, &self.second_member, &self.forces, &self.constraints, &self.constraint_bias].into_iter().flatten().chain(accelerations).copied().collect()
+        [
+            &self.mass,
+            &self.second_member,
+            &self.forces,
+            &self.constraints,
+            &self.constraint_bias,
+        ]
+        .into_iter()
+        .flatten()
+        .chain(accelerations)
+        .copied()
+        .collect()
     }
 
     /// Number of distinct nodes of the equations: their size once common subexpressions are
@@ -110,7 +121,10 @@ impl Equations {
             forces: DVector::from_vec(take(n)),
             constraints: DMatrix::from_row_slice(m, n, &take(m * n)),
             constraint_bias: DVector::from_vec(take(m)),
-            accelerations: self.accelerations.as_ref().map(|a| DVector::from_vec(take(a.len()))),
+            accelerations: self
+                .accelerations
+                .as_ref()
+                .map(|a| DVector::from_vec(take(a.len()))),
         }
     }
 }
@@ -130,7 +144,10 @@ pub struct Values {
 pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {
     let mut generator = Generator::new(mechanism, topology);
     generator.run().map_err(|e| {
-        let error = Diagnostic::error("E1101", format!("the equations of motion cannot be written: {}", e.0));
+        let error = Diagnostic::error(
+            "E1101",
+            format!("the equations of motion cannot be written: {}", e.0),
+        );
         vec![match generator.context {
             Some(span) => error.primary(span, "in this declaration"),
             None => error,
@@ -165,7 +182,19 @@ impl<'a> Generator<'a> {
     fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
         let mut pool = Pool::new();
         let lowering = Lowering::new(&mut pool, mechanism, topology);
-        Generator { mechanism, topology, pool, lowering, derivatives: Derivatives::default(), bodies: Vec::new(), inertias: Vec::new(), local_inertias: Vec::new(), link_steps: Vec::new(), anchors: Vec::new(), context: None }
+        Generator {
+            mechanism,
+            topology,
+            pool,
+            lowering,
+            derivatives: Derivatives::default(),
+            bodies: Vec::new(),
+            inertias: Vec::new(),
+            local_inertias: Vec::new(),
+            link_steps: Vec::new(),
+            anchors: Vec::new(),
+            context: None,
+        }
     }
 
     pub(super) fn columns(&self) -> usize {
@@ -178,8 +207,13 @@ impl<'a> Generator<'a> {
         (self.local_inertias, self.inertias) = self.merged_inertias()?;
         let tree_coordinates = self.tree_coordinates();
         let mass = self.mass_matrix(tree_coordinates);
-        let velocity_terms: Vec<Option<Wrench>> =
-            (0..=self.topology.body_count()).map(|i| self.inertias[i].as_ref().map(|m| m.velocity_terms(&mut self.pool, &self.bodies[i]))).collect();
+        let velocity_terms: Vec<Option<Wrench>> = (0..=self.topology.body_count())
+            .map(|i| {
+                self.inertias[i]
+                    .as_ref()
+                    .map(|m| m.velocity_terms(&mut self.pool, &self.bodies[i]))
+            })
+            .collect();
         let second_member = self.project(velocity_terms);
         self.frame_states()?;
         let applied = self.applied_wrenches()?;
@@ -190,7 +224,11 @@ impl<'a> Generator<'a> {
         for (f, l) in forces.iter_mut().zip(&link_forces) {
             *f = self.pool.add(*f, *l);
         }
-        let accelerations = self.topology.complementary.is_empty().then(|| self.articulated(&applied, &link_forces));
+        let accelerations = self
+            .topology
+            .complementary
+            .is_empty()
+            .then(|| self.articulated(&applied, &link_forces));
         let closure = self.loops()?;
         Ok(Equations {
             pool: std::mem::take(&mut self.pool),
@@ -207,30 +245,60 @@ impl<'a> Generator<'a> {
     }
 
     fn tree_coordinates(&self) -> usize {
-        self.topology.principal.iter().map(|l| self.mechanism.link(self.mechanism.join(l.join).link).coordinates.len()).sum()
+        self.topology
+            .principal
+            .iter()
+            .map(|l| {
+                self.mechanism
+                    .link(self.mechanism.join(l.join).link)
+                    .coordinates
+                    .len()
+            })
+            .sum()
     }
 
     /// The coordinates of a join, with their columns.
     pub(super) fn link_coordinates(&self, join: JoinId) -> LinkCoordinates {
         let offset = self.lowering.join_offset(join);
-        let count = self.mechanism.link(self.mechanism.join(join).link).coordinates.len();
+        let count = self
+            .mechanism
+            .link(self.mechanism.join(join).link)
+            .coordinates
+            .len();
         let variables = &self.lowering.variables;
         LinkCoordinates {
-            positions: variables.positions[offset..offset + count].iter().map(|p| p.symbol).collect(),
-            rates: variables.rates[offset..offset + count].iter().map(|p| p.symbol).collect(),
+            positions: variables.positions[offset..offset + count]
+                .iter()
+                .map(|p| p.symbol)
+                .collect(),
+            rates: variables.rates[offset..offset + count]
+                .iter()
+                .map(|p| p.symbol)
+                .collect(),
             columns: (offset..offset + count).collect(),
         }
     }
 
     /// The steps of a displacement; `link` is the join whose coordinates they may use.
-    pub(super) fn steps(&mut self, d: &Displacement, link: Option<JoinId>) -> Result<Vec<Step>, LowerError> {
+    pub(super) fn steps(
+        &mut self,
+        d: &Displacement,
+        link: Option<JoinId>,
+    ) -> Result<Vec<Step>, LowerError> {
         d.0.iter()
             .map(|step| match step {
-                Elementary::Translation(t) => Ok(Step::Translation(self.lowering.vector(&mut self.pool, t, link)?)),
+                Elementary::Translation(t) => Ok(Step::Translation(self.lowering.vector(
+                    &mut self.pool,
+                    t,
+                    link,
+                )?)),
                 Elementary::Rotation { angle, axis } => {
                     let axis = self.lowering.vector(&mut self.pool, axis, None)?;
                     let axis = unit(&mut self.pool, &axis)?;
-                    Ok(Step::Rotation { axis, angle: self.lowering.scalar(&mut self.pool, angle, link)? })
+                    Ok(Step::Rotation {
+                        axis,
+                        angle: self.lowering.scalar(&mut self.pool, angle, link)?,
+                    })
                 }
             })
             .collect()
@@ -238,7 +306,11 @@ impl<'a> Generator<'a> {
 
     fn inverse_steps(&mut self, d: &Displacement) -> Result<Vec<Step>, LowerError> {
         let steps = self.steps(d, None)?;
-        Ok(steps.iter().rev().map(|s| s.inverse(&mut self.pool)).collect())
+        Ok(steps
+            .iter()
+            .rev()
+            .map(|s| s.inverse(&mut self.pool))
+            .collect())
     }
 
     /// The link's dof chain, in order.
@@ -263,11 +335,19 @@ impl<'a> Generator<'a> {
         for link in &self.topology.principal {
             let join = self.mechanism.join(link.join);
             self.context = Some(join.span);
-            let (on_parent, on_child) = if link.first_on_parent { (&join.first, &join.second) } else { (&join.second, &join.first) };
+            let (on_parent, on_child) = if link.first_on_parent {
+                (&join.first, &join.second)
+            } else {
+                (&join.second, &join.first)
+            };
             let to_joint = self.steps(&on_parent.displacement, None)?;
             let mut chain = self.chain(link.join)?;
             if !link.first_on_parent {
-                chain = chain.iter().rev().map(|s| s.inverse(&mut self.pool)).collect();
+                chain = chain
+                    .iter()
+                    .rev()
+                    .map(|s| s.inverse(&mut self.pool))
+                    .collect();
             }
             let to_body = self.inverse_steps(&on_child.displacement)?;
             let coordinates = self.link_coordinates(link.join);
@@ -310,7 +390,11 @@ impl<'a> Generator<'a> {
     fn owner(&self, column: usize) -> usize {
         let mut end = 0;
         for link in &self.topology.principal {
-            end += self.mechanism.link(self.mechanism.join(link.join).link).coordinates.len();
+            end += self
+                .mechanism
+                .link(self.mechanism.join(link.join).link)
+                .coordinates
+                .len();
             if column < end {
                 return link.child;
             }
@@ -336,7 +420,13 @@ impl<'a> Generator<'a> {
     pub(super) fn own_columns(&self, b: usize) -> std::ops::Range<usize> {
         let link = &self.topology.principal[b - 1];
         let offset = self.lowering.join_offset(link.join);
-        offset..offset + self.mechanism.link(self.mechanism.join(link.join).link).coordinates.len()
+        offset
+            ..offset
+                + self
+                    .mechanism
+                    .link(self.mechanism.join(link.join).link)
+                    .coordinates
+                    .len()
     }
 
     /// The power of `wrench` on body `b` per unit rate of `column`: Ψᵀ's entry.
@@ -378,11 +468,16 @@ impl<'a> Generator<'a> {
         for l in 0..tree_coordinates {
             let mut wrenches: Vec<Option<Wrench>> = vec![None; self.topology.body_count() + 1];
             for (b, wrench) in wrenches.iter_mut().enumerate().skip(1) {
-                if let (Some(inertia), Some([angular, linear])) = (&self.inertias[b], self.bodies[b].column(l)) {
+                if let (Some(inertia), Some([angular, linear])) =
+                    (&self.inertias[b], self.bodies[b].column(l))
+                {
                     *wrench = Some(inertia.times(&mut self.pool, angular, linear));
                 }
             }
-            for b in (self.owner(l)..=self.topology.body_count()).rev().filter(|&b| b > 0) {
+            for b in (self.owner(l)..=self.topology.body_count())
+                .rev()
+                .filter(|&b| b > 0)
+            {
                 let Some(wrench) = wrenches[b] else { continue };
                 for row in self.own_columns(b).filter(|&row| row <= l) {
                     let entry = self.power(b, row, &wrench);

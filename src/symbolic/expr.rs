@@ -235,7 +235,11 @@ impl Pool {
             Node::Neg(inner) => inner,
             // −(c x) = (−c) x, exactly.
             Node::Mul(x, y) if self.as_constant(x).is_some() || self.as_constant(y).is_some() => {
-                let (c, other) = if self.as_constant(x).is_some() { (x, y) } else { (y, x) };
+                let (c, other) = if self.as_constant(x).is_some() {
+                    (x, y)
+                } else {
+                    (y, x)
+                };
                 let minus = self.neg(c);
                 self.mul(minus, other)
             }
@@ -297,7 +301,12 @@ impl Pool {
 
     /// ∂e/∂x for a symbol x. `memo` keeps the derivatives already taken with respect to x, so
     /// that shared subexpressions are differentiated once: pass the same map for the same x.
-    pub fn derivative(&mut self, e: ExprId, x: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+    pub fn derivative(
+        &mut self,
+        e: ExprId,
+        x: ExprId,
+        memo: &mut HashMap<ExprId, ExprId>,
+    ) -> ExprId {
         if let Some(&d) = memo.get(&e) {
             return d;
         }
@@ -349,7 +358,14 @@ impl Pool {
         d
     }
 
-    fn pow_derivative(&mut self, e: ExprId, a: ExprId, b: ExprId, x: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+    fn pow_derivative(
+        &mut self,
+        e: ExprId,
+        a: ExprId,
+        b: ExprId,
+        x: ExprId,
+        memo: &mut HashMap<ExprId, ExprId>,
+    ) -> ExprId {
         let (da, db) = (self.derivative(a, x, memo), self.derivative(b, x, memo));
         if self.is_zero(db) {
             // b a^(b−1) a'
@@ -386,7 +402,11 @@ impl Pool {
                 let rest = self.sub(one, aa);
                 let root = self.sqrt(rest);
                 let inverse = self.div(one, root);
-                if f == Function::Asin { inverse } else { self.neg(inverse) }
+                if f == Function::Asin {
+                    inverse
+                } else {
+                    self.neg(inverse)
+                }
             }
             Function::Atan => {
                 let aa = self.mul(a, a);
@@ -408,7 +428,11 @@ impl Pool {
     pub fn operands(&self, id: ExprId) -> Vec<ExprId> {
         match self.node(id) {
             Node::Constant(_) | Node::Symbol(_) => Vec::new(),
-            Node::Add(a, b) | Node::Mul(a, b) | Node::Div(a, b) | Node::Pow(a, b) | Node::Atan2(a, b) => vec![a, b],
+            Node::Add(a, b)
+            | Node::Mul(a, b)
+            | Node::Div(a, b)
+            | Node::Pow(a, b)
+            | Node::Atan2(a, b) => vec![a, b],
             Node::Neg(a) | Node::Apply(_, a) => vec![a],
         }
     }
@@ -444,7 +468,10 @@ enum Step {
 
 /// The nodes `roots` reach through `operands`, operands before the nodes that use them, each
 /// once; depth-first with an explicit stack, since expression DAGs can be deep.
-pub fn topological_order(roots: &[ExprId], operands: impl Fn(ExprId) -> Vec<ExprId>) -> Vec<ExprId> {
+pub fn topological_order(
+    roots: &[ExprId],
+    operands: impl Fn(ExprId) -> Vec<ExprId>,
+) -> Vec<ExprId> {
     let mut placed: std::collections::HashSet<ExprId> = std::collections::HashSet::new();
     let mut order = Vec::new();
     for &root in roots {
@@ -458,7 +485,12 @@ pub fn topological_order(roots: &[ExprId], operands: impl Fn(ExprId) -> Vec<Expr
                 order.push(id);
             } else {
                 stack.push((id, true));
-                stack.extend(operands(id).into_iter().filter(|o| !placed.contains(o)).map(|o| (o, false)));
+                stack.extend(
+                    operands(id)
+                        .into_iter()
+                        .filter(|o| !placed.contains(o))
+                        .map(|o| (o, false)),
+                );
             }
         }
     }
@@ -468,7 +500,8 @@ pub fn topological_order(roots: &[ExprId], operands: impl Fn(ExprId) -> Vec<Expr
 impl Tape {
     pub fn new(pool: &Pool, roots: &[ExprId]) -> Tape {
         let order = topological_order(roots, |id| pool.operands(id));
-        let position: HashMap<ExprId, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+        let position: HashMap<ExprId, usize> =
+            order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
         let at = |id: ExprId| position[&id];
         let steps = order
             .iter()
@@ -485,7 +518,11 @@ impl Tape {
             })
             .collect();
         let roots = roots.iter().map(|r| position[r]).collect();
-        Tape { order, roots, steps }
+        Tape {
+            order,
+            roots,
+            steps,
+        }
     }
 
     /// Number of distinct nodes the roots reach.
@@ -498,11 +535,16 @@ impl Tape {
     pub fn expanded_size(&self) -> f64 {
         let mut size = vec![0.0; self.steps.len()];
         for (k, step) in self.steps.iter().enumerate() {
-            size[k] = 1.0 + match *step {
-                Step::Constant(_) | Step::Symbol(_) => 0.0,
-                Step::Neg(a) | Step::Apply(_, a) => size[a],
-                Step::Add(a, b) | Step::Mul(a, b) | Step::Div(a, b) | Step::Pow(a, b) | Step::Atan2(a, b) => size[a] + size[b],
-            };
+            size[k] = 1.0
+                + match *step {
+                    Step::Constant(_) | Step::Symbol(_) => 0.0,
+                    Step::Neg(a) | Step::Apply(_, a) => size[a],
+                    Step::Add(a, b)
+                    | Step::Mul(a, b)
+                    | Step::Div(a, b)
+                    | Step::Pow(a, b)
+                    | Step::Atan2(a, b) => size[a] + size[b],
+                };
         }
         self.roots.iter().map(|&r| size[r]).sum()
     }

@@ -13,12 +13,26 @@ use super::vector::{self as v, Vec3};
 impl Generator<'_> {
     /// The coordinates' second derivatives of a tree, given the applied efforts (wrenches at the
     /// bodies' origins, fixed axes) and the links' generalised forces.
-    pub(super) fn articulated(&mut self, applied: &[Option<Wrench>], link_forces: &[ExprId]) -> Vec<ExprId> {
+    pub(super) fn articulated(
+        &mut self,
+        applied: &[Option<Wrench>],
+        link_forces: &[ExprId],
+    ) -> Vec<ExprId> {
         let loads = self.loads_on_anchors(applied);
         let zero = self.pool.constant(0.0);
-        let moving: Vec<usize> = (1..=self.topology.body_count()).filter(|&b| self.anchors[b] == b).collect();
+        let moving: Vec<usize> = (1..=self.topology.body_count())
+            .filter(|&b| self.anchors[b] == b)
+            .collect();
         let mut index = vec![0; self.topology.body_count() + 1];
-        let root = articulated::Body { parent: 0, arm: v::zero(&mut self.pool), rotation: None, columns: Vec::new(), bias: [zero; 6], inertia: None, bias_force: [zero; 6] };
+        let root = articulated::Body {
+            parent: 0,
+            arm: v::zero(&mut self.pool),
+            rotation: None,
+            columns: Vec::new(),
+            bias: [zero; 6],
+            inertia: None,
+            bias_force: [zero; 6],
+        };
         let mut bodies = vec![root];
         let mut velocities: Vec<Spatial> = vec![[zero; 6]];
         for &b in &moving {
@@ -35,7 +49,9 @@ impl Generator<'_> {
     fn loads_on_anchors(&mut self, applied: &[Option<Wrench>]) -> Vec<Option<Wrench>> {
         let mut loads: Vec<Option<Wrench>> = vec![None; applied.len()];
         for (b, wrench) in applied.iter().enumerate().skip(1) {
-            let (Some(wrench), anchor) = (wrench, self.anchors[b]) else { continue };
+            let (Some(wrench), anchor) = (wrench, self.anchors[b]) else {
+                continue;
+            };
             if anchor == 0 {
                 continue; // On a body welded to earth.
             }
@@ -52,7 +68,13 @@ impl Generator<'_> {
     }
 
     /// Body `b` for the recursion, below `parent` (moving with `parent_velocity`), and its velocity.
-    fn articulated_body(&mut self, b: usize, parent: usize, parent_velocity: &Spatial, loads: &Option<Wrench>) -> (articulated::Body, Spatial) {
+    fn articulated_body(
+        &mut self,
+        b: usize,
+        parent: usize,
+        parent_velocity: &Spatial,
+        loads: &Option<Wrench>,
+    ) -> (articulated::Body, Spatial) {
         let steps = self.steps_from_anchor(b);
         let coordinates = self.link_coordinates(self.topology.principal[b - 1].join);
         let (rotation, arm) = self.compose(&steps);
@@ -94,10 +116,14 @@ impl Generator<'_> {
             None => [v::zero(pool); 2],
         };
         let frame = v::transpose(&self.bodies[b].rotation);
-        let applied = loads.map(|[f, m]| [v::mat_vec(pool, &frame, &f), v::mat_vec(pool, &frame, &m)]).unwrap_or([v::zero(pool); 2]);
+        let applied = loads
+            .map(|[f, m]| [v::mat_vec(pool, &frame, &f), v::mat_vec(pool, &frame, &m)])
+            .unwrap_or([v::zero(pool); 2]);
         let force = v::sub(pool, &products[0], &applied[0]);
         let moment = v::sub(pool, &products[1], &applied[1]);
-        body.bias_force = [force[0], force[1], force[2], moment[0], moment[1], moment[2]];
+        body.bias_force = [
+            force[0], force[1], force[2], moment[0], moment[1], moment[2],
+        ];
         body.inertia = inertia.map(|m| m.matrix(pool));
         (body, velocity)
     }
@@ -111,7 +137,10 @@ impl Generator<'_> {
             path.push(w);
             w = self.topology.parent(w);
         }
-        path.iter().rev().flat_map(|&w| self.link_steps[w].iter().cloned()).collect()
+        path.iter()
+            .rev()
+            .flat_map(|&w| self.link_steps[w].iter().cloned())
+            .collect()
     }
 
     /// The columns S of a chain of steps in the axes of its end frame, at its origin (linear
@@ -127,7 +156,10 @@ impl Generator<'_> {
                 let (angular, linear) = match step {
                     Step::Rotation { axis, angle } => {
                         let rate = self.derivatives.of(&mut self.pool, *angle, position);
-                        (v::scale(&mut self.pool, rate, axis), v::zero(&mut self.pool))
+                        (
+                            v::scale(&mut self.pool, rate, axis),
+                            v::zero(&mut self.pool),
+                        )
                     }
                     Step::Translation(t) => {
                         let rates = t.map(|x| self.derivatives.of(&mut self.pool, x, position));
@@ -141,7 +173,10 @@ impl Generator<'_> {
                 let back = v::transpose(&turned);
                 let spin = v::cross(pool, &angular, &offset);
                 let moved = v::add(pool, &linear, &spin);
-                let (w, u) = (v::mat_vec(pool, &back, &angular), v::mat_vec(pool, &back, &moved));
+                let (w, u) = (
+                    v::mat_vec(pool, &back, &angular),
+                    v::mat_vec(pool, &back, &moved),
+                );
                 let column = [u[0], u[1], u[2], w[0], w[1], w[2]];
                 columns[k] = articulated::add(pool, &columns[k], &column);
             }

@@ -39,10 +39,17 @@ impl Inertia {
         for r in 0..3 {
             for c in 0..3 {
                 let outer = pool.mul(origin[r], origin[c]);
-                let point = if r == c { pool.sub(squared, outer) } else { pool.neg(outer) };
+                let point = if r == c {
+                    pool.sub(squared, outer)
+                } else {
+                    pool.neg(outer)
+                };
                 let point = pool.mul(self.mass, point);
                 let cross_terms = {
-                    let (a, b) = (pool.mul(origin[r], turned[c]), pool.mul(turned[r], origin[c]));
+                    let (a, b) = (
+                        pool.mul(origin[r], turned[c]),
+                        pool.mul(turned[r], origin[c]),
+                    );
                     let both = pool.add(a, b);
                     if r == c {
                         let two = pool.constant(2.0);
@@ -56,7 +63,11 @@ impl Inertia {
                 at_origin[r][c] = pool.add(rotated[r][c], shift);
             }
         }
-        Inertia { mass: self.mass, first_moment, at_origin }
+        Inertia {
+            mass: self.mass,
+            first_moment,
+            at_origin,
+        }
     }
 
     fn plus(&self, pool: &mut Pool, other: &Inertia) -> Inertia {
@@ -66,7 +77,11 @@ impl Inertia {
                 *entry = pool.add(*entry, *o);
             }
         }
-        Inertia { mass: pool.add(self.mass, other.mass), first_moment: v::add(pool, &self.first_moment, &other.first_moment), at_origin }
+        Inertia {
+            mass: pool.add(self.mass, other.mass),
+            first_moment: v::add(pool, &self.first_moment, &other.first_moment),
+            at_origin,
+        }
     }
 
     /// 𝔐 (v, ω): the momentum μ v + ω∧h and the angular momentum at O, h∧v + I(O) ω.
@@ -75,7 +90,10 @@ impl Inertia {
         let spin = v::cross(pool, angular, &self.first_moment);
         let lever = v::cross(pool, &self.first_moment, linear);
         let turning = v::mat_vec(pool, &self.at_origin, angular);
-        [v::add(pool, &translating, &spin), v::add(pool, &lever, &turning)]
+        [
+            v::add(pool, &translating, &spin),
+            v::add(pool, &lever, &turning),
+        ]
     }
 
     /// 𝔖 = (−ω∧(ω∧h), −ω∧I(O)ω) for a body moving as `body`.
@@ -92,7 +110,10 @@ impl Inertia {
     pub fn velocity_terms(&self, pool: &mut Pool, body: &Moving) -> Wrench {
         let [force, moment] = self.velocity_products(pool, body);
         let [bias_force, bias_moment] = self.times(pool, &body.angular_bias, &body.bias);
-        [v::sub(pool, &force, &bias_force), v::sub(pool, &moment, &bias_moment)]
+        [
+            v::sub(pool, &force, &bias_force),
+            v::sub(pool, &moment, &bias_moment),
+        ]
     }
 
     /// 𝔐 as a 6 × 6 matrix on (v, ω): [[μ Id, −h̃], [h̃, I(O)]].
@@ -101,7 +122,11 @@ impl Inertia {
         let mut m = [[zero; 6]; 6];
         let h = self.first_moment;
         let minus = v::neg(pool, &h);
-        let skew = [[zero, minus[2], h[1]], [h[2], zero, minus[0]], [minus[1], h[0], zero]];
+        let skew = [
+            [zero, minus[2], h[1]],
+            [h[2], zero, minus[0]],
+            [minus[1], h[0], zero],
+        ];
         for i in 0..3 {
             m[i][i] = self.mass;
             for j in 0..3 {
@@ -123,8 +148,16 @@ impl Generator<'_> {
     pub(super) fn anchors(&self) -> Vec<usize> {
         let mut anchors = vec![0];
         for link in &self.topology.principal {
-            let moves = !self.mechanism.link(self.mechanism.join(link.join).link).coordinates.is_empty();
-            anchors.push(if moves { link.child } else { anchors[link.parent] });
+            let moves = !self
+                .mechanism
+                .link(self.mechanism.join(link.join).link)
+                .coordinates
+                .is_empty();
+            anchors.push(if moves {
+                link.child
+            } else {
+                anchors[link.parent]
+            });
         }
         anchors
     }
@@ -141,7 +174,9 @@ impl Generator<'_> {
         // frames of the bodies on the way.
         for b in (1..=n).rev() {
             let anchor = self.anchors[b];
-            let Some(inertia) = local[b].filter(|_| anchor != b) else { continue };
+            let Some(inertia) = local[b].filter(|_| anchor != b) else {
+                continue;
+            };
             local[b] = None;
             let parent = self.topology.parent(b);
             if anchor == 0 {
@@ -171,8 +206,12 @@ impl Generator<'_> {
     fn local_inertia(&mut self, b: usize) -> Result<Option<Inertia>, LowerError> {
         let body = self.mechanism.body(self.topology.bodies[b - 1]);
         self.context = Some(body.span);
-        let mass = self.lowering.scalar(&mut self.pool, body.mass.value(), None)?;
-        let moments = self.lowering.vector(&mut self.pool, body.inertia.value(), None)?;
+        let mass = self
+            .lowering
+            .scalar(&mut self.pool, body.mass.value(), None)?;
+        let moments = self
+            .lowering
+            .vector(&mut self.pool, body.inertia.value(), None)?;
         if self.pool.is_zero(mass) && v::is_zero(&self.pool, &moments) {
             return Ok(None);
         }
@@ -183,7 +222,11 @@ impl Generator<'_> {
         for k in 0..3 {
             diagonal[k][k] = moments[k];
         }
-        let central = Inertia { mass, first_moment: v::zero(pool), at_origin: diagonal };
+        let central = Inertia {
+            mass,
+            first_moment: v::zero(pool),
+            at_origin: diagonal,
+        };
         Ok(Some(central.moved(pool, &principal, &centre)))
     }
 }

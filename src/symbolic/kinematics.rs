@@ -27,7 +27,10 @@ impl Step {
     pub fn inverse(&self, pool: &mut Pool) -> Step {
         match self {
             Step::Translation(t) => Step::Translation(v::neg(pool, t)),
-            Step::Rotation { axis, angle } => Step::Rotation { axis: *axis, angle: pool.neg(*angle) },
+            Step::Rotation { axis, angle } => Step::Rotation {
+                axis: *axis,
+                angle: pool.neg(*angle),
+            },
         }
     }
 }
@@ -55,9 +58,22 @@ impl Derivatives {
 
     /// ∂e/∂pₖ for each coordinate, ė = Σ ∂e/∂pₖ qₖ, and ë at zero second derivatives,
     /// Σₗ ∂ė/∂pₗ qₗ.
-    fn rates(&mut self, pool: &mut Pool, e: ExprId, link: &LinkCoordinates) -> (Vec<ExprId>, ExprId, ExprId) {
-        let partials: Vec<ExprId> = link.positions.iter().map(|&p| self.of(pool, e, p)).collect();
-        let terms: Vec<ExprId> = partials.iter().zip(&link.rates).map(|(&d, &q)| pool.mul(d, q)).collect();
+    fn rates(
+        &mut self,
+        pool: &mut Pool,
+        e: ExprId,
+        link: &LinkCoordinates,
+    ) -> (Vec<ExprId>, ExprId, ExprId) {
+        let partials: Vec<ExprId> = link
+            .positions
+            .iter()
+            .map(|&p| self.of(pool, e, p))
+            .collect();
+        let terms: Vec<ExprId> = partials
+            .iter()
+            .zip(&link.rates)
+            .map(|(&d, &q)| pool.mul(d, q))
+            .collect();
         let rate = pool.sum(terms);
         let bias_terms: Vec<ExprId> = link
             .positions
@@ -105,14 +121,26 @@ impl Moving {
     }
 
     /// Carries the frame along `step`, whose parameters depend on `link`'s coordinates.
-    pub fn walk(&mut self, pool: &mut Pool, d: &mut Derivatives, step: &Step, link: &LinkCoordinates) {
+    pub fn walk(
+        &mut self,
+        pool: &mut Pool,
+        d: &mut Derivatives,
+        step: &Step,
+        link: &LinkCoordinates,
+    ) {
         match step {
             Step::Translation(t) => self.translate(pool, d, t, link),
             Step::Rotation { axis, angle } => self.rotate(pool, d, axis, *angle, link),
         }
     }
 
-    fn translate(&mut self, pool: &mut Pool, d: &mut Derivatives, t: &Vec3, link: &LinkCoordinates) {
+    fn translate(
+        &mut self,
+        pool: &mut Pool,
+        d: &mut Derivatives,
+        t: &Vec3,
+        link: &LinkCoordinates,
+    ) {
         let offset = v::mat_vec(pool, &self.rotation, t);
         if v::is_zero(pool, &offset) && link.positions.is_empty() {
             return;
@@ -156,7 +184,14 @@ impl Moving {
         self.origin = v::add(pool, &self.origin, &offset);
     }
 
-    fn rotate(&mut self, pool: &mut Pool, d: &mut Derivatives, axis: &Vec3, angle: ExprId, link: &LinkCoordinates) {
+    fn rotate(
+        &mut self,
+        pool: &mut Pool,
+        d: &mut Derivatives,
+        axis: &Vec3,
+        angle: ExprId,
+        link: &LinkCoordinates,
+    ) {
         if !link.positions.is_empty() {
             // The axis w = R u turns with the frame: d/dt (w θ̇) = ω × w θ̇ + w θ̈.
             let w = v::mat_vec(pool, &self.rotation, axis);

@@ -13,8 +13,17 @@ impl Generator<'_> {
     /// The state of every frame the efforts refer to (`position(F)`, …), for the lowering.
     pub(super) fn frame_states(&mut self) -> Result<(), LowerError> {
         let mut frames = Vec::new();
-        let applied = self.mechanism.applications.iter().flat_map(|a| self.mechanism.effort(a.effort).value.value().iter());
-        let links = self.mechanism.links.iter().flat_map(|l| l.forces.iter().chain(&l.torques).flat_map(|(_, v)| v.iter()));
+        let applied = self
+            .mechanism
+            .applications
+            .iter()
+            .flat_map(|a| self.mechanism.effort(a.effort).value.value().iter());
+        let links = self.mechanism.links.iter().flat_map(|l| {
+            l.forces
+                .iter()
+                .chain(&l.torques)
+                .flat_map(|(_, v)| v.iter())
+        });
         for s in applied.chain(links) {
             s.frames_used(&mut frames);
         }
@@ -22,7 +31,9 @@ impl Generator<'_> {
             let steps = self.steps(&frame.displacement, None)?;
             let body = match frame.body {
                 BodyRef::Earth => 0,
-                BodyRef::Body(id) => *self.topology.number_of.get(&id).ok_or_else(|| LowerError("the state of a frame on a body outside the mechanism".to_string()))?,
+                BodyRef::Body(id) => *self.topology.number_of.get(&id).ok_or_else(|| {
+                    LowerError("the state of a frame on a body outside the mechanism".to_string())
+                })?,
             };
             let mut moving = self.bodies[body].clone();
             self.walk(&mut moving, &steps, &LinkCoordinates::default());
@@ -47,11 +58,18 @@ impl Generator<'_> {
             }
             self.context = Some(application.span);
             let effort = self.mechanism.effort(application.effort);
-            let value = self.lowering.vector(&mut self.pool, effort.value.value(), None)?;
+            let value = self
+                .lowering
+                .vector(&mut self.pool, effort.value.value(), None)?;
             let value = match effort.basis {
                 BodyRef::Earth => value,
                 BodyRef::Body(id) => {
-                    let basis = self.topology.number_of.get(&id).copied().ok_or_else(|| LowerError("an effort is written in the basis of a body outside the mechanism".to_string()))?;
+                    let basis = self.topology.number_of.get(&id).copied().ok_or_else(|| {
+                        LowerError(
+                            "an effort is written in the basis of a body outside the mechanism"
+                                .to_string(),
+                        )
+                    })?;
                     v::mat_vec(&mut self.pool, &self.bodies[basis].rotation, &value)
                 }
             };
@@ -65,7 +83,10 @@ impl Generator<'_> {
                 }
             };
             wrenches[b] = Some(match wrenches[b] {
-                Some([f, m]) => [v::add(&mut self.pool, &f, &wrench[0]), v::add(&mut self.pool, &m, &wrench[1])],
+                Some([f, m]) => [
+                    v::add(&mut self.pool, &f, &wrench[0]),
+                    v::add(&mut self.pool, &m, &wrench[1]),
+                ],
                 None => wrench,
             });
         }
@@ -75,14 +96,26 @@ impl Generator<'_> {
     /// The links' own efforts (`force`, `torque`, `forceN`, `torqueN`): the wrench, in the frame
     /// of the chain's start (or of step N), against the twist each coordinate gives there.
     pub(super) fn add_link_efforts(&mut self, forces: &mut [ExprId]) -> Result<(), LowerError> {
-        let joins: Vec<JoinId> = self.topology.principal.iter().map(|l| l.join).chain(self.topology.complementary.iter().map(|l| l.join)).collect();
+        let joins: Vec<JoinId> = self
+            .topology
+            .principal
+            .iter()
+            .map(|l| l.join)
+            .chain(self.topology.complementary.iter().map(|l| l.join))
+            .collect();
         for join in joins {
             self.context = Some(self.mechanism.join(join).span);
             let link = self.mechanism.link(self.mechanism.join(join).link);
-            let efforts: Vec<_> = [(EffortKind::Force, &link.forces), (EffortKind::Torque, &link.torques)]
-                .into_iter()
-                .flat_map(|(kind, list)| list.iter().map(move |(step, value)| (kind, *step, value.clone())))
-                .collect();
+            let efforts: Vec<_> = [
+                (EffortKind::Force, &link.forces),
+                (EffortKind::Torque, &link.torques),
+            ]
+            .into_iter()
+            .flat_map(|(kind, list)| {
+                list.iter()
+                    .map(move |(step, value)| (kind, *step, value.clone()))
+            })
+            .collect();
             if efforts.is_empty() {
                 continue;
             }
@@ -106,10 +139,19 @@ impl Generator<'_> {
 
     /// Per coordinate of the link, the twist (angular, linear at the frame's origin) a unit rate
     /// gives: of the chain's end in its first frame (`step` 0), or of step N in its own frame.
-    fn chain_twists(&mut self, chain: &[Step], step: u8, coordinates: &LinkCoordinates) -> Vec<[Vec3; 2]> {
+    fn chain_twists(
+        &mut self,
+        chain: &[Step],
+        step: u8,
+        coordinates: &LinkCoordinates,
+    ) -> Vec<[Vec3; 2]> {
         let columns = self.columns();
         let mut frame = Moving::fixed(&mut self.pool, columns);
-        let steps = if step == 0 { chain } else { &chain[step as usize - 1..step as usize] };
+        let steps = if step == 0 {
+            chain
+        } else {
+            &chain[step as usize - 1..step as usize]
+        };
         self.walk(&mut frame, steps, coordinates);
         let zero = v::zero(&mut self.pool);
         coordinates
@@ -126,5 +168,4 @@ impl Generator<'_> {
             })
             .collect()
     }
-
 }

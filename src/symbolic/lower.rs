@@ -72,7 +72,6 @@ pub struct FrameState {
     pub orientation: [[ExprId; 3]; 3],
 }
 
-
 #[derive(Debug)]
 pub struct LowerError(pub String);
 
@@ -82,7 +81,11 @@ impl<'a> Lowering<'a> {
         let mut positions = Vec::new();
         let mut rates = Vec::new();
         let mut join_offsets = HashMap::new();
-        let joins = topology.principal.iter().map(|l| l.join).chain(topology.complementary.iter().map(|l| l.join));
+        let joins = topology
+            .principal
+            .iter()
+            .map(|l| l.join)
+            .chain(topology.complementary.iter().map(|l| l.join));
         for join in joins {
             join_offsets.insert(join, positions.len());
             let name = mechanism.join_name(join);
@@ -90,8 +93,20 @@ impl<'a> Lowering<'a> {
                 let position = format!("{name}.{coordinate}");
                 let rate = format!("{position}'");
                 let meaning = format!("coordinate `{coordinate}` of join `{name}`");
-                positions.push(Variable { symbol: pool.symbol(&position), name: position, meaning: meaning.clone(), given: None, unknown: None });
-                rates.push(Variable { symbol: pool.symbol(&rate), name: rate, meaning: format!("rate of the {meaning}"), given: None, unknown: None });
+                positions.push(Variable {
+                    symbol: pool.symbol(&position),
+                    name: position,
+                    meaning: meaning.clone(),
+                    given: None,
+                    unknown: None,
+                });
+                rates.push(Variable {
+                    symbol: pool.symbol(&rate),
+                    name: rate,
+                    meaning: format!("rate of the {meaning}"),
+                    given: None,
+                    unknown: None,
+                });
             }
         }
         let time = pool.symbol("t");
@@ -104,7 +119,13 @@ impl<'a> Lowering<'a> {
             parameters: HashMap::new(),
             functions: HashMap::new(),
             frames: Vec::new(),
-            variables: Variables { positions, rates, parameters: Vec::new(), functions: Vec::new(), time },
+            variables: Variables {
+                positions,
+                rates,
+                parameters: Vec::new(),
+                functions: Vec::new(),
+                time,
+            },
         }
     }
 
@@ -114,25 +135,40 @@ impl<'a> Lowering<'a> {
     }
 
     /// The expression of `s`; `link` is the join whose link encloses it (for `x`, `x'`).
-    pub fn scalar(&mut self, pool: &mut Pool, s: &SExpr, link: Option<JoinId>) -> Result<ExprId, LowerError> {
+    pub fn scalar(
+        &mut self,
+        pool: &mut Pool,
+        s: &SExpr,
+        link: Option<JoinId>,
+    ) -> Result<ExprId, LowerError> {
         Ok(match s {
             SExpr::Num(v) => pool.constant(*v),
             SExpr::Time => self.variables.time,
             SExpr::Unknown(id) => self.parameter(pool, *id),
             SExpr::UnknownFunction(id, args) => {
-                let arguments = args.iter().map(|a| self.scalar(pool, a, link)).collect::<Result<Vec<_>, _>>()?;
+                let arguments = args
+                    .iter()
+                    .map(|a| self.scalar(pool, a, link))
+                    .collect::<Result<Vec<_>, _>>()?;
                 self.function(pool, *id, arguments)
             }
             SExpr::Coordinate { index, order } => {
-                let join = link.ok_or_else(|| LowerError("a link coordinate outside its link".to_string()))?;
+                let join = link
+                    .ok_or_else(|| LowerError("a link coordinate outside its link".to_string()))?;
                 self.coordinate(join, *index, *order)?
             }
-            SExpr::JoinCoordinate { join, index, order } => self.coordinate(*join, *index, *order)?,
+            SExpr::JoinCoordinate { join, index, order } => {
+                self.coordinate(*join, *index, *order)?
+            }
             SExpr::Neg(a) => {
                 let a = self.scalar(pool, a, link)?;
                 pool.neg(a)
             }
-            SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+            SExpr::Add(a, b)
+            | SExpr::Sub(a, b)
+            | SExpr::Mul(a, b)
+            | SExpr::Div(a, b)
+            | SExpr::Pow(a, b) => {
                 let (x, y) = (self.scalar(pool, a, link)?, self.scalar(pool, b, link)?);
                 match s {
                     SExpr::Add(..) => pool.add(x, y),
@@ -145,22 +181,43 @@ impl<'a> Lowering<'a> {
             }
             SExpr::FrameState(frame, quantity) => self.frame_state(frame, *quantity)?,
             SExpr::Call(name, args) => {
-                let args = args.iter().map(|a| self.scalar(pool, a, link)).collect::<Result<Vec<_>, _>>()?;
+                let args = args
+                    .iter()
+                    .map(|a| self.scalar(pool, a, link))
+                    .collect::<Result<Vec<_>, _>>()?;
                 match (Function::from_name(name), args.as_slice()) {
                     (Some(f), [a]) => pool.apply(f, *a),
                     (None, [y, x]) if *name == "atan2" => pool.atan2(*y, *x),
-                    _ => return Err(LowerError(format!("`{name}` is called with {} arguments", args.len()))),
+                    _ => {
+                        return Err(LowerError(format!(
+                            "`{name}` is called with {} arguments",
+                            args.len()
+                        )))
+                    }
                 }
             }
         })
     }
 
-    pub fn vector(&mut self, pool: &mut Pool, v: &crate::elab::value::Vector, link: Option<JoinId>) -> Result<[ExprId; 3], LowerError> {
-        Ok([self.scalar(pool, &v[0], link)?, self.scalar(pool, &v[1], link)?, self.scalar(pool, &v[2], link)?])
+    pub fn vector(
+        &mut self,
+        pool: &mut Pool,
+        v: &crate::elab::value::Vector,
+        link: Option<JoinId>,
+    ) -> Result<[ExprId; 3], LowerError> {
+        Ok([
+            self.scalar(pool, &v[0], link)?,
+            self.scalar(pool, &v[1], link)?,
+            self.scalar(pool, &v[2], link)?,
+        ])
     }
 
     fn frame_state(&self, frame: &Frame, quantity: FrameQuantity) -> Result<ExprId, LowerError> {
-        let (_, state) = self.frames.iter().find(|(f, _)| **f == *frame).ok_or_else(|| LowerError("the state of a frame outside an effort".to_string()))?;
+        let (_, state) = self
+            .frames
+            .iter()
+            .find(|(f, _)| **f == *frame)
+            .ok_or_else(|| LowerError("the state of a frame outside an effort".to_string()))?;
         Ok(match quantity {
             FrameQuantity::Position(i) => state.position[i as usize],
             FrameQuantity::Velocity(i) => state.velocity[i as usize],
@@ -170,7 +227,9 @@ impl<'a> Lowering<'a> {
     }
 
     fn coordinate(&self, join: JoinId, index: u32, order: u32) -> Result<ExprId, LowerError> {
-        let k = self.join_offsets.get(&join).ok_or_else(|| LowerError("a coordinate of a join outside the mechanism".to_string()))? + index as usize;
+        let k = self.join_offsets.get(&join).ok_or_else(|| {
+            LowerError("a coordinate of a join outside the mechanism".to_string())
+        })? + index as usize;
         match order {
             0 => Ok(self.variables.positions[k].symbol),
             1 => Ok(self.variables.rates[k].symbol),
@@ -191,14 +250,32 @@ impl<'a> Lowering<'a> {
             origin => self.mechanism.generic_name(origin),
         };
         let mut name = self.parameter_name(id);
-        while name == "t" || self.variables.parameters.iter().any(|p| p.name == name) || self.variables.positions.iter().any(|p| p.name == name) {
+        while name == "t"
+            || self.variables.parameters.iter().any(|p| p.name == name)
+            || self.variables.positions.iter().any(|p| p.name == name)
+        {
             name.push('_');
         }
-        let given = self.mechanism.given.iter().find(|(g, _, _)| *g == id).and_then(|(_, v, _)| crate::elab::value::constant(v));
-        let variable = Variable { symbol: pool.symbol(&name), name, meaning, given, unknown: Some(id) };
+        let given = self
+            .mechanism
+            .given
+            .iter()
+            .find(|(g, _, _)| *g == id)
+            .and_then(|(_, v, _)| crate::elab::value::constant(v));
+        let variable = Variable {
+            symbol: pool.symbol(&name),
+            name,
+            meaning,
+            given,
+            unknown: Some(id),
+        };
         self.parameters.insert(id, self.variables.parameters.len());
         self.variables.parameters.push(variable);
-        self.variables.parameters.last().map(|v| v.symbol).unwrap_or(self.variables.time)
+        self.variables
+            .parameters
+            .last()
+            .map(|v| v.symbol)
+            .unwrap_or(self.variables.time)
     }
 
     /// The `let` name, else the notation table's, else a thesis-style name built from the body
@@ -208,7 +285,9 @@ impl<'a> Lowering<'a> {
         if let Some(name) = &unknown.name {
             // The components of a `?v` share its name.
             return match unknown.kind {
-                UnknownKind::Vector => format!("{name}_{}", ["x", "y", "z"][unknown.component as usize % 3]),
+                UnknownKind::Vector => {
+                    format!("{name}_{}", ["x", "y", "z"][unknown.component as usize % 3])
+                }
                 _ => name.to_string(),
             };
         }
@@ -219,9 +298,15 @@ impl<'a> Lowering<'a> {
         let number = |body| self.body_numbers.get(&body).copied().unwrap_or(0);
         match unknown.origin {
             Origin::Mass(body) => format!("mu_{}", number(body)),
-            Origin::Inertia(body, axis) => format!("mIg_{}_{}", number(body), AXES[axis as usize % 3]),
-            Origin::InertiaFrame(body, k) => format!("vGT_{}_{}", number(body), AXES[k as usize % 6]),
-            Origin::EffortValue(effort, axis) => format!("effort{}_{}", effort.0 + 1, AXES[axis as usize % 3]),
+            Origin::Inertia(body, axis) => {
+                format!("mIg_{}_{}", number(body), AXES[axis as usize % 3])
+            }
+            Origin::InertiaFrame(body, k) => {
+                format!("vGT_{}_{}", number(body), AXES[k as usize % 6])
+            }
+            Origin::EffortValue(effort, axis) => {
+                format!("effort{}_{}", effort.0 + 1, AXES[axis as usize % 3])
+            }
             Origin::Written if unknown.kind == UnknownKind::Function => format!("f{}", id.0 + 1),
             Origin::Written => format!("unknown{}", id.0 + 1),
         }
@@ -236,8 +321,13 @@ impl<'a> Lowering<'a> {
         // The symbol stands for the value of the application; its name shows the arguments.
         let shown: Vec<String> = key.1.iter().map(|&a| self.argument_name(pool, a)).collect();
         let symbol = pool.symbol(&format!("{name}({})", shown.join(", ")));
-        self.functions.insert(key.clone(), self.variables.functions.len());
-        self.variables.functions.push(FunctionUse { name, symbol, arguments: key.1 });
+        self.functions
+            .insert(key.clone(), self.variables.functions.len());
+        self.variables.functions.push(FunctionUse {
+            name,
+            symbol,
+            arguments: key.1,
+        });
         symbol
     }
 

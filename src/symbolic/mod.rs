@@ -4,9 +4,9 @@
 //! (`kinematics`), the equations M q̇ = S + F + Δᵀ Λ, Δ q = 0 (`equations`), and their
 //! emitters (`emit`).
 
-pub mod emit;
 pub mod articulated;
 mod closure;
+pub mod emit;
 pub mod equations;
 pub mod expr;
 mod forward;

@@ -25,11 +25,19 @@ pub fn is_zero(pool: &Pool, v: &Vec3) -> bool {
 }
 
 pub fn add(pool: &mut Pool, a: &Vec3, b: &Vec3) -> Vec3 {
-    [pool.add(a[0], b[0]), pool.add(a[1], b[1]), pool.add(a[2], b[2])]
+    [
+        pool.add(a[0], b[0]),
+        pool.add(a[1], b[1]),
+        pool.add(a[2], b[2]),
+    ]
 }
 
 pub fn sub(pool: &mut Pool, a: &Vec3, b: &Vec3) -> Vec3 {
-    [pool.sub(a[0], b[0]), pool.sub(a[1], b[1]), pool.sub(a[2], b[2])]
+    [
+        pool.sub(a[0], b[0]),
+        pool.sub(a[1], b[1]),
+        pool.sub(a[2], b[2]),
+    ]
 }
 
 pub fn neg(pool: &mut Pool, a: &Vec3) -> Vec3 {
@@ -41,7 +49,11 @@ pub fn scale(pool: &mut Pool, s: ExprId, a: &Vec3) -> Vec3 {
 }
 
 pub fn dot(pool: &mut Pool, a: &Vec3, b: &Vec3) -> ExprId {
-    let terms = [pool.mul(a[0], b[0]), pool.mul(a[1], b[1]), pool.mul(a[2], b[2])];
+    let terms = [
+        pool.mul(a[0], b[0]),
+        pool.mul(a[1], b[1]),
+        pool.mul(a[2], b[2]),
+    ];
     pool.sum(terms)
 }
 
@@ -50,20 +62,38 @@ pub fn cross(pool: &mut Pool, a: &Vec3, b: &Vec3) -> Vec3 {
         let (l, r) = (pool.mul(a[i], b[j]), pool.mul(a[j], b[i]));
         pool.sub(l, r)
     };
-    [component(pool, 1, 2), component(pool, 2, 0), component(pool, 0, 1)]
+    [
+        component(pool, 1, 2),
+        component(pool, 2, 0),
+        component(pool, 0, 1),
+    ]
 }
 
 pub fn mat_vec(pool: &mut Pool, m: &Mat3, v: &Vec3) -> Vec3 {
-    [dot(pool, &m[0], v), dot(pool, &m[1], v), dot(pool, &m[2], v)]
+    [
+        dot(pool, &m[0], v),
+        dot(pool, &m[1], v),
+        dot(pool, &m[2], v),
+    ]
 }
 
 pub fn transpose(m: &Mat3) -> Mat3 {
-    [[m[0][0], m[1][0], m[2][0]], [m[0][1], m[1][1], m[2][1]], [m[0][2], m[1][2], m[2][2]]]
+    [
+        [m[0][0], m[1][0], m[2][0]],
+        [m[0][1], m[1][1], m[2][1]],
+        [m[0][2], m[1][2], m[2][2]],
+    ]
 }
 
 pub fn mat_mul(pool: &mut Pool, a: &Mat3, b: &Mat3) -> Mat3 {
     let bt = transpose(b);
-    let row = |pool: &mut Pool, i: usize| [dot(pool, &a[i], &bt[0]), dot(pool, &a[i], &bt[1]), dot(pool, &a[i], &bt[2])];
+    let row = |pool: &mut Pool, i: usize| {
+        [
+            dot(pool, &a[i], &bt[0]),
+            dot(pool, &a[i], &bt[1]),
+            dot(pool, &a[i], &bt[2]),
+        ]
+    };
     [row(pool, 0), row(pool, 1), row(pool, 2)]
 }
 
@@ -124,7 +154,8 @@ mod tests {
         let r = rotation(&mut p, &u, q);
         let roots: Vec<ExprId> = r.iter().flatten().copied().collect();
         let values = Tape::new(&p, &roots).eval(&[0.7]);
-        let expected = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.7);
+        let expected =
+            nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.7);
         for i in 0..3 {
             for j in 0..3 {
                 assert!((values[3 * i + j] - expected[(i, j)]).abs() < 1e-15);

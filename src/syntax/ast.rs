@@ -29,9 +29,18 @@ pub enum DeclKind {
     /// `let a = e and b = e`
     Let(Vec<Binding>),
     /// `let f(a, b : vector) = e`: a parameterised definition.
-    Define { name: Ident, params: Vec<Param>, body: Expr },
+    Define {
+        name: Ident,
+        params: Vec<Param>,
+        body: Expr,
+    },
     /// `join <frame> and <frame> with <link> [as <name>]`
-    Join { first: Expr, second: Expr, link: Expr, name: Option<Ident> },
+    Join {
+        first: Expr,
+        second: Expr,
+        link: Expr,
+        name: Option<Ident>,
+    },
     /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
     Initial(Vec<InitialValue>),
     /// `given L = 0.8, arm.mass = 2`: values of unknowns and generic quantities for simulation.
@@ -40,11 +49,18 @@ pub enum DeclKind {
     Simulate(Vec<FieldInit>),
     /// `apply E on T`; `apply E between R and T`: E on T and its opposite on R (`reaction`);
     /// `apply F` for a force with a `field`: on every body with mass (a uniform field).
-    Apply { effort: Expr, target: Option<Expr>, reaction: Option<Expr> },
+    Apply {
+        effort: Expr,
+        target: Option<Expr>,
+        reaction: Option<Expr>,
+    },
     /// `package P = decls end`
     Package { name: Ident, decls: Vec<Decl> },
     /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`
-    Import { target: ImportTarget, alias: Option<Ident> },
+    Import {
+        target: ImportTarget,
+        alias: Option<Ident>,
+    },
     /// A declaration the parser could not read; its error was already reported.
     Error,
 }
@@ -158,7 +174,10 @@ pub struct Arg {
 pub enum Callee {
     Name(Ident),
     /// `P:f(...)`
-    Qualified { package: Ident, name: Ident },
+    Qualified {
+        package: Ident,
+        name: Ident,
+    },
     /// `?fs(x, x')`: an unknown function.
     Unknown(Ident),
 }
@@ -167,32 +186,63 @@ pub enum Callee {
 pub enum ExprKind {
     Name(Ident),
     /// `P:X`
-    Qualified { package: Ident, name: Ident },
+    Qualified {
+        package: Ident,
+        name: Ident,
+    },
     /// `e.field`
-    Field { target: Box<Expr>, field: Ident },
+    Field {
+        target: Box<Expr>,
+        field: Ident,
+    },
     /// `?s`: a fresh unknown scalar at each occurrence.
     Unknown(Ident),
     Int(i64),
     Float(f64),
     /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
     Vector(Vec<Expr>),
-    Call { callee: Callee, args: Vec<Arg> },
-    Binary { op: BinaryOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    Call {
+        callee: Callee,
+        args: Vec<Arg>,
+    },
+    Binary {
+        op: BinaryOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
     Neg(Box<Expr>),
     /// `x'`: the time derivative of a joint coordinate.
     Prime(Box<Expr>),
     /// `body ... end`, `link(x) ... end`, `force ... end`, `torque ... end`
-    Construct { kind: ConstructKind, params: Vec<Ident>, fields: Vec<FieldInit> },
+    Construct {
+        kind: ConstructKind,
+        params: Vec<Ident>,
+        fields: Vec<FieldInit>,
+    },
     /// `local a = e and b = e in body end`
-    Local { bindings: Vec<Binding>, body: Box<Expr> },
+    Local {
+        bindings: Vec<Binding>,
+        body: Box<Expr>,
+    },
     /// An expression the parser could not read.
     Error,
 }
 
 /// Builds a binary expression node (used by the grammar's actions).
-pub fn binary(file: crate::syntax::span::FileId, start: usize, end: usize, op: BinaryOp, lhs: Expr, rhs: Expr) -> Expr {
+pub fn binary(
+    file: crate::syntax::span::FileId,
+    start: usize,
+    end: usize,
+    op: BinaryOp,
+    lhs: Expr,
+    rhs: Expr,
+) -> Expr {
     Expr {
-        kind: ExprKind::Binary { op, lhs: Box::new(lhs), rhs: Box::new(rhs) },
+        kind: ExprKind::Binary {
+            op,
+            lhs: Box::new(lhs),
+            rhs: Box::new(rhs),
+        },
         span: Span::new(file, start, end),
     }
 }

@@ -126,7 +126,9 @@ fn unterminated_string<'input>(_: &mut logos::Lexer<'input, Tok<'input>>) -> Res
 }
 
 /// Skips a comment `(* ... *)`, which may contain nested comments.
-fn nested_comment<'input>(lex: &mut logos::Lexer<'input, Tok<'input>>) -> FilterResult<(), LexError> {
+fn nested_comment<'input>(
+    lex: &mut logos::Lexer<'input, Tok<'input>>,
+) -> FilterResult<(), LexError> {
     let rest = lex.remainder().as_bytes();
     let mut depth = 1usize;
     let mut i = 0;
@@ -228,7 +230,11 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Spanned<'_>>, Vec<Diagnostic>) {
         let range = lexer.span();
         match result {
             Ok(token) => tokens.push((range.start, token, range.end)),
-            Err(error) => errors.push(lex_diagnostic(error, Span::new(file, range.start, range.end), lexer.slice())),
+            Err(error) => errors.push(lex_diagnostic(
+                error,
+                Span::new(file, range.start, range.end),
+                lexer.slice(),
+            )),
         }
     }
     (tokens, errors)
@@ -237,7 +243,10 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Spanned<'_>>, Vec<Diagnostic>) {
 fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
     match error {
         LexError::UnterminatedComment => {
-            let opening = Span { end: span.start + 2, ..span };
+            let opening = Span {
+                end: span.start + 2,
+                ..span
+            };
             Diagnostic::error("E0102", "unterminated comment")
                 .primary(opening, "this comment is never closed")
                 .help("close it with `*)`; comments nest, so every `(*` inside needs its own `*)`")
@@ -246,10 +255,12 @@ fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
             .primary(span, "this string has no closing `\"` on its line"),
         LexError::UnexpectedCharacter => {
             let character = slice.chars().next().unwrap_or('?');
-            let diagnostic = Diagnostic::error("E0101", format!("unexpected character `{character}`"))
-                .primary(span, "not part of any LSD token");
+            let diagnostic =
+                Diagnostic::error("E0101", format!("unexpected character `{character}`"))
+                    .primary(span, "not part of any LSD token");
             match character {
-                '?' => diagnostic.help("an unknown is `?` followed by a letter, as in `?s` or `?fs(x, x')`"),
+                '?' => diagnostic
+                    .help("an unknown is `?` followed by a letter, as in `?s` or `?fs(x, x')`"),
                 '|' => diagnostic.help("the rotation operator is `||`, as in `th || [1,0,0]`"),
                 '"' => diagnostic.help("strings appear only in `import \"file.lsd\";`"),
                 _ => diagnostic,
@@ -270,7 +281,10 @@ mod tests {
 
     #[test]
     fn signs_are_operators() {
-        assert_eq!(tokens("x -1"), vec![Tok::Ident("x"), Tok::Minus, Tok::Int("1")]);
+        assert_eq!(
+            tokens("x -1"),
+            vec![Tok::Ident("x"), Tok::Minus, Tok::Int("1")]
+        );
     }
 
     #[test]
@@ -293,7 +307,10 @@ mod tests {
 
     #[test]
     fn nested_comments_are_skipped() {
-        assert_eq!(tokens("a (* b (* c *) d *) e"), vec![Tok::Ident("a"), Tok::Ident("e")]);
+        assert_eq!(
+            tokens("a (* b (* c *) d *) e"),
+            vec![Tok::Ident("a"), Tok::Ident("e")]
+        );
     }
 
     #[test]

@@ -20,8 +20,16 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
     let (tokens, mut diagnostics) = lex(file, text);
     let mut recovered = Vec::new();
     let parser = grammar::ProgramParser::new();
-    let result = parser.parse(file, &mut recovered, tokens.iter().copied().map(Ok::<_, LexError>));
-    let context = ErrorContext { file, tokens: &tokens, text_len: text.len() };
+    let result = parser.parse(
+        file,
+        &mut recovered,
+        tokens.iter().copied().map(Ok::<_, LexError>),
+    );
+    let context = ErrorContext {
+        file,
+        tokens: &tokens,
+        text_len: text.len(),
+    };
     for error in recovered {
         diagnostics.push(context.describe(error.error));
     }
@@ -39,8 +47,16 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
 pub fn parse_expr(file: FileId, text: &str) -> Result<crate::syntax::ast::Expr, Vec<Diagnostic>> {
     let (tokens, mut diagnostics) = lex(file, text);
     let mut recovered: Vec<ErrorRecovery<usize, Tok<'_>, LexError>> = Vec::new();
-    let result = grammar::ExprParser::new().parse(file, &mut recovered, tokens.iter().copied().map(Ok::<_, LexError>));
-    let context = ErrorContext { file, tokens: &tokens, text_len: text.len() };
+    let result = grammar::ExprParser::new().parse(
+        file,
+        &mut recovered,
+        tokens.iter().copied().map(Ok::<_, LexError>),
+    );
+    let context = ErrorContext {
+        file,
+        tokens: &tokens,
+        text_len: text.len(),
+    };
     diagnostics.extend(recovered.into_iter().map(|e| context.describe(e.error)));
     match result {
         Ok(expr) if diagnostics.is_empty() => Ok(expr),
@@ -61,41 +77,69 @@ struct ErrorContext<'a, 'input> {
 impl ErrorContext<'_, '_> {
     fn describe(&self, error: ParseError<usize, Tok<'_>, LexError>) -> Diagnostic {
         match error {
-            ParseError::UnrecognizedToken { token: (start, token, end), expected } => {
-                self.unexpected_token(Span::new(self.file, start, end), start, token, &expected)
-            }
-            ParseError::ExtraToken { token: (start, token, end) } => {
-                Diagnostic::error("E0201", format!("unexpected {token}"))
-                    .primary(Span::new(self.file, start, end), "nothing can follow here")
-            }
+            ParseError::UnrecognizedToken {
+                token: (start, token, end),
+                expected,
+            } => self.unexpected_token(Span::new(self.file, start, end), start, token, &expected),
+            ParseError::ExtraToken {
+                token: (start, token, end),
+            } => Diagnostic::error("E0201", format!("unexpected {token}"))
+                .primary(Span::new(self.file, start, end), "nothing can follow here"),
             ParseError::UnrecognizedEof { location, expected } => {
                 let at = location.min(self.text_len);
-                Diagnostic::error("E0202", format!("unexpected end of file, expected {}", expected_list(&expected)))
-                    .primary(Span::new(self.file, at, at), "the file ends here")
-                    .with_help(missing_terminator_help(&expected))
+                Diagnostic::error(
+                    "E0202",
+                    format!(
+                        "unexpected end of file, expected {}",
+                        expected_list(&expected)
+                    ),
+                )
+                .primary(Span::new(self.file, at, at), "the file ends here")
+                .with_help(missing_terminator_help(&expected))
             }
             ParseError::InvalidToken { location } => Diagnostic::error("E0101", "invalid token")
-                .primary(Span::new(self.file, location, location + 1), "not part of any LSD token"),
+                .primary(
+                    Span::new(self.file, location, location + 1),
+                    "not part of any LSD token",
+                ),
             ParseError::User { error } => Diagnostic::error("E0101", format!("{error:?}")),
         }
     }
 
-    fn unexpected_token(&self, span: Span, start: usize, token: Tok<'_>, expected: &[String]) -> Diagnostic {
+    fn unexpected_token(
+        &self,
+        span: Span,
+        start: usize,
+        token: Tok<'_>,
+        expected: &[String],
+    ) -> Diagnostic {
         let message = format!("expected {}, found {token}", expected_list(expected));
         let diagnostic = Diagnostic::error("E0201", message);
         if let Some(opening) = self.unmatched_closing(start, token) {
             return diagnostic
-                .primary(span, format!("this `{}` closes no `{opening}`", token.text()))
+                .primary(
+                    span,
+                    format!("this `{}` closes no `{opening}`", token.text()),
+                )
                 .help(format!("remove the extra `{}`", token.text()));
         }
         if expected.len() == 1 && expected[0] == "\"=\"" {
-            let field = self.previous_token(start).map(|t| t.to_string()).unwrap_or_default();
-            return diagnostic
-                .primary(span, "expected `=` here")
-                .help(format!("a field is written `name = value`: insert `=` after {field}"));
+            let field = self
+                .previous_token(start)
+                .map(|t| t.to_string())
+                .unwrap_or_default();
+            return diagnostic.primary(span, "expected `=` here").help(format!(
+                "a field is written `name = value`: insert `=` after {field}"
+            ));
         }
-        let label = if token == Tok::Semicolon { "unexpected `;`".to_string() } else { format!("unexpected {token}") };
-        diagnostic.primary(span, label).with_help(missing_terminator_help(expected))
+        let label = if token == Tok::Semicolon {
+            "unexpected `;`".to_string()
+        } else {
+            format!("unexpected {token}")
+        };
+        diagnostic
+            .primary(span, label)
+            .with_help(missing_terminator_help(expected))
     }
 
     /// For `]` or `)`: the matching opening bracket's text when this one closes nothing.
@@ -157,7 +201,10 @@ fn missing_terminator_help(expected: &[String]) -> Option<String> {
     if has("\";\"") {
         Some("every declaration ends with `;`".to_string())
     } else if has("\"end\"") {
-        Some("`body`, `link`, `force`, `torque`, `local` and `package` are closed by `end`".to_string())
+        Some(
+            "`body`, `link`, `force`, `torque`, `local` and `package` are closed by `end`"
+                .to_string(),
+        )
     } else {
         None
     }
@@ -175,24 +222,57 @@ mod tests {
     #[test]
     fn displacement_binds_tighter_than_frame() {
         let e = expr("[0,0,?s] ++ 1 @ satellite");
-        let ExprKind::Binary { op: BinaryOp::Frame, lhs, .. } = e.kind else { panic!("{e:?}") };
-        assert!(matches!(lhs.kind, ExprKind::Binary { op: BinaryOp::Displacement, .. }));
+        let ExprKind::Binary {
+            op: BinaryOp::Frame,
+            lhs,
+            ..
+        } = e.kind
+        else {
+            panic!("{e:?}")
+        };
+        assert!(matches!(
+            lhs.kind,
+            ExprKind::Binary {
+                op: BinaryOp::Displacement,
+                ..
+            }
+        ));
     }
 
     #[test]
     fn unknown_call_binds_tighter_than_product() {
         let e = expr("?fs(x,x')*axe");
-        let ExprKind::Binary { op: BinaryOp::Mul, lhs, .. } = e.kind else { panic!("{e:?}") };
+        let ExprKind::Binary {
+            op: BinaryOp::Mul,
+            lhs,
+            ..
+        } = e.kind
+        else {
+            panic!("{e:?}")
+        };
         assert!(matches!(lhs.kind, ExprKind::Call { .. }));
     }
 
     #[test]
     fn unary_minus_binds_tightest() {
         let e = expr("-x^2");
-        let ExprKind::Binary { op: BinaryOp::Pow, lhs, .. } = e.kind else { panic!("{e:?}") };
+        let ExprKind::Binary {
+            op: BinaryOp::Pow,
+            lhs,
+            ..
+        } = e.kind
+        else {
+            panic!("{e:?}")
+        };
         assert!(matches!(lhs.kind, ExprKind::Neg(_)));
         let e = expr("x - 1");
-        assert!(matches!(e.kind, ExprKind::Binary { op: BinaryOp::Sub, .. }));
+        assert!(matches!(
+            e.kind,
+            ExprKind::Binary {
+                op: BinaryOp::Sub,
+                ..
+            }
+        ));
     }
 
     #[test]
@@ -204,7 +284,10 @@ mod tests {
 
     #[test]
     fn recovery_reports_several_errors() {
-        let (program, errors) = parse(FileId(0), "let a = ;\nlet b = 1;\njoin x and y with ;\nlet c = 2;");
+        let (program, errors) = parse(
+            FileId(0),
+            "let a = ;\nlet b = 1;\njoin x and y with ;\nlet c = 2;",
+        );
         assert_eq!(errors.len(), 2, "{errors:?}");
         assert_eq!(program.decls.len(), 4);
     }

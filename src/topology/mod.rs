@@ -117,7 +117,10 @@ pub fn build(mechanism: &Mechanism) -> Result<Topology, Vec<Diagnostic>> {
     let mut incident: Vec<Vec<(JoinId, usize)>> = vec![Vec::new(); vertices.len() + 1];
     for (index, join) in mechanism.joins.iter().enumerate() {
         let id = JoinId(index as u32);
-        let (a, b) = (vertex(join.first.body, &vertex_of), vertex(join.second.body, &vertex_of));
+        let (a, b) = (
+            vertex(join.first.body, &vertex_of),
+            vertex(join.second.body, &vertex_of),
+        );
         if a == b {
             errors.push(self_join(mechanism, id));
             continue;
@@ -137,7 +140,9 @@ pub fn build(mechanism: &Mechanism) -> Result<Topology, Vec<Diagnostic>> {
     if !errors.is_empty() {
         return Err(errors);
     }
-    Ok(number(mechanism, &vertices, &vertex_of, &order, &tree, loops))
+    Ok(number(
+        mechanism, &vertices, &vertex_of, &order, &tree, loops,
+    ))
 }
 
 type TreeEdges = HashMap<usize, (JoinId, usize)>;
@@ -185,7 +190,11 @@ fn number(
         number_of_vertex[v] = k + 1;
     }
     let bodies: Vec<BodyId> = order.iter().map(|&v| vertices[v - 1]).collect();
-    let number_of: HashMap<BodyId, usize> = bodies.iter().enumerate().map(|(k, &b)| (b, k + 1)).collect();
+    let number_of: HashMap<BodyId, usize> = bodies
+        .iter()
+        .enumerate()
+        .map(|(k, &b)| (b, k + 1))
+        .collect();
     let principal = order
         .iter()
         .map(|&v| {
@@ -215,7 +224,12 @@ fn number(
             }
         })
         .collect();
-    Topology { bodies, number_of, principal, complementary }
+    Topology {
+        bodies,
+        number_of,
+        principal,
+        complementary,
+    }
 }
 
 fn self_join(mechanism: &Mechanism, id: JoinId) -> Diagnostic {
@@ -231,7 +245,9 @@ fn not_connected(mechanism: &Mechanism, id: BodyId) -> Diagnostic {
     Diagnostic::error("E0701", format!("body `{name}` is not connected to earth"))
         .primary(mechanism.body(id).span, "declared here")
         .note("every body must be reachable from `earth` through joins")
-        .help(format!("join it to earth or to a connected body, e.g. `join earth and {name} with <link>;`"))
+        .help(format!(
+            "join it to earth or to a connected body, e.g. `join earth and {name} with <link>;`"
+        ))
 }
 
 #[cfg(test)]

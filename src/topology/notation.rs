@@ -71,7 +71,9 @@ impl Names<'_> {
         if v.iter().all(|c| constant(c) == Some(0.0)) {
             return "0".to_string();
         }
-        let parts: Vec<String> = (0..3).map(|i| self.scalar(&v[i], &format!("{slot}_{}", AXES[i]))).collect();
+        let parts: Vec<String> = (0..3)
+            .map(|i| self.scalar(&v[i], &format!("{slot}_{}", AXES[i])))
+            .collect();
         format!("[{}]", parts.join(", "))
     }
 }
@@ -81,8 +83,16 @@ impl Names<'_> {
 fn translation_rotation(d: &Displacement) -> Option<(Option<&Vector>, &[Elementary])> {
     match d.0.split_first() {
         None => Some((None, &[])),
-        Some((Elementary::Translation(t), rest)) if rest.iter().all(|e| matches!(e, Elementary::Rotation { .. })) => Some((Some(t), rest)),
-        Some(_) if d.0.iter().all(|e| matches!(e, Elementary::Rotation { .. })) => Some((None, &d.0)),
+        Some((Elementary::Translation(t), rest))
+            if rest
+                .iter()
+                .all(|e| matches!(e, Elementary::Rotation { .. })) =>
+        {
+            Some((Some(t), rest))
+        }
+        Some(_) if d.0.iter().all(|e| matches!(e, Elementary::Rotation { .. })) => {
+            Some((None, &d.0))
+        }
         _ => None,
     }
 }
@@ -96,9 +106,18 @@ fn is_zero_vector(v: &Vector) -> bool {
 }
 
 /// `Vb T_a := ...` and `Mb R_a := ...` lines for a declared displacement of frame `a` in body `b`.
-fn displacement_lines(names: &mut Names<'_>, body: usize, frame: &str, d: &Displacement, out: &mut Vec<String>) {
+fn displacement_lines(
+    names: &mut Names<'_>,
+    body: usize,
+    frame: &str,
+    d: &Displacement,
+    out: &mut Vec<String>,
+) {
     let Some((translation, rotations)) = translation_rotation(d) else {
-        out.push(format!("D_{body}_{frame} := (a chain of {} steps)", d.0.len()));
+        out.push(format!(
+            "D_{body}_{frame} := (a chain of {} steps)",
+            d.0.len()
+        ));
         return;
     };
     let slot = format!("v{body}T_{body}_{frame}");
@@ -112,7 +131,10 @@ fn displacement_lines(names: &mut Names<'_>, body: usize, frame: &str, d: &Displ
             .map(|e| match e {
                 Elementary::Rotation { angle, axis } => {
                     let angle = names.scalar(angle, &format!("a{body}R_{body}_{frame}"));
-                    format!("Rot({angle}, {})", names.vector(axis, &format!("k{body}R_{body}_{frame}")))
+                    format!(
+                        "Rot({angle}, {})",
+                        names.vector(axis, &format!("k{body}R_{body}_{frame}"))
+                    )
                 }
                 Elementary::Translation(_) => String::new(),
             })
@@ -132,9 +154,23 @@ pub fn unknown_names(mechanism: &Mechanism, topology: &Topology) -> HashMap<Unkn
     notation_and_names(mechanism, topology).1
 }
 
-fn notation_and_names(mechanism: &Mechanism, topology: &Topology) -> (String, HashMap<UnknownId, String>) {
-    let link_numbers = topology.principal.iter().map(|l| (l.join, l.number)).chain(topology.complementary.iter().map(|l| (l.join, l.number))).collect();
-    let mut names = Names { mechanism, assigned: HashMap::new(), next_anonymous: 0, link: 0, link_numbers };
+fn notation_and_names(
+    mechanism: &Mechanism,
+    topology: &Topology,
+) -> (String, HashMap<UnknownId, String>) {
+    let link_numbers = topology
+        .principal
+        .iter()
+        .map(|l| (l.join, l.number))
+        .chain(topology.complementary.iter().map(|l| (l.join, l.number)))
+        .collect();
+    let mut names = Names {
+        mechanism,
+        assigned: HashMap::new(),
+        next_anonymous: 0,
+        link: 0,
+        link_numbers,
+    };
     let n = topology.body_count();
     let mut out = String::new();
     let _ = writeln!(out, "(* structure *)\nN := {n} ;");
@@ -146,23 +182,52 @@ fn notation_and_names(mechanism: &Mechanism, topology: &Topology) -> (String, Ha
         .collect();
     let _ = writeln!(out, "BODIES := {} ;", bodies.join(",\n          "));
     let link_line = |number: usize, join: crate::elab::value::JoinId, a: usize, b: usize| {
-        format!("L_{number} = '{}' (S_{a}, S_{b})", mechanism.join_name(join))
+        format!(
+            "L_{number} = '{}' (S_{a}, S_{b})",
+            mechanism.join_name(join)
+        )
     };
-    let principal: Vec<String> = topology.principal.iter().map(|l| link_line(l.number, l.join, l.parent, l.child)).collect();
+    let principal: Vec<String> = topology
+        .principal
+        .iter()
+        .map(|l| link_line(l.number, l.join, l.parent, l.child))
+        .collect();
     let _ = writeln!(out, "PRINCIPAL := {} ;", principal.join(",\n             "));
-    let complementary: Vec<String> =
-        topology.complementary.iter().map(|l| link_line(l.number, l.join, l.first, l.second)).collect();
-    let _ = writeln!(out, "COMPLEMENTARY := {} ;", if complementary.is_empty() { "none".to_string() } else { complementary.join(",\n                 ") });
+    let complementary: Vec<String> = topology
+        .complementary
+        .iter()
+        .map(|l| link_line(l.number, l.join, l.first, l.second))
+        .collect();
+    let _ = writeln!(
+        out,
+        "COMPLEMENTARY := {} ;",
+        if complementary.is_empty() {
+            "none".to_string()
+        } else {
+            complementary.join(",\n                 ")
+        }
+    );
 
     let _ = writeln!(out, "\n(* variables *)");
     for i in 1..=n {
-        let _ = writeln!(out, "p{i}[1..6](t), q{i}[1..6](t) : position and velocity parameters of S_{i}");
+        let _ = writeln!(
+            out,
+            "p{i}[1..6](t), q{i}[1..6](t) : position and velocity parameters of S_{i}"
+        );
     }
-    let links = topology.principal.iter().map(|l| (l.number, l.join)).chain(topology.complementary.iter().map(|l| (l.number, l.join)));
+    let links = topology
+        .principal
+        .iter()
+        .map(|l| (l.number, l.join))
+        .chain(topology.complementary.iter().map(|l| (l.number, l.join)));
     for (number, join) in links {
         let coordinates = &mechanism.link(mechanism.join(join).link).coordinates;
         for (k, c) in coordinates.iter().enumerate() {
-            let _ = writeln!(out, "x{number}[{}](t) : coordinate `{c}` of L_{number}", k + 1);
+            let _ = writeln!(
+                out,
+                "x{number}[{}](t) : coordinate `{c}` of L_{number}",
+                k + 1
+            );
         }
     }
 
@@ -182,11 +247,22 @@ fn notation_and_names(mechanism: &Mechanism, topology: &Topology) -> (String, Ha
         }
         let no_inertia = matches!(&body.inertia, Quantity::Declared(v) if is_zero_vector(v));
         if let Quantity::Declared(v) = &body.inertia {
-            let value = if no_inertia { "0".to_string() } else { format!("diag({})", names.vector(v, &format!("mIg_{i}")).trim_matches(['[', ']'])) };
+            let value = if no_inertia {
+                "0".to_string()
+            } else {
+                format!(
+                    "diag({})",
+                    names
+                        .vector(v, &format!("mIg_{i}"))
+                        .trim_matches(['[', ']'])
+                )
+            };
             declared.push(format!("MIg_{i} := {value}"));
         }
         let centred = match &body.iframe {
-            Quantity::Declared(d) => translation_rotation(d).is_some_and(|(t, _)| t.is_none_or(is_zero_vector)),
+            Quantity::Declared(d) => {
+                translation_rotation(d).is_some_and(|(t, _)| t.is_none_or(is_zero_vector))
+            }
             Quantity::Generic(_) => false,
         };
         if centred {
@@ -200,27 +276,50 @@ fn notation_and_names(mechanism: &Mechanism, topology: &Topology) -> (String, Ha
             relations.push(format!("MOIo_{i} = MOIg_{i}"));
         } else {
             relations.push(format!("VOT_{i}_G = MOR_0_{i} &* V{i}T_{i}_G"));
-            let central = if no_inertia { String::new() } else { format!("MOIg_{i} ") };
-            relations.push(format!("MOIo_{i} = {central}- mu_{i} &* ~VOT_{i}_G &* ~VOT_{i}_G"));
+            let central = if no_inertia {
+                String::new()
+            } else {
+                format!("MOIg_{i} ")
+            };
+            relations.push(format!(
+                "MOIo_{i} = {central}- mu_{i} &* ~VOT_{i}_G &* ~VOT_{i}_G"
+            ));
         }
         if !no_inertia {
-            relations.push(format!("MOIg_{i} = MOR_0_{i} &* M{i}R_{i}_G &* MIg_{i} &* &t(MOR_0_{i} &* M{i}R_{i}_G)"));
+            relations.push(format!(
+                "MOIg_{i} = MOR_0_{i} &* M{i}R_{i}_G &* MIg_{i} &* &t(MOR_0_{i} &* M{i}R_{i}_G)"
+            ));
         }
     }
-    for link in topology.principal.iter().map(|l| l.join).chain(topology.complementary.iter().map(|l| l.join)) {
+    for link in topology
+        .principal
+        .iter()
+        .map(|l| l.join)
+        .chain(topology.complementary.iter().map(|l| l.join))
+    {
         let number = link_number(topology, link);
         let join = mechanism.join(link);
         for frame in [&join.first, &join.second] {
             if let BodyRef::Body(id) = frame.body {
                 let i = topology.number_of[&id];
-                displacement_lines(&mut names, i, &number.to_string(), &frame.displacement, &mut declared);
+                displacement_lines(
+                    &mut names,
+                    i,
+                    &number.to_string(),
+                    &frame.displacement,
+                    &mut declared,
+                );
             }
         }
         let l = mechanism.link(join.link);
         names.link = number;
         for (prefix, efforts) in [("fL", &l.forces), ("cL", &l.torques)] {
             for (index, v) in efforts {
-                let suffix = if *index == 0 { String::new() } else { format!("{index}") };
+                let suffix = if *index == 0 {
+                    String::new()
+                } else {
+                    format!("{index}")
+                };
                 let value = names.vector(v, &format!("{prefix}{number}{suffix}"));
                 let label = if prefix == "fL" { "VFL" } else { "VCL" };
                 declared.push(format!("{label}{suffix}_{number} := {value}"));
@@ -248,6 +347,12 @@ fn link_number(topology: &Topology, join: crate::elab::value::JoinId) -> usize {
         .iter()
         .find(|l| l.join == join)
         .map(|l| l.number)
-        .or_else(|| topology.complementary.iter().find(|l| l.join == join).map(|l| l.number))
+        .or_else(|| {
+            topology
+                .complementary
+                .iter()
+                .find(|l| l.join == join)
+                .map(|l| l.number)
+        })
         .unwrap_or(0)
 }

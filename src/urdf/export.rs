@@ -11,7 +11,10 @@
 use std::fmt::{self, Write};
 
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
-use urdf_rs::{Axis, Inertia, Inertial, Joint as UrdfJoint, JointLimit, JointType as UrdfType, Link, LinkName, Mass, Robot, Vec3};
+use urdf_rs::{
+    Axis, Inertia, Inertial, Joint as UrdfJoint, JointLimit, JointType as UrdfType, Link, LinkName,
+    Mass, Robot, Vec3,
+};
 
 use crate::dynamics::joint::{Joint, JointType};
 use crate::dynamics::model::{BodyInertia, Model};
@@ -32,7 +35,11 @@ pub enum ExportError {
     Loops(Vec<String>),
     /// A step of a join's dof chain that URDF joints cannot express; `step` counts the chain's
     /// elementary translations and rotations from 1.
-    Step { join: String, step: usize, reason: String },
+    Step {
+        join: String,
+        step: usize,
+        reason: String,
+    },
     /// Two links, or two joints, would have the same name.
     DuplicateName { element: &'static str, name: String },
 }
@@ -80,16 +87,28 @@ pub fn robot(model: &Model, robot_name: &str) -> Result<Robot, ExportError> {
     let mut joints = Vec::new();
     for ((joint, layout), body) in model.joints.iter().zip(&layouts).zip(&model.bodies) {
         let name = &model.body_names[joint.child - 1];
-        let parent = if joint.parent == 0 { "earth" } else { &model.body_names[joint.parent - 1] };
+        let parent = if joint.parent == 0 {
+            "earth"
+        } else {
+            &model.body_names[joint.parent - 1]
+        };
         let lead = frames[joint.parent].inverse() * joint.on_parent;
         let (chain, intermediate) = urdf_joints(joint, layout, &lead, parent, name);
-        links.push(Link { inertial: inertial(body, &frames[joint.child]), ..bare_link(name.clone()) });
+        links.push(Link {
+            inertial: inertial(body, &frames[joint.child]),
+            ..bare_link(name.clone())
+        });
         links.extend(intermediate.into_iter().map(bare_link));
         joints.extend(chain);
     }
     unique(links.iter().map(|l| &l.name), "link")?;
     unique(joints.iter().map(|j| &j.name), "joint")?;
-    Ok(Robot { name: robot_name.to_string(), links, joints, materials: Vec::new() })
+    Ok(Robot {
+        name: robot_name.to_string(),
+        links,
+        joints,
+        materials: Vec::new(),
+    })
 }
 
 /// Where each body's URDF link frame is in the body's frame, by body number (0 is the earth).
@@ -104,7 +123,10 @@ enum Layout {
     Floating,
     /// M = lead · J1(q) · C1 · J2(q) · C2 ⋯ (M of dynamics::joint: from the join's frame on the
     /// parent to its frame on the child); no motion is a weld, `lead` alone.
-    Chain { lead: Pose, motions: Vec<(Motion, Pose)> },
+    Chain {
+        lead: Pose,
+        motions: Vec<(Motion, Pose)>,
+    },
 }
 
 /// A rotation about, or a translation along, a unit axis, by one coordinate.
@@ -123,9 +145,15 @@ enum Piece {
 
 fn layouts(model: &Model) -> Result<Vec<Layout>, ExportError> {
     if model.has_loops() {
-        return Err(ExportError::Loops(model.loops.iter().map(|l| l.name.clone()).collect()));
+        return Err(ExportError::Loops(
+            model.loops.iter().map(|l| l.name.clone()).collect(),
+        ));
     }
-    model.joints.iter().map(|joint| layout(joint, &model.unknowns)).collect()
+    model
+        .joints
+        .iter()
+        .map(|joint| layout(joint, &model.unknowns))
+        .collect()
 }
 
 fn layout(joint: &Joint, unknowns: &UnknownValues) -> Result<Layout, ExportError> {
@@ -161,7 +189,9 @@ fn frames_of(model: &Model, layouts: &[Layout]) -> Vec<Pose> {
     let mut frames = vec![Pose::identity(); model.body_count() + 1];
     for (joint, layout) in model.joints.iter().zip(layouts) {
         let trailing = match layout {
-            Layout::Chain { motions, .. } => motions.last().map_or_else(Pose::identity, |(_, after)| *after),
+            Layout::Chain { motions, .. } => motions
+                .last()
+                .map_or_else(Pose::identity, |(_, after)| *after),
             Layout::Floating => Pose::identity(),
         };
         frames[joint.child] = joint.on_child * trailing.inverse();
@@ -171,24 +201,60 @@ fn frames_of(model: &Model, layouts: &[Layout]) -> Vec<Pose> {
 
 /// The URDF joints of a join, and the intermediate links between them; `lead` is the join's
 /// frame on the parent in the parent's link frame.
-fn urdf_joints(joint: &Joint, layout: &Layout, lead: &Pose, parent: &str, child: &str) -> (Vec<UrdfJoint>, Vec<String>) {
+fn urdf_joints(
+    joint: &Joint,
+    layout: &Layout,
+    lead: &Pose,
+    parent: &str,
+    child: &str,
+) -> (Vec<UrdfJoint>, Vec<String>) {
     let chain = &joint.chain;
     let (origin, motions) = match layout {
-        Layout::Floating => return (vec![urdf_joint(chain.name.clone(), UrdfType::Floating, lead, parent, child)], Vec::new()),
-        Layout::Chain { lead: first, motions } => (lead * first, motions),
+        Layout::Floating => {
+            return (
+                vec![urdf_joint(
+                    chain.name.clone(),
+                    UrdfType::Floating,
+                    lead,
+                    parent,
+                    child,
+                )],
+                Vec::new(),
+            )
+        }
+        Layout::Chain {
+            lead: first,
+            motions,
+        } => (lead * first, motions),
     };
     if motions.is_empty() {
-        return (vec![urdf_joint(chain.name.clone(), UrdfType::Fixed, &origin, parent, child)], Vec::new());
+        return (
+            vec![urdf_joint(
+                chain.name.clone(),
+                UrdfType::Fixed,
+                &origin,
+                parent,
+                child,
+            )],
+            Vec::new(),
+        );
     }
     let names: Vec<String> = match motions.len() {
         1 => vec![chain.name.clone()],
-        _ => motions.iter().map(|(m, _)| format!("{}.{}", chain.name, chain.coordinate_names[m.coordinate])).collect(),
+        _ => motions
+            .iter()
+            .map(|(m, _)| format!("{}.{}", chain.name, chain.coordinate_names[m.coordinate]))
+            .collect(),
     };
     let mut joints = Vec::new();
     let mut origin = origin;
     for (k, (motion, after)) in motions.iter().enumerate() {
         let from = if k == 0 { parent } else { &names[k - 1] };
-        let to = if k + 1 == motions.len() { child } else { &names[k] };
+        let to = if k + 1 == motions.len() {
+            child
+        } else {
+            &names[k]
+        };
         joints.push(motion_joint(names[k].clone(), motion, &origin, from, to));
         origin = *after;
     }
@@ -196,13 +262,23 @@ fn urdf_joints(joint: &Joint, layout: &Layout, lead: &Pose, parent: &str, child:
     (joints, intermediate)
 }
 
-fn urdf_joint(name: String, joint_type: UrdfType, origin: &Pose, parent: &str, child: &str) -> UrdfJoint {
+fn urdf_joint(
+    name: String,
+    joint_type: UrdfType,
+    origin: &Pose,
+    parent: &str,
+    child: &str,
+) -> UrdfJoint {
     UrdfJoint {
         name,
         joint_type,
         origin: urdf_pose(origin),
-        parent: LinkName { link: parent.to_string() },
-        child: LinkName { link: child.to_string() },
+        parent: LinkName {
+            link: parent.to_string(),
+        },
+        child: LinkName {
+            link: child.to_string(),
+        },
         axis: Axis::default(),
         limit: JointLimit::default(),
         calibration: None,
@@ -212,25 +288,56 @@ fn urdf_joint(name: String, joint_type: UrdfType, origin: &Pose, parent: &str, c
     }
 }
 
-fn motion_joint(name: String, motion: &Motion, origin: &Pose, parent: &str, child: &str) -> UrdfJoint {
-    let axis = Axis { xyz: Vec3(motion.axis.into()) };
+fn motion_joint(
+    name: String,
+    motion: &Motion,
+    origin: &Pose,
+    parent: &str,
+    child: &str,
+) -> UrdfJoint {
+    let axis = Axis {
+        xyz: Vec3(motion.axis.into()),
+    };
     if motion.rotation {
-        UrdfJoint { axis, ..urdf_joint(name, UrdfType::Continuous, origin, parent, child) }
+        UrdfJoint {
+            axis,
+            ..urdf_joint(name, UrdfType::Continuous, origin, parent, child)
+        }
     } else {
-        let limit = JointLimit { lower: -NO_LIMIT, upper: NO_LIMIT, effort: NO_LIMIT, velocity: NO_LIMIT };
-        UrdfJoint { axis, limit, ..urdf_joint(name, UrdfType::Prismatic, origin, parent, child) }
+        let limit = JointLimit {
+            lower: -NO_LIMIT,
+            upper: NO_LIMIT,
+            effort: NO_LIMIT,
+            velocity: NO_LIMIT,
+        };
+        UrdfJoint {
+            axis,
+            limit,
+            ..urdf_joint(name, UrdfType::Prismatic, origin, parent, child)
+        }
     }
 }
 
 fn bare_link(name: String) -> Link {
-    Link { name, inertial: Inertial::default(), visual: Vec::new(), collision: Vec::new() }
+    Link {
+        name,
+        inertial: Inertial::default(),
+        visual: Vec::new(),
+        collision: Vec::new(),
+    }
 }
 
-fn unique<'a>(names: impl Iterator<Item = &'a String>, element: &'static str) -> Result<(), ExportError> {
+fn unique<'a>(
+    names: impl Iterator<Item = &'a String>,
+    element: &'static str,
+) -> Result<(), ExportError> {
     let mut seen = std::collections::HashSet::new();
     for name in names {
         if !seen.insert(name) {
-            return Err(ExportError::DuplicateName { element, name: name.clone() });
+            return Err(ExportError::DuplicateName {
+                element,
+                name: name.clone(),
+            });
         }
     }
     Ok(())
@@ -250,14 +357,27 @@ fn inertial(body: &BodyInertia, frame: &Pose) -> Inertial {
     let i = r.transpose() * central * r;
     let com = frame.inverse_transform_point(&Point3::from(body.com));
     Inertial {
-        origin: urdf_rs::Pose { xyz: Vec3(com.coords.into()), rpy: Vec3([0.0; 3]) },
+        origin: urdf_rs::Pose {
+            xyz: Vec3(com.coords.into()),
+            rpy: Vec3([0.0; 3]),
+        },
         mass: Mass { value: m },
-        inertia: Inertia { ixx: i[(0, 0)], ixy: i[(0, 1)], ixz: i[(0, 2)], iyy: i[(1, 1)], iyz: i[(1, 2)], izz: i[(2, 2)] },
+        inertia: Inertia {
+            ixx: i[(0, 0)],
+            ixy: i[(0, 1)],
+            ixz: i[(0, 2)],
+            iyy: i[(1, 1)],
+            iyz: i[(1, 2)],
+            izz: i[(2, 2)],
+        },
     }
 }
 
 fn urdf_pose(pose: &Pose) -> urdf_rs::Pose {
-    urdf_rs::Pose { xyz: Vec3(pose.translation.vector.into()), rpy: Vec3(rpy(&pose.rotation)) }
+    urdf_rs::Pose {
+        xyz: Vec3(pose.translation.vector.into()),
+        rpy: Vec3(rpy(&pose.rotation)),
+    }
 }
 
 /// Roll, pitch and yaw with R = Rz(yaw)·Ry(pitch)·Rx(roll), URDF's convention. The pitch comes
@@ -267,7 +387,9 @@ fn rpy(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
     let r = rotation.to_rotation_matrix().into_inner();
     let pitch = (-r[(2, 0)]).atan2(r[(0, 0)].hypot(r[(1, 0)]));
     let yaw = r[(1, 0)].atan2(r[(0, 0)]);
-    let turned = UnitQuaternion::from_euler_angles(0.0, pitch, yaw).to_rotation_matrix().into_inner();
+    let turned = UnitQuaternion::from_euler_angles(0.0, pitch, yaw)
+        .to_rotation_matrix()
+        .into_inner();
     let rest = turned.transpose() * r;
     let roll = rest[(2, 1)].atan2(rest[(2, 2)]);
     [roll, pitch, yaw]
@@ -280,11 +402,17 @@ fn pieces(chain: &JointModel, unknowns: &UnknownValues) -> Result<Vec<Piece>, Ex
     let mut pieces = Vec::new();
     let mut moved_by: Vec<Option<usize>> = vec![None; chain.coordinate_count()];
     for (index, step) in chain.steps.iter().enumerate() {
-        let refuse = |reason: String| ExportError::Step { join: chain.name.clone(), step: index + 1, reason };
+        let refuse = |reason: String| ExportError::Step {
+            join: chain.name.clone(),
+            step: index + 1,
+            reason,
+        };
         let before = pieces.len();
         step_pieces(step, unknowns, &mut pieces).map_err(|r| refuse(r.describe(chain)))?;
         for piece in &pieces[before..] {
-            let Piece::Moving(motion) = piece else { continue };
+            let Piece::Moving(motion) = piece else {
+                continue;
+            };
             if let Some(earlier) = moved_by[motion.coordinate].replace(index + 1) {
                 let name = &chain.coordinate_names[motion.coordinate];
                 return Err(refuse(format!("moves `{name}`, which step {earlier} moves too: a URDF joint has a coordinate of its own")));
@@ -309,15 +437,32 @@ impl Refusal {
         let name = |k: &usize| chain.coordinate_names.get(*k).map_or("?", String::as_str);
         match self {
             Refusal::Evaluation(EvalError::NotGeometric(what)) => format!("depends on {what}"),
-            Refusal::Evaluation(EvalError::Missing(_)) => "needs the value of an unknown".to_string(),
-            Refusal::Several(a, b) => format!("has an expression of two coordinates, `{}` and `{}`", name(a), name(b)),
-            Refusal::Nonlinear(k) => format!("uses the coordinate `{}` in a nonlinear expression", name(k)),
-            Refusal::Rate(k, rate) => format!("moves {} per unit of `{}`: a URDF joint moves 1 per unit of its coordinate", number(*rate), name(k)),
+            Refusal::Evaluation(EvalError::Missing(_)) => {
+                "needs the value of an unknown".to_string()
+            }
+            Refusal::Several(a, b) => format!(
+                "has an expression of two coordinates, `{}` and `{}`",
+                name(a),
+                name(b)
+            ),
+            Refusal::Nonlinear(k) => format!(
+                "uses the coordinate `{}` in a nonlinear expression",
+                name(k)
+            ),
+            Refusal::Rate(k, rate) => format!(
+                "moves {} per unit of `{}`: a URDF joint moves 1 per unit of its coordinate",
+                number(*rate),
+                name(k)
+            ),
         }
     }
 }
 
-fn step_pieces(step: &Step, unknowns: &UnknownValues, pieces: &mut Vec<Piece>) -> Result<(), Refusal> {
+fn step_pieces(
+    step: &Step,
+    unknowns: &UnknownValues,
+    pieces: &mut Vec<Piece>,
+) -> Result<(), Refusal> {
     match step {
         Step::Rotation { angle, axis } => {
             let angle = affine(angle, unknowns)?;
@@ -325,7 +470,11 @@ fn step_pieces(step: &Step, unknowns: &UnknownValues, pieces: &mut Vec<Piece>) -
             if let Some((coordinate, rate)) = angle.term {
                 // Rot(a, c + s·q) = Rot(a, c)·Rot(s·a, q) for s = ±1.
                 unit_rate(coordinate, rate)?;
-                pieces.push(Piece::Moving(Motion { coordinate, rotation: true, axis: axis * rate.signum() }));
+                pieces.push(Piece::Moving(Motion {
+                    coordinate,
+                    rotation: true,
+                    axis: axis * rate.signum(),
+                }));
             }
         }
         Step::Translation(components) => {
@@ -334,7 +483,9 @@ fn step_pieces(step: &Step, unknowns: &UnknownValues, pieces: &mut Vec<Piece>) -
             for (i, component) in components.iter().enumerate() {
                 let value = affine(component, unknowns)?;
                 offset[i] = value.constant;
-                let Some((coordinate, rate)) = value.term else { continue };
+                let Some((coordinate, rate)) = value.term else {
+                    continue;
+                };
                 match directions.iter_mut().find(|(k, _)| *k == coordinate) {
                     Some((_, direction)) => direction[i] = rate,
                     None => directions.push((coordinate, Vector3::ith(i, rate))),
@@ -344,7 +495,11 @@ fn step_pieces(step: &Step, unknowns: &UnknownValues, pieces: &mut Vec<Piece>) -
             pieces.push(Piece::Constant(translation(offset)));
             for (coordinate, direction) in directions {
                 unit_rate(coordinate, direction.norm())?;
-                pieces.push(Piece::Moving(Motion { coordinate, rotation: false, axis: direction }));
+                pieces.push(Piece::Moving(Motion {
+                    coordinate,
+                    rotation: false,
+                    axis: direction,
+                }));
             }
         }
     }
@@ -367,18 +522,29 @@ struct Affine {
 
 impl Affine {
     fn scaled(self, factor: f64) -> Affine {
-        let term = self.term.map(|(k, rate)| (k, rate * factor)).filter(|(_, rate)| *rate != 0.0);
-        Affine { constant: self.constant * factor, term }
+        let term = self
+            .term
+            .map(|(k, rate)| (k, rate * factor))
+            .filter(|(_, rate)| *rate != 0.0);
+        Affine {
+            constant: self.constant * factor,
+            term,
+        }
     }
 
     fn plus(self, other: Affine, sign: f64) -> Result<Affine, Refusal> {
         let other = other.scaled(sign);
         let term = match (self.term, other.term) {
-            (Some((a, x)), Some((b, y))) if a == b => Some((a, x + y)).filter(|(_, rate)| *rate != 0.0),
+            (Some((a, x)), Some((b, y))) if a == b => {
+                Some((a, x + y)).filter(|(_, rate)| *rate != 0.0)
+            }
             (Some((a, _)), Some((b, _))) => return Err(Refusal::Several(a, b)),
             (term, None) | (None, term) => term,
         };
-        Ok(Affine { constant: self.constant + other.constant, term })
+        Ok(Affine {
+            constant: self.constant + other.constant,
+            term,
+        })
     }
 }
 
@@ -386,19 +552,44 @@ impl Affine {
 fn affine(s: &SExpr, unknowns: &UnknownValues) -> Result<Affine, Refusal> {
     let Some(coordinate) = first_coordinate(s) else {
         let constant = eval(s, unknowns, &[]).map_err(Refusal::Evaluation)?;
-        return Ok(Affine { constant, term: None });
+        return Ok(Affine {
+            constant,
+            term: None,
+        });
     };
     match s {
-        SExpr::Coordinate { index, .. } => Ok(Affine { constant: 0.0, term: Some((*index as usize, 1.0)) }),
+        SExpr::Coordinate { index, .. } => Ok(Affine {
+            constant: 0.0,
+            term: Some((*index as usize, 1.0)),
+        }),
         SExpr::Neg(a) => Ok(affine(a, unknowns)?.scaled(-1.0)),
         SExpr::Add(a, b) => affine(a, unknowns)?.plus(affine(b, unknowns)?, 1.0),
         SExpr::Sub(a, b) => affine(a, unknowns)?.plus(affine(b, unknowns)?, -1.0),
         SExpr::Mul(a, b) => match (affine(a, unknowns)?, affine(b, unknowns)?) {
-            (x, Affine { constant, term: None }) | (Affine { constant, term: None }, x) => Ok(x.scaled(constant)),
+            (
+                x,
+                Affine {
+                    constant,
+                    term: None,
+                },
+            )
+            | (
+                Affine {
+                    constant,
+                    term: None,
+                },
+                x,
+            ) => Ok(x.scaled(constant)),
             _ => Err(Refusal::Nonlinear(coordinate)),
         },
         SExpr::Div(a, b) => match (affine(a, unknowns)?, affine(b, unknowns)?) {
-            (x, Affine { constant, term: None }) => Ok(x.scaled(1.0 / constant)),
+            (
+                x,
+                Affine {
+                    constant,
+                    term: None,
+                },
+            ) => Ok(x.scaled(1.0 / constant)),
             _ => Err(Refusal::Nonlinear(coordinate)),
         },
         _ => Err(Refusal::Nonlinear(coordinate)),
@@ -410,8 +601,14 @@ fn first_coordinate(s: &SExpr) -> Option<usize> {
     match s {
         SExpr::Coordinate { index, order: 0 } => Some(*index as usize),
         SExpr::Neg(a) => first_coordinate(a),
-        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => first_coordinate(a).or_else(|| first_coordinate(b)),
-        SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => args.iter().find_map(|a| first_coordinate(a)),
+        SExpr::Add(a, b)
+        | SExpr::Sub(a, b)
+        | SExpr::Mul(a, b)
+        | SExpr::Div(a, b)
+        | SExpr::Pow(a, b) => first_coordinate(a).or_else(|| first_coordinate(b)),
+        SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => {
+            args.iter().find_map(|a| first_coordinate(a))
+        }
         _ => None,
     }
 }
@@ -437,17 +634,30 @@ pub fn to_xml(robot: &Robot) -> String {
 
 fn write_link(out: &mut String, link: &Link) {
     let name = escape(&link.name);
-    let Inertial { origin, mass, inertia: i } = &link.inertial;
+    let Inertial {
+        origin,
+        mass,
+        inertia: i,
+    } = &link.inertial;
     let moments = [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz];
     if mass.value == 0.0 && moments.iter().all(|m| *m == 0.0) {
         let _ = writeln!(out, "  <link name=\"{name}\"/>");
         return;
     }
     let _ = writeln!(out, "  <link name=\"{name}\">\n    <inertial>");
-    let _ = writeln!(out, "      <origin xyz=\"{}\" rpy=\"{}\"/>", triple(&origin.xyz), triple(&origin.rpy));
+    let _ = writeln!(
+        out,
+        "      <origin xyz=\"{}\" rpy=\"{}\"/>",
+        triple(&origin.xyz),
+        triple(&origin.rpy)
+    );
     let _ = writeln!(out, "      <mass value=\"{}\"/>", number(mass.value));
     let names = ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"];
-    let attributes: Vec<String> = names.iter().zip(moments).map(|(n, v)| format!("{n}=\"{}\"", number(v))).collect();
+    let attributes: Vec<String> = names
+        .iter()
+        .zip(moments)
+        .map(|(n, v)| format!("{n}=\"{}\"", number(v)))
+        .collect();
     let _ = writeln!(out, "      <inertia {}/>", attributes.join(" "));
     let _ = writeln!(out, "    </inertial>\n  </link>");
 }
@@ -462,11 +672,23 @@ fn write_joint(out: &mut String, joint: &UrdfJoint) {
         UrdfType::Planar => "planar",
         UrdfType::Spherical => "spherical",
     };
-    let _ = writeln!(out, "  <joint name=\"{}\" type=\"{kind}\">", escape(&joint.name));
-    let _ = writeln!(out, "    <origin xyz=\"{}\" rpy=\"{}\"/>", triple(&joint.origin.xyz), triple(&joint.origin.rpy));
+    let _ = writeln!(
+        out,
+        "  <joint name=\"{}\" type=\"{kind}\">",
+        escape(&joint.name)
+    );
+    let _ = writeln!(
+        out,
+        "    <origin xyz=\"{}\" rpy=\"{}\"/>",
+        triple(&joint.origin.xyz),
+        triple(&joint.origin.rpy)
+    );
     let _ = writeln!(out, "    <parent link=\"{}\"/>", escape(&joint.parent.link));
     let _ = writeln!(out, "    <child link=\"{}\"/>", escape(&joint.child.link));
-    if matches!(joint.joint_type, UrdfType::Revolute | UrdfType::Continuous | UrdfType::Prismatic | UrdfType::Planar) {
+    if matches!(
+        joint.joint_type,
+        UrdfType::Revolute | UrdfType::Continuous | UrdfType::Prismatic | UrdfType::Planar
+    ) {
         let _ = writeln!(out, "    <axis xyz=\"{}\"/>", triple(&joint.axis.xyz));
     }
     if matches!(joint.joint_type, UrdfType::Revolute | UrdfType::Prismatic) {
@@ -520,19 +742,43 @@ mod tests {
 
     #[test]
     fn roll_pitch_yaw_give_back_the_rotation_near_gimbal_lock() {
-        for pitch in [0.3, FRAC_PI_2 - 1e-7, FRAC_PI_2, -FRAC_PI_2 + 1e-9, -FRAC_PI_2] {
+        for pitch in [
+            0.3,
+            FRAC_PI_2 - 1e-7,
+            FRAC_PI_2,
+            -FRAC_PI_2 + 1e-9,
+            -FRAC_PI_2,
+        ] {
             let rotation = UnitQuaternion::from_euler_angles(0.7, pitch, -2.1);
             let [r, p, y] = rpy(&rotation);
             let back = UnitQuaternion::from_euler_angles(r, p, y);
-            assert!(rotation.angle_to(&back) < 1e-15, "pitch {pitch}: {}", rotation.angle_to(&back));
+            assert!(
+                rotation.angle_to(&back) < 1e-15,
+                "pitch {pitch}: {}",
+                rotation.angle_to(&back)
+            );
         }
     }
 
     #[test]
     fn numbers_read_back_exactly() {
-        for x in [0.0, -0.0, 1.0, -0.4, 0.1 + 0.2, 1.0 / 12.0, 6.123e-17, 1e16, -1e300, 12345.678] {
+        for x in [
+            0.0,
+            -0.0,
+            1.0,
+            -0.4,
+            0.1 + 0.2,
+            1.0 / 12.0,
+            6.123e-17,
+            1e16,
+            -1e300,
+            12345.678,
+        ] {
             assert_eq!(number(x).parse::<f64>(), Ok(x + 0.0), "{x}");
         }
-        assert_eq!([number(-0.0), number(0.5), number(6e-17), number(NO_LIMIT)], ["0", "0.5", "6e-17", "1e16"]);
+        assert_eq!(
+            [number(-0.0), number(0.5), number(6e-17), number(NO_LIMIT)],
+            ["0", "0.5", "6e-17", "1e16"]
+        );
     }
 }

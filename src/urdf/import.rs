@@ -45,7 +45,10 @@ pub struct ImportOptions {
 
 impl Default for ImportOptions {
     fn default() -> Self {
-        ImportOptions { floating_base: false, gravity: true }
+        ImportOptions {
+            floating_base: false,
+            gravity: true,
+        }
     }
 }
 
@@ -67,12 +70,25 @@ pub fn import_urdf(name: &str, xml: &str, options: &ImportOptions) -> Result<Imp
 
 /// Imports a URDF text whose diagnostics point into `file`, the id `xml` has in the caller's
 /// `SourceMap`.
-pub fn import_urdf_at(file: FileId, name: &str, xml: &str, options: &ImportOptions) -> Result<Imported, Diagnostic> {
+pub fn import_urdf_at(
+    file: FileId,
+    name: &str,
+    xml: &str,
+    options: &ImportOptions,
+) -> Result<Imported, Diagnostic> {
     let source = Source::scan(file, xml)?;
     source.check_structure()?;
-    let robot = urdf_rs::read_from_string(&source.urdf_text()).map_err(|e| source.rejected(&e.to_string()))?;
+    let robot = urdf_rs::read_from_string(&source.urdf_text())
+        .map_err(|e| source.rejected(&e.to_string()))?;
     let tree = Tree::build(&robot, &source)?;
-    let mut importer = Importer { robot: &robot, source: &source, tree: &tree, options, names: Names::default(), warnings: Vec::new() };
+    let mut importer = Importer {
+        robot: &robot,
+        source: &source,
+        tree: &tree,
+        options,
+        names: Names::default(),
+        warnings: Vec::new(),
+    };
     let text = importer.program(name)?;
     let mut warnings = importer.warnings;
     warnings.sort_by_key(|d| d.primary_span().map(|s| s.start));
@@ -87,7 +103,10 @@ pub fn import_urdf_at(file: FileId, name: &str, xml: &str, options: &ImportOptio
 /// result is a keyword or such a name. The importer then appends `_` while the name is taken by
 /// an earlier link or joint (links first, then joints, in the order of the file).
 pub fn lsd_name(urdf_name: &str) -> String {
-    let mut name: String = urdf_name.chars().map(|c| if continues_identifier(c) { c } else { '_' }).collect();
+    let mut name: String = urdf_name
+        .chars()
+        .map(|c| if continues_identifier(c) { c } else { '_' })
+        .collect();
     if !name.chars().next().is_some_and(starts_identifier) {
         name.insert(0, '_');
     }
@@ -100,7 +119,8 @@ pub fn lsd_name(urdf_name: &str) -> String {
 /// Whether `text` is exactly one LSD identifier token (a keyword lexes as its own token).
 fn is_identifier(text: &str) -> bool {
     let (tokens, errors) = lex(FileId(0), text);
-    errors.is_empty() && matches!(tokens.as_slice(), [(0, Tok::Ident(_), end)] if *end == text.len())
+    errors.is_empty()
+        && matches!(tokens.as_slice(), [(0, Tok::Ident(_), end)] if *end == text.len())
 }
 
 fn starts_identifier(c: char) -> bool {
@@ -120,11 +140,15 @@ fn reserved() -> &'static HashSet<String> {
         let mut names: HashSet<String> = BUILTIN_NAMES.iter().map(|s| s.to_string()).collect();
         for module in stdlib::names() {
             names.insert(module.to_string());
-            let Some((_, text)) = stdlib::find(module) else { continue };
+            let Some((_, text)) = stdlib::find(module) else {
+                continue;
+            };
             let (program, _) = crate::syntax::parser::parse(FileId(0), text);
             for decl in &program.decls {
                 match &decl.kind {
-                    DeclKind::Let(bindings) => names.extend(bindings.iter().map(|b| b.name.name.to_string())),
+                    DeclKind::Let(bindings) => {
+                        names.extend(bindings.iter().map(|b| b.name.name.to_string()))
+                    }
                     DeclKind::Define { name, .. } => {
                         names.insert(name.name.to_string());
                     }
@@ -189,18 +213,30 @@ fn scan(xml: &str) -> Result<Vec<Element>, XmlError> {
     while let Some(offset) = xml[at..].find('<') {
         let start = at + offset;
         let rest = &xml[start..];
-        at = if let Some((_, close, what)) = SKIPPED.iter().find(|(opening, ..)| rest.starts_with(opening)) {
+        at = if let Some((_, close, what)) = SKIPPED
+            .iter()
+            .find(|(opening, ..)| rest.starts_with(opening))
+        {
             past(xml, start, close, what)?
         } else if rest.starts_with("</") {
             let end = past(xml, start, ">", "end tag")?;
-            let closed = close_element(&elements, &mut open, xml[start + 2..end - 1].trim(), (start, end))?;
+            let closed = close_element(
+                &elements,
+                &mut open,
+                xml[start + 2..end - 1].trim(),
+                (start, end),
+            )?;
             elements[closed].end = end;
             end
         } else {
             let (element, end, empty) = start_tag(xml, start, open.last().copied())?;
             if element.parent.is_none() && !elements.is_empty() {
                 let message = format!("a second root element `<{}>`", element.tag);
-                return Err(XmlError { message, range: element.range, label: "after the end of the root element" });
+                return Err(XmlError {
+                    message,
+                    range: element.range,
+                    label: "after the end of the root element",
+                });
             }
             elements.push(element);
             if !empty {
@@ -211,10 +247,18 @@ fn scan(xml: &str) -> Result<Vec<Element>, XmlError> {
     }
     if let Some(&index) = open.last() {
         let message = format!("`<{}>` is never closed", elements[index].tag);
-        return Err(XmlError { message, range: elements[index].range, label: "opened here" });
+        return Err(XmlError {
+            message,
+            range: elements[index].range,
+            label: "opened here",
+        });
     }
     if elements.is_empty() {
-        return Err(XmlError { message: "no element".into(), range: (0, 0), label: "expected `<robot>`" });
+        return Err(XmlError {
+            message: "no element".into(),
+            range: (0, 0),
+            label: "expected `<robot>`",
+        });
     }
     Ok(elements)
 }
@@ -223,30 +267,62 @@ fn scan(xml: &str) -> Result<Vec<Element>, XmlError> {
 fn past(xml: &str, start: usize, close: &str, what: &str) -> Result<usize, XmlError> {
     match xml[start + 1..].find(close) {
         Some(offset) => Ok(start + 1 + offset + close.len()),
-        None => Err(XmlError { message: format!("unterminated {what}"), range: one_char(xml, start), label: "never closed" }),
+        None => Err(XmlError {
+            message: format!("unterminated {what}"),
+            range: one_char(xml, start),
+            label: "never closed",
+        }),
     }
 }
 
 /// Closes the innermost open element, which must be `tag`: its index.
-fn close_element(elements: &[Element], open: &mut Vec<usize>, tag: &str, range: (usize, usize)) -> Result<usize, XmlError> {
+fn close_element(
+    elements: &[Element],
+    open: &mut Vec<usize>,
+    tag: &str,
+    range: (usize, usize),
+) -> Result<usize, XmlError> {
     match open.pop() {
         Some(index) if elements[index].tag == tag => Ok(index),
         Some(index) => {
             let message = format!("`</{tag}>` closes `<{}>`", elements[index].tag);
-            Err(XmlError { message, range, label: "mismatched end tag" })
+            Err(XmlError {
+                message,
+                range,
+                label: "mismatched end tag",
+            })
         }
-        None => Err(XmlError { message: format!("`</{tag}>` closes no element"), range, label: "unexpected end tag" }),
+        None => Err(XmlError {
+            message: format!("`</{tag}>` closes no element"),
+            range,
+            label: "unexpected end tag",
+        }),
     }
 }
 
 /// Reads the start tag at `start`: the element, the offset after it, and whether it is empty
 /// (`<tag ... />`).
-fn start_tag(xml: &str, start: usize, parent: Option<usize>) -> Result<(Element, usize, bool), XmlError> {
+fn start_tag(
+    xml: &str,
+    start: usize,
+    parent: Option<usize>,
+) -> Result<(Element, usize, bool), XmlError> {
     let bytes = xml.as_bytes();
-    let unterminated = || XmlError { message: "unterminated start tag".into(), range: one_char(xml, start), label: "no `>` closes this tag" };
-    let name_end = find_byte(bytes, start + 1, |b| b.is_ascii_whitespace() || b == b'/' || b == b'>').ok_or_else(unterminated)?;
+    let unterminated = || XmlError {
+        message: "unterminated start tag".into(),
+        range: one_char(xml, start),
+        label: "no `>` closes this tag",
+    };
+    let name_end = find_byte(bytes, start + 1, |b| {
+        b.is_ascii_whitespace() || b == b'/' || b == b'>'
+    })
+    .ok_or_else(unterminated)?;
     if name_end == start + 1 {
-        return Err(XmlError { message: "a `<` without an element name".into(), range: one_char(xml, start), label: "expected a name after `<`" });
+        return Err(XmlError {
+            message: "a `<` without an element name".into(),
+            range: one_char(xml, start),
+            label: "expected a name after `<`",
+        });
     }
     let mut attributes = Vec::new();
     let mut at = name_end;
@@ -262,7 +338,13 @@ fn start_tag(xml: &str, start: usize, parent: Option<usize>) -> Result<(Element,
                 continue;
             }
         };
-        let element = Element { tag: xml[start + 1..name_end].to_string(), range: (start, end), end, attributes, parent };
+        let element = Element {
+            tag: xml[start + 1..name_end].to_string(),
+            range: (start, end),
+            end,
+            attributes,
+            parent,
+        };
         return Ok((element, end, empty));
     }
 }
@@ -270,26 +352,53 @@ fn start_tag(xml: &str, start: usize, parent: Option<usize>) -> Result<(Element,
 /// Reads `name="value"` at `start`: the attribute and the offset after it.
 fn attribute(xml: &str, start: usize) -> Result<(Attribute, usize), XmlError> {
     let bytes = xml.as_bytes();
-    let name_end = find_byte(bytes, start, |b| b == b'=' || b == b'>' || b == b'/' || b.is_ascii_whitespace()).unwrap_or(bytes.len());
-    let error = |message: String, label| XmlError { message, range: (start, name_end.max(one_char(xml, start).1)), label };
+    let name_end = find_byte(bytes, start, |b| {
+        b == b'=' || b == b'>' || b == b'/' || b.is_ascii_whitespace()
+    })
+    .unwrap_or(bytes.len());
+    let error = |message: String, label| XmlError {
+        message,
+        range: (start, name_end.max(one_char(xml, start).1)),
+        label,
+    };
     if name_end == start {
-        return Err(error("an unexpected character in a tag".into(), "expected an attribute or `>`"));
+        return Err(error(
+            "an unexpected character in a tag".into(),
+            "expected an attribute or `>`",
+        ));
     }
     let name = &xml[start..name_end];
-    let equals = find_byte(bytes, name_end, |b| !b.is_ascii_whitespace()).filter(|&i| bytes[i] == b'=');
-    let quote = equals.and_then(|e| find_byte(bytes, e + 1, |b| !b.is_ascii_whitespace())).filter(|&i| matches!(bytes[i], b'"' | b'\''));
+    let equals =
+        find_byte(bytes, name_end, |b| !b.is_ascii_whitespace()).filter(|&i| bytes[i] == b'=');
+    let quote = equals
+        .and_then(|e| find_byte(bytes, e + 1, |b| !b.is_ascii_whitespace()))
+        .filter(|&i| matches!(bytes[i], b'"' | b'\''));
     let Some(quote) = quote else {
-        return Err(error(format!("attribute `{name}` has no quoted value"), "expected `=\"...\"` after it"));
+        return Err(error(
+            format!("attribute `{name}` has no quoted value"),
+            "expected `=\"...\"` after it",
+        ));
     };
     let Some(close) = find_byte(bytes, quote + 1, |b| b == bytes[quote]) else {
-        return Err(error(format!("the value of attribute `{name}` is never closed"), "unterminated value"));
+        return Err(error(
+            format!("the value of attribute `{name}` is never closed"),
+            "unterminated value",
+        ));
     };
-    let attribute = Attribute { name: name.to_string(), value: unescape(&xml[quote + 1..close]), range: (start, close + 1) };
+    let attribute = Attribute {
+        name: name.to_string(),
+        value: unescape(&xml[quote + 1..close]),
+        range: (start, close + 1),
+    };
     Ok((attribute, close + 1))
 }
 
 fn find_byte(bytes: &[u8], from: usize, found: impl Fn(u8) -> bool) -> Option<usize> {
-    bytes.get(from..)?.iter().position(|&b| found(b)).map(|i| from + i)
+    bytes
+        .get(from..)?
+        .iter()
+        .position(|&b| found(b))
+        .map(|i| from + i)
 }
 
 /// The range of the character at `at` (empty at the end of the text).
@@ -304,7 +413,10 @@ fn unescape(raw: &str) -> String {
     while let Some(amp) = rest.find('&') {
         out.push_str(&rest[..amp]);
         rest = &rest[amp..];
-        match rest.find(';').and_then(|semi| Some((entity(&rest[1..semi])?, semi))) {
+        match rest
+            .find(';')
+            .and_then(|semi| Some((entity(&rest[1..semi])?, semi)))
+        {
             Some((c, semi)) => {
                 out.push(c);
                 rest = &rest[semi + 1..];
@@ -356,18 +468,43 @@ const READ: &[(&str, &[&str])] = &[
     ("inertial", &["origin", "mass", "inertia"]),
     ("visual", &["origin", "geometry", "material"]),
     ("collision", &["origin", "geometry"]),
-    ("geometry", &["box", "cylinder", "capsule", "sphere", "mesh"]),
+    (
+        "geometry",
+        &["box", "cylinder", "capsule", "sphere", "mesh"],
+    ),
     ("material", &["color", "texture"]),
-    ("joint", &["origin", "parent", "child", "axis", "calibration", "dynamics", "limit", "mimic", "safety_controller"]),
+    (
+        "joint",
+        &[
+            "origin",
+            "parent",
+            "child",
+            "axis",
+            "calibration",
+            "dynamics",
+            "limit",
+            "mimic",
+            "safety_controller",
+        ],
+    ),
 ];
 
 /// Whether urdf-rs reads a `<tag>` inside a `<parent>`.
 fn reads(parent: &str, tag: &str) -> bool {
-    READ.iter().any(|(outer, inner)| *outer == parent && inner.contains(&tag))
+    READ.iter()
+        .any(|(outer, inner)| *outer == parent && inner.contains(&tag))
 }
 
 /// URDF's joint types (urdf-rs also reads `spherical`).
-const JOINT_TYPES: &[&str] = &["revolute", "continuous", "prismatic", "fixed", "floating", "planar", "spherical"];
+const JOINT_TYPES: &[&str] = &[
+    "revolute",
+    "continuous",
+    "prismatic",
+    "fixed",
+    "floating",
+    "planar",
+    "spherical",
+];
 
 /// The numbers urdf-rs reads inside links and joints: element, attribute, how many numbers,
 /// whether the attribute is required.
@@ -425,7 +562,13 @@ impl<'a> Source<'a> {
                 children[parent].push(index);
             }
         }
-        Ok(Source { file, xml, elements, children, read })
+        Ok(Source {
+            file,
+            xml,
+            elements,
+            children,
+            read,
+        })
     }
 
     /// The text handed to urdf-rs: the URDF with the elements that urdf-rs would reject but
@@ -435,7 +578,11 @@ impl<'a> Source<'a> {
     /// attribute, and materials are not imported (W1007).
     fn urdf_text(&self) -> Cow<'a, str> {
         let xml = self.xml;
-        let mut blanked = self.elements.iter().filter(|e| e.tag == "texture" && e.attribute("filename").is_none()).peekable();
+        let mut blanked = self
+            .elements
+            .iter()
+            .filter(|e| e.tag == "texture" && e.attribute("filename").is_none())
+            .peekable();
         if blanked.peek().is_none() {
             return Cow::Borrowed(xml);
         }
@@ -473,21 +620,30 @@ impl<'a> Source<'a> {
     }
 
     fn attribute(&self, index: usize, name: &str) -> Option<&str> {
-        self.elements[index].attribute(name).map(|a| a.value.as_str())
+        self.elements[index]
+            .attribute(name)
+            .map(|a| a.value.as_str())
     }
 
     fn child(&self, parent: usize, tag: &str) -> Option<usize> {
-        self.children[parent].iter().copied().find(|&c| self.elements[c].tag == tag)
+        self.children[parent]
+            .iter()
+            .copied()
+            .find(|&c| self.elements[c].tag == tag)
     }
 
     /// The elements of the robot (children of the root) with this tag.
     fn top_level<'s>(&'s self, tag: &'s str) -> impl Iterator<Item = usize> + 's {
-        self.children[0].iter().copied().filter(move |&c| self.elements[c].tag == tag)
+        self.children[0]
+            .iter()
+            .copied()
+            .filter(move |&c| self.elements[c].tag == tag)
     }
 
     /// The link or joint elements called `name`, in document order.
     fn named<'s>(&'s self, tag: &'s str, name: &'s str) -> impl Iterator<Item = usize> + 's {
-        self.top_level(tag).filter(move |&c| self.attribute(c, "name") == Some(name))
+        self.top_level(tag)
+            .filter(move |&c| self.attribute(c, "name") == Some(name))
     }
 
     /// The first link or joint element called `name` (the root if there is none, so that a
@@ -497,17 +653,29 @@ impl<'a> Source<'a> {
     }
 
     fn line(&self, index: usize) -> usize {
-        self.xml[..self.elements[index].range.0].matches('\n').count() + 1
+        self.xml[..self.elements[index].range.0]
+            .matches('\n')
+            .count()
+            + 1
     }
 
-    fn invalid(&self, span: Span, message: impl Into<String>, label: impl Into<String>) -> Diagnostic {
+    fn invalid(
+        &self,
+        span: Span,
+        message: impl Into<String>,
+        label: impl Into<String>,
+    ) -> Diagnostic {
         Diagnostic::error("E1002", message).primary(span, label)
     }
 
     /// urdf-rs rejected a text that passed the checks below; its message has no position.
     fn rejected(&self, reason: &str) -> Diagnostic {
-        self.invalid(self.span(0), format!("not a valid URDF file: {reason}"), "in this robot")
-            .help("the URDF format is described at http://wiki.ros.org/urdf/XML")
+        self.invalid(
+            self.span(0),
+            format!("not a valid URDF file: {reason}"),
+            "in this robot",
+        )
+        .help("the URDF format is described at http://wiki.ros.org/urdf/XML")
     }
 
     /// What urdf-rs requires, checked first so that the error says where it is.
@@ -546,11 +714,19 @@ impl<'a> Source<'a> {
         self.required_attribute(joint, "name")?;
         let kind = self.required_attribute(joint, "type")?;
         if !JOINT_TYPES.contains(&kind) {
-            let diagnostic = self.invalid(self.attribute_span(joint, "type"), format!("unknown joint type `{kind}`"), "not a URDF joint type");
-            return Err(match suggest::did_you_mean(kind, JOINT_TYPES.iter().copied()) {
-                Some(known) => diagnostic.help(format!("did you mean `{known}`?")),
-                None => diagnostic.help(format!("the joint types are {}", JOINT_TYPES.join(", "))),
-            });
+            let diagnostic = self.invalid(
+                self.attribute_span(joint, "type"),
+                format!("unknown joint type `{kind}`"),
+                "not a URDF joint type",
+            );
+            return Err(
+                match suggest::did_you_mean(kind, JOINT_TYPES.iter().copied()) {
+                    Some(known) => diagnostic.help(format!("did you mean `{known}`?")),
+                    None => {
+                        diagnostic.help(format!("the joint types are {}", JOINT_TYPES.join(", ")))
+                    }
+                },
+            );
         }
         for tag in ["parent", "child"] {
             let element = self.required_child(joint, tag)?;
@@ -562,21 +738,31 @@ impl<'a> Source<'a> {
     fn required_attribute(&self, index: usize, name: &str) -> Result<&str, Diagnostic> {
         self.attribute(index, name).ok_or_else(|| {
             let tag = &self.elements[index].tag;
-            self.invalid(self.span(index), format!("`<{tag}>` has no `{name}` attribute"), format!("`{name}` is required"))
+            self.invalid(
+                self.span(index),
+                format!("`<{tag}>` has no `{name}` attribute"),
+                format!("`{name}` is required"),
+            )
         })
     }
 
     fn required_child(&self, parent: usize, tag: &str) -> Result<usize, Diagnostic> {
         self.child(parent, tag).ok_or_else(|| {
             let outer = &self.elements[parent].tag;
-            self.invalid(self.span(parent), format!("`<{outer}>` has no `<{tag}>` element"), format!("`<{tag}>` is required here"))
+            self.invalid(
+                self.span(parent),
+                format!("`<{outer}>` has no `<{tag}>` element"),
+                format!("`<{tag}>` is required here"),
+            )
         })
     }
 
     /// Checks the numbers of `top` (a link or joint) and of every element inside it: the
     /// elements that follow it in document order up to the first one whose parent comes before it.
     fn check_numbers_below(&self, top: usize) -> Result<(), Diagnostic> {
-        let end = (top + 1..self.elements.len()).find(|&i| self.elements[i].parent.is_none_or(|p| p < top)).unwrap_or(self.elements.len());
+        let end = (top + 1..self.elements.len())
+            .find(|&i| self.elements[i].parent.is_none_or(|p| p < top))
+            .unwrap_or(self.elements.len());
         (top..end).try_for_each(|index| self.check_numbers(index))
     }
 
@@ -587,18 +773,34 @@ impl<'a> Source<'a> {
             return Ok(());
         }
         let element = &self.elements[index];
-        for &(tag, name, count, required) in NUMBERS.iter().filter(|(tag, ..)| *tag == element.tag) {
+        for &(tag, name, count, required) in NUMBERS.iter().filter(|(tag, ..)| *tag == element.tag)
+        {
             let Some(attribute) = element.attribute(name) else {
                 if required {
                     self.required_attribute(index, name)?;
                 }
                 continue;
             };
-            let numbers: Vec<Option<f64>> = attribute.value.split_whitespace().map(|t| t.parse::<f64>().ok().filter(|x| x.is_finite())).collect();
+            let numbers: Vec<Option<f64>> = attribute
+                .value
+                .split_whitespace()
+                .map(|t| t.parse::<f64>().ok().filter(|x| x.is_finite()))
+                .collect();
             if numbers.len() != count || numbers.contains(&None) {
-                let expected = if count == 1 { "a finite number".to_string() } else { format!("{count} finite numbers") };
-                let message = format!("`{name}` of `<{tag}>` must be {expected}, not `{}`", attribute.value);
-                return Err(self.invalid(self.attribute_span(index, name), message, format!("expected {expected}")));
+                let expected = if count == 1 {
+                    "a finite number".to_string()
+                } else {
+                    format!("{count} finite numbers")
+                };
+                let message = format!(
+                    "`{name}` of `<{tag}>` must be {expected}, not `{}`",
+                    attribute.value
+                );
+                return Err(self.invalid(
+                    self.attribute_span(index, name),
+                    message,
+                    format!("expected {expected}"),
+                ));
             }
         }
         Ok(())
@@ -621,11 +823,25 @@ impl Tree {
     fn build(robot: &Robot, source: &Source) -> Result<Tree, Diagnostic> {
         let link_names: Vec<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
         unique(&link_names, "link", source)?;
-        unique(&robot.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>(), "joint", source)?;
+        unique(
+            &robot
+                .joints
+                .iter()
+                .map(|j| j.name.as_str())
+                .collect::<Vec<_>>(),
+            "joint",
+            source,
+        )?;
         let mut joint_links = Vec::new();
         let mut parent_joint: Vec<Option<usize>> = vec![None; link_names.len()];
         for (index, joint) in robot.joints.iter().enumerate() {
-            let parent = link_of(&link_names, &joint.name, "parent", &joint.parent.link, source)?;
+            let parent = link_of(
+                &link_names,
+                &joint.name,
+                "parent",
+                &joint.parent.link,
+                source,
+            )?;
             let child = link_of(&link_names, &joint.name, "child", &joint.child.link, source)?;
             if let Some(first) = parent_joint[child] {
                 return Err(two_parents(robot, source, first, index));
@@ -633,18 +849,29 @@ impl Tree {
             parent_joint[child] = Some(index);
             joint_links.push((parent, child));
         }
-        let parent_link: Vec<Option<usize>> = parent_joint.iter().map(|j| j.map(|j| joint_links[j].0)).collect();
+        let parent_link: Vec<Option<usize>> = parent_joint
+            .iter()
+            .map(|j| j.map(|j| joint_links[j].0))
+            .collect();
         if let Some(cycle) = find_cycle(&parent_link) {
             return Err(cycle_error(robot, source, &cycle, &parent_joint));
         }
-        let roots: Vec<usize> = (0..link_names.len()).filter(|&l| parent_joint[l].is_none()).collect();
+        let roots: Vec<usize> = (0..link_names.len())
+            .filter(|&l| parent_joint[l].is_none())
+            .collect();
         match roots.as_slice() {
-            [root] => Ok(Tree { joint_links, root: *root }),
+            [root] => Ok(Tree {
+                joint_links,
+                root: *root,
+            }),
             [] => Err(Diagnostic::error("E1007", "the robot has no link")
                 .primary(source.span(0), "no `<link>` in this robot")
                 .help("declare the robot's links: `<link name=\"base\"/>`")),
             [first, second, ..] => {
-                let names: Vec<String> = roots.iter().map(|&l| format!("`{}`", link_names[l])).collect();
+                let names: Vec<String> = roots
+                    .iter()
+                    .map(|&l| format!("`{}`", link_names[l]))
+                    .collect();
                 Err(Diagnostic::error("E1007", format!("the robot has {} root links: {}", roots.len(), names.join(", ")))
                     .primary(source.span(source.element("link", link_names[*second])), "the child of no joint")
                     .secondary(source.span(source.element("link", link_names[*first])), "another root")
@@ -662,27 +889,40 @@ fn unique(names: &[&str], tag: &str, source: &Source) -> Result<(), Diagnostic> 
         if !seen.insert(*name) {
             let mut elements = source.named(tag, name);
             let (first, second) = (elements.next().unwrap_or(0), elements.next().unwrap_or(0));
-            return Err(Diagnostic::error("E1004", format!("two {tag}s are called `{name}`"))
-                .primary(source.attribute_span(second, "name"), "this name")
-                .secondary(source.attribute_span(first, "name"), "was given here first")
-                .help(format!("rename one of the {tag}s")));
+            return Err(
+                Diagnostic::error("E1004", format!("two {tag}s are called `{name}`"))
+                    .primary(source.attribute_span(second, "name"), "this name")
+                    .secondary(source.attribute_span(first, "name"), "was given here first")
+                    .help(format!("rename one of the {tag}s")),
+            );
         }
     }
     Ok(())
 }
 
 /// The link a joint's `<parent>` or `<child>` names.
-fn link_of(links: &[&str], joint: &str, role: &str, name: &str, source: &Source) -> Result<usize, Diagnostic> {
+fn link_of(
+    links: &[&str],
+    joint: &str,
+    role: &str,
+    name: &str,
+    source: &Source,
+) -> Result<usize, Diagnostic> {
     if let Some(index) = links.iter().position(|l| *l == name) {
         return Ok(index);
     }
     let element = source.element("joint", joint);
     let at = source.child(element, role).unwrap_or(element);
-    let diagnostic = Diagnostic::error("E1003", format!("joint `{joint}` names the {role} link `{name}`, which does not exist"))
-        .primary(source.attribute_span(at, "link"), "no link has this name");
+    let diagnostic = Diagnostic::error(
+        "E1003",
+        format!("joint `{joint}` names the {role} link `{name}`, which does not exist"),
+    )
+    .primary(source.attribute_span(at, "link"), "no link has this name");
     Err(match suggest::did_you_mean(name, links.iter().copied()) {
         Some(known) => diagnostic.help(format!("did you mean `{known}`?")),
-        None => diagnostic.help(format!("declare it with `<link name=\"{name}\"/>`, or name one of the robot's links")),
+        None => diagnostic.help(format!(
+            "declare it with `<link name=\"{name}\"/>`, or name one of the robot's links"
+        )),
     })
 }
 
@@ -711,7 +951,9 @@ fn find_cycle(parent_link: &[Option<usize>]) -> Option<Vec<usize>> {
         while let Some(l) = link {
             match state[l] {
                 DONE => break,
-                ON_PATH => return Some(path[path.iter().position(|&p| p == l).unwrap_or(0)..].to_vec()),
+                ON_PATH => {
+                    return Some(path[path.iter().position(|&p| p == l).unwrap_or(0)..].to_vec())
+                }
                 _ => {}
             }
             state[l] = ON_PATH;
@@ -725,8 +967,17 @@ fn find_cycle(parent_link: &[Option<usize>]) -> Option<Vec<usize>> {
     None
 }
 
-fn cycle_error(robot: &Robot, source: &Source, cycle: &[usize], parent_joint: &[Option<usize>]) -> Diagnostic {
-    let mut names: Vec<&str> = cycle.iter().rev().map(|&l| robot.links[l].name.as_str()).collect();
+fn cycle_error(
+    robot: &Robot,
+    source: &Source,
+    cycle: &[usize],
+    parent_joint: &[Option<usize>],
+) -> Diagnostic {
+    let mut names: Vec<&str> = cycle
+        .iter()
+        .rev()
+        .map(|&l| robot.links[l].name.as_str())
+        .collect();
     names.push(names[0]);
     let mut joints: Vec<usize> = cycle.iter().filter_map(|&l| parent_joint[l]).collect();
     joints.sort_unstable();
@@ -789,12 +1040,23 @@ impl Importer<'_> {
     fn header(&self, file_name: &str) -> String {
         let root = &self.names.links[self.tree.root];
         let base = if self.options.floating_base {
-            format!("is free, a floating base joined to earth by `{}`", self.names.base)
+            format!(
+                "is free, a floating base joined to earth by `{}`",
+                self.names.base
+            )
         } else {
             "is welded to earth".to_string()
         };
-        let gravity = if self.options.gravity { "Standard gravity pulls every link with mass along -z." } else { "No gravity." };
-        let robot = if self.robot.name.is_empty() { "Robot".to_string() } else { format!("Robot `{}`", self.robot.name) };
+        let gravity = if self.options.gravity {
+            "Standard gravity pulls every link with mass along -z."
+        } else {
+            "No gravity."
+        };
+        let robot = if self.robot.name.is_empty() {
+            "Robot".to_string()
+        } else {
+            format!("Robot `{}`", self.robot.name)
+        };
         let text = format!(
             "{robot}, imported from the URDF file `{file_name}`.\n   \
              Units are URDF's: m, rad, kg, kg m². Each link is a body whose reference frame is the link\n   \
@@ -810,25 +1072,39 @@ impl Importer<'_> {
     /// order of the file, links first; then the others, renamed by [`lsd_name`] and made unique.
     fn assign_names(&mut self) {
         let robot = self.robot;
-        let requests: Vec<(&str, &str)> =
-            robot.links.iter().map(|l| ("link", l.name.as_str())).chain(robot.joints.iter().map(|j| ("joint", j.name.as_str()))).collect();
+        let requests: Vec<(&str, &str)> = robot
+            .links
+            .iter()
+            .map(|l| ("link", l.name.as_str()))
+            .chain(robot.joints.iter().map(|j| ("joint", j.name.as_str())))
+            .collect();
         let mut used = HashSet::new();
-        let mut assigned: Vec<Option<String>> =
-            requests.iter().map(|(_, name)| (lsd_name(name) == *name && used.insert(name.to_string())).then(|| name.to_string())).collect();
+        let mut assigned: Vec<Option<String>> = requests
+            .iter()
+            .map(|(_, name)| {
+                (lsd_name(name) == *name && used.insert(name.to_string())).then(|| name.to_string())
+            })
+            .collect();
         for (slot, &(tag, name)) in assigned.iter_mut().zip(&requests) {
             if slot.is_none() {
                 let mut candidate = lsd_name(name);
                 while !used.insert(candidate.clone()) {
                     candidate.push('_');
                 }
-                self.warnings.push(self.rename_warning(tag, name, &candidate));
+                self.warnings
+                    .push(self.rename_warning(tag, name, &candidate));
                 *slot = Some(candidate);
             }
         }
         let mut names = assigned.into_iter().flatten();
         self.names.links = names.by_ref().take(robot.links.len()).collect();
         self.names.joints = names.collect();
-        let mut base = if self.options.floating_base { "root_joint" } else { "world_joint" }.to_string();
+        let mut base = if self.options.floating_base {
+            "root_joint"
+        } else {
+            "world_joint"
+        }
+        .to_string();
         while used.contains(&base) {
             base.push('_');
         }
@@ -837,7 +1113,8 @@ impl Importer<'_> {
 
     fn rename_warning(&self, tag: &str, name: &str, lsd: &str) -> Diagnostic {
         let reason = if lsd_name(name) == name {
-            "another link or joint has this name (links and joints share one name space in LSD)".to_string()
+            "another link or joint has this name (links and joints share one name space in LSD)"
+                .to_string()
         } else if reserved().contains(name) {
             format!("`{name}` is a builtin or standard library name that the program uses")
         } else if is_identifier(&format!("{name}_")) && !is_identifier(name) {
@@ -869,7 +1146,13 @@ impl Importer<'_> {
             let principal = principal(&tensor(inertial));
             self.check_inertia(index, &principal.moments);
             let mut rotation = rpy_factors(&inertial.origin.rpy);
-            rotation.extend(principal.axes.as_ref().and_then(axis_angle).map(|(angle, axis)| factor(angle, axis)));
+            rotation.extend(
+                principal
+                    .axes
+                    .as_ref()
+                    .and_then(axis_angle)
+                    .map(|(angle, axis)| factor(angle, axis)),
+            );
             format!(
                 "body mass = {}, iframe = {}, inertia = {} end",
                 number(inertial.mass.value),
@@ -878,7 +1161,10 @@ impl Importer<'_> {
             )
         };
         let name = &self.names.links[index];
-        format!("let {name} = {body} ;{}\n", self.original("link", &link.name, name))
+        format!(
+            "let {name} = {body} ;{}\n",
+            self.original("link", &link.name, name)
+        )
     }
 
     /// A warning when the link's mass and inertia are not those of a rigid body.
@@ -893,7 +1179,10 @@ impl Importer<'_> {
             problems.push("it has inertia but no mass".to_string());
         }
         if moments.min() < -tolerance {
-            problems.push("its inertia tensor is not positive definite (a negative principal moment)".to_string());
+            problems.push(
+                "its inertia tensor is not positive definite (a negative principal moment)"
+                    .to_string(),
+            );
         } else if moments.min() <= tolerance {
             problems.push("its inertia tensor is not positive definite (a zero principal moment, as of a point mass or a thin rod)".to_string());
         }
@@ -907,7 +1196,10 @@ impl Importer<'_> {
         }
         let element = self.source.element("link", &link.name);
         let inertial = self.source.child(element, "inertial");
-        let at = inertial.and_then(|i| self.source.child(i, "inertia")).or(inertial).unwrap_or(element);
+        let at = inertial
+            .and_then(|i| self.source.child(i, "inertia"))
+            .or(inertial)
+            .unwrap_or(element);
         self.warnings.push(
             Diagnostic::warning("W1010", format!("the inertia of link `{}` is not physically consistent: {}", link.name, problems.join("; ")))
                 .primary(self.source.span(at), "imported as written")
@@ -918,8 +1210,15 @@ impl Importer<'_> {
     }
 
     fn base_joint(&self) -> String {
-        let link = if self.options.floating_base { "free" } else { "weld" };
-        format!("join earth and {} with {link} as {} ;\n", self.names.links[self.tree.root], self.names.base)
+        let link = if self.options.floating_base {
+            "free"
+        } else {
+            "weld"
+        };
+        format!(
+            "join earth and {} with {link} as {} ;\n",
+            self.names.links[self.tree.root], self.names.base
+        )
     }
 
     fn joint(&mut self, index: usize) -> Result<String, Diagnostic> {
@@ -928,7 +1227,11 @@ impl Importer<'_> {
         let first = frame(&joint.origin, &self.names.links[parent]);
         let link = self.joint_link(index)?;
         let name = &self.names.joints[index];
-        Ok(format!("join {first} and {} with {link} as {name} ;{}\n", self.names.links[child], self.original("joint", &joint.name, name)))
+        Ok(format!(
+            "join {first} and {} with {link} as {name} ;{}\n",
+            self.names.links[child],
+            self.original("joint", &joint.name, name)
+        ))
     }
 
     /// The LSD link of a URDF joint type.
@@ -949,11 +1252,19 @@ impl Importer<'_> {
         let joint = &self.robot.joints[index];
         let axis = Vector3::from(joint.axis.xyz.0);
         let element = self.source.element("joint", &joint.name);
-        let at = self.source.child(element, "axis").map_or(self.source.span(element), |a| self.source.attribute_span(a, "xyz"));
+        let at = self
+            .source
+            .child(element, "axis")
+            .map_or(self.source.span(element), |a| {
+                self.source.attribute_span(a, "xyz")
+            });
         if axis == Vector3::zeros() {
-            return Err(Diagnostic::error("E1008", format!("the axis of joint `{}` is zero", joint.name))
-                .primary(at, "no direction")
-                .help("give the direction of the motion, e.g. `<axis xyz=\"0 0 1\"/>`"));
+            return Err(Diagnostic::error(
+                "E1008",
+                format!("the axis of joint `{}` is zero", joint.name),
+            )
+            .primary(at, "no direction")
+            .help("give the direction of the motion, e.g. `<axis xyz=\"0 0 1\"/>`"));
         }
         let length = axis.norm();
         if (length - 1.0).abs() <= 4.0 * f64::EPSILON {
@@ -963,9 +1274,12 @@ impl Importer<'_> {
         let unit = (axis / axis.amax()).normalize();
         if (length - 1.0).abs() > 1e-9 {
             self.warnings.push(
-                Diagnostic::warning("W1009", format!("the axis of joint `{}` is not a unit vector", joint.name))
-                    .primary(at, format!("its length is {}", number(length)))
-                    .note(format!("it is imported as {}", vector(unit.into()))),
+                Diagnostic::warning(
+                    "W1009",
+                    format!("the axis of joint `{}` is not a unit vector", joint.name),
+                )
+                .primary(at, format!("its length is {}", number(length)))
+                .note(format!("it is imported as {}", vector(unit.into()))),
             );
         }
         Ok(unit)
@@ -982,8 +1296,12 @@ impl Importer<'_> {
                 .help("the imported joint moves without limits; a stop can be written as a link effort"));
         }
         if let (Some(mimic), Some(element)) = (&joint.mimic, child("mimic")) {
-            let (multiplier, offset) = (mimic.multiplier.unwrap_or(1.0), mimic.offset.unwrap_or(0.0));
-            let message = format!("joint `{}` mimics joint `{}` but is imported as an independent joint", joint.name, mimic.joint);
+            let (multiplier, offset) =
+                (mimic.multiplier.unwrap_or(1.0), mimic.offset.unwrap_or(0.0));
+            let message = format!(
+                "joint `{}` mimics joint `{}` but is imported as an independent joint",
+                joint.name, mimic.joint
+            );
             found.push(Diagnostic::warning("W1003", message)
                 .primary(self.source.span(element), "not imported")
                 .note(format!("in URDF its position is {} × `{}` + {}", number(multiplier), mimic.joint, number(offset)))
@@ -991,26 +1309,50 @@ impl Importer<'_> {
         }
         if let (Some(dynamics), Some(element)) = (&joint.dynamics, child("dynamics")) {
             if dynamics.damping != 0.0 || dynamics.friction != 0.0 {
-                let effort = if joint.joint_type == JointType::Prismatic { "force" } else { "torque" };
+                let effort = if joint.joint_type == JointType::Prismatic {
+                    "force"
+                } else {
+                    "torque"
+                };
                 found.push(self.joint_warning(element, "W1004", format!("the damping and friction of joint `{}` are not modelled", joint.name))
                     .help(format!("viscous damping can be written as a link effort: `{effort} = (-{} * q') * axis`", number(dynamics.damping))));
             }
         }
         if let Some(controller) = child("safety_controller") {
-            found.push(self.joint_warning(controller, "W1005", format!("the safety controller of joint `{}` is not modelled", joint.name))
-                .help("soft limits and controller gains are not part of the mechanism"));
+            found.push(
+                self.joint_warning(
+                    controller,
+                    "W1005",
+                    format!(
+                        "the safety controller of joint `{}` is not modelled",
+                        joint.name
+                    ),
+                )
+                .help("soft limits and controller gains are not part of the mechanism"),
+            );
         }
         if let Some(calibration) = child("calibration") {
-            found.push(self.joint_warning(calibration, "W1006", format!("the calibration of joint `{}` is not imported", joint.name))
-                .help("reference positions of sensors are not part of the mechanism"));
+            found.push(
+                self.joint_warning(
+                    calibration,
+                    "W1006",
+                    format!("the calibration of joint `{}` is not imported", joint.name),
+                )
+                .help("reference positions of sensors are not part of the mechanism"),
+            );
         }
         self.warnings.extend(found);
     }
 
     /// A warning at a joint's child element, with its attributes as the URDF gives them.
     fn joint_warning(&self, element: usize, code: &'static str, message: String) -> Diagnostic {
-        let given: Vec<String> = self.source.elements[element].attributes.iter().map(|a| format!("{} = {}", a.name, a.value)).collect();
-        let diagnostic = Diagnostic::warning(code, message).primary(self.source.span(element), "not imported");
+        let given: Vec<String> = self.source.elements[element]
+            .attributes
+            .iter()
+            .map(|a| format!("{} = {}", a.name, a.value))
+            .collect();
+        let diagnostic =
+            Diagnostic::warning(code, message).primary(self.source.span(element), "not imported");
         if given.is_empty() {
             diagnostic
         } else {
@@ -1022,7 +1364,9 @@ impl Importer<'_> {
         if !self.options.gravity {
             return String::new();
         }
-        let mut out = String::from("\n(* Gravity: the weight of every link with mass, at its centre of mass *)\n");
+        let mut out = String::from(
+            "\n(* Gravity: the weight of every link with mass, at its centre of mass *)\n",
+        );
         for (link, name) in self.robot.links.iter().zip(&self.names.links) {
             if link.inertial.mass.value != 0.0 {
                 out += &format!("apply weight({name}) on {name}.iframe ;\n");
@@ -1034,29 +1378,43 @@ impl Importer<'_> {
     /// One warning for all the shapes and materials, which LSD has no place for.
     fn geometry_warning(&mut self) {
         let source = self.source;
-        let is_top_link = |index: usize| source.elements[index].tag == "link" && source.elements[index].parent == Some(0);
+        let is_top_link = |index: usize| {
+            source.elements[index].tag == "link" && source.elements[index].parent == Some(0)
+        };
         let is_shape = |index: usize| match source.elements[index].tag.as_str() {
             "visual" | "collision" => source.elements[index].parent.is_some_and(is_top_link),
             "material" => source.elements[index].parent == Some(0),
             _ => false,
         };
-        let Some(first) = (0..source.elements.len()).find(|&i| is_shape(i)) else { return };
+        let Some(first) = (0..source.elements.len()).find(|&i| is_shape(i)) else {
+            return;
+        };
         let links = &self.robot.links;
-        let shaped = links.iter().filter(|l| !l.visual.is_empty() || !l.collision.is_empty()).count();
+        let shaped = links
+            .iter()
+            .filter(|l| !l.visual.is_empty() || !l.collision.is_empty())
+            .count();
         let visual = links.iter().filter(|l| !l.visual.is_empty()).count();
         let collision = links.iter().filter(|l| !l.collision.is_empty()).count();
         let materials = source.top_level("material").count();
         let message = match shaped {
             0 => "the robot's materials are not imported".to_string(),
-            n => format!("the visual and collision geometry of {} is not imported", count(n, "link")),
+            n => format!(
+                "the visual and collision geometry of {} is not imported",
+                count(n, "link")
+            ),
         };
-        let mut diagnostic = Diagnostic::warning("W1007", message).primary(source.span(first), "the first of them");
+        let mut diagnostic =
+            Diagnostic::warning("W1007", message).primary(source.span(first), "the first of them");
         if shaped > 0 {
             let links = count(links.len(), "link");
             diagnostic = diagnostic.note(format!("of the robot's {links}, {visual} with `<visual>` and {collision} with `<collision>` elements"));
         }
         if materials > 0 {
-            diagnostic = diagnostic.note(format!("the robot defines {}", count(materials, "material")));
+            diagnostic = diagnostic.note(format!(
+                "the robot defines {}",
+                count(materials, "material")
+            ));
         }
         let help = "LSD describes bodies, joints and efforts, not shapes: the bodies' mass properties come from `<inertial>`";
         self.warnings.push(diagnostic.help(help));
@@ -1072,9 +1430,11 @@ impl Importer<'_> {
         for &top in &source.children[0] {
             let top_tag = source.elements[top].tag.as_str();
             let found: Vec<(Option<&str>, usize)> = match top_tag {
-                "link" | "joint" => {
-                    source.children[top].iter().filter(|&&c| !reads(top_tag, &source.elements[c].tag)).map(|&c| (Some(top_tag), c)).collect()
-                }
+                "link" | "joint" => source.children[top]
+                    .iter()
+                    .filter(|&&c| !reads(top_tag, &source.elements[c].tag))
+                    .map(|&c| (Some(top_tag), c))
+                    .collect(),
                 "material" => Vec::new(),
                 _ => vec![(None, top)],
             };
@@ -1090,7 +1450,11 @@ impl Importer<'_> {
             let place = match owner {
                 None => String::new(),
                 Some(owner) => {
-                    let mut names: Vec<&str> = all.iter().filter_map(|&e| source.elements[e].parent).map(|p| source.attribute(p, "name").unwrap_or("")).collect();
+                    let mut names: Vec<&str> = all
+                        .iter()
+                        .filter_map(|&e| source.elements[e].parent)
+                        .map(|p| source.attribute(p, "name").unwrap_or(""))
+                        .collect();
                     names.dedup();
                     match names.as_slice() {
                         [name] => format!(" of {owner} `{name}`"),
@@ -1102,10 +1466,18 @@ impl Importer<'_> {
                 1 => format!("`<{tag}>`{place} is not imported"),
                 n => format!("{n} `<{tag}>` elements{place} are not imported"),
             };
-            let mut diagnostic = Diagnostic::warning("W1008", message).primary(source.span(all[0]), "not imported");
+            let mut diagnostic =
+                Diagnostic::warning("W1008", message).primary(source.span(all[0]), "not imported");
             if all.len() > 1 {
-                let lines: Vec<String> = all[1..].iter().map(|&e| source.line(e).to_string()).collect();
-                let others = if lines.len() == 1 { "the other is at line" } else { "the others are at lines" };
+                let lines: Vec<String> = all[1..]
+                    .iter()
+                    .map(|&e| source.line(e).to_string())
+                    .collect();
+                let others = if lines.len() == 1 {
+                    "the other is at line"
+                } else {
+                    "the others are at lines"
+                };
                 diagnostic = diagnostic.note(format!("{others} {}", lines.join(", ")));
             }
             let help = match (owner, tag) {
@@ -1144,7 +1516,9 @@ fn is_massless(inertial: &Inertial) -> bool {
 /// The inertia tensor about the centre of mass, in the inertial origin's frame.
 fn tensor(inertial: &Inertial) -> Matrix3<f64> {
     let i = &inertial.inertia;
-    Matrix3::new(i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz)
+    Matrix3::new(
+        i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
+    )
 }
 
 /// Principal moments, and the rotation from the tensor's frame to the principal axes (its
@@ -1157,11 +1531,17 @@ struct Principal {
 fn principal(tensor: &Matrix3<f64>) -> Principal {
     let off_diagonal = [tensor[(0, 1)], tensor[(0, 2)], tensor[(1, 2)]];
     if off_diagonal == [0.0; 3] {
-        return Principal { moments: tensor.diagonal(), axes: None };
+        return Principal {
+            moments: tensor.diagonal(),
+            axes: None,
+        };
     }
     let eigen = SymmetricEigen::new(*tensor);
     let (axes, moments) = closest_frame(&eigen.eigenvectors, &eigen.eigenvalues);
-    Principal { moments, axes: Some(axes) }
+    Principal {
+        moments,
+        axes: Some(axes),
+    }
 }
 
 /// Among the orders and directions of the eigenvectors that make a proper rotation, the one
@@ -1169,7 +1549,14 @@ fn principal(tensor: &Matrix3<f64>) -> Principal {
 /// tensor's frame, so a nearly diagonal tensor gets a small rotation and its moments keep their
 /// order.
 fn closest_frame(vectors: &Matrix3<f64>, values: &Vector3<f64>) -> (Rotation3<f64>, Vector3<f64>) {
-    const ORDERS: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+    const ORDERS: [[usize; 3]; 6] = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
     let candidates = ORDERS.iter().flat_map(|order| {
         (0..8).map(move |signs: usize| {
             let mut frame = Matrix3::zeros();
@@ -1177,10 +1564,15 @@ fn closest_frame(vectors: &Matrix3<f64>, values: &Vector3<f64>) -> (Rotation3<f6
                 let sign = if signs >> k & 1 == 1 { -1.0 } else { 1.0 };
                 frame.set_column(k, &(vectors.column(column) * sign));
             }
-            (frame, Vector3::new(values[order[0]], values[order[1]], values[order[2]]))
+            (
+                frame,
+                Vector3::new(values[order[0]], values[order[1]], values[order[2]]),
+            )
         })
     });
-    let best = candidates.filter(|(frame, _)| frame.determinant() > 0.0).max_by(|a, b| a.0.trace().total_cmp(&b.0.trace()));
+    let best = candidates
+        .filter(|(frame, _)| frame.determinant() > 0.0)
+        .max_by(|a, b| a.0.trace().total_cmp(&b.0.trace()));
     let (frame, moments) = best.unwrap_or((Matrix3::identity(), *values));
     (Rotation3::from_matrix_unchecked(frame), moments)
 }
@@ -1189,7 +1581,11 @@ fn closest_frame(vectors: &Matrix3<f64>, values: &Vector3<f64>) -> (Rotation3<f6
 /// small or near a half turn (the `acos` of the trace would lose half of them).
 fn axis_angle(rotation: &Rotation3<f64>) -> Option<(f64, Vector3<f64>)> {
     let q = UnitQuaternion::from_rotation_matrix(rotation).into_inner();
-    let (w, v) = if q.w < 0.0 { (-q.w, -q.imag()) } else { (q.w, q.imag()) };
+    let (w, v) = if q.w < 0.0 {
+        (-q.w, -q.imag())
+    } else {
+        (q.w, q.imag())
+    };
     let s = v.norm();
     (s > 0.0).then(|| (2.0 * s.atan2(w), v / s))
 }
@@ -1206,7 +1602,11 @@ fn number(x: f64) -> String {
         return "0".to_string();
     }
     let magnitude = x.abs();
-    let digits = if (1e-5..1e16).contains(&magnitude) { format!("{magnitude}") } else { format!("{magnitude:e}") };
+    let digits = if (1e-5..1e16).contains(&magnitude) {
+        format!("{magnitude}")
+    } else {
+        format!("{magnitude:e}")
+    };
     if x < 0.0 {
         format!("-{digits}")
     } else {
@@ -1226,16 +1626,24 @@ fn factor(angle: f64, axis: Vector3<f64>) -> String {
 /// URDF's roll, pitch, yaw, fixed axes x, y, z: the rotation Rz(yaw) · Ry(pitch) · Rx(roll), as
 /// LSD factors, leaving out zero angles.
 fn rpy_factors(rpy: &[f64; 3]) -> Vec<String> {
-    [(rpy[2], Vector3::z()), (rpy[1], Vector3::y()), (rpy[0], Vector3::x())]
-        .into_iter()
-        .filter(|(angle, _)| *angle != 0.0)
-        .map(|(angle, axis)| factor(angle, axis))
-        .collect()
+    [
+        (rpy[2], Vector3::z()),
+        (rpy[1], Vector3::y()),
+        (rpy[0], Vector3::x()),
+    ]
+    .into_iter()
+    .filter(|(angle, _)| *angle != 0.0)
+    .map(|(angle, axis)| factor(angle, axis))
+    .collect()
 }
 
 /// `[x, y, z] ++ R`, with `R` the product of the factors (`1` for none).
 fn displacement(xyz: [f64; 3], rotation: &[String]) -> String {
-    let rotation = if rotation.is_empty() { "1".to_string() } else { rotation.join(" * ") };
+    let rotation = if rotation.is_empty() {
+        "1".to_string()
+    } else {
+        rotation.join(" * ")
+    };
     format!("{} ++ {rotation}", vector(xyz))
 }
 
@@ -1279,13 +1687,29 @@ mod tests {
 
     #[test]
     fn numbers_read_back_exactly_and_lex_as_numbers() {
-        for x in [0.1, 1e-7, 1e21, -0.5, 2.5e-5, 1e16, 123456789.125, f64::MAX, f64::MIN_POSITIVE, 5e-324, -3.0] {
+        for x in [
+            0.1,
+            1e-7,
+            1e21,
+            -0.5,
+            2.5e-5,
+            1e16,
+            123456789.125,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            5e-324,
+            -3.0,
+        ] {
             let text = number(x);
             let magnitude = text.trim_start_matches('-');
             let (tokens, errors) = lex(FileId(0), magnitude);
             assert!(errors.is_empty() && tokens.len() == 1, "{text}");
             assert!(matches!(tokens[0].1, Tok::Int(_) | Tok::Float(_)), "{text}");
-            assert_eq!(magnitude.parse::<f64>().unwrap_or(f64::NAN), x.abs(), "{text}");
+            assert_eq!(
+                magnitude.parse::<f64>().unwrap_or(f64::NAN),
+                x.abs(),
+                "{text}"
+            );
         }
         assert_eq!(number(-0.0), "0");
         assert_eq!(number(1e-7), "1e-7");
@@ -1316,18 +1740,27 @@ mod tests {
         let axes = principal.axes.expect("not diagonal");
         assert!(axes.angle() < 1e-2, "{}", axes.angle());
         assert!((principal.moments - Vector3::new(3.0, 2.0, 1.0)).amax() < 1e-5);
-        let rebuilt = axes.matrix() * Matrix3::from_diagonal(&principal.moments) * axes.matrix().transpose();
+        let rebuilt =
+            axes.matrix() * Matrix3::from_diagonal(&principal.moments) * axes.matrix().transpose();
         assert!((rebuilt - tensor).amax() < 1e-15);
     }
 
     #[test]
     fn axis_angle_is_exact_for_small_and_half_turns() {
-        let turns = [(1e-9, Vector3::new(0.0, 0.6, 0.8)), (std::f64::consts::PI - 1e-12, Vector3::x()), (2.0, Vector3::new(1.0, 2.0, 3.0))];
+        let turns = [
+            (1e-9, Vector3::new(0.0, 0.6, 0.8)),
+            (std::f64::consts::PI - 1e-12, Vector3::x()),
+            (2.0, Vector3::new(1.0, 2.0, 3.0)),
+        ];
         for (angle, axis) in turns {
             let rotation = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle);
             let (found, found_axis) = axis_angle(&rotation).expect("not the identity");
-            let back = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(found_axis), found);
-            assert!((back.matrix() - rotation.matrix()).amax() < 1e-15, "{angle}");
+            let back =
+                Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(found_axis), found);
+            assert!(
+                (back.matrix() - rotation.matrix()).amax() < 1e-15,
+                "{angle}"
+            );
         }
         assert!(axis_angle(&Rotation3::identity()).is_none());
     }
@@ -1339,7 +1772,15 @@ mod tests {
         assert_eq!(error.code, "E1001");
         let span = error.primary_span().expect("located");
         assert_eq!(&xml[span.range()], "</robot>");
-        for xml in ["", "<robot", "<robot name=\"r>", "<robot><!-- </robot>", "<robot></link>", "text", "<a/><b/>"] {
+        for xml in [
+            "",
+            "<robot",
+            "<robot name=\"r>",
+            "<robot><!-- </robot>",
+            "<robot></link>",
+            "text",
+            "<a/><b/>",
+        ] {
             let error = import_urdf("t.urdf", xml, &ImportOptions::default()).expect_err(xml);
             assert_eq!(error.code, "E1001", "{xml}");
         }
@@ -1349,9 +1790,15 @@ mod tests {
     fn scanner_reads_attributes_and_entities() {
         let elements = scan("<?xml version=\"1.0\"?><!-- c --><robot name='a&amp;b&#x41;'><link name = \"l\" /></robot>").ok().expect("scans");
         assert_eq!(elements.len(), 2);
-        assert_eq!(elements[0].attribute("name").map(|a| a.value.as_str()), Some("a&bA"));
+        assert_eq!(
+            elements[0].attribute("name").map(|a| a.value.as_str()),
+            Some("a&bA")
+        );
         assert_eq!(elements[1].parent, Some(0));
-        assert_eq!(elements[1].attribute("name").map(|a| a.value.as_str()), Some("l"));
+        assert_eq!(
+            elements[1].attribute("name").map(|a| a.value.as_str()),
+            Some("l")
+        );
     }
 
     #[test]
@@ -1361,25 +1808,46 @@ mod tests {
         let text = source.urdf_text();
         assert_eq!(text.len(), xml.len());
         assert_eq!(text.matches('\n').count(), 1);
-        assert!(!text.contains("<texture a=") && !text.contains("</texture>"), "{text}");
+        assert!(
+            !text.contains("<texture a=") && !text.contains("</texture>"),
+            "{text}"
+        );
         assert!(text.contains("<texture filename=\"t.png\"/>"), "{text}");
         assert!(urdf_rs::read_from_string(&text).is_ok());
-        assert!(matches!(Source::scan(FileId(0), "<robot/>").expect("scans").urdf_text(), Cow::Borrowed(_)));
+        assert!(matches!(
+            Source::scan(FileId(0), "<robot/>")
+                .expect("scans")
+                .urdf_text(),
+            Cow::Borrowed(_)
+        ));
     }
 
     #[test]
     fn planar_axes_span_the_plane() {
         assert_eq!(planar(&Vector3::z()), "planar");
-        assert_eq!(planar(&Vector3::x()), "link(x, y, q) dof1 = x * [0, 1, 0] + y * [0, 0, 1], dof2 = q || [1, 0, 0] end");
-        assert_eq!(planar(&Vector3::y()), "link(x, y, q) dof1 = x * [0, 0, 1] + y * [1, 0, 0], dof2 = q || [0, 1, 0] end");
+        assert_eq!(
+            planar(&Vector3::x()),
+            "link(x, y, q) dof1 = x * [0, 1, 0] + y * [0, 0, 1], dof2 = q || [1, 0, 0] end"
+        );
+        assert_eq!(
+            planar(&Vector3::y()),
+            "link(x, y, q) dof1 = x * [0, 0, 1] + y * [1, 0, 0], dof2 = q || [0, 1, 0] end"
+        );
     }
 
     #[test]
     fn materials_alone_are_reported_once() {
         let imported = import("<robot name=\"r\"><material name=\"m\"/><material name=\"n\"/><link name=\"a\"/></robot>");
-        let messages: Vec<&str> = imported.warnings.iter().map(|d| d.message.as_str()).collect();
+        let messages: Vec<&str> = imported
+            .warnings
+            .iter()
+            .map(|d| d.message.as_str())
+            .collect();
         assert_eq!(messages, ["the robot's materials are not imported"]);
-        assert_eq!(imported.warnings[0].notes, ["the robot defines 2 materials"]);
+        assert_eq!(
+            imported.warnings[0].notes,
+            ["the robot defines 2 materials"]
+        );
     }
 
     #[test]
@@ -1388,6 +1856,12 @@ mod tests {
         let (tokens, errors) = lex(FileId(0), &imported.text);
         assert!(errors.is_empty(), "{}", imported.text);
         assert!(matches!(tokens[0].1, Tok::Import), "{}", imported.text);
-        assert!(imported.text.contains("let x__ = body mass = 0, inertia = 0 end ; (* URDF link \"x* )\" *)"), "{}", imported.text);
+        assert!(
+            imported
+                .text
+                .contains("let x__ = body mass = 0, inertia = 0 end ; (* URDF link \"x* )\" *)"),
+            "{}",
+            imported.text
+        );
     }
 }

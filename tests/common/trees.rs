@@ -37,15 +37,30 @@ pub fn tree_program(parents: &[usize], kinds: &[usize], numbers: &[f64]) -> Stri
     }
     for (i, &p) in parents.iter().enumerate() {
         let b = i + 1;
-        let parent = if p == 0 { "earth".to_string() } else { format!("b{p}") };
-        let offset = format!("[{}, {}, {}] ++ ({} || [1, 0, 0])", value(3 * b), value(3 * b + 1), value(3 * b + 2), value(5 * b));
+        let parent = if p == 0 {
+            "earth".to_string()
+        } else {
+            format!("b{p}")
+        };
+        let offset = format!(
+            "[{}, {}, {}] ++ ({} || [1, 0, 0])",
+            value(3 * b),
+            value(3 * b + 1),
+            value(3 * b + 2),
+            value(5 * b)
+        );
         // Alternate the direction of the join so both traversals are exercised.
         if b % 3 == 0 {
-            text += &format!("join b{b} and {offset} @ {parent} with {} as j{b};\n", JOINTS[kinds[i] % JOINTS.len()]);
+            text += &format!(
+                "join b{b} and {offset} @ {parent} with {} as j{b};\n",
+                JOINTS[kinds[i] % JOINTS.len()]
+            );
         } else {
-            text += &format!("join {offset} @ {parent} and b{b} with {} as j{b};\n", JOINTS[kinds[i] % JOINTS.len()]);
+            text += &format!(
+                "join {offset} @ {parent} and b{b} with {} as j{b};\n",
+                JOINTS[kinds[i] % JOINTS.len()]
+            );
         }
     }
     text
 }
-

@@ -56,7 +56,13 @@ pub fn c(equations: &Equations, source: &str) -> String {
     let symbols = Symbols::new(equations);
     let routines = Routines::new(&symbols, equations);
     let mut out = header(equations, source);
-    let with_f = |routine: &Routine| if routine.uses_functions { format!(", {FUNCTION_ARGUMENT}") } else { String::new() };
+    let with_f = |routine: &Routine| {
+        if routine.uses_functions {
+            format!(", {FUNCTION_ARGUMENT}")
+        } else {
+            String::new()
+        }
+    };
     let time = |routine: &Routine| if routine.uses_time { "double t, " } else { "" };
     let mass = &routines.mass;
     let _ = writeln!(
@@ -115,11 +121,30 @@ fn header(equations: &Equations, source: &str) -> String {
         v.parameters.len(),
         v.functions.len()
     );
-    names(&mut out, "The positions, in the order of p:", "POSITIONS", &v.positions);
-    names(&mut out, "Their rates, in the order of q:", "RATES", &v.rates);
-    names(&mut out, "The parameters, in the order of k:", "PARAMETERS", &v.parameters);
+    names(
+        &mut out,
+        "The positions, in the order of p:",
+        "POSITIONS",
+        &v.positions,
+    );
+    names(
+        &mut out,
+        "Their rates, in the order of q:",
+        "RATES",
+        &v.rates,
+    );
+    names(
+        &mut out,
+        "The parameters, in the order of k:",
+        "PARAMETERS",
+        &v.parameters,
+    );
     if !v.functions.is_empty() {
-        let list: Vec<String> = v.functions.iter().map(|f| c_string(equations.pool.name_of(f.symbol).unwrap_or_default())).collect();
+        let list: Vec<String> = v
+            .functions
+            .iter()
+            .map(|f| c_string(equations.pool.name_of(f.symbol).unwrap_or_default()))
+            .collect();
         let _ = writeln!(
             out,
             "\n/* The unknown functions as applied: a function taking f calls f(i, arguments) for the value\n   \
@@ -128,7 +153,11 @@ fn header(equations: &Equations, source: &str) -> String {
         );
     }
     if equations.constraint_rows() > 0 {
-        let rows: Vec<String> = equations.constraint_names.iter().map(|n| c_string(n)).collect();
+        let rows: Vec<String> = equations
+            .constraint_names
+            .iter()
+            .map(|n| c_string(n))
+            .collect();
         let _ = writeln!(
             out,
             "\n/* The constraint rows, which are also the multipliers' names. */\nstatic const char *const CONSTRAINT_NAMES[CONSTRAINTS] = {{{}}};",
@@ -146,31 +175,52 @@ fn names(out: &mut String, title: &str, constant: &str, list: &[Variable]) {
     }
     let _ = writeln!(out, "\n/* {title}");
     for v in list {
-        let _ = writeln!(out, "   - {}: {}", comment(&v.name), comment(&described(&v.meaning, v.given)));
+        let _ = writeln!(
+            out,
+            "   - {}: {}",
+            comment(&v.name),
+            comment(&described(&v.meaning, v.given))
+        );
     }
     let quoted: Vec<String> = list.iter().map(|v| c_string(&v.name)).collect();
-    let _ = writeln!(out, "*/\nstatic const char *const {constant}[{}] = {{{}}};", list.len(), quoted.join(", "));
+    let _ = writeln!(
+        out,
+        "*/\nstatic const char *const {constant}[{}] = {{{}}};",
+        list.len(),
+        quoted.join(", ")
+    );
 }
 
 fn c_string(text: &str) -> String {
     format!("\"{}\"", text.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
-
 /// `forward_dynamics`: the articulated-body recursion for a tree, the KKT system for loops.
 fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {
-    let argument = if routines.uses_functions() { format!(", {FUNCTION_ARGUMENT}") } else { String::new() };
+    let argument = if routines.uses_functions() {
+        format!(", {FUNCTION_ARGUMENT}")
+    } else {
+        String::new()
+    };
     let call = |routine: &Routine, arguments: &str| {
         let time = if routine.uses_time { "t, " } else { "" };
         let f = if routine.uses_functions { ", f" } else { "" };
         format!("{time}{arguments}{f}")
     };
     let mass = call(&routines.mass, "p, k, m");
-    let rhs_f = if routines.right_hand_side.uses_functions { ", f" } else { "" };
+    let rhs_f = if routines.right_hand_side.uses_functions {
+        ", f"
+    } else {
+        ""
+    };
     let mut out = MESSAGES.to_string();
     match &routines.loops {
         None => {
-            let body = routines.accelerations.as_ref().map(|a| a.body(symbols, &C, &C, "qdd")).unwrap_or_default();
+            let body = routines
+                .accelerations
+                .as_ref()
+                .map(|a| a.body(symbols, &C, &C, "qdd"))
+                .unwrap_or_default();
             let _ = write!(
                 out,
                 "\n/* The rates' derivatives q' = M^-1 (S + F), by the articulated-body recursion (no solve). */\n\
@@ -233,7 +283,6 @@ static int all_finite(const double *x, int count) {
     return 1;
 }
 "#;
-
 
 const KKT: &str = r#"
 /* Unknowns of the KKT system: the accelerations, then the multipliers. */

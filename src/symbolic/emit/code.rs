@@ -24,27 +24,63 @@ impl Routine {
     fn new(symbols: &Symbols, length: usize, outputs: Vec<(usize, Vec<ExprId>)>) -> Routine {
         let outputs: Vec<(usize, Vec<ExprId>)> = outputs
             .into_iter()
-            .map(|(target, terms)| (target, terms.into_iter().filter(|&t| !symbols.pool.is_zero(t)).collect::<Vec<_>>()))
+            .map(|(target, terms)| {
+                (
+                    target,
+                    terms
+                        .into_iter()
+                        .filter(|&t| !symbols.pool.is_zero(t))
+                        .collect::<Vec<_>>(),
+                )
+            })
             .filter(|(_, terms)| !terms.is_empty())
             .collect();
-        let roots: Vec<ExprId> = outputs.iter().flat_map(|(_, terms)| terms.iter().copied()).collect();
+        let roots: Vec<ExprId> = outputs
+            .iter()
+            .flat_map(|(_, terms)| terms.iter().copied())
+            .collect();
         let listing = Listing::new(symbols, &roots);
         let uses_time = listing.uses(symbols, |r| r == Role::Time);
         let uses_functions = listing.uses(symbols, |r| matches!(r, Role::Function(_)));
-        Routine { listing, outputs, mirrors: Vec::new(), length, uses_time, uses_functions }
+        Routine {
+            listing,
+            outputs,
+            mirrors: Vec::new(),
+            length,
+            uses_time,
+            uses_functions,
+        }
     }
 
     /// The statements of the function's body: the output zeroed (only nonzero entries are
     /// assigned), one declaration per temporary, one assignment per output.
-    pub fn body<L: Language>(&self, symbols: &Symbols, language: &L, syntax: &dyn Statements, array: &str) -> String {
-        let printer = Printer { symbols, listing: &self.listing, language };
+    pub fn body<L: Language>(
+        &self,
+        symbols: &Symbols,
+        language: &L,
+        syntax: &dyn Statements,
+        array: &str,
+    ) -> String {
+        let printer = Printer {
+            symbols,
+            listing: &self.listing,
+            language,
+        };
         let mut out = String::new();
         let _ = writeln!(out, "    {}", syntax.zero(array, self.length));
         for (k, &id) in self.listing.temporaries.iter().enumerate() {
-            let _ = writeln!(out, "    {}", syntax.declare(&language.temporary(k), &printer.definition(id)));
+            let _ = writeln!(
+                out,
+                "    {}",
+                syntax.declare(&language.temporary(k), &printer.definition(id))
+            );
         }
         for (target, terms) in &self.outputs {
-            let _ = writeln!(out, "    {array}[{target}] = {};", printer.sum(terms, "0.0"));
+            let _ = writeln!(
+                out,
+                "    {array}[{target}] = {};",
+                printer.sum(terms, "0.0")
+            );
         }
         for (target, source) in &self.mirrors {
             let _ = writeln!(out, "    {array}[{target}] = {array}[{source}];");
@@ -76,28 +112,77 @@ impl Routines {
     pub fn new(symbols: &Symbols, equations: &Equations) -> Routines {
         let n = equations.dimension();
         let upper = upper_triangle(equations);
-        let mut mass = Routine::new(symbols, n * n, upper.iter().map(|&(i, j, id)| (i * n + j, vec![id])).collect());
-        let assigned: std::collections::HashSet<usize> = mass.outputs.iter().map(|(target, _)| *target).collect();
-        mass.mirrors = upper.iter().filter(|&&(i, j, _)| i < j && assigned.contains(&(i * n + j))).map(|&(i, j, _)| (j * n + i, i * n + j)).collect();
-        let sums = (0..n).map(|i| (i, vec![equations.second_member[i], equations.forces[i]])).collect();
+        let mut mass = Routine::new(
+            symbols,
+            n * n,
+            upper
+                .iter()
+                .map(|&(i, j, id)| (i * n + j, vec![id]))
+                .collect(),
+        );
+        let assigned: std::collections::HashSet<usize> =
+            mass.outputs.iter().map(|(target, _)| *target).collect();
+        mass.mirrors = upper
+            .iter()
+            .filter(|&&(i, j, _)| i < j && assigned.contains(&(i * n + j)))
+            .map(|&(i, j, _)| (j * n + i, i * n + j))
+            .collect();
+        let sums = (0..n)
+            .map(|i| (i, vec![equations.second_member[i], equations.forces[i]]))
+            .collect();
         let right_hand_side = Routine::new(symbols, n, sums);
         let loops = (equations.constraint_rows() > 0).then(|| {
-            let delta = Routine::new(symbols, equations.constraints.len(), equations.constraints.iter().enumerate().map(|(k, &id)| (k, vec![id])).collect());
-            let bias = Routine::new(symbols, equations.constraint_rows(), equations.constraint_bias.iter().enumerate().map(|(r, &id)| (r, vec![id])).collect());
+            let delta = Routine::new(
+                symbols,
+                equations.constraints.len(),
+                equations
+                    .constraints
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &id)| (k, vec![id]))
+                    .collect(),
+            );
+            let bias = Routine::new(
+                symbols,
+                equations.constraint_rows(),
+                equations
+                    .constraint_bias
+                    .iter()
+                    .enumerate()
+                    .map(|(r, &id)| (r, vec![id]))
+                    .collect(),
+            );
             (delta, bias)
         });
         let accelerations = equations
             .accelerations
             .as_ref()
             .filter(|_| loops.is_none())
-            .map(|a| Routine::new(symbols, n, a.iter().enumerate().map(|(i, &id)| (i, vec![id])).collect()));
-        Routines { mass, right_hand_side, loops, accelerations }
+            .map(|a| {
+                Routine::new(
+                    symbols,
+                    n,
+                    a.iter().enumerate().map(|(i, &id)| (i, vec![id])).collect(),
+                )
+            });
+        Routines {
+            mass,
+            right_hand_side,
+            loops,
+            accelerations,
+        }
     }
 
     /// Whether any function needs the unknown functions' values: then forward dynamics does.
     pub fn uses_functions(&self) -> bool {
-        let loops = self.loops.as_ref().is_some_and(|(d, b)| d.uses_functions || b.uses_functions);
-        let accelerations = self.accelerations.as_ref().is_some_and(|a| a.uses_functions);
+        let loops = self
+            .loops
+            .as_ref()
+            .is_some_and(|(d, b)| d.uses_functions || b.uses_functions);
+        let accelerations = self
+            .accelerations
+            .as_ref()
+            .is_some_and(|a| a.uses_functions);
         self.mass.uses_functions || self.right_hand_side.uses_functions || loops || accelerations
     }
 }

@@ -14,10 +14,20 @@ use crate::symbolic::Equations;
 pub fn json(equations: &Equations, source: &str) -> String {
     let symbols = Symbols::new(equations);
     let listing = Listing::new(&symbols, &equations.roots());
-    let index: HashMap<ExprId, usize> = listing.order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+    let index: HashMap<ExprId, usize> = listing
+        .order
+        .iter()
+        .enumerate()
+        .map(|(k, &id)| (id, k))
+        .collect();
     let at = |id: &ExprId| index[id];
     let n = equations.dimension();
-    let rows = |matrix: &[ExprId]| -> Vec<Vec<usize>> { matrix.chunks(n.max(1)).map(|row| row.iter().map(at).collect()).collect() };
+    let rows = |matrix: &[ExprId]| -> Vec<Vec<usize>> {
+        matrix
+            .chunks(n.max(1))
+            .map(|row| row.iter().map(at).collect())
+            .collect()
+    };
     let document = json!({
         "source": source,
         "equations": "M(p) q' = S(p, q) + F(p, q, t) + Delta^T Lambda, Delta(p) q' + Delta_bias(p, q) = 0",

@@ -3,13 +3,18 @@
 
 use std::fmt::Write;
 
-use super::shared::{described, nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role, Symbols};
+use super::shared::{
+    described, nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax,
+    Precedence, Printer, Role, Symbols,
+};
 use crate::symbolic::expr::{ExprId, Function};
 use crate::symbolic::Equations;
 
 const GREEK: [&str; 35] = [
-    "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa", "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau",
-    "upsilon", "phi", "chi", "psi", "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi", "Psi", "Omega", "varphi",
+    "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa",
+    "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi",
+    "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi", "Psi",
+    "Omega", "varphi",
 ];
 
 struct Latex<'a> {
@@ -42,7 +47,11 @@ impl Language for Latex<'_> {
         identifier(&format!("{}{k}", self.prefix))
     }
     fn unknown_function(&self, _index: usize, name: &str, arguments: &[String]) -> String {
-        format!("\\operatorname{{{}}}\\left({}\\right)", escape(name), arguments.join(", "))
+        format!(
+            "\\operatorname{{{}}}\\left({}\\right)",
+            escape(name),
+            arguments.join(", ")
+        )
     }
     fn function(&self, f: Function, argument: &str) -> String {
         let command = match f {
@@ -63,11 +72,17 @@ impl Language for Latex<'_> {
         format!("\\operatorname{{atan2}}\\left({y}, {x}\\right)")
     }
     fn power_syntax(&self) -> PowerSyntax {
-        PowerSyntax::Operator { exponent: Precedence::Lowest }
+        PowerSyntax::Operator {
+            exponent: Precedence::Lowest,
+        }
     }
     fn power_operator(&self, base: &str, exponent: &str) -> String {
         // A fraction is an atom for the printer but needs parentheses as a base to be read right.
-        let base = if base.starts_with("\\frac") { self.parenthesize(base) } else { base.to_string() };
+        let base = if base.starts_with("\\frac") {
+            self.parenthesize(base)
+        } else {
+            base.to_string()
+        };
         format!("{base}^{{{exponent}}}")
     }
     fn times(&self) -> &'static str {
@@ -90,16 +105,40 @@ pub fn latex(equations: &Equations, source: &str) -> String {
     let entries = nonzero_entries(equations);
     let roots: Vec<ExprId> = entries.iter().map(|(_, id)| *id).collect();
     let listing = Listing::new(&symbols, &roots);
-    let language = Latex { prefix: temporary_prefix(&symbols.all_names()), equations };
-    let printer = Printer { symbols: &symbols, listing: &listing, language: &language };
+    let language = Latex {
+        prefix: temporary_prefix(&symbols.all_names()),
+        equations,
+    };
+    let printer = Printer {
+        symbols: &symbols,
+        listing: &listing,
+        language: &language,
+    };
     let mut out = preamble(source);
     variables(&mut out, equations, &language);
-    let mut lines: Vec<String> = listing.temporaries.iter().enumerate().map(|(k, &id)| format!("{} &= {}", language.temporary(k), printer.definition(id))).collect();
-    lines.extend(entries.iter().map(|&(entry, id)| format!("{} &= {}", label(entry, equations), printer.expression(id))));
+    let mut lines: Vec<String> = listing
+        .temporaries
+        .iter()
+        .enumerate()
+        .map(|(k, &id)| format!("{} &= {}", language.temporary(k), printer.definition(id)))
+        .collect();
+    lines.extend(
+        entries.iter().map(|&(entry, id)| {
+            format!("{} &= {}", label(entry, equations), printer.expression(id))
+        }),
+    );
     if !lines.is_empty() {
-        let _ = writeln!(out, "\\begin{{align*}}\n{}\n\\end{{align*}}", lines.join(" \\\\\n"));
+        let _ = writeln!(
+            out,
+            "\\begin{{align*}}\n{}\n\\end{{align*}}",
+            lines.join(" \\\\\n")
+        );
     }
-    let _ = writeln!(out, "Size: {} distinct nodes.\n\\end{{document}}", listing.order.len());
+    let _ = writeln!(
+        out,
+        "Size: {} distinct nodes.\n\\end{{document}}",
+        listing.order.len()
+    );
     out
 }
 
@@ -121,16 +160,32 @@ fn variables(out: &mut String, equations: &Equations, language: &Latex) {
     let v = &equations.variables;
     let mut items: Vec<String> = Vec::new();
     for (i, p) in v.positions.iter().enumerate() {
-        items.push(format!("${}$ (position {}): {}", language.symbol(Role::Position(i), &p.name), i + 1, prose(&p.meaning)));
+        items.push(format!(
+            "${}$ (position {}): {}",
+            language.symbol(Role::Position(i), &p.name),
+            i + 1,
+            prose(&p.meaning)
+        ));
     }
     for (i, r) in v.rates.iter().enumerate() {
-        items.push(format!("${}$: {}", language.symbol(Role::Rate(i), &r.name), prose(&r.meaning)));
+        items.push(format!(
+            "${}$: {}",
+            language.symbol(Role::Rate(i), &r.name),
+            prose(&r.meaning)
+        ));
     }
     for p in &v.parameters {
-        items.push(format!("${}$: {}", identifier(&p.name), prose(&described(&p.meaning, p.given))));
+        items.push(format!(
+            "${}$: {}",
+            identifier(&p.name),
+            prose(&described(&p.meaning, p.given))
+        ));
     }
     for f in &v.functions {
-        items.push(format!("$\\operatorname{{{}}}$: an unknown function of the program", escape(&f.name)));
+        items.push(format!(
+            "$\\operatorname{{{}}}$: an unknown function of the program",
+            escape(&f.name)
+        ));
     }
     items.push("$t$: time".to_string());
     let _ = writeln!(out, "\\subsection*{{Variables}}\n\\begin{{itemize}}");
@@ -159,7 +214,11 @@ fn coordinate(name: &str, dotted: bool) -> String {
     if !join.is_empty() {
         subscripts.push(format!("\\mathrm{{{}}}", escape(join)));
     }
-    let head = if dotted { format!("\\dot{{{head}}}") } else { head };
+    let head = if dotted {
+        format!("\\dot{{{head}}}")
+    } else {
+        head
+    };
     compose(head, &subscripts)
 }
 
@@ -175,7 +234,11 @@ fn parts(name: &str) -> (String, Vec<String>) {
     let mut pieces = name.split('_');
     let first = pieces.next().unwrap_or_default();
     let letters = first.trim_end_matches(|c: char| c.is_ascii_digit());
-    let (letters, digits) = if letters.is_empty() { (first, "") } else { (letters, &first[letters.len()..]) };
+    let (letters, digits) = if letters.is_empty() {
+        (first, "")
+    } else {
+        (letters, &first[letters.len()..])
+    };
     let mut subscripts: Vec<String> = Vec::new();
     if !digits.is_empty() {
         subscripts.push(digits.to_string());

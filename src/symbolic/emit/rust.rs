@@ -58,7 +58,13 @@ pub fn rust(equations: &Equations, source: &str) -> String {
     let symbols = Symbols::new(equations);
     let routines = Routines::new(&symbols, equations);
     let mut out = header(equations, source);
-    let with_f = |routine: &Routine| if routine.uses_functions { format!(", {FUNCTION_ARGUMENT}") } else { String::new() };
+    let with_f = |routine: &Routine| {
+        if routine.uses_functions {
+            format!(", {FUNCTION_ARGUMENT}")
+        } else {
+            String::new()
+        }
+    };
     let time = |routine: &Routine| if routine.uses_time { "t: f64, " } else { "" };
     let mass = &routines.mass;
     let _ = writeln!(
@@ -113,11 +119,33 @@ fn header(equations: &Equations, source: &str) -> String {
         comment(source),
         equations.dimension()
     );
-    names(&mut out, "The positions, in the order of `p`:", "POSITIONS", "N", &v.positions);
-    names(&mut out, "Their rates, in the order of `q`:", "RATES", "N", &v.rates);
-    names(&mut out, "The parameters, in the order of `k`:", "PARAMETERS", &v.parameters.len().to_string(), &v.parameters);
+    names(
+        &mut out,
+        "The positions, in the order of `p`:",
+        "POSITIONS",
+        "N",
+        &v.positions,
+    );
+    names(
+        &mut out,
+        "Their rates, in the order of `q`:",
+        "RATES",
+        "N",
+        &v.rates,
+    );
+    names(
+        &mut out,
+        "The parameters, in the order of `k`:",
+        "PARAMETERS",
+        &v.parameters.len().to_string(),
+        &v.parameters,
+    );
     if !v.functions.is_empty() {
-        let list: Vec<String> = v.functions.iter().map(|f| format!("{:?}", equations.pool.name_of(f.symbol).unwrap_or_default())).collect();
+        let list: Vec<String> = v
+            .functions
+            .iter()
+            .map(|f| format!("{:?}", equations.pool.name_of(f.symbol).unwrap_or_default()))
+            .collect();
         let _ = writeln!(
             out,
             "\n/// The unknown functions as applied: a function taking `f` calls `f(i, &arguments)` for the\n\
@@ -127,7 +155,11 @@ fn header(equations: &Equations, source: &str) -> String {
         );
     }
     if equations.constraint_rows() > 0 {
-        let rows: Vec<String> = equations.constraint_names.iter().map(|n| format!("{n:?}")).collect();
+        let rows: Vec<String> = equations
+            .constraint_names
+            .iter()
+            .map(|n| format!("{n:?}"))
+            .collect();
         let _ = writeln!(
             out,
             "\n/// Number of constraint rows (six per complementary link).\npub const CONSTRAINTS: usize = {};\n\
@@ -142,17 +174,29 @@ fn header(equations: &Equations, source: &str) -> String {
 fn names(out: &mut String, title: &str, constant: &str, length: &str, list: &[Variable]) {
     let _ = writeln!(out, "\n/// {title}");
     for v in list {
-        let _ = writeln!(out, "/// - `{}`: {}", v.name, comment(&described(&v.meaning, v.given)));
+        let _ = writeln!(
+            out,
+            "/// - `{}`: {}",
+            v.name,
+            comment(&described(&v.meaning, v.given))
+        );
     }
     let quoted: Vec<String> = list.iter().map(|v| format!("{:?}", v.name)).collect();
-    let _ = writeln!(out, "pub const {constant}: [&str; {length}] = [{}];", quoted.join(", "));
+    let _ = writeln!(
+        out,
+        "pub const {constant}: [&str; {length}] = [{}];",
+        quoted.join(", ")
+    );
 }
-
 
 /// `forward_dynamics`: the articulated-body recursion for a tree, the KKT system for loops.
 fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {
     let f = routines.uses_functions();
-    let argument = if f { format!(", {FUNCTION_ARGUMENT}") } else { String::new() };
+    let argument = if f {
+        format!(", {FUNCTION_ARGUMENT}")
+    } else {
+        String::new()
+    };
     let call = |routine: &Routine, arguments: &str| {
         let time = if routine.uses_time { "t, " } else { "" };
         let f = if routine.uses_functions { ", f" } else { "" };
@@ -160,7 +204,14 @@ fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {
     };
     let mass = call(&routines.mass, "p, k, &mut m");
     // `right_hand_side` always takes the time.
-    let rhs = format!("t, p, q, k, &mut rhs{}", if routines.right_hand_side.uses_functions { ", f" } else { "" });
+    let rhs = format!(
+        "t, p, q, k, &mut rhs{}",
+        if routines.right_hand_side.uses_functions {
+            ", f"
+        } else {
+            ""
+        }
+    );
     match &routines.loops {
         None => format!(
             "\n/// The rates' derivatives q' = M⁻¹ (S + F), by the articulated-body recursion (no solve).\n\
@@ -208,7 +259,6 @@ fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {
         }
     }
 }
-
 
 const KKT: &str = r#"
 /// Unknowns of the KKT system: the accelerations, then the multipliers.

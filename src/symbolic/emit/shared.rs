@@ -41,11 +41,31 @@ impl<'a> Symbols<'a> {
             }
         };
         add(variables.time, Role::Time);
-        variables.positions.iter().enumerate().for_each(|(i, v)| add(v.symbol, Role::Position(i)));
-        variables.rates.iter().enumerate().for_each(|(i, v)| add(v.symbol, Role::Rate(i)));
-        variables.parameters.iter().enumerate().for_each(|(i, v)| add(v.symbol, Role::Parameter(i)));
-        variables.functions.iter().enumerate().for_each(|(i, f)| add(f.symbol, Role::Function(i)));
-        Symbols { pool, variables, roles }
+        variables
+            .positions
+            .iter()
+            .enumerate()
+            .for_each(|(i, v)| add(v.symbol, Role::Position(i)));
+        variables
+            .rates
+            .iter()
+            .enumerate()
+            .for_each(|(i, v)| add(v.symbol, Role::Rate(i)));
+        variables
+            .parameters
+            .iter()
+            .enumerate()
+            .for_each(|(i, v)| add(v.symbol, Role::Parameter(i)));
+        variables
+            .functions
+            .iter()
+            .enumerate()
+            .for_each(|(i, f)| add(f.symbol, Role::Function(i)));
+        Symbols {
+            pool,
+            variables,
+            roles,
+        }
     }
 
     /// The role of a symbol node; `None` for other nodes (and for a symbol the lowering did not
@@ -79,8 +99,16 @@ impl<'a> Symbols<'a> {
     /// Every variable name, for choosing names that cannot collide with them.
     pub fn all_names(&self) -> Vec<String> {
         let v = self.variables;
-        let names = v.positions.iter().chain(&v.rates).chain(&v.parameters).map(|v| v.name.clone());
-        names.chain(v.functions.iter().map(|f| f.name.clone())).chain(["t".to_string()]).collect()
+        let names = v
+            .positions
+            .iter()
+            .chain(&v.rates)
+            .chain(&v.parameters)
+            .map(|v| v.name.clone());
+        names
+            .chain(v.functions.iter().map(|f| f.name.clone()))
+            .chain(["t".to_string()])
+            .collect()
     }
 }
 
@@ -108,17 +136,35 @@ impl Listing {
         }
         let worth_naming = |id: ExprId| match symbols.pool.node(id) {
             Node::Constant(_) => false,
-            Node::Symbol(_) => symbols.role(id).is_some_and(|r| matches!(r, Role::Function(_))),
+            Node::Symbol(_) => symbols
+                .role(id)
+                .is_some_and(|r| matches!(r, Role::Function(_))),
             _ => true,
         };
-        let temporaries: Vec<ExprId> = order.iter().copied().filter(|&id| uses.get(&id).copied().unwrap_or(0) > 1 && worth_naming(id)).collect();
-        let named = temporaries.iter().enumerate().map(|(k, &id)| (id, k)).collect();
-        Listing { order, temporaries, named }
+        let temporaries: Vec<ExprId> = order
+            .iter()
+            .copied()
+            .filter(|&id| uses.get(&id).copied().unwrap_or(0) > 1 && worth_naming(id))
+            .collect();
+        let named = temporaries
+            .iter()
+            .enumerate()
+            .map(|(k, &id)| (id, k))
+            .collect();
+        Listing {
+            order,
+            temporaries,
+            named,
+        }
     }
 
     /// The nodes with no temporary: every expression written out in full.
     pub fn inline(symbols: &Symbols, roots: &[ExprId]) -> Listing {
-        Listing { order: reachable(symbols, roots), temporaries: Vec::new(), named: HashMap::new() }
+        Listing {
+            order: reachable(symbols, roots),
+            temporaries: Vec::new(),
+            named: HashMap::new(),
+        }
     }
 
     pub fn temporary(&self, id: ExprId) -> Option<usize> {
@@ -127,7 +173,9 @@ impl Listing {
 
     /// Whether any of the nodes is the symbol with this role.
     pub fn uses(&self, symbols: &Symbols, wanted: impl Fn(Role) -> bool) -> bool {
-        self.order.iter().any(|&id| symbols.role(id).is_some_and(&wanted))
+        self.order
+            .iter()
+            .any(|&id| symbols.role(id).is_some_and(&wanted))
     }
 }
 
@@ -141,7 +189,10 @@ fn reachable(symbols: &Symbols, roots: &[ExprId]) -> Vec<ExprId> {
 pub fn temporary_prefix(names: &[String]) -> String {
     let mut prefix = "x".to_string();
     let clashes = |prefix: &str| {
-        names.iter().any(|n| n.strip_prefix(prefix).is_some_and(|rest| !rest.is_empty() && rest.bytes().all(|b| b.is_ascii_digit())))
+        names.iter().any(|n| {
+            n.strip_prefix(prefix)
+                .is_some_and(|rest| !rest.is_empty() && rest.bytes().all(|b| b.is_ascii_digit()))
+        })
     };
     while clashes(&prefix) {
         prefix.push('x');
@@ -232,7 +283,11 @@ impl<L: Language> Printer<'_, L> {
 
     /// The sum of some expressions (zero terms left out), `zero` when none is left.
     pub fn sum(&self, terms: &[ExprId], zero: &str) -> String {
-        let terms: Vec<ExprId> = terms.iter().copied().filter(|&t| !self.symbols.pool.is_zero(t)).collect();
+        let terms: Vec<ExprId> = terms
+            .iter()
+            .copied()
+            .filter(|&t| !self.symbols.pool.is_zero(t))
+            .collect();
         match terms.as_slice() {
             [] => zero.to_string(),
             [first, rest @ ..] => {
@@ -271,24 +326,49 @@ impl<L: Language> Printer<'_, L> {
             Node::Symbol(_) => match self.symbols.role(id) {
                 Some(Role::Function(k)) => {
                     let use_ = &self.symbols.variables.functions[k];
-                    let arguments: Vec<String> = use_.arguments.iter().map(|&a| self.expression(a)).collect();
+                    let arguments: Vec<String> =
+                        use_.arguments.iter().map(|&a| self.expression(a)).collect();
                     (language.unknown_function(k, &use_.name, &arguments), Atom)
                 }
                 Some(role) => (language.symbol(role, &self.symbols.name(id)), Atom),
                 None => (self.symbols.name(id), Atom),
             },
             Node::Add(a, b) => self.render_sum(a, b),
-            Node::Mul(a, b) => (format!("{}{}{}", self.at_least(a, Product), language.times(), self.at_least(b, language.product_operand())), Product),
+            Node::Mul(a, b) => (
+                format!(
+                    "{}{}{}",
+                    self.at_least(a, Product),
+                    language.times(),
+                    self.at_least(b, language.product_operand())
+                ),
+                Product,
+            ),
             Node::Div(a, b) => match language.fraction(&self.expression(a), &self.expression(b)) {
                 Some(fraction) => (fraction, Atom),
-                None => (format!("{} / {}", self.at_least(a, Product), self.at_least(b, Unary)), Product),
+                None => (
+                    format!(
+                        "{} / {}",
+                        self.at_least(a, Product),
+                        self.at_least(b, Unary)
+                    ),
+                    Product,
+                ),
             },
             Node::Neg(a) => (format!("-{}", self.at_least(a, Power)), Unary),
             Node::Pow(a, b) => match language.power_syntax() {
-                PowerSyntax::Call => (language.power_call(&self.expression(a), &self.expression(b)), Atom),
-                PowerSyntax::Operator { exponent } => (language.power_operator(&self.at_least(a, Atom), &self.at_least(b, exponent)), Power),
+                PowerSyntax::Call => (
+                    language.power_call(&self.expression(a), &self.expression(b)),
+                    Atom,
+                ),
+                PowerSyntax::Operator { exponent } => (
+                    language.power_operator(&self.at_least(a, Atom), &self.at_least(b, exponent)),
+                    Power,
+                ),
             },
-            Node::Atan2(y, x) => (language.atan2(&self.expression(y), &self.expression(x)), Atom),
+            Node::Atan2(y, x) => (
+                language.atan2(&self.expression(y), &self.expression(x)),
+                Atom,
+            ),
             Node::Apply(f, a) => (language.function(f, &self.expression(a)), Atom),
         }
     }
@@ -296,7 +376,11 @@ impl<L: Language> Printer<'_, L> {
     /// `a + b`, written `a - c` when b is −c (or a negative constant), and `b - c` when a is.
     /// Both are the same floating-point operation as the sum.
     fn render_sum(&self, a: ExprId, b: ExprId) -> (String, Precedence) {
-        let (first, second) = if self.negated(a).is_some() && self.negated(b).is_none() { (b, a) } else { (a, b) };
+        let (first, second) = if self.negated(a).is_some() && self.negated(b).is_none() {
+            (b, a)
+        } else {
+            (a, b)
+        };
         let left = self.at_least(first, Precedence::Sum);
         let text = match self.negated(second) {
             Some(Negated::Node(c)) => format!("{left} - {}", self.at_least(c, Precedence::Product)),
@@ -313,7 +397,9 @@ impl<L: Language> Printer<'_, L> {
         }
         match self.symbols.pool.node(id) {
             Node::Neg(c) => Some(Negated::Node(c)),
-            Node::Constant(bits) if f64::from_bits(bits) < 0.0 => Some(Negated::Constant(-f64::from_bits(bits))),
+            Node::Constant(bits) if f64::from_bits(bits) < 0.0 => {
+                Some(Negated::Constant(-f64::from_bits(bits)))
+            }
             _ => None,
         }
     }
@@ -344,7 +430,10 @@ enum Negated {
 /// The upper triangle of M (i ≤ j), row by row, as (i, j, entry).
 pub fn upper_triangle(equations: &Equations) -> Vec<(usize, usize, ExprId)> {
     let n = equations.dimension();
-    (0..n).flat_map(|i| (i..n).map(move |j| (i, j))).map(|(i, j)| (i, j, equations.mass[i * n + j])).collect()
+    (0..n)
+        .flat_map(|i| (i..n).map(move |j| (i, j)))
+        .map(|(i, j)| (i, j, equations.mass[i * n + j]))
+        .collect()
 }
 
 /// An entry of the equations, by 0-based indices.
@@ -366,12 +455,46 @@ pub enum Entry {
 /// order M, S, F, Δ, Δ̇q, then for a tree the accelerations q'.
 pub fn nonzero_entries(equations: &Equations) -> Vec<(Entry, ExprId)> {
     let n = equations.dimension();
-    let mut entries: Vec<(Entry, ExprId)> = upper_triangle(equations).into_iter().map(|(i, j, id)| (Entry::Mass(i, j), id)).collect();
-    entries.extend(equations.second_member.iter().enumerate().map(|(i, &id)| (Entry::SecondMember(i), id)));
-    entries.extend(equations.forces.iter().enumerate().map(|(i, &id)| (Entry::Force(i), id)));
-    entries.extend(equations.constraints.iter().enumerate().map(|(k, &id)| (Entry::Constraint(k / n, k % n), id)));
-    entries.extend(equations.constraint_bias.iter().enumerate().map(|(r, &id)| (Entry::Bias(r), id)));
-    entries.extend(equations.accelerations.iter().flatten().enumerate().map(|(i, &id)| (Entry::Acceleration(i), id)));
+    let mut entries: Vec<(Entry, ExprId)> = upper_triangle(equations)
+        .into_iter()
+        .map(|(i, j, id)| (Entry::Mass(i, j), id))
+        .collect();
+    entries.extend(
+        equations
+            .second_member
+            .iter()
+            .enumerate()
+            .map(|(i, &id)| (Entry::SecondMember(i), id)),
+    );
+    entries.extend(
+        equations
+            .forces
+            .iter()
+            .enumerate()
+            .map(|(i, &id)| (Entry::Force(i), id)),
+    );
+    entries.extend(
+        equations
+            .constraints
+            .iter()
+            .enumerate()
+            .map(|(k, &id)| (Entry::Constraint(k / n, k % n), id)),
+    );
+    entries.extend(
+        equations
+            .constraint_bias
+            .iter()
+            .enumerate()
+            .map(|(r, &id)| (Entry::Bias(r), id)),
+    );
+    entries.extend(
+        equations
+            .accelerations
+            .iter()
+            .flatten()
+            .enumerate()
+            .map(|(i, &id)| (Entry::Acceleration(i), id)),
+    );
     entries.retain(|(_, id)| !equations.pool.is_zero(*id));
     entries
 }

@@ -5,19 +5,39 @@
 use std::collections::HashSet;
 use std::fmt::Write;
 
-use super::shared::{nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role, Symbols};
+use super::shared::{
+    nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax, Precedence, Printer,
+    Role, Symbols,
+};
 use crate::symbolic::expr::{ExprId, Function};
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
 
 const KEYWORDS: [&str; 35] = [
-    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class", "continue", "def", "del", "elif", "else", "except", "finally",
-    "for", "from", "global", "if", "import", "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return", "try", "while", "with", "yield",
+    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class", "continue",
+    "def", "del", "elif", "else", "except", "finally", "for", "from", "global", "if", "import",
+    "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return", "try", "while",
+    "with", "yield",
 ];
 
 /// Names the module defines itself.
-const RESERVED: [&str; 15] =
-    ["sp", "M", "S", "F", "Delta", "Delta_bias", "accelerations", "positions", "rates", "parameters", "given", "functions", "constraint_names", "source", "t"];
+const RESERVED: [&str; 15] = [
+    "sp",
+    "M",
+    "S",
+    "F",
+    "Delta",
+    "Delta_bias",
+    "accelerations",
+    "positions",
+    "rates",
+    "parameters",
+    "given",
+    "functions",
+    "constraint_names",
+    "source",
+    "t",
+];
 
 /// The Python name of every variable.
 struct PythonNames {
@@ -32,7 +52,11 @@ struct PythonNames {
 impl PythonNames {
     fn new(equations: &Equations) -> PythonNames {
         let v = &equations.variables;
-        let mut taken: HashSet<String> = KEYWORDS.iter().chain(&RESERVED).map(|s| s.to_string()).collect();
+        let mut taken: HashSet<String> = KEYWORDS
+            .iter()
+            .chain(&RESERVED)
+            .map(|s| s.to_string())
+            .collect();
         let mut unique = |name: &str| {
             let mut candidate = sanitize(name);
             while taken.contains(&candidate) {
@@ -41,21 +65,39 @@ impl PythonNames {
             taken.insert(candidate.clone());
             candidate
         };
-        let mut names = |list: &[Variable]| list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>();
-        let (positions, rates, parameters) = (names(&v.positions), names(&v.rates), names(&v.parameters));
+        let mut names =
+            |list: &[Variable]| list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>();
+        let (positions, rates, parameters) =
+            (names(&v.positions), names(&v.rates), names(&v.parameters));
         let mut functions: Vec<(String, String)> = Vec::new();
         for f in &v.functions {
             if !functions.iter().any(|(name, _)| *name == f.name) {
                 functions.push((f.name.clone(), unique(&f.name)));
             }
         }
-        let every: Vec<String> = positions.iter().chain(&rates).chain(&parameters).chain(functions.iter().map(|(_, p)| p)).cloned().collect();
+        let every: Vec<String> = positions
+            .iter()
+            .chain(&rates)
+            .chain(&parameters)
+            .chain(functions.iter().map(|(_, p)| p))
+            .cloned()
+            .collect();
         let temporary_prefix = temporary_prefix(&every);
-        PythonNames { positions, rates, parameters, functions, temporary_prefix }
+        PythonNames {
+            positions,
+            rates,
+            parameters,
+            functions,
+            temporary_prefix,
+        }
     }
 
     fn function<'a>(&'a self, name: &'a str) -> &'a str {
-        self.functions.iter().find(|(n, _)| n == name).map(|(_, p)| p.as_str()).unwrap_or(name)
+        self.functions
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, p)| p.as_str())
+            .unwrap_or(name)
     }
 }
 
@@ -109,7 +151,9 @@ impl Language for Python<'_> {
         format!("sp.atan2({y}, {x})")
     }
     fn power_syntax(&self) -> PowerSyntax {
-        PowerSyntax::Operator { exponent: Precedence::Unary }
+        PowerSyntax::Operator {
+            exponent: Precedence::Unary,
+        }
     }
     fn power_operator(&self, base: &str, exponent: &str) -> String {
         format!("{base}**{exponent}")
@@ -124,19 +168,32 @@ pub fn sympy(equations: &Equations, source: &str) -> String {
     let roots: Vec<ExprId> = entries.iter().map(|(_, id)| *id).collect();
     let listing = Listing::new(&symbols, &roots);
     let language = Python { names: &names };
-    let printer = Printer { symbols: &symbols, listing: &listing, language: &language };
+    let printer = Printer {
+        symbols: &symbols,
+        listing: &listing,
+        language: &language,
+    };
     let mut out = header(source);
     declare_variables(&mut out, equations, &names);
     if !listing.temporaries.is_empty() {
         out.push_str("\n# Subexpressions used more than once.\n");
         for (k, &id) in listing.temporaries.iter().enumerate() {
-            let _ = writeln!(out, "{} = {}", language.temporary(k), printer.definition(id));
+            let _ = writeln!(
+                out,
+                "{} = {}",
+                language.temporary(k),
+                printer.definition(id)
+            );
         }
     }
     let (n, m) = (equations.dimension(), equations.constraint_rows());
     let _ = writeln!(out, "\nM = sp.zeros({n}, {n})\nS = sp.zeros({n}, 1)\nF = sp.zeros({n}, 1)\nDelta = sp.zeros({m}, {n})\nDelta_bias = sp.zeros({m}, 1)");
     // For a tree, the forward dynamics q' = M⁻¹ (S + F) by the articulated-body recursion.
-    let accelerations = if equations.accelerations.is_some() { format!("sp.zeros({n}, 1)") } else { "None".to_string() };
+    let accelerations = if equations.accelerations.is_some() {
+        format!("sp.zeros({n}, 1)")
+    } else {
+        "None".to_string()
+    };
     let _ = writeln!(out, "accelerations = {accelerations}");
     for (entry, id) in entries {
         let value = printer.expression(id);
@@ -169,7 +226,12 @@ fn declare_variables(out: &mut String, equations: &Equations, names: &PythonName
         }
         let _ = writeln!(out, "\n# {title}");
         for (variable, name) in list.iter().zip(python) {
-            let _ = writeln!(out, "{name} = sp.Symbol({})  # {}", python_string(&variable.name), variable.meaning);
+            let _ = writeln!(
+                out,
+                "{name} = sp.Symbol({})  # {}",
+                python_string(&variable.name),
+                variable.meaning
+            );
         }
     };
     declare("Positions.", &v.positions, &names.positions);
@@ -203,13 +265,41 @@ fn lists(out: &mut String, equations: &Equations, names: &PythonNames, language:
     let _ = writeln!(out, "\npositions = {}", list(&names.positions));
     let _ = writeln!(out, "rates = {}", list(&names.rates));
     let _ = writeln!(out, "parameters = {}", list(&names.parameters));
-    let given: Vec<String> = v.parameters.iter().zip(&names.parameters).filter_map(|(p, name)| p.given.map(|g| format!("{name}: {g:?}"))).collect();
-    let _ = writeln!(out, "# The parameters' values given by the program.\ngiven = {{{}}}", given.join(", "));
+    let given: Vec<String> = v
+        .parameters
+        .iter()
+        .zip(&names.parameters)
+        .filter_map(|(p, name)| p.given.map(|g| format!("{name}: {g:?}")))
+        .collect();
+    let _ = writeln!(
+        out,
+        "# The parameters' values given by the program.\ngiven = {{{}}}",
+        given.join(", ")
+    );
     let symbols = Symbols::new(equations);
-    let whole = Listing::inline(&symbols, &v.functions.iter().map(|f| f.symbol).collect::<Vec<_>>());
-    let printer = Printer { symbols: &symbols, listing: &whole, language };
-    let applications: Vec<String> = v.functions.iter().map(|f| printer.definition(f.symbol)).collect();
-    let _ = writeln!(out, "# The unknown functions as applied in the equations.\nfunctions = {}", list(&applications));
-    let rows: Vec<String> = equations.constraint_names.iter().map(|n| python_string(n)).collect();
+    let whole = Listing::inline(
+        &symbols,
+        &v.functions.iter().map(|f| f.symbol).collect::<Vec<_>>(),
+    );
+    let printer = Printer {
+        symbols: &symbols,
+        listing: &whole,
+        language,
+    };
+    let applications: Vec<String> = v
+        .functions
+        .iter()
+        .map(|f| printer.definition(f.symbol))
+        .collect();
+    let _ = writeln!(
+        out,
+        "# The unknown functions as applied in the equations.\nfunctions = {}",
+        list(&applications)
+    );
+    let rows: Vec<String> = equations
+        .constraint_names
+        .iter()
+        .map(|n| python_string(n))
+        .collect();
     let _ = writeln!(out, "constraint_names = {}", list(&rows));
 }

@@ -2,7 +2,10 @@
 
 use std::fmt::Write;
 
-use super::shared::{described, nonzero_entries, Entry, temporary_prefix, Language, Listing, PowerSyntax, Precedence, Printer, Role, Symbols};
+use super::shared::{
+    described, nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax,
+    Precedence, Printer, Role, Symbols,
+};
 use crate::symbolic::expr::{ExprId, Function};
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
@@ -34,7 +37,9 @@ impl Language for Text {
         format!("atan2({y}, {x})")
     }
     fn power_syntax(&self) -> PowerSyntax {
-        PowerSyntax::Operator { exponent: Precedence::Unary }
+        PowerSyntax::Operator {
+            exponent: Precedence::Unary,
+        }
     }
 }
 
@@ -44,19 +49,35 @@ pub fn text(equations: &Equations, source: &str) -> String {
     let entries = nonzero_entries(equations);
     let roots: Vec<ExprId> = entries.iter().map(|(_, id)| *id).collect();
     let listing = Listing::new(&symbols, &roots);
-    let language = Text { prefix: temporary_prefix(&symbols.all_names()) };
-    let printer = Printer { symbols: &symbols, listing: &listing, language: &language };
+    let language = Text {
+        prefix: temporary_prefix(&symbols.all_names()),
+    };
+    let printer = Printer {
+        symbols: &symbols,
+        listing: &listing,
+        language: &language,
+    };
     let mut out = header(source);
     variables(&mut out, equations);
     if !listing.temporaries.is_empty() {
         out.push_str("\ntemporaries\n");
         for (k, &id) in listing.temporaries.iter().enumerate() {
-            let _ = writeln!(out, "  {} = {}", language.temporary(k), printer.definition(id));
+            let _ = writeln!(
+                out,
+                "  {} = {}",
+                language.temporary(k),
+                printer.definition(id)
+            );
         }
     }
     out.push('\n');
     for (entry, id) in entries {
-        let _ = writeln!(out, "{} = {}", label(entry, equations), printer.expression(id));
+        let _ = writeln!(
+            out,
+            "{} = {}",
+            label(entry, equations),
+            printer.expression(id)
+        );
     }
     let _ = writeln!(out, "\nsize: {} distinct nodes", listing.order.len());
     out
@@ -78,7 +99,13 @@ fn variables(out: &mut String, equations: &Equations) {
     let numbered = |out: &mut String, title: &str, list: &[Variable]| {
         let _ = writeln!(out, "\n{title}");
         for (i, variable) in list.iter().enumerate() {
-            let _ = writeln!(out, "  {:>3}  {:<24} {}", i + 1, variable.name, variable.meaning);
+            let _ = writeln!(
+                out,
+                "  {:>3}  {:<24} {}",
+                i + 1,
+                variable.name,
+                variable.meaning
+            );
         }
     };
     numbered(out, "positions", &v.positions);
@@ -92,12 +119,15 @@ fn variables(out: &mut String, equations: &Equations) {
     if !v.functions.is_empty() {
         out.push_str("\nunknown functions applied\n");
         for f in &v.functions {
-            let _ = writeln!(out, "  {}", equations.pool.name_of(f.symbol).unwrap_or_default());
+            let _ = writeln!(
+                out,
+                "  {}",
+                equations.pool.name_of(f.symbol).unwrap_or_default()
+            );
         }
     }
     out.push_str("\ntime\n  t\n");
 }
-
 
 fn label(entry: Entry, equations: &Equations) -> String {
     let names = &equations.constraint_names;
