@@ -19,4 +19,3 @@ pub mod source;
 pub mod symbolic;
 pub mod syntax;
 pub mod topology;
-pub mod urdf;

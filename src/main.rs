@@ -302,7 +302,7 @@ fn main() -> ExitCode {
             no_gravity,
             out: output,
         } => {
-            let options = lsdc::urdf::import::ImportOptions {
+            let options = lsdc::load::urdf::ImportOptions {
                 floating_base,
                 gravity: !no_gravity,
             };
@@ -750,7 +750,7 @@ fn export_urdf(
         .map(str::to_string)
         .or(stem)
         .unwrap_or_else(|| "robot".to_string());
-    let urdf = match lsdc::urdf::export::export_urdf(&prepared.model, &name) {
+    let urdf = match lsdc::output::urdf::export_urdf(&prepared.model, &name) {
         Ok(text) => text,
         Err(e) => {
             eprintln!("error: {}", e.message(&file.display().to_string()));
@@ -778,7 +778,7 @@ fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
 /// Prints the LSD program imported from a URDF file, its warnings to standard error.
 fn import_urdf(
     file: &std::path::Path,
-    options: &lsdc::urdf::import::ImportOptions,
+    options: &lsdc::load::urdf::ImportOptions,
     output: Option<&std::path::Path>,
 ) -> ExitCode {
     let text = match std::fs::read_to_string(file) {
@@ -789,7 +789,7 @@ fn import_urdf(
     let name = file.display().to_string();
     let id = sources.add(name.clone(), text);
     let imported =
-        match lsdc::urdf::import::import_urdf_at(id, &name, &sources.file(id).text, options) {
+        match lsdc::load::urdf::import_urdf_at(id, &name, &sources.file(id).text, options) {
             Ok(imported) => imported,
             Err(error) => {
                 eprint!("{}", render::to_text(&sources, &[error]));

@@ -19,7 +19,7 @@ use lsdc::driver::{compile_files, compile_text, Compilation};
 use lsdc::load::LoadOptions;
 use lsdc::simulate::batch::{evaluate_states, Evaluation, StateInput};
 use lsdc::simulate::prepare::{prepare, Prepared, Settings};
-use lsdc::urdf::import::{import_urdf, ImportOptions};
+use lsdc::load::urdf::{import_urdf, ImportOptions};
 use serde_json::Value;
 
 const TOLERANCE: f64 = 1e-10;

@@ -13,7 +13,7 @@ use lsdc::dynamics::joint::{quaternion, JointType};
 use lsdc::dynamics::spatial::{inertia_to_parent, skew, Pose};
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Prepared, Settings};
-use lsdc::urdf::export::{export_urdf, link_frames, ExportError, NO_LIMIT};
+use lsdc::output::urdf::{export_urdf, link_frames, ExportError, NO_LIMIT};
 
 fn options() -> LoadOptions {
     LoadOptions {

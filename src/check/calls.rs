@@ -6,7 +6,7 @@ use super::types::{self, DefId, Ty};
 use super::{Checker, Ctx, Local, Target, MAX_INSTANTIATION_DEPTH};
 use crate::diag::{suggest, Diagnostic};
 use crate::syntax::ast::{Arg, Callee, Ident};
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 impl<'w> Checker<'w> {
     pub(super) fn call(

@@ -6,7 +6,7 @@ use super::types::{self, Ty};
 use super::{Checker, Ctx, Local, Target};
 use crate::diag::{suggest, Diagnostic};
 use crate::syntax::ast::{BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident};
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 impl<'w> Checker<'w> {
     pub(super) fn expr(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
@@ -201,7 +201,7 @@ impl<'w> Checker<'w> {
             }
             current = scope.parent;
         }
-        for name in types::BUILTIN_NAMES {
+        for name in crate::syntax::names::BUILTIN_NAMES {
             let ty = types::builtin_constant(name).unwrap_or(Ty::Scalar);
             push(name, ty, &mut names);
         }

@@ -13,7 +13,7 @@ use std::collections::HashMap;
 use crate::diag::{Diagnostic, Diagnostics};
 use crate::load::{ModuleId, Workspace};
 use crate::syntax::ast::{Binding, Decl, DeclKind, Expr, Ident, Name, Param};
-use crate::syntax::span::Span;
+use crate::source::Span;
 use scope::{Scope, ScopeId, Target};
 use types::{DefId, Ty};
 

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 
 use crate::check::types::Ty;
 use crate::syntax::ast::Name;
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ScopeId(pub u32);

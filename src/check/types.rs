@@ -261,28 +261,3 @@ pub const SIMULATE_FIELDS: &[&str] = &[
     "rtol",
     "atol",
 ];
-
-pub const BUILTIN_NAMES: &[&str] = &[
-    "pi",
-    "time",
-    "earth",
-    "sin",
-    "cos",
-    "tan",
-    "asin",
-    "acos",
-    "atan",
-    "sqrt",
-    "exp",
-    "log",
-    "abs",
-    "atan2",
-    "norm",
-    "dot",
-    "cross",
-    "position",
-    "velocity",
-    "angular_velocity",
-    "orientation",
-    "distance",
-];

@@ -4,7 +4,7 @@
 pub mod render;
 pub mod suggest;
 
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Severity {

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::diag::{Diagnostic, Severity};
 use crate::source::SourceMap;
-use crate::syntax::span::{FileId, Span};
+use crate::source::{FileId, Span};
 
 impl<'a> Files<'a> for SourceMap {
     type FileId = FileId;

@@ -38,7 +38,7 @@ pub struct AppliedEffort {
     /// The potential energy it derives from, if the program declares one.
     pub potential: Option<Scalar>,
     /// The `apply` it comes from, for messages.
-    pub span: crate::syntax::span::Span,
+    pub span: crate::source::Span,
     /// Whether it derives from a potential the energy report counts: a constant force in the
     /// fixed basis, or an effort that declares its potential. Set when the model is built.
     pub conservative: bool,
@@ -63,7 +63,7 @@ pub struct LinkEffort {
     pub step: u8,
     pub value: Vector,
     /// The join whose link declares it, for messages.
-    pub span: crate::syntax::span::Span,
+    pub span: crate::source::Span,
     /// Whether its link declares the potential it derives from.
     pub conservative: bool,
 }

@@ -15,7 +15,7 @@ use crate::load::ModuleId;
 use crate::syntax::ast::{
     Arg, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, Name,
 };
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 type Result<T> = std::result::Result<T, Diagnostic>;
 

@@ -34,7 +34,7 @@ pub struct Elaborator<'c, 'w> {
     elaborated_modules: Vec<ModuleId>,
     depth: usize,
     /// `apply F` declarations of uniform fields, expanded once every body is known.
-    fields: Vec<(value::EffortId, crate::syntax::span::Span)>,
+    fields: Vec<(value::EffortId, crate::source::Span)>,
 }
 
 /// Evaluates every module of a checked workspace into one mechanism.

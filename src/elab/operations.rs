@@ -8,7 +8,7 @@ use super::internal;
 use super::value::*;
 use crate::diag::Diagnostic;
 use crate::syntax::ast::BinaryOp;
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 type Result<T> = std::result::Result<T, Diagnostic>;
 
@@ -205,7 +205,7 @@ fn dot_row(a: &Vector, b: &Vector) -> Scalar {
 }
 
 pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
-    let static_name: &'static str = crate::check::types::BUILTIN_NAMES
+    let static_name: &'static str = crate::syntax::names::BUILTIN_NAMES
         .iter()
         .find(|n| **n == name)
         .copied()

@@ -9,7 +9,7 @@ use super::spatial::{self, Pose, Twist};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId, Scalar};
-use crate::syntax::span::Span;
+use crate::source::Span;
 use crate::topology::Topology;
 
 #[derive(Clone, Debug)]

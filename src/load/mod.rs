@@ -3,6 +3,7 @@
 //! standard library embedded in the binary), detect import cycles and missing files.
 
 pub mod stdlib;
+pub mod urdf;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -11,8 +12,8 @@ use crate::diag::{suggest, Diagnostic, Diagnostics};
 use crate::source::SourceMap;
 use crate::syntax::ast::{Decl, DeclKind, ImportTarget, Program};
 use crate::syntax::parser::parse;
-use crate::syntax::span::{FileId, Span};
-use crate::urdf::import::{import_urdf_at, ImportOptions};
+use crate::source::{FileId, Span};
+use urdf::{import_urdf_at, ImportOptions};
 
 /// Environment variable holding extra library directories, separated by `:`.
 pub const PATH_VARIABLE: &str = "LSD_PATH";

@@ -4,3 +4,4 @@
 pub mod csv;
 pub mod plot;
 pub mod text;
+pub mod urdf;

@@ -13,7 +13,7 @@ use super::prepare::{Integrator, Prepared};
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::model::Model;
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 /// What the start of a run shows of its stiffness.
 pub struct Stiffness {

@@ -27,7 +27,7 @@ use super::vector::{self as v, Mat3, Vec3};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId};
-use crate::syntax::span::Span;
+use crate::source::Span;
 use crate::topology::Topology;
 
 /// Names of the six rows of a complementary link.

@@ -2,7 +2,7 @@
 
 use std::rc::Rc;
 
-use crate::syntax::span::Span;
+use crate::source::Span;
 
 /// Identifiers are shared strings: the checker and elaborator copy names freely.
 pub type Name = Rc<str>;
@@ -230,7 +230,7 @@ pub enum ExprKind {
 
 /// Builds a binary expression node (used by the grammar's actions).
 pub fn binary(
-    file: crate::syntax::span::FileId,
+    file: crate::source::FileId,
     start: usize,
     end: usize,
     op: BinaryOp,

@@ -5,7 +5,7 @@
 use logos::{FilterResult, Logos};
 
 use crate::diag::Diagnostic;
-use crate::syntax::span::{FileId, Span};
+use crate::source::{FileId, Span};
 
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum LexError {

@@ -3,5 +3,5 @@
 
 pub mod ast;
 pub mod lexer;
+pub mod names;
 pub mod parser;
-pub mod span;

@@ -28,12 +28,12 @@ use std::sync::OnceLock;
 use nalgebra::{Matrix3, Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
 use urdf_rs::{Inertial, JointType, Pose, Robot};
 
-use crate::check::types::BUILTIN_NAMES;
+use crate::syntax::names::BUILTIN_NAMES;
 use crate::diag::{suggest, Diagnostic};
-use crate::load::stdlib;
+use super::stdlib;
 use crate::syntax::ast::DeclKind;
 use crate::syntax::lexer::{lex, Tok};
-use crate::syntax::span::{FileId, Span};
+use crate::source::{FileId, Span};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImportOptions {

@@ -1,7 +1,9 @@
 //! The files of one compilation: the user's files, imported libraries and the embedded standard
 //! library. Diagnostics refer to files by [`FileId`] and are rendered against this map.
 
-use crate::syntax::span::{FileId, Span};
+mod span;
+
+pub use span::{FileId, Span};
 
 pub struct SourceFile {
     /// Name shown in diagnostics: the path as given, or `<stdlib>/name.lsd`.
