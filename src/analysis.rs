@@ -6,12 +6,14 @@ use serde::Serialize;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::BodyRef;
-use crate::kinematics::assembly::{assemble, AssemblyError, AssemblyOptions};
+use crate::kinematics::assembly::AssemblyOptions;
 use crate::kinematics::eval::UnknownValues;
+use crate::kinematics::initial::assemble_initial;
+use crate::kinematics::joint;
 use crate::kinematics::joint::{analyse, JointAnalysis};
 use crate::kinematics::mobility::{mobility, Mobility};
 use crate::kinematics::model::{self, KinematicModel};
-use crate::kinematics::{initial_coordinates, joint};
+use crate::kinematics::unknowns::given_values;
 use crate::topology::{self, Topology};
 
 #[derive(Clone, Debug, Serialize)]
@@ -93,7 +95,7 @@ fn link_report(
 /// The numbered tree, the joints and, when all values are known, the mobility.
 pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
-    let unknowns = crate::simulate::prepare::given_values(mechanism)?;
+    let unknowns = given_values(mechanism)?;
     let bodies: Vec<BodyReport> = topology
         .principal
         .iter()
@@ -166,79 +168,21 @@ pub fn assembled_model(
     topology: Topology,
     options: &AssemblyOptions,
 ) -> Result<(KinematicModel, AssemblyReport), Vec<Diagnostic>> {
-    let model = model::build(
-        mechanism,
-        topology,
-        crate::simulate::prepare::given_values(mechanism)?,
-    )?;
-    let (start, fixed) = initial_coordinates(mechanism, &model).map_err(|d| vec![d])?;
-    let names = model.coordinate_names();
-    match assemble(&model, &start, &fixed, options) {
-        Ok(assembled) => {
-            let coordinates = names
-                .into_iter()
-                .zip(&assembled.q)
-                .zip(&fixed)
-                .map(|((name, &value), &fixed)| CoordinateValue { name, value, fixed })
-                .collect();
-            let report = AssemblyReport {
-                coordinates,
-                iterations: assembled.iterations,
-                residual: assembled.residual,
-            };
-            Ok((model, report))
-        }
-        Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error(
-            "E0804",
-            format!(
-                "cannot evaluate the geometry: {}",
-                crate::kinematics::eval::describe(&e, mechanism)
-            ),
-        )]),
-        Err(AssemblyError::NoAssembly { loop_errors, .. }) => {
-            Err(vec![no_assembly(mechanism, &model, &loop_errors)])
-        }
-    }
-}
-
-/// A residual for people: three significant digits, and "< 1e-6" for what is only round-off.
-fn gap(value: f64) -> String {
-    if value < 1e-6 {
-        "< 1e-6".to_string()
-    } else {
-        format!("{value:.3}")
-    }
-}
-
-pub(crate) fn no_assembly(
-    mechanism: &Mechanism,
-    model: &KinematicModel,
-    loop_errors: &[(f64, f64)],
-) -> Diagnostic {
-    let worst = loop_errors
-        .iter()
-        .enumerate()
-        .max_by(|a, b| (a.1 .0 + a.1 .1).total_cmp(&(b.1 .0 + b.1 .1)))
-        .map(|(k, _)| k)
-        .unwrap_or(0);
-    let joint = &model.complementary()[worst];
-    let (position, rotation) = loop_errors[worst];
-    let join = mechanism.join(joint.join);
-    let mut diagnostic = Diagnostic::error("E0805", format!("the loop closed by join `{}` cannot be assembled", joint.name))
-        .primary(join.span, format!("still {} m and {} rad apart", gap(position), gap(rotation)))
-        .help("check the geometry, or give starting values closer to an assembled configuration with `initial`");
-    for (k, (p, r)) in loop_errors.iter().enumerate() {
-        if k != worst && (p + r) > 1e-9 {
-            let other = &model.complementary()[k];
-            diagnostic = diagnostic.note(format!(
-                "the loop closed by `{}` is also open ({} m, {} rad)",
-                other.name,
-                gap(*p),
-                gap(*r)
-            ));
-        }
-    }
-    diagnostic
+    let model = model::build(mechanism, topology, given_values(mechanism)?)?;
+    let (assembled, fixed) = assemble_initial(mechanism, &model, options)?;
+    let coordinates = model
+        .coordinate_names()
+        .into_iter()
+        .zip(&assembled.q)
+        .zip(&fixed)
+        .map(|((name, &value), &fixed)| CoordinateValue { name, value, fixed })
+        .collect();
+    let report = AssemblyReport {
+        coordinates,
+        iterations: assembled.iterations,
+        residual: assembled.residual,
+    };
+    Ok((model, report))
 }
 
 pub use joint::JointKind;

@@ -521,25 +521,13 @@ fn write_output(output: Option<&std::path::Path>, text: &str) -> ExitCode {
 }
 
 fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, String> {
-    sets.iter()
-        .map(|s| {
-            let (name, value) = s
-                .rsplit_once('=')
-                .ok_or_else(|| format!("`--set {s}`: write NAME=VALUE"))?;
-            let value: f64 = value
-                .trim()
-                .parse()
-                .map_err(|_| format!("`--set {s}`: `{value}` is not a number"))?;
-            Ok(lsdc::simulate::prepare::Override {
-                name: name.trim().to_string(),
-                value,
-            })
-        })
-        .collect()
+    sets.iter().map(|s| s.parse()).collect()
 }
 
 fn simulate(args: &SimulateArgs) -> ExitCode {
+    use lsdc::dynamics::loops::Stabilisation;
     use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+    use lsdc::simulate::settings::SettingsChanges;
     let overrides = match parse_sets(&args.sets) {
         Ok(o) => o,
         Err(message) => return usage_error(&message),
@@ -558,44 +546,26 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let settings = &mut prepared.settings;
-    if let Some(integrator) = args.integrator {
-        settings.integrator = match integrator {
+    let changes = SettingsChanges {
+        integrator: args.integrator.map(|integrator| match integrator {
             IntegratorArg::Rk4 => Integrator::Rk4,
             IntegratorArg::Dopri5 => Integrator::DormandPrince,
             IntegratorArg::Implicit => Integrator::Implicit,
             IntegratorArg::Symplectic => Integrator::Symplectic,
-        };
-    }
-    for (flag, value) in [
-        ("duration", args.duration),
-        ("every", args.output_interval),
-        ("tolerance", args.tolerance),
-        ("step", args.step),
-    ] {
-        if value.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
-            return usage_error(&format!("`--{flag}` must be a positive number"));
-        }
-    }
-    if !(args.baumgarte_rate.is_finite() && args.baumgarte_rate > 0.0) {
-        return usage_error("`--baumgarte-rate` must be a positive number");
-    }
-    settings.stabilisation = match args.stabilisation {
-        StabilisationArg::Projection => lsdc::dynamics::loops::Stabilisation::Projection,
-        StabilisationArg::Baumgarte => {
-            lsdc::dynamics::loops::Stabilisation::Baumgarte(args.baumgarte_rate)
-        }
-        StabilisationArg::None => lsdc::dynamics::loops::Stabilisation::None,
+        }),
+        duration: args.duration,
+        output: args.output_interval,
+        tolerance: args.tolerance,
+        step: args.step,
+        stabilisation: Some(match args.stabilisation {
+            StabilisationArg::Projection => Stabilisation::Projection,
+            StabilisationArg::Baumgarte => Stabilisation::Baumgarte(args.baumgarte_rate),
+            StabilisationArg::None => Stabilisation::None,
+        }),
+        reactions: args.reactions,
     };
-    settings.reactions = args.reactions;
-    settings.duration = args.duration.unwrap_or(settings.duration);
-    settings.output = args.output_interval.unwrap_or(settings.output);
-    settings.step = args.step.or(settings.step);
-    if let Some(t) = args.tolerance {
-        (settings.rtol, settings.atol) = (t, t);
-    }
-    if let Err(message) = settings.check_outputs() {
-        return usage_error(&message);
+    if let Err(error) = prepared.settings.apply(&changes) {
+        return usage_error(&error.to_string());
     }
     if let Some(warning) = lsdc::simulate::stiffness::warning(&prepared) {
         report_diagnostics(&compilation, &[warning], args.report);

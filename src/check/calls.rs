@@ -2,11 +2,12 @@
 //! definitions, whose bodies are checked at each use with the arguments' types (memoised), with
 //! positional and named arguments.
 
+use super::checker::{Checker, Ctx, Local, MAX_INSTANTIATION_DEPTH};
+use super::scope::Target;
 use super::types::{self, DefId, Ty};
-use super::{Checker, Ctx, Local, Target, MAX_INSTANTIATION_DEPTH};
 use crate::diag::{suggest, Diagnostic};
-use crate::syntax::ast::{Arg, Callee, Ident};
 use crate::source::Span;
+use crate::syntax::ast::{Arg, Callee, Ident};
 
 impl<'w> Checker<'w> {
     pub(super) fn call(

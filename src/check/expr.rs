@@ -2,11 +2,12 @@
 
 use std::collections::HashSet;
 
+use super::checker::{Checker, Ctx, Local};
+use super::scope::Target;
 use super::types::{self, Ty};
-use super::{Checker, Ctx, Local, Target};
 use crate::diag::{suggest, Diagnostic};
-use crate::syntax::ast::{BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident};
 use crate::source::Span;
+use crate::syntax::ast::{BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident};
 
 impl<'w> Checker<'w> {
     pub(super) fn expr(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
@@ -101,7 +102,7 @@ impl<'w> Checker<'w> {
     pub(super) fn lookup_global(
         &self,
         name: &str,
-        scope: super::ScopeId,
+        scope: types::ScopeId,
         limit: u32,
     ) -> Option<(Target, Ty)> {
         let mut current = Some((scope, limit));
@@ -224,7 +225,7 @@ impl<'w> Checker<'w> {
         package: &Ident,
         name: &Ident,
         ctx: &mut Ctx,
-    ) -> Option<(super::ScopeId, Ty)> {
+    ) -> Option<(types::ScopeId, Ty)> {
         let scope = match self.name(package, ctx) {
             Ty::Package(scope) => scope,
             Ty::Error => return None,

@@ -4,6 +4,7 @@
 //! and an error inside one shows both the definition and the use.
 
 mod calls;
+mod checker;
 mod expr;
 pub mod scope;
 pub mod types;
@@ -12,65 +13,12 @@ use std::collections::HashMap;
 
 use crate::diag::{Diagnostic, Diagnostics};
 use crate::load::{ModuleId, Workspace};
-use crate::syntax::ast::{Binding, Decl, DeclKind, Expr, Ident, Name, Param};
 use crate::source::Span;
-use scope::{Scope, ScopeId, Target};
-use types::{DefId, Ty};
-
-/// A parameterised definition `let f(a, b) = body`.
-pub struct Definition<'w> {
-    pub name: Name,
-    pub params: &'w [Param],
-    pub body: &'w Expr,
-    pub span: Span,
-    /// The scope it was defined in and how many of that scope's names it sees.
-    pub scope: ScopeId,
-    pub limit: u32,
-}
-
-/// The result of checking: scopes, definitions and name resolutions, for the elaborator.
-pub struct Checked<'w> {
-    pub scopes: Vec<Scope>,
-    pub definitions: Vec<Definition<'w>>,
-    pub resolutions: HashMap<Span, Target>,
-    pub module_scopes: HashMap<ModuleId, ScopeId>,
-    pub package_scopes: HashMap<Span, ScopeId>,
-    /// The `let` binding of each declared name, by the span of the name.
-    pub bindings: HashMap<Span, &'w Binding>,
-}
-
-impl Checked<'_> {
-    pub fn scope(&self, id: ScopeId) -> &Scope {
-        &self.scopes[id.0 as usize]
-    }
-}
-
-/// A parameter, link coordinate or `local` binding in scope while checking an expression.
-#[derive(Clone, Debug)]
-struct Local {
-    name: Name,
-    ty: Ty,
-    /// Link coordinates are time-dependent: only they may be primed (`x'`).
-    coordinate: bool,
-}
-
-/// Where an expression is being checked.
-struct Ctx {
-    scope: ScopeId,
-    limit: u32,
-    locals: Vec<Local>,
-}
-
-pub struct Checker<'w> {
-    workspace: &'w Workspace,
-    out: Checked<'w>,
-    diagnostics: Diagnostics,
-    /// Use sites of the definitions being instantiated, innermost last.
-    instantiations: Vec<(Span, Name)>,
-    memo: HashMap<(DefId, Vec<Ty>), Ty>,
-    modules_in_progress: Vec<ModuleId>,
-    simulate_seen: Option<Span>,
-}
+use crate::syntax::ast::{Binding, Decl, DeclKind, Expr, Ident, Name, Param};
+pub use checker::{Checked, Definition};
+use checker::{Checker, Ctx, Local};
+use scope::Scope;
+use types::{DefId, ScopeId, Ty};
 
 /// Checks every module of the workspace.
 pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
@@ -95,8 +43,6 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
     }
     (checker.out, checker.diagnostics)
 }
-
-const MAX_INSTANTIATION_DEPTH: usize = 64;
 
 impl<'w> Checker<'w> {
     fn new_scope(&mut self, parent: Option<(ScopeId, u32)>) -> ScopeId {

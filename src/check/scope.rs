@@ -4,12 +4,10 @@
 
 use std::collections::HashMap;
 
-use crate::check::types::Ty;
-use crate::syntax::ast::Name;
+pub use super::types::ScopeId;
+use super::types::Ty;
 use crate::source::Span;
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct ScopeId(pub u32);
+use crate::syntax::ast::Name;
 
 #[derive(Clone, Debug)]
 pub struct Entry {

@@ -4,7 +4,9 @@
 
 use std::fmt;
 
-use crate::check::scope::ScopeId;
+/// A scope: a file, a package or the standard library (see `check::scope`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ScopeId(pub u32);
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct DefId(pub u32);

@@ -6,6 +6,7 @@ pub mod algorithms;
 pub mod angles;
 pub mod derivatives;
 pub mod efforts;
+pub mod elements;
 pub mod energy;
 pub mod joint;
 pub mod loops;

@@ -3,6 +3,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+pub use super::elements::{AppliedEffort, BodyInertia, EffortFrame, LinkEffort};
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 use super::welds;
@@ -11,62 +12,6 @@ use crate::elab::mechanism::{EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{constant_pose, JointModel, KinematicModel};
-
-#[derive(Clone, Debug)]
-pub struct BodyInertia {
-    pub mass: f64,
-    /// Centre of mass in the body frame.
-    pub com: Vector3<f64>,
-    /// Spatial inertia about the body frame's origin, and the same in compact form.
-    pub inertia: Inertia,
-    pub rigid: RigidInertia,
-    /// Zero mass and inertia: skipped by the algorithms.
-    pub massless: bool,
-}
-
-/// A force on a point of a body, or a torque on a body, from `apply`.
-#[derive(Clone, Debug)]
-pub struct AppliedEffort {
-    pub kind: EffortKind,
-    /// Body number (1..n).
-    pub body: usize,
-    /// Point of application in the body frame (forces).
-    pub point: Vector3<f64>,
-    pub value: Vector,
-    /// Body whose basis the value is written in (0 = the fixed basis).
-    pub basis: usize,
-    /// The potential energy it derives from, if the program declares one.
-    pub potential: Option<Scalar>,
-    /// The `apply` it comes from, for messages.
-    pub span: crate::source::Span,
-    /// Whether it derives from a potential the energy report counts: a constant force in the
-    /// fixed basis, or an effort that declares its potential. Set when the model is built.
-    pub conservative: bool,
-}
-
-/// A frame an effort refers to: the frame as the expressions hold it (found by identity), its
-/// body's number and its pose on the body.
-#[derive(Clone, Debug)]
-pub struct EffortFrame {
-    pub frame: std::rc::Rc<crate::elab::value::Frame>,
-    pub body: usize,
-    pub offset: Pose,
-}
-
-/// A known link effort (`force`, `torque`, `forceN`, `torqueN`).
-#[derive(Clone, Debug)]
-pub struct LinkEffort {
-    /// Index into `Model::joints`, then into `Model::loops` (`joints.len() + k`).
-    pub joint: usize,
-    pub kind: EffortKind,
-    /// 0 for the plain form (in the chain's first frame), N for the N-th step's frame.
-    pub step: u8,
-    pub value: Vector,
-    /// The join whose link declares it, for messages.
-    pub span: crate::source::Span,
-    /// Whether its link declares the potential it derives from.
-    pub conservative: bool,
-}
 
 #[derive(Clone, Debug)]
 pub struct Model {

@@ -11,8 +11,8 @@
 //! for a merged body, its constant pose in its anchor. The merged bodies keep their world poses,
 //! velocities and names; only the algorithms' passes skip them.
 
+use super::elements::{AppliedEffort, BodyInertia, LinkEffort};
 use super::joint::{Joint, Kernel};
-use super::model::{AppliedEffort, BodyInertia, LinkEffort};
 use super::spatial::{Inertia, RigidInertia, Transform};
 
 /// What merging gives the model.

@@ -2,20 +2,20 @@
 
 use std::rc::Rc;
 
+use super::elaborator::{internal, Elaborator, Global};
 use super::mechanism::*;
 use super::operations::{
     as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix,
 };
 use super::value::*;
-use super::{internal, Elaborator, Global};
 use crate::check::scope::{ScopeId, Target};
 use crate::check::types::Ty;
 use crate::diag::Diagnostic;
 use crate::load::ModuleId;
+use crate::source::Span;
 use crate::syntax::ast::{
     Arg, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, Name,
 };
-use crate::source::Span;
 
 type Result<T> = std::result::Result<T, Diagnostic>;
 

@@ -4,10 +4,10 @@
 
 use std::collections::BTreeSet;
 
+use super::elaborator::Elaborator;
 use super::mechanism::{Application, Effort, Quantity};
 use super::operations::{as_vector, binary};
 use super::value::{constant, BodyRef, Frame, Value};
-use super::Elaborator;
 use crate::diag::Diagnostic;
 use crate::syntax::ast::BinaryOp;
 

@@ -7,8 +7,8 @@ use std::fmt::Write;
 use serde::Serialize;
 
 use super::value::*;
-use crate::syntax::ast::Name;
 use crate::source::Span;
+use crate::syntax::ast::Name;
 
 /// A quantity the program either declares or leaves generic. A generic quantity is made of
 /// generated unknowns (kind [`UnknownKind::Generic`]) that the compiler names, as the thesis's

@@ -3,6 +3,7 @@
 //! fresh unknown; a `let` evaluates its value once, when first used, so `let L = ?s;` is one
 //! shared unknown and an unused definition costs nothing.
 
+mod elaborator;
 mod eval;
 mod fields;
 pub mod mechanism;
@@ -11,31 +12,11 @@ pub mod value;
 
 use std::collections::HashMap;
 
-use crate::check::scope::ScopeId;
 use crate::check::Checked;
 use crate::diag::Diagnostic;
-use crate::load::{ModuleId, Workspace};
-use crate::syntax::ast::Name;
+use crate::load::Workspace;
+use elaborator::Elaborator;
 pub use mechanism::{Mechanism, Summary};
-use value::Value;
-
-/// A declared name's value. `let` bindings are evaluated when first used, so a library costs
-/// only what the mechanism takes from it.
-enum Global {
-    Ready(Value),
-    InProgress,
-}
-
-pub struct Elaborator<'c, 'w> {
-    workspace: &'w Workspace,
-    checked: &'c Checked<'w>,
-    globals: HashMap<(ScopeId, Name), Global>,
-    mechanism: Mechanism,
-    elaborated_modules: Vec<ModuleId>,
-    depth: usize,
-    /// `apply F` declarations of uniform fields, expanded once every body is known.
-    fields: Vec<(value::EffortId, crate::source::Span)>,
-}
 
 /// Evaluates every module of a checked workspace into one mechanism.
 pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechanism, Diagnostic> {
@@ -53,13 +34,4 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
     }
     elaborator.apply_fields()?;
     Ok(elaborator.mechanism)
-}
-
-/// An inconsistency between checker and elaborator: reported, never a panic.
-fn internal(message: impl Into<String>) -> Diagnostic {
-    Diagnostic::error(
-        "E0900",
-        format!("internal error during elaboration: {}", message.into()),
-    )
-    .note("this is a bug in lsdc; please report it with the program that triggers it")
 }

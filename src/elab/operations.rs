@@ -4,11 +4,11 @@
 
 use std::rc::Rc;
 
-use super::internal;
+use super::elaborator::internal;
 use super::value::*;
 use crate::diag::Diagnostic;
-use crate::syntax::ast::BinaryOp;
 use crate::source::Span;
+use crate::syntax::ast::BinaryOp;
 
 type Result<T> = std::result::Result<T, Diagnostic>;
 

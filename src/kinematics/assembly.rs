@@ -72,7 +72,7 @@ pub fn assemble(
                 if fixed[i] {
                     x
                 } else {
-                    x + 0.5 * super::jitter(attempt, i)
+                    x + 0.5 * jitter(attempt, i)
                 }
             })
             .collect();
@@ -219,4 +219,15 @@ pub fn singular_values(m: &DMatrix<f64>) -> DVector<f64> {
     let mut values = m.clone().svd(false, false).singular_values;
     values.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
     values
+}
+
+/// A deterministic pseudo-random number in [-1, 1] for sample `sample`, coordinate `i`
+/// (SplitMix64 of the pair).
+pub(crate) fn jitter(sample: usize, i: usize) -> f64 {
+    let mut z = (sample as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (i as u64).wrapping_add(0x632B_E59B_D9B4_E019);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
 }

@@ -11,10 +11,9 @@
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-use super::assembly::{assemble, singular_values, AssemblyOptions};
+use super::assembly::{assemble, jitter, singular_values, AssemblyOptions};
 use super::closure::closure;
 use super::eval::EvalError;
-use super::jitter;
 use super::model::KinematicModel;
 
 /// Relative tolerance on singular values: σ counts if σ > RANK_TOLERANCE · σ_max. Assembly

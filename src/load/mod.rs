@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 
 use crate::diag::{suggest, Diagnostic, Diagnostics};
 use crate::source::SourceMap;
+use crate::source::{FileId, Span};
 use crate::syntax::ast::{Decl, DeclKind, ImportTarget, Program};
 use crate::syntax::parser::parse;
-use crate::source::{FileId, Span};
 use urdf::{import_urdf_at, ImportOptions};
 
 /// Environment variable holding extra library directories, separated by `:`.

@@ -28,12 +28,12 @@ use std::sync::OnceLock;
 use nalgebra::{Matrix3, Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
 use urdf_rs::{Inertial, JointType, Pose, Robot};
 
-use crate::syntax::names::BUILTIN_NAMES;
-use crate::diag::{suggest, Diagnostic};
 use super::stdlib;
+use crate::diag::{suggest, Diagnostic};
+use crate::source::{FileId, Span};
 use crate::syntax::ast::DeclKind;
 use crate::syntax::lexer::{lex, Tok};
-use crate::source::{FileId, Span};
+use crate::syntax::names::BUILTIN_NAMES;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImportOptions {

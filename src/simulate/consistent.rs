@@ -10,8 +10,8 @@ use crate::dynamics::algorithms::Data;
 use crate::dynamics::loops::{constraints, decompose, project};
 use crate::dynamics::model::Model;
 use crate::elab::mechanism::Mechanism;
-use crate::kinematics::assembly::{assemble, AssemblyError, AssemblyOptions};
-use crate::kinematics::initial_coordinates;
+use crate::kinematics::assembly::AssemblyOptions;
+use crate::kinematics::initial::assemble_initial;
 use crate::kinematics::model::KinematicModel;
 
 /// Declared coordinates and rates (of the whole mechanism) that close every loop.
@@ -21,7 +21,8 @@ pub fn initial_state(
     model: &Model,
     rates: &[f64],
 ) -> Result<(Vec<f64>, Vec<f64>), Vec<Diagnostic>> {
-    let coordinates = assembled(mechanism, kinematics)?;
+    let (assembled, _) = assemble_initial(mechanism, kinematics, &AssemblyOptions::default())?;
+    let coordinates = assembled.q;
     let evaluation = |e| {
         vec![Diagnostic::error(
             "E0804",
@@ -42,30 +43,6 @@ pub fn initial_state(
     // Assembly stops at 1e-12: finish at round-off.
     project(model, &mut data, &mut q, &mut v).map_err(evaluation)?;
     model.declared(&q, &v, &coordinates).map_err(evaluation)
-}
-
-fn assembled(
-    mechanism: &Mechanism,
-    kinematics: &KinematicModel,
-) -> Result<Vec<f64>, Vec<Diagnostic>> {
-    let (start, fixed) = initial_coordinates(mechanism, kinematics).map_err(|d| vec![d])?;
-    match assemble(kinematics, &start, &fixed, &AssemblyOptions::default()) {
-        Ok(assembled) => Ok(assembled.q),
-        Err(AssemblyError::Evaluation(e)) => Err(vec![Diagnostic::error(
-            "E0804",
-            format!(
-                "cannot evaluate the geometry: {}",
-                crate::kinematics::eval::describe(&e, mechanism)
-            ),
-        )]),
-        Err(AssemblyError::NoAssembly { loop_errors, .. }) => {
-            Err(vec![crate::analysis::no_assembly(
-                mechanism,
-                kinematics,
-                &loop_errors,
-            )])
-        }
-    }
 }
 
 /// State velocities whose value the program gives (`initial j.q' = …`). A quaternion joint's

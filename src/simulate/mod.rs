@@ -6,6 +6,7 @@ pub mod consistent;
 pub mod constraints;
 pub mod prepare;
 pub mod run;
+pub mod settings;
 pub mod statics;
 pub mod stiffness;
 pub mod system;

@@ -4,46 +4,18 @@
 
 use std::collections::{BTreeSet, HashMap};
 
-use crate::diag::{suggest, Diagnostic};
-use crate::dynamics::loops::Stabilisation;
+use crate::diag::Diagnostic;
 use crate::dynamics::model::{self as dynamic_model, Model};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
-use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, Scalar, UnknownId, Vector};
+use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, UnknownId, Vector};
 use crate::kinematics::eval::{eval, UnknownValues};
 use crate::kinematics::model as kinematic_model;
+pub use crate::kinematics::unknowns::Override;
+use crate::kinematics::unknowns::{constant, names_of, unknown_values};
 use crate::topology::{self, notation, Topology};
 
-/// A value given on the command line: `--set NAME=VALUE`.
-#[derive(Clone, Debug)]
-pub struct Override {
-    pub name: String,
-    pub value: f64,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub enum Integrator {
-    Rk4,
-    DormandPrince,
-    Implicit,
-    Symplectic,
-}
-
-#[derive(Clone, Debug)]
-pub struct Settings {
-    pub integrator: Integrator,
-    pub duration: f64,
-    /// Time between outputs.
-    pub output: f64,
-    /// Fixed step (RK4, symplectic) or initial step (adaptive methods).
-    pub step: Option<f64>,
-    pub max_step: f64,
-    pub rtol: f64,
-    pub atol: f64,
-    /// How loops are kept closed.
-    pub stabilisation: Stabilisation,
-    /// Output the reactions in every join.
-    pub reactions: bool,
-}
+use super::settings::program_settings;
+pub use super::settings::{Integrator, Settings};
 
 pub struct Prepared {
     pub model: Model,
@@ -118,102 +90,6 @@ fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<Unk
         );
     }
     required
-}
-
-/// Every name an unknown answers to: its `let` name, its generated name, its generic name.
-fn names_of(
-    mechanism: &Mechanism,
-    generated: &HashMap<UnknownId, String>,
-    id: UnknownId,
-) -> Vec<String> {
-    let unknown = &mechanism.unknowns[id.0 as usize];
-    let mut names = Vec::new();
-    if let Some(name) = &unknown.name {
-        names.push(name.to_string());
-    }
-    if unknown.origin != Origin::Written {
-        names.push(mechanism.generic_name(unknown.origin));
-    }
-    if let Some(name) = generated.get(&id) {
-        names.push(name.clone());
-    }
-    if names.is_empty() {
-        // Written somewhere the notation table does not name (an applied effort): number it.
-        names.push(format!("unknown{}", id.0 + 1));
-    }
-    names.dedup();
-    names
-}
-
-fn constant(s: &Scalar, values: &UnknownValues) -> Option<f64> {
-    eval(s, values, &[]).ok()
-}
-
-/// Values of the unknowns from the program's `given` declarations.
-pub fn given_values(mechanism: &Mechanism) -> Result<UnknownValues, Vec<Diagnostic>> {
-    unknown_values(mechanism, &HashMap::new(), &[])
-}
-
-/// Values of the unknowns from `given` declarations, then the command line.
-fn unknown_values(
-    mechanism: &Mechanism,
-    generated: &HashMap<UnknownId, String>,
-    overrides: &[Override],
-) -> Result<UnknownValues, Vec<Diagnostic>> {
-    let mut values = UnknownValues::new();
-    let mut errors = Vec::new();
-    for (id, value, span) in &mechanism.given {
-        match constant(value, &values) {
-            Some(v) => {
-                values.insert(*id, v);
-            }
-            None => errors.push(
-                Diagnostic::error("E0810", "a given value must be a number").primary(*span, "here"),
-            ),
-        }
-    }
-    let mut by_name: HashMap<String, UnknownId> = HashMap::new();
-    for index in 0..mechanism.unknowns.len() {
-        let id = UnknownId(index as u32);
-        for name in names_of(mechanism, generated, id) {
-            by_name.entry(name).or_insert(id);
-        }
-    }
-    for o in overrides {
-        match by_name.get(&o.name) {
-            Some(&id) if mechanism.unknowns[id.0 as usize].kind == UnknownKind::Function => {
-                errors.push(
-                    Diagnostic::error("E0811", format!("`--set {}`: an unknown function takes a law, not a value", o.name))
-                        .help("write the law in the program, for example `torque = [-k * x - c * x', 0, 0]`"),
-                );
-            }
-            Some(&id) => {
-                values.insert(id, o.value);
-            }
-            None => {
-                let help = suggest::did_you_mean(&o.name, by_name.keys().map(String::as_str))
-                    .map(|s| format!("did you mean `{s}`?"))
-                    .unwrap_or_else(|| {
-                        "`lsdc compile FILE --emit notation` lists the generated names".to_string()
-                    });
-                errors.push(
-                    Diagnostic::error(
-                        "E0811",
-                        format!(
-                            "`--set {}`: the program has no unknown of that name",
-                            o.name
-                        ),
-                    )
-                    .help(help),
-                );
-            }
-        }
-    }
-    if errors.is_empty() {
-        Ok(values)
-    } else {
-        Err(errors)
-    }
 }
 
 fn missing_value(
@@ -315,7 +191,7 @@ pub fn prepare(
         (coordinates, rates) =
             super::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
     }
-    let settings = settings(mechanism, &model, defaults)?;
+    let settings = program_settings(mechanism, &model, defaults)?;
     let coordinate_names = kinematics.coordinate_names();
     Ok(Prepared {
         model,
@@ -351,97 +227,4 @@ fn initial_state(
         }
     }
     Ok((coordinates, rates))
-}
-
-fn settings(
-    mechanism: &Mechanism,
-    model: &Model,
-    defaults: &Settings,
-) -> Result<Settings, Vec<Diagnostic>> {
-    let mut settings = defaults.clone();
-    let Some(scenario) = &mechanism.scenario else {
-        return Ok(settings);
-    };
-    let mut errors = Vec::new();
-    let mut number = |name: &str| -> Option<f64> {
-        let (_, value, span) = scenario.setting(name)?;
-        match constant(value, &model.unknowns).filter(|v| v.is_finite() && *v > 0.0) {
-            Some(v) => Some(v),
-            None => {
-                errors.push(
-                    Diagnostic::error("E0814", format!("`{name}` must be a positive number"))
-                        .primary(*span, "here"),
-                );
-                None
-            }
-        }
-    };
-    if let Some(v) = number("duration") {
-        settings.duration = v;
-    }
-    if let Some(v) = number("output") {
-        settings.output = v;
-    }
-    if let Some(v) = number("step") {
-        settings.step = Some(v);
-    }
-    if let Some(v) = number("max_step") {
-        settings.max_step = v;
-    }
-    if let Some(v) = number("tolerance") {
-        settings.rtol = v;
-        settings.atol = v;
-    }
-    if let Some(v) = number("rtol") {
-        settings.rtol = v;
-    }
-    if let Some(v) = number("atol") {
-        settings.atol = v;
-    }
-    if let Some((name, _)) = &scenario.integrator {
-        settings.integrator = match name.as_str() {
-            "rk4" => Integrator::Rk4,
-            "implicit" => Integrator::Implicit,
-            "symplectic" => Integrator::Symplectic,
-            _ => Integrator::DormandPrince,
-        };
-    }
-    if let (Err(message), Some(span)) = (settings.check_outputs(), scenario.span) {
-        errors.push(Diagnostic::error("E0814", message).primary(span, "in this `simulate`"));
-    }
-    if errors.is_empty() {
-        Ok(settings)
-    } else {
-        Err(errors)
-    }
-}
-
-impl Settings {
-    /// Every output is kept in memory: refuses a request that could not fit.
-    pub fn check_outputs(&self) -> Result<(), String> {
-        const MAX_OUTPUTS: f64 = 1e7;
-        if self.duration / self.output > MAX_OUTPUTS {
-            return Err(format!(
-                "{} s of simulation with an output every {} s makes more than {MAX_OUTPUTS:e} outputs: raise the output interval",
-                self.duration, self.output
-            ));
-        }
-        Ok(())
-    }
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Settings {
-            integrator: Integrator::DormandPrince,
-            duration: 1.0,
-            output: 0.01,
-            step: None,
-            max_step: f64::INFINITY,
-            rtol: 1e-8,
-            atol: 1e-10,
-            stabilisation: Stabilisation::Projection,
-            reactions: false,
-        }
-    }
 }

@@ -1,10 +1,13 @@
 //! The loops: six constraint rows per complementary link, Δ(p) q = 0, and their acceleration
 //! terms Δ̇q.
 
-use super::equations::{Generator, ROW_NAMES};
 use super::expr::ExprId;
+use super::generator::Generator;
 use super::kinematics::{LinkCoordinates, Moving};
 use super::lower::LowerError;
+
+/// The names of a complementary link's six constraint rows: rotations, then translations.
+pub const ROW_NAMES: [&str; 6] = ["rx", "ry", "rz", "x", "y", "z"];
 
 /// Δ (row-major), Δ̇q and the rows' names.
 pub(super) struct Closure {

@@ -19,19 +19,15 @@
 
 use nalgebra::{DMatrix, DVector};
 
+pub use super::closure::ROW_NAMES;
 use super::expr::{ExprId, Pool, Tape};
-use super::inertia::Inertia;
-use super::kinematics::{Derivatives, LinkCoordinates, Moving, Step};
-use super::lower::{LowerError, Lowering, Variables};
-use super::vector::{self as v, Mat3, Vec3};
+use super::generator::Generator;
+use super::lower::{LowerError, Variables};
+use super::vector as v;
+use super::vector::Wrench;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
-use crate::elab::value::{Displacement, Elementary, JoinId};
-use crate::source::Span;
 use crate::topology::Topology;
-
-/// Names of the six rows of a complementary link.
-pub const ROW_NAMES: [&str; 6] = ["rx", "ry", "rz", "x", "y", "z"];
 
 pub struct Equations {
     pub pool: Pool,
@@ -155,52 +151,7 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
     })
 }
 
-pub(super) struct Generator<'a> {
-    pub(super) mechanism: &'a Mechanism,
-    pub(super) topology: &'a Topology,
-    pub(super) pool: Pool,
-    pub(super) lowering: Lowering<'a>,
-    pub(super) derivatives: Derivatives,
-    /// Indexed by body number, 0 = earth.
-    pub(super) bodies: Vec<Moving>,
-    pub(super) inertias: Vec<Option<Inertia>>,
-    /// The same in each body's own axes.
-    pub(super) local_inertias: Vec<Option<Inertia>>,
-    /// Per body, the steps from its parent's frame to its own (empty for earth).
-    pub(super) link_steps: Vec<Vec<Step>>,
-    /// Per body, the body its motion is computed with: itself, or for a body welded to its
-    /// parent, the anchor of the parent (0 for a body welded to earth). See `inertia`.
-    pub(super) anchors: Vec<usize>,
-    /// The declaration being written, to locate an error.
-    pub(super) context: Option<Span>,
-}
-
-/// A force and a moment at a body's origin, fixed axes.
-pub(super) type Wrench = [Vec3; 2];
-
-impl<'a> Generator<'a> {
-    fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
-        let mut pool = Pool::new();
-        let lowering = Lowering::new(&mut pool, mechanism, topology);
-        Generator {
-            mechanism,
-            topology,
-            pool,
-            lowering,
-            derivatives: Derivatives::default(),
-            bodies: Vec::new(),
-            inertias: Vec::new(),
-            local_inertias: Vec::new(),
-            link_steps: Vec::new(),
-            anchors: Vec::new(),
-            context: None,
-        }
-    }
-
-    pub(super) fn columns(&self) -> usize {
-        self.lowering.variables.positions.len()
-    }
-
+impl Generator<'_> {
     fn run(&mut self) -> Result<Equations, LowerError> {
         self.place_bodies()?;
         self.anchors = self.anchors();
@@ -244,164 +195,6 @@ impl<'a> Generator<'a> {
         })
     }
 
-    fn tree_coordinates(&self) -> usize {
-        self.topology
-            .principal
-            .iter()
-            .map(|l| {
-                self.mechanism
-                    .link(self.mechanism.join(l.join).link)
-                    .coordinates
-                    .len()
-            })
-            .sum()
-    }
-
-    /// The coordinates of a join, with their columns.
-    pub(super) fn link_coordinates(&self, join: JoinId) -> LinkCoordinates {
-        let offset = self.lowering.join_offset(join);
-        let count = self
-            .mechanism
-            .link(self.mechanism.join(join).link)
-            .coordinates
-            .len();
-        let variables = &self.lowering.variables;
-        LinkCoordinates {
-            positions: variables.positions[offset..offset + count]
-                .iter()
-                .map(|p| p.symbol)
-                .collect(),
-            rates: variables.rates[offset..offset + count]
-                .iter()
-                .map(|p| p.symbol)
-                .collect(),
-            columns: (offset..offset + count).collect(),
-        }
-    }
-
-    /// The steps of a displacement; `link` is the join whose coordinates they may use.
-    pub(super) fn steps(
-        &mut self,
-        d: &Displacement,
-        link: Option<JoinId>,
-    ) -> Result<Vec<Step>, LowerError> {
-        d.0.iter()
-            .map(|step| match step {
-                Elementary::Translation(t) => Ok(Step::Translation(self.lowering.vector(
-                    &mut self.pool,
-                    t,
-                    link,
-                )?)),
-                Elementary::Rotation { angle, axis } => {
-                    let axis = self.lowering.vector(&mut self.pool, axis, None)?;
-                    let axis = unit(&mut self.pool, &axis)?;
-                    Ok(Step::Rotation {
-                        axis,
-                        angle: self.lowering.scalar(&mut self.pool, angle, link)?,
-                    })
-                }
-            })
-            .collect()
-    }
-
-    fn inverse_steps(&mut self, d: &Displacement) -> Result<Vec<Step>, LowerError> {
-        let steps = self.steps(d, None)?;
-        Ok(steps
-            .iter()
-            .rev()
-            .map(|s| s.inverse(&mut self.pool))
-            .collect())
-    }
-
-    /// The link's dof chain, in order.
-    pub(super) fn chain(&mut self, join: JoinId) -> Result<Vec<Step>, LowerError> {
-        let link = self.mechanism.link(self.mechanism.join(join).link);
-        let chain = Displacement(link.dofs.iter().flat_map(|d| d.0.iter().cloned()).collect());
-        self.steps(&chain, Some(join))
-    }
-
-    pub(super) fn walk(&mut self, frame: &mut Moving, steps: &[Step], link: &LinkCoordinates) {
-        for step in steps {
-            frame.walk(&mut self.pool, &mut self.derivatives, step, link);
-        }
-    }
-
-    /// Every body's frame, parent first.
-    fn place_bodies(&mut self) -> Result<(), LowerError> {
-        let columns = self.columns();
-        let fixed = Moving::fixed(&mut self.pool, columns);
-        self.bodies = vec![fixed];
-        self.link_steps = vec![Vec::new()];
-        for link in &self.topology.principal {
-            let join = self.mechanism.join(link.join);
-            self.context = Some(join.span);
-            let (on_parent, on_child) = if link.first_on_parent {
-                (&join.first, &join.second)
-            } else {
-                (&join.second, &join.first)
-            };
-            let to_joint = self.steps(&on_parent.displacement, None)?;
-            let mut chain = self.chain(link.join)?;
-            if !link.first_on_parent {
-                chain = chain
-                    .iter()
-                    .rev()
-                    .map(|s| s.inverse(&mut self.pool))
-                    .collect();
-            }
-            let to_body = self.inverse_steps(&on_child.displacement)?;
-            let coordinates = self.link_coordinates(link.join);
-            let mut frame = self.bodies[link.parent].clone();
-            self.walk(&mut frame, &to_joint, &LinkCoordinates::default());
-            self.walk(&mut frame, &chain, &coordinates);
-            self.walk(&mut frame, &to_body, &LinkCoordinates::default());
-            self.bodies.push(frame);
-            self.link_steps.push([to_joint, chain, to_body].concat());
-        }
-        Ok(())
-    }
-
-    /// Rotation and translation of a constant displacement.
-    pub(super) fn pose(&mut self, d: &Displacement) -> Result<(Mat3, Vec3), LowerError> {
-        let steps = self.steps(d, None)?;
-        Ok(self.compose(&steps))
-    }
-
-    /// Rotation and translation of steps that depend on no coordinate.
-    pub(super) fn compose(&mut self, steps: &[Step]) -> (Mat3, Vec3) {
-        let mut rotation = v::identity(&mut self.pool);
-        let mut origin = v::zero(&mut self.pool);
-        for step in steps {
-            match step {
-                Step::Translation(t) => {
-                    let moved = v::mat_vec(&mut self.pool, &rotation, t);
-                    origin = v::add(&mut self.pool, &origin, &moved);
-                }
-                Step::Rotation { axis, angle } => {
-                    let turn = v::rotation(&mut self.pool, axis, *angle);
-                    rotation = v::mat_mul(&mut self.pool, &rotation, &turn);
-                }
-            }
-        }
-        (rotation, origin)
-    }
-
-    /// The body that owns each tree column, and its parent.
-    fn owner(&self, column: usize) -> usize {
-        let mut end = 0;
-        for link in &self.topology.principal {
-            end += self
-                .mechanism
-                .link(self.mechanism.join(link.join).link)
-                .coordinates
-                .len();
-            if column < end {
-                return link.child;
-            }
-        }
-        0
-    }
-
     /// Ψᵀ applied to per-body wrenches (force, moment at the body's origin), from the last body
     /// to the first: the generalised forces on every tree coordinate (zero on the others).
     fn project(&mut self, mut wrenches: Vec<Option<Wrench>>) -> Vec<ExprId> {
@@ -415,18 +208,6 @@ impl<'a> Generator<'a> {
             self.carry_to_parent(b, wrench, &mut wrenches);
         }
         generalised
-    }
-
-    pub(super) fn own_columns(&self, b: usize) -> std::ops::Range<usize> {
-        let link = &self.topology.principal[b - 1];
-        let offset = self.lowering.join_offset(link.join);
-        offset
-            ..offset
-                + self
-                    .mechanism
-                    .link(self.mechanism.join(link.join).link)
-                    .coordinates
-                    .len()
     }
 
     /// The power of `wrench` on body `b` per unit rate of `column`: Ψᵀ's entry.
@@ -501,24 +282,5 @@ impl<'a> Generator<'a> {
             }
         }
         mass
-    }
-}
-
-/// The unit vector along `axis`: normalised now when it is a number, symbolically otherwise.
-fn unit(pool: &mut Pool, axis: &Vec3) -> Result<Vec3, LowerError> {
-    let values: Option<Vec<f64>> = axis.iter().map(|&a| pool.as_constant(a)).collect();
-    match values {
-        Some(x) => {
-            let norm = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
-            if norm == 0.0 || !norm.is_finite() {
-                return Err(LowerError("a rotation has a zero axis".to_string()));
-            }
-            Ok(v::constant(pool, [x[0] / norm, x[1] / norm, x[2] / norm]))
-        }
-        None => {
-            let squared = v::dot(pool, axis, axis);
-            let norm = pool.sqrt(squared);
-            Ok(axis.map(|a| pool.div(a, norm)))
-        }
     }
 }

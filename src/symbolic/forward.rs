@@ -5,9 +5,10 @@
 //! anchor (`inertia`).
 
 use super::articulated::{self, Spatial};
-use super::equations::{Generator, Wrench};
 use super::expr::ExprId;
+use super::generator::Generator;
 use super::kinematics::{LinkCoordinates, Step};
+use super::vector::Wrench;
 use super::vector::{self as v, Vec3};
 
 impl Generator<'_> {

@@ -7,11 +7,9 @@
 //! nothing, as in the numeric model (`dynamics::welds`).
 
 use super::articulated::Matrix6;
-use super::equations::{Generator, Wrench};
 use super::expr::{ExprId, Pool};
 use super::kinematics::Moving;
-use super::lower::LowerError;
-use super::vector::{self as v, Mat3, Vec3};
+use super::vector::{self as v, Mat3, Vec3, Wrench};
 
 /// Mass properties about a frame's origin, in that frame's axes (or the fixed axes).
 #[derive(Clone, Copy)]
@@ -27,7 +25,7 @@ impl Inertia {
     /// The same mass seen from a frame in which this one has `rotation` and `origin` p:
     /// h' = μ p + R h, I'(O') = R I(O) Rᵀ + μ (|p|² Id − p pᵀ) + 2 (p·h') Id − p h'ᵀ − h' pᵀ
     /// with h' = R h.
-    fn moved(&self, pool: &mut Pool, rotation: &Mat3, origin: &Vec3) -> Inertia {
+    pub(super) fn moved(&self, pool: &mut Pool, rotation: &Mat3, origin: &Vec3) -> Inertia {
         let turned = v::mat_vec(pool, rotation, &self.first_moment);
         let carried = v::scale(pool, self.mass, origin);
         let first_moment = v::add(pool, &carried, &turned);
@@ -70,7 +68,7 @@ impl Inertia {
         }
     }
 
-    fn plus(&self, pool: &mut Pool, other: &Inertia) -> Inertia {
+    pub(super) fn plus(&self, pool: &mut Pool, other: &Inertia) -> Inertia {
         let mut at_origin = self.at_origin;
         for (row, other_row) in at_origin.iter_mut().zip(&other.at_origin) {
             for (entry, o) in row.iter_mut().zip(other_row) {
@@ -141,92 +139,3 @@ impl Inertia {
 
 /// One entry per body number (0 = earth).
 pub(super) type PerBody = Vec<Option<Inertia>>;
-
-impl Generator<'_> {
-    /// Each body's anchor: itself when its link has coordinates, its parent's anchor when it is
-    /// welded (0, earth, for a body welded to earth).
-    pub(super) fn anchors(&self) -> Vec<usize> {
-        let mut anchors = vec![0];
-        for link in &self.topology.principal {
-            let moves = !self
-                .mechanism
-                .link(self.mechanism.join(link.join).link)
-                .coordinates
-                .is_empty();
-            anchors.push(if moves {
-                link.child
-            } else {
-                anchors[link.parent]
-            });
-        }
-        anchors
-    }
-
-    /// Per body, its mass properties and those of the bodies welded to it at its origin, in its
-    /// own axes and in the fixed axes; `None` for bodies without mass and for welded bodies.
-    pub(super) fn merged_inertias(&mut self) -> Result<(PerBody, PerBody), LowerError> {
-        let n = self.topology.body_count();
-        let mut local: Vec<Option<Inertia>> = vec![None; n + 1];
-        for (b, slot) in local.iter_mut().enumerate().skip(1) {
-            *slot = self.local_inertia(b)?;
-        }
-        // Children after parents: carry welded bodies' inertias up to their anchors, in the
-        // frames of the bodies on the way.
-        for b in (1..=n).rev() {
-            let anchor = self.anchors[b];
-            let Some(inertia) = local[b].filter(|_| anchor != b) else {
-                continue;
-            };
-            local[b] = None;
-            let parent = self.topology.parent(b);
-            if anchor == 0 {
-                continue; // Welded to earth: it never moves.
-            }
-            let steps = self.link_steps[b].clone();
-            let (rotation, origin) = self.compose(&steps);
-            let moved = inertia.moved(&mut self.pool, &rotation, &origin);
-            local[parent] = Some(match local[parent] {
-                Some(existing) => existing.plus(&mut self.pool, &moved),
-                None => moved,
-            });
-        }
-        let world = (0..=n)
-            .map(|b| {
-                local[b].map(|inertia| {
-                    let zero = v::zero(&mut self.pool);
-                    inertia.moved(&mut self.pool, &self.bodies[b].rotation, &zero)
-                })
-            })
-            .collect();
-        Ok((local, world))
-    }
-
-    /// Body `b`'s mass properties about its origin, in its own axes (numbers when the program
-    /// gives numbers); `None` for a body declared without mass or inertia.
-    fn local_inertia(&mut self, b: usize) -> Result<Option<Inertia>, LowerError> {
-        let body = self.mechanism.body(self.topology.bodies[b - 1]);
-        self.context = Some(body.span);
-        let mass = self
-            .lowering
-            .scalar(&mut self.pool, body.mass.value(), None)?;
-        let moments = self
-            .lowering
-            .vector(&mut self.pool, body.inertia.value(), None)?;
-        if self.pool.is_zero(mass) && v::is_zero(&self.pool, &moments) {
-            return Ok(None);
-        }
-        let (principal, centre) = self.pose(body.iframe.value())?;
-        let pool = &mut self.pool;
-        let zero = pool.constant(0.0);
-        let mut diagonal = [[zero; 3]; 3];
-        for k in 0..3 {
-            diagonal[k][k] = moments[k];
-        }
-        let central = Inertia {
-            mass,
-            first_moment: v::zero(pool),
-            at_origin: diagonal,
-        };
-        Ok(Some(central.moved(pool, &principal, &centre)))
-    }
-}

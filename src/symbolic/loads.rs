@@ -1,10 +1,11 @@
 //! The efforts of the equations: the applied efforts as wrenches on their bodies (𝔉), and the
 //! links' own efforts as generalised forces on their coordinates.
 
-use super::equations::{Generator, Wrench};
 use super::expr::ExprId;
+use super::generator::Generator;
 use super::kinematics::{LinkCoordinates, Moving, Step};
 use super::lower::{FrameState, LowerError};
+use super::vector::Wrench;
 use super::vector::{self as v, Vec3};
 use crate::elab::mechanism::EffortKind;
 use crate::elab::value::{BodyRef, JoinId};

@@ -10,6 +10,7 @@ pub mod emit;
 pub mod equations;
 pub mod expr;
 mod forward;
+mod generator;
 mod inertia;
 pub mod kinematics;
 mod loads;

@@ -128,6 +128,9 @@ pub fn rotation(pool: &mut Pool, axis: &Vec3, angle: ExprId) -> Mat3 {
     m
 }
 
+/// A force and a moment at a body's origin, fixed axes.
+pub type Wrench = [Vec3; 2];
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,9 +4,9 @@
 use lalrpop_util::{lalrpop_mod, ErrorRecovery, ParseError};
 
 use crate::diag::Diagnostic;
+use crate::source::{FileId, Span};
 use crate::syntax::ast::Program;
 use crate::syntax::lexer::{lex, LexError, Spanned, Tok};
-use crate::source::{FileId, Span};
 
 lalrpop_mod!(
     #[allow(clippy::all, unused_parens, unused_imports)]

@@ -1,0 +1,70 @@
+//! The checker's state: what checking produces (`Checked`), the definitions it instantiates,
+//! and the context an expression is checked in. The checking itself is in the sibling files:
+//! declarations (`mod.rs`), expressions (`expr.rs`) and calls (`calls.rs`).
+
+use std::collections::HashMap;
+
+use crate::diag::Diagnostics;
+use crate::load::{ModuleId, Workspace};
+use crate::source::Span;
+use crate::syntax::ast::{Binding, Expr, Name, Param};
+
+use super::scope::{Scope, Target};
+use super::types::{DefId, ScopeId, Ty};
+
+/// A parameterised definition `let f(a, b) = body`.
+pub struct Definition<'w> {
+    pub name: Name,
+    pub params: &'w [Param],
+    pub body: &'w Expr,
+    pub span: Span,
+    /// The scope it was defined in and how many of that scope's names it sees.
+    pub scope: ScopeId,
+    pub limit: u32,
+}
+
+/// The result of checking: scopes, definitions and name resolutions, for the elaborator.
+pub struct Checked<'w> {
+    pub scopes: Vec<Scope>,
+    pub definitions: Vec<Definition<'w>>,
+    pub resolutions: HashMap<Span, Target>,
+    pub module_scopes: HashMap<ModuleId, ScopeId>,
+    pub package_scopes: HashMap<Span, ScopeId>,
+    /// The `let` binding of each declared name, by the span of the name.
+    pub bindings: HashMap<Span, &'w Binding>,
+}
+
+impl Checked<'_> {
+    pub fn scope(&self, id: ScopeId) -> &Scope {
+        &self.scopes[id.0 as usize]
+    }
+}
+
+/// A parameter, link coordinate or `local` binding in scope while checking an expression.
+#[derive(Clone, Debug)]
+pub(super) struct Local {
+    pub(super) name: Name,
+    pub(super) ty: Ty,
+    /// Link coordinates are time-dependent: only they may be primed (`x'`).
+    pub(super) coordinate: bool,
+}
+
+/// Where an expression is being checked.
+pub(super) struct Ctx {
+    pub(super) scope: ScopeId,
+    pub(super) limit: u32,
+    pub(super) locals: Vec<Local>,
+}
+
+pub struct Checker<'w> {
+    pub(super) workspace: &'w Workspace,
+    pub(super) out: Checked<'w>,
+    pub(super) diagnostics: Diagnostics,
+    /// Use sites of the definitions being instantiated, innermost last.
+    pub(super) instantiations: Vec<(Span, Name)>,
+    pub(super) memo: HashMap<(DefId, Vec<Ty>), Ty>,
+    pub(super) modules_in_progress: Vec<ModuleId>,
+    pub(super) simulate_seen: Option<Span>,
+}
+
+pub(super) const MAX_INSTANTIATION_DEPTH: usize = 64;
