@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use crate::check;
 use crate::diag::Diagnostic;
 use crate::elab::{self, Mechanism};
-use crate::load::{self, LoadOptions, Workspace};
+use crate::load::{self, LoadError, LoadOptions, Workspace};
 
 pub struct Compilation {
     pub workspace: Workspace,
@@ -22,7 +22,7 @@ impl Compilation {
 }
 
 /// Compiles files from disk.
-pub fn compile_files(paths: &[PathBuf], options: &LoadOptions) -> Result<Compilation, String> {
+pub fn compile_files(paths: &[PathBuf], options: &LoadOptions) -> Result<Compilation, LoadError> {
     let (workspace, diagnostics) = load::load_files(paths, options)?;
     Ok(finish(workspace, diagnostics.list))
 }

@@ -1,10 +1,17 @@
 //! lsdc: the compiler and simulator for LSD, a declarative language for describing mechanisms.
 //!
-//! The pipeline, one module per phase, data flowing one way:
-//! `syntax` (text to AST) → `load` (imports, libraries) → `check` (names and types) →
-//! `elab` (values: bodies, frames, links, joins, efforts, unknowns) → later phases.
+//! Start with [`api`]: a program from text or a file, its diagnostics, its mechanism, a prepared
+//! simulation and its run, the dynamics at given states.
+//!
+//! The pipeline, one module per phase, data flowing one way (no module uses a later one):
+//! `source` (files, spans) → `syntax` (text to AST) → `load` (imports, libraries, URDF) →
+//! `check` (names and types) → `elab` (values: bodies, frames, links, joins, efforts,
+//! unknowns) → `topology` (numbering, principal and complementary links) → `kinematics` →
+//! `dynamics` → `integrate` and `simulate` → `output`; `symbolic` writes the equations from the
+//! mechanism. `diag` holds the diagnostics every phase reports.
 
 pub mod analysis;
+pub mod api;
 pub mod check;
 pub mod diag;
 pub mod driver;

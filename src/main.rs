@@ -334,7 +334,7 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
     for file in files {
         let compilation = match driver::compile_files(std::slice::from_ref(file), options) {
             Ok(c) => c,
-            Err(message) => return usage_error(&message),
+            Err(error) => return usage_error(&error.to_string()),
         };
         all_ok &= !compilation.has_errors();
         match format {
@@ -388,8 +388,8 @@ fn compile_one(
     options: &LoadOptions,
     format: Format,
 ) -> Result<Compilation, ExitCode> {
-    let compilation =
-        driver::compile_files(&[file.to_path_buf()], options).map_err(|m| usage_error(&m))?;
+    let compilation = driver::compile_files(&[file.to_path_buf()], options)
+        .map_err(|error| usage_error(&error.to_string()))?;
     if compilation.has_errors() || (format == Format::Text && !compilation.diagnostics.is_empty()) {
         report_diagnostics(&compilation, &compilation.diagnostics, format);
     }
@@ -520,8 +520,11 @@ fn write_output(output: Option<&std::path::Path>, text: &str) -> ExitCode {
     }
 }
 
-fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, String> {
-    sets.iter().map(|s| s.parse()).collect()
+fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, ExitCode> {
+    sets.iter()
+        .map(|s| s.parse())
+        .collect::<Result<_, lsdc::kinematics::unknowns::OverrideError>>()
+        .map_err(|error| usage_error(&error.to_string()))
 }
 
 fn simulate(args: &SimulateArgs) -> ExitCode {
@@ -530,7 +533,7 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     use lsdc::simulate::settings::SettingsChanges;
     let overrides = match parse_sets(&args.sets) {
         Ok(o) => o,
-        Err(message) => return usage_error(&message),
+        Err(code) => return code,
     };
     let compilation = match compile_one(&args.file, &args.libraries.options(), args.report) {
         Ok(c) => c,
@@ -572,9 +575,9 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     }
     let simulation = {
         let bar = progress_bar(prepared.settings.duration);
-        let mut progress = |t: f64| {
+        let mut progress = |sample: &lsdc::simulate::run::Sample| {
             if let Some(bar) = &bar {
-                bar.set_position((t * 1000.0) as u64);
+                bar.set_position((sample.time * 1000.0) as u64);
             }
         };
         let simulation = lsdc::simulate::run::run(&prepared, &mut progress);
@@ -693,7 +696,7 @@ fn prepare_file(
     format: Format,
 ) -> Result<lsdc::simulate::prepare::Prepared, ExitCode> {
     use lsdc::simulate::prepare::{prepare, Settings};
-    let overrides = parse_sets(sets).map_err(|message| usage_error(&message))?;
+    let overrides = parse_sets(sets)?;
     let compilation = compile_one(file, options, format)?;
     let Some(mechanism) = &compilation.mechanism else {
         return Err(ExitCode::from(1));

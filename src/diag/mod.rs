@@ -96,6 +96,20 @@ impl Diagnostic {
     }
 }
 
+impl std::fmt::Display for Diagnostic {
+    /// The one-line form, without the source: `error[E0301]: unknown name `x``. The full form
+    /// with the source lines is `render::to_text`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let severity = match self.severity {
+            Severity::Error => "error",
+            Severity::Warning => "warning",
+        };
+        write!(f, "{severity}[{}]: {}", self.code, self.message)
+    }
+}
+
+impl std::error::Error for Diagnostic {}
+
 /// Diagnostics collected by one phase, in the order found.
 #[derive(Default, Debug)]
 pub struct Diagnostics {

@@ -16,21 +16,48 @@ pub struct Override {
     pub value: f64,
 }
 
+/// A `NAME=VALUE` that cannot be read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum OverrideError {
+    /// No `=`.
+    NoEquals { text: String },
+    /// The right-hand side is not a number.
+    NotANumber { text: String, value: String },
+}
+
+impl std::fmt::Display for OverrideError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OverrideError::NoEquals { text } => write!(f, "`--set {text}`: write NAME=VALUE"),
+            OverrideError::NotANumber { text, value } => {
+                write!(f, "`--set {text}`: `{value}` is not a number")
+            }
+        }
+    }
+}
+
+impl std::error::Error for OverrideError {}
+
 impl std::str::FromStr for Override {
-    type Err = String;
+    type Err = OverrideError;
 
     /// Reads `NAME=VALUE` (the value is the last `=`'s right-hand side, a number).
-    fn from_str(text: &str) -> Result<Override, String> {
+    fn from_str(text: &str) -> Result<Override, OverrideError> {
         let (name, value) = text
             .rsplit_once('=')
-            .ok_or_else(|| format!("`--set {text}`: write NAME=VALUE"))?;
-        let value: f64 = value
+            .ok_or_else(|| OverrideError::NoEquals {
+                text: text.to_string(),
+            })?;
+        let number: f64 = value
             .trim()
             .parse()
-            .map_err(|_| format!("`--set {text}`: `{value}` is not a number"))?;
+            .map_err(|_| OverrideError::NotANumber {
+                text: text.to_string(),
+                value: value.to_string(),
+            })?;
         Ok(Override {
             name: name.trim().to_string(),
-            value,
+            value: number,
         })
     }
 }

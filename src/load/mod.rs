@@ -74,6 +74,26 @@ impl Workspace {
     }
 }
 
+/// A root file that cannot be read (imports that cannot be read are diagnostics of the
+/// importing program instead).
+#[derive(Debug)]
+pub struct LoadError {
+    pub path: PathBuf,
+    pub error: std::io::Error,
+}
+
+impl std::fmt::Display for LoadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "cannot read `{}`: {}", self.path.display(), self.error)
+    }
+}
+
+impl std::error::Error for LoadError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&self.error)
+    }
+}
+
 pub struct LoadOptions {
     /// `-L` directories, searched after the importing file's directory.
     pub library_dirs: Vec<PathBuf>,
@@ -113,11 +133,13 @@ struct Loader {
 pub fn load_files(
     paths: &[PathBuf],
     options: &LoadOptions,
-) -> Result<(Workspace, Diagnostics), String> {
+) -> Result<(Workspace, Diagnostics), LoadError> {
     let mut loader = Loader::new(options);
     for path in paths {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path).map_err(|error| LoadError {
+            path: path.clone(),
+            error,
+        })?;
         let key = path.canonicalize().unwrap_or_else(|_| path.clone());
         if is_urdf(path) {
             if let Some(id) = loader.add_urdf(Origin::File(key), path.display().to_string(), text) {

@@ -39,7 +39,7 @@ pub fn initial_state(
     let mut data = Data::new(model);
     let c = constraints(model, &mut data, &q, &v, false).map_err(evaluation)?;
     complete_rates(&c.jacobian, &given, &mut v)
-        .map_err(|message| vec![incompatible_rates(mechanism, &given, message)])?;
+        .map_err(|opening| vec![incompatible_rates(mechanism, &given, opening)])?;
     // Assembly stops at 1e-12: finish at round-off.
     project(model, &mut data, &mut q, &mut v).map_err(evaluation)?;
     model.declared(&q, &v, &coordinates).map_err(evaluation)
@@ -69,12 +69,13 @@ fn given_velocities(mechanism: &Mechanism, model: &Model) -> Vec<(usize, String)
     given
 }
 
-/// Changes the velocities not given as little as possible so that G v = 0.
+/// Changes the velocities not given as little as possible so that G v = 0; when the given ones
+/// make that impossible, the rate at which the loops still open (m/s or rad/s).
 fn complete_rates(
     jacobian: &DMatrix<f64>,
     given: &[(usize, String)],
     v: &mut [f64],
-) -> Result<(), String> {
+) -> Result<(), f64> {
     let free: Vec<usize> = (0..v.len())
         .filter(|i| !given.iter().any(|(g, _)| g == i))
         .collect();
@@ -89,9 +90,7 @@ fn complete_rates(
     let left = (jacobian * DVector::from_column_slice(v)).amax();
     let scale = velocity.amax().max(1e-300) * jacobian.amax().max(1e-300);
     if left > 1e-9 * scale {
-        return Err(format!(
-            "they leave the loops opening at {left:.3e} (m/s or rad/s)"
-        ));
+        return Err(left);
     }
     Ok(())
 }
@@ -99,10 +98,10 @@ fn complete_rates(
 fn incompatible_rates(
     mechanism: &Mechanism,
     given: &[(usize, String)],
-    message: String,
+    opening: f64,
 ) -> Diagnostic {
     let names: Vec<String> = given.iter().map(|(_, n)| format!("`{n}`")).collect();
-    let mut diagnostic = Diagnostic::error("E0815", format!("the initial rates {} are not compatible with the loops: {message}", names.join(", ")))
+    let mut diagnostic = Diagnostic::error("E0815", format!("the initial rates {} are not compatible with the loops: they leave the loops opening at {opening:.3e} (m/s or rad/s)", names.join(", ")))
         .help("give the rates of independent coordinates only (as many as the mobility); the others follow from the loops");
     if let Some(initial) = mechanism.initial.iter().find(|i| i.order == 1) {
         diagnostic = diagnostic.primary(initial.span, "given here");

@@ -212,8 +212,8 @@ impl Sampler<'_> {
     }
 }
 
-/// Runs the prepared simulation; `progress(t)` is called at every output.
-pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
+/// Runs the prepared simulation; `sink` receives every sample as soon as it is computed.
+pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
     let model = &prepared.model;
     let settings = &prepared.settings;
     let (q0, v0) = match model.state_from_declared(&prepared.coordinates, &prepared.rates) {
@@ -254,8 +254,9 @@ pub fn run(prepared: &Prepared, progress: &mut dyn FnMut(f64)) -> Simulation {
     let mut samples = Vec::with_capacity(outputs.len());
     let started = Instant::now();
     let mut observer = |t: f64, y: &[f64]| -> Result<(), String> {
-        samples.push(sampler.sample(t, y)?);
-        progress(t);
+        let sample = sampler.sample(t, y)?;
+        sink(&sample);
+        samples.push(sample);
         Ok(())
     };
     let integrator_settings = IntegratorSettings {

@@ -90,13 +90,15 @@ impl Equations {
         Tape::new(&self.pool, &self.roots())
     }
 
-    /// Values for every symbol of the pool, by name; the name of the first symbol without one
-    /// otherwise.
-    pub fn symbol_values(&self, value: impl Fn(&str) -> Option<f64>) -> Result<Vec<f64>, String> {
+    /// Values for every symbol of the pool, by name; the first symbol without one otherwise.
+    pub fn symbol_values(
+        &self,
+        value: impl Fn(&str) -> Option<f64>,
+    ) -> Result<Vec<f64>, MissingSymbol> {
         (0..self.pool.symbol_count() as u32)
             .map(|i| {
                 let name = self.pool.symbol_name(i);
-                value(name).ok_or_else(|| name.to_string())
+                value(name).ok_or_else(|| MissingSymbol(name.to_string()))
             })
             .collect()
     }
@@ -124,6 +126,18 @@ impl Equations {
         }
     }
 }
+
+/// A symbol of the equations that was given no value.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MissingSymbol(pub String);
+
+impl std::fmt::Display for MissingSymbol {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "no value for the symbol `{}`", self.0)
+    }
+}
+
+impl std::error::Error for MissingSymbol {}
 
 /// The equations' values at one point.
 #[derive(Clone, Debug)]

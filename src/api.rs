@@ -1,0 +1,211 @@
+//! The library's entry points, in the order a program goes through them:
+//!
+//! 1. [`Program::from_file`] or [`Program::from_text`]: LSD text (or a URDF file) loaded with its
+//!    imports, checked and elaborated; its [`diagnostics`](Program::diagnostics) and, when it has
+//!    no errors, its [`Mechanism`].
+//! 2. [`Program::prepare`]: values for the unknowns, the dynamic model, the initial state and the
+//!    settings, as `lsdc simulate` prepares them: a [`Prepared`] simulation.
+//! 3. [`run`]: the integration, every sample handed to a sink as it is computed, and the
+//!    [`Simulation`] with its report. [`evaluate`] gives the dynamics at chosen states instead.
+//!
+//! Every failure is an [`Error`]; errors in the program are [`Diagnostic`]s, which
+//! [`Program::render`] shows as the command line does.
+//!
+//! ```
+//! use lsdc::api::{run, Program, SettingsChanges};
+//!
+//! let program = Program::from_file("examples/pendulum.lsd", &Default::default())?;
+//! let changes = SettingsChanges { duration: Some(0.5), ..Default::default() };
+//! let prepared = program.prepare(&[], &changes)?;
+//! let mut times = Vec::new();
+//! let simulation = run(&prepared, &mut |sample| times.push(sample.time));
+//! assert!(simulation.report.failure.is_none());
+//! assert_eq!(times.last(), Some(&0.5));
+//! # Ok::<(), lsdc::api::Error>(())
+//! ```
+
+use std::fmt;
+use std::path::Path;
+
+use crate::diag::render;
+pub use crate::diag::Diagnostic;
+use crate::driver::{self, Compilation};
+pub use crate::elab::Mechanism;
+pub use crate::kinematics::unknowns::Override;
+pub use crate::load::{LoadError, LoadOptions};
+pub use crate::simulate::batch::{Evaluation, StateInput};
+pub use crate::simulate::prepare::Prepared;
+pub use crate::simulate::run::{Report, Sample, Simulation};
+pub use crate::simulate::settings::{Integrator, Settings, SettingsChanges, SettingsError};
+
+/// Why a step of the library's pipeline failed.
+#[derive(Debug)]
+pub enum Error {
+    /// A root file cannot be read.
+    Load(LoadError),
+    /// The program has errors, or cannot be prepared for simulation (a value is missing, a loop
+    /// cannot be assembled, …): the diagnostics say where and why.
+    Program(Vec<Diagnostic>),
+    /// The settings asked for cannot be used.
+    Settings(SettingsError),
+    /// The states to evaluate cannot be used.
+    States(String),
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Load(error) => error.fmt(f),
+            Error::Settings(error) => error.fmt(f),
+            Error::States(message) => write!(f, "cannot evaluate the states: {message}"),
+            Error::Program(diagnostics) => {
+                let errors: Vec<String> = diagnostics
+                    .iter()
+                    .filter(|d| d.is_error())
+                    .map(Diagnostic::to_string)
+                    .collect();
+                write!(f, "{}", errors.join("; "))
+            }
+        }
+    }
+}
+
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::Load(error) => Some(error),
+            Error::Settings(error) => Some(error),
+            Error::Program(_) | Error::States(_) => None,
+        }
+    }
+}
+
+impl From<LoadError> for Error {
+    fn from(error: LoadError) -> Error {
+        Error::Load(error)
+    }
+}
+
+impl From<SettingsError> for Error {
+    fn from(error: SettingsError) -> Error {
+        Error::Settings(error)
+    }
+}
+
+impl From<Vec<Diagnostic>> for Error {
+    fn from(diagnostics: Vec<Diagnostic>) -> Error {
+        Error::Program(diagnostics)
+    }
+}
+
+/// A program loaded, checked and elaborated, with everything its phases reported.
+pub struct Program {
+    compilation: Compilation,
+}
+
+impl Program {
+    /// Loads a `.lsd` (or `.urdf`) file and what it imports, then checks and elaborates it.
+    /// Only a file that cannot be read is an error here; errors in the program are in
+    /// [`diagnostics`](Program::diagnostics).
+    ///
+    /// ```
+    /// let program = lsdc::api::Program::from_file("examples/four_bar.lsd", &Default::default())?;
+    /// assert!(!program.has_errors());
+    /// assert!(program.mechanism()?.joins.len() >= 4);
+    /// # Ok::<(), lsdc::api::Error>(())
+    /// ```
+    pub fn from_file(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Program, Error> {
+        let compilation = driver::compile_files(&[path.as_ref().to_path_buf()], options)?;
+        Ok(Program { compilation })
+    }
+
+    /// Checks and elaborates a program given as text; `name` is how diagnostics name it, and
+    /// its relative imports are looked up in `dir` (then the library path).
+    ///
+    /// ```
+    /// use lsdc::api::Program;
+    ///
+    /// let program = Program::from_text("typo.lsd", "let b = body mass = 1 end; join earth and c with 1;", None, &Default::default());
+    /// assert!(program.has_errors());
+    /// let text = program.render();
+    /// assert!(text.contains("unknown name `c`") && text.contains("typo.lsd:1:"));
+    /// ```
+    pub fn from_text(name: &str, text: &str, dir: Option<&Path>, options: &LoadOptions) -> Program {
+        Program {
+            compilation: driver::compile_text(name, text, dir, options),
+        }
+    }
+
+    /// Errors and warnings of every phase, in the order found.
+    pub fn diagnostics(&self) -> &[Diagnostic] {
+        &self.compilation.diagnostics
+    }
+
+    pub fn has_errors(&self) -> bool {
+        self.compilation.has_errors()
+    }
+
+    /// The program's diagnostics as the command line prints them: file, line, column, the
+    /// source lines and the help.
+    pub fn render(&self) -> String {
+        self.render_diagnostics(self.diagnostics())
+    }
+
+    /// Other diagnostics about this program (from [`prepare`](Program::prepare), say) rendered
+    /// against its sources, with the import that brought a library in.
+    pub fn render_diagnostics(&self, diagnostics: &[Diagnostic]) -> String {
+        let mut diagnostics = diagnostics.to_vec();
+        for diagnostic in &mut diagnostics {
+            self.compilation.workspace.add_import_context(diagnostic);
+        }
+        render::to_text(&self.compilation.workspace.sources, &diagnostics)
+    }
+
+    /// The mechanism the program describes, when it has no errors.
+    pub fn mechanism(&self) -> Result<&Mechanism, Error> {
+        self.compilation
+            .mechanism
+            .as_ref()
+            .ok_or_else(|| Error::Program(self.compilation.diagnostics.clone()))
+    }
+
+    /// Prepares the simulation as `lsdc simulate` does: `values` give unknowns their values by
+    /// name (as `--set NAME=VALUE`), `changes` change the settings of the program's `simulate`
+    /// declaration.
+    pub fn prepare(
+        &self,
+        values: &[Override],
+        changes: &SettingsChanges,
+    ) -> Result<Prepared, Error> {
+        let mut prepared =
+            crate::simulate::prepare::prepare(self.mechanism()?, values, &Settings::default())?;
+        prepared.settings.apply(changes)?;
+        Ok(prepared)
+    }
+}
+
+/// Integrates a prepared simulation. `sink` receives every sample as soon as it is computed (to
+/// stream it, draw progress or stop caring about memory); the returned [`Simulation`] holds them
+/// all with the run report. A run that fails keeps the samples computed before the failure, and
+/// its report says when and why.
+pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
+    crate::simulate::run::run(prepared, sink)
+}
+
+/// Inverse dynamics, mass matrix, forward dynamics and the bodies' poses at each state, as
+/// `lsdc eval` computes them.
+///
+/// ```
+/// use lsdc::api::{evaluate, Program, StateInput};
+///
+/// let program = Program::from_file("examples/pendulum.lsd", &Default::default())?;
+/// let prepared = program.prepare(&[], &Default::default())?;
+/// let states = lsdc::simulate::batch::parse_states(r#"[{"q": [0.5], "v": [0.0]}]"#)
+///     .map_err(lsdc::api::Error::States)?;
+/// let evaluation = evaluate(&prepared, &states)?;
+/// assert_eq!(evaluation.states.len(), 1);
+/// # Ok::<(), lsdc::api::Error>(())
+/// ```
+pub fn evaluate(prepared: &Prepared, states: &[StateInput]) -> Result<Evaluation, Error> {
+    crate::simulate::batch::evaluate_states(prepared, states).map_err(Error::States)
+}
