@@ -1,6 +1,7 @@
 //! Calls the system's right-hand side and projection, counting calls and catching non-finite values.
 
-use super::{Failure, IntegrationError, OdeSystem, Stats};
+use super::outcome::{Failure, IntegrationError, Stats};
+use super::system::OdeSystem;
 
 /// Why a step attempt, or the integration, stopped.
 #[derive(Clone, Debug)]
