@@ -20,9 +20,9 @@ mod rosenbrock;
 mod settings;
 mod system;
 
-pub use outcome::{Failure, IntegrationError, Stats};
+pub use outcome::{Failure, InputError, IntegrationError, Stats};
 pub use settings::{Method, Settings};
-pub use system::{Observer, OdeSystem};
+pub use system::{CallbackError, Observer, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,
 /// within `[t0, t_end]`) as soon as the integration has passed it, and returns the state at
@@ -34,14 +34,14 @@ pub use system::{Observer, OdeSystem};
 /// a failure stay delivered.
 ///
 /// ```
-/// use lsdc::integrate::{integrate, Method, OdeSystem, Settings};
+/// use lsdc::integrate::{integrate, CallbackError, Method, OdeSystem, Settings};
 ///
 /// struct Decay;
 /// impl OdeSystem for Decay {
 ///     fn dimension(&self) -> usize {
 ///         1
 ///     }
-///     fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+///     fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
 ///         dydt[0] = -y[0];
 ///         Ok(())
 ///     }
@@ -70,9 +70,9 @@ pub fn integrate(
     settings: &Settings,
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    let invalid = |message: String| IntegrationError {
+    let invalid = |error: InputError| IntegrationError {
         time: t0,
-        failure: Failure::InvalidInput(message),
+        failure: Failure::InvalidInput(error),
         stats: Stats::default(),
     };
     check_problem(system.dimension(), t0, y0, t_end, outputs).map_err(invalid)?;
@@ -107,31 +107,29 @@ fn check_problem(
     y0: &[f64],
     t_end: f64,
     outputs: &[f64],
-) -> Result<(), String> {
+) -> Result<(), InputError> {
     if y0.len() != dimension {
-        return Err(format!(
-            "the initial state has {} values, the system {dimension}",
-            y0.len()
-        ));
+        return Err(InputError::StateLength {
+            given: y0.len(),
+            dimension,
+        });
     }
     if !(t0.is_finite() && t_end.is_finite() && t0 <= t_end) {
-        return Err(format!(
-            "the time span [{t0}, {t_end}] is not a finite forward interval"
-        ));
+        return Err(InputError::TimeSpan { t0, t_end });
     }
     if outputs.iter().any(|&t| !(t0..=t_end).contains(&t)) {
-        return Err(format!("an output time lies outside [{t0}, {t_end}]"));
+        return Err(InputError::OutputOutsideSpan { t0, t_end });
     }
     if outputs.windows(2).any(|pair| pair[0] > pair[1]) {
-        return Err("the output times are not sorted".to_string());
+        return Err(InputError::UnsortedOutputs);
     }
     Ok(())
 }
 
-fn check_settings(method: &Method, settings: &Settings) -> Result<(), String> {
-    if let Method::Rk4 { step } = method {
-        if !(step.is_finite() && *step > 0.0) {
-            return Err(format!("the RK4 step {step} is not a positive number"));
+fn check_settings(method: &Method, settings: &Settings) -> Result<(), InputError> {
+    if let Method::Rk4 { step } = *method {
+        if !(step.is_finite() && step > 0.0) {
+            return Err(InputError::Rk4Step { step });
         }
         return Ok(());
     }
@@ -142,20 +140,15 @@ fn check_settings(method: &Method, settings: &Settings) -> Result<(), String> {
         max_step,
         min_step,
         ..
-    } = settings;
-    if !(*rtol >= 0.0 && *atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite())
-    {
-        return Err(format!(
-            "the tolerances rtol = {rtol}, atol = {atol} must be non-negative, not both zero"
-        ));
+    } = *settings;
+    if !(rtol >= 0.0 && atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite()) {
+        return Err(InputError::Tolerances { rtol, atol });
     }
-    if !(*max_step > 0.0 && *min_step >= 0.0 && min_step <= max_step) {
-        return Err(format!(
-            "the step limits [{min_step}, {max_step}] are not an interval of positive steps"
-        ));
+    if !(max_step > 0.0 && min_step >= 0.0 && min_step <= max_step) {
+        return Err(InputError::StepLimits { min_step, max_step });
     }
     if initial_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
-        return Err("the initial step must be a positive number".to_string());
+        return Err(InputError::InitialStep);
     }
     Ok(())
 }

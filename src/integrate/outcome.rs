@@ -30,12 +30,53 @@ pub enum Failure {
     StepUnderflow { step: f64 },
     /// `max_steps` were taken before reaching the end time.
     TooManySteps,
-    /// The system's `rhs` or `project` returned this error.
+    /// The system's `rhs` or `project` returned an error with this message.
     System(String),
-    /// The observer returned this error.
+    /// The observer returned an error with this message.
     Observer(String),
     /// The arguments were inconsistent (wrong state length, unsorted outputs, bad settings...).
-    InvalidInput(String),
+    InvalidInput(InputError),
+}
+
+/// Arguments of an integration that do not make a problem the method can solve.
+#[derive(Clone, Debug, PartialEq)]
+pub enum InputError {
+    /// The initial state's length differs from the system's dimension.
+    StateLength {
+        given: usize,
+        dimension: usize,
+    },
+    /// The time span is not finite or runs backwards.
+    TimeSpan {
+        t0: f64,
+        t_end: f64,
+    },
+    /// An output time lies outside the time span.
+    OutputOutsideSpan {
+        t0: f64,
+        t_end: f64,
+    },
+    UnsortedOutputs,
+    /// The fixed step of RK4 is not a positive number.
+    Rk4Step {
+        step: f64,
+    },
+    /// The tolerances are negative, not finite, or both zero.
+    Tolerances {
+        rtol: f64,
+        atol: f64,
+    },
+    /// The step limits do not make an interval of positive steps.
+    StepLimits {
+        min_step: f64,
+        max_step: f64,
+    },
+    /// The initial step is not a positive number.
+    InitialStep,
+    /// The method cannot integrate this system, for this reason (the caller's method choice).
+    Unsuitable {
+        reason: &'static str,
+    },
 }
 
 /// An integration that stopped early: when, why, and the work done until then.
@@ -55,10 +96,44 @@ impl fmt::Display for Failure {
             Failure::TooManySteps => write!(f, "too many steps"),
             Failure::System(message) => write!(f, "{message}"),
             Failure::Observer(message) => write!(f, "{message}"),
-            Failure::InvalidInput(message) => write!(f, "invalid integration input: {message}"),
+            Failure::InvalidInput(error) => write!(f, "invalid integration input: {error}"),
         }
     }
 }
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            InputError::StateLength { given, dimension } => write!(
+                f,
+                "the initial state has {given} values, the system {dimension}"
+            ),
+            InputError::TimeSpan { t0, t_end } => write!(
+                f,
+                "the time span [{t0}, {t_end}] is not a finite forward interval"
+            ),
+            InputError::OutputOutsideSpan { t0, t_end } => {
+                write!(f, "an output time lies outside [{t0}, {t_end}]")
+            }
+            InputError::UnsortedOutputs => write!(f, "the output times are not sorted"),
+            InputError::Rk4Step { step } => {
+                write!(f, "the RK4 step {step} is not a positive number")
+            }
+            InputError::Tolerances { rtol, atol } => write!(
+                f,
+                "the tolerances rtol = {rtol}, atol = {atol} must be non-negative, not both zero"
+            ),
+            InputError::StepLimits { min_step, max_step } => write!(
+                f,
+                "the step limits [{min_step}, {max_step}] are not an interval of positive steps"
+            ),
+            InputError::InitialStep => write!(f, "the initial step must be a positive number"),
+            InputError::Unsuitable { reason } => write!(f, "{reason}"),
+        }
+    }
+}
+
+impl std::error::Error for InputError {}
 
 impl fmt::Display for IntegrationError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -70,4 +145,11 @@ impl fmt::Display for IntegrationError {
     }
 }
 
-impl std::error::Error for IntegrationError {}
+impl std::error::Error for IntegrationError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.failure {
+            Failure::InvalidInput(error) => Some(error),
+            _ => None,
+        }
+    }
+}

@@ -86,5 +86,5 @@ impl<'a> Outputs<'a> {
 }
 
 fn observe(observer: &mut Observer, t: f64, y: &[f64]) -> Result<(), Halt> {
-    observer(t, y).map_err(|message| Halt::fatal(t, Failure::Observer(message)))
+    observer(t, y).map_err(|error| Halt::fatal(t, Failure::Observer(error.to_string())))
 }
