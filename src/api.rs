@@ -33,7 +33,7 @@ use crate::driver::{self, Compilation};
 pub use crate::elab::Mechanism;
 pub use crate::kinematics::unknowns::Override;
 pub use crate::load::{LoadError, LoadOptions};
-pub use crate::simulate::batch::{Evaluation, StateInput};
+pub use crate::simulate::batch::{parse_states, Evaluation, StateInput, StatesError};
 pub use crate::simulate::prepare::Prepared;
 pub use crate::simulate::run::{Report, Sample, Simulation};
 pub use crate::simulate::settings::{Integrator, Settings, SettingsChanges, SettingsError};
@@ -48,8 +48,8 @@ pub enum Error {
     Program(Vec<Diagnostic>),
     /// The settings asked for cannot be used.
     Settings(SettingsError),
-    /// The states to evaluate cannot be used.
-    States(String),
+    /// The states to evaluate cannot be read, or one of them cannot be evaluated.
+    States(StatesError),
 }
 
 impl fmt::Display for Error {
@@ -57,7 +57,7 @@ impl fmt::Display for Error {
         match self {
             Error::Load(error) => error.fmt(f),
             Error::Settings(error) => error.fmt(f),
-            Error::States(message) => write!(f, "cannot evaluate the states: {message}"),
+            Error::States(error) => error.fmt(f),
             Error::Program(diagnostics) => {
                 let errors: Vec<String> = diagnostics
                     .iter()
@@ -75,7 +75,8 @@ impl std::error::Error for Error {
         match self {
             Error::Load(error) => Some(error),
             Error::Settings(error) => Some(error),
-            Error::Program(_) | Error::States(_) => None,
+            Error::States(error) => Some(error),
+            Error::Program(_) => None,
         }
     }
 }
@@ -89,6 +90,12 @@ impl From<LoadError> for Error {
 impl From<SettingsError> for Error {
     fn from(error: SettingsError) -> Error {
         Error::Settings(error)
+    }
+}
+
+impl From<StatesError> for Error {
+    fn from(error: StatesError) -> Error {
+        Error::States(error)
     }
 }
 
@@ -196,12 +203,11 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
 /// `lsdc eval` computes them.
 ///
 /// ```
-/// use lsdc::api::{evaluate, Program, StateInput};
+/// use lsdc::api::{evaluate, parse_states, Program};
 ///
 /// let program = Program::from_file("examples/pendulum.lsd", &Default::default())?;
 /// let prepared = program.prepare(&[], &Default::default())?;
-/// let states = lsdc::simulate::batch::parse_states(r#"[{"q": [0.5], "v": [0.0]}]"#)
-///     .map_err(lsdc::api::Error::States)?;
+/// let states = parse_states(r#"[{"q": [0.5], "v": [0.0]}]"#)?;
 /// let evaluation = evaluate(&prepared, &states)?;
 /// assert_eq!(evaluation.states.len(), 1);
 /// # Ok::<(), lsdc::api::Error>(())

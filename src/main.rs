@@ -600,7 +600,7 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     }
     let plotted = match &args.plot {
         Some(path) => lsdc::output::plot::plot(&simulation, path)
-            .map_err(|message| format!("cannot draw `{}`: {message}", path.display())),
+            .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
         None => Ok(()),
     };
     match args.report {
@@ -630,7 +630,7 @@ fn statics(
     };
     let holding = match lsdc::simulate::statics::holding_efforts(&prepared, actuated) {
         Ok(h) => h,
-        Err(message) => return usage_error(&message),
+        Err(error) => return usage_error(&error.to_string()),
     };
     match format {
         Format::Text => out(&text::holding(&holding)),
@@ -648,7 +648,7 @@ fn eval(
     use lsdc::simulate::batch::{evaluate_states, parse_states};
     let inputs = match std::fs::read_to_string(states)
         .map_err(|e| e.to_string())
-        .and_then(|text| parse_states(&text))
+        .and_then(|text| parse_states(&text).map_err(|e| e.to_string()))
     {
         Ok(inputs) => inputs,
         Err(message) => {
@@ -680,8 +680,8 @@ fn eval(
             out(&json(&evaluation));
             ExitCode::SUCCESS
         }
-        Err(message) => {
-            eprintln!("error: {message}");
+        Err(error) => {
+            eprintln!("error: {error}");
             ExitCode::from(1)
         }
     }

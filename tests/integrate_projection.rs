@@ -4,7 +4,9 @@
 
 use std::f64::consts::PI;
 
-use lsdc::integrate::{integrate, Failure, IntegrationError, Method, OdeSystem, Settings, Stats};
+use lsdc::integrate::{
+    integrate, CallbackError, Failure, IntegrationError, Method, OdeSystem, Settings, Stats,
+};
 
 /// A point moving at unit speed on the unit circle, in Cartesian coordinates (x, y, vx, vy): the
 /// acceleration is the centripetal one, −(vx² + vy²)·(x, y). Nothing keeps it on the circle but
@@ -16,7 +18,7 @@ impl OdeSystem for Circle {
         4
     }
 
-    fn rhs(&mut self, _t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, _t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), CallbackError> {
         let speed_squared = s[2] * s[2] + s[3] * s[3];
         dsdt[0] = s[2];
         dsdt[1] = s[3];
@@ -39,11 +41,11 @@ impl OdeSystem for ProjectedCircle {
         4
     }
 
-    fn rhs(&mut self, t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), CallbackError> {
         Circle.rhs(t, s, dsdt)
     }
 
-    fn project(&mut self, t: f64, s: &mut [f64]) -> Result<bool, String> {
+    fn project(&mut self, t: f64, s: &mut [f64]) -> Result<bool, CallbackError> {
         self.times.push(t);
         let before = s.to_vec();
         let radius = s[0].hypot(s[1]);
@@ -193,12 +195,12 @@ impl OdeSystem for Reset {
         1
     }
 
-    fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
         dydt[0] = y[0];
         Ok(())
     }
 
-    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, String> {
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
         self.step_ends.push((t, y[0]));
         let moved = y[0] != 1.0;
         y[0] = 1.0;
@@ -268,11 +270,11 @@ impl OdeSystem for IdleProjection {
         4
     }
 
-    fn rhs(&mut self, t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), CallbackError> {
         Circle.rhs(t, s, dsdt)
     }
 
-    fn project(&mut self, _t: f64, _s: &mut [f64]) -> Result<bool, String> {
+    fn project(&mut self, _t: f64, _s: &mut [f64]) -> Result<bool, CallbackError> {
         self.calls += 1;
         Ok(false)
     }
@@ -299,14 +301,14 @@ impl OdeSystem for FailingProjection {
         4
     }
 
-    fn rhs(&mut self, t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, t: f64, s: &[f64], dsdt: &mut [f64]) -> Result<(), CallbackError> {
         Circle.rhs(t, s, dsdt)
     }
 
-    fn project(&mut self, t: f64, _s: &mut [f64]) -> Result<bool, String> {
+    fn project(&mut self, t: f64, _s: &mut [f64]) -> Result<bool, CallbackError> {
         match t < 1.0 {
             true => Ok(false),
-            false => Err("the constraints cannot be satisfied".to_string()),
+            false => Err("the constraints cannot be satisfied".into()),
         }
     }
 }

@@ -3,7 +3,9 @@
 
 use std::f64::consts::PI;
 
-use lsdc::integrate::{integrate, Failure, IntegrationError, Method, OdeSystem, Settings, Stats};
+use lsdc::integrate::{
+    integrate, CallbackError, Failure, IntegrationError, Method, OdeSystem, Settings, Stats,
+};
 
 /// A system from a closure, for problems that cannot fail.
 struct Ode<F> {
@@ -16,7 +18,7 @@ impl<F: FnMut(f64, &[f64], &mut [f64])> OdeSystem for Ode<F> {
         self.dimension
     }
 
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
         (self.f)(t, y, dydt);
         Ok(())
     }
@@ -539,9 +541,9 @@ impl OdeSystem for BreaksAtHalf {
         1
     }
 
-    fn rhs(&mut self, t: f64, _: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, t: f64, _: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
         match (t >= 0.5, self.with_error) {
-            (true, true) => Err("singular mass matrix".to_string()),
+            (true, true) => Err("singular mass matrix".into()),
             (true, false) => {
                 dydt[0] = f64::NAN;
                 Ok(())
@@ -633,7 +635,7 @@ fn an_error_from_the_observer_stops_the_integration() {
     for method in all_methods() {
         let mut observer = |t: f64, _: &[f64]| {
             if t > 0.3 {
-                Err("enough".to_string())
+                Err("enough".into())
             } else {
                 Ok(())
             }

@@ -6,7 +6,7 @@
 use super::control::{error_norm, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{Evaluator, Halt};
-use super::Settings;
+use super::settings::Settings;
 
 const STAGES: usize = 7;
 

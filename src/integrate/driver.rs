@@ -3,8 +3,10 @@
 
 use super::control::StepController;
 use super::evaluator::{all_finite, Evaluator, Halt};
+use super::outcome::{Failure, IntegrationError, Stats};
 use super::output::Outputs;
-use super::{Failure, IntegrationError, Observer, OdeSystem, Settings, Stats};
+use super::settings::Settings;
+use super::system::{Observer, OdeSystem};
 
 /// What to integrate, already checked for consistency.
 pub(super) struct Problem<'a> {

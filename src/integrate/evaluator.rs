@@ -1,6 +1,7 @@
 //! Calls the system's right-hand side and projection, counting calls and catching non-finite values.
 
-use super::{Failure, IntegrationError, OdeSystem, Stats};
+use super::outcome::{Failure, IntegrationError, Stats};
+use super::system::OdeSystem;
 
 /// Why a step attempt, or the integration, stopped.
 #[derive(Clone, Debug)]
@@ -59,7 +60,7 @@ impl<'s> Evaluator<'s> {
         self.stats.rhs_evaluations += 1;
         self.system
             .rhs(t, y, dydt)
-            .map_err(|message| Halt::fatal(t, Failure::System(message)))?;
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))?;
         if !all_finite(dydt) {
             return Err(Halt::NotFinite { time: t });
         }
@@ -72,7 +73,7 @@ impl<'s> Evaluator<'s> {
         let moved = self
             .system
             .project(t, y)
-            .map_err(|message| Halt::fatal(t, Failure::System(message)))?;
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))?;
         // The step is already accepted: a shorter one cannot undo a projection gone wrong.
         if moved && !all_finite(y) {
             return Err(Halt::fatal(t, Failure::NotFinite));

@@ -13,147 +13,16 @@ mod dopri5;
 mod driver;
 mod evaluator;
 mod hermite;
+mod outcome;
 mod output;
 mod rk4;
 mod rosenbrock;
+mod settings;
+mod system;
 
-use std::fmt;
-
-/// A system of first-order ordinary differential equations.
-pub trait OdeSystem {
-    /// Length of the state vector.
-    fn dimension(&self) -> usize;
-    /// Writes dy/dt at (t, y) into `dydt`. An `Err` stops the integration with that message
-    /// (e.g. a singular mass matrix).
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String>;
-    /// Called after each accepted step with the new state: may move it back onto an invariant
-    /// manifold (constraints of a closed-loop mechanism). Returns whether `y` changed.
-    ///
-    /// The integration continues from the projected state, and outputs at the step's end get it;
-    /// outputs strictly inside a step still come from the step's interpolant. Not called on the
-    /// initial state, which the caller makes consistent. An `Err` stops the integration like an
-    /// `Err` from [`OdeSystem::rhs`].
-    fn project(&mut self, _t: f64, _y: &mut [f64]) -> Result<bool, String> {
-        Ok(false)
-    }
-}
-
-/// Receives the state at each output time; an `Err` stops the integration with that message.
-pub type Observer<'o> = dyn FnMut(f64, &[f64]) -> Result<(), String> + 'o;
-
-/// Which integration method to use.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Method {
-    /// Classic Runge–Kutta of order 4 with this fixed step; the last step is shortened to land on
-    /// the end time. Ignores the tolerances.
-    Rk4 { step: f64 },
-    /// Dormand–Prince 5(4), adaptive, for non-stiff problems.
-    DormandPrince,
-    /// RODAS3, a Rosenbrock method of order 3 with a finite-difference Jacobian, for stiff problems.
-    Rosenbrock,
-}
-
-/// Tolerances and limits of the adaptive methods (only `max_steps` applies to RK4).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Settings {
-    /// Relative tolerance on each component of the local error.
-    pub rtol: f64,
-    /// Absolute tolerance on each component of the local error.
-    pub atol: f64,
-    /// First step to try; estimated from the problem when `None`.
-    pub initial_step: Option<f64>,
-    /// Largest step allowed.
-    pub max_step: f64,
-    /// Smallest step allowed before giving up with [`Failure::StepUnderflow`].
-    pub min_step: f64,
-    /// Most steps (accepted and rejected) before giving up with [`Failure::TooManySteps`].
-    pub max_steps: usize,
-    /// How many leading components the step control watches (all when `None`): the others are
-    /// carried along, like a quadrature of the solution, without changing the steps.
-    pub controlled: Option<usize>,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Settings {
-            rtol: 1e-6,
-            atol: 1e-9,
-            initial_step: None,
-            max_step: f64::INFINITY,
-            min_step: 0.0,
-            max_steps: 1_000_000,
-            controlled: None,
-        }
-    }
-}
-
-/// Work done by an integration.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Stats {
-    /// Accepted steps.
-    pub steps: usize,
-    /// Rejected step attempts (error too large, or non-finite values in the attempt).
-    pub rejected: usize,
-    /// Calls of [`OdeSystem::rhs`], including those made for finite-difference Jacobians.
-    pub rhs_evaluations: usize,
-    /// Jacobians formed (Rosenbrock only).
-    pub jacobian_evaluations: usize,
-    /// LU decompositions of the iteration matrix (Rosenbrock only).
-    pub lu_decompositions: usize,
-}
-
-/// Why an integration stopped early.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Failure {
-    /// A NaN or infinity appeared in the state or its derivative and shrinking the step did not
-    /// avoid it.
-    NotFinite,
-    /// The step size needed for the tolerances fell below `min_step` (or below what the
-    /// resolution of `f64` allows at that time).
-    StepUnderflow { step: f64 },
-    /// `max_steps` were taken before reaching the end time.
-    TooManySteps,
-    /// The system's `rhs` or `project` returned this error.
-    System(String),
-    /// The observer returned this error.
-    Observer(String),
-    /// The arguments were inconsistent (wrong state length, unsorted outputs, bad settings...).
-    InvalidInput(String),
-}
-
-/// An integration that stopped early: when, why, and the work done until then.
-#[derive(Clone, Debug, PartialEq)]
-pub struct IntegrationError {
-    /// Time at which the failure appeared (for `NotFinite`, the time of the offending evaluation).
-    pub time: f64,
-    pub failure: Failure,
-    pub stats: Stats,
-}
-
-impl fmt::Display for Failure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Failure::NotFinite => write!(f, "the state or its derivative is not finite"),
-            Failure::StepUnderflow { step } => write!(f, "the step size fell to {step:e}"),
-            Failure::TooManySteps => write!(f, "too many steps"),
-            Failure::System(message) => write!(f, "{message}"),
-            Failure::Observer(message) => write!(f, "{message}"),
-            Failure::InvalidInput(message) => write!(f, "invalid integration input: {message}"),
-        }
-    }
-}
-
-impl fmt::Display for IntegrationError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "integration stopped at t = {}: {}",
-            self.time, self.failure
-        )
-    }
-}
-
-impl std::error::Error for IntegrationError {}
+pub use outcome::{Failure, InputError, IntegrationError, Stats};
+pub use settings::{Method, Settings};
+pub use system::{CallbackError, Observer, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,
 /// within `[t0, t_end]`) as soon as the integration has passed it, and returns the state at
@@ -165,14 +34,14 @@ impl std::error::Error for IntegrationError {}
 /// a failure stay delivered.
 ///
 /// ```
-/// use lsdc::integrate::{integrate, Method, OdeSystem, Settings};
+/// use lsdc::integrate::{integrate, CallbackError, Method, OdeSystem, Settings};
 ///
 /// struct Decay;
 /// impl OdeSystem for Decay {
 ///     fn dimension(&self) -> usize {
 ///         1
 ///     }
-///     fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+///     fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
 ///         dydt[0] = -y[0];
 ///         Ok(())
 ///     }
@@ -201,9 +70,9 @@ pub fn integrate(
     settings: &Settings,
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    let invalid = |message: String| IntegrationError {
+    let invalid = |error: InputError| IntegrationError {
         time: t0,
-        failure: Failure::InvalidInput(message),
+        failure: Failure::InvalidInput(error),
         stats: Stats::default(),
     };
     check_problem(system.dimension(), t0, y0, t_end, outputs).map_err(invalid)?;
@@ -238,31 +107,29 @@ fn check_problem(
     y0: &[f64],
     t_end: f64,
     outputs: &[f64],
-) -> Result<(), String> {
+) -> Result<(), InputError> {
     if y0.len() != dimension {
-        return Err(format!(
-            "the initial state has {} values, the system {dimension}",
-            y0.len()
-        ));
+        return Err(InputError::StateLength {
+            given: y0.len(),
+            dimension,
+        });
     }
     if !(t0.is_finite() && t_end.is_finite() && t0 <= t_end) {
-        return Err(format!(
-            "the time span [{t0}, {t_end}] is not a finite forward interval"
-        ));
+        return Err(InputError::TimeSpan { t0, t_end });
     }
     if outputs.iter().any(|&t| !(t0..=t_end).contains(&t)) {
-        return Err(format!("an output time lies outside [{t0}, {t_end}]"));
+        return Err(InputError::OutputOutsideSpan { t0, t_end });
     }
     if outputs.windows(2).any(|pair| pair[0] > pair[1]) {
-        return Err("the output times are not sorted".to_string());
+        return Err(InputError::UnsortedOutputs);
     }
     Ok(())
 }
 
-fn check_settings(method: &Method, settings: &Settings) -> Result<(), String> {
-    if let Method::Rk4 { step } = method {
-        if !(step.is_finite() && *step > 0.0) {
-            return Err(format!("the RK4 step {step} is not a positive number"));
+fn check_settings(method: &Method, settings: &Settings) -> Result<(), InputError> {
+    if let Method::Rk4 { step } = *method {
+        if !(step.is_finite() && step > 0.0) {
+            return Err(InputError::Rk4Step { step });
         }
         return Ok(());
     }
@@ -273,20 +140,15 @@ fn check_settings(method: &Method, settings: &Settings) -> Result<(), String> {
         max_step,
         min_step,
         ..
-    } = settings;
-    if !(*rtol >= 0.0 && *atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite())
-    {
-        return Err(format!(
-            "the tolerances rtol = {rtol}, atol = {atol} must be non-negative, not both zero"
-        ));
+    } = *settings;
+    if !(rtol >= 0.0 && atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite()) {
+        return Err(InputError::Tolerances { rtol, atol });
     }
-    if !(*max_step > 0.0 && *min_step >= 0.0 && min_step <= max_step) {
-        return Err(format!(
-            "the step limits [{min_step}, {max_step}] are not an interval of positive steps"
-        ));
+    if !(max_step > 0.0 && min_step >= 0.0 && min_step <= max_step) {
+        return Err(InputError::StepLimits { min_step, max_step });
     }
     if initial_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
-        return Err("the initial step must be a positive number".to_string());
+        return Err(InputError::InitialStep);
     }
     Ok(())
 }

@@ -1,7 +1,8 @@
 //! Hands the states at the requested output times to the observer as the integration passes them.
 
 use super::evaluator::Halt;
-use super::{Failure, Observer};
+use super::outcome::Failure;
+use super::system::Observer;
 
 /// Fraction of a step within which an output time counts as the step's end, so that output times
 /// computed with rounding (3 * 0.1 against 0.3) still get the step's own state.
@@ -85,5 +86,5 @@ impl<'a> Outputs<'a> {
 }
 
 fn observe(observer: &mut Observer, t: f64, y: &[f64]) -> Result<(), Halt> {
-    observer(t, y).map_err(|message| Halt::fatal(t, Failure::Observer(message)))
+    observer(t, y).map_err(|error| Halt::fatal(t, Failure::Observer(error.to_string())))
 }

@@ -7,8 +7,9 @@
 use super::driver::Problem;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
+use super::outcome::{Failure, IntegrationError, Stats};
 use super::output::Outputs;
-use super::{Failure, IntegrationError, Observer, OdeSystem, Stats};
+use super::system::{Observer, OdeSystem};
 
 /// A remainder below this fraction of a step joins the last full step instead of making a sliver.
 const SLIVER: f64 = 1e-9;

@@ -14,7 +14,7 @@ use super::control::{error_norm, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
-use super::Settings;
+use super::settings::Settings;
 
 const STAGES: usize = 4;
 

@@ -9,6 +9,8 @@
 //! is not modified under the Bitstream Vera names. SVGs name the family `sans-serif`, so their
 //! viewers render the text with a font of their own.
 
+use std::error::Error;
+use std::fmt;
 use std::fs::File;
 use std::io::BufWriter;
 use std::ops::Range;
@@ -65,7 +67,7 @@ enum Format {
 
 /// Draws the simulation's coordinates and energy over time to `path`, an SVG when it ends in
 /// `.svg` and a PNG when it ends in `.png`.
-pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
+pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), PlotError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
@@ -73,12 +75,10 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
     let format = match extension.as_deref() {
         Some("svg") => Format::Svg,
         Some("png") => Format::Png,
-        _ => {
-            return Err("a plot's file name must end in .svg (vector) or .png (bitmap)".to_string())
-        }
+        _ => return Err(PlotError::UnknownFormat),
     };
     if simulation.samples.is_empty() {
-        return Err("the simulation has no outputs to plot".to_string());
+        return Err(PlotError::NoOutputs);
     }
     register_fonts()?;
     match format {
@@ -97,14 +97,14 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
                         bitmap: false,
                     },
                 )?;
-                root.present().map_err(|e| e.to_string())?;
+                root.present().map_err(PlotError::drawing)?;
             }
             let svg = svg.replacen(
                 &format!("<svg width=\"{width}\" height=\"{height}\""),
                 &format!("<svg width=\"{WIDTH}\" height=\"{HEIGHT}\""),
                 1,
             );
-            std::fs::write(path, svg).map_err(|e| e.to_string())
+            std::fs::write(path, svg).map_err(PlotError::Io)
         }
         Format::Png => {
             let (width, height) = (WIDTH * SUPERSAMPLING, HEIGHT * SUPERSAMPLING);
@@ -120,15 +120,63 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), String> {
                         bitmap: true,
                     },
                 )?;
-                root.present().map_err(|e| e.to_string())?;
+                root.present().map_err(PlotError::drawing)?;
             }
             write_png(path, &downsample(&pixels, SUPERSAMPLING))
         }
     }
 }
 
+/// Why a plot could not be drawn or written.
+#[derive(Debug)]
+pub enum PlotError {
+    /// The file name ends in neither `.svg` nor `.png`.
+    UnknownFormat,
+    /// The simulation has no samples.
+    NoOutputs,
+    /// The embedded font could not be registered with the plotting library.
+    Font,
+    /// The plotting library failed while drawing.
+    Drawing(Box<dyn Error + Send + Sync>),
+    Io(std::io::Error),
+    Png(png::EncodingError),
+}
+
+impl PlotError {
+    fn drawing<E: Error + Send + Sync + 'static>(error: DrawingAreaErrorKind<E>) -> PlotError {
+        PlotError::Drawing(Box::new(error))
+    }
+}
+
+impl fmt::Display for PlotError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PlotError::UnknownFormat => write!(
+                f,
+                "a plot's file name must end in .svg (vector) or .png (bitmap)"
+            ),
+            PlotError::NoOutputs => write!(f, "the simulation has no outputs to plot"),
+            PlotError::Font => write!(f, "the embedded font could not be loaded"),
+            PlotError::Drawing(e) => write!(f, "{e}"),
+            PlotError::Io(e) => write!(f, "{e}"),
+            PlotError::Png(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl Error for PlotError {
+    fn source(&self) -> Option<&(dyn Error + 'static)> {
+        match self {
+            PlotError::Drawing(e) => Some(e.as_ref()),
+            PlotError::Io(e) => Some(e),
+            PlotError::Png(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 /// Registers the embedded font once per process, under the family the plots use.
-fn register_fonts() -> Result<(), String> {
+fn register_fonts() -> Result<(), PlotError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let registered = *REGISTERED.get_or_init(|| {
         register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular()).is_ok()
@@ -136,7 +184,7 @@ fn register_fonts() -> Result<(), String> {
     if registered {
         Ok(())
     } else {
-        Err("the embedded font could not be loaded".to_string())
+        Err(PlotError::Font)
     }
 }
 
@@ -163,14 +211,14 @@ fn downsample(rgb: &[u8], factor: u32) -> Vec<u8> {
     out
 }
 
-fn write_png(path: &Path, rgb: &[u8]) -> Result<(), String> {
-    let file = File::create(path).map_err(|e| e.to_string())?;
+fn write_png(path: &Path, rgb: &[u8]) -> Result<(), PlotError> {
+    let file = File::create(path).map_err(PlotError::Io)?;
     let mut encoder = png::Encoder::new(BufWriter::new(file), WIDTH, HEIGHT);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(rgb).map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())
+    let mut writer = encoder.write_header().map_err(PlotError::Png)?;
+    writer.write_image_data(rgb).map_err(PlotError::Png)?;
+    writer.finish().map_err(PlotError::Png)
 }
 
 /// One line of a panel: its legend label, its points (non-finite values left out) and whether
@@ -229,8 +277,11 @@ fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     simulation: &Simulation,
     render: Render,
-) -> Result<(), String> {
-    let error = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
+    let error = PlotError::drawing::<DB::ErrorType>;
     root.fill(&WHITE).map_err(error)?;
     let samples = &simulation.samples;
     let coordinates: Vec<Line> = simulation
@@ -319,8 +370,11 @@ fn panel<DB: DrawingBackend>(
     axis: &Axis,
     lines: &[Line],
     layout: &Layout,
-) -> Result<(), String> {
-    let error = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
+    let error = PlotError::drawing::<DB::ErrorType>;
     let render = layout.render;
     let px = |length: f64| render.px(length);
     let (width, _) = area.dim_in_pixel();
@@ -687,7 +741,9 @@ mod tests {
 
     #[test]
     fn rejects_other_extensions_and_empty_runs() {
-        let error = plot(&simulation(3, true), &temp_path("plot.pdf")).unwrap_err();
+        let error = plot(&simulation(3, true), &temp_path("plot.pdf"))
+            .unwrap_err()
+            .to_string();
         assert!(error.contains(".svg") && error.contains(".png"), "{error}");
         assert!(plot(&simulation(3, true), &temp_path("plot")).is_err());
         assert!(plot(&simulation(0, true), &temp_path("empty.svg")).is_err());

@@ -28,6 +28,7 @@
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
+use std::fmt;
 use std::rc::Rc;
 
 use nalgebra::DVector;
@@ -35,7 +36,7 @@ use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize, Serializer};
 
 use super::prepare::Prepared;
-use super::system::{evaluation_message, MechanicalSystem};
+use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
@@ -64,12 +65,10 @@ enum StatesFile {
 }
 
 /// Reads a states file's text.
-pub fn parse_states(text: &str) -> Result<Vec<StateInput>, String> {
+pub fn parse_states(text: &str) -> Result<Vec<StateInput>, StatesError> {
     match serde_json::from_str::<StatesFile>(text) {
         Ok(StatesFile::Wrapped { states }) | Ok(StatesFile::Bare(states)) => Ok(states),
-        Err(e) => Err(format!(
-            "{e}\nhelp: expected {{\"states\": [{{\"q\": [...], \"v\": [...], \"a\": [...], \"tau\": [...]}}, ...]}} with `v`, `a` and `tau` optional"
-        )),
+        Err(e) => Err(StatesError::Syntax(e)),
     }
 }
 
@@ -165,14 +164,17 @@ pub fn position_names(model: &Model) -> Vec<String> {
 /// Evaluates every state. A quantity that cannot be computed at a state is left out of it, with
 /// the reason in its `errors`; a state whose input is wrong, or at which the geometry cannot be
 /// evaluated, stops the batch with its index and the reason.
-pub fn evaluate_states(prepared: &Prepared, states: &[StateInput]) -> Result<Evaluation, String> {
+pub fn evaluate_states(
+    prepared: &Prepared,
+    states: &[StateInput],
+) -> Result<Evaluation, StatesError> {
     let model = &prepared.model;
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
     let mut system = MechanicalSystem::new(model, reference, Stabilisation::None);
     let mut outputs = Vec::with_capacity(states.len());
     for (index, state) in states.iter().enumerate() {
-        let output =
-            evaluate_state(&mut system, state).map_err(|e| format!("state {index}: {e}"))?;
+        let output = evaluate_state(&mut system, state)
+            .map_err(|error| StatesError::State { index, error })?;
         outputs.push(output);
     }
     Ok(Evaluation {
@@ -183,21 +185,22 @@ pub fn evaluate_states(prepared: &Prepared, states: &[StateInput]) -> Result<Eva
     })
 }
 
-fn check_length(what: &str, values: &[f64], expected: usize) -> Result<(), String> {
+fn check_length(quantity: &'static str, values: &[f64], expected: usize) -> Result<(), StateError> {
     if values.len() != expected {
-        return Err(format!(
-            "`{what}` has {} entries, the mechanism has {expected}",
-            values.len()
-        ));
+        return Err(StateError::Length {
+            quantity,
+            given: values.len(),
+            expected,
+        });
     }
-    if let Some(i) = values.iter().position(|x| !x.is_finite()) {
-        return Err(format!("`{what}[{i}]` is not a finite number"));
+    if let Some(index) = values.iter().position(|x| !x.is_finite()) {
+        return Err(StateError::NotFinite { quantity, index });
     }
     Ok(())
 }
 
 /// Quaternions must be unit: a tool that gives another one means something else by q.
-fn check_quaternions(model: &Model, q: &[f64]) -> Result<(), String> {
+fn check_quaternions(model: &Model, q: &[f64]) -> Result<(), StateError> {
     for joint in &model.joints {
         let start = match joint.kind {
             JointType::Chain => continue,
@@ -210,11 +213,11 @@ fn check_quaternions(model: &Model, q: &[f64]) -> Result<(), String> {
             .sum::<f64>()
             .sqrt();
         if (norm - 1.0).abs() > 1e-9 {
-            return Err(format!(
-                "the quaternion of `{}` (q[{start}..{}]) has norm {norm}, not 1",
-                joint.chain.name,
-                start + 4
-            ));
+            return Err(StateError::NotUnitQuaternion {
+                join: joint.chain.name.clone(),
+                start,
+                norm,
+            });
         }
     }
     Ok(())
@@ -223,7 +226,7 @@ fn check_quaternions(model: &Model, q: &[f64]) -> Result<(), String> {
 fn evaluate_state(
     system: &mut MechanicalSystem<'_>,
     state: &StateInput,
-) -> Result<StateOutput, String> {
+) -> Result<StateOutput, StateError> {
     let model = system.model;
     let zero = vec![0.0; model.nv];
     let v = state.v.as_deref().unwrap_or(&zero);
@@ -243,17 +246,16 @@ fn evaluate_state(
         // Without the kinematics nothing can be computed; with it, only RNEA and ABA need the
         // efforts.
         forward_kinematics(model, &mut system.data, &state.q, v)
-            .map_err(|e| evaluation_message(&e))?;
+            .map_err(|e| StateError::Geometry(e.into()))?;
     }
     let frames = frame_poses(system);
     let mut errors = BTreeMap::new();
-    let efforts = efforts.as_ref().map_err(String::clone);
     let rnea_tau = match (&state.a, &efforts) {
         (None, _) => None,
         (Some(_), Err(e)) => kept(&mut errors, "rnea", Err(e.clone())),
         (Some(a), Ok(efforts)) => {
             let tau = rnea(model, &mut system.data, &state.q, v, a, &efforts.external)
-                .map_err(|e| evaluation_message(&e));
+                .map_err(SystemError::from);
             kept(
                 &mut errors,
                 "rnea",
@@ -279,11 +281,12 @@ fn evaluate_state(
                 total.as_slice(),
                 &efforts.external,
             )
-            .map_err(|e| system.dynamics_message(&e));
+            .map_err(|e| system.dynamics_error(&e));
             kept(&mut errors, "aba", a.map(|a| a.iter().copied().collect()))
         }
     };
-    let mass = crba(model, &mut system.data, &state.q).map_err(|e| evaluation_message(&e))?;
+    let mass =
+        crba(model, &mut system.data, &state.q).map_err(|e| StateError::Geometry(e.into()))?;
     let crba_rows = mass
         .row_iter()
         .map(|row| row.iter().copied().collect())
@@ -297,14 +300,14 @@ fn evaluate_state(
     })
 }
 
-/// The value of a quantity, or `None` with its error recorded under its name.
+/// The value of a quantity, or `None` with its error's message recorded under its name.
 fn kept(
     errors: &mut BTreeMap<String, String>,
     quantity: &str,
-    value: Result<Vec<f64>, String>,
+    value: Result<Vec<f64>, SystemError>,
 ) -> Option<Vec<f64>> {
     value
-        .map_err(|e| errors.insert(quantity.to_string(), e))
+        .map_err(|e| errors.insert(quantity.to_string(), e.to_string()))
         .ok()
 }
 
@@ -323,4 +326,91 @@ fn frame_poses(system: &MechanicalSystem<'_>) -> Vec<FramePose> {
             }
         })
         .collect()
+}
+
+/// Why a batch of states cannot be evaluated.
+#[derive(Debug)]
+pub enum StatesError {
+    /// The states file is not JSON of the expected shape.
+    Syntax(serde_json::Error),
+    /// The state at `index` (from 0) fails as a whole.
+    State { index: usize, error: StateError },
+}
+
+/// Why one state fails as a whole: its input, or the geometry at it.
+#[derive(Debug)]
+pub enum StateError {
+    /// `quantity` (`q`, `v`, `a` or `tau`) has `given` entries instead of `expected`.
+    Length {
+        quantity: &'static str,
+        given: usize,
+        expected: usize,
+    },
+    /// Entry `index` of `quantity` is not a finite number.
+    NotFinite {
+        quantity: &'static str,
+        index: usize,
+    },
+    /// The quaternion of `join`, `q[start..start + 4]`, has this norm instead of 1.
+    NotUnitQuaternion {
+        join: String,
+        start: usize,
+        norm: f64,
+    },
+    /// The kinematics or the mass matrix cannot be evaluated at the state.
+    Geometry(SystemError),
+}
+
+impl fmt::Display for StatesError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StatesError::Syntax(e) => write!(
+                f,
+                "{e}\nhelp: expected {{\"states\": [{{\"q\": [...], \"v\": [...], \"a\": [...], \"tau\": [...]}}, ...]}} with `v`, `a` and `tau` optional"
+            ),
+            StatesError::State { index, error } => write!(f, "state {index}: {error}"),
+        }
+    }
+}
+
+impl fmt::Display for StateError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StateError::Length {
+                quantity,
+                given,
+                expected,
+            } => write!(
+                f,
+                "`{quantity}` has {given} entries, the mechanism has {expected}"
+            ),
+            StateError::NotFinite { quantity, index } => {
+                write!(f, "`{quantity}[{index}]` is not a finite number")
+            }
+            StateError::NotUnitQuaternion { join, start, norm } => write!(
+                f,
+                "the quaternion of `{join}` (q[{start}..{}]) has norm {norm}, not 1",
+                start + 4
+            ),
+            StateError::Geometry(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+impl std::error::Error for StatesError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            StatesError::Syntax(e) => Some(e),
+            StatesError::State { error, .. } => Some(error),
+        }
+    }
+}
+
+impl std::error::Error for StateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            StateError::Geometry(error) => Some(error),
+            _ => None,
+        }
+    }
 }

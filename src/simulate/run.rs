@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use super::constraints::ConstraintReport;
 use super::prepare::{Integrator, Prepared};
-use super::system::MechanicalSystem;
+use super::system::{MechanicalSystem, SystemError};
 use super::variational;
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::efforts::{potential_energy, Declared};
@@ -18,7 +18,8 @@ use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
 use crate::integrate::{
-    integrate, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings, Stats,
+    integrate, CallbackError, Failure, InputError, IntegrationError, Method, OdeSystem,
+    Settings as IntegratorSettings, Stats,
 };
 
 impl OdeSystem for MechanicalSystem<'_> {
@@ -26,12 +27,12 @@ impl OdeSystem for MechanicalSystem<'_> {
         MechanicalSystem::dimension(self)
     }
 
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
-        self.derivative(t, y, dydt)
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
+        Ok(self.derivative(t, y, dydt)?)
     }
 
-    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, String> {
-        self.keep_closed(t, y)
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
+        Ok(self.keep_closed(t, y)?)
     }
 }
 
@@ -45,16 +46,16 @@ impl OdeSystem for WithWork<'_, '_> {
         self.0.dimension() + 1
     }
 
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
         let n = self.0.dimension();
         self.0.derivative(t, &y[..n], &mut dydt[..n])?;
         dydt[n] = self.0.power;
         Ok(())
     }
 
-    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, String> {
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
         let n = self.0.dimension();
-        self.0.keep_closed(t, &mut y[..n])
+        Ok(self.0.keep_closed(t, &mut y[..n])?)
     }
 }
 
@@ -166,7 +167,7 @@ struct Sampler<'m> {
 }
 
 impl Sampler<'_> {
-    fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, String> {
+    fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, SystemError> {
         let model = self.system.model;
         // After the motion, the work of the non-conservative efforts when it is integrated.
         let n = self.system.dimension();
@@ -176,9 +177,7 @@ impl Sampler<'_> {
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let previous = self.system.reference.borrow().clone();
-        let (coordinates, rates) = model
-            .declared(&q, v, &previous)
-            .map_err(|e| format!("{e:?}"))?;
+        let (coordinates, rates) = model.declared(&q, v, &previous)?;
         *self.system.reference.borrow_mut() = coordinates.clone();
         let reactions = if self.reactions {
             self.system.reactions(time, &q, v)?
@@ -186,7 +185,7 @@ impl Sampler<'_> {
             Vec::new()
         };
         let data = &mut self.system.data;
-        forward_kinematics(model, data, &q, v).map_err(|e| format!("{e:?}"))?;
+        forward_kinematics(model, data, &q, v)?;
         let h = momentum(model, data);
         let declared = Declared {
             model,
@@ -194,9 +193,7 @@ impl Sampler<'_> {
             rates: &rates,
         };
         // `+ 0.0` turns a −0 into 0 for the outputs.
-        let potential = potential_energy(model, data, &self.conservative, &declared, time)
-            .map_err(|e| format!("{e:?}"))?
-            + 0.0;
+        let potential = potential_energy(model, data, &self.conservative, &declared, time)? + 0.0;
         let kinetic = kinetic_energy(model, data);
         Ok(Sample {
             time,
@@ -232,8 +229,8 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
     let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
-    if let Err(message) = system.start_loops(&mut y0) {
-        return failed_at_start(prepared, message);
+    if let Err(error) = system.start_loops(&mut y0) {
+        return failed_at_start(prepared, error.to_string());
     }
     let mut sampler = Sampler {
         system: MechanicalSystem::new(model, reference.clone(), settings.stabilisation),
@@ -253,7 +250,7 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::with_capacity(outputs.len());
     let started = Instant::now();
-    let mut observer = |t: f64, y: &[f64]| -> Result<(), String> {
+    let mut observer = |t: f64, y: &[f64]| -> Result<(), CallbackError> {
         let sample = sampler.sample(t, y)?;
         sink(&sample);
         samples.push(sample);
@@ -312,9 +309,9 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
             if model.joints.iter().any(|j| j.kind != JointType::Chain) {
                 Err(IntegrationError {
                     time: 0.0,
-                    failure: crate::integrate::Failure::InvalidInput(
-                        "the symplectic integrator needs joints in their own coordinates; this mechanism has a spherical or free joint (use dopri5)".to_string(),
-                    ),
+                    failure: Failure::InvalidInput(InputError::Unsuitable {
+                        reason: "the symplectic integrator needs joints in their own coordinates; this mechanism has a spherical or free joint (use dopri5)",
+                    }),
                     stats: Stats::default(),
                 })
             } else {

@@ -3,11 +3,13 @@
 //! At rest the equations of motion reduce to f(q) + B τ + Gᵀλ = 0; projected on the motions the
 //! loops allow (the null space N of G) this is (NᵀB) τ = −Nᵀf, solved in the least-squares sense.
 
+use std::fmt;
+
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use super::prepare::Prepared;
-use super::system::MechanicalSystem;
+use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::rnea;
 use crate::dynamics::loops::{self, Stabilisation};
 
@@ -28,15 +30,15 @@ pub struct Holding {
 
 /// The efforts along `actuated` (names `join.coordinate` of coordinates in their own right: not
 /// a quaternion joint's) that hold the mechanism at rest at its initial configuration.
-pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holding, String> {
+pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holding, StaticsError> {
     let model = &prepared.model;
     let indices = actuated
         .iter()
         .map(|name| velocity_index(prepared, name))
-        .collect::<Result<Vec<usize>, String>>()?;
+        .collect::<Result<Vec<usize>, StaticsError>>()?;
     let (q, _) = model
         .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .map_err(|e| format!("{e:?}"))?;
+        .map_err(SystemError::from)?;
     let rest = vec![0.0; model.velocities()];
     let reference = std::rc::Rc::new(std::cell::RefCell::new(prepared.coordinates.clone()));
     let mut system = MechanicalSystem::new(model, reference, Stabilisation::Projection);
@@ -49,13 +51,13 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
         &rest[..model.nv],
         &efforts.external,
     )
-    .map_err(|e| format!("{e:?}"))?;
+    .map_err(SystemError::from)?;
     let mut force = efforts.tau;
     let mut tree = force.rows_mut(0, model.nv);
     tree -= applied;
     let allowed = if model.has_loops() {
         let c = loops::constraints(model, &mut system.data, &q, &rest, false)
-            .map_err(|e| format!("{e:?}"))?;
+            .map_err(SystemError::from)?;
         loops::decompose(&c.jacobian).null_space
     } else {
         DMatrix::identity(model.velocities(), model.velocities())
@@ -85,18 +87,18 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
 }
 
 /// The state velocity of coordinate `join.coordinate`.
-fn velocity_index(prepared: &Prepared, name: &str) -> Result<usize, String> {
+fn velocity_index(prepared: &Prepared, name: &str) -> Result<usize, StaticsError> {
     let model = &prepared.model;
     let Some(declared) = prepared.coordinate_names.iter().position(|n| n == name) else {
         let suggestion = crate::diag::suggest::did_you_mean(
             name,
             prepared.coordinate_names.iter().map(String::as_str),
         )
-        .map(|s| format!("; did you mean `{s}`?"))
-        .unwrap_or_default();
-        return Err(format!(
-            "`{name}` is not a coordinate of the mechanism{suggestion}"
-        ));
+        .map(str::to_string);
+        return Err(StaticsError::UnknownCoordinate {
+            name: name.to_string(),
+            suggestion,
+        });
     };
     let tree = model.declared_count - model.nc;
     if declared >= tree {
@@ -108,11 +110,66 @@ fn velocity_index(prepared: &Prepared, name: &str) -> Result<usize, String> {
                 ..model.declared_offsets[j] + model.joints[j].chain.coordinate_count())
                 .contains(&declared)
         })
-        .ok_or_else(|| format!("`{name}` is not a coordinate of the tree"))?;
+        .ok_or_else(|| StaticsError::NotInTree {
+            name: name.to_string(),
+        })?;
     if model.joints[joint].is_quaternion() {
-        return Err(format!(
-            "`{name}` is an angle of a ball or free joint, not a coordinate an actuator can drive"
-        ));
+        return Err(StaticsError::QuaternionAngle {
+            name: name.to_string(),
+        });
     }
     Ok(model.joints[joint].v_offset + declared - model.declared_offsets[joint])
+}
+
+/// Why the holding efforts cannot be computed.
+#[derive(Debug)]
+pub enum StaticsError {
+    /// `name` is no declared coordinate; `suggestion` is the closest one, if any is close.
+    UnknownCoordinate {
+        name: String,
+        suggestion: Option<String>,
+    },
+    /// `name` is a declared coordinate but not one of the tree's joints.
+    NotInTree { name: String },
+    /// `name` is an angle of a ball or free joint, whose motion is not along it.
+    QuaternionAngle { name: String },
+    /// The efforts or the loops cannot be evaluated at the initial configuration.
+    System(SystemError),
+}
+
+impl From<SystemError> for StaticsError {
+    fn from(error: SystemError) -> Self {
+        StaticsError::System(error)
+    }
+}
+
+impl fmt::Display for StaticsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StaticsError::UnknownCoordinate { name, suggestion } => {
+                write!(f, "`{name}` is not a coordinate of the mechanism")?;
+                if let Some(suggestion) = suggestion {
+                    write!(f, "; did you mean `{suggestion}`?")?;
+                }
+                Ok(())
+            }
+            StaticsError::NotInTree { name } => {
+                write!(f, "`{name}` is not a coordinate of the tree")
+            }
+            StaticsError::QuaternionAngle { name } => write!(
+                f,
+                "`{name}` is an angle of a ball or free joint, not a coordinate an actuator can drive"
+            ),
+            StaticsError::System(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+impl std::error::Error for StaticsError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            StaticsError::System(error) => Some(error),
+            _ => None,
+        }
+    }
 }

@@ -4,6 +4,7 @@
 //! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (loops).
 
 use std::cell::RefCell;
+use std::fmt;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
@@ -48,19 +49,17 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
-    pub fn efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Efforts, String> {
+    pub fn efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Efforts, SystemError> {
         let model = self.model;
-        forward_kinematics(model, &mut self.data, q, v).map_err(|e| evaluation_message(&e))?;
+        forward_kinematics(model, &mut self.data, q, v)?;
         let reference = self.reference.borrow().clone();
-        let (coordinates, rates) = model
-            .declared(q, v, &reference)
-            .map_err(|e| evaluation_message(&e))?;
+        let (coordinates, rates) = model.declared(q, v, &reference)?;
         let declared = Declared {
             model,
             coordinates: &coordinates,
             rates: &rates,
         };
-        evaluate(model, &self.data, &declared, t).map_err(|e| evaluation_message(&e))
+        Ok(evaluate(model, &self.data, &declared, t)?)
     }
 
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), with the
@@ -70,10 +69,10 @@ impl<'m> MechanicalSystem<'m> {
         t: f64,
         q: &[f64],
         v: &[f64],
-    ) -> Result<(Solution, Efforts, loops::Constraints), String> {
+    ) -> Result<(Solution, Efforts, loops::Constraints), SystemError> {
         let model = self.model;
         let efforts = self.efforts(t, q, v)?;
-        let mass = crba(model, &mut self.data, q).map_err(|e| evaluation_message(&e))?;
+        let mass = crba(model, &mut self.data, q)?;
         let bias = rnea(
             model,
             &mut self.data,
@@ -81,14 +80,12 @@ impl<'m> MechanicalSystem<'m> {
             v,
             &vec![0.0; model.nv],
             &efforts.external,
-        )
-        .map_err(|e| evaluation_message(&e))?;
+        )?;
         let mut force = efforts.tau.clone();
         let mut tree = force.rows_mut(0, model.nv);
         tree -= &bias;
         // RNEA left the forward kinematics of (q, v) in `data`.
-        let constraints = loops::constraints_after_kinematics(model, &mut self.data, q, v, true)
-            .map_err(|e| evaluation_message(&e))?;
+        let constraints = loops::constraints_after_kinematics(model, &mut self.data, q, v, true)?;
         let solution = loops::solve(
             &mass,
             &force,
@@ -96,12 +93,12 @@ impl<'m> MechanicalSystem<'m> {
             self.loops.stabilisation,
             self.loops.massless,
         )
-        .map_err(|e| self.loop_message(&e))?;
+        .map_err(|e| self.loop_error(&e))?;
         Ok((solution, efforts, constraints))
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.
-    pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+    pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
         let (q, v) = model.split_state(y);
         let (accelerations, efforts) = if model.has_loops() {
@@ -122,7 +119,7 @@ impl<'m> MechanicalSystem<'m> {
                 efforts.tau.as_slice(),
                 &efforts.external,
             )
-            .map_err(|e| self.dynamics_message(&e))?;
+            .map_err(|e| self.dynamics_error(&e))?;
             (accelerations, efforts)
         };
         self.power = efforts.power;
@@ -131,20 +128,18 @@ impl<'m> MechanicalSystem<'m> {
                 .joints
                 .iter()
                 .find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k));
-            let name = joint.map_or("?".to_string(), |j| j.chain.name.clone());
-            let cause = if efforts.tau.iter().all(|x| x.is_finite())
+            let join = joint.map_or("?".to_string(), |j| j.chain.name.clone());
+            let efforts_finite = efforts.tau.iter().all(|x| x.is_finite())
                 && efforts
                     .external
                     .iter()
-                    .all(|f| f.iter().all(|x| x.is_finite()))
-            {
-                "the state became too large"
+                    .all(|f| f.iter().all(|x| x.is_finite()));
+            let cause = if efforts_finite {
+                NotFiniteCause::StateTooLarge
             } else {
-                "an effort is not a number (a square root or logarithm of a negative value, a division by zero)"
+                NotFiniteCause::EffortNotANumber
             };
-            return Err(format!(
-                "the acceleration of join `{name}` is not finite: {cause}"
-            ));
+            return Err(SystemError::AccelerationNotFinite { join, cause });
         }
         let (dq, dv) = dydt.split_at_mut(model.positions());
         for joint in &model.joints {
@@ -161,17 +156,14 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// Keeps the loops closed after a step (see `LoopMonitor::keep`); nothing for a tree.
-    pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, String> {
+    pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
         if !model.has_loops() {
             return Ok(false);
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        let moved = self
-            .loops
-            .keep(model, &mut self.data, t, &mut q, &mut v)
-            .map_err(|e| evaluation_message(&e))?;
+        let moved = self.loops.keep(model, &mut self.data, t, &mut q, &mut v)?;
         if moved {
             y[..q.len()].copy_from_slice(&q);
             y[q.len()..].copy_from_slice(&v);
@@ -180,43 +172,36 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// Sets the rates of the complementary ball joints' angles in y (for outputs).
-    pub fn ball_rates(&mut self, y: &mut [f64]) -> Result<(), String> {
+    pub fn ball_rates(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        if loops::seat_ball_angles(model, &mut self.data, &mut q, &mut v, true)
-            .map_err(|e| evaluation_message(&e))?
-        {
+        if loops::seat_ball_angles(model, &mut self.data, &mut q, &mut v, true)? {
             y[q.len()..].copy_from_slice(&v);
         }
         Ok(())
     }
 
     /// Records the loops' residuals at y without moving it.
-    pub fn measure_loops(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
+    pub fn measure_loops(&mut self, t: f64, y: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
         if !model.has_loops() {
             return Ok(());
         }
         let (q, v) = model.split_state(y);
-        self.loops
-            .measure(model, &mut self.data, t, &q, v)
-            .map_err(|e| evaluation_message(&e))
+        Ok(self.loops.measure(model, &mut self.data, t, &q, v)?)
     }
 
     /// Closes the loops of the initial state at round-off and records their rank and redundancy.
-    pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), String> {
+    pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
         if !model.has_loops() {
             return Ok(());
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        loops::project(model, &mut self.data, &mut q, &mut v)
-            .map_err(|e| evaluation_message(&e))?;
-        self.loops
-            .start(model, &mut self.data, &q, &v)
-            .map_err(|e| evaluation_message(&e))?;
+        loops::project(model, &mut self.data, &mut q, &mut v)?;
+        self.loops.start(model, &mut self.data, &q, &v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
         Ok(())
@@ -225,7 +210,7 @@ impl<'m> MechanicalSystem<'m> {
     /// The wrench each join transmits to its second body, at the join, in the fixed axes
     /// (moment, then force): the tree's joins from inverse dynamics with the accelerations of the
     /// motion and the loops' forces, then the loops' from their multipliers.
-    pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
+    pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
             let (solution, efforts, c) = self.constrained(t, q, v)?;
@@ -247,7 +232,7 @@ impl<'m> MechanicalSystem<'m> {
                 efforts.tau.as_slice(),
                 &efforts.external,
             )
-            .map_err(|e| self.dynamics_message(&e))?;
+            .map_err(|e| self.dynamics_error(&e))?;
             (a, efforts.external, None)
         };
         // The link efforts act across their joints: they are not part of the reaction.
@@ -259,8 +244,7 @@ impl<'m> MechanicalSystem<'m> {
             v,
             &accelerations.as_slice()[..model.nv],
             &external,
-        )
-        .map_err(|e| evaluation_message(&e))?;
+        )?;
         let transmitted = transmitted_wrenches(model, &self.data, &external);
         let mut reactions = Vec::with_capacity(6 * (model.joints.len() + model.loops.len()));
         for joint in &model.joints {
@@ -289,30 +273,91 @@ impl<'m> MechanicalSystem<'m> {
         Ok(reactions)
     }
 
-    fn loop_message(&self, error: &LoopError) -> String {
+    fn loop_error(&self, error: &LoopError) -> SystemError {
         match error {
-            LoopError::MasslessMotion { velocity } => format!(
-                "an effort drives a motion that moves no mass (it moves `{}` most): give the bodies it moves mass or inertia",
-                self.model.velocity_name(*velocity)
-            ),
+            LoopError::MasslessMotion { velocity } => SystemError::MasslessMotion {
+                velocity: self.model.velocity_name(*velocity),
+            },
         }
     }
 
-    pub fn dynamics_message(&self, error: &DynamicsError) -> String {
+    /// The error of a dynamics algorithm, naming the joint and body it is about.
+    pub fn dynamics_error(&self, error: &DynamicsError) -> SystemError {
         match error {
-            DynamicsError::Evaluation(e) => evaluation_message(e),
-            DynamicsError::Singular { joint, body } => format!(
-                "the mass matrix is singular: join `{}` carries no inertia along its motion (body `{}` and the bodies beyond it)",
-                self.model.joints[*joint].chain.name,
-                self.model.body_names[body - 1]
-            ),
+            DynamicsError::Evaluation(e) => SystemError::Evaluation(e.clone()),
+            DynamicsError::Singular { joint, body } => SystemError::SingularInertia {
+                join: self.model.joints[*joint].chain.name.clone(),
+                body: self.model.body_names[body - 1].clone(),
+            },
         }
     }
 }
 
-pub fn evaluation_message(error: &EvalError) -> String {
-    match error {
-        EvalError::Missing(_) => "an effort needs a value that was not given".to_string(),
-        EvalError::NotGeometric(what) => format!("an expression cannot depend on {what} there"),
+/// Why the equations of motion cannot be evaluated at a state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SystemError {
+    /// An effort or expression has no value there.
+    Evaluation(EvalError),
+    /// An effort drives a motion that moves no mass; `velocity` names the coordinate it moves
+    /// most.
+    MasslessMotion { velocity: String },
+    /// `join` carries no inertia along its motion (nor do `body` and the bodies beyond it).
+    SingularInertia { join: String, body: String },
+    /// The mass matrix could not be factorised.
+    SingularMassMatrix,
+    /// The acceleration of `join` is not finite.
+    AccelerationNotFinite { join: String, cause: NotFiniteCause },
+}
+
+/// What made an acceleration infinite or NaN.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NotFiniteCause {
+    /// The efforts are finite: the state itself grew too large.
+    StateTooLarge,
+    /// An effort evaluated to NaN or infinity.
+    EffortNotANumber,
+}
+
+impl From<EvalError> for SystemError {
+    fn from(error: EvalError) -> Self {
+        SystemError::Evaluation(error)
     }
 }
+
+impl fmt::Display for SystemError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SystemError::Evaluation(EvalError::Missing(_)) => {
+                write!(f, "an effort needs a value that was not given")
+            }
+            SystemError::Evaluation(EvalError::NotGeometric(what)) => {
+                write!(f, "an expression cannot depend on {what} there")
+            }
+            SystemError::MasslessMotion { velocity } => write!(
+                f,
+                "an effort drives a motion that moves no mass (it moves `{velocity}` most): give the bodies it moves mass or inertia"
+            ),
+            SystemError::SingularInertia { join, body } => write!(
+                f,
+                "the mass matrix is singular: join `{join}` carries no inertia along its motion (body `{body}` and the bodies beyond it)"
+            ),
+            SystemError::SingularMassMatrix => write!(f, "the mass matrix is singular"),
+            SystemError::AccelerationNotFinite { join, cause } => {
+                write!(f, "the acceleration of join `{join}` is not finite: {cause}")
+            }
+        }
+    }
+}
+
+impl fmt::Display for NotFiniteCause {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            NotFiniteCause::StateTooLarge => "the state became too large",
+            NotFiniteCause::EffortNotANumber => {
+                "an effort is not a number (a square root or logarithm of a negative value, a division by zero)"
+            }
+        })
+    }
+}
+
+impl std::error::Error for SystemError {}

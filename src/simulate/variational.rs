@@ -13,9 +13,11 @@
 //! null-space method in the least-squares sense, so redundant constraints and motions without
 //! mass cost nothing special.
 
+use std::fmt;
+
 use nalgebra::{DMatrix, DVector};
 
-use super::system::MechanicalSystem;
+use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
@@ -32,18 +34,17 @@ impl MechanicalSystem<'_> {
         q: &[f64],
         v: &[f64],
         t: f64,
-    ) -> Result<DVector<f64>, String> {
+    ) -> Result<DVector<f64>, SystemError> {
         let model = self.model;
-        forward_kinematics(model, &mut self.data, q, v).map_err(|e| format!("{e:?}"))?;
+        forward_kinematics(model, &mut self.data, q, v)?;
         let declared = Declared {
             model,
             coordinates: q,
             rates: v,
         };
-        let efforts = evaluate(model, &self.data, &declared, t).map_err(|e| format!("{e:?}"))?;
+        let efforts = evaluate(model, &self.data, &declared, t)?;
         let zero = vec![0.0; model.nv];
-        let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external)
-            .map_err(|e| format!("{e:?}"))?;
+        let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external)?;
         let mut forcing = efforts.tau;
         let mut tree = forcing.rows_mut(0, model.nv);
         tree -= applied;
@@ -57,10 +58,9 @@ impl MechanicalSystem<'_> {
         q: &[f64],
         v: &[f64],
         t: f64,
-    ) -> Result<(DMatrix<f64>, DVector<f64>), String> {
+    ) -> Result<(DMatrix<f64>, DVector<f64>), SystemError> {
         let model = self.model;
-        let gradient =
-            kinetic_energy_gradient(model, &mut self.data, q, v).map_err(|e| format!("{e:?}"))?;
+        let gradient = kinetic_energy_gradient(model, &mut self.data, q, v)?;
         let mut terms = self.generalised_efforts(q, v, t)?;
         let mut tree = terms.rows_mut(0, model.nv);
         tree += gradient;
@@ -68,9 +68,9 @@ impl MechanicalSystem<'_> {
     }
 
     /// The mass matrix over the state's velocities.
-    fn mass(&mut self, q: &[f64]) -> Result<DMatrix<f64>, String> {
+    fn mass(&mut self, q: &[f64]) -> Result<DMatrix<f64>, SystemError> {
         let model = self.model;
-        let tree = crba(model, &mut self.data, q).map_err(|e| format!("{e:?}"))?;
+        let tree = crba(model, &mut self.data, q)?;
         if !model.has_loops() {
             return Ok(tree);
         }
@@ -80,7 +80,7 @@ impl MechanicalSystem<'_> {
     }
 
     /// The constraint Jacobian at the start of a step (None for a tree).
-    fn allowed_motions(&mut self, q: &[f64]) -> Result<Option<DMatrix<f64>>, String> {
+    fn allowed_motions(&mut self, q: &[f64]) -> Result<Option<DMatrix<f64>>, SystemError> {
         if !self.model.has_loops() {
             return Ok(None);
         }
@@ -97,7 +97,7 @@ impl MechanicalSystem<'_> {
         start: &Option<DMatrix<f64>>,
         q1: &[f64],
         rhs: &DVector<f64>,
-    ) -> Result<(DVector<f64>, f64), String> {
+    ) -> Result<(DVector<f64>, f64), SystemError> {
         let Some(g_start) = start else {
             return Ok((solve(mass, rhs)?, 0.0));
         };
@@ -114,7 +114,7 @@ impl MechanicalSystem<'_> {
         &mut self,
         q1: &[f64],
         p: &DVector<f64>,
-    ) -> Result<(DVector<f64>, DMatrix<f64>), String> {
+    ) -> Result<(DVector<f64>, DMatrix<f64>), SystemError> {
         let mass = self.mass(q1)?;
         if !self.model.has_loops() {
             return Ok((solve(&mass, p)?, mass));
@@ -127,10 +127,9 @@ impl MechanicalSystem<'_> {
     }
 
     /// Position rows and their Jacobian G at q.
-    fn closure(&mut self, q: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>), String> {
+    fn closure(&mut self, q: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>), SystemError> {
         let rest = vec![0.0; self.model.velocities()];
-        let c = loops::constraints(self.model, &mut self.data, q, &rest, false)
-            .map_err(|e| format!("{e:?}"))?;
+        let c = loops::constraints(self.model, &mut self.data, q, &rest, false)?;
         Ok((c.residual, c.jacobian))
     }
 }
@@ -155,11 +154,11 @@ fn constrained_solve(
     particular + &end.null_space * z
 }
 
-fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, String> {
+fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, SystemError> {
     mass.clone()
         .cholesky()
         .map(|c| c.solve(rhs))
-        .ok_or_else(|| "the mass matrix is singular".to_string())
+        .ok_or(SystemError::SingularMassMatrix)
 }
 
 /// Integrates with fixed step `h`, reporting the state (positions, velocities) at each output.
@@ -186,11 +185,11 @@ pub fn integrate(
     let mut t = t0;
     let mass = system
         .mass(q.as_slice())
-        .map_err(|m| fail(t, Failure::System(m), &stats))?;
+        .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
     let mut p = &mass * &v;
     let mut next_output = 0;
     while next_output < outputs.len() && outputs[next_output] <= t0 {
-        observer(t0, y0).map_err(|m| fail(t0, Failure::Observer(m), &stats))?;
+        observer(t0, y0).map_err(|m| fail(t0, Failure::Observer(m.to_string()), &stats))?;
         next_output += 1;
     }
     let count = step_count(t0, t_end, h);
@@ -198,7 +197,7 @@ pub fn integrate(
         let step = (t0 + (t_end - t0) * (k + 1) as f64 / count as f64) - t;
         let start = system
             .allowed_motions(q.as_slice())
-            .map_err(|m| fail(t, Failure::System(m), &stats))?;
+            .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
         let mut q1 = &q + &v * step;
         let mut converged = false;
         let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
@@ -206,14 +205,14 @@ pub fn integrate(
             let (mid, mean) = ((&q + &q1) * 0.5, (&q1 - &q) / step);
             (mass_mid, terms) = system
                 .midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step)
-                .map_err(|m| fail(t, Failure::System(m), &stats))?;
+                .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
             stats.rhs_evaluations += 1;
             let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p;
             // Newton with the leading part of the Jacobian, M/h (scaled by h): converges quickly
             // for small h.
             let (correction, open) = system
                 .correction(&mass_mid, &start, q1.as_slice(), &(-momentum * step))
-                .map_err(|m| fail(t, Failure::System(m), &stats))?;
+                .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
             q1 += &correction;
             if correction.amax() <= 1e-15 * (1.0 + q1.amax()) && open <= 1e-13 {
                 converged = true;
@@ -224,14 +223,14 @@ pub fn integrate(
             return Err(fail(t, Failure::NotFinite, &stats));
         }
         if !converged {
-            let message = format!("the implicit equations of the step from t = {t} did not converge: use a smaller `step` than {step}");
-            return Err(fail(t, Failure::System(message), &stats));
+            let error = NotConverged { time: t, step };
+            return Err(fail(t, Failure::System(error.to_string()), &stats));
         }
         let mean = (&q1 - &q) / step;
         let p_end = &mass_mid * &mean + &terms * (0.5 * step);
         let (v1, mass_end) = system
             .end_velocity(q1.as_slice(), &p_end)
-            .map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+            .map_err(|m| fail(t + step, Failure::System(m.to_string()), &stats))?;
         p = &mass_end * &v1;
         stats.steps += 1;
         let mut end_state = q1.as_slice().to_vec();
@@ -239,12 +238,17 @@ pub fn integrate(
         // Only recorded: projecting would spoil the symplectic map.
         system
             .measure_loops(t + step, &end_state)
-            .map_err(|m| fail(t + step, Failure::System(m), &stats))?;
+            .map_err(|m| fail(t + step, Failure::System(m.to_string()), &stats))?;
         while next_output < outputs.len() && outputs[next_output] <= t + step {
             let s = (outputs[next_output] - t) / step;
             let y = hermite(&q, &v, &q1, &v1, s, step);
-            observer(outputs[next_output], &y)
-                .map_err(|m| fail(outputs[next_output], Failure::Observer(m), &stats))?;
+            observer(outputs[next_output], &y).map_err(|m| {
+                fail(
+                    outputs[next_output],
+                    Failure::Observer(m.to_string()),
+                    &stats,
+                )
+            })?;
             next_output += 1;
         }
         (q, v, t) = (q1, v1, t + step);
@@ -253,6 +257,26 @@ pub fn integrate(
     y.extend_from_slice(v.as_slice());
     Ok((y, stats))
 }
+
+/// The implicit equations of the step from `time` did not converge within the iterations
+/// allowed: a smaller step makes them closer to linear.
+#[derive(Debug)]
+pub struct NotConverged {
+    pub time: f64,
+    pub step: f64,
+}
+
+impl fmt::Display for NotConverged {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the implicit equations of the step from t = {} did not converge: use a smaller `step` than {}",
+            self.time, self.step
+        )
+    }
+}
+
+impl std::error::Error for NotConverged {}
 
 /// Steps of equal size at most h from t0 to t_end, their ends computed from their number rather
 /// than accumulated: never a sliver of a last step, whose mean velocity (q1 − q)/step would be

@@ -1,0 +1,155 @@
+//! What an integration did, and why one stopped early.
+
+use std::fmt;
+
+/// Work done by an integration.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Rejected step attempts (error too large, or non-finite values in the attempt).
+    pub rejected: usize,
+    /// Calls of [`OdeSystem::rhs`], including those made for finite-difference Jacobians.
+    ///
+    /// [`OdeSystem::rhs`]: super::system::OdeSystem::rhs
+    pub rhs_evaluations: usize,
+    /// Jacobians formed (Rosenbrock only).
+    pub jacobian_evaluations: usize,
+    /// LU decompositions of the iteration matrix (Rosenbrock only).
+    pub lu_decompositions: usize,
+}
+
+/// Why an integration stopped early.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Failure {
+    /// A NaN or infinity appeared in the state or its derivative and shrinking the step did not
+    /// avoid it.
+    NotFinite,
+    /// The step size needed for the tolerances fell below `min_step` (or below what the
+    /// resolution of `f64` allows at that time).
+    StepUnderflow { step: f64 },
+    /// `max_steps` were taken before reaching the end time.
+    TooManySteps,
+    /// The system's `rhs` or `project` returned an error with this message.
+    System(String),
+    /// The observer returned an error with this message.
+    Observer(String),
+    /// The arguments were inconsistent (wrong state length, unsorted outputs, bad settings...).
+    InvalidInput(InputError),
+}
+
+/// Arguments of an integration that do not make a problem the method can solve.
+#[derive(Clone, Debug, PartialEq)]
+pub enum InputError {
+    /// The initial state's length differs from the system's dimension.
+    StateLength {
+        given: usize,
+        dimension: usize,
+    },
+    /// The time span is not finite or runs backwards.
+    TimeSpan {
+        t0: f64,
+        t_end: f64,
+    },
+    /// An output time lies outside the time span.
+    OutputOutsideSpan {
+        t0: f64,
+        t_end: f64,
+    },
+    UnsortedOutputs,
+    /// The fixed step of RK4 is not a positive number.
+    Rk4Step {
+        step: f64,
+    },
+    /// The tolerances are negative, not finite, or both zero.
+    Tolerances {
+        rtol: f64,
+        atol: f64,
+    },
+    /// The step limits do not make an interval of positive steps.
+    StepLimits {
+        min_step: f64,
+        max_step: f64,
+    },
+    /// The initial step is not a positive number.
+    InitialStep,
+    /// The method cannot integrate this system, for this reason (the caller's method choice).
+    Unsuitable {
+        reason: &'static str,
+    },
+}
+
+/// An integration that stopped early: when, why, and the work done until then.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntegrationError {
+    /// Time at which the failure appeared (for `NotFinite`, the time of the offending evaluation).
+    pub time: f64,
+    pub failure: Failure,
+    pub stats: Stats,
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Failure::NotFinite => write!(f, "the state or its derivative is not finite"),
+            Failure::StepUnderflow { step } => write!(f, "the step size fell to {step:e}"),
+            Failure::TooManySteps => write!(f, "too many steps"),
+            Failure::System(message) => write!(f, "{message}"),
+            Failure::Observer(message) => write!(f, "{message}"),
+            Failure::InvalidInput(error) => write!(f, "invalid integration input: {error}"),
+        }
+    }
+}
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            InputError::StateLength { given, dimension } => write!(
+                f,
+                "the initial state has {given} values, the system {dimension}"
+            ),
+            InputError::TimeSpan { t0, t_end } => write!(
+                f,
+                "the time span [{t0}, {t_end}] is not a finite forward interval"
+            ),
+            InputError::OutputOutsideSpan { t0, t_end } => {
+                write!(f, "an output time lies outside [{t0}, {t_end}]")
+            }
+            InputError::UnsortedOutputs => write!(f, "the output times are not sorted"),
+            InputError::Rk4Step { step } => {
+                write!(f, "the RK4 step {step} is not a positive number")
+            }
+            InputError::Tolerances { rtol, atol } => write!(
+                f,
+                "the tolerances rtol = {rtol}, atol = {atol} must be non-negative, not both zero"
+            ),
+            InputError::StepLimits { min_step, max_step } => write!(
+                f,
+                "the step limits [{min_step}, {max_step}] are not an interval of positive steps"
+            ),
+            InputError::InitialStep => write!(f, "the initial step must be a positive number"),
+            InputError::Unsuitable { reason } => write!(f, "{reason}"),
+        }
+    }
+}
+
+impl std::error::Error for InputError {}
+
+impl fmt::Display for IntegrationError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "integration stopped at t = {}: {}",
+            self.time, self.failure
+        )
+    }
+}
+
+impl std::error::Error for IntegrationError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.failure {
+            Failure::InvalidInput(error) => Some(error),
+            _ => None,
+        }
+    }
+}

@@ -1,0 +1,47 @@
+//! Which method integrates, and within which tolerances and limits.
+
+/// Which integration method to use.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Method {
+    /// Classic Runge–Kutta of order 4 with this fixed step; the last step is shortened to land on
+    /// the end time. Ignores the tolerances.
+    Rk4 { step: f64 },
+    /// Dormand–Prince 5(4), adaptive, for non-stiff problems.
+    DormandPrince,
+    /// RODAS3, a Rosenbrock method of order 3 with a finite-difference Jacobian, for stiff problems.
+    Rosenbrock,
+}
+
+/// Tolerances and limits of the adaptive methods (only `max_steps` applies to RK4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Relative tolerance on each component of the local error.
+    pub rtol: f64,
+    /// Absolute tolerance on each component of the local error.
+    pub atol: f64,
+    /// First step to try; estimated from the problem when `None`.
+    pub initial_step: Option<f64>,
+    /// Largest step allowed.
+    pub max_step: f64,
+    /// Smallest step allowed before giving up with [`Failure::StepUnderflow`](super::outcome::Failure::StepUnderflow).
+    pub min_step: f64,
+    /// Most steps (accepted and rejected) before giving up with [`Failure::TooManySteps`](super::outcome::Failure::TooManySteps).
+    pub max_steps: usize,
+    /// How many leading components the step control watches (all when `None`): the others are
+    /// carried along, like a quadrature of the solution, without changing the steps.
+    pub controlled: Option<usize>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            rtol: 1e-6,
+            atol: 1e-9,
+            initial_step: None,
+            max_step: f64::INFINITY,
+            min_step: 0.0,
+            max_steps: 1_000_000,
+            controlled: None,
+        }
+    }
+}

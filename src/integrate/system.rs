@@ -1,0 +1,29 @@
+//! What the integrators integrate and whom they report to.
+
+/// An error of the system or of the observer. The integrators know nothing of mechanics, so
+/// they take any error and report its message as the integration's [`Failure`].
+///
+/// [`Failure`]: super::outcome::Failure
+pub type CallbackError = Box<dyn std::error::Error + Send + Sync>;
+
+/// A system of first-order ordinary differential equations.
+pub trait OdeSystem {
+    /// Length of the state vector.
+    fn dimension(&self) -> usize;
+    /// Writes dy/dt at (t, y) into `dydt`. An `Err` stops the integration with its message
+    /// (e.g. a singular mass matrix).
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError>;
+    /// Called after each accepted step with the new state: may move it back onto an invariant
+    /// manifold (constraints of a closed-loop mechanism). Returns whether `y` changed.
+    ///
+    /// The integration continues from the projected state, and outputs at the step's end get it;
+    /// outputs strictly inside a step still come from the step's interpolant. Not called on the
+    /// initial state, which the caller makes consistent. An `Err` stops the integration like an
+    /// `Err` from [`OdeSystem::rhs`].
+    fn project(&mut self, _t: f64, _y: &mut [f64]) -> Result<bool, CallbackError> {
+        Ok(false)
+    }
+}
+
+/// Receives the state at each output time; an `Err` stops the integration with its message.
+pub type Observer<'o> = dyn FnMut(f64, &[f64]) -> Result<(), CallbackError> + 'o;
