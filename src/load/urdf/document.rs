@@ -305,7 +305,7 @@ mod tests {
     #[test]
     fn attributes_and_entities_are_read() {
         let xml = "<?xml version=\"1.0\"?><!-- c --><robot name='a&amp;b&#x41;'><link name = \"l\" /></robot>";
-        let source = Source::parse(FileId(0), xml).ok().expect("parses");
+        let source = Source::parse(FileId(0), xml).expect("parses");
         let root = source.root();
         assert_eq!(root.attribute("name"), Some("a&bA"));
         let link = child(root, "link").expect("a link");
@@ -320,7 +320,7 @@ mod tests {
     #[test]
     fn start_tags_end_after_attributes_holding_a_greater_than() {
         let xml = "<robot name=\"a>b\"\n  >text</robot>";
-        let source = Source::parse(FileId(0), xml).ok().expect("parses");
+        let source = Source::parse(FileId(0), xml).expect("parses");
         let span = source.span(source.root());
         assert_eq!(&xml[span.range()], "<robot name=\"a>b\"\n  >");
     }
@@ -357,7 +357,7 @@ mod tests {
     #[test]
     fn textures_without_file_are_blanked_for_urdf_rs() {
         let xml = "<robot name=\"r\"><material name=\"m\"><texture a=\"é\">\n</texture><texture filename=\"t.png\"/></material><link name=\"a\"/></robot>";
-        let source = Source::parse(FileId(0), xml).ok().expect("parses");
+        let source = Source::parse(FileId(0), xml).expect("parses");
         let text = source.urdf_text();
         assert_eq!(text.len(), xml.len());
         assert_eq!(text.matches('\n').count(), 1);
@@ -367,7 +367,7 @@ mod tests {
         );
         assert!(text.contains("<texture filename=\"t.png\"/>"), "{text}");
         assert!(urdf_rs::read_from_string(&text).is_ok());
-        let source = Source::parse(FileId(0), "<robot/>").ok().expect("parses");
+        let source = Source::parse(FileId(0), "<robot/>").expect("parses");
         assert!(matches!(source.urdf_text(), Cow::Borrowed(_)));
     }
 }
