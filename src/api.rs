@@ -148,6 +148,7 @@ impl Program {
         &self.compilation.diagnostics
     }
 
+    /// Whether a phase reported an error (warnings alone leave a usable mechanism).
     pub fn has_errors(&self) -> bool {
         self.compilation.has_errors()
     }
@@ -178,7 +179,23 @@ impl Program {
 
     /// Prepares the simulation as `lsdc simulate` does: `values` give unknowns their values by
     /// name (as `--set NAME=VALUE`), `changes` change the settings of the program's `simulate`
-    /// declaration.
+    /// declaration. A value the motion needs and nobody gave is an error that names it.
+    ///
+    /// ```
+    /// use lsdc::api::{Error, Override, Program, SettingsChanges};
+    ///
+    /// let text = "import joints; let k = ?s; let b = body mass = 1, iframe = 0, inertia = [1, 1, 1] end;
+    ///             join earth and b with prismatic([1, 0, 0]) as slide;
+    ///             apply force value = [-k * slide.q, 0, 0], body = earth end on b;
+    ///             initial slide.q = 0.1;";
+    /// let program = Program::from_text("spring.lsd", text, None, &Default::default());
+    /// let missing = program.prepare(&[], &Default::default());
+    /// assert!(matches!(missing, Err(Error::Program(ref d)) if d[0].message.contains("no value for `k`")));
+    /// let k = Override { name: "k".to_string(), value: 4.0 };
+    /// let prepared = program.prepare(&[k], &SettingsChanges { duration: Some(2.0), ..Default::default() })?;
+    /// assert_eq!(prepared.settings.duration, 2.0);
+    /// # Ok::<(), Error>(())
+    /// ```
     pub fn prepare(
         &self,
         values: &[Override],
@@ -195,6 +212,18 @@ impl Program {
 /// stream it, draw progress or stop caring about memory); the returned [`Simulation`] holds them
 /// all with the run report. A run that fails keeps the samples computed before the failure, and
 /// its report says when and why.
+///
+/// ```
+/// use lsdc::api::{run, Program, SettingsChanges};
+///
+/// let program = Program::from_file("examples/double_pendulum.lsd", &Default::default())?;
+/// let prepared = program.prepare(&[], &SettingsChanges { duration: Some(1.0), ..Default::default() })?;
+/// let mut energies = Vec::new();
+/// let simulation = run(&prepared, &mut |sample| energies.push(sample.kinetic_energy));
+/// assert_eq!(energies.len(), simulation.samples.len());
+/// assert!(simulation.report.energy_drift.unwrap() < 1e-6);
+/// # Ok::<(), lsdc::api::Error>(())
+/// ```
 pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
     crate::simulate::run::run(prepared, sink)
 }

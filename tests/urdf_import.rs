@@ -617,6 +617,55 @@ fn bad_urdf_is_a_located_error() {
     }
 }
 
+/// Malformed XML is an error at the file, line and column of the fault, never a panic: an
+/// unclosed tag, attributes without a value, unquoted or never closed, a second root.
+#[test]
+fn malformed_xml_is_an_error_at_its_line_and_column() {
+    let cases = [
+        (
+            "<robot name=\"r\">\n  <link name=\"a\">\n  <link name=\"b\"/>\n</robot>\n",
+            4,
+            1,
+        ),
+        (
+            "<robot name=\"r\">\n  <link name=\"a\" mass/>\n</robot>\n",
+            2,
+            22,
+        ),
+        ("<robot name=\"r\">\n  <link name=a/>\n</robot>\n", 2, 14),
+        ("<robot name=\"r\">\n  <link name=\"a/>\n</robot>\n", 3, 1),
+        (
+            "<robot name=\"r\">\n  <link name=\"a\" name=\"b\"/>\n</robot>\n",
+            2,
+            18,
+        ),
+        (
+            "<robot name=\"r\">\n  <link name=\"a\"/>\n</robot>\n<robot/>\n",
+            4,
+            1,
+        ),
+    ];
+    for (xml, line, column) in cases {
+        let error = import_urdf("bad.urdf", xml, &ImportOptions::default()).expect_err(xml);
+        assert_eq!(error.code, "E1001", "{xml}: {error:?}");
+        let mut sources = SourceMap::new();
+        sources.add("bad.urdf", xml);
+        let span = error
+            .primary_span()
+            .unwrap_or_else(|| panic!("{xml}: no position"));
+        assert_eq!(
+            sources.file(span.file).line_column(span.start as usize),
+            (line, column),
+            "{xml}: {error:?}"
+        );
+        let rendered = lsdc::diag::render::to_text(&sources, std::slice::from_ref(&error));
+        assert!(
+            rendered.contains(&format!("bad.urdf:{line}:{column}")),
+            "{rendered}"
+        );
+    }
+}
+
 fn lsdc(args: &[&str]) -> (i32, String, String) {
     let output = Command::new(env!("CARGO_BIN_EXE_lsdc"))
         .args(args)

@@ -1,0 +1,373 @@
+//! The URDF text as an XML document whose elements know where they are in the file.
+//!
+//! urdf-rs reads the values but keeps no positions, so the text is also parsed with roxmltree:
+//! its nodes carry byte ranges, which become the spans of the import's diagnostics, and its
+//! errors say where the text stops being well-formed XML.
+
+use std::borrow::Cow;
+use std::ops::Range;
+
+use roxmltree::{Document, Node, ParsingOptions};
+
+use crate::diag::Diagnostic;
+use crate::source::{FileId, Span};
+
+/// An element of the URDF document.
+pub(super) type Element<'s, 'a> = Node<'s, 'a>;
+
+/// The parsed URDF text, for checking what urdf-rs would reject with no position, and for
+/// locating diagnostics.
+pub(super) struct Source<'a> {
+    file: FileId,
+    xml: &'a str,
+    document: Document<'a>,
+}
+
+impl<'a> Source<'a> {
+    /// Parses `xml`; malformed XML is an error at the place roxmltree reports.
+    pub(super) fn parse(file: FileId, xml: &'a str) -> Result<Source<'a>, Diagnostic> {
+        // URDF files written by tools may carry a DOCTYPE: accept it, as urdf-rs does.
+        let options = ParsingOptions {
+            allow_dtd: true,
+            ..ParsingOptions::default()
+        };
+        let document = Document::parse_with_options(xml, options)
+            .map_err(|error| malformed(file, xml, &error))?;
+        Ok(Source {
+            file,
+            xml,
+            document,
+        })
+    }
+
+    /// The root element (`<robot>` in a URDF file).
+    pub(super) fn root(&self) -> Element<'_, 'a> {
+        self.document.root_element()
+    }
+
+    /// The span of an element's start tag, `<` to `>`: pointing at the whole element would
+    /// underline every line of a link.
+    pub(super) fn span(&self, element: Element) -> Span {
+        let range = self.start_tag(element);
+        Span::new(self.file, range.start, range.end)
+    }
+
+    /// The span of `name="value"`, or of the element's start tag when it has no such attribute.
+    pub(super) fn attribute_span(&self, element: Element, name: &str) -> Span {
+        match element.attribute_node(name) {
+            Some(attribute) => {
+                let range = attribute.range();
+                Span::new(self.file, range.start, range.end)
+            }
+            None => self.span(element),
+        }
+    }
+
+    /// One-based line of an element's start tag.
+    pub(super) fn line(&self, element: Element) -> usize {
+        self.document.text_pos_at(element.range().start).row as usize
+    }
+
+    /// The first link or joint element called `name` (the root if there is none, so that a
+    /// diagnostic always has a place).
+    pub(super) fn element(&self, tag: &str, name: &str) -> Element<'_, 'a> {
+        self.named(tag, name).next().unwrap_or_else(|| self.root())
+    }
+
+    /// The link or joint elements called `name`, in document order.
+    pub(super) fn named<'s, 'q>(
+        &'s self,
+        tag: &'q str,
+        name: &'q str,
+    ) -> impl Iterator<Item = Element<'s, 'a>> + 'q
+    where
+        's: 'q,
+    {
+        self.top_level(tag)
+            .filter(move |e| e.attribute("name") == Some(name))
+    }
+
+    /// The elements of the robot (children of the root) with this tag.
+    pub(super) fn top_level<'s, 'q>(
+        &'s self,
+        tag: &'q str,
+    ) -> impl Iterator<Item = Element<'s, 'a>> + 'q
+    where
+        's: 'q,
+    {
+        children(self.root()).filter(move |&e| tag_of(e) == tag)
+    }
+
+    /// Byte range of an element's start tag. roxmltree gives the range of the whole element
+    /// and of each attribute; the tag ends at the first `>` after its name and attributes, as
+    /// only spaces and `/` may come between them and the `>`. (Namespace declarations have no
+    /// range, but a `>` in their URI would be very unusual.)
+    fn start_tag(&self, element: Element) -> Range<usize> {
+        let start = element.range().start;
+        let after = element
+            .attributes()
+            .map(|a| a.range().end)
+            .max()
+            .unwrap_or(start);
+        let end = self.xml[after..]
+            .find('>')
+            .map_or(element.range().end, |i| after + i + 1);
+        start..end
+    }
+
+    /// The text handed to urdf-rs: the URDF with the elements that urdf-rs would reject but
+    /// the import does not use blanked out, byte for byte and keeping the line breaks, so that
+    /// offsets and lines stay those of the file. These are the `<texture>` elements without a
+    /// `filename` (`<texture />` in the materials of some robots): urdf-rs requires the
+    /// attribute, and materials are not imported (W1007).
+    pub(super) fn urdf_text(&self) -> Cow<'a, str> {
+        let xml = self.xml;
+        let mut blanked = self
+            .root()
+            .descendants()
+            .filter(|&e| tag_of(e) == "texture" && e.attribute("filename").is_none())
+            .peekable();
+        if blanked.peek().is_none() {
+            return Cow::Borrowed(xml);
+        }
+        let mut text = String::with_capacity(xml.len());
+        let mut at = 0;
+        for element in blanked {
+            let Range { start, end } = element.range();
+            if start < at {
+                continue; // inside an element already blanked
+            }
+            text.push_str(&xml[at..start]);
+            for c in xml[start..end].chars() {
+                match c {
+                    '\n' | '\r' => text.push(c),
+                    _ => text.extend(std::iter::repeat_n(' ', c.len_utf8())),
+                }
+            }
+            at = end;
+        }
+        text.push_str(&xml[at..]);
+        Cow::Owned(text)
+    }
+}
+
+/// The child elements of an element (not its text or comments).
+pub(super) fn children<'s, 'a>(element: Element<'s, 'a>) -> impl Iterator<Item = Element<'s, 'a>> {
+    element.children().filter(Node::is_element)
+}
+
+/// The first child element with this tag.
+pub(super) fn child<'s, 'a>(element: Element<'s, 'a>, tag: &str) -> Option<Element<'s, 'a>> {
+    children(element).find(|&c| tag_of(c) == tag)
+}
+
+/// The parent element, `None` for the root.
+pub(super) fn parent<'s, 'a>(element: Element<'s, 'a>) -> Option<Element<'s, 'a>> {
+    element.parent().filter(Node::is_element)
+}
+
+/// An element's tag as written, with its namespace prefix if it has one (`xacro:macro`).
+pub(super) fn tag_of<'a>(element: Element<'_, 'a>) -> Cow<'a, str> {
+    let name = element.tag_name();
+    qualified(element, name.namespace(), name.name())
+}
+
+/// An element's attributes as `(name, value)`, names as written.
+pub(super) fn attributes<'s, 'a>(
+    element: Element<'s, 'a>,
+) -> impl Iterator<Item = (Cow<'a, str>, &'s str)> {
+    element
+        .attributes()
+        .map(move |a| (qualified(element, a.namespace(), a.name()), a.value()))
+}
+
+/// `prefix:name` when `namespace` was declared with a prefix in scope of `element`.
+fn qualified<'a>(element: Element<'_, 'a>, namespace: Option<&str>, name: &'a str) -> Cow<'a, str> {
+    match namespace.and_then(|uri| element.lookup_prefix(uri)) {
+        Some(prefix) if !prefix.is_empty() => Cow::Owned(format!("{prefix}:{name}")),
+        _ => Cow::Borrowed(name),
+    }
+}
+
+/// The diagnostic for a text that is not well-formed XML.
+fn malformed(file: FileId, xml: &str, error: &roxmltree::Error) -> Diagnostic {
+    let (message, label) = describe(xml, error);
+    let range = error_range(xml, error);
+    Diagnostic::error("E1001", format!("malformed XML: {message}"))
+        .primary(Span::new(file, range.start, range.end), label)
+        .help("a URDF file is an XML document whose root element is `<robot>`")
+}
+
+/// What went wrong, and the label at the place: roxmltree's own words for the rare errors,
+/// without the position it appends (the span shows it).
+fn describe(xml: &str, error: &roxmltree::Error) -> (String, &'static str) {
+    use roxmltree::Error as E;
+    match error {
+        E::UnexpectedCloseTag(open, close, _) => (
+            format!("`</{close}>` closes `<{open}>`"),
+            "mismatched end tag",
+        ),
+        E::UnknownToken(pos) => unknown_token(&xml[error_range(xml, error)], *pos),
+        // roxmltree also says this of a text whose only tag is never closed (`<robot`).
+        E::NoRootNode if xml.trim().is_empty() => ("no element".into(), "expected `<robot>`"),
+        E::NoRootNode => ("no complete element".into(), "expected `<robot>`"),
+        E::UnclosedRootNode => (
+            "the text ends before the root element is closed".into(),
+            "the text ends here",
+        ),
+        E::UnexpectedEndOfStream => ("the text ends inside a tag".into(), "the text ends here"),
+        E::InvalidString(close, pos) if offset(xml, *pos) == xml.len() => {
+            (format!("the text ends before `{close}`"), "never closed")
+        }
+        _ => {
+            let text = error.to_string();
+            let suffix = format!(" at {}", error.pos());
+            let message = text.strip_suffix(&suffix).unwrap_or(&text).to_string();
+            (message, "here")
+        }
+    }
+}
+
+/// roxmltree's "unknown token": what is there says which.
+fn unknown_token(token: &str, pos: roxmltree::TextPos) -> (String, &'static str) {
+    if token.starts_with("</") {
+        (format!("`{token}` closes no element"), "unexpected end tag")
+    } else if token.starts_with('<') {
+        (
+            format!("`{token}` after the end of the root element"),
+            "a second root element",
+        )
+    } else if pos.row == 1 && pos.col == 1 {
+        (
+            "text where the root element should be".into(),
+            "expected `<robot>`",
+        )
+    } else {
+        ("text outside the root element".into(), "unexpected text")
+    }
+}
+
+/// The bytes to underline for an error: the tag at its position, or the character there.
+fn error_range(xml: &str, error: &roxmltree::Error) -> Range<usize> {
+    use roxmltree::Error as E;
+    let at = match error {
+        // Errors without a position: the end of the text, where it was found.
+        E::UnclosedRootNode | E::UnexpectedEndOfStream => return xml.len()..xml.len(),
+        E::NoRootNode => return 0..0,
+        _ => offset(xml, error.pos()),
+    };
+    if at == xml.len() {
+        if let E::InvalidString(close, _) = error {
+            // A comment, CDATA section or processing instruction runs to the end of the text:
+            // point at where it opens.
+            if let Some(start) = opening(close).and_then(|open| xml.rfind(open)) {
+                return start..start + 1;
+            }
+        }
+        return at..at;
+    }
+    let tag = matches!(error, E::UnexpectedCloseTag(..) | E::UnknownToken(_));
+    match xml[at..].find('>') {
+        Some(end) if tag && xml[at..].starts_with('<') => at..at + end + 1,
+        _ => at..at + xml[at..].chars().next().map_or(0, char::len_utf8),
+    }
+}
+
+/// How the construct that `close` ends opens.
+fn opening(close: &str) -> Option<&'static str> {
+    match close {
+        "-->" => Some("<!--"),
+        "]]>" => Some("<![CDATA["),
+        "?>" => Some("<?"),
+        _ => None,
+    }
+}
+
+/// The byte offset of roxmltree's one-based line and column (counted in characters).
+fn offset(xml: &str, pos: roxmltree::TextPos) -> usize {
+    let line_start: usize = xml
+        .split_inclusive('\n')
+        .take(pos.row as usize - 1)
+        .map(str::len)
+        .sum();
+    let column: usize = xml[line_start..]
+        .chars()
+        .take(pos.col as usize - 1)
+        .map(char::len_utf8)
+        .sum();
+    line_start + column
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn attributes_and_entities_are_read() {
+        let xml = "<?xml version=\"1.0\"?><!-- c --><robot name='a&amp;b&#x41;'><link name = \"l\" /></robot>";
+        let source = Source::parse(FileId(0), xml).expect("parses");
+        let root = source.root();
+        assert_eq!(root.attribute("name"), Some("a&bA"));
+        let link = child(root, "link").expect("a link");
+        assert_eq!(parent(link), Some(root));
+        assert_eq!(link.attribute("name"), Some("l"));
+        let span = source.span(link);
+        assert_eq!(&xml[span.range()], "<link name = \"l\" />");
+        let span = source.attribute_span(link, "name");
+        assert_eq!(&xml[span.range()], "name = \"l\"");
+    }
+
+    #[test]
+    fn start_tags_end_after_attributes_holding_a_greater_than() {
+        let xml = "<robot name=\"a>b\"\n  >text</robot>";
+        let source = Source::parse(FileId(0), xml).expect("parses");
+        let span = source.span(source.root());
+        assert_eq!(&xml[span.range()], "<robot name=\"a>b\"\n  >");
+    }
+
+    #[test]
+    fn malformed_xml_is_located() {
+        let xml = "<robot name=\"r\">\n  <link name=\"a\">\n</robot>\n";
+        let error = Source::parse(FileId(0), xml).err().expect("malformed");
+        assert_eq!(error.code, "E1001");
+        let span = error.primary_span().expect("located");
+        assert_eq!(&xml[span.range()], "</robot>");
+        let xml = "<robot><link/><!-- é\n never closed </robot>";
+        let error = Source::parse(FileId(0), xml).err().expect("malformed");
+        let span = error.primary_span().expect("located");
+        assert_eq!(span.range().start, xml.find("<!--").expect("there"));
+        for xml in [
+            "",
+            "<robot",
+            "<robot name=\"r>",
+            "<robot><!-- </robot>",
+            "<robot></link>",
+            "text",
+            "<a/><b/>",
+            "é<",
+            "<robot>\n<é",
+        ] {
+            let error = Source::parse(FileId(0), xml).err().expect(xml);
+            assert_eq!(error.code, "E1001", "{xml}");
+            let span = error.primary_span().expect(xml);
+            assert!(span.range().end <= xml.len(), "{xml}");
+        }
+    }
+
+    #[test]
+    fn textures_without_file_are_blanked_for_urdf_rs() {
+        let xml = "<robot name=\"r\"><material name=\"m\"><texture a=\"é\">\n</texture><texture filename=\"t.png\"/></material><link name=\"a\"/></robot>";
+        let source = Source::parse(FileId(0), xml).expect("parses");
+        let text = source.urdf_text();
+        assert_eq!(text.len(), xml.len());
+        assert_eq!(text.matches('\n').count(), 1);
+        assert!(
+            !text.contains("<texture a=") && !text.contains("</texture>"),
+            "{text}"
+        );
+        assert!(text.contains("<texture filename=\"t.png\"/>"), "{text}");
+        assert!(urdf_rs::read_from_string(&text).is_ok());
+        let source = Source::parse(FileId(0), "<robot/>").expect("parses");
+        assert!(matches!(source.urdf_text(), Cow::Borrowed(_)));
+    }
+}

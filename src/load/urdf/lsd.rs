@@ -1,0 +1,147 @@
+//! Writing LSD text: numbers, vectors, rotations, frames and comments.
+
+use nalgebra::Vector3;
+use urdf_rs::Pose;
+
+pub(super) fn count(n: usize, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
+/// A program comment around `text`, in which `(*` or `*)` would open or close a comment.
+pub(super) fn comment(text: &str) -> String {
+    format!("(* {} *)", text.replace("(*", "( *").replace("*)", "* )"))
+}
+
+/// A number as LSD reads it back exactly: Rust's shortest round-trip digits, positional for usual
+/// magnitudes and with an exponent for very small or large ones (`{}` alone writes 1e-300 with
+/// 300 zeros). The sign is LSD's unary minus, and `-0` is `0`.
+pub(super) fn number(x: f64) -> String {
+    if x == 0.0 {
+        return "0".to_string();
+    }
+    let magnitude = x.abs();
+    let digits = if (1e-5..1e16).contains(&magnitude) {
+        format!("{magnitude}")
+    } else {
+        format!("{magnitude:e}")
+    };
+    if x < 0.0 {
+        format!("-{digits}")
+    } else {
+        digits
+    }
+}
+
+pub(super) fn vector(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", number(v[0]), number(v[1]), number(v[2]))
+}
+
+/// `(angle || axis)`, in parentheses as `||` binds more loosely than `++`, `@` and `*`.
+pub(super) fn factor(angle: f64, axis: Vector3<f64>) -> String {
+    format!("({} || {})", number(angle), vector(axis.into()))
+}
+
+/// URDF's roll, pitch, yaw, fixed axes x, y, z: the rotation Rz(yaw) · Ry(pitch) · Rx(roll), as
+/// LSD factors, leaving out zero angles.
+pub(super) fn rpy_factors(rpy: &[f64; 3]) -> Vec<String> {
+    [
+        (rpy[2], Vector3::z()),
+        (rpy[1], Vector3::y()),
+        (rpy[0], Vector3::x()),
+    ]
+    .into_iter()
+    .filter(|(angle, _)| *angle != 0.0)
+    .map(|(angle, axis)| factor(angle, axis))
+    .collect()
+}
+
+/// `[x, y, z] ++ R`, with `R` the product of the factors (`1` for none).
+pub(super) fn displacement(xyz: [f64; 3], rotation: &[String]) -> String {
+    let rotation = if rotation.is_empty() {
+        "1".to_string()
+    } else {
+        rotation.join(" * ")
+    };
+    format!("{} ++ {rotation}", vector(xyz))
+}
+
+/// A frame at `origin` on `body`: the body itself when the origin is the identity.
+pub(super) fn frame(origin: &Pose, body: &str) -> String {
+    let rotation = rpy_factors(&origin.rpy);
+    if origin.xyz.0 == [0.0; 3] && rotation.is_empty() {
+        body.to_string()
+    } else {
+        format!("{} @ {body}", displacement(origin.xyz.0, &rotation))
+    }
+}
+
+/// URDF's planar joint moves in the plane normal to its axis. The standard `planar` is normal to
+/// z; for another normal the same motion is written as an inline link: translations x and y along
+/// two unit vectors u and w of the plane (u × w = normal), then the rotation q about the normal.
+pub(super) fn planar(normal: &Vector3<f64>) -> String {
+    if *normal == Vector3::z() {
+        return "planar".to_string();
+    }
+    // u: the coordinate axis after the normal's largest component, projected onto the plane, so
+    // a normal along x, y or z gets the next two coordinate axes in cyclic order.
+    let next = Vector3::ith((normal.iamax() + 1) % 3, 1.0);
+    let u = (next - normal * normal.dot(&next)).normalize();
+    let w = normal.cross(&u);
+    format!(
+        "link(x, y, q) dof1 = x * {} + y * {}, dof2 = q || {} end",
+        vector(u.into()),
+        vector(w.into()),
+        vector((*normal).into())
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::source::FileId;
+    use crate::syntax::lexer::{lex, Tok};
+
+    #[test]
+    fn numbers_read_back_exactly_and_lex_as_numbers() {
+        for x in [
+            0.1,
+            1e-7,
+            1e21,
+            -0.5,
+            2.5e-5,
+            1e16,
+            123456789.125,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            5e-324,
+            -3.0,
+        ] {
+            let text = number(x);
+            let magnitude = text.trim_start_matches('-');
+            let (tokens, errors) = lex(FileId(0), magnitude);
+            assert!(errors.is_empty() && tokens.len() == 1, "{text}");
+            assert!(matches!(tokens[0].1, Tok::Int(_) | Tok::Float(_)), "{text}");
+            assert_eq!(
+                magnitude.parse::<f64>().unwrap_or(f64::NAN),
+                x.abs(),
+                "{text}"
+            );
+        }
+        assert_eq!(number(-0.0), "0");
+        assert_eq!(number(1e-7), "1e-7");
+        assert_eq!(number(0.25), "0.25");
+    }
+
+    #[test]
+    fn planar_axes_span_the_plane() {
+        assert_eq!(planar(&Vector3::z()), "planar");
+        assert_eq!(
+            planar(&Vector3::x()),
+            "link(x, y, q) dof1 = x * [0, 1, 0] + y * [0, 0, 1], dof2 = q || [1, 0, 0] end"
+        );
+        assert_eq!(
+            planar(&Vector3::y()),
+            "link(x, y, q) dof1 = x * [0, 0, 1] + y * [1, 0, 0], dof2 = q || [0, 1, 0] end"
+        );
+    }
+}
