@@ -1,5 +1,5 @@
 //! Dynamics of tree mechanisms: an immutable [`model::Model`] compiled from the mechanism, scratch
-//! [`data::Data`], and the recursive algorithms on them: inverse dynamics (RNEA), the mass
+//! [`algorithms::Data`], and the recursive algorithms on them: inverse dynamics (RNEA), the mass
 //! matrix (CRBA), forward dynamics (ABA), energy and momentum.
 
 pub mod algorithms;

@@ -15,12 +15,12 @@
 //! Nothing is dropped silently: what LSD does not express (limits, mimic, damping, geometry,
 //! transmissions...) is a warning at the URDF element, and so is every name that had to change.
 //! urdf-rs reads the values but keeps no positions, so the text is also parsed with roxmltree
-//! ([`document`]), to point each diagnostic at its element and to report malformed XML where it
-//! is. What urdf-rs would reject is checked first ([`check`]), so that the error has a place.
+//! (`document`), to point each diagnostic at its element and to report malformed XML where it
+//! is. What urdf-rs would reject is checked first (`check`), so that the error has a place.
 //!
-//! The files: [`document`] locates, [`check`] validates, [`tree`] orders the links,
-//! [`program`] writes the LSD program and its warnings, with [`lsd`] (LSD text), [`inertia`]
-//! (mass properties) and [`names`] (LSD names).
+//! The files: `document` locates, `check` validates, `tree` orders the links,
+//! `program` writes the LSD program and its warnings, with `lsd` (LSD text), `inertia`
+//! (mass properties) and `names` (LSD names).
 
 mod check;
 mod document;
