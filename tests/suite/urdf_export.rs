@@ -12,8 +12,8 @@ use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::joint::{quaternion, JointType};
 use lsdc::dynamics::spatial::{inertia_to_parent, skew, Pose};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
 use lsdc::output::urdf::{export_urdf, link_frames, ExportError, NO_LIMIT};
+use lsdc::simulate::prepare::{prepare, Prepared, Settings};
 
 fn options() -> LoadOptions {
     LoadOptions {

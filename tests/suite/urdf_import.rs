@@ -14,9 +14,9 @@ use lsdc::elab::value::BodyRef;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::forward::forward;
 use lsdc::kinematics::model::{self as kinematic_model, KinematicModel};
+use lsdc::load::urdf::{import_urdf, lsd_name, ImportOptions, Imported};
 use lsdc::load::LoadOptions;
 use lsdc::source::SourceMap;
-use lsdc::load::urdf::{import_urdf, lsd_name, ImportOptions, Imported};
 
 /// A two-link arm with a prismatic tool on a fixed flange: off-diagonal inertia tensors, rpy
 /// origins, a continuous joint that mimics the shoulder, limits, damping, a safety controller,
