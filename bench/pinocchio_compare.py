@@ -15,7 +15,7 @@ base), the script
     aba     the accelerations under the generalised forces tau,
     frames  the world pose (translation and rotation matrix) of every link's body frame.
 
-Disagreement measure (the same in tests/pinocchio_fixtures.rs): for one quantity at one state,
+Disagreement measure (the same in tests/suite/pinocchio_fixtures.rs): for one quantity at one state,
 
     d = max_i |lsdc_i - pinocchio_i| / max(1, max_i |pinocchio_i|)
 

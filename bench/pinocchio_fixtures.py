@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the Pinocchio reference fixtures of tests/pinocchio_fixtures.rs.
+"""Writes the Pinocchio reference fixtures of tests/suite/pinocchio_fixtures.rs.
 
 The Rust test suite cannot run Python, so this script stores Pinocchio's answers once:
 

@@ -1,8 +1,7 @@
 //! The emitted equations against `Equations::evaluate`: the Rust and C code compiled and run at
 //! a few states, the JSON DAG evaluated again, and the text formats' shape.
 
-mod common;
-use common::symbolic::{equations_of, Sequence};
+use crate::common::symbolic::{equations_of, Sequence};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::process::Command;

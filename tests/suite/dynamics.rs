@@ -11,8 +11,7 @@ use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
 use proptest::prelude::*;
 
-mod common;
-use common::trees::tree_program;
+use crate::common::trees::tree_program;
 
 fn model_of(text: &str) -> Model {
     let options = LoadOptions {

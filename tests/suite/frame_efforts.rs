@@ -3,8 +3,7 @@
 //! pendulum of `examples/elastic_pendulum.lsd`, whose spring, damper and torsion spring are,
 //! in its coordinates, −k(r − l0) − c r' along the stretch and kt sin a − ct a' on the swing.
 
-mod common;
-use common::symbolic::Sequence;
+use crate::common::symbolic::Sequence;
 
 use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, rnea, Data};

@@ -298,7 +298,7 @@ fn every_fixture_is_checked() {
     found.sort();
     assert_eq!(
         found, ROBOTS,
-        "each fixture of {FIXTURES} needs its test in tests/pinocchio_fixtures.rs"
+        "each fixture of {FIXTURES} needs its test in tests/suite/pinocchio_fixtures.rs"
     );
 }
 

@@ -20,9 +20,8 @@ use lsdc::symbolic::{self, Equations};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 
-mod common;
-use common::symbolic::{equations_of, Sequence};
-use common::trees::tree_program;
+use crate::common::symbolic::{equations_of, Sequence};
+use crate::common::trees::tree_program;
 
 fn equations(path: &str) -> Equations {
     equations_of(path)

@@ -1,0 +1,30 @@
+//! The integration tests, one module per area, linked into a single test binary: each
+//! separate binary under `tests/` would link the library and its dependencies again.
+//! Run one area with `cargo test --test suite <module>::`, e.g. `cargo test --test suite golden::`.
+
+mod common;
+
+mod architecture;
+mod cli;
+mod closed_loops;
+mod constrained;
+mod dynamics;
+mod examples;
+mod force_elements;
+mod frame_efforts;
+mod generated_code;
+mod golden;
+mod integrate_projection;
+mod integrators;
+mod kinematics;
+mod loops;
+mod methods;
+mod pinocchio_fixtures;
+mod properties;
+mod regression;
+mod simulation;
+mod symbolic;
+mod symbolic_equations;
+mod urdf_export;
+mod urdf_import;
+mod welds;
