@@ -44,7 +44,7 @@ def dh(theta, d, a, alpha):
 def read_csv(path):
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
-    header, data = rows[0], np.array([[float(x) for x in r] for r in rows[1:] if r and not r[0].startswith("#")], dtype=float)
+    header, data = rows[0], np.array([[float(x) if x else float("nan") for x in r] for r in rows[1:] if r and not r[0].startswith("#")], dtype=float)
     if data.size == 0:
         data = np.zeros((0, len(header)))
     return {name: data[:, i] for i, name in enumerate(header)}
