@@ -138,6 +138,11 @@ KEY = {"watt_six_bar": "crank_vs_reduced_ode", "bennett": "theta1_vs_reduced_ode
        "truss": "max_coordinate_change", "double_revolute": "max_coordinate_change"}
 
 
+def duration(name):
+    text = open(os.path.join(ROOT, "examples", "hard", name + ".lsd")).read()
+    return float(re.search(r"simulate\s+duration\s*=\s*([0-9.eE+-]+)", text).group(1))
+
+
 def cell(r, name):
     if r["timeout"]:
         return "timeout (%g s)" % r["wall_s"]
@@ -152,10 +157,14 @@ def cell(r, name):
     ref = r.get("reference") or {}
     key = KEY.get(name, "phi_vs_reference")
     v = ref.get(key)
-    mark = "ok" if ref.get("ok") else "FAIL"
+    end = ref.get("t_end")
+    complete = end is not None and end >= duration(name) - 1e-9
+    mark = "ok" if ref.get("ok") and complete else "FAIL"
     parts.append("ref %s%s" % (mark, "" if v is None else " %.1e" % v))
-    if ref.get("t_end") is not None and not ref.get("ok"):
-        parts.append("to t=%g" % ref["t_end"])
+    if end is not None and not complete:
+        parts.append("stopped at t=%.3g" % end)
+    elif end is None:
+        parts.append("no samples")
     parts.append("%.1f s" % r["wall_s"])
     return ", ".join(parts)
 
