@@ -2,8 +2,8 @@
 """Reference for examples/hard/squeezer.lsd, Andrews' squeezing mechanism.
 
 Source: the problem "Andrews' squeezing mechanism" of the Test Set for IVP Solvers
-(F. Mazzia, C. Magherini et al., University of Bari / CWI, problem description "andrews",
-release 2.4, 2008), taken from E. Hairer & G. Wanner, "Solving Ordinary Differential Equations
+(F. Mazzia, C. Magherini et al., University of Bari, formerly CWI Amsterdam; problem
+"andrews", source file andrews.f, revision 1.2 of 2006/10/02), taken from E. Hairer & G. Wanner, "Solving Ordinary Differential Equations
 II", 2nd ed., Springer 1996, section VII.7, after G. C. Andrews (1986) and W. Schiehlen
 (Multibody Systems Handbook, 1990). Seven bodies, planar, without gravity; coordinates
 y = (beta, theta, gamma, phi, delta, omega, epsilon) as in the test set; a drive torque
