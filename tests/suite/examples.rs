@@ -82,10 +82,12 @@ fn the_five_link_forms_check_clean() {
 
 #[test]
 fn every_example_checks_clean() {
-    for entry in std::fs::read_dir("examples").expect("examples directory") {
-        let path = entry.expect("entry").path();
-        if path.extension().is_some_and(|e| e == "lsd") {
-            compile(path.to_str().expect("utf-8 path"));
+    for dir in ["examples", "examples/hard"] {
+        for entry in std::fs::read_dir(dir).expect("examples directory") {
+            let path = entry.expect("entry").path();
+            if path.extension().is_some_and(|e| e == "lsd") {
+                compile(path.to_str().expect("utf-8 path"));
+            }
         }
     }
 }
