@@ -271,9 +271,15 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
         with_work.0
     };
     let fixed_step = settings.step.unwrap_or(settings.output.min(1e-3));
-    let result: Result<(Vec<f64>, Stats), IntegrationError> = match settings.integrator {
-        Integrator::Rk4 => integrate(
-            &Method::Rk4 { step: fixed_step },
+    let method = match settings.integrator {
+        Integrator::Rk4 => Some(Method::Rk4 { step: fixed_step }),
+        Integrator::DormandPrince => Some(Method::DormandPrince),
+        Integrator::Implicit => Some(Method::Rosenbrock),
+        Integrator::Symplectic => None,
+    };
+    let result: Result<(Vec<f64>, Stats), IntegrationError> = match method {
+        Some(method) => integrate(
+            &method,
             ode,
             0.0,
             &y0,
@@ -282,27 +288,7 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
             &integrator_settings,
             &mut observer,
         ),
-        Integrator::DormandPrince => integrate(
-            &Method::DormandPrince,
-            ode,
-            0.0,
-            &y0,
-            settings.duration,
-            &outputs,
-            &integrator_settings,
-            &mut observer,
-        ),
-        Integrator::Implicit => integrate(
-            &Method::Rosenbrock,
-            ode,
-            0.0,
-            &y0,
-            settings.duration,
-            &outputs,
-            &integrator_settings,
-            &mut observer,
-        ),
-        Integrator::Symplectic => {
+        None => {
             let system = &mut *with_work.0;
             // The RATTLE steps keep the loops closed themselves.
             system.loops.stabilisation = crate::dynamics::loops::Stabilisation::Integrator;
