@@ -1,7 +1,7 @@
 //! Glue between the lexer, the LALRPOP parser and diagnostics. One call parses a whole file and
 //! reports every lexical and syntax error the parser can recover from.
 
-use lalrpop_util::{lalrpop_mod, ErrorRecovery, ParseError};
+use lalrpop_util::{lalrpop_mod, ParseError};
 
 use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
@@ -41,31 +41,6 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
         }
     };
     (program, diagnostics)
-}
-
-/// Parses a single expression (for `--set` values and tests).
-pub fn parse_expr(file: FileId, text: &str) -> Result<crate::syntax::ast::Expr, Vec<Diagnostic>> {
-    let (tokens, mut diagnostics) = lex(file, text);
-    let mut recovered: Vec<ErrorRecovery<usize, Tok<'_>, LexError>> = Vec::new();
-    let result = grammar::ExprParser::new().parse(
-        file,
-        &mut recovered,
-        tokens.iter().copied().map(Ok::<_, LexError>),
-    );
-    let context = ErrorContext {
-        file,
-        tokens: &tokens,
-        text_len: text.len(),
-    };
-    diagnostics.extend(recovered.into_iter().map(|e| context.describe(e.error)));
-    match result {
-        Ok(expr) if diagnostics.is_empty() => Ok(expr),
-        Ok(_) => Err(diagnostics),
-        Err(error) => {
-            diagnostics.push(context.describe(error));
-            Err(diagnostics)
-        }
-    }
 }
 
 struct ErrorContext<'a, 'input> {
@@ -215,8 +190,23 @@ mod tests {
     use super::*;
     use crate::syntax::ast::{BinaryOp, ExprKind};
 
-    fn expr(text: &str) -> crate::syntax::ast::Expr {
-        parse_expr(FileId(0), text).unwrap_or_else(|d| panic!("{d:?}"))
+    use crate::syntax::ast::{DeclKind, Expr};
+
+    /// Parses one expression as the value of a `let`: the grammar has one entry point, the
+    /// program (a second one would double the generated parser).
+    fn parse_expr(text: &str) -> Result<Expr, Vec<Diagnostic>> {
+        let (mut program, errors) = parse(FileId(0), &format!("let value = {text};"));
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        let Some(DeclKind::Let(mut bindings)) = program.decls.pop().map(|decl| decl.kind) else {
+            panic!("`let value = {text};` is not one `let`");
+        };
+        Ok(bindings.remove(0).value)
+    }
+
+    fn expr(text: &str) -> Expr {
+        parse_expr(text).unwrap_or_else(|d| panic!("{d:?}"))
     }
 
     #[test]
@@ -278,7 +268,7 @@ mod tests {
     #[test]
     fn non_associative_operators_reject_chains() {
         for text in ["a || b || c", "a @ b @ c", "a ++ b ++ c"] {
-            assert!(parse_expr(FileId(0), text).is_err(), "{text}");
+            assert!(parse_expr(text).is_err(), "{text}");
         }
     }
 
