@@ -2,11 +2,13 @@
 //! and after each projection, and the passages through singular configurations (where the
 //! constraints lose rank), for the run report.
 
-use nalgebra::DVector;
+use nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::dynamics::algorithms::Data;
-use crate::dynamics::loops::{self, Decomposition, Residuals, Stabilisation, ROW_NAMES};
+use crate::dynamics::loops::{
+    self, Factored, Residuals, Stabilisation, Structure, StructureError, ROW_NAMES,
+};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
@@ -15,12 +17,26 @@ use crate::kinematics::eval::EvalError;
 /// accelerations are amplified by more than its inverse. The run goes on; the report says when.
 const NEAR_SINGULAR: f64 = 1e-3;
 
+/// Below this conditioning the kept rows are chosen again, if better ones exist.
+const RECHOOSE_BELOW: f64 = 0.1;
+
+/// Before the start, the structure of a mechanism without loops.
+const NO_STRUCTURE: Structure = Structure {
+    rows: Vec::new(),
+    scales: Vec::new(),
+    length: 1.0,
+    redundant: Vec::new(),
+    rank: 0,
+    active: 0,
+    massless: 0,
+};
+
 /// The state closest to a singular configuration the run saw.
 #[derive(Clone, Debug, Serialize)]
 pub struct ClosestApproach {
     pub time: f64,
-    /// Ratio of the smallest singular value of G (among those independent at the start) to the
-    /// largest: 1 is far from any singularity, 0 is singular.
+    /// How far the kept rows are from dependent (`Factored::conditioning`, on dimensionless
+    /// rows): 1 is far from any singularity, 0 is singular.
     pub ratio: f64,
     pub loop_name: String,
 }
@@ -31,9 +47,9 @@ pub struct SingularPassage {
     /// First and last accepted steps seen singular (`end` is None if the run ended there).
     pub start: f64,
     pub end: Option<f64>,
-    /// The loop taking the largest part in the lost direction.
+    /// The loop of the row losing its independence.
     pub loop_name: String,
-    /// Smallest ratio of the lost singular value to the largest one.
+    /// Smallest conditioning ratio seen.
     pub smallest_ratio: f64,
 }
 
@@ -45,6 +61,8 @@ pub struct ConstraintReport {
     pub rank: usize,
     /// Rows implied by earlier ones at the start: `join: rotation about x`, …
     pub redundant: Vec<String>,
+    /// How many times the independent rows the equations use were chosen again along the run.
+    pub rows_rechosen: usize,
     /// Largest residuals reached by the integration before each projection (metres or radians,
     /// and their rates).
     pub position_residual_before_projection: f64,
@@ -59,11 +77,12 @@ pub struct ConstraintReport {
 #[derive(Clone)]
 pub struct LoopMonitor {
     pub stabilisation: Stabilisation,
-    /// Allowed motions without mass, counted at the start (see `loops::massless_count`).
-    pub massless: usize,
-    rank: usize,
-    redundant: Vec<String>,
-    rows: usize,
+    /// The decisions taken on the loops at the start (see `loops::Structure`).
+    pub structure: Structure,
+    /// The complementary links' names, for the report.
+    loop_names: Vec<String>,
+    /// How many times the kept rows were chosen again (see `Structure::rechoose`).
+    rechosen: usize,
     before: Residuals,
     after: Residuals,
     singular: Vec<SingularPassage>,
@@ -81,10 +100,9 @@ impl LoopMonitor {
     pub fn new(stabilisation: Stabilisation) -> LoopMonitor {
         LoopMonitor {
             stabilisation,
-            massless: 0,
-            rank: 0,
-            redundant: Vec::new(),
-            rows: 0,
+            structure: NO_STRUCTURE,
+            loop_names: Vec::new(),
+            rechosen: 0,
             before: Residuals::default(),
             after: Residuals::default(),
             singular: Vec::new(),
@@ -92,23 +110,17 @@ impl LoopMonitor {
         }
     }
 
-    /// Records the rank and the redundant rows at the (consistent) initial state.
+    /// Decides the loops' structure at the (closed) initial state and records its residuals.
     pub fn start(
         &mut self,
         model: &Model,
         data: &mut Data,
         q: &[f64],
         v: &[f64],
-    ) -> Result<(), EvalError> {
-        self.massless = loops::massless_count(model, data, q)?;
+    ) -> Result<(), StructureError> {
+        self.structure = Structure::decide(model, data, q)?;
+        self.loop_names = model.loops.iter().map(|l| l.name.clone()).collect();
         let c = loops::constraints(model, data, q, v, false)?;
-        let active = loops::active_rows(model);
-        self.rows = active.iter().filter(|&&a| a).count();
-        self.rank = loops::decompose_with(&c.jacobian, loops::RANK_TOLERANCE).rank;
-        self.redundant = loops::redundant_rows(&c.jacobian, &active)
-            .into_iter()
-            .map(|row| format!("{}: {}", model.loops[row / 6].name, ROW_NAMES[row % 6]))
-            .collect();
         let residuals = Residuals {
             position: c.residual.amax(),
             velocity: c.velocity.amax(),
@@ -133,13 +145,13 @@ impl LoopMonitor {
         v: &mut [f64],
     ) -> Result<bool, EvalError> {
         if self.stabilisation == Stabilisation::Projection && !self.near_singular(model, data, q)? {
-            let projection = loops::project(model, data, q, v)?;
+            let projection = loops::project(model, data, &self.structure, q, v)?;
             self.observe(
                 model,
                 time,
                 projection.before,
                 projection.after,
-                &projection.basis,
+                projection.conditioning,
             );
             return Ok(true);
         }
@@ -147,17 +159,31 @@ impl LoopMonitor {
         loops::seat_ball_angles(model, data, q, v, false)
     }
 
-    /// Whether the constraints at q are within `NEAR_SINGULAR` of losing rank.
-    fn near_singular(&self, model: &Model, data: &mut Data, q: &[f64]) -> Result<bool, EvalError> {
-        if self.rank == 0 {
-            return Ok(false);
-        }
+    /// Whether the kept rows at q are within `NEAR_SINGULAR` of losing their independence.
+    fn near_singular(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+    ) -> Result<bool, EvalError> {
         let c = loops::constraints(model, data, q, &vec![0.0; model.velocities()], false)?;
-        let s = loops::decompose(&c.jacobian).singular_values;
-        Ok(s.len() >= self.rank && s[self.rank - 1] < NEAR_SINGULAR * s[0])
+        Ok(self.conditioning(model, &c.jacobian).0 < NEAR_SINGULAR)
     }
 
-    /// Records the residuals and the rank at (q, v) without moving it.
+    /// The conditioning of the kept rows (`Factored::conditioning`) at the constraint Jacobian
+    /// G, after choosing them again if they are poorly conditioned and better ones exist.
+    fn conditioning(&mut self, model: &Model, jacobian: &DMatrix<f64>) -> (f64, Option<usize>) {
+        let conditioning = Factored::new(jacobian, &self.structure).conditioning();
+        if conditioning.0 < RECHOOSE_BELOW
+            && self.structure.rechoose(model, jacobian, conditioning.0)
+        {
+            self.rechosen += 1;
+            return Factored::new(jacobian, &self.structure).conditioning();
+        }
+        conditioning
+    }
+
+    /// Records the residuals and the conditioning at (q, v) without moving it.
     pub fn measure(
         &mut self,
         model: &Model,
@@ -171,13 +197,8 @@ impl LoopMonitor {
             position: c.residual.amax(),
             velocity: c.velocity.amax(),
         };
-        self.observe(
-            model,
-            time,
-            residuals,
-            residuals,
-            &loops::decompose(&c.jacobian),
-        );
+        let conditioning = self.conditioning(model, &c.jacobian);
+        self.observe(model, time, residuals, residuals, conditioning);
         Ok(())
     }
 
@@ -187,20 +208,12 @@ impl LoopMonitor {
         time: f64,
         before: Residuals,
         after: Residuals,
-        basis: &Decomposition,
+        (ratio, row): (f64, Option<usize>),
     ) {
         self.before = max(self.before, before);
         self.after = max(self.after, after);
-        if self.rank == 0 || basis.singular_values.len() < self.rank {
-            return;
-        }
-        let ratio = basis.singular_values[self.rank - 1] / basis.singular_values[0];
-        let loop_name = || {
-            let direction: DVector<f64> = basis.left.column(self.rank - 1).into_owned();
-            model.loops[loops::loop_of_direction(&direction)]
-                .name
-                .clone()
-        };
+        let Some(row) = row else { return };
+        let loop_name = || model.loops[row / 6].name.clone();
         if self.closest.as_ref().is_none_or(|c| ratio < c.ratio) {
             self.closest = Some(ClosestApproach {
                 time,
@@ -226,6 +239,7 @@ impl LoopMonitor {
 
     /// Takes in what another monitor saw (the outputs', which may fall inside a long step).
     pub fn absorb(&mut self, other: &LoopMonitor) {
+        self.rechosen = self.rechosen.max(other.rechosen);
         self.before = max(self.before, other.before);
         self.after = max(self.after, other.after);
         if let Some(theirs) = &other.closest {
@@ -262,11 +276,17 @@ impl LoopMonitor {
             }
             Stabilisation::None => "none".to_string(),
         };
+        let structure = &self.structure;
         ConstraintReport {
             stabilisation,
-            rows: self.rows,
-            rank: self.rank,
-            redundant: self.redundant.clone(),
+            rows: structure.active,
+            rank: structure.rank,
+            redundant: structure
+                .redundant
+                .iter()
+                .map(|&row| format!("{}: {}", self.loop_names[row / 6], ROW_NAMES[row % 6]))
+                .collect(),
+            rows_rechosen: self.rechosen,
             position_residual_before_projection: self.before.position,
             velocity_residual_before_projection: self.before.velocity,
             position_residual: self.after.position,

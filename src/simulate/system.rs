@@ -12,7 +12,9 @@ use crate::dynamics::algorithms::{
     aba, crba, forward_kinematics, rnea, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate, Declared, Efforts};
-use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation};
+use crate::dynamics::loops::{
+    self, LoopError, Solution, Stabilisation, StructureError, ROW_NAMES,
+};
 use crate::dynamics::model::Model;
 use crate::dynamics::spatial;
 use crate::kinematics::eval::EvalError;
@@ -90,8 +92,8 @@ impl<'m> MechanicalSystem<'m> {
             &mass,
             &force,
             &constraints,
+            &self.loops.structure,
             self.loops.stabilisation,
-            self.loops.massless,
         )
         .map_err(|e| self.loop_error(&e))?;
         Ok((solution, efforts, constraints))
@@ -192,7 +194,8 @@ impl<'m> MechanicalSystem<'m> {
         Ok(self.loops.measure(model, &mut self.data, t, &q, v)?)
     }
 
-    /// Closes the loops of the initial state at round-off and records their rank and redundancy.
+    /// Closes the loops of the initial state at round-off, decides their structure (see
+    /// `loops::Structure`) and projects the velocities onto them.
     pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
         if !model.has_loops() {
@@ -200,8 +203,11 @@ impl<'m> MechanicalSystem<'m> {
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        loops::project(model, &mut self.data, &mut q, &mut v)?;
-        self.loops.start(model, &mut self.data, &q, &v)?;
+        loops::close_configuration(model, &mut self.data, &mut q)?;
+        self.loops
+            .start(model, &mut self.data, &q, &v)
+            .map_err(|e| self.structure_error(&e))?;
+        loops::project(model, &mut self.data, &self.loops.structure, &mut q, &mut v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
         Ok(())
@@ -273,10 +279,24 @@ impl<'m> MechanicalSystem<'m> {
         Ok(reactions)
     }
 
-    fn loop_error(&self, error: &LoopError) -> SystemError {
+    pub(super) fn loop_error(&self, error: &LoopError) -> SystemError {
         match error {
             LoopError::MasslessMotion { velocity } => SystemError::MasslessMotion {
                 velocity: self.model.velocity_name(*velocity),
+            },
+            LoopError::Singular { row } => SystemError::SingularConfiguration {
+                join: self.model.loops[row / 6].name.clone(),
+                row: ROW_NAMES[row % 6],
+            },
+        }
+    }
+
+    fn structure_error(&self, error: &StructureError) -> SystemError {
+        match error {
+            StructureError::Evaluation(e) => SystemError::Evaluation(e.clone()),
+            StructureError::SingularStart { row } => SystemError::SingularStart {
+                join: self.model.loops[row / 6].name.clone(),
+                row: ROW_NAMES[row % 6],
             },
         }
     }
@@ -307,6 +327,12 @@ pub enum SystemError {
     SingularMassMatrix,
     /// The acceleration of `join` is not finite.
     AccelerationNotFinite { join: String, cause: NotFiniteCause },
+    /// The loops are exactly at a singular configuration: the constraint `row` of the
+    /// complementary link `join` is no longer independent of the others.
+    SingularConfiguration { join: String, row: &'static str },
+    /// The run starts at a singular configuration, where `row` of `join` is implied by the other
+    /// constraints though it is not at the closed configurations around it.
+    SingularStart { join: String, row: &'static str },
 }
 
 /// What made an acceleration infinite or NaN.
@@ -342,6 +368,14 @@ impl fmt::Display for SystemError {
                 "the mass matrix is singular: join `{join}` carries no inertia along its motion (body `{body}` and the bodies beyond it)"
             ),
             SystemError::SingularMassMatrix => write!(f, "the mass matrix is singular"),
+            SystemError::SingularConfiguration { join, row } => write!(
+                f,
+                "the loops reached a singular configuration: the {row} constraint of `{join}` is no longer independent of the others"
+            ),
+            SystemError::SingularStart { join, row } => write!(
+                f,
+                "the loops start at a singular configuration (the {row} constraint of `{join}` is implied by the others here, not at the configurations around it), where the motion may leave along several branches: start away from it, or give initial values on one branch"
+            ),
             SystemError::AccelerationNotFinite { join, cause } => {
                 write!(f, "the acceleration of join `{join}` is not finite: {cause}")
             }

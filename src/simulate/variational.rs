@@ -21,7 +21,7 @@ use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
-use crate::dynamics::loops;
+use crate::dynamics::loops::{self, Factored, LoopError};
 use crate::integrate::{Failure, IntegrationError, Observer, Stats};
 
 const MAX_ITERATIONS: usize = 50;
@@ -79,12 +79,13 @@ impl MechanicalSystem<'_> {
         Ok(mass)
     }
 
-    /// The constraint Jacobian at the start of a step (None for a tree).
-    fn allowed_motions(&mut self, q: &[f64]) -> Result<Option<DMatrix<f64>>, SystemError> {
+    /// The kept constraint rows at the start of a step, factored (None for a tree).
+    fn allowed_motions(&mut self, q: &[f64]) -> Result<Option<Factored>, SystemError> {
         if !self.model.has_loops() {
             return Ok(None);
         }
-        Ok(Some(self.closure(q)?.1))
+        let g = self.closure(q)?.1;
+        Ok(Some(Factored::new(&g, &self.loops.structure)))
     }
 
     /// The Newton correction of q1 for the momentum residual `rhs` (scaled by h), and how far
@@ -94,18 +95,18 @@ impl MechanicalSystem<'_> {
     fn correction(
         &mut self,
         mass: &DMatrix<f64>,
-        start: &Option<DMatrix<f64>>,
+        start: &Option<Factored>,
         q1: &[f64],
         rhs: &DVector<f64>,
     ) -> Result<(DVector<f64>, f64), SystemError> {
-        let Some(g_start) = start else {
+        let Some(start) = start else {
             return Ok((solve(mass, rhs)?, 0.0));
         };
         let (closure, g_end) = self.closure(q1)?;
-        Ok((
-            constrained_solve(mass, g_start, &g_end, rhs, &(-&closure)),
-            closure.amax(),
-        ))
+        let end = Factored::new(&g_end, &self.loops.structure);
+        let correction = constrained_solve(mass, start, &end, rhs, &end.kept(&-&closure))
+            .map_err(|e| self.loop_error(&e))?;
+        Ok((correction, closure.amax()))
     }
 
     /// The velocities of momentum p at q1 (projected onto the loops' velocity constraints: the
@@ -120,10 +121,11 @@ impl MechanicalSystem<'_> {
             return Ok((solve(&mass, p)?, mass));
         }
         let (_, g) = self.closure(q1)?;
-        Ok((
-            constrained_solve(&mass, &g, &g, p, &DVector::zeros(g.nrows())),
-            mass,
-        ))
+        let end = Factored::new(&g, &self.loops.structure);
+        let rows = DVector::zeros(self.loops.structure.rows.len());
+        let velocity =
+            constrained_solve(&mass, &end, &end, p, &rows).map_err(|e| self.loop_error(&e))?;
+        Ok((velocity, mass))
     }
 
     /// Position rows and their Jacobian G at q.
@@ -134,24 +136,27 @@ impl MechanicalSystem<'_> {
     }
 }
 
-/// Solves `a x − g_startᵀ w = f` (for some w) with `g_end x = c` by the null-space method: x is
-/// the minimum-norm solution of the constraints plus a motion they allow, chosen so that the
-/// first equation holds on the motions the start's constraints allow. Least squares throughout,
-/// so redundant constraints and motions without mass cost nothing special.
+/// Solves `a x − g_startᵀ w = f` (for some w) with `g_end x = c` on the kept rows by the
+/// null-space method: x is the minimum-norm solution of the constraints plus a motion they
+/// allow, chosen so that the first equation holds on the motions the start's constraints allow.
+/// That last system is solved in the least-squares sense, so motions without mass cost nothing
+/// special.
 fn constrained_solve(
     a: &DMatrix<f64>,
-    g_start: &DMatrix<f64>,
-    g_end: &DMatrix<f64>,
+    start: &Factored,
+    end: &Factored,
     f: &DVector<f64>,
     c: &DVector<f64>,
-) -> DVector<f64> {
-    let end = loops::decompose(g_end);
-    let particular = &end.pseudo_inverse * c;
-    let allowed_start = loops::decompose(g_start).null_space;
+) -> Result<DVector<f64>, LoopError> {
+    let particular = end.least_norm(c)?;
+    if end.null_space.ncols() == 0 {
+        return Ok(particular);
+    }
+    let allowed_start = &start.null_space;
     let reduced = allowed_start.transpose() * a * &end.null_space;
     let rhs = allowed_start.transpose() * (f - a * &particular);
     let z = loops::decompose_with(&reduced, 1e-12).pseudo_inverse * rhs;
-    particular + &end.null_space * z
+    Ok(particular + &end.null_space * z)
 }
 
 fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, SystemError> {

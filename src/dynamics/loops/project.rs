@@ -1,0 +1,118 @@
+//! Moving a state back onto the loops: Gauss–Newton steps on the positions with minimum-norm
+//! corrections (the free motions are not disturbed), then the orthogonal projection of the
+//! velocities onto G v = 0. Along a run the steps use the rows the `Structure` keeps and their
+//! QR factorisation; before the structure is known (closing the initial configuration, looking
+//! at its neighbours), they use every row through a singular value decomposition.
+
+use nalgebra::DVector;
+
+use super::basis::decompose;
+use super::rows::{constraints, seat_ball_angles, Constraints};
+use super::solve::Factored;
+use super::structure::Structure;
+use crate::dynamics::algorithms::Data;
+use crate::dynamics::model::Model;
+use crate::kinematics::eval::EvalError;
+
+/// Constraint residuals before and after a projection: largest position row (metres or
+/// radians) and largest velocity row.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Residuals {
+    pub position: f64,
+    pub velocity: f64,
+}
+
+pub struct Projection {
+    pub before: Residuals,
+    pub after: Residuals,
+    /// How far the kept rows are from dependent at the projected configuration
+    /// (`Factored::conditioning`).
+    pub conditioning: (f64, Option<usize>),
+}
+
+const NEWTON_ITERATIONS: usize = 8;
+
+/// Moves (q, v) onto the kept rows of the constraints.
+pub fn project(
+    model: &Model,
+    data: &mut Data,
+    structure: &Structure,
+    q: &mut [f64],
+    v: &mut [f64],
+) -> Result<Projection, EvalError> {
+    let rest = vec![0.0; v.len()];
+    let mut current = constraints(model, data, q, &rest, false)?;
+    let before_position = current.residual.amax();
+    newton(model, data, q, &mut current, |c| {
+        let factored = Factored::new(&c.jacobian, structure);
+        factored.least_norm(&-factored.kept(&c.residual)).ok()
+    })?;
+    let factored = Factored::new(&current.jacobian, structure);
+    let velocity = &current.jacobian * DVector::from_column_slice(v);
+    let corrected = factored.allowed_part(&DVector::from_column_slice(v));
+    let after_velocity = (&current.jacobian * &corrected).amax();
+    v.copy_from_slice(corrected.as_slice());
+    seat_ball_angles(model, data, q, v, false)?;
+    Ok(Projection {
+        before: Residuals {
+            position: before_position,
+            velocity: velocity.amax(),
+        },
+        after: Residuals {
+            position: current.residual.amax(),
+            velocity: after_velocity,
+        },
+        conditioning: factored.conditioning(),
+    })
+}
+
+/// Moves q onto every row of the constraints (minimum-norm steps on a singular value
+/// decomposition, whatever the rank); returns the largest residual left.
+pub fn close_configuration(
+    model: &Model,
+    data: &mut Data,
+    q: &mut [f64],
+) -> Result<f64, EvalError> {
+    let rest = vec![0.0; model.velocities()];
+    let mut current = constraints(model, data, q, &rest, false)?;
+    newton(model, data, q, &mut current, |c| {
+        Some(-(decompose(&c.jacobian).pseudo_inverse * &c.residual))
+    })?;
+    Ok(current.residual.amax())
+}
+
+/// Gauss–Newton on the positions: `step` gives the correction at the constraints `current`
+/// (None to stop); stops when a step no longer reduces the largest residual, or reduces it less
+/// than fourfold. Leaves q and `current` at the best configuration reached.
+fn newton(
+    model: &Model,
+    data: &mut Data,
+    q: &mut [f64],
+    current: &mut Constraints,
+    mut step: impl FnMut(&Constraints) -> Option<DVector<f64>>,
+) -> Result<(), EvalError> {
+    let rest = vec![0.0; model.velocities()];
+    let mut error = current.residual.amax();
+    for _ in 0..NEWTON_ITERATIONS {
+        if error == 0.0 {
+            break;
+        }
+        let Some(correction) = step(current) else {
+            break;
+        };
+        let mut trial = q.to_vec();
+        model.retract(&mut trial, correction.as_slice());
+        let candidate = constraints(model, data, &trial, &rest, false)?;
+        let trial_error = candidate.residual.amax();
+        if !(trial_error < error) {
+            break;
+        }
+        let converging = trial_error < 0.25 * error;
+        q.copy_from_slice(&trial);
+        (*current, error) = (candidate, trial_error);
+        if !converging {
+            break;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,305 @@
+//! The loops' constraint rows. Every complementary link `A @ a and B @ b with D(q)` is six rows
+//! between its two bodies: the chain's end frame E = pose(a)·A·D(q) must coincide with the target
+//! frame T = pose(b)·B. The rows are written on the state's velocities (the tree's, then the
+//! complementary links' own coordinates, which carry no inertia):
+//!
+//! - position: the rotation vector of E⁻¹T and the gap between their origins (fixed axes);
+//! - velocity: `G v`, the difference of the two frames' angular velocities and of their
+//!   velocities at the loop point (fixed axes), zero on a closed trajectory;
+//! - acceleration: `G v̇ + γ = 0`, with γ from the bodies' velocity-product accelerations.
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use crate::dynamics::algorithms::{bias_accelerations, forward_kinematics, Data};
+use crate::dynamics::model::Model;
+use crate::dynamics::spatial::{self, Force, Motion};
+use crate::kinematics::eval::EvalError;
+use crate::kinematics::spatial::{transform_twist, translation, Pose};
+
+/// Names of the six rows of a loop.
+pub const ROW_NAMES: [&str; 6] = [
+    "rotation about x",
+    "rotation about y",
+    "rotation about z",
+    "translation along x",
+    "translation along y",
+    "translation along z",
+];
+
+/// The loops' constraint rows at a state.
+pub struct Constraints {
+    /// Position rows: 6 per loop.
+    pub residual: DVector<f64>,
+    /// ∂(rows' rates)/∂(velocities): 6 per loop, one column per state velocity.
+    pub jacobian: DMatrix<f64>,
+    /// `G v`: the velocity rows.
+    pub velocity: DVector<f64>,
+    /// γ = Ġ v (zero unless asked for).
+    pub bias: DVector<f64>,
+    /// Where each loop closes (origin of its chain's end), fixed axes.
+    pub points: Vec<Vector3<f64>>,
+}
+
+/// The constraint rows at (q, v), both of the state's length. With `with_bias` γ is computed too.
+/// Leaves the forward kinematics of (q, v) in `data`.
+pub fn constraints(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    with_bias: bool,
+) -> Result<Constraints, EvalError> {
+    forward_kinematics(model, data, q, v)?;
+    constraints_after_kinematics(model, data, q, v, with_bias)
+}
+
+/// `constraints` when `data` already holds the forward kinematics of (q, v) (after RNEA, say).
+pub fn constraints_after_kinematics(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    with_bias: bool,
+) -> Result<Constraints, EvalError> {
+    if with_bias {
+        bias_accelerations(model, data);
+    }
+    let rows = 6 * model.loops.len();
+    let mut c = Constraints {
+        residual: DVector::zeros(rows),
+        jacobian: DMatrix::zeros(rows, model.velocities()),
+        velocity: DVector::zeros(rows),
+        bias: DVector::zeros(rows),
+        points: Vec::with_capacity(model.loops.len()),
+    };
+    for k in 0..model.loops.len() {
+        loop_rows(model, data, q, v, k, with_bias, &mut c)?;
+    }
+    c.velocity = &c.jacobian * DVector::from_column_slice(v);
+    Ok(c)
+}
+
+fn loop_rows(
+    model: &Model,
+    data: &Data,
+    q: &[f64],
+    v: &[f64],
+    k: usize,
+    with_bias: bool,
+    c: &mut Constraints,
+) -> Result<(), EvalError> {
+    let joint = &model.loops[k];
+    let (offset, n) = (model.loop_offset(k), joint.coordinate_count());
+    // A ball joint's rotation is free: only its centre is constrained, which its angles do not
+    // move; its angle rates are left out.
+    let ball = model.loop_balls[k].is_some();
+    let no_rates = vec![0.0; n];
+    let rates = if ball {
+        &no_rates[..]
+    } else {
+        &v[model.nv + offset..model.nv + offset + n]
+    };
+    let chain = joint.chain_motion(
+        &q[model.nq + offset..model.nq + offset + n],
+        Some(rates),
+        &model.unknowns,
+    )?;
+    let base = data.world[joint.first_body] * joint.first;
+    let end = base * chain.pose;
+    let target = data.world[joint.second_body] * joint.second;
+    let point = end.translation.vector;
+    let rotation = end.rotation * (end.rotation.inverse() * target.rotation).scaled_axis();
+    let gap = target.translation.vector - point;
+    let row = 6 * k;
+    c.residual.rows_mut(row, 3).copy_from(&rotation);
+    c.residual.rows_mut(row + 3, 3).copy_from(&gap);
+    c.points.push(point);
+    // Rates are taken at the loop point, in fixed axes: a motion seen from `at_point`.
+    let at_point = translation(point);
+    add_body_columns(
+        model,
+        data,
+        joint.second_body,
+        &at_point,
+        1.0,
+        row,
+        &mut c.jacobian,
+    );
+    add_body_columns(
+        model,
+        data,
+        joint.first_body,
+        &at_point,
+        -1.0,
+        row,
+        &mut c.jacobian,
+    );
+    for column in (0..n).filter(|_| !ball) {
+        let twist = transform_twist(
+            &base,
+            &Motion::from_column_slice(chain.subspace.column(column).as_slice()),
+        );
+        let moved = spatial::motion_to_child(&at_point, &twist);
+        let mut target_column = c
+            .jacobian
+            .view_mut((row, model.nv + offset + column), (6, 1));
+        target_column -= moved;
+    }
+    if with_bias {
+        // World-frame spatial accelerations are the derivatives of world-frame spatial twists, so
+        // γ is the difference of the two frames' accelerations at zero joint accelerations.
+        let world = |motions: &[Motion], body: usize| {
+            spatial::motion_to_parent(&data.world[body], &motions[body])
+        };
+        let first_velocity = world(&data.velocity, joint.first_body);
+        let chain_velocity = transform_twist(&base, &chain.velocity);
+        let end_acceleration = world(&data.acceleration, joint.first_body)
+            + spatial::cross_motion(&first_velocity, &chain_velocity)
+            + transform_twist(&base, &chain.bias);
+        let difference = world(&data.acceleration, joint.second_body) - end_acceleration;
+        c.bias
+            .rows_mut(row, 6)
+            .copy_from(&spatial::motion_to_child(&at_point, &difference));
+        if ball {
+            // The point rows are the relative velocity at a moving point p: d/dt adds
+            // (ω_T − ω_E) × ṗ, which vanishes when the rotation rows hold (ω_T = ω_E).
+            let second_velocity = world(&data.velocity, joint.second_body);
+            let relative_spin = (second_velocity - first_velocity)
+                .fixed_rows::<3>(0)
+                .into_owned();
+            let point_velocity = spatial::motion_to_child(&at_point, &first_velocity)
+                .fixed_rows::<3>(3)
+                .into_owned();
+            let mut linear = c.bias.rows_mut(row + 3, 3);
+            linear += relative_spin.cross(&point_velocity);
+        }
+    }
+    if ball {
+        c.residual.rows_mut(row, 3).fill(0.0);
+        c.jacobian.rows_mut(row, 3).fill(0.0);
+        c.bias.rows_mut(row, 3).fill(0.0);
+    }
+    Ok(())
+}
+
+/// Whether each constraint row constrains anything: a ball joint's three rotation rows do not.
+pub fn active_rows(model: &Model) -> Vec<bool> {
+    model
+        .loop_balls
+        .iter()
+        .flat_map(|ball| (0..6).map(move |r| ball.is_none() || r >= 3))
+        .collect()
+}
+
+/// Recovers the angles of the complementary ball joints at (q, v), and their rates when
+/// `with_rates` (for outputs); otherwise their rates are set to zero: the state the integrator
+/// carries then holds them still between recoveries, instead of moving them with rates nothing
+/// updates (which would only feed its error estimate). Returns whether there are any.
+pub fn seat_ball_angles(
+    model: &Model,
+    data: &mut Data,
+    q: &mut [f64],
+    v: &mut [f64],
+    with_rates: bool,
+) -> Result<bool, EvalError> {
+    if model.loop_balls.iter().all(Option::is_none) {
+        return Ok(false);
+    }
+    forward_kinematics(model, data, q, v)?;
+    seat_balls(model, data, q, v, with_rates)?;
+    Ok(true)
+}
+
+/// Sets the angles of the complementary ball joints to those of the bodies' relative rotation
+/// (continuing from their previous values) and their rates to match the relative angular
+/// velocity; `data` must hold the forward kinematics of (q, v).
+fn seat_balls(
+    model: &Model,
+    data: &Data,
+    q: &mut [f64],
+    v: &mut [f64],
+    with_rates: bool,
+) -> Result<(), EvalError> {
+    for (k, axes) in model.loop_balls.iter().enumerate() {
+        let Some(axes) = axes else { continue };
+        let joint = &model.loops[k];
+        let start = model.loop_offset(k);
+        let base = data.world[joint.first_body] * joint.first;
+        let target = data.world[joint.second_body] * joint.second;
+        let relative = base.rotation.inverse() * target.rotation;
+        let previous = [
+            q[model.nq + start],
+            q[model.nq + start + 1],
+            q[model.nq + start + 2],
+        ];
+        let angles = crate::dynamics::angles::angles_from_rotation(axes, &relative, &previous);
+        q[model.nq + start..model.nq + start + 3].copy_from_slice(&angles);
+        if !with_rates {
+            v[model.nv + start..model.nv + start + 3].fill(0.0);
+            continue;
+        }
+        // Relative angular velocity in the first frame, then the angle rates that give it.
+        let world =
+            |body: usize| spatial::motion_to_parent(&data.world[body], &data.velocity[body]);
+        let omega = base.rotation.inverse()
+            * (world(joint.second_body) - world(joint.first_body)).fixed_rows::<3>(0);
+        let subspace = joint.chain(&angles, &model.unknowns)?.1;
+        let rates = subspace
+            .rows(0, 3)
+            .into_owned()
+            .pseudo_inverse(1e-12)
+            .map(|p| p * omega)
+            .unwrap_or_else(|_| DVector::zeros(3));
+        v[model.nv + start..model.nv + start + 3].copy_from_slice(rates.as_slice());
+    }
+    Ok(())
+}
+
+/// Adds `sign` times the rates of `body`'s frame per velocity of the joints between it and earth.
+fn add_body_columns(
+    model: &Model,
+    data: &Data,
+    body: usize,
+    at_point: &Pose,
+    sign: f64,
+    row: usize,
+    jacobian: &mut DMatrix<f64>,
+) {
+    let mut current = body;
+    while current != 0 {
+        let joint = &model.joints[current - 1];
+        let subspace = &data.states[current - 1].subspace;
+        for column in 0..joint.nv() {
+            let world = spatial::motion_to_parent(
+                &data.world[current],
+                &Motion::from_column_slice(subspace.column(column).as_slice()),
+            );
+            let moved = spatial::motion_to_child(at_point, &world);
+            let mut target = jacobian.view_mut((row, joint.v_offset + column), (6, 1));
+            target += sign * moved;
+        }
+        current = joint.parent;
+    }
+}
+
+/// The constraint wrenches as forces on the bodies (in their frames, about their origins):
+/// +λ on each loop's second body, −λ on its first.
+pub fn constraint_forces(
+    model: &Model,
+    data: &Data,
+    c: &Constraints,
+    multipliers: &DVector<f64>,
+) -> Vec<Force> {
+    let mut forces = vec![Force::zeros(); model.body_count() + 1];
+    for (k, joint) in model.loops.iter().enumerate() {
+        let wrench = Force::from_column_slice(multipliers.rows(6 * k, 6).as_slice());
+        // About the fixed origin, then into each body's frame.
+        let about_origin = spatial::force_to_parent(&translation(c.points[k]), &wrench);
+        for (body, sign) in [(joint.second_body, 1.0), (joint.first_body, -1.0)] {
+            if body != 0 {
+                forces[body] += sign * spatial::force_to_child(&data.world[body], &about_origin);
+            }
+        }
+    }
+    forces
+}

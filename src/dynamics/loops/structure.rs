@@ -1,0 +1,336 @@
+//! What the loops are, decided once at the start of a run and kept along it: which constraint
+//! rows are independent (a planar loop of revolutes keeps 3 of its 6 rows, a ball joint 3, an
+//! overconstrained Bennett linkage 3), how many of the motions they allow carry no mass, and the
+//! length that makes rows in radians and rows in metres comparable. The equations of motion are
+//! then the same smooth function of the state all along the run: no rank is decided by a
+//! threshold inside an evaluation.
+//!
+//! Units: rotation rows are in radians, translation rows in metres, and the columns of sliding
+//! coordinates in metres per unit of their rate. Every decision is taken on the rows and columns
+//! made dimensionless by the mechanism's characteristic length L (the diagonal of the box
+//! holding its bodies' origins, its joints and its loop points): translation rows are divided by
+//! L and the columns of sliding motions multiplied by it. The four-bar in millimetres and in
+//! metres then take the same decisions.
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use super::basis::{decompose, SOLVE_TOLERANCE};
+use super::project::close_configuration;
+use super::rows::{active_rows, constraints, Constraints};
+use super::solve::Factored;
+use crate::dynamics::algorithms::{crba, Data};
+use crate::dynamics::model::Model;
+use crate::kinematics::eval::EvalError;
+
+/// For the rank reported to people (redundant constraints, `lsdc tree`): a row counts as
+/// independent when its part orthogonal to the earlier rows is above this fraction of the
+/// largest row. Far above round-off because some closure conditions act only at second order
+/// (maille1, maille2): at a configuration closed to 1e-15 the corresponding part is still about
+/// 1e-8.
+pub const RANK_TOLERANCE: f64 = crate::kinematics::mobility::RANK_TOLERANCE;
+
+/// A motion whose inertia is below this fraction of the largest counts as without mass (a point
+/// mass rod spinning about its own axis: 1e-12 relative, not 0, after the null-space basis
+/// mixes it with motions that have mass).
+pub const MASSLESS: f64 = 1e-10;
+
+/// Size of the displacement (dimensionless: radians, or lengths divided by L) along the allowed
+/// motions used to look at the closed configurations next to the start.
+const NEARBY_STEP: f64 = 1e-3;
+
+/// The decisions taken on the loops at the start of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Structure {
+    /// The rows the equations of motion keep (indices among the 6 per loop): independent at the
+    /// start up to round-off (`SOLVE_TOLERANCE`), in loop order then row order.
+    pub rows: Vec<usize>,
+    /// Per kept row, the factor that makes it dimensionless: 1 for a rotation row, 1/L for a
+    /// translation row.
+    pub scales: Vec<f64>,
+    /// The characteristic length L, in metres.
+    pub length: f64,
+    /// The rows implied by earlier ones at the start, at the reporting tolerance.
+    pub redundant: Vec<usize>,
+    /// The number of independent rows at the reporting tolerance.
+    pub rank: usize,
+    /// The active rows (a ball joint's three rotation rows are not).
+    pub active: usize,
+    /// How many of the allowed motions carry no mass.
+    pub massless: usize,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum StructureError {
+    Evaluation(EvalError),
+    /// The start is a singular configuration: closed configurations next to it have more
+    /// independent rows (this one, the first of them) than the start has.
+    SingularStart { row: usize },
+}
+
+impl From<EvalError> for StructureError {
+    fn from(error: EvalError) -> Self {
+        StructureError::Evaluation(error)
+    }
+}
+
+impl Structure {
+    /// The structure of the loops at a closed configuration q.
+    pub fn decide(model: &Model, data: &mut Data, q: &[f64]) -> Result<Structure, StructureError> {
+        let rest = vec![0.0; model.velocities()];
+        let c = constraints(model, data, q, &rest, false)?;
+        let length = characteristic_length(model, data, &c);
+        let mut structure = Structure::at(model, &c, length);
+        structure.massless = massless_count(model, data, q, &structure)?;
+        if let Some(row) = structure.gained_nearby(model, data, q)? {
+            return Err(StructureError::SingularStart { row });
+        }
+        Ok(structure)
+    }
+
+    /// The rows' decisions at the constraints `c`, with length L.
+    fn at(model: &Model, c: &Constraints, length: f64) -> Structure {
+        let active = active_rows(model);
+        let scaled = dimensionless(&c.jacobian, length);
+        let rows = best_rows(&scaled, &active, SOLVE_TOLERANCE);
+        let (reported, redundant) = independent_rows(&scaled, &active, RANK_TOLERANCE);
+        let scales = rows.iter().map(|&r| row_scale(r, length)).collect();
+        Structure {
+            rows,
+            scales,
+            length,
+            redundant,
+            rank: reported.len(),
+            active: active.iter().filter(|&&a| a).count(),
+            massless: 0,
+        }
+    }
+
+    /// A row independent at closed configurations next to q though dependent at q itself: q is
+    /// then a singular configuration (a flat parallelogram), where the motion may leave along
+    /// either branch.
+    fn gained_nearby(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+    ) -> Result<Option<usize>, EvalError> {
+        let rest = vec![0.0; model.velocities()];
+        let c = constraints(model, data, q, &rest, false)?;
+        let allowed = decompose(&c.jacobian).null_space;
+        if allowed.ncols() == 0 {
+            return Ok(None);
+        }
+        let columns = column_scales(&c.jacobian, self.length);
+        // A fixed, generic combination of the allowed motions, in both directions.
+        let weights = DVector::from_fn(allowed.ncols(), |k, _| 1.0 / (k as f64 + 1.0).sqrt());
+        let direction = (&allowed * weights).normalize();
+        for sign in [1.0, -1.0] {
+            let step: Vec<f64> = direction
+                .iter()
+                .zip(&columns)
+                .map(|(d, scale)| sign * NEARBY_STEP * d * scale)
+                .collect();
+            let mut nearby = q.to_vec();
+            model.retract(&mut nearby, &step);
+            close_configuration(model, data, &mut nearby)?;
+            let there = constraints(model, data, &nearby, &rest, false)?;
+            let active = active_rows(model);
+            let rows = best_rows(
+                &dimensionless(&there.jacobian, self.length),
+                &active,
+                SOLVE_TOLERANCE,
+            );
+            if rows.len() > self.rows.len() {
+                return Ok(rows.into_iter().find(|r| !self.rows.contains(r)));
+            }
+        }
+        Ok(None)
+    }
+}
+
+impl Structure {
+    /// Chooses the kept rows again at q, if the rows chosen there are better conditioned than
+    /// the current ones (by `RECHOOSE` at least) and as many. Redundant rows make this
+    /// necessary: of the six rows of a Bennett linkage, three are independent all along the
+    /// motion, but not always the same three. On the closed configurations every choice gives
+    /// the same accelerations, so the equations of motion do not change; the choice is taken
+    /// between steps, never inside an evaluation. Returns whether the rows changed.
+    pub fn rechoose(&mut self, model: &Model, jacobian: &DMatrix<f64>, current: f64) -> bool {
+        let active = active_rows(model);
+        let rows = best_rows(&dimensionless(jacobian, self.length), &active, SOLVE_TOLERANCE);
+        if rows.len() != self.rows.len() || rows == self.rows {
+            return false;
+        }
+        let candidate = Structure {
+            scales: rows.iter().map(|&r| row_scale(r, self.length)).collect(),
+            rows,
+            ..self.clone()
+        };
+        if Factored::new(jacobian, &candidate).conditioning().0 < RECHOOSE * current {
+            return false;
+        }
+        *self = candidate;
+        true
+    }
+}
+
+/// A new choice of rows must improve the conditioning by this factor at least.
+const RECHOOSE: f64 = 10.0;
+
+/// The active rows that are best conditioned together: pivoted Gram–Schmidt, taking at each
+/// step the row with the largest part orthogonal to those already taken, until that part is at
+/// most `tolerance` times the largest row. In loop order, then row order.
+fn best_rows(jacobian: &DMatrix<f64>, active: &[bool], tolerance: f64) -> Vec<usize> {
+    let mut left: Vec<(usize, DVector<f64>)> = (0..jacobian.nrows())
+        .filter(|&r| active[r])
+        .map(|r| (r, jacobian.row(r).transpose()))
+        .collect();
+    let largest = left.iter().map(|(_, row)| row.norm()).fold(0.0, f64::max);
+    let mut chosen = Vec::new();
+    while !left.is_empty() {
+        let (best, norm) = left
+            .iter()
+            .enumerate()
+            .map(|(k, (_, row))| (k, row.norm()))
+            .fold((0, -1.0), |a, b| if b.1 > a.1 { b } else { a });
+        if norm <= tolerance * largest || norm == 0.0 {
+            break;
+        }
+        let (row, vector) = left.swap_remove(best);
+        let unit = vector / norm;
+        for (_, other) in &mut left {
+            // Twice, for orthogonality in floating point.
+            for _ in 0..2 {
+                let along = unit.dot(other);
+                *other -= &unit * along;
+            }
+        }
+        chosen.push(row);
+    }
+    chosen.sort_unstable();
+    chosen
+}
+
+/// 1 for a rotation row (the first three of a loop), 1/L for a translation row.
+pub fn row_scale(row: usize, length: f64) -> f64 {
+    if row % 6 < 3 {
+        1.0
+    } else {
+        1.0 / length
+    }
+}
+
+/// The diagonal of the box holding the bodies' origins, the joints' frames and the loop points,
+/// in metres; 1 for a mechanism whose points all coincide (only its rotations then matter).
+fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64 {
+    let mut points: Vec<Vector3<f64>> = data
+        .world
+        .iter()
+        .map(|pose| pose.translation.vector)
+        .collect();
+    for joint in &model.joints {
+        points.push((data.world[joint.child] * joint.on_child).translation.vector);
+    }
+    points.extend(c.points.iter().copied());
+    let lowest = points.iter().fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
+    let highest = points
+        .iter()
+        .fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
+    let diagonal = (highest - lowest).norm();
+    if diagonal.is_finite() && diagonal > 0.0 {
+        diagonal
+    } else {
+        1.0
+    }
+}
+
+/// Per column of G, the factor that makes it dimensionless: L for a sliding motion (no rotation
+/// row moves with it), 1 otherwise.
+fn column_scales(jacobian: &DMatrix<f64>, length: f64) -> Vec<f64> {
+    (0..jacobian.ncols())
+        .map(|column| {
+            let turns = (0..jacobian.nrows())
+                .filter(|r| r % 6 < 3)
+                .any(|r| jacobian[(r, column)] != 0.0);
+            if turns {
+                1.0
+            } else {
+                length
+            }
+        })
+        .collect()
+}
+
+/// G with its rows and columns made dimensionless by the length L.
+pub fn dimensionless(jacobian: &DMatrix<f64>, length: f64) -> DMatrix<f64> {
+    let columns = column_scales(jacobian, length);
+    DMatrix::from_fn(jacobian.nrows(), jacobian.ncols(), |r, c| {
+        jacobian[(r, c)] * row_scale(r, length) * columns[c]
+    })
+}
+
+/// The active rows independent of the earlier ones (in loop order, then row order), and those
+/// that are not: a row is dependent when its part orthogonal to the earlier independent rows is
+/// at most `tolerance` times the largest row.
+pub fn independent_rows(
+    jacobian: &DMatrix<f64>,
+    active: &[bool],
+    tolerance: f64,
+) -> (Vec<usize>, Vec<usize>) {
+    let largest = (0..jacobian.nrows())
+        .map(|r| jacobian.row(r).norm())
+        .fold(0.0, f64::max);
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let (mut independent, mut dependent) = (Vec::new(), Vec::new());
+    for r in (0..jacobian.nrows()).filter(|&r| active[r]) {
+        let mut row: DVector<f64> = jacobian.row(r).transpose();
+        // Twice, for orthogonality in floating point.
+        for _ in 0..2 {
+            for b in &basis {
+                row -= b * b.dot(&row);
+            }
+        }
+        let norm = row.norm();
+        if norm <= tolerance * largest || norm == 0.0 {
+            dependent.push(r);
+        } else {
+            basis.push(row / norm);
+            independent.push(r);
+        }
+    }
+    (independent, dependent)
+}
+
+/// How many of the motions the kept rows allow at q move no mass (rod spins, the angles of
+/// complementary ball joints), counted on the closed configuration. The count is a property of
+/// the mechanism: between projections, in the integrator's trial states slightly off the
+/// closed set, these motions pick up inertias of 1e-9 of the largest or so, and dividing the
+/// residue of forces that balance exactly by such inertias makes a spurious fast motion.
+fn massless_count(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    structure: &Structure,
+) -> Result<usize, EvalError> {
+    let rest = vec![0.0; model.velocities()];
+    let c = constraints(model, data, q, &rest, false)?;
+    let allowed = Factored::new(&c.jacobian, structure).null_space;
+    if allowed.ncols() == 0 {
+        return Ok(0);
+    }
+    let mass = full_mass(&crba(model, data, q)?, model.velocities());
+    let eigenvalues = (allowed.transpose() * mass * &allowed).symmetric_eigenvalues();
+    let largest = eigenvalues.amax();
+    Ok(eigenvalues
+        .iter()
+        .filter(|&&value| value <= MASSLESS * largest)
+        .count())
+}
+
+/// The tree's mass matrix over all n of the state's velocities: the complementary links' own
+/// coordinates carry no inertia.
+pub fn full_mass(tree: &DMatrix<f64>, n: usize) -> DMatrix<f64> {
+    let mut mass = DMatrix::zeros(n, n);
+    mass.view_mut((0, 0), tree.shape()).copy_from(tree);
+    mass
+}
