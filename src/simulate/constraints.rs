@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::loops::{
-    self, Factored, Residuals, Stabilisation, Structure, StructureError, ROW_NAMES,
+    self, Factored, Residuals, RowChoice, Stabilisation, Structure, StructureError, ROW_NAMES,
 };
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -22,8 +22,7 @@ const RECHOOSE_BELOW: f64 = 0.1;
 
 /// Before the start, the structure of a mechanism without loops.
 const NO_STRUCTURE: Structure = Structure {
-    rows: Vec::new(),
-    scales: Vec::new(),
+    choice: RowChoice::NONE,
     length: 1.0,
     redundant: Vec::new(),
     rank: 0,
@@ -79,6 +78,8 @@ pub struct LoopMonitor {
     pub stabilisation: Stabilisation,
     /// The decisions taken on the loops at the start (see `loops::Structure`).
     pub structure: Structure,
+    /// Whether they were taken.
+    started: bool,
     /// The complementary links' names, for the report.
     loop_names: Vec<String>,
     /// How many times the kept rows were chosen again (see `Structure::rechoose`).
@@ -101,6 +102,7 @@ impl LoopMonitor {
         LoopMonitor {
             stabilisation,
             structure: NO_STRUCTURE,
+            started: false,
             loop_names: Vec::new(),
             rechosen: 0,
             before: Residuals::default(),
@@ -119,6 +121,7 @@ impl LoopMonitor {
         v: &[f64],
     ) -> Result<(), StructureError> {
         self.structure = Structure::decide(model, data, q)?;
+        self.started = true;
         self.loop_names = model.loops.iter().map(|l| l.name.clone()).collect();
         let c = loops::constraints(model, data, q, v, false)?;
         let residuals = Residuals {
@@ -127,6 +130,11 @@ impl LoopMonitor {
         };
         (self.before, self.after) = (residuals, residuals);
         Ok(())
+    }
+
+    /// Whether the structure was decided (`start`).
+    pub fn started(&self) -> bool {
+        self.started
     }
 
     /// Moves (q, v) onto the constraints when the stabilisation is by projection, and records the
@@ -144,14 +152,17 @@ impl LoopMonitor {
         q: &mut [f64],
         v: &mut [f64],
     ) -> Result<bool, EvalError> {
-        if self.stabilisation == Stabilisation::Projection && !self.near_singular(model, data, q)? {
-            let projection = loops::project(model, data, &self.structure, q, v)?;
+        let rest = vec![0.0; model.velocities()];
+        let c = loops::constraints(model, data, q, &rest, false)?;
+        let conditioning = self.conditioning(model, &c.jacobian);
+        if self.stabilisation == Stabilisation::Projection && conditioning.0 >= NEAR_SINGULAR {
+            let projection = loops::project(model, data, &self.structure.choice, q, v)?;
             self.observe(
                 model,
                 time,
                 projection.before,
                 projection.after,
-                projection.conditioning,
+                conditioning,
             );
             return Ok(true);
         }
@@ -159,26 +170,15 @@ impl LoopMonitor {
         loops::seat_ball_angles(model, data, q, v, false)
     }
 
-    /// Whether the kept rows at q are within `NEAR_SINGULAR` of losing their independence.
-    fn near_singular(
-        &mut self,
-        model: &Model,
-        data: &mut Data,
-        q: &[f64],
-    ) -> Result<bool, EvalError> {
-        let c = loops::constraints(model, data, q, &vec![0.0; model.velocities()], false)?;
-        Ok(self.conditioning(model, &c.jacobian).0 < NEAR_SINGULAR)
-    }
-
     /// The conditioning of the kept rows (`Factored::conditioning`) at the constraint Jacobian
     /// G, after choosing them again if they are poorly conditioned and better ones exist.
     fn conditioning(&mut self, model: &Model, jacobian: &DMatrix<f64>) -> (f64, Option<usize>) {
-        let conditioning = Factored::new(jacobian, &self.structure).conditioning();
+        let conditioning = Factored::new(jacobian, &self.structure.choice).conditioning();
         if conditioning.0 < RECHOOSE_BELOW
             && self.structure.rechoose(model, jacobian, conditioning.0)
         {
             self.rechosen += 1;
-            return Factored::new(jacobian, &self.structure).conditioning();
+            return Factored::new(jacobian, &self.structure.choice).conditioning();
         }
         conditioning
     }

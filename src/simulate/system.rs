@@ -12,9 +12,7 @@ use crate::dynamics::algorithms::{
     aba, crba, forward_kinematics, rnea, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate, Declared, Efforts};
-use crate::dynamics::loops::{
-    self, LoopError, Solution, Stabilisation, StructureError, ROW_NAMES,
-};
+use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::Model;
 use crate::dynamics::spatial;
 use crate::kinematics::eval::EvalError;
@@ -73,6 +71,7 @@ impl<'m> MechanicalSystem<'m> {
         v: &[f64],
     ) -> Result<(Solution, Efforts, loops::Constraints), SystemError> {
         let model = self.model;
+        self.ensure_structure(q)?;
         let efforts = self.efforts(t, q, v)?;
         let mass = crba(model, &mut self.data, q)?;
         let bias = rnea(
@@ -207,7 +206,8 @@ impl<'m> MechanicalSystem<'m> {
         self.loops
             .start(model, &mut self.data, &q, &v)
             .map_err(|e| self.structure_error(&e))?;
-        loops::project(model, &mut self.data, &self.loops.structure, &mut q, &mut v)?;
+        let choice = &self.loops.structure.choice;
+        loops::project(model, &mut self.data, choice, &mut q, &mut v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
         Ok(())
@@ -277,6 +277,18 @@ impl<'m> MechanicalSystem<'m> {
             reactions.extend_from_slice(multipliers.as_slice());
         }
         Ok(reactions)
+    }
+
+    /// Decides the loops' structure at q if no run started them (`start_loops`): a state
+    /// evaluated on its own, closed.
+    pub(super) fn ensure_structure(&mut self, q: &[f64]) -> Result<(), SystemError> {
+        if self.loops.started() {
+            return Ok(());
+        }
+        let rest = vec![0.0; self.model.velocities()];
+        self.loops
+            .start(self.model, &mut self.data, q, &rest)
+            .map_err(|e| self.structure_error(&e))
     }
 
     pub(super) fn loop_error(&self, error: &LoopError) -> SystemError {

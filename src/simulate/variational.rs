@@ -84,8 +84,9 @@ impl MechanicalSystem<'_> {
         if !self.model.has_loops() {
             return Ok(None);
         }
+        self.ensure_structure(q)?;
         let g = self.closure(q)?.1;
-        Ok(Some(Factored::new(&g, &self.loops.structure)))
+        Ok(Some(Factored::new(&g, &self.loops.structure.choice)))
     }
 
     /// The Newton correction of q1 for the momentum residual `rhs` (scaled by h), and how far
@@ -103,7 +104,7 @@ impl MechanicalSystem<'_> {
             return Ok((solve(mass, rhs)?, 0.0));
         };
         let (closure, g_end) = self.closure(q1)?;
-        let end = Factored::new(&g_end, &self.loops.structure);
+        let end = Factored::new(&g_end, &self.loops.structure.choice);
         let correction = constrained_solve(mass, start, &end, rhs, &end.kept(&-&closure))
             .map_err(|e| self.loop_error(&e))?;
         Ok((correction, closure.amax()))
@@ -121,8 +122,8 @@ impl MechanicalSystem<'_> {
             return Ok((solve(&mass, p)?, mass));
         }
         let (_, g) = self.closure(q1)?;
-        let end = Factored::new(&g, &self.loops.structure);
-        let rows = DVector::zeros(self.loops.structure.rows.len());
+        let end = Factored::new(&g, &self.loops.structure.choice);
+        let rows = DVector::zeros(self.loops.structure.choice.rows.len());
         let velocity =
             constrained_solve(&mass, &end, &end, p, &rows).map_err(|e| self.loop_error(&e))?;
         Ok((velocity, mass))
@@ -148,7 +149,9 @@ fn constrained_solve(
     f: &DVector<f64>,
     c: &DVector<f64>,
 ) -> Result<DVector<f64>, LoopError> {
-    let particular = end.least_norm(c)?;
+    let particular = end
+        .least_norm(c)
+        .map_err(|lost| LoopError::Singular { row: lost.row })?;
     if end.null_space.ncols() == 0 {
         return Ok(particular);
     }

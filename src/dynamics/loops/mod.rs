@@ -1,21 +1,24 @@
 //! Closed loops: the complementary links' constraint rows (`rows`), the decisions taken once on
 //! them at the start of a run (`structure`: which rows are independent, in units that do not
-//! depend on the user's), the constrained equations of motion solved on those rows (`solve`),
+//! depend on the user's), the QR factorisation of those rows (`factored`), the constrained equations of motion solved
+//! on them (`solve`),
 //! and the projection of a state back onto the loops (`project`). A singular value
 //! decomposition (`basis`) serves the decisions taken once, never the equations of motion.
 //! The method and its references: `docs/loops.md`.
 
 pub mod basis;
+pub mod factored;
 pub mod project;
 pub mod rows;
 pub mod solve;
 pub mod structure;
 
 pub use basis::{decompose, decompose_with, Decomposition};
+pub use factored::{Factored, RowChoice};
 pub use project::{close_configuration, project, Projection, Residuals};
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_after_kinematics, seat_ball_angles,
     Constraints, ROW_NAMES,
 };
-pub use solve::{solve, Factored, LoopError, Solution, Stabilisation};
+pub use solve::{solve, LoopError, Solution, Stabilisation};
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

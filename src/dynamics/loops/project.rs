@@ -1,15 +1,14 @@
 //! Moving a state back onto the loops: Gauss–Newton steps on the positions with minimum-norm
 //! corrections (the free motions are not disturbed), then the orthogonal projection of the
 //! velocities onto G v = 0. Along a run the steps use the rows the `Structure` keeps and their
-//! QR factorisation; before the structure is known (closing the initial configuration, looking
+//! QR factorisation (`Factored`); before the structure is known (closing the initial configuration, looking
 //! at its neighbours), they use every row through a singular value decomposition.
 
 use nalgebra::DVector;
 
 use super::basis::decompose;
+use super::factored::{Factored, RowChoice};
 use super::rows::{constraints, seat_ball_angles, Constraints};
-use super::solve::Factored;
-use super::structure::Structure;
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -25,9 +24,6 @@ pub struct Residuals {
 pub struct Projection {
     pub before: Residuals,
     pub after: Residuals,
-    /// How far the kept rows are from dependent at the projected configuration
-    /// (`Factored::conditioning`).
-    pub conditioning: (f64, Option<usize>),
 }
 
 const NEWTON_ITERATIONS: usize = 8;
@@ -36,7 +32,7 @@ const NEWTON_ITERATIONS: usize = 8;
 pub fn project(
     model: &Model,
     data: &mut Data,
-    structure: &Structure,
+    choice: &RowChoice,
     q: &mut [f64],
     v: &mut [f64],
 ) -> Result<Projection, EvalError> {
@@ -44,10 +40,10 @@ pub fn project(
     let mut current = constraints(model, data, q, &rest, false)?;
     let before_position = current.residual.amax();
     newton(model, data, q, &mut current, |c| {
-        let factored = Factored::new(&c.jacobian, structure);
+        let factored = Factored::new(&c.jacobian, choice);
         factored.least_norm(&-factored.kept(&c.residual)).ok()
     })?;
-    let factored = Factored::new(&current.jacobian, structure);
+    let factored = Factored::new(&current.jacobian, choice);
     let velocity = &current.jacobian * DVector::from_column_slice(v);
     let corrected = factored.allowed_part(&DVector::from_column_slice(v));
     let after_velocity = (&current.jacobian * &corrected).amax();
@@ -62,7 +58,6 @@ pub fn project(
             position: current.residual.amax(),
             velocity: after_velocity,
         },
-        conditioning: factored.conditioning(),
     })
 }
 
@@ -104,7 +99,8 @@ fn newton(
         model.retract(&mut trial, correction.as_slice());
         let candidate = constraints(model, data, &trial, &rest, false)?;
         let trial_error = candidate.residual.amax();
-        if !(trial_error < error) {
+        // A NaN residual is no improvement either.
+        if trial_error.is_nan() || trial_error >= error {
             break;
         }
         let converging = trial_error < 0.25 * error;

@@ -1,7 +1,5 @@
 //! The constrained equations `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0`, solved on the rows the loops'
-//! `Structure` keeps, by the null-space method on a QR factorisation of those rows (made
-//! dimensionless): Gₛᵀ = Q₁R, and Q₂ completes Q₁ to an orthonormal basis, so Q₂ spans the
-//! motions the loops allow. Then
+//! `Structure` keeps, by the null-space method on their QR factorisation (`Factored`). Then
 //!
 //! - the particular acceleration a₀ = −Q₁R⁻ᵀγₛ, the smallest with Gₛa₀ = −γₛ;
 //! - the allowed part a = a₀ + Q₂z, with (Q₂ᵀMQ₂) z = Q₂ᵀ(f − Ma₀) by Cholesky;
@@ -14,6 +12,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::factored::{Factored, Singular};
 use super::rows::Constraints;
 use super::structure::{full_mass, Structure};
 
@@ -51,109 +50,6 @@ pub enum LoopError {
 /// Delta's rod spins) of evaluating forces that balance exactly.
 const MASSLESS_FORCE: f64 = 1e-3;
 
-/// The QR factorisation of the kept rows of G at one state.
-pub struct Factored {
-    /// Q₁: an orthonormal basis of the kept rows' span (one column per kept row).
-    range: DMatrix<f64>,
-    /// Q₂: an orthonormal basis of the motions the kept rows allow.
-    pub null_space: DMatrix<f64>,
-    /// R, upper triangular: Gₛᵀ = Q₁R.
-    triangle: DMatrix<f64>,
-    rows: Vec<usize>,
-    scales: Vec<f64>,
-}
-
-impl Factored {
-    pub fn new(jacobian: &DMatrix<f64>, structure: &Structure) -> Factored {
-        let n = jacobian.ncols();
-        let r = structure.rows.len();
-        let transposed = DMatrix::from_fn(n, r, |column, k| {
-            jacobian[(structure.rows[k], column)] * structure.scales[k]
-        });
-        let (range, null_space, triangle) = if r == 0 {
-            (DMatrix::zeros(n, 0), DMatrix::identity(n, n), DMatrix::zeros(0, 0))
-        } else {
-            let qr = transposed.qr();
-            let mut q_transposed = DMatrix::identity(n, n);
-            qr.q_tr_mul(&mut q_transposed);
-            let q = q_transposed.transpose();
-            (
-                q.columns(0, r).into_owned(),
-                q.columns(r, n - r).into_owned(),
-                qr.r(),
-            )
-        };
-        Factored {
-            range,
-            null_space,
-            triangle,
-            rows: structure.rows.clone(),
-            scales: structure.scales.clone(),
-        }
-    }
-
-    /// The kept rows of a vector of rows (6 per loop), made dimensionless.
-    pub fn kept(&self, all: &DVector<f64>) -> DVector<f64> {
-        DVector::from_iterator(
-            self.rows.len(),
-            self.rows.iter().zip(&self.scales).map(|(&r, s)| all[r] * s),
-        )
-    }
-
-    /// The smallest x with Gₛx = b (b as from `kept`), or the row lost at a singularity.
-    pub fn least_norm(&self, b: &DVector<f64>) -> Result<DVector<f64>, LoopError> {
-        let y = self
-            .triangle
-            .tr_solve_upper_triangular(b)
-            .filter(|y| y.iter().all(|x| x.is_finite()))
-            .ok_or_else(|| self.singular())?;
-        Ok(&self.range * y)
-    }
-
-    /// v without its part across the kept rows: the closest motion they allow.
-    pub fn allowed_part(&self, v: &DVector<f64>) -> DVector<f64> {
-        v - &self.range * (self.range.transpose() * v)
-    }
-
-    /// λ, 6 per loop (zero on the rows not kept), with Gᵀλ = y for y in the kept rows' span.
-    fn multipliers(&self, y: &DVector<f64>, total: usize) -> Result<DVector<f64>, LoopError> {
-        let kept = self
-            .triangle
-            .solve_upper_triangular(&(self.range.transpose() * y))
-            .filter(|l| l.iter().all(|x| x.is_finite()))
-            .ok_or_else(|| self.singular())?;
-        let mut all = DVector::zeros(total);
-        for (k, (&row, scale)) in self.rows.iter().zip(&self.scales).enumerate() {
-            all[row] = kept[k] * scale;
-        }
-        Ok(all)
-    }
-
-    /// How far the kept rows are from dependent: the smallest diagonal entry of R over the
-    /// largest (1 for rows orthogonal and of equal length, 0 at a singular configuration), and
-    /// the row (among the 6 per loop) of the smallest.
-    pub fn conditioning(&self) -> (f64, Option<usize>) {
-        let diagonal = self.triangle.diagonal().map(f64::abs);
-        if diagonal.is_empty() {
-            return (1.0, None);
-        }
-        let largest = diagonal.max();
-        let smallest = diagonal.imin();
-        let ratio = if largest > 0.0 {
-            diagonal[smallest] / largest
-        } else {
-            0.0
-        };
-        (ratio, Some(self.rows[smallest]))
-    }
-
-    fn singular(&self) -> LoopError {
-        LoopError::Singular {
-            row: self.conditioning().1.unwrap_or(0),
-        }
-    }
-}
-
 /// Solves `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` on the kept rows (γ with Baumgarte's terms when asked
 /// for); `mass` is the tree's mass matrix, `force` has the state's length.
 pub fn solve(
@@ -168,8 +64,10 @@ pub fn solve(
     if let Stabilisation::Baumgarte(rate) = stabilisation {
         gamma += 2.0 * rate * &c.velocity + rate * rate * &c.residual;
     }
-    let factored = Factored::new(&c.jacobian, structure);
-    let particular = factored.least_norm(&-factored.kept(&gamma))?;
+    let factored = Factored::new(&c.jacobian, &structure.choice);
+    let particular = factored
+        .damped_least_norm(&-factored.kept(&gamma))
+        .map_err(singular)?;
     let null = &factored.null_space;
     let reduced_mass = null.transpose() * &full_mass * null;
     let reduced_force = null.transpose() * (force - &full_mass * &particular);
@@ -179,12 +77,17 @@ pub fn solve(
         }
     })?;
     let accelerations = particular + null * z;
-    let multipliers =
-        factored.multipliers(&(&full_mass * &accelerations - force), c.residual.len())?;
+    let multipliers = factored
+        .multipliers(&(&full_mass * &accelerations - force), c.residual.len())
+        .map_err(singular)?;
     Ok(Solution {
         accelerations,
         multipliers,
     })
+}
+
+fn singular(lost: Singular) -> LoopError {
+    LoopError::Singular { row: lost.row }
 }
 
 /// Solves the symmetric positive semi-definite system `a z = b` in the span of the eigenvectors

@@ -14,10 +14,10 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use super::basis::{decompose, SOLVE_TOLERANCE};
+use super::basis::decompose;
+use super::factored::{row_scale, Factored, RowChoice};
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints};
-use super::solve::Factored;
 use crate::dynamics::algorithms::{crba, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -28,6 +28,13 @@ use crate::kinematics::eval::EvalError;
 /// (maille1, maille2): at a configuration closed to 1e-15 the corresponding part is still about
 /// 1e-8.
 pub const RANK_TOLERANCE: f64 = crate::kinematics::mobility::RANK_TOLERANCE;
+
+/// For the rows the equations keep: a row is independent when its part orthogonal to the rows
+/// already kept is above this fraction of the largest (dimensionless) row. Rows that close a
+/// loop only at second order (maille1, maille2) are independent at first order by about 1e-9
+/// at a configuration closed to 1e-15, and must be kept; rows that depend on others are at
+/// round-off, 1e-15.
+pub const KEEP_TOLERANCE: f64 = 1e-12;
 
 /// A motion whose inertia is below this fraction of the largest counts as without mass (a point
 /// mass rod spinning about its own axis: 1e-12 relative, not 0, after the null-space basis
@@ -42,11 +49,9 @@ const NEARBY_STEP: f64 = 1e-3;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Structure {
     /// The rows the equations of motion keep (indices among the 6 per loop): independent at the
-    /// start up to round-off (`SOLVE_TOLERANCE`), in loop order then row order.
-    pub rows: Vec<usize>,
-    /// Per kept row, the factor that makes it dimensionless: 1 for a rotation row, 1/L for a
-    /// translation row.
-    pub scales: Vec<f64>,
+    /// start up to round-off (`KEEP_TOLERANCE`), in loop order then row order, each with the
+    /// factor that makes it dimensionless (1 for a rotation row, 1/L for a translation row).
+    pub choice: RowChoice,
     /// The characteristic length L, in metres.
     pub length: f64,
     /// The rows implied by earlier ones at the start, at the reporting tolerance.
@@ -64,7 +69,9 @@ pub enum StructureError {
     Evaluation(EvalError),
     /// The start is a singular configuration: closed configurations next to it have more
     /// independent rows (this one, the first of them) than the start has.
-    SingularStart { row: usize },
+    SingularStart {
+        row: usize,
+    },
 }
 
 impl From<EvalError> for StructureError {
@@ -91,12 +98,11 @@ impl Structure {
     fn at(model: &Model, c: &Constraints, length: f64) -> Structure {
         let active = active_rows(model);
         let scaled = dimensionless(&c.jacobian, length);
-        let rows = best_rows(&scaled, &active, SOLVE_TOLERANCE);
+        let rows = best_rows(&scaled, &active, KEEP_TOLERANCE);
         let (reported, redundant) = independent_rows(&scaled, &active, RANK_TOLERANCE);
-        let scales = rows.iter().map(|&r| row_scale(r, length)).collect();
+        let weak = rows.len().saturating_sub(reported.len());
         Structure {
-            rows,
-            scales,
+            choice: RowChoice::new(rows, weak, length),
             length,
             redundant,
             rank: reported.len(),
@@ -138,10 +144,10 @@ impl Structure {
             let rows = best_rows(
                 &dimensionless(&there.jacobian, self.length),
                 &active,
-                SOLVE_TOLERANCE,
+                KEEP_TOLERANCE,
             );
-            if rows.len() > self.rows.len() {
-                return Ok(rows.into_iter().find(|r| !self.rows.contains(r)));
+            if rows.len() > self.choice.rows.len() {
+                return Ok(rows.into_iter().find(|r| !self.choice.rows.contains(r)));
             }
         }
         Ok(None)
@@ -157,19 +163,19 @@ impl Structure {
     /// between steps, never inside an evaluation. Returns whether the rows changed.
     pub fn rechoose(&mut self, model: &Model, jacobian: &DMatrix<f64>, current: f64) -> bool {
         let active = active_rows(model);
-        let rows = best_rows(&dimensionless(jacobian, self.length), &active, SOLVE_TOLERANCE);
-        if rows.len() != self.rows.len() || rows == self.rows {
+        let rows = best_rows(
+            &dimensionless(jacobian, self.length),
+            &active,
+            KEEP_TOLERANCE,
+        );
+        if rows.len() != self.choice.rows.len() || rows == self.choice.rows {
             return false;
         }
-        let candidate = Structure {
-            scales: rows.iter().map(|&r| row_scale(r, self.length)).collect(),
-            rows,
-            ..self.clone()
-        };
+        let candidate = RowChoice::new(rows, self.choice.weak, self.length);
         if Factored::new(jacobian, &candidate).conditioning().0 < RECHOOSE * current {
             return false;
         }
-        *self = candidate;
+        self.choice = candidate;
         true
     }
 }
@@ -179,7 +185,8 @@ const RECHOOSE: f64 = 10.0;
 
 /// The active rows that are best conditioned together: pivoted Gram–Schmidt, taking at each
 /// step the row with the largest part orthogonal to those already taken, until that part is at
-/// most `tolerance` times the largest row. In loop order, then row order.
+/// most `tolerance` times the largest row. In the order taken: the rows that close their loop
+/// only at second order, independent by little, come last.
 fn best_rows(jacobian: &DMatrix<f64>, active: &[bool], tolerance: f64) -> Vec<usize> {
     let mut left: Vec<(usize, DVector<f64>)> = (0..jacobian.nrows())
         .filter(|&r| active[r])
@@ -207,17 +214,7 @@ fn best_rows(jacobian: &DMatrix<f64>, active: &[bool], tolerance: f64) -> Vec<us
         }
         chosen.push(row);
     }
-    chosen.sort_unstable();
     chosen
-}
-
-/// 1 for a rotation row (the first three of a loop), 1/L for a translation row.
-pub fn row_scale(row: usize, length: f64) -> f64 {
-    if row % 6 < 3 {
-        1.0
-    } else {
-        1.0 / length
-    }
 }
 
 /// The diagonal of the box holding the bodies' origins, the joints' frames and the loop points,
@@ -229,10 +226,16 @@ fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64 {
         .map(|pose| pose.translation.vector)
         .collect();
     for joint in &model.joints {
-        points.push((data.world[joint.child] * joint.on_child).translation.vector);
+        points.push(
+            (data.world[joint.child] * joint.on_child)
+                .translation
+                .vector,
+        );
     }
     points.extend(c.points.iter().copied());
-    let lowest = points.iter().fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
+    let lowest = points
+        .iter()
+        .fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
     let highest = points
         .iter()
         .fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
@@ -314,7 +317,7 @@ fn massless_count(
 ) -> Result<usize, EvalError> {
     let rest = vec![0.0; model.velocities()];
     let c = constraints(model, data, q, &rest, false)?;
-    let allowed = Factored::new(&c.jacobian, structure).null_space;
+    let allowed = Factored::new(&c.jacobian, &structure.choice).null_space;
     if allowed.ncols() == 0 {
         return Ok(0);
     }
