@@ -10,7 +10,7 @@ loop residuals of the run report (--report json), the wall time, and the verdict
 program's reference script on the CSV samples. Writes bench/hard/baseline.json and prints a
 Markdown table.
 
-Usage: bench/hard/baseline.py [--lsdc PATH] [--timeout S] [PROGRAM...]
+Usage: bench/hard/baseline.py [--lsdc PATH] [--timeout S] [--out FILE.json] [PROGRAM...]
        bench/hard/baseline.py --table [baseline.json]   (the Markdown table of a previous run)
 """
 
@@ -75,10 +75,11 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--lsdc", default=os.environ.get("LSDC", "lsdc"))
     ap.add_argument("--timeout", type=float, default=30)
+    ap.add_argument("--out", default=os.path.join(HERE, "baseline.json"), help="where the results go")
     ap.add_argument("programs", nargs="*")
     a = ap.parse_args()
     names = a.programs or list(PROGRAMS)
-    out_path = os.path.join(HERE, "baseline.json")
+    out_path = a.out
     # programs not run this time keep their previous results
     results = [r for r in (json.load(open(out_path)) if os.path.exists(out_path) else []) if r["program"] not in names]
     for name in names:

@@ -27,6 +27,11 @@ pub const RANK_TOLERANCE: f64 = 1e-6;
 const SAMPLE_STEP: f64 = 1e-3;
 const SAMPLE_TOLERANCE: f64 = 2e-2;
 
+/// A sampled direction is a motion only if the closed configurations move along it by more
+/// than this per unit of perturbation: assembly closes to about 1e-12, so a mechanism that
+/// cannot move shows displacements of 1e-9 per unit at most, never a motion.
+const ROUND_OFF_MOTION: f64 = 1e-6;
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Mobility {
     /// Degrees of freedom of the spanning tree (coordinates of the principal links).
@@ -115,7 +120,15 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
         constraint_rows: rows,
         rank: rank_here,
         first_order_mobility: first_order,
-        mobility: closed_set_dimension(model, q)?.unwrap_or(first_order),
+        mobility: if first_order == 0 {
+            // Rigid to first order is rigid.
+            0
+        } else {
+            // The closed set has at most the tangent space's dimension.
+            closed_set_dimension(model, q)?
+                .unwrap_or(first_order)
+                .min(first_order)
+        },
         redundant: rows.saturating_sub(rank_here),
         generic_rank,
         singular: generic_rank > rank_here,
@@ -154,7 +167,7 @@ fn closed_set_dimension(model: &KinematicModel, q: &[f64]) -> Result<Option<usiz
     Ok(Some(
         values
             .iter()
-            .filter(|&&s| s > SAMPLE_TOLERANCE * largest)
+            .filter(|&&s| s > SAMPLE_TOLERANCE * largest && s > ROUND_OFF_MOTION)
             .count(),
     ))
 }

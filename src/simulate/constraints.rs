@@ -17,8 +17,16 @@ use crate::kinematics::eval::EvalError;
 /// accelerations are amplified by more than its inverse. The run goes on; the report says when.
 const NEAR_SINGULAR: f64 = 1e-3;
 
+/// A projection leaving a kept row above this (dimensionless: radians, or metres per metre of
+/// the mechanism's length) stops the run: the loops came open, and going on would be a wrong
+/// answer.
+const OPEN: f64 = 1e-6;
+
+/// Below this conditioning the projection is skipped (see `LoopMonitor::keep`).
+const SKIP_PROJECTION: f64 = 1e-6;
+
 /// Below this conditioning the kept rows are chosen again, if better ones exist.
-const RECHOOSE_BELOW: f64 = 0.1;
+const RECHOOSE_BELOW: f64 = 0.5;
 
 /// Before the start, the structure of a mechanism without loops.
 const NO_STRUCTURE: Structure = Structure {
@@ -84,6 +92,8 @@ pub struct LoopMonitor {
     loop_names: Vec<String>,
     /// How many times the kept rows were chosen again (see `Structure::rechoose`).
     rechosen: usize,
+    /// A projection that could not close the loops: when, the row left open and by how much.
+    pub opened: Option<(f64, usize, f64)>,
     before: Residuals,
     after: Residuals,
     singular: Vec<SingularPassage>,
@@ -105,6 +115,7 @@ impl LoopMonitor {
             started: false,
             loop_names: Vec::new(),
             rechosen: 0,
+            opened: None,
             before: Residuals::default(),
             after: Residuals::default(),
             singular: Vec::new(),
@@ -140,10 +151,12 @@ impl LoopMonitor {
     /// Moves (q, v) onto the constraints when the stabilisation is by projection, and records the
     /// residuals and the rank there. Returns whether the state changed.
     ///
-    /// Near a singular configuration the projection is skipped: where two branches of the closed
-    /// set cross, the nearest closed point may lie on the other branch, and projecting there
-    /// would switch branches against the momentum. The accelerations keep the constraints to
-    /// the integration's accuracy through the short passage, and projection resumes after it.
+    /// At a singular configuration (conditioning below `SKIP_PROJECTION`) the projection is
+    /// skipped: where two branches of the closed set cross, the nearest closed point may lie on
+    /// the other branch, and projecting there would switch branches against the momentum. The
+    /// accelerations keep the constraints to the integration's accuracy through the short
+    /// passage, and projection resumes after it. Merely near one, it projects: a mechanism that
+    /// only comes close (a Bricard linkage) would otherwise drift off its loops.
     pub fn keep(
         &mut self,
         model: &Model,
@@ -155,8 +168,13 @@ impl LoopMonitor {
         let rest = vec![0.0; model.velocities()];
         let c = loops::constraints(model, data, q, &rest, false)?;
         let conditioning = self.conditioning(model, &c.jacobian);
-        if self.stabilisation == Stabilisation::Projection && conditioning.0 >= NEAR_SINGULAR {
+        if self.stabilisation == Stabilisation::Projection && conditioning.0 >= SKIP_PROJECTION {
             let projection = loops::project(model, data, &self.structure.choice, q, v)?;
+            if let (left, Some(row)) = projection.left {
+                if left > OPEN && self.opened.is_none() {
+                    self.opened = Some((time, row, left));
+                }
+            }
             self.observe(
                 model,
                 time,

@@ -165,6 +165,14 @@ impl<'m> MechanicalSystem<'m> {
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
         let moved = self.loops.keep(model, &mut self.data, t, &mut q, &mut v)?;
+        if let Some((time, row, left)) = self.loops.opened {
+            return Err(SystemError::LoopsOpen {
+                time,
+                join: model.loops[row / 6].name.clone(),
+                row: ROW_NAMES[row % 6],
+                left,
+            });
+        }
         if moved {
             y[..q.len()].copy_from_slice(&q);
             y[q.len()..].copy_from_slice(&v);
@@ -342,6 +350,14 @@ pub enum SystemError {
     /// The loops are exactly at a singular configuration: the constraint `row` of the
     /// complementary link `join` is no longer independent of the others.
     SingularConfiguration { join: String, row: &'static str },
+    /// A projection could not close the loops at `time`: `row` of `join` stays open by `left`
+    /// (radians, or metres per metre of the mechanism's size).
+    LoopsOpen {
+        time: f64,
+        join: String,
+        row: &'static str,
+        left: f64,
+    },
     /// The run starts at a singular configuration, where `row` of `join` is implied by the other
     /// constraints though it is not at the closed configurations around it.
     SingularStart { join: String, row: &'static str },
@@ -383,6 +399,10 @@ impl fmt::Display for SystemError {
             SystemError::SingularConfiguration { join, row } => write!(
                 f,
                 "the loops reached a singular configuration: the {row} constraint of `{join}` is no longer independent of the others"
+            ),
+            SystemError::LoopsOpen { time, join, row, left } => write!(
+                f,
+                "the loops came open at t = {time}: projecting the state back left the {row} constraint of `{join}` open by {left:.1e} (relative to the mechanism's size); the integration strayed too far from the loops: use a tighter tolerance or a smaller step"
             ),
             SystemError::SingularStart { join, row } => write!(
                 f,

@@ -3,76 +3,14 @@
 //! models of one mechanism. The examples carry their own `simulate` settings; a test changes
 //! them on the prepared simulation when it needs another integrator or tolerance.
 
+use crate::common::programs::{column, constraints, example_text, prepared, simulated};
 use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::loops::Stabilisation;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::constraints::ConstraintReport;
 use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Simulation};
 use lsdc::simulate::statics::holding_efforts;
-
-/// An example's text with some of it replaced (the test's variation of the scenario).
-fn example_text(name: &str, replacements: &[(&str, &str)]) -> String {
-    let mut text = std::fs::read_to_string(format!("examples/{name}.lsd")).expect("example");
-    for (from, to) in replacements {
-        assert!(text.contains(from), "{name}: `{from}` not found");
-        text = text.replace(from, to);
-    }
-    text
-}
-
-fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
-    let options = LoadOptions {
-        library_dirs: Vec::new(),
-        use_environment: false,
-    };
-    let text = example_text(name, replacements);
-    let compilation = compile_text(
-        &format!("{name}.lsd"),
-        &text,
-        Some(std::path::Path::new("examples")),
-        &options,
-    );
-    assert!(
-        !compilation.has_errors(),
-        "{name}: {:?}",
-        compilation.diagnostics
-    );
-    let mechanism = compilation.mechanism.expect("elaborates");
-    prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| {
-        panic!(
-            "{name}: {:?}",
-            d.iter().map(|d| &d.message).collect::<Vec<_>>()
-        )
-    })
-}
-
-fn simulated(prepared: &Prepared) -> Simulation {
-    let simulation = run(prepared, &mut |_| {});
-    assert!(
-        simulation.report.failure.is_none(),
-        "{:?}",
-        simulation.report.failure
-    );
-    simulation
-}
-
-fn constraints(simulation: &Simulation) -> &ConstraintReport {
-    simulation
-        .report
-        .constraints
-        .as_ref()
-        .expect("a mechanism with loops")
-}
-
-fn column(simulation: &Simulation, name: &str) -> usize {
-    simulation
-        .coordinate_names
-        .iter()
-        .position(|n| n == name)
-        .unwrap_or_else(|| panic!("no coordinate {name}"))
-}
 
 #[test]
 fn four_bar_and_slider_crank_conserve_energy_and_stay_closed() {

@@ -14,6 +14,7 @@ mod force_elements;
 mod frame_efforts;
 mod generated_code;
 mod golden;
+mod hard_loops;
 mod integrate_projection;
 mod integrators;
 mod kinematics;

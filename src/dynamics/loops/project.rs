@@ -24,6 +24,9 @@ pub struct Residuals {
 pub struct Projection {
     pub before: Residuals,
     pub after: Residuals,
+    /// The largest kept row left after it, made dimensionless, and that row (among the 6 per
+    /// loop).
+    pub left: (f64, Option<usize>),
 }
 
 const NEWTON_ITERATIONS: usize = 8;
@@ -58,7 +61,21 @@ pub fn project(
             position: current.residual.amax(),
             velocity: after_velocity,
         },
+        left: largest_kept(&factored, &current.residual, choice),
     })
+}
+
+fn largest_kept(
+    factored: &Factored,
+    residual: &DVector<f64>,
+    choice: &RowChoice,
+) -> (f64, Option<usize>) {
+    let kept = factored.kept(residual).map(f64::abs);
+    if kept.is_empty() {
+        return (0.0, None);
+    }
+    let k = kept.imax();
+    (kept[k], Some(choice.rows[k]))
 }
 
 /// Moves q onto every row of the constraints (minimum-norm steps on a singular value

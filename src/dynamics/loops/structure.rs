@@ -181,7 +181,7 @@ impl Structure {
 }
 
 /// A new choice of rows must improve the conditioning by this factor at least.
-const RECHOOSE: f64 = 10.0;
+const RECHOOSE: f64 = 2.0;
 
 /// The active rows that are best conditioned together: pivoted Gram–Schmidt, taking at each
 /// step the row with the largest part orthogonal to those already taken, until that part is at

@@ -1,0 +1,71 @@
+//! Examples as test cases: an example's text with some of it replaced (the test's variation of
+//! its scenario), prepared for a run with its own `simulate` settings, and what a run reports.
+//! A name may lie in a folder of `examples/` (`hard/bennett`).
+
+use lsdc::driver::compile_text;
+use lsdc::load::LoadOptions;
+use lsdc::simulate::constraints::ConstraintReport;
+use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::simulate::run::{run, Simulation};
+
+/// An example's text with some of it replaced.
+pub fn example_text(name: &str, replacements: &[(&str, &str)]) -> String {
+    let mut text = std::fs::read_to_string(format!("examples/{name}.lsd")).expect("example");
+    for (from, to) in replacements {
+        assert!(text.contains(from), "{name}: `{from}` not found");
+        text = text.replace(from, to);
+    }
+    text
+}
+
+pub fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let text = example_text(name, replacements);
+    let compilation = compile_text(
+        &format!("{name}.lsd"),
+        &text,
+        Some(std::path::Path::new("examples")),
+        &options,
+    );
+    assert!(
+        !compilation.has_errors(),
+        "{name}: {:?}",
+        compilation.diagnostics
+    );
+    let mechanism = compilation.mechanism.expect("elaborates");
+    prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| {
+        panic!(
+            "{name}: {:?}",
+            d.iter().map(|d| &d.message).collect::<Vec<_>>()
+        )
+    })
+}
+
+pub fn simulated(prepared: &Prepared) -> Simulation {
+    let simulation = run(prepared, &mut |_| {});
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
+    simulation
+}
+
+pub fn constraints(simulation: &Simulation) -> &ConstraintReport {
+    simulation
+        .report
+        .constraints
+        .as_ref()
+        .expect("a mechanism with loops")
+}
+
+pub fn column(simulation: &Simulation, name: &str) -> usize {
+    simulation
+        .coordinate_names
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no coordinate {name}"))
+}
