@@ -18,6 +18,7 @@ mod hard_loops;
 mod integrate_projection;
 mod integrators;
 mod kinematics;
+mod loop_properties;
 mod loops;
 mod methods;
 mod pinocchio_fixtures;
