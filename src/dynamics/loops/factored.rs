@@ -50,7 +50,12 @@ pub fn row_scale(row: usize, length: f64) -> f64 {
 /// within 1e-4 or so of a singular configuration, where it bounds what an error off the
 /// closed set can do to the accelerations (damped least squares: Nakamura and Hanafusa 1986;
 /// Wampler 1986).
-const DAMPING: f64 = 1e-9;
+pub const DAMPING: f64 = 1e-9;
+
+/// The damping of the projections (positions and velocities): larger, since what they correct
+/// is the integration's error, which a projection near a singular configuration would
+/// otherwise amplify into a jump; (μ/σ)² is still below round-off for σ above 1e-2.
+pub const PROJECTION_DAMPING: f64 = 1e-6;
 
 /// The QR factorisation of the kept rows of G at one state.
 pub struct Factored {
@@ -124,19 +129,37 @@ impl Factored {
         Ok(&self.range * y)
     }
 
-    /// `least_norm` damped (see `DAMPING`): the same wherever the rows are independent, bounded
-    /// at a singular configuration.
-    pub fn damped_least_norm(&self, b: &DVector<f64>) -> Result<DVector<f64>, Singular> {
-        let y = self.normal_solve(b)?;
+    /// `least_norm` damped by `damping` (relative, see `DAMPING`): the same wherever the rows
+    /// are independent, bounded at a singular configuration.
+    pub fn damped_least_norm(
+        &self,
+        b: &DVector<f64>,
+        damping: f64,
+    ) -> Result<DVector<f64>, Singular> {
+        let y = self.normal_solve(b, damping)?;
         Ok(&self.range * (&self.triangle * y))
     }
 
-    /// (RᵀR + μ²E)⁻¹ b, with μ = `DAMPING` times the largest diagonal entry of R and E the
+    /// v without its part across the kept rows, damped by `damping`: the closest motion they
+    /// allow wherever they are independent; near a singular configuration, a velocity off the
+    /// rows by a small error is not thrown along the direction they are about to lose (which
+    /// would kick a parallelogram onto its other branch).
+    pub fn damped_allowed_part(
+        &self,
+        v: &DVector<f64>,
+        damping: f64,
+    ) -> Result<DVector<f64>, Singular> {
+        let across = self.triangle.tr_mul(&(self.range.transpose() * v));
+        let y = self.normal_solve(&across, damping)?;
+        Ok(v - &self.range * (&self.triangle * y))
+    }
+
+    /// (RᵀR + μ²E)⁻¹ b, with μ = `damping` times the largest diagonal entry of R and E the
     /// identity on the firm rows, zero on the weak ones: R⁻¹R⁻ᵀb wherever the rows are
     /// independent, bounded where the firm rows lose their independence.
-    fn normal_solve(&self, b: &DVector<f64>) -> Result<DVector<f64>, Singular> {
+    fn normal_solve(&self, b: &DVector<f64>, damping: f64) -> Result<DVector<f64>, Singular> {
         let largest = self.triangle.diagonal().amax();
-        let damping = (DAMPING * largest).powi(2);
+        let damping = (damping * largest).powi(2);
         let mut normal = self.triangle.tr_mul(&self.triangle);
         for k in 0..self.firm {
             normal[(k, k)] += damping;
@@ -155,7 +178,10 @@ impl Factored {
 
     /// λ, 6 per loop (zero on the rows not kept), with Gᵀλ = y for y in the kept rows' span.
     pub fn multipliers(&self, y: &DVector<f64>, total: usize) -> Result<DVector<f64>, Singular> {
-        let kept = self.normal_solve(&self.triangle.tr_mul(&(self.range.transpose() * y)))?;
+        let kept = self.normal_solve(
+            &self.triangle.tr_mul(&(self.range.transpose() * y)),
+            DAMPING,
+        )?;
         let mut all = DVector::zeros(total);
         for (k, (&row, scale)) in self.rows.iter().zip(&self.scales).enumerate() {
             all[row] = kept[k] * scale;

@@ -7,7 +7,7 @@
 use nalgebra::DVector;
 
 use super::basis::decompose;
-use super::factored::{Factored, RowChoice};
+use super::factored::{Factored, RowChoice, PROJECTION_DAMPING};
 use super::rows::{constraints, seat_ball_angles, Constraints};
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::model::Model;
@@ -44,11 +44,15 @@ pub fn project(
     let before_position = current.residual.amax();
     newton(model, data, q, &mut current, |c| {
         let factored = Factored::new(&c.jacobian, choice);
-        factored.least_norm(&-factored.kept(&c.residual)).ok()
+        factored
+            .damped_least_norm(&-factored.kept(&c.residual), PROJECTION_DAMPING)
+            .ok()
     })?;
     let factored = Factored::new(&current.jacobian, choice);
     let velocity = &current.jacobian * DVector::from_column_slice(v);
-    let corrected = factored.allowed_part(&DVector::from_column_slice(v));
+    let corrected = factored
+        .damped_allowed_part(&DVector::from_column_slice(v), PROJECTION_DAMPING)
+        .unwrap_or_else(|_| DVector::from_column_slice(v));
     let after_velocity = (&current.jacobian * &corrected).amax();
     v.copy_from_slice(corrected.as_slice());
     seat_ball_angles(model, data, q, v, false)?;

@@ -12,7 +12,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::factored::{Factored, Singular};
+use super::factored::{Factored, Singular, DAMPING};
 use super::rows::Constraints;
 use super::structure::{full_mass, Structure};
 
@@ -66,7 +66,7 @@ pub fn solve(
     }
     let factored = Factored::new(&c.jacobian, &structure.choice);
     let particular = factored
-        .damped_least_norm(&-factored.kept(&gamma))
+        .damped_least_norm(&-factored.kept(&gamma), DAMPING)
         .map_err(singular)?;
     let null = &factored.null_space;
     let reduced_mass = null.transpose() * &full_mass * null;
