@@ -4,15 +4,13 @@
 //! coupler). For each N: one right-hand side of each, their ratio, and one projection onto the
 //! loops. Run with `cargo bench --bench loop_scaling`; medians over batches of about 10 ms.
 
-use std::cell::RefCell;
-use std::hint::black_box;
-use std::rc::Rc;
-use std::time::Instant;
-
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Prepared, Settings};
-use lsdc::simulate::system::MechanicalSystem;
+
+#[path = "common/loop_costs.rs"]
+mod loop_costs;
+use loop_costs::call_costs;
 
 const ROWS: [usize; 6] = [1, 2, 5, 10, 20, 40];
 
@@ -61,59 +59,13 @@ fn prepared(text: &str) -> Prepared {
     prepare(&mechanism, &[], &Settings::default()).expect("prepares")
 }
 
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
-}
-
-/// Median time of one call of `f` over batches of about 10 ms.
-fn time_per_call(mut f: impl FnMut()) -> f64 {
-    let start = Instant::now();
-    let mut calls = 0u64;
-    while start.elapsed().as_secs_f64() < 0.01 {
-        f();
-        calls += 1;
-    }
-    let batches = (0..9)
-        .map(|_| {
-            let start = Instant::now();
-            (0..calls).for_each(|_| f());
-            start.elapsed().as_secs_f64() / calls as f64
-        })
-        .collect();
-    median(batches)
-}
-
-/// One right-hand side and one projection (µs) at the program's initial state.
-fn costs(prepared: &Prepared) -> (f64, f64) {
-    let model = &prepared.model;
-    let (mut y, v) = model
-        .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .expect("initial state");
-    y.extend_from_slice(&v);
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
-    let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
-    system.start_loops(&mut y).expect("loops close");
-    let mut dydt = vec![0.0; y.len()];
-    let rhs = time_per_call(|| {
-        system
-            .derivative(0.0, black_box(&y), &mut dydt)
-            .expect("evaluates")
-    });
-    let projection = time_per_call(|| {
-        let mut z = y.clone();
-        black_box(system.keep_closed(0.0, &mut z).expect("projects"));
-    });
-    (rhs * 1e6, projection * 1e6)
-}
-
 fn main() {
     println!("A row of N parallelogram four-bars against the same bodies as a tree (release build, medians).\n");
     println!("| N | bodies | tree µs | loops µs | loops / tree | projection µs | projection / loops RHS |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
     for n in ROWS {
-        let (tree, _) = costs(&prepared(&row_program(n, false)));
-        let (loops, projection) = costs(&prepared(&row_program(n, true)));
+        let (tree, _) = call_costs(&prepared(&row_program(n, false)));
+        let (loops, projection) = call_costs(&prepared(&row_program(n, true)));
         println!(
             "| {n} | {} | {tree:.2} | {loops:.2} | {:.1} | {projection:.2} | {:.2} |",
             2 * n + 1,

@@ -2,17 +2,16 @@
 //! and the Delta robot (full ball-jointed model and reduced model). Run with
 //! `cargo bench --bench loops`. Times are medians of a few runs on whatever machine runs this.
 
-use std::cell::RefCell;
-use std::hint::black_box;
 use std::path::PathBuf;
-use std::rc::Rc;
-use std::time::Instant;
 
 use lsdc::driver::compile_files;
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Report, Sample, Simulation};
-use lsdc::simulate::system::MechanicalSystem;
+
+#[path = "common/loop_costs.rs"]
+mod loop_costs;
+use loop_costs::{call_costs, median};
 
 /// Tolerances tried for the reference, tightest first: 1e-13 may fail to converge near round-off.
 const REFERENCE_TOLERANCES: [f64; 2] = [1e-13, 1e-12];
@@ -110,11 +109,6 @@ fn configure(file: &str, method: &Method) -> Prepared {
     prepared
 }
 
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
-}
-
 /// Median integration time (the report's `run_seconds`) and the work of one run. Timed with
 /// outputs only at the start and the end: sampling an output costs a projection and the energy,
 /// and the interpolated outputs do not change the steps, so this is the integration alone.
@@ -171,50 +165,6 @@ fn reference(file: &str) -> (Simulation, f64) {
         }
     }
     panic!("{file}: no reference run completed");
-}
-
-/// Median time of one call of `f` over batches of about 10 ms.
-fn time_per_call(mut f: impl FnMut()) -> f64 {
-    let start = Instant::now();
-    let mut calls = 0u64;
-    while start.elapsed().as_secs_f64() < 0.01 {
-        f();
-        calls += 1;
-    }
-    let batches = (0..9)
-        .map(|_| {
-            let start = Instant::now();
-            (0..calls).for_each(|_| f());
-            start.elapsed().as_secs_f64() / calls as f64
-        })
-        .collect();
-    median(batches)
-}
-
-/// Median cost (µs) of one constrained right-hand side and of one projection onto the loops,
-/// at the initial state.
-fn call_costs(prepared: &Prepared) -> (f64, f64) {
-    let model = &prepared.model;
-    let (mut y, v) = model
-        .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .expect("initial state");
-    y.extend_from_slice(&v);
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
-    let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
-    system.start_loops(&mut y).expect("loops close");
-    let mut dydt = vec![0.0; y.len()];
-    let rhs = time_per_call(|| {
-        system
-            .derivative(0.0, black_box(&y), &mut dydt)
-            .expect("evaluates")
-    });
-    // At the closed initial state (round-off residual) the projection still tries a Newton step
-    // and corrects the velocities: about its cost after an integration step.
-    let projection = time_per_call(|| {
-        let mut z = y.clone();
-        black_box(system.keep_closed(0.0, &mut z).expect("projects"));
-    });
-    (rhs * 1e6, projection * 1e6)
 }
 
 fn optional(value: Option<f64>) -> String {
