@@ -1,18 +1,19 @@
 //! Glue between the lexer, the LALRPOP parser and diagnostics. One call parses a whole file and
 //! reports every lexical and syntax error the parser can recover from.
 
-use lalrpop_util::{lalrpop_mod, ParseError};
+use lalrpop_util::ParseError;
 
 use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 use crate::syntax::ast::Program;
 use crate::syntax::lexer::{lex, LexError, Spanned, Tok};
 
-lalrpop_mod!(
-    #[allow(clippy::all, unused_parens, unused_imports)]
-    grammar,
-    "/lsd.rs"
-);
+/// The parser LALRPOP generated from `grammar/lsd.lalrpop`, checked in (see `build.rs`).
+#[rustfmt::skip]
+#[allow(clippy::all, unused_parens, unused_imports, unused_extern_crates)]
+mod grammar {
+    include!("generated/lsd.rs");
+}
 
 /// Parses one file. The program is returned even when there are errors: declarations that could
 /// not be read become `DeclKind::Error`.
