@@ -2,6 +2,7 @@
 //! program's initial values, with outputs and a run report.
 
 pub mod batch;
+pub mod branch;
 pub mod consistent;
 pub mod constraints;
 pub mod prepare;

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use super::branch;
 use super::constraints::ConstraintReport;
 use super::prepare::{Integrator, Prepared};
 use super::system::{MechanicalSystem, SystemError};
@@ -331,6 +332,18 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
             )
         }
     };
+    let constraints = model.has_loops().then(|| {
+        system.loops.absorb(&sampler.system.loops);
+        system.loops.report()
+    });
+    let left_branch = constraints
+        .as_ref()
+        .and_then(|c| branch::left_branch(&samples, &c.singular));
+    let failure = match (failure, left_branch) {
+        (Some(stopped), Some(left)) if left.time < stopped.time => Some(left),
+        (None, left) => left,
+        (stopped, _) => stopped,
+    };
     let report = Report {
         integrator: integrator_name(&settings.integrator).to_string(),
         duration: settings.duration,
@@ -348,10 +361,7 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
             ])
         }),
         momentum_drift: momentum_drift(model, &samples),
-        constraints: model.has_loops().then(|| {
-            system.loops.absorb(&sampler.system.loops);
-            system.loops.report()
-        }),
+        constraints,
         failure,
     };
     let reaction_names = if settings.reactions {

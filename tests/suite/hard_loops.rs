@@ -220,3 +220,48 @@ fn loop_decisions_do_not_depend_on_units() {
     let (qa, qb) = (last(&a, "crank.q"), last(&b, "crank.q"));
     assert!((qa - qb).abs() < 1e-6, "crank {qa} against {qb}");
 }
+
+#[test]
+fn a_parallelogram_row_stays_on_its_branch_or_says_it_left_it() {
+    // Through its flat configurations a row of parallelograms can be carried onto its
+    // anti-parallelogram branch by an integration error. Either the run follows the physical
+    // branch (every crank turns with the first: the reference of bench/hard/four_bar_row.py,
+    // energy kept) or it fails, naming the passage; never a success on the wrong branch.
+    let cases = [
+        (Integrator::Rk4, 1e-8, Some(1e-3)),
+        (Integrator::Rk4, 1e-8, Some(1e-4)),
+        (Integrator::DormandPrince, 1e-8, Some(1e-3)),
+        (Integrator::DormandPrince, 1e-10, Some(1e-4)),
+        (Integrator::DormandPrince, 1e-11, Some(1e-4)),
+        (Integrator::DormandPrince, 1e-12, Some(1e-4)),
+    ];
+    for (integrator, tolerance, step) in cases {
+        let label = format!("{integrator:?} at {tolerance:e}, step {step:?}");
+        let simulation = run(
+            &hard("four_bar_row_2", integrator, 0.8, tolerance, step),
+            &mut |_| {},
+        );
+        if let Some(failure) = &simulation.report.failure {
+            assert!(
+                failure.message.contains("left its branch"),
+                "{label}: {}",
+                failure.message
+            );
+            continue;
+        }
+        let drift = simulation.report.energy_drift.expect("conservative");
+        assert!(drift < 1e-6, "{label}: energy drift {drift:e}");
+        let first = column(&simulation, "c0.q");
+        for name in ["c1.q", "c2.q"] {
+            let other = column(&simulation, name);
+            for sample in &simulation.samples {
+                let apart = (sample.coordinates[other] - sample.coordinates[first]).abs();
+                assert!(
+                    apart < 1e-6,
+                    "{label}: {name} off c0.q by {apart:e} at t = {}",
+                    sample.time
+                );
+            }
+        }
+    }
+}
