@@ -8,7 +8,6 @@
 //! every output kept.
 
 use super::constraints::SingularPassage;
-use super::run::{RunFailure, Sample};
 
 /// A jump of the energy across a passage, relative to the run's energy scale, above which the
 /// run left its branch: a switch of branch costs a finite part of the energy (0.67 of it for a
@@ -20,21 +19,29 @@ const LEFT_BRANCH: f64 = 1e-3;
 /// passage.
 const ABOVE_ELSEWHERE: f64 = 100.0;
 
-/// The energy the run conserves: its balance with the work of non-conservative efforts when
-/// that work is integrated, else kinetic + potential when the efforts are conservative.
-fn conserved(sample: &Sample) -> Option<f64> {
-    sample
-        .balance
-        .or(sample.potential_energy.map(|p| p + sample.kinetic_energy))
+/// What the check needs of an output: its time, the energy the run conserves there (its balance
+/// with the work of non-conservative efforts when that work is integrated, else kinetic +
+/// potential when the efforts are conservative; None if neither is known) and its kinetic
+/// energy.
+pub struct Output {
+    pub time: f64,
+    pub conserved: Option<f64>,
+    pub kinetic: f64,
 }
 
-/// The first passage across which the energy jumped (see the module), as a failure of the run.
-pub fn left_branch(samples: &[Sample], passages: &[SingularPassage]) -> Option<RunFailure> {
-    let energies: Vec<f64> = samples.iter().map(conserved).collect::<Option<_>>()?;
+/// The passage the run left its branch at: when it began, and why it is a wrong answer.
+pub struct LeftBranch {
+    pub time: f64,
+    pub message: String,
+}
+
+/// The first passage across which the energy jumped (see the module).
+pub fn left_branch(samples: &[Output], passages: &[SingularPassage]) -> Option<LeftBranch> {
+    let energies: Vec<f64> = samples.iter().map(|s| s.conserved).collect::<Option<_>>()?;
     let first = *energies.first()?;
     let scale = samples
         .iter()
-        .map(|s| s.kinetic_energy.abs())
+        .map(|s| s.kinetic.abs())
         .fold(first.abs(), f64::max);
     if scale == 0.0 {
         return None;
@@ -52,7 +59,7 @@ pub fn left_branch(samples: &[Sample], passages: &[SingularPassage]) -> Option<R
         let (a, b) = span(samples, passage.start, passage.end?)?;
         let jump = (energies[b] - energies[a]).abs() / scale;
         let bound = LEFT_BRANCH.max(ABOVE_ELSEWHERE * elsewhere * (b - a) as f64);
-        (jump > bound).then(|| RunFailure {
+        (jump > bound).then(|| LeftBranch {
             time: passage.start,
             message: format!(
                 "the run left its branch of motion at the singular configuration of the loop \
@@ -67,7 +74,7 @@ pub fn left_branch(samples: &[Sample], passages: &[SingularPassage]) -> Option<R
 }
 
 /// The outputs just before and just after a passage from `start` to `end`.
-fn span(samples: &[Sample], start: f64, end: f64) -> Option<(usize, usize)> {
+fn span(samples: &[Output], start: f64, end: f64) -> Option<(usize, usize)> {
     let before = samples.iter().rposition(|s| s.time <= start)?;
     let after = samples.iter().position(|s| s.time >= end)?;
     (after > before).then_some((before, after))

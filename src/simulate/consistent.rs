@@ -40,7 +40,7 @@ pub fn initial_state(
     // Assembly stops at 1e-12: finish at round-off.
     close_configuration(model, &mut data, &mut q).map_err(evaluation)?;
     let c = constraints(model, &mut data, &q, &v, false).map_err(evaluation)?;
-    complete_rates(&c.jacobian, &given, &mut v)
+    complete_rates(&c.jacobian.dense(), &given, &mut v)
         .map_err(|opening| vec![incompatible_rates(mechanism, &given, opening)])?;
     model.declared(&q, &v, &coordinates).map_err(evaluation)
 }

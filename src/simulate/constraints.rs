@@ -2,12 +2,12 @@
 //! and after each projection, and the passages through singular configurations (where the
 //! constraints lose rank), for the run report.
 
-use nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::loops::{
-    self, Factored, Residuals, RowChoice, Stabilisation, Structure, StructureError, ROW_NAMES,
+    self, ConstraintJacobian, Factored, Residuals, RowChoice, Stabilisation, Structure,
+    StructureError, ROW_NAMES,
 };
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -25,8 +25,13 @@ const OPEN: f64 = 1e-6;
 /// Below this conditioning the projection is skipped (see `LoopMonitor::keep`).
 const SKIP_PROJECTION: f64 = 1e-6;
 
-/// Below this conditioning the kept rows are chosen again, if better ones exist.
+/// Below this fraction of their conditioning when chosen, the kept rows are chosen again, if
+/// better ones exist.
 const RECHOOSE_BELOW: f64 = 0.5;
+
+/// Below this fraction of how well they parametrised the allowed motions when chosen
+/// (`Structure::free_quality`), the free coordinates are chosen again.
+const FREE_AGAIN_BELOW: f64 = 0.1;
 
 /// Before the start, the structure of a mechanism without loops.
 const NO_STRUCTURE: Structure = Structure {
@@ -36,6 +41,9 @@ const NO_STRUCTURE: Structure = Structure {
     rank: 0,
     active: 0,
     massless: 0,
+    free: Vec::new(),
+    free_quality: 1.0,
+    chosen_conditioning: 1.0,
 };
 
 /// The state closest to a singular configuration the run saw.
@@ -190,13 +198,24 @@ impl LoopMonitor {
 
     /// The conditioning of the kept rows (`Factored::conditioning`) at the constraint Jacobian
     /// G, after choosing them again if they are poorly conditioned and better ones exist.
-    fn conditioning(&mut self, model: &Model, jacobian: &DMatrix<f64>) -> (f64, Option<usize>) {
-        let conditioning = Factored::new(jacobian, &self.structure.choice).conditioning();
-        if conditioning.0 < RECHOOSE_BELOW
-            && self.structure.rechoose(model, jacobian, conditioning.0)
+    fn conditioning(
+        &mut self,
+        model: &Model,
+        jacobian: &ConstraintJacobian,
+    ) -> (f64, Option<usize>) {
+        let factored = Factored::new(jacobian, &self.structure.choice);
+        let conditioning = factored.conditioning();
+        let structure = &mut self.structure;
+        if conditioning.0 < RECHOOSE_BELOW * structure.chosen_conditioning
+            && structure.rechoose(model, jacobian, conditioning.0)
         {
             self.rechosen += 1;
-            return Factored::new(jacobian, &self.structure.choice).conditioning();
+            structure.choose_free(jacobian);
+            return Factored::new(jacobian, &structure.choice).conditioning();
+        }
+        let quality = structure.free_quality_at(&factored);
+        if quality.is_some_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
+            structure.choose_free(jacobian);
         }
         conditioning
     }

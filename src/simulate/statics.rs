@@ -58,7 +58,7 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
     let allowed = if model.has_loops() {
         let c = loops::constraints(model, &mut system.data, &q, &rest, false)
             .map_err(SystemError::from)?;
-        loops::decompose(&c.jacobian).null_space
+        loops::decompose(&c.jacobian.dense()).null_space
     } else {
         DMatrix::identity(model.velocities(), model.velocities())
     };

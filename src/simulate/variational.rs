@@ -130,7 +130,10 @@ impl MechanicalSystem<'_> {
     }
 
     /// Position rows and their Jacobian G at q.
-    fn closure(&mut self, q: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>), SystemError> {
+    fn closure(
+        &mut self,
+        q: &[f64],
+    ) -> Result<(DVector<f64>, loops::ConstraintJacobian), SystemError> {
         let rest = vec![0.0; self.model.velocities()];
         let c = loops::constraints(self.model, &mut self.data, q, &rest, false)?;
         Ok((c.residual, c.jacobian))
@@ -152,14 +155,15 @@ fn constrained_solve(
     let particular = end
         .least_norm(c)
         .map_err(|lost| LoopError::Singular { row: lost.row })?;
-    if end.null_space.ncols() == 0 {
+    let allowed_end = end.dense_null_space();
+    if allowed_end.ncols() == 0 {
         return Ok(particular);
     }
-    let allowed_start = &start.null_space;
-    let reduced = allowed_start.transpose() * a * &end.null_space;
+    let allowed_start = start.dense_null_space();
+    let reduced = allowed_start.transpose() * a * &allowed_end;
     let rhs = allowed_start.transpose() * (f - a * &particular);
     let z = loops::decompose_with(&reduced, 1e-12).pseudo_inverse * rhs;
-    Ok(particular + &end.null_space * z)
+    Ok(particular + &allowed_end * z)
 }
 
 fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, SystemError> {

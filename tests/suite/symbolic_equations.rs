@@ -143,7 +143,7 @@ fn numeric(
     Numeric {
         mass,
         right_hand_side,
-        constraints: c.jacobian,
+        constraints: c.jacobian.dense(),
         constraint_bias: c.bias,
         active_rows: active_rows(&model),
     }

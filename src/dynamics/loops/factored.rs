@@ -1,14 +1,25 @@
-//! The QR factorisation of the rows a run keeps (made dimensionless): Gₛᵀ = Q₁R, with Q₂
-//! completing Q₁ to an orthogonal matrix, so that Q₂ spans the motions those rows allow. It
-//! serves the equations of motion (`solve`), the projection (`project`) and the decisions on the
-//! rows (`structure`).
+//! The factorisation of the rows a run keeps (made dimensionless), Gₛ, that serves the equations
+//! of motion (`solve`), the projection (`project`) and the watch on singular configurations: a
+//! Cholesky factorisation of the normal matrix A = GₛGₛᵀ + μ²E (damped on the firm rows, see
+//! `DAMPING`). Loops touch few bodies, so A is sparse: two rows meet only where their loops
+//! share a coordinate, and in a chain of loops A is banded. A is stored and factored in its
+//! envelope (per row, from its first non-zero entry to the diagonal), where the factor creates
+//! no fill, so the cost follows the structure: linear in the number of loops for a chain of
+//! them, against a cube for a dense factorisation.
+//!
+//! The rows are factored in the order of `RowChoice` (firm rows, then weak ones, each by index):
+//! loop order keeps the envelope narrow. The diagonal of the factor L equals, up to signs, that
+//! of R in a QR factorisation Gₛᵀ = QR taken in the same order; it measures how independent each
+//! row is of the rows before it (`conditioning`).
 
 use nalgebra::{DMatrix, DVector};
+
+use super::jacobian::ConstraintJacobian;
 
 /// Which of the loops' rows (6 per loop) are kept, and the factor making each dimensionless.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RowChoice {
-    /// The firm rows first, then the `weak` ones.
+    /// The firm rows first, then the `weak` ones; each group in increasing order.
     pub rows: Vec<usize>,
     pub scales: Vec<f64>,
     /// How many of the last rows close their loop only at second order: independent of the
@@ -20,7 +31,10 @@ pub struct RowChoice {
 impl RowChoice {
     /// The rows given (firm first, then `weak` of them), made dimensionless with the
     /// characteristic length L (see `row_scale`).
-    pub fn new(rows: Vec<usize>, weak: usize, length: f64) -> RowChoice {
+    pub fn new(mut rows: Vec<usize>, weak: usize, length: f64) -> RowChoice {
+        let firm = rows.len() - weak;
+        rows[..firm].sort_unstable();
+        rows[firm..].sort_unstable();
         let scales = rows.iter().map(|&r| row_scale(r, length)).collect();
         RowChoice { rows, scales, weak }
     }
@@ -57,17 +71,19 @@ pub const DAMPING: f64 = 1e-9;
 /// otherwise amplify into a jump; (μ/σ)² is still below round-off for σ above 1e-2.
 pub const PROJECTION_DAMPING: f64 = 1e-6;
 
-/// The QR factorisation of the kept rows of G at one state.
+/// A sparse row: (column, value) pairs.
+type SparseRow = Vec<(usize, f64)>;
+
+/// The kept rows of G at one state, dimensionless, and their normal matrix.
 pub struct Factored {
-    /// Q₁: an orthonormal basis of the kept rows' span (one column per kept row).
-    range: DMatrix<f64>,
-    /// Q₂: an orthonormal basis of the motions the kept rows allow.
-    pub null_space: DMatrix<f64>,
-    /// R, upper triangular: Gₛᵀ = Q₁R.
-    triangle: DMatrix<f64>,
-    rows: Vec<usize>,
+    rows: Vec<SparseRow>,
+    columns: usize,
+    /// Indices among the 6 per loop, and the factors that made each row dimensionless.
+    indices: Vec<usize>,
     scales: Vec<f64>,
     firm: usize,
+    /// A = GₛGₛᵀ, undamped.
+    normal: Envelope,
 }
 
 /// The kept rows are dependent at this state: it is exactly a singular configuration. The row
@@ -77,56 +93,92 @@ pub struct Singular {
     pub row: usize,
 }
 
+/// The Cholesky factor L of A + μ²E (A = LLᵀ), with the rows it was made from.
+pub struct Damped<'f> {
+    factored: &'f Factored,
+    factor: Envelope,
+}
+
 impl Factored {
-    pub fn new(jacobian: &DMatrix<f64>, choice: &RowChoice) -> Factored {
-        let n = jacobian.ncols();
-        let r = choice.rows.len();
-        let transposed = DMatrix::from_fn(n, r, |column, k| {
-            jacobian[(choice.rows[k], column)] * choice.scales[k]
-        });
-        let (range, null_space, triangle) = if r == 0 {
-            (
-                DMatrix::zeros(n, 0),
-                DMatrix::identity(n, n),
-                DMatrix::zeros(0, 0),
-            )
-        } else {
-            let qr = transposed.qr();
-            let mut q_transposed = DMatrix::identity(n, n);
-            qr.q_tr_mul(&mut q_transposed);
-            let q = q_transposed.transpose();
-            (
-                q.columns(0, r).into_owned(),
-                q.columns(r, n - r).into_owned(),
-                qr.r(),
-            )
-        };
+    pub fn new(jacobian: &ConstraintJacobian, choice: &RowChoice) -> Factored {
+        let rows: Vec<SparseRow> = choice
+            .rows
+            .iter()
+            .zip(&choice.scales)
+            .map(|(&r, &scale)| {
+                jacobian
+                    .row(r)
+                    .filter(|&(_, value)| value != 0.0)
+                    .map(|(column, value)| (column, value * scale))
+                    .collect()
+            })
+            .collect();
+        let normal = Envelope::normal(&rows, jacobian.ncols());
         Factored {
-            range,
-            null_space,
-            triangle,
-            rows: choice.rows.clone(),
+            rows,
+            columns: jacobian.ncols(),
+            indices: choice.rows.clone(),
             scales: choice.scales.clone(),
             firm: choice.firm(),
+            normal,
         }
     }
 
     /// The kept rows of a vector of rows (6 per loop), made dimensionless.
     pub fn kept(&self, all: &DVector<f64>) -> DVector<f64> {
         DVector::from_iterator(
-            self.rows.len(),
-            self.rows.iter().zip(&self.scales).map(|(&r, s)| all[r] * s),
+            self.indices.len(),
+            self.indices
+                .iter()
+                .zip(&self.scales)
+                .map(|(&r, s)| all[r] * s),
         )
+    }
+
+    /// Gₛ x.
+    pub fn times(&self, x: &[f64]) -> DVector<f64> {
+        DVector::from_iterator(
+            self.rows.len(),
+            self.rows
+                .iter()
+                .map(|row| row.iter().map(|&(c, value)| value * x[c]).sum::<f64>()),
+        )
+    }
+
+    /// Gₛᵀ y.
+    pub fn transpose_times(&self, y: &DVector<f64>) -> DVector<f64> {
+        let mut out = DVector::zeros(self.columns);
+        for (row, &weight) in self.rows.iter().zip(y.iter()) {
+            for &(c, value) in row {
+                out[c] += value * weight;
+            }
+        }
+        out
+    }
+
+    /// The factorisation of A + μ²E, with μ = `damping` times the largest diagonal entry of the
+    /// undamped factor (the largest row's independent length) and E the identity on the firm
+    /// rows, zero on the weak ones: A⁻¹ wherever the rows are independent, bounded where the
+    /// firm rows lose their independence.
+    pub fn damped(&self, damping: f64) -> Result<Damped<'_>, Singular> {
+        let largest = self.normal.diagonal().fold(0.0, f64::max).sqrt();
+        let shift = (damping * largest).powi(2);
+        let mut shifted = self.normal.clone();
+        for k in 0..self.firm {
+            *shifted.at_mut(k, k) += shift;
+        }
+        let factor = shifted.cholesky().map_err(|k| Singular {
+            row: self.indices[k],
+        })?;
+        Ok(Damped {
+            factored: self,
+            factor,
+        })
     }
 
     /// The smallest x with Gₛx = b (b as from `kept`), or the row lost at a singularity.
     pub fn least_norm(&self, b: &DVector<f64>) -> Result<DVector<f64>, Singular> {
-        let y = self
-            .triangle
-            .tr_solve_upper_triangular(b)
-            .filter(|y| y.iter().all(|x| x.is_finite()))
-            .ok_or_else(|| self.singular())?;
-        Ok(&self.range * y)
+        Ok(self.damped(0.0)?.least_norm(b))
     }
 
     /// `least_norm` damped by `damping` (relative, see `DAMPING`): the same wherever the rows
@@ -136,8 +188,7 @@ impl Factored {
         b: &DVector<f64>,
         damping: f64,
     ) -> Result<DVector<f64>, Singular> {
-        let y = self.normal_solve(b, damping)?;
-        Ok(&self.range * (&self.triangle * y))
+        Ok(self.damped(damping)?.least_norm(b))
     }
 
     /// v without its part across the kept rows, damped by `damping`: the closest motion they
@@ -149,67 +200,191 @@ impl Factored {
         v: &DVector<f64>,
         damping: f64,
     ) -> Result<DVector<f64>, Singular> {
-        let across = self.triangle.tr_mul(&(self.range.transpose() * v));
-        let y = self.normal_solve(&across, damping)?;
-        Ok(v - &self.range * (&self.triangle * y))
+        Ok(self.damped(damping)?.allowed_part(v))
     }
 
-    /// (RᵀR + μ²E)⁻¹ b, with μ = `damping` times the largest diagonal entry of R and E the
-    /// identity on the firm rows, zero on the weak ones: R⁻¹R⁻ᵀb wherever the rows are
-    /// independent, bounded where the firm rows lose their independence.
-    fn normal_solve(&self, b: &DVector<f64>, damping: f64) -> Result<DVector<f64>, Singular> {
-        let largest = self.triangle.diagonal().amax();
-        let damping = (damping * largest).powi(2);
-        let mut normal = self.triangle.tr_mul(&self.triangle);
-        for k in 0..self.firm {
-            normal[(k, k)] += damping;
+    /// How far the firm rows are from dependent: the smallest diagonal entry of the factor
+    /// over the largest, among the firm rows (1 for rows orthogonal and of equal length, 0 at a
+    /// singular configuration), and the row (among the 6 per loop) of the smallest.
+    pub fn conditioning(&self) -> (f64, Option<usize>) {
+        if self.firm == 0 {
+            return (1.0, None);
         }
-        normal
-            .cholesky()
-            .map(|c| c.solve(b))
-            .filter(|y| y.iter().all(|x| x.is_finite()))
-            .ok_or_else(|| self.singular())
+        let diagonal: Vec<f64> = match self.damped(DAMPING) {
+            Ok(damped) => damped.factor.diagonal().take(self.firm).collect(),
+            Err(lost) => return (0.0, Some(lost.row)),
+        };
+        let largest = diagonal.iter().copied().fold(0.0, f64::max);
+        let (smallest, value) = diagonal
+            .iter()
+            .copied()
+            .enumerate()
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        let ratio = if largest > 0.0 { value / largest } else { 0.0 };
+        (ratio, Some(self.indices[smallest]))
     }
 
-    /// v without its part across the kept rows: the closest motion they allow.
+    /// An orthonormal basis of the motions the kept rows allow, from a dense QR factorisation:
+    /// for the decisions taken once and for the variational integrator's small systems, not
+    /// for the equations of motion.
+    pub fn dense_null_space(&self) -> DMatrix<f64> {
+        let (n, r) = (self.columns, self.rows.len());
+        if r == 0 {
+            return DMatrix::identity(n, n);
+        }
+        let mut transposed = DMatrix::zeros(n, r);
+        for (k, row) in self.rows.iter().enumerate() {
+            for &(c, value) in row {
+                transposed[(c, k)] = value;
+            }
+        }
+        let qr = transposed.qr();
+        let mut q_transposed = DMatrix::identity(n, n);
+        qr.q_tr_mul(&mut q_transposed);
+        q_transposed.transpose().columns(r, n - r).into_owned()
+    }
+}
+
+impl Damped<'_> {
+    /// (A + μ²E)⁻¹ b.
+    pub fn normal_solve(&self, b: &DVector<f64>) -> DVector<f64> {
+        self.factor.solve(b)
+    }
+
+    /// Gₛᵀ(A + μ²E)⁻¹ b: the smallest x with Gₛx = b where the rows are independent.
+    pub fn least_norm(&self, b: &DVector<f64>) -> DVector<f64> {
+        self.factored.transpose_times(&self.normal_solve(b))
+    }
+
+    /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv: v without its part across the kept rows.
     pub fn allowed_part(&self, v: &DVector<f64>) -> DVector<f64> {
-        v - &self.range * (self.range.transpose() * v)
+        v - self.least_norm(&self.factored.times(v.as_slice()))
     }
 
     /// λ, 6 per loop (zero on the rows not kept), with Gᵀλ = y for y in the kept rows' span.
-    pub fn multipliers(&self, y: &DVector<f64>, total: usize) -> Result<DVector<f64>, Singular> {
-        let kept = self.normal_solve(
-            &self.triangle.tr_mul(&(self.range.transpose() * y)),
-            DAMPING,
-        )?;
+    pub fn multipliers(&self, y: &DVector<f64>, total: usize) -> DVector<f64> {
+        let kept = self.normal_solve(&self.factored.times(y.as_slice()));
         let mut all = DVector::zeros(total);
-        for (k, (&row, scale)) in self.rows.iter().zip(&self.scales).enumerate() {
+        for (k, (&row, scale)) in self
+            .factored
+            .indices
+            .iter()
+            .zip(&self.factored.scales)
+            .enumerate()
+        {
             all[row] = kept[k] * scale;
         }
-        Ok(all)
+        all
     }
 
-    /// How far the firm rows are from dependent: the smallest diagonal entry of R over the
-    /// largest, among the firm rows (1 for rows orthogonal and of equal length, 0 at a singular
-    /// configuration), and the row (among the 6 per loop) of the smallest.
-    pub fn conditioning(&self) -> (f64, Option<usize>) {
-        let diagonal = self.triangle.diagonal().map(f64::abs);
-        let firm = diagonal.rows(0, self.firm);
-        if firm.is_empty() {
-            return (1.0, None);
+    /// The motions the kept rows allow, one per coordinate of `free`: the allowed part of that
+    /// coordinate's unit motion. They span the allowed motions when `free` parametrises them
+    /// (`Structure` chooses it so); unlike an orthonormal basis, they cost one sparse solve
+    /// each.
+    pub fn allowed_motions(&self, free: &[usize]) -> DMatrix<f64> {
+        let n = self.factored.columns;
+        let mut basis = DMatrix::zeros(n, free.len());
+        for (k, &coordinate) in free.iter().enumerate() {
+            let mut unit = DVector::zeros(n);
+            unit[coordinate] = 1.0;
+            basis.set_column(k, &self.allowed_part(&unit));
         }
-        let (largest, smallest) = (firm.max(), firm.imin());
-        let ratio = if largest > 0.0 {
-            firm[smallest] / largest
-        } else {
-            0.0
-        };
-        (ratio, Some(self.rows[smallest]))
+        basis
+    }
+}
+
+/// A symmetric matrix stored by rows from each row's first non-zero entry to the diagonal; the
+/// Cholesky factor of such a matrix lives in the same envelope.
+#[derive(Clone, Debug)]
+struct Envelope {
+    first: Vec<usize>,
+    /// Row k holds columns first[k]..=k.
+    values: Vec<Vec<f64>>,
+}
+
+impl Envelope {
+    /// A = RRᵀ for the sparse rows R over `columns` columns.
+    fn normal(rows: &[SparseRow], columns: usize) -> Envelope {
+        // Which rows touch each column, to find each row's first neighbour.
+        let mut touching: Vec<Vec<(usize, f64)>> = vec![Vec::new(); columns];
+        for (k, row) in rows.iter().enumerate() {
+            for &(c, value) in row {
+                touching[c].push((k, value));
+            }
+        }
+        let first: Vec<usize> = (0..rows.len())
+            .map(|k| {
+                rows[k]
+                    .iter()
+                    .filter_map(|&(c, _)| touching[c].first().map(|&(l, _)| l))
+                    .fold(k, usize::min)
+            })
+            .collect();
+        let mut values: Vec<Vec<f64>> = (0..rows.len())
+            .map(|k| vec![0.0; k - first[k] + 1])
+            .collect();
+        for column in &touching {
+            for (i, &(k, a)) in column.iter().enumerate() {
+                for &(l, b) in &column[..=i] {
+                    values[k][l - first[k]] += a * b;
+                }
+            }
+        }
+        Envelope { first, values }
     }
 
-    fn singular(&self) -> Singular {
-        Singular {
-            row: self.conditioning().1.unwrap_or(0),
+    fn at_mut(&mut self, row: usize, column: usize) -> &mut f64 {
+        &mut self.values[row][column - self.first[row]]
+    }
+
+    fn diagonal(&self) -> impl Iterator<Item = f64> + '_ {
+        self.values
+            .iter()
+            .map(|row| *row.last().expect("a diagonal"))
+    }
+
+    /// The Cholesky factor in place, or the first row whose pivot is not positive.
+    fn cholesky(mut self) -> Result<Envelope, usize> {
+        for k in 0..self.values.len() {
+            let fk = self.first[k];
+            for j in fk..k {
+                let fj = self.first[j];
+                let start = fk.max(fj);
+                let dot: f64 = (start..j)
+                    .map(|i| self.values[k][i - fk] * self.values[j][i - fj])
+                    .sum();
+                let pivot = *self.values[j].last().expect("a diagonal");
+                self.values[k][j - fk] = (self.values[k][j - fk] - dot) / pivot;
+            }
+            let row = &mut self.values[k];
+            let (diagonal, left) = row.split_last_mut().expect("a diagonal");
+            let square = *diagonal - left.iter().map(|x| x * x).sum::<f64>();
+            if !(square > 0.0 && square.is_finite()) {
+                return Err(k);
+            }
+            *diagonal = square.sqrt();
         }
+        Ok(self)
+    }
+
+    /// (LLᵀ)⁻¹ b for the factor L held.
+    fn solve(&self, b: &DVector<f64>) -> DVector<f64> {
+        let mut y = b.clone();
+        for k in 0..y.len() {
+            let fk = self.first[k];
+            let row = &self.values[k];
+            let dot: f64 = (fk..k).map(|i| row[i - fk] * y[i]).sum();
+            y[k] = (y[k] - dot) / row[k - fk];
+        }
+        for k in (0..y.len()).rev() {
+            let fk = self.first[k];
+            let row = &self.values[k];
+            y[k] /= row[k - fk];
+            let value = y[k];
+            for i in fk..k {
+                y[i] -= row[i - fk] * value;
+            }
+        }
+        y
     }
 }

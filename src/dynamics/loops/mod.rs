@@ -8,6 +8,7 @@
 
 pub mod basis;
 pub mod factored;
+pub mod jacobian;
 pub mod project;
 pub mod rows;
 pub mod solve;
@@ -15,6 +16,7 @@ pub mod structure;
 
 pub use basis::{decompose, decompose_with, Decomposition};
 pub use factored::{Factored, RowChoice};
+pub use jacobian::ConstraintJacobian;
 pub use project::{close_configuration, project, Projection, Residuals};
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_after_kinematics, seat_ball_angles,

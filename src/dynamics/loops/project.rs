@@ -1,7 +1,7 @@
 //! Moving a state back onto the loops: Gauss–Newton steps on the positions with minimum-norm
 //! corrections (the free motions are not disturbed), then the orthogonal projection of the
 //! velocities onto G v = 0. Along a run the steps use the rows the `Structure` keeps and their
-//! QR factorisation (`Factored`); before the structure is known (closing the initial configuration, looking
+//! sparse factorisation (`Factored`); before the structure is known (closing the initial configuration, looking
 //! at its neighbours), they use every row through a singular value decomposition.
 
 use nalgebra::DVector;
@@ -49,11 +49,11 @@ pub fn project(
             .ok()
     })?;
     let factored = Factored::new(&current.jacobian, choice);
-    let velocity = &current.jacobian * DVector::from_column_slice(v);
+    let velocity = current.jacobian.mul(v);
     let corrected = factored
         .damped_allowed_part(&DVector::from_column_slice(v), PROJECTION_DAMPING)
         .unwrap_or_else(|_| DVector::from_column_slice(v));
-    let after_velocity = (&current.jacobian * &corrected).amax();
+    let after_velocity = current.jacobian.mul(corrected.as_slice()).amax();
     v.copy_from_slice(corrected.as_slice());
     seat_ball_angles(model, data, q, v, false)?;
     Ok(Projection {
@@ -92,7 +92,7 @@ pub fn close_configuration(
     let rest = vec![0.0; model.velocities()];
     let mut current = constraints(model, data, q, &rest, false)?;
     newton(model, data, q, &mut current, |c| {
-        Some(-(decompose(&c.jacobian).pseudo_inverse * &c.residual))
+        Some(-(decompose(&c.jacobian.dense()).pseudo_inverse * &c.residual))
     })?;
     Ok(current.residual.amax())
 }

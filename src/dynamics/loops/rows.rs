@@ -8,7 +8,9 @@
 //!   velocities at the loop point (fixed axes), zero on a closed trajectory;
 //! - acceleration: `G v̇ + γ = 0`, with γ from the bodies' velocity-product accelerations.
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DVector, Vector3};
+
+use super::jacobian::{ConstraintJacobian, LoopBlock};
 
 use crate::dynamics::algorithms::{bias_accelerations, forward_kinematics, Data};
 use crate::dynamics::model::Model;
@@ -31,7 +33,7 @@ pub struct Constraints {
     /// Position rows: 6 per loop.
     pub residual: DVector<f64>,
     /// ∂(rows' rates)/∂(velocities): 6 per loop, one column per state velocity.
-    pub jacobian: DMatrix<f64>,
+    pub jacobian: ConstraintJacobian,
     /// `G v`: the velocity rows.
     pub velocity: DVector<f64>,
     /// γ = Ġ v (zero unless asked for).
@@ -67,7 +69,10 @@ pub fn constraints_after_kinematics(
     let rows = 6 * model.loops.len();
     let mut c = Constraints {
         residual: DVector::zeros(rows),
-        jacobian: DMatrix::zeros(rows, model.velocities()),
+        jacobian: ConstraintJacobian {
+            columns: model.velocities(),
+            blocks: Vec::with_capacity(model.loops.len()),
+        },
         velocity: DVector::zeros(rows),
         bias: DVector::zeros(rows),
         points: Vec::with_capacity(model.loops.len()),
@@ -75,7 +80,7 @@ pub fn constraints_after_kinematics(
     for k in 0..model.loops.len() {
         loop_rows(model, data, q, v, k, with_bias, &mut c)?;
     }
-    c.velocity = &c.jacobian * DVector::from_column_slice(v);
+    c.velocity = c.jacobian.mul(v);
     Ok(c)
 }
 
@@ -116,33 +121,22 @@ fn loop_rows(
     c.points.push(point);
     // Rates are taken at the loop point, in fixed axes: a motion seen from `at_point`.
     let at_point = translation(point);
-    add_body_columns(
+    let own = if ball { 0 } else { n };
+    let mut block = LoopBlock::zeros(loop_columns(
         model,
-        data,
-        joint.second_body,
-        &at_point,
-        1.0,
-        row,
-        &mut c.jacobian,
-    );
-    add_body_columns(
-        model,
-        data,
-        joint.first_body,
-        &at_point,
-        -1.0,
-        row,
-        &mut c.jacobian,
-    );
-    for column in (0..n).filter(|_| !ball) {
+        [joint.first_body, joint.second_body],
+        model.nv + offset..model.nv + offset + own,
+    ));
+    add_body_columns(model, data, joint.second_body, &at_point, 1.0, &mut block);
+    add_body_columns(model, data, joint.first_body, &at_point, -1.0, &mut block);
+    for column in 0..own {
         let twist = transform_twist(
             &base,
             &Motion::from_column_slice(chain.subspace.column(column).as_slice()),
         );
         let moved = spatial::motion_to_child(&at_point, &twist);
-        let mut target_column = c
-            .jacobian
-            .view_mut((row, model.nv + offset + column), (6, 1));
+        let local = block.local(model.nv + offset + column);
+        let mut target_column = block.values.column_mut(local);
         target_column -= moved;
     }
     if with_bias {
@@ -176,9 +170,10 @@ fn loop_rows(
     }
     if ball {
         c.residual.rows_mut(row, 3).fill(0.0);
-        c.jacobian.rows_mut(row, 3).fill(0.0);
+        block.values.rows_mut(0, 3).fill(0.0);
         c.bias.rows_mut(row, 3).fill(0.0);
     }
+    c.jacobian.blocks.push(block);
     Ok(())
 }
 
@@ -262,8 +257,7 @@ fn add_body_columns(
     body: usize,
     at_point: &Pose,
     sign: f64,
-    row: usize,
-    jacobian: &mut DMatrix<f64>,
+    block: &mut LoopBlock,
 ) {
     let mut current = body;
     while current != 0 {
@@ -275,11 +269,30 @@ fn add_body_columns(
                 &Motion::from_column_slice(subspace.column(column).as_slice()),
             );
             let moved = spatial::motion_to_child(at_point, &world);
-            let mut target = jacobian.view_mut((row, joint.v_offset + column), (6, 1));
+            let local = block.local(joint.v_offset + column);
+            let mut target = block.values.column_mut(local);
             target += sign * moved;
         }
         current = joint.parent;
     }
+}
+
+/// The state velocities a loop's rows depend on: those of the joints on the paths from its two
+/// bodies to the root, then its own coordinates, in increasing order.
+fn loop_columns(model: &Model, bodies: [usize; 2], own: std::ops::Range<usize>) -> Vec<usize> {
+    let mut columns = Vec::new();
+    for body in bodies {
+        let mut current = body;
+        while current != 0 {
+            let joint = &model.joints[current - 1];
+            columns.extend(joint.v_offset..joint.v_offset + joint.nv());
+            current = joint.parent;
+        }
+    }
+    columns.sort_unstable();
+    columns.dedup();
+    columns.extend(own);
+    columns
 }
 
 /// The constraint wrenches as forces on the bodies (in their frames, about their origins):

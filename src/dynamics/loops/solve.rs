@@ -1,20 +1,24 @@
 //! The constrained equations `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0`, solved on the rows the loops'
-//! `Structure` keeps, by the null-space method on their QR factorisation (`Factored`). Then
+//! `Structure` keeps, by the null-space method on the sparse factorisation of their normal
+//! matrix A = GₛGₛᵀ (`Factored`). Then
 //!
-//! - the particular acceleration a₀ = −Q₁R⁻ᵀγₛ, the smallest with Gₛa₀ = −γₛ;
-//! - the allowed part a = a₀ + Q₂z, with (Q₂ᵀMQ₂) z = Q₂ᵀ(f − Ma₀) by Cholesky;
-//! - the multipliers Rλₛ = Q₁ᵀ(Ma − f).
+//! - the particular acceleration a₀ = −GₛᵀA⁻¹γₛ, the smallest with Gₛa₀ = −γₛ;
+//! - the allowed motions N, one per free coordinate of the structure (the allowed part of its
+//!   unit motion), and a = a₀ + Nz with (NᵀMN) z = Nᵀ(f − Ma₀) by Cholesky;
+//! - the multipliers λₛ = A⁻¹Gₛ(Ma − f).
 //!
 //! The kept rows are fixed along the run and independent wherever the mechanism is regular, so
-//! the accelerations are a smooth function of the state there; the basis Q₂ may turn from one
-//! evaluation to the next, but the accelerations do not depend on it. Motions that move no mass
+//! the accelerations are a smooth function of the state there; they do not depend on the basis
+//! N of the allowed motions, only on the space it spans. Motions that move no mass
 //! (their number is part of the structure) are left at rest.
 
 use nalgebra::{DMatrix, DVector};
 
+use std::ops::{AddAssign, SubAssign};
+
 use super::factored::{Factored, Singular, DAMPING};
 use super::rows::Constraints;
-use super::structure::{full_mass, Structure};
+use super::structure::Structure;
 
 /// How the constraints are kept: by projecting the state after each step (exact), by Baumgarte's
 /// feedback in the accelerations (with this rate, in 1/s, critically damped), by the integrator's
@@ -59,27 +63,33 @@ pub fn solve(
     structure: &Structure,
     stabilisation: Stabilisation,
 ) -> Result<Solution, LoopError> {
-    let full_mass = full_mass(mass, force.len());
     let mut gamma = c.bias.clone();
     if let Stabilisation::Baumgarte(rate) = stabilisation {
         gamma += 2.0 * rate * &c.velocity + rate * rate * &c.residual;
     }
     let factored = Factored::new(&c.jacobian, &structure.choice);
-    let particular = factored
-        .damped_least_norm(&-factored.kept(&gamma), DAMPING)
-        .map_err(singular)?;
-    let null = &factored.null_space;
-    let reduced_mass = null.transpose() * &full_mass * null;
-    let reduced_force = null.transpose() * (force - &full_mass * &particular);
+    let damped = factored.damped(DAMPING).map_err(singular)?;
+    let particular = damped.least_norm(&-factored.kept(&gamma));
+    let null = damped.allowed_motions(&structure.free);
+    // The complementary links' own coordinates carry no inertia: only the tree's rows of the
+    // motions meet the mass matrix.
+    let tree = null.rows(0, mass.nrows());
+    let mass_times_null = mass * tree;
+    let reduced_mass = tree.transpose() * &mass_times_null;
+    let inertial = mass * particular.rows(0, mass.nrows());
+    let mut applied = force.clone();
+    applied.rows_mut(0, mass.nrows()).sub_assign(&inertial);
+    let reduced_force = null.transpose() * applied;
     let z = massive_solve(reduced_mass, &reduced_force, structure.massless).map_err(|k| {
         LoopError::MasslessMotion {
             velocity: null.column(k).iamax(),
         }
     })?;
-    let accelerations = particular + null * z;
-    let multipliers = factored
-        .multipliers(&(&full_mass * &accelerations - force), c.residual.len())
-        .map_err(singular)?;
+    let accelerations = particular + &null * z;
+    let mut unbalanced = -force;
+    let inertial = mass * accelerations.rows(0, mass.nrows());
+    unbalanced.rows_mut(0, mass.nrows()).add_assign(&inertial);
+    let multipliers = damped.multipliers(&unbalanced, c.residual.len());
     Ok(Solution {
         accelerations,
         multipliers,

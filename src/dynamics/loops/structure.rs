@@ -15,7 +15,8 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::decompose;
-use super::factored::{row_scale, Factored, RowChoice};
+use super::factored::{row_scale, Factored, RowChoice, DAMPING};
+use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints};
 use crate::dynamics::algorithms::{crba, Data};
@@ -62,6 +63,16 @@ pub struct Structure {
     pub active: usize,
     /// How many of the allowed motions carry no mass.
     pub massless: usize,
+    /// Coordinates that parametrise the allowed motions (one per allowed motion): the
+    /// equations of motion are solved on the allowed parts of their unit motions.
+    pub free: Vec<usize>,
+    /// How well they did when chosen: the smallest eigenvalue of the block of the projector
+    /// onto the allowed motions over the free coordinates (1 when the allowed motions are
+    /// exactly the free coordinates' motions, 0 when the free coordinates no longer
+    /// parametrise them).
+    pub free_quality: f64,
+    /// The kept rows' conditioning (`Factored::conditioning`) when they were chosen.
+    pub chosen_conditioning: f64,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -87,6 +98,7 @@ impl Structure {
         let c = constraints(model, data, q, &rest, false)?;
         let length = characteristic_length(model, data, &c);
         let mut structure = Structure::at(model, &c, length);
+        structure.choose_free(&c.jacobian);
         structure.massless = massless_count(model, data, q, &structure)?;
         if let Some(row) = structure.gained_nearby(model, data, q)? {
             return Err(StructureError::SingularStart { row });
@@ -97,17 +109,22 @@ impl Structure {
     /// The rows' decisions at the constraints `c`, with length L.
     fn at(model: &Model, c: &Constraints, length: f64) -> Structure {
         let active = active_rows(model);
-        let scaled = dimensionless(&c.jacobian, length);
+        let scaled = dimensionless(&c.jacobian.dense(), length);
         let rows = best_rows(&scaled, &active, KEEP_TOLERANCE);
         let (reported, redundant) = independent_rows(&scaled, &active, RANK_TOLERANCE);
         let weak = rows.len().saturating_sub(reported.len());
+        let choice = RowChoice::new(rows, weak, length);
+        let chosen_conditioning = Factored::new(&c.jacobian, &choice).conditioning().0;
         Structure {
-            choice: RowChoice::new(rows, weak, length),
+            choice,
             length,
             redundant,
             rank: reported.len(),
             active: active.iter().filter(|&&a| a).count(),
             massless: 0,
+            free: Vec::new(),
+            free_quality: 1.0,
+            chosen_conditioning,
         }
     }
 
@@ -122,11 +139,12 @@ impl Structure {
     ) -> Result<Option<usize>, EvalError> {
         let rest = vec![0.0; model.velocities()];
         let c = constraints(model, data, q, &rest, false)?;
-        let allowed = decompose(&c.jacobian).null_space;
+        let dense = c.jacobian.dense();
+        let allowed = decompose(&dense).null_space;
         if allowed.ncols() == 0 {
             return Ok(None);
         }
-        let columns = column_scales(&c.jacobian, self.length);
+        let columns = column_scales(&dense, self.length);
         // A fixed, generic combination of the allowed motions, in both directions.
         let weights = DVector::from_fn(allowed.ncols(), |k, _| 1.0 / (k as f64 + 1.0).sqrt());
         let direction = (&allowed * weights).normalize();
@@ -142,7 +160,7 @@ impl Structure {
             let there = constraints(model, data, &nearby, &rest, false)?;
             let active = active_rows(model);
             let rows = best_rows(
-                &dimensionless(&there.jacobian, self.length),
+                &dimensionless(&there.jacobian.dense(), self.length),
                 &active,
                 KEEP_TOLERANCE,
             );
@@ -161,22 +179,51 @@ impl Structure {
     /// motion, but not always the same three. On the closed configurations every choice gives
     /// the same accelerations, so the equations of motion do not change; the choice is taken
     /// between steps, never inside an evaluation. Returns whether the rows changed.
-    pub fn rechoose(&mut self, model: &Model, jacobian: &DMatrix<f64>, current: f64) -> bool {
+    pub fn rechoose(&mut self, model: &Model, jacobian: &ConstraintJacobian, current: f64) -> bool {
         let active = active_rows(model);
         let rows = best_rows(
-            &dimensionless(jacobian, self.length),
+            &dimensionless(&jacobian.dense(), self.length),
             &active,
             KEEP_TOLERANCE,
         );
-        if rows.len() != self.choice.rows.len() || rows == self.choice.rows {
+        if rows.len() != self.choice.rows.len() {
             return false;
         }
         let candidate = RowChoice::new(rows, self.choice.weak, self.length);
-        if Factored::new(jacobian, &candidate).conditioning().0 < RECHOOSE * current {
+        if candidate == self.choice {
+            return false;
+        }
+        let conditioning = Factored::new(jacobian, &candidate).conditioning().0;
+        if conditioning < RECHOOSE * current {
             return false;
         }
         self.choice = candidate;
+        self.chosen_conditioning = conditioning;
         true
+    }
+
+    /// Chooses the free coordinates at G: those along which the allowed motions are best
+    /// conditioned together (pivoted Gram–Schmidt on the rows of an orthonormal basis of the
+    /// allowed motions), and records how well they parametrise them.
+    pub fn choose_free(&mut self, jacobian: &ConstraintJacobian) {
+        let factored = Factored::new(jacobian, &self.choice);
+        let allowed = factored.dense_null_space();
+        let every = vec![true; allowed.nrows()];
+        self.free = best_rows(&allowed, &every, KEEP_TOLERANCE);
+        self.free_quality = self.free_quality_at(&factored).unwrap_or(0.0);
+    }
+
+    /// How well the free coordinates parametrise the allowed motions at the factored rows (see
+    /// `free_quality`), or None at a singular configuration.
+    pub fn free_quality_at(&self, factored: &Factored) -> Option<f64> {
+        if self.free.is_empty() {
+            return Some(1.0);
+        }
+        let motions = factored.damped(DAMPING).ok()?.allowed_motions(&self.free);
+        let block = DMatrix::from_fn(self.free.len(), self.free.len(), |i, j| {
+            motions[(self.free[i], j)]
+        });
+        Some(block.symmetric_eigenvalues().min())
     }
 }
 
@@ -317,7 +364,7 @@ fn massless_count(
 ) -> Result<usize, EvalError> {
     let rest = vec![0.0; model.velocities()];
     let c = constraints(model, data, q, &rest, false)?;
-    let allowed = Factored::new(&c.jacobian, &structure.choice).null_space;
+    let allowed = Factored::new(&c.jacobian, &structure.choice).dense_null_space();
     if allowed.ncols() == 0 {
         return Ok(0);
     }

@@ -1,0 +1,84 @@
+//! The constraint Jacobian G, stored by loop: a loop's six rows move only the coordinates on the
+//! paths from its two bodies to the root and its own complementary coordinates, so each loop
+//! keeps a 6 × k block over those k columns. A row of N four-bars has 4 columns per loop out of
+//! 3N + 1; storing G densely would cost more than the dynamics of the tree beside it.
+
+use nalgebra::{DMatrix, DVector, Dyn, OMatrix, U6};
+
+/// The rows of one loop over the columns it touches.
+#[derive(Clone, Debug)]
+pub struct LoopBlock {
+    /// The state velocities the loop's rows depend on, in increasing order.
+    pub columns: Vec<usize>,
+    /// 6 × `columns.len()`.
+    pub values: OMatrix<f64, U6, Dyn>,
+}
+
+impl LoopBlock {
+    /// A block of zeros over these columns (sorted, without repeats).
+    pub fn zeros(columns: Vec<usize>) -> LoopBlock {
+        let values = OMatrix::<f64, U6, Dyn>::zeros(columns.len());
+        LoopBlock { columns, values }
+    }
+
+    /// The local index of a state velocity among the block's columns.
+    pub fn local(&self, column: usize) -> usize {
+        self.columns
+            .binary_search(&column)
+            .expect("a loop's rows are written only on its own columns")
+    }
+}
+
+/// G: 6 rows per loop, one column per state velocity.
+#[derive(Clone, Debug)]
+pub struct ConstraintJacobian {
+    pub columns: usize,
+    pub blocks: Vec<LoopBlock>,
+}
+
+impl ConstraintJacobian {
+    pub fn nrows(&self) -> usize {
+        6 * self.blocks.len()
+    }
+
+    pub fn ncols(&self) -> usize {
+        self.columns
+    }
+
+    /// Row `row` (among the 6 per loop) as (column, value) pairs.
+    pub fn row(&self, row: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let block = &self.blocks[row / 6];
+        let r = row % 6;
+        block
+            .columns
+            .iter()
+            .enumerate()
+            .map(move |(local, &column)| (column, block.values[(r, local)]))
+    }
+
+    /// G v.
+    pub fn mul(&self, v: &[f64]) -> DVector<f64> {
+        let mut out = DVector::zeros(self.nrows());
+        for (k, block) in self.blocks.iter().enumerate() {
+            for (local, &column) in block.columns.iter().enumerate() {
+                let mut rows = out.fixed_rows_mut::<6>(6 * k);
+                rows += block.values.column(local) * v[column];
+            }
+        }
+        out
+    }
+
+    /// G as a dense matrix, for the decisions taken once (the rows kept, the rank, the nearby
+    /// configurations), never inside an evaluation.
+    pub fn dense(&self) -> DMatrix<f64> {
+        let mut dense = DMatrix::zeros(self.nrows(), self.columns);
+        for (k, block) in self.blocks.iter().enumerate() {
+            for (local, &column) in block.columns.iter().enumerate() {
+                dense
+                    .view_mut((6 * k, column), (6, 1))
+                    .copy_from(&block.values.column(local));
+            }
+        }
+        dense
+    }
+}
