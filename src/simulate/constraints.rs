@@ -100,6 +100,10 @@ pub struct LoopMonitor {
     loop_names: Vec<String>,
     /// How many times the kept rows were chosen again (see `Structure::rechoose`).
     rechosen: usize,
+    /// The conditioning below which the next choice is tried: `RECHOOSE_BELOW` times that of
+    /// the rows when chosen, then halved after each try that found no better rows (a choice
+    /// costs a dense factorisation, not to be repeated at every step of a passage).
+    rechoose_below: f64,
     /// A projection that could not close the loops: when, the row left open and by how much.
     pub opened: Option<(f64, usize, f64)>,
     before: Residuals,
@@ -123,6 +127,7 @@ impl LoopMonitor {
             started: false,
             loop_names: Vec::new(),
             rechosen: 0,
+            rechoose_below: 0.0,
             opened: None,
             before: Residuals::default(),
             after: Residuals::default(),
@@ -140,6 +145,7 @@ impl LoopMonitor {
         v: &[f64],
     ) -> Result<(), StructureError> {
         self.structure = Structure::decide(model, data, q)?;
+        self.rechoose_below = RECHOOSE_BELOW * self.structure.chosen_conditioning;
         self.started = true;
         self.loop_names = model.loops.iter().map(|l| l.name.clone()).collect();
         let c = loops::constraints(model, data, q, v, false)?;
@@ -206,12 +212,18 @@ impl LoopMonitor {
         let factored = Factored::new(jacobian, &self.structure.choice);
         let conditioning = factored.conditioning();
         let structure = &mut self.structure;
-        if conditioning.0 < RECHOOSE_BELOW * structure.chosen_conditioning
-            && structure.rechoose(model, jacobian, conditioning.0)
-        {
-            self.rechosen += 1;
-            structure.choose_free(jacobian);
-            return Factored::new(jacobian, &structure.choice).conditioning();
+        let threshold = RECHOOSE_BELOW * structure.chosen_conditioning;
+        if conditioning.0 >= threshold {
+            self.rechoose_below = threshold;
+        } else if conditioning.0 < self.rechoose_below {
+            if structure.rechoose(model, jacobian, conditioning.0) {
+                self.rechosen += 1;
+                self.rechoose_below = RECHOOSE_BELOW * structure.chosen_conditioning;
+                structure.choose_free(jacobian);
+                return Factored::new(jacobian, &structure.choice).conditioning();
+            }
+            // No better rows here: look again only if the conditioning halves again.
+            self.rechoose_below = RECHOOSE_BELOW * conditioning.0;
         }
         let quality = structure.free_quality_at(&factored);
         if quality.is_some_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {

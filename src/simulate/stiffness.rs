@@ -7,7 +7,7 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, Schur};
 
 use super::prepare::{Integrator, Prepared};
 use super::system::MechanicalSystem;
@@ -39,11 +39,19 @@ fn stability_limit(integrator: &Integrator) -> Option<f64> {
 pub fn warning(prepared: &Prepared) -> Option<Diagnostic> {
     let settings = &prepared.settings;
     let limit = stability_limit(&settings.integrator)?;
-    let stiffness = estimate(prepared, limit)?;
+    let rate = fastest_rate(&prepared.model, prepared)?;
+    let stability_steps = settings.duration * rate / limit;
     let outputs = (settings.duration / settings.output).ceil().max(1.0);
-    if stiffness.stability_steps < 1000.0 || stiffness.stability_steps < 100.0 * outputs {
+    if stability_steps < 1000.0 || stability_steps < 100.0 * outputs {
         return None;
     }
+    // Only now, when there is something to say, look for the element to blame: it costs one
+    // estimate per force element.
+    let stiffness = Stiffness {
+        rate,
+        stability_steps,
+        element: stiffest_element(prepared, rate),
+    };
     let name = if settings.integrator == Integrator::Rk4 {
         "rk4"
     } else {
@@ -62,11 +70,10 @@ pub fn warning(prepared: &Prepared) -> Option<Diagnostic> {
     })
 }
 
-/// The stiffness at the start of the run, for an explicit method of stability limit `limit`.
-pub fn estimate(prepared: &Prepared, limit: f64) -> Option<Stiffness> {
+/// The force element whose removal lowers the fastest rate most, when it lowers it by half or
+/// more.
+fn stiffest_element(prepared: &Prepared, rate: f64) -> Option<Span> {
     let model = &prepared.model;
-    let rate = fastest_rate(model, prepared)?;
-    let stability_steps = prepared.settings.duration * rate / limit;
     let mut element = None;
     let mut lowest = 0.5 * rate;
     for k in 0..model.applied.len() {
@@ -83,12 +90,13 @@ pub fn estimate(prepared: &Prepared, limit: f64) -> Option<Stiffness> {
             (lowest, element) = (r, Some(removed.span));
         }
     }
-    Some(Stiffness {
-        rate,
-        stability_steps,
-        element,
-    })
+    element
 }
+
+/// Sweeps of the eigenvalue iteration allowed per state before the estimate gives up (and no
+/// warning is given): a few per eigenvalue is typical; without a bound a matrix on which the
+/// iteration does not converge would hang the run before its first step.
+const EIGENVALUE_SWEEPS_PER_STATE: usize = 30;
 
 /// The largest |λ| of the Jacobian of y' = f(t, y) at the initial state, by forward differences.
 fn fastest_rate(model: &Model, prepared: &Prepared) -> Option<f64> {
@@ -117,9 +125,14 @@ fn fastest_rate(model: &Model, prepared: &Prepared) -> Option<f64> {
     if !jacobian.iter().all(|x| x.is_finite()) {
         return None;
     }
-    jacobian
-        .complex_eigenvalues()
-        .iter()
-        .map(|l| l.norm())
-        .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
+    let n = jacobian.nrows();
+    Schur::try_new(
+        jacobian,
+        f64::EPSILON,
+        EIGENVALUE_SWEEPS_PER_STATE * n.max(1),
+    )?
+    .complex_eigenvalues()
+    .iter()
+    .map(|l| l.norm())
+    .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
 }
