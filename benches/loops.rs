@@ -11,7 +11,19 @@ use lsdc::simulate::run::{run, Report, Sample, Simulation};
 
 #[path = "common/loop_costs.rs"]
 mod loop_costs;
-use loop_costs::{call_costs, median};
+use loop_costs::{call_costs, median, tree_cost};
+
+/// The mechanisms whose loop overhead is measured: one constrained right-hand side against one
+/// of the same bodies as a tree (the closing joins removed), and one projection.
+const OVERHEAD: [&str; 7] = [
+    "four_bar",
+    "delta_isir88",
+    "delta_isir88_reduced",
+    "hard/squeezer",
+    "hard/watt_six_bar",
+    "hard/bennett",
+    "hard/bricard",
+];
 
 /// Tolerances tried for the reference, tightest first: 1e-13 may fail to converge near round-off.
 const REFERENCE_TOLERANCES: [f64; 2] = [1e-13, 1e-12];
@@ -203,6 +215,21 @@ fn row(file: &str, method: &Method, reference: &[Sample]) -> String {
 
 fn main() {
     println!("Timings are from the machine running this benchmark (release build), medians of {REPEATS} runs ({REPEATS_SLOW} over a second).");
+    println!("\n### Loop overhead per evaluation\n");
+    println!(
+        "| mechanism | loops µs | tree µs | loops / tree | projection µs | projection / loops |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|");
+    for file in OVERHEAD {
+        let prepared = load(file);
+        let (rhs, projection) = call_costs(&prepared);
+        let tree = tree_cost(&prepared);
+        println!(
+            "| {file} | {rhs:.2} | {tree:.2} | {:.1} | {projection:.2} | {:.2} |",
+            rhs / tree,
+            projection / rhs
+        );
+    }
     for case in &CASES {
         let base = load(case.file);
         let (reference, tol) = reference(case.file);

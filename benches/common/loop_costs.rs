@@ -6,6 +6,8 @@ use std::hint::black_box;
 use std::rc::Rc;
 use std::time::Instant;
 
+use lsdc::dynamics::algorithms::{crba, rnea, Data};
+use lsdc::dynamics::spatial::Force;
 use lsdc::simulate::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 
@@ -56,4 +58,46 @@ pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
         black_box(system.keep_closed(0.0, &mut z).expect("projects"));
     });
     (rhs * 1e6, projection * 1e6)
+}
+
+/// Median cost (µs) of one right-hand side of the same bodies as a tree: the mechanism with its
+/// closing joins removed (and the efforts on them), at the tree part of the initial state.
+#[allow(dead_code)]
+pub fn tree_cost(prepared: &Prepared) -> f64 {
+    let mut tree = prepared.model.clone();
+    tree.link_efforts.retain(|e| e.joint < tree.joints.len());
+    tree.link_potentials
+        .retain(|(joint, _)| *joint < tree.joints.len());
+    tree.loops.clear();
+    tree.loop_balls.clear();
+    tree.declared_count -= tree.nc;
+    tree.nc = 0;
+    let model = &prepared.model;
+    let (q, v) = model
+        .state_from_declared(&prepared.coordinates, &prepared.rates)
+        .expect("initial state");
+    let mut y = q[..model.nq].to_vec();
+    y.extend_from_slice(&v[..model.nv]);
+    let declared = prepared.coordinates[..prepared.coordinates.len() - model.nc].to_vec();
+    let reference = Rc::new(RefCell::new(declared));
+    let mut system = MechanicalSystem::new(&tree, reference, prepared.settings.stabilisation);
+    let mut dydt = vec![0.0; y.len()];
+    if system.derivative(0.0, &y, &mut dydt).is_err() {
+        // Without its loops the tree has motions without inertia (the Delta's rods spinning
+        // about their axes), which its forward dynamics refuses: time the mass matrix and the
+        // bias forces instead, which any method of solving the loops needs.
+        let mut data = Data::new(&tree);
+        let (q, v) = (&y[..model.nq], &y[model.nq..]);
+        let zero = vec![0.0; model.nv];
+        let external = vec![Force::zeros(); tree.joints.len() + 1];
+        return time_per_call(|| {
+            black_box(crba(&tree, &mut data, black_box(q)).expect("mass matrix"));
+            black_box(rnea(&tree, &mut data, q, v, &zero, &external).expect("bias forces"));
+        }) * 1e6;
+    }
+    time_per_call(|| {
+        system
+            .derivative(0.0, black_box(&y), &mut dydt)
+            .expect("evaluates")
+    }) * 1e6
 }

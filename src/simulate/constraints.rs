@@ -29,6 +29,20 @@ const SKIP_PROJECTION: f64 = 1e-6;
 /// better ones exist.
 const RECHOOSE_BELOW: f64 = 0.5;
 
+/// Below this fraction of their conditioning when chosen, the kept rows are about to lose their
+/// independence: the run enters a singular passage, an event between steps. The rows losing it
+/// are set aside (the smallest pivots first, until the others are conditioned above
+/// `PASSAGE_LEFT`), so that the motion in the passage is that of a mechanism with those few
+/// constraints released for a few microseconds, instead of one whose constraint forces along
+/// the direction being lost grow as the inverse of the distance to the singularity and whose
+/// smallest velocity error off the branch (the residual of that row over its vanishing
+/// independence) grows with them until the run leaves its branch. Once the rows are independent
+/// again (`PASSAGE_LEFT`), they are restored, and the projection brings the state back onto all
+/// of them: the nearest closed state is then on the branch the motion was on, the other branch
+/// being many times further than what the released constraints let the state drift.
+const PASSAGE_ENTERED: f64 = 1e-5;
+const PASSAGE_LEFT: f64 = 2e-5;
+
 /// Below this fraction of how well they parametrised the allowed motions when chosen
 /// (`Structure::free_quality`), the free coordinates are chosen again.
 const FREE_AGAIN_BELOW: f64 = 0.1;
@@ -100,6 +114,13 @@ pub struct LoopMonitor {
     loop_names: Vec<String>,
     /// How many times the kept rows were chosen again (see `Structure::rechoose`).
     rechosen: usize,
+    /// While the run passes a singular configuration: the rows kept before it (see `PASSAGE_ENTERED`).
+    passage: Option<RowChoice>,
+    /// How many passages were entered.
+    passages: usize,
+    /// Whether the rows set aside for a passage were just restored (the next projection then
+    /// keeps the momentum along the allowed motions, `loops::project_momentum`).
+    restored: bool,
     /// The conditioning below which the next choice is tried: `RECHOOSE_BELOW` times that of
     /// the rows when chosen, then halved after each try that found no better rows (a choice
     /// costs a dense factorisation, not to be repeated at every step of a passage).
@@ -128,6 +149,9 @@ impl LoopMonitor {
             loop_names: Vec::new(),
             rechosen: 0,
             rechoose_below: 0.0,
+            passage: None,
+            passages: 0,
+            restored: false,
             opened: None,
             before: Residuals::default(),
             after: Residuals::default(),
@@ -182,8 +206,14 @@ impl LoopMonitor {
         let rest = vec![0.0; model.velocities()];
         let c = loops::constraints(model, data, q, &rest, false)?;
         let conditioning = self.conditioning(model, &c.jacobian);
-        if self.stabilisation == Stabilisation::Projection && conditioning.0 >= SKIP_PROJECTION {
+        let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;
+        if self.stabilisation == Stabilisation::Projection && projects {
+            let arriving = v.to_vec();
             let projection = loops::project(model, data, &self.structure.choice, q, v)?;
+            if std::mem::take(&mut self.restored) {
+                v.copy_from_slice(&arriving);
+                loops::project_momentum(model, data, &self.structure, q, v)?;
+            }
             if let (left, Some(row)) = projection.left {
                 if left > OPEN && self.opened.is_none() {
                     self.opened = Some((time, row, left));
@@ -203,16 +233,28 @@ impl LoopMonitor {
     }
 
     /// The conditioning of the kept rows (`Factored::conditioning`) at the constraint Jacobian
-    /// G, after choosing them again if they are poorly conditioned and better ones exist.
+    /// G, after choosing them again if they are poorly conditioned and better ones exist, and
+    /// the passages through singular configurations entered or left here (see `passage`).
+    /// During a passage, the conditioning of all the rows chosen before it.
     fn conditioning(
         &mut self,
         model: &Model,
         jacobian: &ConstraintJacobian,
     ) -> (f64, Option<usize>) {
+        let chosen = self.structure.chosen_conditioning;
+        if let Some(before) = &self.passage {
+            let conditioning = Factored::new(jacobian, before).conditioning();
+            if conditioning.0 >= PASSAGE_LEFT {
+                self.structure.choice = self.passage.take().expect("in a passage");
+                self.structure.choose_free(jacobian);
+                self.restored = true;
+            }
+            return conditioning;
+        }
         let factored = Factored::new(jacobian, &self.structure.choice);
         let conditioning = factored.conditioning();
         let structure = &mut self.structure;
-        let threshold = RECHOOSE_BELOW * structure.chosen_conditioning;
+        let threshold = RECHOOSE_BELOW * chosen;
         if conditioning.0 >= threshold {
             self.rechoose_below = threshold;
         } else if conditioning.0 < self.rechoose_below {
@@ -224,6 +266,14 @@ impl LoopMonitor {
             }
             // No better rows here: look again only if the conditioning halves again.
             self.rechoose_below = RECHOOSE_BELOW * conditioning.0;
+        }
+        if conditioning.0 < PASSAGE_ENTERED {
+            let before = structure.choice.clone();
+            structure.choice = without_lost_rows(jacobian, &before, PASSAGE_LEFT);
+            structure.choose_free(jacobian);
+            self.passage = Some(before);
+            self.passages += 1;
+            return conditioning;
         }
         let quality = structure.free_quality_at(&factored);
         if quality.is_some_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
@@ -344,4 +394,24 @@ impl LoopMonitor {
             closest: self.closest.clone(),
         }
     }
+}
+
+/// `choice` without the firm rows losing their independence at G: the row of the smallest pivot
+/// is set aside until the others are conditioned above `above` (at least one row is kept).
+fn without_lost_rows(jacobian: &ConstraintJacobian, choice: &RowChoice, above: f64) -> RowChoice {
+    let mut kept = choice.clone();
+    while kept.rows.len() > kept.weak + 1 {
+        let (ratio, row) = Factored::new(jacobian, &kept).conditioning();
+        let Some(row) = row.filter(|_| ratio < above) else {
+            break;
+        };
+        let k = kept
+            .rows
+            .iter()
+            .position(|&r| r == row)
+            .expect("a kept row");
+        kept.rows.remove(k);
+        kept.scales.remove(k);
+    }
+    kept
 }

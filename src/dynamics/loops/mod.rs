@@ -22,5 +22,5 @@ pub use rows::{
     active_rows, constraint_forces, constraints, constraints_after_kinematics, seat_ball_angles,
     Constraints, ROW_NAMES,
 };
-pub use solve::{solve, LoopError, Solution, Stabilisation};
+pub use solve::{project_momentum, solve, LoopError, Solution, Stabilisation};
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

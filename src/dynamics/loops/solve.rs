@@ -17,8 +17,11 @@ use nalgebra::{DMatrix, DVector};
 use std::ops::{AddAssign, SubAssign};
 
 use super::factored::{Factored, Singular, DAMPING};
-use super::rows::Constraints;
+use super::rows::{constraints, Constraints};
 use super::structure::Structure;
+use crate::dynamics::algorithms::{crba, Data};
+use crate::dynamics::model::Model;
+use crate::kinematics::eval::EvalError;
 
 /// How the constraints are kept: by projecting the state after each step (exact), by Baumgarte's
 /// feedback in the accelerations (with this rate, in 1/s, critically damped), by the integrator's
@@ -132,4 +135,37 @@ fn massive_solve(
         }
     }
     Ok(z)
+}
+
+/// Replaces v by the motion the kept rows allow that has the same momentum along every allowed
+/// motion: v' = N(NᵀMN)⁻¹NᵀMv over the allowed motions N of the structure's free coordinates,
+/// the velocity an impulsive reaction of the constraints leaves (it does no work on the allowed
+/// motions, and removes only the kinetic energy of the motion across them). Used where the
+/// constraints come back after a passage through a singular configuration: what the released
+/// rows let the motion gain across them is taken away whole, and nothing along the branch.
+/// Leaves v as it is when some allowed motion has no mass (the projection is then not defined).
+pub fn project_momentum(
+    model: &Model,
+    data: &mut Data,
+    structure: &Structure,
+    q: &[f64],
+    v: &mut [f64],
+) -> Result<(), EvalError> {
+    let rest = vec![0.0; v.len()];
+    let c = constraints(model, data, q, &rest, false)?;
+    let factored = Factored::new(&c.jacobian, &structure.choice);
+    let Ok(damped) = factored.damped(DAMPING) else {
+        return Ok(());
+    };
+    let allowed = damped.allowed_motions(&structure.free);
+    let mass = crba(model, data, &q[..model.nq])?;
+    let tree = allowed.rows(0, model.nv);
+    let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
+    let reduced = tree.transpose() * (&mass * tree);
+    let Some(cholesky) = reduced.cholesky() else {
+        return Ok(());
+    };
+    let moved = &allowed * cholesky.solve(&(tree.transpose() * momentum));
+    v.copy_from_slice(moved.as_slice());
+    Ok(())
 }
