@@ -12,7 +12,10 @@ use lsdc::simulate::prepare::{prepare, Prepared, Settings};
 mod loop_costs;
 use loop_costs::call_costs;
 
-const ROWS: [usize; 6] = [1, 2, 5, 10, 20, 40];
+const ROWS: [usize; 8] = [1, 2, 5, 10, 20, 40, 70, 100];
+
+/// Where the plot of cost per body against N is written.
+const PLOT: &str = "target/loop_scaling.svg";
 
 /// The row of `n` four-bars, with its closing joins or without them.
 fn row_program(n: usize, closed: bool) -> String {
@@ -63,6 +66,7 @@ fn main() {
     println!("A row of N parallelogram four-bars against the same bodies as a tree (release build, medians).\n");
     println!("| N | bodies | tree µs | loops µs | loops / tree | projection µs | projection / loops RHS |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
+    let mut measured = Vec::new();
     for n in ROWS {
         let (tree, _) = call_costs(&prepared(&row_program(n, false)));
         let (loops, projection) = call_costs(&prepared(&row_program(n, true)));
@@ -72,5 +76,65 @@ fn main() {
             loops / tree,
             projection / loops
         );
+        measured.push((n, tree, loops, projection));
     }
+    match plot(&measured) {
+        Ok(()) => println!("\nPlot of the cost per body: {PLOT}"),
+        Err(e) => println!("\nNo plot: {e}"),
+    }
+}
+
+/// Cost per body (µs) against N, log-log: the tree, the loops and the projection.
+fn plot(measured: &[(usize, f64, f64, f64)]) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    lsdc::output::plot::register_fonts()?;
+    let family = lsdc::output::plot::FONT_FAMILY;
+    let per_body = |cost: f64, n: usize| cost / (2 * n + 1) as f64;
+    let highest = measured
+        .iter()
+        .map(|&(n, _, loops, projection)| per_body(loops.max(projection), n))
+        .fold(1.0, f64::max);
+    let root = SVGBackend::new(PLOT, (720, 440)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "A row of N four-bars: cost of one evaluation per body",
+            (family, 18),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (1f64..100f64).log_scale(),
+            (0.1f64..2.0 * highest).log_scale(),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("N (loops)")
+        .y_desc("µs per body")
+        .label_style((family, 13))
+        .draw()?;
+    let series = [
+        ("tree (closing joins removed)", BLUE, 1),
+        ("loops: right-hand side", RED, 2),
+        ("loops: projection", GREEN, 3),
+    ];
+    for (label, colour, column) in series {
+        let points = measured.iter().map(|m| {
+            let cost = [m.1, m.2, m.3][column - 1];
+            (m.0 as f64, per_body(cost, m.0))
+        });
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour));
+    }
+    chart
+        .configure_series_labels()
+        .label_font((family, 13))
+        .background_style(WHITE)
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
 }

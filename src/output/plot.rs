@@ -33,7 +33,7 @@ const SUPERSAMPLING: u32 = 3;
 const SVG_UNITS_PER_PIXEL: u32 = 4;
 /// Share of the height given to the coordinates panel.
 const UPPER_SHARE: f64 = 0.55;
-const FONT_FAMILY: &str = "sans-serif";
+pub const FONT_FAMILY: &str = "sans-serif";
 const CAPTION_SIZE: f64 = 24.0;
 const LABEL_SIZE: f64 = 16.0;
 const LINE_WIDTH: f64 = 2.0;
@@ -175,8 +175,9 @@ impl Error for PlotError {
     }
 }
 
-/// Registers the embedded font once per process, under the family the plots use.
-fn register_fonts() -> Result<(), PlotError> {
+/// Registers the embedded font once per process, under the family the plots use
+/// (`FONT_FAMILY`); also for other plots drawn with plotters (the benchmarks').
+pub fn register_fonts() -> Result<(), PlotError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let registered = *REGISTERED.get_or_init(|| {
         register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular()).is_ok()

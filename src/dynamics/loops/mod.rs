@@ -1,9 +1,10 @@
-//! Closed loops: the complementary links' constraint rows (`rows`), the decisions taken once on
-//! them at the start of a run (`structure`: which rows are independent, in units that do not
-//! depend on the user's), the QR factorisation of those rows (`factored`), the constrained equations of motion solved
-//! on them (`solve`),
-//! and the projection of a state back onto the loops (`project`). A singular value
-//! decomposition (`basis`) serves the decisions taken once, never the equations of motion.
+//! Closed loops: the complementary links' constraint rows (`rows`), their Jacobian stored by loop
+//! (`jacobian`), the decisions taken once on them at the start of a run (`structure`: which rows
+//! are independent, in units that do not depend on the user's, and which coordinates
+//! parametrise the motions they allow), the sparse factorisation of those rows (`factored`), the
+//! constrained equations of motion solved on them (`solve`), and the projection of a state back
+//! onto the loops (`project`). A singular value decomposition (`basis`) and dense QR
+//! factorisations serve the decisions taken once, never the equations of motion.
 //! The method and its references: `docs/loops.md`.
 
 pub mod basis;
