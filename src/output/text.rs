@@ -183,13 +183,13 @@ fn constraint_report(c: &crate::simulate::constraints::ConstraintReport) -> Stri
             .end
             .map_or("the end of the run".to_string(), |t| format!("t = {t}"));
         out += &format!(
-            "  near a singular configuration from t = {} to {}: the loop closed by `{}` loses a constraint direction (singular value down to {:.1e} of the largest); the run went on\n",
+            "  near a singular configuration from t = {} to {}: the loop closed by `{}` loses a constraint direction (conditioning down to {:.1e}); the run went on\n",
             passage.start, end, passage.loop_name, passage.smallest_ratio
         );
     }
     if let Some(closest) = &c.closest {
         out += &format!(
-            "  closest to a singular configuration at t = {}: smallest singular value {:.1e} of the largest, loop `{}`\n",
+            "  closest to a singular configuration at t = {}: conditioning {:.1e}, loop `{}`\n",
             closest.time, closest.ratio, closest.loop_name
         );
     }

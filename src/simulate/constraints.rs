@@ -12,8 +12,8 @@ use crate::dynamics::loops::{
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
-/// Below this ratio of the smallest singular value of G (among those independent at the start)
-/// to the largest, the loops are near a singular configuration: constraint forces and
+/// Below this conditioning of the kept rows (`Factored::conditioning`: their smallest pivot over
+/// the largest), the loops are near a singular configuration: constraint forces and
 /// accelerations are amplified by more than its inverse. The run goes on; the report says when.
 const NEAR_SINGULAR: f64 = 1e-3;
 
