@@ -7,7 +7,7 @@ use serde::Serialize;
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::loops::{
     self, ConstraintJacobian, Factored, Residuals, RowChoice, Stabilisation, Structure,
-    StructureError, ROW_NAMES,
+    StructureError, DAMPING, ROW_NAMES,
 };
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -29,8 +29,8 @@ const SKIP_PROJECTION: f64 = 1e-6;
 /// better ones exist.
 const RECHOOSE_BELOW: f64 = 0.5;
 
-/// Below this fraction of their conditioning when chosen, the kept rows are about to lose their
-/// independence: the run enters a singular passage, an event between steps. The rows losing it
+/// Below this conditioning (on the dimensionless rows, not relative to the start's), the kept
+/// rows are about to lose their independence: the run enters a singular passage, an event between steps. The rows losing it
 /// are set aside (the smallest pivots first, until the others are conditioned above
 /// `PASSAGE_LEFT`), so that the motion in the passage is that of a mechanism with those few
 /// constraints released for a few microseconds, instead of one whose constraint forces along
@@ -116,8 +116,6 @@ pub struct LoopMonitor {
     rechosen: usize,
     /// While the run passes a singular configuration: the rows kept before it (see `PASSAGE_ENTERED`).
     passage: Option<RowChoice>,
-    /// How many passages were entered.
-    passages: usize,
     /// Whether the rows set aside for a passage were just restored (the next projection then
     /// keeps the momentum along the allowed motions, `loops::project_momentum`).
     restored: bool,
@@ -145,7 +143,6 @@ impl LoopMonitor {
             loop_names: Vec::new(),
             rechosen: 0,
             passage: None,
-            passages: 0,
             restored: false,
             opened: None,
             before: Residuals::default(),
@@ -202,9 +199,11 @@ impl LoopMonitor {
         let conditioning = self.conditioning(model, &c.jacobian);
         let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;
         if self.stabilisation == Stabilisation::Projection && projects {
-            let arriving = v.to_vec();
+            // Rows just restored after a passage: the velocities are projected from those the
+            // state arrived with, by the constraints' impulse (`loops::project_momentum`).
+            let arriving = std::mem::take(&mut self.restored).then(|| v.to_vec());
             let projection = loops::project(model, data, &self.structure.choice, q, v)?;
-            if std::mem::take(&mut self.restored) {
+            if let Some(arriving) = arriving {
                 v.copy_from_slice(&arriving);
                 loops::project_momentum(model, data, &self.structure, q, v)?;
             }
@@ -246,7 +245,8 @@ impl LoopMonitor {
             return conditioning;
         }
         let factored = Factored::new(jacobian, &self.structure.choice);
-        let conditioning = factored.conditioning();
+        let damped = factored.damped(DAMPING);
+        let conditioning = factored.conditioning_of(&damped);
         let structure = &mut self.structure;
         let threshold = RECHOOSE_BELOW * chosen;
         // Tried at every step below the threshold: the redundant rows of a Bricard linkage need
@@ -262,11 +262,10 @@ impl LoopMonitor {
             structure.choice = without_lost_rows(jacobian, &before, PASSAGE_LEFT);
             structure.choose_free(jacobian);
             self.passage = Some(before);
-            self.passages += 1;
             return conditioning;
         }
-        let quality = structure.free_quality_at(&factored);
-        if quality.is_some_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
+        let quality = damped.map(|damped| structure.free_quality_at(&damped));
+        if quality.is_ok_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
             structure.choose_free(jacobian);
         }
         conditioning

@@ -336,19 +336,22 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
         system.loops.absorb(&sampler.system.loops);
         system.loops.report()
     });
-    let outputs: Vec<branch::Output> = samples
-        .iter()
-        .map(|s| branch::Output {
-            time: s.time,
-            conserved: s
-                .balance
-                .or(s.potential_energy.map(|p| p + s.kinetic_energy)),
-            kinetic: s.kinetic_energy,
-        })
-        .collect();
     let left_branch = constraints
         .as_ref()
-        .and_then(|c| branch::left_branch(&outputs, &c.singular))
+        .filter(|c| !c.singular.is_empty())
+        .and_then(|c| {
+            let outputs: Vec<branch::Output> = samples
+                .iter()
+                .map(|s| branch::Output {
+                    time: s.time,
+                    conserved: s
+                        .balance
+                        .or(s.potential_energy.map(|p| p + s.kinetic_energy)),
+                    kinetic: s.kinetic_energy,
+                })
+                .collect();
+            branch::left_branch(&outputs, &c.singular)
+        })
         .map(|left| RunFailure {
             time: left.time,
             message: left.message,

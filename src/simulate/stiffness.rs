@@ -15,16 +15,6 @@ use crate::diag::Diagnostic;
 use crate::dynamics::model::Model;
 use crate::source::Span;
 
-/// What the start of a run shows of its stiffness.
-pub struct Stiffness {
-    /// The largest |λ| of ∂f/∂y, in 1/s.
-    pub rate: f64,
-    /// Steps the explicit integrator needs over the run for stability alone.
-    pub stability_steps: f64,
-    /// The force element whose removal lowers the rate most, when it lowers it by half or more.
-    pub element: Option<Span>,
-}
-
 /// The stability bound of an explicit method: |λ| h below this (about 3.3 for Dormand–Prince,
 /// 2.8 for the classical Runge–Kutta method); `None` for the other integrators.
 fn stability_limit(integrator: &Integrator) -> Option<f64> {
@@ -45,13 +35,6 @@ pub fn warning(prepared: &Prepared) -> Option<Diagnostic> {
     if stability_steps < 1000.0 || stability_steps < 100.0 * outputs {
         return None;
     }
-    // Only now, when there is something to say, look for the element to blame: it costs one
-    // estimate per force element.
-    let stiffness = Stiffness {
-        rate,
-        stability_steps,
-        element: stiffest_element(prepared, rate),
-    };
     let name = if settings.integrator == Integrator::Rk4 {
         "rk4"
     } else {
@@ -59,12 +42,14 @@ pub fn warning(prepared: &Prepared) -> Option<Diagnostic> {
     };
     let message = format!(
         "the mechanism is stiff for `{name}`: its fastest mode decays or turns at {:.1e} /s, so every step must stay below {:.1e} s, about {:.0} steps for this run",
-        stiffness.rate,
-        limit / stiffness.rate,
-        stiffness.stability_steps
+        rate,
+        limit / rate,
+        stability_steps
     );
     let warning = Diagnostic::warning("W0901", message).help("use the implicit integrator: `--integrator implicit`, or `simulate integrator = implicit end`");
-    Some(match stiffness.element {
+    // Only now, when there is something to say, look for the element to blame: it costs one
+    // estimate per force element.
+    Some(match stiffest_element(prepared, rate) {
         Some(span) => warning.primary(span, "the stiffest element"),
         None => warning,
     })

@@ -160,10 +160,10 @@ fn constrained_solve(
         return Ok(particular);
     }
     let allowed_start = start.dense_null_space();
-    let reduced = allowed_start.transpose() * a * &allowed_end;
+    let reduced = allowed_start.transpose() * a * allowed_end;
     let rhs = allowed_start.transpose() * (f - a * &particular);
     let z = loops::decompose_with(&reduced, 1e-12).pseudo_inverse * rhs;
-    Ok(particular + &allowed_end * z)
+    Ok(particular + allowed_end * z)
 }
 
 fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, SystemError> {

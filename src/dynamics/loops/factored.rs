@@ -12,6 +12,8 @@
 //! of R in a QR factorisation Gₛᵀ = QR taken in the same order; it measures how independent each
 //! row is of the rows before it (`conditioning`).
 
+use std::cell::OnceCell;
+
 use nalgebra::{DMatrix, DVector};
 
 use super::jacobian::ConstraintJacobian;
@@ -84,6 +86,8 @@ pub struct Factored {
     firm: usize,
     /// A = GₛGₛᵀ, undamped.
     normal: Envelope,
+    /// `dense_null_space`, once asked for.
+    null_space: OnceCell<DMatrix<f64>>,
 }
 
 /// The kept rows are dependent at this state: it is exactly a singular configuration. The row
@@ -121,6 +125,7 @@ impl Factored {
             scales: choice.scales.clone(),
             firm: choice.firm(),
             normal,
+            null_space: OnceCell::new(),
         }
     }
 
@@ -203,31 +208,32 @@ impl Factored {
         Ok(self.damped(damping)?.allowed_part(v))
     }
 
-    /// How far the firm rows are from dependent: the smallest diagonal entry of the factor
-    /// over the largest, among the firm rows (1 for rows orthogonal and of equal length, 0 at a
-    /// singular configuration), and the row (among the 6 per loop) of the smallest.
+    /// How far the firm rows are from dependent (`Damped::conditioning`, with `DAMPING`); 0 at
+    /// the row whose pivot vanished when they cannot be factored.
     pub fn conditioning(&self) -> (f64, Option<usize>) {
+        self.conditioning_of(&self.damped(DAMPING))
+    }
+
+    /// `conditioning` from a factorisation already taken with `DAMPING`.
+    pub fn conditioning_of(&self, damped: &Result<Damped<'_>, Singular>) -> (f64, Option<usize>) {
         if self.firm == 0 {
             return (1.0, None);
         }
-        let diagonal: Vec<f64> = match self.damped(DAMPING) {
-            Ok(damped) => damped.factor.diagonal().take(self.firm).collect(),
-            Err(lost) => return (0.0, Some(lost.row)),
-        };
-        let largest = diagonal.iter().copied().fold(0.0, f64::max);
-        let (smallest, value) = diagonal
-            .iter()
-            .copied()
-            .enumerate()
-            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
-        let ratio = if largest > 0.0 { value / largest } else { 0.0 };
-        (ratio, Some(self.indices[smallest]))
+        match damped {
+            Ok(damped) => damped.conditioning(),
+            Err(lost) => (0.0, Some(lost.row)),
+        }
     }
 
-    /// An orthonormal basis of the motions the kept rows allow, from a dense QR factorisation:
-    /// for the decisions taken once and for the variational integrator's small systems, not
-    /// for the equations of motion.
-    pub fn dense_null_space(&self) -> DMatrix<f64> {
+    /// An orthonormal basis of the motions the kept rows allow, from a dense QR factorisation
+    /// (taken once per `Factored`): for the decisions taken once and for the variational
+    /// integrator's small systems, not for the equations of motion.
+    pub fn dense_null_space(&self) -> &DMatrix<f64> {
+        self.null_space
+            .get_or_init(|| self.orthonormal_null_space())
+    }
+
+    fn orthonormal_null_space(&self) -> DMatrix<f64> {
         let (n, r) = (self.columns, self.rows.len());
         if r == 0 {
             return DMatrix::identity(n, n);
@@ -246,6 +252,25 @@ impl Factored {
 }
 
 impl Damped<'_> {
+    /// How far the firm rows are from dependent: the smallest diagonal entry of the factor over
+    /// the largest, among the firm rows (1 for rows orthogonal and of equal length, 0 at a
+    /// singular configuration), and the row (among the 6 per loop) of the smallest.
+    pub fn conditioning(&self) -> (f64, Option<usize>) {
+        let firm = self.factored.firm;
+        if firm == 0 {
+            return (1.0, None);
+        }
+        let diagonal: Vec<f64> = self.factor.diagonal().take(firm).collect();
+        let largest = diagonal.iter().copied().fold(0.0, f64::max);
+        let (smallest, value) = diagonal
+            .iter()
+            .copied()
+            .enumerate()
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        let ratio = if largest > 0.0 { value / largest } else { 0.0 };
+        (ratio, Some(self.factored.indices[smallest]))
+    }
+
     /// (A + μ²E)⁻¹ b.
     pub fn normal_solve(&self, b: &DVector<f64>) -> DVector<f64> {
         self.factor.solve(b)

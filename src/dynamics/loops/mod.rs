@@ -16,7 +16,7 @@ pub mod solve;
 pub mod structure;
 
 pub use basis::{decompose, decompose_with, Decomposition};
-pub use factored::{Factored, RowChoice};
+pub use factored::{Damped, Factored, RowChoice, DAMPING};
 pub use jacobian::ConstraintJacobian;
 pub use project::{close_configuration, project, Projection, Residuals};
 pub use rows::{

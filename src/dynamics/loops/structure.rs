@@ -15,7 +15,7 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::decompose;
-use super::factored::{row_scale, Factored, RowChoice, DAMPING};
+use super::factored::{row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints};
@@ -209,21 +209,23 @@ impl Structure {
         let factored = Factored::new(jacobian, &self.choice);
         let allowed = factored.dense_null_space();
         let every = vec![true; allowed.nrows()];
-        self.free = best_rows(&allowed, &every, KEEP_TOLERANCE);
-        self.free_quality = self.free_quality_at(&factored).unwrap_or(0.0);
+        self.free = best_rows(allowed, &every, KEEP_TOLERANCE);
+        self.free_quality = factored
+            .damped(DAMPING)
+            .map_or(0.0, |damped| self.free_quality_at(&damped));
     }
 
-    /// How well the free coordinates parametrise the allowed motions at the factored rows (see
-    /// `free_quality`), or None at a singular configuration.
-    pub fn free_quality_at(&self, factored: &Factored) -> Option<f64> {
+    /// How well the free coordinates parametrise the allowed motions of the factored rows (see
+    /// `free_quality`).
+    pub fn free_quality_at(&self, damped: &Damped) -> f64 {
         if self.free.is_empty() {
-            return Some(1.0);
+            return 1.0;
         }
-        let motions = factored.damped(DAMPING).ok()?.allowed_motions(&self.free);
+        let motions = damped.allowed_motions(&self.free);
         let block = DMatrix::from_fn(self.free.len(), self.free.len(), |i, j| {
             motions[(self.free[i], j)]
         });
-        Some(block.symmetric_eigenvalues().min())
+        block.symmetric_eigenvalues().min()
     }
 }
 
@@ -364,12 +366,13 @@ fn massless_count(
 ) -> Result<usize, EvalError> {
     let rest = vec![0.0; model.velocities()];
     let c = constraints(model, data, q, &rest, false)?;
-    let allowed = Factored::new(&c.jacobian, &structure.choice).dense_null_space();
+    let factored = Factored::new(&c.jacobian, &structure.choice);
+    let allowed = factored.dense_null_space();
     if allowed.ncols() == 0 {
         return Ok(0);
     }
     let mass = full_mass(&crba(model, data, q)?, model.velocities());
-    let eigenvalues = (allowed.transpose() * mass * &allowed).symmetric_eigenvalues();
+    let eigenvalues = (allowed.transpose() * mass * allowed).symmetric_eigenvalues();
     let largest = eigenvalues.amax();
     Ok(eigenvalues
         .iter()
