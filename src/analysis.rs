@@ -64,6 +64,16 @@ pub struct AssemblyReport {
     pub iterations: usize,
     /// Largest component of the closure residual at the solution.
     pub residual: f64,
+    /// Given values no closed configuration holds, and what assembly made of them (W0801).
+    pub moved: Vec<MovedValue>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct MovedValue {
+    /// `join.coordinate`
+    pub name: String,
+    pub given: f64,
+    pub assembled: f64,
 }
 
 fn link_report(
@@ -133,7 +143,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     }
     let (mobility, mobility_unavailable) =
         match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
-            Ok((model, assembled)) => match mobility(&model, &assembled.coordinates_vector()) {
+            Ok((model, assembled, _)) => match mobility(&model, &assembled.coordinates_vector()) {
                 Ok(m) => (Some(m), None),
                 Err(e) => (None, Some(crate::kinematics::eval::describe(&e, mechanism))),
             },
@@ -167,22 +177,33 @@ pub fn assembled_model(
     mechanism: &Mechanism,
     topology: Topology,
     options: &AssemblyOptions,
-) -> Result<(KinematicModel, AssemblyReport), Vec<Diagnostic>> {
+) -> Result<(KinematicModel, AssemblyReport, Vec<Diagnostic>), Vec<Diagnostic>> {
     let model = model::build(mechanism, topology, given_values(mechanism)?)?;
-    let (assembled, fixed) = assemble_initial(mechanism, &model, options)?;
-    let coordinates = model
-        .coordinate_names()
+    let initial = assemble_initial(mechanism, &model, options)?;
+    let assembled = initial.assembled;
+    let names = model.coordinate_names();
+    let moved = assembled
+        .moved
+        .iter()
+        .map(|m| MovedValue {
+            name: names[m.coordinate].clone(),
+            given: m.given,
+            assembled: m.assembled,
+        })
+        .collect();
+    let coordinates = names
         .into_iter()
         .zip(&assembled.q)
-        .zip(&fixed)
+        .zip(&initial.fixed)
         .map(|((name, &value), &fixed)| CoordinateValue { name, value, fixed })
         .collect();
     let report = AssemblyReport {
         coordinates,
         iterations: assembled.iterations,
         residual: assembled.residual,
+        moved,
     };
-    Ok((model, report))
+    Ok((model, report, initial.warnings))
 }
 
 pub use joint::JointKind;

@@ -426,7 +426,7 @@ fn report<R: serde::Serialize>(
     file: &std::path::Path,
     options: &LoadOptions,
     format: Format,
-    analyse: impl Fn(&Mechanism) -> Result<R, Vec<Diagnostic>>,
+    analyse: impl Fn(&Mechanism) -> Result<Warned<R>, Vec<Diagnostic>>,
     text: impl Fn(&R) -> String,
 ) -> ExitCode {
     match analysed(file, options, format, analyse) {
@@ -441,33 +441,45 @@ fn report<R: serde::Serialize>(
     }
 }
 
-/// Compiles a file and returns what `analyse` makes of its mechanism, or the exit code once
-/// the diagnostics are printed.
+/// A command's result and the warnings found on the way to it.
+type Warned<R> = (R, Vec<Diagnostic>);
+
+/// Compiles a file and returns what `analyse` makes of its mechanism (its warnings printed), or
+/// the exit code once the diagnostics are printed.
 fn analysed<R>(
     file: &std::path::Path,
     options: &LoadOptions,
     format: Format,
-    analyse: impl Fn(&Mechanism) -> Result<R, Vec<Diagnostic>>,
+    analyse: impl Fn(&Mechanism) -> Result<Warned<R>, Vec<Diagnostic>>,
 ) -> Result<R, ExitCode> {
     let compilation = compile_one(file, options, format)?;
     let Some(mechanism) = &compilation.mechanism else {
         return Err(ExitCode::from(1));
     };
-    analyse(mechanism).map_err(|diagnostics| {
-        report_diagnostics(&compilation, &diagnostics, format);
-        ExitCode::from(1)
-    })
+    match analyse(mechanism) {
+        Ok((result, warnings)) => {
+            if !warnings.is_empty() {
+                report_diagnostics(&compilation, &warnings, format);
+            }
+            Ok(result)
+        }
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, format);
+            Err(ExitCode::from(1))
+        }
+    }
 }
 
 fn tree(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
-    report(file, options, format, analysis::tree, text::tree)
+    let analyse = |mechanism: &Mechanism| analysis::tree(mechanism).map(|r| (r, Vec::new()));
+    report(file, options, format, analyse, text::tree)
 }
 
 fn assemble(file: &std::path::Path, options: &LoadOptions, format: Format) -> ExitCode {
     let analyse = |mechanism: &Mechanism| {
         let topology = lsdc::topology::build(mechanism)?;
         analysis::assembled_model(mechanism, topology, &Default::default())
-            .map(|(_, report)| report)
+            .map(|(_, report, warnings)| (report, warnings))
     };
     report(file, options, format, analyse, text::assembly)
 }
@@ -486,18 +498,22 @@ fn compile(
     let analyse = |mechanism: &Mechanism| {
         let topology = lsdc::topology::build(mechanism)?;
         if emit == Emit::Notation {
-            return Ok(lsdc::topology::notation::notation(mechanism, &topology));
+            return Ok((
+                lsdc::topology::notation::notation(mechanism, &topology),
+                Vec::new(),
+            ));
         }
         let equations = lsdc::symbolic::generate(mechanism, &topology)?;
         use lsdc::symbolic::emit;
-        Ok(match (emit, format.unwrap_or(EquationsFormat::Text)) {
+        let text = match (emit, format.unwrap_or(EquationsFormat::Text)) {
             (Emit::Rust, _) => emit::rust(&equations, &source),
             (Emit::C, _) => emit::c(&equations, &source),
             (_, EquationsFormat::Text) => emit::text(&equations, &source),
             (_, EquationsFormat::Latex) => emit::latex(&equations, &source),
             (_, EquationsFormat::Sympy) => emit::sympy(&equations, &source),
             (_, EquationsFormat::Json) => emit::json(&equations, &source),
-        })
+        };
+        Ok((text, Vec::new()))
     };
     let text = match analysed(file, options, Format::Text, analyse) {
         Ok(text) => text,
@@ -570,8 +586,14 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     if let Err(error) = prepared.settings.apply(&changes) {
         return usage_error(&error.to_string());
     }
-    if let Some(warning) = lsdc::simulate::stiffness::warning(&prepared) {
-        report_diagnostics(&compilation, &[warning], args.report);
+    let warnings: Vec<Diagnostic> = prepared
+        .warnings
+        .iter()
+        .cloned()
+        .chain(lsdc::simulate::stiffness::warning(&prepared))
+        .collect();
+    if !warnings.is_empty() {
+        report_diagnostics(&compilation, &warnings, args.report);
     }
     let simulation = {
         let bar = progress_bar(prepared.settings.duration);
@@ -701,10 +723,18 @@ fn prepare_file(
     let Some(mechanism) = &compilation.mechanism else {
         return Err(ExitCode::from(1));
     };
-    prepare(mechanism, &overrides, &Settings::default()).map_err(|diagnostics| {
-        report_diagnostics(&compilation, &diagnostics, format);
-        ExitCode::from(1)
-    })
+    match prepare(mechanism, &overrides, &Settings::default()) {
+        Ok(prepared) => {
+            if !prepared.warnings.is_empty() {
+                report_diagnostics(&compilation, &prepared.warnings, format);
+            }
+            Ok(prepared)
+        }
+        Err(diagnostics) => {
+            report_diagnostics(&compilation, &diagnostics, format);
+            Err(ExitCode::from(1))
+        }
+    }
 }
 
 fn export_urdf(

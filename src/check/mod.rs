@@ -386,11 +386,12 @@ impl<'w> Checker<'w> {
                 )
                 .primary(initial.target.span, "a second derivative"),
             );
-        } else if primes == 1 && initial.fixed {
+        } else if primes == 1 && (initial.fixed || initial.guess) {
+            let mark = if initial.fixed { "fixed" } else { "guess" };
             self.report(
-                Diagnostic::error("E0416", "a starting velocity cannot be `fixed`")
+                Diagnostic::error("E0416", format!("a starting velocity cannot be `{mark}`"))
                     .primary(initial.target.span, "a velocity")
-                    .help("`fixed` holds a coordinate during assembly; a velocity is a simulation's starting rate"),
+                    .help("`fixed` and `guess` tell assembly how to treat a position; a velocity is a simulation's starting rate"),
             );
         }
         let value_ty = self.expr(&initial.value, ctx);

@@ -1,6 +1,7 @@
 //! Diagnostics: one structure for every error and warning of every phase, rendered in one place
 //! (`render`) as text with source snippets or as JSON.
 
+pub mod number;
 pub mod render;
 pub mod suggest;
 

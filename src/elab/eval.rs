@@ -144,6 +144,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                         order,
                         value,
                         fixed: initial.fixed,
+                        guess: initial.guess,
                         span: initial.target.span,
                     });
                 }

@@ -78,7 +78,10 @@ pub struct InitialValue {
     pub coordinate: usize,
     pub order: u32,
     pub value: Scalar,
+    /// Held at its value by assembly.
     pub fixed: bool,
+    /// A starting point for assembly only, moved without a warning.
+    pub guess: bool,
     pub span: Span,
 }
 

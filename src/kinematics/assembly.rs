@@ -31,6 +31,29 @@ pub struct Assembled {
     pub iterations: usize,
     /// Largest residual component at the solution.
     pub residual: f64,
+    /// The given values assembly had to change (empty from [`assemble`], which moves every
+    /// coordinate not held).
+    pub moved: Vec<Moved>,
+}
+
+/// How assembly treats a coordinate's starting value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hold {
+    /// Marked `fixed`: never moved.
+    Fixed,
+    /// Given by the program: held when a closed configuration holding every given value exists,
+    /// otherwise changed as little as possible, and reported.
+    Given,
+    /// Not given: a starting guess that assembly moves freely.
+    Free,
+}
+
+/// A given value that no closed configuration holds, and the value assembly chose for it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Moved {
+    pub coordinate: usize,
+    pub given: f64,
+    pub assembled: f64,
 }
 
 #[derive(Clone, Debug)]
@@ -91,6 +114,174 @@ pub fn assemble(
 
 const RESTARTS: usize = 4;
 
+/// Assembles from the program's values, respecting them: the `fixed` ones are held; the given
+/// ones are held too when the loops close with the free coordinates alone; otherwise the given
+/// values change as little as possible (the closed configuration nearest to them in the given
+/// coordinates, the free ones moving as they must) and each one changed is listed in `moved`.
+pub fn assemble_respecting(
+    model: &KinematicModel,
+    start: &[f64],
+    holds: &[Hold],
+    options: &AssemblyOptions,
+) -> Result<Assembled, AssemblyError> {
+    let fixed: Vec<bool> = holds.iter().map(|&h| h == Hold::Fixed).collect();
+    if !holds.contains(&Hold::Given) {
+        return assemble(model, start, &fixed, options);
+    }
+    let holding_given: Vec<bool> = holds.iter().map(|&h| h != Hold::Free).collect();
+    let nearest_open = match assemble(model, start, &holding_given, options) {
+        Ok(assembled) => return Ok(assembled),
+        Err(e @ AssemblyError::Evaluation(_)) => return Err(e),
+        Err(AssemblyError::NoAssembly { q, .. }) => q,
+    };
+    // The nearest closed configuration is searched locally from three places: the loops
+    // closed as far as the free coordinates alone can, the given values themselves, and
+    // wherever the plain assembly closes the loops; the nearest found wins.
+    let closed = assemble(model, start, &fixed, options)?;
+    let mut best = Some(closed.clone());
+    for from in [&nearest_open, start, &closed.q] {
+        let Some(candidate) = nearest_closed(model, start, holds, from, options)? else {
+            continue;
+        };
+        let nearer = best.as_ref().is_none_or(|b| {
+            given_distance(start, &candidate.q, holds) < given_distance(start, &b.q, holds)
+        });
+        if nearer {
+            best = Some(candidate);
+        }
+    }
+    let mut assembled = best.expect("the plain assembly is a candidate");
+    assembled.moved = holds
+        .iter()
+        .enumerate()
+        .filter(|&(i, &h)| {
+            let change = (assembled.q[i] - start[i]).abs();
+            h == Hold::Given && change > MOVED_ABOVE * start[i].abs().max(1.0)
+        })
+        .map(|(i, _)| Moved {
+            coordinate: i,
+            given: start[i],
+            assembled: assembled.q[i],
+        })
+        .collect();
+    Ok(assembled)
+}
+
+/// A given value changed by less than this (relative to it, or absolute below 1) is reported
+/// as held: assembly closes the loops to 1e-12, so smaller changes are its round-off.
+const MOVED_ABOVE: f64 = 1e-10;
+
+/// Squared distance from the given values, the quantity [`nearest_closed`] minimises.
+fn given_distance(start: &[f64], q: &[f64], holds: &[Hold]) -> f64 {
+    (0..q.len())
+        .filter(|&i| holds[i] == Hold::Given)
+        .map(|i| (q[i] - start[i]).powi(2))
+        .sum()
+}
+
+/// From `q`, the closed configuration nearest to the given values of `start`: Gauss–Newton on
+/// the optimality conditions. Each step changes the given coordinates g by the least that
+/// brings them nearest to their values while closing the linearised loops, the free
+/// coordinates f taking what they must: with P the projection away from what the free
+/// coordinates can do (the range of J_f), g moves to the least-norm solution of
+/// P J_g (g' − g₀) = P (J_g (g − g₀) − r), then f by the least-norm solution of
+/// J_f Δf = −r − J_g Δg. The result is closed again at the assembly tolerance; `None` when
+/// the iteration does not settle.
+fn nearest_closed(
+    model: &KinematicModel,
+    start: &[f64],
+    holds: &[Hold],
+    q: &[f64],
+    options: &AssemblyOptions,
+) -> Result<Option<Assembled>, AssemblyError> {
+    let given: Vec<usize> = (0..q.len()).filter(|&i| holds[i] == Hold::Given).collect();
+    let free: Vec<usize> = (0..q.len()).filter(|&i| holds[i] == Hold::Free).collect();
+    let mut q = q.to_vec();
+    let mut change = f64::INFINITY;
+    for _ in 0..50 {
+        let current = closure(model, &q)?;
+        let columns = |of: &[usize]| {
+            DMatrix::from_fn(current.jacobian.nrows(), of.len(), |r, c| {
+                current.jacobian[(r, of[c])]
+            })
+        };
+        let (j_given, j_free) = (columns(&given), columns(&free));
+        let away_from_free = |m: &DMatrix<f64>| -> DMatrix<f64> {
+            match free_range(&j_free) {
+                Some(u) => m - &u * (u.transpose() * m),
+                None => m.clone(),
+            }
+        };
+        let offset = DVector::from_iterator(given.len(), given.iter().map(|&i| q[i] - start[i]));
+        let a = away_from_free(&j_given);
+        let b = away_from_free(&DMatrix::from_column_slice(
+            current.residual.len(),
+            1,
+            (&j_given * &offset - &current.residual).as_slice(),
+        ));
+        let Some(next_offset) = least_norm(a, &b.column(0).into_owned()) else {
+            return Ok(None);
+        };
+        let given_step = &next_offset - &offset;
+        let free_step = match least_norm(j_free, &(-&current.residual - &j_given * &given_step)) {
+            Some(step) => step,
+            None => DVector::zeros(free.len()),
+        };
+        change = given_step.amax().max(free_step.amax());
+        for (k, &i) in given.iter().enumerate() {
+            q[i] += given_step[k];
+        }
+        for (k, &i) in free.iter().enumerate() {
+            q[i] += free_step[k];
+        }
+        if !change.is_finite() {
+            return Ok(None);
+        }
+        let size = q.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
+        if change < 1e-13 * size {
+            break;
+        }
+    }
+    if change > 1e-8 {
+        return Ok(None);
+    }
+    let fixed: Vec<bool> = holds.iter().map(|&h| h == Hold::Fixed).collect();
+    match solve(model, &q, &fixed, options) {
+        Ok(assembled) => Ok(Some(assembled)),
+        Err(AssemblyError::NoAssembly { .. }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// An orthonormal basis of the range of `m` (singular values above 1e-10 of the largest), or
+/// `None` when it is empty.
+fn free_range(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    if m.ncols() == 0 || m.nrows() == 0 {
+        return None;
+    }
+    let svd = m.clone().svd(true, false);
+    let u = svd.u?;
+    let largest = svd.singular_values.max();
+    let kept: Vec<usize> = (0..svd.singular_values.len())
+        .filter(|&k| svd.singular_values[k] > 1e-10 * largest)
+        .collect();
+    if kept.is_empty() {
+        return None;
+    }
+    Some(u.select_columns(&kept))
+}
+
+/// The least-norm least-squares solution of m x = b (singular values below 1e-12 of the
+/// largest treated as zero).
+fn least_norm(m: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
+    if m.ncols() == 0 {
+        return Some(DVector::zeros(0));
+    }
+    let svd = m.svd(true, true);
+    let floor = 1e-12 * svd.singular_values.max();
+    svd.solve(b, floor).ok()
+}
+
 fn total_error(error: &AssemblyError) -> f64 {
     match error {
         AssemblyError::NoAssembly { loop_errors, .. } => {
@@ -118,6 +309,7 @@ fn solve(
                 q,
                 iterations: iteration,
                 residual,
+                moved: Vec::new(),
             });
         }
         let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| {
@@ -168,6 +360,7 @@ fn solve(
             q,
             iterations: options.max_iterations,
             residual,
+            moved: Vec::new(),
         });
     }
     let loop_errors = (0..model.complementary().len())

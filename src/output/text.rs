@@ -115,7 +115,11 @@ pub fn assembly(report: &AssemblyReport) -> String {
     let mut out = String::new();
     for c in &report.coordinates {
         let held = if c.fixed { "  (fixed)" } else { "" };
-        out += &format!("{:<24} {:>22.15e}{held}\n", c.name, c.value);
+        let moved = match report.moved.iter().find(|m| m.name == c.name) {
+            Some(m) => format!("  (moved from {})", m.given),
+            None => String::new(),
+        };
+        out += &format!("{:<24} {:>22.15e}{held}{moved}\n", c.name, c.value);
     }
     out += &format!(
         "assembled in {} iterations, largest residual {:.1e}\n",

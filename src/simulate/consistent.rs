@@ -14,15 +14,25 @@ use crate::kinematics::assembly::AssemblyOptions;
 use crate::kinematics::initial::assemble_initial;
 use crate::kinematics::model::KinematicModel;
 
-/// Declared coordinates and rates (of the whole mechanism) that close every loop.
+/// A starting state that closes every loop.
+pub struct ConsistentState {
+    /// Declared coordinates and rates of the whole mechanism.
+    pub coordinates: Vec<f64>,
+    pub rates: Vec<f64>,
+    /// The given values assembly had to move (W0801).
+    pub warnings: Vec<Diagnostic>,
+}
+
+/// Declared coordinates and rates (of the whole mechanism) that close every loop, and a warning
+/// for the given coordinates assembly had to move.
 pub fn initial_state(
     mechanism: &Mechanism,
     kinematics: &KinematicModel,
     model: &Model,
     rates: &[f64],
-) -> Result<(Vec<f64>, Vec<f64>), Vec<Diagnostic>> {
-    let (assembled, _) = assemble_initial(mechanism, kinematics, &AssemblyOptions::default())?;
-    let coordinates = assembled.q;
+) -> Result<ConsistentState, Vec<Diagnostic>> {
+    let initial = assemble_initial(mechanism, kinematics, &AssemblyOptions::default())?;
+    let coordinates = initial.assembled.q;
     let evaluation = |e| {
         vec![Diagnostic::error(
             "E0804",
@@ -42,7 +52,12 @@ pub fn initial_state(
     let c = constraints(model, &mut data, &q, &v, false).map_err(evaluation)?;
     complete_rates(&c.jacobian.dense(), &given, &mut v)
         .map_err(|opening| vec![incompatible_rates(mechanism, &given, opening)])?;
-    model.declared(&q, &v, &coordinates).map_err(evaluation)
+    let (coordinates, rates) = model.declared(&q, &v, &coordinates).map_err(evaluation)?;
+    Ok(ConsistentState {
+        coordinates,
+        rates,
+        warnings: initial.warnings,
+    })
 }
 
 /// State velocities whose value the program gives (`initial j.q' = …`). A quaternion joint's

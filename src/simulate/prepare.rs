@@ -26,6 +26,8 @@ pub struct Prepared {
     pub settings: Settings,
     /// `join.coordinate` for every declared coordinate.
     pub coordinate_names: Vec<String>,
+    /// What preparing found worth saying without stopping: given values assembly moved (W0801).
+    pub warnings: Vec<Diagnostic>,
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
@@ -187,9 +189,14 @@ pub fn prepare(
     let kinematics = kinematic_model::build(mechanism, topology.clone(), values)?;
     let model = dynamic_model::build(mechanism, &kinematics)?;
     let (mut coordinates, mut rates) = initial_state(mechanism, &model)?;
+    let mut warnings = Vec::new();
     if model.has_loops() {
-        (coordinates, rates) =
-            super::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
+        let consistent = super::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
+        (coordinates, rates, warnings) = (
+            consistent.coordinates,
+            consistent.rates,
+            consistent.warnings,
+        );
     }
     let settings = program_settings(mechanism, &model, defaults)?;
     let coordinate_names = kinematics.coordinate_names();
@@ -200,6 +207,7 @@ pub fn prepare(
         rates,
         settings,
         coordinate_names,
+        warnings,
     })
 }
 

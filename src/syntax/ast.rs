@@ -80,6 +80,8 @@ pub struct InitialValue {
     pub value: Expr,
     /// `fixed`: held at this value when the mechanism is assembled.
     pub fixed: bool,
+    /// `guess`: only a starting point for assembly, moved freely and silently.
+    pub guess: bool,
 }
 
 #[derive(Clone, Debug, PartialEq)]

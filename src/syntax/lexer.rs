@@ -43,6 +43,8 @@ pub enum Tok<'input> {
     Import,
     #[token("fixed")]
     Fixed,
+    #[token("guess")]
+    Guess,
     #[token("in")]
     In,
     #[token("initial")]
@@ -181,6 +183,7 @@ impl Tok<'_> {
             Tok::Given => "given",
             Tok::Import => "import",
             Tok::Fixed => "fixed",
+            Tok::Guess => "guess",
             Tok::In => "in",
             Tok::Initial => "initial",
             Tok::Join => "join",

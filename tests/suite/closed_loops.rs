@@ -160,7 +160,10 @@ fn given_initial_rates_are_kept_and_the_others_close_the_loops() {
 fn incompatible_initial_rates_are_an_error() {
     let text = example_text(
         "four_bar",
-        &[("c.q = 1.15 ;", "c.q = 1.15, crank.q' = 1, rocker.q' = 5 ;")],
+        &[(
+            "c.q = 1.15 guess ;",
+            "c.q = 1.15 guess, crank.q' = 1, rocker.q' = 5 ;",
+        )],
     );
     let options = LoadOptions {
         library_dirs: Vec::new(),
@@ -463,7 +466,7 @@ fn a_parallelogram_runs_through_its_flat_configurations() {
             ("let l2 = 3.5 ;", "let l2 = 3.0 ;"),
             ("let l3 = 3.0 ;", "let l3 = 1.0 ;"),
             ("duration = 10, output = 0.05", "duration = 5, output = 0.01"),
-            ("initial crank.q = 1.0, coupler.q = -0.36, rocker.q = 1.79, c.q = 1.15 ;", "initial crank.q = 1.0 fixed, coupler.q = -1.0, rocker.q = 1.0, c.q = 1.0, crank.q' = 3 ;"),
+            ("initial crank.q = 1.0, coupler.q = -0.36 guess, rocker.q = 1.79 guess, c.q = 1.15 guess ;", "initial crank.q = 1.0 fixed, coupler.q = -1.0, rocker.q = 1.0, c.q = 1.0, crank.q' = 3 ;"),
         ],
     );
     let simulation = simulated(&p);

@@ -43,7 +43,7 @@ fn four_bar(l: [f64; 4], crank: f64, rate: f64) -> Option<Prepared> {
             ("let l2 = 3.5 ;", &format!("let l2 = {} ;", l[2])),
             ("let l3 = 3.0 ;", &format!("let l3 = {} ;", l[3])),
             (
-                "initial crank.q = 1.0, coupler.q = -0.36, rocker.q = 1.79, c.q = 1.15 ;",
+                "initial crank.q = 1.0, coupler.q = -0.36 guess, rocker.q = 1.79 guess, c.q = 1.15 guess ;",
                 &initial,
             ),
         ],

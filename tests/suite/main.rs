@@ -5,6 +5,7 @@
 mod common;
 
 mod architecture;
+mod assembly;
 mod cli;
 mod closed_loops;
 mod constrained;
