@@ -56,26 +56,3 @@ pub fn thesis_body_number(name: &str) -> Option<usize> {
     }
     digits.parse().ok().filter(|&n| n >= 1)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn close_names_are_suggested() {
-        assert_eq!(
-            did_you_mean("satelite", ["earth", "satellite"]),
-            Some("satellite")
-        );
-        assert_eq!(did_you_mean("iframe", ["frame", "mass"]), Some("frame"));
-        assert_eq!(did_you_mean("zzz", ["satellite"]), None);
-    }
-
-    #[test]
-    fn thesis_body_names_are_recognised() {
-        assert_eq!(thesis_body_number("S1"), Some(1));
-        assert_eq!(thesis_body_number("S_12"), Some(12));
-        assert_eq!(thesis_body_number("S0"), None);
-        assert_eq!(thesis_body_number("Sx"), None);
-    }
-}

@@ -9,14 +9,14 @@
 //! outputs never shortens the steps.
 
 mod control;
-mod dopri5;
+pub mod dopri5;
 mod driver;
 mod evaluator;
 mod hermite;
 mod outcome;
 mod output;
 mod rk4;
-mod rosenbrock;
+pub mod rosenbrock;
 mod settings;
 mod system;
 

@@ -16,25 +16,26 @@ use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
 use super::settings::Settings;
 
-const STAGES: usize = 4;
+/// The number of stages.
+pub const STAGES: usize = 4;
 
 type Lu = LU<f64, Dyn, Dyn>;
 
 /// The diagonal of the method, the same for every stage so that one LU serves all of them.
-const GAMMA: f64 = 0.5;
+pub const GAMMA: f64 = 0.5;
 
 // The coefficients in the transformed form where the unknowns are the stage increments K_i:
 //   (I / (h γ) − J) K_i = f(t + α_i h, y + Σ_j A_ij K_j) + Σ_j C_ij K_j / h + γ_i h ∂f/∂t.
 
 /// Weights of earlier increments in each stage's state.
-const A: [[f64; STAGES]; STAGES] = [
+pub const A: [[f64; STAGES]; STAGES] = [
     [0.0; 4],
     [0.0; 4],
     [2.0, 0.0, 0.0, 0.0],
     [2.0, 0.0, 1.0, 0.0],
 ];
 /// Weights of earlier increments (divided by h) in each stage's right-hand side.
-const C: [[f64; STAGES]; STAGES] = [
+pub const C: [[f64; STAGES]; STAGES] = [
     [0.0; 4],
     [4.0, 0.0, 0.0, 0.0],
     [1.0, -1.0, 0.0, 0.0],
@@ -43,13 +44,13 @@ const C: [[f64; STAGES]; STAGES] = [
 /// Whether a stage evaluates f anew; the second stage's state and time equal the first's.
 const NEW_F: [bool; STAGES] = [true, false, true, true];
 /// Fractions of the step at which the stages evaluate f.
-const ALPHA: [f64; STAGES] = [0.0, 0.0, 1.0, 1.0];
+pub const ALPHA: [f64; STAGES] = [0.0, 0.0, 1.0, 1.0];
 /// Weights of h ∂f/∂t in each stage (row sums of the method's Γ matrix).
-const GAMMA_SUM: [f64; STAGES] = [0.5, 1.5, 0.0, 0.0];
+pub const GAMMA_SUM: [f64; STAGES] = [0.5, 1.5, 0.0, 0.0];
 /// Weights of the increments in the order-3 solution.
-const M: [f64; STAGES] = [2.0, 0.0, 1.0, 1.0];
+pub const M: [f64; STAGES] = [2.0, 0.0, 1.0, 1.0];
 /// Weights of the increments in the difference between the order-3 and order-2 solutions.
-const E: [f64; STAGES] = [0.0, 0.0, 0.0, 1.0];
+pub const E: [f64; STAGES] = [0.0, 0.0, 0.0, 1.0];
 
 pub(super) struct Rodas3 {
     rtol: f64,
@@ -234,68 +235,5 @@ impl AdaptiveStepper for Rodas3 {
 
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         self.segment.evaluate(t, out);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    //! Checks the coefficients against the order conditions of Rosenbrock methods (Hairer and
-    //! Wanner, Solving ODEs II, IV.7, Table 7.1), after converting them back from the transformed
-    //! form: Γ = (I/γ − C)⁻¹, α = A Γ, b = M Γ.
-
-    use super::*;
-
-    fn matrix(rows: &[[f64; STAGES]; STAGES]) -> DMatrix<f64> {
-        DMatrix::from_fn(STAGES, STAGES, |i, j| rows[i][j])
-    }
-
-    fn gamma_matrix() -> DMatrix<f64> {
-        let inverse = DMatrix::identity(STAGES, STAGES) / GAMMA - matrix(&C);
-        inverse
-            .try_inverse()
-            .expect("I/γ − C is triangular with a nonzero diagonal")
-    }
-
-    /// Σ b_i, Σ b_i β'_i, Σ b_i α_i², Σ b_i β_ij β'_j for weights `weights` (in the transformed form).
-    fn order_sums(weights: &[f64; STAGES]) -> [f64; 4] {
-        let gamma = gamma_matrix();
-        let alpha = matrix(&A) * &gamma;
-        let b = DVector::from_row_slice(weights).transpose() * &gamma;
-        let beta = &alpha + &gamma - DMatrix::identity(STAGES, STAGES) * GAMMA;
-        let beta_row: DVector<f64> = DVector::from_fn(STAGES, |i, _| beta.row(i).sum());
-        let alpha_row: DVector<f64> = DVector::from_fn(STAGES, |i, _| alpha.row(i).sum());
-        [
-            b.sum(),
-            (&b * &beta_row)[0],
-            (0..STAGES).map(|i| b[i] * alpha_row[i].powi(2)).sum(),
-            (&b * &beta * &beta_row)[0],
-        ]
-    }
-
-    #[test]
-    fn the_solution_has_order_three() {
-        let [one, two, three_a, three_b] = order_sums(&M);
-        assert!((one - 1.0).abs() < 1e-14);
-        assert!((two - (0.5 - GAMMA)).abs() < 1e-14);
-        assert!((three_a - 1.0 / 3.0).abs() < 1e-14);
-        assert!((three_b - (1.0 / 6.0 - GAMMA + GAMMA * GAMMA)).abs() < 1e-14);
-    }
-
-    #[test]
-    fn the_embedded_solution_has_order_two() {
-        let embedded: [f64; STAGES] = std::array::from_fn(|i| M[i] - E[i]);
-        let [one, two, ..] = order_sums(&embedded);
-        assert!((one - 1.0).abs() < 1e-14);
-        assert!((two - (0.5 - GAMMA)).abs() < 1e-14);
-    }
-
-    #[test]
-    fn time_fractions_and_gamma_sums_match_the_matrices() {
-        let gamma = gamma_matrix();
-        let alpha = matrix(&A) * &gamma;
-        for i in 0..STAGES {
-            assert!((alpha.row(i).sum() - ALPHA[i]).abs() < 1e-14);
-            assert!((gamma.row(i).sum() - GAMMA_SUM[i]).abs() < 1e-14);
-        }
     }
 }

@@ -24,8 +24,10 @@ use plotters::style::{register_font, FontStyle};
 
 use crate::simulate::run::{Sample, Simulation};
 
-const WIDTH: u32 = 1200;
-const HEIGHT: u32 = 900;
+/// The width of a plot, in pixels.
+pub const WIDTH: u32 = 1200;
+/// The height of a plot, in pixels.
+pub const HEIGHT: u32 = 900;
 /// PNGs are drawn this many times larger and then averaged down, which smooths the lines (the
 /// bitmap backend does not anti-alias them).
 const SUPERSAMPLING: u32 = 3;
@@ -483,17 +485,21 @@ const MAX_TICKS: f64 = 11.0;
 
 /// A value axis: the plotted range, the offset subtracted from the values to get it, and how its
 /// tick labels are written.
-struct Axis {
-    range: Range<f64>,
-    offset: f64,
+pub struct Axis {
+    /// The plotted range, of the values less the offset.
+    pub range: Range<f64>,
+    /// The offset subtracted from the values.
+    pub offset: f64,
     offset_text: String,
-    /// The step between labelled ticks, and how their labels are written.
+    /// The step between labelled ticks.
     step: f64,
-    format: LabelFormat,
+    /// How the tick labels are written.
+    pub format: LabelFormat,
 }
 
+/// How the tick labels of an axis are written.
 #[derive(Debug, PartialEq)]
-enum LabelFormat {
+pub enum LabelFormat {
     /// This many decimals.
     Fixed(usize),
     /// Scientific notation with this many decimals in the mantissa.
@@ -503,7 +509,7 @@ enum LabelFormat {
 impl Axis {
     /// The axis over the finite values, with a margin of 5% on each side when `margin`; a
     /// constant (or no) value gets a range around it of its own size, at least one unit.
-    fn new(values: impl Iterator<Item = f64>, margin: bool) -> Axis {
+    pub fn new(values: impl Iterator<Item = f64>, margin: bool) -> Axis {
         let (lo, hi) = values
             .filter(|v| v.is_finite())
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
@@ -557,7 +563,8 @@ impl Axis {
         }
     }
 
-    fn label(&self, value: f64) -> String {
+    /// The label of the tick at `value`.
+    pub fn label(&self, value: f64) -> String {
         // A tick at zero comes out of plotters' arithmetic as, say, -8e-28.
         let value = if value.abs() < 1e-6 * self.step {
             0.0
@@ -589,7 +596,8 @@ impl Axis {
         }
     }
 
-    fn description(&self, name: &str) -> String {
+    /// The axis description for the quantity `name`, with the offset if there is one.
+    pub fn description(&self, name: &str) -> String {
         match self.offset {
             o if o > 0.0 => format!("{name} − {}", self.offset_text),
             o if o < 0.0 => format!("{name} + {}", self.offset_text),
@@ -624,129 +632,5 @@ fn label_format(lo: f64, hi: f64, step: f64) -> LabelFormat {
         LabelFormat::Scientific((top - bottom).max(0) as usize)
     } else {
         LabelFormat::Fixed((-bottom).max(0) as usize)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::simulate::run::Report;
-
-    fn simulation(count: usize, conservative: bool) -> Simulation {
-        let samples = (0..count)
-            .map(|k| {
-                let t = k as f64 * 0.05;
-                let (angle, rate) = (0.8 * (2.0 * t).cos(), -1.6 * (2.0 * t).sin());
-                let (slide, slide_rate) = (0.3 * (3.0 * t).sin() + 0.2, 0.9 * (3.0 * t).cos());
-                let kinetic = 0.5 * rate * rate + 0.5 * slide_rate * slide_rate;
-                Sample {
-                    time: t,
-                    coordinates: vec![angle, slide],
-                    rates: vec![rate, slide_rate],
-                    kinetic_energy: kinetic,
-                    potential_energy: conservative.then_some(2.0 - kinetic + 0.01 * t),
-                    work: None,
-                    balance: None,
-                    momentum: [0.0; 6],
-                    reactions: Vec::new(),
-                }
-            })
-            .collect();
-        Simulation {
-            coordinate_names: vec!["crank.q".to_string(), "slider.x".to_string()],
-            reaction_names: Vec::new(),
-            samples,
-            report: Report {
-                integrator: "rk4".to_string(),
-                duration: (count.max(1) - 1) as f64 * 0.05,
-                steps: count,
-                rejected_steps: 0,
-                function_evaluations: 4 * count,
-                run_seconds: 0.0,
-                energy_drift: None,
-                energy_balance: None,
-                final_energies: None,
-                momentum_drift: None,
-                constraints: None,
-                failure: None,
-            },
-        }
-    }
-
-    fn temp_path(name: &str) -> std::path::PathBuf {
-        std::env::temp_dir().join(format!("lsdc-plot-{}-{name}", std::process::id()))
-    }
-
-    #[test]
-    fn renders_svg_and_png() {
-        let simulation = simulation(201, true);
-        let svg = temp_path("test.svg");
-        plot(&simulation, &svg).unwrap();
-        let text = std::fs::read_to_string(&svg).unwrap();
-        assert!(text.starts_with(&format!(
-            "<svg width=\"{WIDTH}\" height=\"{HEIGHT}\" viewBox="
-        )));
-        for name in &simulation.coordinate_names {
-            assert!(text.contains(name.as_str()), "the SVG names {name}");
-        }
-        assert!(text.contains("total (kinetic + potential)"));
-
-        let png = temp_path("test.png");
-        plot(&simulation, &png).unwrap();
-        let bytes = std::fs::read(&png).unwrap();
-        assert!(bytes.len() > 1000);
-        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
-        std::fs::remove_file(svg).unwrap();
-        std::fs::remove_file(png).unwrap();
-    }
-
-    #[test]
-    fn degenerate_runs_still_plot() {
-        // One output, no potential: every range is a single value.
-        let path = temp_path("single.png");
-        plot(&simulation(1, false), &path).unwrap();
-        assert!(std::fs::metadata(&path).unwrap().len() > 0);
-        std::fs::remove_file(path).unwrap();
-    }
-
-    #[test]
-    fn tick_labels_tell_the_ticks_apart() {
-        let axis = Axis::new([-1.05, 1.05].into_iter(), false);
-        assert_eq!((axis.offset, &axis.format), (0.0, &LabelFormat::Fixed(1)));
-        assert_eq!(axis.label(-1e-17), "0.0");
-        assert_eq!(axis.label(-0.4), "-0.4");
-        assert_eq!(
-            Axis::new([0.0, 4500.0].into_iter(), false).label(500.0),
-            "500"
-        );
-        assert_eq!(
-            Axis::new([0.0, 2e-6].into_iter(), false).label(1e-6),
-            "1.0e-6"
-        );
-        // A conserved energy that drifts by parts in 10¹²: labelled relative to an offset.
-        let axis = Axis::new([4.005_2, 4.005_2 + 3e-11].into_iter(), true);
-        assert_eq!(axis.description("energy"), "energy − 4.0052");
-        assert!(axis.range.start > -1e-10 && axis.range.end < 1e-10);
-        assert_eq!(axis.label(2e-11), "2.0e-11");
-        assert_eq!(axis.label(-8e-28), "0");
-        let axis = Axis::new([-2.96, -2.96 - 1e-9].into_iter(), true);
-        assert!(
-            axis.description("energy").starts_with("energy + 2.96"),
-            "{}",
-            axis.description("energy")
-        );
-        // Constant or missing values still get a range.
-        assert_eq!(Axis::new([3.0, 3.0].into_iter(), true).range, 0.0..6.0);
-        assert_eq!(Axis::new(std::iter::empty(), true).range, -1.0..1.0);
-    }
-
-    #[test]
-    fn rejects_other_extensions_and_empty_runs() {
-        let error = plot(&simulation(3, true), &temp_path("plot.pdf"))
-            .unwrap_err()
-            .to_string();
-        assert!(error.contains(".svg") && error.contains(".png"), "{error}");
-        assert!(plot(&simulation(3, true), &temp_path("plot")).is_err());
-        assert!(plot(&simulation(0, true), &temp_path("empty.svg")).is_err());
     }
 }

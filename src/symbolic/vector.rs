@@ -130,39 +130,3 @@ pub fn rotation(pool: &mut Pool, axis: &Vec3, angle: ExprId) -> Mat3 {
 
 /// A force and a moment at a body's origin, fixed axes.
 pub type Wrench = [Vec3; 2];
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::symbolic::expr::Tape;
-
-    #[test]
-    fn rotation_about_x_folds_to_the_textbook_matrix() {
-        let mut p = Pool::new();
-        let q = p.symbol("q");
-        let x = constant(&mut p, [1.0, 0.0, 0.0]);
-        let r = rotation(&mut p, &x, q);
-        let (zero, one) = (p.constant(0.0), p.constant(1.0));
-        let (c, s) = (p.cos(q), p.sin(q));
-        let minus_s = p.neg(s);
-        assert_eq!(r, [[one, zero, zero], [zero, c, minus_s], [zero, s, c]]);
-    }
-
-    #[test]
-    fn rotation_about_an_oblique_axis_matches_nalgebra() {
-        let mut p = Pool::new();
-        let q = p.symbol("q");
-        let axis = nalgebra::Vector3::new(1.0, -2.0, 0.5).normalize();
-        let u = constant(&mut p, [axis.x, axis.y, axis.z]);
-        let r = rotation(&mut p, &u, q);
-        let roots: Vec<ExprId> = r.iter().flatten().copied().collect();
-        let values = Tape::new(&p, &roots).eval(&[0.7]);
-        let expected =
-            nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.7);
-        for i in 0..3 {
-            for j in 0..3 {
-                assert!((values[3 * i + j] - expected[(i, j)]).abs() < 1e-15);
-            }
-        }
-    }
-}

@@ -145,11 +145,12 @@ pub fn build(mechanism: &Mechanism) -> Result<Topology, Vec<Diagnostic>> {
     ))
 }
 
-type TreeEdges = HashMap<usize, (JoinId, usize)>;
+/// The tree edge reaching each vertex, with its parent vertex.
+pub type TreeEdges = HashMap<usize, (JoinId, usize)>;
 
 /// Discovery order of vertices, the tree edge reaching each vertex (with its parent vertex), and
 /// the loop-closing joins in the order met.
-fn breadth_first(incident: &[Vec<(JoinId, usize)>]) -> (Vec<usize>, TreeEdges, Vec<JoinId>) {
+pub fn breadth_first(incident: &[Vec<(JoinId, usize)>]) -> (Vec<usize>, TreeEdges, Vec<JoinId>) {
     let mut discovered = vec![false; incident.len()];
     let mut used = std::collections::HashSet::new();
     let mut order = Vec::new();
@@ -248,24 +249,4 @@ fn not_connected(mechanism: &Mechanism, id: BodyId) -> Diagnostic {
         .help(format!(
             "join it to earth or to a connected body, e.g. `join earth and {name} with <link>;`"
         ))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn breadth_first_marks_the_closing_join_of_an_odd_cycle() {
-        // earth(0) - 1 - 2 - 3 - earth, joins in order 0-1, 1-2, 2-3, 3-0.
-        let incident = vec![
-            vec![(JoinId(0), 1), (JoinId(3), 3)],
-            vec![(JoinId(0), 0), (JoinId(1), 2)],
-            vec![(JoinId(1), 1), (JoinId(2), 3)],
-            vec![(JoinId(2), 2), (JoinId(3), 0)],
-        ];
-        let (order, tree, loops) = breadth_first(&incident);
-        assert_eq!(order, vec![1, 3, 2]);
-        assert_eq!(loops, vec![JoinId(2)]);
-        assert_eq!(tree[&2], (JoinId(1), 1));
-    }
 }

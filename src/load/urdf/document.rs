@@ -13,11 +13,11 @@ use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 
 /// An element of the URDF document.
-pub(super) type Element<'s, 'a> = Node<'s, 'a>;
+pub type Element<'s, 'a> = Node<'s, 'a>;
 
 /// The parsed URDF text, for checking what urdf-rs would reject with no position, and for
 /// locating diagnostics.
-pub(super) struct Source<'a> {
+pub struct Source<'a> {
     file: FileId,
     xml: &'a str,
     document: Document<'a>,
@@ -25,7 +25,7 @@ pub(super) struct Source<'a> {
 
 impl<'a> Source<'a> {
     /// Parses `xml`; malformed XML is an error at the place roxmltree reports.
-    pub(super) fn parse(file: FileId, xml: &'a str) -> Result<Source<'a>, Diagnostic> {
+    pub fn parse(file: FileId, xml: &'a str) -> Result<Source<'a>, Diagnostic> {
         // URDF files written by tools may carry a DOCTYPE: accept it, as urdf-rs does.
         let options = ParsingOptions {
             allow_dtd: true,
@@ -41,19 +41,19 @@ impl<'a> Source<'a> {
     }
 
     /// The root element (`<robot>` in a URDF file).
-    pub(super) fn root(&self) -> Element<'_, 'a> {
+    pub fn root(&self) -> Element<'_, 'a> {
         self.document.root_element()
     }
 
     /// The span of an element's start tag, `<` to `>`: pointing at the whole element would
     /// underline every line of a link.
-    pub(super) fn span(&self, element: Element) -> Span {
+    pub fn span(&self, element: Element) -> Span {
         let range = self.start_tag(element);
         Span::new(self.file, range.start, range.end)
     }
 
     /// The span of `name="value"`, or of the element's start tag when it has no such attribute.
-    pub(super) fn attribute_span(&self, element: Element, name: &str) -> Span {
+    pub fn attribute_span(&self, element: Element, name: &str) -> Span {
         match element.attribute_node(name) {
             Some(attribute) => {
                 let range = attribute.range();
@@ -120,7 +120,7 @@ impl<'a> Source<'a> {
     /// offsets and lines stay those of the file. These are the `<texture>` elements without a
     /// `filename` (`<texture />` in the materials of some robots): urdf-rs requires the
     /// attribute, and materials are not imported (W1007).
-    pub(super) fn urdf_text(&self) -> Cow<'a, str> {
+    pub fn urdf_text(&self) -> Cow<'a, str> {
         let xml = self.xml;
         let mut blanked = self
             .root()
@@ -157,12 +157,12 @@ pub(super) fn children<'s, 'a>(element: Element<'s, 'a>) -> impl Iterator<Item =
 }
 
 /// The first child element with this tag.
-pub(super) fn child<'s, 'a>(element: Element<'s, 'a>, tag: &str) -> Option<Element<'s, 'a>> {
+pub fn child<'s, 'a>(element: Element<'s, 'a>, tag: &str) -> Option<Element<'s, 'a>> {
     children(element).find(|&c| tag_of(c) == tag)
 }
 
 /// The parent element, `None` for the root.
-pub(super) fn parent<'s, 'a>(element: Element<'s, 'a>) -> Option<Element<'s, 'a>> {
+pub fn parent<'s, 'a>(element: Element<'s, 'a>) -> Option<Element<'s, 'a>> {
     element.parent().filter(Node::is_element)
 }
 
@@ -296,78 +296,4 @@ fn offset(xml: &str, pos: roxmltree::TextPos) -> usize {
         .map(char::len_utf8)
         .sum();
     line_start + column
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn attributes_and_entities_are_read() {
-        let xml = "<?xml version=\"1.0\"?><!-- c --><robot name='a&amp;b&#x41;'><link name = \"l\" /></robot>";
-        let source = Source::parse(FileId(0), xml).expect("parses");
-        let root = source.root();
-        assert_eq!(root.attribute("name"), Some("a&bA"));
-        let link = child(root, "link").expect("a link");
-        assert_eq!(parent(link), Some(root));
-        assert_eq!(link.attribute("name"), Some("l"));
-        let span = source.span(link);
-        assert_eq!(&xml[span.range()], "<link name = \"l\" />");
-        let span = source.attribute_span(link, "name");
-        assert_eq!(&xml[span.range()], "name = \"l\"");
-    }
-
-    #[test]
-    fn start_tags_end_after_attributes_holding_a_greater_than() {
-        let xml = "<robot name=\"a>b\"\n  >text</robot>";
-        let source = Source::parse(FileId(0), xml).expect("parses");
-        let span = source.span(source.root());
-        assert_eq!(&xml[span.range()], "<robot name=\"a>b\"\n  >");
-    }
-
-    #[test]
-    fn malformed_xml_is_located() {
-        let xml = "<robot name=\"r\">\n  <link name=\"a\">\n</robot>\n";
-        let error = Source::parse(FileId(0), xml).err().expect("malformed");
-        assert_eq!(error.code, "E1001");
-        let span = error.primary_span().expect("located");
-        assert_eq!(&xml[span.range()], "</robot>");
-        let xml = "<robot><link/><!-- é\n never closed </robot>";
-        let error = Source::parse(FileId(0), xml).err().expect("malformed");
-        let span = error.primary_span().expect("located");
-        assert_eq!(span.range().start, xml.find("<!--").expect("there"));
-        for xml in [
-            "",
-            "<robot",
-            "<robot name=\"r>",
-            "<robot><!-- </robot>",
-            "<robot></link>",
-            "text",
-            "<a/><b/>",
-            "é<",
-            "<robot>\n<é",
-        ] {
-            let error = Source::parse(FileId(0), xml).err().expect(xml);
-            assert_eq!(error.code, "E1001", "{xml}");
-            let span = error.primary_span().expect(xml);
-            assert!(span.range().end <= xml.len(), "{xml}");
-        }
-    }
-
-    #[test]
-    fn textures_without_file_are_blanked_for_urdf_rs() {
-        let xml = "<robot name=\"r\"><material name=\"m\"><texture a=\"é\">\n</texture><texture filename=\"t.png\"/></material><link name=\"a\"/></robot>";
-        let source = Source::parse(FileId(0), xml).expect("parses");
-        let text = source.urdf_text();
-        assert_eq!(text.len(), xml.len());
-        assert_eq!(text.matches('\n').count(), 1);
-        assert!(
-            !text.contains("<texture a=") && !text.contains("</texture>"),
-            "{text}"
-        );
-        assert!(text.contains("<texture filename=\"t.png\"/>"), "{text}");
-        assert!(urdf_rs::read_from_string(&text).is_ok());
-        let source = Source::parse(FileId(0), "<robot/>").expect("parses");
-        assert!(matches!(source.urdf_text(), Cow::Borrowed(_)));
-    }
 }

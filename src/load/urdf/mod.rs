@@ -23,9 +23,9 @@
 //! (mass properties) and `names` (LSD names).
 
 mod check;
-mod document;
-mod inertia;
-mod lsd;
+pub mod document;
+pub mod inertia;
+pub mod lsd;
 mod names;
 mod options;
 mod program;
@@ -71,44 +71,4 @@ pub fn import_urdf_at(
     let (text, mut warnings) = Importer::new(&robot, &source, &tree, options).program(name)?;
     warnings.sort_by_key(|d| d.primary_span().map(|s| s.start));
     Ok(Imported { text, warnings })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::syntax::lexer::{lex, Tok};
-
-    fn import(xml: &str) -> Imported {
-        import_urdf("test.urdf", xml, &ImportOptions::default()).unwrap_or_else(|d| panic!("{d:?}"))
-    }
-
-    #[test]
-    fn materials_alone_are_reported_once() {
-        let imported = import("<robot name=\"r\"><material name=\"m\"/><material name=\"n\"/><link name=\"a\"/></robot>");
-        let messages: Vec<&str> = imported
-            .warnings
-            .iter()
-            .map(|d| d.message.as_str())
-            .collect();
-        assert_eq!(messages, ["the robot's materials are not imported"]);
-        assert_eq!(
-            imported.warnings[0].notes,
-            ["the robot defines 2 materials"]
-        );
-    }
-
-    #[test]
-    fn comments_cannot_be_closed_by_names() {
-        let imported = import("<robot name=\"a*)b(*c\"><link name=\"x*)\"/></robot>");
-        let (tokens, errors) = lex(FileId(0), &imported.text);
-        assert!(errors.is_empty(), "{}", imported.text);
-        assert!(matches!(tokens[0].1, Tok::Import), "{}", imported.text);
-        assert!(
-            imported
-                .text
-                .contains("let x__ = body mass = 0, inertia = 0 end ; (* URDF link \"x* )\" *)"),
-            "{}",
-            imported.text
-        );
-    }
 }

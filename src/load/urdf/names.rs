@@ -73,25 +73,3 @@ pub(super) fn reserved() -> &'static HashSet<String> {
         names
     })
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn names_follow_the_documented_rule() {
-        assert_eq!(lsd_name("base_link"), "base_link");
-        assert_eq!(lsd_name("base-link"), "base_link");
-        assert_eq!(lsd_name("1st"), "_1st");
-        assert_eq!(lsd_name("with"), "with_");
-        assert_eq!(lsd_name("earth"), "earth_");
-        assert_eq!(lsd_name("revolute"), "revolute_");
-        assert_eq!(lsd_name("g"), "g_");
-        assert_eq!(lsd_name("joints"), "joints_");
-        assert_eq!(lsd_name("continuous"), "continuous_");
-        assert_eq!(lsd_name("sin"), "sin_");
-        assert_eq!(lsd_name("bras_rotoïde"), "bras_rotoïde");
-        assert_eq!(lsd_name(""), "_");
-        assert_eq!(lsd_name("a b/c"), "a_b_c");
-    }
-}

@@ -1,0 +1,155 @@
+//! Unit tests of `src/syntax/`: the lexer and the parser.
+//! Each module holds the tests of the file of `src/` it is named after, kept out of the library
+//! so that `cargo test` compiles the library once (`test = false` in Cargo.toml).
+
+mod lexer {
+    use lsdc::source::FileId;
+    use lsdc::syntax::lexer::*;
+
+    fn tokens(text: &str) -> Vec<Tok<'_>> {
+        let (tokens, errors) = lex(FileId(0), text);
+        assert!(errors.is_empty(), "{errors:?}");
+        tokens.into_iter().map(|(_, t, _)| t).collect()
+    }
+
+    #[test]
+    fn signs_are_operators() {
+        assert_eq!(
+            tokens("x -1"),
+            vec![Tok::Ident("x"), Tok::Minus, Tok::Int("1")]
+        );
+    }
+
+    #[test]
+    fn numbers_primes_unknowns_and_unicode() {
+        assert_eq!(
+            tokens("1.5e-3 2E4 7 x' ?fs rotoïde ++ ||"),
+            vec![
+                Tok::Float("1.5e-3"),
+                Tok::Float("2E4"),
+                Tok::Int("7"),
+                Tok::Ident("x"),
+                Tok::Prime,
+                Tok::Unknown("fs"),
+                Tok::Ident("rotoïde"),
+                Tok::PlusPlus,
+                Tok::Parallel
+            ]
+        );
+    }
+
+    #[test]
+    fn nested_comments_are_skipped() {
+        assert_eq!(
+            tokens("a (* b (* c *) d *) e"),
+            vec![Tok::Ident("a"), Tok::Ident("e")]
+        );
+    }
+
+    #[test]
+    fn unterminated_comment_points_at_its_opening() {
+        let (_, errors) = lex(FileId(0), "let a = 1; (* open (* inner *) ");
+        assert_eq!(errors.len(), 1);
+        assert_eq!(errors[0].code, "E0102");
+        assert_eq!(errors[0].primary_span().map(|s| s.range()), Some(11..13));
+    }
+}
+
+mod parser {
+    use lsdc::diag::Diagnostic;
+    use lsdc::source::FileId;
+    use lsdc::syntax::ast::{BinaryOp, ExprKind};
+    use lsdc::syntax::parser::*;
+
+    use lsdc::syntax::ast::{DeclKind, Expr};
+
+    /// Parses one expression as the value of a `let`: the grammar has one entry point, the
+    /// program (a second one would double the generated parser).
+    fn parse_expr(text: &str) -> Result<Expr, Vec<Diagnostic>> {
+        let (mut program, errors) = parse(FileId(0), &format!("let value = {text};"));
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        let Some(DeclKind::Let(mut bindings)) = program.decls.pop().map(|decl| decl.kind) else {
+            panic!("`let value = {text};` is not one `let`");
+        };
+        Ok(bindings.remove(0).value)
+    }
+
+    fn expr(text: &str) -> Expr {
+        parse_expr(text).unwrap_or_else(|d| panic!("{d:?}"))
+    }
+
+    #[test]
+    fn displacement_binds_tighter_than_frame() {
+        let e = expr("[0,0,?s] ++ 1 @ satellite");
+        let ExprKind::Binary {
+            op: BinaryOp::Frame,
+            lhs,
+            ..
+        } = e.kind
+        else {
+            panic!("{e:?}")
+        };
+        assert!(matches!(
+            lhs.kind,
+            ExprKind::Binary {
+                op: BinaryOp::Displacement,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn unknown_call_binds_tighter_than_product() {
+        let e = expr("?fs(x,x')*axe");
+        let ExprKind::Binary {
+            op: BinaryOp::Mul,
+            lhs,
+            ..
+        } = e.kind
+        else {
+            panic!("{e:?}")
+        };
+        assert!(matches!(lhs.kind, ExprKind::Call { .. }));
+    }
+
+    #[test]
+    fn unary_minus_binds_tightest() {
+        let e = expr("-x^2");
+        let ExprKind::Binary {
+            op: BinaryOp::Pow,
+            lhs,
+            ..
+        } = e.kind
+        else {
+            panic!("{e:?}")
+        };
+        assert!(matches!(lhs.kind, ExprKind::Neg(_)));
+        let e = expr("x - 1");
+        assert!(matches!(
+            e.kind,
+            ExprKind::Binary {
+                op: BinaryOp::Sub,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn non_associative_operators_reject_chains() {
+        for text in ["a || b || c", "a @ b @ c", "a ++ b ++ c"] {
+            assert!(parse_expr(text).is_err(), "{text}");
+        }
+    }
+
+    #[test]
+    fn recovery_reports_several_errors() {
+        let (program, errors) = parse(
+            FileId(0),
+            "let a = ;\nlet b = 1;\njoin x and y with ;\nlet c = 2;",
+        );
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        assert_eq!(program.decls.len(), 4);
+    }
+}
