@@ -66,12 +66,12 @@ pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
 pub fn tree_cost(prepared: &Prepared) -> f64 {
     let mut tree = prepared.model.clone();
     tree.link_efforts.retain(|e| e.joint < tree.joints.len());
-    tree.link_potentials
-        .retain(|(joint, _)| *joint < tree.joints.len());
+    tree.link_potentials.retain(|p| p.joint < tree.joints.len());
     tree.loops.clear();
     tree.loop_balls.clear();
     tree.declared_count -= tree.nc;
     tree.nc = 0;
+    tree.compile_efforts();
     let model = &prepared.model;
     let (q, v) = model
         .state_from_declared(&prepared.coordinates, &prepared.rates)

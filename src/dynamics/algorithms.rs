@@ -4,6 +4,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
+use super::compiled::EffortScratch;
 use super::joint::JointState;
 use super::model::Model;
 use super::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
@@ -29,6 +30,8 @@ pub struct Data {
     u: Vec<[Force; 6]>,
     d_inverse: Vec<Matrix6<f64>>,
     u_vector: Vec<Vector6<f64>>,
+    /// Where the efforts' tape is evaluated.
+    pub efforts: EffortScratch,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -66,6 +69,7 @@ impl Data {
             u: vec![[Force::zeros(); 6]; n + 1],
             d_inverse: vec![Matrix6::zeros(); n + 1],
             u_vector: vec![Vector6::zeros(); n + 1],
+            efforts: EffortScratch::default(),
         }
     }
 }
@@ -360,6 +364,18 @@ pub fn aba_into(
     accelerations: &mut DVector<f64>,
 ) -> Result<(), DynamicsError> {
     joint_motions(model, data, q, v)?;
+    aba_after_kinematics(model, data, tau, external, accelerations)
+}
+
+/// ABA when `data` already holds the forward kinematics of the state (`forward_kinematics`,
+/// which the efforts need first): the joints' motions are not computed a second time.
+pub fn aba_after_kinematics(
+    model: &Model,
+    data: &mut Data,
+    tau: &[f64],
+    external: &[Force],
+    accelerations: &mut DVector<f64>,
+) -> Result<(), DynamicsError> {
     for &k in &model.dynamic_joints {
         let i = model.joints[k].child;
         let body = &model.dynamic_bodies[i - 1];

@@ -3,19 +3,17 @@
 //! `torqueN` of the links) as generalised forces. Their values may depend on every join's
 //! coordinates and rates and on the time.
 
-use std::rc::Rc;
-
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::algorithms::Data;
+use super::compiled::{EffortState, EffortTape};
 use super::energy::{constant_potential, Conservative};
 use super::joint::JointType;
 use super::model::{LinkEffort, Model};
-use super::spatial::{self, Force, Pose};
+use super::spatial::{self, Force};
 use crate::elab::mechanism::EffortKind;
-use crate::elab::value::{BodyRef, Frame, FrameQuantity, JoinId, Vector};
 use crate::kinematics::eval::{eval_jet, Env, EvalError};
-use crate::kinematics::model::{constant_pose, Step};
+use crate::kinematics::model::Step;
 
 /// The efforts at one state.
 pub struct Efforts {
@@ -53,138 +51,46 @@ pub struct Declared<'a> {
     pub rates: &'a [f64],
 }
 
-impl Declared<'_> {
-    fn value(&self, join: JoinId, index: usize, order: u32) -> Option<f64> {
-        let offset = self.model.declared_offset(join)? + index;
-        match order {
-            0 => self.coordinates.get(offset).copied(),
-            1 => self.rates.get(offset).copied(),
-            _ => None,
-        }
-    }
-}
-
-fn vector(v: &Vector, model: &Model, env: &Env<'_>) -> Result<Vector3<f64>, EvalError> {
-    let value = |i: usize| eval_jet(&v[i], &model.unknowns, env, &[]).map(|j| j.value);
-    Ok(Vector3::new(value(0)?, value(1)?, value(2)?))
-}
-
-/// A frame's state at one instant, in the fixed axes.
-struct FrameValues {
-    position: Vector3<f64>,
-    velocity: Vector3<f64>,
-    angular_velocity: Vector3<f64>,
-    orientation: Matrix3<f64>,
-}
-
-impl FrameValues {
-    /// The frame at `offset` on `body`; `data` holds the forward kinematics of the state.
-    fn new(data: &Data, body: usize, offset: &Pose) -> FrameValues {
-        let pose = data.world[body] * offset;
-        let velocity = &data.velocity[body];
-        let (spin, linear) = (
-            Vector3::new(velocity[0], velocity[1], velocity[2]),
-            Vector3::new(velocity[3], velocity[4], velocity[5]),
-        );
-        let turn = |v: Vector3<f64>| data.world[body].rotation * v;
-        FrameValues {
-            position: pose.translation.vector,
-            velocity: turn(linear + spin.cross(&offset.translation.vector)),
-            angular_velocity: turn(spin),
-            orientation: *pose.rotation.to_rotation_matrix().matrix(),
-        }
-    }
-
-    fn component(&self, quantity: FrameQuantity) -> f64 {
-        match quantity {
-            FrameQuantity::Position(i) => self.position[i as usize],
-            FrameQuantity::Velocity(i) => self.velocity[i as usize],
-            FrameQuantity::AngularVelocity(i) => self.angular_velocity[i as usize],
-            FrameQuantity::Orientation(i, j) => self.orientation[(i as usize, j as usize)],
-        }
-    }
-}
-
-/// The state of every frame the efforts use, computed once per evaluation (efforts mention the
-/// same frames many times: a spring's direction, its length, its rate).
-struct FrameStates<'a> {
-    model: &'a Model,
-    data: &'a Data,
-    known: Vec<FrameValues>,
-}
-
-impl<'a> FrameStates<'a> {
-    fn new(model: &'a Model, data: &'a Data) -> FrameStates<'a> {
-        let known = model
-            .effort_frames
-            .iter()
-            .map(|f| FrameValues::new(data, f.body, &f.offset))
-            .collect();
-        FrameStates { model, data, known }
-    }
-
-    /// Component `quantity` of `frame`'s state.
-    fn get(&self, frame: &Frame, quantity: FrameQuantity) -> Result<f64, EvalError> {
-        if let Some(k) = self
-            .model
-            .effort_frames
-            .iter()
-            .position(|f| std::ptr::eq(Rc::as_ptr(&f.frame), frame))
-        {
-            return Ok(self.known[k].component(quantity));
-        }
-        let body = match frame.body {
-            BodyRef::Earth => 0,
-            BodyRef::Body(id) => *self
-                .model
-                .body_numbers
-                .get(&id)
-                .ok_or(EvalError::NotGeometric("a body outside the mechanism"))?,
+impl<'a> Declared<'a> {
+    /// Evaluates the model's effort tape at this state, into `data`'s scratch.
+    fn evaluate_tape(&self, data: &mut Data, time: f64) -> Result<&'a EffortTape, EvalError> {
+        let tape = self.model.effort_tape.as_ref().map_err(Clone::clone)?;
+        let state = EffortState {
+            world: &data.world,
+            velocity: &data.velocity,
+            coordinates: self.coordinates,
+            rates: self.rates,
+            time,
         };
-        let offset = constant_pose(&frame.displacement, &self.model.unknowns)?;
-        Ok(FrameValues::new(self.data, body, &offset).component(quantity))
+        tape.eval(&self.model.effort_frames, &state, &mut data.efforts);
+        Ok(tape)
     }
+}
+
+/// The components of an effort's value among the tape's roots.
+fn vector(tape: &EffortTape, data: &Data, roots: [usize; 3]) -> Vector3<f64> {
+    let value = |k: usize| tape.root(&data.efforts, roots[k]);
+    Vector3::new(value(0), value(1), value(2))
 }
 
 /// The potential energy of a conservative mechanism at a state: the constant forces' and the
 /// declared potentials; `data` must hold the forward kinematics of the state.
 pub fn potential_energy(
     model: &Model,
-    data: &Data,
+    data: &mut Data,
     conservative: &Conservative,
     declared: &Declared<'_>,
     time: f64,
 ) -> Result<f64, EvalError> {
-    let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
-    let states = FrameStates::new(model, data);
-    let frames = |frame: &Frame, quantity: FrameQuantity| states.get(frame, quantity);
-    let env = Env {
-        coordinates: &[],
-        rates: None,
-        joins: Some(&joins),
-        time: Some(time),
-        frames: Some(&frames),
-    };
+    let tape = declared.evaluate_tape(data, time)?;
     let mut total = constant_potential(&conservative.constant, data);
     for &k in &conservative.applied {
-        if let Some(potential) = &model.applied[k].potential {
-            total += eval_jet(potential, &model.unknowns, &env, &[])?.value;
+        if let Some(root) = model.applied[k].potential_root {
+            total += tape.root(&data.efforts, root);
         }
     }
-    for (joint, potential) in &model.link_potentials {
-        let chain = model
-            .joints
-            .get(*joint)
-            .map(|j| &j.chain)
-            .unwrap_or_else(|| &model.loops[joint - model.joints.len()]);
-        let offset = model.declared_offset(chain.join).unwrap_or(0);
-        let n = chain.coordinate_count();
-        let link = Env {
-            coordinates: &declared.coordinates[offset..offset + n],
-            rates: Some(&declared.rates[offset..offset + n]),
-            ..env
-        };
-        total += eval_jet(potential, &model.unknowns, &link, &[])?.value;
+    for potential in &model.link_potentials {
+        total += tape.root(&data.efforts, potential.root);
     }
     Ok(total)
 }
@@ -192,24 +98,15 @@ pub fn potential_energy(
 /// Evaluates every effort; `data` must hold the forward kinematics of the state.
 pub fn evaluate(
     model: &Model,
-    data: &Data,
+    data: &mut Data,
     declared: &Declared<'_>,
     time: f64,
 ) -> Result<Efforts, EvalError> {
-    let joins = |join: JoinId, index: usize, order: u32| declared.value(join, index, order);
-    let states = FrameStates::new(model, data);
-    let frames = |frame: &Frame, quantity: FrameQuantity| states.get(frame, quantity);
-    let env = Env {
-        coordinates: &[],
-        rates: None,
-        joins: Some(&joins),
-        time: Some(time),
-        frames: Some(&frames),
-    };
+    let tape = declared.evaluate_tape(data, time)?;
     let mut external = vec![Force::zeros(); model.body_count() + 1];
     let mut power = 0.0;
     for effort in &model.applied {
-        let value = vector(&effort.value, model, &env)?;
+        let value = vector(tape, data, effort.value_roots);
         let in_world = if effort.basis == 0 {
             value
         } else {
@@ -227,8 +124,8 @@ pub fn evaluate(
     }
     let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
-        let (generalised, link_power) =
-            link_effort(model, effort, declared, &joins, &frames, time)?;
+        let value = vector(tape, data, effort.value_roots);
+        let (generalised, link_power) = link_effort(model, effort, value, declared)?;
         if !effort.conservative {
             power += link_power;
         }
@@ -256,14 +153,12 @@ fn spatial_force(moment: Vector3<f64>, force: Vector3<f64>) -> Force {
     Force::new(moment.x, moment.y, moment.z, force.x, force.y, force.z)
 }
 
-/// A link effort as generalised forces on the joint's velocities.
+/// A link effort of value `value` as generalised forces on the joint's velocities, and its power.
 fn link_effort(
     model: &Model,
     effort: &LinkEffort,
+    value: Vector3<f64>,
     declared: &Declared<'_>,
-    joins: &dyn Fn(JoinId, usize, u32) -> Option<f64>,
-    frames: &dyn Fn(&Frame, FrameQuantity) -> Result<f64, EvalError>,
-    time: f64,
 ) -> Result<(DVector<f64>, f64), EvalError> {
     // A complementary link's coordinates are its velocities: no quaternion to map through.
     let (chain, joint) = match model.joints.get(effort.joint) {
@@ -274,14 +169,6 @@ fn link_effort(
     let n = chain.coordinate_count();
     let coordinates = &declared.coordinates[offset..offset + n];
     let rates = &declared.rates[offset..offset + n];
-    let env = Env {
-        coordinates,
-        rates: Some(rates),
-        joins: Some(joins),
-        time: Some(time),
-        frames: Some(frames),
-    };
-    let value = vector(&effort.value, model, &env)?;
     let wrench = match effort.kind {
         EffortKind::Force => spatial_force(Vector3::zeros(), value),
         EffortKind::Torque => spatial_force(value, Vector3::zeros()),
@@ -311,10 +198,7 @@ fn step_columns(
     model: &Model,
 ) -> Result<DMatrix<f64>, EvalError> {
     let n = coordinates.len();
-    let env = Env {
-        coordinates,
-        ..Env::default()
-    };
+    let env = Env { coordinates };
     let mut columns = DMatrix::zeros(6, n);
     let mut unit = vec![0.0; n];
     for k in 0..n {

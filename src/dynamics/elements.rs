@@ -37,6 +37,10 @@ pub struct AppliedEffort {
     /// Whether it derives from a potential the energy report counts: a constant force in the
     /// fixed basis, or an effort that declares its potential. Set when the model is built.
     pub conservative: bool,
+    /// The positions of its value's components and of its potential among the values of the
+    /// model's effort tape. Set when the efforts are compiled.
+    pub value_roots: [usize; 3],
+    pub potential_root: Option<usize>,
 }
 
 /// A frame an effort refers to: the frame as the expressions hold it (found by identity), its
@@ -61,4 +65,17 @@ pub struct LinkEffort {
     pub span: crate::source::Span,
     /// Whether its link declares the potential it derives from.
     pub conservative: bool,
+    /// The positions of its value's components among the values of the model's effort tape.
+    /// Set when the efforts are compiled.
+    pub value_roots: [usize; 3],
+}
+
+/// A link's declared potential.
+#[derive(Clone, Debug)]
+pub struct LinkPotential {
+    /// Index into `Model::joints`, then into `Model::loops`.
+    pub joint: usize,
+    pub value: Scalar,
+    /// Its position among the values of the model's effort tape.
+    pub root: usize,
 }

@@ -4,6 +4,7 @@
 
 pub mod algorithms;
 pub mod angles;
+pub mod compiled;
 pub mod derivatives;
 pub mod efforts;
 pub mod elements;

@@ -3,7 +3,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-pub use super::elements::{AppliedEffort, BodyInertia, EffortFrame, LinkEffort};
+use super::compiled::{EffortTape, Link, TapeBuilder};
+pub use super::elements::{AppliedEffort, BodyInertia, EffortFrame, LinkEffort, LinkPotential};
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 use super::welds;
@@ -40,7 +41,10 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     pub link_efforts: Vec<LinkEffort>,
     /// The links' declared potentials, by joint (index into `joints`, then into `loops`).
-    pub link_potentials: Vec<(usize, Scalar)>,
+    pub link_potentials: Vec<LinkPotential>,
+    /// Every effort's value and potential compiled into one tape (see `compiled`), or why they
+    /// cannot be evaluated.
+    pub effort_tape: Result<EffortTape, EvalError>,
     /// The frames whose state the efforts use (`position(F)`, …), placed on their bodies.
     pub effort_frames: Vec<EffortFrame>,
     pub unknowns: UnknownValues,
@@ -240,7 +244,11 @@ pub fn build_with(
                 .link(mechanism.join(chain.join).link)
                 .potential
                 .clone()
-                .map(|p| (k, p))
+                .map(|value| LinkPotential {
+                    joint: k,
+                    value,
+                    root: 0,
+                })
         })
         .collect();
     if !errors.is_empty() {
@@ -254,7 +262,7 @@ pub fn build_with(
         !loops.is_empty(),
     );
     let branch_velocities = branch_velocities(&joints);
-    Ok(Model {
+    let mut model = Model {
         branch_velocities,
         dynamic_joints: merged.dynamic_joints,
         dynamic_bodies: merged.dynamic_bodies,
@@ -276,7 +284,69 @@ pub fn build_with(
         loops,
         nc,
         loop_balls,
-    })
+        effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
+    };
+    model.compile_efforts();
+    Ok(model)
+}
+
+impl Model {
+    /// Lowers every effort into one tape and records where each effort's values lie in it
+    /// (done when the model is built; again after changing its efforts or joints).
+    pub fn compile_efforts(&mut self) {
+        let declared_offset = |join| self.declared_offset(join);
+        let mut builder = TapeBuilder::new(&self.unknowns, &self.effort_frames, &declared_offset);
+        let mut lower = || -> Result<_, EvalError> {
+            let mut applied = Vec::new();
+            for effort in &self.applied {
+                let value = builder.vector(&effort.value, Link(None))?;
+                let potential = match &effort.potential {
+                    Some(p) => Some(builder.scalar(p, Link(None))?),
+                    None => None,
+                };
+                applied.push((value, potential));
+            }
+            let mut links = Vec::new();
+            for effort in &self.link_efforts {
+                let offset = self.declared_offset(self.chain(effort.joint).join);
+                links.push(builder.vector(&effort.value, Link(offset))?);
+            }
+            let mut potentials = Vec::new();
+            for potential in &self.link_potentials {
+                let offset = self.declared_offset(self.chain(potential.joint).join);
+                potentials.push(builder.scalar(&potential.value, Link(offset))?);
+            }
+            Ok((applied, links, potentials))
+        };
+        let lowered = lower();
+        let tape = builder.build();
+        let (applied, links, potentials) = match lowered {
+            Ok(roots) => roots,
+            Err(e) => {
+                self.effort_tape = Err(e);
+                return;
+            }
+        };
+        for (effort, (value, potential)) in self.applied.iter_mut().zip(applied) {
+            effort.value_roots = value;
+            effort.potential_root = potential;
+        }
+        for (effort, value) in self.link_efforts.iter_mut().zip(links) {
+            effort.value_roots = value;
+        }
+        for (potential, root) in self.link_potentials.iter_mut().zip(potentials) {
+            potential.root = root;
+        }
+        self.effort_tape = Ok(tape);
+    }
+
+    /// The chain of a joint of the tree (`index < joints.len()`) or of a complementary link.
+    pub fn chain(&self, index: usize) -> &JointModel {
+        match self.joints.get(index) {
+            Some(joint) => &joint.chain,
+            None => &self.loops[index - self.joints.len()],
+        }
+    }
 }
 
 fn body_inertia(
@@ -366,6 +436,8 @@ fn applied_efforts(
             potential,
             span: application.span,
             conservative: false,
+            value_roots: [0; 3],
+            potential_root: None,
         };
         applied_effort.conservative = applied_effort.potential.is_some()
             || constant_fixed_force(&applied_effort, &kinematics.unknowns).is_some();
@@ -508,6 +580,7 @@ fn link_efforts(mechanism: &Mechanism, joints: &[Joint], loops: &[JointModel]) -
                     value: value.clone(),
                     span: mechanism.join(chain.join).span,
                     conservative,
+                    value_roots: [0; 3],
                 });
             }
         }
@@ -590,6 +663,12 @@ impl Model {
         let mut rates = vec![0.0; self.declared_count];
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
             let n = joint.chain.coordinate_count();
+            if joint.kind == JointType::Chain {
+                // Its state is its declared coordinates and rates.
+                coordinates[offset..offset + n].copy_from_slice(&q[joint.q_offset..][..n]);
+                rates[offset..offset + n].copy_from_slice(&v[joint.v_offset..][..n]);
+                continue;
+            }
             let (c, r) = joint.declared(
                 &q[joint.q_offset..joint.q_offset + joint.nq()],
                 &v[joint.v_offset..joint.v_offset + joint.nv()],

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use crate::elab::value::{Frame, FrameQuantity, JoinId, SExpr, UnknownId};
+use crate::elab::value::{SExpr, UnknownId};
 
 /// Values of the program's unknowns (written `?s` and generic quantities).
 pub type UnknownValues = HashMap<UnknownId, f64>;
@@ -38,20 +38,13 @@ pub fn describe(error: &EvalError, mechanism: &crate::elab::mechanism::Mechanism
     }
 }
 
-/// A component of a frame's state at the current instant.
-pub type FrameStates<'a> = dyn Fn(&Frame, FrameQuantity) -> Result<f64, EvalError> + 'a;
-
-/// What an expression may refer to besides numbers and unknowns.
+/// What a geometric expression may refer to besides numbers and unknowns: the enclosing link's
+/// coordinates. (Efforts, which may also use rates, other joins, the time and frames, are
+/// compiled into a tape instead: see `dynamics::compiled`.)
 #[derive(Clone, Copy, Default)]
 pub struct Env<'a> {
-    /// The enclosing link's coordinates (`Coordinate { order: 0 }`) and their rates (`order: 1`).
+    /// The enclosing link's coordinates (`Coordinate { order: 0 }`).
     pub coordinates: &'a [f64],
-    pub rates: Option<&'a [f64]>,
-    /// Positions and velocities of every join's coordinates (`crank.q`, `crank.q'`).
-    pub joins: Option<&'a dyn Fn(JoinId, usize, u32) -> Option<f64>>,
-    pub time: Option<f64>,
-    /// The state of frames at the current instant (`position(F)`, …), for efforts.
-    pub frames: Option<&'a FrameStates<'a>>,
 }
 
 /// A value with its first and second derivatives along a direction.
@@ -110,12 +103,11 @@ pub fn eval_jet(
     let go = |e: &SExpr| eval_jet(e, unknowns, env, direction);
     Ok(match s {
         SExpr::Num(v) => Jet::constant(*v),
-        SExpr::Time => Jet::constant(env.time.ok_or(EvalError::NotGeometric("the time"))?),
-        SExpr::FrameState(frame, quantity) => {
-            let state = env.frames.ok_or(EvalError::NotGeometric(
+        SExpr::Time => return Err(EvalError::NotGeometric("the time")),
+        SExpr::FrameState(..) => {
+            return Err(EvalError::NotGeometric(
                 "the state of a frame (position, velocity, …)",
-            ))?;
-            Jet::constant(state(frame, *quantity)?)
+            ))
         }
         SExpr::Unknown(id) => Jet::constant(*unknowns.get(id).ok_or(EvalError::Missing(*id))?),
         SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
@@ -131,27 +123,14 @@ pub fn eval_jet(
                 second: 0.0,
             }
         }
-        SExpr::Coordinate { index, order: 1 } => {
-            let rates = env
-                .rates
-                .ok_or(EvalError::NotGeometric("a time derivative"))?;
-            Jet::constant(
-                *rates
-                    .get(*index as usize)
-                    .ok_or(EvalError::NotGeometric("a time derivative"))?,
-            )
+        SExpr::Coordinate { order: 1, .. } => {
+            return Err(EvalError::NotGeometric("a time derivative"))
         }
         SExpr::Coordinate { .. } => {
             return Err(EvalError::NotGeometric("a second time derivative"))
         }
-        SExpr::JoinCoordinate { join, index, order } => {
-            let joins = env
-                .joins
-                .ok_or(EvalError::NotGeometric("a coordinate of a join"))?;
-            Jet::constant(
-                joins(*join, *index as usize, *order)
-                    .ok_or(EvalError::NotGeometric("a second time derivative"))?,
-            )
+        SExpr::JoinCoordinate { .. } => {
+            return Err(EvalError::NotGeometric("a coordinate of a join"))
         }
         SExpr::Neg(a) => {
             let a = go(a)?;
@@ -259,26 +238,9 @@ pub fn eval_dual(
     if let Some(k) = wrt.filter(|&k| k < q.len()) {
         direction[k] = 1.0;
     }
-    eval_jet(
-        s,
-        unknowns,
-        &Env {
-            coordinates: q,
-            ..Env::default()
-        },
-        &direction,
-    )
+    eval_jet(s, unknowns, &Env { coordinates: q }, &direction)
 }
 
 pub fn eval(s: &SExpr, unknowns: &UnknownValues, q: &[f64]) -> Result<f64, EvalError> {
-    eval_jet(
-        s,
-        unknowns,
-        &Env {
-            coordinates: q,
-            ..Env::default()
-        },
-        &[],
-    )
-    .map(|j| j.value)
+    eval_jet(s, unknowns, &Env { coordinates: q }, &[]).map(|j| j.value)
 }

@@ -60,10 +60,7 @@ impl JointModel {
         unknowns: &UnknownValues,
     ) -> Result<ChainMotion, EvalError> {
         let n = self.coordinate_count();
-        let env = Env {
-            coordinates: q,
-            ..Env::default()
-        };
+        let env = Env { coordinates: q };
         let zero_rates = vec![0.0; n];
         let rates = rates.unwrap_or(&zero_rates);
         let mut pose = Pose::identity();
@@ -394,10 +391,7 @@ impl JointModel {
         direction: &[f64],
         unknowns: &UnknownValues,
     ) -> Result<Twist, EvalError> {
-        let env = Env {
-            coordinates: q,
-            ..Env::default()
-        };
+        let env = Env { coordinates: q };
         let sum: Vec<f64> = rates.iter().zip(direction).map(|(a, b)| a + b).collect();
         // Mixed second derivative by polarisation: D²f[u, w] = (D²f[u + w] − D²f[u] − D²f[w]) / 2.
         let mixed = |s: &Scalar| -> Result<(f64, f64, f64), EvalError> {

@@ -16,6 +16,7 @@ use urdf_rs::{
     Mass, Robot, Vec3,
 };
 
+use crate::diag::number::shortest as number;
 use crate::dynamics::joint::{Joint, JointType};
 use crate::dynamics::model::{BodyInertia, Model};
 use crate::dynamics::spatial::{self, Pose};
@@ -707,17 +708,6 @@ fn write_joint(out: &mut String, joint: &UrdfJoint) {
 
 fn triple(v: &Vec3) -> String {
     v.iter().map(|x| number(*x)).collect::<Vec<_>>().join(" ")
-}
-
-/// The shortest text that reads back as the same f64, in exponent form outside [1e-5, 1e16) so
-/// that round-off such as 6e-17 does not spell out its zeros; −0 is written 0.
-pub fn number(x: f64) -> String {
-    let x = x + 0.0;
-    if x == 0.0 || (1e-5..1e16).contains(&x.abs()) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
 }
 
 fn escape(text: &str) -> String {

@@ -4,12 +4,15 @@
 //! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (loops).
 
 use std::cell::RefCell;
+
+use nalgebra::DVector;
 use std::fmt;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
 use crate::dynamics::algorithms::{
-    aba, crba, forward_kinematics, rnea, transmitted_wrenches, Data, DynamicsError,
+    aba, aba_after_kinematics, aba_into, crba, forward_kinematics, rnea, transmitted_wrenches,
+    Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation, StructureError, ROW_NAMES};
@@ -52,14 +55,13 @@ impl<'m> MechanicalSystem<'m> {
     pub fn efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Efforts, SystemError> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v)?;
-        let reference = self.reference.borrow().clone();
-        let (coordinates, rates) = model.declared(q, v, &reference)?;
+        let (coordinates, rates) = model.declared(q, v, &self.reference.borrow())?;
         let declared = Declared {
             model,
             coordinates: &coordinates,
             rates: &rates,
         };
-        Ok(evaluate(model, &self.data, &declared, t)?)
+        Ok(evaluate(model, &mut self.data, &declared, t)?)
     }
 
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), with the
@@ -106,21 +108,34 @@ impl<'m> MechanicalSystem<'m> {
             let (solution, efforts, _) = self.constrained(t, &q, v)?;
             (solution.accelerations, efforts)
         } else {
-            // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
+            // Without efforts to evaluate, ABA needs no world poses: skip the kinematics. With
+            // them, ABA goes on from the kinematics the efforts were computed from.
+            let mut accelerations = DVector::zeros(model.nv);
             let efforts = if model.has_efforts() {
-                self.efforts(t, &q, v)?
+                let efforts = self.efforts(t, &q, v)?;
+                aba_after_kinematics(
+                    model,
+                    &mut self.data,
+                    efforts.tau.as_slice(),
+                    &efforts.external,
+                    &mut accelerations,
+                )
+                .map_err(|e| self.dynamics_error(&e))?;
+                efforts
             } else {
-                Efforts::none(model)
+                let efforts = Efforts::none(model);
+                aba_into(
+                    model,
+                    &mut self.data,
+                    &q,
+                    v,
+                    efforts.tau.as_slice(),
+                    &efforts.external,
+                    &mut accelerations,
+                )
+                .map_err(|e| self.dynamics_error(&e))?;
+                efforts
             };
-            let accelerations = aba(
-                model,
-                &mut self.data,
-                &q,
-                v,
-                efforts.tau.as_slice(),
-                &efforts.external,
-            )
-            .map_err(|e| self.dynamics_error(&e))?;
             (accelerations, efforts)
         };
         self.power = efforts.power;

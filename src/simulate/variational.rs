@@ -42,7 +42,7 @@ impl MechanicalSystem<'_> {
             coordinates: q,
             rates: v,
         };
-        let efforts = evaluate(model, &self.data, &declared, t)?;
+        let efforts = evaluate(model, &mut self.data, &declared, t)?;
         let zero = vec![0.0; model.nv];
         let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external)?;
         let mut forcing = efforts.tau;

@@ -552,7 +552,14 @@ impl Tape {
 
     /// Evaluates every node with `symbols[i]` the value of symbol i; returns the roots' values.
     pub fn eval(&self, symbols: &[f64]) -> Vec<f64> {
-        let mut value = vec![0.0; self.steps.len()];
+        let mut value = Vec::new();
+        self.eval_into(symbols, &mut value);
+        self.roots.iter().map(|&r| value[r]).collect()
+    }
+
+    /// Evaluates every node into `value` (node k of `order` at index k), reusing its storage.
+    pub fn eval_into(&self, symbols: &[f64], value: &mut Vec<f64>) {
+        value.resize(self.steps.len(), 0.0);
         for (k, step) in self.steps.iter().enumerate() {
             value[k] = match *step {
                 Step::Constant(c) => c,
@@ -566,6 +573,5 @@ impl Tape {
                 Step::Apply(f, a) => f.eval(value[a]),
             };
         }
-        self.roots.iter().map(|&r| value[r]).collect()
     }
 }

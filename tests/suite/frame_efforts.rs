@@ -38,7 +38,7 @@ fn right_hand_side(text: &str, coordinates: &[f64], rates: &[f64]) -> Vec<f64> {
         coordinates,
         rates,
     };
-    let efforts = efforts::evaluate(&model, &data, &declared, 0.0).expect("efforts");
+    let efforts = efforts::evaluate(&model, &mut data, &declared, 0.0).expect("efforts");
     let bias = rnea(
         &model,
         &mut data,

@@ -121,7 +121,7 @@ fn numeric(
         rates,
     };
     let efforts = if with_efforts {
-        efforts::evaluate(&model, &data, &declared, time).expect("efforts")
+        efforts::evaluate(&model, &mut data, &declared, time).expect("efforts")
     } else {
         Efforts::none(&model)
     };

@@ -58,16 +58,7 @@ mod eval {
             let point = [q[0] + t * direction[0], q[1] + t * direction[1]];
             eval(&e, &unknowns, &point).expect("evaluates")
         };
-        let jet = eval_jet(
-            &e,
-            &unknowns,
-            &Env {
-                coordinates: &q,
-                ..Env::default()
-            },
-            &direction,
-        )
-        .expect("evaluates");
+        let jet = eval_jet(&e, &unknowns, &Env { coordinates: &q }, &direction).expect("evaluates");
         let h = 1e-4;
         let fd = (at(h) - 2.0 * at(0.0) + at(-h)) / (h * h);
         assert!((jet.second - fd).abs() < 1e-5, "{} vs {fd}", jet.second);

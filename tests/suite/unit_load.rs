@@ -155,6 +155,7 @@ mod inertia {
 }
 
 mod lsd {
+    use lsdc::diag::number::shortest as number;
     use lsdc::load::urdf::lsd::*;
     use lsdc::source::FileId;
     use lsdc::syntax::lexer::{lex, Tok};

@@ -126,6 +126,7 @@ mod plot {
 }
 
 mod urdf {
+    use lsdc::diag::number::shortest as number;
     use lsdc::output::urdf::*;
     use nalgebra::UnitQuaternion;
     use std::f64::consts::FRAC_PI_2;

@@ -3,6 +3,8 @@
 use nalgebra::Vector3;
 use urdf_rs::Pose;
 
+use crate::diag::number::shortest as number;
+
 pub(super) fn count(n: usize, noun: &str) -> String {
     format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
 }
@@ -10,26 +12,6 @@ pub(super) fn count(n: usize, noun: &str) -> String {
 /// A program comment around `text`, in which `(*` or `*)` would open or close a comment.
 pub(super) fn comment(text: &str) -> String {
     format!("(* {} *)", text.replace("(*", "( *").replace("*)", "* )"))
-}
-
-/// A number as LSD reads it back exactly: Rust's shortest round-trip digits, positional for usual
-/// magnitudes and with an exponent for very small or large ones (`{}` alone writes 1e-300 with
-/// 300 zeros). The sign is LSD's unary minus, and `-0` is `0`.
-pub fn number(x: f64) -> String {
-    if x == 0.0 {
-        return "0".to_string();
-    }
-    let magnitude = x.abs();
-    let digits = if (1e-5..1e16).contains(&magnitude) {
-        format!("{magnitude}")
-    } else {
-        format!("{magnitude:e}")
-    };
-    if x < 0.0 {
-        format!("-{digits}")
-    } else {
-        digits
-    }
 }
 
 pub(super) fn vector(v: [f64; 3]) -> String {

@@ -8,12 +8,11 @@ use urdf_rs::{JointType, Robot};
 use super::check::reads;
 use super::document::{attributes, child, children, parent, tag_of, Element, Source};
 use super::inertia::{axis_angle, is_massless, principal, tensor};
-use super::lsd::{
-    comment, count, displacement, factor, frame, number, planar, rpy_factors, vector,
-};
+use super::lsd::{comment, count, displacement, factor, frame, planar, rpy_factors, vector};
 use super::names::{is_identifier, lsd_name, reserved};
 use super::options::ImportOptions;
 use super::tree::Tree;
+use crate::diag::number::shortest as number;
 use crate::diag::Diagnostic;
 
 #[derive(Default)]

@@ -1,0 +1,352 @@
+//! The efforts compiled once, when the model is built: every applied effort's value and
+//! potential, every link effort's value and every link potential lowered into one hash-consed
+//! expression DAG (the `Pool` of the symbolic back end) and evaluated as one tape per state.
+//!
+//! Written as trees, efforts repeat themselves: a spring's `distance(a, b)` appears in each
+//! component of its `direction(a, b)`, `between` repeats the whole force negated, a damper
+//! repeats the spring's geometry. In the pool each distinct subexpression is one node, and the
+//! tape evaluates it once. Everything an effort refers to is resolved to a slot when the tape is
+//! built: unknowns become constants (their values are known by then), join coordinates and
+//! rates become positions in the declared state, frames become the state of one of the model's
+//! `effort_frames` (computed once per evaluation from the forward kinematics).
+
+use std::collections::HashMap;
+
+use nalgebra::{Matrix3, Vector3};
+
+use super::elements::EffortFrame;
+use super::spatial::{Motion, Pose};
+use crate::elab::value::{FrameQuantity, SExpr, Vector};
+use crate::kinematics::eval::{EvalError, UnknownValues};
+use crate::symbolic::expr::{ExprId, Function, Pool, Tape};
+
+/// What a symbol of the tape stands for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Source {
+    Time,
+    /// A declared coordinate of the whole mechanism.
+    Coordinate(usize),
+    /// A declared rate.
+    Rate(usize),
+    /// A component of the state of `effort_frames[k]`.
+    Frame(usize, FrameQuantity),
+}
+
+/// The compiled efforts: one tape whose roots are every effort's components.
+#[derive(Clone, Debug)]
+pub struct EffortTape {
+    tape: Tape,
+    /// The source of each symbol, in the order of the symbols' indices.
+    sources: Vec<Source>,
+    /// Per effort frame, which parts of its state the tape reads.
+    needs: Vec<Needs>,
+}
+
+/// The parts of a frame's state an effort reads: its position is cheap, the rest is computed
+/// only when used (a spring reads positions only; a damper also velocities).
+#[derive(Clone, Copy, Debug, Default)]
+struct Needs {
+    velocity: bool,
+    angular_velocity: bool,
+    orientation: bool,
+}
+
+impl Needs {
+    fn add(&mut self, quantity: FrameQuantity) {
+        match quantity {
+            FrameQuantity::Position(_) => {}
+            FrameQuantity::Velocity(_) => self.velocity = true,
+            FrameQuantity::AngularVelocity(_) => self.angular_velocity = true,
+            FrameQuantity::Orientation(..) => self.orientation = true,
+        }
+    }
+}
+
+/// The state an effort tape reads: the declared coordinates and rates of every join, the time,
+/// and the forward kinematics of the state (each body's pose and velocity, for the frames).
+pub struct EffortState<'a> {
+    pub world: &'a [Pose],
+    pub velocity: &'a [Motion],
+    pub coordinates: &'a [f64],
+    pub rates: &'a [f64],
+    pub time: f64,
+}
+
+/// Where an effort tape is evaluated: kept from one evaluation to the next, so that evaluating
+/// allocates nothing once the buffers have their sizes.
+#[derive(Clone, Debug, Default)]
+pub struct EffortScratch {
+    frames: Vec<FrameValues>,
+    symbols: Vec<f64>,
+    values: Vec<f64>,
+}
+
+impl EffortTape {
+    /// Evaluates every node at `state`, into `scratch`; read the roots with [`EffortTape::root`].
+    pub fn eval(
+        &self,
+        frames: &[EffortFrame],
+        state: &EffortState<'_>,
+        scratch: &mut EffortScratch,
+    ) {
+        scratch.frames.clear();
+        scratch.frames.extend(
+            frames
+                .iter()
+                .zip(&self.needs)
+                .map(|(f, needs)| FrameValues::new(state, f.body, &f.offset, *needs)),
+        );
+        scratch.symbols.clear();
+        scratch
+            .symbols
+            .extend(self.sources.iter().map(|source| match *source {
+                Source::Time => state.time,
+                Source::Coordinate(i) => state.coordinates[i],
+                Source::Rate(i) => state.rates[i],
+                Source::Frame(k, quantity) => scratch.frames[k].component(quantity),
+            }));
+        self.tape.eval_into(&scratch.symbols, &mut scratch.values);
+    }
+
+    /// The value of root `k` after [`EffortTape::eval`].
+    pub fn root(&self, scratch: &EffortScratch, k: usize) -> f64 {
+        scratch.values[self.tape.roots[k]]
+    }
+
+    /// Number of distinct nodes evaluated per state.
+    pub fn size(&self) -> usize {
+        self.tape.size()
+    }
+}
+
+/// Where an expression's link coordinates (`Coordinate { index, .. }`) lie among the declared
+/// coordinates: at `offset` for a link effort or potential, nowhere for an applied effort.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Link(pub Option<usize>);
+
+/// Lowers expressions into one pool, then builds the tape of all of them.
+pub struct TapeBuilder<'a> {
+    pool: Pool,
+    sources: Vec<Source>,
+    roots: Vec<ExprId>,
+    unknowns: &'a UnknownValues,
+    frames: &'a [EffortFrame],
+    declared_offset: &'a dyn Fn(crate::elab::value::JoinId) -> Option<usize>,
+    /// Subexpressions already lowered, by address and link: programs share subtrees (`let`).
+    lowered: HashMap<(*const SExpr, Link), ExprId>,
+}
+
+impl<'a> TapeBuilder<'a> {
+    pub fn new(
+        unknowns: &'a UnknownValues,
+        frames: &'a [EffortFrame],
+        declared_offset: &'a dyn Fn(crate::elab::value::JoinId) -> Option<usize>,
+    ) -> TapeBuilder<'a> {
+        TapeBuilder {
+            pool: Pool::new(),
+            sources: Vec::new(),
+            roots: Vec::new(),
+            unknowns,
+            frames,
+            declared_offset,
+            lowered: HashMap::new(),
+        }
+    }
+
+    /// Adds a scalar root; returns its index among the tape's values.
+    pub fn scalar(&mut self, s: &SExpr, link: Link) -> Result<usize, EvalError> {
+        let id = self.lower(s, link)?;
+        self.roots.push(id);
+        Ok(self.roots.len() - 1)
+    }
+
+    /// Adds the three components of a vector; returns their indices among the tape's values.
+    pub fn vector(&mut self, v: &Vector, link: Link) -> Result<[usize; 3], EvalError> {
+        Ok([
+            self.scalar(&v[0], link)?,
+            self.scalar(&v[1], link)?,
+            self.scalar(&v[2], link)?,
+        ])
+    }
+
+    pub fn build(self) -> EffortTape {
+        let mut needs = vec![Needs::default(); self.frames.len()];
+        for source in &self.sources {
+            if let Source::Frame(k, quantity) = *source {
+                needs[k].add(quantity);
+            }
+        }
+        EffortTape {
+            tape: Tape::new(&self.pool, &self.roots),
+            sources: self.sources,
+            needs,
+        }
+    }
+
+    fn symbol(&mut self, source: Source) -> ExprId {
+        let name = format!("{source:?}");
+        let id = self.pool.symbol(&name);
+        if self.pool.symbol_index(id) == Some(self.sources.len()) {
+            self.sources.push(source);
+        }
+        id
+    }
+
+    fn lower(&mut self, s: &SExpr, link: Link) -> Result<ExprId, EvalError> {
+        let key = (s as *const SExpr, link);
+        if let Some(&id) = self.lowered.get(&key) {
+            return Ok(id);
+        }
+        let id = self.lower_node(s, link)?;
+        self.lowered.insert(key, id);
+        Ok(id)
+    }
+
+    fn lower_node(&mut self, s: &SExpr, link: Link) -> Result<ExprId, EvalError> {
+        Ok(match s {
+            SExpr::Num(v) => self.pool.constant(*v),
+            SExpr::Time => self.symbol(Source::Time),
+            SExpr::Unknown(id) => {
+                let value = *self.unknowns.get(id).ok_or(EvalError::Missing(*id))?;
+                self.pool.constant(value)
+            }
+            SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
+            SExpr::Coordinate { index, order } => {
+                let offset = link
+                    .0
+                    .ok_or(EvalError::NotGeometric("a coordinate of another link"))?;
+                self.coordinate(offset + *index as usize, *order)?
+            }
+            SExpr::JoinCoordinate { join, index, order } => {
+                let offset = (self.declared_offset)(*join)
+                    .ok_or(EvalError::NotGeometric("a coordinate of a join"))?;
+                self.coordinate(offset + *index as usize, *order)?
+            }
+            SExpr::FrameState(frame, quantity) => {
+                let k = self
+                    .frames
+                    .iter()
+                    .position(|f| *f.frame == **frame)
+                    .ok_or(EvalError::NotGeometric("a frame outside the mechanism"))?;
+                match self.frames[k].body {
+                    // A frame of earth does not move: its state is a constant.
+                    0 => self
+                        .pool
+                        .constant(earth_frame(&self.frames[k].offset, *quantity)),
+                    _ => self.symbol(Source::Frame(k, *quantity)),
+                }
+            }
+            SExpr::Neg(a) => {
+                let a = self.lower(a, link)?;
+                self.pool.neg(a)
+            }
+            SExpr::Add(a, b) => {
+                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
+                self.pool.add(a, b)
+            }
+            SExpr::Sub(a, b) => {
+                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
+                self.pool.sub(a, b)
+            }
+            SExpr::Mul(a, b) => {
+                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
+                self.pool.mul(a, b)
+            }
+            SExpr::Div(a, b) => {
+                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
+                self.pool.div(a, b)
+            }
+            SExpr::Pow(a, b) => {
+                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
+                self.pool.pow(a, b)
+            }
+            SExpr::Call(name, args) => self.call(name, args, link)?,
+        })
+    }
+
+    fn coordinate(&mut self, index: usize, order: u32) -> Result<ExprId, EvalError> {
+        match order {
+            0 => Ok(self.symbol(Source::Coordinate(index))),
+            1 => Ok(self.symbol(Source::Rate(index))),
+            _ => Err(EvalError::NotGeometric("a second time derivative")),
+        }
+    }
+
+    fn call(
+        &mut self,
+        name: &str,
+        args: &[crate::elab::value::Scalar],
+        link: Link,
+    ) -> Result<ExprId, EvalError> {
+        let argument = |k: usize| {
+            args.get(k)
+                .ok_or(EvalError::NotGeometric("a call without its arguments"))
+        };
+        let x = self.lower(argument(0)?, link)?;
+        if name == "atan2" {
+            let second = self.lower(argument(1)?, link)?;
+            return Ok(self.pool.atan2(x, second));
+        }
+        let function =
+            Function::from_name(name).ok_or(EvalError::NotGeometric("an unknown function"))?;
+        Ok(self.pool.apply(function, x))
+    }
+}
+
+/// A component of the state of the frame at `offset` on earth.
+fn earth_frame(offset: &Pose, quantity: FrameQuantity) -> f64 {
+    match quantity {
+        FrameQuantity::Position(i) => offset.translation.vector[i as usize],
+        FrameQuantity::Velocity(_) | FrameQuantity::AngularVelocity(_) => 0.0,
+        FrameQuantity::Orientation(i, j) => {
+            offset.rotation.to_rotation_matrix().matrix()[(i as usize, j as usize)]
+        }
+    }
+}
+
+/// A frame's state at one instant, in the fixed axes.
+#[derive(Clone, Debug)]
+struct FrameValues {
+    position: Vector3<f64>,
+    velocity: Vector3<f64>,
+    angular_velocity: Vector3<f64>,
+    orientation: Matrix3<f64>,
+}
+
+impl FrameValues {
+    /// The frame at `offset` on `body`: its position, and what `needs` asks for of the rest
+    /// (zeros otherwise).
+    fn new(state: &EffortState<'_>, body: usize, offset: &Pose, needs: Needs) -> FrameValues {
+        let world = &state.world[body];
+        let velocity = &state.velocity[body];
+        let spin = Vector3::new(velocity[0], velocity[1], velocity[2]);
+        let mut values = FrameValues {
+            position: world.translation.vector + world.rotation * offset.translation.vector,
+            velocity: Vector3::zeros(),
+            angular_velocity: Vector3::zeros(),
+            orientation: Matrix3::zeros(),
+        };
+        if needs.velocity {
+            let linear = Vector3::new(velocity[3], velocity[4], velocity[5]);
+            values.velocity = world.rotation * (linear + spin.cross(&offset.translation.vector));
+        }
+        if needs.angular_velocity {
+            values.angular_velocity = world.rotation * spin;
+        }
+        if needs.orientation {
+            values.orientation = *(world.rotation * offset.rotation)
+                .to_rotation_matrix()
+                .matrix();
+        }
+        values
+    }
+
+    fn component(&self, quantity: FrameQuantity) -> f64 {
+        match quantity {
+            FrameQuantity::Position(i) => self.position[i as usize],
+            FrameQuantity::Velocity(i) => self.velocity[i as usize],
+            FrameQuantity::AngularVelocity(i) => self.angular_velocity[i as usize],
+            FrameQuantity::Orientation(i, j) => self.orientation[(i as usize, j as usize)],
+        }
+    }
+}
