@@ -47,7 +47,7 @@ pub struct AppliedEffort {
 /// body's number and its pose on the body.
 #[derive(Clone, Debug)]
 pub struct EffortFrame {
-    pub frame: std::rc::Rc<crate::elab::value::Frame>,
+    pub frame: std::sync::Arc<crate::elab::value::Frame>,
     pub body: usize,
     pub offset: Pose,
 }

@@ -1,6 +1,6 @@
 //! Evaluation of declarations and expressions.
 
-use std::rc::Rc;
+use std::sync::Arc;
 
 use super::elaborator::{internal, Elaborator, Global};
 use super::mechanism::*;
@@ -273,7 +273,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Target::Global(scope) => self.global(scope, &ident.name),
             Target::Builtin => match &*ident.name {
                 "pi" => Ok(Value::Scalar(num(std::f64::consts::PI))),
-                "time" => Ok(Value::Scalar(Rc::new(SExpr::Time))),
+                "time" => Ok(Value::Scalar(Arc::new(SExpr::Time))),
                 "earth" => Ok(Value::Body(BodyRef::Earth)),
                 other => Err(internal(format!("`{other}` is not a constant"))),
             },
@@ -333,13 +333,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Prime(inner) => match self.expr(inner, locals)? {
                 Value::Scalar(s) => match *s {
                     SExpr::Coordinate { index, order } => {
-                        Value::Scalar(Rc::new(SExpr::Coordinate {
+                        Value::Scalar(Arc::new(SExpr::Coordinate {
                             index,
                             order: order + 1,
                         }))
                     }
                     SExpr::JoinCoordinate { join, index, order } => {
-                        Value::Scalar(Rc::new(SExpr::JoinCoordinate {
+                        Value::Scalar(Arc::new(SExpr::JoinCoordinate {
                             join,
                             index,
                             order: order + 1,
@@ -390,7 +390,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     }
 
     fn unknown(&mut self, kind: UnknownKind, origin: Origin, component: u8, span: Span) -> Scalar {
-        Rc::new(SExpr::Unknown(
+        Arc::new(SExpr::Unknown(
             self.new_unknown(kind, origin, component, span),
         ))
     }
@@ -452,7 +452,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let join = self.mechanism.join(id);
         let coordinates = &self.mechanism.link(join.link).coordinates;
         match coordinates.iter().position(|c| &**c == coordinate) {
-            Some(index) => Ok(Value::Scalar(Rc::new(SExpr::JoinCoordinate {
+            Some(index) => Ok(Value::Scalar(Arc::new(SExpr::JoinCoordinate {
                 join: id,
                 index: index as u32,
                 order: 0,
@@ -543,7 +543,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .into_iter()
                     .map(|v| as_scalar(v, span))
                     .collect::<Result<Vec<_>>>()?;
-                return Ok(Value::Scalar(Rc::new(SExpr::UnknownFunction(id, scalars))));
+                return Ok(Value::Scalar(Arc::new(SExpr::UnknownFunction(id, scalars))));
             }
             Callee::Name(ident) => (ident, self.resolution(ident.span)?),
             Callee::Qualified { name, .. } => (name, self.resolution(name.span)?),
@@ -601,7 +601,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         for (index, param) in params.iter().enumerate() {
             locals.push((
                 param.name.clone(),
-                Value::Scalar(Rc::new(SExpr::Coordinate {
+                Value::Scalar(Arc::new(SExpr::Coordinate {
                     index: index as u32,
                     order: 0,
                 })),

@@ -2,7 +2,7 @@
 //! arithmetic on scalars, vectors and matrices, rotations applied to vectors, and the built-in
 //! functions, folded to numbers when their arguments are numbers.
 
-use std::rc::Rc;
+use std::sync::Arc;
 
 use super::elaborator::internal;
 use super::value::*;
@@ -189,7 +189,7 @@ fn rotate_about(angle: &Scalar, axis: &Vector, v: &Vector) -> Vector {
 fn builtin_scalar(name: &'static str, x: &Scalar) -> Scalar {
     match fold_builtin(name, std::slice::from_ref(x)) {
         Some(v) => num(v),
-        None => Rc::new(SExpr::Call(name, vec![x.clone()])),
+        None => Arc::new(SExpr::Call(name, vec![x.clone()])),
     }
 }
 
@@ -242,7 +242,7 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
             if let Some(folded) = fold_builtin(name, &args) {
                 return Ok(Value::Scalar(num(folded)));
             }
-            Ok(Value::Scalar(Rc::new(SExpr::Call(static_name, args))))
+            Ok(Value::Scalar(Arc::new(SExpr::Call(static_name, args))))
         }
     }
 }
@@ -252,13 +252,13 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
 fn frame_state(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
     let frames = values
         .into_iter()
-        .map(|v| as_frame(v, span).map(Rc::new))
+        .map(|v| as_frame(v, span).map(Arc::new))
         .collect::<Result<Vec<_>>>()?;
     let frame = frames.first().ok_or_else(|| internal("missing argument"))?;
-    let component = |frame: &Rc<Frame>, quantity: FrameQuantity| {
-        Rc::new(SExpr::FrameState(frame.clone(), quantity))
+    let component = |frame: &Arc<Frame>, quantity: FrameQuantity| {
+        Arc::new(SExpr::FrameState(frame.clone(), quantity))
     };
-    let vector = |frame: &Rc<Frame>, make: fn(u8) -> FrameQuantity| -> Vector {
+    let vector = |frame: &Arc<Frame>, make: fn(u8) -> FrameQuantity| -> Vector {
         [0, 1, 2].map(|i| component(frame, make(i)))
     };
     Ok(match name {

@@ -3,7 +3,7 @@
 //! mechanical objects of the [`Mechanism`](super::mechanism::Mechanism).
 
 use std::fmt;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use crate::check::scope::ScopeId;
 use crate::check::types::DefId;
@@ -19,7 +19,7 @@ pub struct EffortId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct JoinId(pub u32);
 
-pub type Scalar = Rc<SExpr>;
+pub type Scalar = Arc<SExpr>;
 
 /// A symbolic scalar expression.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,7 +51,7 @@ pub enum SExpr {
     Call(&'static str, Vec<Scalar>),
     /// One component of the state of a frame at the current instant, in the fixed axes
     /// (`position(F)`, `velocity(F)`, …): only efforts may depend on it.
-    FrameState(Rc<Frame>, FrameQuantity),
+    FrameState(Arc<Frame>, FrameQuantity),
 }
 
 /// A component of a frame's state, in the fixed axes.
@@ -68,7 +68,7 @@ pub enum FrameQuantity {
 }
 
 pub fn num(value: f64) -> Scalar {
-    Rc::new(SExpr::Num(value))
+    Arc::new(SExpr::Num(value))
 }
 
 pub fn constant(s: &Scalar) -> Option<f64> {
@@ -105,7 +105,7 @@ pub fn arith(op: char, a: &Scalar, b: &Scalar) -> Scalar {
         _ => {}
     }
     let (a, b) = (a.clone(), b.clone());
-    Rc::new(match op {
+    Arc::new(match op {
         '+' => SExpr::Add(a, b),
         '-' => SExpr::Sub(a, b),
         '*' => SExpr::Mul(a, b),
@@ -117,7 +117,7 @@ pub fn arith(op: char, a: &Scalar, b: &Scalar) -> Scalar {
 pub fn negate(a: &Scalar) -> Scalar {
     match constant(a) {
         Some(v) => num(-v),
-        None => Rc::new(SExpr::Neg(a.clone())),
+        None => Arc::new(SExpr::Neg(a.clone())),
     }
 }
 
@@ -230,7 +230,7 @@ impl SExpr {
     }
 
     /// Every frame whose state the expression uses, once each.
-    pub fn frames_used(&self, into: &mut Vec<Rc<Frame>>) {
+    pub fn frames_used(&self, into: &mut Vec<Arc<Frame>>) {
         match self {
             SExpr::FrameState(frame, _) => {
                 if !into.iter().any(|f| f == frame) {

@@ -212,9 +212,31 @@ impl Sampler<'_> {
 
 /// Runs the prepared simulation; `sink` receives every sample as soon as it is computed.
 pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
+    let start = Start {
+        coordinates: &prepared.coordinates,
+        rates: &prepared.rates,
+    };
+    run_from(prepared, &start, sink)
+}
+
+/// A starting state of a prepared mechanism: declared coordinates and rates (for a mechanism
+/// with loops, closed ones: the prepared start is).
+#[derive(Clone, Copy, Debug)]
+pub struct Start<'a> {
+    pub coordinates: &'a [f64],
+    pub rates: &'a [f64],
+}
+
+/// Simulates a prepared mechanism from another starting state: the model is only read, so one
+/// prepared mechanism serves runs from many starts, on as many threads (a parameter sweep).
+pub fn run_from(
+    prepared: &Prepared,
+    start: &Start<'_>,
+    sink: &mut dyn FnMut(&Sample),
+) -> Simulation {
     let model = &prepared.model;
     let settings = &prepared.settings;
-    let (q0, v0) = match model.state_from_declared(&prepared.coordinates, &prepared.rates) {
+    let (q0, v0) = match model.state_from_declared(start.coordinates, start.rates) {
         Ok(state) => state,
         Err(e) => {
             return failed_at_start(
@@ -228,7 +250,7 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
     };
     let mut y0 = q0;
     y0.extend_from_slice(&v0);
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = Rc::new(RefCell::new(start.coordinates.to_vec()));
     let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
     if let Err(error) = system.start_loops(&mut y0) {
         return failed_at_start(prepared, error.to_string());

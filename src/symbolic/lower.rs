@@ -2,7 +2,7 @@
 //! time, unknowns and unknown functions become named symbols, the variables of the equations.
 
 use std::collections::HashMap;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use super::expr::{ExprId, Function, Pool};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
@@ -60,7 +60,7 @@ pub struct Lowering<'a> {
     pub variables: Variables,
     /// The frames whose state efforts use, with that state as expressions (set by the
     /// generator before it lowers the efforts).
-    pub frames: Vec<(Rc<Frame>, FrameState)>,
+    pub frames: Vec<(Arc<Frame>, FrameState)>,
 }
 
 /// A frame's state in the fixed axes, as expressions.

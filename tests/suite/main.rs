@@ -28,6 +28,7 @@ mod regression;
 mod simulation;
 mod symbolic;
 mod symbolic_equations;
+mod threads;
 mod unit_diag;
 mod unit_dynamics;
 mod unit_integrate;

@@ -6,25 +6,25 @@ mod eval {
     use lsdc::elab::value::SExpr;
     use lsdc::elab::value::{arith, num};
     use lsdc::kinematics::eval::*;
-    use std::rc::Rc;
+    use std::sync::Arc;
 
-    fn expression() -> Rc<SExpr> {
-        let q0 = Rc::new(SExpr::Coordinate { index: 0, order: 0 });
-        let q1 = Rc::new(SExpr::Coordinate { index: 1, order: 0 });
+    fn expression() -> Arc<SExpr> {
+        let q0 = Arc::new(SExpr::Coordinate { index: 0, order: 0 });
+        let q1 = Arc::new(SExpr::Coordinate { index: 1, order: 0 });
         let e = arith(
             '*',
-            &Rc::new(SExpr::Call("sin", vec![arith('*', &num(2.0), &q0)])),
+            &Arc::new(SExpr::Call("sin", vec![arith('*', &num(2.0), &q0)])),
             &arith('^', &q1, &num(3.0)),
         );
         let e = arith(
             '+',
             &e,
-            &Rc::new(SExpr::Call("atan2", vec![q1.clone(), q0.clone()])),
+            &Arc::new(SExpr::Call("atan2", vec![q1.clone(), q0.clone()])),
         );
         arith(
             '/',
             &e,
-            &Rc::new(SExpr::Call("sqrt", vec![arith('+', &q0, &num(4.0))])),
+            &Arc::new(SExpr::Call("sqrt", vec![arith('+', &q0, &num(4.0))])),
         )
     }
 
