@@ -9,12 +9,12 @@ use std::hint::black_box;
 use lsdc::driver::{compile_files, compile_text};
 use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
 use lsdc::dynamics::model::{self, Model};
-use lsdc::dynamics::spatial::Force;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Settings};
 use lsdc::simulate::run::run;
+use lsdc::spatial::Force;
 
 fn options() -> LoadOptions {
     LoadOptions {

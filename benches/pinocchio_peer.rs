@@ -14,9 +14,9 @@ use std::path::PathBuf;
 use lsdc::driver::compile_files;
 use lsdc::dynamics::algorithms::{aba_into, crba_into, rnea_into, Data};
 use lsdc::dynamics::model::Model;
-use lsdc::dynamics::spatial::Force;
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::spatial::Force;
 use nalgebra::{DMatrix, DVector};
 
 /// A small deterministic generator (xorshift64*), so both runs see the same kind of states.

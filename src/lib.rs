@@ -23,6 +23,7 @@ pub mod load;
 pub mod output;
 pub mod simulate;
 pub mod source;
+pub mod spatial;
 pub mod symbolic;
 pub mod syntax;
 pub mod topology;

@@ -7,9 +7,9 @@ use std::rc::Rc;
 use std::time::Instant;
 
 use lsdc::dynamics::algorithms::{crba, rnea, Data};
-use lsdc::dynamics::spatial::Force;
 use lsdc::simulate::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
+use lsdc::spatial::Force;
 
 pub fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);

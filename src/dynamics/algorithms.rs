@@ -7,8 +7,8 @@ use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 use super::compiled::EffortScratch;
 use super::joint::JointState;
 use super::model::Model;
-use super::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
 use crate::kinematics::eval::EvalError;
+use crate::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
 
 /// Scratch space for the algorithms; `Data::new(&model)` once, reuse for every call.
 pub struct Data {

@@ -9,8 +9,8 @@ use std::f64::consts::PI;
 use nalgebra::{DVector, Rotation3, Unit, UnitQuaternion, Vector3};
 
 use super::joint::{quaternion, Joint, JointType};
-use super::spatial::{motion_to_parent, Motion, Pose};
 use crate::kinematics::eval::{EvalError, UnknownValues};
+use crate::spatial::{motion_to_parent, Motion, Pose};
 
 fn rotate(axis: &Vector3<f64>, angle: f64, v: &Vector3<f64>) -> Vector3<f64> {
     Rotation3::from_axis_angle(&Unit::new_normalize(*axis), angle) * v
@@ -160,7 +160,7 @@ impl Joint {
             motion.pose.inverse()
         };
         let body = if self.first_on_parent {
-            super::spatial::motion_to_child(&motion.pose, &motion.velocity)
+            crate::spatial::motion_to_child(&motion.pose, &motion.velocity)
         } else {
             -motion.velocity
         };

@@ -15,9 +15,9 @@ use std::collections::HashMap;
 use nalgebra::{Matrix3, Vector3};
 
 use super::elements::EffortFrame;
-use super::spatial::{Motion, Pose};
 use crate::elab::value::{FrameQuantity, SExpr, Vector};
 use crate::kinematics::eval::{EvalError, UnknownValues};
+use crate::spatial::{Motion, Pose};
 use crate::symbolic::expr::{ExprId, Function, Pool, Tape};
 
 /// What a symbol of the tape stands for.

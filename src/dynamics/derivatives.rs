@@ -9,8 +9,8 @@ use nalgebra::DVector;
 use super::algorithms::{forward_kinematics, Data};
 use super::joint::JointType;
 use super::model::Model;
-use super::spatial::{self, Force, Motion};
 use crate::kinematics::eval::EvalError;
+use crate::spatial::{self, Force, Motion};
 
 pub fn kinetic_energy_gradient(
     model: &Model,

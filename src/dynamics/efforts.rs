@@ -10,10 +10,10 @@ use super::compiled::{EffortState, EffortTape};
 use super::energy::{constant_potential, Conservative};
 use super::joint::JointType;
 use super::model::{LinkEffort, Model};
-use super::spatial::{self, Force};
 use crate::elab::mechanism::EffortKind;
 use crate::kinematics::eval::{eval_jet, Env, EvalError};
 use crate::kinematics::model::Step;
+use crate::spatial::{self, Force};
 
 /// The efforts at one state.
 pub struct Efforts {

@@ -3,9 +3,9 @@
 
 use nalgebra::Vector3;
 
-use super::spatial::{Inertia, Pose, RigidInertia};
 use crate::elab::mechanism::EffortKind;
 use crate::elab::value::{Scalar, Vector};
+use crate::spatial::{Inertia, Pose, RigidInertia};
 
 #[derive(Clone, Debug)]
 pub struct BodyInertia {

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use super::algorithms::Data;
 use super::model::constant_fixed_force;
 use super::model::Model;
-use super::spatial::{self, Force};
+use crate::spatial::{self, Force};
 
 pub fn kinetic_energy(model: &Model, data: &Data) -> f64 {
     model

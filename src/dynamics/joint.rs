@@ -16,10 +16,10 @@
 
 use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 
-use super::spatial::{self, Force, Motion, Pose, Transform};
 use crate::elab::value::SExpr;
 use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::kinematics::model::{JointModel, Step};
+use crate::spatial::{self, Force, Motion, Pose, Transform};
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum JointType {

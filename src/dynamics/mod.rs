@@ -12,5 +12,4 @@ pub mod energy;
 pub mod joint;
 pub mod loops;
 pub mod model;
-pub mod spatial;
 pub mod welds;

@@ -6,13 +6,13 @@ use nalgebra::{Matrix3, Vector3};
 use super::compiled::{EffortTape, Link, TapeBuilder};
 pub use super::elements::{AppliedEffort, BodyInertia, EffortFrame, LinkEffort, LinkPotential};
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
-use super::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 use super::welds;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{constant_pose, JointModel, KinematicModel};
+use crate::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 
 #[derive(Clone, Debug)]
 pub struct Model {

@@ -13,7 +13,7 @@
 
 use super::elements::{AppliedEffort, BodyInertia, LinkEffort};
 use super::joint::{Joint, Kernel};
-use super::spatial::{Inertia, RigidInertia, Transform};
+use crate::spatial::{Inertia, RigidInertia, Transform};
 
 /// What merging gives the model.
 pub struct Merged {

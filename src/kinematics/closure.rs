@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use super::eval::EvalError;
 use super::forward::{forward, Configuration};
 use super::model::KinematicModel;
-use super::spatial::{self, Twist};
+use crate::spatial::{self, Twist};
 
 pub struct Closure {
     /// 6 rows per complementary link, in link order.
@@ -56,7 +56,7 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
         let mut end_twists = configuration.jacobians[joint.first_body].clone();
         for c in 0..joint.coordinate_count() {
             let column = Twist::from_column_slice(subspace.column(c).as_slice());
-            let world = spatial::transform_twist(&base, &column);
+            let world = spatial::motion_to_parent(&base, &column);
             for r in 0..6 {
                 end_twists[(r, joint.offset + c)] += world[r];
             }
@@ -66,7 +66,7 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
             let v_end = Twist::from_column_slice(end_twists.column(c).as_slice());
             let v_target = Twist::from_column_slice(target_twists.column(c).as_slice());
             let dw: Vector3<f64> = spatial::angular(&v_target) - spatial::angular(&v_end);
-            let d_relative = r_end.matrix().transpose() * spatial::hat(&dw) * r_target.matrix();
+            let d_relative = r_end.matrix().transpose() * spatial::skew(&dw) * r_target.matrix();
             let d_rotation = spatial::skew_vector(&d_relative);
             let d_position = spatial::point_velocity(&v_target, &p_target)
                 - spatial::point_velocity(&v_end, &p_end);

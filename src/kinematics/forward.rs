@@ -5,7 +5,7 @@ use nalgebra::DMatrix;
 
 use super::eval::EvalError;
 use super::model::KinematicModel;
-use super::spatial::{self, Pose, Twist};
+use crate::spatial::{self, Pose, Twist};
 
 pub struct Configuration {
     /// Pose of body j at index j; index 0 is earth.
@@ -48,9 +48,9 @@ pub fn forward(model: &KinematicModel, q: &[f64]) -> Result<Configuration, EvalE
             let local = if link.first_on_parent {
                 column
             } else {
-                -spatial::transform_twist(&inverse_chain, &column)
+                -spatial::motion_to_parent(&inverse_chain, &column)
             };
-            let world = spatial::transform_twist(&base, &local);
+            let world = spatial::motion_to_parent(&base, &local);
             for r in 0..6 {
                 jacobian[(r, joint.offset + k)] += world[r];
             }

@@ -8,7 +8,7 @@ use serde::Serialize;
 use super::eval::{EvalError, UnknownValues};
 use super::mobility::rank;
 use super::model::JointModel;
-use super::spatial::{angular, linear, Twist};
+use crate::spatial::{angular, linear, Twist};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]

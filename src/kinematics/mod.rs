@@ -9,7 +9,6 @@ pub mod initial;
 pub mod joint;
 pub mod mobility;
 pub mod model;
-pub mod spatial;
 pub mod unknowns;
 
 pub use initial::initial_coordinates;

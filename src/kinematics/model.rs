@@ -5,11 +5,11 @@
 use nalgebra::{DMatrix, Vector3};
 
 use super::eval::{eval, eval_jet, Env, EvalError, UnknownValues};
-use super::spatial::{self, Pose, Twist};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId, Scalar};
 use crate::source::Span;
+use crate::spatial::{self, Pose, Twist};
 use crate::topology::Topology;
 
 #[derive(Clone, Debug)]
@@ -109,14 +109,15 @@ impl JointModel {
                 }
             };
             for (k, column) in columns.iter().enumerate() {
-                let moved = spatial::transform_twist(&pose, column);
+                let moved = spatial::motion_to_parent(&pose, column);
                 for r in 0..6 {
                     subspace[(r, k)] += moved[r];
                 }
             }
             // d/dt of Ad(P) ξ is V_P × Ad(P) ξ + Ad(P) ξ̇ (spatial twists in the first frame).
-            let step_velocity = spatial::transform_twist(&pose, &local_velocity);
-            bias += cross(&velocity, &step_velocity) + spatial::transform_twist(&pose, &local_bias);
+            let step_velocity = spatial::motion_to_parent(&pose, &local_velocity);
+            bias +=
+                cross(&velocity, &step_velocity) + spatial::motion_to_parent(&pose, &local_bias);
             velocity += step_velocity;
             pose *= transform;
         }
@@ -432,10 +433,10 @@ impl JointModel {
                     )
                 }
             };
-            let step_velocity = spatial::transform_twist(&pose, &local_rates);
-            derivative +=
-                cross(&moved_frame, &step_velocity) + spatial::transform_twist(&pose, &local_mixed);
-            moved_frame += spatial::transform_twist(&pose, &local_direction);
+            let step_velocity = spatial::motion_to_parent(&pose, &local_rates);
+            derivative += cross(&moved_frame, &step_velocity)
+                + spatial::motion_to_parent(&pose, &local_mixed);
+            moved_frame += spatial::motion_to_parent(&pose, &local_direction);
             pose *= transform;
         }
         Ok(derivative)

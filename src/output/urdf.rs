@@ -19,11 +19,11 @@ use urdf_rs::{
 use crate::diag::number::shortest as number;
 use crate::dynamics::joint::{Joint, JointType};
 use crate::dynamics::model::{BodyInertia, Model};
-use crate::dynamics::spatial::{self, Pose};
 use crate::elab::value::SExpr;
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{JointModel, Step};
-use crate::kinematics::spatial::{rotation, translation};
+use crate::spatial::{self, Pose};
+use crate::spatial::{rotation, translation};
 
 /// URDF has no unlimited prismatic joint, and its readers require `<limit>` with an effort and
 /// a velocity on one: this bound, SDFormat's own for "no limit", stands for none.

@@ -17,8 +17,8 @@ use crate::dynamics::algorithms::{
 use crate::dynamics::efforts::{evaluate, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::Model;
-use crate::dynamics::spatial;
 use crate::kinematics::eval::EvalError;
+use crate::spatial;
 
 pub struct MechanicalSystem<'m> {
     pub model: &'m Model,

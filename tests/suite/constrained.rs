@@ -10,13 +10,13 @@ use lsdc::dynamics::algorithms::{crba, rnea};
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::energy::{conservative_forces, constant_potential, kinetic_energy};
 use lsdc::dynamics::model::{self, Model};
-use lsdc::dynamics::spatial::Force;
 use lsdc::kinematics::assembly::{assemble, AssemblyOptions};
 use lsdc::kinematics::closure::closure;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::initial_coordinates;
 use lsdc::kinematics::model::{self as kinematic_model, KinematicModel};
 use lsdc::load::LoadOptions;
+use lsdc::spatial::Force;
 use nalgebra::{DMatrix, DVector};
 
 // ---------------------------------------------------------------------------------------------

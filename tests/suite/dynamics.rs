@@ -5,10 +5,10 @@
 use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
 use lsdc::dynamics::model::{self, Model};
-use lsdc::dynamics::spatial::Force;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
+use lsdc::spatial::Force;
 use proptest::prelude::*;
 
 use crate::common::trees::tree_program;

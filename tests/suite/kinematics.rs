@@ -13,9 +13,10 @@ use lsdc::kinematics::assembly::{assemble, AssemblyOptions};
 use lsdc::kinematics::closure::closure;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::forward::forward;
+use lsdc::kinematics::initial_coordinates;
 use lsdc::kinematics::model::{self, KinematicModel};
-use lsdc::kinematics::{initial_coordinates, spatial};
 use lsdc::load::LoadOptions;
+use lsdc::spatial;
 use lsdc::topology;
 use proptest::prelude::*;
 

@@ -42,7 +42,7 @@ mod angles {
 }
 
 mod spatial {
-    use lsdc::dynamics::spatial::*;
+    use lsdc::spatial::*;
     use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 
     fn pose() -> Pose {

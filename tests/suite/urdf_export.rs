@@ -10,10 +10,10 @@ use nalgebra::{Matrix3, Matrix6, Point3, Translation3, UnitQuaternion, Vector3};
 use lsdc::driver::{compile_files, compile_text, Compilation};
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::joint::{quaternion, JointType};
-use lsdc::dynamics::spatial::{inertia_to_parent, skew, Pose};
 use lsdc::load::LoadOptions;
 use lsdc::output::urdf::{export_urdf, link_frames, ExportError, NO_LIMIT};
 use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::spatial::{inertia_to_parent, skew, Pose};
 
 fn options() -> LoadOptions {
     LoadOptions {

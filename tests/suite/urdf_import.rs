@@ -9,7 +9,6 @@ use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, Unit, UnitQuaternion
 use lsdc::diag::Diagnostic;
 use lsdc::driver::{compile_text, Compilation};
 use lsdc::dynamics::model::{self as dynamic_model, Model};
-use lsdc::dynamics::spatial;
 use lsdc::elab::value::BodyRef;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::forward::forward;
@@ -17,6 +16,7 @@ use lsdc::kinematics::model::{self as kinematic_model, KinematicModel};
 use lsdc::load::urdf::{import_urdf, lsd_name, ImportOptions, Imported};
 use lsdc::load::LoadOptions;
 use lsdc::source::SourceMap;
+use lsdc::spatial;
 
 /// A two-link arm with a prismatic tool on a fixed flange: off-diagonal inertia tensors, rpy
 /// origins, a continuous joint that mimics the shoulder, limits, damping, a safety controller,

@@ -14,9 +14,9 @@ use super::jacobian::{ConstraintJacobian, LoopBlock};
 
 use crate::dynamics::algorithms::{bias_accelerations, forward_kinematics, Data};
 use crate::dynamics::model::Model;
-use crate::dynamics::spatial::{self, Force, Motion};
 use crate::kinematics::eval::EvalError;
-use crate::kinematics::spatial::{transform_twist, translation, Pose};
+use crate::spatial::{self, Force, Motion};
+use crate::spatial::{motion_to_parent, translation, Pose};
 
 /// Names of the six rows of a loop.
 pub const ROW_NAMES: [&str; 6] = [
@@ -130,7 +130,7 @@ fn loop_rows(
     add_body_columns(model, data, joint.second_body, &at_point, 1.0, &mut block);
     add_body_columns(model, data, joint.first_body, &at_point, -1.0, &mut block);
     for column in 0..own {
-        let twist = transform_twist(
+        let twist = motion_to_parent(
             &base,
             &Motion::from_column_slice(chain.subspace.column(column).as_slice()),
         );
@@ -146,10 +146,10 @@ fn loop_rows(
             spatial::motion_to_parent(&data.world[body], &motions[body])
         };
         let first_velocity = world(&data.velocity, joint.first_body);
-        let chain_velocity = transform_twist(&base, &chain.velocity);
+        let chain_velocity = motion_to_parent(&base, &chain.velocity);
         let end_acceleration = world(&data.acceleration, joint.first_body)
             + spatial::cross_motion(&first_velocity, &chain_velocity)
-            + transform_twist(&base, &chain.bias);
+            + motion_to_parent(&base, &chain.bias);
         let difference = world(&data.acceleration, joint.second_body) - end_acceleration;
         c.bias
             .rows_mut(row, 6)

@@ -1,8 +1,10 @@
-//! Spatial algebra for the dynamics, in body coordinates (Featherstone's convention with the
-//! angular part first): motions `[ω; v]`, forces `[n; f]` (moment about the frame's origin, then
-//! force), spatial inertias as 6×6 matrices, and rigid transforms acting on them.
+//! Spatial algebra, for the kinematics and the dynamics alike, in Featherstone's convention with
+//! the angular part first: motions (twists) `[ω; v]`, the angular velocity and the velocity of
+//! the point at the origin of the frame they are expressed in; forces `[n; f]`, the moment about
+//! the frame's origin then the force; spatial inertias as 6×6 matrices; and rigid transforms
+//! acting on them.
 
-use nalgebra::{Isometry3, Matrix3, Matrix6, Vector3, Vector6};
+use nalgebra::{Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 
 /// A rigid transform with its rotation as a matrix: the form the recursive algorithms use,
 /// where rotating a vector costs 9 products instead of the quaternion's 18.
@@ -16,18 +18,8 @@ pub type Motion = Vector6<f64>;
 pub type Force = Vector6<f64>;
 pub type Inertia = Matrix6<f64>;
 pub type Pose = Isometry3<f64>;
-
-fn top(x: &Vector6<f64>) -> Vector3<f64> {
-    Vector3::new(x[0], x[1], x[2])
-}
-
-fn bottom(x: &Vector6<f64>) -> Vector3<f64> {
-    Vector3::new(x[3], x[4], x[5])
-}
-
-fn join(a: Vector3<f64>, b: Vector3<f64>) -> Vector6<f64> {
-    Vector6::new(a.x, a.y, a.z, b.x, b.y, b.z)
-}
+/// A motion, as the kinematics names it: `[ω; v]`.
+pub type Twist = Motion;
 
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
@@ -35,28 +27,28 @@ pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 
 /// Motion given in the frame of `pose` (a child), expressed in the frame `pose` is relative to.
 pub fn motion_to_parent(pose: &Pose, m: &Motion) -> Motion {
-    let w = pose.rotation * top(m);
-    join(
+    let w = pose.rotation * angular(m);
+    twist(
         w,
-        pose.rotation * bottom(m) + pose.translation.vector.cross(&w),
+        pose.rotation * linear(m) + pose.translation.vector.cross(&w),
     )
 }
 
 /// Motion given in the parent frame, expressed in the frame of `pose` (the child).
 pub fn motion_to_child(pose: &Pose, m: &Motion) -> Motion {
     let inverse = pose.rotation.inverse();
-    let w = top(m);
-    join(
+    let w = angular(m);
+    twist(
         inverse * w,
-        inverse * (bottom(m) - pose.translation.vector.cross(&w)),
+        inverse * (linear(m) - pose.translation.vector.cross(&w)),
     )
 }
 
 /// Force given in the child frame, expressed in the parent frame.
 pub fn force_to_parent(pose: &Pose, f: &Force) -> Force {
-    let force = pose.rotation * bottom(f);
-    join(
-        pose.rotation * top(f) + pose.translation.vector.cross(&force),
+    let force = pose.rotation * linear(f);
+    twist(
+        pose.rotation * angular(f) + pose.translation.vector.cross(&force),
         force,
     )
 }
@@ -64,23 +56,29 @@ pub fn force_to_parent(pose: &Pose, f: &Force) -> Force {
 /// Force given in the parent frame, expressed in the child frame.
 pub fn force_to_child(pose: &Pose, f: &Force) -> Force {
     let inverse = pose.rotation.inverse();
-    let force = bottom(f);
-    join(
-        inverse * (top(f) - pose.translation.vector.cross(&force)),
+    let force = linear(f);
+    twist(
+        inverse * (angular(f) - pose.translation.vector.cross(&force)),
         inverse * force,
     )
 }
 
 /// `a × b` for two motions.
 pub fn cross_motion(a: &Motion, b: &Motion) -> Motion {
-    let (w, v) = (top(a), bottom(a));
-    join(w.cross(&top(b)), w.cross(&bottom(b)) + v.cross(&top(b)))
+    let (w, v) = (angular(a), linear(a));
+    twist(
+        w.cross(&angular(b)),
+        w.cross(&linear(b)) + v.cross(&angular(b)),
+    )
 }
 
 /// `a ×* f`: a motion acting on a force.
 pub fn cross_force(a: &Motion, f: &Force) -> Force {
-    let (w, v) = (top(a), bottom(a));
-    join(w.cross(&top(f)) + v.cross(&bottom(f)), w.cross(&bottom(f)))
+    let (w, v) = (angular(a), linear(a));
+    twist(
+        w.cross(&angular(f)) + v.cross(&linear(f)),
+        w.cross(&linear(f)),
+    )
 }
 
 /// The 6×6 matrix of `motion_to_child(pose, ·)`.
@@ -120,17 +118,17 @@ impl Transform {
     /// Motion given in the parent frame, expressed in this (child) frame.
     #[inline]
     pub fn motion_to_child(&self, m: &Motion) -> Motion {
-        let w = top(m);
+        let w = angular(m);
         let rt = self.rotation.transpose();
-        join(rt * w, rt * (bottom(m) - self.translation.cross(&w)))
+        twist(rt * w, rt * (linear(m) - self.translation.cross(&w)))
     }
 
     /// Force given in this (child) frame, expressed in the parent frame.
     #[inline]
     pub fn force_to_parent(&self, f: &Force) -> Force {
-        let force = self.rotation * bottom(f);
-        join(
-            self.rotation * top(f) + self.translation.cross(&force),
+        let force = self.rotation * linear(f);
+        twist(
+            self.rotation * angular(f) + self.translation.cross(&force),
             force,
         )
     }
@@ -138,8 +136,8 @@ impl Transform {
     /// Motion given in this (child) frame, expressed in the parent frame.
     #[inline]
     pub fn motion_to_parent(&self, m: &Motion) -> Motion {
-        let w = self.rotation * top(m);
-        join(w, self.rotation * bottom(m) + self.translation.cross(&w))
+        let w = self.rotation * angular(m);
+        twist(w, self.rotation * linear(m) + self.translation.cross(&w))
     }
 
     /// Inertia given in this (child) frame, expressed in the parent frame, by 3 × 3 blocks:
@@ -252,8 +250,8 @@ impl RigidInertia {
     /// The momentum of motion m: [J ω + h × v; m v − h × ω].
     #[inline]
     pub fn times(&self, m: &Motion) -> Force {
-        let (w, v) = (top(m), bottom(m));
-        join(
+        let (w, v) = (angular(m), linear(m));
+        twist(
             self.rotational * w + self.first.cross(&v),
             self.mass * v - self.first.cross(&w),
         )
@@ -286,4 +284,47 @@ pub fn inertia(mass: f64, com: &Vector3<f64>, central: &Matrix3<f64>) -> Inertia
 pub fn inertia_to_parent(pose: &Pose, i: &Inertia) -> Inertia {
     let x = motion_matrix_to_child(pose);
     x.transpose() * i * x
+}
+
+/// The spatial vector with angular (upper) part `angular` and linear (lower) part `linear`.
+pub fn twist(angular: Vector3<f64>, linear: Vector3<f64>) -> Twist {
+    Twist::new(
+        angular.x, angular.y, angular.z, linear.x, linear.y, linear.z,
+    )
+}
+
+/// The upper half of a spatial vector: a motion's angular velocity, a force's moment.
+pub fn angular(t: &Twist) -> Vector3<f64> {
+    Vector3::new(t[0], t[1], t[2])
+}
+
+/// The lower half of a spatial vector: a motion's linear velocity, a force's force.
+pub fn linear(t: &Twist) -> Vector3<f64> {
+    Vector3::new(t[3], t[4], t[5])
+}
+
+/// Velocity of the point `p` of a body moving with (spatial) twist `t`.
+pub fn point_velocity(t: &Twist, p: &Vector3<f64>) -> Vector3<f64> {
+    linear(t) + angular(t).cross(p)
+}
+
+pub fn translation(v: Vector3<f64>) -> Pose {
+    Isometry3::from_parts(Translation3::from(v), UnitQuaternion::identity())
+}
+
+/// Rotation by `angle` about the unit vector `axis`.
+pub fn rotation(axis: &Vector3<f64>, angle: f64) -> Pose {
+    Isometry3::from_parts(
+        Translation3::identity(),
+        UnitQuaternion::from_scaled_axis(axis * angle),
+    )
+}
+
+/// The vector of the skew-symmetric part of `m`: `vee((m - mᵀ)/2)`.
+pub fn skew_vector(m: &Matrix3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    ) * 0.5
 }
