@@ -1,11 +1,12 @@
 //! What force elements cost beside the dynamics: per right-hand side, the efforts (forward
 //! kinematics, declared coordinates, every effort's value) and the whole derivative, against the
 //! same law written by hand in joint coordinates and against the mechanism without its elements.
-//! Run with `cargo bench --bench efforts`. Times are the best of 7 batches (CPU time of one
-//! thread on an otherwise idle machine is what they approximate); the ratios are the result.
+//! Run with `cargo bench --bench efforts`. Times are CPU times of the timing thread (on a shared
+//! virtual machine the wall clock also counts the time given to others): the best over rounds
+//! of 7 batches, and the median of the last round. The ratios are the result.
 
 mod common;
-use common::best_time_per_call;
+use common::cpu_time_per_call;
 use std::cell::RefCell;
 use std::hint::black_box;
 use std::rc::Rc;
@@ -39,8 +40,10 @@ struct Case<'p> {
     v: Vec<f64>,
     y: Vec<f64>,
     size: usize,
-    /// Best microseconds per call so far: efforts, whole right-hand side.
+    /// Best microseconds of CPU per call so far: efforts, whole right-hand side; and the
+    /// medians of the last round.
     best: (f64, f64),
+    median: (f64, f64),
 }
 
 impl<'p> Case<'p> {
@@ -62,13 +65,14 @@ impl<'p> Case<'p> {
             y,
             size,
             best: (f64::INFINITY, f64::INFINITY),
+            median: (0.0, 0.0),
         }
     }
 
     /// One more timing of each; the best is kept.
     fn time(&mut self) {
         let (system, q, v) = (&mut self.system, &self.q, &self.v);
-        let efforts = best_time_per_call(|| {
+        let efforts = cpu_time_per_call(|| {
             black_box(
                 system
                     .efforts(0.1, black_box(q), black_box(v))
@@ -77,19 +81,20 @@ impl<'p> Case<'p> {
         });
         let mut dydt = vec![0.0; self.y.len()];
         let y = &self.y;
-        let derivative = best_time_per_call(|| {
+        let derivative = cpu_time_per_call(|| {
             system
                 .derivative(0.1, black_box(y), &mut dydt)
                 .expect("evaluates");
         });
-        self.best.0 = self.best.0.min(efforts * 1e6);
-        self.best.1 = self.best.1.min(derivative * 1e6);
+        self.best.0 = self.best.0.min(efforts.0 * 1e6);
+        self.best.1 = self.best.1.min(derivative.0 * 1e6);
+        self.median = (efforts.1 * 1e6, derivative.1 * 1e6);
     }
 }
 
 /// Rounds of timings, every case once per round, so that a slow spell of the machine falls on
 /// all of them alike.
-const ROUNDS: usize = 5;
+const ROUNDS: usize = 7;
 
 /// Two bodies of 2 and 3 kg on parallel slides 1 m apart, joined by `elements`.
 fn two_bodies(elements: &str) -> String {
@@ -191,13 +196,13 @@ fn main() {
         cases.iter_mut().for_each(Case::time);
     }
     println!(
-        "{:<40} {:>11} {:>11} {:>7}",
+        "{:<40} {:>11} {:>11} {:>7}  (CPU time; best, median of the last round)",
         "case", "efforts µs", "RHS µs", "nodes"
     );
     for case in &cases {
         println!(
-            "{:<40} {:>11.3} {:>11.3} {:>7}",
-            case.name, case.best.0, case.best.1, case.size
+            "{:<40} {:>11.3} {:>11.3} {:>7}  ({:.3}, {:.3})",
+            case.name, case.best.0, case.best.1, case.size, case.median.0, case.median.1
         );
     }
     let best = |k: usize| cases[k].best;

@@ -162,11 +162,30 @@ impl<'a> TapeBuilder<'a> {
 
     /// Adds the three components of a vector; returns their indices among the tape's values.
     pub fn vector(&mut self, v: &Vector, link: Link) -> Result<[usize; 3], EvalError> {
+        let lowered = self.lower_vector(v, link)?;
+        Ok(self.vector_root(lowered))
+    }
+
+    /// A vector's components in the pool, not yet roots.
+    pub fn lower_vector(&mut self, v: &Vector, link: Link) -> Result<[ExprId; 3], EvalError> {
         Ok([
-            self.scalar(&v[0], link)?,
-            self.scalar(&v[1], link)?,
-            self.scalar(&v[2], link)?,
+            self.lower(&v[0], link)?,
+            self.lower(&v[1], link)?,
+            self.lower(&v[2], link)?,
         ])
+    }
+
+    /// The componentwise sum of two lowered vectors.
+    pub fn add_vectors(&mut self, a: [ExprId; 3], b: [ExprId; 3]) -> [ExprId; 3] {
+        [0, 1, 2].map(|i| self.pool.add(a[i], b[i]))
+    }
+
+    /// Makes a lowered vector's components roots; returns their indices among the values.
+    pub fn vector_root(&mut self, v: [ExprId; 3]) -> [usize; 3] {
+        v.map(|id| {
+            self.roots.push(id);
+            self.roots.len() - 1
+        })
     }
 
     pub fn build(self) -> EffortTape {

@@ -9,7 +9,7 @@ use super::algorithms::Data;
 use super::compiled::{EffortState, EffortTape};
 use super::energy::{constant_potential, Conservative};
 use super::joint::JointType;
-use super::model::{LinkEffort, Model};
+use super::model::{AppliedGroup, LinkEffort, Model};
 use crate::elab::mechanism::EffortKind;
 use crate::kinematics::eval::{eval_jet, Env, EvalError};
 use crate::kinematics::model::Step;
@@ -105,22 +105,13 @@ pub fn evaluate(
     let tape = declared.evaluate_tape(data, time)?;
     let mut external = vec![Force::zeros(); model.body_count() + 1];
     let mut power = 0.0;
-    for effort in &model.applied {
-        let value = vector(tape, data, effort.value_roots);
-        let in_world = if effort.basis == 0 {
-            value
-        } else {
-            data.world[effort.basis].rotation * value
-        };
-        let in_body = data.world[effort.body].rotation.inverse() * in_world;
-        let wrench = match effort.kind {
-            EffortKind::Force => spatial_force(effort.point.cross(&in_body), in_body),
-            EffortKind::Torque => spatial_force(in_body, Vector3::zeros()),
-        };
-        if !effort.conservative {
-            power += wrench.dot(&data.velocity[effort.body]);
+    for group in &model.applied_groups {
+        let wrench = applied_wrench(data, group, vector(tape, data, group.value_roots));
+        if let Some(roots) = group.nonconservative_roots {
+            let nonconservative = applied_wrench(data, group, vector(tape, data, roots));
+            power += nonconservative.dot(&data.velocity[group.body]);
         }
-        external[effort.body] += wrench;
+        external[group.body] += wrench;
     }
     let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
@@ -147,6 +138,22 @@ pub fn evaluate(
         tau,
         power,
     })
+}
+
+/// The wrench, in its body's frame, of an applied effort of value `value` (in its basis).
+fn applied_wrench(data: &Data, group: &AppliedGroup, value: Vector3<f64>) -> Force {
+    let in_world = if group.basis == 0 {
+        value
+    } else {
+        data.world[group.basis].rotation * value
+    };
+    let in_body = data.world[group.body]
+        .rotation
+        .inverse_transform_vector(&in_world);
+    match group.kind {
+        EffortKind::Force => spatial_force(group.point.cross(&in_body), in_body),
+        EffortKind::Torque => spatial_force(in_body, Vector3::zeros()),
+    }
 }
 
 fn spatial_force(moment: Vector3<f64>, force: Vector3<f64>) -> Force {

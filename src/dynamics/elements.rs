@@ -43,6 +43,21 @@ pub struct AppliedEffort {
     pub potential_root: Option<usize>,
 }
 
+/// The applied efforts that act alike (same kind, body, point and basis), summed into one when
+/// the efforts are compiled: a spring and its damper on the same frame are one force to apply.
+#[derive(Clone, Debug)]
+pub struct AppliedGroup {
+    pub kind: EffortKind,
+    pub body: usize,
+    pub point: Vector3<f64>,
+    pub basis: usize,
+    /// The sum of the members' values among the tape's values.
+    pub value_roots: [usize; 3],
+    /// The sum of the values of the members that derive from no potential, for the power the
+    /// energy balance counts; `None` when every member is conservative.
+    pub nonconservative_roots: Option<[usize; 3]>,
+}
+
 /// A frame an effort refers to: the frame as the expressions hold it (found by identity), its
 /// body's number and its pose on the body.
 #[derive(Clone, Debug)]

@@ -4,7 +4,9 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::compiled::{EffortTape, Link, TapeBuilder};
-pub use super::elements::{AppliedEffort, BodyInertia, EffortFrame, LinkEffort, LinkPotential};
+pub use super::elements::{
+    AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
+};
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::welds;
 use crate::diag::Diagnostic;
@@ -13,6 +15,7 @@ use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{constant_pose, JointModel, KinematicModel};
 use crate::spatial::{self, Inertia, Pose, RigidInertia, Transform};
+use crate::symbolic::expr::ExprId;
 
 #[derive(Clone, Debug)]
 pub struct Model {
@@ -45,6 +48,9 @@ pub struct Model {
     /// Every effort's value and potential compiled into one tape (see `compiled`), or why they
     /// cannot be evaluated.
     pub effort_tape: Result<EffortTape, EvalError>,
+    /// The applied efforts as the right-hand side applies them: summed by kind, body, point and
+    /// basis. Set when the efforts are compiled.
+    pub applied_groups: Vec<AppliedGroup>,
     /// The frames whose state the efforts use (`position(F)`, …), placed on their bodies.
     pub effort_frames: Vec<EffortFrame>,
     pub unknowns: UnknownValues,
@@ -285,6 +291,7 @@ pub fn build_with(
         nc,
         loop_balls,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
+        applied_groups: Vec::new(),
     };
     model.compile_efforts();
     Ok(model)
@@ -298,14 +305,53 @@ impl Model {
         let mut builder = TapeBuilder::new(&self.unknowns, &self.effort_frames, &declared_offset);
         let mut lower = || -> Result<_, EvalError> {
             let mut applied = Vec::new();
+            // (group, its value, its non-conservative part), both lowered but not yet roots.
+            let mut groups: Vec<(AppliedGroup, [ExprId; 3], Option<[ExprId; 3]>)> = Vec::new();
             for effort in &self.applied {
-                let value = builder.vector(&effort.value, Link(None))?;
+                let lowered = builder.lower_vector(&effort.value, Link(None))?;
+                let value = builder.vector_root(lowered);
                 let potential = match &effort.potential {
                     Some(p) => Some(builder.scalar(p, Link(None))?),
                     None => None,
                 };
                 applied.push((value, potential));
+                let alike = |g: &AppliedGroup| {
+                    g.kind == effort.kind
+                        && g.body == effort.body
+                        && g.point == effort.point
+                        && g.basis == effort.basis
+                };
+                let nonconservative = (!effort.conservative).then_some(lowered);
+                match groups.iter_mut().find(|(g, _, _)| alike(g)) {
+                    Some((_, sum, nc)) => {
+                        *sum = builder.add_vectors(*sum, lowered);
+                        *nc = match (*nc, nonconservative) {
+                            (Some(a), Some(b)) => Some(builder.add_vectors(a, b)),
+                            (a, b) => a.or(b),
+                        };
+                    }
+                    None => groups.push((
+                        AppliedGroup {
+                            kind: effort.kind,
+                            body: effort.body,
+                            point: effort.point,
+                            basis: effort.basis,
+                            value_roots: [0; 3],
+                            nonconservative_roots: None,
+                        },
+                        lowered,
+                        nonconservative,
+                    )),
+                }
             }
+            let groups: Vec<AppliedGroup> = groups
+                .into_iter()
+                .map(|(mut group, sum, nonconservative)| {
+                    group.value_roots = builder.vector_root(sum);
+                    group.nonconservative_roots = nonconservative.map(|nc| builder.vector_root(nc));
+                    group
+                })
+                .collect();
             let mut links = Vec::new();
             for effort in &self.link_efforts {
                 let offset = self.declared_offset(self.chain(effort.joint).join);
@@ -316,11 +362,11 @@ impl Model {
                 let offset = self.declared_offset(self.chain(potential.joint).join);
                 potentials.push(builder.scalar(&potential.value, Link(offset))?);
             }
-            Ok((applied, links, potentials))
+            Ok((applied, groups, links, potentials))
         };
         let lowered = lower();
         let tape = builder.build();
-        let (applied, links, potentials) = match lowered {
+        let (applied, groups, links, potentials) = match lowered {
             Ok(roots) => roots,
             Err(e) => {
                 self.effort_tape = Err(e);
@@ -331,6 +377,7 @@ impl Model {
             effort.value_roots = value;
             effort.potential_root = potential;
         }
+        self.applied_groups = groups;
         for (effort, value) in self.link_efforts.iter_mut().zip(links) {
             effort.value_roots = value;
         }

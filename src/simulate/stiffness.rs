@@ -64,6 +64,7 @@ fn stiffest_element(prepared: &Prepared, rate: f64) -> Option<Span> {
     for k in 0..model.applied.len() {
         let mut without = model.clone();
         let removed = without.applied.remove(k);
+        without.compile_efforts();
         if let Some(r) = fastest_rate(&without, prepared).filter(|&r| r < lowest) {
             (lowest, element) = (r, Some(removed.span));
         }
@@ -71,6 +72,7 @@ fn stiffest_element(prepared: &Prepared, rate: f64) -> Option<Span> {
     for k in 0..model.link_efforts.len() {
         let mut without = model.clone();
         let removed = without.link_efforts.remove(k);
+        without.compile_efforts();
         if let Some(r) = fastest_rate(&without, prepared).filter(|&r| r < lowest) {
             (lowest, element) = (r, Some(removed.span));
         }
