@@ -644,12 +644,20 @@ impl Joint {
 impl Model {
     /// Splits a state (positions, velocities) and brings its quaternions back to unit length.
     pub fn split_state<'y>(&self, y: &'y [f64]) -> (Vec<f64>, &'y [f64]) {
-        let (q, v) = y.split_at(self.positions());
-        let mut q = q.to_vec();
+        let mut q = Vec::new();
+        let v = self.split_state_into(y, &mut q);
+        (q, v)
+    }
+
+    /// `split_state` writing the positions into `q` (reusing its storage).
+    pub fn split_state_into<'y>(&self, y: &'y [f64], q: &mut Vec<f64>) -> &'y [f64] {
+        let (positions, v) = y.split_at(self.positions());
+        q.clear();
+        q.extend_from_slice(positions);
         for joint in &self.joints {
             joint.normalize(&mut q[joint.q_offset..joint.q_offset + joint.nq()]);
         }
-        (q, v)
+        v
     }
 
     /// Moves the positions `q` (state length) by the small velocity-space step `dv`: the joints'

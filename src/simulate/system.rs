@@ -30,6 +30,11 @@ pub struct MechanicalSystem<'m> {
     pub loops: LoopMonitor,
     /// The power of the non-conservative efforts at the last `derivative`.
     pub power: f64,
+    /// Scratch of `derivative` for a tree, kept so that it allocates nothing: the normalised
+    /// positions, the accelerations, and the efforts of a mechanism without any.
+    positions: Vec<f64>,
+    accelerations: DVector<f64>,
+    no_efforts: Efforts,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -44,6 +49,9 @@ impl<'m> MechanicalSystem<'m> {
             reference,
             loops: LoopMonitor::new(stabilisation),
             power: 0.0,
+            positions: Vec::new(),
+            accelerations: DVector::zeros(model.nv),
+            no_efforts: Efforts::none(model),
         }
     }
 
@@ -102,42 +110,59 @@ impl<'m> MechanicalSystem<'m> {
 
     /// dy/dt at (t, y), or why it cannot be computed.
     pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), SystemError> {
+        let mut q = std::mem::take(&mut self.positions);
+        let v = self.model.split_state_into(y, &mut q);
+        let result = self.derivative_at(t, &q, v, dydt);
+        self.positions = q;
+        result
+    }
+
+    fn derivative_at(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        dydt: &mut [f64],
+    ) -> Result<(), SystemError> {
         let model = self.model;
-        let (q, v) = model.split_state(y);
-        let (accelerations, efforts) = if model.has_loops() {
-            let (solution, efforts, _) = self.constrained(t, &q, v)?;
-            (solution.accelerations, efforts)
+        let mut accelerations = std::mem::take(&mut self.accelerations);
+        if !model.has_loops() && accelerations.len() != model.nv {
+            // Only after a failed evaluation, which took the scratch away.
+            accelerations = DVector::zeros(model.nv);
+        }
+        let evaluated = if model.has_loops() {
+            let (solution, efforts, _) = self.constrained(t, q, v)?;
+            accelerations = solution.accelerations;
+            Some(efforts)
+        } else if model.has_efforts() {
+            // ABA goes on from the kinematics the efforts were computed from.
+            let efforts = self.efforts(t, q, v)?;
+            aba_after_kinematics(
+                model,
+                &mut self.data,
+                efforts.tau.as_slice(),
+                &efforts.external,
+                &mut accelerations,
+            )
+            .map_err(|e| self.dynamics_error(&e))?;
+            Some(efforts)
         } else {
-            // Without efforts to evaluate, ABA needs no world poses: skip the kinematics. With
-            // them, ABA goes on from the kinematics the efforts were computed from.
-            let mut accelerations = DVector::zeros(model.nv);
-            let efforts = if model.has_efforts() {
-                let efforts = self.efforts(t, &q, v)?;
-                aba_after_kinematics(
-                    model,
-                    &mut self.data,
-                    efforts.tau.as_slice(),
-                    &efforts.external,
-                    &mut accelerations,
-                )
-                .map_err(|e| self.dynamics_error(&e))?;
-                efforts
-            } else {
-                let efforts = Efforts::none(model);
-                aba_into(
-                    model,
-                    &mut self.data,
-                    &q,
-                    v,
-                    efforts.tau.as_slice(),
-                    &efforts.external,
-                    &mut accelerations,
-                )
-                .map_err(|e| self.dynamics_error(&e))?;
-                efforts
-            };
-            (accelerations, efforts)
+            // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
+            let (tau, external) = (self.no_efforts.tau.as_slice(), &self.no_efforts.external);
+            if let Err(e) = aba_into(
+                model,
+                &mut self.data,
+                q,
+                v,
+                tau,
+                external,
+                &mut accelerations,
+            ) {
+                return Err(self.dynamics_error(&e));
+            }
+            None
         };
+        let efforts = evaluated.as_ref().unwrap_or(&self.no_efforts);
         self.power = efforts.power;
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model
@@ -168,6 +193,7 @@ impl<'m> MechanicalSystem<'m> {
         }
         dq[model.nq..].copy_from_slice(&v[model.nv..]);
         dv.copy_from_slice(accelerations.as_slice());
+        self.accelerations = accelerations;
         Ok(())
     }
 
