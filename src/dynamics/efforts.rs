@@ -16,6 +16,7 @@ use crate::kinematics::model::Step;
 use crate::spatial::{self, Force};
 
 /// The efforts at one state.
+#[derive(Clone, Debug)]
 pub struct Efforts {
     /// Per body (index = body number, 0 unused), in the body's frame.
     pub external: Vec<Force>,
@@ -102,23 +103,42 @@ pub fn evaluate(
     declared: &Declared<'_>,
     time: f64,
 ) -> Result<Efforts, EvalError> {
+    let mut efforts = Efforts::none(model);
+    evaluate_into(model, data, declared, time, &mut efforts)?;
+    Ok(efforts)
+}
+
+/// `evaluate` writing into `efforts` (made by `Efforts::none` for this model), reusing its
+/// vectors.
+pub fn evaluate_into(
+    model: &Model,
+    data: &mut Data,
+    declared: &Declared<'_>,
+    time: f64,
+    efforts: &mut Efforts,
+) -> Result<(), EvalError> {
     let tape = declared.evaluate_tape(data, time)?;
-    let mut external = vec![Force::zeros(); model.body_count() + 1];
-    let mut power = 0.0;
+    let Efforts {
+        external,
+        tau,
+        power,
+    } = efforts;
+    external.fill(Force::zeros());
+    tau.fill(0.0);
+    *power = 0.0;
     for group in &model.applied_groups {
         let wrench = applied_wrench(data, group, vector(tape, data, group.value_roots));
         if let Some(roots) = group.nonconservative_roots {
             let nonconservative = applied_wrench(data, group, vector(tape, data, roots));
-            power += nonconservative.dot(&data.velocity[group.body]);
+            *power += nonconservative.dot(&data.velocity[group.body]);
         }
         external[group.body] += wrench;
     }
-    let mut tau = DVector::zeros(model.velocities());
     for effort in &model.link_efforts {
         let value = vector(tape, data, effort.value_roots);
         let (generalised, link_power) = link_effort(model, effort, value, declared)?;
         if !effort.conservative {
-            power += link_power;
+            *power += link_power;
         }
         let (start, count) = match model.joints.get(effort.joint) {
             Some(joint) => (joint.v_offset, joint.nv()),
@@ -133,11 +153,7 @@ pub fn evaluate(
         let mut rows = tau.rows_mut(start, count);
         rows += generalised;
     }
-    Ok(Efforts {
-        external,
-        tau,
-        power,
-    })
+    Ok(())
 }
 
 /// The wrench, in its body's frame, of an applied effort of value `value` (in its basis).

@@ -714,8 +714,22 @@ impl Model {
         v: &[f64],
         previous: &[f64],
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
-        let mut coordinates = vec![0.0; self.declared_count];
-        let mut rates = vec![0.0; self.declared_count];
+        let (mut coordinates, mut rates) = (Vec::new(), Vec::new());
+        self.declared_into(q, v, previous, &mut coordinates, &mut rates)?;
+        Ok((coordinates, rates))
+    }
+
+    /// `declared` writing into `coordinates` and `rates` (reusing their storage).
+    pub fn declared_into(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        previous: &[f64],
+        coordinates: &mut Vec<f64>,
+        rates: &mut Vec<f64>,
+    ) -> Result<(), EvalError> {
+        coordinates.resize(self.declared_count, 0.0);
+        rates.resize(self.declared_count, 0.0);
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
             let n = joint.chain.coordinate_count();
             if joint.kind == JointType::Chain {
@@ -736,6 +750,6 @@ impl Model {
         let tree = self.declared_count - self.nc;
         coordinates[tree..].copy_from_slice(&q[self.nq..self.nq + self.nc]);
         rates[tree..].copy_from_slice(&v[self.nv..self.nv + self.nc]);
-        Ok((coordinates, rates))
+        Ok(())
     }
 }

@@ -14,7 +14,7 @@ use crate::dynamics::algorithms::{
     aba, aba_after_kinematics, aba_into, crba, forward_kinematics, rnea, transmitted_wrenches,
     Data, DynamicsError,
 };
-use crate::dynamics::efforts::{evaluate, Declared, Efforts};
+use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -35,6 +35,9 @@ pub struct MechanicalSystem<'m> {
     positions: Vec<f64>,
     accelerations: DVector<f64>,
     no_efforts: Efforts,
+    /// The efforts at the last evaluation, and the declared coordinates and rates they used.
+    efforts: Efforts,
+    declared: (Vec<f64>, Vec<f64>),
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -52,6 +55,8 @@ impl<'m> MechanicalSystem<'m> {
             positions: Vec::new(),
             accelerations: DVector::zeros(model.nv),
             no_efforts: Efforts::none(model),
+            efforts: Efforts::none(model),
+            declared: (Vec::new(), Vec::new()),
         }
     }
 
@@ -61,15 +66,28 @@ impl<'m> MechanicalSystem<'m> {
 
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
     pub fn efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Efforts, SystemError> {
+        self.evaluate_efforts(t, q, v)?;
+        Ok(self.efforts.clone())
+    }
+
+    /// The efforts at (t, q, v) into `self.efforts`, without allocating once its buffers are
+    /// sized; leaves the forward kinematics of (q, v) in `data`.
+    fn evaluate_efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v)?;
-        let (coordinates, rates) = model.declared(q, v, &self.reference.borrow())?;
-        let declared = Declared {
-            model,
-            coordinates: &coordinates,
-            rates: &rates,
-        };
-        Ok(evaluate(model, &mut self.data, &declared, t)?)
+        let (mut coordinates, mut rates) = std::mem::take(&mut self.declared);
+        let result = model
+            .declared_into(q, v, &self.reference.borrow(), &mut coordinates, &mut rates)
+            .and_then(|()| {
+                let declared = Declared {
+                    model,
+                    coordinates: &coordinates,
+                    rates: &rates,
+                };
+                evaluate_into(model, &mut self.data, &declared, t, &mut self.efforts)
+            });
+        self.declared = (coordinates, rates);
+        Ok(result?)
     }
 
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), with the
@@ -136,16 +154,14 @@ impl<'m> MechanicalSystem<'m> {
             Some(efforts)
         } else if model.has_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
-            let efforts = self.efforts(t, q, v)?;
-            aba_after_kinematics(
-                model,
-                &mut self.data,
-                efforts.tau.as_slice(),
-                &efforts.external,
-                &mut accelerations,
-            )
-            .map_err(|e| self.dynamics_error(&e))?;
-            Some(efforts)
+            self.evaluate_efforts(t, q, v)?;
+            let (tau, external) = (self.efforts.tau.as_slice(), &self.efforts.external);
+            if let Err(e) =
+                aba_after_kinematics(model, &mut self.data, tau, external, &mut accelerations)
+            {
+                return Err(self.dynamics_error(&e));
+            }
+            None
         } else {
             // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
             let (tau, external) = (self.no_efforts.tau.as_slice(), &self.no_efforts.external);
@@ -162,7 +178,11 @@ impl<'m> MechanicalSystem<'m> {
             }
             None
         };
-        let efforts = evaluated.as_ref().unwrap_or(&self.no_efforts);
+        let efforts = match &evaluated {
+            Some(efforts) => efforts,
+            None if model.has_efforts() => &self.efforts,
+            None => &self.no_efforts,
+        };
         self.power = efforts.power;
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model
