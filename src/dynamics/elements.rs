@@ -37,9 +37,8 @@ pub struct AppliedEffort {
     /// Whether it derives from a potential the energy report counts: a constant force in the
     /// fixed basis, or an effort that declares its potential. Set when the model is built.
     pub conservative: bool,
-    /// The positions of its value's components and of its potential among the values of the
-    /// model's effort tape. Set when the efforts are compiled.
-    pub value_roots: [usize; 3],
+    /// The position of its potential among the values of the model's effort tape (its value is
+    /// applied with its group's: `AppliedGroup`). Set when the efforts are compiled.
     pub potential_root: Option<usize>,
 }
 

@@ -304,17 +304,16 @@ impl Model {
         let declared_offset = |join| self.declared_offset(join);
         let mut builder = TapeBuilder::new(&self.unknowns, &self.effort_frames, &declared_offset);
         let mut lower = || -> Result<_, EvalError> {
-            let mut applied = Vec::new();
+            let mut potentials_applied = Vec::new();
             // (group, its value, its non-conservative part), both lowered but not yet roots.
             let mut groups: Vec<(AppliedGroup, [ExprId; 3], Option<[ExprId; 3]>)> = Vec::new();
             for effort in &self.applied {
                 let lowered = builder.lower_vector(&effort.value, Link(None))?;
-                let value = builder.vector_root(lowered);
                 let potential = match &effort.potential {
                     Some(p) => Some(builder.scalar(p, Link(None))?),
                     None => None,
                 };
-                applied.push((value, potential));
+                potentials_applied.push(potential);
                 let alike = |g: &AppliedGroup| {
                     g.kind == effort.kind
                         && g.body == effort.body
@@ -362,19 +361,18 @@ impl Model {
                 let offset = self.declared_offset(self.chain(potential.joint).join);
                 potentials.push(builder.scalar(&potential.value, Link(offset))?);
             }
-            Ok((applied, groups, links, potentials))
+            Ok((potentials_applied, groups, links, potentials))
         };
         let lowered = lower();
         let tape = builder.build();
-        let (applied, groups, links, potentials) = match lowered {
+        let (potentials_applied, groups, links, potentials) = match lowered {
             Ok(roots) => roots,
             Err(e) => {
                 self.effort_tape = Err(e);
                 return;
             }
         };
-        for (effort, (value, potential)) in self.applied.iter_mut().zip(applied) {
-            effort.value_roots = value;
+        for (effort, potential) in self.applied.iter_mut().zip(potentials_applied) {
             effort.potential_root = potential;
         }
         self.applied_groups = groups;
@@ -483,7 +481,6 @@ fn applied_efforts(
             potential,
             span: application.span,
             conservative: false,
-            value_roots: [0; 3],
             potential_root: None,
         };
         applied_effort.conservative = applied_effort.potential.is_some()

@@ -48,6 +48,11 @@ pub enum Hold {
     Free,
 }
 
+/// Which coordinates are held (`fixed`).
+pub fn held(holds: &[Hold]) -> Vec<bool> {
+    holds.iter().map(|&h| h == Hold::Fixed).collect()
+}
+
 /// A given value that no closed configuration holds, and the value assembly chose for it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Moved {
@@ -124,7 +129,7 @@ pub fn assemble_respecting(
     holds: &[Hold],
     options: &AssemblyOptions,
 ) -> Result<Assembled, AssemblyError> {
-    let fixed: Vec<bool> = holds.iter().map(|&h| h == Hold::Fixed).collect();
+    let fixed = held(holds);
     if !holds.contains(&Hold::Given) {
         return assemble(model, start, &fixed, options);
     }
@@ -245,7 +250,7 @@ fn nearest_closed(
     if change > 1e-8 {
         return Ok(None);
     }
-    let fixed: Vec<bool> = holds.iter().map(|&h| h == Hold::Fixed).collect();
+    let fixed = held(holds);
     match solve(model, &q, &fixed, options) {
         Ok(assembled) => Ok(Some(assembled)),
         Err(AssemblyError::NoAssembly { .. }) => Ok(None),

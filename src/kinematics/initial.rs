@@ -7,7 +7,7 @@ use crate::elab::mechanism::Mechanism;
 use crate::source::Span;
 
 use super::assembly::{
-    assemble_respecting, Assembled, AssemblyError, AssemblyOptions, Hold, Moved,
+    assemble_respecting, held, Assembled, AssemblyError, AssemblyOptions, Hold, Moved,
 };
 use super::eval;
 use super::model::KinematicModel;
@@ -24,7 +24,7 @@ pub struct Starting {
 impl Starting {
     /// Which coordinates are held (`fixed`).
     pub fn fixed(&self) -> Vec<bool> {
-        self.holds.iter().map(|&h| h == Hold::Fixed).collect()
+        held(&self.holds)
     }
 }
 
