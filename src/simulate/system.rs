@@ -5,17 +5,19 @@
 
 use std::cell::RefCell;
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
 use crate::dynamics::algorithms::{
-    aba, aba_after_kinematics, aba_into, crba, forward_kinematics, rnea, transmitted_wrenches,
-    Data, DynamicsError,
+    aba, aba_after_kinematics, aba_into, crba_into, forward_kinematics, rnea, rnea_into,
+    transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
-use crate::dynamics::loops::{self, LoopError, Solution, Stabilisation, StructureError, ROW_NAMES};
+use crate::dynamics::loops::{
+    self, LoopError, LoopScratch, Stabilisation, StructureError, ROW_NAMES,
+};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 use crate::spatial;
@@ -38,6 +40,14 @@ pub struct MechanicalSystem<'m> {
     /// The efforts at the last evaluation, and the declared coordinates and rates they used.
     efforts: Efforts,
     declared: (Vec<f64>, Vec<f64>),
+    /// Scratch of the constrained equations: the tree's mass matrix, its velocity-product
+    /// forces (and the zero accelerations they are computed at), the applied forces less those,
+    /// and the loops' rows, factorisation and solution.
+    mass: DMatrix<f64>,
+    bias: DVector<f64>,
+    rest: Vec<f64>,
+    force: DVector<f64>,
+    loop_scratch: LoopScratch,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -53,10 +63,15 @@ impl<'m> MechanicalSystem<'m> {
             loops: LoopMonitor::new(stabilisation),
             power: 0.0,
             positions: Vec::new(),
-            accelerations: DVector::zeros(model.nv),
+            accelerations: DVector::zeros(model.velocities()),
             no_efforts: Efforts::none(model),
             efforts: Efforts::none(model),
             declared: (Vec::new(), Vec::new()),
+            mass: DMatrix::zeros(model.nv, model.nv),
+            bias: DVector::zeros(model.nv),
+            rest: vec![0.0; model.nv],
+            force: DVector::zeros(model.velocities()),
+            loop_scratch: LoopScratch::new(model),
         }
     }
 
@@ -90,40 +105,39 @@ impl<'m> MechanicalSystem<'m> {
         Ok(result?)
     }
 
-    /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), with the
-    /// efforts and the constraint rows they come from.
-    pub fn constrained(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-    ) -> Result<(Solution, Efforts, loops::Constraints), SystemError> {
+    /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
+    /// `loop_scratch` with the constraint rows they come from, the efforts in `efforts`;
+    /// nothing is allocated once the buffers are sized.
+    fn solve_constrained(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
         self.ensure_structure(q)?;
-        let efforts = self.efforts(t, q, v)?;
-        let mass = crba(model, &mut self.data, q)?;
-        let bias = rnea(
+        self.evaluate_efforts(t, q, v)?;
+        crba_into(model, &mut self.data, q, &mut self.mass)?;
+        let external = &self.efforts.external;
+        rnea_into(
             model,
             &mut self.data,
             q,
             v,
-            &vec![0.0; model.nv],
-            &efforts.external,
+            &self.rest,
+            external,
+            &mut self.bias,
         )?;
-        let mut force = efforts.tau.clone();
-        let mut tree = force.rows_mut(0, model.nv);
-        tree -= &bias;
+        self.force.copy_from(&self.efforts.tau);
+        let mut tree = self.force.rows_mut(0, model.nv);
+        tree -= &self.bias;
         // RNEA left the forward kinematics of (q, v) in `data`.
-        let constraints = loops::constraints_after_kinematics(model, &mut self.data, q, v, true)?;
-        let solution = loops::solve(
-            &mass,
-            &force,
-            &constraints,
-            &self.loops.structure,
+        let scratch = &mut self.loop_scratch;
+        loops::constraints_into(model, &mut self.data, q, v, true, &mut scratch.constraints)?;
+        let structure = &self.loops.structure;
+        loops::solve(
+            &self.mass,
+            &self.force,
+            structure,
             self.loops.stabilisation,
+            scratch,
         )
-        .map_err(|e| self.loop_error(&e))?;
-        Ok((solution, efforts, constraints))
+        .map_err(|e| self.loop_error(&e))
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.
@@ -144,14 +158,13 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         let mut accelerations = std::mem::take(&mut self.accelerations);
-        if !model.has_loops() && accelerations.len() != model.nv {
+        if accelerations.len() != model.velocities() {
             // Only after a failed evaluation, which took the scratch away.
-            accelerations = DVector::zeros(model.nv);
+            accelerations = DVector::zeros(model.velocities());
         }
-        let evaluated = if model.has_loops() {
-            let (solution, efforts, _) = self.constrained(t, q, v)?;
-            accelerations = solution.accelerations;
-            Some(efforts)
+        if model.has_loops() {
+            self.solve_constrained(t, q, v)?;
+            accelerations.copy_from(&self.loop_scratch.accelerations);
         } else if model.has_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
             self.evaluate_efforts(t, q, v)?;
@@ -161,7 +174,6 @@ impl<'m> MechanicalSystem<'m> {
             {
                 return Err(self.dynamics_error(&e));
             }
-            None
         } else {
             // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
             let (tau, external) = (self.no_efforts.tau.as_slice(), &self.no_efforts.external);
@@ -176,12 +188,11 @@ impl<'m> MechanicalSystem<'m> {
             ) {
                 return Err(self.dynamics_error(&e));
             }
-            None
-        };
-        let efforts = match &evaluated {
-            Some(efforts) => efforts,
-            None if model.has_efforts() => &self.efforts,
-            None => &self.no_efforts,
+        }
+        let efforts = if model.has_efforts() || model.has_loops() {
+            &self.efforts
+        } else {
+            &self.no_efforts
         };
         self.power = efforts.power;
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
@@ -288,15 +299,19 @@ impl<'m> MechanicalSystem<'m> {
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
-            let (solution, efforts, c) = self.constrained(t, q, v)?;
-            let on_bodies = loops::constraint_forces(model, &self.data, &c, &solution.multipliers);
-            let external: Vec<_> = efforts
+            self.solve_constrained(t, q, v)?;
+            let solution = &self.loop_scratch;
+            let (c, multipliers) = (&solution.constraints, &solution.multipliers);
+            let on_bodies = loops::constraint_forces(model, &self.data, c, multipliers);
+            let external: Vec<_> = self
+                .efforts
                 .external
                 .iter()
                 .zip(&on_bodies)
                 .map(|(a, b)| a + b)
                 .collect();
-            (solution.accelerations, external, Some(solution.multipliers))
+            let accelerations = solution.accelerations.clone();
+            (accelerations, external, Some(multipliers.clone()))
         } else {
             let efforts = self.efforts(t, q, v)?;
             let a = aba(

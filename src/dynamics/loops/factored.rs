@@ -86,6 +86,8 @@ pub struct Factored {
     firm: usize,
     /// A = GₛGₛᵀ, undamped.
     normal: Envelope,
+    /// Per column, the kept rows touching it (scratch of `refill`).
+    touching: Vec<Vec<(usize, f64)>>,
     /// `dense_null_space`, once asked for.
     null_space: OnceCell<DMatrix<f64>>,
 }
@@ -105,60 +107,101 @@ pub struct Damped<'f> {
 
 impl Factored {
     pub fn new(jacobian: &ConstraintJacobian, choice: &RowChoice) -> Factored {
-        let rows: Vec<SparseRow> = choice
-            .rows
-            .iter()
-            .zip(&choice.scales)
-            .map(|(&r, &scale)| {
+        let mut factored = Factored {
+            rows: Vec::new(),
+            columns: 0,
+            indices: Vec::new(),
+            scales: Vec::new(),
+            firm: 0,
+            normal: Envelope::default(),
+            touching: Vec::new(),
+            null_space: OnceCell::new(),
+        };
+        factored.refill(jacobian, choice);
+        factored
+    }
+
+    /// The kept rows of another G (or another choice), in this factorisation's storage: once it
+    /// has seen rows of that size, nothing is allocated.
+    pub fn refill(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
+        self.rows.resize_with(choice.rows.len(), Vec::new);
+        for ((row, &r), &scale) in self.rows.iter_mut().zip(&choice.rows).zip(&choice.scales) {
+            row.clear();
+            row.extend(
                 jacobian
                     .row(r)
                     .filter(|&(_, value)| value != 0.0)
-                    .map(|(column, value)| (column, value * scale))
-                    .collect()
-            })
-            .collect();
-        let normal = Envelope::normal(&rows, jacobian.ncols());
-        Factored {
-            rows,
-            columns: jacobian.ncols(),
-            indices: choice.rows.clone(),
-            scales: choice.scales.clone(),
-            firm: choice.firm(),
-            normal,
-            null_space: OnceCell::new(),
+                    .map(|(column, value)| (column, value * scale)),
+            );
         }
+        self.columns = jacobian.ncols();
+        self.indices.clone_from(&choice.rows);
+        self.scales.clone_from(&choice.scales);
+        self.firm = choice.firm();
+        self.normal
+            .fill_normal(&self.rows, self.columns, &mut self.touching);
+        self.null_space = OnceCell::new();
+    }
+
+    /// How many rows are kept.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
     }
 
     /// The kept rows of a vector of rows (6 per loop), made dimensionless.
     pub fn kept(&self, all: &DVector<f64>) -> DVector<f64> {
-        DVector::from_iterator(
-            self.indices.len(),
+        let mut out = vec![0.0; self.len()];
+        self.kept_into(all.as_slice(), &mut out);
+        DVector::from_vec(out)
+    }
+
+    /// `kept` into `out` (resized to the kept rows).
+    pub fn kept_into(&self, all: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(
             self.indices
                 .iter()
                 .zip(&self.scales)
                 .map(|(&r, s)| all[r] * s),
-        )
+        );
     }
 
     /// Gₛ x.
     pub fn times(&self, x: &[f64]) -> DVector<f64> {
-        DVector::from_iterator(
-            self.rows.len(),
+        let mut out = Vec::new();
+        self.times_into(x, &mut out);
+        DVector::from_vec(out)
+    }
+
+    /// Gₛ x into `out` (resized to the kept rows).
+    pub fn times_into(&self, x: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(
             self.rows
                 .iter()
                 .map(|row| row.iter().map(|&(c, value)| value * x[c]).sum::<f64>()),
-        )
+        );
     }
 
     /// Gₛᵀ y.
     pub fn transpose_times(&self, y: &DVector<f64>) -> DVector<f64> {
         let mut out = DVector::zeros(self.columns);
-        for (row, &weight) in self.rows.iter().zip(y.iter()) {
+        self.transpose_times_into(y.as_slice(), out.as_mut_slice());
+        out
+    }
+
+    /// Gₛᵀ y into `out` (of G's columns).
+    pub fn transpose_times_into(&self, y: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (row, &weight) in self.rows.iter().zip(y) {
             for &(c, value) in row {
                 out[c] += value * weight;
             }
         }
-        out
     }
 
     /// The factorisation of A + μ²E, with μ = `damping` times the largest diagonal entry of the
@@ -166,13 +209,19 @@ impl Factored {
     /// rows, zero on the weak ones: A⁻¹ wherever the rows are independent, bounded where the
     /// firm rows lose their independence.
     pub fn damped(&self, damping: f64) -> Result<Damped<'_>, Singular> {
+        self.damped_in(damping, Envelope::default())
+    }
+
+    /// `damped`, factored in the storage of `factor` (from `Damped::into_storage`): nothing is
+    /// allocated once it has held a factor of this size.
+    pub fn damped_in(&self, damping: f64, mut factor: Envelope) -> Result<Damped<'_>, Singular> {
         let largest = self.normal.diagonal().fold(0.0, f64::max).sqrt();
         let shift = (damping * largest).powi(2);
-        let mut shifted = self.normal.clone();
+        factor.copy_from(&self.normal);
         for k in 0..self.firm {
-            *shifted.at_mut(k, k) += shift;
+            *factor.at_mut(k, k) += shift;
         }
-        let factor = shifted.cholesky().map_err(|k| Singular {
+        factor.cholesky().map_err(|k| Singular {
             row: self.indices[k],
         })?;
         Ok(Damped {
@@ -271,9 +320,21 @@ impl Damped<'_> {
         (ratio, Some(self.factored.indices[smallest]))
     }
 
+    /// The factor's storage, to factor again without allocating (`Factored::damped_in`).
+    pub fn into_storage(self) -> Envelope {
+        self.factor
+    }
+
     /// (A + μ²E)⁻¹ b.
     pub fn normal_solve(&self, b: &DVector<f64>) -> DVector<f64> {
-        self.factor.solve(b)
+        let mut y = b.clone();
+        self.factor.solve(y.as_mut_slice());
+        y
+    }
+
+    /// (A + μ²E)⁻¹ b in place.
+    pub fn normal_solve_in_place(&self, b: &mut [f64]) {
+        self.factor.solve(b);
     }
 
     /// Gₛᵀ(A + μ²E)⁻¹ b: the smallest x with Gₛx = b where the rows are independent.
@@ -281,25 +342,44 @@ impl Damped<'_> {
         self.factored.transpose_times(&self.normal_solve(b))
     }
 
+    /// `least_norm` of b (consumed as scratch) into `out` (of G's columns).
+    pub fn least_norm_into(&self, b: &mut [f64], out: &mut [f64]) {
+        self.factor.solve(b);
+        self.factored.transpose_times_into(b, out);
+    }
+
     /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv: v without its part across the kept rows.
     pub fn allowed_part(&self, v: &DVector<f64>) -> DVector<f64> {
-        v - self.least_norm(&self.factored.times(v.as_slice()))
+        let mut out = DVector::zeros(v.len());
+        self.allowed_part_into(v.as_slice(), &mut Vec::new(), out.as_mut_slice());
+        out
+    }
+
+    /// `allowed_part` of v into `out`, with `rows` as scratch.
+    pub fn allowed_part_into(&self, v: &[f64], rows: &mut Vec<f64>, out: &mut [f64]) {
+        self.factored.times_into(v, rows);
+        self.least_norm_into(rows, out);
+        for (o, x) in out.iter_mut().zip(v) {
+            *o = x - *o;
+        }
     }
 
     /// λ, 6 per loop (zero on the rows not kept), with Gᵀλ = y for y in the kept rows' span.
     pub fn multipliers(&self, y: &DVector<f64>, total: usize) -> DVector<f64> {
-        let kept = self.normal_solve(&self.factored.times(y.as_slice()));
         let mut all = DVector::zeros(total);
-        for (k, (&row, scale)) in self
-            .factored
-            .indices
-            .iter()
-            .zip(&self.factored.scales)
-            .enumerate()
-        {
-            all[row] = kept[k] * scale;
-        }
+        self.multipliers_into(y.as_slice(), &mut Vec::new(), all.as_mut_slice());
         all
+    }
+
+    /// `multipliers` into `all` (6 per loop), with `rows` as scratch.
+    pub fn multipliers_into(&self, y: &[f64], rows: &mut Vec<f64>, all: &mut [f64]) {
+        self.factored.times_into(y, rows);
+        self.factor.solve(rows);
+        all.fill(0.0);
+        let factored = self.factored;
+        for ((&row, scale), kept) in factored.indices.iter().zip(&factored.scales).zip(rows) {
+            all[row] = *kept * scale;
+        }
     }
 
     /// The motions the kept rows allow, one per coordinate of `free`: the allowed part of that
@@ -307,55 +387,85 @@ impl Damped<'_> {
     /// (`Structure` chooses it so); unlike an orthonormal basis, they cost one sparse solve
     /// each.
     pub fn allowed_motions(&self, free: &[usize]) -> DMatrix<f64> {
-        let n = self.factored.columns;
-        let mut basis = DMatrix::zeros(n, free.len());
-        for (k, &coordinate) in free.iter().enumerate() {
-            let mut unit = DVector::zeros(n);
-            unit[coordinate] = 1.0;
-            basis.set_column(k, &self.allowed_part(&unit));
-        }
+        let mut basis = DMatrix::zeros(self.factored.columns, free.len());
+        self.allowed_motions_into(free, &mut Vec::new(), &mut basis);
         basis
+    }
+
+    /// `allowed_motions` into `basis` (G's columns × `free`), with `rows` as scratch.
+    pub fn allowed_motions_into(
+        &self,
+        free: &[usize],
+        rows: &mut Vec<f64>,
+        basis: &mut DMatrix<f64>,
+    ) {
+        for (k, &coordinate) in free.iter().enumerate() {
+            // The allowed part of a unit motion eᵢ: eᵢ − Gₛᵀ(A + μ²E)⁻¹Gₛeᵢ, Gₛeᵢ being column i.
+            rows.clear();
+            rows.extend(self.factored.rows.iter().map(|row| {
+                row.iter()
+                    .find(|&&(c, _)| c == coordinate)
+                    .map_or(0.0, |&(_, value)| value)
+            }));
+            let mut column = basis.column_mut(k);
+            self.least_norm_into(rows, column.as_mut_slice());
+            column.neg_mut();
+            column[coordinate] += 1.0;
+        }
     }
 }
 
 /// A symmetric matrix stored by rows from each row's first non-zero entry to the diagonal; the
 /// Cholesky factor of such a matrix lives in the same envelope.
-#[derive(Clone, Debug)]
-struct Envelope {
+#[derive(Clone, Debug, Default)]
+pub struct Envelope {
     first: Vec<usize>,
     /// Row k holds columns first[k]..=k.
     values: Vec<Vec<f64>>,
 }
 
 impl Envelope {
-    /// A = RRᵀ for the sparse rows R over `columns` columns.
-    fn normal(rows: &[SparseRow], columns: usize) -> Envelope {
-        // Which rows touch each column, to find each row's first neighbour.
-        let mut touching: Vec<Vec<(usize, f64)>> = vec![Vec::new(); columns];
+    /// A = RRᵀ for the sparse rows R over `columns` columns, in this envelope's storage;
+    /// `touching` is scratch (which rows touch each column, to find each row's first
+    /// neighbour).
+    fn fill_normal(
+        &mut self,
+        rows: &[SparseRow],
+        columns: usize,
+        touching: &mut Vec<Vec<(usize, f64)>>,
+    ) {
+        touching.resize_with(columns, Vec::new);
+        touching.iter_mut().for_each(Vec::clear);
         for (k, row) in rows.iter().enumerate() {
             for &(c, value) in row {
                 touching[c].push((k, value));
             }
         }
-        let first: Vec<usize> = (0..rows.len())
-            .map(|k| {
-                rows[k]
-                    .iter()
-                    .filter_map(|&(c, _)| touching[c].first().map(|&(l, _)| l))
-                    .fold(k, usize::min)
-            })
-            .collect();
-        let mut values: Vec<Vec<f64>> = (0..rows.len())
-            .map(|k| vec![0.0; k - first[k] + 1])
-            .collect();
-        for column in &touching {
+        self.first.clear();
+        self.first.extend((0..rows.len()).map(|k| {
+            rows[k]
+                .iter()
+                .filter_map(|&(c, _)| touching[c].first().map(|&(l, _)| l))
+                .fold(k, usize::min)
+        }));
+        self.values.resize_with(rows.len(), Vec::new);
+        for (k, row) in self.values.iter_mut().enumerate() {
+            row.clear();
+            row.resize(k - self.first[k] + 1, 0.0);
+        }
+        for column in touching.iter() {
             for (i, &(k, a)) in column.iter().enumerate() {
                 for &(l, b) in &column[..=i] {
-                    values[k][l - first[k]] += a * b;
+                    self.values[k][l - self.first[k]] += a * b;
                 }
             }
         }
-        Envelope { first, values }
+    }
+
+    /// `other`'s entries in this envelope's storage (a derived `clone_from` would allocate anew).
+    fn copy_from(&mut self, other: &Envelope) {
+        self.first.clone_from(&other.first);
+        self.values.clone_from(&other.values);
     }
 
     fn at_mut(&mut self, row: usize, column: usize) -> &mut f64 {
@@ -369,7 +479,7 @@ impl Envelope {
     }
 
     /// The Cholesky factor in place, or the first row whose pivot is not positive.
-    fn cholesky(mut self) -> Result<Envelope, usize> {
+    fn cholesky(&mut self) -> Result<(), usize> {
         for k in 0..self.values.len() {
             let fk = self.first[k];
             for j in fk..k {
@@ -389,12 +499,11 @@ impl Envelope {
             }
             *diagonal = square.sqrt();
         }
-        Ok(self)
+        Ok(())
     }
 
-    /// (LLᵀ)⁻¹ b for the factor L held.
-    fn solve(&self, b: &DVector<f64>) -> DVector<f64> {
-        let mut y = b.clone();
+    /// y ← (LLᵀ)⁻¹ y for the factor L held.
+    fn solve(&self, y: &mut [f64]) {
         for k in 0..y.len() {
             let fk = self.first[k];
             let row = &self.values[k];
@@ -410,6 +519,5 @@ impl Envelope {
                 y[i] -= row[i - fk] * value;
             }
         }
-        y
     }
 }

@@ -59,13 +59,19 @@ impl ConstraintJacobian {
     /// G v.
     pub fn mul(&self, v: &[f64]) -> DVector<f64> {
         let mut out = DVector::zeros(self.nrows());
+        self.mul_into(v, &mut out);
+        out
+    }
+
+    /// G v into `out` (of G's rows).
+    pub fn mul_into(&self, v: &[f64], out: &mut DVector<f64>) {
+        out.fill(0.0);
         for (k, block) in self.blocks.iter().enumerate() {
+            let mut rows = out.fixed_rows_mut::<6>(6 * k);
             for (local, &column) in block.columns.iter().enumerate() {
-                let mut rows = out.fixed_rows_mut::<6>(6 * k);
                 rows += block.values.column(local) * v[column];
             }
         }
-        out
     }
 
     /// G as a dense matrix, for the decisions taken once (the rows kept, the rank, the nearby

@@ -16,12 +16,12 @@ pub mod solve;
 pub mod structure;
 
 pub use basis::{decompose, decompose_with, Decomposition};
-pub use factored::{Damped, Factored, RowChoice, DAMPING};
+pub use factored::{Damped, Envelope, Factored, RowChoice, DAMPING};
 pub use jacobian::ConstraintJacobian;
 pub use project::{close_configuration, project, Projection, Residuals};
 pub use rows::{
-    active_rows, constraint_forces, constraints, constraints_after_kinematics, seat_ball_angles,
-    Constraints, ROW_NAMES,
+    active_rows, constraint_forces, constraints, constraints_after_kinematics, constraints_into,
+    seat_ball_angles, Constraints, ROW_NAMES,
 };
-pub use solve::{project_momentum, solve, LoopError, Solution, Stabilisation};
+pub use solve::{project_momentum, solve, LoopError, LoopScratch, Stabilisation};
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

@@ -42,6 +42,40 @@ pub struct Constraints {
     pub points: Vec<Vector3<f64>>,
 }
 
+impl Constraints {
+    /// Rows of zeros for `model`'s loops, each loop's block already over the columns it touches
+    /// (found once here: they depend on the tree alone), to be filled by `constraints_into`.
+    pub fn new(model: &Model) -> Constraints {
+        let rows = 6 * model.loops.len();
+        let blocks = (0..model.loops.len())
+            .map(|k| {
+                let joint = &model.loops[k];
+                let own = if model.loop_balls[k].is_some() {
+                    0
+                } else {
+                    joint.coordinate_count()
+                };
+                let first = model.nv + model.loop_offset(k);
+                LoopBlock::zeros(loop_columns(
+                    model,
+                    [joint.first_body, joint.second_body],
+                    first..first + own,
+                ))
+            })
+            .collect();
+        Constraints {
+            residual: DVector::zeros(rows),
+            jacobian: ConstraintJacobian {
+                columns: model.velocities(),
+                blocks,
+            },
+            velocity: DVector::zeros(rows),
+            bias: DVector::zeros(rows),
+            points: vec![Vector3::zeros(); model.loops.len()],
+        }
+    }
+}
+
 /// The constraint rows at (q, v), both of the state's length. With `with_bias` γ is computed too.
 /// Leaves the forward kinematics of (q, v) in `data`.
 pub fn constraints(
@@ -51,8 +85,10 @@ pub fn constraints(
     v: &[f64],
     with_bias: bool,
 ) -> Result<Constraints, EvalError> {
+    let mut c = Constraints::new(model);
     forward_kinematics(model, data, q, v)?;
-    constraints_after_kinematics(model, data, q, v, with_bias)
+    constraints_into(model, data, q, v, with_bias, &mut c)?;
+    Ok(c)
 }
 
 /// `constraints` when `data` already holds the forward kinematics of (q, v) (after RNEA, say).
@@ -63,25 +99,31 @@ pub fn constraints_after_kinematics(
     v: &[f64],
     with_bias: bool,
 ) -> Result<Constraints, EvalError> {
+    let mut c = Constraints::new(model);
+    constraints_into(model, data, q, v, with_bias, &mut c)?;
+    Ok(c)
+}
+
+/// Writes the constraint rows at (q, v) into `c` (made by `Constraints::new` for this model),
+/// reusing its storage; `data` must hold the forward kinematics of (q, v).
+pub fn constraints_into(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    with_bias: bool,
+    c: &mut Constraints,
+) -> Result<(), EvalError> {
     if with_bias {
         bias_accelerations(model, data);
+    } else {
+        c.bias.fill(0.0);
     }
-    let rows = 6 * model.loops.len();
-    let mut c = Constraints {
-        residual: DVector::zeros(rows),
-        jacobian: ConstraintJacobian {
-            columns: model.velocities(),
-            blocks: Vec::with_capacity(model.loops.len()),
-        },
-        velocity: DVector::zeros(rows),
-        bias: DVector::zeros(rows),
-        points: Vec::with_capacity(model.loops.len()),
-    };
     for k in 0..model.loops.len() {
-        loop_rows(model, data, q, v, k, with_bias, &mut c)?;
+        loop_rows(model, data, q, v, k, with_bias, c)?;
     }
-    c.velocity = c.jacobian.mul(v);
-    Ok(c)
+    c.jacobian.mul_into(v, &mut c.velocity);
+    Ok(())
 }
 
 fn loop_rows(
@@ -98,15 +140,11 @@ fn loop_rows(
     // A ball joint's rotation is free: only its centre is constrained, which its angles do not
     // move; its angle rates are left out.
     let ball = model.loop_balls[k].is_some();
-    let no_rates = vec![0.0; n];
-    let rates = if ball {
-        &no_rates[..]
-    } else {
-        &v[model.nv + offset..model.nv + offset + n]
-    };
+    // Without rates the chain is taken at rest (its own rates are none of the rows' business).
+    let rates = (!ball).then(|| &v[model.nv + offset..model.nv + offset + n]);
     let chain = joint.chain_motion(
         &q[model.nq + offset..model.nq + offset + n],
-        Some(rates),
+        rates,
         &model.unknowns,
     )?;
     let base = data.world[joint.first_body] * joint.first;
@@ -118,17 +156,14 @@ fn loop_rows(
     let row = 6 * k;
     c.residual.rows_mut(row, 3).copy_from(&rotation);
     c.residual.rows_mut(row + 3, 3).copy_from(&gap);
-    c.points.push(point);
+    c.points[k] = point;
     // Rates are taken at the loop point, in fixed axes: a motion seen from `at_point`.
     let at_point = translation(point);
     let own = if ball { 0 } else { n };
-    let mut block = LoopBlock::zeros(loop_columns(
-        model,
-        [joint.first_body, joint.second_body],
-        model.nv + offset..model.nv + offset + own,
-    ));
-    add_body_columns(model, data, joint.second_body, &at_point, 1.0, &mut block);
-    add_body_columns(model, data, joint.first_body, &at_point, -1.0, &mut block);
+    let block = &mut c.jacobian.blocks[k];
+    block.values.fill(0.0);
+    add_body_columns(model, data, joint.second_body, &at_point, 1.0, block);
+    add_body_columns(model, data, joint.first_body, &at_point, -1.0, block);
     for column in 0..own {
         let twist = motion_to_parent(
             &base,
@@ -170,10 +205,9 @@ fn loop_rows(
     }
     if ball {
         c.residual.rows_mut(row, 3).fill(0.0);
-        block.values.rows_mut(0, 3).fill(0.0);
+        c.jacobian.blocks[k].values.rows_mut(0, 3).fill(0.0);
         c.bias.rows_mut(row, 3).fill(0.0);
     }
-    c.jacobian.blocks.push(block);
     Ok(())
 }
 

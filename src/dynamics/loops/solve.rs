@@ -12,11 +12,9 @@
 //! N of the allowed motions, only on the space it spans. Motions that move no mass
 //! (their number is part of the structure) are left at rest.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Cholesky, DMatrix, DVector};
 
-use std::ops::{AddAssign, SubAssign};
-
-use super::factored::{Factored, Singular, DAMPING};
+use super::factored::{Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::rows::{constraints, Constraints};
 use super::structure::Structure;
 use crate::dynamics::algorithms::{crba, Data};
@@ -34,12 +32,71 @@ pub enum Stabilisation {
     None,
 }
 
-pub struct Solution {
+/// What the constrained solve keeps from one evaluation to the next, so that it allocates
+/// nothing once sized: the constraint rows (filled by the caller, `rows::constraints_into`),
+/// their factorisation, the solve's vectors, and its results.
+pub struct LoopScratch {
+    pub constraints: Constraints,
+    pub factored: Factored,
+    /// The damped factor's storage between evaluations.
+    factor: Envelope,
+    /// Vectors over the kept rows, over all the rows, over the state's velocities.
+    kept: Vec<f64>,
+    gamma: DVector<f64>,
+    particular: DVector<f64>,
+    applied: DVector<f64>,
+    /// The allowed motions N, M times their tree part, NᵀMN (and its factor), and Nᵀ(f − Ma₀),
+    /// then z.
+    null: DMatrix<f64>,
+    mass_null: DMatrix<f64>,
+    null_transposed: DMatrix<f64>,
+    inertial: DVector<f64>,
+    reduced_mass: DMatrix<f64>,
+    reduced_factor: DMatrix<f64>,
+    reduced_force: DVector<f64>,
     /// Accelerations of every state velocity.
     pub accelerations: DVector<f64>,
     /// Constraint wrench of each loop on its second body, at the loop point in fixed axes:
     /// moment, then force (6 per loop).
     pub multipliers: DVector<f64>,
+}
+
+impl LoopScratch {
+    pub fn new(model: &Model) -> LoopScratch {
+        let constraints = Constraints::new(model);
+        let (rows, columns) = (constraints.residual.len(), model.velocities());
+        LoopScratch {
+            factored: Factored::new(&constraints.jacobian, &RowChoice::NONE),
+            constraints,
+            factor: Envelope::default(),
+            kept: Vec::new(),
+            gamma: DVector::zeros(rows),
+            particular: DVector::zeros(columns),
+            applied: DVector::zeros(columns),
+            null: DMatrix::zeros(columns, 0),
+            mass_null: DMatrix::zeros(model.nv, 0),
+            null_transposed: DMatrix::zeros(0, columns),
+            inertial: DVector::zeros(model.nv),
+            reduced_mass: DMatrix::zeros(0, 0),
+            reduced_factor: DMatrix::zeros(0, 0),
+            reduced_force: DVector::zeros(0),
+            accelerations: DVector::zeros(columns),
+            multipliers: DVector::zeros(rows),
+        }
+    }
+
+    /// Sizes the allowed motions' matrices for `free` coordinates (allocates only when their
+    /// number changes, with the structure).
+    fn size_for(&mut self, free: usize) {
+        if self.null.ncols() != free {
+            self.null = DMatrix::zeros(self.null.nrows(), free);
+            self.mass_null = DMatrix::zeros(self.mass_null.nrows(), free);
+            self.null_transposed = DMatrix::zeros(free, self.null.nrows());
+            self.reduced_mass = DMatrix::zeros(free, free);
+            self.reduced_factor = DMatrix::zeros(free, free);
+            self.reduced_force = DVector::zeros(free);
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -58,45 +115,81 @@ pub enum LoopError {
 const MASSLESS_FORCE: f64 = 1e-3;
 
 /// Solves `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` on the kept rows (γ with Baumgarte's terms when asked
-/// for); `mass` is the tree's mass matrix, `force` has the state's length.
+/// for) at the constraints in `scratch`; `mass` is the tree's mass matrix, `force` has the
+/// state's length. The accelerations and multipliers are left in `scratch`.
 pub fn solve(
     mass: &DMatrix<f64>,
     force: &DVector<f64>,
-    c: &Constraints,
     structure: &Structure,
     stabilisation: Stabilisation,
-) -> Result<Solution, LoopError> {
-    let mut gamma = c.bias.clone();
-    if let Stabilisation::Baumgarte(rate) = stabilisation {
-        gamma += 2.0 * rate * &c.velocity + rate * rate * &c.residual;
-    }
-    let factored = Factored::new(&c.jacobian, &structure.choice);
-    let damped = factored.damped(DAMPING).map_err(singular)?;
-    let particular = damped.least_norm(&-factored.kept(&gamma));
-    let null = damped.allowed_motions(&structure.free);
-    // The complementary links' own coordinates carry no inertia: only the tree's rows of the
-    // motions meet the mass matrix.
-    let tree = null.rows(0, mass.nrows());
-    let mass_times_null = mass * tree;
-    let reduced_mass = tree.transpose() * &mass_times_null;
-    let inertial = mass * particular.rows(0, mass.nrows());
-    let mut applied = force.clone();
-    applied.rows_mut(0, mass.nrows()).sub_assign(&inertial);
-    let reduced_force = null.transpose() * applied;
-    let z = massive_solve(reduced_mass, &reduced_force, structure.massless).map_err(|k| {
-        LoopError::MasslessMotion {
-            velocity: null.column(k).iamax(),
-        }
-    })?;
-    let accelerations = particular + &null * z;
-    let mut unbalanced = -force;
-    let inertial = mass * accelerations.rows(0, mass.nrows());
-    unbalanced.rows_mut(0, mass.nrows()).add_assign(&inertial);
-    let multipliers = damped.multipliers(&unbalanced, c.residual.len());
-    Ok(Solution {
+    scratch: &mut LoopScratch,
+) -> Result<(), LoopError> {
+    scratch.size_for(structure.free.len());
+    let LoopScratch {
+        constraints: c,
+        factored,
+        factor,
+        kept,
+        gamma,
+        particular,
+        applied,
+        null,
+        mass_null,
+        null_transposed,
+        inertial,
+        reduced_mass,
+        reduced_factor,
+        reduced_force,
         accelerations,
         multipliers,
-    })
+    } = scratch;
+    gamma.copy_from(&c.bias);
+    if let Stabilisation::Baumgarte(rate) = stabilisation {
+        gamma.axpy(2.0 * rate, &c.velocity, 1.0);
+        gamma.axpy(rate * rate, &c.residual, 1.0);
+    }
+    factored.refill(&c.jacobian, &structure.choice);
+    let damped = factored
+        .damped_in(DAMPING, std::mem::take(factor))
+        .map_err(singular)?;
+    factored.kept_into(gamma.as_slice(), kept);
+    kept.iter_mut().for_each(|x| *x = -*x);
+    damped.least_norm_into(kept, particular.as_mut_slice());
+    damped.allowed_motions_into(&structure.free, kept, null);
+    // The complementary links' own coordinates carry no inertia: only the tree's rows of the
+    // motions meet the mass matrix.
+    let nv = mass.nrows();
+    let tree = null.rows(0, nv);
+    mass.mul_to(&tree, mass_null);
+    null.transpose_to(null_transposed);
+    null_transposed
+        .columns(0, nv)
+        .mul_to(mass_null, reduced_mass);
+    mass.mul_to(&particular.rows(0, nv), inertial);
+    applied.copy_from(force);
+    let mut top = applied.rows_mut(0, nv);
+    top -= &*inertial;
+    null_transposed.mul_to(applied, reduced_force);
+    massive_solve(
+        reduced_mass,
+        reduced_factor,
+        reduced_force,
+        structure.massless,
+    )
+    .map_err(|k| LoopError::MasslessMotion {
+        velocity: null.column(k).iamax(),
+    })?;
+    null.mul_to(reduced_force, accelerations);
+    *accelerations += &*particular;
+    // Ma − f, the constraint forces' share.
+    mass.mul_to(&accelerations.rows(0, nv), inertial);
+    applied.copy_from(force);
+    applied.neg_mut();
+    let mut top = applied.rows_mut(0, nv);
+    top += &*inertial;
+    damped.multipliers_into(applied.as_slice(), kept, multipliers.as_mut_slice());
+    *factor = damped.into_storage();
+    Ok(())
 }
 
 fn singular(lost: Singular) -> LoopError {
@@ -104,23 +197,29 @@ fn singular(lost: Singular) -> LoopError {
 }
 
 /// Solves the symmetric positive semi-definite system `a z = b` in the span of the eigenvectors
-/// that carry mass: the `massless` smallest eigenvalues count as without mass (their number is
-/// part of the structure, not decided here). A motion without mass stays at rest unless a force
-/// acts on it (then its eigenvector index is the error).
+/// that carry mass, z into `b`: the `massless` smallest eigenvalues count as without mass (their
+/// number is part of the structure, not decided here). A motion without mass stays at rest
+/// unless a force acts on it (then its eigenvector index is the error). `work` is scratch of a's size.
 fn massive_solve(
-    a: DMatrix<f64>,
-    b: &DVector<f64>,
+    a: &DMatrix<f64>,
+    work: &mut DMatrix<f64>,
+    b: &mut DVector<f64>,
     massless: usize,
-) -> Result<DVector<f64>, usize> {
+) -> Result<(), usize> {
     if a.nrows() == 0 {
-        return Ok(DVector::zeros(0));
+        return Ok(());
     }
     if massless == 0 {
-        if let Some(cholesky) = a.clone().cholesky() {
-            return Ok(cholesky.solve(b));
+        work.copy_from(a);
+        // The factorisation takes the buffer and gives it back: no allocation.
+        if let Some(cholesky) = Cholesky::new(std::mem::take(work)) {
+            cholesky.solve_mut(b);
+            *work = cholesky.unpack_dirty();
+            return Ok(());
         }
+        *work = a.clone();
     }
-    let eigen = a.symmetric_eigen();
+    let eigen = a.clone().symmetric_eigen();
     let mut order: Vec<usize> = (0..eigen.eigenvalues.len()).collect();
     order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));
     let scale = b.amax().max(f64::MIN_POSITIVE);
@@ -134,7 +233,8 @@ fn massive_solve(
             return Err(k);
         }
     }
-    Ok(z)
+    b.copy_from(&z);
+    Ok(())
 }
 
 /// Replaces v by the motion the kept rows allow that has the same momentum along every allowed
