@@ -6,10 +6,11 @@
 
 use std::f64::consts::PI;
 
-use nalgebra::{DVector, Rotation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Matrix6, Rotation3, Unit, UnitQuaternion, Vector3};
 
 use super::joint::{quaternion, Joint, JointType};
 use crate::kinematics::eval::{EvalError, UnknownValues};
+use crate::kinematics::model::ChainMotion;
 use crate::spatial::{motion_to_parent, Motion, Pose};
 
 fn rotate(axis: &Vector3<f64>, angle: f64, v: &Vector3<f64>) -> Vector3<f64> {
@@ -100,8 +101,31 @@ impl Joint {
         previous: &[f64],
         unknowns: &UnknownValues,
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+        let n = self.chain.coordinate_count();
+        let (mut coordinates, mut rates) = (vec![0.0; n], vec![0.0; n]);
+        let mut chain = ChainMotion::default();
+        let out = (&mut coordinates[..], &mut rates[..]);
+        self.declared_into(q, v, previous, unknowns, out, &mut chain)?;
+        Ok((coordinates, rates))
+    }
+
+    /// `declared` into `out` (coordinates, rates: the chain's count each), with `chain` as
+    /// scratch: nothing is allocated once it has held this chain's motion.
+    pub fn declared_into(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        previous: &[f64],
+        unknowns: &UnknownValues,
+        (coordinates, rates): (&mut [f64], &mut [f64]),
+        chain_motion: &mut ChainMotion,
+    ) -> Result<(), EvalError> {
         let axes = match &self.kind {
-            JointType::Chain => return Ok((q.to_vec(), v.to_vec())),
+            JointType::Chain => {
+                coordinates.copy_from_slice(q);
+                rates.copy_from_slice(v);
+                return Ok(());
+            }
             JointType::Spherical { axes } | JointType::Free { axes } => axes,
         };
         let free = matches!(self.kind, JointType::Free { .. });
@@ -123,11 +147,10 @@ impl Joint {
             previous[angle_start + 2],
         ];
         let angles = angles_from_rotation(axes, &chain.rotation, &reference);
-        let mut coordinates = Vec::with_capacity(6);
         if free {
-            coordinates.extend_from_slice(chain.translation.vector.as_slice());
+            coordinates[..3].copy_from_slice(chain.translation.vector.as_slice());
         }
-        coordinates.extend_from_slice(&angles);
+        coordinates[angle_start..].copy_from_slice(&angles);
         // Rates: the chain's spatial twist equals S(declared) · rates.
         let body_twist = body_twist(v, free);
         let spatial_twist = if self.first_on_parent {
@@ -135,9 +158,10 @@ impl Joint {
         } else {
             -body_twist
         };
-        let motion = self.chain.chain_motion(&coordinates, None, unknowns)?;
-        let rates = solve_least_squares(&motion.subspace, &spatial_twist);
-        Ok((coordinates, rates))
+        self.chain
+            .chain_motion_into(coordinates, None, unknowns, chain_motion)?;
+        solve_least_squares(&chain_motion.subspace, &spatial_twist, rates);
+        Ok(())
     }
 
     /// The joint's positions and velocities from declared coordinates and rates.
@@ -187,21 +211,35 @@ fn body_twist(v: &[f64], free: bool) -> Motion {
     }
 }
 
-/// Least-squares solution of `a x = b`: by QR while `a` has full column rank (accurate to
-/// round-off), by the minimum-norm SVD solution at a singular configuration (gimbal lock).
-fn solve_least_squares(a: &nalgebra::DMatrix<f64>, b: &Motion) -> Vec<f64> {
-    let rhs = DVector::from_column_slice(b.as_slice());
-    let qr = a.clone().qr();
+/// Least-squares solution of `a x = b` into x (a has at most six columns): by QR while `a` has
+/// full column rank (accurate to round-off), by the minimum-norm SVD solution at a singular
+/// configuration (gimbal lock). On `a` padded with zero columns to 6 × 6, so that nothing is
+/// allocated: Householder QR takes the columns in order, so the padding changes neither the
+/// first columns' factor nor the SVD's minimum-norm solution on them.
+fn solve_least_squares(a: &nalgebra::DMatrix<f64>, b: &Motion, x: &mut [f64]) {
+    let n = a.ncols();
+    let mut padded = Matrix6::zeros();
+    for (k, column) in a.column_iter().enumerate() {
+        padded.set_column(k, &column);
+    }
+    let qr = padded.qr();
     let r = qr.r();
-    let largest = r.diagonal().amax();
-    if r.diagonal().iter().all(|d| d.abs() > 1e-10 * largest) {
-        if let Some(x) = r.solve_upper_triangular(&(qr.q().transpose() * &rhs)) {
-            return x.as_slice().to_vec();
+    let diagonal = r.diagonal();
+    let largest = diagonal.rows(0, n).amax();
+    if diagonal
+        .rows(0, n)
+        .iter()
+        .all(|d| d.abs() > 1e-10 * largest)
+    {
+        let mut rhs = qr.q().transpose() * b;
+        let mut top = rhs.rows_mut(0, n);
+        if r.view((0, 0), (n, n)).solve_upper_triangular_mut(&mut top) {
+            x.copy_from_slice(top.as_slice());
+            return;
         }
     }
-    a.clone()
-        .svd(true, true)
-        .solve(&rhs, 1e-12)
-        .map(|x| x.as_slice().to_vec())
-        .unwrap_or_else(|_| vec![f64::NAN; a.ncols()])
+    match padded.svd(true, true).solve(b, 1e-12) {
+        Ok(solution) => x.copy_from_slice(&solution.as_slice()[..n]),
+        Err(_) => x.fill(f64::NAN),
+    }
 }

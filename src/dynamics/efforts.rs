@@ -3,7 +3,7 @@
 //! `torqueN` of the links) as generalised forces. Their values may depend on every join's
 //! coordinates and rates and on the time.
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix6, Vector3};
 
 use super::algorithms::Data;
 use super::compiled::{EffortState, EffortTape};
@@ -12,7 +12,7 @@ use super::joint::JointType;
 use super::model::{AppliedGroup, LinkEffort, Model};
 use crate::elab::mechanism::EffortKind;
 use crate::kinematics::eval::{eval_jet, Env, EvalError};
-use crate::kinematics::model::Step;
+use crate::kinematics::model::{ChainMotion, Step};
 use crate::spatial::{self, Force};
 
 /// The efforts at one state.
@@ -25,6 +25,18 @@ pub struct Efforts {
     /// The power of the efforts that derive from no potential (dampers, motors, …): the rate
     /// of the work the energy balance counts.
     pub power: f64,
+    /// What the link efforts compute on the way, kept between evaluations.
+    links: LinkScratch,
+}
+
+/// The link efforts' scratch: a chain's motion, one step's twists per coordinate, the
+/// generalised forces on the declared coordinates, unit rates.
+#[derive(Clone, Debug, Default)]
+struct LinkScratch {
+    chain: ChainMotion,
+    step: DMatrix<f64>,
+    on_declared: Vec<f64>,
+    unit: Vec<f64>,
 }
 
 impl Efforts {
@@ -34,6 +46,7 @@ impl Efforts {
             external: vec![Force::zeros(); model.body_count() + 1],
             tau: DVector::zeros(model.velocities()),
             power: 0.0,
+            links: LinkScratch::default(),
         }
     }
 }
@@ -122,6 +135,7 @@ pub fn evaluate_into(
         external,
         tau,
         power,
+        links,
     } = efforts;
     external.fill(Force::zeros());
     tau.fill(0.0);
@@ -136,22 +150,10 @@ pub fn evaluate_into(
     }
     for effort in &model.link_efforts {
         let value = vector(tape, data, effort.value_roots);
-        let (generalised, link_power) = link_effort(model, effort, value, declared)?;
+        let link_power = link_effort(model, effort, value, declared, links, tau)?;
         if !effort.conservative {
             *power += link_power;
         }
-        let (start, count) = match model.joints.get(effort.joint) {
-            Some(joint) => (joint.v_offset, joint.nv()),
-            None => {
-                let k = effort.joint - model.joints.len();
-                (
-                    model.nv + model.loop_offset(k),
-                    model.loops[k].coordinate_count(),
-                )
-            }
-        };
-        let mut rows = tau.rows_mut(start, count);
-        rows += generalised;
     }
     Ok(())
 }
@@ -176,17 +178,23 @@ fn spatial_force(moment: Vector3<f64>, force: Vector3<f64>) -> Force {
     Force::new(moment.x, moment.y, moment.z, force.x, force.y, force.z)
 }
 
-/// A link effort of value `value` as generalised forces on the joint's velocities, and its power.
+/// Adds a link effort of value `value` to the generalised forces `tau` on the joint's velocities;
+/// returns its power.
 fn link_effort(
     model: &Model,
     effort: &LinkEffort,
     value: Vector3<f64>,
     declared: &Declared<'_>,
-) -> Result<(DVector<f64>, f64), EvalError> {
+    scratch: &mut LinkScratch,
+    tau: &mut DVector<f64>,
+) -> Result<f64, EvalError> {
     // A complementary link's coordinates are its velocities: no quaternion to map through.
-    let (chain, joint) = match model.joints.get(effort.joint) {
-        Some(joint) => (&joint.chain, Some(joint)),
-        None => (&model.loops[effort.joint - model.joints.len()], None),
+    let (chain, joint, start) = match model.joints.get(effort.joint) {
+        Some(joint) => (&joint.chain, Some(joint), joint.v_offset),
+        None => {
+            let k = effort.joint - model.joints.len();
+            (&model.loops[k], None, model.nv + model.loop_offset(k))
+        }
     };
     let offset = model.declared_offset(chain.join).unwrap_or(0);
     let n = chain.coordinate_count();
@@ -198,35 +206,68 @@ fn link_effort(
     };
     // Generalised forces on the declared coordinates: the wrench against each coordinate's twist.
     let twists = if effort.step == 0 {
-        chain
-            .chain_motion(coordinates, None, &model.unknowns)?
-            .subspace
+        let chain_motion = &mut scratch.chain;
+        chain.chain_motion_into(coordinates, None, &model.unknowns, chain_motion)?;
+        &chain_motion.subspace
     } else {
-        step_columns(&chain.steps[effort.step as usize - 1], coordinates, model)?
+        let step = &chain.steps[effort.step as usize - 1];
+        step_columns(
+            step,
+            coordinates,
+            model,
+            &mut scratch.unit,
+            &mut scratch.step,
+        )?;
+        &scratch.step
     };
-    let on_declared = twists.transpose() * DVector::from_column_slice(wrench.as_slice());
-    let power = on_declared.dot(&DVector::from_column_slice(rates));
-    if joint.is_none_or(|j| j.kind == JointType::Chain) {
-        return Ok((on_declared, power));
+    let on_declared = &mut scratch.on_declared;
+    on_declared.clear();
+    on_declared.extend(twists.column_iter().map(|twist| twist.dot(&wrench)));
+    let power = on_declared.iter().zip(rates).map(|(f, r)| f * r).sum();
+    match joint {
+        Some(joint) if joint.kind != JointType::Chain => {
+            // Quaternion joints: map through the declared rates' dependence on the velocities.
+            let jacobian =
+                declared_rate_jacobian(model, effort.joint, coordinates, &mut scratch.chain)?;
+            for (k, column) in jacobian.column_iter().take(joint.nv()).enumerate() {
+                let along: f64 = column
+                    .iter()
+                    .zip(on_declared.iter())
+                    .map(|(j, f)| j * f)
+                    .sum();
+                tau[start + k] += along;
+            }
+        }
+        _ => {
+            for (k, f) in on_declared.iter().enumerate() {
+                tau[start + k] += f;
+            }
+        }
     }
-    // Quaternion joints: map through the declared rates' dependence on the velocities.
-    let jacobian = declared_rate_jacobian(model, effort.joint, coordinates)?;
-    Ok((jacobian.transpose() * on_declared, power))
+    Ok(power)
 }
 
-/// Twists of one step of a chain per unit rate of each coordinate, in the step's own frame.
+/// Twists of one step of a chain per unit rate of each coordinate, in the step's own frame, into
+/// `columns` (6 × coordinates), with `unit` as scratch.
 fn step_columns(
     step: &Step,
     coordinates: &[f64],
     model: &Model,
-) -> Result<DMatrix<f64>, EvalError> {
+    unit: &mut Vec<f64>,
+    columns: &mut DMatrix<f64>,
+) -> Result<(), EvalError> {
     let n = coordinates.len();
     let env = Env { coordinates };
-    let mut columns = DMatrix::zeros(6, n);
-    let mut unit = vec![0.0; n];
+    if columns.ncols() == n {
+        columns.fill(0.0);
+    } else {
+        *columns = DMatrix::zeros(6, n);
+    }
+    unit.clear();
+    unit.resize(n, 0.0);
     for k in 0..n {
         unit[k] = 1.0;
-        let d = |s| eval_jet(s, &model.unknowns, &env, &unit).map(|j| j.first);
+        let d = |s| eval_jet(s, &model.unknowns, &env, unit).map(|j| j.first);
         match step {
             Step::Translation(v) => {
                 for i in 0..3 {
@@ -242,22 +283,24 @@ fn step_columns(
         }
         unit[k] = 0.0;
     }
-    Ok(columns)
+    Ok(())
 }
 
-/// ∂(declared rates)/∂(velocities) of a quaternion joint at given declared coordinates.
+/// ∂(declared rates)/∂(velocities) of a quaternion joint at given declared coordinates: the
+/// first `nv` columns of the 6 × 6 result, its first rows for the declared coordinates (at most
+/// six); `motion` is scratch. Fixed-size matrices throughout: nothing is allocated.
 fn declared_rate_jacobian(
     model: &Model,
     joint: usize,
     coordinates: &[f64],
-) -> Result<DMatrix<f64>, EvalError> {
+    motion: &mut ChainMotion,
+) -> Result<Matrix6<f64>, EvalError> {
     let joint = &model.joints[joint];
-    let motion = joint
+    joint
         .chain
-        .chain_motion(coordinates, None, &model.unknowns)?;
-    let nv = joint.nv();
-    let mut chain_twists = DMatrix::zeros(6, nv);
-    for k in 0..nv {
+        .chain_motion_into(coordinates, None, &model.unknowns, motion)?;
+    let mut chain_twists = Matrix6::zeros();
+    for k in 0..joint.nv() {
         let mut unit = spatial::Motion::zeros();
         unit[k] = 1.0;
         let twist = if joint.first_on_parent {
@@ -267,9 +310,13 @@ fn declared_rate_jacobian(
         };
         chain_twists.set_column(k, &twist);
     }
-    let pseudo_inverse = motion
-        .subspace
-        .clone()
+    // The declared chain's subspace, padded with zero columns: its pseudo-inverse is the
+    // subspace's, padded with zero rows.
+    let mut subspace = Matrix6::zeros();
+    for (k, column) in motion.subspace.column_iter().enumerate() {
+        subspace.set_column(k, &column);
+    }
+    let pseudo_inverse = subspace
         .pseudo_inverse(1e-12)
         .map_err(|_| EvalError::NotGeometric("a degenerate joint"))?;
     Ok(pseudo_inverse * chain_twists)

@@ -18,7 +18,7 @@ use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternio
 
 use crate::elab::value::SExpr;
 use crate::kinematics::eval::{EvalError, UnknownValues};
-use crate::kinematics::model::{JointModel, Step};
+use crate::kinematics::model::{ChainMotion, JointModel, Step};
 use crate::spatial::{self, Force, Motion, Pose, Transform};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -160,6 +160,8 @@ pub struct JointState {
     /// Joint velocity `S v` and its bias `Ṡ v`.
     pub velocity: Motion,
     pub bias: Motion,
+    /// A general dof chain's motion (scratch kept between evaluations).
+    chain: ChainMotion,
 }
 
 impl JointState {
@@ -170,6 +172,7 @@ impl JointState {
             subspace: Subspace::empty(),
             velocity: Motion::zeros(),
             bias: Motion::zeros(),
+            chain: ChainMotion::default(),
         }
     }
 }
@@ -513,7 +516,9 @@ impl Joint {
         unknowns: &UnknownValues,
         state: &mut JointState,
     ) -> Result<(), EvalError> {
-        let motion = self.chain.chain_motion(q, Some(v), unknowns)?;
+        self.chain
+            .chain_motion_into(q, Some(v), unknowns, &mut state.chain)?;
+        let motion = &state.chain;
         let d = motion.pose;
         // Twists of D (in the first frame) seen in the child frame: through B·D⁻¹ when the first
         // frame is on the parent, through −A when it is on the child (the child moves with D⁻¹).

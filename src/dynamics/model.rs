@@ -13,7 +13,7 @@ use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
-use crate::kinematics::model::{constant_pose, JointModel, KinematicModel};
+use crate::kinematics::model::{constant_pose, ChainMotion, JointModel, KinematicModel};
 use crate::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 use crate::symbolic::expr::ExprId;
 
@@ -711,20 +711,25 @@ impl Model {
         v: &[f64],
         previous: &[f64],
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
-        let (mut coordinates, mut rates) = (Vec::new(), Vec::new());
-        self.declared_into(q, v, previous, &mut coordinates, &mut rates)?;
-        Ok((coordinates, rates))
+        let mut declared = DeclaredState::default();
+        self.declared_into(q, v, previous, &mut declared)?;
+        Ok((declared.coordinates, declared.rates))
     }
 
-    /// `declared` writing into `coordinates` and `rates` (reusing their storage).
+    /// `declared` writing into `declared` (reusing its storage: nothing is allocated once it
+    /// has held this model's).
     pub fn declared_into(
         &self,
         q: &[f64],
         v: &[f64],
         previous: &[f64],
-        coordinates: &mut Vec<f64>,
-        rates: &mut Vec<f64>,
+        declared: &mut DeclaredState,
     ) -> Result<(), EvalError> {
+        let DeclaredState {
+            coordinates,
+            rates,
+            chain,
+        } = declared;
         coordinates.resize(self.declared_count, 0.0);
         rates.resize(self.declared_count, 0.0);
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
@@ -735,18 +740,30 @@ impl Model {
                 rates[offset..offset + n].copy_from_slice(&v[joint.v_offset..][..n]);
                 continue;
             }
-            let (c, r) = joint.declared(
+            joint.declared_into(
                 &q[joint.q_offset..joint.q_offset + joint.nq()],
                 &v[joint.v_offset..joint.v_offset + joint.nv()],
                 &previous[offset..offset + n],
                 &self.unknowns,
+                (
+                    &mut coordinates[offset..offset + n],
+                    &mut rates[offset..offset + n],
+                ),
+                chain,
             )?;
-            coordinates[offset..offset + n].copy_from_slice(&c);
-            rates[offset..offset + n].copy_from_slice(&r);
         }
         let tree = self.declared_count - self.nc;
         coordinates[tree..].copy_from_slice(&q[self.nq..self.nq + self.nc]);
         rates[tree..].copy_from_slice(&v[self.nv..self.nv + self.nc]);
         Ok(())
     }
+}
+
+/// Declared coordinates and rates of every join at a state (`Model::declared_into`), with the
+/// scratch their recovery from quaternions uses.
+#[derive(Clone, Debug, Default)]
+pub struct DeclaredState {
+    pub coordinates: Vec<f64>,
+    pub rates: Vec<f64>,
+    chain: ChainMotion,
 }

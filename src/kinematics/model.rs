@@ -59,31 +59,56 @@ impl JointModel {
         rates: Option<&[f64]>,
         unknowns: &UnknownValues,
     ) -> Result<ChainMotion, EvalError> {
+        let mut motion = ChainMotion::default();
+        self.chain_motion_into(q, rates, unknowns, &mut motion)?;
+        Ok(motion)
+    }
+
+    /// `chain_motion` into `out`, reusing its storage: nothing is allocated once it has held
+    /// this chain's motion.
+    pub fn chain_motion_into(
+        &self,
+        q: &[f64],
+        rates: Option<&[f64]>,
+        unknowns: &UnknownValues,
+        out: &mut ChainMotion,
+    ) -> Result<(), EvalError> {
         let n = self.coordinate_count();
         let env = Env { coordinates: q };
-        let zero_rates = vec![0.0; n];
-        let rates = rates.unwrap_or(&zero_rates);
-        let mut pose = Pose::identity();
-        let mut subspace = DMatrix::zeros(6, n);
-        let mut velocity = Twist::zeros();
-        let mut bias = Twist::zeros();
-        let mut unit = vec![0.0; n];
+        let ChainMotion {
+            pose,
+            subspace,
+            velocity,
+            bias,
+            unit,
+            rest,
+        } = out;
+        rest.clear();
+        rest.resize(n, 0.0);
+        unit.clear();
+        unit.resize(n, 0.0);
+        let rates = rates.unwrap_or(rest);
+        if subspace.ncols() == n {
+            subspace.fill(0.0);
+        } else {
+            *subspace = DMatrix::zeros(6, n);
+        }
+        (*pose, *velocity, *bias) = (Pose::identity(), Twist::zeros(), Twist::zeros());
         for step in &self.steps {
-            // Value and derivatives of the step's parameters: per coordinate, and along the rates.
-            let (transform, columns, local_velocity, local_bias) = match step {
+            // Value and derivatives of the step's parameters along the rates, then per
+            // coordinate (a column of the subspace, moved to the first frame).
+            let (transform, local_velocity, local_bias) = match step {
                 Step::Translation(v) => {
                     let along = [0, 1, 2].map(|i| eval_jet(&v[i], unknowns, &env, rates));
                     let [x, y, z] = along;
                     let (x, y, z) = (x?, y?, z?);
-                    let mut columns = Vec::with_capacity(n);
                     for k in 0..n {
                         unit[k] = 1.0;
-                        let d = |i: usize| eval_jet(&v[i], unknowns, &env, &unit).map(|j| j.first);
-                        columns.push(spatial::twist(
-                            Vector3::zeros(),
-                            Vector3::new(d(0)?, d(1)?, d(2)?),
-                        ));
+                        let d = |i: usize| eval_jet(&v[i], unknowns, &env, unit).map(|j| j.first);
+                        let column =
+                            spatial::twist(Vector3::zeros(), Vector3::new(d(0)?, d(1)?, d(2)?));
                         unit[k] = 0.0;
+                        add_moved(subspace, k, pose, &column);
                     }
                     let value = Vector3::new(x.value, y.value, z.value);
                     let velocity =
@@ -92,45 +117,47 @@ impl JointModel {
                         Vector3::zeros(),
                         Vector3::new(x.second, y.second, z.second),
                     );
-                    (spatial::translation(value), columns, velocity, bias)
+                    (spatial::translation(value), velocity, bias)
                 }
                 Step::Rotation { angle, axis } => {
                     let jet = eval_jet(angle, unknowns, &env, rates)?;
-                    let mut columns = Vec::with_capacity(n);
                     for k in 0..n {
                         unit[k] = 1.0;
-                        let rate = eval_jet(angle, unknowns, &env, &unit)?.first;
-                        columns.push(spatial::twist(axis * rate, Vector3::zeros()));
+                        let rate = eval_jet(angle, unknowns, &env, unit)?.first;
                         unit[k] = 0.0;
+                        add_moved(
+                            subspace,
+                            k,
+                            pose,
+                            &spatial::twist(axis * rate, Vector3::zeros()),
+                        );
                     }
                     let velocity = spatial::twist(axis * jet.first, Vector3::zeros());
                     let bias = spatial::twist(axis * jet.second, Vector3::zeros());
-                    (spatial::rotation(axis, jet.value), columns, velocity, bias)
+                    (spatial::rotation(axis, jet.value), velocity, bias)
                 }
             };
-            for (k, column) in columns.iter().enumerate() {
-                let moved = spatial::motion_to_parent(&pose, column);
-                for r in 0..6 {
-                    subspace[(r, k)] += moved[r];
-                }
-            }
             // d/dt of Ad(P) ξ is V_P × Ad(P) ξ + Ad(P) ξ̇ (spatial twists in the first frame).
-            let step_velocity = spatial::motion_to_parent(&pose, &local_velocity);
-            bias +=
-                cross(&velocity, &step_velocity) + spatial::motion_to_parent(&pose, &local_bias);
-            velocity += step_velocity;
-            pose *= transform;
+            let step_velocity = spatial::motion_to_parent(pose, &local_velocity);
+            *bias += cross(velocity, &step_velocity) + spatial::motion_to_parent(pose, &local_bias);
+            *velocity += step_velocity;
+            *pose *= transform;
         }
-        Ok(ChainMotion {
-            pose,
-            subspace,
-            velocity,
-            bias,
-        })
+        Ok(())
+    }
+}
+
+/// Adds `column`, a twist in the frame `pose` places, to column k of the subspace (in the first
+/// frame).
+fn add_moved(subspace: &mut DMatrix<f64>, k: usize, pose: &Pose, column: &Twist) {
+    let moved = spatial::motion_to_parent(pose, column);
+    for r in 0..6 {
+        subspace[(r, k)] += moved[r];
     }
 }
 
 /// A dof chain at given coordinates and rates, in the joint's first frame.
+#[derive(Clone, Debug)]
 pub struct ChainMotion {
     pub pose: Pose,
     pub subspace: DMatrix<f64>,
@@ -138,6 +165,22 @@ pub struct ChainMotion {
     pub velocity: Twist,
     /// Its derivative when the coordinates have no acceleration.
     pub bias: Twist,
+    /// Scratch: unit rates, one coordinate at a time, and zero rates.
+    unit: Vec<f64>,
+    rest: Vec<f64>,
+}
+
+impl Default for ChainMotion {
+    fn default() -> ChainMotion {
+        ChainMotion {
+            pose: Pose::identity(),
+            subspace: DMatrix::zeros(6, 0),
+            velocity: Twist::zeros(),
+            bias: Twist::zeros(),
+            unit: Vec::new(),
+            rest: Vec::new(),
+        }
+    }
 }
 
 /// `a × b` for two twists `[ω; v]`.

@@ -18,7 +18,7 @@ use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
     self, LoopError, LoopScratch, Stabilisation, StructureError, ROW_NAMES,
 };
-use crate::dynamics::model::Model;
+use crate::dynamics::model::{DeclaredState, Model};
 use crate::kinematics::eval::EvalError;
 use crate::spatial;
 
@@ -39,7 +39,7 @@ pub struct MechanicalSystem<'m> {
     no_efforts: Efforts,
     /// The efforts at the last evaluation, and the declared coordinates and rates they used.
     efforts: Efforts,
-    declared: (Vec<f64>, Vec<f64>),
+    declared: DeclaredState,
     /// Scratch of the constrained equations: the tree's mass matrix, its velocity-product
     /// forces (and the zero accelerations they are computed at), the applied forces less those,
     /// and the loops' rows, factorisation and solution.
@@ -66,7 +66,7 @@ impl<'m> MechanicalSystem<'m> {
             accelerations: DVector::zeros(model.velocities()),
             no_efforts: Efforts::none(model),
             efforts: Efforts::none(model),
-            declared: (Vec::new(), Vec::new()),
+            declared: DeclaredState::default(),
             mass: DMatrix::zeros(model.nv, model.nv),
             bias: DVector::zeros(model.nv),
             rest: vec![0.0; model.nv],
@@ -90,19 +90,20 @@ impl<'m> MechanicalSystem<'m> {
     fn evaluate_efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v)?;
-        let (mut coordinates, mut rates) = std::mem::take(&mut self.declared);
-        let result = model
-            .declared_into(q, v, &self.reference.borrow(), &mut coordinates, &mut rates)
-            .and_then(|()| {
-                let declared = Declared {
-                    model,
-                    coordinates: &coordinates,
-                    rates: &rates,
-                };
-                evaluate_into(model, &mut self.data, &declared, t, &mut self.efforts)
-            });
-        self.declared = (coordinates, rates);
-        Ok(result?)
+        let state = &mut self.declared;
+        model.declared_into(q, v, &self.reference.borrow(), state)?;
+        let declared = Declared {
+            model,
+            coordinates: &state.coordinates,
+            rates: &state.rates,
+        };
+        Ok(evaluate_into(
+            model,
+            &mut self.data,
+            &declared,
+            t,
+            &mut self.efforts,
+        )?)
     }
 
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in

@@ -15,6 +15,7 @@ use super::jacobian::{ConstraintJacobian, LoopBlock};
 use crate::dynamics::algorithms::{bias_accelerations, forward_kinematics, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
+use crate::kinematics::model::ChainMotion;
 use crate::spatial::{self, Force, Motion};
 use crate::spatial::{motion_to_parent, translation, Pose};
 
@@ -40,6 +41,8 @@ pub struct Constraints {
     pub bias: DVector<f64>,
     /// Where each loop closes (origin of its chain's end), fixed axes.
     pub points: Vec<Vector3<f64>>,
+    /// Each loop's dof chain at the state (scratch kept between evaluations).
+    chains: Vec<ChainMotion>,
 }
 
 impl Constraints {
@@ -72,6 +75,7 @@ impl Constraints {
             velocity: DVector::zeros(rows),
             bias: DVector::zeros(rows),
             points: vec![Vector3::zeros(); model.loops.len()],
+            chains: vec![ChainMotion::default(); model.loops.len()],
         }
     }
 }
@@ -142,11 +146,13 @@ fn loop_rows(
     let ball = model.loop_balls[k].is_some();
     // Without rates the chain is taken at rest (its own rates are none of the rows' business).
     let rates = (!ball).then(|| &v[model.nv + offset..model.nv + offset + n]);
-    let chain = joint.chain_motion(
+    joint.chain_motion_into(
         &q[model.nq + offset..model.nq + offset + n],
         rates,
         &model.unknowns,
+        &mut c.chains[k],
     )?;
+    let chain = &c.chains[k];
     let base = data.world[joint.first_body] * joint.first;
     let end = base * chain.pose;
     let target = data.world[joint.second_body] * joint.second;
