@@ -235,6 +235,7 @@ impl<'m> MechanicalSystem<'m> {
         if !model.has_loops() {
             return Ok(false);
         }
+        self.loop_scratch.refresh();
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
         let moved = self.loops.keep(model, &mut self.data, t, &mut q, &mut v)?;

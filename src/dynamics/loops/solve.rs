@@ -54,6 +54,8 @@ pub struct LoopScratch {
     reduced_mass: DMatrix<f64>,
     reduced_factor: DMatrix<f64>,
     reduced_force: DVector<f64>,
+    /// The motions kept when some carry no mass.
+    massive: Massive,
     /// Accelerations of every state velocity.
     pub accelerations: DVector<f64>,
     /// Constraint wrench of each loop on its second body, at the loop point in fixed axes:
@@ -80,8 +82,17 @@ impl LoopScratch {
             reduced_mass: DMatrix::zeros(0, 0),
             reduced_factor: DMatrix::zeros(0, 0),
             reduced_force: DVector::zeros(0),
+            massive: Massive::default(),
             accelerations: DVector::zeros(columns),
             multipliers: DVector::zeros(rows),
+        }
+    }
+
+    /// Takes between steps the decisions the last evaluations found stale (the motions kept when
+    /// some carry no mass): the next evaluation takes them again.
+    pub fn refresh(&mut self) {
+        if self.massive.stale {
+            self.massive = Massive::default();
         }
     }
 
@@ -140,6 +151,7 @@ pub fn solve(
         reduced_mass,
         reduced_factor,
         reduced_force,
+        massive,
         accelerations,
         multipliers,
     } = scratch;
@@ -170,13 +182,15 @@ pub fn solve(
     let mut top = applied.rows_mut(0, nv);
     top -= &*inertial;
     null_transposed.mul_to(applied, reduced_force);
-    massive_solve(
-        reduced_mass,
-        reduced_factor,
-        reduced_force,
-        structure.massless,
-    )
-    .map_err(|k| LoopError::MasslessMotion {
+    let solved = if structure.massless == 0 {
+        massive_solve(reduced_mass, reduced_factor, reduced_force)
+    } else {
+        if massive.free != structure.free || massive.dropped.len() != structure.massless {
+            massive.choose(reduced_mass, &structure.free, structure.massless);
+        }
+        massive.solve(reduced_mass, reduced_factor, reduced_force)
+    };
+    solved.map_err(|k| LoopError::MasslessMotion {
         velocity: null.column(k).iamax(),
     })?;
     null.mul_to(reduced_force, accelerations);
@@ -196,41 +210,190 @@ fn singular(lost: Singular) -> LoopError {
     LoopError::Singular { row: lost.row }
 }
 
-/// Solves the symmetric positive semi-definite system `a z = b` in the span of the eigenvectors
-/// that carry mass, z into `b`: the `massless` smallest eigenvalues count as without mass (their
-/// number is part of the structure, not decided here). A motion without mass stays at rest
-/// unless a force acts on it (then its eigenvector index is the error). `work` is scratch of a's size.
+/// The allowed motions the solve keeps when some carry no mass (the structure counts them): those
+/// of the free coordinates a Cholesky factorisation of NᵀMN pivoted on its diagonal takes first,
+/// decided at the first evaluation after the free coordinates change and then kept, since
+/// choosing inside every evaluation would make the accelerations jump where two pivots swap. The
+/// motions left out are, up to motions of the kept ones, those without mass: they are left at
+/// rest. When the kept block's smallest pivot falls under a tenth of its value at the choice,
+/// the choice is marked stale and taken again between steps (`LoopScratch::refresh`).
+#[derive(Clone, Debug, Default)]
+struct Massive {
+    /// The free coordinates the choice was made for.
+    free: Vec<usize>,
+    /// Positions among them: kept (pivot order), left out.
+    kept: Vec<usize>,
+    dropped: Vec<usize>,
+    /// The kept block's smallest pivot over its largest, when chosen.
+    quality: f64,
+    stale: bool,
+    /// The kept block's right-hand side, then its solution.
+    rhs: Vec<f64>,
+}
+
+impl Massive {
+    /// Chooses the kept motions for the reduced mass matrix `a` of `free`, `massless` of which
+    /// carry no mass.
+    fn choose(&mut self, a: &DMatrix<f64>, free: &[usize], massless: usize) {
+        let n = a.nrows();
+        let mut order: Vec<usize> = (0..n).collect();
+        let mut schur = a.clone();
+        let mut pivots = Vec::with_capacity(n);
+        for k in 0..n {
+            // The largest diagonal entry of what is left: the most massive motion next.
+            let best = (k..n)
+                .max_by(|&i, &j| {
+                    schur[(order[i], order[i])].total_cmp(&schur[(order[j], order[j])])
+                })
+                .expect("not empty");
+            order.swap(k, best);
+            let p = order[k];
+            let pivot = schur[(p, p)].max(0.0).sqrt();
+            pivots.push(pivot);
+            if pivot == 0.0 {
+                break;
+            }
+            for &i in &order[k + 1..] {
+                for &j in &order[k + 1..] {
+                    schur[(i, j)] -= schur[(i, p)] * schur[(j, p)] / (pivot * pivot);
+                }
+            }
+        }
+        let kept = n - massless;
+        self.free = free.to_vec();
+        self.kept = order[..kept].to_vec();
+        self.dropped = order[kept..].to_vec();
+        self.quality = pivot_ratio(&pivots[..kept.min(pivots.len())]);
+        self.stale = false;
+    }
+
+    /// z of `a z = b` on the kept motions (z zero on the others) into `b`; `work` is scratch of
+    /// a's size. The position (among the free coordinates) of a motion without mass that a
+    /// force acts on, if any: its acceleration would be infinite.
+    fn solve(
+        &mut self,
+        a: &DMatrix<f64>,
+        work: &mut DMatrix<f64>,
+        b: &mut DVector<f64>,
+    ) -> Result<(), usize> {
+        let r = self.kept.len();
+        for (i, &p) in self.kept.iter().enumerate() {
+            for (j, &q) in self.kept.iter().enumerate().take(i + 1) {
+                work[(i, j)] = a[(p, q)];
+            }
+        }
+        let Some(quality) = cholesky_in_place(work, r) else {
+            self.stale = true;
+            return Err(self.kept[r - 1]);
+        };
+        if quality < 0.1 * self.quality {
+            self.stale = true;
+        }
+        self.rhs.clear();
+        self.rhs.extend(self.kept.iter().map(|&p| b[p]));
+        cholesky_solve(work, r, &mut self.rhs);
+        let scale = b.amax().max(f64::MIN_POSITIVE);
+        for &d in &self.dropped {
+            let unbalanced: f64 = b[d]
+                - self
+                    .kept
+                    .iter()
+                    .zip(&self.rhs)
+                    .map(|(&p, z)| a[(d, p)] * z)
+                    .sum::<f64>();
+            if unbalanced.abs() > MASSLESS_FORCE * scale {
+                return Err(d);
+            }
+        }
+        b.fill(0.0);
+        for (&p, z) in self.kept.iter().zip(&self.rhs) {
+            b[p] = *z;
+        }
+        Ok(())
+    }
+}
+
+/// The smallest of positive pivots over the largest (0 for none).
+fn pivot_ratio(pivots: &[f64]) -> f64 {
+    let largest = pivots.iter().copied().fold(0.0, f64::max);
+    let smallest = pivots.iter().copied().fold(f64::INFINITY, f64::min);
+    if largest > 0.0 {
+        smallest / largest
+    } else {
+        0.0
+    }
+}
+
+/// The lower Cholesky factor of the leading r × r block of `a` in place (its lower triangle
+/// read and written), without allocating; its smallest pivot over its largest, or None when
+/// the block is not positive definite.
+fn cholesky_in_place(a: &mut DMatrix<f64>, r: usize) -> Option<f64> {
+    let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
+    for j in 0..r {
+        let mut diagonal = a[(j, j)];
+        for k in 0..j {
+            diagonal -= a[(j, k)] * a[(j, k)];
+        }
+        if !(diagonal > 0.0 && diagonal.is_finite()) {
+            return None;
+        }
+        let pivot = diagonal.sqrt();
+        (smallest, largest) = (smallest.min(pivot), largest.max(pivot));
+        a[(j, j)] = pivot;
+        for i in j + 1..r {
+            let mut value = a[(i, j)];
+            for k in 0..j {
+                value -= a[(i, k)] * a[(j, k)];
+            }
+            a[(i, j)] = value / pivot;
+        }
+    }
+    Some(if r == 0 { 1.0 } else { smallest / largest })
+}
+
+/// x ← (LLᵀ)⁻¹ x for the factor L in the leading r × r lower triangle of `l`.
+fn cholesky_solve(l: &DMatrix<f64>, r: usize, x: &mut [f64]) {
+    for i in 0..r {
+        let dot: f64 = (0..i).map(|k| l[(i, k)] * x[k]).sum();
+        x[i] = (x[i] - dot) / l[(i, i)];
+    }
+    for i in (0..r).rev() {
+        let dot: f64 = (i + 1..r).map(|k| l[(k, i)] * x[k]).sum();
+        x[i] = (x[i] - dot) / l[(i, i)];
+    }
+}
+
+/// Solves the symmetric positive definite system `a z = b` (z into `b`) by Cholesky; `work` is
+/// scratch of a's size. A matrix that is not positive definite (a motion of no mass the
+/// structure did not count) is solved in the span of its eigenvectors of positive eigenvalue,
+/// which allocates; a force on the others is the error (the free coordinate its eigenvector
+/// moves most).
 fn massive_solve(
     a: &DMatrix<f64>,
     work: &mut DMatrix<f64>,
     b: &mut DVector<f64>,
-    massless: usize,
 ) -> Result<(), usize> {
     if a.nrows() == 0 {
         return Ok(());
     }
-    if massless == 0 {
-        work.copy_from(a);
-        // The factorisation takes the buffer and gives it back: no allocation.
-        if let Some(cholesky) = Cholesky::new(std::mem::take(work)) {
-            cholesky.solve_mut(b);
-            *work = cholesky.unpack_dirty();
-            return Ok(());
-        }
-        *work = a.clone();
+    work.copy_from(a);
+    // The factorisation takes the buffer and gives it back: no allocation.
+    if let Some(cholesky) = Cholesky::new(std::mem::take(work)) {
+        cholesky.solve_mut(b);
+        *work = cholesky.unpack_dirty();
+        return Ok(());
     }
+    *work = a.clone();
     let eigen = a.clone().symmetric_eigen();
-    let mut order: Vec<usize> = (0..eigen.eigenvalues.len()).collect();
-    order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));
     let scale = b.amax().max(f64::MIN_POSITIVE);
     let mut z = DVector::zeros(b.len());
-    for (rank, &k) in order.iter().enumerate() {
-        let (value, vector) = (eigen.eigenvalues[k], eigen.eigenvectors.column(k));
+    for (k, &value) in eigen.eigenvalues.iter().enumerate() {
+        let vector = eigen.eigenvectors.column(k);
         let component = vector.dot(b);
-        if rank >= massless && value > 0.0 {
+        if value > 0.0 {
             z += vector * (component / value);
         } else if component.abs() > MASSLESS_FORCE * scale {
-            return Err(k);
+            return Err(vector.iamax());
         }
     }
     b.copy_from(&z);
