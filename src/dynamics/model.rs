@@ -665,11 +665,18 @@ impl Model {
                 joint.q_offset..joint.q_offset + joint.nq(),
                 joint.v_offset..joint.v_offset + joint.nv(),
             );
-            let mut rate = vec![0.0; joint.nq()];
-            joint.position_rate(&q[qs.clone()], &dv[vs], &mut rate);
+            // Seven positions at most but for long dof chains: on the stack then.
+            let (mut stack, mut heap) = ([0.0; 7], Vec::new());
+            let rate = if joint.nq() <= 7 {
+                &mut stack[..joint.nq()]
+            } else {
+                heap.resize(joint.nq(), 0.0);
+                &mut heap[..]
+            };
+            joint.position_rate(&q[qs.clone()], &dv[vs], rate);
             q[qs.clone()]
                 .iter_mut()
-                .zip(&rate)
+                .zip(rate.iter())
                 .for_each(|(x, r)| *x += r);
             joint.normalize(&mut q[qs]);
         }

@@ -4,10 +4,10 @@
 
 use serde::Serialize;
 
-use crate::dynamics::algorithms::Data;
+use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::loops::{
-    self, ConstraintJacobian, Factored, Residuals, RowChoice, Stabilisation, Structure,
-    StructureError, DAMPING, ROW_NAMES,
+    self, ConstraintJacobian, Factored, ProjectionScratch, Residuals, RowChoice, Stabilisation,
+    Structure, StructureError, ROW_NAMES,
 };
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -191,18 +191,19 @@ impl LoopMonitor {
         model: &Model,
         data: &mut Data,
         time: f64,
-        q: &mut [f64],
-        v: &mut [f64],
+        (q, v): (&mut [f64], &mut [f64]),
+        scratch: &mut ProjectionScratch,
     ) -> Result<bool, EvalError> {
-        let rest = vec![0.0; model.velocities()];
-        let c = loops::constraints(model, data, q, &rest, false)?;
-        let conditioning = self.conditioning(model, &c.jacobian);
+        forward_kinematics(model, data, q, v)?;
+        loops::constraints_into(model, data, q, v, false, &mut scratch.current)?;
+        let conditioning = self.conditioning(model, scratch);
         let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;
         if self.stabilisation == Stabilisation::Projection && projects {
             // Rows just restored after a passage: the velocities are projected from those the
             // state arrived with, by the constraints' impulse (`loops::project_momentum`).
             let arriving = std::mem::take(&mut self.restored).then(|| v.to_vec());
-            let projection = loops::project(model, data, &self.structure.choice, q, v)?;
+            let choice = &self.structure.choice;
+            let projection = loops::project_from(model, data, choice, q, v, scratch)?;
             if let Some(arriving) = arriving {
                 v.copy_from_slice(&arriving);
                 loops::project_momentum(model, data, &self.structure, q, v)?;
@@ -221,7 +222,7 @@ impl LoopMonitor {
             );
             return Ok(true);
         }
-        self.measure(model, data, time, q, v)?;
+        self.observe_current(model, time, conditioning, scratch);
         loops::seat_ball_angles(model, data, q, v, false)
     }
 
@@ -232,8 +233,9 @@ impl LoopMonitor {
     fn conditioning(
         &mut self,
         model: &Model,
-        jacobian: &ConstraintJacobian,
+        scratch: &mut ProjectionScratch,
     ) -> (f64, Option<usize>) {
+        let jacobian = &scratch.current.jacobian;
         let chosen = self.structure.chosen_conditioning;
         if let Some(before) = &self.passage {
             let conditioning = Factored::new(jacobian, before).conditioning();
@@ -244,9 +246,8 @@ impl LoopMonitor {
             }
             return conditioning;
         }
-        let factored = Factored::new(jacobian, &self.structure.choice);
-        let damped = factored.damped(DAMPING);
-        let conditioning = factored.conditioning_of(&damped);
+        let conditioning = scratch.conditioning(&self.structure.choice);
+        let jacobian = &scratch.current.jacobian;
         let structure = &mut self.structure;
         let threshold = RECHOOSE_BELOW * chosen;
         // Tried at every step below the threshold: the redundant rows of a Bricard linkage need
@@ -264,9 +265,9 @@ impl LoopMonitor {
             self.passage = Some(before);
             return conditioning;
         }
-        let quality = damped.map(|damped| structure.free_quality_at(&damped));
-        if quality.is_ok_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
-            structure.choose_free(jacobian);
+        let quality = scratch.free_quality(&structure.free);
+        if quality.is_some_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
+            structure.choose_free(&scratch.current.jacobian);
         }
         conditioning
     }
@@ -277,17 +278,29 @@ impl LoopMonitor {
         model: &Model,
         data: &mut Data,
         time: f64,
-        q: &[f64],
-        v: &[f64],
+        (q, v): (&[f64], &[f64]),
+        scratch: &mut ProjectionScratch,
     ) -> Result<(), EvalError> {
-        let c = loops::constraints(model, data, q, v, false)?;
-        let residuals = Residuals {
-            position: c.residual.amax(),
-            velocity: c.velocity.amax(),
-        };
-        let conditioning = self.conditioning(model, &c.jacobian);
-        self.observe(model, time, residuals, residuals, conditioning);
+        forward_kinematics(model, data, q, v)?;
+        loops::constraints_into(model, data, q, v, false, &mut scratch.current)?;
+        let conditioning = self.conditioning(model, scratch);
+        self.observe_current(model, time, conditioning, scratch);
         Ok(())
+    }
+
+    /// Records the residuals of the constraints in `scratch.current` and the conditioning.
+    fn observe_current(
+        &mut self,
+        model: &Model,
+        time: f64,
+        conditioning: (f64, Option<usize>),
+        scratch: &ProjectionScratch,
+    ) {
+        let residuals = Residuals {
+            position: scratch.current.residual.amax(),
+            velocity: scratch.current.velocity.amax(),
+        };
+        self.observe(model, time, residuals, residuals, conditioning);
     }
 
     fn observe(

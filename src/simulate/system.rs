@@ -16,7 +16,7 @@ use crate::dynamics::algorithms::{
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
-    self, LoopError, LoopScratch, Stabilisation, StructureError, ROW_NAMES,
+    self, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, ROW_NAMES,
 };
 use crate::dynamics::model::{DeclaredState, Model};
 use crate::kinematics::eval::EvalError;
@@ -48,6 +48,9 @@ pub struct MechanicalSystem<'m> {
     rest: Vec<f64>,
     force: DVector<f64>,
     loop_scratch: LoopScratch,
+    /// Scratch of the projections: the constraints and factorisations, and the velocities.
+    projection: ProjectionScratch,
+    velocities: Vec<f64>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -72,6 +75,8 @@ impl<'m> MechanicalSystem<'m> {
             rest: vec![0.0; model.nv],
             force: DVector::zeros(model.velocities()),
             loop_scratch: LoopScratch::new(model),
+            projection: ProjectionScratch::new(model),
+            velocities: Vec::new(),
         }
     }
 
@@ -236,9 +241,22 @@ impl<'m> MechanicalSystem<'m> {
             return Ok(false);
         }
         self.loop_scratch.refresh();
-        let (mut q, v) = model.split_state(y);
-        let mut v = v.to_vec();
-        let moved = self.loops.keep(model, &mut self.data, t, &mut q, &mut v)?;
+        let (mut q, mut v) = (
+            std::mem::take(&mut self.positions),
+            std::mem::take(&mut self.velocities),
+        );
+        v.clear();
+        v.extend_from_slice(model.split_state_into(y, &mut q));
+        let state = (&mut q[..], &mut v[..]);
+        let kept = self
+            .loops
+            .keep(model, &mut self.data, t, state, &mut self.projection);
+        if kept.as_ref().is_ok_and(|&moved| moved) {
+            y[..q.len()].copy_from_slice(&q);
+            y[q.len()..].copy_from_slice(&v);
+        }
+        (self.positions, self.velocities) = (q, v);
+        let moved = kept?;
         if let Some((time, row, left)) = self.loops.opened {
             return Err(SystemError::LoopsOpen {
                 time,
@@ -246,10 +264,6 @@ impl<'m> MechanicalSystem<'m> {
                 row: ROW_NAMES[row % 6],
                 left,
             });
-        }
-        if moved {
-            y[..q.len()].copy_from_slice(&q);
-            y[q.len()..].copy_from_slice(&v);
         }
         Ok(moved)
     }
@@ -271,8 +285,12 @@ impl<'m> MechanicalSystem<'m> {
         if !model.has_loops() {
             return Ok(());
         }
-        let (q, v) = model.split_state(y);
-        Ok(self.loops.measure(model, &mut self.data, t, &q, v)?)
+        let mut q = std::mem::take(&mut self.positions);
+        let v = model.split_state_into(y, &mut q);
+        let measured =
+            (self.loops).measure(model, &mut self.data, t, (&q, v), &mut self.projection);
+        self.positions = q;
+        Ok(measured?)
     }
 
     /// Closes the loops of the initial state at round-off, decides their structure (see

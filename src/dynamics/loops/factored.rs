@@ -143,6 +143,23 @@ impl Factored {
         self.null_space = OnceCell::new();
     }
 
+    /// The kept rows (among the 6 per loop), each with the factor making it dimensionless.
+    pub fn kept_rows(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.indices
+            .iter()
+            .copied()
+            .zip(self.scales.iter().copied())
+    }
+
+    /// The factorisation of these rows from a factor already taken of them (`damped_in`, then
+    /// `Damped::into_storage`) with the rows unchanged since: no work, no allocation.
+    pub fn with_factor(&self, factor: Envelope) -> Damped<'_> {
+        Damped {
+            factored: self,
+            factor,
+        }
+    }
+
     /// How many rows are kept.
     pub fn len(&self) -> usize {
         self.rows.len()
@@ -309,13 +326,12 @@ impl Damped<'_> {
         if firm == 0 {
             return (1.0, None);
         }
-        let diagonal: Vec<f64> = self.factor.diagonal().take(firm).collect();
-        let largest = diagonal.iter().copied().fold(0.0, f64::max);
-        let (smallest, value) = diagonal
-            .iter()
-            .copied()
-            .enumerate()
-            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        let diagonal = || self.factor.diagonal().take(firm);
+        let largest = diagonal().fold(0.0, f64::max);
+        let (smallest, value) =
+            diagonal()
+                .enumerate()
+                .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
         let ratio = if largest > 0.0 { value / largest } else { 0.0 };
         (ratio, Some(self.factored.indices[smallest]))
     }
@@ -520,4 +536,37 @@ impl Envelope {
             }
         }
     }
+}
+
+/// How well the coordinates `free` parametrise the allowed motions `motions` (one column per
+/// free coordinate, the allowed part of its unit motion): the smallest squared pivot of a
+/// Cholesky factorisation of the block of the motions over the free coordinates, 1 when the
+/// allowed motions are exactly the free coordinates' own, 0 when the free coordinates no longer
+/// parametrise them (the block, the projector onto the allowed motions restricted to the free
+/// coordinates, is then singular). `work` is scratch, sized here; nothing is allocated once it
+/// has the block's size.
+pub fn free_quality(motions: &DMatrix<f64>, free: &[usize], work: &mut DMatrix<f64>) -> f64 {
+    let n = free.len();
+    if work.shape() != (n, n) {
+        *work = DMatrix::zeros(n, n);
+    }
+    let mut smallest = 1.0_f64;
+    for j in 0..n {
+        for i in j..n {
+            let mut value = motions[(free[i], j)];
+            for k in 0..j {
+                value -= work[(i, k)] * work[(j, k)];
+            }
+            if i == j {
+                if value.is_nan() || value <= 0.0 {
+                    return 0.0;
+                }
+                smallest = smallest.min(value);
+                work[(j, j)] = value.sqrt();
+            } else {
+                work[(i, j)] = value / work[(j, j)];
+            }
+        }
+    }
+    smallest
 }

@@ -18,7 +18,9 @@ pub mod structure;
 pub use basis::{decompose, decompose_with, Decomposition};
 pub use factored::{Damped, Envelope, Factored, RowChoice, DAMPING};
 pub use jacobian::ConstraintJacobian;
-pub use project::{close_configuration, project, Projection, Residuals};
+pub use project::{
+    close_configuration, project, project_from, Projection, ProjectionScratch, Residuals,
+};
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_after_kinematics, constraints_into,
     seat_ball_angles, Constraints, ROW_NAMES,

@@ -49,7 +49,6 @@ pub struct LoopScratch {
     /// then z.
     null: DMatrix<f64>,
     mass_null: DMatrix<f64>,
-    null_transposed: DMatrix<f64>,
     inertial: DVector<f64>,
     reduced_mass: DMatrix<f64>,
     reduced_factor: DMatrix<f64>,
@@ -77,7 +76,6 @@ impl LoopScratch {
             applied: DVector::zeros(columns),
             null: DMatrix::zeros(columns, 0),
             mass_null: DMatrix::zeros(model.nv, 0),
-            null_transposed: DMatrix::zeros(0, columns),
             inertial: DVector::zeros(model.nv),
             reduced_mass: DMatrix::zeros(0, 0),
             reduced_factor: DMatrix::zeros(0, 0),
@@ -102,7 +100,6 @@ impl LoopScratch {
         if self.null.ncols() != free {
             self.null = DMatrix::zeros(self.null.nrows(), free);
             self.mass_null = DMatrix::zeros(self.mass_null.nrows(), free);
-            self.null_transposed = DMatrix::zeros(free, self.null.nrows());
             self.reduced_mass = DMatrix::zeros(free, free);
             self.reduced_factor = DMatrix::zeros(free, free);
             self.reduced_force = DVector::zeros(free);
@@ -146,7 +143,6 @@ pub fn solve(
         applied,
         null,
         mass_null,
-        null_transposed,
         inertial,
         reduced_mass,
         reduced_factor,
@@ -172,16 +168,23 @@ pub fn solve(
     // motions meet the mass matrix.
     let nv = mass.nrows();
     let tree = null.rows(0, nv);
-    mass.mul_to(&tree, mass_null);
-    null.transpose_to(null_transposed);
-    null_transposed
-        .columns(0, nv)
-        .mul_to(mass_null, reduced_mass);
+    // Column by column (matrix-vector products): a matrix product would pack its operands into
+    // buffers it allocates on every call.
+    for k in 0..tree.ncols() {
+        mass_null
+            .column_mut(k)
+            .gemv(1.0, mass, &tree.column(k), 0.0);
+    }
+    for k in 0..tree.ncols() {
+        for i in 0..tree.ncols() {
+            reduced_mass[(i, k)] = tree.column(i).dot(&mass_null.column(k));
+        }
+    }
     mass.mul_to(&particular.rows(0, nv), inertial);
     applied.copy_from(force);
     let mut top = applied.rows_mut(0, nv);
     top -= &*inertial;
-    null_transposed.mul_to(applied, reduced_force);
+    reduced_force.gemv_tr(1.0, null, applied, 0.0);
     let solved = if structure.massless == 0 {
         massive_solve(reduced_mass, reduced_factor, reduced_force)
     } else {
@@ -193,8 +196,8 @@ pub fn solve(
     solved.map_err(|k| LoopError::MasslessMotion {
         velocity: null.column(k).iamax(),
     })?;
-    null.mul_to(reduced_force, accelerations);
-    *accelerations += &*particular;
+    accelerations.copy_from(particular);
+    accelerations.gemv(1.0, null, reduced_force, 1.0);
     // Ma − f, the constraint forces' share.
     mass.mul_to(&accelerations.rows(0, nv), inertial);
     applied.copy_from(force);

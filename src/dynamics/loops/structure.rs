@@ -15,7 +15,7 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::decompose;
-use super::factored::{row_scale, Damped, Factored, RowChoice, DAMPING};
+use super::factored::{free_quality, row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints};
@@ -66,10 +66,10 @@ pub struct Structure {
     /// Coordinates that parametrise the allowed motions (one per allowed motion): the
     /// equations of motion are solved on the allowed parts of their unit motions.
     pub free: Vec<usize>,
-    /// How well they did when chosen: the smallest eigenvalue of the block of the projector
-    /// onto the allowed motions over the free coordinates (1 when the allowed motions are
-    /// exactly the free coordinates' motions, 0 when the free coordinates no longer
-    /// parametrise them).
+    /// How well they did when chosen (`factored::free_quality`: the smallest squared Cholesky
+    /// pivot of the block of the projector onto the allowed motions over the free coordinates;
+    /// 1 when the allowed motions are exactly the free coordinates' motions, 0 when the free
+    /// coordinates no longer parametrise them).
     pub free_quality: f64,
     /// The kept rows' conditioning (`Factored::conditioning`) when they were chosen.
     pub chosen_conditioning: f64,
@@ -247,10 +247,7 @@ impl Structure {
             return 1.0;
         }
         let motions = damped.allowed_motions(&self.free);
-        let block = DMatrix::from_fn(self.free.len(), self.free.len(), |i, j| {
-            motions[(self.free[i], j)]
-        });
-        block.symmetric_eigenvalues().min()
+        free_quality(&motions, &self.free, &mut DMatrix::zeros(0, 0))
     }
 }
 
