@@ -4,6 +4,7 @@
 
 mod common;
 
+mod allocations;
 mod architecture;
 mod assembly;
 mod cli;
