@@ -2,12 +2,14 @@
 //! `examples/hard/four_bar_row_N.lsd`, generated here for any N) against the same 2N + 1 bodies
 //! with the N closing joins removed (a tree: N + 1 cranks, each of the first N carrying a
 //! coupler). For each N: one right-hand side of each, their ratio, and one projection onto the
-//! loops. Run with `cargo bench --bench loop_scaling`; medians over batches of about 10 ms.
+//! loops. Run with `cargo bench --bench loop_scaling`; CPU time per call, best of 7 batches of
+//! about 20 ms.
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Prepared, Settings};
 
+mod common;
 #[path = "common/loop_costs.rs"]
 mod loop_costs;
 use loop_costs::call_costs;
@@ -63,7 +65,7 @@ fn prepared(text: &str) -> Prepared {
 }
 
 fn main() {
-    println!("A row of N parallelogram four-bars against the same bodies as a tree (release build, medians).\n");
+    println!("A row of N parallelogram four-bars against the same bodies as a tree (release build, CPU time per call, best batch).\n");
     println!("| N | bodies | tree µs | loops µs | loops / tree | projection µs | projection / loops RHS |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
     let mut measured = Vec::new();

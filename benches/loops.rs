@@ -9,6 +9,7 @@ use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Report, Sample, Simulation};
 
+mod common;
 #[path = "common/loop_costs.rs"]
 mod loop_costs;
 use loop_costs::{call_costs, median, tree_cost};

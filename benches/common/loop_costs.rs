@@ -1,10 +1,9 @@
-//! Timing shared by the closed-loop benchmarks (`loops`, `loop_scaling`): medians of calls and
-//! of runs, and the cost of one constrained right-hand side and one projection.
+//! Timing shared by the closed-loop benchmarks (`loops`, `loop_scaling`): CPU time per call (best
+//! batch), medians of runs, and the cost of one constrained right-hand side and one projection.
 
 use std::cell::RefCell;
 use std::hint::black_box;
 use std::rc::Rc;
-use std::time::Instant;
 
 use lsdc::dynamics::algorithms::{crba, rnea, Data};
 use lsdc::simulate::prepare::Prepared;
@@ -16,25 +15,13 @@ pub fn median(mut values: Vec<f64>) -> f64 {
     values[values.len() / 2]
 }
 
-/// Median time of one call of `f` over batches of about 10 ms.
-pub fn time_per_call(mut f: impl FnMut()) -> f64 {
-    let start = Instant::now();
-    let mut calls = 0u64;
-    while start.elapsed().as_secs_f64() < 0.01 {
-        f();
-        calls += 1;
-    }
-    let batches = (0..9)
-        .map(|_| {
-            let start = Instant::now();
-            (0..calls).for_each(|_| f());
-            start.elapsed().as_secs_f64() / calls as f64
-        })
-        .collect();
-    median(batches)
+/// CPU time of one call of `f` (this thread's clock, so that the time the shared machine gives
+/// to others is left out): the best of 7 batches of about 20 ms, the batch least disturbed.
+pub fn time_per_call(f: impl FnMut()) -> f64 {
+    crate::common::cpu_time_per_call(f).0
 }
 
-/// Median cost (µs) of one constrained right-hand side and of one projection onto the loops,
+/// Cost (µs of CPU, best batch) of one constrained right-hand side and of one projection onto the loops,
 /// at the initial state.
 pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
     let model = &prepared.model;
@@ -60,7 +47,7 @@ pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
     (rhs * 1e6, projection * 1e6)
 }
 
-/// Median cost (µs) of one right-hand side of the same bodies as a tree: the mechanism with its
+/// Cost (µs of CPU, best batch) of one right-hand side of the same bodies as a tree: the mechanism with its
 /// closing joins removed (and the efforts on them), at the tree part of the initial state.
 #[allow(dead_code)]
 pub fn tree_cost(prepared: &Prepared) -> f64 {
