@@ -10,6 +10,7 @@ use lsdc::simulate::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 use lsdc::spatial::Force;
 
+#[allow(dead_code)] // the loops benchmark takes medians of runs, the scaling one does not
 pub fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values[values.len() / 2]
