@@ -424,8 +424,15 @@ impl Damped<'_> {
                     .map_or(0.0, |&(_, value)| value)
             }));
             let mut column = basis.column_mut(k);
-            self.least_norm_into(rows, column.as_mut_slice());
-            column.neg_mut();
+            if rows.iter().all(|&g| g == 0.0) {
+                // No kept row moves with this coordinate (a ball's own angles): its unit motion
+                // is allowed as it is, and the solve of a zero right-hand side can be skipped
+                // (the same entries: −0 off the coordinate, 1 on it).
+                column.fill(-0.0);
+            } else {
+                self.least_norm_into(rows, column.as_mut_slice());
+                column.neg_mut();
+            }
             column[coordinate] += 1.0;
         }
     }

@@ -144,14 +144,17 @@ fn loop_rows(
     // A ball joint's rotation is free: only its centre is constrained, which its angles do not
     // move; its angle rates are left out.
     let ball = model.loop_balls[k].is_some();
-    // Without rates the chain is taken at rest (its own rates are none of the rows' business).
-    let rates = (!ball).then(|| &v[model.nv + offset..model.nv + offset + n]);
-    joint.chain_motion_into(
-        &q[model.nq + offset..model.nq + offset + n],
-        rates,
-        &model.unknowns,
-        &mut c.chains[k],
-    )?;
+    // A ball's chain is three rotations about its centre: its end is the first frame as far as
+    // the rows are concerned (the rotation rows are not kept), so it is not evaluated and stays
+    // at the identity, at rest.
+    if !ball {
+        joint.chain_motion_into(
+            &q[model.nq + offset..model.nq + offset + n],
+            Some(&v[model.nv + offset..model.nv + offset + n]),
+            &model.unknowns,
+            &mut c.chains[k],
+        )?;
+    }
     let chain = &c.chains[k];
     let base = data.world[joint.first_body] * joint.first;
     let end = base * chain.pose;
