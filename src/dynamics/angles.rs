@@ -6,7 +6,7 @@
 
 use std::f64::consts::PI;
 
-use nalgebra::{Matrix6, Rotation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Rotation3, Unit, UnitQuaternion, Vector3};
 
 use super::joint::{quaternion, Joint, JointType};
 use crate::kinematics::eval::{EvalError, UnknownValues};
@@ -160,7 +160,7 @@ impl Joint {
         };
         self.chain
             .chain_motion_into(coordinates, None, unknowns, chain_motion)?;
-        solve_least_squares(&chain_motion.subspace, &spatial_twist, rates);
+        solve_least_squares(chain_motion, &spatial_twist, rates);
         Ok(())
     }
 
@@ -211,17 +211,13 @@ fn body_twist(v: &[f64], free: bool) -> Motion {
     }
 }
 
-/// Least-squares solution of `a x = b` into x (a has at most six columns): by QR while `a` has
-/// full column rank (accurate to round-off), by the minimum-norm SVD solution at a singular
-/// configuration (gimbal lock). On `a` padded with zero columns to 6 × 6, so that nothing is
-/// allocated: Householder QR takes the columns in order, so the padding changes neither the
-/// first columns' factor nor the SVD's minimum-norm solution on them.
-fn solve_least_squares(a: &nalgebra::DMatrix<f64>, b: &Motion, x: &mut [f64]) {
-    let n = a.ncols();
-    let mut padded = Matrix6::zeros();
-    for (k, column) in a.column_iter().enumerate() {
-        padded.set_column(k, &column);
-    }
+/// Least-squares solution of `S x = b` into x, S the chain's subspace: by QR while S has full
+/// column rank (accurate to round-off), by the minimum-norm SVD solution at a singular
+/// configuration (gimbal lock). On S padded to 6 × 6 (`ChainMotion::padded_subspace`), so that
+/// nothing is allocated.
+fn solve_least_squares(motion: &ChainMotion, b: &Motion, x: &mut [f64]) {
+    let n = motion.subspace.ncols();
+    let padded = motion.padded_subspace();
     let qr = padded.qr();
     let r = qr.r();
     let diagonal = r.diagonal();

@@ -310,13 +310,8 @@ fn declared_rate_jacobian(
         };
         chain_twists.set_column(k, &twist);
     }
-    // The declared chain's subspace, padded with zero columns: its pseudo-inverse is the
-    // subspace's, padded with zero rows.
-    let mut subspace = Matrix6::zeros();
-    for (k, column) in motion.subspace.column_iter().enumerate() {
-        subspace.set_column(k, &column);
-    }
-    let pseudo_inverse = subspace
+    let pseudo_inverse = motion
+        .padded_subspace()
         .pseudo_inverse(1e-12)
         .map_err(|_| EvalError::NotGeometric("a degenerate joint"))?;
     Ok(pseudo_inverse * chain_twists)

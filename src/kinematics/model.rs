@@ -2,7 +2,7 @@
 //! and its dof chain as steps to evaluate at given coordinates; the coordinates of the whole
 //! mechanism in one vector, principal links first (by number), then complementary links.
 
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, Matrix6, Vector3};
 
 use super::eval::{eval, eval_jet, Env, EvalError, UnknownValues};
 use crate::diag::Diagnostic;
@@ -168,6 +168,20 @@ pub struct ChainMotion {
     /// Scratch: unit rates, one coordinate at a time, and zero rates.
     unit: Vec<f64>,
     rest: Vec<f64>,
+}
+
+impl ChainMotion {
+    /// The subspace padded with zero columns to 6 × 6 (for chains of at most six coordinates:
+    /// a quaternion joint's declared angles), for fixed-size solves that allocate nothing. The
+    /// padding changes neither a Householder QR factorisation of the first columns (it takes
+    /// the columns in order) nor a pseudo-inverse (padded with zero rows).
+    pub fn padded_subspace(&self) -> Matrix6<f64> {
+        let mut padded = Matrix6::zeros();
+        for (k, column) in self.subspace.column_iter().enumerate() {
+            padded.set_column(k, &column);
+        }
+        padded
+    }
 }
 
 impl Default for ChainMotion {

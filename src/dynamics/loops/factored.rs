@@ -187,13 +187,6 @@ impl Factored {
         );
     }
 
-    /// Gₛ x.
-    pub fn times(&self, x: &[f64]) -> DVector<f64> {
-        let mut out = Vec::new();
-        self.times_into(x, &mut out);
-        DVector::from_vec(out)
-    }
-
     /// Gₛ x into `out` (resized to the kept rows).
     pub fn times_into(&self, x: &[f64], out: &mut Vec<f64>) {
         out.clear();
@@ -250,28 +243,6 @@ impl Factored {
     /// The smallest x with Gₛx = b (b as from `kept`), or the row lost at a singularity.
     pub fn least_norm(&self, b: &DVector<f64>) -> Result<DVector<f64>, Singular> {
         Ok(self.damped(0.0)?.least_norm(b))
-    }
-
-    /// `least_norm` damped by `damping` (relative, see `DAMPING`): the same wherever the rows
-    /// are independent, bounded at a singular configuration.
-    pub fn damped_least_norm(
-        &self,
-        b: &DVector<f64>,
-        damping: f64,
-    ) -> Result<DVector<f64>, Singular> {
-        Ok(self.damped(damping)?.least_norm(b))
-    }
-
-    /// v without its part across the kept rows, damped by `damping`: the closest motion they
-    /// allow wherever they are independent; near a singular configuration, a velocity off the
-    /// rows by a small error is not thrown along the direction they are about to lose (which
-    /// would kick a parallelogram onto its other branch).
-    pub fn damped_allowed_part(
-        &self,
-        v: &DVector<f64>,
-        damping: f64,
-    ) -> Result<DVector<f64>, Singular> {
-        Ok(self.damped(damping)?.allowed_part(v))
     }
 
     /// How far the firm rows are from dependent (`Damped::conditioning`, with `DAMPING`); 0 at
@@ -348,11 +319,6 @@ impl Damped<'_> {
         y
     }
 
-    /// (A + μ²E)⁻¹ b in place.
-    pub fn normal_solve_in_place(&self, b: &mut [f64]) {
-        self.factor.solve(b);
-    }
-
     /// Gₛᵀ(A + μ²E)⁻¹ b: the smallest x with Gₛx = b where the rows are independent.
     pub fn least_norm(&self, b: &DVector<f64>) -> DVector<f64> {
         self.factored.transpose_times(&self.normal_solve(b))
@@ -364,14 +330,10 @@ impl Damped<'_> {
         self.factored.transpose_times_into(b, out);
     }
 
-    /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv: v without its part across the kept rows.
-    pub fn allowed_part(&self, v: &DVector<f64>) -> DVector<f64> {
-        let mut out = DVector::zeros(v.len());
-        self.allowed_part_into(v.as_slice(), &mut Vec::new(), out.as_mut_slice());
-        out
-    }
-
-    /// `allowed_part` of v into `out`, with `rows` as scratch.
+    /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv into `out`, with `rows` as scratch: v without its part across the
+    /// kept rows. Damped, near a singular configuration a velocity off the rows by a small error
+    /// is not thrown along the direction they are about to lose (which would kick a
+    /// parallelogram onto its other branch).
     pub fn allowed_part_into(&self, v: &[f64], rows: &mut Vec<f64>, out: &mut [f64]) {
         self.factored.times_into(v, rows);
         self.least_norm_into(rows, out);
@@ -380,14 +342,8 @@ impl Damped<'_> {
         }
     }
 
-    /// λ, 6 per loop (zero on the rows not kept), with Gᵀλ = y for y in the kept rows' span.
-    pub fn multipliers(&self, y: &DVector<f64>, total: usize) -> DVector<f64> {
-        let mut all = DVector::zeros(total);
-        self.multipliers_into(y.as_slice(), &mut Vec::new(), all.as_mut_slice());
-        all
-    }
-
-    /// `multipliers` into `all` (6 per loop), with `rows` as scratch.
+    /// λ into `all`, 6 per loop (zero on the rows not kept), with Gᵀλ = y for y in the kept
+    /// rows' span; `rows` is scratch.
     pub fn multipliers_into(&self, y: &[f64], rows: &mut Vec<f64>, all: &mut [f64]) {
         self.factored.times_into(y, rows);
         self.factor.solve(rows);
@@ -545,35 +501,49 @@ impl Envelope {
     }
 }
 
+/// The lower Cholesky factor of the leading r × r block of `a` in place (its lower triangle read
+/// and written), without allocating: the smallest and the largest squared pivot, or None when
+/// the block is not positive definite. Dense, for the small systems of the allowed motions.
+pub fn dense_cholesky(a: &mut DMatrix<f64>, r: usize) -> Option<(f64, f64)> {
+    let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
+    for j in 0..r {
+        let mut diagonal = a[(j, j)];
+        for k in 0..j {
+            diagonal -= a[(j, k)] * a[(j, k)];
+        }
+        if !(diagonal > 0.0 && diagonal.is_finite()) {
+            return None;
+        }
+        (smallest, largest) = (smallest.min(diagonal), largest.max(diagonal));
+        let pivot = diagonal.sqrt();
+        a[(j, j)] = pivot;
+        for i in j + 1..r {
+            let mut value = a[(i, j)];
+            for k in 0..j {
+                value -= a[(i, k)] * a[(j, k)];
+            }
+            a[(i, j)] = value / pivot;
+        }
+    }
+    Some((smallest, largest))
+}
+
 /// How well the coordinates `free` parametrise the allowed motions `motions` (one column per
-/// free coordinate, the allowed part of its unit motion): the smallest squared pivot of a
-/// Cholesky factorisation of the block of the motions over the free coordinates, 1 when the
-/// allowed motions are exactly the free coordinates' own, 0 when the free coordinates no longer
-/// parametrise them (the block, the projector onto the allowed motions restricted to the free
-/// coordinates, is then singular). `work` is scratch, sized here; nothing is allocated once it
-/// has the block's size.
+/// free coordinate, the allowed part of its unit motion): the smallest squared pivot (at most 1)
+/// of a Cholesky factorisation of the block of the motions over the free coordinates, 1 when
+/// the allowed motions are exactly the free coordinates' own, 0 when the free coordinates no
+/// longer parametrise them (the block, the projector onto the allowed motions restricted to the
+/// free coordinates, is then singular). `work` is scratch, sized here; nothing is allocated
+/// once it has the block's size.
 pub fn free_quality(motions: &DMatrix<f64>, free: &[usize], work: &mut DMatrix<f64>) -> f64 {
     let n = free.len();
     if work.shape() != (n, n) {
         *work = DMatrix::zeros(n, n);
     }
-    let mut smallest = 1.0_f64;
     for j in 0..n {
         for i in j..n {
-            let mut value = motions[(free[i], j)];
-            for k in 0..j {
-                value -= work[(i, k)] * work[(j, k)];
-            }
-            if i == j {
-                if value.is_nan() || value <= 0.0 {
-                    return 0.0;
-                }
-                smallest = smallest.min(value);
-                work[(j, j)] = value.sqrt();
-            } else {
-                work[(i, j)] = value / work[(j, j)];
-            }
+            work[(i, j)] = motions[(free[i], j)];
         }
     }
-    smallest
+    dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
 }

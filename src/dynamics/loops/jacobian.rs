@@ -56,13 +56,6 @@ impl ConstraintJacobian {
             .map(move |(local, &column)| (column, block.values[(r, local)]))
     }
 
-    /// G v.
-    pub fn mul(&self, v: &[f64]) -> DVector<f64> {
-        let mut out = DVector::zeros(self.nrows());
-        self.mul_into(v, &mut out);
-        out
-    }
-
     /// G v into `out` (of G's rows).
     pub fn mul_into(&self, v: &[f64], out: &mut DVector<f64>) {
         out.fill(0.0);

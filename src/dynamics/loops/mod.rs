@@ -22,8 +22,8 @@ pub use project::{
     close_configuration, project, project_from, Projection, ProjectionScratch, Residuals,
 };
 pub use rows::{
-    active_rows, constraint_forces, constraints, constraints_after_kinematics, constraints_into,
-    seat_ball_angles, Constraints, ROW_NAMES,
+    active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
+    ROW_NAMES,
 };
 pub use solve::{project_momentum, solve, LoopError, LoopScratch, Stabilisation};
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

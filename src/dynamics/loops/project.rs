@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::basis::decompose;
 use super::factored::{free_quality, Envelope, Factored, RowChoice, DAMPING, PROJECTION_DAMPING};
-use super::rows::{constraints, constraints_into, seat_ball_angles, Constraints};
+use super::rows::{constraints_into, seat_ball_angles, Constraints};
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -39,17 +39,28 @@ pub struct ProjectionScratch {
     trial: Constraints,
     pub factored: Factored,
     factor: Envelope,
-    /// Whether `factor` holds the `PROJECTION_DAMPING` factor of the rows in `factored`.
-    factor_valid: bool,
-    /// Whether `factor` holds the `DAMPING` factor `conditioning` took.
-    quality_factor: bool,
+    /// Which factor of the rows in `factored` `factor` holds.
+    held: Held,
     kept: Vec<f64>,
     correction: Vec<f64>,
     trial_q: Vec<f64>,
     rest: Vec<f64>,
+    /// G v, the velocity rows.
+    velocity: DVector<f64>,
     /// The allowed motions of the free coordinates, and their block's factor (`free_quality`).
     motions: DMatrix<f64>,
     block: DMatrix<f64>,
+}
+
+/// The factor a `ProjectionScratch` holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Held {
+    /// None (the rows could not be factored).
+    Nothing,
+    /// Damped by `DAMPING`, for the conditioning and the free coordinates' quality.
+    Conditioning,
+    /// Damped by `PROJECTION_DAMPING`, for the position steps and the velocities.
+    Projection,
 }
 
 impl ProjectionScratch {
@@ -60,12 +71,12 @@ impl ProjectionScratch {
             factored: Factored::new(&current.jacobian, &RowChoice::NONE),
             current,
             factor: Envelope::default(),
-            factor_valid: false,
-            quality_factor: false,
+            held: Held::Nothing,
             kept: Vec::new(),
             correction: vec![0.0; model.velocities()],
             trial_q: Vec::new(),
             rest: vec![0.0; model.velocities()],
+            velocity: DVector::zeros(6 * model.loops.len()),
             motions: DMatrix::zeros(0, 0),
             block: DMatrix::zeros(0, 0),
         }
@@ -105,27 +116,10 @@ pub fn project_from(
         position: scratch.current.residual.amax(),
         velocity: scratch.current.velocity.amax(),
     };
-    let mut factored = scratch.refactor(choice);
-    let mut error = before.position;
-    for _ in 0..NEWTON_ITERATIONS {
-        if error == 0.0 || !factored {
-            break;
-        }
-        let trial_error = scratch.trial_step(model, data, q)?;
-        // A NaN residual (infinite here) is no improvement either.
-        if trial_error >= error {
-            break;
-        }
-        let converging = trial_error < 0.25 * error;
-        q.copy_from_slice(&scratch.trial_q);
-        std::mem::swap(&mut scratch.current, &mut scratch.trial);
-        error = trial_error;
-        factored = scratch.refactor(choice);
-        if !converging {
-            break;
-        }
-    }
-    let velocity = scratch.project_velocities(v);
+    // Whatever factor the scratch holds belongs to other constraints.
+    scratch.held = Held::Nothing;
+    newton(model, data, q, scratch, |s| s.damped_step(choice))?;
+    let velocity = scratch.project_velocities(choice, v);
     seat_ball_angles(model, data, q, v, false)?;
     let current = &scratch.current;
     Ok(Projection {
@@ -143,25 +137,26 @@ impl ProjectionScratch {
     /// (`Factored::conditioning`, damped by `DAMPING`).
     pub fn conditioning(&mut self, choice: &RowChoice) -> (f64, Option<usize>) {
         self.factored.refill(&self.current.jacobian, choice);
-        self.factor_valid = false;
         let damped = self
             .factored
             .damped_in(DAMPING, std::mem::take(&mut self.factor));
         let conditioning = self.factored.conditioning_of(&damped);
-        if let Ok(damped) = damped {
-            self.factor = damped.into_storage();
-            self.quality_factor = true;
-        } else {
-            self.quality_factor = false;
-        }
+        self.held = match damped {
+            Ok(damped) => {
+                self.factor = damped.into_storage();
+                Held::Conditioning
+            }
+            Err(_) => Held::Nothing,
+        };
         conditioning
     }
 
     /// How well the free coordinates `free` parametrise the allowed motions of the rows
     /// `conditioning` just factored (`Structure::free_quality_at`); None if they could not be.
     pub fn free_quality(&mut self, free: &[usize]) -> Option<f64> {
-        if !self.quality_factor || free.is_empty() {
-            return self.quality_factor.then_some(1.0);
+        let factored = self.held == Held::Conditioning;
+        if !factored || free.is_empty() {
+            return factored.then_some(1.0);
         }
         if self.motions.shape() != (self.correction.len(), free.len()) {
             self.motions = DMatrix::zeros(self.correction.len(), free.len());
@@ -177,71 +172,44 @@ impl ProjectionScratch {
     fn refactor(&mut self, choice: &RowChoice) -> bool {
         self.factored.refill(&self.current.jacobian, choice);
         let storage = std::mem::take(&mut self.factor);
-        self.factor_valid = match self.factored.damped_in(PROJECTION_DAMPING, storage) {
+        self.held = match self.factored.damped_in(PROJECTION_DAMPING, storage) {
             Ok(damped) => {
                 self.factor = damped.into_storage();
-                true
+                Held::Projection
             }
-            Err(_) => false,
+            Err(_) => Held::Nothing,
         };
-        self.quality_factor = false;
-        self.factor_valid
+        self.held == Held::Projection
     }
 
-    /// One position step from q with the factor held: the damped minimum-norm correction of
-    /// the kept rows' residual; the trial positions and their constraints are left in
-    /// `trial_q` and `trial`. Returns the trial's largest residual.
-    fn trial_step(&mut self, model: &Model, data: &mut Data, q: &[f64]) -> Result<f64, EvalError> {
+    /// The damped minimum-norm correction of the kept rows' residual at the current
+    /// constraints, into `correction`, with the rows factored there; false if they cannot be.
+    fn damped_step(&mut self, choice: &RowChoice) -> bool {
+        if !self.refactor(choice) {
+            return false;
+        }
         let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
         self.factored
             .kept_into(self.current.residual.as_slice(), &mut self.kept);
         self.kept.iter_mut().for_each(|x| *x = -*x);
         damped.least_norm_into(&mut self.kept, &mut self.correction);
         self.factor = damped.into_storage();
-        self.trial_q.clear();
-        self.trial_q.extend_from_slice(q);
-        model.retract(&mut self.trial_q, &self.correction);
-        forward_kinematics(model, data, &self.trial_q, &self.rest)?;
-        constraints_into(
-            model,
-            data,
-            &self.trial_q,
-            &self.rest,
-            false,
-            &mut self.trial,
-        )?;
-        let error = self.trial.residual.amax();
-        Ok(if error.is_nan() { f64::INFINITY } else { error })
+        true
     }
 
     /// The velocities' damped projection onto G v = 0 at the current positions, with the
-    /// factor taken there: v − Gₛᵀ(A + μ²E)⁻¹Gₛv. Returns the largest velocity row left.
-    fn project_velocities(&mut self, v: &mut [f64]) -> f64 {
-        if !self.factor_valid {
-            return velocity_rows(&self.current, v);
+    /// factor taken there (the last position step's, unless a step was accepted after it):
+    /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv. Returns the largest velocity row left.
+    fn project_velocities(&mut self, choice: &RowChoice, v: &mut [f64]) -> f64 {
+        if self.held == Held::Projection || self.refactor(choice) {
+            let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
+            damped.allowed_part_into(v, &mut self.kept, &mut self.correction);
+            self.factor = damped.into_storage();
+            v.copy_from_slice(&self.correction);
         }
-        let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
-        self.factored.times_into(v, &mut self.kept);
-        damped.least_norm_into(&mut self.kept, &mut self.correction);
-        self.factor = damped.into_storage();
-        for (x, c) in v.iter_mut().zip(&self.correction) {
-            *x -= c;
-        }
-        velocity_rows(&self.current, v)
+        self.current.jacobian.mul_into(v, &mut self.velocity);
+        self.velocity.amax()
     }
-}
-
-/// The largest velocity row |G v| of the constraints `c`.
-fn velocity_rows(c: &Constraints, v: &[f64]) -> f64 {
-    (0..c.jacobian.nrows())
-        .map(|r| {
-            c.jacobian
-                .row(r)
-                .map(|(column, g)| g * v[column])
-                .sum::<f64>()
-                .abs()
-        })
-        .fold(0.0, f64::max)
 }
 
 fn largest_kept(
@@ -269,44 +237,52 @@ pub fn close_configuration(
     data: &mut Data,
     q: &mut [f64],
 ) -> Result<f64, EvalError> {
+    let mut scratch = ProjectionScratch::new(model);
     let rest = vec![0.0; model.velocities()];
-    let mut current = constraints(model, data, q, &rest, false)?;
-    newton(model, data, q, &mut current, |c| {
-        Some(-(decompose(&c.jacobian.dense()).pseudo_inverse * &c.residual))
+    forward_kinematics(model, data, q, &rest)?;
+    constraints_into(model, data, q, &rest, false, &mut scratch.current)?;
+    newton(model, data, q, &mut scratch, |s| {
+        let c = &s.current;
+        let step = -(decompose(&c.jacobian.dense()).pseudo_inverse * &c.residual);
+        s.correction.copy_from_slice(step.as_slice());
+        true
     })?;
-    Ok(current.residual.amax())
+    Ok(scratch.current.residual.amax())
 }
 
-/// Gauss–Newton on the positions: `step` gives the correction at the constraints `current`
-/// (None to stop); stops when a step no longer reduces the largest residual, or reduces it less
-/// than fourfold. Leaves q and `current` at the best configuration reached.
+/// Gauss–Newton on the positions from the constraints in `scratch.current`: `step` writes the
+/// correction at them into `scratch.correction` (false to stop); stops when a step no longer
+/// reduces the largest residual, or reduces it less than fourfold. Leaves q and
+/// `scratch.current` at the best configuration reached; an accepted step leaves no factor held
+/// (the one `step` took belongs to the positions before it).
 fn newton(
     model: &Model,
     data: &mut Data,
     q: &mut [f64],
-    current: &mut Constraints,
-    mut step: impl FnMut(&Constraints) -> Option<DVector<f64>>,
+    scratch: &mut ProjectionScratch,
+    mut step: impl FnMut(&mut ProjectionScratch) -> bool,
 ) -> Result<(), EvalError> {
-    let rest = vec![0.0; model.velocities()];
-    let mut error = current.residual.amax();
+    let mut error = scratch.current.residual.amax();
     for _ in 0..NEWTON_ITERATIONS {
-        if error == 0.0 {
+        if error == 0.0 || !step(scratch) {
             break;
         }
-        let Some(correction) = step(current) else {
-            break;
-        };
-        let mut trial = q.to_vec();
-        model.retract(&mut trial, correction.as_slice());
-        let candidate = constraints(model, data, &trial, &rest, false)?;
-        let trial_error = candidate.residual.amax();
+        let s = &mut *scratch;
+        s.trial_q.clear();
+        s.trial_q.extend_from_slice(q);
+        model.retract(&mut s.trial_q, &s.correction);
+        forward_kinematics(model, data, &s.trial_q, &s.rest)?;
+        constraints_into(model, data, &s.trial_q, &s.rest, false, &mut s.trial)?;
+        let trial_error = s.trial.residual.amax();
         // A NaN residual is no improvement either.
         if trial_error.is_nan() || trial_error >= error {
             break;
         }
         let converging = trial_error < 0.25 * error;
-        q.copy_from_slice(&trial);
-        (*current, error) = (candidate, trial_error);
+        q.copy_from_slice(&s.trial_q);
+        std::mem::swap(&mut s.current, &mut s.trial);
+        s.held = Held::Nothing;
+        error = trial_error;
         if !converging {
             break;
         }

@@ -95,19 +95,6 @@ pub fn constraints(
     Ok(c)
 }
 
-/// `constraints` when `data` already holds the forward kinematics of (q, v) (after RNEA, say).
-pub fn constraints_after_kinematics(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    with_bias: bool,
-) -> Result<Constraints, EvalError> {
-    let mut c = Constraints::new(model);
-    constraints_into(model, data, q, v, with_bias, &mut c)?;
-    Ok(c)
-}
-
 /// Writes the constraint rows at (q, v) into `c` (made by `Constraints::new` for this model),
 /// reusing its storage; `data` must hold the forward kinematics of (q, v).
 pub fn constraints_into(

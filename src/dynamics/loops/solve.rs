@@ -14,7 +14,7 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector};
 
-use super::factored::{Envelope, Factored, RowChoice, Singular, DAMPING};
+use super::factored::{dense_cholesky, Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::rows::{constraints, Constraints};
 use super::structure::Structure;
 use crate::dynamics::algorithms::{crba, Data};
@@ -285,9 +285,14 @@ impl Massive {
                 work[(i, j)] = a[(p, q)];
             }
         }
-        let Some(quality) = cholesky_in_place(work, r) else {
+        let Some((smallest, largest)) = dense_cholesky(work, r) else {
             self.stale = true;
             return Err(self.kept[r - 1]);
+        };
+        let quality = if r == 0 {
+            1.0
+        } else {
+            smallest.sqrt() / largest.sqrt()
         };
         if quality < 0.1 * self.quality {
             self.stale = true;
@@ -325,33 +330,6 @@ fn pivot_ratio(pivots: &[f64]) -> f64 {
     } else {
         0.0
     }
-}
-
-/// The lower Cholesky factor of the leading r × r block of `a` in place (its lower triangle
-/// read and written), without allocating; its smallest pivot over its largest, or None when
-/// the block is not positive definite.
-fn cholesky_in_place(a: &mut DMatrix<f64>, r: usize) -> Option<f64> {
-    let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
-    for j in 0..r {
-        let mut diagonal = a[(j, j)];
-        for k in 0..j {
-            diagonal -= a[(j, k)] * a[(j, k)];
-        }
-        if !(diagonal > 0.0 && diagonal.is_finite()) {
-            return None;
-        }
-        let pivot = diagonal.sqrt();
-        (smallest, largest) = (smallest.min(pivot), largest.max(pivot));
-        a[(j, j)] = pivot;
-        for i in j + 1..r {
-            let mut value = a[(i, j)];
-            for k in 0..j {
-                value -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = value / pivot;
-        }
-    }
-    Some(if r == 0 { 1.0 } else { smallest / largest })
 }
 
 /// x ← (LLᵀ)⁻¹ x for the factor L in the leading r × r lower triangle of `l`.
