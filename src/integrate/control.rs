@@ -2,6 +2,10 @@
 
 /// Fraction of the optimal step actually taken, so that the next step is likely accepted.
 const SAFETY: f64 = 0.9;
+/// The smallest previous error the predictive limit extrapolates from (Hairer and Wanner's
+/// RADAU5): from a step far more accurate than asked, the next error's growth says nothing of
+/// the one after.
+const PREDICTION_FLOOR: f64 = 1e-2;
 /// Largest shrink of one step, so that a single bad estimate cannot collapse the step size.
 const MIN_FACTOR: f64 = 0.2;
 
@@ -26,6 +30,9 @@ pub(super) struct StepController {
     beta: f64,
     max_factor: f64,
     previous_error: f64,
+    /// The last accepted step and its error (at least `PREDICTION_FLOOR`), for the predictive
+    /// limit.
+    previous_step: Option<(f64, f64)>,
     just_rejected: bool,
 }
 
@@ -37,6 +44,7 @@ impl StepController {
             beta,
             max_factor,
             previous_error: 1e-4,
+            previous_step: None,
             just_rejected: false,
         }
     }
@@ -52,9 +60,25 @@ impl StepController {
         } else {
             self.max_factor
         };
+        let mut factor = factor.clamp(MIN_FACTOR, max_factor);
+        // Gustafsson's predictive limit (as in Hairer and Wanner's RADAU5): where the error
+        // grows from step to step faster than the step (the error constant rising, as when a
+        // Bricard linkage speeds up), the proportional-integral factor lags one step behind and
+        // the next step is rejected; extrapolating the growth takes the smaller step at once.
+        if let Some((previous, previous_error)) = self.previous_step {
+            let growth = (previous / h) * (error * error / previous_error).powf(self.exponent);
+            factor = factor.min((SAFETY / growth).clamp(MIN_FACTOR, max_factor));
+        }
         self.previous_error = error.max(1e-4);
+        self.previous_step = Some((h, error.max(PREDICTION_FLOOR)));
         self.just_rejected = false;
-        h * factor.clamp(MIN_FACTOR, max_factor)
+        h * factor
+    }
+
+    /// Forgets the accepted steps' errors, after an event that changed the equations: their
+    /// trend says nothing of the errors after it.
+    pub(super) fn forget_trend(&mut self) {
+        self.previous_step = None;
     }
 
     /// The step to retry with after rejecting a step of size `h` with error norm `error` (> 1).

@@ -132,6 +132,9 @@ impl March<'_> {
                 self.advance(stepper, eval, problem, h, observer)?;
                 eval.stats.steps += 1;
                 self.h = self.controller.after_accept(h, error);
+                if eval.breaks_error_trend() {
+                    self.controller.forget_trend();
+                }
             }
             Ok(error) => {
                 eval.stats.rejected += 1;

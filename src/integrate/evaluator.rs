@@ -82,6 +82,13 @@ impl<'s> Evaluator<'s> {
     }
 }
 
+impl Evaluator<'_> {
+    /// Whether the step control should forget the error's trend (`OdeSystem::breaks_error_trend`).
+    pub(super) fn breaks_error_trend(&self) -> bool {
+        self.system.breaks_error_trend()
+    }
+}
+
 pub(super) fn all_finite(values: &[f64]) -> bool {
     values.iter().all(|v| v.is_finite())
 }

@@ -23,6 +23,14 @@ pub trait OdeSystem {
     fn project(&mut self, _t: f64, _y: &mut [f64]) -> Result<bool, CallbackError> {
         Ok(false)
     }
+
+    /// Whether the step control should forget what the steps before the last
+    /// [`OdeSystem::project`] said of the error's trend: an event changed the equations (a
+    /// closed-loop mechanism's constraint rows chosen again, a singular passage entered or
+    /// left), or the error's growth there says nothing of the steps to come.
+    fn breaks_error_trend(&self) -> bool {
+        false
+    }
 }
 
 /// Receives the state at each output time; an `Err` stops the integration with its message.

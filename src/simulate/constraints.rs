@@ -25,9 +25,9 @@ const OPEN: f64 = 1e-6;
 /// Below this conditioning the projection is skipped (see `LoopMonitor::keep`).
 const SKIP_PROJECTION: f64 = 1e-6;
 
-/// Below this fraction of their conditioning when chosen, the kept rows are chosen again, if
-/// better ones exist.
-const RECHOOSE_BELOW: f64 = 0.5;
+/// Below this fraction of how well they reproduced the rows left out when chosen
+/// (`Structure::chosen_reproduction`), the kept rows are chosen again, if better ones exist.
+const RECHOOSE_BELOW: f64 = 0.8;
 
 /// Below this conditioning (on the dimensionless rows, not relative to the start's), the kept
 /// rows are about to lose their independence: the run enters a singular passage, an event between steps. The rows losing it
@@ -57,7 +57,8 @@ const NO_STRUCTURE: Structure = Structure {
     massless: 0,
     free: Vec::new(),
     free_quality: 1.0,
-    chosen_conditioning: 1.0,
+    chosen_reproduction: 1.0,
+    active_rows: Vec::new(),
 };
 
 /// The state closest to a singular configuration the run saw.
@@ -121,6 +122,13 @@ pub struct LoopMonitor {
     restored: bool,
     /// A projection that could not close the loops: when, the row left open and by how much.
     pub opened: Option<(f64, usize, f64)>,
+    /// Whether the step control should forget the error's trend after the last `keep`: the
+    /// equations off the closed set changed (rows or free coordinates chosen again, a passage
+    /// entered or left), or the loops are near a singular configuration (`NEAR_SINGULAR`).
+    /// There the error grows as the passage nears, and extrapolating that growth ends the steps
+    /// right at the passage's threshold, where releasing the rows costs most energy: a row of
+    /// two parallelograms at 1e-11 lost 7.8e-9 of its energy so, against 5.8e-11.
+    pub breaks_trend: bool,
     before: Residuals,
     after: Residuals,
     singular: Vec<SingularPassage>,
@@ -145,6 +153,7 @@ impl LoopMonitor {
             passage: None,
             restored: false,
             opened: None,
+            breaks_trend: false,
             before: Residuals::default(),
             after: Residuals::default(),
             singular: Vec::new(),
@@ -194,9 +203,11 @@ impl LoopMonitor {
         (q, v): (&mut [f64], &mut [f64]),
         scratch: &mut ProjectionScratch,
     ) -> Result<bool, EvalError> {
+        self.breaks_trend = false;
         forward_kinematics(model, data, q, v)?;
         loops::constraints_into(model, data, q, v, false, &mut scratch.current)?;
-        let conditioning = self.conditioning(model, scratch);
+        let conditioning = self.conditioning(scratch);
+        self.breaks_trend |= conditioning.0 < NEAR_SINGULAR;
         let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;
         if self.stabilisation == Stabilisation::Projection && projects {
             // Rows just restored after a passage: the velocities are projected from those the
@@ -230,44 +241,46 @@ impl LoopMonitor {
     /// G, after choosing them again if they are poorly conditioned and better ones exist, and
     /// the passages through singular configurations entered or left here (see `passage`).
     /// During a passage, the conditioning of all the rows chosen before it.
-    fn conditioning(
-        &mut self,
-        model: &Model,
-        scratch: &mut ProjectionScratch,
-    ) -> (f64, Option<usize>) {
+    fn conditioning(&mut self, scratch: &mut ProjectionScratch) -> (f64, Option<usize>) {
         let jacobian = &scratch.current.jacobian;
-        let chosen = self.structure.chosen_conditioning;
         if let Some(before) = &self.passage {
             let conditioning = Factored::new(jacobian, before).conditioning();
             if conditioning.0 >= PASSAGE_LEFT {
                 self.structure.choice = self.passage.take().expect("in a passage");
                 self.structure.choose_free(jacobian);
                 self.restored = true;
+                self.breaks_trend = true;
             }
             return conditioning;
         }
         let conditioning = scratch.conditioning(&self.structure.choice);
-        let jacobian = &scratch.current.jacobian;
         let structure = &mut self.structure;
-        let threshold = RECHOOSE_BELOW * chosen;
-        // Tried at every step below the threshold: the redundant rows of a Bricard linkage need
-        // choosing again as fast as its conditioning changes (trying only when it had halved
-        // since the last try let its energy drift by 3e-4 instead of 1e-7 at 1e-8).
-        if conditioning.0 < threshold && structure.rechoose(model, jacobian, conditioning.0) {
-            self.rechosen += 1;
-            structure.choose_free(jacobian);
-            return Factored::new(jacobian, &structure.choice).conditioning();
+        let reproduction = scratch.reproduction(&structure.active_rows, structure.length);
+        let jacobian = &scratch.current.jacobian;
+        if let Some(now) =
+            reproduction.filter(|&now| now < RECHOOSE_BELOW * structure.chosen_reproduction)
+        {
+            if structure.rechoose(jacobian, now) {
+                self.rechosen += 1;
+                self.breaks_trend = true;
+                structure.choose_free(jacobian);
+                return Factored::new(jacobian, &structure.choice).conditioning();
+            }
+            // The rows kept are still the best: try again once they have fallen as far again.
+            structure.chosen_reproduction = now;
         }
         if conditioning.0 < PASSAGE_ENTERED {
             let before = structure.choice.clone();
             structure.choice = without_lost_rows(jacobian, &before, PASSAGE_LEFT);
             structure.choose_free(jacobian);
             self.passage = Some(before);
+            self.breaks_trend = true;
             return conditioning;
         }
         let quality = scratch.free_quality(&structure.free);
         if quality.is_some_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
             structure.choose_free(&scratch.current.jacobian);
+            self.breaks_trend = true;
         }
         conditioning
     }
@@ -283,7 +296,7 @@ impl LoopMonitor {
     ) -> Result<(), EvalError> {
         forward_kinematics(model, data, q, v)?;
         loops::constraints_into(model, data, q, v, false, &mut scratch.current)?;
-        let conditioning = self.conditioning(model, scratch);
+        let conditioning = self.conditioning(scratch);
         self.observe_current(model, time, conditioning, scratch);
         Ok(())
     }

@@ -35,6 +35,10 @@ impl OdeSystem for MechanicalSystem<'_> {
     fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
         Ok(self.keep_closed(t, y)?)
     }
+
+    fn breaks_error_trend(&self) -> bool {
+        self.loops.breaks_trend
+    }
 }
 
 /// The mechanism with one more state, the work W of its non-conservative efforts (W' = their
@@ -57,6 +61,10 @@ impl OdeSystem for WithWork<'_, '_> {
     fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
         let n = self.0.dimension();
         Ok(self.0.keep_closed(t, &mut y[..n])?)
+    }
+
+    fn breaks_error_trend(&self) -> bool {
+        self.0.loops.breaks_trend
     }
 }
 

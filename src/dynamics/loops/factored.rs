@@ -73,6 +73,14 @@ pub const DAMPING: f64 = 1e-9;
 /// otherwise amplify into a jump; (μ/σ)² is still below round-off for σ above 1e-2.
 pub const PROJECTION_DAMPING: f64 = 1e-6;
 
+/// For the rows the equations keep: a row is independent when its part orthogonal to the rows
+/// already kept is above this fraction of the largest (dimensionless) row. Rows that close a
+/// loop only at second order (maille1, maille2) are independent at first order by about 1e-9
+/// at a configuration closed to 1e-15, and must be kept; rows that depend on others are at
+/// round-off, 1e-15. A row left out whose entries are all below this fraction of the kept
+/// rows' largest is at round-off (`Damped::reproduction`).
+pub const KEEP_TOLERANCE: f64 = 1e-12;
+
 /// A sparse row: (column, value) pairs.
 type SparseRow = Vec<(usize, f64)>;
 
@@ -340,6 +348,46 @@ impl Damped<'_> {
         for (o, x) in out.iter_mut().zip(v) {
             *o = x - *o;
         }
+    }
+
+    /// How well the kept rows reproduce the active rows of G left out (`active`, 6 per loop):
+    /// the smallest, over those rows g, of 1/√(1 + |c|²) for the coefficients c of g's
+    /// least-squares combination of the kept rows (all dimensionless, with length L): 1 for a
+    /// row at round-off, about 1/|c| for one the kept rows reproduce only with large
+    /// coefficients, which off the closed set is violated |c| times more than they are. On the
+    /// closed set and with one row left out, 1/√(1 + |c|²) is that row's share of the unit
+    /// dependency among the rows. `row` and `coefficients` are scratch.
+    pub fn reproduction(
+        &self,
+        jacobian: &ConstraintJacobian,
+        active: &[bool],
+        length: f64,
+        row: &mut Vec<f64>,
+        coefficients: &mut Vec<f64>,
+    ) -> f64 {
+        let factored = self.factored;
+        let largest = (factored.rows.iter().flatten()).fold(0.0_f64, |m, (_, v)| m.max(v.abs()));
+        let mut smallest = 1.0_f64;
+        for r in (0..jacobian.nrows()).filter(|r| active[*r] && !factored.indices.contains(r)) {
+            let scale = row_scale(r, length);
+            let size = jacobian
+                .row(r)
+                .fold(0.0_f64, |m, (_, v)| m.max((v * scale).abs()));
+            // Rows at round-off (out of the plane of a planar loop) could never be kept.
+            if size <= KEEP_TOLERANCE * largest {
+                continue;
+            }
+            row.clear();
+            row.resize(factored.columns, 0.0);
+            for (column, value) in jacobian.row(r) {
+                row[column] = value * scale;
+            }
+            self.factored.times_into(row, coefficients);
+            self.factor.solve(coefficients);
+            let size: f64 = coefficients.iter().map(|c| c * c).sum();
+            smallest = smallest.min(1.0 / (1.0 + size).sqrt());
+        }
+        smallest
     }
 
     /// λ into `all`, 6 per loop (zero on the rows not kept), with Gᵀλ = y for y in the kept

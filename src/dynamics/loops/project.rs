@@ -50,6 +50,9 @@ pub struct ProjectionScratch {
     /// The allowed motions of the free coordinates, and their block's factor (`free_quality`).
     motions: DMatrix<f64>,
     block: DMatrix<f64>,
+    /// A row left out and its coefficients on the kept rows (`reproduction`).
+    row: Vec<f64>,
+    coefficients: Vec<f64>,
 }
 
 /// The factor a `ProjectionScratch` holds.
@@ -79,6 +82,8 @@ impl ProjectionScratch {
             velocity: DVector::zeros(6 * model.loops.len()),
             motions: DMatrix::zeros(0, 0),
             block: DMatrix::zeros(0, 0),
+            row: Vec::new(),
+            coefficients: Vec::new(),
         }
     }
 }
@@ -165,6 +170,25 @@ impl ProjectionScratch {
         damped.allowed_motions_into(free, &mut self.kept, &mut self.motions);
         self.factor = damped.into_storage();
         Some(free_quality(&self.motions, free, &mut self.block))
+    }
+
+    /// How well the rows `conditioning` just factored reproduce the active rows left out
+    /// (`Damped::reproduction`); None if they could not be factored.
+    pub fn reproduction(&mut self, active: &[bool], length: f64) -> Option<f64> {
+        if self.held != Held::Conditioning {
+            return None;
+        }
+        let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
+        let jacobian = &self.current.jacobian;
+        let value = damped.reproduction(
+            jacobian,
+            active,
+            length,
+            &mut self.row,
+            &mut self.coefficients,
+        );
+        self.factor = damped.into_storage();
+        Some(value)
     }
 
     /// Factors the kept rows of the current constraints (damped by `PROJECTION_DAMPING`);

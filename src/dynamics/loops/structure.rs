@@ -30,12 +30,7 @@ use crate::kinematics::eval::EvalError;
 /// 1e-8.
 pub const RANK_TOLERANCE: f64 = crate::kinematics::mobility::RANK_TOLERANCE;
 
-/// For the rows the equations keep: a row is independent when its part orthogonal to the rows
-/// already kept is above this fraction of the largest (dimensionless) row. Rows that close a
-/// loop only at second order (maille1, maille2) are independent at first order by about 1e-9
-/// at a configuration closed to 1e-15, and must be kept; rows that depend on others are at
-/// round-off, 1e-15.
-pub const KEEP_TOLERANCE: f64 = 1e-12;
+pub use super::factored::KEEP_TOLERANCE;
 
 /// A motion whose inertia is below this fraction of the largest counts as without mass (a point
 /// mass rod spinning about its own axis: 1e-12 relative, not 0, after the null-space basis
@@ -71,8 +66,11 @@ pub struct Structure {
     /// 1 when the allowed motions are exactly the free coordinates' motions, 0 when the free
     /// coordinates no longer parametrise them).
     pub free_quality: f64,
-    /// The kept rows' conditioning (`Factored::conditioning`) when they were chosen.
-    pub chosen_conditioning: f64,
+    /// How well the kept rows reproduce the active rows left out (`Damped::reproduction`, 1
+    /// when none is left out but rows at round-off) when they were chosen.
+    pub chosen_reproduction: f64,
+    /// The active rows (a ball joint's three rotation rows are not).
+    pub active_rows: Vec<bool>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -113,8 +111,9 @@ impl Structure {
         let rows = best_rows(&scaled, &active, KEEP_TOLERANCE);
         let (reported, redundant) = independent_rows(&scaled, &active, RANK_TOLERANCE);
         let weak = rows.len().saturating_sub(reported.len());
+        let rows = reproducing_rows(&scaled, &active, rows, weak);
         let choice = RowChoice::new(rows, weak, length);
-        let chosen_conditioning = Factored::new(&c.jacobian, &choice).conditioning().0;
+        let chosen_reproduction = reproduction(&c.jacobian, &choice, &active, length);
         Structure {
             choice,
             length,
@@ -124,7 +123,8 @@ impl Structure {
             massless: 0,
             free: Vec::new(),
             free_quality: 1.0,
-            chosen_conditioning,
+            chosen_reproduction,
+            active_rows: active,
         }
     }
 
@@ -173,58 +173,32 @@ impl Structure {
 }
 
 impl Structure {
-    /// Chooses the kept rows again at q, if the rows chosen there are better conditioned than
-    /// the current ones (by `RECHOOSE` at least) and as many. Redundant rows make this
-    /// necessary: of the six rows of a Bennett linkage, three are independent all along the
-    /// motion, but not always the same three. On the closed configurations every choice gives
-    /// the same accelerations, so the equations of motion do not change; the choice is taken
-    /// between steps, never inside an evaluation. Returns whether the rows changed.
-    pub fn rechoose(&mut self, model: &Model, jacobian: &ConstraintJacobian, current: f64) -> bool {
-        let active = active_rows(model);
-        if !self.has_other_rows(jacobian, &active) {
-            return false;
-        }
-        let rows = best_rows(
-            &dimensionless(&jacobian.dense(), self.length),
-            &active,
-            KEEP_TOLERANCE,
+    /// Chooses the kept rows again at G (`reproducing_rows`), if they reproduce the rows left
+    /// out better than the current ones (by `RECHOOSE` at least, from `current`). Redundant rows
+    /// make this necessary: of the six rows of a Bennett linkage, three are independent all
+    /// along the motion, but not always the same three, and which reproduce the others with
+    /// small coefficients changes along it. On the closed configurations every choice gives the
+    /// same accelerations, so the equations of motion do not change; the choice is taken between
+    /// steps, never inside an evaluation. Returns whether the rows changed.
+    pub fn rechoose(&mut self, jacobian: &ConstraintJacobian, current: f64) -> bool {
+        let scaled = dimensionless(&jacobian.dense(), self.length);
+        let rows = reproducing_rows(
+            &scaled,
+            &self.active_rows,
+            self.choice.rows.clone(),
+            self.choice.weak,
         );
-        if rows.len() != self.choice.rows.len() {
-            return false;
-        }
         let candidate = RowChoice::new(rows, self.choice.weak, self.length);
         if candidate == self.choice {
             return false;
         }
-        let conditioning = Factored::new(jacobian, &candidate).conditioning().0;
-        if conditioning < RECHOOSE * current {
+        let better = reproduction(jacobian, &candidate, &self.active_rows, self.length);
+        if better < RECHOOSE * current {
             return false;
         }
         self.choice = candidate;
-        self.chosen_conditioning = conditioning;
+        self.chosen_reproduction = better;
         true
-    }
-
-    /// Whether some active row not kept could enter a new choice: one whose entries are not all
-    /// at round-off against the kept rows' (dimensionless). The out-of-plane rows of planar
-    /// loops never can, so a mechanism of planar loops is never searched again (a dense
-    /// search of the 120 rows of a row of 40 four-bars took half of its run).
-    fn has_other_rows(&self, jacobian: &ConstraintJacobian, active: &[bool]) -> bool {
-        let largest_entry = |row: usize| {
-            let scale = row_scale(row, self.length);
-            jacobian
-                .row(row)
-                .fold(0.0_f64, |m, (_, value)| m.max((value * scale).abs()))
-        };
-        let kept = self
-            .choice
-            .rows
-            .iter()
-            .map(|&r| largest_entry(r))
-            .fold(0.0, f64::max);
-        (0..jacobian.nrows())
-            .filter(|r| active[*r] && !self.choice.rows.contains(r))
-            .any(|r| largest_entry(r) > KEEP_TOLERANCE * kept)
     }
 
     /// Chooses the free coordinates at G: those along which the allowed motions are best
@@ -251,8 +225,8 @@ impl Structure {
     }
 }
 
-/// A new choice of rows must improve the conditioning by this factor at least.
-const RECHOOSE: f64 = 2.0;
+/// A new choice of rows must reproduce the rows left out better by this factor at least.
+const RECHOOSE: f64 = 1.25;
 
 /// The active rows that are best conditioned together: pivoted Gram–Schmidt, taking at each
 /// step the row with the largest part orthogonal to those already taken, until that part is at
@@ -286,6 +260,68 @@ fn best_rows(jacobian: &DMatrix<f64>, active: &[bool], tolerance: f64) -> Vec<us
         chosen.push(row);
     }
     chosen
+}
+
+/// The firm rows among `rows` (pivoted Gram–Schmidt on G, the last `weak` of them weak) chosen
+/// again so that the kept rows reproduce the active rows left out with the smallest
+/// coefficients: pivoted Gram–Schmidt on the rows of an orthonormal basis of the span of the
+/// firm rows (a greedy search for the kept block of largest volume in that basis, which leaves
+/// out the block of largest volume in a basis of the dependencies). Gram–Schmidt on G itself
+/// takes the longest and most independent rows, and can leave out a row the others reproduce
+/// only with coefficients of 20: off the closed set that row's violation is then 20 times the
+/// kept rows', the accelerations vary as its square, and a Bricard linkage made dopri5 reject
+/// steps by errors of 10³ times its tolerance. Without rows to leave out but rows at round-off
+/// (planar loops), `rows` as they are.
+fn reproducing_rows(
+    scaled: &DMatrix<f64>,
+    active: &[bool],
+    rows: Vec<usize>,
+    weak: usize,
+) -> Vec<usize> {
+    let firm = rows.len() - weak;
+    let candidates: Vec<usize> = (0..scaled.nrows())
+        .filter(|r| active[*r] && !rows[firm..].contains(r))
+        .collect();
+    let largest = rows[..firm]
+        .iter()
+        .map(|&r| scaled.row(r).amax())
+        .fold(0.0, f64::max);
+    let others = candidates
+        .iter()
+        .filter(|r| !rows[..firm].contains(r))
+        .any(|&r| scaled.row(r).amax() > KEEP_TOLERANCE * largest);
+    if !others || firm == 0 {
+        return rows;
+    }
+    let block = DMatrix::from_fn(candidates.len(), scaled.ncols(), |i, j| {
+        scaled[(candidates[i], j)]
+    });
+    let svd = block.svd(true, false);
+    let Some(u) = svd.u else { return rows };
+    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
+    order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
+    let basis = DMatrix::from_fn(candidates.len(), firm, |i, k| u[(i, order[k])]);
+    let picked = best_rows(&basis, &vec![true; candidates.len()], KEEP_TOLERANCE);
+    if picked.len() != firm {
+        return rows;
+    }
+    let mut chosen: Vec<usize> = picked.iter().map(|&i| candidates[i]).collect();
+    chosen.extend_from_slice(&rows[firm..]);
+    chosen
+}
+
+/// How well the rows of `choice` reproduce the active rows left out (`Damped::reproduction`),
+/// factored at G; 0 if they cannot be factored.
+fn reproduction(
+    jacobian: &ConstraintJacobian,
+    choice: &RowChoice,
+    active: &[bool],
+    length: f64,
+) -> f64 {
+    let factored = Factored::new(jacobian, choice);
+    factored.damped(DAMPING).map_or(0.0, |damped| {
+        damped.reproduction(jacobian, active, length, &mut Vec::new(), &mut Vec::new())
+    })
 }
 
 /// The diagonal of the box holding the bodies' origins, the joints' frames and the loop points,
