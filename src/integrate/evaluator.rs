@@ -80,9 +80,7 @@ impl<'s> Evaluator<'s> {
         }
         Ok(moved)
     }
-}
 
-impl Evaluator<'_> {
     /// Whether the step control should forget the error's trend (`OdeSystem::breaks_error_trend`).
     pub(super) fn breaks_error_trend(&self) -> bool {
         self.system.breaks_error_trend()

@@ -53,7 +53,6 @@ const NO_STRUCTURE: Structure = Structure {
     length: 1.0,
     redundant: Vec::new(),
     rank: 0,
-    active: 0,
     massless: 0,
     free: Vec::new(),
     free_quality: 1.0,
@@ -393,7 +392,7 @@ impl LoopMonitor {
         let structure = &self.structure;
         ConstraintReport {
             stabilisation,
-            rows: structure.active,
+            rows: structure.active(),
             rank: structure.rank,
             redundant: structure
                 .redundant

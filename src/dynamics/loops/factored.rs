@@ -382,7 +382,7 @@ impl Damped<'_> {
             for (column, value) in jacobian.row(r) {
                 row[column] = value * scale;
             }
-            self.factored.times_into(row, coefficients);
+            factored.times_into(row, coefficients);
             self.factor.solve(coefficients);
             let size: f64 = coefficients.iter().map(|c| c * c).sum();
             smallest = smallest.min(1.0 / (1.0 + size).sqrt());

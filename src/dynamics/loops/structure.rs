@@ -54,8 +54,6 @@ pub struct Structure {
     pub redundant: Vec<usize>,
     /// The number of independent rows at the reporting tolerance.
     pub rank: usize,
-    /// The active rows (a ball joint's three rotation rows are not).
-    pub active: usize,
     /// How many of the allowed motions carry no mass.
     pub massless: usize,
     /// Coordinates that parametrise the allowed motions (one per allowed motion): the
@@ -69,7 +67,7 @@ pub struct Structure {
     /// How well the kept rows reproduce the active rows left out (`Damped::reproduction`, 1
     /// when none is left out but rows at round-off) when they were chosen.
     pub chosen_reproduction: f64,
-    /// The active rows (a ball joint's three rotation rows are not).
+    /// Which rows are active (a ball joint's three rotation rows are not), 6 per loop.
     pub active_rows: Vec<bool>,
 }
 
@@ -119,7 +117,6 @@ impl Structure {
             length,
             redundant,
             rank: reported.len(),
-            active: active.iter().filter(|&&a| a).count(),
             massless: 0,
             free: Vec::new(),
             free_quality: 1.0,
@@ -173,6 +170,11 @@ impl Structure {
 }
 
 impl Structure {
+    /// The number of active rows.
+    pub fn active(&self) -> usize {
+        self.active_rows.iter().filter(|&&a| a).count()
+    }
+
     /// Chooses the kept rows again at G (`reproducing_rows`), if they reproduce the rows left
     /// out better than the current ones (by `RECHOOSE` at least, from `current`). Redundant rows
     /// make this necessary: of the six rows of a Bennett linkage, three are independent all
