@@ -189,6 +189,19 @@ pub fn rnea_into(
     tau: &mut DVector<f64>,
 ) -> Result<(), EvalError> {
     joint_motions(model, data, q, v)?;
+    rnea_after_kinematics(model, data, a, external, tau);
+    Ok(())
+}
+
+/// `rnea_into` when `data` already holds the forward kinematics of (q, v)
+/// (`forward_kinematics`): the joints' states are not computed again.
+pub fn rnea_after_kinematics(
+    model: &Model,
+    data: &mut Data,
+    a: &[f64],
+    external: &[Force],
+    tau: &mut DVector<f64>,
+) {
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
@@ -225,7 +238,6 @@ pub fn rnea_into(
             data.force[parent] += transmitted;
         }
     }
-    Ok(())
 }
 
 /// The wrench each joint transmits to its child (and the bodies beyond), in the child's frame,
@@ -297,6 +309,12 @@ pub fn crba_into(
             &mut data.states[k],
         )?;
     }
+    crba_after_kinematics(model, data, mass);
+    Ok(())
+}
+
+/// `crba_into` when `data` already holds the joints' transforms at q (`forward_kinematics`).
+pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<f64>) {
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         let state = &data.states[k];
@@ -335,7 +353,6 @@ pub fn crba_into(
             }
         }
     }
-    Ok(())
 }
 
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.

@@ -113,6 +113,14 @@ impl EffortTape {
         scratch.values[self.tape.roots[k]]
     }
 
+    /// Whether the tape reads a declared coordinate or rate in `range`.
+    pub fn reads_declared(&self, range: std::ops::Range<usize>) -> bool {
+        self.sources.iter().any(|source| match *source {
+            Source::Coordinate(i) | Source::Rate(i) => range.contains(&i),
+            _ => false,
+        })
+    }
+
     /// Number of distinct nodes evaluated per state.
     pub fn size(&self) -> usize {
         self.tape.size()

@@ -56,6 +56,10 @@ pub struct Model {
     pub unknowns: UnknownValues,
     /// Where each tree joint's declared coordinates start.
     pub declared_offsets: Vec<usize>,
+    /// Per tree joint, whether the efforts read its declared coordinates or rates (the tape, a
+    /// link effort or potential on it): only those are recovered from the state at each
+    /// evaluation. Set when the efforts are compiled.
+    pub declared_read: Vec<bool>,
     /// Declared coordinates of the whole mechanism: the tree's, then the complementary links'.
     pub declared_count: usize,
     /// The complementary links, which close the loops: their chains, with `offset` the index of
@@ -292,6 +296,7 @@ pub fn build_with(
         loop_balls,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
+        declared_read: Vec::new(),
     };
     model.compile_efforts();
     Ok(model)
@@ -382,7 +387,27 @@ impl Model {
         for (potential, root) in self.link_potentials.iter_mut().zip(potentials) {
             potential.root = root;
         }
+        self.declared_read = self.joints_read(&tape);
         self.effort_tape = Ok(tape);
+    }
+
+    /// Per tree joint, whether `tape` or a link effort or potential reads its declared state.
+    fn joints_read(&self, tape: &EffortTape) -> Vec<bool> {
+        let mut read: Vec<bool> = self
+            .joints
+            .iter()
+            .zip(&self.declared_offsets)
+            .map(|(joint, &offset)| {
+                tape.reads_declared(offset..offset + joint.chain.coordinate_count())
+            })
+            .collect();
+        let on_links = self.link_efforts.iter().map(|e| e.joint);
+        for joint in on_links.chain(self.link_potentials.iter().map(|p| p.joint)) {
+            if let Some(flag) = read.get_mut(joint) {
+                *flag = true;
+            }
+        }
+        read
     }
 
     /// The chain of a joint of the tree (`index < joints.len()`) or of a complementary link.
@@ -732,6 +757,32 @@ impl Model {
         previous: &[f64],
         declared: &mut DeclaredState,
     ) -> Result<(), EvalError> {
+        self.declared_of_into(q, v, previous, declared, |_| true)
+    }
+
+    /// `declared_into` for the joints the efforts read (`declared_read`); the others' declared
+    /// coordinates and rates are left as they were. Recovering angles from quaternions is most
+    /// of an evaluation's cost on mechanisms of ball joints that no effort reads.
+    pub fn declared_for_efforts_into(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        previous: &[f64],
+        declared: &mut DeclaredState,
+    ) -> Result<(), EvalError> {
+        self.declared_of_into(q, v, previous, declared, |joint| {
+            self.declared_read.get(joint).copied().unwrap_or(true)
+        })
+    }
+
+    fn declared_of_into(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        previous: &[f64],
+        declared: &mut DeclaredState,
+        wanted: impl Fn(usize) -> bool,
+    ) -> Result<(), EvalError> {
         let DeclaredState {
             coordinates,
             rates,
@@ -739,7 +790,8 @@ impl Model {
         } = declared;
         coordinates.resize(self.declared_count, 0.0);
         rates.resize(self.declared_count, 0.0);
-        for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
+        let joints = self.joints.iter().zip(&self.declared_offsets).enumerate();
+        for (_, (joint, &offset)) in joints.filter(|(index, _)| wanted(*index)) {
             let n = joint.chain.coordinate_count();
             if joint.kind == JointType::Chain {
                 // Its state is its declared coordinates and rates.

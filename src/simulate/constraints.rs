@@ -55,6 +55,8 @@ const NO_STRUCTURE: Structure = Structure {
     rank: 0,
     massless: 0,
     free: Vec::new(),
+    idle: Vec::new(),
+    tree_velocities: 0,
     free_quality: 1.0,
     chosen_reproduction: 1.0,
     active_rows: Vec::new(),

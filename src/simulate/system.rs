@@ -11,8 +11,8 @@ use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
 use crate::dynamics::algorithms::{
-    aba, aba_after_kinematics, aba_into, crba_into, forward_kinematics, rnea, rnea_into,
-    transmitted_wrenches, Data, DynamicsError,
+    aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
+    rnea_after_kinematics, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
@@ -96,7 +96,7 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v)?;
         let state = &mut self.declared;
-        model.declared_into(q, v, &self.reference.borrow(), state)?;
+        model.declared_for_efforts_into(q, v, &self.reference.borrow(), state)?;
         let declared = Declared {
             model,
             coordinates: &state.coordinates,
@@ -117,18 +117,12 @@ impl<'m> MechanicalSystem<'m> {
     fn solve_constrained(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
         self.ensure_structure(q)?;
+        // The efforts leave the forward kinematics of (q, v) in `data`, which both recursions
+        // start from.
         self.evaluate_efforts(t, q, v)?;
-        crba_into(model, &mut self.data, q, &mut self.mass)?;
+        crba_after_kinematics(model, &mut self.data, &mut self.mass);
         let external = &self.efforts.external;
-        rnea_into(
-            model,
-            &mut self.data,
-            q,
-            v,
-            &self.rest,
-            external,
-            &mut self.bias,
-        )?;
+        rnea_after_kinematics(model, &mut self.data, &self.rest, external, &mut self.bias);
         self.force.copy_from(&self.efforts.tau);
         let mut tree = self.force.rows_mut(0, model.nv);
         tree -= &self.bias;

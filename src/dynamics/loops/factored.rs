@@ -270,6 +270,14 @@ impl Factored {
         }
     }
 
+    /// Whether a kept row has `column` among the columns it is stored over (the loops' columns
+    /// are found once per model, so a column outside them never moves with a kept row).
+    pub fn touches(&self, column: usize) -> bool {
+        self.rows
+            .iter()
+            .any(|row| row.iter().any(|&(c, _)| c == column))
+    }
+
     /// An orthonormal basis of the motions the kept rows allow, from a dense QR factorisation
     /// (taken once per `Factored`): for the decisions taken once and for the variational
     /// integrator's small systems, not for the equations of motion.

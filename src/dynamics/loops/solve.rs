@@ -87,11 +87,13 @@ impl LoopScratch {
     }
 
     /// Takes between steps the decisions the last evaluations found stale (the motions kept when
-    /// some carry no mass): the next evaluation takes them again.
+    /// some carry no mass): the next evaluation takes them again, and checks that no force acts
+    /// on the motions left out.
     pub fn refresh(&mut self) {
         if self.massive.stale {
             self.massive = Massive::default();
         }
+        self.massive.check_due = true;
     }
 
     /// Sizes the allowed motions' matrices for `free` coordinates (allocates only when their
@@ -163,20 +165,29 @@ pub fn solve(
     factored.kept_into(gamma.as_slice(), kept);
     kept.iter_mut().for_each(|x| *x = -*x);
     damped.least_norm_into(kept, particular.as_mut_slice());
-    damped.allowed_motions_into(&structure.free, kept, null);
+    // The motions solved on: every free coordinate's, or only the massive ones kept when the
+    // others carry no mass and nothing is to be checked on them in this evaluation.
+    let every = structure.massless == 0 || !massive.holds(structure) || massive.check_due;
+    let motions: &[usize] = if every {
+        &structure.free
+    } else {
+        &massive.coordinates
+    };
+    let m = motions.len();
+    damped.allowed_motions_into(motions, kept, null);
     // The complementary links' own coordinates carry no inertia: only the tree's rows of the
     // motions meet the mass matrix.
     let nv = mass.nrows();
-    let tree = null.rows(0, nv);
+    let tree = null.view((0, 0), (nv, m));
     // Column by column (matrix-vector products): a matrix product would pack its operands into
     // buffers it allocates on every call.
-    for k in 0..tree.ncols() {
+    for k in 0..m {
         mass_null
             .column_mut(k)
             .gemv(1.0, mass, &tree.column(k), 0.0);
     }
-    for k in 0..tree.ncols() {
-        for i in 0..tree.ncols() {
+    for k in 0..m {
+        for i in 0..m {
             reduced_mass[(i, k)] = tree.column(i).dot(&mass_null.column(k));
         }
     }
@@ -184,20 +195,38 @@ pub fn solve(
     applied.copy_from(force);
     let mut top = applied.rows_mut(0, nv);
     top -= &*inertial;
-    reduced_force.gemv_tr(1.0, null, applied, 0.0);
+    let null = null.columns(0, m);
+    let mut reduced = reduced_force.rows_mut(0, m);
+    reduced.gemv_tr(1.0, &null, applied, 0.0);
+    // An idle coordinate's motion is its unit motion (no mass, no kept row): its share of the
+    // reduced forces is the force on it.
+    let idle_force = structure.idle.iter().map(|&c| applied[c].abs());
+    let scale = idle_force
+        .fold(reduced.amax(), f64::max)
+        .max(f64::MIN_POSITIVE);
+    if let Some(&velocity) = structure
+        .idle
+        .iter()
+        .find(|&&c| applied[c].abs() > MASSLESS_FORCE * scale)
+    {
+        return Err(LoopError::MasslessMotion { velocity });
+    }
     let solved = if structure.massless == 0 {
-        massive_solve(reduced_mass, reduced_factor, reduced_force)
-    } else {
-        if massive.free != structure.free || massive.dropped.len() != structure.massless {
+        massive_solve(reduced_mass, reduced_factor, reduced_force, scale)
+    } else if every {
+        if !massive.holds(structure) {
             massive.choose(reduced_mass, &structure.free, structure.massless);
         }
-        massive.solve(reduced_mass, reduced_factor, reduced_force)
+        massive.solve(reduced_mass, reduced_factor, reduced_force, scale)
+    } else {
+        massive.solve_kept(reduced_mass, reduced_factor, reduced.as_mut_slice())
     };
     solved.map_err(|k| LoopError::MasslessMotion {
         velocity: null.column(k).iamax(),
     })?;
+    let z = reduced_force.rows(0, m);
     accelerations.copy_from(particular);
-    accelerations.gemv(1.0, null, reduced_force, 1.0);
+    accelerations.gemv(1.0, &null, &z, 1.0);
     // Ma − f, the constraint forces' share.
     mass.mul_to(&accelerations.rows(0, nv), inertial);
     applied.copy_from(force);
@@ -220,6 +249,10 @@ fn singular(lost: Singular) -> LoopError {
 /// motions left out are, up to motions of the kept ones, those without mass: they are left at
 /// rest. When the kept block's smallest pivot falls under a tenth of its value at the choice,
 /// the choice is marked stale and taken again between steps (`LoopScratch::refresh`).
+///
+/// Between two checks the solve computes the kept motions only: that no force acts on the
+/// motions left out (which would give them an infinite acceleration) is checked at the choice
+/// and at the first evaluation after each step (`check_due`), on every motion.
 #[derive(Clone, Debug, Default)]
 struct Massive {
     /// The free coordinates the choice was made for.
@@ -227,6 +260,10 @@ struct Massive {
     /// Positions among them: kept (pivot order), left out.
     kept: Vec<usize>,
     dropped: Vec<usize>,
+    /// The kept free coordinates, in pivot order.
+    coordinates: Vec<usize>,
+    /// Whether the next evaluation solves on every motion, to check the ones left out.
+    check_due: bool,
     /// The kept block's smallest pivot over its largest, when chosen.
     quality: f64,
     stale: bool,
@@ -268,26 +305,22 @@ impl Massive {
         self.dropped = order[kept..].to_vec();
         self.quality = pivot_ratio(&pivots[..kept.min(pivots.len())]);
         self.stale = false;
+        self.coordinates = self.kept.iter().map(|&p| free[p]).collect();
     }
 
-    /// z of `a z = b` on the kept motions (z zero on the others) into `b`; `work` is scratch of
-    /// a's size. The position (among the free coordinates) of a motion without mass that a
-    /// force acts on, if any: its acceleration would be infinite.
-    fn solve(
-        &mut self,
-        a: &DMatrix<f64>,
-        work: &mut DMatrix<f64>,
-        b: &mut DVector<f64>,
-    ) -> Result<(), usize> {
+    /// Whether the choice holds for the structure's free coordinates.
+    fn holds(&self, structure: &Structure) -> bool {
+        self.free == structure.free && self.dropped.len() == structure.massless
+    }
+
+    /// Factors the kept block of NᵀMN in the leading r × r lower triangle of `work` (filled by
+    /// the caller), marking the choice stale when it is not positive definite or has fallen
+    /// under a tenth of its quality at the choice; false when it cannot be factored.
+    fn factor_kept(&mut self, work: &mut DMatrix<f64>) -> bool {
         let r = self.kept.len();
-        for (i, &p) in self.kept.iter().enumerate() {
-            for (j, &q) in self.kept.iter().enumerate().take(i + 1) {
-                work[(i, j)] = a[(p, q)];
-            }
-        }
         let Some((smallest, largest)) = dense_cholesky(work, r) else {
             self.stale = true;
-            return Err(self.kept[r - 1]);
+            return false;
         };
         let quality = if r == 0 {
             1.0
@@ -297,10 +330,55 @@ impl Massive {
         if quality < 0.1 * self.quality {
             self.stale = true;
         }
+        true
+    }
+
+    /// z of `a z = b` for the reduced mass matrix `a` of the kept motions alone (in the order
+    /// of `coordinates`), into `b`; `work` is scratch of a's size. The position of the motion
+    /// that lost its mass if the block cannot be factored.
+    fn solve_kept(
+        &mut self,
+        a: &DMatrix<f64>,
+        work: &mut DMatrix<f64>,
+        b: &mut [f64],
+    ) -> Result<(), usize> {
+        let r = self.kept.len();
+        for i in 0..r {
+            for j in 0..=i {
+                work[(i, j)] = a[(i, j)];
+            }
+        }
+        if !self.factor_kept(work) {
+            return Err(r - 1);
+        }
+        cholesky_solve(work, r, b);
+        Ok(())
+    }
+
+    /// z of `a z = b` on the kept motions (z zero on the others) into `b`; `work` is scratch of
+    /// a's size. The position (among the free coordinates) of a motion without mass that a
+    /// force acts on (above `MASSLESS_FORCE` of `scale`), if any: its acceleration would be
+    /// infinite.
+    fn solve(
+        &mut self,
+        a: &DMatrix<f64>,
+        work: &mut DMatrix<f64>,
+        b: &mut DVector<f64>,
+        scale: f64,
+    ) -> Result<(), usize> {
+        let r = self.kept.len();
+        for (i, &p) in self.kept.iter().enumerate() {
+            for (j, &q) in self.kept.iter().enumerate().take(i + 1) {
+                work[(i, j)] = a[(p, q)];
+            }
+        }
+        if !self.factor_kept(work) {
+            return Err(self.kept[r - 1]);
+        }
+        self.check_due = false;
         self.rhs.clear();
         self.rhs.extend(self.kept.iter().map(|&p| b[p]));
         cholesky_solve(work, r, &mut self.rhs);
-        let scale = b.amax().max(f64::MIN_POSITIVE);
         for &d in &self.dropped {
             let unbalanced: f64 = b[d]
                 - self
@@ -347,12 +425,13 @@ fn cholesky_solve(l: &DMatrix<f64>, r: usize, x: &mut [f64]) {
 /// Solves the symmetric positive definite system `a z = b` (z into `b`) by Cholesky; `work` is
 /// scratch of a's size. A matrix that is not positive definite (a motion of no mass the
 /// structure did not count) is solved in the span of its eigenvectors of positive eigenvalue,
-/// which allocates; a force on the others is the error (the free coordinate its eigenvector
-/// moves most).
+/// which allocates; a force on the others (above `MASSLESS_FORCE` of `scale`) is the error (the
+/// free coordinate its eigenvector moves most).
 fn massive_solve(
     a: &DMatrix<f64>,
     work: &mut DMatrix<f64>,
     b: &mut DVector<f64>,
+    scale: f64,
 ) -> Result<(), usize> {
     if a.nrows() == 0 {
         return Ok(());
@@ -366,7 +445,6 @@ fn massive_solve(
     }
     *work = a.clone();
     let eigen = a.clone().symmetric_eigen();
-    let scale = b.amax().max(f64::MIN_POSITIVE);
     let mut z = DVector::zeros(b.len());
     for (k, &value) in eigen.eigenvalues.iter().enumerate() {
         let vector = eigen.eigenvectors.column(k);
@@ -410,6 +488,12 @@ pub fn project_momentum(
         return Ok(());
     };
     let moved = &allowed * cholesky.solve(&(tree.transpose() * momentum));
-    v.copy_from_slice(moved.as_slice());
+    // The idle coordinates' unit motions are allowed as they are and carry no momentum: their
+    // rates stay.
+    for (k, value) in moved.iter().enumerate() {
+        if !structure.idle.contains(&k) {
+            v[k] = *value;
+        }
+    }
     Ok(())
 }

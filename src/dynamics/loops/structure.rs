@@ -54,11 +54,19 @@ pub struct Structure {
     pub redundant: Vec<usize>,
     /// The number of independent rows at the reporting tolerance.
     pub rank: usize,
-    /// How many of the allowed motions carry no mass.
+    /// How many of the allowed motions of `free` carry no mass.
     pub massless: usize,
-    /// Coordinates that parametrise the allowed motions (one per allowed motion): the
-    /// equations of motion are solved on the allowed parts of their unit motions.
+    /// Coordinates that parametrise the allowed motions (one per allowed motion) but the idle
+    /// ones: the equations of motion are solved on the allowed parts of their unit motions.
     pub free: Vec<usize>,
+    /// The free coordinates that are a complementary link's own and appear in no kept row (a
+    /// ball's angles): their unit motions are allowed as they are and move no mass, so the
+    /// equations of motion leave them at rest without solving for them (their values follow
+    /// the bodies' poses, `rows::seat_ball_angles`).
+    pub idle: Vec<usize>,
+    /// The tree's velocities (`Model::nv`): the columns after them are the complementary
+    /// links' coordinates.
+    pub tree_velocities: usize,
     /// How well they did when chosen (`factored::free_quality`: the smallest squared Cholesky
     /// pivot of the block of the projector onto the allowed motions over the free coordinates;
     /// 1 when the allowed motions are exactly the free coordinates' motions, 0 when the free
@@ -95,7 +103,8 @@ impl Structure {
         let length = characteristic_length(model, data, &c);
         let mut structure = Structure::at(model, &c, length);
         structure.choose_free(&c.jacobian);
-        structure.massless = massless_count(model, data, q, &structure)?;
+        structure.massless =
+            massless_count(model, data, q, &structure)?.saturating_sub(structure.idle.len());
         if let Some(row) = structure.gained_nearby(model, data, q)? {
             return Err(StructureError::SingularStart { row });
         }
@@ -119,6 +128,8 @@ impl Structure {
             rank: reported.len(),
             massless: 0,
             free: Vec::new(),
+            idle: Vec::new(),
+            tree_velocities: model.nv,
             free_quality: 1.0,
             chosen_reproduction,
             active_rows: active,
@@ -210,7 +221,9 @@ impl Structure {
         let factored = Factored::new(jacobian, &self.choice);
         let allowed = factored.dense_null_space();
         let every = vec![true; allowed.nrows()];
-        self.free = best_rows(allowed, &every, KEEP_TOLERANCE);
+        let chosen = best_rows(allowed, &every, KEEP_TOLERANCE);
+        let idle = |&c: &usize| c >= self.tree_velocities && !factored.touches(c);
+        (self.idle, self.free) = chosen.into_iter().partition(idle);
         self.free_quality = factored
             .damped(DAMPING)
             .map_or(0.0, |damped| self.free_quality_at(&damped));
