@@ -206,7 +206,7 @@ impl LoopMonitor {
     ) -> Result<bool, EvalError> {
         self.breaks_trend = false;
         forward_kinematics(model, data, q, v)?;
-        loops::constraints_into(model, data, q, v, false, &mut scratch.current)?;
+        scratch.constraints_at(model, data, q, v)?;
         let conditioning = self.conditioning(scratch);
         self.breaks_trend |= conditioning.0 < NEAR_SINGULAR;
         let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;
@@ -296,7 +296,7 @@ impl LoopMonitor {
         scratch: &mut ProjectionScratch,
     ) -> Result<(), EvalError> {
         forward_kinematics(model, data, q, v)?;
-        loops::constraints_into(model, data, q, v, false, &mut scratch.current)?;
+        scratch.constraints_at(model, data, q, v)?;
         let conditioning = self.conditioning(scratch);
         self.observe_current(model, time, conditioning, scratch);
         Ok(())

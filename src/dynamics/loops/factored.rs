@@ -151,6 +151,11 @@ impl Factored {
         self.null_space = OnceCell::new();
     }
 
+    /// Whether these are the rows of `choice`.
+    pub fn holds(&self, choice: &RowChoice) -> bool {
+        self.indices == choice.rows && self.scales == choice.scales && self.firm == choice.firm()
+    }
+
     /// The kept rows (among the 6 per loop), each with the factor making it dimensionless.
     pub fn kept_rows(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
         self.indices
@@ -193,6 +198,16 @@ impl Factored {
                 .zip(&self.scales)
                 .map(|(&r, s)| all[r] * s),
         );
+    }
+
+    /// Column `column` of Gₛ into `out` (resized to the kept rows).
+    fn column_into(&self, column: usize, out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(self.rows.iter().map(|row| {
+            row.iter()
+                .find(|&&(c, _)| c == column)
+                .map_or(0.0, |&(_, value)| value)
+        }));
     }
 
     /// Gₛ x into `out` (resized to the kept rows).
@@ -429,12 +444,7 @@ impl Damped<'_> {
     ) {
         for (k, &coordinate) in free.iter().enumerate() {
             // The allowed part of a unit motion eᵢ: eᵢ − Gₛᵀ(A + μ²E)⁻¹Gₛeᵢ, Gₛeᵢ being column i.
-            rows.clear();
-            rows.extend(self.factored.rows.iter().map(|row| {
-                row.iter()
-                    .find(|&&(c, _)| c == coordinate)
-                    .map_or(0.0, |&(_, value)| value)
-            }));
+            self.factored.column_into(coordinate, rows);
             let mut column = basis.column_mut(k);
             if rows.iter().all(|&g| g == 0.0) {
                 // No kept row moves with this coordinate (a ball's own angles): its unit motion
@@ -447,6 +457,42 @@ impl Damped<'_> {
             }
             column[coordinate] += 1.0;
         }
+    }
+
+    /// How well the coordinates `free` parametrise the motions the kept rows allow: the smallest
+    /// squared pivot (at most 1) of a Cholesky factorisation of the block over `free` of the
+    /// projector onto them, P = I − Gₛᵀ(A + μ²E)⁻¹Gₛ; 1 when the allowed motions are exactly
+    /// the free coordinates' own, 0 when the free coordinates no longer parametrise them (the
+    /// block is then singular). With A + μ²E = LLᵀ the block is I − XᵀX for X = L⁻¹Gₛ over the
+    /// free columns: one forward substitution per free coordinate. `rows`, `columns` (X) and
+    /// `work` (the block) are scratch, sized here; nothing is allocated once they have their
+    /// sizes.
+    pub fn free_quality_into(
+        &self,
+        free: &[usize],
+        rows: &mut Vec<f64>,
+        columns: &mut DMatrix<f64>,
+        work: &mut DMatrix<f64>,
+    ) -> f64 {
+        let (r, n) = (self.factored.len(), free.len());
+        if columns.shape() != (r, n) {
+            *columns = DMatrix::zeros(r, n);
+        }
+        if work.shape() != (n, n) {
+            *work = DMatrix::zeros(n, n);
+        }
+        for (k, &coordinate) in free.iter().enumerate() {
+            self.factored.column_into(coordinate, rows);
+            self.factor.forward(rows);
+            columns.column_mut(k).copy_from_slice(rows);
+        }
+        for j in 0..n {
+            for i in j..n {
+                let identity = if i == j { 1.0 } else { 0.0 };
+                work[(i, j)] = identity - columns.column(i).dot(&columns.column(j));
+            }
+        }
+        dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
     }
 }
 
@@ -497,6 +543,16 @@ impl Envelope {
         }
     }
 
+    /// y ← L⁻¹ y for the factor L held.
+    fn forward(&self, y: &mut [f64]) {
+        for k in 0..y.len() {
+            let fk = self.first[k];
+            let row = &self.values[k];
+            let dot: f64 = (fk..k).map(|i| row[i - fk] * y[i]).sum();
+            y[k] = (y[k] - dot) / row[k - fk];
+        }
+    }
+
     /// `other`'s entries in this envelope's storage (a derived `clone_from` would allocate anew).
     fn copy_from(&mut self, other: &Envelope) {
         self.first.clone_from(&other.first);
@@ -539,12 +595,7 @@ impl Envelope {
 
     /// y ← (LLᵀ)⁻¹ y for the factor L held.
     fn solve(&self, y: &mut [f64]) {
-        for k in 0..y.len() {
-            let fk = self.first[k];
-            let row = &self.values[k];
-            let dot: f64 = (fk..k).map(|i| row[i - fk] * y[i]).sum();
-            y[k] = (y[k] - dot) / row[k - fk];
-        }
+        self.forward(y);
         for k in (0..y.len()).rev() {
             let fk = self.first[k];
             let row = &self.values[k];
@@ -582,24 +633,4 @@ pub fn dense_cholesky(a: &mut DMatrix<f64>, r: usize) -> Option<(f64, f64)> {
         }
     }
     Some((smallest, largest))
-}
-
-/// How well the coordinates `free` parametrise the allowed motions `motions` (one column per
-/// free coordinate, the allowed part of its unit motion): the smallest squared pivot (at most 1)
-/// of a Cholesky factorisation of the block of the motions over the free coordinates, 1 when
-/// the allowed motions are exactly the free coordinates' own, 0 when the free coordinates no
-/// longer parametrise them (the block, the projector onto the allowed motions restricted to the
-/// free coordinates, is then singular). `work` is scratch, sized here; nothing is allocated
-/// once it has the block's size.
-pub fn free_quality(motions: &DMatrix<f64>, free: &[usize], work: &mut DMatrix<f64>) -> f64 {
-    let n = free.len();
-    if work.shape() != (n, n) {
-        *work = DMatrix::zeros(n, n);
-    }
-    for j in 0..n {
-        for i in j..n {
-            work[(i, j)] = motions[(free[i], j)];
-        }
-    }
-    dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
 }

@@ -7,7 +7,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::basis::decompose;
-use super::factored::{free_quality, Envelope, Factored, RowChoice, DAMPING, PROJECTION_DAMPING};
+use super::factored::{Envelope, Factored, RowChoice, DAMPING, PROJECTION_DAMPING};
 use super::rows::{constraints_into, seat_ball_angles, Constraints};
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::model::Model;
@@ -41,14 +41,18 @@ pub struct ProjectionScratch {
     factor: Envelope,
     /// Which factor of the rows in `factored` `factor` holds.
     held: Held,
+    /// Whether `factored` holds the kept rows of `current` (for the choice it records), so that
+    /// factoring them with another damping needs no refill.
+    rows_of_current: bool,
     kept: Vec<f64>,
     correction: Vec<f64>,
     trial_q: Vec<f64>,
     rest: Vec<f64>,
     /// G v, the velocity rows.
     velocity: DVector<f64>,
-    /// The allowed motions of the free coordinates, and their block's factor (`free_quality`).
-    motions: DMatrix<f64>,
+    /// The kept rows over the free coordinates, through the factor (L⁻¹Gₛ), and the factor of
+    /// the projector's block over them (`free_quality`).
+    free_columns: DMatrix<f64>,
     block: DMatrix<f64>,
     /// A row left out and its coefficients on the kept rows (`reproduction`).
     row: Vec<f64>,
@@ -75,12 +79,13 @@ impl ProjectionScratch {
             current,
             factor: Envelope::default(),
             held: Held::Nothing,
+            rows_of_current: false,
             kept: Vec::new(),
             correction: vec![0.0; model.velocities()],
             trial_q: Vec::new(),
             rest: vec![0.0; model.velocities()],
             velocity: DVector::zeros(6 * model.loops.len()),
-            motions: DMatrix::zeros(0, 0),
+            free_columns: DMatrix::zeros(0, 0),
             block: DMatrix::zeros(0, 0),
             row: Vec::new(),
             coefficients: Vec::new(),
@@ -98,7 +103,7 @@ pub fn project(
 ) -> Result<Projection, EvalError> {
     let mut scratch = ProjectionScratch::new(model);
     forward_kinematics(model, data, q, v)?;
-    constraints_into(model, data, q, v, false, &mut scratch.current)?;
+    scratch.constraints_at(model, data, q, v)?;
     project_from(model, data, choice, q, v, &mut scratch)
 }
 
@@ -138,10 +143,31 @@ pub fn project_from(
 }
 
 impl ProjectionScratch {
+    /// The constraints at (q, v) into `current`; `data` must hold the forward kinematics of
+    /// (q, v).
+    pub fn constraints_at(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), EvalError> {
+        self.rows_of_current = false;
+        constraints_into(model, data, q, v, false, &mut self.current)
+    }
+
+    /// The kept rows of `current` for `choice` into `factored`, unless it holds them already.
+    fn fill_rows(&mut self, choice: &RowChoice) {
+        if !(self.rows_of_current && self.factored.holds(choice)) {
+            self.factored.refill(&self.current.jacobian, choice);
+            self.rows_of_current = true;
+        }
+    }
+
     /// How far the kept rows of the current constraints are from dependent
     /// (`Factored::conditioning`, damped by `DAMPING`).
     pub fn conditioning(&mut self, choice: &RowChoice) -> (f64, Option<usize>) {
-        self.factored.refill(&self.current.jacobian, choice);
+        self.fill_rows(choice);
         let damped = self
             .factored
             .damped_in(DAMPING, std::mem::take(&mut self.factor));
@@ -163,13 +189,15 @@ impl ProjectionScratch {
         if !factored || free.is_empty() {
             return factored.then_some(1.0);
         }
-        if self.motions.shape() != (self.correction.len(), free.len()) {
-            self.motions = DMatrix::zeros(self.correction.len(), free.len());
-        }
         let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
-        damped.allowed_motions_into(free, &mut self.kept, &mut self.motions);
+        let quality = damped.free_quality_into(
+            free,
+            &mut self.kept,
+            &mut self.free_columns,
+            &mut self.block,
+        );
         self.factor = damped.into_storage();
-        Some(free_quality(&self.motions, free, &mut self.block))
+        Some(quality)
     }
 
     /// How well the rows `conditioning` just factored reproduce the active rows left out
@@ -194,7 +222,7 @@ impl ProjectionScratch {
     /// Factors the kept rows of the current constraints (damped by `PROJECTION_DAMPING`);
     /// whether they could be factored.
     fn refactor(&mut self, choice: &RowChoice) -> bool {
-        self.factored.refill(&self.current.jacobian, choice);
+        self.fill_rows(choice);
         let storage = std::mem::take(&mut self.factor);
         self.held = match self.factored.damped_in(PROJECTION_DAMPING, storage) {
             Ok(damped) => {
@@ -264,7 +292,7 @@ pub fn close_configuration(
     let mut scratch = ProjectionScratch::new(model);
     let rest = vec![0.0; model.velocities()];
     forward_kinematics(model, data, q, &rest)?;
-    constraints_into(model, data, q, &rest, false, &mut scratch.current)?;
+    scratch.constraints_at(model, data, q, &rest)?;
     newton(model, data, q, &mut scratch, |s| {
         let c = &s.current;
         let step = -(decompose(&c.jacobian.dense()).pseudo_inverse * &c.residual);
@@ -306,6 +334,7 @@ fn newton(
         q.copy_from_slice(&s.trial_q);
         std::mem::swap(&mut s.current, &mut s.trial);
         s.held = Held::Nothing;
+        s.rows_of_current = false;
         error = trial_error;
         if !converging {
             break;

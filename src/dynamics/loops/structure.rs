@@ -15,7 +15,7 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::decompose;
-use super::factored::{free_quality, row_scale, Damped, Factored, RowChoice, DAMPING};
+use super::factored::{row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints};
@@ -67,7 +67,7 @@ pub struct Structure {
     /// The tree's velocities (`Model::nv`): the columns after them are the complementary
     /// links' coordinates.
     pub tree_velocities: usize,
-    /// How well they did when chosen (`factored::free_quality`: the smallest squared Cholesky
+    /// How well they did when chosen (`Damped::free_quality_into`: the smallest squared Cholesky
     /// pivot of the block of the projector onto the allowed motions over the free coordinates;
     /// 1 when the allowed motions are exactly the free coordinates' motions, 0 when the free
     /// coordinates no longer parametrise them).
@@ -235,8 +235,8 @@ impl Structure {
         if self.free.is_empty() {
             return 1.0;
         }
-        let motions = damped.allowed_motions(&self.free);
-        free_quality(&motions, &self.free, &mut DMatrix::zeros(0, 0))
+        let (mut columns, mut block) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 0));
+        damped.free_quality_into(&self.free, &mut Vec::new(), &mut columns, &mut block)
     }
 }
 
