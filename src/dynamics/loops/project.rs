@@ -8,10 +8,11 @@ use nalgebra::{DMatrix, DVector};
 
 use super::basis::decompose;
 use super::factored::{Envelope, Factored, RowChoice, DAMPING, PROJECTION_DAMPING};
-use super::rows::{constraints_into, seat_ball_angles, Constraints};
+use super::rows::{constraints_into, seat_ball_angles_at_poses, Constraints};
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
+use crate::spatial::Pose;
 
 /// Constraint residuals before and after a projection: largest position row (metres or
 /// radians) and largest velocity row.
@@ -50,6 +51,9 @@ pub struct ProjectionScratch {
     rest: Vec<f64>,
     /// G v, the velocity rows.
     velocity: DVector<f64>,
+    /// The bodies' poses at the positions `current` belongs to (a rejected trial leaves its
+    /// own in `Data`).
+    poses: Vec<Pose>,
     /// The kept rows over the free coordinates, through the factor (L⁻¹Gₛ), and the factor of
     /// the projector's block over them (`free_quality`).
     free_columns: DMatrix<f64>,
@@ -85,6 +89,7 @@ impl ProjectionScratch {
             trial_q: Vec::new(),
             rest: vec![0.0; model.velocities()],
             velocity: DVector::zeros(6 * model.loops.len()),
+            poses: Vec::new(),
             free_columns: DMatrix::zeros(0, 0),
             block: DMatrix::zeros(0, 0),
             row: Vec::new(),
@@ -130,7 +135,8 @@ pub fn project_from(
     scratch.held = Held::Nothing;
     newton(model, data, q, scratch, |s| s.damped_step(choice))?;
     let velocity = scratch.project_velocities(choice, v);
-    seat_ball_angles(model, data, q, v, false)?;
+    data.world.clone_from(&scratch.poses);
+    seat_ball_angles_at_poses(model, data, q, v)?;
     let current = &scratch.current;
     Ok(Projection {
         before,
@@ -305,7 +311,8 @@ pub fn close_configuration(
 /// Gauss–Newton on the positions from the constraints in `scratch.current`: `step` writes the
 /// correction at them into `scratch.correction` (false to stop); stops when a step no longer
 /// reduces the largest residual, or reduces it less than fourfold. Leaves q and
-/// `scratch.current` at the best configuration reached; an accepted step leaves no factor held
+/// `scratch.current` at the best configuration reached, and the bodies' poses there in
+/// `scratch.poses` (`data` must hold them at the start); an accepted step leaves no factor held
 /// (the one `step` took belongs to the positions before it).
 fn newton(
     model: &Model,
@@ -315,6 +322,7 @@ fn newton(
     mut step: impl FnMut(&mut ProjectionScratch) -> bool,
 ) -> Result<(), EvalError> {
     let mut error = scratch.current.residual.amax();
+    scratch.poses.clone_from(&data.world);
     for _ in 0..NEWTON_ITERATIONS {
         if error == 0.0 || !step(scratch) {
             break;
@@ -335,6 +343,7 @@ fn newton(
         std::mem::swap(&mut s.current, &mut s.trial);
         s.held = Held::Nothing;
         s.rows_of_current = false;
+        s.poses.clone_from(&data.world);
         error = trial_error;
         if !converging {
             break;

@@ -43,6 +43,10 @@ pub struct Constraints {
     pub points: Vec<Vector3<f64>>,
     /// Each loop's dof chain at the state (scratch kept between evaluations).
     chains: Vec<ChainMotion>,
+    /// The tree joints on the loops' paths to earth, and the fixed-frame twist of each of their
+    /// velocities (by state velocity), computed once per state for every loop that shares them.
+    path_joints: Vec<usize>,
+    world_columns: Vec<Motion>,
 }
 
 impl Constraints {
@@ -76,8 +80,27 @@ impl Constraints {
             bias: DVector::zeros(rows),
             points: vec![Vector3::zeros(); model.loops.len()],
             chains: vec![ChainMotion::default(); model.loops.len()],
+            path_joints: path_joints(model),
+            world_columns: vec![Motion::zeros(); model.nv],
         }
     }
+}
+
+/// The tree joints between the loops' bodies and earth, in increasing order.
+fn path_joints(model: &Model) -> Vec<usize> {
+    let mut joints = Vec::new();
+    for joint in &model.loops {
+        for body in [joint.first_body, joint.second_body] {
+            let mut current = body;
+            while current != 0 {
+                joints.push(current - 1);
+                current = model.joints[current - 1].parent;
+            }
+        }
+    }
+    joints.sort_unstable();
+    joints.dedup();
+    joints
 }
 
 /// The constraint rows at (q, v), both of the state's length. With `with_bias` γ is computed too.
@@ -109,6 +132,14 @@ pub fn constraints_into(
         bias_accelerations(model, data);
     } else {
         c.bias.fill(0.0);
+    }
+    for &k in &c.path_joints {
+        let (joint, state) = (&model.joints[k], &data.states[k]);
+        for column in 0..joint.nv() {
+            let local = Motion::from_column_slice(state.subspace.column(column).as_slice());
+            c.world_columns[joint.v_offset + column] =
+                spatial::motion_to_parent(&data.world[joint.child], &local);
+        }
     }
     for k in 0..model.loops.len() {
         loop_rows(model, data, q, v, k, with_bias, c)?;
@@ -158,8 +189,23 @@ fn loop_rows(
     let own = if ball { 0 } else { n };
     let block = &mut c.jacobian.blocks[k];
     block.values.fill(0.0);
-    add_body_columns(model, data, joint.second_body, &at_point, 1.0, block);
-    add_body_columns(model, data, joint.first_body, &at_point, -1.0, block);
+    let world_columns = &c.world_columns;
+    add_body_columns(
+        model,
+        world_columns,
+        joint.second_body,
+        &at_point,
+        1.0,
+        block,
+    );
+    add_body_columns(
+        model,
+        world_columns,
+        joint.first_body,
+        &at_point,
+        -1.0,
+        block,
+    );
     for column in 0..own {
         let twist = motion_to_parent(
             &base,
@@ -235,6 +281,16 @@ pub fn seat_ball_angles(
     Ok(true)
 }
 
+/// `seat_ball_angles` without rates, when `data` already holds the bodies' poses at q.
+pub fn seat_ball_angles_at_poses(
+    model: &Model,
+    data: &Data,
+    q: &mut [f64],
+    v: &mut [f64],
+) -> Result<(), EvalError> {
+    seat_balls(model, data, q, v, false)
+}
+
 /// Sets the angles of the complementary ball joints to those of the bodies' relative rotation
 /// (continuing from their previous values) and their rates to match the relative angular
 /// velocity; `data` must hold the forward kinematics of (q, v).
@@ -280,10 +336,11 @@ fn seat_balls(
     Ok(())
 }
 
-/// Adds `sign` times the rates of `body`'s frame per velocity of the joints between it and earth.
+/// Adds `sign` times the rates of `body`'s frame per velocity of the joints between it and earth,
+/// from those velocities' fixed-frame twists `world_columns`.
 fn add_body_columns(
     model: &Model,
-    data: &Data,
+    world_columns: &[Motion],
     body: usize,
     at_point: &Pose,
     sign: f64,
@@ -292,14 +349,9 @@ fn add_body_columns(
     let mut current = body;
     while current != 0 {
         let joint = &model.joints[current - 1];
-        let subspace = &data.states[current - 1].subspace;
-        for column in 0..joint.nv() {
-            let world = spatial::motion_to_parent(
-                &data.world[current],
-                &Motion::from_column_slice(subspace.column(column).as_slice()),
-            );
-            let moved = spatial::motion_to_child(at_point, &world);
-            let local = block.local(joint.v_offset + column);
+        for column in joint.v_offset..joint.v_offset + joint.nv() {
+            let moved = spatial::motion_to_child(at_point, &world_columns[column]);
+            let local = block.local(column);
             let mut target = block.values.column_mut(local);
             target += sign * moved;
         }
