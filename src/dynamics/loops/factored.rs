@@ -82,6 +82,8 @@ pub const PROJECTION_DAMPING: f64 = 1e-6;
 pub const KEEP_TOLERANCE: f64 = 1e-12;
 
 /// A sparse row: (column, value) pairs.
+/// A kept row over every column of its loop (zeros included), as (column, value) in increasing
+/// column order.
 type SparseRow = Vec<(usize, f64)>;
 
 /// The kept rows of G at one state, dimensionless, and their normal matrix.
@@ -94,8 +96,8 @@ pub struct Factored {
     firm: usize,
     /// A = GₛGₛᵀ, undamped.
     normal: Envelope,
-    /// Per column, the kept rows touching it (scratch of `refill`).
-    touching: Vec<Vec<(usize, f64)>>,
+    /// Per loop, its kept rows (scratch of `refill`).
+    by_loop: Vec<Vec<usize>>,
     /// `dense_null_space`, once asked for.
     null_space: OnceCell<DMatrix<f64>>,
 }
@@ -122,7 +124,7 @@ impl Factored {
             scales: Vec::new(),
             firm: 0,
             normal: Envelope::default(),
-            touching: Vec::new(),
+            by_loop: Vec::new(),
             null_space: OnceCell::new(),
         };
         factored.refill(jacobian, choice);
@@ -134,11 +136,12 @@ impl Factored {
     pub fn refill(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
         self.rows.resize_with(choice.rows.len(), Vec::new);
         for ((row, &r), &scale) in self.rows.iter_mut().zip(&choice.rows).zip(&choice.scales) {
+            // Every column of the row's loop, zeros included: the row's entries are then at the
+            // loop block's local positions, where the normal matrix reads them.
             row.clear();
             row.extend(
                 jacobian
                     .row(r)
-                    .filter(|&(_, value)| value != 0.0)
                     .map(|(column, value)| (column, value * scale)),
             );
         }
@@ -147,7 +150,7 @@ impl Factored {
         self.scales.clone_from(&choice.scales);
         self.firm = choice.firm();
         self.normal
-            .fill_normal(&self.rows, self.columns, &mut self.touching);
+            .fill_normal(jacobian, &self.rows, &self.indices, &mut self.by_loop);
         self.null_space = OnceCell::new();
     }
 
@@ -506,38 +509,43 @@ pub struct Envelope {
 }
 
 impl Envelope {
-    /// A = RRᵀ for the sparse rows R over `columns` columns, in this envelope's storage;
-    /// `touching` is scratch (which rows touch each column, to find each row's first
-    /// neighbour).
+    /// A = RRᵀ for the kept rows R of G (`rows`, each over its loop's columns, G's rows
+    /// `indices` among the 6 per loop), in this envelope's storage; `by_loop` is scratch (the
+    /// kept rows of each loop). Each entry is one dot product over the columns its two loops
+    /// share, summed in increasing column order; row k's envelope starts at the first kept row
+    /// of a loop sharing columns with its own.
     fn fill_normal(
         &mut self,
+        jacobian: &ConstraintJacobian,
         rows: &[SparseRow],
-        columns: usize,
-        touching: &mut Vec<Vec<(usize, f64)>>,
+        indices: &[usize],
+        by_loop: &mut Vec<Vec<usize>>,
     ) {
-        touching.resize_with(columns, Vec::new);
-        touching.iter_mut().for_each(Vec::clear);
-        for (k, row) in rows.iter().enumerate() {
-            for &(c, value) in row {
-                touching[c].push((k, value));
-            }
+        by_loop.resize_with(jacobian.blocks.len(), Vec::new);
+        by_loop.iter_mut().for_each(Vec::clear);
+        for (k, &row) in indices.iter().enumerate() {
+            by_loop[row / 6].push(k);
         }
+        let neighbours = |k: usize| jacobian.neighbours[indices[k] / 6].iter();
         self.first.clear();
-        self.first.extend((0..rows.len()).map(|k| {
-            rows[k]
-                .iter()
-                .filter_map(|&(c, _)| touching[c].first().map(|&(l, _)| l))
+        self.first.extend((0..indices.len()).map(|k| {
+            neighbours(k)
+                .filter_map(|n| by_loop[n.other].first().copied())
                 .fold(k, usize::min)
         }));
-        self.values.resize_with(rows.len(), Vec::new);
-        for (k, row) in self.values.iter_mut().enumerate() {
-            row.clear();
-            row.resize(k - self.first[k] + 1, 0.0);
-        }
-        for column in touching.iter() {
-            for (i, &(k, a)) in column.iter().enumerate() {
-                for &(l, b) in &column[..=i] {
-                    self.values[k][l - self.first[k]] += a * b;
+        self.values.resize_with(indices.len(), Vec::new);
+        for (k, row) in rows.iter().enumerate() {
+            let values = &mut self.values[k];
+            values.clear();
+            values.resize(k - self.first[k] + 1, 0.0);
+            for neighbour in neighbours(k) {
+                for &l in by_loop[neighbour.other].iter().filter(|&&l| l <= k) {
+                    let other = &rows[l];
+                    let mut sum = 0.0;
+                    for &(here, there) in &neighbour.shared {
+                        sum += row[here].1 * other[there].1;
+                    }
+                    values[l - self.first[k]] = sum;
                 }
             }
         }

@@ -34,9 +34,39 @@ impl LoopBlock {
 pub struct ConstraintJacobian {
     pub columns: usize,
     pub blocks: Vec<LoopBlock>,
+    /// Per loop, the loops (itself included) whose columns meet its own, each with the pairs of
+    /// local columns they share (this loop's, the other's), in increasing column order: where
+    /// the entries of GGᵀ between their rows come from.
+    pub neighbours: Vec<Vec<Neighbour>>,
+}
+
+/// A loop (or the loop itself) and the local columns it shares with a loop.
+#[derive(Clone, Debug)]
+pub struct Neighbour {
+    pub other: usize,
+    pub shared: Vec<(usize, usize)>,
 }
 
 impl ConstraintJacobian {
+    /// G over these loop blocks.
+    pub fn new(columns: usize, blocks: Vec<LoopBlock>) -> ConstraintJacobian {
+        let neighbours = (0..blocks.len())
+            .map(|i| {
+                (0..blocks.len())
+                    .filter_map(|j| {
+                        let shared = shared_columns(&blocks[i].columns, &blocks[j].columns);
+                        (!shared.is_empty()).then_some(Neighbour { other: j, shared })
+                    })
+                    .collect()
+            })
+            .collect();
+        ConstraintJacobian {
+            columns,
+            blocks,
+            neighbours,
+        }
+    }
+
     pub fn nrows(&self) -> usize {
         6 * self.blocks.len()
     }
@@ -80,4 +110,13 @@ impl ConstraintJacobian {
         }
         dense
     }
+}
+
+/// The positions of the columns two sorted column lists share, in increasing column order.
+fn shared_columns(first: &[usize], second: &[usize]) -> Vec<(usize, usize)> {
+    first
+        .iter()
+        .enumerate()
+        .filter_map(|(i, column)| second.binary_search(column).ok().map(|j| (i, j)))
+        .collect()
 }

@@ -72,10 +72,7 @@ impl Constraints {
             .collect();
         Constraints {
             residual: DVector::zeros(rows),
-            jacobian: ConstraintJacobian {
-                columns: model.velocities(),
-                blocks,
-            },
+            jacobian: ConstraintJacobian::new(model.velocities(), blocks),
             velocity: DVector::zeros(rows),
             bias: DVector::zeros(rows),
             points: vec![Vector3::zeros(); model.loops.len()],
