@@ -455,6 +455,27 @@ fn a_driven_motion_without_mass_is_an_error() {
 }
 
 #[test]
+fn a_torque_on_a_complementary_ball_angle_is_an_error() {
+    // The Delta with a torque in one of its closing ball joints: the ball's angles move no mass
+    // and no kept row (they are left out of the solve), so a force on them cannot be balanced.
+    let mut p = prepared(
+        "delta_isir88",
+        &[(
+            "[0, 0, -l2] ++ 1 @ rod1m with spherical as P1m",
+            "[0, 0, -l2] ++ 1 @ rod1m with link(a, b, c) dof1 = a || [1,0,0], dof2 = b || [0,1,0], dof3 = c || [0,0,1], torque3 = [0, 0, 0.1] end as P1m",
+        )],
+    );
+    p.settings.duration = 0.01;
+    let simulation = run(&p, &mut |_| {});
+    let failure = simulation.report.failure.as_ref().expect("fails");
+    assert!(
+        failure.message.contains("moves no mass") && failure.message.contains("P1m"),
+        "{}",
+        failure.message
+    );
+}
+
+#[test]
 fn a_parallelogram_runs_through_its_flat_configurations() {
     // The four-bar with opposite bars equal: at every flat configuration the constraints lose
     // rank (where the parallelogram and anti-parallelogram branches meet). Momentum carries it
