@@ -34,6 +34,13 @@ pub fn motion_to_parent(pose: &Pose, m: &Motion) -> Motion {
     )
 }
 
+/// A motion given in fixed axes about the origin, taken about the point `point` (same axes):
+/// `motion_to_child` for a pure translation, without its rotations.
+pub fn shifted(point: &Vector3<f64>, m: &Motion) -> Motion {
+    let w = angular(m);
+    twist(w, linear(m) - point.cross(&w))
+}
+
 /// Motion given in the parent frame, expressed in the frame of `pose` (the child).
 pub fn motion_to_child(pose: &Pose, m: &Motion) -> Motion {
     let inverse = pose.rotation.inverse();

@@ -17,7 +17,7 @@ use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::ChainMotion;
 use crate::spatial::{self, Force, Motion};
-use crate::spatial::{motion_to_parent, translation, Pose};
+use crate::spatial::{motion_to_parent, translation};
 
 /// Names of the six rows of a loop.
 pub const ROW_NAMES: [&str; 6] = [
@@ -47,6 +47,10 @@ pub struct Constraints {
     /// velocities (by state velocity), computed once per state for every loop that shares them.
     path_joints: Vec<usize>,
     world_columns: Vec<Motion>,
+    /// Per loop, its tree columns (local index, state velocity) with the sign they enter its
+    /// rows with: +1 on the second body's path to earth, −1 on the first's (a velocity on both
+    /// moves both frames alike and is left out).
+    path_signs: Vec<Vec<(usize, usize, f64)>>,
 }
 
 impl Constraints {
@@ -69,8 +73,15 @@ impl Constraints {
                     first..first + own,
                 ))
             })
+            .collect::<Vec<LoopBlock>>();
+        let path_signs = model
+            .loops
+            .iter()
+            .zip(&blocks)
+            .map(|(joint, block)| path_signs(model, [joint.first_body, joint.second_body], block))
             .collect();
         Constraints {
+            path_signs,
             residual: DVector::zeros(rows),
             jacobian: ConstraintJacobian::new(model.velocities(), blocks),
             velocity: DVector::zeros(rows),
@@ -81,6 +92,33 @@ impl Constraints {
             world_columns: vec![Motion::zeros(); model.nv],
         }
     }
+}
+
+/// A loop's tree columns with their signs (see `Constraints::path_signs`).
+fn path_signs(
+    model: &Model,
+    [first, second]: [usize; 2],
+    block: &LoopBlock,
+) -> Vec<(usize, usize, f64)> {
+    let mut signs = vec![0.0; block.columns.len()];
+    for (body, sign) in [(second, 1.0), (first, -1.0)] {
+        let mut current = body;
+        while current != 0 {
+            let joint = &model.joints[current - 1];
+            for column in joint.v_offset..joint.v_offset + joint.nv() {
+                signs[block.local(column)] += sign;
+            }
+            current = joint.parent;
+        }
+    }
+    block
+        .columns
+        .iter()
+        .zip(signs)
+        .enumerate()
+        .filter(|&(_, (_, sign))| sign != 0.0)
+        .map(|(local, (&column, sign))| (local, column, sign))
+        .collect()
 }
 
 /// The tree joints between the loops' bodies and earth, in increasing order.
@@ -181,34 +219,20 @@ fn loop_rows(
     c.residual.rows_mut(row, 3).copy_from(&rotation);
     c.residual.rows_mut(row + 3, 3).copy_from(&gap);
     c.points[k] = point;
-    // Rates are taken at the loop point, in fixed axes: a motion seen from `at_point`.
-    let at_point = translation(point);
+    // Rates are taken at the loop point, in fixed axes.
     let own = if ball { 0 } else { n };
     let block = &mut c.jacobian.blocks[k];
     block.values.fill(0.0);
-    let world_columns = &c.world_columns;
-    add_body_columns(
-        model,
-        world_columns,
-        joint.second_body,
-        &at_point,
-        1.0,
-        block,
-    );
-    add_body_columns(
-        model,
-        world_columns,
-        joint.first_body,
-        &at_point,
-        -1.0,
-        block,
-    );
+    for &(local, column, sign) in &c.path_signs[k] {
+        let moved = spatial::shifted(&point, &c.world_columns[column]);
+        block.values.column_mut(local).copy_from(&(sign * moved));
+    }
     for column in 0..own {
         let twist = motion_to_parent(
             &base,
             &Motion::from_column_slice(chain.subspace.column(column).as_slice()),
         );
-        let moved = spatial::motion_to_child(&at_point, &twist);
+        let moved = spatial::shifted(&point, &twist);
         let local = block.local(model.nv + offset + column);
         let mut target_column = block.values.column_mut(local);
         target_column -= moved;
@@ -227,7 +251,7 @@ fn loop_rows(
         let difference = world(&data.acceleration, joint.second_body) - end_acceleration;
         c.bias
             .rows_mut(row, 6)
-            .copy_from(&spatial::motion_to_child(&at_point, &difference));
+            .copy_from(&spatial::shifted(&point, &difference));
         if ball {
             // The point rows are the relative velocity at a moving point p: d/dt adds
             // (ω_T − ω_E) × ṗ, which vanishes when the rotation rows hold (ω_T = ω_E).
@@ -235,7 +259,7 @@ fn loop_rows(
             let relative_spin = (second_velocity - first_velocity)
                 .fixed_rows::<3>(0)
                 .into_owned();
-            let point_velocity = spatial::motion_to_child(&at_point, &first_velocity)
+            let point_velocity = spatial::shifted(&point, &first_velocity)
                 .fixed_rows::<3>(3)
                 .into_owned();
             let mut linear = c.bias.rows_mut(row + 3, 3);
@@ -331,29 +355,6 @@ fn seat_balls(
         v[model.nv + start..model.nv + start + 3].copy_from_slice(rates.as_slice());
     }
     Ok(())
-}
-
-/// Adds `sign` times the rates of `body`'s frame per velocity of the joints between it and earth,
-/// from those velocities' fixed-frame twists `world_columns`.
-fn add_body_columns(
-    model: &Model,
-    world_columns: &[Motion],
-    body: usize,
-    at_point: &Pose,
-    sign: f64,
-    block: &mut LoopBlock,
-) {
-    let mut current = body;
-    while current != 0 {
-        let joint = &model.joints[current - 1];
-        for column in joint.v_offset..joint.v_offset + joint.nv() {
-            let moved = spatial::motion_to_child(at_point, &world_columns[column]);
-            let local = block.local(column);
-            let mut target = block.values.column_mut(local);
-            target += sign * moved;
-        }
-        current = joint.parent;
-    }
 }
 
 /// The state velocities a loop's rows depend on: those of the joints on the paths from its two
