@@ -213,10 +213,16 @@ fn loop_rows(
     let end = base * chain.pose;
     let target = data.world[joint.second_body] * joint.second;
     let point = end.translation.vector;
-    let rotation = end.rotation * (end.rotation.inverse() * target.rotation).scaled_axis();
     let gap = target.translation.vector - point;
     let row = 6 * k;
-    c.residual.rows_mut(row, 3).copy_from(&rotation);
+    if ball {
+        c.residual.rows_mut(row, 3).fill(0.0);
+    } else {
+        let relative = end.rotation.inverse() * target.rotation;
+        c.residual
+            .rows_mut(row, 3)
+            .copy_from(&(end.rotation * relative.scaled_axis()));
+    }
     c.residual.rows_mut(row + 3, 3).copy_from(&gap);
     c.points[k] = point;
     // Rates are taken at the loop point, in fixed axes.
