@@ -79,6 +79,14 @@ impl Model {
         self.joints.len()
     }
 
+    /// The bodies from `body` up to (and excluding) earth; body b is reached by joint b − 1.
+    pub fn path_to_earth(&self, body: usize) -> impl Iterator<Item = usize> + '_ {
+        let below_earth = |b: usize| (b != 0).then_some(b);
+        std::iter::successors(below_earth(body), move |&b| {
+            below_earth(self.joints[b - 1].parent)
+        })
+    }
+
     pub fn joint_of(&self, join: JoinId) -> Option<usize> {
         self.joints.iter().position(|j| j.chain.join == join)
     }
@@ -744,45 +752,25 @@ impl Model {
         previous: &[f64],
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let mut declared = DeclaredState::default();
-        self.declared_into(q, v, previous, &mut declared)?;
+        self.declared_into(q, v, previous, &mut declared, Recovered::Every)?;
         Ok((declared.coordinates, declared.rates))
     }
 
     /// `declared` writing into `declared` (reusing its storage: nothing is allocated once it
-    /// has held this model's).
+    /// has held this model's), for the joints `which` selects; the others' declared coordinates
+    /// and rates are left as they were.
     pub fn declared_into(
         &self,
         q: &[f64],
         v: &[f64],
         previous: &[f64],
         declared: &mut DeclaredState,
+        which: Recovered,
     ) -> Result<(), EvalError> {
-        self.declared_of_into(q, v, previous, declared, |_| true)
-    }
-
-    /// `declared_into` for the joints the efforts read (`declared_read`); the others' declared
-    /// coordinates and rates are left as they were. Recovering angles from quaternions is most
-    /// of an evaluation's cost on mechanisms of ball joints that no effort reads.
-    pub fn declared_for_efforts_into(
-        &self,
-        q: &[f64],
-        v: &[f64],
-        previous: &[f64],
-        declared: &mut DeclaredState,
-    ) -> Result<(), EvalError> {
-        self.declared_of_into(q, v, previous, declared, |joint| {
-            self.declared_read.get(joint).copied().unwrap_or(true)
-        })
-    }
-
-    fn declared_of_into(
-        &self,
-        q: &[f64],
-        v: &[f64],
-        previous: &[f64],
-        declared: &mut DeclaredState,
-        wanted: impl Fn(usize) -> bool,
-    ) -> Result<(), EvalError> {
+        let wanted = |joint: usize| match which {
+            Recovered::Every => true,
+            Recovered::ReadByEfforts => self.declared_read.get(joint).copied().unwrap_or(true),
+        };
         let DeclaredState {
             coordinates,
             rates,
@@ -816,6 +804,15 @@ impl Model {
         rates[tree..].copy_from_slice(&v[self.nv..self.nv + self.nc]);
         Ok(())
     }
+}
+
+/// Which joints' declared coordinates `Model::declared_into` recovers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Recovered {
+    Every,
+    /// Those the efforts read (`Model::declared_read`): recovering angles from quaternions is
+    /// most of an evaluation's cost on mechanisms of ball joints that no effort reads.
+    ReadByEfforts,
 }
 
 /// Declared coordinates and rates of every join at a state (`Model::declared_into`), with the

@@ -18,7 +18,7 @@ use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
     self, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, ROW_NAMES,
 };
-use crate::dynamics::model::{DeclaredState, Model};
+use crate::dynamics::model::{DeclaredState, Model, Recovered};
 use crate::kinematics::eval::EvalError;
 use crate::spatial;
 
@@ -96,7 +96,13 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v)?;
         let state = &mut self.declared;
-        model.declared_for_efforts_into(q, v, &self.reference.borrow(), state)?;
+        model.declared_into(
+            q,
+            v,
+            &self.reference.borrow(),
+            state,
+            Recovered::ReadByEfforts,
+        )?;
         let declared = Declared {
             model,
             coordinates: &state.coordinates,

@@ -81,7 +81,6 @@ pub const PROJECTION_DAMPING: f64 = 1e-6;
 /// rows' largest is at round-off (`Damped::reproduction`).
 pub const KEEP_TOLERANCE: f64 = 1e-12;
 
-/// A sparse row: (column, value) pairs.
 /// A kept row over every column of its loop (zeros included), as (column, value) in increasing
 /// column order.
 type SparseRow = Vec<(usize, f64)>;

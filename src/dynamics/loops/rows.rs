@@ -102,13 +102,11 @@ fn path_signs(
 ) -> Vec<(usize, usize, f64)> {
     let mut signs = vec![0.0; block.columns.len()];
     for (body, sign) in [(second, 1.0), (first, -1.0)] {
-        let mut current = body;
-        while current != 0 {
-            let joint = &model.joints[current - 1];
+        for on_path in model.path_to_earth(body) {
+            let joint = &model.joints[on_path - 1];
             for column in joint.v_offset..joint.v_offset + joint.nv() {
                 signs[block.local(column)] += sign;
             }
-            current = joint.parent;
         }
     }
     block
@@ -126,11 +124,7 @@ fn path_joints(model: &Model) -> Vec<usize> {
     let mut joints = Vec::new();
     for joint in &model.loops {
         for body in [joint.first_body, joint.second_body] {
-            let mut current = body;
-            while current != 0 {
-                joints.push(current - 1);
-                current = model.joints[current - 1].parent;
-            }
+            joints.extend(model.path_to_earth(body).map(|b| b - 1));
         }
     }
     joints.sort_unstable();
@@ -368,11 +362,9 @@ fn seat_balls(
 fn loop_columns(model: &Model, bodies: [usize; 2], own: std::ops::Range<usize>) -> Vec<usize> {
     let mut columns = Vec::new();
     for body in bodies {
-        let mut current = body;
-        while current != 0 {
-            let joint = &model.joints[current - 1];
+        for on_path in model.path_to_earth(body) {
+            let joint = &model.joints[on_path - 1];
             columns.extend(joint.v_offset..joint.v_offset + joint.nv());
-            current = joint.parent;
         }
     }
     columns.sort_unstable();
