@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::diag::Diagnostic;
 use crate::dynamics::algorithms::Data;
-use crate::dynamics::loops::{close_configuration, constraints, decompose};
+use crate::dynamics::loops::{close_configuration, constraints, decompose, Extent};
 use crate::dynamics::model::Model;
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::assembly::AssemblyOptions;
@@ -49,7 +49,7 @@ pub fn initial_state(
     let mut data = Data::new(model);
     // Assembly stops at 1e-12: finish at round-off.
     close_configuration(model, &mut data, &mut q).map_err(evaluation)?;
-    let c = constraints(model, &mut data, &q, &v, false).map_err(evaluation)?;
+    let c = constraints(model, &mut data, &q, &v, Extent::Rows).map_err(evaluation)?;
     complete_rates(&c.jacobian.dense(), &given, &mut v)
         .map_err(|opening| vec![incompatible_rates(mechanism, &given, opening)])?;
     let (coordinates, rates) = model.declared(&q, &v, &coordinates).map_err(evaluation)?;

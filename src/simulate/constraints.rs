@@ -6,8 +6,8 @@ use serde::Serialize;
 
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::loops::{
-    self, ConstraintJacobian, Factored, ProjectionScratch, Residuals, RowChoice, Stabilisation,
-    Structure, StructureError, ROW_NAMES,
+    self, ConstraintJacobian, Extent, Factored, ProjectionScratch, Residuals, RowChoice,
+    Stabilisation, Structure, StructureError, ROW_NAMES,
 };
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -173,7 +173,7 @@ impl LoopMonitor {
         self.structure = Structure::decide(model, data, q)?;
         self.started = true;
         self.loop_names = model.loops.iter().map(|l| l.name.clone()).collect();
-        let c = loops::constraints(model, data, q, v, false)?;
+        let c = loops::constraints(model, data, q, v, Extent::Rows)?;
         let residuals = Residuals {
             position: c.residual.amax(),
             velocity: c.velocity.amax(),

@@ -11,7 +11,7 @@ use serde::Serialize;
 use super::prepare::Prepared;
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::rnea;
-use crate::dynamics::loops::{self, Stabilisation};
+use crate::dynamics::loops::{self, Extent, Stabilisation};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct HeldCoordinate {
@@ -56,7 +56,7 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
     let mut tree = force.rows_mut(0, model.nv);
     tree -= applied;
     let allowed = if model.has_loops() {
-        let c = loops::constraints(model, &mut system.data, &q, &rest, false)
+        let c = loops::constraints(model, &mut system.data, &q, &rest, Extent::Rows)
             .map_err(SystemError::from)?;
         loops::decompose(&c.jacobian.dense()).null_space
     } else {

@@ -16,7 +16,8 @@ use crate::dynamics::algorithms::{
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
-    self, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, ROW_NAMES,
+    self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError,
+    ROW_NAMES,
 };
 use crate::dynamics::model::{DeclaredState, Model, Recovered};
 use crate::kinematics::eval::EvalError;
@@ -134,7 +135,14 @@ impl<'m> MechanicalSystem<'m> {
         tree -= &self.bias;
         // RNEA left the forward kinematics of (q, v) in `data`.
         let scratch = &mut self.loop_scratch;
-        loops::constraints_into(model, &mut self.data, q, v, true, &mut scratch.constraints)?;
+        loops::constraints_into(
+            model,
+            &mut self.data,
+            q,
+            v,
+            Extent::WithBias,
+            &mut scratch.constraints,
+        )?;
         let structure = &self.loops.structure;
         loops::solve(
             &self.mass,

@@ -21,7 +21,7 @@ use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
-use crate::dynamics::loops::{self, Factored, LoopError};
+use crate::dynamics::loops::{self, Extent, Factored, LoopError};
 use crate::integrate::{Failure, IntegrationError, Observer, Stats};
 
 const MAX_ITERATIONS: usize = 50;
@@ -135,7 +135,7 @@ impl MechanicalSystem<'_> {
         q: &[f64],
     ) -> Result<(DVector<f64>, loops::ConstraintJacobian), SystemError> {
         let rest = vec![0.0; self.model.velocities()];
-        let c = loops::constraints(self.model, &mut self.data, q, &rest, false)?;
+        let c = loops::constraints(self.model, &mut self.data, q, &rest, Extent::Rows)?;
         Ok((c.residual, c.jacobian))
     }
 }

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use lsdc::driver::compile_files;
 use lsdc::dynamics::algorithms::{crba, forward_kinematics, rnea, Data};
 use lsdc::dynamics::efforts::{self, Declared, Efforts};
-use lsdc::dynamics::loops::{active_rows, constraints};
+use lsdc::dynamics::loops::{active_rows, constraints, Extent};
 use lsdc::dynamics::model;
 use lsdc::elab::mechanism::Origin;
 use lsdc::elab::Mechanism;
@@ -139,7 +139,8 @@ fn numeric(
     for k in 0..model.nv {
         right_hand_side[k] -= bias[k];
     }
-    let c = constraints(&model, &mut data, coordinates, rates, true).expect("constraints");
+    let c =
+        constraints(&model, &mut data, coordinates, rates, Extent::WithBias).expect("constraints");
     Numeric {
         mass,
         right_hand_side,

@@ -553,10 +553,9 @@ impl Envelope {
     /// y ← L⁻¹ y for the factor L held.
     fn forward(&self, y: &mut [f64]) {
         for k in 0..y.len() {
-            let fk = self.first[k];
-            let row = &self.values[k];
-            let dot: f64 = (fk..k).map(|i| row[i - fk] * y[i]).sum();
-            y[k] = (y[k] - dot) / row[k - fk];
+            let (left, diagonal) = split_diagonal(&self.values[k]);
+            let dot = in_order_dot(left, &y[self.first[k]..k]);
+            y[k] = (y[k] - dot) / diagonal;
         }
     }
 
@@ -580,16 +579,14 @@ impl Envelope {
     fn cholesky(&mut self) -> Result<(), usize> {
         for k in 0..self.values.len() {
             let fk = self.first[k];
+            let (above, below) = self.values.split_at_mut(k);
+            let row = &mut below[0];
             for j in fk..k {
-                let fj = self.first[j];
-                let start = fk.max(fj);
-                let dot: f64 = (start..j)
-                    .map(|i| self.values[k][i - fk] * self.values[j][i - fj])
-                    .sum();
-                let pivot = *self.values[j].last().expect("a diagonal");
-                self.values[k][j - fk] = (self.values[k][j - fk] - dot) / pivot;
+                let start = fk.max(self.first[j]);
+                let (left, pivot) = split_diagonal(&above[j]);
+                let dot = in_order_dot(&row[start - fk..j - fk], &left[start - self.first[j]..]);
+                row[j - fk] = (row[j - fk] - dot) / pivot;
             }
-            let row = &mut self.values[k];
             let (diagonal, left) = row.split_last_mut().expect("a diagonal");
             let square = *diagonal - left.iter().map(|x| x * x).sum::<f64>();
             if !(square > 0.0 && square.is_finite()) {
@@ -604,15 +601,26 @@ impl Envelope {
     fn solve(&self, y: &mut [f64]) {
         self.forward(y);
         for k in (0..y.len()).rev() {
-            let fk = self.first[k];
-            let row = &self.values[k];
-            y[k] /= row[k - fk];
+            let (left, diagonal) = split_diagonal(&self.values[k]);
+            y[k] /= diagonal;
             let value = y[k];
-            for i in fk..k {
-                y[i] -= row[i - fk] * value;
+            for (target, entry) in y[self.first[k]..k].iter_mut().zip(left) {
+                *target -= entry * value;
             }
         }
     }
+}
+
+/// An envelope row's entries left of its diagonal, and the diagonal.
+fn split_diagonal(row: &[f64]) -> (&[f64], f64) {
+    let (diagonal, left) = row.split_last().expect("a diagonal");
+    (left, *diagonal)
+}
+
+/// Σ aᵢbᵢ summed in increasing i, over slices of the same length (zipped, so that the loop
+/// carries no bounds checks).
+fn in_order_dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |sum, (x, y)| sum + x * y)
 }
 
 /// The lower Cholesky factor of the leading r × r block of `a` in place (its lower triangle read

@@ -23,7 +23,7 @@ pub use project::{
 };
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
-    ROW_NAMES,
+    Extent, ROW_NAMES,
 };
 pub use solve::{project_momentum, solve, LoopError, LoopScratch, Stabilisation};
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

@@ -132,31 +132,65 @@ fn path_joints(model: &Model) -> Vec<usize> {
     joints
 }
 
-/// The constraint rows at (q, v), both of the state's length. With `with_bias` γ is computed too.
-/// Leaves the forward kinematics of (q, v) in `data`.
+/// The constraints at (q, v), both of the state's length, to `extent`. Leaves the forward
+/// kinematics of (q, v) in `data`.
 pub fn constraints(
     model: &Model,
     data: &mut Data,
     q: &[f64],
     v: &[f64],
-    with_bias: bool,
+    extent: Extent,
 ) -> Result<Constraints, EvalError> {
     let mut c = Constraints::new(model);
     forward_kinematics(model, data, q, v)?;
-    constraints_into(model, data, q, v, with_bias, &mut c)?;
+    constraints_into(model, data, q, v, extent, &mut c)?;
     Ok(c)
 }
 
-/// Writes the constraint rows at (q, v) into `c` (made by `Constraints::new` for this model),
-/// reusing its storage; `data` must hold the forward kinematics of (q, v).
+/// How much of the constraints `constraints_into` computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Extent {
+    /// The position rows alone (a trial configuration, kept only if it reduces them).
+    Residual,
+    /// The position rows, G and G v.
+    Rows,
+    /// The rows and γ.
+    WithBias,
+}
+
+/// Writes the constraints at (q, v) into `c` (made by `Constraints::new` for this model) to
+/// `extent`, reusing its storage; `data` must hold the forward kinematics of (q, v).
 pub fn constraints_into(
     model: &Model,
     data: &mut Data,
     q: &[f64],
     v: &[f64],
-    with_bias: bool,
+    extent: Extent,
     c: &mut Constraints,
 ) -> Result<(), EvalError> {
+    for k in 0..model.loops.len() {
+        loop_residual(model, data, q, v, k, c)?;
+    }
+    if extent != Extent::Residual {
+        rows_after_residual(model, data, v, extent == Extent::WithBias, c);
+    }
+    Ok(())
+}
+
+/// Completes the constraints `constraints_into` left at `Extent::Residual` to `Extent::Rows`,
+/// from the same state (whose forward kinematics `data` must still hold).
+pub fn complete_rows(model: &Model, data: &mut Data, v: &[f64], c: &mut Constraints) {
+    rows_after_residual(model, data, v, false, c);
+}
+
+/// G, G v and, `with_bias`, γ, from the chains and loop points `loop_residual` left in `c`.
+fn rows_after_residual(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    with_bias: bool,
+    c: &mut Constraints,
+) {
     if with_bias {
         bias_accelerations(model, data);
     } else {
@@ -171,29 +205,27 @@ pub fn constraints_into(
         }
     }
     for k in 0..model.loops.len() {
-        loop_rows(model, data, q, v, k, with_bias, c)?;
+        loop_rows(model, data, k, with_bias, c);
     }
     c.jacobian.mul_into(v, &mut c.velocity);
-    Ok(())
 }
 
-fn loop_rows(
+/// Loop `k`'s chain at (q, v), its position rows and its closing point, into `c`.
+fn loop_residual(
     model: &Model,
     data: &Data,
     q: &[f64],
     v: &[f64],
     k: usize,
-    with_bias: bool,
     c: &mut Constraints,
 ) -> Result<(), EvalError> {
     let joint = &model.loops[k];
     let (offset, n) = (model.loop_offset(k), joint.coordinate_count());
     // A ball joint's rotation is free: only its centre is constrained, which its angles do not
-    // move; its angle rates are left out.
+    // move; its angle rates are left out. Its chain is three rotations about its centre: its
+    // end is the first frame as far as the rows are concerned (the rotation rows are not
+    // kept), so it is not evaluated and stays at the identity, at rest.
     let ball = model.loop_balls[k].is_some();
-    // A ball's chain is three rotations about its centre: its end is the first frame as far as
-    // the rows are concerned (the rotation rows are not kept), so it is not evaluated and stays
-    // at the identity, at rest.
     if !ball {
         joint.chain_motion_into(
             &q[model.nq + offset..model.nq + offset + n],
@@ -202,12 +234,9 @@ fn loop_rows(
             &mut c.chains[k],
         )?;
     }
-    let chain = &c.chains[k];
-    let base = data.world[joint.first_body] * joint.first;
-    let end = base * chain.pose;
+    let end = data.world[joint.first_body] * joint.first * c.chains[k].pose;
     let target = data.world[joint.second_body] * joint.second;
     let point = end.translation.vector;
-    let gap = target.translation.vector - point;
     let row = 6 * k;
     if ball {
         c.residual.rows_mut(row, 3).fill(0.0);
@@ -217,10 +246,24 @@ fn loop_rows(
             .rows_mut(row, 3)
             .copy_from(&(end.rotation * relative.scaled_axis()));
     }
-    c.residual.rows_mut(row + 3, 3).copy_from(&gap);
+    c.residual
+        .rows_mut(row + 3, 3)
+        .copy_from(&(target.translation.vector - point));
     c.points[k] = point;
+    Ok(())
+}
+
+/// Loop `k`'s six rows of G and, `with_bias`, of γ, at the chain and point `loop_residual` left.
+fn loop_rows(model: &Model, data: &Data, k: usize, with_bias: bool, c: &mut Constraints) {
+    let joint = &model.loops[k];
+    let offset = model.loop_offset(k);
+    let ball = model.loop_balls[k].is_some();
+    let chain = &c.chains[k];
+    let base = data.world[joint.first_body] * joint.first;
+    let point = c.points[k];
+    let row = 6 * k;
     // Rates are taken at the loop point, in fixed axes.
-    let own = if ball { 0 } else { n };
+    let own = if ball { 0 } else { joint.coordinate_count() };
     let block = &mut c.jacobian.blocks[k];
     block.values.fill(0.0);
     for &(local, column, sign) in &c.path_signs[k] {
@@ -267,11 +310,9 @@ fn loop_rows(
         }
     }
     if ball {
-        c.residual.rows_mut(row, 3).fill(0.0);
         c.jacobian.blocks[k].values.rows_mut(0, 3).fill(0.0);
         c.bias.rows_mut(row, 3).fill(0.0);
     }
-    Ok(())
 }
 
 /// Whether each constraint row constrains anything: a ball joint's three rotation rows do not.

@@ -15,7 +15,7 @@
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 use super::factored::{dense_cholesky, Envelope, Factored, RowChoice, Singular, DAMPING};
-use super::rows::{constraints, Constraints};
+use super::rows::{constraints, Constraints, Extent};
 use super::structure::Structure;
 use crate::dynamics::algorithms::{crba, Data};
 use crate::dynamics::model::Model;
@@ -474,7 +474,7 @@ pub fn project_momentum(
     v: &mut [f64],
 ) -> Result<(), EvalError> {
     let rest = vec![0.0; v.len()];
-    let c = constraints(model, data, q, &rest, false)?;
+    let c = constraints(model, data, q, &rest, Extent::Rows)?;
     let factored = Factored::new(&c.jacobian, &structure.choice);
     let Ok(damped) = factored.damped(DAMPING) else {
         return Ok(());

@@ -18,7 +18,7 @@ use super::basis::decompose;
 use super::factored::{row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
-use super::rows::{active_rows, constraints, Constraints};
+use super::rows::{active_rows, constraints, Constraints, Extent};
 use crate::dynamics::algorithms::{crba, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -99,7 +99,7 @@ impl Structure {
     /// The structure of the loops at a closed configuration q.
     pub fn decide(model: &Model, data: &mut Data, q: &[f64]) -> Result<Structure, StructureError> {
         let rest = vec![0.0; model.velocities()];
-        let c = constraints(model, data, q, &rest, false)?;
+        let c = constraints(model, data, q, &rest, Extent::Rows)?;
         let length = characteristic_length(model, data, &c);
         let mut structure = Structure::at(model, &c, length);
         structure.choose_free(&c.jacobian);
@@ -146,7 +146,7 @@ impl Structure {
         q: &[f64],
     ) -> Result<Option<usize>, EvalError> {
         let rest = vec![0.0; model.velocities()];
-        let c = constraints(model, data, q, &rest, false)?;
+        let c = constraints(model, data, q, &rest, Extent::Rows)?;
         let dense = c.jacobian.dense();
         let allowed = decompose(&dense).null_space;
         if allowed.ncols() == 0 {
@@ -165,7 +165,7 @@ impl Structure {
             let mut nearby = q.to_vec();
             model.retract(&mut nearby, &step);
             close_configuration(model, data, &mut nearby)?;
-            let there = constraints(model, data, &nearby, &rest, false)?;
+            let there = constraints(model, data, &nearby, &rest, Extent::Rows)?;
             let active = active_rows(model);
             let rows = best_rows(
                 &dimensionless(&there.jacobian.dense(), self.length),
@@ -438,7 +438,7 @@ fn massless_count(
     structure: &Structure,
 ) -> Result<usize, EvalError> {
     let rest = vec![0.0; model.velocities()];
-    let c = constraints(model, data, q, &rest, false)?;
+    let c = constraints(model, data, q, &rest, Extent::Rows)?;
     let factored = Factored::new(&c.jacobian, &structure.choice);
     let allowed = factored.dense_null_space();
     if allowed.ncols() == 0 {
