@@ -226,21 +226,50 @@ pub type Spanned<'input> = (usize, Tok<'input>, usize);
 
 /// Lexes a whole file. Lexical errors are returned as diagnostics beside the good tokens.
 pub fn lex(file: FileId, text: &str) -> (Vec<Spanned<'_>>, Vec<Diagnostic>) {
-    let mut tokens = Vec::with_capacity(text.len() / 4);
-    let mut errors = Vec::new();
-    let mut lexer = Tok::lexer(text);
-    while let Some(result) = lexer.next() {
-        let range = lexer.span();
-        match result {
-            Ok(token) => tokens.push((range.start, token, range.end)),
-            Err(error) => errors.push(lex_diagnostic(
-                error,
-                Span::new(file, range.start, range.end),
-                lexer.slice(),
-            )),
+    let mut tokens = Tokens::new(file, text);
+    let good = tokens
+        .by_ref()
+        .map(|token| token.expect("lex errors are set aside"))
+        .collect();
+    (good, tokens.errors)
+}
+
+/// The good tokens of a file one at a time, for the parser to read as they come (a file's
+/// tokens held all at once take 40 bytes each, about five times the text); lexical errors are
+/// set aside in `errors`. Never yields an `Err`: the item type is the one the parser reads.
+pub struct Tokens<'input> {
+    file: FileId,
+    lexer: logos::Lexer<'input, Tok<'input>>,
+    pub errors: Vec<Diagnostic>,
+}
+
+impl<'input> Tokens<'input> {
+    pub fn new(file: FileId, text: &'input str) -> Tokens<'input> {
+        Tokens {
+            file,
+            lexer: Tok::lexer(text),
+            errors: Vec::new(),
         }
     }
-    (tokens, errors)
+}
+
+impl<'input> Iterator for Tokens<'input> {
+    type Item = Result<Spanned<'input>, LexError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            let result = self.lexer.next()?;
+            let range = self.lexer.span();
+            match result {
+                Ok(token) => return Some(Ok((range.start, token, range.end))),
+                Err(error) => self.errors.push(lex_diagnostic(
+                    error,
+                    Span::new(self.file, range.start, range.end),
+                    self.lexer.slice(),
+                )),
+            }
+        }
+    }
 }
 
 fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {

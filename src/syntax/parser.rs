@@ -6,7 +6,7 @@ use lalrpop_util::ParseError;
 use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 use crate::syntax::ast::Program;
-use crate::syntax::lexer::{lex, LexError, Spanned, Tok};
+use crate::syntax::lexer::{lex, LexError, Spanned, Tok, Tokens};
 
 /// The parser LALRPOP generated from `grammar/lsd.lalrpop`, checked in (see `build.rs`).
 #[rustfmt::skip]
@@ -18,14 +18,17 @@ mod grammar {
 /// Parses one file. The program is returned even when there are errors: declarations that could
 /// not be read become `DeclKind::Error`.
 pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
-    let (tokens, mut diagnostics) = lex(file, text);
+    let mut tokens = Tokens::new(file, text);
     let mut recovered = Vec::new();
     let parser = grammar::ProgramParser::new();
-    let result = parser.parse(
-        file,
-        &mut recovered,
-        tokens.iter().copied().map(Ok::<_, LexError>),
-    );
+    let result = parser.parse(file, &mut recovered, &mut tokens);
+    let mut diagnostics = tokens.errors;
+    let result = match result {
+        Ok(program) if recovered.is_empty() => return (program, diagnostics),
+        other => other,
+    };
+    // Describing a syntax error looks at the tokens before it: lexed again, only then.
+    let (tokens, _) = lex(file, text);
     let context = ErrorContext {
         file,
         tokens: &tokens,
