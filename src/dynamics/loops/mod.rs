@@ -16,7 +16,7 @@ pub mod solve;
 pub mod structure;
 
 pub use basis::{decompose, decompose_with, Decomposition};
-pub use factored::{Damped, Envelope, Factored, RowChoice, DAMPING};
+pub use factored::{Damped, Envelope, Factored, RowChoice, Singular, DAMPING};
 pub use jacobian::ConstraintJacobian;
 pub use project::{
     close_configuration, project, project_from, Projection, ProjectionScratch, Residuals,
