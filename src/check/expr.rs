@@ -13,7 +13,9 @@ impl<'w> Checker<'w> {
     pub(super) fn expr(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         match &expr.kind {
             ExprKind::Name(ident) => self.name(ident, ctx),
-            ExprKind::Qualified { package, name } => self.qualified(package, name, expr.span, ctx),
+            ExprKind::Qualified(qualified) => {
+                self.qualified(&qualified.package, &qualified.name, expr.span, ctx)
+            }
             ExprKind::Field { target, field } => {
                 let ty = self.expr(target, ctx);
                 self.field(ty, field)

@@ -14,7 +14,7 @@ use std::collections::HashMap;
 use crate::diag::{Diagnostic, Diagnostics};
 use crate::load::{ModuleId, Workspace};
 use crate::source::Span;
-use crate::syntax::ast::{Binding, Decl, DeclKind, Expr, Ident, Name, Param};
+use crate::syntax::ast::{ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, Param};
 pub use checker::{Checked, Definition};
 use checker::{Checker, Ctx, Local};
 use scope::Scope;
@@ -107,12 +107,13 @@ impl<'w> Checker<'w> {
         match &decl.kind {
             DeclKind::Let(bindings) => self.let_decl(bindings, scope),
             DeclKind::Define { name, params, body } => self.define(name, params, body, scope),
-            DeclKind::Join {
-                first,
-                second,
-                link,
-                name,
-            } => {
+            DeclKind::Join(join) => {
+                let JoinDecl {
+                    first,
+                    second,
+                    link,
+                    name,
+                } = &**join;
                 let mut ctx = self.ctx(scope);
                 for (member, position) in [(first, "first"), (second, "second")] {
                     let ty = self.expr(member, &mut ctx);
@@ -153,11 +154,12 @@ impl<'w> Checker<'w> {
                 }
             }
             DeclKind::Simulate(fields) => self.simulate(fields, decl.span, scope),
-            DeclKind::Apply {
-                effort,
-                target,
-                reaction,
-            } => {
+            DeclKind::Apply(apply) => {
+                let ApplyDecl {
+                    effort,
+                    target,
+                    reaction,
+                } = &**apply;
                 let mut ctx = self.ctx(scope);
                 let effort_ty = self.expr(effort, &mut ctx);
                 for target in target.iter().chain(reaction) {
@@ -172,7 +174,8 @@ impl<'w> Checker<'w> {
                 self.decls(decls, package);
                 self.declare(scope, name, Ty::Package(package));
             }
-            DeclKind::Import { alias, .. } => {
+            DeclKind::Import(import) => {
+                let alias = &import.alias;
                 let Some(&module) = self.workspace.imports.get(&decl.span) else {
                     return;
                 };
@@ -525,6 +528,13 @@ fn strip_primes(expr: &Expr) -> (&Expr, usize) {
 
 /// Names a declaration introduces in its scope, with the span of the name and of its whole
 /// definition.
+/// An optional name a declaration introduces, with the declaration's span.
+fn named(name: &Option<Ident>, decl: Span) -> Vec<(Name, Span, Span)> {
+    name.iter()
+        .map(|name| (name.name.clone(), name.span, decl))
+        .collect()
+}
+
 fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
     match &decl.kind {
         DeclKind::Let(bindings) => bindings
@@ -540,12 +550,8 @@ fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
         DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => {
             vec![(name.name.clone(), name.span, decl.span)]
         }
-        DeclKind::Import {
-            alias: Some(alias), ..
-        } => vec![(alias.name.clone(), alias.span, decl.span)],
-        DeclKind::Join {
-            name: Some(name), ..
-        } => vec![(name.name.clone(), name.span, decl.span)],
+        DeclKind::Import(import) => named(&import.alias, decl.span),
+        DeclKind::Join(join) => named(&join.name, decl.span),
         _ => Vec::new(),
     }
 }

@@ -14,7 +14,8 @@ use crate::diag::Diagnostic;
 use crate::load::ModuleId;
 use crate::source::Span;
 use crate::syntax::ast::{
-    Arg, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, Name,
+    ApplyDecl, Arg, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit,
+    Ident, JoinDecl, Name,
 };
 
 type Result<T> = std::result::Result<T, Diagnostic>;
@@ -48,12 +49,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         match &decl.kind {
             // Definitions are evaluated when first used (see `global`).
             DeclKind::Let(_) | DeclKind::Define { .. } => Ok(()),
-            DeclKind::Join {
-                first,
-                second,
-                link,
-                name,
-            } => {
+            DeclKind::Join(join) => {
+                let JoinDecl {
+                    first,
+                    second,
+                    link,
+                    name,
+                } = &**join;
                 let first = self
                     .expr(first, &mut locals)
                     .and_then(|v| as_frame(v, first.span))?;
@@ -150,11 +152,12 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
-            DeclKind::Apply {
-                effort,
-                target,
-                reaction,
-            } => {
+            DeclKind::Apply(apply) => {
+                let ApplyDecl {
+                    effort,
+                    target,
+                    reaction,
+                } = &**apply;
                 let effort = match self.expr(effort, &mut locals)? {
                     Value::Force(id) | Value::Torque(id) => id,
                     _ => return Err(internal("apply without an effort")),
@@ -286,9 +289,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let target = self.resolution(ident.span)?;
                 self.lookup(ident, target, locals)?
             }
-            ExprKind::Qualified { name, .. } => {
+            ExprKind::Qualified(qualified) => {
                 let target = self.resolution(expr.span)?;
-                self.lookup(name, target, locals)?
+                self.lookup(&qualified.name, target, locals)?
             }
             ExprKind::Field { target, field } => {
                 let value = self.expr(target, locals)?;

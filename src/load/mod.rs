@@ -277,8 +277,8 @@ impl Loader {
     fn follow_imports(&mut self, importer: ModuleId, decls: &[Decl]) {
         for decl in decls {
             match &decl.kind {
-                DeclKind::Import { target, .. } => {
-                    if let Some(id) = self.resolve_import(importer, decl.span, target) {
+                DeclKind::Import(import) => {
+                    if let Some(id) = self.resolve_import(importer, decl.span, &import.target) {
                         self.workspace.imports.insert(decl.span, id);
                     }
                 }

@@ -1,6 +1,6 @@
-// grammar stamp: 8f276b39ca5efd6d (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 27dfb873e9decec1 (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: 402bb2aa15f5877918a1d5333edaa42fdeb25e79b8193419f2171143a71d7955
+// sha3: e0ba9860e3c8fb7182f94de073d192ad9166ccc8875d76e4c158ceeb214ad7d3
 // features: 
 use std::rc::Rc;
 use lalrpop_util::ErrorRecovery;
@@ -6653,7 +6653,7 @@ fn __action11<
     (_, body, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Define { name, params, body }
+    DeclKind::Define { name, params, body: Box::new(body) }
 }
 
 #[allow(unused_variables)]
@@ -6673,7 +6673,7 @@ fn __action12<
     (_, name, _): (usize, Option<Ident>, usize),
 ) -> DeclKind
 {
-    DeclKind::Join { first, second, link, name }
+    DeclKind::Join(Box::new(JoinDecl { first, second, link, name }))
 }
 
 #[allow(unused_variables)]
@@ -6736,7 +6736,7 @@ fn __action16<
     (_, target, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Apply { effort, target: Some(target), reaction: None }
+    DeclKind::Apply(Box::new(ApplyDecl { effort, target: Some(target), reaction: None }))
 }
 
 #[allow(unused_variables)]
@@ -6755,7 +6755,7 @@ fn __action17<
     (_, second, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Apply { effort, target: Some(second), reaction: Some(first) }
+    DeclKind::Apply(Box::new(ApplyDecl { effort, target: Some(second), reaction: Some(first) }))
 }
 
 #[allow(unused_variables)]
@@ -6770,7 +6770,7 @@ fn __action18<
     (_, effort, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Apply { effort, target: None, reaction: None }
+    DeclKind::Apply(Box::new(ApplyDecl { effort, target: None, reaction: None }))
 }
 
 #[allow(unused_variables)]
@@ -6804,7 +6804,7 @@ fn __action20<
     (_, alias, _): (usize, Option<Ident>, usize),
 ) -> DeclKind
 {
-    DeclKind::Import { target, alias }
+    DeclKind::Import(Box::new(ImportDecl { target, alias }))
 }
 
 #[allow(unused_variables)]
@@ -7362,7 +7362,7 @@ fn __action55<
     (_, name, _): (usize, Ident, usize),
 ) -> ExprKind
 {
-    ExprKind::Qualified { package, name }
+    ExprKind::Qualified(Box::new(QualifiedName { package, name }))
 }
 
 #[allow(unused_variables)]
@@ -7437,7 +7437,7 @@ fn __action60<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Call { callee, args }
+    ExprKind::Call { callee: Box::new(callee), args }
 }
 
 #[allow(unused_variables)]
