@@ -97,6 +97,9 @@ pub struct Factored {
     normal: Envelope,
     /// Per loop, its kept rows (scratch of `refill`).
     by_loop: Vec<Vec<usize>>,
+    /// Per column of G, where it stands in the kept rows: (kept row, index in its entries). The
+    /// same for every state as long as the same rows are kept.
+    by_column: Vec<Vec<(usize, usize)>>,
     /// `dense_null_space`, once asked for.
     null_space: OnceCell<DMatrix<f64>>,
 }
@@ -124,6 +127,7 @@ impl Factored {
             firm: 0,
             normal: Envelope::default(),
             by_loop: Vec::new(),
+            by_column: Vec::new(),
             null_space: OnceCell::new(),
         };
         factored.refill(jacobian, choice);
@@ -133,6 +137,7 @@ impl Factored {
     /// The kept rows of another G (or another choice), in this factorisation's storage: once it
     /// has seen rows of that size, nothing is allocated.
     pub fn refill(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
+        let same_rows = self.indices == choice.rows && self.columns == jacobian.ncols();
         self.rows.resize_with(choice.rows.len(), Vec::new);
         for ((row, &r), &scale) in self.rows.iter_mut().zip(&choice.rows).zip(&choice.scales) {
             // Every column of the row's loop, zeros included: the row's entries are then at the
@@ -145,12 +150,26 @@ impl Factored {
             );
         }
         self.columns = jacobian.ncols();
+        if !same_rows {
+            self.index_columns();
+        }
         self.indices.clone_from(&choice.rows);
         self.scales.clone_from(&choice.scales);
         self.firm = choice.firm();
         self.normal
             .fill_normal(jacobian, &self.rows, &self.indices, &mut self.by_loop);
         self.null_space = OnceCell::new();
+    }
+
+    /// `by_column` for the rows now held.
+    fn index_columns(&mut self) {
+        self.by_column.iter_mut().for_each(Vec::clear);
+        self.by_column.resize_with(self.columns, Vec::new);
+        for (k, row) in self.rows.iter().enumerate() {
+            for (position, &(column, _)) in row.iter().enumerate() {
+                self.by_column[column].push((k, position));
+            }
+        }
     }
 
     /// Whether these are the rows of `choice`.
@@ -205,11 +224,10 @@ impl Factored {
     /// Column `column` of Gₛ into `out` (resized to the kept rows).
     fn column_into(&self, column: usize, out: &mut Vec<f64>) {
         out.clear();
-        out.extend(self.rows.iter().map(|row| {
-            row.iter()
-                .find(|&&(c, _)| c == column)
-                .map_or(0.0, |&(_, value)| value)
-        }));
+        out.resize(self.rows.len(), 0.0);
+        for &(k, position) in &self.by_column[column] {
+            out[k] = self.rows[k][position].1;
+        }
     }
 
     /// Gₛ x into `out` (resized to the kept rows).
@@ -290,9 +308,7 @@ impl Factored {
     /// Whether a kept row has `column` among the columns it is stored over (the loops' columns
     /// are found once per model, so a column outside them never moves with a kept row).
     pub fn touches(&self, column: usize) -> bool {
-        self.rows
-            .iter()
-            .any(|row| row.iter().any(|&(c, _)| c == column))
+        self.by_column.get(column).is_some_and(|at| !at.is_empty())
     }
 
     /// An orthonormal basis of the motions the kept rows allow, from a dense QR factorisation
