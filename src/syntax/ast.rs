@@ -220,7 +220,9 @@ pub enum ExprKind {
     Int(i64),
     Float(f64),
     /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
-    Vector(Vec<Expr>),
+    /// Boxed as a slice: a literal's elements take no room beyond their own (its list grew by
+    /// doubling while parsed).
+    Vector(Box<[Expr]>),
     Call {
         callee: Box<Callee>,
         args: Vec<Arg>,

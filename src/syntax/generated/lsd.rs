@@ -1,6 +1,6 @@
-// grammar stamp: 27dfb873e9decec1 (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 7e7d91a07b08ab6c (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: e0ba9860e3c8fb7182f94de073d192ad9166ccc8875d76e4c158ceeb214ad7d3
+// sha3: 7ab6175e6b1d733fe94612496a7a34297a912461c7de4be2c3dcdfd8387c141d
 // features: 
 use std::rc::Rc;
 use lalrpop_util::ErrorRecovery;
@@ -7420,7 +7420,7 @@ fn __action59<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Vector(__0)
+    ExprKind::Vector(__0.into_boxed_slice())
 }
 
 #[allow(unused_variables)]
