@@ -95,14 +95,19 @@ impl MechanicalSystem<'_> {
         Ok(mass)
     }
 
-    /// The kept constraint rows at the start of a step, factored (None for a tree).
-    fn allowed_motions(&mut self, q: &[f64]) -> Result<Option<Factored>, SystemError> {
+    /// The motions the kept constraint rows allow at the start of a step, and how the step
+    /// spans them (None for a tree).
+    fn allowed_motions(&mut self, q: &[f64]) -> Result<Option<StepStart>, SystemError> {
         if !self.model.has_loops() {
             return Ok(None);
         }
         self.ensure_structure(q)?;
         let g = self.closure(q)?.1;
-        Ok(Some(Factored::new(&g, &self.loops.structure.choice)))
+        let start = Factored::new(&g, &self.loops.structure.choice);
+        let basis = Basis::at(&start);
+        let allowed = allowed_by(&start, basis, &self.loops.structure.free)
+            .map_err(|e| self.loop_error(&e))?;
+        Ok(Some(StepStart { basis, allowed }))
     }
 
     /// The Newton correction of q1 for the momentum residual `rhs` (scaled by h), and how far
@@ -112,8 +117,7 @@ impl MechanicalSystem<'_> {
     fn correction(
         &mut self,
         mass: &DMatrix<f64>,
-        start: &Option<Factored>,
-        basis: Basis,
+        start: &Option<StepStart>,
         q1: &[f64],
         rhs: &DVector<f64>,
     ) -> Result<(DVector<f64>, f64), SystemError> {
@@ -131,7 +135,7 @@ impl MechanicalSystem<'_> {
             false => end.kept(&-&closure),
         };
         let free = &self.loops.structure.free;
-        let correction = constrained_solve(mass, [start, &end], basis.of(free), rhs, &rows)
+        let correction = constrained_solve(mass, &end, Some(start), start.basis, free, rhs, &rows)
             .map_err(|e| self.loop_error(&e))?;
         Ok((correction, open))
     }
@@ -152,7 +156,7 @@ impl MechanicalSystem<'_> {
         let end = Factored::new(&g, &self.loops.structure.choice);
         let rows = DVector::zeros(self.loops.structure.choice.rows.len());
         let free = &self.loops.structure.free;
-        let velocity = constrained_solve(&mass, [&end, &end], basis.of(free), p, &rows)
+        let velocity = constrained_solve(&mass, &end, None, basis, free, p, &rows)
             .map_err(|e| self.loop_error(&e))?;
         Ok((velocity, mass))
     }
@@ -194,46 +198,63 @@ impl Basis {
             false => Basis::Free,
         }
     }
+}
 
-    /// The free coordinates to span the allowed motions with, or None for an orthonormal basis.
-    fn of(self, free: &[usize]) -> Option<&[usize]> {
-        (self == Basis::Free).then_some(free)
-    }
+/// What a step keeps of its start: the basis it spans the allowed motions with, and those
+/// motions there (where the constraint impulse acts), found once for all its iterations.
+struct StepStart {
+    basis: Basis,
+    allowed: DMatrix<f64>,
+}
+
+fn singular(lost: Singular) -> LoopError {
+    LoopError::Singular { row: lost.row }
+}
+
+/// The motions `factored`'s rows allow, spanned as `basis` says.
+fn allowed_by(
+    factored: &Factored,
+    basis: Basis,
+    free: &[usize],
+) -> Result<DMatrix<f64>, LoopError> {
+    Ok(match basis {
+        Basis::Free => factored
+            .damped(DAMPING)
+            .map_err(singular)?
+            .allowed_motions(free),
+        Basis::Orthonormal => factored.dense_null_space().clone(),
+    })
 }
 
 /// Solves `a x − g_startᵀ w = f` (for some w) with `g_end x = c` on the kept rows by the
 /// null-space method: x is the minimum-norm solution of the constraints plus a motion they
-/// allow, chosen so that the first equation holds on the motions the start's constraints allow,
-/// spanned by the free coordinates' allowed motions (`free`) or, when None, by an orthonormal
-/// basis. The small system over them is solved in the least-squares sense, so motions without
-/// mass cost nothing special.
+/// allow, chosen so that the first equation holds on the motions the start's constraints allow
+/// (`start`; None when the start is the end). The allowed motions are spanned as `basis` says.
+/// The small system over them is solved in the least-squares sense, so motions without mass
+/// cost nothing special.
 fn constrained_solve(
     a: &DMatrix<f64>,
-    [start, end]: [&Factored; 2],
-    free: Option<&[usize]>,
+    end: &Factored,
+    start: Option<&StepStart>,
+    basis: Basis,
+    free: &[usize],
     f: &DVector<f64>,
     c: &DVector<f64>,
 ) -> Result<DVector<f64>, LoopError> {
-    let singular = |lost: Singular| LoopError::Singular { row: lost.row };
-    let (particular, allowed_end, allowed_start) = match free {
-        Some(free) => {
-            let end_factor = end.damped(DAMPING).map_err(singular)?;
-            let start_factor = start.damped(DAMPING).map_err(singular)?;
-            (
-                end_factor.least_norm(c),
-                end_factor.allowed_motions(free),
-                start_factor.allowed_motions(free),
-            )
+    let (particular, allowed_end) = match basis {
+        Basis::Free => {
+            let factor = end.damped(DAMPING).map_err(singular)?;
+            (factor.least_norm(c), factor.allowed_motions(free))
         }
-        None => (
+        Basis::Orthonormal => (
             end.least_norm(c).map_err(singular)?,
             end.dense_null_space().clone(),
-            start.dense_null_space().clone(),
         ),
     };
     if allowed_end.ncols() == 0 {
         return Ok(particular);
     }
+    let allowed_start = start.map_or(&allowed_end, |start| &start.allowed);
     let reduced = allowed_start.transpose() * a * &allowed_end;
     let rhs = allowed_start.transpose() * (f - a * &particular);
     let z = loops::decompose_with(&reduced, 1e-12).pseudo_inverse * rhs;
@@ -290,7 +311,7 @@ pub fn integrate(
         let start = system
             .allowed_motions(q.as_slice())
             .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
-        let basis = start.as_ref().map_or(Basis::Free, Basis::at);
+        let basis = start.as_ref().map_or(Basis::Free, |start| start.basis);
         let mut q1 = &q + &v * step;
         let mut converged = false;
         let mut previous = f64::INFINITY;
@@ -305,7 +326,7 @@ pub fn integrate(
             // Newton with the leading part of the Jacobian, M/h (scaled by h): converges quickly
             // for small h.
             let (correction, open) = system
-                .correction(&mass_mid, &start, basis, q1.as_slice(), &(-momentum * step))
+                .correction(&mass_mid, &start, q1.as_slice(), &(-momentum * step))
                 .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
             q1 += &correction;
             let (size, scale) = (correction.amax(), 1.0 + q1.amax());
