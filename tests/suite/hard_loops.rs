@@ -10,6 +10,7 @@
 //! Oracles: conservation of energy, RK4's order of convergence against a tight dopri5 run,
 //! standing still when nothing can move, and the same decisions in millimetres as in metres.
 
+use crate::common::max_difference;
 use crate::common::programs::{column, constraints, prepared, simulated};
 use lsdc::dynamics::loops::Stabilisation;
 use lsdc::simulate::prepare::{Integrator, Prepared, Settings};
@@ -318,8 +319,7 @@ fn largest_difference(a: &Simulation, b: &Simulation) -> f64 {
     assert_eq!(a.samples.len(), b.samples.len());
     let pairs = a.samples.iter().zip(&b.samples);
     pairs
-        .flat_map(|(x, y)| x.coordinates.iter().zip(&y.coordinates))
-        .map(|(x, y)| (x - y).abs())
+        .map(|(x, y)| max_difference(&x.coordinates, &y.coordinates))
         .fold(0.0, f64::max)
 }
 

@@ -3,6 +3,8 @@
 
 use std::f64::consts::PI;
 
+use crate::common::max_difference;
+
 use lsdc::integrate::{
     integrate, CallbackError, Failure, IntegrationError, Method, OdeSystem, Settings, Stats,
 };
@@ -66,13 +68,6 @@ fn solve(
         Ok((y, stats)) => Ok((y, stats, observed)),
         Err(error) => Err((error, observed)),
     }
-}
-
-fn max_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
 }
 
 fn linspace(start: f64, end: f64, count: usize) -> Vec<f64> {
