@@ -81,24 +81,81 @@ pub const PROJECTION_DAMPING: f64 = 1e-6;
 /// rows' largest is at round-off (`Damped::reproduction`).
 pub const KEEP_TOLERANCE: f64 = 1e-12;
 
-/// A kept row over every column of its loop (zeros included), as (column, value) in increasing
-/// column order.
-type SparseRow = Vec<(usize, f64)>;
+/// The kept rows of G, compressed: row k's entries are `starts[k]..starts[k + 1]` of `columns`
+/// and `values`, over every column of its loop (zeros included) in increasing column order. The
+/// columns and where each value is read from are fixed as long as the same rows are kept; an
+/// evaluation only gathers the values.
+#[derive(Default)]
+struct KeptRows {
+    starts: Vec<usize>,
+    columns: Vec<usize>,
+    values: Vec<f64>,
+    /// Per entry, its loop block and its index in that block's values (column-major, 6 rows).
+    sources: Vec<(usize, usize)>,
+}
+
+impl KeptRows {
+    /// The structure of the rows `indices` (among the 6 per loop) of `jacobian`.
+    fn lay_out(&mut self, jacobian: &ConstraintJacobian, indices: &[usize]) {
+        self.starts.clear();
+        self.columns.clear();
+        self.sources.clear();
+        self.starts.push(0);
+        for &r in indices {
+            let (block, row) = (r / 6, r % 6);
+            let columns = &jacobian.blocks[block].columns;
+            self.columns.extend_from_slice(columns);
+            self.sources
+                .extend((0..columns.len()).map(|local| (block, 6 * local + row)));
+            self.starts.push(self.columns.len());
+        }
+        self.values.resize(self.columns.len(), 0.0);
+    }
+
+    /// The values of `jacobian`'s rows, each times its scale (`scales`, one per row).
+    fn gather(&mut self, jacobian: &ConstraintJacobian, scales: &[f64]) {
+        for (k, &scale) in scales.iter().enumerate() {
+            let range = self.starts[k]..self.starts[k + 1];
+            for (value, &(block, at)) in self.values[range.clone()]
+                .iter_mut()
+                .zip(&self.sources[range])
+            {
+                *value = jacobian.blocks[block].values.as_slice()[at] * scale;
+            }
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.starts.len().saturating_sub(1)
+    }
+
+    /// Row k as (column, value) pairs.
+    fn row(&self, k: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let range = self.starts[k]..self.starts[k + 1];
+        self.columns[range.clone()]
+            .iter()
+            .copied()
+            .zip(self.values[range].iter().copied())
+    }
+
+    fn iter(&self) -> impl Iterator<Item = impl Iterator<Item = (usize, f64)> + '_> + '_ {
+        (0..self.len()).map(|k| self.row(k))
+    }
+}
 
 /// The kept rows of G at one state, dimensionless, and their normal matrix.
 pub struct Factored {
-    rows: Vec<SparseRow>,
+    rows: KeptRows,
     columns: usize,
     /// Indices among the 6 per loop, and the factors that made each row dimensionless.
     indices: Vec<usize>,
     scales: Vec<f64>,
     firm: usize,
-    /// A = GₛGₛᵀ, undamped.
+    /// A = GₛGₛᵀ, undamped, and the products that fill it.
     normal: Envelope,
-    /// Per loop, its kept rows (scratch of `refill`).
-    by_loop: Vec<Vec<usize>>,
-    /// Per column of G, where it stands in the kept rows: (kept row, index in its entries). The
-    /// same for every state as long as the same rows are kept.
+    plan: NormalPlan,
+    /// Per column of G, the entries of the kept rows over it: (kept row, entry). The same for
+    /// every state as long as the same rows are kept.
     by_column: Vec<Vec<(usize, usize)>>,
     /// `dense_null_space`, once asked for.
     null_space: OnceCell<DMatrix<f64>>,
@@ -120,54 +177,52 @@ pub struct Damped<'f> {
 impl Factored {
     pub fn new(jacobian: &ConstraintJacobian, choice: &RowChoice) -> Factored {
         let mut factored = Factored {
-            rows: Vec::new(),
+            rows: KeptRows::default(),
             columns: 0,
             indices: Vec::new(),
             scales: Vec::new(),
             firm: 0,
             normal: Envelope::default(),
-            by_loop: Vec::new(),
+            plan: NormalPlan::default(),
             by_column: Vec::new(),
             null_space: OnceCell::new(),
         };
+        factored.lay_out(jacobian, choice);
         factored.refill(jacobian, choice);
         factored
     }
 
     /// The kept rows of another G (or another choice), in this factorisation's storage: once it
-    /// has seen rows of that size, nothing is allocated.
+    /// has seen rows of that size, nothing is allocated. The rows' layout, where each column
+    /// stands in them and the products filling A are found again only when the choice changes.
     pub fn refill(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
-        let same_rows = self.indices == choice.rows && self.columns == jacobian.ncols();
-        self.rows.resize_with(choice.rows.len(), Vec::new);
-        for ((row, &r), &scale) in self.rows.iter_mut().zip(&choice.rows).zip(&choice.scales) {
-            // Every column of the row's loop, zeros included: the row's entries are then at the
-            // loop block's local positions, where the normal matrix reads them.
-            row.clear();
-            row.extend(
-                jacobian
-                    .row(r)
-                    .map(|(column, value)| (column, value * scale)),
-            );
+        if self.indices != choice.rows || self.columns != jacobian.ncols() {
+            self.lay_out(jacobian, choice);
         }
-        self.columns = jacobian.ncols();
-        if !same_rows {
-            self.index_columns();
-        }
-        self.indices.clone_from(&choice.rows);
         self.scales.clone_from(&choice.scales);
         self.firm = choice.firm();
-        self.normal
-            .fill_normal(jacobian, &self.rows, &self.indices, &mut self.by_loop);
+        self.rows.gather(jacobian, &self.scales);
+        self.plan.fill(&self.rows.values, &mut self.normal);
         self.null_space = OnceCell::new();
+    }
+
+    /// The layout of `choice`'s rows of `jacobian`, filled by `refill`.
+    fn lay_out(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
+        self.indices.clone_from(&choice.rows);
+        self.columns = jacobian.ncols();
+        self.rows.lay_out(jacobian, &self.indices);
+        self.index_columns();
+        self.plan
+            .lay_out(jacobian, &self.rows, &self.indices, &mut self.normal);
     }
 
     /// `by_column` for the rows now held.
     fn index_columns(&mut self) {
         self.by_column.iter_mut().for_each(Vec::clear);
         self.by_column.resize_with(self.columns, Vec::new);
-        for (k, row) in self.rows.iter().enumerate() {
-            for (position, &(column, _)) in row.iter().enumerate() {
-                self.by_column[column].push((k, position));
+        for k in 0..self.rows.len() {
+            for entry in self.rows.starts[k]..self.rows.starts[k + 1] {
+                self.by_column[self.rows.columns[entry]].push((k, entry));
             }
         }
     }
@@ -200,7 +255,7 @@ impl Factored {
     }
 
     pub fn is_empty(&self) -> bool {
-        self.rows.is_empty()
+        self.rows.len() == 0
     }
 
     /// The kept rows of a vector of rows (6 per loop), made dimensionless.
@@ -225,8 +280,8 @@ impl Factored {
     fn column_into(&self, column: usize, out: &mut Vec<f64>) {
         out.clear();
         out.resize(self.rows.len(), 0.0);
-        for &(k, position) in &self.by_column[column] {
-            out[k] = self.rows[k][position].1;
+        for &(k, entry) in &self.by_column[column] {
+            out[k] = self.rows.values[entry];
         }
     }
 
@@ -236,7 +291,7 @@ impl Factored {
         out.extend(
             self.rows
                 .iter()
-                .map(|row| row.iter().map(|&(c, value)| value * x[c]).sum::<f64>()),
+                .map(|row| row.map(|(c, value)| value * x[c]).sum::<f64>()),
         );
     }
 
@@ -251,7 +306,7 @@ impl Factored {
     pub fn transpose_times_into(&self, y: &[f64], out: &mut [f64]) {
         out.fill(0.0);
         for (row, &weight) in self.rows.iter().zip(y) {
-            for &(c, value) in row {
+            for (c, value) in row {
                 out[c] += value * weight;
             }
         }
@@ -326,7 +381,7 @@ impl Factored {
         }
         let mut transposed = DMatrix::zeros(n, r);
         for (k, row) in self.rows.iter().enumerate() {
-            for &(c, value) in row {
+            for (c, value) in row {
                 transposed[(c, k)] = value;
             }
         }
@@ -407,7 +462,7 @@ impl Damped<'_> {
         coefficients: &mut Vec<f64>,
     ) -> f64 {
         let factored = self.factored;
-        let largest = (factored.rows.iter().flatten()).fold(0.0_f64, |m, (_, v)| m.max(v.abs()));
+        let largest = (factored.rows.values.iter()).fold(0.0_f64, |m, v| m.max(v.abs()));
         let mut smallest = 1.0_f64;
         for r in (0..jacobian.nrows()).filter(|r| active[*r] && !factored.indices.contains(r)) {
             let scale = row_scale(r, length);
@@ -524,46 +579,9 @@ pub struct Envelope {
 }
 
 impl Envelope {
-    /// A = RRᵀ for the kept rows R of G (`rows`, each over its loop's columns, G's rows
-    /// `indices` among the 6 per loop), in this envelope's storage; `by_loop` is scratch (the
-    /// kept rows of each loop). Each entry is one dot product over the columns its two loops
-    /// share, summed in increasing column order; row k's envelope starts at the first kept row
-    /// of a loop sharing columns with its own.
-    fn fill_normal(
-        &mut self,
-        jacobian: &ConstraintJacobian,
-        rows: &[SparseRow],
-        indices: &[usize],
-        by_loop: &mut Vec<Vec<usize>>,
-    ) {
-        by_loop.resize_with(jacobian.blocks.len(), Vec::new);
-        by_loop.iter_mut().for_each(Vec::clear);
-        for (k, &row) in indices.iter().enumerate() {
-            by_loop[row / 6].push(k);
-        }
-        let neighbours = |k: usize| jacobian.neighbours[indices[k] / 6].iter();
-        self.first.clear();
-        self.first.extend((0..indices.len()).map(|k| {
-            neighbours(k)
-                .filter_map(|n| by_loop[n.other].first().copied())
-                .fold(k, usize::min)
-        }));
-        self.values.resize_with(indices.len(), Vec::new);
-        for (k, row) in rows.iter().enumerate() {
-            let values = &mut self.values[k];
-            values.clear();
-            values.resize(k - self.first[k] + 1, 0.0);
-            for neighbour in neighbours(k) {
-                for &l in by_loop[neighbour.other].iter().filter(|&&l| l <= k) {
-                    let other = &rows[l];
-                    let mut sum = 0.0;
-                    for &(here, there) in &neighbour.shared {
-                        sum += row[here].1 * other[there].1;
-                    }
-                    values[l - self.first[k]] = sum;
-                }
-            }
-        }
+    /// Row k's entry in column l (within its envelope).
+    fn index(&self, k: usize, l: usize) -> usize {
+        l - self.first[k]
     }
 
     /// y ← L⁻¹ y for the factor L held.
@@ -623,6 +641,69 @@ impl Envelope {
             for (target, entry) in y[self.first[k]..k].iter_mut().zip(left) {
                 *target -= entry * value;
             }
+        }
+    }
+}
+
+/// How A = RRᵀ is filled for the kept rows R (`KeptRows`): per entry of A's envelope whose two
+/// rows share columns, the pairs of R's entries over those columns, in increasing column order.
+/// Row k's envelope starts at the first kept row of a loop sharing columns with its own. Laid
+/// out once per choice of rows; each state then costs one dot product per entry.
+#[derive(Default)]
+struct NormalPlan {
+    /// (row of A, index in its envelope row, range of `pairs`).
+    entries: Vec<(usize, usize, std::ops::Range<usize>)>,
+    pairs: Vec<(usize, usize)>,
+}
+
+impl NormalPlan {
+    /// The plan for the kept rows `rows` of `jacobian` (rows `indices` among the 6 per loop),
+    /// and `normal`'s envelope shaped for it.
+    fn lay_out(
+        &mut self,
+        jacobian: &ConstraintJacobian,
+        rows: &KeptRows,
+        indices: &[usize],
+        normal: &mut Envelope,
+    ) {
+        let mut by_loop = vec![Vec::new(); jacobian.blocks.len()];
+        for (k, &row) in indices.iter().enumerate() {
+            by_loop[row / 6].push(k);
+        }
+        let neighbours = |k: usize| jacobian.neighbours[indices[k] / 6].iter();
+        normal.first.clear();
+        normal.first.extend((0..indices.len()).map(|k| {
+            neighbours(k)
+                .filter_map(|n| by_loop[n.other].first().copied())
+                .fold(k, usize::min)
+        }));
+        normal.values.resize_with(indices.len(), Vec::new);
+        for (k, values) in normal.values.iter_mut().enumerate() {
+            values.clear();
+            values.resize(k - normal.first[k] + 1, 0.0);
+        }
+        self.entries.clear();
+        self.pairs.clear();
+        for k in 0..indices.len() {
+            for neighbour in neighbours(k) {
+                for &l in by_loop[neighbour.other].iter().filter(|&&l| l <= k) {
+                    let start = self.pairs.len();
+                    let (here, there) = (rows.starts[k], rows.starts[l]);
+                    self.pairs
+                        .extend(neighbour.shared.iter().map(|&(i, j)| (here + i, there + j)));
+                    self.entries
+                        .push((k, normal.index(k, l), start..self.pairs.len()));
+                }
+            }
+        }
+    }
+
+    /// A's entries from the rows' `values`.
+    fn fill(&self, values: &[f64], normal: &mut Envelope) {
+        for (k, at, pairs) in &self.entries {
+            normal.values[*k][*at] = self.pairs[pairs.clone()]
+                .iter()
+                .fold(0.0, |sum, &(i, j)| sum + values[i] * values[j]);
         }
     }
 }
