@@ -18,7 +18,7 @@ use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternio
 
 use crate::elab::value::SExpr;
 use crate::kinematics::eval::{EvalError, UnknownValues};
-use crate::kinematics::model::{ChainMotion, JointModel, Step};
+use crate::kinematics::model::{linear_in_first, ChainMotion, JointModel, Step};
 use crate::spatial::{self, Force, Motion, Pose, Transform};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -213,26 +213,6 @@ pub fn classify(chain: &JointModel) -> JointType {
             }
         }
         _ => JointType::Chain,
-    }
-}
-
-/// The coefficient c when `s` is c · (coordinate 0), structurally (no evaluation).
-fn linear_in_first(s: &SExpr) -> Option<f64> {
-    match s {
-        SExpr::Num(x) if *x == 0.0 => Some(0.0),
-        SExpr::Coordinate { index: 0, order: 0 } => Some(1.0),
-        SExpr::Neg(a) => linear_in_first(a).map(|c| -c),
-        SExpr::Mul(a, b) => match (&**a, &**b) {
-            (SExpr::Num(x), other) | (other, SExpr::Num(x)) => {
-                linear_in_first(other).map(|c| c * x)
-            }
-            _ => None,
-        },
-        SExpr::Div(a, b) => match &**b {
-            SExpr::Num(x) if *x != 0.0 => linear_in_first(a).map(|c| c / x),
-            _ => None,
-        },
-        _ => None,
     }
 }
 

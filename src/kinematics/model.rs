@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, Matrix6, Vector3};
 use super::eval::{eval, eval_jet, Env, EvalError, UnknownValues};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
-use crate::elab::value::{Displacement, Elementary, JoinId, Scalar};
+use crate::elab::value::{Displacement, Elementary, JoinId, SExpr, Scalar};
 use crate::source::Span;
 use crate::spatial::{self, Pose, Twist};
 use crate::topology::Topology;
@@ -37,6 +37,25 @@ pub struct JointModel {
 impl JointModel {
     pub fn coordinate_count(&self) -> usize {
         self.coordinate_names.len()
+    }
+
+    /// The chain when it is one rotation or translation along a fixed axis, linear in its one
+    /// coordinate (structurally: no evaluation).
+    fn single_motion(&self) -> Option<SingleMotion> {
+        if self.coordinate_count() != 1 {
+            return None;
+        }
+        match self.steps.as_slice() {
+            [Step::Rotation { angle, axis }] => linear_in_first(angle)
+                .filter(|&scale| scale != 0.0)
+                .map(|scale| SingleMotion::Rotation { axis: *axis, scale }),
+            [Step::Translation(t)] => {
+                let [x, y, z] = [0, 1, 2].map(|i| linear_in_first(&t[i]));
+                let direction = Vector3::new(x?, y?, z?);
+                (direction != Vector3::zeros()).then_some(SingleMotion::Translation { direction })
+            }
+            _ => None,
+        }
     }
 
     /// The dof chain's transform at coordinates `q`, and its motion subspace: column k is the
@@ -94,6 +113,23 @@ impl JointModel {
             *subspace = DMatrix::zeros(6, n);
         }
         (*pose, *velocity, *bias) = (Pose::identity(), Twist::zeros(), Twist::zeros());
+        if let Some(single) = self.single_motion() {
+            // One rotation or translation along a fixed axis, proportional to the coordinate:
+            // its subspace is that constant twist, its bias zero; nothing to evaluate.
+            let column = match single {
+                SingleMotion::Rotation { axis, scale } => {
+                    *pose = spatial::rotation(&axis, scale * q[0]);
+                    spatial::twist(axis * scale, Vector3::zeros())
+                }
+                SingleMotion::Translation { direction } => {
+                    *pose = spatial::translation(direction * q[0]);
+                    spatial::twist(Vector3::zeros(), direction)
+                }
+            };
+            subspace.column_mut(0).copy_from(&column);
+            *velocity = column * rates[0];
+            return Ok(());
+        }
         for step in &self.steps {
             // Value and derivatives of the step's parameters along the rates, then per
             // coordinate (a column of the subspace, moved to the first frame).
@@ -154,6 +190,13 @@ fn add_moved(subspace: &mut DMatrix<f64>, k: usize, pose: &Pose, column: &Twist)
     for r in 0..6 {
         subspace[(r, k)] += moved[r];
     }
+}
+
+/// A one-coordinate chain of one step: a rotation by `scale` · q about `axis`, or a translation
+/// by q · `direction`.
+enum SingleMotion {
+    Rotation { axis: Vector3<f64>, scale: f64 },
+    Translation { direction: Vector3<f64> },
 }
 
 /// A dof chain at given coordinates and rates, in the joint's first frame.
@@ -497,5 +540,25 @@ impl JointModel {
             pose *= transform;
         }
         Ok(derivative)
+    }
+}
+
+/// The coefficient c when `s` is c · (coordinate 0), structurally (no evaluation).
+pub fn linear_in_first(s: &SExpr) -> Option<f64> {
+    match s {
+        SExpr::Num(x) if *x == 0.0 => Some(0.0),
+        SExpr::Coordinate { index: 0, order: 0 } => Some(1.0),
+        SExpr::Neg(a) => linear_in_first(a).map(|c| -c),
+        SExpr::Mul(a, b) => match (&**a, &**b) {
+            (SExpr::Num(x), other) | (other, SExpr::Num(x)) => {
+                linear_in_first(other).map(|c| c * x)
+            }
+            _ => None,
+        },
+        SExpr::Div(a, b) => match &**b {
+            SExpr::Num(x) if *x != 0.0 => linear_in_first(a).map(|c| c / x),
+            _ => None,
+        },
+        _ => None,
     }
 }
