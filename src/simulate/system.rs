@@ -16,7 +16,7 @@ use crate::dynamics::algorithms::{
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
-    self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError,
+    self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, Wanted,
     ROW_NAMES,
 };
 use crate::dynamics::model::{DeclaredState, Model, Recovered};
@@ -121,7 +121,13 @@ impl<'m> MechanicalSystem<'m> {
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
     /// `loop_scratch` with the constraint rows they come from, the efforts in `efforts`;
     /// nothing is allocated once the buffers are sized.
-    fn solve_constrained(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+    fn solve_constrained(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        wanted: Wanted,
+    ) -> Result<(), SystemError> {
         let model = self.model;
         self.ensure_structure(q)?;
         // The efforts leave the forward kinematics of (q, v) in `data`, which both recursions
@@ -149,6 +155,7 @@ impl<'m> MechanicalSystem<'m> {
             &self.force,
             structure,
             self.loops.stabilisation,
+            wanted,
             scratch,
         )
         .map_err(|e| self.loop_error(&e))
@@ -177,7 +184,7 @@ impl<'m> MechanicalSystem<'m> {
             accelerations = DVector::zeros(model.velocities());
         }
         if model.has_loops() {
-            self.solve_constrained(t, q, v)?;
+            self.solve_constrained(t, q, v, Wanted::Accelerations)?;
             accelerations.copy_from(&self.loop_scratch.accelerations);
         } else if model.has_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
@@ -327,7 +334,7 @@ impl<'m> MechanicalSystem<'m> {
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
-            self.solve_constrained(t, q, v)?;
+            self.solve_constrained(t, q, v, Wanted::WithMultipliers)?;
             let solution = &self.loop_scratch;
             let (c, multipliers) = (&solution.constraints, &solution.multipliers);
             let on_bodies = loops::constraint_forces(model, &self.data, c, multipliers);

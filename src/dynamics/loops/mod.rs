@@ -25,5 +25,5 @@ pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
     Extent, ROW_NAMES,
 };
-pub use solve::{project_momentum, solve, LoopError, LoopScratch, Stabilisation};
+pub use solve::{project_momentum, solve, LoopError, LoopScratch, Stabilisation, Wanted};
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

@@ -124,14 +124,23 @@ pub enum LoopError {
 /// Delta's rod spins) of evaluating forces that balance exactly.
 const MASSLESS_FORCE: f64 = 1e-3;
 
+/// What a constrained solve computes: the accelerations alone (what the equations of motion
+/// need), or the multipliers too (the loops' reactions, for outputs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wanted {
+    Accelerations,
+    WithMultipliers,
+}
+
 /// Solves `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` on the kept rows (γ with Baumgarte's terms when asked
 /// for) at the constraints in `scratch`; `mass` is the tree's mass matrix, `force` has the
-/// state's length. The accelerations and multipliers are left in `scratch`.
+/// state's length. The accelerations and, when `wanted`, the multipliers are left in `scratch`.
 pub fn solve(
     mass: &DMatrix<f64>,
     force: &DVector<f64>,
     structure: &Structure,
     stabilisation: Stabilisation,
+    wanted: Wanted,
     scratch: &mut LoopScratch,
 ) -> Result<(), LoopError> {
     scratch.size_for(structure.free.len());
@@ -227,13 +236,15 @@ pub fn solve(
     let z = reduced_force.rows(0, m);
     accelerations.copy_from(particular);
     accelerations.gemv(1.0, &null, &z, 1.0);
-    // Ma − f, the constraint forces' share.
-    mass.mul_to(&accelerations.rows(0, nv), inertial);
-    applied.copy_from(force);
-    applied.neg_mut();
-    let mut top = applied.rows_mut(0, nv);
-    top += &*inertial;
-    damped.multipliers_into(applied.as_slice(), kept, multipliers.as_mut_slice());
+    if wanted == Wanted::WithMultipliers {
+        // Ma − f, the constraint forces' share.
+        mass.mul_to(&accelerations.rows(0, nv), inertial);
+        applied.copy_from(force);
+        applied.neg_mut();
+        let mut top = applied.rows_mut(0, nv);
+        top += &*inertial;
+        damped.multipliers_into(applied.as_slice(), kept, multipliers.as_mut_slice());
+    }
     *factor = damped.into_storage();
     Ok(())
 }
