@@ -255,6 +255,9 @@ impl<'m> MechanicalSystem<'m> {
         if !model.has_loops() {
             return Ok(false);
         }
+        let free = &self.loops.structure.free;
+        let quality = self.loop_scratch.take_free_quality(free);
+        self.projection.offer_free_quality(quality);
         self.loop_scratch.refresh();
         let (mut q, mut v) = (
             std::mem::take(&mut self.positions),
@@ -266,6 +269,7 @@ impl<'m> MechanicalSystem<'m> {
         let kept = self
             .loops
             .keep(model, &mut self.data, t, state, &mut self.projection);
+        self.projection.offer_free_quality(None);
         if kept.as_ref().is_ok_and(|&moved| moved) {
             y[..q.len()].copy_from_slice(&q);
             y[q.len()..].copy_from_slice(&v);

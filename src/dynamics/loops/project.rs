@@ -36,13 +36,14 @@ const NEWTON_ITERATIONS: usize = 8;
 
 /// Above this conditioning of the kept rows, and when none of them is weak, the factor taken
 /// to measure it (damped by `DAMPING`) also serves the projection's first step:
-/// `PROJECTION_DAMPING` would change that step by (μ/σ)² ≤ 1e-10 of itself, and the steps after
+/// `PROJECTION_DAMPING` would change that step by (μ/σ)² ≤ 4e-10 of itself, and the steps after
 /// it correct what remains. Weak rows (`RowChoice::weak`) are not damped, but the firm rows'
 /// damping enters their pivots, which are about 1e-9: there the two factors differ. Nearer a
 /// singular configuration the projection keeps its own damping: with the factor shared from
 /// 1e-2 on, a row of two four-bars at 1e-12 passed its flat configurations with an energy drift
-/// of 3e-6 instead of 4e-9.
-const SHARED_FACTOR_ABOVE: f64 = 1e-1;
+/// of 3e-6 instead of 4e-9. From 5e-2 on it is shared by the squeezer (0.07 to 0.09 along its
+/// run), and the row keeps its drift.
+const SHARED_FACTOR_ABOVE: f64 = 5e-2;
 
 /// What a projection keeps from one call to the next, so that it allocates nothing once sized:
 /// the constraints at the current and the trial positions, the kept rows' factorisation, and
@@ -73,6 +74,9 @@ pub struct ProjectionScratch {
     /// the projector's block over them (`free_quality`).
     free_columns: DMatrix<f64>,
     block: DMatrix<f64>,
+    /// The same measure, when the equations of motion took it at this step's start
+    /// (`offer_free_quality`).
+    offered_quality: Option<f64>,
     /// A row left out and its coefficients on the kept rows (`reproduction`).
     row: Vec<f64>,
     coefficients: Vec<f64>,
@@ -108,6 +112,7 @@ impl ProjectionScratch {
             poses: Vec::new(),
             free_columns: DMatrix::zeros(0, 0),
             block: DMatrix::zeros(0, 0),
+            offered_quality: None,
             row: Vec::new(),
             coefficients: Vec::new(),
         }
@@ -208,7 +213,11 @@ impl ProjectionScratch {
 
     /// How well the free coordinates `free` parametrise the allowed motions of the rows
     /// `conditioning` just factored (`Structure::free_quality_at`); None if they could not be.
+    /// A quality offered (`offer_free_quality`) is taken instead, once.
     pub fn free_quality(&mut self, free: &[usize]) -> Option<f64> {
+        if let Some(offered) = self.offered_quality.take() {
+            return Some(offered);
+        }
         let factored = self.held == Held::Conditioning;
         if !factored || free.is_empty() {
             return factored.then_some(1.0);
@@ -222,6 +231,14 @@ impl ProjectionScratch {
         );
         self.factor = damped.into_storage();
         Some(quality)
+    }
+
+    /// Offers `free_quality` a measure the equations of motion took on the same rows and free
+    /// coordinates at the start of the step just made (`LoopScratch::take_free_quality`): it
+    /// lags the state by one step, which the margin of the test on it (a tenth of its value
+    /// when chosen) allows, and spares its own factorisation. None withdraws an offer.
+    pub fn offer_free_quality(&mut self, quality: Option<f64>) {
+        self.offered_quality = quality;
     }
 
     /// How well the rows `conditioning` just factored reproduce the active rows left out

@@ -55,6 +55,13 @@ pub struct LoopScratch {
     reduced_force: DVector<f64>,
     /// The motions kept when some carry no mass.
     massive: Massive,
+    /// Whether the next evaluation measures how well the free coordinates parametrise the
+    /// allowed motions (once per step, see `refresh`), the block it measures that on, and the
+    /// measure (`take_free_quality`).
+    quality_due: bool,
+    quality_block: DMatrix<f64>,
+    free_quality: Option<f64>,
+    quality_of: Vec<usize>,
     /// Accelerations of every state velocity.
     pub accelerations: DVector<f64>,
     /// Constraint wrench of each loop on its second body, at the loop point in fixed axes:
@@ -81,6 +88,10 @@ impl LoopScratch {
             reduced_factor: DMatrix::zeros(0, 0),
             reduced_force: DVector::zeros(0),
             massive: Massive::default(),
+            quality_due: false,
+            quality_block: DMatrix::zeros(0, 0),
+            free_quality: None,
+            quality_of: Vec::new(),
             accelerations: DVector::zeros(columns),
             multipliers: DVector::zeros(rows),
         }
@@ -94,12 +105,22 @@ impl LoopScratch {
             self.massive = Massive::default();
         }
         self.massive.check_due = true;
+        self.quality_due = true;
+        self.free_quality = None;
+    }
+
+    /// How well the free coordinates `free` parametrised the allowed motions at the first
+    /// evaluation since the last `refresh` (the measure of `Damped::free_quality_into`), if it
+    /// was taken for them.
+    pub fn take_free_quality(&mut self, free: &[usize]) -> Option<f64> {
+        self.free_quality.take().filter(|_| self.quality_of == free)
     }
 
     /// Sizes the allowed motions' matrices for `free` coordinates (allocates only when their
     /// number changes, with the structure).
     fn size_for(&mut self, free: usize) {
         if self.null.ncols() != free {
+            self.quality_block = DMatrix::zeros(free, free);
             self.null = DMatrix::zeros(self.null.nrows(), free);
             self.mass_null = DMatrix::zeros(self.mass_null.nrows(), free);
             self.reduced_mass = DMatrix::zeros(free, free);
@@ -159,6 +180,10 @@ pub fn solve(
         reduced_factor,
         reduced_force,
         massive,
+        quality_due,
+        quality_block,
+        free_quality,
+        quality_of,
         accelerations,
         multipliers,
     } = scratch;
@@ -184,6 +209,11 @@ pub fn solve(
     };
     let m = motions.len();
     damped.allowed_motions_into(motions, kept, null);
+    if *quality_due && every {
+        *free_quality = Some(free_quality_of(null, &structure.free, quality_block));
+        quality_of.clone_from(&structure.free);
+        *quality_due = false;
+    }
     // The complementary links' own coordinates carry no inertia: only the tree's rows of the
     // motions meet the mass matrix.
     let nv = mass.nrows();
@@ -247,6 +277,19 @@ pub fn solve(
     }
     *factor = damped.into_storage();
     Ok(())
+}
+
+/// The free coordinates' quality (`Damped::free_quality_into`) from their allowed motions N:
+/// the block of the projector P = I − Gₛᵀ(A + μ²E)⁻¹Gₛ over them is N's rows of the free
+/// coordinates, so the measure costs one small Cholesky factorisation of it. `work` is n × n.
+fn free_quality_of(null: &DMatrix<f64>, free: &[usize], work: &mut DMatrix<f64>) -> f64 {
+    let n = free.len();
+    for j in 0..n {
+        for i in j..n {
+            work[(i, j)] = null[(free[i], j)];
+        }
+    }
+    dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
 }
 
 fn singular(lost: Singular) -> LoopError {
