@@ -569,3 +569,26 @@ fn a_loop_closed_by_a_prismatic_link_conserves_energy() {
         / std::f64::consts::TAU;
     assert!(turns.abs() > 1.0, "the crank turns: {turns}");
 }
+
+#[test]
+fn a_force_on_a_motion_without_mass_is_caught_after_the_start() {
+    // The Delta with a torque that grows from zero about a rod's own axis (the third angle of its
+    // ball joint): that spin moves no mass. At the start the torque is zero and the choice of the
+    // motions solved on passes; the check after each step must stop the run once it acts.
+    let mut p = prepared(
+        "delta_isir88",
+        &[(
+            "join [l1, w, 0] ++ 1 @ arm1 and rod1p with spherical as C1p",
+            "join [l1, w, 0] ++ 1 @ arm1 and rod1p with link(a, b, c) dof1 = a || [1,0,0], dof2 = b || [0,1,0], dof3 = c || [0,0,1], torque3 = [0, 0, 10 * time] end as C1p",
+        )],
+    );
+    p.settings.duration = 0.05;
+    let simulation = run(&p, &mut |_| {});
+    let failure = simulation.report.failure.as_ref().expect("fails");
+    assert!(
+        failure.message.contains("moves no mass") && failure.time > 0.0,
+        "{} at {}",
+        failure.message,
+        failure.time
+    );
+}

@@ -504,21 +504,23 @@ impl Damped<'_> {
     /// each.
     pub fn allowed_motions(&self, free: &[usize]) -> DMatrix<f64> {
         let mut basis = DMatrix::zeros(self.factored.columns, free.len());
-        self.allowed_motions_into(free, &mut Vec::new(), &mut basis);
+        self.allowed_motions_into(free, &mut Vec::new(), &mut basis, 0);
         basis
     }
 
-    /// `allowed_motions` into `basis` (G's columns × `free`), with `rows` as scratch.
+    /// `allowed_motions` into the columns of `basis` (of G's columns) from `first` on, with
+    /// `rows` as scratch.
     pub fn allowed_motions_into(
         &self,
         free: &[usize],
         rows: &mut Vec<f64>,
         basis: &mut DMatrix<f64>,
+        first: usize,
     ) {
         for (k, &coordinate) in free.iter().enumerate() {
             // The allowed part of a unit motion eᵢ: eᵢ − Gₛᵀ(A + μ²E)⁻¹Gₛeᵢ, Gₛeᵢ being column i.
             self.factored.column_into(coordinate, rows);
-            let mut column = basis.column_mut(k);
+            let mut column = basis.column_mut(first + k);
             if rows.iter().all(|&g| g == 0.0) {
                 // No kept row moves with this coordinate (a ball's own angles): its unit motion
                 // is allowed as it is, and the solve of a zero right-hand side can be skipped

@@ -200,17 +200,28 @@ pub fn solve(
     kept.iter_mut().for_each(|x| *x = -*x);
     damped.least_norm_into(kept, particular.as_mut_slice());
     // The motions solved on: every free coordinate's, or only the massive ones kept when the
-    // others carry no mass and nothing is to be checked on them in this evaluation.
-    let every = structure.massless == 0 || !massive.holds(structure) || massive.check_due;
+    // others carry no mass (their choice made); those left out are then checked after the
+    // solve, once per step (`check_due`).
+    let every = structure.massless == 0 || !massive.holds(structure);
+    let checking = !every && massive.check_due;
     let motions: &[usize] = if every {
         &structure.free
     } else {
         &massive.coordinates
     };
     let m = motions.len();
-    damped.allowed_motions_into(motions, kept, null);
-    if *quality_due && every {
-        *free_quality = Some(free_quality_of(null, &structure.free, quality_block));
+    damped.allowed_motions_into(motions, kept, null, 0);
+    if checking {
+        damped.allowed_motions_into(&massive.dropped_coordinates, kept, null, m);
+    }
+    if *quality_due && (every || checking) {
+        let columns = if every {
+            None
+        } else {
+            Some(&massive.column_of_free[..])
+        };
+        let quality = free_quality_of(null, &structure.free, columns, quality_block);
+        *free_quality = Some(quality);
         quality_of.clone_from(&structure.free);
         *quality_due = false;
     }
@@ -234,13 +245,16 @@ pub fn solve(
     applied.copy_from(force);
     let mut top = applied.rows_mut(0, nv);
     top -= &*inertial;
+    let dropped = null.columns(m, if checking { structure.massless } else { 0 });
     let null = null.columns(0, m);
     let mut reduced = reduced_force.rows_mut(0, m);
     reduced.gemv_tr(1.0, &null, applied, 0.0);
     // An idle coordinate's motion is its unit motion (no mass, no kept row): its share of the
     // reduced forces is the force on it.
     let idle_force = structure.idle.iter().map(|&c| applied[c].abs());
+    let dropped_force = dropped.column_iter().map(|n| n.dot(applied).abs());
     let scale = idle_force
+        .chain(dropped_force)
         .fold(reduced.amax(), f64::max)
         .max(f64::MIN_POSITIVE);
     if let Some(&velocity) = structure
@@ -266,6 +280,19 @@ pub fn solve(
     let z = reduced_force.rows(0, m);
     accelerations.copy_from(particular);
     accelerations.gemv(1.0, &null, &z, 1.0);
+    if checking {
+        // No force may act on a motion left out: nᵀ(f − Ma) = 0 for each, to MASSLESS_FORCE.
+        mass.mul_to(&accelerations.rows(0, nv), inertial);
+        for n in dropped.column_iter() {
+            let unbalanced = n.dot(force) - n.rows(0, nv).dot(&*inertial);
+            if unbalanced.abs() > MASSLESS_FORCE * scale {
+                return Err(LoopError::MasslessMotion {
+                    velocity: n.iamax(),
+                });
+            }
+        }
+        massive.check_due = false;
+    }
     if wanted == Wanted::WithMultipliers {
         // Ma − f, the constraint forces' share.
         mass.mul_to(&accelerations.rows(0, nv), inertial);
@@ -282,11 +309,18 @@ pub fn solve(
 /// The free coordinates' quality (`Damped::free_quality_into`) from their allowed motions N:
 /// the block of the projector P = I − Gₛᵀ(A + μ²E)⁻¹Gₛ over them is N's rows of the free
 /// coordinates, so the measure costs one small Cholesky factorisation of it. `work` is n × n.
-fn free_quality_of(null: &DMatrix<f64>, free: &[usize], work: &mut DMatrix<f64>) -> f64 {
+/// The motion of free coordinate j is column j of N, or column `columns[j]` when given.
+fn free_quality_of(
+    null: &DMatrix<f64>,
+    free: &[usize],
+    columns: Option<&[usize]>,
+    work: &mut DMatrix<f64>,
+) -> f64 {
     let n = free.len();
     for j in 0..n {
+        let column = columns.map_or(j, |columns| columns[j]);
         for i in j..n {
-            work[(i, j)] = null[(free[i], j)];
+            work[(i, j)] = null[(free[i], column)];
         }
     }
     dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
@@ -306,7 +340,8 @@ fn singular(lost: Singular) -> LoopError {
 ///
 /// Between two checks the solve computes the kept motions only: that no force acts on the
 /// motions left out (which would give them an infinite acceleration) is checked at the choice
-/// and at the first evaluation after each step (`check_due`), on every motion.
+/// and at the first evaluation after each step (`check_due`), from the allowed motions of the
+/// ones left out and the accelerations found without them.
 #[derive(Clone, Debug, Default)]
 struct Massive {
     /// The free coordinates the choice was made for.
@@ -314,9 +349,13 @@ struct Massive {
     /// Positions among them: kept (pivot order), left out.
     kept: Vec<usize>,
     dropped: Vec<usize>,
-    /// The kept free coordinates, in pivot order.
+    /// The kept free coordinates, in pivot order, and those left out.
     coordinates: Vec<usize>,
-    /// Whether the next evaluation solves on every motion, to check the ones left out.
+    dropped_coordinates: Vec<usize>,
+    /// Per free coordinate, the column of its motion when the kept ones are followed by those
+    /// left out.
+    column_of_free: Vec<usize>,
+    /// Whether the next evaluation checks the motions left out.
     check_due: bool,
     /// The kept block's smallest pivot over its largest, when chosen.
     quality: f64,
@@ -360,6 +399,11 @@ impl Massive {
         self.quality = pivot_ratio(&pivots[..kept.min(pivots.len())]);
         self.stale = false;
         self.coordinates = self.kept.iter().map(|&p| free[p]).collect();
+        self.dropped_coordinates = self.dropped.iter().map(|&p| free[p]).collect();
+        self.column_of_free = vec![0; n];
+        for (column, &p) in self.kept.iter().chain(&self.dropped).enumerate() {
+            self.column_of_free[p] = column;
+        }
     }
 
     /// Whether the choice holds for the structure's free coordinates.
