@@ -62,6 +62,9 @@ pub struct LoopScratch {
     quality_block: DMatrix<f64>,
     free_quality: Option<f64>,
     quality_of: Vec<usize>,
+    /// Per column of the tree's mass matrix, the rows that can be non-zero (the velocities on
+    /// one path to earth with it), so that products with it skip the branches' zeros.
+    mass_rows: Vec<Vec<usize>>,
     /// Accelerations of every state velocity.
     pub accelerations: DVector<f64>,
     /// Constraint wrench of each loop on its second body, at the loop point in fixed axes:
@@ -92,6 +95,7 @@ impl LoopScratch {
             quality_block: DMatrix::zeros(0, 0),
             free_quality: None,
             quality_of: Vec::new(),
+            mass_rows: mass_rows(model),
             accelerations: DVector::zeros(columns),
             multipliers: DVector::zeros(rows),
         }
@@ -184,6 +188,7 @@ pub fn solve(
         quality_block,
         free_quality,
         quality_of,
+        mass_rows,
         accelerations,
         multipliers,
     } = scratch;
@@ -232,16 +237,25 @@ pub fn solve(
     // Column by column (matrix-vector products): a matrix product would pack its operands into
     // buffers it allocates on every call.
     for k in 0..m {
-        mass_null
-            .column_mut(k)
-            .gemv(1.0, mass, &tree.column(k), 0.0);
+        let x = tree.column(k);
+        sparse_times(
+            mass,
+            mass_rows,
+            x.as_slice(),
+            mass_null.column_mut(k).as_mut_slice(),
+        );
     }
     for k in 0..m {
         for i in 0..m {
             reduced_mass[(i, k)] = tree.column(i).dot(&mass_null.column(k));
         }
     }
-    mass.mul_to(&particular.rows(0, nv), inertial);
+    sparse_times(
+        mass,
+        mass_rows,
+        &particular.as_slice()[..nv],
+        inertial.as_mut_slice(),
+    );
     applied.copy_from(force);
     let mut top = applied.rows_mut(0, nv);
     top -= &*inertial;
@@ -282,7 +296,8 @@ pub fn solve(
     accelerations.gemv(1.0, &null, &z, 1.0);
     if checking {
         // No force may act on a motion left out: nᵀ(f − Ma) = 0 for each, to MASSLESS_FORCE.
-        mass.mul_to(&accelerations.rows(0, nv), inertial);
+        let tree_accelerations = &accelerations.as_slice()[..nv];
+        sparse_times(mass, mass_rows, tree_accelerations, inertial.as_mut_slice());
         for n in dropped.column_iter() {
             let unbalanced = n.dot(force) - n.rows(0, nv).dot(&*inertial);
             if unbalanced.abs() > MASSLESS_FORCE * scale {
@@ -324,6 +339,42 @@ fn free_quality_of(
         }
     }
     dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
+}
+
+/// The rows of each column of `model`'s mass matrix that the composite-rigid-body algorithm
+/// writes (`crba_after_kinematics`): the others are zero whatever the state.
+fn mass_rows(model: &Model) -> Vec<Vec<usize>> {
+    let mut rows = vec![Vec::new(); model.nv];
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        for column in joint.v_offset..joint.v_offset + joint.nv() {
+            for &row in &model.branch_velocities[k] {
+                rows[column].push(row);
+                if row != column {
+                    rows[row].push(column);
+                }
+            }
+        }
+    }
+    rows.iter_mut().for_each(|r| {
+        r.sort_unstable();
+        r.dedup();
+    });
+    rows
+}
+
+/// y = M x over the entries `rows` lists, column after column: the sums of a dense product
+/// in the same order, without its products by zero.
+fn sparse_times(mass: &DMatrix<f64>, rows: &[Vec<usize>], x: &[f64], y: &mut [f64]) {
+    y.fill(0.0);
+    let nv = mass.nrows();
+    let entries = mass.as_slice();
+    for (column, (rows, &xj)) in rows.iter().zip(x).enumerate() {
+        let entries = &entries[column * nv..(column + 1) * nv];
+        for &row in rows {
+            y[row] += entries[row] * xj;
+        }
+    }
 }
 
 fn singular(lost: Singular) -> LoopError {
