@@ -526,8 +526,6 @@ fn strip_primes(expr: &Expr) -> (&Expr, usize) {
     }
 }
 
-/// Names a declaration introduces in its scope, with the span of the name and of its whole
-/// definition.
 /// An optional name a declaration introduces, with the declaration's span.
 fn named(name: &Option<Ident>, decl: Span) -> Vec<(Name, Span, Span)> {
     name.iter()
@@ -535,6 +533,8 @@ fn named(name: &Option<Ident>, decl: Span) -> Vec<(Name, Span, Span)> {
         .collect()
 }
 
+/// Names a declaration introduces in its scope, with the span of the name and of its whole
+/// definition.
 fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
     match &decl.kind {
         DeclKind::Let(bindings) => bindings

@@ -355,6 +355,42 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
     }
 }
 
+/// The rows of each column of `model`'s mass matrix that the composite-rigid-body algorithm
+/// writes (`crba_after_kinematics`): the others are zero whatever the state.
+pub fn mass_rows(model: &Model) -> Vec<Vec<usize>> {
+    let mut rows = vec![Vec::new(); model.nv];
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        for column in joint.v_offset..joint.v_offset + joint.nv() {
+            for &row in &model.branch_velocities[k] {
+                rows[column].push(row);
+                if row != column {
+                    rows[row].push(column);
+                }
+            }
+        }
+    }
+    rows.iter_mut().for_each(|r| {
+        r.sort_unstable();
+        r.dedup();
+    });
+    rows
+}
+
+/// y = M x over the entries `rows` lists, column after column: the sums of a dense product
+/// in the same order, without its products by zero.
+pub fn mass_times(mass: &DMatrix<f64>, rows: &[Vec<usize>], x: &[f64], y: &mut [f64]) {
+    y.fill(0.0);
+    let nv = mass.nrows();
+    let entries = mass.as_slice();
+    for (column, (rows, &xj)) in rows.iter().zip(x).enumerate() {
+        let entries = &entries[column * nv..(column + 1) * nv];
+        for &row in rows {
+            y[row] += entries[row] * xj;
+        }
+    }
+}
+
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.
 pub fn aba(
     model: &Model,

@@ -567,8 +567,15 @@ impl Damped<'_> {
                 work[(i, j)] = identity - columns.column(i).dot(&columns.column(j));
             }
         }
-        dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
+        projector_block_quality(work, n)
     }
+}
+
+/// The free coordinates' quality from the projector's block over them, in the leading n × n
+/// lower triangle of `work` (factored in place): its smallest squared Cholesky pivot, at most
+/// 1, or 0 when it is not positive definite.
+pub fn projector_block_quality(work: &mut DMatrix<f64>, n: usize) -> f64 {
+    dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
 }
 
 /// A symmetric matrix stored by rows from each row's first non-zero entry to the diagonal; the

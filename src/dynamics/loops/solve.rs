@@ -14,10 +14,12 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector};
 
-use super::factored::{dense_cholesky, Envelope, Factored, RowChoice, Singular, DAMPING};
+use super::factored::{
+    dense_cholesky, projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING,
+};
 use super::rows::{constraints, Constraints, Extent};
 use super::structure::Structure;
-use crate::dynamics::algorithms::{crba, Data};
+use crate::dynamics::algorithms::{crba, mass_rows, mass_times, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
@@ -238,7 +240,7 @@ pub fn solve(
     // buffers it allocates on every call.
     for k in 0..m {
         let x = tree.column(k);
-        sparse_times(
+        mass_times(
             mass,
             mass_rows,
             x.as_slice(),
@@ -250,7 +252,7 @@ pub fn solve(
             reduced_mass[(i, k)] = tree.column(i).dot(&mass_null.column(k));
         }
     }
-    sparse_times(
+    mass_times(
         mass,
         mass_rows,
         &particular.as_slice()[..nv],
@@ -294,10 +296,12 @@ pub fn solve(
     let z = reduced_force.rows(0, m);
     accelerations.copy_from(particular);
     accelerations.gemv(1.0, &null, &z, 1.0);
+    if checking || wanted == Wanted::WithMultipliers {
+        let tree_accelerations = &accelerations.as_slice()[..nv];
+        mass_times(mass, mass_rows, tree_accelerations, inertial.as_mut_slice());
+    }
     if checking {
         // No force may act on a motion left out: nᵀ(f − Ma) = 0 for each, to MASSLESS_FORCE.
-        let tree_accelerations = &accelerations.as_slice()[..nv];
-        sparse_times(mass, mass_rows, tree_accelerations, inertial.as_mut_slice());
         for n in dropped.column_iter() {
             let unbalanced = n.dot(force) - n.rows(0, nv).dot(&*inertial);
             if unbalanced.abs() > MASSLESS_FORCE * scale {
@@ -310,7 +314,6 @@ pub fn solve(
     }
     if wanted == Wanted::WithMultipliers {
         // Ma − f, the constraint forces' share.
-        mass.mul_to(&accelerations.rows(0, nv), inertial);
         applied.copy_from(force);
         applied.neg_mut();
         let mut top = applied.rows_mut(0, nv);
@@ -338,43 +341,7 @@ fn free_quality_of(
             work[(i, j)] = null[(free[i], column)];
         }
     }
-    dense_cholesky(work, n).map_or(0.0, |(smallest, _)| smallest.min(1.0))
-}
-
-/// The rows of each column of `model`'s mass matrix that the composite-rigid-body algorithm
-/// writes (`crba_after_kinematics`): the others are zero whatever the state.
-fn mass_rows(model: &Model) -> Vec<Vec<usize>> {
-    let mut rows = vec![Vec::new(); model.nv];
-    for &k in &model.dynamic_joints {
-        let joint = &model.joints[k];
-        for column in joint.v_offset..joint.v_offset + joint.nv() {
-            for &row in &model.branch_velocities[k] {
-                rows[column].push(row);
-                if row != column {
-                    rows[row].push(column);
-                }
-            }
-        }
-    }
-    rows.iter_mut().for_each(|r| {
-        r.sort_unstable();
-        r.dedup();
-    });
-    rows
-}
-
-/// y = M x over the entries `rows` lists, column after column: the sums of a dense product
-/// in the same order, without its products by zero.
-fn sparse_times(mass: &DMatrix<f64>, rows: &[Vec<usize>], x: &[f64], y: &mut [f64]) {
-    y.fill(0.0);
-    let nv = mass.nrows();
-    let entries = mass.as_slice();
-    for (column, (rows, &xj)) in rows.iter().zip(x).enumerate() {
-        let entries = &entries[column * nv..(column + 1) * nv];
-        for &row in rows {
-            y[row] += entries[row] * xj;
-        }
-    }
+    projector_block_quality(work, n)
 }
 
 fn singular(lost: Singular) -> LoopError {
