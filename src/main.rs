@@ -625,6 +625,10 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
         None => Ok(()),
     };
+    // Before the report, which stays the last thing written (JSON readers take the last object).
+    if let Some(warning) = lsdc::simulate::run::step_error_warning(&simulation.report) {
+        report_diagnostics(&compilation, &[warning], args.report);
+    }
     match args.report {
         Format::Text => eprint!("{}", text::run_report(&simulation.report)),
         Format::Json => eprintln!("{}", json(&simulation.report)),

@@ -106,7 +106,8 @@ def main():
                 cmd = [a.lsdc, "simulate", f, "--integrator", integ, "--report", "json", "-o", csv_path] + extra
                 rc, out, err, wall = run(cmd, a.timeout)
                 r = {"integrator": integ, "setting": setting, "rc": rc, "timeout": rc is None,
-                     "panicked": rc == 101 or "panicked" in err, "wall_s": round(wall, 2)}
+                     "panicked": rc == 101 or "panicked" in err, "wall_s": round(wall, 2),
+                     "warnings": sorted(set(re.findall(r"W09\d\d", err)))}
                 rep = last_json(err)
                 if rep:
                     r["energy_drift"] = rep.get("energy_drift")
@@ -162,6 +163,10 @@ def cell(r, name):
     complete = end is not None and end >= duration(name) - 1e-9
     mark = "ok" if ref.get("ok") and complete else "FAIL"
     parts.append("ref %s%s" % (mark, "" if v is None else " %.1e" % v))
+    if r.get("warnings"):
+        parts.append("/".join(r["warnings"]))
+    elif mark == "FAIL" and r["rc"] == 0:
+        parts.append("**silent**")
     if end is not None and not complete:
         parts.append("stopped at t=%.3g" % end)
     elif end is None:

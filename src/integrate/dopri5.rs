@@ -3,7 +3,7 @@
 //! step's first stage), and Dormand and Prince's continuous extension of order 4 for dense output.
 //! Coefficients from Hairer, Nørsett and Wanner, Solving ODEs I, II.5 (Table 5.2) and II.6.
 
-use super::control::{error_norm, StepController};
+use super::control::{error_norm, Gains, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{Evaluator, Halt};
 use super::settings::Settings;
@@ -112,8 +112,20 @@ impl AdaptiveStepper for DormandPrince {
     }
 
     fn controller(&self) -> StepController {
-        // The error estimate is that of the order-4 solution; the PI gain is Hairer's for DOPRI5.
-        StepController::new(4, 0.04, 10.0)
+        // The error estimate is that of the order-4 solution. Gustafsson's PI.3.4 integral gain
+        // and a predictive limit that anticipates an accelerating error constant: on the spatial
+        // linkages at most 6.9 % of the attempts are rejected at any tolerance from 1e-4 to 1e-12
+        // (up to 19 % with Hairer's β = 0.04 and the plain predictive limit), and about 4 % less
+        // work at equal error on the examples (`docs/commands.md`, *Integrators*).
+        StepController::new(
+            4,
+            Gains {
+                beta: 0.08,
+                safety: 0.93,
+                max_factor: 10.0,
+                rise_power: 2.5,
+            },
+        )
     }
 
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {

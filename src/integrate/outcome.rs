@@ -3,7 +3,7 @@
 use std::fmt;
 
 /// Work done by an integration.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
     /// Accepted steps.
     pub steps: usize,
@@ -17,6 +17,28 @@ pub struct Stats {
     pub jacobian_evaluations: usize,
     /// LU decompositions of the iteration matrix (Rosenbrock only).
     pub lu_decompositions: usize,
+    /// The largest local error estimate of a fixed-step method's steps (RK4), which nothing
+    /// controls: where it exceeds the tolerances, the step is too long for them.
+    pub largest_step_error: Option<StepError>,
+}
+
+/// A local error estimate of one step, in the norm the adaptive methods control (at most 1 meets
+/// the tolerances), and where the step ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepError {
+    pub norm: f64,
+    pub time: f64,
+}
+
+impl StepError {
+    /// Keeps the larger of the estimate so far and `norm` at `time` (a non-finite estimate
+    /// counts as the largest).
+    pub fn keep_largest(largest: &mut Option<StepError>, norm: f64, time: f64) {
+        let norm = if norm.is_nan() { f64::INFINITY } else { norm };
+        if largest.is_none_or(|e| norm > e.norm) {
+            *largest = Some(StepError { norm, time });
+        }
+    }
 }
 
 /// Why an integration stopped early.

@@ -3,11 +3,20 @@
 //! interpolant through the step's ends, whose end slope is then reused as the next step's first
 //! stage, so outputs cost at most one extra evaluation (at the very end). Each step's end is
 //! projected before anything is derived from it, so a projection costs no evaluation here.
+//!
+//! Nothing controls a fixed step's error, so each step measures it: the slope at the step's end
+//! (the next step's first stage, so it costs nothing but at the very end) makes with the four
+//! stages an embedded solution of order 3, y + h (k1 + 2 k2 + 2 k3 + k5) / 6 (the weights
+//! 1/6, 1/3, 1/3, 0, 1/6 satisfy the four order-3 conditions), whose difference from the
+//! order-4 solution, h (k4 − k5) / 6, estimates the local error of the order-3 solution: an upper
+//! bound, to leading order, of the order-4 step's. The run reports the largest estimate in the
+//! norm of the tolerances, so that a step too long for the motion is not a silent wrong answer.
 
+use super::control::error_norm;
 use super::driver::Problem;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
-use super::outcome::{Failure, IntegrationError, Stats};
+use super::outcome::{Failure, IntegrationError, Stats, StepError};
 use super::output::Outputs;
 use super::system::{Observer, OdeSystem};
 
@@ -57,8 +66,11 @@ fn run(
         // Before the end derivative is evaluated, so that what the next step reuses is taken at
         // the projected state and the interpolant joins the projected ends.
         eval.project(t_new, &mut rk4.y_new)?;
+        rk4.end_slope(eval)?;
+        let error = rk4.error_estimate(problem);
+        StepError::keep_largest(&mut eval.stats.largest_step_error, error, t_new);
         if outputs.wants_interior(rk4.t, t_new) {
-            rk4.prepare_interpolation(eval)?;
+            rk4.prepare_interpolation();
         }
         let segment = &rk4.segment;
         outputs.deliver_step(
@@ -80,7 +92,7 @@ struct Rk4 {
     y: Vec<f64>,
     y_new: Vec<f64>,
     h: f64,
-    /// dy/dt at the current point when already known (from the previous step's interpolation).
+    /// dy/dt at the current point when already known (the previous step's end slope).
     derivative_known: bool,
     stages: [Vec<f64>; 4],
     end_derivative: Vec<f64>,
@@ -125,9 +137,36 @@ impl Rk4 {
         Ok(())
     }
 
-    /// Evaluates dy/dt at the step's end and sets up the Hermite interpolant over the step.
-    fn prepare_interpolation(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
+    /// Evaluates dy/dt at the step's (projected) end: the next step's first stage.
+    fn end_slope(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
         eval.rhs(self.t + self.h, &self.y_new, &mut self.end_derivative)?;
+        self.derivative_known = true;
+        Ok(())
+    }
+
+    /// The norm of h (k4 − k5) / 6 over the components the tolerances control: the embedded
+    /// order-3 solution's distance from the step's end (see the module's documentation).
+    fn error_estimate(&mut self, problem: &Problem) -> f64 {
+        let settings = problem.settings;
+        let controlled = settings
+            .controlled
+            .unwrap_or(self.y.len())
+            .min(self.y.len());
+        let difference = &mut self.stage_state;
+        for (i, d) in difference.iter_mut().enumerate() {
+            *d = self.h / 6.0 * (self.stages[3][i] - self.end_derivative[i]);
+        }
+        error_norm(
+            &difference[..controlled],
+            &self.y[..controlled],
+            &self.y_new[..controlled],
+            settings.rtol,
+            settings.atol,
+        )
+    }
+
+    /// Sets up the Hermite interpolant over the step from its ends and their slopes.
+    fn prepare_interpolation(&mut self) {
         let ends = [
             &self.y[..],
             &self.stages[0],
@@ -135,8 +174,6 @@ impl Rk4 {
             &self.end_derivative,
         ];
         self.segment.set(self.t, self.h, ends);
-        self.derivative_known = true;
-        Ok(())
     }
 
     /// Moves the current point to the end of the step just taken.

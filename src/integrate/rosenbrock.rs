@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, DVector, Dyn, LU};
 
-use super::control::{error_norm, StepController};
+use super::control::{error_norm, Gains, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
@@ -174,7 +174,15 @@ impl AdaptiveStepper for Rodas3 {
         // The estimate is the error of the order-2 solution. Elementary control with Hairer and
         // Wanner's growth limit for Rosenbrock methods: PI gains of 0.04 and 0.08 took 3–10 % more
         // steps on the test problems for a few fewer rejections.
-        StepController::new(2, 0.0, 6.0)
+        StepController::new(
+            2,
+            Gains {
+                beta: 0.0,
+                safety: 0.9,
+                max_factor: 6.0,
+                rise_power: 1.0,
+            },
+        )
     }
 
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {

@@ -4,7 +4,7 @@
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
     /// Classic Runge–Kutta of order 4 with this fixed step; the last step is shortened to land on
-    /// the end time. Ignores the tolerances.
+    /// the end time. The tolerances do not change its steps; they measure its error estimate.
     Rk4 { step: f64 },
     /// Dormand–Prince 5(4), adaptive, for non-stiff problems.
     DormandPrince,
@@ -12,7 +12,8 @@ pub enum Method {
     Rosenbrock,
 }
 
-/// Tolerances and limits of the adaptive methods (only `max_steps` applies to RK4).
+/// Tolerances and limits of the adaptive methods (RK4 takes `max_steps`, and measures its error
+/// estimate with the tolerances).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     /// Relative tolerance on each component of the local error.

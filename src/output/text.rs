@@ -157,6 +157,12 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     if let Some(c) = &report.constraints {
         out += &constraint_report(c);
     }
+    if let Some(e) = &report.step_error {
+        out += &format!(
+            "largest local error estimate of a step: {:.1e} of the tolerances (rtol {:e}, atol {:e}), at t = {}\n",
+            e.largest, e.rtol, e.atol, e.time
+        );
+    }
     if let Some(failure) = &report.failure {
         out += &format!(
             "the run FAILED at t = {}: {}\n",

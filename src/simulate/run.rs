@@ -13,6 +13,7 @@ use super::constraints::ConstraintReport;
 use super::prepare::{Integrator, Prepared};
 use super::system::{MechanicalSystem, SystemError};
 use super::variational;
+use crate::diag::Diagnostic;
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
@@ -123,7 +124,43 @@ pub struct Report {
     pub momentum_drift: Option<MomentumDrift>,
     /// The loops: redundancy, residuals, singular configurations (mechanisms with loops).
     pub constraints: Option<ConstraintReport>,
+    /// A fixed-step method's largest local error estimate over its steps (RK4).
+    pub step_error: Option<StepErrorReport>,
     pub failure: Option<RunFailure>,
+}
+
+/// The largest local error estimate of a fixed-step run, in the norm of the tolerances (at most
+/// 1 meets them), the time at the end of that step, and the tolerances it was measured against.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StepErrorReport {
+    pub largest: f64,
+    pub time: f64,
+    pub rtol: f64,
+    pub atol: f64,
+}
+
+impl StepErrorReport {
+    /// Whether the steps were too long for the tolerances.
+    pub fn exceeds_tolerances(&self) -> bool {
+        !(self.largest <= 1.0)
+    }
+}
+
+/// The warning for a fixed-step run whose steps were too long for its tolerances (W0902): its
+/// results may be far from the motion, and nothing else would say so.
+pub fn step_error_warning(report: &Report) -> Option<Diagnostic> {
+    let error = report
+        .step_error
+        .filter(StepErrorReport::exceeds_tolerances)?;
+    let message = format!(
+        "the steps of `{}` are too long for the tolerances: a step's local error estimate reaches {:.1e} times them (rtol {:e}, atol {:e}) at t = {}",
+        report.integrator, error.largest, error.rtol, error.atol, error.time
+    );
+    Some(
+        Diagnostic::warning("W0902", message)
+            .note("the outputs may be far from the motion; the estimate bounds the error a step adds, and errors grow along the run")
+            .help("shorten the step (`--step`), or let `dopri5` choose it to the tolerances (`--integrator dopri5`)"),
+    )
 }
 
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -409,6 +446,12 @@ pub fn run_from(
         }),
         momentum_drift: momentum_drift(model, &samples),
         constraints,
+        step_error: stats.largest_step_error.map(|e| StepErrorReport {
+            largest: e.norm,
+            time: e.time,
+            rtol: settings.rtol,
+            atol: settings.atol,
+        }),
         failure,
     };
     let reaction_names = if settings.reactions {
@@ -475,6 +518,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         final_energies: None,
         momentum_drift: None,
         constraints: None,
+        step_error: None,
         failure: Some(RunFailure { time: 0.0, message }),
     };
     Simulation {

@@ -408,8 +408,8 @@ fn rosenbrock_crosses_a_relaxation_jump_of_van_der_pol_with_mu_1000() {
 
 #[test]
 fn dense_output_agrees_with_the_solution_between_steps() {
-    // x = sin t, sampled far more densely than the steps.
-    let times = linspace(0.0, 20.0, 2001);
+    // x = sin t, sampled far more densely than the steps (at least four outputs a step).
+    let times = linspace(0.0, 20.0, 4001);
     let cases = [
         (Method::DormandPrince, tolerances(1e-10, 1e-10), 1e-8),
         (Method::Rosenbrock, tolerances(1e-5, 1e-5), 1e-3),
@@ -475,10 +475,48 @@ fn rk4_outputs_on_the_grid_are_the_step_states() {
     }
     assert_eq!(y, observed[10].1);
     assert_eq!(stats.steps, 10);
+    // Four stages per step, and the slope at the last step's end for its error estimate (every
+    // other step's end slope is the next step's first stage).
     assert_eq!(
-        stats.rhs_evaluations, 40,
+        stats.rhs_evaluations, 41,
         "outputs on the grid need no interpolation"
     );
+}
+
+#[test]
+fn rk4_error_estimate_measures_the_local_error_of_its_steps() {
+    // y' = λy, one step from y = 1, z = hλ: the order-4 solution is 1 + z + z²/2 + z³/6 + z⁴/24,
+    // the embedded order-3 one (weights 1/6, 1/3, 1/3, 0, 1/6 on k1..k4 and the end slope k5)
+    // is 1 + z + z²/2 + z³/6 + z⁴/36 + z⁵/144, so the estimate is |z⁴/72 − z⁵/144|: the
+    // order-3 solution's local error, falling 16-fold when h is halved.
+    let estimate = |h: f64, lambda: f64| {
+        let mut growth = ode(1, move |_, y, dydt| dydt[0] = lambda * y[0]);
+        let settings = tolerances(0.0, 1e-6);
+        let method = Method::Rk4 { step: h };
+        let (_, stats, _) =
+            solve(&method, &mut growth, &[1.0], (0.0, h), &[0.0], &settings).expect("one step");
+        stats
+            .largest_step_error
+            .expect("RK4 measures its steps")
+            .norm
+            * 1e-6
+    };
+    for h in [0.1, 0.05, 0.025] {
+        let z: f64 = -h;
+        let expected = (z.powi(4) / 72.0 - z.powi(5) / 144.0).abs();
+        let measured = estimate(h, -1.0);
+        assert!(
+            (measured / expected - 1.0).abs() < 1e-8,
+            "h = {h}: estimate {measured:e}, expected {expected:e}"
+        );
+    }
+    let ratio = estimate(0.1, -1.0) / estimate(0.05, -1.0);
+    assert!(
+        (ratio - 16.0).abs() < 1.0,
+        "halving h divides the estimate by {ratio}"
+    );
+    // Near the stability limit (hλ = −2.5, the limit is −2.79) the step is far too long for 1e-6.
+    assert!(estimate(2.5, -1.0) > 1e-2);
 }
 
 /// Error of x(2) for x'' = −x with a fixed step `h` (adaptive methods forced to it by a tolerance

@@ -42,6 +42,7 @@ mod plot {
                 final_energies: None,
                 momentum_drift: None,
                 constraints: None,
+                step_error: None,
                 failure: None,
             },
         }
