@@ -625,13 +625,23 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
         None => Ok(()),
     };
-    // Before the report, which stays the last thing written (JSON readers take the last object).
-    if let Some(warning) = lsdc::simulate::run::step_error_warning(&simulation.report) {
-        report_diagnostics(&compilation, &[warning], args.report);
-    }
+    let warning = lsdc::simulate::run::step_error_warning(&simulation.report);
     match args.report {
-        Format::Text => eprint!("{}", text::run_report(&simulation.report)),
-        Format::Json => eprintln!("{}", json(&simulation.report)),
+        Format::Text => {
+            if let Some(warning) = warning {
+                report_diagnostics(&compilation, &[warning], Format::Text);
+            }
+            eprint!("{}", text::run_report(&simulation.report));
+        }
+        // The warnings about the run go inside its report: standard output carries the samples.
+        Format::Json => {
+            let mut value = serde_json::to_value(&simulation.report).unwrap_or_default();
+            if let Some(warning) = warning {
+                let sources = &compilation.workspace.sources;
+                value["warnings"] = render::to_json_value(sources, &[warning]);
+            }
+            eprintln!("{}", json(&value));
+        }
     }
     if let Err(message) = plotted {
         return usage_error(&message);

@@ -329,3 +329,38 @@ fn eval_reports_a_singular_mass_matrix_for_aba_only() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn an_rk4_step_too_long_for_the_tolerances_is_warned_not_silent() {
+    // The squeezer's stiff spring at h = 1e-3 puts RK4 near its stability limit: the run exits
+    // with 0 but its positions are 0.8 rad off the test set's reference at t = 0.03.
+    let squeezer = [
+        "simulate",
+        "examples/hard/squeezer.lsd",
+        "--integrator",
+        "rk4",
+    ];
+    let long = [&squeezer[..], &["--step", "1e-3", "--tolerance", "1e-8"]].concat();
+    let (code, _, stderr) = lsdc(&long);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("warning[W0902]"), "{stderr}");
+    assert!(
+        stderr.contains("largest local error estimate of a step"),
+        "{stderr}"
+    );
+    let json = [&long[..], &["--report", "json"]].concat();
+    let (_, stdout, stderr) = lsdc(&json);
+    let report: serde_json::Value = serde_json::from_str(&stderr).expect("the report is JSON");
+    assert_eq!(report["warnings"][0]["code"], "W0902", "{stderr}");
+    assert!(report["step_error"]["largest"].as_f64().unwrap() > 1.0);
+    assert!(
+        stdout.starts_with("time,"),
+        "the samples alone on standard output"
+    );
+    // A hundred times shorter, the same run meets its tolerances and says nothing (at 1e-4 its
+    // estimate is still 9 times the tolerance, and its error 7.8e-6 against the reference).
+    let short = [&squeezer[..], &["--step", "1e-5", "--tolerance", "1e-6"]].concat();
+    let (code, _, stderr) = lsdc(&short);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(!stderr.contains("W0902"), "{stderr}");
+}
