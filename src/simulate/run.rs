@@ -307,6 +307,7 @@ pub fn run_from(
     };
     // What the start found of the loops (rank, redundant rows) holds for the outputs too.
     sampler.system.loops = system.loops.clone();
+    sampler.system.loops.samples_outputs = true;
     // The work of non-conservative efforts rides along as one more state (not with the
     // variational integrator, whose steps are its own).
     let motion = y0.len();
