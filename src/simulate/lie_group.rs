@@ -13,11 +13,11 @@
 //! round-off: a step turns a joint by far less than a radian, so a few terms suffice, and one
 //! formula serves both groups without the cancellations of the closed forms at small angles.
 
-use nalgebra::{DMatrix, DVector, DVectorView, Matrix3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{DVector, Matrix6, SMatrix, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use crate::dynamics::joint::{quaternion, JointType};
 use crate::dynamics::model::Model;
-use crate::spatial::{self, Motion, Pose};
+use crate::spatial::{self, Pose};
 
 /// A joint that moves on a group: where its positions and velocities start, and which group.
 #[derive(Clone, Copy, Debug)]
@@ -40,20 +40,28 @@ impl GroupJoint {
         self.v_offset..self.v_offset + self.nv()
     }
 
-    /// The bracket ad_X as a matrix on the joint's velocities.
-    fn bracket(&self, x: &[f64]) -> DMatrix<f64> {
-        if !self.free {
-            return rotation_bracket(x);
-        }
-        let twist = Motion::from_column_slice(x);
-        let mut ad = DMatrix::zeros(6, 6);
-        for k in 0..6 {
-            let mut unit = Motion::zeros();
-            unit[k] = 1.0;
-            ad.column_mut(k)
-                .copy_from(&spatial::cross_motion(&twist, &unit));
+    /// The bracket ad_X in a 6 × 6 matrix: a spherical joint's ω̂ in the leading 3 × 3 block
+    /// (the series below then keep the identity or zero in the rest, and act on velocities
+    /// padded with zeros as they would on the three), a free joint's motion cross product
+    /// [ω̂ 0; v̂ ω̂].
+    fn bracket(&self, x: &[f64]) -> Matrix6<f64> {
+        let mut ad = Matrix6::zeros();
+        let spin = spatial::skew(&Vector3::new(x[0], x[1], x[2]));
+        ad.fixed_view_mut::<3, 3>(0, 0).copy_from(&spin);
+        if self.free {
+            ad.fixed_view_mut::<3, 3>(3, 3).copy_from(&spin);
+            let drift = spatial::skew(&Vector3::new(x[3], x[4], x[5]));
+            ad.fixed_view_mut::<3, 3>(3, 0).copy_from(&drift);
         }
         ad
+    }
+
+    /// The joint's entries of a vector over the velocities, padded with zeros to six.
+    fn padded(&self, v: &DVector<f64>) -> Vector6<f64> {
+        let mut out = Vector6::zeros();
+        out.rows_mut(0, self.nv())
+            .copy_from(&v.rows(self.v_offset, self.nv()));
+        out
     }
 
     /// q0 · exp(X) for this joint's positions.
@@ -73,19 +81,14 @@ impl GroupJoint {
             quaternion(&q0[self.q_offset + 3..self.q_offset + 7]),
         );
         // SE(3)'s exponential: the rotation exp(ω̂), the translation J_l(ω) v.
-        let shift = series(&rotation_bracket(x), 1.0, Weights::Jacobian)
-            * DVector::from_column_slice(&x[3..6]);
-        let step = Pose::from_parts(Translation3::new(shift[0], shift[1], shift[2]), turn);
+        let spin = spatial::skew(&Vector3::new(x[0], x[1], x[2]));
+        let shift =
+            weighted(&powers(&spin), |n| 1.0 / (n + 1) as f64) * Vector3::new(x[3], x[4], x[5]);
+        let step = Pose::from_parts(Translation3::from(shift), turn);
         let end = start * step;
         q[self.q_offset..self.q_offset + 3].copy_from_slice(end.translation.vector.as_slice());
         write_quaternion(&end.rotation, &mut q[self.q_offset + 3..self.q_offset + 7]);
     }
-}
-
-/// ω̂ for the rotation part ω of X: the bracket on so(3).
-fn rotation_bracket(x: &[f64]) -> DMatrix<f64> {
-    let spin: Matrix3<f64> = spatial::skew(&Vector3::new(x[0], x[1], x[2]));
-    DMatrix::from_iterator(3, 3, spin.iter().copied())
 }
 
 fn write_quaternion(rotation: &UnitQuaternion<f64>, out: &mut [f64]) {
@@ -93,71 +96,69 @@ fn write_quaternion(rotation: &UnitQuaternion<f64>, out: &mut [f64]) {
     out.copy_from_slice(&[q.w, q.i, q.j, q.k]);
 }
 
-/// The coefficients of a series in ad: 1/(n + 1)! for the exponential's Jacobians, 1/n! for
-/// the adjoint.
-#[derive(Clone, Copy)]
-enum Weights {
-    Jacobian,
-    Adjoint,
-}
-
-/// Σ (scale · ad)ⁿ · weight(n), to round-off.
-fn series(ad: &DMatrix<f64>, scale: f64, weights: Weights) -> DMatrix<f64> {
-    let n = ad.nrows();
-    let scaled = ad * scale;
-    let mut power = DMatrix::identity(n, n);
-    let mut sum = DMatrix::identity(n, n);
-    for k in 1..60 {
-        let divisor = match weights {
-            Weights::Jacobian => (k + 1) as f64,
-            Weights::Adjoint => k as f64,
-        };
-        power = &scaled * &power / divisor;
-        sum += &power;
-        if power.amax() < 1e-18 {
+/// adⁿ/n! for n = 0, 1, … until they fall below round-off (the exponential's series; a step
+/// turns a joint by far less than a radian, so a few terms).
+fn powers<const N: usize>(ad: &SMatrix<f64, N, N>) -> Vec<SMatrix<f64, N, N>> {
+    let mut powers = vec![SMatrix::<f64, N, N>::identity()];
+    for n in 1..60 {
+        let next = ad * powers[n - 1] / n as f64;
+        let small = next.amax() < 1e-18;
+        powers.push(next);
+        if small {
             break;
         }
     }
-    sum
+    powers
 }
 
-fn inverse(matrix: DMatrix<f64>) -> DMatrix<f64> {
+/// Σ weight(n) · adⁿ/n! over the powers: weight 1/(n + 1) gives J_l, (−1)ⁿ/(n + 1) J_r,
+/// sⁿ/(n + 1) and sⁿ those at sX (J_l(sX), Ad_{exp(sX)}).
+fn weighted<const N: usize>(
+    powers: &[SMatrix<f64, N, N>],
+    weight: impl Fn(usize) -> f64,
+) -> SMatrix<f64, N, N> {
+    powers
+        .iter()
+        .enumerate()
+        .fold(SMatrix::zeros(), |sum, (n, power)| sum + power * weight(n))
+}
+
+/// The inverse of an exponential's Jacobian, invertible for turns below 2π. A step that turns
+/// further has diverged: NaN then makes it fail as not finite.
+fn inverse(matrix: Matrix6<f64>) -> Matrix6<f64> {
     matrix
         .try_inverse()
-        .expect("the exponential's Jacobian is invertible for turns below 2π")
+        .unwrap_or_else(|| Matrix6::from_element(f64::NAN))
 }
 
 /// The operators of one group joint's discrete Euler–Lagrange equations at increment X.
 struct StepOperators {
     /// J_l(X)⁻ᵀ, which carries the step's momentum to its start.
-    start_transport: DMatrix<f64>,
+    start_transport: Matrix6<f64>,
     /// J_r(X)⁻ᵀ, which carries it to its end.
-    end_transport: DMatrix<f64>,
+    end_transport: Matrix6<f64>,
     /// J_r(X/2)ᵀ and Ad_{exp(−X/2)}ᵀ, which carry the midpoint's forces to the increment and to
     /// the step's start.
-    midpoint_to_increment: DMatrix<f64>,
-    midpoint_to_start: DMatrix<f64>,
+    midpoint_to_increment: Matrix6<f64>,
+    midpoint_to_start: Matrix6<f64>,
 }
 
 impl StepOperators {
+    /// The four from one series of powers of ad_X.
     fn at(joint: &GroupJoint, x: &[f64]) -> StepOperators {
-        let ad = joint.bracket(x);
+        let powers = powers(&joint.bracket(x));
+        let jacobian = |scale: f64| weighted(&powers, |n| scale.powi(n as i32) / (n + 1) as f64);
         StepOperators {
-            start_transport: inverse(series(&ad, 1.0, Weights::Jacobian)).transpose(),
-            end_transport: inverse(series(&ad, -1.0, Weights::Jacobian)).transpose(),
-            midpoint_to_increment: series(&ad, -0.5, Weights::Jacobian).transpose(),
-            midpoint_to_start: series(&ad, -0.5, Weights::Adjoint).transpose(),
+            start_transport: inverse(jacobian(1.0)).transpose(),
+            end_transport: inverse(jacobian(-1.0)).transpose(),
+            midpoint_to_increment: jacobian(-0.5).transpose(),
+            midpoint_to_start: weighted(&powers, |n| (-0.5f64).powi(n as i32)).transpose(),
         }
     }
 
     /// Π = M v̄ + h/2 J_r(X/2)ᵀ g: the derivative of the discrete Lagrangian along X.
-    fn mean_momentum(
-        &self,
-        mass_mean: DVectorView<f64>,
-        forces: DVectorView<f64>,
-        h: f64,
-    ) -> DVector<f64> {
-        mass_mean + &self.midpoint_to_increment * forces * (0.5 * h)
+    fn mean_momentum(&self, mass_mean: Vector6<f64>, forces: Vector6<f64>, h: f64) -> Vector6<f64> {
+        mass_mean + self.midpoint_to_increment * forces * (0.5 * h)
     }
 }
 
@@ -260,11 +261,13 @@ impl Configuration {
         }
         for joint in &self.groups {
             let range = joint.velocities();
-            let ad = joint.bracket(&end.increment.as_slice()[range.clone()]);
-            let end_to_increment = inverse(series(&ad, -1.0, Weights::Jacobian));
-            let change = end_to_increment * correction.rows(range.start, range.len());
+            let powers = powers(&joint.bracket(&end.increment.as_slice()[range.clone()]));
+            let end_to_increment = inverse(weighted(&powers, |n| {
+                (-1.0f64).powi(n as i32) / (n + 1) as f64
+            }));
+            let change = end_to_increment * joint.padded(correction);
             let mut increment = end.increment.rows_mut(range.start, range.len());
-            increment += change;
+            increment += change.rows(0, range.len());
             joint.advance(
                 q0.as_slice(),
                 &end.increment.as_slice()[range],
@@ -286,15 +289,16 @@ impl Configuration {
         balance: &mut DVector<f64>,
     ) {
         for joint in &self.groups {
-            let range = joint.velocities();
-            let operators = StepOperators::at(joint, &end.increment.as_slice()[range.clone()]);
-            let (from, n) = (range.start, range.len());
-            let g = forces.rows(from, n);
-            let pi = operators.mean_momentum(mass_mean.rows(from, n), g, h);
-            let start = &operators.start_transport * pi
-                - &operators.midpoint_to_start * g * h
-                - start_momentum.rows(from, n);
-            balance.rows_mut(from, n).copy_from(&start);
+            let operators = StepOperators::at(joint, &end.increment.as_slice()[joint.velocities()]);
+            let g = joint.padded(forces);
+            let pi = operators.mean_momentum(joint.padded(mass_mean), g, h);
+            let start = operators.start_transport * pi
+                - operators.midpoint_to_start * g * h
+                - joint.padded(start_momentum);
+            let n = joint.nv();
+            balance
+                .rows_mut(joint.v_offset, n)
+                .copy_from(&start.rows(0, n));
         }
     }
 
@@ -308,13 +312,13 @@ impl Configuration {
         momentum: &mut DVector<f64>,
     ) {
         for joint in &self.groups {
-            let range = joint.velocities();
-            let operators = StepOperators::at(joint, &end.increment.as_slice()[range.clone()]);
-            let (from, n) = (range.start, range.len());
-            let pi = operators.mean_momentum(mass_mean.rows(from, n), forces.rows(from, n), h);
+            let operators = StepOperators::at(joint, &end.increment.as_slice()[joint.velocities()]);
+            let pi = operators.mean_momentum(joint.padded(mass_mean), joint.padded(forces), h);
+            let n = joint.nv();
+            let end_momentum = operators.end_transport * pi;
             momentum
-                .rows_mut(from, n)
-                .copy_from(&(&operators.end_transport * pi));
+                .rows_mut(joint.v_offset, n)
+                .copy_from(&end_momentum.rows(0, n));
         }
     }
 

@@ -4,14 +4,26 @@
 //! momentum-preserving, so the energy error stays bounded instead of drifting. Each step solves
 //!   p_k = M(q̄) v̄ − h/2 (∂T/∂q(q̄, v̄) + Q(q̄, v̄))   for q_{k+1},
 //! then p_{k+1} = M(q̄) v̄ + h/2 (∂T/∂q(q̄, v̄) + Q(q̄, v̄)), with q̄, v̄ the midpoint and mean
-//! velocity of the step and Q the generalised efforts. Needs chain joints (no quaternions).
+//! velocity of the step and Q the generalised efforts.
+//!
+//! Spherical and free joints step on their groups, SO(3) and SE(3) (`lie_group`): the discrete
+//! Lagrangian is h L(q0 · exp(X/2), X/h) with q1 = q0 · exp(X), and its discrete Euler–Lagrange
+//! equations, written in the velocities' space with left-trivialised variations δq = q·η, are
+//!   p_k = J_l(X)⁻ᵀ Π − h Ad_{exp(−X/2)}ᵀ g,   p_{k+1} = J_r(X)⁻ᵀ Π,   Π = M v̄ + h/2 J_r(X/2)ᵀ g,
+//! with v̄ = X/h, g = ∂T/∂q + Q at the midpoint and J_r, J_l the exponential's Jacobians: on
+//! coordinates they are the identity and these are the equations above. The discrete Lagrangian
+//! is symmetric (second order); the quaternions are products of unit quaternions. References:
+//! Marsden and West, Acta Numerica 10 (2001) 357–514; Lee, Leok and McClamroch, Comput. Methods
+//! Appl. Mech. Engrg. 196 (2007) 2907–2924; Bou-Rabee and Marsden, Found. Comput. Math. 9 (2009)
+//! 197–219; `docs/commands.md`, *Rotations on the group*.
 //!
 //! With loops the same discrete Lagrangian is constrained (RATTLE): the step also solves for the
 //! impulse h·Gᵀλ of the constraint forces at its start so that the positions at its end close
 //! every loop, and the end momentum is projected so that the velocities satisfy G v = 0. The
 //! complementary links' coordinates carry no inertia; the constrained systems are solved by the
-//! null-space method in the least-squares sense, so redundant constraints and motions without
-//! mass cost nothing special.
+//! null-space method (Leyendecker, Marsden and Ortiz, ZAMM 88 (2008) 677–708) in the
+//! least-squares sense, so redundant constraints cost nothing special, and on the allowed
+//! motions that carry mass: those without mass are left at rest (see `with_mass`).
 
 use std::fmt;
 
@@ -409,6 +421,10 @@ pub fn integrate(
                 )
                 .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
             configuration.correct(&q, &mut end, &correction);
+            if end.positions.iter().any(|x| !x.is_finite()) {
+                // Diverged: reported below, rather than iterated on.
+                break;
+            }
             let (size, scale) = (correction.amax(), 1.0 + end.positions.amax());
             let stalled = size <= ROUND_OFF * scale && size >= 0.5 * previous;
             if size <= CONVERGED * scale || stalled {
