@@ -9,9 +9,10 @@
 //! The discrete Euler–Lagrange equations on a group need, per joint, the derivatives of its
 //! exponential (left-trivialised: exp(X + δX) = exp(X) · exp(J_r(X) δX) to first order),
 //! J_r(X) = Σ (−ad_X)ⁿ/(n + 1)!, J_l(X) = Σ ad_Xⁿ/(n + 1)! and Ad_{exp X} = Σ ad_Xⁿ/n!, with
-//! ad the Lie bracket (ω̂ on so(3), the motion cross product on se(3)). The series are summed to
-//! round-off: a step turns a joint by far less than a radian, so a few terms suffice, and one
-//! formula serves both groups without the cancellations of the closed forms at small angles.
+//! ad the Lie bracket (ω̂ on so(3), the motion cross product on se(3)). All of them are sums of
+//! one sequence of powers ad_Xⁿ/n! with scalar weights, taken to round-off: a step turns a joint
+//! by far less than a radian, so a few terms suffice, and one formula serves both groups without
+//! the cancellations of the closed forms at small angles.
 
 use nalgebra::{DVector, Matrix6, SMatrix, Translation3, UnitQuaternion, Vector3, Vector6};
 
