@@ -127,7 +127,7 @@ fn the_heavy_top_keeps_its_energy_bounded_and_its_vertical_momentum() {
 }
 
 #[test]
-fn a_torque_free_body_keeps_its_momentum_to_round_off_and_its_energy_bounded() {
+fn torque_free_bodies_keep_their_momenta_to_the_newton_tolerance_and_their_energy_bounded() {
     // Principal moments 1, 2, 3, spun about the intermediate axis: it flips over and back.
     // Steps of 5 ms, large for the flips: momentum is conserved whatever the step.
     for name in ["free_body", "satellite_springs"] {
