@@ -319,11 +319,11 @@ fn constrained_solve(
 /// The allowed motions `allowed` less the `massless` that carry no mass under `mass`: the
 /// eigenvectors of its reduced mass matrix with the largest eigenvalues, mapped back. Without
 /// mass, such a motion (a point-mass rod's spin about its own axis) is undetermined by the
-/// dynamics; the step leaves it at rest, as the equations of motion do. On joints in their own
-/// coordinates the midpoint's discrete Lagrangian does not depend on it and the least-squares
-/// solve would leave it alone anyway; on a rotation group it does at second order (exp(X) is not
-/// exp of the parts composed), and the step's equation along it is an ill-posed one that the
-/// dynamics do not need.
+/// dynamics; the step leaves it at rest, as the equations of motion do. The step's equation
+/// along it is degenerate (on a rotation group its increment enters at second order only, exp(X)
+/// not being the exponentials of X's parts composed), and the least-squares solve's relative
+/// cutoff cannot tell it from a small pivot: on the Delta robot its corrections grew without
+/// bound.
 fn with_mass(mass: &DMatrix<f64>, allowed: DMatrix<f64>, massless: usize) -> DMatrix<f64> {
     if massless == 0 || allowed.ncols() == 0 {
         return allowed;
