@@ -2,7 +2,8 @@
 //! velocities, for the variational integrator. One pass gathers each subtree's momentum h_c; the
 //! derivative along coordinate k of joint J (child c) is h_c · ∂v_c/∂q_k, where moving q_k turns
 //! the parent's velocity as seen from c (−S_k × Xv_λ) and changes the joint's own velocity.
-//! Joints must be of the chain type (positions and velocities alike).
+//! For a spherical or free joint the derivative is left-trivialised: along the motion
+//! q · exp(ε e_k) of its group (see `simulate::lie_group`), at fixed body velocity.
 
 use nalgebra::DVector;
 
@@ -33,17 +34,23 @@ pub fn kinetic_energy_gradient(
     }
     let mut gradient = DVector::zeros(model.nv);
     for (k, joint) in model.joints.iter().enumerate() {
-        if joint.kind != JointType::Chain {
-            return Err(EvalError::NotGeometric(
-                "a spherical or free joint (use another integrator)",
-            ));
-        }
         let state = &data.states[k];
         let n_joint = joint.nv();
-        let rates = &v[joint.v_offset..joint.v_offset + n_joint];
-        let coordinates = &q[joint.q_offset..joint.q_offset + n_joint];
         let parent_seen =
             spatial::motion_to_child(&state.pose, &data.velocity[joint.dynamic_parent]);
+        if joint.kind != JointType::Chain {
+            // Moving the joint by exp(ε e_c) turns the child by the column S_c in its own frame;
+            // its velocity S v stays (S is constant in the child's frame), only the parent's
+            // velocity seen from the child turns.
+            for c in 0..n_joint {
+                let column = state.subspace.column(c);
+                let change = -spatial::cross_motion(column, &parent_seen);
+                gradient[joint.v_offset + c] = momentum[joint.child].dot(&change);
+            }
+            continue;
+        }
+        let rates = &v[joint.v_offset..joint.v_offset + n_joint];
+        let coordinates = &q[joint.q_offset..joint.q_offset + n_joint];
         let d = joint
             .chain
             .chain_motion(coordinates, None, &model.unknowns)?

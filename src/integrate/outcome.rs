@@ -95,10 +95,6 @@ pub enum InputError {
     },
     /// The initial step is not a positive number.
     InitialStep,
-    /// The method cannot integrate this system, for this reason (the caller's method choice).
-    Unsuitable {
-        reason: &'static str,
-    },
 }
 
 /// An integration that stopped early: when, why, and the work done until then.
@@ -150,7 +146,6 @@ impl fmt::Display for InputError {
                 "the step limits [{min_step}, {max_step}] are not an interval of positive steps"
             ),
             InputError::InitialStep => write!(f, "the initial step must be a positive number"),
-            InputError::Unsuitable { reason } => write!(f, "{reason}"),
         }
     }
 }

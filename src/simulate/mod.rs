@@ -5,6 +5,7 @@ pub mod batch;
 pub mod branch;
 pub mod consistent;
 pub mod constraints;
+pub mod lie_group;
 pub mod prepare;
 pub mod run;
 pub mod settings;

@@ -20,8 +20,8 @@ use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
 use crate::integrate::{
-    integrate, CallbackError, Failure, InputError, IntegrationError, Method, OdeSystem,
-    Settings as IntegratorSettings, Stats,
+    integrate, CallbackError, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings,
+    Stats,
 };
 
 impl OdeSystem for MechanicalSystem<'_> {
@@ -361,25 +361,15 @@ pub fn run_from(
             let system = &mut *with_work.0;
             // The RATTLE steps keep the loops closed themselves.
             system.loops.stabilisation = crate::dynamics::loops::Stabilisation::Integrator;
-            if model.joints.iter().any(|j| j.kind != JointType::Chain) {
-                Err(IntegrationError {
-                    time: 0.0,
-                    failure: Failure::InvalidInput(InputError::Unsuitable {
-                        reason: "the symplectic integrator needs joints in their own coordinates; this mechanism has a spherical or free joint (use dopri5)",
-                    }),
-                    stats: Stats::default(),
-                })
-            } else {
-                variational::integrate(
-                    system,
-                    0.0,
-                    &y0,
-                    settings.duration,
-                    fixed_step,
-                    &outputs,
-                    &mut observer,
-                )
-            }
+            variational::integrate(
+                system,
+                0.0,
+                &y0,
+                settings.duration,
+                fixed_step,
+                &outputs,
+                &mut observer,
+            )
         }
     };
     let run_seconds = started.elapsed().as_secs_f64();

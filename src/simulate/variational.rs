@@ -4,19 +4,32 @@
 //! momentum-preserving, so the energy error stays bounded instead of drifting. Each step solves
 //!   p_k = M(q̄) v̄ − h/2 (∂T/∂q(q̄, v̄) + Q(q̄, v̄))   for q_{k+1},
 //! then p_{k+1} = M(q̄) v̄ + h/2 (∂T/∂q(q̄, v̄) + Q(q̄, v̄)), with q̄, v̄ the midpoint and mean
-//! velocity of the step and Q the generalised efforts. Needs chain joints (no quaternions).
+//! velocity of the step and Q the generalised efforts.
+//!
+//! Spherical and free joints step on their groups, SO(3) and SE(3) (`lie_group`): the discrete
+//! Lagrangian is h L(q0 · exp(X/2), X/h) with q1 = q0 · exp(X), and its discrete Euler–Lagrange
+//! equations, written in the velocities' space with left-trivialised variations δq = q·η, are
+//!   p_k = J_l(X)⁻ᵀ Π − h Ad_{exp(−X/2)}ᵀ g,   p_{k+1} = J_r(X)⁻ᵀ Π,   Π = M v̄ + h/2 J_r(X/2)ᵀ g,
+//! with v̄ = X/h, g = ∂T/∂q + Q at the midpoint and J_r, J_l the exponential's Jacobians: on
+//! coordinates they are the identity and these are the equations above. The discrete Lagrangian
+//! is symmetric (second order); the quaternions are products of unit quaternions. References:
+//! Marsden and West, Acta Numerica 10 (2001) 357–514; Lee, Leok and McClamroch, Comput. Methods
+//! Appl. Mech. Engrg. 196 (2007) 2907–2924; Bou-Rabee and Marsden, Found. Comput. Math. 9 (2009)
+//! 197–219; `docs/commands.md`, *Rotations on the group*.
 //!
 //! With loops the same discrete Lagrangian is constrained (RATTLE): the step also solves for the
 //! impulse h·Gᵀλ of the constraint forces at its start so that the positions at its end close
 //! every loop, and the end momentum is projected so that the velocities satisfy G v = 0. The
 //! complementary links' coordinates carry no inertia; the constrained systems are solved by the
-//! null-space method in the least-squares sense, so redundant constraints and motions without
-//! mass cost nothing special.
+//! null-space method (Leyendecker, Marsden and Ortiz, ZAMM 88 (2008) 677–708) in the
+//! least-squares sense, so redundant constraints cost nothing special, and on the allowed
+//! motions that carry mass: those without mass are left at rest (see `with_mass`).
 
 use std::fmt;
 
 use nalgebra::{DMatrix, DVector};
 
+use super::lie_group::Configuration;
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
@@ -52,13 +65,20 @@ impl MechanicalSystem<'_> {
         t: f64,
     ) -> Result<DVector<f64>, SystemError> {
         let model = self.model;
-        forward_kinematics(model, &mut self.data, q, v)?;
-        let declared = Declared {
-            model,
-            coordinates: q,
-            rates: v,
+        let efforts = if model.nq == model.nv {
+            // Every joint is a chain: the state is the declared coordinates and rates.
+            forward_kinematics(model, &mut self.data, q, v)?;
+            let declared = Declared {
+                model,
+                coordinates: q,
+                rates: v,
+            };
+            evaluate(model, &mut self.data, &declared, t)?
+        } else {
+            // The spherical and free joints' declared angles are recovered from their
+            // quaternions, as for the other integrators.
+            self.efforts(t, q, v)?
         };
-        let efforts = evaluate(model, &mut self.data, &declared, t)?;
         let zero = vec![0.0; model.nv];
         let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external)?;
         let mut forcing = efforts.tau;
@@ -107,7 +127,19 @@ impl MechanicalSystem<'_> {
         let basis = Basis::at(&start);
         let allowed = allowed_by(&start, basis, &self.loops.structure.free)
             .map_err(|e| self.loop_error(&e))?;
+        let massless = self.massless_motions(basis);
+        let allowed = with_mass(&self.mass(q)?, allowed, massless);
         Ok(Some(StepStart { basis, allowed }))
+    }
+
+    /// How many of the allowed motions spanned as `basis` says carry no mass: those the
+    /// loops' structure counted, and with the orthonormal basis the idle coordinates' too.
+    fn massless_motions(&self, basis: Basis) -> usize {
+        let structure = &self.loops.structure;
+        match basis {
+            Basis::Free => structure.massless,
+            Basis::Orthonormal => structure.massless + structure.idle.len(),
+        }
     }
 
     /// The Newton correction of q1 for the momentum residual `rhs` (scaled by h), and how far
@@ -134,9 +166,18 @@ impl MechanicalSystem<'_> {
             true => DVector::zeros(end.len()),
             false => end.kept(&-&closure),
         };
-        let free = &self.loops.structure.free;
-        let correction = constrained_solve(mass, &end, Some(start), start.basis, free, rhs, &rows)
-            .map_err(|e| self.loop_error(&e))?;
+        let (free, massless) = (
+            &self.loops.structure.free,
+            self.massless_motions(start.basis),
+        );
+        let spans = Spans {
+            start: Some(start),
+            basis: start.basis,
+            free,
+            massless,
+        };
+        let correction =
+            constrained_solve(mass, &end, &spans, rhs, &rows).map_err(|e| self.loop_error(&e))?;
         Ok((correction, open))
     }
 
@@ -155,9 +196,15 @@ impl MechanicalSystem<'_> {
         let (_, g) = self.closure(q1)?;
         let end = Factored::new(&g, &self.loops.structure.choice);
         let rows = DVector::zeros(self.loops.structure.choice.rows.len());
-        let free = &self.loops.structure.free;
-        let velocity = constrained_solve(&mass, &end, None, basis, free, p, &rows)
-            .map_err(|e| self.loop_error(&e))?;
+        let (free, massless) = (&self.loops.structure.free, self.massless_motions(basis));
+        let spans = Spans {
+            start: None,
+            basis,
+            free,
+            massless,
+        };
+        let velocity =
+            constrained_solve(&mass, &end, &spans, p, &rows).map_err(|e| self.loop_error(&e))?;
         Ok((velocity, mass))
     }
 
@@ -226,39 +273,74 @@ fn allowed_by(
     })
 }
 
+/// How `constrained_solve` spans the motions the loops allow: the step's start (None when the
+/// start is the end), the basis, the free coordinates, and how many allowed motions carry no
+/// mass.
+struct Spans<'s> {
+    start: Option<&'s StepStart>,
+    basis: Basis,
+    free: &'s [usize],
+    massless: usize,
+}
+
 /// Solves `a x − g_startᵀ w = f` (for some w) with `g_end x = c` on the kept rows by the
 /// null-space method: x is the minimum-norm solution of the constraints plus a motion they
 /// allow, chosen so that the first equation holds on the motions the start's constraints allow
-/// (`start`; None when the start is the end). The allowed motions are spanned as `basis` says.
-/// The small system over them is solved in the least-squares sense, so motions without mass
-/// cost nothing special.
+/// (`spans.start`). The allowed motions are spanned as `spans.basis` says, less those without
+/// mass (see `with_mass`). The small system over them is solved in the least-squares sense.
 fn constrained_solve(
     a: &DMatrix<f64>,
     end: &Factored,
-    start: Option<&StepStart>,
-    basis: Basis,
-    free: &[usize],
+    spans: &Spans,
     f: &DVector<f64>,
     c: &DVector<f64>,
 ) -> Result<DVector<f64>, LoopError> {
-    let (particular, allowed_end) = match basis {
+    let (particular, allowed_end) = match spans.basis {
         Basis::Free => {
             let factor = end.damped(DAMPING).map_err(singular)?;
-            (factor.least_norm(c), factor.allowed_motions(free))
+            (factor.least_norm(c), factor.allowed_motions(spans.free))
         }
         Basis::Orthonormal => (
             end.least_norm(c).map_err(singular)?,
             end.dense_null_space().clone(),
         ),
     };
+    let allowed_end = with_mass(a, allowed_end, spans.massless);
     if allowed_end.ncols() == 0 {
         return Ok(particular);
     }
-    let allowed_start = start.map_or(&allowed_end, |start| &start.allowed);
+    let allowed_start = spans.start.map_or(&allowed_end, |start| &start.allowed);
     let reduced = allowed_start.transpose() * a * &allowed_end;
     let rhs = allowed_start.transpose() * (f - a * &particular);
     let z = loops::decompose_with(&reduced, 1e-12).pseudo_inverse * rhs;
     Ok(particular + allowed_end * z)
+}
+
+/// The allowed motions `allowed` less the `massless` that carry no mass under `mass`: the
+/// eigenvectors of its reduced mass matrix with the largest eigenvalues, mapped back. Without
+/// mass, such a motion (a point-mass rod's spin about its own axis) is undetermined by the
+/// dynamics; the step leaves it at rest, as the equations of motion do. The step's equation
+/// along it is degenerate (on a rotation group its increment enters at second order only, exp(X)
+/// not being the exponentials of X's parts composed), and the least-squares solve's relative
+/// cutoff cannot tell it from a small pivot: on the Delta robot its corrections grew without
+/// bound.
+fn with_mass(mass: &DMatrix<f64>, allowed: DMatrix<f64>, massless: usize) -> DMatrix<f64> {
+    if massless == 0 || allowed.ncols() == 0 {
+        return allowed;
+    }
+    let reduced = allowed.transpose() * mass * &allowed;
+    let eigen = reduced.symmetric_eigen();
+    let mut order: Vec<usize> = (0..eigen.eigenvalues.len()).collect();
+    order.sort_by(|&i, &j| eigen.eigenvalues[j].total_cmp(&eigen.eigenvalues[i]));
+    let kept = allowed.ncols().saturating_sub(massless);
+    let columns: Vec<_> = order[..kept]
+        .iter()
+        .map(|&k| eigen.eigenvectors.column(k).into_owned())
+        .collect();
+    match columns.is_empty() {
+        true => DMatrix::zeros(allowed.nrows(), 0),
+        false => allowed * DMatrix::from_columns(&columns),
+    }
 }
 
 fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, SystemError> {
@@ -278,7 +360,9 @@ pub fn integrate(
     outputs: &[f64],
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    let n = system.model.velocities();
+    let model = system.model;
+    let configuration = Configuration::of(model);
+    let positions = model.positions();
     let mut stats = Stats::default();
     let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError {
         time,
@@ -286,8 +370,8 @@ pub fn integrate(
         stats: stats.clone(),
     };
     let (mut q, mut v) = (
-        DVector::from_column_slice(&y0[..n]),
-        DVector::from_column_slice(&y0[n..]),
+        DVector::from_column_slice(&y0[..positions]),
+        DVector::from_column_slice(&y0[positions..]),
     );
     let mut t = t0;
     let mass = system
@@ -312,24 +396,36 @@ pub fn integrate(
             .allowed_motions(q.as_slice())
             .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
         let basis = start.as_ref().map_or(Basis::Free, |start| start.basis);
-        let mut q1 = &q + &v * step;
+        let mut end = configuration.first_guess(&q, &v, step);
         let mut converged = false;
         let mut previous = f64::INFINITY;
-        let (mut mass_mid, mut terms) = (DMatrix::zeros(n, n), DVector::zeros(n));
+        let (mut mass_mid, mut terms) = (DMatrix::zeros(0, 0), DVector::zeros(0));
         for _ in 0..MAX_ITERATIONS {
-            let (mid, mean) = ((&q + &q1) * 0.5, (&q1 - &q) / step);
+            let mid = configuration.midpoint(&q, &end);
+            let mean = configuration.mean_velocity(&q, &end, step);
             (mass_mid, terms) = system
                 .midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step)
                 .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
             stats.rhs_evaluations += 1;
-            let momentum = &mass_mid * &mean - &terms * (0.5 * step) - &p;
+            let mass_mean = &mass_mid * &mean;
+            let mut momentum = &mass_mean - &terms * (0.5 * step) - &p;
+            configuration.start_balance(&end, (&mass_mean, &terms), &p, step, &mut momentum);
             // Newton with the leading part of the Jacobian, M/h (scaled by h): converges quickly
             // for small h.
             let (correction, open) = system
-                .correction(&mass_mid, &start, q1.as_slice(), &(-momentum * step))
+                .correction(
+                    &mass_mid,
+                    &start,
+                    end.positions.as_slice(),
+                    &(-momentum * step),
+                )
                 .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
-            q1 += &correction;
-            let (size, scale) = (correction.amax(), 1.0 + q1.amax());
+            configuration.correct(&q, &mut end, &correction);
+            if end.positions.iter().any(|x| !x.is_finite()) {
+                // Diverged: reported below, rather than iterated on.
+                break;
+            }
+            let (size, scale) = (correction.amax(), 1.0 + end.positions.amax());
             let stalled = size <= ROUND_OFF * scale && size >= 0.5 * previous;
             if size <= CONVERGED * scale || stalled {
                 converged = open <= LEFT_OPEN;
@@ -337,21 +433,23 @@ pub fn integrate(
             }
             previous = size;
         }
-        if q1.iter().any(|x| !x.is_finite()) {
+        if end.positions.iter().any(|x| !x.is_finite()) {
             return Err(fail(t, Failure::NotFinite, &stats));
         }
         if !converged {
             let error = NotConverged { time: t, step };
             return Err(fail(t, Failure::System(error.to_string()), &stats));
         }
-        let mean = (&q1 - &q) / step;
-        let p_end = &mass_mid * &mean + &terms * (0.5 * step);
+        let mean = configuration.mean_velocity(&q, &end, step);
+        let mass_mean = &mass_mid * &mean;
+        let mut p_end = &mass_mean + &terms * (0.5 * step);
+        configuration.end_momentum(&end, (&mass_mean, &terms), step, &mut p_end);
         let (v1, mass_end) = system
-            .end_velocity(q1.as_slice(), &p_end, basis)
+            .end_velocity(end.positions.as_slice(), &p_end, basis)
             .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
         p = &mass_end * &v1;
         stats.steps += 1;
-        let mut end_state = q1.as_slice().to_vec();
+        let mut end_state = end.positions.as_slice().to_vec();
         end_state.extend_from_slice(v1.as_slice());
         // Only recorded: projecting would spoil the symplectic map.
         system
@@ -359,7 +457,7 @@ pub fn integrate(
             .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
         while next_output < outputs.len() && outputs[next_output] <= t_next {
             let s = (outputs[next_output] - t) / step;
-            let y = hermite(&q, &v, &q1, &v1, s, step);
+            let y = configuration.interpolate((&q, &v), (&end, &v1), s, step);
             observer(outputs[next_output], &y).map_err(|m| {
                 fail(
                     outputs[next_output],
@@ -369,7 +467,7 @@ pub fn integrate(
             })?;
             next_output += 1;
         }
-        (q, v, t) = (q1, v1, t_next);
+        (q, v, t) = (end.positions, v1, t_next);
     }
     let mut y = q.as_slice().to_vec();
     y.extend_from_slice(v.as_slice());
@@ -401,32 +499,4 @@ impl std::error::Error for NotConverged {}
 /// round-off divided by almost nothing.
 fn step_count(t0: f64, t_end: f64, h: f64) -> usize {
     ((t_end - t0) / h * (1.0 - 1e-12)).ceil().max(1.0) as usize
-}
-
-/// Cubic Hermite interpolation of positions (and its derivative for velocities) at fraction s.
-fn hermite(
-    q0: &DVector<f64>,
-    v0: &DVector<f64>,
-    q1: &DVector<f64>,
-    v1: &DVector<f64>,
-    s: f64,
-    h: f64,
-) -> Vec<f64> {
-    let (h00, h10, h01, h11) = (
-        2.0 * s * s * s - 3.0 * s * s + 1.0,
-        s * s * s - 2.0 * s * s + s,
-        -2.0 * s * s * s + 3.0 * s * s,
-        s * s * s - s * s,
-    );
-    let (d00, d10, d01, d11) = (
-        6.0 * s * s - 6.0 * s,
-        3.0 * s * s - 4.0 * s + 1.0,
-        -6.0 * s * s + 6.0 * s,
-        3.0 * s * s - 2.0 * s,
-    );
-    let q = q0 * h00 + v0 * (h10 * h) + q1 * h01 + v1 * (h11 * h);
-    let v = (q0 * d00 + q1 * d01) / h + v0 * d10 + v1 * d11;
-    let mut y = q.as_slice().to_vec();
-    y.extend_from_slice(v.as_slice());
-    y
 }

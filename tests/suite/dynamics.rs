@@ -218,3 +218,89 @@ fn kinetic_energy_gradient_matches_finite_differences() {
         );
     }
 }
+
+/// The positions q moved by ε along velocity `k` of the joint that owns it: a coordinate by ε,
+/// a spherical or free joint by q · exp(ε e_k) on its group (the rotation by the body-axes
+/// rotation vector, a free joint's position by ε along its body axis).
+fn moved_along(model: &Model, q: &[f64], k: usize, epsilon: f64) -> Vec<f64> {
+    use lsdc::dynamics::joint::JointType;
+    use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+    let joint = model
+        .joints
+        .iter()
+        .find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k))
+        .expect("a tree velocity");
+    let c = k - joint.v_offset;
+    let mut moved = q.to_vec();
+    let turn = |at: usize, moved: &mut Vec<f64>| {
+        let start = UnitQuaternion::from_quaternion(Quaternion::new(
+            q[at],
+            q[at + 1],
+            q[at + 2],
+            q[at + 3],
+        ));
+        let mut axis = Vector3::zeros();
+        axis[c] = epsilon;
+        let end = start * UnitQuaternion::from_scaled_axis(axis);
+        moved[at..at + 4].copy_from_slice(&[end.w, end.i, end.j, end.k]);
+        start
+    };
+    match joint.kind {
+        JointType::Chain => moved[joint.q_offset + c] += epsilon,
+        JointType::Spherical { .. } => {
+            turn(joint.q_offset, &mut moved);
+        }
+        JointType::Free { .. } if c < 3 => {
+            turn(joint.q_offset + 3, &mut moved);
+        }
+        JointType::Free { .. } => {
+            let o = joint.q_offset;
+            let rotation = UnitQuaternion::from_quaternion(Quaternion::new(
+                q[o + 3],
+                q[o + 4],
+                q[o + 5],
+                q[o + 6],
+            ));
+            let mut direction = Vector3::zeros();
+            direction[c - 3] = epsilon;
+            let shift = rotation * direction;
+            for i in 0..3 {
+                moved[o + i] += shift[i];
+            }
+        }
+    }
+    moved
+}
+
+/// ∂T/∂q along the groups of spherical and free joints (left-trivialised, at fixed body
+/// velocities) against central differences of the kinetic energy along q · exp(±ε e_k).
+#[test]
+fn kinetic_energy_gradient_on_groups_matches_finite_differences() {
+    let joints = [5usize, 7, 0, 5, 1, 7, 4];
+    let parents = [0usize, 1, 1, 2, 4, 0, 6, 3, 8];
+    let kinds: Vec<usize> = (0..parents.len())
+        .map(|i| joints[i % joints.len()])
+        .collect();
+    let numbers: Vec<f64> = (0..64).map(|i| ((i as f64) * 1.7).sin()).collect();
+    let model = model_of(&tree_program(&parents, &kinds, &numbers));
+    assert!(model.nq > model.nv, "the tree has quaternion joints");
+    let mut data = Data::new(&model);
+    let (q, v) = random_state(&model, &numbers);
+    let gradient = lsdc::dynamics::derivatives::kinetic_energy_gradient(&model, &mut data, &q, &v)
+        .expect("evaluates");
+    let energy = |q: &[f64], data: &mut Data| {
+        lsdc::dynamics::algorithms::forward_kinematics(&model, data, q, &v).expect("evaluates");
+        lsdc::dynamics::energy::kinetic_energy(&model, data)
+    };
+    let h = 1e-6;
+    for k in 0..model.nv {
+        let plus = moved_along(&model, &q, k, h);
+        let minus = moved_along(&model, &q, k, -h);
+        let numeric = (energy(&plus, &mut data) - energy(&minus, &mut data)) / (2.0 * h);
+        assert!(
+            (numeric - gradient[k]).abs() < 1e-6 * (1.0 + numeric.abs()),
+            "∂T/∂q along velocity {k}: {} vs {numeric}",
+            gradient[k]
+        );
+    }
+}

@@ -29,6 +29,7 @@ mod regression;
 mod simulation;
 mod symbolic;
 mod symbolic_equations;
+mod symplectic_groups;
 mod threads;
 mod unit_diag;
 mod unit_dynamics;
