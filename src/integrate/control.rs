@@ -9,7 +9,7 @@ const MIN_FACTOR: f64 = 0.2;
 
 /// Root-mean-square of the local error estimate, each component measured against
 /// `atol + rtol * max(|y_old|, |y_new|)`: a value at most 1 means the step meets the tolerances.
-pub(super) fn error_norm(error: &[f64], y_old: &[f64], y_new: &[f64], rtol: f64, atol: f64) -> f64 {
+pub fn error_norm(error: &[f64], y_old: &[f64], y_new: &[f64], rtol: f64, atol: f64) -> f64 {
     let sum: f64 = (0..error.len())
         .map(|i| {
             let scale = atol + rtol * y_old[i].abs().max(y_new[i].abs());

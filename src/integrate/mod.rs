@@ -20,6 +20,7 @@ pub mod rosenbrock;
 mod settings;
 mod system;
 
+pub use control::error_norm;
 pub use outcome::{Failure, InputError, IntegrationError, Stats, StepError};
 pub use settings::{Method, Settings};
 pub use system::{CallbackError, Observer, OdeSystem};

@@ -158,7 +158,10 @@ pub fn step_error_warning(report: &Report) -> Option<Diagnostic> {
     );
     Some(
         Diagnostic::warning("W0902", message)
-            .note("the outputs may be far from the motion; the estimate bounds the error a step adds, and errors grow along the run")
+            .note(match report.integrator.as_str() {
+                "symplectic" => "its energy stays bounded, but its positions and phase are only as accurate as its step: the outputs may be far from the motion",
+                _ => "the outputs may be far from the motion; the estimate bounds the error a step adds, and errors grow along the run",
+            })
             .help("shorten the step (`--step`), or let `dopri5` choose it to the tolerances (`--integrator dopri5`)"),
     )
 }
@@ -366,7 +369,11 @@ pub fn run_from(
                 0.0,
                 &y0,
                 settings.duration,
-                fixed_step,
+                variational::FixedStep {
+                    step: fixed_step,
+                    rtol: settings.rtol,
+                    atol: settings.atol,
+                },
                 &outputs,
                 &mut observer,
             )

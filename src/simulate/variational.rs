@@ -35,7 +35,7 @@ use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
 use crate::dynamics::loops::{self, Extent, Factored, LoopError, Singular, DAMPING};
-use crate::integrate::{Failure, IntegrationError, Observer, Stats};
+use crate::integrate::{error_norm, Failure, IntegrationError, Observer, Stats, StepError};
 
 const MAX_ITERATIONS: usize = 50;
 
@@ -350,16 +350,40 @@ fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, System
         .ok_or(SystemError::SingularMassMatrix)
 }
 
+/// The fixed step of the variational integrator, and the tolerances its steps are measured
+/// against (nothing controls them).
+#[derive(Clone, Copy, Debug)]
+pub struct FixedStep {
+    pub step: f64,
+    pub rtol: f64,
+    pub atol: f64,
+}
+
+impl FixedStep {
+    /// How far the step's mean velocity (its increment over h, the velocity the midpoint rule
+    /// takes) is from the mean of its end velocities, in the norm the adaptive methods control:
+    /// for the exact motion they differ by h²q‴/12, the order of the method's local error over
+    /// h, so a defect above the tolerances says the step is too long for the motion (a stiff
+    /// spring, a fast passage) however well the energy is kept.
+    fn defect_norm(&self, mean: &DVector<f64>, v: &DVector<f64>, v1: &DVector<f64>) -> f64 {
+        let defect: Vec<f64> = (0..mean.len())
+            .map(|i| mean[i] - 0.5 * (v[i] + v1[i]))
+            .collect();
+        error_norm(&defect, v.as_slice(), v1.as_slice(), self.rtol, self.atol)
+    }
+}
+
 /// Integrates with fixed step `h`, reporting the state (positions, velocities) at each output.
 pub fn integrate(
     system: &mut MechanicalSystem<'_>,
     t0: f64,
     y0: &[f64],
     t_end: f64,
-    h: f64,
+    steps: FixedStep,
     outputs: &[f64],
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
+    let h = steps.step;
     let model = system.model;
     let configuration = Configuration::of(model);
     let positions = model.positions();
@@ -448,6 +472,8 @@ pub fn integrate(
             .end_velocity(end.positions.as_slice(), &p_end, basis)
             .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
         p = &mass_end * &v1;
+        let defect = steps.defect_norm(&mean, &v, &v1);
+        StepError::keep_largest(&mut stats.largest_step_error, defect, t_next);
         stats.steps += 1;
         let mut end_state = end.positions.as_slice().to_vec();
         end_state.extend_from_slice(v1.as_slice());

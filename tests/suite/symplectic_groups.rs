@@ -186,8 +186,13 @@ fn the_quaternions_stay_unit_along_a_run() {
         worst = worst.max((norm - 1.0).abs());
         Ok(())
     };
+    let steps = variational::FixedStep {
+        step: 1e-2,
+        rtol: 1e-6,
+        atol: 1e-9,
+    };
     let (end, stats) =
-        variational::integrate(&mut system, 0.0, &y0, 20.0, 1e-2, &outputs, &mut observer)
+        variational::integrate(&mut system, 0.0, &y0, 20.0, steps, &outputs, &mut observer)
             .expect("integrates");
     assert_eq!(stats.steps, 2000);
     let norm = end[quaternion].iter().map(|x| x * x).sum::<f64>().sqrt();
