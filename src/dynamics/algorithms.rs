@@ -391,6 +391,26 @@ pub fn mass_times(mass: &DMatrix<f64>, rows: &[Vec<usize>], x: &[f64], y: &mut [
     }
 }
 
+/// The motion of every body (in its own frame, index = body, 0 for earth) when the joints
+/// move with velocities `x` (length nv) from the state whose joint transforms `data` holds:
+/// one pass out from the root, v_i = X_i v_parent + S_i x_i. `motions` has one entry per body
+/// and earth. With the bodies' inertias, xᵀMy = Σ v_i(x)ᵀ I_i v_i(y): the mass matrix's
+/// bilinear form, without the mass matrix.
+pub fn body_motions(model: &Model, data: &Data, x: &[f64], motions: &mut [Motion]) {
+    motions[0] = Motion::zeros();
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        let state = &data.states[k];
+        let (i, parent) = (joint.child, joint.dynamic_parent);
+        let own = state.subspace.apply(slice(x, joint.v_offset, joint.nv()));
+        motions[i] = if parent == 0 {
+            own
+        } else {
+            state.transform.motion_to_child(&motions[parent]) + own
+        };
+    }
+}
+
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.
 pub fn aba(
     model: &Model,

@@ -5,14 +5,14 @@
 
 use std::cell::RefCell;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use std::fmt;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
 use crate::dynamics::algorithms::{
-    aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
-    rnea_after_kinematics, transmitted_wrenches, Data, DynamicsError,
+    aba, aba_after_kinematics, aba_into, forward_kinematics, rnea, rnea_after_kinematics,
+    transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
@@ -41,12 +41,9 @@ pub struct MechanicalSystem<'m> {
     /// The efforts at the last evaluation, and the declared coordinates and rates they used.
     efforts: Efforts,
     declared: DeclaredState,
-    /// Scratch of the constrained equations: the tree's mass matrix, its velocity-product
-    /// forces (and the zero accelerations they are computed at), the applied forces less those,
-    /// and the loops' rows, factorisation and solution.
-    mass: DMatrix<f64>,
-    bias: DVector<f64>,
-    rest: Vec<f64>,
+    /// Scratch of the constrained equations: the tree's inverse dynamics, the forces it leaves
+    /// unbalanced (f − Ma), and the loops' rows, factorisation and solution.
+    inverse: DVector<f64>,
     force: DVector<f64>,
     loop_scratch: LoopScratch,
     /// Scratch of the projections: the constraints and factorisations, and the velocities.
@@ -71,9 +68,7 @@ impl<'m> MechanicalSystem<'m> {
             no_efforts: Efforts::none(model),
             efforts: Efforts::none(model),
             declared: DeclaredState::default(),
-            mass: DMatrix::zeros(model.nv, model.nv),
-            bias: DVector::zeros(model.nv),
-            rest: vec![0.0; model.nv],
+            inverse: DVector::zeros(model.nv),
             force: DVector::zeros(model.velocities()),
             loop_scratch: LoopScratch::new(model),
             projection: ProjectionScratch::new(model),
@@ -130,16 +125,9 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         self.ensure_structure(q)?;
-        // The efforts leave the forward kinematics of (q, v) in `data`, which both recursions
-        // start from.
+        // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
+        // recursions start from.
         self.evaluate_efforts(t, q, v)?;
-        crba_after_kinematics(model, &mut self.data, &mut self.mass);
-        let external = &self.efforts.external;
-        rnea_after_kinematics(model, &mut self.data, &self.rest, external, &mut self.bias);
-        self.force.copy_from(&self.efforts.tau);
-        let mut tree = self.force.rows_mut(0, model.nv);
-        tree -= &self.bias;
-        // RNEA left the forward kinematics of (q, v) in `data`.
         let scratch = &mut self.loop_scratch;
         loops::constraints_into(
             model,
@@ -150,15 +138,35 @@ impl<'m> MechanicalSystem<'m> {
             &mut scratch.constraints,
         )?;
         let structure = &self.loops.structure;
-        loops::solve(
-            &self.mass,
-            &self.force,
-            structure,
-            self.loops.stabilisation,
-            wanted,
-            scratch,
-        )
-        .map_err(|e| self.loop_error(&e))
+        loops::allowed_motions(structure, self.loops.stabilisation, scratch)
+            .map_err(|e| self.loop_error(&e))?;
+        // f − Ma₀ in one inverse dynamics at a₀: the velocity-product forces and Ma₀ together.
+        let scratch = &mut self.loop_scratch;
+        unbalanced_forces(
+            model,
+            &mut self.data,
+            &self.efforts,
+            &scratch.particular()[..model.nv],
+            &mut self.inverse,
+            &mut self.force,
+        );
+        let solved = loops::solve_reduced(model, &mut self.data, &self.force, structure, scratch);
+        solved.map_err(|e| self.loop_error(&e))?;
+        if wanted == Wanted::WithMultipliers {
+            // Ma − f, the constraint forces' share, by inverse dynamics at the accelerations.
+            let scratch = &mut self.loop_scratch;
+            unbalanced_forces(
+                model,
+                &mut self.data,
+                &self.efforts,
+                &scratch.accelerations.as_slice()[..model.nv],
+                &mut self.inverse,
+                &mut self.force,
+            );
+            self.force.neg_mut();
+            loops::multipliers(&self.force, scratch);
+        }
+        Ok(())
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.
@@ -542,3 +550,22 @@ impl fmt::Display for NotFiniteCause {
 }
 
 impl std::error::Error for SystemError {}
+
+/// `force` ← τ − ID(a) over the state's velocities (f − Ma with f the efforts less the
+/// velocity-product forces): the efforts' generalised forces τ less the inverse dynamics of the
+/// tree at its accelerations `a` under the efforts' external forces (`inverse` is its scratch);
+/// the complementary coordinates, without inertia, keep τ. `data` holds the forward kinematics
+/// of the state.
+fn unbalanced_forces(
+    model: &Model,
+    data: &mut Data,
+    efforts: &Efforts,
+    a: &[f64],
+    inverse: &mut DVector<f64>,
+    force: &mut DVector<f64>,
+) {
+    rnea_after_kinematics(model, data, a, &efforts.external, inverse);
+    force.copy_from(&efforts.tau);
+    let mut tree = force.rows_mut(0, model.nv);
+    tree -= &*inverse;
+}
