@@ -28,8 +28,7 @@ fn load(file: &str) -> Prepared {
         library_dirs: Vec::new(),
         use_environment: false,
     };
-    let compilation =
-        compile_files(&[PathBuf::from(file)], &options).expect("the program loads");
+    let compilation = compile_files(&[PathBuf::from(file)], &options).expect("the program loads");
     let mechanism = compilation.mechanism.expect("the program elaborates");
     prepare(&mechanism, &[], &Settings::default()).expect("the program prepares")
 }

@@ -82,11 +82,7 @@ pub fn tree_model(prepared: &Prepared) -> (Model, Vec<f64>) {
 /// tree may have motions without inertia (the Delta's rods spinning about their axes), which
 /// its forward dynamics refuses: the call is then the mass matrix and the bias forces, which any
 /// method of solving the loops needs.
-pub fn tree_call<'m>(
-    prepared: &Prepared,
-    tree: &'m Model,
-    y: &'m [f64],
-) -> Box<dyn FnMut() + 'm> {
+pub fn tree_call<'m>(prepared: &Prepared, tree: &'m Model, y: &'m [f64]) -> Box<dyn FnMut() + 'm> {
     let model = &prepared.model;
     let declared = prepared.coordinates[..prepared.coordinates.len() - model.nc].to_vec();
     let reference = Rc::new(RefCell::new(declared));

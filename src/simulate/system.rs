@@ -129,12 +129,17 @@ impl<'m> MechanicalSystem<'m> {
         // recursions start from.
         self.evaluate_efforts(t, q, v)?;
         let scratch = &mut self.loop_scratch;
+        // Only Baumgarte's feedback reads the position rows.
+        let extent = match self.loops.stabilisation {
+            Stabilisation::Baumgarte(_) => Extent::WithBias,
+            _ => Extent::Motion,
+        };
         loops::constraints_into(
             model,
             &mut self.data,
             q,
             v,
-            Extent::WithBias,
+            extent,
             &mut scratch.constraints,
         )?;
         let structure = &self.loops.structure;
