@@ -202,6 +202,15 @@ pub fn rnea_after_kinematics(
     external: &[Force],
     tau: &mut DVector<f64>,
 ) {
+    rnea_forward(model, data, a, external);
+    rnea_backward(model, data, tau);
+}
+
+/// RNEA's pass out, when `data` holds the forward kinematics: each body's acceleration under
+/// the joint accelerations `a` (and gravity), and in `data.force` the force it needs beyond
+/// the external one, I aᵢ + vᵢ × I vᵢ − fᵢ (in its frame). Their power along any motion of
+/// the joints x is xᵀ times the generalised forces: Σ vᵢ(x)·Fᵢ = xᵀτ (`body_motions`).
+pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force]) {
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
@@ -225,6 +234,11 @@ pub fn rnea_after_kinematics(
                 - external[i]
         };
     }
+}
+
+/// RNEA's pass back: the generalised forces `tau` (length nv) from the bodies' forces that
+/// `rnea_forward` left in `data.force` (which it accumulates from child to parent).
+pub fn rnea_backward(model: &Model, data: &mut Data, tau: &mut DVector<f64>) {
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);

@@ -12,7 +12,7 @@ use std::rc::Rc;
 use super::constraints::LoopMonitor;
 use crate::dynamics::algorithms::{
     aba, aba_after_kinematics, aba_into, forward_kinematics, rnea, rnea_after_kinematics,
-    transmitted_wrenches, Data, DynamicsError,
+    rnea_forward, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
@@ -145,17 +145,13 @@ impl<'m> MechanicalSystem<'m> {
         let structure = &self.loops.structure;
         loops::allowed_motions(structure, self.loops.stabilisation, scratch)
             .map_err(|e| self.loop_error(&e))?;
-        // f − Ma₀ in one inverse dynamics at a₀: the velocity-product forces and Ma₀ together.
+        // Inverse dynamics' pass out at a₀: the bodies' forces whose power along each allowed
+        // motion gives its share of Ma₀ and of the velocity-product forces.
         let scratch = &mut self.loop_scratch;
-        unbalanced_forces(
-            model,
-            &mut self.data,
-            &self.efforts,
-            &scratch.particular()[..model.nv],
-            &mut self.inverse,
-            &mut self.force,
-        );
-        let solved = loops::solve_reduced(model, &mut self.data, &self.force, structure, scratch);
+        let particular = &scratch.particular()[..model.nv];
+        rnea_forward(model, &mut self.data, particular, &self.efforts.external);
+        let tau = &self.efforts.tau;
+        let solved = loops::solve_reduced(model, &mut self.data, tau, structure, scratch);
         solved.map_err(|e| self.loop_error(&e))?;
         if wanted == Wanted::WithMultipliers {
             // Ma − f, the constraint forces' share, by inverse dynamics at the accelerations.

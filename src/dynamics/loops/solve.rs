@@ -17,7 +17,7 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 use super::factored::{
     dense_cholesky, projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING,
 };
-use super::inertia::ReducedInertia;
+use super::inertia::{Reduced, ReducedInertia};
 use super::rows::{constraints, Constraints, Extent};
 use super::structure::Structure;
 use crate::dynamics::algorithms::{crba, Data};
@@ -219,14 +219,15 @@ pub fn allowed_motions(
     Ok(())
 }
 
-/// The second half of the solve (after `allowed_motions`): with `applied` = f − Ma₀ over the
-/// state's velocities, a = a₀ + Nz with (NᵀMN) z = Nᵀ(f − Ma₀), NᵀMN formed on the tree whose
-/// forward kinematics `data` holds (`ReducedInertia`). The accelerations are left in
+/// The second half of the solve (after `allowed_motions`): a = a₀ + Nz with
+/// (NᵀMN) z = Nᵀ(f − Ma₀), formed on the tree (`ReducedInertia`) from `tau`, the efforts'
+/// generalised forces over the state's velocities, with `data` holding the forward kinematics
+/// and inverse dynamics' pass out at a₀ (`rnea_forward`). The accelerations are left in
 /// `scratch`.
 pub fn solve_reduced(
     model: &Model,
     data: &mut Data,
-    applied: &DVector<f64>,
+    tau: &DVector<f64>,
     structure: &Structure,
     scratch: &mut LoopScratch,
 ) -> Result<(), LoopError> {
@@ -247,23 +248,24 @@ pub fn solve_reduced(
     } else {
         massive.coordinates.len()
     };
-    // The motions left out are solved with the kept ones when checked: their rows of NᵀMN
-    // give the imbalance of their reduced equations.
+    // The motions left out are solved with the kept ones when checked: their rows of the
+    // reduced equations give their imbalance.
     let count = m + if checking { structure.massless } else { 0 };
-    inertia.reduced_mass_into(model, data, null, count, m, reduced_mass);
-    let motions = null.columns(0, count);
-    let mut reduced = reduced_force.rows_mut(0, count);
-    reduced.gemv_tr(1.0, &motions, applied, 0.0);
+    let reduced = Reduced {
+        mass: reduced_mass,
+        force: reduced_force,
+    };
+    inertia.reduced_into(model, data, null, (count, m), tau, reduced);
     // An idle coordinate's motion is its unit motion (no mass, no kept row): its share of the
-    // reduced forces is the force on it.
-    let idle_force = structure.idle.iter().map(|&c| applied[c].abs());
+    // reduced forces is the effort on it.
+    let idle_force = structure.idle.iter().map(|&c| tau[c].abs());
     let scale = idle_force
-        .fold(reduced.amax(), f64::max)
+        .fold(reduced_force.rows(0, count).amax(), f64::max)
         .max(f64::MIN_POSITIVE);
     if let Some(&velocity) = structure
         .idle
         .iter()
-        .find(|&&c| applied[c].abs() > MASSLESS_FORCE * scale)
+        .find(|&&c| tau[c].abs() > MASSLESS_FORCE * scale)
     {
         return Err(LoopError::MasslessMotion { velocity });
     }
