@@ -72,7 +72,7 @@ impl ReducedInertia {
         if kept <= self.passes_up_to {
             self.by_passes(model, data, null, count, tau, reduced);
         } else {
-            self.from_mass_matrix(model, data, null, count, tau, reduced);
+            self.with_mass_matrix(model, data, null, count, tau, reduced);
         }
     }
 
@@ -117,7 +117,7 @@ impl ReducedInertia {
         }
     }
 
-    fn from_mass_matrix(
+    fn with_mass_matrix(
         &mut self,
         model: &Model,
         data: &mut Data,
