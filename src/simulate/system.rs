@@ -41,8 +41,8 @@ pub struct MechanicalSystem<'m> {
     /// The efforts at the last evaluation, and the declared coordinates and rates they used.
     efforts: Efforts,
     declared: DeclaredState,
-    /// Scratch of the constrained equations: the tree's inverse dynamics, the forces it leaves
-    /// unbalanced (f − Ma), and the loops' rows, factorisation and solution.
+    /// Scratch of the constrained equations: the tree's inverse dynamics and Ma − f (for the
+    /// multipliers), and the loops' rows, factorisation and solution.
     inverse: DVector<f64>,
     force: DVector<f64>,
     loop_scratch: LoopScratch,
@@ -154,20 +154,26 @@ impl<'m> MechanicalSystem<'m> {
         let solved = loops::solve_reduced(model, &mut self.data, tau, structure, scratch);
         solved.map_err(|e| self.loop_error(&e))?;
         if wanted == Wanted::WithMultipliers {
-            // Ma − f, the constraint forces' share, by inverse dynamics at the accelerations.
-            let scratch = &mut self.loop_scratch;
-            unbalanced_forces(
-                model,
-                &mut self.data,
-                &self.efforts,
-                &scratch.accelerations.as_slice()[..model.nv],
-                &mut self.inverse,
-                &mut self.force,
-            );
-            self.force.neg_mut();
-            loops::multipliers(&self.force, scratch);
+            self.solve_multipliers();
         }
         Ok(())
+    }
+
+    /// The multipliers of the accelerations `solve_constrained` left in `loop_scratch`, from
+    /// Ma − f: inverse dynamics at those accelerations under the efforts' external forces,
+    /// less the efforts' generalised forces (the complementary coordinates, without inertia,
+    /// get −τ). `data` holds the forward kinematics of the state.
+    fn solve_multipliers(&mut self) {
+        let model = self.model;
+        let scratch = &mut self.loop_scratch;
+        let a = &scratch.accelerations.as_slice()[..model.nv];
+        let external = &self.efforts.external;
+        rnea_after_kinematics(model, &mut self.data, a, external, &mut self.inverse);
+        self.force.copy_from(&self.efforts.tau);
+        self.force.neg_mut();
+        let mut tree = self.force.rows_mut(0, model.nv);
+        tree += &self.inverse;
+        loops::multipliers(&self.force, scratch);
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.
@@ -551,22 +557,3 @@ impl fmt::Display for NotFiniteCause {
 }
 
 impl std::error::Error for SystemError {}
-
-/// `force` ← τ − ID(a) over the state's velocities (f − Ma with f the efforts less the
-/// velocity-product forces): the efforts' generalised forces τ less the inverse dynamics of the
-/// tree at its accelerations `a` under the efforts' external forces (`inverse` is its scratch);
-/// the complementary coordinates, without inertia, keep τ. `data` holds the forward kinematics
-/// of the state.
-fn unbalanced_forces(
-    model: &Model,
-    data: &mut Data,
-    efforts: &Efforts,
-    a: &[f64],
-    inverse: &mut DVector<f64>,
-    force: &mut DVector<f64>,
-) {
-    rnea_after_kinematics(model, data, a, &efforts.external, inverse);
-    force.copy_from(&efforts.tau);
-    let mut tree = force.rows_mut(0, model.nv);
-    tree -= &*inverse;
-}

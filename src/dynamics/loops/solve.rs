@@ -61,7 +61,7 @@ pub struct LoopScratch {
     quality_block: DMatrix<f64>,
     free_quality: Option<f64>,
     quality_of: Vec<usize>,
-    /// How NᵀMN is formed, and its scratch.
+    /// How the reduced equations are formed, and their scratch.
     inertia: ReducedInertia,
     /// Accelerations of every state velocity.
     pub accelerations: DVector<f64>,
@@ -159,7 +159,7 @@ pub enum Wanted {
 /// The first half of the solve of `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` on the kept rows (γ with
 /// Baumgarte's terms when asked for) at the constraints in `scratch`: the factorisation, the
 /// particular acceleration a₀ (`LoopScratch::particular`) and the allowed motions N. The caller
-/// then computes f − Ma₀ (inverse dynamics at a₀) for `solve_reduced`.
+/// then takes inverse dynamics' pass out at a₀ (`rnea_forward`) for `solve_reduced`.
 pub fn allowed_motions(
     structure: &Structure,
     stabilisation: Stabilisation,
@@ -193,6 +193,9 @@ pub fn allowed_motions(
     factored.kept_into(gamma.as_slice(), kept);
     kept.iter_mut().for_each(|x| *x = -*x);
     damped.least_norm_into(kept, particular.as_mut_slice());
+    // The motions solved on: every free coordinate's, or only the massive ones kept when the
+    // others carry no mass (their choice made); those left out are then checked after the
+    // solve, once per step (`check_due`).
     let (every, checking) = massive.plan(structure);
     let motions: &[usize] = if every {
         &structure.free
