@@ -1,11 +1,13 @@
-//! Timing shared by the closed-loop benchmarks (`loops`, `loop_scaling`): CPU time per call (best
-//! batch), medians of runs, and the cost of one constrained right-hand side and one projection.
+//! Timing shared by the closed-loop benchmarks (`loops`, `loop_scaling`, `call_counts`): CPU time
+//! per call (best batch), medians of runs, and the cost of one constrained right-hand side and
+//! one projection.
 
 use std::cell::RefCell;
 use std::hint::black_box;
 use std::rc::Rc;
 
 use lsdc::dynamics::algorithms::{crba, rnea, Data};
+use lsdc::dynamics::model::Model;
 use lsdc::simulate::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 use lsdc::spatial::Force;
@@ -18,13 +20,13 @@ pub fn median(mut values: Vec<f64>) -> f64 {
 
 /// CPU time of one call of `f` (this thread's clock, so that the time the shared machine gives
 /// to others is left out): the best of 7 batches of about 20 ms, the batch least disturbed.
+#[allow(dead_code)] // the call counts run calls without timing them
 pub fn time_per_call(f: impl FnMut()) -> f64 {
     crate::common::cpu_time_per_call(f).0
 }
 
-/// Cost (µs of CPU, best batch) of one constrained right-hand side and of one projection onto the loops,
-/// at the initial state.
-pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
+/// The constrained system of `prepared` at its initial state, closed (the state is returned).
+pub fn loop_system(prepared: &Prepared) -> (MechanicalSystem<'_>, Vec<f64>) {
     let model = &prepared.model;
     let (mut y, v) = model
         .state_from_declared(&prepared.coordinates, &prepared.rates)
@@ -33,6 +35,14 @@ pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     system.start_loops(&mut y).expect("loops close");
+    (system, y)
+}
+
+/// Cost (µs of CPU, best batch) of one constrained right-hand side and of one projection onto the loops,
+/// at the initial state.
+#[allow(dead_code)]
+pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
+    let (mut system, y) = loop_system(prepared);
     let mut dydt = vec![0.0; y.len()];
     let rhs = time_per_call(|| {
         system
@@ -48,10 +58,9 @@ pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
     (rhs * 1e6, projection * 1e6)
 }
 
-/// Cost (µs of CPU, best batch) of one right-hand side of the same bodies as a tree: the mechanism with its
-/// closing joins removed (and the efforts on them), at the tree part of the initial state.
-#[allow(dead_code)]
-pub fn tree_cost(prepared: &Prepared) -> f64 {
+/// The same bodies as a tree: `prepared`'s model with its closing joins removed (and the
+/// efforts on them), and the tree part of the initial state.
+pub fn tree_model(prepared: &Prepared) -> (Model, Vec<f64>) {
     let mut tree = prepared.model.clone();
     tree.link_efforts.retain(|e| e.joint < tree.joints.len());
     tree.link_potentials.retain(|p| p.joint < tree.joints.len());
@@ -66,26 +75,42 @@ pub fn tree_cost(prepared: &Prepared) -> f64 {
         .expect("initial state");
     let mut y = q[..model.nq].to_vec();
     y.extend_from_slice(&v[..model.nv]);
+    (tree, y)
+}
+
+/// A right-hand side of the tree of `tree_model`, to call repeatedly. Without its loops the
+/// tree may have motions without inertia (the Delta's rods spinning about their axes), which
+/// its forward dynamics refuses: the call is then the mass matrix and the bias forces, which any
+/// method of solving the loops needs.
+pub fn tree_call<'m>(prepared: &Prepared, tree: &'m Model, y: &'m [f64]) -> Box<dyn FnMut() + 'm> {
+    let model = &prepared.model;
     let declared = prepared.coordinates[..prepared.coordinates.len() - model.nc].to_vec();
     let reference = Rc::new(RefCell::new(declared));
-    let mut system = MechanicalSystem::new(&tree, reference, prepared.settings.stabilisation);
+    let mut system = MechanicalSystem::new(tree, reference, prepared.settings.stabilisation);
     let mut dydt = vec![0.0; y.len()];
-    if system.derivative(0.0, &y, &mut dydt).is_err() {
-        // Without its loops the tree has motions without inertia (the Delta's rods spinning
-        // about their axes), which its forward dynamics refuses: time the mass matrix and the
-        // bias forces instead, which any method of solving the loops needs.
-        let mut data = Data::new(&tree);
-        let (q, v) = (&y[..model.nq], &y[model.nq..]);
-        let zero = vec![0.0; model.nv];
-        let external = vec![Force::zeros(); tree.joints.len() + 1];
-        return time_per_call(|| {
-            black_box(crba(&tree, &mut data, black_box(q)).expect("mass matrix"));
-            black_box(rnea(&tree, &mut data, q, v, &zero, &external).expect("bias forces"));
-        }) * 1e6;
+    if system.derivative(0.0, y, &mut dydt).is_ok() {
+        return Box::new(move || {
+            system
+                .derivative(0.0, black_box(y), &mut dydt)
+                .expect("evaluates")
+        });
     }
-    time_per_call(|| {
-        system
-            .derivative(0.0, black_box(&y), &mut dydt)
-            .expect("evaluates")
-    }) * 1e6
+    let (nq, nv) = (model.nq, model.nv);
+    let mut data = Data::new(tree);
+    let zero = vec![0.0; nv];
+    let external = vec![Force::zeros(); tree.joints.len() + 1];
+    Box::new(move || {
+        let (q, v) = (&y[..nq], &y[nq..]);
+        black_box(crba(tree, &mut data, black_box(q)).expect("mass matrix"));
+        black_box(rnea(tree, &mut data, q, v, &zero, &external).expect("bias forces"));
+    })
+}
+
+/// Cost (µs of CPU, best batch) of one right-hand side of the same bodies as a tree
+/// (`tree_model`, `tree_call`).
+#[allow(dead_code)]
+pub fn tree_cost(prepared: &Prepared) -> f64 {
+    let (tree, y) = tree_model(prepared);
+    let call = tree_call(prepared, &tree, &y);
+    time_per_call(call) * 1e6
 }

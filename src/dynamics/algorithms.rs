@@ -202,6 +202,15 @@ pub fn rnea_after_kinematics(
     external: &[Force],
     tau: &mut DVector<f64>,
 ) {
+    rnea_forward(model, data, a, external);
+    rnea_backward(model, data, tau);
+}
+
+/// RNEA's pass out, when `data` holds the forward kinematics: each body's acceleration under
+/// the joint accelerations `a` (and gravity), and in `data.force` the force it needs beyond
+/// the external one, I aᵢ + vᵢ × I vᵢ − fᵢ (in its frame). Their power along any motion of
+/// the joints x is xᵀ times the generalised forces: Σ vᵢ(x)·Fᵢ = xᵀτ (`body_motions`).
+pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force]) {
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
@@ -225,6 +234,11 @@ pub fn rnea_after_kinematics(
                 - external[i]
         };
     }
+}
+
+/// RNEA's pass back: the generalised forces `tau` (length nv) from the bodies' forces that
+/// `rnea_forward` left in `data.force` (which it accumulates from child to parent).
+pub fn rnea_backward(model: &Model, data: &mut Data, tau: &mut DVector<f64>) {
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
@@ -388,6 +402,26 @@ pub fn mass_times(mass: &DMatrix<f64>, rows: &[Vec<usize>], x: &[f64], y: &mut [
         for &row in rows {
             y[row] += entries[row] * xj;
         }
+    }
+}
+
+/// The motion of every body (in its own frame, index = body, 0 for earth) when the joints
+/// move with velocities `x` (length nv) from the state whose joint transforms `data` holds:
+/// one pass out from the root, v_i = X_i v_parent + S_i x_i. `motions` has one entry per body
+/// and earth. With the bodies' inertias, xᵀMy = Σ v_i(x)ᵀ I_i v_i(y): the mass matrix's
+/// bilinear form, without the mass matrix.
+pub fn body_motions(model: &Model, data: &Data, x: &[f64], motions: &mut [Motion]) {
+    motions[0] = Motion::zeros();
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        let state = &data.states[k];
+        let (i, parent) = (joint.child, joint.dynamic_parent);
+        let own = state.subspace.apply(slice(x, joint.v_offset, joint.nv()));
+        motions[i] = if parent == 0 {
+            own
+        } else {
+            state.transform.motion_to_child(&motions[parent]) + own
+        };
     }
 }
 

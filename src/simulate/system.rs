@@ -5,14 +5,14 @@
 
 use std::cell::RefCell;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use std::fmt;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
 use crate::dynamics::algorithms::{
-    aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
-    rnea_after_kinematics, transmitted_wrenches, Data, DynamicsError,
+    aba, aba_after_kinematics, aba_into, forward_kinematics, rnea, rnea_after_kinematics,
+    rnea_forward, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
@@ -41,12 +41,9 @@ pub struct MechanicalSystem<'m> {
     /// The efforts at the last evaluation, and the declared coordinates and rates they used.
     efforts: Efforts,
     declared: DeclaredState,
-    /// Scratch of the constrained equations: the tree's mass matrix, its velocity-product
-    /// forces (and the zero accelerations they are computed at), the applied forces less those,
-    /// and the loops' rows, factorisation and solution.
-    mass: DMatrix<f64>,
-    bias: DVector<f64>,
-    rest: Vec<f64>,
+    /// Scratch of the constrained equations: the tree's inverse dynamics and Ma − f (for the
+    /// multipliers), and the loops' rows, factorisation and solution.
+    inverse: DVector<f64>,
     force: DVector<f64>,
     loop_scratch: LoopScratch,
     /// Scratch of the projections: the constraints and factorisations, and the velocities.
@@ -71,9 +68,7 @@ impl<'m> MechanicalSystem<'m> {
             no_efforts: Efforts::none(model),
             efforts: Efforts::none(model),
             declared: DeclaredState::default(),
-            mass: DMatrix::zeros(model.nv, model.nv),
-            bias: DVector::zeros(model.nv),
-            rest: vec![0.0; model.nv],
+            inverse: DVector::zeros(model.nv),
             force: DVector::zeros(model.velocities()),
             loop_scratch: LoopScratch::new(model),
             projection: ProjectionScratch::new(model),
@@ -130,35 +125,55 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         self.ensure_structure(q)?;
-        // The efforts leave the forward kinematics of (q, v) in `data`, which both recursions
-        // start from.
+        // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
+        // recursions start from.
         self.evaluate_efforts(t, q, v)?;
-        crba_after_kinematics(model, &mut self.data, &mut self.mass);
-        let external = &self.efforts.external;
-        rnea_after_kinematics(model, &mut self.data, &self.rest, external, &mut self.bias);
-        self.force.copy_from(&self.efforts.tau);
-        let mut tree = self.force.rows_mut(0, model.nv);
-        tree -= &self.bias;
-        // RNEA left the forward kinematics of (q, v) in `data`.
         let scratch = &mut self.loop_scratch;
+        // Only Baumgarte's feedback reads the position rows.
+        let extent = match self.loops.stabilisation {
+            Stabilisation::Baumgarte(_) => Extent::WithBias,
+            _ => Extent::Motion,
+        };
         loops::constraints_into(
             model,
             &mut self.data,
             q,
             v,
-            Extent::WithBias,
+            extent,
             &mut scratch.constraints,
         )?;
         let structure = &self.loops.structure;
-        loops::solve(
-            &self.mass,
-            &self.force,
-            structure,
-            self.loops.stabilisation,
-            wanted,
-            scratch,
-        )
-        .map_err(|e| self.loop_error(&e))
+        loops::allowed_motions(structure, self.loops.stabilisation, scratch)
+            .map_err(|e| self.loop_error(&e))?;
+        // Inverse dynamics' pass out at a₀: the bodies' forces whose power along each allowed
+        // motion gives its share of Ma₀ and of the velocity-product forces.
+        let scratch = &mut self.loop_scratch;
+        let particular = &scratch.particular()[..model.nv];
+        rnea_forward(model, &mut self.data, particular, &self.efforts.external);
+        let tau = &self.efforts.tau;
+        let solved = loops::solve_reduced(model, &mut self.data, tau, structure, scratch);
+        solved.map_err(|e| self.loop_error(&e))?;
+        if wanted == Wanted::WithMultipliers {
+            self.solve_multipliers();
+        }
+        Ok(())
+    }
+
+    /// The multipliers of the accelerations `solve_constrained` left in `loop_scratch`, from
+    /// Ma − f: inverse dynamics at those accelerations under the efforts' external forces,
+    /// less the efforts' generalised forces (the complementary coordinates, without inertia,
+    /// get −τ). `data` holds the forward kinematics of the state.
+    fn solve_multipliers(&mut self) {
+        let model = self.model;
+        let scratch = &mut self.loop_scratch;
+        let a = &scratch.accelerations.as_slice()[..model.nv];
+        let external = &self.efforts.external;
+        rnea_after_kinematics(model, &mut self.data, a, external, &mut self.inverse);
+        self.force.copy_from(&self.efforts.tau);
+        self.force.neg_mut();
+        let mut tree = self.force.rows_mut(0, model.nv);
+        tree += &self.inverse;
+        loops::multipliers(&self.force, scratch);
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.

@@ -90,7 +90,8 @@ struct KeptRows {
     starts: Vec<usize>,
     columns: Vec<usize>,
     values: Vec<f64>,
-    /// Per entry, its loop block and its index in that block's values (column-major, 6 rows).
+    /// Per kept row, its loop block and its row there (0 to 5): its entries are that row of
+    /// the block's values (column-major, 6 rows), every sixth value from the row's.
     sources: Vec<(usize, usize)>,
 }
 
@@ -105,8 +106,7 @@ impl KeptRows {
             let (block, row) = (r / 6, r % 6);
             let columns = &jacobian.blocks[block].columns;
             self.columns.extend_from_slice(columns);
-            self.sources
-                .extend((0..columns.len()).map(|local| (block, 6 * local + row)));
+            self.sources.push((block, row));
             self.starts.push(self.columns.len());
         }
         self.values.resize(self.columns.len(), 0.0);
@@ -114,13 +114,12 @@ impl KeptRows {
 
     /// The values of `jacobian`'s rows, each times its scale (`scales`, one per row).
     fn gather(&mut self, jacobian: &ConstraintJacobian, scales: &[f64]) {
-        for (k, &scale) in scales.iter().enumerate() {
+        for (k, (&scale, &(block, row))) in scales.iter().zip(&self.sources).enumerate() {
             let range = self.starts[k]..self.starts[k + 1];
-            for (value, &(block, at)) in self.values[range.clone()]
-                .iter_mut()
-                .zip(&self.sources[range])
-            {
-                *value = jacobian.blocks[block].values.as_slice()[at] * scale;
+            let block = jacobian.blocks[block].values.as_slice();
+            let entries = block[row..].iter().step_by(6);
+            for (value, &entry) in self.values[range].iter_mut().zip(entries) {
+                *value = entry * scale;
             }
         }
     }
@@ -660,8 +659,9 @@ impl Envelope {
 /// out once per choice of rows; each state then costs one dot product per entry.
 #[derive(Default)]
 struct NormalPlan {
-    /// (row of A, index in its envelope row, range of `pairs`).
-    entries: Vec<(usize, usize, std::ops::Range<usize>)>,
+    /// (row of A, index in its envelope row, end of its pairs in `pairs`): an entry's pairs
+    /// follow the previous entry's.
+    entries: Vec<(usize, usize, usize)>,
     pairs: Vec<(usize, usize)>,
 }
 
@@ -696,12 +696,10 @@ impl NormalPlan {
         for k in 0..indices.len() {
             for neighbour in neighbours(k) {
                 for &l in by_loop[neighbour.other].iter().filter(|&&l| l <= k) {
-                    let start = self.pairs.len();
                     let (here, there) = (rows.starts[k], rows.starts[l]);
                     self.pairs
                         .extend(neighbour.shared.iter().map(|&(i, j)| (here + i, there + j)));
-                    self.entries
-                        .push((k, normal.index(k, l), start..self.pairs.len()));
+                    self.entries.push((k, normal.index(k, l), self.pairs.len()));
                 }
             }
         }
@@ -709,10 +707,12 @@ impl NormalPlan {
 
     /// A's entries from the rows' `values`.
     fn fill(&self, values: &[f64], normal: &mut Envelope) {
-        for (k, at, pairs) in &self.entries {
-            normal.values[*k][*at] = self.pairs[pairs.clone()]
+        let mut start = 0;
+        for &(k, at, end) in &self.entries {
+            normal.values[k][at] = self.pairs[start..end]
                 .iter()
                 .fold(0.0, |sum, &(i, j)| sum + values[i] * values[j]);
+            start = end;
         }
     }
 }

@@ -2,13 +2,15 @@
 //! (`jacobian`), the decisions taken once on them at the start of a run (`structure`: which rows
 //! are independent, in units that do not depend on the user's, and which coordinates
 //! parametrise the motions they allow), the sparse factorisation of those rows (`factored`), the
-//! constrained equations of motion solved on them (`solve`), and the projection of a state back
+//! constrained equations of motion solved on them (`solve`, with the allowed motions' reduced
+//! mass matrix from `inertia`), and the projection of a state back
 //! onto the loops (`project`). A singular value decomposition (`basis`) and dense QR
 //! factorisations serve the decisions taken once, never the equations of motion.
 //! The method and its references: `docs/loops.md`.
 
 pub mod basis;
 pub mod factored;
+pub mod inertia;
 pub mod jacobian;
 pub mod project;
 pub mod rows;
@@ -25,5 +27,8 @@ pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
     Extent, ROW_NAMES,
 };
-pub use solve::{project_momentum, solve, LoopError, LoopScratch, Stabilisation, Wanted};
+pub use solve::{
+    allowed_motions, multipliers, project_momentum, solve_reduced, LoopError, LoopScratch,
+    Stabilisation, Wanted,
+};
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

@@ -156,6 +156,10 @@ pub enum Extent {
     Rows,
     /// The rows and γ.
     WithBias,
+    /// The rows and γ, with the position rows' rotations left at zero: what the equations of
+    /// motion read when no feedback of the position rows (Baumgarte's) is asked for, and the
+    /// rotation vector of each loop's residual is its costliest part.
+    Motion,
 }
 
 /// Writes the constraints at (q, v) into `c` (made by `Constraints::new` for this model) to
@@ -168,11 +172,13 @@ pub fn constraints_into(
     extent: Extent,
     c: &mut Constraints,
 ) -> Result<(), EvalError> {
+    let rotations = extent != Extent::Motion;
     for k in 0..model.loops.len() {
-        loop_residual(model, data, q, v, k, c)?;
+        loop_residual(model, data, q, v, k, rotations, c)?;
     }
     if extent != Extent::Residual {
-        rows_after_residual(model, data, v, extent == Extent::WithBias, c);
+        let with_bias = matches!(extent, Extent::WithBias | Extent::Motion);
+        rows_after_residual(model, data, v, with_bias, c);
     }
     Ok(())
 }
@@ -210,13 +216,15 @@ fn rows_after_residual(
     c.jacobian.mul_into(v, &mut c.velocity);
 }
 
-/// Loop `k`'s chain at (q, v), its position rows and its closing point, into `c`.
+/// Loop `k`'s chain at (q, v), its position rows (their rotations only when asked for, zero
+/// otherwise) and its closing point, into `c`.
 fn loop_residual(
     model: &Model,
     data: &Data,
     q: &[f64],
     v: &[f64],
     k: usize,
+    rotations: bool,
     c: &mut Constraints,
 ) -> Result<(), EvalError> {
     let joint = &model.loops[k];
@@ -238,7 +246,7 @@ fn loop_residual(
     let target = data.world[joint.second_body] * joint.second;
     let point = end.translation.vector;
     let row = 6 * k;
-    if ball {
+    if ball || !rotations {
         c.residual.rows_mut(row, 3).fill(0.0);
     } else {
         let relative = end.rotation.inverse() * target.rotation;

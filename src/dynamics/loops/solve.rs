@@ -17,9 +17,10 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 use super::factored::{
     dense_cholesky, projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING,
 };
+use super::inertia::{Reduced, ReducedInertia};
 use super::rows::{constraints, Constraints, Extent};
 use super::structure::Structure;
-use crate::dynamics::algorithms::{crba, mass_rows, mass_times, Data};
+use crate::dynamics::algorithms::{crba, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
@@ -46,12 +47,8 @@ pub struct LoopScratch {
     kept: Vec<f64>,
     gamma: DVector<f64>,
     particular: DVector<f64>,
-    applied: DVector<f64>,
-    /// The allowed motions N, M times their tree part, NᵀMN (and its factor), and Nᵀ(f − Ma₀),
-    /// then z.
+    /// The allowed motions N, NᵀMN (and its factor), and Nᵀ(f − Ma₀), then z.
     null: DMatrix<f64>,
-    mass_null: DMatrix<f64>,
-    inertial: DVector<f64>,
     reduced_mass: DMatrix<f64>,
     reduced_factor: DMatrix<f64>,
     reduced_force: DVector<f64>,
@@ -64,9 +61,8 @@ pub struct LoopScratch {
     quality_block: DMatrix<f64>,
     free_quality: Option<f64>,
     quality_of: Vec<usize>,
-    /// Per column of the tree's mass matrix, the rows that can be non-zero (the velocities on
-    /// one path to earth with it), so that products with it skip the branches' zeros.
-    mass_rows: Vec<Vec<usize>>,
+    /// How the reduced equations are formed, and their scratch.
+    inertia: ReducedInertia,
     /// Accelerations of every state velocity.
     pub accelerations: DVector<f64>,
     /// Constraint wrench of each loop on its second body, at the loop point in fixed axes:
@@ -85,10 +81,7 @@ impl LoopScratch {
             kept: Vec::new(),
             gamma: DVector::zeros(rows),
             particular: DVector::zeros(columns),
-            applied: DVector::zeros(columns),
             null: DMatrix::zeros(columns, 0),
-            mass_null: DMatrix::zeros(model.nv, 0),
-            inertial: DVector::zeros(model.nv),
             reduced_mass: DMatrix::zeros(0, 0),
             reduced_factor: DMatrix::zeros(0, 0),
             reduced_force: DVector::zeros(0),
@@ -97,7 +90,7 @@ impl LoopScratch {
             quality_block: DMatrix::zeros(0, 0),
             free_quality: None,
             quality_of: Vec::new(),
-            mass_rows: mass_rows(model),
+            inertia: ReducedInertia::new(model),
             accelerations: DVector::zeros(columns),
             multipliers: DVector::zeros(rows),
         }
@@ -122,13 +115,17 @@ impl LoopScratch {
         self.free_quality.take().filter(|_| self.quality_of == free)
     }
 
+    /// The particular acceleration a₀ `allowed_motions` found, over the state's velocities.
+    pub fn particular(&self) -> &[f64] {
+        self.particular.as_slice()
+    }
+
     /// Sizes the allowed motions' matrices for `free` coordinates (allocates only when their
     /// number changes, with the structure).
     fn size_for(&mut self, free: usize) {
         if self.null.ncols() != free {
             self.quality_block = DMatrix::zeros(free, free);
             self.null = DMatrix::zeros(self.null.nrows(), free);
-            self.mass_null = DMatrix::zeros(self.mass_null.nrows(), free);
             self.reduced_mass = DMatrix::zeros(free, free);
             self.reduced_factor = DMatrix::zeros(free, free);
             self.reduced_force = DVector::zeros(free);
@@ -159,15 +156,13 @@ pub enum Wanted {
     WithMultipliers,
 }
 
-/// Solves `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` on the kept rows (γ with Baumgarte's terms when asked
-/// for) at the constraints in `scratch`; `mass` is the tree's mass matrix, `force` has the
-/// state's length. The accelerations and, when `wanted`, the multipliers are left in `scratch`.
-pub fn solve(
-    mass: &DMatrix<f64>,
-    force: &DVector<f64>,
+/// The first half of the solve of `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` on the kept rows (γ with
+/// Baumgarte's terms when asked for) at the constraints in `scratch`: the factorisation, the
+/// particular acceleration a₀ (`LoopScratch::particular`) and the allowed motions N. The caller
+/// then takes inverse dynamics' pass out at a₀ (`rnea_forward`) for `solve_reduced`.
+pub fn allowed_motions(
     structure: &Structure,
     stabilisation: Stabilisation,
-    wanted: Wanted,
     scratch: &mut LoopScratch,
 ) -> Result<(), LoopError> {
     scratch.size_for(structure.free.len());
@@ -178,21 +173,13 @@ pub fn solve(
         kept,
         gamma,
         particular,
-        applied,
         null,
-        mass_null,
-        inertial,
-        reduced_mass,
-        reduced_factor,
-        reduced_force,
         massive,
         quality_due,
         quality_block,
         free_quality,
         quality_of,
-        mass_rows,
-        accelerations,
-        multipliers,
+        ..
     } = scratch;
     gamma.copy_from(&c.bias);
     if let Stabilisation::Baumgarte(rate) = stabilisation {
@@ -209,8 +196,7 @@ pub fn solve(
     // The motions solved on: every free coordinate's, or only the massive ones kept when the
     // others carry no mass (their choice made); those left out are then checked after the
     // solve, once per step (`check_due`).
-    let every = structure.massless == 0 || !massive.holds(structure);
-    let checking = !every && massive.check_due;
+    let (every, checking) = massive.plan(structure);
     let motions: &[usize] = if every {
         &structure.free
     } else {
@@ -232,51 +218,57 @@ pub fn solve(
         quality_of.clone_from(&structure.free);
         *quality_due = false;
     }
-    // The complementary links' own coordinates carry no inertia: only the tree's rows of the
-    // motions meet the mass matrix.
-    let nv = mass.nrows();
-    let tree = null.view((0, 0), (nv, m));
-    // Column by column (matrix-vector products): a matrix product would pack its operands into
-    // buffers it allocates on every call.
-    for k in 0..m {
-        let x = tree.column(k);
-        mass_times(
-            mass,
-            mass_rows,
-            x.as_slice(),
-            mass_null.column_mut(k).as_mut_slice(),
-        );
-    }
-    for k in 0..m {
-        for i in 0..m {
-            reduced_mass[(i, k)] = tree.column(i).dot(&mass_null.column(k));
-        }
-    }
-    mass_times(
-        mass,
-        mass_rows,
-        &particular.as_slice()[..nv],
-        inertial.as_mut_slice(),
-    );
-    applied.copy_from(force);
-    let mut top = applied.rows_mut(0, nv);
-    top -= &*inertial;
-    let dropped = null.columns(m, if checking { structure.massless } else { 0 });
-    let null = null.columns(0, m);
-    let mut reduced = reduced_force.rows_mut(0, m);
-    reduced.gemv_tr(1.0, &null, applied, 0.0);
+    *factor = damped.into_storage();
+    Ok(())
+}
+
+/// The second half of the solve (after `allowed_motions`): a = a₀ + Nz with
+/// (NᵀMN) z = Nᵀ(f − Ma₀), formed on the tree (`ReducedInertia`) from `tau`, the efforts'
+/// generalised forces over the state's velocities, with `data` holding the forward kinematics
+/// and inverse dynamics' pass out at a₀ (`rnea_forward`). The accelerations are left in
+/// `scratch`.
+pub fn solve_reduced(
+    model: &Model,
+    data: &mut Data,
+    tau: &DVector<f64>,
+    structure: &Structure,
+    scratch: &mut LoopScratch,
+) -> Result<(), LoopError> {
+    let LoopScratch {
+        particular,
+        null,
+        reduced_mass,
+        reduced_factor,
+        reduced_force,
+        massive,
+        inertia,
+        accelerations,
+        ..
+    } = scratch;
+    let (every, checking) = massive.plan(structure);
+    let m = if every {
+        structure.free.len()
+    } else {
+        massive.coordinates.len()
+    };
+    // The motions left out are solved with the kept ones when checked: their rows of the
+    // reduced equations give their imbalance.
+    let count = m + if checking { structure.massless } else { 0 };
+    let reduced = Reduced {
+        mass: reduced_mass,
+        force: reduced_force,
+    };
+    inertia.reduced_into(model, data, null, (count, m), tau, reduced);
     // An idle coordinate's motion is its unit motion (no mass, no kept row): its share of the
-    // reduced forces is the force on it.
-    let idle_force = structure.idle.iter().map(|&c| applied[c].abs());
-    let dropped_force = dropped.column_iter().map(|n| n.dot(applied).abs());
+    // reduced forces is the effort on it.
+    let idle_force = structure.idle.iter().map(|&c| tau[c].abs());
     let scale = idle_force
-        .chain(dropped_force)
-        .fold(reduced.amax(), f64::max)
+        .fold(reduced_force.rows(0, count).amax(), f64::max)
         .max(f64::MIN_POSITIVE);
     if let Some(&velocity) = structure
         .idle
         .iter()
-        .find(|&&c| applied[c].abs() > MASSLESS_FORCE * scale)
+        .find(|&&c| tau[c].abs() > MASSLESS_FORCE * scale)
     {
         return Err(LoopError::MasslessMotion { velocity });
     }
@@ -288,40 +280,32 @@ pub fn solve(
         }
         massive.solve(reduced_mass, reduced_factor, reduced_force, scale)
     } else {
-        massive.solve_kept(reduced_mass, reduced_factor, reduced.as_mut_slice())
+        massive.solve_kept(reduced_mass, reduced_factor, reduced_force, checking, scale)
     };
     solved.map_err(|k| LoopError::MasslessMotion {
         velocity: null.column(k).iamax(),
     })?;
     let z = reduced_force.rows(0, m);
     accelerations.copy_from(particular);
-    accelerations.gemv(1.0, &null, &z, 1.0);
-    if checking || wanted == Wanted::WithMultipliers {
-        let tree_accelerations = &accelerations.as_slice()[..nv];
-        mass_times(mass, mass_rows, tree_accelerations, inertial.as_mut_slice());
-    }
-    if checking {
-        // No force may act on a motion left out: nᵀ(f − Ma) = 0 for each, to MASSLESS_FORCE.
-        for n in dropped.column_iter() {
-            let unbalanced = n.dot(force) - n.rows(0, nv).dot(&*inertial);
-            if unbalanced.abs() > MASSLESS_FORCE * scale {
-                return Err(LoopError::MasslessMotion {
-                    velocity: n.iamax(),
-                });
-            }
-        }
-        massive.check_due = false;
-    }
-    if wanted == Wanted::WithMultipliers {
-        // Ma − f, the constraint forces' share.
-        applied.copy_from(force);
-        applied.neg_mut();
-        let mut top = applied.rows_mut(0, nv);
-        top += &*inertial;
-        damped.multipliers_into(applied.as_slice(), kept, multipliers.as_mut_slice());
-    }
-    *factor = damped.into_storage();
+    accelerations.gemv(1.0, &null.columns(0, m), &z, 1.0);
     Ok(())
+}
+
+/// The multipliers λₛ = (A + μ²E)⁻¹Gₛ(Ma − f) into `scratch.multipliers` (6 per loop, zero on
+/// the rows not kept), from `reaction` = Ma − f over the state's velocities (inverse dynamics
+/// at the accelerations `solve_reduced` found, less the efforts), at the factorisation
+/// `allowed_motions` took.
+pub fn multipliers(reaction: &DVector<f64>, scratch: &mut LoopScratch) {
+    let LoopScratch {
+        factored,
+        factor,
+        kept,
+        multipliers,
+        ..
+    } = scratch;
+    let damped = factored.with_factor(std::mem::take(factor));
+    damped.multipliers_into(reaction.as_slice(), kept, multipliers.as_mut_slice());
+    *factor = damped.into_storage();
 }
 
 /// The free coordinates' quality (`Damped::free_quality_into`) from their allowed motions N:
@@ -449,14 +433,27 @@ impl Massive {
         true
     }
 
+    /// Whether the solve takes every free coordinate's motion (no motion without mass, or no
+    /// choice of the massive ones yet for these free coordinates), and, if not, whether it
+    /// checks the motions left out at this evaluation.
+    fn plan(&self, structure: &Structure) -> (bool, bool) {
+        let every = structure.massless == 0 || !self.holds(structure);
+        (every, !every && self.check_due)
+    }
+
     /// z of `a z = b` for the reduced mass matrix `a` of the kept motions alone (in the order
-    /// of `coordinates`), into `b`; `work` is scratch of a's size. The position of the motion
-    /// that lost its mass if the block cannot be factored.
+    /// of `coordinates`), into `b`; `work` is scratch of a's size. When `checking`, `a` and `b`
+    /// go on over the motions left out, in the order of `dropped_coordinates`, and no force
+    /// may act on them: their reduced equations' imbalance, b_d − Σ a_dk z_k, is checked against
+    /// `MASSLESS_FORCE` of `scale`. The position of the motion that lost its mass, or of the
+    /// one a force acts on, if any.
     fn solve_kept(
         &mut self,
         a: &DMatrix<f64>,
         work: &mut DMatrix<f64>,
-        b: &mut [f64],
+        b: &mut DVector<f64>,
+        checking: bool,
+        scale: f64,
     ) -> Result<(), usize> {
         let r = self.kept.len();
         for i in 0..r {
@@ -467,7 +464,16 @@ impl Massive {
         if !self.factor_kept(work) {
             return Err(r - 1);
         }
-        cholesky_solve(work, r, b);
+        cholesky_solve(work, r, &mut b.as_mut_slice()[..r]);
+        if checking {
+            for d in r..r + self.dropped.len() {
+                let unbalanced = b[d] - (0..r).map(|k| a[(d, k)] * b[k]).sum::<f64>();
+                if unbalanced.abs() > MASSLESS_FORCE * scale {
+                    return Err(d);
+                }
+            }
+            self.check_due = false;
+        }
         Ok(())
     }
 

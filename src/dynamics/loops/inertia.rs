@@ -1,0 +1,170 @@
+//! The reduced equations of the allowed motions N, (NᵀMN) z = Nᵀ(f − Ma₀), formed the cheaper
+//! way the tree's structure allows. A closed mechanism has few allowed motions (one for a row
+//! of four-bars, three on the Delta): then one pass over the bodies per motion gives each
+//! body's motion under it, NᵀMN is the kinetic energy's bilinear form Σ vᵢᵀIᵢwᵢ, and Nᵀ(f − Ma₀)
+//! is Nᵀτ less the power of the bodies' forces of inverse dynamics at a₀ along each motion, so
+//! that neither the mass matrix nor inverse dynamics' pass back is needed. With many allowed
+//! motions, the mass matrix of the composite-rigid-body algorithm (one entry per pair of
+//! velocities on a branch) and the generalised forces of inverse dynamics cost less.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::dynamics::algorithms::{
+    body_motions, crba_after_kinematics, mass_rows, mass_times, rnea_backward, Data,
+};
+use crate::dynamics::model::Model;
+use crate::spatial::{Force, Motion};
+
+/// What forming the reduced equations keeps between evaluations, so that it allocates nothing
+/// once sized.
+pub struct ReducedInertia {
+    /// Up to how many kept motions the passes are taken (see `passes_up_to`).
+    passes_up_to: usize,
+    /// The passes: each motion's body motions and the bodies' momenta under it, one block of
+    /// bodies + 1 per motion.
+    motions: Vec<Motion>,
+    momenta: Vec<Force>,
+    /// The mass matrix, the rows of each of its columns that can be non-zero, M N, inverse
+    /// dynamics' generalised forces and f − Ma₀.
+    mass: DMatrix<f64>,
+    mass_rows: Vec<Vec<usize>>,
+    mass_null: DMatrix<f64>,
+    inverse: DVector<f64>,
+    applied: DVector<f64>,
+}
+
+/// The reduced equations' two sides, filled by `ReducedInertia::reduced_into`: NᵀMN in the
+/// leading count × count block of `mass`, Nᵀ(f − Ma₀) in the first count entries of `force`.
+pub struct Reduced<'a> {
+    pub mass: &'a mut DMatrix<f64>,
+    pub force: &'a mut DVector<f64>,
+}
+
+impl ReducedInertia {
+    pub fn new(model: &Model) -> ReducedInertia {
+        let mass_rows = mass_rows(model);
+        ReducedInertia {
+            passes_up_to: passes_up_to(model, &mass_rows),
+            motions: Vec::new(),
+            momenta: Vec::new(),
+            mass: DMatrix::zeros(model.nv, model.nv),
+            mass_rows,
+            mass_null: DMatrix::zeros(model.nv, 0),
+            inverse: DVector::zeros(model.nv),
+            applied: DVector::zeros(model.velocities()),
+        }
+    }
+
+    /// The reduced equations of the first `count` columns of `null` (over the state's
+    /// velocities; only the tree's meet M), with `tau` the efforts' generalised forces (state
+    /// length) and `data` holding the forward kinematics and inverse dynamics' pass out at a₀
+    /// (`rnea_forward`). By passes when `kept` (the motions every evaluation solves on, which
+    /// decide the method, so that it is the same at every evaluation) is small enough.
+    pub fn reduced_into(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        null: &DMatrix<f64>,
+        (count, kept): (usize, usize),
+        tau: &DVector<f64>,
+        reduced: Reduced<'_>,
+    ) {
+        if kept <= self.passes_up_to {
+            self.by_passes(model, data, null, count, tau, reduced);
+        } else {
+            self.with_mass_matrix(model, data, null, count, tau, reduced);
+        }
+    }
+
+    fn by_passes(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        null: &DMatrix<f64>,
+        count: usize,
+        tau: &DVector<f64>,
+        reduced: Reduced<'_>,
+    ) {
+        let bodies = model.body_count() + 1;
+        self.motions.resize(bodies * count, Motion::zeros());
+        self.momenta.resize(bodies * count, Force::zeros());
+        for k in 0..count {
+            let motion = null.column(k);
+            let motions = &mut self.motions[k * bodies..(k + 1) * bodies];
+            body_motions(model, data, &motion.as_slice()[..model.nv], motions);
+            let mut power = 0.0;
+            for &j in &model.dynamic_joints {
+                let i = model.joints[j].child;
+                let body = &model.dynamic_bodies[i - 1];
+                self.momenta[k * bodies + i] = if body.massless {
+                    Force::zeros()
+                } else {
+                    body.rigid.times(&motions[i])
+                };
+                power += motions[i].dot(&data.force[i]);
+            }
+            reduced.force[k] = motion.dot(tau) - power;
+        }
+        for k in 0..count {
+            for l in 0..=k {
+                let value = model.dynamic_joints.iter().fold(0.0, |sum, &j| {
+                    let i = model.joints[j].child;
+                    sum + self.motions[l * bodies + i].dot(&self.momenta[k * bodies + i])
+                });
+                reduced.mass[(k, l)] = value;
+                reduced.mass[(l, k)] = value;
+            }
+        }
+    }
+
+    fn with_mass_matrix(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        null: &DMatrix<f64>,
+        count: usize,
+        tau: &DVector<f64>,
+        reduced: Reduced<'_>,
+    ) {
+        let nv = model.nv;
+        rnea_backward(model, data, &mut self.inverse);
+        self.applied.copy_from(tau);
+        let mut tree = self.applied.rows_mut(0, nv);
+        tree -= &self.inverse;
+        let motions = null.columns(0, count);
+        let mut force = reduced.force.rows_mut(0, count);
+        force.gemv_tr(1.0, &motions, &self.applied, 0.0);
+        crba_after_kinematics(model, data, &mut self.mass);
+        if self.mass_null.ncols() < count {
+            self.mass_null = DMatrix::zeros(nv, count);
+        }
+        // Column by column (matrix-vector products): a matrix product would pack its operands
+        // into buffers it allocates on every call.
+        for k in 0..count {
+            let motion = null.column(k);
+            let mut product = self.mass_null.column_mut(k);
+            let x = &motion.as_slice()[..nv];
+            mass_times(&self.mass, &self.mass_rows, x, product.as_mut_slice());
+        }
+        for k in 0..count {
+            for i in 0..count {
+                let motion = null.view((0, i), (nv, 1));
+                reduced.mass[(i, k)] = motion.dot(&self.mass_null.column(k));
+            }
+        }
+    }
+}
+
+/// Up to how many motions the passes cost less than the mass matrix: a pass costs about one
+/// motion transform and one momentum per body, the composite-rigid-body algorithm about as
+/// much per body plus one product per entry of M's lower triangle, and each motion's product
+/// with M one per entry again.
+fn passes_up_to(model: &Model, mass_rows: &[Vec<usize>]) -> usize {
+    let bodies = model.dynamic_joints.len().max(1);
+    let entries = mass_rows
+        .iter()
+        .enumerate()
+        .map(|(column, rows)| rows.iter().filter(|&&row| row <= column).count())
+        .sum::<usize>();
+    (bodies + entries) / bodies
+}
