@@ -140,9 +140,10 @@ pub struct StepErrorReport {
 }
 
 impl StepErrorReport {
-    /// Whether the steps were too long for the tolerances.
+    /// Whether the steps were too long for the tolerances (a non-finite estimate is kept as
+    /// infinite, `StepError::keep_largest`).
     pub fn exceeds_tolerances(&self) -> bool {
-        !(self.largest <= 1.0)
+        self.largest > 1.0
     }
 }
 

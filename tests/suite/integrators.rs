@@ -41,6 +41,10 @@ fn tolerances(rtol: f64, atol: f64) -> Settings {
 /// The (t, y) pairs handed to the observer.
 type Observed = Vec<(f64, Vec<f64>)>;
 
+/// What `solve` returns: the end state, the work done and the outputs, or why the integration
+/// stopped and the outputs before it.
+type Solved = Result<(Vec<f64>, Stats, Observed), Box<(IntegrationError, Observed)>>;
+
 /// Integrates and collects the observed (t, y) pairs.
 fn solve(
     method: &Method,
@@ -49,7 +53,7 @@ fn solve(
     span: (f64, f64),
     outputs: &[f64],
     settings: &Settings,
-) -> Result<(Vec<f64>, Stats, Observed), (IntegrationError, Observed)> {
+) -> Solved {
     let mut observed = Vec::new();
     let mut observer = |t: f64, y: &[f64]| {
         observed.push((t, y.to_vec()));
@@ -66,7 +70,7 @@ fn solve(
         &mut observer,
     ) {
         Ok((y, stats)) => Ok((y, stats, observed)),
-        Err(error) => Err((error, observed)),
+        Err(error) => Err(Box::new((error, observed))),
     }
 }
 
@@ -602,7 +606,7 @@ fn a_nan_derivative_stops_at_its_time_after_the_earlier_outputs() {
     let times = [0.0, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8];
     for method in all_methods() {
         let mut system = BreaksAtHalf { with_error: false };
-        let (error, observed) = solve(
+        let (error, observed) = *solve(
             &method,
             &mut system,
             &[0.0],
@@ -638,7 +642,7 @@ fn an_error_from_the_system_stops_with_its_message() {
             max_step: 0.1,
             ..Settings::default()
         };
-        let (error, observed) = solve(
+        let (error, observed) = *solve(
             &method,
             &mut system,
             &[0.0],
@@ -698,7 +702,7 @@ fn a_solution_that_blows_up_ends_in_a_failure_near_the_singularity() {
     // y' = y³ from 1 is infinite at t = 0.5.
     for method in [Method::DormandPrince, Method::Rosenbrock] {
         let mut cube = ode(1, |_, y, dydt| dydt[0] = y[0].powi(3));
-        let (error, _) = solve(
+        let (error, _) = *solve(
             &method,
             &mut cube,
             &[1.0],
@@ -726,7 +730,7 @@ fn limits_on_steps_are_enforced() {
         ..Settings::default()
     };
     for method in all_methods() {
-        let (error, _) = solve(
+        let (error, _) = *solve(
             &method,
             &mut oscillator(),
             &[1.0, 0.0],
@@ -743,7 +747,7 @@ fn limits_on_steps_are_enforced() {
         ..tolerances(1e-12, 1e-12)
     };
     for method in [Method::DormandPrince, Method::Rosenbrock] {
-        let (error, _) = solve(
+        let (error, _) = *solve(
             &method,
             &mut oscillator(),
             &[1.0, 0.0],
@@ -765,7 +769,7 @@ fn inconsistent_input_is_reported_not_panicked_on() {
     let reject =
         |method: &Method, y0: &[f64], span: (f64, f64), outputs: &[f64], settings: &Settings| {
             let (error, observed) =
-                solve(method, &mut oscillator(), y0, span, outputs, settings).unwrap_err();
+                *solve(method, &mut oscillator(), y0, span, outputs, settings).unwrap_err();
             assert!(matches!(error.failure, Failure::InvalidInput(_)), "{error}");
             assert!(observed.is_empty());
         };
@@ -805,7 +809,7 @@ fn inconsistent_input_is_reported_not_panicked_on() {
         &[],
         &tolerances(-1.0, 0.0),
     );
-    let (error, _) = solve(
+    let (error, _) = *solve(
         &Method::Rosenbrock,
         &mut oscillator(),
         &[f64::NAN, 0.0],
