@@ -91,7 +91,7 @@ impl DormandPrince {
             dense_start: 0.0,
             dense_step: 0.0,
             rtol: settings.rtol,
-            controlled: settings.controlled.unwrap_or(dimension).min(dimension),
+            controlled: settings.controlled_len(dimension),
             atol: settings.atol,
         }
     }

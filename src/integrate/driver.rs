@@ -227,7 +227,7 @@ fn initial_step(
         ..
     } = *problem;
     let f0 = stepper.derivative().to_vec();
-    let controlled = settings.controlled.unwrap_or(y0.len()).min(y0.len());
+    let controlled = settings.controlled_len(y0.len());
     let scale: Vec<f64> = y0[..controlled]
         .iter()
         .map(|y| settings.atol + settings.rtol * y.abs())

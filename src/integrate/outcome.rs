@@ -17,8 +17,9 @@ pub struct Stats {
     pub jacobian_evaluations: usize,
     /// LU decompositions of the iteration matrix (Rosenbrock only).
     pub lu_decompositions: usize,
-    /// The largest local error estimate of a fixed-step method's steps (RK4), which nothing
-    /// controls: where it exceeds the tolerances, the step is too long for them.
+    /// The largest local error estimate of a fixed-step method's steps (RK4, the variational
+    /// integrator), which nothing controls: where it exceeds the tolerances, the step is too
+    /// long for them.
     pub largest_step_error: Option<StepError>,
 }
 

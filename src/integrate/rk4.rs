@@ -148,10 +148,7 @@ impl Rk4 {
     /// order-3 solution's distance from the step's end (see the module's documentation).
     fn error_estimate(&mut self, problem: &Problem) -> f64 {
         let settings = problem.settings;
-        let controlled = settings
-            .controlled
-            .unwrap_or(self.y.len())
-            .min(self.y.len());
+        let controlled = settings.controlled_len(self.y.len());
         let difference = &mut self.stage_state;
         for (i, d) in difference.iter_mut().enumerate() {
             *d = self.h / 6.0 * (self.stages[3][i] - self.end_derivative[i]);

@@ -76,7 +76,7 @@ impl Rodas3 {
         let zeros = vec![0.0; dimension];
         Rodas3 {
             rtol: settings.rtol,
-            controlled: settings.controlled.unwrap_or(dimension).min(dimension),
+            controlled: settings.controlled_len(dimension),
             atol: settings.atol,
             derivative: zeros.clone(),
             jacobian: DMatrix::zeros(dimension, dimension),

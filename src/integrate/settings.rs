@@ -33,6 +33,13 @@ pub struct Settings {
     pub controlled: Option<usize>,
 }
 
+impl Settings {
+    /// How many leading components of a state of `dimension` the error control watches.
+    pub(super) fn controlled_len(&self, dimension: usize) -> usize {
+        self.controlled.unwrap_or(dimension).min(dimension)
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {

@@ -124,7 +124,7 @@ pub struct Report {
     pub momentum_drift: Option<MomentumDrift>,
     /// The loops: redundancy, residuals, singular configurations (mechanisms with loops).
     pub constraints: Option<ConstraintReport>,
-    /// A fixed-step method's largest local error estimate over its steps (RK4).
+    /// A fixed-step method's largest local error estimate over its steps (RK4, symplectic).
     pub step_error: Option<StepErrorReport>,
     pub failure: Option<RunFailure>,
 }
