@@ -205,6 +205,14 @@ impl Factored {
         self.null_space = OnceCell::new();
     }
 
+    /// The values of the same rows of another G (at nearby positions), leaving A as it was:
+    /// for steps that keep a factor taken at the positions where they began
+    /// (`loops::project_from`). A later `damped_in` would factor the earlier A: `refill` first.
+    pub fn regather(&mut self, jacobian: &ConstraintJacobian) {
+        self.rows.gather(jacobian, &self.scales);
+        self.null_space = OnceCell::new();
+    }
+
     /// The layout of `choice`'s rows of `jacobian`, filled by `refill`.
     fn lay_out(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
         self.indices.clone_from(&choice.rows);

@@ -43,7 +43,25 @@ const NEWTON_ITERATIONS: usize = 8;
 /// 1e-2 on, a row of two four-bars at 1e-12 passed its flat configurations with an energy drift
 /// of 3e-6 instead of 4e-9. From 5e-2 on it is shared by the squeezer (0.07 to 0.09 along its
 /// run), and the row keeps its drift.
+/// There the factor is also kept for the whole projection (`Held::Earlier`): each later
+/// position step and the velocities' projection use the rows where they start with the factor
+/// of the rows where the projection started (a chord method). The corrections stay across the
+/// current rows (Gᵀy never moves the state along the allowed motions), only their size comes
+/// from the older factor, and a step that converges slowly for it is taken again with a fresh
+/// one (`ProjectionScratch::refresh`).
 const SHARED_FACTOR_ABOVE: f64 = 5e-2;
+
+/// Kept rows' residuals below this (dimensionless: radians, or metres per metre of the
+/// mechanism's length) are round-off, or within a few hundred times of it: the residuals are
+/// differences of positions a few lengths across, each evaluated to about 1e-16 of itself
+/// (steps fail from 1e-16 on the Delta, from some 5e-14 on the squeezer), and 1e-13 is a
+/// thousandth of the smallest closure anyone asks of a run (1e-10). Where the rows are well
+/// conditioned (`SHARED_FACTOR_ABOVE`), a projection takes no step from there: on the
+/// squeezer, a floor of 1e-14 cost it a fifth more. Nearer a singular configuration every
+/// projection still steps: how a row of two four-bars passes its flat configurations was
+/// measured to depend on such steps (energy drift 9e-9 with them, 1.1e-6 without, rk4 at a
+/// step of 1e-4), a sensitivity of the passages themselves that skipping them would expose.
+const ROUND_OFF: f64 = 1e-13;
 
 /// What a projection keeps from one call to the next, so that it allocates nothing once sized:
 /// the constraints at the current and the trial positions, the kept rows' factorisation, and
@@ -55,12 +73,15 @@ pub struct ProjectionScratch {
     factor: Envelope,
     /// Which factor of the rows in `factored` `factor` holds.
     held: Held,
-    /// Whether the factor held for the conditioning serves the projection too
-    /// (`SHARED_FACTOR_ABOVE`).
+    /// Whether the factor held for the conditioning serves the projection too, and is kept
+    /// along it (`SHARED_FACTOR_ABOVE`).
     shared: bool,
-    /// Whether `factored` holds the kept rows of `current` (for the choice it records), so that
-    /// factoring them with another damping needs no refill.
+    /// Whether `factored` holds the kept rows of `current` (for the choice it records) and
+    /// their normal matrix, so that factoring them with another damping needs no refill.
     rows_of_current: bool,
+    /// Whether `factored` holds the values of `current`'s kept rows, its normal matrix perhaps
+    /// still that of earlier positions (`Held::Earlier`).
+    values_of_current: bool,
     kept: Vec<f64>,
     correction: Vec<f64>,
     trial_q: Vec<f64>,
@@ -91,6 +112,9 @@ enum Held {
     Conditioning,
     /// Damped by `PROJECTION_DAMPING`, for the position steps and the velocities.
     Projection,
+    /// `Projection`'s factor, of the rows at positions a projection has since moved from: it
+    /// serves the later steps with the rows where they start (`SHARED_FACTOR_ABOVE`).
+    Earlier,
 }
 
 impl ProjectionScratch {
@@ -104,6 +128,7 @@ impl ProjectionScratch {
             held: Held::Nothing,
             shared: false,
             rows_of_current: false,
+            values_of_current: false,
             kept: Vec::new(),
             correction: vec![0.0; model.velocities()],
             trial_q: Vec::new(),
@@ -152,7 +177,8 @@ pub fn project_from(
         position: scratch.current.residual.amax(),
         velocity: scratch.current.velocity.amax(),
     };
-    newton(model, data, q, scratch, |s| s.damped_step(choice))?;
+    let closed = |s: &ProjectionScratch| s.at_round_off(choice);
+    newton(model, data, q, scratch, closed, |s| s.damped_step(choice))?;
     let velocity = scratch.project_velocities(choice, v);
     data.world.clone_from(&scratch.poses);
     seat_ball_angles_at_poses(model, data, q, v)?;
@@ -163,7 +189,7 @@ pub fn project_from(
             position: current.residual.amax(),
             velocity,
         },
-        left: largest_kept(&scratch.factored, &current.residual, choice),
+        left: largest_kept(&current.residual, choice),
     })
 }
 
@@ -177,8 +203,7 @@ impl ProjectionScratch {
         q: &[f64],
         v: &[f64],
     ) -> Result<(), EvalError> {
-        self.rows_of_current = false;
-        self.held = Held::Nothing;
+        self.moved_to_current(false);
         constraints_into(model, data, q, v, Extent::Rows, &mut self.current)
     }
 
@@ -188,6 +213,7 @@ impl ProjectionScratch {
         if !(self.rows_of_current && self.factored.holds(choice)) {
             self.factored.refill(&self.current.jacobian, choice);
             self.rows_of_current = true;
+            self.values_of_current = true;
             self.held = Held::Nothing;
         }
     }
@@ -282,7 +308,9 @@ impl ProjectionScratch {
     /// The damped minimum-norm correction of the kept rows' residual at the current
     /// constraints, into `correction`, with the rows factored there; false if they cannot be.
     fn damped_step(&mut self, choice: &RowChoice) -> bool {
-        if !self.refactor(choice) {
+        if self.held == Held::Earlier {
+            self.gather_current();
+        } else if !self.refactor(choice) {
             return false;
         }
         let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
@@ -296,9 +324,21 @@ impl ProjectionScratch {
 
     /// The velocities' damped projection onto G v = 0 at the current positions, with the
     /// factor taken there (the last position step's, unless a step was accepted after it):
-    /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv. Returns the largest velocity row left.
+    /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv. With an earlier factor (`Held::Earlier`) the rows are the current
+    /// ones and only A is earlier: what its mismatch leaves of Gₛv is of the order of the
+    /// position steps since, against the rows' conditioning, times Gₛv; measured on the Delta
+    /// and the squeezer it is round-off (1.6e-15 and 1.7e-13 left, a second pass leaving
+    /// 1.4e-15 and 3.3e-13). Returns the largest velocity row left.
     fn project_velocities(&mut self, choice: &RowChoice, v: &mut [f64]) -> f64 {
-        if self.held == Held::Projection || self.refactor(choice) {
+        let factored = match self.held {
+            Held::Earlier => {
+                self.gather_current();
+                true
+            }
+            Held::Projection => true,
+            _ => self.refactor(choice),
+        };
+        if factored {
             let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
             damped.allowed_part_into(v, &mut self.kept, &mut self.correction);
             self.factor = damped.into_storage();
@@ -307,20 +347,51 @@ impl ProjectionScratch {
         self.current.jacobian.mul_into(v, &mut self.velocity);
         self.velocity.amax()
     }
+
+    /// Whether the kept rows are well conditioned and their residual round-off (`ROUND_OFF`).
+    fn at_round_off(&self, choice: &RowChoice) -> bool {
+        self.shared && largest_kept(&self.current.residual, choice).0 <= ROUND_OFF
+    }
+
+    /// The values of the current kept rows into `factored`, for a factor of earlier rows.
+    fn gather_current(&mut self) {
+        if !self.values_of_current {
+            self.factored.regather(&self.current.jacobian);
+            self.values_of_current = true;
+        }
+    }
+
+    /// `current` now holds other positions' constraints: the rows in `factored` and the factor
+    /// held are no longer theirs. A projection factor kept along the projection
+    /// (`SHARED_FACTOR_ABOVE`) stays as an earlier one when `keep_factor`.
+    fn moved_to_current(&mut self, keep_factor: bool) {
+        self.rows_of_current = false;
+        self.values_of_current = false;
+        let kept = matches!(self.held, Held::Projection | Held::Earlier);
+        self.held = if keep_factor && self.shared && kept {
+            Held::Earlier
+        } else {
+            Held::Nothing
+        };
+    }
+
+    /// After a step with an earlier factor that failed, or converged slowly: drops the factor
+    /// held, so that the next step factors the rows where it starts.
+    fn refresh(&mut self) {
+        self.held = Held::Nothing;
+    }
 }
 
-fn largest_kept(
-    factored: &Factored,
-    residual: &DVector<f64>,
-    choice: &RowChoice,
-) -> (f64, Option<usize>) {
-    factored
-        .kept_rows()
-        .map(|(r, scale)| (residual[r] * scale).abs())
-        .enumerate()
-        .fold((0.0, None), |(best, row), (k, value)| {
+/// The largest of `choice`'s rows in `residual` (6 per loop), made dimensionless, and that row.
+fn largest_kept(residual: &DVector<f64>, choice: &RowChoice) -> (f64, Option<usize>) {
+    choice
+        .rows
+        .iter()
+        .zip(&choice.scales)
+        .map(|(&r, scale)| ((residual[r] * scale).abs(), r))
+        .fold((0.0, None), |(best, row), (value, r)| {
             if row.is_none() || value > best {
-                (value, Some(choice.rows[k]))
+                (value, Some(r))
             } else {
                 (best, row)
             }
@@ -338,13 +409,16 @@ pub fn close_configuration(
     let rest = vec![0.0; model.velocities()];
     forward_kinematics(model, data, q, &rest)?;
     scratch.constraints_at(model, data, q, &rest)?;
-    newton(model, data, q, &mut scratch, |s| {
-        let c = &s.current;
-        let step = -(decompose(&c.jacobian.dense()).pseudo_inverse * &c.residual);
-        s.correction.copy_from_slice(step.as_slice());
-        true
-    })?;
+    newton(model, data, q, &mut scratch, |_| false, minimum_norm_step)?;
     Ok(scratch.current.residual.amax())
+}
+
+/// The minimum-norm correction of every row's residual, from a singular value decomposition.
+fn minimum_norm_step(s: &mut ProjectionScratch) -> bool {
+    let c = &s.current;
+    let step = -(decompose(&c.jacobian.dense()).pseudo_inverse * &c.residual);
+    s.correction.copy_from_slice(step.as_slice());
+    true
 }
 
 /// Gauss–Newton on the positions from the constraints in `scratch.current`: `step` writes the
@@ -352,18 +426,23 @@ pub fn close_configuration(
 /// reduces the largest residual, or reduces it less than fourfold. Leaves q and
 /// `scratch.current` at the best configuration reached, and the bodies' poses there in
 /// `scratch.poses` (`data` must hold them at the start); an accepted step leaves no factor held
-/// (the one `step` took belongs to the positions before it).
+/// (the one `step` took belongs to the positions before it), unless it is kept along the
+/// projection as an earlier one (`Held::Earlier`): a step with it that fails or converges
+/// slowly is taken again with a fresh factor (`ProjectionScratch::refresh`). No step is taken
+/// from a residual that `round_off` says is round-off.
 fn newton(
     model: &Model,
     data: &mut Data,
     q: &mut [f64],
     scratch: &mut ProjectionScratch,
+    round_off: impl Fn(&ProjectionScratch) -> bool,
     mut step: impl FnMut(&mut ProjectionScratch) -> bool,
 ) -> Result<(), EvalError> {
     let mut error = scratch.current.residual.amax();
     scratch.poses.clone_from(&data.world);
     for _ in 0..NEWTON_ITERATIONS {
-        if error == 0.0 || !step(scratch) {
+        let chord = scratch.held == Held::Earlier;
+        if error == 0.0 || round_off(scratch) || !step(scratch) {
             break;
         }
         let s = &mut *scratch;
@@ -383,17 +462,24 @@ fn newton(
         let trial_error = s.trial.residual.amax();
         // A NaN residual is no improvement either.
         if trial_error.is_nan() || trial_error >= error {
+            if chord {
+                s.refresh();
+                continue;
+            }
             break;
         }
         complete_rows(model, data, &s.rest, &mut s.trial);
         let converging = trial_error < 0.25 * error;
         q.copy_from_slice(&s.trial_q);
         std::mem::swap(&mut s.current, &mut s.trial);
-        s.held = Held::Nothing;
-        s.rows_of_current = false;
+        s.moved_to_current(true);
         s.poses.clone_from(&data.world);
         error = trial_error;
         if !converging {
+            if chord {
+                s.refresh();
+                continue;
+            }
             break;
         }
     }
