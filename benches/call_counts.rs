@@ -1,8 +1,9 @@
-//! Calls one program's constrained right-hand side (or its tree's, or a projection) a given
+//! Calls one program's constrained right-hand side (or its tree's, or a projection, or a
+//! right-hand side followed by the projection of the same state, as after a dopri5 step) a given
 //! number of times at the initial state, for an instruction counter:
 //!
 //! ```text
-//! cargo bench --bench call_counts -- FILE [loops|tree|projection] CALLS
+//! cargo bench --bench call_counts -- FILE [loops|tree|projection|evaluated] CALLS
 //! valgrind --tool=callgrind target/release/deps/call_counts-HASH FILE loops 600
 //! ```
 //!
@@ -40,7 +41,7 @@ fn main() {
         .filter(|a| !a.starts_with("--"))
         .collect();
     let [file, what, calls] = &args[..] else {
-        println!("usage: call_counts FILE [loops|tree|projection] CALLS");
+        println!("usage: call_counts FILE [loops|tree|projection|evaluated] CALLS");
         return;
     };
     let calls: usize = calls.parse().expect("CALLS is a number");
@@ -62,6 +63,15 @@ fn main() {
                 black_box(system.keep_closed(0.0, &mut z).expect("projects"));
             }
         }
+        "evaluated" => {
+            let (mut system, y) = loop_system(&prepared);
+            let mut dydt = vec![0.0; y.len()];
+            for _ in 0..calls {
+                let mut z = y.clone();
+                system.derivative(0.0, &z, &mut dydt).expect("evaluates");
+                black_box(system.keep_closed(0.0, &mut z).expect("projects"));
+            }
+        }
         "tree" => {
             let (tree, y) = tree_model(&prepared);
             let mut call = tree_call(&prepared, &tree, &y);
@@ -69,6 +79,6 @@ fn main() {
                 call();
             }
         }
-        other => println!("unknown mode {other}: loops, tree or projection"),
+        other => println!("unknown mode {other}: loops, tree, projection or evaluated"),
     }
 }

@@ -214,7 +214,7 @@ impl LoopMonitor {
     ) -> Result<bool, EvalError> {
         self.breaks_trend = false;
         forward_kinematics(model, data, q, v)?;
-        scratch.constraints_at(model, data, q, v)?;
+        scratch.constraints_here(model, data, q, v)?;
         let conditioning = self.conditioning(scratch);
         self.breaks_trend |= conditioning.0 < NEAR_SINGULAR;
         let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;

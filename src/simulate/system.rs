@@ -49,6 +49,9 @@ pub struct MechanicalSystem<'m> {
     /// Scratch of the projections: the constraints and factorisations, and the velocities.
     projection: ProjectionScratch,
     velocities: Vec<f64>,
+    /// The state of the last evaluation of a mechanism with loops, while `loop_scratch` holds
+    /// its rows (empty otherwise): a projection of that state adopts them.
+    evaluated: Vec<f64>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -73,6 +76,7 @@ impl<'m> MechanicalSystem<'m> {
             loop_scratch: LoopScratch::new(model),
             projection: ProjectionScratch::new(model),
             velocities: Vec::new(),
+            evaluated: Vec::new(),
         }
     }
 
@@ -124,6 +128,7 @@ impl<'m> MechanicalSystem<'m> {
         wanted: Wanted,
     ) -> Result<(), SystemError> {
         let model = self.model;
+        self.evaluated.clear();
         self.ensure_structure(q)?;
         // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
         // recursions start from.
@@ -182,6 +187,9 @@ impl<'m> MechanicalSystem<'m> {
         let v = self.model.split_state_into(y, &mut q);
         let result = self.derivative_at(t, &q, v, dydt);
         self.positions = q;
+        if result.is_ok() && self.model.has_loops() {
+            self.evaluated.extend_from_slice(y);
+        }
         result
     }
 
@@ -280,6 +288,11 @@ impl<'m> MechanicalSystem<'m> {
         );
         v.clear();
         v.extend_from_slice(model.split_state_into(y, &mut q));
+        if self.evaluated == y {
+            let choice = &self.loops.structure.choice;
+            (self.loop_scratch).hand_over(&mut self.projection, choice);
+        }
+        self.evaluated.clear();
         let state = (&mut q[..], &mut v[..]);
         let kept = self
             .loops

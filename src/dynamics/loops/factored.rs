@@ -334,7 +334,8 @@ impl Factored {
         let shift = (damping * largest).powi(2);
         factor.copy_from(&self.normal);
         for k in 0..self.firm {
-            *factor.at_mut(k, k) += shift;
+            let at = factor.index(k, k);
+            factor.values[at] += shift;
         }
         factor.cholesky().map_err(|k| Singular {
             row: self.indices[k],
@@ -586,24 +587,49 @@ pub fn projector_block_quality(work: &mut DMatrix<f64>, n: usize) -> f64 {
 }
 
 /// A symmetric matrix stored by rows from each row's first non-zero entry to the diagonal; the
-/// Cholesky factor of such a matrix lives in the same envelope.
+/// Cholesky factor of such a matrix lives in the same envelope. The rows lie end to end in one
+/// vector, so that copying a matrix into a factor's storage is one copy.
 #[derive(Clone, Debug, Default)]
 pub struct Envelope {
     first: Vec<usize>,
-    /// Row k holds columns first[k]..=k.
-    values: Vec<Vec<f64>>,
+    /// Row k holds columns first[k]..=k at values[starts[k]..starts[k + 1]].
+    starts: Vec<usize>,
+    values: Vec<f64>,
 }
 
 impl Envelope {
-    /// Row k's entry in column l (within its envelope).
+    /// The envelope of rows starting at the columns `first` (each at most its row), zeroed.
+    fn shape(&mut self, first: impl Iterator<Item = usize>) {
+        self.first.clear();
+        self.first.extend(first);
+        self.starts.clear();
+        self.starts.push(0);
+        for (k, &fk) in self.first.iter().enumerate() {
+            self.starts.push(self.starts[k] + k - fk + 1);
+        }
+        self.values.clear();
+        self.values
+            .resize(*self.starts.last().expect("a start"), 0.0);
+    }
+
+    fn len(&self) -> usize {
+        self.first.len()
+    }
+
+    /// Row k's entries, columns first[k]..=k.
+    fn row(&self, k: usize) -> &[f64] {
+        &self.values[self.starts[k]..self.starts[k + 1]]
+    }
+
+    /// Where row k's entry in column l (within its envelope) is stored.
     fn index(&self, k: usize, l: usize) -> usize {
-        l - self.first[k]
+        self.starts[k] + l - self.first[k]
     }
 
     /// y ← L⁻¹ y for the factor L held.
     fn forward(&self, y: &mut [f64]) {
         for k in 0..y.len() {
-            let (left, diagonal) = split_diagonal(&self.values[k]);
+            let (left, diagonal) = split_diagonal(self.row(k));
             let dot = in_order_dot(left, &y[self.first[k]..k]);
             y[k] = (y[k] - dot) / diagonal;
         }
@@ -612,29 +638,25 @@ impl Envelope {
     /// `other`'s entries in this envelope's storage (a derived `clone_from` would allocate anew).
     fn copy_from(&mut self, other: &Envelope) {
         self.first.clone_from(&other.first);
+        self.starts.clone_from(&other.starts);
         self.values.clone_from(&other.values);
     }
 
-    fn at_mut(&mut self, row: usize, column: usize) -> &mut f64 {
-        &mut self.values[row][column - self.first[row]]
-    }
-
     fn diagonal(&self) -> impl Iterator<Item = f64> + '_ {
-        self.values
-            .iter()
-            .map(|row| *row.last().expect("a diagonal"))
+        self.starts[1..].iter().map(|&end| self.values[end - 1])
     }
 
     /// The Cholesky factor in place, or the first row whose pivot is not positive.
     fn cholesky(&mut self) -> Result<(), usize> {
-        for k in 0..self.values.len() {
-            let fk = self.first[k];
-            let (above, below) = self.values.split_at_mut(k);
-            let row = &mut below[0];
+        for k in 0..self.len() {
+            let (fk, start) = (self.first[k], self.starts[k]);
+            let (above, below) = self.values.split_at_mut(start);
+            let row = &mut below[..k - fk + 1];
             for j in fk..k {
-                let start = fk.max(self.first[j]);
-                let (left, pivot) = split_diagonal(&above[j]);
-                let dot = in_order_dot(&row[start - fk..j - fk], &left[start - self.first[j]..]);
+                let from = fk.max(self.first[j]);
+                let above_j = &above[self.starts[j]..self.starts[j + 1]];
+                let (left, pivot) = split_diagonal(above_j);
+                let dot = in_order_dot(&row[from - fk..j - fk], &left[from - self.first[j]..]);
                 row[j - fk] = (row[j - fk] - dot) / pivot;
             }
             let (diagonal, left) = row.split_last_mut().expect("a diagonal");
@@ -651,7 +673,7 @@ impl Envelope {
     fn solve(&self, y: &mut [f64]) {
         self.forward(y);
         for k in (0..y.len()).rev() {
-            let (left, diagonal) = split_diagonal(&self.values[k]);
+            let (left, diagonal) = split_diagonal(self.row(k));
             y[k] /= diagonal;
             let value = y[k];
             for (target, entry) in y[self.first[k]..k].iter_mut().zip(left) {
@@ -667,9 +689,9 @@ impl Envelope {
 /// out once per choice of rows; each state then costs one dot product per entry.
 #[derive(Default)]
 struct NormalPlan {
-    /// (row of A, index in its envelope row, end of its pairs in `pairs`): an entry's pairs
-    /// follow the previous entry's.
-    entries: Vec<(usize, usize, usize)>,
+    /// (index in A's envelope storage, end of its pairs in `pairs`): an entry's pairs follow the
+    /// previous entry's.
+    entries: Vec<(usize, usize)>,
     pairs: Vec<(usize, usize)>,
 }
 
@@ -688,17 +710,11 @@ impl NormalPlan {
             by_loop[row / 6].push(k);
         }
         let neighbours = |k: usize| jacobian.neighbours[indices[k] / 6].iter();
-        normal.first.clear();
-        normal.first.extend((0..indices.len()).map(|k| {
+        normal.shape((0..indices.len()).map(|k| {
             neighbours(k)
                 .filter_map(|n| by_loop[n.other].first().copied())
                 .fold(k, usize::min)
         }));
-        normal.values.resize_with(indices.len(), Vec::new);
-        for (k, values) in normal.values.iter_mut().enumerate() {
-            values.clear();
-            values.resize(k - normal.first[k] + 1, 0.0);
-        }
         self.entries.clear();
         self.pairs.clear();
         for k in 0..indices.len() {
@@ -707,7 +723,7 @@ impl NormalPlan {
                     let (here, there) = (rows.starts[k], rows.starts[l]);
                     self.pairs
                         .extend(neighbour.shared.iter().map(|&(i, j)| (here + i, there + j)));
-                    self.entries.push((k, normal.index(k, l), self.pairs.len()));
+                    self.entries.push((normal.index(k, l), self.pairs.len()));
                 }
             }
         }
@@ -716,8 +732,8 @@ impl NormalPlan {
     /// A's entries from the rows' `values`.
     fn fill(&self, values: &[f64], normal: &mut Envelope) {
         let mut start = 0;
-        for &(k, at, end) in &self.entries {
-            normal.values[k][at] = self.pairs[start..end]
+        for &(at, end) in &self.entries {
+            normal.values[at] = self.pairs[start..end]
                 .iter()
                 .fold(0.0, |sum, &(i, j)| sum + values[i] * values[j]);
             start = end;

@@ -9,7 +9,8 @@ use nalgebra::{DMatrix, DVector};
 use super::basis::decompose;
 use super::factored::{Envelope, Factored, RowChoice, DAMPING, PROJECTION_DAMPING};
 use super::rows::{
-    complete_rows, constraints_into, seat_ball_angles_at_poses, Constraints, Extent,
+    complete_rotations, complete_rows, constraints_into, seat_ball_angles_at_poses, Constraints,
+    Extent,
 };
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::model::Model;
@@ -98,6 +99,9 @@ pub struct ProjectionScratch {
     /// The same measure, when the equations of motion took it at this step's start
     /// (`offer_free_quality`).
     offered_quality: Option<f64>,
+    /// Whether `current` and the factor held were adopted from the equations of motion at the
+    /// state being projected (`adopt`), so that they need not be computed again.
+    adopted: bool,
     /// A row left out and its coefficients on the kept rows (`reproduction`).
     row: Vec<f64>,
     coefficients: Vec<f64>,
@@ -138,6 +142,7 @@ impl ProjectionScratch {
             free_columns: DMatrix::zeros(0, 0),
             block: DMatrix::zeros(0, 0),
             offered_quality: None,
+            adopted: false,
             row: Vec::new(),
             coefficients: Vec::new(),
         }
@@ -194,6 +199,43 @@ pub fn project_from(
 }
 
 impl ProjectionScratch {
+    /// Takes, for the projection of the state the equations of motion were last evaluated at
+    /// (the last stage of a dopri5 step is its end), their constraints, their kept rows'
+    /// factorisation and its factor, damped by `DAMPING` as `conditioning` would take it
+    /// (`LoopScratch::hand_over`), in exchange for this scratch's storage: the projection then
+    /// starts without computing the rows or a factor (`constraints_here`).
+    pub fn adopt(
+        &mut self,
+        constraints: &mut Constraints,
+        factored: &mut Factored,
+        factor: &mut Envelope,
+    ) {
+        std::mem::swap(&mut self.current, constraints);
+        std::mem::swap(&mut self.factored, factored);
+        std::mem::swap(&mut self.factor, factor);
+        self.rows_of_current = true;
+        self.values_of_current = true;
+        self.held = Held::Conditioning;
+        self.adopted = true;
+    }
+
+    /// The constraints at (q, v) into `current`, unless they were adopted (`adopt`): then only
+    /// the rows' rotations, which the equations of motion leave out unless Baumgarte's feedback
+    /// reads them. `data` must hold the forward kinematics of (q, v).
+    pub fn constraints_here(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), EvalError> {
+        if std::mem::take(&mut self.adopted) {
+            complete_rotations(model, data, &mut self.current);
+            return Ok(());
+        }
+        self.constraints_at(model, data, q, v)
+    }
+
     /// The constraints at (q, v) into `current`; `data` must hold the forward kinematics of
     /// (q, v).
     pub fn constraints_at(
@@ -221,10 +263,15 @@ impl ProjectionScratch {
     /// How far the kept rows of the current constraints are from dependent
     /// (`Factored::conditioning`, damped by `DAMPING`).
     pub fn conditioning(&mut self, choice: &RowChoice) -> (f64, Option<usize>) {
-        self.fill_rows(choice);
-        let damped = self
-            .factored
-            .damped_in(DAMPING, std::mem::take(&mut self.factor));
+        // A factor already taken of these rows (`adopt`) serves as it is.
+        let held = self.held == Held::Conditioning && self.rows_of_current;
+        let damped = if held && self.factored.holds(choice) {
+            Ok(self.factored.with_factor(std::mem::take(&mut self.factor)))
+        } else {
+            self.fill_rows(choice);
+            self.factored
+                .damped_in(DAMPING, std::mem::take(&mut self.factor))
+        };
         let conditioning = self.factored.conditioning_of(&damped);
         self.shared = conditioning.0 >= SHARED_FACTOR_ABOVE && choice.weak == 0;
         self.held = match damped {

@@ -17,7 +17,7 @@ use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::ChainMotion;
 use crate::spatial::{self, Force, Motion};
-use crate::spatial::{motion_to_parent, translation};
+use crate::spatial::{motion_to_parent, translation, Pose};
 
 /// Names of the six rows of a loop.
 pub const ROW_NAMES: [&str; 6] = [
@@ -183,6 +183,28 @@ pub fn constraints_into(
     Ok(())
 }
 
+/// The rotation rows of a loop whose chain ends at `end` and whose second frame is at `target`:
+/// the rotation carrying one onto the other, as a rotation vector in fixed axes.
+fn rotation_residual(end: &Pose, target: &Pose) -> Vector3<f64> {
+    let relative = end.rotation.inverse() * target.rotation;
+    end.rotation * relative.scaled_axis()
+}
+
+/// Completes the constraints `constraints_into` left at `Extent::Motion` with the position
+/// rows' rotations, from the same state (whose forward kinematics `data` must still hold).
+pub fn complete_rotations(model: &Model, data: &Data, c: &mut Constraints) {
+    for (k, joint) in model.loops.iter().enumerate() {
+        if model.loop_balls[k].is_some() {
+            continue;
+        }
+        let end = data.world[joint.first_body] * joint.first * c.chains[k].pose;
+        let target = data.world[joint.second_body] * joint.second;
+        c.residual
+            .rows_mut(6 * k, 3)
+            .copy_from(&rotation_residual(&end, &target));
+    }
+}
+
 /// Completes the constraints `constraints_into` left at `Extent::Residual` to `Extent::Rows`,
 /// from the same state (whose forward kinematics `data` must still hold).
 pub fn complete_rows(model: &Model, data: &mut Data, v: &[f64], c: &mut Constraints) {
@@ -249,10 +271,9 @@ fn loop_residual(
     if ball || !rotations {
         c.residual.rows_mut(row, 3).fill(0.0);
     } else {
-        let relative = end.rotation.inverse() * target.rotation;
         c.residual
             .rows_mut(row, 3)
-            .copy_from(&(end.rotation * relative.scaled_axis()));
+            .copy_from(&rotation_residual(&end, &target));
     }
     c.residual
         .rows_mut(row + 3, 3)

@@ -18,6 +18,7 @@ use super::factored::{
     dense_cholesky, projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING,
 };
 use super::inertia::{Reduced, ReducedInertia};
+use super::project::ProjectionScratch;
 use super::rows::{constraints, Constraints, Extent};
 use super::structure::Structure;
 use crate::dynamics::algorithms::{crba, Data};
@@ -113,6 +114,15 @@ impl LoopScratch {
     /// was taken for them.
     pub fn take_free_quality(&mut self, free: &[usize]) -> Option<f64> {
         self.free_quality.take().filter(|_| self.quality_of == free)
+    }
+
+    /// Hands the rows of the last evaluation, their factorisation and its factor (damped by
+    /// `DAMPING`) to a projection of the same state (`ProjectionScratch::adopt`), if they are
+    /// `choice`'s rows; this scratch fills the projection's storage anew at the next evaluation.
+    pub fn hand_over(&mut self, projection: &mut ProjectionScratch, choice: &RowChoice) {
+        if self.factored.holds(choice) {
+            projection.adopt(&mut self.constraints, &mut self.factored, &mut self.factor);
+        }
     }
 
     /// The particular acceleration a₀ `allowed_motions` found, over the state's velocities.
