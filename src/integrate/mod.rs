@@ -3,7 +3,8 @@
 //! Three methods share one entry point, [`integrate`]:
 //! - [`Method::Rk4`]: the classic fixed-step Runge–Kutta method of order 4;
 //! - [`Method::DormandPrince`]: the adaptive explicit Dormand–Prince 5(4) pair with dense output;
-//! - [`Method::Rosenbrock`]: the adaptive linearly implicit RODAS3 method for stiff problems.
+//! - [`Method::Rosenbrock`]: the adaptive linearly implicit Rosenbrock-W method ROS34PW2 for stiff
+//!   problems, its Jacobian kept across steps.
 //!
 //! Values at output times between steps come from each method's interpolant, so asking for many
 //! outputs never shortens the steps.
@@ -94,7 +95,7 @@ pub fn integrate(
             observer,
         ),
         Method::Rosenbrock => driver::integrate_adaptive(
-            &mut rosenbrock::Rodas3::new(y0.len(), settings),
+            &mut rosenbrock::RosenbrockW::new(y0.len(), settings),
             system,
             &problem,
             observer,

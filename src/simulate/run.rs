@@ -37,6 +37,14 @@ impl OdeSystem for MechanicalSystem<'_> {
         Ok(self.keep_closed(t, y)?)
     }
 
+    fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
+        Ok(MechanicalSystem::tangent_basis(self, t, y)?)
+    }
+
     fn breaks_error_trend(&self) -> bool {
         self.loops.breaks_trend
     }
@@ -62,6 +70,15 @@ impl OdeSystem for WithWork<'_, '_> {
     fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
         let n = self.0.dimension();
         Ok(self.0.keep_closed(t, &mut y[..n])?)
+    }
+
+    fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
+        let n = self.0.dimension();
+        Ok(self.0.tangent_basis(t, &y[..n])?)
     }
 
     fn breaks_error_trend(&self) -> bool {
