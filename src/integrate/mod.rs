@@ -4,7 +4,8 @@
 //! - [`Method::Rk4`]: the classic fixed-step Runge–Kutta method of order 4;
 //! - [`Method::DormandPrince`]: the adaptive explicit Dormand–Prince 5(4) pair with dense output;
 //! - [`Method::Rosenbrock`]: the adaptive linearly implicit Rosenbrock-W method ROS34PW2 for stiff
-//!   problems, its Jacobian kept across steps.
+//!   problems, its Jacobian kept across steps;
+//! - [`Method::Automatic`]: Dormand–Prince, and the Rosenbrock-W method where the problem is stiff.
 //!
 //! Values at output times between steps come from each method's interpolant, so asking for many
 //! outputs never shortens the steps.
@@ -19,6 +20,7 @@ mod output;
 mod rk4;
 pub mod rosenbrock;
 mod settings;
+mod switching;
 mod system;
 
 pub use control::error_norm;
@@ -100,6 +102,24 @@ pub fn integrate(
             &problem,
             observer,
         ),
+        Method::Automatic => {
+            let mut stepper = switching::Switching::new(y0.len(), settings);
+            let result = driver::integrate_adaptive(&mut stepper, system, &problem, observer);
+            let count = |stats: &mut Stats| {
+                stats.stiff_steps = stepper.implicit_steps;
+                stats.method_switches = stepper.switches;
+            };
+            match result {
+                Ok((y, mut stats)) => {
+                    count(&mut stats);
+                    Ok((y, stats))
+                }
+                Err(mut error) => {
+                    count(&mut error.stats);
+                    Err(error)
+                }
+            }
+        }
     }
 }
 

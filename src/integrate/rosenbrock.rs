@@ -194,6 +194,8 @@ struct Jacobian {
     /// TᵀU.
     reduced: DMatrix<f64>,
     time_derivative: Vec<f64>,
+    /// The spectral radius of U Tᵀ (that of TᵀU): how fast its stiffest component moves.
+    spectral_radius: f64,
     /// Whether it was formed at the current point of the solution.
     fresh: bool,
     /// Accepted steps since it was formed.
@@ -305,16 +307,33 @@ impl RosenbrockW {
                 false => 1,
             };
         }
+        let spectral_radius = spectral_radius(&reduced);
         self.jacobian = Some(Jacobian {
             directions,
             image,
             reduced,
             time_derivative,
+            spectral_radius,
             fresh: true,
             age: 0,
             factor: None,
         });
         Ok(())
+    }
+
+    /// The spectral radius of the Jacobian last formed (`None` before the first).
+    pub(super) fn spectral_radius(&self) -> Option<f64> {
+        self.jacobian.as_ref().map(|j| j.spectral_radius)
+    }
+
+    /// Takes `derivative` as dy/dt at the current point (computed by another method), and
+    /// forms the Jacobian anew at the next attempt.
+    pub(super) fn adopt(&mut self, derivative: &[f64]) {
+        self.derivative.copy_from_slice(derivative);
+        if let Some(jacobian) = &mut self.jacobian {
+            jacobian.fresh = false;
+            jacobian.age = usize::MAX;
+        }
     }
 
     /// Solves the stage's equation for its increment, in place.
@@ -368,6 +387,25 @@ impl RosenbrockW {
         Self::solve_w(jacobian, lu, h, &mut rhs);
         self.increments[stage] = rhs;
         Ok(())
+    }
+}
+
+/// The largest modulus of the eigenvalues of `matrix` (real Schur form), or its ∞-norm, which
+/// bounds it, should the iterations not converge.
+fn spectral_radius(matrix: &DMatrix<f64>) -> f64 {
+    if matrix.is_empty() {
+        return 0.0;
+    }
+    match nalgebra::linalg::Schur::try_new(matrix.clone(), f64::EPSILON, 1000) {
+        Some(schur) => schur
+            .complex_eigenvalues()
+            .iter()
+            .map(|e| e.norm())
+            .fold(0.0, f64::max),
+        None => matrix
+            .row_iter()
+            .map(|r| r.iter().map(|x| x.abs()).sum::<f64>())
+            .fold(0.0, f64::max),
     }
 }
 

@@ -11,6 +11,9 @@ pub enum Method {
     /// ROS34PW2, a Rosenbrock-W method of order 3 for stiff problems, with a finite-difference
     /// Jacobian kept across steps (along the system's tangent directions when it gives them).
     Rosenbrock,
+    /// Dormand–Prince where the problem is not stiff, the Rosenbrock-W method where it is: the
+    /// method changes between steps when the steps' stability says so (`switching.rs`).
+    Automatic,
 }
 
 /// Tolerances and limits of the adaptive methods (RK4 takes `max_steps`, and measures its error

@@ -125,6 +125,12 @@ pub struct Report {
     pub steps: usize,
     pub rejected_steps: usize,
     pub function_evaluations: usize,
+    /// With the implicit integrator: the accepted steps its Rosenbrock-W method took (the others
+    /// are Dormand–Prince's, where the motion is not stiff), and how often it changed method.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiff_steps: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method_switches: Option<usize>,
     /// Time the integration took (wall clock; the computation is single-threaded).
     pub run_seconds: f64,
     /// Largest |E(t) − E(0)| over the outputs, relative to the larger of |E(0)| and the largest
@@ -364,7 +370,7 @@ pub fn run_from(
     let method = match settings.integrator {
         Integrator::Rk4 => Some(Method::Rk4 { step: fixed_step }),
         Integrator::DormandPrince => Some(Method::DormandPrince),
-        Integrator::Implicit => Some(Method::Rosenbrock),
+        Integrator::Implicit => Some(Method::Automatic),
         Integrator::Symplectic => None,
     };
     let result: Result<(Vec<f64>, Stats), IntegrationError> = match method {
@@ -450,6 +456,9 @@ pub fn run_from(
         steps: stats.steps,
         rejected_steps: stats.rejected,
         function_evaluations: stats.rhs_evaluations,
+        stiff_steps: (settings.integrator == Integrator::Implicit).then_some(stats.stiff_steps),
+        method_switches: (settings.integrator == Integrator::Implicit)
+            .then_some(stats.method_switches),
         run_seconds,
         energy_drift: energy_drift(&samples),
         energy_balance: energy_balance(&samples),
@@ -528,6 +537,8 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         steps: 0,
         rejected_steps: 0,
         function_evaluations: 0,
+        stiff_steps: None,
+        method_switches: None,
         run_seconds: 0.0,
         energy_drift: None,
         energy_balance: None,
