@@ -166,11 +166,14 @@ impl AdaptiveStepper for DormandPrince {
         }
         stage_state_into(&self.stages, STAGES - 1, y, h, y_new);
         eval.rhs(t + h, y_new, &mut self.stages[STAGES - 1])?;
-        let (mut slopes, mut states) = (0.0, 0.0);
-        for i in 0..self.controlled {
-            slopes += (self.stages[STAGES - 1][i] - self.stages[STAGES - 2][i]).powi(2);
-            states += (y_new[i] - self.stage_state[i]).powi(2);
-        }
+        let n = self.controlled;
+        let [.., before_last, last] = &self.stages;
+        let slopes: f64 = (last[..n].iter().zip(&before_last[..n]))
+            .map(|(a, b)| (a - b).powi(2))
+            .sum();
+        let states: f64 = (y_new[..n].iter().zip(&self.stage_state[..n]))
+            .map(|(a, b)| (a - b).powi(2))
+            .sum();
         self.stiffness = if states > 0.0 {
             h * (slopes / states).sqrt()
         } else {

@@ -112,6 +112,7 @@ pub struct Transformed {
 }
 
 impl Transformed {
+    #[allow(clippy::needless_range_loop)]
     pub fn new() -> Transformed {
         // Γ⁻¹ by forward substitution, column by column.
         let mut inverse = [[0.0; STAGES]; STAGES];
@@ -540,7 +541,7 @@ impl AdaptiveStepper for RosenbrockW {
             self.rtol,
             self.atol,
         );
-        self.rejected = !(error <= 1.0);
+        self.rejected = error.is_nan() || error > 1.0;
         if error <= 1.0 && all_finite(y_new) {
             eval.rhs(t + h, y_new, &mut self.end_derivative)?;
         }
