@@ -11,7 +11,7 @@
 //! that depends on h is redone at each attempt.
 //!
 //! J is kept as the product U Tᵀ of its action U = J T on a basis T of the directions the state
-//! moves along ([`OdeSystem::tangent_basis`]): on a mechanism with loops, the allowed motions of
+//! moves along ([`OdeSystem::tangent_basis`](super::OdeSystem::tangent_basis)): on a mechanism with loops, the allowed motions of
 //! positions and velocities, 2 columns for a mechanism of mobility 1 whatever its size. Each
 //! column of U is one forward difference of f along that direction, and W is solved through the
 //! m × m matrix I / (h γ) − TᵀU (Sherman–Morrison–Woodbury): what is left out is the Jacobian
