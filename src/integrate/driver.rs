@@ -23,6 +23,11 @@ pub(super) trait AdaptiveStepper {
     fn order(&self) -> u32;
     /// The step-size controller suited to the method's error estimate.
     fn controller(&self) -> StepController;
+    /// The controller to use from the next attempt on, when the method changed at the last
+    /// accepted step (a method that switches between two).
+    fn switched_controller(&mut self) -> Option<StepController> {
+        None
+    }
     /// Prepares stepping from a point the last accepted step did not compute: the initial point,
     /// or a step end moved by [`OdeSystem::project`] (e.g. evaluates dy/dt there).
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt>;
@@ -132,6 +137,9 @@ impl March<'_> {
                 self.advance(stepper, eval, problem, h, observer)?;
                 eval.stats.steps += 1;
                 self.h = self.controller.after_accept(h, error);
+                if let Some(controller) = stepper.switched_controller() {
+                    self.controller = controller;
+                }
                 if eval.breaks_error_trend() {
                     self.controller.forget_trend();
                 }

@@ -81,6 +81,23 @@ impl<'s> Evaluator<'s> {
         Ok(moved)
     }
 
+    /// The system's tangent directions at (t, y) (`OdeSystem::tangent_basis`); finding them
+    /// counts as one evaluation of the right-hand side.
+    pub(super) fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, Halt> {
+        let basis = self
+            .system
+            .tangent_basis(t, y)
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))?;
+        if basis.is_some() {
+            self.stats.rhs_evaluations += 1;
+        }
+        Ok(basis)
+    }
+
     /// Whether the step control should forget the error's trend (`OdeSystem::breaks_error_trend`).
     pub(super) fn breaks_error_trend(&self) -> bool {
         self.system.breaks_error_trend()

@@ -3,7 +3,9 @@
 //! Three methods share one entry point, [`integrate`]:
 //! - [`Method::Rk4`]: the classic fixed-step Runge–Kutta method of order 4;
 //! - [`Method::DormandPrince`]: the adaptive explicit Dormand–Prince 5(4) pair with dense output;
-//! - [`Method::Rosenbrock`]: the adaptive linearly implicit RODAS3 method for stiff problems.
+//! - [`Method::Rosenbrock`]: the adaptive linearly implicit Rosenbrock-W method ROS34PW2 for stiff
+//!   problems, its Jacobian kept across steps;
+//! - [`Method::Automatic`]: Dormand–Prince, and the Rosenbrock-W method where the problem is stiff.
 //!
 //! Values at output times between steps come from each method's interpolant, so asking for many
 //! outputs never shortens the steps.
@@ -18,6 +20,7 @@ mod output;
 mod rk4;
 pub mod rosenbrock;
 mod settings;
+mod switching;
 mod system;
 
 pub use control::error_norm;
@@ -94,11 +97,29 @@ pub fn integrate(
             observer,
         ),
         Method::Rosenbrock => driver::integrate_adaptive(
-            &mut rosenbrock::Rodas3::new(y0.len(), settings),
+            &mut rosenbrock::RosenbrockW::new(y0.len(), settings),
             system,
             &problem,
             observer,
         ),
+        Method::Automatic => {
+            let mut stepper = switching::Switching::new(y0.len(), settings);
+            let result = driver::integrate_adaptive(&mut stepper, system, &problem, observer);
+            let count = |stats: &mut Stats| {
+                stats.stiff_steps = stepper.implicit_steps;
+                stats.method_switches = stepper.switches;
+            };
+            match result {
+                Ok((y, mut stats)) => {
+                    count(&mut stats);
+                    Ok((y, stats))
+                }
+                Err(mut error) => {
+                    count(&mut error.stats);
+                    Err(error)
+                }
+            }
+        }
     }
 }
 

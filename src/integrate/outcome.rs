@@ -17,6 +17,10 @@ pub struct Stats {
     pub jacobian_evaluations: usize,
     /// LU decompositions of the iteration matrix (Rosenbrock only).
     pub lu_decompositions: usize,
+    /// Accepted steps the Rosenbrock-W method took, and changes between it and Dormand–Prince
+    /// ([`Method::Automatic`](super::settings::Method::Automatic) only).
+    pub stiff_steps: usize,
+    pub method_switches: usize,
     /// The largest local error estimate of a fixed-step method's steps (RK4, the variational
     /// integrator), which nothing controls: where it exceeds the tolerances, the step is too
     /// long for them.

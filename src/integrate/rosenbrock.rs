@@ -1,12 +1,26 @@
-//! RODAS3, a stiffly accurate Rosenbrock method of order 3 with four stages and an embedded
-//! order-2 error estimate (Sandu, Verwer, Blom, Spee, Carmichael and Potra, "Benchmarking stiff
-//! ODE solvers for atmospheric chemistry problems II: Rosenbrock solvers", Atmos. Environ. 1997).
+//! ROS34PW2, a Rosenbrock-W method of order 3 with four stages and an embedded order-2 error
+//! estimate (J. Rang and L. Angermann, "New Rosenbrock W-methods of order 3 for partial
+//! differential algebraic equations of index 1", BIT Numer. Math. 45, 2005), stiffly accurate and
+//! L-stable.
 //!
-//! Each stage solves a linear system with W = I / (h γ) − J instead of iterating Newton's method,
-//! which is why the method is L-stable on stiff problems at the cost of one LU decomposition per
-//! attempt. The method needs the true Jacobian J (and ∂f/∂t), here by finite differences, formed
-//! once per accepted step. Dense output is the cubic Hermite interpolant through the step's ends,
-//! whose end slope is free because it is the next step's first stage.
+//! Each stage solves a linear system with W = I / (h γ) − J instead of iterating Newton's method.
+//! A *W*-method keeps its order whatever the matrix J is (Hairer and Wanner, *Solving ODEs II*,
+//! IV.7): J only decides how stiff a problem the steps stay stable on. So J is not formed at every
+//! step but kept across steps, and formed again after a step is rejected with a Jacobian formed
+//! at an earlier point, or after `JACOBIAN_AGE` accepted steps; only the small factorisation
+//! that depends on h is redone at each attempt.
+//!
+//! J is kept as the product U Tᵀ of its action U = J T on a basis T of the directions the state
+//! moves along ([`OdeSystem::tangent_basis`](super::OdeSystem::tangent_basis)): on a mechanism with loops, the allowed motions of
+//! positions and velocities, 2 columns for a mechanism of mobility 1 whatever its size. Each
+//! column of U is one forward difference of f along that direction, and W is solved through the
+//! m × m matrix I / (h γ) − TᵀU (Sherman–Morrison–Woodbury): what is left out is the Jacobian
+//! across the constraint manifold, along which the projection after each step, not the dynamics,
+//! decides the motion. A system without such a basis is differentiated along each of the
+//! components the error control watches (a full Jacobian of those).
+//!
+//! Dense output is the cubic Hermite interpolant through the step's ends, whose end slope is free
+//! because it is the next step's first stage.
 
 use nalgebra::{DMatrix, DVector, Dyn, LU};
 
@@ -19,49 +33,190 @@ use super::settings::Settings;
 /// The number of stages.
 pub const STAGES: usize = 4;
 
+/// The diagonal of Γ, the same for every stage so that one factorisation serves all of them.
+pub const GAMMA: f64 = 4.358_665_215_084_59e-1;
+
+/// The method in its standard form (Hairer and Wanner, IV.7, (7.4)):
+///   (I − h γ J) k_i = h f(t + α_i h, y + Σ_j α_ij k_j) + h J Σ_{j<i} γ_ij k_j + γ_i h² ∂f/∂t,
+///   y₁ = y + Σ b_i k_i, with α_i = Σ_j α_ij and γ_i = Σ_j γ_ij (diagonal included).
+/// The weights α_ij of earlier stages in each stage's state.
+pub const ALPHA: [[f64; STAGES]; STAGES] = [
+    [0.0; 4],
+    [8.717_330_430_169_18e-1, 0.0, 0.0, 0.0],
+    [
+        8.445_706_001_536_942e-1,
+        -1.129_906_423_648_418_5e-1,
+        0.0,
+        0.0,
+    ],
+    [0.0, 0.0, 1.0, 0.0],
+];
+/// Γ, lower triangular with γ on its diagonal.
+pub const GAMMA_MATRIX: [[f64; STAGES]; STAGES] = [
+    [GAMMA, 0.0, 0.0, 0.0],
+    [-8.717_330_430_169_18e-1, GAMMA, 0.0, 0.0],
+    [
+        -9.033_805_701_304_408e-1,
+        5.418_067_238_809_533e-2,
+        GAMMA,
+        0.0,
+    ],
+    [
+        2.421_238_070_609_534_6e-1,
+        -1.223_250_583_904_514_7,
+        5.452_602_553_351_021e-1,
+        GAMMA,
+    ],
+];
+/// Weights of the order-3 solution.
+pub const B: [f64; STAGES] = [
+    2.421_238_070_609_534_6e-1,
+    -1.223_250_583_904_514_7,
+    1.545_260_255_335_102,
+    GAMMA,
+];
+/// Weights of the embedded order-2 solution.
+pub const B_EMBEDDED: [f64; STAGES] = [
+    3.781_090_314_581_937e-1,
+    -9.604_229_221_242_318e-2,
+    0.5,
+    2.179_332_607_542_295e-1,
+];
+
+/// The most accepted steps a Jacobian serves before it is formed again. A W-method needs no
+/// exact Jacobian for its order, but the stiff components' damping depends on how close it is:
+/// on a flyball governor, whose stiff springs turn with the arms, a Jacobian kept 3 steps
+/// tripled the steps (and rejected a third of them) against one formed at every step. So how
+/// many steps one serves adapts to how much it changed between two formations
+/// (`REUSE_CHANGE`): from one, doubling while it changes little, up to this.
+const JACOBIAN_AGE: usize = 32;
+
+/// The coefficients in the transformed form where the unknowns are u_i = Σ_j γ_ij k_j
+/// (Hairer and Wanner, IV.7, (7.25)), which needs no product with J:
+///   (I / (h γ) − J) u_i = f(t + α_i h, y + Σ_j a_ij u_j) + Σ_j c_ij u_j / h + γ_i h ∂f/∂t,
+///   y₁ = y + Σ m_i u_i.
+#[derive(Clone, Debug)]
+pub struct Transformed {
+    /// a = α Γ⁻¹.
+    pub a: [[f64; STAGES]; STAGES],
+    /// c = diag(1/γ) − Γ⁻¹.
+    pub c: [[f64; STAGES]; STAGES],
+    /// m = bᵀ Γ⁻¹.
+    pub m: [f64; STAGES],
+    /// The weights of the error estimate: (b − b̂)ᵀ Γ⁻¹.
+    pub e: [f64; STAGES],
+    /// Fractions of the step at which the stages evaluate f (row sums of α).
+    pub alpha: [f64; STAGES],
+    /// Weights of h ∂f/∂t in each stage (row sums of Γ).
+    pub gamma: [f64; STAGES],
+}
+
+impl Transformed {
+    #[allow(clippy::needless_range_loop)]
+    pub fn new() -> Transformed {
+        // Γ⁻¹ by forward substitution, column by column.
+        let mut inverse = [[0.0; STAGES]; STAGES];
+        for column in 0..STAGES {
+            for i in 0..STAGES {
+                let identity = if i == column { 1.0 } else { 0.0 };
+                let known: f64 = (0..i)
+                    .map(|j| GAMMA_MATRIX[i][j] * inverse[j][column])
+                    .sum();
+                inverse[i][column] = (identity - known) / GAMMA_MATRIX[i][i];
+            }
+        }
+        let times = |row: &[f64; STAGES], j: usize| -> f64 {
+            (0..STAGES).map(|k| row[k] * inverse[k][j]).sum()
+        };
+        let difference: [f64; STAGES] = std::array::from_fn(|i| B[i] - B_EMBEDDED[i]);
+        Transformed {
+            a: std::array::from_fn(|i| std::array::from_fn(|j| times(&ALPHA[i], j))),
+            c: std::array::from_fn(|i| {
+                std::array::from_fn(|j| {
+                    let diagonal = if i == j {
+                        1.0 / GAMMA_MATRIX[i][i]
+                    } else {
+                        0.0
+                    };
+                    diagonal - inverse[i][j]
+                })
+            }),
+            m: std::array::from_fn(|j| times(&B, j)),
+            e: std::array::from_fn(|j| times(&difference, j)),
+            alpha: std::array::from_fn(|i| ALPHA[i].iter().sum()),
+            gamma: std::array::from_fn(|i| GAMMA_MATRIX[i].iter().sum()),
+        }
+    }
+}
+
+impl Default for Transformed {
+    fn default() -> Self {
+        Transformed::new()
+    }
+}
+
+/// The change of J T between two formations, times the step (h ‖ΔJ T‖, which is what enters the
+/// stages' increments), below which the next one serves twice as many steps; above it, one. On
+/// the governor a change of 1 % of J (h ‖ΔJ‖ about 1) already doubled the steps.
+const REUSE_CHANGE: f64 = 0.05;
+
 type Lu = LU<f64, Dyn, Dyn>;
 
-/// The diagonal of the method, the same for every stage so that one LU serves all of them.
-pub const GAMMA: f64 = 0.5;
+/// The directions the Jacobian is known along: the leading components one by one, or the
+/// orthonormal columns of a basis.
+#[derive(Clone, Debug)]
+enum Directions {
+    Leading(usize),
+    Basis(DMatrix<f64>),
+}
 
-// The coefficients in the transformed form where the unknowns are the stage increments K_i:
-//   (I / (h γ) − J) K_i = f(t + α_i h, y + Σ_j A_ij K_j) + Σ_j C_ij K_j / h + γ_i h ∂f/∂t.
+impl Directions {
+    fn count(&self) -> usize {
+        match self {
+            Directions::Leading(count) => *count,
+            Directions::Basis(basis) => basis.ncols(),
+        }
+    }
 
-/// Weights of earlier increments in each stage's state.
-pub const A: [[f64; STAGES]; STAGES] = [
-    [0.0; 4],
-    [0.0; 4],
-    [2.0, 0.0, 0.0, 0.0],
-    [2.0, 0.0, 1.0, 0.0],
-];
-/// Weights of earlier increments (divided by h) in each stage's right-hand side.
-pub const C: [[f64; STAGES]; STAGES] = [
-    [0.0; 4],
-    [4.0, 0.0, 0.0, 0.0],
-    [1.0, -1.0, 0.0, 0.0],
-    [1.0, -1.0, -8.0 / 3.0, 0.0],
-];
-/// Whether a stage evaluates f anew; the second stage's state and time equal the first's.
-const NEW_F: [bool; STAGES] = [true, false, true, true];
-/// Fractions of the step at which the stages evaluate f.
-pub const ALPHA: [f64; STAGES] = [0.0, 0.0, 1.0, 1.0];
-/// Weights of h ∂f/∂t in each stage (row sums of the method's Γ matrix).
-pub const GAMMA_SUM: [f64; STAGES] = [0.5, 1.5, 0.0, 0.0];
-/// Weights of the increments in the order-3 solution.
-pub const M: [f64; STAGES] = [2.0, 0.0, 1.0, 1.0];
-/// Weights of the increments in the difference between the order-3 and order-2 solutions.
-pub const E: [f64; STAGES] = [0.0, 0.0, 0.0, 1.0];
+    /// Tᵀ x.
+    fn project(&self, x: &[f64]) -> DVector<f64> {
+        match self {
+            Directions::Leading(count) => DVector::from_column_slice(&x[..*count]),
+            Directions::Basis(basis) => basis.tr_mul(&DVector::from_column_slice(x)),
+        }
+    }
+}
 
-pub(super) struct Rodas3 {
+/// J ≈ U Tᵀ, ∂f/∂t, and the factorisation of I / (h γ) − TᵀU for the step it was taken at.
+struct Jacobian {
+    directions: Directions,
+    /// U = J T.
+    image: DMatrix<f64>,
+    /// TᵀU.
+    reduced: DMatrix<f64>,
+    time_derivative: Vec<f64>,
+    /// The spectral radius of U Tᵀ (that of TᵀU): how fast its stiffest component moves.
+    spectral_radius: f64,
+    /// Whether it was formed at the current point of the solution.
+    fresh: bool,
+    /// Accepted steps since it was formed.
+    age: usize,
+    factor: Option<(f64, Lu)>,
+}
+
+pub(super) struct RosenbrockW {
+    coefficients: Transformed,
     rtol: f64,
     /// Components of the state the error control watches (the leading ones).
     controlled: usize,
     atol: f64,
     /// dy/dt at the current point.
     derivative: Vec<f64>,
-    jacobian: DMatrix<f64>,
-    time_derivative: Vec<f64>,
-    jacobian_is_current: bool,
+    jacobian: Option<Jacobian>,
+    /// How many accepted steps the current Jacobian serves.
+    reuse: usize,
+    /// Whether the last attempt was rejected.
+    rejected: bool,
     increments: [DVector<f64>; STAGES],
     stage_state: Vec<f64>,
     stage_derivative: Vec<f64>,
@@ -71,17 +226,18 @@ pub(super) struct Rodas3 {
     segment: HermiteSegment,
 }
 
-impl Rodas3 {
+impl RosenbrockW {
     pub(super) fn new(dimension: usize, settings: &Settings) -> Self {
         let zeros = vec![0.0; dimension];
-        Rodas3 {
+        RosenbrockW {
+            coefficients: Transformed::new(),
             rtol: settings.rtol,
             controlled: settings.controlled_len(dimension),
             atol: settings.atol,
             derivative: zeros.clone(),
-            jacobian: DMatrix::zeros(dimension, dimension),
-            time_derivative: zeros.clone(),
-            jacobian_is_current: false,
+            jacobian: None,
+            reuse: 1,
+            rejected: false,
             increments: std::array::from_fn(|_| DVector::zeros(dimension)),
             stage_state: zeros.clone(),
             stage_derivative: zeros.clone(),
@@ -91,89 +247,222 @@ impl Rodas3 {
         }
     }
 
-    /// ∂f/∂y and ∂f/∂t at the current point by forward differences, with increments that balance
-    /// truncation against rounding (as in Hairer and Wanner's RODAS).
-    fn form_jacobian(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {
+    /// J T and ∂f/∂t at the current point by forward differences, along the directions the
+    /// system gives (or each watched component), with increments that balance truncation
+    /// against rounding (as in Hairer and Wanner's RODAS).
+    fn form_jacobian(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> Result<(), Halt> {
         eval.stats.jacobian_evaluations += 1;
+        let n = y.len();
+        let directions = match eval.tangent_basis(t, y)? {
+            Some(spanning) => Directions::Basis(orthonormal(spanning, n)),
+            None => Directions::Leading(self.controlled),
+        };
+        let m = directions.count();
+        let mut image = DMatrix::zeros(n, m);
         let mut perturbed = y.to_vec();
-        for j in 0..y.len() {
-            perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
-            // The increment actually represented, so that rounding of y + δ does not bias the quotient.
-            let delta = perturbed[j] - y[j];
-            eval.rhs(t, &perturbed, &mut self.stage_derivative)?;
-            for i in 0..y.len() {
-                self.jacobian[(i, j)] = (self.stage_derivative[i] - self.derivative[i]) / delta;
+        for j in 0..m {
+            match &directions {
+                Directions::Leading(_) => {
+                    perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
+                    // The increment actually represented, so that rounding of y + δ does not
+                    // bias the quotient.
+                    let delta = perturbed[j] - y[j];
+                    eval.rhs(t, &perturbed, &mut self.stage_derivative)?;
+                    for i in 0..n {
+                        image[(i, j)] = (self.stage_derivative[i] - self.derivative[i]) / delta;
+                    }
+                    perturbed[j] = y[j];
+                }
+                Directions::Basis(basis) => {
+                    let direction = basis.column(j);
+                    let size: f64 = (0..n).map(|i| (direction[i] * y[i]).abs()).sum();
+                    let delta = (f64::EPSILON * size.max(1e-5)).sqrt();
+                    for i in 0..n {
+                        perturbed[i] = y[i] + delta * direction[i];
+                    }
+                    eval.rhs(t, &perturbed, &mut self.stage_derivative)?;
+                    for i in 0..n {
+                        image[(i, j)] = (self.stage_derivative[i] - self.derivative[i]) / delta;
+                    }
+                }
             }
-            perturbed[j] = y[j];
         }
         let dt = (t + (f64::EPSILON * t.abs().max(1e-5)).sqrt()) - t;
         eval.rhs(t + dt, y, &mut self.stage_derivative)?;
-        for i in 0..y.len() {
-            self.time_derivative[i] = (self.stage_derivative[i] - self.derivative[i]) / dt;
+        let time_derivative = (0..n)
+            .map(|i| (self.stage_derivative[i] - self.derivative[i]) / dt)
+            .collect();
+        let reduced = match &directions {
+            Directions::Leading(count) => image.rows(0, *count).into_owned(),
+            Directions::Basis(basis) => basis.tr_mul(&image),
+        };
+        if let Some(old) = &self.jacobian {
+            self.reuse = match h * change(old, &directions, &image) < REUSE_CHANGE {
+                true => (2 * self.reuse).min(JACOBIAN_AGE),
+                false => 1,
+            };
         }
+        let spectral_radius = spectral_radius(&reduced);
+        self.jacobian = Some(Jacobian {
+            directions,
+            image,
+            reduced,
+            time_derivative,
+            spectral_radius,
+            fresh: true,
+            age: 0,
+            factor: None,
+        });
         Ok(())
     }
 
-    /// LU decomposition of W = I / (h γ) − J, or `None` when W is singular.
-    fn factorize(&self, eval: &mut Evaluator, h: f64) -> Option<Lu> {
-        eval.stats.lu_decompositions += 1;
-        let mut w = -&self.jacobian;
-        for i in 0..w.nrows() {
-            w[(i, i)] += 1.0 / (h * GAMMA);
+    /// The spectral radius of the Jacobian last formed (`None` before the first).
+    pub(super) fn spectral_radius(&self) -> Option<f64> {
+        self.jacobian.as_ref().map(|j| j.spectral_radius)
+    }
+
+    /// Takes `derivative` as dy/dt at the current point (computed by another method), and
+    /// forms the Jacobian anew at the next attempt.
+    pub(super) fn adopt(&mut self, derivative: &[f64]) {
+        self.derivative.copy_from_slice(derivative);
+        if let Some(jacobian) = &mut self.jacobian {
+            jacobian.fresh = false;
+            jacobian.age = usize::MAX;
         }
-        let lu = w.lu();
-        lu.is_invertible().then_some(lu)
+    }
+
+    /// Solves the stage's equation for its increment, in place.
+    fn solve_w(jacobian: &Jacobian, lu: &Lu, h: f64, rhs: &mut DVector<f64>) {
+        // (cI − U Tᵀ)⁻¹ b = (b + U (cI − TᵀU)⁻¹ Tᵀ b) / c, with c = 1 / (h γ).
+        let c = 1.0 / (h * GAMMA);
+        if jacobian.reduced.nrows() > 0 {
+            let mut s = jacobian.directions.project(rhs.as_slice());
+            lu.solve_mut(&mut s);
+            rhs.gemv(1.0, &jacobian.image, &s, 1.0);
+        }
+        *rhs /= c;
     }
 
     /// Solves for the increment of one stage.
+    #[allow(clippy::too_many_arguments)]
     fn solve_stage(
         &mut self,
         eval: &mut Evaluator,
+        jacobian: &Jacobian,
         lu: &Lu,
         stage: usize,
         t: f64,
         y: &[f64],
         h: f64,
     ) -> Result<(), Halt> {
+        let k = &self.coefficients;
         if stage == 0 {
             self.stage_derivative.copy_from_slice(&self.derivative);
-        } else if NEW_F[stage] {
+        } else {
             for (i, state) in self.stage_state.iter_mut().enumerate() {
                 *state = y[i]
                     + (0..stage)
-                        .map(|j| A[stage][j] * self.increments[j][i])
+                        .map(|j| k.a[stage][j] * self.increments[j][i])
                         .sum::<f64>();
             }
             eval.rhs(
-                t + ALPHA[stage] * h,
+                t + k.alpha[stage] * h,
                 &self.stage_state,
                 &mut self.stage_derivative,
             )?;
         }
         let mut rhs = DVector::from_fn(y.len(), |i, _| {
             let coupling: f64 = (0..stage)
-                .map(|j| C[stage][j] * self.increments[j][i])
+                .map(|j| k.c[stage][j] * self.increments[j][i])
                 .sum();
-            self.stage_derivative[i] + coupling / h + GAMMA_SUM[stage] * h * self.time_derivative[i]
+            self.stage_derivative[i]
+                + coupling / h
+                + k.gamma[stage] * h * jacobian.time_derivative[i]
         });
-        // nalgebra's triangular solves do not accept an empty system.
-        if !rhs.is_empty() {
-            lu.solve_mut(&mut rhs);
-        }
+        Self::solve_w(jacobian, lu, h, &mut rhs);
         self.increments[stage] = rhs;
         Ok(())
     }
 }
 
-impl AdaptiveStepper for Rodas3 {
+/// The largest modulus of the eigenvalues of `matrix` (real Schur form), or its ∞-norm, which
+/// bounds it, should the iterations not converge.
+fn spectral_radius(matrix: &DMatrix<f64>) -> f64 {
+    if matrix.is_empty() {
+        return 0.0;
+    }
+    match nalgebra::linalg::Schur::try_new(matrix.clone(), f64::EPSILON, 1000) {
+        Some(schur) => schur
+            .complex_eigenvalues()
+            .iter()
+            .map(|e| e.norm())
+            .fold(0.0, f64::max),
+        None => matrix
+            .row_iter()
+            .map(|r| r.iter().map(|x| x.abs()).sum::<f64>())
+            .fold(0.0, f64::max),
+    }
+}
+
+/// How much the Jacobian changed: ‖U − U₀ T₀ᵀ T‖ (Frobenius), with U = J T the new one's action
+/// on its directions T and U₀ T₀ᵀ the old one.
+fn change(old: &Jacobian, directions: &Directions, image: &DMatrix<f64>) -> f64 {
+    let before = match (&old.directions, directions) {
+        (Directions::Leading(a), Directions::Leading(b)) if a == b => old.image.clone(),
+        (Directions::Basis(t0), Directions::Basis(t)) if t0.nrows() == t.nrows() => {
+            &old.image * t0.tr_mul(t)
+        }
+        _ => return f64::INFINITY,
+    };
+    (image - before).norm()
+}
+
+/// An orthonormal basis of the span of `spanning`'s columns, padded with zero rows to `rows`
+/// (the components past the system's own, such as a quadrature carried along).
+fn orthonormal(spanning: DMatrix<f64>, rows: usize) -> DMatrix<f64> {
+    let mut padded = DMatrix::zeros(rows, spanning.ncols());
+    let height = spanning.nrows().min(rows);
+    padded
+        .rows_mut(0, height)
+        .copy_from(&spanning.rows(0, height));
+    if padded.ncols() == 0 {
+        return padded;
+    }
+    // Modified Gram–Schmidt, dropping the columns the others already span.
+    let mut kept: Vec<DVector<f64>> = Vec::new();
+    let largest = padded
+        .column_iter()
+        .map(|c| c.norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    for column in padded.column_iter() {
+        let mut v = column.into_owned();
+        for u in &kept {
+            let along = u.dot(&v);
+            v.axpy(-along, u, 1.0);
+        }
+        let norm = v.norm();
+        if norm > 1e-10 * largest {
+            kept.push(v / norm);
+        }
+    }
+    DMatrix::from_columns(&kept).resize(rows, kept.len(), 0.0)
+}
+
+impl AdaptiveStepper for RosenbrockW {
     fn order(&self) -> u32 {
         3
     }
 
     fn controller(&self) -> StepController {
         // The estimate is the error of the order-2 solution. Elementary control with Hairer and
-        // Wanner's growth limit for Rosenbrock methods: PI gains of 0.04 and 0.08 took 3–10 % more
-        // steps on the test problems for a few fewer rejections.
+        // Wanner's growth limit for Rosenbrock methods.
         StepController::new(
             2,
             Gains {
@@ -186,6 +475,9 @@ impl AdaptiveStepper for Rodas3 {
     }
 
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {
+        if let Some(jacobian) = &mut self.jacobian {
+            jacobian.fresh = false;
+        }
         eval.rhs(t, y, &mut self.derivative)
     }
 
@@ -201,24 +493,45 @@ impl AdaptiveStepper for Rodas3 {
         h: f64,
         y_new: &mut [f64],
     ) -> Result<f64, Halt> {
-        if !self.jacobian_is_current {
-            self.form_jacobian(eval, t, y)?;
-            self.jacobian_is_current = true;
+        let stale = match &self.jacobian {
+            None => true,
+            Some(jacobian) => (self.rejected && !jacobian.fresh) || jacobian.age >= self.reuse,
+        };
+        if stale {
+            self.form_jacobian(eval, t, y, h)?;
         }
-        let Some(lu) = self.factorize(eval, h) else {
+        // Until the attempt's error says otherwise (a non-finite stage rejects it too).
+        self.rejected = true;
+        let mut jacobian = self.jacobian.take().expect("formed above");
+        let factored = matches!(&jacobian.factor, Some((step, _)) if *step == h);
+        if !factored {
+            eval.stats.lu_decompositions += 1;
+            let mut w = -&jacobian.reduced;
+            for i in 0..w.nrows() {
+                w[(i, i)] += 1.0 / (h * GAMMA);
+            }
+            let lu = w.lu();
+            jacobian.factor = lu.is_invertible().then_some((h, lu));
+        }
+        let Some((_, lu)) = jacobian.factor.take() else {
             // A singular W is a property of this step size: reject it like a large error.
+            self.jacobian = Some(jacobian);
+            self.rejected = true;
             return Ok(f64::INFINITY);
         };
-        for stage in 0..STAGES {
-            self.solve_stage(eval, &lu, stage, t, y, h)?;
-        }
+        let solved = (0..STAGES)
+            .try_for_each(|stage| self.solve_stage(eval, &jacobian, &lu, stage, t, y, h));
+        jacobian.factor = Some((h, lu));
+        self.jacobian = Some(jacobian);
+        solved?;
+        let k = &self.coefficients;
         for i in 0..y.len() {
             y_new[i] = y[i]
                 + (0..STAGES)
-                    .map(|s| M[s] * self.increments[s][i])
+                    .map(|s| k.m[s] * self.increments[s][i])
                     .sum::<f64>();
             self.error[i] = (0..STAGES)
-                .map(|s| E[s] * self.increments[s][i])
+                .map(|s| k.e[s] * self.increments[s][i])
                 .sum::<f64>();
         }
         let error = error_norm(
@@ -228,6 +541,7 @@ impl AdaptiveStepper for Rodas3 {
             self.rtol,
             self.atol,
         );
+        self.rejected = error.is_nan() || error > 1.0;
         if error <= 1.0 && all_finite(y_new) {
             eval.rhs(t + h, y_new, &mut self.end_derivative)?;
         }
@@ -238,7 +552,11 @@ impl AdaptiveStepper for Rodas3 {
         self.segment
             .set(t, h, [y, &self.derivative, y_new, &self.end_derivative]);
         std::mem::swap(&mut self.derivative, &mut self.end_derivative);
-        self.jacobian_is_current = false;
+        if let Some(jacobian) = &mut self.jacobian {
+            jacobian.fresh = false;
+            jacobian.age += 1;
+        }
+        self.rejected = false;
     }
 
     fn interpolate(&self, t: f64, out: &mut [f64]) {

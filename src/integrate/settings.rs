@@ -8,8 +8,12 @@ pub enum Method {
     Rk4 { step: f64 },
     /// Dormand–Prince 5(4), adaptive, for non-stiff problems.
     DormandPrince,
-    /// RODAS3, a Rosenbrock method of order 3 with a finite-difference Jacobian, for stiff problems.
+    /// ROS34PW2, a Rosenbrock-W method of order 3 for stiff problems, with a finite-difference
+    /// Jacobian kept across steps (along the system's tangent directions when it gives them).
     Rosenbrock,
+    /// Dormand–Prince where the problem is not stiff, the Rosenbrock-W method where it is: the
+    /// method changes between steps when the steps' stability says so (`switching.rs`).
+    Automatic,
 }
 
 /// Tolerances and limits of the adaptive methods (RK4 takes `max_steps`, and measures its error

@@ -24,6 +24,19 @@ pub trait OdeSystem {
         Ok(false)
     }
 
+    /// Directions spanning the motions of the state at (t, y), as the columns of a matrix over
+    /// the state's leading components (the others do not move along them), or `None` when the
+    /// state moves freely. A system constrained to a manifold (a mechanism's closed loops) gives
+    /// the manifold's tangent space there: the implicit method differentiates f along these
+    /// directions only. It may evaluate the right-hand side at (t, y) once to find them.
+    fn tangent_basis(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
+        Ok(None)
+    }
+
     /// Whether the step control should forget what the steps before the last
     /// [`OdeSystem::project`] said of the error's trend: an event changed the equations (a
     /// closed-loop mechanism's constraint rows chosen again, a singular passage entered or

@@ -139,6 +139,12 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
         report.run_seconds,
         report.duration
     );
+    if let (Some(stiff), Some(switches)) = (report.stiff_steps, report.method_switches) {
+        out += &format!(
+            "stiff steps (Rosenbrock-W): {stiff} of {}, {switches} changes of method\n",
+            report.steps
+        );
+    }
     if let Some(drift) = report.energy_drift {
         out += &format!("energy drift (relative): {drift:.3e}\n");
     }

@@ -37,6 +37,14 @@ impl OdeSystem for MechanicalSystem<'_> {
         Ok(self.keep_closed(t, y)?)
     }
 
+    fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
+        Ok(MechanicalSystem::tangent_basis(self, t, y)?)
+    }
+
     fn breaks_error_trend(&self) -> bool {
         self.loops.breaks_trend
     }
@@ -62,6 +70,15 @@ impl OdeSystem for WithWork<'_, '_> {
     fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
         let n = self.0.dimension();
         Ok(self.0.keep_closed(t, &mut y[..n])?)
+    }
+
+    fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
+        let n = self.0.dimension();
+        Ok(self.0.tangent_basis(t, &y[..n])?)
     }
 
     fn breaks_error_trend(&self) -> bool {
@@ -108,6 +125,12 @@ pub struct Report {
     pub steps: usize,
     pub rejected_steps: usize,
     pub function_evaluations: usize,
+    /// With the implicit integrator: the accepted steps its Rosenbrock-W method took (the others
+    /// are Dormand–Prince's, where the motion is not stiff), and how often it changed method.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiff_steps: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method_switches: Option<usize>,
     /// Time the integration took (wall clock; the computation is single-threaded).
     pub run_seconds: f64,
     /// Largest |E(t) − E(0)| over the outputs, relative to the larger of |E(0)| and the largest
@@ -347,7 +370,7 @@ pub fn run_from(
     let method = match settings.integrator {
         Integrator::Rk4 => Some(Method::Rk4 { step: fixed_step }),
         Integrator::DormandPrince => Some(Method::DormandPrince),
-        Integrator::Implicit => Some(Method::Rosenbrock),
+        Integrator::Implicit => Some(Method::Automatic),
         Integrator::Symplectic => None,
     };
     let result: Result<(Vec<f64>, Stats), IntegrationError> = match method {
@@ -433,6 +456,9 @@ pub fn run_from(
         steps: stats.steps,
         rejected_steps: stats.rejected,
         function_evaluations: stats.rhs_evaluations,
+        stiff_steps: (settings.integrator == Integrator::Implicit).then_some(stats.stiff_steps),
+        method_switches: (settings.integrator == Integrator::Implicit)
+            .then_some(stats.method_switches),
         run_seconds,
         energy_drift: energy_drift(&samples),
         energy_balance: energy_balance(&samples),
@@ -511,6 +537,8 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         steps: 0,
         rejected_steps: 0,
         function_evaluations: 0,
+        stiff_steps: None,
+        method_switches: None,
         run_seconds: 0.0,
         energy_drift: None,
         energy_balance: None,

@@ -5,7 +5,7 @@
 
 use std::cell::RefCell;
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
@@ -270,6 +270,50 @@ impl<'m> MechanicalSystem<'m> {
         dv.copy_from_slice(accelerations.as_slice());
         self.accelerations = accelerations;
         Ok(())
+    }
+
+    /// The tangent space of the loops' constraints at y, for the implicit method's Jacobian:
+    /// for each allowed motion n of the velocities (the massive ones the equations of motion
+    /// solve on), the state's direction (q̇(n), 0) that moves the positions along it and
+    /// (0, n) that moves the velocities along it. `None` for a tree, whose state moves freely.
+    /// Evaluates the equations of motion at y once (their solve finds the allowed motions).
+    pub fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<DMatrix<f64>>, SystemError> {
+        let model = self.model;
+        if !model.has_loops() {
+            return Ok(None);
+        }
+        let mut dydt = vec![0.0; self.dimension()];
+        self.derivative(t, y, &mut dydt)?;
+        let (q, _) = model.split_state(y);
+        let motions = self.loop_scratch.solved_motions();
+        let (positions, velocities) = (model.positions(), model.velocities());
+        let count = motions.ncols();
+        let mut basis = DMatrix::zeros(positions + velocities, 2 * count);
+        for k in 0..count {
+            let motion = motions.column(k);
+            let mut column = basis.column_mut(k);
+            let rates = column.as_mut_slice();
+            for joint in &model.joints {
+                let range = joint.q_offset..joint.q_offset + joint.nq();
+                let v_range = joint.v_offset..joint.v_offset + joint.nv();
+                joint.position_rate(
+                    &q[range.clone()],
+                    &motion.as_slice()[v_range],
+                    &mut rates[range],
+                );
+            }
+            for (i, rate) in motion.iter().enumerate().skip(model.nv) {
+                rates[model.nq + i - model.nv] = *rate;
+            }
+            basis
+                .view_mut((positions, count + k), (velocities, 1))
+                .copy_from(&motion);
+        }
+        Ok(Some(basis))
     }
 
     /// Keeps the loops closed after a step (see `LoopMonitor::keep`); nothing for a tree.

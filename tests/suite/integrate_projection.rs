@@ -62,11 +62,12 @@ impl OdeSystem for ProjectedCircle {
 
 const START: [f64; 4] = [1.0, 0.0, 0.0, 1.0];
 
-fn methods() -> [Method; 3] {
+fn methods() -> [Method; 4] {
     [
         Method::Rk4 { step: 0.1 },
         Method::DormandPrince,
         Method::Rosenbrock,
+        Method::Automatic,
     ]
 }
 
@@ -119,7 +120,18 @@ fn projection_keeps_the_point_on_the_circle_for_100_periods() {
     let t_end = 200.0 * PI;
     for method in methods() {
         let mut system = ProjectedCircle::default();
-        let (y, stats, observed) = solve(&method, &mut system, &START, t_end, &[t_end]).unwrap();
+        // The Rosenbrock-W method is of order 3 with an order-2 estimate: at the default 1e-6
+        // its phase error after 100 periods is 0.17 rad (RODAS3's, before it, was below
+        // 0.05), so it is held to 1e-7 here, where it is 0.016.
+        let settings = match method {
+            Method::Rosenbrock => Settings {
+                rtol: 1e-7,
+                ..Settings::default()
+            },
+            _ => Settings::default(),
+        };
+        let (y, stats, observed) =
+            solve_with(&method, &mut system, &START, t_end, &[t_end], &settings).unwrap();
         assert!(
             radius_error(&y) < 1e-14,
             "{method:?}: radius off by {:e}",

@@ -23,9 +23,10 @@ mod dopri5 {
 }
 
 mod rosenbrock {
-    //! Checks the coefficients against the order conditions of Rosenbrock methods (Hairer and
-    //! Wanner, Solving ODEs II, IV.7, Table 7.1), after converting them back from the transformed
-    //! form: Γ = (I/γ − C)⁻¹, α = A Γ, b = M Γ.
+    //! Checks ROS34PW2's coefficients against the order conditions of Rosenbrock methods up to
+    //! order 3 and of W-methods up to order 2 (Hairer and Wanner, Solving ODEs II, IV.7, Table
+    //! 7.1 and (7.24)), its stiff accuracy, and the transformed coefficients the steps use. Its
+    //! order 3 with any matrix in place of the Jacobian is measured in `tests/suite/integrators.rs`.
 
     use lsdc::integrate::rosenbrock::*;
     use nalgebra::{DMatrix, DVector};
@@ -34,32 +35,27 @@ mod rosenbrock {
         DMatrix::from_fn(STAGES, STAGES, |i, j| rows[i][j])
     }
 
-    fn gamma_matrix() -> DMatrix<f64> {
-        let inverse = DMatrix::identity(STAGES, STAGES) / GAMMA - matrix(&C);
-        inverse
-            .try_inverse()
-            .expect("I/γ − C is triangular with a nonzero diagonal")
+    fn row_sums(m: &DMatrix<f64>) -> DVector<f64> {
+        DVector::from_fn(STAGES, |i, _| m.row(i).sum())
     }
 
-    /// Σ b_i, Σ b_i β'_i, Σ b_i α_i², Σ b_i β_ij β'_j for weights `weights` (in the transformed form).
+    /// Σ b_i, Σ b_i β'_i, Σ b_i α_i², Σ b_i β_ij β'_j, with β = α + Γ less its diagonal.
     fn order_sums(weights: &[f64; STAGES]) -> [f64; 4] {
-        let gamma = gamma_matrix();
-        let alpha = matrix(&A) * &gamma;
-        let b = DVector::from_row_slice(weights).transpose() * &gamma;
-        let beta = &alpha + &gamma - DMatrix::identity(STAGES, STAGES) * GAMMA;
-        let beta_row: DVector<f64> = DVector::from_fn(STAGES, |i, _| beta.row(i).sum());
-        let alpha_row: DVector<f64> = DVector::from_fn(STAGES, |i, _| alpha.row(i).sum());
+        let alpha = matrix(&ALPHA);
+        let beta = &alpha + matrix(&GAMMA_MATRIX) - DMatrix::identity(STAGES, STAGES) * GAMMA;
+        let b = DVector::from_row_slice(weights);
+        let (alpha_row, beta_row) = (row_sums(&alpha), row_sums(&beta));
         [
             b.sum(),
-            (&b * &beta_row)[0],
+            b.dot(&beta_row),
             (0..STAGES).map(|i| b[i] * alpha_row[i].powi(2)).sum(),
-            (&b * &beta * &beta_row)[0],
+            b.dot(&(&beta * &beta_row)),
         ]
     }
 
     #[test]
     fn the_solution_has_order_three() {
-        let [one, two, three_a, three_b] = order_sums(&M);
+        let [one, two, three_a, three_b] = order_sums(&B);
         assert!((one - 1.0).abs() < 1e-14);
         assert!((two - (0.5 - GAMMA)).abs() < 1e-14);
         assert!((three_a - 1.0 / 3.0).abs() < 1e-14);
@@ -68,19 +64,51 @@ mod rosenbrock {
 
     #[test]
     fn the_embedded_solution_has_order_two() {
-        let embedded: [f64; STAGES] = std::array::from_fn(|i| M[i] - E[i]);
-        let [one, two, ..] = order_sums(&embedded);
+        let [one, two, ..] = order_sums(&B_EMBEDDED);
         assert!((one - 1.0).abs() < 1e-14);
         assert!((two - (0.5 - GAMMA)).abs() < 1e-14);
     }
 
     #[test]
-    fn time_fractions_and_gamma_sums_match_the_matrices() {
-        let gamma = gamma_matrix();
-        let alpha = matrix(&A) * &gamma;
-        for i in 0..STAGES {
-            assert!((alpha.row(i).sum() - ALPHA[i]).abs() < 1e-14);
-            assert!((gamma.row(i).sum() - GAMMA_SUM[i]).abs() < 1e-14);
+    fn both_solutions_keep_order_two_with_any_jacobian() {
+        // The W-method's condition of order 2: the terms in J cancel by themselves,
+        // Σ b_i α_i = 1/2 and Σ b_i γ_i = 0 (γ_i the row sums of Γ).
+        let (alpha, gamma) = (row_sums(&matrix(&ALPHA)), row_sums(&matrix(&GAMMA_MATRIX)));
+        for weights in [B, B_EMBEDDED] {
+            let b = DVector::from_row_slice(&weights);
+            assert!((b.dot(&alpha) - 0.5).abs() < 1e-14);
+            assert!(b.dot(&gamma).abs() < 1e-14);
         }
+    }
+
+    #[test]
+    fn the_method_is_stiffly_accurate() {
+        // b is the last row of α + Γ: the solution is the last stage's, and R(∞) = 0.
+        for (j, b) in B.iter().enumerate() {
+            assert!((b - (ALPHA[STAGES - 1][j] + GAMMA_MATRIX[STAGES - 1][j])).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn the_transformed_coefficients_reproduce_the_standard_form() {
+        // With u = Γ k: a = αΓ⁻¹, m = bᵀΓ⁻¹, c = diag(1/γ) − Γ⁻¹.
+        let t = Transformed::new();
+        let gamma = matrix(&GAMMA_MATRIX);
+        let inverse = gamma
+            .clone()
+            .try_inverse()
+            .expect("triangular, nonzero diagonal");
+        let a = matrix(&ALPHA) * &inverse;
+        let m = DVector::from_row_slice(&B).transpose() * &inverse;
+        for i in 0..STAGES {
+            assert!((t.m[i] - m[i]).abs() < 1e-13);
+            for j in 0..STAGES {
+                assert!((t.a[i][j] - a[(i, j)]).abs() < 1e-13);
+                let c = if i == j { 1.0 / GAMMA } else { 0.0 } - inverse[(i, j)];
+                assert!((t.c[i][j] - c).abs() < 1e-13);
+            }
+        }
+        let error: f64 = (0..STAGES).map(|i| t.e[i] * gamma[(i, 0)]).sum();
+        assert!((error - (B[0] - B_EMBEDDED[0])).abs() < 1e-13);
     }
 }

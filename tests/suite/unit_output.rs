@@ -36,6 +36,8 @@ mod plot {
                 steps: count,
                 rejected_steps: 0,
                 function_evaluations: 4 * count,
+                stiff_steps: None,
+                method_switches: None,
                 run_seconds: 0.0,
                 energy_drift: None,
                 energy_balance: None,

@@ -62,6 +62,8 @@ pub struct LoopScratch {
     quality_block: DMatrix<f64>,
     free_quality: Option<f64>,
     quality_of: Vec<usize>,
+    /// How many of `null`'s columns the last solve moved along (the massive ones).
+    solved_motions: usize,
     /// How the reduced equations are formed, and their scratch.
     inertia: ReducedInertia,
     /// Accelerations of every state velocity.
@@ -91,6 +93,7 @@ impl LoopScratch {
             quality_block: DMatrix::zeros(0, 0),
             free_quality: None,
             quality_of: Vec::new(),
+            solved_motions: 0,
             inertia: ReducedInertia::new(model),
             accelerations: DVector::zeros(columns),
             multipliers: DVector::zeros(rows),
@@ -128,6 +131,12 @@ impl LoopScratch {
     /// The particular acceleration a₀ `allowed_motions` found, over the state's velocities.
     pub fn particular(&self) -> &[f64] {
         self.particular.as_slice()
+    }
+
+    /// The allowed motions the last solve moved along (one column per free coordinate that
+    /// carries mass, over the state's velocities): a basis of the velocities the loops allow.
+    pub fn solved_motions(&self) -> nalgebra::DMatrixView<'_, f64> {
+        self.null.columns(0, self.solved_motions)
     }
 
     /// Sizes the allowed motions' matrices for `free` coordinates (allocates only when their
@@ -253,6 +262,7 @@ pub fn solve_reduced(
         massive,
         inertia,
         accelerations,
+        solved_motions,
         ..
     } = scratch;
     let (every, checking) = massive.plan(structure);
@@ -296,6 +306,7 @@ pub fn solve_reduced(
         velocity: null.column(k).iamax(),
     })?;
     let z = reduced_force.rows(0, m);
+    *solved_motions = m;
     accelerations.copy_from(particular);
     accelerations.gemv(1.0, &null.columns(0, m), &z, 1.0);
     Ok(())

@@ -1,0 +1,159 @@
+//! Stiffness switching between the explicit Dormand–Prince pair and the Rosenbrock-W method, as
+//! LSODA switches between Adams and BDF (Petzold, *SIAM J. Sci. Stat. Comput.* 4, 1983): the
+//! explicit method steps while nothing stiff holds its steps at its stability boundary, the
+//! implicit one while something does.
+//!
+//! - **To the implicit method**: Dormand–Prince's estimate h |λ| of the stiffest eigenvalue
+//!   (`DormandPrince::stiffness`) is above `STIFF` on `PERSISTENCE` accepted steps in a row
+//!   (Hairer and Wanner's test in DOPRI5): the steps are held by stability, not accuracy.
+//! - **Back to the explicit method**: the spectral radius ρ of the implicit method's Jacobian
+//!   gives h ρ below `EXPLICIT_MARGIN` · `STIFF` on `PERSISTENCE` accepted steps in a row: the
+//!   explicit method would be stable at the steps the implicit one takes, and costs less per
+//!   step at equal accuracy (order 5 against 3).
+//!
+//! Where the implicit method was left for steps ρ allowed, it is taken again only where the
+//! explicit steps fall below `RETURN_RATIO` of the steps it took, so that the two do not take
+//! turns on a mildly stiff stretch where neither gains.
+
+use super::control::StepController;
+use super::dopri5::DormandPrince;
+use super::driver::AdaptiveStepper;
+use super::evaluator::{Evaluator, Halt};
+use super::rosenbrock::RosenbrockW;
+use super::settings::Settings;
+
+/// h |λ| above which a Dormand–Prince step is taken as held by stability: its stability region
+/// reaches about 3.3 along the negative real axis.
+const STIFF: f64 = 3.25;
+/// Accepted steps in a row that must agree before the method changes.
+const PERSISTENCE: usize = 15;
+/// The fraction of `STIFF` below which h ρ of the implicit steps says the explicit method
+/// would be stable at them with room to spare.
+const EXPLICIT_MARGIN: f64 = 0.5;
+/// How much shorter than the implicit method's last steps the explicit ones must be for the
+/// implicit method to be taken again.
+const RETURN_RATIO: f64 = 0.67;
+
+pub(super) struct Switching {
+    explicit: DormandPrince,
+    implicit: RosenbrockW,
+    /// Which method takes the next attempt.
+    stiff: bool,
+    /// Which method took the last accepted step (whose interpolant serves the outputs).
+    last_stiff: bool,
+    /// Accepted steps in a row that called for the other method.
+    agreeing: usize,
+    /// The implicit method's step when it was last left.
+    implicit_step: Option<f64>,
+    /// The controller of the method just taken, for the driver.
+    switched: Option<StepController>,
+    /// Steps taken by the implicit method, and changes of method.
+    pub(super) implicit_steps: usize,
+    pub(super) switches: usize,
+}
+
+impl Switching {
+    pub(super) fn new(dimension: usize, settings: &Settings) -> Self {
+        Switching {
+            explicit: DormandPrince::new(dimension, settings),
+            implicit: RosenbrockW::new(dimension, settings),
+            stiff: false,
+            last_stiff: false,
+            agreeing: 0,
+            implicit_step: None,
+            switched: None,
+            implicit_steps: 0,
+            switches: 0,
+        }
+    }
+
+    fn current(&mut self) -> &mut dyn AdaptiveStepper {
+        match self.stiff {
+            true => &mut self.implicit,
+            false => &mut self.explicit,
+        }
+    }
+
+    /// Counts the accepted step of size `h` towards a change of method, and changes when
+    /// enough agree.
+    fn watch(&mut self, h: f64) {
+        let calls_for_other = if self.stiff {
+            let radius = self.implicit.spectral_radius().unwrap_or(f64::INFINITY);
+            h * radius < EXPLICIT_MARGIN * STIFF
+        } else {
+            let returning = self
+                .implicit_step
+                .is_none_or(|step| h < RETURN_RATIO * step);
+            self.explicit.stiffness() > STIFF && returning
+        };
+        self.agreeing = if calls_for_other {
+            self.agreeing + 1
+        } else {
+            0
+        };
+        if self.agreeing < PERSISTENCE {
+            return;
+        }
+        self.agreeing = 0;
+        self.switches += 1;
+        if self.stiff {
+            self.implicit_step = Some(h);
+            self.explicit.adopt(self.implicit.derivative());
+            self.switched = Some(self.explicit.controller());
+        } else {
+            self.implicit.adopt(self.explicit.derivative());
+            self.switched = Some(self.implicit.controller());
+        }
+        self.stiff = !self.stiff;
+    }
+}
+
+impl AdaptiveStepper for Switching {
+    fn order(&self) -> u32 {
+        self.explicit.order()
+    }
+
+    fn controller(&self) -> StepController {
+        self.explicit.controller()
+    }
+
+    fn switched_controller(&mut self) -> Option<StepController> {
+        self.switched.take()
+    }
+
+    fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {
+        self.current().start(eval, t, y)
+    }
+
+    fn derivative(&self) -> &[f64] {
+        match self.stiff {
+            true => self.implicit.derivative(),
+            false => self.explicit.derivative(),
+        }
+    }
+
+    fn attempt(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+    ) -> Result<f64, Halt> {
+        self.current().attempt(eval, t, y, h, y_new)
+    }
+
+    fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
+        self.current().accept(t, y, h, y_new);
+        self.last_stiff = self.stiff;
+        self.implicit_steps += usize::from(self.stiff);
+        self.watch(h);
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        match self.last_stiff {
+            true => self.implicit.interpolate(t, out),
+            false => self.explicit.interpolate(t, out),
+        }
+    }
+}
