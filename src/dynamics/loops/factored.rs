@@ -116,10 +116,9 @@ impl KeptRows {
     fn gather(&mut self, jacobian: &ConstraintJacobian, scales: &[f64]) {
         for (k, (&scale, &(block, row))) in scales.iter().zip(&self.sources).enumerate() {
             let range = self.starts[k]..self.starts[k + 1];
-            let block = jacobian.blocks[block].values.as_slice();
-            let entries = block[row..].iter().step_by(6);
-            for (value, &entry) in self.values[range].iter_mut().zip(entries) {
-                *value = entry * scale;
+            let columns = jacobian.blocks[block].values.as_slice().chunks_exact(6);
+            for (value, column) in self.values[range].iter_mut().zip(columns) {
+                *value = column[row] * scale;
             }
         }
     }
@@ -616,11 +615,6 @@ impl Envelope {
         self.first.len()
     }
 
-    /// Row k's entries, columns first[k]..=k.
-    fn row(&self, k: usize) -> &[f64] {
-        &self.values[self.starts[k]..self.starts[k + 1]]
-    }
-
     /// Where row k's entry in column l (within its envelope) is stored.
     fn index(&self, k: usize, l: usize) -> usize {
         self.starts[k] + l - self.first[k]
@@ -628,10 +622,11 @@ impl Envelope {
 
     /// y ← L⁻¹ y for the factor L held.
     fn forward(&self, y: &mut [f64]) {
-        for k in 0..y.len() {
-            let (left, diagonal) = split_diagonal(self.row(k));
-            let dot = in_order_dot(left, &y[self.first[k]..k]);
-            y[k] = (y[k] - dot) / diagonal;
+        for (k, bound) in self.starts.windows(2).enumerate().take(y.len()) {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
+            let (done, rest) = y.split_at_mut(k);
+            let dot = in_order_dot(left, &done[k - left.len()..]);
+            rest[0] = (rest[0] - dot) / diagonal;
         }
     }
 
@@ -652,12 +647,17 @@ impl Envelope {
             let (fk, start) = (self.first[k], self.starts[k]);
             let (above, below) = self.values.split_at_mut(start);
             let row = &mut below[..k - fk + 1];
-            for j in fk..k {
-                let from = fk.max(self.first[j]);
-                let above_j = &above[self.starts[j]..self.starts[j + 1]];
-                let (left, pivot) = split_diagonal(above_j);
-                let dot = in_order_dot(&row[from - fk..j - fk], &left[from - self.first[j]..]);
-                row[j - fk] = (row[j - fk] - dot) / pivot;
+            // Rows fk..k of the factor, each with its envelope's bounds: zipped, so that the
+            // loop over them slices without looking the bounds up one by one.
+            let bounds = self.starts[fk..=k].windows(2);
+            for (done, bound) in (0..).zip(bounds) {
+                let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
+                // Row k's entries left of column j = fk + done, and row j's: their common
+                // columns are the last `common` of each.
+                let (row_left, rest) = row.split_at_mut(done);
+                let common = done.min(left.len());
+                let dot = in_order_dot(&row_left[done - common..], &left[left.len() - common..]);
+                rest[0] = (rest[0] - dot) / pivot;
             }
             let (diagonal, left) = row.split_last_mut().expect("a diagonal");
             let square = *diagonal - left.iter().map(|x| x * x).sum::<f64>();
@@ -672,11 +672,13 @@ impl Envelope {
     /// y ← (LLᵀ)⁻¹ y for the factor L held.
     fn solve(&self, y: &mut [f64]) {
         self.forward(y);
-        for k in (0..y.len()).rev() {
-            let (left, diagonal) = split_diagonal(self.row(k));
-            y[k] /= diagonal;
-            let value = y[k];
-            for (target, entry) in y[self.first[k]..k].iter_mut().zip(left) {
+        let rows = self.starts.windows(2).take(y.len()).enumerate();
+        for (k, bound) in rows.rev() {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
+            let (done, rest) = y.split_at_mut(k);
+            rest[0] /= diagonal;
+            let value = rest[0];
+            for (target, entry) in done[k - left.len()..].iter_mut().zip(left) {
                 *target -= entry * value;
             }
         }
