@@ -2,6 +2,9 @@
 //! and after each projection, and the passages through singular configurations (where the
 //! constraints lose rank), for the run report.
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use serde::Serialize;
 
 use crate::dynamics::algorithms::{forward_kinematics, Data};
@@ -84,6 +87,28 @@ pub struct SingularPassage {
     pub smallest_ratio: f64,
 }
 
+/// A stretch of the run integrated with rows set aside (a passage, see `PASSAGE_ENTERED`): the
+/// state (positions, then velocities) that arrived at the step end where they were set aside,
+/// integrated with every row, and the state where they were restored, after the restoring
+/// projection (None while the passage lasts). Both are on the branch the motion follows; the
+/// states between them, integrated with rows released, are not (see `Released`).
+#[derive(Clone, Debug)]
+pub struct ReleasedStretch {
+    pub entry: (f64, Vec<f64>),
+    pub exit: Option<(f64, Vec<f64>)>,
+}
+
+/// The stretches a run integrated with rows set aside, in time order, shared between the
+/// integrated system's monitor, which records them, and the outputs' sampler, which reads them:
+/// an output inside a stretch comes from an interpolant of the motion with rows released, off
+/// the branch along the direction they no longer hold (on a row of 10 four-bars, an output at
+/// a conditioning of 6.5e-7 had its cranks' rates apart by 4e-4 rad/s), and projecting it there
+/// cannot find the branch again: the released drift of the positions along that direction is
+/// below round-off in the rows' residual, yet turns the motions the rows allow by the drift
+/// over the distance to the singular configuration. Such outputs are interpolated between the
+/// stretch's ends instead (`run::Sampler`).
+pub type Released = Rc<RefCell<Vec<ReleasedStretch>>>;
+
 #[derive(Clone, Debug, Serialize)]
 pub struct ConstraintReport {
     pub stabilisation: String,
@@ -122,14 +147,21 @@ pub struct LoopMonitor {
     /// keeps the momentum along the allowed motions, `loops::project_momentum`).
     restored: bool,
     /// Whether this monitor keeps the outputs closed, which come from the integrator's
-    /// interpolant inside a step: near a singular configuration their velocities are projected
-    /// by the constraints' impulse too, since the step may have crossed a passage with rows set
-    /// aside, whose motion across them the plain projection would turn into an energy error
-    /// (an output of the row of 40 four-bars at 1e-8 was off by 1e-5 of its energy, the step
-    /// ends around it by 4e-8).
+    /// interpolant inside a step. It never sets rows aside: an output is a state of the
+    /// mechanism, on every row (outputs inside a stretch integrated with rows released are
+    /// interpolated between its ends before they get here, see `Released`). Near a singular
+    /// configuration the velocities are projected by the constraints' impulse, as at the end of
+    /// a passage: the plain projection would turn an error across the rows into an energy
+    /// error.
     pub samples_outputs: bool,
     /// A projection that could not close the loops: when, the row left open and by how much.
     pub opened: Option<(f64, usize, f64)>,
+    /// The stretches integrated with rows set aside, shared with the sampler of the outputs
+    /// (its clone of this monitor reads them; it never sets rows aside itself).
+    pub released: Released,
+    /// The last state this monitor kept outside a passage (after its projection), and its
+    /// time: where a passage's stretch starts (see `ReleasedStretch`).
+    last_kept: Option<(f64, Vec<f64>)>,
     /// Whether the step control should forget the error's trend after the last `keep`: the
     /// equations off the closed set changed (rows or free coordinates chosen again, a passage
     /// entered or left), or the loops are near a singular configuration (`NEAR_SINGULAR`).
@@ -162,6 +194,8 @@ impl LoopMonitor {
             restored: false,
             samples_outputs: false,
             opened: None,
+            released: Rc::new(RefCell::new(Vec::new())),
+            last_kept: None,
             breaks_trend: false,
             before: Residuals::default(),
             after: Residuals::default(),
@@ -215,10 +249,16 @@ impl LoopMonitor {
         self.breaks_trend = false;
         forward_kinematics(model, data, q, v)?;
         scratch.constraints_at(model, data, q, v)?;
+        let was_in_passage = self.passage.is_some();
         let conditioning = self.conditioning(scratch);
+        self.record_entry(was_in_passage, time, (&*q, &*v));
         self.breaks_trend |= conditioning.0 < NEAR_SINGULAR;
-        let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;
-        if self.stabilisation == Stabilisation::Projection && projects {
+        let projects = match self.samples_outputs {
+            true => conditioning.0 >= PASSAGE_ENTERED,
+            false => self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION,
+        };
+        let moved = self.stabilisation == Stabilisation::Projection && projects;
+        if moved {
             // Rows just restored after a passage: the velocities are projected from those the
             // state arrived with, by the constraints' impulse (`loops::project_momentum`).
             let restored = std::mem::take(&mut self.restored);
@@ -242,10 +282,42 @@ impl LoopMonitor {
                 projection.after,
                 conditioning,
             );
-            return Ok(true);
+        } else {
+            self.observe_current(model, time, conditioning, scratch);
         }
-        self.observe_current(model, time, conditioning, scratch);
-        loops::seat_ball_angles(model, data, q, v, false)
+        let seated = !moved && loops::seat_ball_angles(model, data, q, v, false)?;
+        self.record_exit(was_in_passage, time, (&*q, &*v));
+        Ok(moved || seated)
+    }
+
+    /// Starts a stretch with rows set aside where a passage sets them aside (see `Released`).
+    fn record_entry(&mut self, was_in_passage: bool, time: f64, (q, v): (&[f64], &[f64])) {
+        if !was_in_passage && self.passage.is_some() {
+            let entry = self
+                .last_kept
+                .take()
+                .unwrap_or_else(|| (time, [q, v].concat()));
+            let stretch = ReleasedStretch { entry, exit: None };
+            self.released.borrow_mut().push(stretch);
+        }
+    }
+
+    /// Ends the stretch where a passage restores its rows, and remembers the state kept outside
+    /// a passage (see `Released`).
+    fn record_exit(&mut self, was_in_passage: bool, time: f64, (q, v): (&[f64], &[f64])) {
+        if self.samples_outputs || self.passage.is_some() {
+            return;
+        }
+        if was_in_passage {
+            if let Some(stretch) = self.released.borrow_mut().last_mut() {
+                stretch.exit = Some((time, [q, v].concat()));
+            }
+        }
+        let kept = self.last_kept.get_or_insert_with(|| (time, Vec::new()));
+        kept.0 = time;
+        kept.1.clear();
+        kept.1.extend_from_slice(q);
+        kept.1.extend_from_slice(v);
     }
 
     /// The conditioning of the kept rows (`Factored::conditioning`) at the constraint Jacobian
@@ -280,7 +352,7 @@ impl LoopMonitor {
             // The rows kept are still the best: try again once they have fallen as far again.
             structure.chosen_reproduction = now;
         }
-        if conditioning.0 < PASSAGE_ENTERED {
+        if conditioning.0 < PASSAGE_ENTERED && !self.samples_outputs {
             let before = structure.choice.clone();
             structure.choice = without_lost_rows(jacobian, &before, PASSAGE_LEFT);
             structure.choose_free(jacobian);
@@ -307,7 +379,10 @@ impl LoopMonitor {
     ) -> Result<(), EvalError> {
         forward_kinematics(model, data, q, v)?;
         scratch.constraints_at(model, data, q, v)?;
+        let was_in_passage = self.passage.is_some();
         let conditioning = self.conditioning(scratch);
+        self.record_entry(was_in_passage, time, (q, v));
+        self.record_exit(was_in_passage, time, (q, v));
         self.observe_current(model, time, conditioning, scratch);
         Ok(())
     }

@@ -20,8 +20,8 @@ use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
 use crate::integrate::{
-    integrate, CallbackError, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings,
-    Stats,
+    integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Method, OdeSystem,
+    Settings as IntegratorSettings, Stats,
 };
 
 impl OdeSystem for MechanicalSystem<'_> {
@@ -207,23 +207,122 @@ fn output_times(duration: f64, interval: f64) -> Vec<f64> {
 
 /// Samples a state: declared coordinates (continuous with the previous sample), energy, momentum
 /// and, when asked for, the reactions. An output between two steps comes from the integrator's
-/// interpolant: with loops it is projected onto the constraints like the steps are.
+/// interpolant: with loops it is projected onto the constraints like the steps are, except
+/// inside a stretch integrated with rows set aside (a singular passage, see
+/// `constraints::Released`), where it is interpolated between the stretch's ends instead, once
+/// the stretch has ended.
 struct Sampler<'m> {
     /// Its `reference` is shared with the integrated system: the declared coordinates of the
     /// last output, which keep recovered angles continuous.
     system: MechanicalSystem<'m>,
     conservative: crate::dynamics::energy::Conservative,
     reactions: bool,
+    /// Outputs inside a stretch with rows set aside whose end is not known yet: their time and
+    /// the integrator's state there (for the work of the non-conservative efforts).
+    pending: Vec<(f64, Vec<f64>)>,
+    /// The outputs inside such a stretch that could not be interpolated between its ends (the
+    /// run ended inside it): only projected, they may be off the branch.
+    unsettled: Vec<f64>,
 }
 
 impl Sampler<'_> {
+    /// The samples of the outputs up to `time`, given the integrator's state there: none while
+    /// `time` lies inside a stretch integrated with rows set aside, all those of the stretch
+    /// once it has ended.
+    fn offer(&mut self, time: f64, y: &[f64]) -> Result<Vec<Sample>, SystemError> {
+        let mut samples = self.settle()?;
+        if self.released_at(time) {
+            self.pending.push((time, y.to_vec()));
+        } else {
+            samples.push(self.sample(time, y)?);
+        }
+        Ok(samples)
+    }
+
+    /// The samples still pending at the end of the run: those of a stretch that ended, or,
+    /// when the run ended inside one, the projected outputs (`unsettled`).
+    fn finish(&mut self) -> Result<Vec<Sample>, SystemError> {
+        let mut samples = self.settle()?;
+        for (time, y) in std::mem::take(&mut self.pending) {
+            self.unsettled.push(time);
+            samples.push(self.sample(time, &y)?);
+        }
+        Ok(samples)
+    }
+
+    /// Whether an output at `time` lies strictly inside a stretch integrated with rows set
+    /// aside (so far: one not ended yet holds every later time).
+    fn released_at(&self, time: f64) -> bool {
+        let released = self.system.loops.released.borrow();
+        let stretch = released.iter().rev().find(|s| s.entry.0 < time);
+        stretch.is_some_and(|s| s.exit.as_ref().is_none_or(|exit| time < exit.0))
+    }
+
+    /// The samples of the pending outputs, if their stretch has ended: the cubic Hermite
+    /// interpolant between the stretch's ends, each closed onto every row and given the
+    /// derivative of the equations with every row. Both ends are on the branch (the entry
+    /// arrived integrated with every row, the exit was restored onto them), so the
+    /// interpolant is too, to its order; it is not projected again, since projecting deep in
+    /// the passage is what cannot find the branch.
+    fn settle(&mut self) -> Result<Vec<Sample>, SystemError> {
+        let Some(&(first, _)) = self.pending.first() else {
+            return Ok(Vec::new());
+        };
+        let stretch = {
+            let released = self.system.loops.released.borrow();
+            let stretch = released.iter().rev().find(|s| s.entry.0 < first);
+            match stretch {
+                Some(s) if s.exit.is_some() => s.clone(),
+                _ => return Ok(Vec::new()),
+            }
+        };
+        let (entry, exit) = (stretch.entry, stretch.exit.expect("an ended stretch"));
+        let n = self.system.dimension();
+        let mut ends = [entry.1, exit.1];
+        let mut slopes = [vec![0.0; n], vec![0.0; n]];
+        for ((time, end), slope) in [entry.0, exit.0]
+            .into_iter()
+            .zip(&mut ends)
+            .zip(&mut slopes)
+        {
+            self.system.keep_closed(time, end)?;
+            self.system.derivative(time, end, slope)?;
+        }
+        let mut segment = HermiteSegment::new(n);
+        let [start, end] = &ends;
+        let [start_slope, end_slope] = &slopes;
+        segment.set(
+            entry.0,
+            exit.0 - entry.0,
+            [start, start_slope, end, end_slope],
+        );
+        let mut samples = Vec::new();
+        for (time, y) in std::mem::take(&mut self.pending) {
+            let mut state = vec![0.0; n];
+            segment.evaluate(time, &mut state);
+            self.system.measure_loops(time, &state)?;
+            samples.push(self.describe(time, state, y.get(n).copied())?);
+        }
+        Ok(samples)
+    }
+
+    /// The sample of the integrator's state `y` at `time`, projected onto the loops.
     fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, SystemError> {
-        let model = self.system.model;
         // After the motion, the work of the non-conservative efforts when it is integrated.
         let n = self.system.dimension();
-        let work = y.get(n).copied();
-        let mut y = y[..n].to_vec();
-        self.system.keep_closed(time, &mut y)?;
+        let mut state = y[..n].to_vec();
+        self.system.keep_closed(time, &mut state)?;
+        self.describe(time, state, y.get(n).copied())
+    }
+
+    /// The sample of a state (positions, velocities) on the loops.
+    fn describe(
+        &mut self,
+        time: f64,
+        mut y: Vec<f64>,
+        work: Option<f64>,
+    ) -> Result<Sample, SystemError> {
+        let model = self.system.model;
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let previous = self.system.reference.borrow().clone();
@@ -308,6 +407,8 @@ pub fn run_from(
         system: MechanicalSystem::new(model, reference.clone(), settings.stabilisation),
         conservative: conservative_forces(model),
         reactions: settings.reactions,
+        pending: Vec::new(),
+        unsettled: Vec::new(),
     };
     // What the start found of the loops (rank, redundant rows) holds for the outputs too.
     sampler.system.loops = system.loops.clone();
@@ -323,10 +424,14 @@ pub fn run_from(
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::with_capacity(outputs.len());
     let started = Instant::now();
+    let mut deliver = |offered: Vec<Sample>, samples: &mut Vec<Sample>| {
+        for sample in offered {
+            sink(&sample);
+            samples.push(sample);
+        }
+    };
     let mut observer = |t: f64, y: &[f64]| -> Result<(), CallbackError> {
-        let sample = sampler.sample(t, y)?;
-        sink(&sample);
-        samples.push(sample);
+        deliver(sampler.offer(t, y)?, &mut samples);
         Ok(())
     };
     let integrator_settings = IntegratorSettings {
@@ -379,6 +484,19 @@ pub fn run_from(
                 &mut observer,
             )
         }
+    };
+    // The outputs of a stretch with rows set aside that ended with the run.
+    let result = match (result, sampler.finish()) {
+        (result, Ok(rest)) => {
+            deliver(rest, &mut samples);
+            result
+        }
+        (Ok((_, stats)), Err(error)) => Err(IntegrationError {
+            time: settings.duration,
+            failure: Failure::Observer(error.to_string()),
+            stats,
+        }),
+        (failed, Err(_)) => failed,
     };
     let run_seconds = started.elapsed().as_secs_f64();
     let (stats, failure) = match result {

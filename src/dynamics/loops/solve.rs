@@ -581,6 +581,12 @@ fn massive_solve(
     Ok(())
 }
 
+/// Below this conditioning of the kept rows, `project_momentum` spans the allowed motions with
+/// an orthonormal basis from a dense QR factorisation of the rows rather than by solves on
+/// their normal matrix, whose round-off costs ε/σ² of the motion across the rows
+/// (measurement in `docs/loops.md`, "Outputs inside a passage").
+const DENSE_MOMENTUM_BELOW: f64 = 1e-4;
+
 /// Replaces v by the motion the kept rows allow that has the same momentum along every allowed
 /// motion: v' = N(NᵀMN)⁻¹NᵀMv over the allowed motions N of the structure's free coordinates,
 /// the velocity an impulsive reaction of the constraints leaves (it does no work on the allowed
@@ -598,10 +604,15 @@ pub fn project_momentum(
     let rest = vec![0.0; v.len()];
     let c = constraints(model, data, q, &rest, Extent::Rows)?;
     let factored = Factored::new(&c.jacobian, &structure.choice);
-    let Ok(damped) = factored.damped(DAMPING) else {
-        return Ok(());
+    let damped = factored.damped(DAMPING);
+    let dense = factored.conditioning_of(&damped).0 < DENSE_MOMENTUM_BELOW
+        && structure.idle.is_empty()
+        && structure.massless == 0;
+    let allowed = match (dense, damped) {
+        (true, _) => factored.dense_null_space().clone(),
+        (false, Ok(damped)) => damped.allowed_motions(&structure.free),
+        (false, Err(_)) => return Ok(()),
     };
-    let allowed = damped.allowed_motions(&structure.free);
     let mass = crba(model, data, &q[..model.nq])?;
     let tree = allowed.rows(0, model.nv);
     let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
