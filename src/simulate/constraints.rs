@@ -46,6 +46,14 @@ const RECHOOSE_BELOW: f64 = 0.8;
 const PASSAGE_ENTERED: f64 = 1e-5;
 const PASSAGE_LEFT: f64 = 2e-5;
 
+/// At or above this conditioning a state kept around a passage ends the stretch whose outputs
+/// are interpolated between its ends (see `Released`). Nearer the passage the step ends' own
+/// velocities drift across the rows about to be lost (on a row of two parallelograms with the
+/// implicit integrator at 1e-8, by 3e-7 rad/s between the cranks at 1e-5): an end taken at 3e-5
+/// or more halved the outputs' error there, and one at 1e-4 or more lay up to 25 ms before the
+/// passage on the row of 40 at 1e-8, too far for the interpolant.
+const STRETCH_ENDS: f64 = 3e-5;
+
 /// Below this fraction of how well they parametrised the allowed motions when chosen
 /// (`Structure::free_quality`), the free coordinates are chosen again.
 const FREE_AGAIN_BELOW: f64 = 0.1;
@@ -87,15 +95,16 @@ pub struct SingularPassage {
     pub smallest_ratio: f64,
 }
 
-/// A stretch of the run integrated with rows set aside (a passage, see `PASSAGE_ENTERED`): the
-/// state (positions, then velocities) that arrived at the step end where they were set aside,
-/// integrated with every row, and the state where they were restored, after the restoring
-/// projection (None while the passage lasts). Both are on the branch the motion follows; the
-/// states between them, integrated with rows released, are not (see `Released`).
+/// A stretch of the run around a passage where rows were set aside (see `PASSAGE_ENTERED`),
+/// from the last state kept outside the passage well conditioned (`STRETCH_ENDS`) to the first
+/// such state after it: the states (positions, then velocities) at its ends and their times.
+/// `exit` is the latest state kept since the rows were restored, and `settled` says whether it
+/// ends the stretch (None and false while the passage lasts).
 #[derive(Clone, Debug)]
 pub struct ReleasedStretch {
     pub entry: (f64, Vec<f64>),
     pub exit: Option<(f64, Vec<f64>)>,
+    pub settled: bool,
 }
 
 /// The stretches a run integrated with rows set aside, in time order, shared between the
@@ -128,6 +137,11 @@ pub struct ConstraintReport {
     pub velocity_residual: f64,
     pub singular: Vec<SingularPassage>,
     pub closest: Option<ClosestApproach>,
+    /// The times of the outputs inside a passage with rows set aside that the run ended in:
+    /// they could not be interpolated between the passage's ends, and may be off the branch
+    /// (W0903).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub outputs_off_branch: Vec<f64>,
 }
 
 #[derive(Clone)]
@@ -159,9 +173,11 @@ pub struct LoopMonitor {
     /// The stretches integrated with rows set aside, shared with the sampler of the outputs
     /// (its clone of this monitor reads them; it never sets rows aside itself).
     pub released: Released,
-    /// The last state this monitor kept outside a passage (after its projection), and its
-    /// time: where a passage's stretch starts (see `ReleasedStretch`).
+    /// The last state this monitor kept outside a passage (after its projection) and its time,
+    /// and the last such state kept with a conditioning above `STRETCH_ENDS`: where a passage's
+    /// stretch starts (see `ReleasedStretch`).
     last_kept: Option<(f64, Vec<f64>)>,
+    anchor: Option<(f64, Vec<f64>)>,
     /// Whether the step control should forget the error's trend after the last `keep`: the
     /// equations off the closed set changed (rows or free coordinates chosen again, a passage
     /// entered or left), or the loops are near a singular configuration (`NEAR_SINGULAR`).
@@ -196,6 +212,7 @@ impl LoopMonitor {
             opened: None,
             released: Rc::new(RefCell::new(Vec::new())),
             last_kept: None,
+            anchor: None,
             breaks_trend: false,
             before: Residuals::default(),
             after: Residuals::default(),
@@ -286,38 +303,53 @@ impl LoopMonitor {
             self.observe_current(model, time, conditioning, scratch);
         }
         let seated = !moved && loops::seat_ball_angles(model, data, q, v, false)?;
-        self.record_exit(was_in_passage, time, (&*q, &*v));
+        self.record_kept(time, conditioning.0, (&*q, &*v));
         Ok(moved || seated)
     }
 
-    /// Starts a stretch with rows set aside where a passage sets them aside (see `Released`).
+    /// Starts a stretch around a passage where it sets rows aside (see `Released`).
     fn record_entry(&mut self, was_in_passage: bool, time: f64, (q, v): (&[f64], &[f64])) {
-        if !was_in_passage && self.passage.is_some() {
-            let entry = self
-                .last_kept
-                .take()
-                .unwrap_or_else(|| (time, [q, v].concat()));
-            let stretch = ReleasedStretch { entry, exit: None };
-            self.released.borrow_mut().push(stretch);
-        }
-    }
-
-    /// Ends the stretch where a passage restores its rows, and remembers the state kept outside
-    /// a passage (see `Released`).
-    fn record_exit(&mut self, was_in_passage: bool, time: f64, (q, v): (&[f64], &[f64])) {
-        if self.samples_outputs || self.passage.is_some() {
+        if was_in_passage || self.passage.is_none() {
             return;
         }
-        if was_in_passage {
-            if let Some(stretch) = self.released.borrow_mut().last_mut() {
-                stretch.exit = Some((time, [q, v].concat()));
+        let mut released = self.released.borrow_mut();
+        if let Some(last) = released.last_mut().filter(|s| !s.settled) {
+            // The stretch before never reached a well-conditioned state: it ends at the last
+            // one kept.
+            if let Some(kept) = &self.last_kept {
+                last.exit = Some(kept.clone());
             }
+            last.settled = true;
+        }
+        let entry = (self.anchor.take())
+            .or_else(|| self.last_kept.take())
+            .unwrap_or_else(|| (time, [q, v].concat()));
+        released.push(ReleasedStretch {
+            entry,
+            exit: None,
+            settled: false,
+        });
+    }
+
+    /// Remembers a state kept outside a passage, and ends the stretch around the last passage
+    /// at the first one well conditioned (see `Released`).
+    fn record_kept(&mut self, time: f64, conditioning: f64, (q, v): (&[f64], &[f64])) {
+        if self.samples_outputs || self.passage.is_some() {
+            return;
         }
         let kept = self.last_kept.get_or_insert_with(|| (time, Vec::new()));
         kept.0 = time;
         kept.1.clear();
         kept.1.extend_from_slice(q);
         kept.1.extend_from_slice(v);
+        let settles = conditioning >= STRETCH_ENDS;
+        if let Some(last) = self.released.borrow_mut().last_mut().filter(|s| !s.settled) {
+            last.exit = Some(kept.clone());
+            last.settled = settles;
+        }
+        if settles {
+            self.anchor.clone_from(&self.last_kept);
+        }
     }
 
     /// The conditioning of the kept rows (`Factored::conditioning`) at the constraint Jacobian
@@ -382,7 +414,7 @@ impl LoopMonitor {
         let was_in_passage = self.passage.is_some();
         let conditioning = self.conditioning(scratch);
         self.record_entry(was_in_passage, time, (q, v));
-        self.record_exit(was_in_passage, time, (q, v));
+        self.record_kept(time, conditioning.0, (q, v));
         self.observe_current(model, time, conditioning, scratch);
         Ok(())
     }
@@ -493,6 +525,7 @@ impl LoopMonitor {
             velocity_residual: self.after.velocity,
             singular: self.singular.clone(),
             closest: self.closest.clone(),
+            outputs_off_branch: Vec::new(),
         }
     }
 }

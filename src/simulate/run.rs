@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::branch;
-use super::constraints::ConstraintReport;
+use super::constraints::{ConstraintReport, ReleasedStretch};
 use super::prepare::{Integrator, Prepared};
 use super::system::{MechanicalSystem, SystemError};
 use super::variational;
@@ -167,6 +167,24 @@ pub fn step_error_warning(report: &Report) -> Option<Diagnostic> {
     )
 }
 
+/// The warning for outputs inside a singular passage that the run ended in (W0903): they come
+/// from the motion with rows set aside, only projected, and may be off the branch.
+pub fn passage_output_warning(report: &Report) -> Option<Diagnostic> {
+    let times = &report.constraints.as_ref()?.outputs_off_branch;
+    let (first, last) = (times.first()?, times.last()?);
+    let message = format!(
+        "{} output{} from t = {first} to t = {last} fell inside a singular passage that the run ended in: {} not be interpolated between states on the branch, and may be off it",
+        times.len(),
+        if times.len() > 1 { "s" } else { "" },
+        if times.len() > 1 { "they could" } else { "it could" },
+    );
+    Some(
+        Diagnostic::warning("W0903", message)
+            .note("inside a passage the rows losing their independence are set aside; outputs there are interpolated between the states before and after it, which a run that ends inside it does not reach")
+            .help("end the run (`duration`) or the outputs away from the singular configuration"),
+    )
+}
+
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct MomentumDrift {
     pub linear: f64,
@@ -223,6 +241,9 @@ struct Sampler<'m> {
     /// The outputs inside such a stretch that could not be interpolated between its ends (the
     /// run ended inside it): only projected, they may be off the branch.
     unsettled: Vec<f64>,
+    /// The interpolant over the last stretch whose outputs were sampled, and the stretch's
+    /// times.
+    segment: Option<((f64, f64), HermiteSegment)>,
 }
 
 impl Sampler<'_> {
@@ -230,9 +251,10 @@ impl Sampler<'_> {
     /// `time` lies inside a stretch integrated with rows set aside, all those of the stretch
     /// once it has ended.
     fn offer(&mut self, time: f64, y: &[f64]) -> Result<Vec<Sample>, SystemError> {
-        let mut samples = self.settle()?;
+        let mut samples = self.settle(false)?;
         if self.released_at(time) {
             self.pending.push((time, y.to_vec()));
+            samples.extend(self.settle(false)?);
         } else {
             samples.push(self.sample(time, y)?);
         }
@@ -242,7 +264,7 @@ impl Sampler<'_> {
     /// The samples still pending at the end of the run: those of a stretch that ended, or,
     /// when the run ended inside one, the projected outputs (`unsettled`).
     fn finish(&mut self) -> Result<Vec<Sample>, SystemError> {
-        let mut samples = self.settle()?;
+        let mut samples = self.settle(true)?;
         for (time, y) in std::mem::take(&mut self.pending) {
             self.unsettled.push(time);
             samples.push(self.sample(time, &y)?);
@@ -255,16 +277,14 @@ impl Sampler<'_> {
     fn released_at(&self, time: f64) -> bool {
         let released = self.system.loops.released.borrow();
         let stretch = released.iter().rev().find(|s| s.entry.0 < time);
-        stretch.is_some_and(|s| s.exit.as_ref().is_none_or(|exit| time < exit.0))
+        stretch.is_some_and(|s| !s.settled || s.exit.as_ref().is_none_or(|exit| time < exit.0))
     }
 
-    /// The samples of the pending outputs, if their stretch has ended: the cubic Hermite
-    /// interpolant between the stretch's ends, each closed onto every row and given the
-    /// derivative of the equations with every row. Both ends are on the branch (the entry
-    /// arrived integrated with every row, the exit was restored onto them), so the
-    /// interpolant is too, to its order; it is not projected again, since projecting deep in
-    /// the passage is what cannot find the branch.
-    fn settle(&mut self) -> Result<Vec<Sample>, SystemError> {
+    /// The samples of the pending outputs, if their stretch has ended (or the run, `ended`):
+    /// the cubic Hermite interpolant between the stretch's ends (`interpolant`). It is not
+    /// projected: deep in the passage a projection cannot find the branch, which the ends and
+    /// the interpolant follow to their accuracy.
+    fn settle(&mut self, ended: bool) -> Result<Vec<Sample>, SystemError> {
         let Some(&(first, _)) = self.pending.first() else {
             return Ok(Vec::new());
         };
@@ -272,38 +292,61 @@ impl Sampler<'_> {
             let released = self.system.loops.released.borrow();
             let stretch = released.iter().rev().find(|s| s.entry.0 < first);
             match stretch {
-                Some(s) if s.exit.is_some() => s.clone(),
+                Some(s) if s.exit.is_some() && (s.settled || ended) => s.clone(),
                 _ => return Ok(Vec::new()),
             }
         };
-        let (entry, exit) = (stretch.entry, stretch.exit.expect("an ended stretch"));
+        let exit = stretch.exit.as_ref().map_or(f64::INFINITY, |exit| exit.0);
         let n = self.system.dimension();
-        let mut ends = [entry.1, exit.1];
-        let mut slopes = [vec![0.0; n], vec![0.0; n]];
-        for ((time, end), slope) in [entry.0, exit.0]
-            .into_iter()
-            .zip(&mut ends)
-            .zip(&mut slopes)
-        {
-            self.system.keep_closed(time, end)?;
-            self.system.derivative(time, end, slope)?;
-        }
-        let mut segment = HermiteSegment::new(n);
-        let [start, end] = &ends;
-        let [start_slope, end_slope] = &slopes;
-        segment.set(
-            entry.0,
-            exit.0 - entry.0,
-            [start, start_slope, end, end_slope],
-        );
         let mut samples = Vec::new();
         for (time, y) in std::mem::take(&mut self.pending) {
+            if time >= exit {
+                // After the last state kept, at the end of a run that ended inside the stretch.
+                self.unsettled.push(time);
+                samples.push(self.sample(time, &y)?);
+                continue;
+            }
             let mut state = vec![0.0; n];
-            segment.evaluate(time, &mut state);
+            self.interpolant(&stretch)?.evaluate(time, &mut state);
             self.system.measure_loops(time, &state)?;
             samples.push(self.describe(time, state, y.get(n).copied())?);
         }
         Ok(samples)
+    }
+
+    /// The cubic Hermite interpolant over a stretch with rows set aside, between its ends, each
+    /// closed onto every row (its velocities by the constraints' impulse) and given the
+    /// derivative of the equations with every row: kept for the stretch's later outputs.
+    fn interpolant(&mut self, stretch: &ReleasedStretch) -> Result<&HermiteSegment, SystemError> {
+        let (entry, exit) = (&stretch.entry, stretch.exit.as_ref().expect("an end"));
+        let span = (entry.0, exit.0);
+        if self
+            .segment
+            .as_ref()
+            .is_none_or(|(cached, _)| *cached != span)
+        {
+            let n = self.system.dimension();
+            let mut ends = [entry.1.clone(), exit.1.clone()];
+            let mut slopes = [vec![0.0; n], vec![0.0; n]];
+            for ((time, end), slope) in [entry.0, exit.0]
+                .into_iter()
+                .zip(&mut ends)
+                .zip(&mut slopes)
+            {
+                self.system.keep_closed(time, end)?;
+                self.system.derivative(time, end, slope)?;
+            }
+            let mut segment = HermiteSegment::new(n);
+            let [start, end] = &ends;
+            let [start_slope, end_slope] = &slopes;
+            segment.set(
+                entry.0,
+                exit.0 - entry.0,
+                [start, start_slope, end, end_slope],
+            );
+            self.segment = Some((span, segment));
+        }
+        Ok(&self.segment.as_ref().expect("just set").1)
     }
 
     /// The sample of the integrator's state `y` at `time`, projected onto the loops.
@@ -409,6 +452,7 @@ pub fn run_from(
         reactions: settings.reactions,
         pending: Vec::new(),
         unsettled: Vec::new(),
+        segment: None,
     };
     // What the start found of the loops (rank, redundant rows) holds for the outputs too.
     sampler.system.loops = system.loops.clone();
@@ -518,7 +562,9 @@ pub fn run_from(
     };
     let constraints = model.has_loops().then(|| {
         system.loops.absorb(&sampler.system.loops);
-        system.loops.report()
+        let mut report = system.loops.report();
+        report.outputs_off_branch = std::mem::take(&mut sampler.unsettled);
+        report
     });
     let left_branch = constraints
         .as_ref()

@@ -585,7 +585,7 @@ fn massive_solve(
 /// an orthonormal basis from a dense QR factorisation of the rows rather than by solves on
 /// their normal matrix, whose round-off costs ε/σ² of the motion across the rows
 /// (measurement in `docs/loops.md`, "Outputs inside a passage").
-const DENSE_MOMENTUM_BELOW: f64 = 1e-4;
+const DENSE_MOMENTUM_BELOW: f64 = 1e-2;
 
 /// Replaces v by the motion the kept rows allow that has the same momentum along every allowed
 /// motion: v' = N(NᵀMN)⁻¹NᵀMv over the allowed motions N of the structure's free coordinates,
