@@ -270,6 +270,9 @@ impl LoopMonitor {
         let conditioning = self.conditioning(scratch);
         self.record_entry(was_in_passage, time, (&*q, &*v));
         self.breaks_trend |= conditioning.0 < NEAR_SINGULAR;
+        // An output is not projected where a step end would set rows aside: there the
+        // interpolant's error along the direction being lost, invisible in the residual, would
+        // turn the projected velocities off the branch (see `Released`).
         let projects = match self.samples_outputs {
             true => conditioning.0 >= PASSAGE_ENTERED,
             false => self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION,
