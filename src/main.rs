@@ -625,20 +625,27 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
         None => Ok(()),
     };
-    let warning = lsdc::simulate::run::step_error_warning(&simulation.report);
+    let report = &simulation.report;
+    let warnings: Vec<_> = [
+        lsdc::simulate::run::step_error_warning(report),
+        lsdc::simulate::run::passage_output_warning(report),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
     match args.report {
         Format::Text => {
-            if let Some(warning) = warning {
-                report_diagnostics(&compilation, &[warning], Format::Text);
+            if !warnings.is_empty() {
+                report_diagnostics(&compilation, &warnings, Format::Text);
             }
             eprint!("{}", text::run_report(&simulation.report));
         }
         // The warnings about the run go inside its report: standard output carries the samples.
         Format::Json => {
             let mut value = serde_json::to_value(&simulation.report).unwrap_or_default();
-            if let Some(warning) = warning {
+            if !warnings.is_empty() {
                 let sources = &compilation.workspace.sources;
-                value["warnings"] = render::to_json_value(sources, &[warning]);
+                value["warnings"] = render::to_json_value(sources, &warnings);
             }
             eprintln!("{}", json(&value));
         }

@@ -2,7 +2,7 @@
 
 /// The data of one step that the cubic through both ends with matching slopes needs.
 #[derive(Clone, Debug, Default)]
-pub(super) struct HermiteSegment {
+pub struct HermiteSegment {
     t_start: f64,
     step: f64,
     y_start: Vec<f64>,
@@ -12,7 +12,7 @@ pub(super) struct HermiteSegment {
 }
 
 impl HermiteSegment {
-    pub(super) fn new(dimension: usize) -> Self {
+    pub fn new(dimension: usize) -> Self {
         let zeros = vec![0.0; dimension];
         HermiteSegment {
             t_start: 0.0,
@@ -25,7 +25,7 @@ impl HermiteSegment {
     }
 
     /// Remembers the step from (t_start, y_start) over `step` to y_end, with dy/dt at both ends.
-    pub(super) fn set(&mut self, t_start: f64, step: f64, ends: [&[f64]; 4]) {
+    pub fn set(&mut self, t_start: f64, step: f64, ends: [&[f64]; 4]) {
         let [y_start, f_start, y_end, f_end] = ends;
         self.t_start = t_start;
         self.step = step;
@@ -36,7 +36,7 @@ impl HermiteSegment {
     }
 
     /// The interpolant at `t`, written into `out`.
-    pub(super) fn evaluate(&self, t: f64, out: &mut [f64]) {
+    pub fn evaluate(&self, t: f64, out: &mut [f64]) {
         let h = self.step;
         let theta = (t - self.t_start) / h;
         // The Hermite cubic written as the chord plus a correction vanishing at both ends, which

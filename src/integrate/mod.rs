@@ -24,6 +24,7 @@ mod switching;
 mod system;
 
 pub use control::error_norm;
+pub use hermite::HermiteSegment;
 pub use outcome::{Failure, InputError, IntegrationError, Stats, StepError};
 pub use settings::{Method, Settings};
 pub use system::{CallbackError, Observer, OdeSystem};

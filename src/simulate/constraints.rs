@@ -2,12 +2,15 @@
 //! and after each projection, and the passages through singular configurations (where the
 //! constraints lose rank), for the run report.
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use serde::Serialize;
 
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::loops::{
-    self, ConstraintJacobian, Extent, Factored, ProjectionScratch, Residuals, RowChoice,
-    Stabilisation, Structure, StructureError, ROW_NAMES,
+    self, ConstraintJacobian, Extent, Factored, MomentumBasis, ProjectionScratch, Residuals,
+    RowChoice, Stabilisation, Structure, StructureError, ROW_NAMES,
 };
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -42,6 +45,14 @@ const RECHOOSE_BELOW: f64 = 0.8;
 /// being many times further than what the released constraints let the state drift.
 const PASSAGE_ENTERED: f64 = 1e-5;
 const PASSAGE_LEFT: f64 = 2e-5;
+
+/// At or above this conditioning a state kept around a passage ends the stretch whose outputs
+/// are interpolated between its ends (see `Released`). Nearer the passage the step ends' own
+/// velocities drift across the rows about to be lost (on a row of two parallelograms with the
+/// implicit integrator at 1e-8, by 3e-7 rad/s between the cranks at 1e-5): an end taken at 3e-5
+/// or more halved the outputs' error there, and one at 1e-4 or more lay up to 25 ms before the
+/// passage on the row of 40 at 1e-8, too far for the interpolant.
+const STRETCH_ENDS: f64 = 3e-5;
 
 /// Below this fraction of how well they parametrised the allowed motions when chosen
 /// (`Structure::free_quality`), the free coordinates are chosen again.
@@ -84,6 +95,29 @@ pub struct SingularPassage {
     pub smallest_ratio: f64,
 }
 
+/// A stretch of the run around a passage where rows were set aside (see `PASSAGE_ENTERED`),
+/// from the last state kept outside the passage well conditioned (`STRETCH_ENDS`) to the first
+/// such state after it: the states (positions, then velocities) at its ends and their times.
+/// `exit` is the latest state kept since the rows were restored, and `settled` says whether it
+/// ends the stretch (None and false while the passage lasts).
+#[derive(Clone, Debug)]
+pub struct ReleasedStretch {
+    pub entry: (f64, Vec<f64>),
+    pub exit: Option<(f64, Vec<f64>)>,
+    pub settled: bool,
+}
+
+/// The stretches a run integrated with rows set aside, in time order, shared between the
+/// integrated system's monitor, which records them, and the outputs' sampler, which reads them:
+/// an output inside a stretch comes from an interpolant of the motion with rows released, off
+/// the branch along the direction they no longer hold (on a row of 10 four-bars, an output at
+/// a conditioning of 6.5e-7 had its cranks' rates apart by 4e-4 rad/s), and projecting it there
+/// cannot find the branch again: the released drift of the positions along that direction is
+/// below round-off in the rows' residual, yet turns the motions the rows allow by the drift
+/// over the distance to the singular configuration. Such outputs are interpolated between the
+/// stretch's ends instead (`run::Sampler`).
+pub type Released = Rc<RefCell<Vec<ReleasedStretch>>>;
+
 #[derive(Clone, Debug, Serialize)]
 pub struct ConstraintReport {
     pub stabilisation: String,
@@ -103,6 +137,11 @@ pub struct ConstraintReport {
     pub velocity_residual: f64,
     pub singular: Vec<SingularPassage>,
     pub closest: Option<ClosestApproach>,
+    /// The times of the outputs inside a passage with rows set aside that the run ended in:
+    /// they could not be interpolated between the passage's ends, and may be off the branch
+    /// (W0903).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub outputs_off_branch: Vec<f64>,
 }
 
 #[derive(Clone)]
@@ -122,14 +161,23 @@ pub struct LoopMonitor {
     /// keeps the momentum along the allowed motions, `loops::project_momentum`).
     restored: bool,
     /// Whether this monitor keeps the outputs closed, which come from the integrator's
-    /// interpolant inside a step: near a singular configuration their velocities are projected
-    /// by the constraints' impulse too, since the step may have crossed a passage with rows set
-    /// aside, whose motion across them the plain projection would turn into an energy error
-    /// (an output of the row of 40 four-bars at 1e-8 was off by 1e-5 of its energy, the step
-    /// ends around it by 4e-8).
+    /// interpolant inside a step. It never sets rows aside: an output is a state of the
+    /// mechanism, on every row (outputs inside a stretch integrated with rows released are
+    /// interpolated between its ends before they get here, see `Released`). Near a singular
+    /// configuration the velocities are projected by the constraints' impulse, as at the end of
+    /// a passage: the plain projection would turn an error across the rows into an energy
+    /// error.
     pub samples_outputs: bool,
     /// A projection that could not close the loops: when, the row left open and by how much.
     pub opened: Option<(f64, usize, f64)>,
+    /// The stretches integrated with rows set aside, shared with the sampler of the outputs
+    /// (its clone of this monitor reads them; it never sets rows aside itself).
+    pub released: Released,
+    /// The last state this monitor kept outside a passage (after its projection) and its time,
+    /// and the last such state kept with a conditioning above `STRETCH_ENDS`: where a passage's
+    /// stretch starts (see `ReleasedStretch`).
+    last_kept: Option<(f64, Vec<f64>)>,
+    anchor: Option<(f64, Vec<f64>)>,
     /// Whether the step control should forget the error's trend after the last `keep`: the
     /// equations off the closed set changed (rows or free coordinates chosen again, a passage
     /// entered or left), or the loops are near a singular configuration (`NEAR_SINGULAR`).
@@ -162,6 +210,9 @@ impl LoopMonitor {
             restored: false,
             samples_outputs: false,
             opened: None,
+            released: Rc::new(RefCell::new(Vec::new())),
+            last_kept: None,
+            anchor: None,
             breaks_trend: false,
             before: Residuals::default(),
             after: Residuals::default(),
@@ -215,10 +266,19 @@ impl LoopMonitor {
         self.breaks_trend = false;
         forward_kinematics(model, data, q, v)?;
         scratch.constraints_here(model, data, q, v)?;
+        let was_in_passage = self.passage.is_some();
         let conditioning = self.conditioning(scratch);
+        self.record_entry(was_in_passage, time, (&*q, &*v));
         self.breaks_trend |= conditioning.0 < NEAR_SINGULAR;
-        let projects = self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION;
-        if self.stabilisation == Stabilisation::Projection && projects {
+        // An output is not projected where a step end would set rows aside: there the
+        // interpolant's error along the direction being lost, invisible in the residual, would
+        // turn the projected velocities off the branch (see `Released`).
+        let projects = match self.samples_outputs {
+            true => conditioning.0 >= PASSAGE_ENTERED,
+            false => self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION,
+        };
+        let moved = self.stabilisation == Stabilisation::Projection && projects;
+        if moved {
             // Rows just restored after a passage: the velocities are projected from those the
             // state arrived with, by the constraints' impulse (`loops::project_momentum`).
             let restored = std::mem::take(&mut self.restored);
@@ -228,7 +288,15 @@ impl LoopMonitor {
             let projection = loops::project_from(model, data, choice, q, v, scratch)?;
             if let Some(arriving) = arriving {
                 v.copy_from_slice(&arriving);
-                loops::project_momentum(model, data, &self.structure, q, v)?;
+                // The outputs' velocities with the accurate basis; the run's own restores keep
+                // the free coordinates' motions, which its equations use (the dense basis there
+                // moved the row of two four-bars at 1e-12 from 3.6e-10 to 1.7e-9 of its
+                // energy at its first passage).
+                let basis = match self.samples_outputs {
+                    true => MomentumBasis::Orthonormal,
+                    false => MomentumBasis::Free,
+                };
+                loops::project_momentum(model, data, &self.structure, (q, v), basis)?;
             }
             if let (left, Some(row)) = projection.left {
                 if left > OPEN && self.opened.is_none() {
@@ -242,10 +310,57 @@ impl LoopMonitor {
                 projection.after,
                 conditioning,
             );
-            return Ok(true);
+        } else {
+            self.observe_current(model, time, conditioning, scratch);
         }
-        self.observe_current(model, time, conditioning, scratch);
-        loops::seat_ball_angles(model, data, q, v, false)
+        let seated = !moved && loops::seat_ball_angles(model, data, q, v, false)?;
+        self.record_kept(time, conditioning.0, (&*q, &*v));
+        Ok(moved || seated)
+    }
+
+    /// Starts a stretch around a passage where it sets rows aside (see `Released`).
+    fn record_entry(&mut self, was_in_passage: bool, time: f64, (q, v): (&[f64], &[f64])) {
+        if was_in_passage || self.passage.is_none() {
+            return;
+        }
+        let mut released = self.released.borrow_mut();
+        if let Some(last) = released.last_mut().filter(|s| !s.settled) {
+            // The stretch before never reached a well-conditioned state: it ends at the last
+            // one kept.
+            if let Some(kept) = &self.last_kept {
+                last.exit = Some(kept.clone());
+            }
+            last.settled = true;
+        }
+        let entry = (self.anchor.take())
+            .or_else(|| self.last_kept.take())
+            .unwrap_or_else(|| (time, [q, v].concat()));
+        released.push(ReleasedStretch {
+            entry,
+            exit: None,
+            settled: false,
+        });
+    }
+
+    /// Remembers a state kept outside a passage, and ends the stretch around the last passage
+    /// at the first one well conditioned (see `Released`).
+    fn record_kept(&mut self, time: f64, conditioning: f64, (q, v): (&[f64], &[f64])) {
+        if self.samples_outputs || self.passage.is_some() {
+            return;
+        }
+        let kept = self.last_kept.get_or_insert_with(|| (time, Vec::new()));
+        kept.0 = time;
+        kept.1.clear();
+        kept.1.extend_from_slice(q);
+        kept.1.extend_from_slice(v);
+        let settles = conditioning >= STRETCH_ENDS;
+        if let Some(last) = self.released.borrow_mut().last_mut().filter(|s| !s.settled) {
+            last.exit = Some(kept.clone());
+            last.settled = settles;
+        }
+        if settles {
+            self.anchor.clone_from(&self.last_kept);
+        }
     }
 
     /// The conditioning of the kept rows (`Factored::conditioning`) at the constraint Jacobian
@@ -280,7 +395,7 @@ impl LoopMonitor {
             // The rows kept are still the best: try again once they have fallen as far again.
             structure.chosen_reproduction = now;
         }
-        if conditioning.0 < PASSAGE_ENTERED {
+        if conditioning.0 < PASSAGE_ENTERED && !self.samples_outputs {
             let before = structure.choice.clone();
             structure.choice = without_lost_rows(jacobian, &before, PASSAGE_LEFT);
             structure.choose_free(jacobian);
@@ -307,7 +422,10 @@ impl LoopMonitor {
     ) -> Result<(), EvalError> {
         forward_kinematics(model, data, q, v)?;
         scratch.constraints_at(model, data, q, v)?;
+        let was_in_passage = self.passage.is_some();
         let conditioning = self.conditioning(scratch);
+        self.record_entry(was_in_passage, time, (q, v));
+        self.record_kept(time, conditioning.0, (q, v));
         self.observe_current(model, time, conditioning, scratch);
         Ok(())
     }
@@ -418,6 +536,7 @@ impl LoopMonitor {
             velocity_residual: self.after.velocity,
             singular: self.singular.clone(),
             closest: self.closest.clone(),
+            outputs_off_branch: Vec::new(),
         }
     }
 }

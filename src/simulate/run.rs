@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::branch;
-use super::constraints::ConstraintReport;
+use super::constraints::{ConstraintReport, ReleasedStretch};
 use super::prepare::{Integrator, Prepared};
 use super::system::{MechanicalSystem, SystemError};
 use super::variational;
@@ -20,8 +20,8 @@ use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
 use crate::integrate::{
-    integrate, CallbackError, IntegrationError, Method, OdeSystem, Settings as IntegratorSettings,
-    Stats,
+    integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Method, OdeSystem,
+    Settings as IntegratorSettings, Stats,
 };
 
 impl OdeSystem for MechanicalSystem<'_> {
@@ -190,6 +190,24 @@ pub fn step_error_warning(report: &Report) -> Option<Diagnostic> {
     )
 }
 
+/// The warning for outputs inside a singular passage that the run ended in (W0903): they come
+/// from the motion with rows set aside, only projected, and may be off the branch.
+pub fn passage_output_warning(report: &Report) -> Option<Diagnostic> {
+    let times = &report.constraints.as_ref()?.outputs_off_branch;
+    let (first, last) = (times.first()?, times.last()?);
+    let message = format!(
+        "{} output{} from t = {first} to t = {last} fell inside a singular passage that the run ended in: {} not be interpolated between states on the branch, and may be off it",
+        times.len(),
+        if times.len() > 1 { "s" } else { "" },
+        if times.len() > 1 { "they could" } else { "it could" },
+    );
+    Some(
+        Diagnostic::warning("W0903", message)
+            .note("inside a passage the rows losing their independence are set aside; outputs there are interpolated between the states before and after it, which a run that ends inside it does not reach")
+            .help("end the run (`duration`) or the outputs away from the singular configuration"),
+    )
+}
+
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct MomentumDrift {
     pub linear: f64,
@@ -230,23 +248,147 @@ fn output_times(duration: f64, interval: f64) -> Vec<f64> {
 
 /// Samples a state: declared coordinates (continuous with the previous sample), energy, momentum
 /// and, when asked for, the reactions. An output between two steps comes from the integrator's
-/// interpolant: with loops it is projected onto the constraints like the steps are.
+/// interpolant: with loops it is projected onto the constraints like the steps are, except
+/// inside a stretch integrated with rows set aside (a singular passage, see
+/// `constraints::Released`), where it is interpolated between the stretch's ends instead, once
+/// the stretch has ended.
 struct Sampler<'m> {
     /// Its `reference` is shared with the integrated system: the declared coordinates of the
     /// last output, which keep recovered angles continuous.
     system: MechanicalSystem<'m>,
     conservative: crate::dynamics::energy::Conservative,
     reactions: bool,
+    /// Outputs inside a stretch with rows set aside whose end is not known yet: their time and
+    /// the integrator's state there (for the work of the non-conservative efforts).
+    pending: Vec<(f64, Vec<f64>)>,
+    /// The outputs inside such a stretch that could not be interpolated between its ends (the
+    /// run ended inside it): only projected, they may be off the branch.
+    unsettled: Vec<f64>,
+    /// The interpolant over the last stretch whose outputs were sampled, and the stretch's
+    /// times.
+    segment: Option<((f64, f64), HermiteSegment)>,
 }
 
 impl Sampler<'_> {
+    /// The samples of the outputs up to `time`, given the integrator's state there: none while
+    /// `time` lies inside a stretch integrated with rows set aside, all those of the stretch
+    /// once it has ended.
+    fn offer(&mut self, time: f64, y: &[f64]) -> Result<Vec<Sample>, SystemError> {
+        let mut samples = self.settle(false)?;
+        if self.released_at(time) {
+            self.pending.push((time, y.to_vec()));
+            samples.extend(self.settle(false)?);
+        } else {
+            samples.push(self.sample(time, y)?);
+        }
+        Ok(samples)
+    }
+
+    /// The samples still pending at the end of the run: those of a stretch that ended, or,
+    /// when the run ended inside one, the projected outputs (`unsettled`).
+    fn finish(&mut self) -> Result<Vec<Sample>, SystemError> {
+        let mut samples = self.settle(true)?;
+        for (time, y) in std::mem::take(&mut self.pending) {
+            self.unsettled.push(time);
+            samples.push(self.sample(time, &y)?);
+        }
+        Ok(samples)
+    }
+
+    /// Whether an output at `time` lies strictly inside a stretch integrated with rows set
+    /// aside (so far: one not ended yet holds every later time).
+    fn released_at(&self, time: f64) -> bool {
+        let released = self.system.loops.released.borrow();
+        let stretch = released.iter().rev().find(|s| s.entry.0 < time);
+        stretch.is_some_and(|s| !s.settled || s.exit.as_ref().is_none_or(|exit| time < exit.0))
+    }
+
+    /// The samples of the pending outputs, if their stretch has ended (or the run, `ended`):
+    /// the cubic Hermite interpolant between the stretch's ends (`interpolant`). It is not
+    /// projected: deep in the passage a projection cannot find the branch, which the ends and
+    /// the interpolant follow to their accuracy.
+    fn settle(&mut self, ended: bool) -> Result<Vec<Sample>, SystemError> {
+        let Some(&(first, _)) = self.pending.first() else {
+            return Ok(Vec::new());
+        };
+        let stretch = {
+            let released = self.system.loops.released.borrow();
+            let stretch = released.iter().rev().find(|s| s.entry.0 < first);
+            match stretch {
+                Some(s) if s.exit.is_some() && (s.settled || ended) => s.clone(),
+                _ => return Ok(Vec::new()),
+            }
+        };
+        let exit = stretch.exit.as_ref().map_or(f64::INFINITY, |exit| exit.0);
+        let n = self.system.dimension();
+        let mut samples = Vec::new();
+        for (time, y) in std::mem::take(&mut self.pending) {
+            if time >= exit {
+                // After the last state kept, at the end of a run that ended inside the stretch.
+                self.unsettled.push(time);
+                samples.push(self.sample(time, &y)?);
+                continue;
+            }
+            let mut state = vec![0.0; n];
+            self.interpolant(&stretch)?.evaluate(time, &mut state);
+            self.system.measure_loops(time, &state)?;
+            samples.push(self.describe(time, state, y.get(n).copied())?);
+        }
+        Ok(samples)
+    }
+
+    /// The cubic Hermite interpolant over a stretch with rows set aside, between its ends, each
+    /// closed onto every row (its velocities by the constraints' impulse) and given the
+    /// derivative of the equations with every row: kept for the stretch's later outputs.
+    fn interpolant(&mut self, stretch: &ReleasedStretch) -> Result<&HermiteSegment, SystemError> {
+        let (entry, exit) = (&stretch.entry, stretch.exit.as_ref().expect("an end"));
+        let span = (entry.0, exit.0);
+        if self
+            .segment
+            .as_ref()
+            .is_none_or(|(cached, _)| *cached != span)
+        {
+            let n = self.system.dimension();
+            let mut ends = [entry.1.clone(), exit.1.clone()];
+            let mut slopes = [vec![0.0; n], vec![0.0; n]];
+            for ((time, end), slope) in [entry.0, exit.0]
+                .into_iter()
+                .zip(&mut ends)
+                .zip(&mut slopes)
+            {
+                self.system.keep_closed(time, end)?;
+                self.system.derivative(time, end, slope)?;
+            }
+            let mut segment = HermiteSegment::new(n);
+            let [start, end] = &ends;
+            let [start_slope, end_slope] = &slopes;
+            segment.set(
+                entry.0,
+                exit.0 - entry.0,
+                [start, start_slope, end, end_slope],
+            );
+            self.segment = Some((span, segment));
+        }
+        Ok(&self.segment.as_ref().expect("just set").1)
+    }
+
+    /// The sample of the integrator's state `y` at `time`, projected onto the loops.
     fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, SystemError> {
-        let model = self.system.model;
         // After the motion, the work of the non-conservative efforts when it is integrated.
         let n = self.system.dimension();
-        let work = y.get(n).copied();
-        let mut y = y[..n].to_vec();
-        self.system.keep_closed(time, &mut y)?;
+        let mut state = y[..n].to_vec();
+        self.system.keep_closed(time, &mut state)?;
+        self.describe(time, state, y.get(n).copied())
+    }
+
+    /// The sample of a state (positions, velocities) on the loops.
+    fn describe(
+        &mut self,
+        time: f64,
+        mut y: Vec<f64>,
+        work: Option<f64>,
+    ) -> Result<Sample, SystemError> {
+        let model = self.system.model;
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let previous = self.system.reference.borrow().clone();
@@ -331,6 +473,9 @@ pub fn run_from(
         system: MechanicalSystem::new(model, reference.clone(), settings.stabilisation),
         conservative: conservative_forces(model),
         reactions: settings.reactions,
+        pending: Vec::new(),
+        unsettled: Vec::new(),
+        segment: None,
     };
     // What the start found of the loops (rank, redundant rows) holds for the outputs too.
     sampler.system.loops = system.loops.clone();
@@ -346,10 +491,14 @@ pub fn run_from(
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::with_capacity(outputs.len());
     let started = Instant::now();
+    let mut deliver = |offered: Vec<Sample>, samples: &mut Vec<Sample>| {
+        for sample in offered {
+            sink(&sample);
+            samples.push(sample);
+        }
+    };
     let mut observer = |t: f64, y: &[f64]| -> Result<(), CallbackError> {
-        let sample = sampler.sample(t, y)?;
-        sink(&sample);
-        samples.push(sample);
+        deliver(sampler.offer(t, y)?, &mut samples);
         Ok(())
     };
     let integrator_settings = IntegratorSettings {
@@ -403,6 +552,19 @@ pub fn run_from(
             )
         }
     };
+    // The outputs of a stretch with rows set aside that ended with the run.
+    let result = match (result, sampler.finish()) {
+        (result, Ok(rest)) => {
+            deliver(rest, &mut samples);
+            result
+        }
+        (Ok((_, stats)), Err(error)) => Err(IntegrationError {
+            time: settings.duration,
+            failure: Failure::Observer(error.to_string()),
+            stats,
+        }),
+        (failed, Err(_)) => failed,
+    };
     let run_seconds = started.elapsed().as_secs_f64();
     let (stats, failure) = match result {
         Ok((_, stats)) => (stats, None),
@@ -423,7 +585,9 @@ pub fn run_from(
     };
     let constraints = model.has_loops().then(|| {
         system.loops.absorb(&sampler.system.loops);
-        system.loops.report()
+        let mut report = system.loops.report();
+        report.outputs_off_branch = std::mem::take(&mut sampler.unsettled);
+        report
     });
     let left_branch = constraints
         .as_ref()

@@ -364,3 +364,39 @@ fn an_rk4_step_too_long_for_the_tolerances_is_warned_not_silent() {
     assert_eq!(code, 0, "{stderr}");
     assert!(!stderr.contains("W0902"), "{stderr}");
 }
+
+#[test]
+fn a_run_ending_inside_a_singular_passage_warns_about_its_last_outputs() {
+    // The row of ten four-bars sets rows aside at its first flat configuration (t ≈ 0.139);
+    // a run ending there cannot interpolate the outputs inside the passage between states on
+    // the branch, and says so (W0903). Ending just after the passage, it says nothing.
+    let run = |duration: &str| {
+        lsdc(&[
+            "simulate",
+            "examples/hard/four_bar_row_10.lsd",
+            "--integrator",
+            "dopri5",
+            "--tolerance",
+            "1e-11",
+            "--step",
+            "1e-4",
+            "--every",
+            "1e-5",
+            "--duration",
+            duration,
+            "--report",
+            "json",
+        ])
+    };
+    let (code, _, stderr) = run("0.13905");
+    assert_eq!(code, 0, "{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&stderr).expect("the report is JSON");
+    assert_eq!(report["warnings"][0]["code"], "W0903", "{stderr}");
+    assert!(!report["constraints"]["outputs_off_branch"]
+        .as_array()
+        .unwrap()
+        .is_empty());
+    let (code, _, stderr) = run("0.1395");
+    assert_eq!(code, 0, "{stderr}");
+    assert!(!stderr.contains("W0903"), "{stderr}");
+}

@@ -29,6 +29,6 @@ pub use rows::{
 };
 pub use solve::{
     allowed_motions, multipliers, project_momentum, solve_reduced, LoopError, LoopScratch,
-    Stabilisation, Wanted,
+    MomentumBasis, Stabilisation, Wanted,
 };
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};
