@@ -359,7 +359,10 @@ impl LoopMonitor {
             last.settled = settles;
         }
         if settles {
-            self.anchor.clone_from(&self.last_kept);
+            // Into the anchor's own storage: a tuple's `clone_from` would allocate anew.
+            let anchor = self.anchor.get_or_insert_with(|| (time, Vec::new()));
+            anchor.0 = kept.0;
+            anchor.1.clone_from(&kept.1);
         }
     }
 
