@@ -348,21 +348,14 @@ impl LoopMonitor {
         if self.samples_outputs || self.passage.is_some() {
             return;
         }
-        let kept = self.last_kept.get_or_insert_with(|| (time, Vec::new()));
-        kept.0 = time;
-        kept.1.clear();
-        kept.1.extend_from_slice(q);
-        kept.1.extend_from_slice(v);
+        store(&mut self.last_kept, time, (q, v));
         let settles = conditioning >= STRETCH_ENDS;
         if let Some(last) = self.released.borrow_mut().last_mut().filter(|s| !s.settled) {
-            last.exit = Some(kept.clone());
+            store(&mut last.exit, time, (q, v));
             last.settled = settles;
         }
         if settles {
-            // Into the anchor's own storage: a tuple's `clone_from` would allocate anew.
-            let anchor = self.anchor.get_or_insert_with(|| (time, Vec::new()));
-            anchor.0 = kept.0;
-            anchor.1.clone_from(&kept.1);
+            store(&mut self.anchor, time, (q, v));
         }
     }
 
@@ -542,6 +535,16 @@ impl LoopMonitor {
             outputs_off_branch: Vec::new(),
         }
     }
+}
+
+/// Stores a state (positions, then velocities) and its time in `slot`, reusing its storage: a
+/// step allocates nothing once the slots are sized.
+fn store(slot: &mut Option<(f64, Vec<f64>)>, time: f64, (q, v): (&[f64], &[f64])) {
+    let (at, state) = slot.get_or_insert_with(|| (time, Vec::with_capacity(q.len() + v.len())));
+    *at = time;
+    state.clear();
+    state.extend_from_slice(q);
+    state.extend_from_slice(v);
 }
 
 /// `choice` without the firm rows losing their independence at G: the row of the smallest pivot
