@@ -230,7 +230,7 @@ impl ProjectionScratch {
         v: &[f64],
     ) -> Result<(), EvalError> {
         if std::mem::take(&mut self.adopted) {
-            complete_rotations(model, data, &mut self.current);
+            complete_rotations(model, data, v, &mut self.current);
             return Ok(());
         }
         self.constraints_at(model, data, q, v)

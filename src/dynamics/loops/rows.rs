@@ -41,6 +41,8 @@ pub struct Constraints {
     pub bias: DVector<f64>,
     /// Where each loop closes (origin of its chain's end), fixed axes.
     pub points: Vec<Vector3<f64>>,
+    /// Each loop's first frame, pose(a)·A, where its chain starts.
+    bases: Vec<Pose>,
     /// Each loop's dof chain at the state (scratch kept between evaluations).
     chains: Vec<ChainMotion>,
     /// The tree joints on the loops' paths to earth, and the fixed-frame twist of each of their
@@ -87,6 +89,7 @@ impl Constraints {
             velocity: DVector::zeros(rows),
             bias: DVector::zeros(rows),
             points: vec![Vector3::zeros(); model.loops.len()],
+            bases: vec![Pose::identity(); model.loops.len()],
             chains: vec![ChainMotion::default(); model.loops.len()],
             path_joints: path_joints(model),
             world_columns: vec![Motion::zeros(); model.nv],
@@ -156,9 +159,10 @@ pub enum Extent {
     Rows,
     /// The rows and γ.
     WithBias,
-    /// The rows and γ, with the position rows' rotations left at zero: what the equations of
-    /// motion read when no feedback of the position rows (Baumgarte's) is asked for, and the
-    /// rotation vector of each loop's residual is its costliest part.
+    /// G and γ, with the position rows' rotations and the velocity rows G v left at zero: what
+    /// the equations of motion read when no feedback of the constraints (Baumgarte's) is asked
+    /// for. The rotation vector is each loop's residual's costliest part; `complete_rotations`
+    /// adds both where a projection goes on from these rows.
     Motion,
 }
 
@@ -178,7 +182,12 @@ pub fn constraints_into(
     }
     if extent != Extent::Residual {
         let with_bias = matches!(extent, Extent::WithBias | Extent::Motion);
-        rows_after_residual(model, data, v, with_bias, c);
+        rows_after_residual(model, data, with_bias, c);
+        if extent == Extent::Motion {
+            c.velocity.fill(0.0);
+        } else {
+            c.jacobian.mul_into(v, &mut c.velocity);
+        }
     }
     Ok(())
 }
@@ -191,13 +200,15 @@ fn rotation_residual(end: &Pose, target: &Pose) -> Vector3<f64> {
 }
 
 /// Completes the constraints `constraints_into` left at `Extent::Motion` with the position
-/// rows' rotations, from the same state (whose forward kinematics `data` must still hold).
-pub fn complete_rotations(model: &Model, data: &Data, c: &mut Constraints) {
+/// rows' rotations and the velocity rows, from the same state (q, v), whose forward kinematics
+/// `data` must still hold.
+pub fn complete_rotations(model: &Model, data: &Data, v: &[f64], c: &mut Constraints) {
+    c.jacobian.mul_into(v, &mut c.velocity);
     for (k, joint) in model.loops.iter().enumerate() {
         if model.loop_balls[k].is_some() {
             continue;
         }
-        let end = data.world[joint.first_body] * joint.first * c.chains[k].pose;
+        let end = c.bases[k] * c.chains[k].pose;
         let target = data.world[joint.second_body] * joint.second;
         c.residual
             .rows_mut(6 * k, 3)
@@ -208,17 +219,12 @@ pub fn complete_rotations(model: &Model, data: &Data, c: &mut Constraints) {
 /// Completes the constraints `constraints_into` left at `Extent::Residual` to `Extent::Rows`,
 /// from the same state (whose forward kinematics `data` must still hold).
 pub fn complete_rows(model: &Model, data: &mut Data, v: &[f64], c: &mut Constraints) {
-    rows_after_residual(model, data, v, false, c);
+    rows_after_residual(model, data, false, c);
+    c.jacobian.mul_into(v, &mut c.velocity);
 }
 
-/// G, G v and, `with_bias`, γ, from the chains and loop points `loop_residual` left in `c`.
-fn rows_after_residual(
-    model: &Model,
-    data: &mut Data,
-    v: &[f64],
-    with_bias: bool,
-    c: &mut Constraints,
-) {
+/// G and, `with_bias`, γ, from the chains and loop points `loop_residual` left in `c`.
+fn rows_after_residual(model: &Model, data: &mut Data, with_bias: bool, c: &mut Constraints) {
     if with_bias {
         bias_accelerations(model, data);
     } else {
@@ -235,7 +241,6 @@ fn rows_after_residual(
     for k in 0..model.loops.len() {
         loop_rows(model, data, k, with_bias, c);
     }
-    c.jacobian.mul_into(v, &mut c.velocity);
 }
 
 /// Loop `k`'s chain at (q, v), its position rows (their rotations only when asked for, zero
@@ -264,9 +269,11 @@ fn loop_residual(
             &mut c.chains[k],
         )?;
     }
-    let end = data.world[joint.first_body] * joint.first * c.chains[k].pose;
+    let base = data.world[joint.first_body] * joint.first;
+    let end = base * c.chains[k].pose;
     let target = data.world[joint.second_body] * joint.second;
     let point = end.translation.vector;
+    c.bases[k] = base;
     let row = 6 * k;
     if ball || !rotations {
         c.residual.rows_mut(row, 3).fill(0.0);
@@ -288,7 +295,7 @@ fn loop_rows(model: &Model, data: &Data, k: usize, with_bias: bool, c: &mut Cons
     let offset = model.loop_offset(k);
     let ball = model.loop_balls[k].is_some();
     let chain = &c.chains[k];
-    let base = data.world[joint.first_body] * joint.first;
+    let base = c.bases[k];
     let point = c.points[k];
     let row = 6 * k;
     // Rates are taken at the loop point, in fixed axes.
@@ -317,9 +324,12 @@ fn loop_rows(model: &Model, data: &Data, k: usize, with_bias: bool, c: &mut Cons
         };
         let first_velocity = world(&data.velocity, joint.first_body);
         let chain_velocity = motion_to_parent(&base, &chain.velocity);
-        let end_acceleration = world(&data.acceleration, joint.first_body)
-            + spatial::cross_motion(&first_velocity, &chain_velocity)
-            + motion_to_parent(&base, &chain.bias);
+        let mut end_acceleration = world(&data.acceleration, joint.first_body)
+            + spatial::cross_motion(&first_velocity, &chain_velocity);
+        // Zero for a chain of one rotation or translation proportional to its coordinate.
+        if chain.bias != Motion::zeros() {
+            end_acceleration += motion_to_parent(&base, &chain.bias);
+        }
         let difference = world(&data.acceleration, joint.second_body) - end_acceleration;
         c.bias
             .rows_mut(row, 6)
