@@ -76,6 +76,12 @@ struct SimulateArgs {
     /// join, in the fixed axes (moment then force).
     #[arg(long)]
     reactions: bool,
+    /// Evaluate the equations of motion as native code: the generated C forward dynamics,
+    /// compiled by the C compiler (`CC`, else `cc`) and kept in a cache (`LSDC_CACHE_DIR`,
+    /// else `~/.cache/lsdc`). Trees only; where it cannot serve, a warning says why and the
+    /// run goes on without it.
+    #[arg(long)]
+    compiled: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -585,6 +591,10 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     };
     if let Err(error) = prepared.settings.apply(&changes) {
         return usage_error(&error.to_string());
+    }
+    if args.compiled {
+        let native = lsdc::simulate::compiled::attach_with_warnings(&mut prepared, mechanism);
+        prepared.warnings.extend(native);
     }
     let warnings: Vec<Diagnostic> = prepared
         .warnings

@@ -3,9 +3,11 @@
 
 pub mod batch;
 pub mod branch;
+pub mod compiled;
 pub mod consistent;
 pub mod constraints;
 pub mod lie_group;
+pub mod native;
 pub mod prepare;
 pub mod run;
 pub mod settings;

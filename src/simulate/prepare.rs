@@ -28,6 +28,9 @@ pub struct Prepared {
     pub coordinate_names: Vec<String>,
     /// What preparing found worth saying without stopping: given values assembly moved (W0801).
     pub warnings: Vec<Diagnostic>,
+    /// The forward dynamics as native code, when asked for and able to serve
+    /// (`compiled::attach`).
+    pub native: Option<super::native::NativeDynamics>,
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
@@ -208,6 +211,7 @@ pub fn prepare(
         settings,
         coordinate_names,
         warnings,
+        native: None,
     })
 }
 

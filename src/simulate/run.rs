@@ -466,6 +466,7 @@ pub fn run_from(
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(start.coordinates.to_vec()));
     let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
+    system.use_native(prepared.native.as_ref());
     if let Err(error) = system.start_loops(&mut y0) {
         return failed_at_start(prepared, error.to_string());
     }
@@ -483,8 +484,10 @@ pub fn run_from(
     // The work of non-conservative efforts rides along as one more state (not with the
     // variational integrator, whose steps are its own).
     let motion = y0.len();
-    let tracks_work =
-        !sampler.conservative.complete && settings.integrator != Integrator::Symplectic;
+    // Nor with native code, which computes the accelerations alone (`simulate --compiled`).
+    let tracks_work = !sampler.conservative.complete
+        && settings.integrator != Integrator::Symplectic
+        && prepared.native.is_none();
     if tracks_work {
         y0.push(0.0);
     }

@@ -10,6 +10,7 @@ use std::fmt;
 use std::rc::Rc;
 
 use super::constraints::LoopMonitor;
+use super::native::NativeDynamics;
 use crate::dynamics::algorithms::{
     aba, aba_after_kinematics, aba_into, forward_kinematics, rnea, rnea_after_kinematics,
     rnea_forward, transmitted_wrenches, Data, DynamicsError,
@@ -52,6 +53,9 @@ pub struct MechanicalSystem<'m> {
     /// The state of the last evaluation of a mechanism with loops, while `loop_scratch` holds
     /// its rows (empty otherwise): a projection of that state adopts them.
     evaluated: Vec<f64>,
+    /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
+    /// and the articulated-body algorithm.
+    native: Option<&'m NativeDynamics>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -77,7 +81,15 @@ impl<'m> MechanicalSystem<'m> {
             projection: ProjectionScratch::new(model),
             velocities: Vec::new(),
             evaluated: Vec::new(),
+            native: None,
         }
+    }
+
+    /// Evaluates the accelerations with `native` (checked against this system's own evaluation
+    /// by `compiled::attach`) from now on. The power of the non-conservative efforts is then not
+    /// computed: it is left at zero.
+    pub fn use_native(&mut self, native: Option<&'m NativeDynamics>) {
+        self.native = native;
     }
 
     pub fn dimension(&self) -> usize {
@@ -206,7 +218,14 @@ impl<'m> MechanicalSystem<'m> {
             // Only after a failed evaluation, which took the scratch away.
             accelerations = DVector::zeros(model.velocities());
         }
-        if model.has_loops() {
+        // Where the native code refuses (a singular mass matrix, a value not finite), the
+        // evaluation below says why.
+        let native = self
+            .native
+            .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
+        if native {
+            // The accelerations are written.
+        } else if model.has_loops() {
             self.solve_constrained(t, q, v, Wanted::Accelerations)?;
             accelerations.copy_from(&self.loop_scratch.accelerations);
         } else if model.has_efforts() {
@@ -238,7 +257,7 @@ impl<'m> MechanicalSystem<'m> {
         } else {
             &self.no_efforts
         };
-        self.power = efforts.power;
+        self.power = if native { 0.0 } else { efforts.power };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model
                 .joints

@@ -1,6 +1,7 @@
 //! The emitted equations against `Equations::evaluate`: the Rust and C code compiled and run at
 //! a few states, the JSON DAG evaluated again, and the text formats' shape.
 
+use crate::common::c_compiler;
 use crate::common::symbolic::{equations_of, Sequence};
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -397,19 +398,6 @@ fn c_harness(eq: &Equations, source: &str, states: &[State]) -> String {
 
 fn rustc() -> String {
     std::env::var("RUSTC").unwrap_or_else(|_| "rustc".to_string())
-}
-
-/// The first C compiler found: `CC`, `cc`, `gcc`, `clang`.
-fn c_compiler() -> Option<String> {
-    let candidates = std::env::var("CC")
-        .into_iter()
-        .chain(["cc", "gcc", "clang"].map(String::from));
-    candidates.into_iter().find(|c| {
-        Command::new(c)
-            .arg("--version")
-            .output()
-            .is_ok_and(|o| o.status.success())
-    })
 }
 
 fn build_and_run_rust(name: &str, eq: &Equations, states: &[State]) -> String {

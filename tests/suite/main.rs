@@ -23,6 +23,7 @@ mod kinematics;
 mod loop_properties;
 mod loops;
 mod methods;
+mod native;
 mod pinocchio_fixtures;
 mod properties;
 mod regression;

@@ -12,3 +12,16 @@ pub fn max_difference(a: &[f64], b: &[f64]) -> f64 {
         .map(|(x, y)| (x - y).abs())
         .fold(0.0, f64::max)
 }
+
+/// The first C compiler found: `CC`, `cc`, `gcc`, `clang`.
+pub fn c_compiler() -> Option<String> {
+    let candidates = std::env::var("CC")
+        .into_iter()
+        .chain(["cc", "gcc", "clang"].map(String::from));
+    candidates.into_iter().find(|c| {
+        std::process::Command::new(c)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    })
+}

@@ -1,0 +1,146 @@
+//! `simulate --compiled`: the generated forward dynamics compiled by the C compiler, cached, and
+//! used only where it agrees with the simulator's own evaluation; a clean fallback otherwise.
+
+use crate::common::c_compiler;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Runs `lsdc simulate FILE ARGS` with the cache in `cache` and `CC` set to `compiler`: exit
+/// code, samples (CSV) and standard error.
+fn simulate(file: &str, args: &[&str], cache: &Path, compiler: &str) -> (i32, String, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_lsdc"))
+        .arg("simulate")
+        .arg(file)
+        .args(args)
+        .env("LSDC_CACHE_DIR", cache)
+        .env("CC", compiler)
+        .env_remove("LSD_PATH")
+        .output()
+        .expect("lsdc runs");
+    (
+        output.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+fn fresh_cache(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lsdc-native-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// The largest difference between two CSV outputs of the same run, relative to 1 + |value|.
+fn csv_difference(a: &str, b: &str) -> f64 {
+    let rows = |text: &str| -> Vec<Vec<f64>> {
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').filter_map(|x| x.parse().ok()).collect())
+            .collect()
+    };
+    let (a, b) = (rows(a), rows(b));
+    assert_eq!(a.len(), b.len(), "as many samples");
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .map(|(x, y)| (x - y).abs() / (1.0 + y.abs()))
+        .fold(0.0, f64::max)
+}
+
+fn libraries_in(cache: &Path) -> Vec<PathBuf> {
+    let extension = std::env::consts::DLL_EXTENSION;
+    std::fs::read_dir(cache)
+        .map(|entries| {
+            entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == extension))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+#[test]
+fn compiled_runs_give_the_interpreted_motion_and_reuse_the_cache() {
+    let Some(compiler) = c_compiler() else {
+        println!("no C compiler found (CC, cc, gcc, clang): --compiled is not checked");
+        return;
+    };
+    let cache = fresh_cache("reuse");
+    let file = "examples/double_pendulum.lsd";
+    let args = ["--duration", "2"];
+    let (code, interpreted, _) = simulate(file, &args, &cache, &compiler);
+    assert_eq!(code, 0);
+    let compiled_args = ["--duration", "2", "--compiled"];
+    let (code, compiled, stderr) = simulate(file, &compiled_args, &cache, &compiler);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        !stderr.contains("W0904"),
+        "the native code serves: {stderr}"
+    );
+    // The same equations, summed otherwise: the runs part by round-off amplified by a chaotic
+    // motion over 2 s, far below the tolerance's effect.
+    let difference = csv_difference(&compiled, &interpreted);
+    assert!(
+        difference < 1e-7,
+        "compiled and interpreted runs differ by {difference:e}"
+    );
+    let libraries = libraries_in(&cache);
+    assert_eq!(libraries.len(), 1, "one library cached: {libraries:?}");
+    let built = std::fs::metadata(&libraries[0])
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    let (code, again, _) = simulate(file, &compiled_args, &cache, &compiler);
+    assert_eq!(code, 0);
+    assert_eq!(again, compiled, "the cached library gives the same run");
+    let reused = std::fs::metadata(&libraries[0])
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    assert_eq!(built, reused, "the second run loads the cached library");
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
+#[test]
+fn without_a_compiler_the_run_goes_on_and_says_why() {
+    let cache = fresh_cache("none");
+    let file = "examples/pendulum.lsd";
+    let (code, compiled, stderr) = simulate(file, &["--compiled"], &cache, "/no/such/compiler-cc");
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("warning[W0904]"), "{stderr}");
+    assert!(stderr.contains("no C compiler"), "{stderr}");
+    let (_, interpreted, _) = simulate(file, &[], &cache, "/no/such/compiler-cc");
+    assert_eq!(compiled, interpreted, "the run is the interpreted one");
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
+#[test]
+fn loops_and_quaternion_joints_are_declined_by_name() {
+    let cache = fresh_cache("declined");
+    let compiler = c_compiler().unwrap_or_else(|| "cc".to_string());
+    for (file, why) in [
+        ("examples/four_bar.lsd", "has loops"),
+        ("examples/heavy_top.lsd", "free or spherical joint"),
+    ] {
+        let args = ["--compiled", "--duration", "0.1"];
+        let (code, _, stderr) = simulate(file, &args, &cache, &compiler);
+        assert_eq!(code, 0, "{file}: {stderr}");
+        assert!(
+            stderr.contains("W0904") && stderr.contains(why),
+            "{file}: {stderr}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
+#[test]
+fn non_conservative_efforts_are_said_to_leave_the_balance_out() {
+    let Some(compiler) = c_compiler() else {
+        println!("no C compiler found (CC, cc, gcc, clang): --compiled is not checked");
+        return;
+    };
+    let cache = fresh_cache("work");
+    let args = ["--compiled", "--duration", "0.2"];
+    let (code, _, stderr) = simulate("examples/elastic_pendulum.lsd", &args, &cache, &compiler);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("W0905"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&cache);
+}
