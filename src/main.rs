@@ -89,6 +89,7 @@ enum StabilisationArg {
 enum IntegratorArg {
     Rk4,
     Dopri5,
+    Dop853,
     Implicit,
     Symplectic,
 }
@@ -569,6 +570,7 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
         integrator: args.integrator.map(|integrator| match integrator {
             IntegratorArg::Rk4 => Integrator::Rk4,
             IntegratorArg::Dopri5 => Integrator::DormandPrince,
+            IntegratorArg::Dop853 => Integrator::Dop853,
             IntegratorArg::Implicit => Integrator::Implicit,
             IntegratorArg::Symplectic => Integrator::Symplectic,
         }),
