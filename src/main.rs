@@ -121,7 +121,12 @@ struct PrecisionArgs {
     #[arg(long = "set", value_name = "NAME=VALUE")]
     sets: Vec<String>,
     /// The integrators to measure.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "dopri5,dop853")]
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "dopri5,dop853"
+    )]
     integrators: Vec<IntegratorArg>,
     /// Tolerances (relative and absolute) of the adaptive integrators.
     #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
@@ -737,7 +742,11 @@ fn precision_methods(args: &PrecisionArgs) -> Vec<lsdc::simulate::precision::Met
     for &integrator in &args.integrators {
         let settings: Vec<Setting> = match integrator.fixed_step() {
             true => args.steps.iter().map(|&h| Setting::Step(h)).collect(),
-            false => args.tolerances.iter().map(|&t| Setting::Tolerance(t)).collect(),
+            false => args
+                .tolerances
+                .iter()
+                .map(|&t| Setting::Tolerance(t))
+                .collect(),
         };
         methods.extend(settings.into_iter().map(|setting| Method {
             integrator: integrator.integrator(),
@@ -786,7 +795,11 @@ fn precision_reference(
             .map_err(|error| format!("cannot read `{name}`: {error}"))?;
         return Reference::from_csv(&text, &name).map_err(|error| error.to_string());
     }
-    let tightest = args.tolerances.iter().copied().fold(f64::INFINITY, f64::min);
+    let tightest = args
+        .tolerances
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
     let tolerance = (args.reference_tolerance).unwrap_or((tightest / 1000.0).max(1e-14));
     let integrator = args.reference_integrator.integrator();
     computed_reference(prepared, &integrator, tolerance).map_err(|error| error.to_string())

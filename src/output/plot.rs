@@ -186,7 +186,9 @@ pub enum PlotError {
 }
 
 impl PlotError {
-    pub(super) fn drawing<E: Error + Send + Sync + 'static>(error: DrawingAreaErrorKind<E>) -> PlotError {
+    pub(super) fn drawing<E: Error + Send + Sync + 'static>(
+        error: DrawingAreaErrorKind<E>,
+    ) -> PlotError {
         PlotError::Drawing(Box::new(error))
     }
 }

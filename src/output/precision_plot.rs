@@ -56,8 +56,13 @@ struct WorkPrecision {
 impl WorkPrecision {
     /// Decades enclosing the values of one coordinate of the points.
     fn range(&self, coordinate: impl Fn(&(f64, f64)) -> f64) -> std::ops::Range<f64> {
-        let values = self.curves.iter().flat_map(|c| c.points.iter().map(&coordinate));
-        let (lo, hi) = values.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        let values = self
+            .curves
+            .iter()
+            .flat_map(|c| c.points.iter().map(&coordinate));
+        let (lo, hi) = values.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
         10f64.powf(lo.log10().floor())..10f64.powf(hi.log10().ceil().max(lo.log10().floor() + 1.0))
     }
 }
@@ -110,9 +115,7 @@ impl Figure for WorkPrecision {
                     PathElement::new(vec![(x, y), (x + px(24.0) as i32, y)], style)
                 });
             let marker = move |p| Circle::new(p, px(4.0), colour.filled());
-            chart
-                .draw_series(points.map(marker))
-                .map_err(error)?;
+            chart.draw_series(points.map(marker)).map_err(error)?;
         }
         chart
             .configure_series_labels()

@@ -144,7 +144,10 @@ impl Reference {
                 _ => cell.parse::<f64>().map_err(|_| bad(line, "not a number")),
             };
             let time = number(cells[0])?;
-            let values = cells[1..].iter().map(|c| number(c)).collect::<Result<_, _>>()?;
+            let values = cells[1..]
+                .iter()
+                .map(|c| number(c))
+                .collect::<Result<_, _>>()?;
             rows.push((time, values));
         }
         rows.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -169,7 +172,12 @@ impl Reference {
         let rows = simulation
             .samples
             .iter()
-            .map(|s| (s.time, s.coordinates.iter().chain(&s.rates).copied().collect()))
+            .map(|s| {
+                (
+                    s.time,
+                    s.coordinates.iter().chain(&s.rates).copied().collect(),
+                )
+            })
             .collect();
         Reference {
             columns,
@@ -220,10 +228,11 @@ pub fn errors(simulation: &Simulation, reference: &Reference) -> Result<Errors, 
         };
         errors.compared_outputs += 1;
         for (i, (value, rate)) in columns.iter().enumerate() {
-            let difference = |column: Option<usize>, ours: f64| {
-                column.map_or(0.0, |c| distance(ours, row[c]))
-            };
-            errors.position = errors.position.max(difference(*value, sample.coordinates[i]));
+            let difference =
+                |column: Option<usize>, ours: f64| column.map_or(0.0, |c| distance(ours, row[c]));
+            errors.position = errors
+                .position
+                .max(difference(*value, sample.coordinates[i]));
             errors.velocity = errors.velocity.max(difference(*rate, sample.rates[i]));
         }
     }
@@ -325,8 +334,10 @@ pub fn measure(
         integrator: report.integrator.clone(),
         setting: method.setting,
         errors: errors(&simulation, reference)?,
-        closure_residual: (report.constraints.as_ref())
-            .map(|c| c.position_residual_before_projection.max(c.position_residual)),
+        closure_residual: (report.constraints.as_ref()).map(|c| {
+            c.position_residual_before_projection
+                .max(c.position_residual)
+        }),
         energy_drift: report.energy_drift.or(report.energy_balance),
         steps: report.steps,
         rejected_steps: report.rejected_steps,

@@ -302,7 +302,9 @@ fn kepler_path_error(method: &Method, tolerance: f64) -> (f64, Stats) {
 fn dop853_follows_a_kepler_orbit_with_fewer_evaluations_than_dormand_prince_at_tight_tolerance() {
     let (dop853_error, dop853) = kepler_path_error(&Method::Dop853, 1e-12);
     let (dopri5_error, dopri5) = kepler_path_error(&Method::DormandPrince, 1e-12);
-    eprintln!("Kepler 1e-12: DOP853 {dop853_error:.1e} {dop853:?}; DOPRI5 {dopri5_error:.1e} {dopri5:?}");
+    eprintln!(
+        "Kepler 1e-12: DOP853 {dop853_error:.1e} {dop853:?}; DOPRI5 {dopri5_error:.1e} {dopri5:?}"
+    );
     assert!(dop853_error < 1e-8, "path error {dop853_error:e}");
     assert!(
         dop853.rhs_evaluations < dopri5.rhs_evaluations / 2,
