@@ -5,7 +5,9 @@
 //!
 //! Coefficients from Hairer, Nørsett and Wanner, Solving ODEs I (2nd ed.), II.10 ("Dense output
 //! ... DOP853", Tables 10.2–10.3 and the code DOP853 printed with the book); the digits are those
-//! of the published code.
+//! of the published code, kept as printed (more than an f64 holds) so that they can be checked
+//! against it.
+#![allow(clippy::excessive_precision)]
 
 use super::control::{Gains, StepController};
 use super::driver::AdaptiveStepper;
@@ -340,9 +342,9 @@ impl AdaptiveStepper for Dop853 {
         y_new: &mut [f64],
     ) -> Result<f64, Halt> {
         self.extension_taken = false;
-        for stage in 1..STAGES {
+        for (stage, fraction) in C.iter().enumerate().take(STAGES).skip(1) {
             stage_state_into(&self.stages, stage, y, h, &mut self.stage_state);
-            eval.rhs(t + C[stage] * h, &self.stage_state, &mut self.stages[stage])?;
+            eval.rhs(t + fraction * h, &self.stage_state, &mut self.stages[stage])?;
         }
         stage_state_into(&self.stages, END, y, h, y_new);
         let error = self.error_norm(y, y_new, h);
@@ -360,9 +362,9 @@ impl AdaptiveStepper for Dop853 {
         y: &[f64],
         h: f64,
     ) -> Result<(), Halt> {
-        for stage in END + 1..ALL_STAGES {
+        for (stage, fraction) in C.iter().enumerate().skip(END + 1) {
             stage_state_into(&self.stages, stage, y, h, &mut self.stage_state);
-            eval.rhs(t + C[stage] * h, &self.stage_state, &mut self.stages[stage])?;
+            eval.rhs(t + fraction * h, &self.stage_state, &mut self.stages[stage])?;
         }
         self.extension_taken = true;
         Ok(())

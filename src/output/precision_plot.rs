@@ -120,6 +120,8 @@ impl Figure for WorkPrecision {
         chart
             .configure_series_labels()
             .label_font(render.font(LABEL_SIZE))
+            .legend_area_size(px(36.0))
+            .margin(px(12.0))
             .background_style(WHITE.mix(0.9))
             .border_style(BLACK.mix(0.3))
             .position(SeriesLabelPosition::UpperRight)
