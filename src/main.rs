@@ -95,8 +95,82 @@ enum StabilisationArg {
 enum IntegratorArg {
     Rk4,
     Dopri5,
+    Dop853,
     Implicit,
     Symplectic,
+}
+
+impl IntegratorArg {
+    fn integrator(self) -> lsdc::simulate::prepare::Integrator {
+        use lsdc::simulate::prepare::Integrator;
+        match self {
+            IntegratorArg::Rk4 => Integrator::Rk4,
+            IntegratorArg::Dopri5 => Integrator::DormandPrince,
+            IntegratorArg::Dop853 => Integrator::Dop853,
+            IntegratorArg::Implicit => Integrator::Implicit,
+            IntegratorArg::Symplectic => Integrator::Symplectic,
+        }
+    }
+
+    /// Whether the integrator takes a fixed step rather than tolerances.
+    fn fixed_step(self) -> bool {
+        matches!(self, IntegratorArg::Rk4 | IntegratorArg::Symplectic)
+    }
+}
+
+#[derive(clap::Args)]
+struct PrecisionArgs {
+    file: PathBuf,
+    #[command(flatten)]
+    libraries: LibraryArgs,
+    /// Value of an unknown, as for `simulate`. Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    sets: Vec<String>,
+    /// The integrators to measure.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "dopri5,dop853"
+    )]
+    integrators: Vec<IntegratorArg>,
+    /// Tolerances (relative and absolute) of the adaptive integrators.
+    #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
+    tolerances: Vec<f64>,
+    /// Fixed steps of rk4 and symplectic.
+    #[arg(long, value_delimiter = ',', default_value = "1e-2,3e-3,1e-3")]
+    steps: Vec<f64>,
+    /// A CSV of reference values (lsdc's columns: `time`, `join.q`, `join.q'`; any subset of
+    /// them and of the output times) instead of a reference computed by lsdc.
+    #[arg(long, value_name = "CSV")]
+    reference: Option<PathBuf>,
+    /// The integrator of the computed reference.
+    #[arg(long, value_enum, default_value = "dop853")]
+    reference_integrator: IntegratorArg,
+    /// The tolerance of the computed reference (default: the tightest tolerance / 1000, at
+    /// least 1e-14).
+    #[arg(long)]
+    reference_tolerance: Option<f64>,
+    /// Runs of each method; the table gives the least and the median CPU time.
+    #[arg(long, default_value_t = 3)]
+    repeats: usize,
+    /// Recommend the cheapest method whose position error is at most this.
+    #[arg(long)]
+    accuracy: Option<f64>,
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Time between outputs (the errors are measured at the outputs).
+    #[arg(long = "every")]
+    output_interval: Option<f64>,
+    #[arg(long, value_enum, default_value = "text")]
+    format: Format,
+    /// Write the table to this file instead of standard output.
+    #[arg(short = 'o', long = "out")]
+    out: Option<PathBuf>,
+    /// Draw the error against the CPU time (log-log, one curve per integrator) to an .svg or
+    /// .png file.
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -170,6 +244,10 @@ enum Command {
     /// Simulate a mechanism (tree or closed loops) from its `initial` values; write the samples
     /// (CSV or JSON) and a run report.
     Simulate(SimulateArgs),
+    /// Speed against error: simulate with several integrators and tolerances (or fixed steps),
+    /// compare each run with a tight reference at the outputs, and print the work-precision
+    /// table (errors, closure, energy drift, steps, evaluations, CPU time).
+    Precision(PrecisionArgs),
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics {
@@ -276,6 +354,7 @@ fn main() -> ExitCode {
             out: output,
         } => compile(&file, &libraries.options(), emit, format, output.as_deref()),
         Command::Simulate(args) => simulate(&args),
+        Command::Precision(args) => precision(&args),
         Command::Statics {
             file,
             libraries,
@@ -551,7 +630,7 @@ fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>,
 
 fn simulate(args: &SimulateArgs) -> ExitCode {
     use lsdc::dynamics::loops::Stabilisation;
-    use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+    use lsdc::simulate::prepare::{prepare, Settings};
     use lsdc::simulate::settings::SettingsChanges;
     let overrides = match parse_sets(&args.sets) {
         Ok(o) => o,
@@ -572,12 +651,7 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
         }
     };
     let changes = SettingsChanges {
-        integrator: args.integrator.map(|integrator| match integrator {
-            IntegratorArg::Rk4 => Integrator::Rk4,
-            IntegratorArg::Dopri5 => Integrator::DormandPrince,
-            IntegratorArg::Implicit => Integrator::Implicit,
-            IntegratorArg::Symplectic => Integrator::Symplectic,
-        }),
+        integrator: args.integrator.map(IntegratorArg::integrator),
         duration: args.duration,
         output: args.output_interval,
         tolerance: args.tolerance,
@@ -667,6 +741,127 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
         ExitCode::from(1)
     } else {
         ExitCode::SUCCESS
+    }
+}
+
+/// The methods `lsdc precision` measures: each adaptive integrator at each tolerance, each
+/// fixed-step one at each step.
+fn precision_methods(args: &PrecisionArgs) -> Vec<lsdc::simulate::precision::Method> {
+    use lsdc::simulate::precision::{Method, Setting};
+    let mut methods = Vec::new();
+    for &integrator in &args.integrators {
+        let settings: Vec<Setting> = match integrator.fixed_step() {
+            true => args.steps.iter().map(|&h| Setting::Step(h)).collect(),
+            false => args
+                .tolerances
+                .iter()
+                .map(|&t| Setting::Tolerance(t))
+                .collect(),
+        };
+        methods.extend(settings.into_iter().map(|setting| Method {
+            integrator: integrator.integrator(),
+            setting,
+        }));
+    }
+    methods
+}
+
+/// The options of `lsdc precision` that must be positive numbers, and a usable plot name.
+fn check_precision_args(args: &PrecisionArgs) -> Result<(), String> {
+    let lists = [("tolerances", &args.tolerances), ("steps", &args.steps)];
+    for (option, values) in lists {
+        if values.is_empty() || values.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(format!("`--{option}` must be positive numbers"));
+        }
+    }
+    let single = [
+        ("reference-tolerance", args.reference_tolerance),
+        ("accuracy", args.accuracy),
+    ];
+    for (option, value) in single {
+        if value.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+            return Err(format!("`--{option}` must be a positive number"));
+        }
+    }
+    if args.repeats == 0 {
+        return Err("`--repeats` must be at least 1".to_string());
+    }
+    if let Some(path) = &args.plot {
+        lsdc::output::plot::check_file_name(path)
+            .map_err(|error| format!("cannot draw `{}`: {error}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The reference of `lsdc precision`: the user's CSV, or a run at a much tighter tolerance.
+fn precision_reference(
+    args: &PrecisionArgs,
+    prepared: &mut lsdc::simulate::prepare::Prepared,
+) -> Result<lsdc::simulate::precision::Reference, String> {
+    use lsdc::simulate::precision::{computed_reference, Reference};
+    if let Some(path) = &args.reference {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|error| format!("cannot read `{name}`: {error}"))?;
+        return Reference::from_csv(&text, &name).map_err(|error| error.to_string());
+    }
+    let tightest = args
+        .tolerances
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let tolerance = (args.reference_tolerance).unwrap_or((tightest / 1000.0).max(1e-14));
+    let integrator = args.reference_integrator.integrator();
+    computed_reference(prepared, &integrator, tolerance).map_err(|error| error.to_string())
+}
+
+fn precision(args: &PrecisionArgs) -> ExitCode {
+    use lsdc::simulate::settings::SettingsChanges;
+    if let Err(message) = check_precision_args(args) {
+        return usage_error(&message);
+    }
+    let options = args.libraries.options();
+    let mut prepared = match prepare_file(&args.file, &options, &args.sets, args.format) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let changes = SettingsChanges {
+        duration: args.duration,
+        output: args.output_interval,
+        ..SettingsChanges::default()
+    };
+    if let Err(error) = prepared.settings.apply(&changes) {
+        return usage_error(&error.to_string());
+    }
+    let table = precision_reference(args, &mut prepared).and_then(|reference| {
+        let methods = precision_methods(args);
+        lsdc::simulate::precision::table(
+            &mut prepared,
+            &methods,
+            reference,
+            args.repeats,
+            args.accuracy,
+        )
+        .map_err(|error| error.to_string())
+    });
+    let table = match table {
+        Ok(table) => table,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return ExitCode::from(1);
+        }
+    };
+    let text = match args.format {
+        Format::Text => text::precision(&table),
+        Format::Json => json(&table),
+    };
+    let written = write_output(args.out.as_deref(), &text);
+    match &args.plot {
+        Some(path) => match lsdc::output::precision_plot::plot(&table, path) {
+            Ok(()) => written,
+            Err(error) => usage_error(&format!("cannot draw `{}`: {error}", path.display())),
+        },
+        None => written,
     }
 }
 

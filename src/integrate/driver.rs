@@ -43,6 +43,18 @@ pub(super) trait AdaptiveStepper {
         h: f64,
         y_new: &mut [f64],
     ) -> Result<f64, Halt>;
+    /// Takes what the dense output over the attempt about to be accepted needs beyond the
+    /// attempt itself, when an output falls inside it (the extra stages of a continuous
+    /// extension); nothing for most methods.
+    fn prepare_interpolation(
+        &mut self,
+        _eval: &mut Evaluator,
+        _t: f64,
+        _y: &[f64],
+        _h: f64,
+    ) -> Result<(), Halt> {
+        Ok(())
+    }
     /// Makes the last attempt the current step, preparing dense output over it.
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]);
     /// The dense output of the last accepted step at `t`.
@@ -170,14 +182,18 @@ impl March<'_> {
         h: f64,
         observer: &mut Observer,
     ) -> Result<(), Halt> {
-        // The interpolant is built from the unprojected end, consistent with the step's stages.
-        stepper.accept(self.t, &self.y, h, &self.y_new);
         let lands_on_end = h >= problem.t_end - self.t || self.t + h >= problem.t_end;
         let t_new = if lands_on_end {
             problem.t_end
         } else {
             self.t + h
         };
+        if self.outputs.wants_interior(self.t, t_new) {
+            // A failure here is past the step's acceptance: a shorter step would not avoid it.
+            (stepper.prepare_interpolation(eval, self.t, &self.y, h)).map_err(Halt::made_fatal)?;
+        }
+        // The interpolant is built from the unprojected end, consistent with the step's stages.
+        stepper.accept(self.t, &self.y, h, &self.y_new);
         if eval.project(t_new, &mut self.y_new)? {
             // What the stepper cached at the step's end (dy/dt) belongs to the unprojected state.
             stepper

@@ -1,8 +1,10 @@
 //! Integrators for ordinary differential equations `dy/dt = f(t, y)`, independent of mechanics.
 //!
-//! Three methods share one entry point, [`integrate`]:
+//! The methods share one entry point, [`integrate`]:
 //! - [`Method::Rk4`]: the classic fixed-step Runge–Kutta method of order 4;
 //! - [`Method::DormandPrince`]: the adaptive explicit Dormand–Prince 5(4) pair with dense output;
+//! - [`Method::Dop853`]: the adaptive explicit 8(5,3) pair DOP853 with its dense output of
+//!   order 7, for tight tolerances;
 //! - [`Method::Rosenbrock`]: the adaptive linearly implicit Rosenbrock-W method ROS34PW2 for stiff
 //!   problems, its Jacobian kept across steps;
 //! - [`Method::Automatic`]: Dormand–Prince, and the Rosenbrock-W method where the problem is stiff.
@@ -11,6 +13,7 @@
 //! outputs never shortens the steps.
 
 mod control;
+mod dop853;
 pub mod dopri5;
 mod driver;
 mod evaluator;
@@ -34,7 +37,7 @@ pub use system::{CallbackError, Observer, OdeSystem};
 /// `t_end` with the work done.
 ///
 /// Values at output times between steps come from dense output (cubic Hermite for RK4 and
-/// Rosenbrock, the order-4 interpolant for Dormand–Prince); an output time that coincides with a
+/// Rosenbrock, the order-4 interpolant for Dormand–Prince, order 7 for DOP853); an output time that coincides with a
 /// step end gets that step's state exactly, after [`OdeSystem::project`]. Outputs delivered before
 /// a failure stay delivered.
 ///
@@ -93,6 +96,12 @@ pub fn integrate(
         Method::Rk4 { step } => rk4::integrate(system, &problem, *step, observer),
         Method::DormandPrince => driver::integrate_adaptive(
             &mut dopri5::DormandPrince::new(y0.len(), settings),
+            system,
+            &problem,
+            observer,
+        ),
+        Method::Dop853 => driver::integrate_adaptive(
+            &mut dop853::Dop853::new(y0.len(), settings),
             system,
             &problem,
             observer,

@@ -8,6 +8,9 @@ pub enum Method {
     Rk4 { step: f64 },
     /// Dormand–Prince 5(4), adaptive, for non-stiff problems.
     DormandPrince,
+    /// DOP853, the 8(5,3) pair of Dormand and Prince, adaptive, for non-stiff problems at tight
+    /// tolerances.
+    Dop853,
     /// ROS34PW2, a Rosenbrock-W method of order 3 for stiff problems, with a finite-difference
     /// Jacobian kept across steps (along the system's tangent directions when it gives them).
     Rosenbrock,

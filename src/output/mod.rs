@@ -3,5 +3,6 @@
 
 pub mod csv;
 pub mod plot;
+pub mod precision_plot;
 pub mod text;
 pub mod urdf;

@@ -36,9 +36,9 @@ const SVG_UNITS_PER_PIXEL: u32 = 4;
 /// Share of the height given to the coordinates panel.
 const UPPER_SHARE: f64 = 0.55;
 pub const FONT_FAMILY: &str = "sans-serif";
-const CAPTION_SIZE: f64 = 24.0;
-const LABEL_SIZE: f64 = 16.0;
-const LINE_WIDTH: f64 = 2.0;
+pub(super) const CAPTION_SIZE: f64 = 24.0;
+pub(super) const LABEL_SIZE: f64 = 16.0;
+pub(super) const LINE_WIDTH: f64 = 2.0;
 /// Legend geometry: sample line length, gap before the label, row height, padding.
 const LEGEND_LINE: f64 = 28.0;
 const LEGEND_GAP: f64 = 8.0;
@@ -49,7 +49,7 @@ const LEGEND_PAD: f64 = 14.0;
 const BITMAP_CENTRE_SHIFT: f64 = 0.14;
 
 /// Tableau 10, the default line colours of matplotlib: distinct and readable on white.
-const PALETTE: [RGBColor; 10] = [
+pub(super) const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -70,18 +70,61 @@ enum Format {
 /// Draws the simulation's coordinates and energy over time to `path`, an SVG when it ends in
 /// `.svg` and a PNG when it ends in `.png`.
 pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), PlotError> {
+    format_of(path)?;
+    if simulation.samples.is_empty() {
+        return Err(PlotError::NoOutputs);
+    }
+    write_figure(&OverTime(simulation), path)
+}
+
+/// Checks that a plot's file name ends in `.svg` or `.png`, before the work that the plot shows.
+pub fn check_file_name(path: &Path) -> Result<(), PlotError> {
+    format_of(path).map(|_| ())
+}
+
+/// The format a plot's file name asks for.
+fn format_of(path: &Path) -> Result<Format, PlotError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let format = match extension.as_deref() {
-        Some("svg") => Format::Svg,
-        Some("png") => Format::Png,
-        _ => return Err(PlotError::UnknownFormat),
-    };
-    if simulation.samples.is_empty() {
-        return Err(PlotError::NoOutputs);
+    match extension.as_deref() {
+        Some("svg") => Ok(Format::Svg),
+        Some("png") => Ok(Format::Png),
+        _ => Err(PlotError::UnknownFormat),
     }
+}
+
+/// A drawing that `write_figure` renders into an SVG or a PNG.
+pub(super) trait Figure {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        render: Render,
+    ) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// The coordinates and the energy of a simulation over time.
+struct OverTime<'s>(&'s Simulation);
+
+impl Figure for OverTime<'_> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        render: Render,
+    ) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(root, self.0, render)
+    }
+}
+
+/// Draws `figure` to `path`, an SVG when it ends in `.svg` and a PNG when it ends in `.png`.
+pub(super) fn write_figure(figure: &impl Figure, path: &Path) -> Result<(), PlotError> {
+    let format = format_of(path)?;
     register_fonts()?;
     match format {
         Format::Svg => {
@@ -91,9 +134,8 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), PlotError> {
             let mut svg = String::new();
             {
                 let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-                draw(
+                figure.draw(
                     &root,
-                    simulation,
                     Render {
                         scale: SVG_UNITS_PER_PIXEL as f64,
                         bitmap: false,
@@ -114,9 +156,8 @@ pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), PlotError> {
             {
                 let root =
                     BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
-                draw(
+                figure.draw(
                     &root,
-                    simulation,
                     Render {
                         scale: SUPERSAMPLING as f64,
                         bitmap: true,
@@ -145,7 +186,9 @@ pub enum PlotError {
 }
 
 impl PlotError {
-    fn drawing<E: Error + Send + Sync + 'static>(error: DrawingAreaErrorKind<E>) -> PlotError {
+    pub(super) fn drawing<E: Error + Send + Sync + 'static>(
+        error: DrawingAreaErrorKind<E>,
+    ) -> PlotError {
         PlotError::Drawing(Box::new(error))
     }
 }
@@ -251,17 +294,17 @@ impl Line {
 /// supersampled bitmap or a fine SVG grid, and `bitmap` tells that the text is rasterised here
 /// rather than by an SVG viewer.
 #[derive(Clone, Copy)]
-struct Render {
+pub(super) struct Render {
     scale: f64,
     bitmap: bool,
 }
 
 impl Render {
-    fn px(self, length: f64) -> u32 {
+    pub(super) fn px(self, length: f64) -> u32 {
         (length * self.scale).round() as u32
     }
 
-    fn font(self, size: f64) -> TextStyle<'static> {
+    pub(super) fn font(self, size: f64) -> TextStyle<'static> {
         TextStyle::from((FONT_FAMILY, size * self.scale).into_font())
     }
 }

@@ -225,3 +225,47 @@ pub fn holding(h: &crate::simulate::statics::Holding) -> String {
     }
     out
 }
+
+/// A work-precision table (`lsdc precision`) as a Markdown table, with the reference and the
+/// recommendation: readable in a terminal, and pasted as it is into a document.
+pub fn precision(table: &crate::simulate::precision::Table) -> String {
+    use crate::simulate::precision::ReferenceSource;
+    let reference = match &table.reference {
+        ReferenceSource::Computed {
+            integrator,
+            tolerance,
+            self_difference,
+        } => format!(
+            "{integrator} at tolerance {tolerance:e} (differs from a run at ten times that by {self_difference:.1e} in positions)"
+        ),
+        ReferenceSource::File { path } => format!("`{path}`"),
+    };
+    let mut out = format!(
+        "{} s, outputs every {} s; reference: {reference}\n\n",
+        table.duration, table.output_interval
+    );
+    out += "| method | setting | position error | velocity error | closure | energy drift | steps | rejected | evaluations | CPU min (ms) | CPU median (ms) | outcome |\n";
+    out += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    let optional = |value: Option<f64>| value.map_or("–".to_string(), |v| format!("{v:.1e}"));
+    for m in &table.measurements {
+        out += &format!(
+            "| {} | {} | {:.1e} | {:.1e} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {} |\n",
+            m.integrator,
+            m.setting,
+            m.errors.position,
+            m.errors.velocity,
+            optional(m.closure_residual),
+            optional(m.energy_drift),
+            m.steps,
+            m.rejected_steps,
+            m.function_evaluations,
+            m.cpu_seconds_min * 1e3,
+            m.cpu_seconds_median * 1e3,
+            m.failure.as_deref().unwrap_or("ok"),
+        );
+    }
+    if let Some(recommendation) = &table.recommendation {
+        out += &format!("\nRecommended {}\n", recommendation.message);
+    }
+    out
+}

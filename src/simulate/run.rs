@@ -223,10 +223,11 @@ pub struct Simulation {
     pub report: Report,
 }
 
-fn integrator_name(integrator: &Integrator) -> &'static str {
+pub(super) fn integrator_name(integrator: &Integrator) -> &'static str {
     match integrator {
         Integrator::Rk4 => "rk4",
         Integrator::DormandPrince => "dopri5",
+        Integrator::Dop853 => "dop853",
         Integrator::Implicit => "implicit",
         Integrator::Symplectic => "symplectic",
     }
@@ -522,6 +523,7 @@ pub fn run_from(
     let method = match settings.integrator {
         Integrator::Rk4 => Some(Method::Rk4 { step: fixed_step }),
         Integrator::DormandPrince => Some(Method::DormandPrince),
+        Integrator::Dop853 => Some(Method::Dop853),
         Integrator::Implicit => Some(Method::Automatic),
         Integrator::Symplectic => None,
     };

@@ -16,6 +16,7 @@ const MAX_OUTPUTS: f64 = 1e7;
 pub enum Integrator {
     Rk4,
     DormandPrince,
+    Dop853,
     Implicit,
     Symplectic,
 }
@@ -194,6 +195,7 @@ pub(super) fn program_settings(
     if let Some((name, _)) = &scenario.integrator {
         settings.integrator = match name.as_str() {
             "rk4" => Integrator::Rk4,
+            "dop853" => Integrator::Dop853,
             "implicit" => Integrator::Implicit,
             "symplectic" => Integrator::Symplectic,
             _ => Integrator::DormandPrince,

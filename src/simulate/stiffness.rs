@@ -16,10 +16,11 @@ use crate::dynamics::model::Model;
 use crate::source::Span;
 
 /// The stability bound of an explicit method: |λ| h below this (about 3.3 for Dormand–Prince,
-/// 2.8 for the classical Runge–Kutta method); `None` for the other integrators.
+/// about 6 for DOP853, 2.8 for the classical Runge–Kutta method); `None` for the other integrators.
 fn stability_limit(integrator: &Integrator) -> Option<f64> {
     match integrator {
         Integrator::DormandPrince => Some(3.3),
+        Integrator::Dop853 => Some(6.0),
         Integrator::Rk4 => Some(2.8),
         Integrator::Implicit | Integrator::Symplectic => None,
     }
@@ -35,11 +36,7 @@ pub fn warning(prepared: &Prepared) -> Option<Diagnostic> {
     if stability_steps < 1000.0 || stability_steps < 100.0 * outputs {
         return None;
     }
-    let name = if settings.integrator == Integrator::Rk4 {
-        "rk4"
-    } else {
-        "dopri5"
-    };
+    let name = super::run::integrator_name(&settings.integrator);
     let message = format!(
         "the mechanism is stiff for `{name}`: its fastest mode decays or turns at {:.1e} /s, so every step must stay below {:.1e} s, about {:.0} steps for this run",
         rate,

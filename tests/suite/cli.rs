@@ -400,3 +400,107 @@ fn a_run_ending_inside_a_singular_passage_warns_about_its_last_outputs() {
     assert_eq!(code, 0, "{stderr}");
     assert!(!stderr.contains("W0903"), "{stderr}");
 }
+
+#[test]
+fn precision_errors_decrease_with_the_tolerance_and_its_json_is_a_table() {
+    let plot = std::env::temp_dir().join(format!("lsdc-precision-{}.svg", std::process::id()));
+    let plot_name = plot.display().to_string();
+    let args = [
+        "precision",
+        "examples/pendulum.lsd",
+        "--integrators",
+        "dopri5,dop853",
+        "--tolerances",
+        "1e-4,1e-7,1e-10",
+        "--repeats",
+        "2",
+        "--accuracy",
+        "1e-6",
+        "--format",
+        "json",
+        "--plot",
+        &plot_name,
+    ];
+    let (code, stdout, stderr) = lsdc(&args);
+    assert_eq!(code, 0, "{stderr}");
+    let table: serde_json::Value = serde_json::from_str(&stdout).expect("valid JSON");
+    let measurements = table["measurements"].as_array().expect("measurements");
+    assert_eq!(measurements.len(), 6);
+    for integrator in ["dopri5", "dop853"] {
+        let errors: Vec<f64> = measurements
+            .iter()
+            .filter(|m| m["integrator"] == integrator)
+            .map(|m| m["errors"]["position"].as_f64().expect("an error"))
+            .collect();
+        assert!(
+            errors.windows(2).all(|pair| pair[1] < pair[0] / 10.0),
+            "{integrator}: {errors:?}"
+        );
+        for m in measurements
+            .iter()
+            .filter(|m| m["integrator"] == integrator)
+        {
+            assert_eq!(m["repeats"], 2);
+            assert!(m["cpu_seconds_min"].as_f64() <= m["cpu_seconds_median"].as_f64());
+            assert_eq!(m["errors"]["compared_outputs"], 101);
+        }
+    }
+    assert_eq!(table["reference"]["kind"], "computed");
+    let recommended = table["recommendation"]["measurement"]
+        .as_u64()
+        .expect("one");
+    let chosen = &measurements[recommended as usize];
+    assert!(chosen["errors"]["position"].as_f64().expect("an error") <= 1e-6);
+    let svg = std::fs::read_to_string(&plot).expect("the plot is written");
+    let _ = std::fs::remove_file(&plot);
+    assert!(svg.contains("<svg") && svg.contains("dop853"), "{svg}");
+
+    let (code, stdout, stderr) = lsdc(&["precision", "examples/pendulum.lsd", "--repeats", "1"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stdout.contains("| method | setting | position error"),
+        "{stdout}"
+    );
+    assert_eq!(stdout.matches("| dop853 | tol").count(), 4, "{stdout}");
+}
+
+#[test]
+fn precision_compares_with_a_reference_file_and_refuses_bad_ones() {
+    let directory = std::env::temp_dir();
+    let reference = directory.join(format!("lsdc-reference-{}.csv", std::process::id()));
+    // The pendulum's closed-form state at t = 1 s is not needed: a row far off shows as the error.
+    std::fs::write(&reference, "time,swing.q\n# a comment\n1,0.5\n").expect("written");
+    let name = reference.display().to_string();
+    let args = ["precision", "examples/pendulum.lsd", "--reference", &name];
+    let (code, stdout, stderr) =
+        lsdc(&[&args[..], &["--format", "json", "--repeats", "1"]].concat());
+    assert_eq!(code, 0, "{stderr}");
+    let table: serde_json::Value = serde_json::from_str(&stdout).expect("valid JSON");
+    let first = &table["measurements"][0];
+    assert_eq!(first["errors"]["compared_outputs"], 1);
+    assert_eq!(first["errors"]["velocity"], 0.0);
+    assert!(first["errors"]["position"].as_f64().expect("an error") > 0.1);
+
+    std::fs::write(&reference, "time,nothing.q\n1,0.5\n").expect("written");
+    let (code, _, stderr) = lsdc(&args);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("no column of the reference"), "{stderr}");
+    std::fs::write(&reference, "time,swing.q\n1,x\n").expect("written");
+    let (code, _, stderr) = lsdc(&args);
+    assert_eq!(code, 1);
+    assert!(
+        stderr.contains("line 2 of the reference: not a number"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_file(&reference);
+
+    let (code, _, stderr) = lsdc(&["precision", "examples/pendulum.lsd", "--tolerances", "0"]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("`--tolerances` must be positive numbers"),
+        "{stderr}"
+    );
+    let (code, _, stderr) = lsdc(&["precision", "examples/pendulum.lsd", "--plot", "a.txt"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains(".svg"), "{stderr}");
+}

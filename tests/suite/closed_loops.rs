@@ -51,6 +51,7 @@ fn every_integrator_keeps_the_four_bar_closed() {
     let cases = [
         (Integrator::Rk4, Some(1e-3), Stabilisation::Projection, 1e-7),
         (Integrator::Implicit, None, Stabilisation::Projection, 1e-6),
+        (Integrator::Dop853, None, Stabilisation::Projection, 1e-7),
         (
             Integrator::Symplectic,
             Some(1e-3),

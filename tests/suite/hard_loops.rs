@@ -47,6 +47,7 @@ fn spatial_loops_keep_their_energy_and_closure_with_every_integrator() {
         let cases = [
             (Integrator::Rk4, 1.0, Some(1e-3), 1e-8),
             (Integrator::DormandPrince, 1.0, None, 1e-8),
+            (Integrator::Dop853, 1.0, None, 1e-8),
             (Integrator::Symplectic, 1.0, Some(1e-3), 1e-5),
             (Integrator::Implicit, 0.1, None, 1e-6),
         ];

@@ -140,6 +140,7 @@ fn every_method_follows_exponential_decay() {
     let cases = [
         (Method::Rk4 { step: 0.05 }, 1e-7),
         (Method::DormandPrince, 1e-9),
+        (Method::Dop853, 1e-9),
         (Method::Rosenbrock, 1e-7),
     ];
     for (method, bound) in cases {
@@ -274,6 +275,41 @@ fn dormand_prince_keeps_energy_and_period_of_a_kepler_orbit() {
         "after {periods} periods the state is {y:?}"
     );
     assert!(path_error < 1e-8, "path error {path_error:e}");
+}
+
+/// The largest distance from the analytic orbit over 10 periods of a Kepler orbit of
+/// eccentricity 0.5, and the work, with `method` at tolerance `tolerance`.
+fn kepler_path_error(method: &Method, tolerance: f64) -> (f64, Stats) {
+    let e = 0.5;
+    let times = linspace(0.0, 20.0 * PI, 401);
+    let (_, stats, observed) = solve(
+        method,
+        &mut kepler(),
+        &kepler_orbit(e, 0.0),
+        (0.0, times[400]),
+        &times,
+        &tolerances(tolerance, tolerance),
+    )
+    .unwrap();
+    let path_error = observed
+        .iter()
+        .map(|(t, y)| max_difference(y, &kepler_orbit(e, *t)))
+        .fold(0.0, f64::max);
+    (path_error, stats)
+}
+
+#[test]
+fn dop853_follows_a_kepler_orbit_with_fewer_evaluations_than_dormand_prince_at_tight_tolerance() {
+    let (dop853_error, dop853) = kepler_path_error(&Method::Dop853, 1e-12);
+    let (dopri5_error, dopri5) = kepler_path_error(&Method::DormandPrince, 1e-12);
+    eprintln!(
+        "Kepler 1e-12: DOP853 {dop853_error:.1e} {dop853:?}; DOPRI5 {dopri5_error:.1e} {dopri5:?}"
+    );
+    assert!(dop853_error < 1e-8, "path error {dop853_error:e}");
+    assert!(
+        dop853.rhs_evaluations < dopri5.rhs_evaluations / 2,
+        "DOP853 {dop853:?}, DOPRI5 {dopri5:?}"
+    );
 }
 
 #[test]
@@ -416,6 +452,7 @@ fn dense_output_agrees_with_the_solution_between_steps() {
     let times = linspace(0.0, 20.0, 4001);
     let cases = [
         (Method::DormandPrince, tolerances(1e-10, 1e-10), 1e-8),
+        (Method::Dop853, tolerances(1e-10, 1e-10), 1e-8),
         (Method::Rosenbrock, tolerances(1e-5, 1e-5), 1e-3),
         (Method::Rk4 { step: 0.05 }, Settings::default(), 1e-6),
     ];
@@ -550,6 +587,7 @@ fn halving_the_step_divides_the_error_by_two_to_the_order() {
     for (method, h, order) in [
         (Method::Rk4 { step: 0.1 }, 0.1, 4),
         (Method::DormandPrince, 0.2, 5),
+        (Method::Dop853, 0.5, 8),
         (Method::Rosenbrock, 0.1, 3),
     ] {
         let method_with = |h: f64| match method {
@@ -593,10 +631,11 @@ impl OdeSystem for BreaksAtHalf {
     }
 }
 
-fn all_methods() -> [Method; 3] {
+fn all_methods() -> [Method; 4] {
     [
         Method::Rk4 { step: 0.01 },
         Method::DormandPrince,
+        Method::Dop853,
         Method::Rosenbrock,
     ]
 }
