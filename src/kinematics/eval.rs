@@ -6,6 +6,7 @@
 use std::collections::HashMap;
 
 use crate::elab::value::{SExpr, UnknownId};
+use crate::symbolic::expr::{ExprId, Function, Pool, Tape};
 
 /// Values of the program's unknowns (written `?s` and generic quantities).
 pub type UnknownValues = HashMap<UnknownId, f64>;
@@ -36,6 +37,125 @@ pub fn describe(error: &EvalError, mechanism: &crate::elab::mechanism::Mechanism
         EvalError::Missing(id) => format!("no value for {}", unknown_label(mechanism, *id)),
         EvalError::NotGeometric(what) => format!("it depends on {what}"),
     }
+}
+
+/// Lowering a program scalar into the pool: numbers, arithmetic and calls lower alike
+/// everywhere; what the leaves (unknowns, coordinates, rates, the time, frames) become depends
+/// on the use (constants and symbols of a dof chain, slots of the effort tape).
+pub trait Lower {
+    fn pool(&mut self) -> &mut Pool;
+
+    /// A scalar that is neither a number, arithmetic nor a call.
+    fn leaf(&mut self, s: &SExpr) -> Result<ExprId, EvalError>;
+
+    /// Lowers `s` (override to remember subexpressions already lowered).
+    fn lower(&mut self, s: &SExpr) -> Result<ExprId, EvalError> {
+        lower_structure(self, s)
+    }
+}
+
+/// The node of `s`, its operands lowered through `lowering`.
+pub fn lower_structure<L: Lower + ?Sized>(
+    lowering: &mut L,
+    s: &SExpr,
+) -> Result<ExprId, EvalError> {
+    let binary = |lowering: &mut L, a: &SExpr, b: &SExpr| -> Result<_, EvalError> {
+        Ok((lowering.lower(a)?, lowering.lower(b)?))
+    };
+    Ok(match s {
+        SExpr::Num(v) => lowering.pool().constant(*v),
+        SExpr::Neg(a) => {
+            let a = lowering.lower(a)?;
+            lowering.pool().neg(a)
+        }
+        SExpr::Add(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().add(a, b)
+        }
+        SExpr::Sub(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().sub(a, b)
+        }
+        SExpr::Mul(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().mul(a, b)
+        }
+        SExpr::Div(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().div(a, b)
+        }
+        SExpr::Pow(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().pow(a, b)
+        }
+        SExpr::Call(name, args) => {
+            let argument = |k: usize| {
+                args.get(k)
+                    .ok_or(EvalError::NotGeometric("a call without its arguments"))
+            };
+            let x = lowering.lower(argument(0)?)?;
+            if *name == "atan2" {
+                let second = lowering.lower(argument(1)?)?;
+                return Ok(lowering.pool().atan2(x, second));
+            }
+            let function =
+                Function::from_name(name).ok_or(EvalError::NotGeometric("an unknown function"))?;
+            lowering.pool().apply(function, x)
+        }
+        leaf => lowering.leaf(leaf)?,
+    })
+}
+
+/// The leaves of geometry: unknowns are constants (their values are known), the enclosing
+/// link's coordinates are `coordinates` (symbols of a dof chain, or none for constants);
+/// nothing else may appear.
+pub struct Geometric<'a> {
+    pub pool: Pool,
+    pub unknowns: &'a UnknownValues,
+    pub coordinates: Vec<ExprId>,
+}
+
+impl Lower for Geometric<'_> {
+    fn pool(&mut self) -> &mut Pool {
+        &mut self.pool
+    }
+
+    fn leaf(&mut self, s: &SExpr) -> Result<ExprId, EvalError> {
+        match s {
+            SExpr::Unknown(id) => {
+                let value = *self.unknowns.get(id).ok_or(EvalError::Missing(*id))?;
+                Ok(self.pool.constant(value))
+            }
+            SExpr::UnknownFunction(id, _) => Err(EvalError::Missing(*id)),
+            SExpr::Coordinate { index, order: 0 } => self
+                .coordinates
+                .get(*index as usize)
+                .copied()
+                .ok_or(EvalError::NotGeometric("a coordinate of another link")),
+            SExpr::Coordinate { order: 1, .. } => Err(EvalError::NotGeometric("a time derivative")),
+            SExpr::Coordinate { .. } => Err(EvalError::NotGeometric("a second time derivative")),
+            SExpr::JoinCoordinate { .. } => Err(EvalError::NotGeometric("a coordinate of a join")),
+            SExpr::Time => Err(EvalError::NotGeometric("the time")),
+            _ => Err(EvalError::NotGeometric(
+                "the state of a frame (position, velocity, …)",
+            )),
+        }
+    }
+}
+
+/// The value of a constant scalar: lowered into a pool, where constants fold (a tape evaluates
+/// what does not fold to a finite number, such as `log(0)`).
+pub fn eval(s: &SExpr, unknowns: &UnknownValues) -> Result<f64, EvalError> {
+    let mut lowering = Geometric {
+        pool: Pool::new(),
+        unknowns,
+        coordinates: Vec::new(),
+    };
+    let root = lowering.lower(s)?;
+    Ok(match lowering.pool.as_constant(root) {
+        Some(value) => value,
+        None => Tape::new(&lowering.pool, &[root]).eval(&[])[0],
+    })
 }
 
 /// What a geometric expression may refer to besides numbers and unknowns: the enclosing link's
@@ -241,6 +361,6 @@ pub fn eval_dual(
     eval_jet(s, unknowns, &Env { coordinates: q }, &direction)
 }
 
-pub fn eval(s: &SExpr, unknowns: &UnknownValues, q: &[f64]) -> Result<f64, EvalError> {
+pub fn eval_by_trees(s: &SExpr, unknowns: &UnknownValues, q: &[f64]) -> Result<f64, EvalError> {
     eval_jet(s, unknowns, &Env { coordinates: q }, &[]).map(|j| j.value)
 }

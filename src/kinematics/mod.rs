@@ -2,10 +2,13 @@
 //! Jacobians, closure of the complementary links, assembly, joint analysis and mobility.
 
 pub mod assembly;
+pub mod chain;
 pub mod closure;
 pub mod eval;
 pub mod forward;
 pub mod initial;
+#[doc(hidden)]
+pub mod interpreted;
 pub mod joint;
 pub mod mobility;
 pub mod model;

@@ -559,8 +559,14 @@ impl Tape {
 
     /// Evaluates every node into `value` (node k of `order` at index k), reusing its storage.
     pub fn eval_into(&self, symbols: &[f64], value: &mut Vec<f64>) {
+        self.eval_prefix_into(symbols, value, self.steps.len());
+    }
+
+    /// Evaluates the first `count` nodes of `order` into `value` (the nodes the first roots
+    /// reach come first: they need no other), reusing its storage.
+    pub fn eval_prefix_into(&self, symbols: &[f64], value: &mut Vec<f64>, count: usize) {
         value.resize(self.steps.len(), 0.0);
-        for (k, step) in self.steps.iter().enumerate() {
+        for (k, step) in self.steps[..count].iter().enumerate() {
             value[k] = match *step {
                 Step::Constant(c) => c,
                 Step::Symbol(i) => symbols[i],

@@ -42,8 +42,8 @@ mod eval {
             plus[k] += h;
             let mut minus = q;
             minus[k] -= h;
-            let fd = (eval(&e, &unknowns, &plus).expect("")
-                - eval(&e, &unknowns, &minus).expect(""))
+            let fd = (eval_by_trees(&e, &unknowns, &plus).expect("")
+                - eval_by_trees(&e, &unknowns, &minus).expect(""))
                 / (2.0 * h);
             assert!((d - fd).abs() < 1e-8, "{d} vs {fd}");
         }
@@ -56,7 +56,7 @@ mod eval {
         let (q, direction) = ([0.3, 1.7], [0.8, -0.5]);
         let at = |t: f64| {
             let point = [q[0] + t * direction[0], q[1] + t * direction[1]];
-            eval(&e, &unknowns, &point).expect("evaluates")
+            eval_by_trees(&e, &unknowns, &point).expect("evaluates")
         };
         let jet = eval_jet(&e, &unknowns, &Env { coordinates: &q }, &direction).expect("evaluates");
         let h = 1e-4;
