@@ -65,8 +65,14 @@ pub struct Declared<'a> {
 }
 
 impl<'a> Declared<'a> {
-    /// Evaluates the model's effort tape at this state, into `data`'s scratch.
-    fn evaluate_tape(&self, data: &mut Data, time: f64) -> Result<&'a EffortTape, EvalError> {
+    /// Evaluates the model's effort tape at this state (with `energy`, the potentials too),
+    /// into `data`'s scratch.
+    fn evaluate_tape(
+        &self,
+        data: &mut Data,
+        time: f64,
+        energy: bool,
+    ) -> Result<&'a EffortTape, EvalError> {
         let tape = self.model.effort_tape.as_ref().map_err(Clone::clone)?;
         let state = EffortState {
             world: &data.world,
@@ -75,7 +81,7 @@ impl<'a> Declared<'a> {
             rates: self.rates,
             time,
         };
-        tape.eval(&self.model.effort_frames, &state, &mut data.efforts);
+        tape.eval(&self.model.effort_frames, &state, energy, &mut data.efforts);
         Ok(tape)
     }
 }
@@ -95,7 +101,7 @@ pub fn potential_energy(
     declared: &Declared<'_>,
     time: f64,
 ) -> Result<f64, EvalError> {
-    let tape = declared.evaluate_tape(data, time)?;
+    let tape = declared.evaluate_tape(data, time, true)?;
     let mut total = constant_potential(&conservative.constant, data);
     for &k in &conservative.applied {
         if let Some(root) = model.applied[k].potential_root {
@@ -129,7 +135,7 @@ pub fn evaluate_into(
     time: f64,
     efforts: &mut Efforts,
 ) -> Result<(), EvalError> {
-    let tape = declared.evaluate_tape(data, time)?;
+    let tape = declared.evaluate_tape(data, time, false)?;
     let Efforts {
         external,
         tau,

@@ -323,7 +323,7 @@ impl Model {
             for effort in &self.applied {
                 let lowered = builder.lower_vector(&effort.value, Link(None))?;
                 let potential = match &effort.potential {
-                    Some(p) => Some(builder.scalar(p, Link(None))?),
+                    Some(p) => Some(builder.potential(p, Link(None))?),
                     None => None,
                 };
                 potentials_applied.push(potential);
@@ -372,7 +372,7 @@ impl Model {
             let mut potentials = Vec::new();
             for potential in &self.link_potentials {
                 let offset = self.declared_offset(self.chain(potential.joint).join);
-                potentials.push(builder.scalar(&potential.value, Link(offset))?);
+                potentials.push(builder.potential(&potential.value, Link(offset))?);
             }
             Ok((potentials_applied, groups, links, potentials))
         };

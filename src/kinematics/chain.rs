@@ -12,7 +12,6 @@
 use std::collections::HashMap;
 
 use super::eval::{EvalError, Geometric, Lower, UnknownValues};
-use super::model::Step;
 use crate::elab::value::SExpr;
 use crate::symbolic::expr::{ExprId, Pool, Tape};
 
@@ -35,10 +34,10 @@ pub struct ChainScratch {
 }
 
 impl CompiledChain {
-    /// Lowers the parameters of `steps` (in order: a translation's three components, a
-    /// rotation's angle) over `coordinates` coordinates, unknowns folded to their values.
+    /// Lowers `parameters`, expressions of `coordinates` coordinates, unknowns folded to
+    /// their values.
     pub fn new(
-        steps: &[Step],
+        parameters: &[&SExpr],
         coordinates: usize,
         unknowns: &UnknownValues,
     ) -> Result<CompiledChain, EvalError> {
@@ -54,9 +53,8 @@ impl CompiledChain {
             .map(|k| lowering.pool.symbol(&format!("v{k}")))
             .collect();
         lowering.coordinates = positions.clone();
-        let parameters = steps
+        let parameters = parameters
             .iter()
-            .flat_map(parameters_of)
             .map(|p| lowering.lower(p))
             .collect::<Result<Vec<_>, _>>()?;
         let pool = &mut lowering.pool;
@@ -135,21 +133,5 @@ impl CompiledChain {
     /// Number of distinct nodes evaluated with rates.
     pub fn size(&self) -> usize {
         self.tape.size()
-    }
-}
-
-/// The parameters of a step, in the order the tape keeps them.
-pub fn parameters_of(step: &Step) -> Vec<&SExpr> {
-    match step {
-        Step::Translation(v) => v.iter().map(|s| &**s).collect(),
-        Step::Rotation { angle, .. } => vec![&**angle],
-    }
-}
-
-/// Number of parameters of a step: three for a translation, one for a rotation.
-pub fn parameter_count(step: &Step) -> usize {
-    match step {
-        Step::Translation(_) => 3,
-        Step::Rotation { .. } => 1,
     }
 }

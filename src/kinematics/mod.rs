@@ -7,8 +7,6 @@ pub mod closure;
 pub mod eval;
 pub mod forward;
 pub mod initial;
-#[doc(hidden)]
-pub mod interpreted;
 pub mod joint;
 pub mod mobility;
 pub mod model;

@@ -4,7 +4,7 @@
 
 use nalgebra::{DMatrix, Matrix6, Vector3};
 
-use super::chain::{parameter_count, ChainScratch, CompiledChain};
+use super::chain::{ChainScratch, CompiledChain};
 use super::eval::{eval, EvalError, UnknownValues};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
@@ -178,6 +178,31 @@ fn local_twist(step: &Step, component: impl Fn(usize) -> f64) -> Twist {
             Vector3::new(component(0), component(1), component(2)),
         ),
         Step::Rotation { axis, .. } => spatial::twist(axis * component(0), Vector3::zeros()),
+    }
+}
+
+/// The chain of `steps` compiled: their parameters in order (a translation's three components,
+/// a rotation's angle).
+fn compile(
+    steps: &[Step],
+    coordinates: usize,
+    unknowns: &UnknownValues,
+) -> Result<CompiledChain, EvalError> {
+    let parameters: Vec<&SExpr> = steps
+        .iter()
+        .flat_map(|step| match step {
+            Step::Translation(v) => v.iter().map(|s| &**s).collect(),
+            Step::Rotation { angle, .. } => vec![&**angle],
+        })
+        .collect();
+    CompiledChain::new(&parameters, coordinates, unknowns)
+}
+
+/// Number of parameters of a step: three for a translation, one for a rotation.
+fn parameter_count(step: &Step) -> usize {
+    match step {
+        Step::Translation(_) => 3,
+        Step::Rotation { .. } => 1,
     }
 }
 
@@ -362,7 +387,7 @@ fn joint_model(
         second_body: topology.number(join.second.body),
         first,
         second,
-        compiled: CompiledChain::new(&steps, coordinate_names.len(), unknowns),
+        compiled: compile(&steps, coordinate_names.len(), unknowns),
         steps,
         coordinate_names,
         offset,
@@ -439,7 +464,7 @@ pub fn link_only(
         second_body: 0,
         first: Pose::identity(),
         second: Pose::identity(),
-        compiled: CompiledChain::new(&steps, coordinate_names.len(), unknowns),
+        compiled: compile(&steps, coordinate_names.len(), unknowns),
         steps,
         coordinate_names,
         offset: 0,
