@@ -86,7 +86,7 @@ fn link_report(
     let j = mechanism.join(join);
     let joint = model::link_only(mechanism, join, unknowns)
         .ok()
-        .and_then(|m| analyse(&m, unknowns).ok());
+        .and_then(|m| analyse(&m).ok());
     LinkReport {
         number,
         join: mechanism.join_name(join),

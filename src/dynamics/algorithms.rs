@@ -105,7 +105,6 @@ fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result
         joint.update(
             slice(q, joint.q_offset, joint.nq()),
             slice(v, joint.v_offset, joint.nv()),
-            &model.unknowns,
             &mut data.states[k],
         )?;
     }
@@ -126,7 +125,6 @@ fn joint_motion(
     joint.update(
         slice(q, joint.q_offset, joint.nq()),
         slice(v, joint.v_offset, joint.nv()),
-        &model.unknowns,
         &mut data.states[k],
     )?;
     body_velocity(model, data, k);
@@ -317,11 +315,7 @@ pub fn crba_into(
     // The joints' transforms first: independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
-        joint.update_transform(
-            slice(q, joint.q_offset, joint.nq()),
-            &model.unknowns,
-            &mut data.states[k],
-        )?;
+        joint.update_transform(slice(q, joint.q_offset, joint.nq()), &mut data.states[k])?;
     }
     crba_after_kinematics(model, data, mass);
     Ok(())

@@ -9,7 +9,7 @@ use std::f64::consts::PI;
 use nalgebra::{Rotation3, Unit, UnitQuaternion, Vector3};
 
 use super::joint::{quaternion, Joint, JointType};
-use crate::kinematics::eval::{EvalError, UnknownValues};
+use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::ChainMotion;
 use crate::spatial::{motion_to_parent, Motion, Pose};
 
@@ -99,13 +99,12 @@ impl Joint {
         q: &[f64],
         v: &[f64],
         previous: &[f64],
-        unknowns: &UnknownValues,
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let n = self.chain.coordinate_count();
         let (mut coordinates, mut rates) = (vec![0.0; n], vec![0.0; n]);
         let mut chain = ChainMotion::default();
         let out = (&mut coordinates[..], &mut rates[..]);
-        self.declared_into(q, v, previous, unknowns, out, &mut chain)?;
+        self.declared_into(q, v, previous, out, &mut chain)?;
         Ok((coordinates, rates))
     }
 
@@ -116,7 +115,6 @@ impl Joint {
         q: &[f64],
         v: &[f64],
         previous: &[f64],
-        unknowns: &UnknownValues,
         (coordinates, rates): (&mut [f64], &mut [f64]),
         chain_motion: &mut ChainMotion,
     ) -> Result<(), EvalError> {
@@ -159,7 +157,7 @@ impl Joint {
             -body_twist
         };
         self.chain
-            .chain_motion_into(coordinates, None, unknowns, chain_motion)?;
+            .chain_motion_into(coordinates, None, chain_motion)?;
         solve_least_squares(chain_motion, &spatial_twist, rates);
         Ok(())
     }
@@ -169,15 +167,12 @@ impl Joint {
         &self,
         coordinates: &[f64],
         rates: &[f64],
-        unknowns: &UnknownValues,
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         if self.kind == JointType::Chain {
             return Ok((coordinates.to_vec(), rates.to_vec()));
         }
         let free = matches!(self.kind, JointType::Free { .. });
-        let motion = self
-            .chain
-            .chain_motion(coordinates, Some(rates), unknowns)?;
+        let motion = self.chain.chain_motion(coordinates, Some(rates))?;
         let moving = if self.first_on_parent {
             motion.pose
         } else {

@@ -16,9 +16,9 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::elements::EffortFrame;
 use crate::elab::value::{FrameQuantity, SExpr, Vector};
-use crate::kinematics::eval::{EvalError, UnknownValues};
+use crate::kinematics::eval::{lower_structure, EvalError, Lower, UnknownValues};
 use crate::spatial::{Motion, Pose};
-use crate::symbolic::expr::{ExprId, Function, Pool, Tape};
+use crate::symbolic::expr::{ExprId, Pool, Tape};
 
 /// What a symbol of the tape stands for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,6 +36,10 @@ enum Source {
 #[derive(Clone, Debug)]
 pub struct EffortTape {
     tape: Tape,
+    /// Where each root's value lies among the tape's values.
+    slots: Vec<usize>,
+    /// The tape's first nodes that the efforts' values need (the potentials come after).
+    values_end: usize,
     /// The source of each symbol, in the order of the symbols' indices.
     sources: Vec<Source>,
     /// Per effort frame, which parts of its state the tape reads.
@@ -82,11 +86,13 @@ pub struct EffortScratch {
 }
 
 impl EffortTape {
-    /// Evaluates every node at `state`, into `scratch`; read the roots with [`EffortTape::root`].
+    /// Evaluates the efforts' values at `state`, and with `energy` the potentials too, into
+    /// `scratch`; read the roots with [`EffortTape::root`].
     pub fn eval(
         &self,
         frames: &[EffortFrame],
         state: &EffortState<'_>,
+        energy: bool,
         scratch: &mut EffortScratch,
     ) {
         scratch.frames.clear();
@@ -105,12 +111,18 @@ impl EffortTape {
                 Source::Rate(i) => state.rates[i],
                 Source::Frame(k, quantity) => scratch.frames[k].component(quantity),
             }));
-        self.tape.eval_into(&scratch.symbols, &mut scratch.values);
+        let count = if energy {
+            self.tape.size()
+        } else {
+            self.values_end
+        };
+        self.tape
+            .eval_prefix_into(&scratch.symbols, &mut scratch.values, count);
     }
 
     /// The value of root `k` after [`EffortTape::eval`].
     pub fn root(&self, scratch: &EffortScratch, k: usize) -> f64 {
-        scratch.values[self.tape.roots[k]]
+        scratch.values[self.slots[k]]
     }
 
     /// Whether the tape reads a declared coordinate or rate in `range`.
@@ -137,11 +149,15 @@ pub struct TapeBuilder<'a> {
     pool: Pool,
     sources: Vec<Source>,
     roots: Vec<ExprId>,
+    /// The roots only the energy needs (potentials), by index among `roots`.
+    energy_only: Vec<usize>,
     unknowns: &'a UnknownValues,
     frames: &'a [EffortFrame],
     declared_offset: &'a dyn Fn(crate::elab::value::JoinId) -> Option<usize>,
     /// Subexpressions already lowered, by address and link: programs share subtrees (`let`).
     lowered: HashMap<(*const SExpr, Link), ExprId>,
+    /// The link of the expression being lowered.
+    link: Link,
 }
 
 impl<'a> TapeBuilder<'a> {
@@ -154,17 +170,21 @@ impl<'a> TapeBuilder<'a> {
             pool: Pool::new(),
             sources: Vec::new(),
             roots: Vec::new(),
+            energy_only: Vec::new(),
             unknowns,
             frames,
             declared_offset,
             lowered: HashMap::new(),
+            link: Link(None),
         }
     }
 
-    /// Adds a scalar root; returns its index among the tape's values.
-    pub fn scalar(&mut self, s: &SExpr, link: Link) -> Result<usize, EvalError> {
-        let id = self.lower(s, link)?;
+    /// Adds a potential's root, evaluated only when the energy is asked for; returns its index
+    /// among the roots.
+    pub fn potential(&mut self, s: &SExpr, link: Link) -> Result<usize, EvalError> {
+        let id = self.lower_in(s, link)?;
         self.roots.push(id);
+        self.energy_only.push(self.roots.len() - 1);
         Ok(self.roots.len() - 1)
     }
 
@@ -177,9 +197,9 @@ impl<'a> TapeBuilder<'a> {
     /// A vector's components in the pool, not yet roots.
     pub fn lower_vector(&mut self, v: &Vector, link: Link) -> Result<[ExprId; 3], EvalError> {
         Ok([
-            self.lower(&v[0], link)?,
-            self.lower(&v[1], link)?,
-            self.lower(&v[2], link)?,
+            self.lower_in(&v[0], link)?,
+            self.lower_in(&v[1], link)?,
+            self.lower_in(&v[2], link)?,
         ])
     }
 
@@ -196,6 +216,8 @@ impl<'a> TapeBuilder<'a> {
         })
     }
 
+    /// The tape of every root, the efforts' values first: evaluating without the energy stops
+    /// after the nodes they reach.
     pub fn build(self) -> EffortTape {
         let mut needs = vec![Needs::default(); self.frames.len()];
         for source in &self.sources {
@@ -203,8 +225,20 @@ impl<'a> TapeBuilder<'a> {
                 needs[k].add(quantity);
             }
         }
+        let is_value = |k: &usize| !self.energy_only.contains(k);
+        let values: Vec<usize> = (0..self.roots.len()).filter(is_value).collect();
+        let order: Vec<usize> = values.iter().chain(&self.energy_only).copied().collect();
+        let reordered: Vec<ExprId> = order.iter().map(|&k| self.roots[k]).collect();
+        let tape = Tape::new(&self.pool, &reordered);
+        let mut slots = vec![0; self.roots.len()];
+        for (position, &k) in order.iter().enumerate() {
+            slots[k] = tape.roots[position];
+        }
+        let values_end = values.iter().map(|&k| slots[k] + 1).max().unwrap_or(0);
         EffortTape {
-            tape: Tape::new(&self.pool, &self.roots),
+            tape,
+            slots,
+            values_end,
             sources: self.sources,
             needs,
         }
@@ -219,19 +253,39 @@ impl<'a> TapeBuilder<'a> {
         id
     }
 
-    fn lower(&mut self, s: &SExpr, link: Link) -> Result<ExprId, EvalError> {
-        let key = (s as *const SExpr, link);
+    fn lower_in(&mut self, s: &SExpr, link: Link) -> Result<ExprId, EvalError> {
+        self.link = link;
+        self.lower(s)
+    }
+
+    fn coordinate(&mut self, index: usize, order: u32) -> Result<ExprId, EvalError> {
+        match order {
+            0 => Ok(self.symbol(Source::Coordinate(index))),
+            1 => Ok(self.symbol(Source::Rate(index))),
+            _ => Err(EvalError::NotGeometric("a second time derivative")),
+        }
+    }
+}
+
+impl Lower for TapeBuilder<'_> {
+    fn pool(&mut self) -> &mut Pool {
+        &mut self.pool
+    }
+
+    /// Subexpressions already lowered (by address and link) are reused: programs share
+    /// subtrees (`let`).
+    fn lower(&mut self, s: &SExpr) -> Result<ExprId, EvalError> {
+        let key = (s as *const SExpr, self.link);
         if let Some(&id) = self.lowered.get(&key) {
             return Ok(id);
         }
-        let id = self.lower_node(s, link)?;
+        let id = lower_structure(self, s)?;
         self.lowered.insert(key, id);
         Ok(id)
     }
 
-    fn lower_node(&mut self, s: &SExpr, link: Link) -> Result<ExprId, EvalError> {
+    fn leaf(&mut self, s: &SExpr) -> Result<ExprId, EvalError> {
         Ok(match s {
-            SExpr::Num(v) => self.pool.constant(*v),
             SExpr::Time => self.symbol(Source::Time),
             SExpr::Unknown(id) => {
                 let value = *self.unknowns.get(id).ok_or(EvalError::Missing(*id))?;
@@ -239,7 +293,8 @@ impl<'a> TapeBuilder<'a> {
             }
             SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
             SExpr::Coordinate { index, order } => {
-                let offset = link
+                let offset = self
+                    .link
                     .0
                     .ok_or(EvalError::NotGeometric("a coordinate of another link"))?;
                 self.coordinate(offset + *index as usize, *order)?
@@ -263,60 +318,8 @@ impl<'a> TapeBuilder<'a> {
                     _ => self.symbol(Source::Frame(k, *quantity)),
                 }
             }
-            SExpr::Neg(a) => {
-                let a = self.lower(a, link)?;
-                self.pool.neg(a)
-            }
-            SExpr::Add(a, b) => {
-                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
-                self.pool.add(a, b)
-            }
-            SExpr::Sub(a, b) => {
-                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
-                self.pool.sub(a, b)
-            }
-            SExpr::Mul(a, b) => {
-                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
-                self.pool.mul(a, b)
-            }
-            SExpr::Div(a, b) => {
-                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
-                self.pool.div(a, b)
-            }
-            SExpr::Pow(a, b) => {
-                let (a, b) = (self.lower(a, link)?, self.lower(b, link)?);
-                self.pool.pow(a, b)
-            }
-            SExpr::Call(name, args) => self.call(name, args, link)?,
+            _ => unreachable!("numbers, arithmetic and calls are lowered by their structure"),
         })
-    }
-
-    fn coordinate(&mut self, index: usize, order: u32) -> Result<ExprId, EvalError> {
-        match order {
-            0 => Ok(self.symbol(Source::Coordinate(index))),
-            1 => Ok(self.symbol(Source::Rate(index))),
-            _ => Err(EvalError::NotGeometric("a second time derivative")),
-        }
-    }
-
-    fn call(
-        &mut self,
-        name: &str,
-        args: &[crate::elab::value::Scalar],
-        link: Link,
-    ) -> Result<ExprId, EvalError> {
-        let argument = |k: usize| {
-            args.get(k)
-                .ok_or(EvalError::NotGeometric("a call without its arguments"))
-        };
-        let x = self.lower(argument(0)?, link)?;
-        if name == "atan2" {
-            let second = self.lower(argument(1)?, link)?;
-            return Ok(self.pool.atan2(x, second));
-        }
-        let function =
-            Function::from_name(name).ok_or(EvalError::NotGeometric("an unknown function"))?;
-        Ok(self.pool.apply(function, x))
     }
 }
 
@@ -347,15 +350,23 @@ impl FrameValues {
         let world = &state.world[body];
         let velocity = &state.velocity[body];
         let spin = Vector3::new(velocity[0], velocity[1], velocity[2]);
+        // Most elements act between bodies' own frames: no offset to turn.
+        let at_origin = offset.translation.vector == Vector3::zeros();
         let mut values = FrameValues {
-            position: world.translation.vector + world.rotation * offset.translation.vector,
+            position: match at_origin {
+                true => world.translation.vector,
+                false => world.translation.vector + world.rotation * offset.translation.vector,
+            },
             velocity: Vector3::zeros(),
             angular_velocity: Vector3::zeros(),
             orientation: Matrix3::zeros(),
         };
         if needs.velocity {
             let linear = Vector3::new(velocity[3], velocity[4], velocity[5]);
-            values.velocity = world.rotation * (linear + spin.cross(&offset.translation.vector));
+            values.velocity = match at_origin {
+                true => world.rotation * linear,
+                false => world.rotation * (linear + spin.cross(&offset.translation.vector)),
+            };
         }
         if needs.angular_velocity {
             values.angular_velocity = world.rotation * spin;

@@ -51,18 +51,14 @@ pub fn kinetic_energy_gradient(
         }
         let rates = &v[joint.v_offset..joint.v_offset + n_joint];
         let coordinates = &q[joint.q_offset..joint.q_offset + n_joint];
-        let d = joint
-            .chain
-            .chain_motion(coordinates, None, &model.unknowns)?
-            .pose;
+        let d = joint.chain.chain_motion(coordinates, None)?.pose;
         for c in 0..n_joint {
             let mut direction = vec![0.0; n_joint];
             direction[c] = 1.0;
             let column = Motion::from_column_slice(state.subspace.column(c).as_slice());
-            let base =
-                joint
-                    .chain
-                    .velocity_derivative(coordinates, rates, &direction, &model.unknowns)?;
+            let base = joint
+                .chain
+                .velocity_derivative(coordinates, rates, &direction)?;
             let own = if joint.first_on_parent {
                 spatial::motion_to_parent(&(joint.on_child * d.inverse()), &base)
                     - spatial::cross_motion(&column, &state.velocity)

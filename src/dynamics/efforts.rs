@@ -11,8 +11,8 @@ use super::energy::{constant_potential, Conservative};
 use super::joint::JointType;
 use super::model::{AppliedGroup, LinkEffort, Model};
 use crate::elab::mechanism::EffortKind;
-use crate::kinematics::eval::{eval_jet, Env, EvalError};
-use crate::kinematics::model::{ChainMotion, Step};
+use crate::kinematics::eval::EvalError;
+use crate::kinematics::model::ChainMotion;
 use crate::spatial::{self, Force};
 
 /// The efforts at one state.
@@ -36,7 +36,6 @@ struct LinkScratch {
     chain: ChainMotion,
     step: DMatrix<f64>,
     on_declared: Vec<f64>,
-    unit: Vec<f64>,
 }
 
 impl Efforts {
@@ -66,8 +65,14 @@ pub struct Declared<'a> {
 }
 
 impl<'a> Declared<'a> {
-    /// Evaluates the model's effort tape at this state, into `data`'s scratch.
-    fn evaluate_tape(&self, data: &mut Data, time: f64) -> Result<&'a EffortTape, EvalError> {
+    /// Evaluates the model's effort tape at this state (with `energy`, the potentials too),
+    /// into `data`'s scratch.
+    fn evaluate_tape(
+        &self,
+        data: &mut Data,
+        time: f64,
+        energy: bool,
+    ) -> Result<&'a EffortTape, EvalError> {
         let tape = self.model.effort_tape.as_ref().map_err(Clone::clone)?;
         let state = EffortState {
             world: &data.world,
@@ -76,7 +81,7 @@ impl<'a> Declared<'a> {
             rates: self.rates,
             time,
         };
-        tape.eval(&self.model.effort_frames, &state, &mut data.efforts);
+        tape.eval(&self.model.effort_frames, &state, energy, &mut data.efforts);
         Ok(tape)
     }
 }
@@ -96,7 +101,7 @@ pub fn potential_energy(
     declared: &Declared<'_>,
     time: f64,
 ) -> Result<f64, EvalError> {
-    let tape = declared.evaluate_tape(data, time)?;
+    let tape = declared.evaluate_tape(data, time, true)?;
     let mut total = constant_potential(&conservative.constant, data);
     for &k in &conservative.applied {
         if let Some(root) = model.applied[k].potential_root {
@@ -130,7 +135,7 @@ pub fn evaluate_into(
     time: f64,
     efforts: &mut Efforts,
 ) -> Result<(), EvalError> {
-    let tape = declared.evaluate_tape(data, time)?;
+    let tape = declared.evaluate_tape(data, time, false)?;
     let Efforts {
         external,
         tau,
@@ -207,17 +212,11 @@ fn link_effort(
     // Generalised forces on the declared coordinates: the wrench against each coordinate's twist.
     let twists = if effort.step == 0 {
         let chain_motion = &mut scratch.chain;
-        chain.chain_motion_into(coordinates, None, &model.unknowns, chain_motion)?;
+        chain.chain_motion_into(coordinates, None, chain_motion)?;
         &chain_motion.subspace
     } else {
-        let step = &chain.steps[effort.step as usize - 1];
-        step_columns(
-            step,
-            coordinates,
-            model,
-            &mut scratch.unit,
-            &mut scratch.step,
-        )?;
+        let step = effort.step as usize - 1;
+        chain.step_columns_into(coordinates, step, &mut scratch.chain, &mut scratch.step)?;
         &scratch.step
     };
     let on_declared = &mut scratch.on_declared;
@@ -247,45 +246,6 @@ fn link_effort(
     Ok(power)
 }
 
-/// Twists of one step of a chain per unit rate of each coordinate, in the step's own frame, into
-/// `columns` (6 × coordinates), with `unit` as scratch.
-fn step_columns(
-    step: &Step,
-    coordinates: &[f64],
-    model: &Model,
-    unit: &mut Vec<f64>,
-    columns: &mut DMatrix<f64>,
-) -> Result<(), EvalError> {
-    let n = coordinates.len();
-    let env = Env { coordinates };
-    if columns.ncols() == n {
-        columns.fill(0.0);
-    } else {
-        *columns = DMatrix::zeros(6, n);
-    }
-    unit.clear();
-    unit.resize(n, 0.0);
-    for k in 0..n {
-        unit[k] = 1.0;
-        let d = |s| eval_jet(s, &model.unknowns, &env, unit).map(|j| j.first);
-        match step {
-            Step::Translation(v) => {
-                for i in 0..3 {
-                    columns[(3 + i, k)] = d(&v[i])?;
-                }
-            }
-            Step::Rotation { angle, axis } => {
-                let rate = d(angle)?;
-                for i in 0..3 {
-                    columns[(i, k)] = axis[i] * rate;
-                }
-            }
-        }
-        unit[k] = 0.0;
-    }
-    Ok(())
-}
-
 /// ∂(declared rates)/∂(velocities) of a quaternion joint at given declared coordinates: the
 /// first `nv` columns of the 6 × 6 result, its first rows for the declared coordinates (at most
 /// six); `motion` is scratch. Fixed-size matrices throughout: nothing is allocated.
@@ -296,9 +256,7 @@ fn declared_rate_jacobian(
     motion: &mut ChainMotion,
 ) -> Result<Matrix6<f64>, EvalError> {
     let joint = &model.joints[joint];
-    joint
-        .chain
-        .chain_motion_into(coordinates, None, &model.unknowns, motion)?;
+    joint.chain.chain_motion_into(coordinates, None, motion)?;
     let mut chain_twists = Matrix6::zeros();
     for k in 0..joint.nv() {
         let mut unit = spatial::Motion::zeros();

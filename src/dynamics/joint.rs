@@ -17,7 +17,7 @@
 use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 
 use crate::elab::value::SExpr;
-use crate::kinematics::eval::{EvalError, UnknownValues};
+use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::{linear_in_first, ChainMotion, JointModel, Step};
 use crate::spatial::{self, Force, Motion, Pose, Transform};
 
@@ -270,10 +270,10 @@ fn after_motion(on_child: &Pose) -> Option<Transform> {
 
 /// The kernel for a joint: a weld, one rotation or translation linear in the joint's single
 /// coordinate, or the general evaluation.
-pub fn kernel(joint: &Joint, unknowns: &UnknownValues) -> Kernel {
+pub fn kernel(joint: &Joint) -> Kernel {
     let chain = &joint.chain;
     if chain.coordinate_count() == 0 {
-        return match chain.chain_motion(&[], None, unknowns) {
+        return match chain.chain_motion(&[], None) {
             Ok(motion) => {
                 let moving = if joint.first_on_parent {
                     motion.pose
@@ -376,12 +376,7 @@ impl Joint {
     }
 
     /// The transform alone at positions q (for the mass matrix, which needs no velocities).
-    pub fn update_transform(
-        &self,
-        q: &[f64],
-        unknowns: &UnknownValues,
-        state: &mut JointState,
-    ) -> Result<(), EvalError> {
+    pub fn update_transform(&self, q: &[f64], state: &mut JointState) -> Result<(), EvalError> {
         match &self.kernel {
             Kernel::Weld { transform } => state.transform = *transform,
             Kernel::Rotation {
@@ -409,7 +404,7 @@ impl Joint {
                     after,
                 );
             }
-            Kernel::General => self.update(q, &[0.0; 6][..self.nv()], unknowns, state)?,
+            Kernel::General => self.update(q, &[0.0; 6][..self.nv()], state)?,
         }
         Ok(())
     }
@@ -417,13 +412,7 @@ impl Joint {
     /// Writes the joint's state at (q, v) into `state` (made by `new_state`), reusing its
     /// storage: its transform, subspace, velocity and bias. `state.pose` is left as it was for the one-rotation,
     /// one-translation and weld kernels; `forward_kinematics` sets it (see `fill_pose`).
-    pub fn update(
-        &self,
-        q: &[f64],
-        v: &[f64],
-        unknowns: &UnknownValues,
-        state: &mut JointState,
-    ) -> Result<(), EvalError> {
+    pub fn update(&self, q: &[f64], v: &[f64], state: &mut JointState) -> Result<(), EvalError> {
         match (&self.kernel, &self.kind) {
             (Kernel::Weld { transform }, _) => {
                 state.transform = *transform;
@@ -467,7 +456,7 @@ impl Joint {
                 state.bias = Motion::zeros();
             }
             (Kernel::General, JointType::Chain) => {
-                self.chain_state(q, v, unknowns, state)?;
+                self.chain_state(q, v, state)?;
                 state.transform = Transform::from_pose(&state.pose);
             }
             (Kernel::General, _) => {
@@ -489,15 +478,8 @@ impl Joint {
         }
     }
 
-    fn chain_state(
-        &self,
-        q: &[f64],
-        v: &[f64],
-        unknowns: &UnknownValues,
-        state: &mut JointState,
-    ) -> Result<(), EvalError> {
-        self.chain
-            .chain_motion_into(q, Some(v), unknowns, &mut state.chain)?;
+    fn chain_state(&self, q: &[f64], v: &[f64], state: &mut JointState) -> Result<(), EvalError> {
+        self.chain.chain_motion_into(q, Some(v), &mut state.chain)?;
         let motion = &state.chain;
         let d = motion.pose;
         // Twists of D (in the first frame) seen in the child frame: through B·D⁻¹ when the first

@@ -168,14 +168,14 @@ fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
 
 fn constant_vector(v: &Vector, unknowns: &UnknownValues) -> Result<Vector3<f64>, EvalError> {
     Ok(Vector3::new(
-        eval(&v[0], unknowns, &[])?,
-        eval(&v[1], unknowns, &[])?,
-        eval(&v[2], unknowns, &[])?,
+        eval(&v[0], unknowns)?,
+        eval(&v[1], unknowns)?,
+        eval(&v[2], unknowns)?,
     ))
 }
 
 fn constant(s: &Scalar, unknowns: &UnknownValues) -> Result<f64, EvalError> {
-    eval(s, unknowns, &[])
+    eval(s, unknowns)
 }
 
 /// Builds the dynamic model: the tree of principal links, and the complementary links as
@@ -222,7 +222,7 @@ pub fn build_with(
             kernel: Kernel::General,
             dynamic_parent: link.parent,
         };
-        joint.kernel = kernel(&joint, unknowns);
+        joint.kernel = kernel(&joint);
         nq += joint.nq();
         nv += joint.nv();
         declared_offsets.push(declared);
@@ -323,7 +323,7 @@ impl Model {
             for effort in &self.applied {
                 let lowered = builder.lower_vector(&effort.value, Link(None))?;
                 let potential = match &effort.potential {
-                    Some(p) => Some(builder.scalar(p, Link(None))?),
+                    Some(p) => Some(builder.potential(p, Link(None))?),
                     None => None,
                 };
                 potentials_applied.push(potential);
@@ -372,7 +372,7 @@ impl Model {
             let mut potentials = Vec::new();
             for potential in &self.link_potentials {
                 let offset = self.declared_offset(self.chain(potential.joint).join);
-                potentials.push(builder.scalar(&potential.value, Link(offset))?);
+                potentials.push(builder.potential(&potential.value, Link(offset))?);
             }
             Ok((potentials_applied, groups, links, potentials))
         };
@@ -732,11 +732,8 @@ impl Model {
         v[self.nv..].copy_from_slice(&rates[tree..]);
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
             let n = joint.chain.coordinate_count();
-            let (jq, jv) = joint.from_declared(
-                &coordinates[offset..offset + n],
-                &rates[offset..offset + n],
-                &self.unknowns,
-            )?;
+            let (jq, jv) = joint
+                .from_declared(&coordinates[offset..offset + n], &rates[offset..offset + n])?;
             q[joint.q_offset..joint.q_offset + joint.nq()].copy_from_slice(&jq);
             v[joint.v_offset..joint.v_offset + joint.nv()].copy_from_slice(&jv);
         }
@@ -791,7 +788,6 @@ impl Model {
                 &q[joint.q_offset..joint.q_offset + joint.nq()],
                 &v[joint.v_offset..joint.v_offset + joint.nv()],
                 &previous[offset..offset + n],
-                &self.unknowns,
                 (
                     &mut coordinates[offset..offset + n],
                     &mut rates[offset..offset + n],

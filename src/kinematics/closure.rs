@@ -36,7 +36,7 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
     let mut jacobian = DMatrix::zeros(6 * loops.len(), nq);
     for (k, joint) in loops.iter().enumerate() {
         let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
-        let (chain, subspace) = joint.chain(coordinates, &model.unknowns)?;
+        let (chain, subspace) = joint.chain(coordinates)?;
         let base = configuration.poses[joint.first_body] * joint.first;
         let end = base * chain;
         let target = configuration.poses[joint.second_body] * joint.second;

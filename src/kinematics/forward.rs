@@ -30,7 +30,7 @@ pub fn forward(model: &KinematicModel, q: &[f64]) -> Result<Configuration, EvalE
     for link in &model.topology.principal {
         let joint = &model.joints[link.child - 1];
         let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
-        let (chain, subspace) = joint.chain(coordinates, &model.unknowns)?;
+        let (chain, subspace) = joint.chain(coordinates)?;
         let parent_pose = poses[link.parent];
         let mut jacobian = jacobians[link.parent].clone();
         let (base, child_pose) = if link.first_on_parent {

@@ -51,7 +51,7 @@ pub fn starting(mechanism: &Mechanism, model: &KinematicModel) -> Result<Startin
         let Some(joint) = model.joint_of_join(initial.join) else {
             continue;
         };
-        let value = eval::eval(&initial.value, &model.unknowns, &[]).map_err(|_| {
+        let value = eval::eval(&initial.value, &model.unknowns).map_err(|_| {
             Diagnostic::error("E0803", "an initial value must be a number").primary(
                 initial.span,
                 "its value depends on something without a value",

@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use serde::Serialize;
 
-use super::eval::{EvalError, UnknownValues};
+use super::eval::EvalError;
 use super::mobility::rank;
 use super::model::JointModel;
 use crate::spatial::{angular, linear, Twist};
@@ -40,9 +40,9 @@ fn generic_coordinates(n: usize) -> Vec<f64> {
     (0..n).map(|i| 0.3719 + 0.2113 * i as f64).collect()
 }
 
-pub fn analyse(joint: &JointModel, unknowns: &UnknownValues) -> Result<JointAnalysis, EvalError> {
+pub fn analyse(joint: &JointModel) -> Result<JointAnalysis, EvalError> {
     let n = joint.coordinate_count();
-    let (_, subspace) = joint.chain(&generic_coordinates(n), unknowns)?;
+    let (_, subspace) = joint.chain(&generic_coordinates(n))?;
     let dof = rank(&subspace);
     let kind = classify(&subspace, dof);
     Ok(JointAnalysis {

@@ -93,7 +93,7 @@ pub fn constraint_rank(model: &KinematicModel, q: &[f64]) -> Result<(usize, usiz
     let mut rows = 0;
     for joint in model.complementary() {
         let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
-        let (_, subspace) = joint.chain(coordinates, &model.unknowns)?;
+        let (_, subspace) = joint.chain(coordinates)?;
         let r = rank(&subspace);
         cut_rank += r;
         rows += 6 - r;
@@ -107,10 +107,8 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
     // coordinate count, unless a link's coordinates are redundant).
     let mut tree_dof = 0;
     for joint in model.principal() {
-        let (_, subspace) = joint.chain(
-            &q[joint.offset..joint.offset + joint.coordinate_count()],
-            &model.unknowns,
-        )?;
+        let (_, subspace) =
+            joint.chain(&q[joint.offset..joint.offset + joint.coordinate_count()])?;
         tree_dof += rank(&subspace);
     }
     let generic_rank = nearby_rank(model, q)?.max(rank_here);

@@ -4,7 +4,8 @@
 
 use nalgebra::{DMatrix, Matrix6, Vector3};
 
-use super::eval::{eval, eval_jet, Env, EvalError, UnknownValues};
+use super::chain::{ChainScratch, CompiledChain};
+use super::eval::{eval, EvalError, UnknownValues};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId, SExpr, Scalar};
@@ -32,6 +33,8 @@ pub struct JointModel {
     pub coordinate_names: Vec<String>,
     /// Index of the joint's first coordinate in the mechanism's coordinate vector.
     pub offset: usize,
+    /// The steps' parameters compiled, or why they could not be (reported when evaluated).
+    compiled: Result<CompiledChain, EvalError>,
 }
 
 impl JointModel {
@@ -41,7 +44,7 @@ impl JointModel {
 
     /// The chain when it is one rotation or translation along a fixed axis, linear in its one
     /// coordinate (structurally: no evaluation).
-    fn single_motion(&self) -> Option<SingleMotion> {
+    pub(super) fn single_motion(&self) -> Option<SingleMotion> {
         if self.coordinate_count() != 1 {
             return None;
         }
@@ -60,26 +63,17 @@ impl JointModel {
 
     /// The dof chain's transform at coordinates `q`, and its motion subspace: column k is the
     /// twist, in the joint's first frame, produced by a unit rate of coordinate k.
-    pub fn chain(
-        &self,
-        q: &[f64],
-        unknowns: &UnknownValues,
-    ) -> Result<(Pose, DMatrix<f64>), EvalError> {
-        let motion = self.chain_motion(q, None, unknowns)?;
+    pub fn chain(&self, q: &[f64]) -> Result<(Pose, DMatrix<f64>), EvalError> {
+        let motion = self.chain_motion(q, None)?;
         Ok((motion.pose, motion.subspace))
     }
 
     /// The chain's transform, motion subspace and, when rates are given, the acceleration of the
     /// chain's end (in the first frame, as a twist derivative) when the coordinates move at those
     /// rates with no coordinate acceleration: the bias term of the joint.
-    pub fn chain_motion(
-        &self,
-        q: &[f64],
-        rates: Option<&[f64]>,
-        unknowns: &UnknownValues,
-    ) -> Result<ChainMotion, EvalError> {
+    pub fn chain_motion(&self, q: &[f64], rates: Option<&[f64]>) -> Result<ChainMotion, EvalError> {
         let mut motion = ChainMotion::default();
-        self.chain_motion_into(q, rates, unknowns, &mut motion)?;
+        self.chain_motion_into(q, rates, &mut motion)?;
         Ok(motion)
     }
 
@@ -89,97 +83,134 @@ impl JointModel {
         &self,
         q: &[f64],
         rates: Option<&[f64]>,
-        unknowns: &UnknownValues,
         out: &mut ChainMotion,
     ) -> Result<(), EvalError> {
         let n = self.coordinate_count();
-        let env = Env { coordinates: q };
-        let ChainMotion {
-            pose,
-            subspace,
-            velocity,
-            bias,
-            unit,
-            rest,
-        } = out;
-        rest.clear();
-        rest.resize(n, 0.0);
-        unit.clear();
-        unit.resize(n, 0.0);
-        let rates = rates.unwrap_or(rest);
-        if subspace.ncols() == n {
-            subspace.fill(0.0);
-        } else {
-            *subspace = DMatrix::zeros(6, n);
-        }
-        (*pose, *velocity, *bias) = (Pose::identity(), Twist::zeros(), Twist::zeros());
+        out.reset(n);
         if let Some(single) = self.single_motion() {
             // One rotation or translation along a fixed axis, proportional to the coordinate:
             // its subspace is that constant twist, its bias zero; nothing to evaluate.
             let column = match single {
                 SingleMotion::Rotation { axis, scale } => {
-                    *pose = spatial::rotation(&axis, scale * q[0]);
+                    out.pose = spatial::rotation(&axis, scale * q[0]);
                     spatial::twist(axis * scale, Vector3::zeros())
                 }
                 SingleMotion::Translation { direction } => {
-                    *pose = spatial::translation(direction * q[0]);
+                    out.pose = spatial::translation(direction * q[0]);
                     spatial::twist(Vector3::zeros(), direction)
                 }
             };
-            subspace.column_mut(0).copy_from(&column);
-            *velocity = column * rates[0];
+            out.subspace.column_mut(0).copy_from(&column);
+            out.velocity = column * rates.map_or(0.0, |r| r[0]);
             return Ok(());
         }
+        let chain = self.compiled()?;
+        chain.eval(q, rates, &mut out.scratch);
+        let ChainMotion {
+            pose,
+            subspace,
+            velocity,
+            bias,
+            scratch,
+        } = out;
+        let mut first = 0;
         for step in &self.steps {
-            // Value and derivatives of the step's parameters along the rates, then per
-            // coordinate (a column of the subspace, moved to the first frame).
-            let (transform, local_velocity, local_bias) = match step {
-                Step::Translation(v) => {
-                    let along = [0, 1, 2].map(|i| eval_jet(&v[i], unknowns, &env, rates));
-                    let [x, y, z] = along;
-                    let (x, y, z) = (x?, y?, z?);
-                    for k in 0..n {
-                        unit[k] = 1.0;
-                        let d = |i: usize| eval_jet(&v[i], unknowns, &env, unit).map(|j| j.first);
-                        let column =
-                            spatial::twist(Vector3::zeros(), Vector3::new(d(0)?, d(1)?, d(2)?));
-                        unit[k] = 0.0;
-                        add_moved(subspace, k, pose, &column);
-                    }
-                    let value = Vector3::new(x.value, y.value, z.value);
-                    let velocity =
-                        spatial::twist(Vector3::zeros(), Vector3::new(x.first, y.first, z.first));
-                    let bias = spatial::twist(
-                        Vector3::zeros(),
-                        Vector3::new(x.second, y.second, z.second),
-                    );
-                    (spatial::translation(value), velocity, bias)
-                }
-                Step::Rotation { angle, axis } => {
-                    let jet = eval_jet(angle, unknowns, &env, rates)?;
-                    for k in 0..n {
-                        unit[k] = 1.0;
-                        let rate = eval_jet(angle, unknowns, &env, unit)?.first;
-                        unit[k] = 0.0;
-                        add_moved(
-                            subspace,
-                            k,
-                            pose,
-                            &spatial::twist(axis * rate, Vector3::zeros()),
-                        );
-                    }
-                    let velocity = spatial::twist(axis * jet.first, Vector3::zeros());
-                    let bias = spatial::twist(axis * jet.second, Vector3::zeros());
-                    (spatial::rotation(axis, jet.value), velocity, bias)
-                }
-            };
-            // d/dt of Ad(P) ξ is V_P × Ad(P) ξ + Ad(P) ξ̇ (spatial twists in the first frame).
-            let step_velocity = spatial::motion_to_parent(pose, &local_velocity);
-            *bias += cross(velocity, &step_velocity) + spatial::motion_to_parent(pose, &local_bias);
-            *velocity += step_velocity;
-            *pose *= transform;
+            let parameter = |i: usize| first + i;
+            for k in 0..n {
+                let column = local_twist(step, |i| chain.partial(scratch, parameter(i), k));
+                add_moved(subspace, k, pose, &column);
+            }
+            if let Some(rates) = rates {
+                let along = |f: &dyn Fn(usize) -> f64| (0..n).map(|k| f(k) * rates[k]).sum::<f64>();
+                let local_velocity = local_twist(step, |i| {
+                    along(&|k| chain.partial(scratch, parameter(i), k))
+                });
+                let local_bias =
+                    local_twist(step, |i| along(&|l| chain.mixed(scratch, parameter(i), l)));
+                // d/dt of Ad(P) ξ is V_P × Ad(P) ξ + Ad(P) ξ̇ (spatial twists in the first frame).
+                let step_velocity = spatial::motion_to_parent(pose, &local_velocity);
+                *bias +=
+                    cross(velocity, &step_velocity) + spatial::motion_to_parent(pose, &local_bias);
+                *velocity += step_velocity;
+            }
+            *pose *= step_transform(step, |i| chain.value(scratch, parameter(i)));
+            first += parameter_count(step);
         }
         Ok(())
+    }
+
+    /// The twists of step `index` of the chain per unit rate of each coordinate, in the step's
+    /// own frame, into `columns` (6 × coordinates); `scratch` holds the evaluated chain.
+    pub fn step_columns_into(
+        &self,
+        q: &[f64],
+        index: usize,
+        scratch: &mut ChainMotion,
+        columns: &mut DMatrix<f64>,
+    ) -> Result<(), EvalError> {
+        let chain = self.compiled()?;
+        chain.eval(q, None, &mut scratch.scratch);
+        let n = self.coordinate_count();
+        if columns.ncols() != n {
+            *columns = DMatrix::zeros(6, n);
+        }
+        let first: usize = self.steps[..index].iter().map(parameter_count).sum();
+        let step = &self.steps[index];
+        for k in 0..n {
+            let column = local_twist(step, |i| chain.partial(&scratch.scratch, first + i, k));
+            columns.column_mut(k).copy_from(&column);
+        }
+        Ok(())
+    }
+
+    /// The compiled chain, or why it could not be compiled (an unknown without a value, …).
+    fn compiled(&self) -> Result<&CompiledChain, EvalError> {
+        self.compiled.as_ref().map_err(Clone::clone)
+    }
+}
+
+/// A step's twist whose parameters' components are `component(i)` (the rate or partial of the
+/// step's parameter i): along the axis for a rotation, the vector itself for a translation.
+fn local_twist(step: &Step, component: impl Fn(usize) -> f64) -> Twist {
+    match step {
+        Step::Translation(_) => spatial::twist(
+            Vector3::zeros(),
+            Vector3::new(component(0), component(1), component(2)),
+        ),
+        Step::Rotation { axis, .. } => spatial::twist(axis * component(0), Vector3::zeros()),
+    }
+}
+
+/// The chain of `steps` compiled: their parameters in order (a translation's three components,
+/// a rotation's angle).
+fn compile(
+    steps: &[Step],
+    coordinates: usize,
+    unknowns: &UnknownValues,
+) -> Result<CompiledChain, EvalError> {
+    let parameters: Vec<&SExpr> = steps
+        .iter()
+        .flat_map(|step| match step {
+            Step::Translation(v) => v.iter().map(|s| &**s).collect(),
+            Step::Rotation { angle, .. } => vec![&**angle],
+        })
+        .collect();
+    CompiledChain::new(&parameters, coordinates, unknowns)
+}
+
+/// Number of parameters of a step: three for a translation, one for a rotation.
+fn parameter_count(step: &Step) -> usize {
+    match step {
+        Step::Translation(_) => 3,
+        Step::Rotation { .. } => 1,
+    }
+}
+
+/// A step's transform when its parameters have the values `value(i)`.
+fn step_transform(step: &Step, value: impl Fn(usize) -> f64) -> Pose {
+    match step {
+        Step::Translation(_) => spatial::translation(Vector3::new(value(0), value(1), value(2))),
+        Step::Rotation { axis, .. } => spatial::rotation(axis, value(0)),
     }
 }
 
@@ -194,7 +225,7 @@ fn add_moved(subspace: &mut DMatrix<f64>, k: usize, pose: &Pose, column: &Twist)
 
 /// A one-coordinate chain of one step: a rotation by `scale` · q about `axis`, or a translation
 /// by q · `direction`.
-enum SingleMotion {
+pub(super) enum SingleMotion {
     Rotation { axis: Vector3<f64>, scale: f64 },
     Translation { direction: Vector3<f64> },
 }
@@ -208,12 +239,21 @@ pub struct ChainMotion {
     pub velocity: Twist,
     /// Its derivative when the coordinates have no acceleration.
     pub bias: Twist,
-    /// Scratch: unit rates, one coordinate at a time, and zero rates.
-    unit: Vec<f64>,
-    rest: Vec<f64>,
+    /// Where the compiled chain is evaluated.
+    scratch: ChainScratch,
 }
 
 impl ChainMotion {
+    /// The motion of a chain of `n` coordinates that does not move: identity, zero subspace.
+    fn reset(&mut self, n: usize) {
+        if self.subspace.ncols() == n {
+            self.subspace.fill(0.0);
+        } else {
+            self.subspace = DMatrix::zeros(6, n);
+        }
+        (self.pose, self.velocity, self.bias) = (Pose::identity(), Twist::zeros(), Twist::zeros());
+    }
+
     /// The subspace padded with zero columns to 6 × 6 (for chains of at most six coordinates:
     /// a quaternion joint's declared angles), for fixed-size solves that allocate nothing. The
     /// padding changes neither a Householder QR factorisation of the first columns (it takes
@@ -234,8 +274,7 @@ impl Default for ChainMotion {
             subspace: DMatrix::zeros(6, 0),
             velocity: Twist::zeros(),
             bias: Twist::zeros(),
-            unit: Vec::new(),
-            rest: Vec::new(),
+            scratch: ChainScratch::default(),
         }
     }
 }
@@ -340,6 +379,7 @@ fn joint_model(
     let first = frame(&join.first.displacement)?;
     let second = frame(&join.second.displacement)?;
     let steps = link_steps(mechanism, id, unknowns)?;
+    let coordinate_names: Vec<String> = link.coordinates.iter().map(|c| c.to_string()).collect();
     Ok(JointModel {
         join: id,
         name,
@@ -347,8 +387,9 @@ fn joint_model(
         second_body: topology.number(join.second.body),
         first,
         second,
+        compiled: compile(&steps, coordinate_names.len(), unknowns),
         steps,
-        coordinate_names: link.coordinates.iter().map(|c| c.to_string()).collect(),
+        coordinate_names,
         offset,
     })
 }
@@ -409,6 +450,13 @@ pub fn link_only(
     unknowns: &UnknownValues,
 ) -> Result<JointModel, Diagnostic> {
     let join = mechanism.join(id);
+    let steps = link_steps(mechanism, id, unknowns)?;
+    let coordinate_names: Vec<String> = mechanism
+        .link(join.link)
+        .coordinates
+        .iter()
+        .map(|c| c.to_string())
+        .collect();
     Ok(JointModel {
         join: id,
         name: mechanism.join_name(id),
@@ -416,20 +464,16 @@ pub fn link_only(
         second_body: 0,
         first: Pose::identity(),
         second: Pose::identity(),
-        steps: link_steps(mechanism, id, unknowns)?,
-        coordinate_names: mechanism
-            .link(join.link)
-            .coordinates
-            .iter()
-            .map(|c| c.to_string())
-            .collect(),
+        compiled: compile(&steps, coordinate_names.len(), unknowns),
+        steps,
+        coordinate_names,
         offset: 0,
     })
 }
 
 fn constant_vector(v: &[Scalar; 3], unknowns: &UnknownValues) -> Result<Vector3<f64>, EvalError> {
     let value = |s: &Scalar| {
-        eval(s, unknowns, &[]).map_err(|e| match e {
+        eval(s, unknowns).map_err(|e| match e {
             EvalError::NotGeometric("a coordinate of another link") => {
                 EvalError::NotGeometric("a coordinate (rotation axes and frames are constant)")
             }
@@ -447,7 +491,7 @@ pub fn constant_pose(d: &Displacement, unknowns: &UnknownValues) -> Result<Pose,
             Elementary::Translation(v) => spatial::translation(constant_vector(v, unknowns)?),
             Elementary::Rotation { angle, axis } => {
                 let axis = constant_vector(axis, unknowns)?;
-                let angle = eval(angle, unknowns, &[])?;
+                let angle = eval(angle, unknowns)?;
                 let norm = axis.norm();
                 if norm == 0.0 {
                     Pose::identity()
@@ -490,54 +534,33 @@ impl JointModel {
         q: &[f64],
         rates: &[f64],
         direction: &[f64],
-        unknowns: &UnknownValues,
     ) -> Result<Twist, EvalError> {
-        let env = Env { coordinates: q };
-        let sum: Vec<f64> = rates.iter().zip(direction).map(|(a, b)| a + b).collect();
-        // Mixed second derivative by polarisation: D²f[u, w] = (D²f[u + w] − D²f[u] − D²f[w]) / 2.
-        let mixed = |s: &Scalar| -> Result<(f64, f64, f64), EvalError> {
-            let along_rates = eval_jet(s, unknowns, &env, rates)?;
-            let along_direction = eval_jet(s, unknowns, &env, direction)?;
-            let along_sum = eval_jet(s, unknowns, &env, &sum)?;
-            let second = 0.5 * (along_sum.second - along_rates.second - along_direction.second);
-            Ok((along_rates.first, along_direction.first, second))
-        };
+        let chain = self.compiled()?;
+        let mut scratch = ChainScratch::default();
+        chain.eval(q, Some(rates), &mut scratch);
+        let n = self.coordinate_count();
         let mut pose = Pose::identity();
         let mut moved_frame = Twist::zeros();
         let mut derivative = Twist::zeros();
+        let mut first = 0;
         for step in &self.steps {
-            let (transform, local_rates, local_direction, local_mixed) = match step {
-                Step::Translation(v) => {
-                    let (x, y, z) = (mixed(&v[0])?, mixed(&v[1])?, mixed(&v[2])?);
-                    let value = Vector3::new(
-                        eval(&v[0], unknowns, q)?,
-                        eval(&v[1], unknowns, q)?,
-                        eval(&v[2], unknowns, q)?,
-                    );
-                    let zero = Vector3::zeros();
-                    (
-                        spatial::translation(value),
-                        spatial::twist(zero, Vector3::new(x.0, y.0, z.0)),
-                        spatial::twist(zero, Vector3::new(x.1, y.1, z.1)),
-                        spatial::twist(zero, Vector3::new(x.2, y.2, z.2)),
-                    )
-                }
-                Step::Rotation { angle, axis } => {
-                    let (rate, along, second) = mixed(angle)?;
-                    let zero = Vector3::zeros();
-                    (
-                        spatial::rotation(axis, eval(angle, unknowns, q)?),
-                        spatial::twist(axis * rate, zero),
-                        spatial::twist(axis * along, zero),
-                        spatial::twist(axis * second, zero),
-                    )
-                }
+            let along = |weights: &[f64], f: &dyn Fn(usize) -> f64| -> f64 {
+                (0..n).map(|k| f(k) * weights[k]).sum()
             };
-            let step_velocity = spatial::motion_to_parent(&pose, &local_rates);
+            let twist = |weights: &[f64], mixed: bool| {
+                local_twist(step, |i| {
+                    along(weights, &|k| match mixed {
+                        false => chain.partial(&scratch, first + i, k),
+                        true => chain.mixed(&scratch, first + i, k),
+                    })
+                })
+            };
+            let step_velocity = spatial::motion_to_parent(&pose, &twist(rates, false));
             derivative += cross(&moved_frame, &step_velocity)
-                + spatial::motion_to_parent(&pose, &local_mixed);
-            moved_frame += spatial::motion_to_parent(&pose, &local_direction);
-            pose *= transform;
+                + spatial::motion_to_parent(&pose, &twist(direction, true));
+            moved_frame += spatial::motion_to_parent(&pose, &twist(direction, false));
+            pose *= step_transform(step, |i| chain.value(&scratch, first + i));
+            first += parameter_count(step);
         }
         Ok(derivative)
     }

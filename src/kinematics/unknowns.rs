@@ -63,7 +63,7 @@ impl std::str::FromStr for Override {
 }
 
 pub fn constant(s: &Scalar, values: &UnknownValues) -> Option<f64> {
-    eval(s, values, &[]).ok()
+    eval(s, values).ok()
 }
 
 /// Values of the unknowns from the program's `given` declarations.

@@ -552,7 +552,7 @@ impl Affine {
 /// A scalar of a dof chain as an affine function of one of the link's coordinates.
 fn affine(s: &SExpr, unknowns: &UnknownValues) -> Result<Affine, Refusal> {
     let Some(coordinate) = first_coordinate(s) else {
-        let constant = eval(s, unknowns, &[]).map_err(Refusal::Evaluation)?;
+        let constant = eval(s, unknowns).map_err(Refusal::Evaluation)?;
         return Ok(Affine {
             constant,
             term: None,

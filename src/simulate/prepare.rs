@@ -76,12 +76,12 @@ fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<Unk
         collect_vector(body.inertia.value(), &mut inertia);
         let declared_massless = body.mass.is_declared()
             && body.inertia.is_declared()
-            && eval(body.mass.value(), &UnknownValues::new(), &[]) == Ok(0.0)
+            && eval(body.mass.value(), &UnknownValues::new()) == Ok(0.0)
             && body
                 .inertia
                 .value()
                 .iter()
-                .all(|s| eval(s, &UnknownValues::new(), &[]) == Ok(0.0));
+                .all(|s| eval(s, &UnknownValues::new()) == Ok(0.0));
         if !declared_massless {
             required.extend(inertia);
             collect_displacement(body.iframe.value(), &mut required);

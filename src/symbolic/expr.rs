@@ -450,8 +450,10 @@ pub struct Tape {
     pub order: Vec<ExprId>,
     /// For each root, its position in `order`.
     pub roots: Vec<usize>,
-    /// Each node of `order` with its operands replaced by their positions in `order`.
-    steps: Vec<Step>,
+    /// What evaluating computes, in order: each node's position in `order` and its operation on
+    /// the positions of its operands. A sum with a negated operand is one subtraction, so a
+    /// negation that only such sums use is not computed at all.
+    program: Vec<(usize, Step)>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -459,12 +461,29 @@ enum Step {
     Constant(f64),
     Symbol(usize),
     Add(usize, usize),
+    /// `a − b`: a sum of `a` and the negation of `b`, exactly.
+    Sub(usize, usize),
     Mul(usize, usize),
     Neg(usize),
     Div(usize, usize),
     Pow(usize, usize),
     Atan2(usize, usize),
     Apply(Function, usize),
+}
+
+impl Step {
+    fn operands(self) -> [Option<usize>; 2] {
+        match self {
+            Step::Constant(_) | Step::Symbol(_) => [None, None],
+            Step::Neg(a) | Step::Apply(_, a) => [Some(a), None],
+            Step::Add(a, b)
+            | Step::Sub(a, b)
+            | Step::Mul(a, b)
+            | Step::Div(a, b)
+            | Step::Pow(a, b)
+            | Step::Atan2(a, b) => [Some(a), Some(b)],
+        }
+    }
 }
 
 /// The nodes `roots` reach through `operands`, operands before the nodes that use them, each
@@ -504,12 +523,20 @@ impl Tape {
         let position: HashMap<ExprId, usize> =
             order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
         let at = |id: ExprId| position[&id];
-        let steps = order
+        let negated = |id: ExprId| match pool.node(id) {
+            Node::Neg(inner) => Some(inner),
+            _ => None,
+        };
+        let steps: Vec<Step> = order
             .iter()
             .map(|&id| match pool.node(id) {
                 Node::Constant(bits) => Step::Constant(f64::from_bits(bits)),
                 Node::Symbol(i) => Step::Symbol(i as usize),
-                Node::Add(a, b) => Step::Add(at(a), at(b)),
+                Node::Add(a, b) => match (negated(a), negated(b)) {
+                    (_, Some(b)) => Step::Sub(at(a), at(b)),
+                    (Some(a), None) => Step::Sub(at(b), at(a)),
+                    (None, None) => Step::Add(at(a), at(b)),
+                },
                 Node::Mul(a, b) => Step::Mul(at(a), at(b)),
                 Node::Neg(a) => Step::Neg(at(a)),
                 Node::Div(a, b) => Step::Div(at(a), at(b)),
@@ -518,11 +545,26 @@ impl Tape {
                 Node::Apply(f, a) => Step::Apply(f, at(a)),
             })
             .collect();
-        let roots = roots.iter().map(|r| position[r]).collect();
+        let roots: Vec<usize> = roots.iter().map(|r| position[r]).collect();
+        // Every node is used except negations that only subtractions read.
+        let mut used = vec![false; steps.len()];
+        for &r in &roots {
+            used[r] = true;
+        }
+        for step in &steps {
+            for operand in step.operands().into_iter().flatten() {
+                used[operand] = true;
+            }
+        }
+        let program = steps
+            .into_iter()
+            .enumerate()
+            .filter(|&(k, step)| used[k] || !matches!(step, Step::Neg(_)))
+            .collect();
         Tape {
             order,
             roots,
-            steps,
+            program,
         }
     }
 
@@ -534,18 +576,16 @@ impl Tape {
     /// Number of nodes the roots would have written as trees, without sharing (as f64: it grows
     /// exponentially with depth): what common subexpressions save.
     pub fn expanded_size(&self) -> f64 {
-        let mut size = vec![0.0; self.steps.len()];
-        for (k, step) in self.steps.iter().enumerate() {
-            size[k] = 1.0
-                + match *step {
-                    Step::Constant(_) | Step::Symbol(_) => 0.0,
-                    Step::Neg(a) | Step::Apply(_, a) => size[a],
-                    Step::Add(a, b)
-                    | Step::Mul(a, b)
-                    | Step::Div(a, b)
-                    | Step::Pow(a, b)
-                    | Step::Atan2(a, b) => size[a] + size[b],
-                };
+        let mut size = vec![0.0; self.order.len()];
+        for &(k, step) in &self.program {
+            let operands: f64 = step.operands().into_iter().flatten().map(|a| size[a]).sum();
+            // A subtraction stands for a sum and a negation.
+            let negation = if matches!(step, Step::Sub(..)) {
+                1.0
+            } else {
+                0.0
+            };
+            size[k] = 1.0 + negation + operands;
         }
         self.roots.iter().map(|&r| size[r]).sum()
     }
@@ -559,12 +599,20 @@ impl Tape {
 
     /// Evaluates every node into `value` (node k of `order` at index k), reusing its storage.
     pub fn eval_into(&self, symbols: &[f64], value: &mut Vec<f64>) {
-        value.resize(self.steps.len(), 0.0);
-        for (k, step) in self.steps.iter().enumerate() {
-            value[k] = match *step {
+        self.eval_prefix_into(symbols, value, self.order.len());
+    }
+
+    /// Evaluates the first `count` nodes of `order` into `value` (the nodes the first roots
+    /// reach come first: they need no other), reusing its storage.
+    pub fn eval_prefix_into(&self, symbols: &[f64], value: &mut Vec<f64>, count: usize) {
+        value.resize(self.order.len(), 0.0);
+        let end = self.program.partition_point(|&(k, _)| k < count);
+        for &(k, step) in &self.program[..end] {
+            value[k] = match step {
                 Step::Constant(c) => c,
                 Step::Symbol(i) => symbols[i],
                 Step::Add(a, b) => value[a] + value[b],
+                Step::Sub(a, b) => value[a] - value[b],
                 Step::Mul(a, b) => value[a] * value[b],
                 Step::Neg(a) => -value[a],
                 Step::Div(a, b) => value[a] / value[b],

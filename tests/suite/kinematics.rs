@@ -338,8 +338,7 @@ fn joints_are_classified_with_their_degrees_of_constraint() {
     for (k, (kind, dof)) in expected.iter().enumerate() {
         let join = lsdc::elab::value::JoinId(k as u32);
         let joint = model::link_only(&m, join, &UnknownValues::new()).expect("numeric");
-        let analysis =
-            lsdc::kinematics::joint::analyse(&joint, &UnknownValues::new()).expect("analysed");
+        let analysis = lsdc::kinematics::joint::analyse(&joint).expect("analysed");
         assert_eq!(
             (format!("{:?}", analysis.kind).as_str(), analysis.dof),
             (*kind, *dof),
@@ -364,4 +363,111 @@ fn tree_and_assembly_use_given_values() {
         .expect("elaborates");
     let report = analysis::tree(&m).expect("tree");
     assert_eq!(report.mobility.expect("computed with L = 1").mobility, 1);
+}
+
+/// The spatial twist, in the first frame, of a moving pose: ω from Ṙ Rᵀ, and the velocity of
+/// the point at the origin, ṗ − ω × p; Ṗ by central differences of `pose(t)` at t = 0.
+fn twist_by_differences(pose: impl Fn(f64) -> lsdc::spatial::Pose) -> lsdc::spatial::Twist {
+    let h = 1e-6;
+    let (plus, minus, here) = (pose(h), pose(-h), pose(0.0));
+    let rotation = |p: &lsdc::spatial::Pose| *p.rotation.to_rotation_matrix().matrix();
+    let r_dot = (rotation(&plus) - rotation(&minus)) / (2.0 * h);
+    let w = r_dot * rotation(&here).transpose();
+    let omega = nalgebra::Vector3::new(w[(2, 1)], w[(0, 2)], w[(1, 0)]);
+    let p_dot = (plus.translation.vector - minus.translation.vector) / (2.0 * h);
+    spatial::twist(omega, p_dot - omega.cross(&here.translation.vector))
+}
+
+/// The compiled dof chains against finite differences, on every example's joints and on chains
+/// whose parameters are nonlinear in their coordinates, at random coordinates and rates: the
+/// velocity (the subspace times the rates) against the pose's, the bias against the velocity's
+/// change along the rates, and the velocity's derivative along a random direction.
+#[test]
+fn compiled_chains_match_finite_differences() {
+    let mut files: Vec<PathBuf> = std::fs::read_dir("examples")
+        .expect("examples")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "lsd"))
+        .collect();
+    files.sort();
+    let mut mechanisms: Vec<(String, Mechanism)> = files
+        .iter()
+        .filter_map(|file| {
+            let compilation = compile_files(std::slice::from_ref(file), &options()).ok()?;
+            let m = compilation
+                .mechanism
+                .filter(|_| compilation.diagnostics.is_empty())?;
+            Some((file.display().to_string(), m))
+        })
+        .collect();
+    let nonlinear = "let L = 0.7 ;
+        let b1 = body end ;
+        let b2 = body end ;
+        join earth and b1.frame with link(x, y)
+          dof1 = [L * sin(x) * y, x ^ 2 / (1 + y ^ 2), sqrt(2 + cos(y))],
+          dof2 = (x * y + atan2(y, 2 + x)) || [0, 1, 1],
+          dof3 = [exp(y / 3), 0, log(3 + x)]
+        end ;
+        join b1.frame and b2.frame with link(a)
+          dof1 = (a + 0.3 * a ^ 3) || [1, 0, 0], dof2 = [tan(a / 3), 0, abs(a) + 1]
+        end ;";
+    let compilation = compile_text("nonlinear.lsd", nonlinear, None, &options());
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    mechanisms.push((
+        "nonlinear".to_string(),
+        compilation.mechanism.expect("elaborates"),
+    ));
+    let mut seed = 12345u64;
+    let mut random = move |scale: f64| {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        scale * (2.0 * ((seed >> 11) as f64 / (1u64 << 53) as f64) - 1.0)
+    };
+    let mut compared = 0;
+    for (name, m) in mechanisms {
+        let Ok(topology) = topology::build(&m) else {
+            continue;
+        };
+        let Ok(unknowns) = lsdc::kinematics::unknowns::given_values(&m) else {
+            continue;
+        };
+        let Ok(model) = model::build(&m, topology, unknowns) else {
+            continue;
+        };
+        for joint in &model.joints {
+            let n = joint.coordinate_count();
+            for _ in 0..5 {
+                let q: Vec<f64> = (0..n).map(|_| random(1.2)).collect();
+                let v: Vec<f64> = (0..n).map(|_| random(2.0)).collect();
+                let d: Vec<f64> = (0..n).map(|_| random(1.0)).collect();
+                let moved = |along: &[f64], t: f64| -> Vec<f64> {
+                    q.iter().zip(along).map(|(q, a)| q + t * a).collect()
+                };
+                let motion = |q: &[f64]| joint.chain_motion(q, Some(&v)).expect("evaluates");
+                let here = motion(&q);
+                let close =
+                    |what: &str, exact: &lsdc::spatial::Twist, fd: &lsdc::spatial::Twist| {
+                        let scale = exact.norm().max(1.0);
+                        assert!(
+                            (exact - fd).norm() < 1e-6 * scale,
+                            "{name}, {}, {what}: {exact} vs {fd}",
+                            joint.name
+                        );
+                    };
+                let pose = |t: f64| motion(&moved(&v, t)).pose;
+                close("velocity", &here.velocity, &twist_by_differences(pose));
+                let h = 1e-6;
+                let change = |along: &[f64]| {
+                    (motion(&moved(along, h)).velocity - motion(&moved(along, -h)).velocity)
+                        / (2.0 * h)
+                };
+                close("bias", &here.bias, &change(&v));
+                let derivative = joint.velocity_derivative(&q, &v, &d).expect("evaluates");
+                close("velocity derivative", &derivative, &change(&d));
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 100, "{compared}");
 }

@@ -265,7 +265,6 @@ fn loop_residual(
         joint.chain_motion_into(
             &q[model.nq + offset..model.nq + offset + n],
             Some(&v[model.nv + offset..model.nv + offset + n]),
-            &model.unknowns,
             &mut c.chains[k],
         )?;
     }
@@ -425,7 +424,7 @@ fn seat_balls(
             |body: usize| spatial::motion_to_parent(&data.world[body], &data.velocity[body]);
         let omega = base.rotation.inverse()
             * (world(joint.second_body) - world(joint.first_body)).fixed_rows::<3>(0);
-        let subspace = joint.chain(&angles, &model.unknowns)?.1;
+        let subspace = joint.chain(&angles)?.1;
         let rates = subspace
             .rows(0, 3)
             .into_owned()
