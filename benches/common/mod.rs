@@ -26,14 +26,7 @@ pub fn best_time_per_call(mut f: impl FnMut()) -> f64 {
 /// This thread's CPU time, in seconds: unlike the wall clock, it leaves out the time the machine
 /// gave to others (on a shared virtual machine, the main noise of a timing).
 pub fn thread_cpu_seconds() -> f64 {
-    let mut now = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `now` is a valid timespec for the call to write into.
-    let status = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut now) };
-    assert_eq!(status, 0, "the thread's CPU clock is readable");
-    now.tv_sec as f64 + now.tv_nsec as f64 * 1e-9
+    lsdc::simulate::clock::thread_cpu_seconds().expect("the thread's CPU clock is readable")
 }
 
 #[allow(dead_code)]

@@ -20,13 +20,15 @@ mod output;
 mod rk4;
 pub mod rosenbrock;
 mod settings;
+pub mod stability;
 mod switching;
 mod system;
 
 pub use control::error_norm;
 pub use hermite::HermiteSegment;
 pub use outcome::{Failure, InputError, IntegrationError, Stats, StepError};
-pub use settings::{Method, Settings};
+pub use settings::{Interrupt, Method, Settings};
+pub use stability::{spectral_radius, StabilityBound};
 pub use system::{CallbackError, Observer, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,

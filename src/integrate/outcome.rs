@@ -2,6 +2,8 @@
 
 use std::fmt;
 
+use super::stability::StabilityBound;
+
 /// Work done by an integration.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
@@ -25,6 +27,9 @@ pub struct Stats {
     /// integrator), which nothing controls: where it exceeds the tolerances, the step is too
     /// long for them.
     pub largest_step_error: Option<StepError>,
+    /// Where an explicit method's steps were first found held by its stability region, when
+    /// [`Settings::stiffness_check`](super::settings::Settings::stiffness_check) asks.
+    pub stability_bound: Option<StabilityBound>,
 }
 
 /// A local error estimate of one step, in the norm the adaptive methods control (at most 1 meets
@@ -61,6 +66,8 @@ pub enum Failure {
     System(String),
     /// The observer returned an error with this message.
     Observer(String),
+    /// [`Settings::interrupt`](super::settings::Settings::interrupt) was set to this value.
+    Interrupted(usize),
     /// The arguments were inconsistent (wrong state length, unsorted outputs, bad settings...).
     InvalidInput(InputError),
 }
@@ -119,6 +126,7 @@ impl fmt::Display for Failure {
             Failure::TooManySteps => write!(f, "too many steps"),
             Failure::System(message) => write!(f, "{message}"),
             Failure::Observer(message) => write!(f, "{message}"),
+            Failure::Interrupted(value) => write!(f, "interrupted ({value})"),
             Failure::InvalidInput(error) => write!(f, "invalid integration input: {error}"),
         }
     }

@@ -70,15 +70,7 @@ enum Format {
 /// Draws the simulation's coordinates and energy over time to `path`, an SVG when it ends in
 /// `.svg` and a PNG when it ends in `.png`.
 pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), PlotError> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let format = match extension.as_deref() {
-        Some("svg") => Format::Svg,
-        Some("png") => Format::Png,
-        _ => return Err(PlotError::UnknownFormat),
-    };
+    let format = format_of(path)?;
     if simulation.samples.is_empty() {
         return Err(PlotError::NoOutputs);
     }
@@ -142,6 +134,27 @@ pub enum PlotError {
     Drawing(Box<dyn Error + Send + Sync>),
     Io(std::io::Error),
     Png(png::EncodingError),
+}
+
+/// The kind of image a plot's file name asks for.
+fn format_of(path: &Path) -> Result<Format, PlotError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("svg") => Ok(Format::Svg),
+        Some("png") => Ok(Format::Png),
+        _ => Err(PlotError::UnknownFormat),
+    }
+}
+
+/// Checks before a run that a plot can be written to `path`: its name asks for an image this
+/// module draws, and the file can be created (it is, empty, until the plot is drawn).
+pub fn check_path(path: &Path) -> Result<(), PlotError> {
+    format_of(path)?;
+    std::fs::File::create(path).map_err(PlotError::Io)?;
+    Ok(())
 }
 
 impl PlotError {

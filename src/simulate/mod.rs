@@ -3,6 +3,7 @@
 
 pub mod batch;
 pub mod branch;
+pub mod clock;
 pub mod consistent;
 pub mod constraints;
 pub mod lie_group;
@@ -11,5 +12,6 @@ pub mod run;
 pub mod settings;
 pub mod statics;
 pub mod stiffness;
+mod summary;
 pub mod system;
 pub mod variational;
