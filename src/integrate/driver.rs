@@ -65,7 +65,7 @@ pub(super) fn integrate_adaptive(
     let dimension = problem.y0.len();
     let mut watch = stepper
         .stability_limit()
-        .and_then(|limit| StabilityWatch::new(limit, dimension, problem.settings));
+        .and_then(|limit| StabilityWatch::new(limit, true, dimension, problem.settings));
     let result = run(stepper, &mut eval, problem, &mut watch, observer);
     eval.stats.stability_bound = watch.and_then(|mut watch| watch.finding());
     match result {

@@ -28,7 +28,7 @@ pub use control::error_norm;
 pub use hermite::HermiteSegment;
 pub use outcome::{Failure, InputError, IntegrationError, Stats, StepError};
 pub use settings::{Interrupt, Method, Settings};
-pub use stability::{spectral_radius, StabilityBound};
+pub use stability::{jacobian_product, StabilityBound};
 pub use system::{CallbackError, Observer, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,

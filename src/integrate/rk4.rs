@@ -35,7 +35,8 @@ pub(super) fn integrate(
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
     let mut eval = Evaluator::new(system);
-    let mut watch = StabilityWatch::new(STABILITY_LIMIT, problem.y0.len(), problem.settings);
+    let dimension = problem.y0.len();
+    let mut watch = StabilityWatch::new(STABILITY_LIMIT, false, dimension, problem.settings);
     let result = run(&mut eval, problem, step, &mut watch, observer);
     eval.stats.stability_bound = watch.and_then(|mut watch| watch.finding());
     match result {

@@ -11,7 +11,9 @@
 //!
 //! Where h ρ reaches `HELD` of the method's stability limit on `PERSISTENCE` checks in a row
 //! (taken at consecutive steps once one says so), the run's steps are those stability allows:
-//! an adaptive method's controller has found the boundary, a fixed step lies near or beyond it.
+//! an adaptive method's controller has found the boundary (and h ρ stays below
+//! `ADAPTIVE_CEILING` times it), a fixed step lies near or beyond it. A fixed step beyond it
+//! is found at the first check that says so: the run diverges within a few steps.
 //! The first such finding is kept ([`StabilityBound`]) and the checks stop. Nothing depends on
 //! the output times. The implicit method's stiffness switching watches its steps with
 //! Dormand–Prince's own stage estimate instead (`switching.rs`), which is free but measures
@@ -34,6 +36,11 @@ const SETTLED: f64 = 0.01;
 const HELD: f64 = 0.5;
 /// Checks in a row that must agree.
 const PERSISTENCE: usize = 3;
+/// The multiple of the stability limit above which an adaptive method's accepted steps cannot
+/// be held by stability: its error estimate would have caught a mode that grows at every step.
+/// There the fastest mode is one the solution itself follows (a motion running away), which
+/// the step must resolve for accuracy; λ² cannot tell it from a decaying mode.
+const ADAPTIVE_CEILING: f64 = 2.0;
 /// Relative size of the finite-difference perturbation (about √ε).
 const PERTURBATION: f64 = 1.5e-8;
 
@@ -85,12 +92,16 @@ impl PowerIteration {
         }
     }
 
-    /// Starts from `direction` (a fast mode found before) instead of the default vector.
-    pub(super) fn start_from(&mut self, direction: &[f64]) {
-        self.direction.copy_from_slice(direction);
-        if normalise(&mut self.direction[..self.controlled]).is_none() {
-            self.direction = starting_vector(self.direction.len(), self.controlled);
+    /// Starts from `direction` instead of the default vector: its norm over the controlled
+    /// components, `None` (and the default vector kept) when it is zero.
+    fn start_from(&mut self, direction: &[f64]) -> Option<f64> {
+        let n = self.controlled;
+        self.direction[..n].copy_from_slice(&direction[..n]);
+        let size = normalise(&mut self.direction[..n]);
+        if size.is_none() {
+            self.direction = starting_vector(self.direction.len(), n);
         }
+        size
     }
 
     pub(super) fn direction(&self) -> &[f64] {
@@ -144,24 +155,27 @@ impl PowerIteration {
     }
 }
 
-/// The spectral radius of ∂f/∂y of `system` at (t, y), over its leading `controlled`
-/// components, by at most `iterations` power iterations on J² (see the module), from
-/// `direction` when given: the estimate and the direction it settled on, or `None` when an
-/// evaluation fails.
-pub fn spectral_radius(
+/// ∂f/∂y · `direction` at (t, y) of `system`, by a forward difference over its leading
+/// `controlled` components (the others of `direction` are ignored, those of the product zero);
+/// `None` when an evaluation fails or the product vanishes.
+pub fn jacobian_product(
     system: &mut dyn OdeSystem,
     (t, y): (f64, &[f64]),
     controlled: usize,
-    direction: Option<&[f64]>,
-    iterations: usize,
-) -> Option<(f64, Vec<f64>)> {
+    direction: &[f64],
+) -> Option<Vec<f64>> {
     let mut iteration = PowerIteration::new(y.len(), controlled.min(y.len()));
-    if let Some(direction) = direction {
-        iteration.start_from(direction);
-    }
+    let size = iteration.start_from(direction)?;
     let mut eval = Evaluator::new(system);
-    let rate = iteration.estimate(&mut eval, t, y, iterations)?;
-    Some((rate, iteration.direction))
+    eval.rhs(t, y, &mut iteration.slope).ok()?;
+    let norm = iteration.multiply(&mut eval, t, y)?;
+    Some(
+        iteration
+            .direction
+            .iter()
+            .map(|d| d * norm * size)
+            .collect(),
+    )
 }
 
 /// Scales `values` to unit norm; `None` (and unchanged) when their norm is zero or not finite.
@@ -190,6 +204,7 @@ fn starting_vector(dimension: usize, controlled: usize) -> Vec<f64> {
 /// The stiffness check of an explicit run (see the module).
 pub(super) struct StabilityWatch {
     limit: f64,
+    adaptive: bool,
     iteration: PowerIteration,
     steps_since_check: usize,
     held_checks: usize,
@@ -197,11 +212,17 @@ pub(super) struct StabilityWatch {
 }
 
 impl StabilityWatch {
-    /// The watch for a method whose stability region reaches |h λ| = `limit`, or `None` when
-    /// the settings turn the check off.
-    pub(super) fn new(limit: f64, dimension: usize, settings: &Settings) -> Option<Self> {
+    /// The watch for a method whose stability region reaches |h λ| = `limit`, adaptive or with
+    /// a fixed step, or `None` when the settings turn the check off.
+    pub(super) fn new(
+        limit: f64,
+        adaptive: bool,
+        dimension: usize,
+        settings: &Settings,
+    ) -> Option<Self> {
         settings.stiffness_check.then(|| StabilityWatch {
             limit,
+            adaptive,
             iteration: PowerIteration::new(dimension, settings.controlled_len(dimension)),
             steps_since_check: CHECK_EVERY,
             held_checks: 0,
@@ -224,11 +245,17 @@ impl StabilityWatch {
             self.held_checks = 0;
             return;
         };
-        self.held_checks = match h * rate >= HELD * self.limit {
+        let ratio = h * rate / self.limit;
+        let ceiling = match self.adaptive {
+            true => ADAPTIVE_CEILING,
+            false => f64::INFINITY,
+        };
+        self.held_checks = match (HELD..=ceiling).contains(&ratio) {
             true => self.held_checks + 1,
             false => 0,
         };
-        if self.held_checks >= PERSISTENCE {
+        let diverging = !self.adaptive && ratio > 1.0;
+        if self.held_checks >= PERSISTENCE || diverging {
             self.found = Some(StabilityBound {
                 time: t,
                 rate,

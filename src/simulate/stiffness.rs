@@ -9,17 +9,16 @@ use std::rc::Rc;
 
 use serde::Serialize;
 
-use super::prepare::Prepared;
+use super::prepare::{Integrator, Prepared};
 use super::run::Report;
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::model::Model;
-use crate::integrate::{spectral_radius, StabilityBound};
+use crate::integrate::{jacobian_product, StabilityBound};
 use crate::source::Span;
 
-/// Power iterations for the rate of the mechanism without one of its elements, from the fast
-/// mode found: enough for the rate to fall when the element made the mode fast.
-const ITERATIONS_WITHOUT: usize = 6;
+/// The share of ∂f/∂y along the fast mode an element must give to be named.
+const NAMED_SHARE: f64 = 0.25;
 /// A coordinate is named when it moves in the fast mode at least this fraction of the one that
 /// moves most.
 const NAMED_FRACTION: f64 = 0.3;
@@ -34,26 +33,22 @@ pub struct StiffnessReport {
     /// The step taken then, and the largest step stability allows.
     pub step: f64,
     pub stable_step: f64,
+    /// Whether the step is a fixed one beyond the stable step: then the run diverges.
+    pub diverges: bool,
     /// The declared coordinates that move most in the fast mode, the first moving most.
     pub coordinates: Vec<String>,
-    /// The force element without which the mode is slowest, when its removal halves the rate
-    /// or more: how the report names it (for the warning, its place in the program).
+    /// The force element that contributes most to the fast mode, when it gives a quarter of
+    /// its rate or more: how the report names it (for the warning, its place in the program).
     pub element: Option<String>,
     #[serde(skip)]
     pub element_span: Option<Span>,
-}
-
-impl StiffnessReport {
-    /// Whether the step taken was beyond the stable step (a fixed step that diverges).
-    pub fn beyond_limit(&self) -> bool {
-        self.step > self.stable_step
-    }
 }
 
 /// The report of a stability bound an explicit run found, or `None` if its state cannot be
 /// evaluated again.
 pub fn describe(prepared: &Prepared, bound: &StabilityBound) -> Option<StiffnessReport> {
     let model = &prepared.model;
+    let fixed_step = prepared.settings.integrator == Integrator::Rk4;
     let motion = model.positions() + model.velocities();
     let state = bound.state.get(..motion)?;
     let direction = bound.direction.get(..motion)?;
@@ -64,6 +59,7 @@ pub fn describe(prepared: &Prepared, bound: &StabilityBound) -> Option<Stiffness
         rate: bound.rate,
         step: bound.step,
         stable_step: bound.stable_step(),
+        diverges: fixed_step && bound.step > bound.stable_step(),
         coordinates,
         element: element.as_ref().map(|(name, _)| name.clone()),
         element_span: element.map(|(_, span)| span),
@@ -86,7 +82,7 @@ pub fn warning(report: &Report) -> Option<Diagnostic> {
             }
         ),
     };
-    let held = match found.beyond_limit() {
+    let held = match found.diverges {
         true => "is beyond the largest step stability allows",
         false => "is held by stability, not accuracy,",
     };
@@ -96,7 +92,7 @@ pub fn warning(report: &Report) -> Option<Diagnostic> {
     );
     let mut warning = Diagnostic::warning("W0901", message)
         .help("use the implicit integrator: `--integrator implicit`, or `simulate integrator = implicit end`");
-    if found.beyond_limit() {
+    if found.diverges {
         warning = warning.note(
             "a fixed step beyond the stable step makes the fast mode grow at every step: the run diverges",
         );
@@ -144,9 +140,10 @@ fn moving_coordinates(
     named.into_iter().map(|(_, name)| name.clone()).collect()
 }
 
-/// The force element whose removal lowers the fast mode's rate most, when it lowers it by half
-/// or more, with how the report names it. Each element costs a copy of the model and a few
-/// evaluations of the equations along the fast mode: done once, when a run found stiffness.
+/// The force element that contributes most to ∂f/∂y along the fast mode `direction` (its
+/// contribution: the product with the element, less the product without it), when it gives at
+/// least `NAMED_SHARE` of the product, with how the report names it. Each element costs a copy
+/// of the model and two evaluations of the equations: done once, when a run found stiffness.
 fn stiffest_element(
     prepared: &Prepared,
     time: f64,
@@ -154,34 +151,47 @@ fn stiffest_element(
     direction: &[f64],
 ) -> Option<(String, Span)> {
     let model = &prepared.model;
-    let rate_of = |model: &Model| rate_along(prepared, model, (time, state), direction);
-    let mut lowest = 0.5 * rate_of(model)?;
+    let product = |model: &Model| product_along(prepared, model, (time, state), direction);
+    let whole = product(model)?;
+    let contribution = |without: &Model| {
+        let rest = product(without)?;
+        Some(distance(&whole, &rest))
+    };
+    let mut largest = NAMED_SHARE * distance(&whole, &vec![0.0; whole.len()]);
     let mut element = None;
     for k in 0..model.applied.len() {
         let mut without = model.clone();
         let removed = without.applied.remove(k);
         without.compile_efforts();
-        if let Some(rate) = rate_of(&without).filter(|&r| r < lowest) {
+        if let Some(size) = contribution(&without).filter(|&c| c > largest) {
             let body = model.body_names.get(removed.body.wrapping_sub(1));
             let name = match body {
                 Some(body) => format!("an effort applied on `{body}`"),
                 None => "an applied effort".to_string(),
             };
-            (lowest, element) = (rate, Some((name, removed.span)));
+            (largest, element) = (size, Some((name, removed.span)));
         }
     }
     for k in 0..model.link_efforts.len() {
         let mut without = model.clone();
         let removed = without.link_efforts.remove(k);
         without.compile_efforts();
-        if let Some(rate) = rate_of(&without).filter(|&r| r < lowest) {
+        if let Some(size) = contribution(&without).filter(|&c| c > largest) {
             let name = link_name(model, removed.joint).map_or("a link's effort".to_string(), |n| {
                 format!("the effort of `{n}`")
             });
-            (lowest, element) = (rate, Some((name, removed.span)));
+            (largest, element) = (size, Some((name, removed.span)));
         }
     }
     element
+}
+
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// The join a link effort belongs to: a tree joint, then a complementary link.
@@ -195,24 +205,17 @@ fn link_name(model: &Model, joint: usize) -> Option<&str> {
     }
 }
 
-/// The spectral radius of `model`'s equations at (t, y), by power iteration from `direction`.
-fn rate_along(
+/// ∂f/∂y · `direction` for `model`'s equations at (t, y).
+fn product_along(
     prepared: &Prepared,
     model: &Model,
     (time, state): (f64, &[f64]),
     direction: &[f64],
-) -> Option<f64> {
+) -> Option<Vec<f64>> {
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     let mut y = state.to_vec();
     system.start_loops(&mut y).ok()?;
     let n = y.len();
-    let (rate, _) = spectral_radius(
-        &mut system,
-        (time, &y),
-        n,
-        Some(direction),
-        ITERATIONS_WITHOUT,
-    )?;
-    Some(rate)
+    jacobian_product(&mut system, (time, &y), n, direction)
 }
