@@ -26,6 +26,7 @@ mod methods;
 mod pinocchio_fixtures;
 mod properties;
 mod regression;
+mod runs;
 mod simulation;
 mod symbolic;
 mod symbolic_equations;
