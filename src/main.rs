@@ -712,7 +712,7 @@ fn interrupt_on_signals() -> Option<lsdc::integrate::Interrupt> {
     let requested = Arc::new(AtomicUsize::new(0));
     let signalled = Arc::new(AtomicBool::new(false));
     for signal in [SIGINT, SIGTERM] {
-        let exit_code = 128 + signal as i32;
+        let exit_code = 128 + signal;
         let installed =
             signal_hook::flag::register_conditional_shutdown(signal, exit_code, signalled.clone())
                 .and_then(|_| signal_hook::flag::register(signal, signalled.clone()))
@@ -732,7 +732,7 @@ fn print_run_report(
     format: Format,
 ) {
     let warnings: Vec<_> = [
-        lsdc::simulate::stiffness::warning(report),
+        lsdc::simulate::run::stiffness_warning(report),
         lsdc::simulate::run::step_error_warning(report),
         lsdc::simulate::run::passage_output_warning(report),
     ]

@@ -21,6 +21,7 @@
 //! step happened to excite.
 
 use super::evaluator::Evaluator;
+use super::outcome::StabilityBound;
 use super::settings::Settings;
 use super::system::OdeSystem;
 
@@ -43,30 +44,6 @@ const PERSISTENCE: usize = 3;
 const ADAPTIVE_CEILING: f64 = 2.0;
 /// Relative size of the finite-difference perturbation (about √ε).
 const PERTURBATION: f64 = 1.5e-8;
-
-/// Steps found held by an explicit method's stability region.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StabilityBound {
-    /// When it was found (the end of the step checked last).
-    pub time: f64,
-    /// The estimate of the spectral radius of ∂f/∂y there, in 1/s.
-    pub rate: f64,
-    /// The step taken there.
-    pub step: f64,
-    /// |h λ| at the method's stability boundary (2.8 for RK4, 3.3 for Dormand–Prince).
-    pub limit: f64,
-    /// The state there, and the fast mode's direction in it (unit norm over the controlled
-    /// components, zero elsewhere): what a caller needs to find what makes the mode fast.
-    pub state: Vec<f64>,
-    pub direction: Vec<f64>,
-}
-
-impl StabilityBound {
-    /// The largest stable step: limit / rate.
-    pub fn stable_step(&self) -> f64 {
-        self.limit / self.rate
-    }
-}
 
 /// Power iteration on J² along a kept direction (see the module).
 pub(super) struct PowerIteration {

@@ -9,6 +9,7 @@ pub mod constraints;
 pub mod lie_group;
 pub mod prepare;
 pub mod run;
+mod sample;
 pub mod settings;
 pub mod statics;
 pub mod stiffness;

@@ -12,6 +12,7 @@ use super::branch;
 use super::clock::thread_cpu_seconds;
 use super::constraints::{ConstraintReport, ReleasedStretch};
 use super::prepare::{Integrator, Prepared};
+pub use super::sample::{MomentumDrift, Sample};
 use super::stiffness::{self, StiffnessReport};
 use super::summary::Summary;
 use super::system::{MechanicalSystem, SystemError};
@@ -86,32 +87,6 @@ impl OdeSystem for WithWork<'_, '_> {
     fn breaks_error_trend(&self) -> bool {
         self.0.loops.breaks_trend
     }
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct Sample {
-    pub time: f64,
-    /// Declared coordinates and their rates, in `Simulation::coordinate_names` order.
-    pub coordinates: Vec<f64>,
-    pub rates: Vec<f64>,
-    pub kinetic_energy: f64,
-    /// Potential energy, when every effort is a constant force in the fixed basis or declares
-    /// its potential.
-    pub potential_energy: Option<f64>,
-    /// The work done since the start by the efforts that derive from no potential (dampers,
-    /// motors, …), when there are such efforts.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub work: Option<f64>,
-    /// Kinetic energy + potential energy of the conservative efforts − `work`: constant up to
-    /// the integration's error.
-    #[serde(skip)]
-    pub balance: Option<f64>,
-    /// Total momentum in the fixed frame: angular (about the origin), then linear.
-    pub momentum: [f64; 6],
-    /// When asked for: the wrench each join transmits to its second body, at the join, in the
-    /// fixed axes (moment, then force; 6 per join, in `Simulation::reaction_names` order).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub reactions: Vec<f64>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -198,6 +173,11 @@ impl StepErrorReport {
     }
 }
 
+/// The warning for an explicit run whose steps were held by stability (W0901).
+pub fn stiffness_warning(report: &Report) -> Option<Diagnostic> {
+    stiffness::warning(report.stiffness.as_ref()?, &report.integrator)
+}
+
 /// The warning for a fixed-step run whose steps were too long for its tolerances (W0902): its
 /// results may be far from the motion, and nothing else would say so.
 pub fn step_error_warning(report: &Report) -> Option<Diagnostic> {
@@ -234,12 +214,6 @@ pub fn passage_output_warning(report: &Report) -> Option<Diagnostic> {
             .note("inside a passage the rows losing their independence are set aside; outputs there are interpolated between the states before and after it, which a run that ends inside it does not reach")
             .help("end the run (`duration`) or the outputs away from the singular configuration"),
     )
-}
-
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct MomentumDrift {
-    pub linear: f64,
-    pub angular: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -640,7 +614,7 @@ fn simulate_from(
         (Ok((_, stats)), Err(error)) => Err(IntegrationError {
             time: settings.duration,
             failure: Failure::Observer(error.to_string()),
-            stats,
+            stats: Box::new(stats),
         }),
         (failed, Err(_)) => failed,
     };
@@ -650,7 +624,7 @@ fn simulate_from(
         .map(|(now, then)| now - then);
     let (stats, stopped) = match result {
         Ok((_, stats)) => (stats, None),
-        Err(e) => (e.stats.clone(), Some((e.time, e.failure))),
+        Err(e) => (*e.stats, Some((e.time, e.failure))),
     };
     let interrupted = match stopped {
         Some((time, Failure::Interrupted(signal))) => Some(Interruption { time, signal }),

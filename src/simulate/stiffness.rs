@@ -10,7 +10,6 @@ use std::rc::Rc;
 use serde::Serialize;
 
 use super::prepare::{Integrator, Prepared};
-use super::run::Report;
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::model::Model;
@@ -66,10 +65,9 @@ pub fn describe(prepared: &Prepared, bound: &StabilityBound) -> Option<Stiffness
     })
 }
 
-/// The warning for an explicit run whose steps were held by stability (W0901), from its report.
-pub fn warning(report: &Report) -> Option<Diagnostic> {
-    let found = report.stiffness.as_ref()?;
-    let integrator = &report.integrator;
+/// The warning for an explicit run whose steps were held by stability (W0901), from what the run
+/// found and the integrator's name.
+pub fn warning(found: &StiffnessReport, integrator: &str) -> Option<Diagnostic> {
     let moving = match found.coordinates.as_slice() {
         [] => String::new(),
         [one] => format!(" (mostly `{one}`)"),

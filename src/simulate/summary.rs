@@ -3,7 +3,7 @@
 //! long run need not keep them.
 
 use super::branch;
-use super::run::{MomentumDrift, Sample};
+use super::sample::{MomentumDrift, Sample};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
 

@@ -396,7 +396,7 @@ pub fn integrate(
     let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError {
         time,
         failure,
-        stats: stats.clone(),
+        stats: Box::new(stats.clone()),
     };
     let (mut q, mut v) = (
         DVector::from_column_slice(&y0[..positions]),

@@ -217,7 +217,7 @@ fn stiff_chain(integrator: &str, tolerance: f64) -> (Simulation, Option<lsdc::di
     let mechanism = compilation.mechanism.expect("a mechanism");
     let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepares");
     let simulation = run(&prepared, &mut |_| {});
-    let warning = lsdc::simulate::stiffness::warning(&simulation.report);
+    let warning = lsdc::simulate::run::stiffness_warning(&simulation.report);
     (simulation, warning)
 }
 

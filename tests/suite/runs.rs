@@ -44,7 +44,7 @@ fn w0901_fires_for_a_stability_bound_explicit_run_whatever_the_output_interval()
     for name in ["dopri5", "rk4"] {
         for every in [0.02, 0.01, 0.001, 1e-4] {
             let simulation = explicit_governor(name, every, true);
-            let warning = lsdc::simulate::stiffness::warning(&simulation.report)
+            let warning = lsdc::simulate::run::stiffness_warning(&simulation.report)
                 .unwrap_or_else(|| panic!("{name}, every {every}: no W0901"));
             assert_eq!(warning.code, "W0901");
             let found = simulation.report.stiffness.expect("a stiffness report");
