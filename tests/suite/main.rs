@@ -27,6 +27,7 @@ mod native;
 mod pinocchio_fixtures;
 mod properties;
 mod regression;
+mod runs;
 mod simulation;
 mod symbolic;
 mod symbolic_equations;
