@@ -28,6 +28,19 @@ pub struct Elaborator<'c, 'w> {
     pub(super) depth: usize,
     /// `apply F` declarations of uniform fields, expanded once every body is known.
     pub(super) fields: Vec<(value::EffortId, crate::source::Span)>,
+    /// The numbers written in the program, by their bits: one node for each distinct number,
+    /// shared by all its occurrences (a generated chain writes the same few numbers per body).
+    pub(super) literals: HashMap<u64, value::Scalar>,
+}
+
+impl Elaborator<'_, '_> {
+    /// The scalar of a number written in the program.
+    pub(super) fn literal(&mut self, number: f64) -> value::Scalar {
+        self.literals
+            .entry(number.to_bits())
+            .or_insert_with(|| value::num(number))
+            .clone()
+    }
 }
 
 /// An inconsistency between checker and elaborator: reported, never a panic.

@@ -310,8 +310,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             ExprKind::Int(0) => Value::Zero,
             ExprKind::Int(1) => Value::One,
-            ExprKind::Int(n) => Value::Scalar(num(*n as f64)),
-            ExprKind::Float(x) => Value::Scalar(num(*x)),
+            ExprKind::Int(n) => Value::Scalar(self.literal(*n as f64)),
+            ExprKind::Float(x) => Value::Scalar(self.literal(*x)),
             ExprKind::Vector(items) => {
                 let values = items
                     .iter()
@@ -330,7 +330,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 Value::One => Value::Scalar(num(-1.0)),
                 Value::Scalar(s) => Value::Scalar(negate(&s)),
                 Value::Vector(v) => Value::Vector(v.map(|s| negate(&s))),
-                Value::Matrix(m) => Value::Matrix(m.map(|row| row.map(|s| negate(&s)))),
+                Value::Matrix(m) => {
+                    Value::Matrix(Box::new((*m).map(|row| row.map(|s| negate(&s)))))
+                }
                 _ => return Err(internal("negation of a non-number")),
             },
             ExprKind::Prime(inner) => match self.expr(inner, locals)? {

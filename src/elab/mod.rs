@@ -28,6 +28,7 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
         elaborated_modules: Vec::new(),
         depth: 0,
         fields: Vec::new(),
+        literals: HashMap::new(),
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;
