@@ -365,11 +365,11 @@ impl<'w> Checker<'w> {
     /// derivative (a starting velocity, which cannot be `fixed`).
     fn initial_value(&mut self, initial: &'w crate::syntax::ast::InitialValue, ctx: &mut Ctx) {
         let (coordinate, primes) = strip_primes(&initial.target);
-        let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field { .. });
+        let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field(_));
         let ty = self.expr(&initial.target, ctx);
         let target_ty = match &coordinate.kind {
-            crate::syntax::ast::ExprKind::Field { target, .. } => {
-                self.expr_type_silently(target, ctx)
+            crate::syntax::ast::ExprKind::Field(access) => {
+                self.expr_type_silently(&access.target, ctx)
             }
             _ => ty,
         };

@@ -293,9 +293,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let target = self.resolution(expr.span)?;
                 self.lookup(&qualified.name, target, locals)?
             }
-            ExprKind::Field { target, field } => {
-                let value = self.expr(target, locals)?;
-                self.field(value, field)?
+            ExprKind::Field(access) => {
+                let value = self.expr(&access.target, locals)?;
+                self.field(value, &access.field)?
             }
             ExprKind::Unknown(ident) => {
                 if matches!(&*ident.name, "v" | "vector") {

@@ -1,11 +1,28 @@
 //! The abstract syntax of LSD, with a span on every node.
 
+use std::collections::HashSet;
 use std::rc::Rc;
 
 use crate::source::Span;
 
 /// Identifiers are shared strings: the checker and elaborator copy names freely.
 pub type Name = Rc<str>;
+
+/// The names of one file, each spelling stored once: every occurrence of a name shares it (a
+/// generated chain of bodies names each body five times, and every body's fields alike).
+#[derive(Default)]
+pub struct Names(HashSet<Name>);
+
+impl Names {
+    pub fn intern(&mut self, text: &str) -> Name {
+        if let Some(name) = self.0.get(text) {
+            return name.clone();
+        }
+        let name: Name = Rc::from(text);
+        self.0.insert(name.clone());
+        name
+    }
+}
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Ident {
@@ -180,6 +197,13 @@ impl ConstructKind {
     }
 }
 
+/// `target.field`
+#[derive(Clone, Debug, PartialEq)]
+pub struct FieldAccess {
+    pub target: Expr,
+    pub field: Ident,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct FieldInit {
     pub name: Ident,
@@ -210,11 +234,8 @@ pub enum ExprKind {
     Name(Ident),
     /// `P:X`
     Qualified(Box<QualifiedName>),
-    /// `e.field`
-    Field {
-        target: Box<Expr>,
-        field: Ident,
-    },
+    /// `e.field`, boxed whole so that a name does not make every expression larger.
+    Field(Box<FieldAccess>),
     /// `?s`: a fresh unknown scalar at each occurrence.
     Unknown(Ident),
     Int(i64),
@@ -225,7 +246,7 @@ pub enum ExprKind {
     Vector(Box<[Expr]>),
     Call {
         callee: Box<Callee>,
-        args: Vec<Arg>,
+        args: Box<[Arg]>,
     },
     Binary {
         op: BinaryOp,
@@ -238,12 +259,12 @@ pub enum ExprKind {
     /// `body ... end`, `link(x) ... end`, `force ... end`, `torque ... end`
     Construct {
         kind: ConstructKind,
-        params: Vec<Ident>,
-        fields: Vec<FieldInit>,
+        params: Box<[Ident]>,
+        fields: Box<[FieldInit]>,
     },
     /// `local a = e and b = e in body end`
     Local {
-        bindings: Vec<Binding>,
+        bindings: Box<[Binding]>,
         body: Box<Expr>,
     },
     /// An expression the parser could not read.
