@@ -11,6 +11,8 @@ pub mod types;
 
 use std::collections::HashMap;
 
+use rustc_hash::FxHashMap;
+
 use crate::diag::{Diagnostic, Diagnostics};
 use crate::load::{ModuleId, Workspace};
 use crate::source::Span;
@@ -27,14 +29,14 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
         out: Checked {
             scopes: Vec::new(),
             definitions: Vec::new(),
-            resolutions: HashMap::new(),
-            module_scopes: HashMap::new(),
-            package_scopes: HashMap::new(),
-            bindings: HashMap::new(),
+            resolutions: FxHashMap::default(),
+            module_scopes: FxHashMap::default(),
+            package_scopes: FxHashMap::default(),
+            bindings: FxHashMap::default(),
         },
         diagnostics: Diagnostics::default(),
         instantiations: Vec::new(),
-        memo: HashMap::new(),
+        memo: FxHashMap::default(),
         modules_in_progress: Vec::new(),
         simulate_seen: None,
     };

@@ -1,7 +1,7 @@
 //! The elaborator's state: the values of the names evaluated so far and the mechanism being
 //! built. Declarations and expressions are evaluated in `eval.rs`, uniform fields in `fields.rs`.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use crate::check::scope::ScopeId;
 use crate::check::Checked;
@@ -22,7 +22,7 @@ pub(super) enum Global {
 pub struct Elaborator<'c, 'w> {
     pub(super) workspace: &'w Workspace,
     pub(super) checked: &'c Checked<'w>,
-    pub(super) globals: HashMap<(ScopeId, Name), Global>,
+    pub(super) globals: FxHashMap<(ScopeId, Name), Global>,
     pub(super) mechanism: Mechanism,
     pub(super) elaborated_modules: Vec<ModuleId>,
     pub(super) depth: usize,
@@ -30,7 +30,7 @@ pub struct Elaborator<'c, 'w> {
     pub(super) fields: Vec<(value::EffortId, crate::source::Span)>,
     /// The numbers written in the program, by their bits: one node for each distinct number,
     /// shared by all its occurrences (a generated chain writes the same few numbers per body).
-    pub(super) literals: HashMap<u64, value::Scalar>,
+    pub(super) literals: FxHashMap<u64, value::Scalar>,
 }
 
 impl Elaborator<'_, '_> {

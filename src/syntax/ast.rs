@@ -1,6 +1,6 @@
 //! The abstract syntax of LSD, with a span on every node.
 
-use std::collections::HashSet;
+use rustc_hash::FxHashSet;
 use std::rc::Rc;
 
 use crate::source::Span;
@@ -11,7 +11,7 @@ pub type Name = Rc<str>;
 /// The names of one file, each spelling stored once: every occurrence of a name shares it (a
 /// generated chain of bodies names each body five times, and every body's fields alike).
 #[derive(Default)]
-pub struct Names(HashSet<Name>);
+pub struct Names(FxHashSet<Name>);
 
 impl Names {
     pub fn intern(&mut self, text: &str) -> Name {
