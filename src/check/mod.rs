@@ -16,7 +16,9 @@ use rustc_hash::FxHashMap;
 use crate::diag::{Diagnostic, Diagnostics};
 use crate::load::{ModuleId, Workspace};
 use crate::source::Span;
-use crate::syntax::ast::{ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, Param};
+use crate::syntax::ast::{
+    ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, PackageDecl, Param,
+};
 pub use checker::{Checked, Definition};
 use checker::{Checker, Ctx, Local};
 use scope::Scope;
@@ -108,7 +110,9 @@ impl<'w> Checker<'w> {
     fn decl(&mut self, decl: &'w Decl, scope: ScopeId) {
         match &decl.kind {
             DeclKind::Let(bindings) => self.let_decl(bindings, scope),
-            DeclKind::Define { name, params, body } => self.define(name, params, body, scope),
+            DeclKind::Define(define) => {
+                self.define(&define.name, &define.params, &define.body, scope)
+            }
             DeclKind::Join(join) => {
                 let JoinDecl {
                     first,
@@ -169,7 +173,8 @@ impl<'w> Checker<'w> {
                     self.apply(effort, effort_ty, target, target_ty);
                 }
             }
-            DeclKind::Package { name, decls } => {
+            DeclKind::Package(package_decl) => {
+                let PackageDecl { name, decls } = &**package_decl;
                 let limit = self.out.scope(scope).len();
                 let package = self.new_scope(Some((scope, limit)));
                 self.out.package_scopes.insert(decl.span, package);
@@ -549,8 +554,9 @@ fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
                 )
             })
             .collect(),
-        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => {
-            vec![(name.name.clone(), name.span, decl.span)]
+        DeclKind::Define(define) => vec![(define.name.name.clone(), define.name.span, decl.span)],
+        DeclKind::Package(package) => {
+            vec![(package.name.name.clone(), package.name.span, decl.span)]
         }
         DeclKind::Import(import) => named(&import.alias, decl.span),
         DeclKind::Join(join) => named(&join.name, decl.span),

@@ -48,7 +48,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let mut locals = Locals::new();
         match &decl.kind {
             // Definitions are evaluated when first used (see `global`).
-            DeclKind::Let(_) | DeclKind::Define { .. } => Ok(()),
+            DeclKind::Let(_) | DeclKind::Define(_) => Ok(()),
             DeclKind::Join(join) => {
                 let JoinDecl {
                     first,
@@ -187,13 +187,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
-            DeclKind::Package { decls, .. } => {
+            DeclKind::Package(package_decl) => {
                 let package = *self
                     .checked
                     .package_scopes
                     .get(&decl.span)
                     .ok_or_else(|| internal("package not checked"))?;
-                self.decls(decls, package)
+                self.decls(&package_decl.decls, package)
             }
             DeclKind::Import { .. } => match self.workspace.imports.get(&decl.span) {
                 Some(&module) => self.module(module),

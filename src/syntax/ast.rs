@@ -42,17 +42,13 @@ pub struct Decl {
 }
 
 /// A declaration. Its larger variants are boxed so that a declaration takes little room in the
-/// program's list (from 384 bytes to 64; a generated chain has three declarations per body).
+/// program's list (from 384 bytes to 48; a generated chain has three declarations per body).
 #[derive(Clone, Debug, PartialEq)]
 pub enum DeclKind {
     /// `let a = e and b = e`
     Let(Vec<Binding>),
     /// `let f(a, b : vector) = e`: a parameterised definition.
-    Define {
-        name: Ident,
-        params: Vec<Param>,
-        body: Box<Expr>,
-    },
+    Define(Box<DefineDecl>),
     /// `join <frame> and <frame> with <link> [as <name>]`
     Join(Box<JoinDecl>),
     /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
@@ -65,11 +61,26 @@ pub enum DeclKind {
     /// `apply F` for a force with a `field`: on every body with mass (a uniform field).
     Apply(Box<ApplyDecl>),
     /// `package P = decls end`
-    Package { name: Ident, decls: Vec<Decl> },
+    Package(Box<PackageDecl>),
     /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`
     Import(Box<ImportDecl>),
     /// A declaration the parser could not read; its error was already reported.
     Error,
+}
+
+/// `let name(params) = body`
+#[derive(Clone, Debug, PartialEq)]
+pub struct DefineDecl {
+    pub name: Ident,
+    pub params: Vec<Param>,
+    pub body: Expr,
+}
+
+/// `package name = decls end`
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackageDecl {
+    pub name: Ident,
+    pub decls: Vec<Decl>,
 }
 
 /// `join first and second with link [as name]`

@@ -1,6 +1,6 @@
-// grammar stamp: b28011b7fc992c6e (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 6abda0adef6040e1 (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: 3a422e02cfba01b66ec728e4e5d419b933e1e4b118a15ca9945e3dd5bf0b9e42
+// sha3: 9f11dcccae1185dc5b3619d42fdfa0968c26d46877578d0fc2b3cfe03aa01eb7
 // features: 
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
@@ -6828,7 +6828,7 @@ fn __action11<
     (_, body, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Define { name, params, body: Box::new(body) }
+    DeclKind::Define(Box::new(DefineDecl { name, params, body }))
 }
 
 #[allow(unused_variables)]
@@ -6971,7 +6971,7 @@ fn __action19<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> DeclKind
 {
-    DeclKind::Package { name, decls }
+    DeclKind::Package(Box::new(PackageDecl { name, decls }))
 }
 
 #[allow(unused_variables)]
