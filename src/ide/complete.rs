@@ -13,9 +13,13 @@ const KEYWORDS: &[&str] = &[
     "in", "initial", "join", "let", "link", "local", "on", "package", "simulate", "torque", "with",
 ];
 
-/// The completions at a byte offset of the root file.
-pub fn completions(analysis: &Analysis, offset: usize) -> Vec<CompletionItem> {
-    let text = analysis.text(analysis.root);
+/// The completions at a byte offset of the root file of `edited`. The names come from `names`:
+/// the same analysis, or the latest one whose declarations could be read when the file being
+/// typed no longer parses (a parser that reaches the end of the file inside a declaration keeps
+/// none of them).
+pub fn completions(edited: &Analysis, names: &Analysis, offset: usize) -> Vec<CompletionItem> {
+    let analysis = names;
+    let text = edited.text(edited.root);
     let offset = offset.min(text.len());
     let word_start = text[..offset]
         .char_indices()
@@ -33,7 +37,10 @@ pub fn completions(analysis: &Analysis, offset: usize) -> Vec<CompletionItem> {
         Some(':') => package_members(analysis, name_before(&before[..before.len() - 1])),
         _ => {
             let mut items = parameters_of_call(analysis, before);
-            items.extend(names_in_scope(analysis, offset));
+            items.extend(names_in_scope(
+                analysis,
+                offset.min(analysis.text(analysis.root).len()),
+            ));
             items
         }
     }

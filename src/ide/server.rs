@@ -69,6 +69,7 @@ pub fn serve(connection: &Connection) -> Result<(), Error> {
     connection.initialize(serde_json::to_value(capabilities())?)?;
     let mut server = Server {
         documents: HashMap::new(),
+        last_parsed: HashMap::new(),
         options: LoadOptions::default(),
     };
     for message in &connection.receiver {
@@ -94,6 +95,9 @@ pub fn serve(connection: &Connection) -> Result<(), Error> {
 struct Server {
     /// The open files, by URI, each with its latest analysis.
     documents: HashMap<Uri, Analysis>,
+    /// For an open file that does not parse at all (the parser reached its end inside a
+    /// declaration): its latest analysis that had declarations, for completion's names.
+    last_parsed: HashMap<Uri, Analysis>,
     options: LoadOptions,
 }
 
@@ -126,6 +130,7 @@ impl Server {
                     notification.params,
                 ) {
                     self.documents.remove(&params.text_document.uri);
+                    self.last_parsed.remove(&params.text_document.uri);
                     return vec![publish(params.text_document.uri, Vec::new())];
                 }
                 return Vec::new();
@@ -143,7 +148,14 @@ impl Server {
             .iter()
             .map(|d| convert::diagnostic(&analysis, d))
             .collect();
-        self.documents.insert(uri.clone(), analysis);
+        let parsed = has_declarations(&analysis);
+        if let Some(previous) = self.documents.insert(uri.clone(), analysis) {
+            if parsed {
+                self.last_parsed.remove(&uri);
+            } else if has_declarations(&previous) {
+                self.last_parsed.insert(uri.clone(), previous);
+            }
+        }
         vec![publish(uri, diagnostics)]
     }
 
@@ -187,9 +199,12 @@ impl Server {
                 )?))
             }
             Completion::METHOD => {
+                let uri: Uri = serde_json::from_value(params["textDocument"]["uri"].clone())
+                    .map_err(|e| e.to_string())?;
                 let (analysis, offset) = self.at(params)?;
+                let names = self.last_parsed.get(&uri).unwrap_or(analysis);
                 json(serde_json::to_value(complete::completions(
-                    analysis, offset,
+                    analysis, names, offset,
                 )))
             }
             DocumentSymbolRequest::METHOD => {
@@ -235,6 +250,15 @@ impl Server {
         let offset = convert::offset(analysis.text(analysis.root), position.position);
         Ok((analysis, offset))
     }
+}
+
+fn has_declarations(analysis: &Analysis) -> bool {
+    let workspace = &analysis.compilation.workspace;
+    !workspace
+        .module(workspace.roots[0])
+        .program
+        .decls
+        .is_empty()
 }
 
 fn publish(uri: Uri, diagnostics: Vec<lsp_types::Diagnostic>) -> Notification {
