@@ -9,3 +9,5 @@ pub mod format;
 mod navigate;
 mod outline;
 pub mod server;
+
+pub use outline::semantic_tokens;
