@@ -15,16 +15,25 @@ use lsdc::simulate::clock::thread_cpu_seconds;
 fn program() -> String {
     let mut text = String::from("(* A generated chain. *)\nimport joints ;\nimport gravity ;\n");
     for i in 1..=332 {
-        let parent = if i == 1 { "earth".to_string() } else { format!("[0.5, 0, 0] ++ 1 @ b{}", i - 1) };
+        let parent = if i == 1 {
+            "earth".to_string()
+        } else {
+            format!("[0.5, 0, 0] ++ 1 @ b{}", i - 1)
+        };
         text.push_str(&format!("let b{i} = body mass = 1.5, iframe = [0.25, 0, 0] ++ 1, inertia = [0.01, 0.02, 0.02] end ; (* link {i} *)\n"));
-        text.push_str(&format!("join {parent} and b{i}\n  with revolute([0, 0, 1]) as j{i} ;\n"));
+        text.push_str(&format!(
+            "join {parent} and b{i}\n  with revolute([0, 0, 1]) as j{i} ;\n"
+        ));
     }
     text
 }
 
 fn main() {
     let text = program();
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
     let path = Path::new("chain.lsd");
     let mut times = Vec::new();
     for _ in 0..30 {

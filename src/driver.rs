@@ -86,7 +86,10 @@ fn check_and_elaborate(
         return None;
     }
     match elab::elaborate(workspace, checked) {
-        Ok(mechanism) => Some(mechanism),
+        Ok((mechanism, warnings)) => {
+            diagnostics.extend(warnings);
+            Some(mechanism)
+        }
         Err(diagnostic) => {
             diagnostics.push(diagnostic);
             None

@@ -262,6 +262,9 @@ impl Builder<'_, '_> {
                 DeclKind::Package(package) => {
                     let scope = self.checked.package_scopes.get(&decl.span).copied();
                     declare(self, &package.name, DefinitionKind::Package(scope));
+                    if let Some(index) = &package.index {
+                        declare(self, &index.variable, DefinitionKind::Value);
+                    }
                     let start = package.name.span.end as usize;
                     self.scope_declarations(&package.decls, file, start);
                 }
@@ -355,7 +358,13 @@ impl Builder<'_, '_> {
                         self.expr(target, &mut locals);
                     }
                 }
-                DeclKind::Package(package) => self.declarations(&package.decls),
+                DeclKind::Package(package) => {
+                    if let Some(index) = &package.index {
+                        self.expr(&index.first, &mut locals);
+                        self.expr(&index.last, &mut locals);
+                    }
+                    self.declarations(&package.decls)
+                }
                 DeclKind::Import(_) | DeclKind::Error => {}
             }
         }
@@ -397,6 +406,9 @@ impl Builder<'_, '_> {
             }
             ExprKind::Qualified(qualified) => {
                 self.name(&qualified.package, locals);
+                if let Some(index) = &qualified.index {
+                    self.expr(index, locals);
+                }
                 let reference = match self.checked.resolutions.get(&expr.span) {
                     Some(Target::Global(scope)) => self.global(*scope, &qualified.name.name),
                     _ => Reference::Unresolved,
@@ -460,9 +472,12 @@ impl Builder<'_, '_> {
     fn call(&mut self, callee: &Callee, args: &[Arg], locals: &mut Vec<(Name, usize)>) {
         let reference = match callee {
             Callee::Name(ident) => self.name(ident, locals),
-            Callee::Qualified { package, name } => {
-                self.name(package, locals);
-                self.name(name, locals)
+            Callee::Qualified(qualified) => {
+                self.name(&qualified.package, locals);
+                if let Some(index) = &qualified.index {
+                    self.expr(index, locals);
+                }
+                self.name(&qualified.name, locals)
             }
             Callee::Unknown(_) => Reference::Unresolved,
         };

@@ -201,6 +201,8 @@ impl<'a> Printer<'a> {
             (Tok::Plus, Tok::Plus | Tok::PlusPlus) => true,
             _ if self.previous_is_sign => false,
             (Tok::Ident(_) | Tok::Unknown(_) | Tok::Link, Tok::LParen) => false,
+            // An index: `P[k]:x`, `package P[i in 1 .. 3]`.
+            (Tok::Ident(_), Tok::LBracket) => false,
             (Tok::Colon, _) | (_, Tok::Colon) => self.definition_parameters,
             _ => true,
         }
