@@ -71,8 +71,7 @@ fn import_edit(analysis: &Analysis, import: &str) -> (String, TextEdit) {
     let text = analysis.text(analysis.root);
     let last_import = decls
         .iter()
-        .filter(|d| matches!(d.kind, DeclKind::Import(_)))
-        .last();
+        .rfind(|d| matches!(d.kind, DeclKind::Import(_)));
     let (offset, new_text) = match (last_import, decls.first()) {
         (Some(decl), _) => {
             let end = text[decl.span.end as usize..]
