@@ -90,6 +90,12 @@ impl Client {
     }
 }
 
+/// The labels of completion items.
+fn labels(items: &Value) -> Vec<&str> {
+    let items = items.as_array().expect("completion items");
+    items.iter().filter_map(|i| i["label"].as_str()).collect()
+}
+
 fn file_uri(path: &std::path::Path) -> String {
     format!("file://{}", path.display())
 }
@@ -219,13 +225,7 @@ fn a_session_with_every_request() {
         "textDocument/completion",
         json!({"textDocument": document, "position": end}),
     );
-    let labels: Vec<&str> = items
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|i| i["label"].as_str())
-        .collect();
-    assert_eq!(labels, ["frame", "iframe", "mass", "inertia"]);
+    assert_eq!(labels(&items), ["frame", "iframe", "mass", "inertia"]);
     let typing = format!("import \n{FIXED}");
     client.notify(
         "textDocument/didChange",
@@ -236,15 +236,10 @@ fn a_session_with_every_request() {
         "textDocument/completion",
         json!({"textDocument": document, "position": {"line": 0, "character": 7}}),
     );
-    let labels: Vec<&str> = items
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|i| i["label"].as_str())
-        .collect();
+    let modules = labels(&items);
     assert!(
-        labels.contains(&"joints") && labels.contains(&"gravity"),
-        "{labels:?}"
+        modules.contains(&"joints") && modules.contains(&"gravity"),
+        "{modules:?}"
     );
 
     // Formatting, symbols, semantic tokens and rename on the fixed program.
