@@ -5,7 +5,7 @@
 //!   differential algebraic equations of index 1", BIT Numer. Math. 45, 2005);
 //! - RODAS4, of order 4 with six stages and an embedded order-3 estimate (Hairer and Wanner,
 //!   *Solving ODEs II*, VI.4), the stiff method of the implicit integrator: at equal error on a
-//!   stiff flyball governor it takes a quarter to a third of ROS34PW2's time (`BENCHMARKS.md`).
+//!   stiff flyball governor it takes about a quarter of ROS34PW2's time (`BENCHMARKS.md`).
 //!
 //! Each stage solves a linear system with W = I / (h γ) − J instead of iterating Newton's method.
 //! A *W*-method keeps its order whatever the matrix J is (Hairer and Wanner, *Solving ODEs II*,

@@ -125,7 +125,7 @@ pub struct Report {
     pub steps: usize,
     pub rejected_steps: usize,
     pub function_evaluations: usize,
-    /// With the implicit integrator: the accepted steps its Rosenbrock method (RODAS4) took (the others
+    /// With the implicit integrator: the accepted steps its Rosenbrock method took (the others
     /// are Dormand–Prince's, where the motion is not stiff), and how often it changed method.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stiff_steps: Option<usize>,
