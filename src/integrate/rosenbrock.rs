@@ -27,6 +27,8 @@
 //! Dense output is the cubic Hermite interpolant through the step's ends, whose end slope is free
 //! because it is the next step's first stage.
 
+use std::cell::Cell;
+
 use nalgebra::{DMatrix, DVector, Dyn, LU};
 
 use super::control::{error_norm, Gains, StepController};
@@ -271,8 +273,9 @@ struct Jacobian {
     /// TᵀU.
     reduced: DMatrix<f64>,
     time_derivative: Vec<f64>,
-    /// The spectral radius of U Tᵀ (that of TᵀU): how fast its stiffest component moves.
-    spectral_radius: f64,
+    /// The spectral radius of U Tᵀ (that of TᵀU): how fast its stiffest component moves;
+    /// computed when first asked for.
+    spectral_radius: Cell<Option<f64>>,
     /// Whether it was formed at the current point of the solution.
     fresh: bool,
     /// Accepted steps since it was formed.
@@ -338,9 +341,9 @@ impl RosenbrockW {
         }
     }
 
-    /// J T and ∂f/∂t at the current point by forward differences, along the directions the
-    /// system gives (or each watched component), with increments that balance truncation
-    /// against rounding (as in Hairer and Wanner's RODAS).
+    /// J T and ∂f/∂t at the current point: J from the system when it gives it, by forward
+    /// differences otherwise ([`RosenbrockW::differenced_image`]); ∂f/∂t zero when f does not
+    /// depend on t, a forward difference otherwise.
     fn form_jacobian(
         &mut self,
         eval: &mut Evaluator,
@@ -354,11 +357,75 @@ impl RosenbrockW {
             Some(spanning) => Directions::Basis(orthonormal(spanning, n)),
             None => Directions::Leading(self.controlled),
         };
+        let given = match directions {
+            Directions::Leading(count) => self.given_image(eval, t, y, count)?,
+            Directions::Basis(_) => None,
+        };
+        let image = match given {
+            Some(image) => image,
+            None => self.differenced_image(eval, t, y, &directions)?,
+        };
+        let time_derivative = match eval.autonomous() {
+            true => vec![0.0; n],
+            false => {
+                let dt = (t + (f64::EPSILON * t.abs().max(1e-5)).sqrt()) - t;
+                eval.rhs(t + dt, y, &mut self.stage_derivative)?;
+                (0..n)
+                    .map(|i| (self.stage_derivative[i] - self.derivative[i]) / dt)
+                    .collect()
+            }
+        };
+        let reduced = match &directions {
+            Directions::Leading(count) => image.rows(0, *count).into_owned(),
+            Directions::Basis(basis) => basis.tr_mul(&image),
+        };
+        if let Some(old) = &self.jacobian {
+            self.reuse = match h * change(old, &directions, &image) < REUSE_CHANGE {
+                true => (2 * self.reuse).min(JACOBIAN_AGE),
+                false => 1,
+            };
+        }
+        self.jacobian = Some(Jacobian {
+            directions,
+            image,
+            reduced,
+            time_derivative,
+            spectral_radius: Cell::new(None),
+            fresh: true,
+            age: 0,
+            factor: None,
+        });
+        Ok(())
+    }
+
+    /// J's first `count` columns from the system's own Jacobian, if it gives one.
+    fn given_image(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        count: usize,
+    ) -> Result<Option<DMatrix<f64>>, Halt> {
+        let mut full = DMatrix::zeros(y.len(), y.len());
+        let given = eval.jacobian(t, y, &self.derivative, &mut full)?;
+        Ok(given.then(|| full.columns(0, count).into_owned()))
+    }
+
+    /// U = J T by forward differences of f along the directions, with increments that balance
+    /// truncation against rounding (as in Hairer and Wanner's RODAS).
+    fn differenced_image(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        directions: &Directions,
+    ) -> Result<DMatrix<f64>, Halt> {
+        let n = y.len();
         let m = directions.count();
         let mut image = DMatrix::zeros(n, m);
         let mut perturbed = y.to_vec();
         for j in 0..m {
-            match &directions {
+            match directions {
                 Directions::Leading(_) => {
                     perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
                     // The increment actually represented, so that rounding of y + δ does not
@@ -384,33 +451,7 @@ impl RosenbrockW {
                 }
             }
         }
-        let dt = (t + (f64::EPSILON * t.abs().max(1e-5)).sqrt()) - t;
-        eval.rhs(t + dt, y, &mut self.stage_derivative)?;
-        let time_derivative = (0..n)
-            .map(|i| (self.stage_derivative[i] - self.derivative[i]) / dt)
-            .collect();
-        let reduced = match &directions {
-            Directions::Leading(count) => image.rows(0, *count).into_owned(),
-            Directions::Basis(basis) => basis.tr_mul(&image),
-        };
-        if let Some(old) = &self.jacobian {
-            self.reuse = match h * change(old, &directions, &image) < REUSE_CHANGE {
-                true => (2 * self.reuse).min(JACOBIAN_AGE),
-                false => 1,
-            };
-        }
-        let spectral_radius = spectral_radius(&reduced);
-        self.jacobian = Some(Jacobian {
-            directions,
-            image,
-            reduced,
-            time_derivative,
-            spectral_radius,
-            fresh: true,
-            age: 0,
-            factor: None,
-        });
-        Ok(())
+        Ok(image)
     }
 
     /// How many accepted steps the current Jacobian serves: ROS34PW2 keeps its order with any
@@ -422,9 +463,18 @@ impl RosenbrockW {
         }
     }
 
-    /// The spectral radius of the Jacobian last formed (`None` before the first).
-    pub(super) fn spectral_radius(&self) -> Option<f64> {
-        self.jacobian.as_ref().map(|j| j.spectral_radius)
+    /// Whether the spectral radius ρ of the Jacobian last formed is below `limit` (`false`
+    /// before the first). The bound |trace| / m ≤ ρ, m the Jacobian's order, says no without
+    /// the eigenvalues on a stiff stretch, where the dominant eigenvalues make the trace.
+    pub(super) fn spectral_radius_below(&self, limit: f64) -> bool {
+        let Some(jacobian) = &self.jacobian else {
+            return false;
+        };
+        let m = jacobian.reduced.nrows();
+        if m > 0 && jacobian.reduced.trace().abs() / m as f64 >= limit {
+            return false;
+        }
+        jacobian.spectral_radius() < limit
     }
 
     /// Takes `derivative` as dy/dt at the current point (computed by another method), and
@@ -487,6 +537,19 @@ impl RosenbrockW {
         Self::solve_w(jacobian, lu, 1.0 / (h * k.diagonal), &mut rhs);
         self.increments[stage] = rhs;
         Ok(())
+    }
+}
+
+impl Jacobian {
+    fn spectral_radius(&self) -> f64 {
+        match self.spectral_radius.get() {
+            Some(radius) => radius,
+            None => {
+                let radius = spectral_radius(&self.reduced);
+                self.spectral_radius.set(Some(radius));
+                radius
+            }
+        }
     }
 }
 

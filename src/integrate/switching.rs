@@ -78,8 +78,8 @@ impl Switching {
     /// enough agree.
     fn watch(&mut self, h: f64) {
         let calls_for_other = if self.stiff {
-            let radius = self.implicit.spectral_radius().unwrap_or(f64::INFINITY);
-            h * radius < EXPLICIT_MARGIN * STIFF
+            self.implicit
+                .spectral_radius_below(EXPLICIT_MARGIN * STIFF / h)
         } else {
             let returning = self
                 .implicit_step

@@ -32,6 +32,7 @@ mod symbolic;
 mod symbolic_equations;
 mod symplectic_groups;
 mod threads;
+mod tree_jacobian;
 mod unit_diag;
 mod unit_dynamics;
 mod unit_integrate;
