@@ -21,8 +21,9 @@
 //! column of U is one forward difference of f along that direction, and W is solved through the
 //! m × m matrix I / (h γ) − TᵀU (Sherman–Morrison–Woodbury): what is left out is the Jacobian
 //! across the constraint manifold, along which the projection after each step, not the dynamics,
-//! decides the motion. A system without such a basis is differentiated along each of the
-//! components the error control watches (a full Jacobian of those).
+//! decides the motion. A system without such a basis gives its Jacobian itself
+//! ([`OdeSystem::jacobian`](super::OdeSystem::jacobian)), or is differentiated along each of
+//! the components the error control watches (a full Jacobian of those).
 //!
 //! Dense output is the cubic Hermite interpolant through the step's ends, whose end slope is free
 //! because it is the next step's first stage.
