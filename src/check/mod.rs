@@ -11,10 +11,14 @@ pub mod types;
 
 use std::collections::HashMap;
 
+use rustc_hash::FxHashMap;
+
 use crate::diag::{Diagnostic, Diagnostics};
 use crate::load::{ModuleId, Workspace};
 use crate::source::Span;
-use crate::syntax::ast::{ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, Param};
+use crate::syntax::ast::{
+    ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, PackageDecl, Param,
+};
 pub use checker::{Checked, Definition};
 use checker::{Checker, Ctx, Local};
 use scope::Scope;
@@ -27,14 +31,14 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
         out: Checked {
             scopes: Vec::new(),
             definitions: Vec::new(),
-            resolutions: HashMap::new(),
-            module_scopes: HashMap::new(),
-            package_scopes: HashMap::new(),
-            bindings: HashMap::new(),
+            resolutions: FxHashMap::default(),
+            module_scopes: FxHashMap::default(),
+            package_scopes: FxHashMap::default(),
+            bindings: FxHashMap::default(),
         },
         diagnostics: Diagnostics::default(),
         instantiations: Vec::new(),
-        memo: HashMap::new(),
+        memo: FxHashMap::default(),
         modules_in_progress: Vec::new(),
         simulate_seen: None,
     };
@@ -106,7 +110,9 @@ impl<'w> Checker<'w> {
     fn decl(&mut self, decl: &'w Decl, scope: ScopeId) {
         match &decl.kind {
             DeclKind::Let(bindings) => self.let_decl(bindings, scope),
-            DeclKind::Define { name, params, body } => self.define(name, params, body, scope),
+            DeclKind::Define(define) => {
+                self.define(&define.name, &define.params, &define.body, scope)
+            }
             DeclKind::Join(join) => {
                 let JoinDecl {
                     first,
@@ -167,13 +173,7 @@ impl<'w> Checker<'w> {
                     self.apply(effort, effort_ty, target, target_ty);
                 }
             }
-            DeclKind::Package { name, decls } => {
-                let limit = self.out.scope(scope).len();
-                let package = self.new_scope(Some((scope, limit)));
-                self.out.package_scopes.insert(decl.span, package);
-                self.decls(decls, package);
-                self.declare(scope, name, Ty::Package(package));
-            }
+            DeclKind::Package(package_decl) => self.package(package_decl, decl.span, scope),
             DeclKind::Import(import) => {
                 let alias = &import.alias;
                 let Some(&module) = self.workspace.imports.get(&decl.span) else {
@@ -194,6 +194,31 @@ impl<'w> Checker<'w> {
                 }
             }
             DeclKind::Error => {}
+        }
+    }
+
+    /// `package P = decls end`: its declarations see the file's names declared before it.
+    /// An array `package P[i in a .. b]` is declared before its declarations, which may name
+    /// other instances (`P[i - 1]:x`), and its index is a scalar name of the package.
+    fn package(&mut self, package_decl: &'w PackageDecl, span: Span, scope: ScopeId) {
+        let PackageDecl { name, index, decls } = package_decl;
+        let package = self.new_scope(None);
+        self.out.package_scopes.insert(span, package);
+        if let Some(index) = index {
+            let mut ctx = self.ctx(scope);
+            for bound in [&index.first, &index.last] {
+                let ty = self.expr(bound, &mut ctx);
+                self.expect_value(bound, ty, Ty::Scalar, "a bound of an array of packages");
+            }
+            self.declare(scope, name, Ty::Package(package));
+            self.scope_mut(package).index = Some(index.variable.name.clone());
+            self.declare(package, &index.variable, Ty::Scalar);
+        }
+        let limit = self.out.scope(scope).len();
+        self.scope_mut(package).parent = Some((scope, limit));
+        self.decls(decls, package);
+        if index.is_none() {
+            self.declare(scope, name, Ty::Package(package));
         }
     }
 
@@ -365,11 +390,11 @@ impl<'w> Checker<'w> {
     /// derivative (a starting velocity, which cannot be `fixed`).
     fn initial_value(&mut self, initial: &'w crate::syntax::ast::InitialValue, ctx: &mut Ctx) {
         let (coordinate, primes) = strip_primes(&initial.target);
-        let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field { .. });
+        let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field(_));
         let ty = self.expr(&initial.target, ctx);
         let target_ty = match &coordinate.kind {
-            crate::syntax::ast::ExprKind::Field { target, .. } => {
-                self.expr_type_silently(target, ctx)
+            crate::syntax::ast::ExprKind::Field(access) => {
+                self.expr_type_silently(&access.target, ctx)
             }
             _ => ty,
         };
@@ -547,8 +572,9 @@ fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
                 )
             })
             .collect(),
-        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => {
-            vec![(name.name.clone(), name.span, decl.span)]
+        DeclKind::Define(define) => vec![(define.name.name.clone(), define.name.span, decl.span)],
+        DeclKind::Package(package) => {
+            vec![(package.name.name.clone(), package.name.span, decl.span)]
         }
         DeclKind::Import(import) => named(&import.alias, decl.span),
         DeclKind::Join(join) => named(&join.name, decl.span),

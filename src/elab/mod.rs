@@ -6,32 +6,40 @@
 mod elaborator;
 mod eval;
 mod fields;
+mod instances;
 pub mod mechanism;
 mod operations;
 pub mod value;
-
-use std::collections::HashMap;
 
 use crate::check::Checked;
 use crate::diag::Diagnostic;
 use crate::load::Workspace;
 use elaborator::Elaborator;
 pub use mechanism::{Mechanism, Summary};
+use rustc_hash::FxHashMap;
 
-/// Evaluates every module of a checked workspace into one mechanism.
-pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechanism, Diagnostic> {
+/// Evaluates every module of a checked workspace into one mechanism, with warnings about what
+/// is legal but probably not meant.
+pub fn elaborate(
+    workspace: &Workspace,
+    checked: &Checked<'_>,
+) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
     let mut elaborator = Elaborator {
         workspace,
         checked,
-        globals: HashMap::new(),
+        globals: FxHashMap::default(),
         mechanism: Mechanism::default(),
         elaborated_modules: Vec::new(),
         depth: 0,
         fields: Vec::new(),
+        literals: FxHashMap::default(),
+        instances: Default::default(),
+        aliases: FxHashMap::default(),
+        warnings: Vec::new(),
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;
     }
     elaborator.apply_fields()?;
-    Ok(elaborator.mechanism)
+    Ok((elaborator.mechanism, elaborator.warnings))
 }

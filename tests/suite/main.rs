@@ -6,6 +6,7 @@ mod common;
 
 mod allocations;
 mod architecture;
+mod arrays;
 mod assembly;
 mod cli;
 mod closed_loops;
@@ -27,6 +28,7 @@ mod native;
 mod pinocchio_fixtures;
 mod properties;
 mod regression;
+mod runs;
 mod simulation;
 mod symbolic;
 mod symbolic_equations;
