@@ -33,5 +33,8 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
         elaborator.module(root)?;
     }
     elaborator.apply_fields()?;
+    for &root in &workspace.roots {
+        elaborator.name_frames(root)?;
+    }
     Ok(elaborator.mechanism)
 }

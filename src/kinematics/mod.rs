@@ -6,6 +6,7 @@ pub mod chain;
 pub mod closure;
 pub mod eval;
 pub mod forward;
+pub mod frames;
 pub mod initial;
 pub mod joint;
 pub mod mobility;
