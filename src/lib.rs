@@ -14,6 +14,7 @@ pub mod analysis;
 pub mod api;
 pub mod check;
 pub mod diag;
+pub mod drag;
 pub mod driver;
 pub mod dynamics;
 pub mod elab;

@@ -14,6 +14,8 @@ use lsdc::elab::Mechanism;
 use lsdc::load::LoadOptions;
 use lsdc::output::text;
 
+mod cli;
+
 #[derive(Parser)]
 #[command(
     name = "lsdc",
@@ -262,6 +264,9 @@ enum Command {
     /// compare each run with a tight reference at the outputs, and print the work-precision
     /// table (errors, closure, energy drift, steps, evaluations, CPU time).
     Precision(PrecisionArgs),
+    /// Drag a point of a body along a path of targets, quasi-statically: the configuration at
+    /// each target, the distance left, the loops' residual or the joints' gap, the energy.
+    Drag(cli::drag::DragArgs),
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics {
@@ -369,6 +374,7 @@ fn main() -> ExitCode {
         } => compile(&file, &libraries.options(), emit, format, output.as_deref()),
         Command::Simulate(args) => simulate(&args),
         Command::Precision(args) => precision(&args),
+        Command::Drag(args) => cli::drag::drag(&args),
         Command::Statics {
             file,
             libraries,

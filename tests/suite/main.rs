@@ -10,6 +10,7 @@ mod assembly;
 mod cli;
 mod closed_loops;
 mod constrained;
+mod drag;
 mod dynamics;
 mod examples;
 mod force_elements;
