@@ -28,3 +28,4 @@ pub mod spatial;
 pub mod symbolic;
 pub mod syntax;
 pub mod topology;
+pub mod view;

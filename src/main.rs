@@ -267,6 +267,9 @@ enum Command {
     /// Drag a point of a body along a path of targets, quasi-statically: the configuration at
     /// each target, the distance left, the loops' residual or the joints' gap, the energy.
     Drag(cli::drag::DragArgs),
+    /// Show the mechanism in 3D in a web page: served on 127.0.0.1 (simulations on demand,
+    /// bodies dragged with the mouse), or exported as one standalone HTML file.
+    View(cli::view::ViewArgs),
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics {
@@ -375,6 +378,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate(&args),
         Command::Precision(args) => precision(&args),
         Command::Drag(args) => cli::drag::drag(&args),
+        Command::View(args) => cli::view::view(&args),
         Command::Statics {
             file,
             libraries,
