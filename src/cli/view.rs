@@ -50,7 +50,10 @@ pub fn view(args: &ViewArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let title = args.file.file_stem().map_or("mechanism".into(), |s| s.to_string_lossy().to_string());
+    let title = args
+        .file
+        .file_stem()
+        .map_or("mechanism".into(), |s| s.to_string_lossy().to_string());
     let mut viewer = match Viewer::new(mechanism, prepared, &title) {
         Ok(v) => v,
         Err(message) => return usage_error(&message),
@@ -90,7 +93,9 @@ fn serve(viewer: &mut Viewer, port: u16) -> ExitCode {
         Ok(l) => l,
         Err(e) => return usage_error(&format!("cannot listen on 127.0.0.1:{port}: {e}")),
     };
-    let address = listener.local_addr().map_or(format!("127.0.0.1:{port}"), |a| a.to_string());
+    let address = listener
+        .local_addr()
+        .map_or(format!("127.0.0.1:{port}"), |a| a.to_string());
     println!("lsdc view: http://{address}/ (Ctrl+C to stop)");
     let _ = std::io::stdout().flush();
     match server::serve(&listener, viewer, None) {

@@ -52,7 +52,10 @@ impl Viewer {
             duration,
             ..SettingsChanges::default()
         };
-        self.prepared.settings.apply(&changes).map_err(|e| e.to_string())?;
+        self.prepared
+            .settings
+            .apply(&changes)
+            .map_err(|e| e.to_string())?;
         let simulation = run_with(&self.prepared, &RunOptions::default(), &mut |_| {});
         self.prepared.settings = saved;
         let recorded = Recorded::from(&simulation);
@@ -82,12 +85,13 @@ impl Viewer {
         };
         let options = DragOptions::default();
         let target = Vector3::from(request.target);
-        let dragged = drag(model, &frame, &request.coordinates, &target, &options).map_err(|e| match e {
-            DragError::Evaluation(e) => crate::kinematics::eval::describe(&e, &self.mechanism),
-            DragError::NoAssembly { loop_residual } => {
-                format!("the loops cannot be closed (residual {loop_residual:.3e})")
-            }
-        })?;
+        let dragged =
+            drag(model, &frame, &request.coordinates, &target, &options).map_err(|e| match e {
+                DragError::Evaluation(e) => crate::kinematics::eval::describe(&e, &self.mechanism),
+                DragError::NoAssembly { loop_residual } => {
+                    format!("the loops cannot be closed (residual {loop_residual:.3e})")
+                }
+            })?;
         let poses = scene::body_poses(model, &dragged.q)
             .map_err(|e| crate::kinematics::eval::describe(&e, &self.mechanism))?;
         Ok(DragResponse {

@@ -126,7 +126,11 @@ pub fn scene(mechanism: &Mechanism, prepared: &Prepared, title: &str) -> Result<
                 points: shape,
                 mass: inertia.mass,
                 com: array(&inertia.com),
-                ellipsoid: ellipsoid(inertia.mass, &inertia.com, &inertia.inertia.fixed_view::<3, 3>(0, 0).into_owned()),
+                ellipsoid: ellipsoid(
+                    inertia.mass,
+                    &inertia.com,
+                    &inertia.inertia.fixed_view::<3, 3>(0, 0).into_owned(),
+                ),
             }
         })
         .collect();
@@ -138,7 +142,9 @@ pub fn scene(mechanism: &Mechanism, prepared: &Prepared, title: &str) -> Result<
         .map(|(index, joint)| {
             let (kind, axis) = match joint.single_motion() {
                 Some(SingleMotion::Rotation { axis, .. }) => ("revolute", Some(axis)),
-                Some(SingleMotion::Translation { direction }) => ("prismatic", Some(direction.normalize())),
+                Some(SingleMotion::Translation { direction }) => {
+                    ("prismatic", Some(direction.normalize()))
+                }
                 None => ("other", None),
             };
             SceneJoint {
@@ -179,12 +185,15 @@ fn ellipsoid(mass: f64, com: &Vector3<f64>, about_origin: &Matrix3<f64>) -> Opti
     if mass <= 0.0 {
         return None;
     }
-    let central = about_origin - mass * (Matrix3::identity() * com.norm_squared() - com * com.transpose());
+    let central =
+        about_origin - mass * (Matrix3::identity() * com.norm_squared() - com * com.transpose());
     let eigen = central.symmetric_eigen();
     let moments = eigen.eigenvalues;
     let semi = |i: usize| {
         let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-        (2.5 * (moments[j] + moments[k] - moments[i]) / mass).max(0.0).sqrt()
+        (2.5 * (moments[j] + moments[k] - moments[i]) / mass)
+            .max(0.0)
+            .sqrt()
     };
     let mut axes = eigen.eigenvectors;
     if axes.determinant() < 0.0 {
@@ -246,7 +255,11 @@ impl From<&Simulation> for Recorded {
         Recorded {
             coordinate_names: simulation.coordinate_names.clone(),
             samples: samples.collect(),
-            failure: simulation.report.failure.as_ref().map(|f| f.message.clone()),
+            failure: simulation
+                .report
+                .failure
+                .as_ref()
+                .map(|f| f.message.clone()),
         }
     }
 }
@@ -254,8 +267,13 @@ impl From<&Simulation> for Recorded {
 /// Reads the output of `lsdc simulate --format json`, checking that it is a run of this
 /// mechanism (the same coordinates).
 pub fn read_results(text: &str, name: &str, prepared: &Prepared) -> Result<Recorded, String> {
-    let recorded: Recorded = serde_json::from_str(text)
-        .map_err(|e| format!("{name}:{}:{}: not the output of `lsdc simulate --format json`: {e}", e.line(), e.column()))?;
+    let recorded: Recorded = serde_json::from_str(text).map_err(|e| {
+        format!(
+            "{name}:{}:{}: not the output of `lsdc simulate --format json`: {e}",
+            e.line(),
+            e.column()
+        )
+    })?;
     if recorded.coordinate_names != prepared.coordinate_names {
         return Err(format!(
             "{name}: its coordinates ({}) are not this mechanism's ({})",
@@ -264,8 +282,15 @@ pub fn read_results(text: &str, name: &str, prepared: &Prepared) -> Result<Recor
         ));
     }
     let count = recorded.coordinate_names.len();
-    if let Some(k) = recorded.samples.iter().position(|s| s.coordinates.len() != count || s.rates.len() != count) {
-        return Err(format!("{name}: sample {} does not have {count} coordinates and rates", k + 1));
+    if let Some(k) = recorded
+        .samples
+        .iter()
+        .position(|s| s.coordinates.len() != count || s.rates.len() != count)
+    {
+        return Err(format!(
+            "{name}: sample {} does not have {count} coordinates and rates",
+            k + 1
+        ));
     }
     Ok(recorded)
 }
@@ -293,26 +318,48 @@ pub fn animation(
     let mut series = Vec::new();
     for (i, name) in simulation.coordinate_names.iter().enumerate() {
         let values = samples.iter().map(|s| s.coordinates[i]).collect();
-        series.push(Series { name: name.clone(), values });
+        series.push(Series {
+            name: name.clone(),
+            values,
+        });
     }
     for (i, name) in simulation.coordinate_names.iter().enumerate() {
         let values = samples.iter().map(|s| s.rates[i]).collect();
-        series.push(Series { name: format!("{name}'"), values });
+        series.push(Series {
+            name: format!("{name}'"),
+            values,
+        });
     }
     series.push(Series {
         name: "kinetic_energy".into(),
         values: samples.iter().map(|s| s.kinetic_energy).collect(),
     });
     if samples.iter().all(|s| s.potential_energy.is_some()) {
-        let potential: Vec<f64> = samples.iter().map(|s| s.potential_energy.unwrap_or(0.0)).collect();
-        let total = samples.iter().zip(&potential).map(|(s, p)| s.kinetic_energy + p).collect();
-        series.push(Series { name: "potential_energy".into(), values: potential });
-        series.push(Series { name: "energy".into(), values: total });
+        let potential: Vec<f64> = samples
+            .iter()
+            .map(|s| s.potential_energy.unwrap_or(0.0))
+            .collect();
+        let total = samples
+            .iter()
+            .zip(&potential)
+            .map(|(s, p)| s.kinetic_energy + p)
+            .collect();
+        series.push(Series {
+            name: "potential_energy".into(),
+            values: potential,
+        });
+        series.push(Series {
+            name: "energy".into(),
+            values: total,
+        });
     }
     for (k, frame) in named.iter().enumerate() {
         for (c, axis) in ["x", "y", "z"].iter().enumerate() {
             let values = std::mem::take(&mut frame_positions[3 * k + c]);
-            series.push(Series { name: format!("{}.{axis}", frame.name), values });
+            series.push(Series {
+                name: format!("{}.{axis}", frame.name),
+                values,
+            });
         }
     }
     Ok(Animation {

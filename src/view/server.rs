@@ -4,6 +4,7 @@
 
 use std::io::{self, BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
+use std::time::Duration;
 
 use super::Viewer;
 
@@ -11,7 +12,11 @@ use super::Viewer;
 const MAX_BODY: usize = 1 << 20;
 
 /// Answers requests until `requests` have been served (forever when `None`).
-pub fn serve(listener: &TcpListener, viewer: &mut Viewer, requests: Option<usize>) -> io::Result<()> {
+pub fn serve(
+    listener: &TcpListener,
+    viewer: &mut Viewer,
+    requests: Option<usize>,
+) -> io::Result<()> {
     let mut served = 0;
     for stream in listener.incoming() {
         // A client that hangs up mid-request is its own problem, not the server's.
@@ -52,7 +57,10 @@ fn read_request(stream: &TcpStream) -> io::Result<Request> {
         }
     }
     if length > MAX_BODY {
-        return Err(io::Error::new(io::ErrorKind::InvalidData, "request too large"));
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            "request too large",
+        ));
     }
     let mut body = vec![0; length];
     reader.read_exact(&mut body)?;
@@ -64,7 +72,12 @@ fn read_request(stream: &TcpStream) -> io::Result<Request> {
     })
 }
 
+/// How long a connection may stay silent. Browsers open connections ahead of need and may
+/// leave them unused; one connection at a time, such a connection would hold up the others.
+const IDLE: Duration = Duration::from_millis(300);
+
 fn handle(mut stream: TcpStream, viewer: &mut Viewer) -> io::Result<()> {
+    stream.set_read_timeout(Some(IDLE))?;
     let request = read_request(&stream)?;
     let (status, kind, body) = respond(&request, viewer);
     write!(
@@ -81,7 +94,11 @@ const JSON: &str = "application/json";
 fn respond(request: &Request, viewer: &mut Viewer) -> (&'static str, &'static str, String) {
     let json = |result: Result<String, String>| match result {
         Ok(body) => ("200 OK", JSON, body),
-        Err(message) => ("400 Bad Request", JSON, serde_json::json!({ "error": message }).to_string()),
+        Err(message) => (
+            "400 Bad Request",
+            JSON,
+            serde_json::json!({ "error": message }).to_string(),
+        ),
     };
     match (request.method.as_str(), request.path.as_str()) {
         ("GET", "/" | "/index.html") => ("200 OK", "text/html; charset=utf-8", viewer.page(true)),
@@ -97,7 +114,11 @@ fn respond(request: &Request, viewer: &mut Viewer) -> (&'static str, &'static st
                 .and_then(|drag| viewer.drag(&drag))
                 .and_then(|response| to_json(&response)),
         ),
-        _ => ("404 Not Found", "text/plain", format!("no page at {}\n", request.path)),
+        _ => (
+            "404 Not Found",
+            "text/plain",
+            format!("no page at {}\n", request.path),
+        ),
     }
 }
 
@@ -107,11 +128,16 @@ fn to_json(value: &impl serde::Serialize) -> Result<String, String> {
 
 /// `duration=D` from the query, if there.
 fn duration(query: &str) -> Result<Option<f64>, String> {
-    let Some(value) = query.split('&').find_map(|pair| pair.strip_prefix("duration=")) else {
+    let Some(value) = query
+        .split('&')
+        .find_map(|pair| pair.strip_prefix("duration="))
+    else {
         return Ok(None);
     };
     match value.parse::<f64>() {
         Ok(d) if d.is_finite() && d > 0.0 => Ok(Some(d)),
-        _ => Err(format!("`duration` must be a positive number, not `{value}`")),
+        _ => Err(format!(
+            "`duration` must be a positive number, not `{value}`"
+        )),
     }
 }

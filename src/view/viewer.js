@@ -12,7 +12,11 @@
                    frame: 0, time: 0, advanced: false, playing: false, drag: null, error: null };
   window.lsdcStatus = status;
   const report = () => { document.getElementById("status").textContent = JSON.stringify(status); };
-  const message = (text) => { document.getElementById("message").textContent = text; };
+  const message = (text) => {
+    const box = document.getElementById("message");
+    box.textContent = text;
+    box.style.display = text ? "" : "none";
+  };
 
   if (!window.THREE) {
     status.error = "three.js is missing";
@@ -298,7 +302,8 @@
       const band = normalised ? 0 : k;
       const top = 5 + band * bandHeight, bottom = top + bandHeight - 8;
       const lo = Math.min(...series.values), hi = Math.max(...series.values);
-      const span = hi - lo || 1;
+      // A series constant to round-off is drawn flat, not as magnified noise.
+      const span = Math.max(hi - lo, 1e-9 * Math.max(Math.abs(lo), Math.abs(hi)), 1e-300);
       const y = (v) => bottom - (v - lo) / span * (bottom - top);
       g.strokeStyle = "#" + palette[k % palette.length].toString(16).padStart(6, "0");
       g.beginPath();
@@ -368,37 +373,43 @@
     const target = new THREE.Vector3();
     if (raycaster.ray.intersectPlane(dragging.plane, target)) dragTo(dragging.body, dragging.local, target);
   }
+  const dragRequest = (body, local, target) => JSON.stringify({
+    body, point: [local.x, local.y, local.z], target: [target.x, target.y, target.z], coordinates });
+  // The server's answer to a move: the new configuration, or why not.
+  function applyDrag(ok, result) {
+    if (!ok) { message(result.error); return null; }
+    coordinates = result.coordinates;
+    applyPoses(result.poses);
+    message(result.reached ? "" : "out of reach: " + result.distance.toPrecision(3) + " away");
+    return result;
+  }
   // One request at a time: moves while one is out are dropped, the next move catches up.
   async function dragTo(body, local, target) {
     if (pending) return null;
     pending = true;
     try {
       const response = await fetch("/api/drag", {
-        method: "POST",
-        headers: { "Content-Type": "application/json" },
-        body: JSON.stringify({ body, point: [local.x, local.y, local.z],
-                               target: [target.x, target.y, target.z], coordinates }),
-      });
-      const result = await response.json();
-      if (!response.ok) { message(result.error); return null; }
-      coordinates = result.coordinates;
-      applyPoses(result.poses);
-      message(result.reached ? "" : "out of reach: " + result.distance.toPrecision(3) + " away");
-      return result;
+        method: "POST", headers: { "Content-Type": "application/json" }, body: dragRequest(body, local, target) });
+      return applyDrag(response.ok, await response.json());
     } finally {
       pending = false;
     }
   }
 
   // `?drag-test=1`: drags the last body's last point by a tenth of the mechanism's size and
-  // records how far it moved (for the browser tests).
-  async function dragTest() {
+  // records how far it moved, for the browser tests. The request is synchronous so that the
+  // page has its answer before it finishes loading (when a headless browser reads it).
+  function dragTest() {
     const body = scene.bodies[scene.bodies.length - 1];
     const point = body.points[body.points.length - 1] || body.com;
     const local = new THREE.Vector3(...point);
     const before = groups[body.number].localToWorld(local.clone());
     const target = before.clone().add(new THREE.Vector3(0.1 * radius, 0.1 * radius, 0));
-    const result = await dragTo(body.number, local, target);
+    const request = new XMLHttpRequest();
+    request.open("POST", "/api/drag", false);
+    request.setRequestHeader("Content-Type", "application/json");
+    request.send(dragRequest(body.number, local, target));
+    const result = applyDrag(request.status === 200, JSON.parse(request.responseText));
     groups[body.number].updateMatrixWorld(true);
     const after = groups[body.number].localToWorld(local.clone());
     status.drag = { moved: after.distanceTo(before), distance: result ? result.distance : null };
@@ -411,6 +422,8 @@
   if (params.get("play") === "1") setPlaying(true);
   status.ready = true;
   report();
-  if (params.get("drag-test") === "1") dragTest();
+  if (params.get("drag-test") === "1") {
+    try { dragTest(); } catch (e) { status.error = String(e); }
+  }
   requestAnimationFrame(tick);
 })();

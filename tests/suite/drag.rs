@@ -42,7 +42,7 @@ fn planar(model: &KinematicModel) -> PlanarModel {
 /// The coupler point at crank angle t, in closed form: B on the crank circle, C where the
 /// circles about B (coupler, 3.5) and D = (4, 0) (rocker, 3) meet above BD, the point 1.75
 /// along BC and 1 to its left.
-fn coupler_point(t: f64) -> [f64; 3] {
+pub fn coupler_point(t: f64) -> [f64; 3] {
     let b = Vector2::new(t.cos(), t.sin());
     let bd = Vector2::new(4.0, 0.0) - b;
     let d = bd.norm();

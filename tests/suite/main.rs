@@ -45,4 +45,5 @@ mod unit_syntax;
 mod unit_topology;
 mod urdf_export;
 mod urdf_import;
+mod view;
 mod welds;
