@@ -158,10 +158,9 @@ impl PlanarModel {
             if body == 0 {
                 continue;
             }
-            let r = Self::point_rows(state, body, &local);
-            for c in 0..3 {
-                rows.push((3 * (body - 1) + c, [sign * r[0][c], sign * r[1][c]]));
-            }
+            let [x_row, y_row] = Self::point_rows(state, body, &local);
+            let columns = x_row.iter().zip(&y_row).enumerate();
+            rows.extend(columns.map(|(c, (x, y))| (3 * (body - 1) + c, [sign * x, sign * y])));
         }
         for &(i, gi) in &rows {
             force[i] -= k * (gi[0] * gap.x + gi[1] * gap.y);

@@ -17,12 +17,10 @@ pub fn serve(
     viewer: &mut Viewer,
     requests: Option<usize>,
 ) -> io::Result<()> {
-    let mut served = 0;
-    for stream in listener.incoming() {
+    for (served, stream) in listener.incoming().enumerate() {
         // A client that hangs up mid-request is its own problem, not the server's.
         let _ = handle(stream?, viewer);
-        served += 1;
-        if requests.is_some_and(|n| served >= n) {
+        if requests.is_some_and(|n| served + 1 >= n) {
             break;
         }
     }

@@ -10,22 +10,11 @@ use lsdc::kinematics::model::KinematicModel;
 use lsdc::kinematics::penalty::{self, PlanarModel, Stiffness};
 use nalgebra::Vector2;
 
-use crate::common::programs::example_text;
+use crate::common::programs::mechanism;
 
 /// The four-bar example assembled, and its coupler point.
 fn four_bar() -> (KinematicModel, FramePoint, Vec<f64>) {
-    let text = example_text("four_bar", &[]);
-    let options = lsdc::load::LoadOptions {
-        library_dirs: Vec::new(),
-        use_environment: false,
-    };
-    let compilation = lsdc::driver::compile_text(
-        "four_bar.lsd",
-        &text,
-        Some(std::path::Path::new("examples")),
-        &options,
-    );
-    let mechanism = compilation.mechanism.expect("elaborates");
+    let mechanism = mechanism("four_bar", &[]);
     let topology = lsdc::topology::build(&mechanism).expect("numbered");
     let (model, report, _) =
         lsdc::analysis::assembled_model(&mechanism, topology, &AssemblyOptions::default())
@@ -229,18 +218,7 @@ fn the_penalty_system_is_symmetric_and_is_the_energy_hessian_at_rest() {
 
 #[test]
 fn a_spatial_mechanism_is_refused_by_the_penalty_method() {
-    let text = example_text("heavy_top", &[]);
-    let options = lsdc::load::LoadOptions {
-        library_dirs: Vec::new(),
-        use_environment: false,
-    };
-    let compilation = lsdc::driver::compile_text(
-        "heavy_top.lsd",
-        &text,
-        Some(std::path::Path::new("examples")),
-        &options,
-    );
-    let mechanism = compilation.mechanism.expect("elaborates");
+    let mechanism = mechanism("heavy_top", &[]);
     let topology = lsdc::topology::build(&mechanism).unwrap();
     let (model, _, _) =
         lsdc::analysis::assembled_model(&mechanism, topology, &AssemblyOptions::default()).unwrap();

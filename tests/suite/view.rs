@@ -13,18 +13,7 @@ use crate::common::lsdc;
 use crate::drag::coupler_point;
 
 fn viewer(name: &str) -> Viewer {
-    let text = crate::common::programs::example_text(name, &[]);
-    let options = lsdc::load::LoadOptions {
-        library_dirs: Vec::new(),
-        use_environment: false,
-    };
-    let compilation = lsdc::driver::compile_text(
-        &format!("{name}.lsd"),
-        &text,
-        Some(std::path::Path::new("examples")),
-        &options,
-    );
-    let mechanism = compilation.mechanism.expect("elaborates");
+    let mechanism = crate::common::programs::mechanism(name, &[]);
     let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
         .unwrap_or_else(|_| panic!("{name} prepares"));
     Viewer::new(mechanism, prepared, name).expect("a scene")
