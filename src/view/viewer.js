@@ -15,7 +15,7 @@
   const message = (text) => {
     const box = document.getElementById("message");
     box.textContent = text;
-    box.style.display = text ? "" : "none";
+    box.style.display = text ? "block" : "none";
   };
 
   if (!window.THREE) {
@@ -161,7 +161,7 @@
   applyPoses(scene.poses);
 
   // Orbit (left button), pan (right button or shift), zoom (wheel), about `target`, z up.
-  const orbit = { target: centre.clone(), distance: radius * 3.2, azimuth: -Math.PI / 3, elevation: 0.5 };
+  const orbit = { target: centre.clone(), distance: radius * 2.6, azimuth: -Math.PI / 3, elevation: 0.5 };
   function placeCamera() {
     const e = orbit.elevation, a = orbit.azimuth;
     const offset = new THREE.Vector3(Math.cos(e) * Math.cos(a), Math.cos(e) * Math.sin(a), Math.sin(e));
