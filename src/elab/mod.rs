@@ -6,6 +6,8 @@
 mod elaborator;
 mod eval;
 mod fields;
+mod instance_table;
+mod instances;
 pub mod mechanism;
 mod operations;
 pub mod value;
@@ -17,8 +19,12 @@ use elaborator::Elaborator;
 pub use mechanism::{Mechanism, Summary};
 use rustc_hash::FxHashMap;
 
-/// Evaluates every module of a checked workspace into one mechanism.
-pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechanism, Diagnostic> {
+/// Evaluates every module of a checked workspace into one mechanism, with warnings about what
+/// is legal but probably not meant.
+pub fn elaborate(
+    workspace: &Workspace,
+    checked: &Checked<'_>,
+) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
     let mut elaborator = Elaborator {
         workspace,
         checked,
@@ -28,6 +34,9 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
         depth: 0,
         fields: Vec::new(),
         literals: FxHashMap::default(),
+        instances: Default::default(),
+        aliases: FxHashMap::default(),
+        warnings: Vec::new(),
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;
@@ -36,5 +45,5 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
     for &root in &workspace.roots {
         elaborator.name_frames(root)?;
     }
-    Ok(elaborator.mechanism)
+    Ok((elaborator.mechanism, elaborator.warnings))
 }
