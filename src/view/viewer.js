@@ -251,7 +251,10 @@
     playButton.textContent = clock.playing ? "Pause" : "Play";
   }
   playButton.addEventListener("click", () => setPlaying(!clock.playing));
-  function tick(now) {
+  // The clock runs on a timer (which a headless browser's virtual time drives as well),
+  // the drawing on animation frames.
+  function advance() {
+    const now = performance.now();
     if (clock.playing) {
       const speed = +document.getElementById("speed").value;
       clock.time += (now - clock.last) / 1000 * speed;
@@ -260,8 +263,10 @@
       show(outputAt(clock.time));
     }
     clock.last = now;
-    renderer.render(world, camera);
     report();
+  }
+  function tick() {
+    renderer.render(world, camera);
     requestAnimationFrame(tick);
   }
 
@@ -425,5 +430,6 @@
   if (params.get("drag-test") === "1") {
     try { dragTest(); } catch (e) { status.error = String(e); }
   }
+  setInterval(advance, 40);
   requestAnimationFrame(tick);
 })();
