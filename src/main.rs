@@ -14,6 +14,8 @@ use lsdc::elab::Mechanism;
 use lsdc::load::LoadOptions;
 use lsdc::output::text;
 
+mod cli;
+
 #[derive(Parser)]
 #[command(
     name = "lsdc",
@@ -77,6 +79,11 @@ struct SimulateArgs {
     /// join, in the fixed axes (moment then force).
     #[arg(long)]
     reactions: bool,
+    /// Output the position, orientation (quaternion w, x, y, z), velocity and angular velocity
+    /// of a frame, in the fixed frame: a frame the program names (`let tip = ... @ arm;`), a
+    /// body's reference frame (its name) or `earth`. Repeatable.
+    #[arg(long = "output-frame", value_name = "NAME")]
+    output_frames: Vec<String>,
     /// Most steps of the integrator, rejected ones included, before the run stops with a
     /// failure (its outputs kept).
     #[arg(long, value_name = "N", default_value_t = lsdc::simulate::settings::DEFAULT_MAX_STEPS)]
@@ -257,6 +264,12 @@ enum Command {
     /// compare each run with a tight reference at the outputs, and print the work-precision
     /// table (errors, closure, energy drift, steps, evaluations, CPU time).
     Precision(PrecisionArgs),
+    /// Drag a point of a body along a path of targets, quasi-statically: the configuration at
+    /// each target, the distance left, the loops' residual or the joints' gap, the energy.
+    Drag(cli::drag::DragArgs),
+    /// Show the mechanism in 3D in a web page: served on 127.0.0.1 (simulations on demand,
+    /// bodies dragged with the mouse), or exported as one standalone HTML file.
+    View(cli::view::ViewArgs),
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics {
@@ -375,6 +388,8 @@ fn main() -> ExitCode {
         } => compile(&file, &libraries.options(), emit, format, output.as_deref()),
         Command::Simulate(args) => simulate(&args),
         Command::Precision(args) => precision(&args),
+        Command::Drag(args) => cli::drag::drag(&args),
+        Command::View(args) => cli::view::view(&args),
         Command::Statics {
             file,
             libraries,
@@ -678,6 +693,10 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     if let Err(error) = prepared.settings.apply(&settings_changes(args)) {
         return usage_error(&error.to_string());
     }
+    let frames = match resolve_frames(mechanism, &prepared, &args.output_frames) {
+        Ok(frames) => frames,
+        Err(message) => return usage_error(&message),
+    };
     if args.compiled {
         let native = lsdc::simulate::compiled::attach_with_warnings(&mut prepared, mechanism);
         prepared.warnings.extend(native);
@@ -695,7 +714,7 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     if !prepared.warnings.is_empty() {
         report_diagnostics(&compilation, &prepared.warnings, args.report);
     }
-    let (simulation, written) = run_and_write(args, &prepared, samples_out);
+    let (simulation, written) = run_and_write(args, &prepared, &frames, samples_out);
     let plotted = match &args.plot {
         Some(path) => lsdc::output::plot::plot(&simulation, path)
             .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
@@ -733,6 +752,18 @@ fn settings_changes(args: &SimulateArgs) -> lsdc::simulate::settings::SettingsCh
     }
 }
 
+/// The frames `--output-frame` names, resolved on the mechanism.
+fn resolve_frames(
+    mechanism: &Mechanism,
+    prepared: &lsdc::simulate::prepare::Prepared,
+    names: &[String],
+) -> Result<Vec<lsdc::kinematics::frames::FramePoint>, String> {
+    names
+        .iter()
+        .map(|name| lsdc::kinematics::frames::resolve(mechanism, &prepared.kinematics, name))
+        .collect()
+}
+
 /// The file the samples go to (created, or emptied, now), or standard output.
 fn open_samples_output(path: Option<&std::path::Path>) -> Result<Box<dyn Write>, ExitCode> {
     match path {
@@ -752,8 +783,10 @@ fn open_samples_output(path: Option<&std::path::Path>) -> Result<Box<dyn Write>,
 fn run_and_write(
     args: &SimulateArgs,
     prepared: &lsdc::simulate::prepare::Prepared,
+    frames: &[lsdc::kinematics::frames::FramePoint],
     out: Box<dyn Write>,
 ) -> (lsdc::simulate::run::Simulation, Result<(), String>) {
+    use lsdc::kinematics::frames::{column_names, states};
     use lsdc::simulate::run::{run_with, RunOptions, Sample};
     let target = args
         .out
@@ -768,15 +801,28 @@ fn run_and_write(
     let mut csv = (args.format == SampleFormat::Csv).then(|| {
         let names = &prepared.coordinate_names;
         let reactions = lsdc::simulate::run::reaction_names_of(prepared);
-        lsdc::output::csv::CsvWriter::new(out, names, &reactions)
+        lsdc::output::csv::CsvWriter::new(out, names, &reactions, &column_names(frames))
     });
+    let frame_values = |sample: &Sample| -> Vec<f64> {
+        let found = states(
+            &prepared.kinematics,
+            frames,
+            &sample.coordinates,
+            &sample.rates,
+        );
+        // The run evaluated these chains at every step: they cannot fail here.
+        found.map_or_else(
+            |_| vec![f64::NAN; 13 * frames.len()],
+            |states| states.iter().flat_map(|s| s.values()).collect(),
+        )
+    };
     let bar = progress_bar(prepared.settings.duration);
     let mut sink = |sample: &Sample| {
         if let Some(bar) = &bar {
             bar.set_position((sample.time * 1000.0) as u64);
         }
         if let Some(csv) = &mut csv {
-            csv.write_sample(sample);
+            csv.write_sample(sample, &frame_values(sample));
         }
     };
     let simulation = run_with(prepared, &options, &mut sink);
@@ -785,20 +831,42 @@ fn run_and_write(
     }
     let written = match csv {
         Some(csv) => csv.finish(&simulation.report),
-        None => write_json_samples(&simulation, args.out.as_deref()),
+        None => write_json_samples(&simulation, prepared, frames, args.out.as_deref()),
     };
     let written = written.map_err(|e| format!("cannot write {target}: {e}"));
     (simulation, written)
 }
 
+/// The simulation as JSON; with `--output-frame`, each sample also has `frames`: each frame's
+/// state by name.
 fn write_json_samples(
     simulation: &lsdc::simulate::run::Simulation,
+    prepared: &lsdc::simulate::prepare::Prepared,
+    frames: &[lsdc::kinematics::frames::FramePoint],
     path: Option<&std::path::Path>,
 ) -> std::io::Result<()> {
+    let mut value = serde_json::to_value(simulation).unwrap_or_default();
+    if !frames.is_empty() {
+        let samples = value["samples"].as_array_mut().into_iter().flatten();
+        for (json_sample, sample) in samples.zip(&simulation.samples) {
+            let states = lsdc::kinematics::frames::states(
+                &prepared.kinematics,
+                frames,
+                &sample.coordinates,
+                &sample.rates,
+            );
+            let by_name: serde_json::Map<String, serde_json::Value> = frames
+                .iter()
+                .zip(states.unwrap_or_default())
+                .map(|(f, s)| (f.name.clone(), serde_json::json!(s)))
+                .collect();
+            json_sample["frames"] = serde_json::Value::Object(by_name);
+        }
+    }
     match path {
-        Some(path) => std::fs::write(path, json(simulation)),
+        Some(path) => std::fs::write(path, json(&value)),
         None => {
-            out(&json(simulation));
+            out(&json(&value));
             Ok(())
         }
     }

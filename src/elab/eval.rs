@@ -41,6 +41,36 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         self.decls(decls, scope)
     }
 
+    /// Records the frames a main module names at its top level (`let tip = … @ arm;`) in the
+    /// mechanism's table of frames. Only bindings the checker typed as frames are evaluated, so
+    /// no other unused definition is.
+    pub(super) fn name_frames(&mut self, id: ModuleId) -> Result<()> {
+        let Some(&scope) = self.checked.module_scopes.get(&id) else {
+            return Ok(());
+        };
+        for decl in &self.workspace.module(id).program.decls {
+            let DeclKind::Let(bindings) = &decl.kind else {
+                continue;
+            };
+            for binding in bindings {
+                let name = &binding.name.name;
+                let is_frame =
+                    self.checked.scope(scope).names.get(name).map(|e| e.ty) == Some(Ty::Frame);
+                if !is_frame {
+                    continue;
+                }
+                if let Value::Frame(frame) = self.global(scope, name)? {
+                    self.mechanism.frames.push(NamedFrame {
+                        name: name.clone(),
+                        frame,
+                        span: binding.name.span,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
     pub(super) fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) -> Result<()> {
         decls.iter().try_for_each(|decl| self.decl(decl, scope))
     }

@@ -42,5 +42,8 @@ pub fn elaborate(
         elaborator.module(root)?;
     }
     elaborator.apply_fields()?;
+    for &root in &workspace.roots {
+        elaborator.name_frames(root)?;
+    }
     Ok((elaborator.mechanism, elaborator.warnings))
 }
