@@ -26,4 +26,5 @@ pub mod source;
 pub mod spatial;
 pub mod symbolic;
 pub mod syntax;
+pub mod testing;
 pub mod topology;

@@ -335,6 +335,34 @@ enum Command {
     },
     /// Print the syntax tree of a file (for debugging the parser).
     Parse { file: PathBuf },
+    /// Run the regression cases of test manifests (`lsdtest.toml`): simulate each program,
+    /// compare its outputs with a reference within per-variable tolerances, make its checks.
+    /// Exit code 0 when every case passes, 1 when one fails, 2 for a manifest that cannot be
+    /// read.
+    Test(TestArgs),
+}
+
+#[derive(clap::Args)]
+struct TestArgs {
+    /// Manifests, or folders searched for `lsdtest.toml` files (default: the current folder).
+    paths: Vec<PathBuf>,
+    /// Cases run at once (default: the number of processors).
+    #[arg(short = 'j', long = "jobs")]
+    jobs: Option<usize>,
+    /// Only the cases whose name contains this text.
+    #[arg(long)]
+    case: Option<String>,
+    #[arg(long, value_enum, default_value = "text")]
+    format: Format,
+    /// Also write the results as JUnit XML to this file.
+    #[arg(long, value_name = "FILE")]
+    junit: Option<PathBuf>,
+    /// Re-record the references from runs, and say what moved.
+    #[arg(long, conflicts_with = "calibrate")]
+    update: bool,
+    /// Run each case at its tolerance and ten times it, and propose tolerances.
+    #[arg(long)]
+    calibrate: bool,
 }
 
 fn main() -> ExitCode {
@@ -403,6 +431,7 @@ fn main() -> ExitCode {
             import_urdf(&file, &options, output.as_deref())
         }
         Command::Parse { file } => parse(&file),
+        Command::Test(args) => test(&args),
     }
 }
 
@@ -1139,5 +1168,74 @@ fn parse(file: &std::path::Path) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
+    }
+}
+
+fn test(args: &TestArgs) -> ExitCode {
+    use lsdc::testing::{self, calibrate, record, report};
+    let paths = match args.paths.is_empty() {
+        true => vec![PathBuf::from(".")],
+        false => args.paths.clone(),
+    };
+    let mut cases = match testing::load(&paths) {
+        Ok(cases) => cases,
+        Err(error) => return usage_error(&error.to_string()),
+    };
+    if let Some(text) = &args.case {
+        cases.retain(|c| c.name.contains(text.as_str()));
+    }
+    if cases.is_empty() {
+        return usage_error("no test case found (manifests are named `lsdtest.toml`)");
+    }
+    let jobs =
+        (args.jobs).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    if args.calibrate {
+        let proposals = testing::for_each_case(&cases, jobs, |c| named(c, calibrate::calibrate(c)));
+        return print_each(&proposals, args.format, calibrate::as_manifest);
+    }
+    if args.update {
+        let recorded = testing::for_each_case(&cases, jobs, |c| named(c, record::record(c)));
+        return print_each(&recorded, args.format, report::recorded_text);
+    }
+    let start = std::time::Instant::now();
+    let outcomes = testing::run_all(&cases, jobs);
+    let summary = report::Summary::new(&outcomes, jobs, start.elapsed().as_secs_f64());
+    match args.format {
+        Format::Text => out(&report::text(&summary)),
+        Format::Json => out(&json(&summary)),
+    }
+    if let Some(path) = &args.junit {
+        if let Err(error) = std::fs::write(path, report::junit(&summary)) {
+            return usage_error(&format!("cannot write `{}`: {error}", path.display()));
+        }
+    }
+    match summary.all_passed() {
+        true => ExitCode::SUCCESS,
+        false => ExitCode::from(1),
+    }
+}
+
+/// An error of a case, with the case's name.
+fn named<T>(case: &lsdc::testing::Case, result: Result<T, String>) -> Result<T, String> {
+    result.map_err(|error| format!("{}: {error}", case.name))
+}
+
+/// Prints what `--calibrate` or `--update` made of each case (text or JSON), the cases it could
+/// not be done for on standard error; exit code 1 if there was one.
+fn print_each<T: serde::Serialize>(
+    results: &[Result<T, String>],
+    format: Format,
+    text: impl Fn(&T) -> String,
+) -> ExitCode {
+    let done: Vec<&T> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
+    match format {
+        Format::Text => done.iter().for_each(|d| out(&text(d))),
+        Format::Json => out(&json(&done)),
+    }
+    let failures: Vec<&String> = results.iter().filter_map(|r| r.as_ref().err()).collect();
+    failures.iter().for_each(|f| eprintln!("error: {f}"));
+    match failures.is_empty() {
+        true => ExitCode::SUCCESS,
+        false => ExitCode::from(1),
     }
 }
