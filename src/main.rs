@@ -360,7 +360,7 @@ struct TestArgs {
     /// Re-record the references from runs, and say what moved.
     #[arg(long, conflicts_with = "calibrate")]
     update: bool,
-    /// Run each case at its tolerance and ten times it, and propose tolerances.
+    /// Run each case at its tolerance (or step) and a finer one, and propose tolerances.
     #[arg(long)]
     calibrate: bool,
 }
@@ -1173,39 +1173,56 @@ fn parse(file: &std::path::Path) -> ExitCode {
 
 fn test(args: &TestArgs) -> ExitCode {
     use lsdc::testing::{self, calibrate, record, report};
+    let mut cases = match test_cases(args) {
+        Ok(cases) => cases,
+        Err(message) => return usage_error(&message),
+    };
+    if args.calibrate || args.update {
+        // Only the cases compared with a reference have one to record or tolerances to propose.
+        cases.retain(|c| c.reference.is_some());
+    }
+    let jobs =
+        (args.jobs).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let start = std::time::Instant::now();
+    let outcomes = match (args.calibrate, args.update) {
+        (true, _) => testing::for_each_case(&cases, jobs, |c| named(c, calibrate::calibrate(c)))
+            .map(|proposals| print_each(&proposals, args.format, calibrate::as_manifest)),
+        (_, true) => testing::for_each_case(&cases, jobs, |c| named(c, record::record(c)))
+            .map(|recorded| print_each(&recorded, args.format, report::recorded_text)),
+        _ => testing::run_all(&cases, jobs).map(|outcomes| {
+            let summary = report::Summary::new(&outcomes, jobs, start.elapsed().as_secs_f64());
+            print_summary(&summary, args)
+        }),
+    };
+    outcomes.unwrap_or_else(|message| usage_error(&message))
+}
+
+/// The cases of the manifests under the paths given (the current folder by default), those
+/// named by `--case` only.
+fn test_cases(args: &TestArgs) -> Result<Vec<lsdc::testing::Case>, String> {
     let paths = match args.paths.is_empty() {
         true => vec![PathBuf::from(".")],
         false => args.paths.clone(),
     };
-    let mut cases = match testing::load(&paths) {
-        Ok(cases) => cases,
-        Err(error) => return usage_error(&error.to_string()),
-    };
+    let mut cases = lsdc::testing::load(&paths).map_err(|error| error.to_string())?;
     if let Some(text) = &args.case {
         cases.retain(|c| c.name.contains(text.as_str()));
     }
-    if cases.is_empty() {
-        return usage_error("no test case found (manifests are named `lsdtest.toml`)");
+    match cases.is_empty() {
+        true => Err("no test case found (manifests are named `lsdtest.toml`)".into()),
+        false => Ok(cases),
     }
-    let jobs =
-        (args.jobs).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
-    if args.calibrate {
-        let proposals = testing::for_each_case(&cases, jobs, |c| named(c, calibrate::calibrate(c)));
-        return print_each(&proposals, args.format, calibrate::as_manifest);
-    }
-    if args.update {
-        let recorded = testing::for_each_case(&cases, jobs, |c| named(c, record::record(c)));
-        return print_each(&recorded, args.format, report::recorded_text);
-    }
-    let start = std::time::Instant::now();
-    let outcomes = testing::run_all(&cases, jobs);
-    let summary = report::Summary::new(&outcomes, jobs, start.elapsed().as_secs_f64());
+}
+
+/// Prints the results (text or JSON), writes the JUnit file; exit code 0 if every case passed.
+fn print_summary(summary: &lsdc::testing::report::Summary, args: &TestArgs) -> ExitCode {
+    use lsdc::testing::report;
     match args.format {
-        Format::Text => out(&report::text(&summary)),
-        Format::Json => out(&json(&summary)),
+        Format::Text => out(&report::text(summary)),
+        Format::Json => out(&json(summary)),
     }
     if let Some(path) = &args.junit {
-        if let Err(error) = std::fs::write(path, report::junit(&summary)) {
+        if let Err(error) = std::fs::write(path, report::junit(summary)) {
             return usage_error(&format!("cannot write `{}`: {error}", path.display()));
         }
     }

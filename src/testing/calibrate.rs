@@ -1,14 +1,17 @@
 //! `lsdc test --calibrate`: tolerances from a convergence study. The case runs at its own
-//! tolerance (or step) and at a coarser one, ten times the tolerance (twice the step); their
-//! difference estimates what the integration's error, and a reordering of floating-point
-//! operations amplified by the mechanism, can move each variable. The proposed absolute
-//! tolerance of a variable is that difference times a safety factor, rounded up to one
-//! significant digit; a change of the dynamics larger than the integration's error still fails.
+//! tolerance (or step) and at a finer one, a tenth of the tolerance (half the step); their
+//! difference estimates the error of the case's own run. That error is also how far a
+//! reordering of floating-point operations can move the run: round-off changes which steps an
+//! adaptive integrator takes, and a run along other steps differs by about its error, however
+//! much the mechanism amplifies the round-off itself. The proposed absolute tolerance of a
+//! variable is that difference times a safety factor, rounded up to one significant digit; a
+//! change of the dynamics larger than the integration's error still fails.
 
 use serde::Serialize;
 
-use super::case::{as_table, compile, prepare_case, Stop};
+use super::case::{as_table, compile_and_prepare, run_failure};
 use super::manifest::Case;
+use super::record::rounded;
 use crate::simulate::precision::Reference;
 use crate::simulate::prepare::{Integrator, Prepared};
 use crate::simulate::run::{self, Simulation};
@@ -17,17 +20,24 @@ use crate::simulate::run::{self, Simulation};
 pub const SAFETY: f64 = 2.0;
 
 /// A tolerance never proposed below this fraction of the variable's largest magnitude (or of 1,
-/// for a variable that stays near 0): round-off's own size.
+/// for a variable that stays near 0): round-off's own size, amplified.
 const FLOOR: f64 = 1e-12;
+
+/// The smallest relative tolerance proposed for a reference recorded to `digits` significant
+/// digits: the safety factor times the most its rounding moves a value (half a unit of its last
+/// digit).
+fn rounding_floor(digits: usize) -> f64 {
+    SAFETY * 0.5 * 10f64.powi(1 - digits as i32)
+}
 
 /// A case's calibration.
 #[derive(Clone, Debug, Serialize)]
 pub struct Calibration {
     pub name: String,
-    /// The setting of the case's run and of the coarser one (`tolerance` or `step`).
+    /// The setting of the case's run and of the finer one (`tolerance` or `step`).
     pub setting: &'static str,
+    pub own: f64,
     pub fine: f64,
-    pub coarse: f64,
     pub variables: Vec<Proposal>,
 }
 
@@ -42,42 +52,36 @@ pub struct Proposal {
 
 /// Runs the case at two settings and proposes a tolerance per compared variable.
 pub fn calibrate(case: &Case) -> Result<Calibration, String> {
-    let compilation = compile(case).map_err(stop_message)?;
-    let mut prepared = prepare_case(case, &compilation).map_err(stop_message)?;
-    let fine = run_checked(&prepared)?;
-    let (setting, fine_value, coarse_value) = coarsen(&mut prepared);
-    let coarse = run_checked(&prepared)?;
-    let (fine, coarse) = (as_table(&fine), as_table(&coarse));
-    let names = case.outputs.clone().unwrap_or_else(|| fine.columns.clone());
+    let mut prepared = compile_and_prepare(case)?;
+    let own = run_as_expected(case, &prepared)?;
+    let (setting, own_value, fine_value) = refine(&mut prepared);
+    let fine = run_as_expected(case, &prepared)?;
+    let (own, fine) = (as_table(&own), as_table(&fine));
+    let names = case.outputs.clone().unwrap_or_else(|| own.columns.clone());
     let variables = (names.iter())
-        .map(|name| propose(name, &fine, &coarse))
+        .map(|name| propose(name, &own, &fine, case.precision))
         .collect::<Result<_, _>>()?;
     Ok(Calibration {
         name: case.name.clone(),
         setting,
+        own: own_value,
         fine: fine_value,
-        coarse: coarse_value,
         variables,
     })
 }
 
-fn stop_message(stop: Stop) -> String {
-    match stop {
-        Stop::Program(m) | Stop::Setup(m) => m,
-    }
-}
-
-fn run_checked(prepared: &Prepared) -> Result<Simulation, String> {
+/// A run to its end, or to a failure that the case expects.
+fn run_as_expected(case: &Case, prepared: &Prepared) -> Result<Simulation, String> {
     let simulation = run::run(prepared, &mut |_| {});
-    match &simulation.report.failure {
-        Some(f) => Err(format!("the run failed at t = {}: {}", f.time, f.message)),
-        None => Ok(simulation),
+    match run_failure(&simulation) {
+        Some(failure) if case.checks.expect_failure.is_none() => Err(failure),
+        _ => Ok(simulation),
     }
 }
 
-/// Makes the run coarser: ten times the tolerances of an adaptive integrator, twice the step of
-/// a fixed-step one. Returns which setting changed, and from what to what.
-fn coarsen(prepared: &mut Prepared) -> (&'static str, f64, f64) {
+/// Makes the run finer: a tenth of the tolerances of an adaptive integrator, half the step of a
+/// fixed-step one. Returns which setting changed, and from what to what.
+fn refine(prepared: &mut Prepared) -> (&'static str, f64, f64) {
     let settings = &mut prepared.settings;
     let fixed_step = matches!(
         settings.integrator,
@@ -85,38 +89,41 @@ fn coarsen(prepared: &mut Prepared) -> (&'static str, f64, f64) {
     );
     match settings.step {
         Some(step) if fixed_step => {
-            settings.step = Some(2.0 * step);
-            ("step", step, 2.0 * step)
+            settings.step = Some(step / 2.0);
+            ("step", step, step / 2.0)
         }
         _ => {
             let tolerance = settings.rtol;
-            (settings.rtol, settings.atol) = (10.0 * settings.rtol, 10.0 * settings.atol);
-            ("tolerance", tolerance, 10.0 * tolerance)
+            (settings.rtol, settings.atol) = (settings.rtol / 10.0, settings.atol / 10.0);
+            ("tolerance", tolerance, tolerance / 10.0)
         }
     }
 }
 
-/// The largest difference of a variable between the two runs at the fine run's times, and the
-/// tolerance it suggests.
-fn propose(name: &str, fine: &Reference, coarse: &Reference) -> Result<Proposal, String> {
+/// The largest difference of a variable between the two runs at the outputs of the case's own
+/// run (those both have, when a failure ends them), and the tolerance it suggests.
+fn propose(
+    name: &str,
+    own: &Reference,
+    fine: &Reference,
+    digits: usize,
+) -> Result<Proposal, String> {
     let column = |table: &Reference| {
         (table.columns.iter())
             .position(|c| c == name)
             .ok_or_else(|| format!("the run has no output `{name}`"))
     };
-    let (f, c) = (column(fine)?, column(coarse)?);
+    let (o, f) = (column(own)?, column(fine)?);
     let (mut difference, mut time, mut magnitude) = (0.0_f64, 0.0, 0.0_f64);
-    for (t, row) in &fine.rows {
-        let other = coarse
-            .at(*t)
-            .ok_or_else(|| format!("the coarse run has no output at t = {t}"))?;
-        let d = (row[f] - other[c]).abs();
+    for (t, row) in &own.rows {
+        let Some(finer) = fine.at(*t) else { break };
+        let d = (row[o] - finer[f]).abs();
         if d > difference {
             (difference, time) = (d, *t);
         }
-        magnitude = magnitude.max(row[f].abs());
+        magnitude = magnitude.max(row[o].abs());
     }
-    let floor = FLOOR * magnitude.max(1.0);
+    let floor = FLOOR.max(rounding_floor(digits)) * magnitude.max(1.0);
     Ok(Proposal {
         variable: name.to_string(),
         difference,
@@ -140,13 +147,19 @@ pub fn round_up(x: f64) -> f64 {
 /// The proposal as the manifest's text: a `[case.variables]` table to put under the case.
 pub fn as_manifest(calibration: &Calibration) -> String {
     let mut text = format!(
-        "# {}: {} {:e} against {:e}; tolerance = {SAFETY} × the largest difference\n[case.variables]\n",
-        calibration.name, calibration.setting, calibration.fine, calibration.coarse
+        "# {}: {} {} against {}; tolerance = {SAFETY} × the largest difference\n[case.variables]\n",
+        calibration.name,
+        calibration.setting,
+        rounded(calibration.own, 12),
+        rounded(calibration.fine, 12)
     );
     for p in &calibration.variables {
         text += &format!(
             "\"{}\" = {{ absolute = {:e} }}  # difference {:.2e} at t = {}\n",
-            p.variable, p.absolute, p.difference, p.time
+            p.variable,
+            p.absolute,
+            p.difference,
+            rounded(p.time, 12)
         );
     }
     text

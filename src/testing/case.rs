@@ -55,6 +55,14 @@ pub(super) enum Stop {
     Setup(String),
 }
 
+impl From<Stop> for String {
+    fn from(stop: Stop) -> String {
+        match stop {
+            Stop::Program(message) | Stop::Setup(message) => message,
+        }
+    }
+}
+
 /// Runs a case.
 pub fn run_case(case: &Case) -> Outcome {
     let start = Instant::now();
@@ -102,7 +110,8 @@ fn settle(case: &Case, result: Result<(), Stop>, outcome: &mut Outcome) {
     }
 }
 
-/// Compiles, checks, runs and compares, recording failures in `outcome`.
+/// Compiles, checks, runs and compares, recording failures in `outcome`. A run that fails where
+/// the case expects it is still compared with the reference, up to where it stopped.
 fn examine(case: &Case, outcome: &mut Outcome) -> Result<(), Stop> {
     let compilation = compile(case)?;
     let mechanism = compilation
@@ -117,18 +126,32 @@ fn examine(case: &Case, outcome: &mut Outcome) -> Result<(), Stop> {
         .failures
         .extend(assembly_check(&prepared, &case.checks));
     let simulation = run::run(&prepared, &mut |_| {});
-    if let Some(failure) = &simulation.report.failure {
-        return Err(Stop::Program(format!(
-            "the run failed at t = {}: {}",
-            failure.time, failure.message
-        )));
+    let failure = run_failure(&simulation);
+    if failure.is_none() {
+        outcome
+            .failures
+            .extend(run_checks(&simulation, &case.checks));
     }
-    outcome
-        .failures
-        .extend(run_checks(&simulation, &case.checks));
+    if failure.is_none() || case.checks.expect_failure.is_some() {
+        compare_with_reference(case, &simulation, outcome)?;
+    }
+    failure.map_or(Ok(()), |message| Err(Stop::Program(message)))
+}
+
+/// Why a run stopped before its end, in one sentence, if it did.
+pub(super) fn run_failure(simulation: &Simulation) -> Option<String> {
+    (simulation.report.failure.as_ref())
+        .map(|f| format!("the run failed at t = {}: {}", f.time, f.message))
+}
+
+fn compare_with_reference(
+    case: &Case,
+    simulation: &Simulation,
+    outcome: &mut Outcome,
+) -> Result<(), Stop> {
     if let Some(path) = &case.reference {
         let reference = read_reference(path)?;
-        let errors = compare(&as_table(&simulation), &reference, case).map_err(Stop::Setup)?;
+        let errors = compare(&as_table(simulation), &reference, case).map_err(Stop::Setup)?;
         record_comparison(errors, outcome);
     }
     Ok(())
@@ -156,9 +179,19 @@ pub fn describe(error: &VariableError) -> String {
         super::manifest::Measure::Final => "at the final time",
         super::manifest::Measure::L2 => "root mean square over time",
     };
+    let value = |x: f64| match x.is_nan() {
+        true => "no value".to_string(),
+        false => super::record::rounded(x, 17),
+    };
     format!(
-        "`{}` at t = {}: {} against {} in the reference, difference {:.3e} ({measure}) > allowed {:.3e} (margin {:.3})",
-        error.variable, error.time, error.actual, error.reference, error.difference, error.allowed, error.margin
+        "`{}` at t = {}: {} against {} in the reference, difference {:.3e} ({measure}), allowed {:.3e} (margin {:.3})",
+        error.variable,
+        value(error.time),
+        value(error.actual),
+        value(error.reference),
+        error.difference,
+        error.allowed,
+        error.margin
     )
 }
 
@@ -194,6 +227,12 @@ pub(super) fn prepare_case(case: &Case, compilation: &Compilation) -> Result<Pre
         .apply(&case.settings)
         .map_err(|e| Stop::Setup(format!("[case.simulate]: {e}")))?;
     Ok(prepared)
+}
+
+/// The case's program compiled and prepared, or why it could not be.
+pub(super) fn compile_and_prepare(case: &Case) -> Result<Prepared, String> {
+    let compilation = compile(case)?;
+    Ok(prepare_case(case, &compilation)?)
 }
 
 /// The outputs of a run as a table, the form references are read in.

@@ -10,8 +10,7 @@ pub mod manifest;
 pub mod record;
 pub mod report;
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use rayon::prelude::*;
 
 pub use case::{run_case, Outcome, Status};
 pub use manifest::{Case, ManifestError};
@@ -31,30 +30,16 @@ pub fn for_each_case<R: Send>(
     cases: &[Case],
     jobs: usize,
     task: impl Fn(&Case) -> R + Sync,
-) -> Vec<R> {
-    let next = AtomicUsize::new(0);
-    let results: Vec<Mutex<Option<R>>> = cases.iter().map(|_| Mutex::new(None)).collect();
-    let work = || loop {
-        let index = next.fetch_add(1, Ordering::Relaxed);
-        let Some(case) = cases.get(index) else { break };
-        let result = task(case);
-        *results[index].lock().expect("no thread panics holding it") = Some(result);
-    };
-    std::thread::scope(|scope| {
-        for _ in 0..jobs.clamp(1, cases.len().max(1)) {
-            scope.spawn(work);
-        }
-    });
-    (results.into_iter())
-        .map(|r| {
-            r.into_inner()
-                .expect("not poisoned")
-                .expect("every case ran")
-        })
-        .collect()
+) -> Result<Vec<R>, String> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(|error| format!("cannot start {jobs} threads: {error}"))?;
+    // One case per task: cases take from milliseconds to seconds, so no batching.
+    Ok(pool.install(|| cases.par_iter().with_max_len(1).map(&task).collect()))
 }
 
 /// Runs every case on `jobs` threads.
-pub fn run_all(cases: &[Case], jobs: usize) -> Vec<Outcome> {
+pub fn run_all(cases: &[Case], jobs: usize) -> Result<Vec<Outcome>, String> {
     for_each_case(cases, jobs, run_case)
 }

@@ -7,7 +7,7 @@ use std::fmt::Write;
 
 use serde::Serialize;
 
-use super::case::{as_table, compile, prepare_case, read_reference, Stop};
+use super::case::{as_table, compile_and_prepare, read_reference, run_failure};
 use super::compare::{compare, VariableError};
 use super::manifest::Case;
 use crate::simulate::precision::Reference;
@@ -30,35 +30,23 @@ pub struct Recorded {
     pub largest: Option<VariableError>,
 }
 
-/// Runs the case and writes its reference.
+/// Runs the case and writes its reference: the outputs of a run to its end, or up to its failure
+/// when the case expects one.
 pub fn record(case: &Case) -> Result<Recorded, String> {
     let path = (case.reference.as_ref()).ok_or("the case has no `reference` to record")?;
-    let compilation = compile(case).map_err(message)?;
-    let prepared = prepare_case(case, &compilation).map_err(message)?;
-    let simulation = run::run(&prepared, &mut |_| {});
-    if let Some(f) = &simulation.report.failure {
-        return Err(format!(
-            "the run failed at t = {}: {}; nothing recorded",
-            f.time, f.message
-        ));
+    let simulation = run::run(&compile_and_prepare(case)?, &mut |_| {});
+    if let Some(failure) = run_failure(&simulation) {
+        if case.checks.expect_failure.is_none() {
+            return Err(format!("{failure}; nothing recorded"));
+        }
     }
     let run = as_table(&simulation);
     let columns = case.outputs.clone().unwrap_or_else(|| run.columns.clone());
     let text = to_csv(&run, &columns, case.precision)?;
-    let old = path
-        .exists()
-        .then(|| read_reference(path))
-        .transpose()
-        .map_err(message)?;
+    let old = (path.exists().then(|| read_reference(path)).transpose()).map_err(String::from)?;
     let new = Reference::from_csv(&text, "the new reference").map_err(|e| e.to_string())?;
     std::fs::write(path, &text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(summary(case, path, old.as_ref(), &new))
-}
-
-fn message(stop: Stop) -> String {
-    match stop {
-        Stop::Program(m) | Stop::Setup(m) => m,
-    }
 }
 
 /// The run's `columns` as CSV at `digits` significant digits, the precision stated in a first

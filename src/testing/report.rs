@@ -48,7 +48,7 @@ pub fn text(summary: &Summary) -> String {
         let closest = match (&case.worst, case.status) {
             (Some(w), Status::Passed) => {
                 format!(
-                    ", closest: `{}` at {:.2} of its tolerance",
+                    ", closest: `{}` at {:.1e} of its tolerance",
                     w.variable, w.margin
                 )
             }
