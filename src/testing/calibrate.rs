@@ -41,25 +41,38 @@ pub struct Calibration {
     pub variables: Vec<Proposal>,
 }
 
-/// A variable's observed difference and proposed absolute tolerance.
+/// A variable's observed differences and proposed absolute tolerance.
 #[derive(Clone, Debug, Serialize)]
 pub struct Proposal {
     pub variable: String,
+    /// The largest difference between the case's run and the finer one, and its time.
     pub difference: f64,
     pub time: f64,
+    /// The largest difference between the case's run and the run from a perturbed initial
+    /// configuration, and its time.
+    pub round_off: f64,
+    pub round_off_time: f64,
     pub absolute: f64,
 }
 
-/// Runs the case at two settings and proposes a tolerance per compared variable.
+/// The relative change of each initial coordinate of the round-off probe: a few units of
+/// round-off, as a reordering of floating-point operations leaves after the assembly.
+pub const PROBE: f64 = 1e-14;
+
+/// Runs the case at its settings, at finer ones and from a perturbed initial configuration, and
+/// proposes a tolerance per compared variable.
 pub fn calibrate(case: &Case) -> Result<Calibration, String> {
     let mut prepared = compile_and_prepare(case)?;
-    let own = run_as_expected(case, &prepared)?;
+    let own = as_table(&run_as_expected(case, &prepared)?);
+    let assembled = prepared.coordinates.clone();
+    perturb(&mut prepared.coordinates);
+    let perturbed = as_table(&run_as_expected(case, &prepared)?);
+    prepared.coordinates = assembled;
     let (setting, own_value, fine_value) = refine(&mut prepared);
-    let fine = run_as_expected(case, &prepared)?;
-    let (own, fine) = (as_table(&own), as_table(&fine));
+    let fine = as_table(&run_as_expected(case, &prepared)?);
     let names = case.outputs.clone().unwrap_or_else(|| own.columns.clone());
     let variables = (names.iter())
-        .map(|name| propose(name, &own, &fine, case.precision))
+        .map(|name| propose(name, [&own, &fine, &perturbed], case.precision))
         .collect::<Result<_, _>>()?;
     Ok(Calibration {
         name: case.name.clone(),
@@ -76,6 +89,15 @@ fn run_as_expected(case: &Case, prepared: &Prepared) -> Result<Simulation, Strin
     match run_failure(&simulation) {
         Some(failure) if case.checks.expect_failure.is_none() => Err(failure),
         _ => Ok(simulation),
+    }
+}
+
+/// Moves each value by a relative `PROBE`, the signs alternating (an absolute `PROBE` for a
+/// value at 0).
+fn perturb(values: &mut [f64]) {
+    for (i, value) in values.iter_mut().enumerate() {
+        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+        *value += sign * PROBE * value.abs().max(1.0);
     }
 }
 
@@ -100,36 +122,49 @@ fn refine(prepared: &mut Prepared) -> (&'static str, f64, f64) {
     }
 }
 
-/// The largest difference of a variable between the two runs at the outputs of the case's own
-/// run (those both have, when a failure ends them), and the tolerance it suggests.
+/// A variable's largest differences between the case's run and the finer one, and between the
+/// case's run and the perturbed one, and the tolerance they suggest.
 fn propose(
     name: &str,
-    own: &Reference,
-    fine: &Reference,
+    [own, fine, perturbed]: [&Reference; 3],
     digits: usize,
 ) -> Result<Proposal, String> {
-    let column = |table: &Reference| {
-        (table.columns.iter())
-            .position(|c| c == name)
-            .ok_or_else(|| format!("the run has no output `{name}`"))
-    };
-    let (o, f) = (column(own)?, column(fine)?);
-    let (mut difference, mut time, mut magnitude) = (0.0_f64, 0.0, 0.0_f64);
-    for (t, row) in &own.rows {
-        let Some(finer) = fine.at(*t) else { break };
-        let d = (row[o] - finer[f]).abs();
-        if d > difference {
-            (difference, time) = (d, *t);
-        }
-        magnitude = magnitude.max(row[o].abs());
-    }
+    let (difference, time, magnitude) = largest_difference(name, own, fine)?;
+    let (round_off, round_off_time, _) = largest_difference(name, own, perturbed)?;
     let floor = FLOOR.max(rounding_floor(digits)) * magnitude.max(1.0);
     Ok(Proposal {
         variable: name.to_string(),
         difference,
         time,
-        absolute: round_up((SAFETY * difference).max(floor)),
+        round_off,
+        round_off_time,
+        absolute: round_up((SAFETY * difference.max(round_off)).max(floor)),
     })
+}
+
+/// The largest difference of a variable between two runs at the outputs of the first (those
+/// both have, when a failure ends them), its time, and the variable's largest magnitude.
+fn largest_difference(
+    name: &str,
+    own: &Reference,
+    other: &Reference,
+) -> Result<(f64, f64, f64), String> {
+    let column = |table: &Reference| {
+        (table.columns.iter())
+            .position(|c| c == name)
+            .ok_or_else(|| format!("the run has no output `{name}`"))
+    };
+    let (o, f) = (column(own)?, column(other)?);
+    let (mut difference, mut time, mut magnitude) = (0.0_f64, 0.0, 0.0_f64);
+    for (t, row) in &own.rows {
+        let Some(values) = other.at(*t) else { break };
+        let d = (row[o] - values[f]).abs();
+        if d > difference {
+            (difference, time) = (d, *t);
+        }
+        magnitude = magnitude.max(row[o].abs());
+    }
+    Ok((difference, time, magnitude))
 }
 
 /// Rounded up to one significant digit: 2.3e-9 → 3e-9.
@@ -147,7 +182,7 @@ pub fn round_up(x: f64) -> f64 {
 /// The proposal as the manifest's text: a `[case.variables]` table to put under the case.
 pub fn as_manifest(calibration: &Calibration) -> String {
     let mut text = format!(
-        "# {}: {} {} against {}; tolerance = {SAFETY} × the largest difference\n[case.variables]\n",
+        "# {}: {} {} against {}; initial coordinates perturbed by {PROBE:e}; tolerance = {SAFETY} × the larger difference\n[case.variables]\n",
         calibration.name,
         calibration.setting,
         rounded(calibration.own, 12),
@@ -155,11 +190,13 @@ pub fn as_manifest(calibration: &Calibration) -> String {
     );
     for p in &calibration.variables {
         text += &format!(
-            "\"{}\" = {{ absolute = {:e} }}  # difference {:.2e} at t = {}\n",
+            "\"{}\" = {{ absolute = {:e} }}  # {:.1e} at t = {}, perturbed {:.1e} at t = {}\n",
             p.variable,
             p.absolute,
             p.difference,
-            rounded(p.time, 12)
+            rounded(p.time, 12),
+            p.round_off,
+            rounded(p.round_off_time, 12)
         );
     }
     text

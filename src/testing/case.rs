@@ -158,7 +158,7 @@ fn compare_with_reference(
 }
 
 fn record_comparison(mut errors: Vec<VariableError>, outcome: &mut Outcome) {
-    errors.sort_by(|a, b| b.margin.total_cmp(&a.margin));
+    errors.sort_by(|a, b| b.closeness(a));
     outcome.compared_variables = errors.len();
     outcome.worst = errors.first().cloned();
     outcome.failed_variables = errors.into_iter().filter(VariableError::fails).collect();

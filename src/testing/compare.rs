@@ -30,6 +30,12 @@ impl VariableError {
         // A NaN margin (a NaN difference) fails too.
         !(self.margin <= 1.0)
     }
+
+    /// Orders errors by how near they come to failing, or beyond: by margin, then (between
+    /// margins alike, as the infinite ones of a zero tolerance) by difference.
+    pub fn closeness(&self, other: &VariableError) -> std::cmp::Ordering {
+        (self.margin.total_cmp(&other.margin)).then(self.difference.total_cmp(&other.difference))
+    }
 }
 
 /// The values of a run and of its reference at the reference's times, for the compared
@@ -143,7 +149,7 @@ fn measure(
     };
     let worst = |candidates: &mut dyn Iterator<Item = VariableError>| {
         candidates
-            .max_by(|a, b| a.margin.total_cmp(&b.margin))
+            .max_by(VariableError::closeness)
             .unwrap_or_else(|| nothing_compared(name, tolerance))
     };
     match tolerance.measure {

@@ -129,7 +129,7 @@ fn summary(
         ..case.clone()
     };
     if let Ok(mut errors) = compare(new, old, &compared) {
-        errors.sort_by(|a, b| b.margin.total_cmp(&a.margin));
+        errors.sort_by(|a, b| b.closeness(a));
         recorded.largest = errors
             .iter()
             .max_by(|a, b| a.difference.total_cmp(&b.difference))
