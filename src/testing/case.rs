@@ -181,7 +181,7 @@ pub fn describe(error: &VariableError) -> String {
     };
     let value = |x: f64| match x.is_nan() {
         true => "no value".to_string(),
-        false => super::record::rounded(x, 17),
+        false => crate::diag::number::shortest(x),
     };
     format!(
         "`{}` at t = {}: {} against {} in the reference, difference {:.3e} ({measure}), allowed {:.3e} (margin {:.3})",

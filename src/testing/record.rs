@@ -10,6 +10,7 @@ use serde::Serialize;
 use super::case::{as_table, compile_and_prepare, read_reference, run_failure};
 use super::compare::{compare, VariableError};
 use super::manifest::Case;
+use crate::diag::number::shortest;
 use crate::simulate::precision::Reference;
 use crate::simulate::run;
 
@@ -73,8 +74,8 @@ fn to_csv(run: &Reference, columns: &[String], digits: usize) -> Result<String, 
     Ok(text)
 }
 
-/// `x` rounded to `digits` significant digits, in the shorter of the plain and the exponent
-/// forms; empty for NaN (no value).
+/// `x` rounded to `digits` significant digits, in its shortest form (`diag::number::shortest`);
+/// empty for NaN (no value).
 pub fn rounded(x: f64, digits: usize) -> String {
     if x.is_nan() {
         return String::new();
@@ -82,12 +83,7 @@ pub fn rounded(x: f64, digits: usize) -> String {
     let value: f64 = format!("{:.*e}", digits.saturating_sub(1), x)
         .parse()
         .unwrap_or(x);
-    let (plain, exponent) = (format!("{value}"), format!("{value:e}"));
-    if plain.len() <= exponent.len() {
-        plain
-    } else {
-        exponent
-    }
+    shortest(value)
 }
 
 fn summary(

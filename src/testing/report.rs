@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use super::case::{describe, Outcome, Status};
 use super::record::Recorded;
+use crate::output::xml::escape;
 
 /// The counts of a run of cases.
 #[derive(Clone, Debug, Serialize)]
@@ -142,24 +143,6 @@ fn junit_case(out: &mut String, case: &Outcome) {
         escape(message),
         escape(&details.join("\n"))
     );
-}
-
-/// Text made safe for XML attributes and content.
-fn escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            // Control characters other than tab and newline are not allowed in XML 1.0.
-            c if c.is_control() && c != '\n' && c != '\t' => out.push(' '),
-            c => out.push(c),
-        }
-    }
-    out
 }
 
 /// What `--update` did, one case per paragraph.

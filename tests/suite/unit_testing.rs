@@ -236,7 +236,10 @@ fn the_manifest_of_the_documentation_reads() {
     let text = &section[start..start + section[start..].find("```").expect("its end")];
     let cases = manifest::parse(text, Path::new("lsdtest.toml")).expect("the example reads");
     let four_bar = &cases[0];
-    assert_eq!((four_bar.name.as_str(), four_bar.overrides.len()), ("four_bar", 2));
+    assert_eq!(
+        (four_bar.name.as_str(), four_bar.overrides.len()),
+        ("four_bar", 2)
+    );
     assert_eq!(four_bar.tolerance_of("crank.q").absolute, 3e-9);
     assert_eq!(four_bar.tolerance_of("crank.q").relative, 1e-6);
     assert_eq!(four_bar.tolerance_of("rocker.q'").measure, Measure::L2);
