@@ -28,7 +28,7 @@ pub struct VariableError {
 impl VariableError {
     pub fn fails(&self) -> bool {
         // A NaN margin (a NaN difference) fails too.
-        !(self.margin <= 1.0)
+        self.margin.is_nan() || self.margin > 1.0
     }
 
     /// Orders errors by how near they come to failing, or beyond: by margin, then (between
@@ -118,10 +118,12 @@ fn difference(actual: f64, reference: f64) -> f64 {
     }
 }
 
+/// difference / allowed; 0 for no difference, even against a zero tolerance.
 fn margin(difference: f64, allowed: f64) -> f64 {
-    match (difference, allowed) {
-        (d, _) if d == 0.0 => 0.0,
-        (d, a) => d / a,
+    if difference == 0.0 {
+        0.0
+    } else {
+        difference / allowed
     }
 }
 
