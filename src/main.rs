@@ -347,8 +347,8 @@ struct TestArgs {
     /// Manifests, or folders searched for `lsdtest.toml` files (default: the current folder).
     paths: Vec<PathBuf>,
     /// Cases run at once (default: the number of processors).
-    #[arg(short = 'j', long = "jobs")]
-    jobs: Option<usize>,
+    #[arg(short = 'j', long = "jobs", value_parser = clap::value_parser!(u16).range(1..))]
+    jobs: Option<u16>,
     /// Only the cases whose name contains this text.
     #[arg(long)]
     case: Option<String>,
@@ -1181,8 +1181,8 @@ fn test(args: &TestArgs) -> ExitCode {
         // Only the cases compared with a reference have one to record or tolerances to propose.
         cases.retain(|c| c.reference.is_some());
     }
-    let jobs =
-        (args.jobs).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let jobs = (args.jobs.map(usize::from))
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
     let start = std::time::Instant::now();
     let outcomes = match (args.calibrate, args.update) {
         (true, _) => testing::for_each_case(&cases, jobs, |c| named(c, calibrate::calibrate(c)))

@@ -9,7 +9,7 @@ use crate::diag::Diagnostic;
 use crate::load::{ModuleId, Workspace};
 use crate::syntax::ast::Name;
 
-use super::instances::{InstanceId, Instances};
+use super::instance_table::{InstanceId, Instances};
 use super::mechanism::Mechanism;
 use super::value::{self, Value};
 

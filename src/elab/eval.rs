@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use super::elaborator::{internal, Elaborator, Global};
-use super::instances::{InstanceId, ROOT};
+use super::instance_table::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
     as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix,

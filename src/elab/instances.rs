@@ -3,9 +3,8 @@
 //! instance and name; the instance of a scope is the one being evaluated (or one of its
 //! enclosing instances), and `P[k]:x` evaluates `x` in instance `k`.
 
-use rustc_hash::FxHashMap;
-
 use super::elaborator::{internal, Elaborator, Global};
+use super::instance_table::{Instance, InstanceId, ROOT};
 use super::value::{constant, Value};
 use crate::check::scope::ScopeId;
 use crate::diag::Diagnostic;
@@ -14,61 +13,8 @@ use crate::syntax::ast::{Decl, Expr, Ident, Name, PackageIndex};
 
 type Result<T> = std::result::Result<T, Diagnostic>;
 
-/// An instance of an array of packages; `ROOT` stands for the files and plain packages.
-pub(super) type InstanceId = u32;
-pub(super) const ROOT: InstanceId = 0;
-
 /// The most instances one array may have: a bound beyond it is a typing slip, not a mechanism.
 const MAX_INSTANCES: i64 = 1_000_000;
-
-struct Instance {
-    package: Name,
-    scope: ScopeId,
-    /// The instance of the enclosing array, or `ROOT`.
-    parent: InstanceId,
-    index: i64,
-}
-
-pub(super) struct Instances {
-    table: Vec<Instance>,
-    ids: FxHashMap<(InstanceId, ScopeId, i64), InstanceId>,
-    /// Each array's range, by its scope and the instance of the scope around it.
-    ranges: FxHashMap<(ScopeId, InstanceId), (i64, i64)>,
-    /// The instance whose declarations or names are being evaluated.
-    pub(super) current: InstanceId,
-}
-
-impl Default for Instances {
-    fn default() -> Instances {
-        let root = Instance {
-            package: Name::from(""),
-            scope: ScopeId(u32::MAX),
-            parent: ROOT,
-            index: 0,
-        };
-        Instances {
-            table: vec![root],
-            ids: FxHashMap::default(),
-            ranges: FxHashMap::default(),
-            current: ROOT,
-        }
-    }
-}
-
-impl Instances {
-    /// How objects declared in an instance are named: `P[3]:` (`P[3]:Q[1]:` when nested), or
-    /// nothing outside arrays.
-    pub(super) fn prefix(&self, mut id: InstanceId) -> String {
-        let mut parts = Vec::new();
-        while id != ROOT {
-            let instance = &self.table[id as usize];
-            parts.push(format!("{}[{}]:", instance.package, instance.index));
-            id = instance.parent;
-        }
-        parts.reverse();
-        parts.concat()
-    }
-}
 
 impl<'w> Elaborator<'_, 'w> {
     /// The instance that `scope`'s names take their values in, from the one being evaluated:

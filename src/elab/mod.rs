@@ -6,6 +6,7 @@
 mod elaborator;
 mod eval;
 mod fields;
+mod instance_table;
 mod instances;
 pub mod mechanism;
 mod operations;
