@@ -158,6 +158,11 @@ impl<'w> Checker<'w> {
             }
             current = scope.parent.map(|(p, _)| p);
         }
+        if let Some(module) = crate::load::stdlib::module_declaring(name) {
+            return diagnostic.help(format!(
+                "`{name}` is declared in the standard library's `{module}`: add `import {module} ;`"
+            ));
+        }
         let visible = self.visible_names(ctx);
         if let Some(number) = suggest::thesis_body_number(name) {
             let bodies: Vec<&(String, Ty)> =
