@@ -28,5 +28,6 @@ pub mod source;
 pub mod spatial;
 pub mod symbolic;
 pub mod syntax;
+pub mod testing;
 pub mod topology;
 pub mod view;

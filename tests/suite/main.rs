@@ -47,6 +47,7 @@ mod unit_load;
 mod unit_output;
 mod unit_symbolic;
 mod unit_syntax;
+mod unit_testing;
 mod unit_topology;
 mod urdf_export;
 mod urdf_import;
