@@ -137,6 +137,11 @@ impl<'w> Checker<'w> {
                 let inside = extent.file == ident.span.file
                     && extent.start <= ident.span.start
                     && ident.span.end <= extent.end;
+                if inside && self.declares_join(extent) {
+                    return diagnostic
+                        .secondary(later, "the join being declared")
+                        .help(format!("a join's frames cannot depend on the join; only its link (after `with`) may read its coordinates, as in `{name}.q'`"));
+                }
                 if inside {
                     return diagnostic
                         .secondary(later, "the name being defined")
@@ -147,9 +152,15 @@ impl<'w> Checker<'w> {
                         .secondary(later, "defined in the same `let ... and ...`")
                         .help("bindings joined by `and` are simultaneous and do not see each other: use two `let` declarations");
                 }
+                let help = if self.declares_join(extent) {
+                    format!("a join's coordinates are read after the join, or inside its own link: write the expression in the link, as in `with motor(axis, 2 - 0.1 * {name}.q') as {name}`")
+                } else {
+                    "a name is visible only after its declaration: move the declaration up"
+                        .to_string()
+                };
                 return diagnostic
                     .secondary(later, "defined here, after its use")
-                    .help("a name is visible only after its declaration: move the declaration up");
+                    .help(help);
             }
             if let Some(entry) = scope.names.get(name.as_ref()) {
                 return diagnostic
@@ -174,6 +185,13 @@ impl<'w> Checker<'w> {
             diagnostic = diagnostic.help(format!("did you mean `{candidate}`?"));
         }
         diagnostic
+    }
+
+    /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).
+    fn declares_join(&self, extent: Span) -> bool {
+        let text = &self.workspace.sources.file(extent.file).text;
+        text.get(extent.start as usize..)
+            .is_some_and(|rest| rest.starts_with("join"))
     }
 
     /// Every name visible from a context, in declaration order (for suggestions).

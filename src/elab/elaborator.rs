@@ -31,6 +31,8 @@ pub struct Elaborator<'c, 'w> {
     /// The numbers written in the program, by their bits: one node for each distinct number,
     /// shared by all its occurrences (a generated chain writes the same few numbers per body).
     pub(super) literals: FxHashMap<u64, value::Scalar>,
+    /// The named join whose link is being evaluated: its name reads its own coordinates.
+    pub(super) own_join: Option<super::own_join::OwnJoin>,
 }
 
 impl Elaborator<'_, '_> {

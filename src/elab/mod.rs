@@ -8,6 +8,7 @@ mod eval;
 mod fields;
 pub mod mechanism;
 mod operations;
+mod own_join;
 pub mod value;
 
 use crate::check::Checked;
@@ -28,6 +29,7 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
         depth: 0,
         fields: Vec::new(),
         literals: FxHashMap::default(),
+        own_join: None,
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;
