@@ -179,6 +179,11 @@ impl<'w> Checker<'w> {
                 ));
             }
         }
+        if let Some(hinted) =
+            super::stdlib_hint::import_hint(&diagnostic, name, ident.span, self.workspace)
+        {
+            return hinted;
+        }
         if let Some(candidate) =
             suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()))
         {

@@ -7,6 +7,7 @@ mod calls;
 mod checker;
 mod expr;
 pub mod scope;
+mod stdlib_hint;
 pub mod types;
 
 use std::collections::HashMap;

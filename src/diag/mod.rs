@@ -22,6 +22,14 @@ pub struct Label {
     pub primary: bool,
 }
 
+/// An edit that fixes the problem, for editors to apply: replace the text of `span` (empty for
+/// an insertion) by `replacement`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Fix {
+    pub span: Span,
+    pub replacement: String,
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Diagnostic {
     pub severity: Severity,
@@ -31,6 +39,8 @@ pub struct Diagnostic {
     pub labels: Vec<Label>,
     pub notes: Vec<String>,
     pub help: Option<String>,
+    /// Edits that fix the problem, when the fix is certain enough to offer.
+    pub fixes: Vec<Fix>,
 }
 
 impl Diagnostic {
@@ -42,6 +52,7 @@ impl Diagnostic {
             labels: Vec::new(),
             notes: Vec::new(),
             help: None,
+            fixes: Vec::new(),
         }
     }
 
@@ -85,6 +96,15 @@ impl Diagnostic {
             Some(h) => self.help(h),
             None => self,
         }
+    }
+
+    /// Offers an edit that fixes the problem: `span`'s text replaced by `replacement`.
+    pub fn fix(mut self, span: Span, replacement: impl Into<String>) -> Diagnostic {
+        self.fixes.push(Fix {
+            span,
+            replacement: replacement.into(),
+        });
+        self
     }
 
     /// Where the problem is: the span of the primary label.

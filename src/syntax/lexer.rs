@@ -121,6 +121,13 @@ pub enum Tok<'input> {
     Str(&'input str),
     #[regex(r#""[^"\n]*"#, unterminated_string)]
     UnterminatedStr,
+
+    /// `// ...`, a comment in other languages: reported and skipped, never given to the parser.
+    #[regex(r"//[^\n]*", allow_greedy = true)]
+    SlashComment,
+    /// `.5`: reported, then given to the parser as the number it means.
+    #[regex(r"\.[0-9]+([eE][+-]?[0-9]+)?", |lex| lex.slice())]
+    LeadingDot(&'input str),
 }
 
 fn unterminated_string<'input>(_: &mut logos::Lexer<'input, Tok<'input>>) -> Result<(), LexError> {
@@ -218,6 +225,8 @@ impl Tok<'_> {
             Tok::Ident(_) => "identifier",
             Tok::Unknown(_) => "unknown",
             Tok::Str(_) => "string",
+            Tok::SlashComment => "//",
+            Tok::LeadingDot(_) => "number",
         }
     }
 }
@@ -260,7 +269,13 @@ impl<'input> Iterator for Tokens<'input> {
         loop {
             let result = self.lexer.next()?;
             let range = self.lexer.span();
+            let span = Span::new(self.file, range.start, range.end);
             match result {
+                Ok(Tok::SlashComment) => self.errors.push(slash_comment(span, self.lexer.slice())),
+                Ok(Tok::LeadingDot(number)) => {
+                    self.errors.push(leading_dot(span, number));
+                    return Some(Ok((range.start, Tok::Float(number), range.end)));
+                }
                 Ok(token) => return Some(Ok((range.start, token, range.end))),
                 Err(error) => self.errors.push(lex_diagnostic(
                     error,
@@ -270,6 +285,23 @@ impl<'input> Iterator for Tokens<'input> {
             }
         }
     }
+}
+
+/// E0104: `// text`, with the LSD comment that says the same.
+fn slash_comment(span: Span, slice: &str) -> Diagnostic {
+    let text = slice.trim_start_matches('/').trim();
+    Diagnostic::error("E0104", "`//` does not start a comment in LSD")
+        .primary(span, "read as a comment, but LSD comments are `(* ... *)`")
+        .help(format!("write `(* {text} *)`"))
+        .fix(span, format!("(* {text} *)"))
+}
+
+/// E0105: `.5`, a number without its leading digit.
+fn leading_dot(span: Span, number: &str) -> Diagnostic {
+    Diagnostic::error("E0105", "a number starts with a digit")
+        .primary(span, "no digit before the decimal point")
+        .help(format!("write `0{number}`"))
+        .fix(span, format!("0{number}"))
 }
 
 fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
