@@ -27,6 +27,9 @@ impl<'w> Checker<'w> {
             ExprKind::Vector(items) => self.vector(items, expr.span, ctx),
             ExprKind::Call { callee, args } => self.call(callee, args, expr.span, ctx),
             ExprKind::Binary { op, lhs, rhs } => {
+                if let Some(ty) = self.precedence_trap(expr, *op, lhs, rhs, ctx) {
+                    return ty;
+                }
                 let left = self.expr(lhs, ctx);
                 let right = self.expr(rhs, ctx);
                 self.binary(*op, lhs, left, rhs, right, expr.span)
@@ -194,9 +197,71 @@ impl<'w> Checker<'w> {
 
     /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).
     fn declares_join(&self, extent: Span) -> bool {
-        let text = &self.workspace.sources.file(extent.file).text;
-        text.get(extent.start as usize..)
-            .is_some_and(|rest| rest.starts_with("join"))
+        self.source(extent).starts_with("join")
+    }
+
+    /// The source text of a span.
+    fn source(&self, span: Span) -> &str {
+        let text = &self.workspace.sources.file(span.file).text;
+        text.get(span.range()).unwrap_or_default()
+    }
+
+    /// `t ++ q || axis`, which reads `(t ++ q) || axis` since `||` binds most loosely: one error
+    /// (E0421) that suggests `t ++ (q || axis)`, and the type the suggestion has, so that the
+    /// declaration raises no other error. `None` when the expression is not this trap.
+    fn precedence_trap(
+        &mut self,
+        expr: &'w Expr,
+        op: BinaryOp,
+        lhs: &'w Expr,
+        rhs: &'w Expr,
+        ctx: &mut Ctx,
+    ) -> Option<Ty> {
+        let ExprKind::Binary {
+            op: BinaryOp::Displacement,
+            lhs: translation,
+            rhs: angle,
+        } = &lhs.kind
+        else {
+            return None;
+        };
+        // A parenthesised `(t ++ q)` starts after the parenthesis: written on purpose.
+        if op != BinaryOp::Rotation || lhs.span.start != expr.span.start {
+            return None;
+        }
+        for part in [&**translation, &**angle, rhs] {
+            self.expr(part, ctx);
+        }
+        // `axis @ b` on the right, unparenthesised: the frame applies to the whole displacement.
+        let (axis, body, ty) = match &rhs.kind {
+            ExprKind::Binary {
+                op: BinaryOp::Frame,
+                lhs: axis,
+                rhs: body,
+            } if rhs.span.end == expr.span.end => (axis.span, Some(body.span), Ty::Frame),
+            _ => (rhs.span, None, Ty::Displacement),
+        };
+        let mut intended = format!(
+            "{} ++ ({} || {})",
+            self.source(translation.span),
+            self.source(angle.span),
+            self.source(axis)
+        );
+        if let Some(body) = body {
+            intended = format!("{intended} @ {}", self.source(body));
+        }
+        self.report(
+            Diagnostic::error("E0421", "`||` binds more loosely than `++`")
+                .primary(
+                    expr.span,
+                    format!("this reads `({}) || ...`", self.source(lhs.span)),
+                )
+                .help(format!(
+                    "a displacement with a rotation is `t ++ (q || axis)`: write `{intended}`"
+                ))
+                .fix(expr.span, intended),
+        );
+        Some(ty)
     }
 
     /// Every name visible from a context, in declaration order (for suggestions).

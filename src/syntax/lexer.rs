@@ -250,14 +250,70 @@ pub struct Tokens<'input> {
     file: FileId,
     lexer: logos::Lexer<'input, Tok<'input>>,
     pub errors: Vec<Diagnostic>,
+    /// Repairs of recognised slips, by the offset of the token they apply to, in order.
+    repairs: Vec<(usize, Repair)>,
+    /// A token held back while an inserted one is read.
+    held: Option<Spanned<'input>>,
+}
+
+/// A change to the token stream that lets the parser read on past a slip it has recognised and
+/// reported (see `syntax::repair`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Repair {
+    /// A `,` before the token: a missing comma between fields.
+    InsertComma,
+    /// The string read as a name: `integrator = "rk4"`.
+    Unquote,
+    /// The token left out: a unit after a number (`30 deg`).
+    Skip,
 }
 
 impl<'input> Tokens<'input> {
     pub fn new(file: FileId, text: &'input str) -> Tokens<'input> {
+        Tokens::repaired(file, text, Vec::new())
+    }
+
+    /// The tokens with `repairs` applied, each to the token starting at its offset.
+    pub fn repaired(
+        file: FileId,
+        text: &'input str,
+        mut repairs: Vec<(usize, Repair)>,
+    ) -> Tokens<'input> {
+        // Popped from the end: the first repair last.
+        repairs.sort_by_key(|(offset, _)| std::cmp::Reverse(*offset));
         Tokens {
             file,
             lexer: Tok::lexer(text),
             errors: Vec::new(),
+            repairs,
+            held: None,
+        }
+    }
+
+    /// The token as the repairs make it: `None` when it is left out.
+    fn repair(&mut self, token: Spanned<'input>) -> Option<Spanned<'input>> {
+        let (start, tok, end) = token;
+        while self
+            .repairs
+            .last()
+            .is_some_and(|(offset, _)| *offset < start)
+        {
+            self.repairs.pop();
+        }
+        match self.repairs.last() {
+            Some(&(offset, repair)) if offset == start => {
+                self.repairs.pop();
+                match (repair, tok) {
+                    (Repair::InsertComma, _) => {
+                        self.held = Some(token);
+                        Some((start, Tok::Comma, start))
+                    }
+                    (Repair::Unquote, Tok::Str(name)) => Some((start, Tok::Ident(name), end)),
+                    (Repair::Skip, _) => None,
+                    (Repair::Unquote, _) => Some(token),
+                }
+            }
+            _ => Some(token),
         }
     }
 }
@@ -266,22 +322,31 @@ impl<'input> Iterator for Tokens<'input> {
     type Item = Result<Spanned<'input>, LexError>;
 
     fn next(&mut self) -> Option<Self::Item> {
+        if let Some(held) = self.held.take() {
+            return Some(Ok(held));
+        }
         loop {
             let result = self.lexer.next()?;
             let range = self.lexer.span();
             let span = Span::new(self.file, range.start, range.end);
-            match result {
-                Ok(Tok::SlashComment) => self.errors.push(slash_comment(span, self.lexer.slice())),
+            let token = match result {
+                Ok(Tok::SlashComment) => {
+                    self.errors.push(slash_comment(span, self.lexer.slice()));
+                    continue;
+                }
                 Ok(Tok::LeadingDot(number)) => {
                     self.errors.push(leading_dot(span, number));
-                    return Some(Ok((range.start, Tok::Float(number), range.end)));
+                    Tok::Float(number)
                 }
-                Ok(token) => return Some(Ok((range.start, token, range.end))),
-                Err(error) => self.errors.push(lex_diagnostic(
-                    error,
-                    Span::new(self.file, range.start, range.end),
-                    self.lexer.slice(),
-                )),
+                Ok(token) => token,
+                Err(error) => {
+                    self.errors
+                        .push(lex_diagnostic(error, span, self.lexer.slice()));
+                    continue;
+                }
+            };
+            if let Some(token) = self.repair((range.start, token, range.end)) {
+                return Some(Ok(token));
             }
         }
     }
@@ -327,6 +392,7 @@ fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
                     .help("an unknown is `?` followed by a letter, as in `?s` or `?fs(x, x')`"),
                 '|' => diagnostic.help("the rotation operator is `||`, as in `th || [1,0,0]`"),
                 '"' => diagnostic.help("strings appear only in `import \"file.lsd\";`"),
+                '°' => diagnostic.help("angles are in radians: write `30 * pi / 180` for 30°"),
                 _ => diagnostic,
             }
         }
