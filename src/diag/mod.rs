@@ -39,8 +39,9 @@ pub struct Diagnostic {
     pub labels: Vec<Label>,
     pub notes: Vec<String>,
     pub help: Option<String>,
-    /// Edits that fix the problem, when the fix is certain enough to offer.
-    pub fixes: Vec<Fix>,
+    /// An edit that fixes the problem, when one is certain enough to offer. Boxed: every
+    /// diagnostic travels in the `Err` of results, and few have a fix.
+    pub fix: Option<Box<Fix>>,
 }
 
 impl Diagnostic {
@@ -52,7 +53,7 @@ impl Diagnostic {
             labels: Vec::new(),
             notes: Vec::new(),
             help: None,
-            fixes: Vec::new(),
+            fix: None,
         }
     }
 
@@ -100,10 +101,10 @@ impl Diagnostic {
 
     /// Offers an edit that fixes the problem: `span`'s text replaced by `replacement`.
     pub fn fix(mut self, span: Span, replacement: impl Into<String>) -> Diagnostic {
-        self.fixes.push(Fix {
+        self.fix = Some(Box::new(Fix {
             span,
             replacement: replacement.into(),
-        });
+        }));
         self
     }
 

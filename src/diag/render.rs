@@ -56,12 +56,9 @@ pub fn to_text(sources: &SourceMap, diagnostics: &[Diagnostic]) -> String {
     let mut out = String::new();
     for diagnostic in diagnostics {
         let mut rendered = to_codespan(diagnostic);
-        rendered.notes.extend(
-            diagnostic
-                .fixes
-                .iter()
-                .map(|fix| describe_fix(sources, fix)),
-        );
+        rendered
+            .notes
+            .extend(diagnostic.fix.iter().map(|fix| describe_fix(sources, fix)));
         if term::emit_to_string(&mut out, &config, sources, &rendered).is_err() {
             out.push_str(&format!(
                 "{}: {}\n",
@@ -157,8 +154,8 @@ struct JsonDiagnostic {
     labels: Vec<JsonLabel>,
     notes: Vec<String>,
     help: Option<String>,
-    /// Edits that fix the problem: replace the text from the position to the end position by
-    /// `replacement` (an insertion when they are equal).
+    /// Edits that fix the problem (none or one): replace the text from the position to the end
+    /// position by `replacement` (an insertion when they are equal).
     fixes: Vec<JsonFix>,
 }
 
@@ -203,7 +200,7 @@ pub fn to_json_value(sources: &SourceMap, diagnostics: &[Diagnostic]) -> serde_j
             notes: d.notes.clone(),
             help: d.help.clone(),
             fixes: d
-                .fixes
+                .fix
                 .iter()
                 .map(|f| JsonFix {
                     position: position(sources, f.span),
