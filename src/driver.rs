@@ -46,7 +46,10 @@ fn finish(workspace: Workspace, mut diagnostics: Vec<Diagnostic>) -> Compilation
         diagnostics.extend(check_diagnostics.list);
         if !failed {
             match elab::elaborate(&workspace, &checked) {
-                Ok(m) => mechanism = Some(m),
+                Ok((m, warnings)) => {
+                    mechanism = Some(m);
+                    diagnostics.extend(warnings);
+                }
                 Err(d) => diagnostics.push(d),
             }
         }

@@ -7,15 +7,15 @@ use super::scope::Target;
 use super::types::{self, Ty};
 use crate::diag::{suggest, Diagnostic};
 use crate::source::Span;
-use crate::syntax::ast::{BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident};
+use crate::syntax::ast::{
+    BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident, QualifiedName,
+};
 
 impl<'w> Checker<'w> {
     pub(super) fn expr(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         match &expr.kind {
             ExprKind::Name(ident) => self.name(ident, ctx),
-            ExprKind::Qualified(qualified) => {
-                self.qualified(&qualified.package, &qualified.name, expr.span, ctx)
-            }
+            ExprKind::Qualified(qualified) => self.qualified(qualified, expr.span, ctx),
             ExprKind::Field(access) => {
                 let ty = self.expr(&access.target, ctx);
                 self.field(ty, &access.field)
@@ -299,8 +299,8 @@ impl<'w> Checker<'w> {
         names
     }
 
-    fn qualified(&mut self, package: &Ident, name: &Ident, span: Span, ctx: &mut Ctx) -> Ty {
-        match self.package_member(package, name, ctx) {
+    fn qualified(&mut self, qualified: &'w QualifiedName, span: Span, ctx: &mut Ctx) -> Ty {
+        match self.package_member(qualified, ctx) {
             Some((scope, ty)) => {
                 self.out.resolutions.insert(span, Target::Global(scope));
                 ty
@@ -309,13 +309,18 @@ impl<'w> Checker<'w> {
         }
     }
 
-    /// Resolves `P:X` to the package's scope and X's type, reporting what is wrong.
+    /// Resolves `P:X` (or `P[k]:X`) to the package's scope and X's type, reporting what is
+    /// wrong.
     pub(super) fn package_member(
         &mut self,
-        package: &Ident,
-        name: &Ident,
+        qualified: &'w QualifiedName,
         ctx: &mut Ctx,
     ) -> Option<(types::ScopeId, Ty)> {
+        let QualifiedName {
+            package,
+            index,
+            name,
+        } = qualified;
         let scope = match self.name(package, ctx) {
             Ty::Package(scope) => scope,
             Ty::Error => return None,
@@ -334,12 +339,20 @@ impl<'w> Checker<'w> {
                 return None;
             }
         };
+        if !self.instance_index(package, scope, index.as_ref(), ctx) {
+            return None;
+        }
         let members = self.out.scope(scope);
         if let Some(entry) = members.names.get(&name.name) {
             return Some((scope, entry.ty));
         }
-        let help = suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref()))
-            .map(|s| format!("did you mean `{}:{s}`?", package.name));
+        let help =
+            suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref())).map(|s| {
+                match index {
+                    Some(_) => format!("did you mean `{}[…]:{s}`?", package.name),
+                    None => format!("did you mean `{}:{s}`?", package.name),
+                }
+            });
         self.report(
             Diagnostic::error(
                 "E0301",
@@ -349,6 +362,51 @@ impl<'w> Checker<'w> {
             .with_help(help),
         );
         None
+    }
+
+    /// Checks that an array of packages is named with an index (a scalar) and a plain package
+    /// without one.
+    fn instance_index(
+        &mut self,
+        package: &Ident,
+        scope: types::ScopeId,
+        index: Option<&'w Expr>,
+        ctx: &mut Ctx,
+    ) -> bool {
+        let array = self.out.scope(scope).index.is_some();
+        match (array, index) {
+            (true, Some(index)) => {
+                let ty = self.expr(index, ctx);
+                self.expect_value(index, ty, Ty::Scalar, "the index of an instance");
+                true
+            }
+            (false, None) => true,
+            (true, None) => {
+                self.report(
+                    Diagnostic::error(
+                        "E0430",
+                        format!("`{}` is an array of packages", package.name),
+                    )
+                    .primary(package.span, "which instance?")
+                    .help(format!(
+                        "name one instance by its index: `{}[k]:name`",
+                        package.name
+                    )),
+                );
+                false
+            }
+            (false, Some(index)) => {
+                self.report(
+                    Diagnostic::error(
+                        "E0430",
+                        format!("`{}` is a package, not an array of packages", package.name),
+                    )
+                    .primary(index.span, "an index of a package that has one instance")
+                    .help(format!("write `{}:name`", package.name)),
+                );
+                false
+            }
+        }
     }
 
     fn field(&mut self, target: Ty, field: &Ident) -> Ty {
@@ -747,10 +805,9 @@ fn mentions(expr: &Expr, name: &str) -> bool {
             bindings.iter().any(|b| mentions(&b.value, name)) || mentions(body, name)
         }
         ExprKind::Construct { fields, .. } => fields.iter().any(|f| mentions(&f.value, name)),
-        ExprKind::Qualified { .. }
-        | ExprKind::Unknown(_)
-        | ExprKind::Int(_)
-        | ExprKind::Float(_)
-        | ExprKind::Error => false,
+        ExprKind::Qualified(qualified) => {
+            qualified.index.as_ref().is_some_and(|e| mentions(e, name))
+        }
+        ExprKind::Unknown(_) | ExprKind::Int(_) | ExprKind::Float(_) | ExprKind::Error => false,
     }
 }

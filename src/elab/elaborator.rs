@@ -9,6 +9,7 @@ use crate::diag::Diagnostic;
 use crate::load::{ModuleId, Workspace};
 use crate::syntax::ast::Name;
 
+use super::instances::{InstanceId, Instances};
 use super::mechanism::Mechanism;
 use super::value::{self, Value};
 
@@ -22,7 +23,13 @@ pub(super) enum Global {
 pub struct Elaborator<'c, 'w> {
     pub(super) workspace: &'w Workspace,
     pub(super) checked: &'c Checked<'w>,
-    pub(super) globals: FxHashMap<(ScopeId, Name), Global>,
+    /// Values of declared names, by scope, instance (of an array of packages) and name.
+    pub(super) globals: FxHashMap<(ScopeId, InstanceId, Name), Global>,
+    pub(super) instances: Instances,
+    /// The first name bound to each body by `let name = other_name` (see `point_out_alias`).
+    pub(super) aliases: FxHashMap<value::BodyId, (Name, crate::source::Span)>,
+    /// Warnings about legal programs that are probably not what was meant.
+    pub(super) warnings: Vec<Diagnostic>,
     pub(super) mechanism: Mechanism,
     pub(super) elaborated_modules: Vec<ModuleId>,
     pub(super) depth: usize,

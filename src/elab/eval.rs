@@ -3,6 +3,7 @@
 use std::sync::Arc;
 
 use super::elaborator::{internal, Elaborator, Global};
+use super::instances::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
     as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix,
@@ -22,7 +23,7 @@ use crate::syntax::ast::{
 type Result<T> = std::result::Result<T, Diagnostic>;
 
 /// Local bindings while evaluating an expression: parameters, coordinates, `local` names.
-type Locals = Vec<(Name, Value)>;
+pub(super) type Locals = Vec<(Name, Value)>;
 
 const MAX_DEPTH: usize = 64;
 
@@ -41,7 +42,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         self.decls(decls, scope)
     }
 
-    fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) -> Result<()> {
+    pub(super) fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) -> Result<()> {
         decls.iter().try_for_each(|decl| self.decl(decl, scope))
     }
 
@@ -81,7 +82,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 if let Some(own) = own {
                     self.resolve_own_coordinates(own, link, decl.span)?;
                 }
-                let join_name = name.as_ref().map(|n| n.name.clone());
+                let instance = self.instances.current;
+                let join_name = name
+                    .as_ref()
+                    .map(|n| self.qualified_name(&n.name, instance));
                 self.mechanism.joins.push(Join {
                     name: join_name,
                     first,
@@ -90,8 +94,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     span: decl.span,
                 });
                 if let Some(name) = name {
-                    self.globals
-                        .insert((scope, name.name.clone()), Global::Ready(Value::Join(id)));
+                    let key = (scope, self.instance_of(scope)?, name.name.clone());
+                    self.globals.insert(key, Global::Ready(Value::Join(id)));
                 }
                 Ok(())
             }
@@ -208,7 +212,12 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .package_scopes
                     .get(&decl.span)
                     .ok_or_else(|| internal("package not checked"))?;
-                self.decls(&package_decl.decls, package)
+                match &package_decl.index {
+                    None => self.decls(&package_decl.decls, package),
+                    Some(index) => {
+                        self.package_array(&package_decl.name, index, &package_decl.decls, package)
+                    }
+                }
             }
             DeclKind::Import { .. } => match self.workspace.imports.get(&decl.span) {
                 Some(&module) => self.module(module),
@@ -220,12 +229,19 @@ impl<'c, 'w> Elaborator<'c, 'w> {
 
     /// The value of a declared name. A `let` is evaluated on first use: unused definitions of a
     /// library cost nothing here.
-    fn global(&mut self, scope: ScopeId, name: &Name) -> Result<Value> {
-        let key = (scope, name.clone());
+    pub(super) fn global(&mut self, scope: ScopeId, name: &Name) -> Result<Value> {
+        let instance = self.instance_of(scope)?;
+        let key = (scope, instance, name.clone());
         match self.globals.get(&key) {
             Some(Global::Ready(value)) => return Ok(value.clone()),
             Some(Global::InProgress) => {
-                return Err(internal(format!("`{name}` depends on itself")))
+                let shown = self.qualified_name(name, instance);
+                return Err(Diagnostic::error(
+                    "E0631",
+                    format!("`{shown}` depends on itself through instances of an array"),
+                )
+                .primary(self.checked.scope(scope).names[name].span, "defined here")
+                .help("an instance may use the names of other instances, but not in a cycle"));
             }
             None => {}
         }
@@ -238,6 +254,15 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let value = match entry.ty {
             Ty::Definition(def) => Value::Definition(def),
             Ty::Package(package) => Value::Package(package),
+            Ty::Join => {
+                let shown = self.qualified_name(name, instance);
+                return Err(Diagnostic::error(
+                    "E0631",
+                    format!("the join `{shown}` is used before its instance declares it"),
+                )
+                .primary(entry.span, "declared here, in a later instance")
+                .help("an instance may name the joins of the instances before it, not after"));
+            }
             _ => {
                 let binding: &'w Binding = self
                     .checked
@@ -246,8 +271,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .copied()
                     .ok_or_else(|| internal(format!("`{name}` has no value")))?;
                 self.globals.insert(key.clone(), Global::InProgress);
-                let value = self.expr(&binding.value, &mut Locals::new())?;
-                self.name_object(&value, &binding.name.name);
+                let value = self.within(instance, |elaborator| {
+                    elaborator.expr(&binding.value, &mut Locals::new())
+                })?;
+                if matches!(binding.value.kind, ExprKind::Name(_)) {
+                    self.point_out_alias(&value, binding, instance);
+                }
+                self.name_object(&value, &binding.name.name, instance);
                 value
             }
         };
@@ -255,8 +285,47 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         Ok(value)
     }
 
-    /// Gives an unnamed body, link, effort or unknown the name it is first bound to.
-    fn name_object(&mut self, value: &Value, name: &Name) {
+    /// `let v1 = proto;` where `proto` is a body: `v1` is that same body, not a copy. Legal,
+    /// and harmless once; a second such name (`let v0 = proto; let v1 = proto;`, or one per
+    /// instance of an array) is the usual slip of someone who wanted several bodies, and is
+    /// pointed out.
+    fn point_out_alias(&mut self, value: &Value, binding: &Binding, instance: InstanceId) {
+        let Value::Body(BodyRef::Body(id)) = value else {
+            return;
+        };
+        let alias = self.qualified_name(&binding.name.name, instance);
+        let Some((earlier, earlier_span)) = self.aliases.get(id).cloned() else {
+            self.aliases.insert(*id, (alias, binding.value.span));
+            return;
+        };
+        let body = self.mechanism.body_name(BodyRef::Body(*id));
+        self.warnings.push(
+            Diagnostic::warning(
+                "W0610",
+                format!("`{alias}` and `{earlier}` are one body, `{body}`"),
+            )
+            .primary(binding.value.span, format!("the body `{body}` itself"))
+            .secondary(earlier_span, format!("`{earlier}` is this body too"))
+            .help(format!(
+                "a `let` gives a value another name, it does not copy it; for a new body at each use, \
+                 make a definition `let {body}() = body ... end;` and write `{body}()`"
+            )),
+        );
+    }
+
+    /// A name declared in `instance`, as messages and outputs show it:
+    /// `P[3]:crank` in an array of packages, `crank` elsewhere.
+    fn qualified_name(&self, name: &Name, instance: InstanceId) -> Name {
+        match instance {
+            ROOT => name.clone(),
+            _ => Name::from(format!("{}{name}", self.instances.prefix(instance))),
+        }
+    }
+
+    /// Gives an unnamed body, link, effort or unknown the name it is first bound to (in
+    /// `instance`, which qualifies it).
+    fn name_object(&mut self, value: &Value, name: &Name, instance: InstanceId) {
+        let qualified = self.qualified_name(name, instance);
         let slot = match value {
             Value::Body(BodyRef::Body(id)) => &mut self.mechanism.bodies[id.0 as usize].name,
             Value::Link(id) => &mut self.mechanism.links[id.0 as usize].name,
@@ -268,7 +337,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             _ => return,
         };
         if slot.is_none() {
-            *slot = Some(name.clone());
+            *slot = Some(qualified);
         }
     }
 
@@ -306,7 +375,14 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             ExprKind::Qualified(qualified) => {
                 let target = self.resolution(expr.span)?;
-                self.lookup(&qualified.name, target, locals)?
+                match (&qualified.index, target) {
+                    (Some(index), Target::Global(scope)) => {
+                        let instance = self.instance_at(scope, index, locals)?;
+                        self.within(instance, |e| e.global(scope, &qualified.name.name))
+                            .map_err(|error| error.secondary(expr.span, "named here"))?
+                    }
+                    _ => self.lookup(&qualified.name, target, locals)?,
+                }
             }
             ExprKind::Field(access) => {
                 let value = self.expr(&access.target, locals)?;
@@ -548,7 +624,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .iter()
             .map(|a| self.expr(&a.value, locals))
             .collect::<Result<Vec<_>>>()?;
-        let (ident, target) = match callee {
+        let (ident, target, index) = match callee {
             Callee::Unknown(ident) => {
                 let id = self.new_unknown(UnknownKind::Function, Origin::Written, 0, ident.span);
                 let scalars = values
@@ -557,13 +633,22 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .collect::<Result<Vec<_>>>()?;
                 return Ok(Value::Scalar(Arc::new(SExpr::UnknownFunction(id, scalars))));
             }
-            Callee::Name(ident) => (ident, self.resolution(ident.span)?),
-            Callee::Qualified { name, .. } => (name, self.resolution(name.span)?),
+            Callee::Name(ident) => (ident, self.resolution(ident.span)?, None),
+            Callee::Qualified(qualified) => (
+                &qualified.name,
+                self.resolution(qualified.name.span)?,
+                qualified.index.as_ref(),
+            ),
         };
         if target == Target::Builtin {
             return builtin_call(&ident.name, values, span);
         }
-        let Value::Definition(def) = self.lookup(ident, target, locals)? else {
+        // The instance the definition was declared in: its body's names take their values there.
+        let home = match (index, target) {
+            (Some(index), Target::Global(scope)) => self.instance_at(scope, index, locals)?,
+            _ => self.instances.current,
+        };
+        let Value::Definition(def) = self.within(home, |e| e.lookup(ident, target, locals))? else {
             return Err(internal("call of a non-definition"));
         };
         let definition = &self.checked.definitions[def.0 as usize];
@@ -596,7 +681,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .primary(span, format!("instantiating `{name}` here")));
         }
         self.depth += 1;
-        let result = self.expr(body, &mut frame);
+        let result = self.within(home, |e| e.expr(body, &mut frame));
         self.depth -= 1;
         result
     }

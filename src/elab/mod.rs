@@ -6,6 +6,7 @@
 mod elaborator;
 mod eval;
 mod fields;
+mod instances;
 pub mod mechanism;
 mod operations;
 mod own_join;
@@ -18,8 +19,12 @@ use elaborator::Elaborator;
 pub use mechanism::{Mechanism, Summary};
 use rustc_hash::FxHashMap;
 
-/// Evaluates every module of a checked workspace into one mechanism.
-pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechanism, Diagnostic> {
+/// Evaluates every module of a checked workspace into one mechanism, with warnings about what
+/// is legal but probably not meant.
+pub fn elaborate(
+    workspace: &Workspace,
+    checked: &Checked<'_>,
+) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
     let mut elaborator = Elaborator {
         workspace,
         checked,
@@ -30,10 +35,13 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
         fields: Vec::new(),
         literals: FxHashMap::default(),
         own_join: None,
+        instances: Default::default(),
+        aliases: FxHashMap::default(),
+        warnings: Vec::new(),
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;
     }
     elaborator.apply_fields()?;
-    Ok(elaborator.mechanism)
+    Ok((elaborator.mechanism, elaborator.warnings))
 }

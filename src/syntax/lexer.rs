@@ -84,6 +84,8 @@ pub enum Tok<'input> {
     RParen,
     #[token(".")]
     Dot,
+    #[token("..")]
+    DotDot,
     #[token("=")]
     Equal,
     #[token("+")]
@@ -210,6 +212,7 @@ impl Tok<'_> {
             Tok::LParen => "(",
             Tok::RParen => ")",
             Tok::Dot => ".",
+            Tok::DotDot => "..",
             Tok::Equal => "=",
             Tok::Plus => "+",
             Tok::PlusPlus => "++",

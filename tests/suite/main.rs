@@ -6,6 +6,7 @@ mod common;
 
 mod allocations;
 mod architecture;
+mod arrays;
 mod assembly;
 mod cli;
 mod closed_loops;
