@@ -17,6 +17,7 @@ pub mod diag;
 pub mod driver;
 pub mod dynamics;
 pub mod elab;
+pub mod ide;
 pub mod integrate;
 pub mod kinematics;
 pub mod load;

@@ -335,6 +335,17 @@ enum Command {
     },
     /// Print the syntax tree of a file (for debugging the parser).
     Parse { file: PathBuf },
+    /// Format LSD files in place (`docs/formatting.md`); directories are searched for `.lsd`
+    /// files. Only whitespace changes: every token and comment is kept.
+    Fmt {
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Change nothing; list the files that are not formatted and fail if there are any.
+        #[arg(long)]
+        check: bool,
+    },
+    /// Run the language server on standard input and output (`docs/editors.md`).
+    Lsp,
 }
 
 fn main() -> ExitCode {
@@ -403,6 +414,14 @@ fn main() -> ExitCode {
             import_urdf(&file, &options, output.as_deref())
         }
         Command::Parse { file } => parse(&file),
+        Command::Fmt { paths, check } => format_files(&paths, check),
+        Command::Lsp => match lsdc::ide::server::run_stdio() {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(error) => {
+                eprintln!("error: the language server stopped: {error}");
+                ExitCode::from(1)
+            }
+        },
     }
 }
 
@@ -1139,5 +1158,51 @@ fn parse(file: &std::path::Path) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
+    }
+}
+
+/// `lsdc fmt`: formats each file in place, or with `check` lists those that would change.
+/// Exit status 1 when a file cannot be read or parsed, or (with `check`) is not formatted.
+fn format_files(paths: &[PathBuf], check: bool) -> ExitCode {
+    let files = match lsdc::ide::format::lsd_files(paths) {
+        Ok(files) => files,
+        Err(error) => return usage_error(&error),
+    };
+    let mut failed = false;
+    for file in files {
+        let text = match std::fs::read_to_string(&file) {
+            Ok(text) => text,
+            Err(e) => {
+                eprintln!("error: cannot read `{}`: {e}", file.display());
+                failed = true;
+                continue;
+            }
+        };
+        let mut sources = lsdc::source::SourceMap::new();
+        let id = sources.add(file.display().to_string(), text);
+        let text = &sources.file(id).text;
+        let formatted = match lsdc::ide::format::format(id, text) {
+            Ok(formatted) => formatted,
+            Err(diagnostics) => {
+                eprint!("{}", render::to_text(&sources, &diagnostics));
+                failed = true;
+                continue;
+            }
+        };
+        if formatted == *text {
+            continue;
+        }
+        if check {
+            println!("{}: not formatted", file.display());
+            failed = true;
+        } else if let Err(e) = std::fs::write(&file, formatted) {
+            eprintln!("error: cannot write `{}`: {e}", file.display());
+            failed = true;
+        }
+    }
+    if failed {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
     }
 }

@@ -1,31 +1,9 @@
 //! The hint for a name the program did not import: "`revolute` is in the standard library: add
 //! `import joints;`", with the import offered as a fix.
 
-use std::sync::OnceLock;
-
 use crate::diag::Diagnostic;
 use crate::load::{stdlib, Workspace};
 use crate::source::{FileId, Span};
-
-/// The names each standard-library module declares at its top level, read once.
-fn exports() -> &'static [(&'static str, Vec<String>)] {
-    static EXPORTS: OnceLock<Vec<(&'static str, Vec<String>)>> = OnceLock::new();
-    EXPORTS.get_or_init(|| {
-        stdlib::names()
-            .filter_map(stdlib::find)
-            .map(|(module, text)| {
-                let (program, _) = crate::syntax::parser::parse(FileId(0), text);
-                let names = program
-                    .decls
-                    .iter()
-                    .flat_map(super::declared_names)
-                    .map(|(name, _, _)| name.to_string())
-                    .collect();
-                (module, names)
-            })
-            .collect()
-    })
-}
 
 /// Adds the hint to an unknown-name error when a standard-library module declares the name, or
 /// the name is a module's own (`joints:revolute` without `import joints;`).
@@ -35,10 +13,10 @@ pub(super) fn import_hint(
     at: Span,
     workspace: &Workspace,
 ) -> Option<Diagnostic> {
-    let (module, _) = exports()
-        .iter()
-        .find(|(module, names)| *module == name || names.iter().any(|n| n == name))?;
-    let what = if *module == name {
+    let module = stdlib::find(name)
+        .map(|(module, _)| module)
+        .or_else(|| stdlib::module_declaring(name))?;
+    let what = if module == name {
         format!("`{name}` is a standard-library module")
     } else {
         format!("`{name}` is in the standard library")

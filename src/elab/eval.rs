@@ -2,13 +2,12 @@
 
 use std::sync::Arc;
 
-use super::elaborator::{internal, Elaborator, Global};
+use super::elaborator::{internal, Elaborator, Global, OwnJoin};
 use super::instances::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
     as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix,
 };
-use super::own_join::OwnJoin;
 use super::value::*;
 use crate::check::scope::{ScopeId, Target};
 use crate::check::types::Ty;

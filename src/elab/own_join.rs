@@ -5,18 +5,11 @@
 
 use std::sync::Arc;
 
-use super::elaborator::Elaborator;
+use super::elaborator::{Elaborator, OwnJoin};
 use super::value::{Displacement, Elementary, JoinId, LinkId, SExpr, Scalar, Value, Vector};
 use crate::diag::Diagnostic;
 use crate::source::Span;
 use crate::syntax::ast::Name;
-
-/// The named join whose link is being evaluated, and the coordinate names its link read.
-pub(super) struct OwnJoin {
-    pub(super) id: JoinId,
-    pub(super) name: Name,
-    pub(super) read: Vec<(Name, Span)>,
-}
 
 impl Elaborator<'_, '_> {
     /// `crank.q` while `crank`'s link is evaluated: a placeholder coordinate whose index is the

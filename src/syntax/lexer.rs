@@ -140,7 +140,24 @@ fn unterminated_string<'input>(_: &mut logos::Lexer<'input, Tok<'input>>) -> Res
 fn nested_comment<'input>(
     lex: &mut logos::Lexer<'input, Tok<'input>>,
 ) -> FilterResult<(), LexError> {
-    let rest = lex.remainder().as_bytes();
+    let rest = lex.remainder();
+    match comment_rest_length(rest) {
+        Some(length) => {
+            lex.bump(length);
+            FilterResult::Skip
+        }
+        None => {
+            // Everything after an unclosed `(*` is comment: consume it so it is not read as code.
+            lex.bump(rest.len());
+            FilterResult::Error(LexError::UnterminatedComment)
+        }
+    }
+}
+
+/// The length of a comment's text after its opening `(*`, up to and including the `*)` that
+/// closes it (comments nest); `None` when it is never closed.
+fn comment_rest_length(rest: &str) -> Option<usize> {
+    let rest = rest.as_bytes();
     let mut depth = 1usize;
     let mut i = 0;
     while i < rest.len() {
@@ -153,16 +170,28 @@ fn nested_comment<'input>(
                 depth -= 1;
                 i += 2;
                 if depth == 0 {
-                    lex.bump(i);
-                    return FilterResult::Skip;
+                    return Some(i);
                 }
             }
             _ => i += 1,
         }
     }
-    // Everything after an unclosed `(*` is comment: consume it so it is not read as code.
-    lex.bump(rest.len());
-    FilterResult::Error(LexError::UnterminatedComment)
+    None
+}
+
+/// The comments in the text between two tokens (which holds only spaces and comments), as
+/// byte ranges relative to `gap`. The parser never sees comments; the formatter and the editor
+/// support put them back.
+pub fn comments_in_gap(gap: &str) -> Vec<std::ops::Range<usize>> {
+    let mut comments = Vec::new();
+    let mut i = 0;
+    while let Some(offset) = gap[i..].find("(*") {
+        let start = i + offset;
+        let length = comment_rest_length(&gap[start + 2..]).unwrap_or(gap.len() - start - 2);
+        comments.push(start..start + 2 + length);
+        i = start + 2 + length;
+    }
+    comments
 }
 
 impl std::fmt::Display for Tok<'_> {
