@@ -37,6 +37,7 @@ mod symbolic_equations;
 mod symplectic_groups;
 mod textmate;
 mod threads;
+mod tree_jacobian;
 mod unit_diag;
 mod unit_dynamics;
 mod unit_integrate;
