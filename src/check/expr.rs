@@ -27,6 +27,9 @@ impl<'w> Checker<'w> {
             ExprKind::Vector(items) => self.vector(items, expr.span, ctx),
             ExprKind::Call { callee, args } => self.call(callee, args, expr.span, ctx),
             ExprKind::Binary { op, lhs, rhs } => {
+                if let Some(ty) = self.precedence_trap(expr, *op, lhs, rhs, ctx) {
+                    return ty;
+                }
                 let left = self.expr(lhs, ctx);
                 let right = self.expr(rhs, ctx);
                 self.binary(*op, lhs, left, rhs, right, expr.span)
@@ -137,6 +140,11 @@ impl<'w> Checker<'w> {
                 let inside = extent.file == ident.span.file
                     && extent.start <= ident.span.start
                     && ident.span.end <= extent.end;
+                if inside && self.declares_join(extent) {
+                    return diagnostic
+                        .secondary(later, "the join being declared")
+                        .help(format!("a join's frames cannot depend on the join; only its link (after `with`) may read its coordinates, as in `{name}.q'`"));
+                }
                 if inside {
                     return diagnostic
                         .secondary(later, "the name being defined")
@@ -147,9 +155,15 @@ impl<'w> Checker<'w> {
                         .secondary(later, "defined in the same `let ... and ...`")
                         .help("bindings joined by `and` are simultaneous and do not see each other: use two `let` declarations");
                 }
+                let help = if self.declares_join(extent) {
+                    format!("a join's coordinates are read after the join, or inside its own link: write the expression in the link, as in `with motor(axis, 2 - 0.1 * {name}.q') as {name}`")
+                } else {
+                    "a name is visible only after its declaration: move the declaration up"
+                        .to_string()
+                };
                 return diagnostic
                     .secondary(later, "defined here, after its use")
-                    .help("a name is visible only after its declaration: move the declaration up");
+                    .help(help);
             }
             if let Some(entry) = scope.names.get(name.as_ref()) {
                 return diagnostic
@@ -157,11 +171,6 @@ impl<'w> Checker<'w> {
                     .help("a definition sees only the names declared before it");
             }
             current = scope.parent.map(|(p, _)| p);
-        }
-        if let Some(module) = crate::load::stdlib::module_declaring(name) {
-            return diagnostic.help(format!(
-                "`{name}` is declared in the standard library's `{module}`: add `import {module} ;`"
-            ));
         }
         let visible = self.visible_names(ctx);
         if let Some(number) = suggest::thesis_body_number(name) {
@@ -173,12 +182,86 @@ impl<'w> Checker<'w> {
                 ));
             }
         }
+        if let Some(hinted) =
+            super::stdlib_hint::import_hint(&diagnostic, name, ident.span, self.workspace)
+        {
+            return hinted;
+        }
         if let Some(candidate) =
             suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()))
         {
             diagnostic = diagnostic.help(format!("did you mean `{candidate}`?"));
         }
         diagnostic
+    }
+
+    /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).
+    fn declares_join(&self, extent: Span) -> bool {
+        self.source(extent).starts_with("join")
+    }
+
+    /// The source text of a span.
+    fn source(&self, span: Span) -> &str {
+        let text = &self.workspace.sources.file(span.file).text;
+        text.get(span.range()).unwrap_or_default()
+    }
+
+    /// `t ++ q || axis`, which reads `(t ++ q) || axis` since `||` binds most loosely: one error
+    /// (E0421) that suggests `t ++ (q || axis)`, and the type the suggestion has, so that the
+    /// declaration raises no other error. `None` when the expression is not this trap.
+    fn precedence_trap(
+        &mut self,
+        expr: &'w Expr,
+        op: BinaryOp,
+        lhs: &'w Expr,
+        rhs: &'w Expr,
+        ctx: &mut Ctx,
+    ) -> Option<Ty> {
+        let ExprKind::Binary {
+            op: BinaryOp::Displacement,
+            lhs: translation,
+            rhs: angle,
+        } = &lhs.kind
+        else {
+            return None;
+        };
+        // A parenthesised `(t ++ q)` starts after the parenthesis: written on purpose.
+        if op != BinaryOp::Rotation || lhs.span.start != expr.span.start {
+            return None;
+        }
+        for part in [&**translation, &**angle, rhs] {
+            self.expr(part, ctx);
+        }
+        // `axis @ b` on the right, unparenthesised: the frame applies to the whole displacement.
+        let (axis, body, ty) = match &rhs.kind {
+            ExprKind::Binary {
+                op: BinaryOp::Frame,
+                lhs: axis,
+                rhs: body,
+            } if rhs.span.end == expr.span.end => (axis.span, Some(body.span), Ty::Frame),
+            _ => (rhs.span, None, Ty::Displacement),
+        };
+        let mut intended = format!(
+            "{} ++ ({} || {})",
+            self.source(translation.span),
+            self.source(angle.span),
+            self.source(axis)
+        );
+        if let Some(body) = body {
+            intended = format!("{intended} @ {}", self.source(body));
+        }
+        self.report(
+            Diagnostic::error("E0421", "`||` binds more loosely than `++`")
+                .primary(
+                    expr.span,
+                    format!("this reads `({}) || ...`", self.source(lhs.span)),
+                )
+                .help(format!(
+                    "a displacement with a rotation is `t ++ (q || axis)`: write `{intended}`"
+                ))
+                .fix(expr.span, intended),
+        );
+        Some(ty)
     }
 
     /// Every name visible from a context, in declaration order (for suggestions).

@@ -7,6 +7,7 @@ mod calls;
 mod checker;
 mod expr;
 pub mod scope;
+mod stdlib_hint;
 pub mod types;
 
 use std::collections::HashMap;
@@ -126,6 +127,14 @@ impl<'w> Checker<'w> {
                     if !ty.fits(Ty::Frame) {
                         self.report(join_member_error(member.span, position, ty));
                     }
+                }
+                // The link may read the join's own coordinates (`crank.q'`); its frames may not.
+                if let Some(name) = name {
+                    ctx.locals.push(Local {
+                        name: name.name.clone(),
+                        ty: Ty::Join,
+                        coordinate: false,
+                    });
                 }
                 let ty = self.expr(link, &mut ctx);
                 self.expect_value(link, ty, Ty::Link, "the link of `join ... with <link>`");

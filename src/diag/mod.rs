@@ -22,6 +22,14 @@ pub struct Label {
     pub primary: bool,
 }
 
+/// An edit that fixes the problem, for editors to apply: replace the text of `span` (empty for
+/// an insertion) by `replacement`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Fix {
+    pub span: Span,
+    pub replacement: String,
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Diagnostic {
     pub severity: Severity,
@@ -31,6 +39,9 @@ pub struct Diagnostic {
     pub labels: Vec<Label>,
     pub notes: Vec<String>,
     pub help: Option<String>,
+    /// An edit that fixes the problem, when one is certain enough to offer. Boxed: every
+    /// diagnostic travels in the `Err` of results, and few have a fix.
+    pub fix: Option<Box<Fix>>,
 }
 
 impl Diagnostic {
@@ -42,6 +53,7 @@ impl Diagnostic {
             labels: Vec::new(),
             notes: Vec::new(),
             help: None,
+            fix: None,
         }
     }
 
@@ -85,6 +97,15 @@ impl Diagnostic {
             Some(h) => self.help(h),
             None => self,
         }
+    }
+
+    /// Offers an edit that fixes the problem: `span`'s text replaced by `replacement`.
+    pub fn fix(mut self, span: Span, replacement: impl Into<String>) -> Diagnostic {
+        self.fix = Some(Box::new(Fix {
+            span,
+            replacement: replacement.into(),
+        }));
+        self
     }
 
     /// Where the problem is: the span of the primary label.

@@ -38,6 +38,8 @@ pub struct Elaborator<'c, 'w> {
     /// The numbers written in the program, by their bits: one node for each distinct number,
     /// shared by all its occurrences (a generated chain writes the same few numbers per body).
     pub(super) literals: FxHashMap<u64, value::Scalar>,
+    /// The named join whose link is being evaluated: its name reads its own coordinates.
+    pub(super) own_join: Option<OwnJoin>,
 }
 
 impl Elaborator<'_, '_> {
@@ -57,4 +59,11 @@ pub(super) fn internal(message: impl Into<String>) -> Diagnostic {
         format!("internal error during elaboration: {}", message.into()),
     )
     .note("this is a bug in lsdc; please report it with the program that triggers it")
+}
+
+/// The named join whose link is being evaluated, and the coordinate names its link read.
+pub(super) struct OwnJoin {
+    pub(super) id: value::JoinId,
+    pub(super) name: Name,
+    pub(super) read: Vec<(Name, crate::source::Span)>,
 }

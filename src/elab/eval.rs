@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use super::elaborator::{internal, Elaborator, Global};
+use super::elaborator::{internal, Elaborator, Global, OwnJoin};
 use super::instances::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
@@ -93,10 +93,24 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let second = self
                     .expr(second, &mut locals)
                     .and_then(|v| as_frame(v, second.span))?;
-                let Value::Link(link) = self.expr(link, &mut locals)? else {
+                // The join's own name is visible in its link, for reading its coordinates.
+                let id = JoinId(self.mechanism.joins.len() as u32);
+                if let Some(name) = name {
+                    locals.push((name.name.clone(), Value::Join(id)));
+                    self.own_join = Some(OwnJoin {
+                        id,
+                        name: name.name.clone(),
+                        read: Vec::new(),
+                    });
+                }
+                let link_value = self.expr(link, &mut locals);
+                let own = self.own_join.take();
+                let Value::Link(link) = link_value? else {
                     return Err(internal("join without a link"));
                 };
-                let id = JoinId(self.mechanism.joins.len() as u32);
+                if let Some(own) = own {
+                    self.resolve_own_coordinates(own, link, decl.span)?;
+                }
                 let instance = self.instances.current;
                 let join_name = name
                     .as_ref()
@@ -514,7 +528,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         [0, 1, 2].map(|i| self.generic(origin, i, span))
     }
 
-    fn field(&self, value: Value, field: &Ident) -> Result<Value> {
+    fn field(&mut self, value: Value, field: &Ident) -> Result<Value> {
         let name = &*field.name;
         Ok(match (value, name) {
             (Value::Body(body), "frame") => Value::Frame(Frame {
@@ -550,7 +564,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 Value::Body(self.mechanism.effort(id).basis)
             }
             (Value::Link(id), f) => self.link_field(id, f, field.span)?,
-            (Value::Join(id), f) => self.join_coordinate(id, f, field.span)?,
+            (Value::Join(id), _) => self.join_coordinate(id, &field.name, field.span)?,
             _ => {
                 return Err(internal(format!(
                     "field `{name}` of a value without fields"
@@ -559,10 +573,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         })
     }
 
-    fn join_coordinate(&self, id: JoinId, coordinate: &str, span: Span) -> Result<Value> {
+    fn join_coordinate(&mut self, id: JoinId, coordinate: &Name, span: Span) -> Result<Value> {
+        if let Some(value) = self.own_coordinate(id, coordinate, span) {
+            return Ok(value);
+        }
         let join = self.mechanism.join(id);
         let coordinates = &self.mechanism.link(join.link).coordinates;
-        match coordinates.iter().position(|c| &**c == coordinate) {
+        match coordinates.iter().position(|c| c == coordinate) {
             Some(index) => Ok(Value::Scalar(Arc::new(SExpr::JoinCoordinate {
                 join: id,
                 index: index as u32,
@@ -570,24 +587,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }))),
             None => {
                 let name = self.mechanism.join_name(id);
-                let listed: Vec<String> = coordinates.iter().map(|c| format!("`{c}`")).collect();
-                let help = match crate::diag::suggest::did_you_mean(
+                Err(no_such_coordinate(
+                    &name,
+                    coordinates,
                     coordinate,
-                    coordinates.iter().map(|c| &**c),
-                ) {
-                    Some(s) => format!("did you mean `{name}.{s}`?"),
-                    None if listed.is_empty() => {
-                        format!("`{name}` is a weld: it has no coordinates")
-                    }
-                    None => format!("the coordinates of `{name}` are {}", listed.join(", ")),
-                };
-                Err(Diagnostic::error(
-                    "E0603",
-                    format!("join `{name}` has no coordinate `{coordinate}`"),
-                )
-                .primary(span, "not a coordinate of this join's link")
-                .secondary(join.span, "the join")
-                .help(help))
+                    span,
+                    join.span,
+                ))
             }
         }
     }
@@ -891,4 +897,28 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Value::Torque(id)
         })
     }
+}
+
+/// E0603: `crank.x` when the link of `crank` has no coordinate `x`.
+pub(super) fn no_such_coordinate(
+    join: &str,
+    coordinates: &[Name],
+    coordinate: &str,
+    span: Span,
+    join_span: Span,
+) -> Diagnostic {
+    let listed: Vec<String> = coordinates.iter().map(|c| format!("`{c}`")).collect();
+    let help =
+        match crate::diag::suggest::did_you_mean(coordinate, coordinates.iter().map(|c| &**c)) {
+            Some(s) => format!("did you mean `{join}.{s}`?"),
+            None if listed.is_empty() => format!("`{join}` is a weld: it has no coordinates"),
+            None => format!("the coordinates of `{join}` are {}", listed.join(", ")),
+        };
+    Diagnostic::error(
+        "E0603",
+        format!("join `{join}` has no coordinate `{coordinate}`"),
+    )
+    .primary(span, "not a coordinate of this join's link")
+    .secondary(join_span, "the join")
+    .help(help)
 }

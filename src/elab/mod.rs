@@ -10,6 +10,7 @@ mod fields;
 mod instances;
 pub mod mechanism;
 mod operations;
+mod own_join;
 pub mod value;
 
 use crate::check::Checked;
@@ -34,6 +35,7 @@ pub fn elaborate(
         depth: 0,
         fields: Vec::new(),
         literals: FxHashMap::default(),
+        own_join: None,
         instances: Default::default(),
         aliases: FxHashMap::default(),
         warnings: Vec::new(),

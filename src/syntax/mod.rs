@@ -5,3 +5,4 @@ pub mod ast;
 pub mod lexer;
 pub mod names;
 pub mod parser;
+mod repair;
