@@ -116,7 +116,10 @@ impl<'w> Elaborator<'_, 'w> {
             .ranges
             .get(&(scope, parent))
             .ok_or_else(|| internal("an instance named before its array is evaluated"))?;
-        let declared = self.checked.scope(scope);
+        // An instance made before was in range: only a new one needs the array's name.
+        if let Some(&id) = self.instances.ids.get(&(parent, scope, k)) {
+            return Ok(id);
+        }
         let package = self.package_name(scope)?;
         if !(first..=last).contains(&k) {
             let range = if first > last {
@@ -131,10 +134,9 @@ impl<'w> Elaborator<'_, 'w> {
             .primary(span, format!("index {k}"))
             .note(range));
         }
-        if let Some(&id) = self.instances.ids.get(&(parent, scope, k)) {
-            return Ok(id);
-        }
-        let variable = declared
+        let variable = self
+            .checked
+            .scope(scope)
             .index
             .clone()
             .ok_or_else(|| internal("an index of a plain package"))?;
