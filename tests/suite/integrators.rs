@@ -590,6 +590,7 @@ fn halving_the_step_divides_the_error_by_two_to_the_order() {
         (Method::Dop853, 0.5, 8),
         (Method::Rosenbrock, 0.1, 3),
         (Method::Rodas4, 0.1, 4),
+        (Method::Radau5, 0.2, 5),
     ] {
         let method_with = |h: f64| match method {
             Method::Rk4 { .. } => Method::Rk4 { step: h },
@@ -1055,6 +1056,62 @@ fn rodas4_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
         let (y, stats, _) = run(&Method::Rodas4, rtol);
         let error = (y[0] - reference[0]).abs();
         eprintln!("RODAS4 on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
+        assert!(error < 1e3 * rtol, "{rtol:e}: error {error:e}");
+    }
+}
+
+#[test]
+fn radau5_keeps_its_order_on_the_stiff_prothero_robinson_problem() {
+    // Fixed steps to t = 1, 100 to 1e5 times the stiff mode's time scale. Radau IIA's stage
+    // order 3 bounds its error there by about h⁴ / |λ| (Hairer and Wanner, VI.7), far below
+    // RODAS4's 0.02 h / |λ|: halving h divides it by more than 8.
+    for lambda in [-1e4, -1e6] {
+        let error = |h: f64| {
+            let settings = Settings {
+                rtol: 1e6,
+                atol: 1e6,
+                initial_step: Some(h),
+                max_step: h,
+                ..Settings::default()
+            };
+            let (y, _, _) = solve(
+                &Method::Radau5,
+                &mut prothero_robinson(lambda),
+                &[0.0],
+                (0.0, 1.0),
+                &[],
+                &settings,
+            )
+            .unwrap();
+            (y[0] - 1f64.sin()).abs()
+        };
+        let (coarse, fine) = (error(0.1), error(0.05));
+        eprintln!("Radau IIA on Prothero-Robinson, λ = {lambda:e}: errors {coarse:.2e}, {fine:.2e}");
+        assert!(coarse < 0.01 * 0.1 / lambda.abs(), "λ = {lambda:e}: {coarse:e}");
+        assert!(coarse / fine > 6.0 || fine < 1e-15, "λ = {lambda:e}: {coarse:e} {fine:e}");
+    }
+}
+
+#[test]
+fn radau5_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
+    // x(3000) against RODAS4 at 1e-11 (checked against ROS34PW2 in the test above), with
+    // fewer right-hand sides than RODAS4 at the same tolerance.
+    let run = |method: &Method, rtol: f64| {
+        solve(
+            method,
+            &mut van_der_pol(1000.0),
+            &[2.0, 0.0],
+            (0.0, 3000.0),
+            &[],
+            &tolerances(rtol, rtol),
+        )
+        .unwrap()
+    };
+    let (reference, _, _) = run(&Method::Rodas4, 1e-11);
+    for rtol in [1e-6, 1e-8] {
+        let (y, stats, _) = run(&Method::Radau5, rtol);
+        let error = (y[0] - reference[0]).abs();
+        eprintln!("Radau IIA on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
         assert!(error < 1e3 * rtol, "{rtol:e}: error {error:e}");
     }
 }
