@@ -142,7 +142,10 @@ mod radau {
     #[test]
     fn the_inverse_transform_inverts_the_transform() {
         let product = matrix(&TRANSFORM_INVERSE) * matrix(&TRANSFORM);
-        assert!((product - Matrix3::identity()).abs().max() < 1e-14, "{product}");
+        assert!(
+            (product - Matrix3::identity()).abs().max() < 1e-14,
+            "{product}"
+        );
     }
 
     #[test]
