@@ -38,13 +38,13 @@ const ERROR_WEIGHTS: [f64; 3] = [
 pub const TRANSFORM: [[f64; 3]; 3] = [
     [
         0.094_438_762_488_975_24,
-        -0.141_255_295_020_954_21,
+        -0.1412552950209542,
         0.030_029_194_105_147_42,
     ],
     [
-        0.250_213_122_965_333_32,
+        0.2502131229653333,
         0.204_129_352_293_799_94,
-        -0.382_942_112_757_261_92,
+        -0.3829421127572619,
     ],
     [1.0, 1.0, 0.0],
 ];
@@ -314,8 +314,13 @@ impl Radau5 {
         let mut outcome = Newton::Failed;
         for iteration in 0..NEWTON_ITERATIONS {
             for (stage, node) in NODES.iter().enumerate() {
-                for i in 0..n {
-                    self.stage_state[i] = y[i] + self.increments[stage][i];
+                for ((state, y), z) in self
+                    .stage_state
+                    .iter_mut()
+                    .zip(y)
+                    .zip(&self.increments[stage])
+                {
+                    *state = y + z;
                 }
                 let derivative = &mut self.stage_derivatives[stage];
                 if let Err(halt) = eval.rhs(t + node * h, &self.stage_state, derivative) {
