@@ -996,6 +996,28 @@ fn prothero_robinson(lambda: f64) -> Ode<impl FnMut(f64, &[f64], &mut [f64])> {
     })
 }
 
+/// The error at t = 1 on Prothero and Robinson's problem with fixed steps `h` (tolerances that
+/// accept every step).
+fn prothero_robinson_error(method: &Method, lambda: f64, h: f64) -> (f64, Stats) {
+    let settings = Settings {
+        rtol: 1e6,
+        atol: 1e6,
+        initial_step: Some(h),
+        max_step: h,
+        ..Settings::default()
+    };
+    let (y, stats, _) = solve(
+        method,
+        &mut prothero_robinson(lambda),
+        &[0.0],
+        (0.0, 1.0),
+        &[],
+        &settings,
+    )
+    .unwrap();
+    ((y[0] - 1f64.sin()).abs(), stats)
+}
+
 #[test]
 fn rodas4_error_on_the_stiff_prothero_robinson_problem_shrinks_with_the_stiffness() {
     // Fixed steps (tolerances that accept every step) to t = 1, 100 to 1e5 times the stiff
@@ -1006,23 +1028,7 @@ fn rodas4_error_on_the_stiff_prothero_robinson_problem_shrinks_with_the_stiffnes
     // limit were not this accurate (or a wrong ∂f/∂t term) would leave an error of order h.
     for lambda in [-1e4, -1e6] {
         for h in [0.1, 0.025] {
-            let settings = Settings {
-                rtol: 1e6,
-                atol: 1e6,
-                initial_step: Some(h),
-                max_step: h,
-                ..Settings::default()
-            };
-            let (y, stats, _) = solve(
-                &Method::Rodas4,
-                &mut prothero_robinson(lambda),
-                &[0.0],
-                (0.0, 1.0),
-                &[],
-                &settings,
-            )
-            .unwrap();
-            let error = (y[0] - 1f64.sin()).abs();
+            let (error, stats) = prothero_robinson_error(&Method::Rodas4, lambda, h);
             let constant = error * lambda.abs() / h;
             eprintln!("RODAS4 on Prothero-Robinson, λ = {lambda:e}, h = {h}: error {error:.2e} = {constant:.3} h / |λ|");
             assert_eq!(stats.jacobian_evaluations, stats.steps, "h = {h}");
@@ -1032,9 +1038,9 @@ fn rodas4_error_on_the_stiff_prothero_robinson_problem_shrinks_with_the_stiffnes
 }
 
 #[test]
-fn rodas4_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
-    // x(t), x'(t) at t = 3000 (three relaxation cycles), against RODAS4 at a thousandth of the
-    // tolerance, each run also checked against the W-method's run at the tightest tolerance.
+fn rodas4_and_radau5_meet_a_tight_reference_on_van_der_pol_with_mu_1000() {
+    // x(t), x'(t) at t = 3000 (three relaxation cycles), RODAS4 and Radau IIA against RODAS4 at
+    // a thousandth of the tolerance, each run also checked against the W-method's run at the tightest tolerance.
     let run = |method: &Method, rtol: f64| {
         solve(
             method,
@@ -1052,11 +1058,13 @@ fn rodas4_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
         (reference[0] - independent[0]).abs() < 1e-6,
         "references {reference:?} and {independent:?}"
     );
-    for rtol in [1e-6, 1e-8] {
-        let (y, stats, _) = run(&Method::Rodas4, rtol);
-        let error = (y[0] - reference[0]).abs();
-        eprintln!("RODAS4 on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
-        assert!(error < 1e3 * rtol, "{rtol:e}: error {error:e}");
+    for method in [Method::Rodas4, Method::Radau5] {
+        for rtol in [1e-6, 1e-8] {
+            let (y, stats, _) = run(&method, rtol);
+            let error = (y[0] - reference[0]).abs();
+            eprintln!("{method:?} on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
+            assert!(error < 1e3 * rtol, "{method:?}, {rtol:e}: error {error:e}");
+        }
     }
 }
 
@@ -1066,25 +1074,7 @@ fn radau5_keeps_its_order_on_the_stiff_prothero_robinson_problem() {
     // order 3 bounds its error there by about h⁴ / |λ| (Hairer and Wanner, VI.7), far below
     // RODAS4's 0.02 h / |λ|: halving h divides it by more than 8.
     for lambda in [-1e4, -1e6] {
-        let error = |h: f64| {
-            let settings = Settings {
-                rtol: 1e6,
-                atol: 1e6,
-                initial_step: Some(h),
-                max_step: h,
-                ..Settings::default()
-            };
-            let (y, _, _) = solve(
-                &Method::Radau5,
-                &mut prothero_robinson(lambda),
-                &[0.0],
-                (0.0, 1.0),
-                &[],
-                &settings,
-            )
-            .unwrap();
-            (y[0] - 1f64.sin()).abs()
-        };
+        let error = |h: f64| prothero_robinson_error(&Method::Radau5, lambda, h).0;
         let (coarse, fine) = (error(0.1), error(0.05));
         eprintln!(
             "Radau IIA on Prothero-Robinson, λ = {lambda:e}: errors {coarse:.2e}, {fine:.2e}"
@@ -1097,29 +1087,5 @@ fn radau5_keeps_its_order_on_the_stiff_prothero_robinson_problem() {
             coarse / fine > 6.0 || fine < 1e-15,
             "λ = {lambda:e}: {coarse:e} {fine:e}"
         );
-    }
-}
-
-#[test]
-fn radau5_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
-    // x(3000) against RODAS4 at 1e-11 (checked against ROS34PW2 in the test above), with
-    // fewer right-hand sides than RODAS4 at the same tolerance.
-    let run = |method: &Method, rtol: f64| {
-        solve(
-            method,
-            &mut van_der_pol(1000.0),
-            &[2.0, 0.0],
-            (0.0, 3000.0),
-            &[],
-            &tolerances(rtol, rtol),
-        )
-        .unwrap()
-    };
-    let (reference, _, _) = run(&Method::Rodas4, 1e-11);
-    for rtol in [1e-6, 1e-8] {
-        let (y, stats, _) = run(&Method::Radau5, rtol);
-        let error = (y[0] - reference[0]).abs();
-        eprintln!("Radau IIA on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
-        assert!(error < 1e3 * rtol, "{rtol:e}: error {error:e}");
     }
 }
