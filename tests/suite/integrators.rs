@@ -560,16 +560,21 @@ fn rk4_error_estimate_measures_the_local_error_of_its_steps() {
     assert!(estimate(2.5, -1.0) > 1e-2);
 }
 
-/// Error of x(2) for x'' = −x with a fixed step `h` (adaptive methods forced to it by a tolerance
-/// they always meet).
-fn fixed_step_error(method: &Method, h: f64) -> f64 {
-    let settings = Settings {
+/// Settings that hold an adaptive method to the step `h`: tolerances it always meets.
+fn fixed_step(h: f64) -> Settings {
+    Settings {
         rtol: 1e6,
         atol: 1e6,
         initial_step: Some(h),
         max_step: h,
         ..Settings::default()
-    };
+    }
+}
+
+/// Error of x(2) for x'' = −x with a fixed step `h` (adaptive methods forced to it by a tolerance
+/// they always meet).
+fn fixed_step_error(method: &Method, h: f64) -> f64 {
+    let settings = fixed_step(h);
     let (y, _, _) = solve(
         method,
         &mut oscillator(),
@@ -999,13 +1004,7 @@ fn prothero_robinson(lambda: f64) -> Ode<impl FnMut(f64, &[f64], &mut [f64])> {
 /// The error at t = 1 on Prothero and Robinson's problem with fixed steps `h` (tolerances that
 /// accept every step).
 fn prothero_robinson_error(method: &Method, lambda: f64, h: f64) -> (f64, Stats) {
-    let settings = Settings {
-        rtol: 1e6,
-        atol: 1e6,
-        initial_step: Some(h),
-        max_step: h,
-        ..Settings::default()
-    };
+    let settings = fixed_step(h);
     let (y, stats, _) = solve(
         method,
         &mut prothero_robinson(lambda),
