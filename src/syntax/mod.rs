@@ -4,4 +4,5 @@
 pub mod ast;
 pub mod lexer;
 pub mod names;
+pub mod nesting;
 pub mod parser;

@@ -7,6 +7,7 @@ use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 use crate::syntax::ast::Program;
 use crate::syntax::lexer::{lex, LexError, Spanned, Tok, Tokens};
+use crate::syntax::nesting::limit_nesting;
 
 /// The parser LALRPOP generated from `grammar/lsd.lalrpop`, checked in (see `build.rs`).
 #[rustfmt::skip]
@@ -24,7 +25,10 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
     let result = parser.parse(file, &mut recovered, &mut tokens);
     let mut diagnostics = tokens.errors;
     let result = match result {
-        Ok(program) if recovered.is_empty() => return (program, diagnostics),
+        Ok(mut program) if recovered.is_empty() => {
+            limit_nesting(&mut program, &mut diagnostics);
+            return (program, diagnostics);
+        }
         other => other,
     };
     // Describing a syntax error looks at the tokens before it: lexed again, only then.
@@ -38,7 +42,10 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
         diagnostics.push(context.describe(error.error));
     }
     let program = match result {
-        Ok(program) => program,
+        Ok(mut program) => {
+            limit_nesting(&mut program, &mut diagnostics);
+            program
+        }
         Err(error) => {
             diagnostics.push(context.describe(error));
             Program { decls: Vec::new() }
