@@ -93,6 +93,10 @@ fn fastest_rate(model: &Model, prepared: &Prepared) -> Option<f64> {
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     system.start_loops(&mut y0).ok()?;
     let n = y0.len();
+    if n == 0 {
+        // Nothing moves: no mode, no bound on the step.
+        return None;
+    }
     let mut f0 = vec![0.0; n];
     system.derivative(0.0, &y0, &mut f0).ok()?;
     let mut jacobian = DMatrix::zeros(n, n);
