@@ -19,6 +19,7 @@ pub mod dynamics;
 pub mod elab;
 pub mod integrate;
 pub mod kinematics;
+pub mod linalg;
 pub mod load;
 pub mod output;
 pub mod simulate;

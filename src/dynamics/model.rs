@@ -163,6 +163,9 @@ fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
         EvalError::NotGeometric(detail) => {
             Diagnostic::error("E0807", format!("{what} cannot depend on {detail}"))
         }
+        EvalError::NotFinite => {
+            Diagnostic::error("E0807", format!("{what} is not a finite number"))
+        }
     }
 }
 

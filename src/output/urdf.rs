@@ -438,6 +438,7 @@ impl Refusal {
         let name = |k: &usize| chain.coordinate_names.get(*k).map_or("?", String::as_str);
         match self {
             Refusal::Evaluation(EvalError::NotGeometric(what)) => format!("depends on {what}"),
+            Refusal::Evaluation(EvalError::NotFinite) => "is not a finite number".to_string(),
             Refusal::Evaluation(EvalError::Missing(_)) => {
                 "needs the value of an unknown".to_string()
             }

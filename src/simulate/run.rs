@@ -693,9 +693,11 @@ fn fastest_coordinate(names: &[String], samples: &[Sample]) -> String {
 }
 
 fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
+    use crate::kinematics::eval::{EvalError, NOT_FINITE};
     match e {
-        crate::kinematics::eval::EvalError::Missing(_) => "a value is missing".to_string(),
-        crate::kinematics::eval::EvalError::NotGeometric(what) => format!("it depends on {what}"),
+        EvalError::Missing(_) => "a value is missing".to_string(),
+        EvalError::NotGeometric(what) => format!("it depends on {what}"),
+        EvalError::NotFinite => NOT_FINITE.to_string(),
     }
 }
 
