@@ -1,0 +1,238 @@
+//! No panic, no silent wrong answer: degenerate mechanisms, the nesting limit, values checked
+//! where they are written or given, and a few hundred semantic mutants of the examples run
+//! through the whole back end without a panic or a hang.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::{Duration, Instant};
+
+use lsdc::api::{run, Error, Override, Program, SettingsChanges};
+use lsdc::simulate::prepare::Integrator;
+
+use crate::mutants::{exercise, mutate, Choices};
+
+const INTEGRATORS: [Integrator; 5] = [
+    Integrator::Rk4,
+    Integrator::DormandPrince,
+    Integrator::Dop853,
+    Integrator::Implicit,
+    Integrator::Symplectic,
+];
+
+fn codes(program: &Program) -> Vec<&str> {
+    program.diagnostics().iter().map(|d| d.code).collect()
+}
+
+/// A program with nothing to move (no body, or one welded to the earth) simulates to its end
+/// with every integrator.
+#[test]
+fn mechanisms_without_coordinates_simulate() {
+    let welded = "import joints ;\nlet b = body mass = 1, iframe = 1, inertia = [1, 1, 1] end ;\njoin earth and b with weld as w ;\n";
+    for text in ["", welded] {
+        let program = Program::from_text("still.lsd", text, None, &Default::default());
+        for integrator in INTEGRATORS {
+            let name = format!("{integrator:?}");
+            let changes = SettingsChanges {
+                integrator: Some(integrator),
+                duration: Some(0.01),
+                ..Default::default()
+            };
+            let prepared = program.prepare(&[], &changes).expect("prepares");
+            let mut times = Vec::new();
+            let simulation = run(&prepared, &mut |s| times.push(s.time));
+            assert!(simulation.report.failure.is_none(), "{text:?} {name}");
+            assert_eq!(times.last(), Some(&0.01), "{text:?} {name}");
+        }
+    }
+}
+
+/// Expressions of each deep kind, `depth` levels.
+fn deep(kind: usize, depth: usize) -> String {
+    match kind {
+        0 => format!("{}1", "1 + ".repeat(depth - 1)),
+        1 => format!("{}1{}", "[".repeat(depth - 1), "]".repeat(depth - 1)),
+        2 => format!("{}1", "-".repeat(depth - 1)),
+        3 => format!("{}1{}", "sin(".repeat(depth - 1), ")".repeat(depth - 1)),
+        _ => format!(
+            "{}1{}",
+            "local a = 1 in ".repeat(depth - 1),
+            " end".repeat(depth - 1)
+        ),
+    }
+}
+
+/// At the limit every pass takes the program (on a test thread's small stack); one past it the
+/// parser refuses it with E0203 and nothing overflows, however deep.
+#[test]
+fn nesting_is_limited_by_design() {
+    use lsdc::syntax::nesting::MAX_NESTING;
+    for kind in 0..5 {
+        let at_limit = format!(
+            "import joints ;\nlet s = {} ;\nlet b = body mass = 1, iframe = 1, inertia = [1, 1, 1] end ;\njoin earth and b with revolute([1, 0, 0]) as j ;\ninitial j.q = 0 * s ;\n",
+            deep(kind, MAX_NESTING).replace("1 end", "0 end")
+        );
+        let program = Program::from_text("deep.lsd", &at_limit, None, &Default::default());
+        assert!(!codes(&program).contains(&"E0203"), "kind {kind}");
+        if !program.has_errors() {
+            let changes = SettingsChanges {
+                duration: Some(0.01),
+                ..Default::default()
+            };
+            let prepared = program.prepare(&[], &changes).expect("prepares");
+            run(&prepared, &mut |_| {});
+        }
+        for depth in [MAX_NESTING + 1, 30_000] {
+            let text = format!("let x = {} ;\ninitial x = 1 ;\n", deep(kind, depth));
+            let program = Program::from_text("deep.lsd", &text, None, &Default::default());
+            assert!(
+                codes(&program).contains(&"E0203"),
+                "kind {kind} depth {depth}"
+            );
+        }
+    }
+    let primes = format!(
+        "import joints ;\nlet b = body mass = 1, iframe = 1, inertia = [1, 1, 1] end ;\njoin earth and b with link(q) dof = q{} * [1, 0, 0] end ;\n",
+        "'".repeat(30_000)
+    );
+    let program = Program::from_text("deep.lsd", &primes, None, &Default::default());
+    assert!(codes(&program).contains(&"E0203"));
+}
+
+/// Values given with `--set` are checked as written ones are: `nan`, `inf` and a missing name
+/// are usage errors, a negative mass is E0816 at the body.
+#[test]
+fn values_given_on_the_command_line_are_checked() {
+    for text in ["k=nan", "k=inf", "k=-inf", "k=1e309", "=3", " =3"] {
+        assert!(text.parse::<Override>().is_err(), "{text}");
+    }
+    let text = "import joints ;\nlet m = ?s ;\nlet b = body mass = m, iframe = 1, inertia = [1, 1, 1] end ;\njoin earth and b with revolute([1, 0, 0]) as j ;\n";
+    let program = Program::from_text("set.lsd", text, None, &Default::default());
+    let set = |value: f64| Override {
+        name: "m".to_string(),
+        value,
+    };
+    match program.prepare(&[set(-2.0)], &Default::default()) {
+        Err(Error::Program(diagnostics)) => {
+            assert_eq!(diagnostics[0].code, "E0816");
+            assert!(diagnostics[0]
+                .to_string()
+                .contains("a mass of -2 is impossible"));
+        }
+        Err(other) => panic!("{other}"),
+        Ok(_) => panic!("a negative mass was accepted"),
+    }
+    assert!(program.prepare(&[set(2.0)], &Default::default()).is_ok());
+}
+
+fn examples() -> Vec<(PathBuf, String)> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir("examples")
+        .expect("examples")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "lsd"))
+        .collect();
+    found.sort();
+    found
+        .into_iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(&p).expect("readable");
+            (p, text)
+        })
+        .collect()
+}
+
+/// How many mutants the test runs, and the most time it may take (it takes a few seconds).
+const MUTANTS: u64 = 300;
+const TIME_LIMIT: Duration = Duration::from_secs(60);
+
+/// Mutants of every example (numbers made degenerate, joints and integrators swapped, axes made
+/// zero, declarations dropped or duplicated, one to three at a time) through the whole back end:
+/// no panic, and all of them within the time limit.
+#[test]
+fn mutants_neither_panic_nor_hang() {
+    let examples = examples();
+    assert!(examples.len() >= 20, "the examples went missing");
+    let (done, finished) = mpsc::channel();
+    let current = Arc::new(AtomicU64::new(0));
+    let running = current.clone();
+    std::thread::spawn(move || {
+        let start = Instant::now();
+        let mut reached = [0; 4];
+        for seed in 0..MUTANTS {
+            running.store(seed, Ordering::Relaxed);
+            let mut choices = Choices::new(seed);
+            let (path, text) = &examples[seed as usize % examples.len()];
+            let mut mutant = text.clone();
+            for _ in 0..1 + choices.below(3) {
+                mutant = mutate(&mutant, &mut choices);
+            }
+            let outcome = std::panic::catch_unwind(|| exercise(&mutant, path.parent()));
+            if let Ok(stage) = outcome {
+                reached[stage] += 1;
+            } else {
+                let _ = done.send(Err(format!(
+                    "mutant {seed} of {} panicked:\n{mutant}",
+                    path.display()
+                )));
+                return;
+            }
+        }
+        let _ = done.send(Ok((start.elapsed(), reached)));
+    });
+    match finished.recv_timeout(TIME_LIMIT) {
+        Ok(Ok((elapsed, reached))) => {
+            eprintln!("{MUTANTS} mutants in {elapsed:.1?}: refused, no tree, not prepared, simulated: {reached:?}");
+            // The mutants reach the back end: a good share of them simulated, others refused.
+            assert!(reached[3] >= MUTANTS as usize / 6, "{reached:?}");
+            assert!(reached[0] >= MUTANTS as usize / 20, "{reached:?}");
+        }
+        Ok(Err(failure)) => panic!("{failure}"),
+        Err(_) => panic!(
+            "the mutants took more than {TIME_LIMIT:?}: mutant {} hangs",
+            current.load(Ordering::Relaxed)
+        ),
+    }
+}
+
+/// The shared mutator changes programs (a test of the test).
+#[test]
+fn mutants_differ_from_their_example() {
+    let (_, text) = &examples()[0];
+    let changed = (0..20)
+        .filter(|&seed| mutate(text, &mut Choices::new(seed)) != *text)
+        .count();
+    assert!(
+        changed >= 18,
+        "only {changed} of 20 mutants changed the program"
+    );
+}
+
+/// A zero rotation axis and a guess of 1e308 made the closure Jacobian of the delta robot NaN,
+/// and the SVD of the assembly iterated on it for ever: now the configuration is refused, and
+/// the tree says why its mobility is unknown.
+#[test]
+fn an_overflowing_configuration_is_refused() {
+    let text = std::fs::read_to_string("examples/delta_isir88.lsd")
+        .expect("readable")
+        .replace("(phi || [0, 0, 1])", "(phi || [0, 0, 0])")
+        .replace("P3p.a = 0 guess", "P3p.a = 1e308 guess");
+    let dir = std::path::Path::new("examples");
+    let program = Program::from_text("delta.lsd", &text, Some(dir), &Default::default());
+    let mechanism = program.mechanism().expect("the program is valid");
+    let tree = lsdc::analysis::tree(mechanism).expect("a tree");
+    assert!(tree.mobility.is_none());
+    let why = tree.mobility_unavailable.expect("a reason");
+    assert!(why.contains("not a finite number"), "{why}");
+}
+
+/// nalgebra's SVD never ends on a NaN: the project's decomposes only finite matrices.
+#[test]
+fn decompositions_refuse_non_finite_matrices() {
+    use nalgebra::DMatrix;
+    let mut m = DMatrix::<f64>::identity(3, 3);
+    assert!(lsdc::linalg::svd(m.clone(), true, true).is_some());
+    m[(1, 2)] = f64::NAN;
+    assert!(lsdc::linalg::svd(m.clone(), true, true).is_none());
+    m[(1, 2)] = f64::INFINITY;
+    assert!(lsdc::linalg::pseudo_inverse(m, 1e-12).is_none());
+}
