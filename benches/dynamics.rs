@@ -103,7 +103,7 @@ fn main() {
             r.duration,
             r.steps,
             r.function_evaluations,
-            r.steps as f64 / r.run_seconds
+            r.steps as f64 / r.wall_seconds
         );
     }
 }

@@ -122,7 +122,7 @@ fn configure(file: &str, method: &Method) -> Prepared {
     prepared
 }
 
-/// Median integration time (the report's `run_seconds`) and the work of one run. Timed with
+/// Median integration time (the report's `wall_seconds`) and the work of one run. Timed with
 /// outputs only at the start and the end: sampling an output costs a projection and the energy,
 /// and the interpolated outputs do not change the steps, so this is the integration alone.
 fn timed_run(file: &str, method: &Method) -> (f64, Report) {
@@ -138,7 +138,7 @@ fn timed_run(file: &str, method: &Method) -> (f64, Report) {
         }
     {
         let simulation = run(&prepared, &mut |_| {});
-        seconds.push(simulation.report.run_seconds);
+        seconds.push(simulation.report.wall_seconds);
         report = Some(simulation.report);
     }
     (median(seconds), report.expect("at least one run"))

@@ -1,6 +1,7 @@
 //! The `lsdc` command line: wires the phases together, prints results and diagnostics.
 //! Exit codes: 0 clean, 1 errors in the program, 2 usage errors (bad flags, unreadable files).
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -76,6 +77,14 @@ struct SimulateArgs {
     /// join, in the fixed axes (moment then force).
     #[arg(long)]
     reactions: bool,
+    /// Most steps of the integrator, rejected ones included, before the run stops with a
+    /// failure (its outputs kept).
+    #[arg(long, value_name = "N", default_value_t = lsdc::simulate::settings::DEFAULT_MAX_STEPS)]
+    max_steps: usize,
+    /// Do not check whether an explicit integrator's steps are held by its stability region
+    /// (W0901; the check costs three evaluations every 20 steps).
+    #[arg(long)]
+    no_stiffness_check: bool,
     /// Evaluate the equations of motion as native code: the generated C forward dynamics,
     /// compiled by the C compiler (`CC`, else `cc`) and kept in a cache (`LSDC_CACHE_DIR`,
     /// else `~/.cache/lsdc`). Trees only; where it cannot serve, a warning says why and the
@@ -400,7 +409,6 @@ fn main() -> ExitCode {
 /// Writes to standard output. A closed pipe (`lsdc tree f.lsd | head`) is not an error worth a
 /// message: the reader has what it wanted.
 fn out(text: &str) {
-    use std::io::Write;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
 }
 
@@ -629,9 +637,7 @@ fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>,
 }
 
 fn simulate(args: &SimulateArgs) -> ExitCode {
-    use lsdc::dynamics::loops::Stabilisation;
     use lsdc::simulate::prepare::{prepare, Settings};
-    use lsdc::simulate::settings::SettingsChanges;
     let overrides = match parse_sets(&args.sets) {
         Ok(o) => o,
         Err(code) => return code,
@@ -650,7 +656,48 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let changes = SettingsChanges {
+    if let Err(error) = prepared.settings.apply(&settings_changes(args)) {
+        return usage_error(&error.to_string());
+    }
+    if args.compiled {
+        let native = lsdc::simulate::compiled::attach_with_warnings(&mut prepared, mechanism);
+        prepared.warnings.extend(native);
+    }
+    // Where the results go is checked before the run, not after it.
+    let samples_out = match open_samples_output(args.out.as_deref()) {
+        Ok(out) => out,
+        Err(code) => return code,
+    };
+    if let Some(path) = &args.plot {
+        if let Err(error) = lsdc::output::plot::check_path(path) {
+            return usage_error(&format!("cannot draw `{}`: {error}", path.display()));
+        }
+    }
+    if !prepared.warnings.is_empty() {
+        report_diagnostics(&compilation, &prepared.warnings, args.report);
+    }
+    let (simulation, written) = run_and_write(args, &prepared, samples_out);
+    let plotted = match &args.plot {
+        Some(path) => lsdc::output::plot::plot(&simulation, path)
+            .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
+        None => Ok(()),
+    };
+    print_run_report(&compilation, &simulation.report, args.report);
+    if let Err(message) = written.and(plotted) {
+        return usage_error(&message);
+    }
+    let report = &simulation.report;
+    match (report.interrupted, &report.failure) {
+        (Some(stop), _) => ExitCode::from((128 + stop.signal).min(255) as u8),
+        (None, Some(_)) => ExitCode::from(1),
+        (None, None) => ExitCode::SUCCESS,
+    }
+}
+
+/// The command line's changes to the program's `simulate` declaration.
+fn settings_changes(args: &SimulateArgs) -> lsdc::simulate::settings::SettingsChanges {
+    use lsdc::dynamics::loops::Stabilisation;
+    lsdc::simulate::settings::SettingsChanges {
         integrator: args.integrator.map(IntegratorArg::integrator),
         duration: args.duration,
         output: args.output_interval,
@@ -662,85 +709,134 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             StabilisationArg::None => Stabilisation::None,
         }),
         reactions: args.reactions,
+        max_steps: Some(args.max_steps),
+        no_stiffness_check: args.no_stiffness_check,
+    }
+}
+
+/// The file the samples go to (created, or emptied, now), or standard output.
+fn open_samples_output(path: Option<&std::path::Path>) -> Result<Box<dyn Write>, ExitCode> {
+    match path {
+        Some(path) => match std::fs::File::create(path) {
+            Ok(file) => Ok(Box::new(std::io::BufWriter::new(file))),
+            Err(e) => Err(usage_error(&format!(
+                "cannot write `{}`: {e}",
+                path.display()
+            ))),
+        },
+        None => Ok(Box::new(std::io::BufWriter::new(std::io::stdout()))),
+    }
+}
+
+/// Runs the simulation, streaming CSV rows to `out` as they come (JSON is one document,
+/// written at the end), until its end, a failure, or SIGINT/SIGTERM; then ends the file.
+fn run_and_write(
+    args: &SimulateArgs,
+    prepared: &lsdc::simulate::prepare::Prepared,
+    out: Box<dyn Write>,
+) -> (lsdc::simulate::run::Simulation, Result<(), String>) {
+    use lsdc::simulate::run::{run_with, RunOptions, Sample};
+    let target = args
+        .out
+        .as_ref()
+        .map_or("standard output".to_string(), |p| {
+            format!("`{}`", p.display())
+        });
+    let options = RunOptions {
+        keep_samples: args.plot.is_some() || args.format == SampleFormat::Json,
+        interrupt: interrupt_on_signals(),
     };
-    if let Err(error) = prepared.settings.apply(&changes) {
-        return usage_error(&error.to_string());
-    }
-    if args.compiled {
-        let native = lsdc::simulate::compiled::attach_with_warnings(&mut prepared, mechanism);
-        prepared.warnings.extend(native);
-    }
-    let warnings: Vec<Diagnostic> = prepared
-        .warnings
-        .iter()
-        .cloned()
-        .chain(lsdc::simulate::stiffness::warning(&prepared))
-        .collect();
-    if !warnings.is_empty() {
-        report_diagnostics(&compilation, &warnings, args.report);
-    }
-    let simulation = {
-        let bar = progress_bar(prepared.settings.duration);
-        let mut progress = |sample: &lsdc::simulate::run::Sample| {
-            if let Some(bar) = &bar {
-                bar.set_position((sample.time * 1000.0) as u64);
-            }
-        };
-        let simulation = lsdc::simulate::run::run(&prepared, &mut progress);
-        if let Some(bar) = bar {
-            bar.finish_and_clear();
+    let mut csv = (args.format == SampleFormat::Csv).then(|| {
+        let names = &prepared.coordinate_names;
+        let reactions = lsdc::simulate::run::reaction_names_of(prepared);
+        lsdc::output::csv::CsvWriter::new(out, names, &reactions)
+    });
+    let bar = progress_bar(prepared.settings.duration);
+    let mut sink = |sample: &Sample| {
+        if let Some(bar) = &bar {
+            bar.set_position((sample.time * 1000.0) as u64);
         }
-        simulation
-    };
-    let samples = match args.format {
-        SampleFormat::Csv => lsdc::output::csv::to_csv(&simulation),
-        SampleFormat::Json => json(&simulation),
-    };
-    match &args.out {
-        Some(path) => {
-            if let Err(e) = std::fs::write(path, samples) {
-                return usage_error(&format!("cannot write `{}`: {e}", path.display()));
-            }
+        if let Some(csv) = &mut csv {
+            csv.write_sample(sample);
         }
-        None => out(&samples),
-    }
-    let plotted = match &args.plot {
-        Some(path) => lsdc::output::plot::plot(&simulation, path)
-            .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
-        None => Ok(()),
     };
-    let report = &simulation.report;
+    let simulation = run_with(prepared, &options, &mut sink);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let written = match csv {
+        Some(csv) => csv.finish(&simulation.report),
+        None => write_json_samples(&simulation, args.out.as_deref()),
+    };
+    let written = written.map_err(|e| format!("cannot write {target}: {e}"));
+    (simulation, written)
+}
+
+fn write_json_samples(
+    simulation: &lsdc::simulate::run::Simulation,
+    path: Option<&std::path::Path>,
+) -> std::io::Result<()> {
+    match path {
+        Some(path) => std::fs::write(path, json(simulation)),
+        None => {
+            out(&json(simulation));
+            Ok(())
+        }
+    }
+}
+
+/// A flag that SIGINT and SIGTERM set to their number, for the run to stop between two steps
+/// and its output and report to be finished; a second signal ends the process at once. `None`
+/// where the handlers cannot be installed (the signals then end the process as usual).
+fn interrupt_on_signals() -> Option<lsdc::integrate::Interrupt> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    use std::sync::atomic::{AtomicBool, AtomicUsize};
+    use std::sync::Arc;
+    let requested = Arc::new(AtomicUsize::new(0));
+    let signalled = Arc::new(AtomicBool::new(false));
+    for signal in [SIGINT, SIGTERM] {
+        let exit_code = 128 + signal;
+        let installed =
+            signal_hook::flag::register_conditional_shutdown(signal, exit_code, signalled.clone())
+                .and_then(|_| signal_hook::flag::register(signal, signalled.clone()))
+                .and_then(|_| {
+                    signal_hook::flag::register_usize(signal, requested.clone(), signal as usize)
+                });
+        installed.ok()?;
+    }
+    Some(lsdc::integrate::Interrupt(requested))
+}
+
+/// The warnings the run found and its report, on standard error (in JSON, the warnings inside
+/// the report: standard output may carry the samples).
+fn print_run_report(
+    compilation: &Compilation,
+    report: &lsdc::simulate::run::Report,
+    format: Format,
+) {
     let warnings: Vec<_> = [
+        lsdc::simulate::run::stiffness_warning(report),
         lsdc::simulate::run::step_error_warning(report),
         lsdc::simulate::run::passage_output_warning(report),
     ]
     .into_iter()
     .flatten()
     .collect();
-    match args.report {
+    match format {
         Format::Text => {
             if !warnings.is_empty() {
-                report_diagnostics(&compilation, &warnings, Format::Text);
+                report_diagnostics(compilation, &warnings, Format::Text);
             }
-            eprint!("{}", text::run_report(&simulation.report));
+            eprint!("{}", text::run_report(report));
         }
-        // The warnings about the run go inside its report: standard output carries the samples.
         Format::Json => {
-            let mut value = serde_json::to_value(&simulation.report).unwrap_or_default();
+            let mut value = serde_json::to_value(report).unwrap_or_default();
             if !warnings.is_empty() {
                 let sources = &compilation.workspace.sources;
                 value["warnings"] = render::to_json_value(sources, &warnings);
             }
             eprintln!("{}", json(&value));
         }
-    }
-    if let Err(message) = plotted {
-        return usage_error(&message);
-    }
-    if simulation.report.failure.is_some() {
-        ExitCode::from(1)
-    } else {
-        ExitCode::SUCCESS
     }
 }
 

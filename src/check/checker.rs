@@ -2,7 +2,7 @@
 //! and the context an expression is checked in. The checking itself is in the sibling files:
 //! declarations (`mod.rs`), expressions (`expr.rs`) and calls (`calls.rs`).
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use crate::diag::Diagnostics;
 use crate::load::{ModuleId, Workspace};
@@ -24,14 +24,17 @@ pub struct Definition<'w> {
 }
 
 /// The result of checking: scopes, definitions and name resolutions, for the elaborator.
+/// Its tables are keyed by spans and names, hashed with the fast non-keyed hasher of
+/// `rustc-hash`: they are the front end's hottest look-ups (every name use, several per body of
+/// a large program), and a program cannot choose its keys to collide.
 pub struct Checked<'w> {
     pub scopes: Vec<Scope>,
     pub definitions: Vec<Definition<'w>>,
-    pub resolutions: HashMap<Span, Target>,
-    pub module_scopes: HashMap<ModuleId, ScopeId>,
-    pub package_scopes: HashMap<Span, ScopeId>,
+    pub resolutions: FxHashMap<Span, Target>,
+    pub module_scopes: FxHashMap<ModuleId, ScopeId>,
+    pub package_scopes: FxHashMap<Span, ScopeId>,
     /// The `let` binding of each declared name, by the span of the name.
-    pub bindings: HashMap<Span, &'w Binding>,
+    pub bindings: FxHashMap<Span, &'w Binding>,
 }
 
 impl Checked<'_> {
@@ -62,7 +65,7 @@ pub struct Checker<'w> {
     pub(super) diagnostics: Diagnostics,
     /// Use sites of the definitions being instantiated, innermost last.
     pub(super) instantiations: Vec<(Span, Name)>,
-    pub(super) memo: HashMap<(DefId, Vec<Ty>), Ty>,
+    pub(super) memo: FxHashMap<(DefId, Vec<Ty>), Ty>,
     pub(super) modules_in_progress: Vec<ModuleId>,
     pub(super) simulate_seen: Option<Span>,
 }

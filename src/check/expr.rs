@@ -16,9 +16,9 @@ impl<'w> Checker<'w> {
             ExprKind::Qualified(qualified) => {
                 self.qualified(&qualified.package, &qualified.name, expr.span, ctx)
             }
-            ExprKind::Field { target, field } => {
-                let ty = self.expr(target, ctx);
-                self.field(ty, field)
+            ExprKind::Field(access) => {
+                let ty = self.expr(&access.target, ctx);
+                self.field(ty, &access.field)
             }
             ExprKind::Unknown(ident) => unknown_type(&ident.name),
             ExprKind::Int(0) => Ty::Zero,
@@ -336,7 +336,7 @@ impl<'w> Checker<'w> {
                 .find(|l| l.name == ident.name)
                 .is_some_and(|l| l.coordinate),
             ExprKind::Prime(_) => true,
-            ExprKind::Field { target, .. } => self.expr_type_silently(target, ctx) == Ty::Join,
+            ExprKind::Field(access) => self.expr_type_silently(&access.target, ctx) == Ty::Join,
             _ => false,
         };
         let ty = self.expr(inner, ctx);
@@ -650,9 +650,8 @@ fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
 fn mentions(expr: &Expr, name: &str) -> bool {
     match &expr.kind {
         ExprKind::Name(ident) => &*ident.name == name,
-        ExprKind::Field { target, .. } | ExprKind::Neg(target) | ExprKind::Prime(target) => {
-            mentions(target, name)
-        }
+        ExprKind::Field(access) => mentions(&access.target, name),
+        ExprKind::Neg(target) | ExprKind::Prime(target) => mentions(target, name),
         ExprKind::Binary { lhs, rhs, .. } => mentions(lhs, name) || mentions(rhs, name),
         ExprKind::Vector(items) => items.iter().any(|e| mentions(e, name)),
         ExprKind::Call { args, .. } => args.iter().any(|a| mentions(&a.value, name)),

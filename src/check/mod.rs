@@ -11,10 +11,14 @@ pub mod types;
 
 use std::collections::HashMap;
 
+use rustc_hash::FxHashMap;
+
 use crate::diag::{Diagnostic, Diagnostics};
 use crate::load::{ModuleId, Workspace};
 use crate::source::Span;
-use crate::syntax::ast::{ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, Param};
+use crate::syntax::ast::{
+    ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, PackageDecl, Param,
+};
 pub use checker::{Checked, Definition};
 use checker::{Checker, Ctx, Local};
 use scope::Scope;
@@ -27,14 +31,14 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
         out: Checked {
             scopes: Vec::new(),
             definitions: Vec::new(),
-            resolutions: HashMap::new(),
-            module_scopes: HashMap::new(),
-            package_scopes: HashMap::new(),
-            bindings: HashMap::new(),
+            resolutions: FxHashMap::default(),
+            module_scopes: FxHashMap::default(),
+            package_scopes: FxHashMap::default(),
+            bindings: FxHashMap::default(),
         },
         diagnostics: Diagnostics::default(),
         instantiations: Vec::new(),
-        memo: HashMap::new(),
+        memo: FxHashMap::default(),
         modules_in_progress: Vec::new(),
         simulate_seen: None,
     };
@@ -106,7 +110,9 @@ impl<'w> Checker<'w> {
     fn decl(&mut self, decl: &'w Decl, scope: ScopeId) {
         match &decl.kind {
             DeclKind::Let(bindings) => self.let_decl(bindings, scope),
-            DeclKind::Define { name, params, body } => self.define(name, params, body, scope),
+            DeclKind::Define(define) => {
+                self.define(&define.name, &define.params, &define.body, scope)
+            }
             DeclKind::Join(join) => {
                 let JoinDecl {
                     first,
@@ -167,7 +173,8 @@ impl<'w> Checker<'w> {
                     self.apply(effort, effort_ty, target, target_ty);
                 }
             }
-            DeclKind::Package { name, decls } => {
+            DeclKind::Package(package_decl) => {
+                let PackageDecl { name, decls } = &**package_decl;
                 let limit = self.out.scope(scope).len();
                 let package = self.new_scope(Some((scope, limit)));
                 self.out.package_scopes.insert(decl.span, package);
@@ -365,11 +372,11 @@ impl<'w> Checker<'w> {
     /// derivative (a starting velocity, which cannot be `fixed`).
     fn initial_value(&mut self, initial: &'w crate::syntax::ast::InitialValue, ctx: &mut Ctx) {
         let (coordinate, primes) = strip_primes(&initial.target);
-        let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field { .. });
+        let is_coordinate = matches!(&coordinate.kind, crate::syntax::ast::ExprKind::Field(_));
         let ty = self.expr(&initial.target, ctx);
         let target_ty = match &coordinate.kind {
-            crate::syntax::ast::ExprKind::Field { target, .. } => {
-                self.expr_type_silently(target, ctx)
+            crate::syntax::ast::ExprKind::Field(access) => {
+                self.expr_type_silently(&access.target, ctx)
             }
             _ => ty,
         };
@@ -547,8 +554,9 @@ fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
                 )
             })
             .collect(),
-        DeclKind::Define { name, .. } | DeclKind::Package { name, .. } => {
-            vec![(name.name.clone(), name.span, decl.span)]
+        DeclKind::Define(define) => vec![(define.name.name.clone(), define.name.span, decl.span)],
+        DeclKind::Package(package) => {
+            vec![(package.name.name.clone(), package.name.span, decl.span)]
         }
         DeclKind::Import(import) => named(&import.alias, decl.span),
         DeclKind::Join(join) => named(&join.name, decl.span),

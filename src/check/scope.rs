@@ -2,7 +2,7 @@
 //! A name is visible after its declaration; a parameterised definition sees the names declared
 //! before it, whenever it is instantiated.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 pub use super::types::ScopeId;
 use super::types::Ty;
@@ -19,7 +19,7 @@ pub struct Entry {
 
 #[derive(Default, Debug)]
 pub struct Scope {
-    pub names: HashMap<Name, Entry>,
+    pub names: FxHashMap<Name, Entry>,
     /// Names in declaration order.
     pub order: Vec<Name>,
     /// The enclosing scope (a package's file) and how many of its names were visible then.
@@ -28,7 +28,7 @@ pub struct Scope {
     pub opened: Vec<(ScopeId, u32)>,
     /// Names declared later in this scope, with the extent of their declaration: a use before
     /// the declaration gets a precise message.
-    pub declared_later: HashMap<Name, (Span, Span)>,
+    pub declared_later: FxHashMap<Name, (Span, Span)>,
 }
 
 impl Scope {

@@ -16,9 +16,10 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::elements::EffortFrame;
 use crate::elab::value::{FrameQuantity, SExpr, Vector};
-use crate::kinematics::eval::{lower_structure, EvalError, Lower, UnknownValues};
+use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::spatial::{Motion, Pose};
 use crate::symbolic::expr::{ExprId, Pool, Tape};
+use crate::symbolic::program::{lower_structure, Lower};
 
 /// What a symbol of the tape stands for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -268,6 +269,8 @@ impl<'a> TapeBuilder<'a> {
 }
 
 impl Lower for TapeBuilder<'_> {
+    type Error = EvalError;
+
     fn pool(&mut self) -> &mut Pool {
         &mut self.pool
     }

@@ -49,7 +49,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let mut locals = Locals::new();
         match &decl.kind {
             // Definitions are evaluated when first used (see `global`).
-            DeclKind::Let(_) | DeclKind::Define { .. } => Ok(()),
+            DeclKind::Let(_) | DeclKind::Define(_) => Ok(()),
             DeclKind::Join(join) => {
                 let JoinDecl {
                     first,
@@ -188,13 +188,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
-            DeclKind::Package { decls, .. } => {
+            DeclKind::Package(package_decl) => {
                 let package = *self
                     .checked
                     .package_scopes
                     .get(&decl.span)
                     .ok_or_else(|| internal("package not checked"))?;
-                self.decls(decls, package)
+                self.decls(&package_decl.decls, package)
             }
             DeclKind::Import { .. } => match self.workspace.imports.get(&decl.span) {
                 Some(&module) => self.module(module),
@@ -294,9 +294,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let target = self.resolution(expr.span)?;
                 self.lookup(&qualified.name, target, locals)?
             }
-            ExprKind::Field { target, field } => {
-                let value = self.expr(target, locals)?;
-                self.field(value, field)?
+            ExprKind::Field(access) => {
+                let value = self.expr(&access.target, locals)?;
+                self.field(value, &access.field)?
             }
             ExprKind::Unknown(ident) => {
                 if matches!(&*ident.name, "v" | "vector") {
@@ -311,8 +311,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             ExprKind::Int(0) => Value::Zero,
             ExprKind::Int(1) => Value::One,
-            ExprKind::Int(n) => Value::Scalar(num(*n as f64)),
-            ExprKind::Float(x) => Value::Scalar(num(finite_literal(*x, expr.span)?)),
+            ExprKind::Int(n) => Value::Scalar(self.literal(*n as f64)),
+            ExprKind::Float(x) => Value::Scalar(self.literal(finite_literal(*x, expr.span)?)),
             ExprKind::Vector(items) => {
                 let values = items
                     .iter()
@@ -338,7 +338,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 Value::One => Value::Scalar(num(-1.0)),
                 Value::Scalar(s) => Value::Scalar(negate(&s)),
                 Value::Vector(v) => Value::Vector(v.map(|s| negate(&s))),
-                Value::Matrix(m) => Value::Matrix(m.map(|row| row.map(|s| negate(&s)))),
+                Value::Matrix(m) => {
+                    Value::Matrix(Box::new((*m).map(|row| row.map(|s| negate(&s)))))
+                }
                 _ => return Err(internal("negation of a non-number")),
             },
             ExprKind::Prime(inner) => match self.expr(inner, locals)? {

@@ -10,24 +10,24 @@ pub mod mechanism;
 mod operations;
 pub mod value;
 
-use std::collections::HashMap;
-
 use crate::check::Checked;
 use crate::diag::Diagnostic;
 use crate::load::Workspace;
 use elaborator::Elaborator;
 pub use mechanism::{Mechanism, Summary};
+use rustc_hash::FxHashMap;
 
 /// Evaluates every module of a checked workspace into one mechanism.
 pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechanism, Diagnostic> {
     let mut elaborator = Elaborator {
         workspace,
         checked,
-        globals: HashMap::new(),
+        globals: FxHashMap::default(),
         mechanism: Mechanism::default(),
         elaborated_modules: Vec::new(),
         depth: 0,
         fields: Vec::new(),
+        literals: FxHashMap::default(),
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;

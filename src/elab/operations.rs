@@ -78,7 +78,7 @@ pub(super) fn vector_or_matrix(values: Vec<Value>, span: Span) -> Result<Value> 
     let matrix: Matrix = rows
         .try_into()
         .map_err(|_| internal("matrix of the wrong size"))?;
-    Ok(Value::Matrix(matrix))
+    Ok(Value::Matrix(Box::new(matrix)))
 }
 
 pub(super) fn binary(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Value> {
@@ -128,12 +128,12 @@ fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Val
         (Vector(v), Zero) if matches!(op, BinaryOp::Sub) => Vector(v),
         (Zero, Vector(v)) if matches!(op, BinaryOp::Sub) => Vector(v.map(|s| negate(&s))),
         (Vector(a), Vector(b)) => Vector([0, 1, 2].map(|i| arith(c, &a[i], &b[i]))),
-        (Matrix(a), Matrix(b)) if matches!(op, BinaryOp::Add | BinaryOp::Sub) => {
-            Matrix([0, 1, 2].map(|i| [0, 1, 2].map(|j| arith(c, &a[i][j], &b[i][j]))))
-        }
-        (Matrix(a), Matrix(b)) => Matrix([0, 1, 2].map(|i| {
+        (Matrix(a), Matrix(b)) if matches!(op, BinaryOp::Add | BinaryOp::Sub) => Matrix(Box::new(
+            [0, 1, 2].map(|i| [0, 1, 2].map(|j| arith(c, &a[i][j], &b[i][j]))),
+        )),
+        (Matrix(a), Matrix(b)) => Matrix(Box::new([0, 1, 2].map(|i| {
             [0, 1, 2].map(|j| dot_row(&a[i], &[b[0][j].clone(), b[1][j].clone(), b[2][j].clone()]))
-        })),
+        }))),
         (Matrix(a), Vector(v)) => Vector([0, 1, 2].map(|i| dot_row(&a[i], &v))),
         (Rotation(a), Rotation(b)) => Rotation(a.then(&b)),
         (Rotation(r), Vector(v)) => Vector(rotate(&r, v)),
@@ -151,11 +151,11 @@ fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Val
         }
         (Matrix(m), s) => {
             let s = as_scalar(s, span)?;
-            Matrix(m.map(|row| row.map(|x| arith(c, &x, &s))))
+            Matrix(Box::new((*m).map(|row| row.map(|x| arith(c, &x, &s)))))
         }
         (s, Matrix(m)) => {
             let s = as_scalar(s, span)?;
-            Matrix(m.map(|row| row.map(|x| arith(c, &s, &x))))
+            Matrix(Box::new((*m).map(|row| row.map(|x| arith(c, &s, &x)))))
         }
         (a, b) => Scalar(arith(c, &as_scalar(a, span)?, &as_scalar(b, span)?)),
     })
@@ -265,10 +265,11 @@ fn frame_state(name: &str, values: Vec<Value>, span: Span) -> Result<Value> {
         "position" => Value::Vector(vector(frame, FrameQuantity::Position)),
         "velocity" => Value::Vector(vector(frame, FrameQuantity::Velocity)),
         "angular_velocity" => Value::Vector(vector(frame, FrameQuantity::AngularVelocity)),
-        "orientation" => Value::Matrix(
-            [0u8, 1, 2]
-                .map(|i| [0u8, 1, 2].map(|j| component(frame, FrameQuantity::Orientation(i, j)))),
-        ),
+        "orientation" => {
+            Value::Matrix(Box::new([0u8, 1, 2].map(|i| {
+                [0u8, 1, 2].map(|j| component(frame, FrameQuantity::Orientation(i, j)))
+            })))
+        }
         _ => {
             let other = frames.get(1).ok_or_else(|| internal("missing argument"))?;
             let (a, b) = (

@@ -3,7 +3,7 @@
 //! mechanical objects of the [`Mechanism`](super::mechanism::Mechanism).
 
 use std::fmt;
-use std::sync::Arc;
+use std::sync::{Arc, LazyLock};
 
 use crate::check::scope::ScopeId;
 use crate::check::types::DefId;
@@ -67,8 +67,19 @@ pub enum FrameQuantity {
     Orientation(u8, u8),
 }
 
+/// A number as a scalar. Zero and one, which fill most vectors and axes, are shared rather than
+/// allocated at each use (a chain of 100,000 bodies has about twenty per body).
 pub fn num(value: f64) -> Scalar {
-    Arc::new(SExpr::Num(value))
+    static ZERO: LazyLock<Scalar> = LazyLock::new(|| Arc::new(SExpr::Num(0.0)));
+    static ONE: LazyLock<Scalar> = LazyLock::new(|| Arc::new(SExpr::Num(1.0)));
+    // Bit patterns, not `==`: −0.0 keeps its own node.
+    if value.to_bits() == 0.0f64.to_bits() {
+        ZERO.clone()
+    } else if value.to_bits() == 1.0f64.to_bits() {
+        ONE.clone()
+    } else {
+        Arc::new(SExpr::Num(value))
+    }
 }
 
 pub fn constant(s: &Scalar) -> Option<f64> {
@@ -182,7 +193,9 @@ pub struct Frame {
 pub enum Value {
     Scalar(Scalar),
     Vector(Vector),
-    Matrix(Matrix),
+    /// Boxed: nine scalars would make every value (and the elaborator's table of the program's
+    /// names) three times larger.
+    Matrix(Box<Matrix>),
     /// Rotations are displacement chains made of rotations only.
     Rotation(Displacement),
     Displacement(Displacement),

@@ -16,6 +16,10 @@ use super::settings::Settings;
 
 /// Stages of one step.
 const STAGES: usize = 12;
+
+/// |h λ| at the boundary of the method's stability region on the negative real axis (Hairer's
+/// DOP853 takes 6.1 in its stiffness test).
+pub const STABILITY_LIMIT: f64 = 6.0;
 /// The step's stages, dy/dt at its end, and the three stages of the continuous extension.
 const ALL_STAGES: usize = 16;
 /// Index of dy/dt at the step's end among the stages.
@@ -308,6 +312,10 @@ fn stage_state_into(stages: &[Vec<f64>], stage: usize, y: &[f64], h: f64, out: &
 impl AdaptiveStepper for Dop853 {
     fn order(&self) -> u32 {
         8
+    }
+
+    fn stability_limit(&self) -> Option<f64> {
+        Some(STABILITY_LIMIT)
     }
 
     fn controller(&self) -> StepController {

@@ -10,6 +10,9 @@ use super::settings::Settings;
 
 const STAGES: usize = 7;
 
+/// |h λ| at the boundary of the method's stability region on the negative real axis.
+pub const STABILITY_LIMIT: f64 = 3.3;
+
 /// Fractions of the step at which the stages are evaluated.
 pub const C: [f64; STAGES] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
 
@@ -125,6 +128,10 @@ fn stage_state_into(stages: &[Vec<f64>], stage: usize, y: &[f64], h: f64, out: &
 impl AdaptiveStepper for DormandPrince {
     fn order(&self) -> u32 {
         5
+    }
+
+    fn stability_limit(&self) -> Option<f64> {
+        Some(STABILITY_LIMIT)
     }
 
     fn controller(&self) -> StepController {

@@ -6,6 +6,7 @@ use super::evaluator::{all_finite, Evaluator, Halt};
 use super::outcome::{Failure, IntegrationError, Stats};
 use super::output::Outputs;
 use super::settings::Settings;
+use super::stability::StabilityWatch;
 use super::system::{Observer, OdeSystem};
 
 /// What to integrate, already checked for consistency.
@@ -21,6 +22,11 @@ pub(super) struct Problem<'a> {
 pub(super) trait AdaptiveStepper {
     /// Order of the method (for the initial step estimate).
     fn order(&self) -> u32;
+    /// |h λ| at the boundary of an explicit method's stability region (for its stiffness
+    /// check); `None` for a method whose steps stability does not bound.
+    fn stability_limit(&self) -> Option<f64> {
+        None
+    }
     /// The step-size controller suited to the method's error estimate.
     fn controller(&self) -> StepController;
     /// The controller to use from the next attempt on, when the method changed at the last
@@ -68,7 +74,13 @@ pub(super) fn integrate_adaptive(
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
     let mut eval = Evaluator::new(system);
-    match run(stepper, &mut eval, problem, observer) {
+    let dimension = problem.y0.len();
+    let mut watch = stepper
+        .stability_limit()
+        .and_then(|limit| StabilityWatch::new(limit, true, dimension, problem.settings));
+    let result = run(stepper, &mut eval, problem, &mut watch, observer);
+    eval.stats.stability_bound = watch.and_then(|mut watch| watch.finding());
+    match result {
         Ok(y) => Ok((y, eval.stats)),
         Err(halt) => Err(halt.made_fatal().into_error(eval.stats)),
     }
@@ -78,6 +90,7 @@ fn run(
     stepper: &mut dyn AdaptiveStepper,
     eval: &mut Evaluator,
     problem: &Problem,
+    watch: &mut Option<StabilityWatch>,
     observer: &mut Observer,
 ) -> Result<Vec<f64>, Halt> {
     let Problem {
@@ -106,12 +119,17 @@ fn run(
         y: y0.to_vec(),
         y_new: vec![0.0; y0.len()],
         h,
+        last_step: h,
         attempts: 0,
         controller: stepper.controller(),
         outputs,
     };
     while march.t < t_end {
-        march.step(stepper, eval, problem, observer)?;
+        if march.step(stepper, eval, problem, observer)? {
+            if let Some(watch) = watch {
+                watch.after_step(eval, march.t, &march.y, march.last_step);
+            }
+        }
     }
     march.outputs.deliver_rest(&march.y, observer)?;
     Ok(march.y)
@@ -122,22 +140,23 @@ struct March<'a> {
     t: f64,
     y: Vec<f64>,
     y_new: Vec<f64>,
-    /// The step to try next.
+    /// The step to try next, and the last one accepted.
     h: f64,
+    last_step: f64,
     attempts: usize,
     controller: StepController,
     outputs: Outputs<'a>,
 }
 
 impl March<'_> {
-    /// One attempt: either advances the solution or shrinks the step.
+    /// One attempt: either advances the solution (and says so) or shrinks the step.
     fn step(
         &mut self,
         stepper: &mut dyn AdaptiveStepper,
         eval: &mut Evaluator,
         problem: &Problem,
         observer: &mut Observer,
-    ) -> Result<(), Halt> {
+    ) -> Result<bool, Halt> {
         let h = self.next_step_size(problem)?;
         let attempt = stepper.attempt(eval, self.t, &self.y, h, &mut self.y_new);
         let attempt = attempt.and_then(|error| match all_finite(&self.y_new) {
@@ -148,6 +167,7 @@ impl March<'_> {
             Ok(error) if error <= 1.0 => {
                 self.advance(stepper, eval, problem, h, observer)?;
                 eval.stats.steps += 1;
+                self.last_step = h;
                 self.h = self.controller.after_accept(h, error);
                 if let Some(controller) = stepper.switched_controller() {
                     self.controller = controller;
@@ -155,6 +175,7 @@ impl March<'_> {
                 if eval.breaks_error_trend() {
                     self.controller.forget_trend();
                 }
+                return Ok(true);
             }
             Ok(error) => {
                 eval.stats.rejected += 1;
@@ -169,7 +190,7 @@ impl March<'_> {
             }
             Err(fatal) => return Err(fatal),
         }
-        Ok(())
+        Ok(false)
     }
 
     /// Moves to the end of the accepted step of size `h`, projected onto the system's manifold,
@@ -211,6 +232,9 @@ impl March<'_> {
     /// The proposed step limited by the settings and stretched to land exactly on the end time.
     fn next_step_size(&mut self, problem: &Problem) -> Result<f64, Halt> {
         let settings = problem.settings;
+        if let Some(value) = settings.interrupted() {
+            return Err(Halt::fatal(self.t, Failure::Interrupted(value)));
+        }
         if self.attempts >= settings.max_steps {
             return Err(Halt::fatal(self.t, Failure::TooManySteps));
         }

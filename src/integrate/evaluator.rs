@@ -33,7 +33,7 @@ impl Halt {
         IntegrationError {
             time,
             failure,
-            stats,
+            stats: Box::new(stats),
         }
     }
 }

@@ -23,13 +23,15 @@ mod output;
 mod rk4;
 pub mod rosenbrock;
 mod settings;
+pub mod stability;
 mod switching;
 mod system;
 
 pub use control::error_norm;
 pub use hermite::HermiteSegment;
-pub use outcome::{Failure, InputError, IntegrationError, Stats, StepError};
-pub use settings::{Method, Settings};
+pub use outcome::{Failure, InputError, IntegrationError, StabilityBound, Stats, StepError};
+pub use settings::{Interrupt, Method, Settings};
+pub use stability::jacobian_product;
 pub use system::{CallbackError, Observer, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,
@@ -81,7 +83,7 @@ pub fn integrate(
     let invalid = |error: InputError| IntegrationError {
         time: t0,
         failure: Failure::InvalidInput(error),
-        stats: Stats::default(),
+        stats: Box::default(),
     };
     check_problem(system.dimension(), t0, y0, t_end, outputs).map_err(invalid)?;
     check_settings(method, settings).map_err(invalid)?;

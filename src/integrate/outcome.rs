@@ -25,6 +25,33 @@ pub struct Stats {
     /// integrator), which nothing controls: where it exceeds the tolerances, the step is too
     /// long for them.
     pub largest_step_error: Option<StepError>,
+    /// Where an explicit method's steps were first found held by its stability region, when
+    /// [`Settings::stiffness_check`](super::settings::Settings::stiffness_check) asks.
+    pub stability_bound: Option<StabilityBound>,
+}
+
+/// Steps found held by an explicit method's stability region.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StabilityBound {
+    /// When it was found (the end of the step checked last).
+    pub time: f64,
+    /// The estimate of the spectral radius of ∂f/∂y there, in 1/s.
+    pub rate: f64,
+    /// The step taken there.
+    pub step: f64,
+    /// |h λ| at the method's stability boundary (2.8 for RK4, 3.3 for Dormand–Prince).
+    pub limit: f64,
+    /// The state there, and the fast mode's direction in it (unit norm over the controlled
+    /// components, zero elsewhere): what a caller needs to find what makes the mode fast.
+    pub state: Vec<f64>,
+    pub direction: Vec<f64>,
+}
+
+impl StabilityBound {
+    /// The largest stable step: limit / rate.
+    pub fn stable_step(&self) -> f64 {
+        self.limit / self.rate
+    }
 }
 
 /// A local error estimate of one step, in the norm the adaptive methods control (at most 1 meets
@@ -61,6 +88,8 @@ pub enum Failure {
     System(String),
     /// The observer returned an error with this message.
     Observer(String),
+    /// [`Settings::interrupt`](super::settings::Settings::interrupt) was set to this value.
+    Interrupted(usize),
     /// The arguments were inconsistent (wrong state length, unsorted outputs, bad settings...).
     InvalidInput(InputError),
 }
@@ -108,7 +137,8 @@ pub struct IntegrationError {
     /// Time at which the failure appeared (for `NotFinite`, the time of the offending evaluation).
     pub time: f64,
     pub failure: Failure,
-    pub stats: Stats,
+    /// Boxed, so that a failed integration's `Result` stays small.
+    pub stats: Box<Stats>,
 }
 
 impl fmt::Display for Failure {
@@ -119,6 +149,7 @@ impl fmt::Display for Failure {
             Failure::TooManySteps => write!(f, "too many steps"),
             Failure::System(message) => write!(f, "{message}"),
             Failure::Observer(message) => write!(f, "{message}"),
+            Failure::Interrupted(value) => write!(f, "interrupted ({value})"),
             Failure::InvalidInput(error) => write!(f, "invalid integration input: {error}"),
         }
     }

@@ -18,10 +18,15 @@ use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
 use super::outcome::{Failure, IntegrationError, Stats, StepError};
 use super::output::Outputs;
+use super::stability::StabilityWatch;
 use super::system::{Observer, OdeSystem};
 
 /// A remainder below this fraction of a step joins the last full step instead of making a sliver.
 const SLIVER: f64 = 1e-9;
+
+/// |h λ| at the boundary of the method's stability region: 2.785 on the negative real axis,
+/// 2√2 on the imaginary one.
+pub const STABILITY_LIMIT: f64 = 2.8;
 
 pub(super) fn integrate(
     system: &mut dyn OdeSystem,
@@ -30,7 +35,11 @@ pub(super) fn integrate(
     observer: &mut Observer,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
     let mut eval = Evaluator::new(system);
-    match run(&mut eval, problem, step, observer) {
+    let dimension = problem.y0.len();
+    let mut watch = StabilityWatch::new(STABILITY_LIMIT, false, dimension, problem.settings);
+    let result = run(&mut eval, problem, step, &mut watch, observer);
+    eval.stats.stability_bound = watch.and_then(|mut watch| watch.finding());
+    match result {
         Ok(y) => Ok((y, eval.stats)),
         Err(halt) => Err(halt.made_fatal().into_error(eval.stats)),
     }
@@ -40,6 +49,7 @@ fn run(
     eval: &mut Evaluator,
     problem: &Problem,
     step: f64,
+    watch: &mut Option<StabilityWatch>,
     observer: &mut Observer,
 ) -> Result<Vec<f64>, Halt> {
     let Problem { t0, y0, t_end, .. } = *problem;
@@ -52,6 +62,9 @@ fn run(
     let mut rk4 = Rk4::new(t0, y0);
     let mut k = 0usize;
     while (k as f64) < step_count {
+        if let Some(value) = problem.settings.interrupted() {
+            return Err(Halt::fatal(rk4.t, Failure::Interrupted(value)));
+        }
         if k >= problem.settings.max_steps {
             return Err(Halt::fatal(rk4.t, Failure::TooManySteps));
         }
@@ -79,8 +92,12 @@ fn run(
             |t, out| segment.evaluate(t, out),
             observer,
         )?;
+        let h = rk4.h;
         rk4.advance(t_new);
         eval.stats.steps += 1;
+        if let Some(watch) = watch {
+            watch.after_step(eval, rk4.t, &rk4.y, h);
+        }
     }
     outputs.deliver_rest(&rk4.y, observer)?;
     Ok(rk4.y)

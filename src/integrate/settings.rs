@@ -1,5 +1,8 @@
 //! Which method integrates, and within which tolerances and limits.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+
 /// Which integration method to use.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
@@ -33,17 +36,55 @@ pub struct Settings {
     pub max_step: f64,
     /// Smallest step allowed before giving up with [`Failure::StepUnderflow`](super::outcome::Failure::StepUnderflow).
     pub min_step: f64,
-    /// Most steps (accepted and rejected) before giving up with [`Failure::TooManySteps`](super::outcome::Failure::TooManySteps).
+    /// Most steps (accepted and rejected; RK4's and the others' alike) before giving up with
+    /// [`Failure::TooManySteps`](super::outcome::Failure::TooManySteps); 1,000,000 by default.
     pub max_steps: usize,
     /// How many leading components the step control watches (all when `None`): the others are
     /// carried along, like a quadrature of the solution, without changing the steps.
     pub controlled: Option<usize>,
+    /// Whether the explicit methods (RK4, Dormand–Prince) check during the run whether their
+    /// steps are held by their stability region ([`Stats::stability_bound`]): a few evaluations
+    /// every 20 steps.
+    ///
+    /// [`Stats::stability_bound`]: super::outcome::Stats::stability_bound
+    pub stiffness_check: bool,
+    /// A flag read between steps: once it is set, the integration stops with
+    /// [`Failure::Interrupted`](super::outcome::Failure::Interrupted), outputs delivered so far
+    /// kept (a signal handler sets it).
+    pub interrupt: Option<Interrupt>,
+}
+
+/// A request to stop an integration between two steps: any value but 0, set from anywhere
+/// (another thread, a signal handler), which the integration reports back.
+#[derive(Clone, Debug, Default)]
+pub struct Interrupt(pub Arc<AtomicUsize>);
+
+impl Interrupt {
+    /// The value set, if any.
+    pub fn requested(&self) -> Option<usize> {
+        match self.0.load(Ordering::Relaxed) {
+            0 => None,
+            value => Some(value),
+        }
+    }
+}
+
+/// Two interrupts are the same when they share their flag.
+impl PartialEq for Interrupt {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 impl Settings {
     /// How many leading components of a state of `dimension` the error control watches.
     pub(super) fn controlled_len(&self, dimension: usize) -> usize {
         self.controlled.unwrap_or(dimension).min(dimension)
+    }
+
+    /// The value of the interrupt, when one was requested.
+    pub(super) fn interrupted(&self) -> Option<usize> {
+        self.interrupt.as_ref().and_then(Interrupt::requested)
     }
 }
 
@@ -57,6 +98,8 @@ impl Default for Settings {
             min_step: 0.0,
             max_steps: 1_000_000,
             controlled: None,
+            stiffness_check: false,
+            interrupt: None,
         }
     }
 }

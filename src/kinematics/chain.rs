@@ -11,9 +11,10 @@
 
 use std::collections::HashMap;
 
-use super::eval::{EvalError, Geometric, Lower, UnknownValues};
+use super::eval::{EvalError, Geometric, UnknownValues};
 use crate::elab::value::SExpr;
 use crate::symbolic::expr::{ExprId, Pool, Tape};
+use crate::symbolic::program::Lower;
 
 /// The compiled parameters of one chain.
 #[derive(Clone, Debug)]

@@ -7,7 +7,8 @@
 use std::collections::HashMap;
 
 use crate::elab::value::{SExpr, UnknownId};
-use crate::symbolic::expr::{ExprId, Function, Pool, Tape};
+use crate::symbolic::expr::{ExprId, Pool, Tape};
+use crate::symbolic::program::{Lower, MalformedCall};
 
 /// Values of the program's unknowns (written `?s` and generic quantities).
 pub type UnknownValues = HashMap<UnknownId, f64>;
@@ -22,6 +23,12 @@ pub enum EvalError {
     /// The geometry at a configuration is not a finite number (a coordinate so large that the
     /// poses overflow, a degenerate joint).
     NotFinite,
+}
+
+impl From<MalformedCall> for EvalError {
+    fn from(error: MalformedCall) -> EvalError {
+        EvalError::NotGeometric(error.0)
+    }
 }
 
 /// How messages name an unknown: `` `L` `` (its `let` name), `` `mass(arm)` `` (a generic
@@ -48,77 +55,6 @@ pub fn describe(error: &EvalError, mechanism: &crate::elab::mechanism::Mechanism
     }
 }
 
-/// Lowering a program scalar into the pool: numbers, arithmetic and calls lower alike
-/// everywhere; what the leaves (unknowns, coordinates, rates, the time, frames) become depends
-/// on the use (constants and symbols of a dof chain, slots of the effort tape).
-pub trait Lower {
-    fn pool(&mut self) -> &mut Pool;
-
-    /// A scalar that is neither a number, arithmetic nor a call.
-    fn leaf(&mut self, s: &SExpr) -> Result<ExprId, EvalError>;
-
-    /// Lowers `s` (override to remember subexpressions already lowered).
-    fn lower(&mut self, s: &SExpr) -> Result<ExprId, EvalError> {
-        lower_structure(self, s)
-    }
-}
-
-/// The node of `s`, its operands lowered through `lowering`.
-pub fn lower_structure<L: Lower + ?Sized>(
-    lowering: &mut L,
-    s: &SExpr,
-) -> Result<ExprId, EvalError> {
-    let binary = |lowering: &mut L, a: &SExpr, b: &SExpr| -> Result<_, EvalError> {
-        Ok((lowering.lower(a)?, lowering.lower(b)?))
-    };
-    Ok(match s {
-        SExpr::Num(v) => lowering.pool().constant(*v),
-        SExpr::Neg(a) => {
-            let a = lowering.lower(a)?;
-            lowering.pool().neg(a)
-        }
-        SExpr::Add(a, b) => {
-            let (a, b) = binary(lowering, a, b)?;
-            lowering.pool().add(a, b)
-        }
-        SExpr::Sub(a, b) => {
-            let (a, b) = binary(lowering, a, b)?;
-            lowering.pool().sub(a, b)
-        }
-        SExpr::Mul(a, b) => {
-            let (a, b) = binary(lowering, a, b)?;
-            lowering.pool().mul(a, b)
-        }
-        SExpr::Div(a, b) => {
-            let (a, b) = binary(lowering, a, b)?;
-            lowering.pool().div(a, b)
-        }
-        SExpr::Pow(a, b) => {
-            let (a, b) = binary(lowering, a, b)?;
-            // A square is a product: cheaper than `powf`, and as exact.
-            match lowering.pool().as_constant(b) {
-                Some(2.0) => lowering.pool().mul(a, a),
-                _ => lowering.pool().pow(a, b),
-            }
-        }
-        SExpr::Call(name, args) => {
-            let argument = |k: usize| {
-                args.get(k)
-                    .ok_or(EvalError::NotGeometric("a call without its arguments"))
-            };
-            let x = lowering.lower(argument(0)?)?;
-            if *name == "atan2" {
-                let second = lowering.lower(argument(1)?)?;
-                return Ok(lowering.pool().atan2(x, second));
-            }
-            let function =
-                Function::from_name(name).ok_or(EvalError::NotGeometric("an unknown function"))?;
-            lowering.pool().apply(function, x)
-        }
-        leaf => lowering.leaf(leaf)?,
-    })
-}
-
 /// The leaves of geometry: unknowns are constants (their values are known), the enclosing
 /// link's coordinates are `coordinates` (symbols of a dof chain, or none for constants);
 /// nothing else may appear.
@@ -129,6 +65,8 @@ pub struct Geometric<'a> {
 }
 
 impl Lower for Geometric<'_> {
+    type Error = EvalError;
+
     fn pool(&mut self) -> &mut Pool {
         &mut self.pool
     }

@@ -282,7 +282,7 @@ impl Loader {
                         self.workspace.imports.insert(decl.span, id);
                     }
                 }
-                DeclKind::Package { decls, .. } => self.follow_imports(importer, decls),
+                DeclKind::Package(package) => self.follow_imports(importer, &package.decls),
                 _ => {}
             }
         }

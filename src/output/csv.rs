@@ -1,46 +1,136 @@
 //! Simulation samples as CSV: one row per output time, a header of readable names
 //! (`time`, `swing.q`, `swing.q'`, …, energies). A failed run ends with a comment line saying
-//! when and why, after the rows computed before the failure.
+//! when and why, after the rows computed before the failure; an interrupted run with a comment
+//! line saying when and by what (the marker line).
+//!
+//! [`CsvWriter`] writes the rows as the run produces them, so that a long run's samples are on
+//! disk as it goes (flushed at least every `FLUSH_EVERY`), not held in memory.
 
-use std::fmt::Write;
+use std::fmt::Write as _;
+use std::io::{self, Write};
+use std::time::{Duration, Instant};
 
-use crate::simulate::run::Simulation;
+use super::text::signal_name;
+use crate::simulate::run::{Report, Sample, Simulation};
 
+/// The longest a written row waits in the buffer before it reaches the file.
+const FLUSH_EVERY: Duration = Duration::from_millis(200);
+
+/// The whole CSV text of a finished simulation.
 pub fn to_csv(simulation: &Simulation) -> String {
+    let mut out = header(&simulation.coordinate_names, &simulation.reaction_names);
+    for sample in &simulation.samples {
+        out += &row(sample);
+    }
+    out += &ending(&simulation.report);
+    out
+}
+
+/// The header line: time, the declared coordinates, their rates, the energies and the
+/// reactions' components.
+pub fn header(coordinate_names: &[String], reaction_names: &[String]) -> String {
     let mut out = String::from("time");
-    for name in &simulation.coordinate_names {
+    for name in coordinate_names {
         let _ = write!(out, ",{name}");
     }
-    for name in &simulation.coordinate_names {
+    for name in coordinate_names {
         let _ = write!(out, ",{name}'");
     }
     out.push_str(",kinetic_energy,potential_energy");
-    for name in &simulation.reaction_names {
+    for name in reaction_names {
         for part in ["mx", "my", "mz", "fx", "fy", "fz"] {
             let _ = write!(out, ",{name}.reaction.{part}");
         }
     }
     out.push('\n');
-    for sample in &simulation.samples {
-        let _ = write!(out, "{:e}", sample.time);
-        for value in sample.coordinates.iter().chain(&sample.rates) {
-            let _ = write!(out, ",{value:e}");
-        }
-        let potential = sample
-            .potential_energy
-            .map_or(String::new(), |p| format!("{p:e}"));
-        let _ = write!(out, ",{:e},{potential}", sample.kinetic_energy);
-        for value in &sample.reactions {
-            let _ = write!(out, ",{value:e}");
-        }
-        out.push('\n');
+    out
+}
+
+/// One sample's line.
+pub fn row(sample: &Sample) -> String {
+    let mut out = format!("{:e}", sample.time);
+    for value in sample.coordinates.iter().chain(&sample.rates) {
+        let _ = write!(out, ",{value:e}");
     }
-    if let Some(failure) = &simulation.report.failure {
+    let potential = sample
+        .potential_energy
+        .map_or(String::new(), |p| format!("{p:e}"));
+    let _ = write!(out, ",{:e},{potential}", sample.kinetic_energy);
+    for value in &sample.reactions {
+        let _ = write!(out, ",{value:e}");
+    }
+    out.push('\n');
+    out
+}
+
+/// The comment lines after the rows: why the run failed, or when it was interrupted (the
+/// marker line); nothing after a run that reached its end.
+pub fn ending(report: &Report) -> String {
+    let mut out = String::new();
+    if let Some(failure) = &report.failure {
         let _ = writeln!(
             out,
             "# the run failed at t = {}: {}",
             failure.time, failure.message
         );
     }
+    if let Some(stop) = &report.interrupted {
+        let _ = writeln!(
+            out,
+            "# interrupted by {} at t = {}: the rows above are the outputs up to there",
+            signal_name(stop.signal),
+            stop.time
+        );
+    }
     out
+}
+
+/// Writes the rows of a run as they come; keeps the first write error, after which it writes
+/// nothing more.
+pub struct CsvWriter<W: Write> {
+    out: W,
+    flushed: Instant,
+    error: Option<io::Error>,
+}
+
+impl<W: Write> CsvWriter<W> {
+    /// Starts the file with its header.
+    pub fn new(out: W, coordinate_names: &[String], reaction_names: &[String]) -> Self {
+        let mut writer = CsvWriter {
+            out,
+            flushed: Instant::now(),
+            error: None,
+        };
+        writer.write(&header(coordinate_names, reaction_names));
+        writer.flush();
+        writer
+    }
+
+    pub fn write_sample(&mut self, sample: &Sample) {
+        self.write(&row(sample));
+        if self.flushed.elapsed() >= FLUSH_EVERY {
+            self.flush();
+        }
+    }
+
+    /// Ends the file after the run (see [`ending`]) and flushes it: the first write error, if
+    /// any.
+    pub fn finish(mut self, report: &Report) -> Result<(), io::Error> {
+        self.write(&ending(report));
+        self.flush();
+        self.error.map_or(Ok(()), Err)
+    }
+
+    fn write(&mut self, text: &str) {
+        if self.error.is_none() {
+            self.error = self.out.write_all(text.as_bytes()).err();
+        }
+    }
+
+    fn flush(&mut self) {
+        if self.error.is_none() {
+            self.error = self.out.flush().err();
+        }
+        self.flushed = Instant::now();
+    }
 }

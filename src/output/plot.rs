@@ -95,6 +95,14 @@ fn format_of(path: &Path) -> Result<Format, PlotError> {
     }
 }
 
+/// Checks before a run that a plot can be written to `path`: its name asks for an image this
+/// module draws, and the file can be created (it is, empty, until the plot is drawn).
+pub fn check_path(path: &Path) -> Result<(), PlotError> {
+    check_file_name(path)?;
+    std::fs::File::create(path).map_err(PlotError::Io)?;
+    Ok(())
+}
+
 /// A drawing that `write_figure` renders into an SVG or a PNG.
 pub(super) trait Figure {
     fn draw<DB: DrawingBackend>(

@@ -130,14 +130,17 @@ pub fn assembly(report: &AssemblyReport) -> String {
 
 /// The run report of a simulation, for people.
 pub fn run_report(report: &crate::simulate::run::Report) -> String {
+    let cpu = report
+        .cpu_seconds
+        .map_or("unknown".to_string(), |s| format!("{s:.3} s"));
     let mut out = format!(
-        "{}: {} steps ({} rejected), {} function evaluations, {:.3} s to simulate {} s\n",
+        "{}: {} steps ({} rejected), {} function evaluations to simulate {} s; CPU time {cpu}, wall time {:.3} s\n",
         report.integrator,
         report.steps,
         report.rejected_steps,
         report.function_evaluations,
-        report.run_seconds,
-        report.duration
+        report.duration,
+        report.wall_seconds,
     );
     if let (Some(stiff), Some(switches)) = (report.stiff_steps, report.method_switches) {
         out += &format!(
@@ -169,13 +172,41 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
             e.largest, e.rtol, e.atol, e.time
         );
     }
+    if let Some(s) = &report.stiffness {
+        out += &format!(
+            "stiffness: at t = {}, steps of {:.1e} s held by stability (fastest mode {:.1e} /s, stable step {:.1e} s){}\n",
+            s.time,
+            s.step,
+            s.rate,
+            s.stable_step,
+            s.element
+                .as_ref()
+                .map_or(String::new(), |e| format!(", made fast by {e}"))
+        );
+    }
     if let Some(failure) = &report.failure {
         out += &format!(
             "the run FAILED at t = {}: {}\n",
             failure.time, failure.message
         );
     }
+    if let Some(stop) = &report.interrupted {
+        out += &format!(
+            "the run was INTERRUPTED at t = {} ({}): the outputs end there\n",
+            stop.time,
+            signal_name(stop.signal)
+        );
+    }
     out
+}
+
+/// How a run's report names the signal that interrupted it.
+pub fn signal_name(signal: usize) -> String {
+    match signal as i32 {
+        libc::SIGINT => "SIGINT".to_string(),
+        libc::SIGTERM => "SIGTERM".to_string(),
+        other => format!("signal {other}"),
+    }
 }
 
 fn constraint_report(c: &crate::simulate::constraints::ConstraintReport) -> String {

@@ -3,17 +3,19 @@
 
 pub mod batch;
 pub mod branch;
+pub mod clock;
 pub mod compiled;
 pub mod consistent;
 pub mod constraints;
-pub mod cpu_time;
 pub mod lie_group;
 pub mod native;
 pub mod precision;
 pub mod prepare;
 pub mod run;
+mod sample;
 pub mod settings;
 pub mod statics;
 pub mod stiffness;
+mod summary;
 pub mod system;
 pub mod variational;

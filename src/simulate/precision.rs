@@ -11,7 +11,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use super::cpu_time::thread_cpu_seconds;
+use super::clock::thread_cpu_seconds;
 use super::prepare::{Integrator, Prepared};
 use super::run::{self, integrator_name, Simulation};
 
@@ -321,10 +321,12 @@ pub fn measure(
     method.configure(prepared);
     let mut times = Vec::new();
     let mut simulation = None;
+    // NaN where the clock cannot be read: the time is then reported as unknown.
+    let now = || thread_cpu_seconds().unwrap_or(f64::NAN);
     for _ in 0..repeats.max(1) {
-        let start = thread_cpu_seconds();
+        let start = now();
         let run = run::run(prepared, &mut |_| {});
-        times.push(thread_cpu_seconds() - start);
+        times.push(now() - start);
         simulation = Some(run);
     }
     let simulation = simulation.expect("at least one run");

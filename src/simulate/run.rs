@@ -9,19 +9,22 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::branch;
+use super::clock::thread_cpu_seconds;
 use super::constraints::{ConstraintReport, ReleasedStretch};
 use super::prepare::{Integrator, Prepared};
+pub use super::sample::{MomentumDrift, Sample};
+use super::stiffness::{self, StiffnessReport};
+use super::summary::Summary;
 use super::system::{MechanicalSystem, SystemError};
 use super::variational;
 use crate::diag::Diagnostic;
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
-use crate::dynamics::joint::JointType;
 use crate::dynamics::model::Model;
 use crate::integrate::{
-    integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Method, OdeSystem,
-    Settings as IntegratorSettings, Stats,
+    integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Interrupt, Method,
+    OdeSystem, Settings as IntegratorSettings, Stats,
 };
 
 impl OdeSystem for MechanicalSystem<'_> {
@@ -87,32 +90,6 @@ impl OdeSystem for WithWork<'_, '_> {
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct Sample {
-    pub time: f64,
-    /// Declared coordinates and their rates, in `Simulation::coordinate_names` order.
-    pub coordinates: Vec<f64>,
-    pub rates: Vec<f64>,
-    pub kinetic_energy: f64,
-    /// Potential energy, when every effort is a constant force in the fixed basis or declares
-    /// its potential.
-    pub potential_energy: Option<f64>,
-    /// The work done since the start by the efforts that derive from no potential (dampers,
-    /// motors, …), when there are such efforts.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub work: Option<f64>,
-    /// Kinetic energy + potential energy of the conservative efforts − `work`: constant up to
-    /// the integration's error.
-    #[serde(skip)]
-    pub balance: Option<f64>,
-    /// Total momentum in the fixed frame: angular (about the origin), then linear.
-    pub momentum: [f64; 6],
-    /// When asked for: the wrench each join transmits to its second body, at the join, in the
-    /// fixed axes (moment, then force; 6 per join, in `Simulation::reaction_names` order).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub reactions: Vec<f64>,
-}
-
-#[derive(Clone, Debug, Serialize)]
 pub struct RunFailure {
     pub time: f64,
     pub message: String,
@@ -131,8 +108,11 @@ pub struct Report {
     pub stiff_steps: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub method_switches: Option<usize>,
-    /// Time the integration took (wall clock; the computation is single-threaded).
-    pub run_seconds: f64,
+    /// The CPU time of the run (integration and sampling, on the thread that ran it), when the
+    /// thread's CPU clock can be read; and the wall-clock time it took, longer when the machine
+    /// gave time to other work.
+    pub cpu_seconds: Option<f64>,
+    pub wall_seconds: f64,
     /// Largest |E(t) − E(0)| over the outputs, relative to the larger of |E(0)| and the largest
     /// kinetic energy, when the system is conservative.
     pub energy_drift: Option<f64>,
@@ -149,7 +129,30 @@ pub struct Report {
     pub constraints: Option<ConstraintReport>,
     /// A fixed-step method's largest local error estimate over its steps (RK4, symplectic).
     pub step_error: Option<StepErrorReport>,
+    /// Where an explicit integrator's steps were found held by its stability region (W0901).
+    pub stiffness: Option<StiffnessReport>,
     pub failure: Option<RunFailure>,
+    /// When the run was stopped from outside (`RunOptions::interrupt`): not a failure, but the
+    /// outputs end there.
+    pub interrupted: Option<Interruption>,
+}
+
+/// When a run was stopped from outside, and the value the interrupt was set to (the signal's
+/// number for `lsdc simulate`).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Interruption {
+    pub time: f64,
+    pub signal: usize,
+}
+
+/// Why an integration stopped, in a run's words.
+fn failure_message(failure: &Failure, max_steps: usize) -> String {
+    match failure {
+        Failure::TooManySteps => format!(
+            "the run reached its limit of {max_steps} steps (rejected ones included); raise it with `--max-steps`"
+        ),
+        other => other.to_string(),
+    }
 }
 
 /// The largest local error estimate of a fixed-step run, in the norm of the tolerances (at most
@@ -168,6 +171,11 @@ impl StepErrorReport {
     pub fn exceeds_tolerances(&self) -> bool {
         self.largest > 1.0
     }
+}
+
+/// The warning for an explicit run whose steps were held by stability (W0901).
+pub fn stiffness_warning(report: &Report) -> Option<Diagnostic> {
+    stiffness::warning(report.stiffness.as_ref()?, &report.integrator)
 }
 
 /// The warning for a fixed-step run whose steps were too long for its tolerances (W0902): its
@@ -206,12 +214,6 @@ pub fn passage_output_warning(report: &Report) -> Option<Diagnostic> {
             .note("inside a passage the rows losing their independence are set aside; outputs there are interpolated between the states before and after it, which a run that ends inside it does not reach")
             .help("end the run (`duration`) or the outputs away from the singular configuration"),
     )
-}
-
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct MomentumDrift {
-    pub linear: f64,
-    pub angular: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -425,13 +427,45 @@ impl Sampler<'_> {
     }
 }
 
-/// Runs the prepared simulation; `sink` receives every sample as soon as it is computed.
+/// Runs the prepared simulation; `sink` receives every sample as soon as it is computed, and
+/// the simulation keeps them all.
 pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
+    run_with(prepared, &RunOptions::default(), sink)
+}
+
+/// How a run treats its samples, and what may stop it.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Keep every sample in `Simulation::samples` (plots, JSON need them); when false, they only
+    /// go to the sink, and the run's memory does not grow with its length (but for three
+    /// numbers per output of a mechanism with loops, for the check of singular passages).
+    pub keep_samples: bool,
+    /// A flag that stops the run between two steps when set (to a signal's number, say): the
+    /// report says when (`Report::interrupted`), every sample before is kept.
+    pub interrupt: Option<Interrupt>,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            keep_samples: true,
+            interrupt: None,
+        }
+    }
+}
+
+/// Runs the prepared simulation with these options; `sink` receives every sample as soon as it
+/// is computed.
+pub fn run_with(
+    prepared: &Prepared,
+    options: &RunOptions,
+    sink: &mut dyn FnMut(&Sample),
+) -> Simulation {
     let start = Start {
         coordinates: &prepared.coordinates,
         rates: &prepared.rates,
     };
-    run_from(prepared, &start, sink)
+    simulate_from(prepared, &start, options, sink)
 }
 
 /// A starting state of a prepared mechanism: declared coordinates and rates (for a mechanism
@@ -447,6 +481,15 @@ pub struct Start<'a> {
 pub fn run_from(
     prepared: &Prepared,
     start: &Start<'_>,
+    sink: &mut dyn FnMut(&Sample),
+) -> Simulation {
+    simulate_from(prepared, start, &RunOptions::default(), sink)
+}
+
+fn simulate_from(
+    prepared: &Prepared,
+    start: &Start<'_>,
+    options: &RunOptions,
     sink: &mut dyn FnMut(&Sample),
 ) -> Simulation {
     let model = &prepared.model;
@@ -493,12 +536,17 @@ pub fn run_from(
         y0.push(0.0);
     }
     let outputs = output_times(settings.duration, settings.output);
-    let mut samples = Vec::with_capacity(outputs.len());
+    let mut samples = Vec::new();
+    let mut summary = Summary::new(model);
     let started = Instant::now();
+    let cpu_started = thread_cpu_seconds();
     let mut deliver = |offered: Vec<Sample>, samples: &mut Vec<Sample>| {
         for sample in offered {
             sink(&sample);
-            samples.push(sample);
+            summary.add(&sample);
+            if options.keep_samples {
+                samples.push(sample);
+            }
         }
     };
     let mut observer = |t: f64, y: &[f64]| -> Result<(), CallbackError> {
@@ -511,6 +559,9 @@ pub fn run_from(
         initial_step: settings.step,
         max_step: settings.max_step,
         controlled: Some(motion),
+        max_steps: settings.max_steps,
+        stiffness_check: settings.stiffness_check,
+        interrupt: options.interrupt.clone(),
         ..IntegratorSettings::default()
     };
     let mut with_work = WithWork(&mut system);
@@ -551,6 +602,8 @@ pub fn run_from(
                     step: fixed_step,
                     rtol: settings.rtol,
                     atol: settings.atol,
+                    max_steps: settings.max_steps,
+                    interrupt: options.interrupt.clone(),
                 },
                 &outputs,
                 &mut observer,
@@ -566,28 +619,32 @@ pub fn run_from(
         (Ok((_, stats)), Err(error)) => Err(IntegrationError {
             time: settings.duration,
             failure: Failure::Observer(error.to_string()),
-            stats,
+            stats: Box::new(stats),
         }),
         (failed, Err(_)) => failed,
     };
-    let run_seconds = started.elapsed().as_secs_f64();
-    let (stats, failure) = match result {
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let cpu_seconds = thread_cpu_seconds()
+        .zip(cpu_started)
+        .map(|(now, then)| now - then);
+    let (stats, stopped) = match result {
         Ok((_, stats)) => (stats, None),
-        Err(e) => {
-            let message = format!(
-                "{}{}",
-                e.failure,
-                fastest_coordinate(&prepared.coordinate_names, &samples)
-            );
-            (
-                e.stats.clone(),
-                Some(RunFailure {
-                    time: e.time,
-                    message,
-                }),
-            )
-        }
+        Err(e) => (*e.stats, Some((e.time, e.failure))),
     };
+    let interrupted = match stopped {
+        Some((time, Failure::Interrupted(signal))) => Some(Interruption { time, signal }),
+        _ => None,
+    };
+    let failure = stopped
+        .filter(|(_, failure)| !matches!(failure, Failure::Interrupted(_)))
+        .map(|(time, failure)| RunFailure {
+            time,
+            message: format!(
+                "{}{}",
+                failure_message(&failure, settings.max_steps),
+                fastest_coordinate(&prepared.coordinate_names, summary.last())
+            ),
+        });
     let constraints = model.has_loops().then(|| {
         system.loops.absorb(&sampler.system.loops);
         let mut report = system.loops.report();
@@ -597,19 +654,7 @@ pub fn run_from(
     let left_branch = constraints
         .as_ref()
         .filter(|c| !c.singular.is_empty())
-        .and_then(|c| {
-            let outputs: Vec<branch::Output> = samples
-                .iter()
-                .map(|s| branch::Output {
-                    time: s.time,
-                    conserved: s
-                        .balance
-                        .or(s.potential_energy.map(|p| p + s.kinetic_energy)),
-                    kinetic: s.kinetic_energy,
-                })
-                .collect();
-            branch::left_branch(&outputs, &c.singular)
-        })
+        .and_then(|c| branch::left_branch(summary.branch_outputs(), &c.singular))
         .map(|left| RunFailure {
             time: left.time,
             message: left.message,
@@ -628,17 +673,12 @@ pub fn run_from(
         stiff_steps: (settings.integrator == Integrator::Implicit).then_some(stats.stiff_steps),
         method_switches: (settings.integrator == Integrator::Implicit)
             .then_some(stats.method_switches),
-        run_seconds,
-        energy_drift: energy_drift(&samples),
-        energy_balance: energy_balance(&samples),
-        final_energies: samples.last().and_then(|s| {
-            Some([
-                s.kinetic_energy,
-                s.balance? - s.kinetic_energy + s.work?,
-                s.work?,
-            ])
-        }),
-        momentum_drift: momentum_drift(model, &samples),
+        cpu_seconds,
+        wall_seconds,
+        energy_drift: summary.energy_drift(),
+        energy_balance: summary.energy_balance(),
+        final_energies: summary.final_energies(),
+        momentum_drift: summary.momentum_drift(),
         constraints,
         step_error: stats.largest_step_error.map(|e| StepErrorReport {
             largest: e.norm,
@@ -646,18 +686,27 @@ pub fn run_from(
             rtol: settings.rtol,
             atol: settings.atol,
         }),
+        stiffness: stats
+            .stability_bound
+            .as_ref()
+            .and_then(|bound| stiffness::describe(prepared, bound)),
         failure,
+        interrupted,
     };
-    let reaction_names = if settings.reactions {
-        reaction_names(model)
-    } else {
-        Vec::new()
-    };
+    let reaction_names = reaction_names_of(prepared);
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),
         reaction_names,
         samples,
         report,
+    }
+}
+
+/// The joins whose reactions the samples carry: none unless the settings ask for them.
+pub fn reaction_names_of(prepared: &Prepared) -> Vec<String> {
+    match prepared.settings.reactions {
+        true => reaction_names(&prepared.model),
+        false => Vec::new(),
     }
 }
 
@@ -672,8 +721,8 @@ fn reaction_names(model: &Model) -> Vec<String> {
 }
 
 /// Where a failing run was heading: the coordinate moving fastest at the last output.
-fn fastest_coordinate(names: &[String], samples: &[Sample]) -> String {
-    let Some(last) = samples.last() else {
+fn fastest_coordinate(names: &[String], last: Option<&Sample>) -> String {
+    let Some(last) = last else {
         return String::new();
     };
     let fastest = last.rates.iter().enumerate().max_by(|a, b| {
@@ -710,14 +759,17 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         function_evaluations: 0,
         stiff_steps: None,
         method_switches: None,
-        run_seconds: 0.0,
+        cpu_seconds: Some(0.0),
+        wall_seconds: 0.0,
         energy_drift: None,
         energy_balance: None,
         final_energies: None,
         momentum_drift: None,
         constraints: None,
         step_error: None,
+        stiffness: None,
         failure: Some(RunFailure { time: 0.0, message }),
+        interrupted: None,
     };
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),
@@ -725,75 +777,4 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         samples: Vec::new(),
         report,
     }
-}
-
-fn energy_drift(samples: &[Sample]) -> Option<f64> {
-    if samples.len() < 2 {
-        return None;
-    }
-    let energy = |s: &Sample| s.potential_energy.map(|p| p + s.kinetic_energy);
-    let first = energy(samples.first()?)?;
-    let scale = samples
-        .iter()
-        .map(|s| s.kinetic_energy.abs())
-        .fold(first.abs(), f64::max);
-    if scale == 0.0 {
-        return Some(0.0);
-    }
-    samples
-        .iter()
-        .map(|s| energy(s).map(|e| (e - first).abs() / scale))
-        .try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
-}
-
-fn energy_balance(samples: &[Sample]) -> Option<f64> {
-    let first = samples.first()?.balance?;
-    let scale = samples
-        .iter()
-        .map(|s| {
-            s.kinetic_energy
-                .abs()
-                .max(s.work.unwrap_or(0.0).abs())
-                .max((s.balance.unwrap_or(0.0) - s.kinetic_energy + s.work.unwrap_or(0.0)).abs())
-        })
-        .fold(first.abs(), f64::max);
-    if scale == 0.0 {
-        return Some(0.0);
-    }
-    samples
-        .iter()
-        .map(|s| s.balance.map(|b| (b - first).abs() / scale))
-        .try_fold(0.0f64, |m, d| d.map(|d| m.max(d)))
-}
-
-fn momentum_drift(model: &Model, samples: &[Sample]) -> Option<MomentumDrift> {
-    if samples.len() < 2 {
-        return None;
-    }
-    let free = model
-        .joints
-        .iter()
-        .filter(|j| j.parent == 0)
-        .all(|j| matches!(j.kind, JointType::Free { .. }));
-    if !free || !model.applied.is_empty() || model.gravity != nalgebra::Vector3::zeros() {
-        return None;
-    }
-    let first = samples.first()?.momentum;
-    let mut drift = MomentumDrift {
-        linear: 0.0,
-        angular: 0.0,
-    };
-    for s in samples {
-        let angular = (0..3)
-            .map(|i| (s.momentum[i] - first[i]).abs())
-            .fold(0.0, f64::max);
-        let linear = (3..6)
-            .map(|i| (s.momentum[i] - first[i]).abs())
-            .fold(0.0, f64::max);
-        drift = MomentumDrift {
-            linear: drift.linear.max(linear),
-            angular: drift.angular.max(angular),
-        };
-    }
-    Some(drift)
 }

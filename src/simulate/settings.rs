@@ -9,8 +9,12 @@ use crate::dynamics::model::Model;
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::unknowns::constant;
 
-/// Every output is kept in memory: more than this many are refused up front.
+/// The output times are listed before the run (8 bytes each): more than this many are refused
+/// up front, with a message that says so.
 const MAX_OUTPUTS: f64 = 1e7;
+
+/// Most steps of a run unless `--max-steps` says otherwise (attempts, rejected ones included).
+pub const DEFAULT_MAX_STEPS: usize = 1_000_000;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Integrator {
@@ -36,6 +40,11 @@ pub struct Settings {
     pub stabilisation: Stabilisation,
     /// Output the reactions in every join.
     pub reactions: bool,
+    /// Most steps (attempts, rejected ones included) before the run stops with a failure.
+    pub max_steps: usize,
+    /// Whether an explicit integrator checks during the run whether its steps are held by
+    /// its stability region (W0901).
+    pub stiffness_check: bool,
 }
 
 /// Changes to the settings of a program's `simulate` declaration; `None` keeps the program's.
@@ -51,6 +60,9 @@ pub struct SettingsChanges {
     pub stabilisation: Option<Stabilisation>,
     /// Also output the reactions in every join.
     pub reactions: bool,
+    pub max_steps: Option<usize>,
+    /// Turn the stiffness check off (`--no-stiffness-check`).
+    pub no_stiffness_check: bool,
 }
 
 /// Settings that cannot be used.
@@ -58,6 +70,8 @@ pub struct SettingsChanges {
 pub enum SettingsError {
     /// An option that must be a positive number is not (named as the command line names it).
     NotPositive { option: &'static str },
+    /// `--max-steps 0`.
+    NoSteps,
     /// More outputs than can be kept in memory.
     TooManyOutputs { duration: f64, output: f64 },
 }
@@ -68,6 +82,7 @@ impl fmt::Display for SettingsError {
             SettingsError::NotPositive { option } => {
                 write!(f, "`--{option}` must be a positive number")
             }
+            SettingsError::NoSteps => write!(f, "`--max-steps` must be at least 1"),
             SettingsError::TooManyOutputs { duration, output } => write!(
                 f,
                 "{duration} s of simulation with an output every {output} s makes more than {MAX_OUTPUTS:e} outputs: raise the output interval"
@@ -83,7 +98,7 @@ fn positive(value: f64) -> bool {
 }
 
 impl Settings {
-    /// Every output is kept in memory: refuses a request that could not fit.
+    /// The output times are listed before the run: refuses more than `MAX_OUTPUTS`.
     pub fn check_outputs(&self) -> Result<(), SettingsError> {
         if self.duration / self.output > MAX_OUTPUTS {
             return Err(SettingsError::TooManyOutputs {
@@ -114,6 +129,11 @@ impl Settings {
                 });
             }
         }
+        if changes.max_steps == Some(0) {
+            return Err(SettingsError::NoSteps);
+        }
+        self.max_steps = changes.max_steps.unwrap_or(self.max_steps);
+        self.stiffness_check &= !changes.no_stiffness_check;
         if let Some(integrator) = &changes.integrator {
             self.integrator = integrator.clone();
         }
@@ -143,6 +163,8 @@ impl Default for Settings {
             atol: 1e-10,
             stabilisation: Stabilisation::Projection,
             reactions: false,
+            max_steps: DEFAULT_MAX_STEPS,
+            stiffness_check: true,
         }
     }
 }

@@ -1,126 +1,219 @@
-//! Stiffness: how fast the fastest mode of a mechanism decays or turns, from the eigenvalues of
-//! the Jacobian of its equations at the start, and which force element makes it so. An explicit
-//! integrator's step is bounded by that rate for stability alone, however smooth the motion of
-//! interest; when the bound forces far more steps than the outputs ask for, the run is better
-//! served by the implicit integrator, and `lsdc simulate` says so (W0901).
+//! Stiffness as a run finds it: an explicit integrator checks during the run whether its steps
+//! are held by its stability region (`integrate::stability`, power iteration on the Jacobian of
+//! the equations, a few evaluations every 20 steps). When they are, the run is better served by
+//! the implicit integrator, and `lsdc simulate` says so (W0901), naming the coordinates that
+//! move in the fast mode and the force element that makes it fast.
 
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use nalgebra::{DMatrix, Schur};
+use serde::Serialize;
 
 use super::prepare::{Integrator, Prepared};
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::model::Model;
+use crate::integrate::{jacobian_product, StabilityBound};
 use crate::source::Span;
 
-/// The stability bound of an explicit method: |λ| h below this (about 3.3 for Dormand–Prince,
-/// about 6 for DOP853, 2.8 for the classical Runge–Kutta method); `None` for the other integrators.
-fn stability_limit(integrator: &Integrator) -> Option<f64> {
-    match integrator {
-        Integrator::DormandPrince => Some(3.3),
-        Integrator::Dop853 => Some(6.0),
-        Integrator::Rk4 => Some(2.8),
-        Integrator::Implicit | Integrator::Symplectic => None,
-    }
+/// The share of ∂f/∂y along the fast mode an element must give to be named.
+const NAMED_SHARE: f64 = 0.25;
+/// A coordinate is named when it moves in the fast mode at least this fraction of the one that
+/// moves most.
+const NAMED_FRACTION: f64 = 0.3;
+
+/// Where a run's steps were found held by stability, and what makes them so.
+#[derive(Clone, Debug, Serialize)]
+pub struct StiffnessReport {
+    /// When it was found.
+    pub time: f64,
+    /// The fastest mode's rate (spectral radius of the Jacobian of the equations), in 1/s.
+    pub rate: f64,
+    /// The step taken then, and the largest step stability allows.
+    pub step: f64,
+    pub stable_step: f64,
+    /// Whether the step is a fixed one beyond the stable step: then the run diverges.
+    pub diverges: bool,
+    /// The declared coordinates that move most in the fast mode, the first moving most.
+    pub coordinates: Vec<String>,
+    /// The force element that contributes most to the fast mode, when it gives a quarter of
+    /// its rate or more: how the report names it (for the warning, its place in the program).
+    pub element: Option<String>,
+    #[serde(skip)]
+    pub element_span: Option<Span>,
 }
 
-/// The warning for an explicit run that stiffness makes inefficient, or `None`.
-pub fn warning(prepared: &Prepared) -> Option<Diagnostic> {
-    let settings = &prepared.settings;
-    let limit = stability_limit(&settings.integrator)?;
-    let rate = fastest_rate(&prepared.model, prepared)?;
-    let stability_steps = settings.duration * rate / limit;
-    let outputs = (settings.duration / settings.output).ceil().max(1.0);
-    if stability_steps < 1000.0 || stability_steps < 100.0 * outputs {
-        return None;
-    }
-    let name = super::run::integrator_name(&settings.integrator);
+/// The report of a stability bound an explicit run found, or `None` if its state cannot be
+/// evaluated again.
+pub fn describe(prepared: &Prepared, bound: &StabilityBound) -> Option<StiffnessReport> {
+    let model = &prepared.model;
+    let fixed_step = prepared.settings.integrator == Integrator::Rk4;
+    let motion = model.positions() + model.velocities();
+    let state = bound.state.get(..motion)?;
+    let direction = bound.direction.get(..motion)?;
+    let coordinates = moving_coordinates(prepared, state, direction, bound.rate);
+    let element = stiffest_element(prepared, bound.time, state, direction);
+    Some(StiffnessReport {
+        time: bound.time,
+        rate: bound.rate,
+        step: bound.step,
+        stable_step: bound.stable_step(),
+        diverges: fixed_step && bound.step > bound.stable_step(),
+        coordinates,
+        element: element.as_ref().map(|(name, _)| name.clone()),
+        element_span: element.map(|(_, span)| span),
+    })
+}
+
+/// The warning for an explicit run whose steps were held by stability (W0901), from what the run
+/// found and the integrator's name.
+pub fn warning(found: &StiffnessReport, integrator: &str) -> Option<Diagnostic> {
+    let moving = match found.coordinates.as_slice() {
+        [] => String::new(),
+        [one] => format!(" (mostly `{one}`)"),
+        [first, second, ..] => format!(
+            " (mostly `{first}`, `{second}`{})",
+            if found.coordinates.len() > 2 {
+                ", …"
+            } else {
+                ""
+            }
+        ),
+    };
+    let held = match found.diverges {
+        true => "is beyond the largest step stability allows",
+        false => "is held by stability, not accuracy,",
+    };
     let message = format!(
-        "the mechanism is stiff for `{name}`: its fastest mode decays or turns at {:.1e} /s, so every step must stay below {:.1e} s, about {:.0} steps for this run",
-        rate,
-        limit / rate,
-        stability_steps
+        "the mechanism is stiff for `{integrator}`: at t = {}, its fastest mode{moving} decays or turns at {:.1e} /s, and the step {:.1e} s {held} at {:.1e} s",
+        found.time, found.rate, found.step, found.stable_step
     );
-    let warning = Diagnostic::warning("W0901", message).help("use the implicit integrator: `--integrator implicit`, or `simulate integrator = implicit end`");
-    // Only now, when there is something to say, look for the element to blame: it costs one
-    // estimate per force element.
-    Some(match stiffest_element(prepared, rate) {
+    let mut warning = Diagnostic::warning("W0901", message)
+        .help("use the implicit integrator: `--integrator implicit`, or `simulate integrator = implicit end`");
+    if found.diverges {
+        warning = warning.note(
+            "a fixed step beyond the stable step makes the fast mode grow at every step: the run diverges",
+        );
+    }
+    Some(match found.element_span {
         Some(span) => warning.primary(span, "the stiffest element"),
         None => warning,
     })
 }
 
-/// The force element whose removal lowers the fastest rate most, when it lowers it by half or
-/// more.
-fn stiffest_element(prepared: &Prepared, rate: f64) -> Option<Span> {
+/// The declared coordinates that move most along the fast mode `direction` at `state`:
+/// their displacement scaled by the rate, plus their rate's change, along it.
+fn moving_coordinates(
+    prepared: &Prepared,
+    state: &[f64],
+    direction: &[f64],
+    rate: f64,
+) -> Vec<String> {
     let model = &prepared.model;
+    let declared = |y: &[f64]| {
+        let (q, v) = model.split_state(y);
+        model.declared(&q, v, &prepared.coordinates).ok()
+    };
+    let size = state.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let epsilon = 1e-7 * (1.0 + size);
+    let moved: Vec<f64> = state
+        .iter()
+        .zip(direction)
+        .map(|(y, d)| y + epsilon * d)
+        .collect();
+    let (Some((q0, v0)), Some((q1, v1))) = (declared(state), declared(&moved)) else {
+        return Vec::new();
+    };
+    let motion: Vec<f64> = (0..q0.len())
+        .map(|i| rate * (q1[i] - q0[i]).abs() + (v1[i] - v0[i]).abs())
+        .collect();
+    let largest = motion.iter().copied().fold(0.0, f64::max);
+    let mut named: Vec<(f64, &String)> = motion
+        .iter()
+        .zip(&prepared.coordinate_names)
+        .filter(|(m, _)| largest > 0.0 && **m >= NAMED_FRACTION * largest)
+        .map(|(m, name)| (*m, name))
+        .collect();
+    named.sort_by(|a, b| b.0.total_cmp(&a.0));
+    named.into_iter().map(|(_, name)| name.clone()).collect()
+}
+
+/// The force element that contributes most to ∂f/∂y along the fast mode `direction` (its
+/// contribution: the product with the element, less the product without it), when it gives at
+/// least `NAMED_SHARE` of the product, with how the report names it. Each element costs a copy
+/// of the model and two evaluations of the equations: done once, when a run found stiffness.
+fn stiffest_element(
+    prepared: &Prepared,
+    time: f64,
+    state: &[f64],
+    direction: &[f64],
+) -> Option<(String, Span)> {
+    let model = &prepared.model;
+    let product = |model: &Model| product_along(prepared, model, (time, state), direction);
+    let whole = product(model)?;
+    let contribution = |without: &Model| {
+        let rest = product(without)?;
+        Some(distance(&whole, &rest))
+    };
+    let mut largest = NAMED_SHARE * distance(&whole, &vec![0.0; whole.len()]);
     let mut element = None;
-    let mut lowest = 0.5 * rate;
     for k in 0..model.applied.len() {
         let mut without = model.clone();
         let removed = without.applied.remove(k);
         without.compile_efforts();
-        if let Some(r) = fastest_rate(&without, prepared).filter(|&r| r < lowest) {
-            (lowest, element) = (r, Some(removed.span));
+        if let Some(size) = contribution(&without).filter(|&c| c > largest) {
+            let body = model.body_names.get(removed.body.wrapping_sub(1));
+            let name = match body {
+                Some(body) => format!("an effort applied on `{body}`"),
+                None => "an applied effort".to_string(),
+            };
+            (largest, element) = (size, Some((name, removed.span)));
         }
     }
     for k in 0..model.link_efforts.len() {
         let mut without = model.clone();
         let removed = without.link_efforts.remove(k);
         without.compile_efforts();
-        if let Some(r) = fastest_rate(&without, prepared).filter(|&r| r < lowest) {
-            (lowest, element) = (r, Some(removed.span));
+        if let Some(size) = contribution(&without).filter(|&c| c > largest) {
+            let name = link_name(model, removed.joint).map_or("a link's effort".to_string(), |n| {
+                format!("the effort of `{n}`")
+            });
+            (largest, element) = (size, Some((name, removed.span)));
         }
     }
     element
 }
 
-/// Sweeps of the eigenvalue iteration allowed per state before the estimate gives up (and no
-/// warning is given): a few per eigenvalue is typical; without a bound a matrix on which the
-/// iteration does not converge would hang the run before its first step.
-const EIGENVALUE_SWEEPS_PER_STATE: usize = 30;
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
 
-/// The largest |λ| of the Jacobian of y' = f(t, y) at the initial state, by forward differences.
-fn fastest_rate(model: &Model, prepared: &Prepared) -> Option<f64> {
-    let (q0, v0) = model
-        .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .ok()?;
-    let mut y0 = q0;
-    y0.extend_from_slice(&v0);
+/// The join a link effort belongs to: a tree joint, then a complementary link.
+fn link_name(model: &Model, joint: usize) -> Option<&str> {
+    match model.joints.get(joint) {
+        Some(j) => Some(&j.chain.name),
+        None => model
+            .loops
+            .get(joint - model.joints.len())
+            .map(|l| l.name.as_str()),
+    }
+}
+
+/// ∂f/∂y · `direction` for `model`'s equations at (t, y).
+fn product_along(
+    prepared: &Prepared,
+    model: &Model,
+    (time, state): (f64, &[f64]),
+    direction: &[f64],
+) -> Option<Vec<f64>> {
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
-    system.start_loops(&mut y0).ok()?;
-    let n = y0.len();
-    if n == 0 {
-        // Nothing moves: no mode, no bound on the step.
-        return None;
-    }
-    let mut f0 = vec![0.0; n];
-    system.derivative(0.0, &y0, &mut f0).ok()?;
-    let mut jacobian = DMatrix::zeros(n, n);
-    let mut f = vec![0.0; n];
-    for j in 0..n {
-        let mut y = y0.clone();
-        let h = 1e-7 * y0[j].abs().max(1.0);
-        y[j] += h;
-        system.derivative(0.0, &y, &mut f).ok()?;
-        for i in 0..n {
-            jacobian[(i, j)] = (f[i] - f0[i]) / h;
-        }
-    }
-    if !jacobian.iter().all(|x| x.is_finite()) {
-        return None;
-    }
-    let n = jacobian.nrows();
-    Schur::try_new(
-        jacobian,
-        f64::EPSILON,
-        EIGENVALUE_SWEEPS_PER_STATE * n.max(1),
-    )?
-    .complex_eigenvalues()
-    .iter()
-    .map(|l| l.norm())
-    .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
+    let mut y = state.to_vec();
+    system.start_loops(&mut y).ok()?;
+    let n = y.len();
+    jacobian_product(&mut system, (time, &y), n, direction)
 }

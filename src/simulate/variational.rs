@@ -35,7 +35,9 @@ use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
 use crate::dynamics::loops::{self, Extent, Factored, LoopError, Singular, DAMPING};
-use crate::integrate::{error_norm, Failure, IntegrationError, Observer, Stats, StepError};
+use crate::integrate::{
+    error_norm, Failure, IntegrationError, Interrupt, Observer, Stats, StepError,
+};
 
 const MAX_ITERATIONS: usize = 50;
 
@@ -350,13 +352,16 @@ fn solve(mass: &DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>, System
         .ok_or(SystemError::SingularMassMatrix)
 }
 
-/// The fixed step of the variational integrator, and the tolerances its steps are measured
-/// against (nothing controls them).
-#[derive(Clone, Copy, Debug)]
+/// The fixed step of the variational integrator, the tolerances its steps are measured
+/// against (nothing controls them), and the limits of the run: most steps, and the flag that
+/// stops it between two steps.
+#[derive(Clone, Debug)]
 pub struct FixedStep {
     pub step: f64,
     pub rtol: f64,
     pub atol: f64,
+    pub max_steps: usize,
+    pub interrupt: Option<Interrupt>,
 }
 
 impl FixedStep {
@@ -391,7 +396,7 @@ pub fn integrate(
     let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError {
         time,
         failure,
-        stats: stats.clone(),
+        stats: Box::new(stats.clone()),
     };
     let (mut q, mut v) = (
         DVector::from_column_slice(&y0[..positions]),
@@ -409,6 +414,12 @@ pub fn integrate(
     }
     let count = step_count(t0, t_end, h);
     for k in 0..count {
+        if let Some(value) = steps.interrupt.as_ref().and_then(Interrupt::requested) {
+            return Err(fail(t, Failure::Interrupted(value), &stats));
+        }
+        if k >= steps.max_steps {
+            return Err(fail(t, Failure::TooManySteps, &stats));
+        }
         // The last step ends exactly at t_end: t + (t_end − t) may round below it, and the
         // output there would be lost.
         let t_next = match k + 1 == count {

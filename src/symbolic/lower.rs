@@ -4,7 +4,8 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::expr::{ExprId, Function, Pool};
+use super::expr::{ExprId, Pool};
+use super::program::{Lower, MalformedCall};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
 
 use crate::elab::value::{Frame, FrameQuantity, JoinId, SExpr, UnknownId};
@@ -141,62 +142,12 @@ impl<'a> Lowering<'a> {
         s: &SExpr,
         link: Option<JoinId>,
     ) -> Result<ExprId, LowerError> {
-        Ok(match s {
-            SExpr::Num(v) => pool.constant(*v),
-            SExpr::Time => self.variables.time,
-            SExpr::Unknown(id) => self.parameter(pool, *id),
-            SExpr::UnknownFunction(id, args) => {
-                let arguments = args
-                    .iter()
-                    .map(|a| self.scalar(pool, a, link))
-                    .collect::<Result<Vec<_>, _>>()?;
-                self.function(pool, *id, arguments)
-            }
-            SExpr::Coordinate { index, order } => {
-                let join = link
-                    .ok_or_else(|| LowerError("a link coordinate outside its link".to_string()))?;
-                self.coordinate(join, *index, *order)?
-            }
-            SExpr::JoinCoordinate { join, index, order } => {
-                self.coordinate(*join, *index, *order)?
-            }
-            SExpr::Neg(a) => {
-                let a = self.scalar(pool, a, link)?;
-                pool.neg(a)
-            }
-            SExpr::Add(a, b)
-            | SExpr::Sub(a, b)
-            | SExpr::Mul(a, b)
-            | SExpr::Div(a, b)
-            | SExpr::Pow(a, b) => {
-                let (x, y) = (self.scalar(pool, a, link)?, self.scalar(pool, b, link)?);
-                match s {
-                    SExpr::Add(..) => pool.add(x, y),
-                    SExpr::Sub(..) => pool.sub(x, y),
-                    SExpr::Mul(..) => pool.mul(x, y),
-                    SExpr::Div(..) => pool.div(x, y),
-                    _ if pool.as_constant(y) == Some(2.0) => pool.mul(x, x),
-                    _ => pool.pow(x, y),
-                }
-            }
-            SExpr::FrameState(frame, quantity) => self.frame_state(frame, *quantity)?,
-            SExpr::Call(name, args) => {
-                let args = args
-                    .iter()
-                    .map(|a| self.scalar(pool, a, link))
-                    .collect::<Result<Vec<_>, _>>()?;
-                match (Function::from_name(name), args.as_slice()) {
-                    (Some(f), [a]) => pool.apply(f, *a),
-                    (None, [y, x]) if *name == "atan2" => pool.atan2(*y, *x),
-                    _ => {
-                        return Err(LowerError(format!(
-                            "`{name}` is called with {} arguments",
-                            args.len()
-                        )))
-                    }
-                }
-            }
-        })
+        Symbolic {
+            lowering: self,
+            pool,
+            link,
+        }
+        .lower(s)
     }
 
     pub fn vector(
@@ -336,5 +287,54 @@ impl<'a> Lowering<'a> {
             super::expr::Node::Symbol(i) => pool.symbol_name(i).to_string(),
             _ => format!("e{}", a.index()),
         }
+    }
+}
+
+/// The program's scalars within one link (`link`: the join whose coordinates `x`, `x'` stand
+/// in it) as expressions of the equations' variables: numbers, arithmetic and calls lower as
+/// everywhere (`symbolic::program::Lower`); the leaves become the variables.
+struct Symbolic<'l, 'a, 'p> {
+    lowering: &'l mut Lowering<'a>,
+    pool: &'p mut Pool,
+    link: Option<JoinId>,
+}
+
+impl Lower for Symbolic<'_, '_, '_> {
+    type Error = LowerError;
+
+    fn pool(&mut self) -> &mut Pool {
+        self.pool
+    }
+
+    fn leaf(&mut self, s: &SExpr) -> Result<ExprId, LowerError> {
+        let lowering = &mut *self.lowering;
+        Ok(match s {
+            SExpr::Time => lowering.variables.time,
+            SExpr::Unknown(id) => lowering.parameter(self.pool, *id),
+            SExpr::UnknownFunction(id, args) => {
+                let arguments = args
+                    .iter()
+                    .map(|a| self.lower(a))
+                    .collect::<Result<Vec<_>, _>>()?;
+                self.lowering.function(self.pool, *id, arguments)
+            }
+            SExpr::Coordinate { index, order } => {
+                let join = self
+                    .link
+                    .ok_or_else(|| LowerError("a link coordinate outside its link".to_string()))?;
+                lowering.coordinate(join, *index, *order)?
+            }
+            SExpr::JoinCoordinate { join, index, order } => {
+                lowering.coordinate(*join, *index, *order)?
+            }
+            SExpr::FrameState(frame, quantity) => lowering.frame_state(frame, *quantity)?,
+            other => return Err(LowerError(format!("{other:?} is not a leaf"))),
+        })
+    }
+}
+
+impl From<MalformedCall> for LowerError {
+    fn from(error: MalformedCall) -> LowerError {
+        LowerError(format!("it has {}", error.0))
     }
 }

@@ -1,6 +1,7 @@
 //! The equations of motion as expressions (Papegay 1992, §3.3): a hash-consed expression DAG
 //! (`expr`) where equal subexpressions are one node, vectors and matrices of expressions
-//! (`vector`), program scalars lowered to it (`lower`), frames moving with the mechanism
+//! (`vector`), program scalars lowered to it (`program` for their structure, `lower` for the equations'
+//! variables), frames moving with the mechanism
 //! (`kinematics`), the equations M q̇ = S + F + Δᵀ Λ, Δ q = 0 (`equations`), and their
 //! emitters (`emit`).
 
@@ -15,6 +16,7 @@ mod inertia;
 pub mod kinematics;
 mod loads;
 pub mod lower;
+pub mod program;
 pub mod vector;
 
 pub use equations::{generate, Equations};

@@ -1,11 +1,28 @@
 //! The abstract syntax of LSD, with a span on every node.
 
+use rustc_hash::FxHashSet;
 use std::rc::Rc;
 
 use crate::source::Span;
 
 /// Identifiers are shared strings: the checker and elaborator copy names freely.
 pub type Name = Rc<str>;
+
+/// The names of one file, each spelling stored once: every occurrence of a name shares it (a
+/// generated chain of bodies names each body five times, and every body's fields alike).
+#[derive(Default)]
+pub struct Names(FxHashSet<Name>);
+
+impl Names {
+    pub fn intern(&mut self, text: &str) -> Name {
+        if let Some(name) = self.0.get(text) {
+            return name.clone();
+        }
+        let name: Name = Rc::from(text);
+        self.0.insert(name.clone());
+        name
+    }
+}
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Ident {
@@ -25,17 +42,13 @@ pub struct Decl {
 }
 
 /// A declaration. Its larger variants are boxed so that a declaration takes little room in the
-/// program's list (from 384 bytes to 64; a generated chain has three declarations per body).
+/// program's list (from 384 bytes to 48; a generated chain has three declarations per body).
 #[derive(Clone, Debug, PartialEq)]
 pub enum DeclKind {
     /// `let a = e and b = e`
     Let(Vec<Binding>),
     /// `let f(a, b : vector) = e`: a parameterised definition.
-    Define {
-        name: Ident,
-        params: Vec<Param>,
-        body: Box<Expr>,
-    },
+    Define(Box<DefineDecl>),
     /// `join <frame> and <frame> with <link> [as <name>]`
     Join(Box<JoinDecl>),
     /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
@@ -48,11 +61,26 @@ pub enum DeclKind {
     /// `apply F` for a force with a `field`: on every body with mass (a uniform field).
     Apply(Box<ApplyDecl>),
     /// `package P = decls end`
-    Package { name: Ident, decls: Vec<Decl> },
+    Package(Box<PackageDecl>),
     /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`
     Import(Box<ImportDecl>),
     /// A declaration the parser could not read; its error was already reported.
     Error,
+}
+
+/// `let name(params) = body`
+#[derive(Clone, Debug, PartialEq)]
+pub struct DefineDecl {
+    pub name: Ident,
+    pub params: Vec<Param>,
+    pub body: Expr,
+}
+
+/// `package name = decls end`
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackageDecl {
+    pub name: Ident,
+    pub decls: Vec<Decl>,
 }
 
 /// `join first and second with link [as name]`
@@ -180,6 +208,13 @@ impl ConstructKind {
     }
 }
 
+/// `target.field`
+#[derive(Clone, Debug, PartialEq)]
+pub struct FieldAccess {
+    pub target: Expr,
+    pub field: Ident,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct FieldInit {
     pub name: Ident,
@@ -210,11 +245,8 @@ pub enum ExprKind {
     Name(Ident),
     /// `P:X`
     Qualified(Box<QualifiedName>),
-    /// `e.field`
-    Field {
-        target: Box<Expr>,
-        field: Ident,
-    },
+    /// `e.field`, boxed whole so that a name does not make every expression larger.
+    Field(Box<FieldAccess>),
     /// `?s`: a fresh unknown scalar at each occurrence.
     Unknown(Ident),
     Int(i64),
@@ -225,7 +257,7 @@ pub enum ExprKind {
     Vector(Box<[Expr]>),
     Call {
         callee: Box<Callee>,
-        args: Vec<Arg>,
+        args: Box<[Arg]>,
     },
     Binary {
         op: BinaryOp,
@@ -238,12 +270,12 @@ pub enum ExprKind {
     /// `body ... end`, `link(x) ... end`, `force ... end`, `torque ... end`
     Construct {
         kind: ConstructKind,
-        params: Vec<Ident>,
-        fields: Vec<FieldInit>,
+        params: Box<[Ident]>,
+        fields: Box<[FieldInit]>,
     },
     /// `local a = e and b = e in body end`
     Local {
-        bindings: Vec<Binding>,
+        bindings: Box<[Binding]>,
         body: Box<Expr>,
     },
     /// An expression the parser could not read.

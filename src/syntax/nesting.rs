@@ -46,8 +46,8 @@ fn too_deep(decl: &Decl) -> Option<Span> {
             return Some(decl.span);
         }
         let mut top = Vec::new();
-        if let DeclKind::Package { decls: inner, .. } = &decl.kind {
-            decls.extend(inner.iter().map(|d| (d, depth + 1)));
+        if let DeclKind::Package(package) = &decl.kind {
+            decls.extend(package.decls.iter().map(|d| (d, depth + 1)));
         }
         decl_exprs(&decl.kind, &mut top);
         exprs.extend(top.into_iter().map(|e| (e, depth + 1)));
@@ -67,7 +67,7 @@ fn too_deep(decl: &Decl) -> Option<Span> {
 fn decl_exprs<'a>(kind: &'a DeclKind, out: &mut Vec<&'a Expr>) {
     match kind {
         DeclKind::Let(bindings) => out.extend(bindings.iter().map(|b| &b.value)),
-        DeclKind::Define { body, .. } => out.push(body),
+        DeclKind::Define(define) => out.push(&define.body),
         DeclKind::Join(join) => out.extend([&join.first, &join.second, &join.link]),
         DeclKind::Initial(values) => {
             out.extend(values.iter().flat_map(|v| [&v.target, &v.value]));
@@ -78,13 +78,13 @@ fn decl_exprs<'a>(kind: &'a DeclKind, out: &mut Vec<&'a Expr>) {
             out.push(&apply.effort);
             out.extend(apply.target.iter().chain(&apply.reaction));
         }
-        DeclKind::Package { .. } | DeclKind::Import(_) | DeclKind::Error => {}
+        DeclKind::Package(_) | DeclKind::Import(_) | DeclKind::Error => {}
     }
 }
 
 fn expr_children<'a>(expr: &'a Expr, out: &mut Vec<&'a Expr>) {
     match &expr.kind {
-        ExprKind::Field { target, .. } => out.push(target),
+        ExprKind::Field(access) => out.push(&access.target),
         ExprKind::Vector(items) => out.extend(items.iter()),
         ExprKind::Call { args, .. } => out.extend(args.iter().map(|a| &a.value)),
         ExprKind::Binary { lhs, rhs, .. } => out.extend([&**lhs, &**rhs]),
@@ -111,7 +111,7 @@ fn dismantle(kind: DeclKind) {
     while let Some(kind) = decls.pop() {
         match kind {
             DeclKind::Let(bindings) => exprs.extend(bindings.into_iter().map(|b| b.value)),
-            DeclKind::Define { body, .. } => exprs.push(*body),
+            DeclKind::Define(define) => exprs.push(define.body),
             DeclKind::Join(join) => {
                 let join = *join;
                 exprs.extend([join.first, join.second, join.link]);
@@ -128,23 +128,25 @@ fn dismantle(kind: DeclKind) {
                 exprs.push(apply.effort);
                 exprs.extend(apply.target.into_iter().chain(apply.reaction));
             }
-            DeclKind::Package { decls: inner, .. } => {
-                decls.extend(inner.into_iter().map(|d| d.kind));
+            DeclKind::Package(package) => {
+                decls.extend(package.decls.into_iter().map(|d| d.kind));
             }
             DeclKind::Import(_) | DeclKind::Error => {}
         }
         while let Some(mut expr) = exprs.pop() {
             match std::mem::replace(&mut expr.kind, ExprKind::Error) {
-                ExprKind::Field { target, .. } => exprs.push(*target),
+                ExprKind::Field(access) => exprs.push(access.target),
                 ExprKind::Vector(items) => exprs.extend(items.into_vec()),
-                ExprKind::Call { args, .. } => exprs.extend(args.into_iter().map(|a| a.value)),
+                ExprKind::Call { args, .. } => {
+                    exprs.extend(args.into_vec().into_iter().map(|a| a.value))
+                }
                 ExprKind::Binary { lhs, rhs, .. } => exprs.extend([*lhs, *rhs]),
                 ExprKind::Neg(inner) | ExprKind::Prime(inner) => exprs.push(*inner),
                 ExprKind::Construct { fields, .. } => {
-                    exprs.extend(fields.into_iter().map(|f| f.value));
+                    exprs.extend(fields.into_vec().into_iter().map(|f| f.value));
                 }
                 ExprKind::Local { bindings, body } => {
-                    exprs.extend(bindings.into_iter().map(|b| b.value));
+                    exprs.extend(bindings.into_vec().into_iter().map(|b| b.value));
                     exprs.push(*body);
                 }
                 _ => {}

@@ -5,7 +5,7 @@ use lalrpop_util::ParseError;
 
 use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
-use crate::syntax::ast::Program;
+use crate::syntax::ast::{Names, Program};
 use crate::syntax::lexer::{lex, LexError, Spanned, Tok, Tokens};
 use crate::syntax::nesting::limit_nesting;
 
@@ -21,8 +21,9 @@ mod grammar {
 pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
     let mut tokens = Tokens::new(file, text);
     let mut recovered = Vec::new();
+    let mut names = Names::default();
     let parser = grammar::ProgramParser::new();
-    let result = parser.parse(file, &mut recovered, &mut tokens);
+    let result = parser.parse(file, &mut recovered, &mut names, &mut tokens);
     let mut diagnostics = tokens.errors;
     let result = match result {
         Ok(mut program) if recovered.is_empty() => {

@@ -1,19 +1,7 @@
 //! The `lsdc` binary: exit codes, summary, JSON diagnostics, library search path.
 
+use crate::common::lsdc;
 use std::process::Command;
-
-fn lsdc(args: &[&str]) -> (i32, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_lsdc"))
-        .args(args)
-        .env_remove("LSD_PATH")
-        .output()
-        .expect("lsdc runs");
-    (
-        output.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&output.stdout).into_owned(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
-    )
-}
 
 #[test]
 fn clean_program_exits_zero_with_a_summary() {

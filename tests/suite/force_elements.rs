@@ -216,8 +216,9 @@ fn stiff_chain(integrator: &str, tolerance: f64) -> (Simulation, Option<lsdc::di
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.expect("a mechanism");
     let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepares");
-    let warning = lsdc::simulate::stiffness::warning(&prepared);
-    (run(&prepared, &mut |_| {}), warning)
+    let simulation = run(&prepared, &mut |_| {});
+    let warning = lsdc::simulate::run::stiffness_warning(&simulation.report);
+    (simulation, warning)
 }
 
 #[test]

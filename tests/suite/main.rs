@@ -29,6 +29,7 @@ mod pinocchio_fixtures;
 mod properties;
 mod regression;
 mod robustness;
+mod runs;
 mod simulation;
 mod symbolic;
 mod symbolic_equations;

@@ -1,27 +1,21 @@
 //! `simulate --compiled`: the generated forward dynamics compiled by the C compiler, cached, and
 //! used only where it agrees with the simulator's own evaluation; a clean fallback otherwise.
 
-use crate::common::c_compiler;
+use crate::common::{c_compiler, lsdc_with};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// Runs `lsdc simulate FILE ARGS` with the cache in `cache` and `CC` set to `compiler`: exit
 /// code, samples (CSV) and standard error.
 fn simulate(file: &str, args: &[&str], cache: &Path, compiler: &str) -> (i32, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_lsdc"))
-        .arg("simulate")
-        .arg(file)
-        .args(args)
-        .env("LSDC_CACHE_DIR", cache)
-        .env("CC", compiler)
-        .env_remove("LSD_PATH")
-        .output()
-        .expect("lsdc runs");
-    (
-        output.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&output.stdout).into_owned(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
-    )
+    let arguments: Vec<&str> = ["simulate", file]
+        .into_iter()
+        .chain(args.iter().copied())
+        .collect();
+    let environment = [
+        ("LSDC_CACHE_DIR", cache.as_os_str()),
+        ("CC", std::ffi::OsStr::new(compiler)),
+    ];
+    lsdc_with(&arguments, &environment)
 }
 
 fn fresh_cache(name: &str) -> PathBuf {

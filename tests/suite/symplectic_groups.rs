@@ -190,6 +190,8 @@ fn the_quaternions_stay_unit_along_a_run() {
         step: 1e-2,
         rtol: 1e-6,
         atol: 1e-9,
+        max_steps: usize::MAX,
+        interrupt: None,
     };
     let (end, stats) =
         variational::integrate(&mut system, 0.0, &y0, 20.0, steps, &outputs, &mut observer)

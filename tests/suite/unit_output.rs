@@ -38,14 +38,17 @@ mod plot {
                 function_evaluations: 4 * count,
                 stiff_steps: None,
                 method_switches: None,
-                run_seconds: 0.0,
+                cpu_seconds: Some(0.0),
+                wall_seconds: 0.0,
                 energy_drift: None,
                 energy_balance: None,
                 final_energies: None,
                 momentum_drift: None,
                 constraints: None,
                 step_error: None,
+                stiffness: None,
                 failure: None,
+                interrupted: None,
             },
         }
     }

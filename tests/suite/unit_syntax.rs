@@ -152,4 +152,28 @@ mod parser {
         assert_eq!(errors.len(), 2, "{errors:?}");
         assert_eq!(program.decls.len(), 4);
     }
+
+    #[test]
+    fn names_are_stored_once_per_spelling() {
+        let e = expr("b.mass * b.mass");
+        let ExprKind::Binary { lhs, rhs, .. } = e.kind else {
+            panic!("{e:?}")
+        };
+        let (ExprKind::Field(left), ExprKind::Field(right)) = (lhs.kind, rhs.kind) else {
+            panic!("two field accesses")
+        };
+        assert!(std::rc::Rc::ptr_eq(&left.field.name, &right.field.name));
+        let (ExprKind::Name(a), ExprKind::Name(b)) = (&left.target.kind, &right.target.kind) else {
+            panic!("two names")
+        };
+        assert!(std::rc::Rc::ptr_eq(&a.name, &b.name));
+    }
+
+    /// A large program holds some forty expressions per body (BENCHMARKS.md, "Memory of
+    /// `lsdc check`"): their size is the syntax tree's.
+    #[test]
+    fn an_expression_takes_56_bytes_and_a_declaration_48() {
+        assert_eq!(std::mem::size_of::<Expr>(), 56);
+        assert_eq!(std::mem::size_of::<lsdc::syntax::ast::Decl>(), 48);
+    }
 }

@@ -2,7 +2,7 @@
 //! joint placements, reports what it leaves out at the right lines, renames what it must, and
 //! turns bad input into diagnostics. Also `lsdc import-urdf` and `.urdf` files given to `lsdc`.
 
-use std::process::Command;
+use crate::common::lsdc;
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 
@@ -664,19 +664,6 @@ fn malformed_xml_is_an_error_at_its_line_and_column() {
             "{rendered}"
         );
     }
-}
-
-fn lsdc(args: &[&str]) -> (i32, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_lsdc"))
-        .args(args)
-        .env_remove("LSD_PATH")
-        .output()
-        .expect("lsdc runs");
-    (
-        output.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&output.stdout).into_owned(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
-    )
 }
 
 fn temp_dir(name: &str) -> std::path::PathBuf {

@@ -63,8 +63,8 @@ pub(super) fn reserved() -> &'static HashSet<String> {
                     DeclKind::Let(bindings) => {
                         names.extend(bindings.iter().map(|b| b.name.name.to_string()))
                     }
-                    DeclKind::Define { name, .. } => {
-                        names.insert(name.name.to_string());
+                    DeclKind::Define(define) => {
+                        names.insert(define.name.name.to_string());
                     }
                     _ => {}
                 }

@@ -1,8 +1,7 @@
-// grammar stamp: 7e7d91a07b08ab6c (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 6abda0adef6040e1 (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: 7ab6175e6b1d733fe94612496a7a34297a912461c7de4be2c3dcdfd8387c141d
+// sha3: 9f11dcccae1185dc5b3619d42fdfa0968c26d46877578d0fc2b3cfe03aa01eb7
 // features: 
-use std::rc::Rc;
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
 use crate::syntax::lexer::{LexError, Tok};
@@ -18,7 +17,6 @@ extern crate alloc;
 #[allow(explicit_outlives_requirements, non_snake_case, non_camel_case_types, unused_mut, unused_variables, unused_imports, unused_parens, clippy::needless_lifetimes, clippy::type_complexity, clippy::needless_return, clippy::too_many_arguments, clippy::match_single_binding, clippy::clone_on_copy, clippy::unit_arg)]
 mod __parse__Program {
 
-    use std::rc::Rc;
     use lalrpop_util::ErrorRecovery;
     use crate::syntax::ast::*;
     use crate::syntax::lexer::{LexError, Tok};
@@ -1037,6 +1035,7 @@ mod __parse__Program {
     {
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __phantom: core::marker::PhantomData<(&'input (), &'err ())>,
     }
     impl<'input, 'err> __state_machine::ParserDefinition for __StateMachine<'input, 'err>
@@ -1123,6 +1122,7 @@ mod __parse__Program {
             __reduce(
                 self.file,
                 self.errors,
+                self.names,
                 action,
                 start_location,
                 states,
@@ -2208,6 +2208,7 @@ mod __parse__Program {
             &self,
             file: FileId,
             errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+            names: &'err mut Names,
             __tokens0: __TOKENS,
         ) -> Result<Program, __lalrpop_util::ParseError<usize, Tok<'input>, LexError>>
         {
@@ -2217,6 +2218,7 @@ mod __parse__Program {
                 __StateMachine {
                     file,
                     errors,
+                    names,
                     __phantom: core::marker::PhantomData::<(&(), &())>,
                 },
                 __tokens,
@@ -2265,6 +2267,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __action: i16,
         __lookahead_start: Option<&usize>,
         __states: &mut alloc::vec::Vec<i16>,
@@ -2274,491 +2277,491 @@ mod __parse__Program {
     {
         let (__pop_states, __nonterminal) = match __action {
             0 => {
-                __reduce0(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce0(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             1 => {
-                __reduce1(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce1(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             2 => {
-                __reduce2(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce2(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             3 => {
-                __reduce3(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce3(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             4 => {
-                __reduce4(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce4(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             5 => {
-                __reduce5(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce5(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             6 => {
-                __reduce6(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce6(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             7 => {
-                __reduce7(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce7(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             8 => {
-                __reduce8(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce8(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             9 => {
-                __reduce9(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce9(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             10 => {
-                __reduce10(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce10(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             11 => {
-                __reduce11(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce11(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             12 => {
-                __reduce12(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce12(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             13 => {
-                __reduce13(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce13(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             14 => {
-                __reduce14(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce14(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             15 => {
-                __reduce15(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce15(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             16 => {
-                __reduce16(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce16(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             17 => {
-                __reduce17(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce17(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             18 => {
-                __reduce18(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce18(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             19 => {
-                __reduce19(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce19(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             20 => {
-                __reduce20(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce20(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             21 => {
-                __reduce21(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce21(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             22 => {
-                __reduce22(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce22(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             23 => {
-                __reduce23(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce23(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             24 => {
-                __reduce24(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce24(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             25 => {
-                __reduce25(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce25(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             26 => {
-                __reduce26(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce26(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             27 => {
-                __reduce27(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce27(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             28 => {
-                __reduce28(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce28(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             29 => {
-                __reduce29(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce29(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             30 => {
-                __reduce30(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce30(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             31 => {
-                __reduce31(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce31(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             32 => {
-                __reduce32(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce32(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             33 => {
-                __reduce33(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce33(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             34 => {
-                __reduce34(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce34(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             35 => {
-                __reduce35(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce35(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             36 => {
-                __reduce36(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce36(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             37 => {
-                __reduce37(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce37(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             38 => {
-                __reduce38(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce38(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             39 => {
-                __reduce39(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce39(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             40 => {
-                __reduce40(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce40(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             41 => {
-                __reduce41(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce41(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             42 => {
-                __reduce42(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce42(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             43 => {
-                __reduce43(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce43(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             44 => {
-                __reduce44(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce44(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             45 => {
-                __reduce45(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce45(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             46 => {
-                __reduce46(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce46(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             47 => {
-                __reduce47(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce47(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             48 => {
-                __reduce48(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce48(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             49 => {
-                __reduce49(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce49(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             50 => {
-                __reduce50(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce50(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             51 => {
-                __reduce51(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce51(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             52 => {
-                __reduce52(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce52(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             53 => {
-                __reduce53(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce53(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             54 => {
-                __reduce54(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce54(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             55 => {
-                __reduce55(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce55(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             56 => {
-                __reduce56(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce56(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             57 => {
-                __reduce57(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce57(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             58 => {
-                __reduce58(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce58(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             59 => {
-                __reduce59(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce59(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             60 => {
-                __reduce60(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce60(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             61 => {
-                __reduce61(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce61(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             62 => {
-                __reduce62(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce62(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             63 => {
-                __reduce63(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce63(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             64 => {
-                __reduce64(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce64(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             65 => {
-                __reduce65(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce65(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             66 => {
-                __reduce66(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce66(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             67 => {
-                __reduce67(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce67(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             68 => {
-                __reduce68(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce68(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             69 => {
-                __reduce69(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce69(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             70 => {
-                __reduce70(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce70(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             71 => {
-                __reduce71(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce71(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             72 => {
-                __reduce72(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce72(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             73 => {
-                __reduce73(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce73(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             74 => {
-                __reduce74(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce74(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             75 => {
-                __reduce75(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce75(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             76 => {
-                __reduce76(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce76(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             77 => {
-                __reduce77(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce77(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             78 => {
-                __reduce78(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce78(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             79 => {
-                __reduce79(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce79(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             80 => {
-                __reduce80(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce80(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             81 => {
-                __reduce81(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce81(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             82 => {
-                __reduce82(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce82(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             83 => {
-                __reduce83(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce83(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             84 => {
-                __reduce84(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce84(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             85 => {
-                __reduce85(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce85(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             86 => {
-                __reduce86(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce86(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             87 => {
-                __reduce87(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce87(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             88 => {
-                __reduce88(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce88(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             89 => {
-                __reduce89(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce89(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             90 => {
-                __reduce90(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce90(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             91 => {
-                __reduce91(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce91(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             92 => {
-                __reduce92(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce92(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             93 => {
-                __reduce93(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce93(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             94 => {
-                __reduce94(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce94(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             95 => {
-                __reduce95(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce95(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             96 => {
-                __reduce96(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce96(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             97 => {
-                __reduce97(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce97(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             98 => {
-                __reduce98(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce98(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             99 => {
-                __reduce99(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce99(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             100 => {
-                __reduce100(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce100(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             101 => {
-                __reduce101(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce101(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             102 => {
-                __reduce102(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce102(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             103 => {
-                __reduce103(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce103(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             104 => {
-                __reduce104(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce104(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             105 => {
-                __reduce105(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce105(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             106 => {
-                __reduce106(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce106(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             107 => {
-                __reduce107(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce107(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             108 => {
-                __reduce108(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce108(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             109 => {
-                __reduce109(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce109(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             110 => {
-                __reduce110(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce110(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             111 => {
-                __reduce111(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce111(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             112 => {
-                __reduce112(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce112(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             113 => {
-                __reduce113(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce113(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             114 => {
-                __reduce114(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce114(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             115 => {
-                __reduce115(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce115(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             116 => {
-                __reduce116(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce116(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             117 => {
-                __reduce117(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce117(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             118 => {
-                __reduce118(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce118(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             119 => {
-                __reduce119(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce119(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             120 => {
-                __reduce120(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce120(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             121 => {
-                __reduce121(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce121(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             122 => {
-                __reduce122(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce122(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             123 => {
-                __reduce123(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce123(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             124 => {
-                __reduce124(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce124(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             125 => {
-                __reduce125(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce125(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             126 => {
-                __reduce126(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce126(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             127 => {
-                __reduce127(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce127(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             128 => {
-                __reduce128(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce128(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             129 => {
-                __reduce129(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce129(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             130 => {
-                __reduce130(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce130(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             131 => {
-                __reduce131(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce131(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             132 => {
-                __reduce132(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce132(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             133 => {
-                __reduce133(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce133(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             134 => {
-                __reduce134(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce134(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             135 => {
-                __reduce135(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce135(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             136 => {
-                __reduce136(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce136(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             137 => {
-                __reduce137(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce137(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             138 => {
-                __reduce138(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce138(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             139 => {
-                __reduce139(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce139(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             140 => {
-                __reduce140(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce140(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             141 => {
-                __reduce141(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce141(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             142 => {
-                __reduce142(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce142(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             143 => {
-                __reduce143(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce143(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             144 => {
-                __reduce144(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce144(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             145 => {
-                __reduce145(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce145(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             146 => {
-                __reduce146(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce146(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             147 => {
-                __reduce147(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce147(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             148 => {
-                __reduce148(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce148(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             149 => {
-                __reduce149(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce149(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             150 => {
-                __reduce150(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce150(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             151 => {
-                __reduce151(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce151(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             152 => {
-                __reduce152(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce152(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             153 => {
-                __reduce153(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce153(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             154 => {
-                __reduce154(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce154(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             155 => {
-                __reduce155(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce155(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             156 => {
-                __reduce156(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce156(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             157 => {
-                __reduce157(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce157(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             158 => {
-                __reduce158(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce158(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             159 => {
-                __reduce159(file, errors, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
+                __reduce159(file, errors, names, __lookahead_start, __symbols, core::marker::PhantomData::<(&(), &())>)
             }
             160 => {
                 // __Program = Program => ActionFn(0);
                 let __sym0 = __pop_Variant40(__symbols);
                 let __start = __sym0.0.clone();
                 let __end = __sym0.2.clone();
-                let __nt = super::__action0::<>(file, errors, __sym0);
+                let __nt = super::__action0::<>(file, errors, names, __sym0);
                 return Some(Ok(__nt));
             }
             _ => panic!("invalid action code {__action}")
@@ -3231,6 +3234,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3242,7 +3246,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action80::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action80::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (2, 0)
     }
@@ -3252,6 +3256,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3263,7 +3268,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action140::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action140::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant4(__nt), __end));
         (2, 1)
     }
@@ -3273,6 +3278,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3281,7 +3287,7 @@ mod __parse__Program {
         // (":" <Ident>)? =  => ActionFn(79);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action79::<>(file, errors, &__start, &__end);
+        let __nt = super::__action79::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant4(__nt), __end));
         (0, 1)
     }
@@ -3291,6 +3297,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3302,7 +3309,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action86::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action86::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (2, 2)
     }
@@ -3312,6 +3319,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3323,7 +3331,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action143::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action143::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant4(__nt), __end));
         (2, 3)
     }
@@ -3333,6 +3341,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3341,7 +3350,7 @@ mod __parse__Program {
         // ("as" <Ident>)? =  => ActionFn(85);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action85::<>(file, errors, &__start, &__end);
+        let __nt = super::__action85::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant4(__nt), __end));
         (0, 3)
     }
@@ -3351,6 +3360,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3362,7 +3372,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant5(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action120::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action120::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant5(__nt), __end));
         (2, 4)
     }
@@ -3372,6 +3382,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3380,7 +3391,7 @@ mod __parse__Program {
         // (<Arg> ",")* =  => ActionFn(118);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action118::<>(file, errors, &__start, &__end);
+        let __nt = super::__action118::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant6(__nt), __end));
         (0, 5)
     }
@@ -3390,6 +3401,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3399,7 +3411,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant6(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action119::<>(file, errors, __sym0);
+        let __nt = super::__action119::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant6(__nt), __end));
         (1, 5)
     }
@@ -3409,6 +3421,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3420,7 +3433,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant5(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action148::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action148::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant6(__nt), __end));
         (2, 6)
     }
@@ -3430,6 +3443,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3442,7 +3456,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant6(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action149::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action149::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant6(__nt), __end));
         (3, 6)
     }
@@ -3452,6 +3466,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3463,7 +3478,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant7(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action90::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action90::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant7(__nt), __end));
         (2, 7)
     }
@@ -3473,6 +3488,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3481,7 +3497,7 @@ mod __parse__Program {
         // (<Decl> ";")* =  => ActionFn(88);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action88::<>(file, errors, &__start, &__end);
+        let __nt = super::__action88::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant8(__nt), __end));
         (0, 8)
     }
@@ -3491,6 +3507,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3500,7 +3517,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant8(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action89::<>(file, errors, __sym0);
+        let __nt = super::__action89::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant8(__nt), __end));
         (1, 8)
     }
@@ -3510,6 +3527,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3521,7 +3539,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant7(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action152::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action152::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant8(__nt), __end));
         (2, 9)
     }
@@ -3531,6 +3549,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3543,7 +3562,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant8(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action153::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action153::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant8(__nt), __end));
         (3, 9)
     }
@@ -3553,6 +3572,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3564,7 +3584,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action115::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action115::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (2, 10)
     }
@@ -3574,6 +3594,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3582,7 +3603,7 @@ mod __parse__Program {
         // (<Expr> ",")* =  => ActionFn(113);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action113::<>(file, errors, &__start, &__end);
+        let __nt = super::__action113::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant10(__nt), __end));
         (0, 11)
     }
@@ -3592,6 +3613,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3601,7 +3623,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant10(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action114::<>(file, errors, __sym0);
+        let __nt = super::__action114::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant10(__nt), __end));
         (1, 11)
     }
@@ -3611,6 +3633,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3622,7 +3645,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action156::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action156::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant10(__nt), __end));
         (2, 12)
     }
@@ -3632,6 +3655,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3644,7 +3668,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant10(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action157::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action157::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant10(__nt), __end));
         (3, 12)
     }
@@ -3654,6 +3678,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3665,7 +3690,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant11(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action110::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action110::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant11(__nt), __end));
         (2, 13)
     }
@@ -3675,6 +3700,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3683,7 +3709,7 @@ mod __parse__Program {
         // (<FieldInit> ",")* =  => ActionFn(108);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action108::<>(file, errors, &__start, &__end);
+        let __nt = super::__action108::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant12(__nt), __end));
         (0, 14)
     }
@@ -3693,6 +3719,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3702,7 +3729,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant12(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action109::<>(file, errors, __sym0);
+        let __nt = super::__action109::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant12(__nt), __end));
         (1, 14)
     }
@@ -3712,6 +3739,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3723,7 +3751,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant11(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action160::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action160::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant12(__nt), __end));
         (2, 15)
     }
@@ -3733,6 +3761,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3745,7 +3774,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant12(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action161::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action161::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant12(__nt), __end));
         (3, 15)
     }
@@ -3755,6 +3784,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3766,7 +3796,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant13(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action105::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action105::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant13(__nt), __end));
         (2, 16)
     }
@@ -3776,6 +3806,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3784,7 +3815,7 @@ mod __parse__Program {
         // (<GivenValue> ",")* =  => ActionFn(103);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action103::<>(file, errors, &__start, &__end);
+        let __nt = super::__action103::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant14(__nt), __end));
         (0, 17)
     }
@@ -3794,6 +3825,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3803,7 +3835,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant14(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action104::<>(file, errors, __sym0);
+        let __nt = super::__action104::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant14(__nt), __end));
         (1, 17)
     }
@@ -3813,6 +3845,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3824,7 +3857,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant13(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action164::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action164::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant14(__nt), __end));
         (2, 18)
     }
@@ -3834,6 +3867,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3846,7 +3880,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant14(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action165::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action165::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant14(__nt), __end));
         (3, 18)
     }
@@ -3856,6 +3890,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3867,7 +3902,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action125::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action125::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (2, 19)
     }
@@ -3877,6 +3912,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3885,7 +3921,7 @@ mod __parse__Program {
         // (<Ident> ",")* =  => ActionFn(123);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action123::<>(file, errors, &__start, &__end);
+        let __nt = super::__action123::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant15(__nt), __end));
         (0, 20)
     }
@@ -3895,6 +3931,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3904,7 +3941,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant15(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action124::<>(file, errors, __sym0);
+        let __nt = super::__action124::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant15(__nt), __end));
         (1, 20)
     }
@@ -3914,6 +3951,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3925,7 +3963,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action168::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action168::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant15(__nt), __end));
         (2, 21)
     }
@@ -3935,6 +3973,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3947,7 +3986,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant15(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action169::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action169::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant15(__nt), __end));
         (3, 21)
     }
@@ -3957,6 +3996,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3968,7 +4008,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant16(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action102::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action102::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant16(__nt), __end));
         (2, 22)
     }
@@ -3978,6 +4018,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -3986,7 +4027,7 @@ mod __parse__Program {
         // (<InitialValue> ",")* =  => ActionFn(100);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action100::<>(file, errors, &__start, &__end);
+        let __nt = super::__action100::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant17(__nt), __end));
         (0, 23)
     }
@@ -3996,6 +4037,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4005,7 +4047,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant17(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action101::<>(file, errors, __sym0);
+        let __nt = super::__action101::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant17(__nt), __end));
         (1, 23)
     }
@@ -4015,6 +4057,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4026,7 +4069,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant16(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action172::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action172::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant17(__nt), __end));
         (2, 24)
     }
@@ -4036,6 +4079,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4048,7 +4092,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant17(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action173::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action173::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant17(__nt), __end));
         (3, 24)
     }
@@ -4058,6 +4102,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4069,7 +4114,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant18(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action99::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action99::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant18(__nt), __end));
         (2, 25)
     }
@@ -4079,6 +4124,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4087,7 +4133,7 @@ mod __parse__Program {
         // (<Param> ",")* =  => ActionFn(97);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action97::<>(file, errors, &__start, &__end);
+        let __nt = super::__action97::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant19(__nt), __end));
         (0, 26)
     }
@@ -4097,6 +4143,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4106,7 +4153,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant19(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action98::<>(file, errors, __sym0);
+        let __nt = super::__action98::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant19(__nt), __end));
         (1, 26)
     }
@@ -4116,6 +4163,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4127,7 +4175,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant18(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action176::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action176::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant19(__nt), __end));
         (2, 27)
     }
@@ -4137,6 +4185,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4149,7 +4198,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant19(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action177::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action177::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant19(__nt), __end));
         (3, 27)
     }
@@ -4159,6 +4208,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4167,7 +4217,7 @@ mod __parse__Program {
         // @L =  => ActionFn(92);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action92::<>(file, errors, &__start, &__end);
+        let __nt = super::__action92::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant20(__nt), __end));
         (0, 28)
     }
@@ -4177,6 +4227,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4185,7 +4236,7 @@ mod __parse__Program {
         // @R =  => ActionFn(91);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action91::<>(file, errors, &__start, &__end);
+        let __nt = super::__action91::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant20(__nt), __end));
         (0, 29)
     }
@@ -4195,6 +4246,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4207,7 +4259,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action201::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action201::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 30)
     }
@@ -4217,6 +4269,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4229,7 +4282,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action202::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action202::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 30)
     }
@@ -4239,6 +4292,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4248,7 +4302,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action40::<>(file, errors, __sym0);
+        let __nt = super::__action40::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 30)
     }
@@ -4258,6 +4312,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4267,7 +4322,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action73::<>(file, errors, __sym0);
+        let __nt = super::__action73::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant5(__nt), __end));
         (1, 31)
     }
@@ -4277,6 +4332,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4289,7 +4345,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action74::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action74::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant5(__nt), __end));
         (3, 31)
     }
@@ -4299,6 +4355,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4308,7 +4365,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant5(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action116::<>(file, errors, __sym0);
+        let __nt = super::__action116::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant21(__nt), __end));
         (1, 32)
     }
@@ -4318,6 +4375,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4326,7 +4384,7 @@ mod __parse__Program {
         // Arg? =  => ActionFn(117);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action117::<>(file, errors, &__start, &__end);
+        let __nt = super::__action117::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant21(__nt), __end));
         (0, 32)
     }
@@ -4336,6 +4394,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4348,7 +4407,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action29::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action29::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant22(__nt), __end));
         (3, 33)
     }
@@ -4358,6 +4417,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4367,7 +4427,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant22(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action23::<>(file, errors, __sym0);
+        let __nt = super::__action23::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant23(__nt), __end));
         (1, 34)
     }
@@ -4377,6 +4437,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4389,7 +4450,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant23(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action24::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action24::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant23(__nt), __end));
         (3, 34)
     }
@@ -4399,6 +4460,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4408,7 +4470,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action65::<>(file, errors, __sym0);
+        let __nt = super::__action65::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant24(__nt), __end));
         (1, 35)
     }
@@ -4418,6 +4480,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4430,7 +4493,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action66::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action66::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant24(__nt), __end));
         (3, 35)
     }
@@ -4440,6 +4503,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4449,7 +4513,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action67::<>(file, errors, __sym0);
+        let __nt = super::__action67::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant24(__nt), __end));
         (1, 35)
     }
@@ -4459,6 +4523,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4468,7 +4533,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant5(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action222::<>(file, errors, __sym0);
+        let __nt = super::__action222::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant25(__nt), __end));
         (1, 36)
     }
@@ -4478,6 +4543,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4486,7 +4552,7 @@ mod __parse__Program {
         // Comma<Arg> =  => ActionFn(223);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action223::<>(file, errors, &__start, &__end);
+        let __nt = super::__action223::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant25(__nt), __end));
         (0, 36)
     }
@@ -4496,6 +4562,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4507,7 +4574,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant6(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action224::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action224::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant25(__nt), __end));
         (2, 36)
     }
@@ -4517,6 +4584,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4526,7 +4594,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant6(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action225::<>(file, errors, __sym0);
+        let __nt = super::__action225::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant25(__nt), __end));
         (1, 36)
     }
@@ -4536,6 +4604,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4545,7 +4614,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action226::<>(file, errors, __sym0);
+        let __nt = super::__action226::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant26(__nt), __end));
         (1, 37)
     }
@@ -4555,6 +4624,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4563,7 +4633,7 @@ mod __parse__Program {
         // Comma<Expr> =  => ActionFn(227);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action227::<>(file, errors, &__start, &__end);
+        let __nt = super::__action227::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant26(__nt), __end));
         (0, 37)
     }
@@ -4573,6 +4643,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4584,7 +4655,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant10(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action228::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action228::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant26(__nt), __end));
         (2, 37)
     }
@@ -4594,6 +4665,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4603,7 +4675,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant10(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action229::<>(file, errors, __sym0);
+        let __nt = super::__action229::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant26(__nt), __end));
         (1, 37)
     }
@@ -4613,6 +4685,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4622,7 +4695,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant11(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action230::<>(file, errors, __sym0);
+        let __nt = super::__action230::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant27(__nt), __end));
         (1, 38)
     }
@@ -4632,6 +4705,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4640,7 +4714,7 @@ mod __parse__Program {
         // Comma<FieldInit> =  => ActionFn(231);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action231::<>(file, errors, &__start, &__end);
+        let __nt = super::__action231::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant27(__nt), __end));
         (0, 38)
     }
@@ -4650,6 +4724,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4661,7 +4736,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant12(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action232::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action232::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant27(__nt), __end));
         (2, 38)
     }
@@ -4671,6 +4746,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4680,7 +4756,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant12(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action233::<>(file, errors, __sym0);
+        let __nt = super::__action233::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant27(__nt), __end));
         (1, 38)
     }
@@ -4690,6 +4766,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4699,7 +4776,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action234::<>(file, errors, __sym0);
+        let __nt = super::__action234::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant28(__nt), __end));
         (1, 39)
     }
@@ -4709,6 +4786,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4717,7 +4795,7 @@ mod __parse__Program {
         // Comma<Ident> =  => ActionFn(235);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action235::<>(file, errors, &__start, &__end);
+        let __nt = super::__action235::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant28(__nt), __end));
         (0, 39)
     }
@@ -4727,6 +4805,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4738,7 +4817,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant15(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action236::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action236::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant28(__nt), __end));
         (2, 39)
     }
@@ -4748,6 +4827,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4757,7 +4837,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant15(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action237::<>(file, errors, __sym0);
+        let __nt = super::__action237::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant28(__nt), __end));
         (1, 39)
     }
@@ -4767,6 +4847,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4776,7 +4857,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant18(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action238::<>(file, errors, __sym0);
+        let __nt = super::__action238::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant29(__nt), __end));
         (1, 40)
     }
@@ -4786,6 +4867,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4794,7 +4876,7 @@ mod __parse__Program {
         // Comma<Param> =  => ActionFn(239);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action239::<>(file, errors, &__start, &__end);
+        let __nt = super::__action239::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant29(__nt), __end));
         (0, 40)
     }
@@ -4804,6 +4886,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4815,7 +4898,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant19(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action240::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action240::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant29(__nt), __end));
         (2, 40)
     }
@@ -4825,6 +4908,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4834,7 +4918,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant19(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action241::<>(file, errors, __sym0);
+        let __nt = super::__action241::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant29(__nt), __end));
         (1, 40)
     }
@@ -4844,6 +4928,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4853,7 +4938,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant13(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action166::<>(file, errors, __sym0);
+        let __nt = super::__action166::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant30(__nt), __end));
         (1, 41)
     }
@@ -4863,6 +4948,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4874,7 +4960,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant14(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action167::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action167::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant30(__nt), __end));
         (2, 41)
     }
@@ -4884,6 +4970,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4893,7 +4980,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant16(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action174::<>(file, errors, __sym0);
+        let __nt = super::__action174::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant31(__nt), __end));
         (1, 42)
     }
@@ -4903,6 +4990,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4914,7 +5002,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant17(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action175::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action175::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant31(__nt), __end));
         (2, 42)
     }
@@ -4924,6 +5012,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4933,7 +5022,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action68::<>(file, errors, __sym0);
+        let __nt = super::__action68::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant32(__nt), __end));
         (1, 43)
     }
@@ -4943,6 +5032,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4952,7 +5042,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action69::<>(file, errors, __sym0);
+        let __nt = super::__action69::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant32(__nt), __end));
         (1, 43)
     }
@@ -4962,6 +5052,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4971,7 +5062,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action70::<>(file, errors, __sym0);
+        let __nt = super::__action70::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant32(__nt), __end));
         (1, 43)
     }
@@ -4981,6 +5072,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -4990,7 +5082,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action71::<>(file, errors, __sym0);
+        let __nt = super::__action71::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant32(__nt), __end));
         (1, 43)
     }
@@ -5000,6 +5092,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5009,7 +5102,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant33(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action203::<>(file, errors, __sym0);
+        let __nt = super::__action203::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant7(__nt), __end));
         (1, 44)
     }
@@ -5019,6 +5112,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5028,7 +5122,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant2(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action204::<>(file, errors, __sym0);
+        let __nt = super::__action204::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant7(__nt), __end));
         (1, 44)
     }
@@ -5038,6 +5132,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5049,7 +5144,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action10::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action10::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (2, 45)
     }
@@ -5059,6 +5154,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5075,7 +5171,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym6.2.clone();
-        let __nt = super::__action11::<>(file, errors, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5, __sym6);
+        let __nt = super::__action11::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5, __sym6);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (7, 45)
     }
@@ -5085,6 +5181,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5102,7 +5199,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym7.2.clone();
-        let __nt = super::__action144::<>(file, errors, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5, __sym6, __sym7);
+        let __nt = super::__action144::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5, __sym6, __sym7);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (8, 45)
     }
@@ -5112,6 +5209,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5127,7 +5225,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym5.2.clone();
-        let __nt = super::__action145::<>(file, errors, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5);
+        let __nt = super::__action145::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (6, 45)
     }
@@ -5137,6 +5235,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5148,7 +5247,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action13::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action13::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (2, 45)
     }
@@ -5158,6 +5257,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5169,7 +5269,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action14::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action14::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (2, 45)
     }
@@ -5179,6 +5279,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5191,7 +5292,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action15::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action15::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (3, 45)
     }
@@ -5201,6 +5302,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5214,7 +5316,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym3.2.clone();
-        let __nt = super::__action16::<>(file, errors, __sym0, __sym1, __sym2, __sym3);
+        let __nt = super::__action16::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (4, 45)
     }
@@ -5224,6 +5326,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5239,7 +5342,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym5.2.clone();
-        let __nt = super::__action17::<>(file, errors, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5);
+        let __nt = super::__action17::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (6, 45)
     }
@@ -5249,6 +5352,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5260,7 +5364,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action18::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action18::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (2, 45)
     }
@@ -5270,6 +5374,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5284,7 +5389,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym4.2.clone();
-        let __nt = super::__action19::<>(file, errors, __sym0, __sym1, __sym2, __sym3, __sym4);
+        let __nt = super::__action19::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3, __sym4);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (5, 45)
     }
@@ -5294,6 +5399,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5307,7 +5413,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym3.2.clone();
-        let __nt = super::__action146::<>(file, errors, __sym0, __sym1, __sym2, __sym3);
+        let __nt = super::__action146::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (4, 45)
     }
@@ -5317,6 +5423,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5328,7 +5435,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action147::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action147::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant33(__nt), __end));
         (2, 45)
     }
@@ -5338,6 +5445,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5346,7 +5454,7 @@ mod __parse__Program {
         // DeclList =  => ActionFn(154);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action154::<>(file, errors, &__start, &__end);
+        let __nt = super::__action154::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant34(__nt), __end));
         (0, 46)
     }
@@ -5356,6 +5464,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5365,7 +5474,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant8(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action155::<>(file, errors, __sym0);
+        let __nt = super::__action155::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant34(__nt), __end));
         (1, 46)
     }
@@ -5375,6 +5484,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5387,7 +5497,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action205::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action205::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 47)
     }
@@ -5397,6 +5507,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5406,7 +5517,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action37::<>(file, errors, __sym0);
+        let __nt = super::__action37::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 47)
     }
@@ -5416,6 +5527,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5425,7 +5537,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action31::<>(file, errors, __sym0);
+        let __nt = super::__action31::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 48)
     }
@@ -5435,6 +5547,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5444,7 +5557,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action111::<>(file, errors, __sym0);
+        let __nt = super::__action111::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant35(__nt), __end));
         (1, 49)
     }
@@ -5454,6 +5567,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5462,7 +5576,7 @@ mod __parse__Program {
         // Expr? =  => ActionFn(112);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action112::<>(file, errors, &__start, &__end);
+        let __nt = super::__action112::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant35(__nt), __end));
         (0, 49)
     }
@@ -5472,6 +5586,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5484,7 +5599,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action72::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action72::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant11(__nt), __end));
         (3, 50)
     }
@@ -5494,6 +5609,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5503,7 +5619,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant11(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action106::<>(file, errors, __sym0);
+        let __nt = super::__action106::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant36(__nt), __end));
         (1, 51)
     }
@@ -5513,6 +5629,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5521,7 +5638,7 @@ mod __parse__Program {
         // FieldInit? =  => ActionFn(107);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action107::<>(file, errors, &__start, &__end);
+        let __nt = super::__action107::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant36(__nt), __end));
         (0, 51)
     }
@@ -5531,6 +5648,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5540,7 +5658,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action2::<>(file, errors, __sym0);
+        let __nt = super::__action2::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (1, 52)
     }
@@ -5550,6 +5668,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5559,7 +5678,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action206::<>(file, errors, __sym0);
+        let __nt = super::__action206::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (1, 52)
     }
@@ -5569,6 +5688,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5578,7 +5698,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action207::<>(file, errors, __sym0);
+        let __nt = super::__action207::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (1, 52)
     }
@@ -5588,6 +5708,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5597,7 +5718,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action208::<>(file, errors, __sym0);
+        let __nt = super::__action208::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (1, 52)
     }
@@ -5607,6 +5728,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5619,7 +5741,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action209::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action209::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 53)
     }
@@ -5629,6 +5751,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5638,7 +5761,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action35::<>(file, errors, __sym0);
+        let __nt = super::__action35::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 53)
     }
@@ -5648,6 +5771,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5660,7 +5784,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action28::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action28::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant13(__nt), __end));
         (3, 54)
     }
@@ -5670,6 +5794,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5679,7 +5804,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant1(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action210::<>(file, errors, __sym0);
+        let __nt = super::__action210::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (1, 55)
     }
@@ -5689,6 +5814,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5698,7 +5824,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action121::<>(file, errors, __sym0);
+        let __nt = super::__action121::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant4(__nt), __end));
         (1, 56)
     }
@@ -5708,6 +5834,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5716,7 +5843,7 @@ mod __parse__Program {
         // Ident? =  => ActionFn(122);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action122::<>(file, errors, &__start, &__end);
+        let __nt = super::__action122::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant4(__nt), __end));
         (0, 56)
     }
@@ -5726,6 +5853,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5735,7 +5863,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action21::<>(file, errors, __sym0);
+        let __nt = super::__action21::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant37(__nt), __end));
         (1, 57)
     }
@@ -5745,6 +5873,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5754,7 +5883,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant1(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action211::<>(file, errors, __sym0);
+        let __nt = super::__action211::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant37(__nt), __end));
         (1, 57)
     }
@@ -5764,6 +5893,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5776,7 +5906,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action25::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action25::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant16(__nt), __end));
         (3, 58)
     }
@@ -5786,6 +5916,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5799,7 +5930,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym3.2.clone();
-        let __nt = super::__action26::<>(file, errors, __sym0, __sym1, __sym2, __sym3);
+        let __nt = super::__action26::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3);
         __symbols.push((__start, __Symbol::Variant16(__nt), __end));
         (4, 58)
     }
@@ -5809,6 +5940,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5822,7 +5954,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym3.2.clone();
-        let __nt = super::__action27::<>(file, errors, __sym0, __sym1, __sym2, __sym3);
+        let __nt = super::__action27::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3);
         __symbols.push((__start, __Symbol::Variant16(__nt), __end));
         (4, 58)
     }
@@ -5832,6 +5964,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5844,7 +5977,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action212::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action212::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 59)
     }
@@ -5854,6 +5987,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5866,7 +6000,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action213::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action213::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 59)
     }
@@ -5876,6 +6010,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5885,7 +6020,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action43::<>(file, errors, __sym0);
+        let __nt = super::__action43::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 59)
     }
@@ -5895,6 +6030,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5907,7 +6043,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action141::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action141::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant18(__nt), __end));
         (3, 60)
     }
@@ -5917,6 +6053,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5926,7 +6063,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action142::<>(file, errors, __sym0);
+        let __nt = super::__action142::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant18(__nt), __end));
         (1, 60)
     }
@@ -5936,6 +6073,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5945,7 +6083,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant18(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action95::<>(file, errors, __sym0);
+        let __nt = super::__action95::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant38(__nt), __end));
         (1, 61)
     }
@@ -5955,6 +6093,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5963,7 +6102,7 @@ mod __parse__Program {
         // Param? =  => ActionFn(96);
         let __start = __lookahead_start.cloned().or_else(|| __symbols.last().map(|s| s.2.clone())).unwrap_or_default();
         let __end = __start.clone();
-        let __nt = super::__action96::<>(file, errors, &__start, &__end);
+        let __nt = super::__action96::<>(file, errors, names, &__start, &__end);
         __symbols.push((__start, __Symbol::Variant38(__nt), __end));
         (0, 61)
     }
@@ -5973,6 +6112,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -5985,7 +6125,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action214::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action214::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 62)
     }
@@ -5995,6 +6135,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6006,7 +6147,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action215::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action215::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (2, 62)
     }
@@ -6016,6 +6157,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6025,7 +6167,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action51::<>(file, errors, __sym0);
+        let __nt = super::__action51::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 62)
     }
@@ -6035,6 +6177,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6047,7 +6190,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action216::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action216::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 63)
     }
@@ -6057,6 +6200,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6066,7 +6210,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action45::<>(file, errors, __sym0);
+        let __nt = super::__action45::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 63)
     }
@@ -6076,6 +6220,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6085,7 +6230,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant39(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action217::<>(file, errors, __sym0);
+        let __nt = super::__action217::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 64)
     }
@@ -6095,6 +6240,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6107,7 +6253,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action53::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action53::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 64)
     }
@@ -6117,6 +6263,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6126,7 +6273,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action54::<>(file, errors, __sym0);
+        let __nt = super::__action54::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (1, 65)
     }
@@ -6136,6 +6283,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6148,7 +6296,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action55::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action55::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (3, 65)
     }
@@ -6158,6 +6306,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6167,7 +6316,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant3(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action56::<>(file, errors, __sym0);
+        let __nt = super::__action56::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (1, 65)
     }
@@ -6177,6 +6326,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6186,7 +6336,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant1(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action57::<>(file, errors, __sym0);
+        let __nt = super::__action57::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (1, 65)
     }
@@ -6196,6 +6346,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6205,7 +6356,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant1(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action58::<>(file, errors, __sym0);
+        let __nt = super::__action58::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (1, 65)
     }
@@ -6215,6 +6366,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6227,7 +6379,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action59::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action59::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (3, 65)
     }
@@ -6237,6 +6389,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6250,7 +6403,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant24(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym3.2.clone();
-        let __nt = super::__action60::<>(file, errors, __sym0, __sym1, __sym2, __sym3);
+        let __nt = super::__action60::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (4, 65)
     }
@@ -6260,6 +6413,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6272,7 +6426,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant32(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action61::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action61::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (3, 65)
     }
@@ -6282,6 +6436,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6297,7 +6452,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym5.2.clone();
-        let __nt = super::__action62::<>(file, errors, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5);
+        let __nt = super::__action62::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3, __sym4, __sym5);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (6, 65)
     }
@@ -6307,6 +6462,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6321,7 +6477,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym4.2.clone();
-        let __nt = super::__action63::<>(file, errors, __sym0, __sym1, __sym2, __sym3, __sym4);
+        let __nt = super::__action63::<>(file, errors, names, __sym0, __sym1, __sym2, __sym3, __sym4);
         __symbols.push((__start, __Symbol::Variant39(__nt), __end));
         (5, 65)
     }
@@ -6331,6 +6487,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6340,7 +6497,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant34(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action6::<>(file, errors, __sym0);
+        let __nt = super::__action6::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant40(__nt), __end));
         (1, 66)
     }
@@ -6350,6 +6507,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6362,7 +6520,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym2.2.clone();
-        let __nt = super::__action218::<>(file, errors, __sym0, __sym1, __sym2);
+        let __nt = super::__action218::<>(file, errors, names, __sym0, __sym1, __sym2);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (3, 67)
     }
@@ -6372,6 +6530,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6381,7 +6540,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action33::<>(file, errors, __sym0);
+        let __nt = super::__action33::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 67)
     }
@@ -6391,6 +6550,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6402,7 +6562,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action219::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action219::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (2, 68)
     }
@@ -6412,6 +6572,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6423,7 +6584,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant0(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym1.2.clone();
-        let __nt = super::__action220::<>(file, errors, __sym0, __sym1);
+        let __nt = super::__action220::<>(file, errors, names, __sym0, __sym1);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (2, 68)
     }
@@ -6433,6 +6594,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6442,7 +6604,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant9(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action48::<>(file, errors, __sym0);
+        let __nt = super::__action48::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant9(__nt), __end));
         (1, 68)
     }
@@ -6452,6 +6614,7 @@ mod __parse__Program {
     >(
         file: FileId,
         errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+        names: &'err mut Names,
         __lookahead_start: Option<&usize>,
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>,
         _: core::marker::PhantomData<(&'input (), &'err ())>,
@@ -6461,7 +6624,7 @@ mod __parse__Program {
         let __sym0 = __pop_Variant1(__symbols);
         let __start = __sym0.0.clone();
         let __end = __sym0.2.clone();
-        let __nt = super::__action221::<>(file, errors, __sym0);
+        let __nt = super::__action221::<>(file, errors, names, __sym0);
         __symbols.push((__start, __Symbol::Variant3(__nt), __end));
         (1, 69)
     }
@@ -6477,6 +6640,7 @@ fn __action0<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Program, usize),
 ) -> Program
 {
@@ -6491,12 +6655,13 @@ fn __action1<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, s, _): (usize, &'input str, usize),
     (_, r, _): (usize, usize, usize),
 ) -> Ident
 {
-    Ident { name: Rc::from(s), span: Span::new(file, l, r) }
+    Ident { name: names.intern(s), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -6507,6 +6672,7 @@ fn __action2<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> Ident
 {
@@ -6521,12 +6687,13 @@ fn __action3<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, r, _): (usize, usize, usize),
 ) -> Ident
 {
-    Ident { name: Rc::from("force"), span: Span::new(file, l, r) }
+    Ident { name: names.intern("force"), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -6537,12 +6704,13 @@ fn __action4<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, r, _): (usize, usize, usize),
 ) -> Ident
 {
-    Ident { name: Rc::from("torque"), span: Span::new(file, l, r) }
+    Ident { name: names.intern("torque"), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -6553,12 +6721,13 @@ fn __action5<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, r, _): (usize, usize, usize),
 ) -> Ident
 {
-    Ident { name: Rc::from("body"), span: Span::new(file, l, r) }
+    Ident { name: names.intern("body"), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -6569,6 +6738,7 @@ fn __action6<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, decls, _): (usize, Vec<Decl>, usize),
 ) -> Program
 {
@@ -6583,6 +6753,7 @@ fn __action7<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, alloc::vec::Vec<Decl>, usize),
 ) -> Vec<Decl>
 {
@@ -6597,6 +6768,7 @@ fn __action8<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, kind, _): (usize, DeclKind, usize),
     (_, r, _): (usize, usize, usize),
@@ -6613,6 +6785,7 @@ fn __action9<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, e, _): (usize, __lalrpop_util::ErrorRecovery<usize, Tok<'input>, LexError>, usize),
     (_, r, _): (usize, usize, usize),
@@ -6629,6 +6802,7 @@ fn __action10<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, bindings, _): (usize, Vec<Binding>, usize),
 ) -> DeclKind
@@ -6644,6 +6818,7 @@ fn __action11<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -6653,7 +6828,7 @@ fn __action11<
     (_, body, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Define { name, params, body: Box::new(body) }
+    DeclKind::Define(Box::new(DefineDecl { name, params, body }))
 }
 
 #[allow(unused_variables)]
@@ -6664,6 +6839,7 @@ fn __action12<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, first, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -6684,6 +6860,7 @@ fn __action13<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, values, _): (usize, Vec<InitialValue>, usize),
 ) -> DeclKind
@@ -6699,6 +6876,7 @@ fn __action14<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, values, _): (usize, Vec<GivenValue>, usize),
 ) -> DeclKind
@@ -6714,6 +6892,7 @@ fn __action15<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, fields, _): (usize, Vec<FieldInit>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -6730,6 +6909,7 @@ fn __action16<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, effort, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -6747,6 +6927,7 @@ fn __action17<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, effort, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -6766,6 +6947,7 @@ fn __action18<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, effort, _): (usize, Expr, usize),
 ) -> DeclKind
@@ -6781,6 +6963,7 @@ fn __action19<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -6788,7 +6971,7 @@ fn __action19<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> DeclKind
 {
-    DeclKind::Package { name, decls }
+    DeclKind::Package(Box::new(PackageDecl { name, decls }))
 }
 
 #[allow(unused_variables)]
@@ -6799,6 +6982,7 @@ fn __action20<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, target, _): (usize, ImportTarget, usize),
     (_, alias, _): (usize, Option<Ident>, usize),
@@ -6815,6 +6999,7 @@ fn __action21<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> ImportTarget
 {
@@ -6829,6 +7014,7 @@ fn __action22<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, s, _): (usize, &'input str, usize),
     (_, r, _): (usize, usize, usize),
@@ -6845,6 +7031,7 @@ fn __action23<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, b, _): (usize, Binding, usize),
 ) -> Vec<Binding>
 {
@@ -6859,6 +7046,7 @@ fn __action24<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, Vec<Binding>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, b, _): (usize, Binding, usize),
@@ -6875,6 +7063,7 @@ fn __action25<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, target, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
@@ -6891,6 +7080,7 @@ fn __action26<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, target, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
@@ -6908,6 +7098,7 @@ fn __action27<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, target, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
@@ -6925,6 +7116,7 @@ fn __action28<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, target, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
@@ -6941,6 +7133,7 @@ fn __action29<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, name, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
@@ -6957,6 +7150,7 @@ fn __action30<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, name, _): (usize, Ident, usize),
     (_, ty, _): (usize, Option<Ident>, usize),
 ) -> Param
@@ -6972,6 +7166,7 @@ fn __action31<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -6986,6 +7181,7 @@ fn __action32<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7004,6 +7200,7 @@ fn __action33<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7018,6 +7215,7 @@ fn __action34<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7036,6 +7234,7 @@ fn __action35<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7050,6 +7249,7 @@ fn __action36<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7068,6 +7268,7 @@ fn __action37<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7082,6 +7283,7 @@ fn __action38<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7100,6 +7302,7 @@ fn __action39<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7118,6 +7321,7 @@ fn __action40<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7132,6 +7336,7 @@ fn __action41<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7150,6 +7355,7 @@ fn __action42<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7168,6 +7374,7 @@ fn __action43<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7182,6 +7389,7 @@ fn __action44<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, lhs, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7200,6 +7408,7 @@ fn __action45<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7214,6 +7423,7 @@ fn __action46<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, e, _): (usize, Expr, usize),
@@ -7231,6 +7441,7 @@ fn __action47<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, e, _): (usize, Expr, usize),
@@ -7248,6 +7459,7 @@ fn __action48<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7262,6 +7474,7 @@ fn __action49<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, target, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7269,7 +7482,7 @@ fn __action49<
     (_, r, _): (usize, usize, usize),
 ) -> Expr
 {
-    Expr { kind: ExprKind::Field { target: Box::new(target), field }, span: Span::new(file, l, r) }
+    Expr { kind: ExprKind::Field(Box::new(FieldAccess { target, field })), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -7280,6 +7493,7 @@ fn __action50<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, e, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7297,6 +7511,7 @@ fn __action51<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Expr
 {
@@ -7311,6 +7526,7 @@ fn __action52<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, kind, _): (usize, ExprKind, usize),
     (_, r, _): (usize, usize, usize),
@@ -7327,6 +7543,7 @@ fn __action53<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, __0, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7343,6 +7560,7 @@ fn __action54<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> ExprKind
 {
@@ -7357,6 +7575,7 @@ fn __action55<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, package, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
@@ -7373,6 +7592,7 @@ fn __action56<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, n, _): (usize, Ident, usize),
 ) -> ExprKind
 {
@@ -7387,6 +7607,7 @@ fn __action57<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, s, _): (usize, &'input str, usize),
 ) -> ExprKind
 {
@@ -7401,6 +7622,7 @@ fn __action58<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, s, _): (usize, &'input str, usize),
 ) -> ExprKind
 {
@@ -7415,6 +7637,7 @@ fn __action59<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, __0, _): (usize, Vec<Expr>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7431,13 +7654,14 @@ fn __action60<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, callee, _): (usize, Callee, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, args, _): (usize, Vec<Arg>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Call { callee: Box::new(callee), args }
+    ExprKind::Call { callee: Box::new(callee), args: args.into_boxed_slice() }
 }
 
 #[allow(unused_variables)]
@@ -7448,12 +7672,13 @@ fn __action61<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, kind, _): (usize, ConstructKind, usize),
     (_, fields, _): (usize, Vec<FieldInit>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct { kind, params: Vec::new(), fields }
+    ExprKind::Construct { kind, params: Box::default(), fields: fields.into_boxed_slice() }
 }
 
 #[allow(unused_variables)]
@@ -7464,6 +7689,7 @@ fn __action62<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, params, _): (usize, Vec<Ident>, usize),
@@ -7472,7 +7698,7 @@ fn __action62<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct { kind: ConstructKind::Link, params, fields }
+    ExprKind::Construct { kind: ConstructKind::Link, params: params.into_boxed_slice(), fields: fields.into_boxed_slice() }
 }
 
 #[allow(unused_variables)]
@@ -7483,6 +7709,7 @@ fn __action63<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, bindings, _): (usize, Vec<Binding>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
@@ -7490,7 +7717,7 @@ fn __action63<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Local { bindings, body: Box::new(body) }
+    ExprKind::Local { bindings: bindings.into_boxed_slice(), body: Box::new(body) }
 }
 
 #[allow(unused_variables)]
@@ -7501,12 +7728,13 @@ fn __action64<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, l, _): (usize, usize, usize),
     (_, s, _): (usize, &'input str, usize),
     (_, r, _): (usize, usize, usize),
 ) -> Ident
 {
-    Ident { name: Rc::from(s), span: Span::new(file, l, r) }
+    Ident { name: names.intern(s), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -7517,6 +7745,7 @@ fn __action65<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> Callee
 {
@@ -7531,6 +7760,7 @@ fn __action66<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, package, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
@@ -7547,6 +7777,7 @@ fn __action67<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> Callee
 {
@@ -7561,6 +7792,7 @@ fn __action68<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Tok<'input>, usize),
 ) -> ConstructKind
 {
@@ -7575,6 +7807,7 @@ fn __action69<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Tok<'input>, usize),
 ) -> ConstructKind
 {
@@ -7589,6 +7822,7 @@ fn __action70<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Tok<'input>, usize),
 ) -> ConstructKind
 {
@@ -7603,6 +7837,7 @@ fn __action71<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Tok<'input>, usize),
 ) -> ConstructKind
 {
@@ -7617,6 +7852,7 @@ fn __action72<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, name, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
@@ -7633,6 +7869,7 @@ fn __action73<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, value, _): (usize, Expr, usize),
 ) -> Arg
 {
@@ -7647,6 +7884,7 @@ fn __action74<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, name, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
@@ -7663,6 +7901,7 @@ fn __action75<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, alloc::vec::Vec<Ident>, usize),
     (_, e, _): (usize, Option<Ident>, usize),
 ) -> Vec<Ident>
@@ -7681,6 +7920,7 @@ fn __action76<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, alloc::vec::Vec<Arg>, usize),
     (_, e, _): (usize, Option<Arg>, usize),
 ) -> Vec<Arg>
@@ -7699,6 +7939,7 @@ fn __action77<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, alloc::vec::Vec<Expr>, usize),
     (_, e, _): (usize, Option<Expr>, usize),
 ) -> Vec<Expr>
@@ -7717,6 +7958,7 @@ fn __action78<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> Option<Ident>
 {
@@ -7731,6 +7973,7 @@ fn __action79<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Option<Ident>
@@ -7746,6 +7989,7 @@ fn __action80<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, __0, _): (usize, Ident, usize),
 ) -> Ident
@@ -7761,6 +8005,7 @@ fn __action81<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, alloc::vec::Vec<FieldInit>, usize),
     (_, e, _): (usize, Option<FieldInit>, usize),
 ) -> Vec<FieldInit>
@@ -7779,6 +8024,7 @@ fn __action82<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, alloc::vec::Vec<GivenValue>, usize),
     (_, e, _): (usize, GivenValue, usize),
 ) -> Vec<GivenValue>
@@ -7794,6 +8040,7 @@ fn __action83<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, alloc::vec::Vec<InitialValue>, usize),
     (_, e, _): (usize, InitialValue, usize),
 ) -> Vec<InitialValue>
@@ -7809,6 +8056,7 @@ fn __action84<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> Option<Ident>
 {
@@ -7823,6 +8071,7 @@ fn __action85<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Option<Ident>
@@ -7838,6 +8087,7 @@ fn __action86<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
     (_, __0, _): (usize, Ident, usize),
 ) -> Ident
@@ -7853,6 +8103,7 @@ fn __action87<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, mut v, _): (usize, alloc::vec::Vec<Param>, usize),
     (_, e, _): (usize, Option<Param>, usize),
 ) -> Vec<Param>
@@ -7871,6 +8122,7 @@ fn __action88<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<Decl>
@@ -7886,6 +8138,7 @@ fn __action89<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Decl>, usize),
 ) -> alloc::vec::Vec<Decl>
 {
@@ -7900,6 +8153,7 @@ fn __action90<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Decl, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> Decl
@@ -7915,6 +8169,7 @@ fn __action91<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> usize
@@ -7930,6 +8185,7 @@ fn __action92<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> usize
@@ -7945,6 +8201,7 @@ fn __action93<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Decl, usize),
 ) -> alloc::vec::Vec<Decl>
 {
@@ -7959,6 +8216,7 @@ fn __action94<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Decl>, usize),
     (_, e, _): (usize, Decl, usize),
 ) -> alloc::vec::Vec<Decl>
@@ -7974,6 +8232,7 @@ fn __action95<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Param, usize),
 ) -> Option<Param>
 {
@@ -7988,6 +8247,7 @@ fn __action96<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Option<Param>
@@ -8003,6 +8263,7 @@ fn __action97<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<Param>
@@ -8018,6 +8279,7 @@ fn __action98<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Param>, usize),
 ) -> alloc::vec::Vec<Param>
 {
@@ -8032,6 +8294,7 @@ fn __action99<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Param, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> Param
@@ -8047,6 +8310,7 @@ fn __action100<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<InitialValue>
@@ -8062,6 +8326,7 @@ fn __action101<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<InitialValue>, usize),
 ) -> alloc::vec::Vec<InitialValue>
 {
@@ -8076,6 +8341,7 @@ fn __action102<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, InitialValue, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> InitialValue
@@ -8091,6 +8357,7 @@ fn __action103<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<GivenValue>
@@ -8106,6 +8373,7 @@ fn __action104<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<GivenValue>, usize),
 ) -> alloc::vec::Vec<GivenValue>
 {
@@ -8120,6 +8388,7 @@ fn __action105<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, GivenValue, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> GivenValue
@@ -8135,6 +8404,7 @@ fn __action106<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, FieldInit, usize),
 ) -> Option<FieldInit>
 {
@@ -8149,6 +8419,7 @@ fn __action107<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Option<FieldInit>
@@ -8164,6 +8435,7 @@ fn __action108<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<FieldInit>
@@ -8179,6 +8451,7 @@ fn __action109<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<FieldInit>, usize),
 ) -> alloc::vec::Vec<FieldInit>
 {
@@ -8193,6 +8466,7 @@ fn __action110<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, FieldInit, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> FieldInit
@@ -8208,6 +8482,7 @@ fn __action111<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> Option<Expr>
 {
@@ -8222,6 +8497,7 @@ fn __action112<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Option<Expr>
@@ -8237,6 +8513,7 @@ fn __action113<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<Expr>
@@ -8252,6 +8529,7 @@ fn __action114<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Expr>, usize),
 ) -> alloc::vec::Vec<Expr>
 {
@@ -8266,6 +8544,7 @@ fn __action115<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> Expr
@@ -8281,6 +8560,7 @@ fn __action116<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Arg, usize),
 ) -> Option<Arg>
 {
@@ -8295,6 +8575,7 @@ fn __action117<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Option<Arg>
@@ -8310,6 +8591,7 @@ fn __action118<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<Arg>
@@ -8325,6 +8607,7 @@ fn __action119<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Arg>, usize),
 ) -> alloc::vec::Vec<Arg>
 {
@@ -8339,6 +8622,7 @@ fn __action120<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Arg, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> Arg
@@ -8354,6 +8638,7 @@ fn __action121<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> Option<Ident>
 {
@@ -8368,6 +8653,7 @@ fn __action122<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Option<Ident>
@@ -8383,6 +8669,7 @@ fn __action123<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> alloc::vec::Vec<Ident>
@@ -8398,6 +8685,7 @@ fn __action124<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Ident>, usize),
 ) -> alloc::vec::Vec<Ident>
 {
@@ -8412,6 +8700,7 @@ fn __action125<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> Ident
@@ -8427,6 +8716,7 @@ fn __action126<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
 ) -> alloc::vec::Vec<Ident>
 {
@@ -8441,6 +8731,7 @@ fn __action127<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Ident>, usize),
     (_, e, _): (usize, Ident, usize),
 ) -> alloc::vec::Vec<Ident>
@@ -8456,6 +8747,7 @@ fn __action128<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Arg, usize),
 ) -> alloc::vec::Vec<Arg>
 {
@@ -8470,6 +8762,7 @@ fn __action129<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Arg>, usize),
     (_, e, _): (usize, Arg, usize),
 ) -> alloc::vec::Vec<Arg>
@@ -8485,6 +8778,7 @@ fn __action130<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Expr, usize),
 ) -> alloc::vec::Vec<Expr>
 {
@@ -8499,6 +8793,7 @@ fn __action131<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Expr>, usize),
     (_, e, _): (usize, Expr, usize),
 ) -> alloc::vec::Vec<Expr>
@@ -8514,6 +8809,7 @@ fn __action132<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, FieldInit, usize),
 ) -> alloc::vec::Vec<FieldInit>
 {
@@ -8528,6 +8824,7 @@ fn __action133<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<FieldInit>, usize),
     (_, e, _): (usize, FieldInit, usize),
 ) -> alloc::vec::Vec<FieldInit>
@@ -8543,6 +8840,7 @@ fn __action134<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, GivenValue, usize),
 ) -> alloc::vec::Vec<GivenValue>
 {
@@ -8557,6 +8855,7 @@ fn __action135<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<GivenValue>, usize),
     (_, e, _): (usize, GivenValue, usize),
 ) -> alloc::vec::Vec<GivenValue>
@@ -8572,6 +8871,7 @@ fn __action136<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, InitialValue, usize),
 ) -> alloc::vec::Vec<InitialValue>
 {
@@ -8586,6 +8886,7 @@ fn __action137<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<InitialValue>, usize),
     (_, e, _): (usize, InitialValue, usize),
 ) -> alloc::vec::Vec<InitialValue>
@@ -8601,6 +8902,7 @@ fn __action138<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, __0, _): (usize, Param, usize),
 ) -> alloc::vec::Vec<Param>
 {
@@ -8615,6 +8917,7 @@ fn __action139<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     (_, v, _): (usize, alloc::vec::Vec<Param>, usize),
     (_, e, _): (usize, Param, usize),
 ) -> alloc::vec::Vec<Param>
@@ -8631,6 +8934,7 @@ fn __action140<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Ident, usize),
 ) -> Option<Ident>
@@ -8640,6 +8944,7 @@ fn __action140<
     let __temp0 = __action80(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -8647,6 +8952,7 @@ fn __action140<
     __action78(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -8660,6 +8966,7 @@ fn __action141<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Ident, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Ident, usize),
@@ -8670,6 +8977,7 @@ fn __action141<
     let __temp0 = __action140(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -8677,6 +8985,7 @@ fn __action141<
     __action30(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -8691,6 +9000,7 @@ fn __action142<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Ident, usize),
 ) -> Param
 {
@@ -8699,6 +9009,7 @@ fn __action142<
     let __temp0 = __action79(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -8706,6 +9017,7 @@ fn __action142<
     __action30(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -8720,6 +9032,7 @@ fn __action143<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Ident, usize),
 ) -> Option<Ident>
@@ -8729,6 +9042,7 @@ fn __action143<
     let __temp0 = __action86(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -8736,6 +9050,7 @@ fn __action143<
     __action84(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -8749,6 +9064,7 @@ fn __action144<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Expr, usize),
     __2: (usize, Tok<'input>, usize),
@@ -8764,6 +9080,7 @@ fn __action144<
     let __temp0 = __action143(
         file,
         errors,
+        names,
         __6,
         __7,
     );
@@ -8771,6 +9088,7 @@ fn __action144<
     __action12(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -8790,6 +9108,7 @@ fn __action145<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Expr, usize),
     __2: (usize, Tok<'input>, usize),
@@ -8803,6 +9122,7 @@ fn __action145<
     let __temp0 = __action85(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -8810,6 +9130,7 @@ fn __action145<
     __action12(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -8829,6 +9150,7 @@ fn __action146<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, ImportTarget, usize),
     __2: (usize, Tok<'input>, usize),
@@ -8840,6 +9162,7 @@ fn __action146<
     let __temp0 = __action143(
         file,
         errors,
+        names,
         __2,
         __3,
     );
@@ -8847,6 +9170,7 @@ fn __action146<
     __action20(
         file,
         errors,
+        names,
         __0,
         __1,
         __temp0,
@@ -8862,6 +9186,7 @@ fn __action147<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, ImportTarget, usize),
 ) -> DeclKind
@@ -8871,6 +9196,7 @@ fn __action147<
     let __temp0 = __action85(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -8878,6 +9204,7 @@ fn __action147<
     __action20(
         file,
         errors,
+        names,
         __0,
         __1,
         __temp0,
@@ -8893,6 +9220,7 @@ fn __action148<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Arg, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<Arg>
@@ -8902,6 +9230,7 @@ fn __action148<
     let __temp0 = __action120(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -8909,6 +9238,7 @@ fn __action148<
     __action128(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -8922,6 +9252,7 @@ fn __action149<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Arg>, usize),
     __1: (usize, Arg, usize),
     __2: (usize, Tok<'input>, usize),
@@ -8932,6 +9263,7 @@ fn __action149<
     let __temp0 = __action120(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -8939,6 +9271,7 @@ fn __action149<
     __action129(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -8953,6 +9286,7 @@ fn __action150<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Option<Arg>, usize),
 ) -> Vec<Arg>
 {
@@ -8961,6 +9295,7 @@ fn __action150<
     let __temp0 = __action118(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -8968,6 +9303,7 @@ fn __action150<
     __action76(
         file,
         errors,
+        names,
         __temp0,
         __0,
     )
@@ -8982,6 +9318,7 @@ fn __action151<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Arg>, usize),
     __1: (usize, Option<Arg>, usize),
 ) -> Vec<Arg>
@@ -8991,12 +9328,14 @@ fn __action151<
     let __temp0 = __action119(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action76(
         file,
         errors,
+        names,
         __temp0,
         __1,
     )
@@ -9011,6 +9350,7 @@ fn __action152<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Decl, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<Decl>
@@ -9020,6 +9360,7 @@ fn __action152<
     let __temp0 = __action90(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -9027,6 +9368,7 @@ fn __action152<
     __action93(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9040,6 +9382,7 @@ fn __action153<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Decl>, usize),
     __1: (usize, Decl, usize),
     __2: (usize, Tok<'input>, usize),
@@ -9050,6 +9393,7 @@ fn __action153<
     let __temp0 = __action90(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -9057,6 +9401,7 @@ fn __action153<
     __action94(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -9071,6 +9416,7 @@ fn __action154<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Vec<Decl>
@@ -9080,6 +9426,7 @@ fn __action154<
     let __temp0 = __action88(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9087,6 +9434,7 @@ fn __action154<
     __action7(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9100,6 +9448,7 @@ fn __action155<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Decl>, usize),
 ) -> Vec<Decl>
 {
@@ -9108,12 +9457,14 @@ fn __action155<
     let __temp0 = __action89(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action7(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9127,6 +9478,7 @@ fn __action156<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<Expr>
@@ -9136,6 +9488,7 @@ fn __action156<
     let __temp0 = __action115(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -9143,6 +9496,7 @@ fn __action156<
     __action130(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9156,6 +9510,7 @@ fn __action157<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Expr>, usize),
     __1: (usize, Expr, usize),
     __2: (usize, Tok<'input>, usize),
@@ -9166,6 +9521,7 @@ fn __action157<
     let __temp0 = __action115(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -9173,6 +9529,7 @@ fn __action157<
     __action131(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -9187,6 +9544,7 @@ fn __action158<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Option<Expr>, usize),
 ) -> Vec<Expr>
 {
@@ -9195,6 +9553,7 @@ fn __action158<
     let __temp0 = __action113(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9202,6 +9561,7 @@ fn __action158<
     __action77(
         file,
         errors,
+        names,
         __temp0,
         __0,
     )
@@ -9216,6 +9576,7 @@ fn __action159<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Expr>, usize),
     __1: (usize, Option<Expr>, usize),
 ) -> Vec<Expr>
@@ -9225,12 +9586,14 @@ fn __action159<
     let __temp0 = __action114(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action77(
         file,
         errors,
+        names,
         __temp0,
         __1,
     )
@@ -9245,6 +9608,7 @@ fn __action160<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, FieldInit, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<FieldInit>
@@ -9254,6 +9618,7 @@ fn __action160<
     let __temp0 = __action110(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -9261,6 +9626,7 @@ fn __action160<
     __action132(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9274,6 +9640,7 @@ fn __action161<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<FieldInit>, usize),
     __1: (usize, FieldInit, usize),
     __2: (usize, Tok<'input>, usize),
@@ -9284,6 +9651,7 @@ fn __action161<
     let __temp0 = __action110(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -9291,6 +9659,7 @@ fn __action161<
     __action133(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -9305,6 +9674,7 @@ fn __action162<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Option<FieldInit>, usize),
 ) -> Vec<FieldInit>
 {
@@ -9313,6 +9683,7 @@ fn __action162<
     let __temp0 = __action108(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9320,6 +9691,7 @@ fn __action162<
     __action81(
         file,
         errors,
+        names,
         __temp0,
         __0,
     )
@@ -9334,6 +9706,7 @@ fn __action163<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<FieldInit>, usize),
     __1: (usize, Option<FieldInit>, usize),
 ) -> Vec<FieldInit>
@@ -9343,12 +9716,14 @@ fn __action163<
     let __temp0 = __action109(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action81(
         file,
         errors,
+        names,
         __temp0,
         __1,
     )
@@ -9363,6 +9738,7 @@ fn __action164<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, GivenValue, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<GivenValue>
@@ -9372,6 +9748,7 @@ fn __action164<
     let __temp0 = __action105(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -9379,6 +9756,7 @@ fn __action164<
     __action134(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9392,6 +9770,7 @@ fn __action165<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<GivenValue>, usize),
     __1: (usize, GivenValue, usize),
     __2: (usize, Tok<'input>, usize),
@@ -9402,6 +9781,7 @@ fn __action165<
     let __temp0 = __action105(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -9409,6 +9789,7 @@ fn __action165<
     __action135(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -9423,6 +9804,7 @@ fn __action166<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, GivenValue, usize),
 ) -> Vec<GivenValue>
 {
@@ -9431,6 +9813,7 @@ fn __action166<
     let __temp0 = __action103(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9438,6 +9821,7 @@ fn __action166<
     __action82(
         file,
         errors,
+        names,
         __temp0,
         __0,
     )
@@ -9452,6 +9836,7 @@ fn __action167<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<GivenValue>, usize),
     __1: (usize, GivenValue, usize),
 ) -> Vec<GivenValue>
@@ -9461,12 +9846,14 @@ fn __action167<
     let __temp0 = __action104(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action82(
         file,
         errors,
+        names,
         __temp0,
         __1,
     )
@@ -9481,6 +9868,7 @@ fn __action168<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Ident, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<Ident>
@@ -9490,6 +9878,7 @@ fn __action168<
     let __temp0 = __action125(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -9497,6 +9886,7 @@ fn __action168<
     __action126(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9510,6 +9900,7 @@ fn __action169<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Ident>, usize),
     __1: (usize, Ident, usize),
     __2: (usize, Tok<'input>, usize),
@@ -9520,6 +9911,7 @@ fn __action169<
     let __temp0 = __action125(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -9527,6 +9919,7 @@ fn __action169<
     __action127(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -9541,6 +9934,7 @@ fn __action170<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Option<Ident>, usize),
 ) -> Vec<Ident>
 {
@@ -9549,6 +9943,7 @@ fn __action170<
     let __temp0 = __action123(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9556,6 +9951,7 @@ fn __action170<
     __action75(
         file,
         errors,
+        names,
         __temp0,
         __0,
     )
@@ -9570,6 +9966,7 @@ fn __action171<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Ident>, usize),
     __1: (usize, Option<Ident>, usize),
 ) -> Vec<Ident>
@@ -9579,12 +9976,14 @@ fn __action171<
     let __temp0 = __action124(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action75(
         file,
         errors,
+        names,
         __temp0,
         __1,
     )
@@ -9599,6 +9998,7 @@ fn __action172<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, InitialValue, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<InitialValue>
@@ -9608,6 +10008,7 @@ fn __action172<
     let __temp0 = __action102(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -9615,6 +10016,7 @@ fn __action172<
     __action136(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9628,6 +10030,7 @@ fn __action173<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<InitialValue>, usize),
     __1: (usize, InitialValue, usize),
     __2: (usize, Tok<'input>, usize),
@@ -9638,6 +10041,7 @@ fn __action173<
     let __temp0 = __action102(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -9645,6 +10049,7 @@ fn __action173<
     __action137(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -9659,6 +10064,7 @@ fn __action174<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, InitialValue, usize),
 ) -> Vec<InitialValue>
 {
@@ -9667,6 +10073,7 @@ fn __action174<
     let __temp0 = __action100(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9674,6 +10081,7 @@ fn __action174<
     __action83(
         file,
         errors,
+        names,
         __temp0,
         __0,
     )
@@ -9688,6 +10096,7 @@ fn __action175<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<InitialValue>, usize),
     __1: (usize, InitialValue, usize),
 ) -> Vec<InitialValue>
@@ -9697,12 +10106,14 @@ fn __action175<
     let __temp0 = __action101(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action83(
         file,
         errors,
+        names,
         __temp0,
         __1,
     )
@@ -9717,6 +10128,7 @@ fn __action176<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Param, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> alloc::vec::Vec<Param>
@@ -9726,6 +10138,7 @@ fn __action176<
     let __temp0 = __action99(
         file,
         errors,
+        names,
         __0,
         __1,
     );
@@ -9733,6 +10146,7 @@ fn __action176<
     __action138(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -9746,6 +10160,7 @@ fn __action177<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Param>, usize),
     __1: (usize, Param, usize),
     __2: (usize, Tok<'input>, usize),
@@ -9756,6 +10171,7 @@ fn __action177<
     let __temp0 = __action99(
         file,
         errors,
+        names,
         __1,
         __2,
     );
@@ -9763,6 +10179,7 @@ fn __action177<
     __action139(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -9777,6 +10194,7 @@ fn __action178<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Option<Param>, usize),
 ) -> Vec<Param>
 {
@@ -9785,6 +10203,7 @@ fn __action178<
     let __temp0 = __action97(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9792,6 +10211,7 @@ fn __action178<
     __action87(
         file,
         errors,
+        names,
         __temp0,
         __0,
     )
@@ -9806,6 +10226,7 @@ fn __action179<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Param>, usize),
     __1: (usize, Option<Param>, usize),
 ) -> Vec<Param>
@@ -9815,12 +10236,14 @@ fn __action179<
     let __temp0 = __action98(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action87(
         file,
         errors,
+        names,
         __temp0,
         __1,
     )
@@ -9835,6 +10258,7 @@ fn __action180<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -9846,6 +10270,7 @@ fn __action180<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9853,6 +10278,7 @@ fn __action180<
     __action38(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -9870,6 +10296,7 @@ fn __action181<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -9881,6 +10308,7 @@ fn __action181<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9888,6 +10316,7 @@ fn __action181<
     __action39(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -9905,6 +10334,7 @@ fn __action182<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, DeclKind, usize),
     __1: (usize, usize, usize),
 ) -> Decl
@@ -9914,6 +10344,7 @@ fn __action182<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9921,6 +10352,7 @@ fn __action182<
     __action8(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -9936,6 +10368,7 @@ fn __action183<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, __lalrpop_util::ErrorRecovery<usize, Tok<'input>, LexError>, usize),
     __1: (usize, usize, usize),
 ) -> Decl
@@ -9945,6 +10378,7 @@ fn __action183<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9952,6 +10386,7 @@ fn __action183<
     __action9(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -9967,6 +10402,7 @@ fn __action184<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -9978,6 +10414,7 @@ fn __action184<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -9985,6 +10422,7 @@ fn __action184<
     __action36(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10002,6 +10440,7 @@ fn __action185<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, usize, usize),
 ) -> Ident
@@ -10011,6 +10450,7 @@ fn __action185<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10018,6 +10458,7 @@ fn __action185<
     __action3(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10033,6 +10474,7 @@ fn __action186<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, usize, usize),
 ) -> Ident
@@ -10042,6 +10484,7 @@ fn __action186<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10049,6 +10492,7 @@ fn __action186<
     __action4(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10064,6 +10508,7 @@ fn __action187<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, usize, usize),
 ) -> Ident
@@ -10073,6 +10518,7 @@ fn __action187<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10080,6 +10526,7 @@ fn __action187<
     __action5(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10095,6 +10542,7 @@ fn __action188<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10106,6 +10554,7 @@ fn __action188<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10113,6 +10562,7 @@ fn __action188<
     __action34(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10130,6 +10580,7 @@ fn __action189<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, &'input str, usize),
     __1: (usize, usize, usize),
 ) -> Ident
@@ -10139,6 +10590,7 @@ fn __action189<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10146,6 +10598,7 @@ fn __action189<
     __action1(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10161,6 +10614,7 @@ fn __action190<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, &'input str, usize),
     __1: (usize, usize, usize),
 ) -> ImportTarget
@@ -10170,6 +10624,7 @@ fn __action190<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10177,6 +10632,7 @@ fn __action190<
     __action22(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10192,6 +10648,7 @@ fn __action191<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10203,6 +10660,7 @@ fn __action191<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10210,6 +10668,7 @@ fn __action191<
     __action41(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10227,6 +10686,7 @@ fn __action192<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10238,6 +10698,7 @@ fn __action192<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10245,6 +10706,7 @@ fn __action192<
     __action42(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10262,6 +10724,7 @@ fn __action193<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Ident, usize),
@@ -10273,6 +10736,7 @@ fn __action193<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10280,6 +10744,7 @@ fn __action193<
     __action49(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10297,6 +10762,7 @@ fn __action194<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, usize, usize),
@@ -10307,6 +10773,7 @@ fn __action194<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10314,6 +10781,7 @@ fn __action194<
     __action50(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10330,6 +10798,7 @@ fn __action195<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10341,6 +10810,7 @@ fn __action195<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10348,6 +10818,7 @@ fn __action195<
     __action44(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10365,6 +10836,7 @@ fn __action196<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, ExprKind, usize),
     __1: (usize, usize, usize),
 ) -> Expr
@@ -10374,6 +10846,7 @@ fn __action196<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10381,6 +10854,7 @@ fn __action196<
     __action52(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10396,6 +10870,7 @@ fn __action197<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10407,6 +10882,7 @@ fn __action197<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10414,6 +10890,7 @@ fn __action197<
     __action32(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10431,6 +10908,7 @@ fn __action198<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Expr, usize),
     __2: (usize, usize, usize),
@@ -10441,6 +10919,7 @@ fn __action198<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10448,6 +10927,7 @@ fn __action198<
     __action46(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10464,6 +10944,7 @@ fn __action199<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Expr, usize),
     __2: (usize, usize, usize),
@@ -10474,6 +10955,7 @@ fn __action199<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10481,6 +10963,7 @@ fn __action199<
     __action47(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10497,6 +10980,7 @@ fn __action200<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, &'input str, usize),
     __1: (usize, usize, usize),
 ) -> Ident
@@ -10506,6 +10990,7 @@ fn __action200<
     let __temp0 = __action92(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10513,6 +10998,7 @@ fn __action200<
     __action64(
         file,
         errors,
+        names,
         __temp0,
         __0,
         __1,
@@ -10528,6 +11014,7 @@ fn __action201<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10538,6 +11025,7 @@ fn __action201<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10545,6 +11033,7 @@ fn __action201<
     __action180(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -10561,6 +11050,7 @@ fn __action202<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10571,6 +11061,7 @@ fn __action202<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10578,6 +11069,7 @@ fn __action202<
     __action181(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -10594,6 +11086,7 @@ fn __action203<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, DeclKind, usize),
 ) -> Decl
 {
@@ -10602,6 +11095,7 @@ fn __action203<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10609,6 +11103,7 @@ fn __action203<
     __action182(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -10623,6 +11118,7 @@ fn __action204<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, __lalrpop_util::ErrorRecovery<usize, Tok<'input>, LexError>, usize),
 ) -> Decl
 {
@@ -10631,6 +11127,7 @@ fn __action204<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10638,6 +11135,7 @@ fn __action204<
     __action183(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -10652,6 +11150,7 @@ fn __action205<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10662,6 +11161,7 @@ fn __action205<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10669,6 +11169,7 @@ fn __action205<
     __action184(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -10685,6 +11186,7 @@ fn __action206<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
 ) -> Ident
 {
@@ -10693,6 +11195,7 @@ fn __action206<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10700,6 +11203,7 @@ fn __action206<
     __action185(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -10714,6 +11218,7 @@ fn __action207<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
 ) -> Ident
 {
@@ -10722,6 +11227,7 @@ fn __action207<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10729,6 +11235,7 @@ fn __action207<
     __action186(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -10743,6 +11250,7 @@ fn __action208<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
 ) -> Ident
 {
@@ -10751,6 +11259,7 @@ fn __action208<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10758,6 +11267,7 @@ fn __action208<
     __action187(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -10772,6 +11282,7 @@ fn __action209<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10782,6 +11293,7 @@ fn __action209<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10789,6 +11301,7 @@ fn __action209<
     __action188(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -10805,6 +11318,7 @@ fn __action210<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, &'input str, usize),
 ) -> Ident
 {
@@ -10813,6 +11327,7 @@ fn __action210<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10820,6 +11335,7 @@ fn __action210<
     __action189(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -10834,6 +11350,7 @@ fn __action211<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, &'input str, usize),
 ) -> ImportTarget
 {
@@ -10842,6 +11359,7 @@ fn __action211<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10849,6 +11367,7 @@ fn __action211<
     __action190(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -10863,6 +11382,7 @@ fn __action212<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10873,6 +11393,7 @@ fn __action212<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10880,6 +11401,7 @@ fn __action212<
     __action191(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -10896,6 +11418,7 @@ fn __action213<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -10906,6 +11429,7 @@ fn __action213<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10913,6 +11437,7 @@ fn __action213<
     __action192(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -10929,6 +11454,7 @@ fn __action214<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Ident, usize),
@@ -10939,6 +11465,7 @@ fn __action214<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10946,6 +11473,7 @@ fn __action214<
     __action193(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -10962,6 +11490,7 @@ fn __action215<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
 ) -> Expr
@@ -10971,6 +11500,7 @@ fn __action215<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -10978,6 +11508,7 @@ fn __action215<
     __action194(
         file,
         errors,
+        names,
         __0,
         __1,
         __temp0,
@@ -10993,6 +11524,7 @@ fn __action216<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -11003,6 +11535,7 @@ fn __action216<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11010,6 +11543,7 @@ fn __action216<
     __action195(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -11026,6 +11560,7 @@ fn __action217<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, ExprKind, usize),
 ) -> Expr
 {
@@ -11034,6 +11569,7 @@ fn __action217<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11041,6 +11577,7 @@ fn __action217<
     __action196(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11055,6 +11592,7 @@ fn __action218<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
     __1: (usize, Tok<'input>, usize),
     __2: (usize, Expr, usize),
@@ -11065,6 +11603,7 @@ fn __action218<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11072,6 +11611,7 @@ fn __action218<
     __action197(
         file,
         errors,
+        names,
         __0,
         __1,
         __2,
@@ -11088,6 +11628,7 @@ fn __action219<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Expr, usize),
 ) -> Expr
@@ -11097,6 +11638,7 @@ fn __action219<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11104,6 +11646,7 @@ fn __action219<
     __action198(
         file,
         errors,
+        names,
         __0,
         __1,
         __temp0,
@@ -11119,6 +11662,7 @@ fn __action220<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Tok<'input>, usize),
     __1: (usize, Expr, usize),
 ) -> Expr
@@ -11128,6 +11672,7 @@ fn __action220<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11135,6 +11680,7 @@ fn __action220<
     __action199(
         file,
         errors,
+        names,
         __0,
         __1,
         __temp0,
@@ -11150,6 +11696,7 @@ fn __action221<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, &'input str, usize),
 ) -> Ident
 {
@@ -11158,6 +11705,7 @@ fn __action221<
     let __temp0 = __action91(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11165,6 +11713,7 @@ fn __action221<
     __action200(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11179,6 +11728,7 @@ fn __action222<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Arg, usize),
 ) -> Vec<Arg>
 {
@@ -11187,12 +11737,14 @@ fn __action222<
     let __temp0 = __action116(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action150(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11206,6 +11758,7 @@ fn __action223<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Vec<Arg>
@@ -11215,6 +11768,7 @@ fn __action223<
     let __temp0 = __action117(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11222,6 +11776,7 @@ fn __action223<
     __action150(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11235,6 +11790,7 @@ fn __action224<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Arg>, usize),
     __1: (usize, Arg, usize),
 ) -> Vec<Arg>
@@ -11244,12 +11800,14 @@ fn __action224<
     let __temp0 = __action116(
         file,
         errors,
+        names,
         __1,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action151(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11264,6 +11822,7 @@ fn __action225<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Arg>, usize),
 ) -> Vec<Arg>
 {
@@ -11272,6 +11831,7 @@ fn __action225<
     let __temp0 = __action117(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11279,6 +11839,7 @@ fn __action225<
     __action151(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11293,6 +11854,7 @@ fn __action226<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Expr, usize),
 ) -> Vec<Expr>
 {
@@ -11301,12 +11863,14 @@ fn __action226<
     let __temp0 = __action111(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action158(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11320,6 +11884,7 @@ fn __action227<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Vec<Expr>
@@ -11329,6 +11894,7 @@ fn __action227<
     let __temp0 = __action112(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11336,6 +11902,7 @@ fn __action227<
     __action158(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11349,6 +11916,7 @@ fn __action228<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Expr>, usize),
     __1: (usize, Expr, usize),
 ) -> Vec<Expr>
@@ -11358,12 +11926,14 @@ fn __action228<
     let __temp0 = __action111(
         file,
         errors,
+        names,
         __1,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action159(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11378,6 +11948,7 @@ fn __action229<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Expr>, usize),
 ) -> Vec<Expr>
 {
@@ -11386,6 +11957,7 @@ fn __action229<
     let __temp0 = __action112(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11393,6 +11965,7 @@ fn __action229<
     __action159(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11407,6 +11980,7 @@ fn __action230<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, FieldInit, usize),
 ) -> Vec<FieldInit>
 {
@@ -11415,12 +11989,14 @@ fn __action230<
     let __temp0 = __action106(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action162(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11434,6 +12010,7 @@ fn __action231<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Vec<FieldInit>
@@ -11443,6 +12020,7 @@ fn __action231<
     let __temp0 = __action107(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11450,6 +12028,7 @@ fn __action231<
     __action162(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11463,6 +12042,7 @@ fn __action232<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<FieldInit>, usize),
     __1: (usize, FieldInit, usize),
 ) -> Vec<FieldInit>
@@ -11472,12 +12052,14 @@ fn __action232<
     let __temp0 = __action106(
         file,
         errors,
+        names,
         __1,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action163(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11492,6 +12074,7 @@ fn __action233<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<FieldInit>, usize),
 ) -> Vec<FieldInit>
 {
@@ -11500,6 +12083,7 @@ fn __action233<
     let __temp0 = __action107(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11507,6 +12091,7 @@ fn __action233<
     __action163(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11521,6 +12106,7 @@ fn __action234<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Ident, usize),
 ) -> Vec<Ident>
 {
@@ -11529,12 +12115,14 @@ fn __action234<
     let __temp0 = __action121(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action170(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11548,6 +12136,7 @@ fn __action235<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Vec<Ident>
@@ -11557,6 +12146,7 @@ fn __action235<
     let __temp0 = __action122(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11564,6 +12154,7 @@ fn __action235<
     __action170(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11577,6 +12168,7 @@ fn __action236<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Ident>, usize),
     __1: (usize, Ident, usize),
 ) -> Vec<Ident>
@@ -11586,12 +12178,14 @@ fn __action236<
     let __temp0 = __action121(
         file,
         errors,
+        names,
         __1,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action171(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11606,6 +12200,7 @@ fn __action237<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Ident>, usize),
 ) -> Vec<Ident>
 {
@@ -11614,6 +12209,7 @@ fn __action237<
     let __temp0 = __action122(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11621,6 +12217,7 @@ fn __action237<
     __action171(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11635,6 +12232,7 @@ fn __action238<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, Param, usize),
 ) -> Vec<Param>
 {
@@ -11643,12 +12241,14 @@ fn __action238<
     let __temp0 = __action95(
         file,
         errors,
+        names,
         __0,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action178(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11662,6 +12262,7 @@ fn __action239<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
 ) -> Vec<Param>
@@ -11671,6 +12272,7 @@ fn __action239<
     let __temp0 = __action96(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11678,6 +12280,7 @@ fn __action239<
     __action178(
         file,
         errors,
+        names,
         __temp0,
     )
 }
@@ -11691,6 +12294,7 @@ fn __action240<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Param>, usize),
     __1: (usize, Param, usize),
 ) -> Vec<Param>
@@ -11700,12 +12304,14 @@ fn __action240<
     let __temp0 = __action95(
         file,
         errors,
+        names,
         __1,
     );
     let __temp0 = (__start0, __temp0, __end0);
     __action179(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )
@@ -11720,6 +12326,7 @@ fn __action241<
 >(
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
+    names: &'err mut Names,
     __0: (usize, alloc::vec::Vec<Param>, usize),
 ) -> Vec<Param>
 {
@@ -11728,6 +12335,7 @@ fn __action241<
     let __temp0 = __action96(
         file,
         errors,
+        names,
         &__start0,
         &__end0,
     );
@@ -11735,6 +12343,7 @@ fn __action241<
     __action179(
         file,
         errors,
+        names,
         __0,
         __temp0,
     )

@@ -25,3 +25,24 @@ pub fn c_compiler() -> Option<String> {
             .is_ok_and(|o| o.status.success())
     })
 }
+
+/// Runs the `lsdc` binary with `args` (no library path from the environment): exit code,
+/// standard output and standard error.
+pub fn lsdc(args: &[&str]) -> (i32, String, String) {
+    lsdc_with(args, &[])
+}
+
+/// `lsdc` with these environment variables set.
+pub fn lsdc_with(args: &[&str], environment: &[(&str, &std::ffi::OsStr)]) -> (i32, String, String) {
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_lsdc"))
+        .args(args)
+        .env_remove("LSD_PATH")
+        .envs(environment.iter().copied())
+        .output()
+        .expect("lsdc runs");
+    (
+        output.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}

@@ -1,0 +1,83 @@
+//! Program scalars lowered into the expression pool, the one expression system of lsdc: the
+//! structure (numbers, arithmetic, calls) is lowered alike everywhere, the leaves as each use
+//! needs (the geometry's constants and dof chains in `kinematics::eval`, the efforts in
+//! `dynamics::compiled`, the equations in `symbolic::lower`).
+
+use super::expr::{ExprId, Function, Pool};
+use crate::elab::value::SExpr;
+
+/// A call the pool cannot express: another number of arguments than the function takes, or a
+/// function no one knows (the checker rejects both; lowering does not trust it blindly).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MalformedCall(pub &'static str);
+
+/// Lowering a program scalar into the pool: numbers, arithmetic and calls lower alike
+/// everywhere; what the leaves (unknowns, coordinates, rates, the time, frames) become depends
+/// on the use (constants and symbols of a dof chain, slots of the effort tape).
+pub trait Lower {
+    /// What a leaf can fail with; the structure's own failures come as a `MalformedCall`.
+    type Error: From<MalformedCall>;
+
+    fn pool(&mut self) -> &mut Pool;
+
+    /// A scalar that is neither a number, arithmetic nor a call.
+    fn leaf(&mut self, s: &SExpr) -> Result<ExprId, Self::Error>;
+
+    /// Lowers `s` (override to remember subexpressions already lowered).
+    fn lower(&mut self, s: &SExpr) -> Result<ExprId, Self::Error> {
+        lower_structure(self, s)
+    }
+}
+
+/// The node of `s`, its operands lowered through `lowering`.
+pub fn lower_structure<L: Lower + ?Sized>(lowering: &mut L, s: &SExpr) -> Result<ExprId, L::Error> {
+    let binary = |lowering: &mut L, a: &SExpr, b: &SExpr| -> Result<_, L::Error> {
+        Ok((lowering.lower(a)?, lowering.lower(b)?))
+    };
+    Ok(match s {
+        SExpr::Num(v) => lowering.pool().constant(*v),
+        SExpr::Neg(a) => {
+            let a = lowering.lower(a)?;
+            lowering.pool().neg(a)
+        }
+        SExpr::Add(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().add(a, b)
+        }
+        SExpr::Sub(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().sub(a, b)
+        }
+        SExpr::Mul(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().mul(a, b)
+        }
+        SExpr::Div(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            lowering.pool().div(a, b)
+        }
+        SExpr::Pow(a, b) => {
+            let (a, b) = binary(lowering, a, b)?;
+            // A square is a product: cheaper than `powf`, and as exact.
+            match lowering.pool().as_constant(b) {
+                Some(2.0) => lowering.pool().mul(a, a),
+                _ => lowering.pool().pow(a, b),
+            }
+        }
+        SExpr::Call(name, args) => {
+            let arity = if *name == "atan2" { 2 } else { 1 };
+            if args.len() != arity {
+                let error = MalformedCall("a call with another number of arguments");
+                return Err(error.into());
+            }
+            let x = lowering.lower(&args[0])?;
+            if *name == "atan2" {
+                let second = lowering.lower(&args[1])?;
+                return Ok(lowering.pool().atan2(x, second));
+            }
+            let function = Function::from_name(name).ok_or(MalformedCall("an unknown function"))?;
+            lowering.pool().apply(function, x)
+        }
+        leaf => lowering.leaf(leaf)?,
+    })
+}
