@@ -1106,7 +1106,7 @@ fn import_urdf(
     options: &lsdc::load::urdf::ImportOptions,
     output: Option<&std::path::Path>,
 ) -> ExitCode {
-    let text = match std::fs::read_to_string(file) {
+    let text = match lsdc::load::read_source(file) {
         Ok(t) => t,
         Err(e) => return usage_error(&format!("cannot read `{}`: {e}", file.display())),
     };
@@ -1126,7 +1126,7 @@ fn import_urdf(
 }
 
 fn parse(file: &std::path::Path) -> ExitCode {
-    let text = match std::fs::read_to_string(file) {
+    let text = match lsdc::load::read_source(file) {
         Ok(t) => t,
         Err(e) => return usage_error(&format!("cannot read `{}`: {e}", file.display())),
     };
