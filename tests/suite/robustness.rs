@@ -236,3 +236,32 @@ fn decompositions_refuse_non_finite_matrices() {
     m[(1, 2)] = f64::INFINITY;
     assert!(lsdc::linalg::pseudo_inverse(m, 1e-12).is_none());
 }
+
+/// With a damping torque beside gravity, the samples still carry the potential energy of the
+/// weight (m g z of the centre of mass), the one the report's final energies count; the energy
+/// is not said to drift, since it is not conserved.
+#[test]
+fn potential_energy_is_written_beside_non_conservative_efforts() {
+    let text = "import joints ;\nlet rod = body mass = 1.2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and rod with revolute([1, 0, 0]) as swing ;\napply force value = [0, 0, -9.81 * rod.mass], body = earth end on rod.iframe ;\napply torque value = [-0.3 * swing.q', 0, 0] end on rod ;\ninitial swing.q = pi / 3 ;\nsimulate duration = 1, output = 0.1, integrator = dopri5, tolerance = 1e-10 end ;\n";
+    let program = Program::from_text("damped.lsd", text, None, &Default::default());
+    let prepared = program.prepare(&[], &Default::default()).expect("prepares");
+    let simulation = run(&prepared, &mut |_| {});
+    assert!(simulation.report.failure.is_none());
+    assert_eq!(simulation.samples.len(), 11);
+    for sample in &simulation.samples {
+        let height = -0.5 * sample.coordinates[0].cos();
+        let expected = 1.2 * 9.81 * height;
+        let potential = sample.potential_energy.expect("the weight's potential");
+        assert!(
+            (potential - expected).abs() < 1e-9,
+            "{potential} vs {expected}"
+        );
+    }
+    let last = simulation.samples.last().expect("a sample");
+    let [_, potential, _] = simulation
+        .report
+        .final_energies
+        .expect("the work is tracked");
+    assert!((potential - last.potential_energy.unwrap_or(f64::NAN)).abs() < 1e-9);
+    assert!(simulation.report.energy_drift.is_none());
+}
