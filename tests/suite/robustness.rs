@@ -265,3 +265,86 @@ fn potential_energy_is_written_beside_non_conservative_efforts() {
     assert!((potential - last.potential_energy.unwrap_or(f64::NAN)).abs() < 1e-9);
     assert!(simulation.report.energy_drift.is_none());
 }
+
+/// `-` reads the program from standard input.
+#[test]
+fn a_program_is_read_from_standard_input() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lsdc"))
+        .args(["check", "-"])
+        .env_remove("LSD_PATH")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("lsdc runs");
+    let text = std::fs::read("examples/pendulum.lsd").expect("readable");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(&text)
+        .expect("written");
+    let output = child.wait_with_output().expect("lsdc ends");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("bodies    1 (rod)"), "{stdout}");
+}
+
+/// Usage errors where JSON is asked for: `check` reports the readable files and the unreadable
+/// one, exit code 2; a `--set` without a name is a usage error as JSON.
+#[test]
+fn usage_errors_are_json_where_json_is_asked_for() {
+    let (code, stdout, _) = crate::common::lsdc(&[
+        "check",
+        "--format",
+        "json",
+        "examples/pendulum.lsd",
+        "examples/no_such_file.lsd",
+    ]);
+    assert_eq!(code, 2);
+    let value: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON document");
+    let files = value["files"].as_array().expect("a list of files");
+    assert_eq!(files.len(), 2);
+    assert_eq!(files[0]["ok"], true);
+    assert_eq!(files[1]["file"], "examples/no_such_file.lsd");
+    assert!(files[1]["usage_error"]
+        .as_str()
+        .is_some_and(|m| m.contains("cannot read")));
+    let (code, stdout, _) = crate::common::lsdc(&[
+        "statics",
+        "--format",
+        "json",
+        "--actuate",
+        "swing.q",
+        "--set",
+        "=3",
+        "examples/pendulum.lsd",
+    ]);
+    assert_eq!(code, 2);
+    let value: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON document");
+    assert!(value["usage_error"]
+        .as_str()
+        .is_some_and(|m| m.contains("no name before `=`")));
+}
+
+/// A states file of the wrong form says what is wrong in it, not how serde tried to read it.
+#[test]
+fn states_files_are_explained() {
+    let cases = [
+        (r#"{"states": [{"v": [0]}]}"#, "missing field `q`"),
+        (
+            r#"{"x": 1}"#,
+            "neither an object with one `states` list nor a list",
+        ),
+    ];
+    for (text, expected) in cases {
+        let error = lsdc::simulate::batch::parse_states(text)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(error.contains(expected), "{error}");
+        assert!(!error.contains("untagged"), "{error}");
+    }
+}
