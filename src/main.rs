@@ -23,6 +23,29 @@ use lsdc::output::text;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print no warnings (errors are still printed, and JSON results keep theirs).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+}
+
+/// Set by `--quiet`: warnings are not printed.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// The diagnostics to print as text: without the warnings under `--quiet`.
+fn printed(diagnostics: &[Diagnostic]) -> Vec<Diagnostic> {
+    let keep = |d: &&Diagnostic| d.is_error() || !quiet();
+    diagnostics.iter().filter(keep).cloned().collect()
+}
+
+/// A warning of the command line itself, on standard error (not under `--quiet`).
+fn warn(message: &str) {
+    if !quiet() {
+        eprintln!("warning: {message}");
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -339,6 +362,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     match cli.command {
         Command::Check {
             files,
@@ -472,7 +496,8 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
 }
 
 fn print_text_report(file: &std::path::Path, compilation: &Compilation) {
-    let rendered = render::to_text(&compilation.workspace.sources, &compilation.diagnostics);
+    let diagnostics = printed(&compilation.diagnostics);
+    let rendered = render::to_text(&compilation.workspace.sources, &diagnostics);
     eprint!("{rendered}");
     match &compilation.mechanism {
         Some(mechanism) => out(&text::summary(file, &mechanism.summary())),
@@ -529,7 +554,7 @@ fn report_diagnostics(
     match format {
         Format::Text => eprint!(
             "{}",
-            render::to_text(&compilation.workspace.sources, &diagnostics)
+            render::to_text(&compilation.workspace.sources, &printed(&diagnostics))
         ),
         Format::Json => {
             let value = serde_json::json!({ "ok": false, "diagnostics": render::to_json_value(&compilation.workspace.sources, &diagnostics) });
@@ -869,9 +894,7 @@ fn print_run_report(
         .collect();
     match format {
         Format::Text => {
-            if !warnings.is_empty() {
-                report_diagnostics(compilation, &warnings, Format::Text);
-            }
+            report_diagnostics(compilation, &warnings, Format::Text);
             eprint!("{}", text::run_report(report));
         }
         Format::Json => {
@@ -1064,7 +1087,7 @@ fn eval(
                     .iter()
                     .map(|(quantity, message)| format!("{quantity}: {message}"))
                     .collect();
-                eprintln!("warning: state {index}: {}", errors.join("; "));
+                warn(&format!("state {index}: {}", errors.join("; ")));
             }
             out(&json(&evaluation));
             ExitCode::SUCCESS
@@ -1127,6 +1150,9 @@ fn export_urdf(
             return ExitCode::from(1);
         }
     };
+    if let Some(dropped) = lsdc::output::urdf::dropped_efforts(&prepared.model) {
+        warn(&dropped);
+    }
     write_output(output, &urdf)
 }
 
@@ -1166,7 +1192,10 @@ fn import_urdf(
                 return ExitCode::from(1);
             }
         };
-    eprint!("{}", render::to_text(&sources, &imported.warnings));
+    eprint!(
+        "{}",
+        render::to_text(&sources, &printed(&imported.warnings))
+    );
     write_output(output, &imported.text)
 }
 

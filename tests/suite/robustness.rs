@@ -348,3 +348,38 @@ fn states_files_are_explained() {
         assert!(!error.contains("untagged"), "{error}");
     }
 }
+
+/// A URDF's warnings are printed once each, and not at all under `--quiet`.
+#[test]
+fn warnings_are_printed_once_and_silenced_by_quiet() {
+    let panda = "tests/fixtures/urdf/panda.urdf";
+    let (code, _, stderr) = crate::common::lsdc(&["import-urdf", panda]);
+    assert_eq!(code, 0);
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning"))
+        .collect();
+    let distinct: std::collections::BTreeSet<&str> = warnings.iter().copied().collect();
+    assert!(warnings.len() >= 20, "{stderr}");
+    assert_eq!(warnings.len(), distinct.len(), "{stderr}");
+    let run = ["simulate", "--duration", "0.001", "-o", "/dev/null", panda];
+    let (code, _, stderr) = crate::common::lsdc(&run);
+    assert_eq!(code, 0);
+    assert!(stderr.contains("warning["), "{stderr}");
+    let (code, _, stderr) = crate::common::lsdc(&[&["--quiet"], &run[..]].concat());
+    assert_eq!(code, 0);
+    assert!(!stderr.contains("warning"), "{stderr}");
+    assert!(stderr.contains("function evaluations"), "{stderr}");
+}
+
+/// `export-urdf` says which efforts the URDF leaves out.
+#[test]
+fn exported_urdf_names_the_efforts_left_out() {
+    let (code, stdout, stderr) = crate::common::lsdc(&["export-urdf", "examples/governor.lsd"]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("<robot"));
+    assert!(
+        stderr.contains("leaves out the mechanism's efforts (gravity, 8 applied efforts)"),
+        "{stderr}"
+    );
+}
