@@ -383,3 +383,18 @@ fn exported_urdf_names_the_efforts_left_out() {
         "{stderr}"
     );
 }
+
+/// Large numbers are written with an exponent in the notation table, not as 301 digits.
+#[test]
+fn large_numbers_are_written_with_an_exponent() {
+    let text = std::fs::read_to_string("examples/pendulum.lsd")
+        .expect("readable")
+        .replace("mass = 1.2", "mass = 1e300");
+    std::fs::write(std::env::temp_dir().join("lsdc_large_mass.lsd"), text).expect("writable");
+    let path = std::env::temp_dir().join("lsdc_large_mass.lsd");
+    let path = path.to_str().expect("a UTF-8 path");
+    let (code, stdout, _) = crate::common::lsdc(&["compile", "--emit", "notation", path]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("mu_1 := 1e300"), "{stdout}");
+    assert!(stdout.lines().all(|l| l.len() < 200), "{stdout}");
+}
