@@ -41,6 +41,7 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
         memo: FxHashMap::default(),
         modules_in_progress: Vec::new(),
         simulate_seen: None,
+        suggestions_left: std::cell::Cell::new(checker::MAX_SUGGESTIONS),
     };
     for &root in &workspace.roots {
         checker.module(root);

@@ -115,18 +115,21 @@ impl std::error::Error for Diagnostic {}
 #[derive(Default, Debug)]
 pub struct Diagnostics {
     pub list: Vec<Diagnostic>,
+    /// Code, message and place of each diagnostic pushed, so that a duplicate is found in
+    /// constant time (a file of n errors is checked in linear time).
+    pushed: std::collections::HashSet<(&'static str, String, Option<crate::source::Span>)>,
 }
 
 impl Diagnostics {
     pub fn push(&mut self, diagnostic: Diagnostic) {
         // A definition's body is checked when it is declared and again at each use: the same
         // error at the same place is reported once, with the context of its first report.
-        let duplicate = self.list.iter().any(|d| {
-            d.code == diagnostic.code
-                && d.message == diagnostic.message
-                && d.primary_span() == diagnostic.primary_span()
-        });
-        if !duplicate {
+        let key = (
+            diagnostic.code,
+            diagnostic.message.clone(),
+            diagnostic.primary_span(),
+        );
+        if self.pushed.insert(key) {
             self.list.push(diagnostic);
         }
     }

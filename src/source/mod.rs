@@ -25,6 +25,12 @@ impl SourceFile {
         }
     }
 
+    /// Byte offset where a zero-based line starts, from the table of line starts: rendering a
+    /// diagnostic costs the same at the end of a long file as at its start.
+    pub fn line_start(&self, line_index: usize) -> Option<usize> {
+        self.line_starts.get(line_index).copied()
+    }
+
     /// One-based line and column (in characters) of a byte offset.
     pub fn line_column(&self, offset: usize) -> (usize, usize) {
         let offset = offset.min(self.text.len());

@@ -398,3 +398,19 @@ fn large_numbers_are_written_with_an_exponent() {
     assert!(stdout.contains("mu_1 := 1e300"), "{stdout}");
     assert!(stdout.lines().all(|l| l.len() < 200), "{stdout}");
 }
+
+/// Many unknown names: each is reported, the first 100 with a suggestion (each suggestion
+/// compares the name with every visible one, so they are bounded to keep checking linear).
+#[test]
+fn suggestions_for_unknown_names_are_bounded() {
+    let text: String = (0..300)
+        .map(|i| format!("let a{i} = 1 ;\nlet b{i} = a{i}x ;\n"))
+        .collect();
+    let program = Program::from_text("names.lsd", &text, None, &Default::default());
+    let unknown: Vec<_> = (program.diagnostics().iter())
+        .filter(|d| d.code == "E0301")
+        .collect();
+    assert_eq!(unknown.len(), 300);
+    let suggested = unknown.iter().filter(|d| d.help.is_some()).count();
+    assert_eq!(suggested, 100);
+}
