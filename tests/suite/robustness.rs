@@ -341,8 +341,7 @@ fn states_files_are_explained() {
     ];
     for (text, expected) in cases {
         let error = lsdc::simulate::batch::parse_states(text)
-            .err()
-            .expect("refused")
+            .expect_err("refused")
             .to_string();
         assert!(error.contains(expected), "{error}");
         assert!(!error.contains("untagged"), "{error}");
