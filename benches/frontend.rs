@@ -45,7 +45,7 @@ fn run(text: &str) -> Timing {
     let check = start.elapsed();
     assert!(!diagnostics.has_errors());
     let start = Instant::now();
-    let mechanism = lsdc::elab::elaborate(&workspace, &checked).expect("elaborates");
+    let (mechanism, _warnings) = lsdc::elab::elaborate(&workspace, &checked).expect("elaborates");
     let elaborate = start.elapsed();
     assert_eq!(mechanism.summary().joins, mechanism.joins.len());
     Timing {
@@ -101,6 +101,7 @@ fn library_cost() {
         let (checked, _) = lsdc::check::check(&workspace);
         let bodies = lsdc::elab::elaborate(&workspace, &checked)
             .expect("elaborates")
+            .0
             .bodies
             .len();
         println!(

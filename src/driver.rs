@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use crate::check;
-use crate::diag::Diagnostic;
+use crate::check::{self, Checked};
+use crate::diag::{Diagnostic, Diagnostics};
 use crate::elab::{self, Mechanism};
 use crate::load::{self, LoadError, LoadOptions, Workspace};
 
@@ -42,15 +42,66 @@ fn finish(workspace: Workspace, mut diagnostics: Vec<Diagnostic>) -> Compilation
     let mut mechanism = None;
     if !diagnostics.iter().any(Diagnostic::is_error) {
         let (checked, check_diagnostics) = check::check(&workspace);
-        let failed = check_diagnostics.has_errors();
-        diagnostics.extend(check_diagnostics.list);
-        if !failed {
-            match elab::elaborate(&workspace, &checked) {
-                Ok(m) => mechanism = Some(m),
-                Err(d) => diagnostics.push(d),
-            }
+        mechanism = check_and_elaborate(&workspace, &checked, check_diagnostics, &mut diagnostics);
+    }
+    in_import_context(workspace, diagnostics, mechanism)
+}
+
+/// Compiles a program given as text for an editor: as [`compile_text`], and `inspect` sees the
+/// checker's results (its scopes and name resolutions) and the mechanism. The checker runs even
+/// when loading found errors, on what could be parsed, so that names can be resolved in a file
+/// being typed; the diagnostics are those the command line reports.
+pub fn compile_text_inspected<R>(
+    name: &str,
+    text: &str,
+    dir: Option<&std::path::Path>,
+    options: &LoadOptions,
+    inspect: impl FnOnce(&Workspace, &Checked<'_>, Option<&Mechanism>) -> R,
+) -> (Compilation, R) {
+    let (workspace, diagnostics) = load::load_text(name, text, dir, options);
+    let mut diagnostics = diagnostics.list;
+    let load_failed = diagnostics.iter().any(Diagnostic::is_error);
+    let (checked, check_diagnostics) = check::check(&workspace);
+    let mechanism = if load_failed {
+        None
+    } else {
+        check_and_elaborate(&workspace, &checked, check_diagnostics, &mut diagnostics)
+    };
+    let inspected = inspect(&workspace, &checked, mechanism.as_ref());
+    drop(checked);
+    let compilation = in_import_context(workspace, diagnostics, mechanism);
+    (compilation, inspected)
+}
+
+/// Adds the checker's diagnostics and, when it found no errors, elaborates the mechanism.
+fn check_and_elaborate(
+    workspace: &Workspace,
+    checked: &Checked<'_>,
+    check_diagnostics: Diagnostics,
+    diagnostics: &mut Vec<Diagnostic>,
+) -> Option<Mechanism> {
+    let failed = check_diagnostics.has_errors();
+    diagnostics.extend(check_diagnostics.list);
+    if failed {
+        return None;
+    }
+    match elab::elaborate(workspace, checked) {
+        Ok((mechanism, warnings)) => {
+            diagnostics.extend(warnings);
+            Some(mechanism)
+        }
+        Err(diagnostic) => {
+            diagnostics.push(diagnostic);
+            None
         }
     }
+}
+
+fn in_import_context(
+    workspace: Workspace,
+    mut diagnostics: Vec<Diagnostic>,
+    mechanism: Option<Mechanism>,
+) -> Compilation {
     for diagnostic in &mut diagnostics {
         workspace.add_import_context(diagnostic);
     }

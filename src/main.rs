@@ -14,6 +14,8 @@ use lsdc::elab::Mechanism;
 use lsdc::load::LoadOptions;
 use lsdc::output::text;
 
+mod cli;
+
 #[derive(Parser)]
 #[command(
     name = "lsdc",
@@ -100,6 +102,11 @@ struct SimulateArgs {
     /// join, in the fixed axes (moment then force).
     #[arg(long)]
     reactions: bool,
+    /// Output the position, orientation (quaternion w, x, y, z), velocity and angular velocity
+    /// of a frame, in the fixed frame: a frame the program names (`let tip = ... @ arm;`), a
+    /// body's reference frame (its name) or `earth`. Repeatable.
+    #[arg(long = "output-frame", value_name = "NAME")]
+    output_frames: Vec<String>,
     /// Most steps of the integrator, rejected ones included, before the run stops with a
     /// failure (its outputs kept).
     #[arg(long, value_name = "N", default_value_t = lsdc::simulate::settings::DEFAULT_MAX_STEPS)]
@@ -280,6 +287,12 @@ enum Command {
     /// compare each run with a tight reference at the outputs, and print the work-precision
     /// table (errors, closure, energy drift, steps, evaluations, CPU time).
     Precision(PrecisionArgs),
+    /// Drag a point of a body along a path of targets, quasi-statically: the configuration at
+    /// each target, the distance left, the loops' residual or the joints' gap, the energy.
+    Drag(cli::drag::DragArgs),
+    /// Show the mechanism in 3D in a web page: served on 127.0.0.1 (simulations on demand,
+    /// bodies dragged with the mouse), or exported as one standalone HTML file.
+    View(cli::view::ViewArgs),
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics {
@@ -358,6 +371,45 @@ enum Command {
     },
     /// Print the syntax tree of a file (for debugging the parser).
     Parse { file: PathBuf },
+    /// Run the regression cases of test manifests (`lsdtest.toml`): simulate each program,
+    /// compare its outputs with a reference within per-variable tolerances, make its checks.
+    /// Exit code 0 when every case passes, 1 when one fails, 2 for a manifest that cannot be
+    /// read.
+    Test(TestArgs),
+    /// Format LSD files in place (`docs/formatting.md`); directories are searched for `.lsd`
+    /// files. Only whitespace changes: every token and comment is kept.
+    Fmt {
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Change nothing; list the files that are not formatted and fail if there are any.
+        #[arg(long)]
+        check: bool,
+    },
+    /// Run the language server on standard input and output (`docs/editors.md`).
+    Lsp,
+}
+
+#[derive(clap::Args)]
+struct TestArgs {
+    /// Manifests, or folders searched for `lsdtest.toml` files (default: the current folder).
+    paths: Vec<PathBuf>,
+    /// Cases run at once (default: the number of processors).
+    #[arg(short = 'j', long = "jobs", value_parser = clap::value_parser!(u16).range(1..))]
+    jobs: Option<u16>,
+    /// Only the cases whose name contains this text.
+    #[arg(long)]
+    case: Option<String>,
+    #[arg(long, value_enum, default_value = "text")]
+    format: Format,
+    /// Also write the results as JUnit XML to this file.
+    #[arg(long, value_name = "FILE")]
+    junit: Option<PathBuf>,
+    /// Re-record the references from runs, and say what moved.
+    #[arg(long, conflicts_with = "calibrate")]
+    update: bool,
+    /// Run each case at its tolerance (or step) and a finer one, and propose tolerances.
+    #[arg(long)]
+    calibrate: bool,
 }
 
 fn main() -> ExitCode {
@@ -388,6 +440,8 @@ fn main() -> ExitCode {
         } => compile(&file, &libraries.options(), emit, format, output.as_deref()),
         Command::Simulate(args) => simulate(&args),
         Command::Precision(args) => precision(&args),
+        Command::Drag(args) => cli::drag::drag(&args),
+        Command::View(args) => cli::view::view(&args),
         Command::Statics {
             file,
             libraries,
@@ -427,6 +481,15 @@ fn main() -> ExitCode {
             import_urdf(&file, &options, output.as_deref())
         }
         Command::Parse { file } => parse(&file),
+        Command::Test(args) => test(&args),
+        Command::Fmt { paths, check } => format_files(&paths, check),
+        Command::Lsp => match lsdc::ide::server::run_stdio() {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(error) => {
+                eprintln!("error: the language server stopped: {error}");
+                ExitCode::from(1)
+            }
+        },
     }
 }
 
@@ -712,6 +775,10 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     if let Err(error) = prepared.settings.apply(&settings_changes(args)) {
         return usage_error(&error.to_string());
     }
+    let frames = match resolve_frames(mechanism, &prepared, &args.output_frames) {
+        Ok(frames) => frames,
+        Err(message) => return usage_error(&message),
+    };
     if args.compiled {
         let native = lsdc::simulate::compiled::attach_with_warnings(&mut prepared, mechanism);
         prepared.warnings.extend(native);
@@ -739,7 +806,7 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
         }
         Format::Text => {}
     }
-    let (simulation, written) = run_and_write(args, &prepared, samples_out);
+    let (simulation, written) = run_and_write(args, &prepared, &frames, samples_out);
     let plotted = match &args.plot {
         Some(path) => lsdc::output::plot::plot(&simulation, path)
             .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
@@ -782,6 +849,18 @@ fn settings_changes(args: &SimulateArgs) -> lsdc::simulate::settings::SettingsCh
     }
 }
 
+/// The frames `--output-frame` names, resolved on the mechanism.
+fn resolve_frames(
+    mechanism: &Mechanism,
+    prepared: &lsdc::simulate::prepare::Prepared,
+    names: &[String],
+) -> Result<Vec<lsdc::kinematics::frames::FramePoint>, String> {
+    names
+        .iter()
+        .map(|name| lsdc::kinematics::frames::resolve(mechanism, &prepared.kinematics, name))
+        .collect()
+}
+
 /// The file the samples go to (created, or emptied, now), or standard output.
 fn open_samples_output(path: Option<&std::path::Path>) -> Result<Box<dyn Write>, ExitCode> {
     match path {
@@ -801,8 +880,10 @@ fn open_samples_output(path: Option<&std::path::Path>) -> Result<Box<dyn Write>,
 fn run_and_write(
     args: &SimulateArgs,
     prepared: &lsdc::simulate::prepare::Prepared,
+    frames: &[lsdc::kinematics::frames::FramePoint],
     out: Box<dyn Write>,
 ) -> (lsdc::simulate::run::Simulation, Result<(), String>) {
+    use lsdc::kinematics::frames::{column_names, states};
     use lsdc::simulate::run::{run_with, RunOptions, Sample};
     let target = args
         .out
@@ -817,15 +898,28 @@ fn run_and_write(
     let mut csv = (args.format == SampleFormat::Csv).then(|| {
         let names = &prepared.coordinate_names;
         let reactions = lsdc::simulate::run::reaction_names_of(prepared);
-        lsdc::output::csv::CsvWriter::new(out, names, &reactions)
+        lsdc::output::csv::CsvWriter::new(out, names, &reactions, &column_names(frames))
     });
+    let frame_values = |sample: &Sample| -> Vec<f64> {
+        let found = states(
+            &prepared.kinematics,
+            frames,
+            &sample.coordinates,
+            &sample.rates,
+        );
+        // The run evaluated these chains at every step: they cannot fail here.
+        found.map_or_else(
+            |_| vec![f64::NAN; 13 * frames.len()],
+            |states| states.iter().flat_map(|s| s.values()).collect(),
+        )
+    };
     let bar = progress_bar(prepared.settings.duration);
     let mut sink = |sample: &Sample| {
         if let Some(bar) = &bar {
             bar.set_position((sample.time * 1000.0) as u64);
         }
         if let Some(csv) = &mut csv {
-            csv.write_sample(sample);
+            csv.write_sample(sample, &frame_values(sample));
         }
     };
     let simulation = run_with(prepared, &options, &mut sink);
@@ -834,20 +928,42 @@ fn run_and_write(
     }
     let written = match csv {
         Some(csv) => csv.finish(&simulation.report),
-        None => write_json_samples(&simulation, args.out.as_deref()),
+        None => write_json_samples(&simulation, prepared, frames, args.out.as_deref()),
     };
     let written = written.map_err(|e| format!("cannot write {target}: {e}"));
     (simulation, written)
 }
 
+/// The simulation as JSON; with `--output-frame`, each sample also has `frames`: each frame's
+/// state by name.
 fn write_json_samples(
     simulation: &lsdc::simulate::run::Simulation,
+    prepared: &lsdc::simulate::prepare::Prepared,
+    frames: &[lsdc::kinematics::frames::FramePoint],
     path: Option<&std::path::Path>,
 ) -> std::io::Result<()> {
+    let mut value = serde_json::to_value(simulation).unwrap_or_default();
+    if !frames.is_empty() {
+        let samples = value["samples"].as_array_mut().into_iter().flatten();
+        for (json_sample, sample) in samples.zip(&simulation.samples) {
+            let states = lsdc::kinematics::frames::states(
+                &prepared.kinematics,
+                frames,
+                &sample.coordinates,
+                &sample.rates,
+            );
+            let by_name: serde_json::Map<String, serde_json::Value> = frames
+                .iter()
+                .zip(states.unwrap_or_default())
+                .map(|(f, s)| (f.name.clone(), serde_json::json!(s)))
+                .collect();
+            json_sample["frames"] = serde_json::Value::Object(by_name);
+        }
+    }
     match path {
-        Some(path) => std::fs::write(path, json(simulation)),
+        Some(path) => std::fs::write(path, json(&value)),
         None => {
-            out(&json(simulation));
+            out(&json(&value));
             Ok(())
         }
     }
@@ -1213,5 +1329,137 @@ fn parse(file: &std::path::Path) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
+    }
+}
+
+fn test(args: &TestArgs) -> ExitCode {
+    use lsdc::testing::{self, calibrate, record, report};
+    let mut cases = match test_cases(args) {
+        Ok(cases) => cases,
+        Err(message) => return usage_error(&message),
+    };
+    if args.calibrate || args.update {
+        // Only the cases compared with a reference have one to record or tolerances to propose.
+        cases.retain(|c| c.reference.is_some());
+    }
+    let jobs = (args.jobs.map(usize::from))
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let start = std::time::Instant::now();
+    let outcomes = match (args.calibrate, args.update) {
+        (true, _) => testing::for_each_case(&cases, jobs, |c| named(c, calibrate::calibrate(c)))
+            .map(|proposals| print_each(&proposals, args.format, calibrate::as_manifest)),
+        (_, true) => testing::for_each_case(&cases, jobs, |c| named(c, record::record(c)))
+            .map(|recorded| print_each(&recorded, args.format, report::recorded_text)),
+        _ => testing::run_all(&cases, jobs).map(|outcomes| {
+            let summary = report::Summary::new(&outcomes, jobs, start.elapsed().as_secs_f64());
+            print_summary(&summary, args)
+        }),
+    };
+    outcomes.unwrap_or_else(|message| usage_error(&message))
+}
+
+/// The cases of the manifests under the paths given (the current folder by default), those
+/// named by `--case` only.
+fn test_cases(args: &TestArgs) -> Result<Vec<lsdc::testing::Case>, String> {
+    let paths = match args.paths.is_empty() {
+        true => vec![PathBuf::from(".")],
+        false => args.paths.clone(),
+    };
+    let mut cases = lsdc::testing::load(&paths).map_err(|error| error.to_string())?;
+    if let Some(text) = &args.case {
+        cases.retain(|c| c.name.contains(text.as_str()));
+    }
+    match cases.is_empty() {
+        true => Err("no test case found (manifests are named `lsdtest.toml`)".into()),
+        false => Ok(cases),
+    }
+}
+
+/// Prints the results (text or JSON), writes the JUnit file; exit code 0 if every case passed.
+fn print_summary(summary: &lsdc::testing::report::Summary, args: &TestArgs) -> ExitCode {
+    use lsdc::testing::report;
+    match args.format {
+        Format::Text => out(&report::text(summary)),
+        Format::Json => out(&json(summary)),
+    }
+    if let Some(path) = &args.junit {
+        if let Err(error) = std::fs::write(path, report::junit(summary)) {
+            return usage_error(&format!("cannot write `{}`: {error}", path.display()));
+        }
+    }
+    match summary.all_passed() {
+        true => ExitCode::SUCCESS,
+        false => ExitCode::from(1),
+    }
+}
+
+/// An error of a case, with the case's name.
+fn named<T>(case: &lsdc::testing::Case, result: Result<T, String>) -> Result<T, String> {
+    result.map_err(|error| format!("{}: {error}", case.name))
+}
+
+/// Prints what `--calibrate` or `--update` made of each case (text or JSON), the cases it could
+/// not be done for on standard error; exit code 1 if there was one.
+fn print_each<T: serde::Serialize>(
+    results: &[Result<T, String>],
+    format: Format,
+    text: impl Fn(&T) -> String,
+) -> ExitCode {
+    let done: Vec<&T> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
+    match format {
+        Format::Text => done.iter().for_each(|d| out(&text(d))),
+        Format::Json => out(&json(&done)),
+    }
+    let failures: Vec<&String> = results.iter().filter_map(|r| r.as_ref().err()).collect();
+    failures.iter().for_each(|f| eprintln!("error: {f}"));
+    match failures.is_empty() {
+        true => ExitCode::SUCCESS,
+        false => ExitCode::from(1),
+    }
+}
+
+/// `lsdc fmt`: formats each file in place, or with `check` lists those that would change.
+/// Exit status 1 when a file cannot be read or parsed, or (with `check`) is not formatted.
+fn format_files(paths: &[PathBuf], check: bool) -> ExitCode {
+    let files = match lsdc::ide::format::lsd_files(paths) {
+        Ok(files) => files,
+        Err(error) => return usage_error(&error),
+    };
+    let mut failed = false;
+    for file in files {
+        let text = match std::fs::read_to_string(&file) {
+            Ok(text) => text,
+            Err(e) => {
+                eprintln!("error: cannot read `{}`: {e}", file.display());
+                failed = true;
+                continue;
+            }
+        };
+        let mut sources = lsdc::source::SourceMap::new();
+        let id = sources.add(file.display().to_string(), text);
+        let text = &sources.file(id).text;
+        let formatted = match lsdc::ide::format::format(id, text) {
+            Ok(formatted) => formatted,
+            Err(diagnostics) => {
+                eprint!("{}", render::to_text(&sources, &diagnostics));
+                failed = true;
+                continue;
+            }
+        };
+        if formatted == *text {
+            continue;
+        }
+        if check {
+            println!("{}: not formatted", file.display());
+            failed = true;
+        } else if let Err(e) = std::fs::write(&file, formatted) {
+            eprintln!("error: cannot write `{}`: {e}", file.display());
+            failed = true;
+        }
+    }
+    if failed {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
     }
 }

@@ -49,8 +49,9 @@ impl<'w> Checker<'w> {
                 let ty = self.name(ident, ctx);
                 self.call_value(ident, ty, args, arg_types, span)
             }
-            Callee::Qualified { package, name } => match self.package_member(package, name, ctx) {
+            Callee::Qualified(qualified) => match self.package_member(qualified, ctx) {
                 Some((scope, ty)) => {
+                    let name = &qualified.name;
                     self.out
                         .resolutions
                         .insert(name.span, Target::Global(scope));

@@ -7,15 +7,15 @@ use super::scope::Target;
 use super::types::{self, Ty};
 use crate::diag::{suggest, Diagnostic};
 use crate::source::Span;
-use crate::syntax::ast::{BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident};
+use crate::syntax::ast::{
+    BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident, QualifiedName,
+};
 
 impl<'w> Checker<'w> {
     pub(super) fn expr(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         match &expr.kind {
             ExprKind::Name(ident) => self.name(ident, ctx),
-            ExprKind::Qualified(qualified) => {
-                self.qualified(&qualified.package, &qualified.name, expr.span, ctx)
-            }
+            ExprKind::Qualified(qualified) => self.qualified(qualified, expr.span, ctx),
             ExprKind::Field(access) => {
                 let ty = self.expr(&access.target, ctx);
                 self.field(ty, &access.field)
@@ -27,6 +27,9 @@ impl<'w> Checker<'w> {
             ExprKind::Vector(items) => self.vector(items, expr.span, ctx),
             ExprKind::Call { callee, args } => self.call(callee, args, expr.span, ctx),
             ExprKind::Binary { op, lhs, rhs } => {
+                if let Some(ty) = self.precedence_trap(expr, *op, lhs, rhs, ctx) {
+                    return ty;
+                }
                 let left = self.expr(lhs, ctx);
                 let right = self.expr(rhs, ctx);
                 self.binary(*op, lhs, left, rhs, right, expr.span)
@@ -137,6 +140,11 @@ impl<'w> Checker<'w> {
                 let inside = extent.file == ident.span.file
                     && extent.start <= ident.span.start
                     && ident.span.end <= extent.end;
+                if inside && self.declares_join(extent) {
+                    return diagnostic
+                        .secondary(later, "the join being declared")
+                        .help(format!("a join's frames cannot depend on the join; only its link (after `with`) may read its coordinates, as in `{name}.q'`"));
+                }
                 if inside {
                     return diagnostic
                         .secondary(later, "the name being defined")
@@ -147,9 +155,15 @@ impl<'w> Checker<'w> {
                         .secondary(later, "defined in the same `let ... and ...`")
                         .help("bindings joined by `and` are simultaneous and do not see each other: use two `let` declarations");
                 }
+                let help = if self.declares_join(extent) {
+                    format!("a join's coordinates are read after the join, or inside its own link: write the expression in the link, as in `with motor(axis, 2 - 0.1 * {name}.q') as {name}`")
+                } else {
+                    "a name is visible only after its declaration: move the declaration up"
+                        .to_string()
+                };
                 return diagnostic
                     .secondary(later, "defined here, after its use")
-                    .help("a name is visible only after its declaration: move the declaration up");
+                    .help(help);
             }
             if let Some(entry) = scope.names.get(name.as_ref()) {
                 return diagnostic
@@ -173,12 +187,86 @@ impl<'w> Checker<'w> {
                 ));
             }
         }
+        if let Some(hinted) =
+            super::stdlib_hint::import_hint(&diagnostic, name, ident.span, self.workspace)
+        {
+            return hinted;
+        }
         if let Some(candidate) =
             suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()))
         {
             diagnostic = diagnostic.help(format!("did you mean `{candidate}`?"));
         }
         diagnostic
+    }
+
+    /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).
+    fn declares_join(&self, extent: Span) -> bool {
+        self.source(extent).starts_with("join")
+    }
+
+    /// The source text of a span.
+    fn source(&self, span: Span) -> &str {
+        let text = &self.workspace.sources.file(span.file).text;
+        text.get(span.range()).unwrap_or_default()
+    }
+
+    /// `t ++ q || axis`, which reads `(t ++ q) || axis` since `||` binds most loosely: one error
+    /// (E0421) that suggests `t ++ (q || axis)`, and the type the suggestion has, so that the
+    /// declaration raises no other error. `None` when the expression is not this trap.
+    fn precedence_trap(
+        &mut self,
+        expr: &'w Expr,
+        op: BinaryOp,
+        lhs: &'w Expr,
+        rhs: &'w Expr,
+        ctx: &mut Ctx,
+    ) -> Option<Ty> {
+        let ExprKind::Binary {
+            op: BinaryOp::Displacement,
+            lhs: translation,
+            rhs: angle,
+        } = &lhs.kind
+        else {
+            return None;
+        };
+        // A parenthesised `(t ++ q)` starts after the parenthesis: written on purpose.
+        if op != BinaryOp::Rotation || lhs.span.start != expr.span.start {
+            return None;
+        }
+        for part in [&**translation, &**angle, rhs] {
+            self.expr(part, ctx);
+        }
+        // `axis @ b` on the right, unparenthesised: the frame applies to the whole displacement.
+        let (axis, body, ty) = match &rhs.kind {
+            ExprKind::Binary {
+                op: BinaryOp::Frame,
+                lhs: axis,
+                rhs: body,
+            } if rhs.span.end == expr.span.end => (axis.span, Some(body.span), Ty::Frame),
+            _ => (rhs.span, None, Ty::Displacement),
+        };
+        let mut intended = format!(
+            "{} ++ ({} || {})",
+            self.source(translation.span),
+            self.source(angle.span),
+            self.source(axis)
+        );
+        if let Some(body) = body {
+            intended = format!("{intended} @ {}", self.source(body));
+        }
+        self.report(
+            Diagnostic::error("E0421", "`||` binds more loosely than `++`")
+                .primary(
+                    expr.span,
+                    format!("this reads `({}) || ...`", self.source(lhs.span)),
+                )
+                .help(format!(
+                    "a displacement with a rotation is `t ++ (q || axis)`: write `{intended}`"
+                ))
+                .fix(expr.span, intended),
+        );
+        Some(ty)
     }
 
     /// Every name visible from a context, in declaration order (for suggestions).
@@ -216,8 +304,8 @@ impl<'w> Checker<'w> {
         names
     }
 
-    fn qualified(&mut self, package: &Ident, name: &Ident, span: Span, ctx: &mut Ctx) -> Ty {
-        match self.package_member(package, name, ctx) {
+    fn qualified(&mut self, qualified: &'w QualifiedName, span: Span, ctx: &mut Ctx) -> Ty {
+        match self.package_member(qualified, ctx) {
             Some((scope, ty)) => {
                 self.out.resolutions.insert(span, Target::Global(scope));
                 ty
@@ -226,13 +314,18 @@ impl<'w> Checker<'w> {
         }
     }
 
-    /// Resolves `P:X` to the package's scope and X's type, reporting what is wrong.
+    /// Resolves `P:X` (or `P[k]:X`) to the package's scope and X's type, reporting what is
+    /// wrong.
     pub(super) fn package_member(
         &mut self,
-        package: &Ident,
-        name: &Ident,
+        qualified: &'w QualifiedName,
         ctx: &mut Ctx,
     ) -> Option<(types::ScopeId, Ty)> {
+        let QualifiedName {
+            package,
+            index,
+            name,
+        } = qualified;
         let scope = match self.name(package, ctx) {
             Ty::Package(scope) => scope,
             Ty::Error => return None,
@@ -251,12 +344,20 @@ impl<'w> Checker<'w> {
                 return None;
             }
         };
+        if !self.instance_index(package, scope, index.as_ref(), ctx) {
+            return None;
+        }
         let members = self.out.scope(scope);
         if let Some(entry) = members.names.get(&name.name) {
             return Some((scope, entry.ty));
         }
-        let help = suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref()))
-            .map(|s| format!("did you mean `{}:{s}`?", package.name));
+        let help =
+            suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref())).map(|s| {
+                match index {
+                    Some(_) => format!("did you mean `{}[…]:{s}`?", package.name),
+                    None => format!("did you mean `{}:{s}`?", package.name),
+                }
+            });
         self.report(
             Diagnostic::error(
                 "E0301",
@@ -266,6 +367,51 @@ impl<'w> Checker<'w> {
             .with_help(help),
         );
         None
+    }
+
+    /// Checks that an array of packages is named with an index (a scalar) and a plain package
+    /// without one.
+    fn instance_index(
+        &mut self,
+        package: &Ident,
+        scope: types::ScopeId,
+        index: Option<&'w Expr>,
+        ctx: &mut Ctx,
+    ) -> bool {
+        let array = self.out.scope(scope).index.is_some();
+        match (array, index) {
+            (true, Some(index)) => {
+                let ty = self.expr(index, ctx);
+                self.expect_value(index, ty, Ty::Scalar, "the index of an instance");
+                true
+            }
+            (false, None) => true,
+            (true, None) => {
+                self.report(
+                    Diagnostic::error(
+                        "E0430",
+                        format!("`{}` is an array of packages", package.name),
+                    )
+                    .primary(package.span, "which instance?")
+                    .help(format!(
+                        "name one instance by its index: `{}[k]:name`",
+                        package.name
+                    )),
+                );
+                false
+            }
+            (false, Some(index)) => {
+                self.report(
+                    Diagnostic::error(
+                        "E0430",
+                        format!("`{}` is a package, not an array of packages", package.name),
+                    )
+                    .primary(index.span, "an index of a package that has one instance")
+                    .help(format!("write `{}:name`", package.name)),
+                );
+                false
+            }
+        }
     }
 
     fn field(&mut self, target: Ty, field: &Ident) -> Ty {
@@ -664,10 +810,9 @@ fn mentions(expr: &Expr, name: &str) -> bool {
             bindings.iter().any(|b| mentions(&b.value, name)) || mentions(body, name)
         }
         ExprKind::Construct { fields, .. } => fields.iter().any(|f| mentions(&f.value, name)),
-        ExprKind::Qualified { .. }
-        | ExprKind::Unknown(_)
-        | ExprKind::Int(_)
-        | ExprKind::Float(_)
-        | ExprKind::Error => false,
+        ExprKind::Qualified(qualified) => {
+            qualified.index.as_ref().is_some_and(|e| mentions(e, name))
+        }
+        ExprKind::Unknown(_) | ExprKind::Int(_) | ExprKind::Float(_) | ExprKind::Error => false,
     }
 }

@@ -7,6 +7,7 @@ mod calls;
 mod checker;
 mod expr;
 pub mod scope;
+mod stdlib_hint;
 pub mod types;
 
 use std::collections::HashMap;
@@ -128,6 +129,14 @@ impl<'w> Checker<'w> {
                         self.report(join_member_error(member.span, position, ty));
                     }
                 }
+                // The link may read the join's own coordinates (`crank.q'`); its frames may not.
+                if let Some(name) = name {
+                    ctx.locals.push(Local {
+                        name: name.name.clone(),
+                        ty: Ty::Join,
+                        coordinate: false,
+                    });
+                }
                 let ty = self.expr(link, &mut ctx);
                 self.expect_value(link, ty, Ty::Link, "the link of `join ... with <link>`");
                 if let Some(name) = name {
@@ -174,14 +183,7 @@ impl<'w> Checker<'w> {
                     self.apply(effort, effort_ty, target, target_ty);
                 }
             }
-            DeclKind::Package(package_decl) => {
-                let PackageDecl { name, decls } = &**package_decl;
-                let limit = self.out.scope(scope).len();
-                let package = self.new_scope(Some((scope, limit)));
-                self.out.package_scopes.insert(decl.span, package);
-                self.decls(decls, package);
-                self.declare(scope, name, Ty::Package(package));
-            }
+            DeclKind::Package(package_decl) => self.package(package_decl, decl.span, scope),
             DeclKind::Import(import) => {
                 let alias = &import.alias;
                 let Some(&module) = self.workspace.imports.get(&decl.span) else {
@@ -202,6 +204,31 @@ impl<'w> Checker<'w> {
                 }
             }
             DeclKind::Error => {}
+        }
+    }
+
+    /// `package P = decls end`: its declarations see the file's names declared before it.
+    /// An array `package P[i in a .. b]` is declared before its declarations, which may name
+    /// other instances (`P[i - 1]:x`), and its index is a scalar name of the package.
+    fn package(&mut self, package_decl: &'w PackageDecl, span: Span, scope: ScopeId) {
+        let PackageDecl { name, index, decls } = package_decl;
+        let package = self.new_scope(None);
+        self.out.package_scopes.insert(span, package);
+        if let Some(index) = index {
+            let mut ctx = self.ctx(scope);
+            for bound in [&index.first, &index.last] {
+                let ty = self.expr(bound, &mut ctx);
+                self.expect_value(bound, ty, Ty::Scalar, "a bound of an array of packages");
+            }
+            self.declare(scope, name, Ty::Package(package));
+            self.scope_mut(package).index = Some(index.variable.name.clone());
+            self.declare(package, &index.variable, Ty::Scalar);
+        }
+        let limit = self.out.scope(scope).len();
+        self.scope_mut(package).parent = Some((scope, limit));
+        self.decls(decls, package);
+        if index.is_none() {
+            self.declare(scope, name, Ty::Package(package));
         }
     }
 
@@ -413,7 +440,7 @@ impl<'w> Checker<'w> {
     fn expr_type_silently(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         let reported = self.diagnostics.list.len();
         let ty = self.expr(expr, ctx);
-        self.diagnostics.list.truncate(reported);
+        self.diagnostics.truncate(reported);
         ty
     }
 

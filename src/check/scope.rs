@@ -24,6 +24,9 @@ pub struct Scope {
     pub order: Vec<Name>,
     /// The enclosing scope (a package's file) and how many of its names were visible then.
     pub parent: Option<(ScopeId, u32)>,
+    /// The index of an array of packages (`i` in `package P[i in 1 .. 4]`): its declarations
+    /// are evaluated once per instance.
+    pub index: Option<Name>,
     /// Modules opened by a plain `import`, with the number of this scope's names declared before.
     pub opened: Vec<(ScopeId, u32)>,
     /// Names declared later in this scope, with the extent of their declaration: a use before

@@ -22,6 +22,14 @@ pub struct Label {
     pub primary: bool,
 }
 
+/// An edit that fixes the problem, for editors to apply: replace the text of `span` (empty for
+/// an insertion) by `replacement`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Fix {
+    pub span: Span,
+    pub replacement: String,
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Diagnostic {
     pub severity: Severity,
@@ -31,6 +39,9 @@ pub struct Diagnostic {
     pub labels: Vec<Label>,
     pub notes: Vec<String>,
     pub help: Option<String>,
+    /// An edit that fixes the problem, when one is certain enough to offer. Boxed: every
+    /// diagnostic travels in the `Err` of results, and few have a fix.
+    pub fix: Option<Box<Fix>>,
 }
 
 impl Diagnostic {
@@ -42,6 +53,7 @@ impl Diagnostic {
             labels: Vec::new(),
             notes: Vec::new(),
             help: None,
+            fix: None,
         }
     }
 
@@ -87,6 +99,15 @@ impl Diagnostic {
         }
     }
 
+    /// Offers an edit that fixes the problem: `span`'s text replaced by `replacement`.
+    pub fn fix(mut self, span: Span, replacement: impl Into<String>) -> Diagnostic {
+        self.fix = Some(Box::new(Fix {
+            span,
+            replacement: replacement.into(),
+        }));
+        self
+    }
+
     /// Where the problem is: the span of the primary label.
     pub fn primary_span(&self) -> Option<Span> {
         self.labels.iter().find(|l| l.primary).map(|l| l.span)
@@ -117,20 +138,34 @@ pub struct Diagnostics {
     pub list: Vec<Diagnostic>,
     /// Code, message and place of each diagnostic pushed, so that a duplicate is found in
     /// constant time (a file of n errors is checked in linear time).
-    pushed: std::collections::HashSet<(&'static str, String, Option<crate::source::Span>)>,
+    pushed: std::collections::HashSet<Identity>,
+}
+
+/// What makes two diagnostics the same report: code, message and place.
+type Identity = (&'static str, String, Option<crate::source::Span>);
+
+fn identity(diagnostic: &Diagnostic) -> Identity {
+    (
+        diagnostic.code,
+        diagnostic.message.clone(),
+        diagnostic.primary_span(),
+    )
 }
 
 impl Diagnostics {
     pub fn push(&mut self, diagnostic: Diagnostic) {
         // A definition's body is checked when it is declared and again at each use: the same
         // error at the same place is reported once, with the context of its first report.
-        let key = (
-            diagnostic.code,
-            diagnostic.message.clone(),
-            diagnostic.primary_span(),
-        );
-        if self.pushed.insert(key) {
+        if self.pushed.insert(identity(&diagnostic)) {
             self.list.push(diagnostic);
+        }
+    }
+
+    /// Drops the diagnostics after the first `len`, which can then be reported again (the
+    /// checker looks at an expression's type silently this way).
+    pub fn truncate(&mut self, len: usize) {
+        for dropped in self.list.drain(len.min(self.list.len())..) {
+            self.pushed.remove(&identity(&dropped));
         }
     }
 

@@ -47,7 +47,10 @@ pub fn to_text(sources: &SourceMap, diagnostics: &[Diagnostic]) -> String {
     let config = term::Config::default();
     let mut out = String::new();
     for diagnostic in diagnostics {
-        let rendered = to_codespan(diagnostic);
+        let mut rendered = to_codespan(diagnostic);
+        rendered
+            .notes
+            .extend(diagnostic.fix.iter().map(|fix| describe_fix(sources, fix)));
         if term::emit_to_string(&mut out, &config, sources, &rendered).is_err() {
             out.push_str(&format!(
                 "{}: {}\n",
@@ -57,6 +60,22 @@ pub fn to_text(sources: &SourceMap, diagnostics: &[Diagnostic]) -> String {
         }
     }
     out
+}
+
+/// A fix in words: "fix: replace `.5` by `0.5`", "fix: insert `,` at 2:17".
+fn describe_fix(sources: &SourceMap, fix: &crate::diag::Fix) -> String {
+    let file = sources.file(fix.span.file);
+    let replaced = file.text.get(fix.span.range()).unwrap_or_default();
+    let replacement = fix.replacement.trim_end_matches('\n');
+    let (line, column) = file.line_column(fix.span.start as usize);
+    match (replaced.is_empty(), replacement.is_empty()) {
+        (true, _) if fix.replacement.ends_with('\n') && column == 1 => {
+            format!("fix: insert the line `{replacement}` before line {line}")
+        }
+        (true, _) => format!("fix: insert `{replacement}` at {line}:{column}"),
+        (false, true) => format!("fix: remove `{replaced}`"),
+        (false, false) => format!("fix: replace `{replaced}` by `{replacement}`"),
+    }
 }
 
 fn severity_word(severity: Severity) -> &'static str {
@@ -127,6 +146,16 @@ struct JsonDiagnostic {
     labels: Vec<JsonLabel>,
     notes: Vec<String>,
     help: Option<String>,
+    /// Edits that fix the problem (none or one): replace the text from the position to the end
+    /// position by `replacement` (an insertion when they are equal).
+    fixes: Vec<JsonFix>,
+}
+
+#[derive(Serialize)]
+struct JsonFix {
+    #[serde(flatten)]
+    position: JsonPosition,
+    replacement: String,
 }
 
 fn position(sources: &SourceMap, span: Span) -> JsonPosition {
@@ -162,6 +191,14 @@ pub fn to_json_value(sources: &SourceMap, diagnostics: &[Diagnostic]) -> serde_j
                 .collect(),
             notes: d.notes.clone(),
             help: d.help.clone(),
+            fixes: d
+                .fix
+                .iter()
+                .map(|f| JsonFix {
+                    position: position(sources, f.span),
+                    replacement: f.replacement.clone(),
+                })
+                .collect(),
         })
         .collect();
     serde_json::to_value(list).unwrap_or(serde_json::Value::Null)

@@ -134,6 +134,11 @@ impl EffortTape {
         })
     }
 
+    /// Whether the tape reads the time.
+    pub fn reads_time(&self) -> bool {
+        self.sources.contains(&Source::Time)
+    }
+
     /// Number of distinct nodes evaluated per state.
     pub fn size(&self) -> usize {
         self.tape.size()

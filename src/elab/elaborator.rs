@@ -9,6 +9,7 @@ use crate::diag::Diagnostic;
 use crate::load::{ModuleId, Workspace};
 use crate::syntax::ast::Name;
 
+use super::instances::{InstanceId, Instances};
 use super::mechanism::Mechanism;
 use super::value::{self, Value};
 
@@ -22,7 +23,13 @@ pub(super) enum Global {
 pub struct Elaborator<'c, 'w> {
     pub(super) workspace: &'w Workspace,
     pub(super) checked: &'c Checked<'w>,
-    pub(super) globals: FxHashMap<(ScopeId, Name), Global>,
+    /// Values of declared names, by scope, instance (of an array of packages) and name.
+    pub(super) globals: FxHashMap<(ScopeId, InstanceId, Name), Global>,
+    pub(super) instances: Instances,
+    /// The first name bound to each body by `let name = other_name` (see `point_out_alias`).
+    pub(super) aliases: FxHashMap<value::BodyId, (Name, crate::source::Span)>,
+    /// Warnings about legal programs that are probably not what was meant.
+    pub(super) warnings: Vec<Diagnostic>,
     pub(super) mechanism: Mechanism,
     pub(super) elaborated_modules: Vec<ModuleId>,
     pub(super) depth: usize,
@@ -31,6 +38,8 @@ pub struct Elaborator<'c, 'w> {
     /// The numbers written in the program, by their bits: one node for each distinct number,
     /// shared by all its occurrences (a generated chain writes the same few numbers per body).
     pub(super) literals: FxHashMap<u64, value::Scalar>,
+    /// The named join whose link is being evaluated: its name reads its own coordinates.
+    pub(super) own_join: Option<OwnJoin>,
 }
 
 impl Elaborator<'_, '_> {
@@ -50,4 +59,11 @@ pub(super) fn internal(message: impl Into<String>) -> Diagnostic {
         format!("internal error during elaboration: {}", message.into()),
     )
     .note("this is a bug in lsdc; please report it with the program that triggers it")
+}
+
+/// The named join whose link is being evaluated, and the coordinate names its link read.
+pub(super) struct OwnJoin {
+    pub(super) id: value::JoinId,
+    pub(super) name: Name,
+    pub(super) read: Vec<(Name, crate::source::Span)>,
 }

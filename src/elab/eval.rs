@@ -2,7 +2,8 @@
 
 use std::sync::Arc;
 
-use super::elaborator::{internal, Elaborator, Global};
+use super::elaborator::{internal, Elaborator, Global, OwnJoin};
+use super::instances::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
     as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, check_finite,
@@ -22,7 +23,7 @@ use crate::syntax::ast::{
 type Result<T> = std::result::Result<T, Diagnostic>;
 
 /// Local bindings while evaluating an expression: parameters, coordinates, `local` names.
-type Locals = Vec<(Name, Value)>;
+pub(super) type Locals = Vec<(Name, Value)>;
 
 const MAX_DEPTH: usize = 64;
 
@@ -41,7 +42,37 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         self.decls(decls, scope)
     }
 
-    fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) -> Result<()> {
+    /// Records the frames a main module names at its top level (`let tip = … @ arm;`) in the
+    /// mechanism's table of frames. Only bindings the checker typed as frames are evaluated, so
+    /// no other unused definition is.
+    pub(super) fn name_frames(&mut self, id: ModuleId) -> Result<()> {
+        let Some(&scope) = self.checked.module_scopes.get(&id) else {
+            return Ok(());
+        };
+        for decl in &self.workspace.module(id).program.decls {
+            let DeclKind::Let(bindings) = &decl.kind else {
+                continue;
+            };
+            for binding in bindings {
+                let name = &binding.name.name;
+                let is_frame =
+                    self.checked.scope(scope).names.get(name).map(|e| e.ty) == Some(Ty::Frame);
+                if !is_frame {
+                    continue;
+                }
+                if let Value::Frame(frame) = self.global(scope, name)? {
+                    self.mechanism.frames.push(NamedFrame {
+                        name: name.clone(),
+                        frame,
+                        span: binding.name.span,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) -> Result<()> {
         decls.iter().try_for_each(|decl| self.decl(decl, scope))
     }
 
@@ -63,11 +94,28 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let second = self
                     .expr(second, &mut locals)
                     .and_then(|v| as_frame(v, second.span))?;
-                let Value::Link(link) = self.expr(link, &mut locals)? else {
+                // The join's own name is visible in its link, for reading its coordinates.
+                let id = JoinId(self.mechanism.joins.len() as u32);
+                if let Some(name) = name {
+                    locals.push((name.name.clone(), Value::Join(id)));
+                    self.own_join = Some(OwnJoin {
+                        id,
+                        name: name.name.clone(),
+                        read: Vec::new(),
+                    });
+                }
+                let link_value = self.expr(link, &mut locals);
+                let own = self.own_join.take();
+                let Value::Link(link) = link_value? else {
                     return Err(internal("join without a link"));
                 };
-                let id = JoinId(self.mechanism.joins.len() as u32);
-                let join_name = name.as_ref().map(|n| n.name.clone());
+                if let Some(own) = own {
+                    self.resolve_own_coordinates(own, link, decl.span)?;
+                }
+                let instance = self.instances.current;
+                let join_name = name
+                    .as_ref()
+                    .map(|n| self.qualified_name(&n.name, instance));
                 self.mechanism.joins.push(Join {
                     name: join_name,
                     first,
@@ -76,8 +124,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     span: decl.span,
                 });
                 if let Some(name) = name {
-                    self.globals
-                        .insert((scope, name.name.clone()), Global::Ready(Value::Join(id)));
+                    let key = (scope, self.instance_of(scope)?, name.name.clone());
+                    self.globals.insert(key, Global::Ready(Value::Join(id)));
                 }
                 Ok(())
             }
@@ -194,7 +242,12 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .package_scopes
                     .get(&decl.span)
                     .ok_or_else(|| internal("package not checked"))?;
-                self.decls(&package_decl.decls, package)
+                match &package_decl.index {
+                    None => self.decls(&package_decl.decls, package),
+                    Some(index) => {
+                        self.package_array(&package_decl.name, index, &package_decl.decls, package)
+                    }
+                }
             }
             DeclKind::Import { .. } => match self.workspace.imports.get(&decl.span) {
                 Some(&module) => self.module(module),
@@ -206,12 +259,19 @@ impl<'c, 'w> Elaborator<'c, 'w> {
 
     /// The value of a declared name. A `let` is evaluated on first use: unused definitions of a
     /// library cost nothing here.
-    fn global(&mut self, scope: ScopeId, name: &Name) -> Result<Value> {
-        let key = (scope, name.clone());
+    pub(super) fn global(&mut self, scope: ScopeId, name: &Name) -> Result<Value> {
+        let instance = self.instance_of(scope)?;
+        let key = (scope, instance, name.clone());
         match self.globals.get(&key) {
             Some(Global::Ready(value)) => return Ok(value.clone()),
             Some(Global::InProgress) => {
-                return Err(internal(format!("`{name}` depends on itself")))
+                let shown = self.qualified_name(name, instance);
+                return Err(Diagnostic::error(
+                    "E0631",
+                    format!("`{shown}` depends on itself through instances of an array"),
+                )
+                .primary(self.checked.scope(scope).names[name].span, "defined here")
+                .help("an instance may use the names of other instances, but not in a cycle"));
             }
             None => {}
         }
@@ -224,6 +284,15 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let value = match entry.ty {
             Ty::Definition(def) => Value::Definition(def),
             Ty::Package(package) => Value::Package(package),
+            Ty::Join => {
+                let shown = self.qualified_name(name, instance);
+                return Err(Diagnostic::error(
+                    "E0631",
+                    format!("the join `{shown}` is used before its instance declares it"),
+                )
+                .primary(entry.span, "declared here, in a later instance")
+                .help("an instance may name the joins of the instances before it, not after"));
+            }
             _ => {
                 let binding: &'w Binding = self
                     .checked
@@ -232,8 +301,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .copied()
                     .ok_or_else(|| internal(format!("`{name}` has no value")))?;
                 self.globals.insert(key.clone(), Global::InProgress);
-                let value = self.expr(&binding.value, &mut Locals::new())?;
-                self.name_object(&value, &binding.name.name);
+                let value = self.within(instance, |elaborator| {
+                    elaborator.expr(&binding.value, &mut Locals::new())
+                })?;
+                if matches!(binding.value.kind, ExprKind::Name(_)) {
+                    self.point_out_alias(&value, binding, instance);
+                }
+                self.name_object(&value, &binding.name.name, instance);
                 value
             }
         };
@@ -241,8 +315,47 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         Ok(value)
     }
 
-    /// Gives an unnamed body, link, effort or unknown the name it is first bound to.
-    fn name_object(&mut self, value: &Value, name: &Name) {
+    /// `let v1 = proto;` where `proto` is a body: `v1` is that same body, not a copy. Legal,
+    /// and harmless once; a second such name (`let v0 = proto; let v1 = proto;`, or one per
+    /// instance of an array) is the usual slip of someone who wanted several bodies, and is
+    /// pointed out.
+    fn point_out_alias(&mut self, value: &Value, binding: &Binding, instance: InstanceId) {
+        let Value::Body(BodyRef::Body(id)) = value else {
+            return;
+        };
+        let alias = self.qualified_name(&binding.name.name, instance);
+        let Some((earlier, earlier_span)) = self.aliases.get(id).cloned() else {
+            self.aliases.insert(*id, (alias, binding.value.span));
+            return;
+        };
+        let body = self.mechanism.body_name(BodyRef::Body(*id));
+        self.warnings.push(
+            Diagnostic::warning(
+                "W0610",
+                format!("`{alias}` and `{earlier}` are one body, `{body}`"),
+            )
+            .primary(binding.value.span, format!("the body `{body}` itself"))
+            .secondary(earlier_span, format!("`{earlier}` is this body too"))
+            .help(format!(
+                "a `let` gives a value another name, it does not copy it; for a new body at each use, \
+                 make a definition `let {body}() = body ... end;` and write `{body}()`"
+            )),
+        );
+    }
+
+    /// A name declared in `instance`, as messages and outputs show it:
+    /// `P[3]:crank` in an array of packages, `crank` elsewhere.
+    fn qualified_name(&self, name: &Name, instance: InstanceId) -> Name {
+        match instance {
+            ROOT => name.clone(),
+            _ => Name::from(format!("{}{name}", self.instances.prefix(instance))),
+        }
+    }
+
+    /// Gives an unnamed body, link, effort or unknown the name it is first bound to (in
+    /// `instance`, which qualifies it).
+    fn name_object(&mut self, value: &Value, name: &Name, instance: InstanceId) {
+        let qualified = self.qualified_name(name, instance);
         let slot = match value {
             Value::Body(BodyRef::Body(id)) => &mut self.mechanism.bodies[id.0 as usize].name,
             Value::Link(id) => &mut self.mechanism.links[id.0 as usize].name,
@@ -254,7 +367,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             _ => return,
         };
         if slot.is_none() {
-            *slot = Some(name.clone());
+            *slot = Some(qualified);
         }
     }
 
@@ -292,7 +405,14 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             ExprKind::Qualified(qualified) => {
                 let target = self.resolution(expr.span)?;
-                self.lookup(&qualified.name, target, locals)?
+                match (&qualified.index, target) {
+                    (Some(index), Target::Global(scope)) => {
+                        let instance = self.instance_at(scope, index, locals)?;
+                        self.within(instance, |e| e.global(scope, &qualified.name.name))
+                            .map_err(|error| error.secondary(expr.span, "named here"))?
+                    }
+                    _ => self.lookup(&qualified.name, target, locals)?,
+                }
             }
             ExprKind::Field(access) => {
                 let value = self.expr(&access.target, locals)?;
@@ -416,7 +536,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         [0, 1, 2].map(|i| self.generic(origin, i, span))
     }
 
-    fn field(&self, value: Value, field: &Ident) -> Result<Value> {
+    fn field(&mut self, value: Value, field: &Ident) -> Result<Value> {
         let name = &*field.name;
         Ok(match (value, name) {
             (Value::Body(body), "frame") => Value::Frame(Frame {
@@ -452,7 +572,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 Value::Body(self.mechanism.effort(id).basis)
             }
             (Value::Link(id), f) => self.link_field(id, f, field.span)?,
-            (Value::Join(id), f) => self.join_coordinate(id, f, field.span)?,
+            (Value::Join(id), _) => self.join_coordinate(id, &field.name, field.span)?,
             _ => {
                 return Err(internal(format!(
                     "field `{name}` of a value without fields"
@@ -461,10 +581,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         })
     }
 
-    fn join_coordinate(&self, id: JoinId, coordinate: &str, span: Span) -> Result<Value> {
+    fn join_coordinate(&mut self, id: JoinId, coordinate: &Name, span: Span) -> Result<Value> {
+        if let Some(value) = self.own_coordinate(id, coordinate, span) {
+            return Ok(value);
+        }
         let join = self.mechanism.join(id);
         let coordinates = &self.mechanism.link(join.link).coordinates;
-        match coordinates.iter().position(|c| &**c == coordinate) {
+        match coordinates.iter().position(|c| c == coordinate) {
             Some(index) => Ok(Value::Scalar(Arc::new(SExpr::JoinCoordinate {
                 join: id,
                 index: index as u32,
@@ -472,24 +595,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }))),
             None => {
                 let name = self.mechanism.join_name(id);
-                let listed: Vec<String> = coordinates.iter().map(|c| format!("`{c}`")).collect();
-                let help = match crate::diag::suggest::did_you_mean(
+                Err(no_such_coordinate(
+                    &name,
+                    coordinates,
                     coordinate,
-                    coordinates.iter().map(|c| &**c),
-                ) {
-                    Some(s) => format!("did you mean `{name}.{s}`?"),
-                    None if listed.is_empty() => {
-                        format!("`{name}` is a weld: it has no coordinates")
-                    }
-                    None => format!("the coordinates of `{name}` are {}", listed.join(", ")),
-                };
-                Err(Diagnostic::error(
-                    "E0603",
-                    format!("join `{name}` has no coordinate `{coordinate}`"),
-                )
-                .primary(span, "not a coordinate of this join's link")
-                .secondary(join.span, "the join")
-                .help(help))
+                    span,
+                    join.span,
+                ))
             }
         }
     }
@@ -549,7 +661,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .iter()
             .map(|a| self.expr(&a.value, locals))
             .collect::<Result<Vec<_>>>()?;
-        let (ident, target) = match callee {
+        let (ident, target, index) = match callee {
             Callee::Unknown(ident) => {
                 let id = self.new_unknown(UnknownKind::Function, Origin::Written, 0, ident.span);
                 let scalars = values
@@ -558,13 +670,22 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .collect::<Result<Vec<_>>>()?;
                 return Ok(Value::Scalar(Arc::new(SExpr::UnknownFunction(id, scalars))));
             }
-            Callee::Name(ident) => (ident, self.resolution(ident.span)?),
-            Callee::Qualified { name, .. } => (name, self.resolution(name.span)?),
+            Callee::Name(ident) => (ident, self.resolution(ident.span)?, None),
+            Callee::Qualified(qualified) => (
+                &qualified.name,
+                self.resolution(qualified.name.span)?,
+                qualified.index.as_ref(),
+            ),
         };
         if target == Target::Builtin {
             return builtin_call(&ident.name, values, span);
         }
-        let Value::Definition(def) = self.lookup(ident, target, locals)? else {
+        // The instance the definition was declared in: its body's names take their values there.
+        let home = match (index, target) {
+            (Some(index), Target::Global(scope)) => self.instance_at(scope, index, locals)?,
+            _ => self.instances.current,
+        };
+        let Value::Definition(def) = self.within(home, |e| e.lookup(ident, target, locals))? else {
             return Err(internal("call of a non-definition"));
         };
         let definition = &self.checked.definitions[def.0 as usize];
@@ -597,7 +718,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .primary(span, format!("instantiating `{name}` here")));
         }
         self.depth += 1;
-        let result = self.expr(body, &mut frame);
+        let result = self.within(home, |e| e.expr(body, &mut frame));
         self.depth -= 1;
         result
     }
@@ -799,4 +920,28 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Value::Torque(id)
         })
     }
+}
+
+/// E0603: `crank.x` when the link of `crank` has no coordinate `x`.
+pub(super) fn no_such_coordinate(
+    join: &str,
+    coordinates: &[Name],
+    coordinate: &str,
+    span: Span,
+    join_span: Span,
+) -> Diagnostic {
+    let listed: Vec<String> = coordinates.iter().map(|c| format!("`{c}`")).collect();
+    let help =
+        match crate::diag::suggest::did_you_mean(coordinate, coordinates.iter().map(|c| &**c)) {
+            Some(s) => format!("did you mean `{join}.{s}`?"),
+            None if listed.is_empty() => format!("`{join}` is a weld: it has no coordinates"),
+            None => format!("the coordinates of `{join}` are {}", listed.join(", ")),
+        };
+    Diagnostic::error(
+        "E0603",
+        format!("join `{join}` has no coordinate `{coordinate}`"),
+    )
+    .primary(span, "not a coordinate of this join's link")
+    .secondary(join_span, "the join")
+    .help(help)
 }

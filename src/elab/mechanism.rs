@@ -153,6 +153,15 @@ pub struct Unknown {
     pub name: Option<Name>,
 }
 
+/// A frame the main program names at its top level (`let tip = [l, 0, 0] ++ 1 @ arm;`): the
+/// outputs and the viewer refer to frames by these names.
+#[derive(Clone, Debug)]
+pub struct NamedFrame {
+    pub name: Name,
+    pub frame: Frame,
+    pub span: Span,
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct Mechanism {
     pub bodies: Vec<Body>,
@@ -165,6 +174,8 @@ pub struct Mechanism {
     /// `given` values of unknowns.
     pub given: Vec<(UnknownId, Scalar, Span)>,
     pub scenario: Option<Scenario>,
+    /// The frames the main program names, in declaration order.
+    pub frames: Vec<NamedFrame>,
 }
 
 /// The `simulate` declaration: numeric settings by field name, and the integrator's name.
@@ -247,6 +258,36 @@ impl Mechanism {
             .name
             .as_deref()
             .map_or_else(|| format!("join{}", id.0 + 1), str::to_string)
+    }
+
+    /// The frame a name denotes: a named frame of the main program, else a body's reference
+    /// frame (by its `let` name), else `earth`.
+    pub fn frame_named(&self, name: &str) -> Option<Frame> {
+        let reference = |body| Frame {
+            body,
+            displacement: Displacement(Vec::new()),
+        };
+        if let Some(named) = self.frames.iter().find(|f| &*f.name == name) {
+            return Some(named.frame.clone());
+        }
+        if let Some(id) = self
+            .bodies
+            .iter()
+            .position(|b| b.name.as_deref() == Some(name))
+        {
+            return Some(reference(BodyRef::Body(BodyId(id as u32))));
+        }
+        (name == "earth").then(|| reference(BodyRef::Earth))
+    }
+
+    /// The names `frame_named` knows, for suggestions.
+    pub fn frame_names(&self) -> Vec<String> {
+        let frames = self.frames.iter().map(|f| f.name.to_string());
+        let bodies = self
+            .bodies
+            .iter()
+            .filter_map(|b| b.name.as_deref().map(str::to_string));
+        frames.chain(bodies).chain(["earth".to_string()]).collect()
     }
 
     pub fn body(&self, id: BodyId) -> &Body {

@@ -3,11 +3,14 @@
 //! fresh unknown; a `let` evaluates its value once, when first used, so `let L = ?s;` is one
 //! shared unknown and an unused definition costs nothing.
 
+mod arrays;
 mod elaborator;
 mod eval;
 mod fields;
+mod instances;
 pub mod mechanism;
 mod operations;
+mod own_join;
 pub mod value;
 
 use crate::check::Checked;
@@ -17,8 +20,12 @@ use elaborator::Elaborator;
 pub use mechanism::{Mechanism, Summary};
 use rustc_hash::FxHashMap;
 
-/// Evaluates every module of a checked workspace into one mechanism.
-pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechanism, Diagnostic> {
+/// Evaluates every module of a checked workspace into one mechanism, with warnings about what
+/// is legal but probably not meant.
+pub fn elaborate(
+    workspace: &Workspace,
+    checked: &Checked<'_>,
+) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
     let mut elaborator = Elaborator {
         workspace,
         checked,
@@ -28,10 +35,17 @@ pub fn elaborate(workspace: &Workspace, checked: &Checked<'_>) -> Result<Mechani
         depth: 0,
         fields: Vec::new(),
         literals: FxHashMap::default(),
+        own_join: None,
+        instances: Default::default(),
+        aliases: FxHashMap::default(),
+        warnings: Vec::new(),
     };
     for &root in &workspace.roots {
         elaborator.module(root)?;
     }
     elaborator.apply_fields()?;
-    Ok(elaborator.mechanism)
+    for &root in &workspace.roots {
+        elaborator.name_frames(root)?;
+    }
+    Ok((elaborator.mechanism, elaborator.warnings))
 }

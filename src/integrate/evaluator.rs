@@ -98,6 +98,30 @@ impl<'s> Evaluator<'s> {
         Ok(basis)
     }
 
+    /// The system's own Jacobian at (t, y) (`OdeSystem::jacobian`), if it has one; its
+    /// evaluations are the system's own affair, not counted as right-hand sides.
+    pub(super) fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        dydt: &[f64],
+        jacobian: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<bool, Halt> {
+        let given = self
+            .system
+            .jacobian(t, y, dydt, jacobian)
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))?;
+        if given && !all_finite(jacobian.as_slice()) {
+            return Err(Halt::NotFinite { time: t });
+        }
+        Ok(given)
+    }
+
+    /// Whether f does not depend on t (`OdeSystem::autonomous`).
+    pub(super) fn autonomous(&self) -> bool {
+        self.system.autonomous()
+    }
+
     /// Whether the step control should forget the error's trend (`OdeSystem::breaks_error_trend`).
     pub(super) fn breaks_error_trend(&self) -> bool {
         self.system.breaks_error_trend()

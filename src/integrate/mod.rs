@@ -7,7 +7,9 @@
 //!   order 7, for tight tolerances;
 //! - [`Method::Rosenbrock`]: the adaptive linearly implicit Rosenbrock-W method ROS34PW2 for stiff
 //!   problems, its Jacobian kept across steps;
-//! - [`Method::Automatic`]: Dormand–Prince, and the Rosenbrock-W method where the problem is stiff.
+//! - [`Method::Rodas4`]: the adaptive Rosenbrock method RODAS4 of order 4 for stiff problems, its
+//!   Jacobian formed at every step;
+//! - [`Method::Automatic`]: Dormand–Prince, and RODAS4 where the problem is stiff.
 //!
 //! Values at output times between steps come from each method's interpolant, so asking for many
 //! outputs never shortens the steps.
@@ -109,13 +111,20 @@ pub fn integrate(
             observer,
         ),
         Method::Rosenbrock => driver::integrate_adaptive(
-            &mut rosenbrock::RosenbrockW::new(y0.len(), settings),
+            &mut rosenbrock::RosenbrockW::new(rosenbrock::Scheme::Ros34pw2, y0.len(), settings),
+            system,
+            &problem,
+            observer,
+        ),
+        Method::Rodas4 => driver::integrate_adaptive(
+            &mut rosenbrock::RosenbrockW::new(rosenbrock::Scheme::Rodas4, y0.len(), settings),
             system,
             &problem,
             observer,
         ),
         Method::Automatic => {
-            let mut stepper = switching::Switching::new(y0.len(), settings);
+            let mut stepper =
+                switching::Switching::new(stiff_scheme(system, t0, y0), y0.len(), settings);
             let result = driver::integrate_adaptive(&mut stepper, system, &problem, observer);
             let count = |stats: &mut Stats| {
                 stats.stiff_steps = stepper.implicit_steps;
@@ -132,6 +141,17 @@ pub fn integrate(
                 }
             }
         }
+    }
+}
+
+/// The stiff method of [`Method::Automatic`]: RODAS4, whose order needs the Jacobian, except on
+/// a system that moves on a manifold (a mechanism's closed loops), whose Jacobian is formed along
+/// the manifold's tangent directions only: there the W-method ROS34PW2, whose order holds with
+/// any matrix (on a stiff four-bar over 2 s at 1e-8, RODAS4 took 26,460 steps, ROS34PW2 638).
+fn stiff_scheme(system: &mut dyn OdeSystem, t0: f64, y0: &[f64]) -> rosenbrock::Scheme {
+    match system.tangent_basis(t0, y0) {
+        Ok(Some(_)) => rosenbrock::Scheme::Ros34pw2,
+        _ => rosenbrock::Scheme::Rodas4,
     }
 }
 

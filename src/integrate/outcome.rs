@@ -17,7 +17,7 @@ pub struct Stats {
     pub jacobian_evaluations: usize,
     /// LU decompositions of the iteration matrix (Rosenbrock only).
     pub lu_decompositions: usize,
-    /// Accepted steps the Rosenbrock-W method took, and changes between it and Dormand–Prince
+    /// Accepted steps the Rosenbrock method (RODAS4, or ROS34PW2 on a manifold) took, and changes between it and Dormand–Prince
     /// ([`Method::Automatic`](super::settings::Method::Automatic) only).
     pub stiff_steps: usize,
     pub method_switches: usize,

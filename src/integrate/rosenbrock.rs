@@ -1,14 +1,19 @@
-//! ROS34PW2, a Rosenbrock-W method of order 3 with four stages and an embedded order-2 error
-//! estimate (J. Rang and L. Angermann, "New Rosenbrock W-methods of order 3 for partial
-//! differential algebraic equations of index 1", BIT Numer. Math. 45, 2005), stiffly accurate and
-//! L-stable.
+//! Two Rosenbrock methods, both stiffly accurate and L-stable, stepping through one code
+//! ([`Scheme`]):
+//! - ROS34PW2, a Rosenbrock-W method of order 3 with four stages and an embedded order-2 error
+//!   estimate (J. Rang and L. Angermann, "New Rosenbrock W-methods of order 3 for partial
+//!   differential algebraic equations of index 1", BIT Numer. Math. 45, 2005);
+//! - RODAS4, of order 4 with six stages and an embedded order-3 estimate (Hairer and Wanner,
+//!   *Solving ODEs II*, VI.4), the stiff method of the implicit integrator: at equal error on a
+//!   stiff flyball governor it takes about a quarter of ROS34PW2's time (`BENCHMARKS.md`).
 //!
 //! Each stage solves a linear system with W = I / (h γ) − J instead of iterating Newton's method.
 //! A *W*-method keeps its order whatever the matrix J is (Hairer and Wanner, *Solving ODEs II*,
-//! IV.7): J only decides how stiff a problem the steps stay stable on. So J is not formed at every
-//! step but kept across steps, and formed again after a step is rejected with a Jacobian formed
-//! at an earlier point, or after `JACOBIAN_AGE` accepted steps; only the small factorisation
-//! that depends on h is redone at each attempt.
+//! IV.7): J only decides how stiff a problem the steps stay stable on. So ROS34PW2 does not form
+//! J at every step but keeps it across steps, and forms it again after a step is rejected with a
+//! Jacobian formed at an earlier point, or after `JACOBIAN_AGE` accepted steps; only the small
+//! factorisation that depends on h is redone at each attempt. RODAS4's order needs the Jacobian
+//! at each step's start: it forms J at every step.
 //!
 //! J is kept as the product U Tᵀ of its action U = J T on a basis T of the directions the state
 //! moves along ([`OdeSystem::tangent_basis`](super::OdeSystem::tangent_basis)): on a mechanism with loops, the allowed motions of
@@ -16,11 +21,14 @@
 //! column of U is one forward difference of f along that direction, and W is solved through the
 //! m × m matrix I / (h γ) − TᵀU (Sherman–Morrison–Woodbury): what is left out is the Jacobian
 //! across the constraint manifold, along which the projection after each step, not the dynamics,
-//! decides the motion. A system without such a basis is differentiated along each of the
-//! components the error control watches (a full Jacobian of those).
+//! decides the motion. A system without such a basis gives its Jacobian itself
+//! ([`OdeSystem::jacobian`](super::OdeSystem::jacobian)), or is differentiated along each of
+//! the components the error control watches (a full Jacobian of those).
 //!
 //! Dense output is the cubic Hermite interpolant through the step's ends, whose end slope is free
 //! because it is the next step's first stage.
+
+use std::cell::Cell;
 
 use nalgebra::{DMatrix, DVector, Dyn, LU};
 
@@ -30,7 +38,7 @@ use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
 use super::settings::Settings;
 
-/// The number of stages.
+/// ROS34PW2's number of stages.
 pub const STAGES: usize = 4;
 
 /// The diagonal of Γ, the same for every stage so that one factorisation serves all of them.
@@ -91,27 +99,30 @@ pub const B_EMBEDDED: [f64; STAGES] = [
 /// (`REUSE_CHANGE`): from one, doubling while it changes little, up to this.
 const JACOBIAN_AGE: usize = 32;
 
-/// The coefficients in the transformed form where the unknowns are u_i = Σ_j γ_ij k_j
+/// A method's coefficients in the transformed form where the unknowns are u_i = Σ_j γ_ij k_j
 /// (Hairer and Wanner, IV.7, (7.25)), which needs no product with J:
 ///   (I / (h γ) − J) u_i = f(t + α_i h, y + Σ_j a_ij u_j) + Σ_j c_ij u_j / h + γ_i h ∂f/∂t,
 ///   y₁ = y + Σ m_i u_i.
 #[derive(Clone, Debug)]
 pub struct Transformed {
-    /// a = α Γ⁻¹.
-    pub a: [[f64; STAGES]; STAGES],
-    /// c = diag(1/γ) − Γ⁻¹.
-    pub c: [[f64; STAGES]; STAGES],
+    /// The diagonal γ of Γ, the same for every stage.
+    pub diagonal: f64,
+    /// a = α Γ⁻¹ (row i: the weights of the earlier stages in stage i's state).
+    pub a: Vec<Vec<f64>>,
+    /// c = diag(1/γ) − Γ⁻¹ (row i: the weights of the earlier stages in stage i's equation).
+    pub c: Vec<Vec<f64>>,
     /// m = bᵀ Γ⁻¹.
-    pub m: [f64; STAGES],
+    pub m: Vec<f64>,
     /// The weights of the error estimate: (b − b̂)ᵀ Γ⁻¹.
-    pub e: [f64; STAGES],
+    pub e: Vec<f64>,
     /// Fractions of the step at which the stages evaluate f (row sums of α).
-    pub alpha: [f64; STAGES],
+    pub alpha: Vec<f64>,
     /// Weights of h ∂f/∂t in each stage (row sums of Γ).
-    pub gamma: [f64; STAGES],
+    pub gamma: Vec<f64>,
 }
 
 impl Transformed {
+    /// ROS34PW2's coefficients, transformed from its standard form above.
     #[allow(clippy::needless_range_loop)]
     pub fn new() -> Transformed {
         // Γ⁻¹ by forward substitution, column by column.
@@ -130,22 +141,90 @@ impl Transformed {
         };
         let difference: [f64; STAGES] = std::array::from_fn(|i| B[i] - B_EMBEDDED[i]);
         Transformed {
-            a: std::array::from_fn(|i| std::array::from_fn(|j| times(&ALPHA[i], j))),
-            c: std::array::from_fn(|i| {
-                std::array::from_fn(|j| {
-                    let diagonal = if i == j {
-                        1.0 / GAMMA_MATRIX[i][i]
-                    } else {
-                        0.0
-                    };
-                    diagonal - inverse[i][j]
+            diagonal: GAMMA,
+            a: (0..STAGES)
+                .map(|i| (0..STAGES).map(|j| times(&ALPHA[i], j)).collect())
+                .collect(),
+            c: (0..STAGES)
+                .map(|i| {
+                    (0..STAGES)
+                        .map(|j| {
+                            let diagonal = if i == j {
+                                1.0 / GAMMA_MATRIX[i][i]
+                            } else {
+                                0.0
+                            };
+                            diagonal - inverse[i][j]
+                        })
+                        .collect()
                 })
-            }),
-            m: std::array::from_fn(|j| times(&B, j)),
-            e: std::array::from_fn(|j| times(&difference, j)),
-            alpha: std::array::from_fn(|i| ALPHA[i].iter().sum()),
-            gamma: std::array::from_fn(|i| GAMMA_MATRIX[i].iter().sum()),
+                .collect(),
+            m: (0..STAGES).map(|j| times(&B, j)).collect(),
+            e: (0..STAGES).map(|j| times(&difference, j)).collect(),
+            alpha: ALPHA.iter().map(|row| row.iter().sum()).collect(),
+            gamma: GAMMA_MATRIX.iter().map(|row| row.iter().sum()).collect(),
         }
+    }
+
+    /// RODAS4 (Hairer and Wanner, *Solving ODEs II*, VI.4, Table 4.3; their code `rodas.f`,
+    /// METH = 1), published in this transformed form: order 4, six stages, stiffly accurate
+    /// and L-stable, with an embedded solution of order 3 (the fifth stage's state, itself
+    /// stiffly accurate), so that the error estimate is the last stage's unknown u₆.
+    pub fn rodas4() -> Transformed {
+        let a5 = [
+            1.221_224_509_226_641,
+            6.019_134_481_288_629,
+            12.537_083_329_320_87,
+            -0.687_886_036_105_895,
+        ];
+        let a = vec![
+            vec![],
+            vec![1.544],
+            vec![0.946_678_528_081_582_6, 0.255_701_169_898_328_4],
+            vec![
+                3.314_825_187_068_521,
+                2.896_124_015_972_201,
+                0.998_641_913_997_781_7,
+            ],
+            a5.to_vec(),
+            [&a5[..], &[1.0]].concat(),
+        ];
+        let c = vec![
+            vec![],
+            vec![-5.6688],
+            vec![-2.430_093_356_833_875, -0.206_359_915_709_191_5],
+            vec![
+                -0.107_352_905_815_137_5,
+                -9.594_562_251_023_355,
+                -20.470_286_148_096_16,
+            ],
+            vec![
+                7.496_443_313_967_647,
+                -10.246_804_314_643_52,
+                -33.999_903_528_199_05,
+                11.708_908_932_061_6,
+            ],
+            vec![
+                8.083_246_795_921_522,
+                -7.981_132_988_064_893,
+                -31.521_594_328_743_71,
+                16.319_305_431_231_36,
+                -6.058_818_238_834_054,
+            ],
+        ];
+        Transformed {
+            diagonal: 0.25,
+            m: [&a5[..], &[1.0, 1.0]].concat(),
+            e: vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            alpha: vec![0.0, 0.386, 0.21, 0.63, 1.0, 1.0],
+            gamma: vec![0.25, -0.1043, 0.1035, -0.036_200_000_000_000_23, 0.0, 0.0],
+            a,
+            c,
+        }
+    }
+
+    fn stages(&self) -> usize {
+        self.m.len()
     }
 }
 
@@ -195,8 +274,9 @@ struct Jacobian {
     /// TᵀU.
     reduced: DMatrix<f64>,
     time_derivative: Vec<f64>,
-    /// The spectral radius of U Tᵀ (that of TᵀU): how fast its stiffest component moves.
-    spectral_radius: f64,
+    /// The spectral radius of U Tᵀ (that of TᵀU): how fast its stiffest component moves;
+    /// computed when first asked for.
+    spectral_radius: Cell<Option<f64>>,
     /// Whether it was formed at the current point of the solution.
     fresh: bool,
     /// Accepted steps since it was formed.
@@ -204,7 +284,17 @@ struct Jacobian {
     factor: Option<(f64, Lu)>,
 }
 
+/// Which Rosenbrock method steps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scheme {
+    /// ROS34PW2: order 3, a W-method, its Jacobian kept across steps.
+    Ros34pw2,
+    /// RODAS4: order 4, its Jacobian formed at every step (its order needs the exact one).
+    Rodas4,
+}
+
 pub(super) struct RosenbrockW {
+    scheme: Scheme,
     coefficients: Transformed,
     rtol: f64,
     /// Components of the state the error control watches (the leading ones).
@@ -217,7 +307,7 @@ pub(super) struct RosenbrockW {
     reuse: usize,
     /// Whether the last attempt was rejected.
     rejected: bool,
-    increments: [DVector<f64>; STAGES],
+    increments: Vec<DVector<f64>>,
     stage_state: Vec<f64>,
     stage_derivative: Vec<f64>,
     /// dy/dt at the end of the last attempt, evaluated only when the attempt is acceptable.
@@ -227,10 +317,16 @@ pub(super) struct RosenbrockW {
 }
 
 impl RosenbrockW {
-    pub(super) fn new(dimension: usize, settings: &Settings) -> Self {
+    pub(super) fn new(scheme: Scheme, dimension: usize, settings: &Settings) -> Self {
         let zeros = vec![0.0; dimension];
+        let coefficients = match scheme {
+            Scheme::Ros34pw2 => Transformed::new(),
+            Scheme::Rodas4 => Transformed::rodas4(),
+        };
         RosenbrockW {
-            coefficients: Transformed::new(),
+            scheme,
+            increments: vec![DVector::zeros(dimension); coefficients.stages()],
+            coefficients,
             rtol: settings.rtol,
             controlled: settings.controlled_len(dimension),
             atol: settings.atol,
@@ -238,7 +334,6 @@ impl RosenbrockW {
             jacobian: None,
             reuse: 1,
             rejected: false,
-            increments: std::array::from_fn(|_| DVector::zeros(dimension)),
             stage_state: zeros.clone(),
             stage_derivative: zeros.clone(),
             end_derivative: zeros.clone(),
@@ -247,9 +342,9 @@ impl RosenbrockW {
         }
     }
 
-    /// J T and ∂f/∂t at the current point by forward differences, along the directions the
-    /// system gives (or each watched component), with increments that balance truncation
-    /// against rounding (as in Hairer and Wanner's RODAS).
+    /// J T and ∂f/∂t at the current point: J from the system when it gives it, by forward
+    /// differences otherwise ([`RosenbrockW::differenced_image`]); ∂f/∂t zero when f does not
+    /// depend on t, a forward difference otherwise.
     fn form_jacobian(
         &mut self,
         eval: &mut Evaluator,
@@ -263,11 +358,75 @@ impl RosenbrockW {
             Some(spanning) => Directions::Basis(orthonormal(spanning, n)),
             None => Directions::Leading(self.controlled),
         };
+        let given = match directions {
+            Directions::Leading(count) => self.given_image(eval, t, y, count)?,
+            Directions::Basis(_) => None,
+        };
+        let image = match given {
+            Some(image) => image,
+            None => self.differenced_image(eval, t, y, &directions)?,
+        };
+        let time_derivative = match eval.autonomous() {
+            true => vec![0.0; n],
+            false => {
+                let dt = (t + (f64::EPSILON * t.abs().max(1e-5)).sqrt()) - t;
+                eval.rhs(t + dt, y, &mut self.stage_derivative)?;
+                (0..n)
+                    .map(|i| (self.stage_derivative[i] - self.derivative[i]) / dt)
+                    .collect()
+            }
+        };
+        let reduced = match &directions {
+            Directions::Leading(count) => image.rows(0, *count).into_owned(),
+            Directions::Basis(basis) => basis.tr_mul(&image),
+        };
+        if let Some(old) = &self.jacobian {
+            self.reuse = match h * change(old, &directions, &image) < REUSE_CHANGE {
+                true => (2 * self.reuse).min(JACOBIAN_AGE),
+                false => 1,
+            };
+        }
+        self.jacobian = Some(Jacobian {
+            directions,
+            image,
+            reduced,
+            time_derivative,
+            spectral_radius: Cell::new(None),
+            fresh: true,
+            age: 0,
+            factor: None,
+        });
+        Ok(())
+    }
+
+    /// J's first `count` columns from the system's own Jacobian, if it gives one.
+    fn given_image(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        count: usize,
+    ) -> Result<Option<DMatrix<f64>>, Halt> {
+        let mut full = DMatrix::zeros(y.len(), y.len());
+        let given = eval.jacobian(t, y, &self.derivative, &mut full)?;
+        Ok(given.then(|| full.columns(0, count).into_owned()))
+    }
+
+    /// U = J T by forward differences of f along the directions, with increments that balance
+    /// truncation against rounding (as in Hairer and Wanner's RODAS).
+    fn differenced_image(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        directions: &Directions,
+    ) -> Result<DMatrix<f64>, Halt> {
+        let n = y.len();
         let m = directions.count();
         let mut image = DMatrix::zeros(n, m);
         let mut perturbed = y.to_vec();
         for j in 0..m {
-            match &directions {
+            match directions {
                 Directions::Leading(_) => {
                     perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
                     // The increment actually represented, so that rounding of y + δ does not
@@ -293,38 +452,30 @@ impl RosenbrockW {
                 }
             }
         }
-        let dt = (t + (f64::EPSILON * t.abs().max(1e-5)).sqrt()) - t;
-        eval.rhs(t + dt, y, &mut self.stage_derivative)?;
-        let time_derivative = (0..n)
-            .map(|i| (self.stage_derivative[i] - self.derivative[i]) / dt)
-            .collect();
-        let reduced = match &directions {
-            Directions::Leading(count) => image.rows(0, *count).into_owned(),
-            Directions::Basis(basis) => basis.tr_mul(&image),
-        };
-        if let Some(old) = &self.jacobian {
-            self.reuse = match h * change(old, &directions, &image) < REUSE_CHANGE {
-                true => (2 * self.reuse).min(JACOBIAN_AGE),
-                false => 1,
-            };
-        }
-        let spectral_radius = spectral_radius(&reduced);
-        self.jacobian = Some(Jacobian {
-            directions,
-            image,
-            reduced,
-            time_derivative,
-            spectral_radius,
-            fresh: true,
-            age: 0,
-            factor: None,
-        });
-        Ok(())
+        Ok(image)
     }
 
-    /// The spectral radius of the Jacobian last formed (`None` before the first).
-    pub(super) fn spectral_radius(&self) -> Option<f64> {
-        self.jacobian.as_ref().map(|j| j.spectral_radius)
+    /// How many accepted steps the current Jacobian serves: ROS34PW2 keeps its order with any
+    /// matrix, RODAS4 needs the Jacobian at the step's start.
+    fn steps_per_jacobian(&self) -> usize {
+        match self.scheme {
+            Scheme::Ros34pw2 => self.reuse,
+            Scheme::Rodas4 => 1,
+        }
+    }
+
+    /// Whether the spectral radius ρ of the Jacobian last formed is below `limit` (`false`
+    /// before the first). The bound |trace| / m ≤ ρ, m the Jacobian's order, says no without
+    /// the eigenvalues on a stiff stretch, where the dominant eigenvalues make the trace.
+    pub(super) fn spectral_radius_below(&self, limit: f64) -> bool {
+        let Some(jacobian) = &self.jacobian else {
+            return false;
+        };
+        let m = jacobian.reduced.nrows();
+        if m > 0 && jacobian.reduced.trace().abs() / m as f64 >= limit {
+            return false;
+        }
+        jacobian.spectral_radius() < limit
     }
 
     /// Takes `derivative` as dy/dt at the current point (computed by another method), and
@@ -338,9 +489,8 @@ impl RosenbrockW {
     }
 
     /// Solves the stage's equation for its increment, in place.
-    fn solve_w(jacobian: &Jacobian, lu: &Lu, h: f64, rhs: &mut DVector<f64>) {
+    fn solve_w(jacobian: &Jacobian, lu: &Lu, c: f64, rhs: &mut DVector<f64>) {
         // (cI − U Tᵀ)⁻¹ b = (b + U (cI − TᵀU)⁻¹ Tᵀ b) / c, with c = 1 / (h γ).
-        let c = 1.0 / (h * GAMMA);
         if jacobian.reduced.nrows() > 0 {
             let mut s = jacobian.directions.project(rhs.as_slice());
             lu.solve_mut(&mut s);
@@ -385,9 +535,22 @@ impl RosenbrockW {
                 + coupling / h
                 + k.gamma[stage] * h * jacobian.time_derivative[i]
         });
-        Self::solve_w(jacobian, lu, h, &mut rhs);
+        Self::solve_w(jacobian, lu, 1.0 / (h * k.diagonal), &mut rhs);
         self.increments[stage] = rhs;
         Ok(())
+    }
+}
+
+impl Jacobian {
+    fn spectral_radius(&self) -> f64 {
+        match self.spectral_radius.get() {
+            Some(radius) => radius,
+            None => {
+                let radius = spectral_radius(&self.reduced);
+                self.spectral_radius.set(Some(radius));
+                radius
+            }
+        }
     }
 }
 
@@ -457,14 +620,17 @@ fn orthonormal(spanning: DMatrix<f64>, rows: usize) -> DMatrix<f64> {
 
 impl AdaptiveStepper for RosenbrockW {
     fn order(&self) -> u32 {
-        3
+        match self.scheme {
+            Scheme::Ros34pw2 => 3,
+            Scheme::Rodas4 => 4,
+        }
     }
 
     fn controller(&self) -> StepController {
         // The estimate is the error of the order-2 solution. Elementary control with Hairer and
         // Wanner's growth limit for Rosenbrock methods.
         StepController::new(
-            2,
+            self.order() - 1,
             Gains {
                 beta: 0.0,
                 safety: 0.9,
@@ -495,7 +661,9 @@ impl AdaptiveStepper for RosenbrockW {
     ) -> Result<f64, Halt> {
         let stale = match &self.jacobian {
             None => true,
-            Some(jacobian) => (self.rejected && !jacobian.fresh) || jacobian.age >= self.reuse,
+            Some(jacobian) => {
+                (self.rejected && !jacobian.fresh) || jacobian.age >= self.steps_per_jacobian()
+            }
         };
         if stale {
             self.form_jacobian(eval, t, y, h)?;
@@ -508,7 +676,7 @@ impl AdaptiveStepper for RosenbrockW {
             eval.stats.lu_decompositions += 1;
             let mut w = -&jacobian.reduced;
             for i in 0..w.nrows() {
-                w[(i, i)] += 1.0 / (h * GAMMA);
+                w[(i, i)] += 1.0 / (h * self.coefficients.diagonal);
             }
             let lu = w.lu();
             jacobian.factor = lu.is_invertible().then_some((h, lu));
@@ -519,7 +687,7 @@ impl AdaptiveStepper for RosenbrockW {
             self.rejected = true;
             return Ok(f64::INFINITY);
         };
-        let solved = (0..STAGES)
+        let solved = (0..self.coefficients.stages())
             .try_for_each(|stage| self.solve_stage(eval, &jacobian, &lu, stage, t, y, h));
         jacobian.factor = Some((h, lu));
         self.jacobian = Some(jacobian);
@@ -527,10 +695,10 @@ impl AdaptiveStepper for RosenbrockW {
         let k = &self.coefficients;
         for i in 0..y.len() {
             y_new[i] = y[i]
-                + (0..STAGES)
+                + (0..k.stages())
                     .map(|s| k.m[s] * self.increments[s][i])
                     .sum::<f64>();
-            self.error[i] = (0..STAGES)
+            self.error[i] = (0..k.stages())
                 .map(|s| k.e[s] * self.increments[s][i])
                 .sum::<f64>();
         }

@@ -17,8 +17,13 @@ pub enum Method {
     /// ROS34PW2, a Rosenbrock-W method of order 3 for stiff problems, with a finite-difference
     /// Jacobian kept across steps (along the system's tangent directions when it gives them).
     Rosenbrock,
-    /// Dormand–Prince where the problem is not stiff, the Rosenbrock-W method where it is: the
-    /// method changes between steps when the steps' stability says so (`switching.rs`).
+    /// RODAS4, a Rosenbrock method of order 4 for stiff problems, with a Jacobian formed at
+    /// every step: the system's own ([`OdeSystem::jacobian`](super::OdeSystem::jacobian)) when
+    /// it gives one, finite differences otherwise (along the system's tangent directions when it
+    /// gives them).
+    Rodas4,
+    /// Dormand–Prince where the problem is not stiff, RODAS4 where it is: the method changes
+    /// between steps when the steps' stability says so (`switching.rs`).
     Automatic,
 }
 

@@ -37,6 +37,26 @@ pub trait OdeSystem {
         Ok(None)
     }
 
+    /// Whether f does not depend on t: the implicit method then takes ∂f/∂t = 0 instead of
+    /// differencing f in time.
+    fn autonomous(&self) -> bool {
+        false
+    }
+
+    /// Writes ∂f/∂y at (t, y), where `dydt` = f(t, y), into `jacobian` (a square of the
+    /// dimension), for a system that knows a way cheaper than differencing f along each
+    /// component; `Ok(false)` (the default) leaves the implicit method to difference f. Not
+    /// asked of a system with a [`OdeSystem::tangent_basis`].
+    fn jacobian(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _dydt: &[f64],
+        _jacobian: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<bool, CallbackError> {
+        Ok(false)
+    }
+
     /// Whether the step control should forget what the steps before the last
     /// [`OdeSystem::project`] said of the error's trend: an event changed the equations (a
     /// closed-loop mechanism's constraint rows chosen again, a singular passage entered or

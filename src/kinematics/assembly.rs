@@ -278,7 +278,7 @@ fn free_range(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
 
 /// The least-norm least-squares solution of m x = b (singular values below 1e-12 of the
 /// largest treated as zero).
-fn least_norm(m: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
+pub(crate) fn least_norm(m: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
     if m.ncols() == 0 {
         return Some(DVector::zeros(0));
     }

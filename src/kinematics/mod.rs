@@ -4,12 +4,15 @@
 pub mod assembly;
 pub mod chain;
 pub mod closure;
+pub mod drag;
 pub mod eval;
 pub mod forward;
+pub mod frames;
 pub mod initial;
 pub mod joint;
 pub mod mobility;
 pub mod model;
+pub mod penalty;
 pub mod unknowns;
 
 pub use initial::initial_coordinates;

@@ -44,7 +44,7 @@ impl JointModel {
 
     /// The chain when it is one rotation or translation along a fixed axis, linear in its one
     /// coordinate (structurally: no evaluation).
-    pub(super) fn single_motion(&self) -> Option<SingleMotion> {
+    pub(crate) fn single_motion(&self) -> Option<SingleMotion> {
         if self.coordinate_count() != 1 {
             return None;
         }
@@ -225,7 +225,7 @@ fn add_moved(subspace: &mut DMatrix<f64>, k: usize, pose: &Pose, column: &Twist)
 
 /// A one-coordinate chain of one step: a rotation by `scale` · q about `axis`, or a translation
 /// by q · `direction`.
-pub(super) enum SingleMotion {
+pub(crate) enum SingleMotion {
     Rotation { axis: Vector3<f64>, scale: f64 },
     Translation { direction: Vector3<f64> },
 }

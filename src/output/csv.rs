@@ -18,17 +18,21 @@ const FLUSH_EVERY: Duration = Duration::from_millis(200);
 
 /// The whole CSV text of a finished simulation.
 pub fn to_csv(simulation: &Simulation) -> String {
-    let mut out = header(&simulation.coordinate_names, &simulation.reaction_names);
+    let mut out = header(
+        &simulation.coordinate_names,
+        &simulation.reaction_names,
+        &[],
+    );
     for sample in &simulation.samples {
-        out += &row(sample);
+        out += &row(sample, &[]);
     }
     out += &ending(&simulation.report);
     out
 }
 
-/// The header line: time, the declared coordinates, their rates, the energies and the
-/// reactions' components.
-pub fn header(coordinate_names: &[String], reaction_names: &[String]) -> String {
+/// The header line: time, the declared coordinates, their rates, the energies, the
+/// reactions' components and the `extra` columns (the frames' states).
+pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[String]) -> String {
     let mut out = String::from("time");
     for name in coordinate_names {
         let _ = write!(out, ",{name}");
@@ -42,18 +46,21 @@ pub fn header(coordinate_names: &[String], reaction_names: &[String]) -> String 
             let _ = write!(out, ",{name}.reaction.{part}");
         }
     }
+    for name in extra {
+        let _ = write!(out, ",{name}");
+    }
     out.push('\n');
     out
 }
 
-/// One sample's line.
-pub fn row(sample: &Sample) -> String {
+/// One sample's line, ending with the `extra` values.
+pub fn row(sample: &Sample, extra: &[f64]) -> String {
     let mut out = exponent(sample.time);
     let values = (sample.coordinates.iter().chain(&sample.rates))
         .chain([&sample.kinetic_energy])
         .map(|&x| Some(x))
         .chain([sample.potential_energy])
-        .chain(sample.reactions.iter().map(|&x| Some(x)));
+        .chain(sample.reactions.iter().chain(extra).map(|&x| Some(x)));
     for value in values {
         out.push(',');
         out += &value.map_or(String::new(), exponent);
@@ -98,20 +105,26 @@ pub struct CsvWriter<W: Write> {
 }
 
 impl<W: Write> CsvWriter<W> {
-    /// Starts the file with its header.
-    pub fn new(out: W, coordinate_names: &[String], reaction_names: &[String]) -> Self {
+    /// Starts the file with its header (see [`header`]).
+    pub fn new(
+        out: W,
+        coordinate_names: &[String],
+        reaction_names: &[String],
+        extra: &[String],
+    ) -> Self {
         let mut writer = CsvWriter {
             out,
             flushed: Instant::now(),
             error: None,
         };
-        writer.write(&header(coordinate_names, reaction_names));
+        writer.write(&header(coordinate_names, reaction_names, extra));
         writer.flush();
         writer
     }
 
-    pub fn write_sample(&mut self, sample: &Sample) {
-        self.write(&row(sample));
+    /// Writes a sample's row, ending with the `extra` values its header named.
+    pub fn write_sample(&mut self, sample: &Sample, extra: &[f64]) {
+        self.write(&row(sample, extra));
         if self.flushed.elapsed() >= FLUSH_EVERY {
             self.flush();
         }

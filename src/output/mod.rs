@@ -6,3 +6,4 @@ pub mod plot;
 pub mod precision_plot;
 pub mod text;
 pub mod urdf;
+pub mod xml;

@@ -22,6 +22,7 @@ use crate::dynamics::model::{BodyInertia, Model};
 use crate::elab::value::SExpr;
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{JointModel, Step};
+use crate::output::xml::escape;
 use crate::spatial::{self, Pose};
 use crate::spatial::{rotation, translation};
 
@@ -734,19 +735,4 @@ fn write_joint(out: &mut String, joint: &UrdfJoint) {
 
 fn triple(v: &Vec3) -> String {
     v.iter().map(|x| number(*x)).collect::<Vec<_>>().join(" ")
-}
-
-fn escape(text: &str) -> String {
-    let mut escaped = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => escaped.push_str("&amp;"),
-            '<' => escaped.push_str("&lt;"),
-            '>' => escaped.push_str("&gt;"),
-            '"' => escaped.push_str("&quot;"),
-            '\'' => escaped.push_str("&apos;"),
-            _ => escaped.push(c),
-        }
-    }
-    escaped
 }

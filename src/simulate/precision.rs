@@ -194,6 +194,36 @@ impl Reference {
         ((t - time).abs() <= tolerance).then_some(&values[..])
     }
 
+    /// Every column at `time`, between the first and the last row: the row at that time if
+    /// there is one, else interpolated between the rows around it. A column whose rate is a
+    /// column too (`x` and `x'`) is interpolated by the cubic Hermite polynomial of its values
+    /// and rates at both rows (the error of a step's fourth power, as fine as the outputs of an
+    /// integrator), any other linearly.
+    pub fn at(&self, time: f64) -> Option<Vec<f64>> {
+        if let Some(row) = self.row_at(time) {
+            return Some(row.to_vec());
+        }
+        let after = self.rows.partition_point(|(t, _)| *t < time);
+        let ((t0, before), (t1, next)) =
+            (self.rows.get(after.checked_sub(1)?)?, self.rows.get(after)?);
+        let h = t1 - t0;
+        let s = (time - t0) / h;
+        let rates = self.rate_columns();
+        let value = |c: usize| match rates[c] {
+            Some(r) => hermite(s, h, [before[c], before[r]], [next[c], next[r]]),
+            None => before[c] + s * (next[c] - before[c]),
+        };
+        Some((0..self.columns.len()).map(value).collect())
+    }
+
+    /// For each column, the column of its rate (`x'` for `x`), if there is one.
+    fn rate_columns(&self) -> Vec<Option<usize>> {
+        let find = |name: String| self.columns.iter().position(|c| *c == name);
+        (self.columns.iter())
+            .map(|c| find(format!("{c}'")))
+            .collect()
+    }
+
     /// For each coordinate of `names`, the reference's columns of its value and of its rate.
     fn columns_of(&self, names: &[String]) -> Vec<(Option<usize>, Option<usize>)> {
         let find = |name: &str| self.columns.iter().position(|c| c == name);
@@ -202,6 +232,16 @@ impl Reference {
             .map(|n| (find(n), find(&format!("{n}'"))))
             .collect()
     }
+}
+
+/// The cubic Hermite interpolant at `s` ∈ [0, 1] of a step of length `h` between (value, rate)
+/// pairs.
+fn hermite(s: f64, h: f64, [y0, d0]: [f64; 2], [y1, d1]: [f64; 2]) -> f64 {
+    let (s2, s3) = (s * s, s * s * s);
+    (2.0 * s3 - 3.0 * s2 + 1.0) * y0
+        + (s3 - 2.0 * s2 + s) * h * d0
+        + (-2.0 * s3 + 3.0 * s2) * y1
+        + (s3 - s2) * h * d1
 }
 
 /// A run's distance from the reference.

@@ -20,6 +20,8 @@ pub use super::settings::{Integrator, Settings};
 pub struct Prepared {
     pub model: Model,
     pub topology: Topology,
+    /// The kinematic model of the declared coordinates: the poses of the bodies and frames.
+    pub kinematics: kinematic_model::KinematicModel,
     /// Declared coordinates and rates at t = 0 (in the model's joint order).
     pub coordinates: Vec<f64>,
     pub rates: Vec<f64>,
@@ -206,6 +208,7 @@ pub fn prepare(
     Ok(Prepared {
         model,
         topology,
+        kinematics,
         coordinates,
         rates,
         settings,

@@ -48,6 +48,28 @@ impl OdeSystem for MechanicalSystem<'_> {
         Ok(MechanicalSystem::tangent_basis(self, t, y)?)
     }
 
+    fn autonomous(&self) -> bool {
+        MechanicalSystem::autonomous(self)
+    }
+
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        dydt: &[f64],
+        jacobian: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<bool, CallbackError> {
+        let mut power_gradient = vec![0.0; y.len()];
+        Ok(MechanicalSystem::jacobian(
+            self,
+            t,
+            y,
+            dydt,
+            jacobian,
+            &mut power_gradient,
+        )?)
+    }
+
     fn breaks_error_trend(&self) -> bool {
         self.loops.breaks_trend
     }
@@ -84,6 +106,33 @@ impl OdeSystem for WithWork<'_, '_> {
         Ok(self.0.tangent_basis(t, &y[..n])?)
     }
 
+    fn autonomous(&self) -> bool {
+        self.0.autonomous()
+    }
+
+    /// The mechanism's Jacobian, and the work's rate's gradient as the last row (the rate does
+    /// not depend on the work itself).
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        dydt: &[f64],
+        jacobian: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<bool, CallbackError> {
+        let n = self.0.dimension();
+        let mut motion = nalgebra::DMatrix::zeros(n, n);
+        let mut power_gradient = vec![0.0; n];
+        let given = self
+            .0
+            .jacobian(t, &y[..n], &dydt[..n], &mut motion, &mut power_gradient)?;
+        jacobian.fill(0.0);
+        jacobian.view_mut((0, 0), (n, n)).copy_from(&motion);
+        for (j, gradient) in power_gradient.iter().enumerate() {
+            jacobian[(n, j)] = *gradient;
+        }
+        Ok(given)
+    }
+
     fn breaks_error_trend(&self) -> bool {
         self.0.loops.breaks_trend
     }
@@ -102,7 +151,7 @@ pub struct Report {
     pub steps: usize,
     pub rejected_steps: usize,
     pub function_evaluations: usize,
-    /// With the implicit integrator: the accepted steps its Rosenbrock-W method took (the others
+    /// With the implicit integrator: the accepted steps its Rosenbrock method took (the others
     /// are Dormand–Prince's, where the motion is not stiff), and how often it changed method.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stiff_steps: Option<usize>,

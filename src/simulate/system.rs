@@ -9,6 +9,8 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
+mod jacobian;
+
 use super::constraints::LoopMonitor;
 use super::native::NativeDynamics;
 use crate::dynamics::algorithms::{
@@ -94,6 +96,12 @@ impl<'m> MechanicalSystem<'m> {
 
     pub fn dimension(&self) -> usize {
         self.model.positions() + self.model.velocities()
+    }
+
+    /// Whether the equations of motion do not depend on the time: no effort reads it.
+    pub fn autonomous(&self) -> bool {
+        let model = self.model;
+        !model.has_efforts() || model.effort_tape.as_ref().is_ok_and(|t| !t.reads_time())
     }
 
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.

@@ -76,11 +76,21 @@ pub struct DefineDecl {
     pub body: Expr,
 }
 
-/// `package name = decls end`
+/// `package name = decls end`, or an array of packages `package name[i in a .. b] = decls end`:
+/// one instance of the declarations for each integer `i` from `a` to `b`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PackageDecl {
     pub name: Ident,
+    pub index: Option<PackageIndex>,
     pub decls: Vec<Decl>,
+}
+
+/// `[i in first .. last]`: the index of an array of packages and its range, both ends included.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackageIndex {
+    pub variable: Ident,
+    pub first: Expr,
+    pub last: Expr,
 }
 
 /// `join first and second with link [as name]`
@@ -107,10 +117,11 @@ pub struct ImportDecl {
     pub alias: Option<Ident>,
 }
 
-/// `package:name`
+/// `package:name`, or `package[index]:name` in an array of packages.
 #[derive(Clone, Debug, PartialEq)]
 pub struct QualifiedName {
     pub package: Ident,
+    pub index: Option<Expr>,
     pub name: Ident,
 }
 
@@ -231,11 +242,8 @@ pub struct Arg {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Callee {
     Name(Ident),
-    /// `P:f(...)`
-    Qualified {
-        package: Ident,
-        name: Ident,
-    },
+    /// `P:f(...)`, `P[k]:f(...)`
+    Qualified(QualifiedName),
     /// `?fs(x, x')`: an unknown function.
     Unknown(Ident),
 }

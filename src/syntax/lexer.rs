@@ -84,6 +84,8 @@ pub enum Tok<'input> {
     RParen,
     #[token(".")]
     Dot,
+    #[token("..")]
+    DotDot,
     #[token("=")]
     Equal,
     #[token("+")]
@@ -121,6 +123,13 @@ pub enum Tok<'input> {
     Str(&'input str),
     #[regex(r#""[^"\n]*"#, unterminated_string)]
     UnterminatedStr,
+
+    /// `// ...`, a comment in other languages: reported and skipped, never given to the parser.
+    #[regex(r"//[^\n]*", allow_greedy = true)]
+    SlashComment,
+    /// `.5`: reported, then given to the parser as the number it means.
+    #[regex(r"\.[0-9]+([eE][+-]?[0-9]+)?", |lex| lex.slice())]
+    LeadingDot(&'input str),
 }
 
 fn unterminated_string<'input>(_: &mut logos::Lexer<'input, Tok<'input>>) -> Result<(), LexError> {
@@ -131,7 +140,24 @@ fn unterminated_string<'input>(_: &mut logos::Lexer<'input, Tok<'input>>) -> Res
 fn nested_comment<'input>(
     lex: &mut logos::Lexer<'input, Tok<'input>>,
 ) -> FilterResult<(), LexError> {
-    let rest = lex.remainder().as_bytes();
+    let rest = lex.remainder();
+    match comment_rest_length(rest) {
+        Some(length) => {
+            lex.bump(length);
+            FilterResult::Skip
+        }
+        None => {
+            // Everything after an unclosed `(*` is comment: consume it so it is not read as code.
+            lex.bump(rest.len());
+            FilterResult::Error(LexError::UnterminatedComment)
+        }
+    }
+}
+
+/// The length of a comment's text after its opening `(*`, up to and including the `*)` that
+/// closes it (comments nest); `None` when it is never closed.
+fn comment_rest_length(rest: &str) -> Option<usize> {
+    let rest = rest.as_bytes();
     let mut depth = 1usize;
     let mut i = 0;
     while i < rest.len() {
@@ -144,16 +170,28 @@ fn nested_comment<'input>(
                 depth -= 1;
                 i += 2;
                 if depth == 0 {
-                    lex.bump(i);
-                    return FilterResult::Skip;
+                    return Some(i);
                 }
             }
             _ => i += 1,
         }
     }
-    // Everything after an unclosed `(*` is comment: consume it so it is not read as code.
-    lex.bump(rest.len());
-    FilterResult::Error(LexError::UnterminatedComment)
+    None
+}
+
+/// The comments in the text between two tokens (which holds only spaces and comments), as
+/// byte ranges relative to `gap`. The parser never sees comments; the formatter and the editor
+/// support put them back.
+pub fn comments_in_gap(gap: &str) -> Vec<std::ops::Range<usize>> {
+    let mut comments = Vec::new();
+    let mut i = 0;
+    while let Some(offset) = gap[i..].find("(*") {
+        let start = i + offset;
+        let length = comment_rest_length(&gap[start + 2..]).unwrap_or(gap.len() - start - 2);
+        comments.push(start..start + 2 + length);
+        i = start + 2 + length;
+    }
+    comments
 }
 
 impl std::fmt::Display for Tok<'_> {
@@ -203,6 +241,7 @@ impl Tok<'_> {
             Tok::LParen => "(",
             Tok::RParen => ")",
             Tok::Dot => ".",
+            Tok::DotDot => "..",
             Tok::Equal => "=",
             Tok::Plus => "+",
             Tok::PlusPlus => "++",
@@ -218,6 +257,8 @@ impl Tok<'_> {
             Tok::Ident(_) => "identifier",
             Tok::Unknown(_) => "unknown",
             Tok::Str(_) => "string",
+            Tok::SlashComment => "//",
+            Tok::LeadingDot(_) => "number",
         }
     }
 }
@@ -241,14 +282,70 @@ pub struct Tokens<'input> {
     file: FileId,
     lexer: logos::Lexer<'input, Tok<'input>>,
     pub errors: Vec<Diagnostic>,
+    /// Repairs of recognised slips, by the offset of the token they apply to, in order.
+    repairs: Vec<(usize, Repair)>,
+    /// A token held back while an inserted one is read.
+    held: Option<Spanned<'input>>,
+}
+
+/// A change to the token stream that lets the parser read on past a slip it has recognised and
+/// reported (see `syntax::repair`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Repair {
+    /// A `,` before the token: a missing comma between fields.
+    InsertComma,
+    /// The string read as a name: `integrator = "rk4"`.
+    Unquote,
+    /// The token left out: a unit after a number (`30 deg`).
+    Skip,
 }
 
 impl<'input> Tokens<'input> {
     pub fn new(file: FileId, text: &'input str) -> Tokens<'input> {
+        Tokens::repaired(file, text, Vec::new())
+    }
+
+    /// The tokens with `repairs` applied, each to the token starting at its offset.
+    pub fn repaired(
+        file: FileId,
+        text: &'input str,
+        mut repairs: Vec<(usize, Repair)>,
+    ) -> Tokens<'input> {
+        // Popped from the end: the first repair last.
+        repairs.sort_by_key(|(offset, _)| std::cmp::Reverse(*offset));
         Tokens {
             file,
             lexer: Tok::lexer(text),
             errors: Vec::new(),
+            repairs,
+            held: None,
+        }
+    }
+
+    /// The token as the repairs make it: `None` when it is left out.
+    fn repair(&mut self, token: Spanned<'input>) -> Option<Spanned<'input>> {
+        let (start, tok, end) = token;
+        while self
+            .repairs
+            .last()
+            .is_some_and(|(offset, _)| *offset < start)
+        {
+            self.repairs.pop();
+        }
+        match self.repairs.last() {
+            Some(&(offset, repair)) if offset == start => {
+                self.repairs.pop();
+                match (repair, tok) {
+                    (Repair::InsertComma, _) => {
+                        self.held = Some(token);
+                        Some((start, Tok::Comma, start))
+                    }
+                    (Repair::Unquote, Tok::Str(name)) => Some((start, Tok::Ident(name), end)),
+                    (Repair::Skip, _) => None,
+                    (Repair::Unquote, _) => Some(token),
+                }
+            }
+            _ => Some(token),
         }
     }
 }
@@ -257,19 +354,51 @@ impl<'input> Iterator for Tokens<'input> {
     type Item = Result<Spanned<'input>, LexError>;
 
     fn next(&mut self) -> Option<Self::Item> {
+        if let Some(held) = self.held.take() {
+            return Some(Ok(held));
+        }
         loop {
             let result = self.lexer.next()?;
             let range = self.lexer.span();
-            match result {
-                Ok(token) => return Some(Ok((range.start, token, range.end))),
-                Err(error) => self.errors.push(lex_diagnostic(
-                    error,
-                    Span::new(self.file, range.start, range.end),
-                    self.lexer.slice(),
-                )),
+            let span = Span::new(self.file, range.start, range.end);
+            let token = match result {
+                Ok(Tok::SlashComment) => {
+                    self.errors.push(slash_comment(span, self.lexer.slice()));
+                    continue;
+                }
+                Ok(Tok::LeadingDot(number)) => {
+                    self.errors.push(leading_dot(span, number));
+                    Tok::Float(number)
+                }
+                Ok(token) => token,
+                Err(error) => {
+                    self.errors
+                        .push(lex_diagnostic(error, span, self.lexer.slice()));
+                    continue;
+                }
+            };
+            if let Some(token) = self.repair((range.start, token, range.end)) {
+                return Some(Ok(token));
             }
         }
     }
+}
+
+/// E0104: `// text`, with the LSD comment that says the same.
+fn slash_comment(span: Span, slice: &str) -> Diagnostic {
+    let text = slice.trim_start_matches('/').trim();
+    Diagnostic::error("E0104", "`//` does not start a comment in LSD")
+        .primary(span, "read as a comment, but LSD comments are `(* ... *)`")
+        .help(format!("write `(* {text} *)`"))
+        .fix(span, format!("(* {text} *)"))
+}
+
+/// E0105: `.5`, a number without its leading digit.
+fn leading_dot(span: Span, number: &str) -> Diagnostic {
+    Diagnostic::error("E0105", "a number starts with a digit")
+        .primary(span, "no digit before the decimal point")
+        .help(format!("write `0{number}`"))
+        .fix(span, format!("0{number}"))
 }
 
 fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
@@ -295,6 +424,7 @@ fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
                     .help("an unknown is `?` followed by a letter, as in `?s` or `?fs(x, x')`"),
                 '|' => diagnostic.help("the rotation operator is `||`, as in `th || [1,0,0]`"),
                 '"' => diagnostic.help("strings appear only in `import \"file.lsd\";`"),
+                '°' => diagnostic.help("angles are in radians: write `30 * pi / 180` for 30°"),
                 _ => diagnostic,
             }
         }

@@ -6,3 +6,4 @@ pub mod lexer;
 pub mod names;
 pub mod nesting;
 pub mod parser;
+mod repair;

@@ -6,8 +6,9 @@ use lalrpop_util::ParseError;
 use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 use crate::syntax::ast::{Names, Program};
-use crate::syntax::lexer::{lex, LexError, Spanned, Tok, Tokens};
+use crate::syntax::lexer::{lex, LexError, Repair, Spanned, Tok, Tokens};
 use crate::syntax::nesting::limit_nesting;
+use crate::syntax::repair::{self, Slip};
 
 /// The parser LALRPOP generated from `grammar/lsd.lalrpop`, checked in (see `build.rs`).
 #[rustfmt::skip]
@@ -16,19 +17,54 @@ mod grammar {
     include!("generated/lsd.rs");
 }
 
+/// How many times a file is parsed again with its slips repaired (see `repair`); slips found
+/// after the last pass are reported without a repair.
+const MAX_REPAIR_PASSES: usize = 16;
+
 /// Parses one file. The program is returned even when there are errors: declarations that could
-/// not be read become `DeclKind::Error`.
+/// not be read become `DeclKind::Error`. A recognised slip (a missing comma, …) is reported and
+/// the file parsed again with it repaired, so that what follows it is still read.
 pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
-    let mut tokens = Tokens::new(file, text);
+    let mut repairs = Vec::new();
+    let mut slips = Vec::new();
+    let mut passes = 0;
+    loop {
+        let recognise = passes < MAX_REPAIR_PASSES;
+        passes += 1;
+        let (program, lexical, syntax, found) = parse_pass(file, text, &repairs, recognise);
+        if found.is_empty() {
+            slips.extend(syntax);
+            slips.sort_by_key(|d: &Diagnostic| d.primary_span().map(|s| s.start));
+            return (program, lexical.into_iter().chain(slips).collect());
+        }
+        for slip in found {
+            repairs.push((slip.offset, slip.repair));
+            slips.push(slip.diagnostic);
+        }
+    }
+}
+
+/// One parse with `repairs` applied: the program, the lexical and syntax errors (those of the
+/// nesting limit among them), and the new slips found (only when `recognise`). Declarations
+/// past the nesting limit are taken apart here, so that a pass's program is dropped safely
+/// when the file is parsed again.
+fn parse_pass(
+    file: FileId,
+    text: &str,
+    repairs: &[(usize, Repair)],
+    recognise: bool,
+) -> (Program, Vec<Diagnostic>, Vec<Diagnostic>, Vec<Slip>) {
+    let mut tokens = Tokens::repaired(file, text, repairs.to_vec());
     let mut recovered = Vec::new();
     let mut names = Names::default();
     let parser = grammar::ProgramParser::new();
     let result = parser.parse(file, &mut recovered, &mut names, &mut tokens);
-    let mut diagnostics = tokens.errors;
+    let lexical = tokens.errors;
     let result = match result {
         Ok(mut program) if recovered.is_empty() => {
-            limit_nesting(&mut program, &mut diagnostics);
-            return (program, diagnostics);
+            let mut syntax = Vec::new();
+            limit_nesting(&mut program, &mut syntax);
+            return (program, lexical, syntax, Vec::new());
         }
         other => other,
     };
@@ -39,20 +75,30 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
         tokens: &tokens,
         text_len: text.len(),
     };
-    for error in recovered {
-        diagnostics.push(context.describe(error.error));
-    }
+    let mut errors: Vec<_> = recovered.into_iter().map(|e| e.error).collect();
+    let mut syntax = Vec::new();
     let program = match result {
         Ok(mut program) => {
-            limit_nesting(&mut program, &mut diagnostics);
+            limit_nesting(&mut program, &mut syntax);
             program
         }
         Err(error) => {
-            diagnostics.push(context.describe(error));
+            errors.push(error);
             Program { decls: Vec::new() }
         }
     };
-    (program, diagnostics)
+    let mut slips = Vec::new();
+    for error in errors {
+        let slip = recognise
+            .then(|| repair::recognise(file, &tokens, &error))
+            .flatten()
+            .filter(|slip| !repairs.iter().any(|(offset, _)| *offset == slip.offset));
+        match slip {
+            Some(slip) => slips.push(slip),
+            None => syntax.push(context.describe(error)),
+        }
+    }
+    (program, lexical, syntax, slips)
 }
 
 struct ErrorContext<'a, 'input> {

@@ -16,7 +16,7 @@ fn parallelogram(initial: &str) -> String {
     example_text(
         "hard/four_bar_row_1",
         &[(
-            "initial c0.q = -pi / 2 fixed,\n        c1.q = -pi / 2,\n        p1.q = pi / 2,\n        e1.q = -pi / 2 ;",
+            "initial c0.q = -pi / 2 fixed,\n  c1.q = -pi / 2,\n  p1.q = pi / 2,\n  e1.q = -pi / 2 ;",
             initial,
         )],
     )

@@ -129,3 +129,47 @@ fn notation_tables_match_golden_files() {
         );
     }
 }
+
+/// The fixes offered for the newcomers' slips are right: applied to the golden file, every one
+/// of them at once, they leave a program that checks clean.
+#[test]
+fn applying_the_offered_fixes_makes_the_program_check_clean() {
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    for name in [
+        "stdlib_name_not_imported",
+        "missing_comma",
+        "slash_comment",
+        "leading_dot",
+        "quoted_integrator",
+        "number_with_unit",
+        "rotation_precedence",
+    ] {
+        let path = PathBuf::from(format!("tests/golden/{name}.lsd"));
+        let compilation = compile_files(std::slice::from_ref(&path), &options).expect("readable");
+        let mut fixes: Vec<_> = compilation
+            .diagnostics
+            .iter()
+            .filter_map(|d| d.fix.as_deref().cloned())
+            .collect();
+        assert!(!fixes.is_empty(), "{name}: no fix offered");
+        assert!(
+            compilation.diagnostics.iter().all(|d| d.fix.is_some()),
+            "{name}: a diagnostic without a fix"
+        );
+        // From the end of the file, so the earlier offsets stay valid.
+        fixes.sort_by_key(|f| std::cmp::Reverse(f.span.start));
+        let mut text = std::fs::read_to_string(&path).expect("readable");
+        for fix in fixes {
+            text.replace_range(fix.span.range(), &fix.replacement);
+        }
+        let fixed = lsdc::driver::compile_text("fixed.lsd", &text, None, &options);
+        assert!(
+            !fixed.has_errors(),
+            "{name} after its fixes:\n{text}\n{:?}",
+            fixed.diagnostics
+        );
+    }
+}

@@ -589,6 +589,7 @@ fn halving_the_step_divides_the_error_by_two_to_the_order() {
         (Method::DormandPrince, 0.2, 5),
         (Method::Dop853, 0.5, 8),
         (Method::Rosenbrock, 0.1, 3),
+        (Method::Rodas4, 0.1, 4),
     ] {
         let method_with = |h: f64| match method {
             Method::Rk4 { .. } => Method::Rk4 { step: h },
@@ -984,4 +985,76 @@ fn the_switching_method_stays_explicit_on_a_problem_that_is_not_stiff() {
     assert_eq!(stats.stiff_steps, 0);
     assert_eq!(stats.rhs_evaluations, explicit_stats.rhs_evaluations);
     assert_eq!(automatic, explicit);
+}
+
+/// Prothero and Robinson's problem y' = λ (y − sin t) + cos t, y(0) = 0, whose solution is
+/// sin t whatever λ.
+fn prothero_robinson(lambda: f64) -> Ode<impl FnMut(f64, &[f64], &mut [f64])> {
+    ode(1, move |t, y, dydt| {
+        dydt[0] = lambda * (y[0] - t.sin()) + t.cos()
+    })
+}
+
+#[test]
+fn rodas4_error_on_the_stiff_prothero_robinson_problem_shrinks_with_the_stiffness() {
+    // Fixed steps (tolerances that accept every step) to t = 1, 100 to 1e5 times the stiff
+    // mode's time scale. There a Rosenbrock method's error is not its classical order's
+    // (Hairer and Wanner, VI.4 and VI.7, order reduction): RODAS4's is about 0.02 h / |λ|
+    // (2.2e-9 for h = 0.1, λ = −1e6, the same in an independent transcription with the exact
+    // ∂f/∂t), first order in h but a 1/|λ| smaller the stiffer the problem. A method whose stiff
+    // limit were not this accurate (or a wrong ∂f/∂t term) would leave an error of order h.
+    for lambda in [-1e4, -1e6] {
+        for h in [0.1, 0.025] {
+            let settings = Settings {
+                rtol: 1e6,
+                atol: 1e6,
+                initial_step: Some(h),
+                max_step: h,
+                ..Settings::default()
+            };
+            let (y, stats, _) = solve(
+                &Method::Rodas4,
+                &mut prothero_robinson(lambda),
+                &[0.0],
+                (0.0, 1.0),
+                &[],
+                &settings,
+            )
+            .unwrap();
+            let error = (y[0] - 1f64.sin()).abs();
+            let constant = error * lambda.abs() / h;
+            eprintln!("RODAS4 on Prothero-Robinson, λ = {lambda:e}, h = {h}: error {error:.2e} = {constant:.3} h / |λ|");
+            assert_eq!(stats.jacobian_evaluations, stats.steps, "h = {h}");
+            assert!(constant < 0.03, "λ = {lambda:e}, h = {h}: error {error:e}");
+        }
+    }
+}
+
+#[test]
+fn rodas4_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
+    // x(t), x'(t) at t = 3000 (three relaxation cycles), against RODAS4 at a thousandth of the
+    // tolerance, each run also checked against the W-method's run at the tightest tolerance.
+    let run = |method: &Method, rtol: f64| {
+        solve(
+            method,
+            &mut van_der_pol(1000.0),
+            &[2.0, 0.0],
+            (0.0, 3000.0),
+            &[],
+            &tolerances(rtol, rtol),
+        )
+        .unwrap()
+    };
+    let (reference, _, _) = run(&Method::Rodas4, 1e-11);
+    let (independent, _, _) = run(&Method::Rosenbrock, 1e-11);
+    assert!(
+        (reference[0] - independent[0]).abs() < 1e-6,
+        "references {reference:?} and {independent:?}"
+    );
+    for rtol in [1e-6, 1e-8] {
+        let (y, stats, _) = run(&Method::Rodas4, rtol);
+        let error = (y[0] - reference[0]).abs();
+        eprintln!("RODAS4 on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
+        assert!(error < 1e3 * rtol, "{rtol:e}: error {error:e}");
+    }
 }

@@ -1,141 +1,223 @@
-//! Regression over the example mechanisms: every example that can be simulated is simulated with
-//! its own `simulate` settings, and its outputs are compared with `tests/expected/NAME.csv`
-//! (written by the same simulation when the results were checked; set `UPDATE_EXPECTED=1` to
-//! rewrite them after an intended change, and review the difference).
+//! Regression over the example mechanisms, through `lsdc test` as a user runs it: every example
+//! is a case of `examples/lsdtest.toml`, simulated and compared with its reference
+//! (`tests/expected/NAME.csv`) within the per-variable tolerances `lsdc test --calibrate`
+//! proposed, or expected to fail where it does not simulate. After an intended change of the
+//! results, `lsdc test --update examples/` re-records the references and says what moved.
 //!
-//! Tolerance: 1e-8 relative to the largest magnitude of each column, which leaves room for
-//! floating-point differences between machines and catches any change of the dynamics. A column
-//! that is zero up to round-off (an angle that symmetry keeps at 0, at 1e-16) is compared at
-//! 1e-14 of the largest column of its kind (coordinates, or rates) instead: round-off does not
-//! reproduce to its own last digits.
+//! The other tests here show that these comparisons can fail: a reference value moved by 1e-3,
+//! a parameter moved by 1e-6, while a parameter moved by 1e-14 (the size of a reordering of
+//! floating-point operations) still passes on the round-off-sensitive examples.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use lsdc::driver::compile_files;
-use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
-use lsdc::simulate::run::run;
+use lsdc::testing::{self, Case, Outcome, Status};
 
-/// Examples that are not simulated, and why.
-const NOT_SIMULATED: &[(&str, &str)] = &[
-    (
-        "satellite",
-        "unknowns without values and unknown torque laws (the thesis's program)",
-    ),
-    ("satellite_library", "the same program through a library"),
-    ("link_forms", "bodies without inertia"),
-    (
-        "delta_isir88_ik",
-        "inverse kinematics of the Delta: bodies without inertia",
-    ),
-    (
-        "planar_triangle",
-        "a kinematic loop: bodies without inertia",
-    ),
-];
+use crate::common::lsdc;
 
-fn parse_csv(text: &str) -> Vec<Vec<f64>> {
-    text.lines()
-        .skip(1)
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect()
+const MANIFEST: &str = "examples/lsdtest.toml";
+
+/// A folder of its own under the system's temporary folder.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lsdc-regression-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temporary folder");
+    dir
+}
+
+/// The case of the examples' manifest named `name`.
+fn example_case(name: &str) -> Case {
+    let cases = testing::load(&[PathBuf::from(MANIFEST)]).expect("the examples' manifest reads");
+    (cases.into_iter().find(|c| c.name == name)).expect("a case of the examples")
 }
 
 #[test]
-fn examples_reproduce_their_expected_results() {
-    let update = std::env::var_os("UPDATE_EXPECTED").is_some();
-    let options = LoadOptions {
-        library_dirs: Vec::new(),
-        use_environment: false,
-    };
-    let mut examples: Vec<PathBuf> = std::fs::read_dir("examples")
+fn every_example_passes_lsdc_test() {
+    let junit = scratch("junit").join("examples.xml");
+    let junit_arg = junit.to_str().expect("utf-8");
+    let (code, stdout, stderr) = lsdc(&[
+        "test",
+        "examples/",
+        "-j",
+        "2",
+        "--format",
+        "json",
+        "--junit",
+        junit_arg,
+    ]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let summary: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+    let cases = summary["cases"].as_array().expect("cases");
+    assert_eq!(summary["passed"].as_u64(), Some(cases.len() as u64));
+    let programs: Vec<PathBuf> = (testing::load(&[PathBuf::from(MANIFEST)]).expect("reads"))
+        .into_iter()
+        .map(|c| c.program)
+        .collect();
+    for example in std::fs::read_dir("examples")
         .expect("examples")
         .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "lsd"))
-        .collect();
-    examples.sort();
-    let mut simulated = 0;
-    for path in examples {
-        let name = path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .expect("name")
-            .to_string();
-        let compilation = compile_files(std::slice::from_ref(&path), &options).expect("readable");
-        let mechanism = compilation.mechanism.expect("examples check clean");
-        let prepared = match prepare(&mechanism, &[], &Settings::default()) {
-            Ok(p) => p,
-            Err(d) => {
-                assert!(
-                    NOT_SIMULATED.iter().any(|(n, _)| *n == name),
-                    "{name} cannot be simulated: {:?}",
-                    d.first().map(|d| &d.message)
-                );
-                continue;
-            }
-        };
-        assert!(
-            !NOT_SIMULATED.iter().any(|(n, _)| *n == name),
-            "{name} is simulated now: update NOT_SIMULATED"
-        );
-        let csv = lsdc::output::csv::to_csv(&run(&prepared, &mut |_| {}));
-        let expected_path = PathBuf::from(format!("tests/expected/{name}.csv"));
-        simulated += 1;
-        if update {
-            std::fs::write(&expected_path, &csv).expect("writable");
-            continue;
-        }
-        let expected = std::fs::read_to_string(&expected_path)
-            .unwrap_or_else(|_| panic!("{} missing", expected_path.display()));
-        assert_eq!(
-            csv.lines().next(),
-            expected.lines().next(),
-            "{name}: columns changed"
-        );
-        assert_eq!(
-            csv.lines().last().filter(|l| l.starts_with('#')).is_some(),
-            expected
-                .lines()
-                .last()
-                .filter(|l| l.starts_with('#'))
-                .is_some(),
-            "{name}: the run's success changed"
-        );
-        let (actual, expected) = (parse_csv(&csv), parse_csv(&expected));
-        assert_eq!(actual.len(), expected.len(), "{name}: number of outputs");
-        let columns = expected.first().map_or(0, Vec::len);
-        let largest = |c: usize| {
-            expected
-                .iter()
-                .map(|r| r[c].abs())
-                .filter(|x| x.is_finite())
-                .fold(1e-300, f64::max)
-        };
-        // Columns: time, n coordinates, n rates, kinetic and potential energy.
-        let n = (columns - 3) / 2;
-        let kind = |c: usize| {
-            if (1..=n).contains(&c) {
-                1..=n
-            } else if (n + 1..=2 * n).contains(&c) {
-                n + 1..=2 * n
-            } else {
-                c..=c
-            }
-        };
-        for c in 0..columns {
-            let kind_scale = kind(c).map(largest).fold(0.0, f64::max);
-            let scale = largest(c).max(1e-6 * kind_scale);
-            for (row, (a, e)) in actual.iter().zip(&expected).enumerate() {
-                let (a, e) = (a[c], e[c]);
-                let same = (a.is_nan() && e.is_nan()) || (a - e).abs() <= 1e-8 * scale;
-                assert!(same, "{name}: row {row}, column {c}: {a} vs {e}");
-            }
+    {
+        if example.extension().is_some_and(|e| e == "lsd") {
+            let name = example.file_name().expect("a file");
+            let is_case = programs.iter().any(|p| p.file_name() == Some(name));
+            assert!(is_case, "{} is no case of {MANIFEST}", example.display());
         }
     }
-    assert!(simulated >= 3, "only {simulated} examples simulated");
+    let xml = std::fs::read_to_string(&junit).expect("the JUnit file is written");
+    let document = roxmltree::Document::parse(&xml).expect("well-formed XML");
+    let root = document.root_element();
+    assert_eq!(root.tag_name().name(), "testsuites");
+    assert_eq!(
+        root.attribute("tests"),
+        Some(cases.len().to_string().as_str())
+    );
+    assert_eq!(root.attribute("failures"), Some("0"));
+    let testcases = root
+        .descendants()
+        .filter(|n| n.has_tag_name("testcase"))
+        .count();
+    assert_eq!(testcases, cases.len());
+}
+
+#[test]
+fn a_reference_value_moved_by_1e_3_fails_with_its_variable_time_and_margin() {
+    let mut case = example_case("maille1");
+    let original =
+        std::fs::read_to_string(case.reference.as_ref().expect("a reference")).expect("reads");
+    let (row, column) = (120, 3);
+    let mut lines: Vec<String> = original.lines().map(String::from).collect();
+    let header = lines
+        .iter()
+        .position(|l| l.starts_with("time,"))
+        .expect("a header");
+    let variable = lines[header]
+        .split(',')
+        .nth(column)
+        .expect("a column")
+        .to_string();
+    let mut cells: Vec<String> = lines[header + 1 + row]
+        .split(',')
+        .map(String::from)
+        .collect();
+    let time: f64 = cells[0].parse().expect("a time");
+    let value: f64 = cells[column].parse().expect("a value");
+    cells[column] = format!("{:e}", value * (1.0 + 1e-3));
+    lines[header + 1 + row] = cells.join(",");
+    let perturbed = scratch("moved").join("maille1.csv");
+    std::fs::write(&perturbed, lines.join("\n")).expect("writes");
+    case.reference = Some(perturbed);
+
+    let outcome = testing::run_case(&case);
+    assert_eq!(outcome.status, Status::Failed, "{:?}", outcome.failures);
+    assert_eq!(
+        outcome.failed_variables.len(),
+        1,
+        "{:?}",
+        outcome.failed_variables
+    );
+    let worst = &outcome.failed_variables[0];
+    assert_eq!(worst.variable, variable);
+    assert_eq!(worst.time, time);
+    assert!(worst.margin > 100.0, "{worst:?}");
+    assert!(
+        outcome.failures[0].contains(&format!("`{variable}`")),
+        "{:?}",
+        outcome.failures
+    );
+}
+
+/// The example `name` with the text `from` of its program replaced by `to`, run as its case of
+/// the examples' manifest.
+fn with_change(name: &str, from: &str, to: &str) -> Case {
+    let mut case = example_case(name);
+    let text = std::fs::read_to_string(&case.program).expect("reads");
+    assert!(text.contains(from), "{name} has `{from}`");
+    let folder = scratch(&format!(
+        "{name}-{}",
+        to.replace(|c: char| !c.is_alphanumeric(), "_")
+    ));
+    copy_folder(Path::new("examples/lib"), &folder.join("lib"));
+    case.program = folder.join(format!("{name}.lsd"));
+    std::fs::write(&case.program, text.replace(from, to)).expect("writes");
+    case
+}
+
+fn copy_folder(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("a folder");
+    for entry in std::fs::read_dir(from).expect("reads") {
+        let path = entry.expect("entry").path();
+        std::fs::copy(&path, to.join(path.file_name().expect("a file"))).expect("copies");
+    }
+}
+
+/// `value` moved by a relative `change`, as a program's number.
+fn moved(value: f64, change: f64) -> String {
+    format!("{:?}", value * (1.0 + change))
+}
+
+/// The round-off-sensitive examples (second-order closure conditions, the full Delta) with one
+/// of their parameters moved by a relative `change`: a length their tolerances were calibrated
+/// against (`calibrated`), or one they were not (the driving torque of the meshes, the Delta's
+/// arm length).
+fn sensitive_examples(change: f64, calibrated: bool) -> Vec<Outcome> {
+    let cases = match calibrated {
+        true => vec![
+            with_change(
+                "maille1",
+                "let L = 1.0 ;",
+                &format!("let L = {} ;", moved(1.0, change)),
+            ),
+            with_change(
+                "maille2",
+                "let L = 1.0 ;",
+                &format!("let L = {} ;", moved(1.0, change)),
+            ),
+            with_change(
+                "delta_isir88",
+                "let l2 = 0.300 ;",
+                &format!("let l2 = {} ;", moved(0.3, change)),
+            ),
+        ],
+        false => vec![
+            with_change(
+                "maille1",
+                "driven(z, -1)",
+                &format!("driven(z, {})", moved(-1.0, change)),
+            ),
+            with_change(
+                "maille2",
+                "driven(z, -1)",
+                &format!("driven(z, {})", moved(-1.0, change)),
+            ),
+            with_change(
+                "delta_isir88",
+                "let l1 = 0.200 ;",
+                &format!("let l1 = {} ;", moved(0.2, change)),
+            ),
+        ],
+    };
+    testing::run_all(&cases, 2).expect("threads start")
+}
+
+#[test]
+fn round_off_sized_changes_pass_the_sensitive_examples() {
+    for outcome in sensitive_examples(1e-14, false) {
+        assert_eq!(
+            outcome.status,
+            Status::Passed,
+            "{}: {:?}",
+            outcome.name,
+            outcome.failures
+        );
+    }
+}
+
+#[test]
+fn a_parameter_moved_by_1e_6_fails_the_sensitive_examples() {
+    for outcome in sensitive_examples(1e-6, true) {
+        assert_eq!(outcome.status, Status::Failed, "{}", outcome.name);
+        let worst = outcome
+            .failed_variables
+            .first()
+            .expect("a variable beyond its tolerance");
+        assert!(worst.margin > 1.0, "{}: {worst:?}", outcome.name);
+    }
 }

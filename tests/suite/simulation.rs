@@ -611,3 +611,59 @@ fn free_body_declared_rates_match_its_velocity() {
         worst_angular.1
     );
 }
+
+/// `examples/speed_feedback_motor`: a geared motor (ratio r) whose law `2 - c q'` reads the
+/// join's own rate drives an inertia J about its axis. J q'' = r (2 - c q') from rest gives
+/// q' = (2/c)(1 - e^{-t/τ}) and q = (2/c)(t - τ (1 - e^{-t/τ})), τ = J / (r c).
+#[test]
+fn motor_reading_its_own_rate_follows_the_first_order_response() {
+    let (ratio, c, inertia) = (3.0f64, 0.05f64, 0.6f64);
+    let tau = inertia / (ratio * c);
+    let simulation = simulate_example("speed_feedback_motor", 10.0);
+    assert!(simulation.samples.len() > 10);
+    for sample in &simulation.samples {
+        let t = sample.time;
+        let decay = (-t / tau).exp();
+        let rate = 2.0 / c * (1.0 - decay);
+        let angle = 2.0 / c * (t - tau * (1.0 - decay));
+        assert!(
+            (sample.rates[0] - rate).abs() < 1e-7 * (2.0 / c),
+            "t = {t}: q' = {}, expected {rate}",
+            sample.rates[0]
+        );
+        assert!(
+            (sample.coordinates[0] - angle).abs() < 1e-7 * (1.0 + angle),
+            "t = {t}: q = {}, expected {angle}",
+            sample.coordinates[0]
+        );
+    }
+}
+
+/// A join read in its own link by a definition (`damped(spin)`) and directly, its second
+/// coordinate read first: each `spin.x` is the link's coordinate of that name. Decoupled
+/// along z: a damped spin J a'' = -a' and a spring slider m s'' = -s.
+#[test]
+fn a_join_reads_its_own_coordinates_by_name_in_any_order() {
+    let text = "let rotor = body mass = 3, iframe = 1, inertia = [0.4, 0.4, 0.6] end;\n\
+        let damped(j) = -j.a';\n\
+        join earth and rotor with link(s, a)\n\
+          dof1 = s * [0, 0, 1], dof2 = a || [0, 0, 1],\n\
+          torque2 = [0, 0, damped(spin)], force1 = [0, 0, -spin.s]\n\
+        end as spin;\n\
+        initial spin.s = 0.5, spin.a' = 1;\n";
+    let settings = Settings {
+        duration: 2.0,
+        output: 0.5,
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..Settings::default()
+    };
+    let (mass, inertia) = (3.0f64, 0.6f64);
+    for sample in &simulate(text, settings).samples {
+        let t = sample.time;
+        let slider = 0.5 * (t / mass.sqrt()).cos();
+        let spin_rate = (-t / inertia).exp();
+        assert!((sample.coordinates[0] - slider).abs() < 1e-8, "t = {t}: s");
+        assert!((sample.rates[1] - spin_rate).abs() < 1e-8, "t = {t}: a'");
+    }
+}

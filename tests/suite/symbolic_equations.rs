@@ -590,7 +590,7 @@ fn declared_values_simplify_the_equations() {
         "mass = 0, inertia = 0",
         "mass = 1e-9, inertia = [1e-9, 1e-9, 1e-9]",
     ));
-    let oblique = size(&program.replace("x || [1,0,0]", "x || [1,1e-9,0]"));
+    let oblique = size(&program.replace("x || [1, 0, 0]", "x || [1, 1e-9, 0]"));
     println!("declared {declared}, tiny masses {with_masses}, oblique axis {oblique}");
     assert!(
         declared < with_masses && declared < oblique,

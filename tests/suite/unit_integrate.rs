@@ -1,4 +1,4 @@
-//! Unit tests of `src/integrate/`: the coefficients of the Dormand–Prince and RODAS3 methods.
+//! Unit tests of `src/integrate/`: the coefficients of the Dormand–Prince and ROS34PW2 methods.
 //! Each module holds the tests of the file of `src/` it is named after, kept out of the library
 //! so that `cargo test` compiles the library once (`test = false` in Cargo.toml).
 

@@ -18,7 +18,8 @@ pub fn example_text(name: &str, replacements: &[(&str, &str)]) -> String {
     text
 }
 
-pub fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
+/// An example's mechanism, its text with some of it replaced.
+pub fn mechanism(name: &str, replacements: &[(&str, &str)]) -> lsdc::elab::Mechanism {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
@@ -35,7 +36,11 @@ pub fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
         "{name}: {:?}",
         compilation.diagnostics
     );
-    let mechanism = compilation.mechanism.expect("elaborates");
+    compilation.mechanism.expect("elaborates")
+}
+
+pub fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
+    let mechanism = mechanism(name, replacements);
     prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| {
         panic!(
             "{name}: {:?}",

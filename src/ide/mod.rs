@@ -1,0 +1,13 @@
+//! Editor support: the formatter (`lsdc fmt`) and the language server (`lsdc lsp`), which
+//! share the compiler's front end: its lexer, parser, checker and diagnostics.
+
+mod actions;
+pub mod analysis;
+mod complete;
+pub mod convert;
+pub mod format;
+mod navigate;
+mod outline;
+pub mod server;
+
+pub use outline::semantic_tokens;

@@ -1,0 +1,220 @@
+//! Hover, go to definition, find references and rename.
+
+use std::collections::HashMap;
+
+use lsp_types::{
+    Hover, HoverContents, Location, MarkupContent, MarkupKind, TextEdit, WorkspaceEdit,
+};
+
+use crate::check::types::{builtin_constant, builtin_function, Ty};
+use crate::ide::analysis::{Analysis, Definition, DefinitionKind, Occurrence, Reference};
+use crate::ide::convert;
+use crate::syntax::lexer::{lex, Tok};
+
+/// The longest declaration a hover shows, in lines.
+const HOVER_LINES: usize = 8;
+
+/// The name at a byte offset of the root file.
+fn occurrence(analysis: &Analysis, offset: usize) -> Option<&Occurrence> {
+    analysis.index.occurrence_at(analysis.root, offset)
+}
+
+fn definition_at(analysis: &Analysis, offset: usize) -> Option<(usize, &Definition)> {
+    match occurrence(analysis, offset)?.reference {
+        Reference::Definition(id) => Some((id, &analysis.index.definitions[id])),
+        _ => None,
+    }
+}
+
+pub fn definition(analysis: &Analysis, offset: usize) -> Option<Location> {
+    let (_, definition) = definition_at(analysis, offset)?;
+    Some(convert::location(analysis, definition.span))
+}
+
+/// Every use of the name at `offset`, in the file and the libraries it imports; with
+/// `declaration`, its definition too.
+pub fn references(analysis: &Analysis, offset: usize, declaration: bool) -> Vec<Location> {
+    let Some((id, definition)) = definition_at(analysis, offset) else {
+        return Vec::new();
+    };
+    analysis
+        .index
+        .references(id)
+        .filter(|o| declaration || o.span != definition.span)
+        .map(|o| convert::location(analysis, o.span))
+        .collect()
+}
+
+/// Renames a name defined in the edited file everywhere it is used there.
+pub fn rename(analysis: &Analysis, offset: usize, new_name: &str) -> Result<WorkspaceEdit, String> {
+    let (id, definition) =
+        definition_at(analysis, offset).ok_or("no name defined in this program here")?;
+    if definition.span.file != analysis.root {
+        return Err(format!(
+            "`{}` is defined in a library: rename it there",
+            definition.name
+        ));
+    }
+    let (tokens, errors) = lex(analysis.root, new_name);
+    if !errors.is_empty()
+        || !matches!(tokens.as_slice(), [(0, Tok::Ident(_), end)] if *end == new_name.len())
+    {
+        return Err(format!(
+            "`{new_name}` is not a name (a keyword, or not an identifier)"
+        ));
+    }
+    let edits = analysis
+        .index
+        .references(id)
+        .filter(|o| o.span.file == analysis.root)
+        .map(|o| TextEdit::new(convert::span_range(analysis, o.span), new_name.to_string()))
+        .collect();
+    let uri = convert::file_uri(analysis, analysis.root);
+    Ok(WorkspaceEdit::new(HashMap::from([(uri, edits)])))
+}
+
+pub fn hover(analysis: &Analysis, offset: usize) -> Option<Hover> {
+    let occurrence = occurrence(analysis, offset)?;
+    let name = &analysis.text(analysis.root)[occurrence.span.range()];
+    let value = match occurrence.reference {
+        Reference::Definition(id) => definition_hover(analysis, &analysis.index.definitions[id]),
+        Reference::Builtin => builtin_hover(name)?,
+        Reference::Field | Reference::Unresolved => return None,
+    };
+    Some(Hover {
+        contents: HoverContents::Markup(MarkupContent {
+            kind: MarkupKind::Markdown,
+            value,
+        }),
+        range: Some(convert::span_range(analysis, occurrence.span)),
+    })
+}
+
+fn builtin_hover(name: &str) -> Option<String> {
+    if let Some(ty) = builtin_constant(name) {
+        return Some(format!("built-in constant `{name}`: {ty}"));
+    }
+    if let Some((params, result)) = builtin_function(name) {
+        let params: Vec<String> = params.iter().map(Ty::to_string).collect();
+        return Some(format!(
+            "built-in function `{name}({}) : {result}`",
+            params.join(", ")
+        ));
+    }
+    Ty::from_annotation(name).map(|ty| format!("type `{ty}`"))
+}
+
+/// The declaration's source, what the name is, what the mechanism makes of it and its
+/// documentation.
+fn definition_hover(analysis: &Analysis, definition: &Definition) -> String {
+    let mut parts = Vec::new();
+    let source = &analysis.text(definition.declaration.file)[definition.declaration.range()];
+    let mut lines: Vec<&str> = source.lines().take(HOVER_LINES).collect();
+    if source.lines().count() > HOVER_LINES {
+        lines.push("...");
+    }
+    if !definition.is_local() {
+        parts.push(format!("```lsd\n{}\n```", lines.join("\n")));
+    }
+    parts.push(describe(analysis, definition));
+    if let Some(facts) = mechanism_facts(analysis, definition) {
+        parts.push(facts);
+    }
+    if let Some(doc) = &definition.doc {
+        parts.push(doc.clone());
+    }
+    parts.join("\n\n")
+}
+
+fn describe(analysis: &Analysis, definition: &Definition) -> String {
+    let name = &definition.name;
+    let typed = |what: &str| match definition.ty {
+        Some(ty) if ty != Ty::Error => format!("{what} `{name}`: {ty}"),
+        _ => format!("{what} `{name}`"),
+    };
+    match &definition.kind {
+        DefinitionKind::Value => typed("value"),
+        DefinitionKind::Function { parameters } => {
+            let names: Vec<String> = parameters
+                .iter()
+                .map(|&p| {
+                    let parameter = &analysis.index.definitions[p];
+                    match parameter.ty {
+                        Some(ty) => format!("{} : {ty}", parameter.name),
+                        None => parameter.name.to_string(),
+                    }
+                })
+                .collect();
+            format!("parameterised definition `{name}({})`", names.join(", "))
+        }
+        DefinitionKind::Package(_) => format!("package `{name}`"),
+        DefinitionKind::Module(_) => {
+            let file = &analysis
+                .compilation
+                .workspace
+                .sources
+                .file(definition.span.file);
+            format!("library `{name}` ({})", file.name)
+        }
+        DefinitionKind::Join => format!("named join `{name}`"),
+        DefinitionKind::Parameter => typed("parameter"),
+        DefinitionKind::Coordinate => format!("joint coordinate `{name}` (a scalar of time)"),
+        DefinitionKind::Local => typed("local binding"),
+    }
+}
+
+/// A body's mass properties, a join's coordinates: from the elaborated mechanism, when the
+/// program has no errors.
+fn mechanism_facts(analysis: &Analysis, definition: &Definition) -> Option<String> {
+    let mechanism = analysis.mechanism()?;
+    let inside = |span: crate::source::Span| {
+        let declaration = definition.declaration;
+        span.file == declaration.file
+            && declaration.start <= span.start
+            && span.end <= declaration.end
+    };
+    let named = |name: &Option<crate::syntax::ast::Name>| name.as_ref() == Some(&definition.name);
+    match (&definition.kind, definition.ty) {
+        (DefinitionKind::Value, Some(Ty::Body)) => {
+            let body = mechanism
+                .bodies
+                .iter()
+                .find(|b| named(&b.name) && inside(b.span))?;
+            let quantity = |declared: bool, value: String| {
+                if declared {
+                    value
+                } else {
+                    format!("generic ({value})")
+                }
+            };
+            let inertia = body.inertia.value();
+            Some(format!(
+                "mass: {}  \nprincipal moments of inertia: {}  \ninertia frame: {}",
+                quantity(body.mass.is_declared(), body.mass.value().to_string()),
+                quantity(
+                    body.inertia.is_declared(),
+                    format!("[{}, {}, {}]", inertia[0], inertia[1], inertia[2])
+                ),
+                if body.iframe.is_declared() {
+                    "declared"
+                } else {
+                    "generic"
+                }
+            ))
+        }
+        (DefinitionKind::Join, _) => {
+            let join = mechanism
+                .joins
+                .iter()
+                .find(|j| named(&j.name) && inside(j.span))?;
+            let link = &mechanism.links[join.link.0 as usize];
+            let coordinates: Vec<String> = link
+                .coordinates
+                .iter()
+                .map(|c| format!("`{}.{c}`", definition.name))
+                .collect();
+            Some(format!("coordinates: {}", coordinates.join(", ")))
+        }
+        _ => None,
+    }
+}

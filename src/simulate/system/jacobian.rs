@@ -1,0 +1,106 @@
+//! The Jacobian of a tree's equations of motion, for the implicit integrator, from inverse
+//! dynamics instead of the forward dynamics.
+//!
+//! With y = (q, v) and joints whose coordinates move with their rates (q̇ = v, no quaternion),
+//! f(y) = (v, a(q, v)), so ∂q̇/∂q = 0 and ∂q̇/∂v = I exactly. The accelerations satisfy
+//! r(q, v, a) = τ(q, v) − ID(q, v, a; f_ext(q, v)) = 0, with ID the inverse dynamics (RNEA) and
+//! τ, f_ext the efforts; since ∂r/∂a = −M, differentiating at the solution a* gives
+//!
+//!   ∂a/∂x = M⁻¹ ∂r/∂x (q, v, a*),
+//!
+//! a derivative at fixed accelerations. Each column of ∂r/∂x is a forward difference of the
+//! efforts and of RNEA, cheaper than the articulated-body algorithm that f needs, and M comes
+//! from the composite rigid bodies once per Jacobian; the power of the non-conservative efforts
+//! (the work's rate) is differenced along with the efforts.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{MechanicalSystem, SystemError};
+use crate::dynamics::algorithms::{
+    crba_after_kinematics, forward_kinematics, rnea_after_kinematics,
+};
+use crate::dynamics::joint::JointType;
+
+/// The residual of the equations of motion at one state, and the power of the efforts there.
+struct Residual {
+    values: DVector<f64>,
+    power: f64,
+}
+
+impl MechanicalSystem<'_> {
+    /// Whether [`MechanicalSystem::jacobian`] applies: a tree whose joints' coordinates move
+    /// with their rates, evaluated by the articulated-body algorithm (not native code).
+    pub fn has_tree_jacobian(&self) -> bool {
+        let model = self.model;
+        !model.has_loops()
+            && self.native.is_none()
+            && model.positions() == model.velocities()
+            && model.joints.iter().all(|j| j.kind == JointType::Chain)
+    }
+
+    /// ∂f/∂y at (t, y), where `dydt` = f(t, y), into `jacobian` (a square of the state's
+    /// dimension), and the gradient of the efforts' power into `power_gradient`. `Ok(false)`
+    /// where it does not apply ([`MechanicalSystem::has_tree_jacobian`]) or where the mass
+    /// matrix is singular (a massless motion): the caller differences f instead.
+    pub fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        dydt: &[f64],
+        jacobian: &mut DMatrix<f64>,
+        power_gradient: &mut [f64],
+    ) -> Result<bool, SystemError> {
+        if !self.has_tree_jacobian() {
+            return Ok(false);
+        }
+        let nv = self.model.nv;
+        let accelerations = &dydt[nv..];
+        let at_state = self.residual(t, y, accelerations)?;
+        let mut mass = DMatrix::zeros(nv, nv);
+        crba_after_kinematics(self.model, &mut self.data, &mut mass);
+        let Some(cholesky) = mass.cholesky() else {
+            return Ok(false);
+        };
+        let mut differences = DMatrix::zeros(nv, 2 * nv);
+        let mut perturbed = y.to_vec();
+        for j in 0..2 * nv {
+            perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
+            // The increment actually represented, so that rounding of y + δ does not bias the
+            // quotient.
+            let delta = perturbed[j] - y[j];
+            let moved = self.residual(t, &perturbed, accelerations)?;
+            perturbed[j] = y[j];
+            let column = (moved.values - &at_state.values) / delta;
+            differences.set_column(j, &column);
+            power_gradient[j] = (moved.power - at_state.power) / delta;
+        }
+        jacobian.fill(0.0);
+        jacobian.view_mut((0, nv), (nv, nv)).fill_with_identity();
+        jacobian
+            .view_mut((nv, 0), (nv, 2 * nv))
+            .copy_from(&cholesky.solve(&differences));
+        Ok(true)
+    }
+
+    /// r = τ − RNEA(q, v, a; f_ext) at y = (q, v), the efforts evaluated there; leaves the
+    /// forward kinematics of y in `data`.
+    fn residual(&mut self, t: f64, y: &[f64], a: &[f64]) -> Result<Residual, SystemError> {
+        let model = self.model;
+        let (q, v) = y.split_at(model.nq);
+        let efforts = if model.has_efforts() {
+            self.evaluate_efforts(t, q, v)?;
+            &self.efforts
+        } else {
+            forward_kinematics(model, &mut self.data, q, v)?;
+            &self.no_efforts
+        };
+        let mut values = DVector::zeros(model.nv);
+        rnea_after_kinematics(model, &mut self.data, a, &efforts.external, &mut values);
+        values -= &efforts.tau;
+        values.neg_mut();
+        Ok(Residual {
+            values,
+            power: efforts.power,
+        })
+    }
+}

@@ -1,0 +1,408 @@
+//! `lsdc view` and frame outputs: the scene's geometry against the closed loops, the standalone
+//! page, the server over HTTP on 127.0.0.1, `simulate --output-frame` against the four-bar's
+//! coupler curve in closed form, and (where Chromium is installed) the page in a real browser.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::PathBuf;
+
+use lsdc::view::{page, server, Viewer};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use crate::common::lsdc;
+use crate::drag::coupler_point;
+
+fn viewer(name: &str) -> Viewer {
+    let mechanism = crate::common::programs::mechanism(name, &[]);
+    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
+        .unwrap_or_else(|_| panic!("{name} prepares"));
+    Viewer::new(mechanism, prepared, name).expect("a scene")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lsdc-view-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// A body's point in the fixed frame, from a pose `[x, y, z, qw, qx, qy, qz]`.
+fn world(pose: &[f64; 7], local: &[f64; 3]) -> Vector3<f64> {
+    let rotation =
+        UnitQuaternion::from_quaternion(Quaternion::new(pose[3], pose[4], pose[5], pose[6]));
+    Vector3::new(pose[0], pose[1], pose[2]) + rotation * Vector3::from(*local)
+}
+
+#[test]
+fn the_four_bar_scene_has_its_joints_closed_and_its_loop_marked() {
+    let viewer = viewer("four_bar");
+    let scene = &viewer.scene;
+    assert_eq!(scene.bodies.len(), 3);
+    assert_eq!(scene.joints.len(), 4);
+    let complementary: Vec<&str> = scene
+        .joints
+        .iter()
+        .filter(|j| j.complementary)
+        .map(|j| j.name.as_str())
+        .collect();
+    assert_eq!(complementary, ["c"]);
+    assert!(scene
+        .joints
+        .iter()
+        .all(|j| j.kind == "revolute" && j.axis == Some([0.0, 0.0, 1.0])));
+    assert_eq!(scene.frames.len(), 1);
+    assert_eq!(scene.frames[0].name, "coupler_point");
+    // Each revolute's two frames meet: the first at `position` on its first body, the second
+    // at one of the second body's points.
+    let pose_of = |body: usize| {
+        if body == 0 {
+            [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+        } else {
+            scene.poses[body - 1]
+        }
+    };
+    for joint in &scene.joints {
+        let at = world(&pose_of(joint.first_body), &joint.position);
+        let second = &scene.bodies[joint.second_body - 1];
+        let nearest = second
+            .points
+            .iter()
+            .map(|p| (world(&pose_of(second.number), p) - at).norm())
+            .fold(f64::INFINITY, f64::min);
+        assert!(nearest <= 1e-9, "{}: frames {nearest} apart", joint.name);
+    }
+    // A uniform bar of length l: the ellipsoid of its inertia has semi-axis √(5/12) l along it.
+    let bar = &scene.bodies[0];
+    let ellipsoid = bar.ellipsoid.expect("a massive body");
+    let longest = ellipsoid.semi_axes.iter().copied().fold(0.0, f64::max);
+    assert!(
+        (longest - (5.0_f64 / 12.0).sqrt() * bar.mass).abs() <= 1e-3,
+        "{longest}"
+    );
+}
+
+#[test]
+fn the_page_stands_alone() {
+    let three = page::three_script().expect("the module's exports");
+    assert!(three.contains("window.THREE={") && three.contains("WebGLRenderer:"));
+    assert!(!three.contains("export{"));
+    let mut viewer = viewer("four_bar");
+    let animation = viewer.simulate(Some(0.5)).unwrap();
+    assert!((animation.times.last().unwrap() - 0.5).abs() < 1e-12);
+    viewer.results = Some(animation);
+    let html = viewer.page(false);
+    for external in ["<script src", "<link", "import(", "fetch(\"http"] {
+        assert!(!html.contains(external), "the page loads `{external}`");
+    }
+    assert_eq!(
+        html.matches("</script>").count(),
+        html.matches("<script").count()
+    );
+    assert!(html.contains("\"coupler_point.x\""), "the frame's series");
+}
+
+#[test]
+fn simulate_writes_the_frames_the_coupler_curve_predicts() {
+    let (code, out, err) = lsdc(&[
+        "simulate",
+        "examples/four_bar.lsd",
+        "--duration",
+        "1",
+        "--every",
+        "0.1",
+        "--output-frame",
+        "coupler_point",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let mut lines = out.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no {name}"))
+    };
+    let (crank, rate) = (column("crank.q"), column("crank.q'"));
+    let (x, vx) = (column("coupler_point.x"), column("coupler_point.vx"));
+    assert_eq!(header[header.len() - 1], "coupler_point.wz");
+    let mut rows = 0;
+    for line in lines {
+        let v: Vec<f64> = line.split(',').map(|f| f.parse().unwrap()).collect();
+        let t = v[crank];
+        let expected = coupler_point(t);
+        assert!(
+            (v[x] - expected[0]).abs() <= 1e-8 && (v[x + 1] - expected[1]).abs() <= 1e-8,
+            "{line}"
+        );
+        let h = 1e-6;
+        let (ahead, behind) = (coupler_point(t + h), coupler_point(t - h));
+        for c in 0..2 {
+            let velocity = (ahead[c] - behind[c]) / (2.0 * h) * v[rate];
+            assert!(
+                (v[vx + c] - velocity).abs() <= 1e-6 * (1.0 + velocity.abs()),
+                "{line}"
+            );
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, 11);
+}
+
+#[test]
+fn view_plays_recorded_results_of_the_same_mechanism_only() {
+    let run = scratch("run.json");
+    let page = scratch("page.html");
+    let run_path = run.to_str().unwrap();
+    let (code, _, err) = lsdc(&[
+        "simulate",
+        "examples/four_bar.lsd",
+        "--duration",
+        "0.3",
+        "--format",
+        "json",
+        "-o",
+        run_path,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = lsdc(&[
+        "view",
+        "examples/four_bar.lsd",
+        "--results",
+        run_path,
+        "--export",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("\"times\":[0.0,"), "the recorded times");
+    let (code, _, err) = lsdc(&[
+        "view",
+        "examples/pendulum.lsd",
+        "--results",
+        run_path,
+        "--export",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("are not this mechanism's"), "{err}");
+}
+
+/// One HTTP exchange: status line and body.
+fn http(address: &str, request: &str) -> (String, String) {
+    let mut stream = TcpStream::connect(address).unwrap();
+    stream.write_all(request.as_bytes()).unwrap();
+    let mut response = String::new();
+    stream.read_to_string(&mut response).unwrap();
+    let (head, body) = response.split_once("\r\n\r\n").unwrap();
+    (head.lines().next().unwrap().to_string(), body.to_string())
+}
+
+fn post(path: &str, body: &str) -> String {
+    format!("POST {path} HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}", body.len())
+}
+
+#[test]
+fn the_server_answers_the_page_the_scene_runs_and_drags() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let shown = viewer("four_bar");
+    let coordinates = shown.scene.coordinates.clone();
+    let coupler = shown
+        .scene
+        .bodies
+        .iter()
+        .find(|b| b.name == "bar2")
+        .unwrap()
+        .number;
+    // The mechanism's names are not shared between threads: the server builds its own.
+    let requests = 7;
+    let serving = std::thread::spawn(move || {
+        server::serve(&listener, &mut viewer("four_bar"), Some(requests)).unwrap()
+    });
+
+    let (status, page) = http(&address, "GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    assert!(page.contains("\"live\":true"));
+    let (status, scene) = http(&address, "GET /api/scene HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    let scene: serde_json::Value = serde_json::from_str(&scene).unwrap();
+    assert_eq!(scene["bodies"].as_array().unwrap().len(), 3);
+    let (status, animation) = http(&address, "GET /api/simulate?duration=0.2 HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    let animation: serde_json::Value = serde_json::from_str(&animation).unwrap();
+    assert_eq!(
+        animation["times"]
+            .as_array()
+            .unwrap()
+            .last()
+            .unwrap()
+            .as_f64(),
+        Some(0.2)
+    );
+    let (status, _) = http(&address, "GET /api/simulate?duration=-1 HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 400 Bad Request");
+
+    // Drag the coupler's point (1.75, 1, 0) to where the coupler curve puts it at crank 1.1.
+    let target = coupler_point(1.1);
+    let request = serde_json::json!({ "body": coupler, "point": [1.75, 1.0, 0.0], "target": target, "coordinates": coordinates });
+    let (status, moved) = http(&address, &post("/api/drag", &request.to_string()));
+    assert_eq!(status, "HTTP/1.1 200 OK", "{moved}");
+    let moved: serde_json::Value = serde_json::from_str(&moved).unwrap();
+    assert!(
+        moved["distance"].as_f64().unwrap() <= 1e-9 && moved["reached"] == true,
+        "{moved}"
+    );
+    assert!(moved["loop_residual"].as_f64().unwrap() <= 1e-10);
+    let (status, error) = http(&address, &post("/api/drag", "{\"body\": 9}"));
+    assert_eq!(status, "HTTP/1.1 400 Bad Request");
+    assert!(error.contains("not a drag request"), "{error}");
+    let (status, _) = http(&address, "GET /elsewhere HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 404 Not Found");
+    serving.join().unwrap();
+}
+
+#[test]
+fn view_prints_its_address_and_serves_there() {
+    use std::io::BufRead;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lsdc"))
+        .args(["view", "examples/pendulum.lsd", "--port", "0"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let address = line
+        .strip_prefix("lsdc view: http://")
+        .and_then(|rest| rest.split('/').next())
+        .unwrap_or_else(|| panic!("no address in {line:?}"))
+        .to_string();
+    assert!(address.starts_with("127.0.0.1:"), "{address}");
+    let (status, page) = http(&address, "GET / HTTP/1.1\r\n\r\n");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    assert!(page.contains("window.THREE="));
+}
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+
+/// Runs headless Chromium on `url` with `flags`; `None` (after saying so) when it is not
+/// installed (`tools/install-chromium` installs it).
+fn chromium(url: &str, flags: &[&str]) -> Option<std::process::Output> {
+    if !std::path::Path::new(CHROMIUM).exists() {
+        eprintln!(
+            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
+        );
+        return None;
+    }
+    // A profile of its own: two instances sharing one hand their page over to the first.
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let profile = scratch(&format!("profile-{run}"));
+    let output = std::process::Command::new(CHROMIUM)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--use-angle=swiftshader",
+            "--enable-unsafe-swiftshader",
+            "--window-size=1000,700",
+            "--virtual-time-budget=4000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(flags)
+        .arg(url)
+        .output()
+        .expect("chromium runs");
+    Some(output)
+}
+
+/// The page's `#status` after it ran.
+fn page_status(url: &str) -> Option<serde_json::Value> {
+    let output = chromium(url, &["--dump-dom"])?;
+    let dom = String::from_utf8_lossy(&output.stdout);
+    let start =
+        dom.find("<pre id=\"status\">").expect("the status element") + "<pre id=\"status\">".len();
+    let end = start + dom[start..].find("</pre>").unwrap();
+    Some(
+        serde_json::from_str(&dom[start..end])
+            .unwrap_or_else(|e| panic!("{e}: {}", &dom[start..end])),
+    )
+}
+
+/// Distinct colours of a PNG and the share of pixels unlike the top-left one.
+fn picture(path: &std::path::Path) -> (usize, f64) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buffer = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buffer).unwrap();
+    let channels = info.color_type.samples();
+    let pixels: Vec<&[u8]> = buffer[..info.buffer_size()].chunks(channels).collect();
+    let background = pixels[0];
+    let colours: std::collections::HashSet<&[u8]> = pixels.iter().copied().collect();
+    let different = pixels.iter().filter(|p| **p != background).count();
+    (colours.len(), different as f64 / pixels.len() as f64)
+}
+
+#[test]
+fn the_exported_delta_opens_offline_and_animates_in_chromium() {
+    if !std::path::Path::new(CHROMIUM).exists() {
+        eprintln!(
+            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
+        );
+        return;
+    }
+    let page = scratch("delta.html");
+    let (code, _, err) = lsdc(&[
+        "view",
+        "examples/delta_isir88.lsd",
+        "--export",
+        page.to_str().unwrap(),
+        "--duration",
+        "1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let url = format!("file://{}?play=1", page.display());
+    let Some(status) = page_status(&url) else {
+        return;
+    };
+    assert_eq!(status["error"], serde_json::Value::Null);
+    assert_eq!(status["bodies"], 10);
+    assert_eq!(status["complementary"], 5);
+    assert!(status["objects"].as_u64().unwrap() > 30, "{status}");
+    assert!(
+        status["advanced"] == true && status["time"].as_f64().unwrap() > 0.0,
+        "{status}"
+    );
+    let shot = scratch("delta.png");
+    chromium(&url, &[&format!("--screenshot={}", shot.display())]);
+    let (colours, drawn) = picture(&shot);
+    assert!(
+        colours > 50 && drawn > 0.05,
+        "{colours} colours, {drawn} drawn"
+    );
+}
+
+#[test]
+fn a_body_dragged_in_chromium_moves() {
+    if !std::path::Path::new(CHROMIUM).exists() {
+        eprintln!(
+            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
+        );
+        return;
+    }
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    // The browser opens connections of its own accord (an icon, ahead of need): the server
+    // answers until the test process ends.
+    std::thread::spawn(move || server::serve(&listener, &mut viewer("four_bar"), None));
+    let Some(status) = page_status(&format!("http://{address}/?drag-test=1")) else {
+        return;
+    };
+    let moved = status["drag"]["moved"].as_f64().unwrap_or(0.0);
+    assert!(
+        moved > 1e-3 && status["drag"]["distance"].is_f64(),
+        "{status}"
+    );
+}
