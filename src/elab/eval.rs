@@ -115,6 +115,17 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let join_name = name
                     .as_ref()
                     .map(|n| self.qualified_name(&n.name, instance));
+                if self.mechanism.link(link).contact.is_some() {
+                    // A contact is a constraint, not a joint: it has no coordinates to name.
+                    self.mechanism.contacts.push(Contact {
+                        name: join_name,
+                        first,
+                        second,
+                        link,
+                        span: decl.span,
+                    });
+                    return Ok(());
+                }
                 self.mechanism.joins.push(Join {
                     name: join_name,
                     first,
@@ -670,6 +681,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ),
         };
         if target == Target::Builtin {
+            if matches!(&*ident.name, "rolling" | "sliding") {
+                return self.contact_link(values, span);
+            }
             return builtin_call(&ident.name, values, span);
         }
         // The instance the definition was declared in: its body's names take their values there.
@@ -816,6 +830,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             forces: Vec::new(),
             torques: Vec::new(),
             potential: None,
+            contact: None,
         };
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {
@@ -832,6 +847,31 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         dofs.sort_by_key(|(i, _)| *i);
         link.dofs = dofs.into_iter().map(|(_, d)| d).collect();
         self.mechanism.links.push(link);
+        Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
+    }
+
+    /// `rolling(radius)` or `sliding(radius, friction)`: a link without coordinates that makes
+    /// its join a contact (see `mechanism::Contact`).
+    fn contact_link(&mut self, values: Vec<Value>, span: Span) -> Result<Value> {
+        let mut scalars = values.into_iter().map(|v| as_scalar(v, span));
+        let radius = scalars
+            .next()
+            .ok_or_else(|| internal("contact without a radius"))??;
+        let friction = scalars.next().transpose()?;
+        self.mechanism.links.push(Link {
+            name: None,
+            span,
+            coordinates: Vec::new(),
+            dofs: Vec::new(),
+            forces: Vec::new(),
+            torques: Vec::new(),
+            potential: None,
+            contact: Some(ContactLaw {
+                radius,
+                friction,
+                span,
+            }),
+        });
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }
 

@@ -766,6 +766,7 @@ fn reaction_names(model: &Model) -> Vec<String> {
         .iter()
         .map(|j| j.chain.name.clone())
         .chain(model.loops.iter().map(|l| l.name.clone()))
+        .chain(model.contacts.iter().map(|c| c.name.clone()))
         .collect()
 }
 
