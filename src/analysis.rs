@@ -7,6 +7,8 @@ use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::BodyRef;
 use crate::kinematics::assembly::AssemblyOptions;
+use crate::kinematics::contacts::{contact_mobility, contact_models, ContactMobility};
+use crate::kinematics::forward::forward;
 use crate::kinematics::eval::UnknownValues;
 use crate::kinematics::initial::assemble_initial;
 use crate::kinematics::joint;
@@ -46,6 +48,9 @@ pub struct TreeReport {
     pub mobility: Option<Mobility>,
     /// Why the mobility could not be computed.
     pub mobility_unavailable: Option<String>,
+    /// The degrees of freedom in position and in velocity the contacts leave, if there are any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contacts: Option<ContactMobility>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -134,11 +139,19 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
             ),
             None => (None, Some("a joint could not be analysed".to_string())),
         };
+        let (contacts, unavailable) = match (&mobility, mechanism.contacts.is_empty()) {
+            (Some(m), false) => match tree_contacts(mechanism, topology, m.tree_dof) {
+                Ok(contacts) => (Some(contacts), unavailable),
+                Err(reason) => (None, Some(reason)),
+            },
+            _ => (None, unavailable),
+        };
         return Ok(TreeReport {
             bodies,
             complementary,
             mobility,
             mobility_unavailable: unavailable,
+            contacts,
         });
     }
     let (mobility, mobility_unavailable) =
@@ -163,7 +176,33 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         complementary,
         mobility,
         mobility_unavailable,
+        contacts: None,
     })
+}
+
+/// The contacts' degrees of freedom for a tree, at its `initial` configuration, or why they
+/// cannot be computed.
+fn tree_contacts(
+    mechanism: &Mechanism,
+    topology: Topology,
+    tree_dof: usize,
+) -> Result<ContactMobility, String> {
+    let joined = |d: Vec<Diagnostic>| {
+        d.iter()
+            .map(|d| d.message.clone())
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let (model, assembled, _) =
+        assembled_model(mechanism, topology, &AssemblyOptions::default()).map_err(joined)?;
+    let mut errors = Vec::new();
+    let contacts = contact_models(mechanism, &model, &mut errors);
+    if !errors.is_empty() {
+        return Err(joined(errors));
+    }
+    let configuration = forward(&model, &assembled.coordinates_vector())
+        .map_err(|e| crate::kinematics::eval::describe(&e, mechanism))?;
+    Ok(contact_mobility(&contacts, &configuration, tree_dof))
 }
 
 impl AssemblyReport {

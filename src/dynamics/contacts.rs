@@ -26,7 +26,7 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::algorithms::{bias_accelerations, Data};
-pub use super::contact_model::{ContactModel, SLIP_REGULARISATION};
+pub use crate::kinematics::contacts::{ContactModel, SLIP_REGULARISATION};
 use super::model::Model;
 use crate::spatial::{self, Motion};
 
@@ -176,9 +176,7 @@ pub const CONTACT_RANK_TOLERANCE: f64 = 1e-10;
 /// `CONTACT_RANK_TOLERANCE` times the largest diagonal entry. A cylinder rolling in a plane
 /// motion has a tangential row along its axis that is zero at every state: it is left out.
 pub fn independent_rows(model: &Model, mass: &DMatrix<f64>, rows: &ContactRows) -> Vec<usize> {
-    let candidates: Vec<usize> = (model.contacts.iter().enumerate())
-        .flat_map(|(k, c)| c.rows().iter().map(move |r| 3 * k + r))
-        .collect();
+    let candidates = candidate_rows(model);
     let Some(cholesky) = mass.clone().cholesky() else {
         return candidates;
     };
@@ -205,6 +203,13 @@ pub fn independent_rows(model: &Model, mass: &DMatrix<f64>, rows: &ContactRows) 
     }
     chosen.sort_unstable();
     chosen.into_iter().map(|i| candidates[i]).collect()
+}
+
+/// Every contact's candidate rows (`ContactModel::rows`), in contact order.
+pub fn candidate_rows(model: &Model) -> Vec<usize> {
+    (model.contacts.iter().enumerate())
+        .flat_map(|(k, c)| c.rows().iter().map(move |r| 3 * k + r))
+        .collect()
 }
 
 /// The holonomic rows among `kept`: the normal rows, which positions are projected onto.

@@ -5,7 +5,6 @@
 pub mod algorithms;
 pub mod angles;
 pub mod compiled;
-pub mod contact_model;
 pub mod contacts;
 pub mod derivatives;
 pub mod efforts;

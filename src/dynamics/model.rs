@@ -4,7 +4,6 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::compiled::{EffortTape, Link, TapeBuilder};
-use super::contact_model::{contact_models, ContactModel};
 pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
 };
@@ -14,6 +13,7 @@ use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
+use crate::kinematics::contacts::{contact_models, ContactModel};
 use crate::kinematics::model::{constant_pose, ChainMotion, JointModel, KinematicModel};
 use crate::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 use crate::symbolic::expr::ExprId;

@@ -500,9 +500,15 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// Closes the loops of the initial state at round-off, decides their structure (see
-    /// `loops::Structure`) and projects the velocities onto them.
+    /// `loops::Structure`) and projects the velocities onto them; for contacts, closes their
+    /// gaps and projects the velocities onto their rows.
     pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
+        if model.has_contacts() {
+            // The gaps closed and the starting velocities made to roll, by the smallest change
+            // in the kinetic metric.
+            return self.keep_contacts(y).map(|_| ());
+        }
         if !model.has_loops() {
             return Ok(());
         }

@@ -1,12 +1,19 @@
-//! The contacts of the model (`join plane and ball with rolling(r)`, `sliding(r, f)`), their
-//! numbers evaluated when the model is built; their rows and solve are in `contacts`.
+//! The contacts of a mechanism (`join plane and ball with rolling(r)`, `sliding(r, f)`), their
+//! numbers evaluated, and the degrees of freedom they leave a tree: their rows in position and
+//! in velocity. The rows for the equations of motion and their solve are in
+//! `dynamics::contacts`.
 
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::BodyRef;
-use crate::kinematics::eval::eval;
-use crate::kinematics::model::{constant_pose, KinematicModel};
-use crate::spatial::Pose;
+use nalgebra::DMatrix;
+use serde::Serialize;
+
+use super::eval::eval;
+use super::forward::Configuration;
+use super::mobility::rank;
+use super::model::{constant_pose, KinematicModel};
+use crate::spatial::{self, Pose};
 
 /// The regularisation velocity ε of Coulomb friction, in m/s: the friction force is
 /// f|λₙ| w/√(|w|² + ε²). At a slip speed |w| it is short of f|λₙ| by the fraction
@@ -126,4 +133,75 @@ pub fn contact_models(
         });
     }
     contacts
+}
+
+/// The degrees of freedom a tree keeps under its contacts: the normal rows constrain positions
+/// (holonomic), the rolling rows velocities only (non-holonomic).
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactMobility {
+    pub contacts: usize,
+    /// Independent normal rows: the holonomic constraints.
+    pub holonomic_rank: usize,
+    /// Independent rows of every kind (normal and rolling).
+    pub velocity_rank: usize,
+    /// tree dof − holonomic rank: the dimension of the configurations the contacts allow.
+    pub position_dof: usize,
+    /// tree dof − velocity rank: the independent velocities at a configuration.
+    pub velocity_dof: usize,
+}
+
+/// The contacts' rows over the coordinates' rates at `configuration`: the holonomic (normal)
+/// rows, then all the candidate rows (`ContactModel::rows`).
+fn contact_jacobians(
+    contacts: &[ContactModel],
+    configuration: &Configuration,
+    columns: usize,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let mut normal = Vec::new();
+    let mut all = Vec::new();
+    for contact in contacts {
+        let plane = configuration.poses[contact.plane_body] * contact.plane;
+        let centre = (configuration.poses[contact.round_body] * contact.centre).translation.vector;
+        let axes = plane.rotation.to_rotation_matrix().into_inner();
+        let point = centre - contact.radius * axes.column(2);
+        let velocity_at = |body: usize, column: usize| {
+            let twist = spatial::Motion::from_iterator(
+                configuration.jacobians[body].column(column).iter().copied(),
+            );
+            spatial::linear(&spatial::shifted(&point, &twist))
+        };
+        for &row in contact.rows() {
+            let axis = axes.column(row).into_owned();
+            let entries: Vec<f64> = (0..columns)
+                .map(|c| {
+                    axis.dot(&(velocity_at(contact.round_body, c) - velocity_at(contact.plane_body, c)))
+                })
+                .collect();
+            if row == 2 {
+                normal.push(entries.clone());
+            }
+            all.push(entries);
+        }
+    }
+    let matrix = |rows: &[Vec<f64>]| {
+        DMatrix::from_fn(rows.len(), columns, |r, c| rows[r][c])
+    };
+    (matrix(&normal), matrix(&all))
+}
+
+/// The degrees of freedom of a tree of `tree_dof` under `contacts`, at `configuration`.
+pub fn contact_mobility(
+    contacts: &[ContactModel],
+    configuration: &Configuration,
+    tree_dof: usize,
+) -> ContactMobility {
+    let (normal, all) = contact_jacobians(contacts, configuration, tree_dof);
+    let (holonomic_rank, velocity_rank) = (rank(&normal), rank(&all));
+    ContactMobility {
+        contacts: contacts.len(),
+        holonomic_rank,
+        velocity_rank,
+        position_dof: tree_dof.saturating_sub(holonomic_rank),
+        velocity_dof: tree_dof.saturating_sub(velocity_rank),
+    }
 }
