@@ -372,3 +372,12 @@ pub fn contact_body_forces(
     }
     on_bodies
 }
+
+/// The power of the sliding contacts' friction forces on the slip velocities (≤ 0): the rate
+/// of the work the energy balance counts.
+pub fn friction_power(model: &Model, rows: &ContactRows, forces: &[Vector3<f64>]) -> f64 {
+    (model.contacts.iter().enumerate())
+        .filter(|(_, c)| c.friction.is_some())
+        .map(|(k, _)| forces[k].x * rows.velocity[3 * k] + forces[k].y * rows.velocity[3 * k + 1])
+        .sum()
+}

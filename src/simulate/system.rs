@@ -316,8 +316,9 @@ impl<'m> MechanicalSystem<'m> {
         if native {
             // The accelerations are written.
         } else if model.has_contacts() {
-            let (solution, _) = self.solve_contacts(t, q, v)?;
+            let (solution, rows) = self.solve_contacts(t, q, v)?;
             accelerations.copy_from(&solution.accelerations);
+            self.efforts.power += contacts::friction_power(model, &rows, &solution.forces);
         } else if model.has_loops() {
             self.solve_constrained(t, q, v, Wanted::Accelerations)?;
             accelerations.copy_from(&self.loop_scratch.accelerations);
