@@ -142,7 +142,9 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         let (contacts, unavailable) = match (&mobility, mechanism.contacts.is_empty()) {
             (Some(m), false) => match tree_contacts(mechanism, topology, m.tree_dof) {
                 Ok(contacts) => (Some(contacts), unavailable),
-                Err(reason) => (None, Some(reason)),
+                // A contact written wrong is an error of the program, not a missing value.
+                Err(d) if d.iter().any(|d| d.code.starts_with("E082")) => return Err(d),
+                Err(d) => (None, Some(joined_messages(&d))),
             },
             _ => (None, unavailable),
         };
@@ -180,28 +182,30 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     })
 }
 
+fn joined_messages(diagnostics: &[Diagnostic]) -> String {
+    diagnostics
+        .iter()
+        .map(|d| d.message.clone())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 /// The contacts' degrees of freedom for a tree, at its `initial` configuration, or why they
 /// cannot be computed.
 fn tree_contacts(
     mechanism: &Mechanism,
     topology: Topology,
     tree_dof: usize,
-) -> Result<ContactMobility, String> {
-    let joined = |d: Vec<Diagnostic>| {
-        d.iter()
-            .map(|d| d.message.clone())
-            .collect::<Vec<_>>()
-            .join("; ")
-    };
-    let (model, assembled, _) =
-        assembled_model(mechanism, topology, &AssemblyOptions::default()).map_err(joined)?;
+) -> Result<ContactMobility, Vec<Diagnostic>> {
+    let (model, assembled, _) = assembled_model(mechanism, topology, &AssemblyOptions::default())?;
     let mut errors = Vec::new();
     let contacts = contact_models(mechanism, &model, &mut errors);
-    if !errors.is_empty() {
-        return Err(joined(errors));
-    }
-    let configuration = forward(&model, &assembled.coordinates_vector())
-        .map_err(|e| crate::kinematics::eval::describe(&e, mechanism))?;
+    let configuration = forward(&model, &assembled.coordinates_vector()).map_err(|e| {
+        vec![Diagnostic::error(
+            "E0802",
+            crate::kinematics::eval::describe(&e, mechanism),
+        )]
+    })?;
     Ok(contact_mobility(&contacts, &configuration, tree_dof))
 }
 
@@ -218,6 +222,11 @@ pub fn assembled_model(
     options: &AssemblyOptions,
 ) -> Result<(KinematicModel, AssemblyReport, Vec<Diagnostic>), Vec<Diagnostic>> {
     let model = model::build(mechanism, topology, given_values(mechanism)?)?;
+    let mut errors = Vec::new();
+    contact_models(mechanism, &model, &mut errors);
+    if !errors.is_empty() {
+        return Err(errors);
+    }
     let initial = assemble_initial(mechanism, &model, options)?;
     let assembled = initial.assembled;
     let names = model.coordinate_names();

@@ -9,6 +9,10 @@ use super::operations::{
     as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix,
 };
 use super::value::*;
+
+/// The name of a contact (`join plane and ball with rolling(r) as c`) stands for a join whose
+/// number has this bit set, and the contact's index below it: it has no coordinates to read.
+const CONTACT_JOIN: u32 = 1 << 31;
 use crate::check::scope::{ScopeId, Target};
 use crate::check::types::Ty;
 use crate::diag::Diagnostic;
@@ -117,6 +121,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .map(|n| self.qualified_name(&n.name, instance));
                 if self.mechanism.link(link).contact.is_some() {
                     // A contact is a constraint, not a joint: it has no coordinates to name.
+                    let id = JoinId(CONTACT_JOIN | self.mechanism.contacts.len() as u32);
                     self.mechanism.contacts.push(Contact {
                         name: join_name,
                         first,
@@ -124,6 +129,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                         link,
                         span: decl.span,
                     });
+                    if let Some(name) = name {
+                        let key = (scope, self.instance_of(scope)?, name.name.clone());
+                        self.globals.insert(key, Global::Ready(Value::Join(id)));
+                    }
                     return Ok(());
                 }
                 self.mechanism.joins.push(Join {
@@ -585,6 +594,15 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     }
 
     fn join_coordinate(&mut self, id: JoinId, coordinate: &Name, span: Span) -> Result<Value> {
+        if id.0 & CONTACT_JOIN != 0 {
+            let name = self.mechanism.contact_name((id.0 & !CONTACT_JOIN) as usize);
+            return Err(Diagnostic::error(
+                "E0440",
+                format!("`{name}` is a contact: it has no coordinate `{coordinate}`"),
+            )
+            .primary(span, "a contact has no coordinates")
+            .help("a contact constrains the coordinates of the joints that place its bodies: read those (`motion.x`); its force is in the reactions (`lsdc simulate --reactions`)"));
+        }
         if let Some(value) = self.own_coordinate(id, coordinate, span) {
             return Ok(value);
         }
