@@ -26,10 +26,9 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::algorithms::{bias_accelerations, Data};
-pub use crate::kinematics::contacts::{ContactModel, SLIP_REGULARISATION};
 use super::model::Model;
+pub use crate::kinematics::contacts::{ContactModel, SLIP_REGULARISATION};
 use crate::spatial::{self, Motion};
-
 
 /// Names of a contact's three rows.
 pub const CONTACT_ROW_NAMES: [&str; 3] = ["slip along x", "slip along y", "normal"];
@@ -99,7 +98,15 @@ pub fn contact_rows(model: &Model, data: &mut Data, v: &[f64], with_bias: bool) 
         rows.gap[k] = (centre - plane.translation.vector).dot(&normal) - contact.radius;
         rows.points[k] = point;
         rows.axes[k] = axes;
-        fill_jacobian(model, data, contact, &point, &axes, 3 * k, &mut rows.jacobian);
+        fill_jacobian(
+            model,
+            data,
+            contact,
+            &point,
+            &axes,
+            3 * k,
+            &mut rows.jacobian,
+        );
         if with_bias {
             let bias = contact_bias(data, contact, &centre, &point, &axes);
             rows.bias.rows_mut(3 * k, 3).copy_from(&bias);
@@ -189,7 +196,8 @@ pub fn independent_rows(model: &Model, mass: &DMatrix<f64>, rows: &ContactRows) 
         .max_by(|a, b| normal[(*a.1, *a.1)].total_cmp(&normal[(*b.1, *b.1)]))
     {
         let size = normal[(pivot, pivot)];
-        if !(size > CONTACT_RANK_TOLERANCE * scale) {
+        // A NaN pivot stops the choice too.
+        if size.is_nan() || size <= CONTACT_RANK_TOLERANCE * scale {
             break;
         }
         left.remove(position);
@@ -337,7 +345,9 @@ pub fn project_velocities(mass: &DMatrix<f64>, rows: &ContactRows, kept: &[usize
         return;
     };
     let correction = moved * lambda;
-    v.iter_mut().zip(correction.iter()).for_each(|(x, c)| *x -= c);
+    v.iter_mut()
+        .zip(correction.iter())
+        .for_each(|(x, c)| *x -= c);
 }
 
 /// The minimum-M-norm step of the velocities that closes the gaps of the normal rows `normal`
@@ -363,7 +373,8 @@ pub fn contact_body_forces(
     for (k, contact) in model.contacts.iter().enumerate() {
         let force = rows.axes[k] * forces[k];
         let at_point = spatial::twist(Vector3::zeros(), force);
-        let about_origin = spatial::force_to_parent(&spatial::translation(rows.points[k]), &at_point);
+        let about_origin =
+            spatial::force_to_parent(&spatial::translation(rows.points[k]), &at_point);
         for (body, sign) in [(contact.round_body, 1.0), (contact.plane_body, -1.0)] {
             if body != 0 {
                 on_bodies[body] += sign * spatial::force_to_child(&data.world[body], &about_origin);

@@ -80,8 +80,11 @@ pub fn contact_models(
         };
         if plane_body == round_body {
             errors.push(
-                Diagnostic::error("E0823", format!("the contact `{name}` joins a body with itself"))
-                    .primary(contact.span, "both frames are on the same body"),
+                Diagnostic::error(
+                    "E0823",
+                    format!("the contact `{name}` joins a body with itself"),
+                )
+                .primary(contact.span, "both frames are on the same body"),
             );
             continue;
         }
@@ -102,8 +105,11 @@ pub fn contact_models(
         };
         if !(radius > 0.0 && radius.is_finite()) {
             errors.push(
-                Diagnostic::error("E0820", format!("the radius of the contact `{name}` is {radius}"))
-                    .primary(law.span, "the radius must be a positive number"),
+                Diagnostic::error(
+                    "E0820",
+                    format!("the radius of the contact `{name}` is {radius}"),
+                )
+                .primary(law.span, "the radius must be a positive number"),
             );
             continue;
         }
@@ -117,7 +123,10 @@ pub fn contact_models(
                         "E0821",
                         format!("the friction coefficient of the contact `{name}` is {shown}"),
                     )
-                    .primary(law.span, "Coulomb's coefficient must be a number, zero or positive"),
+                    .primary(
+                        law.span,
+                        "Coulomb's coefficient must be a number, zero or positive",
+                    ),
                 );
                 continue;
             }
@@ -161,7 +170,9 @@ fn contact_jacobians(
     let mut all = Vec::new();
     for contact in contacts {
         let plane = configuration.poses[contact.plane_body] * contact.plane;
-        let centre = (configuration.poses[contact.round_body] * contact.centre).translation.vector;
+        let centre = (configuration.poses[contact.round_body] * contact.centre)
+            .translation
+            .vector;
         let axes = plane.rotation.to_rotation_matrix().into_inner();
         let point = centre - contact.radius * axes.column(2);
         let velocity_at = |body: usize, column: usize| {
@@ -174,7 +185,9 @@ fn contact_jacobians(
             let axis = axes.column(row).into_owned();
             let entries: Vec<f64> = (0..columns)
                 .map(|c| {
-                    axis.dot(&(velocity_at(contact.round_body, c) - velocity_at(contact.plane_body, c)))
+                    axis.dot(
+                        &(velocity_at(contact.round_body, c) - velocity_at(contact.plane_body, c)),
+                    )
                 })
                 .collect();
             if row == 2 {
@@ -183,9 +196,7 @@ fn contact_jacobians(
             all.push(entries);
         }
     }
-    let matrix = |rows: &[Vec<f64>]| {
-        DMatrix::from_fn(rows.len(), columns, |r, c| rows[r][c])
-    };
+    let matrix = |rows: &[Vec<f64>]| DMatrix::from_fn(rows.len(), columns, |r, c| rows[r][c]);
     (matrix(&normal), matrix(&all))
 }
 

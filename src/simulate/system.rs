@@ -15,8 +15,7 @@ use super::constraints::LoopMonitor;
 use super::native::NativeDynamics;
 use crate::dynamics::algorithms::{
     aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
-    rnea_after_kinematics,
-    rnea_forward, transmitted_wrenches, Data, DynamicsError,
+    rnea_after_kinematics, rnea_forward, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::contacts::{
     self, ContactError, ContactRows, ContactSolution, CONTACT_ROW_NAMES,
@@ -247,7 +246,10 @@ impl<'m> MechanicalSystem<'m> {
         let kept = self.kept_contact_rows(&mass, &rows);
         let normal = contacts::holonomic_rows(&kept);
         for _ in 0..4 {
-            let gap = normal.iter().map(|r| rows.gap[r / 3].abs()).fold(0.0, f64::max);
+            let gap = normal
+                .iter()
+                .map(|r| rows.gap[r / 3].abs())
+                .fold(0.0, f64::max);
             let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
             if gap <= 1e-15 * size {
                 break;
@@ -547,12 +549,16 @@ impl<'m> MechanicalSystem<'m> {
             (accelerations, external, Some(multipliers.clone()))
         } else if model.has_contacts() {
             let (solution, rows) = self.solve_contacts(t, q, v)?;
-            let on_bodies = contacts::contact_body_forces(model, &self.data, &rows, &solution.forces);
+            let on_bodies =
+                contacts::contact_body_forces(model, &self.data, &rows, &solution.forces);
             let external: Vec<_> = (self.efforts.external.iter().zip(&on_bodies))
                 .map(|(a, b)| a + b)
                 .collect();
             // A contact transmits no moment about its point: its force, along the plane's axes.
-            let forces = solution.forces.iter().flat_map(|f| [0.0, 0.0, 0.0, f.x, f.y, f.z]);
+            let forces = solution
+                .forces
+                .iter()
+                .flat_map(|f| [0.0, 0.0, 0.0, f.x, f.y, f.z]);
             let forces = DVector::from_iterator(6 * model.contacts.len(), forces);
             (solution.accelerations, external, Some(forces))
         } else {
@@ -681,10 +687,7 @@ pub enum SystemError {
     /// constraints though it is not at the closed configurations around it.
     SingularStart { join: String, row: &'static str },
     /// The kept rows of the contacts stopped being independent: `row` of `contact`.
-    SingularContact {
-        contact: String,
-        row: &'static str,
-    },
+    SingularContact { contact: String, row: &'static str },
 }
 
 /// What made an acceleration infinite or NaN.

@@ -79,10 +79,16 @@ fn the_rolling_cylinder_matches_its_closed_form_with_every_integrator() {
                 );
             }
             // The contact point has no velocity: ẋ + r q̇ = 0 (q turns about −y).
-            assert!((x_rate + RADIUS * q_rate).abs() < 1e-9, "{integrator}: slip");
+            assert!(
+                (x_rate + RADIUS * q_rate).abs() < 1e-9,
+                "{integrator}: slip"
+            );
             let [fx, fy, fz] = contact_force(sample);
             assert!((fx - along).abs() < 1e-9, "{integrator}: R_x = {fx}");
-            assert!(fy.abs() < 1e-9 && (fz - normal).abs() < 1e-9, "{integrator}: R_y = {fz}");
+            assert!(
+                fy.abs() < 1e-9 && (fz - normal).abs() < 1e-9,
+                "{integrator}: R_y = {fz}"
+            );
             // Rolling holds as long as tan φ exceeds |R_x / R_y| = tan α / 3 = 0.19245.
             assert!((fx / fz - ALPHA.tan() / 3.0).abs() < 1e-12);
             assert!((fx / fz - 0.19245).abs() < 1e-5);
@@ -99,7 +105,9 @@ fn the_symplectic_integrator_refuses_contacts() {
     let simulation = run(&prepared, &mut |_| {});
     let failure = simulation.report.failure.expect("refused");
     assert!(
-        failure.message.contains("symplectic integrator does not handle contacts"),
+        failure
+            .message
+            .contains("symplectic integrator does not handle contacts"),
         "{}",
         failure.message
     );
@@ -148,7 +156,10 @@ fn the_sliding_cylinder_follows_coulomb_with_both_signs_of_the_slip() {
             }
             let [fx, _, fz] = contact_force(sample);
             assert!((fz - MASS * G * ALPHA.cos()).abs() < 1e-9);
-            assert!((fx + sign * friction * fz).abs() < 1e-9, "s = {sign}: R_x = {fx}");
+            assert!(
+                (fx + sign * friction * fz).abs() < 1e-9,
+                "s = {sign}: R_x = {fx}"
+            );
         }
         // The friction's work balances the energy.
         let report = &simulation.report;
@@ -176,7 +187,10 @@ fn the_rolling_ball_keeps_its_contact_point_at_rest_and_its_energy() {
     let radius = 0.05;
     let prepared = prepared_with_reactions(
         "rolling_ball",
-        &[("duration = 4,", "duration = 20,"), ("output = 0.1", "output = 0.5")],
+        &[
+            ("duration = 4,", "duration = 20,"),
+            ("output = 0.1", "output = 0.5"),
+        ],
     );
     let simulation = completed(&prepared);
     let first = &simulation.samples[0];
@@ -187,12 +201,19 @@ fn the_rolling_ball_keeps_its_contact_point_at_rest_and_its_energy() {
         assert!(vx.abs() < 1e-9 && vy.abs() < 1e-9, "slip ({vx}, {vy})");
         largest_height = largest_height.max((sample.coordinates[2] - radius).abs());
         let drift = (energy(sample) - energy(first)) / energy(first);
-        assert!(drift.abs() < 1e-9, "t = {}: energy drift {drift}", sample.time);
+        assert!(
+            drift.abs() < 1e-9,
+            "t = {}: energy drift {drift}",
+            sample.time
+        );
         // The normal force carries the weight; the rolling forces move the centre.
         let [_, _, fz] = contact_force(sample);
         assert!(fz > 0.0);
     }
-    assert!(largest_height < 1e-12, "the centre left its plane by {largest_height}");
+    assert!(
+        largest_height < 1e-12,
+        "the centre left its plane by {largest_height}"
+    );
     // The ball travelled (it is not a trivial rest).
     let last = simulation.samples.last().expect("samples");
     assert!(last.coordinates[0].hypot(last.coordinates[1]) > 1.0);
@@ -235,7 +256,10 @@ fn the_contact_bias_is_the_rate_of_the_rows_along_the_motion() {
         rows_at(&moved, data, false).velocity
     };
     let rate = (moved(1.0, &mut data) - moved(-1.0, &mut data)) / (2.0 * h);
-    assert!(rate.rows(0, 3).norm() > 0.1, "a state where the rows change: {rate}");
+    assert!(
+        rate.rows(0, 3).norm() > 0.1,
+        "a state where the rows change: {rate}"
+    );
     for row in 0..3 {
         assert!(
             (rate[row] - here.bias[row]).abs() < 1e-6 * (1.0 + rate[row].abs()),

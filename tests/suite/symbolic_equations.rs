@@ -286,7 +286,9 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
         let topology = lsdc::topology::build(mechanism).expect("a topology");
         if !mechanism.contacts.is_empty() {
             // The equations of a mechanism with contacts are refused, not written without them.
-            let refused = symbolic::generate(mechanism, &topology).err().expect("refused");
+            let refused = symbolic::generate(mechanism, &topology)
+                .err()
+                .expect("refused");
             assert_eq!(refused[0].code, "E0825", "{}", path.display());
             continue;
         }
