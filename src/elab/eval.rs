@@ -119,29 +119,29 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let join_name = name
                     .as_ref()
                     .map(|n| self.qualified_name(&n.name, instance));
-                if self.mechanism.link(link).contact.is_some() {
-                    // A contact is a constraint, not a joint: it has no coordinates to name.
+                // A contact is a constraint, not a joint: its name stands for no coordinates.
+                let id = if self.mechanism.link(link).contact.is_some() {
                     let id = JoinId(CONTACT_JOIN | self.mechanism.contacts.len() as u32);
-                    self.mechanism.contacts.push(Contact {
+                    let contact = Contact {
                         name: join_name,
                         first,
                         second,
                         link,
                         span: decl.span,
-                    });
-                    if let Some(name) = name {
-                        let key = (scope, self.instance_of(scope)?, name.name.clone());
-                        self.globals.insert(key, Global::Ready(Value::Join(id)));
-                    }
-                    return Ok(());
-                }
-                self.mechanism.joins.push(Join {
-                    name: join_name,
-                    first,
-                    second,
-                    link,
-                    span: decl.span,
-                });
+                    };
+                    self.mechanism.contacts.push(contact);
+                    id
+                } else {
+                    let join = Join {
+                        name: join_name,
+                        first,
+                        second,
+                        link,
+                        span: decl.span,
+                    };
+                    self.mechanism.joins.push(join);
+                    id
+                };
                 if let Some(name) = name {
                     let key = (scope, self.instance_of(scope)?, name.name.clone());
                     self.globals.insert(key, Global::Ready(Value::Join(id)));
