@@ -7,7 +7,9 @@ use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::BodyRef;
 use crate::kinematics::assembly::AssemblyOptions;
+use crate::kinematics::contacts::{contact_mobility, contact_models, ContactMobility};
 use crate::kinematics::eval::UnknownValues;
+use crate::kinematics::forward::forward;
 use crate::kinematics::initial::assemble_initial;
 use crate::kinematics::joint;
 use crate::kinematics::joint::{analyse, JointAnalysis};
@@ -46,6 +48,9 @@ pub struct TreeReport {
     pub mobility: Option<Mobility>,
     /// Why the mobility could not be computed.
     pub mobility_unavailable: Option<String>,
+    /// The degrees of freedom in position and in velocity the contacts leave, if there are any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contacts: Option<ContactMobility>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -134,11 +139,21 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
             ),
             None => (None, Some("a joint could not be analysed".to_string())),
         };
+        let (contacts, unavailable) = match (&mobility, mechanism.contacts.is_empty()) {
+            (Some(m), false) => match tree_contacts(mechanism, topology, m.tree_dof) {
+                Ok(contacts) => (Some(contacts), unavailable),
+                // A contact written wrong is an error of the program, not a missing value.
+                Err(d) if d.iter().any(|d| d.code.starts_with("E082")) => return Err(d),
+                Err(d) => (None, Some(joined_messages(&d))),
+            },
+            _ => (None, unavailable),
+        };
         return Ok(TreeReport {
             bodies,
             complementary,
             mobility,
             mobility_unavailable: unavailable,
+            contacts,
         });
     }
     let (mobility, mobility_unavailable) =
@@ -163,7 +178,35 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         complementary,
         mobility,
         mobility_unavailable,
+        contacts: None,
     })
+}
+
+fn joined_messages(diagnostics: &[Diagnostic]) -> String {
+    diagnostics
+        .iter()
+        .map(|d| d.message.clone())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The contacts' degrees of freedom for a tree, at its `initial` configuration, or why they
+/// cannot be computed.
+fn tree_contacts(
+    mechanism: &Mechanism,
+    topology: Topology,
+    tree_dof: usize,
+) -> Result<ContactMobility, Vec<Diagnostic>> {
+    let (model, assembled, _) = assembled_model(mechanism, topology, &AssemblyOptions::default())?;
+    let mut errors = Vec::new();
+    let contacts = contact_models(mechanism, &model, &mut errors);
+    let configuration = forward(&model, &assembled.coordinates_vector()).map_err(|e| {
+        vec![Diagnostic::error(
+            "E0802",
+            crate::kinematics::eval::describe(&e, mechanism),
+        )]
+    })?;
+    Ok(contact_mobility(&contacts, &configuration, tree_dof))
 }
 
 impl AssemblyReport {
@@ -179,6 +222,11 @@ pub fn assembled_model(
     options: &AssemblyOptions,
 ) -> Result<(KinematicModel, AssemblyReport, Vec<Diagnostic>), Vec<Diagnostic>> {
     let model = model::build(mechanism, topology, given_values(mechanism)?)?;
+    let mut errors = Vec::new();
+    contact_models(mechanism, &model, &mut errors);
+    if !errors.is_empty() {
+        return Err(errors);
+    }
     let initial = assemble_initial(mechanism, &model, options)?;
     let assembled = initial.assembled;
     let names = model.coordinate_names();

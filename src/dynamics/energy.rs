@@ -52,7 +52,9 @@ pub fn conservative_forces(model: &Model) -> Conservative {
         }
     }
     let complete = model.applied.iter().all(|e| e.conservative)
-        && model.link_efforts.iter().all(|e| e.conservative);
+        && model.link_efforts.iter().all(|e| e.conservative)
+        // Coulomb friction dissipates: its power is tracked as work (see `simulate::system`).
+        && model.contacts.iter().all(|c| c.friction.is_none());
     Conservative {
         constant,
         applied,

@@ -5,6 +5,7 @@
 pub mod algorithms;
 pub mod angles;
 pub mod compiled;
+pub mod contacts;
 pub mod derivatives;
 pub mod efforts;
 pub mod elements;

@@ -12,6 +12,7 @@ use super::welds;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{inertia_problem, EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
+use crate::kinematics::contacts::{contact_models, ContactModel};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{constant_pose, ChainMotion, JointModel, KinematicModel};
 use crate::spatial::{self, Inertia, Pose, RigidInertia, Transform};
@@ -72,6 +73,9 @@ pub struct Model {
     /// through one point), its axes: it constrains only the point, and its angles are recovered
     /// from the bodies' poses rather than integrated (no gimbal lock).
     pub loop_balls: Vec<Option<[Vector3<f64>; 3]>>,
+    /// Contacts of round bodies on planes: constraints on the tree's velocities (see
+    /// `contacts`).
+    pub contacts: Vec<ContactModel>,
 }
 
 impl Model {
@@ -101,6 +105,11 @@ impl Model {
 
     pub fn has_loops(&self) -> bool {
         !self.loops.is_empty()
+    }
+
+    /// Whether contacts (`rolling`, `sliding`) constrain the tree's motion.
+    pub fn has_contacts(&self) -> bool {
+        !self.contacts.is_empty()
     }
 
     /// Length of the position part of the state: the tree's, then the complementary links'.
@@ -274,6 +283,7 @@ pub fn build_with(
         })
         .collect();
     let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
+    let contacts = contact_models(mechanism, kinematics, &mut errors);
     let link_efforts = link_efforts(mechanism, &joints, &loops);
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
@@ -301,7 +311,7 @@ pub fn build_with(
         &bodies,
         &applied,
         &link_efforts,
-        !loops.is_empty(),
+        !loops.is_empty() || !contacts.is_empty(),
     );
     let branch_velocities = branch_velocities(&joints);
     let mut model = Model {
@@ -326,6 +336,7 @@ pub fn build_with(
         loops,
         nc,
         loop_balls,
+        contacts,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),

@@ -10,6 +10,10 @@ use super::operations::{
     finite_literal, is_zero, vector_or_matrix,
 };
 use super::value::*;
+
+/// The name of a contact (`join plane and ball with rolling(r) as c`) stands for a join whose
+/// number has this bit set, and the contact's index below it: it has no coordinates to read.
+const CONTACT_JOIN: u32 = 1 << 31;
 use crate::check::scope::{ScopeId, Target};
 use crate::check::types::Ty;
 use crate::diag::Diagnostic;
@@ -116,13 +120,29 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let join_name = name
                     .as_ref()
                     .map(|n| self.qualified_name(&n.name, instance));
-                self.mechanism.joins.push(Join {
-                    name: join_name,
-                    first,
-                    second,
-                    link,
-                    span: decl.span,
-                });
+                // A contact is a constraint, not a joint: its name stands for no coordinates.
+                let id = if self.mechanism.link(link).contact.is_some() {
+                    let id = JoinId(CONTACT_JOIN | self.mechanism.contacts.len() as u32);
+                    let contact = Contact {
+                        name: join_name,
+                        first,
+                        second,
+                        link,
+                        span: decl.span,
+                    };
+                    self.mechanism.contacts.push(contact);
+                    id
+                } else {
+                    let join = Join {
+                        name: join_name,
+                        first,
+                        second,
+                        link,
+                        span: decl.span,
+                    };
+                    self.mechanism.joins.push(join);
+                    id
+                };
                 if let Some(name) = name {
                     let key = (scope, self.instance_of(scope)?, name.name.clone());
                     self.globals.insert(key, Global::Ready(Value::Join(id)));
@@ -582,6 +602,15 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     }
 
     fn join_coordinate(&mut self, id: JoinId, coordinate: &Name, span: Span) -> Result<Value> {
+        if id.0 & CONTACT_JOIN != 0 {
+            let name = self.mechanism.contact_name((id.0 & !CONTACT_JOIN) as usize);
+            return Err(Diagnostic::error(
+                "E0440",
+                format!("`{name}` is a contact: it has no coordinate `{coordinate}`"),
+            )
+            .primary(span, "a contact has no coordinates")
+            .help("a contact constrains the coordinates of the joints that place its bodies: read those (`motion.x`); its force is in the reactions (`lsdc simulate --reactions`)"));
+        }
         if let Some(value) = self.own_coordinate(id, coordinate, span) {
             return Ok(value);
         }
@@ -678,6 +707,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ),
         };
         if target == Target::Builtin {
+            if matches!(&*ident.name, "rolling" | "sliding") {
+                return self.contact_link(values, span);
+            }
             return builtin_call(&ident.name, values, span);
         }
         // The instance the definition was declared in: its body's names take their values there.
@@ -839,6 +871,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             forces: Vec::new(),
             torques: Vec::new(),
             potential: None,
+            contact: None,
         };
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {
@@ -855,6 +888,31 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         dofs.sort_by_key(|(i, _)| *i);
         link.dofs = dofs.into_iter().map(|(_, d)| d).collect();
         self.mechanism.links.push(link);
+        Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
+    }
+
+    /// `rolling(radius)` or `sliding(radius, friction)`: a link without coordinates that makes
+    /// its join a contact (see `mechanism::Contact`).
+    fn contact_link(&mut self, values: Vec<Value>, span: Span) -> Result<Value> {
+        let mut scalars = values.into_iter().map(|v| as_scalar(v, span));
+        let radius = scalars
+            .next()
+            .ok_or_else(|| internal("contact without a radius"))??;
+        let friction = scalars.next().transpose()?;
+        self.mechanism.links.push(Link {
+            name: None,
+            span,
+            coordinates: Vec::new(),
+            dofs: Vec::new(),
+            forces: Vec::new(),
+            torques: Vec::new(),
+            potential: None,
+            contact: Some(ContactLaw {
+                radius,
+                friction,
+                span,
+            }),
+        });
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }
 

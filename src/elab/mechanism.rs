@@ -57,6 +57,36 @@ pub struct Link {
     pub torques: Vec<(u8, Vector)>,
     /// `potential = ...`: the potential energy its efforts derive from, for the energy report.
     pub potential: Option<Scalar>,
+    /// `rolling(r)` or `sliding(r, f)`: a contact between a plane and a round body, not a joint
+    /// of the tree (see [`Contact`]).
+    pub contact: Option<ContactLaw>,
+}
+
+/// How a round body touches a plane: which rows a contact adds to the equations of motion.
+#[derive(Clone, Debug)]
+pub struct ContactLaw {
+    /// The body's radius: a sphere about the second frame's origin, or a cylinder whose axis
+    /// stays parallel to the plane.
+    pub radius: Scalar,
+    /// `None`: rolling without slipping (the contact point of the body has no velocity relative
+    /// to the plane). `Some(f)`: sliding under Coulomb friction of coefficient f.
+    pub friction: Option<Scalar>,
+    /// Where `rolling(...)` or `sliding(...)` is written.
+    pub span: Span,
+}
+
+/// `join plane and ball with rolling(r)`: a contact between the plane through the first frame's
+/// origin, normal to its z axis, and a round body centred on the second frame's origin. It is
+/// a constraint on the tree's motion (a bilateral normal row, and for rolling two
+/// non-holonomic tangential rows), not a joint: the bodies are joined to the tree otherwise.
+#[derive(Clone, Debug)]
+pub struct Contact {
+    /// `as name`; unnamed contacts are called `contact1`, `contact2`, … in declaration order.
+    pub name: Option<Name>,
+    pub first: Frame,
+    pub second: Frame,
+    pub link: LinkId,
+    pub span: Span,
 }
 
 /// `join first and second with link`: the link's dof chain, in its own coordinates, carries the
@@ -167,6 +197,8 @@ pub struct Mechanism {
     pub bodies: Vec<Body>,
     pub links: Vec<Link>,
     pub joins: Vec<Join>,
+    /// Joins whose link is a contact (`rolling`, `sliding`), in declaration order.
+    pub contacts: Vec<Contact>,
     pub efforts: Vec<Effort>,
     pub applications: Vec<Application>,
     pub unknowns: Vec<Unknown>,
@@ -252,6 +284,14 @@ impl Mechanism {
         &self.joins[id.0 as usize]
     }
 
+    /// The contact's name: `as wheel_on_ground`, or `contact2` for the second contact declared.
+    pub fn contact_name(&self, index: usize) -> String {
+        self.contacts[index]
+            .name
+            .as_deref()
+            .map_or_else(|| format!("contact{}", index + 1), str::to_string)
+    }
+
     /// The join's name: `as crank`, or `join3` for the third join declared.
     pub fn join_name(&self, id: JoinId) -> String {
         self.join(id)
@@ -309,6 +349,11 @@ impl Mechanism {
             reached.frame(&join.second);
             reached.links.insert(join.link);
         }
+        for contact in &self.contacts {
+            reached.frame(&contact.first);
+            reached.frame(&contact.second);
+            reached.links.insert(contact.link);
+        }
         for application in &self.applications {
             reached.frame(&application.target);
             let effort = self.effort(application.effort);
@@ -328,6 +373,10 @@ impl Mechanism {
                 .iter()
                 .chain(&link.torques)
                 .for_each(|(_, v)| reached.vector(v));
+            if let Some(law) = &link.contact {
+                reached.scalar(&law.radius);
+                law.friction.iter().for_each(|f| reached.scalar(f));
+            }
         }
         reached
     }

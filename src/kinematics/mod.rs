@@ -4,6 +4,7 @@
 pub mod assembly;
 pub mod chain;
 pub mod closure;
+pub mod contacts;
 pub mod drag;
 pub mod eval;
 pub mod forward;

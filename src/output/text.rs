@@ -108,7 +108,24 @@ pub fn tree(report: &TreeReport) -> String {
         (None, Some(reason)) => out += &format!("mobility not computed: {reason}\n"),
         (None, None) => {}
     }
+    if let Some(c) = &report.contacts {
+        out += &contact_text(c, report.mobility.as_ref().map_or(0, |m| m.tree_dof));
+    }
     out
+}
+
+/// The degrees of freedom left by contacts: in position (the normal rows are holonomic) and
+/// in velocity (the rolling rows are not).
+fn contact_text(c: &crate::kinematics::contacts::ContactMobility, tree_dof: usize) -> String {
+    format!(
+        "contacts {}: position dof {} = tree dof {tree_dof} - {} holonomic rows; velocity dof {} = tree dof {tree_dof} - {} independent rows ({} non-holonomic)\n",
+        c.contacts,
+        c.position_dof,
+        c.holonomic_rank,
+        c.velocity_dof,
+        c.velocity_rank,
+        c.velocity_rank - c.holonomic_rank
+    )
 }
 
 pub fn assembly(report: &AssemblyReport) -> String {

@@ -22,6 +22,11 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
             "the mechanism has loops (the native code serves trees)".into(),
         ));
     }
+    if model.has_contacts() {
+        return Err(Unavailable::Unsupported(
+            "the mechanism has contacts (the native code serves trees without constraints)".into(),
+        ));
+    }
     if model.nq != model.nv || model.positions() != model.nq {
         return Err(Unavailable::Unsupported(
             "its state is not its declared coordinates and rates (a free or spherical joint)"

@@ -555,6 +555,12 @@ fn simulate_from(
             )
         }
     };
+    if model.has_contacts() && settings.integrator == Integrator::Symplectic {
+        return failed_at_start(
+            prepared,
+            "the symplectic integrator does not handle contacts (`rolling`, `sliding`), whose rows are not all integrable: use dopri5, dop853, rk4 or implicit".to_string(),
+        );
+    }
     let mut y0 = q0;
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(start.coordinates.to_vec()));
@@ -573,6 +579,7 @@ fn simulate_from(
     };
     // What the start found of the loops (rank, redundant rows) holds for the outputs too.
     sampler.system.loops = system.loops.clone();
+    sampler.system.contact_rows = system.contact_rows.clone();
     sampler.system.loops.samples_outputs = true;
     // The work of non-conservative efforts rides along as one more state (not with the
     // variational integrator, whose steps are its own).
@@ -766,6 +773,7 @@ fn reaction_names(model: &Model) -> Vec<String> {
         .iter()
         .map(|j| j.chain.name.clone())
         .chain(model.loops.iter().map(|l| l.name.clone()))
+        .chain(model.contacts.iter().map(|c| c.name.clone()))
         .collect()
 }
 

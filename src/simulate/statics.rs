@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::prepare::Prepared;
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::rnea;
+use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Extent, Stabilisation};
 
 #[derive(Clone, Debug, Serialize)]
@@ -59,6 +60,11 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
         let c = loops::constraints(model, &mut system.data, &q, &rest, Extent::Rows)
             .map_err(SystemError::from)?;
         loops::decompose(&c.jacobian.dense()).null_space
+    } else if model.has_contacts() {
+        // At rest a sliding contact's friction has no direction: only its normal row holds.
+        let rows = contacts::contact_rows(model, &mut system.data, &rest, false);
+        let candidates = contacts::candidate_rows(model);
+        loops::decompose(&rows.jacobian.select_rows(&candidates)).null_space
     } else {
         DMatrix::identity(model.velocities(), model.velocities())
     };

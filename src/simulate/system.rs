@@ -14,8 +14,11 @@ mod jacobian;
 use super::constraints::LoopMonitor;
 use super::native::NativeDynamics;
 use crate::dynamics::algorithms::{
-    aba, aba_after_kinematics, aba_into, forward_kinematics, rnea, rnea_after_kinematics,
-    rnea_forward, transmitted_wrenches, Data, DynamicsError,
+    aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
+    rnea_after_kinematics, rnea_forward, transmitted_wrenches, Data, DynamicsError,
+};
+use crate::dynamics::contacts::{
+    self, ContactError, ContactRows, ContactSolution, CONTACT_ROW_NAMES,
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
@@ -55,6 +58,9 @@ pub struct MechanicalSystem<'m> {
     /// The state of the last evaluation of a mechanism with loops, while `loop_scratch` holds
     /// its rows (empty otherwise): a projection of that state adopts them.
     evaluated: Vec<f64>,
+    /// The contact rows kept for the run (decided at the first evaluation, see
+    /// `contacts::independent_rows`), and the last contacts' solution.
+    pub contact_rows: Option<Vec<usize>>,
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
@@ -83,6 +89,7 @@ impl<'m> MechanicalSystem<'m> {
             projection: ProjectionScratch::new(model),
             velocities: Vec::new(),
             evaluated: Vec::new(),
+            contact_rows: None,
             native: None,
         }
     }
@@ -184,6 +191,83 @@ impl<'m> MechanicalSystem<'m> {
         Ok(())
     }
 
+    /// The accelerations and contact forces of a tree with contacts at (t, q, v), with the
+    /// contacts' rows they come from; the efforts in `efforts`, the forward kinematics of
+    /// (q, v) in `data`.
+    fn solve_contacts(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(ContactSolution, ContactRows), SystemError> {
+        let model = self.model;
+        self.evaluate_efforts(t, q, v)?;
+        let rows = contacts::contact_rows(model, &mut self.data, v, true);
+        let mut mass = DMatrix::zeros(model.nv, model.nv);
+        crba_after_kinematics(model, &mut self.data, &mut mass);
+        let kept = self.kept_contact_rows(&mass, &rows);
+        let rest = vec![0.0; model.nv];
+        let external = &self.efforts.external;
+        rnea_after_kinematics(model, &mut self.data, &rest, external, &mut self.inverse);
+        let free_force = &self.efforts.tau - &self.inverse;
+        let solution = contacts::solve(model, &mass, &free_force, &rows, &kept)
+            .map_err(|e| self.contact_error(&e))?;
+        Ok((solution, rows))
+    }
+
+    /// The contact rows of the run: decided at the first state evaluated, then kept.
+    fn kept_contact_rows(&mut self, mass: &DMatrix<f64>, rows: &ContactRows) -> Vec<usize> {
+        self.contact_rows
+            .get_or_insert_with(|| contacts::independent_rows(self.model, mass, rows))
+            .clone()
+    }
+
+    fn contact_error(&self, error: &ContactError) -> SystemError {
+        match error {
+            ContactError::SingularMass => SystemError::SingularMassMatrix,
+            ContactError::Singular { row } => SystemError::SingularContact {
+                contact: self.model.contacts[row / 3].name.clone(),
+                row: CONTACT_ROW_NAMES[row % 3],
+            },
+        }
+    }
+
+    /// Keeps the contacts after a step: the gaps of the normal rows closed by Newton steps of
+    /// least kinetic metric, then the velocities projected onto every kept row (the rolling
+    /// rows are not integrable: only their velocities are projected). Whether y moved.
+    fn keep_contacts(&mut self, y: &mut [f64]) -> Result<bool, SystemError> {
+        let model = self.model;
+        let (mut q, v) = model.split_state(y);
+        let mut v = v.to_vec();
+        let mut mass = DMatrix::zeros(model.nv, model.nv);
+        forward_kinematics(model, &mut self.data, &q, &v)?;
+        let mut rows = contacts::contact_rows(model, &mut self.data, &v, false);
+        crba_after_kinematics(model, &mut self.data, &mut mass);
+        let kept = self.kept_contact_rows(&mass, &rows);
+        let normal = contacts::holonomic_rows(&kept);
+        for _ in 0..4 {
+            let gap = normal
+                .iter()
+                .map(|r| rows.gap[r / 3].abs())
+                .fold(0.0, f64::max);
+            let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
+            if gap <= 1e-15 * size {
+                break;
+            }
+            let Some(step) = contacts::gap_step(&mass, &rows, &normal) else {
+                break;
+            };
+            model.retract(&mut q, step.as_slice());
+            forward_kinematics(model, &mut self.data, &q, &v)?;
+            rows = contacts::contact_rows(model, &mut self.data, &v, false);
+            crba_after_kinematics(model, &mut self.data, &mut mass);
+        }
+        contacts::project_velocities(&mass, &rows, &kept, &mut v);
+        y[..q.len()].copy_from_slice(&q);
+        y[q.len()..].copy_from_slice(&v);
+        Ok(true)
+    }
+
     /// The multipliers of the accelerations `solve_constrained` left in `loop_scratch`, from
     /// Ma − f: inverse dynamics at those accelerations under the efforts' external forces,
     /// less the efforts' generalised forces (the complementary coordinates, without inertia,
@@ -233,6 +317,10 @@ impl<'m> MechanicalSystem<'m> {
             .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
         if native {
             // The accelerations are written.
+        } else if model.has_contacts() {
+            let (solution, rows) = self.solve_contacts(t, q, v)?;
+            accelerations.copy_from(&solution.accelerations);
+            self.efforts.power += contacts::friction_power(model, &rows, &solution.forces);
         } else if model.has_loops() {
             self.solve_constrained(t, q, v, Wanted::Accelerations)?;
             accelerations.copy_from(&self.loop_scratch.accelerations);
@@ -260,7 +348,7 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        let efforts = if model.has_efforts() || model.has_loops() {
+        let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
             &self.efforts
         } else {
             &self.no_efforts
@@ -346,6 +434,9 @@ impl<'m> MechanicalSystem<'m> {
     /// Keeps the loops closed after a step (see `LoopMonitor::keep`); nothing for a tree.
     pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
+        if model.has_contacts() {
+            return self.keep_contacts(y);
+        }
         if !model.has_loops() {
             return Ok(false);
         }
@@ -412,9 +503,15 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// Closes the loops of the initial state at round-off, decides their structure (see
-    /// `loops::Structure`) and projects the velocities onto them.
+    /// `loops::Structure`) and projects the velocities onto them; for contacts, closes their
+    /// gaps and projects the velocities onto their rows.
     pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
+        if model.has_contacts() {
+            // The gaps closed and the starting velocities made to roll, by the smallest change
+            // in the kinetic metric.
+            return self.keep_contacts(y).map(|_| ());
+        }
         if !model.has_loops() {
             return Ok(());
         }
@@ -450,6 +547,20 @@ impl<'m> MechanicalSystem<'m> {
                 .collect();
             let accelerations = solution.accelerations.clone();
             (accelerations, external, Some(multipliers.clone()))
+        } else if model.has_contacts() {
+            let (solution, rows) = self.solve_contacts(t, q, v)?;
+            let on_bodies =
+                contacts::contact_body_forces(model, &self.data, &rows, &solution.forces);
+            let external: Vec<_> = (self.efforts.external.iter().zip(&on_bodies))
+                .map(|(a, b)| a + b)
+                .collect();
+            // A contact transmits no moment about its point: its force, along the plane's axes.
+            let forces = solution
+                .forces
+                .iter()
+                .flat_map(|f| [0.0, 0.0, 0.0, f.x, f.y, f.z]);
+            let forces = DVector::from_iterator(6 * model.contacts.len(), forces);
+            (solution.accelerations, external, Some(forces))
         } else {
             let efforts = self.efforts(t, q, v)?;
             let a = aba(
@@ -575,6 +686,8 @@ pub enum SystemError {
     /// The run starts at a singular configuration, where `row` of `join` is implied by the other
     /// constraints though it is not at the closed configurations around it.
     SingularStart { join: String, row: &'static str },
+    /// The kept rows of the contacts stopped being independent: `row` of `contact`.
+    SingularContact { contact: String, row: &'static str },
 }
 
 /// What made an acceleration infinite or NaN.
@@ -624,6 +737,10 @@ impl fmt::Display for SystemError {
             SystemError::SingularStart { join, row } => write!(
                 f,
                 "the loops start at a singular configuration (the {row} constraint of `{join}` is implied by the others here, not at the configurations around it), where the motion may leave along several branches: start away from it, or give initial values on one branch"
+            ),
+            SystemError::SingularContact { contact, row } => write!(
+                f,
+                "the contacts reached a singular configuration: the {row} row of `{contact}` is no longer independent of the other contacts' rows"
             ),
             SystemError::AccelerationNotFinite { join, cause } => {
                 write!(f, "the acceleration of join `{join}` is not finite: {cause}")

@@ -152,6 +152,16 @@ pub struct Values {
 
 /// Generates the equations of a mechanism whose bodies are numbered by `topology`.
 pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {
+    if let Some(contact) = mechanism.contacts.first() {
+        // The equations below are the tree's and its loops'; leaving the contacts' rows out
+        // would write the equations of another mechanism.
+        return Err(vec![Diagnostic::error(
+            "E0825",
+            "the equations of motion of a mechanism with contacts (`rolling`, `sliding`) are not written",
+        )
+        .primary(contact.span, "this contact constrains the motion")
+        .help("`lsdc simulate` integrates it; the symbolic equations cover joints and closed loops only")]);
+    }
     let mut generator = Generator::new(mechanism, topology);
     generator.run().map_err(|e| {
         let error = Diagnostic::error(

@@ -25,4 +25,6 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "angular_velocity",
     "orientation",
     "distance",
+    "rolling",
+    "sliding",
 ];

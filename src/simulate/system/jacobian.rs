@@ -33,6 +33,7 @@ impl MechanicalSystem<'_> {
     pub fn has_tree_jacobian(&self) -> bool {
         let model = self.model;
         !model.has_loops()
+            && !model.has_contacts()
             && self.native.is_none()
             && model.positions() == model.velocities()
             && model.joints.iter().all(|j| j.kind == JointType::Chain)

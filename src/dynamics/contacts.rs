@@ -1,0 +1,394 @@
+//! Contacts of a round body on a plane (`join plane and ball with rolling(r)` or
+//! `sliding(r, f)`): constraints on the tree's motion written on velocities, not joints.
+//!
+//! The plane passes through its frame's origin O, normal to the frame's z axis n (pointing
+//! towards the round body); the round body is a sphere of radius r about its frame's origin C,
+//! or a cylinder whose axis stays parallel to the plane. The contact point is p = C − r n. Each
+//! contact has three candidate rows, the relative velocity of the two bodies' material points at
+//! p along the plane frame's axes x, y (tangential) and z (normal):
+//!
+//! - the normal row is the rate of the gap g = (C − O)·n − r, a holonomic constraint: it is
+//!   kept at the position level too (projected after every step);
+//! - the tangential rows of a rolling contact say that the body rolls without slipping. They
+//!   are non-holonomic (a ball on a plane can reach any position with any orientation): they
+//!   hold on velocities and accelerations only, and nothing projects positions onto them;
+//! - a sliding contact keeps its normal row only; the friction force −f|λₙ| s on the round body
+//!   opposes the slip velocity w (Coulomb), with the regularised direction
+//!   s = w / √(|w|² + ε²) (`SLIP_REGULARISATION`).
+//!
+//! With G the kept rows, the equations of motion are M a = f + Hᵀλ, G a + γ = 0, where H = G
+//! but on a sliding contact's normal row, whose force also carries the friction it causes:
+//! H = Gₙ − f σ sᵀ Gₜ with σ the sign of λₙ. γ is the rows' velocity-product term: with V
+//! the bodies' twists in fixed axes and A their accelerations at zero joint accelerations,
+//! d/dt [e·(V_B − V_P)(p)] = (ω_P × e)·w + e·[(A_B − A_P)(p) + (ω_B − ω_P) × ṗ],
+//! ṗ = v_C − r ω_P × n (the contact point moves over both bodies).
+
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+use super::algorithms::{bias_accelerations, Data};
+use super::model::Model;
+pub use crate::kinematics::contacts::{ContactModel, SLIP_REGULARISATION};
+use crate::spatial::{self, Motion};
+
+/// Names of a contact's three rows.
+pub const CONTACT_ROW_NAMES: [&str; 3] = ["slip along x", "slip along y", "normal"];
+
+/// The contacts' rows at a state: three per contact, every row computed (the kept ones are
+/// chosen by the caller).
+#[derive(Clone, Debug)]
+pub struct ContactRows {
+    /// 3 per contact × nv: the relative velocity at the contact point along the plane's axes.
+    pub jacobian: DMatrix<f64>,
+    /// γ, the rows' velocity-product term (zero unless asked for).
+    pub bias: DVector<f64>,
+    /// G v.
+    pub velocity: DVector<f64>,
+    /// Per contact, the gap g = (C − O)·n − r (a position row).
+    pub gap: Vec<f64>,
+    /// Per contact, the contact point and the plane's axes (columns x, y, n), fixed axes.
+    pub points: Vec<Vector3<f64>>,
+    pub axes: Vec<Matrix3<f64>>,
+}
+
+/// The fixed-frame twist of a body (index 0: earth, at rest).
+fn world_twist(data: &Data, body: usize) -> Motion {
+    if body == 0 {
+        return Motion::zeros();
+    }
+    spatial::motion_to_parent(&data.world[body], &data.velocity[body])
+}
+
+/// The fixed-frame acceleration of a body at zero joint accelerations (after
+/// `bias_accelerations`).
+fn world_bias(data: &Data, body: usize) -> Motion {
+    if body == 0 {
+        return Motion::zeros();
+    }
+    spatial::motion_to_parent(&data.world[body], &data.acceleration[body])
+}
+
+/// Velocity at `point` of a fixed-frame twist.
+fn at_point(point: &Vector3<f64>, twist: &Motion) -> Vector3<f64> {
+    spatial::linear(&spatial::shifted(point, twist))
+}
+
+/// The contacts' rows at the state whose forward kinematics `data` holds; γ when `with_bias`
+/// (it overwrites `data.acceleration` with the bias accelerations).
+pub fn contact_rows(model: &Model, data: &mut Data, v: &[f64], with_bias: bool) -> ContactRows {
+    let count = model.contacts.len();
+    let mut rows = ContactRows {
+        jacobian: DMatrix::zeros(3 * count, model.velocities()),
+        bias: DVector::zeros(3 * count),
+        velocity: DVector::zeros(3 * count),
+        gap: vec![0.0; count],
+        points: vec![Vector3::zeros(); count],
+        axes: vec![Matrix3::identity(); count],
+    };
+    if with_bias {
+        bias_accelerations(model, data);
+    }
+    for (k, contact) in model.contacts.iter().enumerate() {
+        let plane = data.world[contact.plane_body] * contact.plane;
+        let centre = (data.world[contact.round_body] * contact.centre)
+            .translation
+            .vector;
+        let axes = plane.rotation.to_rotation_matrix().into_inner();
+        let normal = axes.column(2).into_owned();
+        let point = centre - contact.radius * normal;
+        rows.gap[k] = (centre - plane.translation.vector).dot(&normal) - contact.radius;
+        rows.points[k] = point;
+        rows.axes[k] = axes;
+        fill_jacobian(
+            model,
+            data,
+            contact,
+            &point,
+            &axes,
+            3 * k,
+            &mut rows.jacobian,
+        );
+        if with_bias {
+            let bias = contact_bias(data, contact, &centre, &point, &axes);
+            rows.bias.rows_mut(3 * k, 3).copy_from(&bias);
+        }
+    }
+    rows.velocity = &rows.jacobian * DVector::from_column_slice(v);
+    rows
+}
+
+/// The three rows of a contact: the velocity at `point` that each state velocity gives the
+/// round body, less the one it gives the plane's body, along the plane's axes.
+fn fill_jacobian(
+    model: &Model,
+    data: &Data,
+    contact: &ContactModel,
+    point: &Vector3<f64>,
+    axes: &Matrix3<f64>,
+    row: usize,
+    jacobian: &mut DMatrix<f64>,
+) {
+    for (body, sign) in [(contact.round_body, 1.0), (contact.plane_body, -1.0)] {
+        for on_path in model.path_to_earth(body) {
+            let joint = &model.joints[on_path - 1];
+            let state = &data.states[on_path - 1];
+            for column in 0..joint.nv() {
+                let local = Motion::from_column_slice(state.subspace.column(column).as_slice());
+                let twist = spatial::motion_to_parent(&data.world[joint.child], &local);
+                let along = axes.transpose() * at_point(point, &twist);
+                let mut entries = jacobian.view_mut((row, joint.v_offset + column), (3, 1));
+                entries += sign * along;
+            }
+        }
+    }
+}
+
+/// γ of a contact's three rows (see the module's documentation).
+fn contact_bias(
+    data: &Data,
+    contact: &ContactModel,
+    centre: &Vector3<f64>,
+    point: &Vector3<f64>,
+    axes: &Matrix3<f64>,
+) -> Vector3<f64> {
+    let (round, plane) = (
+        world_twist(data, contact.round_body),
+        world_twist(data, contact.plane_body),
+    );
+    let (spin_round, spin_plane) = (spatial::angular(&round), spatial::angular(&plane));
+    let normal = axes.column(2).into_owned();
+    let relative = at_point(point, &(round - plane));
+    let point_rate = at_point(centre, &round) - contact.radius * spin_plane.cross(&normal);
+    let accelerations = world_bias(data, contact.round_body) - world_bias(data, contact.plane_body);
+    let material = at_point(point, &accelerations) + (spin_round - spin_plane).cross(&point_rate);
+    Vector3::from_fn(|i, _| {
+        let axis = axes.column(i).into_owned();
+        spin_plane.cross(&axis).dot(&relative) + axis.dot(&material)
+    })
+}
+
+/// The regularised direction of Coulomb friction for a slip velocity (see
+/// `SLIP_REGULARISATION`), in the plane's axes x, y.
+pub fn friction_direction(rows: &ContactRows, k: usize) -> [f64; 2] {
+    let (x, y) = (rows.velocity[3 * k], rows.velocity[3 * k + 1]);
+    let scale = (x * x + y * y + SLIP_REGULARISATION * SLIP_REGULARISATION).sqrt();
+    [x / scale, y / scale]
+}
+
+/// The relative size below which a row is taken as dependent on the rows chosen before it.
+pub const CONTACT_RANK_TOLERANCE: f64 = 1e-10;
+
+/// The independent rows among the contacts' candidate rows (`ContactModel::rows`), in contact
+/// order: a Cholesky factorisation of G M⁻¹ Gᵀ pivoted on its diagonal, whose entries all have
+/// the units of an inverse mass, stops where the largest pivot left falls below
+/// `CONTACT_RANK_TOLERANCE` times the largest diagonal entry. A cylinder rolling in a plane
+/// motion has a tangential row along its axis that is zero at every state: it is left out.
+pub fn independent_rows(model: &Model, mass: &DMatrix<f64>, rows: &ContactRows) -> Vec<usize> {
+    let candidates = candidate_rows(model);
+    let Some(cholesky) = mass.clone().cholesky() else {
+        return candidates;
+    };
+    let g = rows.jacobian.select_rows(&candidates);
+    let mut normal = &g * cholesky.solve(&g.transpose());
+    let scale = normal.diagonal().max();
+    let mut chosen = Vec::new();
+    let mut left: Vec<usize> = (0..candidates.len()).collect();
+    while let Some((position, &pivot)) = (left.iter().enumerate())
+        .max_by(|a, b| normal[(*a.1, *a.1)].total_cmp(&normal[(*b.1, *b.1)]))
+    {
+        let size = normal[(pivot, pivot)];
+        // A NaN pivot stops the choice too.
+        if size.is_nan() || size <= CONTACT_RANK_TOLERANCE * scale {
+            break;
+        }
+        left.remove(position);
+        chosen.push(pivot);
+        let column = normal.column(pivot).into_owned();
+        for &i in &left {
+            for &j in &left {
+                normal[(i, j)] -= column[i] * column[j] / size;
+            }
+        }
+    }
+    chosen.sort_unstable();
+    chosen.into_iter().map(|i| candidates[i]).collect()
+}
+
+/// Every contact's candidate rows (`ContactModel::rows`), in contact order.
+pub fn candidate_rows(model: &Model) -> Vec<usize> {
+    (model.contacts.iter().enumerate())
+        .flat_map(|(k, c)| c.rows().iter().map(move |r| 3 * k + r))
+        .collect()
+}
+
+/// The holonomic rows among `kept`: the normal rows, which positions are projected onto.
+pub fn holonomic_rows(kept: &[usize]) -> Vec<usize> {
+    kept.iter().copied().filter(|r| r % 3 == 2).collect()
+}
+
+/// The solution of the constrained equations of motion at a state.
+#[derive(Clone, Debug)]
+pub struct ContactSolution {
+    pub accelerations: DVector<f64>,
+    /// Per contact, the force on the round body at the contact point along the plane's axes
+    /// (x, y tangential, z normal): the reaction of the plane, friction included.
+    pub forces: Vec<Vector3<f64>>,
+}
+
+/// Why the constrained equations have no solution.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ContactError {
+    /// The mass matrix is not positive definite.
+    SingularMass,
+    /// The kept rows stopped being independent (the contact `row` names).
+    Singular { row: usize },
+}
+
+/// Solves M a = f + Hᵀλ, G a + γ = 0 on the kept rows (see the module's documentation), with
+/// f the efforts less the velocity-product forces. A sliding contact's friction follows the
+/// sign of its normal force: assumed pressing first, and solved again where it pulls.
+pub fn solve(
+    model: &Model,
+    mass: &DMatrix<f64>,
+    free_force: &DVector<f64>,
+    rows: &ContactRows,
+    kept: &[usize],
+) -> Result<ContactSolution, ContactError> {
+    let cholesky = mass.clone().cholesky().ok_or(ContactError::SingularMass)?;
+    let free = cholesky.solve(free_force);
+    let g = rows.jacobian.select_rows(kept);
+    let rhs = -rows.bias.select_rows(kept) - &g * &free;
+    let mut pressing = vec![1.0; model.contacts.len()];
+    for _ in 0..=model.contacts.len() {
+        let h = force_rows(model, rows, kept, &pressing);
+        let moved = cholesky.solve(&h.transpose());
+        let coupling = &g * &moved;
+        let lu = coupling.lu();
+        let Some(multipliers) = lu.solve(&rhs) else {
+            let row = kept[lu.u().diagonal().iamin()];
+            return Err(ContactError::Singular { row });
+        };
+        let forces = contact_forces(model, rows, kept, &multipliers);
+        let flipped = flip_pulling(model, &forces, &mut pressing);
+        if !flipped {
+            let accelerations = free + moved * multipliers;
+            return Ok(ContactSolution {
+                accelerations,
+                forces,
+            });
+        }
+    }
+    Err(ContactError::Singular { row: kept[0] })
+}
+
+/// H: the kept rows, where a sliding contact's normal row also carries the friction its normal
+/// force causes, −f σ (sₓ Gₓ + s_y G_y), with σ = `pressing` (±1) the normal force's sign.
+fn force_rows(model: &Model, rows: &ContactRows, kept: &[usize], pressing: &[f64]) -> DMatrix<f64> {
+    let mut h = rows.jacobian.select_rows(kept);
+    for (i, &row) in kept.iter().enumerate() {
+        let k = row / 3;
+        let Some(friction) = model.contacts[k].friction else {
+            continue;
+        };
+        let [sx, sy] = friction_direction(rows, k);
+        let tangential = rows.jacobian.row(3 * k) * sx + rows.jacobian.row(3 * k + 1) * sy;
+        let mut force_row = h.row_mut(i);
+        force_row -= friction * pressing[k] * tangential;
+    }
+    h
+}
+
+/// Each contact's force on its round body, in the plane's axes, from the kept rows'
+/// multipliers.
+fn contact_forces(
+    model: &Model,
+    rows: &ContactRows,
+    kept: &[usize],
+    multipliers: &DVector<f64>,
+) -> Vec<Vector3<f64>> {
+    let mut forces = vec![Vector3::zeros(); model.contacts.len()];
+    for (&row, &lambda) in kept.iter().zip(multipliers.iter()) {
+        forces[row / 3][row % 3] = lambda;
+    }
+    for (k, contact) in model.contacts.iter().enumerate() {
+        if let Some(friction) = contact.friction {
+            let [sx, sy] = friction_direction(rows, k);
+            let normal = forces[k].z.abs();
+            forces[k].x = -friction * normal * sx;
+            forces[k].y = -friction * normal * sy;
+        }
+    }
+    forces
+}
+
+/// Flips the assumed sign of every sliding contact's normal force that came out the other
+/// way; whether any did.
+fn flip_pulling(model: &Model, forces: &[Vector3<f64>], pressing: &mut [f64]) -> bool {
+    let mut flipped = false;
+    for (k, contact) in model.contacts.iter().enumerate() {
+        if contact.friction.is_some() && forces[k].z * pressing[k] < 0.0 {
+            pressing[k] = -pressing[k];
+            flipped = true;
+        }
+    }
+    flipped
+}
+
+/// The smallest change of the velocities in the metric of M that zeroes the kept rows:
+/// v − M⁻¹Gᵀ(G M⁻¹ Gᵀ)⁻¹ G v.
+pub fn project_velocities(mass: &DMatrix<f64>, rows: &ContactRows, kept: &[usize], v: &mut [f64]) {
+    let Some(cholesky) = mass.clone().cholesky() else {
+        return;
+    };
+    let g = rows.jacobian.select_rows(kept);
+    let moved = cholesky.solve(&g.transpose());
+    let Some(lambda) = (&g * &moved).lu().solve(&rows.velocity.select_rows(kept)) else {
+        return;
+    };
+    let correction = moved * lambda;
+    v.iter_mut()
+        .zip(correction.iter())
+        .for_each(|(x, c)| *x -= c);
+}
+
+/// The minimum-M-norm step of the velocities that closes the gaps of the normal rows `normal`
+/// to first order: −M⁻¹Gₙᵀ(Gₙ M⁻¹ Gₙᵀ)⁻¹ g.
+pub fn gap_step(mass: &DMatrix<f64>, rows: &ContactRows, normal: &[usize]) -> Option<DVector<f64>> {
+    let cholesky = mass.clone().cholesky()?;
+    let g = rows.jacobian.select_rows(normal);
+    let moved = cholesky.solve(&g.transpose());
+    let gaps = DVector::from_iterator(normal.len(), normal.iter().map(|r| rows.gap[r / 3]));
+    let lambda = (&g * &moved).lu().solve(&gaps)?;
+    Some(-(moved * lambda))
+}
+
+/// The contact forces as forces on the bodies (in their frames, about their origins): each
+/// contact's force on its round body at the contact point, its opposite on the plane's body.
+pub fn contact_body_forces(
+    model: &Model,
+    data: &Data,
+    rows: &ContactRows,
+    forces: &[Vector3<f64>],
+) -> Vec<spatial::Force> {
+    let mut on_bodies = vec![spatial::Force::zeros(); model.body_count() + 1];
+    for (k, contact) in model.contacts.iter().enumerate() {
+        let force = rows.axes[k] * forces[k];
+        let at_point = spatial::twist(Vector3::zeros(), force);
+        let about_origin =
+            spatial::force_to_parent(&spatial::translation(rows.points[k]), &at_point);
+        for (body, sign) in [(contact.round_body, 1.0), (contact.plane_body, -1.0)] {
+            if body != 0 {
+                on_bodies[body] += sign * spatial::force_to_child(&data.world[body], &about_origin);
+            }
+        }
+    }
+    on_bodies
+}
+
+/// The power of the sliding contacts' friction forces on the slip velocities (≤ 0): the rate
+/// of the work the energy balance counts.
+pub fn friction_power(model: &Model, rows: &ContactRows, forces: &[Vector3<f64>]) -> f64 {
+    (model.contacts.iter().enumerate())
+        .filter(|(_, c)| c.friction.is_some())
+        .map(|(k, _)| forces[k].x * rows.velocity[3 * k] + forces[k].y * rows.velocity[3 * k + 1])
+        .sum()
+}

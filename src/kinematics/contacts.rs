@@ -1,0 +1,218 @@
+//! The contacts of a mechanism (`join plane and ball with rolling(r)`, `sliding(r, f)`), their
+//! numbers evaluated, and the degrees of freedom they leave a tree: their rows in position and
+//! in velocity. The rows for the equations of motion and their solve are in
+//! `dynamics::contacts`.
+
+use crate::diag::Diagnostic;
+use crate::elab::mechanism::Mechanism;
+use crate::elab::value::BodyRef;
+use nalgebra::DMatrix;
+use serde::Serialize;
+
+use super::eval::eval;
+use super::forward::Configuration;
+use super::mobility::rank;
+use super::model::{constant_pose, KinematicModel};
+use crate::spatial::{self, Pose};
+
+/// The regularisation velocity ε of Coulomb friction, in m/s: the friction force is
+/// f|λₙ| w/√(|w|² + ε²). At a slip speed |w| it is short of f|λₙ| by the fraction
+/// 1 − |w|/√(|w|² + ε²) ≈ ε²/(2|w|²) (5e-13 at 1 m/s); while the tangential force needed
+/// to stick is a fraction ρ < 1 of f|λₙ|, the body creeps at ε ρ/√(1 − ρ²).
+pub const SLIP_REGULARISATION: f64 = 1e-6;
+
+/// A contact of the model, numbers evaluated.
+#[derive(Clone, Debug)]
+pub struct ContactModel {
+    /// `as name`, or `contact1`, … in declaration order.
+    pub name: String,
+    /// The plane's body and its frame on it: origin on the plane, z along the normal.
+    pub plane_body: usize,
+    pub plane: Pose,
+    /// The round body and its centre frame on it.
+    pub round_body: usize,
+    pub centre: Pose,
+    pub radius: f64,
+    /// `None` for rolling without slipping; the Coulomb coefficient of a sliding contact.
+    pub friction: Option<f64>,
+}
+
+impl ContactModel {
+    /// The candidate rows of this contact among its three (x, y tangential, z normal).
+    pub fn rows(&self) -> &'static [usize] {
+        match self.friction {
+            None => &[0, 1, 2],
+            Some(_) => &[2],
+        }
+    }
+}
+
+/// The contacts of `mechanism`, evaluated; errors for a radius that is not positive (E0820), a
+/// friction coefficient that is negative (E0821), a body that no joint places (E0822) and a
+/// contact of a body with itself (E0823).
+pub fn contact_models(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+    errors: &mut Vec<Diagnostic>,
+) -> Vec<ContactModel> {
+    let mut contacts = Vec::new();
+    for (index, contact) in mechanism.contacts.iter().enumerate() {
+        let name = mechanism.contact_name(index);
+        let Some(law) = mechanism.link(contact.link).contact.as_ref() else {
+            continue;
+        };
+        let number = |body: BodyRef| match body {
+            BodyRef::Earth => Some(0),
+            BodyRef::Body(id) => kinematics.topology.number_of.get(&id).copied(),
+        };
+        let (Some(plane_body), Some(round_body)) =
+            (number(contact.first.body), number(contact.second.body))
+        else {
+            errors.push(
+                Diagnostic::error(
+                    "E0822",
+                    format!("a body of the contact `{name}` is not part of the mechanism"),
+                )
+                .primary(contact.span, "this contact")
+                .help("join both bodies to the mechanism with joints (a `free` or `planar` joint for the rolling body): a contact constrains their motion but does not place them"),
+            );
+            continue;
+        };
+        if plane_body == round_body {
+            errors.push(
+                Diagnostic::error(
+                    "E0823",
+                    format!("the contact `{name}` joins a body with itself"),
+                )
+                .primary(contact.span, "both frames are on the same body"),
+            );
+            continue;
+        }
+        let unknowns = &kinematics.unknowns;
+        let radius = eval(&law.radius, unknowns).ok();
+        let friction = law.friction.as_ref().map(|f| eval(f, unknowns).ok());
+        let (Some(radius), Ok(plane), Ok(centre)) = (
+            radius,
+            constant_pose(&contact.first.displacement, unknowns),
+            constant_pose(&contact.second.displacement, unknowns),
+        ) else {
+            errors.push(
+                Diagnostic::error("E0820", format!("the contact `{name}` needs numbers"))
+                    .primary(law.span, "its radius, or a frame it joins, has no value")
+                    .help("give the radius a number (`rolling(0.1)`), or its unknowns values with `given`"),
+            );
+            continue;
+        };
+        if !(radius > 0.0 && radius.is_finite()) {
+            errors.push(
+                Diagnostic::error(
+                    "E0820",
+                    format!("the radius of the contact `{name}` is {radius}"),
+                )
+                .primary(law.span, "the radius must be a positive number"),
+            );
+            continue;
+        }
+        let friction = match friction {
+            Some(Some(f)) if f >= 0.0 && f.is_finite() => Some(f),
+            None => None,
+            Some(value) => {
+                let shown = value.map_or("unknown".to_string(), |f| f.to_string());
+                errors.push(
+                    Diagnostic::error(
+                        "E0821",
+                        format!("the friction coefficient of the contact `{name}` is {shown}"),
+                    )
+                    .primary(
+                        law.span,
+                        "Coulomb's coefficient must be a number, zero or positive",
+                    ),
+                );
+                continue;
+            }
+        };
+        contacts.push(ContactModel {
+            name,
+            plane_body,
+            plane,
+            round_body,
+            centre,
+            radius,
+            friction,
+        });
+    }
+    contacts
+}
+
+/// The degrees of freedom a tree keeps under its contacts: the normal rows constrain positions
+/// (holonomic), the rolling rows velocities only (non-holonomic).
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactMobility {
+    pub contacts: usize,
+    /// Independent normal rows: the holonomic constraints.
+    pub holonomic_rank: usize,
+    /// Independent rows of every kind (normal and rolling).
+    pub velocity_rank: usize,
+    /// tree dof − holonomic rank: the dimension of the configurations the contacts allow.
+    pub position_dof: usize,
+    /// tree dof − velocity rank: the independent velocities at a configuration.
+    pub velocity_dof: usize,
+}
+
+/// The contacts' rows over the coordinates' rates at `configuration`: the holonomic (normal)
+/// rows, then all the candidate rows (`ContactModel::rows`).
+fn contact_jacobians(
+    contacts: &[ContactModel],
+    configuration: &Configuration,
+    columns: usize,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let mut normal = Vec::new();
+    let mut all = Vec::new();
+    for contact in contacts {
+        let plane = configuration.poses[contact.plane_body] * contact.plane;
+        let centre = (configuration.poses[contact.round_body] * contact.centre)
+            .translation
+            .vector;
+        let axes = plane.rotation.to_rotation_matrix().into_inner();
+        let point = centre - contact.radius * axes.column(2);
+        let velocity_at = |body: usize, column: usize| {
+            let twist = spatial::Motion::from_iterator(
+                configuration.jacobians[body].column(column).iter().copied(),
+            );
+            spatial::linear(&spatial::shifted(&point, &twist))
+        };
+        for &row in contact.rows() {
+            let axis = axes.column(row).into_owned();
+            let entries: Vec<f64> = (0..columns)
+                .map(|c| {
+                    axis.dot(
+                        &(velocity_at(contact.round_body, c) - velocity_at(contact.plane_body, c)),
+                    )
+                })
+                .collect();
+            if row == 2 {
+                normal.push(entries.clone());
+            }
+            all.push(entries);
+        }
+    }
+    let matrix = |rows: &[Vec<f64>]| DMatrix::from_fn(rows.len(), columns, |r, c| rows[r][c]);
+    (matrix(&normal), matrix(&all))
+}
+
+/// The degrees of freedom of a tree of `tree_dof` under `contacts`, at `configuration`.
+pub fn contact_mobility(
+    contacts: &[ContactModel],
+    configuration: &Configuration,
+    tree_dof: usize,
+) -> ContactMobility {
+    let (normal, all) = contact_jacobians(contacts, configuration, tree_dof);
+    let (holonomic_rank, velocity_rank) = (rank(&normal), rank(&all));
+    ContactMobility {
+        contacts: contacts.len(),
+        holonomic_rank,
+        velocity_rank,
+        position_dof: tree_dof.saturating_sub(holonomic_rank),
+        velocity_dof: tree_dof.saturating_sub(velocity_rank),
+    }
+}
