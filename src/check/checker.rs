@@ -68,6 +68,8 @@ pub struct Checker<'w> {
     pub(super) memo: FxHashMap<(DefId, Vec<Ty>), Ty>,
     pub(super) modules_in_progress: Vec<ModuleId>,
     pub(super) simulate_seen: Option<Span>,
+    /// The outputs declared so far, by scope and name: a name is one group of columns.
+    pub(super) outputs: std::collections::HashMap<(ScopeId, crate::syntax::ast::Name), Span>,
 }
 
 pub(super) const MAX_INSTANTIATION_DEPTH: usize = 64;

@@ -21,7 +21,7 @@ pub fn to_csv(simulation: &Simulation) -> String {
     let mut out = header(
         &simulation.coordinate_names,
         &simulation.reaction_names,
-        &[],
+        &simulation.output_names,
     );
     for sample in &simulation.samples {
         out += &row(sample, &[]);
@@ -31,7 +31,8 @@ pub fn to_csv(simulation: &Simulation) -> String {
 }
 
 /// The header line: time, the declared coordinates, their rates, the energies, the
-/// reactions' components and the `extra` columns (the frames' states).
+/// reactions' components and the `extra` columns (the program's outputs, then the frames'
+/// states of `--output-frame`).
 pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[String]) -> String {
     let mut out = String::from("time");
     for name in coordinate_names {
@@ -53,7 +54,7 @@ pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[S
     out
 }
 
-/// One sample's line, ending with the `extra` values.
+/// One sample's line, ending with its outputs and the `extra` values.
 pub fn row(sample: &Sample, extra: &[f64]) -> String {
     let mut out = format!("{:e}", sample.time);
     for value in sample.coordinates.iter().chain(&sample.rates) {
@@ -63,7 +64,7 @@ pub fn row(sample: &Sample, extra: &[f64]) -> String {
         .potential_energy
         .map_or(String::new(), |p| format!("{p:e}"));
     let _ = write!(out, ",{:e},{potential}", sample.kinetic_energy);
-    for value in sample.reactions.iter().chain(extra) {
+    for value in sample.reactions.iter().chain(&sample.outputs).chain(extra) {
         let _ = write!(out, ",{value:e}");
     }
     out.push('\n');
