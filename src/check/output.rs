@@ -49,7 +49,7 @@ impl<'w> Checker<'w> {
 fn type_error(output: &OutputDecl, ty: Ty) -> Option<Diagnostic> {
     let help = match ty.numeric() {
         Ty::Scalar | Ty::Vector | Ty::Matrix | Ty::Frame | Ty::Body | Ty::Error => return None,
-        Ty::Rotation => "a rotation of the program is constant; the orientation of a frame at each output is `orientation(F)`, a matrix".to_string(),
+        Ty::Rotation => "a rotation is not written as numbers: output the orientation of a frame, `orientation(F)`, a matrix (nine columns)".to_string(),
         Ty::Displacement => format!(
             "place it on a body to make a frame: `output {} = <displacement> @ <body>;`",
             output.name.name

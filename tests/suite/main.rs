@@ -27,6 +27,7 @@ mod loop_properties;
 mod loops;
 mod lsp;
 mod methods;
+mod outputs;
 mod native;
 mod pinocchio_fixtures;
 mod properties;
