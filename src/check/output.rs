@@ -22,7 +22,10 @@ impl<'w> Checker<'w> {
             self.report(
                 Diagnostic::error(
                     "E0462",
-                    format!("`{}` is a column of every run, not a name for an output", name.name),
+                    format!(
+                        "`{}` is a column of every run, not a name for an output",
+                        name.name
+                    ),
                 )
                 .primary(name.span, "this name is taken by the run's own column")
                 .help(format!(

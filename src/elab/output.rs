@@ -16,7 +16,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let value = match self.expr(&output.value, &mut locals)? {
             Value::Vector(v) => OutputValue::Vector(v),
             Value::Matrix(m) => OutputValue::Matrix(m),
-            frame @ (Value::Frame(_) | Value::Body(_)) => OutputValue::Frame(as_frame(frame, span)?),
+            frame @ (Value::Frame(_) | Value::Body(_)) => {
+                OutputValue::Frame(as_frame(frame, span)?)
+            }
             scalar @ (Value::Scalar(_) | Value::Zero | Value::One) => {
                 OutputValue::Scalar(as_scalar(scalar, span)?)
             }

@@ -276,7 +276,10 @@ pub fn precision(table: &crate::simulate::precision::Table) -> String {
         table.duration, table.output_interval
     );
     // The outputs' column only for a program that declares outputs the reference has.
-    let outputs = table.measurements.iter().any(|m| m.errors.outputs.is_some());
+    let outputs = table
+        .measurements
+        .iter()
+        .any(|m| m.errors.outputs.is_some());
     let (output_head, output_rule) = match outputs {
         true => (" output error |", "---|"),
         false => ("", ""),

@@ -10,8 +10,8 @@ use serde::Serialize;
 
 use super::branch;
 use super::clock::thread_cpu_seconds;
-use super::outputs::Outputs;
 use super::constraints::{ConstraintReport, ReleasedStretch};
+use super::outputs::Outputs;
 use super::prepare::{Integrator, Prepared};
 pub use super::sample::{MomentumDrift, Sample};
 use super::stiffness::{self, StiffnessReport};

@@ -17,11 +17,19 @@ fn prepared_text(text: &str) -> Result<Prepared, Vec<String>> {
         library_dirs: Vec::new(),
         use_environment: false,
     };
-    let compilation = compile_text("program.lsd", text, Some(std::path::Path::new("examples")), &options);
+    let compilation = compile_text(
+        "program.lsd",
+        text,
+        Some(std::path::Path::new("examples")),
+        &options,
+    );
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.expect("elaborates");
-    prepare(&mechanism, &[], &Settings::default())
-        .map_err(|d| d.iter().map(|d| format!("{}: {}", d.code, d.message)).collect())
+    prepare(&mechanism, &[], &Settings::default()).map_err(|d| {
+        d.iter()
+            .map(|d| format!("{}: {}", d.code, d.message))
+            .collect()
+    })
 }
 
 fn output(simulation: &Simulation, name: &str) -> usize {
@@ -42,7 +50,11 @@ fn a_pendulum_tip_is_at_its_closed_form_position_and_velocity() {
     let simulation = pendulum_with(
         "output tip = position(tip) ; output v = velocity(tip) ; output angle = swing.q ;",
     );
-    let (p, v, angle) = (output(&simulation, "tip.x"), output(&simulation, "v.x"), output(&simulation, "angle"));
+    let (p, v, angle) = (
+        output(&simulation, "tip.x"),
+        output(&simulation, "v.x"),
+        output(&simulation, "angle"),
+    );
     assert_eq!(simulation.samples.len(), 101);
     for sample in &simulation.samples {
         let (q, rate) = (sample.coordinates[0], sample.rates[0]);
@@ -51,7 +63,11 @@ fn a_pendulum_tip_is_at_its_closed_form_position_and_velocity() {
         let expected = [0.0, q.sin(), -q.cos(), 0.0, rate * q.cos(), rate * q.sin()];
         let actual = [o[p], o[p + 1], o[p + 2], o[v], o[v + 1], o[v + 2]];
         for (a, e) in actual.iter().zip(expected) {
-            assert!((a - e).abs() < 1e-14, "t = {}: {actual:?} ≠ {expected:?}", sample.time);
+            assert!(
+                (a - e).abs() < 1e-14,
+                "t = {}: {actual:?} ≠ {expected:?}",
+                sample.time
+            );
         }
         assert_eq!(o[angle], q);
     }
@@ -66,7 +82,11 @@ fn an_energy_output_is_the_runs_energy() {
     let e = output(&simulation, "e");
     for sample in &simulation.samples {
         let run = sample.kinetic_energy + sample.potential_energy.expect("conservative");
-        assert!((sample.outputs[e] - run).abs() < 1e-12, "t = {}", sample.time);
+        assert!(
+            (sample.outputs[e] - run).abs() < 1e-12,
+            "t = {}",
+            sample.time
+        );
     }
 }
 
@@ -75,21 +95,40 @@ fn a_frame_output_has_the_columns_and_values_of_output_frame() {
     let program = std::env::temp_dir().join(format!("lsdc-outputs-{}.lsd", std::process::id()));
     let text = example_text("four_bar", &[("duration = 10", "duration = 1")])
         + "output coupler = coupler_point ;\noutput gap = distance(bar1, coupler_point) ;\n";
-    std::fs::write(&program, text)
-        .expect("written");
+    std::fs::write(&program, text).expect("written");
     let path = program.to_str().expect("a path");
     let library = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
-    let (code, csv, stderr) = lsdc(&["simulate", path, "-L", library, "--output-frame", "coupler_point", "--output-frame", "bar1"]);
+    let (code, csv, stderr) = lsdc(&[
+        "simulate",
+        path,
+        "-L",
+        library,
+        "--output-frame",
+        "coupler_point",
+        "--output-frame",
+        "bar1",
+    ]);
     std::fs::remove_file(&program).ok();
     assert_eq!(code, 0, "{stderr}");
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
-    let column = |name: &str| header.iter().position(|c| *c == name).unwrap_or_else(|| panic!("no {name}"));
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|c| *c == name)
+            .unwrap_or_else(|| panic!("no {name}"))
+    };
     let mut rows = 0;
     for line in lines.filter(|l| !l.starts_with('#')) {
-        let row: Vec<f64> = line.split(',').map(|c| c.parse().expect("a number")).collect();
+        let row: Vec<f64> = line
+            .split(',')
+            .map(|c| c.parse().expect("a number"))
+            .collect();
         for part in lsdc::kinematics::frames::STATE_COMPONENTS {
-            let (ours, theirs) = (row[column(&format!("coupler.{part}"))], row[column(&format!("coupler_point.{part}"))]);
+            let (ours, theirs) = (
+                row[column(&format!("coupler.{part}"))],
+                row[column(&format!("coupler_point.{part}"))],
+            );
             assert!((ours - theirs).abs() < 1e-12, "{part}: {ours} ≠ {theirs}");
         }
         let difference: f64 = ["x", "y", "z"]
@@ -119,7 +158,10 @@ simulate duration = 0.5, output = 0.25 end ;";
     let simulation = simulated(&prepared_text(text).expect("prepares"));
     let names = &simulation.output_names;
     assert_eq!(names[..3], ["leg[1]:tip.x", "leg[1]:tip.y", "leg[1]:tip.z"]);
-    assert_eq!(names[3..6], ["leg[2]:tip.x", "leg[2]:tip.y", "leg[2]:tip.z"]);
+    assert_eq!(
+        names[3..6],
+        ["leg[2]:tip.x", "leg[2]:tip.y", "leg[2]:tip.z"]
+    );
     let last = simulation.samples.last().expect("samples");
     for (k, i) in [(0, 1.0), (3, 2.0)] {
         // Free turns at rate i: the tip at angle i t on a unit circle about (0, i).
@@ -132,14 +174,22 @@ simulate duration = 0.5, output = 0.25 end ;";
 
 #[test]
 fn an_output_needs_its_values_and_reads_no_second_derivative() {
-    let errors = prepared_text("import joints ; let k = ?s ; let b = body mass = 1, iframe = 0, inertia = [1, 1, 1] end ;
+    let errors = prepared_text(
+        "import joints ; let k = ?s ; let b = body mass = 1, iframe = 0, inertia = [1, 1, 1] end ;
         join earth and b with revolute([0, 0, 1]) as hinge ;
         output spring = 0.5 * k * hinge.q ^ 2 ;
-        output accel = hinge.q'' ;")
+        output accel = hinge.q'' ;",
+    )
     .err()
     .expect("refused");
-    assert!(errors[0].starts_with("E0840: the output `spring` needs a value for `k`"), "{errors:?}");
-    assert!(errors[1].starts_with("E0842: the output `accel` cannot be computed"), "{errors:?}");
+    assert!(
+        errors[0].starts_with("E0840: the output `spring` needs a value for `k`"),
+        "{errors:?}"
+    );
+    assert!(
+        errors[1].starts_with("E0842: the output `accel` cannot be computed"),
+        "{errors:?}"
+    );
 }
 
 #[test]
@@ -155,7 +205,10 @@ fn lsdc_test_compares_outputs_and_precision_measures_them() {
     let (code, _, stderr) = lsdc(&["test", "--update", dir]);
     assert_eq!(code, 0, "{stderr}");
     let reference = std::fs::read_to_string(folder.join("p.csv")).expect("recorded");
-    let header = reference.lines().find(|l| l.starts_with("time")).expect("a header");
+    let header = reference
+        .lines()
+        .find(|l| l.starts_with("time"))
+        .expect("a header");
     assert_eq!(header, "time,swing.q,tip.y");
     let (code, out, _) = lsdc(&["test", dir]);
     assert_eq!(code, 0, "{out}");
@@ -176,12 +229,54 @@ fn lsdc_test_compares_outputs_and_precision_measures_them() {
     let (code, out, _) = lsdc(&["test", dir]);
     assert_ne!(code, 0);
     assert!(out.contains("tip.y"), "{out}");
-    let (code, table, stderr) = lsdc(&["precision", &format!("{dir}/p.lsd"), "--integrators", "dopri5", "--tolerances", "1e-4,1e-8", "--repeats", "1", "--format", "json"]);
+    let (code, table, stderr) = lsdc(&[
+        "precision",
+        &format!("{dir}/p.lsd"),
+        "--integrators",
+        "dopri5",
+        "--tolerances",
+        "1e-4,1e-8",
+        "--repeats",
+        "1",
+        "--format",
+        "json",
+    ]);
     std::fs::remove_dir_all(&folder).ok();
     assert_eq!(code, 0, "{stderr}");
     let table: serde_json::Value = serde_json::from_str(&table).expect("json");
-    let errors: Vec<f64> = (table["measurements"].as_array().expect("measurements").iter())
-        .map(|m| m["errors"]["outputs"].as_f64().expect("an output error"))
-        .collect();
-    assert!(errors[1] < errors[0] / 100.0 && errors[1] > 0.0, "{errors:?}");
+    let errors: Vec<f64> = (table["measurements"]
+        .as_array()
+        .expect("measurements")
+        .iter())
+    .map(|m| m["errors"]["outputs"].as_f64().expect("an output error"))
+    .collect();
+    assert!(
+        errors[1] < errors[0] / 100.0 && errors[1] > 0.0,
+        "{errors:?}"
+    );
+}
+
+#[test]
+fn the_viewer_plots_every_output_column() {
+    let text = example_text("pendulum", &[])
+        + "output tip = position([0, 0, -1] ++ 1 @ rod) ; output angle = swing.q ;";
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let mechanism = compile_text("pendulum.lsd", &text, None, &options)
+        .mechanism
+        .expect("elaborates");
+    let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepares");
+    let mut viewer = lsdc::view::Viewer::new(mechanism, prepared, "pendulum").expect("a scene");
+    let animation = viewer.simulate(Some(0.5)).expect("runs");
+    let series = |name: &str| {
+        (animation.series.iter())
+            .find(|s| s.name == name)
+            .unwrap_or_else(|| panic!("no series {name}"))
+    };
+    assert_eq!(series("angle").values, series("swing.q").values);
+    for (y, q) in series("tip.y").values.iter().zip(&series("swing.q").values) {
+        assert!((y - q.sin()).abs() < 1e-14);
+    }
 }
