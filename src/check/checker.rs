@@ -70,6 +70,13 @@ pub struct Checker<'w> {
     pub(super) simulate_seen: Option<Span>,
     /// The outputs declared so far, by scope and name: a name is one group of columns.
     pub(super) outputs: std::collections::HashMap<(ScopeId, crate::syntax::ast::Name), Span>,
+    /// How many more unknown names get a did-you-mean search (see [`MAX_SUGGESTIONS`]).
+    pub(super) suggestions_left: std::cell::Cell<usize>,
 }
 
 pub(super) const MAX_INSTANTIATION_DEPTH: usize = 64;
+
+/// Unknown names that get a did-you-mean suggestion in one compilation: each search compares
+/// the name with every visible one, so that without a bound a file of n misspelt names costs
+/// n² comparisons; the first ones are those a reader fixes first.
+pub(super) const MAX_SUGGESTIONS: usize = 100;

@@ -239,9 +239,13 @@ fn lowering_error(mechanism: &Mechanism, output: &NamedOutput, error: EvalError)
             .secondary(mechanism.unknowns[id.0 as usize].span, "no value given")
             .help("give it with `given` in the program or `--set NAME=VALUE`")
         }
-        EvalError::NotGeometric(what) => Diagnostic::error(
+        EvalError::NotGeometric(_) | EvalError::NotFinite => Diagnostic::error(
             "E0842",
-            format!("the output `{}` cannot be computed: it depends on {what}", output.name),
+            format!(
+                "the output `{}` cannot be computed: {}",
+                output.name,
+                crate::kinematics::eval::describe(&error, mechanism)
+            ),
         )
         .primary(output.span, "this output")
         .help("an output is an expression of the coordinates, rates, time and frames' state (`position`, `velocity`, …), without second derivatives"),
