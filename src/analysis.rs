@@ -15,8 +15,8 @@ use crate::kinematics::joint;
 use crate::kinematics::joint::{analyse, JointAnalysis};
 use crate::kinematics::mobility::{mobility, Mobility};
 use crate::kinematics::model::{self, KinematicModel};
-use crate::kinematics::unknowns::given_values;
-use crate::topology::{self, Topology};
+use crate::kinematics::unknowns::{given_values, unknown_values, Override};
+use crate::topology::{self, notation, Topology};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct LinkReport {
@@ -221,7 +221,25 @@ pub fn assembled_model(
     topology: Topology,
     options: &AssemblyOptions,
 ) -> Result<(KinematicModel, AssemblyReport, Vec<Diagnostic>), Vec<Diagnostic>> {
-    let model = model::build(mechanism, topology, given_values(mechanism)?)?;
+    assembled_model_with(mechanism, topology, options, &[])
+}
+
+/// `assembled_model` with values of unknowns from the command line (`--set`) over `given`.
+pub fn assembled_model_with(
+    mechanism: &Mechanism,
+    topology: Topology,
+    options: &AssemblyOptions,
+    overrides: &[Override],
+) -> Result<(KinematicModel, AssemblyReport, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let values = match overrides {
+        [] => given_values(mechanism)?,
+        _ => unknown_values(
+            mechanism,
+            &notation::unknown_names(mechanism, &topology),
+            overrides,
+        )?,
+    };
+    let model = model::build(mechanism, topology, values)?;
     let mut errors = Vec::new();
     contact_models(mechanism, &model, &mut errors);
     if !errors.is_empty() {

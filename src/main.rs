@@ -898,7 +898,10 @@ fn run_and_write(
     let mut csv = (args.format == SampleFormat::Csv).then(|| {
         let names = &prepared.coordinate_names;
         let reactions = lsdc::simulate::run::reaction_names_of(prepared);
-        lsdc::output::csv::CsvWriter::new(out, names, &reactions, &column_names(frames))
+        let extra: Vec<String> = (prepared.outputs.names.iter().cloned())
+            .chain(column_names(frames))
+            .collect();
+        lsdc::output::csv::CsvWriter::new(out, names, &reactions, &extra)
     });
     let frame_values = |sample: &Sample| -> Vec<f64> {
         let found = states(

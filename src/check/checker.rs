@@ -68,6 +68,8 @@ pub struct Checker<'w> {
     pub(super) memo: FxHashMap<(DefId, Vec<Ty>), Ty>,
     pub(super) modules_in_progress: Vec<ModuleId>,
     pub(super) simulate_seen: Option<Span>,
+    /// The outputs declared so far, by scope and name: a name is one group of columns.
+    pub(super) outputs: std::collections::HashMap<(ScopeId, crate::syntax::ast::Name), Span>,
     /// How many more unknown names get a did-you-mean search (see [`MAX_SUGGESTIONS`]).
     pub(super) suggestions_left: std::cell::Cell<usize>,
 }

@@ -6,6 +6,7 @@
 mod calls;
 mod checker;
 mod expr;
+mod output;
 pub mod scope;
 mod stdlib_hint;
 pub mod types;
@@ -42,6 +43,7 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
         memo: FxHashMap::default(),
         modules_in_progress: Vec::new(),
         simulate_seen: None,
+        outputs: HashMap::new(),
         suggestions_left: std::cell::Cell::new(checker::MAX_SUGGESTIONS),
     };
     for &root in &workspace.roots {
@@ -170,6 +172,7 @@ impl<'w> Checker<'w> {
                 }
             }
             DeclKind::Simulate(fields) => self.simulate(fields, decl.span, scope),
+            DeclKind::Output(output) => self.output(output, scope),
             DeclKind::Apply(apply) => {
                 let ApplyDecl {
                     effort,

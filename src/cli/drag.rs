@@ -6,8 +6,8 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 
 use crate::{
-    compile_one, json, report_diagnostics, usage_error, write_output, Format, LibraryArgs,
-    SampleFormat,
+    compile_one, json, parse_sets, report_diagnostics, usage_error, write_output, Format,
+    LibraryArgs, SampleFormat,
 };
 use lsdc::drag::{follow_exact, follow_penalty, parse_targets, DragRun, PenaltyOptions};
 use lsdc::kinematics::assembly::AssemblyOptions;
@@ -29,6 +29,9 @@ pub struct DragArgs {
     file: PathBuf,
     #[command(flatten)]
     libraries: LibraryArgs,
+    /// Value of an unknown, as for `simulate` (over the program's `given`). Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    sets: Vec<String>,
     /// The frame whose origin is dragged: a frame the program names, or a body.
     #[arg(long, value_name = "FRAME")]
     point: String,
@@ -67,6 +70,10 @@ pub fn drag(args: &DragArgs) -> ExitCode {
             "the stiffnesses, `--reach-tolerance` and `--iterations` must be positive",
         );
     }
+    let overrides = match parse_sets(&args.sets, Format::Text) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
     let compilation = match compile_one(&args.file, &args.libraries.options(), Format::Text) {
         Ok(c) => c,
         Err(code) => return code,
@@ -75,7 +82,8 @@ pub fn drag(args: &DragArgs) -> ExitCode {
         return ExitCode::from(1);
     };
     let assembled = lsdc::topology::build(mechanism).and_then(|topology| {
-        lsdc::analysis::assembled_model(mechanism, topology, &AssemblyOptions::default())
+        let options = AssemblyOptions::default();
+        lsdc::analysis::assembled_model_with(mechanism, topology, &options, &overrides)
     });
     let (model, report) = match assembled {
         Ok((model, report, warnings)) => {

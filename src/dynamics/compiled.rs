@@ -194,6 +194,13 @@ impl<'a> TapeBuilder<'a> {
         Ok(self.roots.len() - 1)
     }
 
+    /// Adds a scalar's root; returns its index among the roots.
+    pub fn scalar(&mut self, s: &SExpr, link: Link) -> Result<usize, EvalError> {
+        let id = self.lower_in(s, link)?;
+        self.roots.push(id);
+        Ok(self.roots.len() - 1)
+    }
+
     /// Adds the three components of a vector; returns their indices among the tape's values.
     pub fn vector(&mut self, v: &Vector, link: Link) -> Result<[usize; 3], EvalError> {
         let lowered = self.lower_vector(v, link)?;

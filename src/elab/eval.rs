@@ -176,6 +176,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
+            DeclKind::Output(output) => self.output(output),
             DeclKind::Simulate(fields) => {
                 let mut scenario = crate::elab::mechanism::Scenario {
                     span: Some(decl.span),
@@ -365,7 +366,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
 
     /// A name declared in `instance`, as messages and outputs show it:
     /// `P[3]:crank` in an array of packages, `crank` elsewhere.
-    fn qualified_name(&self, name: &Name, instance: InstanceId) -> Name {
+    pub(super) fn qualified_name(&self, name: &Name, instance: InstanceId) -> Name {
         match instance {
             ROOT => name.clone(),
             _ => Name::from(format!("{}{name}", self.instances.prefix(instance))),

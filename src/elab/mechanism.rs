@@ -208,6 +208,29 @@ pub struct Mechanism {
     pub scenario: Option<Scenario>,
     /// The frames the main program names, in declaration order.
     pub frames: Vec<NamedFrame>,
+    /// The `output` declarations, in the order they were evaluated.
+    pub outputs: Vec<NamedOutput>,
+}
+
+/// What an `output` declaration writes at each output of a run.
+#[derive(Clone, Debug)]
+pub enum OutputValue {
+    /// One column: the output's name.
+    Scalar(Scalar),
+    /// Three columns, `name.x`, `name.y`, `name.z`.
+    Vector(Vector),
+    /// Nine columns by rows, `name.xx`, `name.xy`, … `name.zz`.
+    Matrix(Box<Matrix>),
+    /// The frame's state, the columns of `--output-frame`: `name.x` … `name.wz`.
+    Frame(Frame),
+}
+
+/// `output name = value;`, its name qualified by its instance (`leg[2]:tip`).
+#[derive(Clone, Debug)]
+pub struct NamedOutput {
+    pub name: Name,
+    pub value: OutputValue,
+    pub span: Span,
 }
 
 /// The `simulate` declaration: numeric settings by field name, and the integrator's name.

@@ -10,6 +10,7 @@ mod fields;
 mod instances;
 pub mod mechanism;
 mod operations;
+mod output;
 mod own_join;
 pub mod value;
 

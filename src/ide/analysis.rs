@@ -352,6 +352,7 @@ impl Builder<'_, '_> {
                     }
                 }
                 DeclKind::Simulate(fields) => self.fields(fields, &mut locals),
+                DeclKind::Output(output) => self.expr(&output.value, &mut locals),
                 DeclKind::Apply(apply) => {
                     self.expr(&apply.effort, &mut locals);
                     for target in apply.target.iter().chain(&apply.reaction) {

@@ -21,7 +21,7 @@ pub fn to_csv(simulation: &Simulation) -> String {
     let mut out = header(
         &simulation.coordinate_names,
         &simulation.reaction_names,
-        &[],
+        &simulation.output_names,
     );
     for sample in &simulation.samples {
         out += &row(sample, &[]);
@@ -31,7 +31,8 @@ pub fn to_csv(simulation: &Simulation) -> String {
 }
 
 /// The header line: time, the declared coordinates, their rates, the energies, the
-/// reactions' components and the `extra` columns (the frames' states).
+/// reactions' components and the `extra` columns (the program's outputs, then the frames'
+/// states of `--output-frame`).
 pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[String]) -> String {
     let mut out = String::from("time");
     for name in coordinate_names {
@@ -53,14 +54,14 @@ pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[S
     out
 }
 
-/// One sample's line, ending with the `extra` values.
+/// One sample's line, ending with its outputs and the `extra` values.
 pub fn row(sample: &Sample, extra: &[f64]) -> String {
     let mut out = exponent(sample.time);
     let values = (sample.coordinates.iter().chain(&sample.rates))
         .chain([&sample.kinetic_energy])
         .map(|&x| Some(x))
         .chain([sample.potential_energy])
-        .chain(sample.reactions.iter().chain(extra).map(|&x| Some(x)));
+        .chain((sample.reactions.iter().chain(&sample.outputs).chain(extra)).map(|&x| Some(x)));
     for value in values {
         out.push(',');
         out += &value.map_or(String::new(), exponent);

@@ -292,12 +292,25 @@ pub fn precision(table: &crate::simulate::precision::Table) -> String {
         "{} s, outputs every {} s; reference: {reference}\n\n",
         table.duration, table.output_interval
     );
-    out += "| method | setting | position error | velocity error | closure | energy drift | steps | rejected | evaluations | CPU min (ms) | CPU median (ms) | outcome |\n";
-    out += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    // The outputs' column only for a program that declares outputs the reference has.
+    let outputs = table
+        .measurements
+        .iter()
+        .any(|m| m.errors.outputs.is_some());
+    let (output_head, output_rule) = match outputs {
+        true => (" output error |", "---|"),
+        false => ("", ""),
+    };
+    out += &format!("| method | setting | position error | velocity error |{output_head} closure | energy drift | steps | rejected | evaluations | CPU min (ms) | CPU median (ms) | outcome |\n");
+    out += &format!("|---|---|---|---|{output_rule}---|---|---|---|---|---|---|---|\n");
     let optional = |value: Option<f64>| value.map_or("–".to_string(), |v| format!("{v:.1e}"));
     for m in &table.measurements {
+        let output_cell = match outputs {
+            true => format!(" {} |", optional(m.errors.outputs)),
+            false => String::new(),
+        };
         out += &format!(
-            "| {} | {} | {:.1e} | {:.1e} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {} |\n",
+            "| {} | {} | {:.1e} | {:.1e} |{output_cell} {} | {} | {} | {} | {} | {:.3} | {:.3} | {} |\n",
             m.integrator,
             m.setting,
             m.errors.position,

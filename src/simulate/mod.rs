@@ -9,6 +9,7 @@ pub mod consistent;
 pub mod constraints;
 pub mod lie_group;
 pub mod native;
+pub mod outputs;
 pub mod precision;
 pub mod prepare;
 pub mod run;

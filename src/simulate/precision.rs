@@ -5,7 +5,8 @@
 //!
 //! Errors (`docs/commands.md`, *precision*): the largest absolute difference from the reference,
 //! over the outputs the reference has a row for, of the declared coordinates (positions, in
-//! metres or radians) and of their rates (velocities), each over the columns the reference has.
+//! metres or radians) and of their rates (velocities), each over the columns the reference has;
+//! and of the program's outputs (`output` declarations) whose columns the reference has.
 
 use std::fmt;
 
@@ -168,15 +169,14 @@ impl Reference {
             .iter()
             .cloned()
             .chain(names.iter().map(|n| format!("{n}'")))
+            .chain(simulation.output_names.iter().cloned())
             .collect();
         let rows = simulation
             .samples
             .iter()
             .map(|s| {
-                (
-                    s.time,
-                    s.coordinates.iter().chain(&s.rates).copied().collect(),
-                )
+                let values = s.coordinates.iter().chain(&s.rates).chain(&s.outputs);
+                (s.time, values.copied().collect())
             })
             .collect();
         Reference {
@@ -251,6 +251,10 @@ pub struct Errors {
     pub position: f64,
     /// Largest |q' − q'_ref|.
     pub velocity: f64,
+    /// Largest |o − o_ref| over the program's outputs the reference has (absolute, in each
+    /// output's own unit); `None` when it has none of them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outputs: Option<f64>,
     /// How many outputs had a reference row.
     pub compared_outputs: usize,
 }
@@ -258,10 +262,16 @@ pub struct Errors {
 /// Compares a simulation's outputs with the reference where it has rows and columns.
 pub fn errors(simulation: &Simulation, reference: &Reference) -> Result<Errors, ReferenceError> {
     let columns = reference.columns_of(&simulation.coordinate_names);
-    if columns.iter().all(|c| *c == (None, None)) {
+    let find = |name: &String| reference.columns.iter().position(|c| c == name);
+    let outputs: Vec<Option<usize>> = simulation.output_names.iter().map(find).collect();
+    let has_outputs = outputs.iter().any(Option::is_some);
+    if columns.iter().all(|c| *c == (None, None)) && !has_outputs {
         return Err(ReferenceError::NoCommonColumn);
     }
-    let mut errors = Errors::default();
+    let mut errors = Errors {
+        outputs: has_outputs.then_some(0.0),
+        ..Errors::default()
+    };
     for sample in &simulation.samples {
         let Some(row) = reference.row_at(sample.time) else {
             continue;
@@ -274,6 +284,11 @@ pub fn errors(simulation: &Simulation, reference: &Reference) -> Result<Errors, 
                 .position
                 .max(difference(*value, sample.coordinates[i]));
             errors.velocity = errors.velocity.max(difference(*rate, sample.rates[i]));
+        }
+        for (column, &ours) in outputs.iter().zip(&sample.outputs) {
+            if let (Some(c), Some(largest)) = (column, errors.outputs.as_mut()) {
+                *largest = largest.max(distance(ours, row[*c]));
+            }
         }
     }
     Ok(errors)

@@ -33,6 +33,8 @@ pub struct Prepared {
     /// The forward dynamics as native code, when asked for and able to serve
     /// (`compiled::attach`).
     pub native: Option<super::native::NativeDynamics>,
+    /// The program's `output` declarations, compiled.
+    pub outputs: super::outputs::Outputs,
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
@@ -207,6 +209,7 @@ pub fn prepare(
         );
     }
     let settings = program_settings(mechanism, &model, defaults)?;
+    let outputs = super::outputs::Outputs::compile(mechanism, &model)?;
     let coordinate_names = kinematics.coordinate_names();
     Ok(Prepared {
         model,
@@ -218,6 +221,7 @@ pub fn prepare(
         coordinate_names,
         warnings,
         native: None,
+        outputs,
     })
 }
 

@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::branch;
 use super::clock::thread_cpu_seconds;
 use super::constraints::{ConstraintReport, ReleasedStretch};
+use super::outputs::Outputs;
 use super::prepare::{Integrator, Prepared};
 pub use super::sample::{MomentumDrift, Sample};
 use super::stiffness::{self, StiffnessReport};
@@ -19,6 +20,7 @@ use super::system::{MechanicalSystem, SystemError};
 use super::variational;
 use crate::diag::Diagnostic;
 use crate::dynamics::algorithms::forward_kinematics;
+use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::model::Model;
@@ -270,6 +272,9 @@ pub struct Simulation {
     pub coordinate_names: Vec<String>,
     /// The joins whose reactions the samples carry (empty unless asked for).
     pub reaction_names: Vec<String>,
+    /// The columns of the program's outputs (`output` declarations).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub output_names: Vec<String>,
     pub samples: Vec<Sample>,
     pub report: Report,
 }
@@ -310,6 +315,9 @@ struct Sampler<'m> {
     system: MechanicalSystem<'m>,
     conservative: crate::dynamics::energy::Conservative,
     reactions: bool,
+    /// The program's outputs, and where their tape is evaluated.
+    outputs: &'m Outputs,
+    output_scratch: EffortScratch,
     /// Outputs inside a stretch with rows set aside whose end is not known yet: their time and
     /// the integrator's state there (for the work of the non-conservative efforts).
     pending: Vec<(f64, Vec<f64>)>,
@@ -462,6 +470,14 @@ impl Sampler<'_> {
         // `+ 0.0` turns a −0 into 0 for the outputs.
         let potential = potential_energy(model, data, &self.conservative, &declared, time)? + 0.0;
         let kinetic = kinetic_energy(model, data);
+        let state = EffortState {
+            world: &data.world,
+            velocity: &data.velocity,
+            coordinates: &coordinates,
+            rates: &rates,
+            time,
+        };
+        let outputs = self.outputs.values(&state, &mut self.output_scratch);
         Ok(Sample {
             time,
             coordinates,
@@ -472,6 +488,7 @@ impl Sampler<'_> {
             balance: work.map(|w| kinetic + potential - w),
             momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
             reactions,
+            outputs,
         })
     }
 }
@@ -573,6 +590,8 @@ fn simulate_from(
         system: MechanicalSystem::new(model, reference.clone(), settings.stabilisation),
         conservative: conservative_forces(model),
         reactions: settings.reactions,
+        outputs: &prepared.outputs,
+        output_scratch: EffortScratch::default(),
         pending: Vec::new(),
         unsettled: Vec::new(),
         segment: None,
@@ -753,6 +772,7 @@ fn simulate_from(
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),
         reaction_names,
+        output_names: prepared.outputs.names.clone(),
         samples,
         report,
     }
@@ -831,6 +851,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),
         reaction_names: Vec::new(),
+        output_names: prepared.outputs.names.clone(),
         samples: Vec::new(),
         report,
     }

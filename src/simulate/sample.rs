@@ -27,6 +27,9 @@ pub struct Sample {
     /// fixed axes (moment, then force; 6 per join, in `Simulation::reaction_names` order).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub reactions: Vec<f64>,
+    /// The program's outputs, in `Simulation::output_names` order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub outputs: Vec<f64>,
 }
 
 #[derive(Clone, Copy, Debug, Serialize)]

@@ -57,6 +57,9 @@ pub enum DeclKind {
     Given(Vec<GivenValue>),
     /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
     Simulate(Vec<FieldInit>),
+    /// `output tip = position(arm.tip)`: a named quantity of the state, written by `simulate`
+    /// at every output.
+    Output(Box<OutputDecl>),
     /// `apply E on T`; `apply E between R and T`: E on T and its opposite on R (`reaction`);
     /// `apply F` for a force with a `field`: on every body with mass (a uniform field).
     Apply(Box<ApplyDecl>),
@@ -100,6 +103,13 @@ pub struct JoinDecl {
     pub second: Expr,
     pub link: Expr,
     pub name: Option<Ident>,
+}
+
+/// `output name = value`: a scalar, vector or matrix expression of the state, or a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputDecl {
+    pub name: Ident,
+    pub value: Expr,
 }
 
 /// `apply effort on target`; `apply effort between reaction and target`; `apply effort`.

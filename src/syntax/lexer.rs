@@ -59,6 +59,8 @@ pub enum Tok<'input> {
     Local,
     #[token("on")]
     On,
+    #[token("output")]
+    Output,
     #[token("package")]
     Package,
     #[token("simulate")]
@@ -229,6 +231,7 @@ impl Tok<'_> {
             Tok::Link => "link",
             Tok::Local => "local",
             Tok::On => "on",
+            Tok::Output => "output",
             Tok::Package => "package",
             Tok::Simulate => "simulate",
             Tok::Torque => "torque",

@@ -74,6 +74,7 @@ fn decl_exprs<'a>(kind: &'a DeclKind, out: &mut Vec<&'a Expr>) {
         }
         DeclKind::Given(values) => out.extend(values.iter().flat_map(|v| [&v.target, &v.value])),
         DeclKind::Simulate(fields) => out.extend(fields.iter().map(|f| &f.value)),
+        DeclKind::Output(output) => out.push(&output.value),
         DeclKind::Apply(apply) => {
             out.push(&apply.effort);
             out.extend(apply.target.iter().chain(&apply.reaction));
@@ -123,6 +124,7 @@ fn dismantle(kind: DeclKind) {
                 exprs.extend(values.into_iter().flat_map(|v| [v.target, v.value]));
             }
             DeclKind::Simulate(fields) => exprs.extend(fields.into_iter().map(|f| f.value)),
+            DeclKind::Output(output) => exprs.push(output.value),
             DeclKind::Apply(apply) => {
                 let apply = *apply;
                 exprs.push(apply.effort);

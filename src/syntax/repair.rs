@@ -43,7 +43,7 @@ pub(super) fn recognise(
         })
     };
     match (token, previous) {
-        (Tok::Ident(_) | Tok::Force | Tok::Torque | Tok::Body, Some(previous))
+        (Tok::Ident(_) | Tok::Force | Tok::Torque | Tok::Body | Tok::Output, Some(previous))
             if expects("\",\"") && next == Some(Tok::Equal) =>
         {
             slip(Repair::InsertComma, missing_comma(file, span, previous))

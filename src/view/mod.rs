@@ -5,12 +5,13 @@ pub mod page;
 pub mod scene;
 pub mod server;
 
-use nalgebra::Vector3;
+use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::drag::{drag, DragError, DragOptions};
 use crate::kinematics::frames::FramePoint;
+use crate::kinematics::penalty;
 use crate::simulate::prepare::Prepared;
 use crate::simulate::run::{run_with, RunOptions};
 use crate::simulate::settings::SettingsChanges;
@@ -83,10 +84,23 @@ impl Viewer {
             body: request.body,
             offset: crate::spatial::translation(Vector3::from(request.point)),
         };
+        match request.method {
+            DragMethod::Exact => self.exact_drag(request, &frame),
+            DragMethod::Penalty => self.penalty_drag(request, &frame),
+        }
+    }
+
+    /// The exact method: the loops closed, the point a soft goal (`kinematics::drag`).
+    fn exact_drag(
+        &self,
+        request: &DragRequest,
+        frame: &FramePoint,
+    ) -> Result<DragResponse, String> {
+        let model = &self.prepared.kinematics;
         let options = DragOptions::default();
         let target = Vector3::from(request.target);
         let dragged =
-            drag(model, &frame, &request.coordinates, &target, &options).map_err(|e| match e {
+            drag(model, frame, &request.coordinates, &target, &options).map_err(|e| match e {
                 DragError::Evaluation(e) => crate::kinematics::eval::describe(&e, &self.mechanism),
                 DragError::NoAssembly { loop_residual } => {
                     format!("the loops cannot be closed (residual {loop_residual:.3e})")
@@ -100,8 +114,65 @@ impl Viewer {
             poses,
             distance: dragged.distance,
             loop_residual: dragged.loop_residual,
+            planar: None,
         })
     }
+
+    /// The seed's penalty method, one linearised solve per move from the planar state the page
+    /// carries (or the one of `request.coordinates` at the first move); the joint coordinates
+    /// stay those of the last exact configuration, the bodies drawn at the penalty's poses.
+    fn penalty_drag(
+        &self,
+        request: &DragRequest,
+        frame: &FramePoint,
+    ) -> Result<DragResponse, String> {
+        let model = &self.prepared.kinematics;
+        let describe = |e| crate::kinematics::eval::describe(&e, &self.mechanism);
+        let planar = penalty::planar_model(model, self.prepared.model.body_names.clone())?;
+        let state = match &request.planar {
+            Some(state) if state.len() == planar.bodies => state.clone(),
+            Some(_) => {
+                return Err(format!(
+                    "expected the planar state of {} bodies",
+                    planar.bodies
+                ))
+            }
+            None => penalty::planar_state(model, &request.coordinates).map_err(describe)?,
+        };
+        let point = penalty::planar_point(frame);
+        let target = Vector2::new(request.target[0], request.target[1]);
+        let stiffness = penalty::Stiffness {
+            link: 1e6,
+            mouse: 1.0,
+        };
+        let state = planar.step(&state, &point, &target, stiffness);
+        let position = penalty::point_position(&planar, &state, &point);
+        let distance = (position.xy() - target).norm();
+        let heights = scene::body_poses(model, &request.coordinates).map_err(describe)?;
+        let poses = (state.iter().zip(&heights))
+            .map(|([x, y, angle], height)| {
+                let (s, c) = (0.5 * angle).sin_cos();
+                [*x, *y, height[2], c, 0.0, 0.0, s]
+            })
+            .collect();
+        Ok(DragResponse {
+            reached: distance <= DragOptions::default().reach_tolerance,
+            coordinates: request.coordinates.clone(),
+            poses,
+            distance,
+            loop_residual: planar.largest_gap(&state),
+            planar: Some(state),
+        })
+    }
+}
+
+/// How the page drags: `exact` (the default) or the seed's `penalty` method.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum DragMethod {
+    #[default]
+    Exact,
+    Penalty,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -111,6 +182,11 @@ pub struct DragRequest {
     pub point: [f64; 3],
     pub target: [f64; 3],
     pub coordinates: Vec<f64>,
+    #[serde(default)]
+    pub method: DragMethod,
+    /// Penalty method: the bodies' (X, Y, Θ) the previous move left, absent at the first.
+    #[serde(default)]
+    pub planar: Option<Vec<[f64; 3]>>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -119,5 +195,9 @@ pub struct DragResponse {
     pub poses: Vec<[f64; 7]>,
     pub distance: f64,
     pub reached: bool,
+    /// Exact: the loops' residual. Penalty: the largest gap of a pivot.
     pub loop_residual: f64,
+    /// Penalty method: the bodies' (X, Y, Θ), for the next move.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planar: Option<Vec<[f64; 3]>>,
 }

@@ -229,6 +229,9 @@ pub struct Series {
 #[derive(Clone, Debug, Deserialize)]
 pub struct Recorded {
     pub coordinate_names: Vec<String>,
+    /// The columns of the program's named outputs (absent from runs without outputs).
+    #[serde(default)]
+    pub output_names: Vec<String>,
     pub samples: Vec<RecordedSample>,
     #[serde(skip)]
     pub failure: Option<String>,
@@ -241,6 +244,8 @@ pub struct RecordedSample {
     pub rates: Vec<f64>,
     pub kinetic_energy: f64,
     pub potential_energy: Option<f64>,
+    #[serde(default)]
+    pub outputs: Vec<f64>,
 }
 
 impl From<&Simulation> for Recorded {
@@ -251,9 +256,11 @@ impl From<&Simulation> for Recorded {
             rates: s.rates.clone(),
             kinetic_energy: s.kinetic_energy,
             potential_energy: s.potential_energy,
+            outputs: s.outputs.clone(),
         });
         Recorded {
             coordinate_names: simulation.coordinate_names.clone(),
+            output_names: simulation.output_names.clone(),
             samples: samples.collect(),
             failure: simulation
                 .report
@@ -289,6 +296,13 @@ pub fn read_results(text: &str, name: &str, prepared: &Prepared) -> Result<Recor
     {
         return Err(format!(
             "{name}: sample {} does not have {count} coordinates and rates",
+            k + 1
+        ));
+    }
+    let outputs = recorded.output_names.len();
+    if let Some(k) = (recorded.samples.iter()).position(|s| s.outputs.len() != outputs) {
+        return Err(format!(
+            "{name}: sample {} does not have the values of its {outputs} outputs",
             k + 1
         ));
     }
@@ -351,6 +365,12 @@ pub fn animation(
         series.push(Series {
             name: "energy".into(),
             values: total,
+        });
+    }
+    for (i, name) in simulation.output_names.iter().enumerate() {
+        series.push(Series {
+            name: name.clone(),
+            values: samples.iter().map(|s| s.outputs[i]).collect(),
         });
     }
     for (k, frame) in named.iter().enumerate() {

@@ -378,12 +378,19 @@
     const target = new THREE.Vector3();
     if (raycaster.ray.intersectPlane(dragging.plane, target)) dragTo(dragging.body, dragging.local, target);
   }
+  // The penalty method's bodies (X, Y, Θ) between moves; a new method starts from the
+  // configuration shown.
+  let planarState = null;
+  const dragMethod = () => document.getElementById("drag-method").value;
+  document.getElementById("drag-method").addEventListener("change", () => { planarState = null; });
   const dragRequest = (body, local, target) => JSON.stringify({
-    body, point: [local.x, local.y, local.z], target: [target.x, target.y, target.z], coordinates });
+    body, point: [local.x, local.y, local.z], target: [target.x, target.y, target.z], coordinates,
+    method: dragMethod(), planar: dragMethod() === "penalty" ? planarState : null });
   // The server's answer to a move: the new configuration, or why not.
   function applyDrag(ok, result) {
     if (!ok) { message(result.error); return null; }
     coordinates = result.coordinates;
+    planarState = result.planar || null;
     applyPoses(result.poses);
     message(result.reached ? "" : "out of reach: " + result.distance.toPrecision(3) + " away");
     return result;
@@ -427,6 +434,7 @@
   if (params.get("play") === "1") setPlaying(true);
   status.ready = true;
   report();
+  if (params.get("drag-method")) document.getElementById("drag-method").value = params.get("drag-method");
   if (params.get("drag-test") === "1") {
     try { dragTest(); } catch (e) { status.error = String(e); }
   }

@@ -285,3 +285,40 @@ fn the_drag_command_writes_rows_and_reports_unreached_targets() {
     assert_eq!(code, 2);
     assert!(err.contains("no frame named `coupler`"), "{err}");
 }
+
+#[test]
+fn drag_set_gives_unknowns_their_values_as_simulate_set_does() {
+    let dir = std::env::temp_dir().join(format!("lsdc-drag-set-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("path.csv");
+    let targets: String = (0..5)
+        .map(|k| coupler_point(1.0 + 0.05 * k as f64))
+        .map(|[x, y, _]| format!("{x},{y}\n"))
+        .collect();
+    std::fs::write(&path, targets).unwrap();
+    // The crank's length an unknown, given a wrong value: `--set` puts back the example's.
+    let text = std::fs::read_to_string("examples/four_bar.lsd")
+        .unwrap()
+        .replace("let l1 = 1.0 ;", "let l1 = ?s ; given l1 = 1.3 ;");
+    let program = dir.join("four_bar_unknown.lsd");
+    std::fs::write(&program, text).unwrap();
+    let drag = |file: &str, sets: &[&str]| {
+        let mut args = vec!["drag", file, "--point", "coupler_point", "--path"];
+        args.push(path.to_str().unwrap());
+        args.extend(sets);
+        crate::common::lsdc(&args)
+    };
+    let (code, expected, err) = drag("examples/four_bar.lsd", &[]);
+    assert_eq!(code, 0, "{err}");
+    let program = program.to_str().unwrap();
+    let (code, with_set, err) = drag(program, &["--set", "l1=1.0"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(with_set, expected);
+    // Without `--set`, the given 1.3 holds: the same targets are not traced the same way.
+    let (_, with_given, _) = drag(program, &[]);
+    assert_ne!(with_given, expected);
+    let (code, _, err) = drag(program, &["--set", "l9=1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("E0811"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

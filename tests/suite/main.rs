@@ -30,6 +30,7 @@ mod lsp;
 mod methods;
 mod mutants;
 mod native;
+mod outputs;
 mod pinocchio_fixtures;
 mod properties;
 mod regression;

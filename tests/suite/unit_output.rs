@@ -23,12 +23,14 @@ mod plot {
                     balance: None,
                     momentum: [0.0; 6],
                     reactions: Vec::new(),
+                    outputs: Vec::new(),
                 }
             })
             .collect();
         Simulation {
             coordinate_names: vec!["crank.q".to_string(), "slider.x".to_string()],
             reaction_names: Vec::new(),
+            output_names: Vec::new(),
             samples,
             report: Report {
                 integrator: "rk4".to_string(),

@@ -397,12 +397,55 @@ fn a_body_dragged_in_chromium_moves() {
     // The browser opens connections of its own accord (an icon, ahead of need): the server
     // answers until the test process ends.
     std::thread::spawn(move || server::serve(&listener, &mut viewer("four_bar"), None));
-    let Some(status) = page_status(&format!("http://{address}/?drag-test=1")) else {
-        return;
+    for method in ["exact", "penalty"] {
+        let url = format!("http://{address}/?drag-test=1&drag-method={method}");
+        let Some(status) = page_status(&url) else {
+            return;
+        };
+        let moved = status["drag"]["moved"].as_f64().unwrap_or(0.0);
+        assert!(
+            moved > 1e-3 && status["drag"]["distance"].is_f64(),
+            "{method}: {status}"
+        );
+    }
+}
+
+#[test]
+fn the_page_drags_by_the_penalty_method_too() {
+    use lsdc::view::{DragMethod, DragRequest};
+    let shown = viewer("four_bar");
+    let coupler = (shown.scene.bodies.iter())
+        .find(|b| b.name == "bar2")
+        .unwrap()
+        .number;
+    let target = coupler_point(1.1);
+    let mut request = DragRequest {
+        body: coupler,
+        point: [1.75, 1.0, 0.0],
+        target,
+        coordinates: shown.scene.coordinates.clone(),
+        method: DragMethod::Exact,
+        planar: None,
     };
-    let moved = status["drag"]["moved"].as_f64().unwrap_or(0.0);
+    let exact = shown.drag(&request).unwrap();
+    // Moves towards the same target, each one linearised solve from the state the last left:
+    // the penalty method converges to the configuration of the exact one.
+    request.method = DragMethod::Penalty;
+    let mut moved = shown.drag(&request).unwrap();
+    let first_distance = moved.distance;
+    for _ in 0..20 {
+        request.planar = moved.planar.clone();
+        moved = shown.drag(&request).unwrap();
+    }
     assert!(
-        moved > 1e-3 && status["drag"]["distance"].is_f64(),
-        "{status}"
+        first_distance > 1e-6 && moved.distance < 1e-6,
+        "{first_distance} then {}",
+        moved.distance
     );
+    assert!(moved.loop_residual < 1e-5, "gap {}", moved.loop_residual);
+    for (penalty, exact) in moved.poses.iter().zip(&exact.poses) {
+        let local = [1.0, 0.0, 0.0];
+        assert!((world(penalty, &local) - world(exact, &local)).norm() < 1e-5);
+    }
+    assert_eq!(moved.coordinates, request.coordinates);
 }

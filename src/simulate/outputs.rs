@@ -1,0 +1,253 @@
+//! The program's `output` declarations compiled for a run: every output's expression lowered
+//! into one tape (the machinery of the compiled efforts), evaluated at each output time from the
+//! sample's forward kinematics, declared coordinates, rates and time.
+
+use std::sync::Arc;
+
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
+
+use crate::diag::Diagnostic;
+use crate::dynamics::compiled::{EffortScratch, EffortState, EffortTape, Link, TapeBuilder};
+use crate::dynamics::model::{EffortFrame, Model};
+use crate::elab::mechanism::{Mechanism, NamedOutput, OutputValue};
+use crate::elab::value::{BodyRef, Frame, FrameQuantity, SExpr, Scalar};
+use crate::kinematics::eval::{unknown_label, EvalError};
+use crate::kinematics::frames::{quaternion, STATE_COMPONENTS};
+use crate::kinematics::model::constant_pose;
+
+/// The axes' letters, for the columns of vectors (`tip.x`) and matrices (`r.xy`).
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Where one output's values lie among the tape's roots.
+#[derive(Clone, Debug)]
+enum Layout {
+    /// One root per column, in column order (scalars, vectors, matrices by rows).
+    Plain(Vec<usize>),
+    /// A frame: position (3), rotation matrix by rows (9), velocity (3), angular velocity (3);
+    /// written as the 13 columns of `--output-frame`, the matrix as a quaternion.
+    Frame([usize; 18]),
+}
+
+/// The compiled outputs of a program (none when it declares none).
+#[derive(Clone, Debug, Default)]
+pub struct Outputs {
+    /// The columns, in order: `e`, `tip.x`, `tip.y`, …
+    pub names: Vec<String>,
+    layouts: Vec<Layout>,
+    tape: Option<EffortTape>,
+    frames: Vec<EffortFrame>,
+}
+
+/// The state an output is evaluated at: the forward kinematics of the dynamic model (each
+/// body's pose and velocity) and the declared coordinates and rates.
+pub type OutputState<'a> = EffortState<'a>;
+
+impl Outputs {
+    /// Compiles the mechanism's outputs on the dynamic model; every value the outputs need
+    /// must be known (E0840), and their frames constant on bodies of the mechanism (E0841).
+    pub fn compile(mechanism: &Mechanism, model: &Model) -> Result<Outputs, Vec<Diagnostic>> {
+        if mechanism.outputs.is_empty() {
+            return Ok(Outputs::default());
+        }
+        let frames = place_frames(mechanism, model)?;
+        // Made before the builder and kept until the tape is built: the builder recognises
+        // subexpressions it has lowered by their address.
+        let components: Vec<Vec<Scalar>> = mechanism.outputs.iter().map(components).collect();
+        let declared_offset = |join| model.declared_offset(join);
+        let mut builder = TapeBuilder::new(&model.unknowns, &frames, &declared_offset);
+        let mut outputs = Outputs::default();
+        let mut errors = Vec::new();
+        for (output, components) in mechanism.outputs.iter().zip(&components) {
+            let roots: Result<Vec<usize>, EvalError> = components
+                .iter()
+                .map(|s| builder.scalar(s, Link(None)))
+                .collect();
+            match roots {
+                Ok(roots) => {
+                    outputs.names.extend(column_names(output));
+                    outputs.layouts.push(layout(output, roots));
+                }
+                Err(error) => errors.push(lowering_error(mechanism, output, error)),
+            }
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        outputs.tape = Some(builder.build());
+        outputs.frames = frames;
+        Ok(outputs)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// The outputs' values at `state`, in column order.
+    pub fn values(&self, state: &OutputState<'_>, scratch: &mut EffortScratch) -> Vec<f64> {
+        let Some(tape) = &self.tape else {
+            return Vec::new();
+        };
+        tape.eval(&self.frames, state, true, scratch);
+        let root = |k: usize| tape.root(scratch, k) + 0.0;
+        let mut values = Vec::with_capacity(self.names.len());
+        for layout in &self.layouts {
+            match layout {
+                Layout::Plain(roots) => values.extend(roots.iter().map(|&k| root(k))),
+                Layout::Frame(roots) => {
+                    let all = roots.map(root);
+                    values.extend(frame_columns(&all));
+                }
+            }
+        }
+        values
+    }
+}
+
+/// Position, quaternion `[w, x, y, z]`, velocity, angular velocity from the 18 evaluated roots.
+fn frame_columns(all: &[f64; 18]) -> impl Iterator<Item = f64> {
+    let matrix = Matrix3::from_row_slice(&all[3..12]);
+    let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(matrix));
+    let position = [all[0], all[1], all[2]];
+    let rest: Vec<f64> = all[12..].to_vec();
+    position
+        .into_iter()
+        .chain(quaternion(&rotation))
+        .chain(rest)
+}
+
+/// An output's scalar components: a scalar's, a vector's, a matrix's by rows, or the 18
+/// components of a frame's state (`Layout::Frame`).
+fn components(output: &NamedOutput) -> Vec<Scalar> {
+    match &output.value {
+        OutputValue::Scalar(s) => vec![s.clone()],
+        OutputValue::Vector(v) => v.to_vec(),
+        OutputValue::Matrix(m) => m.iter().flatten().cloned().collect(),
+        OutputValue::Frame(frame) => {
+            let frame = Arc::new(frame.clone());
+            frame_quantities()
+                .map(|quantity| Arc::new(SExpr::FrameState(frame.clone(), quantity)))
+                .collect()
+        }
+    }
+}
+
+/// Where the output's components lie among the tape's roots.
+fn layout(output: &NamedOutput, roots: Vec<usize>) -> Layout {
+    match (&output.value, <[usize; 18]>::try_from(roots.as_slice())) {
+        (OutputValue::Frame(_), Ok(frame)) => Layout::Frame(frame),
+        _ => Layout::Plain(roots),
+    }
+}
+
+/// The 18 components of a frame's state, in `Layout::Frame` order.
+fn frame_quantities() -> impl Iterator<Item = FrameQuantity> {
+    let position = (0..3).map(FrameQuantity::Position);
+    let orientation = (0..9).map(|k| FrameQuantity::Orientation(k / 3, k % 3));
+    let velocity = (0..3).map(FrameQuantity::Velocity);
+    let angular = (0..3).map(FrameQuantity::AngularVelocity);
+    position.chain(orientation).chain(velocity).chain(angular)
+}
+
+/// An output's columns: its name for a scalar, `name.x` … for a vector, `name.xx` … for a
+/// matrix, the 13 components of `--output-frame` for a frame.
+fn column_names(output: &NamedOutput) -> Vec<String> {
+    let name = &output.name;
+    match &output.value {
+        OutputValue::Scalar(_) => vec![name.to_string()],
+        OutputValue::Vector(_) => AXES.iter().map(|a| format!("{name}.{a}")).collect(),
+        OutputValue::Matrix(_) => AXES
+            .iter()
+            .flat_map(|r| AXES.iter().map(move |c| format!("{name}.{r}{c}")))
+            .collect(),
+        OutputValue::Frame(_) => STATE_COMPONENTS
+            .iter()
+            .map(|c| format!("{name}.{c}"))
+            .collect(),
+    }
+}
+
+/// Every frame the outputs read, placed on its body of the dynamic model.
+fn place_frames(mechanism: &Mechanism, model: &Model) -> Result<Vec<EffortFrame>, Vec<Diagnostic>> {
+    let mut used: Vec<(Arc<Frame>, &NamedOutput)> = Vec::new();
+    for output in &mechanism.outputs {
+        let mut frames = Vec::new();
+        match &output.value {
+            OutputValue::Scalar(s) => s.frames_used(&mut frames),
+            OutputValue::Vector(v) => v.iter().for_each(|s| s.frames_used(&mut frames)),
+            OutputValue::Matrix(m) => m.iter().flatten().for_each(|s| s.frames_used(&mut frames)),
+            OutputValue::Frame(f) => frames.push(Arc::new(f.clone())),
+        }
+        for frame in frames {
+            if !used.iter().any(|(f, _)| *f == frame) {
+                used.push((frame, output));
+            }
+        }
+    }
+    let mut placed = Vec::new();
+    let mut errors = Vec::new();
+    for (frame, output) in used {
+        match place(mechanism, model, &frame, output) {
+            Ok((body, offset)) => placed.push(EffortFrame {
+                frame,
+                body,
+                offset,
+            }),
+            Err(error) => errors.push(error),
+        }
+    }
+    match errors.is_empty() {
+        true => Ok(placed),
+        false => Err(errors),
+    }
+}
+
+/// A frame's body number and its constant pose on the body.
+fn place(
+    mechanism: &Mechanism,
+    model: &Model,
+    frame: &Frame,
+    output: &NamedOutput,
+) -> Result<(usize, crate::spatial::Pose), Diagnostic> {
+    let body = match frame.body {
+        BodyRef::Earth => 0,
+        BodyRef::Body(id) => *model.body_numbers.get(&id).ok_or_else(|| {
+            let name = mechanism.body_name(frame.body);
+            Diagnostic::error(
+                "E0841",
+                format!("the output `{}` reads a frame of `{name}`, a body outside the mechanism", output.name),
+            )
+            .primary(output.span, "this output")
+            .help(format!("`{name}` is joined to nothing: join it to the mechanism, or output a frame of a body that moves with it"))
+        })?,
+    };
+    let offset = constant_pose(&frame.displacement, &model.unknowns)
+        .map_err(|error| lowering_error(mechanism, output, error))?;
+    Ok((body, offset))
+}
+
+/// Why an output cannot be computed: a value it needs is missing, or it reads what a run
+/// cannot give it (a second derivative, a link's own coordinate).
+fn lowering_error(mechanism: &Mechanism, output: &NamedOutput, error: EvalError) -> Diagnostic {
+    match error {
+        EvalError::Missing(id) => {
+            let label = unknown_label(mechanism, id);
+            Diagnostic::error(
+                "E0840",
+                format!("the output `{}` needs a value for {label}", output.name),
+            )
+            .primary(output.span, "this output")
+            .secondary(mechanism.unknowns[id.0 as usize].span, "no value given")
+            .help("give it with `given` in the program or `--set NAME=VALUE`")
+        }
+        EvalError::NotGeometric(_) | EvalError::NotFinite => Diagnostic::error(
+            "E0842",
+            format!(
+                "the output `{}` cannot be computed: {}",
+                output.name,
+                crate::kinematics::eval::describe(&error, mechanism)
+            ),
+        )
+        .primary(output.span, "this output")
+        .help("an output is an expression of the coordinates, rates, time and frames' state (`position`, `velocity`, …), without second derivatives"),
+    }
+}
