@@ -339,10 +339,7 @@ fn clap_rejections_are_json_too() {
             "--no-such-option",
         ),
         (vec!["simulate", "--report=json"], "required"),
-        (
-            vec!["check", "--format", "json", "--format", "yaml", "x.lsd"],
-            "yaml",
-        ),
+        (vec!["eval", "--format=json", "x.lsd"], "'--format'"),
     ];
     for (arguments, expected) in rejected {
         let (code, stdout, stderr) = crate::common::lsdc(&arguments);
