@@ -633,12 +633,7 @@ fn generated_c_of_every_example_compiles_without_warnings() {
         println!("no C compiler found (CC, cc, gcc, clang): the generated C is not checked");
         return;
     };
-    let mut examples: Vec<PathBuf> = std::fs::read_dir("examples")
-        .expect("the examples")
-        .map(|entry| entry.expect("an entry").path())
-        .filter(|path| path.extension().is_some_and(|e| e == "lsd"))
-        .collect();
-    examples.sort();
+    let examples = crate::common::example_paths();
     let dir = scratch("c-warnings");
     let compile = |path: &PathBuf| {
         let name = path.file_stem().expect("a name").to_string_lossy();

@@ -126,13 +126,7 @@ fn values_given_on_the_command_line_are_checked() {
 }
 
 fn examples() -> Vec<(PathBuf, String)> {
-    let mut found: Vec<PathBuf> = std::fs::read_dir("examples")
-        .expect("examples")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "lsd"))
-        .collect();
-    found.sort();
-    found
+    crate::common::example_paths()
         .into_iter()
         .map(|p| {
             let text = std::fs::read_to_string(&p).expect("readable");

@@ -187,10 +187,7 @@ mod debug_tree {
     /// for strings holding brackets, commas and escaped quotes, and for a sum 150 terms deep.
     #[test]
     fn the_layout_is_that_of_rust_pretty_debug() {
-        let mut programs: Vec<String> = std::fs::read_dir("examples")
-            .expect("the examples")
-            .map(|entry| entry.expect("an entry").path())
-            .filter(|path| path.extension().is_some_and(|e| e == "lsd"))
+        let mut programs: Vec<String> = (crate::common::example_paths().iter())
             .map(|path| std::fs::read_to_string(path).expect("readable"))
             .collect();
         programs.push(r#"import "a, b {c} [d] (e) \" f.lsd" ; let x = [] ;"#.to_string());
