@@ -29,6 +29,11 @@ pub(super) trait AdaptiveStepper {
     }
     /// The step-size controller suited to the method's error estimate.
     fn controller(&self) -> StepController;
+    /// The longest step the method expects to complete from the current point, whatever its
+    /// error estimate (an implicit method's iteration converges only on steps short enough).
+    fn step_limit(&self) -> f64 {
+        f64::INFINITY
+    }
     /// The controller to use from the next attempt on, when the method changed at the last
     /// accepted step (a method that switches between two).
     fn switched_controller(&mut self) -> Option<StepController> {
@@ -157,7 +162,7 @@ impl March<'_> {
         problem: &Problem,
         observer: &mut Observer,
     ) -> Result<bool, Halt> {
-        let h = self.next_step_size(problem)?;
+        let h = self.next_step_size(problem, stepper.step_limit())?;
         let attempt = stepper.attempt(eval, self.t, &self.y, h, &mut self.y_new);
         let attempt = attempt.and_then(|error| match all_finite(&self.y_new) {
             true => Ok(error),
@@ -230,7 +235,7 @@ impl March<'_> {
     }
 
     /// The proposed step limited by the settings and stretched to land exactly on the end time.
-    fn next_step_size(&mut self, problem: &Problem) -> Result<f64, Halt> {
+    fn next_step_size(&mut self, problem: &Problem, limit: f64) -> Result<f64, Halt> {
         let settings = problem.settings;
         if let Some(value) = settings.interrupted() {
             return Err(Halt::fatal(self.t, Failure::Interrupted(value)));
@@ -240,7 +245,7 @@ impl March<'_> {
         }
         self.attempts += 1;
         let remaining = problem.t_end - self.t;
-        let h = self.h.min(settings.max_step);
+        let h = self.h.min(settings.max_step).min(limit);
         if h < smallest_step(problem, self.t) && h < remaining {
             return Err(Halt::fatal(self.t, Failure::StepUnderflow { step: h }));
         }

@@ -9,7 +9,10 @@
 //!   problems, its Jacobian kept across steps;
 //! - [`Method::Rodas4`]: the adaptive Rosenbrock method RODAS4 of order 4 for stiff problems, its
 //!   Jacobian formed at every step;
-//! - [`Method::Automatic`]: Dormand–Prince, and RODAS4 where the problem is stiff.
+//! - [`Method::Radau5`]: the adaptive implicit Runge–Kutta method Radau IIA of order 5 for stiff
+//!   problems, its Jacobian kept across steps while its Newton iteration converges fast;
+//! - [`Method::Automatic`]: Dormand–Prince, and Radau IIA where the problem is stiff (ROS34PW2
+//!   on a system with tangent directions).
 //!
 //! Values at output times between steps come from each method's interpolant, so asking for many
 //! outputs never shortens the steps.
@@ -20,8 +23,10 @@ pub mod dopri5;
 mod driver;
 mod evaluator;
 mod hermite;
+mod jacobian;
 mod outcome;
 mod output;
+pub mod radau;
 mod rk4;
 pub mod rosenbrock;
 mod settings;
@@ -122,9 +127,15 @@ pub fn integrate(
             &problem,
             observer,
         ),
+        Method::Radau5 => driver::integrate_adaptive(
+            &mut radau::Radau5::new(y0.len(), settings),
+            system,
+            &problem,
+            observer,
+        ),
         Method::Automatic => {
-            let mut stepper =
-                switching::Switching::new(stiff_scheme(system, t0, y0), y0.len(), settings);
+            let implicit = stiff_method(system, t0, y0, settings);
+            let mut stepper = switching::Switching::new(implicit, y0.len(), settings);
             let result = driver::integrate_adaptive(&mut stepper, system, &problem, observer);
             let count = |stats: &mut Stats| {
                 stats.stiff_steps = stepper.implicit_steps;
@@ -144,14 +155,24 @@ pub fn integrate(
     }
 }
 
-/// The stiff method of [`Method::Automatic`]: RODAS4, whose order needs the Jacobian, except on
-/// a system that moves on a manifold (a mechanism's closed loops), whose Jacobian is formed along
-/// the manifold's tangent directions only: there the W-method ROS34PW2, whose order holds with
-/// any matrix (on a stiff four-bar over 2 s at 1e-8, RODAS4 took 26,460 steps, ROS34PW2 638).
-fn stiff_scheme(system: &mut dyn OdeSystem, t0: f64, y0: &[f64]) -> rosenbrock::Scheme {
+/// The stiff method of [`Method::Automatic`]: Radau IIA of order 5, except on a system that
+/// moves on a manifold (a mechanism's closed loops), whose Jacobian is formed along the
+/// manifold's tangent directions only: there the W-method ROS34PW2, whose order holds with any
+/// matrix (on a stiff four-bar over 2 s at 1e-8, RODAS4 took 26,460 steps, ROS34PW2 638).
+fn stiff_method(
+    system: &mut dyn OdeSystem,
+    t0: f64,
+    y0: &[f64],
+    settings: &Settings,
+) -> switching::Stiff {
+    let n = y0.len();
     match system.tangent_basis(t0, y0) {
-        Ok(Some(_)) => rosenbrock::Scheme::Ros34pw2,
-        _ => rosenbrock::Scheme::Rodas4,
+        Ok(Some(_)) => switching::Stiff::Rosenbrock(rosenbrock::RosenbrockW::new(
+            rosenbrock::Scheme::Ros34pw2,
+            n,
+            settings,
+        )),
+        _ => switching::Stiff::Radau(radau::Radau5::new(n, settings)),
     }
 }
 

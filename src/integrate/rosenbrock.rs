@@ -36,6 +36,7 @@ use super::control::{error_norm, Gains, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
+use super::jacobian::leading_columns;
 use super::settings::Settings;
 
 /// ROS34PW2's number of stages.
@@ -250,13 +251,6 @@ enum Directions {
 }
 
 impl Directions {
-    fn count(&self) -> usize {
-        match self {
-            Directions::Leading(count) => *count,
-            Directions::Basis(basis) => basis.ncols(),
-        }
-    }
-
     /// Tᵀ x.
     fn project(&self, x: &[f64]) -> DVector<f64> {
         match self {
@@ -358,13 +352,15 @@ impl RosenbrockW {
             Some(spanning) => Directions::Basis(orthonormal(spanning, n)),
             None => Directions::Leading(self.controlled),
         };
-        let given = match directions {
-            Directions::Leading(count) => self.given_image(eval, t, y, count)?,
-            Directions::Basis(_) => None,
-        };
-        let image = match given {
-            Some(image) => image,
-            None => self.differenced_image(eval, t, y, &directions)?,
+        let image = match &directions {
+            Directions::Leading(count) => {
+                let derivative = std::mem::take(&mut self.derivative);
+                let image =
+                    leading_columns(eval, t, y, &derivative, *count, &mut self.stage_derivative);
+                self.derivative = derivative;
+                image?
+            }
+            Directions::Basis(basis) => self.differenced_image(eval, t, y, basis)?,
         };
         let time_derivative = match eval.autonomous() {
             true => vec![0.0; n],
@@ -399,57 +395,27 @@ impl RosenbrockW {
         Ok(())
     }
 
-    /// J's first `count` columns from the system's own Jacobian, if it gives one.
-    fn given_image(
-        &mut self,
-        eval: &mut Evaluator,
-        t: f64,
-        y: &[f64],
-        count: usize,
-    ) -> Result<Option<DMatrix<f64>>, Halt> {
-        let mut full = DMatrix::zeros(y.len(), y.len());
-        let given = eval.jacobian(t, y, &self.derivative, &mut full)?;
-        Ok(given.then(|| full.columns(0, count).into_owned()))
-    }
-
-    /// U = J T by forward differences of f along the directions, with increments that balance
-    /// truncation against rounding (as in Hairer and Wanner's RODAS).
+    /// U = J T by forward differences of f along the basis's columns, with increments that
+    /// balance truncation against rounding (as in Hairer and Wanner's RODAS).
     fn differenced_image(
         &mut self,
         eval: &mut Evaluator,
         t: f64,
         y: &[f64],
-        directions: &Directions,
+        basis: &DMatrix<f64>,
     ) -> Result<DMatrix<f64>, Halt> {
         let n = y.len();
-        let m = directions.count();
-        let mut image = DMatrix::zeros(n, m);
+        let mut image = DMatrix::zeros(n, basis.ncols());
         let mut perturbed = y.to_vec();
-        for j in 0..m {
-            match directions {
-                Directions::Leading(_) => {
-                    perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
-                    // The increment actually represented, so that rounding of y + δ does not
-                    // bias the quotient.
-                    let delta = perturbed[j] - y[j];
-                    eval.rhs(t, &perturbed, &mut self.stage_derivative)?;
-                    for i in 0..n {
-                        image[(i, j)] = (self.stage_derivative[i] - self.derivative[i]) / delta;
-                    }
-                    perturbed[j] = y[j];
-                }
-                Directions::Basis(basis) => {
-                    let direction = basis.column(j);
-                    let size: f64 = (0..n).map(|i| (direction[i] * y[i]).abs()).sum();
-                    let delta = (f64::EPSILON * size.max(1e-5)).sqrt();
-                    for i in 0..n {
-                        perturbed[i] = y[i] + delta * direction[i];
-                    }
-                    eval.rhs(t, &perturbed, &mut self.stage_derivative)?;
-                    for i in 0..n {
-                        image[(i, j)] = (self.stage_derivative[i] - self.derivative[i]) / delta;
-                    }
-                }
+        for (j, direction) in basis.column_iter().enumerate() {
+            let size: f64 = (0..n).map(|i| (direction[i] * y[i]).abs()).sum();
+            let delta = (f64::EPSILON * size.max(1e-5)).sqrt();
+            for i in 0..n {
+                perturbed[i] = y[i] + delta * direction[i];
+            }
+            eval.rhs(t, &perturbed, &mut self.stage_derivative)?;
+            for i in 0..n {
+                image[(i, j)] = (self.stage_derivative[i] - self.derivative[i]) / delta;
             }
         }
         Ok(image)
@@ -556,7 +522,7 @@ impl Jacobian {
 
 /// The largest modulus of the eigenvalues of `matrix` (real Schur form), or its ∞-norm, which
 /// bounds it, should the iterations not converge.
-fn spectral_radius(matrix: &DMatrix<f64>) -> f64 {
+pub(super) fn spectral_radius(matrix: &DMatrix<f64>) -> f64 {
     if matrix.is_empty() {
         return 0.0;
     }

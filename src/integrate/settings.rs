@@ -22,7 +22,11 @@ pub enum Method {
     /// it gives one, finite differences otherwise (along the system's tangent directions when it
     /// gives them).
     Rodas4,
-    /// Dormand–Prince where the problem is not stiff, RODAS4 where it is: the method changes
+    /// Radau IIA of order 5 (RADAU5's method) for stiff problems, its Jacobian (the system's own
+    /// or by finite differences) kept across steps while its Newton iteration converges fast.
+    Radau5,
+    /// Dormand–Prince where the problem is not stiff, Radau IIA (ROS34PW2 on a system with
+    /// tangent directions) where it is: the method changes
     /// between steps when the steps' stability says so (`switching.rs`).
     Automatic,
 }

@@ -19,8 +19,54 @@ use super::control::StepController;
 use super::dopri5::DormandPrince;
 use super::driver::AdaptiveStepper;
 use super::evaluator::{Evaluator, Halt};
-use super::rosenbrock::{RosenbrockW, Scheme};
+use super::radau::Radau5;
+use super::rosenbrock::RosenbrockW;
 use super::settings::Settings;
+
+/// The implicit method of the pair.
+pub(super) enum Stiff {
+    /// A Rosenbrock method (ROS34PW2 on a system with tangent directions).
+    Rosenbrock(RosenbrockW),
+    /// Radau IIA of order 5.
+    Radau(Radau5),
+}
+
+impl Stiff {
+    fn stepper(&mut self) -> &mut dyn AdaptiveStepper {
+        match self {
+            Stiff::Rosenbrock(method) => method,
+            Stiff::Radau(method) => method,
+        }
+    }
+
+    fn spectral_radius_below(&self, limit: f64) -> bool {
+        match self {
+            Stiff::Rosenbrock(method) => method.spectral_radius_below(limit),
+            Stiff::Radau(method) => method.spectral_radius_below(limit),
+        }
+    }
+
+    fn adopt(&mut self, derivative: &[f64]) {
+        match self {
+            Stiff::Rosenbrock(method) => method.adopt(derivative),
+            Stiff::Radau(method) => method.adopt(derivative),
+        }
+    }
+
+    fn derivative(&self) -> &[f64] {
+        match self {
+            Stiff::Rosenbrock(method) => method.derivative(),
+            Stiff::Radau(method) => method.derivative(),
+        }
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        match self {
+            Stiff::Rosenbrock(method) => method.interpolate(t, out),
+            Stiff::Radau(method) => method.interpolate(t, out),
+        }
+    }
+}
 
 /// h |λ| above which a Dormand–Prince step is taken as held by stability: its stability region
 /// reaches about 3.3 along the negative real axis.
@@ -36,7 +82,7 @@ const RETURN_RATIO: f64 = 0.67;
 
 pub(super) struct Switching {
     explicit: DormandPrince,
-    implicit: RosenbrockW,
+    implicit: Stiff,
     /// Which method takes the next attempt.
     stiff: bool,
     /// Which method took the last accepted step (whose interpolant serves the outputs).
@@ -53,10 +99,10 @@ pub(super) struct Switching {
 }
 
 impl Switching {
-    pub(super) fn new(scheme: Scheme, dimension: usize, settings: &Settings) -> Self {
+    pub(super) fn new(implicit: Stiff, dimension: usize, settings: &Settings) -> Self {
         Switching {
             explicit: DormandPrince::new(dimension, settings),
-            implicit: RosenbrockW::new(scheme, dimension, settings),
+            implicit,
             stiff: false,
             last_stiff: false,
             agreeing: 0,
@@ -69,7 +115,7 @@ impl Switching {
 
     fn current(&mut self) -> &mut dyn AdaptiveStepper {
         match self.stiff {
-            true => &mut self.implicit,
+            true => self.implicit.stepper(),
             false => &mut self.explicit,
         }
     }
@@ -102,7 +148,7 @@ impl Switching {
             self.switched = Some(self.explicit.controller());
         } else {
             self.implicit.adopt(self.explicit.derivative());
-            self.switched = Some(self.implicit.controller());
+            self.switched = Some(self.implicit.stepper().controller());
         }
         self.stiff = !self.stiff;
     }
@@ -115,6 +161,13 @@ impl AdaptiveStepper for Switching {
 
     fn controller(&self) -> StepController {
         self.explicit.controller()
+    }
+
+    fn step_limit(&self) -> f64 {
+        match (self.stiff, &self.implicit) {
+            (true, Stiff::Radau(method)) => method.step_limit(),
+            _ => f64::INFINITY,
+        }
     }
 
     fn switched_controller(&mut self) -> Option<StepController> {

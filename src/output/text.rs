@@ -144,7 +144,7 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     );
     if let (Some(stiff), Some(switches)) = (report.stiff_steps, report.method_switches) {
         out += &format!(
-            "stiff steps (Rosenbrock): {stiff} of {}, {switches} changes of method\n",
+            "stiff steps (implicit): {stiff} of {}, {switches} changes of method\n",
             report.steps
         );
     }

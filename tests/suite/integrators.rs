@@ -560,16 +560,21 @@ fn rk4_error_estimate_measures_the_local_error_of_its_steps() {
     assert!(estimate(2.5, -1.0) > 1e-2);
 }
 
-/// Error of x(2) for x'' = −x with a fixed step `h` (adaptive methods forced to it by a tolerance
-/// they always meet).
-fn fixed_step_error(method: &Method, h: f64) -> f64 {
-    let settings = Settings {
+/// Settings that hold an adaptive method to the step `h`: tolerances it always meets.
+fn fixed_step(h: f64) -> Settings {
+    Settings {
         rtol: 1e6,
         atol: 1e6,
         initial_step: Some(h),
         max_step: h,
         ..Settings::default()
-    };
+    }
+}
+
+/// Error of x(2) for x'' = −x with a fixed step `h` (adaptive methods forced to it by a tolerance
+/// they always meet).
+fn fixed_step_error(method: &Method, h: f64) -> f64 {
+    let settings = fixed_step(h);
     let (y, _, _) = solve(
         method,
         &mut oscillator(),
@@ -590,6 +595,7 @@ fn halving_the_step_divides_the_error_by_two_to_the_order() {
         (Method::Dop853, 0.5, 8),
         (Method::Rosenbrock, 0.1, 3),
         (Method::Rodas4, 0.1, 4),
+        (Method::Radau5, 0.2, 5),
     ] {
         let method_with = |h: f64| match method {
             Method::Rk4 { .. } => Method::Rk4 { step: h },
@@ -995,6 +1001,22 @@ fn prothero_robinson(lambda: f64) -> Ode<impl FnMut(f64, &[f64], &mut [f64])> {
     })
 }
 
+/// The error at t = 1 on Prothero and Robinson's problem with fixed steps `h` (tolerances that
+/// accept every step).
+fn prothero_robinson_error(method: &Method, lambda: f64, h: f64) -> (f64, Stats) {
+    let settings = fixed_step(h);
+    let (y, stats, _) = solve(
+        method,
+        &mut prothero_robinson(lambda),
+        &[0.0],
+        (0.0, 1.0),
+        &[],
+        &settings,
+    )
+    .unwrap();
+    ((y[0] - 1f64.sin()).abs(), stats)
+}
+
 #[test]
 fn rodas4_error_on_the_stiff_prothero_robinson_problem_shrinks_with_the_stiffness() {
     // Fixed steps (tolerances that accept every step) to t = 1, 100 to 1e5 times the stiff
@@ -1005,23 +1027,7 @@ fn rodas4_error_on_the_stiff_prothero_robinson_problem_shrinks_with_the_stiffnes
     // limit were not this accurate (or a wrong ∂f/∂t term) would leave an error of order h.
     for lambda in [-1e4, -1e6] {
         for h in [0.1, 0.025] {
-            let settings = Settings {
-                rtol: 1e6,
-                atol: 1e6,
-                initial_step: Some(h),
-                max_step: h,
-                ..Settings::default()
-            };
-            let (y, stats, _) = solve(
-                &Method::Rodas4,
-                &mut prothero_robinson(lambda),
-                &[0.0],
-                (0.0, 1.0),
-                &[],
-                &settings,
-            )
-            .unwrap();
-            let error = (y[0] - 1f64.sin()).abs();
+            let (error, stats) = prothero_robinson_error(&Method::Rodas4, lambda, h);
             let constant = error * lambda.abs() / h;
             eprintln!("RODAS4 on Prothero-Robinson, λ = {lambda:e}, h = {h}: error {error:.2e} = {constant:.3} h / |λ|");
             assert_eq!(stats.jacobian_evaluations, stats.steps, "h = {h}");
@@ -1031,9 +1037,9 @@ fn rodas4_error_on_the_stiff_prothero_robinson_problem_shrinks_with_the_stiffnes
 }
 
 #[test]
-fn rodas4_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
-    // x(t), x'(t) at t = 3000 (three relaxation cycles), against RODAS4 at a thousandth of the
-    // tolerance, each run also checked against the W-method's run at the tightest tolerance.
+fn rodas4_and_radau5_meet_a_tight_reference_on_van_der_pol_with_mu_1000() {
+    // x(t), x'(t) at t = 3000 (three relaxation cycles), RODAS4 and Radau IIA against RODAS4 at
+    // a thousandth of the tolerance, each run also checked against the W-method's run at the tightest tolerance.
     let run = |method: &Method, rtol: f64| {
         solve(
             method,
@@ -1051,10 +1057,34 @@ fn rodas4_meets_a_tight_reference_on_van_der_pol_with_mu_1000() {
         (reference[0] - independent[0]).abs() < 1e-6,
         "references {reference:?} and {independent:?}"
     );
-    for rtol in [1e-6, 1e-8] {
-        let (y, stats, _) = run(&Method::Rodas4, rtol);
-        let error = (y[0] - reference[0]).abs();
-        eprintln!("RODAS4 on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
-        assert!(error < 1e3 * rtol, "{rtol:e}: error {error:e}");
+    for method in [Method::Rodas4, Method::Radau5] {
+        for rtol in [1e-6, 1e-8] {
+            let (y, stats, _) = run(&method, rtol);
+            let error = (y[0] - reference[0]).abs();
+            eprintln!("{method:?} on Van der Pol, {rtol:e}: x error {error:.2e} {stats:?}");
+            assert!(error < 1e3 * rtol, "{method:?}, {rtol:e}: error {error:e}");
+        }
+    }
+}
+
+#[test]
+fn radau5_keeps_its_order_on_the_stiff_prothero_robinson_problem() {
+    // Fixed steps to t = 1, 100 to 1e5 times the stiff mode's time scale. Radau IIA's stage
+    // order 3 bounds its error there by about h⁴ / |λ| (Hairer and Wanner, VI.7), far below
+    // RODAS4's 0.02 h / |λ|: halving h divides it by more than 8.
+    for lambda in [-1e4, -1e6] {
+        let error = |h: f64| prothero_robinson_error(&Method::Radau5, lambda, h).0;
+        let (coarse, fine) = (error(0.1), error(0.05));
+        eprintln!(
+            "Radau IIA on Prothero-Robinson, λ = {lambda:e}: errors {coarse:.2e}, {fine:.2e}"
+        );
+        assert!(
+            coarse < 0.01 * 0.1 / lambda.abs(),
+            "λ = {lambda:e}: {coarse:e}"
+        );
+        assert!(
+            coarse / fine > 6.0 || fine < 1e-15,
+            "λ = {lambda:e}: {coarse:e} {fine:e}"
+        );
     }
 }

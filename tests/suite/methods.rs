@@ -291,10 +291,11 @@ const GOVERNOR_AT_ONE_SECOND: [f64; 8] = [
 #[test]
 fn the_implicit_integrator_takes_the_stiff_governor_to_its_tolerance() {
     // The governor's springs and dampers hold dopri5 at its stability boundary (17,000 steps
-    // over 1 s at any tolerance); the implicit integrator goes over to RODAS4. Its global error
-    // at t = 1 measured: positions 1-3 times the tolerance, rates 15-28 times (the error of
-    // each step, controlled to the tolerance, adds up over the hundreds of steps), in a fifth
-    // of dopri5's steps or less (2,732 at 1e-8).
+    // over 1 s at any tolerance); the implicit integrator goes over to Radau IIA. Its global
+    // error at t = 1 measured: positions 2.0e-6 and 4.4e-10, rates 4.8e-6 and 1.1e-9 at 1e-6
+    // and 1e-8, in 308 and 811 steps. At 1e-8 dopri5's first 419 steps resolve the initial
+    // transient (to t = 0.018, where accuracy, not stability, holds them), Radau IIA the rest
+    // in 392: at least a third of the steps are stiff, and all take a fifth of dopri5's or less.
     for tolerance in [1e-6, 1e-8] {
         let mut governor = prepared("governor", &[]);
         governor.settings = Settings {
@@ -323,7 +324,7 @@ fn the_implicit_integrator_takes_the_stiff_governor_to_its_tolerance() {
         assert!(rates < 50.0 * tolerance, "rates: {rates:e}");
         let stiff = simulation.report.stiff_steps.expect("counted");
         assert!(
-            stiff > simulation.report.steps / 2 && 5 * simulation.report.steps < 17_000,
+            3 * stiff > simulation.report.steps && 5 * simulation.report.steps < 17_000,
             "{} steps, {stiff} stiff",
             simulation.report.steps
         );

@@ -112,3 +112,52 @@ mod rosenbrock {
         assert!((error - (B[0] - B_EMBEDDED[0])).abs() < 1e-13);
     }
 }
+
+mod radau {
+    //! Checks Radau IIA's transformation: T⁻¹ is T's inverse, and T⁻¹ A⁻¹ T is the block of
+    //! A⁻¹'s real eigenvalue γ and its complex pair α ± iβ that the steps solve with, A being the
+    //! method's matrix written from its closed form (Hairer and Wanner, IV.5, Table 5.6).
+    use lsdc::integrate::radau::*;
+    use nalgebra::Matrix3;
+
+    fn butcher_matrix() -> Matrix3<f64> {
+        let s = 6f64.sqrt();
+        Matrix3::new(
+            (88.0 - 7.0 * s) / 360.0,
+            (296.0 - 169.0 * s) / 1800.0,
+            (-2.0 + 3.0 * s) / 225.0,
+            (296.0 + 169.0 * s) / 1800.0,
+            (88.0 + 7.0 * s) / 360.0,
+            (-2.0 - 3.0 * s) / 225.0,
+            (16.0 - s) / 36.0,
+            (16.0 + s) / 36.0,
+            1.0 / 9.0,
+        )
+    }
+
+    fn matrix(rows: &[[f64; 3]; 3]) -> Matrix3<f64> {
+        Matrix3::from_fn(|i, j| rows[i][j])
+    }
+
+    #[test]
+    fn the_inverse_transform_inverts_the_transform() {
+        let product = matrix(&TRANSFORM_INVERSE) * matrix(&TRANSFORM);
+        assert!(
+            (product - Matrix3::identity()).abs().max() < 1e-14,
+            "{product}"
+        );
+    }
+
+    #[test]
+    fn the_transform_splits_the_inverse_of_a_by_its_eigenvalues() {
+        let inverse = butcher_matrix().try_inverse().unwrap();
+        let block = matrix(&TRANSFORM_INVERSE) * inverse * matrix(&TRANSFORM);
+        let (gamma, sigma) = (real_eigenvalue(), complex_eigenvalue());
+        // The steps solve for W₁ + i W₂ with σ = complex_eigenvalue(): the 2 × 2 block is
+        // multiplication by σ written on (real, imaginary) parts.
+        let expected = Matrix3::new(
+            gamma, 0.0, 0.0, 0.0, sigma.re, -sigma.im, 0.0, sigma.im, sigma.re,
+        );
+        assert!((block - expected).abs().max() < 1e-12, "{block}");
+    }
+}

@@ -1,0 +1,532 @@
+//! Radau IIA of order 5 (three stages, stage order 3), the implicit Runge–Kutta method of Hairer
+//! and Wanner's RADAU5 (*Solving ODEs II*, IV.8), for stiff problems.
+//!
+//! Each step solves the collocation equations Z_i = h Σ_j a_ij f(t + c_j h, y + Z_j) for the
+//! stage increments Z by a simplified Newton iteration, whose matrix I ⊗ I − h A ⊗ J is
+//! split by the eigenvalues of A⁻¹ (one real γ, one complex pair α ± iβ) into one real and one
+//! complex system of the state's size: (γ/h − J) and ((α + iβ)/h − J). Unlike a Rosenbrock
+//! method the iteration converges to the same solution whatever J is, so one Jacobian serves as
+//! many steps as the iteration converges quickly with it (its rate θ at most `JACOBIAN_RATE`):
+//! on the flyball governor the Jacobian is formed once every few steps, where RODAS4 forms it at
+//! each. Its stage order 3 keeps the order near 5 on stiff mechanical problems, where RODAS4's
+//! stage order 1 lowers it (`BENCHMARKS.md`).
+//!
+//! The error estimate is RADAU5's (γ/h − J)⁻¹ (f(t, y) + Σ e_i Z_i / h), of order 3, which
+//! damps the stiff components; dense output is the collocation polynomial of degree 3, which
+//! also gives the next step's first guess of Z.
+
+use nalgebra::{Complex, DMatrix, DVector, Dyn, LU};
+
+use super::control::{error_norm, Gains, StepController};
+use super::driver::AdaptiveStepper;
+use super::evaluator::{all_finite, Evaluator, Halt};
+use super::jacobian::leading_columns;
+use super::settings::Settings;
+
+const SQRT6: f64 = 2.449_489_742_783_178;
+/// The nodes c_i.
+const NODES: [f64; 3] = [(4.0 - SQRT6) / 10.0, (4.0 + SQRT6) / 10.0, 1.0];
+/// The weights of Σ e_i Z_i / h in the error estimate.
+const ERROR_WEIGHTS: [f64; 3] = [
+    (-13.0 - 7.0 * SQRT6) / 3.0,
+    (-13.0 + 7.0 * SQRT6) / 3.0,
+    -1.0 / 3.0,
+];
+/// T, whose columns are eigenvectors of A⁻¹ (the real one, then the real and imaginary parts
+/// of a complex one), and T⁻¹ (the coefficients of scipy's `radau.py`, checked by
+/// `tests/suite/unit_integrate.rs`).
+pub const TRANSFORM: [[f64; 3]; 3] = [
+    [
+        0.094_438_762_488_975_24,
+        -0.1412552950209542,
+        0.030_029_194_105_147_42,
+    ],
+    [
+        0.2502131229653333,
+        0.204_129_352_293_799_94,
+        -0.3829421127572619,
+    ],
+    [1.0, 1.0, 0.0],
+];
+pub const TRANSFORM_INVERSE: [[f64; 3]; 3] = [
+    [
+        4.178_718_591_551_904,
+        0.327_682_820_761_062_37,
+        0.523_376_445_499_449_5,
+    ],
+    [
+        -4.178_718_591_551_904,
+        -0.327_682_820_761_062_37,
+        0.476_623_554_500_550_44,
+    ],
+    [
+        0.502_872_634_945_786_8,
+        -2.571_926_949_855_605,
+        0.596_039_204_828_224_9,
+    ],
+];
+/// Coefficients of the collocation polynomial: y(t + x h) = y + Σ_k (Σ_i Z_i P[i][k]) x^(k+1).
+const DENSE: [[f64; 3]; 3] = [
+    [
+        13.0 / 3.0 + 7.0 * SQRT6 / 3.0,
+        -23.0 / 3.0 - 22.0 * SQRT6 / 3.0,
+        10.0 / 3.0 + 5.0 * SQRT6,
+    ],
+    [
+        13.0 / 3.0 - 7.0 * SQRT6 / 3.0,
+        -23.0 / 3.0 + 22.0 * SQRT6 / 3.0,
+        10.0 / 3.0 - 5.0 * SQRT6,
+    ],
+    [1.0 / 3.0, -8.0 / 3.0, 10.0 / 3.0],
+];
+
+/// The real eigenvalue γ of A⁻¹.
+pub fn real_eigenvalue() -> f64 {
+    3.0 + 3f64.powf(2.0 / 3.0) - 3f64.cbrt()
+}
+
+/// The complex eigenvalue α − iβ of A⁻¹ that goes with [`TRANSFORM_INVERSE`]'s rows 2 and 3.
+pub fn complex_eigenvalue() -> Complex<f64> {
+    Complex::new(
+        3.0 + 0.5 * (3f64.cbrt() - 3f64.powf(2.0 / 3.0)),
+        -0.5 * (3f64.powf(5.0 / 6.0) + 3f64.powf(7.0 / 6.0)),
+    )
+}
+
+/// Newton iterations per attempt before it counts as failed (RADAU5's default).
+const NEWTON_ITERATIONS: usize = 7;
+/// The rate of convergence θ of the last step's iteration above which the Jacobian is formed
+/// again at the next step (RADAU5 advises 0.1 where the Jacobian is costly, as here).
+const JACOBIAN_RATE: f64 = 0.1;
+/// The error an attempt reports when its iteration did not converge: the controller then
+/// retries with 0.7 of the step (0.9 · 2.73^(-1/4)).
+const NEWTON_FAILED: f64 = 2.73;
+/// The fraction of a step on which the iteration failed (with a fresh Jacobian) that the steps
+/// after are limited to, and how much that limit grows with each accepted step: on the
+/// governor the iteration converges up to a step that drifts slowly along the run, above which
+/// it fails, while the error would allow steps 3 to 5 times longer.
+const NEWTON_LIMIT: f64 = 0.7;
+const NEWTON_LIMIT_GROWTH: f64 = 1.1;
+
+type Lu<T> = LU<T, Dyn, Dyn>;
+
+/// The two matrices of the iteration, factored for one step size.
+struct Factors {
+    step: f64,
+    real: Lu<f64>,
+    complex: Lu<Complex<f64>>,
+}
+
+/// The collocation polynomial of the last accepted step.
+struct Collocation {
+    t: f64,
+    h: f64,
+    y: Vec<f64>,
+    /// Σ_i Z_i P[i][k], for k = 0, 1, 2.
+    coefficients: [Vec<f64>; 3],
+}
+
+impl Collocation {
+    fn evaluate(&self, t: f64, out: &mut [f64]) {
+        let x = (t - self.t) / self.h;
+        let [c1, c2, c3] = &self.coefficients;
+        for i in 0..out.len() {
+            out[i] = self.y[i] + x * (c1[i] + x * (c2[i] + x * c3[i]));
+        }
+    }
+}
+
+/// How the Newton iteration ended.
+enum Newton {
+    Converged,
+    Failed,
+}
+
+pub(super) struct Radau5 {
+    rtol: f64,
+    atol: f64,
+    /// Components of the state the error control watches (the leading ones).
+    controlled: usize,
+    /// The iteration's stopping threshold, relative to the tolerances.
+    newton_tolerance: f64,
+    /// dy/dt at the current point, and at the end of the last acceptable attempt.
+    derivative: Vec<f64>,
+    end_derivative: Vec<f64>,
+    jacobian: Option<DMatrix<f64>>,
+    /// Whether the Jacobian was formed at the current point.
+    fresh: bool,
+    /// Whether the next attempt forms the Jacobian again.
+    stale: bool,
+    factors: Option<Factors>,
+    /// The stage increments of the last attempt.
+    increments: [Vec<f64>; 3],
+    /// The accepted step's polynomial; `None` after a start at a point it did not reach.
+    collocation: Option<Collocation>,
+    /// θ / (1 − θ) of the last iteration, which lets the next converge in one iteration.
+    contraction: f64,
+    /// The rate θ of the last iteration.
+    rate: f64,
+    /// The longest step the iteration is expected to converge on (`NEWTON_LIMIT`).
+    newton_limit: f64,
+    /// Whether the last attempt was rejected, and whether no step was accepted yet.
+    rejected: bool,
+    first: bool,
+    stage_state: Vec<f64>,
+    stage_derivatives: [Vec<f64>; 3],
+}
+
+impl Radau5 {
+    pub(super) fn new(dimension: usize, settings: &Settings) -> Self {
+        let zeros = vec![0.0; dimension];
+        let triple = || [zeros.clone(), zeros.clone(), zeros.clone()];
+        let rtol = settings.rtol.max(f64::EPSILON);
+        Radau5 {
+            rtol: settings.rtol,
+            atol: settings.atol,
+            controlled: settings.controlled_len(dimension),
+            newton_tolerance: (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt())),
+            derivative: zeros.clone(),
+            end_derivative: zeros.clone(),
+            jacobian: None,
+            fresh: false,
+            stale: true,
+            factors: None,
+            increments: triple(),
+            collocation: None,
+            contraction: 0.0,
+            rate: 0.0,
+            newton_limit: f64::INFINITY,
+            rejected: false,
+            first: true,
+            stage_state: zeros.clone(),
+            stage_derivatives: triple(),
+        }
+    }
+
+    /// Takes `derivative` as dy/dt at the current point (computed by another method); the
+    /// Jacobian and the first guess are formed anew.
+    pub(super) fn adopt(&mut self, derivative: &[f64]) {
+        self.derivative.copy_from_slice(derivative);
+        self.restart();
+    }
+
+    fn restart(&mut self) {
+        self.newton_limit = f64::INFINITY;
+        self.stale = true;
+        self.fresh = false;
+        self.collocation = None;
+    }
+
+    /// Whether the spectral radius of the Jacobian last formed is below `limit` (`false` before
+    /// the first); the bound |trace| / n ≤ ρ says no without the eigenvalues where the stiff
+    /// eigenvalues make the trace.
+    pub(super) fn spectral_radius_below(&self, limit: f64) -> bool {
+        let Some(jacobian) = &self.jacobian else {
+            return false;
+        };
+        let m = jacobian.nrows();
+        if m > 0 && jacobian.trace().abs() / m as f64 >= limit {
+            return false;
+        }
+        super::rosenbrock::spectral_radius(jacobian) < limit
+    }
+
+    fn form_jacobian(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {
+        eval.stats.jacobian_evaluations += 1;
+        let n = y.len();
+        let columns = leading_columns(
+            eval,
+            t,
+            y,
+            &self.derivative,
+            self.controlled,
+            &mut self.stage_state,
+        )?;
+        // The components past the controlled ones (a quadrature) do not act on f.
+        let mut jacobian = DMatrix::zeros(n, n);
+        jacobian.columns_mut(0, self.controlled).copy_from(&columns);
+        self.jacobian = Some(jacobian);
+        self.fresh = true;
+        self.stale = false;
+        self.factors = None;
+        Ok(())
+    }
+
+    /// The matrices γ/h − J and (α + iβ)/h − J factored for `h`, or `None` when singular.
+    fn factor(&mut self, eval: &mut Evaluator, h: f64) -> bool {
+        if matches!(&self.factors, Some(f) if f.step == h) {
+            return true;
+        }
+        eval.stats.lu_decompositions += 1;
+        let jacobian = self.jacobian.as_ref().expect("formed before factoring");
+        let n = jacobian.nrows();
+        let mut real = -jacobian;
+        let mut complex = jacobian.map(|x| Complex::new(-x, 0.0));
+        let shift = complex_eigenvalue() / h;
+        for i in 0..n {
+            real[(i, i)] += real_eigenvalue() / h;
+            complex[(i, i)] += shift;
+        }
+        let (real, complex) = (real.lu(), complex.lu());
+        let invertible = real.is_invertible() && complex.is_invertible();
+        self.factors = invertible.then_some(Factors {
+            step: h,
+            real,
+            complex,
+        });
+        invertible
+    }
+
+    /// The first guess of the stage increments: the last step's polynomial carried on, or zero.
+    fn guess(&mut self, t: f64, y: &[f64], h: f64) {
+        for (stage, node) in NODES.iter().enumerate() {
+            let z = &mut self.increments[stage];
+            match &self.collocation {
+                Some(previous) => {
+                    previous.evaluate(t + node * h, z);
+                    z.iter_mut().zip(y).for_each(|(z, y)| *z -= y);
+                }
+                None => z.fill(0.0),
+            }
+        }
+    }
+
+    /// The scaled root-mean-square of the controlled components of the three vectors.
+    fn scaled_norm(&self, vectors: [&[f64]; 3], y: &[f64]) -> f64 {
+        let m = self.controlled;
+        let sum: f64 = vectors
+            .iter()
+            .flat_map(|v| (0..m).map(move |i| (i, v[i])))
+            .map(|(i, value)| (value / (self.atol + self.rtol * y[i].abs())).powi(2))
+            .sum();
+        (sum / (3 * m).max(1) as f64).sqrt()
+    }
+
+    /// Solves the collocation equations from the guess in `increments`.
+    fn iterate(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64) -> Result<Newton, Halt> {
+        let n = y.len();
+        let factors = self.factors.take().expect("factored before iterating");
+        let mut w = transform(&TRANSFORM_INVERSE, &self.increments);
+        let mut contraction = self.contraction.max(f64::EPSILON).powf(0.8);
+        let mut previous: Option<f64> = None;
+        let gamma = real_eigenvalue() / h;
+        let sigma = complex_eigenvalue() / h;
+        let mut outcome = Newton::Failed;
+        for iteration in 0..NEWTON_ITERATIONS {
+            for (stage, node) in NODES.iter().enumerate() {
+                for ((state, y), z) in self
+                    .stage_state
+                    .iter_mut()
+                    .zip(y)
+                    .zip(&self.increments[stage])
+                {
+                    *state = y + z;
+                }
+                let derivative = &mut self.stage_derivatives[stage];
+                if let Err(halt) = eval.rhs(t + node * h, &self.stage_state, derivative) {
+                    self.factors = Some(factors);
+                    return Err(halt);
+                }
+            }
+            let f = transform(&TRANSFORM_INVERSE, &self.stage_derivatives);
+            let mut real = DVector::from_fn(n, |i, _| f[0][i] - gamma * w[0][i]);
+            let mut complex = DVector::from_fn(n, |i, _| {
+                Complex::new(f[1][i], f[2][i]) - sigma * Complex::new(w[1][i], w[2][i])
+            });
+            factors.real.solve_mut(&mut real);
+            factors.complex.solve_mut(&mut complex);
+            let re: Vec<f64> = complex.iter().map(|c| c.re).collect();
+            let im: Vec<f64> = complex.iter().map(|c| c.im).collect();
+            let size = self.scaled_norm([real.as_slice(), &re, &im], y);
+            if let Some(before) = previous {
+                let theta = size / before;
+                self.rate = theta;
+                if theta >= 0.99 {
+                    break;
+                }
+                contraction = theta / (1.0 - theta);
+                let remaining = (NEWTON_ITERATIONS - 1 - iteration) as i32;
+                if contraction * size * theta.powi(remaining) > self.newton_tolerance {
+                    break;
+                }
+            }
+            for i in 0..n {
+                w[0][i] += real[i];
+                w[1][i] += re[i];
+                w[2][i] += im[i];
+            }
+            self.increments = transform(&TRANSFORM, &w);
+            if !self.increments.iter().all(|z| all_finite(z)) {
+                break;
+            }
+            if contraction * size <= self.newton_tolerance {
+                self.contraction = contraction;
+                outcome = Newton::Converged;
+                break;
+            }
+            previous = Some(size);
+        }
+        self.factors = Some(factors);
+        Ok(outcome)
+    }
+
+    /// The error estimate (γ/h − J)⁻¹ (f₀ + Σ e_i Z_i / h), f₀ = f(t, y) or, for a second
+    /// estimate after a rejection, f at y plus the first estimate.
+    fn error_estimate(&self, h: f64, f0: &[f64]) -> DVector<f64> {
+        let n = f0.len();
+        let mut error = DVector::from_fn(n, |i, _| {
+            f0[i]
+                + (0..3)
+                    .map(|s| ERROR_WEIGHTS[s] * self.increments[s][i])
+                    .sum::<f64>()
+                    / h
+        });
+        let factors = self.factors.as_ref().expect("factored before estimating");
+        factors.real.solve_mut(&mut error);
+        error
+    }
+
+    /// Attempts the step with the Jacobian as it is.
+    fn attempt_with_jacobian(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> Result<bool, Halt> {
+        if !self.factor(eval, h) {
+            return Ok(false);
+        }
+        self.guess(t, y, h);
+        Ok(matches!(self.iterate(eval, t, y, h)?, Newton::Converged))
+    }
+}
+
+/// Σ_j m[i][j] v_j for i = 0, 1, 2.
+fn transform(m: &[[f64; 3]; 3], v: &[Vec<f64>; 3]) -> [Vec<f64>; 3] {
+    std::array::from_fn(|i| {
+        (0..v[0].len())
+            .map(|k| m[i][0] * v[0][k] + m[i][1] * v[1][k] + m[i][2] * v[2][k])
+            .collect()
+    })
+}
+
+impl AdaptiveStepper for Radau5 {
+    fn order(&self) -> u32 {
+        5
+    }
+
+    fn step_limit(&self) -> f64 {
+        self.newton_limit
+    }
+
+    fn controller(&self) -> StepController {
+        // The estimate is of order 3; RADAU5's growth limit of 8.
+        StepController::new(
+            3,
+            Gains {
+                beta: 0.0,
+                safety: 0.9,
+                max_factor: 8.0,
+                rise_power: 1.0,
+            },
+        )
+    }
+
+    fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {
+        self.restart();
+        eval.rhs(t, y, &mut self.derivative)
+    }
+
+    fn derivative(&self) -> &[f64] {
+        &self.derivative
+    }
+
+    fn attempt(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+    ) -> Result<f64, Halt> {
+        if self.jacobian.is_none() || (self.stale && !self.fresh) {
+            self.form_jacobian(eval, t, y)?;
+        }
+        let after_rejection = self.rejected;
+        // Until the attempt's error says otherwise.
+        self.rejected = true;
+        let mut converged = self.attempt_with_jacobian(eval, t, y, h)?;
+        if !converged && !self.fresh {
+            // A Jacobian from an earlier point may be what slows the iteration.
+            self.form_jacobian(eval, t, y)?;
+            converged = self.attempt_with_jacobian(eval, t, y, h)?;
+        }
+        if !converged {
+            self.newton_limit = NEWTON_LIMIT * h;
+            return Ok(NEWTON_FAILED);
+        }
+        for i in 0..y.len() {
+            y_new[i] = y[i] + self.increments[2][i];
+        }
+        let m = self.controlled;
+        let norm = |e: &DVector<f64>| {
+            error_norm(
+                &e.as_slice()[..m],
+                &y[..m],
+                &y_new[..m],
+                self.rtol,
+                self.atol,
+            )
+        };
+        let mut estimate = self.error_estimate(h, &self.derivative);
+        let mut error = norm(&estimate);
+        if error > 1.0 && (self.first || after_rejection) {
+            // Hairer and Wanner's second estimate, which damps the stiff components' part of
+            // the first (too pessimistic on them) by one more solve.
+            for i in 0..y.len() {
+                self.stage_state[i] = y[i] + estimate[i];
+            }
+            let mut f = std::mem::take(&mut self.end_derivative);
+            let evaluated = eval.rhs(t, &self.stage_state, &mut f);
+            if evaluated.is_ok() {
+                estimate = self.error_estimate(h, &f);
+                error = norm(&estimate);
+            }
+            self.end_derivative = f;
+            evaluated?;
+        }
+        if error <= 1.0 && all_finite(y_new) {
+            eval.rhs(t + h, y_new, &mut self.end_derivative)?;
+        }
+        self.rejected = error.is_nan() || error > 1.0;
+        Ok(error)
+    }
+
+    fn accept(&mut self, t: f64, y: &[f64], h: f64, _y_new: &[f64]) {
+        let coefficients = std::array::from_fn(|k| {
+            (0..y.len())
+                .map(|i| (0..3).map(|s| self.increments[s][i] * DENSE[s][k]).sum())
+                .collect()
+        });
+        self.collocation = Some(Collocation {
+            t,
+            h,
+            y: y.to_vec(),
+            coefficients,
+        });
+        std::mem::swap(&mut self.derivative, &mut self.end_derivative);
+        self.stale = self.rate > JACOBIAN_RATE;
+        self.newton_limit *= NEWTON_LIMIT_GROWTH;
+        self.fresh = false;
+        self.rate = 0.0;
+        self.first = false;
+        self.rejected = false;
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        if let Some(collocation) = &self.collocation {
+            collocation.evaluate(t, out);
+        }
+    }
+}
