@@ -4,6 +4,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::Ordering;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
@@ -35,6 +36,21 @@ static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new
 
 fn quiet() -> bool {
     QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Set when the command line asks for JSON (`--format json`, `--report json`): usage errors are
+/// then also printed as JSON on standard output, where the results would be.
+static JSON_ASKED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether the arguments ask for JSON: `--format` or `--report` followed by `json`, or
+/// `--format=json`, `--report=json`. Read from the raw arguments, so that the arguments clap
+/// rejects are also reported as JSON.
+fn asks_for_json(arguments: &[String]) -> bool {
+    let option = |a: &str| a == "--format" || a == "--report";
+    arguments
+        .windows(2)
+        .any(|w| option(&w[0]) && w[1] == "json")
+        || (arguments.iter()).any(|a| a == "--format=json" || a == "--report=json")
 }
 
 /// The diagnostics to print as text: without the warnings under `--quiet`.
@@ -413,7 +429,14 @@ struct TestArgs {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let arguments: Vec<String> = std::env::args_os()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    JSON_ASKED.store(asks_for_json(&arguments), Ordering::Relaxed);
+    let cli = match Cli::try_parse_from(&arguments) {
+        Ok(cli) => cli,
+        Err(error) => return rejected_arguments(error),
+    };
     QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     match cli.command {
         Command::Check {
@@ -503,18 +526,40 @@ fn json(value: &impl serde::Serialize) -> String {
     serde_json::to_string_pretty(value).unwrap_or_default() + "\n"
 }
 
+/// A usage error: the message on standard error, exit code 2; where JSON is asked for, also
+/// `{"ok": false, "usage_error": MESSAGE}` on standard output.
 fn usage_error(message: &str) -> ExitCode {
+    if JSON_ASKED.load(Ordering::Relaxed) {
+        out(&json(&usage_error_json(message)));
+    }
+    usage_error_after_results(message)
+}
+
+/// A usage error found after the results were printed: on standard error only, so that standard
+/// output keeps one JSON document.
+fn usage_error_after_results(message: &str) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(2)
 }
 
-/// A usage error of a command whose results are asked for in `format`: in JSON, also as
-/// `{"ok": false, "usage_error": MESSAGE}` on standard output, where the results would be.
-fn usage_error_in(format: Format, message: &str) -> ExitCode {
-    if format == Format::Json {
-        out(&json(&usage_error_json(message)));
+/// Arguments clap rejects: its message and usage on standard error (help and version are
+/// printed as clap prints them), and in JSON where JSON is asked for.
+fn rejected_arguments(error: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        error.kind(),
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion
+    ) {
+        error.exit();
     }
-    usage_error(message)
+    if JSON_ASKED.load(Ordering::Relaxed) {
+        let text = error.render().to_string();
+        let message = text.split("\n\n").next().unwrap_or(&text);
+        let message = message.strip_prefix("error: ").unwrap_or(message);
+        out(&json(&usage_error_json(message.trim_end())));
+    }
+    let _ = error.print();
+    ExitCode::from(2)
 }
 
 fn usage_error_json(message: &str) -> serde_json::Value {
@@ -595,7 +640,7 @@ fn compile_one(
     format: Format,
 ) -> Result<Compilation, ExitCode> {
     let compilation = driver::compile_files(&[file.to_path_buf()], options)
-        .map_err(|error| usage_error_in(format, &error.to_string()))?;
+        .map_err(|error| usage_error(&error.to_string()))?;
     if compilation.has_errors() || (format == Format::Text && !compilation.diagnostics.is_empty()) {
         report_diagnostics(&compilation, &compilation.diagnostics, format);
     }
@@ -742,19 +787,16 @@ fn write_output(output: Option<&std::path::Path>, text: &str) -> ExitCode {
     }
 }
 
-fn parse_sets(
-    sets: &[String],
-    format: Format,
-) -> Result<Vec<lsdc::simulate::prepare::Override>, ExitCode> {
+fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, ExitCode> {
     sets.iter()
         .map(|s| s.parse())
         .collect::<Result<_, lsdc::kinematics::unknowns::OverrideError>>()
-        .map_err(|error| usage_error_in(format, &error.to_string()))
+        .map_err(|error| usage_error(&error.to_string()))
 }
 
 fn simulate(args: &SimulateArgs) -> ExitCode {
     use lsdc::simulate::prepare::{prepare, Settings};
-    let overrides = match parse_sets(&args.sets, args.report) {
+    let overrides = match parse_sets(&args.sets) {
         Ok(o) => o,
         Err(code) => return code,
     };
@@ -814,7 +856,7 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
     };
     print_run_report(&compilation, &simulation.report, args.report, warnings);
     if let Err(message) = written {
-        return usage_error(&message);
+        return usage_error_after_results(&message);
     }
     // A plot that cannot be drawn after the run (a run without outputs) does not change what
     // the run's exit code says.
@@ -1227,7 +1269,7 @@ fn prepare_file(
     format: Format,
 ) -> Result<lsdc::simulate::prepare::Prepared, ExitCode> {
     use lsdc::simulate::prepare::{prepare, Settings};
-    let overrides = parse_sets(sets, format)?;
+    let overrides = parse_sets(sets)?;
     let compilation = compile_one(file, options, format)?;
     let Some(mechanism) = &compilation.mechanism else {
         return Err(ExitCode::from(1));
@@ -1326,7 +1368,8 @@ fn parse(file: &std::path::Path) -> ExitCode {
     let mut sources = lsdc::source::SourceMap::new();
     let id = sources.add(file.display().to_string(), text);
     let (program, diagnostics) = lsdc::syntax::parser::parse(id, &sources.file(id).text);
-    out(&format!("{program:#?}\n"));
+    out(&lsdc::syntax::debug_tree::pretty(&format!("{program:?}")));
+    out("\n");
     eprint!("{}", render::to_text(&sources, &diagnostics));
     if diagnostics.is_empty() {
         ExitCode::SUCCESS
@@ -1387,7 +1430,10 @@ fn print_summary(summary: &lsdc::testing::report::Summary, args: &TestArgs) -> E
     }
     if let Some(path) = &args.junit {
         if let Err(error) = std::fs::write(path, report::junit(summary)) {
-            return usage_error(&format!("cannot write `{}`: {error}", path.display()));
+            return usage_error_after_results(&format!(
+                "cannot write `{}`: {error}",
+                path.display()
+            ));
         }
     }
     match summary.all_passed() {

@@ -2,6 +2,7 @@
 //! abstract syntax with spans.
 
 pub mod ast;
+pub mod debug_tree;
 pub mod lexer;
 pub mod names;
 pub mod nesting;

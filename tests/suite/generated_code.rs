@@ -624,3 +624,40 @@ fn temporaries_are_named_once_and_constants_are_literals_of_every_language() {
     // Constants always carry a point or an exponent: `40.0`, never `40`.
     assert!(source.contains("40.0") && !source.contains(" 40 "));
 }
+
+/// The C of every example compiles as a file of its own without a warning under
+/// `-Wall -Wextra -Werror` (unused inputs and names were warnings).
+#[test]
+fn generated_c_of_every_example_compiles_without_warnings() {
+    let Some(compiler) = c_compiler() else {
+        println!("no C compiler found (CC, cc, gcc, clang): the generated C is not checked");
+        return;
+    };
+    let examples = crate::common::example_paths();
+    let dir = scratch("c-warnings");
+    let compile = |path: &PathBuf| {
+        let name = path.file_stem().expect("a name").to_string_lossy();
+        let source = emit::c(&equations_of(&path.to_string_lossy()), &name);
+        let file = dir.join(format!("{name}.c"));
+        std::fs::write(&file, source).expect("written");
+        let output = Command::new(&compiler)
+            .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-c", "-o"])
+            .arg(dir.join(format!("{name}.o")))
+            .arg(&file)
+            .output()
+            .unwrap_or_else(|e| panic!("{compiler}: {e}"));
+        assert!(
+            output.status.success(),
+            "{compiler} -Wall -Wextra -Werror on the C of {name}:\n{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    };
+    let (even, odd): (Vec<_>, Vec<_>) = examples.iter().enumerate().partition(|(i, _)| i % 2 == 0);
+    std::thread::scope(|scope| {
+        let other = scope.spawn(|| odd.iter().for_each(|(_, path)| compile(path)));
+        even.iter().for_each(|(_, path)| compile(path));
+        other.join().expect("no failure");
+    });
+    let _ = std::fs::remove_dir_all(&dir);
+    println!("{} examples: C without warnings", examples.len());
+}

@@ -126,13 +126,7 @@ fn values_given_on_the_command_line_are_checked() {
 }
 
 fn examples() -> Vec<(PathBuf, String)> {
-    let mut found: Vec<PathBuf> = std::fs::read_dir("examples")
-        .expect("examples")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "lsd"))
-        .collect();
-    found.sort();
-    found
+    crate::common::example_paths()
         .into_iter()
         .map(|p| {
             let text = std::fs::read_to_string(&p).expect("readable");
@@ -327,6 +321,33 @@ fn usage_errors_are_json_where_json_is_asked_for() {
     assert!(value["usage_error"]
         .as_str()
         .is_some_and(|m| m.contains("no name before `=`")));
+    clap_rejections_are_json_too();
+}
+
+/// Arguments clap rejects, with JSON asked for: one JSON document on standard output, clap's
+/// text with its usage on standard error. Help is still help.
+fn clap_rejections_are_json_too() {
+    let rejected = [
+        (
+            vec!["tree", "--format", "json", "--no-such-option", "x.lsd"],
+            "--no-such-option",
+        ),
+        (vec!["simulate", "--report=json"], "required"),
+        (vec!["eval", "--format=json", "x.lsd"], "'--format'"),
+    ];
+    for (arguments, expected) in rejected {
+        let (code, stdout, stderr) = crate::common::lsdc(&arguments);
+        assert_eq!(code, 2, "{arguments:?}: {stderr}");
+        let value: serde_json::Value = serde_json::from_str(&stdout)
+            .unwrap_or_else(|e| panic!("{arguments:?}: {e}: {stdout}"));
+        assert_eq!(value["ok"], false);
+        let message = value["usage_error"].as_str().expect("a message");
+        assert!(message.contains(expected), "{arguments:?}: {message}");
+        assert!(stderr.contains("Usage:"), "{arguments:?}: {stderr}");
+    }
+    let (code, stdout, _) = crate::common::lsdc(&["check", "--format", "json", "--help"]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("Usage:"), "{stdout}");
 }
 
 /// A states file of the wrong form says what is wrong in it, not how serde tried to read it.

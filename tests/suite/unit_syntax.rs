@@ -177,3 +177,28 @@ mod parser {
         assert_eq!(std::mem::size_of::<lsdc::syntax::ast::Decl>(), 48);
     }
 }
+
+mod debug_tree {
+    use lsdc::source::FileId;
+    use lsdc::syntax::debug_tree::pretty;
+    use lsdc::syntax::parser::parse;
+
+    /// `pretty` of the compact debug text is Rust's own pretty debug text, for every example,
+    /// for strings holding brackets, commas and escaped quotes, and for a sum 150 terms deep.
+    #[test]
+    fn the_layout_is_that_of_rust_pretty_debug() {
+        let mut programs: Vec<String> = (crate::common::example_paths().iter())
+            .map(|path| std::fs::read_to_string(path).expect("readable"))
+            .collect();
+        programs.push(r#"import "a, b {c} [d] (e) \" f.lsd" ; let x = [] ;"#.to_string());
+        programs.push(format!("let s = {}1 ;", "1 + ".repeat(149)));
+        for text in &programs {
+            let (program, _) = parse(FileId(0), text);
+            assert_eq!(
+                pretty(&format!("{program:?}")),
+                format!("{program:#?}"),
+                "{text}"
+            );
+        }
+    }
+}

@@ -907,3 +907,40 @@ fn extensions_inside_links_are_reported_not_checked_as_shapes() {
         "the one in `<geometry>`"
     );
 }
+
+/// Elements nested past the limit are refused at the first element too deep (E0209), at once
+/// even for 100,000 levels (reading them took minutes); at the limit the document is read on.
+#[test]
+fn elements_nested_too_deep_are_refused_where_the_limit_is_passed() {
+    use lsdc::load::urdf::document::MAX_ELEMENT_NESTING;
+    let nested = |levels: usize| {
+        let inner = levels - 2; // below <robot> and <link>
+        format!(
+            "<robot name=\"r\">\n<link name=\"a\">{}{}</link>\n</robot>\n",
+            "<x>".repeat(inner),
+            "</x>".repeat(inner)
+        )
+    };
+    for levels in [MAX_ELEMENT_NESTING + 1, 100_000] {
+        let xml = nested(levels);
+        let error =
+            import_urdf("deep.urdf", &xml, &ImportOptions::default()).expect_err("too deep");
+        assert_eq!(error.code, "E0209", "{error:?}");
+        let span = error.primary_span().expect("a place");
+        let opened_before = xml[..span.start as usize].matches("<x>").count();
+        assert_eq!(opened_before + 2, MAX_ELEMENT_NESTING, "{error:?}");
+        assert_eq!(&xml[span.start as usize..span.end as usize], "<x>");
+    }
+    let at_the_limit = import_urdf(
+        "deep.urdf",
+        &nested(MAX_ELEMENT_NESTING),
+        &Default::default(),
+    );
+    assert!(
+        at_the_limit
+            .as_ref()
+            .map_or_else(|e| e.code != "E0209", |_| true),
+        "{:?}",
+        at_the_limit.err()
+    );
+}

@@ -12,6 +12,12 @@ use roxmltree::{Document, Node, ParsingOptions};
 use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 
+/// The deepest nesting of elements a URDF file may have, the root `<robot>` being level 1. A
+/// URDF needs about five levels (`robot`, `link`, `visual`, `geometry`, `mesh`), a few more in
+/// the extensions of tools; the limit is far above that, and keeps the reading of urdf-rs, whose
+/// time grows with the square of the depth (100,000 levels took minutes), short.
+pub const MAX_ELEMENT_NESTING: usize = 100;
+
 /// An element of the URDF document.
 pub type Element<'s, 'a> = Node<'s, 'a>;
 
@@ -33,11 +39,36 @@ impl<'a> Source<'a> {
         };
         let document = Document::parse_with_options(xml, options)
             .map_err(|error| malformed(file, xml, &error))?;
-        Ok(Source {
+        let source = Source {
             file,
             xml,
             document,
-        })
+        };
+        source.limit_nesting()?;
+        Ok(source)
+    }
+
+    /// E0209 at the first element nested deeper than [`MAX_ELEMENT_NESTING`]. The depths are
+    /// counted in one pass over the document, each element's from its parent's, without
+    /// recursion.
+    fn limit_nesting(&self) -> Result<(), Diagnostic> {
+        let mut depths = vec![0; self.document.descendants().count()];
+        for element in self.document.descendants().filter(Node::is_element) {
+            let depth = element.parent().map_or(0, |p| depths[p.id().get_usize()]) + 1;
+            if depth > MAX_ELEMENT_NESTING {
+                return Err(Diagnostic::error(
+                    "E0209",
+                    format!("the elements are nested more than {MAX_ELEMENT_NESTING} levels deep"),
+                )
+                .primary(
+                    self.span(element),
+                    format!("level {} starts here", MAX_ELEMENT_NESTING + 1),
+                )
+                .help("the elements of a URDF robot are a few levels deep (`<robot>`, `<link>`, `<visual>`, `<geometry>`, `<mesh>`)"));
+            }
+            depths[element.id().get_usize()] = depth;
+        }
+        Ok(())
     }
 
     /// The root element (`<robot>` in a URDF file).

@@ -71,7 +71,7 @@ pub fn c(equations: &Equations, source: &str) -> String {
          void mass_matrix({}const double *p, const double *k, double *m{}) {{\n{}}}",
         time(mass),
         with_f(mass),
-        mass.body(&symbols, &C, &C, "m")
+        with_unused(&inputs(mass, &["p", "k"]), mass.body(&symbols, &C, &C, "m"))
     );
     let rhs = &routines.right_hand_side;
     let _ = writeln!(
@@ -79,7 +79,7 @@ pub fn c(equations: &Equations, source: &str) -> String {
         "\n/* S(p, q) + F(p, q, t): the velocity-product terms and the generalised forces. */\n\
          void right_hand_side(double t, const double *p, const double *q, const double *k, double *rhs{}) {{\n{}}}",
         with_f(rhs),
-        rhs.body(&symbols, &C, &C, "rhs")
+        with_unused(&["t", "p", "q", "k"], rhs.body(&symbols, &C, &C, "rhs"))
     );
     if let Some((delta, bias)) = &routines.loops {
         let _ = writeln!(
@@ -88,7 +88,7 @@ pub fn c(equations: &Equations, source: &str) -> String {
              void constraints({}const double *p, const double *k, double *delta{}) {{\n{}}}",
             time(delta),
             with_f(delta),
-            delta.body(&symbols, &C, &C, "delta")
+            with_unused(&inputs(delta, &["p", "k"]), delta.body(&symbols, &C, &C, "delta"))
         );
         let _ = writeln!(
             out,
@@ -96,11 +96,35 @@ pub fn c(equations: &Equations, source: &str) -> String {
              void constraint_bias({}const double *p, const double *q, const double *k, double *out{}) {{\n{}}}",
             time(bias),
             with_f(bias),
-            bias.body(&symbols, &C, &C, "out")
+            with_unused(&inputs(bias, &["p", "q", "k"]), bias.body(&symbols, &C, &C, "out"))
         );
     }
     out.push_str(&forward_dynamics(&symbols, &routines));
     out
+}
+
+/// The inputs of a routine's signature: the time when it reads it, then `others`.
+fn inputs<'a>(routine: &Routine, others: &[&'a str]) -> Vec<&'a str> {
+    let time = routine.uses_time.then_some("t");
+    time.into_iter().chain(others.iter().copied()).collect()
+}
+
+/// `body` after a `(void)x;` for each input `x` it does not read. The signatures are the same
+/// for every mechanism (a pendulum's right-hand side does not read the time, nor a mass matrix
+/// the parameters when there are none), and the file compiles without a warning under
+/// `-Wall -Wextra`.
+fn with_unused(inputs: &[&str], body: String) -> String {
+    let read: std::collections::HashSet<&str> = body
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .collect();
+    let unused: Vec<String> = (inputs.iter())
+        .filter(|input| !read.contains(*input))
+        .map(|input| format!("(void){input};"))
+        .collect();
+    if unused.is_empty() {
+        return body;
+    }
+    format!("    {}\n{body}", unused.join(" "))
 }
 
 fn header(equations: &Equations, source: &str) -> String {
@@ -148,7 +172,7 @@ fn header(equations: &Equations, source: &str) -> String {
         let _ = writeln!(
             out,
             "\n/* The unknown functions as applied: a function taking f calls f(i, arguments) for the value\n   \
-             of FUNCTIONS[i]. */\nstatic const char *const FUNCTIONS[FUNCTION_COUNT] = {{{}}};",
+             of FUNCTIONS[i]. */\nconst char *const FUNCTIONS[FUNCTION_COUNT] = {{{}}};",
             list.join(", ")
         );
     }
@@ -160,7 +184,7 @@ fn header(equations: &Equations, source: &str) -> String {
             .collect();
         let _ = writeln!(
             out,
-            "\n/* The constraint rows, which are also the multipliers' names. */\nstatic const char *const CONSTRAINT_NAMES[CONSTRAINTS] = {{{}}};",
+            "\n/* The constraint rows, which are also the multipliers' names. */\nconst char *const CONSTRAINT_NAMES[CONSTRAINTS] = {{{}}};",
             rows.join(", ")
         );
     }
@@ -185,7 +209,7 @@ fn names(out: &mut String, title: &str, constant: &str, list: &[Variable]) {
     let quoted: Vec<String> = list.iter().map(|v| c_string(&v.name)).collect();
     let _ = writeln!(
         out,
-        "*/\nstatic const char *const {constant}[{}] = {{{}}};",
+        "*/\nconst char *const {constant}[{}] = {{{}}};",
         list.len(),
         quoted.join(", ")
     );
@@ -221,6 +245,7 @@ fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {
                 .as_ref()
                 .map(|a| a.body(symbols, &C, &C, "qdd"))
                 .unwrap_or_default();
+            let body = with_unused(&["t", "p", "q", "k"], body);
             let _ = write!(
                 out,
                 "\n/* The rates' derivatives q' = M^-1 (S + F), by the articulated-body recursion (no solve). */\n\

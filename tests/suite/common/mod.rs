@@ -13,6 +13,17 @@ pub fn max_difference(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The paths of the programs `examples/*.lsd`, sorted.
+pub fn example_paths() -> Vec<std::path::PathBuf> {
+    let mut found: Vec<std::path::PathBuf> = std::fs::read_dir("examples")
+        .expect("examples")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "lsd"))
+        .collect();
+    found.sort();
+    found
+}
+
 /// The first C compiler found: `CC`, `cc`, `gcc`, `clang`.
 pub fn c_compiler() -> Option<String> {
     let candidates = std::env::var("CC")
