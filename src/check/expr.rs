@@ -130,7 +130,7 @@ impl<'w> Checker<'w> {
 
     fn unknown_name(&self, ident: &Ident, ctx: &Ctx) -> Diagnostic {
         let name = &ident.name;
-        let mut diagnostic = Diagnostic::error("E0301", format!("unknown name `{name}`"))
+        let diagnostic = Diagnostic::error("E0301", format!("unknown name `{name}`"))
             .primary(ident.span, "not defined here");
         // Declared later in the same scope?
         let mut current = Some(ctx.scope);
@@ -179,7 +179,7 @@ impl<'w> Checker<'w> {
             if let Some((body, _)) = bodies.iter().filter(|(n, _)| n != "earth").nth(number - 1) {
                 return diagnostic.help(format!(
                     "did you mean `{body}`? bodies are referred to by the names they are declared with (`S{number}` is the thesis's notation for body {number})"
-                ));
+                )).fix(ident.span, body.as_str());
             }
         }
         if let Some(hinted) =
@@ -187,12 +187,8 @@ impl<'w> Checker<'w> {
         {
             return hinted;
         }
-        if let Some(candidate) =
-            suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()))
-        {
-            diagnostic = diagnostic.help(format!("did you mean `{candidate}`?"));
-        }
-        diagnostic
+        let candidate = suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()));
+        diagnostic.did_you_mean(ident.span, candidate.as_deref())
     }
 
     /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).
@@ -346,21 +342,21 @@ impl<'w> Checker<'w> {
         if let Some(entry) = members.names.get(&name.name) {
             return Some((scope, entry.ty));
         }
-        let help =
-            suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref())).map(|s| {
-                match index {
-                    Some(_) => format!("did you mean `{}[…]:{s}`?", package.name),
-                    None => format!("did you mean `{}:{s}`?", package.name),
-                }
-            });
-        self.report(
-            Diagnostic::error(
-                "E0301",
-                format!("package `{}` has no `{}`", package.name, name.name),
-            )
-            .primary(name.span, "not defined in the package")
-            .with_help(help),
-        );
+        let candidate = suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref()));
+        let help = candidate.as_ref().map(|s| match index {
+            Some(_) => format!("did you mean `{}[…]:{s}`?", package.name),
+            None => format!("did you mean `{}:{s}`?", package.name),
+        });
+        let mut diagnostic = Diagnostic::error(
+            "E0301",
+            format!("package `{}` has no `{}`", package.name, name.name),
+        )
+        .primary(name.span, "not defined in the package")
+        .with_help(help);
+        if let Some(candidate) = candidate {
+            diagnostic = diagnostic.fix(name.span, candidate);
+        }
+        self.report(diagnostic);
         None
     }
 

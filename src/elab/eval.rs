@@ -431,7 +431,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Int(0) => Value::Zero,
             ExprKind::Int(1) => Value::One,
             ExprKind::Int(n) => Value::Scalar(self.literal(*n as f64)),
-            ExprKind::Float(x) => Value::Scalar(self.literal(*x)),
+            ExprKind::Float(x) => {
+                let x = self.perturbation.map_or(*x, |p| p.apply(*x));
+                Value::Scalar(self.literal(x))
+            }
             ExprKind::Vector(items) => {
                 let values = items
                     .iter()
