@@ -46,7 +46,8 @@ impl Client {
         let mut length = 0;
         loop {
             let mut line = String::new();
-            self.output.read_line(&mut line).expect("reads a header");
+            let read = self.output.read_line(&mut line).expect("reads a header");
+            assert!(read > 0, "the server closed its output");
             if let Some(value) = line.strip_prefix("Content-Length: ") {
                 length = value.trim().parse().expect("a length");
             }
@@ -79,6 +80,11 @@ impl Client {
 
     fn notify(&mut self, method: &str, params: Value) {
         self.send(json!({"jsonrpc": "2.0", "method": method, "params": params}));
+    }
+
+    fn initialize(&mut self) {
+        self.request("initialize", json!({"capabilities": {}}));
+        self.notify("initialized", json!({}));
     }
 
     fn stop(mut self) {
@@ -321,7 +327,7 @@ fn values_on_hover_references_and_rename_across_libraries() {
     let [library, user_a, user_b] =
         ["parts.lsd", "user_a.lsd", "user_b.lsd"].map(|name| file_uri(&dir.join(name)));
     let mut client = Client::start();
-    client.request("initialize", json!({"capabilities": {}}));
+    client.initialize();
     // Only `user_a.lsd` is open: the library and `user_b.lsd` are read from disk.
     assert_eq!(client.open(&user_a, USER_A), json!([]));
     let document = json!({"uri": user_a});
@@ -370,7 +376,7 @@ fn quick_fixes_are_the_fixes_the_diagnostics_carry() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/quick_fix.lsd");
     let uri = file_uri(&path);
     let mut client = Client::start();
-    client.request("initialize", json!({"capabilities": {}}));
+    client.initialize();
     // `revolute` without `import joints`, and a `//` comment.
     let text =
         "// an arm\nlet arm = body mass = 1 end ;\njoin earth and arm with revolute([0, 0, 1]) ;\n";

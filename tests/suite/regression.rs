@@ -198,9 +198,8 @@ fn sensitive_examples(change: f64, calibrated: bool) -> Vec<Outcome> {
     testing::run_all(&cases, 2).expect("threads start")
 }
 
-#[test]
-fn round_off_sized_changes_pass_the_sensitive_examples() {
-    for outcome in sensitive_examples(1e-14, false) {
+fn assert_all_pass(outcomes: Vec<Outcome>) {
+    for outcome in outcomes {
         assert_eq!(
             outcome.status,
             Status::Passed,
@@ -209,6 +208,11 @@ fn round_off_sized_changes_pass_the_sensitive_examples() {
             outcome.failures
         );
     }
+}
+
+#[test]
+fn round_off_sized_changes_pass_the_sensitive_examples() {
+    assert_all_pass(sensitive_examples(1e-14, false));
 }
 
 /// Every decimal number of the round-off-sensitive examples moved by 1e-15 of itself, in
@@ -226,15 +230,7 @@ fn numbers_moved_by_round_off_pass_the_sensitive_examples() {
             ..example_case(name)
         })
         .collect();
-    for outcome in testing::run_all(&cases, 2).expect("threads start") {
-        assert_eq!(
-            outcome.status,
-            Status::Passed,
-            "{}: {:?}",
-            outcome.name,
-            outcome.failures
-        );
-    }
+    assert_all_pass(testing::run_all(&cases, 2).expect("threads start"));
 }
 
 #[test]
