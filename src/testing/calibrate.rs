@@ -74,7 +74,7 @@ pub const PROBE: f64 = 1e-14;
 pub const GEOMETRY_PROBE: f64 = 1e-15;
 
 /// The runs of the probe of the geometry, each moving the numbers in other directions.
-pub const GEOMETRY_RUNS: u64 = 3;
+pub const GEOMETRY_RUNS: u64 = 8;
 
 /// Runs the case at its settings, at finer ones, from a perturbed initial configuration and
 /// with its numbers perturbed, and proposes a tolerance per compared variable.

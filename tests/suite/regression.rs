@@ -216,7 +216,7 @@ fn round_off_sized_changes_pass_the_sensitive_examples() {
 }
 
 /// Every decimal number of the round-off-sensitive examples moved by 1e-15 of itself, in
-/// directions other than those `--calibrate` probed (its seeds are 1 to 3): the tolerances it
+/// directions other than those `--calibrate` probed (its seeds are 1 to 8): the tolerances it
 /// proposed hold.
 #[test]
 fn numbers_moved_by_round_off_pass_the_sensitive_examples() {
