@@ -172,6 +172,11 @@ impl<'w> Checker<'w> {
             }
             current = scope.parent.map(|(p, _)| p);
         }
+        let left = self.suggestions_left.get();
+        if left == 0 {
+            return diagnostic;
+        }
+        self.suggestions_left.set(left - 1);
         let visible = self.visible_names(ctx);
         if let Some(number) = suggest::thesis_body_number(name) {
             let bodies: Vec<&(String, Ty)> =
@@ -418,8 +423,9 @@ impl<'w> Checker<'w> {
             format!("{} has no field `{}`", target.with_article(), field.name),
         )
         .primary(field.span, "unknown field");
-        diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
-            Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
+        let candidate = suggest::did_you_mean(&field.name, names.iter().map(String::as_str));
+        diagnostic = match candidate {
+            Some(_) => diagnostic.did_you_mean(field.span, candidate),
             None if names.is_empty() => {
                 diagnostic.note(format!("{} has no fields", target.with_article()))
             }
@@ -778,8 +784,9 @@ fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
     if kind == ConstructKind::Body && &*field.name == "frame" {
         return diagnostic.note("a body's reference frame is the body itself; other frames are `<displacement> @ <body>`");
     }
-    diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
-        Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
+    let candidate = suggest::did_you_mean(&field.name, names.iter().map(String::as_str));
+    diagnostic = match candidate {
+        Some(_) => diagnostic.did_you_mean(field.span, candidate),
         None => diagnostic.help(format!(
             "the fields of `{keyword}` are: {}",
             names.join(", ")
