@@ -175,7 +175,7 @@ impl<'w> Checker<'w> {
                             )
                             .primary(arg_name.span, "unknown parameter")
                             .secondary(def_span, "defined here")
-                            .did_you_mean(arg_name.span, candidate.as_deref()),
+                            .did_you_mean(arg_name.span, candidate),
                         );
                         ok = false;
                         continue;

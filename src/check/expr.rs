@@ -193,7 +193,7 @@ impl<'w> Checker<'w> {
             return hinted;
         }
         let candidate = suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()));
-        diagnostic.did_you_mean(ident.span, candidate.as_deref())
+        diagnostic.did_you_mean(ident.span, candidate)
     }
 
     /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).

@@ -4,7 +4,7 @@
 //! analysis of every open file and of every readable `.lsd` file beside them that imports it,
 //! and its occurrences gathered from all of them.
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use lsp_types::{Location, TextEdit, Uri, WorkspaceEdit};
@@ -143,17 +143,18 @@ pub fn rename(
             "`{new_name}` is not a name (a keyword, or not an identifier)"
         ));
     }
-    let mut changes: HashMap<Uri, Vec<TextEdit>> = HashMap::new();
+    // Grouped by file in a list: a map keyed by `Uri` (which caches its parts in cells) is
+    // only built at the end.
+    let mut changes: Vec<(Uri, Vec<TextEdit>)> = Vec::new();
     for (analysis, span) in occurrences(analyses, target) {
-        changes
-            .entry(convert::file_uri(analysis, span.file))
-            .or_default()
-            .push(TextEdit::new(
-                convert::span_range(analysis, span),
-                new_name.to_string(),
-            ));
+        let uri = convert::file_uri(analysis, span.file);
+        let edit = TextEdit::new(convert::span_range(analysis, span), new_name.to_string());
+        match changes.iter_mut().find(|(u, _)| *u == uri) {
+            Some((_, edits)) => edits.push(edit),
+            None => changes.push((uri, vec![edit])),
+        }
     }
-    Ok(WorkspaceEdit::new(changes))
+    Ok(WorkspaceEdit::new(changes.into_iter().collect()))
 }
 
 /// The `.lsd` files of `directories` that are not open and import the target's module,
