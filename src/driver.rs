@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use crate::check::{self, Checked};
 use crate::diag::{Diagnostic, Diagnostics};
-use crate::elab::{self, Mechanism};
+use crate::elab::{self, Mechanism, Perturbation};
 use crate::load::{self, LoadError, LoadOptions, Workspace};
 
 pub struct Compilation {
@@ -23,8 +23,18 @@ impl Compilation {
 
 /// Compiles files from disk.
 pub fn compile_files(paths: &[PathBuf], options: &LoadOptions) -> Result<Compilation, LoadError> {
+    compile_files_perturbed(paths, options, None)
+}
+
+/// Compiles files from disk, with the numbers written with a decimal point moved by `numbers`
+/// (a round-off probe of the geometry: `lsdc test --calibrate`, `--perturb`).
+pub fn compile_files_perturbed(
+    paths: &[PathBuf],
+    options: &LoadOptions,
+    numbers: Option<Perturbation>,
+) -> Result<Compilation, LoadError> {
     let (workspace, diagnostics) = load::load_files(paths, options)?;
-    Ok(finish(workspace, diagnostics.list))
+    Ok(finish(workspace, diagnostics.list, numbers))
 }
 
 /// Compiles a program given as text; `dir` is where its relative imports are looked up.
@@ -35,14 +45,24 @@ pub fn compile_text(
     options: &LoadOptions,
 ) -> Compilation {
     let (workspace, diagnostics) = load::load_text(name, text, dir, options);
-    finish(workspace, diagnostics.list)
+    finish(workspace, diagnostics.list, None)
 }
 
-fn finish(workspace: Workspace, mut diagnostics: Vec<Diagnostic>) -> Compilation {
+fn finish(
+    workspace: Workspace,
+    mut diagnostics: Vec<Diagnostic>,
+    numbers: Option<Perturbation>,
+) -> Compilation {
     let mut mechanism = None;
     if !diagnostics.iter().any(Diagnostic::is_error) {
         let (checked, check_diagnostics) = check::check(&workspace);
-        mechanism = check_and_elaborate(&workspace, &checked, check_diagnostics, &mut diagnostics);
+        mechanism = check_and_elaborate(
+            &workspace,
+            &checked,
+            check_diagnostics,
+            &mut diagnostics,
+            numbers,
+        );
     }
     in_import_context(workspace, diagnostics, mechanism)
 }
@@ -65,7 +85,13 @@ pub fn compile_text_inspected<R>(
     let mechanism = if load_failed {
         None
     } else {
-        check_and_elaborate(&workspace, &checked, check_diagnostics, &mut diagnostics)
+        check_and_elaborate(
+            &workspace,
+            &checked,
+            check_diagnostics,
+            &mut diagnostics,
+            None,
+        )
     };
     let inspected = inspect(&workspace, &checked, mechanism.as_ref());
     drop(checked);
@@ -79,13 +105,14 @@ fn check_and_elaborate(
     checked: &Checked<'_>,
     check_diagnostics: Diagnostics,
     diagnostics: &mut Vec<Diagnostic>,
+    numbers: Option<Perturbation>,
 ) -> Option<Mechanism> {
     let failed = check_diagnostics.has_errors();
     diagnostics.extend(check_diagnostics.list);
     if failed {
         return None;
     }
-    match elab::elaborate(workspace, checked) {
+    match elab::elaborate_perturbed(workspace, checked, numbers) {
         Ok((mechanism, warnings)) => {
             diagnostics.extend(warnings);
             Some(mechanism)

@@ -426,6 +426,13 @@ struct TestArgs {
     /// Run each case at its tolerance (or step) and a finer one, and propose tolerances.
     #[arg(long)]
     calibrate: bool,
+    /// Move each number written with a decimal point in the programs by this relative amount,
+    /// up or down as `--seed` decides: are the tolerances robust to round-off of the geometry?
+    #[arg(long, value_name = "RELATIVE", conflicts_with_all = ["calibrate", "update"])]
+    perturb: Option<f64>,
+    /// The directions of `--perturb`'s moves (a different seed, other directions).
+    #[arg(long, default_value_t = 1, requires = "perturb")]
+    seed: u64,
 }
 
 fn main() -> ExitCode {
@@ -1387,6 +1394,13 @@ fn test(args: &TestArgs) -> ExitCode {
     if args.calibrate || args.update {
         // Only the cases compared with a reference have one to record or tolerances to propose.
         cases.retain(|c| c.reference.is_some());
+    }
+    if let Some(relative) = args.perturb {
+        let numbers = lsdc::elab::Perturbation {
+            relative,
+            seed: args.seed,
+        };
+        cases.iter_mut().for_each(|c| c.numbers = Some(numbers));
     }
     let jobs = (args.jobs.map(usize::from))
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));

@@ -164,11 +164,10 @@ impl<'w> Checker<'w> {
                 Some(arg_name) => match params.iter().position(|p| p.name.name == arg_name.name) {
                     Some(index) => index,
                     None => {
-                        let help = suggest::did_you_mean(
+                        let candidate = suggest::did_you_mean(
                             &arg_name.name,
                             params.iter().map(|p| p.name.name.as_ref()),
-                        )
-                        .map(|s| format!("did you mean `{s}`?"));
+                        );
                         self.report(
                             Diagnostic::error(
                                 "E0413",
@@ -176,7 +175,7 @@ impl<'w> Checker<'w> {
                             )
                             .primary(arg_name.span, "unknown parameter")
                             .secondary(def_span, "defined here")
-                            .with_help(help),
+                            .did_you_mean(arg_name.span, candidate),
                         );
                         ok = false;
                         continue;

@@ -130,7 +130,7 @@ impl<'w> Checker<'w> {
 
     fn unknown_name(&self, ident: &Ident, ctx: &Ctx) -> Diagnostic {
         let name = &ident.name;
-        let mut diagnostic = Diagnostic::error("E0301", format!("unknown name `{name}`"))
+        let diagnostic = Diagnostic::error("E0301", format!("unknown name `{name}`"))
             .primary(ident.span, "not defined here");
         // Declared later in the same scope?
         let mut current = Some(ctx.scope);
@@ -184,7 +184,7 @@ impl<'w> Checker<'w> {
             if let Some((body, _)) = bodies.iter().filter(|(n, _)| n != "earth").nth(number - 1) {
                 return diagnostic.help(format!(
                     "did you mean `{body}`? bodies are referred to by the names they are declared with (`S{number}` is the thesis's notation for body {number})"
-                ));
+                )).fix(ident.span, body.as_str());
             }
         }
         if let Some(hinted) =
@@ -192,12 +192,8 @@ impl<'w> Checker<'w> {
         {
             return hinted;
         }
-        if let Some(candidate) =
-            suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()))
-        {
-            diagnostic = diagnostic.help(format!("did you mean `{candidate}`?"));
-        }
-        diagnostic
+        let candidate = suggest::did_you_mean(name, visible.iter().map(|(n, _)| n.as_str()));
+        diagnostic.did_you_mean(ident.span, candidate)
     }
 
     /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).
@@ -351,21 +347,21 @@ impl<'w> Checker<'w> {
         if let Some(entry) = members.names.get(&name.name) {
             return Some((scope, entry.ty));
         }
-        let help =
-            suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref())).map(|s| {
-                match index {
-                    Some(_) => format!("did you mean `{}[…]:{s}`?", package.name),
-                    None => format!("did you mean `{}:{s}`?", package.name),
-                }
-            });
-        self.report(
-            Diagnostic::error(
-                "E0301",
-                format!("package `{}` has no `{}`", package.name, name.name),
-            )
-            .primary(name.span, "not defined in the package")
-            .with_help(help),
-        );
+        let candidate = suggest::did_you_mean(&name.name, members.order.iter().map(|n| n.as_ref()));
+        let help = candidate.as_ref().map(|s| match index {
+            Some(_) => format!("did you mean `{}[…]:{s}`?", package.name),
+            None => format!("did you mean `{}:{s}`?", package.name),
+        });
+        let mut diagnostic = Diagnostic::error(
+            "E0301",
+            format!("package `{}` has no `{}`", package.name, name.name),
+        )
+        .primary(name.span, "not defined in the package")
+        .with_help(help);
+        if let Some(candidate) = candidate {
+            diagnostic = diagnostic.fix(name.span, candidate);
+        }
+        self.report(diagnostic);
         None
     }
 
@@ -427,8 +423,9 @@ impl<'w> Checker<'w> {
             format!("{} has no field `{}`", target.with_article(), field.name),
         )
         .primary(field.span, "unknown field");
-        diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
-            Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
+        let candidate = suggest::did_you_mean(&field.name, names.iter().map(String::as_str));
+        diagnostic = match candidate {
+            Some(_) => diagnostic.did_you_mean(field.span, candidate),
             None if names.is_empty() => {
                 diagnostic.note(format!("{} has no fields", target.with_article()))
             }
@@ -787,8 +784,9 @@ fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
     if kind == ConstructKind::Body && &*field.name == "frame" {
         return diagnostic.note("a body's reference frame is the body itself; other frames are `<displacement> @ <body>`");
     }
-    diagnostic = match suggest::did_you_mean(&field.name, names.iter().map(String::as_str)) {
-        Some(s) => diagnostic.help(format!("did you mean `{s}`?")),
+    let candidate = suggest::did_you_mean(&field.name, names.iter().map(String::as_str));
+    diagnostic = match candidate {
+        Some(_) => diagnostic.did_you_mean(field.span, candidate),
         None => diagnostic.help(format!(
             "the fields of `{keyword}` are: {}",
             names.join(", ")

@@ -301,14 +301,14 @@ impl<'w> Checker<'w> {
         let annotation = param.ty.as_ref()?;
         let ty = Ty::from_annotation(&annotation.name);
         if ty.is_none() {
-            let help = crate::diag::suggest::did_you_mean(&annotation.name, Ty::ANNOTATIONS)
-                .map(|s| format!("did you mean `{s}`?"))
-                .unwrap_or_else(|| format!("the types are: {}", Ty::ANNOTATIONS.join(", ")));
-            self.report(
+            let candidate = crate::diag::suggest::did_you_mean(&annotation.name, Ty::ANNOTATIONS);
+            let diagnostic =
                 Diagnostic::error("E0409", format!("unknown type `{}`", annotation.name))
-                    .primary(annotation.span, "not a type")
-                    .help(help),
-            );
+                    .primary(annotation.span, "not a type");
+            self.report(match candidate {
+                Some(_) => diagnostic.did_you_mean(annotation.span, candidate),
+                None => diagnostic.help(format!("the types are: {}", Ty::ANNOTATIONS.join(", "))),
+            });
         }
         ty
     }
@@ -361,37 +361,35 @@ impl<'w> Checker<'w> {
                     _ => None,
                 };
                 if given.is_none_or(|g| !known.contains(&&*g.name)) {
-                    let help = given
-                        .and_then(|g| {
-                            crate::diag::suggest::did_you_mean(&g.name, known.iter().copied())
-                        })
-                        .map(|s| format!("did you mean `{s}`?"))
-                        .unwrap_or_else(|| format!("the integrators are: {}", known.join(", ")));
-                    self.report(
-                        Diagnostic::error("E0420", "unknown integrator")
-                            .primary(field.value.span, "not an integrator")
-                            .help(help),
-                    );
+                    let candidate = given.and_then(|g| {
+                        crate::diag::suggest::did_you_mean(&g.name, known.iter().copied())
+                    });
+                    let diagnostic = Diagnostic::error("E0420", "unknown integrator")
+                        .primary(field.value.span, "not an integrator");
+                    self.report(match candidate {
+                        Some(_) => diagnostic.did_you_mean(field.value.span, candidate),
+                        None => {
+                            diagnostic.help(format!("the integrators are: {}", known.join(", ")))
+                        }
+                    });
                 }
                 continue;
             }
             if !crate::check::types::SIMULATE_FIELDS.contains(&name) {
-                let help = crate::diag::suggest::did_you_mean(
+                let candidate = crate::diag::suggest::did_you_mean(
                     name,
                     crate::check::types::SIMULATE_FIELDS.iter().copied(),
-                )
-                .map(|s| format!("did you mean `{s}`?"))
-                .unwrap_or_else(|| {
-                    format!(
+                );
+                let diagnostic =
+                    Diagnostic::error("E0405", format!("`simulate` has no field `{name}`"))
+                        .primary(field.name.span, "unknown field");
+                self.report(match candidate {
+                    Some(_) => diagnostic.did_you_mean(field.name.span, candidate),
+                    None => diagnostic.help(format!(
                         "the fields of `simulate` are: integrator, {}",
                         crate::check::types::SIMULATE_FIELDS.join(", ")
-                    )
+                    )),
                 });
-                self.report(
-                    Diagnostic::error("E0405", format!("`simulate` has no field `{name}`"))
-                        .primary(field.name.span, "unknown field")
-                        .help(help),
-                );
                 continue;
             }
             let ty = self.expr(&field.value, &mut ctx);

@@ -108,6 +108,17 @@ impl Diagnostic {
         self
     }
 
+    /// A did-you-mean: the help "did you mean `candidate`?" and the fix that writes `candidate`
+    /// in place of `span`, when there is a candidate.
+    pub fn did_you_mean(self, span: Span, candidate: Option<&str>) -> Diagnostic {
+        match candidate {
+            Some(candidate) => self
+                .help(format!("did you mean `{candidate}`?"))
+                .fix(span, candidate),
+            None => self,
+        }
+    }
+
     /// Where the problem is: the span of the primary label.
     pub fn primary_span(&self) -> Option<Span> {
         self.labels.iter().find(|l| l.primary).map(|l| l.span)

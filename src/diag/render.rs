@@ -62,8 +62,8 @@ pub fn to_text(sources: &SourceMap, diagnostics: &[Diagnostic]) -> String {
     out
 }
 
-/// A fix in words: "fix: replace `.5` by `0.5`", "fix: insert `,` at 2:17".
-fn describe_fix(sources: &SourceMap, fix: &crate::diag::Fix) -> String {
+/// A fix in words (the command line's note, the title of an editor's quick fix): "fix: replace `.5` by `0.5`", "fix: insert `,` at 2:17".
+pub fn describe_fix(sources: &SourceMap, fix: &crate::diag::Fix) -> String {
     let file = sources.file(fix.span.file);
     let replaced = file.text.get(fix.span.range()).unwrap_or_default();
     let replacement = fix.replacement.trim_end_matches('\n');

@@ -40,9 +40,53 @@ pub struct Elaborator<'c, 'w> {
     pub(super) literals: FxHashMap<u64, value::Scalar>,
     /// The named join whose link is being evaluated: its name reads its own coordinates.
     pub(super) own_join: Option<OwnJoin>,
+    /// How the numbers written with a decimal point are moved (`lsdc test --perturb`).
+    pub(super) perturbation: Option<Perturbation>,
 }
 
-impl Elaborator<'_, '_> {
+/// A round-off probe of a program's own numbers: each number written with a decimal point
+/// (`0.3`, `1.0`, `2e-3`) moved by `relative` of itself, up or down as a pseudo-random function
+/// of the number and `seed` decides: the same number moves the same way everywhere in a run.
+/// Integers are left alone: they are exact, and some count or index.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Perturbation {
+    pub relative: f64,
+    pub seed: u64,
+}
+
+impl Perturbation {
+    pub fn apply(&self, number: f64) -> f64 {
+        // SplitMix64 of the number's bits and the seed: its lowest bit is the direction.
+        let mut z = (number.to_bits() ^ self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+            .wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        let direction = if z & 1 == 0 { 1.0 } else { -1.0 };
+        number + direction * self.relative * number.abs()
+    }
+}
+
+impl<'c, 'w> Elaborator<'c, 'w> {
+    /// An elaborator that has evaluated nothing yet.
+    pub(super) fn new(workspace: &'w Workspace, checked: &'c Checked<'w>) -> Self {
+        Elaborator {
+            workspace,
+            checked,
+            globals: FxHashMap::default(),
+            mechanism: Mechanism::default(),
+            elaborated_modules: Vec::new(),
+            depth: 0,
+            fields: Vec::new(),
+            literals: FxHashMap::default(),
+            own_join: None,
+            perturbation: None,
+            instances: Default::default(),
+            aliases: FxHashMap::default(),
+            warnings: Vec::new(),
+        }
+    }
+
     /// The scalar of a number written in the program.
     pub(super) fn literal(&mut self, number: f64) -> value::Scalar {
         self.literals

@@ -453,7 +453,11 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Int(0) => Value::Zero,
             ExprKind::Int(1) => Value::One,
             ExprKind::Int(n) => Value::Scalar(self.literal(*n as f64)),
-            ExprKind::Float(x) => Value::Scalar(self.literal(finite_literal(*x, expr.span)?)),
+            ExprKind::Float(x) => {
+                let x = finite_literal(*x, expr.span)?;
+                let x = self.perturbation.map_or(x, |p| p.apply(x));
+                Value::Scalar(self.literal(x))
+            }
             ExprKind::Vector(items) => {
                 let values = items
                     .iter()

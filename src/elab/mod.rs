@@ -4,6 +4,7 @@
 //! shared unknown and an unused definition costs nothing.
 
 mod arrays;
+mod constants;
 mod elaborator;
 mod eval;
 mod fields;
@@ -17,9 +18,10 @@ pub mod value;
 use crate::check::Checked;
 use crate::diag::Diagnostic;
 use crate::load::Workspace;
+pub use constants::constant_values;
 use elaborator::Elaborator;
+pub use elaborator::Perturbation;
 pub use mechanism::{Mechanism, Summary};
-use rustc_hash::FxHashMap;
 
 /// Evaluates every module of a checked workspace into one mechanism, with warnings about what
 /// is legal but probably not meant.
@@ -27,20 +29,17 @@ pub fn elaborate(
     workspace: &Workspace,
     checked: &Checked<'_>,
 ) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
-    let mut elaborator = Elaborator {
-        workspace,
-        checked,
-        globals: FxHashMap::default(),
-        mechanism: Mechanism::default(),
-        elaborated_modules: Vec::new(),
-        depth: 0,
-        fields: Vec::new(),
-        literals: FxHashMap::default(),
-        own_join: None,
-        instances: Default::default(),
-        aliases: FxHashMap::default(),
-        warnings: Vec::new(),
-    };
+    elaborate_perturbed(workspace, checked, None)
+}
+
+/// As [`elaborate`], with the numbers written with a decimal point moved by `numbers`.
+pub fn elaborate_perturbed(
+    workspace: &Workspace,
+    checked: &Checked<'_>,
+    numbers: Option<Perturbation>,
+) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
+    let mut elaborator = Elaborator::new(workspace, checked);
+    elaborator.perturbation = numbers;
     for &root in &workspace.roots {
         elaborator.module(root)?;
     }

@@ -126,6 +126,9 @@ pub struct Index {
     pub visible: Vec<usize>,
     /// The names of each package and module scope.
     pub scope_members: FxHashMap<ScopeId, Vec<usize>>,
+    /// The values of the numeric constants, by the span of their name (when the program has
+    /// no errors).
+    pub values: FxHashMap<Span, String>,
 }
 
 impl Index {
@@ -151,11 +154,18 @@ impl Index {
             .find(|d| &*d.name == name)
     }
 
-    fn build(workspace: &Workspace, checked: &Checked<'_>, _: Option<&Mechanism>) -> Index {
+    fn build(workspace: &Workspace, checked: &Checked<'_>, mechanism: Option<&Mechanism>) -> Index {
+        let values = match mechanism {
+            Some(_) => crate::elab::constant_values(workspace, checked),
+            None => FxHashMap::default(),
+        };
         let mut builder = Builder {
             workspace,
             checked,
-            index: Index::default(),
+            index: Index {
+                values,
+                ..Index::default()
+            },
             by_span: FxHashMap::default(),
         };
         builder.modules();

@@ -1,6 +1,7 @@
 //! Editor support: the formatter (`lsdc fmt`) and the language server (`lsdc lsp`), which
 //! share the compiler's front end: its lexer, parser, checker and diagnostics.
 
+mod across;
 mod actions;
 pub mod analysis;
 mod complete;

@@ -1,15 +1,10 @@
-//! Hover, go to definition, find references and rename.
+//! Hover and go to definition (references and rename, across files: `across.rs`).
 
-use std::collections::HashMap;
-
-use lsp_types::{
-    Hover, HoverContents, Location, MarkupContent, MarkupKind, TextEdit, WorkspaceEdit,
-};
+use lsp_types::{Hover, HoverContents, Location, MarkupContent, MarkupKind};
 
 use crate::check::types::{builtin_constant, builtin_function, Ty};
 use crate::ide::analysis::{Analysis, Definition, DefinitionKind, Occurrence, Reference};
 use crate::ide::convert;
-use crate::syntax::lexer::{lex, Tok};
 
 /// The longest declaration a hover shows, in lines.
 const HOVER_LINES: usize = 8;
@@ -29,48 +24,6 @@ fn definition_at(analysis: &Analysis, offset: usize) -> Option<(usize, &Definiti
 pub fn definition(analysis: &Analysis, offset: usize) -> Option<Location> {
     let (_, definition) = definition_at(analysis, offset)?;
     Some(convert::location(analysis, definition.span))
-}
-
-/// Every use of the name at `offset`, in the file and the libraries it imports; with
-/// `declaration`, its definition too.
-pub fn references(analysis: &Analysis, offset: usize, declaration: bool) -> Vec<Location> {
-    let Some((id, definition)) = definition_at(analysis, offset) else {
-        return Vec::new();
-    };
-    analysis
-        .index
-        .references(id)
-        .filter(|o| declaration || o.span != definition.span)
-        .map(|o| convert::location(analysis, o.span))
-        .collect()
-}
-
-/// Renames a name defined in the edited file everywhere it is used there.
-pub fn rename(analysis: &Analysis, offset: usize, new_name: &str) -> Result<WorkspaceEdit, String> {
-    let (id, definition) =
-        definition_at(analysis, offset).ok_or("no name defined in this program here")?;
-    if definition.span.file != analysis.root {
-        return Err(format!(
-            "`{}` is defined in a library: rename it there",
-            definition.name
-        ));
-    }
-    let (tokens, errors) = lex(analysis.root, new_name);
-    if !errors.is_empty()
-        || !matches!(tokens.as_slice(), [(0, Tok::Ident(_), end)] if *end == new_name.len())
-    {
-        return Err(format!(
-            "`{new_name}` is not a name (a keyword, or not an identifier)"
-        ));
-    }
-    let edits = analysis
-        .index
-        .references(id)
-        .filter(|o| o.span.file == analysis.root)
-        .map(|o| TextEdit::new(convert::span_range(analysis, o.span), new_name.to_string()))
-        .collect();
-    let uri = convert::file_uri(analysis, analysis.root);
-    Ok(WorkspaceEdit::new(HashMap::from([(uri, edits)])))
 }
 
 pub fn hover(analysis: &Analysis, offset: usize) -> Option<Hover> {
@@ -133,7 +86,10 @@ fn describe(analysis: &Analysis, definition: &Definition) -> String {
         _ => format!("{what} `{name}`"),
     };
     match &definition.kind {
-        DefinitionKind::Value => typed("value"),
+        DefinitionKind::Value => match analysis.index.values.get(&definition.span) {
+            Some(value) => format!("{} = {value}", typed("value")),
+            None => typed("value"),
+        },
         DefinitionKind::Function { parameters } => {
             let names: Vec<String> = parameters
                 .iter()

@@ -3,8 +3,8 @@
 //! 1,000-line file in 13 to 20 ms of CPU time), and its diagnostics are published; requests read the
 //! latest analysis of their file.
 
-use std::collections::HashMap;
-use std::path::PathBuf;
+use std::collections::{BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
 
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
 use lsp_types::notification::{
@@ -23,6 +23,7 @@ use lsp_types::{
 };
 use serde_json::Value;
 
+use crate::ide::across::{self, Target};
 use crate::ide::analysis::Analysis;
 use crate::ide::{actions, complete, convert, format, navigate, outline};
 use crate::load::LoadOptions;
@@ -185,17 +186,26 @@ impl Server {
                     .as_bool()
                     .unwrap_or(true);
                 let (analysis, offset) = self.at(params)?;
-                json(serde_json::to_value(navigate::references(
-                    analysis,
-                    offset,
+                let Some(target) = Target::at(analysis, offset) else {
+                    return Ok(Value::Array(Vec::new()));
+                };
+                let closed = self.readable_importers(&target);
+                let analyses = self.with_open(&closed);
+                json(serde_json::to_value(across::references(
+                    &analyses,
+                    &target,
                     declaration,
                 )))
             }
             Rename::METHOD => {
                 let new_name = params["newName"].as_str().unwrap_or_default().to_string();
                 let (analysis, offset) = self.at(params)?;
-                json(serde_json::to_value(navigate::rename(
-                    analysis, offset, &new_name,
+                let target =
+                    Target::at(analysis, offset).ok_or("no name defined in this program here")?;
+                let closed = self.readable_importers(&target);
+                let analyses = self.with_open(&closed);
+                json(serde_json::to_value(across::rename(
+                    &analyses, &target, &new_name,
                 )?))
             }
             Completion::METHOD => {
@@ -231,6 +241,25 @@ impl Server {
             }
             _ => Err(format!("unsupported request `{method}`")),
         }
+    }
+
+    /// The files beside the open ones (and beside the target's) that are not open and import
+    /// the target's library, analysed from disk.
+    fn readable_importers(&self, target: &Target) -> Vec<Analysis> {
+        let open: BTreeSet<PathBuf> = (self.documents.keys())
+            .filter_map(convert::uri_to_path)
+            .map(|p| std::fs::canonicalize(&p).unwrap_or(p))
+            .collect();
+        let directories = (open.iter())
+            .filter_map(|p| p.parent().map(Path::to_path_buf))
+            .chain(target.directory())
+            .collect();
+        across::readable_importers(&directories, &open, target, &self.options)
+    }
+
+    /// The open files' analyses, then `closed`.
+    fn with_open<'a>(&'a self, closed: &'a [Analysis]) -> Vec<&'a Analysis> {
+        self.documents.values().chain(closed).collect()
     }
 
     /// The analysis of the file a request names.

@@ -6,12 +6,18 @@
 //! much the mechanism amplifies the round-off itself. The proposed absolute tolerance of a
 //! variable is that difference times a safety factor, rounded up to one significant digit; a
 //! change of the dynamics larger than the integration's error still fails.
+//!
+//! Two round-off probes widen it where the mechanism amplifies round-off: a run from initial
+//! coordinates moved by a relative 1e-14, and runs of the program with its own decimal numbers
+//! (its lengths, masses, …) moved by a relative 1e-15 each, in directions that differ from run
+//! to run, as another parsing or order of operations would leave them.
 
 use serde::Serialize;
 
 use super::case::{as_table, compile_and_prepare, run_failure};
 use super::manifest::Case;
 use super::record::rounded;
+use crate::elab::Perturbation;
 use crate::simulate::precision::Reference;
 use crate::simulate::prepare::{Integrator, Prepared};
 use crate::simulate::run::{self, Simulation};
@@ -52,6 +58,10 @@ pub struct Proposal {
     /// configuration, and its time.
     pub round_off: f64,
     pub round_off_time: f64,
+    /// The largest difference between the case's run and the runs with the program's decimal
+    /// numbers moved by round-off, and its time.
+    pub geometry: f64,
+    pub geometry_time: f64,
     pub absolute: f64,
 }
 
@@ -59,8 +69,15 @@ pub struct Proposal {
 /// round-off, as a reordering of floating-point operations leaves after the assembly.
 pub const PROBE: f64 = 1e-14;
 
-/// Runs the case at its settings, at finer ones and from a perturbed initial configuration, and
-/// proposes a tolerance per compared variable.
+/// The relative move of each decimal number of the program in the probe of the geometry: a
+/// few units of round-off (one unit in the last place is 1.1e-16 to 2.2e-16 of a number).
+pub const GEOMETRY_PROBE: f64 = 1e-15;
+
+/// The runs of the probe of the geometry, each moving the numbers in other directions.
+pub const GEOMETRY_RUNS: u64 = 8;
+
+/// Runs the case at its settings, at finer ones, from a perturbed initial configuration and
+/// with its numbers perturbed, and proposes a tolerance per compared variable.
 pub fn calibrate(case: &Case) -> Result<Calibration, String> {
     let mut prepared = compile_and_prepare(case)?;
     let own = as_table(&run_as_expected(case, &prepared)?);
@@ -70,9 +87,18 @@ pub fn calibrate(case: &Case) -> Result<Calibration, String> {
     prepared.coordinates = assembled;
     let (setting, own_value, fine_value) = refine(&mut prepared);
     let fine = as_table(&run_as_expected(case, &prepared)?);
+    let geometry = (1..=GEOMETRY_RUNS)
+        .map(|seed| perturbed_numbers(case, seed))
+        .collect::<Result<Vec<_>, _>>()?;
     let names = case.outputs.clone().unwrap_or_else(|| own.columns.clone());
+    let runs = Runs {
+        own: &own,
+        fine: &fine,
+        perturbed: &perturbed,
+        geometry: &geometry,
+    };
     let variables = (names.iter())
-        .map(|name| propose(name, [&own, &fine, &perturbed], case.precision))
+        .map(|name| propose(name, &runs, case.precision))
         .collect::<Result<_, _>>()?;
     Ok(Calibration {
         name: case.name.clone(),
@@ -81,6 +107,27 @@ pub fn calibrate(case: &Case) -> Result<Calibration, String> {
         fine: fine_value,
         variables,
     })
+}
+
+/// The case's run with the program's decimal numbers moved by [`GEOMETRY_PROBE`].
+fn perturbed_numbers(case: &Case, seed: u64) -> Result<Reference, String> {
+    let case = Case {
+        numbers: Some(Perturbation {
+            relative: GEOMETRY_PROBE,
+            seed,
+        }),
+        ..case.clone()
+    };
+    let prepared = compile_and_prepare(&case)?;
+    Ok(as_table(&run_as_expected(&case, &prepared)?))
+}
+
+/// The runs a calibration compares.
+struct Runs<'a> {
+    own: &'a Reference,
+    fine: &'a Reference,
+    perturbed: &'a Reference,
+    geometry: &'a [Reference],
 }
 
 /// A run to its end, or to a failure that the case expects.
@@ -122,23 +169,29 @@ fn refine(prepared: &mut Prepared) -> (&'static str, f64, f64) {
     }
 }
 
-/// A variable's largest differences between the case's run and the finer one, and between the
-/// case's run and the perturbed one, and the tolerance they suggest.
-fn propose(
-    name: &str,
-    [own, fine, perturbed]: [&Reference; 3],
-    digits: usize,
-) -> Result<Proposal, String> {
-    let (difference, time, magnitude) = largest_difference(name, own, fine)?;
-    let (round_off, round_off_time, _) = largest_difference(name, own, perturbed)?;
+/// A variable's largest differences between the case's run and the finer one, the perturbed
+/// one and those with perturbed numbers, and the tolerance they suggest.
+fn propose(name: &str, runs: &Runs<'_>, digits: usize) -> Result<Proposal, String> {
+    let (difference, time, magnitude) = largest_difference(name, runs.own, runs.fine)?;
+    let (round_off, round_off_time, _) = largest_difference(name, runs.own, runs.perturbed)?;
+    let (mut geometry, mut geometry_time) = (0.0_f64, 0.0);
+    for run in runs.geometry {
+        let (d, t, _) = largest_difference(name, runs.own, run)?;
+        if d > geometry {
+            (geometry, geometry_time) = (d, t);
+        }
+    }
     let floor = FLOOR.max(rounding_floor(digits)) * magnitude.max(1.0);
+    let largest = difference.max(round_off).max(geometry);
     Ok(Proposal {
         variable: name.to_string(),
         difference,
         time,
         round_off,
         round_off_time,
-        absolute: round_up((SAFETY * difference.max(round_off)).max(floor)),
+        geometry,
+        geometry_time,
+        absolute: round_up((SAFETY * largest).max(floor)),
     })
 }
 
@@ -182,7 +235,7 @@ pub fn round_up(x: f64) -> f64 {
 /// The proposal as the manifest's text: a `[case.variables]` table to put under the case.
 pub fn as_manifest(calibration: &Calibration) -> String {
     let mut text = format!(
-        "# {}: {} {} against {}; initial coordinates perturbed by {PROBE:e}; tolerance = {SAFETY} × the larger difference\n[case.variables]\n",
+        "# {}: {} {} against {}; initial coordinates perturbed by {PROBE:e}; numbers by {GEOMETRY_PROBE:e} ({GEOMETRY_RUNS} runs); tolerance = {SAFETY} × the largest difference\n[case.variables]\n",
         calibration.name,
         calibration.setting,
         rounded(calibration.own, 12),
@@ -190,13 +243,15 @@ pub fn as_manifest(calibration: &Calibration) -> String {
     );
     for p in &calibration.variables {
         text += &format!(
-            "\"{}\" = {{ absolute = {:e} }}  # {:.1e} at t = {}, perturbed {:.1e} at t = {}\n",
+            "\"{}\" = {{ absolute = {:e} }}  # {:.1e} at t = {}, perturbed {:.1e} at t = {}, numbers {:.1e} at t = {}\n",
             p.variable,
             p.absolute,
             p.difference,
             rounded(p.time, 12),
             p.round_off,
-            rounded(p.round_off_time, 12)
+            rounded(p.round_off_time, 12),
+            p.geometry,
+            rounded(p.geometry_time, 12)
         );
     }
     text

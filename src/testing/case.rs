@@ -10,7 +10,7 @@ use super::compare::{compare, VariableError};
 use super::manifest::{Case, Checks, ExpectedFailure};
 use crate::analysis;
 use crate::diag::{Diagnostic, Severity};
-use crate::driver::{compile_files, Compilation};
+use crate::driver::{compile_files_perturbed, Compilation};
 use crate::load::LoadOptions;
 use crate::output::csv::to_csv;
 use crate::simulate::precision::Reference;
@@ -198,7 +198,8 @@ pub fn describe(error: &VariableError) -> String {
 /// The program compiled; its diagnostics make a `Stop::Program` when it has errors.
 pub(super) fn compile(case: &Case) -> Result<Compilation, Stop> {
     let options = LoadOptions::default();
-    let compilation = compile_files(std::slice::from_ref(&case.program), &options)
+    let program = std::slice::from_ref(&case.program);
+    let compilation = compile_files_perturbed(program, &options, case.numbers)
         .map_err(|error| Stop::Setup(format!("{}: {error}", case.program.display())))?;
     if compilation.has_errors() || compilation.mechanism.is_none() {
         return Err(Stop::Program(summary(&compilation.diagnostics)));

@@ -90,6 +90,9 @@ pub struct Case {
     pub checks: Checks,
     /// Significant digits of the reference when recorded (`--update`).
     pub precision: usize,
+    /// The program's decimal numbers moved by round-off (`--perturb`, and `--calibrate`'s
+    /// probe of the geometry); none as the manifest reads.
+    pub numbers: Option<crate::elab::Perturbation>,
 }
 
 impl Case {
@@ -305,6 +308,7 @@ fn resolve(
         variables,
         checks: entry.checks.resolve()?,
         precision: precision_of(entry.precision, precision)?,
+        numbers: None,
     })
 }
 

@@ -46,7 +46,8 @@ impl Client {
         let mut length = 0;
         loop {
             let mut line = String::new();
-            self.output.read_line(&mut line).expect("reads a header");
+            let read = self.output.read_line(&mut line).expect("reads a header");
+            assert!(read > 0, "the server closed its output");
             if let Some(value) = line.strip_prefix("Content-Length: ") {
                 length = value.trim().parse().expect("a length");
             }
@@ -60,13 +61,18 @@ impl Client {
     }
 
     fn request(&mut self, method: &str, params: Value) -> Value {
+        self.response(method, params)["result"].clone()
+    }
+
+    /// The whole response to a request: its `result` or its `error`.
+    fn response(&mut self, method: &str, params: Value) -> Value {
         self.next_id += 1;
         let id = self.next_id;
         self.send(json!({"jsonrpc": "2.0", "id": id, "method": method, "params": params}));
         loop {
             let message = self.receive();
             if message["id"] == id {
-                return message["result"].clone();
+                return message;
             }
             self.notifications.push(message);
         }
@@ -74,6 +80,25 @@ impl Client {
 
     fn notify(&mut self, method: &str, params: Value) {
         self.send(json!({"jsonrpc": "2.0", "method": method, "params": params}));
+    }
+
+    fn initialize(&mut self) {
+        self.request("initialize", json!({"capabilities": {}}));
+        self.notify("initialized", json!({}));
+    }
+
+    fn stop(mut self) {
+        self.request("shutdown", Value::Null);
+        self.notify("exit", Value::Null);
+        assert!(self.server.wait().expect("exits").success());
+    }
+
+    fn open(&mut self, uri: &str, text: &str) -> Value {
+        self.notify(
+            "textDocument/didOpen",
+            json!({"textDocument": {"uri": uri, "languageId": "lsd", "version": 1, "text": text}}),
+        );
+        self.diagnostics()
     }
 
     /// The diagnostics published next.
@@ -162,6 +187,7 @@ fn a_session_with_every_request() {
         "textDocument/codeAction",
         json!({"textDocument": document, "range": range, "context": {"diagnostics": []}}),
     );
+    assert_eq!(actions[0]["title"], "replace `arn` by `arm`");
     let edit = &actions[0]["edit"]["changes"][&uri][0];
     assert_eq!(edit["newText"], "arm");
     assert_eq!(edit["range"]["start"], json!({"line": 2, "character": 15}));
@@ -276,7 +302,116 @@ fn a_session_with_every_request() {
     let renamed = client.request("textDocument/rename", json!({"textDocument": document, "position": position(FIXED, "arm =", 0), "newName": "upper_arm"}));
     assert_eq!(renamed["changes"][&uri].as_array().map(Vec::len), Some(2));
 
-    client.request("shutdown", Value::Null);
-    client.notify("exit", Value::Null);
-    assert!(client.server.wait().expect("exits").success());
+    client.stop();
+}
+
+/// A library and two programs that import it, in a directory of their own.
+const LIBRARY: &str = "(* The arm's length, in metres. *)\nlet L = 0.25 * 4 + 0.5 ;\n";
+const USER_A: &str = "import parts ;\nimport joints ;\nlet arm = body mass = L end ;\n\
+    join earth and arm with revolute([0, 0, 1]) ;\n";
+const USER_B: &str = "import parts ;\nlet b = body mass = 2 * L end ;\n";
+
+#[test]
+fn values_on_hover_references_and_rename_across_libraries() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("lsp_across");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a directory");
+    for (name, text) in [
+        ("parts.lsd", LIBRARY),
+        ("user_a.lsd", USER_A),
+        ("user_b.lsd", USER_B),
+    ] {
+        std::fs::write(dir.join(name), text).expect("written");
+    }
+    let dir = std::fs::canonicalize(&dir).expect("canonical");
+    let [library, user_a, user_b] =
+        ["parts.lsd", "user_a.lsd", "user_b.lsd"].map(|name| file_uri(&dir.join(name)));
+    let mut client = Client::start();
+    client.initialize();
+    // Only `user_a.lsd` is open: the library and `user_b.lsd` are read from disk.
+    assert_eq!(client.open(&user_a, USER_A), json!([]));
+    let document = json!({"uri": user_a});
+    let at_length = json!({"textDocument": document, "position": position(USER_A, "L end", 0)});
+
+    // Hover: the constant's value (0.25 * 4 + 0.5), its type and its documentation.
+    let hover = client.request("textDocument/hover", at_length.clone());
+    let text = hover["contents"]["value"].as_str().expect("markdown");
+    assert!(text.contains("value `L`: scalar = 1.5"), "{text}");
+    assert!(text.contains("The arm's length, in metres."), "{text}");
+
+    // References: the definition in the library and the uses in both programs.
+    let mut with_declaration = at_length.clone();
+    with_declaration["context"] = json!({"includeDeclaration": true});
+    let references = client.request("textDocument/references", with_declaration);
+    let mut files: Vec<&str> = (references.as_array().expect("locations").iter())
+        .map(|l| l["uri"].as_str().expect("a URI"))
+        .collect();
+    files.sort();
+    assert_eq!(files, [library.as_str(), user_a.as_str(), user_b.as_str()]);
+
+    // Rename: one edit in each file, at the name.
+    let mut renaming = at_length.clone();
+    renaming["newName"] = json!("arm_length");
+    let edit = client.request("textDocument/rename", renaming);
+    for (uri, text, needle) in [
+        (&library, LIBRARY, "L ="),
+        (&user_a, USER_A, "L end"),
+        (&user_b, USER_B, "L end"),
+    ] {
+        let edits = edit["changes"][uri].as_array().expect("edits in each file");
+        assert_eq!(edits.len(), 1, "{uri}: {edits:?}");
+        assert_eq!(edits[0]["newText"], "arm_length");
+        assert_eq!(edits[0]["range"]["start"], position(text, needle, 0));
+    }
+
+    // The standard library's names are not renamed.
+    let refused = client.response("textDocument/rename", json!({"textDocument": document, "position": position(USER_A, "revolute", 0), "newName": "hinge"}));
+    let message = refused["error"]["message"].as_str().expect("an error");
+    assert!(message.contains("standard library (`joints`)"), "{message}");
+    client.stop();
+}
+
+#[test]
+fn quick_fixes_are_the_fixes_the_diagnostics_carry() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/quick_fix.lsd");
+    let uri = file_uri(&path);
+    let mut client = Client::start();
+    client.initialize();
+    // `revolute` without `import joints`, and a `//` comment.
+    let text =
+        "// an arm\nlet arm = body mass = 1 end ;\njoin earth and arm with revolute([0, 0, 1]) ;\n";
+    let diagnostics = client.open(&uri, text);
+    assert_eq!(diagnostics[0]["code"], "E0104", "{diagnostics}");
+    let everywhere =
+        json!({"start": {"line": 0, "character": 0}, "end": {"line": 3, "character": 0}});
+    let actions = client.request(
+        "textDocument/codeAction",
+        json!({"textDocument": {"uri": uri}, "range": everywhere, "context": {"diagnostics": []}}),
+    );
+    let titles: Vec<&str> = (actions.as_array().expect("actions").iter())
+        .map(|a| a["title"].as_str().expect("a title"))
+        .collect();
+    assert_eq!(titles, ["replace `// an arm` by `(* an arm *)`"]);
+    let edit = &actions[0]["edit"]["changes"][&uri][0];
+    assert_eq!(edit["newText"], "(* an arm *)");
+
+    // Once the comment is fixed, the checker's error and its fix: the missing import.
+    let text = text.replacen("// an arm", "(* an arm *)", 1);
+    client.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": uri, "version": 2}, "contentChanges": [{"text": text}]}),
+    );
+    assert_eq!(client.diagnostics()[0]["code"], "E0301");
+    let actions = client.request(
+        "textDocument/codeAction",
+        json!({"textDocument": {"uri": uri}, "range": everywhere, "context": {"diagnostics": []}}),
+    );
+    assert_eq!(
+        actions[0]["title"],
+        "insert the line `import joints ;` before line 2"
+    );
+    let edit = &actions[0]["edit"]["changes"][&uri][0];
+    assert_eq!(edit["newText"], "import joints ;\n");
+    assert_eq!(edit["range"]["start"], json!({"line": 1, "character": 0}));
+    client.stop();
 }

@@ -56,4 +56,5 @@ mod unit_topology;
 mod urdf_export;
 mod urdf_import;
 mod view;
+mod vscode_package;
 mod welds;

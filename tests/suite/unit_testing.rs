@@ -190,6 +190,13 @@ fn calibrate_proposes_tolerances_the_manifest_reads() {
         0,
         "the run passes its proposed tolerances"
     );
+    // The proposal covers the program's numbers moved by round-off: in other directions than
+    // the calibration's (seeds 1 to 8) they pass, while a move of 1e-6 fails.
+    assert!(proposal.contains("numbers by 1e-15 (8 runs)"), "{proposal}");
+    let (code, stdout, _) = lsdc(&["test", "--perturb", "1e-15", "--seed", "9", arg(&dir)]);
+    assert_eq!(code, 0, "{stdout}");
+    let (code, stdout, _) = lsdc(&["test", "--perturb", "1e-6", arg(&dir)]);
+    assert_eq!(code, 1, "{stdout}");
 }
 
 #[test]
