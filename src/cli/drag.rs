@@ -70,7 +70,7 @@ pub fn drag(args: &DragArgs) -> ExitCode {
             "the stiffnesses, `--reach-tolerance` and `--iterations` must be positive",
         );
     }
-    let overrides = match parse_sets(&args.sets, Format::Text) {
+    let overrides = match parse_sets(&args.sets) {
         Ok(o) => o,
         Err(code) => return code,
     };
