@@ -12,4 +12,5 @@ pub mod energy;
 pub mod joint;
 pub mod loops;
 pub mod model;
+pub mod stops;
 pub mod welds;

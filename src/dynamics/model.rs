@@ -8,6 +8,7 @@ pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
 };
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
+use super::stops::{self, Stop};
 use super::welds;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{EffortKind, Mechanism};
@@ -72,6 +73,8 @@ pub struct Model {
     /// through one point), its axes: it constrains only the point, and its angles are recovered
     /// from the bodies' poses rather than integrated (no gimbal lock).
     pub loop_balls: Vec<Option<[Vector3<f64>; 3]>>,
+    /// The bounds of the tree's coordinates (links' `lower` and `upper`): events of a run.
+    pub stops: Vec<Stop>,
 }
 
 impl Model {
@@ -251,6 +254,7 @@ pub fn build_with(
         .collect();
     let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
     let link_efforts = link_efforts(mechanism, &joints, &loops);
+    let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -302,6 +306,7 @@ pub fn build_with(
         loops,
         nc,
         loop_balls,
+        stops,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),

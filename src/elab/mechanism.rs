@@ -57,6 +57,30 @@ pub struct Link {
     pub torques: Vec<(u8, Vector)>,
     /// `potential = ...`: the potential energy its efforts derive from, for the energy report.
     pub potential: Option<Scalar>,
+    /// `lower = ..., upper = ..., restitution = ...`: stops on its coordinate, hit with that
+    /// coefficient of restitution (0 when not given).
+    pub stops: LinkStops,
+    /// `rotor_inertia = ..., gear_ratio = ..., rotor_axis = ...`: a motor's rotor geared to its
+    /// coordinate.
+    pub rotor: LinkRotor,
+}
+
+/// The stops of a link's coordinate, as declared (each optional).
+#[derive(Clone, Debug, Default)]
+pub struct LinkStops {
+    pub lower: Option<Scalar>,
+    pub upper: Option<Scalar>,
+    pub restitution: Option<Scalar>,
+}
+
+/// A rotor spinning about `axis` (in the join's first frame) relative to the body of that frame
+/// at `ratio` times the rate of the link's coordinate, with moment of inertia `inertia` about
+/// its axis; each optional as declared.
+#[derive(Clone, Debug, Default)]
+pub struct LinkRotor {
+    pub inertia: Option<Scalar>,
+    pub ratio: Option<Scalar>,
+    pub axis: Option<Vector>,
 }
 
 /// `join first and second with link`: the link's dof chain, in its own coordinates, carries the

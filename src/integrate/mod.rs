@@ -19,6 +19,7 @@ mod dop853;
 pub mod dopri5;
 mod driver;
 mod evaluator;
+mod events;
 mod hermite;
 mod outcome;
 mod output;

@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::branch;
 use super::clock::thread_cpu_seconds;
 use super::constraints::{ConstraintReport, ReleasedStretch};
+use super::impacts::Impact;
 use super::prepare::{Integrator, Prepared};
 pub use super::sample::{MomentumDrift, Sample};
 use super::stiffness::{self, StiffnessReport};
@@ -72,6 +73,19 @@ impl OdeSystem for MechanicalSystem<'_> {
 
     fn breaks_error_trend(&self) -> bool {
         self.loops.breaks_trend
+    }
+
+    fn event_count(&self) -> usize {
+        self.model.stops.len()
+    }
+
+    fn events(&mut self, _t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        self.stop_distances(y, values);
+        Ok(())
+    }
+
+    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
+        Ok(self.impact(t, y, index)?)
     }
 }
 
@@ -136,6 +150,21 @@ impl OdeSystem for WithWork<'_, '_> {
     fn breaks_error_trend(&self) -> bool {
         self.0.loops.breaks_trend
     }
+
+    fn event_count(&self) -> usize {
+        self.0.model.stops.len()
+    }
+
+    fn events(&mut self, _t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        self.0.stop_distances(y, values);
+        Ok(())
+    }
+
+    /// The impact; the work of the non-conservative efforts does not jump.
+    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
+        let n = self.0.dimension();
+        Ok(self.0.impact(t, &mut y[..n], index)?)
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -178,6 +207,9 @@ pub struct Report {
     pub constraints: Option<ConstraintReport>,
     /// A fixed-step method's largest local error estimate over its steps (RK4, symplectic).
     pub step_error: Option<StepErrorReport>,
+    /// The impacts on the stops (links' `lower` and `upper`), in time order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub impacts: Vec<Impact>,
     /// Where an explicit integrator's steps were found held by its stability region (W0901).
     pub stiffness: Option<StiffnessReport>,
     pub failure: Option<RunFailure>,
@@ -638,6 +670,15 @@ fn simulate_from(
             &integrator_settings,
             &mut observer,
         ),
+        None if !model.stops.is_empty() => Err(IntegrationError {
+            time: 0.0,
+            failure: Failure::System(
+                "the symplectic integrator does not handle stops (links' `lower` and `upper`): \
+                 use `dopri5`, `dop853`, `rk4` or `implicit`"
+                    .to_string(),
+            ),
+            stats: Box::default(),
+        }),
         None => {
             let system = &mut *with_work.0;
             // The RATTLE steps keep the loops closed themselves.
@@ -739,6 +780,7 @@ fn simulate_from(
             .stability_bound
             .as_ref()
             .and_then(|bound| stiffness::describe(prepared, bound)),
+        impacts: std::mem::take(&mut system.impacts),
         failure,
         interrupted,
     };
@@ -815,6 +857,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         constraints: None,
         step_error: None,
         stiffness: None,
+        impacts: Vec::new(),
         failure: Some(RunFailure { time: 0.0, message }),
         interrupted: None,
     };

@@ -58,6 +58,8 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
+    /// The impacts on the stops so far, in time order.
+    pub impacts: Vec<super::impacts::Impact>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -84,6 +86,7 @@ impl<'m> MechanicalSystem<'m> {
             velocities: Vec::new(),
             evaluated: Vec::new(),
             native: None,
+            impacts: Vec::new(),
         }
     }
 
@@ -575,6 +578,8 @@ pub enum SystemError {
     /// The run starts at a singular configuration, where `row` of `join` is implied by the other
     /// constraints though it is not at the closed configurations around it.
     SingularStart { join: String, row: &'static str },
+    /// An impact on a stop could not be resolved, or left a coordinate resting on its stop.
+    Impact(String),
 }
 
 /// What made an acceleration infinite or NaN.
@@ -622,6 +627,7 @@ impl fmt::Display for SystemError {
                 f,
                 "the loops start at a singular configuration (the {row} constraint of `{join}` is implied by the others here, not at the configurations around it), where the motion may leave along several branches: start away from it, or give initial values on one branch"
             ),
+            SystemError::Impact(message) => f.write_str(message),
             SystemError::AccelerationNotFinite { join, cause } => {
                 write!(f, "the acceleration of join `{join}` is not finite: {cause}")
             }
