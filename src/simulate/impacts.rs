@@ -58,6 +58,9 @@ impl MechanicalSystem<'_> {
         })?;
         let positions = model.positions();
         y[positions..positions + after.len()].copy_from_slice(after.as_slice());
+        // The event was located past the bound by at most the time resolution: the coordinate
+        // starts again from the bound itself, so that the next crossing begins at zero.
+        y[stop.position] = stop.bound;
         let v_after = &y[positions..positions + after.len()];
         let impact = Impact {
             time: t,

@@ -33,6 +33,7 @@ mod properties;
 mod regression;
 mod runs;
 mod simulation;
+mod stops;
 mod symbolic;
 mod symbolic_equations;
 mod symplectic_groups;
