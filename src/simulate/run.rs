@@ -79,13 +79,12 @@ impl OdeSystem for MechanicalSystem<'_> {
         self.model.stops.len()
     }
 
-    fn events(&mut self, _t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
-        self.stop_distances(y, values);
-        Ok(())
+    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        Ok(self.stop_events(t, y, values)?)
     }
 
     fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
-        Ok(self.impact(t, y, index)?)
+        Ok(self.stop_event(t, y, index)?)
     }
 }
 
@@ -155,15 +154,15 @@ impl OdeSystem for WithWork<'_, '_> {
         self.0.model.stops.len()
     }
 
-    fn events(&mut self, _t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
-        self.0.stop_distances(y, values);
-        Ok(())
+    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        let n = self.0.dimension();
+        Ok(self.0.stop_events(t, &y[..n], values)?)
     }
 
-    /// The impact; the work of the non-conservative efforts does not jump.
+    /// The impact or release; the work of the non-conservative efforts does not jump.
     fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
         let n = self.0.dimension();
-        Ok(self.0.impact(t, &mut y[..n], index)?)
+        Ok(self.0.stop_event(t, &mut y[..n], index)?)
     }
 }
 

@@ -60,6 +60,10 @@ pub struct MechanicalSystem<'m> {
     native: Option<&'m NativeDynamics>,
     /// The impacts on the stops so far, in time order.
     pub impacts: Vec<super::impacts::Impact>,
+    /// Per stop, whether its coordinate rests on it, and the contact force holding it there
+    /// at the last evaluation (positive while it pushes the coordinate into its range).
+    pub resting: Vec<bool>,
+    pub contact: Vec<f64>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -87,6 +91,8 @@ impl<'m> MechanicalSystem<'m> {
             evaluated: Vec::new(),
             native: None,
             impacts: Vec::new(),
+            resting: vec![false; model.stops.len()],
+            contact: vec![0.0; model.stops.len()],
         }
     }
 
@@ -287,6 +293,7 @@ impl<'m> MechanicalSystem<'m> {
             };
             return Err(SystemError::AccelerationNotFinite { join, cause });
         }
+        self.hold_resting(q, &mut accelerations)?;
         let (dq, dv) = dydt.split_at_mut(model.positions());
         for joint in &model.joints {
             let range = joint.q_offset..joint.q_offset + joint.nq();
