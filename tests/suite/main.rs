@@ -26,6 +26,7 @@ mod kinematics;
 mod loop_properties;
 mod loops;
 mod lsp;
+mod mampey;
 mod methods;
 mod native;
 mod pinocchio_fixtures;
