@@ -168,9 +168,16 @@ pub fn field_names(target: Ty) -> Vec<String> {
     names
 }
 
-/// A link's scalar fields besides its efforts: its potential, and the stops of its coordinate
-/// with their coefficient of restitution.
-const LINK_SCALAR_FIELDS: [&str; 4] = ["potential", "lower", "upper", "restitution"];
+/// A link's scalar fields besides its efforts: its potential, the limits of its coordinate and
+/// the restitution of its stops, and the geared rotor that drives it.
+const LINK_SCALAR_FIELDS: [&str; 6] = [
+    "potential",
+    "lower",
+    "upper",
+    "restitution",
+    "rotor_inertia",
+    "gear_ratio",
+];
 
 /// Fields a constructor accepts, with the type of their value.
 pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &str) -> Option<Ty> {
@@ -184,7 +191,8 @@ pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &s
         (Force | Torque, "value") => Ty::Vector,
         (Force | Torque, "body") => Ty::Body,
         (Force | Torque | Link, "potential") => Ty::Scalar,
-        (Link, "lower" | "upper" | "restitution") => Ty::Scalar,
+        (Link, "lower" | "upper" | "restitution" | "rotor_inertia" | "gear_ratio") => Ty::Scalar,
+        (Link, "rotor_axis") => Ty::Vector,
         (Force, "field") => Ty::Vector,
         _ => return None,
     })
@@ -200,6 +208,7 @@ pub fn constructor_field_names(kind: crate::syntax::ast::ConstructKind) -> Vec<S
         Link => field_names(Ty::Link)
             .into_iter()
             .chain(LINK_SCALAR_FIELDS.iter().map(|s| s.to_string()))
+            .chain(["rotor_axis".to_string()])
             .collect(),
         Force => ["value", "body", "potential", "field"]
             .iter()

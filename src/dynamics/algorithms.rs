@@ -201,7 +201,11 @@ pub fn rnea_after_kinematics(
     tau: &mut DVector<f64>,
 ) {
     rnea_forward(model, data, a, external);
+    let rotor_efforts = super::rotors::add_torques(model, data, a);
     rnea_backward(model, data, tau);
+    for (rotor, effort) in model.rotors.iter().zip(rotor_efforts) {
+        tau[rotor.velocity] += effort;
+    }
 }
 
 /// RNEA's pass out, when `data` holds the forward kinematics: each body's acceleration under
@@ -348,6 +352,12 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
     }
     let nv = model.nv;
     let entries = mass.as_mut_slice();
+    write_composite_entries(model, data, entries, nv);
+    super::rotors::add_to_mass(model, data, mass);
+}
+
+/// The mass matrix's entries from the composite inertias and motion columns in `data`.
+fn write_composite_entries(model: &Model, data: &Data, entries: &mut [f64], nv: usize) {
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         let composite = &data.composite_world[joint.child];

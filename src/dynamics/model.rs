@@ -8,6 +8,7 @@ pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
 };
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
+use super::rotors::{self, Rotor};
 use super::stops::{self, Stop};
 use super::welds;
 use crate::diag::Diagnostic;
@@ -75,6 +76,8 @@ pub struct Model {
     pub loop_balls: Vec<Option<[Vector3<f64>; 3]>>,
     /// The bounds of the tree's coordinates (links' `lower` and `upper`): events of a run.
     pub stops: Vec<Stop>,
+    /// The geared rotors of the tree's links (`rotor_inertia`, `gear_ratio`, `rotor_axis`).
+    pub rotors: Vec<Rotor>,
 }
 
 impl Model {
@@ -255,6 +258,7 @@ pub fn build_with(
     let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
     let link_efforts = link_efforts(mechanism, &joints, &loops);
     let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
+    let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -283,6 +287,7 @@ pub fn build_with(
         &link_efforts,
         !loops.is_empty(),
     );
+    refuse_rotors_on_welds(mechanism, &joints, &merged.dynamic_joints, &rotors)?;
     let branch_velocities = branch_velocities(&joints);
     let mut model = Model {
         branch_velocities,
@@ -307,12 +312,45 @@ pub fn build_with(
         nc,
         loop_balls,
         stops,
+        rotors,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),
     };
     model.compile_efforts();
     Ok(model)
+}
+
+/// A rotor carried by a body merged into another by welds (E0453): the algorithms see the merged
+/// body only, and the rotor is not moved there.
+fn refuse_rotors_on_welds(
+    mechanism: &Mechanism,
+    joints: &[Joint],
+    dynamic_joints: &[usize],
+    rotors: &[Rotor],
+) -> Result<(), Vec<Diagnostic>> {
+    let visited =
+        |body: usize| body == 0 || dynamic_joints.iter().any(|&k| joints[k].child == body);
+    let errors: Vec<Diagnostic> = rotors
+        .iter()
+        .filter(|r| !visited(r.carrier))
+        .map(|r| {
+            let join = mechanism.join(joints[r.joint].chain.join);
+            Diagnostic::error(
+                "E0453",
+                format!(
+                    "the rotor of `{}` is carried by a welded body",
+                    joints[r.joint].chain.name
+                ),
+            )
+            .primary(join.span, "its first frame's body is welded to another")
+            .help("join the rotor's link to the body the weld attaches to")
+        })
+        .collect();
+    match errors.is_empty() {
+        true => Ok(()),
+        false => Err(errors),
+    }
 }
 
 impl Model {

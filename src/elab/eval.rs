@@ -817,6 +817,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             torques: Vec::new(),
             potential: None,
             stops: Default::default(),
+            rotor: Default::default(),
         };
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {
@@ -830,6 +831,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 "lower" => link.stops.lower = Some(as_scalar(value, at)?),
                 "upper" => link.stops.upper = Some(as_scalar(value, at)?),
                 "restitution" => link.stops.restitution = Some(as_scalar(value, at)?),
+                "rotor_inertia" => link.rotor.inertia = Some(as_scalar(value, at)?),
+                "gear_ratio" => link.rotor.ratio = Some(as_scalar(value, at)?),
+                "rotor_axis" => link.rotor.axis = Some(as_vector(value, at)?),
                 _ => return Err(internal(format!("link field `{name}`"))),
             }
         }

@@ -60,6 +60,9 @@ pub struct Link {
     /// `lower = ..., upper = ..., restitution = ...`: stops on its coordinate, hit with that
     /// coefficient of restitution (0 when not given).
     pub stops: LinkStops,
+    /// `rotor_inertia = ..., gear_ratio = ..., rotor_axis = ...`: a motor's rotor geared to its
+    /// coordinate.
+    pub rotor: LinkRotor,
 }
 
 /// The stops of a link's coordinate, as declared (each optional).
@@ -70,6 +73,15 @@ pub struct LinkStops {
     pub restitution: Option<Scalar>,
 }
 
+/// A rotor spinning about `axis` (in the join's first frame) relative to the body of that frame
+/// at `ratio` times the rate of the link's coordinate, with moment of inertia `inertia` about
+/// its axis; each optional as declared.
+#[derive(Clone, Debug, Default)]
+pub struct LinkRotor {
+    pub inertia: Option<Scalar>,
+    pub ratio: Option<Scalar>,
+    pub axis: Option<Vector>,
+}
 
 /// `join first and second with link`: the link's dof chain, in its own coordinates, carries the
 /// first frame onto the second.

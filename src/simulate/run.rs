@@ -590,7 +590,8 @@ fn simulate_from(
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(start.coordinates.to_vec()));
     let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
-    system.use_native(prepared.native.as_ref());
+    // The native code knows nothing of geared rotors: the model's own evaluation counts them.
+    system.use_native(prepared.native.as_ref().filter(|_| model.rotors.is_empty()));
     if let Err(error) = system.start_loops(&mut y0) {
         return failed_at_start(prepared, error.to_string());
     }
@@ -669,11 +670,11 @@ fn simulate_from(
             &integrator_settings,
             &mut observer,
         ),
-        None if !model.stops.is_empty() => Err(IntegrationError {
+        None if !model.stops.is_empty() || !model.rotors.is_empty() => Err(IntegrationError {
             time: 0.0,
             failure: Failure::System(
-                "the symplectic integrator does not handle stops (links' `lower` and `upper`): \
-                 use `dopri5`, `dop853`, `rk4` or `implicit`"
+                "the symplectic integrator does not handle stops (links' `lower` and `upper`) \
+                 nor geared rotors: use `dopri5`, `dop853`, `rk4` or `implicit`"
                     .to_string(),
             ),
             stats: Box::default(),

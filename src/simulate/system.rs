@@ -146,6 +146,32 @@ impl<'m> MechanicalSystem<'m> {
         )?)
     }
 
+    /// The accelerations of a tree with geared rotors, M⁻¹(τ − b) with M from CRBA and the bias
+    /// b from RNEA, which count the rotors (the articulated-body algorithm does not).
+    fn geared_accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        accelerations: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        self.evaluate_efforts(t, q, v)?;
+        let efforts = match model.has_efforts() {
+            true => &self.efforts,
+            false => &self.no_efforts,
+        };
+        let mut bias = DVector::zeros(model.nv);
+        let zero = vec![0.0; model.nv];
+        rnea_after_kinematics(model, &mut self.data, &zero, &efforts.external, &mut bias);
+        let mut mass = DMatrix::zeros(model.nv, model.nv);
+        crate::dynamics::algorithms::crba_after_kinematics(model, &mut self.data, &mut mass);
+        let factors = mass.cholesky().ok_or(SystemError::SingularMassMatrix)?;
+        let free = DVector::from_fn(model.nv, |i, _| efforts.tau[i] - bias[i]);
+        accelerations.copy_from(&factors.solve(&free));
+        Ok(())
+    }
+
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
     /// `loop_scratch` with the constraint rows they come from, the efforts in `efforts`;
     /// nothing is allocated once the buffers are sized.
@@ -268,6 +294,9 @@ impl<'m> MechanicalSystem<'m> {
             ) {
                 return Err(self.dynamics_error(&e));
             }
+        }
+        if !native && !model.has_loops() && !model.rotors.is_empty() {
+            self.geared_accelerations(t, q, v, &mut accelerations)?;
         }
         let efforts = if model.has_efforts() || model.has_loops() {
             &self.efforts

@@ -1,7 +1,8 @@
 //! The mass matrix by Llibre's Mampey recursion (notes/seed-llibre.md §2.4, corrected form,
 //! generalised to trees as in §2.6) as an independent check: against the columns of the seed's
 //! Newton–Euler recursion with q̈ = e_j, gravity and velocities zero (§2.3), on a geared two-link
-//! arm, and against lsdc's CRBA and RNEA on programs and on the URDF fixtures.
+//! arm, and against lsdc's CRBA and RNEA (rotors included) on the URDF fixtures and on
+//! `examples/geared_arm.lsd`.
 
 use lsdc::dynamics::algorithms::{crba, forward_kinematics, rnea, Data};
 use lsdc::dynamics::model::Model;
@@ -240,7 +241,7 @@ fn mampey_equals_newton_euler_columns_on_a_geared_arm() {
 }
 
 /// The seed's data of lsdc's model at q (a tree of one-coordinate joints whose child frame's
-/// origin lies on the joint axis), without rotors.
+/// origin lies on the joint axis), its geared rotors included.
 fn tree_of(model: &Model, data: &Data) -> Tree {
     let n = model.nv;
     let mut tree = Tree {
@@ -295,6 +296,19 @@ fn tree_of(model: &Model, data: &Data) -> Tree {
             .push(about_origin + body.mass * skew(&c) * skew(&c));
         index += 1;
     }
+    // Geared rotors carried by the parent: actuator i's ratio, axis in B_parent, moment; the
+    // parent's full inertia includes the rotor's, as the seed's bookkeeping has it.
+    for rotor in &model.rotors {
+        let i = number[model.joints[rotor.joint].child];
+        let parent = tree.parent[i];
+        assert_eq!(number[rotor.carrier], parent, "a rotor on the parent");
+        tree.alpha[i] = rotor.ratio;
+        tree.eps[i] = rotor.axis;
+        tree.jm[i] = rotor.inertia;
+        if parent != 0 {
+            tree.inertia[parent] += rotor.inertia * rotor.axis * rotor.axis.transpose();
+        }
+    }
     tree
 }
 
@@ -325,7 +339,7 @@ fn check_against_crba_and_rnea(model: &Model, q: &[f64], what: &str) {
     let against_rnea = largest_difference(&mampey, &columns) / scale;
     assert!(
         against_crba <= 1e-12,
-        "{what}: Mampey − CRBA {against_crba:e}"
+        "{what}: Mampey − CRBA {against_crba:e}\n{mampey}{mass}{columns}"
     );
     assert!(
         against_rnea <= 1e-12,
@@ -339,9 +353,11 @@ fn check_against_crba_and_rnea(model: &Model, q: &[f64], what: &str) {
 }
 
 #[test]
-fn mampey_equals_crba_and_rnea_columns_on_the_urdf_fixtures() {
-    for robot in ["ur5", "panda", "kinova", "double_pendulum"] {
-        let path = format!("tests/fixtures/urdf/{robot}.urdf");
+fn mampey_equals_crba_and_rnea_columns_on_the_urdf_fixtures_and_a_geared_arm() {
+    let paths = ["ur5", "panda", "kinova", "double_pendulum"]
+        .map(|robot| format!("tests/fixtures/urdf/{robot}.urdf"));
+    for path in paths.iter().chain([&"examples/geared_arm.lsd".to_string()]) {
+        let robot = path.as_str();
         let compilation = lsdc::driver::compile_files(
             &[std::path::PathBuf::from(&path)],
             &lsdc::load::LoadOptions {
@@ -361,4 +377,29 @@ fn mampey_equals_crba_and_rnea_columns_on_the_urdf_fixtures() {
             check_against_crba_and_rnea(model, &q, robot);
         }
     }
+}
+
+/// The rotors' inverse dynamics (their torques, gyroscopic ones included) is consistent with
+/// their kinetic energy ½ J (ε·ω_B + n q̇)²: the geared arm under gravity conserves energy.
+#[test]
+fn the_geared_arm_conserves_its_energy_rotors_included() {
+    let compilation = lsdc::driver::compile_files(
+        &[std::path::PathBuf::from("examples/geared_arm.lsd")],
+        &lsdc::load::LoadOptions {
+            library_dirs: Vec::new(),
+            use_environment: false,
+        },
+    )
+    .expect("loads");
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
+        .unwrap_or_else(|d| panic!("{d:?}"));
+    let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
+    assert!(simulation.report.failure.is_none());
+    let drift = simulation.report.energy_drift.expect("conservative");
+    assert!(drift < 1e-9, "energy drift {drift:e}");
+    // Without the gyroscopic and coupling terms the drift would be of the order of the
+    // rotors' share of the kinetic energy; the run is not trivially at rest either.
+    let last = simulation.samples.last().expect("samples");
+    assert!(last.kinetic_energy > 0.1, "{}", last.kinetic_energy);
 }
