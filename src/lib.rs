@@ -21,6 +21,7 @@ pub mod elab;
 pub mod ide;
 pub mod integrate;
 pub mod kinematics;
+pub mod linalg;
 pub mod load;
 pub mod output;
 pub mod simulate;

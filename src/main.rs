@@ -25,6 +25,29 @@ mod cli;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print no warnings (errors are still printed, and JSON results keep theirs).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+}
+
+/// Set by `--quiet`: warnings are not printed.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// The diagnostics to print as text: without the warnings under `--quiet`.
+fn printed(diagnostics: &[Diagnostic]) -> Vec<Diagnostic> {
+    let keep = |d: &&Diagnostic| d.is_error() || !quiet();
+    diagnostics.iter().filter(keep).cloned().collect()
+}
+
+/// A warning of the command line itself, on standard error (not under `--quiet`).
+fn warn(message: &str) {
+    if !quiet() {
+        eprintln!("warning: {message}");
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -391,6 +414,7 @@ struct TestArgs {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     match cli.command {
         Command::Check {
             files,
@@ -484,12 +508,35 @@ fn usage_error(message: &str) -> ExitCode {
     ExitCode::from(2)
 }
 
+/// A usage error of a command whose results are asked for in `format`: in JSON, also as
+/// `{"ok": false, "usage_error": MESSAGE}` on standard output, where the results would be.
+fn usage_error_in(format: Format, message: &str) -> ExitCode {
+    if format == Format::Json {
+        out(&json(&usage_error_json(message)));
+    }
+    usage_error(message)
+}
+
+fn usage_error_json(message: &str) -> serde_json::Value {
+    serde_json::json!({ "ok": false, "usage_error": message })
+}
+
 fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
     let mut all_ok = true;
+    let mut unreadable = false;
     let mut reports = Vec::new();
     for file in files {
         let compilation = match driver::compile_files(std::slice::from_ref(file), options) {
             Ok(c) => c,
+            // In JSON every file has its entry; in text the first unreadable file stops.
+            Err(error) if format == Format::Json => {
+                let mut entry = usage_error_json(&error.to_string());
+                entry["file"] = file.display().to_string().into();
+                reports.push(entry);
+                eprintln!("error: {error}");
+                (all_ok, unreadable) = (false, true);
+                continue;
+            }
             Err(error) => return usage_error(&error.to_string()),
         };
         all_ok &= !compilation.has_errors();
@@ -502,7 +549,9 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
         let value = serde_json::json!({ "ok": all_ok, "files": reports });
         out(&json(&value));
     }
-    if all_ok {
+    if unreadable {
+        ExitCode::from(2)
+    } else if all_ok {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
@@ -510,7 +559,8 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
 }
 
 fn print_text_report(file: &std::path::Path, compilation: &Compilation) {
-    let rendered = render::to_text(&compilation.workspace.sources, &compilation.diagnostics);
+    let diagnostics = printed(&compilation.diagnostics);
+    let rendered = render::to_text(&compilation.workspace.sources, &diagnostics);
     eprint!("{rendered}");
     match &compilation.mechanism {
         Some(mechanism) => out(&text::summary(file, &mechanism.summary())),
@@ -545,7 +595,7 @@ fn compile_one(
     format: Format,
 ) -> Result<Compilation, ExitCode> {
     let compilation = driver::compile_files(&[file.to_path_buf()], options)
-        .map_err(|error| usage_error(&error.to_string()))?;
+        .map_err(|error| usage_error_in(format, &error.to_string()))?;
     if compilation.has_errors() || (format == Format::Text && !compilation.diagnostics.is_empty()) {
         report_diagnostics(&compilation, &compilation.diagnostics, format);
     }
@@ -567,7 +617,7 @@ fn report_diagnostics(
     match format {
         Format::Text => eprint!(
             "{}",
-            render::to_text(&compilation.workspace.sources, &diagnostics)
+            render::to_text(&compilation.workspace.sources, &printed(&diagnostics))
         ),
         Format::Json => {
             let value = serde_json::json!({ "ok": false, "diagnostics": render::to_json_value(&compilation.workspace.sources, &diagnostics) });
@@ -692,16 +742,19 @@ fn write_output(output: Option<&std::path::Path>, text: &str) -> ExitCode {
     }
 }
 
-fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, ExitCode> {
+fn parse_sets(
+    sets: &[String],
+    format: Format,
+) -> Result<Vec<lsdc::simulate::prepare::Override>, ExitCode> {
     sets.iter()
         .map(|s| s.parse())
         .collect::<Result<_, lsdc::kinematics::unknowns::OverrideError>>()
-        .map_err(|error| usage_error(&error.to_string()))
+        .map_err(|error| usage_error_in(format, &error.to_string()))
 }
 
 fn simulate(args: &SimulateArgs) -> ExitCode {
     use lsdc::simulate::prepare::{prepare, Settings};
-    let overrides = match parse_sets(&args.sets) {
+    let overrides = match parse_sets(&args.sets, args.report) {
         Ok(o) => o,
         Err(code) => return code,
     };
@@ -740,8 +793,18 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             return usage_error(&format!("cannot draw `{}`: {error}", path.display()));
         }
     }
-    if !prepared.warnings.is_empty() {
-        report_diagnostics(&compilation, &prepared.warnings, args.report);
+    // In JSON, the warnings of the program and of its preparation go in the report with the
+    // run's own: standard output may carry the samples.
+    let mut warnings = Vec::new();
+    match args.report {
+        Format::Json => {
+            let program = compilation.diagnostics.iter().filter(|d| !d.is_error());
+            warnings.extend(program.chain(&prepared.warnings).cloned());
+        }
+        Format::Text if !prepared.warnings.is_empty() => {
+            report_diagnostics(&compilation, &prepared.warnings, Format::Text);
+        }
+        Format::Text => {}
     }
     let (simulation, written) = run_and_write(args, &prepared, &frames, samples_out);
     let plotted = match &args.plot {
@@ -749,9 +812,14 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
             .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
         None => Ok(()),
     };
-    print_run_report(&compilation, &simulation.report, args.report);
-    if let Err(message) = written.and(plotted) {
+    print_run_report(&compilation, &simulation.report, args.report, warnings);
+    if let Err(message) = written {
         return usage_error(&message);
+    }
+    // A plot that cannot be drawn after the run (a run without outputs) does not change what
+    // the run's exit code says.
+    if let Err(message) = plotted {
+        eprintln!("error: {message}");
     }
     let report = &simulation.report;
     match (report.interrupted, &report.failure) {
@@ -929,20 +997,20 @@ fn print_run_report(
     compilation: &Compilation,
     report: &lsdc::simulate::run::Report,
     format: Format,
+    earlier_warnings: Vec<Diagnostic>,
 ) {
-    let warnings: Vec<_> = [
+    let run_warnings = [
         lsdc::simulate::run::stiffness_warning(report),
         lsdc::simulate::run::step_error_warning(report),
         lsdc::simulate::run::passage_output_warning(report),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+    ];
+    let warnings: Vec<_> = earlier_warnings
+        .into_iter()
+        .chain(run_warnings.into_iter().flatten())
+        .collect();
     match format {
         Format::Text => {
-            if !warnings.is_empty() {
-                report_diagnostics(compilation, &warnings, Format::Text);
-            }
+            report_diagnostics(compilation, &warnings, Format::Text);
             eprint!("{}", text::run_report(report));
         }
         Format::Json => {
@@ -1135,7 +1203,7 @@ fn eval(
                     .iter()
                     .map(|(quantity, message)| format!("{quantity}: {message}"))
                     .collect();
-                eprintln!("warning: state {index}: {}", errors.join("; "));
+                warn(&format!("state {index}: {}", errors.join("; ")));
             }
             out(&json(&evaluation));
             ExitCode::SUCCESS
@@ -1156,7 +1224,7 @@ fn prepare_file(
     format: Format,
 ) -> Result<lsdc::simulate::prepare::Prepared, ExitCode> {
     use lsdc::simulate::prepare::{prepare, Settings};
-    let overrides = parse_sets(sets)?;
+    let overrides = parse_sets(sets, format)?;
     let compilation = compile_one(file, options, format)?;
     let Some(mechanism) = &compilation.mechanism else {
         return Err(ExitCode::from(1));
@@ -1198,6 +1266,9 @@ fn export_urdf(
             return ExitCode::from(1);
         }
     };
+    if let Some(dropped) = lsdc::output::urdf::dropped_efforts(&prepared.model) {
+        warn(&dropped);
+    }
     write_output(output, &urdf)
 }
 
@@ -1222,7 +1293,7 @@ fn import_urdf(
     options: &lsdc::load::urdf::ImportOptions,
     output: Option<&std::path::Path>,
 ) -> ExitCode {
-    let text = match std::fs::read_to_string(file) {
+    let text = match lsdc::load::read_source(file) {
         Ok(t) => t,
         Err(e) => return usage_error(&format!("cannot read `{}`: {e}", file.display())),
     };
@@ -1237,12 +1308,15 @@ fn import_urdf(
                 return ExitCode::from(1);
             }
         };
-    eprint!("{}", render::to_text(&sources, &imported.warnings));
+    eprint!(
+        "{}",
+        render::to_text(&sources, &printed(&imported.warnings))
+    );
     write_output(output, &imported.text)
 }
 
 fn parse(file: &std::path::Path) -> ExitCode {
-    let text = match std::fs::read_to_string(file) {
+    let text = match lsdc::load::read_source(file) {
         Ok(t) => t,
         Err(e) => return usage_error(&format!("cannot read `{}`: {e}", file.display())),
     };

@@ -68,6 +68,13 @@ pub struct Checker<'w> {
     pub(super) memo: FxHashMap<(DefId, Vec<Ty>), Ty>,
     pub(super) modules_in_progress: Vec<ModuleId>,
     pub(super) simulate_seen: Option<Span>,
+    /// How many more unknown names get a did-you-mean search (see [`MAX_SUGGESTIONS`]).
+    pub(super) suggestions_left: std::cell::Cell<usize>,
 }
 
 pub(super) const MAX_INSTANTIATION_DEPTH: usize = 64;
+
+/// Unknown names that get a did-you-mean suggestion in one compilation: each search compares
+/// the name with every visible one, so that without a bound a file of n misspelt names costs
+/// n² comparisons; the first ones are those a reader fixes first.
+pub(super) const MAX_SUGGESTIONS: usize = 100;

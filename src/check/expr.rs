@@ -172,6 +172,11 @@ impl<'w> Checker<'w> {
             }
             current = scope.parent.map(|(p, _)| p);
         }
+        let left = self.suggestions_left.get();
+        if left == 0 {
+            return diagnostic;
+        }
+        self.suggestions_left.set(left - 1);
         let visible = self.visible_names(ctx);
         if let Some(number) = suggest::thesis_body_number(name) {
             let bodies: Vec<&(String, Ty)> =

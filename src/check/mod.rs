@@ -42,6 +42,7 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
         memo: FxHashMap::default(),
         modules_in_progress: Vec::new(),
         simulate_seen: None,
+        suggestions_left: std::cell::Cell::new(checker::MAX_SUGGESTIONS),
     };
     for &root in &workspace.roots {
         checker.module(root);
@@ -439,7 +440,7 @@ impl<'w> Checker<'w> {
     fn expr_type_silently(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         let reported = self.diagnostics.list.len();
         let ty = self.expr(expr, ctx);
-        self.diagnostics.list.truncate(reported);
+        self.diagnostics.truncate(reported);
         ty
     }
 

@@ -31,7 +31,7 @@ pub struct ViewArgs {
 }
 
 pub fn view(args: &ViewArgs) -> ExitCode {
-    let overrides = match parse_sets(&args.sets) {
+    let overrides = match parse_sets(&args.sets, Format::Text) {
         Ok(o) => o,
         Err(code) => return code,
     };

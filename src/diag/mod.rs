@@ -136,19 +136,36 @@ impl std::error::Error for Diagnostic {}
 #[derive(Default, Debug)]
 pub struct Diagnostics {
     pub list: Vec<Diagnostic>,
+    /// Code, message and place of each diagnostic pushed, so that a duplicate is found in
+    /// constant time (a file of n errors is checked in linear time).
+    pushed: std::collections::HashSet<Identity>,
+}
+
+/// What makes two diagnostics the same report: code, message and place.
+type Identity = (&'static str, String, Option<crate::source::Span>);
+
+fn identity(diagnostic: &Diagnostic) -> Identity {
+    (
+        diagnostic.code,
+        diagnostic.message.clone(),
+        diagnostic.primary_span(),
+    )
 }
 
 impl Diagnostics {
     pub fn push(&mut self, diagnostic: Diagnostic) {
         // A definition's body is checked when it is declared and again at each use: the same
         // error at the same place is reported once, with the context of its first report.
-        let duplicate = self.list.iter().any(|d| {
-            d.code == diagnostic.code
-                && d.message == diagnostic.message
-                && d.primary_span() == diagnostic.primary_span()
-        });
-        if !duplicate {
+        if self.pushed.insert(identity(&diagnostic)) {
             self.list.push(diagnostic);
+        }
+    }
+
+    /// Drops the diagnostics after the first `len`, which can then be reported again (the
+    /// checker looks at an expression's type silently this way).
+    pub fn truncate(&mut self, len: usize) {
+        for dropped in self.list.drain(len.min(self.list.len())..) {
+            self.pushed.remove(&identity(&dropped));
         }
     }
 

@@ -30,24 +30,16 @@ impl<'a> Files<'a> for SourceMap {
     }
 
     fn line_range(&'a self, id: FileId, line_index: usize) -> Result<Range<usize>, FilesError> {
-        let text = &self.file(id).text;
-        let start = line_start(text, line_index).ok_or(FilesError::LineTooLarge {
-            given: line_index,
-            max: 0,
-        })?;
-        let end = line_start(text, line_index + 1).unwrap_or(text.len());
+        let file = self.file(id);
+        let start = file
+            .line_start(line_index)
+            .ok_or(FilesError::LineTooLarge {
+                given: line_index,
+                max: 0,
+            })?;
+        let end = file.line_start(line_index + 1).unwrap_or(file.text.len());
         Ok(start..end)
     }
-}
-
-/// Byte offset where a zero-based line starts (only used while rendering an error).
-fn line_start(text: &str, line_index: usize) -> Option<usize> {
-    if line_index == 0 {
-        return Some(0);
-    }
-    text.match_indices('\n')
-        .nth(line_index - 1)
-        .map(|(i, _)| i + 1)
 }
 
 /// Renders diagnostics as plain text, as a terminal shows them.

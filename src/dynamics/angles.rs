@@ -229,6 +229,11 @@ fn solve_least_squares(motion: &ChainMotion, b: &Motion, x: &mut [f64]) {
             return;
         }
     }
+    // nalgebra's SVD never ends on a non-finite matrix (see `crate::linalg`).
+    if !padded.iter().all(|v| v.is_finite()) {
+        x.fill(f64::NAN);
+        return;
+    }
     match padded.svd(true, true).solve(b, 1e-12) {
         Ok(solution) => x.copy_from_slice(&solution.as_slice()[..n]),
         Err(_) => x.fill(f64::NAN),

@@ -268,9 +268,9 @@ fn declared_rate_jacobian(
         };
         chain_twists.set_column(k, &twist);
     }
-    let pseudo_inverse = motion
-        .padded_subspace()
-        .pseudo_inverse(1e-12)
-        .map_err(|_| EvalError::NotGeometric("a degenerate joint"))?;
+    let subspace = DMatrix::from_column_slice(6, 6, motion.padded_subspace().as_slice());
+    let pseudo_inverse = crate::linalg::pseudo_inverse(subspace, 1e-12)
+        .map(|p| Matrix6::from_column_slice(p.as_slice()))
+        .ok_or(EvalError::NotGeometric("a degenerate joint"))?;
     Ok(pseudo_inverse * chain_twists)
 }

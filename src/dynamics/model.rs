@@ -12,7 +12,7 @@ use super::rotors::{self, Rotor};
 use super::stops::{self, Stop};
 use super::welds;
 use crate::diag::Diagnostic;
-use crate::elab::mechanism::{EffortKind, Mechanism};
+use crate::elab::mechanism::{inertia_problem, EffortKind, Mechanism};
 use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{constant_pose, ChainMotion, JointModel, KinematicModel};
@@ -169,6 +169,9 @@ fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
         EvalError::NotGeometric(detail) => {
             Diagnostic::error("E0807", format!("{what} cannot depend on {detail}"))
         }
+        EvalError::NotFinite => {
+            Diagnostic::error("E0807", format!("{what} is not a finite number"))
+        }
     }
 }
 
@@ -240,7 +243,28 @@ pub fn build_with(
     for &id in &topology.bodies {
         let name = mechanism.body_name(BodyRef::Body(id));
         match body_inertia(mechanism, id, unknowns) {
-            Ok(b) => bodies.push(b),
+            Ok(b) => {
+                let body = mechanism.body(id);
+                let moments = constant_vector(body.inertia.value(), unknowns)
+                    .ok()
+                    .map(|v| [v.x, v.y, v.z]);
+                if let Some(problem) = inertia_problem(Some(b.mass), moments) {
+                    // Written values are checked where they are written: these came from
+                    // `given` or `--set`.
+                    errors.push(
+                        Diagnostic::error(
+                            "E0816",
+                            format!(
+                                "`{name}`: {} (a value given to an unknown)",
+                                problem.message
+                            ),
+                        )
+                        .primary(body.span, "the body")
+                        .help(problem.help),
+                    );
+                }
+                bodies.push(b);
+            }
             Err(e) => errors.push(missing(mechanism, e, &format!("the inertia of `{name}`"))),
         }
         body_names.push(name);

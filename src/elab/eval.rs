@@ -6,7 +6,8 @@ use super::elaborator::{internal, Elaborator, Global, OwnJoin};
 use super::instances::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
-    as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, vector_or_matrix,
+    as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, check_finite,
+    finite_literal, is_zero, vector_or_matrix,
 };
 use super::value::*;
 use crate::check::scope::{ScopeId, Target};
@@ -15,8 +16,8 @@ use crate::diag::Diagnostic;
 use crate::load::ModuleId;
 use crate::source::Span;
 use crate::syntax::ast::{
-    ApplyDecl, Arg, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind, FieldInit,
-    Ident, JoinDecl, Name,
+    ApplyDecl, Arg, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind,
+    FieldInit, Ident, JoinDecl, Name,
 };
 
 type Result<T> = std::result::Result<T, Diagnostic>;
@@ -431,7 +432,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Int(0) => Value::Zero,
             ExprKind::Int(1) => Value::One,
             ExprKind::Int(n) => Value::Scalar(self.literal(*n as f64)),
-            ExprKind::Float(x) => Value::Scalar(self.literal(*x)),
+            ExprKind::Float(x) => Value::Scalar(self.literal(finite_literal(*x, expr.span)?)),
             ExprKind::Vector(items) => {
                 let values = items
                     .iter()
@@ -439,11 +440,18 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .collect::<Result<Vec<_>>>()?;
                 vector_or_matrix(values, expr.span)?
             }
-            ExprKind::Call { callee, args } => self.call(callee, args, locals, expr.span)?,
+            ExprKind::Call { callee, args } => {
+                let value = self.call(callee, args, locals, expr.span)?;
+                check_finite(&value, None, expr.span)?;
+                value
+            }
             ExprKind::Binary { op, lhs, rhs } => {
                 let left = self.expr(lhs, locals)?;
                 let right = self.expr(rhs, locals)?;
-                binary(*op, left, right, expr.span)?
+                let divisor_is_zero = matches!(op, BinaryOp::Div) && is_zero(&right);
+                let value = binary(*op, left, right, expr.span)?;
+                check_finite(&value, Some((*op, divisor_is_zero)), expr.span)?;
+                value
             }
             ExprKind::Neg(inner) => match self.expr(inner, locals)? {
                 Value::Zero => Value::Zero,
@@ -754,13 +762,28 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     fn body(&mut self, fields: Vec<(&str, Value, Span)>, span: Span) -> Result<Value> {
         let id = BodyId(self.mechanism.bodies.len() as u32);
         let (mut mass, mut iframe, mut inertia) = (None, None, None);
+        let (mut mass_at, mut inertia_at) = (span, span);
         for (name, value, at) in fields {
             match name {
-                "mass" => mass = Some(as_scalar(value, at)?),
+                "mass" => (mass, mass_at) = (Some(as_scalar(value, at)?), at),
                 "iframe" => iframe = Some(as_displacement(value, at)?),
-                "inertia" => inertia = Some(as_vector(value, at)?),
+                "inertia" => (inertia, inertia_at) = (Some(as_vector(value, at)?), at),
                 _ => return Err(internal(format!("body field `{name}`"))),
             }
+        }
+        let mass_value = mass.as_ref().and_then(constant);
+        let moments = inertia
+            .as_ref()
+            .and_then(|v| Some([constant(&v[0])?, constant(&v[1])?, constant(&v[2])?]));
+        if let Some(problem) = inertia_problem(mass_value, moments) {
+            let at = if problem.about_mass {
+                mass_at
+            } else {
+                inertia_at
+            };
+            return Err(Diagnostic::error("E0608", problem.message)
+                .primary(at, "written here")
+                .help(problem.help));
         }
         let mass = match mass {
             Some(m) => Quantity::Declared(m),

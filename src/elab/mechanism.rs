@@ -548,3 +548,55 @@ impl Dumper<'_> {
         )
     }
 }
+
+/// Why a body's mass or principal moments cannot be those of a rigid body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InertiaProblem {
+    /// The mass is at fault (else the principal moments).
+    pub about_mass: bool,
+    pub message: String,
+    pub help: &'static str,
+}
+
+/// Relative slack of the triangle inequality of the principal moments, for rounded values.
+const TRIANGLE_SLACK: f64 = 1e-9;
+
+/// Checks what is known of a body's mass and principal moments: a mass is finite and not
+/// negative; moments are finite, not negative, and each is at most the sum of the other two (the
+/// triangle inequality of every rigid body). `None` when nothing is wrong.
+pub fn inertia_problem(mass: Option<f64>, moments: Option<[f64; 3]>) -> Option<InertiaProblem> {
+    let shown = crate::diag::number::shortest;
+    if let Some(m) = mass.filter(|m| !m.is_finite() || *m < 0.0) {
+        return Some(InertiaProblem {
+            about_mass: true,
+            message: format!("a mass of {} is impossible", shown(m)),
+            help: "a mass is a finite number, 0 or more",
+        });
+    }
+    let [a, b, c] = moments?;
+    if let Some(i) = [a, b, c].into_iter().find(|i| !i.is_finite() || *i < 0.0) {
+        return Some(InertiaProblem {
+            about_mass: false,
+            message: format!(
+                "a principal moment of inertia of {} is impossible",
+                shown(i)
+            ),
+            help: "principal moments of inertia are finite numbers, 0 or more",
+        });
+    }
+    for (big, x, y) in [(a, b, c), (b, c, a), (c, a, b)] {
+        if big > (x + y) * (1.0 + TRIANGLE_SLACK) {
+            return Some(InertiaProblem {
+                about_mass: false,
+                message: format!(
+                    "principal moments of inertia {}, {}, {} violate the triangle inequality",
+                    shown(a),
+                    shown(b),
+                    shown(c)
+                ),
+                help: "no rigid body has a principal moment larger than the sum of the other two: check the values and their order",
+            });
+        }
+    }
+    None
+}

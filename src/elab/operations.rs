@@ -301,3 +301,77 @@ fn fold_builtin(name: &str, args: &[Scalar]) -> Option<f64> {
     };
     value.is_finite().then_some(value)
 }
+
+/// A number literal too large for a double (`1e309`): refused where it is written.
+pub(super) fn finite_literal(x: f64, span: Span) -> Result<f64> {
+    if x.is_finite() {
+        return Ok(x);
+    }
+    Err(Diagnostic::error("E0606", "this number is too large")
+        .primary(span, "larger than 1.8e308, the largest finite number")
+        .help("write a finite number; constant parts of a program must be finite"))
+}
+
+/// Whether a value is the number 0 (or a vector of them), as a divisor.
+pub(super) fn is_zero(value: &Value) -> bool {
+    let zero = |s: &Scalar| constant(s) == Some(0.0);
+    match value {
+        Value::Zero => true,
+        Value::Scalar(s) => zero(s),
+        Value::Vector(v) => v.iter().any(zero),
+        _ => false,
+    }
+}
+
+/// The built-in functions folded on numbers by [`fold_builtin`].
+const FOLDED: [&str; 11] = [
+    "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2",
+];
+
+/// Whether a scalar is an operation on numbers that folding left alone because its result is
+/// not a finite number (`1/0`, `0/0`, `log(0)`, `1e200 * 1e200`).
+fn undefined(s: &Scalar) -> bool {
+    match &**s {
+        SExpr::Add(a, b)
+        | SExpr::Sub(a, b)
+        | SExpr::Mul(a, b)
+        | SExpr::Div(a, b)
+        | SExpr::Pow(a, b) => constant(a).is_some() && constant(b).is_some(),
+        SExpr::Call(name, args) => {
+            FOLDED.contains(name) && !args.is_empty() && args.iter().all(|a| constant(a).is_some())
+        }
+        _ => false,
+    }
+}
+
+/// Refuses the value of an operation (`operator`: a binary one, and whether its divisor is 0)
+/// or of a call when its constant parts have no finite value, at the place it is written.
+pub(super) fn check_finite(
+    value: &Value,
+    operator: Option<(BinaryOp, bool)>,
+    span: Span,
+) -> Result<()> {
+    let bad = match value {
+        Value::Scalar(s) => undefined(s),
+        Value::Vector(v) => v.iter().any(undefined),
+        Value::Matrix(m) => m.iter().flatten().any(undefined),
+        _ => false,
+    };
+    if !bad {
+        return Ok(());
+    }
+    Err(match operator {
+        Some((BinaryOp::Div, true)) => Diagnostic::error("E0607", "division by zero")
+            .primary(span, "the divisor of this constant is 0")
+            .help("constant parts of a program must be finite numbers: check the divisor"),
+        Some((op, _)) => Diagnostic::error(
+            "E0607",
+            format!("`{}` on these numbers has no finite value", op.symbol()),
+        )
+        .primary(span, "this is not a finite number")
+        .help("constant parts of a program must be finite numbers"),
+        None => Diagnostic::error("E0607", "this function has no finite value here")
+            .primary(span, "not a finite number (outside the function's domain)")
+            .help("constant parts of a program must be finite numbers: check the argument"),
+    })
+}

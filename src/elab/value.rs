@@ -316,7 +316,7 @@ impl SExpr {
                 .join(", ")
         };
         match self {
-            SExpr::Num(v) => format!("{v}"),
+            SExpr::Num(v) => crate::diag::number::shortest(*v),
             SExpr::Time => "t".to_string(),
             SExpr::Unknown(id) => unknown(*id),
             SExpr::UnknownFunction(id, args) => {

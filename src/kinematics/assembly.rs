@@ -264,7 +264,7 @@ fn free_range(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     if m.ncols() == 0 || m.nrows() == 0 {
         return None;
     }
-    let svd = m.clone().svd(true, false);
+    let svd = crate::linalg::svd(m.clone(), true, false)?;
     let u = svd.u?;
     let largest = svd.singular_values.max();
     let kept: Vec<usize> = (0..svd.singular_values.len())
@@ -282,7 +282,7 @@ pub(crate) fn least_norm(m: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f6
     if m.ncols() == 0 {
         return Some(DVector::zeros(0));
     }
-    let svd = m.svd(true, true);
+    let svd = crate::linalg::svd(m, true, true)?;
     let floor = 1e-12 * svd.singular_values.max();
     svd.solve(b, floor).ok()
 }
@@ -391,7 +391,10 @@ fn polish(
         let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| {
             current.jacobian[(r, free[c])]
         });
-        let Ok(step) = jacobian.svd(true, true).solve(&(-&current.residual), 1e-14) else {
+        let Some(svd) = crate::linalg::svd(jacobian, true, true) else {
+            break;
+        };
+        let Ok(step) = svd.solve(&(-&current.residual), 1e-14) else {
             break;
         };
         let mut trial = q.clone();
@@ -414,7 +417,11 @@ pub fn singular_values(m: &DMatrix<f64>) -> DVector<f64> {
     if m.nrows() == 0 || m.ncols() == 0 {
         return DVector::zeros(0);
     }
-    let mut values = m.clone().svd(false, false).singular_values;
+    let Some(svd) = crate::linalg::svd(m.clone(), false, false) else {
+        // No decomposition of a non-finite matrix: values that no rank test accepts.
+        return DVector::from_element(m.nrows().min(m.ncols()), f64::NAN);
+    };
+    let mut values = svd.singular_values;
     values.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
     values
 }

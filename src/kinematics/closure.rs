@@ -76,6 +76,14 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
             }
         }
     }
+    // An overflowing configuration has no closure error worth solving for (and no SVD).
+    if !residual
+        .iter()
+        .chain(jacobian.iter())
+        .all(|x| x.is_finite())
+    {
+        return Err(EvalError::NotFinite);
+    }
     Ok(Closure {
         residual,
         jacobian,

@@ -20,6 +20,9 @@ pub enum EvalError {
     /// Something that is not a function of the link's coordinates alone (a derivative `x'`,
     /// another join's coordinate, the time): not allowed in geometry.
     NotGeometric(&'static str),
+    /// The geometry at a configuration is not a finite number (a coordinate so large that the
+    /// poses overflow, a degenerate joint).
+    NotFinite,
 }
 
 impl From<MalformedCall> for EvalError {
@@ -39,11 +42,16 @@ pub fn unknown_label(mechanism: &crate::elab::mechanism::Mechanism, id: UnknownI
     }
 }
 
+/// What [`EvalError::NotFinite`] says.
+pub const NOT_FINITE: &str =
+    "its value is not a finite number there (a coordinate too large, or a degenerate joint)";
+
 /// A sentence for people about an evaluation error.
 pub fn describe(error: &EvalError, mechanism: &crate::elab::mechanism::Mechanism) -> String {
     match error {
         EvalError::Missing(id) => format!("no value for {}", unknown_label(mechanism, *id)),
         EvalError::NotGeometric(what) => format!("it depends on {what}"),
+        EvalError::NotFinite => NOT_FINITE.to_string(),
     }
 }
 

@@ -75,7 +75,9 @@ fn common_fixed_point(twists: &[Twist]) -> bool {
         a.view_mut((3 * k, 0), (3, 3)).copy_from(&hat);
         b.rows_mut(3 * k, 3).copy_from(&linear(t));
     }
-    let Ok(c) = a.clone().svd(true, true).solve(&b, 1e-12) else {
+    let Some(c) =
+        crate::linalg::svd(a.clone(), true, true).and_then(|svd| svd.solve(&b, 1e-12).ok())
+    else {
         return false;
     };
     (a * c - b).amax() < 1e-9

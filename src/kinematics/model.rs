@@ -522,6 +522,12 @@ fn geometry_error(mechanism: &Mechanism, error: EvalError, span: Span, join: &st
         )
         .primary(span, "here")
         .help("frames and rotation axes are constant; only the link's own coordinates vary"),
+        EvalError::NotFinite => Diagnostic::error(
+            "E0802",
+            format!("the geometry of join `{join}` is not a finite number"),
+        )
+        .primary(span, "here")
+        .help("check the join's frames and axes, and the `initial` values of its coordinates"),
     }
 }
 

@@ -21,16 +21,26 @@ pub struct Override {
 pub enum OverrideError {
     /// No `=`.
     NoEquals { text: String },
+    /// Nothing before the `=`.
+    NoName { text: String },
     /// The right-hand side is not a number.
     NotANumber { text: String, value: String },
+    /// The right-hand side is not a finite number (`nan`, `inf`, `1e309`).
+    NotFinite { text: String, value: String },
 }
 
 impl std::fmt::Display for OverrideError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             OverrideError::NoEquals { text } => write!(f, "`--set {text}`: write NAME=VALUE"),
+            OverrideError::NoName { text } => {
+                write!(f, "`--set {text}`: no name before `=`; write NAME=VALUE")
+            }
             OverrideError::NotANumber { text, value } => {
                 write!(f, "`--set {text}`: `{value}` is not a number")
+            }
+            OverrideError::NotFinite { text, value } => {
+                write!(f, "`--set {text}`: `{value}` is not a finite number")
             }
         }
     }
@@ -55,6 +65,17 @@ impl std::str::FromStr for Override {
                 text: text.to_string(),
                 value: value.to_string(),
             })?;
+        if name.trim().is_empty() {
+            return Err(OverrideError::NoName {
+                text: text.to_string(),
+            });
+        }
+        if !number.is_finite() {
+            return Err(OverrideError::NotFinite {
+                text: text.to_string(),
+                value: value.to_string(),
+            });
+        }
         Ok(Override {
             name: name.trim().to_string(),
             value: number,

@@ -136,7 +136,7 @@ pub fn load_files(
 ) -> Result<(Workspace, Diagnostics), LoadError> {
     let mut loader = Loader::new(options);
     for path in paths {
-        let text = std::fs::read_to_string(path).map_err(|error| LoadError {
+        let text = read_source(path).map_err(|error| LoadError {
             path: path.clone(),
             error,
         })?;
@@ -164,6 +164,14 @@ pub fn load_files(
         loader.workspace.roots.push(id);
     }
     Ok(loader.finish())
+}
+
+/// The text of a file, or of standard input for `-`.
+pub fn read_source(path: &Path) -> std::io::Result<String> {
+    if path == Path::new("-") {
+        return std::io::read_to_string(std::io::stdin());
+    }
+    std::fs::read_to_string(path)
 }
 
 fn is_urdf(path: &Path) -> bool {

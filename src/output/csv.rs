@@ -55,19 +55,23 @@ pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[S
 
 /// One sample's line, ending with the `extra` values.
 pub fn row(sample: &Sample, extra: &[f64]) -> String {
-    let mut out = format!("{:e}", sample.time);
-    for value in sample.coordinates.iter().chain(&sample.rates) {
-        let _ = write!(out, ",{value:e}");
-    }
-    let potential = sample
-        .potential_energy
-        .map_or(String::new(), |p| format!("{p:e}"));
-    let _ = write!(out, ",{:e},{potential}", sample.kinetic_energy);
-    for value in sample.reactions.iter().chain(extra) {
-        let _ = write!(out, ",{value:e}");
+    let mut out = exponent(sample.time);
+    let values = (sample.coordinates.iter().chain(&sample.rates))
+        .chain([&sample.kinetic_energy])
+        .map(|&x| Some(x))
+        .chain([sample.potential_energy])
+        .chain(sample.reactions.iter().chain(extra).map(|&x| Some(x)));
+    for value in values {
+        out.push(',');
+        out += &value.map_or(String::new(), exponent);
     }
     out.push('\n');
     out
+}
+
+/// A number in exponent notation, as Rust reads it back; −0 is written 0e0.
+fn exponent(x: f64) -> String {
+    format!("{:e}", x + 0.0)
 }
 
 /// The comment lines after the rows: why the run failed, or when it was interrupted (the

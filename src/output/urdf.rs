@@ -80,6 +80,31 @@ pub fn export_urdf(model: &Model, robot_name: &str) -> Result<String, ExportErro
     robot(model, robot_name).map(|robot| to_xml(&robot))
 }
 
+/// What a URDF cannot carry of `model`: its gravity, applied efforts and link efforts, named in
+/// a sentence for a warning; `None` when it has none.
+pub fn dropped_efforts(model: &Model) -> Option<String> {
+    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    let counted = [
+        (model.applied.len(), "applied effort"),
+        (model.link_efforts.len(), "link effort"),
+    ];
+    let mut parts: Vec<String> = (model.gravity != nalgebra::Vector3::zeros())
+        .then(|| "gravity".to_string())
+        .into_iter()
+        .collect();
+    parts.extend(
+        (counted.iter().filter(|(n, _)| *n > 0))
+            .map(|(n, what)| format!("{n} {what}{}", plural(*n))),
+    );
+    if parts.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "the URDF leaves out the mechanism's efforts ({}): URDF describes bodies and joints only",
+        parts.join(", ")
+    ))
+}
+
 /// The URDF robot of `model`'s tree: links in body order after `earth`, the intermediate links
 /// of each join after its body; joints in join order.
 pub fn robot(model: &Model, robot_name: &str) -> Result<Robot, ExportError> {
@@ -439,6 +464,7 @@ impl Refusal {
         let name = |k: &usize| chain.coordinate_names.get(*k).map_or("?", String::as_str);
         match self {
             Refusal::Evaluation(EvalError::NotGeometric(what)) => format!("depends on {what}"),
+            Refusal::Evaluation(EvalError::NotFinite) => "is not a finite number".to_string(),
             Refusal::Evaluation(EvalError::Missing(_)) => {
                 "needs the value of an unknown".to_string()
             }

@@ -56,20 +56,24 @@ pub struct StateInput {
     pub tau: Option<Vec<f64>>,
 }
 
-/// The states file: `{"states": [...]}` or the bare list.
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum StatesFile {
-    Wrapped { states: Vec<StateInput> },
-    Bare(Vec<StateInput>),
-}
-
-/// Reads a states file's text.
+/// Reads a states file's text: `{"states": [...]}` or the bare list. Its form is told apart
+/// before the states are read, so that an error names what is wrong in them (`missing field
+/// `q``) rather than the two forms it matches neither of.
 pub fn parse_states(text: &str) -> Result<Vec<StateInput>, StatesError> {
-    match serde_json::from_str::<StatesFile>(text) {
-        Ok(StatesFile::Wrapped { states }) | Ok(StatesFile::Bare(states)) => Ok(states),
-        Err(e) => Err(StatesError::Syntax(e)),
-    }
+    use serde::de::Error as _;
+    use serde_json::Value;
+    let value: Value = serde_json::from_str(text).map_err(StatesError::Syntax)?;
+    let list = match value {
+        Value::Object(mut fields) if fields.len() == 1 && fields.contains_key("states") => {
+            fields.remove("states").unwrap_or_default()
+        }
+        list @ Value::Array(_) => list,
+        _ => {
+            let message = "the file is neither an object with one `states` list nor a list";
+            return Err(StatesError::Syntax(serde_json::Error::custom(message)));
+        }
+    };
+    serde_json::from_value(list).map_err(StatesError::Syntax)
 }
 
 /// A body's pose in the fixed frame: its origin and the rotation matrix (rows) whose columns

@@ -498,7 +498,7 @@ impl Sampler<'_> {
             coordinates,
             rates,
             kinetic_energy: kinetic,
-            potential_energy: self.conservative.complete.then_some(potential),
+            potential_energy: Some(potential),
             work: work.map(|w| w + 0.0),
             balance: work.map(|w| kinetic + potential - w),
             momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
@@ -618,7 +618,7 @@ fn simulate_from(
     }
     let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::new();
-    let mut summary = Summary::new(model);
+    let mut summary = Summary::new(model, sampler.conservative.complete);
     let started = Instant::now();
     let cpu_started = thread_cpu_seconds();
     let mut deliver = |offered: Vec<Sample>, samples: &mut Vec<Sample>| {
@@ -833,9 +833,11 @@ fn fastest_coordinate(names: &[String], last: Option<&Sample>) -> String {
 }
 
 fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
+    use crate::kinematics::eval::{EvalError, NOT_FINITE};
     match e {
-        crate::kinematics::eval::EvalError::Missing(_) => "a value is missing".to_string(),
-        crate::kinematics::eval::EvalError::NotGeometric(what) => format!("it depends on {what}"),
+        EvalError::Missing(_) => "a value is missing".to_string(),
+        EvalError::NotGeometric(what) => format!("it depends on {what}"),
+        EvalError::NotFinite => NOT_FINITE.to_string(),
     }
 }
 

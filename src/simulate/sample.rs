@@ -9,8 +9,9 @@ pub struct Sample {
     pub coordinates: Vec<f64>,
     pub rates: Vec<f64>,
     pub kinetic_energy: f64,
-    /// Potential energy, when every effort is a constant force in the fixed basis or declares
-    /// its potential.
+    /// Potential energy of the conservative efforts (constant forces in the fixed basis such as
+    /// gravity, efforts that declare their potential); the others' work is `work`. Always known
+    /// from a run; `None` only where a sample is read back without it.
     pub potential_energy: Option<f64>,
     /// The work done since the start by the efforts that derive from no potential (dampers,
     /// motors, …), when there are such efforts.

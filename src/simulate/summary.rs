@@ -55,13 +55,17 @@ pub(super) struct Summary {
     momentum: Option<([f64; 6], MomentumDrift)>,
     tracks_momentum: bool,
     last: Option<Sample>,
+    /// Whether every effort derives from a potential (else the energy is not conserved).
+    conservative: bool,
     /// What the check of singular passages needs of every output (three numbers each), for a
     /// mechanism with loops.
     branch: Option<Vec<branch::Output>>,
 }
 
 impl Summary {
-    pub(super) fn new(model: &Model) -> Self {
+    /// `conservative`: whether every effort derives from a potential, so that the energy is
+    /// conserved and its drift is reported.
+    pub(super) fn new(model: &Model, conservative: bool) -> Self {
         Summary {
             outputs: 0,
             energy: Drift::default(),
@@ -69,13 +73,16 @@ impl Summary {
             momentum: None,
             tracks_momentum: isolated(model),
             last: None,
+            conservative,
             branch: model.has_loops().then(Vec::new),
         }
     }
 
     pub(super) fn add(&mut self, sample: &Sample) {
         let kinetic = sample.kinetic_energy;
-        let energy = sample.potential_energy.map(|p| p + kinetic);
+        let energy = (sample.potential_energy)
+            .filter(|_| self.conservative)
+            .map(|p| p + kinetic);
         self.energy.add(self.outputs, energy, kinetic.abs());
         let work = sample.work.unwrap_or(0.0);
         let potential = sample.balance.unwrap_or(0.0) - kinetic + work;

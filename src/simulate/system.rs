@@ -642,6 +642,9 @@ impl fmt::Display for SystemError {
             SystemError::Evaluation(EvalError::NotGeometric(what)) => {
                 write!(f, "an expression cannot depend on {what} there")
             }
+            SystemError::Evaluation(EvalError::NotFinite) => {
+                write!(f, "the geometry is not a finite number at this state")
+            }
             SystemError::MasslessMotion { velocity } => write!(
                 f,
                 "an effort drives a motion that moves no mass (it moves `{velocity}` most): give the bodies it moves mass or inertia"

@@ -14,6 +14,7 @@ pub struct SourceFile {
 
 impl SourceFile {
     fn new(name: String, text: String) -> SourceFile {
+        let text = normalise(text);
         let line_starts = std::iter::once(0)
             .chain(text.match_indices('\n').map(|(i, _)| i + 1))
             .collect();
@@ -22,6 +23,12 @@ impl SourceFile {
             text,
             line_starts,
         }
+    }
+
+    /// Byte offset where a zero-based line starts, from the table of line starts: rendering a
+    /// diagnostic costs the same at the end of a long file as at its start.
+    pub fn line_start(&self, line_index: usize) -> Option<usize> {
+        self.line_starts.get(line_index).copied()
     }
 
     /// One-based line and column (in characters) of a byte offset.
@@ -35,6 +42,26 @@ impl SourceFile {
             .map_or(offset - line_start, |s| s.chars().count());
         (line + 1, column + 1)
     }
+}
+
+/// The text as read, without the byte order mark some editors write first, and with the line
+/// ends of old Mac files (a lone carriage return) as line feeds, so that lines are numbered
+/// whatever the editor; the text keeps its length otherwise, and a Windows `\r\n` its `\r`.
+fn normalise(text: String) -> String {
+    let text = match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    };
+    if !text.contains('\r') {
+        return text;
+    }
+    let bytes = text.as_bytes();
+    let lone_cr = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    let normalised: Vec<u8> = (0..bytes.len())
+        .map(|i| if lone_cr(i) { b'\n' } else { bytes[i] })
+        .collect();
+    // Only ASCII bytes were replaced by ASCII bytes.
+    String::from_utf8(normalised).unwrap_or(text)
 }
 
 #[derive(Default)]

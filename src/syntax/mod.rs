@@ -4,5 +4,6 @@
 pub mod ast;
 pub mod lexer;
 pub mod names;
+pub mod nesting;
 pub mod parser;
 mod repair;

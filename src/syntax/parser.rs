@@ -7,6 +7,7 @@ use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 use crate::syntax::ast::{Names, Program};
 use crate::syntax::lexer::{lex, LexError, Repair, Spanned, Tok, Tokens};
+use crate::syntax::nesting::limit_nesting;
 use crate::syntax::repair::{self, Slip};
 
 /// The parser LALRPOP generated from `grammar/lsd.lalrpop`, checked in (see `build.rs`).
@@ -43,8 +44,10 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
     }
 }
 
-/// One parse with `repairs` applied: the program, the lexical and syntax errors, and the new
-/// slips found (only when `recognise`).
+/// One parse with `repairs` applied: the program, the lexical and syntax errors (those of the
+/// nesting limit among them), and the new slips found (only when `recognise`). Declarations
+/// past the nesting limit are taken apart here, so that a pass's program is dropped safely
+/// when the file is parsed again.
 fn parse_pass(
     file: FileId,
     text: &str,
@@ -58,7 +61,11 @@ fn parse_pass(
     let result = parser.parse(file, &mut recovered, &mut names, &mut tokens);
     let lexical = tokens.errors;
     let result = match result {
-        Ok(program) if recovered.is_empty() => return (program, lexical, Vec::new(), Vec::new()),
+        Ok(mut program) if recovered.is_empty() => {
+            let mut syntax = Vec::new();
+            limit_nesting(&mut program, &mut syntax);
+            return (program, lexical, syntax, Vec::new());
+        }
         other => other,
     };
     // Describing a syntax error looks at the tokens before it: lexed again, only then.
@@ -69,14 +76,17 @@ fn parse_pass(
         text_len: text.len(),
     };
     let mut errors: Vec<_> = recovered.into_iter().map(|e| e.error).collect();
+    let mut syntax = Vec::new();
     let program = match result {
-        Ok(program) => program,
+        Ok(mut program) => {
+            limit_nesting(&mut program, &mut syntax);
+            program
+        }
         Err(error) => {
             errors.push(error);
             Program { decls: Vec::new() }
         }
     };
-    let mut syntax = Vec::new();
     let mut slips = Vec::new();
     for error in errors {
         let slip = recognise

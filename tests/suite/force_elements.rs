@@ -156,7 +156,7 @@ fn link_elements_act_as_written() {
     // A torsion spring alone: a harmonic oscillator of frequency sqrt(k / I) about q0.
     let spring = simulate(
         "import forces ;
-        let wheel = body mass = 1, iframe = 0, inertia = [0.5, 0.5, 2] end ;
+        let wheel = body mass = 1, iframe = 0, inertia = [1, 1, 2] end ;
         join earth and wheel with revolute_spring([0, 0, 1], 8, 0.2) as hub ;
         initial hub.q = 0.5 ;
         simulate duration = 3, output = 0.1, tolerance = 1e-13 end ;",
@@ -178,7 +178,7 @@ fn link_elements_act_as_written() {
     // A geared motor with a constant torque: q = ratio τ t² / (2 I).
     let motor = simulate(
         "import forces ;
-        let wheel = body mass = 1, iframe = 0, inertia = [0.5, 0.5, 2] end ;
+        let wheel = body mass = 1, iframe = 0, inertia = [1, 1, 2] end ;
         join earth and wheel with geared_motor([0, 0, 1], 0.25, 12) as hub ;
         simulate duration = 2, output = 0.1, tolerance = 1e-13 end ;",
     );

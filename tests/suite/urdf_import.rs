@@ -535,7 +535,7 @@ fn numbers_are_written_without_loss() {
 }
 
 #[test]
-fn impossible_inertia_is_reported_but_imported() {
+fn impossible_inertia_is_reported_imported_and_refused() {
     let xml = r#"<robot name="bad">
   <link name="a"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="3"/></inertial></link>
   <link name="b"><inertial><mass value="1"/><inertia ixx="1" ixy="2" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
@@ -566,7 +566,12 @@ fn impossible_inertia_is_reported_but_imported() {
         "{}",
         messages[2]
     );
-    compile(&imported.text);
+    // Imported as written, an impossible body is then refused where the program writes it
+    // (E0608; evaluation stops at its first error, the body of `a`).
+    let compilation = compile_text("imported.lsd", &imported.text, None, &options());
+    let codes: Vec<&str> = compilation.diagnostics.iter().map(|d| d.code).collect();
+    assert_eq!(codes, ["E0608"], "{:?}", compilation.diagnostics);
+    assert!(compilation.diagnostics[0].message.contains("1, 1, 3"));
 }
 
 #[test]

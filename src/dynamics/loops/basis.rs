@@ -34,7 +34,9 @@ pub fn decompose_with(g: &DMatrix<f64>, tolerance: f64) -> Decomposition {
     let rows = m.max(n);
     let mut square = DMatrix::zeros(rows, n);
     square.rows_mut(0, m).copy_from(g);
-    let svd = square.svd(true, true);
+    let Some(svd) = crate::linalg::svd(square, true, true) else {
+        return not_finite(m, n);
+    };
     let (u, v_t) = (svd.u.expect("asked for"), svd.v_t.expect("asked for"));
     let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
     order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
@@ -65,5 +67,17 @@ pub fn decompose_with(g: &DMatrix<f64>, tolerance: f64) -> Decomposition {
         null_space,
         singular_values,
         left,
+    }
+}
+
+/// The decomposition of a G with a non-finite entry: every number NaN, so that whatever uses it
+/// fails on a non-finite value rather than deciding on a rank that was never computed.
+fn not_finite(m: usize, n: usize) -> Decomposition {
+    Decomposition {
+        rank: 0,
+        pseudo_inverse: DMatrix::from_element(n, m, f64::NAN),
+        null_space: DMatrix::from_element(n, n, f64::NAN),
+        singular_values: vec![f64::NAN; m.min(n)],
+        left: DMatrix::from_element(m, m.min(n), f64::NAN),
     }
 }

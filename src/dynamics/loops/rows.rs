@@ -425,12 +425,9 @@ fn seat_balls(
         let omega = base.rotation.inverse()
             * (world(joint.second_body) - world(joint.first_body)).fixed_rows::<3>(0);
         let subspace = joint.chain(&angles)?.1;
-        let rates = subspace
-            .rows(0, 3)
-            .into_owned()
-            .pseudo_inverse(1e-12)
+        let rates = crate::linalg::pseudo_inverse(subspace.rows(0, 3).into_owned(), 1e-12)
             .map(|p| p * omega)
-            .unwrap_or_else(|_| DVector::zeros(3));
+            .unwrap_or_else(|| DVector::zeros(3));
         v[model.nv + start..model.nv + start + 3].copy_from_slice(rates.as_slice());
     }
     Ok(())

@@ -311,7 +311,9 @@ fn reproducing_rows(
     let block = DMatrix::from_fn(candidates.len(), scaled.ncols(), |i, j| {
         scaled[(candidates[i], j)]
     });
-    let svd = block.svd(true, false);
+    let Some(svd) = crate::linalg::svd(block, true, false) else {
+        return rows;
+    };
     let Some(u) = svd.u else { return rows };
     let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
     order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));

@@ -21,6 +21,9 @@ pub fn tree_program(parents: &[usize], kinds: &[usize], numbers: &[f64]) -> Stri
     let value = |k: usize| numbers[k % numbers.len()];
     for (i, _) in parents.iter().enumerate() {
         let b = i + 1;
+        // Principal moments of a rigid body: sums of two of the non-negative second moments of
+        // its mass about its principal planes, so that they satisfy the triangle inequality.
+        let second = [7, 8, 9].map(|k| 0.1 + value(7 * b + k).abs());
         text += &format!(
             "let b{b} = body mass = {m}, iframe = [{x}, {y}, {z}] ++ ({a} || [{ax}, 1, {az}]), inertia = [{i1}, {i2}, {i3}] end;\n",
             m = 0.5 + value(7 * b).abs(),
@@ -30,9 +33,9 @@ pub fn tree_program(parents: &[usize], kinds: &[usize], numbers: &[f64]) -> Stri
             a = value(7 * b + 4),
             ax = value(7 * b + 5),
             az = value(7 * b + 6),
-            i1 = 0.2 + value(7 * b + 7).abs(),
-            i2 = 0.3 + value(7 * b + 8).abs(),
-            i3 = 0.4 + value(7 * b + 9).abs(),
+            i1 = second[1] + second[2],
+            i2 = second[0] + second[2],
+            i3 = second[0] + second[1],
         );
     }
     for (i, &p) in parents.iter().enumerate() {

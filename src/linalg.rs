@@ -1,0 +1,25 @@
+//! Decompositions that end on any matrix. nalgebra's SVD iterates until it converges, which a
+//! matrix with a NaN or an infinite entry never does (a degenerate joint or an overflowing
+//! configuration can produce one): here such a matrix has no decomposition, and the caller says
+//! why it cannot go on.
+
+use nalgebra::{DMatrix, Dyn, SVD};
+
+/// Iterations of the SVD per row and column before it gives up: far more than a finite matrix
+/// needs, so that only a pathological one is refused.
+const ITERATIONS_PER_DIMENSION: usize = 1000;
+
+/// The singular value decomposition, singular values largest first; `None` when an entry is not
+/// finite or the iteration does not converge.
+pub fn svd(m: DMatrix<f64>, compute_u: bool, compute_v: bool) -> Option<SVD<f64, Dyn, Dyn>> {
+    if !m.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let limit = ITERATIONS_PER_DIMENSION * (m.nrows() + m.ncols()).max(1);
+    SVD::try_new(m, compute_u, compute_v, f64::EPSILON * 5.0, limit)
+}
+
+/// The pseudo-inverse, singular values up to `floor` taken as zero; `None` as for [`svd`].
+pub fn pseudo_inverse(m: DMatrix<f64>, floor: f64) -> Option<DMatrix<f64>> {
+    svd(m, true, true)?.pseudo_inverse(floor).ok()
+}

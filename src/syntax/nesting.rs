@@ -1,0 +1,156 @@
+//! The nesting limit of programs. The parser keeps its own stack and reads any depth, but the
+//! passes after it (checker, elaborator, symbolic algebra, printing) walk the tree recursively:
+//! a declaration nested deeper than [`MAX_NESTING`] levels (`1+1+…+1`, `[[[…]]]`, `---…1`,
+//! `sin(sin(…))`, `x'''…`, `local … in` in `local … in`, packages in packages) is refused here
+//! with a located error (E0203), measured and taken apart without recursion.
+
+use crate::diag::Diagnostic;
+use crate::source::Span;
+use crate::syntax::ast::{Decl, DeclKind, Expr, ExprKind, Program};
+
+/// The deepest nesting of expressions (and packages) a declaration may have, counting the
+/// outermost expression as level 1: far beyond what a mechanism needs, far below what the
+/// recursive passes can take on a thread's stack.
+pub const MAX_NESTING: usize = 200;
+
+/// Replaces every declaration nested deeper than [`MAX_NESTING`] by an error declaration, with
+/// an E0203 at the first construct past the limit.
+pub fn limit_nesting(program: &mut Program, diagnostics: &mut Vec<Diagnostic>) {
+    for decl in &mut program.decls {
+        if let Some(span) = too_deep(decl) {
+            diagnostics.push(
+                Diagnostic::error(
+                    "E0203",
+                    format!("this declaration is nested more than {MAX_NESTING} levels deep"),
+                )
+                .primary(
+                    Span {
+                        end: span.start + 1,
+                        ..span
+                    },
+                    format!("level {} starts here", MAX_NESTING + 1),
+                )
+                .help("name intermediate values with `let`, or write long sums as several terms bound to names"),
+            );
+            dismantle(std::mem::replace(&mut decl.kind, DeclKind::Error));
+        }
+    }
+}
+
+/// The span of the first construct of `decl` past the limit, or `None` if it is within it.
+fn too_deep(decl: &Decl) -> Option<Span> {
+    let mut decls = vec![(decl, 0)];
+    let mut exprs: Vec<(&Expr, usize)> = Vec::new();
+    while let Some((decl, depth)) = decls.pop() {
+        if depth > MAX_NESTING {
+            return Some(decl.span);
+        }
+        let mut top = Vec::new();
+        if let DeclKind::Package(package) = &decl.kind {
+            decls.extend(package.decls.iter().map(|d| (d, depth + 1)));
+        }
+        decl_exprs(&decl.kind, &mut top);
+        exprs.extend(top.into_iter().map(|e| (e, depth + 1)));
+    }
+    while let Some((expr, depth)) = exprs.pop() {
+        if depth > MAX_NESTING {
+            return Some(expr.span);
+        }
+        let mut children = Vec::new();
+        expr_children(expr, &mut children);
+        exprs.extend(children.into_iter().map(|e| (e, depth + 1)));
+    }
+    None
+}
+
+/// The expressions written directly in a declaration (not in its nested packages).
+fn decl_exprs<'a>(kind: &'a DeclKind, out: &mut Vec<&'a Expr>) {
+    match kind {
+        DeclKind::Let(bindings) => out.extend(bindings.iter().map(|b| &b.value)),
+        DeclKind::Define(define) => out.push(&define.body),
+        DeclKind::Join(join) => out.extend([&join.first, &join.second, &join.link]),
+        DeclKind::Initial(values) => {
+            out.extend(values.iter().flat_map(|v| [&v.target, &v.value]));
+        }
+        DeclKind::Given(values) => out.extend(values.iter().flat_map(|v| [&v.target, &v.value])),
+        DeclKind::Simulate(fields) => out.extend(fields.iter().map(|f| &f.value)),
+        DeclKind::Apply(apply) => {
+            out.push(&apply.effort);
+            out.extend(apply.target.iter().chain(&apply.reaction));
+        }
+        DeclKind::Package(_) | DeclKind::Import(_) | DeclKind::Error => {}
+    }
+}
+
+fn expr_children<'a>(expr: &'a Expr, out: &mut Vec<&'a Expr>) {
+    match &expr.kind {
+        ExprKind::Field(access) => out.push(&access.target),
+        ExprKind::Vector(items) => out.extend(items.iter()),
+        ExprKind::Call { args, .. } => out.extend(args.iter().map(|a| &a.value)),
+        ExprKind::Binary { lhs, rhs, .. } => out.extend([&**lhs, &**rhs]),
+        ExprKind::Neg(inner) | ExprKind::Prime(inner) => out.push(inner),
+        ExprKind::Construct { fields, .. } => out.extend(fields.iter().map(|f| &f.value)),
+        ExprKind::Local { bindings, body } => {
+            out.extend(bindings.iter().map(|b| &b.value));
+            out.push(body);
+        }
+        ExprKind::Name(_)
+        | ExprKind::Qualified(_)
+        | ExprKind::Unknown(_)
+        | ExprKind::Int(_)
+        | ExprKind::Float(_)
+        | ExprKind::Error => {}
+    }
+}
+
+/// Drops a declaration one node at a time: the recursive drop of a deep tree would overflow the
+/// stack just as the passes would.
+fn dismantle(kind: DeclKind) {
+    let mut decls = vec![kind];
+    let mut exprs: Vec<Expr> = Vec::new();
+    while let Some(kind) = decls.pop() {
+        match kind {
+            DeclKind::Let(bindings) => exprs.extend(bindings.into_iter().map(|b| b.value)),
+            DeclKind::Define(define) => exprs.push(define.body),
+            DeclKind::Join(join) => {
+                let join = *join;
+                exprs.extend([join.first, join.second, join.link]);
+            }
+            DeclKind::Initial(values) => {
+                exprs.extend(values.into_iter().flat_map(|v| [v.target, v.value]));
+            }
+            DeclKind::Given(values) => {
+                exprs.extend(values.into_iter().flat_map(|v| [v.target, v.value]));
+            }
+            DeclKind::Simulate(fields) => exprs.extend(fields.into_iter().map(|f| f.value)),
+            DeclKind::Apply(apply) => {
+                let apply = *apply;
+                exprs.push(apply.effort);
+                exprs.extend(apply.target.into_iter().chain(apply.reaction));
+            }
+            DeclKind::Package(package) => {
+                decls.extend(package.decls.into_iter().map(|d| d.kind));
+            }
+            DeclKind::Import(_) | DeclKind::Error => {}
+        }
+        while let Some(mut expr) = exprs.pop() {
+            match std::mem::replace(&mut expr.kind, ExprKind::Error) {
+                ExprKind::Field(access) => exprs.push(access.target),
+                ExprKind::Vector(items) => exprs.extend(items.into_vec()),
+                ExprKind::Call { args, .. } => {
+                    exprs.extend(args.into_vec().into_iter().map(|a| a.value))
+                }
+                ExprKind::Binary { lhs, rhs, .. } => exprs.extend([*lhs, *rhs]),
+                ExprKind::Neg(inner) | ExprKind::Prime(inner) => exprs.push(*inner),
+                ExprKind::Construct { fields, .. } => {
+                    exprs.extend(fields.into_vec().into_iter().map(|f| f.value));
+                }
+                ExprKind::Local { bindings, body } => {
+                    exprs.extend(bindings.into_vec().into_iter().map(|b| b.value));
+                    exprs.push(*body);
+                }
+                _ => {}
+            }
+        }
+    }
+}
