@@ -17,7 +17,7 @@ pub fn kinetic_energy(model: &Model, data: &Data) -> f64 {
         .filter(|(_, b)| !b.massless)
         .map(|(k, b)| 0.5 * data.velocity[k + 1].dot(&(b.inertia * data.velocity[k + 1])))
         .sum::<f64>()
-        + super::rotors::kinetic_energy(model, data)
+        + super::algorithms::rotor_kinetic_energy(model, data)
 }
 
 /// A constant force in the fixed basis: (body number, point in the body frame, force).

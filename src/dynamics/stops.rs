@@ -21,6 +21,26 @@ pub enum Side {
     Upper,
 }
 
+/// One impact on a stop, as the run report gives it.
+#[derive(Clone, Debug, Serialize)]
+pub struct Impact {
+    pub time: f64,
+    /// `swing.q`, and which of its bounds (at `bound`) was hit.
+    pub coordinate: String,
+    pub side: Side,
+    pub bound: f64,
+    pub restitution: f64,
+    /// The coordinate's rate just before and just after the impact.
+    pub rate_before: f64,
+    pub rate_after: f64,
+    /// The mechanism's kinetic energy just before and just after.
+    pub kinetic_before: f64,
+    pub kinetic_after: f64,
+    /// Whether the coordinate then rests on the stop, pushed into it (until the contact force
+    /// would have to pull, when it is released).
+    pub rests: bool,
+}
+
 /// One bound on one tree coordinate.
 #[derive(Clone, Debug)]
 pub struct Stop {

@@ -129,7 +129,7 @@ pub fn assembly(report: &AssemblyReport) -> String {
 }
 
 /// One impact on a stop: when, which, the rate and kinetic energy before and after.
-fn impact_line(impact: &crate::simulate::impacts::Impact) -> String {
+fn impact_line(impact: &crate::dynamics::stops::Impact) -> String {
     let side = match impact.side {
         crate::dynamics::stops::Side::Lower => "lower",
         crate::dynamics::stops::Side::Upper => "upper",

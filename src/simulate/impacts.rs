@@ -2,36 +2,15 @@
 //! coordinate to its bound), and the impact where one is reached, recorded for the report.
 
 use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
 
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics};
 use crate::dynamics::energy::kinetic_energy;
-use crate::dynamics::stops::{impact_velocities, Side};
+use crate::dynamics::stops::{impact_velocities, Impact, Side};
 
 /// Below this approach rate (coordinate units per second) after an impact, a coordinate pushed
 /// against its stop rests on it: a contact that lasts, which the run does not model.
 pub const RESTING_RATE: f64 = 1e-8;
-
-/// One impact on a stop, as the run report gives it.
-#[derive(Clone, Debug, Serialize)]
-pub struct Impact {
-    pub time: f64,
-    /// `swing.q`, and which of its bounds (at `bound`) was hit.
-    pub coordinate: String,
-    pub side: Side,
-    pub bound: f64,
-    pub restitution: f64,
-    /// The coordinate's rate just before and just after the impact.
-    pub rate_before: f64,
-    pub rate_after: f64,
-    /// The mechanism's kinetic energy just before and just after.
-    pub kinetic_before: f64,
-    pub kinetic_after: f64,
-    /// Whether the coordinate then rests on the stop, pushed into it (until the contact force
-    /// would have to pull, when it is released).
-    pub rests: bool,
-}
 
 impl MechanicalSystem<'_> {
     /// The stops' event functions at (t, y): each free coordinate's distance to its bound,

@@ -11,7 +11,6 @@ use serde::Serialize;
 use super::branch;
 use super::clock::thread_cpu_seconds;
 use super::constraints::{ConstraintReport, ReleasedStretch};
-use super::impacts::Impact;
 use super::prepare::{Integrator, Prepared};
 pub use super::sample::{MomentumDrift, Sample};
 use super::stiffness::{self, StiffnessReport};
@@ -23,6 +22,7 @@ use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::model::Model;
+use crate::dynamics::stops::Impact;
 use crate::integrate::{
     integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Interrupt, Method,
     OdeSystem, Settings as IntegratorSettings, Stats,

@@ -59,7 +59,7 @@ pub struct MechanicalSystem<'m> {
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
     /// The impacts on the stops so far, in time order.
-    pub impacts: Vec<super::impacts::Impact>,
+    pub impacts: Vec<crate::dynamics::stops::Impact>,
     /// Per stop, whether its coordinate rests on it, and the contact force holding it there
     /// at the last evaluation (positive while it pushes the coordinate into its range).
     pub resting: Vec<bool>,

@@ -2,9 +2,9 @@
 //! against the closed forms of the motion, the impact law, and the refusals.
 
 use lsdc::driver::compile_text;
+use lsdc::dynamics::stops::Impact;
 use lsdc::dynamics::stops::{impact_velocities, Side, Stop};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::impacts::Impact;
 use lsdc::simulate::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{run, Simulation};
 use nalgebra::{DMatrix, DVector};
