@@ -168,6 +168,17 @@ pub fn field_names(target: Ty) -> Vec<String> {
     names
 }
 
+/// A link's scalar fields besides its efforts: its potential, the limits of its coordinate and
+/// the restitution of its stops, and the geared rotor that drives it.
+const LINK_SCALAR_FIELDS: [&str; 6] = [
+    "potential",
+    "lower",
+    "upper",
+    "restitution",
+    "rotor_inertia",
+    "gear_ratio",
+];
+
 /// Fields a constructor accepts, with the type of their value.
 pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &str) -> Option<Ty> {
     use crate::syntax::ast::ConstructKind::*;
@@ -180,6 +191,8 @@ pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &s
         (Force | Torque, "value") => Ty::Vector,
         (Force | Torque, "body") => Ty::Body,
         (Force | Torque | Link, "potential") => Ty::Scalar,
+        (Link, "lower" | "upper" | "restitution" | "rotor_inertia" | "gear_ratio") => Ty::Scalar,
+        (Link, "rotor_axis") => Ty::Vector,
         (Force, "field") => Ty::Vector,
         _ => return None,
     })
@@ -194,7 +207,8 @@ pub fn constructor_field_names(kind: crate::syntax::ast::ConstructKind) -> Vec<S
             .collect(),
         Link => field_names(Ty::Link)
             .into_iter()
-            .chain(["potential".to_string()])
+            .chain(LINK_SCALAR_FIELDS.iter().map(|s| s.to_string()))
+            .chain(["rotor_axis".to_string()])
             .collect(),
         Force => ["value", "body", "potential", "field"]
             .iter()

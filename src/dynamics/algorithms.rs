@@ -2,7 +2,7 @@
 //! velocities, inverse dynamics (RNEA: one pass out, one back), the mass matrix (CRBA) and
 //! forward dynamics (ABA: three passes). Bodies without mass cost nothing.
 
-use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 
 use super::compiled::EffortScratch;
 use super::joint::JointState;
@@ -201,7 +201,11 @@ pub fn rnea_after_kinematics(
     tau: &mut DVector<f64>,
 ) {
     rnea_forward(model, data, a, external);
+    let rotor_efforts = add_rotor_torques(model, data, a);
     rnea_backward(model, data, tau);
+    for (rotor, effort) in model.rotors.iter().zip(rotor_efforts) {
+        tau[rotor.velocity] += effort;
+    }
 }
 
 /// RNEA's pass out, when `data` holds the forward kinematics: each body's acceleration under
@@ -348,6 +352,12 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
     }
     let nv = model.nv;
     let entries = mass.as_mut_slice();
+    write_composite_entries(model, data, entries, nv);
+    add_rotors_to_mass(model, data, mass);
+}
+
+/// The mass matrix's entries from the composite inertias and motion columns in `data`.
+fn write_composite_entries(model: &Model, data: &Data, entries: &mut [f64], nv: usize) {
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         let composite = &data.composite_world[joint.child];
@@ -565,4 +575,73 @@ fn aba_backward_step(
         bias[parent] += state.transform.force_to_parent(&handed);
     }
     Ok(())
+}
+
+// Geared rotors (see `rotors`): their spin's energy, mass-matrix terms and torques.
+
+/// The rate of a one-coordinate joint, from its state's motion S q̇.
+fn joint_rate(data: &Data, joint: usize) -> f64 {
+    let state = &data.states[joint];
+    let column = state.subspace.column(0);
+    column.dot(&state.velocity) / column.norm_squared()
+}
+
+fn angular(motion: &Motion) -> Vector3<f64> {
+    motion.fixed_rows::<3>(0).into_owned()
+}
+
+/// The rotor's spin rate ε·ω_B + n q̇ from the body velocities in `data`.
+fn spin(rotor: &super::rotors::Rotor, data: &Data) -> f64 {
+    let carried = rotor.axis.dot(&angular(&data.velocity[rotor.carrier]));
+    carried + rotor.ratio * joint_rate(data, rotor.joint)
+}
+
+/// The rotors' kinetic energy, ½ J (ε·ω_B + n q̇)² each, from the kinematics in `data`.
+pub fn rotor_kinetic_energy(model: &Model, data: &Data) -> f64 {
+    let spin_energy = |r: &super::rotors::Rotor| 0.5 * r.inertia * spin(r, data).powi(2);
+    model.rotors.iter().map(spin_energy).sum()
+}
+
+/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q.
+pub fn add_rotors_to_mass(model: &Model, data: &Data, mass: &mut DMatrix<f64>) {
+    if model.rotors.is_empty() {
+        return;
+    }
+    let mut motions = vec![Motion::zeros(); model.body_count() + 1];
+    let mut unit = vec![0.0; model.nv];
+    let mut rows = vec![DVector::<f64>::zeros(model.nv); model.rotors.len()];
+    for j in 0..model.nv {
+        unit[j] = 1.0;
+        body_motions(model, data, &unit, &mut motions);
+        unit[j] = 0.0;
+        for (row, rotor) in rows.iter_mut().zip(&model.rotors) {
+            row[j] = rotor.axis.dot(&angular(&motions[rotor.carrier]));
+        }
+    }
+    for (mut row, rotor) in rows.into_iter().zip(&model.rotors) {
+        row[rotor.velocity] += rotor.ratio;
+        *mass += rotor.inertia * &row * row.transpose();
+    }
+}
+
+/// Inverse dynamics of the rotors, between RNEA's passes: adds each rotor's torque τ_r to its
+/// carrier's force (so the pass back carries it to the joints that turn the carrier) and
+/// returns, per rotor, n ε·τ_r to add to its coordinate's effort afterwards.
+pub fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) -> Vec<f64> {
+    let mut own = Vec::with_capacity(model.rotors.len());
+    for rotor in &model.rotors {
+        let omega = angular(&data.velocity[rotor.carrier]);
+        let omega_dot = match rotor.carrier {
+            0 => Vector3::zeros(),
+            b => angular(&data.acceleration[b]),
+        };
+        let axis = rotor.axis;
+        let spin_rate = rotor.axis.dot(&omega_dot) + rotor.ratio * a[rotor.velocity];
+        let torque = rotor.inertia * (spin_rate * axis + spin(rotor, data) * omega.cross(&axis));
+        if rotor.carrier != 0 {
+            data.force[rotor.carrier] += Force::new(torque.x, torque.y, torque.z, 0.0, 0.0, 0.0);
+        }
+        own.push(rotor.ratio * axis.dot(&torque));
+    }
+    own
 }

@@ -16,7 +16,8 @@ pub fn kinetic_energy(model: &Model, data: &Data) -> f64 {
         .enumerate()
         .filter(|(_, b)| !b.massless)
         .map(|(k, b)| 0.5 * data.velocity[k + 1].dot(&(b.inertia * data.velocity[k + 1])))
-        .sum()
+        .sum::<f64>()
+        + super::algorithms::rotor_kinetic_energy(model, data)
 }
 
 /// A constant force in the fixed basis: (body number, point in the body frame, force).

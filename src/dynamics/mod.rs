@@ -13,4 +13,6 @@ pub mod energy;
 pub mod joint;
 pub mod loops;
 pub mod model;
+pub mod rotors;
+pub mod stops;
 pub mod welds;

@@ -8,6 +8,8 @@ pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
 };
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
+use super::rotors::{self, Rotor};
+use super::stops::{self, Stop};
 use super::welds;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{inertia_problem, EffortKind, Mechanism};
@@ -76,6 +78,10 @@ pub struct Model {
     /// Contacts of round bodies on planes: constraints on the tree's velocities (see
     /// `contacts`).
     pub contacts: Vec<ContactModel>,
+    /// The bounds of the tree's coordinates (links' `lower` and `upper`): events of a run.
+    pub stops: Vec<Stop>,
+    /// The geared rotors of the tree's links (`rotor_inertia`, `gear_ratio`, `rotor_axis`).
+    pub rotors: Vec<Rotor>,
 }
 
 impl Model {
@@ -285,6 +291,9 @@ pub fn build_with(
     let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
     let contacts = contact_models(mechanism, kinematics, &mut errors);
     let link_efforts = link_efforts(mechanism, &joints, &loops);
+    let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
+    let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
+    refuse_stops_and_rotors_with_contacts(mechanism, &contacts, &stops, &rotors, &mut errors);
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -313,6 +322,7 @@ pub fn build_with(
         &link_efforts,
         !loops.is_empty() || !contacts.is_empty(),
     );
+    refuse_rotors_on_welds(mechanism, &joints, &merged.dynamic_joints, &rotors)?;
     let branch_velocities = branch_velocities(&joints);
     let mut model = Model {
         branch_velocities,
@@ -337,12 +347,46 @@ pub fn build_with(
         nc,
         loop_balls,
         contacts,
+        stops,
+        rotors,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),
     };
     model.compile_efforts();
     Ok(model)
+}
+
+/// A rotor carried by a body merged into another by welds (E0453): the algorithms see the merged
+/// body only, and the rotor is not moved there.
+fn refuse_rotors_on_welds(
+    mechanism: &Mechanism,
+    joints: &[Joint],
+    dynamic_joints: &[usize],
+    rotors: &[Rotor],
+) -> Result<(), Vec<Diagnostic>> {
+    let visited =
+        |body: usize| body == 0 || dynamic_joints.iter().any(|&k| joints[k].child == body);
+    let errors: Vec<Diagnostic> = rotors
+        .iter()
+        .filter(|r| !visited(r.carrier))
+        .map(|r| {
+            let join = mechanism.join(joints[r.joint].chain.join);
+            Diagnostic::error(
+                "E0453",
+                format!(
+                    "the rotor of `{}` is carried by a welded body",
+                    joints[r.joint].chain.name
+                ),
+            )
+            .primary(join.span, "its first frame's body is welded to another")
+            .help("join the rotor's link to the body the weld attaches to")
+        })
+        .collect();
+    match errors.is_empty() {
+        true => Ok(()),
+        false => Err(errors),
+    }
 }
 
 impl Model {
@@ -853,4 +897,38 @@ pub struct DeclaredState {
     pub coordinates: Vec<f64>,
     pub rates: Vec<f64>,
     chain: ChainMotion,
+}
+
+/// Stops and geared rotors are simulated on a tree without contacts: the impact law and the
+/// geared forward dynamics do not carry the contacts' rows, so their combination is refused
+/// (E0450, E0454) rather than simulated without the contacts.
+fn refuse_stops_and_rotors_with_contacts(
+    mechanism: &Mechanism,
+    contacts: &[ContactModel],
+    stops: &[Stop],
+    rotors: &[Rotor],
+    errors: &mut Vec<Diagnostic>,
+) {
+    let Some(contact) = contacts.first() else {
+        return;
+    };
+    let span = mechanism.contacts.first().map(|c| c.span);
+    for (code, what, present) in [
+        ("E0450", "stops", !stops.is_empty()),
+        ("E0454", "geared rotors", !rotors.is_empty()),
+    ] {
+        if present {
+            let mut error = Diagnostic::error(
+                code,
+                format!("{what} in a mechanism with contacts (`{}`)", contact.name),
+            )
+            .help(format!(
+                "{what} are simulated in mechanisms without contacts; remove one or the other"
+            ));
+            if let Some(span) = span {
+                error = error.primary(span, "a contact of the mechanism");
+            }
+            errors.push(error);
+        }
+    }
 }

@@ -877,6 +877,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             torques: Vec::new(),
             potential: None,
             contact: None,
+            stops: Default::default(),
+            rotor: Default::default(),
         };
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {
@@ -887,6 +889,12 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 "force" => link.forces.push((index, as_vector(value, at)?)),
                 "torque" => link.torques.push((index, as_vector(value, at)?)),
                 "potential" => link.potential = Some(as_scalar(value, at)?),
+                "lower" => link.stops.lower = Some(as_scalar(value, at)?),
+                "upper" => link.stops.upper = Some(as_scalar(value, at)?),
+                "restitution" => link.stops.restitution = Some(as_scalar(value, at)?),
+                "rotor_inertia" => link.rotor.inertia = Some(as_scalar(value, at)?),
+                "gear_ratio" => link.rotor.ratio = Some(as_scalar(value, at)?),
+                "rotor_axis" => link.rotor.axis = Some(as_vector(value, at)?),
                 _ => return Err(internal(format!("link field `{name}`"))),
             }
         }
@@ -917,6 +925,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 friction,
                 span,
             }),
+            stops: Default::default(),
+            rotor: Default::default(),
         });
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }

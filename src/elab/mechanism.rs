@@ -60,6 +60,12 @@ pub struct Link {
     /// `rolling(r)` or `sliding(r, f)`: a contact between a plane and a round body, not a joint
     /// of the tree (see [`Contact`]).
     pub contact: Option<ContactLaw>,
+    /// `lower = ..., upper = ..., restitution = ...`: stops on its coordinate, hit with that
+    /// coefficient of restitution (0 when not given).
+    pub stops: LinkStops,
+    /// `rotor_inertia = ..., gear_ratio = ..., rotor_axis = ...`: a motor's rotor geared to its
+    /// coordinate.
+    pub rotor: LinkRotor,
 }
 
 /// How a round body touches a plane: which rows a contact adds to the equations of motion.
@@ -87,6 +93,24 @@ pub struct Contact {
     pub second: Frame,
     pub link: LinkId,
     pub span: Span,
+}
+
+/// The stops of a link's coordinate, as declared (each optional).
+#[derive(Clone, Debug, Default)]
+pub struct LinkStops {
+    pub lower: Option<Scalar>,
+    pub upper: Option<Scalar>,
+    pub restitution: Option<Scalar>,
+}
+
+/// A rotor spinning about `axis` (in the join's first frame) relative to the body of that frame
+/// at `ratio` times the rate of the link's coordinate, with moment of inertia `inertia` about
+/// its axis; each optional as declared.
+#[derive(Clone, Debug, Default)]
+pub struct LinkRotor {
+    pub inertia: Option<Scalar>,
+    pub ratio: Option<Scalar>,
+    pub axis: Option<Vector>,
 }
 
 /// `join first and second with link`: the link's dof chain, in its own coordinates, carries the

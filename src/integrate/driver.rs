@@ -3,6 +3,7 @@
 
 use super::control::StepController;
 use super::evaluator::{all_finite, Evaluator, Halt};
+use super::events::{EventWatch, Located};
 use super::outcome::{Failure, IntegrationError, Stats};
 use super::output::Outputs;
 use super::settings::Settings;
@@ -128,6 +129,7 @@ fn run(
         attempts: 0,
         controller: stepper.controller(),
         outputs,
+        events: EventWatch::new(eval, t0, y0)?,
     };
     while march.t < t_end {
         if march.step(stepper, eval, problem, observer)? {
@@ -151,6 +153,8 @@ struct March<'a> {
     attempts: usize,
     controller: StepController,
     outputs: Outputs<'a>,
+    /// The system's event functions, when it has any.
+    events: Option<EventWatch>,
 }
 
 impl March<'_> {
@@ -214,12 +218,18 @@ impl March<'_> {
         } else {
             self.t + h
         };
-        if self.outputs.wants_interior(self.t, t_new) {
+        if self.outputs.wants_interior(self.t, t_new) || self.events.is_some() {
             // A failure here is past the step's acceptance: a shorter step would not avoid it.
             (stepper.prepare_interpolation(eval, self.t, &self.y, h)).map_err(Halt::made_fatal)?;
         }
         // The interpolant is built from the unprojected end, consistent with the step's stages.
         stepper.accept(self.t, &self.y, h, &self.y_new);
+        if let Some(watch) = &mut self.events {
+            let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
+            if let Some(event) = watch.search(eval, (self.t, t_new), &self.y_new, &interpolate)? {
+                return self.act_on_event(stepper, eval, event, observer);
+            }
+        }
         if eval.project(t_new, &mut self.y_new)? {
             // What the stepper cached at the step's end (dy/dt) belongs to the unprojected state.
             stepper
@@ -231,6 +241,38 @@ impl March<'_> {
             .deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
         std::mem::swap(&mut self.y, &mut self.y_new);
         self.t = t_new;
+        Ok(())
+    }
+
+    /// Ends the step at the event located in it: delivers the outputs up to the event (from the
+    /// interpolant), lets the system act, and restarts the method from the changed state, the
+    /// error's trend forgotten (the motion after an impact owes nothing to the one before).
+    fn act_on_event(
+        &mut self,
+        stepper: &mut dyn AdaptiveStepper,
+        eval: &mut Evaluator,
+        event: Located,
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
+        let Located {
+            index,
+            time,
+            mut state,
+        } = event;
+        let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
+        self.outputs
+            .deliver_step((self.t, time), &state, interpolate, observer)?;
+        eval.handle_event(time, &mut state, index)?;
+        eval.project(time, &mut state)?;
+        stepper
+            .start(eval, time, &state)
+            .map_err(Halt::made_fatal)?;
+        self.controller.forget_trend();
+        if let Some(watch) = &mut self.events {
+            watch.restart(eval, time, &state)?;
+        }
+        self.y = state;
+        self.t = time;
         Ok(())
     }
 

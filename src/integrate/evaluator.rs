@@ -81,6 +81,29 @@ impl<'s> Evaluator<'s> {
         Ok(moved)
     }
 
+    pub(super) fn event_count(&self) -> usize {
+        self.system.event_count()
+    }
+
+    /// The event functions at (t, y) (`OdeSystem::events`).
+    pub(super) fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), Halt> {
+        self.system
+            .events(t, y, values)
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))
+    }
+
+    /// Lets the system act at event `index` (`OdeSystem::handle_event`), and counts it.
+    pub(super) fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), Halt> {
+        self.stats.events += 1;
+        self.system
+            .handle_event(t, y, index)
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))?;
+        match all_finite(y) {
+            true => Ok(()),
+            false => Err(Halt::fatal(t, Failure::NotFinite)),
+        }
+    }
+
     /// The system's tangent directions at (t, y) (`OdeSystem::tangent_basis`); finding them
     /// counts as one evaluation of the right-hand side.
     pub(super) fn tangent_basis(

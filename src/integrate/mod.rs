@@ -22,6 +22,7 @@ mod dop853;
 pub mod dopri5;
 mod driver;
 mod evaluator;
+mod events;
 mod hermite;
 mod jacobian;
 mod outcome;

@@ -21,6 +21,10 @@ pub struct Stats {
     /// ([`Method::Automatic`](super::settings::Method::Automatic) only).
     pub stiff_steps: usize,
     pub method_switches: usize,
+    /// Events located and acted on ([`OdeSystem::handle_event`]).
+    ///
+    /// [`OdeSystem::handle_event`]: super::system::OdeSystem::handle_event
+    pub events: usize,
     /// The largest local error estimate of a fixed-step method's steps (RK4, the variational
     /// integrator), which nothing controls: where it exceeds the tolerances, the step is too
     /// long for them.

@@ -15,6 +15,7 @@
 use super::control::error_norm;
 use super::driver::Problem;
 use super::evaluator::{all_finite, Evaluator, Halt};
+use super::events::{EventWatch, Located};
 use super::hermite::HermiteSegment;
 use super::outcome::{Failure, IntegrationError, Stats, StepError};
 use super::output::Outputs;
@@ -60,6 +61,7 @@ fn run(
     outputs.deliver_start(t0, y0, observer)?;
     let step_count = ((t_end - t0) / step - SLIVER).ceil().max(0.0);
     let mut rk4 = Rk4::new(t0, y0);
+    let mut events = EventWatch::new(eval, t0, y0)?;
     let mut k = 0usize;
     while (k as f64) < step_count {
         if let Some(value) = problem.settings.interrupted() {
@@ -82,8 +84,20 @@ fn run(
         rk4.end_slope(eval)?;
         let error = rk4.error_estimate(problem);
         StepError::keep_largest(&mut eval.stats.largest_step_error, error, t_new);
-        if outputs.wants_interior(rk4.t, t_new) {
+        if outputs.wants_interior(rk4.t, t_new) || events.is_some() {
             rk4.prepare_interpolation();
+        }
+        if let Some(watch) = &mut events {
+            let segment = &rk4.segment;
+            let interpolate = |t: f64, out: &mut [f64]| segment.evaluate(t, out);
+            if let Some(event) = watch.search(eval, (rk4.t, t_new), &rk4.y_new, &interpolate)? {
+                rk4.act_on_event(eval, event, &mut outputs, observer)?;
+                watch.restart(eval, rk4.t, &rk4.y)?;
+                // The step to the grid point is taken again, from the event.
+                k -= 1;
+                eval.stats.steps += 1;
+                continue;
+            }
         }
         let segment = &rk4.segment;
         outputs.deliver_step(
@@ -188,6 +202,35 @@ impl Rk4 {
             &self.end_derivative,
         ];
         self.segment.set(self.t, self.h, ends);
+    }
+
+    /// Ends the step at the event located in it: the outputs up to it from the interpolant, then
+    /// the system acts and the next step starts from the changed state (its slope unknown).
+    fn act_on_event(
+        &mut self,
+        eval: &mut Evaluator,
+        event: Located,
+        outputs: &mut Outputs,
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
+        let Located {
+            index,
+            time,
+            mut state,
+        } = event;
+        let segment = &self.segment;
+        outputs.deliver_step(
+            (self.t, time),
+            &state,
+            |t, out| segment.evaluate(t, out),
+            observer,
+        )?;
+        eval.handle_event(time, &mut state, index)?;
+        eval.project(time, &mut state)?;
+        self.y = state;
+        self.t = time;
+        self.derivative_known = false;
+        Ok(())
     }
 
     /// Moves the current point to the end of the step just taken.

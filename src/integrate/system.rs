@@ -64,6 +64,31 @@ pub trait OdeSystem {
     fn breaks_error_trend(&self) -> bool {
         false
     }
+
+    /// How many event functions the system has (a mechanism's stops): after each step the
+    /// integrators locate, on the step's interpolant, the first time one of them crosses from
+    /// non-negative to negative, and let [`OdeSystem::handle_event`] act there.
+    fn event_count(&self) -> usize {
+        0
+    }
+
+    /// Writes the event functions at (t, y) into `values` (length [`OdeSystem::event_count`]),
+    /// non-negative while nothing happens.
+    fn events(&mut self, _t: f64, _y: &[f64], _values: &mut [f64]) -> Result<(), CallbackError> {
+        Ok(())
+    }
+
+    /// Acts at event `index`, located at time t where the state is y (an impact changes the
+    /// velocities); the integration restarts from the changed y. An `Err` stops it like an
+    /// `Err` from [`OdeSystem::rhs`].
+    fn handle_event(
+        &mut self,
+        _t: f64,
+        _y: &mut [f64],
+        _index: usize,
+    ) -> Result<(), CallbackError> {
+        Ok(())
+    }
 }
 
 /// Receives the state at each output time; an `Err` stops the integration with its message.

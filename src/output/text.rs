@@ -145,6 +145,25 @@ pub fn assembly(report: &AssemblyReport) -> String {
     out
 }
 
+/// One impact on a stop: when, which, the rate and kinetic energy before and after.
+fn impact_line(impact: &crate::dynamics::stops::Impact) -> String {
+    let side = match impact.side {
+        crate::dynamics::stops::Side::Lower => "lower",
+        crate::dynamics::stops::Side::Upper => "upper",
+    };
+    format!(
+        "impact at t = {:.12}: `{}` on its {side} stop {} (e = {}), rate {:.9e} -> {:.9e}, kinetic energy {:.9e} -> {:.9e}\n",
+        impact.time,
+        impact.coordinate,
+        impact.bound,
+        impact.restitution,
+        impact.rate_before,
+        impact.rate_after,
+        impact.kinetic_before,
+        impact.kinetic_after
+    )
+}
+
 /// The run report of a simulation, for people.
 pub fn run_report(report: &crate::simulate::run::Report) -> String {
     let cpu = report
@@ -182,6 +201,9 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     }
     if let Some(c) = &report.constraints {
         out += &constraint_report(c);
+    }
+    for impact in &report.impacts {
+        out += &impact_line(impact);
     }
     if let Some(e) = &report.step_error {
         out += &format!(

@@ -24,6 +24,7 @@ use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::model::Model;
+use crate::dynamics::stops::Impact;
 use crate::integrate::{
     integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Interrupt, Method,
     OdeSystem, Settings as IntegratorSettings, Stats,
@@ -74,6 +75,18 @@ impl OdeSystem for MechanicalSystem<'_> {
 
     fn breaks_error_trend(&self) -> bool {
         self.loops.breaks_trend
+    }
+
+    fn event_count(&self) -> usize {
+        self.model.stops.len()
+    }
+
+    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        Ok(self.stop_events(t, y, values)?)
+    }
+
+    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
+        Ok(self.stop_event(t, y, index)?)
     }
 }
 
@@ -138,6 +151,21 @@ impl OdeSystem for WithWork<'_, '_> {
     fn breaks_error_trend(&self) -> bool {
         self.0.loops.breaks_trend
     }
+
+    fn event_count(&self) -> usize {
+        self.0.model.stops.len()
+    }
+
+    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        let n = self.0.dimension();
+        Ok(self.0.stop_events(t, &y[..n], values)?)
+    }
+
+    /// The impact or release; the work of the non-conservative efforts does not jump.
+    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
+        let n = self.0.dimension();
+        Ok(self.0.stop_event(t, &mut y[..n], index)?)
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -180,6 +208,9 @@ pub struct Report {
     pub constraints: Option<ConstraintReport>,
     /// A fixed-step method's largest local error estimate over its steps (RK4, symplectic).
     pub step_error: Option<StepErrorReport>,
+    /// The impacts on the stops (links' `lower` and `upper`), in time order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub impacts: Vec<Impact>,
     /// Where an explicit integrator's steps were found held by its stability region (W0901).
     pub stiffness: Option<StiffnessReport>,
     pub failure: Option<RunFailure>,
@@ -582,7 +613,8 @@ fn simulate_from(
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(start.coordinates.to_vec()));
     let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
-    system.use_native(prepared.native.as_ref());
+    // The native code knows nothing of geared rotors: the model's own evaluation counts them.
+    system.use_native(prepared.native.as_ref().filter(|_| model.rotors.is_empty()));
     if let Err(error) = system.start_loops(&mut y0) {
         return failed_at_start(prepared, error.to_string());
     }
@@ -664,6 +696,15 @@ fn simulate_from(
             &integrator_settings,
             &mut observer,
         ),
+        None if !model.stops.is_empty() || !model.rotors.is_empty() => Err(IntegrationError {
+            time: 0.0,
+            failure: Failure::System(
+                "the symplectic integrator does not handle stops (links' `lower` and `upper`) \
+                 nor geared rotors: use `dopri5`, `dop853`, `rk4` or `implicit`"
+                    .to_string(),
+            ),
+            stats: Box::default(),
+        }),
         None => {
             let system = &mut *with_work.0;
             // The RATTLE steps keep the loops closed themselves.
@@ -765,6 +806,7 @@ fn simulate_from(
             .stability_bound
             .as_ref()
             .and_then(|bound| stiffness::describe(prepared, bound)),
+        impacts: std::mem::take(&mut system.impacts),
         failure,
         interrupted,
     };
@@ -845,6 +887,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         constraints: None,
         step_error: None,
         stiffness: None,
+        impacts: Vec::new(),
         failure: Some(RunFailure { time: 0.0, message }),
         interrupted: None,
     };

@@ -64,6 +64,12 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
+    /// The impacts on the stops so far, in time order.
+    pub impacts: Vec<crate::dynamics::stops::Impact>,
+    /// Per stop, whether its coordinate rests on it, and the contact force holding it there
+    /// at the last evaluation (positive while it pushes the coordinate into its range).
+    pub resting: Vec<bool>,
+    pub contact: Vec<f64>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -91,6 +97,9 @@ impl<'m> MechanicalSystem<'m> {
             evaluated: Vec::new(),
             contact_rows: None,
             native: None,
+            impacts: Vec::new(),
+            resting: vec![false; model.stops.len()],
+            contact: vec![0.0; model.stops.len()],
         }
     }
 
@@ -142,6 +151,32 @@ impl<'m> MechanicalSystem<'m> {
             t,
             &mut self.efforts,
         )?)
+    }
+
+    /// The accelerations of a tree with geared rotors, M⁻¹(τ − b) with M from CRBA and the bias
+    /// b from RNEA, which count the rotors (the articulated-body algorithm does not).
+    fn geared_accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        accelerations: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        self.evaluate_efforts(t, q, v)?;
+        let efforts = match model.has_efforts() {
+            true => &self.efforts,
+            false => &self.no_efforts,
+        };
+        let mut bias = DVector::zeros(model.nv);
+        let zero = vec![0.0; model.nv];
+        rnea_after_kinematics(model, &mut self.data, &zero, &efforts.external, &mut bias);
+        let mut mass = DMatrix::zeros(model.nv, model.nv);
+        crate::dynamics::algorithms::crba_after_kinematics(model, &mut self.data, &mut mass);
+        let factors = mass.cholesky().ok_or(SystemError::SingularMassMatrix)?;
+        let free = DVector::from_fn(model.nv, |i, _| efforts.tau[i] - bias[i]);
+        accelerations.copy_from(&factors.solve(&free));
+        Ok(())
     }
 
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
@@ -348,6 +383,9 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
+        if !native && !model.has_loops() && !model.rotors.is_empty() {
+            self.geared_accelerations(t, q, v, &mut accelerations)?;
+        }
         let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
             &self.efforts
         } else {
@@ -372,6 +410,7 @@ impl<'m> MechanicalSystem<'m> {
             };
             return Err(SystemError::AccelerationNotFinite { join, cause });
         }
+        self.hold_resting(q, &mut accelerations)?;
         let (dq, dv) = dydt.split_at_mut(model.positions());
         for joint in &model.joints {
             let range = joint.q_offset..joint.q_offset + joint.nq();
@@ -688,6 +727,8 @@ pub enum SystemError {
     SingularStart { join: String, row: &'static str },
     /// The kept rows of the contacts stopped being independent: `row` of `contact`.
     SingularContact { contact: String, row: &'static str },
+    /// An impact on a stop could not be resolved, or left a coordinate resting on its stop.
+    Impact(String),
 }
 
 /// What made an acceleration infinite or NaN.
@@ -742,6 +783,7 @@ impl fmt::Display for SystemError {
                 f,
                 "the contacts reached a singular configuration: the {row} row of `{contact}` is no longer independent of the other contacts' rows"
             ),
+            SystemError::Impact(message) => f.write_str(message),
             SystemError::AccelerationNotFinite { join, cause } => {
                 write!(f, "the acceleration of join `{join}` is not finite: {cause}")
             }

@@ -327,6 +327,10 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
             )
             .expect("prepares with values"),
         };
+        if !prepared.model.rotors.is_empty() {
+            // The symbolic equations do not include geared rotors (docs/language.md).
+            continue;
+        }
         let unknowns = &prepared.model.unknowns;
         let (coordinates, rates) = (prepared.coordinates.clone(), prepared.rates.clone());
         let mut worst = compare(mechanism, &eq, unknowns, &coordinates, &rates);

@@ -49,6 +49,7 @@ mod plot {
                 constraints: None,
                 step_error: None,
                 stiffness: None,
+                impacts: Vec::new(),
                 failure: None,
                 interrupted: None,
             },

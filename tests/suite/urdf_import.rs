@@ -157,10 +157,11 @@ fn the_arm_compiles_with_one_join_per_joint() {
         // A diagonal tensor keeps its axes and the order of its moments.
         "let lower = body mass = 0.8, iframe = [0, 0, 0.2] ++ (0.5 || [0, 1, 0]), inertia = [0.01, 0.012, 0.003] end ;",
         "join earth and base with weld as world_joint ;",
-        "join [0, 0, 0.1] ++ (1.5707963267948966 || [0, 0, 1]) * (0.3 || [0, 1, 0]) * (0.2 || [1, 0, 0]) @ base and upper with revolute([0, 1, 0]) as shoulder ;",
+        "join [0, 0, 0.1] ++ (1.5707963267948966 || [0, 0, 1]) * (0.3 || [0, 1, 0]) * (0.2 || [1, 0, 0]) @ base and upper with limited_revolute([0, 1, 0], -1.57, 1.57, 0) as shoulder ;",
         "with continuous([0, 0.7071067811865475, 0.7071067811865475]) as elbow ;",
         "join [0, 0, 0.4] ++ 1 @ lower and flange with weld as fixed_ ; (* URDF joint \"fixed\" *)",
-        "with prismatic([1, 0, 0]) as slide ;",
+        // `<limit>` ranges become stops on the coordinates.
+        "with limited_prismatic([1, 0, 0], 0, 0.1, 0) as slide ;",
         "apply weight(upper) on upper.iframe ;",
         "apply weight(slider) on slider.iframe ;",
     ] {

@@ -285,15 +285,45 @@ impl<'a> Importer<'a> {
 
     /// The LSD link of a URDF joint type.
     fn joint_link(&mut self, index: usize) -> Result<String, Diagnostic> {
+        let stops = self.stops(index);
         Ok(match self.robot.joints[index].joint_type {
-            JointType::Revolute => format!("revolute({})", vector(self.axis(index)?.into())),
+            JointType::Revolute => match stops {
+                Some((lower, upper)) => format!(
+                    "limited_revolute({}, {}, {}, 0)",
+                    vector(self.axis(index)?.into()),
+                    number(lower),
+                    number(upper)
+                ),
+                None => format!("revolute({})", vector(self.axis(index)?.into())),
+            },
             JointType::Continuous => format!("continuous({})", vector(self.axis(index)?.into())),
-            JointType::Prismatic => format!("prismatic({})", vector(self.axis(index)?.into())),
+            JointType::Prismatic => match stops {
+                Some((lower, upper)) => format!(
+                    "limited_prismatic({}, {}, {}, 0)",
+                    vector(self.axis(index)?.into()),
+                    number(lower),
+                    number(upper)
+                ),
+                None => format!("prismatic({})", vector(self.axis(index)?.into())),
+            },
             JointType::Planar => planar(&self.axis(index)?),
             JointType::Fixed => "weld".to_string(),
             JointType::Floating => "free".to_string(),
             JointType::Spherical => "spherical".to_string(),
         })
+    }
+
+    /// The position limits of a revolute or prismatic joint, when its `<limit>` gives a range
+    /// (lower < upper; URDF's default 0, 0 gives none): imported as stops on its coordinate,
+    /// with restitution 0 (URDF says nothing of the impact).
+    fn stops(&self, index: usize) -> Option<(f64, f64)> {
+        let joint = &self.robot.joints[index];
+        let element = self.source.element("joint", &joint.name);
+        child(element, "limit")?;
+        let (lower, upper) = (joint.limit.lower, joint.limit.upper);
+        let limited = matches!(joint.joint_type, JointType::Revolute | JointType::Prismatic);
+        (limited && lower < upper && lower.is_finite() && upper.is_finite())
+            .then_some((lower, upper))
     }
 
     /// The joint's axis as a unit vector; a warning when the URDF's was not one.
@@ -337,9 +367,12 @@ impl<'a> Importer<'a> {
         let element = self.source.element("joint", &joint.name);
         let child = |tag: &str| child(element, tag);
         let mut found = Vec::new();
-        if let Some(limit) = child("limit") {
-            found.push(self.joint_warning(limit, "W1002", format!("the limits of joint `{}` are not modelled", joint.name))
-                .help("the imported joint moves without limits; a stop can be written as a link effort"));
+        match (child("limit"), self.stops(index)) {
+            (Some(limit), Some(_)) => found.push(self.joint_warning(limit, "W1002", format!("the effort and velocity limits of joint `{}` are not modelled", joint.name))
+                .help("its position limits are imported as stops (`lower`, `upper`, restitution 0); its efforts and rates are not bounded")),
+            (Some(limit), None) => found.push(self.joint_warning(limit, "W1002", format!("the limits of joint `{}` are not modelled", joint.name))
+                .help("the imported joint moves without limits: its `<limit>` gives no range of positions")),
+            (None, _) => {}
         }
         if let (Some(mimic), Some(element)) = (&joint.mimic, child("mimic")) {
             let (multiplier, offset) =

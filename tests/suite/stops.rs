@@ -1,0 +1,251 @@
+//! Stops on joint coordinates (links' `lower`, `upper`, `restitution`): impacts located in time
+//! against the closed forms of the motion, the impact law, and the refusals.
+
+use lsdc::driver::compile_text;
+use lsdc::dynamics::stops::Impact;
+use lsdc::dynamics::stops::{impact_velocities, Side, Stop};
+use lsdc::load::LoadOptions;
+use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+use lsdc::simulate::run::{run, Simulation};
+use nalgebra::{DMatrix, DVector};
+
+fn compile(text: &str) -> lsdc::driver::Compilation {
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    compile_text("test.lsd", text, None, &options)
+}
+
+fn simulate(text: &str, settings: Settings) -> Simulation {
+    let compilation = compile(text);
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let prepared = prepare(&mechanism, &[], &settings).unwrap_or_else(|d| panic!("{d:?}"));
+    run(&prepared, &mut |_| {})
+}
+
+/// Complete elliptic integral of the first kind, K(k), by the arithmetic-geometric mean.
+fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    for _ in 0..40 {
+        (a, b) = (0.5 * (a + b), (a * b).sqrt());
+    }
+    std::f64::consts::PI / (2.0 * a)
+}
+
+fn settings(integrator: Integrator, duration: f64, tolerance: f64) -> Settings {
+    Settings {
+        integrator,
+        duration,
+        output: duration / 10.0,
+        rtol: tolerance,
+        atol: tolerance,
+        ..Settings::default()
+    }
+}
+
+const PENDULUM: &str = "import joints;\n\
+    let rod = body mass = 1.2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end;\n\
+    join earth and rod with limited_revolute([1, 0, 0], 0, pi, RESTITUTION) as swing;\n\
+    apply force value = [0, 0, -9.81 * rod.mass], body = earth end on rod.iframe;\n\
+    initial swing.q = pi / 2;\n";
+
+/// The rod released from the horizontal reaches the stop at the bottom after a quarter period
+/// of the swing from 90°, K(sin 45°)/ω0 with ω0² = m g d / I about the pivot; it leaves with e
+/// times its rate, swings up to θ1 with 1 − cos θ1 = e² (1 − cos 90°) and comes back after a
+/// half period of that swing, 2 K(sin(θ1/2))/ω0.
+fn pendulum_impact_times(e: f64) -> [f64; 2] {
+    let (m, g, d, inertia): (f64, f64, f64, f64) = (1.2, 9.81, 0.5, 0.1 + 1.2 * 0.25);
+    let omega0 = (m * g * d / inertia).sqrt();
+    let first = elliptic_k(std::f64::consts::FRAC_PI_4.sin()) / omega0;
+    let theta1 = (1.0 - e * e).acos();
+    [
+        first,
+        first + 2.0 * elliptic_k((theta1 / 2.0).sin()) / omega0,
+    ]
+}
+
+fn check_impact_law(impact: &Impact, e: f64) {
+    let rate = impact.rate_after / impact.rate_before;
+    assert!((rate + e).abs() < 1e-12, "rate ratio {rate}");
+    // One coordinate: all the kinetic energy is normal to the stop, and e² of it is kept.
+    let kept = impact.kinetic_after / impact.kinetic_before;
+    assert!((kept - e * e).abs() < 1e-12, "kept {kept}");
+}
+
+#[test]
+fn a_pendulum_hits_its_stop_when_the_elliptic_integral_says() {
+    let e = 0.5;
+    let expected = pendulum_impact_times(e);
+    let text = PENDULUM.replace("RESTITUTION", &e.to_string());
+    let cases = [
+        (Integrator::DormandPrince, 1e-12, 1e-9),
+        (Integrator::Dop853, 1e-12, 1e-9),
+        (Integrator::Implicit, 1e-10, 1e-6),
+        (Integrator::Rk4, 1e-10, 1e-6),
+    ];
+    for (integrator, tolerance, bound) in cases {
+        let mut settings = settings(integrator.clone(), 1.5, tolerance);
+        if integrator == Integrator::Rk4 {
+            settings.step = Some(1e-3);
+        }
+        let simulation = simulate(&text, settings);
+        let report = &simulation.report;
+        assert!(report.failure.is_none(), "{:?}", report.failure);
+        assert_eq!(
+            report.impacts.len(),
+            2,
+            "{integrator:?}: {:?}",
+            report.impacts
+        );
+        for (impact, time) in report.impacts.iter().zip(expected) {
+            assert_eq!(impact.side, Side::Lower);
+            assert!(
+                (impact.time - time).abs() < bound,
+                "{integrator:?}: impact at {} instead of {time}",
+                impact.time
+            );
+            check_impact_law(impact, e);
+        }
+    }
+}
+
+#[test]
+fn a_body_falling_onto_a_prismatic_stop_bounces_on_time() {
+    let (g, h, e) = (9.81f64, 0.8f64, 0.6f64);
+    let text = format!(
+        "import joints;\n\
+         let block = body mass = 2, iframe = 0, inertia = [0.1, 0.1, 0.1] end;\n\
+         join earth and block with limited_prismatic([0, 0, 1], -{h}, 1, {e}) as slide;\n\
+         apply force value = [0, 0, -{g} * block.mass], body = earth end on block.frame;\n"
+    );
+    // Free fall from rest: the stop after √(2h/g), then flights of 2 eᵏ v1 / g.
+    let v1 = (2.0 * g * h).sqrt();
+    let first = (2.0 * h / g).sqrt();
+    let expected = [
+        first,
+        first + 2.0 * e * v1 / g,
+        first + 2.0 * e * v1 / g + 2.0 * e * e * v1 / g,
+    ];
+    for integrator in [Integrator::DormandPrince, Integrator::Rk4] {
+        let mut settings = settings(integrator.clone(), 1.25, 1e-12);
+        settings.step = Some(1e-3);
+        let simulation = simulate(&text, settings);
+        let report = &simulation.report;
+        assert!(report.failure.is_none(), "{:?}", report.failure);
+        assert_eq!(report.impacts.len(), 3, "{:?}", report.impacts);
+        for (k, (impact, time)) in report.impacts.iter().zip(expected).enumerate() {
+            // The free fall is a polynomial of degree 2, which both methods follow exactly.
+            assert!(
+                (impact.time - time).abs() < 1e-10,
+                "{integrator:?}: impact {k} at {} instead of {time}",
+                impact.time
+            );
+            let speed = v1 * e.powi(k as i32);
+            assert!((impact.rate_before + speed).abs() < 1e-9 * speed);
+            check_impact_law(impact, e);
+        }
+    }
+}
+
+/// A mass matrix with coupling: the impulse acts through it, so the other rates change too,
+/// M (v⁺ − v⁻) is along the stopped coordinate alone, and the kinetic energy lost is
+/// (1 − e²) of the part normal to the stop, ½ v_k² / (M⁻¹)_kk.
+#[test]
+fn the_impulse_acts_through_the_mass_matrix() {
+    let mass = DMatrix::from_row_slice(3, 3, &[3.0, 0.8, -0.4, 0.8, 2.0, 0.3, -0.4, 0.3, 1.5]);
+    let v = [0.7, -1.3, 0.4];
+    let stop = Stop {
+        coordinate: "b.q".to_string(),
+        side: Side::Upper,
+        bound: 1.0,
+        restitution: 0.3,
+        position: 1,
+        velocity: 1,
+    };
+    let after = impact_velocities(&stop, &mass, None, &v).expect("solvable");
+    let before = DVector::from_column_slice(&v);
+    assert!((after[1] + 0.3 * v[1]).abs() < 1e-14);
+    let impulse = &mass * (&after - &before);
+    assert!(
+        impulse[0].abs() < 1e-14 && impulse[2].abs() < 1e-14,
+        "{impulse}"
+    );
+    let energy = |x: &DVector<f64>| 0.5 * x.dot(&(&mass * x));
+    let inverse = mass.clone().try_inverse().unwrap();
+    let normal = 0.5 * v[1] * v[1] / inverse[(1, 1)];
+    let lost = energy(&before) - energy(&after);
+    assert!(
+        (lost - (1.0 - 0.09) * normal).abs() < 1e-13,
+        "{lost} {normal}"
+    );
+    // Kept through the impact, a constraint row G v = 0 changes the impulse but not the law.
+    let g = DMatrix::from_row_slice(1, 3, &[1.0, 0.0, -2.0]);
+    let v = [0.8, -1.3, 0.4];
+    let after = impact_velocities(&stop, &mass, Some(&g), &v).expect("solvable");
+    assert!((after[0] - 2.0 * after[2]).abs() < 1e-13);
+    assert!((after[1] + 0.3 * v[1]).abs() < 1e-13);
+}
+
+#[test]
+fn a_coordinate_stopped_dead_rests_and_the_symplectic_method_refuses_stops() {
+    // At the bottom, the rod stopped dead rests in equilibrium: the run goes on.
+    let text = PENDULUM.replace("RESTITUTION", "0");
+    let simulation = simulate(&text, settings(Integrator::DormandPrince, 1.0, 1e-10));
+    assert!(simulation.report.failure.is_none());
+    assert_eq!(simulation.report.impacts.len(), 1);
+    assert!(!simulation.report.impacts[0].rests);
+    // Above it, gravity holds it against the stop: it rests there, held by the stop's contact
+    // torque, and stays at the bound.
+    let text = text.replace(
+        "limited_revolute([1, 0, 0], 0, pi",
+        "limited_revolute([1, 0, 0], 0.3, pi",
+    );
+    let simulation = simulate(&text, settings(Integrator::DormandPrince, 1.0, 1e-10));
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
+    assert_eq!(simulation.report.impacts.len(), 1);
+    assert!(simulation.report.impacts[0].rests);
+    let last = simulation.samples.last().expect("samples");
+    assert!(
+        (last.coordinates[0] - 0.3).abs() < 1e-12,
+        "{:?}",
+        last.coordinates
+    );
+    let text = PENDULUM.replace("RESTITUTION", "1");
+    let simulation = simulate(&text, settings(Integrator::Symplectic, 1.0, 1e-10));
+    let failure = simulation.report.failure.expect("refused");
+    assert!(
+        failure.message.contains("does not handle stops"),
+        "{}",
+        failure.message
+    );
+}
+
+#[test]
+fn bad_stops_are_located_errors() {
+    let cases = [
+        ("limited_revolute([1, 0, 0], 1, 0, 0.5)", "E0451"),
+        ("limited_revolute([1, 0, 0], 0, 1, 1.5)", "E0452"),
+        (
+            "link(a, b) dof1 = a || [1, 0, 0], dof2 = b || [0, 1, 0], lower = 0 end",
+            "E0450",
+        ),
+    ];
+    for (link, code) in cases {
+        let text = format!(
+            "import joints;\nlet rod = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.1] end;\n\
+             join earth and rod with {link} as swing;\n"
+        );
+        let compilation = compile(&text);
+        let mechanism = compilation.mechanism.expect("elaborates");
+        let errors = prepare(&mechanism, &[], &Settings::default())
+            .err()
+            .expect("refused");
+        assert!(errors.iter().any(|d| d.code == code), "{code}: {errors:?}");
+    }
+}
