@@ -291,3 +291,17 @@ fn contacts_with_loops_are_refused() {
            join earth and rod with revolute([0, 0, 1]) ;\n";
     assert_eq!(diagnostics_of(&text), vec!["E0824"]);
 }
+
+#[test]
+fn stops_and_geared_rotors_with_contacts_are_refused() {
+    let bob =
+        "let bob = body mass = 1, iframe = [0, 0, -0.1] ++ 1, inertia = [0.1, 0.1, 0.1] end ;\n";
+    let stop = example_text("rolling_cylinder", &[])
+        + bob
+        + "join cylinder and bob with limited_revolute([0, 1, 0], -1, 1, 0.5) ;\n";
+    assert_eq!(diagnostics_of(&stop), vec!["E0450"]);
+    let rotor = example_text("rolling_cylinder", &[])
+        + bob
+        + "join cylinder and bob with geared_revolute([0, 1, 0], 10, 0.001) ;\n";
+    assert_eq!(diagnostics_of(&rotor), vec!["E0454"]);
+}
