@@ -42,7 +42,7 @@ pub fn build(
     for (k, joint) in joints.iter().enumerate() {
         let join = mechanism.join(joint.chain.join);
         let link = mechanism.link(join.link);
-        if !has_rotor(&link.rotor) {
+        if !link.rotor.is_declared() {
             continue;
         }
         let name = &joint.chain.name;
@@ -85,10 +85,6 @@ pub fn build(
         }
     }
     rotors
-}
-
-fn has_rotor(rotor: &LinkRotor) -> bool {
-    rotor.inertia.is_some() || rotor.ratio.is_some() || rotor.axis.is_some()
 }
 
 fn rotor_values(rotor: &LinkRotor, unknowns: &UnknownValues) -> Option<(f64, f64, Vector3<f64>)> {

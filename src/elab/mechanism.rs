@@ -113,6 +113,13 @@ pub struct LinkRotor {
     pub axis: Option<Vector>,
 }
 
+impl LinkRotor {
+    /// Whether any of the rotor's fields is written.
+    pub fn is_declared(&self) -> bool {
+        self.inertia.is_some() || self.ratio.is_some() || self.axis.is_some()
+    }
+}
+
 /// `join first and second with link`: the link's dof chain, in its own coordinates, carries the
 /// first frame onto the second.
 #[derive(Clone, Debug)]

@@ -162,6 +162,22 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
         .primary(contact.span, "this contact constrains the motion")
         .help("`lsdc simulate` integrates it; the symbolic equations cover joints and closed loops only")]);
     }
+    if let Some(join) = mechanism
+        .joins
+        .iter()
+        .find(|join| mechanism.link(join.link).rotor.is_declared())
+    {
+        // The generator writes the bodies' kinetic energy only; a rotor's own energy and its
+        // gyroscopic coupling would be missing from M and S.
+        return Err(vec![Diagnostic::error(
+            "E0826",
+            "the equations of motion of a mechanism with geared rotors are not written",
+        )
+        .primary(join.span, "this join carries a geared rotor")
+        .help(
+            "`lsdc simulate` integrates it; the symbolic equations cover the bodies' inertia only",
+        )]);
+    }
     let mut generator = Generator::new(mechanism, topology);
     generator.run().map_err(|e| {
         let error = Diagnostic::error(

@@ -284,12 +284,18 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
             compile_files(std::slice::from_ref(&path), &LoadOptions::default()).expect("readable");
         let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
         let topology = lsdc::topology::build(mechanism).expect("a topology");
-        if !mechanism.contacts.is_empty() {
-            // The equations of a mechanism with contacts are refused, not written without them.
+        let has_rotors = mechanism
+            .joins
+            .iter()
+            .any(|join| mechanism.link(join.link).rotor.is_declared());
+        if !mechanism.contacts.is_empty() || has_rotors {
+            // The equations of a mechanism with contacts or geared rotors are refused, not
+            // written without them.
             let refused = symbolic::generate(mechanism, &topology)
                 .err()
                 .expect("refused");
-            assert_eq!(refused[0].code, "E0825", "{}", path.display());
+            let code = if has_rotors { "E0826" } else { "E0825" };
+            assert_eq!(refused[0].code, code, "{}", path.display());
             continue;
         }
         let eq = symbolic::generate(mechanism, &topology)
@@ -327,10 +333,6 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
             )
             .expect("prepares with values"),
         };
-        if !prepared.model.rotors.is_empty() {
-            // The symbolic equations do not include geared rotors (docs/language.md).
-            continue;
-        }
         let unknowns = &prepared.model.unknowns;
         let (coordinates, rates) = (prepared.coordinates.clone(), prepared.rates.clone());
         let mut worst = compare(mechanism, &eq, unknowns, &coordinates, &rates);
