@@ -129,7 +129,7 @@ pub fn build(
     for joint in joints {
         let join = mechanism.join(joint.chain.join);
         let link = mechanism.link(join.link);
-        if !has_stops(&link.stops) {
+        if !link.stops.is_declared() {
             continue;
         }
         if joint.chain.coordinate_count() != 1
@@ -169,7 +169,7 @@ fn refuse_with_loops(
     let chains = joints.iter().map(|j| &j.chain).chain(loops);
     for chain in chains {
         let join = mechanism.join(chain.join);
-        if has_stops(&mechanism.link(join.link).stops) {
+        if mechanism.link(join.link).stops.is_declared() {
             errors.push(
                 Diagnostic::error(
                     "E0450",
@@ -183,10 +183,6 @@ fn refuse_with_loops(
             );
         }
     }
-}
-
-fn has_stops(stops: &LinkStops) -> bool {
-    stops.lower.is_some() || stops.upper.is_some() || stops.restitution.is_some()
 }
 
 fn joint_stops(

@@ -103,6 +103,13 @@ pub struct LinkStops {
     pub restitution: Option<Scalar>,
 }
 
+impl LinkStops {
+    /// Whether any of the stops' fields is written.
+    pub fn is_declared(&self) -> bool {
+        self.lower.is_some() || self.upper.is_some() || self.restitution.is_some()
+    }
+}
+
 /// A rotor spinning about `axis` (in the join's first frame) relative to the body of that frame
 /// at `ratio` times the rate of the link's coordinate, with moment of inertia `inertia` about
 /// its axis; each optional as declared.

@@ -2,9 +2,9 @@
 //! a few states, the JSON DAG evaluated again, and the text formats' shape.
 
 use crate::common::c_compiler;
-use crate::common::symbolic::{equations_of, Sequence};
+use crate::common::symbolic::{equations_of, written_equations, Sequence};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 use lsdc::symbolic::equations::Values;
@@ -637,7 +637,7 @@ fn generated_c_of_every_example_compiles_without_warnings() {
     let dir = scratch("c-warnings");
     let compile = |path: &PathBuf| {
         let name = path.file_stem().expect("a name").to_string_lossy();
-        let Some(equations) = written_equations(path) else {
+        let Some(equations) = written_equations(&path.to_string_lossy()) else {
             return;
         };
         let source = emit::c(&equations, &name);
@@ -663,19 +663,4 @@ fn generated_c_of_every_example_compiles_without_warnings() {
     });
     let _ = std::fs::remove_dir_all(&dir);
     println!("{} examples: C without warnings", examples.len());
-}
-
-/// The equations of an example, or `None` for the mechanisms whose equations are refused
-/// (contacts E0825, geared rotors E0826; `symbolic_equations` checks the refusals).
-fn written_equations(path: &Path) -> Option<Equations> {
-    let compilation =
-        lsdc::driver::compile_files(&[path.to_path_buf()], &lsdc::load::LoadOptions::default())
-            .expect("readable");
-    let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
-    let topology = lsdc::topology::build(mechanism).expect("a topology");
-    match lsdc::symbolic::generate(mechanism, &topology) {
-        Ok(equations) => Some(equations),
-        Err(refused) if ["E0825", "E0826"].contains(&refused[0].code) => None,
-        Err(errors) => panic!("{}: {errors:?}", path.display()),
-    }
 }
