@@ -217,7 +217,8 @@ fn the_delta_robot_runs_with_its_loops_closed_and_converges_at_second_order() {
     // Every step's end is measured (not projected): the loops close within Newton's tolerance.
     let residual = constraints(&run).position_residual;
     assert!(residual < 1e-10, "loops open by {residual:e}");
-    let drift = run.report.energy_drift.expect("conservative");
+    // Kinetic plus potential energy less the work of the motors' brakes.
+    let drift = run.report.energy_balance.expect("braked");
     assert!(drift < 1e-5, "energy error {drift:e}");
     let (coarse, fine, ratio) = convergence("delta_isir88", 0.3, 0.01, 1e-3);
     assert!(
