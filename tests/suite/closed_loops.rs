@@ -9,7 +9,7 @@ use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::loops::Stabilisation;
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
-use lsdc::simulate::run::{run, Simulation};
+use lsdc::simulate::run::{run, Sample, Simulation};
 use lsdc::simulate::statics::holding_efforts;
 
 #[test]
@@ -410,6 +410,26 @@ fn delta_braked_by_its_shorted_motors_stays_closed_and_both_models_agree() {
 /// The shorted motors' brake, c = 12² K_i K_e / R (lib/delta_masses.lsd), N·m·s/rad.
 const SHORTED_MOTOR_BRAKE: f64 = 144.0 * 0.119 * 0.1194 / 1.35;
 
+/// The full Delta held at a sample's configuration: its arm angles fixed, its ball joints'
+/// starting guesses the sample's values (so that the assembly finds that configuration).
+fn delta_at_sample(run: &Simulation, sample: &Sample) -> Prepared {
+    let text = example_text("delta_isir88", &[]);
+    let mut replacements = Vec::new();
+    for (name, value) in run.coordinate_names.iter().zip(&sample.coordinates) {
+        let start = text.find(&format!("{name} = ")).expect("an initial value");
+        let end = start + text[start..].find([',', ';']).unwrap();
+        let kind = if name.starts_with('A') { "fixed" } else { "guess" };
+        replacements.push((
+            text[start..end].to_string(),
+            format!("{name} = {value:e} {kind}"),
+        ));
+    }
+    let pairs: Vec<(&str, &str)> = (replacements.iter())
+        .map(|(from, to)| (from.as_str(), to.as_str()))
+        .collect();
+    prepared("delta_isir88", &pairs)
+}
+
 /// Braked by its shorted motors, the Delta sinks slowly, nearly in static balance: each arm's
 /// brake torque c α' nearly matches the torque that holds the arm at rest at that pose (the
 /// statics of the same mechanism, an independent computation). What is left is the inertia of
@@ -417,21 +437,20 @@ const SHORTED_MOTOR_BRAKE: f64 = 144.0 * 0.119 * 0.1194 / 1.35;
 #[test]
 fn the_braked_delta_sinks_in_near_static_balance() {
     let run = simulated(&prepared("delta_isir88", &[]));
-    let arm = column(&run, "A1.q");
+    let actuated = ["A1.q", "A2.q", "A3.q"].map(String::from);
     let mut checked = 0;
     // Every half second from 0.5 s (outputs every 0.05 s).
     for sample in run.samples.iter().skip(10).step_by(10) {
-        let alpha = sample.coordinates[arm];
-        let braking = SHORTED_MOTOR_BRAKE * sample.rates[arm];
-        let held = delta_at("delta_isir88", [alpha.to_degrees(); 3]);
-        let actuated = ["A1.q", "A2.q", "A3.q"].map(String::from);
-        let holding = holding_efforts(&held, &actuated).expect("holds");
-        let needed = -holding.efforts[0].effort;
-        assert!(
-            (braking - needed).abs() < 2e-3 * needed,
-            "t = {}: brake {braking} N·m, holding {needed} N·m",
-            sample.time
-        );
+        let holding = holding_efforts(&delta_at_sample(&run, sample), &actuated).expect("holds");
+        for (k, held) in holding.efforts.iter().enumerate() {
+            let braking = SHORTED_MOTOR_BRAKE * sample.rates[column(&run, &actuated[k])];
+            assert!(
+                (braking + held.effort).abs() < 2e-3 * held.effort.abs(),
+                "t = {}: brake {braking} N·m, holding {} N·m",
+                sample.time,
+                -held.effort
+            );
+        }
         checked += 1;
     }
     assert_eq!(checked, 20);

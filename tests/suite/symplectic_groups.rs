@@ -28,6 +28,15 @@ const NEWTON_TOLERANCE: f64 = 1e-10;
 
 /// An example with another integrator, duration, output interval and step (symplectic) or
 /// tolerance (dopri5).
+/// The symplectic method is for conservative mechanisms: the Delta's shorted-motor brakes
+/// (examples/lib/delta_masses.lsd) are left out, so that its arms fall freely (for 0.3 s: before
+/// they reach, at 0.40 s, the singular pose where the three elbows meet).
+const DELTA_UNBRAKED: [(&str, &str); 3] = [
+    ("apply shorted_motor(arm1) on arm1 ;", ""),
+    ("apply shorted_motor(arm2) on arm2 ;", ""),
+    ("apply shorted_motor(arm3) on arm3 ;", ""),
+];
+
 fn example(
     name: &str,
     integrator: Integrator,
@@ -35,7 +44,11 @@ fn example(
     output: f64,
     step: Option<f64>,
 ) -> Prepared {
-    let mut p = prepared(name, &[]);
+    let conservative: &[(&str, &str)] = match name {
+        "delta_isir88" => &DELTA_UNBRAKED,
+        _ => &[],
+    };
+    let mut p = prepared(name, conservative);
     p.settings = Settings {
         integrator,
         duration,
@@ -217,8 +230,7 @@ fn the_delta_robot_runs_with_its_loops_closed_and_converges_at_second_order() {
     // Every step's end is measured (not projected): the loops close within Newton's tolerance.
     let residual = constraints(&run).position_residual;
     assert!(residual < 1e-10, "loops open by {residual:e}");
-    // Kinetic plus potential energy less the work of the motors' brakes.
-    let drift = run.report.energy_balance.expect("braked");
+    let drift = run.report.energy_drift.expect("conservative");
     assert!(drift < 1e-5, "energy error {drift:e}");
     let (coarse, fine, ratio) = convergence("delta_isir88", 0.3, 0.01, 1e-3);
     assert!(
