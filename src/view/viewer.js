@@ -8,8 +8,11 @@
   let animation = read("animation-data");
   const mode = read("mode-data");
   const params = new URLSearchParams(location.search);
+  // `frame`/`time`: the output shown; `furthest`: the latest output shown so far; `last`: the
+  // animation's last output; `laps`: how many times playing went round from the end to the start.
   const status = { ready: false, objects: 0, bodies: 0, joints: 0, complementary: 0, frames: 0,
-                   frame: 0, time: 0, advanced: false, playing: false, drag: null, error: null };
+                   frame: 0, time: 0, furthest: 0, last: 0, end: 0, laps: 0, failure: null,
+                   advanced: false, playing: false, drag: null, error: null };
   window.lsdcStatus = status;
   const report = () => { document.getElementById("status").textContent = JSON.stringify(status); };
   const message = (text) => {
@@ -24,7 +27,14 @@
     return;
   }
   const view = document.getElementById("view");
-  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  let renderer;
+  try {
+    renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  } catch (e) {
+    status.error = "no WebGL: " + e.message;
+    report();
+    return;
+  }
   renderer.setClearColor(0xf4f4f2);
   view.appendChild(renderer.domElement);
   const world = new THREE.Scene();
@@ -228,12 +238,18 @@
     status.frame = index;
     status.time = animation.times[index];
     status.advanced = status.advanced || index > 0;
+    status.furthest = Math.max(status.furthest, index);
     document.getElementById("time").textContent = "t = " + animation.times[index].toFixed(3) + " s";
     drawPlot();
   }
   function loadAnimation(next) {
     animation = next;
     slider.max = Math.max(animation.times.length - 1, 0);
+    status.last = Math.max(animation.times.length - 1, 0);
+    status.end = animation.times.length > 0 ? animation.times[status.last] : 0;
+    status.failure = animation.failure || null;
+    status.furthest = 0;
+    status.laps = 0;
     clock.time = 0;
     fillSeries();
     show(0);
@@ -259,7 +275,13 @@
       const speed = +document.getElementById("speed").value;
       clock.time += (now - clock.last) / 1000 * speed;
       const end = animation.times[animation.times.length - 1];
-      if (clock.time > end) clock.time = 0;
+      // Past the end: the last output is shown once, then playing starts again from the start.
+      if (clock.time > end && status.frame !== status.last) {
+        clock.time = end;
+      } else if (clock.time > end) {
+        clock.time = 0;
+        status.laps += 1;
+      }
       show(outputAt(clock.time));
     }
     clock.last = now;
@@ -431,6 +453,9 @@
   placeCamera();
   resize();
   if (animation) loadAnimation(animation);
+  // `?speed=5`: one of the speeds of the list.
+  const speed = document.getElementById("speed");
+  if (Array.from(speed.options).some((o) => o.value === params.get("speed"))) speed.value = params.get("speed");
   if (params.get("play") === "1") setPlaying(true);
   status.ready = true;
   report();
