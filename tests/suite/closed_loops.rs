@@ -418,7 +418,11 @@ fn delta_at_sample(run: &Simulation, sample: &Sample) -> Prepared {
     for (name, value) in run.coordinate_names.iter().zip(&sample.coordinates) {
         let start = text.find(&format!("{name} = ")).expect("an initial value");
         let end = start + text[start..].find([',', ';']).unwrap();
-        let kind = if name.starts_with('A') { "fixed" } else { "guess" };
+        let kind = if name.starts_with('A') {
+            "fixed"
+        } else {
+            "guess"
+        };
         replacements.push((
             text[start..end].to_string(),
             format!("{name} = {value:e} {kind}"),

@@ -333,10 +333,13 @@ fn page_status(url: &str, virtual_ms: u32) -> Option<serde_json::Value> {
         let output = chromium(url, virtual_ms, &["--dump-dom"])?;
         let dom = String::from_utf8_lossy(&output.stdout);
         let status = status_in(&dom);
+        let without_webgl = |s: &serde_json::Value| {
+            s["error"]
+                .as_str()
+                .is_some_and(|e| e.starts_with("no WebGL"))
+        };
         match status {
-            Some(status) if !status["error"].as_str().unwrap_or("").starts_with("no WebGL") => {
-                return Some(status)
-            }
+            Some(status) if !without_webgl(&status) => return Some(status),
             _ => {
                 why = format!(
                     "{}; status {status:?}; {}",
