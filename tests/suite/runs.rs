@@ -102,6 +102,16 @@ fn w0901_never_fires_on_the_examples_that_are_not_stiff() {
         if name == "governor" {
             continue;
         }
+        // The Deltas braked by their shorted motors (c / J ~ 200 /s over a 10 s run) are
+        // mildly stiff, which is why they run with the implicit integrator: dopri5 says so,
+        // naming an arm, on which a brake acts.
+        if name.starts_with("delta") {
+            prepared.settings.integrator = integrator("dopri5");
+            let stiffness = run(&prepared, &mut |_| {}).report.stiffness;
+            let element = stiffness.and_then(|s| s.element).unwrap_or_default();
+            assert!(element.contains("arm"), "{name}: {element}");
+            continue;
+        }
         for explicit in ["dopri5", "rk4"] {
             prepared.settings.integrator = integrator(explicit);
             let simulation = run(&prepared, &mut |_| {});
