@@ -89,7 +89,7 @@ fn expr_children<'a>(expr: &'a Expr, out: &mut Vec<&'a Expr>) {
         ExprKind::Call { args, .. } => out.extend(args.iter().map(|a| &a.value)),
         ExprKind::Binary { lhs, rhs, .. } => out.extend([&**lhs, &**rhs]),
         ExprKind::Neg(inner) | ExprKind::Prime(inner) => out.push(inner),
-        ExprKind::Construct { fields, .. } => out.extend(fields.iter().map(|f| &f.value)),
+        ExprKind::Construct(c) => out.extend(c.fields.iter().map(|f| &f.value)),
         ExprKind::Local { bindings, body } => {
             out.extend(bindings.iter().map(|b| &b.value));
             out.push(body);
@@ -143,8 +143,8 @@ fn dismantle(kind: DeclKind) {
                 }
                 ExprKind::Binary { lhs, rhs, .. } => exprs.extend([*lhs, *rhs]),
                 ExprKind::Neg(inner) | ExprKind::Prime(inner) => exprs.push(*inner),
-                ExprKind::Construct { fields, .. } => {
-                    exprs.extend(fields.into_vec().into_iter().map(|f| f.value));
+                ExprKind::Construct(c) => {
+                    exprs.extend(c.fields.into_vec().into_iter().map(|f| f.value));
                 }
                 ExprKind::Local { bindings, body } => {
                     exprs.extend(bindings.into_vec().into_iter().map(|b| b.value));

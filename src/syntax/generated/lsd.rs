@@ -1,6 +1,6 @@
-// grammar stamp: 34370f0e7f63c70a (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 32a99b7410f2efb9 (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: 08297650076e65b6077e65a05b257f072453bd2b8a3d94a7f6d4e0e31aa25358
+// sha3: 5424144b9d161de64d3e23387a3bff1952a5eb84c5f8d1ce6a374aa9154ca3b5
 // features: 
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
@@ -7890,7 +7890,7 @@ fn __action57<
     (_, __0, _): (usize, Ident, usize),
 ) -> ExprKind
 {
-    ExprKind::Name(__0)
+    ExprKind::Name(__0.name)
 }
 
 #[allow(unused_variables)]
@@ -7942,7 +7942,7 @@ fn __action60<
     (_, n, _): (usize, Ident, usize),
 ) -> ExprKind
 {
-    ExprKind::Unknown(n)
+    ExprKind::Unknown(n.name)
 }
 
 #[allow(unused_variables)]
@@ -8024,7 +8024,7 @@ fn __action65<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct { kind, params: Box::default(), fields: fields.into_boxed_slice() }
+    ExprKind::Construct(Box::new(Construct { kind, params: Box::default(), fields: fields.into_boxed_slice() }))
 }
 
 #[allow(unused_variables)]
@@ -8044,7 +8044,7 @@ fn __action66<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct { kind: ConstructKind::Link, params: params.into_boxed_slice(), fields: fields.into_boxed_slice() }
+    ExprKind::Construct(Box::new(Construct { kind: ConstructKind::Link, params: params.into_boxed_slice(), fields: fields.into_boxed_slice() }))
 }
 
 #[allow(unused_variables)]
