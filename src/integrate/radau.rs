@@ -105,9 +105,11 @@ const JACOBIAN_RATE: f64 = 0.001;
 /// retries with 0.7 of the step (0.9 · 2.73^(-1/4)).
 const NEWTON_FAILED: f64 = 2.73;
 /// The fraction of a step on which the iteration failed (with a fresh Jacobian) that the steps
-/// after are limited to, and how much that limit grows with each accepted step: on the
-/// governor the iteration converges up to a step that drifts slowly along the run, above which
-/// it fails, while the error would allow steps 3 to 5 times longer.
+/// after are limited to, and how much that limit grows with each accepted step, so that a
+/// run does not try again and again the steps its iteration cannot converge on. (On the
+/// governor, most failures came from judging the iteration on its first rate, `hopeless`:
+/// without that, 152 steps at 1e-6 instead of 271. Without the limit too, the rejections rose
+/// from 26 to 56.)
 const NEWTON_LIMIT: f64 = 0.7;
 const NEWTON_LIMIT_GROWTH: f64 = 1.1;
 
