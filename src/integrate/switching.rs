@@ -1,5 +1,5 @@
-//! Stiffness switching between the explicit Dormand–Prince pair and the Rosenbrock method RODAS4, as
-//! LSODA switches between Adams and BDF (Petzold, *SIAM J. Sci. Stat. Comput.* 4, 1983): the
+//! Stiffness switching between the explicit Dormand–Prince pair and an implicit method (Radau IIA
+//! of order 5 on trees, the Rosenbrock method ROS34PW2 on closed loops), as LSODA switches between Adams and BDF (Petzold, *SIAM J. Sci. Stat. Comput.* 4, 1983): the
 //! explicit method steps while nothing stiff holds its steps at its stability boundary, the
 //! implicit one while something does.
 //!
