@@ -32,6 +32,13 @@ pub struct Data {
     u_vector: Vec<Vector6<f64>>,
     /// Where the efforts' tape is evaluated.
     pub efforts: EffortScratch,
+    /// Geared rotors (empty without any): the bodies' motions for one unit velocity, that unit
+    /// velocity, each rotor's row w of spin rates per velocity (rotors × nv), and each rotor's
+    /// own effort n ε·τ_r (see `add_rotors_to_mass`, `add_rotor_torques`).
+    rotor_motions: Vec<Motion>,
+    rotor_unit: Vec<f64>,
+    rotor_rows: DMatrix<f64>,
+    rotor_own: Vec<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -54,6 +61,7 @@ impl From<EvalError> for DynamicsError {
 impl Data {
     pub fn new(model: &Model) -> Data {
         let n = model.body_count();
+        let geared = !model.rotors.is_empty();
         Data {
             states: model.joints.iter().map(|j| j.new_state()).collect(),
             world: vec![Pose::identity(); n + 1],
@@ -70,6 +78,10 @@ impl Data {
             d_inverse: vec![Matrix6::zeros(); n + 1],
             u_vector: vec![Vector6::zeros(); n + 1],
             efforts: EffortScratch::default(),
+            rotor_motions: vec![Motion::zeros(); if geared { n + 1 } else { 0 }],
+            rotor_unit: vec![0.0; if geared { model.nv } else { 0 }],
+            rotor_rows: DMatrix::zeros(model.rotors.len(), model.nv),
+            rotor_own: vec![0.0; model.rotors.len()],
         }
     }
 }
@@ -201,9 +213,9 @@ pub fn rnea_after_kinematics(
     tau: &mut DVector<f64>,
 ) {
     rnea_forward(model, data, a, external);
-    let rotor_efforts = add_rotor_torques(model, data, a);
+    add_rotor_torques(model, data, a);
     rnea_backward(model, data, tau);
-    for (rotor, effort) in model.rotors.iter().zip(rotor_efforts) {
+    for (rotor, effort) in model.rotors.iter().zip(&data.rotor_own) {
         tau[rotor.velocity] += effort;
     }
 }
@@ -602,34 +614,39 @@ pub fn rotor_kinetic_energy(model: &Model, data: &Data) -> f64 {
     model.rotors.iter().map(spin_energy).sum()
 }
 
-/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q.
-pub fn add_rotors_to_mass(model: &Model, data: &Data, mass: &mut DMatrix<f64>) {
+/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q; w is
+/// the rotor's spin rate per unit velocity, found by moving each velocity alone (in `data`'s
+/// rotor scratch: nothing is allocated).
+pub fn add_rotors_to_mass(model: &Model, data: &mut Data, mass: &mut DMatrix<f64>) {
     if model.rotors.is_empty() {
         return;
     }
-    let mut motions = vec![Motion::zeros(); model.body_count() + 1];
-    let mut unit = vec![0.0; model.nv];
-    let mut rows = vec![DVector::<f64>::zeros(model.nv); model.rotors.len()];
+    let mut motions = std::mem::take(&mut data.rotor_motions);
     for j in 0..model.nv {
-        unit[j] = 1.0;
-        body_motions(model, data, &unit, &mut motions);
-        unit[j] = 0.0;
-        for (row, rotor) in rows.iter_mut().zip(&model.rotors) {
-            row[j] = rotor.axis.dot(&angular(&motions[rotor.carrier]));
+        data.rotor_unit[j] = 1.0;
+        body_motions(model, data, &data.rotor_unit, &mut motions);
+        data.rotor_unit[j] = 0.0;
+        for (r, rotor) in model.rotors.iter().enumerate() {
+            data.rotor_rows[(r, j)] = rotor.axis.dot(&angular(&motions[rotor.carrier]));
         }
     }
-    for (mut row, rotor) in rows.into_iter().zip(&model.rotors) {
-        row[rotor.velocity] += rotor.ratio;
-        *mass += rotor.inertia * &row * row.transpose();
+    data.rotor_motions = motions;
+    for (r, rotor) in model.rotors.iter().enumerate() {
+        data.rotor_rows[(r, rotor.velocity)] += rotor.ratio;
+        let row = data.rotor_rows.row(r);
+        for i in 0..model.nv {
+            for j in 0..model.nv {
+                mass[(i, j)] += rotor.inertia * row[i] * row[j];
+            }
+        }
     }
 }
 
 /// Inverse dynamics of the rotors, between RNEA's passes: adds each rotor's torque τ_r to its
 /// carrier's force (so the pass back carries it to the joints that turn the carrier) and
-/// returns, per rotor, n ε·τ_r to add to its coordinate's effort afterwards.
-pub fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) -> Vec<f64> {
-    let mut own = Vec::with_capacity(model.rotors.len());
-    for rotor in &model.rotors {
+/// leaves, per rotor, n ε·τ_r to add to its coordinate's effort afterwards in `data.rotor_own`.
+fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) {
+    for (r, rotor) in model.rotors.iter().enumerate() {
         let omega = angular(&data.velocity[rotor.carrier]);
         let omega_dot = match rotor.carrier {
             0 => Vector3::zeros(),
@@ -641,7 +658,6 @@ pub fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) -> Vec<f64> 
         if rotor.carrier != 0 {
             data.force[rotor.carrier] += Force::new(torque.x, torque.y, torque.z, 0.0, 0.0, 0.0);
         }
-        own.push(rotor.ratio * axis.dot(&torque));
+        data.rotor_own[r] = rotor.ratio * axis.dot(&torque);
     }
-    own
 }
