@@ -18,6 +18,7 @@ mod examples;
 mod force_elements;
 mod format;
 mod frame_efforts;
+mod geared_loops;
 mod generated_code;
 mod golden;
 mod hard_loops;
