@@ -1,7 +1,6 @@
-//! Geared rotors and stops on mechanisms with closed loops: the four-bar of
-//! `examples/four_bar.lsd` with a geared crank against the same linkage with the rotor's
-//! reflected inertia written into the crank, the energy of a rotor carried by a moving body,
-//! and a crank hitting a stop against the impact law of a one-degree-of-freedom mechanism.
+//! Geared rotors on mechanisms with closed loops: the four-bar of `examples/four_bar.lsd` with a
+//! geared crank against the same linkage with the rotor's reflected inertia written into the
+//! crank, and the energy of a rotor carried by a moving body.
 
 use crate::common::programs::{column, prepared, simulated};
 use lsdc::simulate::run::Simulation;
