@@ -70,8 +70,8 @@ pub fn examples() -> Vec<PathBuf> {
 
 /// What one evaluation of a program's mechanism allocates at its initial state, once two of
 /// each have sized every buffer: (loops, allocations per derivative, per projection onto the
-/// loops if it has any). None for a program that needs values from the command line, or
-/// whose mechanism cannot move as given (a massless body on a moving joint).
+/// loops or contacts if it has any). None for a program that needs values from the command
+/// line, or whose mechanism cannot move as given (a massless body on a moving joint).
 pub fn per_evaluation(file: &Path) -> Option<(usize, usize, Option<usize>)> {
     let options = LoadOptions {
         library_dirs: Vec::new(),
@@ -102,6 +102,6 @@ pub fn per_evaluation(file: &Path) -> Option<(usize, usize, Option<usize>)> {
     Some((
         model.loops.len(),
         derivative,
-        model.has_loops().then_some(projection),
+        (model.has_loops() || model.has_contacts()).then_some(projection),
     ))
 }

@@ -32,6 +32,13 @@ pub struct Data {
     u_vector: Vec<Vector6<f64>>,
     /// Where the efforts' tape is evaluated.
     pub efforts: EffortScratch,
+    /// Geared rotors (empty without any): the bodies' motions for one unit velocity, that unit
+    /// velocity, each rotor's row w of spin rates per velocity (rotors × nv), and each rotor's
+    /// own effort n ε·τ_r (see `add_rotors_to_mass`, `add_rotor_torques`).
+    rotor_motions: Vec<Motion>,
+    rotor_unit: Vec<f64>,
+    rotor_rows: DMatrix<f64>,
+    rotor_own: Vec<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -52,8 +59,15 @@ impl From<EvalError> for DynamicsError {
 }
 
 impl Data {
+    /// Per geared rotor, its own effort n ε·τ_r on its coordinate at the last pass out of
+    /// inverse dynamics (`rnea_forward`).
+    pub fn rotor_efforts(&self) -> &[f64] {
+        &self.rotor_own
+    }
+
     pub fn new(model: &Model) -> Data {
         let n = model.body_count();
+        let geared = !model.rotors.is_empty();
         Data {
             states: model.joints.iter().map(|j| j.new_state()).collect(),
             world: vec![Pose::identity(); n + 1],
@@ -70,6 +84,10 @@ impl Data {
             d_inverse: vec![Matrix6::zeros(); n + 1],
             u_vector: vec![Vector6::zeros(); n + 1],
             efforts: EffortScratch::default(),
+            rotor_motions: vec![Motion::zeros(); if geared { n + 1 } else { 0 }],
+            rotor_unit: vec![0.0; if geared { model.nv } else { 0 }],
+            rotor_rows: DMatrix::zeros(model.rotors.len(), model.nv),
+            rotor_own: vec![0.0; model.rotors.len()],
         }
     }
 }
@@ -201,17 +219,15 @@ pub fn rnea_after_kinematics(
     tau: &mut DVector<f64>,
 ) {
     rnea_forward(model, data, a, external);
-    let rotor_efforts = add_rotor_torques(model, data, a);
     rnea_backward(model, data, tau);
-    for (rotor, effort) in model.rotors.iter().zip(rotor_efforts) {
-        tau[rotor.velocity] += effort;
-    }
 }
 
 /// RNEA's pass out, when `data` holds the forward kinematics: each body's acceleration under
 /// the joint accelerations `a` (and gravity), and in `data.force` the force it needs beyond
-/// the external one, I aᵢ + vᵢ × I vᵢ − fᵢ (in its frame). Their power along any motion of
-/// the joints x is xᵀ times the generalised forces: Σ vᵢ(x)·Fᵢ = xᵀτ (`body_motions`).
+/// the external one, I aᵢ + vᵢ × I vᵢ − fᵢ (in its frame), geared rotors' torques on their
+/// carriers included (`add_rotor_torques`). Their power along any motion of the joints x is
+/// xᵀ times the generalised forces, less the rotors' own efforts on their coordinates:
+/// Σ vᵢ(x)·Fᵢ = xᵀτ − Σ x_r n ε·τ_r (`body_motions`, `Data::rotor_efforts`).
 pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force]) {
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
@@ -236,10 +252,12 @@ pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force
                 - external[i]
         };
     }
+    add_rotor_torques(model, data, a);
 }
 
 /// RNEA's pass back: the generalised forces `tau` (length nv) from the bodies' forces that
-/// `rnea_forward` left in `data.force` (which it accumulates from child to parent).
+/// `rnea_forward` left in `data.force` (which it accumulates from child to parent), and the
+/// geared rotors' own efforts on their coordinates.
 pub fn rnea_backward(model: &Model, data: &mut Data, tau: &mut DVector<f64>) {
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
@@ -253,6 +271,9 @@ pub fn rnea_backward(model: &Model, data: &mut Data, tau: &mut DVector<f64>) {
             let transmitted = state.transform.force_to_parent(&data.force[i]);
             data.force[parent] += transmitted;
         }
+    }
+    for (rotor, effort) in model.rotors.iter().zip(&data.rotor_own) {
+        tau[rotor.velocity] += effort;
     }
 }
 
@@ -592,8 +613,7 @@ fn angular(motion: &Motion) -> Vector3<f64> {
 
 /// The rotor's spin rate ε·ω_B + n q̇ from the body velocities in `data`.
 fn spin(rotor: &super::rotors::Rotor, data: &Data) -> f64 {
-    let carried = rotor.axis.dot(&angular(&data.velocity[rotor.carrier]));
-    carried + rotor.ratio * joint_rate(data, rotor.joint)
+    rotor_spin(rotor, &data.velocity, joint_rate(data, rotor.joint))
 }
 
 /// The rotors' kinetic energy, ½ J (ε·ω_B + n q̇)² each, from the kinematics in `data`.
@@ -602,34 +622,46 @@ pub fn rotor_kinetic_energy(model: &Model, data: &Data) -> f64 {
     model.rotors.iter().map(spin_energy).sum()
 }
 
-/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q.
-pub fn add_rotors_to_mass(model: &Model, data: &Data, mass: &mut DMatrix<f64>) {
+/// A rotor's spin rate ε·ω_B + n q̇ under a motion of the joints whose body motions are
+/// `motions` (`body_motions`) and whose rate of the rotor's coordinate is `rate`.
+pub fn rotor_spin(rotor: &super::rotors::Rotor, motions: &[Motion], rate: f64) -> f64 {
+    rotor.axis.dot(&angular(&motions[rotor.carrier])) + rotor.ratio * rate
+}
+
+/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q; w is
+/// the rotor's spin rate per unit velocity, found by moving each velocity alone (in `data`'s
+/// rotor scratch: nothing is allocated).
+pub fn add_rotors_to_mass(model: &Model, data: &mut Data, mass: &mut DMatrix<f64>) {
     if model.rotors.is_empty() {
         return;
     }
-    let mut motions = vec![Motion::zeros(); model.body_count() + 1];
-    let mut unit = vec![0.0; model.nv];
-    let mut rows = vec![DVector::<f64>::zeros(model.nv); model.rotors.len()];
+    let mut motions = std::mem::take(&mut data.rotor_motions);
     for j in 0..model.nv {
-        unit[j] = 1.0;
-        body_motions(model, data, &unit, &mut motions);
-        unit[j] = 0.0;
-        for (row, rotor) in rows.iter_mut().zip(&model.rotors) {
-            row[j] = rotor.axis.dot(&angular(&motions[rotor.carrier]));
+        data.rotor_unit[j] = 1.0;
+        body_motions(model, data, &data.rotor_unit, &mut motions);
+        data.rotor_unit[j] = 0.0;
+        for (r, rotor) in model.rotors.iter().enumerate() {
+            let rate = if j == rotor.velocity { 1.0 } else { 0.0 };
+            data.rotor_rows[(r, j)] = rotor_spin(rotor, &motions, rate);
         }
     }
-    for (mut row, rotor) in rows.into_iter().zip(&model.rotors) {
-        row[rotor.velocity] += rotor.ratio;
-        *mass += rotor.inertia * &row * row.transpose();
+    data.rotor_motions = motions;
+    for (r, rotor) in model.rotors.iter().enumerate() {
+        let row = data.rotor_rows.row(r);
+        for i in 0..model.nv {
+            for j in 0..model.nv {
+                mass[(i, j)] += rotor.inertia * row[i] * row[j];
+            }
+        }
     }
 }
 
-/// Inverse dynamics of the rotors, between RNEA's passes: adds each rotor's torque τ_r to its
-/// carrier's force (so the pass back carries it to the joints that turn the carrier) and
-/// returns, per rotor, n ε·τ_r to add to its coordinate's effort afterwards.
-pub fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) -> Vec<f64> {
-    let mut own = Vec::with_capacity(model.rotors.len());
-    for rotor in &model.rotors {
+/// Inverse dynamics of the rotors, at the end of RNEA's pass out: adds each rotor's torque τ_r
+/// to its carrier's force (so the pass back carries it to the joints that turn the carrier) and
+/// leaves, per rotor, n ε·τ_r for the pass back to add to its coordinate's effort in
+/// `data.rotor_own`.
+fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) {
+    for (r, rotor) in model.rotors.iter().enumerate() {
         let omega = angular(&data.velocity[rotor.carrier]);
         let omega_dot = match rotor.carrier {
             0 => Vector3::zeros(),
@@ -641,7 +673,6 @@ pub fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) -> Vec<f64> 
         if rotor.carrier != 0 {
             data.force[rotor.carrier] += Force::new(torque.x, torque.y, torque.z, 0.0, 0.0, 0.0);
         }
-        own.push(rotor.ratio * axis.dot(&torque));
+        data.rotor_own[r] = rotor.ratio * axis.dot(&torque);
     }
-    own
 }

@@ -23,9 +23,10 @@
 //! d/dt [e·(V_B − V_P)(p)] = (ω_P × e)·w + e·[(A_B − A_P)(p) + (ω_B − ω_P) × ṗ],
 //! ṗ = v_C − r ω_P × n (the contact point moves over both bodies).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, DVectorView, DVectorViewMut, Matrix3, Vector3};
 
 use super::algorithms::{bias_accelerations, Data};
+use super::dense::{solve_in_place, Factor};
 use super::model::Model;
 pub use crate::kinematics::contacts::{ContactModel, SLIP_REGULARISATION};
 use crate::spatial::{self, Motion};
@@ -72,18 +73,40 @@ fn at_point(point: &Vector3<f64>, twist: &Motion) -> Vector3<f64> {
     spatial::linear(&spatial::shifted(point, twist))
 }
 
+impl ContactRows {
+    /// Rows for the contacts of `model`, all zero.
+    pub fn new(model: &Model) -> ContactRows {
+        let count = model.contacts.len();
+        ContactRows {
+            jacobian: DMatrix::zeros(3 * count, model.velocities()),
+            bias: DVector::zeros(3 * count),
+            velocity: DVector::zeros(3 * count),
+            gap: vec![0.0; count],
+            points: vec![Vector3::zeros(); count],
+            axes: vec![Matrix3::identity(); count],
+        }
+    }
+}
+
 /// The contacts' rows at the state whose forward kinematics `data` holds; γ when `with_bias`
 /// (it overwrites `data.acceleration` with the bias accelerations).
 pub fn contact_rows(model: &Model, data: &mut Data, v: &[f64], with_bias: bool) -> ContactRows {
-    let count = model.contacts.len();
-    let mut rows = ContactRows {
-        jacobian: DMatrix::zeros(3 * count, model.velocities()),
-        bias: DVector::zeros(3 * count),
-        velocity: DVector::zeros(3 * count),
-        gap: vec![0.0; count],
-        points: vec![Vector3::zeros(); count],
-        axes: vec![Matrix3::identity(); count],
-    };
+    let mut rows = ContactRows::new(model);
+    contact_rows_into(model, data, v, with_bias, &mut rows);
+    rows
+}
+
+/// `contact_rows` written into `rows` (made by `ContactRows::new` for this model), without
+/// allocating.
+pub fn contact_rows_into(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    with_bias: bool,
+    rows: &mut ContactRows,
+) {
+    rows.jacobian.fill(0.0);
+    rows.bias.fill(0.0);
     if with_bias {
         bias_accelerations(model, data);
     }
@@ -112,8 +135,8 @@ pub fn contact_rows(model: &Model, data: &mut Data, v: &[f64], with_bias: bool) 
             rows.bias.rows_mut(3 * k, 3).copy_from(&bias);
         }
     }
-    rows.velocity = &rows.jacobian * DVector::from_column_slice(v);
-    rows
+    let v = DVectorView::from_slice(v, v.len());
+    rows.velocity.gemv(1.0, &rows.jacobian, &v, 0.0);
 }
 
 /// The three rows of a contact: the velocity at `point` that each state velocity gives the
@@ -243,70 +266,189 @@ pub enum ContactError {
     Singular { row: usize },
 }
 
-/// Solves M a = f + Hᵀλ, G a + γ = 0 on the kept rows (see the module's documentation), with
-/// f the efforts less the velocity-product forces. A sliding contact's friction follows the
-/// sign of its normal force: assumed pressing first, and solved again where it pulls.
-pub fn solve(
-    model: &Model,
-    mass: &DMatrix<f64>,
-    free_force: &DVector<f64>,
-    rows: &ContactRows,
-    kept: &[usize],
-) -> Result<ContactSolution, ContactError> {
-    let cholesky = mass.clone().cholesky().ok_or(ContactError::SingularMass)?;
-    let free = cholesky.solve(free_force);
-    let g = rows.jacobian.select_rows(kept);
-    let rhs = -rows.bias.select_rows(kept) - &g * &free;
-    let mut pressing = vec![1.0; model.contacts.len()];
-    for _ in 0..=model.contacts.len() {
-        let h = force_rows(model, rows, kept, &pressing);
-        let moved = cholesky.solve(&h.transpose());
-        let coupling = &g * &moved;
-        let lu = coupling.lu();
-        let Some(multipliers) = lu.solve(&rhs) else {
-            let row = kept[lu.u().diagonal().iamin()];
-            return Err(ContactError::Singular { row });
-        };
-        let forces = contact_forces(model, rows, kept, &multipliers);
-        let flipped = flip_pulling(model, &forces, &mut pressing);
-        if !flipped {
-            let accelerations = free + moved * multipliers;
-            return Ok(ContactSolution {
-                accelerations,
-                forces,
-            });
+/// What a solve on some of the contacts' rows forms: G (those rows), the rows H their forces act
+/// along, M⁻¹Hᵀ, G M⁻¹Hᵀ, and the right-hand side (the multipliers once solved), sized once for
+/// the rows.
+#[derive(Clone, Debug)]
+struct RowSystem {
+    rows: Vec<usize>,
+    g: DMatrix<f64>,
+    h: DMatrix<f64>,
+    moved: DMatrix<f64>,
+    coupling: DMatrix<f64>,
+    right: DVector<f64>,
+}
+
+impl RowSystem {
+    fn new(rows: Vec<usize>, velocities: usize) -> RowSystem {
+        let n = rows.len();
+        RowSystem {
+            rows,
+            g: DMatrix::zeros(n, velocities),
+            h: DMatrix::zeros(n, velocities),
+            moved: DMatrix::zeros(velocities, n),
+            coupling: DMatrix::zeros(n, n),
+            right: DVector::zeros(n),
         }
     }
-    Err(ContactError::Singular { row: kept[0] })
+
+    /// G, and H = G (the forces of ideal contacts), from every contact row.
+    fn gather(&mut self, all: &ContactRows) {
+        for (i, &row) in self.rows.iter().enumerate() {
+            self.g.row_mut(i).copy_from(&all.jacobian.row(row));
+        }
+        self.h.copy_from(&self.g);
+    }
+
+    /// M⁻¹Hᵀ and G M⁻¹Hᵀ, `factor` holding M's factorisation.
+    fn couple(&mut self, factor: &Factor) {
+        self.moved.tr_copy_from(&self.h);
+        factor.solve_mut(&mut self.moved);
+        self.coupling.gemm(1.0, &self.g, &self.moved, 0.0);
+    }
+
+    /// The multipliers (G M⁻¹Hᵀ)⁻¹ r of the right-hand side r, left in its place; Err names a
+    /// row that depends on the others.
+    fn multipliers(&mut self) -> Result<(), usize> {
+        solve_in_place(&mut self.coupling, &mut self.right).map_err(|k| self.rows[k])
+    }
+}
+
+/// Everything the contacts' equations and projections use at each evaluation, kept so that
+/// they allocate nothing once the run's rows are chosen (`ContactScratch::keep`): the rows,
+/// the mass matrix (for `crba_after_kinematics` to fill) and its factor, the solves on the
+/// kept rows and on their normal rows, and the last solution.
+#[derive(Clone, Debug)]
+pub struct ContactScratch {
+    pub rows: ContactRows,
+    pub mass: DMatrix<f64>,
+    factor: Factor,
+    kept: RowSystem,
+    normal: RowSystem,
+    /// M⁻¹f, and the assumed sign of each contact's normal force.
+    free: DVector<f64>,
+    pressing: Vec<f64>,
+    pub solution: ContactSolution,
+    /// The step of the velocities that closes the gaps (`gap_step`).
+    pub step: DVector<f64>,
+}
+
+impl ContactScratch {
+    /// Scratch for the contacts of `model`, with no row kept yet.
+    pub fn new(model: &Model) -> ContactScratch {
+        let n = model.velocities();
+        ContactScratch {
+            rows: ContactRows::new(model),
+            mass: DMatrix::zeros(n, n),
+            factor: Factor::new(n),
+            kept: RowSystem::new(Vec::new(), n),
+            normal: RowSystem::new(Vec::new(), n),
+            free: DVector::zeros(n),
+            pressing: vec![1.0; model.contacts.len()],
+            solution: ContactSolution {
+                accelerations: DVector::zeros(n),
+                forces: vec![Vector3::zeros(); model.contacts.len()],
+            },
+            step: DVector::zeros(n),
+        }
+    }
+
+    /// Sizes the solves for the rows `kept` (see `independent_rows`); nothing is done when they
+    /// are the rows already kept.
+    pub fn keep(&mut self, kept: &[usize]) {
+        if self.kept.rows != kept {
+            let n = self.mass.nrows();
+            self.kept = RowSystem::new(kept.to_vec(), n);
+            self.normal = RowSystem::new(holonomic_rows(kept), n);
+        }
+    }
+
+    /// The rows kept.
+    pub fn kept(&self) -> &[usize] {
+        &self.kept.rows
+    }
+
+    /// Factors `mass`: false when it is not positive definite.
+    pub fn factor_mass(&mut self) -> bool {
+        self.factor.factor(&self.mass)
+    }
+}
+
+/// Solves M a = f + Hᵀλ, G a + γ = 0 on the kept rows (see the module's documentation), with
+/// M and the rows in `scratch` and f the efforts less the velocity-product forces; the solution
+/// is left in `scratch.solution`. A sliding contact's friction follows the sign of its normal
+/// force: assumed pressing first, and solved again where it pulls.
+pub fn solve(
+    model: &Model,
+    scratch: &mut ContactScratch,
+    free_force: &DVector<f64>,
+) -> Result<(), ContactError> {
+    if !scratch.factor_mass() {
+        return Err(ContactError::SingularMass);
+    }
+    let ContactScratch {
+        rows,
+        factor,
+        kept: system,
+        free,
+        pressing,
+        solution,
+        ..
+    } = scratch;
+    free.copy_from(free_force);
+    factor.solve_vector_mut(free);
+    system.gather(rows);
+    pressing.fill(1.0);
+    for _ in 0..=model.contacts.len() {
+        force_rows(model, rows, system, pressing);
+        system.couple(factor);
+        for (i, &row) in system.rows.iter().enumerate() {
+            system.right[i] = -rows.bias[row];
+        }
+        system.right.gemv(-1.0, &system.g, free, 1.0);
+        system
+            .multipliers()
+            .map_err(|row| ContactError::Singular { row })?;
+        contact_forces(model, rows, system, &mut solution.forces);
+        if !flip_pulling(model, &solution.forces, pressing) {
+            solution.accelerations.copy_from(free);
+            (solution.accelerations).gemv(1.0, &system.moved, &system.right, 1.0);
+            return Ok(());
+        }
+    }
+    Err(ContactError::Singular {
+        row: system.rows[0],
+    })
 }
 
 /// H: the kept rows, where a sliding contact's normal row also carries the friction its normal
 /// force causes, −f σ (sₓ Gₓ + s_y G_y), with σ = `pressing` (±1) the normal force's sign.
-fn force_rows(model: &Model, rows: &ContactRows, kept: &[usize], pressing: &[f64]) -> DMatrix<f64> {
-    let mut h = rows.jacobian.select_rows(kept);
-    for (i, &row) in kept.iter().enumerate() {
+fn force_rows(model: &Model, rows: &ContactRows, system: &mut RowSystem, pressing: &[f64]) {
+    system.h.copy_from(&system.g);
+    for (i, &row) in system.rows.iter().enumerate() {
         let k = row / 3;
         let Some(friction) = model.contacts[k].friction else {
             continue;
         };
         let [sx, sy] = friction_direction(rows, k);
-        let tangential = rows.jacobian.row(3 * k) * sx + rows.jacobian.row(3 * k + 1) * sy;
-        let mut force_row = h.row_mut(i);
-        force_row -= friction * pressing[k] * tangential;
+        let scale = friction * pressing[k];
+        for j in 0..system.h.ncols() {
+            let tangential = rows.jacobian[(3 * k, j)] * sx + rows.jacobian[(3 * k + 1, j)] * sy;
+            system.h[(i, j)] -= scale * tangential;
+        }
     }
-    h
 }
 
-/// Each contact's force on its round body, in the plane's axes, from the kept rows'
-/// multipliers.
+/// Each contact's force on its round body, in the plane's axes, from the multipliers of the
+/// kept rows (solved in `system`).
 fn contact_forces(
     model: &Model,
     rows: &ContactRows,
-    kept: &[usize],
-    multipliers: &DVector<f64>,
-) -> Vec<Vector3<f64>> {
-    let mut forces = vec![Vector3::zeros(); model.contacts.len()];
-    for (&row, &lambda) in kept.iter().zip(multipliers.iter()) {
+    system: &RowSystem,
+    forces: &mut [Vector3<f64>],
+) {
+    forces.fill(Vector3::zeros());
+    for (&row, &lambda) in system.rows.iter().zip(system.right.iter()) {
         forces[row / 3][row % 3] = lambda;
     }
     for (k, contact) in model.contacts.iter().enumerate() {
@@ -317,7 +459,6 @@ fn contact_forces(
             forces[k].y = -friction * normal * sy;
         }
     }
-    forces
 }
 
 /// Flips the assumed sign of every sliding contact's normal force that came out the other
@@ -334,31 +475,44 @@ fn flip_pulling(model: &Model, forces: &[Vector3<f64>], pressing: &mut [f64]) ->
 }
 
 /// The smallest change of the velocities in the metric of M that zeroes the kept rows:
-/// v − M⁻¹Gᵀ(G M⁻¹ Gᵀ)⁻¹ G v.
-pub fn project_velocities(mass: &DMatrix<f64>, rows: &ContactRows, kept: &[usize], v: &mut [f64]) {
-    let Some(cholesky) = mass.clone().cholesky() else {
-        return;
-    };
-    let g = rows.jacobian.select_rows(kept);
-    let moved = cholesky.solve(&g.transpose());
-    let Some(lambda) = (&g * &moved).lu().solve(&rows.velocity.select_rows(kept)) else {
-        return;
-    };
-    let correction = moved * lambda;
-    v.iter_mut()
-        .zip(correction.iter())
-        .for_each(|(x, c)| *x -= c);
+/// v − M⁻¹Gᵀ(G M⁻¹ Gᵀ)⁻¹ G v, with the rows of `scratch` taken at v and its mass matrix
+/// factored (`ContactScratch::factor_mass`). Nothing moves where the rows are dependent.
+pub fn project_velocities(scratch: &mut ContactScratch, v: &mut [f64]) {
+    let system = &mut scratch.kept;
+    system.gather(&scratch.rows);
+    system.couple(&scratch.factor);
+    for (i, &row) in system.rows.iter().enumerate() {
+        system.right[i] = scratch.rows.velocity[row];
+    }
+    if system.multipliers().is_ok() {
+        let n = v.len();
+        let mut v = DVectorViewMut::from_slice(v, n);
+        v.gemv(-1.0, &system.moved, &system.right, 1.0);
+    }
 }
 
-/// The minimum-M-norm step of the velocities that closes the gaps of the normal rows `normal`
-/// to first order: −M⁻¹Gₙᵀ(Gₙ M⁻¹ Gₙᵀ)⁻¹ g.
-pub fn gap_step(mass: &DMatrix<f64>, rows: &ContactRows, normal: &[usize]) -> Option<DVector<f64>> {
-    let cholesky = mass.clone().cholesky()?;
-    let g = rows.jacobian.select_rows(normal);
-    let moved = cholesky.solve(&g.transpose());
-    let gaps = DVector::from_iterator(normal.len(), normal.iter().map(|r| rows.gap[r / 3]));
-    let lambda = (&g * &moved).lu().solve(&gaps)?;
-    Some(-(moved * lambda))
+/// The minimum-M-norm step of the velocities that closes the gaps of the kept normal rows to
+/// first order, −M⁻¹Gₙᵀ(Gₙ M⁻¹ Gₙᵀ)⁻¹ g, into `scratch.step`, with `scratch` as for
+/// `project_velocities`; false where the rows are dependent.
+pub fn gap_step(scratch: &mut ContactScratch) -> bool {
+    let system = &mut scratch.normal;
+    system.gather(&scratch.rows);
+    system.couple(&scratch.factor);
+    for (i, &row) in system.rows.iter().enumerate() {
+        system.right[i] = scratch.rows.gap[row / 3];
+    }
+    if system.multipliers().is_err() {
+        return false;
+    }
+    (scratch.step).gemv(-1.0, &system.moved, &system.right, 0.0);
+    true
+}
+
+/// The largest gap of the kept normal rows.
+pub fn largest_gap(scratch: &ContactScratch) -> f64 {
+    (scratch.normal.rows.iter())
+        .map(|r| scratch.rows.gap[r / 3].abs())
+        .fold(0.0, f64::max)
 }
 
 /// The contact forces as forces on the bodies (in their frames, about their origins): each

@@ -6,6 +6,7 @@ pub mod algorithms;
 pub mod angles;
 pub mod compiled;
 pub mod contacts;
+pub mod dense;
 pub mod derivatives;
 pub mod efforts;
 pub mod elements;

@@ -293,7 +293,7 @@ pub fn build_with(
     let link_efforts = link_efforts(mechanism, &joints, &loops);
     let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
-    refuse_stops_and_rotors_with_contacts(mechanism, &contacts, &stops, &rotors, &mut errors);
+    refuse_stops_with_contacts(mechanism, &contacts, &stops, &mut errors);
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -899,36 +899,28 @@ pub struct DeclaredState {
     chain: ChainMotion,
 }
 
-/// Stops and geared rotors are simulated on a tree without contacts: the impact law and the
-/// geared forward dynamics do not carry the contacts' rows, so their combination is refused
-/// (E0450, E0454) rather than simulated without the contacts.
-fn refuse_stops_and_rotors_with_contacts(
+/// Stops are simulated on a tree without contacts: the impact law does not carry the contacts'
+/// rows, so their combination is refused (E0450) rather than simulated without the contacts.
+/// Geared rotors are counted by the contacts' solve (CRBA and RNEA carry them).
+fn refuse_stops_with_contacts(
     mechanism: &Mechanism,
     contacts: &[ContactModel],
     stops: &[Stop],
-    rotors: &[Rotor],
     errors: &mut Vec<Diagnostic>,
 ) {
     let Some(contact) = contacts.first() else {
         return;
     };
-    let span = mechanism.contacts.first().map(|c| c.span);
-    for (code, what, present) in [
-        ("E0450", "stops", !stops.is_empty()),
-        ("E0454", "geared rotors", !rotors.is_empty()),
-    ] {
-        if present {
-            let mut error = Diagnostic::error(
-                code,
-                format!("{what} in a mechanism with contacts (`{}`)", contact.name),
-            )
-            .help(format!(
-                "{what} are simulated in mechanisms without contacts; remove one or the other"
-            ));
-            if let Some(span) = span {
-                error = error.primary(span, "a contact of the mechanism");
-            }
-            errors.push(error);
-        }
+    if stops.is_empty() {
+        return;
     }
+    let mut error = Diagnostic::error(
+        "E0450",
+        format!("stops in a mechanism with contacts (`{}`)", contact.name),
+    )
+    .help("stops are simulated in mechanisms without contacts; remove one or the other");
+    if let Some(span) = mechanism.contacts.first().map(|c| c.span) {
+        error = error.primary(span, "a contact of the mechanism");
+    }
+    errors.push(error);
 }

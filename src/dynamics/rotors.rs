@@ -29,8 +29,9 @@ pub struct Rotor {
     pub ratio: f64,
 }
 
-/// The rotors of the tree's links. A link with a rotor must have one coordinate (E0453) in a
-/// tree mechanism (E0454), and give all three fields as numbers with a non-zero axis (E0453).
+/// The rotors of the tree's links. A link with a rotor must have one coordinate (E0453), be a
+/// link of the tree rather than one that closes a loop (E0827), and give all three fields as
+/// numbers with a non-zero axis (E0453).
 pub fn build(
     mechanism: &Mechanism,
     joints: &[Joint],
@@ -39,6 +40,7 @@ pub fn build(
     errors: &mut Vec<Diagnostic>,
 ) -> Vec<Rotor> {
     let mut rotors = Vec::new();
+    refuse_on_closing_links(mechanism, loops, errors);
     for (k, joint) in joints.iter().enumerate() {
         let join = mechanism.join(joint.chain.join);
         let link = mechanism.link(join.link);
@@ -46,17 +48,6 @@ pub fn build(
             continue;
         }
         let name = &joint.chain.name;
-        if !loops.is_empty() {
-            errors.push(
-                Diagnostic::error(
-                    "E0454",
-                    format!("`{name}` has a geared rotor in a mechanism with closed loops"),
-                )
-                .primary(join.span, "rotors are simulated in tree mechanisms only")
-                .help("remove `rotor_inertia`, `gear_ratio` and `rotor_axis`, or open the loop"),
-            );
-            continue;
-        }
         let single = joint.chain.coordinate_count() == 1
             && joint.kind == JointType::Chain
             && joint.nv() == 1;
@@ -98,4 +89,26 @@ fn rotor_values(rotor: &LinkRotor, unknowns: &UnknownValues) -> Option<(f64, f64
     );
     let valid = inertia >= 0.0 && inertia.is_finite() && ratio.is_finite() && axis.norm() > 0.0;
     valid.then_some((inertia, ratio, axis))
+}
+
+/// A rotor on a link that closes a loop (E0827): that link's coordinate is an unknown of the
+/// closure, without inertia of its own, which a rotor would have to give one.
+fn refuse_on_closing_links(
+    mechanism: &Mechanism,
+    loops: &[JointModel],
+    errors: &mut Vec<Diagnostic>,
+) {
+    for chain in loops {
+        let join = mechanism.join(chain.join);
+        if mechanism.link(join.link).rotor.is_declared() {
+            errors.push(
+                Diagnostic::error(
+                    "E0827",
+                    format!("`{}` has a geared rotor but closes a loop", chain.name),
+                )
+                .primary(join.span, "this join closes a loop of the mechanism")
+                .help("put the rotor on another join of the loop (`lsdc tree` shows which joins close loops)"),
+            );
+        }
+    }
 }

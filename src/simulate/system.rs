@@ -17,9 +17,8 @@ use crate::dynamics::algorithms::{
     aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
     rnea_after_kinematics, rnea_forward, transmitted_wrenches, Data, DynamicsError,
 };
-use crate::dynamics::contacts::{
-    self, ContactError, ContactRows, ContactSolution, CONTACT_ROW_NAMES,
-};
+use crate::dynamics::contacts::{self, ContactError, ContactScratch, CONTACT_ROW_NAMES};
+use crate::dynamics::dense::Factor;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{
     self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, Wanted,
@@ -59,8 +58,15 @@ pub struct MechanicalSystem<'m> {
     /// its rows (empty otherwise): a projection of that state adopts them.
     evaluated: Vec<f64>,
     /// The contact rows kept for the run (decided at the first evaluation, see
-    /// `contacts::independent_rows`), and the last contacts' solution.
+    /// `contacts::independent_rows`), and the contacts' scratch, which holds the last
+    /// contacts' rows and solution.
     pub contact_rows: Option<Vec<usize>>,
+    contacts: ContactScratch,
+    /// Zero velocities or accelerations (tree length), and the mass matrix and its factor of a
+    /// tree with geared rotors (empty without).
+    at_rest: Vec<f64>,
+    mass: DMatrix<f64>,
+    mass_factor: Factor,
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
@@ -78,6 +84,7 @@ impl<'m> MechanicalSystem<'m> {
         reference: Rc<RefCell<Vec<f64>>>,
         stabilisation: Stabilisation,
     ) -> MechanicalSystem<'m> {
+        let geared = if model.rotors.is_empty() { 0 } else { model.nv };
         MechanicalSystem {
             model,
             data: Data::new(model),
@@ -96,6 +103,10 @@ impl<'m> MechanicalSystem<'m> {
             velocities: Vec::new(),
             evaluated: Vec::new(),
             contact_rows: None,
+            contacts: ContactScratch::new(model),
+            at_rest: vec![0.0; model.nv],
+            mass: DMatrix::zeros(geared, geared),
+            mass_factor: Factor::new(geared),
             native: None,
             impacts: Vec::new(),
             resting: vec![false; model.stops.len()],
@@ -168,14 +179,16 @@ impl<'m> MechanicalSystem<'m> {
             true => &self.efforts,
             false => &self.no_efforts,
         };
-        let mut bias = DVector::zeros(model.nv);
-        let zero = vec![0.0; model.nv];
-        rnea_after_kinematics(model, &mut self.data, &zero, &efforts.external, &mut bias);
-        let mut mass = DMatrix::zeros(model.nv, model.nv);
-        crate::dynamics::algorithms::crba_after_kinematics(model, &mut self.data, &mut mass);
-        let factors = mass.cholesky().ok_or(SystemError::SingularMassMatrix)?;
-        let free = DVector::from_fn(model.nv, |i, _| efforts.tau[i] - bias[i]);
-        accelerations.copy_from(&factors.solve(&free));
+        let (data, bias) = (&mut self.data, &mut self.inverse);
+        rnea_after_kinematics(model, data, &self.at_rest, &efforts.external, bias);
+        crba_after_kinematics(model, &mut self.data, &mut self.mass);
+        if !self.mass_factor.factor(&self.mass) {
+            return Err(SystemError::SingularMassMatrix);
+        }
+        for (i, a) in accelerations.iter_mut().enumerate() {
+            *a = efforts.tau[i] - self.inverse[i];
+        }
+        self.mass_factor.solve_vector_mut(accelerations);
         Ok(())
     }
 
@@ -226,35 +239,36 @@ impl<'m> MechanicalSystem<'m> {
         Ok(())
     }
 
-    /// The accelerations and contact forces of a tree with contacts at (t, q, v), with the
-    /// contacts' rows they come from; the efforts in `efforts`, the forward kinematics of
-    /// (q, v) in `data`.
-    fn solve_contacts(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-    ) -> Result<(ContactSolution, ContactRows), SystemError> {
+    /// The accelerations and contact forces of a tree with contacts at (t, q, v), left in the
+    /// contacts' scratch with the rows they come from; the efforts in `efforts`, the forward
+    /// kinematics of (q, v) in `data`.
+    fn solve_contacts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
         self.evaluate_efforts(t, q, v)?;
-        let rows = contacts::contact_rows(model, &mut self.data, v, true);
-        let mut mass = DMatrix::zeros(model.nv, model.nv);
-        crba_after_kinematics(model, &mut self.data, &mut mass);
-        let kept = self.kept_contact_rows(&mass, &rows);
-        let rest = vec![0.0; model.nv];
+        let scratch = &mut self.contacts;
+        contacts::contact_rows_into(model, &mut self.data, v, true, &mut scratch.rows);
+        crba_after_kinematics(model, &mut self.data, &mut scratch.mass);
+        self.keep_contact_rows();
         let external = &self.efforts.external;
-        rnea_after_kinematics(model, &mut self.data, &rest, external, &mut self.inverse);
-        let free_force = &self.efforts.tau - &self.inverse;
-        let solution = contacts::solve(model, &mass, &free_force, &rows, &kept)
-            .map_err(|e| self.contact_error(&e))?;
-        Ok((solution, rows))
+        rnea_after_kinematics(
+            model,
+            &mut self.data,
+            &self.at_rest,
+            external,
+            &mut self.inverse,
+        );
+        self.force.copy_from(&self.efforts.tau);
+        self.force -= &self.inverse;
+        contacts::solve(model, &mut self.contacts, &self.force).map_err(|e| self.contact_error(&e))
     }
 
-    /// The contact rows of the run: decided at the first state evaluated, then kept.
-    fn kept_contact_rows(&mut self, mass: &DMatrix<f64>, rows: &ContactRows) -> Vec<usize> {
-        self.contact_rows
-            .get_or_insert_with(|| contacts::independent_rows(self.model, mass, rows))
-            .clone()
+    /// The contact rows of the run, decided at the first state evaluated (from the rows and mass
+    /// matrix in the contacts' scratch), then kept; the scratch sized for them.
+    fn keep_contact_rows(&mut self) {
+        let (model, scratch) = (self.model, &mut self.contacts);
+        let kept = (self.contact_rows)
+            .get_or_insert_with(|| contacts::independent_rows(model, &scratch.mass, &scratch.rows));
+        scratch.keep(kept);
     }
 
     fn contact_error(&self, error: &ContactError) -> SystemError {
@@ -271,36 +285,51 @@ impl<'m> MechanicalSystem<'m> {
     /// least kinetic metric, then the velocities projected onto every kept row (the rolling
     /// rows are not integrable: only their velocities are projected). Whether y moved.
     fn keep_contacts(&mut self, y: &mut [f64]) -> Result<bool, SystemError> {
+        let (mut q, mut v) = (
+            std::mem::take(&mut self.positions),
+            std::mem::take(&mut self.velocities),
+        );
+        v.clear();
+        v.extend_from_slice(self.model.split_state_into(y, &mut q));
+        let kept = self.close_contacts(&mut q, &mut v);
+        if kept.is_ok() {
+            y[..q.len()].copy_from_slice(&q);
+            y[q.len()..].copy_from_slice(&v);
+        }
+        (self.positions, self.velocities) = (q, v);
+        kept.map(|()| true)
+    }
+
+    /// `keep_contacts` on the positions and velocities.
+    fn close_contacts(&mut self, q: &mut [f64], v: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
-        let (mut q, v) = model.split_state(y);
-        let mut v = v.to_vec();
-        let mut mass = DMatrix::zeros(model.nv, model.nv);
-        forward_kinematics(model, &mut self.data, &q, &v)?;
-        let mut rows = contacts::contact_rows(model, &mut self.data, &v, false);
-        crba_after_kinematics(model, &mut self.data, &mut mass);
-        let kept = self.kept_contact_rows(&mass, &rows);
-        let normal = contacts::holonomic_rows(&kept);
+        self.contact_geometry(q, v)?;
+        self.keep_contact_rows();
+        let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
         for _ in 0..4 {
-            let gap = normal
-                .iter()
-                .map(|r| rows.gap[r / 3].abs())
-                .fold(0.0, f64::max);
-            let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
-            if gap <= 1e-15 * size {
+            if contacts::largest_gap(&self.contacts) <= 1e-15 * size
+                || !self.contacts.factor_mass()
+                || !contacts::gap_step(&mut self.contacts)
+            {
                 break;
             }
-            let Some(step) = contacts::gap_step(&mass, &rows, &normal) else {
-                break;
-            };
-            model.retract(&mut q, step.as_slice());
-            forward_kinematics(model, &mut self.data, &q, &v)?;
-            rows = contacts::contact_rows(model, &mut self.data, &v, false);
-            crba_after_kinematics(model, &mut self.data, &mut mass);
+            model.retract(q, self.contacts.step.as_slice());
+            self.contact_geometry(q, v)?;
         }
-        contacts::project_velocities(&mass, &rows, &kept, &mut v);
-        y[..q.len()].copy_from_slice(&q);
-        y[q.len()..].copy_from_slice(&v);
-        Ok(true)
+        if self.contacts.factor_mass() {
+            contacts::project_velocities(&mut self.contacts, v);
+        }
+        Ok(())
+    }
+
+    /// The forward kinematics, the contacts' rows (without γ) and the mass matrix at (q, v).
+    fn contact_geometry(&mut self, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+        let model = self.model;
+        forward_kinematics(model, &mut self.data, q, v)?;
+        let scratch = &mut self.contacts;
+        contacts::contact_rows_into(model, &mut self.data, v, false, &mut scratch.rows);
+        crba_after_kinematics(model, &mut self.data, &mut scratch.mass);
+        Ok(())
     }
 
     /// The multipliers of the accelerations `solve_constrained` left in `loop_scratch`, from
@@ -353,9 +382,10 @@ impl<'m> MechanicalSystem<'m> {
         if native {
             // The accelerations are written.
         } else if model.has_contacts() {
-            let (solution, rows) = self.solve_contacts(t, q, v)?;
+            self.solve_contacts(t, q, v)?;
+            let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
             accelerations.copy_from(&solution.accelerations);
-            self.efforts.power += contacts::friction_power(model, &rows, &solution.forces);
+            self.efforts.power += contacts::friction_power(model, rows, &solution.forces);
         } else if model.has_loops() {
             self.solve_constrained(t, q, v, Wanted::Accelerations)?;
             accelerations.copy_from(&self.loop_scratch.accelerations);
@@ -383,7 +413,8 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        if !native && !model.has_loops() && !model.rotors.is_empty() {
+        // The contacts' solve counts the rotors already (it uses CRBA and RNEA).
+        if !native && !model.has_loops() && !model.has_contacts() && !model.rotors.is_empty() {
             self.geared_accelerations(t, q, v, &mut accelerations)?;
         }
         let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
@@ -587,9 +618,10 @@ impl<'m> MechanicalSystem<'m> {
             let accelerations = solution.accelerations.clone();
             (accelerations, external, Some(multipliers.clone()))
         } else if model.has_contacts() {
-            let (solution, rows) = self.solve_contacts(t, q, v)?;
+            self.solve_contacts(t, q, v)?;
+            let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
             let on_bodies =
-                contacts::contact_body_forces(model, &self.data, &rows, &solution.forces);
+                contacts::contact_body_forces(model, &self.data, rows, &solution.forces);
             let external: Vec<_> = (self.efforts.external.iter().zip(&on_bodies))
                 .map(|(a, b)| a + b)
                 .collect();
@@ -599,7 +631,7 @@ impl<'m> MechanicalSystem<'m> {
                 .iter()
                 .flat_map(|f| [0.0, 0.0, 0.0, f.x, f.y, f.z]);
             let forces = DVector::from_iterator(6 * model.contacts.len(), forces);
-            (solution.accelerations, external, Some(forces))
+            (solution.accelerations.clone(), external, Some(forces))
         } else {
             let efforts = self.efforts(t, q, v)?;
             let a = aba(

@@ -1,5 +1,6 @@
-//! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked (then numbered, assembled
-//! and its equations written, while it stays clean) and its rendered
+//! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked (then numbered, assembled,
+//! prepared for a simulation if it has `simulate`, and its equations written, while it stays
+//! clean) and its rendered
 //! diagnostics are compared with `tests/golden/NAME.stderr`. The error text is reviewed like code.
 //! Set `UPDATE_GOLDEN=1` to rewrite the expected files after an intended change.
 
@@ -37,14 +38,24 @@ fn render_diagnostics(input: &Path) -> String {
                     &Default::default(),
                 ) {
                     Err(errors) => diagnostics.extend(errors),
-                    // The equations' phase, for what only it rejects.
-                    Ok((_, _, warnings)) => diagnostics.extend(
-                        warnings.into_iter().chain(
-                            lsdc::symbolic::generate(mechanism, &topology)
+                    // A program that asks for a simulation (`simulate`) is prepared for it,
+                    // then every program's equations are written, for what only they reject.
+                    Ok((_, _, warnings)) => {
+                        let settings = lsdc::simulate::prepare::Settings::default();
+                        let refused = match &mechanism.scenario {
+                            Some(_) => lsdc::simulate::prepare::prepare(mechanism, &[], &settings)
                                 .err()
                                 .unwrap_or_default(),
-                        ),
-                    ),
+                            None => Vec::new(),
+                        };
+                        let later = match refused.is_empty() {
+                            true => lsdc::symbolic::generate(mechanism, &topology)
+                                .err()
+                                .unwrap_or_default(),
+                            false => refused,
+                        };
+                        diagnostics.extend(warnings.into_iter().chain(later))
+                    }
                 }
             }
         }

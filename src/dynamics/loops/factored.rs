@@ -17,6 +17,7 @@ use std::cell::OnceCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::jacobian::ConstraintJacobian;
+use crate::dynamics::dense::dense_cholesky;
 
 /// Which of the loops' rows (6 per loop) are kept, and the factor making each dimensionless.
 #[derive(Clone, Debug, PartialEq)]
@@ -753,31 +754,4 @@ fn split_diagonal(row: &[f64]) -> (&[f64], f64) {
 /// carries no bounds checks).
 fn in_order_dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0, |sum, (x, y)| sum + x * y)
-}
-
-/// The lower Cholesky factor of the leading r × r block of `a` in place (its lower triangle read
-/// and written), without allocating: the smallest and the largest squared pivot, or None when
-/// the block is not positive definite. Dense, for the small systems of the allowed motions.
-pub fn dense_cholesky(a: &mut DMatrix<f64>, r: usize) -> Option<(f64, f64)> {
-    let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
-    for j in 0..r {
-        let mut diagonal = a[(j, j)];
-        for k in 0..j {
-            diagonal -= a[(j, k)] * a[(j, k)];
-        }
-        if !(diagonal > 0.0 && diagonal.is_finite()) {
-            return None;
-        }
-        (smallest, largest) = (smallest.min(diagonal), largest.max(diagonal));
-        let pivot = diagonal.sqrt();
-        a[(j, j)] = pivot;
-        for i in j + 1..r {
-            let mut value = a[(i, j)];
-            for k in 0..j {
-                value -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = value / pivot;
-        }
-    }
-    Some((smallest, largest))
 }

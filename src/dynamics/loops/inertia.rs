@@ -10,9 +10,10 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::dynamics::algorithms::{
-    body_motions, crba_after_kinematics, mass_rows, mass_times, rnea_backward, Data,
+    body_motions, crba_after_kinematics, mass_rows, mass_times, rnea_backward, rotor_spin, Data,
 };
 use crate::dynamics::model::Model;
+use crate::dynamics::rotors::Rotor;
 use crate::spatial::{Force, Motion};
 
 /// What forming the reduced equations keeps between evaluations, so that it allocates nothing
@@ -103,6 +104,11 @@ impl ReducedInertia {
                 };
                 power += motions[i].dot(&data.force[i]);
             }
+            // The rotors' torques on their carriers are in the bodies' forces; their own
+            // efforts on their coordinates are not.
+            for (rotor, own) in model.rotors.iter().zip(data.rotor_efforts()) {
+                power += motion[rotor.velocity] * own;
+            }
             reduced.force[k] = motion.dot(tau) - power;
         }
         for k in 0..count {
@@ -110,11 +116,24 @@ impl ReducedInertia {
                 let value = model.dynamic_joints.iter().fold(0.0, |sum, &j| {
                     let i = model.joints[j].child;
                     sum + self.motions[l * bodies + i].dot(&self.momenta[k * bodies + i])
-                });
+                }) + self.rotors_energy_form(model, null, k, l);
                 reduced.mass[(k, l)] = value;
                 reduced.mass[(l, k)] = value;
             }
         }
+    }
+
+    /// The geared rotors' share of the kinetic energy's bilinear form between motions k and l
+    /// (after the passes): Σ J s_r(k) s_r(l), s_r the rotor's spin rate under a motion.
+    fn rotors_energy_form(&self, model: &Model, null: &DMatrix<f64>, k: usize, l: usize) -> f64 {
+        let bodies = model.body_count() + 1;
+        let spin = |m: usize, rotor: &Rotor| {
+            let motions = &self.motions[m * bodies..(m + 1) * bodies];
+            rotor_spin(rotor, motions, null[(rotor.velocity, m)])
+        };
+        (model.rotors.iter())
+            .map(|r| r.inertia * spin(k, r) * spin(l, r))
+            .sum()
     }
 
     fn with_mass_matrix(

@@ -14,14 +14,13 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector};
 
-use super::factored::{
-    dense_cholesky, projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING,
-};
+use super::factored::{projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::inertia::{Reduced, ReducedInertia};
 use super::project::ProjectionScratch;
 use super::rows::{constraints, Constraints, Extent};
 use super::structure::Structure;
 use crate::dynamics::algorithms::{crba, Data};
+use crate::dynamics::dense::dense_cholesky;
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
