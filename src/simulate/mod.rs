@@ -6,6 +6,7 @@ pub mod branch;
 pub mod clock;
 pub mod compiled;
 pub mod consistent;
+mod friction;
 pub mod constraints;
 pub mod impacts;
 pub mod lie_group;

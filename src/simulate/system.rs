@@ -25,6 +25,8 @@ use crate::dynamics::loops::{
     self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, Wanted,
     ROW_NAMES,
 };
+use crate::dynamics::friction::Phase;
+use crate::dynamics::mimics;
 use crate::dynamics::model::{DeclaredState, Model, Recovered};
 use crate::kinematics::eval::EvalError;
 use crate::spatial;
@@ -70,6 +72,11 @@ pub struct MechanicalSystem<'m> {
     /// at the last evaluation (positive while it pushes the coordinate into its range).
     pub resting: Vec<bool>,
     pub contact: Vec<f64>,
+    /// Per joint with friction, its phase (set at the start and at its events), the force
+    /// holding it while it sticks at the last evaluation, and the power of the friction then.
+    pub phases: Vec<Phase>,
+    pub holding: Vec<f64>,
+    friction_power: f64,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -100,6 +107,9 @@ impl<'m> MechanicalSystem<'m> {
             impacts: Vec::new(),
             resting: vec![false; model.stops.len()],
             contact: vec![0.0; model.stops.len()],
+            phases: vec![Phase::Slipping(1.0); model.frictions.len()],
+            holding: vec![0.0; model.frictions.len()],
+            friction_power: 0.0,
         }
     }
 
@@ -153,9 +163,20 @@ impl<'m> MechanicalSystem<'m> {
         )?)
     }
 
-    /// The accelerations of a tree with geared rotors, M⁻¹(τ − b) with M from CRBA and the bias
-    /// b from RNEA, which count the rotors (the articulated-body algorithm does not).
-    fn geared_accelerations(
+    /// Whether the accelerations of a tree need the mass matrix rather than the
+    /// articulated-body algorithm: geared rotors (which ABA does not count), mimic couplings
+    /// (eliminated through M) or joint friction (held through M while sticking).
+    fn needs_mass_matrix(&self) -> bool {
+        let model = self.model;
+        !model.has_loops()
+            && !(model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty())
+    }
+
+    /// The accelerations of a tree from its mass matrix: M from CRBA and the bias b from RNEA
+    /// (both count the rotors), the slipping joints' friction added to the efforts τ, solved
+    /// with the mimic couplings kept (`mimics::solve`); the friction's power in
+    /// `friction_power`.
+    fn mass_accelerations(
         &mut self,
         t: f64,
         q: &[f64],
@@ -173,9 +194,10 @@ impl<'m> MechanicalSystem<'m> {
         rnea_after_kinematics(model, &mut self.data, &zero, &efforts.external, &mut bias);
         let mut mass = DMatrix::zeros(model.nv, model.nv);
         crate::dynamics::algorithms::crba_after_kinematics(model, &mut self.data, &mut mass);
-        let factors = mass.cholesky().ok_or(SystemError::SingularMassMatrix)?;
-        let free = DVector::from_fn(model.nv, |i, _| efforts.tau[i] - bias[i]);
-        accelerations.copy_from(&factors.solve(&free));
+        let mut free = DVector::from_fn(model.nv, |i, _| efforts.tau[i] - bias[i]);
+        self.friction_power = self.add_friction(v, &mut free);
+        let solved = mimics::solve_vector(&model.mimics, &mass, &free);
+        accelerations.copy_from(&solved.ok_or(SystemError::SingularMassMatrix)?);
         Ok(())
     }
 
@@ -383,15 +405,20 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        if !native && !model.has_loops() && !model.rotors.is_empty() {
-            self.geared_accelerations(t, q, v, &mut accelerations)?;
+        self.friction_power = 0.0;
+        if !native && self.needs_mass_matrix() {
+            self.mass_accelerations(t, q, v, &mut accelerations)?;
         }
         let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
             &self.efforts
         } else {
             &self.no_efforts
         };
-        self.power = if native { 0.0 } else { efforts.power };
+        self.power = if native {
+            0.0
+        } else {
+            efforts.power + self.friction_power
+        };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model
                 .joints
