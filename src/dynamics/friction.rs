@@ -14,6 +14,8 @@
 //! Where a slipping joint's rate reaches zero it sticks if the force that holds it there is
 //! within F_c, and slips back the other way otherwise.
 
+use serde::Serialize;
+
 use super::joint::Joint;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{LinkFriction, Mechanism};
@@ -25,19 +27,43 @@ use crate::kinematics::model::JointModel;
 pub struct Friction {
     /// `slide.q`, as the outputs name the coordinate.
     pub coordinate: String,
-    /// The coordinate's rate's index among the state's velocities.
+    /// The coordinate's index among the state's positions, its rate's among the velocities.
+    pub position: usize,
     pub velocity: usize,
     /// F_c ≥ 0 (N or N m) and c ≥ 0 (N s/m or N m s/rad).
     pub dry: f64,
     pub viscous: f64,
 }
 
+/// A change of phase of a joint with friction, as the run report gives it.
+#[derive(Clone, Debug, Serialize)]
+pub struct Switch {
+    pub time: f64,
+    /// `slide.q`, and its value there.
+    pub coordinate: String,
+    pub position: f64,
+    /// The phase from then on.
+    pub phase: Phase,
+}
+
 /// The phase of a joint with friction.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Phase {
     /// Moving with the sign of the rate given (±1).
     Slipping(f64),
     Sticking,
+}
+
+impl Phase {
+    /// "sticks", "slips forward" (q increasing) or "slips back".
+    pub fn describe(self) -> &'static str {
+        match self {
+            Phase::Sticking => "sticks",
+            Phase::Slipping(s) if s > 0.0 => "slips forward",
+            Phase::Slipping(_) => "slips back",
+        }
+    }
 }
 
 impl Friction {
@@ -127,6 +153,7 @@ fn joint_friction(
     match (number(&declared.dry), number(&declared.viscous)) {
         (Some(dry), Some(viscous)) => Ok(Friction {
             coordinate: joint.coordinate_label(),
+            position: joint.q_offset,
             velocity: joint.v_offset,
             dry,
             viscous,

@@ -5,7 +5,7 @@
 use nalgebra::DVector;
 
 use super::system::{MechanicalSystem, SystemError};
-use crate::dynamics::friction::Phase;
+use crate::dynamics::friction::{Phase, Switch};
 
 impl MechanicalSystem<'_> {
     /// Adds the slipping joints' friction efforts at rates `v` to the generalised forces
@@ -92,6 +92,13 @@ impl MechanicalSystem<'_> {
             Phase::Sticking => Phase::Slipping(-self.holding_force(t, y, k)?.signum()),
             Phase::Slipping(_) => self.phase_from_rest(t, y, k)?,
         };
+        let friction = &model.frictions[k];
+        self.switches.push(Switch {
+            time: t,
+            coordinate: friction.coordinate.clone(),
+            position: y[friction.position],
+            phase: self.phases[k],
+        });
         Ok(())
     }
 

@@ -25,6 +25,7 @@ use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
 use crate::dynamics::mimics;
 use crate::dynamics::model::Model;
+use crate::dynamics::friction::Switch;
 use crate::dynamics::stops::Impact;
 use crate::integrate::{
     integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Interrupt, Method,
@@ -213,6 +214,9 @@ pub struct Report {
     /// The impacts on the stops (links' `lower` and `upper`), in time order.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub impacts: Vec<Impact>,
+    /// The joints' friction switching between slipping and sticking, in time order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub friction_switches: Vec<Switch>,
     /// Where an explicit integrator's steps were found held by its stability region (W0901).
     pub stiffness: Option<StiffnessReport>,
     pub failure: Option<RunFailure>,
@@ -818,6 +822,7 @@ fn simulate_from(
             .as_ref()
             .and_then(|bound| stiffness::describe(prepared, bound)),
         impacts: std::mem::take(&mut system.impacts),
+        friction_switches: std::mem::take(&mut system.switches),
         failure,
         interrupted,
     };
@@ -899,6 +904,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         step_error: None,
         stiffness: None,
         impacts: Vec::new(),
+        friction_switches: Vec::new(),
         failure: Some(RunFailure { time: 0.0, message }),
         interrupted: None,
     };

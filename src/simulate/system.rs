@@ -77,6 +77,8 @@ pub struct MechanicalSystem<'m> {
     pub phases: Vec<Phase>,
     pub holding: Vec<f64>,
     friction_power: f64,
+    /// The friction's changes of phase so far, in time order.
+    pub switches: Vec<crate::dynamics::friction::Switch>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -110,6 +112,7 @@ impl<'m> MechanicalSystem<'m> {
             phases: vec![Phase::Slipping(1.0); model.frictions.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,
+            switches: Vec::new(),
         }
     }
 
