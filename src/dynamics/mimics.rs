@@ -75,7 +75,8 @@ pub fn basis(mimics: &[Mimic], nv: usize) -> DMatrix<f64> {
     }
     for mimic in mimics {
         let leader = s.row(mimic.leader_velocity).clone_owned();
-        s.row_mut(mimic.velocity).copy_from(&(leader * mimic.multiplier));
+        s.row_mut(mimic.velocity)
+            .copy_from(&(leader * mimic.multiplier));
     }
     s
 }
@@ -136,16 +137,27 @@ pub fn build(
         }
     }
     let closed = !loops.is_empty() || has_contacts;
-    let loop_mimics = loops
-        .iter()
-        .filter(|l| mechanism.link(mechanism.join(l.join).link).mimic.is_declared());
+    let loop_mimics = loops.iter().filter(|l| {
+        mechanism
+            .link(mechanism.join(l.join).link)
+            .mimic
+            .is_declared()
+    });
     for chain in loop_mimics {
         errors.push(refused_in_loops(mechanism, &chain.name, chain.join));
     }
     if closed {
         for joint in joints {
-            if mechanism.link(mechanism.join(joint.chain.join).link).mimic.is_declared() {
-                errors.push(refused_in_loops(mechanism, &joint.chain.name, joint.chain.join));
+            if mechanism
+                .link(mechanism.join(joint.chain.join).link)
+                .mimic
+                .is_declared()
+            {
+                errors.push(refused_in_loops(
+                    mechanism,
+                    &joint.chain.name,
+                    joint.chain.join,
+                ));
             }
         }
         return Vec::new();
@@ -163,7 +175,10 @@ fn refused_in_loops(
         "E0471",
         format!("`{name}` mimics another join in a mechanism with closed loops or contacts"),
     )
-    .primary(mechanism.join(join).span, "mimic joints are simulated in tree mechanisms only")
+    .primary(
+        mechanism.join(join).span,
+        "mimic joints are simulated in tree mechanisms only",
+    )
     .help("remove `mimic` from the link, or open the loop")
 }
 
@@ -209,16 +224,21 @@ fn follower(
             "E0472",
             format!("`{name}` has a mimic multiplier or offset but no leader"),
         )
-        .primary(link.span, "`mimic_multiplier` and `mimic_offset` need `mimic`")
+        .primary(
+            link.span,
+            "`mimic_multiplier` and `mimic_offset` need `mimic`",
+        )
         .help("name the join to follow, e.g. `mimic = left`"));
     };
     let leader = joints.iter().find(|j| j.chain.join == leader_join);
     let single = |j: &Joint| j.is_single_coordinate();
     let leader = match leader {
         Some(leader) if leader.chain.join == joint.chain.join => {
-            return Err(Diagnostic::error("E0472", format!("`{name}` mimics itself"))
-                .primary(leader_span, "the join being declared")
-                .help("name another join with one coordinate"))
+            return Err(
+                Diagnostic::error("E0472", format!("`{name}` mimics itself"))
+                    .primary(leader_span, "the join being declared")
+                    .help("name another join with one coordinate"),
+            )
         }
         Some(leader) if single(joint) && single(leader) => leader,
         _ => {
@@ -239,7 +259,10 @@ fn follower(
                 "E0473",
                 format!("the mimic multiplier or offset of `{name}` is not a number"),
             )
-            .primary(link.span, "`mimic_multiplier` and `mimic_offset` must be numbers")
+            .primary(
+                link.span,
+                "`mimic_multiplier` and `mimic_offset` must be numbers",
+            )
             .help("give the unknowns they use values (`--set`)")),
         },
     };

@@ -7,8 +7,8 @@ use super::compiled::{EffortTape, Link, TapeBuilder};
 pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
 };
-use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::friction::{self, Friction};
+use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::mimics::{self, Mimic};
 use super::rotors::{self, Rotor};
 use super::stops::{self, Stop};
@@ -301,7 +301,14 @@ pub fn build_with(
     let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
     refuse_stops_and_rotors_with_contacts(mechanism, &contacts, &stops, &rotors, &mut errors);
     let has_contacts = !contacts.is_empty();
-    let mimics = mimics::build(mechanism, &joints, &loops, has_contacts, unknowns, &mut errors);
+    let mimics = mimics::build(
+        mechanism,
+        &joints,
+        &loops,
+        has_contacts,
+        unknowns,
+        &mut errors,
+    );
     let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
     if has_contacts && !frictions.is_empty() {
         errors.push(friction_with_contacts(mechanism, &frictions[0]));
@@ -918,7 +925,10 @@ pub struct DeclaredState {
 fn friction_with_contacts(mechanism: &Mechanism, friction: &Friction) -> Diagnostic {
     let mut error = Diagnostic::error(
         "E0474",
-        format!("`{}` has friction in a mechanism with contacts", friction.coordinate),
+        format!(
+            "`{}` has friction in a mechanism with contacts",
+            friction.coordinate
+        ),
     )
     .help("joint friction is simulated in mechanisms without contacts; remove one or the other");
     if let Some(contact) = mechanism.contacts.first() {

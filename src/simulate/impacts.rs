@@ -74,8 +74,8 @@ impl MechanicalSystem<'_> {
         for (column, &row) in rows.iter().enumerate() {
             unit[(row, column)] = 1.0;
         }
-        let responses = mimics::solve(&model.mimics, &mass, &unit)
-            .ok_or(SystemError::SingularMassMatrix)?;
+        let responses =
+            mimics::solve(&model.mimics, &mass, &unit).ok_or(SystemError::SingularMassMatrix)?;
         let coupling = DMatrix::from_fn(rows.len(), rows.len(), |i, j| responses[(rows[i], j)]);
         let free = DVector::from_fn(rows.len(), |i, _| -a[rows[i]]);
         let forces = coupling

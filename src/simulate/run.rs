@@ -23,9 +23,9 @@ use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
+use crate::dynamics::friction::Switch;
 use crate::dynamics::mimics;
 use crate::dynamics::model::Model;
-use crate::dynamics::friction::Switch;
 use crate::dynamics::stops::Impact;
 use crate::integrate::{
     integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Interrupt, Method,

@@ -21,11 +21,11 @@ use crate::dynamics::contacts::{
     self, ContactError, ContactRows, ContactSolution, CONTACT_ROW_NAMES,
 };
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
+use crate::dynamics::friction::Phase;
 use crate::dynamics::loops::{
     self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, Wanted,
     ROW_NAMES,
 };
-use crate::dynamics::friction::Phase;
 use crate::dynamics::mimics;
 use crate::dynamics::model::{DeclaredState, Model, Recovered};
 use crate::kinematics::eval::EvalError;
