@@ -25,6 +25,8 @@ use crate::kinematics::model::JointModel;
 /// The friction of one joint, in the model's numbering.
 #[derive(Clone, Debug)]
 pub struct Friction {
+    /// The joint (index into `Model::joints`).
+    pub joint: usize,
     /// `slide.q`, as the outputs name the coordinate.
     pub coordinate: String,
     /// The coordinate's index among the state's positions, its rate's among the velocities.
@@ -107,13 +109,13 @@ pub fn build(
             );
         }
     }
-    for joint in joints {
+    for (k, joint) in joints.iter().enumerate() {
         let link = mechanism.link(mechanism.join(joint.chain.join).link);
         if !link.friction.is_declared() {
             continue;
         }
         match joint_friction(joint, &link.friction, unknowns, !loops.is_empty()) {
-            Ok(friction) => found.push(friction),
+            Ok(friction) => found.push(Friction { joint: k, ..friction }),
             Err((message, label)) => errors.push(
                 Diagnostic::error("E0474", message)
                     .primary(link.span, label)
@@ -152,6 +154,7 @@ fn joint_friction(
     };
     match (number(&declared.dry), number(&declared.viscous)) {
         (Some(dry), Some(viscous)) => Ok(Friction {
+            joint: 0,
             coordinate: joint.coordinate_label(),
             position: joint.q_offset,
             velocity: joint.v_offset,

@@ -23,6 +23,9 @@ use crate::kinematics::model::JointModel;
 /// One follower and its leader, in the model's numbering.
 #[derive(Clone, Debug)]
 pub struct Mimic {
+    /// The follower's and the leader's joints (indices into `Model::joints`).
+    pub joint: usize,
+    pub leader_joint: usize,
     /// `finger.q`, the follower's coordinate as the outputs name it, and its leader's.
     pub coordinate: String,
     pub leader_coordinate: String,
@@ -267,6 +270,8 @@ fn follower(
         },
     };
     Ok(Mimic {
+        joint: index_of(joints, joint),
+        leader_joint: index_of(joints, leader),
         coordinate: joint.coordinate_label(),
         leader_coordinate: leader.coordinate_label(),
         position: joint.q_offset,
@@ -276,4 +281,11 @@ fn follower(
         multiplier: number(&declared.multiplier, 1.0)?,
         offset: number(&declared.offset, 0.0)?,
     })
+}
+
+fn index_of(joints: &[Joint], joint: &Joint) -> usize {
+    joints
+        .iter()
+        .position(|j| j.chain.join == joint.chain.join)
+        .unwrap_or_default()
 }
