@@ -72,10 +72,7 @@ impl<'a> Importer<'a> {
         }
         out += "\n(* Joints *)\n";
         out += &self.base_joint();
-        // The mimic joints last: a join names its leader, which must be declared before it.
-        let (mimics, leaders): (Vec<usize>, Vec<usize>) =
-            (0..self.robot.joints.len()).partition(|&i| self.robot.joints[i].mimic.is_some());
-        for index in leaders.into_iter().chain(mimics) {
+        for index in self.joint_order() {
             out += &self.joint(index)?;
             self.joint_warnings(index);
         }
@@ -83,6 +80,33 @@ impl<'a> Importer<'a> {
         self.geometry_warning();
         self.unsupported_warnings();
         Ok(out)
+    }
+
+    /// The joints in the URDF's order, except that a mimic joint comes after the joint it
+    /// follows (its join names its leader, which must be declared before it).
+    fn joint_order(&self) -> Vec<usize> {
+        let joints = &self.robot.joints;
+        let leader = |i: usize| {
+            let name = &joints[i].mimic.as_ref()?.joint;
+            joints.iter().position(|j| &j.name == name)
+        };
+        let mut order: Vec<usize> = Vec::new();
+        let mut pending: Vec<usize> = Vec::new();
+        for index in 0..joints.len() {
+            match leader(index) {
+                Some(l) if !order.contains(&l) => pending.push(index),
+                _ => order.push(index),
+            }
+            // Each joint placed may release the mimics that wait for it, and theirs in turn.
+            while let Some(k) =
+                (pending.iter()).position(|&p| leader(p).is_some_and(|l| order.contains(&l)))
+            {
+                order.push(pending.remove(k));
+            }
+        }
+        // A cycle of mimics: in the URDF's order, refused where its coupling is written.
+        order.extend(pending);
+        order
     }
 
     fn header(&self, file_name: &str) -> String {
