@@ -577,7 +577,7 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
     let mut all_ok = true;
     let mut unreadable = false;
     let mut reports = Vec::new();
-    for file in files {
+    for (i, file) in files.iter().enumerate() {
         let compilation = match driver::compile_files(std::slice::from_ref(file), options) {
             Ok(c) => c,
             // In JSON every file has its entry; in text the first unreadable file stops.
@@ -595,6 +595,12 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
         match format {
             Format::Text => print_text_report(file, &compilation),
             Format::Json => reports.push(json_report(file, &compilation)),
+        }
+        if i + 1 == files.len() {
+            // The process ends next: the system takes back its memory at once, whereas freeing
+            // the syntax tree and the mechanism node by node is about a tenth of the command's
+            // time on a large program. Earlier files are dropped, so that the peak is one file's.
+            std::mem::forget(compilation);
         }
     }
     if format == Format::Json {

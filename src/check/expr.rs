@@ -14,13 +14,19 @@ use crate::syntax::ast::{
 impl<'w> Checker<'w> {
     pub(super) fn expr(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         match &expr.kind {
-            ExprKind::Name(ident) => self.name(ident, ctx),
+            ExprKind::Name(name) => self.name(
+                &Ident {
+                    name: name.clone(),
+                    span: expr.span,
+                },
+                ctx,
+            ),
             ExprKind::Qualified(qualified) => self.qualified(qualified, expr.span, ctx),
             ExprKind::Field(access) => {
                 let ty = self.expr(&access.target, ctx);
                 self.field(ty, &access.field)
             }
-            ExprKind::Unknown(ident) => unknown_type(&ident.name),
+            ExprKind::Unknown(name) => unknown_type(name),
             ExprKind::Int(0) => Ty::Zero,
             ExprKind::Int(1) => Ty::One,
             ExprKind::Int(_) | ExprKind::Float(_) => Ty::Scalar,
@@ -48,11 +54,7 @@ impl<'w> Checker<'w> {
                 }
             },
             ExprKind::Prime(inner) => self.prime(inner, ctx),
-            ExprKind::Construct {
-                kind,
-                params,
-                fields,
-            } => self.construct(*kind, params, fields, ctx),
+            ExprKind::Construct(c) => self.construct(c.kind, &c.params, &c.fields, ctx),
             ExprKind::Local { bindings, body } => {
                 let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, ctx)).collect();
                 for (binding, ty) in bindings.iter().zip(&types) {
@@ -477,11 +479,11 @@ impl<'w> Checker<'w> {
 
     fn prime(&mut self, inner: &'w Expr, ctx: &mut Ctx) -> Ty {
         let is_coordinate = match &inner.kind {
-            ExprKind::Name(ident) => ctx
+            ExprKind::Name(name) => ctx
                 .locals
                 .iter()
                 .rev()
-                .find(|l| l.name == ident.name)
+                .find(|l| l.name == *name)
                 .is_some_and(|l| l.coordinate),
             ExprKind::Prime(_) => true,
             ExprKind::Field(access) => self.expr_type_silently(&access.target, ctx) == Ty::Join,
@@ -798,7 +800,7 @@ fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
 /// Whether an expression mentions a name (a conservative syntactic test).
 fn mentions(expr: &Expr, name: &str) -> bool {
     match &expr.kind {
-        ExprKind::Name(ident) => &*ident.name == name,
+        ExprKind::Name(written) => &**written == name,
         ExprKind::Field(access) => mentions(&access.target, name),
         ExprKind::Neg(target) | ExprKind::Prime(target) => mentions(target, name),
         ExprKind::Binary { lhs, rhs, .. } => mentions(lhs, name) || mentions(rhs, name),
@@ -807,7 +809,7 @@ fn mentions(expr: &Expr, name: &str) -> bool {
         ExprKind::Local { bindings, body } => {
             bindings.iter().any(|b| mentions(&b.value, name)) || mentions(body, name)
         }
-        ExprKind::Construct { fields, .. } => fields.iter().any(|f| mentions(&f.value, name)),
+        ExprKind::Construct(c) => c.fields.iter().any(|f| mentions(&f.value, name)),
         ExprKind::Qualified(qualified) => {
             qualified.index.as_ref().is_some_and(|e| mentions(e, name))
         }

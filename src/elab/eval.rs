@@ -184,8 +184,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 };
                 for field in fields {
                     if &*field.name.name == "integrator" {
-                        if let ExprKind::Name(ident) = &field.value.kind {
-                            scenario.integrator = Some((ident.name.to_string(), ident.span));
+                        if let ExprKind::Name(name) = &field.value.kind {
+                            scenario.integrator = Some((name.to_string(), field.value.span));
                         }
                         continue;
                     }
@@ -400,16 +400,16 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .ok_or_else(|| internal("unresolved name"))
     }
 
-    fn lookup(&mut self, ident: &Ident, target: Target, locals: &Locals) -> Result<Value> {
+    fn lookup(&mut self, name: &Name, target: Target, locals: &Locals) -> Result<Value> {
         match target {
             Target::Local => locals
                 .iter()
                 .rev()
-                .find(|(n, _)| *n == ident.name)
+                .find(|(n, _)| n == name)
                 .map(|(_, v)| v.clone())
-                .ok_or_else(|| internal(format!("local `{}` missing", ident.name))),
-            Target::Global(scope) => self.global(scope, &ident.name),
-            Target::Builtin => match &*ident.name {
+                .ok_or_else(|| internal(format!("local `{name}` missing"))),
+            Target::Global(scope) => self.global(scope, name),
+            Target::Builtin => match &**name {
                 "pi" => Ok(Value::Scalar(num(std::f64::consts::PI))),
                 "time" => Ok(Value::Scalar(Arc::new(SExpr::Time))),
                 "earth" => Ok(Value::Body(BodyRef::Earth)),
@@ -420,9 +420,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
 
     pub(super) fn expr(&mut self, expr: &'w Expr, locals: &mut Locals) -> Result<Value> {
         Ok(match &expr.kind {
-            ExprKind::Name(ident) => {
-                let target = self.resolution(ident.span)?;
-                self.lookup(ident, target, locals)?
+            ExprKind::Name(name) => {
+                let target = self.resolution(expr.span)?;
+                self.lookup(name, target, locals)?
             }
             ExprKind::Qualified(qualified) => {
                 let target = self.resolution(expr.span)?;
@@ -432,22 +432,22 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                         self.within(instance, |e| e.global(scope, &qualified.name.name))
                             .map_err(|error| error.secondary(expr.span, "named here"))?
                     }
-                    _ => self.lookup(&qualified.name, target, locals)?,
+                    _ => self.lookup(&qualified.name.name, target, locals)?,
                 }
             }
             ExprKind::Field(access) => {
                 let value = self.expr(&access.target, locals)?;
                 self.field(value, &access.field)?
             }
-            ExprKind::Unknown(ident) => {
-                if matches!(&*ident.name, "v" | "vector") {
+            ExprKind::Unknown(name) => {
+                if matches!(&**name, "v" | "vector") {
                     Value::Vector(
                         [0, 1, 2].map(|c| {
-                            self.unknown(UnknownKind::Vector, Origin::Written, c, ident.span)
+                            self.unknown(UnknownKind::Vector, Origin::Written, c, expr.span)
                         }),
                     )
                 } else {
-                    Value::Scalar(self.unknown(UnknownKind::Scalar, Origin::Written, 0, ident.span))
+                    Value::Scalar(self.unknown(UnknownKind::Scalar, Origin::Written, 0, expr.span))
                 }
             }
             ExprKind::Int(0) => Value::Zero,
@@ -507,11 +507,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 },
                 _ => return Err(internal("prime of a non-scalar")),
             },
-            ExprKind::Construct {
-                kind,
-                params,
-                fields,
-            } => self.construct(*kind, params, fields, locals, expr.span)?,
+            ExprKind::Construct(c) => {
+                self.construct(c.kind, &c.params, &c.fields, locals, expr.span)?
+            }
             ExprKind::Local { bindings, body } => {
                 let depth = locals.len();
                 let mut values = Vec::with_capacity(bindings.len());
@@ -722,7 +720,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             (Some(index), Target::Global(scope)) => self.instance_at(scope, index, locals)?,
             _ => self.instances.current,
         };
-        let Value::Definition(def) = self.within(home, |e| e.lookup(ident, target, locals))? else {
+        let Value::Definition(def) =
+            self.within(home, |e| e.lookup(&ident.name, target, locals))?
+        else {
             return Err(internal("call of a non-definition"));
         };
         let definition = &self.checked.definitions[def.0 as usize];

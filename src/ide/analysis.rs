@@ -412,8 +412,12 @@ impl Builder<'_, '_> {
 
     fn expr(&mut self, expr: &Expr, locals: &mut Vec<(Name, usize)>) {
         match &expr.kind {
-            ExprKind::Name(ident) => {
-                self.name(ident, locals);
+            ExprKind::Name(name) => {
+                let ident = Ident {
+                    name: name.clone(),
+                    span: expr.span,
+                };
+                self.name(&ident, locals);
             }
             ExprKind::Qualified(qualified) => {
                 self.name(&qualified.package, locals);
@@ -441,9 +445,9 @@ impl Builder<'_, '_> {
                 self.expr(rhs, locals);
             }
             ExprKind::Neg(inner) | ExprKind::Prime(inner) => self.expr(inner, locals),
-            ExprKind::Construct { params, fields, .. } => {
+            ExprKind::Construct(c) => {
                 let depth = locals.len();
-                for param in params.iter() {
+                for param in c.params.iter() {
                     let id = self.local(
                         param,
                         DefinitionKind::Coordinate,
@@ -452,7 +456,7 @@ impl Builder<'_, '_> {
                     );
                     locals.push((param.name.clone(), id));
                 }
-                self.fields(fields, locals);
+                self.fields(&c.fields, locals);
                 locals.truncate(depth);
             }
             ExprKind::Local { bindings, body } => {

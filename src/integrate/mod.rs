@@ -141,6 +141,7 @@ pub fn integrate(
             let count = |stats: &mut Stats| {
                 stats.stiff_steps = stepper.implicit_steps;
                 stats.method_switches = stepper.switches;
+                stats.stiff_from = stepper.stiff_from;
             };
             match result {
                 Ok((y, mut stats)) => {

@@ -21,6 +21,9 @@ pub struct Stats {
     /// ([`Method::Automatic`](super::settings::Method::Automatic) only).
     pub stiff_steps: usize,
     pub method_switches: usize,
+    /// When the implicit method first took over from Dormand–Prince
+    /// ([`Method::Automatic`](super::settings::Method::Automatic) only).
+    pub stiff_from: Option<f64>,
     /// Events located and acted on ([`OdeSystem::handle_event`]).
     ///
     /// [`OdeSystem::handle_event`]: super::system::OdeSystem::handle_event

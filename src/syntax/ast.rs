@@ -180,6 +180,20 @@ pub struct Expr {
     pub span: Span,
 }
 
+impl Expr {
+    /// The name this expression is, with the expression's span: `ExprKind::Name` stores only
+    /// the spelling.
+    pub fn as_ident(&self) -> Option<Ident> {
+        match &self.kind {
+            ExprKind::Name(name) => Some(Ident {
+                name: name.clone(),
+                span: self.span,
+            }),
+            _ => None,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BinaryOp {
     Add,
@@ -258,15 +272,25 @@ pub enum Callee {
     Unknown(Ident),
 }
 
+/// `body ... end`, `link(x) ... end`, `force ... end`, `torque ... end`
+#[derive(Clone, Debug, PartialEq)]
+pub struct Construct {
+    pub kind: ConstructKind,
+    pub params: Box<[Ident]>,
+    pub fields: Box<[FieldInit]>,
+}
+
+/// The kind of an expression. A name's span is its expression's, and a constructor is boxed,
+/// so that an expression is 48 bytes (a generated chain holds some forty per body).
 #[derive(Clone, Debug, PartialEq)]
 pub enum ExprKind {
-    Name(Ident),
+    Name(Name),
     /// `P:X`
     Qualified(Box<QualifiedName>),
     /// `e.field`, boxed whole so that a name does not make every expression larger.
     Field(Box<FieldAccess>),
     /// `?s`: a fresh unknown scalar at each occurrence.
-    Unknown(Ident),
+    Unknown(Name),
     Int(i64),
     Float(f64),
     /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
@@ -286,11 +310,7 @@ pub enum ExprKind {
     /// `x'`: the time derivative of a joint coordinate.
     Prime(Box<Expr>),
     /// `body ... end`, `link(x) ... end`, `force ... end`, `torque ... end`
-    Construct {
-        kind: ConstructKind,
-        params: Box<[Ident]>,
-        fields: Box<[FieldInit]>,
-    },
+    Construct(Box<Construct>),
     /// `local a = e and b = e in body end`
     Local {
         bindings: Box<[Binding]>,

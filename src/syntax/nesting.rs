@@ -17,7 +17,7 @@ pub const MAX_NESTING: usize = 200;
 /// an E0203 at the first construct past the limit.
 pub fn limit_nesting(program: &mut Program, diagnostics: &mut Vec<Diagnostic>) {
     for decl in &mut program.decls {
-        if let Some(span) = too_deep(decl) {
+        if let Some(span) = too_deep(decl, &mut Vec::new()) {
             diagnostics.push(
                 Diagnostic::error(
                     "E0203",
@@ -38,27 +38,26 @@ pub fn limit_nesting(program: &mut Program, diagnostics: &mut Vec<Diagnostic>) {
 }
 
 /// The span of the first construct of `decl` past the limit, or `None` if it is within it.
-fn too_deep(decl: &Decl) -> Option<Span> {
+/// `children` is scratch room, kept by the caller so that a walk allocates nothing per node.
+fn too_deep<'a>(decl: &'a Decl, children: &mut Vec<&'a Expr>) -> Option<Span> {
     let mut decls = vec![(decl, 0)];
     let mut exprs: Vec<(&Expr, usize)> = Vec::new();
     while let Some((decl, depth)) = decls.pop() {
         if depth > MAX_NESTING {
             return Some(decl.span);
         }
-        let mut top = Vec::new();
         if let DeclKind::Package(package) = &decl.kind {
             decls.extend(package.decls.iter().map(|d| (d, depth + 1)));
         }
-        decl_exprs(&decl.kind, &mut top);
-        exprs.extend(top.into_iter().map(|e| (e, depth + 1)));
+        decl_exprs(&decl.kind, children);
+        exprs.extend(children.drain(..).map(|e| (e, depth + 1)));
     }
     while let Some((expr, depth)) = exprs.pop() {
         if depth > MAX_NESTING {
             return Some(expr.span);
         }
-        let mut children = Vec::new();
-        expr_children(expr, &mut children);
-        exprs.extend(children.into_iter().map(|e| (e, depth + 1)));
+        expr_children(expr, children);
+        exprs.extend(children.drain(..).map(|e| (e, depth + 1)));
     }
     None
 }
@@ -90,7 +89,7 @@ fn expr_children<'a>(expr: &'a Expr, out: &mut Vec<&'a Expr>) {
         ExprKind::Call { args, .. } => out.extend(args.iter().map(|a| &a.value)),
         ExprKind::Binary { lhs, rhs, .. } => out.extend([&**lhs, &**rhs]),
         ExprKind::Neg(inner) | ExprKind::Prime(inner) => out.push(inner),
-        ExprKind::Construct { fields, .. } => out.extend(fields.iter().map(|f| &f.value)),
+        ExprKind::Construct(c) => out.extend(c.fields.iter().map(|f| &f.value)),
         ExprKind::Local { bindings, body } => {
             out.extend(bindings.iter().map(|b| &b.value));
             out.push(body);
@@ -144,8 +143,8 @@ fn dismantle(kind: DeclKind) {
                 }
                 ExprKind::Binary { lhs, rhs, .. } => exprs.extend([*lhs, *rhs]),
                 ExprKind::Neg(inner) | ExprKind::Prime(inner) => exprs.push(*inner),
-                ExprKind::Construct { fields, .. } => {
-                    exprs.extend(fields.into_vec().into_iter().map(|f| f.value));
+                ExprKind::Construct(c) => {
+                    exprs.extend(c.fields.into_vec().into_iter().map(|f| f.value));
                 }
                 ExprKind::Local { bindings, body } => {
                     exprs.extend(bindings.into_vec().into_iter().map(|b| b.value));

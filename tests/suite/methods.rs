@@ -292,10 +292,10 @@ const GOVERNOR_AT_ONE_SECOND: [f64; 8] = [
 fn the_implicit_integrator_takes_the_stiff_governor_to_its_tolerance() {
     // The governor's springs and dampers hold dopri5 at its stability boundary (17,000 steps
     // over 1 s at any tolerance); the implicit integrator goes over to Radau IIA. Its global
-    // error at t = 1 measured: positions 2.0e-6 and 4.4e-10, rates 4.8e-6 and 1.1e-9 at 1e-6
-    // and 1e-8, in 308 and 811 steps. At 1e-8 dopri5's first 419 steps resolve the initial
-    // transient (to t = 0.018, where accuracy, not stability, holds them), Radau IIA the rest
-    // in 392: at least a third of the steps are stiff, and all take a fifth of dopri5's or less.
+    // error at t = 1 measured: positions 1.6e-7 and 5.9e-10, rates 9.1e-7 and 2.4e-9 at 1e-6
+    // and 1e-8, in 205 and 394 steps. At 1e-8 dopri5's first 64 steps resolve the start of
+    // the initial transient, Radau IIA the rest in 330: at least a third of the steps are
+    // stiff, and all take a fifth of dopri5's or less.
     for tolerance in [1e-6, 1e-8] {
         let mut governor = prepared("governor", &[]);
         governor.settings = Settings {
@@ -328,5 +328,52 @@ fn the_implicit_integrator_takes_the_stiff_governor_to_its_tolerance() {
             "{} steps, {stiff} stiff",
             simulation.report.steps
         );
+    }
+}
+
+#[test]
+fn the_implicit_integrator_takes_the_stiff_method_early_in_the_governors_transient() {
+    // Dormand–Prince starts, and its steps resolve the damped modes' initial transient. Once
+    // its stage estimate h |λ| has been above 1 for 15 steps in a row, Radau IIA takes over.
+    // Waiting for h |λ| above its stability boundary (3.25) instead took the switch to
+    // t = 0.018 at 1e-8 and t = 0.56 at 1e-10. Measured: at t = 5.9e-4 (1e-6) and 4.7e-4 (1e-10).
+    use lsdc::dynamics::loops::Stabilisation;
+    use lsdc::integrate::{integrate, Method, Settings as Tolerances};
+    use lsdc::simulate::system::MechanicalSystem;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    let governor = prepared("governor", &[]);
+    let (q, v) = governor
+        .model
+        .state_from_declared(&governor.coordinates, &governor.rates)
+        .expect("state");
+    let y0 = [q, v].concat();
+    for tolerance in [1e-6, 1e-10] {
+        let reference = Rc::new(RefCell::new(governor.coordinates.clone()));
+        let mut system =
+            MechanicalSystem::new(&governor.model, reference, Stabilisation::Projection);
+        let settings = Tolerances {
+            rtol: tolerance,
+            atol: tolerance,
+            ..Tolerances::default()
+        };
+        let (_, stats) = integrate(
+            &Method::Automatic,
+            &mut system,
+            0.0,
+            &y0,
+            1.0,
+            &[],
+            &settings,
+            &mut |_, _| Ok(()),
+        )
+        .expect("integrated");
+        let from = stats.stiff_from.expect("the stiff method taken");
+        eprintln!(
+            "governor at {tolerance:e}: stiff from t = {from:.2e}, {} of {} steps, {} switches",
+            stats.stiff_steps, stats.steps, stats.method_switches
+        );
+        assert!(from < 2e-3, "switched at t = {from}");
     }
 }

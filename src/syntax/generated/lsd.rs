@@ -1,6 +1,6 @@
-// grammar stamp: 558c8d8835ad2abb (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 32a99b7410f2efb9 (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: c88eef33710e61ac9e9398da1e86463d257eccaf5bc4becd1e199568d60f99d7
+// sha3: 5424144b9d161de64d3e23387a3bff1952a5eb84c5f8d1ce6a374aa9154ca3b5
 // features: 
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
@@ -44,25 +44,25 @@ mod __parse__Program {
         Variant10(alloc::vec::Vec<Expr>),
         Variant11(FieldInit),
         Variant12(alloc::vec::Vec<FieldInit>),
-        Variant13(GivenValue),
-        Variant14(alloc::vec::Vec<GivenValue>),
+        Variant13(Box<GivenValue>),
+        Variant14(alloc::vec::Vec<Box<GivenValue>>),
         Variant15(alloc::vec::Vec<Ident>),
-        Variant16(InitialValue),
-        Variant17(alloc::vec::Vec<InitialValue>),
+        Variant16(Box<InitialValue>),
+        Variant17(alloc::vec::Vec<Box<InitialValue>>),
         Variant18(Param),
         Variant19(alloc::vec::Vec<Param>),
         Variant20(usize),
         Variant21(Option<Arg>),
         Variant22(Binding),
         Variant23(Vec<Binding>),
-        Variant24(Callee),
+        Variant24(Box<Callee>),
         Variant25(Vec<Arg>),
         Variant26(Vec<Expr>),
         Variant27(Vec<FieldInit>),
         Variant28(Vec<Ident>),
         Variant29(Vec<Param>),
-        Variant30(Vec<GivenValue>),
-        Variant31(Vec<InitialValue>),
+        Variant30(Vec<Box<GivenValue>>),
+        Variant31(Vec<Box<InitialValue>>),
         Variant32(ConstructKind),
         Variant33(DeclKind),
         Variant34(Vec<Decl>),
@@ -2940,10 +2940,32 @@ mod __parse__Program {
       'input,
     >(
         __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, Callee, usize)
+    ) -> (usize, Box<Callee>, usize)
      {
         match __symbols.pop() {
             Some((__l, __Symbol::Variant24(__v), __r)) => (__l, __v, __r),
+            _ => __symbol_type_mismatch()
+        }
+    }
+    fn __pop_Variant13<
+      'input,
+    >(
+        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
+    ) -> (usize, Box<GivenValue>, usize)
+     {
+        match __symbols.pop() {
+            Some((__l, __Symbol::Variant13(__v), __r)) => (__l, __v, __r),
+            _ => __symbol_type_mismatch()
+        }
+    }
+    fn __pop_Variant16<
+      'input,
+    >(
+        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
+    ) -> (usize, Box<InitialValue>, usize)
+     {
+        match __symbols.pop() {
+            Some((__l, __Symbol::Variant16(__v), __r)) => (__l, __v, __r),
             _ => __symbol_type_mismatch()
         }
     }
@@ -3013,17 +3035,6 @@ mod __parse__Program {
             _ => __symbol_type_mismatch()
         }
     }
-    fn __pop_Variant13<
-      'input,
-    >(
-        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, GivenValue, usize)
-     {
-        match __symbols.pop() {
-            Some((__l, __Symbol::Variant13(__v), __r)) => (__l, __v, __r),
-            _ => __symbol_type_mismatch()
-        }
-    }
     fn __pop_Variant3<
       'input,
     >(
@@ -3043,17 +3054,6 @@ mod __parse__Program {
      {
         match __symbols.pop() {
             Some((__l, __Symbol::Variant37(__v), __r)) => (__l, __v, __r),
-            _ => __symbol_type_mismatch()
-        }
-    }
-    fn __pop_Variant16<
-      'input,
-    >(
-        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, InitialValue, usize)
-     {
-        match __symbols.pop() {
-            Some((__l, __Symbol::Variant16(__v), __r)) => (__l, __v, __r),
             _ => __symbol_type_mismatch()
         }
     }
@@ -3167,6 +3167,28 @@ mod __parse__Program {
             _ => __symbol_type_mismatch()
         }
     }
+    fn __pop_Variant30<
+      'input,
+    >(
+        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
+    ) -> (usize, Vec<Box<GivenValue>>, usize)
+     {
+        match __symbols.pop() {
+            Some((__l, __Symbol::Variant30(__v), __r)) => (__l, __v, __r),
+            _ => __symbol_type_mismatch()
+        }
+    }
+    fn __pop_Variant31<
+      'input,
+    >(
+        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
+    ) -> (usize, Vec<Box<InitialValue>>, usize)
+     {
+        match __symbols.pop() {
+            Some((__l, __Symbol::Variant31(__v), __r)) => (__l, __v, __r),
+            _ => __symbol_type_mismatch()
+        }
+    }
     fn __pop_Variant34<
       'input,
     >(
@@ -3200,17 +3222,6 @@ mod __parse__Program {
             _ => __symbol_type_mismatch()
         }
     }
-    fn __pop_Variant30<
-      'input,
-    >(
-        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, Vec<GivenValue>, usize)
-     {
-        match __symbols.pop() {
-            Some((__l, __Symbol::Variant30(__v), __r)) => (__l, __v, __r),
-            _ => __symbol_type_mismatch()
-        }
-    }
     fn __pop_Variant28<
       'input,
     >(
@@ -3219,17 +3230,6 @@ mod __parse__Program {
      {
         match __symbols.pop() {
             Some((__l, __Symbol::Variant28(__v), __r)) => (__l, __v, __r),
-            _ => __symbol_type_mismatch()
-        }
-    }
-    fn __pop_Variant31<
-      'input,
-    >(
-        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, Vec<InitialValue>, usize)
-     {
-        match __symbols.pop() {
-            Some((__l, __Symbol::Variant31(__v), __r)) => (__l, __v, __r),
             _ => __symbol_type_mismatch()
         }
     }
@@ -3266,6 +3266,28 @@ mod __parse__Program {
             _ => __symbol_type_mismatch()
         }
     }
+    fn __pop_Variant14<
+      'input,
+    >(
+        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
+    ) -> (usize, alloc::vec::Vec<Box<GivenValue>>, usize)
+     {
+        match __symbols.pop() {
+            Some((__l, __Symbol::Variant14(__v), __r)) => (__l, __v, __r),
+            _ => __symbol_type_mismatch()
+        }
+    }
+    fn __pop_Variant17<
+      'input,
+    >(
+        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
+    ) -> (usize, alloc::vec::Vec<Box<InitialValue>>, usize)
+     {
+        match __symbols.pop() {
+            Some((__l, __Symbol::Variant17(__v), __r)) => (__l, __v, __r),
+            _ => __symbol_type_mismatch()
+        }
+    }
     fn __pop_Variant8<
       'input,
     >(
@@ -3299,17 +3321,6 @@ mod __parse__Program {
             _ => __symbol_type_mismatch()
         }
     }
-    fn __pop_Variant14<
-      'input,
-    >(
-        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, alloc::vec::Vec<GivenValue>, usize)
-     {
-        match __symbols.pop() {
-            Some((__l, __Symbol::Variant14(__v), __r)) => (__l, __v, __r),
-            _ => __symbol_type_mismatch()
-        }
-    }
     fn __pop_Variant15<
       'input,
     >(
@@ -3318,17 +3329,6 @@ mod __parse__Program {
      {
         match __symbols.pop() {
             Some((__l, __Symbol::Variant15(__v), __r)) => (__l, __v, __r),
-            _ => __symbol_type_mismatch()
-        }
-    }
-    fn __pop_Variant17<
-      'input,
-    >(
-        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, alloc::vec::Vec<InitialValue>, usize)
-     {
-        match __symbols.pop() {
-            Some((__l, __Symbol::Variant17(__v), __r)) => (__l, __v, __r),
             _ => __symbol_type_mismatch()
         }
     }
@@ -7144,10 +7144,10 @@ fn __action14<
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
-    (_, values, _): (usize, Vec<InitialValue>, usize),
+    (_, values, _): (usize, Vec<Box<InitialValue>>, usize),
 ) -> DeclKind
 {
-    DeclKind::Initial(values)
+    DeclKind::Initial(values.into_iter().map(|v| *v).collect())
 }
 
 #[allow(unused_variables)]
@@ -7160,10 +7160,10 @@ fn __action15<
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
     (_, _, _): (usize, Tok<'input>, usize),
-    (_, values, _): (usize, Vec<GivenValue>, usize),
+    (_, values, _): (usize, Vec<Box<GivenValue>>, usize),
 ) -> DeclKind
 {
-    DeclKind::Given(values)
+    DeclKind::Given(values.into_iter().map(|v| *v).collect())
 }
 
 #[allow(unused_variables)]
@@ -7393,9 +7393,9 @@ fn __action28<
     (_, target, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
-) -> InitialValue
+) -> Box<InitialValue>
 {
-    InitialValue { target, value, fixed: false, guess: false }
+    Box::new(InitialValue { target, value, fixed: false, guess: false })
 }
 
 #[allow(unused_variables)]
@@ -7411,9 +7411,9 @@ fn __action29<
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
-) -> InitialValue
+) -> Box<InitialValue>
 {
-    InitialValue { target, value, fixed: true, guess: false }
+    Box::new(InitialValue { target, value, fixed: true, guess: false })
 }
 
 #[allow(unused_variables)]
@@ -7429,9 +7429,9 @@ fn __action30<
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
-) -> InitialValue
+) -> Box<InitialValue>
 {
-    InitialValue { target, value, fixed: false, guess: true }
+    Box::new(InitialValue { target, value, fixed: false, guess: true })
 }
 
 #[allow(unused_variables)]
@@ -7446,9 +7446,9 @@ fn __action31<
     (_, target, _): (usize, Expr, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, value, _): (usize, Expr, usize),
-) -> GivenValue
+) -> Box<GivenValue>
 {
-    GivenValue { target, value }
+    Box::new(GivenValue { target, value })
 }
 
 #[allow(unused_variables)]
@@ -7890,7 +7890,7 @@ fn __action57<
     (_, __0, _): (usize, Ident, usize),
 ) -> ExprKind
 {
-    ExprKind::Name(__0)
+    ExprKind::Name(__0.name)
 }
 
 #[allow(unused_variables)]
@@ -7942,7 +7942,7 @@ fn __action60<
     (_, n, _): (usize, Ident, usize),
 ) -> ExprKind
 {
-    ExprKind::Unknown(n)
+    ExprKind::Unknown(n.name)
 }
 
 #[allow(unused_variables)]
@@ -8001,13 +8001,13 @@ fn __action64<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, callee, _): (usize, Callee, usize),
+    (_, callee, _): (usize, Box<Callee>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, args, _): (usize, Vec<Arg>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Call { callee: Box::new(callee), args: args.into_boxed_slice() }
+    ExprKind::Call { callee, args: args.into_boxed_slice() }
 }
 
 #[allow(unused_variables)]
@@ -8024,7 +8024,7 @@ fn __action65<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct { kind, params: Box::default(), fields: fields.into_boxed_slice() }
+    ExprKind::Construct(Box::new(Construct { kind, params: Box::default(), fields: fields.into_boxed_slice() }))
 }
 
 #[allow(unused_variables)]
@@ -8044,7 +8044,7 @@ fn __action66<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct { kind: ConstructKind::Link, params: params.into_boxed_slice(), fields: fields.into_boxed_slice() }
+    ExprKind::Construct(Box::new(Construct { kind: ConstructKind::Link, params: params.into_boxed_slice(), fields: fields.into_boxed_slice() }))
 }
 
 #[allow(unused_variables)]
@@ -8093,9 +8093,9 @@ fn __action69<
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
-) -> Callee
+) -> Box<Callee>
 {
-    Callee::Name(__0)
+    Box::new(Callee::Name(__0))
 }
 
 #[allow(unused_variables)]
@@ -8110,9 +8110,9 @@ fn __action70<
     (_, package, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
-) -> Callee
+) -> Box<Callee>
 {
-    Callee::Qualified(QualifiedName { package, index: None, name })
+    Box::new(Callee::Qualified(QualifiedName { package, index: None, name }))
 }
 
 #[allow(unused_variables)]
@@ -8130,9 +8130,9 @@ fn __action71<
     (_, _, _): (usize, Tok<'input>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
-) -> Callee
+) -> Box<Callee>
 {
-    Callee::Qualified(QualifiedName { package, index: Some(index), name })
+    Box::new(Callee::Qualified(QualifiedName { package, index: Some(index), name }))
 }
 
 #[allow(unused_variables)]
@@ -8145,9 +8145,9 @@ fn __action72<
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
-) -> Callee
+) -> Box<Callee>
 {
-    Callee::Unknown(__0)
+    Box::new(Callee::Unknown(__0))
 }
 
 #[allow(unused_variables)]
@@ -8391,9 +8391,9 @@ fn __action87<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, mut v, _): (usize, alloc::vec::Vec<GivenValue>, usize),
-    (_, e, _): (usize, GivenValue, usize),
-) -> Vec<GivenValue>
+    (_, mut v, _): (usize, alloc::vec::Vec<Box<GivenValue>>, usize),
+    (_, e, _): (usize, Box<GivenValue>, usize),
+) -> Vec<Box<GivenValue>>
 {
     { v.push(e); v }
 }
@@ -8407,9 +8407,9 @@ fn __action88<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, mut v, _): (usize, alloc::vec::Vec<InitialValue>, usize),
-    (_, e, _): (usize, InitialValue, usize),
-) -> Vec<InitialValue>
+    (_, mut v, _): (usize, alloc::vec::Vec<Box<InitialValue>>, usize),
+    (_, e, _): (usize, Box<InitialValue>, usize),
+) -> Vec<Box<InitialValue>>
 {
     { v.push(e); v }
 }
@@ -8679,7 +8679,7 @@ fn __action105<
     names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
-) -> alloc::vec::Vec<InitialValue>
+) -> alloc::vec::Vec<Box<InitialValue>>
 {
     alloc::vec![]
 }
@@ -8693,8 +8693,8 @@ fn __action106<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, v, _): (usize, alloc::vec::Vec<InitialValue>, usize),
-) -> alloc::vec::Vec<InitialValue>
+    (_, v, _): (usize, alloc::vec::Vec<Box<InitialValue>>, usize),
+) -> alloc::vec::Vec<Box<InitialValue>>
 {
     v
 }
@@ -8708,9 +8708,9 @@ fn __action107<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, __0, _): (usize, InitialValue, usize),
+    (_, __0, _): (usize, Box<InitialValue>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
-) -> InitialValue
+) -> Box<InitialValue>
 {
     __0
 }
@@ -8726,7 +8726,7 @@ fn __action108<
     names: &'err mut Names,
     __lookbehind: &usize,
     __lookahead: &usize,
-) -> alloc::vec::Vec<GivenValue>
+) -> alloc::vec::Vec<Box<GivenValue>>
 {
     alloc::vec![]
 }
@@ -8740,8 +8740,8 @@ fn __action109<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, v, _): (usize, alloc::vec::Vec<GivenValue>, usize),
-) -> alloc::vec::Vec<GivenValue>
+    (_, v, _): (usize, alloc::vec::Vec<Box<GivenValue>>, usize),
+) -> alloc::vec::Vec<Box<GivenValue>>
 {
     v
 }
@@ -8755,9 +8755,9 @@ fn __action110<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, __0, _): (usize, GivenValue, usize),
+    (_, __0, _): (usize, Box<GivenValue>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
-) -> GivenValue
+) -> Box<GivenValue>
 {
     __0
 }
@@ -9207,8 +9207,8 @@ fn __action139<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, __0, _): (usize, GivenValue, usize),
-) -> alloc::vec::Vec<GivenValue>
+    (_, __0, _): (usize, Box<GivenValue>, usize),
+) -> alloc::vec::Vec<Box<GivenValue>>
 {
     alloc::vec![__0]
 }
@@ -9222,9 +9222,9 @@ fn __action140<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, v, _): (usize, alloc::vec::Vec<GivenValue>, usize),
-    (_, e, _): (usize, GivenValue, usize),
-) -> alloc::vec::Vec<GivenValue>
+    (_, v, _): (usize, alloc::vec::Vec<Box<GivenValue>>, usize),
+    (_, e, _): (usize, Box<GivenValue>, usize),
+) -> alloc::vec::Vec<Box<GivenValue>>
 {
     { let mut v = v; v.push(e); v }
 }
@@ -9238,8 +9238,8 @@ fn __action141<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, __0, _): (usize, InitialValue, usize),
-) -> alloc::vec::Vec<InitialValue>
+    (_, __0, _): (usize, Box<InitialValue>, usize),
+) -> alloc::vec::Vec<Box<InitialValue>>
 {
     alloc::vec![__0]
 }
@@ -9253,9 +9253,9 @@ fn __action142<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, v, _): (usize, alloc::vec::Vec<InitialValue>, usize),
-    (_, e, _): (usize, InitialValue, usize),
-) -> alloc::vec::Vec<InitialValue>
+    (_, v, _): (usize, alloc::vec::Vec<Box<InitialValue>>, usize),
+    (_, e, _): (usize, Box<InitialValue>, usize),
+) -> alloc::vec::Vec<Box<InitialValue>>
 {
     { let mut v = v; v.push(e); v }
 }
@@ -10105,9 +10105,9 @@ fn __action169<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, GivenValue, usize),
+    __0: (usize, Box<GivenValue>, usize),
     __1: (usize, Tok<'input>, usize),
-) -> alloc::vec::Vec<GivenValue>
+) -> alloc::vec::Vec<Box<GivenValue>>
 {
     let __start0 = __0.0.clone();
     let __end0 = __1.2.clone();
@@ -10137,10 +10137,10 @@ fn __action170<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, alloc::vec::Vec<GivenValue>, usize),
-    __1: (usize, GivenValue, usize),
+    __0: (usize, alloc::vec::Vec<Box<GivenValue>>, usize),
+    __1: (usize, Box<GivenValue>, usize),
     __2: (usize, Tok<'input>, usize),
-) -> alloc::vec::Vec<GivenValue>
+) -> alloc::vec::Vec<Box<GivenValue>>
 {
     let __start0 = __1.0.clone();
     let __end0 = __2.2.clone();
@@ -10171,8 +10171,8 @@ fn __action171<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, GivenValue, usize),
-) -> Vec<GivenValue>
+    __0: (usize, Box<GivenValue>, usize),
+) -> Vec<Box<GivenValue>>
 {
     let __start0 = __0.0.clone();
     let __end0 = __0.0.clone();
@@ -10203,9 +10203,9 @@ fn __action172<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, alloc::vec::Vec<GivenValue>, usize),
-    __1: (usize, GivenValue, usize),
-) -> Vec<GivenValue>
+    __0: (usize, alloc::vec::Vec<Box<GivenValue>>, usize),
+    __1: (usize, Box<GivenValue>, usize),
+) -> Vec<Box<GivenValue>>
 {
     let __start0 = __0.0.clone();
     let __end0 = __0.2.clone();
@@ -10365,9 +10365,9 @@ fn __action177<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, InitialValue, usize),
+    __0: (usize, Box<InitialValue>, usize),
     __1: (usize, Tok<'input>, usize),
-) -> alloc::vec::Vec<InitialValue>
+) -> alloc::vec::Vec<Box<InitialValue>>
 {
     let __start0 = __0.0.clone();
     let __end0 = __1.2.clone();
@@ -10397,10 +10397,10 @@ fn __action178<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, alloc::vec::Vec<InitialValue>, usize),
-    __1: (usize, InitialValue, usize),
+    __0: (usize, alloc::vec::Vec<Box<InitialValue>>, usize),
+    __1: (usize, Box<InitialValue>, usize),
     __2: (usize, Tok<'input>, usize),
-) -> alloc::vec::Vec<InitialValue>
+) -> alloc::vec::Vec<Box<InitialValue>>
 {
     let __start0 = __1.0.clone();
     let __end0 = __2.2.clone();
@@ -10431,8 +10431,8 @@ fn __action179<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, InitialValue, usize),
-) -> Vec<InitialValue>
+    __0: (usize, Box<InitialValue>, usize),
+) -> Vec<Box<InitialValue>>
 {
     let __start0 = __0.0.clone();
     let __end0 = __0.0.clone();
@@ -10463,9 +10463,9 @@ fn __action180<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    __0: (usize, alloc::vec::Vec<InitialValue>, usize),
-    __1: (usize, InitialValue, usize),
-) -> Vec<InitialValue>
+    __0: (usize, alloc::vec::Vec<Box<InitialValue>>, usize),
+    __1: (usize, Box<InitialValue>, usize),
+) -> Vec<Box<InitialValue>>
 {
     let __start0 = __0.0.clone();
     let __end0 = __0.2.clone();
