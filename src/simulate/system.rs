@@ -171,8 +171,9 @@ impl<'m> MechanicalSystem<'m> {
     /// (eliminated through M) or joint friction (held through M while sticking).
     fn needs_mass_matrix(&self) -> bool {
         let model = self.model;
-        !model.has_loops()
-            && !(model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty())
+        let extended =
+            !model.rotors.is_empty() || !model.mimics.is_empty() || !model.frictions.is_empty();
+        !model.has_loops() && extended
     }
 
     /// The accelerations of a tree from its mass matrix: M from CRBA and the bias b from RNEA
