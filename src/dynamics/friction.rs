@@ -80,7 +80,8 @@ impl Friction {
     pub fn phase_at(&self, rate: f64, hold: f64) -> Phase {
         match rate {
             r if r != 0.0 => Phase::Slipping(r.signum()),
-            _ if hold.abs() <= self.dry => Phase::Sticking,
+            // Without dry friction nothing holds the joint: it moves off at once, if at all.
+            _ if hold.abs() <= self.dry && self.dry > 0.0 => Phase::Sticking,
             _ => Phase::Slipping(-hold.signum()),
         }
     }

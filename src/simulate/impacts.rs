@@ -78,10 +78,9 @@ impl MechanicalSystem<'_> {
             mimics::solve(&model.mimics, &mass, &unit).ok_or(SystemError::SingularMassMatrix)?;
         let coupling = DMatrix::from_fn(rows.len(), rows.len(), |i, j| responses[(rows[i], j)]);
         let free = DVector::from_fn(rows.len(), |i, _| -a[rows[i]]);
-        let forces = coupling
-            .lu()
-            .solve(&free)
-            .ok_or(SystemError::SingularMassMatrix)?;
+        // Rank-revealing: a follower held with its leader gives two rows for one coupled motion.
+        let forces = (coupling.svd(true, true).solve(&free, 1e-12))
+            .map_err(|_| SystemError::SingularMassMatrix)?;
         *a += &responses * &forces;
         let mut forces = forces.iter();
         for (k, force) in stops.zip(forces.by_ref()) {

@@ -372,6 +372,16 @@ impl<'a> Importer<'a> {
     /// own coupling composed in when the leader mimics a joint too; none for other joints. A
     /// leader that is not a joint with one coordinate, or a cycle of mimics, is E0470 / E0472.
     fn coupling_fields(&self, index: usize) -> Result<Vec<String>, Diagnostic> {
+        let single = |j: &urdf_rs::Joint| {
+            matches!(
+                j.joint_type,
+                JointType::Revolute | JointType::Continuous | JointType::Prismatic
+            )
+        };
+        if !single(&self.robot.joints[index]) {
+            // A fixed (or multi-coordinate) joint's `<mimic>` has no coordinate to couple.
+            return Ok(Vec::new());
+        }
         let (mut multiplier, mut offset) = (1.0, 0.0);
         let mut current = index;
         let mut visited = vec![index];
