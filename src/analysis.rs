@@ -126,6 +126,10 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         .iter()
         .map(|link| link_report(mechanism, &topology, link.join, link.number, &unknowns))
         .collect();
+    // Each mimic joint couples two coordinates of the tree: one degree of freedom less.
+    let couplings = (mechanism.joins.iter())
+        .filter(|j| mechanism.link(j.link).mimic.is_declared())
+        .count();
     if topology.complementary.is_empty() {
         // A tree: no constraint, the mobility is the sum of the links' degrees of freedom.
         let joints: Option<Vec<&JointAnalysis>> = bodies
@@ -134,7 +138,9 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
             .collect();
         let (mobility, unavailable) = match joints {
             Some(joints) => (
-                Some(Mobility::of_tree(joints.iter().map(|j| j.dof).sum())),
+                Some(
+                    Mobility::of_tree(joints.iter().map(|j| j.dof).sum()).with_couplings(couplings),
+                ),
                 None,
             ),
             None => (None, Some("a joint could not be analysed".to_string())),
@@ -159,7 +165,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     let (mobility, mobility_unavailable) =
         match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
             Ok((model, assembled, _)) => match mobility(&model, &assembled.coordinates_vector()) {
-                Ok(m) => (Some(m), None),
+                Ok(m) => (Some(m.with_couplings(couplings)), None),
                 Err(e) => (None, Some(crate::kinematics::eval::describe(&e, mechanism))),
             },
             Err(diagnostics) => (

@@ -169,14 +169,19 @@ pub fn field_names(target: Ty) -> Vec<String> {
 }
 
 /// A link's scalar fields besides its efforts: its potential, the limits of its coordinate and
-/// the restitution of its stops, and the geared rotor that drives it.
-const LINK_SCALAR_FIELDS: [&str; 6] = [
+/// the restitution of its stops, the geared rotor that drives it, the coupling of a mimic's
+/// coordinate to its leader's, and the friction in its coordinate.
+const LINK_SCALAR_FIELDS: [&str; 10] = [
     "potential",
     "lower",
     "upper",
     "restitution",
     "rotor_inertia",
     "gear_ratio",
+    "mimic_multiplier",
+    "mimic_offset",
+    "friction",
+    "damping",
 ];
 
 /// Fields a constructor accepts, with the type of their value.
@@ -191,8 +196,9 @@ pub fn constructor_field_type(kind: crate::syntax::ast::ConstructKind, field: &s
         (Force | Torque, "value") => Ty::Vector,
         (Force | Torque, "body") => Ty::Body,
         (Force | Torque | Link, "potential") => Ty::Scalar,
-        (Link, "lower" | "upper" | "restitution" | "rotor_inertia" | "gear_ratio") => Ty::Scalar,
+        (Link, f) if LINK_SCALAR_FIELDS.contains(&f) => Ty::Scalar,
         (Link, "rotor_axis") => Ty::Vector,
+        (Link, "mimic") => Ty::Join,
         (Force, "field") => Ty::Vector,
         _ => return None,
     })
@@ -208,7 +214,7 @@ pub fn constructor_field_names(kind: crate::syntax::ast::ConstructKind) -> Vec<S
         Link => field_names(Ty::Link)
             .into_iter()
             .chain(LINK_SCALAR_FIELDS.iter().map(|s| s.to_string()))
-            .chain(["rotor_axis".to_string()])
+            .chain(["rotor_axis".to_string(), "mimic".to_string()])
             .collect(),
         Force => ["value", "body", "potential", "field"]
             .iter()

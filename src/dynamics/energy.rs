@@ -55,7 +55,8 @@ pub fn conservative_forces(model: &Model) -> Conservative {
     let complete = model.applied.iter().all(|e| e.conservative)
         && model.link_efforts.iter().all(|e| e.conservative)
         // Coulomb friction dissipates: its power is tracked as work (see `simulate::system`).
-        && model.contacts.iter().all(|c| c.friction.is_none());
+        && model.contacts.iter().all(|c| c.friction.is_none())
+        && model.frictions.iter().all(|f| f.dry == 0.0 && f.viscous == 0.0);
     Conservative {
         constant,
         applied,

@@ -349,6 +349,18 @@ pub fn kernel(joint: &Joint) -> Kernel {
 }
 
 impl Joint {
+    /// Whether the joint has one coordinate that the state holds as it is, its rate the one
+    /// velocity (a revolute or prismatic link): the joints stops, rotors, couplings and
+    /// friction act on.
+    pub fn is_single_coordinate(&self) -> bool {
+        self.kind == JointType::Chain && self.chain.coordinate_count() == 1
+    }
+
+    /// `swing.q`: the name of the joint's first coordinate, as the outputs give it.
+    pub fn coordinate_label(&self) -> String {
+        format!("{}.{}", self.chain.name, self.chain.coordinate_names[0])
+    }
+
     pub fn nq(&self) -> usize {
         match self.kind {
             JointType::Chain => self.chain.coordinate_count(),

@@ -7,7 +7,9 @@ use super::compiled::{EffortTape, Link, TapeBuilder};
 pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
 };
+use super::friction::{self, Friction};
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
+use super::mimics::{self, Mimic};
 use super::rotors::{self, Rotor};
 use super::stops::{self, Stop};
 use super::welds;
@@ -82,6 +84,10 @@ pub struct Model {
     pub stops: Vec<Stop>,
     /// The geared rotors of the tree's links (`rotor_inertia`, `gear_ratio`, `rotor_axis`).
     pub rotors: Vec<Rotor>,
+    /// The couplings of mimic joints to their leaders (`mimic`), eliminated from the dynamics.
+    pub mimics: Vec<Mimic>,
+    /// The friction in the tree's joints (`friction`, `damping`).
+    pub frictions: Vec<Friction>,
 }
 
 impl Model {
@@ -294,6 +300,19 @@ pub fn build_with(
     let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
     refuse_stops_with_contacts(mechanism, &contacts, &stops, &mut errors);
+    let has_contacts = !contacts.is_empty();
+    let mimics = mimics::build(
+        mechanism,
+        &joints,
+        &loops,
+        has_contacts,
+        unknowns,
+        &mut errors,
+    );
+    let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
+    if has_contacts && !frictions.is_empty() {
+        errors.push(friction_with_contacts(mechanism, &frictions[0]));
+    }
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -349,6 +368,8 @@ pub fn build_with(
         contacts,
         stops,
         rotors,
+        mimics,
+        frictions,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),
@@ -897,6 +918,23 @@ pub struct DeclaredState {
     pub coordinates: Vec<f64>,
     pub rates: Vec<f64>,
     chain: ChainMotion,
+}
+
+/// Joint friction in a mechanism with contacts (E0474): the contacts' equations do not carry
+/// the joints' stick/slip phases.
+fn friction_with_contacts(mechanism: &Mechanism, friction: &Friction) -> Diagnostic {
+    let mut error = Diagnostic::error(
+        "E0474",
+        format!(
+            "`{}` has friction in a mechanism with contacts",
+            friction.coordinate
+        ),
+    )
+    .help("joint friction is simulated in mechanisms without contacts; remove one or the other");
+    if let Some(contact) = mechanism.contacts.first() {
+        error = error.primary(contact.span, "a contact of the mechanism");
+    }
+    error
 }
 
 /// Stops are simulated on a tree without contacts: the impact law does not carry the contacts'

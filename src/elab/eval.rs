@@ -6,7 +6,7 @@ use super::elaborator::{internal, Elaborator, Global, OwnJoin};
 use super::instances::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
-    as_displacement, as_frame, as_scalar, as_vector, binary, builtin_call, check_finite,
+    as_displacement, as_frame, as_join, as_scalar, as_vector, binary, builtin_call, check_finite,
     finite_literal, is_zero, vector_or_matrix,
 };
 use super::value::*;
@@ -879,6 +879,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             contact: None,
             stops: Default::default(),
             rotor: Default::default(),
+            mimic: Default::default(),
+            friction: Default::default(),
         };
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {
@@ -895,6 +897,11 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 "rotor_inertia" => link.rotor.inertia = Some(as_scalar(value, at)?),
                 "gear_ratio" => link.rotor.ratio = Some(as_scalar(value, at)?),
                 "rotor_axis" => link.rotor.axis = Some(as_vector(value, at)?),
+                "mimic" => link.mimic.leader = Some((as_join(value, at)?, at)),
+                "mimic_multiplier" => link.mimic.multiplier = Some(as_scalar(value, at)?),
+                "mimic_offset" => link.mimic.offset = Some(as_scalar(value, at)?),
+                "friction" => link.friction.dry = Some(as_scalar(value, at)?),
+                "damping" => link.friction.viscous = Some(as_scalar(value, at)?),
                 _ => return Err(internal(format!("link field `{name}`"))),
             }
         }
@@ -927,6 +934,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }),
             stops: Default::default(),
             rotor: Default::default(),
+            mimic: Default::default(),
+            friction: Default::default(),
         });
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }

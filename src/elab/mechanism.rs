@@ -66,6 +66,12 @@ pub struct Link {
     /// `rotor_inertia = ..., gear_ratio = ..., rotor_axis = ...`: a motor's rotor geared to its
     /// coordinate.
     pub rotor: LinkRotor,
+    /// `mimic = leader, mimic_multiplier = m, mimic_offset = o`: its coordinate follows the
+    /// leader join's, q = m q_leader + o.
+    pub mimic: LinkMimic,
+    /// `friction = F, damping = c`: dry (Coulomb) and viscous friction opposing the rate of its
+    /// coordinate.
+    pub friction: LinkFriction,
 }
 
 /// How a round body touches a plane: which rows a contact adds to the equations of motion.
@@ -124,6 +130,38 @@ impl LinkRotor {
     /// Whether any of the rotor's fields is written.
     pub fn is_declared(&self) -> bool {
         self.inertia.is_some() || self.ratio.is_some() || self.axis.is_some()
+    }
+}
+
+/// A holonomic coupling of the link's coordinate to the coordinate of another join, `leader`:
+/// q = multiplier × q_leader + offset (multiplier 1 and offset 0 when not given).
+#[derive(Clone, Debug, Default)]
+pub struct LinkMimic {
+    pub leader: Option<(JoinId, Span)>,
+    pub multiplier: Option<Scalar>,
+    pub offset: Option<Scalar>,
+}
+
+impl LinkMimic {
+    /// Whether any of the coupling's fields is written.
+    pub fn is_declared(&self) -> bool {
+        self.leader.is_some() || self.multiplier.is_some() || self.offset.is_some()
+    }
+}
+
+/// Friction in a link's coordinate: a dry (Coulomb) force or torque of constant magnitude
+/// `dry` opposing its rate, holding it at rest while the force needed to hold it is within
+/// `dry`, and a viscous one, −`viscous` × rate; each optional as declared.
+#[derive(Clone, Debug, Default)]
+pub struct LinkFriction {
+    pub dry: Option<Scalar>,
+    pub viscous: Option<Scalar>,
+}
+
+impl LinkFriction {
+    /// Whether any of the friction's fields is written.
+    pub fn is_declared(&self) -> bool {
+        self.dry.is_some() || self.viscous.is_some()
     }
 }
 

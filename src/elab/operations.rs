@@ -29,6 +29,13 @@ pub(super) fn as_vector(value: Value, span: Span) -> Result<Vector> {
     }
 }
 
+pub(super) fn as_join(value: Value, span: Span) -> Result<JoinId> {
+    match value {
+        Value::Join(id) => Ok(id),
+        _ => Err(internal(format!("expected a join at {span:?}"))),
+    }
+}
+
 pub(super) fn as_displacement(value: Value, span: Span) -> Result<Displacement> {
     match value {
         Value::Displacement(d) | Value::Rotation(d) => Ok(d),

@@ -56,6 +56,18 @@ pub struct Mobility {
 }
 
 impl Mobility {
+    /// The mobility with `couplings` mimic joints more (links' `mimic`): each holds one
+    /// coordinate of the tree to another, a constraint row independent of every other (its
+    /// follower appears in no other row).
+    pub fn with_couplings(mut self, couplings: usize) -> Mobility {
+        self.constraint_rows += couplings;
+        self.rank += couplings;
+        self.generic_rank += couplings;
+        self.first_order_mobility = self.first_order_mobility.saturating_sub(couplings);
+        self.mobility = self.mobility.saturating_sub(couplings);
+        self
+    }
+
     /// A tree: no constraints.
     pub fn of_tree(tree_dof: usize) -> Mobility {
         Mobility {

@@ -205,6 +205,15 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     for impact in &report.impacts {
         out += &impact_line(impact);
     }
+    for switch in &report.friction_switches {
+        out += &format!(
+            "friction at t = {:.12}: `{}` {} at {:.9e}\n",
+            switch.time,
+            switch.coordinate,
+            switch.phase.describe(),
+            switch.position
+        );
+    }
     if let Some(e) = &report.step_error {
         out += &format!(
             "largest local error estimate of a step: {:.1e} of the tolerances (rtol {:e}, atol {:e}), at t = {}\n",

@@ -128,6 +128,7 @@ pub fn robot(model: &Model, robot_name: &str) -> Result<Robot, ExportError> {
         links.extend(intermediate.into_iter().map(bare_link));
         joints.extend(chain);
     }
+    couple_and_damp(model, &mut joints);
     unique(links.iter().map(|l| &l.name), "link")?;
     unique(joints.iter().map(|j| &j.name), "joint")?;
     Ok(Robot {
@@ -641,6 +642,30 @@ fn first_coordinate(s: &SExpr) -> Option<usize> {
     }
 }
 
+/// The mimic couplings (`<mimic>`) and the joint friction (`<dynamics>`) of the model on the
+/// URDF joints of their joins, which have one coordinate and so the join's name.
+fn couple_and_damp(model: &Model, joints: &mut [UrdfJoint]) {
+    let name = |k: usize| &model.joints[k].chain.name;
+    let position = |joints: &[UrdfJoint], k: usize| joints.iter().position(|j| &j.name == name(k));
+    for mimic in &model.mimics {
+        if let Some(joint) = position(joints, mimic.joint).map(|i| &mut joints[i]) {
+            joint.mimic = Some(urdf_rs::Mimic {
+                joint: name(mimic.leader_joint).clone(),
+                multiplier: Some(mimic.multiplier),
+                offset: Some(mimic.offset),
+            });
+        }
+    }
+    for friction in &model.frictions {
+        if let Some(joint) = position(joints, friction.joint).map(|i| &mut joints[i]) {
+            joint.dynamics = Some(urdf_rs::Dynamics {
+                damping: friction.viscous,
+                friction: friction.dry,
+            });
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // XML. urdf-rs's writer always writes `<inertial>` and `<limit>`, so a massless link would get a
 // zero mass and a continuous joint zero effort and velocity limits: the text is written here.
@@ -728,6 +753,22 @@ fn write_joint(out: &mut String, joint: &UrdfJoint) {
             number(l.upper),
             number(l.effort),
             number(l.velocity)
+        );
+    }
+    if let Some(d) = &joint.dynamics {
+        let (damping, friction) = (number(d.damping), number(d.friction));
+        let _ = writeln!(
+            out,
+            "    <dynamics damping=\"{damping}\" friction=\"{friction}\"/>"
+        );
+    }
+    if let Some(m) = &joint.mimic {
+        let _ = writeln!(
+            out,
+            "    <mimic joint=\"{}\" multiplier=\"{}\" offset=\"{}\"/>",
+            escape(&m.joint),
+            number(m.multiplier.unwrap_or(1.0)),
+            number(m.offset.unwrap_or(0.0))
         );
     }
     out.push_str("  </joint>\n");

@@ -6,6 +6,8 @@ use nalgebra::{DMatrix, DVector};
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics};
 use crate::dynamics::energy::kinetic_energy;
+use crate::dynamics::friction::Phase;
+use crate::dynamics::mimics;
 use crate::dynamics::stops::{impact_velocities, Impact, Side};
 
 /// Below this approach rate (coordinate units per second) after an impact, a coordinate pushed
@@ -47,46 +49,49 @@ impl MechanicalSystem<'_> {
         }
     }
 
-    /// Holds the coordinates resting on their stops: adds to the accelerations `a` (at q) the
-    /// response M⁻¹ Sᵀ λ to the contact forces λ that keep those coordinates' accelerations
-    /// zero, and records λ.
+    /// Holds the coordinates at rest, on their stops or stuck by their friction: adds to the
+    /// accelerations `a` (at q) the response P Sᵀ λ to the forces λ that keep those
+    /// coordinates' accelerations zero, P = M⁻¹ with the mimic couplings kept
+    /// (`mimics::solve`), and records λ.
     pub(super) fn hold_resting(
         &mut self,
         q: &[f64],
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
         let model = self.model;
-        let held: Vec<usize> = (0..model.stops.len())
-            .filter(|&k| self.resting[k])
+        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
+        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
+        let rows: Vec<usize> = stops
+            .clone()
+            .map(|k| model.stops[k].velocity)
+            .chain(frictions.clone().map(|k| model.frictions[k].velocity))
             .collect();
-        if held.is_empty() {
+        if rows.is_empty() {
             return Ok(());
         }
         let mass = crba(model, &mut self.data, q)?;
-        let factors = mass.cholesky().ok_or(SystemError::SingularMassMatrix)?;
-        let mut responses = DMatrix::zeros(model.nv, held.len());
-        for (column, &k) in held.iter().enumerate() {
-            responses[(model.stops[k].velocity, column)] = 1.0;
+        let mut unit = DMatrix::zeros(model.nv, rows.len());
+        for (column, &row) in rows.iter().enumerate() {
+            unit[(row, column)] = 1.0;
         }
-        factors.solve_mut(&mut responses);
-        let rows: Vec<usize> = held.iter().map(|&k| model.stops[k].velocity).collect();
-        let coupling = DMatrix::from_fn(held.len(), held.len(), |i, j| responses[(rows[i], j)]);
-        let free = DVector::from_fn(held.len(), |i, _| -a[rows[i]]);
-        let forces = coupling
-            .lu()
-            .solve(&free)
-            .ok_or(SystemError::SingularMassMatrix)?;
-        for i in 0..model.nv {
-            a[i] += (0..held.len())
-                .map(|j| responses[(i, j)] * forces[j])
-                .sum::<f64>();
-        }
-        for (j, &k) in held.iter().enumerate() {
+        let responses =
+            mimics::solve(&model.mimics, &mass, &unit).ok_or(SystemError::SingularMassMatrix)?;
+        let coupling = DMatrix::from_fn(rows.len(), rows.len(), |i, j| responses[(rows[i], j)]);
+        let free = DVector::from_fn(rows.len(), |i, _| -a[rows[i]]);
+        // Rank-revealing: a follower held with its leader gives two rows for one coupled motion.
+        let forces = (coupling.svd(true, true).solve(&free, 1e-12))
+            .map_err(|_| SystemError::SingularMassMatrix)?;
+        *a += &responses * &forces;
+        let mut forces = forces.iter();
+        for (k, force) in stops.zip(forces.by_ref()) {
             // A lower stop pushes the coordinate up, an upper one down.
             self.contact[k] = match model.stops[k].side {
-                Side::Lower => forces[j],
-                Side::Upper => -forces[j],
+                Side::Lower => *force,
+                Side::Upper => -*force,
             };
+        }
+        for (k, force) in frictions.zip(forces) {
+            self.holding[k] = *force;
         }
         Ok(())
     }
@@ -102,7 +107,8 @@ impl MechanicalSystem<'_> {
         let v = v.to_vec();
         let mass = crba(model, &mut self.data, &q)?;
         let kinetic_before = self.kinetic_energy_at(&q, &v)?;
-        let after = impact_velocities(stop, &mass, None, &v).ok_or_else(|| {
+        let couplings = (!model.mimics.is_empty()).then(|| mimics::rows(&model.mimics, model.nv));
+        let after = impact_velocities(stop, &mass, couplings.as_ref(), &v).ok_or_else(|| {
             SystemError::Impact(format!(
                 "the impact on the {} stop of `{}` has no solution (no inertia along it)",
                 side_name(stop.side),
@@ -114,6 +120,7 @@ impl MechanicalSystem<'_> {
         // The event was located past the bound by at most the time resolution: the coordinate
         // starts again from the bound itself, so that the next crossing begins at zero.
         y[stop.position] = stop.bound;
+        mimics::restore(&model.mimics, y, positions, stop.velocity);
         let v_after = &y[positions..positions + after.len()];
         let impact = Impact {
             time: t,
@@ -131,6 +138,7 @@ impl MechanicalSystem<'_> {
         if stop.approach(v_after) > -RESTING_RATE && self.pushed_into(t, y, index)? {
             // Too slow to leave: the coordinate rests on the stop from now on.
             y[positions + stop.velocity] = 0.0;
+            mimics::restore(&model.mimics, y, positions, stop.velocity);
             self.resting[index] = true;
             if let Some(last) = self.impacts.last_mut() {
                 last.rests = true;

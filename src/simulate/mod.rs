@@ -7,6 +7,7 @@ pub mod clock;
 pub mod compiled;
 pub mod consistent;
 pub mod constraints;
+mod friction;
 pub mod impacts;
 pub mod lie_group;
 pub mod native;

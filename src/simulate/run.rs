@@ -23,6 +23,8 @@ use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
+use crate::dynamics::friction::Switch;
+use crate::dynamics::mimics;
 use crate::dynamics::model::Model;
 use crate::dynamics::stops::Impact;
 use crate::integrate::{
@@ -78,15 +80,15 @@ impl OdeSystem for MechanicalSystem<'_> {
     }
 
     fn event_count(&self) -> usize {
-        self.model.stops.len()
+        self.event_total()
     }
 
     fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
-        Ok(self.stop_events(t, y, values)?)
+        Ok(self.event_values(t, y, values)?)
     }
 
     fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
-        Ok(self.stop_event(t, y, index)?)
+        Ok(self.act_on_event(t, y, index)?)
     }
 }
 
@@ -153,18 +155,19 @@ impl OdeSystem for WithWork<'_, '_> {
     }
 
     fn event_count(&self) -> usize {
-        self.0.model.stops.len()
+        self.0.event_total()
     }
 
     fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
         let n = self.0.dimension();
-        Ok(self.0.stop_events(t, &y[..n], values)?)
+        Ok(self.0.event_values(t, &y[..n], values)?)
     }
 
-    /// The impact or release; the work of the non-conservative efforts does not jump.
+    /// The impact, release or friction switch; the work of the non-conservative efforts does
+    /// not jump.
     fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
         let n = self.0.dimension();
-        Ok(self.0.stop_event(t, &mut y[..n], index)?)
+        Ok(self.0.act_on_event(t, &mut y[..n], index)?)
     }
 }
 
@@ -211,6 +214,9 @@ pub struct Report {
     /// The impacts on the stops (links' `lower` and `upper`), in time order.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub impacts: Vec<Impact>,
+    /// The joints' friction switching between slipping and sticking, in time order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub friction_switches: Vec<Switch>,
     /// Where an explicit integrator's steps were found held by its stability region (W0901).
     pub stiffness: Option<StiffnessReport>,
     pub failure: Option<RunFailure>,
@@ -613,9 +619,17 @@ fn simulate_from(
     y0.extend_from_slice(&v0);
     let reference = Rc::new(RefCell::new(start.coordinates.to_vec()));
     let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
-    // The native code knows nothing of geared rotors: the model's own evaluation counts them.
-    system.use_native(prepared.native.as_ref().filter(|_| model.rotors.is_empty()));
+    // The native code knows nothing of geared rotors, mimic couplings or joint friction: the
+    // model's own evaluation counts them.
+    let plain = model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty();
+    system.use_native(prepared.native.as_ref().filter(|_| plain));
     if let Err(error) = system.start_loops(&mut y0) {
+        return failed_at_start(prepared, error.to_string());
+    }
+    // The followers start where their leaders put them, whatever `initial` said.
+    let (q0, v0) = y0.split_at_mut(model.positions());
+    mimics::impose(&model.mimics, q0, v0);
+    if let Err(error) = system.start_friction(0.0, &mut y0) {
         return failed_at_start(prepared, error.to_string());
     }
     let mut sampler = Sampler {
@@ -696,11 +710,12 @@ fn simulate_from(
             &integrator_settings,
             &mut observer,
         ),
-        None if !model.stops.is_empty() || !model.rotors.is_empty() => Err(IntegrationError {
+        None if !plain || !model.stops.is_empty() => Err(IntegrationError {
             time: 0.0,
             failure: Failure::System(
-                "the symplectic integrator does not handle stops (links' `lower` and `upper`) \
-                 nor geared rotors: use `dopri5`, `dop853`, `rk4` or `implicit`"
+                "the symplectic integrator does not handle stops (links' `lower` and `upper`), \
+                 geared rotors, mimic joints nor joint friction: use `dopri5`, `dop853`, `rk4` \
+                 or `implicit`"
                     .to_string(),
             ),
             stats: Box::default(),
@@ -807,6 +822,7 @@ fn simulate_from(
             .as_ref()
             .and_then(|bound| stiffness::describe(prepared, bound)),
         impacts: std::mem::take(&mut system.impacts),
+        friction_switches: std::mem::take(&mut system.switches),
         failure,
         interrupted,
     };
@@ -888,6 +904,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         step_error: None,
         stiffness: None,
         impacts: Vec::new(),
+        friction_switches: Vec::new(),
         failure: Some(RunFailure { time: 0.0, message }),
         interrupted: None,
     };

@@ -20,10 +20,12 @@ use crate::dynamics::algorithms::{
 use crate::dynamics::contacts::{self, ContactError, ContactScratch, CONTACT_ROW_NAMES};
 use crate::dynamics::dense::Factor;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
+use crate::dynamics::friction::Phase;
 use crate::dynamics::loops::{
     self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, Wanted,
     ROW_NAMES,
 };
+use crate::dynamics::mimics;
 use crate::dynamics::model::{DeclaredState, Model, Recovered};
 use crate::kinematics::eval::EvalError;
 use crate::spatial;
@@ -76,6 +78,13 @@ pub struct MechanicalSystem<'m> {
     /// at the last evaluation (positive while it pushes the coordinate into its range).
     pub resting: Vec<bool>,
     pub contact: Vec<f64>,
+    /// Per joint with friction, its phase (set at the start and at its events), the force
+    /// holding it while it sticks at the last evaluation, and the power of the friction then.
+    pub phases: Vec<Phase>,
+    pub holding: Vec<f64>,
+    friction_power: f64,
+    /// The friction's changes of phase so far, in time order.
+    pub switches: Vec<crate::dynamics::friction::Switch>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -84,7 +93,11 @@ impl<'m> MechanicalSystem<'m> {
         reference: Rc<RefCell<Vec<f64>>>,
         stabilisation: Stabilisation,
     ) -> MechanicalSystem<'m> {
-        let geared = if model.rotors.is_empty() { 0 } else { model.nv };
+        let geared = if needs_mass_matrix(model) {
+            model.nv
+        } else {
+            0
+        };
         MechanicalSystem {
             model,
             data: Data::new(model),
@@ -111,6 +124,10 @@ impl<'m> MechanicalSystem<'m> {
             impacts: Vec::new(),
             resting: vec![false; model.stops.len()],
             contact: vec![0.0; model.stops.len()],
+            phases: vec![Phase::Slipping(1.0); model.frictions.len()],
+            holding: vec![0.0; model.frictions.len()],
+            friction_power: 0.0,
+            switches: Vec::new(),
         }
     }
 
@@ -164,9 +181,16 @@ impl<'m> MechanicalSystem<'m> {
         )?)
     }
 
-    /// The accelerations of a tree with geared rotors, M⁻¹(τ − b) with M from CRBA and the bias
-    /// b from RNEA, which count the rotors (the articulated-body algorithm does not).
-    fn geared_accelerations(
+    /// Whether this tree's accelerations come from its mass matrix ([`needs_mass_matrix`]).
+    fn needs_mass_matrix(&self) -> bool {
+        needs_mass_matrix(self.model)
+    }
+
+    /// The accelerations of a tree from its mass matrix: M from CRBA and the bias b from RNEA
+    /// (both count the rotors), the slipping joints' friction added to the efforts τ, solved
+    /// with the mimic couplings kept (`mimics::solve`); the friction's power in
+    /// `friction_power`.
+    fn mass_accelerations(
         &mut self,
         t: f64,
         q: &[f64],
@@ -182,11 +206,18 @@ impl<'m> MechanicalSystem<'m> {
         let (data, bias) = (&mut self.data, &mut self.inverse);
         rnea_after_kinematics(model, data, &self.at_rest, &efforts.external, bias);
         crba_after_kinematics(model, &mut self.data, &mut self.mass);
-        if !self.mass_factor.factor(&self.mass) {
-            return Err(SystemError::SingularMassMatrix);
-        }
         for (i, a) in accelerations.iter_mut().enumerate() {
             *a = efforts.tau[i] - self.inverse[i];
+        }
+        self.friction_power = self.add_friction(v, accelerations);
+        if !model.mimics.is_empty() {
+            // The couplings' reduced matrix S^T M S is formed per evaluation (`mimics::solve`).
+            let solved = mimics::solve_vector(&model.mimics, &self.mass, accelerations);
+            accelerations.copy_from(&solved.ok_or(SystemError::SingularMassMatrix)?);
+            return Ok(());
+        }
+        if !self.mass_factor.factor(&self.mass) {
+            return Err(SystemError::SingularMassMatrix);
         }
         self.mass_factor.solve_vector_mut(accelerations);
         Ok(())
@@ -413,16 +444,21 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
+        self.friction_power = 0.0;
         // The contacts' solve counts the rotors already (it uses CRBA and RNEA).
-        if !native && !model.has_loops() && !model.has_contacts() && !model.rotors.is_empty() {
-            self.geared_accelerations(t, q, v, &mut accelerations)?;
+        if !native && !model.has_contacts() && self.needs_mass_matrix() {
+            self.mass_accelerations(t, q, v, &mut accelerations)?;
         }
         let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
             &self.efforts
         } else {
             &self.no_efforts
         };
-        self.power = if native { 0.0 } else { efforts.power };
+        self.power = if native {
+            0.0
+        } else {
+            efforts.power + self.friction_power
+        };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model
                 .joints
@@ -835,3 +871,12 @@ impl fmt::Display for NotFiniteCause {
 }
 
 impl std::error::Error for SystemError {}
+
+/// Whether the accelerations of a tree need the mass matrix rather than the articulated-body
+/// algorithm: geared rotors (which ABA does not count), mimic couplings (eliminated through M)
+/// or joint friction (held through M while sticking).
+fn needs_mass_matrix(model: &Model) -> bool {
+    let extended =
+        !model.rotors.is_empty() || !model.mimics.is_empty() || !model.frictions.is_empty();
+    !model.has_loops() && extended
+}

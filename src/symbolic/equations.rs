@@ -162,6 +162,19 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
         .primary(contact.span, "this contact constrains the motion")
         .help("`lsdc simulate` integrates it; the symbolic equations cover joints and closed loops only")]);
     }
+    let coupled = |join: &&crate::elab::mechanism::Join| {
+        let link = mechanism.link(join.link);
+        link.mimic.is_declared() || link.friction.is_declared()
+    };
+    if let Some(join) = mechanism.joins.iter().find(coupled) {
+        // The generator writes one equation per coordinate, with no coupling or friction.
+        return Err(vec![Diagnostic::error(
+            "E0826",
+            "the equations of motion of a mechanism with mimic joints or joint friction are not written",
+        )
+        .primary(join.span, "this join is a mimic or has friction")
+        .help("`lsdc simulate` integrates it; the symbolic equations cover free joints only")]);
+    }
     if let Some(join) = mechanism
         .joins
         .iter()

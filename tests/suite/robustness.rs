@@ -380,7 +380,8 @@ fn warnings_are_printed_once_and_silenced_by_quiet() {
         .filter(|l| l.starts_with("warning"))
         .collect();
     let distinct: std::collections::BTreeSet<&str> = warnings.iter().copied().collect();
-    assert!(warnings.len() >= 20, "{stderr}");
+    // The joints' `<dynamics>` are imported as friction: 17 warnings are left.
+    assert!(warnings.len() >= 15, "{stderr}");
     assert_eq!(warnings.len(), distinct.len(), "{stderr}");
     let run = ["simulate", "--duration", "0.001", "-o", "/dev/null", panda];
     let (code, _, stderr) = crate::common::lsdc(&run);

@@ -282,12 +282,13 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
     for path in example_paths() {
         let compilation =
             compile_files(std::slice::from_ref(&path), &LoadOptions::default()).expect("readable");
-        let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
+        let mechanism = (compilation.mechanism.as_ref())
+            .unwrap_or_else(|| panic!("{}: {:?}", path.display(), compilation.diagnostics));
         let topology = lsdc::topology::build(mechanism).expect("a topology");
-        let has_rotors = mechanism
-            .joins
-            .iter()
-            .any(|join| mechanism.link(join.link).rotor.is_declared());
+        let has_rotors = mechanism.joins.iter().any(|join| {
+            let link = mechanism.link(join.link);
+            link.rotor.is_declared() || link.mimic.is_declared() || link.friction.is_declared()
+        });
         if !mechanism.contacts.is_empty() || has_rotors {
             // The equations of a mechanism with contacts or geared rotors are refused, not
             // written without them.

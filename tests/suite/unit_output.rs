@@ -50,6 +50,7 @@ mod plot {
                 step_error: None,
                 stiffness: None,
                 impacts: Vec::new(),
+                friction_switches: Vec::new(),
                 failure: None,
                 interrupted: None,
             },

@@ -157,8 +157,9 @@ fn the_arm_compiles_with_one_join_per_joint() {
         // A diagonal tensor keeps its axes and the order of its moments.
         "let lower = body mass = 0.8, iframe = [0, 0, 0.2] ++ (0.5 || [0, 1, 0]), inertia = [0.01, 0.012, 0.003] end ;",
         "join earth and base with weld as world_joint ;",
-        "join [0, 0, 0.1] ++ (1.5707963267948966 || [0, 0, 1]) * (0.3 || [0, 1, 0]) * (0.2 || [1, 0, 0]) @ base and upper with limited_revolute([0, 1, 0], -1.57, 1.57, 0) as shoulder ;",
-        "with continuous([0, 0.7071067811865475, 0.7071067811865475]) as elbow ;",
+        // The limits, friction and damping of the shoulder; the elbow mimics it.
+        "join [0, 0, 0.1] ++ (1.5707963267948966 || [0, 0, 1]) * (0.3 || [0, 1, 0]) * (0.2 || [1, 0, 0]) @ base and upper with link(q) dof = q || [0, 1, 0], lower = -1.57, upper = 1.57, restitution = 0, friction = 0.01, damping = 0.1 end as shoulder ;",
+        "with link(q) dof = q || [0, 0.7071067811865475, 0.7071067811865475], mimic = shoulder, mimic_multiplier = -2, mimic_offset = 0.1 end as elbow ;",
         "join [0, 0, 0.4] ++ 1 @ lower and flange with weld as fixed_ ; (* URDF joint \"fixed\" *)",
         // `<limit>` ranges become stops on the coordinates.
         "with limited_prismatic([1, 0, 0], 0, 0.1, 0) as slide ;",
@@ -352,9 +353,7 @@ fn warnings_point_at_what_is_not_imported() {
     let expected = [
         ("W1007", line_of(ARM, "<material name=\"grey\"")),
         ("W1002", line_of(ARM, "<limit lower=\"-1.57\"")),
-        ("W1004", line_of(ARM, "<dynamics")),
         ("W1009", line_of(ARM, "<axis xyz=\"0 2 2\"")),
-        ("W1003", line_of(ARM, "<mimic")),
         ("W1006", line_of(ARM, "<calibration")),
         ("W1001", line_of(ARM, "<joint name=\"fixed\"")),
         ("W1002", line_of(ARM, "<limit lower=\"0\"")),
@@ -364,23 +363,23 @@ fn warnings_point_at_what_is_not_imported() {
     ];
     assert_eq!(found, expected, "{:#?}", imported.warnings);
     assert!(imported.warnings.iter().all(|d| !d.is_error()));
-    let mimic = imported
+    // The mimic and the dynamics are imported: elbow = -2 shoulder + 0.1, with friction and
+    // damping on the shoulder.
+    assert!(imported
         .warnings
         .iter()
-        .find(|d| d.code == "W1003")
-        .expect("mimic");
+        .all(|d| d.code != "W1003" && d.code != "W1004"));
     assert!(
-        mimic.message.contains("`elbow` mimics joint `shoulder`"),
+        imported
+            .text
+            .contains("mimic = shoulder, mimic_multiplier = -2, mimic_offset = 0.1"),
         "{}",
-        mimic.message
+        imported.text
     );
     assert!(
-        mimic
-            .notes
-            .iter()
-            .any(|n| n.contains("-2 × `shoulder` + 0.1")),
-        "{:?}",
-        mimic.notes
+        imported.text.contains("friction = 0.01, damping = 0.1"),
+        "{}",
+        imported.text
     );
     let gazebo = imported
         .warnings
@@ -407,7 +406,7 @@ fn warnings_point_at_what_is_not_imported() {
     );
     let rendered = lsdc::diag::render::to_text(&sources, &imported.warnings);
     assert!(
-        rendered.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))),
+        rendered.contains(&format!("arm.urdf:{}:", line_of(ARM, "<calibration"))),
         "{rendered}"
     );
 }
@@ -690,11 +689,7 @@ fn urdf_files_are_programs_for_every_command() {
         stdout.contains("bodies    5 (base, upper, lower, flange, slider)"),
         "{stdout}"
     );
-    assert!(
-        stderr.contains(&format!("arm.urdf:{}:", line_of(ARM, "<mimic"))),
-        "{stderr}"
-    );
-    assert!(stderr.contains("warning[W1003]"), "{stderr}");
+    assert!(!stderr.contains("warning[W1003]"), "{stderr}");
     let (code, stdout, stderr) = lsdc(&["tree", file]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("shoulder"), "{stdout}");
@@ -943,5 +938,59 @@ fn elements_nested_too_deep_are_refused_where_the_limit_is_passed() {
             .map_or_else(|e| e.code != "E0209", |_| true),
         "{:?}",
         at_the_limit.err()
+    );
+}
+
+/// A gripper whose right finger mimics the left (listed before it in the URDF), whose left
+/// finger has `<dynamics>`: imported with the coupling active and the friction acting, and
+/// exported back with both.
+#[test]
+fn a_gripper_imports_with_its_mimic_coupling_and_friction_active() {
+    let xml = std::fs::read_to_string("tests/fixtures/urdf/gripper.urdf").expect("fixture");
+    let imported = import(&xml);
+    let text = format!(
+        "{}initial left_finger.q = 0.01, left_finger.q' = 0.05;\n",
+        imported.text
+    );
+    // The leader is declared first whatever the URDF's order.
+    let leader = text.find("as left_finger ;").expect("leader");
+    let follower = text.find("as right_finger ;").expect("follower");
+    assert!(leader < follower, "{text}");
+    let settings = lsdc::simulate::prepare::Settings {
+        duration: 1.0,
+        output: 0.01,
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..Default::default()
+    };
+    let simulation = crate::common::programs::run_text(&text, settings);
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
+    for sample in &simulation.samples {
+        assert!((sample.coordinates[0] + sample.coordinates[1]).abs() < 1e-15);
+    }
+    // Both fingers (0.2 kg) slow down under 0.2 N of dry and 0.5 v of viscous friction:
+    // v(t) = (v0 + 0.4) e^(−2.5 t) − 0.4, at rest at t = ln(1.125) / 2.5, where they stick.
+    let switches = &simulation.report.friction_switches;
+    assert_eq!(switches.len(), 1, "{switches:?}");
+    assert!(
+        (switches[0].time - 1.125f64.ln() / 2.5).abs() < 1e-9,
+        "{switches:?}"
+    );
+    assert_eq!(switches[0].phase, lsdc::dynamics::friction::Phase::Sticking);
+    let mechanism = compile(&text).mechanism.expect("elaborates");
+    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
+        .unwrap_or_else(|d| panic!("{d:?}"));
+    let exported = lsdc::output::urdf::export_urdf(&prepared.model, "gripper").expect("exports");
+    assert!(
+        exported.contains("<mimic joint=\"left_finger\" multiplier=\"-1\" offset=\"0\"/>"),
+        "{exported}"
+    );
+    assert!(
+        exported.contains("<dynamics damping=\"0.5\" friction=\"0.2\"/>"),
+        "{exported}"
     );
 }

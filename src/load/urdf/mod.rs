@@ -12,7 +12,7 @@
 //! - the root link is welded to earth, or joined to it by `free` for a floating base; gravity is
 //!   the standard library's `weight` on every link with mass.
 //!
-//! Nothing is dropped silently: what LSD does not express (limits, mimic, damping, geometry,
+//! Nothing is dropped silently: what LSD does not express (effort limits, geometry,
 //! transmissions...) is a warning at the URDF element, and so is every name that had to change.
 //! urdf-rs reads the values but keeps no positions, so the text is also parsed with roxmltree
 //! (`document`), to point each diagnostic at its element and to report malformed XML where it

@@ -72,7 +72,7 @@ impl<'a> Importer<'a> {
         }
         out += "\n(* Joints *)\n";
         out += &self.base_joint();
-        for index in 0..self.robot.joints.len() {
+        for index in self.joint_order() {
             out += &self.joint(index)?;
             self.joint_warnings(index);
         }
@@ -80,6 +80,33 @@ impl<'a> Importer<'a> {
         self.geometry_warning();
         self.unsupported_warnings();
         Ok(out)
+    }
+
+    /// The joints in the URDF's order, except that a mimic joint comes after the joint it
+    /// follows (its join names its leader, which must be declared before it).
+    fn joint_order(&self) -> Vec<usize> {
+        let joints = &self.robot.joints;
+        let leader = |i: usize| {
+            let name = &joints[i].mimic.as_ref()?.joint;
+            joints.iter().position(|j| &j.name == name)
+        };
+        let mut order: Vec<usize> = Vec::new();
+        let mut pending: Vec<usize> = Vec::new();
+        for index in 0..joints.len() {
+            match leader(index) {
+                Some(l) if !order.contains(&l) => pending.push(index),
+                _ => order.push(index),
+            }
+            // Each joint placed may release the mimics that wait for it, and theirs in turn.
+            while let Some(k) =
+                (pending.iter()).position(|&p| leader(p).is_some_and(|l| order.contains(&l)))
+            {
+                order.push(pending.remove(k));
+            }
+        }
+        // A cycle of mimics: in the URDF's order, refused where its coupling is written.
+        order.extend(pending);
+        order
     }
 
     fn header(&self, file_name: &str) -> String {
@@ -283,9 +310,37 @@ impl<'a> Importer<'a> {
         ))
     }
 
-    /// The LSD link of a URDF joint type.
+    /// The LSD link of a URDF joint type: a link of `joints`, or where the joint mimics another
+    /// or has `<dynamics>`, a link with its fields written out.
     fn joint_link(&mut self, index: usize) -> Result<String, Diagnostic> {
         let stops = self.stops(index);
+        let mut fields = self.coupling_fields(index)?;
+        let joint = &self.robot.joints[index];
+        if let Some(dynamics) = joint.dynamics.as_ref() {
+            if dynamics.friction != 0.0 {
+                fields.push(format!("friction = {}", number(dynamics.friction)));
+            }
+            if dynamics.damping != 0.0 {
+                fields.push(format!("damping = {}", number(dynamics.damping)));
+            }
+        }
+        let dof = match joint.joint_type {
+            JointType::Revolute | JointType::Continuous => "q ||",
+            JointType::Prismatic => "q *",
+            _ => "",
+        };
+        if !fields.is_empty() && !dof.is_empty() {
+            let mut all = vec![format!("dof = {dof} {}", vector(self.axis(index)?.into()))];
+            if let Some((lower, upper)) = stops {
+                all.push(format!(
+                    "lower = {}, upper = {}, restitution = 0",
+                    number(lower),
+                    number(upper)
+                ));
+            }
+            all.extend(fields);
+            return Ok(format!("link(q) {} end", all.join(", ")));
+        }
         Ok(match self.robot.joints[index].joint_type {
             JointType::Revolute => match stops {
                 Some((lower, upper)) => format!(
@@ -311,6 +366,66 @@ impl<'a> Importer<'a> {
             JointType::Floating => "free".to_string(),
             JointType::Spherical => "spherical".to_string(),
         })
+    }
+
+    /// The fields of a mimic joint (`mimic`, `mimic_multiplier`, `mimic_offset`), its leader's
+    /// own coupling composed in when the leader mimics a joint too; none for other joints. A
+    /// leader that is not a joint with one coordinate, or a cycle of mimics, is E0470 / E0472.
+    fn coupling_fields(&self, index: usize) -> Result<Vec<String>, Diagnostic> {
+        let single = |j: &urdf_rs::Joint| {
+            matches!(
+                j.joint_type,
+                JointType::Revolute | JointType::Continuous | JointType::Prismatic
+            )
+        };
+        if !single(&self.robot.joints[index]) {
+            // A fixed (or multi-coordinate) joint's `<mimic>` has no coordinate to couple.
+            return Ok(Vec::new());
+        }
+        let (mut multiplier, mut offset) = (1.0, 0.0);
+        let mut current = index;
+        let mut visited = vec![index];
+        let joints = &self.robot.joints;
+        while let Some(mimic) = joints[current].mimic.as_ref() {
+            let element = self.source.element("joint", &joints[index].name);
+            let at =
+                child(element, "mimic").map_or(self.source.span(element), |m| self.source.span(m));
+            let leader = joints.iter().position(|j| j.name == mimic.joint);
+            let single = |j: &urdf_rs::Joint| {
+                matches!(
+                    j.joint_type,
+                    JointType::Revolute | JointType::Continuous | JointType::Prismatic
+                )
+            };
+            let Some(leader) = leader.filter(|&l| single(&joints[l]) && single(&joints[current]))
+            else {
+                return Err(Diagnostic::error("E0470", format!("joint `{}` mimics `{}`, which is not a revolute, continuous or prismatic joint of the robot", joints[current].name, mimic.joint))
+                    .primary(at, "the mimic")
+                    .help("a mimic couples two joints with one coordinate each"));
+            };
+            if visited.contains(&leader) {
+                return Err(Diagnostic::error(
+                    "E0472",
+                    format!("the mimic joints of `{}` form a cycle", joints[index].name),
+                )
+                .primary(at, "the mimic")
+                .help("one joint of the cycle must move on its own"));
+            }
+            visited.push(leader);
+            // q = m q_current + o, q_current = m' q_leader + o'.
+            let (m, o) = (mimic.multiplier.unwrap_or(1.0), mimic.offset.unwrap_or(0.0));
+            offset += multiplier * o;
+            multiplier *= m;
+            current = leader;
+        }
+        if current == index {
+            return Ok(Vec::new());
+        }
+        Ok(vec![
+            format!("mimic = {}", self.names.joints[current]),
+            format!("mimic_multiplier = {}", number(multiplier)),
+            format!("mimic_offset = {}", number(offset)),
+        ])
     }
 
     /// The position limits of a revolute or prismatic joint, when its `<limit>` gives a range
@@ -373,29 +488,6 @@ impl<'a> Importer<'a> {
             (Some(limit), None) => found.push(self.joint_warning(limit, "W1002", format!("the limits of joint `{}` are not modelled", joint.name))
                 .help("the imported joint moves without limits: its `<limit>` gives no range of positions")),
             (None, _) => {}
-        }
-        if let (Some(mimic), Some(element)) = (&joint.mimic, child("mimic")) {
-            let (multiplier, offset) =
-                (mimic.multiplier.unwrap_or(1.0), mimic.offset.unwrap_or(0.0));
-            let message = format!(
-                "joint `{}` mimics joint `{}` but is imported as an independent joint",
-                joint.name, mimic.joint
-            );
-            found.push(Diagnostic::warning("W1003", message)
-                .primary(self.source.span(element), "not imported")
-                .note(format!("in URDF its position is {} × `{}` + {}", number(multiplier), mimic.joint, number(offset)))
-                .help("it gets its own coordinate: give it `initial` values consistent with the joint it mimics"));
-        }
-        if let (Some(dynamics), Some(element)) = (&joint.dynamics, child("dynamics")) {
-            if dynamics.damping != 0.0 || dynamics.friction != 0.0 {
-                let effort = if joint.joint_type == JointType::Prismatic {
-                    "force"
-                } else {
-                    "torque"
-                };
-                found.push(self.joint_warning(element, "W1004", format!("the damping and friction of joint `{}` are not modelled", joint.name))
-                    .help(format!("viscous damping can be written as a link effort: `{effort} = (-{} * q') * axis`", number(dynamics.damping))));
-            }
         }
         if let Some(controller) = child("safety_controller") {
             found.push(

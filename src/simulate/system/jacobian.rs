@@ -29,10 +29,13 @@ struct Residual {
 
 impl MechanicalSystem<'_> {
     /// Whether [`MechanicalSystem::jacobian`] applies: a tree whose joints' coordinates move
-    /// with their rates, evaluated by the articulated-body algorithm (not native code).
+    /// with their rates, evaluated by the articulated-body algorithm (not native code), without
+    /// mimic couplings or joint friction (whose accelerations are not M⁻¹ times a residual).
     pub fn has_tree_jacobian(&self) -> bool {
         let model = self.model;
         !model.has_loops()
+            && model.mimics.is_empty()
+            && model.frictions.is_empty()
             && !model.has_contacts()
             && self.native.is_none()
             && model.positions() == model.velocities()

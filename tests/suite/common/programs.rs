@@ -20,10 +20,7 @@ pub fn example_text(name: &str, replacements: &[(&str, &str)]) -> String {
 
 /// An example's mechanism, its text with some of it replaced.
 pub fn mechanism(name: &str, replacements: &[(&str, &str)]) -> lsdc::elab::Mechanism {
-    let options = LoadOptions {
-        library_dirs: Vec::new(),
-        use_environment: false,
-    };
+    let options = no_library_path();
     let text = example_text(name, replacements);
     let compilation = compile_text(
         &format!("{name}.lsd"),
@@ -73,4 +70,36 @@ pub fn column(simulation: &Simulation, name: &str) -> usize {
         .iter()
         .position(|n| n == name)
         .unwrap_or_else(|| panic!("no coordinate {name}"))
+}
+
+/// A program's run with `settings` (its own `simulate` declaration overridden).
+pub fn run_text(text: &str, settings: Settings) -> Simulation {
+    let compilation = compile_text("test.lsd", text, None, &no_library_path());
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let prepared = prepare(&mechanism, &[], &settings).unwrap_or_else(|d| panic!("{d:?}"));
+    run(&prepared, &mut |_| {})
+}
+
+/// The codes of the diagnostics of a program that elaborates, from its preparation for a run.
+pub fn refusal_codes(text: &str) -> Vec<String> {
+    let compilation = compile_text("test.lsd", text, None, &no_library_path());
+    let Some(mechanism) = compilation.mechanism else {
+        return compilation
+            .diagnostics
+            .iter()
+            .map(|d| d.code.to_string())
+            .collect();
+    };
+    match prepare(&mechanism, &[], &Settings::default()) {
+        Ok(_) => Vec::new(),
+        Err(errors) => errors.iter().map(|d| d.code.to_string()).collect(),
+    }
+}
+
+fn no_library_path() -> LoadOptions {
+    LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    }
 }
