@@ -1,5 +1,5 @@
-//! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked (then numbered, assembled
-//! and its equations written, while it stays clean) and its rendered
+//! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked (then numbered, assembled,
+//! its equations written and its simulation prepared, while it stays clean) and its rendered
 //! diagnostics are compared with `tests/golden/NAME.stderr`. The error text is reviewed like code.
 //! Set `UPDATE_GOLDEN=1` to rewrite the expected files after an intended change.
 
@@ -47,6 +47,11 @@ fn render_diagnostics(input: &Path) -> String {
                     ),
                 }
             }
+        }
+        // The simulation's preparation, for what only it rejects (values of `given`, outputs).
+        if diagnostics.is_empty() {
+            let prepared = lsdc::simulate::prepare::prepare(mechanism, &[], &Default::default());
+            diagnostics.extend(prepared.err().unwrap_or_default());
         }
     }
     // A golden file shows an error, or a warning of a clean program.
