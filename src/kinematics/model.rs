@@ -527,11 +527,12 @@ pub fn constant_pose(d: &Displacement, unknowns: &UnknownValues) -> Result<Pose,
                 let axis = constant_vector(axis, unknowns)?;
                 let angle = eval(angle, unknowns)?;
                 let norm = axis.norm();
+                // A written zero axis is refused while evaluating (E0609); this one is zero by
+                // the values of its unknowns, and a rotation about nothing has no value.
                 if norm == 0.0 {
-                    Pose::identity()
-                } else {
-                    spatial::rotation(&(axis / norm), angle)
+                    return Err(EvalError::NotFinite);
                 }
+                spatial::rotation(&(axis / norm), angle)
             }
         };
     }
