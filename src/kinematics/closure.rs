@@ -1,9 +1,10 @@
 //! Closure of the complementary links: for a join `A on a`, `B on b` with chain D(q), the loop is
-//! closed when pose(a)·A·D(q) = pose(b)·B. The residual has 6 rows per loop: the skew part of the
-//! relative rotation (zero when the frames agree) and the position difference, both in the world
-//! frame; its Jacobian is exact (not a finite difference).
+//! closed when pose(a)·A·D(q) = pose(b)·B. The residual has 6 rows per loop: the rotation error
+//! of the relative rotation (its skew part, zero when the frames agree, see `rotation_error`)
+//! and the position difference, both in the world frame; its Jacobian is exact (not a finite
+//! difference) within a quarter turn of closure.
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use super::eval::EvalError;
 use super::forward::{forward, Configuration};
@@ -28,6 +29,25 @@ impl Closure {
     }
 }
 
+/// The error of a relative rotation R by angle θ about a unit axis: the skew part of R,
+/// sin θ · axis, within a quarter turn (θ ≤ 90°), where Newton's steps need it and its Jacobian
+/// is exact. Beyond, the skew part shrinks back to zero at a half turn, which would make a
+/// loop closed in position but turned by 180° look closed (a cut revolute assembled at q + π):
+/// there the error grows on, (2 − sin θ) · axis, continuous at 90° and 2 at a half turn.
+fn rotation_error(relative: &Matrix3<f64>) -> Vector3<f64> {
+    let skew = spatial::skew_vector(relative);
+    let cos = (relative.trace() - 1.0) / 2.0;
+    if cos >= 0.0 {
+        return skew;
+    }
+    let rotation = Rotation3::from_matrix_unchecked(*relative);
+    match UnitQuaternion::from_rotation_matrix(&rotation).axis() {
+        Some(axis) => axis.into_inner() * (2.0 - skew.norm()),
+        // Not a rotation (non-finite entries): the skew part says as much as anything.
+        None => skew,
+    }
+}
+
 pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> {
     let configuration = forward(model, q)?;
     let loops = model.complementary();
@@ -46,7 +66,7 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
         );
         let (p_end, p_target) = (end.translation.vector, target.translation.vector);
         let relative = r_end.matrix().transpose() * r_target.matrix();
-        let rotation_error = spatial::skew_vector(&relative);
+        let rotation_error = rotation_error(&relative);
         let position_error = p_target - p_end;
         for r in 0..3 {
             residual[6 * k + r] = rotation_error[r];
