@@ -567,11 +567,7 @@ impl<'w> Checker<'w> {
     /// A coordinate that no dof mentions is a mistake: the link would have a useless parameter.
     fn check_coordinates_used(&mut self, params: &[Ident], fields: &[FieldInit]) {
         for param in params {
-            let used = fields
-                .iter()
-                .filter(|f| types::is_numbered(&f.name.name, "dof"))
-                .any(|f| mentions(&f.value, &param.name));
-            if !used {
+            if !dof_mentions(fields, &param.name) {
                 self.report(
                     Diagnostic::warning(
                         "W0401",
@@ -795,6 +791,14 @@ fn unknown_constructor_field(kind: ConstructKind, field: &Ident) -> Diagnostic {
         )),
     };
     diagnostic
+}
+
+/// Whether a link's `dof` fields (`dof`, `dof1`, …) mention a name, as written.
+pub fn dof_mentions(fields: &[FieldInit], name: &str) -> bool {
+    fields
+        .iter()
+        .filter(|f| types::is_numbered(&f.name.name, "dof"))
+        .any(|f| mentions(&f.value, name))
 }
 
 /// Whether an expression mentions a name (a conservative syntactic test).

@@ -23,6 +23,7 @@ use crate::syntax::ast::{
 };
 pub use checker::{Checked, Definition};
 use checker::{Checker, Ctx, Local};
+pub use expr::dof_mentions;
 use scope::Scope;
 use types::{DefId, ScopeId, Ty};
 

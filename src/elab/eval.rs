@@ -6,8 +6,8 @@ use super::elaborator::{internal, Elaborator, Global, OwnJoin};
 use super::instances::{InstanceId, ROOT};
 use super::mechanism::*;
 use super::operations::{
-    as_displacement, as_frame, as_join, as_scalar, as_vector, binary, builtin_call, check_finite,
-    finite_literal, is_zero, vector_or_matrix,
+    as_displacement, as_frame, as_join, as_scalar, as_vector, binary, builtin_call, check_axis,
+    check_finite, finite_literal, is_zero, vector_or_matrix,
 };
 use super::value::*;
 
@@ -473,6 +473,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Binary { op, lhs, rhs } => {
                 let left = self.expr(lhs, locals)?;
                 let right = self.expr(rhs, locals)?;
+                if *op == BinaryOp::Rotation {
+                    check_axis(&right, rhs.span)?;
+                }
                 let divisor_is_zero = matches!(op, BinaryOp::Div) && is_zero(&right);
                 let value = binary(*op, left, right, expr.span)?;
                 check_finite(&value, Some((*op, divisor_is_zero)), expr.span)?;
@@ -757,7 +760,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         self.depth += 1;
         let result = self.within(home, |e| e.expr(body, &mut frame));
         self.depth -= 1;
-        result
+        result.map_err(|error| at_use(error, span, &name))
     }
 
     fn construct(
@@ -791,7 +794,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         locals.truncate(depth);
         match kind {
             ConstructKind::Body => self.body(values, span),
-            ConstructKind::Link => self.link(params, values, span),
+            ConstructKind::Link => self.link(params, fields, values, span),
             ConstructKind::Force | ConstructKind::Torque => self.effort(kind, values, span),
         }
     }
@@ -865,6 +868,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     fn link(
         &mut self,
         params: &[Ident],
+        written: &[FieldInit],
         fields: Vec<(&str, Value, Span)>,
         span: Span,
     ) -> Result<Value> {
@@ -907,6 +911,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         }
         dofs.sort_by_key(|(i, _)| *i);
         link.dofs = dofs.into_iter().map(|(_, d)| d).collect();
+        coordinates_move(&link, params, written)?;
         self.mechanism.links.push(link);
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }
@@ -1001,6 +1006,38 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         } else {
             Value::Torque(id)
         })
+    }
+}
+
+/// E0610: a coordinate that the dof chain mentions as written but that its value does not
+/// depend on (`q * [0, 0, 0]`, `0 * q || axis`): it would move nothing, and its mass matrix
+/// would be singular. A coordinate the dof does not mention at all is the checker's W0401.
+fn coordinates_move(link: &Link, params: &[Ident], written: &[FieldInit]) -> Result<()> {
+    for (index, param) in params.iter().enumerate() {
+        let moves = link.dofs.iter().any(|d| d.uses_coordinate(index as u32));
+        if moves || !crate::check::dof_mentions(written, &param.name) {
+            continue;
+        }
+        return Err(Diagnostic::error(
+            "E0610",
+            format!("coordinate `{}` moves nothing", param.name),
+        )
+        .primary(param.span, "the dof's value does not depend on it")
+        .help(
+            "a translation `q * axis` needs a non-zero axis, a rotation `k * q || axis` a non-zero \
+             factor: check the values the dof is built from",
+        ));
+    }
+    Ok(())
+}
+
+/// An error met inside a definition, with the place it was used (`revolute([0, 0, 0])` for a
+/// zero axis inside `revolute`), as the checker shows them. The nesting limit E0414 already
+/// points at the call that reached it, and would otherwise list all 64 of them.
+fn at_use(error: Diagnostic, span: Span, name: &impl std::fmt::Display) -> Diagnostic {
+    match error.code {
+        "E0414" => error,
+        _ => error.secondary(span, format!("in this use of `{name}`")),
     }
 }
 

@@ -319,6 +319,26 @@ pub(super) fn finite_literal(x: f64, span: Span) -> Result<f64> {
         .help("write a finite number; constant parts of a program must be finite"))
 }
 
+/// Refuses the axis of a rotation `angle || axis` whose value is known and has length 0
+/// (`[0, 0, 0]`, `0`, or components so small that their squares vanish): such a rotation
+/// turns about nothing. An axis that depends on unknowns is checked once they have values.
+pub(super) fn check_axis(axis: &Value, span: Span) -> Result<()> {
+    let components = match axis {
+        Value::Zero => Some([0.0; 3]),
+        Value::Vector(v) => (|| Some([constant(&v[0])?, constant(&v[1])?, constant(&v[2])?]))(),
+        _ => None,
+    };
+    let Some(components) = components else {
+        return Ok(());
+    };
+    if components.iter().map(|c| c * c).sum::<f64>().sqrt() != 0.0 {
+        return Ok(());
+    }
+    Err(Diagnostic::error("E0609", "a rotation about a zero axis")
+        .primary(span, "this axis has length 0")
+        .help("`angle || axis` turns about a non-zero vector, such as `[0, 0, 1]`"))
+}
+
 /// Whether a value is the number 0 (or a vector of them), as a divisor.
 pub(super) fn is_zero(value: &Value) -> bool {
     let zero = |s: &Scalar| constant(s) == Some(0.0);

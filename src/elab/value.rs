@@ -162,6 +162,17 @@ impl Displacement {
         self.0.is_empty()
     }
 
+    /// Whether the displacement moves with coordinate `index` of its link: a translation or an
+    /// angle that uses it (an axis that does is refused later, E0802).
+    pub fn uses_coordinate(&self, index: u32) -> bool {
+        self.0.iter().any(|step| match step {
+            Elementary::Translation(t) => t.iter().any(|s| s.uses_coordinate(index)),
+            Elementary::Rotation { angle, axis } => {
+                angle.uses_coordinate(index) || axis.iter().any(|s| s.uses_coordinate(index))
+            }
+        })
+    }
+
     /// Adds every unknown the displacement's parameters mention to `into`.
     pub fn collect_unknowns(&self, into: &mut std::collections::BTreeSet<UnknownId>) {
         for step in &self.0 {
@@ -272,18 +283,32 @@ impl SExpr {
 
     /// Whether the expression uses the state of a frame (`position(F)`, …).
     pub fn uses_frame_state(&self) -> bool {
+        self.any(&|e| matches!(e, SExpr::FrameState(..)))
+    }
+
+    /// Whether the expression uses coordinate `index` of its link (or its rates).
+    pub fn uses_coordinate(&self, index: u32) -> bool {
+        self.any(&|e| matches!(e, SExpr::Coordinate { index: i, .. } if *i == index))
+    }
+
+    /// Whether `test` holds for the expression or one of its subexpressions (the arguments of
+    /// calls included, the displacement of a frame whose state is read not).
+    fn any(&self, test: &dyn Fn(&SExpr) -> bool) -> bool {
+        if test(self) {
+            return true;
+        }
         match self {
-            SExpr::FrameState(..) => true,
-            SExpr::Neg(a) => a.uses_frame_state(),
+            SExpr::Neg(a) => a.any(test),
             SExpr::Add(a, b)
             | SExpr::Sub(a, b)
             | SExpr::Mul(a, b)
             | SExpr::Div(a, b)
-            | SExpr::Pow(a, b) => a.uses_frame_state() || b.uses_frame_state(),
+            | SExpr::Pow(a, b) => a.any(test) || b.any(test),
             SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => {
-                args.iter().any(|a| a.uses_frame_state())
+                args.iter().any(|a| a.any(test))
             }
-            SExpr::Num(_)
+            SExpr::FrameState(..)
+            | SExpr::Num(_)
             | SExpr::Time
             | SExpr::Unknown(_)
             | SExpr::Coordinate { .. }

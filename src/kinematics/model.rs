@@ -423,15 +423,17 @@ pub fn link_steps(
         steps.push(match step {
             Elementary::Translation(v) => Step::Translation(v.clone()),
             Elementary::Rotation { angle, axis } => {
+                let axis_expr = axis;
                 let axis = constant_vector(axis, unknowns)
                     .map_err(|e| geometry_error(mechanism, e, link.span, &name))?;
                 let norm = axis.norm();
                 if norm == 0.0 || !norm.is_finite() {
-                    return Err(Diagnostic::error(
-                        "E0704",
-                        format!("a rotation of join `{name}` has a zero axis"),
-                    )
-                    .primary(link.span, "in this link's dof chain"));
+                    return Err(zero_axis(
+                        mechanism,
+                        axis_expr,
+                        (link.span, join.span),
+                        &name,
+                    ));
                 }
                 Step::Rotation {
                     angle: angle.clone(),
@@ -441,6 +443,38 @@ pub fn link_steps(
         });
     }
     Ok(steps)
+}
+
+/// E0704: a rotation axis of a dof chain that is zero with the values of its unknowns. A
+/// written zero axis is refused where it is written (E0609), so these values came from
+/// `given` or `--set`: the message names them.
+fn zero_axis(
+    mechanism: &Mechanism,
+    axis: &[Scalar; 3],
+    (link, join_span): (Span, Span),
+    join: &str,
+) -> Diagnostic {
+    let mut ids = std::collections::BTreeSet::new();
+    axis.iter().for_each(|s| s.collect_unknowns(&mut ids));
+    let names: Vec<String> = ids
+        .iter()
+        .map(|&id| super::eval::unknown_label(mechanism, id))
+        .collect();
+    let mut diagnostic = Diagnostic::error(
+        "E0704",
+        format!("a rotation of join `{join}` has a zero axis"),
+    )
+    .primary(link, "in this link's dof chain")
+    .secondary(join_span, "the join");
+    if !names.is_empty() {
+        diagnostic = diagnostic
+            .note(format!(
+                "the axis is zero with the values given to {}",
+                names.join(", ")
+            ))
+            .help("give values that make the axis non-zero, with `given` or `--set NAME=VALUE`");
+    }
+    diagnostic
 }
 
 /// A joint model of the link alone (frames at identity): enough to analyse the joint.
@@ -493,11 +527,12 @@ pub fn constant_pose(d: &Displacement, unknowns: &UnknownValues) -> Result<Pose,
                 let axis = constant_vector(axis, unknowns)?;
                 let angle = eval(angle, unknowns)?;
                 let norm = axis.norm();
+                // A written zero axis is refused while evaluating (E0609); this one is zero by
+                // the values of its unknowns, and a rotation about nothing has no value.
                 if norm == 0.0 {
-                    Pose::identity()
-                } else {
-                    spatial::rotation(&(axis / norm), angle)
+                    return Err(EvalError::NotFinite);
                 }
+                spatial::rotation(&(axis / norm), angle)
             }
         };
     }

@@ -1,6 +1,5 @@
 //! Golden tests for diagnostics: each `tests/golden/NAME.lsd` is checked (then numbered, assembled,
-//! prepared for a simulation if it has `simulate`, and its equations written, while it stays
-//! clean) and its rendered
+//! prepared for a simulation, and its equations written, while it stays clean) and its rendered
 //! diagnostics are compared with `tests/golden/NAME.stderr`. The error text is reviewed like code.
 //! Set `UPDATE_GOLDEN=1` to rewrite the expected files after an intended change.
 
@@ -38,16 +37,13 @@ fn render_diagnostics(input: &Path) -> String {
                     &Default::default(),
                 ) {
                     Err(errors) => diagnostics.extend(errors),
-                    // A program that asks for a simulation (`simulate`) is prepared for it,
-                    // then every program's equations are written, for what only they reject.
+                    // The program is prepared for a simulation, for what only that rejects
+                    // (values of `given`, outputs, rotors), then its equations are written.
                     Ok((_, _, warnings)) => {
                         let settings = lsdc::simulate::prepare::Settings::default();
-                        let refused = match &mechanism.scenario {
-                            Some(_) => lsdc::simulate::prepare::prepare(mechanism, &[], &settings)
-                                .err()
-                                .unwrap_or_default(),
-                            None => Vec::new(),
-                        };
+                        let refused = lsdc::simulate::prepare::prepare(mechanism, &[], &settings)
+                            .err()
+                            .unwrap_or_default();
                         let later = match refused.is_empty() {
                             true => lsdc::symbolic::generate(mechanism, &topology)
                                 .err()
