@@ -37,18 +37,30 @@ fn render_diagnostics(input: &Path) -> String {
                     &Default::default(),
                 ) {
                     Err(errors) => diagnostics.extend(errors),
-                    // The program is prepared for a simulation, for what only that rejects
-                    // (values of `given`, outputs, rotors), then its equations are written.
+                    // A program that asks for a simulation (`simulate`) is prepared for it,
+                    // then every program's equations are written, for what only they reject;
+                    // a clean program without `simulate` is prepared last (values of `given`,
+                    // outputs).
                     Ok((_, _, warnings)) => {
                         let settings = lsdc::simulate::prepare::Settings::default();
-                        let refused = lsdc::simulate::prepare::prepare(mechanism, &[], &settings)
-                            .err()
-                            .unwrap_or_default();
+                        let prepare = || {
+                            lsdc::simulate::prepare::prepare(mechanism, &[], &settings)
+                                .err()
+                                .unwrap_or_default()
+                        };
+                        let refused = match &mechanism.scenario {
+                            Some(_) => prepare(),
+                            None => Vec::new(),
+                        };
                         let later = match refused.is_empty() {
                             true => lsdc::symbolic::generate(mechanism, &topology)
                                 .err()
                                 .unwrap_or_default(),
                             false => refused,
+                        };
+                        let later = match (later.is_empty(), &mechanism.scenario) {
+                            (true, None) => prepare(),
+                            _ => later,
                         };
                         diagnostics.extend(warnings.into_iter().chain(later))
                     }
