@@ -120,6 +120,7 @@ pub fn build(
             Err((message, label)) => errors.push(
                 Diagnostic::error("E0474", message)
                     .primary(link.span, label)
+.secondary(mechanism.join(joint.chain.join).span, "the join")
                     .help("give `friction` (and `damping`) as numbers ≥ 0 on a revolute or prismatic link of a tree"),
             ),
         }

@@ -231,6 +231,7 @@ fn follower(
             link.span,
             "`mimic_multiplier` and `mimic_offset` need `mimic`",
         )
+        .secondary(mechanism.join(joint.chain.join).span, "the join")
         .help("name the join to follow, e.g. `mimic = left`"));
     };
     let leader = joints.iter().find(|j| j.chain.join == leader_join);
@@ -266,6 +267,7 @@ fn follower(
                 link.span,
                 "`mimic_multiplier` and `mimic_offset` must be numbers",
             )
+            .secondary(mechanism.join(joint.chain.join).span, "the join")
             .help("give the unknowns they use values (`--set`)")),
         },
     };

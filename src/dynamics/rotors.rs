@@ -66,11 +66,13 @@ pub fn build(
             (false, _) => errors.push(
                 Diagnostic::error("E0453", format!("`{name}` has a geared rotor but {} coordinates", joint.chain.coordinate_count()))
                     .primary(link.span, "a rotor drives a link with one coordinate")
+.secondary(mechanism.join(joint.chain.join).span, "the join")
                     .help("put the rotor on a revolute or prismatic link (`geared_revolute` in `joints`)"),
             ),
             (true, None) => errors.push(
                 Diagnostic::error("E0453", format!("the geared rotor of `{name}` is incomplete"))
                     .primary(link.span, "needs `rotor_inertia` (≥ 0), `gear_ratio` and a non-zero `rotor_axis`, as numbers")
+.secondary(mechanism.join(joint.chain.join).span, "the join")
                     .help("give all three fields, e.g. `rotor_inertia = 2e-5, gear_ratio = 100, rotor_axis = [0, 0, 1]`"),
             ),
         }

@@ -147,6 +147,7 @@ pub fn build(
                     ),
                 )
                 .primary(link.span, "`lower`, `upper` need a link with one coordinate")
+.secondary(mechanism.join(joint.chain.join).span, "the join")
                 .help("put the stops on a revolute or prismatic link (`limited_revolute`, `limited_prismatic` in `joints`)"),
             );
             continue;
@@ -205,6 +206,7 @@ fn joint_stops(
                             link.span,
                             "its `lower`, `upper` and `restitution` must be numbers",
                         )
+                        .secondary(mechanism.join(joint.chain.join).span, "the join")
                         .help("give the unknowns they use values (`--set`)"),
                 );
                 Some(Err(()))
@@ -225,6 +227,7 @@ fn joint_stops(
                     format!("the stops of `{name}` leave no room: lower {lower} ≥ upper {upper}"),
                 )
                 .primary(link.span, "here")
+                .secondary(mechanism.join(joint.chain.join).span, "the join")
                 .help("give `lower` a value below `upper`"),
             );
             return None;
@@ -237,6 +240,7 @@ fn joint_stops(
                 format!("the restitution of `{name}`'s stops is {restitution}, outside [0, 1]"),
             )
             .primary(link.span, "here")
+            .secondary(mechanism.join(joint.chain.join).span, "the join")
             .help("0 stops the coordinate dead at the bound, 1 bounces back without loss"),
         );
         return None;
