@@ -16,7 +16,7 @@
 
 use serde::Serialize;
 
-use super::joint::Joint;
+use super::joint::{refuse_declared, Joint};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{LinkFriction, Mechanism};
 use crate::kinematics::eval::{eval, UnknownValues};
@@ -97,19 +97,17 @@ pub fn build(
     errors: &mut Vec<Diagnostic>,
 ) -> Vec<Friction> {
     let mut found = Vec::new();
-    for chain in loops {
-        let join = mechanism.join(chain.join);
-        if mechanism.link(join.link).friction.is_declared() {
-            errors.push(
-                Diagnostic::error(
-                    "E0474",
-                    format!("`{}` has friction and closes a loop", chain.name),
-                )
-                .primary(join.span, "friction acts in the joints of the tree only")
-                .help("put the friction on a join of the tree, or remove it"),
-            );
-        }
-    }
+    refuse_declared(
+        mechanism,
+        loops,
+        |link| link.friction.is_declared(),
+        |name, span| {
+            Diagnostic::error("E0474", format!("`{name}` has friction and closes a loop"))
+                .primary(span, "friction acts in the joints of the tree only")
+                .help("put the friction on a join of the tree, or remove it")
+        },
+        errors,
+    );
     for (k, joint) in joints.iter().enumerate() {
         let link = mechanism.link(mechanism.join(joint.chain.join).link);
         if !link.friction.is_declared() {

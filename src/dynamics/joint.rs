@@ -16,9 +16,12 @@
 
 use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 
+use crate::diag::Diagnostic;
+use crate::elab::mechanism::{Link, Mechanism};
 use crate::elab::value::SExpr;
 use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::{linear_in_first, ChainMotion, JointModel, Step};
+use crate::source::Span;
 use crate::spatial::{self, Force, Motion, Pose, Transform};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -583,4 +586,21 @@ fn quaternion_rate(q: &[f64], w: &[f64], rate: &mut [f64]) {
     rate[1] = 0.5 * (qw * wx + qy * wz - qz * wy);
     rate[2] = 0.5 * (qw * wy - qx * wz + qz * wx);
     rate[3] = 0.5 * (qw * wz + qx * wy - qy * wx);
+}
+
+/// One refusal per chain of `chains` whose link declares a field the run cannot simulate there
+/// (`declared`): `refusal` builds it from the chain's name and the span of its join.
+pub fn refuse_declared<'a>(
+    mechanism: &Mechanism,
+    chains: impl IntoIterator<Item = &'a JointModel>,
+    declared: impl Fn(&Link) -> bool,
+    refusal: impl Fn(&str, Span) -> Diagnostic,
+    errors: &mut Vec<Diagnostic>,
+) {
+    for chain in chains {
+        let join = mechanism.join(chain.join);
+        if declared(mechanism.link(join.link)) {
+            errors.push(refusal(&chain.name, join.span));
+        }
+    }
 }

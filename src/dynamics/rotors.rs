@@ -10,7 +10,7 @@
 
 use nalgebra::Vector3;
 
-use super::joint::{Joint, JointType};
+use super::joint::{refuse_declared, Joint, JointType};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{LinkRotor, Mechanism};
 use crate::kinematics::eval::{eval, UnknownValues};
@@ -100,17 +100,15 @@ fn refuse_on_closing_links(
     loops: &[JointModel],
     errors: &mut Vec<Diagnostic>,
 ) {
-    for chain in loops {
-        let join = mechanism.join(chain.join);
-        if mechanism.link(join.link).rotor.is_declared() {
-            errors.push(
-                Diagnostic::error(
-                    "E0827",
-                    format!("`{}` has a geared rotor but closes a loop", chain.name),
-                )
-                .primary(join.span, "this join closes a loop of the mechanism")
-                .help("put the rotor on another join of the loop (`lsdc tree` shows which joins close loops)"),
-            );
-        }
-    }
+    refuse_declared(
+        mechanism,
+        loops,
+        |link| link.rotor.is_declared(),
+        |name, span| {
+            Diagnostic::error("E0827", format!("`{name}` has a geared rotor but closes a loop"))
+                .primary(span, "this join closes a loop of the mechanism")
+                .help("put the rotor on another join of the loop (`lsdc tree` shows which joins close loops)")
+        },
+        errors,
+    );
 }

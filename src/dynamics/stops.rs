@@ -7,7 +7,7 @@
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-use super::joint::{Joint, JointType};
+use super::joint::{refuse_declared, Joint, JointType};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{LinkStops, Mechanism};
 use crate::kinematics::eval::{eval, UnknownValues};
@@ -167,23 +167,20 @@ fn refuse_with_loops(
     loops: &[JointModel],
     errors: &mut Vec<Diagnostic>,
 ) {
-    let chains = joints.iter().map(|j| &j.chain).chain(loops);
-    for chain in chains {
-        let join = mechanism.join(chain.join);
-        if mechanism.link(join.link).stops.is_declared() {
-            errors.push(
-                Diagnostic::error(
-                    "E0450",
-                    format!(
-                        "`{}` has stops in a mechanism with closed loops",
-                        chain.name
-                    ),
-                )
-                .primary(join.span, "stops are simulated in tree mechanisms only")
-                .help("remove `lower` and `upper` from the link, or open the loop"),
-            );
-        }
-    }
+    refuse_declared(
+        mechanism,
+        joints.iter().map(|j| &j.chain).chain(loops),
+        |link| link.stops.is_declared(),
+        |name, span| {
+            Diagnostic::error(
+                "E0450",
+                format!("`{name}` has stops in a mechanism with closed loops"),
+            )
+            .primary(span, "stops are simulated in tree mechanisms only")
+            .help("remove `lower` and `upper` from the link, or open the loop")
+        },
+        errors,
+    );
 }
 
 fn joint_stops(
