@@ -368,6 +368,12 @@ impl ContactScratch {
         &self.kept.rows
     }
 
+    /// The kept rows G of the last solve and the rows H their forces act along (G but on a
+    /// sliding contact's normal row, which carries its friction), over the velocities.
+    pub fn kept_system(&self) -> (&DMatrix<f64>, &DMatrix<f64>) {
+        (&self.kept.g, &self.kept.h)
+    }
+
     /// Factors `mass`: false when it is not positive definite.
     pub fn factor_mass(&mut self) -> bool {
         self.factor.factor(&self.mass)

@@ -299,7 +299,6 @@ pub fn build_with(
     let link_efforts = link_efforts(mechanism, &joints, &loops);
     let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
-    refuse_stops_with_contacts(mechanism, &contacts, &stops, &mut errors);
     let has_contacts = !contacts.is_empty();
     let mimics = mimics::build(
         mechanism,
@@ -935,30 +934,4 @@ fn friction_with_contacts(mechanism: &Mechanism, friction: &Friction) -> Diagnos
         error = error.primary(contact.span, "a contact of the mechanism");
     }
     error
-}
-
-/// Stops are simulated on a tree without contacts: the impact law does not carry the contacts'
-/// rows, so their combination is refused (E0450) rather than simulated without the contacts.
-/// Geared rotors are counted by the contacts' solve (CRBA and RNEA carry them).
-fn refuse_stops_with_contacts(
-    mechanism: &Mechanism,
-    contacts: &[ContactModel],
-    stops: &[Stop],
-    errors: &mut Vec<Diagnostic>,
-) {
-    let Some(contact) = contacts.first() else {
-        return;
-    };
-    if stops.is_empty() {
-        return;
-    }
-    let mut error = Diagnostic::error(
-        "E0450",
-        format!("stops in a mechanism with contacts (`{}`)", contact.name),
-    )
-    .help("stops are simulated in mechanisms without contacts; remove one or the other");
-    if let Some(span) = mechanism.contacts.first().map(|c| c.span) {
-        error = error.primary(span, "a contact of the mechanism");
-    }
-    errors.push(error);
 }

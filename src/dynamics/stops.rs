@@ -73,10 +73,10 @@ impl Stop {
 }
 
 /// The velocities just after an impact on `stop`: v⁺ = v⁻ + M⁻¹ eₖ P, with the impulse P such
-/// that the coordinate's rate becomes −e times what it was. `inverse_column` is M⁻¹ eₖ (the
-/// column of the inverse mass matrix of the stopped coordinate). With the constraint rows `g`
-/// of closed loops (G v = 0 kept through the impact), the impulse is found with their reactions
-/// from the saddle-point system instead.
+/// that the coordinate's rate becomes −e times what it was. With constraint rows `g` (closed
+/// loops, contacts or mimic couplings), the impulse is found with their reactions Λ from the
+/// saddle-point system, which brings their rates to zero (G v⁺ = 0): the stop's row is one more
+/// row of the constraints, with restitution on it alone.
 pub fn impact_velocities(
     stop: &Stop,
     mass: &DMatrix<f64>,
@@ -85,35 +85,81 @@ pub fn impact_velocities(
 ) -> Option<DVector<f64>> {
     let n = mass.nrows();
     let k = stop.velocity;
-    let rows = loops.map_or(0, |g| g.nrows());
+    let empty = DMatrix::zeros(0, n);
+    let g = loops.unwrap_or(&empty);
+    let rows = g.nrows();
     // [M  −Gᵀ  −eₖ] [Δv]   [0]
-    // [G   0    0 ] [Λ ] = [0]
+    // [G   0    0 ] [Λ ] = [−G v⁻]
     // [eₖᵀ 0    0 ] [P ]   [−(1 + e) vₖ]
-    let size = n + rows + 1;
+    let system = saddle_point(mass, g, g, &[k]);
+    let mut right = DVector::zeros(n + rows + 1);
+    let before = DVector::from_column_slice(v);
+    right.rows_mut(n, rows).copy_from(&(-(g * &before)));
+    right[n + rows] = -(1.0 + stop.restitution) * v[k];
+    let solution = rank_revealing_solve(system, &right)?;
+    Some(before + solution.rows(0, n))
+}
+
+/// The change Δa of accelerations `a` that holds the velocities `held` at rest (their
+/// accelerations zero) with the constraint rows `g` kept (G Δa = 0), their forces along the
+/// rows `h` (G itself but for a sliding contact's friction): the saddle-point system of the
+/// constraints with one more row eₖᵀ per held velocity. Returns Δa and the forces μ that hold
+/// them, one per held velocity, positive along its velocity.
+pub fn held_accelerations(
+    mass: &DMatrix<f64>,
+    g: &DMatrix<f64>,
+    h: &DMatrix<f64>,
+    held: &[usize],
+    a: &[f64],
+) -> Option<(DVector<f64>, DVector<f64>)> {
+    let (n, rows) = (mass.nrows(), g.nrows());
+    // [M  −Hᵀ  −Eᵀ] [Δa]   [0]
+    // [G   0    0 ] [Δλ] = [0]
+    // [E   0    0 ] [μ ]   [−E a]
+    let system = saddle_point(mass, g, h, held);
+    let mut right = DVector::zeros(n + rows + held.len());
+    for (i, &k) in held.iter().enumerate() {
+        right[n + rows + i] = -a[k];
+    }
+    let solution = rank_revealing_solve(system, &right)?;
+    let change = solution.rows(0, n).clone_owned();
+    let forces = solution.rows(n + rows, held.len()).clone_owned();
+    Some((change, forces))
+}
+
+/// The saddle-point matrix of the mass matrix `mass`, the constraint rows `g` whose forces act
+/// along `h`, and the unit rows of the velocities `held`:
+/// [M −Hᵀ −Eᵀ; G 0 0; E 0 0].
+fn saddle_point(
+    mass: &DMatrix<f64>,
+    g: &DMatrix<f64>,
+    h: &DMatrix<f64>,
+    held: &[usize],
+) -> DMatrix<f64> {
+    let (n, rows) = (mass.nrows(), g.nrows());
+    let size = n + rows + held.len();
     let mut system = DMatrix::zeros(size, size);
     system.view_mut((0, 0), (n, n)).copy_from(mass);
-    if let Some(g) = loops {
-        system
-            .view_mut((0, n), (n, rows))
-            .copy_from(&(-g.transpose()));
-        system.view_mut((n, 0), (rows, n)).copy_from(g);
+    system
+        .view_mut((0, n), (n, rows))
+        .copy_from(&(-h.transpose()));
+    system.view_mut((n, 0), (rows, n)).copy_from(g);
+    for (i, &k) in held.iter().enumerate() {
+        system[(k, n + rows + i)] = -1.0;
+        system[(n + rows + i, k)] = 1.0;
     }
-    system[(k, n + rows)] = -1.0;
-    system[(n + rows, k)] = 1.0;
-    let mut right = DVector::zeros(size);
-    right[n + rows] = -(1.0 + stop.restitution) * v[k];
-    // A rank-revealing solve: redundant loop rows leave the impulse well defined.
-    let solution = system.svd(true, true).solve(&right, 1e-12).ok()?;
-    let mut after = DVector::from_column_slice(v);
-    for i in 0..n {
-        after[i] += solution[i];
-    }
-    Some(after)
+    system
+}
+
+/// A rank-revealing solve: redundant constraint rows (a planar loop's, a follower held with
+/// its leader) leave the velocities or accelerations well defined, though not their forces.
+fn rank_revealing_solve(system: DMatrix<f64>, right: &DVector<f64>) -> Option<DVector<f64>> {
+    system.svd(true, true).solve(right, 1e-12).ok()
 }
 
 /// The stops of the tree's links, two per link with both bounds; a link with stops must have
-/// one coordinate that the state holds as such (E0450) and be a tree link, and its bounds must
-/// be numbers with lower < upper (E0451) and 0 ≤ e ≤ 1 (E0452).
+/// one coordinate that the state holds as such (E0450) and be a tree link (not one that closes
+/// a loop), and its bounds must be numbers with lower < upper (E0451) and 0 ≤ e ≤ 1 (E0452).
 pub fn build(
     mechanism: &Mechanism,
     joints: &[Joint],
@@ -122,10 +168,7 @@ pub fn build(
     errors: &mut Vec<Diagnostic>,
 ) -> Vec<Stop> {
     let mut stops = Vec::new();
-    if !loops.is_empty() {
-        refuse_with_loops(mechanism, joints, loops, errors);
-        return stops;
-    }
+    refuse_on_loop_closing(mechanism, loops, errors);
     for joint in joints {
         let join = mechanism.join(joint.chain.join);
         let link = mechanism.link(join.link);
@@ -159,25 +202,21 @@ pub fn build(
     stops
 }
 
-/// Stops in a mechanism with closed loops: the impact would have to keep the loops closed (the
-/// saddle-point form of `impact_velocities`), which the run does not do yet (E0450).
-fn refuse_with_loops(
+/// Stops on a link that closes a loop (E0450): its coordinate is not one of the tree's, which
+/// the state holds and the stops' rows are written on.
+fn refuse_on_loop_closing(
     mechanism: &Mechanism,
-    joints: &[Joint],
     loops: &[JointModel],
     errors: &mut Vec<Diagnostic>,
 ) {
     refuse_declared(
         mechanism,
-        joints.iter().map(|j| &j.chain).chain(loops),
+        loops,
         |link| link.stops.is_declared(),
         |name, span| {
-            Diagnostic::error(
-                "E0450",
-                format!("`{name}` has stops in a mechanism with closed loops"),
-            )
-            .primary(span, "stops are simulated in tree mechanisms only")
-            .help("remove `lower` and `upper` from the link, or open the loop")
+            Diagnostic::error("E0450", format!("`{name}` has stops but closes a loop"))
+                .primary(span, "stops are simulated on the links of the tree")
+                .help("put the stops on another link of the loop (`lsdc tree` lists the links that close loops)")
         },
         errors,
     );

@@ -1,18 +1,19 @@
 //! The stops of a mechanism during a run: their event functions (the distance of each stopped
 //! coordinate to its bound), and the impact where one is reached, recorded for the report.
 
-use nalgebra::{DMatrix, DVector};
-
 use super::system::{MechanicalSystem, SystemError};
-use crate::dynamics::algorithms::{crba, forward_kinematics};
+use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::energy::kinetic_energy;
-use crate::dynamics::friction::Phase;
 use crate::dynamics::mimics;
 use crate::dynamics::stops::{impact_velocities, Impact, Side};
 
-/// Below this approach rate (coordinate units per second) after an impact, a coordinate pushed
-/// against its stop rests on it: a contact that lasts, which the run does not model.
+/// Below this rate of leaving (coordinate units per second) after an impact, a coordinate
+/// pushed against its stop rests on it.
 pub const RESTING_RATE: f64 = 1e-8;
+
+/// A coordinate pushed against its stop that would rise less than this above its bound after
+/// an impact (relative to max(1, |bound|)) rests on it (`comes_to_rest`).
+pub const RESTING_HEIGHT: f64 = 1e-14;
 
 impl MechanicalSystem<'_> {
     /// The stops' event functions at (t, y): each free coordinate's distance to its bound,
@@ -49,79 +50,43 @@ impl MechanicalSystem<'_> {
         }
     }
 
-    /// Holds the coordinates at rest, on their stops or stuck by their friction: adds to the
-    /// accelerations `a` (at q) the response P Sᵀ λ to the forces λ that keep those
-    /// coordinates' accelerations zero, P = M⁻¹ with the mimic couplings kept
-    /// (`mimics::solve`), and records λ.
-    pub(super) fn hold_resting(
-        &mut self,
-        q: &[f64],
-        a: &mut DVector<f64>,
-    ) -> Result<(), SystemError> {
-        let model = self.model;
-        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
-        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
-        let rows: Vec<usize> = stops
-            .clone()
-            .map(|k| model.stops[k].velocity)
-            .chain(frictions.clone().map(|k| model.frictions[k].velocity))
-            .collect();
-        if rows.is_empty() {
-            return Ok(());
-        }
-        let mass = crba(model, &mut self.data, q)?;
-        let mut unit = DMatrix::zeros(model.nv, rows.len());
-        for (column, &row) in rows.iter().enumerate() {
-            unit[(row, column)] = 1.0;
-        }
-        let responses =
-            mimics::solve(&model.mimics, &mass, &unit).ok_or(SystemError::SingularMassMatrix)?;
-        let coupling = DMatrix::from_fn(rows.len(), rows.len(), |i, j| responses[(rows[i], j)]);
-        let free = DVector::from_fn(rows.len(), |i, _| -a[rows[i]]);
-        // Rank-revealing: a follower held with its leader gives two rows for one coupled motion.
-        let forces = (coupling.svd(true, true).solve(&free, 1e-12))
-            .map_err(|_| SystemError::SingularMassMatrix)?;
-        *a += &responses * &forces;
-        let mut forces = forces.iter();
-        for (k, force) in stops.zip(forces.by_ref()) {
-            // A lower stop pushes the coordinate up, an upper one down.
-            self.contact[k] = match model.stops[k].side {
-                Side::Lower => *force,
-                Side::Upper => -*force,
-            };
-        }
-        for (k, force) in frictions.zip(forces) {
-            self.holding[k] = *force;
-        }
-        Ok(())
-    }
-
     /// The impact on stop `index` at time t: the velocities of y jump so that the stopped
     /// coordinate's rate is reversed and scaled by the restitution, the impulse acting through
-    /// the mass matrix. A coordinate that then rests against its stop, pushed into it, stops
-    /// the run with an error (lasting contact is not modelled).
+    /// the mass matrix with the constraint rows kept (`impact_velocities`). A coordinate that
+    /// then leaves too slowly while the motion pushes it into its stop rests on it.
     pub fn impact(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), SystemError> {
         let model = self.model;
         let stop = &model.stops[index];
+        let positions = model.positions();
         let (q, v) = model.split_state(y);
         let v = v.to_vec();
-        let mass = crba(model, &mut self.data, &q)?;
         let kinetic_before = self.kinetic_energy_at(&q, &v)?;
-        let couplings = (!model.mimics.is_empty()).then(|| mimics::rows(&model.mimics, model.nv));
-        let after = impact_velocities(stop, &mass, couplings.as_ref(), &v).ok_or_else(|| {
+        // The event was located past the bound by at most the time resolution: the coordinate
+        // starts again from the bound itself, so that the next crossing begins at zero. With
+        // loops or contacts the positions move onto their rows and the bounds together.
+        let constrained = model.has_loops() || model.has_contacts();
+        if constrained {
+            let mut held: Vec<usize> = (0..model.stops.len())
+                .filter(|&k| self.resting[k])
+                .collect();
+            held.push(index);
+            self.close_on_bounds(y, &held)?;
+        }
+        let (q, _) = model.split_state(y);
+        let (mass, rows) = self.impact_system(&q, &v)?;
+        let after = impact_velocities(stop, &mass, rows.as_ref(), &v).ok_or_else(|| {
             SystemError::Impact(format!(
                 "the impact on the {} stop of `{}` has no solution (no inertia along it)",
                 side_name(stop.side),
                 stop.coordinate
             ))
         })?;
-        let positions = model.positions();
-        y[positions..positions + after.len()].copy_from_slice(after.as_slice());
-        // The event was located past the bound by at most the time resolution: the coordinate
-        // starts again from the bound itself, so that the next crossing begins at zero.
-        y[stop.position] = stop.bound;
-        mimics::restore(&model.mimics, y, positions, stop.velocity);
-        let v_after = &y[positions..positions + after.len()];
+        y[positions..].copy_from_slice(after.as_slice());
+        if !constrained {
+            y[stop.position] = stop.bound;
+            mimics::restore(&model.mimics, y, positions, stop.velocity);
+        }
+        let v_after = y[positions..].to_vec();
         let impact = Impact {
             time: t,
             coordinate: stop.coordinate.clone(),
@@ -131,15 +96,19 @@ impl MechanicalSystem<'_> {
             rate_before: v[stop.velocity],
             rate_after: after[stop.velocity],
             kinetic_before,
-            kinetic_after: self.kinetic_energy_at(&q, v_after)?,
+            kinetic_after: self.kinetic_energy_at(&q, &v_after)?,
             rests: false,
         };
         self.impacts.push(impact);
-        if stop.approach(v_after) > -RESTING_RATE && self.pushed_into(t, y, index)? {
+        if self.comes_to_rest(t, y, index)? {
             // Too slow to leave: the coordinate rests on the stop from now on.
-            y[positions + stop.velocity] = 0.0;
-            mimics::restore(&model.mimics, y, positions, stop.velocity);
             self.resting[index] = true;
+            if constrained {
+                self.keep_on_bounds(y)?;
+            } else {
+                y[positions + stop.velocity] = 0.0;
+                mimics::restore(&model.mimics, y, positions, stop.velocity);
+            }
             if let Some(last) = self.impacts.last_mut() {
                 last.rests = true;
             }
@@ -147,12 +116,21 @@ impl MechanicalSystem<'_> {
         Ok(())
     }
 
-    /// Whether the motion at (t, y) accelerates the coordinate of stop `index` into it.
-    fn pushed_into(&mut self, t: f64, y: &[f64], index: usize) -> Result<bool, SystemError> {
+    /// Whether the coordinate of stop `index`, just after an impact at (t, y), rests on the
+    /// stop: the motion accelerates it into the stop, and it leaves too slowly to matter,
+    /// below `RESTING_RATE` or too slowly to rise `RESTING_HEIGHT` above the bound before the
+    /// motion brings it back (its flight's height v² / 2a). Below that height the bounces are
+    /// lost in the positions' round-off: the coordinate returns one unit in the last place past
+    /// the bound, having gained the rate of that fall, and would bounce on forever.
+    fn comes_to_rest(&mut self, t: f64, y: &[f64], index: usize) -> Result<bool, SystemError> {
         let model = self.model;
+        let stop = &model.stops[index];
+        let leaving = -stop.approach(&y[model.positions()..]);
         let mut dydt = vec![0.0; y.len()];
         self.derivative(t, y, &mut dydt)?;
-        Ok(model.stops[index].approach(&dydt[model.positions()..]) > 0.0)
+        let pushed = stop.approach(&dydt[model.positions()..]);
+        let height = RESTING_HEIGHT * stop.bound.abs().max(1.0);
+        Ok(pushed > 0.0 && (leaving < RESTING_RATE || leaving * leaving < 2.0 * pushed * height))
     }
 
     fn kinetic_energy_at(&mut self, q: &[f64], v: &[f64]) -> Result<f64, SystemError> {

@@ -9,7 +9,9 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
+mod holding;
 mod jacobian;
+mod stop_rows;
 
 use super::constraints::LoopMonitor;
 use super::native::NativeDynamics;
@@ -83,6 +85,8 @@ pub struct MechanicalSystem<'m> {
     pub phases: Vec<Phase>,
     pub holding: Vec<f64>,
     friction_power: f64,
+    /// The held rows' storage (`holding`).
+    hold: holding::HoldScratch,
     /// The friction's changes of phase so far, in time order.
     pub switches: Vec<crate::dynamics::friction::Switch>,
 }
@@ -127,6 +131,7 @@ impl<'m> MechanicalSystem<'m> {
             phases: vec![Phase::Slipping(1.0); model.frictions.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,
+            hold: holding::HoldScratch::new(model),
             switches: Vec::new(),
         }
     }
@@ -495,8 +500,9 @@ impl<'m> MechanicalSystem<'m> {
 
     /// The tangent space of the loops' constraints at y, for the implicit method's Jacobian:
     /// for each allowed motion n of the velocities (the massive ones the equations of motion
-    /// solve on), the state's direction (q̇(n), 0) that moves the positions along it and
-    /// (0, n) that moves the velocities along it. `None` for a tree, whose state moves freely.
+    /// solve on) that leaves the resting stops' coordinates at rest, the state's direction
+    /// (q̇(n), 0) that moves the positions along it and (0, n) that moves the velocities along
+    /// it. `None` for a tree, whose state moves freely.
     /// Evaluates the equations of motion at y once (their solve finds the allowed motions).
     pub fn tangent_basis(
         &mut self,
@@ -510,7 +516,7 @@ impl<'m> MechanicalSystem<'m> {
         let mut dydt = vec![0.0; self.dimension()];
         self.derivative(t, y, &mut dydt)?;
         let (q, _) = model.split_state(y);
-        let motions = self.loop_scratch.solved_motions();
+        let motions = self.motions_off_bounds(self.loop_scratch.solved_motions().into_owned());
         let (positions, velocities) = (model.positions(), model.velocities());
         let count = motions.ncols();
         let mut basis = DMatrix::zeros(positions + velocities, 2 * count);
@@ -537,8 +543,17 @@ impl<'m> MechanicalSystem<'m> {
         Ok(Some(basis))
     }
 
-    /// Keeps the loops closed after a step (see `LoopMonitor::keep`); nothing for a tree.
+    /// Keeps the loops closed or the contacts kept after a step (`keep_rows`), with the
+    /// resting stops' bounds in mechanisms with them (`keep_on_bounds`); nothing for a tree.
+    /// Whether y moved.
     pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
+        let moved = self.keep_rows(t, y)?;
+        Ok(self.keep_on_bounds(y)? || moved)
+    }
+
+    /// Keeps the loops closed after a step (see `LoopMonitor::keep`), or the contacts
+    /// (`keep_contacts`); nothing for a tree.
+    fn keep_rows(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
         if model.has_contacts() {
             return self.keep_contacts(y);

@@ -41,6 +41,7 @@ mod regression;
 mod robustness;
 mod runs;
 mod simulation;
+mod stop_loops;
 mod stops;
 mod symbolic;
 mod symbolic_equations;

@@ -249,3 +249,72 @@ fn bad_stops_are_located_errors() {
         assert!(errors.iter().any(|d| d.code == code), "{code}: {errors:?}");
     }
 }
+
+/// The mechanical system of a program, at its initial state (positions, then velocities).
+fn system_of(text: &str) -> (lsdc::simulate::prepare::Prepared, Vec<f64>) {
+    let compilation = compile(text);
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepared");
+    let (mut y, v) = (prepared.model)
+        .state_from_declared(&prepared.coordinates, &prepared.rates)
+        .expect("state");
+    y.extend_from_slice(&v);
+    (prepared, y)
+}
+
+/// While the rod rests on its stop, its acceleration is held at zero: the Jacobian the
+/// implicit method uses there is that of the held right-hand side (the differences of f), not
+/// the free motion's from inverse dynamics, whose row of the stopped coordinate is not zero.
+/// Radau IIA, which Newton-iterates with it, then follows dopri5 through the resting phase.
+#[test]
+fn the_jacobian_while_resting_is_the_held_right_hand_sides() {
+    use lsdc::integrate::{integrate, Method, OdeSystem, Settings as Steps};
+    use lsdc::simulate::system::MechanicalSystem;
+    use std::{cell::RefCell, rc::Rc};
+    let text = PENDULUM
+        .replace("RESTITUTION", "0")
+        .replace("0, pi, ", "0.3, pi, ")
+        .replace("swing.q = pi / 2", "swing.q = 0.3");
+    let (prepared, y) = system_of(&text);
+    let model = &prepared.model;
+    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let stabilisation = prepared.settings.stabilisation;
+    let mut system = MechanicalSystem::new(model, reference.clone(), stabilisation);
+    system.resting[0] = true;
+    let n = y.len();
+    let mut f = vec![0.0; n];
+    system.derivative(0.0, &y, &mut f).expect("f");
+    assert!(f[1].abs() < 1e-14, "held acceleration {}", f[1]);
+    assert!(system.contact[0] > 0.0, "the stop pushes");
+    let mut given = nalgebra::DMatrix::zeros(n, n);
+    if OdeSystem::jacobian(&mut system, 0.0, &y, &f, &mut given).expect("jacobian") {
+        for j in 0..n {
+            let mut moved = y.clone();
+            moved[j] += 1e-7;
+            let mut g = vec![0.0; n];
+            system.derivative(0.0, &moved, &mut g).expect("f");
+            for i in 0..n {
+                let difference = (g[i] - f[i]) / 1e-7;
+                assert!((difference - given[(i, j)]).abs() < 1e-5, "({i}, {j})");
+            }
+        }
+    }
+    // Through the resting phase: from rest at the bound, held there by its weight.
+    let steps = Steps {
+        rtol: 1e-10,
+        atol: 1e-10,
+        ..Steps::default()
+    };
+    let mut ends = Vec::new();
+    for method in [Method::Radau5, Method::DormandPrince] {
+        let mut system = MechanicalSystem::new(model, reference.clone(), stabilisation);
+        system.resting[0] = true;
+        let mut observer = |_: f64, _: &[f64]| Ok(());
+        let (end, _) = integrate(&method, &mut system, 0.0, &y, 2.0, &[], &steps, &mut observer)
+            .expect("integrates");
+        ends.push(end);
+    }
+    for end in &ends {
+        assert!((end[0] - 0.3).abs() < 1e-12 && end[1].abs() < 1e-12, "{end:?}");
+    }
+}

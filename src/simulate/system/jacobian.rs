@@ -45,7 +45,8 @@ impl MechanicalSystem<'_> {
     /// ∂f/∂y at (t, y), where `dydt` = f(t, y), into `jacobian` (a square of the state's
     /// dimension), and the gradient of the efforts' power into `power_gradient`. `Ok(false)`
     /// where it does not apply ([`MechanicalSystem::has_tree_jacobian`]) or where the mass
-    /// matrix is singular (a massless motion): the caller differences f instead.
+    /// matrix is singular (a massless motion), or while a coordinate rests on its stop: the
+    /// caller differences f instead.
     pub fn jacobian(
         &mut self,
         t: f64,
@@ -54,7 +55,9 @@ impl MechanicalSystem<'_> {
         jacobian: &mut DMatrix<f64>,
         power_gradient: &mut [f64],
     ) -> Result<bool, SystemError> {
-        if !self.has_tree_jacobian() {
+        // A coordinate resting on its stop is held by a force that depends on the state too
+        // (`hold_resting`): the differences of f carry it, the residual's would not.
+        if !self.has_tree_jacobian() || self.resting.contains(&true) {
             return Ok(false);
         }
         let nv = self.model.nv;

@@ -1,0 +1,190 @@
+//! Coordinates held at rest during a run, on their stops (resting on a bound) or stuck by their
+//! friction: each adds the row eₖᵀ a = 0 to the equations of motion, with a force μₖ along the
+//! coordinate found with the accelerations. On a tree, the forces solve
+//! (E P Eᵀ) μ = −E a with P the response to generalised forces (M⁻¹, or with the mimic
+//! couplings kept); in a mechanism with closed loops or contacts, the held rows join the
+//! constraint rows in their saddle-point system (`stops::held_accelerations`).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{MechanicalSystem, SystemError};
+use crate::dynamics::algorithms::{crba, crba_into};
+use crate::dynamics::dense::{solve_in_place, Factor};
+use crate::dynamics::friction::Phase;
+use crate::dynamics::mimics;
+use crate::dynamics::model::Model;
+use crate::dynamics::stops::Side;
+
+/// What the held rows of a tree keep between evaluations, so that holding them allocates
+/// nothing but when the coordinates held change (at an event): the held velocities, the mass
+/// matrix and its factor, the responses P Eᵀ, E P Eᵀ and the forces.
+#[derive(Debug)]
+pub(super) struct HoldScratch {
+    rows: Vec<usize>,
+    mass: DMatrix<f64>,
+    factor: Factor,
+    responses: DMatrix<f64>,
+    coupling: DMatrix<f64>,
+    forces: DVector<f64>,
+}
+
+impl HoldScratch {
+    pub(super) fn new(model: &Model) -> HoldScratch {
+        HoldScratch {
+            rows: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            mass: DMatrix::zeros(0, 0),
+            factor: Factor::new(0),
+            responses: DMatrix::zeros(0, 0),
+            coupling: DMatrix::zeros(0, 0),
+            forces: DVector::zeros(0),
+        }
+    }
+
+    /// Sizes the storage for n velocities and s held rows.
+    fn size_for(&mut self, n: usize, s: usize) {
+        if self.mass.nrows() != n {
+            self.mass = DMatrix::zeros(n, n);
+            self.factor = Factor::new(n);
+        }
+        if self.responses.shape() != (n, s) {
+            self.responses = DMatrix::zeros(n, s);
+            self.coupling = DMatrix::zeros(s, s);
+            self.forces = DVector::zeros(s);
+        }
+    }
+}
+
+impl MechanicalSystem<'_> {
+    /// Holds the coordinates at rest, on their stops or stuck by their friction: adds to the
+    /// accelerations `a` (at q) the response to the forces that keep those coordinates'
+    /// accelerations zero, and records the forces (`contact`, `holding`).
+    pub(super) fn hold_resting(
+        &mut self,
+        q: &[f64],
+        a: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        let mut rows = std::mem::take(&mut self.hold.rows);
+        rows.clear();
+        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
+        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
+        rows.extend(stops.map(|k| model.stops[k].velocity));
+        rows.extend(frictions.map(|k| model.frictions[k].velocity));
+        let held = match rows.is_empty() {
+            true => Ok(()),
+            false if model.has_loops() || model.has_contacts() => {
+                self.hold_with_constraints(q, &rows, a)
+            }
+            false if !model.mimics.is_empty() || has_repeats(&rows) => {
+                self.hold_coupled(q, &rows, a)
+            }
+            false => self.hold_on_tree(q, &rows, a),
+        };
+        let count = rows.len();
+        self.hold.rows = rows;
+        held?;
+        if count > 0 {
+            self.record_holding();
+        }
+        Ok(())
+    }
+
+    /// `hold_resting` on a tree without couplings, each velocity held once: P = M⁻¹, from the
+    /// factor the accelerations took when they came from the mass matrix, else from CRBA here.
+    fn hold_on_tree(
+        &mut self,
+        q: &[f64],
+        rows: &[usize],
+        a: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        self.hold.size_for(model.nv, rows.len());
+        // `mass_accelerations` factored M at this state unless native code gave them.
+        let factored = self.needs_mass_matrix() && self.native.is_none();
+        if !factored {
+            crba_into(model, &mut self.data, q, &mut self.hold.mass)?;
+            if !self.hold.factor.factor(&self.hold.mass) {
+                return Err(SystemError::SingularMassMatrix);
+            }
+        }
+        let hold = &mut self.hold;
+        let factor = if factored {
+            &self.mass_factor
+        } else {
+            &hold.factor
+        };
+        hold.responses.fill(0.0);
+        for (column, &row) in rows.iter().enumerate() {
+            hold.responses[(row, column)] = 1.0;
+        }
+        factor.solve_mut(&mut hold.responses);
+        for (i, &row) in rows.iter().enumerate() {
+            for j in 0..rows.len() {
+                hold.coupling[(i, j)] = hold.responses[(row, j)];
+            }
+            hold.forces[i] = -a[row];
+        }
+        // E M⁻¹ Eᵀ is positive definite: distinct coordinates of a positive definite M.
+        solve_in_place(&mut hold.coupling, &mut hold.forces)
+            .map_err(|_| SystemError::SingularMassMatrix)?;
+        a.gemv(1.0, &hold.responses, &hold.forces, 1.0);
+        Ok(())
+    }
+
+    /// `hold_resting` on a tree with mimic couplings (P = S (Sᵀ M S)⁻¹ Sᵀ, `mimics::solve`), or
+    /// with a velocity held twice (a stop and a friction on one coordinate): the forces by a
+    /// rank-revealing solve, since a follower held with its leader gives two rows for one
+    /// coupled motion. This path allocates.
+    fn hold_coupled(
+        &mut self,
+        q: &[f64],
+        rows: &[usize],
+        a: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        let mass = crba(model, &mut self.data, q)?;
+        let mut unit = DMatrix::zeros(model.nv, rows.len());
+        for (column, &row) in rows.iter().enumerate() {
+            unit[(row, column)] = 1.0;
+        }
+        let responses =
+            mimics::solve(&model.mimics, &mass, &unit).ok_or(SystemError::SingularMassMatrix)?;
+        let coupling = DMatrix::from_fn(rows.len(), rows.len(), |i, j| responses[(rows[i], j)]);
+        let free = DVector::from_fn(rows.len(), |i, _| -a[rows[i]]);
+        let forces = (coupling.svd(true, true).solve(&free, 1e-12))
+            .map_err(|_| SystemError::SingularMassMatrix)?;
+        *a += &responses * &forces;
+        self.hold.forces = forces;
+        Ok(())
+    }
+
+    /// The held forces of the last `hold_resting`, in the order of its rows (the resting stops,
+    /// then the sticking frictions), into each stop's contact force (positive while it pushes)
+    /// and each friction's holding force.
+    fn record_holding(&mut self) {
+        let model = self.model;
+        let mut forces = self.hold.forces.iter();
+        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
+        for (k, force) in stops.zip(forces.by_ref()) {
+            // A lower stop pushes the coordinate up, an upper one down.
+            self.contact[k] = match model.stops[k].side {
+                Side::Lower => *force,
+                Side::Upper => -*force,
+            };
+        }
+        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
+        for (k, force) in frictions.zip(forces) {
+            self.holding[k] = *force;
+        }
+    }
+
+    /// The held forces found by the constrained path (`stop_rows`), for `record_holding`.
+    pub(super) fn set_held_forces(&mut self, forces: DVector<f64>) {
+        self.hold.forces = forces;
+    }
+}
+
+/// Whether a velocity appears twice among `rows` (few rows: a quadratic scan).
+fn has_repeats(rows: &[usize]) -> bool {
+    (0..rows.len()).any(|i| rows[i + 1..].contains(&rows[i]))
+}

@@ -1,0 +1,242 @@
+//! Stops in a mechanism with closed loops or contacts: a stop is one more row of the
+//! constraints, unilateral. At an impact its row joins the loops' or contacts' rows in the
+//! impulse's saddle-point system (restitution on the stop's row alone, the other rows brought to
+//! zero velocity, `stops::impact_velocities`); while its coordinate rests on it, it is an active
+//! bilateral row: its acceleration is held at zero with the other rows kept
+//! (`stops::held_accelerations`), and after each step the positions are brought back onto the
+//! other rows' position constraints and the bound together, the velocities onto all the rows.
+//! No coordinate is ever set alone: that would open the loops, and their projection would then
+//! give the resting coordinate a rate again. The stop is released when its force would pull.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{MechanicalSystem, SystemError};
+use crate::dynamics::algorithms::{crba, forward_kinematics};
+use crate::dynamics::contacts::{self, holonomic_rows};
+use crate::dynamics::loops::{self, decompose, Extent};
+use crate::dynamics::mimics;
+
+/// Newton steps at most when moving the positions onto the rows and the bounds.
+const NEWTON_ITERATIONS: usize = 8;
+
+/// A stop's row within this of its bound (relative to max(1, |bound|)) after the positions'
+/// Newton steps is at round-off.
+const SNAP: f64 = 1e-14;
+
+/// The rows of one state: position residuals and their Jacobian, or velocity rows.
+struct Rows {
+    residual: DVector<f64>,
+    jacobian: DMatrix<f64>,
+}
+
+impl MechanicalSystem<'_> {
+    /// The mass matrix over the state's velocities (the complementary links' coordinates carry
+    /// no inertia) and the constraint rows kept through an impact at (q, v), dense: the loops'
+    /// kept rows, the contacts' kept rows, or the mimic couplings (None without any). Leaves the
+    /// forward kinematics of (q, v) in `data`.
+    pub(in crate::simulate) fn impact_system(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(DMatrix<f64>, Option<DMatrix<f64>>), SystemError> {
+        let model = self.model;
+        let mass = loops::structure::full_mass(&crba(model, &mut self.data, q)?, v.len());
+        let rows = if model.has_loops() || model.has_contacts() {
+            Some(self.velocity_rows(q, v)?)
+        } else {
+            (!model.mimics.is_empty()).then(|| mimics::rows(&model.mimics, model.nv))
+        };
+        forward_kinematics(model, &mut self.data, q, v)?;
+        Ok((mass, rows))
+    }
+
+    /// `hold_resting` in a mechanism with loops or contacts, right after their solve at q (whose
+    /// rows and accelerations `a` it starts from): the held velocities `rows` join the loops'
+    /// kept rows or the contacts' in the saddle-point system.
+    pub(super) fn hold_with_constraints(
+        &mut self,
+        q: &[f64],
+        rows: &[usize],
+        a: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        let (mass, g, h) = if model.has_contacts() {
+            let scratch = &self.contacts;
+            let (g, h) = scratch.kept_system();
+            (scratch.mass.clone(), g.clone(), h.clone())
+        } else {
+            let tree = crba(model, &mut self.data, q)?;
+            let mass = loops::structure::full_mass(&tree, model.velocities());
+            let g = self.loop_kept_rows(&self.loop_scratch.constraints.jacobian.dense());
+            let h = g.clone();
+            (mass, g, h)
+        };
+        let (change, forces) =
+            crate::dynamics::stops::held_accelerations(&mass, &g, &h, rows, a.as_slice())
+                .ok_or(SystemError::SingularMassMatrix)?;
+        *a += change;
+        self.set_held_forces(forces);
+        Ok(())
+    }
+
+    /// Brings a state back onto the rows and the bounds of the resting stops together, after
+    /// the loops' or the contacts' own projection: Gauss–Newton on the positions with
+    /// minimum-norm steps on the rows' position constraints and qₖ = bound, then the velocities'
+    /// orthogonal projection onto every row and vₖ = 0. Whether y moved; nothing on a tree or
+    /// when no stop rests.
+    pub(in crate::simulate) fn keep_on_bounds(&mut self, y: &mut [f64]) -> Result<bool, SystemError> {
+        let model = self.model;
+        let resting: Vec<usize> = (0..model.stops.len()).filter(|&k| self.resting[k]).collect();
+        if resting.is_empty() || !(model.has_loops() || model.has_contacts()) {
+            return Ok(false);
+        }
+        let before = y.to_vec();
+        self.close_on_bounds(y, &resting)?;
+        let (q, v) = model.split_state(y);
+        let mut rows = self.velocity_rows(&q, v)?;
+        rows = stack_units(&rows, resting.iter().map(|&k| model.stops[k].velocity));
+        let velocity = DVector::from_column_slice(v);
+        let projected = &velocity - decompose(&rows).pseudo_inverse * (&rows * &velocity);
+        let positions = model.positions();
+        y[positions..].copy_from_slice(projected.as_slice());
+        Ok(y != before.as_slice())
+    }
+
+    /// Moves the positions of y onto the rows' position constraints and the bounds of the stops
+    /// `stops` together: minimum-norm Gauss–Newton steps, each kept while it reduces the largest
+    /// residual.
+    pub(in crate::simulate) fn close_on_bounds(
+        &mut self,
+        y: &mut [f64],
+        stops: &[usize],
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        let (mut q, v) = model.split_state(y);
+        let v = v.to_vec();
+        let mut rows = self.position_rows(&q, &v, stops)?;
+        let mut error = rows.residual.amax();
+        for _ in 0..NEWTON_ITERATIONS {
+            if error == 0.0 {
+                break;
+            }
+            let step = -(decompose(&rows.jacobian).pseudo_inverse * &rows.residual);
+            let mut trial = q.clone();
+            model.retract(&mut trial, step.as_slice());
+            let there = self.position_rows(&trial, &v, stops)?;
+            let trial_error = there.residual.amax();
+            // A NaN residual is no improvement either.
+            if trial_error.is_nan() || trial_error >= error {
+                break;
+            }
+            (q, rows, error) = (trial, there, trial_error);
+        }
+        // The stops' rows are left at round-off, on either side of the bound: the bound itself
+        // (a change at round-off, which leaves the other rows closed), so that the stop's event
+        // function starts the next step at zero, not below it where its crossing would be missed.
+        for stop in stops.iter().map(|&k| &model.stops[k]) {
+            if (q[stop.position] - stop.bound).abs() <= SNAP * stop.bound.abs().max(1.0) {
+                q[stop.position] = stop.bound;
+            }
+        }
+        y[..q.len()].copy_from_slice(&q);
+        Ok(())
+    }
+
+    /// The position constraints at q (the loops' kept rows, or the contacts' kept normal rows,
+    /// their gaps) and the stops' rows qₖ − bound, with their Jacobian over the velocities.
+    fn position_rows(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+        stops: &[usize],
+    ) -> Result<Rows, SystemError> {
+        let model = self.model;
+        let (residual, jacobian) = if model.has_contacts() {
+            let all = self.contact_rows_at(q, v)?;
+            let normal = holonomic_rows(&self.contact_rows_kept());
+            let residual = normal.iter().map(|&r| all.gap[r / 3]);
+            let residual = DVector::from_iterator(normal.len(), residual);
+            (residual, all.jacobian.select_rows(&normal))
+        } else {
+            forward_kinematics(model, &mut self.data, q, v)?;
+            let c = loops::constraints(model, &mut self.data, q, v, Extent::Rows)?;
+            let kept = &self.loops.structure.choice.rows;
+            let residual = DVector::from_iterator(kept.len(), kept.iter().map(|&r| c.residual[r]));
+            (residual, self.loop_kept_rows(&c.jacobian.dense()))
+        };
+        let stop_rows = stops.iter().map(|&k| &model.stops[k]);
+        let jacobian = stack_units(&jacobian, stop_rows.clone().map(|s| s.velocity));
+        let offsets = stop_rows.map(|s| q[s.position] - s.bound);
+        let residual = DVector::from_iterator(
+            residual.len() + stops.len(),
+            residual.iter().copied().chain(offsets),
+        );
+        Ok(Rows { residual, jacobian })
+    }
+
+    /// The velocity rows at (q, v), dense over the state's velocities: the loops' kept rows, or
+    /// the contacts' kept rows.
+    fn velocity_rows(&mut self, q: &[f64], v: &[f64]) -> Result<DMatrix<f64>, SystemError> {
+        let model = self.model;
+        if model.has_contacts() {
+            let all = self.contact_rows_at(q, v)?;
+            return Ok(all.jacobian.select_rows(&self.contact_rows_kept()));
+        }
+        forward_kinematics(model, &mut self.data, q, v)?;
+        let c = loops::constraints(model, &mut self.data, q, v, Extent::Rows)?;
+        Ok(self.loop_kept_rows(&c.jacobian.dense()))
+    }
+
+    /// The contacts' rows at (q, v), the contact rows of the run decided if not yet.
+    fn contact_rows_at(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<contacts::ContactRows, SystemError> {
+        let model = self.model;
+        forward_kinematics(model, &mut self.data, q, v)?;
+        let rows = contacts::contact_rows(model, &mut self.data, v, false);
+        if self.contact_rows.is_none() {
+            let mass = crba(model, &mut self.data, q)?;
+            self.contact_rows = Some(contacts::independent_rows(model, &mass, &rows));
+        }
+        Ok(rows)
+    }
+
+    /// The contact rows of the run (`contact_rows_at` decides them).
+    fn contact_rows_kept(&self) -> Vec<usize> {
+        self.contact_rows.clone().unwrap_or_default()
+    }
+
+    /// The rows of the loops' structure among the 6 per loop of a dense constraint Jacobian.
+    fn loop_kept_rows(&self, jacobian: &DMatrix<f64>) -> DMatrix<f64> {
+        jacobian.select_rows(&self.loops.structure.choice.rows)
+    }
+
+    /// The allowed motions `motions` (columns over the state's velocities) restricted to those
+    /// that leave the resting stops' coordinates at rest: the tangent directions of the run
+    /// while they rest (none when every allowed motion moves them).
+    pub(super) fn motions_off_bounds(&self, motions: DMatrix<f64>) -> DMatrix<f64> {
+        let model = self.model;
+        let held: Vec<usize> = (0..model.stops.len())
+            .filter(|&k| self.resting[k])
+            .map(|k| model.stops[k].velocity)
+            .collect();
+        if held.is_empty() || motions.ncols() == 0 {
+            return motions;
+        }
+        let moved = motions.select_rows(&held);
+        let allowed = decompose(&moved).null_space;
+        motions * allowed
+    }
+}
+
+/// `rows` with one more unit row per velocity of `units`.
+fn stack_units(rows: &DMatrix<f64>, units: impl Iterator<Item = usize>) -> DMatrix<f64> {
+    let units: Vec<usize> = units.collect();
+    let mut stacked = rows.clone().resize_vertically(rows.nrows() + units.len(), 0.0);
+    for (i, &k) in units.iter().enumerate() {
+        stacked[(rows.nrows() + i, k)] = 1.0;
+    }
+    stacked
+}
