@@ -50,3 +50,56 @@ fn the_counter_counts() {
     });
     assert_eq!(made, 1);
 }
+
+/// A coordinate resting on its stop adds a held row to a tree's right-hand side: holding it
+/// allocates nothing either, once the held rows are sized (with the articulated-body algorithm,
+/// and with the mass matrix that joint friction needs, sticking on another coordinate).
+#[test]
+fn holding_a_coordinate_on_its_stop_allocates_nothing() {
+    use lsdc::driver::compile_text;
+    use lsdc::dynamics::friction::Phase;
+    use lsdc::load::LoadOptions;
+    use lsdc::simulate::prepare::{prepare, Settings};
+    use lsdc::simulate::system::MechanicalSystem;
+    use std::{cell::RefCell, rc::Rc};
+    let pendulum = "import joints;\n\
+        let rod = body mass = 1.2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end;\n\
+        let tip = body mass = 0.3, iframe = [0, 0, -0.2] ++ 1, inertia = [0.01, 0.01, 0.001] end;\n\
+        join earth and rod with limited_revolute([1, 0, 0], 0.3, pi, 0) as swing;\n\
+        join [0, 0, -1] ++ 1 @ rod and tip with JOINT as wrist;\n\
+        apply force value = [0, 0, -9.81 * rod.mass], body = earth end on rod.iframe;\n\
+        initial swing.q = 0.3;\n";
+    let joints = [
+        "revolute([1, 0, 0])",
+        "friction_revolute([1, 0, 0], 5, 0.1)",
+    ];
+    for joint in joints {
+        let text = pendulum.replace("JOINT", joint);
+        let options = LoadOptions {
+            library_dirs: Vec::new(),
+            use_environment: false,
+        };
+        let compilation = compile_text("resting.lsd", &text, None, &options);
+        let prepared = prepare(&compilation.mechanism.expect("elaborates"), &[], &Settings::default())
+            .expect("prepared");
+        let model = &prepared.model;
+        let (mut y, v) = model
+            .state_from_declared(&prepared.coordinates, &prepared.rates)
+            .expect("state");
+        y.extend_from_slice(&v);
+        let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+        let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
+        system.resting[0] = true;
+        system.phases.iter_mut().for_each(|p| *p = Phase::Sticking);
+        let mut dydt = vec![0.0; y.len()];
+        for _ in 0..2 {
+            system.derivative(0.0, &y, &mut dydt).expect("derivative");
+        }
+        assert!(dydt[y.len() / 2].abs() < 1e-14, "held: {dydt:?}");
+        assert!(system.contact[0] > 0.0);
+        let made = allocations(|| {
+            let _ = system.derivative(0.0, &y, &mut dydt);
+        });
+        assert_eq!(made, 0, "{joint}: {made} allocations per derivative");
+    }
+}
