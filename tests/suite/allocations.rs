@@ -80,8 +80,12 @@ fn holding_a_coordinate_on_its_stop_allocates_nothing() {
             use_environment: false,
         };
         let compilation = compile_text("resting.lsd", &text, None, &options);
-        let prepared = prepare(&compilation.mechanism.expect("elaborates"), &[], &Settings::default())
-            .expect("prepared");
+        let prepared = prepare(
+            &compilation.mechanism.expect("elaborates"),
+            &[],
+            &Settings::default(),
+        )
+        .expect("prepared");
         let model = &prepared.model;
         let (mut y, v) = model
             .state_from_declared(&prepared.coordinates, &prepared.rates)

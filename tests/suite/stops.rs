@@ -310,11 +310,23 @@ fn the_jacobian_while_resting_is_the_held_right_hand_sides() {
         let mut system = MechanicalSystem::new(model, reference.clone(), stabilisation);
         system.resting[0] = true;
         let mut observer = |_: f64, _: &[f64]| Ok(());
-        let (end, _) = integrate(&method, &mut system, 0.0, &y, 2.0, &[], &steps, &mut observer)
-            .expect("integrates");
+        let (end, _) = integrate(
+            &method,
+            &mut system,
+            0.0,
+            &y,
+            2.0,
+            &[],
+            &steps,
+            &mut observer,
+        )
+        .expect("integrates");
         ends.push(end);
     }
     for end in &ends {
-        assert!((end[0] - 0.3).abs() < 1e-12 && end[1].abs() < 1e-12, "{end:?}");
+        assert!(
+            (end[0] - 0.3).abs() < 1e-12 && end[1].abs() < 1e-12,
+            "{end:?}"
+        );
     }
 }

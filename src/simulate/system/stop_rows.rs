@@ -84,9 +84,14 @@ impl MechanicalSystem<'_> {
     /// minimum-norm steps on the rows' position constraints and qₖ = bound, then the velocities'
     /// orthogonal projection onto every row and vₖ = 0. Whether y moved; nothing on a tree or
     /// when no stop rests.
-    pub(in crate::simulate) fn keep_on_bounds(&mut self, y: &mut [f64]) -> Result<bool, SystemError> {
+    pub(in crate::simulate) fn keep_on_bounds(
+        &mut self,
+        y: &mut [f64],
+    ) -> Result<bool, SystemError> {
         let model = self.model;
-        let resting: Vec<usize> = (0..model.stops.len()).filter(|&k| self.resting[k]).collect();
+        let resting: Vec<usize> = (0..model.stops.len())
+            .filter(|&k| self.resting[k])
+            .collect();
         if resting.is_empty() || !(model.has_loops() || model.has_contacts()) {
             return Ok(false);
         }
@@ -234,7 +239,9 @@ impl MechanicalSystem<'_> {
 /// `rows` with one more unit row per velocity of `units`.
 fn stack_units(rows: &DMatrix<f64>, units: impl Iterator<Item = usize>) -> DMatrix<f64> {
     let units: Vec<usize> = units.collect();
-    let mut stacked = rows.clone().resize_vertically(rows.nrows() + units.len(), 0.0);
+    let mut stacked = rows
+        .clone()
+        .resize_vertically(rows.nrows() + units.len(), 0.0);
     for (i, &k) in units.iter().enumerate() {
         stacked[(rows.nrows() + i, k)] = 1.0;
     }
