@@ -56,10 +56,7 @@ fn the_counter_counts() {
 /// and with the mass matrix that joint friction needs, sticking on another coordinate).
 #[test]
 fn holding_a_coordinate_on_its_stop_allocates_nothing() {
-    use lsdc::driver::compile_text;
     use lsdc::dynamics::friction::Phase;
-    use lsdc::load::LoadOptions;
-    use lsdc::simulate::prepare::{prepare, Settings};
     use lsdc::simulate::system::MechanicalSystem;
     use std::{cell::RefCell, rc::Rc};
     let pendulum = "import joints;\n\
@@ -75,22 +72,9 @@ fn holding_a_coordinate_on_its_stop_allocates_nothing() {
     ];
     for joint in joints {
         let text = pendulum.replace("JOINT", joint);
-        let options = LoadOptions {
-            library_dirs: Vec::new(),
-            use_environment: false,
-        };
-        let compilation = compile_text("resting.lsd", &text, None, &options);
-        let prepared = prepare(
-            &compilation.mechanism.expect("elaborates"),
-            &[],
-            &Settings::default(),
-        )
-        .expect("prepared");
+        let prepared = super::common::programs::prepared_text(&text);
         let model = &prepared.model;
-        let (mut y, v) = model
-            .state_from_declared(&prepared.coordinates, &prepared.rates)
-            .expect("state");
-        y.extend_from_slice(&v);
+        let y = super::common::programs::initial_state(&prepared);
         let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
         let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
         system.resting[0] = true;

@@ -250,18 +250,6 @@ fn bad_stops_are_located_errors() {
     }
 }
 
-/// The mechanical system of a program, at its initial state (positions, then velocities).
-fn system_of(text: &str) -> (lsdc::simulate::prepare::Prepared, Vec<f64>) {
-    let compilation = compile(text);
-    let mechanism = compilation.mechanism.expect("elaborates");
-    let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepared");
-    let (mut y, v) = (prepared.model)
-        .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .expect("state");
-    y.extend_from_slice(&v);
-    (prepared, y)
-}
-
 /// While the rod rests on its stop, its acceleration is held at zero: the Jacobian the
 /// implicit method uses there is that of the held right-hand side (the differences of f), not
 /// the free motion's from inverse dynamics, whose row of the stopped coordinate is not zero.
@@ -275,7 +263,8 @@ fn the_jacobian_while_resting_is_the_held_right_hand_sides() {
         .replace("RESTITUTION", "0")
         .replace("0, pi, ", "0.3, pi, ")
         .replace("swing.q = pi / 2", "swing.q = 0.3");
-    let (prepared, y) = system_of(&text);
+    let prepared = super::common::programs::prepared_text(&text);
+    let y = super::common::programs::initial_state(&prepared);
     let model = &prepared.model;
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
     let stabilisation = prepared.settings.stabilisation;

@@ -81,6 +81,23 @@ pub fn run_text(text: &str, settings: Settings) -> Simulation {
     run(&prepared, &mut |_| {})
 }
 
+/// A program prepared for a run with the default settings.
+pub fn prepared_text(text: &str) -> Prepared {
+    let compilation = compile_text("test.lsd", text, None, &no_library_path());
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.expect("elaborates");
+    prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| panic!("{d:?}"))
+}
+
+/// The initial state of a prepared program: positions, then velocities.
+pub fn initial_state(prepared: &Prepared) -> Vec<f64> {
+    let (mut y, v) = (prepared.model)
+        .state_from_declared(&prepared.coordinates, &prepared.rates)
+        .expect("state");
+    y.extend_from_slice(&v);
+    y
+}
+
 /// The codes of the diagnostics of a program that elaborates, from its preparation for a run.
 pub fn refusal_codes(text: &str) -> Vec<String> {
     let compilation = compile_text("test.lsd", text, None, &no_library_path());
