@@ -187,27 +187,48 @@ fn the_implicit_method_follows_dopri5_through_a_resting_phase_and_its_release() 
     }
 }
 
-/// A cylinder rolling on level ground (its axle a carriage moving along x) carries a pendulum
-/// limited to [−0.2, 0.25]. The motion has two degrees of freedom, x and the pendulum's θ, with
-/// the reduced mass matrix [[M, −m d cos θ], [−m d cos θ, I + m d²]] (M the carriage's,
-/// cylinder's and rod's masses plus the cylinder's I_c / r²): an impact on the pendulum's stop
-/// takes (1 − e²) of ½ θ̇² / (M⁻¹)_θθ. The rolling rows stay at round-off through it.
+/// A cylinder (m = 2, I = 0.01 about its axis, r = 0.1) rolling on level ground, its axle a
+/// carriage (0.5 kg) moving along x, carries a pendulum (0.8 kg at d = 0.3, I = 0.006 about its
+/// centre) limited to `range` with restitution `e`; launched at 1 m/s.
+fn rolling_pendulum(range: &str, e: f64, start: &str) -> String {
+    format!(
+        "import joints ;\nimport gravity ;\n\
+         let cylinder = body mass = 2, iframe = 1, inertia = [0.0067, 0.01, 0.0067] end ;\n\
+         let carriage = body mass = 0.5, iframe = 1, inertia = [0.001, 0.001, 0.001] end ;\n\
+         let rod = body mass = 0.8, iframe = [0, 0, -0.3] ++ 1, inertia = [0.006, 0.006, 0.0002] end ;\n\
+         join earth and carriage with link(x, y) dof = [x, 0, y] end as motion ;\n\
+         join carriage and cylinder with revolute([0, -1, 0]) as spin ;\n\
+         join earth and cylinder with rolling(0.1) as contact ;\n\
+         join carriage and rod with limited_revolute([0, 1, 0], {range}, {e}) as swing ;\n\
+         apply gravity_field ;\n\
+         initial motion.y = 0.1, motion.x' = 1, spin.q' = 10{start} ;\n"
+    )
+}
+
+/// The rolling rows and the normal row hold at round-off on every sample: the axle moves r
+/// times the spin (about −y: x' = −r q'), and the cylinder stays on the ground.
+fn assert_rolling(simulation: &Simulation) {
+    let (x, spin, y) = (
+        column(simulation, "motion.x"),
+        column(simulation, "spin.q"),
+        column(simulation, "motion.y"),
+    );
+    for sample in &simulation.samples {
+        let slip = sample.rates[x] + 0.1 * sample.rates[spin];
+        assert!(slip.abs() < 1e-12, "slip {slip} at {}", sample.time);
+        assert!((sample.coordinates[y] - 0.1).abs() < 1e-12);
+    }
+}
+
+/// The rolling pendulum's motion has two degrees of freedom, x and the pendulum's θ, with the
+/// reduced mass matrix [[M, −m d cos θ], [−m d cos θ, I + m d²]] (M the carriage's, cylinder's
+/// and rod's masses plus the cylinder's I_c / r²): an impact on the pendulum's stop takes
+/// (1 − e²) of ½ θ̇² / (M⁻¹)_θθ. The rolling rows stay at round-off through it.
 #[test]
 fn a_pendulum_on_a_rolling_cylinder_loses_the_energy_normal_to_its_stop() {
     let (r, m_cylinder, i_cylinder, m_carriage) = (0.1f64, 2.0f64, 0.01f64, 0.5f64);
     let (m_rod, d, i_rod, e) = (0.8f64, 0.3f64, 0.006f64, 0.5f64);
-    let text = format!(
-        "import joints ;\nimport gravity ;\n\
-         let cylinder = body mass = {m_cylinder}, iframe = 1, inertia = [0.0067, {i_cylinder}, 0.0067] end ;\n\
-         let carriage = body mass = {m_carriage}, iframe = 1, inertia = [0.001, 0.001, 0.001] end ;\n\
-         let rod = body mass = {m_rod}, iframe = [0, 0, -{d}] ++ 1, inertia = [{i_rod}, {i_rod}, 0.0002] end ;\n\
-         join earth and carriage with link(x, y) dof = [x, 0, y] end as motion ;\n\
-         join carriage and cylinder with revolute([0, -1, 0]) as spin ;\n\
-         join earth and cylinder with rolling({r}) as contact ;\n\
-         join carriage and rod with limited_revolute([0, 1, 0], -0.2, 0.25, {e}) as swing ;\n\
-         apply gravity_field ;\n\
-         initial motion.y = {r}, motion.x' = 1, spin.q' = 10 ;\n"
-    );
+    let text = rolling_pendulum("-0.2, 0.25", e, "");
     for integrator in [Integrator::DormandPrince, Integrator::Rk4] {
         let simulation = simulate(&text, settings(integrator.clone(), 2.0, 1e-11));
         let report = &simulation.report;
@@ -226,22 +247,45 @@ fn a_pendulum_on_a_rolling_cylinder_loses_the_energy_normal_to_its_stop() {
             );
             assert!((impact.rate_after + e * impact.rate_before).abs() < 1e-12);
         }
-        let (x, spin, y) = (
-            column(&simulation, "motion.x"),
-            column(&simulation, "spin.q"),
-            column(&simulation, "motion.y"),
-        );
-        for sample in &simulation.samples {
-            // Rolling: the axle moves r times the spin (about −y: x' = −r q'... with the
-            // cylinder's axis along −y, rolling forward turns it backwards).
-            let slip = sample.rates[x] + r * sample.rates[spin];
+        assert_rolling(&simulation);
+    }
+}
+
+/// Stopped dead on its stop at 0.2 rad, where its weight pushes it, the pendulum then rests
+/// there while the cylinder rolls on: the angle stays at the bound, the rolling rows hold, and
+/// the energy left after the impact is kept (the resting stop does no work).
+#[test]
+fn a_pendulum_on_a_rolling_cylinder_rests_on_its_stop() {
+    let text = rolling_pendulum("0.2, 1.0", 0.0, ", swing.q = 0.35");
+    for integrator in [Integrator::DormandPrince, Integrator::Rk4] {
+        let simulation = simulate(&text, settings(integrator.clone(), 5.0, 1e-11));
+        let report = &simulation.report;
+        assert_eq!(report.impacts.len(), 1, "{:?}", report.impacts);
+        let impact = &report.impacts[0];
+        assert!(impact.rests);
+        let swing = column(&simulation, "swing.q");
+        let resting: Vec<_> = (simulation.samples.iter())
+            .filter(|s| s.time > impact.time)
+            .collect();
+        assert!(resting.len() > 90);
+        let energy = |s: &lsdc::simulate::run::Sample| {
+            s.kinetic_energy + s.potential_energy.expect("potential")
+        };
+        let after = energy(resting[0]);
+        for sample in &resting {
+            let off = sample.coordinates[swing] - 0.2;
             assert!(
-                slip.abs() < 1e-12,
-                "{integrator:?}: slip {slip} at {}",
+                off.abs() < 1e-12,
+                "{integrator:?}: {off} at {}",
                 sample.time
             );
-            assert!((sample.coordinates[y] - r).abs() < 1e-12);
+            let drift = energy(sample) - after;
+            assert!(
+                drift.abs() < 1e-10 * after,
+                "{integrator:?}: energy {drift}"
+            );
         }
+        assert_rolling(&simulation);
     }
 }
 
