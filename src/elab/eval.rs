@@ -20,8 +20,8 @@ use crate::diag::Diagnostic;
 use crate::load::ModuleId;
 use crate::source::Span;
 use crate::syntax::ast::{
-    ApplyDecl, Arg, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind,
-    FieldInit, Ident, JoinDecl, Name,
+    ApplyDecl, Arg, BinaryExpr, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind, Expr,
+    ExprKind, FieldInit, Ident, JoinDecl, LocalExpr, Name,
 };
 
 type Result<T> = std::result::Result<T, Diagnostic>;
@@ -465,12 +465,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .collect::<Result<Vec<_>>>()?;
                 vector_or_matrix(values, expr.span)?
             }
-            ExprKind::Call { callee, args } => {
-                let value = self.call(callee, args, locals, expr.span)?;
+            ExprKind::Call(call) => {
+                let value = self.call(&call.callee, &call.args, locals, expr.span)?;
                 check_finite(&value, None, expr.span)?;
                 value
             }
-            ExprKind::Binary { op, lhs, rhs } => {
+            ExprKind::Binary(operation) => {
+                let BinaryExpr { op, lhs, rhs } = &**operation;
                 let left = self.expr(lhs, locals)?;
                 let right = self.expr(rhs, locals)?;
                 if *op == BinaryOp::Rotation {
@@ -513,7 +514,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Construct(c) => {
                 self.construct(c.kind, &c.params, &c.fields, locals, expr.span)?
             }
-            ExprKind::Local { bindings, body } => {
+            ExprKind::Local(local) => {
+                let LocalExpr { bindings, body } = &**local;
                 let depth = locals.len();
                 let mut values = Vec::with_capacity(bindings.len());
                 for binding in bindings {
