@@ -705,7 +705,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .into_iter()
                     .map(|v| as_scalar(v, span))
                     .collect::<Result<Vec<_>>>()?;
-                return Ok(Value::Scalar(Arc::new(SExpr::UnknownFunction(id, scalars))));
+                return Ok(Value::Scalar(Arc::new(SExpr::unknown_function(
+                    id, scalars,
+                ))));
             }
             Callee::Name(ident) => (ident, self.resolution(ident.span)?, None),
             Callee::Qualified(qualified) => (
