@@ -172,7 +172,7 @@ pub fn build(
     for joint in joints {
         let join = mechanism.join(joint.chain.join);
         let link = mechanism.link(join.link);
-        if !link.stops.is_declared() {
+        if !link.stops().is_declared() {
             continue;
         }
         if joint.chain.coordinate_count() != 1
@@ -195,7 +195,7 @@ pub fn build(
             );
             continue;
         }
-        if let Some(found) = joint_stops(mechanism, joint, &link.stops, unknowns, errors) {
+        if let Some(found) = joint_stops(mechanism, joint, link.stops(), unknowns, errors) {
             stops.extend(found);
         }
     }
@@ -212,7 +212,7 @@ fn refuse_on_loop_closing(
     refuse_declared(
         mechanism,
         loops,
-        |link| link.stops.is_declared(),
+        |link| link.stops().is_declared(),
         |name, span| {
             Diagnostic::error("E0450", format!("`{name}` has stops but closes a loop"))
                 .primary(span, "stops are simulated on the links of the tree")
