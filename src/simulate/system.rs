@@ -9,6 +9,7 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
+mod held_rows;
 mod holding;
 mod jacobian;
 mod stop_rows;
@@ -86,7 +87,7 @@ pub struct MechanicalSystem<'m> {
     pub holding: Vec<f64>,
     friction_power: f64,
     /// The held rows' storage (`holding`).
-    hold: holding::HoldScratch,
+    hold: held_rows::HoldScratch,
     /// The friction's changes of phase so far, in time order.
     pub switches: Vec<crate::dynamics::friction::Switch>,
 }
@@ -131,7 +132,7 @@ impl<'m> MechanicalSystem<'m> {
             phases: vec![Phase::Slipping(1.0); model.frictions.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,
-            hold: holding::HoldScratch::new(model),
+            hold: held_rows::HoldScratch::new(model),
             switches: Vec::new(),
         }
     }

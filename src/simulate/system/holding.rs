@@ -9,50 +9,10 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, crba_into};
-use crate::dynamics::dense::{solve_in_place, Factor};
+use crate::dynamics::dense::solve_in_place;
 use crate::dynamics::friction::Phase;
 use crate::dynamics::mimics;
-use crate::dynamics::model::Model;
 use crate::dynamics::stops::Side;
-
-/// What the held rows of a tree keep between evaluations, so that holding them allocates
-/// nothing but when the coordinates held change (at an event): the held velocities, the mass
-/// matrix and its factor, the responses P Eᵀ, E P Eᵀ and the forces.
-#[derive(Debug)]
-pub(super) struct HoldScratch {
-    rows: Vec<usize>,
-    mass: DMatrix<f64>,
-    factor: Factor,
-    responses: DMatrix<f64>,
-    coupling: DMatrix<f64>,
-    forces: DVector<f64>,
-}
-
-impl HoldScratch {
-    pub(super) fn new(model: &Model) -> HoldScratch {
-        HoldScratch {
-            rows: Vec::with_capacity(model.stops.len() + model.frictions.len()),
-            mass: DMatrix::zeros(0, 0),
-            factor: Factor::new(0),
-            responses: DMatrix::zeros(0, 0),
-            coupling: DMatrix::zeros(0, 0),
-            forces: DVector::zeros(0),
-        }
-    }
-
-    /// Sizes the storage for n velocities and s held rows.
-    fn size_for(&mut self, n: usize, s: usize) {
-        if self.mass.nrows() != n {
-            self.mass = DMatrix::zeros(n, n);
-            self.factor = Factor::new(n);
-        }
-        if self.responses.shape() != (n, s) {
-            self.responses = DMatrix::zeros(n, s);
-            self.coupling = DMatrix::zeros(s, s);
-            self.forces = DVector::zeros(s);
-        }
-    }
-}
 
 impl MechanicalSystem<'_> {
     /// Holds the coordinates at rest, on their stops or stuck by their friction: adds to the
