@@ -44,6 +44,24 @@ impl JointModel {
         self.coordinate_names.len()
     }
 
+    /// Whether coordinate `index` is an angle that gives the same pose every full turn: the
+    /// chain uses it only as the whole angle of its rotations (`q || axis`, as `revolute`).
+    pub fn turns(&self, index: usize) -> bool {
+        let index = index as u32;
+        let whole =
+            |s: &Scalar| matches!(**s, SExpr::Coordinate { index: i, order: 0 } if i == index);
+        let mut as_angle = false;
+        for step in &self.steps {
+            match step {
+                Step::Rotation { angle, .. } if whole(angle) => as_angle = true,
+                Step::Rotation { angle, .. } if angle.uses_coordinate(index) => return false,
+                Step::Translation(t) if t.iter().any(|s| s.uses_coordinate(index)) => return false,
+                _ => {}
+            }
+        }
+        as_angle
+    }
+
     /// The chain when it is one rotation or translation along a fixed axis, linear in its one
     /// coordinate (structurally: no evaluation).
     pub(crate) fn single_motion(&self) -> Option<SingleMotion> {
@@ -323,6 +341,14 @@ impl KinematicModel {
                     .iter()
                     .map(move |c| format!("{}.{c}", j.name))
             })
+            .collect()
+    }
+
+    /// For every coordinate, in vector order, whether it turns (`JointModel::turns`).
+    pub fn turning(&self) -> Vec<bool> {
+        self.joints
+            .iter()
+            .flat_map(|j| (0..j.coordinate_count()).map(move |k| j.turns(k)))
             .collect()
     }
 
