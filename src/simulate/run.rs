@@ -623,12 +623,13 @@ fn simulate_from(
     // model's own evaluation counts them.
     let plain = model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty();
     system.use_native(prepared.native.as_ref().filter(|_| plain));
+    // The followers start where their leaders put them, whatever `initial` said (then with
+    // loops, the loops and couplings are closed together).
+    let (q0, v0) = y0.split_at_mut(model.positions());
+    mimics::impose(&model.mimics, q0, v0);
     if let Err(error) = system.start_loops(&mut y0) {
         return failed_at_start(prepared, error.to_string());
     }
-    // The followers start where their leaders put them, whatever `initial` said.
-    let (q0, v0) = y0.split_at_mut(model.positions());
-    mimics::impose(&model.mimics, q0, v0);
     if let Err(error) = system.start_friction(0.0, &mut y0) {
         return failed_at_start(prepared, error.to_string());
     }

@@ -9,6 +9,7 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
+mod couplings;
 mod jacobian;
 
 use super::constraints::LoopMonitor;
@@ -239,6 +240,10 @@ impl<'m> MechanicalSystem<'m> {
         // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
         // recursions start from.
         self.evaluate_efforts(t, q, v)?;
+        // The slipping joints' friction acts with the efforts.
+        let mut tau = std::mem::take(&mut self.efforts.tau);
+        self.friction_power = self.add_friction(v, &mut tau);
+        self.efforts.tau = tau;
         let scratch = &mut self.loop_scratch;
         // Only Baumgarte's feedback reads the position rows.
         let extent = match self.loops.stabilisation {
@@ -400,6 +405,7 @@ impl<'m> MechanicalSystem<'m> {
         dydt: &mut [f64],
     ) -> Result<(), SystemError> {
         let model = self.model;
+        self.friction_power = 0.0;
         let mut accelerations = std::mem::take(&mut self.accelerations);
         if accelerations.len() != model.velocities() {
             // Only after a failed evaluation, which took the scratch away.
@@ -444,7 +450,6 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        self.friction_power = 0.0;
         // The contacts' solve counts the rotors already (it uses CRBA and RNEA).
         if !native && !model.has_contacts() && self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
@@ -580,7 +585,7 @@ impl<'m> MechanicalSystem<'m> {
                 left,
             });
         }
-        Ok(moved)
+        Ok(self.keep_couplings(t, y)? || moved)
     }
 
     /// Sets the rates of the complementary ball joints' angles in y (for outputs).
@@ -631,7 +636,7 @@ impl<'m> MechanicalSystem<'m> {
         loops::project(model, &mut self.data, choice, &mut q, &mut v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
-        Ok(())
+        self.keep_couplings(0.0, y).map(|_| ())
     }
 
     /// The wrench each join transmits to its second body, at the join, in the fixed axes
