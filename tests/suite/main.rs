@@ -11,6 +11,7 @@ mod assembly;
 mod cli;
 mod closed_loops;
 mod constrained;
+mod coupled_loops;
 mod contacts;
 mod drag;
 mod dynamics;
