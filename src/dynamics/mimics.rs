@@ -15,6 +15,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::dense::Factor;
 use super::joint::Joint;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{LinkMimic, Mechanism};
@@ -108,14 +109,44 @@ pub fn solve(mimics: &[Mimic], mass: &DMatrix<f64>, forces: &DMatrix<f64>) -> Op
     Some(s * reduced.solve(&(st * forces)))
 }
 
-/// [`solve`] for one force vector.
-pub fn solve_vector(
-    mimics: &[Mimic],
-    mass: &DMatrix<f64>,
-    force: &DVector<f64>,
-) -> Option<DVector<f64>> {
-    let columns = DMatrix::from_column_slice(force.len(), 1, force.as_slice());
-    solve(mimics, mass, &columns).map(|a| a.column(0).clone_owned())
+/// [`solve`] for one force vector at a time without allocating: the basis S (constant, the
+/// couplings being linear) and the storage of M S, Sᵀ M S, its factor and Sᵀ f, sized once.
+#[derive(Clone, Debug)]
+pub struct ReducedSolve {
+    basis: DMatrix<f64>,
+    moved: DMatrix<f64>,
+    reduced: DMatrix<f64>,
+    factor: Factor,
+    force: DVector<f64>,
+}
+
+impl ReducedSolve {
+    /// Storage for the couplings `mimics` of a tree with `nv` velocities.
+    pub fn new(mimics: &[Mimic], nv: usize) -> ReducedSolve {
+        let basis = basis(mimics, nv);
+        let free = basis.ncols();
+        ReducedSolve {
+            moved: DMatrix::zeros(nv, free),
+            reduced: DMatrix::zeros(free, free),
+            factor: Factor::new(free),
+            force: DVector::zeros(free),
+            basis,
+        }
+    }
+
+    /// Replaces the forces f by the accelerations S (Sᵀ M S)⁻¹ Sᵀ f; false where Sᵀ M S is not
+    /// positive definite (f is then left as it was).
+    pub fn solve_mut(&mut self, mass: &DMatrix<f64>, force: &mut DVector<f64>) -> bool {
+        self.moved.gemm(1.0, mass, &self.basis, 0.0);
+        self.reduced.gemm_tr(1.0, &self.basis, &self.moved, 0.0);
+        if !self.factor.factor(&self.reduced) {
+            return false;
+        }
+        self.force.gemv_tr(1.0, &self.basis, force, 0.0);
+        self.factor.solve_vector_mut(&mut self.force);
+        force.gemv(1.0, &self.basis, &self.force, 0.0);
+        true
+    }
 }
 
 /// The couplings of the tree's links. Follower and leader must each have one coordinate

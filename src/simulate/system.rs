@@ -70,6 +70,8 @@ pub struct MechanicalSystem<'m> {
     at_rest: Vec<f64>,
     mass: DMatrix<f64>,
     mass_factor: Factor,
+    /// The mimic couplings' reduced solve on a tree (`mimics::ReducedSolve`).
+    reduced: mimics::ReducedSolve,
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
@@ -121,6 +123,7 @@ impl<'m> MechanicalSystem<'m> {
             at_rest: vec![0.0; model.nv],
             mass: DMatrix::zeros(geared, geared),
             mass_factor: Factor::new(geared),
+            reduced: mimics::ReducedSolve::new(&model.mimics, model.nv),
             native: None,
             impacts: Vec::new(),
             resting: vec![false; model.stops.len()],
@@ -212,10 +215,10 @@ impl<'m> MechanicalSystem<'m> {
         }
         self.friction_power = self.add_friction(v, accelerations);
         if !model.mimics.is_empty() {
-            // The couplings' reduced matrix S^T M S is formed per evaluation (`mimics::solve`).
-            let solved = mimics::solve_vector(&model.mimics, &self.mass, accelerations);
-            accelerations.copy_from(&solved.ok_or(SystemError::SingularMassMatrix)?);
-            return Ok(());
+            return match self.reduced.solve_mut(&self.mass, accelerations) {
+                true => Ok(()),
+                false => Err(SystemError::SingularMassMatrix),
+            };
         }
         if !self.mass_factor.factor(&self.mass) {
             return Err(SystemError::SingularMassMatrix);
