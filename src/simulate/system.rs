@@ -9,6 +9,7 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
+mod contact_loops;
 mod couplings;
 mod jacobian;
 
@@ -230,7 +231,7 @@ impl<'m> MechanicalSystem<'m> {
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
     /// `loop_scratch` with the constraint rows they come from, the efforts in `efforts`;
     /// nothing is allocated once the buffers are sized.
-    fn solve_constrained(
+    pub(super) fn solve_constrained(
         &mut self,
         t: f64,
         q: &[f64],
@@ -310,7 +311,7 @@ impl<'m> MechanicalSystem<'m> {
         scratch.keep(kept);
     }
 
-    fn contact_error(&self, error: &ContactError) -> SystemError {
+    pub(super) fn contact_error(&self, error: &ContactError) -> SystemError {
         match error {
             ContactError::SingularMass => SystemError::SingularMassMatrix,
             ContactError::Singular { row } => SystemError::SingularContact {
@@ -375,7 +376,7 @@ impl<'m> MechanicalSystem<'m> {
     /// Ma − f: inverse dynamics at those accelerations under the efforts' external forces,
     /// less the efforts' generalised forces (the complementary coordinates, without inertia,
     /// get −τ). `data` holds the forward kinematics of the state.
-    fn solve_multipliers(&mut self) {
+    pub(super) fn solve_multipliers(&mut self) {
         let model = self.model;
         let scratch = &mut self.loop_scratch;
         let a = &scratch.accelerations.as_slice()[..model.nv];
@@ -422,7 +423,10 @@ impl<'m> MechanicalSystem<'m> {
         if native {
             // The accelerations are written.
         } else if model.has_contacts() {
-            self.solve_contacts(t, q, v)?;
+            match model.has_loops() {
+                true => self.solve_contacts_on_loops(t, q, v)?,
+                false => self.solve_contacts(t, q, v)?,
+            }
             let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
             accelerations.copy_from(&solution.accelerations);
             self.efforts.power += contacts::friction_power(model, rows, &solution.forces);
@@ -548,11 +552,11 @@ impl<'m> MechanicalSystem<'m> {
     /// Keeps the loops closed after a step (see `LoopMonitor::keep`); nothing for a tree.
     pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
-        if model.has_contacts() {
-            return self.keep_contacts(y);
-        }
         if !model.has_loops() {
-            return Ok(false);
+            return match model.has_contacts() {
+                true => self.keep_contacts(y),
+                false => Ok(false),
+            };
         }
         let free = &self.loops.structure.free;
         let quality = self.loop_scratch.take_free_quality(free);
@@ -588,7 +592,9 @@ impl<'m> MechanicalSystem<'m> {
                 left,
             });
         }
-        Ok(self.keep_couplings(t, y)? || moved)
+        let coupled = self.keep_couplings(t, y)?;
+        let touching = model.has_contacts() && self.keep_contacts_on_loops(t, y)?;
+        Ok(moved || coupled || touching)
     }
 
     /// Sets the rates of the complementary ball joints' angles in y (for outputs).
@@ -621,13 +627,13 @@ impl<'m> MechanicalSystem<'m> {
     /// gaps and projects the velocities onto their rows.
     pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
-        if model.has_contacts() {
+        if !model.has_loops() {
             // The gaps closed and the starting velocities made to roll, by the smallest change
             // in the kinetic metric.
-            return self.keep_contacts(y).map(|_| ());
-        }
-        if !model.has_loops() {
-            return Ok(());
+            return match model.has_contacts() {
+                true => self.keep_contacts(y).map(|_| ()),
+                false => Ok(()),
+            };
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
@@ -639,7 +645,11 @@ impl<'m> MechanicalSystem<'m> {
         loops::project(model, &mut self.data, choice, &mut q, &mut v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
-        self.keep_couplings(0.0, y).map(|_| ())
+        self.keep_couplings(0.0, y)?;
+        if model.has_contacts() {
+            self.keep_contacts_on_loops(0.0, y)?;
+        }
+        Ok(())
     }
 
     /// The wrench each join transmits to its second body, at the join, in the fixed axes
@@ -648,7 +658,13 @@ impl<'m> MechanicalSystem<'m> {
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
-            self.solve_constrained(t, q, v, Wanted::WithMultipliers)?;
+            let touching = match model.has_contacts() {
+                true => Some(self.contacts_on_loops_reactions(t, q, v)?),
+                false => {
+                    self.solve_constrained(t, q, v, Wanted::WithMultipliers)?;
+                    None
+                }
+            };
             let solution = &self.loop_scratch;
             let (c, multipliers) = (&solution.constraints, &solution.multipliers);
             let on_bodies = loops::constraint_forces(model, &self.data, c, multipliers);
@@ -660,21 +676,26 @@ impl<'m> MechanicalSystem<'m> {
                 .map(|(a, b)| a + b)
                 .collect();
             let accelerations = solution.accelerations.clone();
-            (accelerations, external, Some(multipliers.clone()))
+            let mut multipliers = multipliers.clone();
+            if let Some(forces) = touching {
+                multipliers = DVector::from_iterator(
+                    multipliers.len() + forces.len(),
+                    multipliers.iter().chain(forces.iter()).copied(),
+                );
+            }
+            (accelerations, external, Some(multipliers))
         } else if model.has_contacts() {
-            self.solve_contacts(t, q, v)?;
+            match model.has_loops() {
+                true => self.solve_contacts_on_loops(t, q, v)?,
+                false => self.solve_contacts(t, q, v)?,
+            }
             let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
             let on_bodies =
                 contacts::contact_body_forces(model, &self.data, rows, &solution.forces);
             let external: Vec<_> = (self.efforts.external.iter().zip(&on_bodies))
                 .map(|(a, b)| a + b)
                 .collect();
-            // A contact transmits no moment about its point: its force, along the plane's axes.
-            let forces = solution
-                .forces
-                .iter()
-                .flat_map(|f| [0.0, 0.0, 0.0, f.x, f.y, f.z]);
-            let forces = DVector::from_iterator(6 * model.contacts.len(), forces);
+            let forces = contacts::contact_reactions(&solution.forces);
             (solution.accelerations.clone(), external, Some(forces))
         } else {
             let efforts = self.efforts(t, q, v)?;
