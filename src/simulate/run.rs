@@ -486,6 +486,7 @@ impl Sampler<'_> {
         work: Option<f64>,
     ) -> Result<Sample, SystemError> {
         let model = self.system.model;
+        self.system.adopt_phases();
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let previous = self.system.reference.borrow().clone();
@@ -647,6 +648,8 @@ fn simulate_from(
     sampler.system.loops = system.loops.clone();
     sampler.system.contact_rows = system.contact_rows.clone();
     sampler.system.loops.samples_outputs = true;
+    // The sampler's reactions see the joints sticking and the stops resting as the run does.
+    sampler.system.mirror_phases(system.share_phases());
     // The work of non-conservative efforts rides along as one more state (not with the
     // variational integrator, whose steps are its own).
     let motion = y0.len();

@@ -16,7 +16,7 @@ mod jacobian;
 use super::constraints::LoopMonitor;
 use super::native::NativeDynamics;
 use crate::dynamics::algorithms::{
-    aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
+    aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
     rnea_after_kinematics, rnea_forward, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::contacts::{self, ContactError, ContactScratch, CONTACT_ROW_NAMES};
@@ -89,6 +89,17 @@ pub struct MechanicalSystem<'m> {
     friction_power: f64,
     /// The friction's changes of phase so far, in time order.
     pub switches: Vec<crate::dynamics::friction::Switch>,
+    /// The phases and resting stops shared with another system of the run (the sampler's),
+    /// which mirrors them (see `simulate::friction`).
+    pub(super) shared_phases: Option<Rc<RefCell<SharedPhases>>>,
+}
+
+/// The friction's phases and the stops' resting flags of a run, as its integrated system last
+/// set them.
+#[derive(Clone, Debug, Default)]
+pub struct SharedPhases {
+    pub phases: Vec<Phase>,
+    pub resting: Vec<bool>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -133,6 +144,7 @@ impl<'m> MechanicalSystem<'m> {
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,
             switches: Vec::new(),
+            shared_phases: None,
         }
     }
 
@@ -698,16 +710,12 @@ impl<'m> MechanicalSystem<'m> {
             let forces = contacts::contact_reactions(&solution.forces);
             (solution.accelerations.clone(), external, Some(forces))
         } else {
+            // The accelerations of the run's own equations: with the geared rotors, the mimic
+            // couplings, the friction's phases and the coordinates held at rest.
+            let mut rates = vec![0.0; self.dimension()];
+            self.derivative_at(t, q, v, &mut rates)?;
+            let a = DVector::from_column_slice(&rates[model.positions()..]);
             let efforts = self.efforts(t, q, v)?;
-            let a = aba(
-                model,
-                &mut self.data,
-                q,
-                v,
-                efforts.tau.as_slice(),
-                &efforts.external,
-            )
-            .map_err(|e| self.dynamics_error(&e))?;
             (a, efforts.external, None)
         };
         // The link efforts act across their joints: they are not part of the reaction.
