@@ -218,7 +218,11 @@ pub fn independent_rows(model: &Model, mass: &DMatrix<f64>, rows: &ContactRows) 
 /// [`independent_rows`] on a mechanism with loops, whose accelerations respond to forces
 /// through `response` (P, `loops::constrained_response`) rather than M⁻¹: a contact row the
 /// loops already keep is left out.
-pub fn independent_rows_on(model: &Model, response: &DMatrix<f64>, rows: &ContactRows) -> Vec<usize> {
+pub fn independent_rows_on(
+    model: &Model,
+    response: &DMatrix<f64>,
+    rows: &ContactRows,
+) -> Vec<usize> {
     let candidates = candidate_rows(model);
     let g = rows.jacobian.select_rows(&candidates);
     let normal = &g * response * g.transpose();

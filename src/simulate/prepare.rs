@@ -247,4 +247,3 @@ fn initial_state(
     }
     Ok((coordinates, rates))
 }
-

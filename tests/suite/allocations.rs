@@ -42,7 +42,10 @@ fn derivatives_and_projections_allocate_nothing_on_every_example() {
         contacts_and_rotors >= 3,
         "the examples with contacts or geared rotors were not counted"
     );
-    assert_eq!(mimics, 1, "the example with mimic couplings was not counted");
+    assert_eq!(
+        mimics, 1,
+        "the example with mimic couplings was not counted"
+    );
     assert!(allocating.is_empty(), "allocations: {allocating:#?}");
 }
 

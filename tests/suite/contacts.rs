@@ -301,8 +301,14 @@ fn the_rolling_cylinder_carrying_a_loop_matches_its_closed_form() {
             "rolling_cylinder",
             &[
                 ("integrator = dopri5", replaced.as_str()),
-                ("join slope and cylinder with rolling(r) as contact ;", shadow),
-                ("initial motion.y = r ;", "initial motion.y = r, shadow.y = r guess ;"),
+                (
+                    "join slope and cylinder with rolling(r) as contact ;",
+                    shadow,
+                ),
+                (
+                    "initial motion.y = r ;",
+                    "initial motion.y = r, shadow.y = r guess ;",
+                ),
             ],
         );
         let simulation = completed(&prepared);
@@ -317,8 +323,14 @@ fn the_rolling_cylinder_carrying_a_loop_matches_its_closed_form() {
                 "{integrator}, t = {t}: x = {x}"
             );
             assert!((x_rate - acceleration * t).abs() < 1e-9, "{integrator}");
+            let turned = -0.5 * acceleration * t * t / RADIUS;
+            assert!((q - turned).abs() < 1e-9, "{integrator}: q = {q}");
             // No drift off the contact: the gap and the rolling row at round-off.
-            assert!((y - RADIUS).abs() < 1e-14, "{integrator}: gap {}", y - RADIUS);
+            assert!(
+                (y - RADIUS).abs() < 1e-14,
+                "{integrator}: gap {}",
+                y - RADIUS
+            );
             assert!(
                 (x_rate + RADIUS * q_rate).abs() < 1e-12,
                 "{integrator}: slip {}",
@@ -328,7 +340,10 @@ fn the_rolling_cylinder_carrying_a_loop_matches_its_closed_form() {
             assert!((shadow_x - x).abs() < 1e-12, "{integrator}: shadow");
             let [fx, fy, fz] = contact_force(sample);
             assert!((fx - along).abs() < 1e-9, "{integrator}: R_x = {fx}");
-            assert!(fy.abs() < 1e-9 && (fz - normal).abs() < 1e-9, "{integrator}");
+            assert!(
+                fy.abs() < 1e-9 && (fz - normal).abs() < 1e-9,
+                "{integrator}"
+            );
         }
     }
 }

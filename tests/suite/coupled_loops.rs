@@ -26,7 +26,9 @@ fn settings(duration: f64, output: f64, tolerance: f64) -> Settings {
 /// settings would take precedence over a test's.
 fn variant(name: &str, replacements: &[(&str, &str)]) -> String {
     let text = example_text(name, replacements);
-    let start = text.find("simulate duration").expect("a simulate declaration");
+    let start = text
+        .find("simulate duration")
+        .expect("a simulate declaration");
     let end = start + text[start..].find(';').expect("its end");
     format!("{}{}", &text[..start], &text[end + 1..])
 }
@@ -87,13 +89,22 @@ fn a_mimic_with_another_multiplier_conserves_the_energy() {
         &[(MIMIC, &MIMIC.replace("crank, 1, 0.3", "crank, -0.5, 0.2"))],
     );
     let simulation = succeeded(run_text(&text, settings(3.0, 0.05, 1e-12)));
-    let (follower, leader) = (column(&simulation, "turn.q"), column(&simulation, "crank.q"));
+    let (follower, leader) = (
+        column(&simulation, "turn.q"),
+        column(&simulation, "crank.q"),
+    );
     for sample in &simulation.samples {
         let position = sample.coordinates[follower] + 0.5 * sample.coordinates[leader] - 0.2;
         let rate = sample.rates[follower] + 0.5 * sample.rates[leader];
-        assert!(position.abs() < 2e-12 && rate.abs() < 2e-12, "{position:e} {rate:e}");
+        assert!(
+            position.abs() < 2e-12 && rate.abs() < 2e-12,
+            "{position:e} {rate:e}"
+        );
     }
-    assert!(simulation.report.energy_drift.is_some_and(|d| d.abs() < 1e-10));
+    assert!(simulation
+        .report
+        .energy_drift
+        .is_some_and(|d| d.abs() < 1e-10));
 }
 
 /// The time where the crank's rate of the frictionless four-bar, driven by a constant torque
@@ -182,10 +193,7 @@ fn dry_friction_on_a_four_bar_switches_as_separate_swings_and_dissipates_its_wor
 fn a_four_bar_sticks_while_its_friction_exceeds_the_holding_torque() {
     let frictionless = prepared(
         "four_bar_friction",
-        &[(
-            "friction_revolute([0, 0, 1], 4, 0)",
-            "revolute([0, 0, 1])",
-        )],
+        &[("friction_revolute([0, 0, 1], 4, 0)", "revolute([0, 0, 1])")],
     );
     let holding = holding_efforts(&frictionless, &["crank.q".to_string()]).expect("statics");
     let torque = holding.efforts[0].effort.abs();
@@ -205,7 +213,10 @@ fn a_four_bar_sticks_while_its_friction_exceeds_the_holding_torque() {
         match sticks {
             true => {
                 assert!(simulation.report.friction_switches.is_empty());
-                assert!(moved < 1e-12 && last.rates[crank].abs() < 1e-12, "{moved:e}");
+                assert!(
+                    moved < 1e-12 && last.rates[crank].abs() < 1e-12,
+                    "{moved:e}"
+                );
             }
             // Driven by 0.1 % of the holding torque, it turns by about 2e-3 rad in 1 s.
             false => assert!(moved > 1e-4, "{moved:e}"),

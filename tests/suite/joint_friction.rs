@@ -238,7 +238,11 @@ fn the_reactions_see_a_sticking_joint_held() {
     assert_eq!(switches[0].phase, Phase::Sticking);
     let weight = 9.81 * MASS;
     let mut checked = 0;
-    for sample in simulation.samples.iter().filter(|s| s.time > switches[0].time) {
+    for sample in simulation
+        .samples
+        .iter()
+        .filter(|s| s.time > switches[0].time)
+    {
         // The joint's wrench on the block, fixed axes: moment, then force.
         let force = &sample.reactions[3..6];
         assert!(

@@ -39,9 +39,9 @@ impl MechanicalSystem<'_> {
         let motions = self.loop_scratch.solved_motions();
         let response = loops::constrained_response(&mass, motions, &identity)
             .ok_or(SystemError::SingularMassMatrix)?;
-        let kept = (self.contact_rows.get_or_insert_with(|| {
-            contacts::independent_rows_on(model, &response, &scratch.rows)
-        }))
+        let kept = (self
+            .contact_rows
+            .get_or_insert_with(|| contacts::independent_rows_on(model, &response, &scratch.rows)))
         .clone();
         scratch.keep(&kept);
         scratch.response = Some(response);

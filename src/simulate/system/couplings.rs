@@ -111,7 +111,12 @@ impl MechanicalSystem<'_> {
                 model.mimics.len(),
                 model.mimics.iter().map(|m| m.violation(&q)),
             );
-            let scale = 1.0 + model.mimics.iter().map(|m| q[m.position].abs()).fold(0.0, f64::max);
+            let scale = 1.0
+                + model
+                    .mimics
+                    .iter()
+                    .map(|m| q[m.position].abs())
+                    .fold(0.0, f64::max);
             if violation.amax() <= COUPLING_ROUND_OFF * scale {
                 break;
             }
