@@ -1,7 +1,7 @@
 //! The stops of a mechanism during a run: their event functions (the distance of each stopped
 //! coordinate to its bound), and the impact where one is reached, recorded for the report.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics};
@@ -49,40 +49,25 @@ impl MechanicalSystem<'_> {
         }
     }
 
-    /// Holds the coordinates at rest, on their stops or stuck by their friction: adds to the
-    /// accelerations `a` (at q) the response P Sᵀ λ to the forces λ that keep those
-    /// coordinates' accelerations zero, P = M⁻¹ with the mimic couplings kept
-    /// (`mimics::solve`), and records λ.
+    /// Holds the coordinates at rest, on their stops or stuck by their friction, and with loops
+    /// the mimic couplings (see `system::couplings`): adds to the accelerations `a` (at q) the
+    /// response P Eᵀ λ to the forces λ that keep the held rows E's accelerations zero, and
+    /// records λ.
     pub(super) fn hold_resting(
         &mut self,
         q: &[f64],
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
         let model = self.model;
-        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
-        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
-        let rows: Vec<usize> = stops
-            .clone()
-            .map(|k| model.stops[k].velocity)
-            .chain(frictions.clone().map(|k| model.frictions[k].velocity))
-            .collect();
-        if rows.is_empty() {
+        let (rows, couplings) = self.held_rows();
+        if rows.nrows() == 0 {
             return Ok(());
         }
-        let mass = crba(model, &mut self.data, q)?;
-        let mut unit = DMatrix::zeros(model.nv, rows.len());
-        for (column, &row) in rows.iter().enumerate() {
-            unit[(row, column)] = 1.0;
-        }
-        let responses =
-            mimics::solve(&model.mimics, &mass, &unit).ok_or(SystemError::SingularMassMatrix)?;
-        let coupling = DMatrix::from_fn(rows.len(), rows.len(), |i, j| responses[(rows[i], j)]);
-        let free = DVector::from_fn(rows.len(), |i, _| -a[rows[i]]);
-        // Rank-revealing: a follower held with its leader gives two rows for one coupled motion.
-        let forces = (coupling.svd(true, true).solve(&free, 1e-12))
-            .map_err(|_| SystemError::SingularMassMatrix)?;
-        *a += &responses * &forces;
-        let mut forces = forces.iter();
+        let (change, forces) = self.held_change(q, &rows, &(&rows * &*a))?;
+        *a += change;
+        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
+        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
+        let mut forces = forces.iter().skip(couplings);
         for (k, force) in stops.zip(forces.by_ref()) {
             // A lower stop pushes the coordinate up, an upper one down.
             self.contact[k] = match model.stops[k].side {
