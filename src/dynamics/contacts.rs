@@ -211,7 +211,28 @@ pub fn independent_rows(model: &Model, mass: &DMatrix<f64>, rows: &ContactRows) 
         return candidates;
     };
     let g = rows.jacobian.select_rows(&candidates);
-    let mut normal = &g * cholesky.solve(&g.transpose());
+    let normal = &g * cholesky.solve(&g.transpose());
+    choose_independent(&candidates, normal)
+}
+
+/// [`independent_rows`] on a mechanism with loops, whose accelerations respond to forces
+/// through `response` (P, `loops::constrained_response`) rather than M⁻¹: a contact row the
+/// loops already keep is left out.
+pub fn independent_rows_on(
+    model: &Model,
+    response: &DMatrix<f64>,
+    rows: &ContactRows,
+) -> Vec<usize> {
+    let candidates = candidate_rows(model);
+    let g = rows.jacobian.select_rows(&candidates);
+    let normal = &g * response * g.transpose();
+    choose_independent(&candidates, normal)
+}
+
+/// The candidate rows a Cholesky factorisation of their normal matrix `normal` pivoted on its
+/// diagonal takes before its largest pivot left falls below `CONTACT_RANK_TOLERANCE` times
+/// the largest diagonal entry.
+fn choose_independent(candidates: &[usize], mut normal: DMatrix<f64>) -> Vec<usize> {
     let scale = normal.diagonal().max();
     let mut chosen = Vec::new();
     let mut left: Vec<usize> = (0..candidates.len()).collect();
@@ -300,10 +321,16 @@ impl RowSystem {
         self.h.copy_from(&self.g);
     }
 
-    /// M⁻¹Hᵀ and G M⁻¹Hᵀ, `factor` holding M's factorisation.
-    fn couple(&mut self, factor: &Factor) {
-        self.moved.tr_copy_from(&self.h);
-        factor.solve_mut(&mut self.moved);
+    /// M⁻¹Hᵀ and G M⁻¹Hᵀ, `factor` holding M's factorisation; with loops, P Hᵀ and G P Hᵀ
+    /// for their `response` P in place of M⁻¹.
+    fn couple(&mut self, factor: &Factor, response: Option<&DMatrix<f64>>) {
+        match response {
+            Some(response) => self.moved.gemm(1.0, response, &self.h.transpose(), 0.0),
+            None => {
+                self.moved.tr_copy_from(&self.h);
+                factor.solve_mut(&mut self.moved);
+            }
+        }
         self.coupling.gemm(1.0, &self.g, &self.moved, 0.0);
     }
 
@@ -331,6 +358,9 @@ pub struct ContactScratch {
     pub solution: ContactSolution,
     /// The step of the velocities that closes the gaps (`gap_step`).
     pub step: DVector<f64>,
+    /// On a mechanism with loops, the response P of its accelerations to generalised forces
+    /// (`loops::constrained_response`), which the solves and projections use in place of M⁻¹.
+    pub response: Option<DMatrix<f64>>,
 }
 
 impl ContactScratch {
@@ -350,6 +380,7 @@ impl ContactScratch {
                 forces: vec![Vector3::zeros(); model.contacts.len()],
             },
             step: DVector::zeros(n),
+            response: None,
         }
     }
 
@@ -392,6 +423,26 @@ pub fn solve(
     if !scratch.factor_mass() {
         return Err(ContactError::SingularMass);
     }
+    scratch.free.copy_from(free_force);
+    scratch.factor.solve_vector_mut(&mut scratch.free);
+    solve_rows(model, scratch)
+}
+
+/// [`solve`] on a mechanism with loops: `free` the accelerations the loops' solve found without
+/// the contacts, and the contacts' forces acting through the loops' response
+/// (`ContactScratch::response`, which must be set).
+pub fn solve_on_loops(
+    model: &Model,
+    scratch: &mut ContactScratch,
+    free: &DVector<f64>,
+) -> Result<(), ContactError> {
+    scratch.free.copy_from(free);
+    solve_rows(model, scratch)
+}
+
+/// The contacts' multipliers and the accelerations a = a_free + X Hᵀλ from the accelerations
+/// without them in `scratch.free`, X = M⁻¹ (factored) or the loops' response.
+fn solve_rows(model: &Model, scratch: &mut ContactScratch) -> Result<(), ContactError> {
     let ContactScratch {
         rows,
         factor,
@@ -399,15 +450,14 @@ pub fn solve(
         free,
         pressing,
         solution,
+        response,
         ..
     } = scratch;
-    free.copy_from(free_force);
-    factor.solve_vector_mut(free);
     system.gather(rows);
     pressing.fill(1.0);
     for _ in 0..=model.contacts.len() {
         force_rows(model, rows, system, pressing);
-        system.couple(factor);
+        system.couple(factor, response.as_ref());
         for (i, &row) in system.rows.iter().enumerate() {
             system.right[i] = -rows.bias[row];
         }
@@ -482,11 +532,13 @@ fn flip_pulling(model: &Model, forces: &[Vector3<f64>], pressing: &mut [f64]) ->
 
 /// The smallest change of the velocities in the metric of M that zeroes the kept rows:
 /// v − M⁻¹Gᵀ(G M⁻¹ Gᵀ)⁻¹ G v, with the rows of `scratch` taken at v and its mass matrix
-/// factored (`ContactScratch::factor_mass`). Nothing moves where the rows are dependent.
+/// factored (`ContactScratch::factor_mass`), or with loops their response P in place of M⁻¹
+/// (the change then keeps the loops' velocity rows). Nothing moves where the rows are
+/// dependent.
 pub fn project_velocities(scratch: &mut ContactScratch, v: &mut [f64]) {
     let system = &mut scratch.kept;
     system.gather(&scratch.rows);
-    system.couple(&scratch.factor);
+    system.couple(&scratch.factor, scratch.response.as_ref());
     for (i, &row) in system.rows.iter().enumerate() {
         system.right[i] = scratch.rows.velocity[row];
     }
@@ -503,7 +555,7 @@ pub fn project_velocities(scratch: &mut ContactScratch, v: &mut [f64]) {
 pub fn gap_step(scratch: &mut ContactScratch) -> bool {
     let system = &mut scratch.normal;
     system.gather(&scratch.rows);
-    system.couple(&scratch.factor);
+    system.couple(&scratch.factor, scratch.response.as_ref());
     for (i, &row) in system.rows.iter().enumerate() {
         system.right[i] = scratch.rows.gap[row / 3];
     }
@@ -542,6 +594,13 @@ pub fn contact_body_forces(
         }
     }
     on_bodies
+}
+
+/// The contacts' reactions as the outputs give them, six per contact: a contact transmits no
+/// moment about its point, then its force along the plane's axes.
+pub fn contact_reactions(forces: &[Vector3<f64>]) -> DVector<f64> {
+    let flat = forces.iter().flat_map(|f| [0.0, 0.0, 0.0, f.x, f.y, f.z]);
+    DVector::from_iterator(6 * forces.len(), flat)
 }
 
 /// The power of the sliding contacts' friction forces on the slip velocities (≤ 0): the rate

@@ -87,8 +87,9 @@ impl Friction {
     }
 }
 
-/// The friction of the tree's links. A link with friction must have one coordinate (E0474) in
-/// a tree (E0474), and its coefficients must be numbers ≥ 0 (E0474).
+/// The friction of the tree's links. A link with friction must have one coordinate (E0474) and
+/// be a join of the tree, not one closing a loop (E0474), and its coefficients must be numbers
+/// ≥ 0 (E0474).
 pub fn build(
     mechanism: &Mechanism,
     joints: &[Joint],
@@ -113,13 +114,13 @@ pub fn build(
         if !link.friction().is_declared() {
             continue;
         }
-        match joint_friction(joint, link.friction(), unknowns, !loops.is_empty()) {
+        match joint_friction(joint, link.friction(), unknowns) {
             Ok(friction) => found.push(Friction { joint: k, ..friction }),
             Err((message, label)) => errors.push(
                 Diagnostic::error("E0474", message)
                     .primary(link.span, label)
 .secondary(mechanism.join(joint.chain.join).span, "the join")
-                    .help("give `friction` (and `damping`) as numbers ≥ 0 on a revolute or prismatic link of a tree"),
+                    .help("give `friction` (and `damping`) as numbers ≥ 0 on a revolute or prismatic link"),
             ),
         }
     }
@@ -130,7 +131,6 @@ fn joint_friction(
     joint: &Joint,
     declared: &LinkFriction,
     unknowns: &UnknownValues,
-    has_loops: bool,
 ) -> Result<Friction, (String, &'static str)> {
     let name = &joint.chain.name;
     if !joint.is_single_coordinate() {
@@ -138,12 +138,6 @@ fn joint_friction(
         return Err((
             format!("`{name}` has friction but {count} coordinates"),
             "`friction` and `damping` need a link with one coordinate",
-        ));
-    }
-    if has_loops {
-        return Err((
-            format!("`{name}` has friction in a mechanism with closed loops"),
-            "joint friction is simulated in tree mechanisms only",
         ));
     }
     let number = |value: &Option<crate::elab::value::Scalar>| match value {

@@ -2,7 +2,7 @@
 //! coordinate of a follower joint held to the coordinate of its leader, q_f = m q_l + o, a
 //! holonomic constraint linear in the coordinates.
 //!
-//! The coupling is eliminated rather than enforced by multipliers: the velocities are
+//! On a tree the coupling is eliminated rather than enforced by multipliers: the velocities are
 //! v = S u, with u the velocities of every joint but the followers and S the identity with each
 //! follower's row m times its leader's, so the equations of motion reduce to
 //! (Sᵀ M S) u̇ = Sᵀ (τ − b), exact and symmetric positive definite on a tree, and the
@@ -10,10 +10,12 @@
 //! algorithms see the follower as any other joint; since the accelerations satisfy the coupling
 //! exactly, q_f − m q_l − o is a linear invariant of the equations of motion, which every
 //! Runge–Kutta and Rosenbrock method preserves: it stays at round-off over a run once the start
-//! satisfies it ([`impose`]).
+//! satisfies it ([`impose`]). With closed loops the couplings are rows solved together with
+//! the loops' (`simulate::system::couplings`), kept at the position level after each step.
 
 use nalgebra::{DMatrix, DVector};
 
+use super::dense::Factor;
 use super::joint::Joint;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{LinkMimic, Mechanism};
@@ -107,18 +109,48 @@ pub fn solve(mimics: &[Mimic], mass: &DMatrix<f64>, forces: &DMatrix<f64>) -> Op
     Some(s * reduced.solve(&(st * forces)))
 }
 
-/// [`solve`] for one force vector.
-pub fn solve_vector(
-    mimics: &[Mimic],
-    mass: &DMatrix<f64>,
-    force: &DVector<f64>,
-) -> Option<DVector<f64>> {
-    let columns = DMatrix::from_column_slice(force.len(), 1, force.as_slice());
-    solve(mimics, mass, &columns).map(|a| a.column(0).clone_owned())
+/// [`solve`] for one force vector at a time without allocating: the basis S (constant, the
+/// couplings being linear) and the storage of M S, Sᵀ M S, its factor and Sᵀ f, sized once.
+#[derive(Clone, Debug)]
+pub struct ReducedSolve {
+    basis: DMatrix<f64>,
+    moved: DMatrix<f64>,
+    reduced: DMatrix<f64>,
+    factor: Factor,
+    force: DVector<f64>,
+}
+
+impl ReducedSolve {
+    /// Storage for the couplings `mimics` of a tree with `nv` velocities.
+    pub fn new(mimics: &[Mimic], nv: usize) -> ReducedSolve {
+        let basis = basis(mimics, nv);
+        let free = basis.ncols();
+        ReducedSolve {
+            moved: DMatrix::zeros(nv, free),
+            reduced: DMatrix::zeros(free, free),
+            factor: Factor::new(free),
+            force: DVector::zeros(free),
+            basis,
+        }
+    }
+
+    /// Replaces the forces f by the accelerations S (Sᵀ M S)⁻¹ Sᵀ f; false where Sᵀ M S is not
+    /// positive definite (f is then left as it was).
+    pub fn solve_mut(&mut self, mass: &DMatrix<f64>, force: &mut DVector<f64>) -> bool {
+        self.moved.gemm(1.0, mass, &self.basis, 0.0);
+        self.reduced.gemm_tr(1.0, &self.basis, &self.moved, 0.0);
+        if !self.factor.factor(&self.reduced) {
+            return false;
+        }
+        self.force.gemv_tr(1.0, &self.basis, force, 0.0);
+        self.factor.solve_vector_mut(&mut self.force);
+        force.gemv(1.0, &self.basis, &self.force, 0.0);
+        true
+    }
 }
 
 /// The couplings of the tree's links. Follower and leader must each have one coordinate
-/// (E0470), in a tree without contacts (E0471); a leader that follows another join, or the
+/// (E0470), be a join of the tree, in a mechanism without contacts (E0471); a leader that follows another join, or the
 /// follower itself, is refused (E0472); the multiplier and offset must be numbers (E0473).
 pub fn build(
     mechanism: &Mechanism,
@@ -139,7 +171,6 @@ pub fn build(
             }
         }
     }
-    let closed = !loops.is_empty() || has_contacts;
     let loop_mimics = loops.iter().filter(|l| {
         mechanism
             .link(mechanism.join(l.join).link)
@@ -147,20 +178,26 @@ pub fn build(
             .is_declared()
     });
     for chain in loop_mimics {
-        errors.push(refused_in_loops(mechanism, &chain.name, chain.join));
+        errors.push(refused(
+            mechanism,
+            format!("`{}` closes a loop and mimics another join", chain.name),
+            chain.join,
+            "a loop-closing join cannot follow another",
+        ));
     }
-    if closed {
+    if has_contacts {
         for joint in joints {
             if mechanism
                 .link(mechanism.join(joint.chain.join).link)
                 .mimic()
                 .is_declared()
             {
-                errors.push(refused_in_loops(
-                    mechanism,
-                    &joint.chain.name,
-                    joint.chain.join,
-                ));
+                let message = format!(
+                    "`{}` mimics another join in a mechanism with contacts",
+                    joint.chain.name
+                );
+                let label = "mimic joints are simulated without contacts";
+                errors.push(refused(mechanism, message, joint.chain.join, label));
             }
         }
         return Vec::new();
@@ -169,20 +206,15 @@ pub fn build(
     mimics
 }
 
-fn refused_in_loops(
+fn refused(
     mechanism: &Mechanism,
-    name: &str,
+    message: String,
     join: crate::elab::value::JoinId,
+    label: &str,
 ) -> Diagnostic {
-    Diagnostic::error(
-        "E0471",
-        format!("`{name}` mimics another join in a mechanism with closed loops or contacts"),
-    )
-    .primary(
-        mechanism.join(join).span,
-        "mimic joints are simulated in tree mechanisms only",
-    )
-    .help("remove `mimic` from the link, or open the loop")
+    Diagnostic::error("E0471", message)
+        .primary(mechanism.join(join).span, label)
+        .help("remove `mimic` from the link, or make the follower a join of the tree")
 }
 
 /// A leader that is itself a follower (a chain or cycle of mimics) is refused: E0472.

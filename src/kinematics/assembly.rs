@@ -142,12 +142,24 @@ pub fn assemble_respecting(
     // The nearest closed configuration is searched locally from three places: the loops
     // closed as far as the free coordinates alone can, the given values themselves, and
     // wherever the plain assembly closes the loops; the nearest found wins.
+    // Angles that turn are compared, and brought, within half a turn of their given values:
+    // the pose is the same a full turn away.
+    let turning = model.turning();
+    let nearest_turn = |mut candidate: Assembled| {
+        for (i, q) in candidate.q.iter_mut().enumerate() {
+            if turning[i] && holds[i] != Hold::Fixed {
+                *q = start[i] + within_half_turn(*q - start[i]);
+            }
+        }
+        candidate
+    };
     let closed = assemble(model, start, &fixed, options)?;
-    let mut best = Some(closed.clone());
+    let mut best = Some(nearest_turn(closed.clone()));
     for from in [&nearest_open, start, &closed.q] {
         let Some(candidate) = nearest_closed(model, start, holds, from, options)? else {
             continue;
         };
+        let candidate = nearest_turn(candidate);
         let nearer = best.as_ref().is_none_or(|b| {
             given_distance(start, &candidate.q, holds) < given_distance(start, &b.q, holds)
         });
@@ -170,6 +182,17 @@ pub fn assemble_respecting(
         })
         .collect();
     Ok(assembled)
+}
+
+/// An angle's change brought within half a turn, (−π, π], by whole turns.
+fn within_half_turn(change: f64) -> f64 {
+    let turn = std::f64::consts::TAU;
+    let wrapped = change - turn * (change / turn).round();
+    if wrapped <= -std::f64::consts::PI {
+        wrapped + turn
+    } else {
+        wrapped
+    }
 }
 
 /// A given value changed by less than this (relative to it, or absolute below 1) is reported

@@ -5,12 +5,14 @@
 use nalgebra::{DMatrix, Matrix6, Vector3};
 
 use super::chain::{ChainScratch, CompiledChain};
-use super::eval::{eval, EvalError, UnknownValues};
+use super::eval::{eval, EvalError, Geometric, UnknownValues};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId, SExpr, Scalar};
 use crate::source::Span;
 use crate::spatial::{self, Pose, Twist};
+use crate::symbolic::expr::{ExprId, Pool};
+use crate::symbolic::program::Lower;
 use crate::topology::Topology;
 
 #[derive(Clone, Debug)]
@@ -40,6 +42,24 @@ pub struct JointModel {
 impl JointModel {
     pub fn coordinate_count(&self) -> usize {
         self.coordinate_names.len()
+    }
+
+    /// Whether coordinate `index` is an angle that gives the same pose every full turn: the
+    /// chain uses it only as the whole angle of its rotations (`q || axis`, as `revolute`).
+    pub fn turns(&self, index: usize) -> bool {
+        let index = index as u32;
+        let whole =
+            |s: &Scalar| matches!(**s, SExpr::Coordinate { index: i, order: 0 } if i == index);
+        let mut as_angle = false;
+        for step in &self.steps {
+            match step {
+                Step::Rotation { angle, .. } if whole(angle) => as_angle = true,
+                Step::Rotation { angle, .. } if angle.uses_coordinate(index) => return false,
+                Step::Translation(t) if t.iter().any(|s| s.uses_coordinate(index)) => return false,
+                _ => {}
+            }
+        }
+        as_angle
     }
 
     /// The chain when it is one rotation or translation along a fixed axis, linear in its one
@@ -324,6 +344,14 @@ impl KinematicModel {
             .collect()
     }
 
+    /// For every coordinate, in vector order, whether it turns (`JointModel::turns`).
+    pub fn turning(&self) -> Vec<bool> {
+        self.joints
+            .iter()
+            .flat_map(|j| (0..j.coordinate_count()).map(move |k| j.turns(k)))
+            .collect()
+    }
+
     pub fn joint_of_join(&self, join: JoinId) -> Option<&JointModel> {
         self.joints.iter().find(|j| j.join == join)
     }
@@ -442,7 +470,61 @@ pub fn link_steps(
             }
         });
     }
+    coordinates_move(mechanism, id, unknowns)?;
     Ok(steps)
+}
+
+/// E0829: a coordinate of a join's dof chain that moves nothing with the values of its
+/// unknowns: `prismatic([a, 0, 0])` with `given a = 0` or `--set a=0` is `q * [0, 0, 0]`, and
+/// `k * q || axis` with k = 0 turns by nothing. As written the chain depends on the coordinate
+/// (E0610 refuses one that does not), so these values came from `given` or `--set`; the joint
+/// would be a weld with a singular mass matrix. The translations and angles are lowered with
+/// the unknowns' values, where products by zero fold, and differentiated by each coordinate.
+fn coordinates_move(
+    mechanism: &Mechanism,
+    id: JoinId,
+    unknowns: &UnknownValues,
+) -> Result<(), Diagnostic> {
+    let join = mechanism.join(id);
+    let link = mechanism.link(join.link);
+    let moving: Vec<&Scalar> = link
+        .dofs
+        .iter()
+        .flat_map(|d| d.0.iter())
+        .flat_map(|step| match step {
+            Elementary::Translation(v) => v.iter().collect::<Vec<_>>(),
+            Elementary::Rotation { angle, .. } => vec![angle],
+        })
+        .collect();
+    let mut named = std::collections::BTreeSet::new();
+    moving.iter().for_each(|s| s.collect_unknowns(&mut named));
+    if named.is_empty() {
+        return Ok(()); // Numbers alone: checked as written (E0610).
+    }
+    let mut lowering = Geometric {
+        pool: Pool::new(),
+        unknowns,
+        coordinates: Vec::new(),
+    };
+    for coordinate in &link.coordinates {
+        let symbol = lowering.pool.symbol(coordinate);
+        lowering.coordinates.push(symbol);
+    }
+    // What cannot be lowered here (a missing value, a time derivative) is reported elsewhere.
+    let Ok(values) = moving
+        .iter()
+        .map(|s| lowering.lower(s))
+        .collect::<Result<Vec<_>, _>>()
+    else {
+        return Ok(());
+    };
+    for (index, &symbol) in lowering.coordinates.iter().enumerate() {
+        let written = moving.iter().any(|s| s.uses_coordinate(index as u32));
+        if written && !depends_on(&mut lowering.pool, &values, symbol) {
+            return Err(motionless(mechanism, id, index, &named));
+        }
+    }
+    Ok(())
 }
 
 /// E0704: a rotation axis of a dof chain that is zero with the values of its unknowns. A
@@ -475,6 +557,48 @@ fn zero_axis(
             .help("give values that make the axis non-zero, with `given` or `--set NAME=VALUE`");
     }
     diagnostic
+}
+
+/// Whether any of `values` depends on `symbol`: a derivative that does not fold to zero.
+fn depends_on(pool: &mut Pool, values: &[ExprId], symbol: ExprId) -> bool {
+    let mut memo = std::collections::HashMap::new();
+    values.iter().any(|&e| {
+        let derivative = pool.derivative(e, symbol, &mut memo);
+        !pool.is_zero(derivative)
+    })
+}
+
+/// E0829 for coordinate `index` of join `id`, whose dof chain mentions the unknowns `named`.
+fn motionless(
+    mechanism: &Mechanism,
+    id: JoinId,
+    index: usize,
+    named: &std::collections::BTreeSet<crate::elab::value::UnknownId>,
+) -> Diagnostic {
+    let join = mechanism.join(id);
+    let link = mechanism.link(join.link);
+    let names: Vec<String> = named
+        .iter()
+        .map(|&u| super::eval::unknown_label(mechanism, u))
+        .collect();
+    Diagnostic::error(
+        "E0829",
+        format!(
+            "coordinate `{}` of join `{}` moves nothing",
+            link.coordinates[index],
+            mechanism.join_name(id)
+        ),
+    )
+    .primary(link.span, "in this link's dof chain")
+    .secondary(join.span, "the join")
+    .note(format!(
+        "its motion is zero with the values given to {}",
+        names.join(", ")
+    ))
+    .help(
+        "give values that make it move (a translation `q * axis` needs a non-zero axis), with \
+         `given` or `--set NAME=VALUE`",
+    )
 }
 
 /// A joint model of the link alone (frames at identity): enough to analyse the joint.

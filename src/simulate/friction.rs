@@ -2,9 +2,12 @@
 //! events that switch a joint between slipping and sticking. The events of a run are the
 //! stops' (see `impacts`), then one per joint with friction.
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use nalgebra::DVector;
 
-use super::system::{MechanicalSystem, SystemError};
+use super::system::{MechanicalSystem, SharedPhases, SystemError};
 use crate::dynamics::friction::{Phase, Switch};
 
 impl MechanicalSystem<'_> {
@@ -59,9 +62,43 @@ impl MechanicalSystem<'_> {
     /// Event `index` at time t (numbered as by `event_values`).
     pub fn act_on_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), SystemError> {
         let stops = self.model.stops.len();
-        match index < stops {
+        let acted = match index < stops {
             true => self.stop_event(t, y, index),
             false => self.switch_friction(t, y, index - stops),
+        };
+        self.publish_phases();
+        acted
+    }
+
+    /// The phases and resting stops of this system, shared from now on with the systems that
+    /// mirror them (`mirror_phases`): the sampler's, whose outputs that depend on the
+    /// accelerations (the reactions) must see a sticking joint held as the run does.
+    pub fn share_phases(&mut self) -> Rc<RefCell<SharedPhases>> {
+        let shared = self.shared_phases.get_or_insert_with(Rc::default).clone();
+        self.publish_phases();
+        shared
+    }
+
+    /// Mirrors from now on the phases another system shares (`share_phases`).
+    pub fn mirror_phases(&mut self, shared: Rc<RefCell<SharedPhases>>) {
+        self.shared_phases = Some(shared);
+    }
+
+    /// Writes this system's phases to the shared ones.
+    fn publish_phases(&self) {
+        if let Some(shared) = &self.shared_phases {
+            let mut shared = shared.borrow_mut();
+            shared.phases.clone_from(&self.phases);
+            shared.resting.clone_from(&self.resting);
+        }
+    }
+
+    /// Takes the shared phases (those of the integrated system at the last event).
+    pub fn adopt_phases(&mut self) {
+        if let Some(shared) = &self.shared_phases {
+            let shared = shared.borrow();
+            self.phases.clone_from(&shared.phases);
+            self.resting.clone_from(&shared.resting);
         }
     }
 

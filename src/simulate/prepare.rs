@@ -195,9 +195,6 @@ pub fn prepare(
     }
     let kinematics = kinematic_model::build(mechanism, topology.clone(), values)?;
     let model = dynamic_model::build(mechanism, &kinematics)?;
-    if model.has_contacts() && model.has_loops() {
-        return Err(vec![contacts_with_loops(mechanism)]);
-    }
     let (mut coordinates, mut rates) = initial_state(mechanism, &model)?;
     let mut warnings = Vec::new();
     if model.has_loops() {
@@ -249,16 +246,4 @@ fn initial_state(
         }
     }
     Ok((coordinates, rates))
-}
-
-/// E0824: contacts are solved on a tree; with complementary links they are refused.
-fn contacts_with_loops(mechanism: &Mechanism) -> Diagnostic {
-    let contact = &mechanism.contacts[0];
-    Diagnostic::error(
-        "E0824",
-        "contacts (`rolling`, `sliding`) are not simulated in a mechanism with closed loops",
-    )
-    .primary(contact.span, "this contact")
-    .note("the contacts' rows are solved on the tree's motion; with complementary links the loops' solver would have to take them too, which it does not yet")
-    .help("simulate the contacts on a tree: open the loops, or replace a loop by efforts")
 }

@@ -486,6 +486,7 @@ impl Sampler<'_> {
         work: Option<f64>,
     ) -> Result<Sample, SystemError> {
         let model = self.system.model;
+        self.system.adopt_phases();
         self.system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let previous = self.system.reference.borrow().clone();
@@ -623,12 +624,13 @@ fn simulate_from(
     // model's own evaluation counts them.
     let plain = model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty();
     system.use_native(prepared.native.as_ref().filter(|_| plain));
+    // The followers start where their leaders put them, whatever `initial` said (then with
+    // loops, the loops and couplings are closed together).
+    let (q0, v0) = y0.split_at_mut(model.positions());
+    mimics::impose(&model.mimics, q0, v0);
     if let Err(error) = system.start_loops(&mut y0) {
         return failed_at_start(prepared, error.to_string());
     }
-    // The followers start where their leaders put them, whatever `initial` said.
-    let (q0, v0) = y0.split_at_mut(model.positions());
-    mimics::impose(&model.mimics, q0, v0);
     if let Err(error) = system.start_friction(0.0, &mut y0) {
         return failed_at_start(prepared, error.to_string());
     }
@@ -646,6 +648,8 @@ fn simulate_from(
     sampler.system.loops = system.loops.clone();
     sampler.system.contact_rows = system.contact_rows.clone();
     sampler.system.loops.samples_outputs = true;
+    // The sampler's reactions see the joints sticking and the stops resting as the run does.
+    sampler.system.mirror_phases(system.share_phases());
     // The work of non-conservative efforts rides along as one more state (not with the
     // variational integrator, whose steps are its own).
     let motion = y0.len();

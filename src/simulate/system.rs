@@ -9,6 +9,8 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
+mod contact_loops;
+mod couplings;
 mod held_rows;
 mod holding;
 mod jacobian;
@@ -17,7 +19,7 @@ mod stop_rows;
 use super::constraints::LoopMonitor;
 use super::native::NativeDynamics;
 use crate::dynamics::algorithms::{
-    aba, aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
+    aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
     rnea_after_kinematics, rnea_forward, transmitted_wrenches, Data, DynamicsError,
 };
 use crate::dynamics::contacts::{self, ContactError, ContactScratch, CONTACT_ROW_NAMES};
@@ -72,6 +74,8 @@ pub struct MechanicalSystem<'m> {
     at_rest: Vec<f64>,
     mass: DMatrix<f64>,
     mass_factor: Factor,
+    /// The mimic couplings' reduced solve on a tree (`mimics::ReducedSolve`).
+    reduced: mimics::ReducedSolve,
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
@@ -90,6 +94,17 @@ pub struct MechanicalSystem<'m> {
     hold: held_rows::HoldScratch,
     /// The friction's changes of phase so far, in time order.
     pub switches: Vec<crate::dynamics::friction::Switch>,
+    /// The phases and resting stops shared with another system of the run (the sampler's),
+    /// which mirrors them (see `simulate::friction`).
+    pub(super) shared_phases: Option<Rc<RefCell<SharedPhases>>>,
+}
+
+/// The friction's phases and the stops' resting flags of a run, as its integrated system last
+/// set them.
+#[derive(Clone, Debug, Default)]
+pub struct SharedPhases {
+    pub phases: Vec<Phase>,
+    pub resting: Vec<bool>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -125,6 +140,7 @@ impl<'m> MechanicalSystem<'m> {
             at_rest: vec![0.0; model.nv],
             mass: DMatrix::zeros(geared, geared),
             mass_factor: Factor::new(geared),
+            reduced: mimics::ReducedSolve::new(&model.mimics, model.nv),
             native: None,
             impacts: Vec::new(),
             resting: vec![false; model.stops.len()],
@@ -134,6 +150,7 @@ impl<'m> MechanicalSystem<'m> {
             friction_power: 0.0,
             hold: held_rows::HoldScratch::new(model),
             switches: Vec::new(),
+            shared_phases: None,
         }
     }
 
@@ -217,10 +234,10 @@ impl<'m> MechanicalSystem<'m> {
         }
         self.friction_power = self.add_friction(v, accelerations);
         if !model.mimics.is_empty() {
-            // The couplings' reduced matrix S^T M S is formed per evaluation (`mimics::solve`).
-            let solved = mimics::solve_vector(&model.mimics, &self.mass, accelerations);
-            accelerations.copy_from(&solved.ok_or(SystemError::SingularMassMatrix)?);
-            return Ok(());
+            return match self.reduced.solve_mut(&self.mass, accelerations) {
+                true => Ok(()),
+                false => Err(SystemError::SingularMassMatrix),
+            };
         }
         if !self.mass_factor.factor(&self.mass) {
             return Err(SystemError::SingularMassMatrix);
@@ -232,7 +249,7 @@ impl<'m> MechanicalSystem<'m> {
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
     /// `loop_scratch` with the constraint rows they come from, the efforts in `efforts`;
     /// nothing is allocated once the buffers are sized.
-    fn solve_constrained(
+    pub(super) fn solve_constrained(
         &mut self,
         t: f64,
         q: &[f64],
@@ -245,6 +262,10 @@ impl<'m> MechanicalSystem<'m> {
         // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
         // recursions start from.
         self.evaluate_efforts(t, q, v)?;
+        // The slipping joints' friction acts with the efforts.
+        let mut tau = std::mem::take(&mut self.efforts.tau);
+        self.friction_power = self.add_friction(v, &mut tau);
+        self.efforts.tau = tau;
         let scratch = &mut self.loop_scratch;
         // Only Baumgarte's feedback reads the position rows.
         let extent = match self.loops.stabilisation {
@@ -308,7 +329,7 @@ impl<'m> MechanicalSystem<'m> {
         scratch.keep(kept);
     }
 
-    fn contact_error(&self, error: &ContactError) -> SystemError {
+    pub(super) fn contact_error(&self, error: &ContactError) -> SystemError {
         match error {
             ContactError::SingularMass => SystemError::SingularMassMatrix,
             ContactError::Singular { row } => SystemError::SingularContact {
@@ -373,7 +394,7 @@ impl<'m> MechanicalSystem<'m> {
     /// Ma − f: inverse dynamics at those accelerations under the efforts' external forces,
     /// less the efforts' generalised forces (the complementary coordinates, without inertia,
     /// get −τ). `data` holds the forward kinematics of the state.
-    fn solve_multipliers(&mut self) {
+    pub(super) fn solve_multipliers(&mut self) {
         let model = self.model;
         let scratch = &mut self.loop_scratch;
         let a = &scratch.accelerations.as_slice()[..model.nv];
@@ -406,6 +427,7 @@ impl<'m> MechanicalSystem<'m> {
         dydt: &mut [f64],
     ) -> Result<(), SystemError> {
         let model = self.model;
+        self.friction_power = 0.0;
         let mut accelerations = std::mem::take(&mut self.accelerations);
         if accelerations.len() != model.velocities() {
             // Only after a failed evaluation, which took the scratch away.
@@ -419,7 +441,10 @@ impl<'m> MechanicalSystem<'m> {
         if native {
             // The accelerations are written.
         } else if model.has_contacts() {
-            self.solve_contacts(t, q, v)?;
+            match model.has_loops() {
+                true => self.solve_contacts_on_loops(t, q, v)?,
+                false => self.solve_contacts(t, q, v)?,
+            }
             let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
             accelerations.copy_from(&solution.accelerations);
             self.efforts.power += contacts::friction_power(model, rows, &solution.forces);
@@ -450,7 +475,6 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        self.friction_power = 0.0;
         // The contacts' solve counts the rotors already (it uses CRBA and RNEA).
         if !native && !model.has_contacts() && self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
@@ -556,11 +580,11 @@ impl<'m> MechanicalSystem<'m> {
     /// (`keep_contacts`); nothing for a tree.
     fn keep_rows(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
-        if model.has_contacts() {
-            return self.keep_contacts(y);
-        }
         if !model.has_loops() {
-            return Ok(false);
+            return match model.has_contacts() {
+                true => self.keep_contacts(y),
+                false => Ok(false),
+            };
         }
         let free = &self.loops.structure.free;
         let quality = self.loop_scratch.take_free_quality(free);
@@ -596,7 +620,9 @@ impl<'m> MechanicalSystem<'m> {
                 left,
             });
         }
-        Ok(moved)
+        let coupled = self.keep_couplings(t, y)?;
+        let touching = model.has_contacts() && self.keep_contacts_on_loops(t, y)?;
+        Ok(moved || coupled || touching)
     }
 
     /// Sets the rates of the complementary ball joints' angles in y (for outputs).
@@ -629,13 +655,13 @@ impl<'m> MechanicalSystem<'m> {
     /// gaps and projects the velocities onto their rows.
     pub fn start_loops(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
-        if model.has_contacts() {
+        if !model.has_loops() {
             // The gaps closed and the starting velocities made to roll, by the smallest change
             // in the kinetic metric.
-            return self.keep_contacts(y).map(|_| ());
-        }
-        if !model.has_loops() {
-            return Ok(());
+            return match model.has_contacts() {
+                true => self.keep_contacts(y).map(|_| ()),
+                false => Ok(()),
+            };
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
@@ -647,6 +673,10 @@ impl<'m> MechanicalSystem<'m> {
         loops::project(model, &mut self.data, choice, &mut q, &mut v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
+        self.keep_couplings(0.0, y)?;
+        if model.has_contacts() {
+            self.keep_contacts_on_loops(0.0, y)?;
+        }
         Ok(())
     }
 
@@ -656,7 +686,13 @@ impl<'m> MechanicalSystem<'m> {
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
-            self.solve_constrained(t, q, v, Wanted::WithMultipliers)?;
+            let touching = match model.has_contacts() {
+                true => Some(self.contacts_on_loops_reactions(t, q, v)?),
+                false => {
+                    self.solve_constrained(t, q, v, Wanted::WithMultipliers)?;
+                    None
+                }
+            };
             let solution = &self.loop_scratch;
             let (c, multipliers) = (&solution.constraints, &solution.multipliers);
             let on_bodies = loops::constraint_forces(model, &self.data, c, multipliers);
@@ -668,33 +704,34 @@ impl<'m> MechanicalSystem<'m> {
                 .map(|(a, b)| a + b)
                 .collect();
             let accelerations = solution.accelerations.clone();
-            (accelerations, external, Some(multipliers.clone()))
+            let mut multipliers = multipliers.clone();
+            if let Some(forces) = touching {
+                multipliers = DVector::from_iterator(
+                    multipliers.len() + forces.len(),
+                    multipliers.iter().chain(forces.iter()).copied(),
+                );
+            }
+            (accelerations, external, Some(multipliers))
         } else if model.has_contacts() {
-            self.solve_contacts(t, q, v)?;
+            match model.has_loops() {
+                true => self.solve_contacts_on_loops(t, q, v)?,
+                false => self.solve_contacts(t, q, v)?,
+            }
             let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
             let on_bodies =
                 contacts::contact_body_forces(model, &self.data, rows, &solution.forces);
             let external: Vec<_> = (self.efforts.external.iter().zip(&on_bodies))
                 .map(|(a, b)| a + b)
                 .collect();
-            // A contact transmits no moment about its point: its force, along the plane's axes.
-            let forces = solution
-                .forces
-                .iter()
-                .flat_map(|f| [0.0, 0.0, 0.0, f.x, f.y, f.z]);
-            let forces = DVector::from_iterator(6 * model.contacts.len(), forces);
+            let forces = contacts::contact_reactions(&solution.forces);
             (solution.accelerations.clone(), external, Some(forces))
         } else {
+            // The accelerations of the run's own equations: with the geared rotors, the mimic
+            // couplings, the friction's phases and the coordinates held at rest.
+            let mut rates = vec![0.0; self.dimension()];
+            self.derivative_at(t, q, v, &mut rates)?;
+            let a = DVector::from_column_slice(&rates[model.positions()..]);
             let efforts = self.efforts(t, q, v)?;
-            let a = aba(
-                model,
-                &mut self.data,
-                q,
-                v,
-                efforts.tau.as_slice(),
-                &efforts.external,
-            )
-            .map_err(|e| self.dynamics_error(&e))?;
             (a, efforts.external, None)
         };
         // The link efforts act across their joints: they are not part of the reaction.

@@ -283,13 +283,69 @@ fn diagnostics_of(text: &str) -> Vec<String> {
     }
 }
 
+/// The rolling cylinder carrying a closed loop: a second planar link between the slope and the
+/// cylinder (`shadow`, a complementary link whose rows repeat the first's) closes a loop that
+/// shares the cylinder's velocities with the contact's rows. Solved together, the motion and
+/// the contact's force are those of the closed form, the rolling row and the gap stay at
+/// round-off, and so do the loop's rows; the shadow follows the cylinder.
 #[test]
-fn contacts_with_loops_are_refused() {
-    let text = example_text("rolling_cylinder", &[])
-        + "let rod = body mass = 1, iframe = 1, inertia = [1, 1, 1] end ;\n\
-           join earth and rod with revolute([0, 0, 1]) ;\n\
-           join earth and rod with revolute([0, 0, 1]) ;\n";
-    assert_eq!(diagnostics_of(&text), vec!["E0824"]);
+fn the_rolling_cylinder_carrying_a_loop_matches_its_closed_form() {
+    let acceleration = -2.0 / 3.0 * G * ALPHA.sin();
+    let (along, normal) = (MASS * G * ALPHA.sin() / 3.0, MASS * G * ALPHA.cos());
+    let shadow = "join slope and cylinder with link(x, y, q) dof1 = [x, 0, y], \
+                  dof2 = q || [0, -1, 0] end as shadow ;\n\
+                  join slope and cylinder with rolling(r) as contact ;";
+    for integrator in ["rk4", "dopri5", "dop853", "implicit"] {
+        let replaced = format!("integrator = {integrator}");
+        let prepared = prepared_with_reactions(
+            "rolling_cylinder",
+            &[
+                ("integrator = dopri5", replaced.as_str()),
+                (
+                    "join slope and cylinder with rolling(r) as contact ;",
+                    shadow,
+                ),
+                (
+                    "initial motion.y = r ;",
+                    "initial motion.y = r, shadow.y = r guess ;",
+                ),
+            ],
+        );
+        let simulation = completed(&prepared);
+        let residual = simulation.report.constraints.as_ref().expect("loops");
+        assert!(residual.position_residual < 1e-13, "{integrator}");
+        assert!(residual.velocity_residual < 1e-13, "{integrator}");
+        for sample in &simulation.samples {
+            let t = sample.time;
+            let ([x, y, q], [x_rate, _, q_rate]) = cylinder_state(sample);
+            assert!(
+                (x - 0.5 * acceleration * t * t).abs() < 1e-9,
+                "{integrator}, t = {t}: x = {x}"
+            );
+            assert!((x_rate - acceleration * t).abs() < 1e-9, "{integrator}");
+            let turned = -0.5 * acceleration * t * t / RADIUS;
+            assert!((q - turned).abs() < 1e-9, "{integrator}: q = {q}");
+            // No drift off the contact: the gap and the rolling row at round-off.
+            assert!(
+                (y - RADIUS).abs() < 1e-14,
+                "{integrator}: gap {}",
+                y - RADIUS
+            );
+            assert!(
+                (x_rate + RADIUS * q_rate).abs() < 1e-12,
+                "{integrator}: slip {}",
+                x_rate + RADIUS * q_rate
+            );
+            let shadow_x = sample.coordinates[3];
+            assert!((shadow_x - x).abs() < 1e-12, "{integrator}: shadow");
+            let [fx, fy, fz] = contact_force(sample);
+            assert!((fx - along).abs() < 1e-9, "{integrator}: R_x = {fx}");
+            assert!(
+                fy.abs() < 1e-9 && (fz - normal).abs() < 1e-9,
+                "{integrator}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -205,3 +205,52 @@ fn bad_friction_is_refused() {
         assert!(codes.iter().any(|c| c == "E0474"), "{link}: {codes:?}");
     }
 }
+
+/// The sampler mirrors the run's phases: once the block launched up the slope sticks (dry
+/// friction 20 N above its weight along the slope, 9.41 N), its accelerations are zero and the
+/// reaction of its joint balances its weight exactly, which the outputs' own evaluation gives
+/// only if it holds the joint as the run does.
+#[test]
+fn the_reactions_see_a_sticking_joint_held() {
+    let text = example_text(
+        "friction_incline",
+        &[("sin(slope)], 3, 0)", "sin(slope)], 20, 0)")],
+    );
+    let compilation = lsdc::driver::compile_text(
+        "test.lsd",
+        &text,
+        None,
+        &lsdc::load::LoadOptions {
+            library_dirs: Vec::new(),
+            use_environment: false,
+        },
+    );
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let settings = Settings {
+        reactions: true,
+        ..Settings::default()
+    };
+    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &settings).expect("prepares");
+    let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
+    assert!(simulation.report.failure.is_none());
+    let switches = &simulation.report.friction_switches;
+    assert_eq!(switches.len(), 1, "{switches:?}");
+    assert_eq!(switches[0].phase, Phase::Sticking);
+    let weight = 9.81 * MASS;
+    let mut checked = 0;
+    for sample in simulation
+        .samples
+        .iter()
+        .filter(|s| s.time > switches[0].time)
+    {
+        // The joint's wrench on the block, fixed axes: moment, then force.
+        let force = &sample.reactions[3..6];
+        assert!(
+            force[0].abs() < 1e-9 && force[1].abs() < 1e-9 && (force[2] - weight).abs() < 1e-9,
+            "t = {}: {force:?}",
+            sample.time
+        );
+        checked += 1;
+    }
+    assert!(checked > 10);
+}

@@ -12,6 +12,7 @@ mod cli;
 mod closed_loops;
 mod constrained;
 mod contacts;
+mod coupled_loops;
 mod drag;
 mod dynamics;
 mod examples;

@@ -125,6 +125,42 @@ fn values_given_on_the_command_line_are_checked() {
     assert!(program.prepare(&[set(2.0)], &Default::default()).is_ok());
 }
 
+/// A coordinate whose motion becomes zero only through the values of unknowns is refused
+/// before the run (E0829, at the link and the join, naming them), as a rotation axis made zero
+/// so is (E0704): a translation `q * [a, 0, 0]` and an angle `k * q`, with `--set`, while
+/// other values run.
+#[test]
+fn a_motion_zeroed_by_given_values_is_refused() {
+    let head = "import joints ;\nlet a = ?s ;\nlet b = body mass = 1, iframe = 0, inertia = [1, 1, 1] end ;\n";
+    for link in [
+        "prismatic([a, 0, 0])",
+        "link(q) dof = [0, 0, 1] * q * a end",
+        "link(q) dof = (a * q) || [0, 0, 1] end",
+        "link(x, y) dof1 = x * [1, 0, 0], dof2 = y * [0, a, 0] end",
+    ] {
+        let text = format!("{head}join earth and b with {link} as slide ;\n");
+        let program = Program::from_text("set.lsd", &text, None, &Default::default());
+        assert_eq!(codes(&program), Vec::<&str>::new(), "{link}");
+        let set = |value: f64| Override {
+            name: "a".to_string(),
+            value,
+        };
+        match program.prepare(&[set(0.0)], &Default::default()) {
+            Err(Error::Program(diagnostics)) => {
+                assert_eq!(diagnostics[0].code, "E0829", "{link}");
+                let d = &diagnostics[0];
+                assert!(d.message.contains("of join `slide` moves nothing"), "{d}");
+                assert_eq!(d.labels.len(), 2, "{link}: the link and the join");
+                assert!(d.notes[0].ends_with("the values given to `a`"), "{d}");
+            }
+            Err(other) => panic!("{link}: {other}"),
+            Ok(_) => panic!("{link}: a motionless coordinate was accepted"),
+        }
+        let moving = program.prepare(&[set(0.5)], &Default::default());
+        assert!(moving.is_ok(), "{link}");
+    }
+}
+
 fn examples() -> Vec<(PathBuf, String)> {
     crate::common::example_paths()
         .into_iter()

@@ -64,6 +64,16 @@ const SHARED_FACTOR_ABOVE: f64 = 5e-2;
 /// step of 1e-4), a sensitivity of the passages themselves that skipping them would expose.
 const ROUND_OFF: f64 = 1e-13;
 
+/// A projection factor taken where the kept rows' largest residual (dimensionless) is above
+/// this serves only its own step, not the later ones as an earlier factor (`Held::Earlier`).
+/// The chord steps converge, and the velocities projected with that factor keep of their rows'
+/// residual, about the distance the positions moved since it was taken over the rows'
+/// conditioning (at least `SHARED_FACTOR_ABOVE`): from 1e-6, the loops' open limit of a run,
+/// that is some 2e-5, while a step that strayed 0.24 m from a five-bar's loops (rk4 at steps
+/// far too long) left the chord converging sixfold a step, 2e-8 m open after the eight steps,
+/// and 6 % of the velocities' residual. The examples' projections all start below 1e-10.
+const CHORD_WITHIN: f64 = 1e-6;
+
 /// What a projection keeps from one call to the next, so that it allocates nothing once sized:
 /// the constraints at the current and the trial positions, the kept rows' factorisation, and
 /// the vectors of the steps.
@@ -77,6 +87,9 @@ pub struct ProjectionScratch {
     /// Whether the factor held for the conditioning serves the projection too, and is kept
     /// along it (`SHARED_FACTOR_ABOVE`).
     shared: bool,
+    /// Whether the projection factor held was taken where the kept rows' residual is within
+    /// `CHORD_WITHIN`, so that it may serve the later steps as an earlier one.
+    near: bool,
     /// Whether `factored` holds the kept rows of `current` (for the choice it records) and
     /// their normal matrix, so that factoring them with another damping needs no refill.
     rows_of_current: bool,
@@ -131,6 +144,7 @@ impl ProjectionScratch {
             factor: Envelope::default(),
             held: Held::Nothing,
             shared: false,
+            near: false,
             rows_of_current: false,
             values_of_current: false,
             kept: Vec::new(),
@@ -337,6 +351,7 @@ impl ProjectionScratch {
     /// whether they could be factored.
     fn refactor(&mut self, choice: &RowChoice) -> bool {
         self.fill_rows(choice);
+        self.near = largest_kept(&self.current.residual, choice).0 <= CHORD_WITHIN;
         if self.held == Held::Conditioning && self.shared {
             self.held = Held::Projection;
             return true;
@@ -415,7 +430,7 @@ impl ProjectionScratch {
         self.rows_of_current = false;
         self.values_of_current = false;
         let kept = matches!(self.held, Held::Projection | Held::Earlier);
-        self.held = if keep_factor && self.shared && kept {
+        self.held = if keep_factor && self.shared && self.near && kept {
             Held::Earlier
         } else {
             Held::Nothing

@@ -24,6 +24,9 @@ impl MechanicalSystem<'_> {
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
         let model = self.model;
+        if model.has_loops() {
+            return self.hold_with_loops(q, a);
+        }
         let mut rows = std::mem::take(&mut self.hold.rows);
         rows.clear();
         let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
@@ -32,9 +35,7 @@ impl MechanicalSystem<'_> {
         rows.extend(frictions.map(|k| model.frictions[k].velocity));
         let held = match rows.is_empty() {
             true => Ok(()),
-            false if model.has_loops() || model.has_contacts() => {
-                self.hold_with_constraints(q, &rows, a)
-            }
+            false if model.has_contacts() => self.hold_with_constraints(q, &rows, a),
             false if !model.mimics.is_empty() || has_repeats(&rows) => {
                 self.hold_coupled(q, &rows, a)
             }
