@@ -312,6 +312,9 @@ pub fn build_with(
     if has_contacts && !frictions.is_empty() {
         errors.push(friction_with_contacts(mechanism, &frictions[0]));
     }
+    if has_contacts && !loops.is_empty() && !stops.is_empty() {
+        errors.push(stops_with_contacts_and_loops(mechanism, &stops[0]));
+    }
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -921,6 +924,24 @@ pub struct DeclaredState {
 
 /// Joint friction in a mechanism with contacts (E0474): the contacts' equations do not carry
 /// the joints' stick/slip phases.
+/// Stops in a mechanism with both contacts and closed loops (E0450): a resting stop and an
+/// impact are solved with the contacts' rows or with the loops' rows, not yet with both, and
+/// leaving either out would let those constraints open silently.
+fn stops_with_contacts_and_loops(mechanism: &Mechanism, stop: &Stop) -> Diagnostic {
+    let mut error = Diagnostic::error(
+        "E0450",
+        format!(
+            "`{}` has stops in a mechanism with both contacts and closed loops",
+            stop.coordinate
+        ),
+    )
+    .help("stops are simulated with contacts or with closed loops, not with both; remove the stops, the contacts or the links that close loops");
+    if let Some(contact) = mechanism.contacts.first() {
+        error = error.primary(contact.span, "a contact of the mechanism");
+    }
+    error
+}
+
 fn friction_with_contacts(mechanism: &Mechanism, friction: &Friction) -> Diagnostic {
     let mut error = Diagnostic::error(
         "E0474",

@@ -35,7 +35,7 @@ impl MechanicalSystem<'_> {
         rows.extend(frictions.map(|k| model.frictions[k].velocity));
         let held = match rows.is_empty() {
             true => Ok(()),
-            false if model.has_contacts() => self.hold_with_constraints(q, &rows, a),
+            false if model.has_contacts() => self.hold_with_constraints(&rows, a),
             false if !model.mimics.is_empty() || has_repeats(&rows) => {
                 self.hold_coupled(q, &rows, a)
             }

@@ -50,27 +50,18 @@ impl MechanicalSystem<'_> {
         Ok((mass, rows))
     }
 
-    /// `hold_resting` in a mechanism with loops or contacts, right after their solve at q (whose
-    /// rows and accelerations `a` it starts from): the held velocities `rows` join the loops'
-    /// kept rows or the contacts' in the saddle-point system.
+    /// `hold_resting` in a mechanism with contacts (and no loops: those hold through
+    /// `hold_with_loops`), right after the contacts' solve at q (whose rows and accelerations
+    /// `a` it starts from): the held velocities `rows` join the contacts' kept rows in the
+    /// saddle-point system.
     pub(super) fn hold_with_constraints(
         &mut self,
-        q: &[f64],
         rows: &[usize],
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
-        let model = self.model;
-        let (mass, g, h) = if model.has_contacts() {
-            let scratch = &self.contacts;
-            let (g, h) = scratch.kept_system();
-            (scratch.mass.clone(), g.clone(), h.clone())
-        } else {
-            let tree = crba(model, &mut self.data, q)?;
-            let mass = loops::structure::full_mass(&tree, model.velocities());
-            let g = self.loop_kept_rows(&self.loop_scratch.constraints.jacobian.dense());
-            let h = g.clone();
-            (mass, g, h)
-        };
+        let scratch = &self.contacts;
+        let (g, h) = scratch.kept_system();
+        let (mass, g, h) = (scratch.mass.clone(), g.clone(), h.clone());
         let (change, forces) =
             crate::dynamics::stops::held_accelerations(&mass, &g, &h, rows, a.as_slice())
                 .ok_or(SystemError::SingularMassMatrix)?;
