@@ -22,6 +22,9 @@ use super::driver::AdaptiveStepper;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::jacobian::leading_columns;
 use super::settings::Settings;
+use hermite::Hermite;
+
+mod hermite;
 
 const SQRT6: f64 = 2.449_489_742_783_178;
 /// The nodes c_i.
@@ -207,6 +210,8 @@ pub(super) struct Radau5 {
     transformed_derivatives: [Vec<f64>; 3],
     real_rhs: DVector<f64>,
     complex_rhs: DVector<Complex<f64>>,
+    /// The quintic through the last three step ends, and the components it serves.
+    dense: Hermite,
 }
 
 impl Radau5 {
@@ -238,6 +243,7 @@ impl Radau5 {
             transformed_derivatives: triple(),
             real_rhs: DVector::zeros(dimension),
             complex_rhs: DVector::zeros(dimension),
+            dense: Hermite::new(dimension),
         }
     }
 
@@ -253,6 +259,7 @@ impl Radau5 {
         self.stale = true;
         self.fresh = false;
         self.collocation = None;
+        self.dense.forget();
     }
 
     /// Whether the spectral radius of the Jacobian last formed is below `limit` (`false` before
@@ -606,12 +613,18 @@ impl AdaptiveStepper for Radau5 {
         Ok(error)
     }
 
-    fn accept(&mut self, t: f64, y: &[f64], h: f64, _y_new: &[f64]) {
+    fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
         let mut collocation = self
             .collocation
             .take()
             .unwrap_or_else(|| Collocation::new(y.len()));
         collocation.fill(t, y, h, &self.increments);
+        let jacobian = self.jacobian.as_ref().expect("formed before a step");
+        self.dense.add_step(
+            jacobian,
+            (t, y, &self.derivative),
+            (h, y_new, &self.end_derivative),
+        );
         self.collocation = Some(collocation);
         std::mem::swap(&mut self.derivative, &mut self.end_derivative);
         self.stale = self.rate > JACOBIAN_RATE;
@@ -625,6 +638,7 @@ impl AdaptiveStepper for Radau5 {
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         if let Some(collocation) = &self.collocation {
             collocation.evaluate(t, out);
+            self.dense.evaluate(t, out);
         }
     }
 }
