@@ -12,8 +12,9 @@
 //! stage order 1 lowers it (`BENCHMARKS.md`).
 //!
 //! The error estimate is RADAU5's (γ/h − J)⁻¹ (f(t, y) + Σ e_i Z_i / h), of order 3, which
-//! damps the stiff components; dense output is the collocation polynomial of degree 3, which
-//! also gives the next step's first guess of Z.
+//! damps the stiff components. The collocation polynomial of degree 3 gives the next step's
+//! first guess of Z, and the dense output of the stiff components; the others' dense output
+//! is the quintic through the last three step ends (`radau/hermite.rs`).
 
 use nalgebra::{Complex, DMatrix, DVector, Dyn, LU};
 
