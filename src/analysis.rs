@@ -128,7 +128,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         .collect();
     // Each mimic joint couples two coordinates of the tree: one degree of freedom less.
     let couplings = (mechanism.joins.iter())
-        .filter(|j| mechanism.link(j.link).mimic.is_declared())
+        .filter(|j| mechanism.link(j.link).mimic().is_declared())
         .count();
     if topology.complementary.is_empty() {
         // A tree: no constraint, the mobility is the sum of the links' degrees of freedom.

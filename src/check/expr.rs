@@ -8,7 +8,7 @@ use super::types::{self, Ty};
 use crate::diag::{suggest, Diagnostic};
 use crate::source::Span;
 use crate::syntax::ast::{
-    BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident, QualifiedName,
+    BinaryExpr, BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident, LocalExpr, QualifiedName,
 };
 
 impl<'w> Checker<'w> {
@@ -31,8 +31,9 @@ impl<'w> Checker<'w> {
             ExprKind::Int(1) => Ty::One,
             ExprKind::Int(_) | ExprKind::Float(_) => Ty::Scalar,
             ExprKind::Vector(items) => self.vector(items, expr.span, ctx),
-            ExprKind::Call { callee, args } => self.call(callee, args, expr.span, ctx),
-            ExprKind::Binary { op, lhs, rhs } => {
+            ExprKind::Call(call) => self.call(&call.callee, &call.args, expr.span, ctx),
+            ExprKind::Binary(binary) => {
+                let BinaryExpr { op, lhs, rhs } = &**binary;
                 if let Some(ty) = self.precedence_trap(expr, *op, lhs, rhs, ctx) {
                     return ty;
                 }
@@ -55,7 +56,8 @@ impl<'w> Checker<'w> {
             },
             ExprKind::Prime(inner) => self.prime(inner, ctx),
             ExprKind::Construct(c) => self.construct(c.kind, &c.params, &c.fields, ctx),
-            ExprKind::Local { bindings, body } => {
+            ExprKind::Local(local) => {
+                let LocalExpr { bindings, body } = &**local;
                 let types: Vec<Ty> = bindings.iter().map(|b| self.expr(&b.value, ctx)).collect();
                 for (binding, ty) in bindings.iter().zip(&types) {
                     self.expect_first_class(&binding.value, *ty);
@@ -220,11 +222,14 @@ impl<'w> Checker<'w> {
         rhs: &'w Expr,
         ctx: &mut Ctx,
     ) -> Option<Ty> {
-        let ExprKind::Binary {
+        let ExprKind::Binary(inner) = &lhs.kind else {
+            return None;
+        };
+        let BinaryExpr {
             op: BinaryOp::Displacement,
             lhs: translation,
             rhs: angle,
-        } = &lhs.kind
+        } = &**inner
         else {
             return None;
         };
@@ -232,16 +237,16 @@ impl<'w> Checker<'w> {
         if op != BinaryOp::Rotation || lhs.span.start != expr.span.start {
             return None;
         }
-        for part in [&**translation, &**angle, rhs] {
+        for part in [translation, angle, rhs] {
             self.expr(part, ctx);
         }
         // `axis @ b` on the right, unparenthesised: the frame applies to the whole displacement.
         let (axis, body, ty) = match &rhs.kind {
-            ExprKind::Binary {
-                op: BinaryOp::Frame,
-                lhs: axis,
-                rhs: body,
-            } if rhs.span.end == expr.span.end => (axis.span, Some(body.span), Ty::Frame),
+            ExprKind::Binary(frame)
+                if frame.op == BinaryOp::Frame && rhs.span.end == expr.span.end =>
+            {
+                (frame.lhs.span, Some(frame.rhs.span), Ty::Frame)
+            }
             _ => (rhs.span, None, Ty::Displacement),
         };
         let mut intended = format!(
@@ -807,11 +812,11 @@ fn mentions(expr: &Expr, name: &str) -> bool {
         ExprKind::Name(written) => &**written == name,
         ExprKind::Field(access) => mentions(&access.target, name),
         ExprKind::Neg(target) | ExprKind::Prime(target) => mentions(target, name),
-        ExprKind::Binary { lhs, rhs, .. } => mentions(lhs, name) || mentions(rhs, name),
+        ExprKind::Binary(binary) => mentions(&binary.lhs, name) || mentions(&binary.rhs, name),
         ExprKind::Vector(items) => items.iter().any(|e| mentions(e, name)),
-        ExprKind::Call { args, .. } => args.iter().any(|a| mentions(&a.value, name)),
-        ExprKind::Local { bindings, body } => {
-            bindings.iter().any(|b| mentions(&b.value, name)) || mentions(body, name)
+        ExprKind::Call(call) => call.args.iter().any(|a| mentions(&a.value, name)),
+        ExprKind::Local(local) => {
+            local.bindings.iter().any(|b| mentions(&b.value, name)) || mentions(&local.body, name)
         }
         ExprKind::Construct(c) => c.fields.iter().any(|f| mentions(&f.value, name)),
         ExprKind::Qualified(qualified) => {

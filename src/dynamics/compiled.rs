@@ -306,7 +306,7 @@ impl Lower for TapeBuilder<'_> {
                 let value = *self.unknowns.get(id).ok_or(EvalError::Missing(*id))?;
                 self.pool.constant(value)
             }
-            SExpr::UnknownFunction(id, _) => return Err(EvalError::Missing(*id)),
+            SExpr::UnknownFunction(call) => return Err(EvalError::Missing(call.function)),
             SExpr::Coordinate { index, order } => {
                 let offset = self
                     .link

@@ -100,7 +100,7 @@ pub fn build(
     refuse_declared(
         mechanism,
         loops,
-        |link| link.friction.is_declared(),
+        |link| link.friction().is_declared(),
         |name, span| {
             Diagnostic::error("E0474", format!("`{name}` has friction and closes a loop"))
                 .primary(span, "friction acts in the joints of the tree only")
@@ -110,10 +110,10 @@ pub fn build(
     );
     for (k, joint) in joints.iter().enumerate() {
         let link = mechanism.link(mechanism.join(joint.chain.join).link);
-        if !link.friction.is_declared() {
+        if !link.friction().is_declared() {
             continue;
         }
-        match joint_friction(joint, &link.friction, unknowns, !loops.is_empty()) {
+        match joint_friction(joint, link.friction(), unknowns, !loops.is_empty()) {
             Ok(friction) => found.push(Friction { joint: k, ..friction }),
             Err((message, label)) => errors.push(
                 Diagnostic::error("E0474", message)

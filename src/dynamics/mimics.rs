@@ -131,8 +131,8 @@ pub fn build(
     let mut mimics = Vec::new();
     for joint in joints.iter() {
         let link = mechanism.link(mechanism.join(joint.chain.join).link);
-        if link.mimic.is_declared() {
-            let found = follower(mechanism, joint, joints, &link.mimic, unknowns);
+        if link.mimic().is_declared() {
+            let found = follower(mechanism, joint, joints, link.mimic(), unknowns);
             match found {
                 Ok(mimic) => mimics.push(mimic),
                 Err(error) => errors.push(error),
@@ -143,7 +143,7 @@ pub fn build(
     let loop_mimics = loops.iter().filter(|l| {
         mechanism
             .link(mechanism.join(l.join).link)
-            .mimic
+            .mimic()
             .is_declared()
     });
     for chain in loop_mimics {
@@ -153,7 +153,7 @@ pub fn build(
         for joint in joints {
             if mechanism
                 .link(mechanism.join(joint.chain.join).link)
-                .mimic
+                .mimic()
                 .is_declared()
             {
                 errors.push(refused_in_loops(

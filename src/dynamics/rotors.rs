@@ -44,14 +44,14 @@ pub fn build(
     for (k, joint) in joints.iter().enumerate() {
         let join = mechanism.join(joint.chain.join);
         let link = mechanism.link(join.link);
-        if !link.rotor.is_declared() {
+        if !link.rotor().is_declared() {
             continue;
         }
         let name = &joint.chain.name;
         let single = joint.chain.coordinate_count() == 1
             && joint.kind == JointType::Chain
             && joint.nv() == 1;
-        match (single, rotor_values(&link.rotor, unknowns)) {
+        match (single, rotor_values(link.rotor(), unknowns)) {
             (true, Some((inertia, ratio, axis))) => {
                 let frame = if joint.first_on_parent { joint.on_parent } else { joint.on_child };
                 rotors.push(Rotor {
@@ -103,7 +103,7 @@ fn refuse_on_closing_links(
     refuse_declared(
         mechanism,
         loops,
-        |link| link.rotor.is_declared(),
+        |link| link.rotor().is_declared(),
         |name, span| {
             Diagnostic::error("E0827", format!("`{name}` has a geared rotor but closes a loop"))
                 .primary(span, "this join closes a loop of the mechanism")

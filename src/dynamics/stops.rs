@@ -129,7 +129,7 @@ pub fn build(
     for joint in joints {
         let join = mechanism.join(joint.chain.join);
         let link = mechanism.link(join.link);
-        if !link.stops.is_declared() {
+        if !link.stops().is_declared() {
             continue;
         }
         if joint.chain.coordinate_count() != 1
@@ -152,7 +152,7 @@ pub fn build(
             );
             continue;
         }
-        if let Some(found) = joint_stops(mechanism, joint, &link.stops, unknowns, errors) {
+        if let Some(found) = joint_stops(mechanism, joint, link.stops(), unknowns, errors) {
             stops.extend(found);
         }
     }
@@ -170,7 +170,7 @@ fn refuse_with_loops(
     refuse_declared(
         mechanism,
         joints.iter().map(|j| &j.chain).chain(loops),
-        |link| link.stops.is_declared(),
+        |link| link.stops().is_declared(),
         |name, span| {
             Diagnostic::error(
                 "E0450",

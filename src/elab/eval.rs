@@ -20,8 +20,8 @@ use crate::diag::Diagnostic;
 use crate::load::ModuleId;
 use crate::source::Span;
 use crate::syntax::ast::{
-    ApplyDecl, Arg, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind, Expr, ExprKind,
-    FieldInit, Ident, JoinDecl, Name,
+    ApplyDecl, Arg, BinaryExpr, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind, Expr,
+    ExprKind, FieldInit, Ident, JoinDecl, LocalExpr, Name,
 };
 
 type Result<T> = std::result::Result<T, Diagnostic>;
@@ -121,7 +121,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .as_ref()
                     .map(|n| self.qualified_name(&n.name, instance));
                 // A contact is a constraint, not a joint: its name stands for no coordinates.
-                let id = if self.mechanism.link(link).contact.is_some() {
+                let id = if self.mechanism.link(link).contact().is_some() {
                     let id = JoinId(CONTACT_JOIN | self.mechanism.contacts.len() as u32);
                     let contact = Contact {
                         name: join_name,
@@ -465,12 +465,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .collect::<Result<Vec<_>>>()?;
                 vector_or_matrix(values, expr.span)?
             }
-            ExprKind::Call { callee, args } => {
-                let value = self.call(callee, args, locals, expr.span)?;
+            ExprKind::Call(call) => {
+                let value = self.call(&call.callee, &call.args, locals, expr.span)?;
                 check_finite(&value, None, expr.span)?;
                 value
             }
-            ExprKind::Binary { op, lhs, rhs } => {
+            ExprKind::Binary(operation) => {
+                let BinaryExpr { op, lhs, rhs } = &**operation;
                 let left = self.expr(lhs, locals)?;
                 let right = self.expr(rhs, locals)?;
                 if *op == BinaryOp::Rotation {
@@ -513,7 +514,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ExprKind::Construct(c) => {
                 self.construct(c.kind, &c.params, &c.fields, locals, expr.span)?
             }
-            ExprKind::Local { bindings, body } => {
+            ExprKind::Local(local) => {
+                let LocalExpr { bindings, body } = &**local;
                 let depth = locals.len();
                 let mut values = Vec::with_capacity(bindings.len());
                 for binding in bindings {
@@ -703,7 +705,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .into_iter()
                     .map(|v| as_scalar(v, span))
                     .collect::<Result<Vec<_>>>()?;
-                return Ok(Value::Scalar(Arc::new(SExpr::UnknownFunction(id, scalars))));
+                return Ok(Value::Scalar(Arc::new(SExpr::unknown_function(
+                    id, scalars,
+                ))));
             }
             Callee::Name(ident) => (ident, self.resolution(ident.span)?, None),
             Callee::Qualified(qualified) => (
@@ -872,20 +876,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         fields: Vec<(&str, Value, Span)>,
         span: Span,
     ) -> Result<Value> {
-        let mut link = Link {
-            name: None,
-            span,
-            coordinates: params.iter().map(|p| p.name.clone()).collect(),
-            dofs: Vec::new(),
-            forces: Vec::new(),
-            torques: Vec::new(),
-            potential: None,
-            contact: None,
-            stops: Default::default(),
-            rotor: Default::default(),
-            mimic: Default::default(),
-            friction: Default::default(),
-        };
+        let coordinates = params.iter().map(|p| p.name.clone()).collect();
+        let mut link = Link::new(span, coordinates);
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {
             let base = name.trim_end_matches(|c: char| c.is_ascii_digit());
@@ -895,22 +887,16 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 "force" => link.forces.push((index, as_vector(value, at)?)),
                 "torque" => link.torques.push((index, as_vector(value, at)?)),
                 "potential" => link.potential = Some(as_scalar(value, at)?),
-                "lower" => link.stops.lower = Some(as_scalar(value, at)?),
-                "upper" => link.stops.upper = Some(as_scalar(value, at)?),
-                "restitution" => link.stops.restitution = Some(as_scalar(value, at)?),
-                "rotor_inertia" => link.rotor.inertia = Some(as_scalar(value, at)?),
-                "gear_ratio" => link.rotor.ratio = Some(as_scalar(value, at)?),
-                "rotor_axis" => link.rotor.axis = Some(as_vector(value, at)?),
-                "mimic" => link.mimic.leader = Some((as_join(value, at)?, at)),
-                "mimic_multiplier" => link.mimic.multiplier = Some(as_scalar(value, at)?),
-                "mimic_offset" => link.mimic.offset = Some(as_scalar(value, at)?),
-                "friction" => link.friction.dry = Some(as_scalar(value, at)?),
-                "damping" => link.friction.viscous = Some(as_scalar(value, at)?),
-                _ => return Err(internal(format!("link field `{name}`"))),
+                _ => extra_field(link.extras_mut(), name, value, at)?,
             }
         }
         dofs.sort_by_key(|(i, _)| *i);
-        link.dofs = dofs.into_iter().map(|(_, d)| d).collect();
+        // Exact lengths: a chain has one link per body, and a list grown by pushing keeps
+        // room for four.
+        link.dofs = Vec::with_capacity(dofs.len());
+        link.dofs.extend(dofs.into_iter().map(|(_, d)| d));
+        link.forces.shrink_to_fit();
+        link.torques.shrink_to_fit();
         coordinates_move(&link, params, written)?;
         self.mechanism.links.push(link);
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
@@ -924,24 +910,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .next()
             .ok_or_else(|| internal("contact without a radius"))??;
         let friction = scalars.next().transpose()?;
-        self.mechanism.links.push(Link {
-            name: None,
+        let mut link = Link::new(span, Vec::new());
+        link.extras_mut().contact = Some(ContactLaw {
+            radius,
+            friction,
             span,
-            coordinates: Vec::new(),
-            dofs: Vec::new(),
-            forces: Vec::new(),
-            torques: Vec::new(),
-            potential: None,
-            contact: Some(ContactLaw {
-                radius,
-                friction,
-                span,
-            }),
-            stops: Default::default(),
-            rotor: Default::default(),
-            mimic: Default::default(),
-            friction: Default::default(),
         });
+        self.mechanism.links.push(link);
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }
 
@@ -1063,4 +1038,23 @@ pub(super) fn no_such_coordinate(
     .primary(span, "not a coordinate of this join's link")
     .secondary(join_span, "the join")
     .help(help)
+}
+
+/// A field of a link that few links write (see [`LinkExtras`]).
+fn extra_field(extras: &mut LinkExtras, name: &str, value: Value, at: Span) -> Result<()> {
+    match name {
+        "lower" => extras.stops.lower = Some(as_scalar(value, at)?),
+        "upper" => extras.stops.upper = Some(as_scalar(value, at)?),
+        "restitution" => extras.stops.restitution = Some(as_scalar(value, at)?),
+        "rotor_inertia" => extras.rotor.inertia = Some(as_scalar(value, at)?),
+        "gear_ratio" => extras.rotor.ratio = Some(as_scalar(value, at)?),
+        "rotor_axis" => extras.rotor.axis = Some(as_vector(value, at)?),
+        "mimic" => extras.mimic.leader = Some((as_join(value, at)?, at)),
+        "mimic_multiplier" => extras.mimic.multiplier = Some(as_scalar(value, at)?),
+        "mimic_offset" => extras.mimic.offset = Some(as_scalar(value, at)?),
+        "friction" => extras.friction.dry = Some(as_scalar(value, at)?),
+        "damping" => extras.friction.viscous = Some(as_scalar(value, at)?),
+        _ => return Err(internal(format!("link field `{name}`"))),
+    }
+    Ok(())
 }

@@ -57,6 +57,15 @@ pub struct Link {
     pub torques: Vec<(u8, Vector)>,
     /// `potential = ...`: the potential energy its efforts derive from, for the energy report.
     pub potential: Option<Scalar>,
+    /// The fields few links write (a contact, stops, a rotor, a mimic coupling, friction),
+    /// boxed together and absent when none is written: inline they made every link of a
+    /// chain 150 bytes larger. Read through [`Link::contact`], [`Link::stops`] and the like.
+    extras: Option<Box<LinkExtras>>,
+}
+
+/// The rarely written fields of a link (see [`Link`]).
+#[derive(Clone, Debug, Default)]
+pub struct LinkExtras {
     /// `rolling(r)` or `sliding(r, f)`: a contact between a plane and a round body, not a joint
     /// of the tree (see [`Contact`]).
     pub contact: Option<ContactLaw>,
@@ -72,6 +81,80 @@ pub struct Link {
     /// `friction = F, damping = c`: dry (Coulomb) and viscous friction opposing the rate of its
     /// coordinate.
     pub friction: LinkFriction,
+}
+
+/// What a link without extras reads: nothing written.
+static NO_EXTRAS: LinkExtras = LinkExtras {
+    contact: None,
+    stops: LinkStops {
+        lower: None,
+        upper: None,
+        restitution: None,
+    },
+    rotor: LinkRotor {
+        inertia: None,
+        ratio: None,
+        axis: None,
+    },
+    mimic: LinkMimic {
+        leader: None,
+        multiplier: None,
+        offset: None,
+    },
+    friction: LinkFriction {
+        dry: None,
+        viscous: None,
+    },
+};
+
+impl Link {
+    /// A link in these coordinates with nothing else written yet.
+    pub fn new(span: Span, coordinates: Vec<Name>) -> Link {
+        Link {
+            name: None,
+            span,
+            coordinates,
+            dofs: Vec::new(),
+            forces: Vec::new(),
+            torques: Vec::new(),
+            potential: None,
+            extras: None,
+        }
+    }
+
+    fn extras(&self) -> &LinkExtras {
+        self.extras.as_deref().unwrap_or(&NO_EXTRAS)
+    }
+
+    /// The rarely written fields, to write one (made when the first is written).
+    pub fn extras_mut(&mut self) -> &mut LinkExtras {
+        self.extras.get_or_insert_with(Default::default)
+    }
+
+    /// `rolling(r)` or `sliding(r, f)`: see [`LinkExtras::contact`].
+    pub fn contact(&self) -> Option<&ContactLaw> {
+        self.extras().contact.as_ref()
+    }
+
+    /// The stops of its coordinate, as declared: see [`LinkExtras::stops`].
+    pub fn stops(&self) -> &LinkStops {
+        &self.extras().stops
+    }
+
+    /// A geared rotor, as declared: see [`LinkExtras::rotor`].
+    pub fn rotor(&self) -> &LinkRotor {
+        &self.extras().rotor
+    }
+
+    /// A mimic coupling, as declared: see [`LinkExtras::mimic`].
+    pub fn mimic(&self) -> &LinkMimic {
+        &self.extras().mimic
+    }
+
+    /// Friction in its coordinate, as declared: see [`LinkExtras::friction`].
+    pub fn friction(&self) -> &LinkFriction {
+        &self.extras().friction
+    }
 }
 
 /// How a round body touches a plane: which rows a contact adds to the equations of motion.
@@ -472,7 +555,7 @@ impl Mechanism {
                 .iter()
                 .chain(&link.torques)
                 .for_each(|(_, v)| reached.vector(v));
-            if let Some(law) = &link.contact {
+            if let Some(law) = link.contact() {
                 reached.scalar(&law.radius);
                 law.friction.iter().for_each(|f| reached.scalar(f));
             }

@@ -196,7 +196,7 @@ fn rotate_about(angle: &Scalar, axis: &Vector, v: &Vector) -> Vector {
 fn builtin_scalar(name: &'static str, x: &Scalar) -> Scalar {
     match fold_builtin(name, std::slice::from_ref(x)) {
         Some(v) => num(v),
-        None => Arc::new(SExpr::Call(name, vec![x.clone()])),
+        None => Arc::new(SExpr::call(name, vec![x.clone()])),
     }
 }
 
@@ -249,7 +249,7 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
             if let Some(folded) = fold_builtin(name, &args) {
                 return Ok(Value::Scalar(num(folded)));
             }
-            Ok(Value::Scalar(Arc::new(SExpr::Call(static_name, args))))
+            Ok(Value::Scalar(Arc::new(SExpr::call(static_name, args))))
         }
     }
 }
@@ -364,8 +364,11 @@ fn undefined(s: &Scalar) -> bool {
         | SExpr::Mul(a, b)
         | SExpr::Div(a, b)
         | SExpr::Pow(a, b) => constant(a).is_some() && constant(b).is_some(),
-        SExpr::Call(name, args) => {
-            FOLDED.contains(name) && !args.is_empty() && args.iter().all(|a| constant(a).is_some())
+        SExpr::Call(call) => {
+            let args = &call.args;
+            FOLDED.contains(&call.function)
+                && !args.is_empty()
+                && args.iter().all(|a| constant(a).is_some())
         }
         _ => false,
     }

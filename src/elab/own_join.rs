@@ -97,8 +97,10 @@ impl Replacement {
             | SExpr::Unknown(_)
             | SExpr::Coordinate { .. }
             | SExpr::JoinCoordinate { .. } => return s.clone(),
-            SExpr::UnknownFunction(id, args) => SExpr::UnknownFunction(*id, self.list(args)),
-            SExpr::Call(name, args) => SExpr::Call(name, self.list(args)),
+            SExpr::UnknownFunction(call) => {
+                SExpr::unknown_function(call.function, self.list(&call.args))
+            }
+            SExpr::Call(call) => SExpr::call(call.function, self.list(&call.args)),
             SExpr::Neg(a) => SExpr::Neg(self.scalar(a)),
             SExpr::Add(a, b) => SExpr::Add(self.scalar(a), self.scalar(b)),
             SExpr::Sub(a, b) => SExpr::Sub(self.scalar(a), self.scalar(b)),

@@ -21,7 +21,17 @@ pub struct JoinId(pub u32);
 
 pub type Scalar = Arc<SExpr>;
 
-/// A symbolic scalar expression.
+/// A function applied to arguments: `sin(x)` (`F` its name) or `?fs(x, x')` (`F` the unknown).
+/// Boxed in [`SExpr`], so that every other node is not as large as a call.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Applied<F> {
+    pub function: F,
+    pub args: Vec<Scalar>,
+}
+
+/// A symbolic scalar expression. Its variants hold at most 16 bytes, so that a node with its
+/// `Arc` counts is 40 bytes (a 48-byte block of glibc's malloc, where 56 bytes took 64): an
+/// elaborated mechanism holds several per body.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SExpr {
     Num(f64),
@@ -30,7 +40,7 @@ pub enum SExpr {
     /// `?s`, or a `let` name bound to one.
     Unknown(UnknownId),
     /// `?fs(x, x')`
-    UnknownFunction(UnknownId, Vec<Scalar>),
+    UnknownFunction(Box<Applied<UnknownId>>),
     /// The `index`-th coordinate of the enclosing link, differentiated `order` times.
     Coordinate {
         index: u32,
@@ -48,7 +58,7 @@ pub enum SExpr {
     Mul(Scalar, Scalar),
     Div(Scalar, Scalar),
     Pow(Scalar, Scalar),
-    Call(&'static str, Vec<Scalar>),
+    Call(Box<Applied<&'static str>>),
     /// One component of the state of a frame at the current instant, in the fixed axes
     /// (`position(F)`, `velocity(F)`, …): only efforts may depend on it.
     FrameState(Arc<Frame>, FrameQuantity),
@@ -154,6 +164,9 @@ pub struct Displacement(pub Vec<Elementary>);
 
 impl Displacement {
     pub fn then(mut self, other: &Displacement) -> Displacement {
+        // At the exact length: a frame `t ++ r @ b` is kept per join and per body, and a chain
+        // grown by doubling kept room for four steps.
+        self.0.reserve_exact(other.0.len());
         self.0.extend(other.0.iter().cloned());
         self
     }
@@ -225,6 +238,25 @@ pub enum Value {
 }
 
 impl SExpr {
+    /// `function(args)`: a call of a function of the standard library.
+    pub fn call(function: &'static str, args: Vec<Scalar>) -> SExpr {
+        SExpr::Call(Box::new(Applied { function, args }))
+    }
+
+    /// `?fs(args)`: a call of an unknown function.
+    pub fn unknown_function(function: UnknownId, args: Vec<Scalar>) -> SExpr {
+        SExpr::UnknownFunction(Box::new(Applied { function, args }))
+    }
+
+    /// The arguments of a call, known or unknown; none for any other node.
+    pub fn arguments(&self) -> &[Scalar] {
+        match self {
+            SExpr::Call(call) => &call.args,
+            SExpr::UnknownFunction(call) => &call.args,
+            _ => &[],
+        }
+    }
+
     /// Adds every unknown (scalar or function) the expression mentions to `into`.
     pub fn collect_unknowns(&self, into: &mut std::collections::BTreeSet<UnknownId>) {
         match self {
@@ -235,9 +267,9 @@ impl SExpr {
             SExpr::Unknown(id) => {
                 into.insert(*id);
             }
-            SExpr::UnknownFunction(id, args) => {
-                into.insert(*id);
-                args.iter().for_each(|a| a.collect_unknowns(into));
+            SExpr::UnknownFunction(call) => {
+                into.insert(call.function);
+                call.args.iter().for_each(|a| a.collect_unknowns(into));
             }
             SExpr::Neg(a) => a.collect_unknowns(into),
             SExpr::Add(a, b)
@@ -248,7 +280,7 @@ impl SExpr {
                 a.collect_unknowns(into);
                 b.collect_unknowns(into);
             }
-            SExpr::Call(_, args) => args.iter().for_each(|a| a.collect_unknowns(into)),
+            SExpr::Call(call) => call.args.iter().for_each(|a| a.collect_unknowns(into)),
             SExpr::FrameState(frame, _) => frame.displacement.collect_unknowns(into),
         }
     }
@@ -270,8 +302,8 @@ impl SExpr {
                 a.frames_used(into);
                 b.frames_used(into);
             }
-            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => {
-                args.iter().for_each(|a| a.frames_used(into))
+            SExpr::Call(_) | SExpr::UnknownFunction(_) => {
+                self.arguments().iter().for_each(|a| a.frames_used(into))
             }
             SExpr::Num(_)
             | SExpr::Time
@@ -304,8 +336,8 @@ impl SExpr {
             | SExpr::Mul(a, b)
             | SExpr::Div(a, b)
             | SExpr::Pow(a, b) => a.any(test) || b.any(test),
-            SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => {
-                args.iter().any(|a| a.any(test))
+            SExpr::Call(_) | SExpr::UnknownFunction(_) => {
+                self.arguments().iter().any(|a| a.any(test))
             }
             SExpr::FrameState(..)
             | SExpr::Num(_)
@@ -344,9 +376,9 @@ impl SExpr {
             SExpr::Num(v) => crate::diag::number::shortest(*v),
             SExpr::Time => "t".to_string(),
             SExpr::Unknown(id) => unknown(*id),
-            SExpr::UnknownFunction(id, args) => {
-                let name = unknown(*id);
-                format!("{name}({})", list(args, unknown))
+            SExpr::UnknownFunction(call) => {
+                let name = unknown(call.function);
+                format!("{name}({})", list(&call.args, unknown))
             }
             SExpr::Coordinate { index, order } => coordinate(None, *index, *order),
             SExpr::JoinCoordinate { join, index, order } => coordinate(Some(*join), *index, *order),
@@ -376,7 +408,7 @@ impl SExpr {
                 a.render_with(unknown, coordinate),
                 b.render_with(unknown, coordinate)
             ),
-            SExpr::Call(name, args) => format!("{name}({})", list(args, unknown)),
+            SExpr::Call(call) => format!("{}({})", call.function, list(&call.args, unknown)),
             SExpr::FrameState(_, quantity) => match quantity {
                 FrameQuantity::Position(i) => format!("position(frame)[{i}]"),
                 FrameQuantity::Velocity(i) => format!("velocity(frame)[{i}]"),

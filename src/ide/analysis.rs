@@ -13,7 +13,7 @@ use crate::elab::Mechanism;
 use crate::load::{LoadOptions, Workspace};
 use crate::source::{FileId, Span};
 use crate::syntax::ast::{
-    Arg, Callee, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, ImportTarget, Name,
+    Arg, Callee, Decl, DeclKind, Expr, ExprKind, FieldInit, Ident, ImportTarget, LocalExpr, Name,
 };
 use crate::syntax::lexer::comments_in_gap;
 
@@ -439,10 +439,10 @@ impl Builder<'_, '_> {
                     self.expr(element, locals);
                 }
             }
-            ExprKind::Call { callee, args } => self.call(callee, args, locals),
-            ExprKind::Binary { lhs, rhs, .. } => {
-                self.expr(lhs, locals);
-                self.expr(rhs, locals);
+            ExprKind::Call(call) => self.call(&call.callee, &call.args, locals),
+            ExprKind::Binary(binary) => {
+                self.expr(&binary.lhs, locals);
+                self.expr(&binary.rhs, locals);
             }
             ExprKind::Neg(inner) | ExprKind::Prime(inner) => self.expr(inner, locals),
             ExprKind::Construct(c) => {
@@ -459,7 +459,8 @@ impl Builder<'_, '_> {
                 self.fields(&c.fields, locals);
                 locals.truncate(depth);
             }
-            ExprKind::Local { bindings, body } => {
+            ExprKind::Local(local) => {
+                let LocalExpr { bindings, body } = &**local;
                 for binding in bindings.iter() {
                     self.expr(&binding.value, locals);
                 }

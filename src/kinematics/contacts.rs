@@ -58,7 +58,7 @@ pub fn contact_models(
     let mut contacts = Vec::new();
     for (index, contact) in mechanism.contacts.iter().enumerate() {
         let name = mechanism.contact_name(index);
-        let Some(law) = mechanism.link(contact.link).contact.as_ref() else {
+        let Some(law) = mechanism.link(contact.link).contact() else {
             continue;
         };
         let number = |body: BodyRef| match body {

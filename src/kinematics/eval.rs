@@ -77,7 +77,7 @@ impl Lower for Geometric<'_> {
                 let value = *self.unknowns.get(id).ok_or(EvalError::Missing(*id))?;
                 Ok(self.pool.constant(value))
             }
-            SExpr::UnknownFunction(id, _) => Err(EvalError::Missing(*id)),
+            SExpr::UnknownFunction(call) => Err(EvalError::Missing(call.function)),
             SExpr::Coordinate { index, order: 0 } => self
                 .coordinates
                 .get(*index as usize)

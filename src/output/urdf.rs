@@ -635,8 +635,8 @@ fn first_coordinate(s: &SExpr) -> Option<usize> {
         | SExpr::Mul(a, b)
         | SExpr::Div(a, b)
         | SExpr::Pow(a, b) => first_coordinate(a).or_else(|| first_coordinate(b)),
-        SExpr::Call(_, args) | SExpr::UnknownFunction(_, args) => {
-            args.iter().find_map(|a| first_coordinate(a))
+        SExpr::Call(_) | SExpr::UnknownFunction(_) => {
+            s.arguments().iter().find_map(|a| first_coordinate(a))
         }
         _ => None,
     }

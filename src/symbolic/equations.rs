@@ -164,7 +164,7 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
     }
     let coupled = |join: &&crate::elab::mechanism::Join| {
         let link = mechanism.link(join.link);
-        link.mimic.is_declared() || link.friction.is_declared()
+        link.mimic().is_declared() || link.friction().is_declared()
     };
     if let Some(join) = mechanism.joins.iter().find(coupled) {
         // The generator writes one equation per coordinate, with no coupling or friction.
@@ -178,7 +178,7 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
     if let Some(join) = mechanism
         .joins
         .iter()
-        .find(|join| mechanism.link(join.link).rotor.is_declared())
+        .find(|join| mechanism.link(join.link).rotor().is_declared())
     {
         // The generator writes the bodies' kinetic energy only; a rotor's own energy and its
         // gyroscopic coupling would be missing from M and S.

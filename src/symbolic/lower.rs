@@ -311,12 +311,13 @@ impl Lower for Symbolic<'_, '_, '_> {
         Ok(match s {
             SExpr::Time => lowering.variables.time,
             SExpr::Unknown(id) => lowering.parameter(self.pool, *id),
-            SExpr::UnknownFunction(id, args) => {
-                let arguments = args
+            SExpr::UnknownFunction(call) => {
+                let arguments = call
+                    .args
                     .iter()
                     .map(|a| self.lower(a))
                     .collect::<Result<Vec<_>, _>>()?;
-                self.lowering.function(self.pool, *id, arguments)
+                self.lowering.function(self.pool, call.function, arguments)
             }
             SExpr::Coordinate { index, order } => {
                 let join = self

@@ -64,7 +64,8 @@ pub fn lower_structure<L: Lower + ?Sized>(lowering: &mut L, s: &SExpr) -> Result
                 _ => lowering.pool().pow(a, b),
             }
         }
-        SExpr::Call(name, args) => {
+        SExpr::Call(call) => {
+            let (name, args) = (&call.function, &call.args);
             let arity = if *name == "atan2" { 2 } else { 1 };
             if args.len() != arity {
                 let error = MalformedCall("a call with another number of arguments");

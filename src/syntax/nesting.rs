@@ -6,7 +6,7 @@
 
 use crate::diag::Diagnostic;
 use crate::source::Span;
-use crate::syntax::ast::{Decl, DeclKind, Expr, ExprKind, Program};
+use crate::syntax::ast::{BinaryExpr, Decl, DeclKind, Expr, ExprKind, LocalExpr, Program};
 
 /// The deepest nesting of expressions (and packages) a declaration may have, counting the
 /// outermost expression as level 1: far beyond what a mechanism needs, far below what the
@@ -86,13 +86,13 @@ fn expr_children<'a>(expr: &'a Expr, out: &mut Vec<&'a Expr>) {
     match &expr.kind {
         ExprKind::Field(access) => out.push(&access.target),
         ExprKind::Vector(items) => out.extend(items.iter()),
-        ExprKind::Call { args, .. } => out.extend(args.iter().map(|a| &a.value)),
-        ExprKind::Binary { lhs, rhs, .. } => out.extend([&**lhs, &**rhs]),
+        ExprKind::Call(call) => out.extend(call.args.iter().map(|a| &a.value)),
+        ExprKind::Binary(binary) => out.extend([&binary.lhs, &binary.rhs]),
         ExprKind::Neg(inner) | ExprKind::Prime(inner) => out.push(inner),
         ExprKind::Construct(c) => out.extend(c.fields.iter().map(|f| &f.value)),
-        ExprKind::Local { bindings, body } => {
-            out.extend(bindings.iter().map(|b| &b.value));
-            out.push(body);
+        ExprKind::Local(local) => {
+            out.extend(local.bindings.iter().map(|b| &b.value));
+            out.push(&local.body);
         }
         ExprKind::Name(_)
         | ExprKind::Qualified(_)
@@ -138,17 +138,21 @@ fn dismantle(kind: DeclKind) {
             match std::mem::replace(&mut expr.kind, ExprKind::Error) {
                 ExprKind::Field(access) => exprs.push(access.target),
                 ExprKind::Vector(items) => exprs.extend(items.into_vec()),
-                ExprKind::Call { args, .. } => {
-                    exprs.extend(args.into_vec().into_iter().map(|a| a.value))
+                ExprKind::Call(call) => {
+                    exprs.extend(call.args.into_vec().into_iter().map(|a| a.value))
                 }
-                ExprKind::Binary { lhs, rhs, .. } => exprs.extend([*lhs, *rhs]),
+                ExprKind::Binary(binary) => {
+                    let BinaryExpr { lhs, rhs, .. } = *binary;
+                    exprs.extend([lhs, rhs])
+                }
                 ExprKind::Neg(inner) | ExprKind::Prime(inner) => exprs.push(*inner),
                 ExprKind::Construct(c) => {
                     exprs.extend(c.fields.into_vec().into_iter().map(|f| f.value));
                 }
-                ExprKind::Local { bindings, body } => {
+                ExprKind::Local(local) => {
+                    let LocalExpr { bindings, body } = *local;
                     exprs.extend(bindings.into_vec().into_iter().map(|b| b.value));
-                    exprs.push(*body);
+                    exprs.push(body);
                 }
                 _ => {}
             }

@@ -287,7 +287,9 @@ fn symbolic_and_numeric_back_ends_agree_on_every_example() {
         let topology = lsdc::topology::build(mechanism).expect("a topology");
         let has_rotors = mechanism.joins.iter().any(|join| {
             let link = mechanism.link(join.link);
-            link.rotor.is_declared() || link.mimic.is_declared() || link.friction.is_declared()
+            link.rotor().is_declared()
+                || link.mimic().is_declared()
+                || link.friction().is_declared()
         });
         if !mechanism.contacts.is_empty() || has_rotors {
             // The equations of a mechanism with contacts or geared rotors are refused, not

@@ -15,18 +15,18 @@ mod eval {
         let q1 = Arc::new(SExpr::Coordinate { index: 1, order: 0 });
         let e = arith(
             '*',
-            &Arc::new(SExpr::Call("sin", vec![arith('*', &num(2.0), &q0)])),
+            &Arc::new(SExpr::call("sin", vec![arith('*', &num(2.0), &q0)])),
             &arith('^', &q1, &num(3.0)),
         );
         let e = arith(
             '+',
             &e,
-            &Arc::new(SExpr::Call("atan2", vec![q1.clone(), q0.clone()])),
+            &Arc::new(SExpr::call("atan2", vec![q1.clone(), q0.clone()])),
         );
         arith(
             '/',
             &e,
-            &Arc::new(SExpr::Call("sqrt", vec![arith('+', &q0, &num(4.0))])),
+            &Arc::new(SExpr::call("sqrt", vec![arith('+', &q0, &num(4.0))])),
         )
     }
 
@@ -41,12 +41,20 @@ mod eval {
         chain.value(&scratch, 0)
     }
 
+    /// An elaborated mechanism holds several scalar nodes per body (BENCHMARKS.md, "Toward
+    /// 2 KiB per body"): a node and its `Arc` counts take a 48-byte block of glibc's malloc
+    /// while the node is 24 bytes.
+    #[test]
+    fn a_scalar_node_takes_24_bytes() {
+        assert_eq!(std::mem::size_of::<SExpr>(), 24);
+    }
+
     #[test]
     fn constants_fold_and_evaluate() {
         let unknowns = UnknownValues::new();
         let e = arith('+', &num(2.0), &arith('*', &num(3.0), &num(0.5)));
         assert_eq!(eval(&e, &unknowns), Ok(3.5));
-        let log = Arc::new(SExpr::Call("log", vec![num(0.0)]));
+        let log = Arc::new(SExpr::call("log", vec![num(0.0)]));
         assert_eq!(eval(&log, &unknowns), Ok(f64::NEG_INFINITY));
         let q0 = Arc::new(SExpr::Coordinate { index: 0, order: 0 });
         assert!(eval(&q0, &unknowns).is_err());

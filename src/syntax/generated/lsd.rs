@@ -1,6 +1,6 @@
-// grammar stamp: 32a99b7410f2efb9 (tools/parser-generator writes this file; do not edit)
+// grammar stamp: e66cc03a8a531277 (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: 5424144b9d161de64d3e23387a3bff1952a5eb84c5f8d1ce6a374aa9154ca3b5
+// sha3: ae53bd9c32783c115949618a333c4eb0951ff1a464bc0873fb81adf6532628fe
 // features: 
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
@@ -55,7 +55,7 @@ mod __parse__Program {
         Variant21(Option<Arg>),
         Variant22(Binding),
         Variant23(Vec<Binding>),
-        Variant24(Box<Callee>),
+        Variant24(Callee),
         Variant25(Vec<Arg>),
         Variant26(Vec<Expr>),
         Variant27(Vec<FieldInit>),
@@ -2936,17 +2936,6 @@ mod __parse__Program {
             _ => __symbol_type_mismatch()
         }
     }
-    fn __pop_Variant24<
-      'input,
-    >(
-        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
-    ) -> (usize, Box<Callee>, usize)
-     {
-        match __symbols.pop() {
-            Some((__l, __Symbol::Variant24(__v), __r)) => (__l, __v, __r),
-            _ => __symbol_type_mismatch()
-        }
-    }
     fn __pop_Variant13<
       'input,
     >(
@@ -2966,6 +2955,17 @@ mod __parse__Program {
      {
         match __symbols.pop() {
             Some((__l, __Symbol::Variant16(__v), __r)) => (__l, __v, __r),
+            _ => __symbol_type_mismatch()
+        }
+    }
+    fn __pop_Variant24<
+      'input,
+    >(
+        __symbols: &mut alloc::vec::Vec<(usize,__Symbol<'input>,usize)>
+    ) -> (usize, Callee, usize)
+     {
+        match __symbols.pop() {
+            Some((__l, __Symbol::Variant24(__v), __r)) => (__l, __v, __r),
             _ => __symbol_type_mismatch()
         }
     }
@@ -8001,13 +8001,13 @@ fn __action64<
     file: FileId,
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
-    (_, callee, _): (usize, Box<Callee>, usize),
+    (_, callee, _): (usize, Callee, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, args, _): (usize, Vec<Arg>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Call { callee, args: args.into_boxed_slice() }
+    ExprKind::Call(Box::new(CallExpr { callee, args: args.into_boxed_slice() }))
 }
 
 #[allow(unused_variables)]
@@ -8063,7 +8063,7 @@ fn __action67<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Local { bindings: bindings.into_boxed_slice(), body: Box::new(body) }
+    ExprKind::Local(Box::new(LocalExpr { bindings: bindings.into_boxed_slice(), body }))
 }
 
 #[allow(unused_variables)]
@@ -8093,9 +8093,9 @@ fn __action69<
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
-) -> Box<Callee>
+) -> Callee
 {
-    Box::new(Callee::Name(__0))
+    Callee::Name(__0)
 }
 
 #[allow(unused_variables)]
@@ -8110,9 +8110,9 @@ fn __action70<
     (_, package, _): (usize, Ident, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
-) -> Box<Callee>
+) -> Callee
 {
-    Box::new(Callee::Qualified(QualifiedName { package, index: None, name }))
+    Callee::Qualified(Box::new(QualifiedName { package, index: None, name }))
 }
 
 #[allow(unused_variables)]
@@ -8130,9 +8130,9 @@ fn __action71<
     (_, _, _): (usize, Tok<'input>, usize),
     (_, _, _): (usize, Tok<'input>, usize),
     (_, name, _): (usize, Ident, usize),
-) -> Box<Callee>
+) -> Callee
 {
-    Box::new(Callee::Qualified(QualifiedName { package, index: Some(index), name }))
+    Callee::Qualified(Box::new(QualifiedName { package, index: Some(index), name }))
 }
 
 #[allow(unused_variables)]
@@ -8145,9 +8145,9 @@ fn __action72<
     errors: &'err mut Vec<ErrorRecovery<usize, Tok<'input>, LexError>>,
     names: &'err mut Names,
     (_, __0, _): (usize, Ident, usize),
-) -> Box<Callee>
+) -> Callee
 {
-    Box::new(Callee::Unknown(__0))
+    Callee::Unknown(__0)
 }
 
 #[allow(unused_variables)]
