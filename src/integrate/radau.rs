@@ -211,8 +211,9 @@ pub(super) struct Radau5 {
     transformed_derivatives: [Vec<f64>; 3],
     real_rhs: DVector<f64>,
     complex_rhs: DVector<Complex<f64>>,
-    /// The quintic through the last three step ends, and the components it serves.
-    dense: Hermite,
+    /// The quintic through the last three step ends, and the components it serves (boxed, so
+    /// that the implicit integrator's two stiff methods take about the same room).
+    dense: Box<Hermite>,
 }
 
 impl Radau5 {
@@ -244,7 +245,7 @@ impl Radau5 {
             transformed_derivatives: triple(),
             real_rhs: DVector::zeros(dimension),
             complex_rhs: DVector::zeros(dimension),
-            dense: Hermite::new(dimension),
+            dense: Box::new(Hermite::new(dimension)),
         }
     }
 
@@ -595,8 +596,8 @@ impl AdaptiveStepper for Radau5 {
         if error > 1.0 && (self.first || after_rejection) {
             // Hairer and Wanner's second estimate, which damps the stiff components' part of
             // the first (too pessimistic on them) by one more solve.
-            for i in 0..y.len() {
-                self.stage_state[i] = y[i] + self.real_rhs[i];
+            for ((state, y), e) in self.stage_state.iter_mut().zip(y).zip(&self.real_rhs) {
+                *state = y + e;
             }
             let mut f = std::mem::take(&mut self.end_derivative);
             let evaluated = eval.rhs(t, &self.stage_state, &mut f);
