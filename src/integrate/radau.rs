@@ -25,7 +25,7 @@ use super::jacobian::leading_columns;
 use super::settings::Settings;
 use hermite::Hermite;
 
-mod hermite;
+pub mod hermite;
 
 const SQRT6: f64 = 2.449_489_742_783_178;
 /// The nodes c_i.

@@ -90,9 +90,7 @@ impl Hermite {
     pub(super) fn evaluate(&self, t: f64, out: &mut [f64]) {
         for ((out, d), smooth) in out.iter_mut().zip(&self.differences).zip(&self.smooth) {
             if *smooth {
-                *out = (0..5)
-                    .rev()
-                    .fold(d[5], |p, k| d[k] + (t - self.nodes[k]) * p);
+                *out = newton_form(d, &self.nodes, t);
             }
         }
     }
@@ -100,7 +98,7 @@ impl Hermite {
 
 /// The divided differences f[z₀], f[z₀, z₁], …, f[z₀, …, z₅] over the nodes t₀, t₀, t₁, t₁,
 /// t₂, t₂ (each twice: value and slope) of the values and slopes at t₀, t₁, t₂.
-fn divided_differences(nodes: &[f64; 6], values: [f64; 3], slopes: [f64; 3]) -> [f64; 6] {
+pub fn divided_differences(nodes: &[f64; 6], values: [f64; 3], slopes: [f64; 3]) -> [f64; 6] {
     let mut d = [
         values[0], values[0], values[1], values[1], values[2], values[2],
     ];
@@ -116,24 +114,7 @@ fn divided_differences(nodes: &[f64; 6], values: [f64; 3], slopes: [f64; 3]) -> 
     d
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_quintic_reproduces_a_quintic() {
-        let p = |t: f64| 1.0 - 2.0 * t + 0.5 * t.powi(3) - 3.0 * t.powi(4) + 0.7 * t.powi(5);
-        let dp = |t: f64| -2.0 + 1.5 * t * t - 12.0 * t.powi(3) + 3.5 * t.powi(4);
-        let times = [0.1, 0.35, 0.5];
-        let nodes = [times[0], times[0], times[1], times[1], times[2], times[2]];
-        let d = divided_differences(&nodes, times.map(p), times.map(dp));
-        for t in [0.0, 0.2, 0.4, 0.45, 0.6] {
-            let value = (0..5).rev().fold(d[5], |q, k| d[k] + (t - nodes[k]) * q);
-            assert!(
-                (value - p(t)).abs() < 1e-12,
-                "{t}: {value} against {}",
-                p(t)
-            );
-        }
-    }
+/// The polynomial of divided differences `d` over `nodes` (Newton's form) at `t`.
+pub fn newton_form(d: &[f64; 6], nodes: &[f64; 6], t: f64) -> f64 {
+    (0..5).rev().fold(d[5], |p, k| d[k] + (t - nodes[k]) * p)
 }
