@@ -96,7 +96,7 @@ impl Hermite {
     }
 }
 
-/// The divided differences f[z₀], f[z₀, z₁], …, f[z₀, …, z₅] over the nodes t₀, t₀, t₁, t₁,
+/// The divided differences `f[z₀]`, `f[z₀, z₁]`, …, `f[z₀, …, z₅]` over the nodes t₀, t₀, t₁, t₁,
 /// t₂, t₂ (each twice: value and slope) of the values and slopes at t₀, t₁, t₂.
 pub fn divided_differences(nodes: &[f64; 6], values: [f64; 3], slopes: [f64; 3]) -> [f64; 6] {
     let mut d = [
