@@ -12,8 +12,9 @@
 //! stage order 1 lowers it (`BENCHMARKS.md`).
 //!
 //! The error estimate is RADAU5's (γ/h − J)⁻¹ (f(t, y) + Σ e_i Z_i / h), of order 3, which
-//! damps the stiff components; dense output is the collocation polynomial of degree 3, which
-//! also gives the next step's first guess of Z.
+//! damps the stiff components. The collocation polynomial of degree 3 gives the next step's
+//! first guess of Z, and the dense output of the stiff components; the others' dense output
+//! is the quintic through the last three step ends (`radau/hermite.rs`).
 
 use nalgebra::{Complex, DMatrix, DVector, Dyn, LU};
 
@@ -22,6 +23,9 @@ use super::driver::AdaptiveStepper;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::jacobian::leading_columns;
 use super::settings::Settings;
+use hermite::Hermite;
+
+pub mod hermite;
 
 const SQRT6: f64 = 2.449_489_742_783_178;
 /// The nodes c_i.
@@ -96,11 +100,12 @@ pub fn complex_eigenvalue() -> Complex<f64> {
 /// Newton iterations per attempt before it counts as failed (RADAU5's default).
 const NEWTON_ITERATIONS: usize = 7;
 /// The rate of convergence θ of the last step's iteration above which the Jacobian is formed
-/// again at the next step: RADAU5's default for small systems. With 0.1 (its advice where the
-/// Jacobian is costly) the governor at 3e-10 formed 297 Jacobians and took 4,008 iterations;
-/// with 0.001, 670 and 2,910, 10 % less time (a Jacobian there costs about six right-hand
-/// sides, an iteration three).
-const JACOBIAN_RATE: f64 = 0.001;
+/// again at the next step. Measured on the governor at 3e-10 (instructions of the whole run,
+/// Newton iterations, Jacobians): 0.001 (RADAU5's default for small systems) 245 M, 2,511,
+/// 670; 0.01 231 M, 2,606, 483; 0.04 224 M, 3,020, 215; 0.1 (its advice where the Jacobian
+/// is costly) 242 M, 3,597, 98. A Jacobian there costs about six right-hand sides, an
+/// iteration three.
+const JACOBIAN_RATE: f64 = 0.04;
 /// The error an attempt reports when its iteration did not converge: the controller then
 /// retries with 0.7 of the step (0.9 · 2.73^(-1/4)).
 const NEWTON_FAILED: f64 = 2.73;
@@ -132,6 +137,27 @@ struct Collocation {
 }
 
 impl Collocation {
+    fn new(dimension: usize) -> Self {
+        Collocation {
+            t: 0.0,
+            h: 0.0,
+            y: vec![0.0; dimension],
+            coefficients: std::array::from_fn(|_| vec![0.0; dimension]),
+        }
+    }
+
+    /// The polynomial of the step of size `h` from (t, y) whose stage increments are `z`.
+    fn fill(&mut self, t: f64, y: &[f64], h: f64, z: &[Vec<f64>; 3]) {
+        self.t = t;
+        self.h = h;
+        self.y.copy_from_slice(y);
+        for (k, coefficients) in self.coefficients.iter_mut().enumerate() {
+            for (i, c) in coefficients.iter_mut().enumerate() {
+                *c = DENSE[0][k] * z[0][i] + DENSE[1][k] * z[1][i] + DENSE[2][k] * z[2][i];
+            }
+        }
+    }
+
     fn evaluate(&self, t: f64, out: &mut [f64]) {
         let x = (t - self.t) / self.h;
         let [c1, c2, c3] = &self.coefficients;
@@ -178,6 +204,16 @@ pub(super) struct Radau5 {
     first: bool,
     stage_state: Vec<f64>,
     stage_derivatives: [Vec<f64>; 3],
+    /// The iteration's work space, allocated once: the increments transformed by T⁻¹ (W), the
+    /// stage derivatives transformed likewise, and the right-hand sides of the real and the
+    /// complex system (also the error estimate's).
+    transformed: [Vec<f64>; 3],
+    transformed_derivatives: [Vec<f64>; 3],
+    real_rhs: DVector<f64>,
+    complex_rhs: DVector<Complex<f64>>,
+    /// The quintic through the last three step ends, and the components it serves (boxed, so
+    /// that the implicit integrator's two stiff methods take about the same room).
+    dense: Box<Hermite>,
 }
 
 impl Radau5 {
@@ -205,6 +241,11 @@ impl Radau5 {
             first: true,
             stage_state: zeros.clone(),
             stage_derivatives: triple(),
+            transformed: triple(),
+            transformed_derivatives: triple(),
+            real_rhs: DVector::zeros(dimension),
+            complex_rhs: DVector::zeros(dimension),
+            dense: Box::new(Hermite::new(dimension)),
         }
     }
 
@@ -220,6 +261,7 @@ impl Radau5 {
         self.stale = true;
         self.fresh = false;
         self.collocation = None;
+        self.dense.forget();
     }
 
     /// Whether the spectral radius of the Jacobian last formed is below `limit` (`false` before
@@ -296,82 +338,135 @@ impl Radau5 {
         }
     }
 
-    /// The scaled root-mean-square of the controlled components of the three vectors.
-    fn scaled_norm(&self, vectors: [&[f64]; 3], y: &[f64]) -> f64 {
+    /// The scaled root-mean-square of the controlled components of the correction, the real
+    /// system's solution and the real and imaginary parts of the complex one's.
+    fn correction_size(&self, y: &[f64]) -> f64 {
         let m = self.controlled;
-        let sum: f64 = vectors
-            .iter()
-            .flat_map(|v| (0..m).map(move |i| (i, v[i])))
-            .map(|(i, value)| (value / (self.atol + self.rtol * y[i].abs())).powi(2))
+        let sum: f64 = (0..m)
+            .map(|i| {
+                let (real, complex) = (self.real_rhs[i], self.complex_rhs[i]);
+                let squares = real * real + complex.re * complex.re + complex.im * complex.im;
+                squares / (self.atol + self.rtol * y[i].abs()).powi(2)
+            })
             .sum();
         (sum / (3 * m).max(1) as f64).sqrt()
     }
 
     /// Solves the collocation equations from the guess in `increments`.
     fn iterate(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64) -> Result<Newton, Halt> {
-        let n = y.len();
         let factors = self.factors.take().expect("factored before iterating");
-        let mut w = transform(&TRANSFORM_INVERSE, &self.increments);
+        let outcome = self.iterate_with(&factors, eval, t, y, h);
+        self.factors = Some(factors);
+        outcome
+    }
+
+    fn iterate_with(
+        &mut self,
+        factors: &Factors,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> Result<Newton, Halt> {
+        transform_into(&TRANSFORM_INVERSE, &self.increments, &mut self.transformed);
         let mut contraction = self.contraction.max(f64::EPSILON).powf(0.8);
         let mut previous: Option<f64> = None;
-        let gamma = real_eigenvalue() / h;
-        let sigma = complex_eigenvalue() / h;
-        let mut outcome = Newton::Failed;
+        // The last ratio of successive corrections' sizes.
+        let mut last_ratio = 0.0;
         for iteration in 0..NEWTON_ITERATIONS {
-            for (stage, node) in NODES.iter().enumerate() {
-                for ((state, y), z) in self
-                    .stage_state
-                    .iter_mut()
-                    .zip(y)
-                    .zip(&self.increments[stage])
-                {
-                    *state = y + z;
-                }
-                let derivative = &mut self.stage_derivatives[stage];
-                if let Err(halt) = eval.rhs(t + node * h, &self.stage_state, derivative) {
-                    self.factors = Some(factors);
-                    return Err(halt);
-                }
-            }
-            let f = transform(&TRANSFORM_INVERSE, &self.stage_derivatives);
-            let mut real = DVector::from_fn(n, |i, _| f[0][i] - gamma * w[0][i]);
-            let mut complex = DVector::from_fn(n, |i, _| {
-                Complex::new(f[1][i], f[2][i]) - sigma * Complex::new(w[1][i], w[2][i])
-            });
-            factors.real.solve_mut(&mut real);
-            factors.complex.solve_mut(&mut complex);
-            let re: Vec<f64> = complex.iter().map(|c| c.re).collect();
-            let im: Vec<f64> = complex.iter().map(|c| c.im).collect();
-            let size = self.scaled_norm([real.as_slice(), &re, &im], y);
+            self.stage_derivatives_at(eval, t, y, h)?;
+            self.solve_correction(factors, h);
+            let size = self.correction_size(y);
             if let Some(before) = previous {
-                let theta = size / before;
+                // The rate θ: from the third iteration on the geometric mean of the last two
+                // ratios, as RADAU5 takes it. The ratios alternate (on the governor 0.11,
+                // 0.006, 0.09, 0.01 with a fresh Jacobian, the complex pair's and the real
+                // eigenvalue's parts converging unevenly), and the last one alone
+                // overstates or understates what is left.
+                let ratio = size / before;
+                let theta = match iteration {
+                    1 => ratio,
+                    _ => (ratio * last_ratio).sqrt(),
+                };
+                last_ratio = ratio;
                 self.rate = theta;
                 if theta >= 0.99 {
-                    break;
+                    return Ok(Newton::Failed);
                 }
                 contraction = theta / (1.0 - theta);
                 if iteration >= 2 && self.hopeless(size, theta, iteration) {
-                    break;
+                    return Ok(Newton::Failed);
                 }
             }
-            for i in 0..n {
-                w[0][i] += real[i];
-                w[1][i] += re[i];
-                w[2][i] += im[i];
-            }
-            self.increments = transform(&TRANSFORM, &w);
+            self.apply_correction();
             if !self.increments.iter().all(|z| all_finite(z)) {
-                break;
+                return Ok(Newton::Failed);
             }
             if contraction * size <= self.newton_tolerance {
                 self.contraction = contraction;
-                outcome = Newton::Converged;
-                break;
+                return Ok(Newton::Converged);
             }
             previous = Some(size);
         }
-        self.factors = Some(factors);
-        Ok(outcome)
+        Ok(Newton::Failed)
+    }
+
+    /// f at the three stages y + Z_i, into `stage_derivatives`.
+    fn stage_derivatives_at(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> Result<(), Halt> {
+        for (stage, node) in NODES.iter().enumerate() {
+            for ((state, y), z) in self
+                .stage_state
+                .iter_mut()
+                .zip(y)
+                .zip(&self.increments[stage])
+            {
+                *state = y + z;
+            }
+            eval.rhs(
+                t + node * h,
+                &self.stage_state,
+                &mut self.stage_derivatives[stage],
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The Newton correction of W: the real system's solution into `real_rhs`, the complex
+    /// one's into `complex_rhs`.
+    fn solve_correction(&mut self, factors: &Factors, h: f64) {
+        transform_into(
+            &TRANSFORM_INVERSE,
+            &self.stage_derivatives,
+            &mut self.transformed_derivatives,
+        );
+        let gamma = real_eigenvalue() / h;
+        let sigma = complex_eigenvalue() / h;
+        let [f0, f1, f2] = &self.transformed_derivatives;
+        let [w0, w1, w2] = &self.transformed;
+        for i in 0..f0.len() {
+            self.real_rhs[i] = f0[i] - gamma * w0[i];
+            self.complex_rhs[i] = Complex::new(f1[i], f2[i]) - sigma * Complex::new(w1[i], w2[i]);
+        }
+        factors.real.solve_mut(&mut self.real_rhs);
+        factors.complex.solve_mut(&mut self.complex_rhs);
+    }
+
+    /// W plus the correction, and Z = T W.
+    fn apply_correction(&mut self) {
+        let [w0, w1, w2] = &mut self.transformed;
+        for i in 0..w0.len() {
+            let complex = self.complex_rhs[i];
+            w0[i] += self.real_rhs[i];
+            w1[i] += complex.re;
+            w2[i] += complex.im;
+        }
+        transform_into(&TRANSFORM, &self.transformed, &mut self.increments);
     }
 
     /// Whether the iteration, at its correction `size` after `iteration` iterations and rate
@@ -386,20 +481,29 @@ impl Radau5 {
         theta / (1.0 - theta) * size * theta.powi(remaining) > self.newton_tolerance
     }
 
-    /// The error estimate (γ/h − J)⁻¹ (f₀ + Σ e_i Z_i / h), f₀ = f(t, y) or, for a second
-    /// estimate after a rejection, f at y plus the first estimate.
-    fn error_estimate(&self, h: f64, f0: &[f64]) -> DVector<f64> {
-        let n = f0.len();
-        let mut error = DVector::from_fn(n, |i, _| {
-            f0[i]
-                + (0..3)
-                    .map(|s| ERROR_WEIGHTS[s] * self.increments[s][i])
-                    .sum::<f64>()
-                    / h
-        });
+    /// The error estimate (γ/h − J)⁻¹ (f₀ + Σ e_i Z_i / h) into `real_rhs`, f₀ = f(t, y) or,
+    /// for a second estimate after a rejection, f at y plus the first estimate.
+    fn error_estimate(&mut self, h: f64, f0: &[f64]) {
+        let [z0, z1, z2] = &self.increments;
+        for (i, f0) in f0.iter().enumerate() {
+            let weighted =
+                ERROR_WEIGHTS[0] * z0[i] + ERROR_WEIGHTS[1] * z1[i] + ERROR_WEIGHTS[2] * z2[i];
+            self.real_rhs[i] = f0 + weighted / h;
+        }
         let factors = self.factors.as_ref().expect("factored before estimating");
-        factors.real.solve_mut(&mut error);
-        error
+        factors.real.solve_mut(&mut self.real_rhs);
+    }
+
+    /// The error norm of the estimate in `real_rhs`, over the controlled components.
+    fn estimate_norm(&self, y: &[f64], y_new: &[f64]) -> f64 {
+        let m = self.controlled;
+        error_norm(
+            &self.real_rhs.as_slice()[..m],
+            &y[..m],
+            &y_new[..m],
+            self.rtol,
+            self.atol,
+        )
     }
 
     /// Attempts the step with the Jacobian as it is.
@@ -418,13 +522,13 @@ impl Radau5 {
     }
 }
 
-/// Σ_j m[i][j] v_j for i = 0, 1, 2.
-fn transform(m: &[[f64; 3]; 3], v: &[Vec<f64>; 3]) -> [Vec<f64>; 3] {
-    std::array::from_fn(|i| {
-        (0..v[0].len())
-            .map(|k| m[i][0] * v[0][k] + m[i][1] * v[1][k] + m[i][2] * v[2][k])
-            .collect()
-    })
+/// out_i = Σ_j m[i][j] v_j for i = 0, 1, 2.
+fn transform_into(m: &[[f64; 3]; 3], v: &[Vec<f64>; 3], out: &mut [Vec<f64>; 3]) {
+    for (row, out) in m.iter().zip(out.iter_mut()) {
+        for (k, out) in out.iter_mut().enumerate() {
+            *out = row[0] * v[0][k] + row[1] * v[1][k] + row[2] * v[2][k];
+        }
+    }
 }
 
 impl AdaptiveStepper for Radau5 {
@@ -485,29 +589,21 @@ impl AdaptiveStepper for Radau5 {
         for i in 0..y.len() {
             y_new[i] = y[i] + self.increments[2][i];
         }
-        let m = self.controlled;
-        let norm = |e: &DVector<f64>| {
-            error_norm(
-                &e.as_slice()[..m],
-                &y[..m],
-                &y_new[..m],
-                self.rtol,
-                self.atol,
-            )
-        };
-        let mut estimate = self.error_estimate(h, &self.derivative);
-        let mut error = norm(&estimate);
+        let derivative = std::mem::take(&mut self.derivative);
+        self.error_estimate(h, &derivative);
+        self.derivative = derivative;
+        let mut error = self.estimate_norm(y, y_new);
         if error > 1.0 && (self.first || after_rejection) {
             // Hairer and Wanner's second estimate, which damps the stiff components' part of
             // the first (too pessimistic on them) by one more solve.
-            for i in 0..y.len() {
-                self.stage_state[i] = y[i] + estimate[i];
+            for ((state, y), e) in self.stage_state.iter_mut().zip(y).zip(&self.real_rhs) {
+                *state = y + e;
             }
             let mut f = std::mem::take(&mut self.end_derivative);
             let evaluated = eval.rhs(t, &self.stage_state, &mut f);
             if evaluated.is_ok() {
-                estimate = self.error_estimate(h, &f);
-                error = norm(&estimate);
+                self.error_estimate(h, &f);
+                error = self.estimate_norm(y, y_new);
             }
             self.end_derivative = f;
             evaluated?;
@@ -519,18 +615,19 @@ impl AdaptiveStepper for Radau5 {
         Ok(error)
     }
 
-    fn accept(&mut self, t: f64, y: &[f64], h: f64, _y_new: &[f64]) {
-        let coefficients = std::array::from_fn(|k| {
-            (0..y.len())
-                .map(|i| (0..3).map(|s| self.increments[s][i] * DENSE[s][k]).sum())
-                .collect()
-        });
-        self.collocation = Some(Collocation {
-            t,
-            h,
-            y: y.to_vec(),
-            coefficients,
-        });
+    fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
+        let mut collocation = self
+            .collocation
+            .take()
+            .unwrap_or_else(|| Collocation::new(y.len()));
+        collocation.fill(t, y, h, &self.increments);
+        let jacobian = self.jacobian.as_ref().expect("formed before a step");
+        self.dense.add_step(
+            jacobian,
+            (t, y, &self.derivative),
+            (h, y_new, &self.end_derivative),
+        );
+        self.collocation = Some(collocation);
         std::mem::swap(&mut self.derivative, &mut self.end_derivative);
         self.stale = self.rate > JACOBIAN_RATE;
         self.newton_limit *= NEWTON_LIMIT_GROWTH;
@@ -543,6 +640,7 @@ impl AdaptiveStepper for Radau5 {
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         if let Some(collocation) = &self.collocation {
             collocation.evaluate(t, out);
+            self.dense.evaluate(t, out);
         }
     }
 }

@@ -140,6 +140,24 @@ mod radau {
     }
 
     #[test]
+    fn the_dense_outputs_quintic_reproduces_a_quintic() {
+        use lsdc::integrate::radau::hermite::{divided_differences, newton_form};
+        let p = |t: f64| 1.0 - 2.0 * t + 0.5 * t.powi(3) - 3.0 * t.powi(4) + 0.7 * t.powi(5);
+        let dp = |t: f64| -2.0 + 1.5 * t * t - 12.0 * t.powi(3) + 3.5 * t.powi(4);
+        let times = [0.1, 0.35, 0.5];
+        let nodes = [times[0], times[0], times[1], times[1], times[2], times[2]];
+        let d = divided_differences(&nodes, times.map(p), times.map(dp));
+        for t in [0.0, 0.2, 0.4, 0.45, 0.6] {
+            let value = newton_form(&d, &nodes, t);
+            assert!(
+                (value - p(t)).abs() < 1e-12,
+                "{t}: {value} against {}",
+                p(t)
+            );
+        }
+    }
+
+    #[test]
     fn the_inverse_transform_inverts_the_transform() {
         let product = matrix(&TRANSFORM_INVERSE) * matrix(&TRANSFORM);
         assert!(
