@@ -50,8 +50,8 @@ impl Method {
 impl fmt::Display for Setting {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Setting::Tolerance(t) => write!(f, "tol {t:.0e}"),
-            Setting::Step(h) => write!(f, "step {h:.0e}"),
+            Setting::Tolerance(t) => write!(f, "tol {t:e}"),
+            Setting::Step(h) => write!(f, "step {h:e}"),
         }
     }
 }
