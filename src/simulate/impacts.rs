@@ -1,12 +1,9 @@
 //! The stops of a mechanism during a run: their event functions (the distance of each stopped
 //! coordinate to its bound), and the impact where one is reached, recorded for the report.
 
-use nalgebra::DVector;
-
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::energy::kinetic_energy;
-use crate::dynamics::friction::Phase;
 use crate::dynamics::mimics;
 use crate::dynamics::stops::{impact_velocities, Impact, Side};
 
@@ -51,38 +48,6 @@ impl MechanicalSystem<'_> {
             }
             false => self.impact(t, y, index),
         }
-    }
-
-    /// `hold_resting` in a mechanism with loops: the coordinates at rest, on their stops or stuck
-    /// by their friction, and the mimic couplings (see `system::couplings`): adds to the
-    /// accelerations `a` (at q) the response P Eᵀ λ to the forces λ that keep the held rows E's
-    /// accelerations zero, and records λ.
-    pub(super) fn hold_with_loops(
-        &mut self,
-        q: &[f64],
-        a: &mut DVector<f64>,
-    ) -> Result<(), SystemError> {
-        let model = self.model;
-        let (rows, couplings) = self.held_rows();
-        if rows.nrows() == 0 {
-            return Ok(());
-        }
-        let (change, forces) = self.held_change(q, &rows, &(&rows * &*a))?;
-        *a += change;
-        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
-        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
-        let mut forces = forces.iter().skip(couplings);
-        for (k, force) in stops.zip(forces.by_ref()) {
-            // A lower stop pushes the coordinate up, an upper one down.
-            self.contact[k] = match model.stops[k].side {
-                Side::Lower => *force,
-                Side::Upper => -*force,
-            };
-        }
-        for (k, force) in frictions.zip(forces) {
-            self.holding[k] = *force;
-        }
-        Ok(())
     }
 
     /// The impact on stop `index` at time t: the velocities of y jump so that the stopped

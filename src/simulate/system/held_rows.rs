@@ -40,6 +40,9 @@ impl HoldScratch {
         if self.responses.shape() != (n, s) {
             self.responses = DMatrix::zeros(n, s);
             self.coupling = DMatrix::zeros(s, s);
+        }
+        // The forces are also replaced whole by the paths that allocate (a velocity held twice).
+        if self.forces.len() != s {
             self.forces = DVector::zeros(s);
         }
     }

@@ -2,16 +2,16 @@
 //! friction: each adds the row eₖᵀ a = 0 to the equations of motion, with a force μₖ along the
 //! coordinate found with the accelerations. On a tree, the forces solve
 //! (E P Eᵀ) μ = −E a with P the response to generalised forces (M⁻¹, or with the mimic
-//! couplings kept); in a mechanism with closed loops or contacts, the held rows join the
-//! constraint rows in their saddle-point system (`stops::held_accelerations`).
+//! couplings kept), and so they do with closed loops, P being the response along the loops'
+//! allowed motions; with contacts, the held rows join the contacts' rows in their saddle-point
+//! system (`stops::held_accelerations`).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use super::{MechanicalSystem, SystemError};
-use crate::dynamics::algorithms::{crba, crba_into};
+use crate::dynamics::algorithms::crba_into;
 use crate::dynamics::dense::solve_in_place;
 use crate::dynamics::friction::Phase;
-use crate::dynamics::mimics;
 use crate::dynamics::stops::Side;
 
 impl MechanicalSystem<'_> {
@@ -25,7 +25,10 @@ impl MechanicalSystem<'_> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         if model.has_loops() {
-            return self.hold_with_loops(q, a);
+            // The mimic couplings are held rows there too, held even when nothing rests.
+            self.hold_on_response(q, a)?;
+            self.record_holding();
+            return Ok(());
         }
         let mut rows = std::mem::take(&mut self.hold.rows);
         rows.clear();
@@ -36,9 +39,7 @@ impl MechanicalSystem<'_> {
         let held = match rows.is_empty() {
             true => Ok(()),
             false if model.has_contacts() => self.hold_with_constraints(&rows, a),
-            false if !model.mimics.is_empty() || has_repeats(&rows) => {
-                self.hold_coupled(q, &rows, a)
-            }
+            false if !model.mimics.is_empty() || has_repeats(&rows) => self.hold_on_response(q, a),
             false => self.hold_on_tree(q, &rows, a),
         };
         let count = rows.len();
@@ -92,30 +93,23 @@ impl MechanicalSystem<'_> {
         Ok(())
     }
 
-    /// `hold_resting` on a tree with mimic couplings (P = S (Sᵀ M S)⁻¹ Sᵀ, `mimics::solve`), or
-    /// with a velocity held twice (a stop and a friction on one coordinate): the forces by a
-    /// rank-revealing solve, since a follower held with its leader gives two rows for one
-    /// coupled motion. This path allocates.
-    fn hold_coupled(
-        &mut self,
-        q: &[f64],
-        rows: &[usize],
-        a: &mut DVector<f64>,
-    ) -> Result<(), SystemError> {
-        let model = self.model;
-        let mass = crba(model, &mut self.data, q)?;
-        let mut unit = DMatrix::zeros(model.nv, rows.len());
-        for (column, &row) in rows.iter().enumerate() {
-            unit[(row, column)] = 1.0;
+    /// `hold_resting` through the response P of the accelerations (`held_change`): in a
+    /// mechanism with loops (the loops' allowed motions, with the mimic couplings as rows), or on
+    /// a tree with mimic couplings (P = S (Sᵀ M S)⁻¹ Sᵀ) or a velocity held twice (a stop and a
+    /// friction on one coordinate). The forces come from a rank-revealing solve, since a
+    /// follower held with its leader gives two rows for one coupled motion; the couplings'
+    /// forces are not recorded. This path allocates.
+    fn hold_on_response(&mut self, q: &[f64], a: &mut DVector<f64>) -> Result<(), SystemError> {
+        let (rows, couplings) = self.held_rows();
+        if rows.nrows() == 0 {
+            self.hold.forces = DVector::zeros(0);
+            return Ok(());
         }
-        let responses =
-            mimics::solve(&model.mimics, &mass, &unit).ok_or(SystemError::SingularMassMatrix)?;
-        let coupling = DMatrix::from_fn(rows.len(), rows.len(), |i, j| responses[(rows[i], j)]);
-        let free = DVector::from_fn(rows.len(), |i, _| -a[rows[i]]);
-        let forces = (coupling.svd(true, true).solve(&free, 1e-12))
-            .map_err(|_| SystemError::SingularMassMatrix)?;
-        *a += &responses * &forces;
-        self.hold.forces = forces;
+        let (change, forces) = self.held_change(q, &rows, &(&rows * &*a))?;
+        *a += change;
+        self.hold.forces = forces
+            .rows(couplings, forces.len() - couplings)
+            .clone_owned();
         Ok(())
     }
 
