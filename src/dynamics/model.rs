@@ -922,13 +922,11 @@ pub struct DeclaredState {
     chain: ChainMotion,
 }
 
-/// Joint friction in a mechanism with contacts (E0474): the contacts' equations do not carry
-/// the joints' stick/slip phases.
 /// Stops in a mechanism with both contacts and closed loops (E0450): a resting stop and an
 /// impact are solved with the contacts' rows or with the loops' rows, not yet with both, and
 /// leaving either out would let those constraints open silently.
 fn stops_with_contacts_and_loops(mechanism: &Mechanism, stop: &Stop) -> Diagnostic {
-    let mut error = Diagnostic::error(
+    let error = Diagnostic::error(
         "E0450",
         format!(
             "`{}` has stops in a mechanism with both contacts and closed loops",
@@ -936,14 +934,13 @@ fn stops_with_contacts_and_loops(mechanism: &Mechanism, stop: &Stop) -> Diagnost
         ),
     )
     .help("stops are simulated with contacts or with closed loops, not with both; remove the stops, the contacts or the links that close loops");
-    if let Some(contact) = mechanism.contacts.first() {
-        error = error.primary(contact.span, "a contact of the mechanism");
-    }
-    error
+    at_first_contact(mechanism, error)
 }
 
+/// Joint friction in a mechanism with contacts (E0474): the contacts' equations do not carry
+/// the joints' stick/slip phases.
 fn friction_with_contacts(mechanism: &Mechanism, friction: &Friction) -> Diagnostic {
-    let mut error = Diagnostic::error(
+    let error = Diagnostic::error(
         "E0474",
         format!(
             "`{}` has friction in a mechanism with contacts",
@@ -951,8 +948,13 @@ fn friction_with_contacts(mechanism: &Mechanism, friction: &Friction) -> Diagnos
         ),
     )
     .help("joint friction is simulated in mechanisms without contacts; remove one or the other");
-    if let Some(contact) = mechanism.contacts.first() {
-        error = error.primary(contact.span, "a contact of the mechanism");
+    at_first_contact(mechanism, error)
+}
+
+/// `error` labelled at the mechanism's first contact, the element it cannot be simulated with.
+fn at_first_contact(mechanism: &Mechanism, error: Diagnostic) -> Diagnostic {
+    match mechanism.contacts.first() {
+        Some(contact) => error.primary(contact.span, "a contact of the mechanism"),
+        None => error,
     }
-    error
 }
