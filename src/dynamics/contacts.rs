@@ -23,11 +23,11 @@
 //! d/dt [e·(V_B − V_P)(p)] = (ω_P × e)·w + e·[(A_B − A_P)(p) + (ω_B − ω_P) × ṗ],
 //! ṗ = v_C − r ω_P × n (the contact point moves over both bodies).
 
-use nalgebra::{DMatrix, DVector, DVectorView, DVectorViewMut, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, DVectorView, Matrix3, Vector3};
 
 use super::algorithms::{bias_accelerations, Data};
-use super::dense::{solve_in_place, Factor};
 use super::model::Model;
+use super::response::Response;
 pub use crate::kinematics::contacts::{ContactModel, SLIP_REGULARISATION};
 use crate::spatial::{self, Motion};
 
@@ -201,31 +201,19 @@ pub fn friction_direction(rows: &ContactRows, k: usize) -> [f64; 2] {
 pub const CONTACT_RANK_TOLERANCE: f64 = 1e-10;
 
 /// The independent rows among the contacts' candidate rows (`ContactModel::rows`), in contact
-/// order: a Cholesky factorisation of G M⁻¹ Gᵀ pivoted on its diagonal, whose entries all have
-/// the units of an inverse mass, stops where the largest pivot left falls below
-/// `CONTACT_RANK_TOLERANCE` times the largest diagonal entry. A cylinder rolling in a plane
-/// motion has a tangential row along its axis that is zero at every state: it is left out.
-pub fn independent_rows(model: &Model, mass: &DMatrix<f64>, rows: &ContactRows) -> Vec<usize> {
+/// order, for accelerations that respond to forces through `response` (X, formed at the state:
+/// M⁻¹ on a tree, with the couplings or the loops' allowed motions otherwise): a Cholesky
+/// factorisation of G X Gᵀ pivoted on its diagonal, whose entries all have the units of an
+/// inverse mass, stops where the largest pivot left falls below `CONTACT_RANK_TOLERANCE` times
+/// the largest diagonal entry. A cylinder rolling in a plane motion has a tangential row along
+/// its axis that is zero at every state, and a row the loops already keep is zero on X: they
+/// are left out.
+pub fn independent_rows(model: &Model, response: &mut Response, rows: &ContactRows) -> Vec<usize> {
     let candidates = candidate_rows(model);
-    let Some(cholesky) = mass.clone().cholesky() else {
-        return candidates;
-    };
-    let g = rows.jacobian.select_rows(&candidates);
-    let normal = &g * cholesky.solve(&g.transpose());
-    choose_independent(&candidates, normal)
-}
-
-/// [`independent_rows`] on a mechanism with loops, whose accelerations respond to forces
-/// through `response` (P, `loops::constrained_response`) rather than M⁻¹: a contact row the
-/// loops already keep is left out.
-pub fn independent_rows_on(
-    model: &Model,
-    response: &DMatrix<f64>,
-    rows: &ContactRows,
-) -> Vec<usize> {
-    let candidates = candidate_rows(model);
-    let g = rows.jacobian.select_rows(&candidates);
-    let normal = &g * response * g.transpose();
+    let gt = rows.jacobian.select_rows(&candidates).transpose();
+    let mut moved = gt.clone();
+    response.apply(&gt, &mut moved);
+    let normal = gt.transpose() * moved;
     choose_independent(&candidates, normal)
 }
 
@@ -269,242 +257,41 @@ pub fn holonomic_rows(kept: &[usize]) -> Vec<usize> {
     kept.iter().copied().filter(|r| r % 3 == 2).collect()
 }
 
-/// The solution of the constrained equations of motion at a state.
-#[derive(Clone, Debug)]
-pub struct ContactSolution {
-    pub accelerations: DVector<f64>,
-    /// Per contact, the force on the round body at the contact point along the plane's axes
-    /// (x, y tangential, z normal): the reaction of the plane, friction included.
-    pub forces: Vec<Vector3<f64>>,
-}
-
-/// Why the constrained equations have no solution.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ContactError {
-    /// The mass matrix is not positive definite.
-    SingularMass,
-    /// The kept rows stopped being independent (the contact `row` names).
-    Singular { row: usize },
-}
-
-/// What a solve on some of the contacts' rows forms: G (those rows), the rows H their forces act
-/// along, M⁻¹Hᵀ, G M⁻¹Hᵀ, and the right-hand side (the multipliers once solved), sized once for
-/// the rows.
-#[derive(Clone, Debug)]
-struct RowSystem {
-    rows: Vec<usize>,
-    g: DMatrix<f64>,
-    h: DMatrix<f64>,
-    moved: DMatrix<f64>,
-    coupling: DMatrix<f64>,
-    right: DVector<f64>,
-}
-
-impl RowSystem {
-    fn new(rows: Vec<usize>, velocities: usize) -> RowSystem {
-        let n = rows.len();
-        RowSystem {
-            rows,
-            g: DMatrix::zeros(n, velocities),
-            h: DMatrix::zeros(n, velocities),
-            moved: DMatrix::zeros(velocities, n),
-            coupling: DMatrix::zeros(n, n),
-            right: DVector::zeros(n),
-        }
-    }
-
-    /// G, and H = G (the forces of ideal contacts), from every contact row.
-    fn gather(&mut self, all: &ContactRows) {
-        for (i, &row) in self.rows.iter().enumerate() {
-            self.g.row_mut(i).copy_from(&all.jacobian.row(row));
-        }
-        self.h.copy_from(&self.g);
-    }
-
-    /// M⁻¹Hᵀ and G M⁻¹Hᵀ, `factor` holding M's factorisation; with loops, P Hᵀ and G P Hᵀ
-    /// for their `response` P in place of M⁻¹.
-    fn couple(&mut self, factor: &Factor, response: Option<&DMatrix<f64>>) {
-        match response {
-            Some(response) => self.moved.gemm(1.0, response, &self.h.transpose(), 0.0),
-            None => {
-                self.moved.tr_copy_from(&self.h);
-                factor.solve_mut(&mut self.moved);
-            }
-        }
-        self.coupling.gemm(1.0, &self.g, &self.moved, 0.0);
-    }
-
-    /// The multipliers (G M⁻¹Hᵀ)⁻¹ r of the right-hand side r, left in its place; Err names a
-    /// row that depends on the others.
-    fn multipliers(&mut self) -> Result<(), usize> {
-        solve_in_place(&mut self.coupling, &mut self.right).map_err(|k| self.rows[k])
-    }
-}
-
-/// Everything the contacts' equations and projections use at each evaluation, kept so that
-/// they allocate nothing once the run's rows are chosen (`ContactScratch::keep`): the rows,
-/// the mass matrix (for `crba_after_kinematics` to fill) and its factor, the solves on the
-/// kept rows and on their normal rows, and the last solution.
-#[derive(Clone, Debug)]
-pub struct ContactScratch {
-    pub rows: ContactRows,
-    pub mass: DMatrix<f64>,
-    factor: Factor,
-    kept: RowSystem,
-    normal: RowSystem,
-    /// M⁻¹f, and the assumed sign of each contact's normal force.
-    free: DVector<f64>,
-    pressing: Vec<f64>,
-    pub solution: ContactSolution,
-    /// The step of the velocities that closes the gaps (`gap_step`).
-    pub step: DVector<f64>,
-    /// On a mechanism with loops, the response P of its accelerations to generalised forces
-    /// (`loops::constrained_response`), which the solves and projections use in place of M⁻¹.
-    pub response: Option<DMatrix<f64>>,
-}
-
-impl ContactScratch {
-    /// Scratch for the contacts of `model`, with no row kept yet.
-    pub fn new(model: &Model) -> ContactScratch {
-        let n = model.velocities();
-        ContactScratch {
-            rows: ContactRows::new(model),
-            mass: DMatrix::zeros(n, n),
-            factor: Factor::new(n),
-            kept: RowSystem::new(Vec::new(), n),
-            normal: RowSystem::new(Vec::new(), n),
-            free: DVector::zeros(n),
-            pressing: vec![1.0; model.contacts.len()],
-            solution: ContactSolution {
-                accelerations: DVector::zeros(n),
-                forces: vec![Vector3::zeros(); model.contacts.len()],
-            },
-            step: DVector::zeros(n),
-            response: None,
-        }
-    }
-
-    /// Sizes the solves for the rows `kept` (see `independent_rows`); nothing is done when they
-    /// are the rows already kept.
-    pub fn keep(&mut self, kept: &[usize]) {
-        if self.kept.rows != kept {
-            let n = self.mass.nrows();
-            self.kept = RowSystem::new(kept.to_vec(), n);
-            self.normal = RowSystem::new(holonomic_rows(kept), n);
-        }
-    }
-
-    /// The rows kept.
-    pub fn kept(&self) -> &[usize] {
-        &self.kept.rows
-    }
-
-    /// The kept rows G of the last solve and the rows H their forces act along (G but on a
-    /// sliding contact's normal row, which carries its friction), over the velocities.
-    pub fn kept_system(&self) -> (&DMatrix<f64>, &DMatrix<f64>) {
-        (&self.kept.g, &self.kept.h)
-    }
-
-    /// Factors `mass`: false when it is not positive definite.
-    pub fn factor_mass(&mut self) -> bool {
-        self.factor.factor(&self.mass)
-    }
-}
-
-/// Solves M a = f + Hᵀλ, G a + γ = 0 on the kept rows (see the module's documentation), with
-/// M and the rows in `scratch` and f the efforts less the velocity-product forces; the solution
-/// is left in `scratch.solution`. A sliding contact's friction follows the sign of its normal
-/// force: assumed pressing first, and solved again where it pulls.
-pub fn solve(
+/// Hᵀ for the stacked contact rows `stacked` (the first columns of `directions`, which holds
+/// Gᵀ): a sliding contact's normal row also carries the friction its normal force causes,
+/// −f σ (sₓ Gₓ + s_y G_y), with σ = `pressing` (±1) the normal force's sign.
+pub fn sliding_directions(
     model: &Model,
-    scratch: &mut ContactScratch,
-    free_force: &DVector<f64>,
-) -> Result<(), ContactError> {
-    if !scratch.factor_mass() {
-        return Err(ContactError::SingularMass);
-    }
-    scratch.free.copy_from(free_force);
-    scratch.factor.solve_vector_mut(&mut scratch.free);
-    solve_rows(model, scratch)
-}
-
-/// [`solve`] on a mechanism with loops: `free` the accelerations the loops' solve found without
-/// the contacts, and the contacts' forces acting through the loops' response
-/// (`ContactScratch::response`, which must be set).
-pub fn solve_on_loops(
-    model: &Model,
-    scratch: &mut ContactScratch,
-    free: &DVector<f64>,
-) -> Result<(), ContactError> {
-    scratch.free.copy_from(free);
-    solve_rows(model, scratch)
-}
-
-/// The contacts' multipliers and the accelerations a = a_free + X Hᵀλ from the accelerations
-/// without them in `scratch.free`, X = M⁻¹ (factored) or the loops' response.
-fn solve_rows(model: &Model, scratch: &mut ContactScratch) -> Result<(), ContactError> {
-    let ContactScratch {
-        rows,
-        factor,
-        kept: system,
-        free,
-        pressing,
-        solution,
-        response,
-        ..
-    } = scratch;
-    system.gather(rows);
-    pressing.fill(1.0);
-    for _ in 0..=model.contacts.len() {
-        force_rows(model, rows, system, pressing);
-        system.couple(factor, response.as_ref());
-        for (i, &row) in system.rows.iter().enumerate() {
-            system.right[i] = -rows.bias[row];
-        }
-        system.right.gemv(-1.0, &system.g, free, 1.0);
-        system
-            .multipliers()
-            .map_err(|row| ContactError::Singular { row })?;
-        contact_forces(model, rows, system, &mut solution.forces);
-        if !flip_pulling(model, &solution.forces, pressing) {
-            solution.accelerations.copy_from(free);
-            (solution.accelerations).gemv(1.0, &system.moved, &system.right, 1.0);
-            return Ok(());
-        }
-    }
-    Err(ContactError::Singular {
-        row: system.rows[0],
-    })
-}
-
-/// H: the kept rows, where a sliding contact's normal row also carries the friction its normal
-/// force causes, −f σ (sₓ Gₓ + s_y G_y), with σ = `pressing` (±1) the normal force's sign.
-fn force_rows(model: &Model, rows: &ContactRows, system: &mut RowSystem, pressing: &[f64]) {
-    system.h.copy_from(&system.g);
-    for (i, &row) in system.rows.iter().enumerate() {
+    rows: &ContactRows,
+    stacked: &[usize],
+    directions: &mut DMatrix<f64>,
+    pressing: &[f64],
+) {
+    for (i, &row) in stacked.iter().enumerate() {
         let k = row / 3;
         let Some(friction) = model.contacts[k].friction else {
             continue;
         };
         let [sx, sy] = friction_direction(rows, k);
         let scale = friction * pressing[k];
-        for j in 0..system.h.ncols() {
+        for j in 0..directions.nrows() {
             let tangential = rows.jacobian[(3 * k, j)] * sx + rows.jacobian[(3 * k + 1, j)] * sy;
-            system.h[(i, j)] -= scale * tangential;
+            directions[(j, i)] -= scale * tangential;
         }
     }
 }
 
 /// Each contact's force on its round body, in the plane's axes, from the multipliers of the
-/// kept rows (solved in `system`).
-fn contact_forces(
+/// stacked contact rows `stacked`.
+pub fn contact_forces(
     model: &Model,
     rows: &ContactRows,
-    system: &RowSystem,
+    stacked: &[usize],
+    multipliers: &[f64],
     forces: &mut [Vector3<f64>],
 ) {
     forces.fill(Vector3::zeros());
-    for (&row, &lambda) in system.rows.iter().zip(system.right.iter()) {
+    for (&row, &lambda) in stacked.iter().zip(multipliers) {
         forces[row / 3][row % 3] = lambda;
     }
     for (k, contact) in model.contacts.iter().enumerate() {
@@ -519,7 +306,7 @@ fn contact_forces(
 
 /// Flips the assumed sign of every sliding contact's normal force that came out the other
 /// way; whether any did.
-fn flip_pulling(model: &Model, forces: &[Vector3<f64>], pressing: &mut [f64]) -> bool {
+pub fn flip_pulling(model: &Model, forces: &[Vector3<f64>], pressing: &mut [f64]) -> bool {
     let mut flipped = false;
     for (k, contact) in model.contacts.iter().enumerate() {
         if contact.friction.is_some() && forces[k].z * pressing[k] < 0.0 {
@@ -530,46 +317,10 @@ fn flip_pulling(model: &Model, forces: &[Vector3<f64>], pressing: &mut [f64]) ->
     flipped
 }
 
-/// The smallest change of the velocities in the metric of M that zeroes the kept rows:
-/// v − M⁻¹Gᵀ(G M⁻¹ Gᵀ)⁻¹ G v, with the rows of `scratch` taken at v and its mass matrix
-/// factored (`ContactScratch::factor_mass`), or with loops their response P in place of M⁻¹
-/// (the change then keeps the loops' velocity rows). Nothing moves where the rows are
-/// dependent.
-pub fn project_velocities(scratch: &mut ContactScratch, v: &mut [f64]) {
-    let system = &mut scratch.kept;
-    system.gather(&scratch.rows);
-    system.couple(&scratch.factor, scratch.response.as_ref());
-    for (i, &row) in system.rows.iter().enumerate() {
-        system.right[i] = scratch.rows.velocity[row];
-    }
-    if system.multipliers().is_ok() {
-        let n = v.len();
-        let mut v = DVectorViewMut::from_slice(v, n);
-        v.gemv(-1.0, &system.moved, &system.right, 1.0);
-    }
-}
-
-/// The minimum-M-norm step of the velocities that closes the gaps of the kept normal rows to
-/// first order, −M⁻¹Gₙᵀ(Gₙ M⁻¹ Gₙᵀ)⁻¹ g, into `scratch.step`, with `scratch` as for
-/// `project_velocities`; false where the rows are dependent.
-pub fn gap_step(scratch: &mut ContactScratch) -> bool {
-    let system = &mut scratch.normal;
-    system.gather(&scratch.rows);
-    system.couple(&scratch.factor, scratch.response.as_ref());
-    for (i, &row) in system.rows.iter().enumerate() {
-        system.right[i] = scratch.rows.gap[row / 3];
-    }
-    if system.multipliers().is_err() {
-        return false;
-    }
-    (scratch.step).gemv(-1.0, &system.moved, &system.right, 0.0);
-    true
-}
-
-/// The largest gap of the kept normal rows.
-pub fn largest_gap(scratch: &ContactScratch) -> f64 {
-    (scratch.normal.rows.iter())
-        .map(|r| scratch.rows.gap[r / 3].abs())
+/// The largest gap of the contacts' rows `stacked` that are normal rows.
+pub fn largest_gap(rows: &ContactRows, stacked: &[usize]) -> f64 {
+    (stacked.iter().filter(|r| *r % 3 == 2))
+        .map(|r| rows.gap[r / 3].abs())
         .fold(0.0, f64::max)
 }
 

@@ -95,3 +95,71 @@ pub fn solve_in_place(a: &mut DMatrix<f64>, b: &mut DVector<f64>) -> Result<(), 
     }
     Ok(())
 }
+
+impl Factor {
+    /// The size of the matrices this factor's storage holds.
+    pub fn size(&self) -> usize {
+        self.lower.nrows()
+    }
+}
+
+/// A rank-revealing solve of A x = b in storage kept between solves: Gaussian elimination with
+/// complete pivoting that stops where the largest entry left falls below `tolerance` times the
+/// largest entry of A. The unknowns of the rows left (dependent on the others, as a follower's
+/// row held together with its leader's, or a velocity held twice) are set to zero: where the
+/// system is consistent, x is one of its solutions, and X Hᵀ x (the change of the motion) is
+/// the same for all of them.
+#[derive(Clone, Debug, Default)]
+pub struct Pivoted {
+    columns: Vec<usize>,
+    solution: Vec<f64>,
+}
+
+impl Pivoted {
+    /// Solves A x = b, overwriting A and leaving x in `b`; the rank found.
+    pub fn solve(&mut self, a: &mut DMatrix<f64>, b: &mut DVector<f64>, tolerance: f64) -> usize {
+        let n = a.nrows();
+        self.columns.clear();
+        self.columns.extend(0..n);
+        let scale = a.amax();
+        let mut rank = 0;
+        while rank < n {
+            let k = rank;
+            let (mut row, mut column, mut largest) = (k, k, 0.0);
+            for j in k..n {
+                for i in k..n {
+                    if a[(i, j)].abs() > largest {
+                        (row, column, largest) = (i, j, a[(i, j)].abs());
+                    }
+                }
+            }
+            // A NaN entry ends the elimination too.
+            if !(largest > tolerance * scale) {
+                break;
+            }
+            a.swap_rows(k, row);
+            b.swap_rows(k, row);
+            a.swap_columns(k, column);
+            self.columns.swap(k, column);
+            for i in k + 1..n {
+                let factor = a[(i, k)] / a[(k, k)];
+                for j in k..n {
+                    a[(i, j)] -= factor * a[(k, j)];
+                }
+                b[i] -= factor * b[k];
+            }
+            rank += 1;
+        }
+        for k in (0..rank).rev() {
+            let known: f64 = (k + 1..rank).map(|j| a[(k, j)] * b[j]).sum();
+            b[k] = (b[k] - known) / a[(k, k)];
+        }
+        self.solution.clear();
+        self.solution.resize(n, 0.0);
+        for k in 0..rank {
+            self.solution[self.columns[k]] = b[k];
+        }
+        b.as_mut_slice().copy_from_slice(&self.solution);
+        rank
+    }
+}

@@ -6,16 +6,16 @@
 //! v = S u, with u the velocities of every joint but the followers and S the identity with each
 //! follower's row m times its leader's, so the equations of motion reduce to
 //! (Sᵀ M S) u̇ = Sᵀ (τ − b), exact and symmetric positive definite on a tree, and the
-//! accelerations are S u̇. The state keeps every coordinate, so outputs, energy and the
+//! accelerations are S u̇: the response X = S (SᵀMS)⁻¹ Sᵀ (`response`), on which the contacts'
+//! rows and the coordinates held at rest are solved. The state keeps every coordinate, so outputs, energy and the
 //! algorithms see the follower as any other joint; since the accelerations satisfy the coupling
 //! exactly, q_f − m q_l − o is a linear invariant of the equations of motion, which every
 //! Runge–Kutta and Rosenbrock method preserves: it stays at round-off over a run once the start
 //! satisfies it ([`impose`]). With closed loops the couplings are rows solved together with
-//! the loops' (`simulate::system::couplings`), kept at the position level after each step.
+//! the loops' and the contacts' (`rows`), kept at the position level after each step.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
-use super::dense::Factor;
 use super::joint::Joint;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{LinkMimic, Mechanism};
@@ -96,67 +96,14 @@ pub fn rows(mimics: &[Mimic], nv: usize) -> DMatrix<f64> {
     g
 }
 
-/// The accelerations under the generalised forces `forces` (columns) with the couplings kept:
-/// S (Sᵀ M S)⁻¹ Sᵀ f, which is M⁻¹ f without couplings. `None` where the (reduced) mass matrix
-/// is not positive definite.
-pub fn solve(mimics: &[Mimic], mass: &DMatrix<f64>, forces: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    if mimics.is_empty() {
-        return Some(mass.clone().cholesky()?.solve(forces));
-    }
-    let s = basis(mimics, mass.nrows());
-    let st = s.transpose();
-    let reduced = (&st * mass * &s).cholesky()?;
-    Some(s * reduced.solve(&(st * forces)))
-}
-
-/// [`solve`] for one force vector at a time without allocating: the basis S (constant, the
-/// couplings being linear) and the storage of M S, Sᵀ M S, its factor and Sᵀ f, sized once.
-#[derive(Clone, Debug)]
-pub struct ReducedSolve {
-    basis: DMatrix<f64>,
-    moved: DMatrix<f64>,
-    reduced: DMatrix<f64>,
-    factor: Factor,
-    force: DVector<f64>,
-}
-
-impl ReducedSolve {
-    /// Storage for the couplings `mimics` of a tree with `nv` velocities.
-    pub fn new(mimics: &[Mimic], nv: usize) -> ReducedSolve {
-        let basis = basis(mimics, nv);
-        let free = basis.ncols();
-        ReducedSolve {
-            moved: DMatrix::zeros(nv, free),
-            reduced: DMatrix::zeros(free, free),
-            factor: Factor::new(free),
-            force: DVector::zeros(free),
-            basis,
-        }
-    }
-
-    /// Replaces the forces f by the accelerations S (Sᵀ M S)⁻¹ Sᵀ f; false where Sᵀ M S is not
-    /// positive definite (f is then left as it was).
-    pub fn solve_mut(&mut self, mass: &DMatrix<f64>, force: &mut DVector<f64>) -> bool {
-        self.moved.gemm(1.0, mass, &self.basis, 0.0);
-        self.reduced.gemm_tr(1.0, &self.basis, &self.moved, 0.0);
-        if !self.factor.factor(&self.reduced) {
-            return false;
-        }
-        self.force.gemv_tr(1.0, &self.basis, force, 0.0);
-        self.factor.solve_vector_mut(&mut self.force);
-        force.gemv(1.0, &self.basis, &self.force, 0.0);
-        true
-    }
-}
-
 /// The couplings of the tree's links. Follower and leader must each have one coordinate
-/// (E0470), be a join of the tree, in a mechanism without contacts (E0471); a leader that follows another join, or the
-/// follower itself, is refused (E0472); the multiplier and offset must be numbers (E0473).
+/// (E0470) and be a join of the tree, not one closing a loop (E0471); a leader that follows
+/// another join, or the follower itself, is refused (E0472); the multiplier and offset must be
+/// numbers (E0473).
 pub fn build(
     mechanism: &Mechanism,
     joints: &[Joint],
     loops: &[JointModel],
-    has_contacts: bool,
     unknowns: &UnknownValues,
     errors: &mut Vec<Diagnostic>,
 ) -> Vec<Mimic> {
@@ -184,23 +131,6 @@ pub fn build(
             chain.join,
             "a loop-closing join cannot follow another",
         ));
-    }
-    if has_contacts {
-        for joint in joints {
-            if mechanism
-                .link(mechanism.join(joint.chain.join).link)
-                .mimic()
-                .is_declared()
-            {
-                let message = format!(
-                    "`{}` mimics another join in a mechanism with contacts",
-                    joint.chain.name
-                );
-                let label = "mimic joints are simulated without contacts";
-                errors.push(refused(mechanism, message, joint.chain.join, label));
-            }
-        }
-        return Vec::new();
     }
     refuse_chains(mechanism, joints, &mimics, errors);
     mimics

@@ -16,6 +16,8 @@ pub mod joint;
 pub mod loops;
 pub mod mimics;
 pub mod model;
+pub mod response;
 pub mod rotors;
+pub mod rows;
 pub mod stops;
 pub mod welds;

@@ -299,22 +299,8 @@ pub fn build_with(
     let link_efforts = link_efforts(mechanism, &joints, &loops);
     let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
-    let has_contacts = !contacts.is_empty();
-    let mimics = mimics::build(
-        mechanism,
-        &joints,
-        &loops,
-        has_contacts,
-        unknowns,
-        &mut errors,
-    );
+    let mimics = mimics::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
-    if has_contacts && !frictions.is_empty() {
-        errors.push(friction_with_contacts(mechanism, &frictions[0]));
-    }
-    if has_contacts && !loops.is_empty() && !stops.is_empty() {
-        errors.push(stops_with_contacts_and_loops(mechanism, &stops[0]));
-    }
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -920,41 +906,4 @@ pub struct DeclaredState {
     pub coordinates: Vec<f64>,
     pub rates: Vec<f64>,
     chain: ChainMotion,
-}
-
-/// Stops in a mechanism with both contacts and closed loops (E0450): a resting stop and an
-/// impact are solved with the contacts' rows or with the loops' rows, not yet with both, and
-/// leaving either out would let those constraints open silently.
-fn stops_with_contacts_and_loops(mechanism: &Mechanism, stop: &Stop) -> Diagnostic {
-    let error = Diagnostic::error(
-        "E0450",
-        format!(
-            "`{}` has stops in a mechanism with both contacts and closed loops",
-            stop.coordinate
-        ),
-    )
-    .help("stops are simulated with contacts or with closed loops, not with both; remove the stops, the contacts or the links that close loops");
-    at_first_contact(mechanism, error)
-}
-
-/// Joint friction in a mechanism with contacts (E0474): the contacts' equations do not carry
-/// the joints' stick/slip phases.
-fn friction_with_contacts(mechanism: &Mechanism, friction: &Friction) -> Diagnostic {
-    let error = Diagnostic::error(
-        "E0474",
-        format!(
-            "`{}` has friction in a mechanism with contacts",
-            friction.coordinate
-        ),
-    )
-    .help("joint friction is simulated in mechanisms without contacts; remove one or the other");
-    at_first_contact(mechanism, error)
-}
-
-/// `error` labelled at the mechanism's first contact, the element it cannot be simulated with.
-fn at_first_contact(mechanism: &Mechanism, error: Diagnostic) -> Diagnostic {
-    match mechanism.contacts.first() {
-        Some(contact) => error.primary(contact.span, "a contact of the mechanism"),
-        None => error,
-    }
 }

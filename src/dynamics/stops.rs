@@ -91,7 +91,7 @@ pub fn impact_velocities(
     // [M  −Gᵀ  −eₖ] [Δv]   [0]
     // [G   0    0 ] [Λ ] = [−G v⁻]
     // [eₖᵀ 0    0 ] [P ]   [−(1 + e) vₖ]
-    let system = saddle_point(mass, g, g, &[k]);
+    let system = saddle_point(mass, g, &[k]);
     let mut right = DVector::zeros(n + rows + 1);
     let before = DVector::from_column_slice(v);
     right.rows_mut(n, rows).copy_from(&(-(g * &before)));
@@ -100,49 +100,16 @@ pub fn impact_velocities(
     Some(before + solution.rows(0, n))
 }
 
-/// The change Δa of accelerations `a` that holds the velocities `held` at rest (their
-/// accelerations zero) with the constraint rows `g` kept (G Δa = 0), their forces along the
-/// rows `h` (G itself but for a sliding contact's friction): the saddle-point system of the
-/// constraints with one more row eₖᵀ per held velocity. Returns Δa and the forces μ that hold
-/// them, one per held velocity, positive along its velocity.
-pub fn held_accelerations(
-    mass: &DMatrix<f64>,
-    g: &DMatrix<f64>,
-    h: &DMatrix<f64>,
-    held: &[usize],
-    a: &[f64],
-) -> Option<(DVector<f64>, DVector<f64>)> {
-    let (n, rows) = (mass.nrows(), g.nrows());
-    // [M  −Hᵀ  −Eᵀ] [Δa]   [0]
-    // [G   0    0 ] [Δλ] = [0]
-    // [E   0    0 ] [μ ]   [−E a]
-    let system = saddle_point(mass, g, h, held);
-    let mut right = DVector::zeros(n + rows + held.len());
-    for (i, &k) in held.iter().enumerate() {
-        right[n + rows + i] = -a[k];
-    }
-    let solution = rank_revealing_solve(system, &right)?;
-    let change = solution.rows(0, n).clone_owned();
-    let forces = solution.rows(n + rows, held.len()).clone_owned();
-    Some((change, forces))
-}
-
-/// The saddle-point matrix of the mass matrix `mass`, the constraint rows `g` whose forces act
-/// along `h`, and the unit rows of the velocities `held`:
-/// [M −Hᵀ −Eᵀ; G 0 0; E 0 0].
-fn saddle_point(
-    mass: &DMatrix<f64>,
-    g: &DMatrix<f64>,
-    h: &DMatrix<f64>,
-    held: &[usize],
-) -> DMatrix<f64> {
+/// The saddle-point matrix of the mass matrix `mass`, the constraint rows `g` and the unit rows
+/// of the velocities `held`: [M −Gᵀ −Eᵀ; G 0 0; E 0 0].
+fn saddle_point(mass: &DMatrix<f64>, g: &DMatrix<f64>, held: &[usize]) -> DMatrix<f64> {
     let (n, rows) = (mass.nrows(), g.nrows());
     let size = n + rows + held.len();
     let mut system = DMatrix::zeros(size, size);
     system.view_mut((0, 0), (n, n)).copy_from(mass);
     system
         .view_mut((0, n), (n, rows))
-        .copy_from(&(-h.transpose()));
+        .copy_from(&(-g.transpose()));
     system.view_mut((n, 0), (rows, n)).copy_from(g);
     for (i, &k) in held.iter().enumerate() {
         system[(k, n + rows + i)] = -1.0;

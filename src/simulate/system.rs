@@ -9,11 +9,9 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
-mod contact_loops;
-mod couplings;
-mod held_rows;
 mod holding;
 mod jacobian;
+mod stacked;
 mod stop_rows;
 
 use super::constraints::LoopMonitor;
@@ -22,8 +20,7 @@ use crate::dynamics::algorithms::{
     aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
     rnea_after_kinematics, rnea_forward, transmitted_wrenches, Data, DynamicsError,
 };
-use crate::dynamics::contacts::{self, ContactError, ContactScratch, CONTACT_ROW_NAMES};
-use crate::dynamics::dense::Factor;
+use crate::dynamics::contacts::{self, ContactRows};
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::friction::Phase;
 use crate::dynamics::loops::{
@@ -32,6 +29,8 @@ use crate::dynamics::loops::{
 };
 use crate::dynamics::mimics;
 use crate::dynamics::model::{DeclaredState, Model, Recovered};
+use crate::dynamics::response::Response;
+use crate::dynamics::rows::RowStack;
 use crate::kinematics::eval::EvalError;
 use crate::spatial;
 
@@ -65,17 +64,28 @@ pub struct MechanicalSystem<'m> {
     /// its rows (empty otherwise): a projection of that state adopts them.
     evaluated: Vec<f64>,
     /// The contact rows kept for the run (decided at the first evaluation, see
-    /// `contacts::independent_rows`), and the contacts' scratch, which holds the last
-    /// contacts' rows and solution.
+    /// `contacts::independent_rows`), their normal rows, and every contact row at the last
+    /// evaluation.
     pub contact_rows: Option<Vec<usize>>,
-    contacts: ContactScratch,
-    /// Zero velocities or accelerations (tree length), and the mass matrix and its factor of a
-    /// tree with geared rotors (empty without).
+    normal_rows: Vec<usize>,
+    contact_state: ContactRows,
+    /// Zero velocities or accelerations (tree length), the tree's mass matrix, the basis of
+    /// the velocities a tree's mimic couplings allow (`mimics::basis`), and the response X of
+    /// the accelerations to generalised forces (`response`), with whether it was formed at the
+    /// state of the current evaluation.
     at_rest: Vec<f64>,
     mass: DMatrix<f64>,
-    mass_factor: Factor,
-    /// The mimic couplings' reduced solve on a tree (`mimics::ReducedSolve`).
-    reduced: mimics::ReducedSolve,
+    coupled: DMatrix<f64>,
+    response: Response,
+    response_here: bool,
+    /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
+    /// loops, coordinates held at rest), and in the projections onto the velocity rows and onto
+    /// the position rows; the velocities held at the evaluation; a step of the velocities.
+    rows: RowStack,
+    velocity_stack: RowStack,
+    position_stack: RowStack,
+    held: Vec<usize>,
+    step: DVector<f64>,
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
@@ -90,8 +100,6 @@ pub struct MechanicalSystem<'m> {
     pub phases: Vec<Phase>,
     pub holding: Vec<f64>,
     friction_power: f64,
-    /// The held rows' storage (`holding`).
-    hold: held_rows::HoldScratch,
     /// The friction's changes of phase so far, in time order.
     pub switches: Vec<crate::dynamics::friction::Switch>,
     /// The phases and resting stops shared with another system of the run (the sampler's),
@@ -113,11 +121,6 @@ impl<'m> MechanicalSystem<'m> {
         reference: Rc<RefCell<Vec<f64>>>,
         stabilisation: Stabilisation,
     ) -> MechanicalSystem<'m> {
-        let geared = if needs_mass_matrix(model) {
-            model.nv
-        } else {
-            0
-        };
         MechanicalSystem {
             model,
             data: Data::new(model),
@@ -136,11 +139,18 @@ impl<'m> MechanicalSystem<'m> {
             velocities: Vec::new(),
             evaluated: Vec::new(),
             contact_rows: None,
-            contacts: ContactScratch::new(model),
+            normal_rows: Vec::with_capacity(model.contacts.len()),
+            contact_state: ContactRows::new(model),
             at_rest: vec![0.0; model.nv],
-            mass: DMatrix::zeros(geared, geared),
-            mass_factor: Factor::new(geared),
-            reduced: mimics::ReducedSolve::new(&model.mimics, model.nv),
+            mass: DMatrix::zeros(model.nv, model.nv),
+            coupled: mimics::basis(&model.mimics, model.nv),
+            response: Response::default(),
+            response_here: false,
+            rows: RowStack::new(model),
+            velocity_stack: RowStack::new(model),
+            position_stack: RowStack::new(model),
+            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            step: DVector::zeros(model.velocities()),
             native: None,
             impacts: Vec::new(),
             resting: vec![false; model.stops.len()],
@@ -148,7 +158,6 @@ impl<'m> MechanicalSystem<'m> {
             phases: vec![Phase::Slipping(1.0); model.frictions.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,
-            hold: held_rows::HoldScratch::new(model),
             switches: Vec::new(),
             shared_phases: None,
         }
@@ -209,10 +218,11 @@ impl<'m> MechanicalSystem<'m> {
         needs_mass_matrix(self.model)
     }
 
-    /// The accelerations of a tree from its mass matrix: M from CRBA and the bias b from RNEA
-    /// (both count the rotors), the slipping joints' friction added to the efforts τ, solved
-    /// with the mimic couplings kept (`mimics::solve`); the friction's power in
-    /// `friction_power`.
+    /// The accelerations of a tree from its mass matrix, before the rows (`solve_rows`): M from
+    /// CRBA and the bias b from RNEA (both count the rotors), the slipping joints' friction
+    /// added to the efforts τ, a₀ = X (τ − b) with X the response (M⁻¹, or with the mimic
+    /// couplings kept); the friction's power in `friction_power`. The contacts' rows at (q, v)
+    /// are left in `contact_state`.
     fn mass_accelerations(
         &mut self,
         t: f64,
@@ -222,6 +232,10 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         self.evaluate_efforts(t, q, v)?;
+        if model.has_contacts() {
+            let state = &mut self.contact_state;
+            contacts::contact_rows_into(model, &mut self.data, v, true, state);
+        }
         let efforts = match model.has_efforts() {
             true => &self.efforts,
             false => &self.no_efforts,
@@ -233,17 +247,42 @@ impl<'m> MechanicalSystem<'m> {
             *a = efforts.tau[i] - self.inverse[i];
         }
         self.friction_power = self.add_friction(v, accelerations);
-        if !model.mimics.is_empty() {
-            return match self.reduced.solve_mut(&self.mass, accelerations) {
-                true => Ok(()),
-                false => Err(SystemError::SingularMassMatrix),
-            };
-        }
-        if !self.mass_factor.factor(&self.mass) {
-            return Err(SystemError::SingularMassMatrix);
-        }
-        self.mass_factor.solve_vector_mut(accelerations);
+        self.form_tree_response()?;
+        self.response.apply_vector(accelerations);
         Ok(())
+    }
+
+    /// Forms the response of a tree at the mass matrix in `mass`: M⁻¹, or S (SᵀMS)⁻¹ Sᵀ with S
+    /// the basis of the velocities the mimic couplings allow.
+    fn form_tree_response(&mut self) -> Result<(), SystemError> {
+        let formed = match self.model.mimics.is_empty() {
+            true => self.response.on_tree(&self.mass),
+            false => self.response.on_basis(&self.mass, self.coupled.as_view()),
+        };
+        self.response_here = formed;
+        match formed {
+            true => Ok(()),
+            false => Err(SystemError::SingularMassMatrix),
+        }
+    }
+
+    /// Forms the response at q when the evaluation did not (`response_here`): with loops, on
+    /// the allowed motions of the last constrained solve (which must be at q).
+    fn form_response_at(&mut self, q: &[f64]) -> Result<(), SystemError> {
+        if self.response_here {
+            return Ok(());
+        }
+        let model = self.model;
+        crate::dynamics::algorithms::crba_into(model, &mut self.data, &q[..model.nq], &mut self.mass)?;
+        if !model.has_loops() {
+            return self.form_tree_response();
+        }
+        let motions = self.loop_scratch.solved_motions();
+        self.response_here = self.response.on_basis(&self.mass, motions);
+        match self.response_here {
+            true => Ok(()),
+            false => Err(SystemError::SingularMassMatrix),
+        }
     }
 
     /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
@@ -297,99 +336,6 @@ impl<'m> MechanicalSystem<'m> {
         Ok(())
     }
 
-    /// The accelerations and contact forces of a tree with contacts at (t, q, v), left in the
-    /// contacts' scratch with the rows they come from; the efforts in `efforts`, the forward
-    /// kinematics of (q, v) in `data`.
-    fn solve_contacts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
-        let model = self.model;
-        self.evaluate_efforts(t, q, v)?;
-        let scratch = &mut self.contacts;
-        contacts::contact_rows_into(model, &mut self.data, v, true, &mut scratch.rows);
-        crba_after_kinematics(model, &mut self.data, &mut scratch.mass);
-        self.keep_contact_rows();
-        let external = &self.efforts.external;
-        rnea_after_kinematics(
-            model,
-            &mut self.data,
-            &self.at_rest,
-            external,
-            &mut self.inverse,
-        );
-        self.force.copy_from(&self.efforts.tau);
-        self.force -= &self.inverse;
-        contacts::solve(model, &mut self.contacts, &self.force).map_err(|e| self.contact_error(&e))
-    }
-
-    /// The contact rows of the run, decided at the first state evaluated (from the rows and mass
-    /// matrix in the contacts' scratch), then kept; the scratch sized for them.
-    fn keep_contact_rows(&mut self) {
-        let (model, scratch) = (self.model, &mut self.contacts);
-        let kept = (self.contact_rows)
-            .get_or_insert_with(|| contacts::independent_rows(model, &scratch.mass, &scratch.rows));
-        scratch.keep(kept);
-    }
-
-    pub(super) fn contact_error(&self, error: &ContactError) -> SystemError {
-        match error {
-            ContactError::SingularMass => SystemError::SingularMassMatrix,
-            ContactError::Singular { row } => SystemError::SingularContact {
-                contact: self.model.contacts[row / 3].name.clone(),
-                row: CONTACT_ROW_NAMES[row % 3],
-            },
-        }
-    }
-
-    /// Keeps the contacts after a step: the gaps of the normal rows closed by Newton steps of
-    /// least kinetic metric, then the velocities projected onto every kept row (the rolling
-    /// rows are not integrable: only their velocities are projected). Whether y moved.
-    fn keep_contacts(&mut self, y: &mut [f64]) -> Result<bool, SystemError> {
-        let (mut q, mut v) = (
-            std::mem::take(&mut self.positions),
-            std::mem::take(&mut self.velocities),
-        );
-        v.clear();
-        v.extend_from_slice(self.model.split_state_into(y, &mut q));
-        let kept = self.close_contacts(&mut q, &mut v);
-        if kept.is_ok() {
-            y[..q.len()].copy_from_slice(&q);
-            y[q.len()..].copy_from_slice(&v);
-        }
-        (self.positions, self.velocities) = (q, v);
-        kept.map(|()| true)
-    }
-
-    /// `keep_contacts` on the positions and velocities.
-    fn close_contacts(&mut self, q: &mut [f64], v: &mut [f64]) -> Result<(), SystemError> {
-        let model = self.model;
-        self.contact_geometry(q, v)?;
-        self.keep_contact_rows();
-        let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
-        for _ in 0..4 {
-            if contacts::largest_gap(&self.contacts) <= 1e-15 * size
-                || !self.contacts.factor_mass()
-                || !contacts::gap_step(&mut self.contacts)
-            {
-                break;
-            }
-            model.retract(q, self.contacts.step.as_slice());
-            self.contact_geometry(q, v)?;
-        }
-        if self.contacts.factor_mass() {
-            contacts::project_velocities(&mut self.contacts, v);
-        }
-        Ok(())
-    }
-
-    /// The forward kinematics, the contacts' rows (without γ) and the mass matrix at (q, v).
-    fn contact_geometry(&mut self, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
-        let model = self.model;
-        forward_kinematics(model, &mut self.data, q, v)?;
-        let scratch = &mut self.contacts;
-        contacts::contact_rows_into(model, &mut self.data, v, false, &mut scratch.rows);
-        crba_after_kinematics(model, &mut self.data, &mut scratch.mass);
-        Ok(())
-    }
-
     /// The multipliers of the accelerations `solve_constrained` left in `loop_scratch`, from
     /// Ma − f: inverse dynamics at those accelerations under the efforts' external forces,
     /// less the efforts' generalised forces (the complementary coordinates, without inertia,
@@ -428,6 +374,7 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         self.friction_power = 0.0;
+        self.response_here = false;
         let mut accelerations = std::mem::take(&mut self.accelerations);
         if accelerations.len() != model.velocities() {
             // Only after a failed evaluation, which took the scratch away.
@@ -440,17 +387,11 @@ impl<'m> MechanicalSystem<'m> {
             .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
         if native {
             // The accelerations are written.
-        } else if model.has_contacts() {
-            match model.has_loops() {
-                true => self.solve_contacts_on_loops(t, q, v)?,
-                false => self.solve_contacts(t, q, v)?,
-            }
-            let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
-            accelerations.copy_from(&solution.accelerations);
-            self.efforts.power += contacts::friction_power(model, rows, &solution.forces);
         } else if model.has_loops() {
             self.solve_constrained(t, q, v, Wanted::Accelerations)?;
             accelerations.copy_from(&self.loop_scratch.accelerations);
+        } else if self.needs_mass_matrix() {
+            self.mass_accelerations(t, q, v, &mut accelerations)?;
         } else if model.has_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
             self.evaluate_efforts(t, q, v)?;
@@ -475,10 +416,9 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        // The contacts' solve counts the rotors already (it uses CRBA and RNEA).
-        if !native && !model.has_contacts() && self.needs_mass_matrix() {
-            self.mass_accelerations(t, q, v, &mut accelerations)?;
-        }
+        // The contacts, the couplings with loops and the coordinates held at rest, solved on the
+        // response together.
+        self.solve_rows(q, v, &mut accelerations)?;
         let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
             &self.efforts
         } else {
@@ -507,7 +447,6 @@ impl<'m> MechanicalSystem<'m> {
             };
             return Err(SystemError::AccelerationNotFinite { join, cause });
         }
-        self.hold_resting(q, &mut accelerations)?;
         let (dq, dv) = dydt.split_at_mut(model.positions());
         for joint in &model.joints {
             let range = joint.q_offset..joint.q_offset + joint.nq();
@@ -581,10 +520,7 @@ impl<'m> MechanicalSystem<'m> {
     fn keep_rows(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
         if !model.has_loops() {
-            return match model.has_contacts() {
-                true => self.keep_contacts(y),
-                false => Ok(false),
-            };
+            return self.keep_stacked(t, y);
         }
         let free = &self.loops.structure.free;
         let quality = self.loop_scratch.take_free_quality(free);
@@ -620,9 +556,8 @@ impl<'m> MechanicalSystem<'m> {
                 left,
             });
         }
-        let coupled = self.keep_couplings(t, y)?;
-        let touching = model.has_contacts() && self.keep_contacts_on_loops(t, y)?;
-        Ok(moved || coupled || touching)
+        let stacked = self.keep_stacked(t, y)?;
+        Ok(moved || stacked)
     }
 
     /// Sets the rates of the complementary ball joints' angles in y (for outputs).
@@ -658,10 +593,7 @@ impl<'m> MechanicalSystem<'m> {
         if !model.has_loops() {
             // The gaps closed and the starting velocities made to roll, by the smallest change
             // in the kinetic metric.
-            return match model.has_contacts() {
-                true => self.keep_contacts(y).map(|_| ()),
-                false => Ok(()),
-            };
+            return self.keep_stacked(0.0, y).map(|_| ());
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
@@ -673,10 +605,7 @@ impl<'m> MechanicalSystem<'m> {
         loops::project(model, &mut self.data, choice, &mut q, &mut v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
-        self.keep_couplings(0.0, y)?;
-        if model.has_contacts() {
-            self.keep_contacts_on_loops(0.0, y)?;
-        }
+        self.keep_stacked(0.0, y)?;
         Ok(())
     }
 
@@ -713,18 +642,15 @@ impl<'m> MechanicalSystem<'m> {
             }
             (accelerations, external, Some(multipliers))
         } else if model.has_contacts() {
-            match model.has_loops() {
-                true => self.solve_contacts_on_loops(t, q, v)?,
-                false => self.solve_contacts(t, q, v)?,
-            }
-            let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
+            let accelerations = self.solve_every_row(t, q, v)?;
+            let forces = &self.rows.contact_forces;
             let on_bodies =
-                contacts::contact_body_forces(model, &self.data, rows, &solution.forces);
+                contacts::contact_body_forces(model, &self.data, &self.contact_state, forces);
             let external: Vec<_> = (self.efforts.external.iter().zip(&on_bodies))
                 .map(|(a, b)| a + b)
                 .collect();
-            let forces = contacts::contact_reactions(&solution.forces);
-            (solution.accelerations.clone(), external, Some(forces))
+            let forces = contacts::contact_reactions(forces);
+            (accelerations, external, Some(forces))
         } else {
             // The accelerations of the run's own equations: with the geared rotors, the mimic
             // couplings, the friction's phases and the coordinates held at rest.

@@ -13,7 +13,6 @@ pub mod factored;
 pub mod inertia;
 pub mod jacobian;
 pub mod project;
-pub mod response;
 pub mod rows;
 pub mod solve;
 pub mod structure;
@@ -24,7 +23,6 @@ pub use jacobian::ConstraintJacobian;
 pub use project::{
     close_configuration, project, project_from, Projection, ProjectionScratch, Residuals,
 };
-pub use response::constrained_response;
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
     Extent, ROW_NAMES,

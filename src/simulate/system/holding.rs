@@ -1,124 +1,94 @@
-//! Coordinates held at rest during a run, on their stops (resting on a bound) or stuck by their
-//! friction: each adds the row eₖᵀ a = 0 to the equations of motion, with a force μₖ along the
-//! coordinate found with the accelerations. On a tree, the forces solve
-//! (E P Eᵀ) μ = −E a with P the response to generalised forces (M⁻¹, or with the mimic
-//! couplings kept), and so they do with closed loops, P being the response along the loops'
-//! allowed motions; with contacts, the held rows join the contacts' rows in their saddle-point
-//! system (`stops::held_accelerations`).
+//! The rows an evaluation solves on the response X after the base solve (`rows::RowStack`): the
+//! contacts' kept rows, the mimic couplings with closed loops, and the coordinates held at rest,
+//! on their stops (resting on a bound) or stuck by their friction, each a unit row eₖᵀ a = 0
+//! with a force μₖ along the coordinate. Whatever the mechanism (a tree, closed loops, contacts
+//! or both), they are solved together in one saddle-point system; the held forces are recorded
+//! for the events (`contact`, `holding`).
 
 use nalgebra::DVector;
 
 use super::{MechanicalSystem, SystemError};
-use crate::dynamics::algorithms::crba_into;
-use crate::dynamics::dense::solve_in_place;
+use crate::dynamics::algorithms::forward_kinematics;
+use crate::dynamics::contacts;
 use crate::dynamics::friction::Phase;
 use crate::dynamics::stops::Side;
 
 impl MechanicalSystem<'_> {
-    /// Holds the coordinates at rest, on their stops or stuck by their friction: adds to the
-    /// accelerations `a` (at q) the response to the forces that keep those coordinates'
-    /// accelerations zero, and records the forces (`contact`, `holding`).
-    pub(super) fn hold_resting(
+    /// Solves the rows at (q, v) from the accelerations `a` of the base solve (the loops', or
+    /// the tree's), which they replace; records the contacts' forces and the held forces.
+    pub(super) fn solve_rows(
         &mut self,
         q: &[f64],
+        v: &[f64],
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
         let model = self.model;
-        if model.has_loops() {
-            // The mimic couplings are held rows there too, held even when nothing rests.
-            self.hold_on_response(q, a)?;
-            self.record_holding();
+        self.gather_held();
+        let couplings = self.coupling_count();
+        if !model.has_contacts() && couplings == 0 && self.held.is_empty() {
             return Ok(());
         }
-        let mut rows = std::mem::take(&mut self.hold.rows);
-        rows.clear();
+        self.form_response_at(q)?;
+        if model.has_contacts() && model.has_loops() {
+            // The loops' solve leaves the kinematics for its own rows: the contacts' start anew.
+            forward_kinematics(model, &mut self.data, q, v)?;
+            let state = &mut self.contact_state;
+            contacts::contact_rows_into(model, &mut self.data, v, true, state);
+        }
+        self.decide_contact_rows();
+        let kept = self.contact_rows.as_deref().unwrap_or_default();
+        self.rows.arrange(kept, couplings, &self.held);
+        self.rows.gather(&self.contact_state, &model.mimics);
+        let solved = (self.rows).solve(model, &self.contact_state, &mut self.response, a);
+        solved.map_err(|unsettled| SystemError::SingularContact {
+            contact: model.contacts[unsettled.contact].name.clone(),
+            row: contacts::CONTACT_ROW_NAMES[2],
+        })?;
+        a.copy_from(&self.rows.accelerations);
+        let forces = &self.rows.contact_forces;
+        self.efforts.power += contacts::friction_power(model, &self.contact_state, forces);
+        self.record_holding();
+        Ok(())
+    }
+
+    /// The mimic couplings solved as rows: with closed loops (a tree's response keeps them).
+    pub(super) fn coupling_count(&self) -> usize {
+        match self.model.has_loops() {
+            true => self.model.mimics.len(),
+            false => 0,
+        }
+    }
+
+    /// The velocities held at rest into `held`: the resting stops', then the sticking joints'.
+    fn gather_held(&mut self) {
+        let model = self.model;
+        self.held.clear();
         let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
+        self.held.extend(stops.map(|k| model.stops[k].velocity));
         let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
-        rows.extend(stops.map(|k| model.stops[k].velocity));
-        rows.extend(frictions.map(|k| model.frictions[k].velocity));
-        let held = match rows.is_empty() {
-            true => Ok(()),
-            false if model.has_contacts() => self.hold_with_constraints(&rows, a),
-            false if !model.mimics.is_empty() || has_repeats(&rows) => self.hold_on_response(q, a),
-            false => self.hold_on_tree(q, &rows, a),
-        };
-        let count = rows.len();
-        self.hold.rows = rows;
-        held?;
-        if count > 0 {
-            self.record_holding();
-        }
-        Ok(())
+        self.held.extend(frictions.map(|k| model.frictions[k].velocity));
     }
 
-    /// `hold_resting` on a tree without couplings, each velocity held once: P = M⁻¹, from the
-    /// factor the accelerations took when they came from the mass matrix, else from CRBA here.
-    fn hold_on_tree(
-        &mut self,
-        q: &[f64],
-        rows: &[usize],
-        a: &mut DVector<f64>,
-    ) -> Result<(), SystemError> {
+    /// The contact rows of the run, decided at the first state evaluated (from the contacts'
+    /// rows and the response formed there), then kept.
+    pub(super) fn decide_contact_rows(&mut self) {
         let model = self.model;
-        self.hold.size_for(model.nv, rows.len());
-        // `mass_accelerations` factored M at this state unless native code gave them.
-        let factored = self.needs_mass_matrix() && self.native.is_none();
-        if !factored {
-            crba_into(model, &mut self.data, q, &mut self.hold.mass)?;
-            if !self.hold.factor.factor(&self.hold.mass) {
-                return Err(SystemError::SingularMassMatrix);
-            }
+        if model.has_contacts() && self.contact_rows.is_none() {
+            let kept = contacts::independent_rows(model, &mut self.response, &self.contact_state);
+            self.contact_rows = Some(kept);
         }
-        let hold = &mut self.hold;
-        let factor = if factored {
-            &self.mass_factor
-        } else {
-            &hold.factor
-        };
-        hold.responses.fill(0.0);
-        for (column, &row) in rows.iter().enumerate() {
-            hold.responses[(row, column)] = 1.0;
-        }
-        factor.solve_mut(&mut hold.responses);
-        for (i, &row) in rows.iter().enumerate() {
-            for j in 0..rows.len() {
-                hold.coupling[(i, j)] = hold.responses[(row, j)];
-            }
-            hold.forces[i] = -a[row];
-        }
-        // E M⁻¹ Eᵀ is positive definite: distinct coordinates of a positive definite M.
-        solve_in_place(&mut hold.coupling, &mut hold.forces)
-            .map_err(|_| SystemError::SingularMassMatrix)?;
-        a.gemv(1.0, &hold.responses, &hold.forces, 1.0);
-        Ok(())
+        let kept = self.contact_rows.as_deref().unwrap_or_default();
+        self.normal_rows.clear();
+        self.normal_rows
+            .extend(kept.iter().copied().filter(|r| r % 3 == 2));
     }
 
-    /// `hold_resting` through the response P of the accelerations (`held_change`): in a
-    /// mechanism with loops (the loops' allowed motions, with the mimic couplings as rows), or on
-    /// a tree with mimic couplings (P = S (Sᵀ M S)⁻¹ Sᵀ) or a velocity held twice (a stop and a
-    /// friction on one coordinate). The forces come from a rank-revealing solve, since a
-    /// follower held with its leader gives two rows for one coupled motion; the couplings'
-    /// forces are not recorded. This path allocates.
-    fn hold_on_response(&mut self, q: &[f64], a: &mut DVector<f64>) -> Result<(), SystemError> {
-        let (rows, couplings) = self.held_rows();
-        if rows.nrows() == 0 {
-            self.hold.forces = DVector::zeros(0);
-            return Ok(());
-        }
-        let (change, forces) = self.held_change(q, &rows, &(&rows * &*a))?;
-        *a += change;
-        self.hold.forces = forces
-            .rows(couplings, forces.len() - couplings)
-            .clone_owned();
-        Ok(())
-    }
-
-    /// The held forces of the last `hold_resting`, in the order of its rows (the resting stops,
+    /// The held forces of the last solve, in the order of the held rows (the resting stops,
     /// then the sticking frictions), into each stop's contact force (positive while it pushes)
     /// and each friction's holding force.
     fn record_holding(&mut self) {
         let model = self.model;
-        let mut forces = self.hold.forces.iter();
+        let mut forces = self.rows.held_forces().iter();
         let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
         for (k, force) in stops.zip(forces.by_ref()) {
             // A lower stop pushes the coordinate up, an upper one down.
@@ -133,13 +103,41 @@ impl MechanicalSystem<'_> {
         }
     }
 
-    /// The held forces found by the constrained path (`stop_rows`), for `record_holding`.
-    pub(super) fn set_held_forces(&mut self, forces: DVector<f64>) {
-        self.hold.forces = forces;
+    /// The accelerations of the run's equations at (t, q, v), every row solved, leaving the
+    /// contacts' rows and forces and the forward kinematics of (q, v) in place: for the
+    /// reactions.
+    pub(super) fn solve_every_row(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<DVector<f64>, SystemError> {
+        let mut rates = vec![0.0; self.dimension()];
+        self.derivative_at(t, q, v, &mut rates)?;
+        forward_kinematics(self.model, &mut self.data, q, v)?;
+        Ok(DVector::from_column_slice(&rates[self.model.positions()..]))
     }
-}
 
-/// Whether a velocity appears twice among `rows` (few rows: a quadratic scan).
-fn has_repeats(rows: &[usize]) -> bool {
-    (0..rows.len()).any(|i| rows[i + 1..].contains(&rows[i]))
+    /// The solve of [`solve_every_row`](Self::solve_every_row) on a mechanism with loops and
+    /// contacts, for the reactions: the contacts' forces join the efforts' external forces, the
+    /// loops' multipliers are taken at the accelerations with the rows (in the loops' scratch,
+    /// for `reactions`), and the contacts' reactions (`contacts::contact_reactions`) returned.
+    pub(super) fn contacts_on_loops_reactions(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<DVector<f64>, SystemError> {
+        let model = self.model;
+        let accelerations = self.solve_every_row(t, q, v)?;
+        let forces = &self.rows.contact_forces;
+        let on_bodies = contacts::contact_body_forces(model, &self.data, &self.contact_state, forces);
+        for (external, force) in self.efforts.external.iter_mut().zip(&on_bodies) {
+            *external += force;
+        }
+        self.loop_scratch.accelerations.copy_from(&accelerations);
+        let forces = contacts::contact_reactions(forces);
+        self.solve_multipliers();
+        Ok(forces)
+    }
 }

@@ -1,9 +1,9 @@
-//! Stops in a mechanism with closed loops or contacts: a stop is one more row of the
-//! constraints, unilateral. At an impact its row joins the loops' or contacts' rows in the
-//! impulse's saddle-point system (restitution on the stop's row alone, the other rows brought to
-//! zero velocity, `stops::impact_velocities`); while its coordinate rests on it, it is an active
-//! bilateral row: its acceleration is held at zero with the other rows kept
-//! (`stops::held_accelerations`), and after each step the positions are brought back onto the
+//! Stops in a mechanism with closed loops, contacts or mimic couplings: a stop is one more row
+//! of the constraints, unilateral. At an impact its row joins every other row (the loops', the
+//! contacts', the couplings') in the impulse's saddle-point system (restitution on the stop's
+//! row alone, the other rows brought to zero velocity, `stops::impact_velocities`); while its
+//! coordinate rests on it, it is an active bilateral row: its acceleration is held at zero with
+//! the other rows kept (`holding`), and after each step the positions are brought back onto the
 //! other rows' position constraints and the bound together, the velocities onto all the rows.
 //! No coordinate is ever set alone: that would open the loops, and their projection would then
 //! give the resting coordinate a rate again. The stop is released when its force would pull.
@@ -31,9 +31,8 @@ struct Rows {
 
 impl MechanicalSystem<'_> {
     /// The mass matrix over the state's velocities (the complementary links' coordinates carry
-    /// no inertia) and the constraint rows kept through an impact at (q, v), dense: the loops'
-    /// kept rows, the contacts' kept rows, or the mimic couplings (None without any). Leaves the
-    /// forward kinematics of (q, v) in `data`.
+    /// no inertia) and the constraint rows kept through an impact at (q, v), dense
+    /// (`velocity_rows`; None without any). Leaves the forward kinematics of (q, v) in `data`.
     pub(in crate::simulate) fn impact_system(
         &mut self,
         q: &[f64],
@@ -41,33 +40,13 @@ impl MechanicalSystem<'_> {
     ) -> Result<(DMatrix<f64>, Option<DMatrix<f64>>), SystemError> {
         let model = self.model;
         let mass = loops::structure::full_mass(&crba(model, &mut self.data, q)?, v.len());
-        let rows = if model.has_loops() || model.has_contacts() {
-            Some(self.velocity_rows(q, v)?)
-        } else {
-            (!model.mimics.is_empty()).then(|| mimics::rows(&model.mimics, model.nv))
+        let constrained = model.has_loops() || model.has_contacts() || !model.mimics.is_empty();
+        let rows = match constrained {
+            true => Some(self.velocity_rows(q, v)?),
+            false => None,
         };
         forward_kinematics(model, &mut self.data, q, v)?;
         Ok((mass, rows))
-    }
-
-    /// `hold_resting` in a mechanism with contacts (and no loops: those hold through
-    /// `hold_with_loops`), right after the contacts' solve at q (whose rows and accelerations
-    /// `a` it starts from): the held velocities `rows` join the contacts' kept rows in the
-    /// saddle-point system.
-    pub(super) fn hold_with_constraints(
-        &mut self,
-        rows: &[usize],
-        a: &mut DVector<f64>,
-    ) -> Result<(), SystemError> {
-        let scratch = &self.contacts;
-        let (g, h) = scratch.kept_system();
-        let (mass, g, h) = (scratch.mass.clone(), g.clone(), h.clone());
-        let (change, forces) =
-            crate::dynamics::stops::held_accelerations(&mass, &g, &h, rows, a.as_slice())
-                .ok_or(SystemError::SingularMassMatrix)?;
-        *a += change;
-        self.set_held_forces(forces);
-        Ok(())
     }
 
     /// Brings a state back onto the rows and the bounds of the resting stops together, after
@@ -138,8 +117,9 @@ impl MechanicalSystem<'_> {
         Ok(())
     }
 
-    /// The position constraints at q (the loops' kept rows, or the contacts' kept normal rows,
-    /// their gaps) and the stops' rows qₖ − bound, with their Jacobian over the velocities.
+    /// Every position constraint at q, with its Jacobian over the velocities: the loops' kept
+    /// rows, the contacts' kept normal rows (their gaps), the mimic couplings' violations, then
+    /// the stops' rows qₖ − bound.
     fn position_rows(
         &mut self,
         q: &[f64],
@@ -147,43 +127,62 @@ impl MechanicalSystem<'_> {
         stops: &[usize],
     ) -> Result<Rows, SystemError> {
         let model = self.model;
-        let (residual, jacobian) = if model.has_contacts() {
+        let mut rows = Rows {
+            residual: DVector::zeros(0),
+            jacobian: DMatrix::zeros(0, model.velocities()),
+        };
+        if model.has_loops() {
+            let c = self.loop_rows_at(q, v)?;
+            let kept = &self.loops.structure.choice.rows;
+            let residual = DVector::from_iterator(kept.len(), kept.iter().map(|&r| c.residual[r]));
+            rows.stack(residual, self.loop_kept_rows(&c.jacobian.dense()));
+        }
+        if model.has_contacts() {
             let all = self.contact_rows_at(q, v)?;
             let normal = holonomic_rows(&self.contact_rows_kept());
             let residual = normal.iter().map(|&r| all.gap[r / 3]);
             let residual = DVector::from_iterator(normal.len(), residual);
-            (residual, all.jacobian.select_rows(&normal))
-        } else {
-            forward_kinematics(model, &mut self.data, q, v)?;
-            let c = loops::constraints(model, &mut self.data, q, v, Extent::Rows)?;
-            let kept = &self.loops.structure.choice.rows;
-            let residual = DVector::from_iterator(kept.len(), kept.iter().map(|&r| c.residual[r]));
-            (residual, self.loop_kept_rows(&c.jacobian.dense()))
-        };
+            rows.stack(residual, all.jacobian.select_rows(&normal));
+        }
+        let violations = model.mimics.iter().map(|m| m.violation(q));
+        let residual = DVector::from_iterator(model.mimics.len(), violations);
+        rows.stack(residual, mimics::rows(&model.mimics, model.velocities()));
         let stop_rows = stops.iter().map(|&k| &model.stops[k]);
-        let jacobian = stack_units(&jacobian, stop_rows.clone().map(|s| s.velocity));
-        let offsets = stop_rows.map(|s| q[s.position] - s.bound);
-        let residual = DVector::from_iterator(
-            residual.len() + stops.len(),
-            residual.iter().copied().chain(offsets),
+        let units = stack_units(
+            &DMatrix::zeros(0, model.velocities()),
+            stop_rows.clone().map(|s| s.velocity),
         );
-        Ok(Rows { residual, jacobian })
+        let offsets = stop_rows.map(|s| q[s.position] - s.bound);
+        rows.stack(DVector::from_iterator(stops.len(), offsets), units);
+        Ok(rows)
     }
 
-    /// The velocity rows at (q, v), dense over the state's velocities: the loops' kept rows, or
-    /// the contacts' kept rows.
+    /// Every velocity row at (q, v), dense over the state's velocities: the loops' kept rows,
+    /// the contacts' kept rows and the mimic couplings.
     fn velocity_rows(&mut self, q: &[f64], v: &[f64]) -> Result<DMatrix<f64>, SystemError> {
         let model = self.model;
+        let mut rows = DMatrix::zeros(0, model.velocities());
+        if model.has_loops() {
+            let c = self.loop_rows_at(q, v)?;
+            rows = self.loop_kept_rows(&c.jacobian.dense());
+        }
         if model.has_contacts() {
             let all = self.contact_rows_at(q, v)?;
-            return Ok(all.jacobian.select_rows(&self.contact_rows_kept()));
+            rows = stack(&rows, &all.jacobian.select_rows(&self.contact_rows_kept()));
         }
-        forward_kinematics(model, &mut self.data, q, v)?;
-        let c = loops::constraints(model, &mut self.data, q, v, Extent::Rows)?;
-        Ok(self.loop_kept_rows(&c.jacobian.dense()))
+        Ok(stack(&rows, &mimics::rows(&model.mimics, model.velocities())))
     }
 
-    /// The contacts' rows at (q, v), the contact rows of the run decided if not yet.
+    /// The loops' rows at (q, v).
+    fn loop_rows_at(&mut self, q: &[f64], v: &[f64]) -> Result<loops::Constraints, SystemError> {
+        let model = self.model;
+        forward_kinematics(model, &mut self.data, q, v)?;
+        Ok(loops::constraints(model, &mut self.data, q, v, Extent::Rows)?)
+    }
+
+    /// The contacts' rows at (q, v). The contact rows of the run are decided by the first
+    /// evaluation; a state evaluated here first keeps those independent on the tree (M⁻¹) or,
+    /// with loops, every candidate row.
     fn contact_rows_at(
         &mut self,
         q: &[f64],
@@ -193,8 +192,14 @@ impl MechanicalSystem<'_> {
         forward_kinematics(model, &mut self.data, q, v)?;
         let rows = contacts::contact_rows(model, &mut self.data, v, false);
         if self.contact_rows.is_none() {
-            let mass = crba(model, &mut self.data, q)?;
-            self.contact_rows = Some(contacts::independent_rows(model, &mass, &rows));
+            self.contact_rows = Some(match model.has_loops() {
+                true => contacts::candidate_rows(model),
+                false => {
+                    self.mass = crba(model, &mut self.data, q)?;
+                    self.form_tree_response()?;
+                    contacts::independent_rows(model, &mut self.response, &rows)
+                }
+            });
         }
         Ok(rows)
     }
@@ -225,6 +230,23 @@ impl MechanicalSystem<'_> {
         let allowed = decompose(&moved).null_space;
         motions * allowed
     }
+}
+
+impl Rows {
+    /// Appends the rows `jacobian` with their residuals `residual`.
+    fn stack(&mut self, residual: DVector<f64>, jacobian: DMatrix<f64>) {
+        let values = self.residual.iter().chain(residual.iter()).copied();
+        self.residual = DVector::from_iterator(self.residual.len() + residual.len(), values);
+        self.jacobian = stack(&self.jacobian, &jacobian);
+    }
+}
+
+/// `upper` with the rows of `lower` below.
+fn stack(upper: &DMatrix<f64>, lower: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut stacked = DMatrix::zeros(upper.nrows() + lower.nrows(), upper.ncols());
+    stacked.rows_mut(0, upper.nrows()).copy_from(upper);
+    stacked.rows_mut(upper.nrows(), lower.nrows()).copy_from(lower);
+    stacked
 }
 
 /// `rows` with one more unit row per velocity of `units`.

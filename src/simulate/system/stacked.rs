@@ -1,0 +1,145 @@
+//! Keeps the rows beyond the loops' after a step (the contacts' and, with closed loops, the
+//! mimic couplings'), on the response X as the accelerations solve them (`holding`). After the
+//! loops' own projection, the position rows (the contacts' gaps, the couplings' violations) are
+//! closed by Newton steps of least kinetic metric along X Gᵀ (along the loops and the tree's
+//! couplings to first order), each followed by the loops' projection; then the velocities are
+//! projected along X onto every kept row (the rolling rows, not integrable, on velocities only):
+//! the loops' velocity rows and a tree's couplings stay kept, since G X = 0 for them.
+
+use super::{MechanicalSystem, SystemError};
+use crate::dynamics::algorithms::{crba_after_kinematics, forward_kinematics};
+use crate::dynamics::contacts;
+use crate::dynamics::loops::{self, Wanted};
+
+/// Newton steps at most that close the position rows.
+const POSITION_STEPS: usize = 4;
+
+/// Relative size of a coupling's violation below which it is not corrected.
+const COUPLING_ROUND_OFF: f64 = 1e-13;
+
+/// Relative size of a contact's gap (to the largest radius) below which it is not corrected.
+const GAP_ROUND_OFF: f64 = 1e-15;
+
+impl MechanicalSystem<'_> {
+    /// Keeps the contacts' rows and the couplings solved as rows in the state y (see the
+    /// module's documentation). Whether y moved; nothing when there are no such rows.
+    pub(super) fn keep_stacked(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
+        let model = self.model;
+        let couplings = self.coupling_count();
+        if !model.has_contacts() && couplings == 0 {
+            return Ok(false);
+        }
+        let (mut q, mut v) = (
+            std::mem::take(&mut self.positions),
+            std::mem::take(&mut self.velocities),
+        );
+        let kept = self.keep_stacked_in(t, y, &mut q, &mut v, couplings);
+        (self.positions, self.velocities) = (q, v);
+        kept
+    }
+
+    /// `keep_stacked` with the storage of the positions and velocities.
+    fn keep_stacked_in(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        q: &mut Vec<f64>,
+        v: &mut Vec<f64>,
+        couplings: usize,
+    ) -> Result<bool, SystemError> {
+        let model = self.model;
+        let positions = model.positions();
+        let mut moved = false;
+        for _ in 0..POSITION_STEPS {
+            self.split_into(y, q, v);
+            self.stacked_geometry(t, q, v)?;
+            let stack = &mut self.position_stack;
+            stack.arrange(&self.normal_rows, couplings, &[]);
+            stack.gather(&self.contact_state, &model.mimics);
+            if !self.fill_position_values(q) {
+                break;
+            }
+            self.step.fill(0.0);
+            let step = self.step.as_mut_slice();
+            self.position_stack.add_least_change(&mut self.response, step);
+            model.retract(q, step);
+            if model.has_loops() {
+                let choice = &self.loops.structure.choice;
+                loops::project(model, &mut self.data, choice, q, v)?;
+            }
+            y[..positions].copy_from_slice(q);
+            y[positions..].copy_from_slice(v);
+            moved = true;
+        }
+        self.split_into(y, q, v);
+        self.stacked_geometry(t, q, v)?;
+        let kept = self.contact_rows.as_deref().unwrap_or_default();
+        let stack = &mut self.velocity_stack;
+        stack.arrange(kept, couplings, &[]);
+        stack.gather(&self.contact_state, &model.mimics);
+        let rates = stack.values_mut();
+        let (g, state) = (&self.contact_state, &v[..]);
+        for (i, &row) in kept.iter().enumerate() {
+            rates[i] = g.velocity[row];
+        }
+        for (i, mimic) in model.mimics.iter().take(couplings).enumerate() {
+            rates[kept.len() + i] = state[mimic.velocity] - mimic.multiplier * state[mimic.leader_velocity];
+        }
+        let off = stack.values_mut().amax() > 0.0;
+        stack.add_least_change(&mut self.response, v);
+        y[positions..].copy_from_slice(v);
+        Ok(moved || off)
+    }
+
+    /// The positions and velocities of y into `q` (quaternions at unit length) and `v`.
+    fn split_into(&self, y: &[f64], q: &mut Vec<f64>, v: &mut Vec<f64>) {
+        let rates = self.model.split_state_into(y, q);
+        v.clear();
+        v.extend_from_slice(rates);
+    }
+
+    /// The position rows' values into the position stack (the gaps of its contact rows, then
+    /// the couplings' violations at q); false when all are at round-off.
+    fn fill_position_values(&mut self, q: &[f64]) -> bool {
+        let model = self.model;
+        let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
+        let gaps = self.normal_rows.len();
+        let values = self.position_stack.values_mut();
+        let mut open = false;
+        for (i, &row) in self.normal_rows.iter().enumerate() {
+            values[i] = self.contact_state.gap[row / 3];
+            open |= values[i].abs() > GAP_ROUND_OFF * size;
+        }
+        let couplings = values.len() - gaps;
+        let scale = 1.0 + (model.mimics.iter().take(couplings))
+            .map(|m| q[m.position].abs())
+            .fold(0.0, f64::max);
+        for (i, mimic) in model.mimics.iter().take(couplings).enumerate() {
+            values[gaps + i] = mimic.violation(q);
+            open |= values[gaps + i].abs() > COUPLING_ROUND_OFF * scale;
+        }
+        open
+    }
+
+    /// At (q, v): the loops' allowed motions (a constrained solve), the contacts' rows without
+    /// γ, the response X and the contact rows of the run decided if they were not.
+    fn stacked_geometry(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+        let model = self.model;
+        self.response_here = false;
+        if model.has_loops() {
+            self.solve_constrained(t, q, v, Wanted::Accelerations)?;
+            self.form_response_at(q)?;
+            forward_kinematics(model, &mut self.data, q, v)?;
+        } else {
+            forward_kinematics(model, &mut self.data, q, v)?;
+            crba_after_kinematics(model, &mut self.data, &mut self.mass);
+            self.form_tree_response()?;
+        }
+        if model.has_contacts() {
+            let state = &mut self.contact_state;
+            contacts::contact_rows_into(model, &mut self.data, v, false, state);
+        }
+        self.decide_contact_rows();
+        Ok(())
+    }
+}
