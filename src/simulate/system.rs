@@ -852,10 +852,12 @@ impl fmt::Display for NotFiniteCause {
 impl std::error::Error for SystemError {}
 
 /// Whether the accelerations of a tree need the mass matrix rather than the articulated-body
-/// algorithm: geared rotors (which ABA does not count), mimic couplings (eliminated through M)
-/// or joint friction (held through M while sticking).
+/// algorithm: geared rotors (which ABA does not count), mimic couplings (eliminated through M),
+/// joint friction (held through M while sticking) or contacts (whose rows are solved on M⁻¹).
 fn needs_mass_matrix(model: &Model) -> bool {
-    let extended =
-        !model.rotors.is_empty() || !model.mimics.is_empty() || !model.frictions.is_empty();
+    let extended = !model.rotors.is_empty()
+        || !model.mimics.is_empty()
+        || !model.frictions.is_empty()
+        || model.has_contacts();
     !model.has_loops() && extended
 }
