@@ -160,14 +160,26 @@ impl RowStack {
         self.pressing.fill(1.0);
         for _ in 0..=model.contacts.len() {
             self.directions.tr_copy_from(&self.g);
-            contacts::sliding_directions(model, all, &self.contacts, &mut self.directions, &self.pressing);
+            contacts::sliding_directions(
+                model,
+                all,
+                &self.contacts,
+                &mut self.directions,
+                &self.pressing,
+            );
             self.couple(response);
             self.right.copy_from(&self.bias);
             self.right.gemv(-1.0, &self.g, free, -1.0);
             self.pivoted
                 .solve(&mut self.coupling, &mut self.right, DEPENDENT_ROWS);
             let multipliers = &self.right.as_slice()[..self.contacts.len()];
-            contacts::contact_forces(model, all, &self.contacts, multipliers, &mut self.contact_forces);
+            contacts::contact_forces(
+                model,
+                all,
+                &self.contacts,
+                multipliers,
+                &mut self.contact_forces,
+            );
             if !contacts::flip_pulling(model, &self.contact_forces, &mut self.pressing) {
                 self.accelerations.copy_from(free);
                 self.accelerations.gemv(1.0, &self.moved, &self.right, 1.0);

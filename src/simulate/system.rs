@@ -273,7 +273,12 @@ impl<'m> MechanicalSystem<'m> {
             return Ok(());
         }
         let model = self.model;
-        crate::dynamics::algorithms::crba_into(model, &mut self.data, &q[..model.nq], &mut self.mass)?;
+        crate::dynamics::algorithms::crba_into(
+            model,
+            &mut self.data,
+            &q[..model.nq],
+            &mut self.mass,
+        )?;
         if !model.has_loops() {
             return self.form_tree_response();
         }

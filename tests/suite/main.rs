@@ -40,6 +40,7 @@ mod pinocchio_fixtures;
 mod properties;
 mod regression;
 mod robustness;
+mod rows;
 mod runs;
 mod simulation;
 mod stop_loops;

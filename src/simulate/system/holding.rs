@@ -60,13 +60,14 @@ impl MechanicalSystem<'_> {
     }
 
     /// The velocities held at rest into `held`: the resting stops', then the sticking joints'.
-    fn gather_held(&mut self) {
+    pub(super) fn gather_held(&mut self) {
         let model = self.model;
         self.held.clear();
         let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
         self.held.extend(stops.map(|k| model.stops[k].velocity));
         let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
-        self.held.extend(frictions.map(|k| model.frictions[k].velocity));
+        self.held
+            .extend(frictions.map(|k| model.frictions[k].velocity));
     }
 
     /// The contact rows of the run, decided at the first state evaluated (from the contacts'
@@ -131,7 +132,8 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         let accelerations = self.solve_every_row(t, q, v)?;
         let forces = &self.rows.contact_forces;
-        let on_bodies = contacts::contact_body_forces(model, &self.data, &self.contact_state, forces);
+        let on_bodies =
+            contacts::contact_body_forces(model, &self.data, &self.contact_state, forces);
         for (external, force) in self.efforts.external.iter_mut().zip(&on_bodies) {
             *external += force;
         }

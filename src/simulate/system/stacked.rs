@@ -3,8 +3,10 @@
 //! loops' own projection, the position rows (the contacts' gaps, the couplings' violations) are
 //! closed by Newton steps of least kinetic metric along X Gᵀ (along the loops and the tree's
 //! couplings to first order), each followed by the loops' projection; then the velocities are
-//! projected along X onto every kept row (the rolling rows, not integrable, on velocities only):
-//! the loops' velocity rows and a tree's couplings stay kept, since G X = 0 for them.
+//! projected along X onto every kept row (the rolling rows, not integrable, on velocities only)
+//! and onto the rates held at rest (a joint stuck by its friction, a stop's resting
+//! coordinate): the loops' velocity rows and a tree's couplings stay kept, since G X = 0 for
+//! them.
 
 use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{crba_after_kinematics, forward_kinematics};
@@ -61,7 +63,8 @@ impl MechanicalSystem<'_> {
             }
             self.step.fill(0.0);
             let step = self.step.as_mut_slice();
-            self.position_stack.add_least_change(&mut self.response, step);
+            self.position_stack
+                .add_least_change(&mut self.response, step);
             model.retract(q, step);
             if model.has_loops() {
                 let choice = &self.loops.structure.choice;
@@ -73,17 +76,23 @@ impl MechanicalSystem<'_> {
         }
         self.split_into(y, q, v);
         self.stacked_geometry(t, q, v)?;
+        self.gather_held();
         let kept = self.contact_rows.as_deref().unwrap_or_default();
         let stack = &mut self.velocity_stack;
-        stack.arrange(kept, couplings, &[]);
+        stack.arrange(kept, couplings, &self.held);
         stack.gather(&self.contact_state, &model.mimics);
         let rates = stack.values_mut();
         let (g, state) = (&self.contact_state, &v[..]);
         for (i, &row) in kept.iter().enumerate() {
             rates[i] = g.velocity[row];
         }
-        for (i, mimic) in model.mimics.iter().take(couplings).enumerate() {
-            rates[kept.len() + i] = state[mimic.velocity] - mimic.multiplier * state[mimic.leader_velocity];
+        let mimics = model.mimics.iter().take(couplings);
+        for (i, mimic) in mimics.enumerate() {
+            let rate = state[mimic.velocity] - mimic.multiplier * state[mimic.leader_velocity];
+            rates[kept.len() + i] = rate;
+        }
+        for (i, &velocity) in self.held.iter().enumerate() {
+            rates[kept.len() + couplings + i] = state[velocity];
         }
         let off = stack.values_mut().amax() > 0.0;
         stack.add_least_change(&mut self.response, v);
@@ -111,9 +120,10 @@ impl MechanicalSystem<'_> {
             open |= values[i].abs() > GAP_ROUND_OFF * size;
         }
         let couplings = values.len() - gaps;
-        let scale = 1.0 + (model.mimics.iter().take(couplings))
-            .map(|m| q[m.position].abs())
-            .fold(0.0, f64::max);
+        let scale = 1.0
+            + (model.mimics.iter().take(couplings))
+                .map(|m| q[m.position].abs())
+                .fold(0.0, f64::max);
         for (i, mimic) in model.mimics.iter().take(couplings).enumerate() {
             values[gaps + i] = mimic.violation(q);
             open |= values[gaps + i].abs() > COUPLING_ROUND_OFF * scale;

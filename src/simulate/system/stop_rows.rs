@@ -170,14 +170,23 @@ impl MechanicalSystem<'_> {
             let all = self.contact_rows_at(q, v)?;
             rows = stack(&rows, &all.jacobian.select_rows(&self.contact_rows_kept()));
         }
-        Ok(stack(&rows, &mimics::rows(&model.mimics, model.velocities())))
+        Ok(stack(
+            &rows,
+            &mimics::rows(&model.mimics, model.velocities()),
+        ))
     }
 
     /// The loops' rows at (q, v).
     fn loop_rows_at(&mut self, q: &[f64], v: &[f64]) -> Result<loops::Constraints, SystemError> {
         let model = self.model;
         forward_kinematics(model, &mut self.data, q, v)?;
-        Ok(loops::constraints(model, &mut self.data, q, v, Extent::Rows)?)
+        Ok(loops::constraints(
+            model,
+            &mut self.data,
+            q,
+            v,
+            Extent::Rows,
+        )?)
     }
 
     /// The contacts' rows at (q, v). The contact rows of the run are decided by the first
@@ -245,7 +254,9 @@ impl Rows {
 fn stack(upper: &DMatrix<f64>, lower: &DMatrix<f64>) -> DMatrix<f64> {
     let mut stacked = DMatrix::zeros(upper.nrows() + lower.nrows(), upper.ncols());
     stacked.rows_mut(0, upper.nrows()).copy_from(upper);
-    stacked.rows_mut(upper.nrows(), lower.nrows()).copy_from(lower);
+    stacked
+        .rows_mut(upper.nrows(), lower.nrows())
+        .copy_from(lower);
     stacked
 }
 
