@@ -147,7 +147,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         };
         let (contacts, unavailable) = match (&mobility, mechanism.contacts.is_empty()) {
             (Some(m), false) => match tree_contacts(mechanism, topology, m.tree_dof) {
-                Ok(contacts) => (Some(contacts), unavailable),
+                Ok(contacts) => (Some(contacts.with_couplings(couplings)), unavailable),
                 // A contact written wrong is an error of the program, not a missing value.
                 Err(d) if d.iter().any(|d| d.code.starts_with("E082")) => return Err(d),
                 Err(d) => (None, Some(joined_messages(&d))),

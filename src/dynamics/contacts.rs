@@ -16,7 +16,8 @@
 //!   opposes the slip velocity w (Coulomb), with the regularised direction
 //!   s = w / √(|w|² + ε²) (`SLIP_REGULARISATION`).
 //!
-//! With G the kept rows, the equations of motion are M a = f + Hᵀλ, G a + γ = 0, where H = G
+//! With G the kept rows (solved with the mechanism's other rows, `rows`), the equations of
+//! motion are M a = f + Hᵀλ, G a + γ = 0, where H = G
 //! but on a sliding contact's normal row, whose force also carries the friction it causes:
 //! H = Gₙ − f σ sᵀ Gₜ with σ the sign of λₙ. γ is the rows' velocity-product term: with V
 //! the bodies' twists in fixed axes and A their accelerations at zero joint accelerations,

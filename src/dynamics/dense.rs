@@ -133,8 +133,8 @@ impl Pivoted {
                     }
                 }
             }
-            // A NaN entry ends the elimination too.
-            if !(largest > tolerance * scale) {
+            // A NaN entry (in the scale: the search skips it) ends the elimination too.
+            if largest <= tolerance * scale || scale.is_nan() {
                 break;
             }
             a.swap_rows(k, row);

@@ -157,6 +157,20 @@ pub struct ContactMobility {
     pub position_dof: usize,
     /// tree dof − velocity rank: the independent velocities at a configuration.
     pub velocity_dof: usize,
+    /// Mimic couplings, counted off both (`with_couplings`).
+    pub couplings: usize,
+}
+
+impl ContactMobility {
+    /// The degrees of freedom with `couplings` mimic joints more: each holds one coordinate of
+    /// the tree to another, one holonomic row more, independent of the contacts' rows at a
+    /// generic configuration (as `Mobility::with_couplings` counts them).
+    pub fn with_couplings(mut self, couplings: usize) -> ContactMobility {
+        self.couplings += couplings;
+        self.position_dof = self.position_dof.saturating_sub(couplings);
+        self.velocity_dof = self.velocity_dof.saturating_sub(couplings);
+        self
+    }
 }
 
 /// The contacts' rows over the coordinates' rates at `configuration`: the holonomic (normal)
@@ -214,5 +228,6 @@ pub fn contact_mobility(
         velocity_rank,
         position_dof: tree_dof.saturating_sub(holonomic_rank),
         velocity_dof: tree_dof.saturating_sub(velocity_rank),
+        couplings: 0,
     }
 }

@@ -117,8 +117,12 @@ pub fn tree(report: &TreeReport) -> String {
 /// The degrees of freedom left by contacts: in position (the normal rows are holonomic) and
 /// in velocity (the rolling rows are not).
 fn contact_text(c: &crate::kinematics::contacts::ContactMobility, tree_dof: usize) -> String {
+    let tree = match c.couplings {
+        0 => format!("tree dof {tree_dof}"),
+        n => format!("tree dof {tree_dof} - {n} mimic couplings"),
+    };
     format!(
-        "contacts {}: position dof {} = tree dof {tree_dof} - {} holonomic rows; velocity dof {} = tree dof {tree_dof} - {} independent rows ({} non-holonomic)\n",
+        "contacts {}: position dof {} = {tree} - {} holonomic rows; velocity dof {} = {tree} - {} independent rows ({} non-holonomic)\n",
         c.contacts,
         c.position_dof,
         c.holonomic_rank,

@@ -362,3 +362,24 @@ fn a_stop_with_a_contact_and_a_loop_holds_its_resting_coordinate() {
     }
     assert_closed(&simulation);
 }
+
+/// `lsdc tree` counts the mimic coupling with the contact's rows: the carriage's x and y, the
+/// spin and the plate's turn (4 tree dof) keep 2 positions (the coupling, the gap) and one
+/// velocity (the rolling row ties the spin to x).
+#[test]
+fn a_mimic_with_a_contact_is_counted_in_both_degrees_of_freedom() {
+    let plate = "let plate = body mass = 0.4, iframe = 1, inertia = [0.01, 0.02, 0.01] end ;\n\
+                 join carriage and plate with mimic_revolute([0, -1, 0], spin, 2, 0.3) as turn ;\n";
+    let text =
+        incline(0.5, "revolute([0, -1, 0])", "rolling(r)", plate) + "initial motion.y = r ;\n";
+    let options = lsdc::load::LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let compilation = lsdc::driver::compile_text("test.lsd", &text, None, &options);
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let report = lsdc::analysis::tree(&mechanism).expect("a tree report");
+    let contacts = report.contacts.expect("contacts");
+    assert_eq!((contacts.position_dof, contacts.velocity_dof), (2, 1));
+    assert_eq!(report.mobility.expect("mobility").mobility, 3);
+}
