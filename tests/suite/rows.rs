@@ -7,6 +7,7 @@
 //! energy normal to the stop), and the same mechanism built without its redundant loop.
 
 use super::common::programs::{column, constraints, run_text};
+use super::stop_loops::{assert_impacts_take_normal_energy, assert_rolling, rolling_pendulum_with};
 use lsdc::simulate::prepare::{Integrator, Settings};
 use lsdc::simulate::run::{Sample, Simulation};
 
@@ -65,22 +66,6 @@ fn contact_force(sample: &Sample) -> [f64; 3] {
     [r[r.len() - 3], r[r.len() - 2], r[r.len() - 1]]
 }
 
-/// The rolling rows at round-off on every sample: the axle moves −r times the spin, and the
-/// cylinder stays on the slope.
-fn assert_rolls(simulation: &Simulation) {
-    let (x, y, spin) = (
-        column(simulation, "motion.x"),
-        column(simulation, "motion.y"),
-        column(simulation, "spin.q"),
-    );
-    for sample in &simulation.samples {
-        let slip = sample.rates[x] + RADIUS * sample.rates[spin];
-        assert!(slip.abs() < 1e-12, "slip {slip} at t = {}", sample.time);
-        let gap = sample.coordinates[y] - RADIUS;
-        assert!(gap.abs() < 1e-14, "gap {gap} at t = {}", sample.time);
-    }
-}
-
 /// A plate (0.4 kg, centred on the axle, J = 0.02 about it) hinged on the carriage follows the
 /// rolling cylinder's spin, turn.q = n spin.q + 0.3: the coupling adds n² J to the inertia the
 /// rolling brings to the axle, so it runs down the slope at
@@ -123,7 +108,7 @@ fn a_mimic_on_a_rolling_cylinder_adds_its_inertia_times_the_square_of_its_multip
                 assert!(coupling.abs() < 1e-12, "coupling {coupling}");
                 assert!((r[turn] - multiplier * r[spin]).abs() < 1e-12);
             }
-            assert_rolls(&simulation);
+            assert_rolling(&simulation);
             let drift = simulation.report.energy_drift.expect("conservative");
             assert!(drift < 1e-10, "{integrator:?}: energy drift {drift:e}");
         }
@@ -162,7 +147,7 @@ fn friction_in_the_axle_of_a_rolling_cylinder_slows_it_as_in_closed_form() {
                 assert!((fx - along).abs() < 1e-9, "R_x = {fx} against {along}");
                 assert!(fy.abs() < 1e-9 && (fz - normal).abs() < 1e-9, "R_y = {fz}");
             }
-            assert_rolls(&simulation);
+            assert_rolling(&simulation);
             let report = &simulation.report;
             assert!(report.friction_switches.is_empty());
             if dry > 0.0 {
@@ -208,7 +193,7 @@ fn a_rolling_cylinder_whose_axle_friction_exceeds_its_weight_sticks_where_it_sto
             );
             assert!(sample.rates[x].abs() < 1e-12, "rate {}", sample.rates[x]);
         }
-        assert_rolls(&simulation);
+        assert_rolling(&simulation);
     }
 }
 
@@ -256,27 +241,11 @@ fn a_sliding_cylinder_with_friction_in_its_axle_follows_both_coulomb_laws() {
 /// also joined to the ground by `shadow`, a second planar link that closes a loop whose rows
 /// repeat the first's, when `loop_closed`.
 fn rolling_pendulum(range: &str, e: f64, start: &str, loop_closed: bool) -> String {
-    let shadow = match loop_closed {
-        true => "join earth and carriage with link(x, y) dof = [x, 0, y] end as shadow ;\n",
-        false => "",
-    };
-    let guess = match loop_closed {
-        true => ", shadow.y = 0.1 guess",
-        false => "",
-    };
-    format!(
-        "import joints ;\nimport gravity ;\n\
-         let cylinder = body mass = 2, iframe = 1, inertia = [0.0067, 0.01, 0.0067] end ;\n\
-         let carriage = body mass = 0.5, iframe = 1, inertia = [0.001, 0.001, 0.001] end ;\n\
-         let rod = body mass = 0.8, iframe = [0, 0, -0.3] ++ 1, inertia = [0.006, 0.006, 0.0002] end ;\n\
-         join earth and carriage with link(x, y) dof = [x, 0, y] end as motion ;\n\
-         {shadow}\
-         join carriage and cylinder with revolute([0, -1, 0]) as spin ;\n\
-         join earth and cylinder with rolling(0.1) as contact ;\n\
-         join carriage and rod with limited_revolute([0, 1, 0], {range}, {e}) as swing ;\n\
-         apply gravity_field ;\n\
-         initial motion.y = 0.1, motion.x' = 1, spin.q' = 10{start}{guess} ;\n"
-    )
+    let shadow = (
+        "join earth and carriage with link(x, y) dof = [x, 0, y] end as shadow ;\n",
+        ", shadow.y = 0.1 guess",
+    );
+    rolling_pendulum_with(range, e, start, loop_closed.then_some(shadow))
 }
 
 /// The loop's rows at round-off on every state the run continued from and every output.
@@ -294,37 +263,14 @@ fn assert_closed(simulation: &Simulation) {
 /// mechanism without the loop.
 #[test]
 fn a_stop_with_a_contact_and_a_loop_takes_e_squared_of_the_normal_energy() {
-    let (r, m_cylinder, i_cylinder, m_carriage) = (0.1f64, 2.0f64, 0.01f64, 0.5f64);
-    let (m_rod, d, i_rod, e) = (0.8f64, 0.3f64, 0.006f64, 0.5f64);
+    let e = 0.5;
     let looped = rolling_pendulum("-0.2, 0.25", e, "", true);
     let tree = rolling_pendulum("-0.2, 0.25", e, "", false);
     for integrator in [Integrator::DormandPrince, Integrator::Rk4] {
         let simulation = simulate(&looped, settings(integrator.clone(), 2.0, false));
-        let report = &simulation.report;
-        assert!(report.impacts.len() >= 3, "{:?}", report.impacts);
-        for impact in &report.impacts {
-            let mass = m_carriage + m_cylinder + m_rod + i_cylinder / (r * r);
-            let coupling = m_rod * d * impact.bound.cos();
-            let swing = i_rod + m_rod * d * d;
-            let inverse = mass / (mass * swing - coupling * coupling);
-            let normal = 0.5 * impact.rate_before.powi(2) / inverse;
-            let lost = impact.kinetic_before - impact.kinetic_after;
-            assert!(
-                (lost - (1.0 - e * e) * normal).abs() < 1e-9 * impact.kinetic_before,
-                "{integrator:?}: lost {lost}, expected {}",
-                (1.0 - e * e) * normal
-            );
-            assert!((impact.rate_after + e * impact.rate_before).abs() < 1e-12);
-        }
+        assert_impacts_take_normal_energy(&simulation, e, &format!("{integrator:?}"));
         assert_closed(&simulation);
-        let (x, spin) = (
-            column(&simulation, "motion.x"),
-            column(&simulation, "spin.q"),
-        );
-        for sample in &simulation.samples {
-            let slip = sample.rates[x] + 0.1 * sample.rates[spin];
-            assert!(slip.abs() < 1e-12, "slip {slip} at {}", sample.time);
-        }
+        assert_rolling(&simulation);
         let without = simulate(&tree, settings(integrator.clone(), 2.0, false));
         for (a, b) in simulation.samples.iter().zip(&without.samples) {
             for name in ["motion.x", "swing.q"] {
