@@ -329,3 +329,40 @@ fn a_mimic_with_a_contact_is_counted_in_both_degrees_of_freedom() {
     assert_eq!((contacts.position_dof, contacts.velocity_dof), (2, 1));
     assert_eq!(report.mobility.expect("mobility").mobility, 3);
 }
+
+/// `examples/rolling_axle_friction.lsd`: launched up the slope, the cylinder whose axle has
+/// F_c = 0.3 N m of dry friction rolls up at −(m g sin α + F_c / r) / (3/2 m), stops at
+/// t* = 0.5 / 4.27 s, where the holding torque (0.981 N m) exceeds F_c, so that the axle slips
+/// back, and rolls down at −(m g sin α − F_c / r) / (3/2 m), each phase in closed form.
+#[test]
+fn the_rolling_axle_friction_example_switches_at_its_closed_form_time() {
+    let (dry, v0) = (0.3, 0.5);
+    let up = -(MASS * G * ALPHA.sin() + dry / RADIUS) / (1.5 * MASS);
+    let down = -(MASS * G * ALPHA.sin() - dry / RADIUS) / (1.5 * MASS);
+    let stop = -v0 / up;
+    let top = v0 * stop + 0.5 * up * stop * stop;
+    let text = super::common::programs::example_text("rolling_axle_friction", &[]);
+    let simulation = simulate(&text, settings(Integrator::DormandPrince, 1.0, false));
+    let switches = &simulation.report.friction_switches;
+    let [back] = &switches[..] else {
+        panic!("{switches:?}");
+    };
+    assert!(
+        (back.time - stop).abs() < 1e-9,
+        "{} against {stop}",
+        back.time
+    );
+    assert_eq!(back.phase, lsdc::dynamics::friction::Phase::Slipping(1.0));
+    let x = column(&simulation, "motion.x");
+    for sample in &simulation.samples {
+        let t = sample.time;
+        let want = match t <= stop {
+            true => v0 * t + 0.5 * up * t * t,
+            false => top + 0.5 * down * (t - stop).powi(2),
+        };
+        assert!((sample.coordinates[x] - want).abs() < 1e-9, "t = {t}");
+    }
+    assert_rolling(&simulation);
+    let balance = simulation.report.energy_balance.expect("a balance");
+    assert!(balance.abs() < 1e-10, "balance {balance}");
+}
