@@ -52,6 +52,8 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         let positions = model.positions();
         let mut moved = false;
+        // Whether the geometry of the last evaluation is that of y (no step followed it).
+        let mut settled = false;
         for _ in 0..POSITION_STEPS {
             self.split_into(y, q, v);
             self.stacked_geometry(t, q, v)?;
@@ -59,6 +61,7 @@ impl MechanicalSystem<'_> {
             stack.arrange(&self.normal_rows, couplings, &[]);
             stack.gather(&self.contact_state, &model.mimics);
             if !self.fill_position_values(q) {
+                settled = true;
                 break;
             }
             self.step.fill(0.0);
@@ -74,8 +77,10 @@ impl MechanicalSystem<'_> {
             y[positions..].copy_from_slice(v);
             moved = true;
         }
-        self.split_into(y, q, v);
-        self.stacked_geometry(t, q, v)?;
+        if !settled {
+            self.split_into(y, q, v);
+            self.stacked_geometry(t, q, v)?;
+        }
         self.gather_held();
         let kept = self.contact_rows.as_deref().unwrap_or_default();
         let stack = &mut self.velocity_stack;
