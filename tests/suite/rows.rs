@@ -366,3 +366,47 @@ fn the_rolling_axle_friction_example_switches_at_its_closed_form_time() {
     let balance = simulation.report.energy_balance.expect("a balance");
     assert!(balance.abs() < 1e-10, "balance {balance}");
 }
+
+/// Every kind at once: the mimic plate and the rolling contact of the test above, dry friction
+/// in the axle, and a second planar link `shadow` from the slope to the carriage that closes a
+/// loop repeating the first's rows. The couplings', the contact's and the loop's rows are
+/// solved together, so the motion keeps the closed form of the added inertia with the
+/// friction's torque, ẍ = (−g sin α M + F_c / r) / (M + (I + n² J) / r²), and every row holds
+/// at round-off.
+#[test]
+fn a_mimic_a_contact_friction_and_a_loop_are_solved_together() {
+    let (carriage, plate, plate_inertia, multiplier, dry) = (0.5, 0.4, 0.02, -2.5, 0.3);
+    let extra = format!(
+        "let plate = body mass = {plate}, iframe = 1, inertia = [0.01, {plate_inertia}, 0.01] end ;\n\
+         join carriage and plate with mimic_revolute([0, -1, 0], spin, {multiplier}, 0.3) as turn ;\n\
+         join slope and carriage with link(x, y) dof = [x, 0, y] end as shadow ;\n"
+    );
+    let spin = format!("friction_revolute([0, -1, 0], {dry}, 0)");
+    let text = incline(carriage, &spin, "rolling(r)", &extra)
+        + "initial motion.y = r, shadow.y = r guess ;\n";
+    let moved = carriage + MASS + plate;
+    let rolling = (INERTIA + multiplier * multiplier * plate_inertia) / (RADIUS * RADIUS);
+    let acceleration = (-G * ALPHA.sin() * moved + dry / RADIUS) / (moved + rolling);
+    for integrator in [Integrator::DormandPrince, Integrator::Rk4] {
+        let simulation = simulate(&text, settings(integrator.clone(), 1.0, false));
+        let (x, spin, turn) = (
+            column(&simulation, "motion.x"),
+            column(&simulation, "spin.q"),
+            column(&simulation, "turn.q"),
+        );
+        for sample in simulation.samples.iter().skip(1) {
+            let (t, c) = (sample.time, &sample.coordinates);
+            let want = 0.5 * acceleration * t * t;
+            assert!(
+                (c[x] - want).abs() < 1e-9,
+                "{integrator:?}, t = {t}: x = {} against {want}",
+                c[x]
+            );
+            let coupling = c[turn] - (multiplier * c[spin] + 0.3);
+            assert!(coupling.abs() < 1e-12, "coupling {coupling}");
+        }
+        assert_rolling(&simulation);
+        assert_closed(&simulation);
+        assert!(simulation.report.friction_switches.is_empty());
+    }
+}
