@@ -1,7 +1,9 @@
 //! The equations of motion as a first-order system y' = f(t, y), with y = (positions,
 //! velocities): positions move with the joint velocities (quaternions included), velocities with
 //! the accelerations from the articulated-body algorithm under the efforts (trees), or from the
-//! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (loops).
+//! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (loops), then with every other row
+//! (contacts, couplings with loops, coordinates held at rest) solved on the response of those
+//! accelerations to forces (`dynamics::rows`, `holding`).
 
 use std::cell::RefCell;
 
@@ -520,8 +522,8 @@ impl<'m> MechanicalSystem<'m> {
         Ok(self.keep_on_bounds(y)? || moved)
     }
 
-    /// Keeps the loops closed after a step (see `LoopMonitor::keep`), or the contacts
-    /// (`keep_contacts`); nothing for a tree.
+    /// Keeps the loops closed after a step (see `LoopMonitor::keep`), then the rows beyond
+    /// them, the contacts' and the couplings' (`keep_stacked`); nothing for a tree without.
     fn keep_rows(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
         if !model.has_loops() {

@@ -1,5 +1,5 @@
 //! Mimic joints and joint friction on mechanisms with closed loops: their rows solved with the
-//! loops' (`simulate::system::couplings`). A four-bar carrying a plate that mimics its crank
+//! loops' (`dynamics::rows`). A four-bar carrying a plate that mimics its crank
 //! against the same four-bar with the plate welded to the crank; a four-bar with dry friction in
 //! its crank's pivot against separate integrations of each swing under a constant torque, its
 //! energy lost against the friction times the angle swept, and its sticking threshold against

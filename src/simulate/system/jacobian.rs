@@ -56,7 +56,7 @@ impl MechanicalSystem<'_> {
         power_gradient: &mut [f64],
     ) -> Result<bool, SystemError> {
         // A coordinate resting on its stop is held by a force that depends on the state too
-        // (`hold_resting`): the differences of f carry it, the residual's would not.
+        // (`solve_rows`): the differences of f carry it, the residual's would not.
         if !self.has_tree_jacobian() || self.resting.contains(&true) {
             return Ok(false);
         }
