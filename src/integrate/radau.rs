@@ -193,7 +193,8 @@ pub(super) struct Radau5 {
     increments: [Vec<f64>; 3],
     /// The accepted step's polynomial; `None` after a start at a point it did not reach.
     collocation: Option<Collocation>,
-    /// θ / (1 − θ) of the last iteration, which lets the next converge in one iteration.
+    /// θ / (1 − θ) of the last iteration, which lets the next converge in one iteration; 1
+    /// after a start (RADAU5's FACCON), where no rate is known yet.
     contraction: f64,
     /// The rate θ of the last iteration.
     rate: f64,
@@ -234,7 +235,7 @@ impl Radau5 {
             factors: None,
             increments: triple(),
             collocation: None,
-            contraction: 0.0,
+            contraction: 1.0,
             rate: 0.0,
             newton_limit: f64::INFINITY,
             rejected: false,
@@ -257,6 +258,12 @@ impl Radau5 {
     }
 
     fn restart(&mut self) {
+        // The last rate belongs to another point (or to none): the first iteration is judged on
+        // its correction alone. With 0 there (as before), the first step after dopri5 handed
+        // over took the first iterate as converged, and its error (in the fast transient, up to
+        // 1e4 times the tolerance in the end slope) stayed in the slow motion: on the governor
+        // the position error at 1e-8 was 1.6e-10, now 6.8e-11, at 1.5e-9 2.4e-11, now 5.2e-12.
+        self.contraction = 1.0;
         self.newton_limit = f64::INFINITY;
         self.stale = true;
         self.fresh = false;
