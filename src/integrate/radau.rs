@@ -495,7 +495,11 @@ impl Radau5 {
         let stage = &self.stage_derivatives[2];
         for (i, slope) in self.end_derivative.iter_mut().enumerate() {
             let row = jacobian.row(i);
-            let change: f64 = row.iter().zip(&self.end_correction).map(|(j, d)| j * d).sum();
+            let change: f64 = row
+                .iter()
+                .zip(&self.end_correction)
+                .map(|(j, d)| j * d)
+                .sum();
             *slope = stage[i] + change;
         }
     }
