@@ -11,6 +11,7 @@ use std::rc::Rc;
 
 mod contact_loops;
 mod couplings;
+mod held_reactions;
 mod held_rows;
 mod holding;
 mod jacobian;
@@ -300,7 +301,12 @@ impl<'m> MechanicalSystem<'m> {
     /// The accelerations and contact forces of a tree with contacts at (t, q, v), left in the
     /// contacts' scratch with the rows they come from; the efforts in `efforts`, the forward
     /// kinematics of (q, v) in `data`.
-    fn solve_contacts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+    pub(super) fn solve_contacts(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SystemError> {
         let model = self.model;
         self.evaluate_efforts(t, q, v)?;
         let scratch = &mut self.contacts;
@@ -682,14 +688,16 @@ impl<'m> MechanicalSystem<'m> {
 
     /// The wrench each join transmits to its second body, at the join, in the fixed axes
     /// (moment, then force): the tree's joins from inverse dynamics with the accelerations of the
-    /// motion and the loops' forces, then the loops' from their multipliers.
+    /// motion and the loops' forces, then the loops' from their multipliers. The coordinates
+    /// held at rest (resting stops, sticking joints) are held as the run holds them, their
+    /// forces in their joins' reactions as a link effort is.
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
             let touching = match model.has_contacts() {
                 true => Some(self.contacts_on_loops_reactions(t, q, v)?),
                 false => {
-                    self.solve_constrained(t, q, v, Wanted::WithMultipliers)?;
+                    self.solve_held_on_loops(t, q, v)?;
                     None
                 }
             };
@@ -713,10 +721,7 @@ impl<'m> MechanicalSystem<'m> {
             }
             (accelerations, external, Some(multipliers))
         } else if model.has_contacts() {
-            match model.has_loops() {
-                true => self.solve_contacts_on_loops(t, q, v)?,
-                false => self.solve_contacts(t, q, v)?,
-            }
+            self.solve_held_contacts(t, q, v)?;
             let (rows, solution) = (&self.contacts.rows, &self.contacts.solution);
             let on_bodies =
                 contacts::contact_body_forces(model, &self.data, rows, &solution.forces);

@@ -8,11 +8,13 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use super::common::programs::{example_text, initial_state, prepared_text};
+use super::stop_loops::rolling_pendulum;
 use lsdc::dynamics::loops::Stabilisation;
+use lsdc::dynamics::stops::Side;
 use lsdc::simulate::prepare::Prepared;
 use lsdc::simulate::run::reaction_names_of;
 use lsdc::simulate::system::MechanicalSystem;
-use nalgebra::{Rotation3, Vector3};
+use nalgebra::{Matrix2, Rotation3, Vector2, Vector3};
 
 fn system(prepared: &Prepared) -> MechanicalSystem<'_> {
     let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
@@ -21,8 +23,22 @@ fn system(prepared: &Prepared) -> MechanicalSystem<'_> {
 
 /// The reactions and accelerations of a prepared program at its initial state.
 fn reactions_at_start(prepared: &Prepared) -> (Vec<f64>, Vec<f64>) {
+    reactions_resting(prepared, None)
+}
+
+/// The reactions and accelerations of a prepared program at its initial state, its loops closed
+/// and its contacts kept, resting on the lower stop of coordinate `resting` if given.
+fn reactions_resting(prepared: &Prepared, resting: Option<&str>) -> (Vec<f64>, Vec<f64>) {
     let mut system = system(prepared);
-    let y = initial_state(prepared);
+    let mut y = initial_state(prepared);
+    system.start_loops(&mut y).expect("closes");
+    if let Some(coordinate) = resting {
+        let stops = &prepared.model.stops;
+        let lower =
+            |s: &&lsdc::dynamics::stops::Stop| s.coordinate == coordinate && s.side == Side::Lower;
+        let k = stops.iter().position(|s| lower(&s)).expect("stop");
+        system.resting[k] = true;
+    }
     let mut dydt = vec![0.0; y.len()];
     system.derivative(0.0, &y, &mut dydt).expect("f");
     let (q, v) = prepared.model.split_state(&y);
@@ -126,4 +142,93 @@ fn a_geared_rotor_s_torque_is_in_the_reaction_of_the_joins_that_carry_it() {
     );
     // The rotor's torque matters: it is far above round-off in the shoulder's reaction.
     assert!(torque.amax() > 1e-2, "{torque:?}");
+}
+
+/// A crank of `examples/limited_four_bar.lsd` resting on its lower stop (0.6 rad), at rest:
+/// the stop's torque holds the weights. By virtual work along the four-bar's one motion
+/// (crank rate 1), τ = g Σ mᵢ vᵢ,y with vᵢ the bars' centres' velocities; the crank's reaction
+/// has that moment about its axis (its bearing transmits none), and with the rocker's it
+/// carries the weights to the ground.
+#[test]
+fn a_resting_stop_s_torque_is_in_the_reaction_of_its_join_on_a_four_bar() {
+    let (l0, l1, l2, l3, g) = (4.0f64, 1.0f64, 3.5f64, 3.0f64, 9.81);
+    let mut prepared = prepared_text(&example_text(
+        "limited_four_bar",
+        &[("initial crank.q = 1.0", "initial crank.q = 0.6")],
+    ));
+    prepared.settings.reactions = true;
+    let (reactions, accelerations) = reactions_resting(&prepared, Some("crank.q"));
+    assert!(
+        accelerations.iter().all(|a| a.abs() < 1e-12),
+        "{accelerations:?}"
+    );
+    // The closed four-bar by hand: the coupler's far end C is at l2 from the crank's end P and
+    // at l3 from the rocker's pivot O, above the ground line (the example's branch).
+    let angle = |v: Vector2<f64>| v.y.atan2(v.x);
+    let along = |a: f64| Vector2::new(a.cos(), a.sin());
+    let square = |a: f64| Vector2::new(-a.sin(), a.cos());
+    let crank = 0.6;
+    let (p, o) = (l1 * along(crank), Vector2::new(l0, 0.0));
+    let d = (o - p).norm();
+    let x = (d * d + l2 * l2 - l3 * l3) / (2.0 * d);
+    let u = (o - p) / d;
+    let c = p + x * u + (l2 * l2 - x * x).sqrt() * Vector2::new(-u.y, u.x);
+    let (coupler, rocker) = (angle(c - p), angle(c - o));
+    // Velocities at crank rate 1: l1 e⊥(θ1) + l2 θ2' e⊥(θ2) = l3 θ3' e⊥(θ3).
+    let closure = Matrix2::from_columns(&[l2 * square(coupler), -l3 * square(rocker)]);
+    let rates = closure.lu().solve(&(-l1 * square(crank))).expect("regular");
+    let centres = [
+        0.5 * l1 * square(crank),
+        l1 * square(crank) + 0.5 * l2 * rates[0] * square(coupler),
+        0.5 * l3 * rates[1] * square(rocker),
+    ];
+    let masses = [l1, l2, l3];
+    let torque: f64 = g
+        * (masses.iter().zip(&centres))
+            .map(|(m, v)| m * v.y)
+            .sum::<f64>();
+    assert!(
+        torque > 1.0,
+        "the weights push the crank onto its lower stop: {torque}"
+    );
+    let on_crank = reaction(&prepared, &reactions, "crank");
+    assert!(
+        (on_crank[2] - torque).abs() < 1e-9 * torque,
+        "crank's moment {} vs the stop's torque {torque}",
+        on_crank[2]
+    );
+    let on_rocker = reaction(&prepared, &reactions, "rocker");
+    let weight = g * (l1 + l2 + l3);
+    let ground = [
+        on_crank[3] + on_rocker[3],
+        on_crank[4] + on_rocker[4] - weight,
+    ];
+    assert!(ground.iter().all(|f| f.abs() < 1e-9 * weight), "{ground:?}");
+}
+
+/// The pendulum of the rolling cylinder (`stop_loops`) resting on its stop at 0.2 rad while the
+/// cylinder rolls: the rod moves with the carriage, without turning (the carriage translates;
+/// the weights are vertical, so it rolls on at constant speed), so its join carries
+/// F = m (ẍ, 0, g) at its centre (`gravity_field`: g = 9.80665), r = (−d sin θ, 0, −d cos θ) from the join, and the moment
+/// r × F about the join (Newton–Euler by hand, ẍ from the run's equations). The stop's torque
+/// is the moment's y component: without it the rod would swing.
+#[test]
+fn a_resting_stop_s_torque_is_in_the_reaction_of_its_join_with_contacts() {
+    let (m, d, theta, g) = (0.8f64, 0.3f64, 0.2f64, 9.80665);
+    // Rolling from the start (x' = −r q'), so that keeping the contact gives the rod no rate.
+    let text = rolling_pendulum("0.2, 1.0", 0.0, ", swing.q = 0.2");
+    let mut prepared = prepared_text(&text.replace("spin.q' = 10", "spin.q' = -10"));
+    prepared.settings.reactions = true;
+    let (reactions, accelerations) = reactions_resting(&prepared, Some("swing.q"));
+    let model = &prepared.model;
+    let index = |name: &str| (0..model.velocities()).position(|k| model.velocity_name(k) == name);
+    let swing = index("swing.q").expect("swing");
+    assert!(accelerations[swing].abs() < 1e-12, "{accelerations:?}");
+    let x = accelerations[index("motion.x").expect("x")];
+    let force = m * Vector3::new(x, 0.0, g);
+    let moment = Vector3::new(-d * theta.sin(), 0.0, -d * theta.cos()).cross(&force);
+    let by_hand = [moment.as_slice(), force.as_slice()].concat();
+    let on_rod = reaction(&prepared, &reactions, "swing");
+    let difference = largest_difference(on_rod, &by_hand);
+    assert!(difference < 1e-9 * m * g, "{on_rod:?} vs {by_hand:?}");
 }

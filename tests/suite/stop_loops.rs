@@ -190,7 +190,7 @@ fn the_implicit_method_follows_dopri5_through_a_resting_phase_and_its_release() 
 /// A cylinder (m = 2, I = 0.01 about its axis, r = 0.1) rolling on level ground, its axle a
 /// carriage (0.5 kg) moving along x, carries a pendulum (0.8 kg at d = 0.3, I = 0.006 about its
 /// centre) limited to `range` with restitution `e`; launched at 1 m/s.
-fn rolling_pendulum(range: &str, e: f64, start: &str) -> String {
+pub(super) fn rolling_pendulum(range: &str, e: f64, start: &str) -> String {
     format!(
         "import joints ;\nimport gravity ;\n\
          let cylinder = body mass = 2, iframe = 1, inertia = [0.0067, 0.01, 0.0067] end ;\n\

@@ -39,11 +39,7 @@ impl MechanicalSystem<'_> {
     pub(in crate::simulate) fn held_rows(&self) -> (DMatrix<f64>, usize) {
         let model = self.model;
         let couplings = self.coupling_rows();
-        let resting = (0..model.stops.len()).filter(|&k| self.resting[k]);
-        let sticking = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
-        let units: Vec<usize> = (resting.map(|k| model.stops[k].velocity))
-            .chain(sticking.map(|k| model.frictions[k].velocity))
-            .collect();
+        let units = self.held_velocities();
         let count = couplings.nrows();
         let mut rows = DMatrix::zeros(count + units.len(), model.velocities());
         rows.rows_mut(0, count).copy_from(&couplings);
@@ -51,6 +47,16 @@ impl MechanicalSystem<'_> {
             rows[(count + i, velocity)] = 1.0;
         }
         (rows, count)
+    }
+
+    /// The velocities held at rest: the resting stops' coordinates, then the sticking joints'.
+    pub(super) fn held_velocities(&self) -> Vec<usize> {
+        let model = self.model;
+        let resting = (0..model.stops.len()).filter(|&k| self.resting[k]);
+        let sticking = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
+        (resting.map(|k| model.stops[k].velocity))
+            .chain(sticking.map(|k| model.frictions[k].velocity))
+            .collect()
     }
 
     /// The accelerations' response P F to the generalised forces F (columns over the state's
