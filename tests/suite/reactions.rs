@@ -232,3 +232,36 @@ fn a_resting_stop_s_torque_is_in_the_reaction_of_its_join_with_contacts() {
     let difference = largest_difference(on_rod, &by_hand);
     assert!(difference < 1e-9 * m * g, "{on_rod:?} vs {by_hand:?}");
 }
+
+/// `examples/four_bar_mimic.lsd`: a plate hinged on the ground follows the crank at 0.3 rad, a
+/// mimic coupling solved with the loop's rows. The coupling's force acts on the crank's and the
+/// plate's coordinates as link efforts do, so the crank's and the plate's joins, both at the
+/// crank's pivot, transmit together what the crank transmits when the plate is welded to it;
+/// the rocker's reaction is the same in both.
+#[test]
+fn a_mimic_coupling_s_force_is_in_the_reactions_of_a_four_bar() {
+    let mimic = "join earth and plate with mimic_revolute([0, 0, 1], crank, 1, 0.3) as turn ;";
+    let weld = "join bar1 and plate with link dof = 0.3 || [0, 0, 1] end as weld ;";
+    let start = (
+        "initial crank.q = 1.0,",
+        "initial crank.q = 1.0, turn.q = 1.3,",
+    );
+    let mut coupled = prepared_text(&example_text("four_bar_mimic", &[start]));
+    let mut welded = prepared_text(&example_text("four_bar_mimic", &[(mimic, weld)]));
+    coupled.settings.reactions = true;
+    welded.settings.reactions = true;
+    let (with_mimic, _) = reactions_at_start(&coupled);
+    let (with_weld, _) = reactions_at_start(&welded);
+    let crank = reaction(&coupled, &with_mimic, "crank");
+    let turn = reaction(&coupled, &with_mimic, "turn");
+    let together: Vec<f64> = crank.iter().zip(turn).map(|(a, b)| a + b).collect();
+    let expected = reaction(&welded, &with_weld, "crank");
+    let scale = expected.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
+    let difference = largest_difference(&together, expected);
+    assert!(difference < 1e-9 * scale, "{together:?} vs {expected:?}");
+    let rocker = largest_difference(
+        reaction(&coupled, &with_mimic, "rocker"),
+        reaction(&welded, &with_weld, "rocker"),
+    );
+    assert!(rocker < 1e-9 * scale, "rocker off by {rocker:e}");
+}
