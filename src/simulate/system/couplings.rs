@@ -89,6 +89,19 @@ impl MechanicalSystem<'_> {
         rows: &DMatrix<f64>,
         values: &DVector<f64>,
     ) -> Result<(DVector<f64>, DVector<f64>), SystemError> {
+        let values = DMatrix::from_column_slice(values.len(), 1, values.as_slice());
+        let (change, forces) = self.held_changes(q, rows, &values)?;
+        Ok((change.column(0).into_owned(), forces.column(0).into_owned()))
+    }
+
+    /// [`held_change`](Self::held_change) for several columns of values at once: the changes
+    /// and forces column by column.
+    pub(in crate::simulate) fn held_changes(
+        &mut self,
+        q: &[f64],
+        rows: &DMatrix<f64>,
+        values: &DMatrix<f64>,
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), SystemError> {
         let responses = self.response(q, &rows.transpose())?;
         let coupling = rows * &responses;
         let forces = (coupling.svd(true, true).solve(&(-values), 1e-12))
