@@ -2,7 +2,9 @@
 //! dynamics acts in them: a geared rotor's torque on the body that carries it, against the same
 //! arm with each rotor an explicit body on its own joint that mimics the geared one, and against
 //! the rotor's torque by hand; a stop's contact force holding a four-bar at rest, against the
-//! balance of moments of the weights along the four-bar's one motion.
+//! balance of moments of the weights along the four-bar's one motion, and holding a pendulum on
+//! a rolling cylinder, against Newton–Euler by hand; a mimic coupling's force on a four-bar,
+//! against the plate welded to the crank.
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -10,7 +12,7 @@ use std::rc::Rc;
 use super::common::programs::{example_text, initial_state, prepared_text};
 use super::stop_loops::rolling_pendulum;
 use lsdc::dynamics::loops::Stabilisation;
-use lsdc::dynamics::stops::Side;
+use lsdc::dynamics::stops::{Side, Stop};
 use lsdc::simulate::prepare::Prepared;
 use lsdc::simulate::run::reaction_names_of;
 use lsdc::simulate::system::MechanicalSystem;
@@ -34,9 +36,8 @@ fn reactions_resting(prepared: &Prepared, resting: Option<&str>) -> (Vec<f64>, V
     system.start_loops(&mut y).expect("closes");
     if let Some(coordinate) = resting {
         let stops = &prepared.model.stops;
-        let lower =
-            |s: &&lsdc::dynamics::stops::Stop| s.coordinate == coordinate && s.side == Side::Lower;
-        let k = stops.iter().position(|s| lower(&s)).expect("stop");
+        let lower = |s: &Stop| s.coordinate == coordinate && s.side == Side::Lower;
+        let k = stops.iter().position(lower).expect("stop");
         system.resting[k] = true;
     }
     let mut dydt = vec![0.0; y.len()];
