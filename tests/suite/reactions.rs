@@ -145,26 +145,13 @@ fn a_geared_rotor_s_torque_is_in_the_reaction_of_the_joins_that_carry_it() {
     assert!(torque.amax() > 1e-2, "{torque:?}");
 }
 
-/// A crank of `examples/limited_four_bar.lsd` resting on its lower stop (0.6 rad), at rest:
-/// the stop's torque holds the weights. By virtual work along the four-bar's one motion
-/// (crank rate 1), τ = g Σ mᵢ vᵢ,y with vᵢ the bars' centres' velocities; the crank's reaction
-/// has that moment about its axis (its bearing transmits none), and with the rocker's it
-/// carries the weights to the ground.
-#[test]
-fn a_resting_stop_s_torque_is_in_the_reaction_of_its_join_on_a_four_bar() {
+/// The four-bar of `examples/limited_four_bar.lsd` (bars of 1 kg/m) at rest with its crank at
+/// 0.6 rad: the crank torque that holds the weights, by virtual work along the four-bar's one
+/// motion (crank rate 1), τ = g Σ mᵢ vᵢ,y with vᵢ the bars' centres' velocities. The coupler's
+/// far end C is at l2 from the crank's end P and at l3 from the rocker's pivot O, above the
+/// ground line (the example's branch).
+fn holding_torque() -> f64 {
     let (l0, l1, l2, l3, g) = (4.0f64, 1.0f64, 3.5f64, 3.0f64, 9.81);
-    let mut prepared = prepared_text(&example_text(
-        "limited_four_bar",
-        &[("initial crank.q = 1.0", "initial crank.q = 0.6")],
-    ));
-    prepared.settings.reactions = true;
-    let (reactions, accelerations) = reactions_resting(&prepared, Some("crank.q"));
-    assert!(
-        accelerations.iter().all(|a| a.abs() < 1e-12),
-        "{accelerations:?}"
-    );
-    // The closed four-bar by hand: the coupler's far end C is at l2 from the crank's end P and
-    // at l3 from the rocker's pivot O, above the ground line (the example's branch).
     let angle = |v: Vector2<f64>| v.y.atan2(v.x);
     let along = |a: f64| Vector2::new(a.cos(), a.sin());
     let square = |a: f64| Vector2::new(-a.sin(), a.cos());
@@ -184,10 +171,28 @@ fn a_resting_stop_s_torque_is_in_the_reaction_of_its_join_on_a_four_bar() {
         0.5 * l3 * rates[1] * square(rocker),
     ];
     let masses = [l1, l2, l3];
-    let torque: f64 = g
-        * (masses.iter().zip(&centres))
-            .map(|(m, v)| m * v.y)
-            .sum::<f64>();
+    g * (masses.iter().zip(&centres))
+        .map(|(m, v)| m * v.y)
+        .sum::<f64>()
+}
+
+/// A crank of `examples/limited_four_bar.lsd` resting on its lower stop (0.6 rad), at rest:
+/// the stop's torque holds the weights ([`holding_torque`]); the crank's reaction has that
+/// moment about its axis (its bearing transmits none), and with the rocker's it carries the
+/// weights to the ground.
+#[test]
+fn a_resting_stop_s_torque_is_in_the_reaction_of_its_join_on_a_four_bar() {
+    let mut prepared = prepared_text(&example_text(
+        "limited_four_bar",
+        &[("initial crank.q = 1.0", "initial crank.q = 0.6")],
+    ));
+    prepared.settings.reactions = true;
+    let (reactions, accelerations) = reactions_resting(&prepared, Some("crank.q"));
+    assert!(
+        accelerations.iter().all(|a| a.abs() < 1e-12),
+        "{accelerations:?}"
+    );
+    let (torque, g) = (holding_torque(), 9.81);
     assert!(
         torque > 1.0,
         "the weights push the crank onto its lower stop: {torque}"
@@ -199,7 +204,7 @@ fn a_resting_stop_s_torque_is_in_the_reaction_of_its_join_on_a_four_bar() {
         on_crank[2]
     );
     let on_rocker = reaction(&prepared, &reactions, "rocker");
-    let weight = g * (l1 + l2 + l3);
+    let weight = g * (1.0 + 3.5 + 3.0);
     let ground = [
         on_crank[3] + on_rocker[3],
         on_crank[4] + on_rocker[4] - weight,
@@ -265,4 +270,31 @@ fn a_mimic_coupling_s_force_is_in_the_reactions_of_a_four_bar() {
         reaction(&welded, &with_weld, "rocker"),
     );
     assert!(rocker < 1e-9 * scale, "rocker off by {rocker:e}");
+}
+
+/// The run's samples see the crank resting as the run does: `examples/limited_four_bar.lsd`
+/// stopped dead on its lower stop (restitution 0) rests there, and every later sample's crank
+/// reaction has the holding torque about its axis.
+#[test]
+fn the_samples_reactions_see_a_four_bar_resting_on_its_stop() {
+    let text = example_text("limited_four_bar", &[("0.6, 2.5, 0.5)", "0.6, 2.5, 0)")]);
+    let mut prepared = prepared_text(&text);
+    prepared.settings.reactions = true;
+    let simulation = super::common::programs::simulated(&prepared);
+    let impacts = &simulation.report.impacts;
+    assert!(impacts.len() == 1 && impacts[0].rests, "{impacts:?}");
+    let torque = holding_torque();
+    let resting = (simulation.samples.iter()).filter(|s| s.time > impacts[0].time);
+    let mut checked = 0;
+    for sample in resting {
+        let on_crank = reaction(&prepared, &sample.reactions, "crank");
+        assert!(
+            (on_crank[2] - torque).abs() < 1e-9 * torque,
+            "t = {}: {} vs {torque}",
+            sample.time,
+            on_crank[2]
+        );
+        checked += 1;
+    }
+    assert!(checked > 10, "{checked}");
 }
