@@ -34,11 +34,13 @@ pub struct Data {
     pub efforts: EffortScratch,
     /// Geared rotors (empty without any): the bodies' motions for one unit velocity, that unit
     /// velocity, each rotor's row w of spin rates per velocity (rotors × nv), and each rotor's
-    /// own effort n ε·τ_r (see `add_rotors_to_mass`, `add_rotor_torques`).
+    /// own effort n ε·τ_r and torque τ_r on its carrier, in the carrier's frame (see
+    /// `add_rotors_to_mass`, `add_rotor_torques`).
     rotor_motions: Vec<Motion>,
     rotor_unit: Vec<f64>,
     rotor_rows: DMatrix<f64>,
     rotor_own: Vec<f64>,
+    rotor_torques: Vec<Vector3<f64>>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -88,6 +90,7 @@ impl Data {
             rotor_unit: vec![0.0; if geared { model.nv } else { 0 }],
             rotor_rows: DMatrix::zeros(model.rotors.len(), model.nv),
             rotor_own: vec![0.0; model.rotors.len()],
+            rotor_torques: vec![Vector3::zeros(); model.rotors.len()],
         }
     }
 }
@@ -279,7 +282,10 @@ pub fn rnea_backward(model: &Model, data: &mut Data, tau: &mut DVector<f64>) {
 
 /// The wrench each joint transmits to its child (and the bodies beyond), in the child's frame,
 /// after `rnea` with the same external forces: every body counts, merged welds included, so a
-/// weld's reaction is its own. `data` must also hold the forward kinematics of the state.
+/// weld's reaction is its own, and so does each geared rotor's torque on its carrier (the rate
+/// of its spin's angular momentum, which the carrier's bearings and the gear supply: a moment
+/// alone, the rotor's mass being the carrier's). `data` must also hold the forward kinematics
+/// of the state.
 pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> Vec<Force> {
     let n = model.body_count();
     let mut acceleration = data.acceleration.clone();
@@ -304,6 +310,12 @@ pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> V
             body.inertia * acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum)
                 - external[i]
         };
+    }
+    for (rotor, torque) in model.rotors.iter().zip(&data.rotor_torques) {
+        // A rotor's carrier is not merged into another body (E0453).
+        if rotor.carrier != 0 {
+            force[rotor.carrier] += pure_moment(torque);
+        }
     }
     for (k, joint) in model.joints.iter().enumerate().rev() {
         if joint.parent != 0 {
@@ -656,6 +668,11 @@ pub fn add_rotors_to_mass(model: &Model, data: &mut Data, mass: &mut DMatrix<f64
     }
 }
 
+/// A force that is a moment alone.
+fn pure_moment(moment: &Vector3<f64>) -> Force {
+    Force::new(moment.x, moment.y, moment.z, 0.0, 0.0, 0.0)
+}
+
 /// Inverse dynamics of the rotors, at the end of RNEA's pass out: adds each rotor's torque τ_r
 /// to its carrier's force (so the pass back carries it to the joints that turn the carrier) and
 /// leaves, per rotor, n ε·τ_r for the pass back to add to its coordinate's effort in
@@ -671,8 +688,9 @@ fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) {
         let spin_rate = rotor.axis.dot(&omega_dot) + rotor.ratio * a[rotor.velocity];
         let torque = rotor.inertia * (spin_rate * axis + spin(rotor, data) * omega.cross(&axis));
         if rotor.carrier != 0 {
-            data.force[rotor.carrier] += Force::new(torque.x, torque.y, torque.z, 0.0, 0.0, 0.0);
+            data.force[rotor.carrier] += pure_moment(&torque);
         }
         data.rotor_own[r] = rotor.ratio * axis.dot(&torque);
+        data.rotor_torques[r] = torque;
     }
 }

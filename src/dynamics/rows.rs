@@ -203,6 +203,21 @@ impl RowStack {
         &self.right.as_slice()[self.contacts.len() + self.couplings..]
     }
 
+    /// Adds the forces of the last solve's coupling and held rows to the generalised forces
+    /// `tau` (over the state's velocities): they act along coordinates, as link efforts do
+    /// (the contacts' act on bodies instead, `contact_forces`).
+    pub fn add_coordinate_forces(&self, mimics: &[Mimic], tau: &mut DVector<f64>) {
+        let multipliers = &self.right.as_slice()[self.contacts.len()..];
+        let (couplings, held) = multipliers.split_at(self.couplings);
+        for (mimic, force) in mimics.iter().zip(couplings) {
+            tau[mimic.velocity] += force;
+            tau[mimic.leader_velocity] -= mimic.multiplier * force;
+        }
+        for (&velocity, force) in self.held.iter().zip(held) {
+            tau[velocity] += force;
+        }
+    }
+
     /// The values the rows must be brought from, for `add_least_change` (one per row).
     pub fn values_mut(&mut self) -> &mut DVector<f64> {
         &mut self.right

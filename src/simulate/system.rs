@@ -11,6 +11,7 @@ use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use std::rc::Rc;
 
+mod held_reactions;
 mod holding;
 mod jacobian;
 mod stacked;
@@ -618,17 +619,13 @@ impl<'m> MechanicalSystem<'m> {
 
     /// The wrench each join transmits to its second body, at the join, in the fixed axes
     /// (moment, then force): the tree's joins from inverse dynamics with the accelerations of the
-    /// motion and the loops' forces, then the loops' from their multipliers.
+    /// motion and the loops' forces, then the loops' from their multipliers. The coordinates
+    /// held at rest (resting stops, sticking joints) are held as the run holds them, their
+    /// forces in their joins' reactions as a link effort is.
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
-            let touching = match model.has_contacts() {
-                true => Some(self.contacts_on_loops_reactions(t, q, v)?),
-                false => {
-                    self.solve_constrained(t, q, v, Wanted::WithMultipliers)?;
-                    None
-                }
-            };
+            let touching = self.loops_reactions_solve(t, q, v)?;
             let solution = &self.loop_scratch;
             let (c, multipliers) = (&solution.constraints, &solution.multipliers);
             let on_bodies = loops::constraint_forces(model, &self.data, c, multipliers);

@@ -38,6 +38,7 @@ mod native;
 mod outputs;
 mod pinocchio_fixtures;
 mod properties;
+mod reactions;
 mod regression;
 mod robustness;
 mod rows;

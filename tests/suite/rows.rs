@@ -240,7 +240,7 @@ fn a_sliding_cylinder_with_friction_in_its_axle_follows_both_coulomb_laws() {
 /// carriage carrying a pendulum limited to `range` with restitution `e`), with the carriage
 /// also joined to the ground by `shadow`, a second planar link that closes a loop whose rows
 /// repeat the first's, when `loop_closed`.
-fn rolling_pendulum(range: &str, e: f64, start: &str, loop_closed: bool) -> String {
+pub(super) fn rolling_pendulum(range: &str, e: f64, start: &str, loop_closed: bool) -> String {
     let shadow = (
         "join earth and carriage with link(x, y) dof = [x, 0, y] end as shadow ;\n",
         ", shadow.y = 0.1 guess",

@@ -118,28 +118,4 @@ impl MechanicalSystem<'_> {
         forward_kinematics(self.model, &mut self.data, q, v)?;
         Ok(DVector::from_column_slice(&rates[self.model.positions()..]))
     }
-
-    /// The solve of [`solve_every_row`](Self::solve_every_row) on a mechanism with loops and
-    /// contacts, for the reactions: the contacts' forces join the efforts' external forces, the
-    /// loops' multipliers are taken at the accelerations with the rows (in the loops' scratch,
-    /// for `reactions`), and the contacts' reactions (`contacts::contact_reactions`) returned.
-    pub(super) fn contacts_on_loops_reactions(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-    ) -> Result<DVector<f64>, SystemError> {
-        let model = self.model;
-        let accelerations = self.solve_every_row(t, q, v)?;
-        let forces = &self.rows.contact_forces;
-        let on_bodies =
-            contacts::contact_body_forces(model, &self.data, &self.contact_state, forces);
-        for (external, force) in self.efforts.external.iter_mut().zip(&on_bodies) {
-            *external += force;
-        }
-        self.loop_scratch.accelerations.copy_from(&accelerations);
-        let forces = contacts::contact_reactions(forces);
-        self.solve_multipliers();
-        Ok(forces)
-    }
 }

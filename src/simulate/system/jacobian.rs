@@ -12,6 +12,14 @@
 //! efforts and of RNEA, cheaper than the articulated-body algorithm that f needs, and M comes
 //! from the composite rigid bodies once per Jacobian; the power of the non-conservative efforts
 //! (the work's rate) is differenced along with the efforts.
+//!
+//! The same holds with the structure of the tree's other equations. Mimic couplings keep
+//! a = S u̇ with Sᵀ r(q, v, a*) = 0, so ∂a/∂x = P ∂r/∂x with P = S (Sᵀ M S)⁻¹ Sᵀ
+//! (the tree response, `Response::apply`). Coordinates held at rest (a resting stop, a sticking joint) add the rows
+//! E a = 0 and their forces Eᵀμ, which depend on the state too: differentiating
+//! Sᵀ(r + Eᵀμ) = 0 and E a = 0 gives ∂a/∂x = (P − P Eᵀ (E P Eᵀ)⁺ E P) ∂r/∂x, the held change
+//! of the columns P ∂r/∂x (`subtract_held_change`). The slipping joints' friction, −s F_c − c q̇ in a
+//! phase, is one more effort in r.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -20,6 +28,7 @@ use crate::dynamics::algorithms::{
     crba_after_kinematics, forward_kinematics, rnea_after_kinematics,
 };
 use crate::dynamics::joint::JointType;
+use crate::dynamics::rows::DEPENDENT_ROWS;
 
 /// The residual of the equations of motion at one state, and the power of the efforts there.
 struct Residual {
@@ -29,13 +38,10 @@ struct Residual {
 
 impl MechanicalSystem<'_> {
     /// Whether [`MechanicalSystem::jacobian`] applies: a tree whose joints' coordinates move
-    /// with their rates, evaluated by the articulated-body algorithm (not native code), without
-    /// mimic couplings or joint friction (whose accelerations are not M⁻¹ times a residual).
+    /// with their rates, evaluated in the library (not native code), without contacts.
     pub fn has_tree_jacobian(&self) -> bool {
         let model = self.model;
         !model.has_loops()
-            && model.mimics.is_empty()
-            && model.frictions.is_empty()
             && !model.has_contacts()
             && self.native.is_none()
             && model.positions() == model.velocities()
@@ -45,8 +51,7 @@ impl MechanicalSystem<'_> {
     /// ∂f/∂y at (t, y), where `dydt` = f(t, y), into `jacobian` (a square of the state's
     /// dimension), and the gradient of the efforts' power into `power_gradient`. `Ok(false)`
     /// where it does not apply ([`MechanicalSystem::has_tree_jacobian`]) or where the mass
-    /// matrix is singular (a massless motion), or while a coordinate rests on its stop: the
-    /// caller differences f instead.
+    /// matrix is singular (a massless motion): the caller differences f instead.
     pub fn jacobian(
         &mut self,
         t: f64,
@@ -55,19 +60,14 @@ impl MechanicalSystem<'_> {
         jacobian: &mut DMatrix<f64>,
         power_gradient: &mut [f64],
     ) -> Result<bool, SystemError> {
-        // A coordinate resting on its stop is held by a force that depends on the state too
-        // (`solve_rows`): the differences of f carry it, the residual's would not.
-        if !self.has_tree_jacobian() || self.resting.contains(&true) {
+        if !self.has_tree_jacobian() {
             return Ok(false);
         }
-        let nv = self.model.nv;
+        let model = self.model;
+        let nv = model.nv;
         let accelerations = &dydt[nv..];
         let at_state = self.residual(t, y, accelerations)?;
-        let mut mass = DMatrix::zeros(nv, nv);
-        crba_after_kinematics(self.model, &mut self.data, &mut mass);
-        let Some(cholesky) = mass.cholesky() else {
-            return Ok(false);
-        };
+        crba_after_kinematics(model, &mut self.data, &mut self.mass);
         let mut differences = DMatrix::zeros(nv, 2 * nv);
         let mut perturbed = y.to_vec();
         for j in 0..2 * nv {
@@ -81,16 +81,49 @@ impl MechanicalSystem<'_> {
             differences.set_column(j, &column);
             power_gradient[j] = (moved.power - at_state.power) / delta;
         }
+        // X = M⁻¹, or S (SᵀMS)⁻¹Sᵀ with the mimic couplings; formed at y for this Jacobian only.
+        let formed = self.form_tree_response().is_ok();
+        self.response_here = false;
+        if !formed {
+            return Ok(false);
+        }
+        let mut response = DMatrix::zeros(nv, 2 * nv);
+        self.response.apply(&differences, &mut response);
+        // The coordinates held at rest keep their accelerations zero, whatever the state.
+        self.gather_held();
+        if !self.held.is_empty() {
+            self.subtract_held_change(&mut response);
+        }
         jacobian.fill(0.0);
         jacobian.view_mut((0, nv), (nv, nv)).fill_with_identity();
         jacobian
             .view_mut((nv, 0), (nv, 2 * nv))
-            .copy_from(&cholesky.solve(&differences));
+            .copy_from(&response);
         Ok(true)
     }
 
-    /// r = τ − RNEA(q, v, a; f_ext) at y = (q, v), the efforts evaluated there; leaves the
-    /// forward kinematics of y in `data`.
+    /// The held change of the columns Y = X ∂r/∂x (`held`): Y − X Eᵀ (E X Eᵀ)⁺ E Y, with E the
+    /// unit rows of the held velocities; X formed. Dependent rows (a coordinate held by its stop
+    /// and its friction) are set aside as the run's solve sets them aside (`rows`).
+    fn subtract_held_change(&mut self, columns: &mut DMatrix<f64>) {
+        let nv = self.model.nv;
+        let mut units = DMatrix::zeros(nv, self.held.len());
+        for (i, &k) in self.held.iter().enumerate() {
+            units[(k, i)] = 1.0;
+        }
+        let mut moved = DMatrix::zeros(nv, self.held.len());
+        self.response.apply(&units, &mut moved);
+        let coupling = moved.select_rows(&self.held);
+        let held_rows = columns.select_rows(&self.held);
+        let svd = coupling.svd(true, true);
+        let cutoff = DEPENDENT_ROWS * svd.singular_values.max();
+        if let Ok(solved) = svd.solve(&held_rows, cutoff) {
+            *columns -= moved * solved;
+        }
+    }
+
+    /// r = τ − RNEA(q, v, a; f_ext) at y = (q, v), the efforts and the slipping joints'
+    /// friction evaluated there, and their power; leaves the forward kinematics of y in `data`.
     fn residual(&mut self, t: f64, y: &[f64], a: &[f64]) -> Result<Residual, SystemError> {
         let model = self.model;
         let (q, v) = y.split_at(model.nq);
@@ -105,9 +138,7 @@ impl MechanicalSystem<'_> {
         rnea_after_kinematics(model, &mut self.data, a, &efforts.external, &mut values);
         values -= &efforts.tau;
         values.neg_mut();
-        Ok(Residual {
-            values,
-            power: efforts.power,
-        })
+        let power = efforts.power + self.add_friction(v, &mut values);
+        Ok(Residual { values, power })
     }
 }
