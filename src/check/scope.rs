@@ -17,7 +17,7 @@ pub struct Entry {
     pub index: u32,
 }
 
-#[derive(Default, Debug)]
+#[derive(Debug)]
 pub struct Scope {
     pub names: FxHashMap<Name, Entry>,
     /// Names in declaration order.
@@ -32,9 +32,35 @@ pub struct Scope {
     /// Names declared later in this scope, with the extent of their declaration: a use before
     /// the declaration gets a precise message.
     pub declared_later: FxHashMap<Name, (Span, Span)>,
+    /// Where the scope's declarations are in the syntax tree.
+    pub decls: DeclsAt,
+}
+
+/// Where a scope's declarations are: a module's top level, or a package declared in another
+/// scope.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeclsAt {
+    Module(crate::load::ModuleId),
+    /// The package declared by the `decl`-th declaration of the scope `parent`.
+    Package {
+        parent: ScopeId,
+        decl: u32,
+    },
 }
 
 impl Scope {
+    pub fn new(parent: Option<(ScopeId, u32)>, decls: DeclsAt) -> Scope {
+        Scope {
+            names: FxHashMap::default(),
+            order: Vec::new(),
+            parent,
+            index: None,
+            opened: Vec::new(),
+            declared_later: FxHashMap::default(),
+            decls,
+        }
+    }
+
     pub fn len(&self) -> u32 {
         self.order.len() as u32
     }

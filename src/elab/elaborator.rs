@@ -9,6 +9,7 @@ use crate::diag::Diagnostic;
 use crate::load::{ModuleId, Workspace};
 use crate::syntax::ast::Name;
 
+use super::decls::OwnedDecls;
 use super::instances::{InstanceId, Instances};
 use super::mechanism::Mechanism;
 use super::value::{self, Value};
@@ -22,7 +23,10 @@ pub(super) enum Global {
 
 pub struct Elaborator<'c, 'w> {
     pub(super) workspace: &'w Workspace,
-    pub(super) checked: &'c Checked<'w>,
+    pub(super) checked: &'c Checked,
+    /// The top-level declarations of the root files, when the elaborator owns them and frees
+    /// each once it is done with it (`decls.rs`); the others are read in `workspace`.
+    pub(super) owned: FxHashMap<ModuleId, OwnedDecls>,
     /// Values of declared names, by scope, instance (of an array of packages) and name.
     pub(super) globals: FxHashMap<(ScopeId, InstanceId, Name), Global>,
     pub(super) instances: Instances,
@@ -69,10 +73,11 @@ impl Perturbation {
 
 impl<'c, 'w> Elaborator<'c, 'w> {
     /// An elaborator that has evaluated nothing yet.
-    pub(super) fn new(workspace: &'w Workspace, checked: &'c Checked<'w>) -> Self {
+    pub(super) fn new(workspace: &'w Workspace, checked: &'c Checked) -> Self {
         Elaborator {
             workspace,
             checked,
+            owned: FxHashMap::default(),
             globals: FxHashMap::default(),
             mechanism: Mechanism::default(),
             elaborated_modules: Vec::new(),

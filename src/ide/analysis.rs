@@ -154,7 +154,7 @@ impl Index {
             .find(|d| &*d.name == name)
     }
 
-    fn build(workspace: &Workspace, checked: &Checked<'_>, mechanism: Option<&Mechanism>) -> Index {
+    fn build(workspace: &Workspace, checked: &Checked, mechanism: Option<&Mechanism>) -> Index {
         let values = match mechanism {
             Some(_) => crate::elab::constant_values(workspace, checked),
             None => FxHashMap::default(),
@@ -184,15 +184,15 @@ impl Index {
     }
 }
 
-struct Builder<'a, 'w> {
+struct Builder<'a> {
     workspace: &'a Workspace,
-    checked: &'a Checked<'w>,
+    checked: &'a Checked,
     index: Index,
     /// Definitions by the span the checker's scopes record for them.
     by_span: FxHashMap<Span, usize>,
 }
 
-impl Builder<'_, '_> {
+impl Builder<'_> {
     fn define(&mut self, definition: Definition) -> usize {
         let id = self.index.definitions.len();
         self.index.occurrences.push(Occurrence {
