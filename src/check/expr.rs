@@ -545,7 +545,8 @@ impl<'w> Checker<'w> {
                 continue;
             }
             match types::constructor_field_type(kind, &field.name.name) {
-                Some(expected) => {
+                // The field's role is spelled out only for a message (a body has a few fields).
+                Some(expected) if !ty.fits(expected) => {
                     self.expect_value(
                         &field.value,
                         ty,
@@ -553,6 +554,7 @@ impl<'w> Checker<'w> {
                         &format!("field `{}`", field.name.name),
                     );
                 }
+                Some(_) => {}
                 None => self.report(unknown_constructor_field(kind, &field.name)),
             }
         }

@@ -72,7 +72,7 @@ impl<'w> Elaborator<'_, 'w> {
     /// How many declarations a scope has.
     pub(super) fn decl_count(&self, scope: ScopeId) -> Result<u32> {
         match self.checked.scope(scope).decls {
-            DeclsAt::Module(module) => Ok(match self.owned.get(&module) {
+            DeclsAt::Module(module) => Ok(match self.owned_decls(module) {
                 Some(owned) => owned.decls.len(),
                 None => self.workspace.module(module).program.decls.len(),
             } as u32),
@@ -88,8 +88,14 @@ impl<'w> Elaborator<'_, 'w> {
         index: u32,
         f: impl FnOnce(&mut Self, &Decl) -> Result<T>,
     ) -> Result<T> {
-        // The top-level declaration the scope's declarations are in, and the positions that
-        // lead from it through packages to the one asked for.
+        if let DeclsAt::Module(module) = self.checked.scope(scope).decls {
+            let decl = self.top_decl(module, index)?;
+            let result = f(self, &decl);
+            self.give_back(module, index, decl);
+            return result;
+        }
+        // The top-level declaration the package is in, and the positions that lead from it
+        // through packages to the declaration asked for.
         let mut path = vec![index];
         let mut at = scope;
         let module = loop {
@@ -118,21 +124,26 @@ impl<'w> Elaborator<'_, 'w> {
         result
     }
 
+    /// The declarations of `module` if the elaborator owns them.
+    fn owned_decls(&self, module: ModuleId) -> Option<&OwnedDecls> {
+        self.owned.get(module.0 as usize)?.as_ref()
+    }
+
     /// The `index`-th top-level declaration of `module`.
     fn top_decl(&mut self, module: ModuleId, index: u32) -> Result<DeclRef<'w>> {
-        let Some(owned) = self.owned.get_mut(&module) else {
+        let Some(owned) = self.owned.get_mut(module.0 as usize).and_then(Option::as_mut) else {
             let decls = &self.workspace.module(module).program.decls;
             return (decls.get(index as usize))
                 .map(DeclRef::Tree)
                 .ok_or_else(|| internal("a declaration past its file's end"));
         };
-        if let Some(shared) = owned.shared.get(&index) {
-            return Ok(DeclRef::Shared(shared.clone()));
-        }
         let slot = (owned.decls.get_mut(index as usize))
             .ok_or_else(|| internal("a declaration past its file's end"))?;
         if matches!(slot.kind, DeclKind::Error) {
-            return Err(internal("a declaration read after it was freed"));
+            return match owned.shared.get(&index) {
+                Some(shared) => Ok(DeclRef::Shared(shared.clone())),
+                None => Err(internal("a declaration read after it was freed")),
+            };
         }
         let span = slot.span;
         let decl = std::mem::replace(
@@ -163,7 +174,7 @@ impl<'w> Elaborator<'_, 'w> {
                 matches!(value, Some(Global::Ready(_)))
             };
             if !bindings.iter().all(|b| evaluated(b.name.name.clone())) {
-                if let Some(owned) = self.owned.get_mut(&module) {
+                if let Some(Some(owned)) = self.owned.get_mut(module.0 as usize) {
                     owned.decls[index as usize] = decl;
                 }
             }

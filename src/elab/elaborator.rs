@@ -24,9 +24,9 @@ pub(super) enum Global {
 pub struct Elaborator<'c, 'w> {
     pub(super) workspace: &'w Workspace,
     pub(super) checked: &'c Checked,
-    /// The top-level declarations of the root files, when the elaborator owns them and frees
-    /// each once it is done with it (`decls.rs`); the others are read in `workspace`.
-    pub(super) owned: FxHashMap<ModuleId, OwnedDecls>,
+    /// The top-level declarations of the root files, by module, when the elaborator owns them
+    /// and frees each once it is done with it (`decls.rs`); the others are read in `workspace`.
+    pub(super) owned: Vec<Option<OwnedDecls>>,
     /// Values of declared names, by scope, instance (of an array of packages) and name.
     pub(super) globals: FxHashMap<(ScopeId, InstanceId, Name), Global>,
     pub(super) instances: Instances,
@@ -77,7 +77,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         Elaborator {
             workspace,
             checked,
-            owned: FxHashMap::default(),
+            owned: Vec::new(),
             globals: FxHashMap::default(),
             mechanism: Mechanism::default(),
             elaborated_modules: Vec::new(),

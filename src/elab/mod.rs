@@ -52,10 +52,11 @@ pub fn elaborate_consuming(
     checked: &Checked,
     numbers: Option<Perturbation>,
 ) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
-    let mut owned = rustc_hash::FxHashMap::default();
+    let mut owned: Vec<Option<OwnedDecls>> = Vec::new();
+    owned.resize_with(workspace.modules.len(), || None);
     for &root in &workspace.roots {
         let program = &mut workspace.modules[root.0 as usize].program;
-        owned.insert(root, OwnedDecls::new(std::mem::take(&mut program.decls)));
+        owned[root.0 as usize] = Some(OwnedDecls::new(std::mem::take(&mut program.decls)));
     }
     let mut elaborator = Elaborator::new(workspace, checked);
     elaborator.owned = owned;
