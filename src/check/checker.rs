@@ -9,7 +9,8 @@ use crate::load::{ModuleId, Workspace};
 use crate::source::Span;
 use crate::syntax::ast::{Expr, Name, Param};
 
-use super::scope::{Scope, Target};
+use super::resolutions::Resolutions;
+use super::scope::Scope;
 use super::types::{DefId, ScopeId, Ty};
 
 /// A parameterised definition `let f(a, b) = body`.
@@ -41,7 +42,7 @@ pub struct BindingAt {
 pub struct Checked {
     pub scopes: Vec<Scope>,
     pub definitions: Vec<Definition>,
-    pub resolutions: FxHashMap<Span, Target>,
+    pub resolutions: Resolutions,
     pub module_scopes: FxHashMap<ModuleId, ScopeId>,
     pub package_scopes: FxHashMap<Span, ScopeId>,
     /// Where the `let` binding of each declared name is, by the span of the name.

@@ -7,6 +7,7 @@ mod calls;
 mod checker;
 mod expr;
 mod output;
+pub mod resolutions;
 pub mod scope;
 mod stdlib_hint;
 pub mod types;
@@ -34,7 +35,7 @@ pub fn check(workspace: &Workspace) -> (Checked, Diagnostics) {
         out: Checked {
             scopes: Vec::new(),
             definitions: Vec::new(),
-            resolutions: FxHashMap::default(),
+            resolutions: Default::default(),
             module_scopes: FxHashMap::default(),
             package_scopes: FxHashMap::default(),
             bindings: FxHashMap::default(),
@@ -51,6 +52,7 @@ pub fn check(workspace: &Workspace) -> (Checked, Diagnostics) {
     for &root in &workspace.roots {
         checker.module(root);
     }
+    checker.out.resolutions.finish();
     (checker.out, checker.diagnostics)
 }
 

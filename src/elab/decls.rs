@@ -131,7 +131,11 @@ impl<'w> Elaborator<'_, 'w> {
 
     /// The `index`-th top-level declaration of `module`.
     fn top_decl(&mut self, module: ModuleId, index: u32) -> Result<DeclRef<'w>> {
-        let Some(owned) = self.owned.get_mut(module.0 as usize).and_then(Option::as_mut) else {
+        let Some(owned) = self
+            .owned
+            .get_mut(module.0 as usize)
+            .and_then(Option::as_mut)
+        else {
             let decls = &self.workspace.module(module).program.decls;
             return (decls.get(index as usize))
                 .map(DeclRef::Tree)

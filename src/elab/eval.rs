@@ -415,8 +415,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     fn resolution(&self, span: Span) -> Result<Target> {
         self.checked
             .resolutions
-            .get(&span)
-            .copied()
+            .get(span)
             .ok_or_else(|| internal("unresolved name"))
     }
 

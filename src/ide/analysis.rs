@@ -387,13 +387,13 @@ impl Builder<'_> {
 
     /// A name use, as the checker resolved it.
     fn name(&mut self, ident: &Ident, locals: &[(Name, usize)]) -> Reference {
-        let reference = match self.checked.resolutions.get(&ident.span) {
+        let reference = match self.checked.resolutions.get(ident.span) {
             Some(Target::Local) => locals
                 .iter()
                 .rev()
                 .find(|(name, _)| *name == ident.name)
                 .map_or(Reference::Unresolved, |&(_, id)| Reference::Definition(id)),
-            Some(Target::Global(scope)) => self.global(*scope, &ident.name),
+            Some(Target::Global(scope)) => self.global(scope, &ident.name),
             Some(Target::Builtin) => Reference::Builtin,
             None => Reference::Unresolved,
         };
@@ -424,8 +424,8 @@ impl Builder<'_> {
                 if let Some(index) = &qualified.index {
                     self.expr(index, locals);
                 }
-                let reference = match self.checked.resolutions.get(&expr.span) {
-                    Some(Target::Global(scope)) => self.global(*scope, &qualified.name.name),
+                let reference = match self.checked.resolutions.get(expr.span) {
+                    Some(Target::Global(scope)) => self.global(scope, &qualified.name.name),
                     _ => Reference::Unresolved,
                 };
                 self.occurrence(qualified.name.span, reference);
