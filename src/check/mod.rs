@@ -91,21 +91,40 @@ impl<'w> Checker<'w> {
     }
 
     fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) {
-        for decl in decls {
-            for (name, span, extent) in declared_names(decl) {
-                self.scope_mut(scope)
-                    .declared_later
-                    .entry(name)
-                    .or_insert((span, extent));
-            }
-        }
         for (index, decl) in (0..).zip(decls) {
             self.decl(decl, index, scope);
         }
-        // Each declaration took its own name out: what is left is only the names whose
-        // declaration failed, and the scope lives on through elaboration, so the table gives
-        // back the room it had for every name (about 54 bytes per declared name).
-        self.scope_mut(scope).declared_later.shrink_to_fit();
+    }
+
+    /// The declarations of a scope, in the syntax tree.
+    fn scope_decls(&self, scope: ScopeId) -> &'w [Decl] {
+        match self.out.scope(scope).decls {
+            DeclsAt::Module(module) => &self.workspace.module(module).program.decls,
+            DeclsAt::Package { parent, decl } => {
+                match self.scope_decls(parent).get(decl as usize).map(|d| &d.kind) {
+                    Some(DeclKind::Package(package)) => &package.decls,
+                    _ => &[],
+                }
+            }
+        }
+    }
+
+    /// Makes the table of the names a scope declares that are not declared yet, with the spans
+    /// of their first declaration, when a name is first found missing in it (see
+    /// [`Scope::declared_later`]): a program without such errors never makes one.
+    fn note_declared_later(&mut self, scope: ScopeId) {
+        if self.out.scope(scope).declared_later.is_some() {
+            return;
+        }
+        let mut later = FxHashMap::default();
+        for decl in self.scope_decls(scope) {
+            for (name, span, extent) in declared_names(decl) {
+                if !self.out.scope(scope).names.contains_key(&name) {
+                    later.entry(name).or_insert((span, extent));
+                }
+            }
+        }
+        self.scope_mut(scope).declared_later = Some(later);
     }
 
     fn ctx(&self, scope: ScopeId) -> Ctx {

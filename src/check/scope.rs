@@ -29,9 +29,10 @@ pub struct Scope {
     pub index: Option<Name>,
     /// Modules opened by a plain `import`, with the number of this scope's names declared before.
     pub opened: Vec<(ScopeId, u32)>,
-    /// Names declared later in this scope, with the extent of their declaration: a use before
-    /// the declaration gets a precise message.
-    pub declared_later: FxHashMap<Name, (Span, Span)>,
+    /// Names declared later in this scope, with the span of the name and the extent of their
+    /// declaration: a use before the declaration gets a precise message. Made when a name is
+    /// first found missing (`None` before), then kept as names are declared.
+    pub declared_later: Option<FxHashMap<Name, (Span, Span)>>,
     /// Where the scope's declarations are in the syntax tree.
     pub decls: DeclsAt,
 }
@@ -56,7 +57,7 @@ impl Scope {
             parent,
             index: None,
             opened: Vec::new(),
-            declared_later: FxHashMap::default(),
+            declared_later: None,
             decls,
         }
     }
@@ -76,7 +77,9 @@ impl Scope {
 
     pub fn insert(&mut self, name: Name, ty: Ty, span: Span) {
         let index = self.len();
-        self.declared_later.remove(&name);
+        if let Some(later) = &mut self.declared_later {
+            later.remove(&name);
+        }
         self.order.push(name.clone());
         self.names.insert(name, Entry { ty, span, index });
     }
