@@ -3,6 +3,7 @@
 
 use rustc_hash::FxHashMap;
 
+use crate::check::resolutions::Cursor;
 use crate::check::scope::ScopeId;
 use crate::check::Checked;
 use crate::diag::Diagnostic;
@@ -30,6 +31,9 @@ pub struct Elaborator<'c, 'w> {
     /// Values of declared names, by scope, instance (of an array of packages) and name.
     pub(super) globals: FxHashMap<(ScopeId, InstanceId, Name), Global>,
     pub(super) instances: Instances,
+    /// Where the last name resolution was found (see
+    /// [`Resolutions::get_near`](crate::check::resolutions::Resolutions::get_near)).
+    pub(super) resolved: Cursor,
     /// The first name bound to each body by `let name = other_name` (see `point_out_alias`).
     pub(super) aliases: FxHashMap<value::BodyId, (Name, crate::source::Span)>,
     /// Warnings about legal programs that are probably not what was meant.
@@ -87,6 +91,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             own_join: None,
             perturbation: None,
             instances: Default::default(),
+            resolved: Cursor::default(),
             aliases: FxHashMap::default(),
             warnings: Vec::new(),
         }

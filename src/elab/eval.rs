@@ -412,10 +412,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         }
     }
 
-    fn resolution(&self, span: Span) -> Result<Target> {
-        self.checked
-            .resolutions
-            .get(span)
+    fn resolution(&mut self, span: Span) -> Result<Target> {
+        let checked = self.checked;
+        (checked.resolutions)
+            .get_near(span, &mut self.resolved)
             .ok_or_else(|| internal("unresolved name"))
     }
 
