@@ -52,9 +52,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
 
     /// Records the frames a main module names at its top level (`let tip = … @ arm;`) in the
     /// mechanism's table of frames. Only bindings the checker typed as frames are evaluated, so
-    /// no other unused definition is.
-    /// (They are read in the checker's scope, in declaration order: the declarations of a root
-    /// file may have been freed by now.)
+    /// no other unused definition is. The names are read in the checker's scope, in declaration
+    /// order: the declarations of a root file may have been freed by now.
     pub(super) fn name_frames(&mut self, id: ModuleId) -> Result<()> {
         let Some(&scope) = self.checked.module_scopes.get(&id) else {
             return Ok(());
