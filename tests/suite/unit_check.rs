@@ -44,7 +44,7 @@ fn resolutions_are_found_as_a_map_finds_them() {
             start as usize + 1 + (position % 4) as usize,
         );
         record(span, &mut oracle);
-        if next() % 5 == 0 {
+        if next().is_multiple_of(5) {
             // A name a little before, recorded late.
             let back = start.saturating_sub(3 * (next() % 40) as u32 + 5);
             record(
@@ -52,7 +52,7 @@ fn resolutions_are_found_as_a_map_finds_them() {
                 &mut oracle,
             );
         }
-        if next() % 50 == 0 {
+        if next().is_multiple_of(50) {
             // A name far before, recorded again.
             let (&(f, s, e), _) = oracle
                 .iter()
@@ -60,7 +60,7 @@ fn resolutions_are_found_as_a_map_finds_them() {
                 .unwrap();
             record(Span::new(FileId(f), s as usize, e as usize), &mut oracle);
         }
-        if next() % 300 == 0 {
+        if next().is_multiple_of(300) {
             // A name far before, recorded for the first time.
             let back = (next() % 1000) as u32 * 10 + 7;
             record(
