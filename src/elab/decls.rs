@@ -11,62 +11,17 @@
 //! a root file is owned: the declarations of packages and of imported libraries are read in
 //! place.
 
-use std::ops::Deref;
 use std::rc::Rc;
-
-use rustc_hash::FxHashMap;
 
 use super::elaborator::{internal, Elaborator, Global};
 use super::instances::ROOT;
+use super::owned::{DeclRef, OwnedDecls};
 use crate::check::scope::{DeclsAt, ScopeId};
 use crate::diag::Diagnostic;
 use crate::load::ModuleId;
 use crate::syntax::ast::{Decl, DeclKind};
 
 type Result<T> = std::result::Result<T, Diagnostic>;
-
-/// A declaration being read.
-pub(super) enum DeclRef<'w> {
-    /// In the workspace's syntax tree.
-    Tree(&'w Decl),
-    /// Taken out of a root file the elaborator owns: given back (`Elaborator::give_back`) to be
-    /// kept or freed.
-    Taken(Decl),
-    /// A definition or package of a root file the elaborator owns, kept for the whole
-    /// elaboration.
-    Shared(Rc<Decl>),
-}
-
-impl Deref for DeclRef<'_> {
-    type Target = Decl;
-
-    fn deref(&self) -> &Decl {
-        match self {
-            DeclRef::Tree(decl) => decl,
-            DeclRef::Taken(decl) => decl,
-            DeclRef::Shared(decl) => decl,
-        }
-    }
-}
-
-/// The top-level declarations of a root file, owned by the elaborator. A declaration taken out
-/// leaves an error declaration (`DeclKind::Error`) with its span in its place, until it is put
-/// back; one that was freed leaves it for good.
-#[derive(Default)]
-pub(super) struct OwnedDecls {
-    decls: Vec<Decl>,
-    /// Definitions and packages, by position, once first read.
-    shared: FxHashMap<u32, Rc<Decl>>,
-}
-
-impl OwnedDecls {
-    pub(super) fn new(decls: Vec<Decl>) -> OwnedDecls {
-        OwnedDecls {
-            decls,
-            shared: FxHashMap::default(),
-        }
-    }
-}
 
 impl<'w> Elaborator<'_, 'w> {
     /// How many declarations a scope has.

@@ -10,9 +10,9 @@ use crate::diag::Diagnostic;
 use crate::load::{ModuleId, Workspace};
 use crate::syntax::ast::Name;
 
-use super::decls::OwnedDecls;
 use super::instances::{InstanceId, Instances};
 use super::mechanism::Mechanism;
+use super::owned::OwnedDecls;
 use super::value::{self, Value};
 
 /// A declared name's value. `let` bindings are evaluated when first used, so a library costs

@@ -14,16 +14,17 @@ pub mod mechanism;
 mod operations;
 mod output;
 mod own_join;
+mod owned;
 pub mod value;
 
 use crate::check::Checked;
 use crate::diag::Diagnostic;
 use crate::load::Workspace;
 pub use constants::constant_values;
-use decls::OwnedDecls;
 use elaborator::Elaborator;
 pub use elaborator::Perturbation;
 pub use mechanism::{Mechanism, Summary};
+use owned::OwnedDecls;
 
 /// Evaluates every module of a checked workspace into one mechanism, with warnings about what
 /// is legal but probably not meant.
