@@ -21,9 +21,31 @@ impl Compilation {
     }
 }
 
+/// What becomes of the root files' syntax trees once the mechanism is elaborated.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Tree {
+    /// Kept in the compilation's workspace.
+    Keep,
+    /// Each top-level declaration freed once it has been elaborated
+    /// (`elab::elaborate_consuming`).
+    Free,
+}
+
 /// Compiles files from disk.
 pub fn compile_files(paths: &[PathBuf], options: &LoadOptions) -> Result<Compilation, LoadError> {
     compile_files_perturbed(paths, options, None)
+}
+
+/// As [`compile_files`], for commands that need only the mechanism, the diagnostics and the
+/// sources: the syntax tree of each root file is freed as the mechanism is elaborated, so that
+/// the front end's peak memory is the larger of the tree and the mechanism, not their sum. The
+/// compilation's root modules have no declarations left.
+pub fn compile_files_lean(
+    paths: &[PathBuf],
+    options: &LoadOptions,
+) -> Result<Compilation, LoadError> {
+    let (workspace, diagnostics) = load::load_files(paths, options)?;
+    Ok(finish(workspace, diagnostics.list, None, Tree::Free))
 }
 
 /// Compiles files from disk, with the numbers written with a decimal point moved by `numbers`
@@ -34,7 +56,7 @@ pub fn compile_files_perturbed(
     numbers: Option<Perturbation>,
 ) -> Result<Compilation, LoadError> {
     let (workspace, diagnostics) = load::load_files(paths, options)?;
-    Ok(finish(workspace, diagnostics.list, numbers))
+    Ok(finish(workspace, diagnostics.list, numbers, Tree::Keep))
 }
 
 /// Compiles a program given as text; `dir` is where its relative imports are looked up.
@@ -45,24 +67,22 @@ pub fn compile_text(
     options: &LoadOptions,
 ) -> Compilation {
     let (workspace, diagnostics) = load::load_text(name, text, dir, options);
-    finish(workspace, diagnostics.list, None)
+    finish(workspace, diagnostics.list, None, Tree::Keep)
 }
 
 fn finish(
-    workspace: Workspace,
+    mut workspace: Workspace,
     mut diagnostics: Vec<Diagnostic>,
     numbers: Option<Perturbation>,
+    tree: Tree,
 ) -> Compilation {
     let mut mechanism = None;
     if !diagnostics.iter().any(Diagnostic::is_error) {
         let (checked, check_diagnostics) = check::check(&workspace);
-        mechanism = check_and_elaborate(
-            &workspace,
-            &checked,
-            check_diagnostics,
-            &mut diagnostics,
-            numbers,
-        );
+        mechanism = check_and_elaborate(check_diagnostics, &mut diagnostics, || match tree {
+            Tree::Keep => elab::elaborate_perturbed(&workspace, &checked, numbers),
+            Tree::Free => elab::elaborate_consuming(&mut workspace, &checked, numbers),
+        });
     }
     in_import_context(workspace, diagnostics, mechanism)
 }
@@ -76,7 +96,7 @@ pub fn compile_text_inspected<R>(
     text: &str,
     dir: Option<&std::path::Path>,
     options: &LoadOptions,
-    inspect: impl FnOnce(&Workspace, &Checked<'_>, Option<&Mechanism>) -> R,
+    inspect: impl FnOnce(&Workspace, &Checked, Option<&Mechanism>) -> R,
 ) -> (Compilation, R) {
     let (workspace, diagnostics) = load::load_text(name, text, dir, options);
     let mut diagnostics = diagnostics.list;
@@ -85,13 +105,9 @@ pub fn compile_text_inspected<R>(
     let mechanism = if load_failed {
         None
     } else {
-        check_and_elaborate(
-            &workspace,
-            &checked,
-            check_diagnostics,
-            &mut diagnostics,
-            None,
-        )
+        check_and_elaborate(check_diagnostics, &mut diagnostics, || {
+            elab::elaborate(&workspace, &checked)
+        })
     };
     let inspected = inspect(&workspace, &checked, mechanism.as_ref());
     drop(checked);
@@ -99,20 +115,19 @@ pub fn compile_text_inspected<R>(
     (compilation, inspected)
 }
 
-/// Adds the checker's diagnostics and, when it found no errors, elaborates the mechanism.
+/// Adds the checker's diagnostics and, when it found no errors, elaborates the mechanism,
+/// adding the elaborator's warnings or error.
 fn check_and_elaborate(
-    workspace: &Workspace,
-    checked: &Checked<'_>,
     check_diagnostics: Diagnostics,
     diagnostics: &mut Vec<Diagnostic>,
-    numbers: Option<Perturbation>,
+    elaborate: impl FnOnce() -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic>,
 ) -> Option<Mechanism> {
     let failed = check_diagnostics.has_errors();
     diagnostics.extend(check_diagnostics.list);
     if failed {
         return None;
     }
-    match elab::elaborate_perturbed(workspace, checked, numbers) {
+    match elaborate() {
         Ok((mechanism, warnings)) => {
             diagnostics.extend(warnings);
             Some(mechanism)

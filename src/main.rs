@@ -578,7 +578,7 @@ fn check(files: &[PathBuf], options: &LoadOptions, format: Format) -> ExitCode {
     let mut unreadable = false;
     let mut reports = Vec::new();
     for (i, file) in files.iter().enumerate() {
-        let compilation = match driver::compile_files(std::slice::from_ref(file), options) {
+        let compilation = match driver::compile_files_lean(std::slice::from_ref(file), options) {
             Ok(c) => c,
             // In JSON every file has its entry; in text the first unreadable file stops.
             Err(error) if format == Format::Json => {
@@ -652,7 +652,7 @@ fn compile_one(
     options: &LoadOptions,
     format: Format,
 ) -> Result<Compilation, ExitCode> {
-    let compilation = driver::compile_files(&[file.to_path_buf()], options)
+    let compilation = driver::compile_files_lean(&[file.to_path_buf()], options)
         .map_err(|error| usage_error(&error.to_string()))?;
     if compilation.has_errors() || (format == Format::Text && !compilation.diagnostics.is_empty()) {
         report_diagnostics(&compilation, &compilation.diagnostics, format);

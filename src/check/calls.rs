@@ -143,7 +143,7 @@ impl<'w> Checker<'w> {
         span: Span,
     ) -> Option<Vec<Ty>> {
         let definition = &self.out.definitions[def.0 as usize];
-        let params = definition.params;
+        let params = self.definition_trees[def.0 as usize].0;
         let (name, def_span) = (definition.name.clone(), definition.span);
         let mut bound: Vec<Option<Ty>> = vec![None; params.len()];
         let mut ok = true;
@@ -232,12 +232,8 @@ impl<'w> Checker<'w> {
             return ty;
         }
         let definition = &self.out.definitions[def.0 as usize];
-        let (name, body, scope, limit) = (
-            definition.name.clone(),
-            definition.body,
-            definition.scope,
-            definition.limit,
-        );
+        let (params, body) = self.definition_trees[def.0 as usize];
+        let (name, scope, limit) = (definition.name.clone(), definition.scope, definition.limit);
         if self.instantiations.len() >= MAX_INSTANTIATION_DEPTH {
             self.report(
                 Diagnostic::error(
@@ -248,8 +244,7 @@ impl<'w> Checker<'w> {
             );
             return Ty::Error;
         }
-        let locals = definition
-            .params
+        let locals = params
             .iter()
             .zip(&arg_types)
             .map(|(p, &ty)| Local {

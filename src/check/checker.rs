@@ -7,37 +7,49 @@ use rustc_hash::FxHashMap;
 use crate::diag::Diagnostics;
 use crate::load::{ModuleId, Workspace};
 use crate::source::Span;
-use crate::syntax::ast::{Binding, Expr, Name, Param};
+use crate::syntax::ast::{Expr, Name, Param};
 
-use super::scope::{Scope, Target};
+use super::resolutions::Resolutions;
+use super::scope::Scope;
 use super::types::{DefId, ScopeId, Ty};
 
 /// A parameterised definition `let f(a, b) = body`.
-pub struct Definition<'w> {
+pub struct Definition {
     pub name: Name,
-    pub params: &'w [Param],
-    pub body: &'w Expr,
     pub span: Span,
     /// The scope it was defined in and how many of that scope's names it sees.
     pub scope: ScopeId,
     pub limit: u32,
+    /// Its declaration's position among its scope's declarations (see [`Scope::decls`]).
+    pub decl: u32,
+}
+
+/// Where a `let` binding is: its declaration's position among its scope's declarations, and
+/// its position among that declaration's bindings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BindingAt {
+    pub decl: u32,
+    pub binding: u32,
 }
 
 /// The result of checking: scopes, definitions and name resolutions, for the elaborator.
 /// Its tables are keyed by spans and names, hashed with the fast non-keyed hasher of
 /// `rustc-hash`: they are the front end's hottest look-ups (every name use, several per body of
 /// a large program), and a program cannot choose its keys to collide.
-pub struct Checked<'w> {
+///
+/// It holds no reference into the syntax tree, only positions in it, so that the elaborator
+/// may free each declaration once it is done with it (see `elab::elaborate_consuming`).
+pub struct Checked {
     pub scopes: Vec<Scope>,
-    pub definitions: Vec<Definition<'w>>,
-    pub resolutions: FxHashMap<Span, Target>,
+    pub definitions: Vec<Definition>,
+    pub resolutions: Resolutions,
     pub module_scopes: FxHashMap<ModuleId, ScopeId>,
     pub package_scopes: FxHashMap<Span, ScopeId>,
-    /// The `let` binding of each declared name, by the span of the name.
-    pub bindings: FxHashMap<Span, &'w Binding>,
+    /// Where the `let` binding of each declared name is, by the span of the name.
+    pub bindings: FxHashMap<Span, BindingAt>,
 }
 
-impl Checked<'_> {
+impl Checked {
     pub fn scope(&self, id: ScopeId) -> &Scope {
         &self.scopes[id.0 as usize]
     }
@@ -61,7 +73,10 @@ pub(super) struct Ctx {
 
 pub struct Checker<'w> {
     pub(super) workspace: &'w Workspace,
-    pub(super) out: Checked<'w>,
+    pub(super) out: Checked,
+    /// The parameters and body of each definition, by its `DefId`: instantiations check them
+    /// again.
+    pub(super) definition_trees: Vec<(&'w [Param], &'w Expr)>,
     pub(super) diagnostics: Diagnostics,
     /// Use sites of the definitions being instantiated, innermost last.
     pub(super) instantiations: Vec<(Span, Name)>,

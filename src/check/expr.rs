@@ -132,15 +132,17 @@ impl<'w> Checker<'w> {
         None
     }
 
-    fn unknown_name(&self, ident: &Ident, ctx: &Ctx) -> Diagnostic {
+    fn unknown_name(&mut self, ident: &Ident, ctx: &Ctx) -> Diagnostic {
         let name = &ident.name;
         let diagnostic = Diagnostic::error("E0301", format!("unknown name `{name}`"))
             .primary(ident.span, "not defined here");
         // Declared later in the same scope?
         let mut current = Some(ctx.scope);
         while let Some(id) = current {
+            self.note_declared_later(id);
             let scope = self.out.scope(id);
-            if let Some(&(later, extent)) = scope.declared_later.get(name.as_ref()) {
+            let later = scope.declared_later.as_ref();
+            if let Some(&(later, extent)) = later.and_then(|later| later.get(name.as_ref())) {
                 let inside = extent.file == ident.span.file
                     && extent.start <= ident.span.start
                     && ident.span.end <= extent.end;
@@ -545,7 +547,8 @@ impl<'w> Checker<'w> {
                 continue;
             }
             match types::constructor_field_type(kind, &field.name.name) {
-                Some(expected) => {
+                // The field's role is spelled out only for a message (a body has a few fields).
+                Some(expected) if !ty.fits(expected) => {
                     self.expect_value(
                         &field.value,
                         ty,
@@ -553,6 +556,7 @@ impl<'w> Checker<'w> {
                         &format!("field `{}`", field.name.name),
                     );
                 }
+                Some(_) => {}
                 None => self.report(unknown_constructor_field(kind, &field.name)),
             }
         }

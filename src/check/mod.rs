@@ -7,6 +7,7 @@ mod calls;
 mod checker;
 mod expr;
 mod output;
+pub mod resolutions;
 pub mod scope;
 mod stdlib_hint;
 pub mod types;
@@ -21,24 +22,25 @@ use crate::source::Span;
 use crate::syntax::ast::{
     ApplyDecl, Binding, Decl, DeclKind, Expr, Ident, JoinDecl, Name, PackageDecl, Param,
 };
-pub use checker::{Checked, Definition};
+pub use checker::{BindingAt, Checked, Definition};
 use checker::{Checker, Ctx, Local};
 pub use expr::dof_mentions;
-use scope::Scope;
+use scope::{DeclsAt, Scope};
 use types::{DefId, ScopeId, Ty};
 
 /// Checks every module of the workspace.
-pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
+pub fn check(workspace: &Workspace) -> (Checked, Diagnostics) {
     let mut checker = Checker {
         workspace,
         out: Checked {
             scopes: Vec::new(),
             definitions: Vec::new(),
-            resolutions: FxHashMap::default(),
+            resolutions: Default::default(),
             module_scopes: FxHashMap::default(),
             package_scopes: FxHashMap::default(),
             bindings: FxHashMap::default(),
         },
+        definition_trees: Vec::new(),
         diagnostics: Diagnostics::default(),
         instantiations: Vec::new(),
         memo: FxHashMap::default(),
@@ -50,15 +52,13 @@ pub fn check(workspace: &Workspace) -> (Checked<'_>, Diagnostics) {
     for &root in &workspace.roots {
         checker.module(root);
     }
+    checker.out.resolutions.finish();
     (checker.out, checker.diagnostics)
 }
 
 impl<'w> Checker<'w> {
-    fn new_scope(&mut self, parent: Option<(ScopeId, u32)>) -> ScopeId {
-        self.out.scopes.push(Scope {
-            parent,
-            ..Scope::default()
-        });
+    fn new_scope(&mut self, parent: Option<(ScopeId, u32)>, decls: DeclsAt) -> ScopeId {
+        self.out.scopes.push(Scope::new(parent, decls));
         ScopeId(self.out.scopes.len() as u32 - 1)
     }
 
@@ -78,7 +78,7 @@ impl<'w> Checker<'w> {
         if let Some(&scope) = self.out.module_scopes.get(&id) {
             return scope;
         }
-        let scope = self.new_scope(None);
+        let scope = self.new_scope(None, DeclsAt::Module(id));
         self.out.module_scopes.insert(id, scope);
         if self.modules_in_progress.contains(&id) {
             return scope;
@@ -91,21 +91,40 @@ impl<'w> Checker<'w> {
     }
 
     fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) {
-        for decl in decls {
-            for (name, span, extent) in declared_names(decl) {
-                self.scope_mut(scope)
-                    .declared_later
-                    .entry(name)
-                    .or_insert((span, extent));
+        for (index, decl) in (0..).zip(decls) {
+            self.decl(decl, index, scope);
+        }
+    }
+
+    /// The declarations of a scope, in the syntax tree.
+    fn scope_decls(&self, scope: ScopeId) -> &'w [Decl] {
+        match self.out.scope(scope).decls {
+            DeclsAt::Module(module) => &self.workspace.module(module).program.decls,
+            DeclsAt::Package { parent, decl } => {
+                match self.scope_decls(parent).get(decl as usize).map(|d| &d.kind) {
+                    Some(DeclKind::Package(package)) => &package.decls,
+                    _ => &[],
+                }
             }
         }
-        for decl in decls {
-            self.decl(decl, scope);
+    }
+
+    /// Makes the table of the names a scope declares that are not declared yet, with the spans
+    /// of their first declaration, when a name is first found missing in it (see
+    /// [`Scope::declared_later`]): a program without such errors never makes one.
+    fn note_declared_later(&mut self, scope: ScopeId) {
+        if self.out.scope(scope).declared_later.is_some() {
+            return;
         }
-        // Each declaration took its own name out: what is left is only the names whose
-        // declaration failed, and the scope lives on through elaboration, so the table gives
-        // back the room it had for every name (about 54 bytes per declared name).
-        self.scope_mut(scope).declared_later.shrink_to_fit();
+        let mut later = FxHashMap::default();
+        for decl in self.scope_decls(scope) {
+            for (name, span, extent) in declared_names(decl) {
+                if !self.out.scope(scope).names.contains_key(&name) {
+                    later.entry(name).or_insert((span, extent));
+                }
+            }
+        }
+        self.scope_mut(scope).declared_later = Some(later);
     }
 
     fn ctx(&self, scope: ScopeId) -> Ctx {
@@ -116,11 +135,12 @@ impl<'w> Checker<'w> {
         }
     }
 
-    fn decl(&mut self, decl: &'w Decl, scope: ScopeId) {
+    /// Checks the `index`-th declaration of `scope`.
+    fn decl(&mut self, decl: &'w Decl, index: u32, scope: ScopeId) {
         match &decl.kind {
-            DeclKind::Let(bindings) => self.let_decl(bindings, scope),
+            DeclKind::Let(bindings) => self.let_decl(bindings, index, scope),
             DeclKind::Define(define) => {
-                self.define(&define.name, &define.params, &define.body, scope)
+                self.define(&define.name, &define.params, &define.body, index, scope)
             }
             DeclKind::Join(join) => {
                 let JoinDecl {
@@ -191,7 +211,7 @@ impl<'w> Checker<'w> {
                     self.apply(effort, effort_ty, target, target_ty);
                 }
             }
-            DeclKind::Package(package_decl) => self.package(package_decl, decl.span, scope),
+            DeclKind::Package(package_decl) => self.package(package_decl, decl.span, index, scope),
             DeclKind::Import(import) => {
                 let alias = &import.alias;
                 let Some(&module) = self.workspace.imports.get(&decl.span) else {
@@ -218,9 +238,13 @@ impl<'w> Checker<'w> {
     /// `package P = decls end`: its declarations see the file's names declared before it.
     /// An array `package P[i in a .. b]` is declared before its declarations, which may name
     /// other instances (`P[i - 1]:x`), and its index is a scalar name of the package.
-    fn package(&mut self, package_decl: &'w PackageDecl, span: Span, scope: ScopeId) {
+    fn package(&mut self, package_decl: &'w PackageDecl, span: Span, at: u32, scope: ScopeId) {
         let PackageDecl { name, index, decls } = package_decl;
-        let package = self.new_scope(None);
+        let decls_at = DeclsAt::Package {
+            parent: scope,
+            decl: at,
+        };
+        let package = self.new_scope(None, decls_at);
         self.out.package_scopes.insert(span, package);
         if let Some(index) = index {
             let mut ctx = self.ctx(scope);
@@ -242,20 +266,28 @@ impl<'w> Checker<'w> {
 
     /// `let a = e and b = e`: the bindings are simultaneous, as in the thesis's grammar: none of
     /// them sees the others.
-    fn let_decl(&mut self, bindings: &'w [Binding], scope: ScopeId) {
+    fn let_decl(&mut self, bindings: &'w [Binding], decl: u32, scope: ScopeId) {
         let mut ctx = self.ctx(scope);
         let types: Vec<Ty> = bindings
             .iter()
             .map(|b| self.expr(&b.value, &mut ctx))
             .collect();
-        for (binding, ty) in bindings.iter().zip(types) {
+        for ((binding, ty), at) in bindings.iter().zip(types).zip(0..) {
             self.expect_first_class(&binding.value, ty);
             self.declare(scope, &binding.name, ty);
-            self.out.bindings.insert(binding.name.span, binding);
+            let at = BindingAt { decl, binding: at };
+            self.out.bindings.insert(binding.name.span, at);
         }
     }
 
-    fn define(&mut self, name: &'w Ident, params: &'w [Param], body: &'w Expr, scope: ScopeId) {
+    fn define(
+        &mut self,
+        name: &'w Ident,
+        params: &'w [Param],
+        body: &'w Expr,
+        decl: u32,
+        scope: ScopeId,
+    ) {
         let limit = self.out.scope(scope).len();
         let mut seen: HashMap<&str, Span> = HashMap::new();
         let mut declared = Vec::with_capacity(params.len());
@@ -275,12 +307,12 @@ impl<'w> Checker<'w> {
         let id = DefId(self.out.definitions.len() as u32);
         self.out.definitions.push(Definition {
             name: name.name.clone(),
-            params,
-            body,
             span: name.span,
             scope,
             limit,
+            decl,
         });
+        self.definition_trees.push((params, body));
         self.declare(scope, name, Ty::Definition(id));
         // Check the body once now: names are resolved and typed parameters checked even if the
         // definition is never used. Untyped parameters are `Error` here (they fit anywhere);

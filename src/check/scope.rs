@@ -17,7 +17,7 @@ pub struct Entry {
     pub index: u32,
 }
 
-#[derive(Default, Debug)]
+#[derive(Debug)]
 pub struct Scope {
     pub names: FxHashMap<Name, Entry>,
     /// Names in declaration order.
@@ -29,12 +29,39 @@ pub struct Scope {
     pub index: Option<Name>,
     /// Modules opened by a plain `import`, with the number of this scope's names declared before.
     pub opened: Vec<(ScopeId, u32)>,
-    /// Names declared later in this scope, with the extent of their declaration: a use before
-    /// the declaration gets a precise message.
-    pub declared_later: FxHashMap<Name, (Span, Span)>,
+    /// Names declared later in this scope, with the span of the name and the extent of their
+    /// declaration: a use before the declaration gets a precise message. Made when a name is
+    /// first found missing (`None` before), then kept as names are declared.
+    pub declared_later: Option<FxHashMap<Name, (Span, Span)>>,
+    /// Where the scope's declarations are in the syntax tree.
+    pub decls: DeclsAt,
+}
+
+/// Where a scope's declarations are: a module's top level, or a package declared in another
+/// scope.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeclsAt {
+    Module(crate::load::ModuleId),
+    /// The package declared by the `decl`-th declaration of the scope `parent`.
+    Package {
+        parent: ScopeId,
+        decl: u32,
+    },
 }
 
 impl Scope {
+    pub fn new(parent: Option<(ScopeId, u32)>, decls: DeclsAt) -> Scope {
+        Scope {
+            names: FxHashMap::default(),
+            order: Vec::new(),
+            parent,
+            index: None,
+            opened: Vec::new(),
+            declared_later: None,
+            decls,
+        }
+    }
+
     pub fn len(&self) -> u32 {
         self.order.len() as u32
     }
@@ -50,7 +77,9 @@ impl Scope {
 
     pub fn insert(&mut self, name: Name, ty: Ty, span: Span) {
         let index = self.len();
-        self.declared_later.remove(&name);
+        if let Some(later) = &mut self.declared_later {
+            later.remove(&name);
+        }
         self.order.push(name.clone());
         self.names.insert(name, Entry { ty, span, index });
     }

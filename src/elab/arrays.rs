@@ -55,8 +55,8 @@ impl<'w> Elaborator<'_, 'w> {
     pub(super) fn package_array(
         &mut self,
         name: &Ident,
-        index: &'w PackageIndex,
-        decls: &'w [Decl],
+        index: &PackageIndex,
+        decls: &[Decl],
         scope: ScopeId,
     ) -> Result<()> {
         let first = self.bound(&index.first)?;
@@ -95,7 +95,7 @@ impl<'w> Elaborator<'_, 'w> {
     pub(super) fn instance_at(
         &mut self,
         scope: ScopeId,
-        index: &'w Expr,
+        index: &Expr,
         locals: &mut super::eval::Locals,
     ) -> Result<InstanceId> {
         let value = self.expr(index, locals)?;
@@ -176,7 +176,7 @@ impl<'w> Elaborator<'_, 'w> {
     }
 
     /// A bound of an array's range: a whole number.
-    fn bound(&mut self, expr: &'w Expr) -> Result<i64> {
+    fn bound(&mut self, expr: &Expr) -> Result<i64> {
         let value = self.expr(expr, &mut Vec::new())?;
         integer(&value).ok_or_else(|| {
             Diagnostic::error(

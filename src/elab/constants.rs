@@ -15,7 +15,7 @@ use crate::syntax::ast::DeclKind;
 
 /// The value of each numeric top-level binding, as text, by the span of its name. A binding
 /// whose evaluation fails (it reads a joint coordinate, say) has none.
-pub fn constant_values(workspace: &Workspace, checked: &Checked<'_>) -> FxHashMap<Span, String> {
+pub fn constant_values(workspace: &Workspace, checked: &Checked) -> FxHashMap<Span, String> {
     let mut elaborator = Elaborator::new(workspace, checked);
     let mut values = FxHashMap::default();
     for (id, module) in workspace.modules.iter().enumerate() {

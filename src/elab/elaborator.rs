@@ -3,6 +3,7 @@
 
 use rustc_hash::FxHashMap;
 
+use crate::check::resolutions::Cursor;
 use crate::check::scope::ScopeId;
 use crate::check::Checked;
 use crate::diag::Diagnostic;
@@ -11,6 +12,7 @@ use crate::syntax::ast::Name;
 
 use super::instances::{InstanceId, Instances};
 use super::mechanism::Mechanism;
+use super::owned::OwnedDecls;
 use super::value::{self, Value};
 
 /// A declared name's value. `let` bindings are evaluated when first used, so a library costs
@@ -22,10 +24,16 @@ pub(super) enum Global {
 
 pub struct Elaborator<'c, 'w> {
     pub(super) workspace: &'w Workspace,
-    pub(super) checked: &'c Checked<'w>,
+    pub(super) checked: &'c Checked,
+    /// The top-level declarations of the root files, by module, when the elaborator owns them
+    /// and frees each once it is done with it (`decls.rs`); the others are read in `workspace`.
+    pub(super) owned: Vec<Option<OwnedDecls>>,
     /// Values of declared names, by scope, instance (of an array of packages) and name.
     pub(super) globals: FxHashMap<(ScopeId, InstanceId, Name), Global>,
     pub(super) instances: Instances,
+    /// Where the last name resolution was found (see
+    /// [`Resolutions::get_near`](crate::check::resolutions::Resolutions::get_near)).
+    pub(super) resolved: Cursor,
     /// The first name bound to each body by `let name = other_name` (see `point_out_alias`).
     pub(super) aliases: FxHashMap<value::BodyId, (Name, crate::source::Span)>,
     /// Warnings about legal programs that are probably not what was meant.
@@ -69,10 +77,11 @@ impl Perturbation {
 
 impl<'c, 'w> Elaborator<'c, 'w> {
     /// An elaborator that has evaluated nothing yet.
-    pub(super) fn new(workspace: &'w Workspace, checked: &'c Checked<'w>) -> Self {
+    pub(super) fn new(workspace: &'w Workspace, checked: &'c Checked) -> Self {
         Elaborator {
             workspace,
             checked,
+            owned: Vec::new(),
             globals: FxHashMap::default(),
             mechanism: Mechanism::default(),
             elaborated_modules: Vec::new(),
@@ -82,6 +91,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             own_join: None,
             perturbation: None,
             instances: Default::default(),
+            resolved: Cursor::default(),
             aliases: FxHashMap::default(),
             warnings: Vec::new(),
         }

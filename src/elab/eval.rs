@@ -20,8 +20,8 @@ use crate::diag::Diagnostic;
 use crate::load::ModuleId;
 use crate::source::Span;
 use crate::syntax::ast::{
-    ApplyDecl, Arg, BinaryExpr, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind, Expr,
-    ExprKind, FieldInit, Ident, JoinDecl, LocalExpr, Name,
+    ApplyDecl, Arg, BinaryExpr, BinaryOp, Binding, Callee, ConstructKind, Decl, DeclKind,
+    DefineDecl, Expr, ExprKind, FieldInit, Ident, JoinDecl, LocalExpr, Name,
 };
 
 type Result<T> = std::result::Result<T, Diagnostic>;
@@ -42,45 +42,46 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .module_scopes
             .get(&id)
             .ok_or_else(|| internal("module was not checked"))?;
-        let decls = &self.workspace.module(id).program.decls;
-        self.decls(decls, scope)
+        for index in 0..self.decl_count(scope)? {
+            self.with_decl(scope, index, |elaborator, decl| {
+                elaborator.decl(decl, scope)
+            })?;
+        }
+        Ok(())
     }
 
     /// Records the frames a main module names at its top level (`let tip = … @ arm;`) in the
     /// mechanism's table of frames. Only bindings the checker typed as frames are evaluated, so
-    /// no other unused definition is.
+    /// no other unused definition is. The names are read in the checker's scope, in declaration
+    /// order: the declarations of a root file may have been freed by now.
     pub(super) fn name_frames(&mut self, id: ModuleId) -> Result<()> {
         let Some(&scope) = self.checked.module_scopes.get(&id) else {
             return Ok(());
         };
-        for decl in &self.workspace.module(id).program.decls {
-            let DeclKind::Let(bindings) = &decl.kind else {
+        let checked = self.checked;
+        let names = &checked.scope(scope).names;
+        for name in &checked.scope(scope).order {
+            // Only a `let` binding has the type of a frame.
+            let Some(entry) = names.get(name).filter(|e| e.ty == Ty::Frame) else {
                 continue;
             };
-            for binding in bindings {
-                let name = &binding.name.name;
-                let is_frame =
-                    self.checked.scope(scope).names.get(name).map(|e| e.ty) == Some(Ty::Frame);
-                if !is_frame {
-                    continue;
-                }
-                if let Value::Frame(frame) = self.global(scope, name)? {
-                    self.mechanism.frames.push(NamedFrame {
-                        name: name.clone(),
-                        frame,
-                        span: binding.name.span,
-                    });
-                }
+            if let Value::Frame(frame) = self.global(scope, name)? {
+                self.mechanism.frames.push(NamedFrame {
+                    name: name.clone(),
+                    frame,
+                    span: entry.span,
+                });
             }
         }
         Ok(())
     }
 
-    pub(super) fn decls(&mut self, decls: &'w [Decl], scope: ScopeId) -> Result<()> {
+    /// The declarations of a package, in order.
+    pub(super) fn decls(&mut self, decls: &[Decl], scope: ScopeId) -> Result<()> {
         decls.iter().try_for_each(|decl| self.decl(decl, scope))
     }
 
-    fn decl(&mut self, decl: &'w Decl, scope: ScopeId) -> Result<()> {
+    fn decl(&mut self, decl: &Decl, scope: ScopeId) -> Result<()> {
         let mut locals = Locals::new();
         match &decl.kind {
             // Definitions are evaluated when first used (see `global`).
@@ -315,23 +316,41 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 .help("an instance may name the joins of the instances before it, not after"));
             }
             _ => {
-                let binding: &'w Binding = self
+                let at = *self
                     .checked
                     .bindings
                     .get(&entry.span)
-                    .copied()
                     .ok_or_else(|| internal(format!("`{name}` has no value")))?;
                 self.globals.insert(key.clone(), Global::InProgress);
-                let value = self.within(instance, |elaborator| {
-                    elaborator.expr(&binding.value, &mut Locals::new())
-                })?;
-                if matches!(binding.value.kind, ExprKind::Name(_)) {
-                    self.point_out_alias(&value, binding, instance);
-                }
-                self.name_object(&value, &binding.name.name, instance);
-                value
+                return self.with_decl(scope, at.decl, |elaborator, decl| {
+                    let DeclKind::Let(bindings) = &decl.kind else {
+                        return Err(internal(format!("`{name}` is not bound by a `let`")));
+                    };
+                    let binding = (bindings.get(at.binding as usize))
+                        .ok_or_else(|| internal(format!("`{name}` has no binding")))?;
+                    elaborator.binding(binding, key, instance)
+                });
             }
         };
+        self.globals.insert(key, Global::Ready(value.clone()));
+        Ok(value)
+    }
+
+    /// Evaluates a `let` binding of the name `key` in `instance`, and records its value (before
+    /// its declaration is given back: see `decls.rs`).
+    fn binding(
+        &mut self,
+        binding: &Binding,
+        key: (ScopeId, InstanceId, Name),
+        instance: InstanceId,
+    ) -> Result<Value> {
+        let value = self.within(instance, |elaborator| {
+            elaborator.expr(&binding.value, &mut Locals::new())
+        })?;
+        if matches!(binding.value.kind, ExprKind::Name(_)) {
+            self.point_out_alias(&value, binding, instance);
+        }
+        self.name_object(&value, &binding.name.name, instance);
         self.globals.insert(key, Global::Ready(value.clone()));
         Ok(value)
     }
@@ -392,11 +411,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         }
     }
 
-    fn resolution(&self, span: Span) -> Result<Target> {
-        self.checked
-            .resolutions
-            .get(&span)
-            .copied()
+    fn resolution(&mut self, span: Span) -> Result<Target> {
+        let checked = self.checked;
+        (checked.resolutions)
+            .get_near(span, &mut self.resolved)
             .ok_or_else(|| internal("unresolved name"))
     }
 
@@ -418,7 +436,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         }
     }
 
-    pub(super) fn expr(&mut self, expr: &'w Expr, locals: &mut Locals) -> Result<Value> {
+    pub(super) fn expr(&mut self, expr: &Expr, locals: &mut Locals) -> Result<Value> {
         Ok(match &expr.kind {
             ExprKind::Name(name) => {
                 let target = self.resolution(expr.span)?;
@@ -689,8 +707,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
 
     fn call(
         &mut self,
-        callee: &'w Callee,
-        args: &'w [Arg],
+        callee: &Callee,
+        args: &[Arg],
         locals: &mut Locals,
         span: Span,
     ) -> Result<Value> {
@@ -733,7 +751,25 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             return Err(internal("call of a non-definition"));
         };
         let definition = &self.checked.definitions[def.0 as usize];
-        let (params, body, name) = (definition.params, definition.body, definition.name.clone());
+        self.with_decl(definition.scope, definition.decl, |elaborator, decl| {
+            let DeclKind::Define(define) = &decl.kind else {
+                return Err(internal("a definition without its declaration"));
+            };
+            elaborator.instantiate(define, args, values, home, span)
+        })
+    }
+
+    /// The value of a definition's body with the arguments `values` (written as `args`), its
+    /// names taking their values in the instance `home`.
+    fn instantiate(
+        &mut self,
+        define: &DefineDecl,
+        args: &[Arg],
+        values: Vec<Value>,
+        home: InstanceId,
+        span: Span,
+    ) -> Result<Value> {
+        let (params, body, name) = (&define.params, &define.body, &define.name.name);
         let mut bound: Vec<Option<Value>> = vec![None; params.len()];
         for (position, (arg, value)) in args.iter().zip(values).enumerate() {
             let index = match &arg.name {
@@ -764,14 +800,14 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         self.depth += 1;
         let result = self.within(home, |e| e.expr(body, &mut frame));
         self.depth -= 1;
-        result.map_err(|error| at_use(error, span, &name))
+        result.map_err(|error| at_use(error, span, name))
     }
 
     fn construct(
         &mut self,
         kind: ConstructKind,
-        params: &'w [Ident],
-        fields: &'w [FieldInit],
+        params: &[Ident],
+        fields: &[FieldInit],
         locals: &mut Locals,
         span: Span,
     ) -> Result<Value> {

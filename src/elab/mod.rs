@@ -5,6 +5,7 @@
 
 mod arrays;
 mod constants;
+mod decls;
 mod elaborator;
 mod eval;
 mod fields;
@@ -13,6 +14,7 @@ pub mod mechanism;
 mod operations;
 mod output;
 mod own_join;
+mod owned;
 pub mod value;
 
 use crate::check::Checked;
@@ -22,12 +24,13 @@ pub use constants::constant_values;
 use elaborator::Elaborator;
 pub use elaborator::Perturbation;
 pub use mechanism::{Mechanism, Summary};
+use owned::OwnedDecls;
 
 /// Evaluates every module of a checked workspace into one mechanism, with warnings about what
 /// is legal but probably not meant.
 pub fn elaborate(
     workspace: &Workspace,
-    checked: &Checked<'_>,
+    checked: &Checked,
 ) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
     elaborate_perturbed(workspace, checked, None)
 }
@@ -35,10 +38,37 @@ pub fn elaborate(
 /// As [`elaborate`], with the numbers written with a decimal point moved by `numbers`.
 pub fn elaborate_perturbed(
     workspace: &Workspace,
-    checked: &Checked<'_>,
+    checked: &Checked,
     numbers: Option<Perturbation>,
 ) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
+    run(Elaborator::new(workspace, checked), numbers)
+}
+
+/// As [`elaborate_perturbed`], freeing the syntax tree of the root files as it goes: each
+/// top-level declaration once it has been elaborated (see `decls.rs`), so that the tree and the
+/// mechanism are not both whole at once. The root files' declarations are gone afterwards
+/// (`program.decls` is empty): for commands that need only the mechanism and the sources.
+pub fn elaborate_consuming(
+    workspace: &mut Workspace,
+    checked: &Checked,
+    numbers: Option<Perturbation>,
+) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
+    let mut owned: Vec<Option<OwnedDecls>> = Vec::new();
+    owned.resize_with(workspace.modules.len(), || None);
+    for &root in &workspace.roots {
+        let program = &mut workspace.modules[root.0 as usize].program;
+        owned[root.0 as usize] = Some(OwnedDecls::new(std::mem::take(&mut program.decls)));
+    }
     let mut elaborator = Elaborator::new(workspace, checked);
+    elaborator.owned = owned;
+    run(elaborator, numbers)
+}
+
+fn run(
+    mut elaborator: Elaborator<'_, '_>,
+    numbers: Option<Perturbation>,
+) -> Result<(Mechanism, Vec<Diagnostic>), Diagnostic> {
+    let workspace = elaborator.workspace;
     elaborator.perturbation = numbers;
     for &root in &workspace.roots {
         elaborator.module(root)?;

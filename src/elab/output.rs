@@ -10,7 +10,7 @@ use crate::diag::Diagnostic;
 use crate::syntax::ast::OutputDecl;
 
 impl<'c, 'w> Elaborator<'c, 'w> {
-    pub(super) fn output(&mut self, output: &'w OutputDecl) -> Result<(), Diagnostic> {
+    pub(super) fn output(&mut self, output: &OutputDecl) -> Result<(), Diagnostic> {
         let mut locals = Locals::new();
         let span = output.value.span;
         let value = match self.expr(&output.value, &mut locals)? {

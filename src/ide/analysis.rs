@@ -154,7 +154,7 @@ impl Index {
             .find(|d| &*d.name == name)
     }
 
-    fn build(workspace: &Workspace, checked: &Checked<'_>, mechanism: Option<&Mechanism>) -> Index {
+    fn build(workspace: &Workspace, checked: &Checked, mechanism: Option<&Mechanism>) -> Index {
         let values = match mechanism {
             Some(_) => crate::elab::constant_values(workspace, checked),
             None => FxHashMap::default(),
@@ -184,15 +184,15 @@ impl Index {
     }
 }
 
-struct Builder<'a, 'w> {
+struct Builder<'a> {
     workspace: &'a Workspace,
-    checked: &'a Checked<'w>,
+    checked: &'a Checked,
     index: Index,
     /// Definitions by the span the checker's scopes record for them.
     by_span: FxHashMap<Span, usize>,
 }
 
-impl Builder<'_, '_> {
+impl Builder<'_> {
     fn define(&mut self, definition: Definition) -> usize {
         let id = self.index.definitions.len();
         self.index.occurrences.push(Occurrence {
@@ -387,13 +387,13 @@ impl Builder<'_, '_> {
 
     /// A name use, as the checker resolved it.
     fn name(&mut self, ident: &Ident, locals: &[(Name, usize)]) -> Reference {
-        let reference = match self.checked.resolutions.get(&ident.span) {
+        let reference = match self.checked.resolutions.get(ident.span) {
             Some(Target::Local) => locals
                 .iter()
                 .rev()
                 .find(|(name, _)| *name == ident.name)
                 .map_or(Reference::Unresolved, |&(_, id)| Reference::Definition(id)),
-            Some(Target::Global(scope)) => self.global(*scope, &ident.name),
+            Some(Target::Global(scope)) => self.global(scope, &ident.name),
             Some(Target::Builtin) => Reference::Builtin,
             None => Reference::Unresolved,
         };
@@ -424,8 +424,8 @@ impl Builder<'_, '_> {
                 if let Some(index) = &qualified.index {
                     self.expr(index, locals);
                 }
-                let reference = match self.checked.resolutions.get(&expr.span) {
-                    Some(Target::Global(scope)) => self.global(*scope, &qualified.name.name),
+                let reference = match self.checked.resolutions.get(expr.span) {
+                    Some(Target::Global(scope)) => self.global(scope, &qualified.name.name),
                     _ => Reference::Unresolved,
                 };
                 self.occurrence(qualified.name.span, reference);

@@ -250,3 +250,45 @@ fn an_import_opens_its_names_to_the_declarations_after_it() {
         compilation.diagnostics
     );
 }
+
+/// The `.lsd` files of a folder and its subfolders.
+fn programs_in(folder: &str, found: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(folder).expect("folder exists") {
+        let path = entry.expect("readable entry").path();
+        if path.is_dir() {
+            programs_in(path.to_str().expect("a UTF-8 path"), found);
+        } else if path.extension().is_some_and(|e| e == "lsd") {
+            found.push(path);
+        }
+    }
+}
+
+/// `compile_files_lean` frees each declaration of the root file once it is elaborated: the
+/// diagnostics and the mechanism must be those of the compilation that keeps the tree, on
+/// every example and on every golden input (clean programs, and the checker's and the
+/// elaborator's errors).
+#[test]
+fn freeing_the_tree_while_elaborating_changes_nothing() {
+    let mut programs = Vec::new();
+    programs_in("examples", &mut programs);
+    programs_in("tests/golden", &mut programs);
+    programs.sort();
+    assert!(programs.len() > 100, "{} programs", programs.len());
+    let mut elaborated = 0;
+    for path in programs {
+        let kept = compile_files(std::slice::from_ref(&path), &options()).expect("readable");
+        let lean = lsdc::driver::compile_files_lean(std::slice::from_ref(&path), &options())
+            .expect("readable");
+        let render =
+            |c: &Compilation| lsdc::diag::render::to_text(&c.workspace.sources, &c.diagnostics);
+        assert_eq!(render(&kept), render(&lean), "{}", path.display());
+        let debug = |c: &Compilation| format!("{:?}", c.mechanism);
+        assert_eq!(debug(&kept), debug(&lean), "{}", path.display());
+        elaborated += usize::from(lean.mechanism.is_some());
+        if lean.mechanism.is_some() {
+            let root = lean.workspace.roots[0];
+            assert!(lean.workspace.module(root).program.decls.is_empty());
+        }
+    }
+    assert!(elaborated > 40, "{elaborated} programs elaborated");
+}

@@ -52,6 +52,7 @@ mod symplectic_groups;
 mod textmate;
 mod threads;
 mod tree_jacobian;
+mod unit_check;
 mod unit_dense;
 mod unit_diag;
 mod unit_dynamics;
