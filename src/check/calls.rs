@@ -144,7 +144,7 @@ impl<'w> Checker<'w> {
     ) -> Option<Vec<Ty>> {
         let definition = &self.out.definitions[def.0 as usize];
         let params = definition.params;
-        let (name, def_span) = (definition.name.clone(), definition.span);
+        let (name, def_span) = (definition.name, definition.span);
         let mut bound: Vec<Option<Ty>> = vec![None; params.len()];
         let mut ok = true;
         for (position, (arg, ty)) in args.iter().zip(arg_types).enumerate() {
@@ -233,7 +233,7 @@ impl<'w> Checker<'w> {
         }
         let definition = &self.out.definitions[def.0 as usize];
         let (name, body, scope, limit) = (
-            definition.name.clone(),
+            definition.name,
             definition.body,
             definition.scope,
             definition.limit,
@@ -253,7 +253,7 @@ impl<'w> Checker<'w> {
             .iter()
             .zip(&arg_types)
             .map(|(p, &ty)| Local {
-                name: p.name.name.clone(),
+                name: p.name.name,
                 ty,
                 coordinate: false,
             })

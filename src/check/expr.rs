@@ -16,7 +16,7 @@ impl<'w> Checker<'w> {
         match &expr.kind {
             ExprKind::Name(name) => self.name(
                 &Ident {
-                    name: name.clone(),
+                    name: *name,
                     span: expr.span,
                 },
                 ctx,
@@ -65,7 +65,7 @@ impl<'w> Checker<'w> {
                 let depth = ctx.locals.len();
                 for (binding, ty) in bindings.iter().zip(types) {
                     ctx.locals.push(Local {
-                        name: binding.name.name.clone(),
+                        name: binding.name.name,
                         ty,
                         coordinate: false,
                     });
@@ -526,7 +526,7 @@ impl<'w> Checker<'w> {
                 );
             }
             ctx.locals.push(Local {
-                name: param.name.clone(),
+                name: param.name,
                 ty: Ty::Scalar,
                 coordinate: true,
             });

@@ -51,7 +51,7 @@ impl Scope {
     pub fn insert(&mut self, name: Name, ty: Ty, span: Span) {
         let index = self.len();
         self.declared_later.remove(&name);
-        self.order.push(name.clone());
+        self.order.push(name);
         self.names.insert(name, Entry { ty, span, index });
     }
 }

@@ -239,7 +239,7 @@ impl Builder<'_, '_> {
             let declare = |builder: &mut Self, name: &Ident, kind: DefinitionKind| {
                 let ty = builder.declared_type(name);
                 builder.define(Definition {
-                    name: name.name.clone(),
+                    name: name.name,
                     span: name.span,
                     kind,
                     ty,
@@ -314,7 +314,7 @@ impl Builder<'_, '_> {
 
     fn local(&mut self, name: &Ident, kind: DefinitionKind, ty: Option<Ty>, scope: Span) -> usize {
         self.define(Definition {
-            name: name.name.clone(),
+            name: name.name,
             span: name.span,
             kind,
             ty,
@@ -336,7 +336,7 @@ impl Builder<'_, '_> {
                 DeclKind::Define(define) => {
                     for param in &define.params {
                         if let Some(&id) = self.by_span.get(&param.name.span) {
-                            locals.push((param.name.name.clone(), id));
+                            locals.push((param.name.name, id));
                         }
                         if let Some(ty) = &param.ty {
                             self.occurrence(ty.span, Reference::Builtin);
@@ -414,7 +414,7 @@ impl Builder<'_, '_> {
         match &expr.kind {
             ExprKind::Name(name) => {
                 let ident = Ident {
-                    name: name.clone(),
+                    name: *name,
                     span: expr.span,
                 };
                 self.name(&ident, locals);
@@ -454,7 +454,7 @@ impl Builder<'_, '_> {
                         Some(Ty::Scalar),
                         expr.span,
                     );
-                    locals.push((param.name.clone(), id));
+                    locals.push((param.name, id));
                 }
                 self.fields(&c.fields, locals);
                 locals.truncate(depth);
@@ -467,7 +467,7 @@ impl Builder<'_, '_> {
                 let depth = locals.len();
                 for binding in bindings.iter() {
                     let id = self.local(&binding.name, DefinitionKind::Local, None, expr.span);
-                    locals.push((binding.name.name.clone(), id));
+                    locals.push((binding.name.name, id));
                 }
                 self.expr(body, locals);
                 locals.truncate(depth);

@@ -1,25 +1,25 @@
 //! The abstract syntax of LSD, with a span on every node.
 
-use rustc_hash::FxHashSet;
-use std::rc::Rc;
+use rustc_hash::FxHashMap;
 
 use crate::source::Span;
+pub use crate::syntax::symbol::Symbol;
 
-/// Identifiers are shared strings: the checker and elaborator copy names freely.
-pub type Name = Rc<str>;
+/// Identifiers are 4-byte symbols (`Copy`): the checker and elaborator copy names freely.
+pub type Name = Symbol;
 
-/// The names of one file, each spelling stored once: every occurrence of a name shares it (a
-/// generated chain of bodies names each body five times, and every body's fields alike).
+/// The names met while parsing one file: each spelling is looked up in the process's table
+/// once per file, and its other occurrences found here without taking that table's lock.
 #[derive(Default)]
-pub struct Names(FxHashSet<Name>);
+pub struct Names(FxHashMap<&'static str, Name>);
 
 impl Names {
     pub fn intern(&mut self, text: &str) -> Name {
-        if let Some(name) = self.0.get(text) {
-            return name.clone();
+        if let Some(&name) = self.0.get(text) {
+            return name;
         }
-        let name: Name = Rc::from(text);
-        self.0.insert(name.clone());
+        let name = Symbol::intern(text);
+        self.0.insert(name.as_str(), name);
         name
     }
 }
@@ -186,7 +186,7 @@ impl Expr {
     pub fn as_ident(&self) -> Option<Ident> {
         match &self.kind {
             ExprKind::Name(name) => Some(Ident {
-                name: name.clone(),
+                name: *name,
                 span: self.span,
             }),
             _ => None,

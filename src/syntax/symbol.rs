@@ -1,0 +1,200 @@
+//! Names as 4-byte symbols: each spelling is stored once for the whole process, and a name in
+//! the syntax tree, the checker's scopes and the elaborator's tables is its index in that table
+//! (a shared string took 16 bytes at every occurrence, and a generated chain names each body
+//! five times).
+//!
+//! The spellings live as long as the process: a compiler run is short, and the language server,
+//! which runs for a whole editing session, keeps at most the distinct names typed in it.
+//! Symbols behave as their text: they compare, order, hash and print as their spelling, so that
+//! a table keyed by names iterates, and a sorted list of names sorts, as it did with strings.
+
+use rustc_hash::FxHashMap;
+use std::cell::RefCell;
+use std::cmp::Ordering;
+use std::fmt;
+use std::hash::{Hash, Hasher};
+use std::num::NonZeroU32;
+use std::ops::Deref;
+use std::sync::{Mutex, MutexGuard};
+
+/// A name: an index in the process's table of spellings (nonzero, so that an `Option` of it
+/// takes no more room).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Symbol(NonZeroU32);
+
+/// Every spelling interned, in the order first met, and the symbol of each.
+#[derive(Default)]
+struct Interner {
+    spellings: Vec<&'static str>,
+    symbols: FxHashMap<&'static str, Symbol>,
+}
+
+/// The one table, shared by all threads (`lsdc test` compiles on several).
+static INTERNER: Mutex<Option<Interner>> = Mutex::new(None);
+
+thread_local! {
+    /// This thread's copy of the table's spellings, extended from the shared table when a
+    /// symbol newer than the copy is read: reading a name takes no lock.
+    static SPELLINGS: RefCell<Vec<&'static str>> = const { RefCell::new(Vec::new()) };
+}
+
+fn interner() -> MutexGuard<'static, Option<Interner>> {
+    // A thread that panicked while holding the lock left the table whole (each entry is
+    // pushed in one step), so the table is used anyway.
+    INTERNER
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+impl Symbol {
+    /// The symbol of a spelling, added to the table when first met.
+    pub fn intern(text: &str) -> Symbol {
+        let mut guard = interner();
+        let table = guard.get_or_insert_with(Interner::default);
+        if let Some(&symbol) = table.symbols.get(text) {
+            return symbol;
+        }
+        let spelling: &'static str = Box::leak(Box::from(text));
+        let index = u32::try_from(table.spellings.len() + 1).expect("fewer than 2^32 names");
+        let symbol = Symbol(NonZeroU32::new(index).expect("indices start at 1"));
+        table.spellings.push(spelling);
+        table.symbols.insert(spelling, symbol);
+        symbol
+    }
+
+    /// The spelling of the name.
+    pub fn as_str(self) -> &'static str {
+        let index = self.0.get() as usize - 1;
+        SPELLINGS.with(|spellings| {
+            if let Some(&spelling) = spellings.borrow().get(index) {
+                return spelling;
+            }
+            let mut spellings = spellings.borrow_mut();
+            let guard = interner();
+            let all = &guard.as_ref().expect("a symbol was interned").spellings;
+            let known = spellings.len();
+            spellings.extend_from_slice(&all[known..]);
+            spellings[index]
+        })
+    }
+}
+
+impl Deref for Symbol {
+    type Target = str;
+
+    fn deref(&self) -> &str {
+        self.as_str()
+    }
+}
+
+impl AsRef<str> for Symbol {
+    fn as_ref(&self) -> &str {
+        self.as_str()
+    }
+}
+
+impl std::borrow::Borrow<str> for Symbol {
+    fn borrow(&self) -> &str {
+        self.as_str()
+    }
+}
+
+impl From<&str> for Symbol {
+    fn from(text: &str) -> Symbol {
+        Symbol::intern(text)
+    }
+}
+
+impl From<&String> for Symbol {
+    fn from(text: &String) -> Symbol {
+        Symbol::intern(text)
+    }
+}
+
+impl From<String> for Symbol {
+    fn from(text: String) -> Symbol {
+        Symbol::intern(&text)
+    }
+}
+
+impl PartialEq<str> for Symbol {
+    fn eq(&self, other: &str) -> bool {
+        self.as_str() == other
+    }
+}
+
+impl PartialEq<&str> for Symbol {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+/// Hashed as its spelling, so that a table keyed by symbols can be searched with a `&str`
+/// (`Borrow<str>`) and iterates in the order it did when keyed by strings.
+impl Hash for Symbol {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        self.as_str().hash(state);
+    }
+}
+
+/// Ordered as its spelling (alphabetically), not by when it was first met.
+impl PartialOrd for Symbol {
+    fn partial_cmp(&self, other: &Symbol) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Symbol {
+    fn cmp(&self, other: &Symbol) -> Ordering {
+        if self == other {
+            return Ordering::Equal;
+        }
+        self.as_str().cmp(other.as_str())
+    }
+}
+
+impl fmt::Display for Symbol {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self.as_str(), f)
+    }
+}
+
+impl fmt::Debug for Symbol {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Symbol;
+
+    #[test]
+    fn a_spelling_is_one_symbol_and_reads_back() {
+        let a = Symbol::intern("symbol_test_alpha");
+        let b = Symbol::intern(&String::from("symbol_test_alpha"));
+        assert_eq!(a, b);
+        assert_eq!(a.as_str(), "symbol_test_alpha");
+        assert_ne!(a, Symbol::intern("symbol_test_beta"));
+        assert_eq!(std::mem::size_of::<Option<Symbol>>(), 4);
+    }
+
+    #[test]
+    fn symbols_order_as_their_spellings() {
+        // Interned in the reverse of alphabetical order.
+        let z = Symbol::intern("symbol_test_zz");
+        let a = Symbol::intern("symbol_test_aa");
+        assert!(a < z);
+        assert_eq!(format!("{a} {z:?}"), "symbol_test_aa \"symbol_test_zz\"");
+    }
+
+    #[test]
+    fn another_thread_reads_the_same_spelling() {
+        let here = Symbol::intern("symbol_test_shared");
+        let there = std::thread::spawn(move || (here.as_str(), Symbol::intern("symbol_test_new")))
+            .join()
+            .unwrap();
+        assert_eq!(there.0, "symbol_test_shared");
+        assert_eq!(there.1.as_str(), "symbol_test_new");
+    }
+}
