@@ -141,9 +141,9 @@ impl<'w> Checker<'w> {
         while let Some(id) = current {
             let scope = self.out.scope(id);
             if let Some(&(later, extent)) = scope.declared_later.get(name.as_ref()) {
-                let inside = extent.file == ident.span.file
-                    && extent.start <= ident.span.start
-                    && ident.span.end <= extent.end;
+                let inside = extent.file() == ident.span.file()
+                    && extent.start() <= ident.span.start()
+                    && ident.span.end() <= extent.end();
                 if inside && self.declares_join(extent) {
                     return diagnostic
                         .secondary(later, "the join being declared")
@@ -154,7 +154,7 @@ impl<'w> Checker<'w> {
                         .secondary(later, "the name being defined")
                         .help("a definition cannot refer to itself; LSD has no recursion");
                 }
-                if later.file == ident.span.file && later.start < ident.span.start {
+                if later.file() == ident.span.file() && later.start() < ident.span.start() {
                     return diagnostic
                         .secondary(later, "defined in the same `let ... and ...`")
                         .help("bindings joined by `and` are simultaneous and do not see each other: use two `let` declarations");
@@ -207,7 +207,7 @@ impl<'w> Checker<'w> {
 
     /// The source text of a span.
     fn source(&self, span: Span) -> &str {
-        let text = &self.workspace.sources.file(span.file).text;
+        let text = &self.workspace.sources.file(span.file()).text;
         text.get(span.range()).unwrap_or_default()
     }
 
@@ -234,7 +234,7 @@ impl<'w> Checker<'w> {
             return None;
         };
         // A parenthesised `(t ++ q)` starts after the parenthesis: written on purpose.
-        if op != BinaryOp::Rotation || lhs.span.start != expr.span.start {
+        if op != BinaryOp::Rotation || lhs.span.start() != expr.span.start() {
             return None;
         }
         for part in [translation, angle, rhs] {
@@ -243,7 +243,7 @@ impl<'w> Checker<'w> {
         // `axis @ b` on the right, unparenthesised: the frame applies to the whole displacement.
         let (axis, body, ty) = match &rhs.kind {
             ExprKind::Binary(frame)
-                if frame.op == BinaryOp::Frame && rhs.span.end == expr.span.end =>
+                if frame.op == BinaryOp::Frame && rhs.span.end() == expr.span.end() =>
             {
                 (frame.lhs.span, Some(frame.rhs.span), Ty::Frame)
             }

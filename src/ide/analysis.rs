@@ -135,7 +135,9 @@ impl Index {
     /// The occurrence of a name at a byte offset of a file.
     pub fn occurrence_at(&self, file: FileId, offset: usize) -> Option<&Occurrence> {
         self.occurrences.iter().find(|o| {
-            o.span.file == file && o.span.start as usize <= offset && offset <= o.span.end as usize
+            o.span.file() == file
+                && o.span.start() as usize <= offset
+                && offset <= o.span.end() as usize
         })
     }
 
@@ -179,7 +181,7 @@ impl Index {
         builder
             .index
             .occurrences
-            .sort_by_key(|o| (o.span.file, o.span.start));
+            .sort_by_key(|o| (o.span.file(), o.span.start()));
         builder.index
     }
 }
@@ -233,9 +235,9 @@ impl Builder<'_, '_> {
         for decl in decls {
             let doc = leading_comment(
                 &text[previous_end..],
-                decl.span.start as usize - previous_end,
+                decl.span.start() as usize - previous_end,
             );
-            previous_end = decl.span.end as usize;
+            previous_end = decl.span.end() as usize;
             let declare = |builder: &mut Self, name: &Ident, kind: DefinitionKind| {
                 let ty = builder.declared_type(name);
                 builder.define(Definition {
@@ -275,7 +277,7 @@ impl Builder<'_, '_> {
                     if let Some(index) = &package.index {
                         declare(self, &index.variable, DefinitionKind::Value);
                     }
-                    let start = package.name.span.end as usize;
+                    let start = package.name.span.end() as usize;
                     self.scope_declarations(&package.decls, file, start);
                 }
                 DeclKind::Import(import) => self.import(decl.span, &import.target),

@@ -407,10 +407,11 @@ fn leading_dot(span: Span, number: &str) -> Diagnostic {
 fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
     match error {
         LexError::UnterminatedComment => {
-            let opening = Span {
-                end: span.start + 2,
-                ..span
-            };
+            let opening = Span::new(
+                span.file(),
+                span.start() as usize,
+                span.start() as usize + 2,
+            );
             Diagnostic::error("E0102", "unterminated comment")
                 .primary(opening, "this comment is never closed")
                 .help("close it with `*)`; comments nest, so every `(*` inside needs its own `*)`")

@@ -3,79 +3,42 @@
 //! (a shared string took 16 bytes at every occurrence, and a generated chain names each body
 //! five times).
 //!
-//! The spellings live as long as the process: a compiler run is short, and the language server,
-//! which runs for a whole editing session, keeps at most the distinct names typed in it.
+//! The spellings live as long as the process (see [`Interner`]): the language server keeps at
+//! most the distinct names typed in its editing session.
 //! Symbols behave as their text: they compare, order, hash and print as their spelling, so that
 //! a table keyed by names iterates, and a sorted list of names sorts, as it did with strings.
 
-use rustc_hash::FxHashMap;
 use std::cell::RefCell;
 use std::cmp::Ordering;
 use std::fmt;
 use std::hash::{Hash, Hasher};
 use std::num::NonZeroU32;
 use std::ops::Deref;
-use std::sync::{Mutex, MutexGuard};
 
-/// A name: an index in the process's table of spellings (nonzero, so that an `Option` of it
-/// takes no more room).
+use crate::source::interner::Interner;
+
+/// A name: one more than its index in the process's table of spellings (nonzero, so that an
+/// `Option` of it takes no more room).
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub struct Symbol(NonZeroU32);
 
-/// Every spelling interned, in the order first met, and the symbol of each.
-#[derive(Default)]
-struct Interner {
-    spellings: Vec<&'static str>,
-    symbols: FxHashMap<&'static str, Symbol>,
-}
-
-/// The one table, shared by all threads (`lsdc test` compiles on several).
-static INTERNER: Mutex<Option<Interner>> = Mutex::new(None);
-
 thread_local! {
-    /// This thread's copy of the table's spellings, extended from the shared table when a
-    /// symbol newer than the copy is read: reading a name takes no lock.
     static SPELLINGS: RefCell<Vec<&'static str>> = const { RefCell::new(Vec::new()) };
 }
 
-fn interner() -> MutexGuard<'static, Option<Interner>> {
-    // A thread that panicked while holding the lock left the table whole (each entry is
-    // pushed in one step), so the table is used anyway.
-    INTERNER
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
-}
+/// Every spelling interned, leaked: it lives as long as the process.
+static INTERNER: Interner<&'static str> = Interner::new(&SPELLINGS);
 
 impl Symbol {
     /// The symbol of a spelling, added to the table when first met.
     pub fn intern(text: &str) -> Symbol {
-        let mut guard = interner();
-        let table = guard.get_or_insert_with(Interner::default);
-        if let Some(&symbol) = table.symbols.get(text) {
-            return symbol;
-        }
-        let spelling: &'static str = Box::leak(Box::from(text));
-        let index = u32::try_from(table.spellings.len() + 1).expect("fewer than 2^32 names");
-        let symbol = Symbol(NonZeroU32::new(index).expect("indices start at 1"));
-        table.spellings.push(spelling);
-        table.symbols.insert(spelling, symbol);
-        symbol
+        let index = INTERNER.intern(text, |text| Box::leak(Box::from(text)));
+        Symbol(NonZeroU32::new(index + 1).expect("fewer than 2^32 - 1 names"))
     }
 
     /// The spelling of the name.
     pub fn as_str(self) -> &'static str {
-        let index = self.0.get() as usize - 1;
-        SPELLINGS.with(|spellings| {
-            if let Some(&spelling) = spellings.borrow().get(index) {
-                return spelling;
-            }
-            let mut spellings = spellings.borrow_mut();
-            let guard = interner();
-            let all = &guard.as_ref().expect("a symbol was interned").spellings;
-            let known = spellings.len();
-            spellings.extend_from_slice(&all[known..]);
-            spellings[index]
-        })
+        INTERNER.get(self.0.get() - 1)
     }
 }
 
