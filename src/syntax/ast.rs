@@ -42,21 +42,23 @@ pub struct Decl {
 }
 
 /// A declaration. Its larger variants are boxed so that a declaration takes little room in the
-/// program's list (from 384 bytes to 48; a generated chain has three declarations per body).
+/// program's list (from 384 bytes to 32; a generated chain has three declarations per body),
+/// and its lists are boxed slices, at their exact length (a `let`'s single binding took room
+/// for four in the list it was pushed into).
 #[derive(Clone, Debug, PartialEq)]
 pub enum DeclKind {
     /// `let a = e and b = e`
-    Let(Vec<Binding>),
+    Let(Box<[Binding]>),
     /// `let f(a, b : vector) = e`: a parameterised definition.
     Define(Box<DefineDecl>),
     /// `join <frame> and <frame> with <link> [as <name>]`
     Join(Box<JoinDecl>),
     /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
-    Initial(Vec<InitialValue>),
+    Initial(Box<[InitialValue]>),
     /// `given L = 0.8, arm.mass = 2`: values of unknowns and generic quantities for simulation.
-    Given(Vec<GivenValue>),
+    Given(Box<[GivenValue]>),
     /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
-    Simulate(Vec<FieldInit>),
+    Simulate(Box<[FieldInit]>),
     /// `output tip = position(arm.tip)`: a named quantity of the state, written by `simulate`
     /// at every output.
     Output(Box<OutputDecl>),
@@ -303,9 +305,10 @@ pub struct LocalExpr {
 }
 
 /// The kind of an expression. A name's span is its expression's, and every variant holds at
-/// most 16 bytes (a call, a binary operation, a `local` and a constructor are boxed whole), so
-/// that an expression is 40 bytes: a generated chain holds some forty per body, inline in
-/// lists or boxed (a 48-byte block of glibc's malloc, where 48 bytes took 64).
+/// most 8 bytes (a call, a binary operation, a `local` and a constructor are boxed whole, and a
+/// vector literal's slice), so that the kind is 16 bytes and an expression with its 8-byte span
+/// 24: a generated chain holds some forty per body, inline in lists or boxed (a 32-byte block
+/// of glibc's malloc, where 32 bytes took 48).
 #[derive(Clone, Debug, PartialEq)]
 pub enum ExprKind {
     Name(Name),
@@ -319,8 +322,9 @@ pub enum ExprKind {
     Float(f64),
     /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
     /// Boxed as a slice: a literal's elements take no room beyond their own (its list grew by
-    /// doubling while parsed).
-    Vector(Box<[Expr]>),
+    /// doubling while parsed); the slice is boxed again so that its length is not in every
+    /// expression.
+    Vector(Box<Box<[Expr]>>),
     Call(Box<CallExpr>),
     Binary(Box<BinaryExpr>),
     Neg(Box<Expr>),

@@ -107,19 +107,33 @@ fn dismantle(kind: DeclKind) {
     let mut exprs: Vec<Expr> = Vec::new();
     while let Some(kind) = decls.pop() {
         match kind {
-            DeclKind::Let(bindings) => exprs.extend(bindings.into_iter().map(|b| b.value)),
+            DeclKind::Let(bindings) => {
+                exprs.extend(bindings.into_vec().into_iter().map(|b| b.value))
+            }
             DeclKind::Define(define) => exprs.push(define.body),
             DeclKind::Join(join) => {
                 let join = *join;
                 exprs.extend([join.first, join.second, join.link]);
             }
             DeclKind::Initial(values) => {
-                exprs.extend(values.into_iter().flat_map(|v| [v.target, v.value]));
+                exprs.extend(
+                    values
+                        .into_vec()
+                        .into_iter()
+                        .flat_map(|v| [v.target, v.value]),
+                );
             }
             DeclKind::Given(values) => {
-                exprs.extend(values.into_iter().flat_map(|v| [v.target, v.value]));
+                exprs.extend(
+                    values
+                        .into_vec()
+                        .into_iter()
+                        .flat_map(|v| [v.target, v.value]),
+                );
             }
-            DeclKind::Simulate(fields) => exprs.extend(fields.into_iter().map(|f| f.value)),
+            DeclKind::Simulate(fields) => {
+                exprs.extend(fields.into_vec().into_iter().map(|f| f.value))
+            }
             DeclKind::Output(output) => exprs.push(output.value),
             DeclKind::Apply(apply) => {
                 let apply = *apply;
@@ -134,7 +148,7 @@ fn dismantle(kind: DeclKind) {
         while let Some(mut expr) = exprs.pop() {
             match std::mem::replace(&mut expr.kind, ExprKind::Error) {
                 ExprKind::Field(access) => exprs.push(access.target),
-                ExprKind::Vector(items) => exprs.extend(items.into_vec()),
+                ExprKind::Vector(items) => exprs.extend((*items).into_vec()),
                 ExprKind::Call(call) => {
                     exprs.extend(call.args.into_vec().into_iter().map(|a| a.value))
                 }

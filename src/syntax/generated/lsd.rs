@@ -1,6 +1,6 @@
-// grammar stamp: e66cc03a8a531277 (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 36ae57ba5b065c2d (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: ae53bd9c32783c115949618a333c4eb0951ff1a464bc0873fb81adf6532628fe
+// sha3: ef274979604e678623a63c718d4bcc5231c1590e37c88d5bd721bdcbb45557d3
 // features: 
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
@@ -7089,7 +7089,7 @@ fn __action11<
     (_, bindings, _): (usize, Vec<Binding>, usize),
 ) -> DeclKind
 {
-    DeclKind::Let(bindings)
+    DeclKind::Let(bindings.into_boxed_slice())
 }
 
 #[allow(unused_variables)]
@@ -7180,7 +7180,7 @@ fn __action16<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> DeclKind
 {
-    DeclKind::Simulate(fields)
+    DeclKind::Simulate(fields.into_boxed_slice())
 }
 
 #[allow(unused_variables)]
@@ -7989,7 +7989,7 @@ fn __action63<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Vector(__0.into_boxed_slice())
+    ExprKind::Vector(Box::new(__0.into_boxed_slice()))
 }
 
 #[allow(unused_variables)]
