@@ -66,18 +66,25 @@ impl<T: Copy + Eq + Hash> Interner<T> {
     }
 
     /// The value of an index `intern` returned.
+    #[inline]
     pub fn get(&self, index: u32) -> T {
-        let index = index as usize;
+        let copied = self
+            .local
+            .with(|local| local.borrow().get(index as usize).copied());
+        copied.unwrap_or_else(|| self.refresh(index))
+    }
+
+    /// Brings this thread's copy up to date with the shared table, for an index newer than it.
+    #[cold]
+    #[inline(never)]
+    fn refresh(&self, index: u32) -> T {
         self.local.with(|local| {
-            if let Some(&value) = local.borrow().get(index) {
-                return value;
-            }
             let mut local = local.borrow_mut();
             let guard = self.lock();
             let all = &guard.as_ref().expect("a value was interned").values;
             let known = local.len();
             local.extend_from_slice(&all[known..]);
-            local[index]
+            local[index as usize]
         })
     }
 }

@@ -40,44 +40,62 @@ thread_local! {
 static LONG_TABLE: Interner<Full> = Interner::new(&LONG_SPANS);
 
 impl Span {
+    #[inline]
     pub fn new(file: FileId, start: usize, end: usize) -> Span {
         Span::from_full((file, start as u32, end as u32))
     }
 
+    #[inline]
     fn from_full((file, start, end): Full) -> Span {
         let len = end
             .checked_sub(start)
             .and_then(|len| u16::try_from(len).ok());
         match (len, u16::try_from(file.0)) {
             (Some(len), Ok(file)) if file != LONG => Span { start, len, file },
-            _ => Span {
-                start: LONG_TABLE.intern(&(file, start, end), |&full| full),
-                len: 0,
-                file: LONG,
-            },
+            _ => Span::long((file, start, end)),
         }
     }
 
+    /// A span in the table of long spans (rare, so kept out of the inlined path).
+    #[cold]
+    #[inline(never)]
+    fn long(full: Full) -> Span {
+        Span {
+            start: LONG_TABLE.intern(&full, |&full| full),
+            len: 0,
+            file: LONG,
+        }
+    }
+
+    #[inline]
     fn full(self) -> Full {
         if self.file == LONG {
-            LONG_TABLE.get(self.start)
-        } else {
-            let end = self.start + u32::from(self.len);
-            (FileId(u32::from(self.file)), self.start, end)
+            return Span::read_long(self.start);
         }
+        let end = self.start + u32::from(self.len);
+        (FileId(u32::from(self.file)), self.start, end)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn read_long(index: u32) -> Full {
+        LONG_TABLE.get(index)
     }
 
     /// The file the span is in.
+    #[inline]
     pub fn file(self) -> FileId {
         self.full().0
     }
 
     /// Byte offset of the span's start in its file.
+    #[inline]
     pub fn start(self) -> u32 {
         self.full().1
     }
 
     /// Byte offset just past the span's end in its file.
+    #[inline]
     pub fn end(self) -> u32 {
         self.full().2
     }
@@ -89,6 +107,7 @@ impl Span {
         Span::from_full((file, start.min(other_start), end.max(other_end)))
     }
 
+    #[inline]
     pub fn range(self) -> std::ops::Range<usize> {
         let (_, start, end) = self.full();
         start as usize..end as usize

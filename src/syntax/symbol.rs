@@ -37,6 +37,7 @@ impl Symbol {
     }
 
     /// The spelling of the name.
+    #[inline]
     pub fn as_str(self) -> &'static str {
         INTERNER.get(self.0.get() - 1)
     }
