@@ -306,7 +306,7 @@ pub struct LocalExpr {
 
 /// The kind of an expression. A name's span is its expression's, and every variant holds at
 /// most 8 bytes (a call, a binary operation, a `local` and a constructor are boxed whole, and a
-/// vector literal's slice), so that the kind is 16 bytes and an expression with its 8-byte span
+/// vector literal's elements), so that the kind is 16 bytes and an expression with its 8-byte span
 /// 24: a generated chain holds some forty per body, inline in lists or boxed (a 32-byte block
 /// of glibc's malloc, where 32 bytes took 48).
 #[derive(Clone, Debug, PartialEq)]
@@ -321,10 +321,7 @@ pub enum ExprKind {
     Int(i64),
     Float(f64),
     /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
-    /// Boxed as a slice: a literal's elements take no room beyond their own (its list grew by
-    /// doubling while parsed); the slice is boxed again so that its length is not in every
-    /// expression.
-    Vector(Box<Box<[Expr]>>),
+    Vector(VectorLiteral),
     Call(Box<CallExpr>),
     Binary(Box<BinaryExpr>),
     Neg(Box<Expr>),
@@ -336,6 +333,50 @@ pub enum ExprKind {
     Local(Box<LocalExpr>),
     /// An expression the parser could not read.
     Error,
+}
+
+/// The elements of a vector literal, read as a slice. Vectors and matrices have three elements
+/// (or rows), so three elements are one block of their own size; a literal of another length
+/// (an error the checker reports) is a slice, boxed again so that its length is not in every
+/// expression. Either form fits in eight bytes beside the expression's own tag.
+#[derive(Clone, PartialEq)]
+pub enum VectorLiteral {
+    Three(Box<[Expr; 3]>),
+    Other(Box<Box<[Expr]>>),
+}
+
+impl VectorLiteral {
+    pub fn new(elements: Vec<Expr>) -> VectorLiteral {
+        match <Box<[Expr; 3]>>::try_from(elements) {
+            Ok(three) => VectorLiteral::Three(three),
+            Err(other) => VectorLiteral::Other(Box::new(other.into_boxed_slice())),
+        }
+    }
+
+    pub fn into_vec(self) -> Vec<Expr> {
+        match self {
+            VectorLiteral::Three(three) => Vec::from(*three),
+            VectorLiteral::Other(other) => other.into_vec(),
+        }
+    }
+}
+
+impl std::ops::Deref for VectorLiteral {
+    type Target = [Expr];
+
+    fn deref(&self) -> &[Expr] {
+        match self {
+            VectorLiteral::Three(three) => &three[..],
+            VectorLiteral::Other(other) => other,
+        }
+    }
+}
+
+/// Printed as the list of its elements, whichever its form.
+impl std::fmt::Debug for VectorLiteral {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
 }
 
 /// Builds a binary expression node (used by the grammar's actions).

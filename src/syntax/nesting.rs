@@ -148,7 +148,7 @@ fn dismantle(kind: DeclKind) {
         while let Some(mut expr) = exprs.pop() {
             match std::mem::replace(&mut expr.kind, ExprKind::Error) {
                 ExprKind::Field(access) => exprs.push(access.target),
-                ExprKind::Vector(items) => exprs.extend((*items).into_vec()),
+                ExprKind::Vector(items) => exprs.extend(items.into_vec()),
                 ExprKind::Call(call) => {
                     exprs.extend(call.args.into_vec().into_iter().map(|a| a.value))
                 }

@@ -128,37 +128,3 @@ impl fmt::Debug for Symbol {
         fmt::Debug::fmt(self.as_str(), f)
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::Symbol;
-
-    #[test]
-    fn a_spelling_is_one_symbol_and_reads_back() {
-        let a = Symbol::intern("symbol_test_alpha");
-        let b = Symbol::intern(&String::from("symbol_test_alpha"));
-        assert_eq!(a, b);
-        assert_eq!(a.as_str(), "symbol_test_alpha");
-        assert_ne!(a, Symbol::intern("symbol_test_beta"));
-        assert_eq!(std::mem::size_of::<Option<Symbol>>(), 4);
-    }
-
-    #[test]
-    fn symbols_order_as_their_spellings() {
-        // Interned in the reverse of alphabetical order.
-        let z = Symbol::intern("symbol_test_zz");
-        let a = Symbol::intern("symbol_test_aa");
-        assert!(a < z);
-        assert_eq!(format!("{a} {z:?}"), "symbol_test_aa \"symbol_test_zz\"");
-    }
-
-    #[test]
-    fn another_thread_reads_the_same_spelling() {
-        let here = Symbol::intern("symbol_test_shared");
-        let there = std::thread::spawn(move || (here.as_str(), Symbol::intern("symbol_test_new")))
-            .join()
-            .unwrap();
-        assert_eq!(there.0, "symbol_test_shared");
-        assert_eq!(there.1.as_str(), "symbol_test_new");
-    }
-}

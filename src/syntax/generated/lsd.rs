@@ -1,6 +1,6 @@
-// grammar stamp: 36ae57ba5b065c2d (tools/parser-generator writes this file; do not edit)
+// grammar stamp: 91ba9ed2fe2df6c5 (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: ef274979604e678623a63c718d4bcc5231c1590e37c88d5bd721bdcbb45557d3
+// sha3: fa47a5ca0ca1978975292dd2a5afe4d99b8ae5cf953c16c858abb99181998337
 // features: 
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
@@ -7989,7 +7989,7 @@ fn __action63<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Vector(Box::new(__0.into_boxed_slice()))
+    ExprKind::Vector(VectorLiteral::new(__0))
 }
 
 #[allow(unused_variables)]
