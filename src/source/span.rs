@@ -36,7 +36,9 @@ thread_local! {
     static LONG_SPANS: RefCell<Vec<Full>> = const { RefCell::new(Vec::new()) };
 }
 
-/// The spans too long (or of a file too far in the map) for the short form.
+/// The spans too long (or of a file too far in the map) for the short form. Only a few nodes
+/// of a file span more than 64 KiB (a large package, its declaration), so the language
+/// server, which parses each version of a file it is sent, adds a few entries per version.
 static LONG_TABLE: Interner<Full> = Interner::new(&LONG_SPANS);
 
 impl Span {
@@ -98,6 +100,12 @@ impl Span {
     #[inline]
     pub fn end(self) -> u32 {
         self.full().2
+    }
+
+    /// The first `len` bytes of the span: where it starts, `len` bytes long.
+    pub fn head(self, len: u32) -> Span {
+        let (file, start, _) = self.full();
+        Span::from_full((file, start, start + len))
     }
 
     /// The smallest span covering both `self` and `other` (same file).

@@ -24,7 +24,7 @@ pub fn limit_nesting(program: &mut Program, diagnostics: &mut Vec<Diagnostic>) {
                     format!("this declaration is nested more than {MAX_NESTING} levels deep"),
                 )
                 .primary(
-                    Span::new(span.file(), span.start() as usize, span.start() as usize + 1),
+                    span.head(1),
                     format!("level {} starts here", MAX_NESTING + 1),
                 )
                 .help("name intermediate values with `let`, or write long sums as several terms bound to names"),
