@@ -3,7 +3,7 @@
 //! too far in a large compilation to fit a [`Span`](crate::source::Span)'s eight bytes.
 //!
 //! The table only grows, and lives as long as the process: a compiler run is short, and the
-//! language server, which runs for a whole editing session, keeps at most the distinct values
+//! language server, which runs as long as its editor, keeps at most the distinct values
 //! met in it. It is shared by all threads (`lsdc test` compiles on several); each thread reads
 //! through its own copy of the values, extended from the shared table when it meets an index
 //! newer than its copy, so that reading takes no lock.

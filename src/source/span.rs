@@ -16,7 +16,7 @@ pub struct FileId(pub u32);
 ///
 /// A span is its start, length and file when its length and file index each fit 16 bits (every
 /// node but a few whole declarations and packages of a very long file); otherwise `file` is
-/// [`LONG`] and `start` the index of the whole span in a process-wide table. The form is
+/// `u16::MAX` and `start` the index of the whole span in a process-wide table. The form is
 /// chosen by the span alone, so two equal spans have equal fields, and equality compares
 /// fields.
 #[derive(Clone, Copy, PartialEq, Eq)]

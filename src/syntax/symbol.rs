@@ -4,7 +4,7 @@
 //! five times).
 //!
 //! The spellings live as long as the process (see [`Interner`]): the language server keeps at
-//! most the distinct names typed in its editing session.
+//! most the distinct names typed while its editor runs.
 //! Symbols behave as their text: they compare, order, hash and print as their spelling, so that
 //! a table keyed by names iterates, and a sorted list of names sorts, as it did with strings.
 
