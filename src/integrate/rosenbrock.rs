@@ -354,11 +354,8 @@ impl RosenbrockW {
         };
         let image = match &directions {
             Directions::Leading(count) => {
-                let derivative = std::mem::take(&mut self.derivative);
-                let image =
-                    leading_columns(eval, t, y, &derivative, *count, &mut self.stage_derivative);
-                self.derivative = derivative;
-                image?
+                let slope = (self.derivative.as_mut_slice(), &mut true);
+                leading_columns(eval, t, y, slope, *count, &mut self.stage_derivative)?
             }
             Directions::Basis(basis) => self.differenced_image(eval, t, y, basis)?,
         };
