@@ -144,7 +144,7 @@ impl<'w> Checker<'w> {
     ) -> Option<Vec<Ty>> {
         let definition = &self.out.definitions[def.0 as usize];
         let params = self.definition_trees[def.0 as usize].0;
-        let (name, def_span) = (definition.name.clone(), definition.span);
+        let (name, def_span) = (definition.name, definition.span);
         let mut bound: Vec<Option<Ty>> = vec![None; params.len()];
         let mut ok = true;
         for (position, (arg, ty)) in args.iter().zip(arg_types).enumerate() {
@@ -233,7 +233,7 @@ impl<'w> Checker<'w> {
         }
         let definition = &self.out.definitions[def.0 as usize];
         let (params, body) = self.definition_trees[def.0 as usize];
-        let (name, scope, limit) = (definition.name.clone(), definition.scope, definition.limit);
+        let (name, scope, limit) = (definition.name, definition.scope, definition.limit);
         if self.instantiations.len() >= MAX_INSTANTIATION_DEPTH {
             self.report(
                 Diagnostic::error(
@@ -248,7 +248,7 @@ impl<'w> Checker<'w> {
             .iter()
             .zip(&arg_types)
             .map(|(p, &ty)| Local {
-                name: p.name.name.clone(),
+                name: p.name.name,
                 ty,
                 coordinate: false,
             })

@@ -16,7 +16,7 @@ impl<'w> Checker<'w> {
         match &expr.kind {
             ExprKind::Name(name) => self.name(
                 &Ident {
-                    name: name.clone(),
+                    name: *name,
                     span: expr.span,
                 },
                 ctx,
@@ -65,7 +65,7 @@ impl<'w> Checker<'w> {
                 let depth = ctx.locals.len();
                 for (binding, ty) in bindings.iter().zip(types) {
                     ctx.locals.push(Local {
-                        name: binding.name.name.clone(),
+                        name: binding.name.name,
                         ty,
                         coordinate: false,
                     });
@@ -143,9 +143,9 @@ impl<'w> Checker<'w> {
             let scope = self.out.scope(id);
             let later = scope.declared_later.as_ref();
             if let Some(&(later, extent)) = later.and_then(|later| later.get(name.as_ref())) {
-                let inside = extent.file == ident.span.file
-                    && extent.start <= ident.span.start
-                    && ident.span.end <= extent.end;
+                let inside = extent.file() == ident.span.file()
+                    && extent.start() <= ident.span.start()
+                    && ident.span.end() <= extent.end();
                 if inside && self.declares_join(extent) {
                     return diagnostic
                         .secondary(later, "the join being declared")
@@ -156,7 +156,7 @@ impl<'w> Checker<'w> {
                         .secondary(later, "the name being defined")
                         .help("a definition cannot refer to itself; LSD has no recursion");
                 }
-                if later.file == ident.span.file && later.start < ident.span.start {
+                if later.file() == ident.span.file() && later.start() < ident.span.start() {
                     return diagnostic
                         .secondary(later, "defined in the same `let ... and ...`")
                         .help("bindings joined by `and` are simultaneous and do not see each other: use two `let` declarations");
@@ -209,7 +209,7 @@ impl<'w> Checker<'w> {
 
     /// The source text of a span.
     fn source(&self, span: Span) -> &str {
-        let text = &self.workspace.sources.file(span.file).text;
+        let text = &self.workspace.sources.file(span.file()).text;
         text.get(span.range()).unwrap_or_default()
     }
 
@@ -236,7 +236,7 @@ impl<'w> Checker<'w> {
             return None;
         };
         // A parenthesised `(t ++ q)` starts after the parenthesis: written on purpose.
-        if op != BinaryOp::Rotation || lhs.span.start != expr.span.start {
+        if op != BinaryOp::Rotation || lhs.span.start() != expr.span.start() {
             return None;
         }
         for part in [translation, angle, rhs] {
@@ -245,7 +245,7 @@ impl<'w> Checker<'w> {
         // `axis @ b` on the right, unparenthesised: the frame applies to the whole displacement.
         let (axis, body, ty) = match &rhs.kind {
             ExprKind::Binary(frame)
-                if frame.op == BinaryOp::Frame && rhs.span.end == expr.span.end =>
+                if frame.op == BinaryOp::Frame && rhs.span.end() == expr.span.end() =>
             {
                 (frame.lhs.span, Some(frame.rhs.span), Ty::Frame)
             }
@@ -528,7 +528,7 @@ impl<'w> Checker<'w> {
                 );
             }
             ctx.locals.push(Local {
-                name: param.name.clone(),
+                name: param.name,
                 ty: Ty::Scalar,
                 coordinate: true,
             });

@@ -159,7 +159,7 @@ impl<'w> Checker<'w> {
                 // The link may read the join's own coordinates (`crank.q'`); its frames may not.
                 if let Some(name) = name {
                     ctx.locals.push(Local {
-                        name: name.name.clone(),
+                        name: name.name,
                         ty: Ty::Join,
                         coordinate: false,
                     });
@@ -253,7 +253,7 @@ impl<'w> Checker<'w> {
                 self.expect_value(bound, ty, Ty::Scalar, "a bound of an array of packages");
             }
             self.declare(scope, name, Ty::Package(package));
-            self.scope_mut(package).index = Some(index.variable.name.clone());
+            self.scope_mut(package).index = Some(index.variable.name);
             self.declare(package, &index.variable, Ty::Scalar);
         }
         let limit = self.out.scope(scope).len();
@@ -306,7 +306,7 @@ impl<'w> Checker<'w> {
         }
         let id = DefId(self.out.definitions.len() as u32);
         self.out.definitions.push(Definition {
-            name: name.name.clone(),
+            name: name.name,
             span: name.span,
             scope,
             limit,
@@ -321,7 +321,7 @@ impl<'w> Checker<'w> {
             .iter()
             .zip(declared)
             .map(|(p, ty)| Local {
-                name: p.name.name.clone(),
+                name: p.name.name,
                 ty: ty.unwrap_or(Ty::Error),
                 coordinate: false,
             })
@@ -362,8 +362,7 @@ impl<'w> Checker<'w> {
             );
             return;
         }
-        self.scope_mut(scope)
-            .insert(name.name.clone(), ty, name.span);
+        self.scope_mut(scope).insert(name.name, ty, name.span);
     }
 
     /// `simulate duration = 10, integrator = dopri5, ... end`.
@@ -601,7 +600,7 @@ fn strip_primes(expr: &Expr) -> (&Expr, usize) {
 /// An optional name a declaration introduces, with the declaration's span.
 fn named(name: &Option<Ident>, decl: Span) -> Vec<(Name, Span, Span)> {
     name.iter()
-        .map(|name| (name.name.clone(), name.span, decl))
+        .map(|name| (name.name, name.span, decl))
         .collect()
 }
 
@@ -611,17 +610,11 @@ fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
     match &decl.kind {
         DeclKind::Let(bindings) => bindings
             .iter()
-            .map(|b| {
-                (
-                    b.name.name.clone(),
-                    b.name.span,
-                    b.name.span.to(b.value.span),
-                )
-            })
+            .map(|b| (b.name.name, b.name.span, b.name.span.to(b.value.span)))
             .collect(),
-        DeclKind::Define(define) => vec![(define.name.name.clone(), define.name.span, decl.span)],
+        DeclKind::Define(define) => vec![(define.name.name, define.name.span, decl.span)],
         DeclKind::Package(package) => {
-            vec![(package.name.name.clone(), package.name.span, decl.span)]
+            vec![(package.name.name, package.name.span, decl.span)]
         }
         DeclKind::Import(import) => named(&import.alias, decl.span),
         DeclKind::Join(join) => named(&join.name, decl.span),

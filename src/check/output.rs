@@ -34,7 +34,7 @@ impl<'w> Checker<'w> {
                 )),
             );
         }
-        let key: (ScopeId, Name) = (scope, name.name.clone());
+        let key: (ScopeId, Name) = (scope, name.name);
         if let Some(&first) = self.outputs.get(&key) {
             self.report(
                 Diagnostic::error("E0461", format!("output `{}` is declared twice", name.name))

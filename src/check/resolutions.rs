@@ -63,14 +63,14 @@ impl Resolutions {
     /// Records that the name at `span` resolves to `target`. A name checked again (the body of
     /// a definition, at its first use) resolves the same way each time.
     pub fn insert(&mut self, span: Span, target: Target) {
-        let file = span.file.0 as usize;
+        let file = span.file().0 as usize;
         if self.files.len() <= file {
             self.files.resize_with(file + 1, || FileResolutions {
                 entries: Vec::new(),
                 sorted: true,
             });
         }
-        self.files[file].insert((span.start, span.end, Packed::new(target)));
+        self.files[file].insert((span.start(), span.end(), Packed::new(target)));
     }
 
     /// Puts every file's resolutions in order, once all are recorded.
@@ -89,9 +89,9 @@ impl Resolutions {
     /// ended: names looked up in source order (the elaborator's, mostly) are found there
     /// without a search of the whole file.
     pub fn get_near(&self, span: Span, cursor: &mut Cursor) -> Option<Target> {
-        let entries = &self.files.get(span.file.0 as usize)?.entries;
-        let key = (span.start, span.end);
-        let near = match cursor.file == span.file.0 {
+        let entries = &self.files.get(span.file().0 as usize)?.entries;
+        let key = (span.start(), span.end());
+        let near = match cursor.file == span.file().0 {
             true => entries.get(cursor.index..).unwrap_or_default(),
             false => &[],
         };
@@ -100,7 +100,7 @@ impl Resolutions {
             None => entries.binary_search_by_key(&key, |e| (e.0, e.1)).ok()?,
         };
         *cursor = Cursor {
-            file: span.file.0,
+            file: span.file().0,
             index,
         };
         Some(entries[index].2.target())

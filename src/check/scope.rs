@@ -80,7 +80,7 @@ impl Scope {
         if let Some(later) = &mut self.declared_later {
             later.remove(&name);
         }
-        self.order.push(name.clone());
+        self.order.push(name);
         self.names.insert(name, Entry { ty, span, index });
     }
 }

@@ -24,7 +24,7 @@ pub(super) fn import_hint(
     let diagnostic = diagnostic
         .clone()
         .help(format!("{what}: add `import {module};`"));
-    Some(match import_position(workspace, at.file) {
+    Some(match import_position(workspace, at.file()) {
         Some(position) => diagnostic.fix(position, format!("import {module} ;\n")),
         None => diagnostic,
     })
@@ -36,7 +36,7 @@ fn import_position(workspace: &Workspace, file: FileId) -> Option<Span> {
     let module = workspace.modules.iter().find(|m| m.file == file)?;
     let first = module.program.decls.first()?.span;
     let text = &workspace.sources.file(file).text;
-    let line_start = text[..first.start as usize]
+    let line_start = text[..first.start() as usize]
         .rfind('\n')
         .map_or(0, |i| i + 1);
     Some(Span::new(file, line_start, line_start))

@@ -64,10 +64,10 @@ pub fn to_text(sources: &SourceMap, diagnostics: &[Diagnostic]) -> String {
 
 /// A fix in words (the command line's note, the title of an editor's quick fix): "fix: replace `.5` by `0.5`", "fix: insert `,` at 2:17".
 pub fn describe_fix(sources: &SourceMap, fix: &crate::diag::Fix) -> String {
-    let file = sources.file(fix.span.file);
+    let file = sources.file(fix.span.file());
     let replaced = file.text.get(fix.span.range()).unwrap_or_default();
     let replacement = fix.replacement.trim_end_matches('\n');
-    let (line, column) = file.line_column(fix.span.start as usize);
+    let (line, column) = file.line_column(fix.span.start() as usize);
     match (replaced.is_empty(), replacement.is_empty()) {
         (true, _) if fix.replacement.ends_with('\n') && column == 1 => {
             format!("fix: insert the line `{replacement}` before line {line}")
@@ -99,7 +99,7 @@ fn to_codespan(diagnostic: &Diagnostic) -> cs::Diagnostic<FileId> {
             } else {
                 cs::LabelStyle::Secondary
             };
-            cs::Label::new(style, label.span.file, label.span.range())
+            cs::Label::new(style, label.span.file(), label.span.range())
                 .with_message(label.message.clone())
         })
         .collect();
@@ -159,9 +159,9 @@ struct JsonFix {
 }
 
 fn position(sources: &SourceMap, span: Span) -> JsonPosition {
-    let file = sources.file(span.file);
-    let (line, column) = file.line_column(span.start as usize);
-    let (end_line, end_column) = file.line_column(span.end as usize);
+    let file = sources.file(span.file());
+    let (line, column) = file.line_column(span.start() as usize);
+    let (end_line, end_column) = file.line_column(span.end() as usize);
     JsonPosition {
         file: file.name.clone(),
         line,

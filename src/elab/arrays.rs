@@ -138,7 +138,6 @@ impl<'w> Elaborator<'_, 'w> {
             .checked
             .scope(scope)
             .index
-            .clone()
             .ok_or_else(|| internal("an index of a plain package"))?;
         let id = self.instances.table.len() as InstanceId;
         self.instances.table.push(Instance {

@@ -132,7 +132,7 @@ impl<'w> Elaborator<'_, 'w> {
                 let value = scope.and_then(|scope| self.globals.get(&(scope, ROOT, name)));
                 matches!(value, Some(Global::Ready(_)))
             };
-            if !bindings.iter().all(|b| evaluated(b.name.name.clone())) {
+            if !bindings.iter().all(|b| evaluated(b.name.name)) {
                 if let Some(Some(owned)) = self.owned.get_mut(module.0 as usize) {
                     owned.decls[index as usize] = decl;
                 }

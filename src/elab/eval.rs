@@ -67,7 +67,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             };
             if let Value::Frame(frame) = self.global(scope, name)? {
                 self.mechanism.frames.push(NamedFrame {
-                    name: name.clone(),
+                    name: *name,
                     frame,
                     span: entry.span,
                 });
@@ -102,10 +102,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 // The join's own name is visible in its link, for reading its coordinates.
                 let id = JoinId(self.mechanism.joins.len() as u32);
                 if let Some(name) = name {
-                    locals.push((name.name.clone(), Value::Join(id)));
+                    locals.push((name.name, Value::Join(id)));
                     self.own_join = Some(OwnJoin {
                         id,
-                        name: name.name.clone(),
+                        name: name.name,
                         read: Vec::new(),
                     });
                 }
@@ -145,7 +145,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     id
                 };
                 if let Some(name) = name {
-                    let key = (scope, self.instance_of(scope)?, name.name.clone());
+                    let key = (scope, self.instance_of(scope)?, name.name);
                     self.globals.insert(key, Global::Ready(Value::Join(id)));
                 }
                 Ok(())
@@ -283,7 +283,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     /// library cost nothing here.
     pub(super) fn global(&mut self, scope: ScopeId, name: &Name) -> Result<Value> {
         let instance = self.instance_of(scope)?;
-        let key = (scope, instance, name.clone());
+        let key = (scope, instance, *name);
         match self.globals.get(&key) {
             Some(Global::Ready(value)) => return Ok(value.clone()),
             Some(Global::InProgress) => {
@@ -321,7 +321,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .bindings
                     .get(&entry.span)
                     .ok_or_else(|| internal(format!("`{name}` has no value")))?;
-                self.globals.insert(key.clone(), Global::InProgress);
+                self.globals.insert(key, Global::InProgress);
                 return self.with_decl(scope, at.decl, |elaborator, decl| {
                     let DeclKind::Let(bindings) = &decl.kind else {
                         return Err(internal(format!("`{name}` is not bound by a `let`")));
@@ -387,7 +387,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
     /// `P[3]:crank` in an array of packages, `crank` elsewhere.
     pub(super) fn qualified_name(&self, name: &Name, instance: InstanceId) -> Name {
         match instance {
-            ROOT => name.clone(),
+            ROOT => *name,
             _ => Name::from(format!("{}{name}", self.instances.prefix(instance))),
         }
     }
@@ -537,10 +537,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let depth = locals.len();
                 let mut values = Vec::with_capacity(bindings.len());
                 for binding in bindings {
-                    values.push((
-                        binding.name.name.clone(),
-                        self.expr(&binding.value, locals)?,
-                    ));
+                    values.push((binding.name.name, self.expr(&binding.value, locals)?));
                 }
                 locals.extend(values);
                 let value = self.expr(body, locals);
@@ -786,7 +783,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let mut frame: Locals = Vec::with_capacity(params.len());
         for (param, value) in params.iter().zip(bound) {
             frame.push((
-                param.name.name.clone(),
+                param.name.name,
                 value.ok_or_else(|| internal(format!("missing argument for `{name}`")))?,
             ));
         }
@@ -814,7 +811,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let depth = locals.len();
         for (index, param) in params.iter().enumerate() {
             locals.push((
-                param.name.clone(),
+                param.name,
                 Value::Scalar(Arc::new(SExpr::Coordinate {
                     index: index as u32,
                     order: 0,
@@ -912,7 +909,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         fields: Vec<(&str, Value, Span)>,
         span: Span,
     ) -> Result<Value> {
-        let coordinates = params.iter().map(|p| p.name.clone()).collect();
+        let coordinates = params.iter().map(|p| p.name).collect();
         let mut link = Link::new(span, coordinates);
         let mut dofs: Vec<(u8, Displacement)> = Vec::new();
         for (name, value, at) in fields {

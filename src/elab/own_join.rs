@@ -24,7 +24,7 @@ impl Elaborator<'_, '_> {
         let index = match own.read.iter().position(|(name, _)| name == coordinate) {
             Some(index) => index,
             None => {
-                own.read.push((coordinate.clone(), span));
+                own.read.push((*coordinate, span));
                 own.read.len() - 1
             }
         };

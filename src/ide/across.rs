@@ -37,9 +37,9 @@ impl Target {
         };
         let definition = &analysis.index.definitions[id];
         Some(Target {
-            file: file_key(analysis, definition.span.file),
-            start: definition.span.start,
-            end: definition.span.end,
+            file: file_key(analysis, definition.span.file()),
+            start: definition.span.start(),
+            end: definition.span.end(),
             name: definition.name.to_string(),
             kind: definition.kind.clone(),
         })
@@ -63,10 +63,10 @@ impl Target {
     /// The same definition in another analysis.
     fn find(&self, analysis: &Analysis) -> Option<usize> {
         analysis.index.definitions.iter().position(|d| {
-            d.span.start == self.start
-                && d.span.end == self.end
+            d.span.start() == self.start
+                && d.span.end() == self.end
                 && *d.name == *self.name
-                && file_key(analysis, d.span.file) == self.file
+                && file_key(analysis, d.span.file()) == self.file
         })
     }
 }
@@ -92,9 +92,9 @@ fn occurrences<'a>(analyses: &[&'a Analysis], target: &Target) -> Vec<(&'a Analy
             continue;
         };
         for occurrence in analysis.index.references(id) {
-            let file = file_key(analysis, occurrence.span.file);
-            let own_or_closed = occurrence.span.file == analysis.root || !open.contains(&file);
-            let key = (file, occurrence.span.start, occurrence.span.end);
+            let file = file_key(analysis, occurrence.span.file());
+            let own_or_closed = occurrence.span.file() == analysis.root || !open.contains(&file);
+            let key = (file, occurrence.span.start(), occurrence.span.end());
             if own_or_closed && seen.insert(key) {
                 found.push((analysis, occurrence.span));
             }
@@ -109,7 +109,7 @@ pub fn references(analyses: &[&Analysis], target: &Target, declaration: bool) ->
         .into_iter()
         .filter(|(analysis, span)| {
             declaration
-                || !(span.start == target.start && file_key(analysis, span.file) == target.file)
+                || !(span.start() == target.start && file_key(analysis, span.file()) == target.file)
         })
         .map(|(analysis, span)| convert::location(analysis, span))
         .collect()
@@ -147,7 +147,7 @@ pub fn rename(
     // only built at the end.
     let mut changes: Vec<(Uri, Vec<TextEdit>)> = Vec::new();
     for (analysis, span) in occurrences(analyses, target) {
-        let uri = convert::file_uri(analysis, span.file);
+        let uri = convert::file_uri(analysis, span.file());
         let edit = TextEdit::new(convert::span_range(analysis, span), new_name.to_string());
         match changes.iter_mut().find(|(u, _)| *u == uri) {
             Some((_, edits)) => edits.push(edit),

@@ -28,7 +28,7 @@ pub fn code_actions(analysis: &Analysis, range: Range) -> Vec<CodeAction> {
             convert::span_range(analysis, fix.span),
             fix.replacement.clone(),
         );
-        let uri = convert::file_uri(analysis, fix.span.file);
+        let uri = convert::file_uri(analysis, fix.span.file());
         actions.push(CodeAction {
             title: title.to_string(),
             kind: Some(CodeActionKind::QUICKFIX),

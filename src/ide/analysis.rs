@@ -135,7 +135,9 @@ impl Index {
     /// The occurrence of a name at a byte offset of a file.
     pub fn occurrence_at(&self, file: FileId, offset: usize) -> Option<&Occurrence> {
         self.occurrences.iter().find(|o| {
-            o.span.file == file && o.span.start as usize <= offset && offset <= o.span.end as usize
+            o.span.file() == file
+                && o.span.start() as usize <= offset
+                && offset <= o.span.end() as usize
         })
     }
 
@@ -179,7 +181,7 @@ impl Index {
         builder
             .index
             .occurrences
-            .sort_by_key(|o| (o.span.file, o.span.start));
+            .sort_by_key(|o| (o.span.file(), o.span.start()));
         builder.index
     }
 }
@@ -233,13 +235,13 @@ impl Builder<'_> {
         for decl in decls {
             let doc = leading_comment(
                 &text[previous_end..],
-                decl.span.start as usize - previous_end,
+                decl.span.start() as usize - previous_end,
             );
-            previous_end = decl.span.end as usize;
+            previous_end = decl.span.end() as usize;
             let declare = |builder: &mut Self, name: &Ident, kind: DefinitionKind| {
                 let ty = builder.declared_type(name);
                 builder.define(Definition {
-                    name: name.name.clone(),
+                    name: name.name,
                     span: name.span,
                     kind,
                     ty,
@@ -275,7 +277,7 @@ impl Builder<'_> {
                     if let Some(index) = &package.index {
                         declare(self, &index.variable, DefinitionKind::Value);
                     }
-                    let start = package.name.span.end as usize;
+                    let start = package.name.span.end() as usize;
                     self.scope_declarations(&package.decls, file, start);
                 }
                 DeclKind::Import(import) => self.import(decl.span, &import.target),
@@ -314,7 +316,7 @@ impl Builder<'_> {
 
     fn local(&mut self, name: &Ident, kind: DefinitionKind, ty: Option<Ty>, scope: Span) -> usize {
         self.define(Definition {
-            name: name.name.clone(),
+            name: name.name,
             span: name.span,
             kind,
             ty,
@@ -336,7 +338,7 @@ impl Builder<'_> {
                 DeclKind::Define(define) => {
                     for param in &define.params {
                         if let Some(&id) = self.by_span.get(&param.name.span) {
-                            locals.push((param.name.name.clone(), id));
+                            locals.push((param.name.name, id));
                         }
                         if let Some(ty) = &param.ty {
                             self.occurrence(ty.span, Reference::Builtin);
@@ -414,7 +416,7 @@ impl Builder<'_> {
         match &expr.kind {
             ExprKind::Name(name) => {
                 let ident = Ident {
-                    name: name.clone(),
+                    name: *name,
                     span: expr.span,
                 };
                 self.name(&ident, locals);
@@ -454,7 +456,7 @@ impl Builder<'_> {
                         Some(Ty::Scalar),
                         expr.span,
                     );
-                    locals.push((param.name.clone(), id));
+                    locals.push((param.name, id));
                 }
                 self.fields(&c.fields, locals);
                 locals.truncate(depth);
@@ -467,7 +469,7 @@ impl Builder<'_> {
                 let depth = locals.len();
                 for binding in bindings.iter() {
                     let id = self.local(&binding.name, DefinitionKind::Local, None, expr.span);
-                    locals.push((binding.name.name.clone(), id));
+                    locals.push((binding.name.name, id));
                 }
                 self.expr(body, locals);
                 locals.truncate(depth);

@@ -195,9 +195,9 @@ fn names_in_scope(analysis: &Analysis, offset: usize) -> Vec<CompletionItem> {
     let index = &analysis.index;
     let locals = index.definitions.iter().filter(|d| {
         d.is_local()
-            && d.declaration.file == analysis.root
-            && d.declaration.start as usize <= offset
-            && offset <= d.declaration.end as usize
+            && d.declaration.file() == analysis.root
+            && d.declaration.start() as usize <= offset
+            && offset <= d.declaration.end() as usize
     });
     let globals = index.visible.iter().map(|&id| &index.definitions[id]);
     let mut items: Vec<CompletionItem> = locals.chain(globals).map(definition_item).collect();

@@ -73,9 +73,9 @@ pub fn range(text: &str, start: usize, end: usize) -> Range {
 /// The range of a span in its file.
 pub fn span_range(analysis: &Analysis, span: Span) -> Range {
     range(
-        analysis.text(span.file),
-        span.start as usize,
-        span.end as usize,
+        analysis.text(span.file()),
+        span.start() as usize,
+        span.end() as usize,
     )
 }
 
@@ -145,7 +145,7 @@ fn stdlib_copy(module: &str) -> Option<PathBuf> {
 }
 
 pub fn location(analysis: &Analysis, span: Span) -> Location {
-    Location::new(file_uri(analysis, span.file), span_range(analysis, span))
+    Location::new(file_uri(analysis, span.file()), span_range(analysis, span))
 }
 
 /// A diagnostic of the compilation as the protocol has it, for the root file: located at its
@@ -153,7 +153,7 @@ pub fn location(analysis: &Analysis, span: Span) -> Location {
 /// brought a library in); the other labels are related locations, and the help and notes
 /// follow the message.
 pub fn diagnostic(analysis: &Analysis, diagnostic: &Diagnostic) -> lsp_types::Diagnostic {
-    let in_root = |span: &Span| span.file == analysis.root;
+    let in_root = |span: &Span| span.file() == analysis.root;
     let primary = diagnostic.primary_span();
     let anchor = primary
         .filter(in_root)

@@ -61,7 +61,7 @@ fn builtin_hover(name: &str) -> Option<String> {
 /// documentation.
 fn definition_hover(analysis: &Analysis, definition: &Definition) -> String {
     let mut parts = Vec::new();
-    let source = &analysis.text(definition.declaration.file)[definition.declaration.range()];
+    let source = &analysis.text(definition.declaration.file())[definition.declaration.range()];
     let mut lines: Vec<&str> = source.lines().take(HOVER_LINES).collect();
     if source.lines().count() > HOVER_LINES {
         lines.push("...");
@@ -109,7 +109,7 @@ fn describe(analysis: &Analysis, definition: &Definition) -> String {
                 .compilation
                 .workspace
                 .sources
-                .file(definition.span.file);
+                .file(definition.span.file());
             format!("library `{name}` ({})", file.name)
         }
         DefinitionKind::Join => format!("named join `{name}`"),
@@ -125,9 +125,9 @@ fn mechanism_facts(analysis: &Analysis, definition: &Definition) -> Option<Strin
     let mechanism = analysis.mechanism()?;
     let inside = |span: crate::source::Span| {
         let declaration = definition.declaration;
-        span.file == declaration.file
-            && declaration.start <= span.start
-            && span.end <= declaration.end
+        span.file() == declaration.file()
+            && declaration.start() <= span.start()
+            && span.end() <= declaration.end()
     };
     let named = |name: &Option<crate::syntax::ast::Name>| name.as_ref() == Some(&definition.name);
     match (&definition.kind, definition.ty) {

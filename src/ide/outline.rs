@@ -111,7 +111,7 @@ fn decl_symbols(analysis: &Analysis, decls: &[Decl]) -> Vec<DocumentSymbol> {
 fn type_of(analysis: &Analysis, name: Span) -> Option<Ty> {
     let occurrence = analysis
         .index
-        .occurrence_at(name.file, name.start as usize)?;
+        .occurrence_at(name.file(), name.start() as usize)?;
     match occurrence.reference {
         Reference::Definition(id) => analysis.index.definitions[id].ty,
         _ => None,

@@ -51,7 +51,7 @@ impl Workspace {
         let Some(span) = diagnostic.primary_span() else {
             return;
         };
-        let mut module = self.modules.iter().position(|m| m.file == span.file);
+        let mut module = self.modules.iter().position(|m| m.file == span.file());
         let mut hops = 0;
         while let Some(index) = module {
             let Some((site, importer)) = self.modules[index].imported_at else {

@@ -1,6 +1,7 @@
 //! The files of one compilation: the user's files, imported libraries and the embedded standard
 //! library. Diagnostics refer to files by [`FileId`] and are rendered against this map.
 
+pub mod interner;
 mod span;
 
 pub use span::{FileId, Span};
@@ -92,13 +93,13 @@ impl SourceMap {
 
     /// The source text a span covers.
     pub fn snippet(&self, span: Span) -> &str {
-        self.file(span.file).text.get(span.range()).unwrap_or("")
+        self.file(span.file()).text.get(span.range()).unwrap_or("")
     }
 
     /// `file:line:column` of the start of a span.
     pub fn location(&self, span: Span) -> String {
-        let file = self.file(span.file);
-        let (line, column) = file.line_column(span.start as usize);
+        let file = self.file(span.file());
+        let (line, column) = file.line_column(span.start() as usize);
         format!("{}:{}:{}", file.name, line, column)
     }
 }

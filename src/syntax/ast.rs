@@ -1,25 +1,25 @@
 //! The abstract syntax of LSD, with a span on every node.
 
-use rustc_hash::FxHashSet;
-use std::rc::Rc;
+use rustc_hash::FxHashMap;
 
 use crate::source::Span;
+pub use crate::syntax::symbol::Symbol;
 
-/// Identifiers are shared strings: the checker and elaborator copy names freely.
-pub type Name = Rc<str>;
+/// Identifiers are 4-byte symbols (`Copy`): the checker and elaborator copy names freely.
+pub type Name = Symbol;
 
-/// The names of one file, each spelling stored once: every occurrence of a name shares it (a
-/// generated chain of bodies names each body five times, and every body's fields alike).
+/// The names met while parsing one file: each spelling is looked up in the process's table
+/// once per file, and its other occurrences found here without taking that table's lock.
 #[derive(Default)]
-pub struct Names(FxHashSet<Name>);
+pub struct Names(FxHashMap<&'static str, Name>);
 
 impl Names {
     pub fn intern(&mut self, text: &str) -> Name {
-        if let Some(name) = self.0.get(text) {
-            return name.clone();
+        if let Some(&name) = self.0.get(text) {
+            return name;
         }
-        let name: Name = Rc::from(text);
-        self.0.insert(name.clone());
+        let name = Symbol::intern(text);
+        self.0.insert(name.as_str(), name);
         name
     }
 }
@@ -42,21 +42,23 @@ pub struct Decl {
 }
 
 /// A declaration. Its larger variants are boxed so that a declaration takes little room in the
-/// program's list (from 384 bytes to 48; a generated chain has three declarations per body).
+/// program's list (from 384 bytes to 32; a generated chain has three declarations per body),
+/// and its lists are boxed slices, at their exact length (a `let`'s single binding took room
+/// for four in the list it was pushed into).
 #[derive(Clone, Debug, PartialEq)]
 pub enum DeclKind {
     /// `let a = e and b = e`
-    Let(Vec<Binding>),
+    Let(Box<[Binding]>),
     /// `let f(a, b : vector) = e`: a parameterised definition.
     Define(Box<DefineDecl>),
     /// `join <frame> and <frame> with <link> [as <name>]`
     Join(Box<JoinDecl>),
     /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
-    Initial(Vec<InitialValue>),
+    Initial(Box<[InitialValue]>),
     /// `given L = 0.8, arm.mass = 2`: values of unknowns and generic quantities for simulation.
-    Given(Vec<GivenValue>),
+    Given(Box<[GivenValue]>),
     /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
-    Simulate(Vec<FieldInit>),
+    Simulate(Box<[FieldInit]>),
     /// `output tip = position(arm.tip)`: a named quantity of the state, written by `simulate`
     /// at every output.
     Output(Box<OutputDecl>),
@@ -186,7 +188,7 @@ impl Expr {
     pub fn as_ident(&self) -> Option<Ident> {
         match &self.kind {
             ExprKind::Name(name) => Some(Ident {
-                name: name.clone(),
+                name: *name,
                 span: self.span,
             }),
             _ => None,
@@ -303,9 +305,10 @@ pub struct LocalExpr {
 }
 
 /// The kind of an expression. A name's span is its expression's, and every variant holds at
-/// most 16 bytes (a call, a binary operation, a `local` and a constructor are boxed whole), so
-/// that an expression is 40 bytes: a generated chain holds some forty per body, inline in
-/// lists or boxed (a 48-byte block of glibc's malloc, where 48 bytes took 64).
+/// most 8 bytes (a call, a binary operation, a `local` and a constructor are boxed whole, and a
+/// vector literal's elements), so that the kind is 16 bytes and an expression with its 8-byte span
+/// 24: a generated chain holds some forty per body, inline in lists or boxed (a 32-byte block
+/// of glibc's malloc, where 32 bytes took 48).
 #[derive(Clone, Debug, PartialEq)]
 pub enum ExprKind {
     Name(Name),
@@ -318,9 +321,7 @@ pub enum ExprKind {
     Int(i64),
     Float(f64),
     /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
-    /// Boxed as a slice: a literal's elements take no room beyond their own (its list grew by
-    /// doubling while parsed).
-    Vector(Box<[Expr]>),
+    Vector(VectorLiteral),
     Call(Box<CallExpr>),
     Binary(Box<BinaryExpr>),
     Neg(Box<Expr>),
@@ -332,6 +333,50 @@ pub enum ExprKind {
     Local(Box<LocalExpr>),
     /// An expression the parser could not read.
     Error,
+}
+
+/// The elements of a vector literal, read as a slice. Vectors and matrices have three elements
+/// (or rows), so three elements are one block of their own size; a literal of another length
+/// (an error the checker reports) is a slice, boxed again so that its length is not in every
+/// expression. Either form fits in eight bytes beside the expression's own tag.
+#[derive(Clone, PartialEq)]
+pub enum VectorLiteral {
+    Three(Box<[Expr; 3]>),
+    Other(Box<Box<[Expr]>>),
+}
+
+impl VectorLiteral {
+    pub fn new(elements: Vec<Expr>) -> VectorLiteral {
+        match <Box<[Expr; 3]>>::try_from(elements) {
+            Ok(three) => VectorLiteral::Three(three),
+            Err(other) => VectorLiteral::Other(Box::new(other.into_boxed_slice())),
+        }
+    }
+
+    pub fn into_vec(self) -> Vec<Expr> {
+        match self {
+            VectorLiteral::Three(three) => Vec::from(*three),
+            VectorLiteral::Other(other) => other.into_vec(),
+        }
+    }
+}
+
+impl std::ops::Deref for VectorLiteral {
+    type Target = [Expr];
+
+    fn deref(&self) -> &[Expr] {
+        match self {
+            VectorLiteral::Three(three) => &three[..],
+            VectorLiteral::Other(other) => other,
+        }
+    }
+}
+
+/// Printed as the list of its elements, whichever its form.
+impl std::fmt::Debug for VectorLiteral {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
 }
 
 /// Builds a binary expression node (used by the grammar's actions).

@@ -406,15 +406,9 @@ fn leading_dot(span: Span, number: &str) -> Diagnostic {
 
 fn lex_diagnostic(error: LexError, span: Span, slice: &str) -> Diagnostic {
     match error {
-        LexError::UnterminatedComment => {
-            let opening = Span {
-                end: span.start + 2,
-                ..span
-            };
-            Diagnostic::error("E0102", "unterminated comment")
-                .primary(opening, "this comment is never closed")
-                .help("close it with `*)`; comments nest, so every `(*` inside needs its own `*)`")
-        }
+        LexError::UnterminatedComment => Diagnostic::error("E0102", "unterminated comment")
+            .primary(span.head(2), "this comment is never closed")
+            .help("close it with `*)`; comments nest, so every `(*` inside needs its own `*)`"),
         LexError::UnterminatedString => Diagnostic::error("E0103", "unterminated string")
             .primary(span, "this string has no closing `\"` on its line"),
         LexError::UnexpectedCharacter => {

@@ -8,3 +8,4 @@ pub mod names;
 pub mod nesting;
 pub mod parser;
 mod repair;
+pub mod symbol;

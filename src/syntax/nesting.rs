@@ -24,10 +24,7 @@ pub fn limit_nesting(program: &mut Program, diagnostics: &mut Vec<Diagnostic>) {
                     format!("this declaration is nested more than {MAX_NESTING} levels deep"),
                 )
                 .primary(
-                    Span {
-                        end: span.start + 1,
-                        ..span
-                    },
+                    span.head(1),
                     format!("level {} starts here", MAX_NESTING + 1),
                 )
                 .help("name intermediate values with `let`, or write long sums as several terms bound to names"),
@@ -110,19 +107,33 @@ fn dismantle(kind: DeclKind) {
     let mut exprs: Vec<Expr> = Vec::new();
     while let Some(kind) = decls.pop() {
         match kind {
-            DeclKind::Let(bindings) => exprs.extend(bindings.into_iter().map(|b| b.value)),
+            DeclKind::Let(bindings) => {
+                exprs.extend(bindings.into_vec().into_iter().map(|b| b.value))
+            }
             DeclKind::Define(define) => exprs.push(define.body),
             DeclKind::Join(join) => {
                 let join = *join;
                 exprs.extend([join.first, join.second, join.link]);
             }
             DeclKind::Initial(values) => {
-                exprs.extend(values.into_iter().flat_map(|v| [v.target, v.value]));
+                exprs.extend(
+                    values
+                        .into_vec()
+                        .into_iter()
+                        .flat_map(|v| [v.target, v.value]),
+                );
             }
             DeclKind::Given(values) => {
-                exprs.extend(values.into_iter().flat_map(|v| [v.target, v.value]));
+                exprs.extend(
+                    values
+                        .into_vec()
+                        .into_iter()
+                        .flat_map(|v| [v.target, v.value]),
+                );
             }
-            DeclKind::Simulate(fields) => exprs.extend(fields.into_iter().map(|f| f.value)),
+            DeclKind::Simulate(fields) => {
+                exprs.extend(fields.into_vec().into_iter().map(|f| f.value))
+            }
             DeclKind::Output(output) => exprs.push(output.value),
             DeclKind::Apply(apply) => {
                 let apply = *apply;

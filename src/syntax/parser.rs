@@ -34,7 +34,7 @@ pub fn parse(file: FileId, text: &str) -> (Program, Vec<Diagnostic>) {
         let (program, lexical, syntax, found) = parse_pass(file, text, &repairs, recognise);
         if found.is_empty() {
             slips.extend(syntax);
-            slips.sort_by_key(|d: &Diagnostic| d.primary_span().map(|s| s.start));
+            slips.sort_by_key(|d: &Diagnostic| d.primary_span().map(|s| s.start()));
             return (program, lexical.into_iter().chain(slips).collect());
         }
         for slip in found {

@@ -179,7 +179,7 @@ fn applying_the_offered_fixes_makes_the_program_check_clean() {
             "{name}: a diagnostic without a fix"
         );
         // From the end of the file, so the earlier offsets stay valid.
-        fixes.sort_by_key(|f| std::cmp::Reverse(f.span.start));
+        fixes.sort_by_key(|f| std::cmp::Reverse(f.span.start()));
         let mut text = std::fs::read_to_string(&path).expect("readable");
         for fix in fixes {
             text.replace_range(fix.span.range(), &fix.replacement);

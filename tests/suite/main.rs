@@ -60,6 +60,7 @@ mod unit_integrate;
 mod unit_kinematics;
 mod unit_load;
 mod unit_output;
+mod unit_source;
 mod unit_symbolic;
 mod unit_syntax;
 mod unit_testing;

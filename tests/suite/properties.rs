@@ -100,9 +100,10 @@ fn run_front_end(text: &str) {
     );
     for diagnostic in &compilation.diagnostics {
         for label in &diagnostic.labels {
-            let file = compilation.workspace.sources.file(label.span.file);
+            let file = compilation.workspace.sources.file(label.span.file());
             assert!(
-                label.span.start <= label.span.end && label.span.end as usize <= file.text.len()
+                label.span.start() <= label.span.end()
+                    && label.span.end() as usize <= file.text.len()
             );
         }
     }

@@ -27,12 +27,12 @@ fn resolutions_are_found_as_a_map_finds_them() {
     let mut oracle = BTreeMap::new();
     let mut resolutions = Resolutions::default();
     let mut record = |span: Span, oracle: &mut BTreeMap<(u32, u32, u32), Target>| {
-        let target = match span.start % 3 {
+        let target = match span.start() % 3 {
             0 => Target::Local,
             1 => Target::Builtin,
-            _ => Target::Global(ScopeId(span.end % 5)),
+            _ => Target::Global(ScopeId(span.end() % 5)),
         };
-        oracle.insert((span.file.0, span.start, span.end), target);
+        oracle.insert((span.file().0, span.start(), span.end()), target);
         resolutions.insert(span, target);
     };
     for position in 0..3000u32 {

@@ -138,7 +138,10 @@ fn line_of(xml: &str, needle: &str) -> usize {
 
 fn line(sources: &SourceMap, diagnostic: &Diagnostic) -> usize {
     let span = diagnostic.primary_span().expect("located");
-    sources.file(span.file).line_column(span.start as usize).0
+    sources
+        .file(span.file())
+        .line_column(span.start() as usize)
+        .0
 }
 
 #[test]
@@ -659,7 +662,7 @@ fn malformed_xml_is_an_error_at_its_line_and_column() {
             .primary_span()
             .unwrap_or_else(|| panic!("{xml}: no position"));
         assert_eq!(
-            sources.file(span.file).line_column(span.start as usize),
+            sources.file(span.file()).line_column(span.start() as usize),
             (line, column),
             "{xml}: {error:?}"
         );
@@ -923,9 +926,9 @@ fn elements_nested_too_deep_are_refused_where_the_limit_is_passed() {
             import_urdf("deep.urdf", &xml, &ImportOptions::default()).expect_err("too deep");
         assert_eq!(error.code, "E0209", "{error:?}");
         let span = error.primary_span().expect("a place");
-        let opened_before = xml[..span.start as usize].matches("<x>").count();
+        let opened_before = xml[..span.start() as usize].matches("<x>").count();
         assert_eq!(opened_before + 2, MAX_ELEMENT_NESTING, "{error:?}");
-        assert_eq!(&xml[span.start as usize..span.end as usize], "<x>");
+        assert_eq!(&xml[span.start() as usize..span.end() as usize], "<x>");
     }
     let at_the_limit = import_urdf(
         "deep.urdf",

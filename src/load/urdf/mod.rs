@@ -69,6 +69,6 @@ pub fn import_urdf_at(
         .map_err(|e| check::rejected(&source, &e.to_string()))?;
     let tree = Tree::build(&robot, &source)?;
     let (text, mut warnings) = Importer::new(&robot, &source, &tree, options).program(name)?;
-    warnings.sort_by_key(|d| d.primary_span().map(|s| s.start));
+    warnings.sort_by_key(|d| d.primary_span().map(|s| s.start()));
     Ok(Imported { text, warnings })
 }
