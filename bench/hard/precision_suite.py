@@ -19,7 +19,9 @@ planar loops of the hard set (Bennett 4R, Watt six-bar). Each case names its ref
 
 Usage: bench/hard/precision_suite.py [--lsdc PATH] [--repeats N] [--no-write]
 Writes bench/hard/references/*.csv, bench/hard/precision/NAME.json, docs/precision/NAME.svg and
-the section between the markers in BENCHMARKS.md; prints the time it took.
+the section between the markers in BENCHMARKS.md (with --no-write, that section is only printed;
+the other files are still written, as the runs read them); prints the time it took. PATH
+defaults to target/debug/lsdc: build it first, or pass target/release/lsdc.
 """
 
 import argparse
