@@ -105,14 +105,33 @@ impl Factor {
 
 /// A rank-revealing solve of A x = b in storage kept between solves: Gaussian elimination with
 /// complete pivoting that stops where the largest entry left falls below `tolerance` times the
-/// largest entry of A. The unknowns of the rows left (dependent on the others, as a follower's
-/// row held together with its leader's, or a velocity held twice) are set to zero: where the
-/// system is consistent, x is one of its solutions, and X Hᵀ x (the change of the motion) is
-/// the same for all of them.
+/// largest entry of A equilibrated. The unknowns of the rows left (dependent on the others, as
+/// a follower's row held together with its leader's, or a velocity held twice) are set to zero:
+/// where the system is consistent, x is one of its solutions, and X Hᵀ x (the change of the
+/// motion) is the same for all of them.
+///
+/// A's rows and columns are first scaled by powers of two so that each one's largest entry is
+/// in [1, 2) (exact, so a well-scaled system is solved as it was): the rows of one stack have
+/// different units (a held angle's 1/I beside a contact's 1/m), and without it a row of small
+/// entries, independent of the others, would fall under a cutoff relative to the largest.
 #[derive(Clone, Debug, Default)]
 pub struct Pivoted {
     columns: Vec<usize>,
     solution: Vec<f64>,
+    column_scales: Vec<f64>,
+}
+
+/// The power of two 2⁻ᵉ for `largest` in [2ᵉ, 2ᵉ⁺¹), read from its exponent's bits (no
+/// logarithm: it runs for every row of every solve); 1 where `largest` is zero or not finite.
+pub fn inverse_power_of_two(largest: f64) -> f64 {
+    if !(largest > 0.0 && largest.is_finite()) {
+        return 1.0;
+    }
+    let exponent = ((largest.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+    // Bounded to the normal numbers' exponents: a subnormal `largest` (its field reads
+    // −1023) is scaled by 2¹⁰²², the largest power of two, and the largest numbers by 2⁻¹⁰²².
+    let inverse = (-exponent).clamp(-1022, 1022);
+    f64::from_bits(((inverse + 1023) as u64) << 52)
 }
 
 impl Pivoted {
@@ -121,6 +140,7 @@ impl Pivoted {
         let n = a.nrows();
         self.columns.clear();
         self.columns.extend(0..n);
+        self.equilibrate(a, b);
         let scale = a.amax();
         let mut rank = 0;
         while rank < n {
@@ -157,9 +177,26 @@ impl Pivoted {
         self.solution.clear();
         self.solution.resize(n, 0.0);
         for k in 0..rank {
-            self.solution[self.columns[k]] = b[k];
+            let column = self.columns[k];
+            self.solution[column] = b[k] * self.column_scales[column];
         }
         b.as_mut_slice().copy_from_slice(&self.solution);
         rank
+    }
+
+    /// Scales A's rows (and b with them), then its columns (kept in `column_scales`, to scale
+    /// the solution back), so that the largest entry of each is in [1, 2).
+    fn equilibrate(&mut self, a: &mut DMatrix<f64>, b: &mut DVector<f64>) {
+        for i in 0..a.nrows() {
+            let scale = inverse_power_of_two(a.row(i).amax());
+            a.row_mut(i).scale_mut(scale);
+            b[i] *= scale;
+        }
+        self.column_scales.clear();
+        for j in 0..a.ncols() {
+            let scale = inverse_power_of_two(a.column(j).amax());
+            a.column_mut(j).scale_mut(scale);
+            self.column_scales.push(scale);
+        }
     }
 }

@@ -158,6 +158,71 @@ fn friction_in_the_axle_of_a_rolling_cylinder_slows_it_as_in_closed_form() {
     }
 }
 
+/// A rotor of 1e-13 kg m² on the rolling cylinder's carriage, held by its dry friction (nothing
+/// turns it): its held row, of entries 1/J = 1e13, stands beside the contact's, of about 1/m.
+/// Rows of such different units are solved as rows of one (each row scaled to its largest
+/// entry before the dependent ones are found): the contact's is kept, and the cylinder rolls
+/// down at the seed's ẍ = −3.27 m/s² on its normal force 16.9914 N. (Without the scaling the
+/// contact's rows fell under the cutoff relative to the rotor's: no normal force, the
+/// cylinder falling through the slope.)
+#[test]
+fn a_light_rotor_held_beside_a_rolling_contact_leaves_the_contact_s_rows_kept() {
+    let rotor = "let rotor = body mass = 0, iframe = 1, inertia = [1e-13, 1e-13, 1e-13] end ;
+                 join carriage and rotor with friction_revolute([0, -1, 0], 1, 0) as brake ;
+";
+    let text = incline(0.0, "revolute([0, -1, 0])", "rolling(r)", rotor)
+        + "initial motion.y = r ;
+";
+    let acceleration = -G * ALPHA.sin() / 1.5;
+    let normal = MASS * G * ALPHA.cos();
+    let simulation = simulate(&text, settings(Integrator::DormandPrince, 1.0, true));
+    let x = column(&simulation, "motion.x");
+    let brake = column(&simulation, "brake.q");
+    for sample in simulation.samples.iter().skip(1) {
+        let (t, c) = (sample.time, &sample.coordinates);
+        assert!(
+            (c[x] - 0.5 * acceleration * t * t).abs() < 1e-9,
+            "t = {t}: x = {}",
+            c[x]
+        );
+        assert!(c[brake].abs() < 1e-12 && sample.rates[brake].abs() < 1e-12);
+        let [_, _, fz] = contact_force(sample);
+        assert!((fz - normal).abs() < 1e-9, "R_z = {fz} against {normal}");
+    }
+    assert_rolling(&simulation);
+}
+
+/// A slider of 1000 kg resting on its lower stop carries a rotor of 1e-10 kg m² held by its
+/// dry friction: the stop's held row (entries 1/m = 1e-3) and the rotor's (1/J = 1e10) are
+/// both kept, and the slider stays on its stop under its weight. (It fell through the stop,
+/// 4.9 m in 1 s, while the stop's row was taken as dependent on the rotor's.)
+#[test]
+fn a_heavy_slider_resting_on_its_stop_beside_a_light_held_rotor_stays_there() {
+    let text = "import joints ;
+                let slider = body mass = 1000, iframe = 0, inertia = [1, 1, 1] end ;
+                let rotor = body mass = 1e-6, iframe = 0, inertia = [1e-10, 1e-10, 1e-10] end ;
+                join earth and slider with limited_prismatic([0, 0, 1], 0, 1, 0) as lift ;
+                join slider and rotor with friction_revolute([0, 0, 1], 1, 0) as spin ;
+                apply force value = [0, 0, -9.81 * slider.mass], body = earth end on slider.frame ;
+";
+    for integrator in [
+        Integrator::DormandPrince,
+        Integrator::Rk4,
+        Integrator::Implicit,
+    ] {
+        let simulation = simulate(text, settings(integrator.clone(), 1.0, false));
+        let lift = column(&simulation, "lift.q");
+        for sample in &simulation.samples {
+            let (q, rate) = (sample.coordinates[lift], sample.rates[lift]);
+            assert!(
+                q.abs() < 1e-12 && rate.abs() < 1e-12,
+                "{integrator:?}, t = {}: lift.q = {q}, rate {rate}",
+                sample.time
+            );
+        }
+    }
+}
+
 /// Launched up the slope at 0.5 m/s (rolling: its spin −5 rad/s) with F_c = 1.2 N m in the axle, more than the r m g sin α
 /// = 0.981 N m that holds the cylinder on the slope: it slows at
 /// ẍ = −(m g sin α + F_c / r) / (3/2 m), stops at t* = 0.5 / |ẍ|, where the axle sticks (its

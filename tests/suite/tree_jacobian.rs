@@ -279,3 +279,30 @@ fn the_jacobian_keeps_the_couplings_and_the_held_rows() {
     let (meshed, _) = central_difference(&gears, &turning, |_| {});
     assert!(meshed < 1e-7, "meshed gears: {meshed:e}");
 }
+
+/// A slider of 1000 kg on a spring, resting on its stop, carries a rotor of 1e-10 kg m² held by
+/// its friction: the held rows' entries (1/m = 1e-3 and 1/J = 1e10) are fifteen orders apart,
+/// and both are held in the Jacobian as in f (scaled before the dependent rows are found):
+/// the slider's acceleration does not move with its position, where the spring alone would
+/// give −k/m. Against central differences of f.
+#[test]
+fn the_jacobian_holds_rows_of_very_different_sizes() {
+    use lsdc::dynamics::friction::Phase;
+    let text = "import joints ;\n\
+        let slider = body mass = 1000, iframe = 0, inertia = [1, 1, 1] end ;\n\
+        let rotor = body mass = 1e-6, iframe = 0, inertia = [1e-10, 1e-10, 1e-10] end ;\n\
+        join earth and slider with limited_prismatic([0, 0, 1], 0, 1, 0) as lift ;\n\
+        join slider and rotor with friction_revolute([0, 0, 1], 1, 0) as spin ;\n\
+        apply force value = [0, 0, -9.81 * slider.mass - 1e4 * (lift.q - 0.1)], body = earth end on slider.frame ;\n";
+    let prepared = super::common::programs::prepared_text(text);
+    let y = state(&prepared, None);
+    let held = |system: &mut MechanicalSystem| {
+        system.phases = vec![Phase::Sticking];
+        system.resting[0] = true;
+    };
+    let (matrix, gradient) = central_difference(&prepared, &y, held);
+    assert!(
+        matrix < 1e-7 && gradient < 1e-7,
+        "Jacobian off by {matrix:e}, power's gradient by {gradient:e}"
+    );
+}

@@ -27,6 +27,7 @@ use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{
     crba_after_kinematics, forward_kinematics, rnea_after_kinematics,
 };
+use crate::dynamics::dense::inverse_power_of_two;
 use crate::dynamics::joint::JointType;
 use crate::dynamics::rows::DEPENDENT_ROWS;
 
@@ -113,11 +114,24 @@ impl MechanicalSystem<'_> {
         }
         let mut moved = DMatrix::zeros(nv, self.held.len());
         self.response.apply(&units, &mut moved);
-        let coupling = moved.select_rows(&self.held);
-        let held_rows = columns.select_rows(&self.held);
+        // Scaled symmetrically, D (E X Eᵀ) D with D of powers of two, for the reason `Pivoted`
+        // scales the run's rows: a held angle of a light rotor beside a heavy slider's.
+        let scales: Vec<f64> = (self.held.iter().enumerate())
+            .map(|(i, &k)| inverse_power_of_two(moved[(k, i)].abs().sqrt()))
+            .collect();
+        let mut coupling = moved.select_rows(&self.held);
+        let mut held_rows = columns.select_rows(&self.held);
+        for (i, &scale) in scales.iter().enumerate() {
+            coupling.row_mut(i).scale_mut(scale);
+            coupling.column_mut(i).scale_mut(scale);
+            held_rows.row_mut(i).scale_mut(scale);
+        }
         let svd = coupling.svd(true, true);
         let cutoff = DEPENDENT_ROWS * svd.singular_values.max();
-        if let Ok(solved) = svd.solve(&held_rows, cutoff) {
+        if let Ok(mut solved) = svd.solve(&held_rows, cutoff) {
+            for (i, &scale) in scales.iter().enumerate() {
+                solved.row_mut(i).scale_mut(scale);
+            }
             *columns -= moved * solved;
         }
     }
