@@ -52,12 +52,52 @@ pub fn initial_state(
     let c = constraints(model, &mut data, &q, &v, Extent::Rows).map_err(evaluation)?;
     complete_rates(&c.jacobian.dense(), &given, &mut v)
         .map_err(|opening| vec![incompatible_rates(mechanism, &given, opening)])?;
+    let mut warnings = initial.warnings;
+    warnings.extend(amplified_rates(mechanism, model, &given, &v));
     let (coordinates, rates) = model.declared(&q, &v, &coordinates).map_err(evaluation)?;
     Ok(ConsistentState {
         coordinates,
         rates,
-        warnings: initial.warnings,
+        warnings,
     })
+}
+
+/// Completed rates beyond this multiple of the largest rate given are reported (W0802).
+const AMPLIFIED_RATES: f64 = 1e3;
+
+/// W0802 when the loops complete the given rates with a rate more than `AMPLIFIED_RATES` times
+/// the largest given: the configuration is close to one where the loops' velocity map is
+/// singular (they lock, or change branch), and the motion asked for is much faster than it
+/// reads.
+fn amplified_rates(
+    mechanism: &Mechanism,
+    model: &Model,
+    given: &[(usize, String)],
+    v: &[f64],
+) -> Option<Diagnostic> {
+    let largest_given = given
+        .iter()
+        .max_by(|a, b| v[a.0].abs().total_cmp(&v[b.0].abs()))?;
+    let given_rate = v[largest_given.0];
+    let completed = (0..v.len()).filter(|i| !given.iter().any(|(g, _)| g == i));
+    let fastest = completed.max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs()))?;
+    let ratio = v[fastest].abs() / given_rate.abs();
+    if given_rate == 0.0 || ratio.is_nan() || ratio <= AMPLIFIED_RATES {
+        return None;
+    }
+    let message = format!(
+        "the loops turn the given initial rates into rates {ratio:.1e} times larger: `{}'` = {:.3e} with `{}` = {given_rate}",
+        model.velocity_name(fastest),
+        v[fastest],
+        largest_given.1,
+    );
+    let mut warning = Diagnostic::warning("W0802", message).help(
+        "the configuration is close to one where the loops lock or change branch; check the `initial` positions, or give the rate of a coordinate that moves freely there",
+    );
+    if let Some(initial) = mechanism.initial.iter().find(|i| i.order == 1) {
+        warning = warning.primary(initial.span, "given here");
+    }
+    Some(warning)
 }
 
 /// State velocities whose value the program gives (`initial j.q' = …`). A quaternion joint's

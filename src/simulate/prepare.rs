@@ -28,7 +28,8 @@ pub struct Prepared {
     pub settings: Settings,
     /// `join.coordinate` for every declared coordinate.
     pub coordinate_names: Vec<String>,
-    /// What preparing found worth saying without stopping: given values assembly moved (W0801).
+    /// What preparing found worth saying without stopping: given values assembly moved (W0801),
+    /// rates the loops made far larger than those given (W0802).
     pub warnings: Vec<Diagnostic>,
     /// The forward dynamics as native code, when asked for and able to serve
     /// (`compiled::attach`).

@@ -298,6 +298,57 @@ fn incompatible_initial_rates_are_an_error() {
     );
 }
 
+/// A spatial six-revolute loop next to a singular configuration of its velocity map (found by
+/// the loops fuzz target): the given `j0.q' = -5` is completed with `jn.q'` = 6.278e4, which
+/// W0802 reports with the ratio of the two, at the `initial` that gives the rate. The four-bar,
+/// its rates completed at the same order as the given one, has no such warning.
+#[test]
+fn rates_the_loops_make_far_larger_than_the_given_ones_are_reported() {
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+    };
+    let path = "tests/fixtures/amplified_initial_rates.lsd";
+    let text = std::fs::read_to_string(path).expect("fixture");
+    let mechanism = compile_text(path, &text, None, &options)
+        .mechanism
+        .expect("elaborates");
+    let prepared = prepare(&mechanism, &[], &Settings::default()).expect("prepared");
+    let closing = (prepared.coordinate_names.iter())
+        .position(|n| n == "jn.q")
+        .expect("jn.q");
+    let ratio = prepared.rates[closing].abs() / 5.0;
+    assert!(ratio > 1e4 && ratio < 2e4, "ratio {ratio}");
+    let warnings: Vec<_> = prepared
+        .warnings
+        .iter()
+        .filter(|w| w.code == "W0802")
+        .collect();
+    let [warning] = &warnings[..] else {
+        panic!("{:?}", prepared.warnings);
+    };
+    let expected = format!(
+        "{ratio:.1e} times larger: `jn.q'` = {:.3e} with `j0.q'` = -5",
+        prepared.rates[closing]
+    );
+    assert!(
+        warning.message.contains(&expected),
+        "{} / {expected}",
+        warning.message
+    );
+    let text = example_text(
+        "four_bar",
+        &[("c.q = 1.15 guess ;", "c.q = 1.15 guess, crank.q' = 1 ;")],
+    );
+    let mechanism = compile_text("four_bar.lsd", &text, None, &options)
+        .mechanism
+        .expect("elaborates");
+    let four_bar = prepare(&mechanism, &[], &Settings::default()).expect("prepared");
+    let largest = four_bar.rates.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    assert!(largest > 0.1 && largest < 1e3, "{:?}", four_bar.rates);
+    assert!(four_bar.warnings.iter().all(|w| w.code != "W0802"));
+}
+
 #[test]
 fn reactions_at_the_ground_balance_the_change_of_momentum() {
     // Momentum theorem: the forces earth exerts through the crank and rocker joins plus the
