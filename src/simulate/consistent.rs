@@ -79,7 +79,7 @@ fn amplified_rates(
         .iter()
         .max_by(|a, b| v[a.0].abs().total_cmp(&v[b.0].abs()))?;
     let given_rate = v[largest_given.0];
-    let completed = (0..v.len()).filter(|i| !given.iter().any(|(g, _)| g == i));
+    let completed = completed_velocities(given, v.len());
     let fastest = completed.max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs()))?;
     let ratio = v[fastest].abs() / given_rate.abs();
     if given_rate == 0.0 || ratio.is_nan() || ratio <= AMPLIFIED_RATES {
@@ -124,6 +124,14 @@ fn given_velocities(mechanism: &Mechanism, model: &Model) -> Vec<(usize, String)
     given
 }
 
+/// The velocities (of `count`) whose rates the program does not give: the loops complete them.
+fn completed_velocities(
+    given: &[(usize, String)],
+    count: usize,
+) -> impl Iterator<Item = usize> + '_ {
+    (0..count).filter(|i| !given.iter().any(|(g, _)| g == i))
+}
+
 /// Changes the velocities not given as little as possible so that G v = 0; when the given ones
 /// make that impossible, the rate at which the loops still open (m/s or rad/s).
 fn complete_rates(
@@ -131,9 +139,7 @@ fn complete_rates(
     given: &[(usize, String)],
     v: &mut [f64],
 ) -> Result<(), f64> {
-    let free: Vec<usize> = (0..v.len())
-        .filter(|i| !given.iter().any(|(g, _)| g == i))
-        .collect();
+    let free: Vec<usize> = completed_velocities(given, v.len()).collect();
     let velocity = DVector::from_column_slice(v);
     let error = jacobian * &velocity;
     let free_columns =

@@ -14,12 +14,12 @@
 //! (the work's rate) is differenced along with the efforts.
 //!
 //! The same holds with the structure of the tree's other equations. Mimic couplings keep
-//! a = S u̇ with Sᵀ r(q, v, a*) = 0, so ∂a/∂x = P ∂r/∂x with P = S (Sᵀ M S)⁻¹ Sᵀ
-//! (the tree response, `Response::apply`). Coordinates held at rest (a resting stop, a sticking joint) add the rows
-//! E a = 0 and their forces Eᵀμ, which depend on the state too: differentiating
+//! a = S u̇ with Sᵀ r(q, v, a*) = 0, so ∂a/∂x = P ∂r/∂x with P = S (Sᵀ M S)⁻¹ Sᵀ (the tree
+//! response, `Response::apply`). Coordinates held at rest (a resting stop, a sticking joint)
+//! add the rows E a = 0 and their forces Eᵀμ, which depend on the state too: differentiating
 //! Sᵀ(r + Eᵀμ) = 0 and E a = 0 gives ∂a/∂x = (P − P Eᵀ (E P Eᵀ)⁺ E P) ∂r/∂x, the held change
-//! of the columns P ∂r/∂x (`subtract_held_change`). The slipping joints' friction, −s F_c − c q̇ in a
-//! phase, is one more effort in r.
+//! of the columns P ∂r/∂x (`subtract_held_change`). The slipping joints' friction,
+//! −s F_c − c q̇ in a phase, is one more effort in r.
 
 use nalgebra::{DMatrix, DVector};
 
