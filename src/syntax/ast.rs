@@ -1,8 +1,11 @@
-//! The abstract syntax of LSD, with a span on every node.
+//! The abstract syntax of LSD, with a span on every node. Boxed values and lists are
+//! [`Node`]s and [`Nodes`]: as `Box` and `Box<[T]>`, carved from the chunks of
+//! [`syntax::arena`](crate::syntax::arena) so that a freed tree gives its memory back.
 
 use rustc_hash::FxHashMap;
 
 use crate::source::Span;
+pub use crate::syntax::arena::{Node, Nodes};
 pub use crate::syntax::symbol::Symbol;
 
 /// Identifiers are 4-byte symbols (`Copy`): the checker and elaborator copy names freely.
@@ -48,27 +51,27 @@ pub struct Decl {
 #[derive(Clone, Debug, PartialEq)]
 pub enum DeclKind {
     /// `let a = e and b = e`
-    Let(Box<[Binding]>),
+    Let(Nodes<Binding>),
     /// `let f(a, b : vector) = e`: a parameterised definition.
-    Define(Box<DefineDecl>),
+    Define(Node<DefineDecl>),
     /// `join <frame> and <frame> with <link> [as <name>]`
-    Join(Box<JoinDecl>),
+    Join(Node<JoinDecl>),
     /// `initial crank.q = 0.3 fixed, crank.q' = 1`: starting values of joint coordinates.
-    Initial(Box<[InitialValue]>),
+    Initial(Nodes<InitialValue>),
     /// `given L = 0.8, arm.mass = 2`: values of unknowns and generic quantities for simulation.
-    Given(Box<[GivenValue]>),
+    Given(Nodes<GivenValue>),
     /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
-    Simulate(Box<[FieldInit]>),
+    Simulate(Nodes<FieldInit>),
     /// `output tip = position(arm.tip)`: a named quantity of the state, written by `simulate`
     /// at every output.
-    Output(Box<OutputDecl>),
+    Output(Node<OutputDecl>),
     /// `apply E on T`; `apply E between R and T`: E on T and its opposite on R (`reaction`);
     /// `apply F` for a force with a `field`: on every body with mass (a uniform field).
-    Apply(Box<ApplyDecl>),
+    Apply(Node<ApplyDecl>),
     /// `package P = decls end`
-    Package(Box<PackageDecl>),
+    Package(Node<PackageDecl>),
     /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`
-    Import(Box<ImportDecl>),
+    Import(Node<ImportDecl>),
     /// A declaration the parser could not read; its error was already reported.
     Error,
 }
@@ -269,7 +272,7 @@ pub struct Arg {
 pub enum Callee {
     Name(Ident),
     /// `P:f(...)`, `P[k]:f(...)`; boxed, so that a call's callee is the size of a name.
-    Qualified(Box<QualifiedName>),
+    Qualified(Node<QualifiedName>),
     /// `?fs(x, x')`: an unknown function.
     Unknown(Ident),
 }
@@ -278,15 +281,15 @@ pub enum Callee {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Construct {
     pub kind: ConstructKind,
-    pub params: Box<[Ident]>,
-    pub fields: Box<[FieldInit]>,
+    pub params: Nodes<Ident>,
+    pub fields: Nodes<FieldInit>,
 }
 
 /// `callee(args)`
 #[derive(Clone, Debug, PartialEq)]
 pub struct CallExpr {
     pub callee: Callee,
-    pub args: Box<[Arg]>,
+    pub args: Nodes<Arg>,
 }
 
 /// `lhs op rhs`: both operands in one box with the operator.
@@ -300,37 +303,37 @@ pub struct BinaryExpr {
 /// `local a = e and b = e in body end`
 #[derive(Clone, Debug, PartialEq)]
 pub struct LocalExpr {
-    pub bindings: Box<[Binding]>,
+    pub bindings: Nodes<Binding>,
     pub body: Expr,
 }
 
 /// The kind of an expression. A name's span is its expression's, and every variant holds at
 /// most 8 bytes (a call, a binary operation, a `local` and a constructor are boxed whole, and a
 /// vector literal's elements), so that the kind is 16 bytes and an expression with its 8-byte span
-/// 24: a generated chain holds some forty per body, inline in lists or boxed (a 32-byte block
-/// of glibc's malloc, where 32 bytes took 48).
+/// 24: a generated chain holds some forty per body, inline in lists or boxed (24 bytes of a
+/// chunk, see `syntax::arena`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum ExprKind {
     Name(Name),
     /// `P:X`
-    Qualified(Box<QualifiedName>),
+    Qualified(Node<QualifiedName>),
     /// `e.field`, boxed whole so that a name does not make every expression larger.
-    Field(Box<FieldAccess>),
+    Field(Node<FieldAccess>),
     /// `?s`: a fresh unknown scalar at each occurrence.
     Unknown(Name),
     Int(i64),
     Float(f64),
     /// `[a, b, c]` (a vector) or `[[..], [..], [..]]` (a matrix, by rows).
     Vector(VectorLiteral),
-    Call(Box<CallExpr>),
-    Binary(Box<BinaryExpr>),
-    Neg(Box<Expr>),
+    Call(Node<CallExpr>),
+    Binary(Node<BinaryExpr>),
+    Neg(Node<Expr>),
     /// `x'`: the time derivative of a joint coordinate.
-    Prime(Box<Expr>),
+    Prime(Node<Expr>),
     /// `body ... end`, `link(x) ... end`, `force ... end`, `torque ... end`
-    Construct(Box<Construct>),
+    Construct(Node<Construct>),
     /// `local a = e and b = e in body end`
-    Local(Box<LocalExpr>),
+    Local(Node<LocalExpr>),
     /// An expression the parser could not read.
     Error,
 }
@@ -341,22 +344,22 @@ pub enum ExprKind {
 /// expression. Either form fits in eight bytes beside the expression's own tag.
 #[derive(Clone, PartialEq)]
 pub enum VectorLiteral {
-    Three(Box<[Expr; 3]>),
-    Other(Box<Box<[Expr]>>),
+    Three(Node<[Expr; 3]>),
+    Other(Node<Nodes<Expr>>),
 }
 
 impl VectorLiteral {
     pub fn new(elements: Vec<Expr>) -> VectorLiteral {
-        match <Box<[Expr; 3]>>::try_from(elements) {
-            Ok(three) => VectorLiteral::Three(three),
-            Err(other) => VectorLiteral::Other(Box::new(other.into_boxed_slice())),
+        match <[Expr; 3]>::try_from(elements) {
+            Ok(three) => VectorLiteral::Three(Node::new(three)),
+            Err(other) => VectorLiteral::Other(Node::new(Nodes::from(other))),
         }
     }
 
     pub fn into_vec(self) -> Vec<Expr> {
         match self {
-            VectorLiteral::Three(three) => Vec::from(*three),
-            VectorLiteral::Other(other) => other.into_vec(),
+            VectorLiteral::Three(three) => Vec::from(three.into_inner()),
+            VectorLiteral::Other(other) => other.into_inner().into_vec(),
         }
     }
 }
@@ -389,7 +392,7 @@ pub fn binary(
     rhs: Expr,
 ) -> Expr {
     Expr {
-        kind: ExprKind::Binary(Box::new(BinaryExpr { op, lhs, rhs })),
+        kind: ExprKind::Binary(Node::new(BinaryExpr { op, lhs, rhs })),
         span: Span::new(file, start, end),
     }
 }

@@ -110,9 +110,9 @@ fn dismantle(kind: DeclKind) {
             DeclKind::Let(bindings) => {
                 exprs.extend(bindings.into_vec().into_iter().map(|b| b.value))
             }
-            DeclKind::Define(define) => exprs.push(define.body),
+            DeclKind::Define(define) => exprs.push(define.into_inner().body),
             DeclKind::Join(join) => {
-                let join = *join;
+                let join = join.into_inner();
                 exprs.extend([join.first, join.second, join.link]);
             }
             DeclKind::Initial(values) => {
@@ -134,34 +134,44 @@ fn dismantle(kind: DeclKind) {
             DeclKind::Simulate(fields) => {
                 exprs.extend(fields.into_vec().into_iter().map(|f| f.value))
             }
-            DeclKind::Output(output) => exprs.push(output.value),
+            DeclKind::Output(output) => exprs.push(output.into_inner().value),
             DeclKind::Apply(apply) => {
-                let apply = *apply;
+                let apply = apply.into_inner();
                 exprs.push(apply.effort);
                 exprs.extend(apply.target.into_iter().chain(apply.reaction));
             }
             DeclKind::Package(package) => {
-                decls.extend(package.decls.into_iter().map(|d| d.kind));
+                decls.extend(package.into_inner().decls.into_iter().map(|d| d.kind));
             }
             DeclKind::Import(_) | DeclKind::Error => {}
         }
         while let Some(mut expr) = exprs.pop() {
             match std::mem::replace(&mut expr.kind, ExprKind::Error) {
-                ExprKind::Field(access) => exprs.push(access.target),
+                ExprKind::Field(access) => exprs.push(access.into_inner().target),
                 ExprKind::Vector(items) => exprs.extend(items.into_vec()),
-                ExprKind::Call(call) => {
-                    exprs.extend(call.args.into_vec().into_iter().map(|a| a.value))
-                }
+                ExprKind::Call(call) => exprs.extend(
+                    call.into_inner()
+                        .args
+                        .into_vec()
+                        .into_iter()
+                        .map(|a| a.value),
+                ),
                 ExprKind::Binary(binary) => {
-                    let BinaryExpr { lhs, rhs, .. } = *binary;
+                    let BinaryExpr { lhs, rhs, .. } = binary.into_inner();
                     exprs.extend([lhs, rhs])
                 }
-                ExprKind::Neg(inner) | ExprKind::Prime(inner) => exprs.push(*inner),
+                ExprKind::Neg(inner) | ExprKind::Prime(inner) => exprs.push(inner.into_inner()),
                 ExprKind::Construct(c) => {
-                    exprs.extend(c.fields.into_vec().into_iter().map(|f| f.value));
+                    exprs.extend(
+                        c.into_inner()
+                            .fields
+                            .into_vec()
+                            .into_iter()
+                            .map(|f| f.value),
+                    );
                 }
                 ExprKind::Local(local) => {
-                    let LocalExpr { bindings, body } = *local;
+                    let LocalExpr { bindings, body } = local.into_inner();
                     exprs.extend(bindings.into_vec().into_iter().map(|b| b.value));
                     exprs.push(body);
                 }

@@ -247,3 +247,88 @@ mod symbol {
         assert_eq!(there.1.as_str(), "symbol_test_new");
     }
 }
+
+mod arena {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+
+    use lsdc::source::FileId;
+    use lsdc::syntax::arena::{mapped_bytes, Node, Nodes};
+    use lsdc::syntax::parser::parse;
+
+    /// Counts its drops.
+    #[derive(Clone, Debug)]
+    struct Counted(u64, Arc<AtomicUsize>);
+
+    impl PartialEq for Counted {
+        fn eq(&self, other: &Counted) -> bool {
+            self.0 == other.0
+        }
+    }
+
+    impl Drop for Counted {
+        fn drop(&mut self) {
+            self.1.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    #[test]
+    fn nodes_drop_their_values_once_and_give_them_back_whole() {
+        let drops = Arc::new(AtomicUsize::new(0));
+        let counted = |n| Counted(n, drops.clone());
+        let node = Node::new(counted(7));
+        let copy = node.clone();
+        assert_eq!(node, copy);
+        drop(copy);
+        assert_eq!(drops.load(Ordering::Relaxed), 1);
+        let value = node.into_inner();
+        assert_eq!(drops.load(Ordering::Relaxed), 1, "taken out, not dropped");
+        assert_eq!(value.0, 7);
+        drop(value);
+
+        let list: Nodes<Counted> = (0..5).map(counted).collect();
+        assert_eq!(
+            list.iter().map(|c| c.0).collect::<Vec<_>>(),
+            [0, 1, 2, 3, 4]
+        );
+        assert_eq!(drops.load(Ordering::Relaxed), 2);
+        let vec = list.clone().into_vec();
+        assert_eq!(vec.len(), 5);
+        assert_eq!(drops.load(Ordering::Relaxed), 2, "moved into the vector");
+        drop(vec);
+        drop(list);
+        assert_eq!(drops.load(Ordering::Relaxed), 12);
+        assert!(Nodes::<Counted>::default().is_empty());
+        assert!(Nodes::<Counted>::default().into_vec().is_empty());
+
+        // A value larger than a chunk's share has a mapping of its own.
+        let large: Nodes<u64> = (0..100_000).collect();
+        assert_eq!(large.iter().sum::<u64>(), 4_999_950_000);
+    }
+
+    /// The point of the arena: once a tree is dropped, wherever, its chunks go back to the
+    /// system. Other tests parse beside this one, but a few small files' chunks, far below the
+    /// margin here.
+    #[test]
+    fn the_chunks_of_a_dropped_tree_are_unmapped() {
+        let text = "let b = body mass = 1.5, iframe = [0.25,0,0] ++ 1 end;\n".repeat(40_000);
+        let (program, before, parsed) = std::thread::spawn(move || {
+            let before = mapped_bytes();
+            let (program, diagnostics) = parse(FileId(0), &text);
+            assert!(diagnostics.is_empty());
+            (program, before, mapped_bytes())
+        })
+        .join()
+        .expect("parsed");
+        assert_eq!(program.decls.len(), 40_000);
+        let grown = parsed.saturating_sub(before);
+        assert!(grown > 10 << 20, "the tree took {grown} bytes of chunks");
+        // Dropped on another thread than the one that made it, which has ended.
+        drop(program);
+        let after = mapped_bytes();
+        assert!(
+            after < before + (4 << 20),
+            "{before} bytes before, {parsed} parsed, {after} after the drop"
+        );
+    }
+}

@@ -1,6 +1,6 @@
-// grammar stamp: ee2769950d2486b5 (tools/parser-generator writes this file; do not edit)
+// grammar stamp: c5138fc5bfae1afb (tools/parser-generator writes this file; do not edit)
 // auto-generated: "lalrpop 0.23.2"
-// sha3: 50669bddb2b0a9b412ef3fa67d05f21c2502a5fbed4922731de1f453ce7eac9b
+// sha3: 38082448afc3f0dc7d5973b8e9547d32bdfcb1d718913f496085bae3d7b1fceb
 // features: 
 use lalrpop_util::ErrorRecovery;
 use crate::syntax::ast::*;
@@ -9624,7 +9624,7 @@ fn __action11<
     (_, bindings, _): (usize, Vec<Binding>, usize),
 ) -> DeclKind
 {
-    DeclKind::Let(bindings.into_boxed_slice())
+    DeclKind::Let(bindings.into())
 }
 
 #[allow(unused_variables)]
@@ -9645,7 +9645,7 @@ fn __action12<
     (_, body, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Define(Box::new(DefineDecl { name, params, body }))
+    DeclKind::Define(Node::new(DefineDecl { name, params, body }))
 }
 
 #[allow(unused_variables)]
@@ -9666,7 +9666,7 @@ fn __action13<
     (_, name, _): (usize, Option<Ident>, usize),
 ) -> DeclKind
 {
-    DeclKind::Join(Box::new(JoinDecl { first, second, link, name }))
+    DeclKind::Join(Node::new(JoinDecl { first, second, link, name }))
 }
 
 #[allow(unused_variables)]
@@ -9715,7 +9715,7 @@ fn __action16<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> DeclKind
 {
-    DeclKind::Simulate(fields.into_boxed_slice())
+    DeclKind::Simulate(fields.into())
 }
 
 #[allow(unused_variables)]
@@ -9733,7 +9733,7 @@ fn __action17<
     (_, value, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Output(Box::new(OutputDecl { name, value }))
+    DeclKind::Output(Node::new(OutputDecl { name, value }))
 }
 
 #[allow(unused_variables)]
@@ -9751,7 +9751,7 @@ fn __action18<
     (_, target, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Apply(Box::new(ApplyDecl { effort, target: Some(target), reaction: None }))
+    DeclKind::Apply(Node::new(ApplyDecl { effort, target: Some(target), reaction: None }))
 }
 
 #[allow(unused_variables)]
@@ -9771,7 +9771,7 @@ fn __action19<
     (_, second, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Apply(Box::new(ApplyDecl { effort, target: Some(second), reaction: Some(first) }))
+    DeclKind::Apply(Node::new(ApplyDecl { effort, target: Some(second), reaction: Some(first) }))
 }
 
 #[allow(unused_variables)]
@@ -9787,7 +9787,7 @@ fn __action20<
     (_, effort, _): (usize, Expr, usize),
 ) -> DeclKind
 {
-    DeclKind::Apply(Box::new(ApplyDecl { effort, target: None, reaction: None }))
+    DeclKind::Apply(Node::new(ApplyDecl { effort, target: None, reaction: None }))
 }
 
 #[allow(unused_variables)]
@@ -9806,7 +9806,7 @@ fn __action21<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> DeclKind
 {
-    DeclKind::Package(Box::new(PackageDecl { name, index: None, decls }))
+    DeclKind::Package(Node::new(PackageDecl { name, index: None, decls }))
 }
 
 #[allow(unused_variables)]
@@ -9832,7 +9832,7 @@ fn __action22<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> DeclKind
 {
-    DeclKind::Package(Box::new(PackageDecl { name, index: Some(PackageIndex { variable, first, last }), decls }))
+    DeclKind::Package(Node::new(PackageDecl { name, index: Some(PackageIndex { variable, first, last }), decls }))
 }
 
 #[allow(unused_variables)]
@@ -9849,7 +9849,7 @@ fn __action23<
     (_, alias, _): (usize, Option<Ident>, usize),
 ) -> DeclKind
 {
-    DeclKind::Import(Box::new(ImportDecl { target, alias }))
+    DeclKind::Import(Node::new(ImportDecl { target, alias }))
 }
 
 #[allow(unused_variables)]
@@ -10291,7 +10291,7 @@ fn __action49<
     (_, r, _): (usize, usize, usize),
 ) -> Expr
 {
-    Expr { kind: ExprKind::Neg(Box::new(e)), span: Span::new(file, l, r) }
+    Expr { kind: ExprKind::Neg(Node::new(e)), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -10343,7 +10343,7 @@ fn __action52<
     (_, r, _): (usize, usize, usize),
 ) -> Expr
 {
-    Expr { kind: ExprKind::Field(Box::new(FieldAccess { target, field })), span: Span::new(file, l, r) }
+    Expr { kind: ExprKind::Field(Node::new(FieldAccess { target, field })), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -10361,7 +10361,7 @@ fn __action53<
     (_, r, _): (usize, usize, usize),
 ) -> Expr
 {
-    Expr { kind: ExprKind::Prime(Box::new(e)), span: Span::new(file, l, r) }
+    Expr { kind: ExprKind::Prime(Node::new(e)), span: Span::new(file, l, r) }
 }
 
 #[allow(unused_variables)]
@@ -10442,7 +10442,7 @@ fn __action58<
     (_, name, _): (usize, Ident, usize),
 ) -> ExprKind
 {
-    ExprKind::Qualified(Box::new(QualifiedName { package, index: None, name }))
+    ExprKind::Qualified(Node::new(QualifiedName { package, index: None, name }))
 }
 
 #[allow(unused_variables)]
@@ -10462,7 +10462,7 @@ fn __action59<
     (_, name, _): (usize, Ident, usize),
 ) -> ExprKind
 {
-    ExprKind::Qualified(Box::new(QualifiedName { package, index: Some(index), name }))
+    ExprKind::Qualified(Node::new(QualifiedName { package, index: Some(index), name }))
 }
 
 #[allow(unused_variables)]
@@ -10542,7 +10542,7 @@ fn __action64<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Call(Box::new(CallExpr { callee, args: args.into_boxed_slice() }))
+    ExprKind::Call(Node::new(CallExpr { callee, args: args.into() }))
 }
 
 #[allow(unused_variables)]
@@ -10559,7 +10559,7 @@ fn __action65<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct(Box::new(Construct { kind, params: Box::default(), fields: fields.into_boxed_slice() }))
+    ExprKind::Construct(Node::new(Construct { kind, params: Nodes::default(), fields: fields.into() }))
 }
 
 #[allow(unused_variables)]
@@ -10579,7 +10579,7 @@ fn __action66<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Construct(Box::new(Construct { kind: ConstructKind::Link, params: params.into_boxed_slice(), fields: fields.into_boxed_slice() }))
+    ExprKind::Construct(Node::new(Construct { kind: ConstructKind::Link, params: params.into(), fields: fields.into() }))
 }
 
 #[allow(unused_variables)]
@@ -10598,7 +10598,7 @@ fn __action67<
     (_, _, _): (usize, Tok<'input>, usize),
 ) -> ExprKind
 {
-    ExprKind::Local(Box::new(LocalExpr { bindings: bindings.into_boxed_slice(), body }))
+    ExprKind::Local(Node::new(LocalExpr { bindings: bindings.into(), body }))
 }
 
 #[allow(unused_variables)]
@@ -10647,7 +10647,7 @@ fn __action70<
     (_, name, _): (usize, Ident, usize),
 ) -> Callee
 {
-    Callee::Qualified(Box::new(QualifiedName { package, index: None, name }))
+    Callee::Qualified(Node::new(QualifiedName { package, index: None, name }))
 }
 
 #[allow(unused_variables)]
@@ -10667,7 +10667,7 @@ fn __action71<
     (_, name, _): (usize, Ident, usize),
 ) -> Callee
 {
-    Callee::Qualified(Box::new(QualifiedName { package, index: Some(index), name }))
+    Callee::Qualified(Node::new(QualifiedName { package, index: Some(index), name }))
 }
 
 #[allow(unused_variables)]
