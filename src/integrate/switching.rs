@@ -16,8 +16,11 @@
 //!   step at equal accuracy (order 5 against 4, and no Jacobian).
 //!
 //! Where the implicit method was left for steps ρ allowed, it is taken again only where the
-//! explicit steps fall below `RETURN_RATIO` of the steps it took, so that the two do not take
-//! turns on a mildly stiff stretch where neither gains.
+//! explicit steps fall below `RETURN_RATIO` of the longest step it took in its last stretch, so
+//! that the two do not take turns on a mildly stiff stretch where neither gains. The longest, not
+//! the last: after an impact the implicit method starts again with short steps, which ρ allows
+//! the explicit method too, and a ratio to those kept the explicit method at its stability
+//! limit for the rest of the run (a stiff pendulum on its stop: 96,761 steps instead of 1,110).
 
 use super::control::StepController;
 use super::dopri5::DormandPrince;
@@ -97,8 +100,10 @@ pub(super) struct Switching {
     last_stiff: bool,
     /// Accepted steps in a row that called for the other method.
     agreeing: usize,
-    /// The implicit method's step when it was last left.
+    /// The longest step of the implicit method in its last stretch, once it has been left.
     implicit_step: Option<f64>,
+    /// The longest step of the implicit method in its current stretch.
+    longest_implicit: f64,
     /// The controller of the method just taken, for the driver.
     switched: Option<StepController>,
     /// Steps taken by the implicit method, and changes of method.
@@ -117,6 +122,7 @@ impl Switching {
             last_stiff: false,
             agreeing: 0,
             implicit_step: None,
+            longest_implicit: 0.0,
             switched: None,
             implicit_steps: 0,
             switches: 0,
@@ -154,11 +160,12 @@ impl Switching {
         self.agreeing = 0;
         self.switches += 1;
         if self.stiff {
-            self.implicit_step = Some(h);
+            self.implicit_step = Some(self.longest_implicit);
             self.explicit.adopt(self.implicit.derivative());
             self.switched = Some(self.explicit.controller());
         } else {
             self.stiff_from.get_or_insert(t);
+            self.longest_implicit = 0.0;
             self.implicit.adopt(self.explicit.derivative());
             self.switched = Some(self.implicit.stepper().controller());
         }
@@ -211,7 +218,10 @@ impl AdaptiveStepper for Switching {
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
         self.current().accept(t, y, h, y_new);
         self.last_stiff = self.stiff;
-        self.implicit_steps += usize::from(self.stiff);
+        if self.stiff {
+            self.implicit_steps += 1;
+            self.longest_implicit = self.longest_implicit.max(h);
+        }
         self.watch(t + h, h);
     }
 

@@ -438,3 +438,51 @@ fn the_implicit_integrator_takes_the_stiff_method_early_in_the_governors_transie
         assert!(from < 2e-3, "switched at t = {from}");
     }
 }
+
+/// A pendulum whose bob hangs on a stiff damped spring (8e5 N/m, 4e4 N s/m: a mode at 3.3e4
+/// /s), released onto a stop with restitution 0.5. Dormand–Prince is held by that mode to
+/// steps of 1e-4 s over the whole run; the implicit integrator takes Radau IIA, leaves it just
+/// after each impact (its first steps there are short enough for the explicit method) and must
+/// take it again: it went on with the explicit method for the rest of the run, at its
+/// stability limit (96,761 steps over 10 s at 1e-10). The impacts are those of dopri5.
+#[test]
+fn the_implicit_integrator_takes_radau_again_after_an_impact_on_a_stiff_pendulum() {
+    let text = "import joints ;\n\
+        let rod = body mass = 0, inertia = 0 end ;\n\
+        let bob = body mass = 1.2, iframe = 0, inertia = [0.01, 0.01, 0.001] end ;\n\
+        join earth and rod.frame with limited_revolute([1, 0, 0], 0, pi, 0.5) as swing ;\n\
+        join rod.frame and bob.frame with link(r) dof = [0, 0, -r] end as stretch ;\n\
+        apply force value = (8e5 * (0.5 - stretch.r) - 4e4 * stretch.r') * [0, 0, -1], body = rod end on bob.frame ;\n\
+        apply force value = [0, 0, -9.81 * bob.mass], body = earth end on bob.frame ;\n\
+        initial swing.q = pi / 2, stretch.r = 0.5 ;\n";
+    let run_with = |integrator| {
+        let settings = Settings {
+            integrator,
+            duration: 3.0,
+            output: 0.5,
+            rtol: 1e-10,
+            atol: 1e-10,
+            ..Settings::default()
+        };
+        let simulation = simulate(text, settings);
+        assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+        simulation.report
+    };
+    let implicit = run_with(Integrator::Implicit);
+    let explicit = run_with(Integrator::DormandPrince);
+    eprintln!(
+        "stiff pendulum on its stop: implicit {} steps ({:?} stiff), dopri5 {}",
+        implicit.steps, implicit.stiff_steps, explicit.steps
+    );
+    assert_eq!(implicit.impacts.len(), 4);
+    assert_eq!(explicit.impacts.len(), 4);
+    for (a, b) in implicit.impacts.iter().zip(&explicit.impacts) {
+        assert!((a.time - b.time).abs() < 1e-9, "{} / {}", a.time, b.time);
+    }
+    let stiff = implicit.stiff_steps.expect("counted");
+    assert!(
+        10 * implicit.steps < explicit.steps && 5 * stiff > 4 * implicit.steps,
+        "{} steps, {stiff} stiff",
+        implicit.steps
+    );
+}
