@@ -131,6 +131,16 @@ fn release_chunk(chunk: NonNull<Header>) {
     }
 }
 
+/// Overwrites a value's place once the value is gone, in builds with debug assertions (the test
+/// suite's): a node read after it was dropped then reads this pattern rather than a value that
+/// still looks right, since its chunk stays mapped while its neighbours live.
+fn poison(place: *mut u8, size: usize) {
+    if cfg!(debug_assertions) {
+        // SAFETY: the caller's value occupied these bytes and is gone; they are its to write.
+        unsafe { std::ptr::write_bytes(place, 0xA5, size) };
+    }
+}
+
 /// A chunk of `size` bytes (a multiple of `CHUNK`), aligned to `CHUNK`, with its count at one.
 fn map_chunk(size: usize) -> NonNull<Header> {
     let chunk = system::map(size).cast::<Header>();
@@ -254,6 +264,7 @@ impl<T> Node<T> {
         let node = ManuallyDrop::new(self);
         // SAFETY: the value is read once and its place released without dropping it again.
         let value = unsafe { node.value.as_ptr().read() };
+        poison(node.value.as_ptr().cast(), mem::size_of::<T>());
         release(node.value.as_ptr().cast());
         value
     }
@@ -263,6 +274,7 @@ impl<T> Drop for Node<T> {
     fn drop(&mut self) {
         // SAFETY: the node owns its value, dropped once, then its place released.
         unsafe { self.value.as_ptr().drop_in_place() };
+        poison(self.value.as_ptr().cast(), mem::size_of::<T>());
         release(self.value.as_ptr().cast());
     }
 }
@@ -327,6 +339,7 @@ impl<T> Nodes<T> {
             elements.set_len(nodes.len);
         }
         if nodes.len > 0 {
+            poison(nodes.first.as_ptr().cast(), nodes.len * mem::size_of::<T>());
             release(nodes.first.as_ptr().cast());
         }
         elements
@@ -381,6 +394,7 @@ impl<T> Drop for Nodes<T> {
         unsafe {
             std::ptr::slice_from_raw_parts_mut(self.first.as_ptr(), self.len).drop_in_place()
         };
+        poison(self.first.as_ptr().cast(), self.len * mem::size_of::<T>());
         release(self.first.as_ptr().cast());
     }
 }

@@ -465,7 +465,11 @@ fn the_implicit_integrator_takes_radau_again_after_an_impact_on_a_stiff_pendulum
             ..Settings::default()
         };
         let simulation = simulate(text, settings);
-        assert!(simulation.report.failure.is_none(), "{:?}", simulation.report.failure);
+        assert!(
+            simulation.report.failure.is_none(),
+            "{:?}",
+            simulation.report.failure
+        );
         simulation.report
     };
     let implicit = run_with(Integrator::Implicit);
