@@ -215,8 +215,23 @@ fn describe_expected(token: &str) -> String {
     }
 }
 
+/// The tokens that would go on with the expression just read (its operators, `.field`, `x'`,
+/// a call's `(`, an index's `[`, `P:x`), as the parser names them.
+const CONTINUING: [&str; 13] = [
+    "\"+\"", "\"-\"", "\"*\"", "\"/\"", "\"^\"", "\"||\"", "\"++\"", "\"@\"", "\".\"", "\"'\"",
+    "\"(\"", "\"[\"", "\":\"",
+];
+
+/// The tokens the parser could have taken, for people. Those that would have gone on with the
+/// expression just read are left out when something else was possible: after `join a and b`,
+/// `]` lacks a `with`, not a `|| axis`; in `[1, 2 3]`, a `,` or a `]`.
 fn expected_list(expected: &[String]) -> String {
-    let mut items: Vec<String> = expected.iter().map(|e| describe_expected(e)).collect();
+    let ends = |e: &&String| !CONTINUING.contains(&e.as_str());
+    let kept: Vec<&String> = match expected.iter().any(|e| ends(&e)) {
+        true => expected.iter().filter(ends).collect(),
+        false => expected.iter().collect(),
+    };
+    let mut items: Vec<String> = kept.iter().map(|e| describe_expected(e)).collect();
     items.dedup();
     match items.len() {
         0 => "nothing".to_string(),
