@@ -48,7 +48,7 @@ pub fn mapped_bytes() -> usize {
 }
 
 /// The first address of a chunk usable for nodes.
-const FIRST: usize = mem::size_of::<Header>().next_multiple_of(16);
+const FIRST: usize = mem::size_of::<Header>().next_multiple_of(ALIGN);
 
 /// The chunk this thread carves nodes from: the next free address and the chunk's end.
 struct Carver {
@@ -71,9 +71,12 @@ thread_local! {
     };
 }
 
-/// Room for a value of `layout` (nonzero size), counted in its chunk.
+/// The largest alignment of a value in a chunk (that of the syntax tree's values is 8).
+const ALIGN: usize = 16;
+
+/// Room for a value of `layout` (nonzero size, alignment at most `ALIGN`), counted in its chunk.
 fn allocate(layout: Layout) -> NonNull<u8> {
-    if layout.size() > LARGE || layout.align() > 16 {
+    if layout.size() > LARGE {
         return allocate_alone(layout);
     }
     let carved = CARVER.try_with(|carver| {
@@ -246,10 +249,13 @@ unsafe impl<T: Send> Send for Node<T> {}
 unsafe impl<T: Sync> Sync for Node<T> {}
 
 impl<T> Node<T> {
-    const NOT_EMPTY: () = assert!(mem::size_of::<T>() > 0, "a node holds a value with a size");
+    const FITS: () = assert!(
+        mem::size_of::<T>() > 0 && mem::align_of::<T>() <= ALIGN,
+        "a node holds a value with a size, aligned to 16 bytes at most"
+    );
 
     pub fn new(value: T) -> Node<T> {
-        let () = Self::NOT_EMPTY;
+        let () = Self::FITS;
         let place = allocate(Layout::new::<T>()).cast::<T>();
         // SAFETY: the place is fresh, aligned and large enough for a `T`.
         unsafe { place.as_ptr().write(value) };
@@ -326,7 +332,10 @@ unsafe impl<T: Send> Send for Nodes<T> {}
 unsafe impl<T: Sync> Sync for Nodes<T> {}
 
 impl<T> Nodes<T> {
-    const NOT_EMPTY: () = assert!(mem::size_of::<T>() > 0, "a list holds values with a size");
+    const FITS: () = assert!(
+        mem::size_of::<T>() > 0 && mem::align_of::<T>() <= ALIGN,
+        "a list holds values with a size, aligned to 16 bytes at most"
+    );
 
     /// The elements, moved out into a vector and their place freed.
     pub fn into_vec(self) -> Vec<T> {
@@ -348,7 +357,7 @@ impl<T> Nodes<T> {
 
 impl<T> From<Vec<T>> for Nodes<T> {
     fn from(mut elements: Vec<T>) -> Nodes<T> {
-        let () = Self::NOT_EMPTY;
+        let () = Self::FITS;
         let len = elements.len();
         if len == 0 {
             return Nodes::default();
