@@ -29,6 +29,9 @@ const CHUNK: usize = 256 * 1024;
 /// A value larger than this takes a mapping of its own rather than ending a chunk early.
 const LARGE: usize = CHUNK / 16;
 
+/// The largest alignment of a value in a chunk (that of the syntax tree's values is 8).
+const ALIGN: usize = 16;
+
 /// The start of every chunk.
 #[repr(C)]
 struct Header {
@@ -70,9 +73,6 @@ thread_local! {
         RefCell::new(Carver { chunk: None, next: 0, end: 0 })
     };
 }
-
-/// The largest alignment of a value in a chunk (that of the syntax tree's values is 8).
-const ALIGN: usize = 16;
 
 /// Room for a value of `layout` (nonzero size, alignment at most `ALIGN`), counted in its chunk.
 fn allocate(layout: Layout) -> NonNull<u8> {
