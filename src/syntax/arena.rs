@@ -115,9 +115,18 @@ fn allocate_alone(layout: Layout) -> NonNull<u8> {
     unsafe { NonNull::new_unchecked((chunk.as_ptr() as *mut u8).add(offset)) }
 }
 
-/// Drops the count of the value at `address`, freeing its chunk if it was the last.
-fn release(address: *const u8) {
-    let chunk = (address as usize & !(CHUNK - 1)) as *mut Header;
+/// Gives back the place of `count` values at `first` (at least one), once they are gone
+/// (dropped or moved out): its count in its chunk is dropped, freeing the chunk if it was the
+/// last. In builds with debug assertions (the test suite's) the place is first overwritten, so
+/// that a node read after it is gone reads this pattern rather than a value that still looks
+/// right, since its chunk stays mapped while its neighbours live.
+fn vacate<T>(first: NonNull<T>, count: usize) {
+    let place = first.as_ptr().cast::<u8>();
+    if cfg!(debug_assertions) {
+        // SAFETY: the values occupied these bytes and are gone; they are the caller's to write.
+        unsafe { std::ptr::write_bytes(place, 0xA5, count * mem::size_of::<T>()) };
+    }
+    let chunk = (place as usize & !(CHUNK - 1)) as *mut Header;
     // SAFETY: every value handed out lies in the first `CHUNK` bytes of its chunk, whose
     // header is at the chunk's aligned start.
     release_chunk(unsafe { NonNull::new_unchecked(chunk) });
@@ -131,16 +140,6 @@ fn release_chunk(chunk: NonNull<Header>) {
         fence(Ordering::Acquire);
         let size = header.size;
         unmap_chunk(chunk, size);
-    }
-}
-
-/// Overwrites a value's place once the value is gone, in builds with debug assertions (the test
-/// suite's): a node read after it was dropped then reads this pattern rather than a value that
-/// still looks right, since its chunk stays mapped while its neighbours live.
-fn poison(place: *mut u8, size: usize) {
-    if cfg!(debug_assertions) {
-        // SAFETY: the caller's value occupied these bytes and is gone; they are its to write.
-        unsafe { std::ptr::write_bytes(place, 0xA5, size) };
     }
 }
 
@@ -270,8 +269,7 @@ impl<T> Node<T> {
         let node = ManuallyDrop::new(self);
         // SAFETY: the value is read once and its place released without dropping it again.
         let value = unsafe { node.value.as_ptr().read() };
-        poison(node.value.as_ptr().cast(), mem::size_of::<T>());
-        release(node.value.as_ptr().cast());
+        vacate(node.value, 1);
         value
     }
 }
@@ -280,8 +278,7 @@ impl<T> Drop for Node<T> {
     fn drop(&mut self) {
         // SAFETY: the node owns its value, dropped once, then its place released.
         unsafe { self.value.as_ptr().drop_in_place() };
-        poison(self.value.as_ptr().cast(), mem::size_of::<T>());
-        release(self.value.as_ptr().cast());
+        vacate(self.value, 1);
     }
 }
 
@@ -348,8 +345,7 @@ impl<T> Nodes<T> {
             elements.set_len(nodes.len);
         }
         if nodes.len > 0 {
-            poison(nodes.first.as_ptr().cast(), nodes.len * mem::size_of::<T>());
-            release(nodes.first.as_ptr().cast());
+            vacate(nodes.first, nodes.len);
         }
         elements
     }
@@ -403,8 +399,7 @@ impl<T> Drop for Nodes<T> {
         unsafe {
             std::ptr::slice_from_raw_parts_mut(self.first.as_ptr(), self.len).drop_in_place()
         };
-        poison(self.first.as_ptr().cast(), self.len * mem::size_of::<T>());
-        release(self.first.as_ptr().cast());
+        vacate(self.first, self.len);
     }
 }
 
