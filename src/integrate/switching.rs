@@ -100,9 +100,8 @@ pub(super) struct Switching {
     last_stiff: bool,
     /// Accepted steps in a row that called for the other method.
     agreeing: usize,
-    /// The longest step of the implicit method in its last stretch, once it has been left.
-    implicit_step: Option<f64>,
-    /// The longest step of the implicit method in its current stretch.
+    /// The longest step of the implicit method in its current stretch, or in its last one while
+    /// the explicit method steps; infinite before it is first taken.
     longest_implicit: f64,
     /// The controller of the method just taken, for the driver.
     switched: Option<StepController>,
@@ -121,8 +120,7 @@ impl Switching {
             stiff: false,
             last_stiff: false,
             agreeing: 0,
-            implicit_step: None,
-            longest_implicit: 0.0,
+            longest_implicit: f64::INFINITY,
             switched: None,
             implicit_steps: 0,
             switches: 0,
@@ -144,9 +142,7 @@ impl Switching {
             self.implicit
                 .spectral_radius_below(EXPLICIT_MARGIN * STIFF / h)
         } else {
-            let returning = self
-                .implicit_step
-                .is_none_or(|step| h < RETURN_RATIO * step);
+            let returning = h < RETURN_RATIO * self.longest_implicit;
             self.explicit.stiffness() > NEAR_STIFF && returning
         };
         self.agreeing = if calls_for_other {
@@ -160,7 +156,6 @@ impl Switching {
         self.agreeing = 0;
         self.switches += 1;
         if self.stiff {
-            self.implicit_step = Some(self.longest_implicit);
             self.explicit.adopt(self.implicit.derivative());
             self.switched = Some(self.explicit.controller());
         } else {
