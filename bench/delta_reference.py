@@ -2,7 +2,7 @@
 """Independent reference values for the Delta ISIR88 examples (tests/fixtures/delta.json).
 
 This script does not import or run anything from the lsdc project. It re-implements, from the
-thesis equations as corrected in /work/shared/notes/seed-delta.md:
+thesis equations as corrected in the project's notes on the Delta seed ("seed-delta"):
 
 * the direct geometric model (MGD) by the authors' circumcircle method (notes §3.2);
 * the inverse geometric model (MGI) of notes §3.3, with the [fix] corrections
@@ -382,7 +382,7 @@ def main():
     data = {
         "provenance": (
             "Computed by bench/delta_reference.py (numpy; independent of lsdc). Delta ISIR88, "
-            "Nadour & Mokhtari, ENP Alger 2016, as summarised in /work/shared/notes/seed-delta.md. "
+            "Nadour & Mokhtari, ENP Alger 2016, as summarised in the project's notes on the Delta seed (\"seed-delta\"). "
             "forward: MGD by the circumcircle method (notes 3.2) at the alpha rows of table T4 "
             "(the 48.205906 deg row uses that printed value); inverse: MGI of notes 3.3 with the "
             "[fix] corrections (beta = atan2(-z_i, x_i - r), delta with l1, alpha = beta - delta) at "

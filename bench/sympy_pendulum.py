@@ -48,7 +48,6 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_LSDC = Path("/work/target-rel/release/lsdc")
 LSDC_EXTRA_N = [10, 20, 50, 100]
 AGREEMENT_MAX_N = 4
 
@@ -307,7 +306,7 @@ def main():
 
     lsdc = Path(args.lsdc) if args.lsdc else None
     if lsdc is None:
-        candidates = [ROOT / "target" / "release" / "lsdc", DEFAULT_LSDC]
+        candidates = [ROOT / "target" / "release" / "lsdc", ROOT / "target" / "debug" / "lsdc"]
         existing = [c for c in candidates if c.exists()]
         # The most recently built one (a stale binary may not know `--format json`).
         lsdc = max(existing, key=lambda c: c.stat().st_mtime) if existing else None

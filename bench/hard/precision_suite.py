@@ -122,7 +122,9 @@ CASES = {
 
 def reference_for(name, lsdc, program, options, kind, check):
     """The --reference option and a description of the reference."""
-    path = os.path.join(HERE, "references", f"{name}.csv")
+    # Relative to the repository (the runs' working directory), so that the tables the runs
+    # record name the reference as the repository does.
+    path = os.path.relpath(os.path.join(HERE, "references", f"{name}.csv"), ROOT)
     if kind == "analytic":
         return ["--reference", path], pendulum_reference(path)
     if kind == "reduced":
@@ -191,6 +193,9 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--no-write", action="store_true")
     args = parser.parse_args()
+    # The cases name their programs and references relative to the repository.
+    args.lsdc = os.path.abspath(args.lsdc)
+    os.chdir(ROOT)
     started = time.time()
     sections = []
     for name in CASES:

@@ -40,6 +40,7 @@ mod pinocchio_fixtures;
 mod properties;
 mod reactions;
 mod regression;
+mod repository;
 mod robustness;
 mod rows;
 mod runs;
