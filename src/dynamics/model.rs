@@ -19,6 +19,7 @@ use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::contacts::{contact_models, ContactModel};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{constant_pose, ChainMotion, JointModel, KinematicModel};
+use crate::source::Span;
 use crate::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 use crate::symbolic::expr::ExprId;
 
@@ -173,7 +174,13 @@ impl Model {
     }
 }
 
-fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
+/// The error of a value that must be a constant number and is not; `at` is the declaration it
+/// belongs to, where one is known.
+fn missing(mechanism: &Mechanism, error: EvalError, what: &str, at: Option<Span>) -> Diagnostic {
+    let located = |diagnostic: Diagnostic, label: &str| match at {
+        Some(span) => diagnostic.primary(span, label.to_string()),
+        None => diagnostic,
+    };
     match error {
         EvalError::Missing(id) => {
             let name = crate::kinematics::eval::unknown_label(mechanism, id);
@@ -181,12 +188,15 @@ fn missing(mechanism: &Mechanism, error: EvalError, what: &str) -> Diagnostic {
                 .primary(mechanism.unknowns[id.0 as usize].span, "no value given")
                 .help("give it a number in the program (`mass = 2`), or a value with `--set`")
         }
-        EvalError::NotGeometric(detail) => {
+        EvalError::NotGeometric(detail) => located(
             Diagnostic::error("E0807", format!("{what} cannot depend on {detail}"))
-        }
-        EvalError::NotFinite => {
-            Diagnostic::error("E0807", format!("{what} is not a finite number"))
-        }
+                .help("it is fixed for the whole motion: write it with numbers and unknowns only"),
+            "declared here",
+        ),
+        EvalError::NotFinite => located(
+            Diagnostic::error("E0807", format!("{what} is not a finite number")),
+            "declared here",
+        ),
     }
 }
 
@@ -280,7 +290,12 @@ pub fn build_with(
                 }
                 bodies.push(b);
             }
-            Err(e) => errors.push(missing(mechanism, e, &format!("the inertia of `{name}`"))),
+            Err(e) => errors.push(missing(
+                mechanism,
+                e,
+                &format!("the inertia of `{name}`"),
+                Some(mechanism.body(id).span),
+            )),
         }
         body_names.push(name);
     }
@@ -567,6 +582,7 @@ fn applied_efforts(
                     mechanism,
                     e,
                     "the point of application of an effort",
+                    Some(application.span),
                 ));
                 continue;
             }
@@ -649,7 +665,7 @@ fn effort_frames(
                 body,
                 offset,
             }),
-            Err(e) => errors.push(missing(mechanism, e, "a frame an effort uses")),
+            Err(e) => errors.push(missing(mechanism, e, "a frame an effort uses", None)),
         }
     }
     placed

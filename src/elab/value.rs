@@ -119,7 +119,9 @@ pub fn arith(op: char, a: &Scalar, b: &Scalar) -> Scalar {
     match (op, ca, cb) {
         ('+', Some(z), _) if z == 0.0 => return b.clone(),
         ('+' | '-', _, Some(z)) if z == 0.0 => return a.clone(),
-        ('*', Some(z), _) | ('*', _, Some(z)) if z == 0.0 => return num(0.0),
+        // 0 · x is 0 only for a finite x: 0 · ∞ and 0 · NaN are NaN (IEEE 754).
+        ('*', Some(z), _) if z == 0.0 && surely_finite(b, FINITENESS_DEPTH) => return num(0.0),
+        ('*', _, Some(z)) if z == 0.0 && surely_finite(a, FINITENESS_DEPTH) => return num(0.0),
         ('*', Some(o), _) if o == 1.0 => return b.clone(),
         ('*' | '/', _, Some(o)) if o == 1.0 => return a.clone(),
         ('-', Some(z), _) if z == 0.0 => return negate(b),
@@ -133,6 +135,38 @@ pub fn arith(op: char, a: &Scalar, b: &Scalar) -> Scalar {
         '/' => SExpr::Div(a, b),
         _ => SExpr::Pow(a, b),
     })
+}
+
+/// How deep `surely_finite` looks before it answers "maybe not": a bound that keeps the folding
+/// of long expressions linear, on the safe side (an unproven product is kept, not folded).
+const FINITENESS_DEPTH: u32 = 32;
+
+/// Whether `s` is finite at every instant and state: numbers that are, the time, coordinates,
+/// rates, unknowns and unknown functions (their values are finite numbers), and sums, differences, products and
+/// negations of finite values, sines, cosines, arctangents and absolute values of them.
+/// Overflow of a sum or product of finite values is not considered. A quotient, a root, a
+/// power, a logarithm, an exponential or an unknown function may be infinite or NaN.
+fn surely_finite(s: &Scalar, depth: u32) -> bool {
+    if depth == 0 {
+        return false;
+    }
+    let finite = |s: &Scalar| surely_finite(s, depth - 1);
+    match &**s {
+        SExpr::Num(v) => v.is_finite(),
+        SExpr::Time
+        | SExpr::Unknown(_)
+        | SExpr::Coordinate { .. }
+        | SExpr::JoinCoordinate { .. }
+        | SExpr::UnknownFunction(_)
+        | SExpr::FrameState(..) => true,
+        SExpr::Neg(a) => finite(a),
+        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) => finite(a) && finite(b),
+        SExpr::Call(call) => {
+            matches!(call.function, "sin" | "cos" | "atan" | "abs" | "atan2")
+                && call.args.iter().all(finite)
+        }
+        _ => false,
+    }
 }
 
 pub fn negate(a: &Scalar) -> Scalar {

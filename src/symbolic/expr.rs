@@ -103,6 +103,8 @@ impl Function {
 #[derive(Default)]
 pub struct Pool {
     nodes: Vec<Node>,
+    /// Per node, whether it is surely finite (`finite_when_interned`).
+    finite: Vec<bool>,
     index: HashMap<Node, ExprId>,
     symbols: Vec<String>,
     symbol_ids: HashMap<String, ExprId>,
@@ -139,6 +141,7 @@ impl Pool {
             return id;
         }
         let id = ExprId(self.nodes.len() as u32);
+        self.finite.push(self.finite_when_interned(node));
         self.nodes.push(node);
         self.index.insert(node, id);
         id
@@ -184,6 +187,31 @@ impl Pool {
         }
     }
 
+    /// Whether a node is finite at every instant and state (see `finite_when_interned`).
+    pub fn surely_finite(&self, id: ExprId) -> bool {
+        self.finite[id.0 as usize]
+    }
+
+    /// Whether a new node is finite at every instant and state: finite constants, symbols (the
+    /// values of coordinates, rates, time and unknowns are finite numbers), and sums, products,
+    /// negations, arctangents, sines, cosines and absolute values of finite nodes. Overflow of a
+    /// sum or product is not considered; quotients, roots, powers, logarithms and exponentials
+    /// may be infinite or NaN. Decided once per node from its operands', which exist before it.
+    fn finite_when_interned(&self, node: Node) -> bool {
+        match node {
+            Node::Constant(bits) => f64::from_bits(bits).is_finite(),
+            Node::Symbol(_) => true,
+            Node::Add(a, b) | Node::Mul(a, b) | Node::Atan2(a, b) => {
+                self.surely_finite(a) && self.surely_finite(b)
+            }
+            Node::Neg(a)
+            | Node::Apply(Function::Sin | Function::Cos | Function::Atan | Function::Abs, a) => {
+                self.surely_finite(a)
+            }
+            Node::Div(..) | Node::Pow(..) | Node::Apply(..) => false,
+        }
+    }
+
     fn is(&self, id: ExprId, value: f64) -> bool {
         self.as_constant(id) == Some(value)
     }
@@ -195,8 +223,8 @@ impl Pool {
             (_, Some(0.0)) => return a,
             _ => {}
         }
-        // a + (−a) = 0.
-        if self.node(b) == Node::Neg(a) || self.node(a) == Node::Neg(b) {
+        // a + (−a) = 0 for a finite a (∞ − ∞ and NaN − NaN are NaN).
+        if (self.node(b) == Node::Neg(a) || self.node(a) == Node::Neg(b)) && self.surely_finite(a) {
             return self.constant(0.0);
         }
         self.intern(Node::Add(a.min(b), a.max(b)))
@@ -210,7 +238,9 @@ impl Pool {
     pub fn mul(&mut self, a: ExprId, b: ExprId) -> ExprId {
         match (self.as_constant(a), self.as_constant(b)) {
             (Some(x), Some(y)) => return self.constant(x * y),
-            (Some(x), _) | (_, Some(x)) if x == 0.0 => return self.constant(0.0),
+            // 0 · x = 0 for a finite x (0 · ∞ and 0 · NaN are NaN).
+            (Some(x), _) if x == 0.0 && self.surely_finite(b) => return self.constant(0.0),
+            (_, Some(x)) if x == 0.0 && self.surely_finite(a) => return self.constant(0.0),
             (Some(1.0), _) => return b,
             (_, Some(1.0)) => return a,
             (Some(-1.0), _) => return self.neg(b),
@@ -249,10 +279,9 @@ impl Pool {
 
     pub fn div(&mut self, a: ExprId, b: ExprId) -> ExprId {
         match (self.as_constant(a), self.as_constant(b)) {
-            (Some(x), Some(y)) if y != 0.0 => self.constant(x / y),
-            (Some(0.0), _) => self.constant(0.0),
+            // Not 0 / b = 0 nor a / a = 1: either is NaN where the divisor vanishes.
+            (Some(x), Some(y)) if (x / y).is_finite() => self.constant(x / y),
             (_, Some(1.0)) => a,
-            _ if a == b => self.constant(1.0),
             _ => self.intern(Node::Div(a, b)),
         }
     }

@@ -474,3 +474,48 @@ fn suggestions_for_unknown_names_are_bounded() {
     let suggested = unknown.iter().filter(|d| d.help.is_some()).count();
     assert_eq!(suggested, 100);
 }
+
+/// A pendulum whose weight is `weight`: a run of it from rest.
+fn pendulum_weighing(weight: &str) -> lsdc::api::Simulation {
+    let text = format!(
+        "import joints ;\n\
+         let rod = body mass = 1.2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\n\
+         join earth and rod with revolute([1, 0, 0]) as swing ;\n\
+         apply force value = [0, 0, {weight}], body = earth end on rod.iframe ;\n\
+         initial swing.q = pi / 3 ;\n\
+         simulate duration = 0.1, output = 0.05 end ;\n"
+    );
+    let program = Program::from_text("weighed.lsd", &text, None, &Default::default());
+    assert!(
+        codes(&program).is_empty(),
+        "{weight}: {:?}",
+        codes(&program)
+    );
+    let prepared = program.prepare(&[], &Default::default()).expect("prepares");
+    run(&prepared, &mut |_| {})
+}
+
+/// Expressions that are NaN somewhere are not folded into numbers: `(time - time) / (time -
+/// time)` is 0/0 at every instant and `time / time` at t = 0, so the runs fail at t = 0 saying
+/// why, where they ran as if the weight were -9.81 before.
+#[test]
+fn an_effort_that_is_nan_is_not_folded_into_a_number() {
+    for weight in [
+        "-9.81 + 5 * (time - time) / (time - time)",
+        "-9.81 * time / time",
+        "-9.81 + 0 * sqrt(-1 - time)",
+    ] {
+        let simulation = pendulum_weighing(weight);
+        let failure = simulation.report.failure.as_ref();
+        assert!(
+            failure.is_some_and(|f| f.time == 0.0 && f.message.contains("not finite")),
+            "{weight}: {failure:?}"
+        );
+    }
+    // Where the factor is finite everywhere, 0 · x still vanishes and the run is the plain one.
+    let plain = pendulum_weighing("-9.81");
+    let folded = pendulum_weighing("-9.81 + 0 * sin(time) * swing.q");
+    assert!(folded.report.failure.is_none());
+    let last = |s: &lsdc::api::Simulation| s.samples.last().expect("samples").coordinates.clone();
+    assert_eq!(last(&plain), last(&folded));
+}

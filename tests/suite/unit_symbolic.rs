@@ -17,6 +17,49 @@ mod expr {
         assert_eq!(p.symbol("x"), x);
     }
 
+    /// Folding keeps IEEE 754's meaning: 0 · x, x − x, 0 / x and x / x are constants only where
+    /// x is surely finite (and, for a quotient, a nonzero constant), since each is NaN at an
+    /// infinite or vanishing x.
+    #[test]
+    fn folding_keeps_nan_and_infinity() {
+        let mut p = Pool::new();
+        let t = p.symbol("time");
+        let (zero, one) = (p.constant(0.0), p.constant(1.0));
+        let inverse = p.div(one, t);
+        let root = p.sqrt(t);
+        for maybe_infinite in [inverse, root] {
+            assert!(!p.surely_finite(maybe_infinite));
+            let product = p.mul(zero, maybe_infinite);
+            assert!(
+                !p.is_zero(product),
+                "0 · x folded for an x that may be infinite"
+            );
+            let minus = p.neg(maybe_infinite);
+            let difference = p.add(maybe_infinite, minus);
+            assert!(
+                !p.is_zero(difference),
+                "x − x folded for an x that may be NaN"
+            );
+        }
+        // Quotients by a value that may vanish are kept.
+        let quotient = p.div(t, t);
+        assert!(p.as_constant(quotient).is_none(), "t / t folded to 1");
+        let zero_over = p.div(zero, t);
+        assert!(p.as_constant(zero_over).is_none(), "0 / t folded to 0");
+        let zero_over_zero = p.div(zero, zero);
+        assert!(p.as_constant(zero_over_zero).is_none(), "0 / 0 folded");
+        // Where x is surely finite, the folds stay.
+        let s = p.sin(t);
+        let product = p.mul(s, zero);
+        assert!(p.is_zero(product));
+        let minus_t = p.neg(t);
+        let difference = p.add(t, minus_t);
+        assert!(p.is_zero(difference));
+        let two = p.constant(2.0);
+        let half = p.div(one, two);
+        assert_eq!(p.as_constant(half), Some(0.5));
+    }
+
     #[test]
     fn neutral_and_absorbing_constants_vanish() {
         let mut p = Pool::new();
