@@ -59,7 +59,7 @@ fn run(
         return Err(Halt::fatal(t0, Failure::NotFinite));
     }
     outputs.deliver_start(t0, y0, observer)?;
-    let step_count = ((t_end - t0) / step - SLIVER).ceil().max(0.0);
+    let step_count = step_count(t_end - t0, step);
     let mut rk4 = Rk4::new(t0, y0);
     let mut events = EventWatch::new(eval, t0, y0)?;
     let mut k = 0usize;
@@ -115,6 +115,17 @@ fn run(
     }
     outputs.deliver_rest(&rk4.y, observer)?;
     Ok(rk4.y)
+}
+
+/// The number of steps of the grid over a run of length `span`: a remainder under `SLIVER` of a
+/// step joins the last full step, and a run shorter than one step is one shortened step (not
+/// none, which would report the start as the end).
+fn step_count(span: f64, step: f64) -> f64 {
+    if span > 0.0 {
+        (span / step - SLIVER).ceil().max(1.0)
+    } else {
+        0.0
+    }
 }
 
 /// The current point, the step just taken from it, and the stage buffers.

@@ -524,6 +524,29 @@ fn rk4_outputs_on_the_grid_are_the_step_states() {
     );
 }
 
+/// A step longer than the run is one shortened step to the end, however much longer: with a
+/// step over about 10^9 times the duration the run took no step and gave its start as its end.
+#[test]
+fn rk4_with_a_step_far_longer_than_the_run_takes_one_step_to_its_end() {
+    for step in [2.0, 1e8, 1e9, 1e12, f64::MAX] {
+        let mut decay = ode(1, |_, y, dydt| dydt[0] = -y[0]);
+        let (y, stats, observed) = solve(
+            &Method::Rk4 { step },
+            &mut decay,
+            &[1.0],
+            (0.0, 1.0),
+            &[0.0, 1.0],
+            &Settings::default(),
+        )
+        .unwrap();
+        // One RK4 step of y' = −y over h = 1.
+        let one_step = 1.0 - 1.0 + 1.0 / 2.0 - 1.0 / 6.0 + 1.0 / 24.0;
+        assert_eq!(stats.steps, 1, "step {step:e}");
+        assert!((y[0] - one_step).abs() < 1e-15, "step {step:e}: {y:?}");
+        assert_eq!(observed.last().map(|o| o.0), Some(1.0), "step {step:e}");
+    }
+}
+
 #[test]
 fn rk4_error_estimate_measures_the_local_error_of_its_steps() {
     // y' = λy, one step from y = 1, z = hλ: the order-4 solution is 1 + z + z²/2 + z³/6 + z⁴/24,
