@@ -15,6 +15,23 @@ mod suggest {
         assert_eq!(did_you_mean("zzz", ["satellite"]), None);
     }
 
+    /// Two adjacent characters swapped are one slip: `earht` and `swnig` are one edit from
+    /// `earth` and `swing` (plain Levenshtein counts two, beyond the limit of a five-letter name).
+    #[test]
+    fn swapped_neighbours_are_one_edit() {
+        assert_eq!(did_you_mean("earht", ["earth", "rod"]), Some("earth"));
+        assert_eq!(did_you_mean("swnig", ["swing", "rod"]), Some("swing"));
+        assert_eq!(did_you_mean("ra", ["ar", "rod"]), Some("ar"));
+        // A transposition elsewhere in a longer name, and one besides a substitution.
+        assert_eq!(did_you_mean("satellitte", ["satellite"]), Some("satellite"));
+        assert_eq!(
+            did_you_mean("setallite", ["satellite", "earth"]),
+            Some("satellite")
+        );
+        // Swapping is not a licence for anagrams.
+        assert_eq!(did_you_mean("htrae", ["earth"]), None);
+    }
+
     #[test]
     fn thesis_body_names_are_recognised() {
         assert_eq!(thesis_body_number("S1"), Some(1));
