@@ -166,12 +166,35 @@ pub fn load_files(
     Ok(loader.finish())
 }
 
-/// The text of a file, or of standard input for `-`.
+/// The largest program text read, in bytes: far above any mechanism written or generated (a
+/// chain of 10^6 bodies is about 210 MiB), and a bound on what an endless input (`/dev/zero`, a
+/// pipe that never closes) can take before it is refused.
+pub const MAX_SOURCE_BYTES: u64 = 1 << 30;
+
+/// The text of a file, or of standard input for `-`, refused beyond `MAX_SOURCE_BYTES`.
 pub fn read_source(path: &Path) -> std::io::Result<String> {
     if path == Path::new("-") {
-        return std::io::read_to_string(std::io::stdin());
+        return read_bounded(std::io::stdin(), MAX_SOURCE_BYTES);
     }
-    std::fs::read_to_string(path)
+    read_bounded(std::fs::File::open(path)?, MAX_SOURCE_BYTES)
+}
+
+/// All the text of `reader`, or an error once it goes on past `limit` bytes.
+pub fn read_bounded(reader: impl std::io::Read, limit: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    reader.take(limit + 1).read_to_string(&mut text)?;
+    if text.len() as u64 > limit {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!(
+                "it is longer than {} bytes ({} MiB), the most a program may be",
+                limit,
+                limit >> 20
+            ),
+        ));
+    }
+    Ok(text)
 }
 
 fn is_urdf(path: &Path) -> bool {
@@ -347,7 +370,7 @@ impl Loader {
             for dir in dirs {
                 let candidate = dir.join(file_name);
                 if candidate.is_file() {
-                    let text = std::fs::read_to_string(&candidate).ok()?;
+                    let text = read_source(&candidate).ok()?;
                     let display = candidate.display().to_string();
                     let canonical = candidate.canonicalize().unwrap_or(candidate);
                     return Some((Origin::File(canonical), text, display));

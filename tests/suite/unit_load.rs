@@ -1,4 +1,4 @@
-//! Unit tests of `src/load/urdf/`: the pieces of the URDF import.
+//! Unit tests of `src/load/`: reading a program's text, and the pieces of the URDF import.
 //! Each module holds the tests of the file of `src/` it is named after, kept out of the library
 //! so that `cargo test` compiles the library once (`test = false` in Cargo.toml).
 
@@ -224,5 +224,26 @@ mod names {
         assert_eq!(lsd_name("bras_rotoïde"), "bras_rotoïde");
         assert_eq!(lsd_name(""), "_");
         assert_eq!(lsd_name("a b/c"), "a_b_c");
+    }
+}
+
+mod reading {
+    use lsdc::load::{read_bounded, MAX_SOURCE_BYTES};
+
+    /// An endless input (`lsdc check /dev/zero` grew by 1.9 GB a second) is refused once past
+    /// the limit, with the limit in the message; a text at the limit is read whole.
+    #[test]
+    fn an_endless_input_is_refused_at_the_limit() {
+        let endless = std::io::repeat(b'(');
+        let error = read_bounded(endless, 1000).expect_err("refused");
+        assert_eq!(error.kind(), std::io::ErrorKind::FileTooLarge);
+        assert!(
+            error.to_string().contains("longer than 1000 bytes"),
+            "{error}"
+        );
+        let text = "x".repeat(1000);
+        assert_eq!(read_bounded(text.as_bytes(), 1000).expect("read"), text);
+        // Well above the largest generated mechanisms (10^6 bodies: about 210 MiB).
+        assert!(MAX_SOURCE_BYTES >= 512 << 20);
     }
 }
