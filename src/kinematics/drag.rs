@@ -190,7 +190,7 @@ impl Correction for DragSteps<'_> {
     type Error = DragError;
 
     fn settled(&self) -> bool {
-        !(self.distance > 0.0)
+        self.distance <= 0.0 || self.distance.is_nan()
     }
 
     fn merit(&self) -> f64 {
