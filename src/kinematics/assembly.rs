@@ -339,7 +339,8 @@ fn solve(
         current,
         gradient: DVector::zeros(0),
         normal: DMatrix::zeros(0, 0),
-        trial: None,
+        trial: Vec::new(),
+        tried: None,
     };
     let settings = Settings {
         iterations: options.max_iterations,
@@ -390,8 +391,10 @@ struct ClosingSteps<'a> {
     cost: f64,
     gradient: DVector<f64>,
     normal: DMatrix<f64>,
-    /// The coordinates of the step, then their closure and its squared residual once tried.
-    trial: Option<(Vec<f64>, Option<(Closure, f64)>)>,
+    /// The coordinates the step leads to.
+    trial: Vec<f64>,
+    /// Their closure and its squared residual, once tried.
+    tried: Option<(Closure, f64)>,
 }
 
 impl Correction for ClosingSteps<'_> {
@@ -425,20 +428,20 @@ impl Correction for ClosingSteps<'_> {
         for (i, &index) in self.free.iter().enumerate() {
             trial[index] += step[i];
         }
-        self.trial = Some((trial, None));
+        (self.trial, self.tried) = (trial, None);
         Ok(Some(step.amax()))
     }
 
     fn try_step(&mut self) -> Result<f64, AssemblyError> {
-        let (q, tried) = self.trial.as_mut().expect("a step was formed");
-        let candidate = closure(self.model, q)?;
+        let candidate = closure(self.model, &self.trial)?;
         let cost = candidate.residual.norm_squared();
-        *tried = Some((candidate, cost));
+        self.tried = Some((candidate, cost));
         Ok(cost)
     }
 
     fn accept(&mut self) {
-        if let Some((q, Some((current, cost)))) = self.trial.take() {
+        if let Some((current, cost)) = self.tried.take() {
+            let q = std::mem::take(&mut self.trial);
             (self.q, self.current, self.cost) = (q, current, cost);
         }
     }

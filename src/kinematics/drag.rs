@@ -137,7 +137,8 @@ pub fn drag(
         distance: (current.point - target).norm(),
         current,
         steps: None,
-        trial: None,
+        trial: Vec::new(),
+        tried: None,
     };
     let settings = Settings {
         iterations: options.max_iterations,
@@ -182,8 +183,10 @@ struct DragSteps<'a> {
     /// The point's distance to the target at `q`.
     distance: f64,
     steps: Option<Steps>,
-    /// The closed coordinates of the step, then their linearisation and distance once tried.
-    trial: Option<(Vec<f64>, Option<(Linearised, f64)>)>,
+    /// The closed coordinates the step leads to.
+    trial: Vec<f64>,
+    /// Their linearisation and distance, once tried.
+    tried: Option<(Linearised, f64)>,
 }
 
 impl Correction for DragSteps<'_> {
@@ -208,7 +211,7 @@ impl Correction for DragSteps<'_> {
         let trial: Vec<f64> = self.q.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
         match assemble(self.model, &trial, &self.free, self.assembly) {
             Ok(closed) => {
-                self.trial = Some((closed.q, None));
+                (self.trial, self.tried) = (closed.q, None);
                 Ok(Some(step.amax()))
             }
             Err(AssemblyError::NoAssembly { .. }) => Ok(None),
@@ -217,15 +220,15 @@ impl Correction for DragSteps<'_> {
     }
 
     fn try_step(&mut self) -> Result<f64, DragError> {
-        let (q, tried) = self.trial.as_mut().expect("a step was formed");
-        let candidate = linearise(self.model, self.frame, q)?;
+        let candidate = linearise(self.model, self.frame, &self.trial)?;
         let distance = (candidate.point - self.target).norm();
-        *tried = Some((candidate, distance));
+        self.tried = Some((candidate, distance));
         Ok(distance)
     }
 
     fn accept(&mut self) {
-        if let Some((q, Some((current, distance)))) = self.trial.take() {
+        if let Some((current, distance)) = self.tried.take() {
+            let q = std::mem::take(&mut self.trial);
             (self.q, self.current, self.distance) = (q, current, distance);
         }
     }
