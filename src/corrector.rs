@@ -1,9 +1,9 @@
 //! The position corrector: moves coordinates onto constraints (or towards a goal) by
 //! Gauss–Newton steps, with a Levenberg–Marquardt fallback where a caller allows it (Nocedal &
-//! Wright, *Numerical Optimization*, 2nd ed., §10.3 for Gauss–Newton and §10.3/§4 for
-//! Levenberg–Marquardt as a trust region; Madsen, Nielsen & Tingleff, *Methods for Non-Linear
-//! Least Squares Problems*, 2004, §3.2 for the damping's tenfold updates). It serves every
-//! position correction of the house:
+//! Wright, *Numerical Optimization*, 2nd ed., §10.3 for both methods, §4 for the damping as a
+//! trust region; Marquardt, "An algorithm for least-squares estimation of nonlinear
+//! parameters", SIAM J. Appl. Math. 11(2), 1963, for the damping's tenfold updates). It serves
+//! every position correction of the house:
 //!
 //! | caller | merit a step must reduce | settled when | damping | iterations | a slow step |
 //! |---|---|---|---|---|---|
@@ -30,6 +30,14 @@
 //! stopped is returned ([`Stop`]). The dense solve most callers need is
 //! [`minimum_norm_step`]: rows scaled by powers of two (exact) and a singular value
 //! decomposition that ends on any matrix (`linalg::svd`).
+//!
+//! The callers keep their own rules in the table because each was measured where it runs: the
+//! projection's fourfold rule and round-off floor decide how a row of four-bars passes its flat
+//! configurations (see `dynamics::loops::project`), assembly's small initial damping keeps the
+//! free motions where the user put them, and the stacked rows' steps change the measure they
+//! would be judged by. Gauss–Newton is the start of every correction (Levenberg–Marquardt with
+//! a damping of 1e-6 of the normal matrix's scale is Gauss–Newton to that precision); the
+//! damping grows only where a caller's start may be far (assembly, drag).
 
 use nalgebra::{DMatrix, DVector};
 
