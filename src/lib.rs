@@ -13,6 +13,7 @@
 pub mod analysis;
 pub mod api;
 pub mod check;
+pub mod corrector;
 pub mod diag;
 pub mod drag;
 pub mod driver;

@@ -1,7 +1,8 @@
 //! Decompositions that end on any matrix. nalgebra's SVD iterates until it converges, which a
 //! matrix with a NaN or an infinite entry never does (a degenerate joint or an overflowing
 //! configuration can produce one): here such a matrix has no decomposition, and the caller says
-//! why it cannot go on.
+//! why it cannot go on. Beside them, the exact power-of-two scaling that brings rows of different
+//! units to one size before a decomposition.
 
 use nalgebra::{DMatrix, Dyn, SVD};
 
@@ -22,4 +23,17 @@ pub fn svd(m: DMatrix<f64>, compute_u: bool, compute_v: bool) -> Option<SVD<f64,
 /// The pseudo-inverse, singular values up to `floor` taken as zero; `None` as for [`svd`].
 pub fn pseudo_inverse(m: DMatrix<f64>, floor: f64) -> Option<DMatrix<f64>> {
     svd(m, true, true)?.pseudo_inverse(floor).ok()
+}
+
+/// The power of two 2⁻ᵉ for `largest` in [2ᵉ, 2ᵉ⁺¹), read from its exponent's bits (no
+/// logarithm: it runs for every row of every solve); 1 where `largest` is zero or not finite.
+pub fn inverse_power_of_two(largest: f64) -> f64 {
+    if !(largest > 0.0 && largest.is_finite()) {
+        return 1.0;
+    }
+    let exponent = ((largest.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+    // Bounded to the normal numbers' exponents: a subnormal `largest` (its field reads
+    // −1023) is scaled by 2¹⁰²², the largest power of two, and the largest numbers by 2⁻¹⁰²².
+    let inverse = (-exponent).clamp(-1022, 1022);
+    f64::from_bits(((inverse + 1023) as u64) << 52)
 }

@@ -5,6 +5,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+pub use crate::linalg::inverse_power_of_two;
+
 /// The lower Cholesky factor of the leading r × r block of `a` in place (its lower triangle read
 /// and written), without allocating: the smallest and the largest squared pivot, or None when
 /// the block is not positive definite.
@@ -119,19 +121,6 @@ pub struct Pivoted {
     columns: Vec<usize>,
     solution: Vec<f64>,
     column_scales: Vec<f64>,
-}
-
-/// The power of two 2⁻ᵉ for `largest` in [2ᵉ, 2ᵉ⁺¹), read from its exponent's bits (no
-/// logarithm: it runs for every row of every solve); 1 where `largest` is zero or not finite.
-pub fn inverse_power_of_two(largest: f64) -> f64 {
-    if !(largest > 0.0 && largest.is_finite()) {
-        return 1.0;
-    }
-    let exponent = ((largest.to_bits() >> 52) & 0x7ff) as i64 - 1023;
-    // Bounded to the normal numbers' exponents: a subnormal `largest` (its field reads
-    // −1023) is scaled by 2¹⁰²², the largest power of two, and the largest numbers by 2⁻¹⁰²².
-    let inverse = (-exponent).clamp(-1022, 1022);
-    f64::from_bits(((inverse + 1023) as u64) << 52)
 }
 
 impl Pivoted {

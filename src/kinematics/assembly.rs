@@ -5,9 +5,10 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::closure::closure;
+use super::closure::{closure, Closure};
 use super::eval::EvalError;
 use super::model::KinematicModel;
+use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings, Stop};
 
 #[derive(Clone, Debug)]
 pub struct AssemblyOptions {
@@ -319,6 +320,8 @@ fn total_error(error: &AssemblyError) -> f64 {
     }
 }
 
+/// Closes the loops from `start`, the coordinates `fixed` held: Levenberg–Marquardt on the
+/// squared residual (`corrector`), then `polish` once the largest row is within the tolerance.
 fn solve(
     model: &KinematicModel,
     start: &[f64],
@@ -326,67 +329,30 @@ fn solve(
     options: &AssemblyOptions,
 ) -> Result<Assembled, AssemblyError> {
     let free: Vec<usize> = (0..model.coordinate_count).filter(|&i| !fixed[i]).collect();
-    let mut q = start.to_vec();
-    let mut current = closure(model, &q)?;
-    let mut cost = current.residual.norm_squared();
-    let mut damping = 1e-6;
-    for iteration in 0..options.max_iterations {
-        if current.residual.amax() <= options.tolerance {
-            let (q, residual) = polish(model, q, current.residual.norm(), &free)?;
-            return Ok(Assembled {
-                q,
-                iterations: iteration,
-                residual,
-                moved: Vec::new(),
-            });
-        }
-        let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| {
-            current.jacobian[(r, free[c])]
-        });
-        let gradient = jacobian.transpose() * &current.residual;
-        let normal = jacobian.transpose() * &jacobian;
-        let mut improved = false;
-        for _ in 0..30 {
-            // Uniform (Levenberg) damping: as it vanishes the step tends to the minimum-norm
-            // Gauss–Newton step, so the free motions of the mechanism are left where the user
-            // put them instead of drifting along directions the constraints barely see.
-            let scale = normal.diagonal().max().max(1e-12);
-            let mut damped = normal.clone();
-            for i in 0..free.len() {
-                damped[(i, i)] += damping * scale;
-            }
-            let Some(step) = damped.cholesky().map(|c| c.solve(&(-&gradient))) else {
-                damping *= 10.0;
-                continue;
-            };
-            let mut trial = q.clone();
-            for (i, &index) in free.iter().enumerate() {
-                trial[index] += step[i];
-            }
-            let candidate = closure(model, &trial)?;
-            let trial_cost = candidate.residual.norm_squared();
-            if trial_cost < cost {
-                q = trial;
-                current = candidate;
-                cost = trial_cost;
-                damping = (damping / 10.0).max(1e-15);
-                improved = true;
-                break;
-            }
-            damping *= 10.0;
-            if step.amax() < 1e-16 {
-                break;
-            }
-        }
-        if !improved {
-            break;
-        }
-    }
-    if current.residual.amax() <= options.tolerance {
-        let residual = current.residual.amax();
+    let current = closure(model, start)?;
+    let mut steps = ClosingSteps {
+        model,
+        free: &free,
+        tolerance: options.tolerance,
+        q: start.to_vec(),
+        cost: current.residual.norm_squared(),
+        current,
+        gradient: DVector::zeros(0),
+        normal: DMatrix::zeros(0, 0),
+        trial: Vec::new(),
+        tried: None,
+    };
+    let settings = Settings {
+        iterations: options.max_iterations,
+        ..CLOSING
+    };
+    let outcome = correct(&mut steps, &settings)?;
+    let ClosingSteps { q, current, .. } = steps;
+    if outcome.stop == Stop::Settled {
+        let (q, residual) = polish(model, q, current, &free)?;
         return Ok(Assembled {
             q,
-            iterations: options.max_iterations,
+            iterations: outcome.accepted,
             residual,
             moved: Vec::new(),
         });
@@ -397,42 +363,182 @@ fn solve(
     Err(AssemblyError::NoAssembly { q, loop_errors })
 }
 
+/// Assembly's iteration: Levenberg–Marquardt from a small damping. Uniform (Levenberg) damping:
+/// as it vanishes the step tends to the minimum-norm Gauss–Newton step, so the free motions of
+/// the mechanism are left where the user put them instead of drifting along directions the
+/// constraints barely see.
+const CLOSING: Settings = Settings {
+    iterations: 200,
+    damping: Damping::Levenberg {
+        initial: 1e-6,
+        floor: 1e-15,
+        tries: 30,
+        smallest_step: 1e-16,
+    },
+    acceptance: Acceptance::Descent,
+    progress: Progress::Any,
+};
+
+/// Assembly's steps on the free coordinates, for the corrector: the normal equations of the
+/// closure's rows, damped relative to their largest diagonal term.
+struct ClosingSteps<'a> {
+    model: &'a KinematicModel,
+    free: &'a [usize],
+    tolerance: f64,
+    q: Vec<f64>,
+    current: Closure,
+    /// The squared residual at `q`.
+    cost: f64,
+    gradient: DVector<f64>,
+    normal: DMatrix<f64>,
+    /// The coordinates the step leads to.
+    trial: Vec<f64>,
+    /// Their closure and its squared residual, once tried.
+    tried: Option<(Closure, f64)>,
+}
+
+impl Correction for ClosingSteps<'_> {
+    type Error = AssemblyError;
+
+    fn settled(&self) -> bool {
+        self.current.residual.amax() <= self.tolerance
+    }
+
+    fn merit(&self) -> f64 {
+        self.cost
+    }
+
+    fn linearise(&mut self) -> Result<(), AssemblyError> {
+        let jacobian = free_columns(&self.current.jacobian, self.free);
+        self.gradient = jacobian.transpose() * &self.current.residual;
+        self.normal = jacobian.transpose() * &jacobian;
+        Ok(())
+    }
+
+    fn step(&mut self, damping: f64) -> Result<Option<f64>, AssemblyError> {
+        let scale = self.normal.diagonal().max().max(1e-12);
+        let mut damped = self.normal.clone();
+        for i in 0..self.free.len() {
+            damped[(i, i)] += damping * scale;
+        }
+        let Some(step) = damped.cholesky().map(|c| c.solve(&(-&self.gradient))) else {
+            return Ok(None);
+        };
+        let mut trial = self.q.clone();
+        for (i, &index) in self.free.iter().enumerate() {
+            trial[index] += step[i];
+        }
+        (self.trial, self.tried) = (trial, None);
+        Ok(Some(step.amax()))
+    }
+
+    fn try_step(&mut self) -> Result<f64, AssemblyError> {
+        let candidate = closure(self.model, &self.trial)?;
+        let cost = candidate.residual.norm_squared();
+        self.tried = Some((candidate, cost));
+        Ok(cost)
+    }
+
+    fn accept(&mut self) {
+        if let Some((current, cost)) = self.tried.take() {
+            let q = std::mem::take(&mut self.trial);
+            (self.q, self.current, self.cost) = (q, current, cost);
+        }
+    }
+}
+
+/// The columns `free` of `jacobian`.
+fn free_columns(jacobian: &DMatrix<f64>, free: &[usize]) -> DMatrix<f64> {
+    DMatrix::from_fn(jacobian.nrows(), free.len(), |r, c| jacobian[(r, free[c])])
+}
+
 /// A few more minimum-norm Gauss–Newton steps after convergence, while they reduce the residual:
 /// where constraints act at second order, a residual of 1e-12 can leave the configuration 1e-6
 /// from the closed set, and every halving of the residual matters to the rank computed there.
 fn polish(
     model: &KinematicModel,
-    mut q: Vec<f64>,
-    mut norm: f64,
+    q: Vec<f64>,
+    current: Closure,
     free: &[usize],
 ) -> Result<(Vec<f64>, f64), AssemblyError> {
+    let norm = current.residual.norm();
     if free.is_empty() || model.complementary().is_empty() {
         return Ok((q, norm));
     }
-    for _ in 0..8 {
-        let current = closure(model, &q)?;
-        let jacobian = DMatrix::from_fn(current.jacobian.nrows(), free.len(), |r, c| {
-            current.jacobian[(r, free[c])]
-        });
+    let mut steps = PolishingSteps {
+        model,
+        free,
+        q,
+        norm,
+        current,
+        trial: None,
+        tried: None,
+    };
+    correct(&mut steps, &POLISHING)?;
+    let residual = steps.current.residual.amax();
+    Ok((steps.q, residual))
+}
+
+/// The polish: Gauss–Newton, a step kept while it reduces the residual's norm.
+const POLISHING: Settings = Settings {
+    iterations: 8,
+    damping: Damping::None,
+    acceptance: Acceptance::Descent,
+    progress: Progress::Any,
+};
+
+/// The polish's minimum-norm steps (singular values to 1e-14 kept), for the corrector.
+struct PolishingSteps<'a> {
+    model: &'a KinematicModel,
+    free: &'a [usize],
+    q: Vec<f64>,
+    /// The residual's norm at `q`.
+    norm: f64,
+    current: Closure,
+    trial: Option<Vec<f64>>,
+    tried: Option<(Closure, f64)>,
+}
+
+impl Correction for PolishingSteps<'_> {
+    type Error = AssemblyError;
+
+    fn settled(&self) -> bool {
+        false
+    }
+
+    fn merit(&self) -> f64 {
+        self.norm
+    }
+
+    fn step(&mut self, _damping: f64) -> Result<Option<f64>, AssemblyError> {
+        let jacobian = free_columns(&self.current.jacobian, self.free);
         let Some(svd) = crate::linalg::svd(jacobian, true, true) else {
-            break;
+            return Ok(None);
         };
-        let Ok(step) = svd.solve(&(-&current.residual), 1e-14) else {
-            break;
+        let Ok(step) = svd.solve(&(-&self.current.residual), 1e-14) else {
+            return Ok(None);
         };
-        let mut trial = q.clone();
-        for (i, &index) in free.iter().enumerate() {
+        let mut trial = self.q.clone();
+        for (i, &index) in self.free.iter().enumerate() {
             trial[index] += step[i];
         }
-        let trial_norm = closure(model, &trial)?.residual.norm();
-        if trial_norm >= norm {
-            break;
-        }
-        q = trial;
-        norm = trial_norm;
+        self.trial = Some(trial);
+        Ok(Some(step.amax()))
     }
-    let residual = closure(model, &q)?.residual.amax();
-    Ok((q, residual))
+
+    fn try_step(&mut self) -> Result<f64, AssemblyError> {
+        let q = self.trial.as_ref().expect("a step was formed");
+        let candidate = closure(self.model, q)?;
+        let norm = candidate.residual.norm();
+        self.tried = Some((candidate, norm));
+        Ok(norm)
+    }
+
+    fn accept(&mut self) {
+        if let (Some(q), Some((current, norm))) = (self.trial.take(), self.tried.take()) {
+            (self.q, self.current, self.norm) = (q, current, norm);
+        }
+    }
 }
 
 /// Singular values of a matrix, largest first.

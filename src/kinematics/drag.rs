@@ -14,6 +14,7 @@ use super::closure::closure;
 use super::eval::EvalError;
 use super::frames::FramePoint;
 use super::model::KinematicModel;
+use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
 use crate::spatial;
 
 #[derive(Clone, Debug)]
@@ -124,51 +125,113 @@ pub fn drag(
     options: &DragOptions,
 ) -> Result<Dragged, DragError> {
     let free = vec![false; q.len()];
-    let mut q = assemble(model, q, &free, &options.assembly)?.q;
-    let mut current = linearise(model, frame, &q)?;
-    let mut distance = (current.point - target).norm();
-    let mut damping = 1e-6;
-    let mut iterations = 0;
-    while iterations < options.max_iterations && distance > 0.0 {
-        iterations += 1;
-        let steps = Steps::new(&current, target);
-        let mut improved = false;
-        for _ in 0..30 {
-            let trial: Vec<f64> = q
-                .iter()
-                .zip(steps.at(damping).iter())
-                .map(|(a, b)| a + b)
-                .collect();
-            let closed = match assemble(model, &trial, &free, &options.assembly) {
-                Ok(closed) => closed.q,
-                Err(AssemblyError::NoAssembly { .. }) => {
-                    damping *= 10.0;
-                    continue;
-                }
-                Err(e) => return Err(e.into()),
-            };
-            let candidate = linearise(model, frame, &closed)?;
-            let trial_distance = (candidate.point - target).norm();
-            if trial_distance < distance {
-                let progress = distance - trial_distance;
-                (q, current, distance) = (closed, candidate, trial_distance);
-                damping = (damping / 10.0).max(1e-15);
-                improved = progress > 1e-15 * distance.max(1.0);
-                break;
+    let q = assemble(model, q, &free, &options.assembly)?.q;
+    let current = linearise(model, frame, &q)?;
+    let mut steps = DragSteps {
+        model,
+        frame,
+        target,
+        assembly: &options.assembly,
+        free,
+        q,
+        distance: (current.point - target).norm(),
+        current,
+        steps: None,
+        trial: Vec::new(),
+        tried: None,
+    };
+    let settings = Settings {
+        iterations: options.max_iterations,
+        ..DRAGGING
+    };
+    let outcome = correct(&mut steps, &settings)?;
+    Ok(Dragged {
+        point: steps.current.point,
+        distance: steps.distance,
+        loop_residual: steps.current.residual.amax(),
+        q: steps.q,
+        iterations: outcome.iterations,
+    })
+}
+
+/// Dragging's iteration: Levenberg–Marquardt on the distance to the target, from a small
+/// damping; a step that brings the point nearer by round-off only ends it.
+const DRAGGING: Settings = Settings {
+    iterations: 100,
+    damping: Damping::Levenberg {
+        initial: 1e-6,
+        floor: 1e-15,
+        tries: 30,
+        smallest_step: 0.0,
+    },
+    acceptance: Acceptance::Descent,
+    progress: Progress::Absolute(1e-15),
+};
+
+/// The drag's steps, for the corrector: each one the closure's least-norm correction plus a
+/// damped step towards the target along the closed motions, closed again by assembly (a step
+/// that assembly cannot close is taken again with more damping).
+struct DragSteps<'a> {
+    model: &'a KinematicModel,
+    frame: &'a FramePoint,
+    target: &'a Vector3<f64>,
+    assembly: &'a AssemblyOptions,
+    /// No coordinate is held.
+    free: Vec<bool>,
+    q: Vec<f64>,
+    current: Linearised,
+    /// The point's distance to the target at `q`.
+    distance: f64,
+    steps: Option<Steps>,
+    /// The closed coordinates the step leads to.
+    trial: Vec<f64>,
+    /// Their linearisation and distance, once tried.
+    tried: Option<(Linearised, f64)>,
+}
+
+impl Correction for DragSteps<'_> {
+    type Error = DragError;
+
+    fn settled(&self) -> bool {
+        self.distance <= 0.0 || self.distance.is_nan()
+    }
+
+    fn merit(&self) -> f64 {
+        self.distance
+    }
+
+    fn linearise(&mut self) -> Result<(), DragError> {
+        self.steps = Some(Steps::new(&self.current, self.target));
+        Ok(())
+    }
+
+    fn step(&mut self, damping: f64) -> Result<Option<f64>, DragError> {
+        let steps = self.steps.as_ref().expect("linearised");
+        let step = steps.at(damping);
+        let trial: Vec<f64> = self.q.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+        match assemble(self.model, &trial, &self.free, self.assembly) {
+            Ok(closed) => {
+                (self.trial, self.tried) = (closed.q, None);
+                Ok(Some(step.amax()))
             }
-            damping *= 10.0;
-        }
-        if !improved {
-            break;
+            Err(AssemblyError::NoAssembly { .. }) => Ok(None),
+            Err(e) => Err(e.into()),
         }
     }
-    Ok(Dragged {
-        point: current.point,
-        distance,
-        loop_residual: current.residual.amax(),
-        q,
-        iterations,
-    })
+
+    fn try_step(&mut self) -> Result<f64, DragError> {
+        let candidate = linearise(self.model, self.frame, &self.trial)?;
+        let distance = (candidate.point - self.target).norm();
+        self.tried = Some((candidate, distance));
+        Ok(distance)
+    }
+
+    fn accept(&mut self) {
+        if let Some((current, distance)) = self.tried.take() {
+            let q = std::mem::take(&mut self.trial);
+            (self.q, self.current, self.distance) = (q, current, distance);
+        }
+    }
 }
 
 /// The pieces of a step: the least-norm correction of the linearised closure, and the normal

@@ -54,6 +54,7 @@ mod textmate;
 mod threads;
 mod tree_jacobian;
 mod unit_check;
+mod unit_corrector;
 mod unit_dense;
 mod unit_diag;
 mod unit_dynamics;

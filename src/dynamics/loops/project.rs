@@ -12,6 +12,7 @@ use super::rows::{
     complete_rotations, complete_rows, constraints_into, seat_ball_angles_at_poses, Constraints,
     Extent,
 };
+use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -483,67 +484,110 @@ fn minimum_norm_step(s: &mut ProjectionScratch) -> bool {
     true
 }
 
-/// Gauss–Newton on the positions from the constraints in `scratch.current`: `step` writes the
-/// correction at them into `scratch.correction` (false to stop); stops when a step no longer
-/// reduces the largest residual, or reduces it less than fourfold. Leaves q and
-/// `scratch.current` at the best configuration reached, and the bodies' poses there in
-/// `scratch.poses` (`data` must hold them at the start); an accepted step leaves no factor held
-/// (the one `step` took belongs to the positions before it), unless it is kept along the
-/// projection as an earlier one (`Held::Earlier`): a step with it that fails or converges
-/// slowly is taken again with a fresh factor (`ProjectionScratch::refresh`). No step is taken
-/// from a residual that `round_off` says is round-off.
+/// Gauss–Newton on the positions from the constraints in `scratch.current` (the house's
+/// corrector, `corrector::correct`, without damping): `step` writes the correction at them into
+/// `scratch.correction` (false to stop); stops when a step no longer reduces the largest
+/// residual, or reduces it less than fourfold. Leaves q and `scratch.current` at the best
+/// configuration reached, and the bodies' poses there in `scratch.poses` (`data` must hold them
+/// at the start); an accepted step leaves no factor held (the one `step` took belongs to the
+/// positions before it), unless it is kept along the projection as an earlier one
+/// (`Held::Earlier`): a step with it that fails or converges slowly is taken again with a fresh
+/// factor (`ProjectionScratch::refresh`). No step is taken from a residual that `round_off`
+/// says is round-off.
 fn newton(
     model: &Model,
     data: &mut Data,
     q: &mut [f64],
     scratch: &mut ProjectionScratch,
     round_off: impl Fn(&ProjectionScratch) -> bool,
-    mut step: impl FnMut(&mut ProjectionScratch) -> bool,
+    step: impl FnMut(&mut ProjectionScratch) -> bool,
 ) -> Result<(), EvalError> {
-    let mut error = scratch.current.residual.amax();
     scratch.poses.clone_from(&data.world);
-    for _ in 0..NEWTON_ITERATIONS {
-        let chord = scratch.held == Held::Earlier;
-        if error == 0.0 || round_off(scratch) || !step(scratch) {
-            break;
-        }
-        let s = &mut *scratch;
+    let mut steps = NewtonSteps {
+        model,
+        data,
+        q,
+        scratch,
+        round_off,
+        step,
+        chord: false,
+    };
+    correct(&mut steps, &NEWTON)?;
+    Ok(())
+}
+
+/// The projection's iteration: Gauss–Newton, a step kept while it reduces the largest residual
+/// at least fourfold.
+const NEWTON: Settings = Settings {
+    iterations: NEWTON_ITERATIONS,
+    damping: Damping::None,
+    acceptance: Acceptance::Descent,
+    progress: Progress::Ratio(0.25),
+};
+
+/// The positions' Gauss–Newton steps onto the loops, for the corrector.
+struct NewtonSteps<'a, R, S> {
+    model: &'a Model,
+    data: &'a mut Data,
+    q: &'a mut [f64],
+    scratch: &'a mut ProjectionScratch,
+    round_off: R,
+    step: S,
+    /// Whether the step tried was taken with an earlier factor (`Held::Earlier`).
+    chord: bool,
+}
+
+impl<R, S> Correction for NewtonSteps<'_, R, S>
+where
+    R: Fn(&ProjectionScratch) -> bool,
+    S: FnMut(&mut ProjectionScratch) -> bool,
+{
+    type Error = EvalError;
+
+    fn settled(&self) -> bool {
+        self.merit() == 0.0 || (self.round_off)(self.scratch)
+    }
+
+    fn merit(&self) -> f64 {
+        self.scratch.current.residual.amax()
+    }
+
+    fn step(&mut self, _damping: f64) -> Result<Option<f64>, EvalError> {
+        self.chord = self.scratch.held == Held::Earlier;
+        Ok((self.step)(self.scratch).then_some(0.0))
+    }
+
+    fn try_step(&mut self) -> Result<f64, EvalError> {
+        let s = &mut *self.scratch;
         s.trial_q.clear();
-        s.trial_q.extend_from_slice(q);
-        model.retract(&mut s.trial_q, &s.correction);
-        forward_kinematics(model, data, &s.trial_q, &s.rest)?;
+        s.trial_q.extend_from_slice(self.q);
+        self.model.retract(&mut s.trial_q, &s.correction);
+        forward_kinematics(self.model, self.data, &s.trial_q, &s.rest)?;
         // G at a trial is needed only if the trial is kept.
         constraints_into(
-            model,
-            data,
+            self.model,
+            self.data,
             &s.trial_q,
             &s.rest,
             Extent::Residual,
             &mut s.trial,
         )?;
-        let trial_error = s.trial.residual.amax();
-        // A NaN residual is no improvement either.
-        if trial_error.is_nan() || trial_error >= error {
-            if chord {
-                s.refresh();
-                continue;
-            }
-            break;
-        }
-        complete_rows(model, data, &s.rest, &mut s.trial);
-        let converging = trial_error < 0.25 * error;
-        q.copy_from_slice(&s.trial_q);
+        Ok(s.trial.residual.amax())
+    }
+
+    fn accept(&mut self) {
+        let s = &mut *self.scratch;
+        complete_rows(self.model, self.data, &s.rest, &mut s.trial);
+        self.q.copy_from_slice(&s.trial_q);
         std::mem::swap(&mut s.current, &mut s.trial);
         s.moved_to_current(true);
-        s.poses.clone_from(&data.world);
-        error = trial_error;
-        if !converging {
-            if chord {
-                s.refresh();
-                continue;
-            }
-            break;
-        }
+        s.poses.clone_from(&self.data.world);
     }
-    Ok(())
+
+    fn retry(&mut self) -> bool {
+        if self.chord {
+            self.scratch.refresh();
+        }
+        self.chord
+    }
 }

@@ -9,12 +9,22 @@
 //! them.
 
 use super::{MechanicalSystem, SystemError};
+use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
 use crate::dynamics::algorithms::{crba_after_kinematics, forward_kinematics};
 use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Wanted};
 
 /// Newton steps at most that close the position rows.
 const POSITION_STEPS: usize = 4;
+
+/// The position rows' iteration: every step is kept (a least change along X followed by the
+/// loops' projection, not a descent on one measure) until the rows are at their round-off.
+const STACKED: Settings = Settings {
+    iterations: POSITION_STEPS,
+    damping: Damping::None,
+    acceptance: Acceptance::EveryStep,
+    progress: Progress::Any,
+};
 
 /// Relative size of a coupling's violation below which it is not corrected.
 const COUPLING_ROUND_OFF: f64 = 1e-13;
@@ -51,36 +61,20 @@ impl MechanicalSystem<'_> {
     ) -> Result<bool, SystemError> {
         let model = self.model;
         let positions = model.positions();
-        let mut moved = false;
-        // Whether the geometry of the last evaluation is that of y (no step followed it).
-        let mut settled = false;
-        for _ in 0..POSITION_STEPS {
-            self.split_into(y, q, v);
-            self.stacked_geometry(t, q, v)?;
-            let stack = &mut self.position_stack;
-            stack.arrange(&self.normal_rows, couplings, &[]);
-            stack.gather(&self.contact_state, &model.mimics);
-            if !self.fill_position_values(q) {
-                settled = true;
-                break;
-            }
-            self.step.fill(0.0);
-            let step = self.step.as_mut_slice();
-            self.position_stack
-                .add_least_change(&mut self.response, step);
-            model.retract(q, step);
-            if model.has_loops() {
-                let choice = &self.loops.structure.choice;
-                loops::project(model, &mut self.data, choice, q, v)?;
-            }
-            y[..positions].copy_from_slice(q);
-            y[positions..].copy_from_slice(v);
-            moved = true;
-        }
-        if !settled {
-            self.split_into(y, q, v);
-            self.stacked_geometry(t, q, v)?;
-        }
+        self.split_into(y, q, v);
+        let open = self.stacked_rows_at(t, q, v, couplings)?;
+        let largest = self.position_stack.values_mut().amax();
+        let mut steps = StackedSteps {
+            system: self,
+            t,
+            y: &mut *y,
+            q: &mut *q,
+            v: &mut *v,
+            couplings,
+            open,
+            largest,
+        };
+        let moved = correct(&mut steps, &STACKED)?.accepted > 0;
         self.gather_held();
         let kept = self.contact_rows.as_deref().unwrap_or_default();
         let stack = &mut self.velocity_stack;
@@ -103,6 +97,22 @@ impl MechanicalSystem<'_> {
         stack.add_least_change(&mut self.response, v);
         y[positions..].copy_from_slice(v);
         Ok(moved || off)
+    }
+
+    /// At (q, v), the geometry (`stacked_geometry`) and the position rows' values in the
+    /// position stack; whether any of them is above its round-off.
+    fn stacked_rows_at(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        couplings: usize,
+    ) -> Result<bool, SystemError> {
+        self.stacked_geometry(t, q, v)?;
+        let stack = &mut self.position_stack;
+        stack.arrange(&self.normal_rows, couplings, &[]);
+        stack.gather(&self.contact_state, &self.model.mimics);
+        Ok(self.fill_position_values(q))
     }
 
     /// The positions and velocities of y into `q` (quaternions at unit length) and `v`.
@@ -157,4 +167,59 @@ impl MechanicalSystem<'_> {
         self.decide_contact_rows();
         Ok(())
     }
+}
+
+/// The position rows' steps, for the corrector: each one the least change along X that closes
+/// the rows to first order, then the loops' projection; the state y follows every step.
+struct StackedSteps<'s, 'm> {
+    system: &'s mut MechanicalSystem<'m>,
+    t: f64,
+    y: &'s mut [f64],
+    q: &'s mut Vec<f64>,
+    v: &'s mut Vec<f64>,
+    couplings: usize,
+    /// Whether a position row at the current state is above its round-off, and the largest.
+    open: bool,
+    largest: f64,
+}
+
+impl Correction for StackedSteps<'_, '_> {
+    type Error = SystemError;
+
+    fn settled(&self) -> bool {
+        !self.open
+    }
+
+    fn merit(&self) -> f64 {
+        self.largest
+    }
+
+    fn step(&mut self, _damping: f64) -> Result<Option<f64>, SystemError> {
+        let system = &mut *self.system;
+        system.step.fill(0.0);
+        let step = system.step.as_mut_slice();
+        system
+            .position_stack
+            .add_least_change(&mut system.response, step);
+        Ok(Some(0.0))
+    }
+
+    fn try_step(&mut self) -> Result<f64, SystemError> {
+        let system = &mut *self.system;
+        let model = system.model;
+        model.retract(self.q, system.step.as_slice());
+        if model.has_loops() {
+            let choice = &system.loops.structure.choice;
+            loops::project(model, &mut system.data, choice, self.q, self.v)?;
+        }
+        let positions = model.positions();
+        self.y[..positions].copy_from_slice(self.q);
+        self.y[positions..].copy_from_slice(self.v);
+        system.split_into(self.y, self.q, self.v);
+        self.open = system.stacked_rows_at(self.t, self.q, self.v, self.couplings)?;
+        self.largest = system.position_stack.values_mut().amax();
+        Ok(self.largest)
+    }
+
+    fn accept(&mut self) {}
 }

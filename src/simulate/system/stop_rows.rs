@@ -11,8 +11,12 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{MechanicalSystem, SystemError};
+use crate::corrector::{
+    correct, minimum_norm_step, Acceptance, Correction, Damping, Progress, Settings,
+};
 use crate::dynamics::algorithms::{crba, forward_kinematics};
 use crate::dynamics::contacts::{self, holonomic_rows};
+use crate::dynamics::loops::basis::SOLVE_TOLERANCE;
 use crate::dynamics::loops::{self, decompose, Extent};
 use crate::dynamics::mimics;
 
@@ -22,6 +26,14 @@ const NEWTON_ITERATIONS: usize = 8;
 /// A stop's row within this of its bound (relative to max(1, |bound|)) after the positions'
 /// Newton steps is at round-off.
 const SNAP: f64 = 1e-14;
+
+/// Gauss–Newton onto the rows and the bounds: a step kept while it reduces the largest residual.
+const ON_BOUNDS: Settings = Settings {
+    iterations: NEWTON_ITERATIONS,
+    damping: Damping::None,
+    acceptance: Acceptance::Descent,
+    progress: Progress::Any,
+};
 
 /// The rows of one state: position residuals and their Jacobian, or velocity rows.
 struct Rows {
@@ -78,33 +90,28 @@ impl MechanicalSystem<'_> {
     }
 
     /// Moves the positions of y onto the rows' position constraints and the bounds of the stops
-    /// `stops` together: minimum-norm Gauss–Newton steps, each kept while it reduces the largest
-    /// residual.
+    /// `stops` together: minimum-norm Gauss–Newton steps (`corrector`, rows scaled), each kept
+    /// while it reduces the largest residual.
     pub(in crate::simulate) fn close_on_bounds(
         &mut self,
         y: &mut [f64],
         stops: &[usize],
     ) -> Result<(), SystemError> {
         let model = self.model;
-        let (mut q, v) = model.split_state(y);
+        let (q, v) = model.split_state(y);
         let v = v.to_vec();
-        let mut rows = self.position_rows(&q, &v, stops)?;
-        let mut error = rows.residual.amax();
-        for _ in 0..NEWTON_ITERATIONS {
-            if error == 0.0 {
-                break;
-            }
-            let step = -(decompose(&rows.jacobian).pseudo_inverse * &rows.residual);
-            let mut trial = q.clone();
-            model.retract(&mut trial, step.as_slice());
-            let there = self.position_rows(&trial, &v, stops)?;
-            let trial_error = there.residual.amax();
-            // A NaN residual is no improvement either.
-            if trial_error.is_nan() || trial_error >= error {
-                break;
-            }
-            (q, rows, error) = (trial, there, trial_error);
-        }
+        let rows = self.position_rows(&q, &v, stops)?;
+        let mut steps = BoundSteps {
+            system: self,
+            stops,
+            v,
+            q,
+            rows,
+            step: DVector::zeros(0),
+            trial: None,
+        };
+        correct(&mut steps, &ON_BOUNDS)?;
+        let mut q = steps.q;
         // The stops' rows are left at round-off, on either side of the bound: the bound itself
         // (a change at round-off, which leaves the other rows closed), so that the stop's event
         // function starts the next step at zero, not below it where its crossing would be missed.
@@ -238,6 +245,54 @@ impl MechanicalSystem<'_> {
         let moved = motions.select_rows(&held);
         let allowed = decompose(&moved).null_space;
         motions * allowed
+    }
+}
+
+/// The positions' steps onto the rows and the resting stops' bounds, for the corrector.
+struct BoundSteps<'s, 'm> {
+    system: &'s mut MechanicalSystem<'m>,
+    stops: &'s [usize],
+    v: Vec<f64>,
+    q: Vec<f64>,
+    rows: Rows,
+    step: DVector<f64>,
+    /// The positions tried and their rows.
+    trial: Option<(Vec<f64>, Rows)>,
+}
+
+impl Correction for BoundSteps<'_, '_> {
+    type Error = SystemError;
+
+    fn settled(&self) -> bool {
+        self.merit() == 0.0
+    }
+
+    fn merit(&self) -> f64 {
+        self.rows.residual.amax()
+    }
+
+    fn step(&mut self, _damping: f64) -> Result<Option<f64>, SystemError> {
+        let rows = &self.rows;
+        let Some(step) = minimum_norm_step(&rows.jacobian, &rows.residual, SOLVE_TOLERANCE) else {
+            return Ok(None);
+        };
+        self.step = step;
+        Ok(Some(self.step.amax()))
+    }
+
+    fn try_step(&mut self) -> Result<f64, SystemError> {
+        let mut trial = self.q.clone();
+        self.system.model.retract(&mut trial, self.step.as_slice());
+        let there = self.system.position_rows(&trial, &self.v, self.stops)?;
+        let merit = there.residual.amax();
+        self.trial = Some((trial, there));
+        Ok(merit)
+    }
+
+    fn accept(&mut self) {
+        if let Some((q, rows)) = self.trial.take() {
+            (self.q, self.rows) = (q, rows);
+        }
     }
 }
 
