@@ -1,6 +1,9 @@
 //! The recursive algorithms, each `algorithm(&model, &mut data, ...)`: forward kinematics and
 //! velocities, inverse dynamics (RNEA: one pass out, one back), the mass matrix (CRBA) and
-//! forward dynamics (ABA: three passes). Bodies without mass cost nothing.
+//! forward dynamics (ABA: three passes). Bodies without mass cost nothing. Geared rotors enter
+//! all three (`geared`).
+
+mod geared;
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 
@@ -9,6 +12,8 @@ use super::joint::JointState;
 use super::model::Model;
 use crate::kinematics::eval::EvalError;
 use crate::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
+use geared::{add_rotor_torques, pure_moment};
+pub use geared::{add_rotors_to_mass, rotor_kinetic_energy, rotor_spin};
 
 /// Scratch space for the algorithms; `Data::new(&model)` once, reuse for every call.
 pub struct Data {
@@ -41,6 +46,12 @@ pub struct Data {
     rotor_rows: DMatrix<f64>,
     rotor_own: Vec<f64>,
     rotor_torques: Vec<Vector3<f64>>,
+    /// ABA with geared rotors: per joint, the rotor it drives (empty without any); per rotor,
+    /// U_R = I_R S_R and its velocity-product acceleration relative to its carrier's
+    /// (`geared::aba_backward_step`).
+    rotor_of_joint: Vec<Option<usize>>,
+    rotor_u: Vec<Force>,
+    rotor_coriolis: Vec<Motion>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -91,8 +102,28 @@ impl Data {
             rotor_rows: DMatrix::zeros(model.rotors.len(), model.nv),
             rotor_own: vec![0.0; model.rotors.len()],
             rotor_torques: vec![Vector3::zeros(); model.rotors.len()],
+            rotor_of_joint: rotors_of_joints(model),
+            rotor_u: vec![Force::zeros(); model.rotors.len()],
+            rotor_coriolis: vec![Motion::zeros(); model.rotors.len()],
         }
     }
+}
+
+/// Per joint, the geared rotor it drives; empty when the model has none.
+fn rotors_of_joints(model: &Model) -> Vec<Option<usize>> {
+    if model.rotors.is_empty() {
+        return Vec::new();
+    }
+    let mut rotors = vec![None; model.joints.len()];
+    for (r, rotor) in model.rotors.iter().enumerate() {
+        rotors[rotor.joint] = Some(r);
+    }
+    rotors
+}
+
+/// The geared rotor joint `k` drives, if any.
+fn rotor_of(data: &Data, k: usize) -> Option<usize> {
+    data.rotor_of_joint.get(k).copied().flatten()
 }
 
 fn slice(values: &[f64], offset: usize, count: usize) -> &[f64] {
@@ -513,7 +544,10 @@ pub fn aba_after_kinematics(
     }
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
-        aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?;
+        match rotor_of(data, k) {
+            Some(r) => geared::aba_backward_step(model, data, k, r, tau[joint.v_offset])?,
+            None => aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?,
+        }
     }
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
@@ -531,6 +565,9 @@ pub fn aba_after_kinematics(
         let mut rhs = Vector6::zeros();
         for c in 0..n {
             rhs[c] = data.u_vector[i][c] - data.u[i][c].dot(&a);
+        }
+        if let Some(r) = rotor_of(data, k) {
+            rhs[0] -= geared::rotor_acceleration_term(model, data, k, r, parent_acceleration, &a);
         }
         let out = &mut accelerations.as_mut_slice()[joint.v_offset..joint.v_offset + n];
         for (r, o) in out.iter_mut().enumerate() {
@@ -608,89 +645,4 @@ fn aba_backward_step(
         bias[parent] += state.transform.force_to_parent(&handed);
     }
     Ok(())
-}
-
-// Geared rotors (see `rotors`): their spin's energy, mass-matrix terms and torques.
-
-/// The rate of a one-coordinate joint, from its state's motion S q̇.
-fn joint_rate(data: &Data, joint: usize) -> f64 {
-    let state = &data.states[joint];
-    let column = state.subspace.column(0);
-    column.dot(&state.velocity) / column.norm_squared()
-}
-
-fn angular(motion: &Motion) -> Vector3<f64> {
-    motion.fixed_rows::<3>(0).into_owned()
-}
-
-/// The rotor's spin rate ε·ω_B + n q̇ from the body velocities in `data`.
-fn spin(rotor: &super::rotors::Rotor, data: &Data) -> f64 {
-    rotor_spin(rotor, &data.velocity, joint_rate(data, rotor.joint))
-}
-
-/// The rotors' kinetic energy, ½ J (ε·ω_B + n q̇)² each, from the kinematics in `data`.
-pub fn rotor_kinetic_energy(model: &Model, data: &Data) -> f64 {
-    let spin_energy = |r: &super::rotors::Rotor| 0.5 * r.inertia * spin(r, data).powi(2);
-    model.rotors.iter().map(spin_energy).sum()
-}
-
-/// A rotor's spin rate ε·ω_B + n q̇ under a motion of the joints whose body motions are
-/// `motions` (`body_motions`) and whose rate of the rotor's coordinate is `rate`.
-pub fn rotor_spin(rotor: &super::rotors::Rotor, motions: &[Motion], rate: f64) -> f64 {
-    rotor.axis.dot(&angular(&motions[rotor.carrier])) + rotor.ratio * rate
-}
-
-/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q; w is
-/// the rotor's spin rate per unit velocity, found by moving each velocity alone (in `data`'s
-/// rotor scratch: nothing is allocated).
-pub fn add_rotors_to_mass(model: &Model, data: &mut Data, mass: &mut DMatrix<f64>) {
-    if model.rotors.is_empty() {
-        return;
-    }
-    let mut motions = std::mem::take(&mut data.rotor_motions);
-    for j in 0..model.nv {
-        data.rotor_unit[j] = 1.0;
-        body_motions(model, data, &data.rotor_unit, &mut motions);
-        data.rotor_unit[j] = 0.0;
-        for (r, rotor) in model.rotors.iter().enumerate() {
-            let rate = if j == rotor.velocity { 1.0 } else { 0.0 };
-            data.rotor_rows[(r, j)] = rotor_spin(rotor, &motions, rate);
-        }
-    }
-    data.rotor_motions = motions;
-    for (r, rotor) in model.rotors.iter().enumerate() {
-        let row = data.rotor_rows.row(r);
-        for i in 0..model.nv {
-            for j in 0..model.nv {
-                mass[(i, j)] += rotor.inertia * row[i] * row[j];
-            }
-        }
-    }
-}
-
-/// A force that is a moment alone.
-fn pure_moment(moment: &Vector3<f64>) -> Force {
-    Force::new(moment.x, moment.y, moment.z, 0.0, 0.0, 0.0)
-}
-
-/// Inverse dynamics of the rotors, at the end of RNEA's pass out: adds each rotor's torque τ_r
-/// to its carrier's force (so the pass back carries it to the joints that turn the carrier) and
-/// leaves, per rotor, n ε·τ_r for the pass back to add to its coordinate's effort in
-/// `data.rotor_own`.
-fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) {
-    for (r, rotor) in model.rotors.iter().enumerate() {
-        let omega = angular(&data.velocity[rotor.carrier]);
-        let omega_dot = match rotor.carrier {
-            0 => Vector3::zeros(),
-            b => angular(&data.acceleration[b]),
-        };
-        let axis = rotor.axis;
-        let spin_rate = rotor.axis.dot(&omega_dot) + rotor.ratio * a[rotor.velocity];
-        let torque = rotor.inertia * (spin_rate * axis + spin(rotor, data) * omega.cross(&axis));
-        if rotor.carrier != 0 {
-            data.force[rotor.carrier] += pure_moment(&torque);
-        }
-        data.rotor_own[r] = rotor.ratio * axis.dot(&torque);
-        data.rotor_torques[r] = torque;
-    }
 }
