@@ -183,7 +183,9 @@ pub(super) fn aba_backward_step(
         let u_pair = state.transform.force_to_parent(&u_child) + u_rotor;
         let reduced = state.transform.inertia_to_parent(&inertia) + rotor_inertia
             - u_pair * u_pair.transpose() / d;
-        let handed = state.transform.force_to_parent(&(bias + inertia * coriolis))
+        let handed = state
+            .transform
+            .force_to_parent(&(bias + inertia * coriolis))
             + rotor_bias
             + rotor_inertia * rotor_coriolis
             + u_pair * ((u - u_child.dot(&coriolis) - rotor_shift) / d);

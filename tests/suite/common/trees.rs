@@ -18,7 +18,9 @@ pub const JOINTS: [&str; 11] = [
 ];
 
 pub fn tree_program(parents: &[usize], kinds: &[usize], numbers: &[f64]) -> String {
-    program(parents, numbers, |i| JOINTS[kinds[i] % JOINTS.len()].to_string())
+    program(parents, numbers, |i| {
+        JOINTS[kinds[i] % JOINTS.len()].to_string()
+    })
 }
 
 /// The joints of one coordinate of `JOINTS` (revolute, prismatic, helical) written as links with
@@ -45,7 +47,8 @@ pub fn featured_tree_program(
         };
         let mut text = format!("link(q) {dof}");
         let feature = features[i];
-        let carrier_welded = !child_first(b) && parents[i] != 0 && kinds[parents[i] - 1] % JOINTS.len() == 10;
+        let carrier_welded =
+            !child_first(b) && parents[i] != 0 && kinds[parents[i] - 1] % JOINTS.len() == 10;
         if feature & 1 != 0 && !carrier_welded {
             text += &format!(
                 ", rotor_inertia = {}, gear_ratio = {}, rotor_axis = [{}, {}, {}]",
@@ -57,11 +60,19 @@ pub fn featured_tree_program(
             );
         }
         if feature & 2 != 0 {
-            text += &format!(", friction = {}, damping = {}", value(11 * b + 5).abs(), value(11 * b + 6).abs());
+            text += &format!(
+                ", friction = {}, damping = {}",
+                value(11 * b + 5).abs(),
+                value(11 * b + 6).abs()
+            );
         }
         match leaders.first() {
             Some(leader) if feature & 4 != 0 => {
-                text += &format!(", mimic = j{leader}, mimic_multiplier = {}, mimic_offset = {}", value(11 * b + 7), value(11 * b + 8));
+                text += &format!(
+                    ", mimic = j{leader}, mimic_multiplier = {}, mimic_offset = {}",
+                    value(11 * b + 7),
+                    value(11 * b + 8)
+                );
             }
             _ => leaders.push(b),
         }
@@ -71,7 +82,7 @@ pub fn featured_tree_program(
 
 /// Whether join `j{b}` is written with the child's frame first.
 fn child_first(b: usize) -> bool {
-    b % 3 == 0
+    b.is_multiple_of(3)
 }
 
 fn program(parents: &[usize], numbers: &[f64], mut joint: impl FnMut(usize) -> String) -> String {
