@@ -12,8 +12,6 @@ use super::joint::JointState;
 use super::model::Model;
 use crate::kinematics::eval::EvalError;
 use crate::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
-use geared::{add_rotor_torques, pure_moment};
-pub use geared::{add_rotors_to_mass, rotor_kinetic_energy, rotor_spin};
 
 /// Scratch space for the algorithms; `Data::new(&model)` once, reuse for every call.
 pub struct Data {
@@ -286,7 +284,7 @@ pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force
                 - external[i]
         };
     }
-    add_rotor_torques(model, data, a);
+    data.add_rotor_torques(model, a);
 }
 
 /// RNEA's pass back: the generalised forces `tau` (length nv) from the bodies' forces that
@@ -545,7 +543,7 @@ pub fn aba_after_kinematics(
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         match rotor_of(data, k) {
-            Some(r) => geared::aba_backward_step(model, data, k, r, tau[joint.v_offset])?,
+            Some(r) => data.aba_rotor_step(model, k, r, tau[joint.v_offset])?,
             None => aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?,
         }
     }
@@ -567,7 +565,7 @@ pub fn aba_after_kinematics(
             rhs[c] = data.u_vector[i][c] - data.u[i][c].dot(&a);
         }
         if let Some(r) = rotor_of(data, k) {
-            rhs[0] -= geared::rotor_acceleration_term(model, data, k, r, parent_acceleration, &a);
+            rhs[0] -= data.rotor_acceleration_term(model, k, r, parent_acceleration, &a);
         }
         let out = &mut accelerations.as_mut_slice()[joint.v_offset..joint.v_offset + n];
         for (r, o) in out.iter_mut().enumerate() {
@@ -645,4 +643,45 @@ fn aba_backward_step(
         bias[parent] += state.transform.force_to_parent(&handed);
     }
     Ok(())
+}
+
+// Geared rotors (see `rotors`; their terms of CRBA, RNEA and ABA are in `geared`): their
+// spin and its energy.
+
+/// The rate of a one-coordinate joint, from its state's motion S q̇.
+fn joint_rate(data: &Data, joint: usize) -> f64 {
+    let state = &data.states[joint];
+    let column = state.subspace.column(0);
+    column.dot(&state.velocity) / column.norm_squared()
+}
+
+fn angular(motion: &Motion) -> Vector3<f64> {
+    motion.fixed_rows::<3>(0).into_owned()
+}
+
+/// The rotor's spin rate ε·ω_B + n q̇ from the body velocities in `data`.
+fn spin(rotor: &super::rotors::Rotor, data: &Data) -> f64 {
+    rotor_spin(rotor, &data.velocity, joint_rate(data, rotor.joint))
+}
+
+/// The rotors' kinetic energy, ½ J (ε·ω_B + n q̇)² each, from the kinematics in `data`.
+pub fn rotor_kinetic_energy(model: &Model, data: &Data) -> f64 {
+    let spin_energy = |r: &super::rotors::Rotor| 0.5 * r.inertia * spin(r, data).powi(2);
+    model.rotors.iter().map(spin_energy).sum()
+}
+
+/// A rotor's spin rate ε·ω_B + n q̇ under a motion of the joints whose body motions are
+/// `motions` (`body_motions`) and whose rate of the rotor's coordinate is `rate`.
+pub fn rotor_spin(rotor: &super::rotors::Rotor, motions: &[Motion], rate: f64) -> f64 {
+    rotor.axis.dot(&angular(&motions[rotor.carrier])) + rotor.ratio * rate
+}
+
+/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q.
+pub fn add_rotors_to_mass(model: &Model, data: &mut Data, mass: &mut DMatrix<f64>) {
+    data.add_rotor_inertias(model, mass);
+}
+
+/// A force that is a moment alone.
+fn pure_moment(moment: &Vector3<f64>) -> Force {
+    Force::new(moment.x, moment.y, moment.z, 0.0, 0.0, 0.0)
 }

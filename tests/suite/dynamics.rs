@@ -352,3 +352,32 @@ fn kinetic_energy_gradient_on_groups_matches_finite_differences() {
         );
     }
 }
+
+/// `lsdc eval`'s forward dynamics of the geared arm (its rotors on the base and on the upper
+/// arm) at the state of issue 44, where it once ignored the rotors ([0.230, 30.46]): M a = τ − b
+/// with M and b = RNEA(q, v, 0) of the same evaluation, the 2 × 2 system solved by hand.
+#[test]
+fn geared_arm_forward_dynamics_inverts_its_mass_matrix() {
+    let prepared = crate::common::programs::prepared("geared_arm", &[]);
+    let state = lsdc::api::StateInput {
+        q: vec![0.3, -0.4],
+        v: Some(vec![0.5, 0.2]),
+        a: Some(vec![0.0, 0.0]),
+        tau: Some(vec![0.0, 0.0]),
+    };
+    let evaluation = lsdc::api::evaluate(&prepared, &[state]).expect("evaluates");
+    let output = &evaluation.states[0];
+    let (m, b) = (&output.crba, output.rnea.as_ref().expect("rnea"));
+    let a = output.aba.as_ref().expect("aba");
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let wanted = [
+        (m[1][1] * -b[0] - m[0][1] * -b[1]) / det,
+        (m[0][0] * -b[1] - m[1][0] * -b[0]) / det,
+    ];
+    for k in 0..2 {
+        assert!(
+            (a[k] - wanted[k]).abs() <= 1e-12 * wanted[k].abs().max(1e-3),
+            "{a:?} vs {wanted:?}"
+        );
+    }
+}
