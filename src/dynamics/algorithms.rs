@@ -46,7 +46,7 @@ pub struct Data {
     rotor_torques: Vec<Vector3<f64>>,
     /// ABA with geared rotors: per joint, the rotor it drives (empty without any); per rotor,
     /// U_R = I_R S_R and its velocity-product acceleration relative to its carrier's
-    /// (`geared::aba_backward_step`).
+    /// (`Data::aba_rotor_step` in `geared`).
     rotor_of_joint: Vec<Option<usize>>,
     rotor_u: Vec<Force>,
     rotor_coriolis: Vec<Motion>,
