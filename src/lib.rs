@@ -21,6 +21,7 @@ pub mod dynamics;
 pub mod elab;
 pub mod ide;
 pub mod integrate;
+pub mod integrators;
 pub mod kinematics;
 pub mod linalg;
 pub mod load;

@@ -146,30 +146,33 @@ enum StabilisationArg {
     None,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum IntegratorArg {
-    Rk4,
-    Dopri5,
-    Dop853,
-    Implicit,
-    Symplectic,
+/// An integrator of the registry (`lsdc::integrators`), which gives clap its names and help.
+#[derive(Clone, Copy)]
+struct IntegratorArg(&'static lsdc::integrators::IntegratorEntry);
+
+impl ValueEnum for IntegratorArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        static VARIANTS: std::sync::OnceLock<Vec<IntegratorArg>> = std::sync::OnceLock::new();
+        VARIANTS.get_or_init(|| {
+            (lsdc::integrators::INTEGRATORS.iter())
+                .map(IntegratorArg)
+                .collect()
+        })
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.name).help(self.0.description))
+    }
 }
 
 impl IntegratorArg {
     fn integrator(self) -> lsdc::simulate::prepare::Integrator {
-        use lsdc::simulate::prepare::Integrator;
-        match self {
-            IntegratorArg::Rk4 => Integrator::Rk4,
-            IntegratorArg::Dopri5 => Integrator::DormandPrince,
-            IntegratorArg::Dop853 => Integrator::Dop853,
-            IntegratorArg::Implicit => Integrator::Implicit,
-            IntegratorArg::Symplectic => Integrator::Symplectic,
-        }
+        self.0.integrator.clone()
     }
 
     /// Whether the integrator takes a fixed step rather than tolerances.
     fn fixed_step(self) -> bool {
-        matches!(self, IntegratorArg::Rk4 | IntegratorArg::Symplectic)
+        self.0.fixed_step
     }
 }
 

@@ -391,7 +391,7 @@ impl<'w> Checker<'w> {
                 continue;
             }
             if name == "integrator" {
-                let known = crate::check::types::INTEGRATORS;
+                let known: Vec<&str> = crate::integrators::names().collect();
                 let given = match &field.value.kind {
                     crate::syntax::ast::ExprKind::Name(name) => Some(name),
                     _ => None,

@@ -273,9 +273,6 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
     })
 }
 
-/// The integrators `simulate integrator = ...` accepts.
-pub const INTEGRATORS: &[&str] = &["rk4", "dopri5", "dop853", "implicit", "symplectic"];
-
 /// The numeric fields of `simulate`.
 pub const SIMULATE_FIELDS: &[&str] = &[
     "duration",

@@ -1,6 +1,9 @@
 //! The recursive algorithms, each `algorithm(&model, &mut data, ...)`: forward kinematics and
 //! velocities, inverse dynamics (RNEA: one pass out, one back), the mass matrix (CRBA) and
-//! forward dynamics (ABA: three passes). Bodies without mass cost nothing.
+//! forward dynamics (ABA: three passes). Bodies without mass cost nothing. Geared rotors enter
+//! all three (`geared`).
+
+mod geared;
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 
@@ -41,6 +44,12 @@ pub struct Data {
     rotor_rows: DMatrix<f64>,
     rotor_own: Vec<f64>,
     rotor_torques: Vec<Vector3<f64>>,
+    /// ABA with geared rotors: per joint, the rotor it drives (empty without any); per rotor,
+    /// U_R = I_R S_R and its velocity-product acceleration relative to its carrier's
+    /// (`Data::aba_rotor_step` in `geared`).
+    rotor_of_joint: Vec<Option<usize>>,
+    rotor_u: Vec<Force>,
+    rotor_coriolis: Vec<Motion>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -91,8 +100,28 @@ impl Data {
             rotor_rows: DMatrix::zeros(model.rotors.len(), model.nv),
             rotor_own: vec![0.0; model.rotors.len()],
             rotor_torques: vec![Vector3::zeros(); model.rotors.len()],
+            rotor_of_joint: rotors_of_joints(model),
+            rotor_u: vec![Force::zeros(); model.rotors.len()],
+            rotor_coriolis: vec![Motion::zeros(); model.rotors.len()],
         }
     }
+}
+
+/// Per joint, the geared rotor it drives; empty when the model has none.
+fn rotors_of_joints(model: &Model) -> Vec<Option<usize>> {
+    if model.rotors.is_empty() {
+        return Vec::new();
+    }
+    let mut rotors = vec![None; model.joints.len()];
+    for (r, rotor) in model.rotors.iter().enumerate() {
+        rotors[rotor.joint] = Some(r);
+    }
+    rotors
+}
+
+/// The geared rotor joint `k` drives, if any.
+fn rotor_of(data: &Data, k: usize) -> Option<usize> {
+    data.rotor_of_joint.get(k).copied().flatten()
 }
 
 fn slice(values: &[f64], offset: usize, count: usize) -> &[f64] {
@@ -255,7 +284,7 @@ pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force
                 - external[i]
         };
     }
-    add_rotor_torques(model, data, a);
+    data.add_rotor_torques(model, a);
 }
 
 /// RNEA's pass back: the generalised forces `tau` (length nv) from the bodies' forces that
@@ -513,7 +542,10 @@ pub fn aba_after_kinematics(
     }
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
-        aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?;
+        match rotor_of(data, k) {
+            Some(r) => data.aba_rotor_step(model, k, r, tau[joint.v_offset])?,
+            None => aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?,
+        }
     }
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
@@ -531,6 +563,9 @@ pub fn aba_after_kinematics(
         let mut rhs = Vector6::zeros();
         for c in 0..n {
             rhs[c] = data.u_vector[i][c] - data.u[i][c].dot(&a);
+        }
+        if let Some(r) = rotor_of(data, k) {
+            rhs[0] -= data.rotor_acceleration_term(model, k, r, parent_acceleration, &a);
         }
         let out = &mut accelerations.as_mut_slice()[joint.v_offset..joint.v_offset + n];
         for (r, o) in out.iter_mut().enumerate() {
@@ -610,7 +645,8 @@ fn aba_backward_step(
     Ok(())
 }
 
-// Geared rotors (see `rotors`): their spin's energy, mass-matrix terms and torques.
+// Geared rotors (see `rotors`; their terms of CRBA, RNEA and ABA are in `geared`): their
+// spin and its energy.
 
 /// The rate of a one-coordinate joint, from its state's motion S q̇.
 fn joint_rate(data: &Data, joint: usize) -> f64 {
@@ -640,57 +676,12 @@ pub fn rotor_spin(rotor: &super::rotors::Rotor, motions: &[Motion], rate: f64) -
     rotor.axis.dot(&angular(&motions[rotor.carrier])) + rotor.ratio * rate
 }
 
-/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q; w is
-/// the rotor's spin rate per unit velocity, found by moving each velocity alone (in `data`'s
-/// rotor scratch: nothing is allocated).
+/// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q.
 pub fn add_rotors_to_mass(model: &Model, data: &mut Data, mass: &mut DMatrix<f64>) {
-    if model.rotors.is_empty() {
-        return;
-    }
-    let mut motions = std::mem::take(&mut data.rotor_motions);
-    for j in 0..model.nv {
-        data.rotor_unit[j] = 1.0;
-        body_motions(model, data, &data.rotor_unit, &mut motions);
-        data.rotor_unit[j] = 0.0;
-        for (r, rotor) in model.rotors.iter().enumerate() {
-            let rate = if j == rotor.velocity { 1.0 } else { 0.0 };
-            data.rotor_rows[(r, j)] = rotor_spin(rotor, &motions, rate);
-        }
-    }
-    data.rotor_motions = motions;
-    for (r, rotor) in model.rotors.iter().enumerate() {
-        let row = data.rotor_rows.row(r);
-        for i in 0..model.nv {
-            for j in 0..model.nv {
-                mass[(i, j)] += rotor.inertia * row[i] * row[j];
-            }
-        }
-    }
+    data.add_rotor_inertias(model, mass);
 }
 
 /// A force that is a moment alone.
 fn pure_moment(moment: &Vector3<f64>) -> Force {
     Force::new(moment.x, moment.y, moment.z, 0.0, 0.0, 0.0)
-}
-
-/// Inverse dynamics of the rotors, at the end of RNEA's pass out: adds each rotor's torque τ_r
-/// to its carrier's force (so the pass back carries it to the joints that turn the carrier) and
-/// leaves, per rotor, n ε·τ_r for the pass back to add to its coordinate's effort in
-/// `data.rotor_own`.
-fn add_rotor_torques(model: &Model, data: &mut Data, a: &[f64]) {
-    for (r, rotor) in model.rotors.iter().enumerate() {
-        let omega = angular(&data.velocity[rotor.carrier]);
-        let omega_dot = match rotor.carrier {
-            0 => Vector3::zeros(),
-            b => angular(&data.acceleration[b]),
-        };
-        let axis = rotor.axis;
-        let spin_rate = rotor.axis.dot(&omega_dot) + rotor.ratio * a[rotor.velocity];
-        let torque = rotor.inertia * (spin_rate * axis + spin(rotor, data) * omega.cross(&axis));
-        if rotor.carrier != 0 {
-            data.force[rotor.carrier] += pure_moment(&torque);
-        }
-        data.rotor_own[r] = rotor.ratio * axis.dot(&torque);
-        data.rotor_torques[r] = torque;
-    }
 }

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use super::clock::thread_cpu_seconds;
 use super::prepare::{Integrator, Prepared};
-use super::run::{self, integrator_name, Simulation};
+use super::run::{self, Simulation};
 
 /// How a method's steps are set: a tolerance (adaptive integrators) or a fixed step (rk4,
 /// symplectic).
@@ -328,7 +328,7 @@ pub fn computed_reference(
     let tight = run_at(prepared, tolerance)?;
     let looser = run_at(prepared, 10.0 * tolerance)?;
     let source = ReferenceSource::Computed {
-        integrator: integrator_name(integrator).to_string(),
+        integrator: integrator.name().to_string(),
         tolerance,
         self_difference: f64::NAN,
     };

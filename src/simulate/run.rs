@@ -31,6 +31,7 @@ use crate::integrate::{
     integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Interrupt, Method,
     OdeSystem, Settings as IntegratorSettings, Stats,
 };
+use crate::integrators::Feature;
 
 impl OdeSystem for MechanicalSystem<'_> {
     fn dimension(&self) -> usize {
@@ -316,14 +317,20 @@ pub struct Simulation {
     pub report: Report,
 }
 
-pub(super) fn integrator_name(integrator: &Integrator) -> &'static str {
-    match integrator {
-        Integrator::Rk4 => "rk4",
-        Integrator::DormandPrince => "dopri5",
-        Integrator::Dop853 => "dop853",
-        Integrator::Implicit => "implicit",
-        Integrator::Symplectic => "symplectic",
-    }
+/// The features of `model` that an integrator may not handle (`Integrator::refusal`).
+fn features(model: &Model) -> Vec<Feature> {
+    let present = [
+        (Feature::Contacts, model.has_contacts()),
+        (Feature::Stops, !model.stops.is_empty()),
+        (Feature::GearedRotors, !model.rotors.is_empty()),
+        (Feature::Mimics, !model.mimics.is_empty()),
+        (Feature::Friction, !model.frictions.is_empty()),
+    ];
+    present
+        .iter()
+        .filter(|(_, p)| *p)
+        .map(|(f, _)| *f)
+        .collect()
 }
 
 fn output_times(duration: f64, interval: f64) -> Vec<f64> {
@@ -610,11 +617,8 @@ fn simulate_from(
             )
         }
     };
-    if model.has_contacts() && settings.integrator == Integrator::Symplectic {
-        return failed_at_start(
-            prepared,
-            "the symplectic integrator does not handle contacts (`rolling`, `sliding`), whose rows are not all integrable: use dopri5, dop853, rk4 or implicit".to_string(),
-        );
+    if let Some(refusal) = settings.integrator.refusal(&features(model)) {
+        return failed_at_start(prepared, refusal);
     }
     let mut y0 = q0;
     y0.extend_from_slice(&v0);
@@ -714,16 +718,6 @@ fn simulate_from(
             &integrator_settings,
             &mut observer,
         ),
-        None if !plain || !model.stops.is_empty() => Err(IntegrationError {
-            time: 0.0,
-            failure: Failure::System(
-                "the symplectic integrator does not handle stops (links' `lower` and `upper`), \
-                 geared rotors, mimic joints nor joint friction: use `dopri5`, `dop853`, `rk4` \
-                 or `implicit`"
-                    .to_string(),
-            ),
-            stats: Box::default(),
-        }),
         None => {
             let system = &mut *with_work.0;
             // The RATTLE steps keep the loops closed themselves.
@@ -800,7 +794,7 @@ fn simulate_from(
         (stopped, _) => stopped,
     };
     let report = Report {
-        integrator: integrator_name(&settings.integrator).to_string(),
+        integrator: settings.integrator.name().to_string(),
         duration: settings.duration,
         steps: stats.steps,
         rejected_steps: stats.rejected,
@@ -891,7 +885,7 @@ fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
 
 fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
     let report = Report {
-        integrator: integrator_name(&prepared.settings.integrator).to_string(),
+        integrator: prepared.settings.integrator.name().to_string(),
         duration: prepared.settings.duration,
         steps: 0,
         rejected_steps: 0,

@@ -856,7 +856,8 @@ impl fmt::Display for NotFiniteCause {
 impl std::error::Error for SystemError {}
 
 /// Whether the accelerations of a tree need the mass matrix rather than the articulated-body
-/// algorithm: geared rotors (which ABA does not count), mimic couplings (eliminated through M),
+/// algorithm: geared rotors (which ABA counts as well; runs have taken them through M, whose
+/// results the examples' expected outputs hold), mimic couplings (eliminated through M),
 /// joint friction (held through M while sticking) or contacts (whose rows are solved on M⁻¹).
 fn needs_mass_matrix(model: &Model) -> bool {
     let extended = !model.rotors.is_empty()

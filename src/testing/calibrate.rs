@@ -19,7 +19,7 @@ use super::manifest::Case;
 use super::record::rounded;
 use crate::elab::Perturbation;
 use crate::simulate::precision::Reference;
-use crate::simulate::prepare::{Integrator, Prepared};
+use crate::simulate::prepare::Prepared;
 use crate::simulate::run::{self, Simulation};
 
 /// The proposed tolerance is this many times the observed difference.
@@ -152,10 +152,7 @@ fn perturb(values: &mut [f64]) {
 /// fixed-step one. Returns which setting changed, and from what to what.
 fn refine(prepared: &mut Prepared) -> (&'static str, f64, f64) {
     let settings = &mut prepared.settings;
-    let fixed_step = matches!(
-        settings.integrator,
-        Integrator::Rk4 | Integrator::Symplectic
-    );
+    let fixed_step = settings.integrator.fixed_step();
     match settings.step {
         Some(step) if fixed_step => {
             settings.step = Some(step / 2.0);

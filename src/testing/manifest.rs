@@ -187,14 +187,17 @@ struct SimulateEntry {
     step: Option<f64>,
 }
 
-#[derive(Clone, Copy, Deserialize)]
-#[serde(rename_all = "snake_case")]
-enum IntegratorName {
-    Rk4,
-    Dopri5,
-    Dop853,
-    Implicit,
-    Symplectic,
+/// An integrator named as the registry names it (`lsdc::integrators`); any other name is an
+/// error that lists the known ones.
+struct IntegratorName(Integrator);
+
+impl<'de> Deserialize<'de> for IntegratorName {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(deserializer)?;
+        Integrator::from_name(&name)
+            .map(IntegratorName)
+            .map_err(serde::de::Error::custom)
+    }
 }
 
 #[derive(Default, Deserialize)]
@@ -326,13 +329,7 @@ impl ToleranceEntry {
 impl SimulateEntry {
     fn changes(self) -> SettingsChanges {
         SettingsChanges {
-            integrator: self.integrator.map(|name| match name {
-                IntegratorName::Rk4 => Integrator::Rk4,
-                IntegratorName::Dopri5 => Integrator::DormandPrince,
-                IntegratorName::Dop853 => Integrator::Dop853,
-                IntegratorName::Implicit => Integrator::Implicit,
-                IntegratorName::Symplectic => Integrator::Symplectic,
-            }),
+            integrator: self.integrator.map(|IntegratorName(integrator)| integrator),
             duration: self.duration,
             output: self.every,
             tolerance: self.tolerance,

@@ -1,6 +1,8 @@
 //! The dynamics algorithms against each other on random trees of 1 to 30 bodies with mixed
 //! joints: RNEA(q, v, ABA(q, v, τ)) = τ, CRBA equal to the matrix built column by column from
-//! RNEA, symmetric positive definite.
+//! RNEA, symmetric positive definite; with the link features of joints of one coordinate
+//! (geared rotors, friction, mimics), M(q) ABA(q, v, τ) = τ − b(q, v) and CRBA equal to RNEA's
+//! columns.
 
 use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
@@ -11,7 +13,7 @@ use lsdc::load::LoadOptions;
 use lsdc::spatial::Force;
 use proptest::prelude::*;
 
-use crate::common::trees::tree_program;
+use crate::common::trees::{featured_tree_program, tree_program};
 
 fn model_of(text: &str) -> Model {
     let options = LoadOptions {
@@ -82,6 +84,52 @@ proptest! {
         }
         prop_assert!((&mass - mass.transpose()).amax() < 1e-12 * (1.0 + mass.amax()));
         prop_assert!(mass.clone().cholesky().is_some(), "positive definite");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// Every joint kind, and on joints of one coordinate every link feature: the rotors' terms
+    /// of ABA (stacked with the child) against those of CRBA (J w wᵀ) and RNEA (their torques),
+    /// three separate derivations; friction and mimics are efforts and couplings of a run, which
+    /// none of the three counts.
+    #[test]
+    fn forward_dynamics_inverts_the_mass_matrix_with_link_features(
+        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..16),
+        kinds in prop::collection::vec(prop_oneof![3 => 0usize..3, 1 => 0usize..11], 16),
+        features in prop::collection::vec(0usize..8, 16),
+        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+    ) {
+        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
+        let model = model_of(&featured_tree_program(&parents, &kinds, &features, &numbers));
+        let mut data = Data::new(&model);
+        let (q, v) = random_state(&model, &numbers);
+        let tau: Vec<f64> = (0..model.nv).map(|i| numbers[(7 * i + 3) % numbers.len()]).collect();
+        let external: Vec<Force> = (0..=model.body_count())
+            .map(|i| Force::from_fn(|r, _| numbers[(11 * i + r) % numbers.len()] * 0.3))
+            .collect();
+        let acceleration = aba(&model, &mut data, &q, &v, &tau, &external).expect("regular");
+        let bias = rnea(&model, &mut data, &q, &v, &vec![0.0; model.nv], &external).expect("evaluates");
+        let mass = crba(&model, &mut data, &q).expect("evaluates");
+        let moved = &mass * &acceleration;
+        let scale = tau.iter().chain(bias.iter()).chain(moved.iter()).fold(1.0f64, |m, x| m.max(x.abs()));
+        for k in 0..model.nv {
+            let wanted = tau[k] - bias[k];
+            prop_assert!((moved[k] - wanted).abs() <= 1e-12 * scale, "(M a)_{k} = {} vs τ − b = {wanted}", moved[k]);
+        }
+
+        let none = vec![Force::zeros(); model.body_count() + 1];
+        let zero_v = vec![0.0; model.nv];
+        let gravity = rnea(&model, &mut data, &q, &zero_v, &zero_v, &none).expect("evaluates");
+        for c in 0..model.nv {
+            let mut unit = vec![0.0; model.nv];
+            unit[c] = 1.0;
+            let column = rnea(&model, &mut data, &q, &zero_v, &unit, &none).expect("evaluates") - &gravity;
+            for r in 0..model.nv {
+                prop_assert!((mass[(r, c)] - column[r]).abs() <= 1e-12 * (1.0 + mass.amax()), "M[{r},{c}]");
+            }
+        }
     }
 }
 
@@ -301,6 +349,35 @@ fn kinetic_energy_gradient_on_groups_matches_finite_differences() {
             (numeric - gradient[k]).abs() < 1e-6 * (1.0 + numeric.abs()),
             "∂T/∂q along velocity {k}: {} vs {numeric}",
             gradient[k]
+        );
+    }
+}
+
+/// `lsdc eval`'s forward dynamics of the geared arm (its rotors on the base and on the upper
+/// arm) at the state of issue 44, where it once ignored the rotors ([0.230, 30.46]): M a = τ − b
+/// with M and b = RNEA(q, v, 0) of the same evaluation, the 2 × 2 system solved by hand.
+#[test]
+fn geared_arm_forward_dynamics_inverts_its_mass_matrix() {
+    let prepared = crate::common::programs::prepared("geared_arm", &[]);
+    let state = lsdc::api::StateInput {
+        q: vec![0.3, -0.4],
+        v: Some(vec![0.5, 0.2]),
+        a: Some(vec![0.0, 0.0]),
+        tau: Some(vec![0.0, 0.0]),
+    };
+    let evaluation = lsdc::api::evaluate(&prepared, &[state]).expect("evaluates");
+    let output = &evaluation.states[0];
+    let (m, b) = (&output.crba, output.rnea.as_ref().expect("rnea"));
+    let a = output.aba.as_ref().expect("aba");
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let wanted = [
+        (m[1][1] * -b[0] - m[0][1] * -b[1]) / det,
+        (m[0][0] * -b[1] - m[1][0] * -b[0]) / det,
+    ];
+    for k in 0..2 {
+        assert!(
+            (a[k] - wanted[k]).abs() <= 1e-12 * wanted[k].abs().max(1e-3),
+            "{a:?} vs {wanted:?}"
         );
     }
 }

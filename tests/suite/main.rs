@@ -24,6 +24,7 @@ mod generated_code;
 mod golden;
 mod hard_loops;
 mod integrate_projection;
+mod integrator_registry;
 mod integrators;
 mod joint_friction;
 mod kinematics;
