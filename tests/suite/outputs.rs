@@ -193,6 +193,42 @@ fn frames_asked_by_name_are_the_states_the_kinematic_model_computes() {
 }
 
 #[test]
+fn json_samples_keep_the_program_outputs_apart_from_the_frames_asked_by_name() {
+    let program = std::env::temp_dir().join(format!("lsdc-json-frames-{}.lsd", std::process::id()));
+    let text = example_text("four_bar", &[]) + "output gap = distance(bar1, coupler_point) ;\n";
+    std::fs::write(&program, text).expect("written");
+    let path = program.to_str().expect("a path");
+    let library = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let run = |format: &str| {
+        let arguments = ["simulate", path, "-L", library, "--duration", "0.2"];
+        let frames = ["--output-frame", "coupler_point", "--format", format];
+        let (code, out, err) = lsdc(&[&arguments[..], &frames[..]].concat());
+        assert_eq!(code, 0, "{err}");
+        out
+    };
+    let (json, csv) = (run("json"), run("csv"));
+    std::fs::remove_file(&program).ok();
+    let document: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+    assert_eq!(document["output_names"], serde_json::json!(["gap"]));
+    let samples = document["samples"].as_array().expect("samples");
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(samples.len(), rows.len());
+    let header: Vec<&str> = csv.lines().next().expect("a header").split(',').collect();
+    let x = header.iter().position(|c| *c == "coupler_point.x").expect("x");
+    for (sample, row) in samples.iter().zip(rows) {
+        assert_eq!(sample["outputs"].as_array().map(Vec::len), Some(1));
+        let frame = &sample["frames"]["coupler_point"];
+        let columns: Vec<f64> = row.split(',').map(|c| c.parse().expect("a number")).collect();
+        let parts = ["position", "orientation", "velocity", "angular_velocity"];
+        let values: Vec<f64> = (parts.iter())
+            .flat_map(|part| frame[part].as_array().expect(part).clone())
+            .map(|v| v.as_f64().expect("a number"))
+            .collect();
+        assert_eq!(values, columns[x..x + 13], "t = {}", columns[0]);
+    }
+}
+
+#[test]
 fn outputs_in_an_array_of_packages_are_named_by_instance() {
     let text = "import joints ;
 let z = [0, 0, 1] ;
