@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::io::{self, Write};
 use std::time::{Duration, Instant};
 
-use super::samples::SampleWriter;
+use super::sample_writer::SampleWriter;
 use super::text::signal_name;
 use crate::simulate::run::{Report, Sample, Simulation};
 

@@ -6,7 +6,7 @@ use std::io::{self, Write};
 
 use serde_json::{Map, Value};
 
-use super::samples::SampleWriter;
+use super::sample_writer::SampleWriter;
 use crate::kinematics::frames::{FrameState, STATE_COMPONENTS};
 use crate::simulate::run::{Sample, Simulation};
 

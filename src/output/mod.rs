@@ -5,6 +5,7 @@ pub mod csv;
 pub mod json;
 pub mod plot;
 pub mod precision_plot;
+pub mod sample_writer;
 pub mod samples;
 pub mod text;
 pub mod urdf;

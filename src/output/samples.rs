@@ -1,32 +1,19 @@
-//! Where a run's samples go: one [`SampleWriter`] per format (CSV rows streamed as the run
-//! computes them, one JSON document written at its end), chosen by [`SampleFormat`].
+//! Where a run's samples go: the [`SampleWriter`] of a [`SampleFormat`] (CSV rows streamed as
+//! the run computes them, one JSON document written at its end).
 
-use std::io::{self, Write};
+use std::io::Write;
 
 use super::csv::CsvWriter;
 use super::json::JsonWriter;
+pub use super::sample_writer::SampleWriter;
 use crate::simulate::prepare::Prepared;
-use crate::simulate::run::{reaction_names_of, Sample, Simulation};
+use crate::simulate::run::reaction_names_of;
 
 /// The formats of a run's samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SampleFormat {
     Csv,
     Json,
-}
-
-/// Writes a run's samples in one format.
-pub trait SampleWriter {
-    /// Takes a sample as soon as the run has computed it.
-    fn write_sample(&mut self, sample: &Sample);
-
-    /// Ends the output once the run is over (with everything the simulation holds): the first
-    /// write error, if any.
-    fn finish(self: Box<Self>, simulation: &Simulation) -> io::Result<()>;
-
-    /// Whether the run must keep its samples for [`finish`](SampleWriter::finish) (a writer of
-    /// one document at the end, rather than of rows as they come).
-    fn needs_kept_samples(&self) -> bool;
 }
 
 /// The writer of `format` for the runs of `prepared`, writing to `out` (a CSV header at once).
