@@ -5,8 +5,10 @@
 //!    no errors, its [`Mechanism`].
 //! 2. [`Program::prepare`]: values for the unknowns, the dynamic model, the initial state and the
 //!    settings, as `lsdc simulate` prepares them: a [`Prepared`] simulation.
+//!    [`Program::output_frames`] adds the state of named frames to its outputs.
 //! 3. [`run`]: the integration, every sample handed to a sink as it is computed, and the
-//!    [`Simulation`] with its report. [`evaluate`] gives the dynamics at chosen states instead.
+//!    [`Simulation`] with its report (its warnings by [`Report::warnings`]); [`run_with`] with
+//!    options. [`evaluate`] gives the dynamics at chosen states instead.
 //!
 //! Every failure is an [`Error`]; errors in the program are [`Diagnostic`]s, which
 //! [`Program::render`] shows as the command line does.
@@ -34,9 +36,11 @@ pub use crate::elab::Mechanism;
 pub use crate::kinematics::unknowns::Override;
 pub use crate::load::{LoadError, LoadOptions};
 pub use crate::simulate::batch::{parse_states, Evaluation, StateInput, StatesError};
+use crate::simulate::outputs::Outputs;
 pub use crate::simulate::prepare::Prepared;
-pub use crate::simulate::run::{Report, Sample, Simulation};
+pub use crate::simulate::run::{Report, RunOptions, Sample, Simulation};
 pub use crate::simulate::settings::{Integrator, Settings, SettingsChanges, SettingsError};
+pub use crate::source::SourceMap;
 
 /// Why a step of the library's pipeline failed.
 #[derive(Debug)]
@@ -50,6 +54,8 @@ pub enum Error {
     Settings(SettingsError),
     /// The states to evaluate cannot be read, or one of them cannot be evaluated.
     States(StatesError),
+    /// A frame asked for by name cannot be found, or followed by the outputs.
+    Frame(String),
 }
 
 impl fmt::Display for Error {
@@ -58,6 +64,7 @@ impl fmt::Display for Error {
             Error::Load(error) => error.fmt(f),
             Error::Settings(error) => error.fmt(f),
             Error::States(error) => error.fmt(f),
+            Error::Frame(message) => f.write_str(message),
             Error::Program(diagnostics) => {
                 let errors: Vec<String> = diagnostics
                     .iter()
@@ -76,7 +83,7 @@ impl std::error::Error for Error {
             Error::Load(error) => Some(error),
             Error::Settings(error) => Some(error),
             Error::States(error) => Some(error),
-            Error::Program(_) => None,
+            Error::Program(_) | Error::Frame(_) => None,
         }
     }
 }
@@ -122,7 +129,8 @@ impl Program {
     /// # Ok::<(), lsdc::api::Error>(())
     /// ```
     pub fn from_file(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Program, Error> {
-        let compilation = driver::compile_files(&[path.as_ref().to_path_buf()], options)?;
+        // Nothing here reads the syntax tree again: it is freed as the mechanism is elaborated.
+        let compilation = driver::compile_files_lean(&[path.as_ref().to_path_buf()], options)?;
         Ok(Program { compilation })
     }
 
@@ -162,11 +170,22 @@ impl Program {
     /// Other diagnostics about this program (from [`prepare`](Program::prepare), say) rendered
     /// against its sources, with the import that brought a library in.
     pub fn render_diagnostics(&self, diagnostics: &[Diagnostic]) -> String {
+        render::to_text(self.sources(), &self.in_context(diagnostics))
+    }
+
+    /// Diagnostics about this program with the import that brought a library in, to render
+    /// against its [`sources`](Program::sources) (as text or JSON, `diag::render`).
+    pub fn in_context(&self, diagnostics: &[Diagnostic]) -> Vec<Diagnostic> {
         let mut diagnostics = diagnostics.to_vec();
         for diagnostic in &mut diagnostics {
             self.compilation.workspace.add_import_context(diagnostic);
         }
-        render::to_text(&self.compilation.workspace.sources, &diagnostics)
+        diagnostics
+    }
+
+    /// The program's source files, which its diagnostics point into.
+    pub fn sources(&self) -> &SourceMap {
+        &self.compilation.workspace.sources
     }
 
     /// The mechanism the program describes, when it has no errors.
@@ -206,6 +225,40 @@ impl Program {
         prepared.settings.apply(changes)?;
         Ok(prepared)
     }
+
+    /// Adds the state of each named frame to the outputs of `prepared`, after the program's
+    /// own: a frame the program names, a body's name or `earth`, 13 columns `NAME.x`, `NAME.y`,
+    /// `NAME.z`, `NAME.qw` … `NAME.qz` (unit quaternion, w ≥ 0), `NAME.vx` … `NAME.wz` in the
+    /// fixed frame, as `output NAME = NAME;` would (and `lsdc simulate --output-frame`).
+    ///
+    /// ```
+    /// use lsdc::api::{run, Program, SettingsChanges};
+    ///
+    /// let program = Program::from_file("examples/pendulum.lsd", &Default::default())?;
+    /// let mut prepared = program.prepare(&[], &SettingsChanges { duration: Some(0.5), ..Default::default() })?;
+    /// program.output_frames(&mut prepared, &["rod".to_string()])?;
+    /// let simulation = run(&prepared, &mut |_| {});
+    /// assert_eq!(simulation.output_names[0], "rod.x");
+    /// assert_eq!(simulation.samples[0].outputs.len(), 13);
+    /// assert!(program.output_frames(&mut prepared, &["rdo".to_string()]).is_err());
+    /// # Ok::<(), lsdc::api::Error>(())
+    /// ```
+    pub fn output_frames(&self, prepared: &mut Prepared, names: &[String]) -> Result<(), Error> {
+        let (mechanism, model) = (self.mechanism()?, &prepared.model);
+        prepared.outputs = Outputs::with_frames(mechanism, model, &prepared.kinematics, names)
+            .map_err(Error::Frame)?;
+        Ok(())
+    }
+
+    /// Lets `prepared` evaluate its equations of motion as native code (the generated C forward
+    /// dynamics, compiled by the C compiler and cached): warnings say why where it cannot, and
+    /// the runs then go on without it.
+    pub fn attach_native(&self, prepared: &mut Prepared) -> Result<Vec<Diagnostic>, Error> {
+        let mechanism = self.mechanism()?;
+        Ok(crate::simulate::compiled::attach_with_warnings(
+            prepared, mechanism,
+        ))
+    }
 }
 
 /// Integrates a prepared simulation. `sink` receives every sample as soon as it is computed (to
@@ -226,6 +279,16 @@ impl Program {
 /// ```
 pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
     crate::simulate::run::run(prepared, sink)
+}
+
+/// As [`run`], with `options`: whether the simulation keeps its samples, and a flag that stops
+/// the run between two steps.
+pub fn run_with(
+    prepared: &Prepared,
+    options: &RunOptions,
+    sink: &mut dyn FnMut(&Sample),
+) -> Simulation {
+    crate::simulate::run::run_with(prepared, options, sink)
 }
 
 /// Inverse dynamics, mass matrix, forward dynamics and the bodies' poses at each state, as

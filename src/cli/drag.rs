@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use clap::ValueEnum;
 
-use crate::{
-    compile_one, json, parse_sets, report_diagnostics, usage_error, write_output, Format,
+use super::shared::{
+    json, load_program, parse_sets, report_diagnostics, usage_error, write_output, Format,
     LibraryArgs, SampleFormat,
 };
 use lsdc::drag::{follow_exact, follow_penalty, parse_targets, DragRun, PenaltyOptions};
@@ -59,7 +59,7 @@ pub struct DragArgs {
     out: Option<PathBuf>,
 }
 
-pub fn drag(args: &DragArgs) -> ExitCode {
+pub fn run(args: &DragArgs) -> ExitCode {
     let positive = [
         args.link_stiffness,
         args.mouse_stiffness,
@@ -74,11 +74,11 @@ pub fn drag(args: &DragArgs) -> ExitCode {
         Ok(o) => o,
         Err(code) => return code,
     };
-    let compilation = match compile_one(&args.file, &args.libraries.options(), Format::Text) {
-        Ok(c) => c,
+    let program = match load_program(&args.file, &args.libraries.options(), Format::Text) {
+        Ok(program) => program,
         Err(code) => return code,
     };
-    let Some(mechanism) = &compilation.mechanism else {
+    let Ok(mechanism) = program.mechanism() else {
         return ExitCode::from(1);
     };
     let assembled = lsdc::topology::build(mechanism).and_then(|topology| {
@@ -88,12 +88,12 @@ pub fn drag(args: &DragArgs) -> ExitCode {
     let (model, report) = match assembled {
         Ok((model, report, warnings)) => {
             if !warnings.is_empty() {
-                report_diagnostics(&compilation, &warnings, Format::Text);
+                report_diagnostics(&program, &warnings, Format::Text);
             }
             (model, report)
         }
         Err(diagnostics) => {
-            report_diagnostics(&compilation, &diagnostics, Format::Text);
+            report_diagnostics(&program, &diagnostics, Format::Text);
             return ExitCode::from(1);
         }
     };

@@ -1,4 +1,20 @@
-//! The commands that look at a mechanism's motion: `lsdc drag` and `lsdc view`.
+//! The commands of `lsdc`, one file each: its arguments and a `run` that calls the library and
+//! prints the result. `shared` holds what they share (`--quiet`, usage errors, diagnostics).
 
+pub mod assemble;
+pub mod check;
+pub mod compile;
 pub mod drag;
+pub mod eval;
+pub mod export_urdf;
+pub mod fmt;
+pub mod import_urdf;
+pub mod lsp;
+pub mod parse;
+pub mod precision;
+pub mod shared;
+pub mod simulate;
+pub mod statics;
+pub mod test;
+pub mod tree;
 pub mod view;

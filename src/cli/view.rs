@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use crate::{compile_one, parse_sets, report_diagnostics, usage_error, Format, LibraryArgs};
+use super::shared::{prepare_program, usage_error, Format, LibraryArgs};
 use lsdc::view::scene::read_results;
 use lsdc::view::{server, Viewer};
 
@@ -30,25 +30,20 @@ pub struct ViewArgs {
     port: u16,
 }
 
-pub fn view(args: &ViewArgs) -> ExitCode {
-    let overrides = match parse_sets(&args.sets) {
-        Ok(o) => o,
+pub fn run(args: &ViewArgs) -> ExitCode {
+    let changes = Default::default();
+    let (program, prepared) = match prepare_program(
+        &args.file,
+        &args.libraries,
+        &args.sets,
+        &changes,
+        Format::Text,
+    ) {
+        Ok(prepared) => prepared,
         Err(code) => return code,
     };
-    let compilation = match compile_one(&args.file, &args.libraries.options(), Format::Text) {
-        Ok(c) => c,
-        Err(code) => return code,
-    };
-    let Some(mechanism) = compilation.mechanism.clone() else {
+    let Ok(mechanism) = program.mechanism().cloned() else {
         return ExitCode::from(1);
-    };
-    let settings = lsdc::simulate::prepare::Settings::default();
-    let prepared = match lsdc::simulate::prepare::prepare(&mechanism, &overrides, &settings) {
-        Ok(p) => p,
-        Err(diagnostics) => {
-            report_diagnostics(&compilation, &diagnostics, Format::Text);
-            return ExitCode::from(1);
-        }
     };
     let title = args
         .file

@@ -10,6 +10,7 @@ use std::fmt::Write as _;
 use std::io::{self, Write};
 use std::time::{Duration, Instant};
 
+use super::sample_writer::SampleWriter;
 use super::text::signal_name;
 use crate::simulate::run::{Report, Sample, Simulation};
 
@@ -24,14 +25,14 @@ pub fn to_csv(simulation: &Simulation) -> String {
         &simulation.output_names,
     );
     for sample in &simulation.samples {
-        out += &row(sample, &[]);
+        out += &row(sample);
     }
     out += &ending(&simulation.report);
     out
 }
 
 /// The header line: time, the declared coordinates, their rates, the energies, the
-/// reactions' components and the `extra` columns (the program's outputs, then the frames'
+/// reactions' components and the `extra` columns (the outputs: the program's, then the frames'
 /// states of `--output-frame`).
 pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[String]) -> String {
     let mut out = String::from("time");
@@ -54,14 +55,14 @@ pub fn header(coordinate_names: &[String], reaction_names: &[String], extra: &[S
     out
 }
 
-/// One sample's line, ending with its outputs and the `extra` values.
-pub fn row(sample: &Sample, extra: &[f64]) -> String {
+/// One sample's line, ending with its outputs.
+pub fn row(sample: &Sample) -> String {
     let mut out = exponent(sample.time);
     let values = (sample.coordinates.iter().chain(&sample.rates))
         .chain([&sample.kinetic_energy])
         .map(|&x| Some(x))
         .chain([sample.potential_energy])
-        .chain((sample.reactions.iter().chain(&sample.outputs).chain(extra)).map(|&x| Some(x)));
+        .chain((sample.reactions.iter().chain(&sample.outputs)).map(|&x| Some(x)));
     for value in values {
         out.push(',');
         out += &value.map_or(String::new(), exponent);
@@ -106,7 +107,7 @@ pub struct CsvWriter<W: Write> {
 }
 
 impl<W: Write> CsvWriter<W> {
-    /// Starts the file with its header (see [`header`]).
+    /// Starts the file with its header (see [`header`]); `extra` are the outputs' columns.
     pub fn new(
         out: W,
         coordinate_names: &[String],
@@ -123,22 +124,6 @@ impl<W: Write> CsvWriter<W> {
         writer
     }
 
-    /// Writes a sample's row, ending with the `extra` values its header named.
-    pub fn write_sample(&mut self, sample: &Sample, extra: &[f64]) {
-        self.write(&row(sample, extra));
-        if self.flushed.elapsed() >= FLUSH_EVERY {
-            self.flush();
-        }
-    }
-
-    /// Ends the file after the run (see [`ending`]) and flushes it: the first write error, if
-    /// any.
-    pub fn finish(mut self, report: &Report) -> Result<(), io::Error> {
-        self.write(&ending(report));
-        self.flush();
-        self.error.map_or(Ok(()), Err)
-    }
-
     fn write(&mut self, text: &str) {
         if self.error.is_none() {
             self.error = self.out.write_all(text.as_bytes()).err();
@@ -150,5 +135,26 @@ impl<W: Write> CsvWriter<W> {
             self.error = self.out.flush().err();
         }
         self.flushed = Instant::now();
+    }
+}
+
+impl<W: Write> SampleWriter for CsvWriter<W> {
+    /// Writes the sample's row.
+    fn write_sample(&mut self, sample: &Sample) {
+        self.write(&row(sample));
+        if self.flushed.elapsed() >= FLUSH_EVERY {
+            self.flush();
+        }
+    }
+
+    /// Ends the file after the run (see [`ending`]) and flushes it.
+    fn finish(mut self: Box<Self>, simulation: &Simulation) -> io::Result<()> {
+        self.write(&ending(&simulation.report));
+        self.flush();
+        self.error.map_or(Ok(()), Err)
+    }
+
+    fn needs_kept_samples(&self) -> bool {
+        false
     }
 }

@@ -1,9 +1,12 @@
-//! Output: text renderings of reports, simulation samples as CSV, plots (JSON comes from the
-//! reports' `Serialize` forms).
+//! Output: text renderings of reports, simulation samples (CSV, JSON) behind one writer, plots
+//! (the reports' JSON comes from their `Serialize` forms).
 
 pub mod csv;
+pub mod json;
 pub mod plot;
 pub mod precision_plot;
+pub mod sample_writer;
+pub mod samples;
 pub mod text;
 pub mod urdf;
 pub mod xml;

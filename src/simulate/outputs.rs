@@ -1,6 +1,8 @@
 //! The program's `output` declarations compiled for a run: every output's expression lowered
 //! into one tape (the machinery of the compiled efforts), evaluated at each output time from the
-//! sample's forward kinematics, declared coordinates, rates and time.
+//! sample's forward kinematics, declared coordinates, rates and time. Frames asked for by name
+//! (`--output-frame`) are frame outputs added after the program's own, in the same tape: they
+//! cost one evaluation of their part of the tape per sample, and nothing when none is asked for.
 
 use std::sync::Arc;
 
@@ -12,8 +14,9 @@ use crate::dynamics::model::{EffortFrame, Model};
 use crate::elab::mechanism::{Mechanism, NamedOutput, OutputValue};
 use crate::elab::value::{BodyRef, Frame, FrameQuantity, SExpr, Scalar};
 use crate::kinematics::eval::{unknown_label, EvalError};
-use crate::kinematics::frames::{quaternion, STATE_COMPONENTS};
-use crate::kinematics::model::constant_pose;
+use crate::kinematics::frames::{self, quaternion, STATE_COMPONENTS};
+use crate::kinematics::model::{constant_pose, KinematicModel};
+use crate::source::{FileId, Span};
 
 /// The axes' letters, for the columns of vectors (`tip.x`) and matrices (`r.xy`).
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -31,8 +34,11 @@ enum Layout {
 /// The compiled outputs of a program (none when it declares none).
 #[derive(Clone, Debug, Default)]
 pub struct Outputs {
-    /// The columns, in order: `e`, `tip.x`, `tip.y`, …
+    /// The columns, in order: `e`, `tip.x`, `tip.y`, …, then the 13 of each frame asked for.
     pub names: Vec<String>,
+    /// The frames asked for by name ([`Outputs::with_frames`]), in order: the last 13 columns
+    /// each, after the program's outputs.
+    pub frame_names: Vec<String>,
     layouts: Vec<Layout>,
     tape: Option<EffortTape>,
     frames: Vec<EffortFrame>,
@@ -46,35 +52,35 @@ impl Outputs {
     /// Compiles the mechanism's outputs on the dynamic model; every value the outputs need
     /// must be known (E0840), and their frames constant on bodies of the mechanism (E0841).
     pub fn compile(mechanism: &Mechanism, model: &Model) -> Result<Outputs, Vec<Diagnostic>> {
-        if mechanism.outputs.is_empty() {
-            return Ok(Outputs::default());
+        compile_list(mechanism, model, &mechanism.outputs)
+    }
+
+    /// The program's outputs, then the state of each named frame (a frame the program names, a
+    /// body's name or `earth`): 13 columns `NAME.x` … `NAME.wz` each, as a frame output. The
+    /// error names a frame that cannot be found (with the closest name) or placed.
+    pub fn with_frames(
+        mechanism: &Mechanism,
+        model: &Model,
+        kinematics: &KinematicModel,
+        names: &[String],
+    ) -> Result<Outputs, String> {
+        let mut list = mechanism.outputs.clone();
+        for name in names {
+            // Resolved first for its messages: an unknown name, a frame not constant on its body.
+            frames::resolve(mechanism, kinematics, name)?;
+            let frame = mechanism.frame_named(name).ok_or("resolved above")?;
+            list.push(NamedOutput {
+                name: name.as_str().into(),
+                value: OutputValue::Frame(frame),
+                // Asked for from outside the program: no place in it (errors go by message).
+                span: Span::new(FileId(0), 0, 0),
+            });
         }
-        let frames = place_frames(mechanism, model)?;
-        // Made before the builder and kept until the tape is built: the builder recognises
-        // subexpressions it has lowered by their address.
-        let components: Vec<Vec<Scalar>> = mechanism.outputs.iter().map(components).collect();
-        let declared_offset = |join| model.declared_offset(join);
-        let mut builder = TapeBuilder::new(&model.unknowns, &frames, &declared_offset);
-        let mut outputs = Outputs::default();
-        let mut errors = Vec::new();
-        for (output, components) in mechanism.outputs.iter().zip(&components) {
-            let roots: Result<Vec<usize>, EvalError> = components
-                .iter()
-                .map(|s| builder.scalar(s, Link(None)))
-                .collect();
-            match roots {
-                Ok(roots) => {
-                    outputs.names.extend(column_names(output));
-                    outputs.layouts.push(layout(output, roots));
-                }
-                Err(error) => errors.push(lowering_error(mechanism, output, error)),
-            }
-        }
-        if !errors.is_empty() {
-            return Err(errors);
-        }
-        outputs.tape = Some(builder.build());
-        outputs.frames = frames;
+        let mut outputs = compile_list(mechanism, model, &list).map_err(|errors| {
+            let messages: Vec<String> = errors.iter().map(|e| e.message.clone()).collect();
+            messages.join("; ")
+        })?;
+        outputs.frame_names = names.to_vec();
         Ok(outputs)
     }
 
@@ -101,6 +107,44 @@ impl Outputs {
         }
         values
     }
+}
+
+/// Compiles `list`, outputs of the mechanism, on the dynamic model (see [`Outputs::compile`]).
+fn compile_list(
+    mechanism: &Mechanism,
+    model: &Model,
+    list: &[NamedOutput],
+) -> Result<Outputs, Vec<Diagnostic>> {
+    if list.is_empty() {
+        return Ok(Outputs::default());
+    }
+    let frames = place_frames(mechanism, model, list)?;
+    // Made before the builder and kept until the tape is built: the builder recognises
+    // subexpressions it has lowered by their address.
+    let components: Vec<Vec<Scalar>> = list.iter().map(components).collect();
+    let declared_offset = |join| model.declared_offset(join);
+    let mut builder = TapeBuilder::new(&model.unknowns, &frames, &declared_offset);
+    let mut outputs = Outputs::default();
+    let mut errors = Vec::new();
+    for (output, components) in list.iter().zip(&components) {
+        let roots: Result<Vec<usize>, EvalError> = components
+            .iter()
+            .map(|s| builder.scalar(s, Link(None)))
+            .collect();
+        match roots {
+            Ok(roots) => {
+                outputs.names.extend(column_names(output));
+                outputs.layouts.push(layout(output, roots));
+            }
+            Err(error) => errors.push(lowering_error(mechanism, output, error)),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    outputs.tape = Some(builder.build());
+    outputs.frames = frames;
+    Ok(outputs)
 }
 
 /// Position, quaternion `[w, x, y, z]`, velocity, angular velocity from the 18 evaluated roots.
@@ -167,9 +211,13 @@ fn column_names(output: &NamedOutput) -> Vec<String> {
 }
 
 /// Every frame the outputs read, placed on its body of the dynamic model.
-fn place_frames(mechanism: &Mechanism, model: &Model) -> Result<Vec<EffortFrame>, Vec<Diagnostic>> {
-    let mut used: Vec<(Arc<Frame>, &NamedOutput)> = Vec::new();
-    for output in &mechanism.outputs {
+fn place_frames<'a>(
+    mechanism: &Mechanism,
+    model: &Model,
+    list: &'a [NamedOutput],
+) -> Result<Vec<EffortFrame>, Vec<Diagnostic>> {
+    let mut used: Vec<(Arc<Frame>, &'a NamedOutput)> = Vec::new();
+    for output in list {
         let mut frames = Vec::new();
         match &output.value {
             OutputValue::Scalar(s) => s.frames_used(&mut frames),

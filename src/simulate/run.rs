@@ -305,6 +305,19 @@ pub fn passage_output_warning(report: &Report) -> Option<Diagnostic> {
     )
 }
 
+impl Report {
+    /// The warnings the run found, in this order: steps held by stability (W0901), fixed steps
+    /// too long for their tolerances (W0902), outputs inside a singular passage (W0903).
+    pub fn warnings(&self) -> Vec<Diagnostic> {
+        let found = [
+            stiffness_warning(self),
+            step_error_warning(self),
+            passage_output_warning(self),
+        ];
+        found.into_iter().flatten().collect()
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Simulation {
     pub coordinate_names: Vec<String>,

@@ -1,8 +1,9 @@
 //! Named outputs (`output name = value;`) against independent oracles: a pendulum's tip from its
-//! angle in closed form, an energy output against the run's own energies, a distance output
-//! against the frames' positions that `--output-frame` computes by the kinematic model (another
-//! forward kinematics than the run's), outputs in arrays of packages named by instance, and
-//! `lsdc test` and `lsdc precision` reading outputs.
+//! angle in closed form, an energy output against the run's own energies, the frames of
+//! `--output-frame` (outputs of the same tape) against the frames' states that the kinematic
+//! model computes (another forward kinematics than the run's), a distance output against the
+//! frames' positions, outputs in arrays of packages named by instance, and `lsdc test` and
+//! `lsdc precision` reading outputs.
 
 use crate::common::lsdc;
 use crate::common::programs::{example_text, simulated};
@@ -141,6 +142,110 @@ fn a_frame_output_has_the_columns_and_values_of_output_frame() {
         rows += 1;
     }
     assert_eq!(rows, 21);
+}
+
+#[test]
+fn frames_asked_by_name_are_the_states_the_kinematic_model_computes() {
+    use lsdc::api::{run, Program, SettingsChanges};
+    use lsdc::kinematics::frames::{self, STATE_COMPONENTS};
+    let text = example_text("four_bar", &[]);
+    let examples = std::path::Path::new("examples");
+    let program = Program::from_text("four_bar.lsd", &text, Some(examples), &Default::default());
+    let changes = SettingsChanges {
+        duration: Some(1.0),
+        ..Default::default()
+    };
+    let mut prepared = program.prepare(&[], &changes).expect("prepares");
+    let names = [
+        "coupler_point".to_string(),
+        "bar1".to_string(),
+        "earth".to_string(),
+    ];
+    program
+        .output_frames(&mut prepared, &names)
+        .expect("frames found");
+    let mechanism = program.mechanism().expect("a mechanism");
+    let points: Vec<_> = (names.iter())
+        .map(|name| frames::resolve(mechanism, &prepared.kinematics, name).expect("resolved"))
+        .collect();
+    let simulation = run(&prepared, &mut |_| {});
+    assert_eq!(simulation.output_names.len(), 13 * names.len());
+    assert_eq!(simulation.output_names[13], "bar1.x");
+    assert_eq!(simulation.samples.len(), 21);
+    for sample in &simulation.samples {
+        let states = frames::states(
+            &prepared.kinematics,
+            &points,
+            &sample.coordinates,
+            &sample.rates,
+        )
+        .expect("evaluated");
+        let expected: Vec<f64> = states.iter().flat_map(|s| s.values()).collect();
+        for (k, (ours, theirs)) in sample.outputs.iter().zip(&expected).enumerate() {
+            let column = &simulation.output_names[k];
+            assert!(
+                (ours - theirs).abs() < 1e-12,
+                "t = {}, {column}: {ours} ≠ {theirs}",
+                sample.time
+            );
+            assert!(column.ends_with(STATE_COMPONENTS[k % 13]));
+        }
+    }
+    let unknown = program.output_frames(&mut prepared, &["coupler_pont".to_string()]);
+    let message = unknown.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(
+        message.contains("did you mean `coupler_point`"),
+        "{message}"
+    );
+}
+
+#[test]
+fn json_samples_keep_the_program_outputs_apart_from_the_frames_asked_by_name() {
+    let program = std::env::temp_dir().join(format!("lsdc-json-frames-{}.lsd", std::process::id()));
+    let text = example_text("four_bar", &[]) + "output gap = distance(bar1, coupler_point) ;\n";
+    std::fs::write(&program, text).expect("written");
+    let path = program.to_str().expect("a path");
+    let library = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let run = |format: &str| {
+        let arguments = ["simulate", path, "-L", library, "--duration", "0.2"];
+        let frames = ["--output-frame", "coupler_point", "--format", format];
+        let (code, out, err) = lsdc(&[&arguments[..], &frames[..]].concat());
+        assert_eq!(code, 0, "{err}");
+        out
+    };
+    let (json, csv) = (run("json"), run("csv"));
+    std::fs::remove_file(&program).ok();
+    let document: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+    assert_eq!(document["output_names"], serde_json::json!(["gap"]));
+    let samples = document["samples"].as_array().expect("samples");
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(samples.len(), rows.len());
+    let header: Vec<&str> = csv.lines().next().expect("a header").split(',').collect();
+    let x = header
+        .iter()
+        .position(|c| *c == "coupler_point.x")
+        .expect("x");
+    for (sample, row) in samples.iter().zip(rows) {
+        assert_eq!(sample["outputs"].as_array().map(Vec::len), Some(1));
+        let frame = &sample["frames"]["coupler_point"];
+        let columns: Vec<f64> = row
+            .split(',')
+            .map(|c| c.parse().expect("a number"))
+            .collect();
+        let parts = ["position", "orientation", "velocity", "angular_velocity"];
+        let values: Vec<f64> = (parts.iter())
+            .flat_map(|part| frame[part].as_array().expect(part).clone())
+            .map(|v| v.as_f64().expect("a number"))
+            .collect();
+        // The same numbers: serde_json reads decimals back to within an ulp, not exactly.
+        for (json, csv) in values.iter().zip(&columns[x..x + 13]) {
+            assert!(
+                (json - csv).abs() <= 1e-15 * csv.abs().max(1.0),
+                "t = {}: {json} ≠ {csv}",
+                columns[0]
+            );
+        }
+    }
 }
 
 #[test]

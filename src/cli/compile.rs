@@ -1,0 +1,79 @@
+//! `lsdc compile FILE --emit WHAT`: the notation table, the equations of motion, or source code
+//! that evaluates them.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::ValueEnum;
+
+use super::shared::{analysed, usage_error, write_output, Format, LibraryArgs};
+use lsdc::elab::Mechanism;
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Emit {
+    Notation,
+    Equations,
+    Rust,
+    C,
+}
+
+/// How `--emit equations` writes them.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum EquationsFormat {
+    Text,
+    Latex,
+    Sympy,
+    Json,
+}
+
+#[derive(clap::Args)]
+pub struct CompileArgs {
+    file: PathBuf,
+    #[command(flatten)]
+    libraries: LibraryArgs,
+    /// `notation`: the thesis-style notation table (structure, variables, declared and
+    /// deduced assignments). `equations`: the equations of motion M q' = S + F + Δᵀ Λ,
+    /// Δ q' + Δ̇q = 0 in the `--format` given. `rust`, `c`: source code that evaluates them
+    /// and the forward dynamics.
+    #[arg(long, value_enum)]
+    emit: Emit,
+    /// Format of `--emit equations` (default text).
+    #[arg(long, value_enum)]
+    format: Option<EquationsFormat>,
+    /// Write to this file instead of standard output.
+    #[arg(short = 'o', long = "out")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(args: &CompileArgs) -> ExitCode {
+    let (emit, format) = (args.emit, args.format);
+    if format.is_some() && emit != Emit::Equations {
+        return usage_error("`--format` applies to `--emit equations` only");
+    }
+    let source = args.file.display().to_string();
+    let analyse = |mechanism: &Mechanism| {
+        let topology = lsdc::topology::build(mechanism)?;
+        if emit == Emit::Notation {
+            return Ok((
+                lsdc::topology::notation::notation(mechanism, &topology),
+                Vec::new(),
+            ));
+        }
+        let equations = lsdc::symbolic::generate(mechanism, &topology)?;
+        use lsdc::symbolic::emit;
+        let text = match (emit, format.unwrap_or(EquationsFormat::Text)) {
+            (Emit::Rust, _) => emit::rust(&equations, &source),
+            (Emit::C, _) => emit::c(&equations, &source),
+            (_, EquationsFormat::Text) => emit::text(&equations, &source),
+            (_, EquationsFormat::Latex) => emit::latex(&equations, &source),
+            (_, EquationsFormat::Sympy) => emit::sympy(&equations, &source),
+            (_, EquationsFormat::Json) => emit::json(&equations, &source),
+        };
+        Ok((text, Vec::new()))
+    };
+    let options = args.libraries.options();
+    match analysed(&args.file, &options, Format::Text, analyse) {
+        Ok(text) => write_output(args.out.as_deref(), &text),
+        Err(code) => code,
+    }
+}

@@ -1,0 +1,57 @@
+//! `lsdc eval FILE --states states.json`: inverse dynamics, mass matrix, forward dynamics and
+//! the bodies' poses at a list of states, as JSON.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use super::shared::{json, out, prepare_file, usage_error, warn, Format, LibraryArgs};
+use lsdc::api::{evaluate, parse_states};
+
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    file: PathBuf,
+    #[command(flatten)]
+    libraries: LibraryArgs,
+    /// JSON file of states: {"states": [{"q": [..], "v": [..], "a": [..], "tau": [..]}]}.
+    #[arg(long)]
+    states: PathBuf,
+    /// Value of an unknown, as for `simulate`. Repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    sets: Vec<String>,
+}
+
+pub fn run(args: &EvalArgs) -> ExitCode {
+    let inputs = match std::fs::read_to_string(&args.states)
+        .map_err(|e| e.to_string())
+        .and_then(|text| parse_states(&text).map_err(|e| e.to_string()))
+    {
+        Ok(inputs) => inputs,
+        Err(message) => {
+            return usage_error(&format!(
+                "cannot read states from `{}`: {message}",
+                args.states.display()
+            ))
+        }
+    };
+    let (_, prepared) = match prepare_file(&args.file, &args.libraries, &args.sets, Format::Text) {
+        Ok(prepared) => prepared,
+        Err(code) => return code,
+    };
+    match evaluate(&prepared, &inputs) {
+        Ok(evaluation) => {
+            let failed = evaluation.states.iter().enumerate();
+            for (index, state) in failed.filter(|(_, s)| !s.errors.is_empty()) {
+                let errors: Vec<String> = (state.errors.iter())
+                    .map(|(quantity, message)| format!("{quantity}: {message}"))
+                    .collect();
+                warn(&format!("state {index}: {}", errors.join("; ")));
+            }
+            out(&json(&evaluation));
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("error: {error}");
+            ExitCode::from(1)
+        }
+    }
+}
