@@ -38,7 +38,8 @@ use scratch::Scratch;
 pub struct MechanicalSystem<'m> {
     pub model: &'m Model,
     pub state: RunState,
-    pub scratch: Scratch,
+    /// Boxed, so that handing it to the outputs and back (`sampling`) moves a pointer.
+    pub scratch: Box<Scratch>,
     /// The scratch of the outputs' evaluations (`sampling`), made at their first.
     sampling: Option<Box<Scratch>>,
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
@@ -57,7 +58,7 @@ impl<'m> MechanicalSystem<'m> {
         MechanicalSystem {
             model,
             state: RunState::new(model, reference),
-            scratch: Scratch::new(model, stabilisation),
+            scratch: Box::new(Scratch::new(model, stabilisation)),
             sampling: None,
             native: None,
         }
@@ -71,9 +72,9 @@ impl<'m> MechanicalSystem<'m> {
     pub fn sampling<R>(&mut self, evaluate: impl FnOnce(&mut Self) -> R) -> R {
         self.prepare_sampling();
         let mut scratch = self.sampling.take().expect("prepared");
-        std::mem::swap(&mut self.scratch, &mut *scratch);
+        std::mem::swap(&mut self.scratch, &mut scratch);
         let result = evaluate(self);
-        std::mem::swap(&mut self.scratch, &mut *scratch);
+        std::mem::swap(&mut self.scratch, &mut scratch);
         self.sampling = Some(scratch);
         result
     }
