@@ -33,10 +33,10 @@ use crate::driver::{self, Compilation};
 pub use crate::elab::Mechanism;
 pub use crate::kinematics::unknowns::Override;
 pub use crate::load::{LoadError, LoadOptions};
-pub use crate::simulate::batch::{parse_states, Evaluation, StateInput, StatesError};
 pub use crate::simulate::prepare::Prepared;
 pub use crate::simulate::run::{Report, Sample, Simulation};
 pub use crate::simulate::settings::{Integrator, Settings, SettingsChanges, SettingsError};
+pub use crate::studies::batch::{parse_states, Evaluation, StateInput, StatesError};
 
 /// Why a step of the library's pipeline failed.
 #[derive(Debug)]
@@ -242,5 +242,5 @@ pub fn run(prepared: &Prepared, sink: &mut dyn FnMut(&Sample)) -> Simulation {
 /// # Ok::<(), lsdc::api::Error>(())
 /// ```
 pub fn evaluate(prepared: &Prepared, states: &[StateInput]) -> Result<Evaluation, Error> {
-    crate::simulate::batch::evaluate_states(prepared, states).map_err(Error::States)
+    crate::studies::batch::evaluate_states(prepared, states).map_err(Error::States)
 }

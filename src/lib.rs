@@ -7,14 +7,12 @@
 //! `source` (files, spans) → `syntax` (text to AST) → `load` (imports, libraries, URDF) →
 //! `check` (names and types) → `elab` (values: bodies, frames, links, joins, efforts,
 //! unknowns) → `topology` (numbering, principal and complementary links) → `kinematics` →
-//! `dynamics` → `integrate` and `simulate` → `output`; `symbolic` writes the equations from the
+//! `dynamics` → `integrate` and `simulate` → `studies` (built on runs) → `output`; `symbolic` writes the equations from the
 //! mechanism. `diag` holds the diagnostics every phase reports.
 
-pub mod analysis;
 pub mod api;
 pub mod check;
 pub mod diag;
-pub mod drag;
 pub mod driver;
 pub mod dynamics;
 pub mod elab;
@@ -27,6 +25,7 @@ pub mod output;
 pub mod simulate;
 pub mod source;
 pub mod spatial;
+pub mod studies;
 pub mod symbolic;
 pub mod syntax;
 pub mod testing;

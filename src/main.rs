@@ -8,12 +8,12 @@ use std::sync::atomic::Ordering;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use lsdc::analysis;
 use lsdc::diag::{render, Diagnostic};
 use lsdc::driver::{self, Compilation};
 use lsdc::elab::Mechanism;
 use lsdc::load::LoadOptions;
 use lsdc::output::text;
+use lsdc::studies::analysis;
 
 mod cli;
 
@@ -1084,8 +1084,8 @@ fn print_run_report(
 
 /// The methods `lsdc precision` measures: each adaptive integrator at each tolerance, each
 /// fixed-step one at each step.
-fn precision_methods(args: &PrecisionArgs) -> Vec<lsdc::simulate::precision::Method> {
-    use lsdc::simulate::precision::{Method, Setting};
+fn precision_methods(args: &PrecisionArgs) -> Vec<lsdc::studies::precision::Method> {
+    use lsdc::studies::precision::{Method, Setting};
     let mut methods = Vec::new();
     for &integrator in &args.integrators {
         let settings: Vec<Setting> = match integrator.fixed_step() {
@@ -1135,8 +1135,8 @@ fn check_precision_args(args: &PrecisionArgs) -> Result<(), String> {
 fn precision_reference(
     args: &PrecisionArgs,
     prepared: &mut lsdc::simulate::prepare::Prepared,
-) -> Result<lsdc::simulate::precision::Reference, String> {
-    use lsdc::simulate::precision::{computed_reference, Reference};
+) -> Result<lsdc::studies::precision::Reference, String> {
+    use lsdc::studies::precision::{computed_reference, Reference};
     if let Some(path) = &args.reference {
         let name = path.display().to_string();
         let text = std::fs::read_to_string(path)
@@ -1173,7 +1173,7 @@ fn precision(args: &PrecisionArgs) -> ExitCode {
     }
     let table = precision_reference(args, &mut prepared).and_then(|reference| {
         let methods = precision_methods(args);
-        lsdc::simulate::precision::table(
+        lsdc::studies::precision::table(
             &mut prepared,
             &methods,
             reference,
@@ -1214,7 +1214,7 @@ fn statics(
         Ok(p) => p,
         Err(code) => return code,
     };
-    let holding = match lsdc::simulate::statics::holding_efforts(&prepared, actuated) {
+    let holding = match lsdc::studies::statics::holding_efforts(&prepared, actuated) {
         Ok(h) => h,
         Err(error) => return usage_error(&error.to_string()),
     };
@@ -1231,7 +1231,7 @@ fn eval(
     states: &std::path::Path,
     sets: &[String],
 ) -> ExitCode {
-    use lsdc::simulate::batch::{evaluate_states, parse_states};
+    use lsdc::studies::batch::{evaluate_states, parse_states};
     let inputs = match std::fs::read_to_string(states)
         .map_err(|e| e.to_string())
         .and_then(|text| parse_states(&text).map_err(|e| e.to_string()))

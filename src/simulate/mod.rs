@@ -1,7 +1,6 @@
 //! Simulation of mechanisms (trees and closed loops): the equations of motion as an ODE system, integrated from the
 //! program's initial values, with outputs and a run report.
 
-pub mod batch;
 pub mod branch;
 pub mod clock;
 pub mod compiled;
@@ -12,14 +11,12 @@ pub mod impacts;
 pub mod lie_group;
 pub mod native;
 pub mod outputs;
-pub mod precision;
 pub mod prepare;
 pub mod run;
 pub mod run_state;
 mod sample;
 mod sampler;
 pub mod settings;
-pub mod statics;
 pub mod stiffness;
 mod summary;
 pub mod system;

@@ -325,7 +325,7 @@ pub struct Simulation {
     pub report: Report,
 }
 
-pub(super) fn integrator_name(integrator: &Integrator) -> &'static str {
+pub(crate) fn integrator_name(integrator: &Integrator) -> &'static str {
     match integrator {
         Integrator::Rk4 => "rk4",
         Integrator::DormandPrince => "dopri5",

@@ -10,7 +10,7 @@ use lsdc::dynamics::loops::Stabilisation;
 use lsdc::load::LoadOptions;
 use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Sample, Simulation};
-use lsdc::simulate::statics::holding_efforts;
+use lsdc::studies::statics::holding_efforts;
 
 #[test]
 fn four_bar_and_slider_crank_conserve_energy_and_stay_closed() {

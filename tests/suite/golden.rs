@@ -31,7 +31,7 @@ fn render_diagnostics(input: &Path) -> String {
         match lsdc::topology::build(mechanism) {
             Err(errors) => diagnostics.extend(errors),
             Ok(topology) => {
-                match lsdc::analysis::assembled_model(
+                match lsdc::studies::analysis::assembled_model(
                     mechanism,
                     topology.clone(),
                     &Default::default(),

@@ -172,7 +172,8 @@ pub fn exercise(text: &str, dir: Option<&Path>) -> usize {
         return 1;
     };
     let _ = lsdc::topology::notation::notation(mechanism, &topology);
-    let _ = lsdc::analysis::assembled_model(mechanism, topology.clone(), &Default::default());
+    let _ =
+        lsdc::studies::analysis::assembled_model(mechanism, topology.clone(), &Default::default());
     if let Ok(equations) = lsdc::symbolic::generate(mechanism, &topology) {
         let _ = lsdc::symbolic::emit::c(&equations, "mutant.lsd");
         let _ = lsdc::symbolic::emit::text(&equations, "mutant.lsd");

@@ -8,11 +8,11 @@ use std::fmt;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-use super::prepare::Prepared;
-use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::rnea;
 use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Extent, Stabilisation};
+use crate::simulate::prepare::Prepared;
+use crate::simulate::system::{MechanicalSystem, SystemError};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct HeldCoordinate {

@@ -12,9 +12,9 @@ use std::fmt;
 
 use serde::Serialize;
 
-use super::clock::thread_cpu_seconds;
-use super::prepare::{Integrator, Prepared};
-use super::run::{self, integrator_name, Simulation};
+use crate::simulate::clock::thread_cpu_seconds;
+use crate::simulate::prepare::{Integrator, Prepared};
+use crate::simulate::run::{self, integrator_name, Simulation};
 
 /// How a method's steps are set: a tolerance (adaptive integrators) or a fixed step (rk4,
 /// symplectic).

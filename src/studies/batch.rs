@@ -33,12 +33,12 @@ use nalgebra::DVector;
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize, Serializer};
 
-use super::prepare::Prepared;
-use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
 use crate::dynamics::model::Model;
+use crate::simulate::prepare::Prepared;
+use crate::simulate::system::{MechanicalSystem, SystemError};
 
 /// One state to evaluate: positions, velocities (zero when absent), and accelerations (for the
 /// inverse dynamics) or generalised forces (for the forward dynamics), or both.
