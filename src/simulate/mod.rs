@@ -6,8 +6,6 @@ pub mod clock;
 pub mod compiled;
 pub mod consistent;
 pub mod constraints;
-mod friction;
-pub mod impacts;
 pub mod lie_group;
 pub mod native;
 pub mod outputs;

@@ -8,8 +8,10 @@
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
 
+mod friction;
 mod held_reactions;
 mod holding;
+pub mod impacts;
 mod jacobian;
 pub mod scratch;
 mod stacked;

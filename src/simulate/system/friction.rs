@@ -4,7 +4,7 @@
 
 use nalgebra::DVector;
 
-use super::system::{MechanicalSystem, SystemError};
+use super::{MechanicalSystem, SystemError};
 use crate::dynamics::friction::{Phase, Switch};
 
 impl MechanicalSystem<'_> {

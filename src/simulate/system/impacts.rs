@@ -1,7 +1,7 @@
 //! The stops of a mechanism during a run: their event functions (the distance of each stopped
 //! coordinate to its bound), and the impact where one is reached, recorded for the report.
 
-use super::system::{MechanicalSystem, SystemError};
+use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::energy::kinetic_energy;
 use crate::dynamics::mimics;
