@@ -11,7 +11,7 @@ use std::hint::black_box;
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::system::MechanicalSystem;
 
 fn prepared(text: &str) -> Prepared {

@@ -13,8 +13,8 @@ use std::time::Instant;
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::compiled;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::system::MechanicalSystem;
 
 /// ns per call of the right-hand side at the initial state, best over 7 rounds, with the

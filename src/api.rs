@@ -33,9 +33,9 @@ use crate::driver::{self, Compilation};
 pub use crate::elab::Mechanism;
 pub use crate::kinematics::unknowns::Override;
 pub use crate::load::{LoadError, LoadOptions};
-pub use crate::simulate::prepare::Prepared;
+pub use crate::prepare::settings::{Integrator, Settings, SettingsChanges, SettingsError};
+pub use crate::prepare::Prepared;
 pub use crate::simulate::run::{Report, Sample, Simulation};
-pub use crate::simulate::settings::{Integrator, Settings, SettingsChanges, SettingsError};
 pub use crate::studies::batch::{parse_states, Evaluation, StateInput, StatesError};
 
 /// Why a step of the library's pipeline failed.
@@ -202,7 +202,7 @@ impl Program {
         changes: &SettingsChanges,
     ) -> Result<Prepared, Error> {
         let mut prepared =
-            crate::simulate::prepare::prepare(self.mechanism()?, values, &Settings::default())?;
+            crate::prepare::prepare(self.mechanism()?, values, &Settings::default())?;
         prepared.settings.apply(changes)?;
         Ok(prepared)
     }

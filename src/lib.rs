@@ -7,7 +7,7 @@
 //! `source` (files, spans) → `syntax` (text to AST) → `load` (imports, libraries, URDF) →
 //! `check` (names and types) → `elab` (values: bodies, frames, links, joins, efforts,
 //! unknowns) → `topology` (numbering, principal and complementary links) → `kinematics` →
-//! `dynamics` → `integrate` and `simulate` → `studies` (built on runs) → `output`; `symbolic` writes the equations from the
+//! `dynamics` → `prepare` (a program made ready to run) → `integrate` and `simulate` → `studies` (built on runs) → `output`; `symbolic` writes the equations from the
 //! mechanism. `diag` holds the diagnostics every phase reports.
 
 pub mod api;
@@ -22,6 +22,7 @@ pub mod kinematics;
 pub mod linalg;
 pub mod load;
 pub mod output;
+pub mod prepare;
 pub mod simulate;
 pub mod source;
 pub mod spatial;

@@ -125,7 +125,7 @@ struct SimulateArgs {
     output_frames: Vec<String>,
     /// Most steps of the integrator, rejected ones included, before the run stops with a
     /// failure (its outputs kept).
-    #[arg(long, value_name = "N", default_value_t = lsdc::simulate::settings::DEFAULT_MAX_STEPS)]
+    #[arg(long, value_name = "N", default_value_t = lsdc::prepare::settings::DEFAULT_MAX_STEPS)]
     max_steps: usize,
     /// Do not check whether an explicit integrator's steps are held by its stability region
     /// (W0901; the check costs three evaluations every 20 steps).
@@ -156,8 +156,8 @@ enum IntegratorArg {
 }
 
 impl IntegratorArg {
-    fn integrator(self) -> lsdc::simulate::prepare::Integrator {
-        use lsdc::simulate::prepare::Integrator;
+    fn integrator(self) -> lsdc::prepare::Integrator {
+        use lsdc::prepare::Integrator;
         match self {
             IntegratorArg::Rk4 => Integrator::Rk4,
             IntegratorArg::Dopri5 => Integrator::DormandPrince,
@@ -800,7 +800,7 @@ fn write_output(output: Option<&std::path::Path>, text: &str) -> ExitCode {
     }
 }
 
-fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>, ExitCode> {
+fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::prepare::Override>, ExitCode> {
     sets.iter()
         .map(|s| s.parse())
         .collect::<Result<_, lsdc::kinematics::unknowns::OverrideError>>()
@@ -808,7 +808,7 @@ fn parse_sets(sets: &[String]) -> Result<Vec<lsdc::simulate::prepare::Override>,
 }
 
 fn simulate(args: &SimulateArgs) -> ExitCode {
-    use lsdc::simulate::prepare::{prepare, Settings};
+    use lsdc::prepare::{prepare, Settings};
     let overrides = match parse_sets(&args.sets) {
         Ok(o) => o,
         Err(code) => return code,
@@ -885,9 +885,9 @@ fn simulate(args: &SimulateArgs) -> ExitCode {
 }
 
 /// The command line's changes to the program's `simulate` declaration.
-fn settings_changes(args: &SimulateArgs) -> lsdc::simulate::settings::SettingsChanges {
+fn settings_changes(args: &SimulateArgs) -> lsdc::prepare::settings::SettingsChanges {
     use lsdc::dynamics::loops::Stabilisation;
-    lsdc::simulate::settings::SettingsChanges {
+    lsdc::prepare::settings::SettingsChanges {
         integrator: args.integrator.map(IntegratorArg::integrator),
         duration: args.duration,
         output: args.output_interval,
@@ -907,7 +907,7 @@ fn settings_changes(args: &SimulateArgs) -> lsdc::simulate::settings::SettingsCh
 /// The frames `--output-frame` names, resolved on the mechanism.
 fn resolve_frames(
     mechanism: &Mechanism,
-    prepared: &lsdc::simulate::prepare::Prepared,
+    prepared: &lsdc::prepare::Prepared,
     names: &[String],
 ) -> Result<Vec<lsdc::kinematics::frames::FramePoint>, String> {
     names
@@ -934,7 +934,7 @@ fn open_samples_output(path: Option<&std::path::Path>) -> Result<Box<dyn Write>,
 /// written at the end), until its end, a failure, or SIGINT/SIGTERM; then ends the file.
 fn run_and_write(
     args: &SimulateArgs,
-    prepared: &lsdc::simulate::prepare::Prepared,
+    prepared: &lsdc::prepare::Prepared,
     frames: &[lsdc::kinematics::frames::FramePoint],
     out: Box<dyn Write>,
 ) -> (lsdc::simulate::run::Simulation, Result<(), String>) {
@@ -996,7 +996,7 @@ fn run_and_write(
 /// state by name.
 fn write_json_samples(
     simulation: &lsdc::simulate::run::Simulation,
-    prepared: &lsdc::simulate::prepare::Prepared,
+    prepared: &lsdc::prepare::Prepared,
     frames: &[lsdc::kinematics::frames::FramePoint],
     path: Option<&std::path::Path>,
 ) -> std::io::Result<()> {
@@ -1134,7 +1134,7 @@ fn check_precision_args(args: &PrecisionArgs) -> Result<(), String> {
 /// The reference of `lsdc precision`: the user's CSV, or a run at a much tighter tolerance.
 fn precision_reference(
     args: &PrecisionArgs,
-    prepared: &mut lsdc::simulate::prepare::Prepared,
+    prepared: &mut lsdc::prepare::Prepared,
 ) -> Result<lsdc::studies::precision::Reference, String> {
     use lsdc::studies::precision::{computed_reference, Reference};
     if let Some(path) = &args.reference {
@@ -1154,7 +1154,7 @@ fn precision_reference(
 }
 
 fn precision(args: &PrecisionArgs) -> ExitCode {
-    use lsdc::simulate::settings::SettingsChanges;
+    use lsdc::prepare::settings::SettingsChanges;
     if let Err(message) = check_precision_args(args) {
         return usage_error(&message);
     }
@@ -1280,8 +1280,8 @@ fn prepare_file(
     options: &LoadOptions,
     sets: &[String],
     format: Format,
-) -> Result<lsdc::simulate::prepare::Prepared, ExitCode> {
-    use lsdc::simulate::prepare::{prepare, Settings};
+) -> Result<lsdc::prepare::Prepared, ExitCode> {
+    use lsdc::prepare::{prepare, Settings};
     let overrides = parse_sets(sets)?;
     let compilation = compile_one(file, options, format)?;
     let Some(mechanism) = &compilation.mechanism else {

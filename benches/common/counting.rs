@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use lsdc::driver::compile_files;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Settings};
 use lsdc::simulate::system::MechanicalSystem;
 
 /// The system allocator, counting the allocations of each thread.

@@ -6,7 +6,7 @@ use std::hint::black_box;
 
 use lsdc::dynamics::algorithms::{crba, rnea, Data};
 use lsdc::dynamics::model::Model;
-use lsdc::simulate::prepare::Prepared;
+use lsdc::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 use lsdc::spatial::Force;
 

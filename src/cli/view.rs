@@ -42,8 +42,8 @@ pub fn view(args: &ViewArgs) -> ExitCode {
     let Some(mechanism) = compilation.mechanism.clone() else {
         return ExitCode::from(1);
     };
-    let settings = lsdc::simulate::prepare::Settings::default();
-    let prepared = match lsdc::simulate::prepare::prepare(&mechanism, &overrides, &settings) {
+    let settings = lsdc::prepare::Settings::default();
+    let prepared = match lsdc::prepare::prepare(&mechanism, &overrides, &settings) {
         Ok(p) => p,
         Err(diagnostics) => {
             report_diagnostics(&compilation, &diagnostics, Format::Text);

@@ -2,12 +2,12 @@
 //! (`native.rs`) attached once it agrees with the simulator's own evaluation, or the warning
 //! that says why the runs go on without it.
 
-use super::native::{build, disagreement, Unavailable};
-use super::prepare::Prepared;
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::energy::conservative_forces;
 use crate::elab::mechanism::Mechanism;
+use crate::prepare::native::{build, disagreement, Unavailable};
+use crate::prepare::Prepared;
 
 /// Compiles `prepared`'s forward dynamics and keeps it for its runs, once it agrees with the
 /// simulator's evaluation at the initial state (to 1e-9 of the largest acceleration); otherwise

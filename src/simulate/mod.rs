@@ -4,17 +4,12 @@
 pub mod branch;
 pub mod clock;
 pub mod compiled;
-pub mod consistent;
 pub mod constraints;
 pub mod lie_group;
-pub mod native;
-pub mod outputs;
-pub mod prepare;
 pub mod run;
 pub mod run_state;
 mod sample;
 mod sampler;
-pub mod settings;
 pub mod stiffness;
 mod summary;
 pub mod system;

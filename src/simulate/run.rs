@@ -9,7 +9,6 @@ use serde::Serialize;
 use super::branch;
 use super::clock::thread_cpu_seconds;
 use super::constraints::ConstraintReport;
-use super::prepare::{Integrator, Prepared};
 pub use super::sample::{MomentumDrift, Sample};
 use super::sampler::Sampler;
 use super::stiffness::{self, StiffnessReport};
@@ -27,6 +26,7 @@ use crate::integrate::{
     integrate, CallbackError, Failure, IntegrationError, Interrupt, Method, OdeSystem,
     Settings as IntegratorSettings, Stats,
 };
+use crate::prepare::{Integrator, Prepared};
 
 impl OdeSystem for MechanicalSystem<'_> {
     fn dimension(&self) -> usize {

@@ -3,7 +3,6 @@
 //! outputs and, when asked for, the reactions.
 
 use super::constraints::ReleasedStretch;
-use super::outputs::Outputs;
 use super::sample::Sample;
 use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::forward_kinematics;
@@ -11,6 +10,7 @@ use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::dynamics::efforts::{potential_energy, Declared};
 use crate::dynamics::energy::{kinetic_energy, momentum, Conservative};
 use crate::integrate::HermiteSegment;
+use crate::prepare::outputs::Outputs;
 
 /// Samples a state: declared coordinates (continuous with the previous sample), energy, momentum
 /// and, when asked for, the reactions. An output between two steps comes from the integrator's

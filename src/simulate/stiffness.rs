@@ -6,11 +6,11 @@
 
 use serde::Serialize;
 
-use super::prepare::{Integrator, Prepared};
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::model::Model;
 use crate::integrate::{jacobian_product, StabilityBound};
+use crate::prepare::{Integrator, Prepared};
 use crate::source::Span;
 
 /// The share of ∂f/∂y along the fast mode an element must give to be named.

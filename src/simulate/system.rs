@@ -17,7 +17,6 @@ pub mod scratch;
 mod stacked;
 mod stop_rows;
 
-use super::native::NativeDynamics;
 use super::run_state::RunState;
 use crate::dynamics::algorithms::{
     aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
@@ -31,6 +30,7 @@ use crate::dynamics::loops::{
 use crate::dynamics::model::{Model, Recovered};
 use crate::integrate::CallbackError;
 use crate::kinematics::eval::EvalError;
+use crate::prepare::native::NativeDynamics;
 use crate::spatial;
 use scratch::Scratch;
 

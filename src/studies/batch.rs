@@ -37,7 +37,7 @@ use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
 use crate::dynamics::model::Model;
-use crate::simulate::prepare::Prepared;
+use crate::prepare::Prepared;
 use crate::simulate::system::{MechanicalSystem, SystemError};
 
 /// One state to evaluate: positions, velocities (zero when absent), and accelerations (for the

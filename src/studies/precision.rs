@@ -12,8 +12,8 @@ use std::fmt;
 
 use serde::Serialize;
 
+use crate::prepare::{Integrator, Prepared};
 use crate::simulate::clock::thread_cpu_seconds;
-use crate::simulate::prepare::{Integrator, Prepared};
 use crate::simulate::run::{self, integrator_name, Simulation};
 
 /// How a method's steps are set: a tolerance (adaptive integrators) or a fixed step (rk4,

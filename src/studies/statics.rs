@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::dynamics::algorithms::rnea;
 use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Extent, Stabilisation};
-use crate::simulate::prepare::Prepared;
+use crate::prepare::Prepared;
 use crate::simulate::system::{MechanicalSystem, SystemError};
 
 #[derive(Clone, Debug, Serialize)]

@@ -18,7 +18,7 @@ use super::case::{as_table, compile_and_prepare, run_failure};
 use super::manifest::Case;
 use super::record::rounded;
 use crate::elab::Perturbation;
-use crate::simulate::prepare::{Integrator, Prepared};
+use crate::prepare::{Integrator, Prepared};
 use crate::simulate::run::{self, Simulation};
 use crate::studies::precision::Reference;
 

@@ -12,7 +12,7 @@ use crate::diag::{Diagnostic, Severity};
 use crate::driver::{compile_files_perturbed, Compilation};
 use crate::load::LoadOptions;
 use crate::output::csv::to_csv;
-use crate::simulate::prepare::{prepare, Prepared, Settings};
+use crate::prepare::{prepare, Prepared, Settings};
 use crate::simulate::run::{self, Simulation};
 use crate::studies::analysis;
 use crate::studies::precision::Reference;

@@ -8,7 +8,7 @@ use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::loops::Stabilisation;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
+use lsdc::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Sample, Simulation};
 use lsdc::studies::statics::holding_efforts;
 

@@ -8,7 +8,7 @@ use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::contacts::contact_rows;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run, Sample, Simulation};
 
 /// Standard gravity, as the `gravity` library gives it.

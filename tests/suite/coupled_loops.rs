@@ -7,7 +7,7 @@
 
 use crate::common::programs::{column, constraints, example_text, prepared, run_text};
 use lsdc::dynamics::friction::Phase;
-use lsdc::simulate::prepare::{Integrator, Settings};
+use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
 use lsdc::studies::statics::holding_efforts;
 

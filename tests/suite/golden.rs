@@ -42,9 +42,9 @@ fn render_diagnostics(input: &Path) -> String {
                     // a clean program without `simulate` is prepared last (values of `given`,
                     // outputs).
                     Ok((_, _, warnings)) => {
-                        let settings = lsdc::simulate::prepare::Settings::default();
+                        let settings = lsdc::prepare::Settings::default();
                         let prepare = || {
-                            lsdc::simulate::prepare::prepare(mechanism, &[], &settings)
+                            lsdc::prepare::prepare(mechanism, &[], &settings)
                                 .err()
                                 .unwrap_or_default()
                         };

@@ -5,7 +5,7 @@
 use crate::common::programs::{prepared, simulated};
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+use lsdc::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 const DOUBLE_PENDULUM: &str = "import joints;\n\

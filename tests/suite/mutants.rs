@@ -6,7 +6,7 @@ use std::path::Path;
 
 use lsdc::api::{run, Program, SettingsChanges};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::Integrator;
+use lsdc::prepare::Integrator;
 
 /// What a number is replaced by: the degenerate values a user or a typo brings.
 const NUMBERS: [&str; 8] = [

@@ -18,7 +18,7 @@ use lsdc::diag::render;
 use lsdc::driver::{compile_files, compile_text, Compilation};
 use lsdc::load::urdf::{import_urdf, ImportOptions};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::studies::batch::{evaluate_states, Evaluation, StateInput};
 use serde_json::Value;
 

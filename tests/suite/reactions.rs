@@ -10,7 +10,7 @@ use super::common::programs::{example_text, initial_state, prepared_text};
 use super::rows::rolling_pendulum;
 use lsdc::dynamics::loops::Stabilisation;
 use lsdc::dynamics::stops::{Side, Stop};
-use lsdc::simulate::prepare::Prepared;
+use lsdc::prepare::Prepared;
 use lsdc::simulate::run::reaction_names_of;
 use lsdc::simulate::system::MechanicalSystem;
 use nalgebra::{Matrix2, Rotation3, Vector2, Vector3};

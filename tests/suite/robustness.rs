@@ -8,7 +8,7 @@ use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 use lsdc::api::{run, Error, Override, Program, SettingsChanges};
-use lsdc::simulate::prepare::Integrator;
+use lsdc::prepare::Integrator;
 
 use crate::mutants::{exercise, mutate, Choices};
 

@@ -8,7 +8,7 @@
 
 use super::common::programs::{column, constraints, run_text};
 use super::stop_loops::{assert_impacts_take_normal_energy, assert_rolling, rolling_pendulum_with};
-use lsdc::simulate::prepare::{Integrator, Settings};
+use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::{Sample, Simulation};
 
 /// The seed's gravity, and its incline.

@@ -8,7 +8,7 @@
 use super::common::programs::{
     column, constraints, example_text, initial_state, prepared_text, run_text,
 };
-use lsdc::simulate::prepare::{Integrator, Settings};
+use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
 
 /// A run with `settings`, which must not fail.

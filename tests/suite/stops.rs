@@ -5,7 +5,7 @@ use lsdc::driver::compile_text;
 use lsdc::dynamics::stops::Impact;
 use lsdc::dynamics::stops::{impact_velocities, Side, Stop};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+use lsdc::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{run, Simulation};
 use nalgebra::{DMatrix, DVector};
 

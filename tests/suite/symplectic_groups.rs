@@ -10,7 +10,7 @@
 use crate::common::programs::{constraints, prepared, simulated};
 use lsdc::dynamics::joint::JointType;
 use lsdc::dynamics::loops::Stabilisation;
-use lsdc::simulate::prepare::{Integrator, Prepared, Settings};
+use lsdc::prepare::{Integrator, Prepared, Settings};
 use lsdc::simulate::run::Simulation;
 use lsdc::simulate::system::MechanicalSystem;
 use lsdc::simulate::variational;

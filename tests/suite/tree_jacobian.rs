@@ -5,7 +5,7 @@
 
 use crate::common::programs::prepared;
 use lsdc::dynamics::loops::Stabilisation;
-use lsdc::simulate::prepare::Prepared;
+use lsdc::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 use nalgebra::DMatrix;
 
