@@ -6,7 +6,7 @@
 //! its bound, and the release where the held force changes sign.
 
 use super::common::programs::{
-    column, constraints, example_text, initial_state, prepared_text, run_text,
+    column, constraints, example_text, initial_state, prepared, prepared_text, run_text, simulated,
 };
 use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
@@ -314,6 +314,29 @@ fn a_pendulum_on_a_rolling_cylinder_rests_on_its_stop() {
 /// tangent directions of the loops that leave a resting coordinate at rest: on the four-bar
 /// resting on its crank's stop there are none, and the steps keep the crank on its bound, the
 /// loop closed and every rate zero, as dopri5's do.
+/// The outputs see the stops resting as the steps left them: the first output after the crank
+/// of `examples/limited_four_bar.lsd` came to rest on its bound (t = 0.85, after the impacts
+/// that end at 0.8114) is held there like every later one, its rate zero to round-off of a
+/// velocity at rest (below 1e-30 rad/s). When the outputs' evaluations copied the resting flags
+/// from the steps' at each output's description, after its projection, that output was
+/// projected as if the crank still moved and kept 5.6e-17 rad/s.
+#[test]
+fn the_first_output_after_a_four_bar_comes_to_rest_is_held_on_its_stop() {
+    let simulation = simulated(&prepared("limited_four_bar", &[]));
+    let rest = simulation.report.impacts.iter().find(|i| i.rests);
+    let rest = rest.expect("the crank comes to rest");
+    let crank = column(&simulation, "crank.q");
+    let after: Vec<_> = (simulation.samples.iter())
+        .filter(|s| s.time > rest.time)
+        .collect();
+    assert!(after.len() > 10, "outputs after the rest: {}", after.len());
+    for sample in after {
+        assert_eq!(sample.coordinates[crank], rest.bound, "t = {}", sample.time);
+        let rate = sample.rates[crank];
+        assert!(rate.abs() < 1e-30, "t = {}: rate {rate:e}", sample.time);
+    }
+}
+
 #[test]
 fn rosenbrock_steps_keep_a_resting_four_bar_on_its_stop() {
     use lsdc::integrate::{integrate, Method, Settings as Steps};
