@@ -6,6 +6,8 @@ pub mod clock;
 pub mod compiled;
 pub mod constraints;
 pub mod lie_group;
+mod ode;
+pub mod report;
 pub mod run;
 pub mod run_state;
 mod sample;
