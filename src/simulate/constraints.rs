@@ -104,15 +104,15 @@ pub struct ReleasedStretch {
     pub settled: bool,
 }
 
-/// The stretches a run integrated with rows set aside, in time order, shared between the
-/// integrated system's monitor, which records them, and the outputs' sampler, which reads them:
-/// an output inside a stretch comes from an interpolant of the motion with rows released, off
+/// What a run's monitors found of its loops, held once in the run (`RunState::loops`). First
+/// the stretches it integrated with rows set aside, in time order, which the steps' monitor
+/// records and the outputs' sampler reads: an output inside a stretch comes from an interpolant of the motion with rows released, off
 /// the branch along the direction they no longer hold (on a row of 10 four-bars, an output at
 /// a conditioning of 6.5e-7 had its cranks' rates apart by 4e-4 rad/s), and projecting it there
 /// cannot find the branch again: the released drift of the positions along that direction is
 /// below round-off in the rows' residual, yet turns the motions the rows allow by the drift
 /// over the distance to the singular configuration. Such outputs are interpolated between the
-/// stretch's ends instead (`run::Sampler`).
+/// stretch's ends instead (`sampler::Sampler`).
 #[derive(Clone, Debug, Default)]
 pub struct LoopFindings {
     pub released: Vec<ReleasedStretch>,

@@ -16,7 +16,7 @@ use crate::prepare::outputs::Outputs;
 /// and, when asked for, the reactions. An output between two steps comes from the integrator's
 /// interpolant: with loops it is projected onto the constraints like the steps are, except
 /// inside a stretch integrated with rows set aside (a singular passage, see
-/// `constraints::Released`), where it is interpolated between the stretch's ends instead, once
+/// `constraints::LoopFindings`), where it is interpolated between the stretch's ends instead, once
 /// the stretch has ended.
 pub(super) struct Sampler<'m> {
     pub(super) conservative: Conservative,
