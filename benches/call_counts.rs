@@ -17,7 +17,7 @@ use std::path::PathBuf;
 
 use lsdc::driver::compile_files;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 
 mod common;
 #[path = "common/loop_costs.rs"]

@@ -12,7 +12,7 @@ use lsdc::dynamics::model::{self, Model};
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Settings};
 use lsdc::simulate::run::run;
 use lsdc::spatial::Force;
 

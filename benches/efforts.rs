@@ -7,13 +7,11 @@
 
 mod common;
 use common::cpu_time_per_call;
-use std::cell::RefCell;
 use std::hint::black_box;
-use std::rc::Rc;
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::system::MechanicalSystem;
 
 fn prepared(text: &str) -> Prepared {
@@ -54,7 +52,7 @@ impl<'p> Case<'p> {
             .expect("initial state");
         let mut y = q.clone();
         y.extend_from_slice(&v);
-        let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+        let reference = prepared.coordinates.clone();
         let system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
         let size = model.effort_tape.as_ref().map_or(0, |t| t.size());
         Case {

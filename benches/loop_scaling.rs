@@ -7,7 +7,7 @@
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 
 mod common;
 #[path = "common/loop_costs.rs"]

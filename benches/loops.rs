@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use lsdc::driver::compile_files;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
+use lsdc::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Report, Sample, Simulation};
 
 mod common;

@@ -8,15 +8,13 @@
 
 mod common;
 use common::cpu_time_per_call;
-use std::cell::RefCell;
 use std::hint::black_box;
-use std::rc::Rc;
 use std::time::Instant;
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::compiled;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::system::MechanicalSystem;
 
 /// ns per call of the right-hand side at the initial state, best over 7 rounds, with the
@@ -26,7 +24,7 @@ fn derivative_ns(prepared: &Prepared, native: bool) -> f64 {
     let (q, v) = model
         .state_from_declared(&prepared.coordinates, &prepared.rates)
         .expect("initial state");
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     if native {
         system.use_native(prepared.native.as_ref());

@@ -15,7 +15,7 @@ use lsdc::driver::compile_files;
 use lsdc::dynamics::algorithms::{aba_into, crba_into, rnea_into, Data};
 use lsdc::dynamics::model::Model;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Settings};
 use lsdc::spatial::Force;
 use nalgebra::{DMatrix, DVector};
 

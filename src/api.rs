@@ -35,12 +35,12 @@ use crate::driver::{self, Compilation};
 pub use crate::elab::Mechanism;
 pub use crate::kinematics::unknowns::Override;
 pub use crate::load::{LoadError, LoadOptions};
-pub use crate::simulate::batch::{parse_states, Evaluation, StateInput, StatesError};
-use crate::simulate::outputs::Outputs;
-pub use crate::simulate::prepare::Prepared;
+use crate::prepare::outputs::Outputs;
+pub use crate::prepare::settings::{Integrator, Settings, SettingsChanges, SettingsError};
+pub use crate::prepare::Prepared;
 pub use crate::simulate::run::{Report, RunOptions, Sample, Simulation};
-pub use crate::simulate::settings::{Integrator, Settings, SettingsChanges, SettingsError};
 pub use crate::source::SourceMap;
+pub use crate::studies::batch::{parse_states, Evaluation, StateInput, StatesError};
 
 /// Why a step of the library's pipeline failed.
 #[derive(Debug)]
@@ -221,7 +221,7 @@ impl Program {
         changes: &SettingsChanges,
     ) -> Result<Prepared, Error> {
         let mut prepared =
-            crate::simulate::prepare::prepare(self.mechanism()?, values, &Settings::default())?;
+            crate::prepare::prepare(self.mechanism()?, values, &Settings::default())?;
         prepared.settings.apply(changes)?;
         Ok(prepared)
     }
@@ -305,5 +305,5 @@ pub fn run_with(
 /// # Ok::<(), lsdc::api::Error>(())
 /// ```
 pub fn evaluate(prepared: &Prepared, states: &[StateInput]) -> Result<Evaluation, Error> {
-    crate::simulate::batch::evaluate_states(prepared, states).map_err(Error::States)
+    crate::studies::batch::evaluate_states(prepared, states).map_err(Error::States)
 }

@@ -7,15 +7,13 @@
 //! `source` (files, spans) → `syntax` (text to AST) → `load` (imports, libraries, URDF) →
 //! `check` (names and types) → `elab` (values: bodies, frames, links, joins, efforts,
 //! unknowns) → `topology` (numbering, principal and complementary links) → `kinematics` →
-//! `dynamics` → `integrate` and `simulate` → `output`; `symbolic` writes the equations from the
+//! `dynamics` → `prepare` (a program made ready to run) → `integrate` and `simulate` → `studies` (built on runs) → `output`; `symbolic` writes the equations from the
 //! mechanism. `diag` holds the diagnostics every phase reports.
 
-pub mod analysis;
 pub mod api;
 pub mod check;
 pub mod corrector;
 pub mod diag;
-pub mod drag;
 pub mod driver;
 pub mod dynamics;
 pub mod elab;
@@ -26,9 +24,11 @@ pub mod kinematics;
 pub mod linalg;
 pub mod load;
 pub mod output;
+pub mod prepare;
 pub mod simulate;
 pub mod source;
 pub mod spatial;
+pub mod studies;
 pub mod symbolic;
 pub mod syntax;
 pub mod testing;

@@ -4,13 +4,12 @@
 //! running beside the counting one do not count.
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::{Cell, RefCell};
+use std::cell::Cell;
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
 
 use lsdc::driver::compile_files;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Settings};
 use lsdc::simulate::system::MechanicalSystem;
 
 /// The system allocator, counting the allocations of each thread.
@@ -84,7 +83,7 @@ pub fn per_evaluation(file: &Path) -> Option<(usize, usize, Option<usize>)> {
         .state_from_declared(&prepared.coordinates, &prepared.rates)
         .ok()?;
     y.extend_from_slice(&v);
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     system.start_loops(&mut y).ok()?;
     let mut dydt = vec![0.0; y.len()];

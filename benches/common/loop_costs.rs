@@ -2,13 +2,11 @@
 //! per call (best batch), medians of runs, and the cost of one constrained right-hand side and
 //! one projection.
 
-use std::cell::RefCell;
 use std::hint::black_box;
-use std::rc::Rc;
 
 use lsdc::dynamics::algorithms::{crba, rnea, Data};
 use lsdc::dynamics::model::Model;
-use lsdc::simulate::prepare::Prepared;
+use lsdc::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 use lsdc::spatial::Force;
 
@@ -32,7 +30,7 @@ pub fn loop_system(prepared: &Prepared) -> (MechanicalSystem<'_>, Vec<f64>) {
         .state_from_declared(&prepared.coordinates, &prepared.rates)
         .expect("initial state");
     y.extend_from_slice(&v);
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     system.start_loops(&mut y).expect("loops close");
     (system, y)
@@ -85,7 +83,7 @@ pub fn tree_model(prepared: &Prepared) -> (Model, Vec<f64>) {
 pub fn tree_call<'m>(prepared: &Prepared, tree: &'m Model, y: &'m [f64]) -> Box<dyn FnMut() + 'm> {
     let model = &prepared.model;
     let declared = prepared.coordinates[..prepared.coordinates.len() - model.nc].to_vec();
-    let reference = Rc::new(RefCell::new(declared));
+    let reference = declared;
     let mut system = MechanicalSystem::new(tree, reference, prepared.settings.stabilisation);
     let mut dydt = vec![0.0; y.len()];
     if system.derivative(0.0, y, &mut dydt).is_ok() {

@@ -7,7 +7,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use lsdc::api::{run, Program, SettingsChanges};
-use lsdc::simulate::prepare::Integrator;
+use lsdc::prepare::Integrator;
 
 /// Numbers in [lo, hi) read from the bytes, 0 once they run out.
 struct Numbers<'a>(&'a [u8]);

@@ -19,7 +19,7 @@ pub struct AssembleArgs {
 pub fn run(args: &AssembleArgs) -> ExitCode {
     let analyse = |mechanism: &Mechanism| {
         let topology = lsdc::topology::build(mechanism)?;
-        lsdc::analysis::assembled_model(mechanism, topology, &Default::default())
+        lsdc::studies::analysis::assembled_model(mechanism, topology, &Default::default())
             .map(|(_, report, warnings)| (report, warnings))
     };
     let options = args.libraries.options();

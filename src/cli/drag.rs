@@ -9,12 +9,12 @@ use super::shared::{
     json, load_program, parse_sets, report_diagnostics, usage_error, write_output, Format,
     LibraryArgs, SampleFormat,
 };
-use lsdc::drag::{follow_exact, follow_penalty, parse_targets, DragRun, PenaltyOptions};
 use lsdc::kinematics::assembly::AssemblyOptions;
 use lsdc::kinematics::drag::{DragError, DragOptions};
 use lsdc::kinematics::frames::{self, FramePoint};
 use lsdc::kinematics::model::KinematicModel;
 use lsdc::kinematics::penalty::{self, Stiffness};
+use lsdc::studies::drag::{follow_exact, follow_penalty, parse_targets, DragRun, PenaltyOptions};
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum DragMethod {
@@ -83,7 +83,7 @@ pub fn run(args: &DragArgs) -> ExitCode {
     };
     let assembled = lsdc::topology::build(mechanism).and_then(|topology| {
         let options = AssemblyOptions::default();
-        lsdc::analysis::assembled_model_with(mechanism, topology, &options, &overrides)
+        lsdc::studies::analysis::assembled_model_with(mechanism, topology, &options, &overrides)
     });
     let (model, report) = match assembled {
         Ok((model, report, warnings)) => {
@@ -114,7 +114,7 @@ pub fn run(args: &DragArgs) -> ExitCode {
         }
     };
     let text = match args.format {
-        SampleFormat::Csv => lsdc::drag::to_csv(&run),
+        SampleFormat::Csv => lsdc::studies::drag::to_csv(&run),
         SampleFormat::Json => json(&run),
     };
     let written = write_output(args.out.as_deref(), &text);
@@ -130,7 +130,7 @@ fn read_targets(
     model: &KinematicModel,
     frame: &FramePoint,
     q: &[f64],
-) -> Result<Vec<lsdc::drag::Target>, String> {
+) -> Result<Vec<lsdc::studies::drag::Target>, String> {
     let name = args.path.display().to_string();
     let text =
         std::fs::read_to_string(&args.path).map_err(|e| format!("cannot read `{name}`: {e}"))?;
@@ -145,7 +145,7 @@ fn exact(
     model: &KinematicModel,
     frame: &FramePoint,
     q: &[f64],
-    targets: &[lsdc::drag::Target],
+    targets: &[lsdc::studies::drag::Target],
 ) -> Result<DragRun, String> {
     let options = DragOptions {
         reach_tolerance: args.reach_tolerance,
@@ -165,7 +165,7 @@ fn penalty_run(
     model: &KinematicModel,
     frame: &FramePoint,
     q: &[f64],
-    targets: &[lsdc::drag::Target],
+    targets: &[lsdc::studies::drag::Target],
 ) -> Result<DragRun, String> {
     let names = model
         .topology

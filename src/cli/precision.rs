@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use super::shared::{json, prepare_file, usage_error, write_output, Format, LibraryArgs};
 use super::simulate::IntegratorArg;
 use lsdc::api::{Prepared, SettingsChanges};
-use lsdc::simulate::precision::{self, computed_reference, Method, Reference, Setting};
+use lsdc::studies::precision::{self, computed_reference, Method, Reference, Setting};
 
 #[derive(clap::Args)]
 pub struct PrecisionArgs {

@@ -70,7 +70,7 @@ pub struct SimulateArgs {
     output_frames: Vec<String>,
     /// Most steps of the integrator, rejected ones included, before the run stops with a
     /// failure (its outputs kept).
-    #[arg(long, value_name = "N", default_value_t = lsdc::simulate::settings::DEFAULT_MAX_STEPS)]
+    #[arg(long, value_name = "N", default_value_t = lsdc::prepare::settings::DEFAULT_MAX_STEPS)]
     max_steps: usize,
     /// Do not check whether an explicit integrator's steps are held by its stability region
     /// (W0901; the check costs three evaluations every 20 steps).
@@ -111,7 +111,7 @@ impl ValueEnum for IntegratorArg {
 }
 
 impl IntegratorArg {
-    pub fn integrator(self) -> lsdc::simulate::prepare::Integrator {
+    pub fn integrator(self) -> lsdc::prepare::Integrator {
         self.0.integrator.clone()
     }
 

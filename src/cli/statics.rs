@@ -27,7 +27,7 @@ pub fn run(args: &StaticsArgs) -> ExitCode {
         Ok(prepared) => prepared,
         Err(code) => return code,
     };
-    let holding = match lsdc::simulate::statics::holding_efforts(&prepared, &args.actuated) {
+    let holding = match lsdc::studies::statics::holding_efforts(&prepared, &args.actuated) {
         Ok(h) => h,
         Err(error) => return usage_error(&error.to_string()),
     };

@@ -17,7 +17,8 @@ pub struct TreeArgs {
 }
 
 pub fn run(args: &TreeArgs) -> ExitCode {
-    let analyse = |mechanism: &Mechanism| lsdc::analysis::tree(mechanism).map(|r| (r, Vec::new()));
+    let analyse =
+        |mechanism: &Mechanism| lsdc::studies::analysis::tree(mechanism).map(|r| (r, Vec::new()));
     let options = args.libraries.options();
     report(
         &args.file,

@@ -110,7 +110,7 @@ fn run(
     if !all_finite(y0) {
         return Err(Halt::fatal(t0, Failure::NotFinite));
     }
-    outputs.deliver_start(t0, y0, observer)?;
+    outputs.deliver_start(t0, y0, (eval, observer))?;
     if t0 == t_end {
         return Ok(y0.to_vec());
     }
@@ -138,7 +138,7 @@ fn run(
             }
         }
     }
-    march.outputs.deliver_rest(&march.y, observer)?;
+    march.outputs.deliver_rest(&march.y, (eval, observer))?;
     Ok(march.y)
 }
 
@@ -238,7 +238,7 @@ impl March<'_> {
         }
         let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
         self.outputs
-            .deliver_step((self.t, t_new), &self.y_new, interpolate, observer)?;
+            .deliver_step((self.t, t_new), &self.y_new, interpolate, (eval, observer))?;
         std::mem::swap(&mut self.y, &mut self.y_new);
         self.t = t_new;
         Ok(())
@@ -261,7 +261,7 @@ impl March<'_> {
         } = event;
         let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
         self.outputs
-            .deliver_step((self.t, time), &state, interpolate, observer)?;
+            .deliver_step((self.t, time), &state, interpolate, (eval, observer))?;
         eval.handle_event(time, &mut state, index)?;
         eval.project(time, &mut state)?;
         stepper

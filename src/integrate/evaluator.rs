@@ -1,7 +1,7 @@
 //! Calls the system's right-hand side and projection, counting calls and catching non-finite values.
 
 use super::outcome::{Failure, IntegrationError, Stats};
-use super::system::OdeSystem;
+use super::system::{CallbackError, OdeSystem};
 
 /// Why a step attempt, or the integration, stopped.
 #[derive(Clone, Debug)]
@@ -50,6 +50,11 @@ impl<'s> Evaluator<'s> {
             system,
             stats: Stats::default(),
         }
+    }
+
+    /// The system's observation of the output at (t, y) (`OdeSystem::observe`).
+    pub(super) fn observe(&mut self, t: f64, y: &[f64]) -> Result<(), CallbackError> {
+        self.system.observe(t, y)
     }
 
     /// dy/dt at (t, y); a non-finite state or derivative becomes `Halt::NotFinite` at `t`.

@@ -1,6 +1,6 @@
 //! Hands the states at the requested output times to the observer as the integration passes them.
 
-use super::evaluator::Halt;
+use super::evaluator::{Evaluator, Halt};
 use super::outcome::Failure;
 use super::system::Observer;
 
@@ -29,11 +29,11 @@ impl<'a> Outputs<'a> {
         &mut self,
         t0: f64,
         y0: &[f64],
-        observer: &mut Observer,
+        (eval, observer): (&mut Evaluator, &mut Observer),
     ) -> Result<(), Halt> {
         while let Some(&t) = self.times.get(self.next).filter(|&&t| t <= t0) {
             self.next += 1;
-            observe(observer, t, y0)?;
+            observe((eval, observer), t, y0)?;
         }
         Ok(())
     }
@@ -52,7 +52,7 @@ impl<'a> Outputs<'a> {
         (t_start, t_end): (f64, f64),
         y_end: &[f64],
         interpolate: impl Fn(f64, &mut [f64]),
-        observer: &mut Observer,
+        (eval, observer): (&mut Evaluator, &mut Observer),
     ) -> Result<(), Halt> {
         let tolerance = COINCIDENCE * (t_end - t_start);
         while let Some(&t) = self
@@ -63,9 +63,9 @@ impl<'a> Outputs<'a> {
             self.next += 1;
             if t < t_end - tolerance {
                 interpolate(t, &mut self.value);
-                observe(observer, t, &self.value)?;
+                observe((eval, observer), t, &self.value)?;
             } else {
-                observe(observer, t, y_end)?;
+                observe((eval, observer), t, y_end)?;
             }
         }
         Ok(())
@@ -75,16 +75,22 @@ impl<'a> Outputs<'a> {
     pub(super) fn deliver_rest(
         &mut self,
         y_end: &[f64],
-        observer: &mut Observer,
+        (eval, observer): (&mut Evaluator, &mut Observer),
     ) -> Result<(), Halt> {
         while let Some(&t) = self.times.get(self.next) {
             self.next += 1;
-            observe(observer, t, y_end)?;
+            observe((eval, observer), t, y_end)?;
         }
         Ok(())
     }
 }
 
-fn observe(observer: &mut Observer, t: f64, y: &[f64]) -> Result<(), Halt> {
-    observer(t, y).map_err(|error| Halt::fatal(t, Failure::Observer(error.to_string())))
+/// The system's observation, then the observer's, of the output at (t, y).
+fn observe(
+    (eval, observer): (&mut Evaluator, &mut Observer),
+    t: f64,
+    y: &[f64],
+) -> Result<(), Halt> {
+    let observed = eval.observe(t, y).and_then(|()| observer(t, y));
+    observed.map_err(|error| Halt::fatal(t, Failure::Observer(error.to_string())))
 }

@@ -58,7 +58,7 @@ fn run(
     if !all_finite(y0) {
         return Err(Halt::fatal(t0, Failure::NotFinite));
     }
-    outputs.deliver_start(t0, y0, observer)?;
+    outputs.deliver_start(t0, y0, (eval, observer))?;
     let step_count = step_count(t_end - t0, step);
     let mut rk4 = Rk4::new(t0, y0);
     let mut events = EventWatch::new(eval, t0, y0)?;
@@ -104,7 +104,7 @@ fn run(
             (rk4.t, t_new),
             &rk4.y_new,
             |t, out| segment.evaluate(t, out),
-            observer,
+            (eval, observer),
         )?;
         let h = rk4.h;
         rk4.advance(t_new);
@@ -113,7 +113,7 @@ fn run(
             watch.after_step(eval, rk4.t, &rk4.y, h);
         }
     }
-    outputs.deliver_rest(&rk4.y, observer)?;
+    outputs.deliver_rest(&rk4.y, (eval, observer))?;
     Ok(rk4.y)
 }
 
@@ -234,7 +234,7 @@ impl Rk4 {
             (self.t, time),
             &state,
             |t, out| segment.evaluate(t, out),
-            observer,
+            (eval, observer),
         )?;
         eval.handle_event(time, &mut state, index)?;
         eval.project(time, &mut state)?;

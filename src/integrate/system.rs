@@ -89,6 +89,14 @@ pub trait OdeSystem {
     ) -> Result<(), CallbackError> {
         Ok(())
     }
+
+    /// Observes the state y at output time t, before the integration's observer does: a
+    /// system whose outputs are evaluations of its own equations (a run's sampler) observes
+    /// with the same state and scratch its steps use. An `Err` stops the integration like one
+    /// from the observer.
+    fn observe(&mut self, _t: f64, _y: &[f64]) -> Result<(), CallbackError> {
+        Ok(())
+    }
 }
 
 /// Receives the state at each output time; an `Err` stops the integration with its message.

@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use super::plot::{
     write_figure, Figure, PlotError, Render, CAPTION_SIZE, LABEL_SIZE, LINE_WIDTH, PALETTE,
 };
-use crate::simulate::precision::{Measurement, Table};
+use crate::studies::precision::{Measurement, Table};
 
 /// Draws the table's error against CPU time to `path` (`.svg` or `.png`). Runs that failed or
 /// whose error is zero (nothing to put on a logarithmic axis) are left out.

@@ -6,7 +6,7 @@ use std::io::Write;
 use super::csv::CsvWriter;
 use super::json::JsonWriter;
 pub use super::sample_writer::SampleWriter;
-use crate::simulate::prepare::Prepared;
+use crate::prepare::Prepared;
 use crate::simulate::run::reaction_names_of;
 
 /// The formats of a run's samples.

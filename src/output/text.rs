@@ -1,7 +1,7 @@
 //! Text renderings of the reports, as the command line prints them.
 
-use crate::analysis::{AssemblyReport, LinkReport, TreeReport};
 use crate::elab::Summary;
+use crate::studies::analysis::{AssemblyReport, LinkReport, TreeReport};
 
 pub fn summary(file: &std::path::Path, s: &Summary) -> String {
     let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
@@ -296,7 +296,7 @@ fn constraint_report(c: &crate::simulate::constraints::ConstraintReport) -> Stri
 }
 
 /// Holding efforts, one coordinate per line.
-pub fn holding(h: &crate::simulate::statics::Holding) -> String {
+pub fn holding(h: &crate::studies::statics::Holding) -> String {
     let width = h.efforts.iter().map(|e| e.name.len()).max().unwrap_or(0);
     let mut out =
         String::from("efforts that hold the mechanism at rest (along each coordinate):\n");
@@ -311,8 +311,8 @@ pub fn holding(h: &crate::simulate::statics::Holding) -> String {
 
 /// A work-precision table (`lsdc precision`) as a Markdown table, with the reference and the
 /// recommendation: readable in a terminal, and pasted as it is into a document.
-pub fn precision(table: &crate::simulate::precision::Table) -> String {
-    use crate::simulate::precision::ReferenceSource;
+pub fn precision(table: &crate::studies::precision::Table) -> String {
+    use crate::studies::precision::ReferenceSource;
     let reference = match &table.reference {
         ReferenceSource::Computed {
             integrator,

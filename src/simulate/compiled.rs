@@ -2,15 +2,12 @@
 //! (`native.rs`) attached once it agrees with the simulator's own evaluation, or the warning
 //! that says why the runs go on without it.
 
-use std::cell::RefCell;
-use std::rc::Rc;
-
-use super::native::{build, disagreement, Unavailable};
-use super::prepare::Prepared;
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::energy::conservative_forces;
 use crate::elab::mechanism::Mechanism;
+use crate::prepare::native::{build, disagreement, Unavailable};
+use crate::prepare::Prepared;
 
 /// Compiles `prepared`'s forward dynamics and keeps it for its runs, once it agrees with the
 /// simulator's evaluation at the initial state (to 1e-9 of the largest acceleration); otherwise
@@ -42,7 +39,7 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
     let (q, v) = model
         .state_from_declared(&prepared.coordinates, &prepared.rates)
         .map_err(|e| Unavailable::Unsupported(format!("the start cannot be evaluated: {e:?}")))?;
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     let y: Vec<f64> = q.iter().chain(&v).copied().collect();
     let mut dydt = vec![0.0; y.len()];

@@ -2,9 +2,6 @@
 //! and after each projection, and the passages through singular configurations (where the
 //! constraints lose rank), for the run report.
 
-use std::cell::RefCell;
-use std::rc::Rc;
-
 use serde::Serialize;
 
 use crate::dynamics::algorithms::{forward_kinematics, Data};
@@ -47,7 +44,7 @@ const PASSAGE_ENTERED: f64 = 1e-5;
 const PASSAGE_LEFT: f64 = 2e-5;
 
 /// At or above this conditioning a state kept around a passage ends the stretch whose outputs
-/// are interpolated between its ends (see `Released`). Nearer the passage the step ends' own
+/// are interpolated between its ends (see `LoopFindings`). Nearer the passage the step ends' own
 /// velocities drift across the rows about to be lost (on a row of two parallelograms with the
 /// implicit integrator at 1e-8, by 3e-7 rad/s between the cranks at 1e-5): an end taken at 3e-5
 /// or more halved the outputs' error there, and one at 1e-4 or more lay up to 25 ms before the
@@ -107,16 +104,46 @@ pub struct ReleasedStretch {
     pub settled: bool,
 }
 
-/// The stretches a run integrated with rows set aside, in time order, shared between the
-/// integrated system's monitor, which records them, and the outputs' sampler, which reads them:
-/// an output inside a stretch comes from an interpolant of the motion with rows released, off
+/// What a run's monitors found of its loops, held once in the run (`RunState::loops`). First
+/// the stretches it integrated with rows set aside, in time order, which the steps' monitor
+/// records and the outputs' sampler reads: an output inside a stretch comes from an interpolant of the motion with rows released, off
 /// the branch along the direction they no longer hold (on a row of 10 four-bars, an output at
 /// a conditioning of 6.5e-7 had its cranks' rates apart by 4e-4 rad/s), and projecting it there
 /// cannot find the branch again: the released drift of the positions along that direction is
 /// below round-off in the rows' residual, yet turns the motions the rows allow by the drift
 /// over the distance to the singular configuration. Such outputs are interpolated between the
-/// stretch's ends instead (`run::Sampler`).
-pub type Released = Rc<RefCell<Vec<ReleasedStretch>>>;
+/// stretch's ends instead (`sampler::Sampler`).
+#[derive(Clone, Debug, Default)]
+pub struct LoopFindings {
+    pub released: Vec<ReleasedStretch>,
+    /// What the steps saw, and what the outputs saw: kept apart because an output lies inside
+    /// the step that reached it, earlier than the step's end, and a passage is followed in time
+    /// order; the report takes both (`LoopRecord::merge`).
+    pub steps: LoopRecord,
+    pub outputs: LoopRecord,
+}
+
+impl LoopFindings {
+    /// The record of the steps' monitor, or of the outputs' (`LoopMonitor::samples_outputs`).
+    fn record(&mut self, outputs: bool) -> &mut LoopRecord {
+        match outputs {
+            true => &mut self.outputs,
+            false => &mut self.steps,
+        }
+    }
+}
+
+/// What one monitor saw of the loops along a run: how often the kept rows were chosen again
+/// (see `Structure::rechoose`), the largest residuals before and after each projection, the
+/// singular passages and the closest approach to a singular configuration.
+#[derive(Clone, Debug, Default)]
+pub struct LoopRecord {
+    rechosen: usize,
+    before: Residuals,
+    after: Residuals,
+    singular: Vec<SingularPassage>,
+    closest: Option<ClosestApproach>,
+}
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ConstraintReport {
@@ -144,6 +171,9 @@ pub struct ConstraintReport {
     pub outputs_off_branch: Vec<f64>,
 }
 
+/// How one evaluator keeps the loops closed along a run: the kept rows and free coordinates it
+/// chose, its passages through singular configurations; what it sees goes to the run's
+/// `LoopFindings`.
 #[derive(Clone)]
 pub struct LoopMonitor {
     pub stabilisation: Stabilisation,
@@ -153,8 +183,6 @@ pub struct LoopMonitor {
     started: bool,
     /// The complementary links' names, for the report.
     loop_names: Vec<String>,
-    /// How many times the kept rows were chosen again (see `Structure::rechoose`).
-    rechosen: usize,
     /// While the run passes a singular configuration: the rows kept before it (see `PASSAGE_ENTERED`).
     passage: Option<RowChoice>,
     /// Whether the rows set aside for a passage were just restored (the next projection then
@@ -163,16 +191,13 @@ pub struct LoopMonitor {
     /// Whether this monitor keeps the outputs closed, which come from the integrator's
     /// interpolant inside a step. It never sets rows aside: an output is a state of the
     /// mechanism, on every row (outputs inside a stretch integrated with rows released are
-    /// interpolated between its ends before they get here, see `Released`). Near a singular
+    /// interpolated between its ends before they get here, see `LoopFindings`). Near a singular
     /// configuration the velocities are projected by the constraints' impulse, as at the end of
     /// a passage: the plain projection would turn an error across the rows into an energy
     /// error.
     pub samples_outputs: bool,
     /// A projection that could not close the loops: when, the row left open and by how much.
     pub opened: Option<(f64, usize, f64)>,
-    /// The stretches integrated with rows set aside, shared with the sampler of the outputs
-    /// (its clone of this monitor reads them; it never sets rows aside itself).
-    pub released: Released,
     /// The last state this monitor kept outside a passage (after its projection) and its time,
     /// and the last such state kept with a conditioning above `STRETCH_ENDS`: where a passage's
     /// stretch starts (see `ReleasedStretch`).
@@ -185,10 +210,6 @@ pub struct LoopMonitor {
     /// right at the passage's threshold, where releasing the rows costs most energy: a row of
     /// two parallelograms at 1e-11 lost 7.8e-9 of its energy so, against 5.8e-11.
     pub breaks_trend: bool,
-    before: Residuals,
-    after: Residuals,
-    singular: Vec<SingularPassage>,
-    closest: Option<ClosestApproach>,
 }
 
 fn max(a: Residuals, b: Residuals) -> Residuals {
@@ -205,19 +226,13 @@ impl LoopMonitor {
             structure: NO_STRUCTURE,
             started: false,
             loop_names: Vec::new(),
-            rechosen: 0,
             passage: None,
             restored: false,
             samples_outputs: false,
             opened: None,
-            released: Rc::new(RefCell::new(Vec::new())),
             last_kept: None,
             anchor: None,
             breaks_trend: false,
-            before: Residuals::default(),
-            after: Residuals::default(),
-            singular: Vec::new(),
-            closest: None,
         }
     }
 
@@ -226,8 +241,8 @@ impl LoopMonitor {
         &mut self,
         model: &Model,
         data: &mut Data,
-        q: &[f64],
-        v: &[f64],
+        (q, v): (&[f64], &[f64]),
+        findings: &mut LoopFindings,
     ) -> Result<(), StructureError> {
         self.structure = Structure::decide(model, data, q)?;
         self.started = true;
@@ -237,8 +252,17 @@ impl LoopMonitor {
             position: c.residual.amax(),
             velocity: c.velocity.amax(),
         };
-        (self.before, self.after) = (residuals, residuals);
+        let record = findings.record(self.samples_outputs);
+        (record.before, record.after) = (residuals, residuals);
         Ok(())
+    }
+
+    /// A monitor for the outputs, from this one's structure as it stands
+    /// (`samples_outputs`).
+    pub fn for_outputs(&self) -> LoopMonitor {
+        let mut monitor = self.clone();
+        monitor.samples_outputs = true;
+        monitor
     }
 
     /// Whether the structure was decided (`start`).
@@ -262,17 +286,18 @@ impl LoopMonitor {
         time: f64,
         (q, v): (&mut [f64], &mut [f64]),
         scratch: &mut ProjectionScratch,
+        findings: &mut LoopFindings,
     ) -> Result<bool, EvalError> {
         self.breaks_trend = false;
         forward_kinematics(model, data, q, v)?;
         scratch.constraints_here(model, data, q, v)?;
         let was_in_passage = self.passage.is_some();
-        let conditioning = self.conditioning(scratch);
-        self.record_entry(was_in_passage, time, (&*q, &*v));
+        let conditioning = self.conditioning(scratch, findings.record(self.samples_outputs));
+        self.record_entry(was_in_passage, time, (&*q, &*v), &mut findings.released);
         self.breaks_trend |= conditioning.0 < NEAR_SINGULAR;
         // An output is not projected where a step end would set rows aside: there the
         // interpolant's error along the direction being lost, invisible in the residual, would
-        // turn the projected velocities off the branch (see `Released`).
+        // turn the projected velocities off the branch (see `LoopFindings`).
         let projects = match self.samples_outputs {
             true => conditioning.0 >= PASSAGE_ENTERED,
             false => self.passage.is_some() || conditioning.0 >= SKIP_PROJECTION,
@@ -303,7 +328,7 @@ impl LoopMonitor {
                     self.opened = Some((time, row, left));
                 }
             }
-            self.observe(
+            findings.record(self.samples_outputs).observe(
                 model,
                 time,
                 projection.before,
@@ -311,19 +336,25 @@ impl LoopMonitor {
                 conditioning,
             );
         } else {
-            self.observe_current(model, time, conditioning, scratch);
+            let record = findings.record(self.samples_outputs);
+            record.observe_current(model, time, conditioning, scratch);
         }
         let seated = !moved && loops::seat_ball_angles(model, data, q, v, false)?;
-        self.record_kept(time, conditioning.0, (&*q, &*v));
+        self.record_kept(time, conditioning.0, (&*q, &*v), &mut findings.released);
         Ok(moved || seated)
     }
 
-    /// Starts a stretch around a passage where it sets rows aside (see `Released`).
-    fn record_entry(&mut self, was_in_passage: bool, time: f64, (q, v): (&[f64], &[f64])) {
+    /// Starts a stretch around a passage where it sets rows aside (see `LoopFindings`).
+    fn record_entry(
+        &mut self,
+        was_in_passage: bool,
+        time: f64,
+        (q, v): (&[f64], &[f64]),
+        released: &mut Vec<ReleasedStretch>,
+    ) {
         if was_in_passage || self.passage.is_none() {
             return;
         }
-        let mut released = self.released.borrow_mut();
         if let Some(last) = released.last_mut().filter(|s| !s.settled) {
             // The stretch before never reached a well-conditioned state: it ends at the last
             // one kept.
@@ -343,14 +374,20 @@ impl LoopMonitor {
     }
 
     /// Remembers a state kept outside a passage, and ends the stretch around the last passage
-    /// at the first one well conditioned (see `Released`).
-    fn record_kept(&mut self, time: f64, conditioning: f64, (q, v): (&[f64], &[f64])) {
+    /// at the first one well conditioned (see `LoopFindings`).
+    fn record_kept(
+        &mut self,
+        time: f64,
+        conditioning: f64,
+        (q, v): (&[f64], &[f64]),
+        released: &mut [ReleasedStretch],
+    ) {
         if self.samples_outputs || self.passage.is_some() {
             return;
         }
         store(&mut self.last_kept, time, (q, v));
         let settles = conditioning >= STRETCH_ENDS;
-        if let Some(last) = self.released.borrow_mut().last_mut().filter(|s| !s.settled) {
+        if let Some(last) = released.last_mut().filter(|s| !s.settled) {
             store(&mut last.exit, time, (q, v));
             last.settled = settles;
         }
@@ -363,7 +400,11 @@ impl LoopMonitor {
     /// G, after choosing them again if they are poorly conditioned and better ones exist, and
     /// the passages through singular configurations entered or left here (see `passage`).
     /// During a passage, the conditioning of all the rows chosen before it.
-    fn conditioning(&mut self, scratch: &mut ProjectionScratch) -> (f64, Option<usize>) {
+    fn conditioning(
+        &mut self,
+        scratch: &mut ProjectionScratch,
+        record: &mut LoopRecord,
+    ) -> (f64, Option<usize>) {
         let jacobian = &scratch.current.jacobian;
         if let Some(before) = &self.passage {
             let conditioning = Factored::new(jacobian, before).conditioning();
@@ -383,7 +424,7 @@ impl LoopMonitor {
             reproduction.filter(|&now| now < RECHOOSE_BELOW * structure.chosen_reproduction)
         {
             if structure.rechoose(jacobian, now) {
-                self.rechosen += 1;
+                record.rechosen += 1;
                 self.breaks_trend = true;
                 structure.choose_free(jacobian);
                 return Factored::new(jacobian, &structure.choice).conditioning();
@@ -415,17 +456,54 @@ impl LoopMonitor {
         time: f64,
         (q, v): (&[f64], &[f64]),
         scratch: &mut ProjectionScratch,
+        findings: &mut LoopFindings,
     ) -> Result<(), EvalError> {
         forward_kinematics(model, data, q, v)?;
         scratch.constraints_at(model, data, q, v)?;
         let was_in_passage = self.passage.is_some();
-        let conditioning = self.conditioning(scratch);
-        self.record_entry(was_in_passage, time, (q, v));
-        self.record_kept(time, conditioning.0, (q, v));
-        self.observe_current(model, time, conditioning, scratch);
+        let conditioning = self.conditioning(scratch, findings.record(self.samples_outputs));
+        self.record_entry(was_in_passage, time, (q, v), &mut findings.released);
+        self.record_kept(time, conditioning.0, (q, v), &mut findings.released);
+        let record = findings.record(self.samples_outputs);
+        record.observe_current(model, time, conditioning, scratch);
         Ok(())
     }
 
+    /// The report of the loops: the structure this monitor decided at the start, and what the
+    /// run's monitors found (`findings`).
+    pub fn report(&self, findings: &LoopFindings) -> ConstraintReport {
+        let stabilisation = match self.stabilisation {
+            Stabilisation::Projection => "projection".to_string(),
+            Stabilisation::Baumgarte(rate) => format!("baumgarte ({rate} 1/s)"),
+            Stabilisation::Integrator => {
+                "the integrator's constraint equations (RATTLE)".to_string()
+            }
+            Stabilisation::None => "none".to_string(),
+        };
+        let structure = &self.structure;
+        let seen = findings.steps.merge(&findings.outputs);
+        ConstraintReport {
+            stabilisation,
+            rows: structure.active(),
+            rank: structure.rank,
+            redundant: structure
+                .redundant
+                .iter()
+                .map(|&row| format!("{}: {}", self.loop_names[row / 6], ROW_NAMES[row % 6]))
+                .collect(),
+            rows_rechosen: seen.rechosen,
+            position_residual_before_projection: seen.before.position,
+            velocity_residual_before_projection: seen.before.velocity,
+            position_residual: seen.after.position,
+            velocity_residual: seen.after.velocity,
+            singular: seen.singular,
+            closest: seen.closest,
+            outputs_off_branch: Vec::new(),
+        }
+    }
+}
+
+impl LoopRecord {
     /// Records the residuals of the constraints in `scratch.current` and the conditioning.
     fn observe_current(
         &mut self,
@@ -476,24 +554,31 @@ impl LoopMonitor {
         }
     }
 
-    /// Takes in what another monitor saw (the outputs', which may fall inside a long step).
-    pub fn absorb(&mut self, other: &LoopMonitor) {
-        self.rechosen = self.rechosen.max(other.rechosen);
-        self.before = max(self.before, other.before);
-        self.after = max(self.after, other.after);
+    /// What this record and `other` saw together (the steps' and the outputs', which may fall
+    /// inside a long step): the larger residuals, the closer approach, the passages of either,
+    /// overlapping ones joined.
+    fn merge(&self, other: &LoopRecord) -> LoopRecord {
+        let mut merged = self.clone();
+        merged.rechosen = self.rechosen.max(other.rechosen);
+        merged.before = max(self.before, other.before);
+        merged.after = max(self.after, other.after);
         if let Some(theirs) = &other.closest {
-            if self.closest.as_ref().is_none_or(|c| theirs.ratio < c.ratio) {
-                self.closest = Some(theirs.clone());
+            if merged
+                .closest
+                .as_ref()
+                .is_none_or(|c| theirs.ratio < c.ratio)
+            {
+                merged.closest = Some(theirs.clone());
             }
         }
-        let mut passages: Vec<SingularPassage> = self
+        let mut passages: Vec<SingularPassage> = merged
             .singular
             .drain(..)
             .chain(other.singular.iter().cloned())
             .collect();
         passages.sort_by(|a, b| a.start.total_cmp(&b.start));
         for passage in passages {
-            match self.singular.last_mut() {
+            match merged.singular.last_mut() {
                 Some(last) if last.end.is_none_or(|end| passage.start <= end) => {
                     last.end = match (last.end, passage.end) {
                         (Some(a), Some(b)) => Some(a.max(b)),
@@ -501,39 +586,10 @@ impl LoopMonitor {
                     };
                     last.smallest_ratio = last.smallest_ratio.min(passage.smallest_ratio);
                 }
-                _ => self.singular.push(passage),
+                _ => merged.singular.push(passage),
             }
         }
-    }
-
-    pub fn report(&self) -> ConstraintReport {
-        let stabilisation = match self.stabilisation {
-            Stabilisation::Projection => "projection".to_string(),
-            Stabilisation::Baumgarte(rate) => format!("baumgarte ({rate} 1/s)"),
-            Stabilisation::Integrator => {
-                "the integrator's constraint equations (RATTLE)".to_string()
-            }
-            Stabilisation::None => "none".to_string(),
-        };
-        let structure = &self.structure;
-        ConstraintReport {
-            stabilisation,
-            rows: structure.active(),
-            rank: structure.rank,
-            redundant: structure
-                .redundant
-                .iter()
-                .map(|&row| format!("{}: {}", self.loop_names[row / 6], ROW_NAMES[row % 6]))
-                .collect(),
-            rows_rechosen: self.rechosen,
-            position_residual_before_projection: self.before.position,
-            velocity_residual_before_projection: self.before.velocity,
-            position_residual: self.after.position,
-            velocity_residual: self.after.velocity,
-            singular: self.singular.clone(),
-            closest: self.closest.clone(),
-            outputs_off_branch: Vec::new(),
-        }
+        merged
     }
 }
 

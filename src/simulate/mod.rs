@@ -1,23 +1,17 @@
 //! Simulation of mechanisms (trees and closed loops): the equations of motion as an ODE system, integrated from the
 //! program's initial values, with outputs and a run report.
 
-pub mod batch;
 pub mod branch;
 pub mod clock;
 pub mod compiled;
-pub mod consistent;
 pub mod constraints;
-mod friction;
-pub mod impacts;
 pub mod lie_group;
-pub mod native;
-pub mod outputs;
-pub mod precision;
-pub mod prepare;
+mod ode;
+pub mod report;
 pub mod run;
+pub mod run_state;
 mod sample;
-pub mod settings;
-pub mod statics;
+mod sampler;
 pub mod stiffness;
 mod summary;
 pub mod system;

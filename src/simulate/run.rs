@@ -2,321 +2,33 @@
 //! declared coordinates, energy and momentum, and a report of the work and the accuracy. A run
 //! that fails keeps every output computed before the failure.
 
-use std::cell::RefCell;
-use std::rc::Rc;
 use std::time::Instant;
 
 use serde::Serialize;
 
 use super::branch;
 use super::clock::thread_cpu_seconds;
-use super::constraints::{ConstraintReport, ReleasedStretch};
-use super::outputs::Outputs;
-use super::prepare::{Integrator, Prepared};
+use super::ode::RunOde;
+use super::report::{failure_message, fastest_coordinate};
+pub use super::report::{
+    passage_output_warning, step_error_warning, stiffness_warning, Interruption, Report,
+    RunFailure, StepErrorReport,
+};
 pub use super::sample::{MomentumDrift, Sample};
-use super::stiffness::{self, StiffnessReport};
+use super::sampler::Sampler;
+use super::stiffness;
 use super::summary::Summary;
-use super::system::{MechanicalSystem, SystemError};
+use super::system::{MechanicalSystem, RunObserver};
 use super::variational;
-use crate::diag::Diagnostic;
-use crate::dynamics::algorithms::forward_kinematics;
-use crate::dynamics::compiled::{EffortScratch, EffortState};
-use crate::dynamics::efforts::{potential_energy, Declared};
-use crate::dynamics::energy::{conservative_forces, kinetic_energy, momentum};
-use crate::dynamics::friction::Switch;
+use crate::dynamics::compiled::EffortScratch;
+use crate::dynamics::energy::conservative_forces;
 use crate::dynamics::mimics;
 use crate::dynamics::model::Model;
-use crate::dynamics::stops::Impact;
 use crate::integrate::{
-    integrate, CallbackError, Failure, HermiteSegment, IntegrationError, Interrupt, Method,
-    OdeSystem, Settings as IntegratorSettings, Stats,
+    integrate, Failure, IntegrationError, Interrupt, Method, Settings as IntegratorSettings, Stats,
 };
 use crate::integrators::Feature;
-
-impl OdeSystem for MechanicalSystem<'_> {
-    fn dimension(&self) -> usize {
-        MechanicalSystem::dimension(self)
-    }
-
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
-        Ok(self.derivative(t, y, dydt)?)
-    }
-
-    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
-        Ok(self.keep_closed(t, y)?)
-    }
-
-    fn tangent_basis(
-        &mut self,
-        t: f64,
-        y: &[f64],
-    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
-        Ok(MechanicalSystem::tangent_basis(self, t, y)?)
-    }
-
-    fn autonomous(&self) -> bool {
-        MechanicalSystem::autonomous(self)
-    }
-
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        dydt: &[f64],
-        jacobian: &mut nalgebra::DMatrix<f64>,
-    ) -> Result<bool, CallbackError> {
-        let mut power_gradient = vec![0.0; y.len()];
-        Ok(MechanicalSystem::jacobian(
-            self,
-            t,
-            y,
-            dydt,
-            jacobian,
-            &mut power_gradient,
-        )?)
-    }
-
-    fn breaks_error_trend(&self) -> bool {
-        self.loops.breaks_trend
-    }
-
-    fn event_count(&self) -> usize {
-        self.event_total()
-    }
-
-    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
-        Ok(self.event_values(t, y, values)?)
-    }
-
-    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
-        Ok(self.act_on_event(t, y, index)?)
-    }
-}
-
-/// The mechanism with one more state, the work W of its non-conservative efforts (W' = their
-/// power), integrated with the motion; the step control watches the motion only, so the steps
-/// are those of the mechanism alone.
-struct WithWork<'s, 'm>(&'s mut MechanicalSystem<'m>);
-
-impl OdeSystem for WithWork<'_, '_> {
-    fn dimension(&self) -> usize {
-        self.0.dimension() + 1
-    }
-
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
-        let n = self.0.dimension();
-        self.0.derivative(t, &y[..n], &mut dydt[..n])?;
-        dydt[n] = self.0.power;
-        Ok(())
-    }
-
-    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
-        let n = self.0.dimension();
-        Ok(self.0.keep_closed(t, &mut y[..n])?)
-    }
-
-    fn tangent_basis(
-        &mut self,
-        t: f64,
-        y: &[f64],
-    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
-        let n = self.0.dimension();
-        Ok(self.0.tangent_basis(t, &y[..n])?)
-    }
-
-    fn autonomous(&self) -> bool {
-        self.0.autonomous()
-    }
-
-    /// The mechanism's Jacobian, and the work's rate's gradient as the last row (the rate does
-    /// not depend on the work itself).
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        dydt: &[f64],
-        jacobian: &mut nalgebra::DMatrix<f64>,
-    ) -> Result<bool, CallbackError> {
-        let n = self.0.dimension();
-        let mut motion = nalgebra::DMatrix::zeros(n, n);
-        let mut power_gradient = vec![0.0; n];
-        let given = self
-            .0
-            .jacobian(t, &y[..n], &dydt[..n], &mut motion, &mut power_gradient)?;
-        jacobian.fill(0.0);
-        jacobian.view_mut((0, 0), (n, n)).copy_from(&motion);
-        for (j, gradient) in power_gradient.iter().enumerate() {
-            jacobian[(n, j)] = *gradient;
-        }
-        Ok(given)
-    }
-
-    fn breaks_error_trend(&self) -> bool {
-        self.0.loops.breaks_trend
-    }
-
-    fn event_count(&self) -> usize {
-        self.0.event_total()
-    }
-
-    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
-        let n = self.0.dimension();
-        Ok(self.0.event_values(t, &y[..n], values)?)
-    }
-
-    /// The impact, release or friction switch; the work of the non-conservative efforts does
-    /// not jump.
-    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
-        let n = self.0.dimension();
-        Ok(self.0.act_on_event(t, &mut y[..n], index)?)
-    }
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct RunFailure {
-    pub time: f64,
-    pub message: String,
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct Report {
-    pub integrator: String,
-    pub duration: f64,
-    pub steps: usize,
-    pub rejected_steps: usize,
-    pub function_evaluations: usize,
-    /// With the implicit integrator: the accepted steps its Rosenbrock method took (the others
-    /// are Dormand–Prince's, where the motion is not stiff), and how often it changed method.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stiff_steps: Option<usize>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub method_switches: Option<usize>,
-    /// The CPU time of the run (integration and sampling, on the thread that ran it), when the
-    /// thread's CPU clock can be read; and the wall-clock time it took, longer when the machine
-    /// gave time to other work.
-    pub cpu_seconds: Option<f64>,
-    pub wall_seconds: f64,
-    /// Largest |E(t) − E(0)| over the outputs, relative to the larger of |E(0)| and the largest
-    /// kinetic energy, when the system is conservative.
-    pub energy_drift: Option<f64>,
-    /// For a mechanism with non-conservative efforts: the largest change of kinetic + potential
-    /// − work since the start, over the largest of those energies (the energy balance).
-    pub energy_balance: Option<f64>,
-    /// Kinetic energy, potential energy (of the conservative efforts) and work of the others at
-    /// the end of the run, when the work is integrated.
-    pub final_energies: Option<[f64; 3]>,
-    /// Largest change of a component of the total momentum, when nothing outside acts on the
-    /// mechanism (its root joints are free and no effort is applied).
-    pub momentum_drift: Option<MomentumDrift>,
-    /// The loops: redundancy, residuals, singular configurations (mechanisms with loops).
-    pub constraints: Option<ConstraintReport>,
-    /// A fixed-step method's largest local error estimate over its steps (RK4, symplectic).
-    pub step_error: Option<StepErrorReport>,
-    /// The impacts on the stops (links' `lower` and `upper`), in time order.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub impacts: Vec<Impact>,
-    /// The joints' friction switching between slipping and sticking, in time order.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub friction_switches: Vec<Switch>,
-    /// Where an explicit integrator's steps were found held by its stability region (W0901).
-    pub stiffness: Option<StiffnessReport>,
-    pub failure: Option<RunFailure>,
-    /// When the run was stopped from outside (`RunOptions::interrupt`): not a failure, but the
-    /// outputs end there.
-    pub interrupted: Option<Interruption>,
-}
-
-/// When a run was stopped from outside, and the value the interrupt was set to (the signal's
-/// number for `lsdc simulate`).
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Interruption {
-    pub time: f64,
-    pub signal: usize,
-}
-
-/// Why an integration stopped, in a run's words.
-fn failure_message(failure: &Failure, max_steps: usize) -> String {
-    match failure {
-        Failure::TooManySteps => format!(
-            "the run reached its limit of {max_steps} steps (rejected ones included); raise it with `--max-steps`"
-        ),
-        other => other.to_string(),
-    }
-}
-
-/// The largest local error estimate of a fixed-step run, in the norm of the tolerances (at most
-/// 1 meets them), the time at the end of that step, and the tolerances it was measured against.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct StepErrorReport {
-    pub largest: f64,
-    pub time: f64,
-    pub rtol: f64,
-    pub atol: f64,
-}
-
-impl StepErrorReport {
-    /// Whether the steps were too long for the tolerances (a non-finite estimate is kept as
-    /// infinite, `StepError::keep_largest`).
-    pub fn exceeds_tolerances(&self) -> bool {
-        self.largest > 1.0
-    }
-}
-
-/// The warning for an explicit run whose steps were held by stability (W0901).
-pub fn stiffness_warning(report: &Report) -> Option<Diagnostic> {
-    stiffness::warning(report.stiffness.as_ref()?, &report.integrator)
-}
-
-/// The warning for a fixed-step run whose steps were too long for its tolerances (W0902): its
-/// results may be far from the motion, and nothing else would say so.
-pub fn step_error_warning(report: &Report) -> Option<Diagnostic> {
-    let error = report
-        .step_error
-        .filter(StepErrorReport::exceeds_tolerances)?;
-    let message = format!(
-        "the steps of `{}` are too long for the tolerances: a step's local error estimate reaches {:.1e} times them (rtol {:e}, atol {:e}) at t = {}",
-        report.integrator, error.largest, error.rtol, error.atol, error.time
-    );
-    Some(
-        Diagnostic::warning("W0902", message)
-            .note(match report.integrator.as_str() {
-                "symplectic" => "its energy stays bounded, but its positions and phase are only as accurate as its step: the outputs may be far from the motion",
-                _ => "the outputs may be far from the motion; the estimate bounds the error a step adds, and errors grow along the run",
-            })
-            .help("shorten the step (`--step`), or let `dopri5` choose it to the tolerances (`--integrator dopri5`)"),
-    )
-}
-
-/// The warning for outputs inside a singular passage that the run ended in (W0903): they come
-/// from the motion with rows set aside, only projected, and may be off the branch.
-pub fn passage_output_warning(report: &Report) -> Option<Diagnostic> {
-    let times = &report.constraints.as_ref()?.outputs_off_branch;
-    let (first, last) = (times.first()?, times.last()?);
-    let message = format!(
-        "{} output{} from t = {first} to t = {last} fell inside a singular passage that the run ended in: {} not be interpolated between states on the branch, and may be off it",
-        times.len(),
-        if times.len() > 1 { "s" } else { "" },
-        if times.len() > 1 { "they could" } else { "it could" },
-    );
-    Some(
-        Diagnostic::warning("W0903", message)
-            .note("inside a passage the rows losing their independence are set aside; outputs there are interpolated between the states before and after it, which a run that ends inside it does not reach")
-            .help("end the run (`duration`) or the outputs away from the singular configuration"),
-    )
-}
-
-impl Report {
-    /// The warnings the run found, in this order: steps held by stability (W0901), fixed steps
-    /// too long for their tolerances (W0902), outputs inside a singular passage (W0903).
-    pub fn warnings(&self) -> Vec<Diagnostic> {
-        let found = [
-            stiffness_warning(self),
-            step_error_warning(self),
-            passage_output_warning(self),
-        ];
-        found.into_iter().flatten().collect()
-    }
-}
+use crate::prepare::{Integrator, Prepared};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Simulation {
@@ -358,197 +70,6 @@ fn output_times(duration: f64, interval: f64) -> Vec<f64> {
         times.push(duration);
     }
     times
-}
-
-/// Samples a state: declared coordinates (continuous with the previous sample), energy, momentum
-/// and, when asked for, the reactions. An output between two steps comes from the integrator's
-/// interpolant: with loops it is projected onto the constraints like the steps are, except
-/// inside a stretch integrated with rows set aside (a singular passage, see
-/// `constraints::Released`), where it is interpolated between the stretch's ends instead, once
-/// the stretch has ended.
-struct Sampler<'m> {
-    /// Its `reference` is shared with the integrated system: the declared coordinates of the
-    /// last output, which keep recovered angles continuous.
-    system: MechanicalSystem<'m>,
-    conservative: crate::dynamics::energy::Conservative,
-    reactions: bool,
-    /// The program's outputs, and where their tape is evaluated.
-    outputs: &'m Outputs,
-    output_scratch: EffortScratch,
-    /// Outputs inside a stretch with rows set aside whose end is not known yet: their time and
-    /// the integrator's state there (for the work of the non-conservative efforts).
-    pending: Vec<(f64, Vec<f64>)>,
-    /// The outputs inside such a stretch that could not be interpolated between its ends (the
-    /// run ended inside it): only projected, they may be off the branch.
-    unsettled: Vec<f64>,
-    /// The interpolant over the last stretch whose outputs were sampled, and the stretch's
-    /// times.
-    segment: Option<((f64, f64), HermiteSegment)>,
-}
-
-impl Sampler<'_> {
-    /// The samples of the outputs up to `time`, given the integrator's state there: none while
-    /// `time` lies inside a stretch integrated with rows set aside, all those of the stretch
-    /// once it has ended.
-    fn offer(&mut self, time: f64, y: &[f64]) -> Result<Vec<Sample>, SystemError> {
-        let mut samples = self.settle(false)?;
-        if self.released_at(time) {
-            self.pending.push((time, y.to_vec()));
-            samples.extend(self.settle(false)?);
-        } else {
-            samples.push(self.sample(time, y)?);
-        }
-        Ok(samples)
-    }
-
-    /// The samples still pending at the end of the run: those of a stretch that ended, or,
-    /// when the run ended inside one, the projected outputs (`unsettled`).
-    fn finish(&mut self) -> Result<Vec<Sample>, SystemError> {
-        let mut samples = self.settle(true)?;
-        for (time, y) in std::mem::take(&mut self.pending) {
-            self.unsettled.push(time);
-            samples.push(self.sample(time, &y)?);
-        }
-        Ok(samples)
-    }
-
-    /// Whether an output at `time` lies strictly inside a stretch integrated with rows set
-    /// aside (so far: one not ended yet holds every later time).
-    fn released_at(&self, time: f64) -> bool {
-        let released = self.system.loops.released.borrow();
-        let stretch = released.iter().rev().find(|s| s.entry.0 < time);
-        stretch.is_some_and(|s| !s.settled || s.exit.as_ref().is_none_or(|exit| time < exit.0))
-    }
-
-    /// The samples of the pending outputs, if their stretch has ended (or the run, `ended`):
-    /// the cubic Hermite interpolant between the stretch's ends (`interpolant`). It is not
-    /// projected: deep in the passage a projection cannot find the branch, which the ends and
-    /// the interpolant follow to their accuracy.
-    fn settle(&mut self, ended: bool) -> Result<Vec<Sample>, SystemError> {
-        let Some(&(first, _)) = self.pending.first() else {
-            return Ok(Vec::new());
-        };
-        let stretch = {
-            let released = self.system.loops.released.borrow();
-            let stretch = released.iter().rev().find(|s| s.entry.0 < first);
-            match stretch {
-                Some(s) if s.exit.is_some() && (s.settled || ended) => s.clone(),
-                _ => return Ok(Vec::new()),
-            }
-        };
-        let exit = stretch.exit.as_ref().map_or(f64::INFINITY, |exit| exit.0);
-        let n = self.system.dimension();
-        let mut samples = Vec::new();
-        for (time, y) in std::mem::take(&mut self.pending) {
-            if time >= exit {
-                // After the last state kept, at the end of a run that ended inside the stretch.
-                self.unsettled.push(time);
-                samples.push(self.sample(time, &y)?);
-                continue;
-            }
-            let mut state = vec![0.0; n];
-            self.interpolant(&stretch)?.evaluate(time, &mut state);
-            self.system.measure_loops(time, &state)?;
-            samples.push(self.describe(time, state, y.get(n).copied())?);
-        }
-        Ok(samples)
-    }
-
-    /// The cubic Hermite interpolant over a stretch with rows set aside, between its ends, each
-    /// closed onto every row (its velocities by the constraints' impulse) and given the
-    /// derivative of the equations with every row: kept for the stretch's later outputs.
-    fn interpolant(&mut self, stretch: &ReleasedStretch) -> Result<&HermiteSegment, SystemError> {
-        let (entry, exit) = (&stretch.entry, stretch.exit.as_ref().expect("an end"));
-        let span = (entry.0, exit.0);
-        if self
-            .segment
-            .as_ref()
-            .is_none_or(|(cached, _)| *cached != span)
-        {
-            let n = self.system.dimension();
-            let mut ends = [entry.1.clone(), exit.1.clone()];
-            let mut slopes = [vec![0.0; n], vec![0.0; n]];
-            for ((time, end), slope) in [entry.0, exit.0]
-                .into_iter()
-                .zip(&mut ends)
-                .zip(&mut slopes)
-            {
-                self.system.keep_closed(time, end)?;
-                self.system.derivative(time, end, slope)?;
-            }
-            let mut segment = HermiteSegment::new(n);
-            let [start, end] = &ends;
-            let [start_slope, end_slope] = &slopes;
-            segment.set(
-                entry.0,
-                exit.0 - entry.0,
-                [start, start_slope, end, end_slope],
-            );
-            self.segment = Some((span, segment));
-        }
-        Ok(&self.segment.as_ref().expect("just set").1)
-    }
-
-    /// The sample of the integrator's state `y` at `time`, projected onto the loops.
-    fn sample(&mut self, time: f64, y: &[f64]) -> Result<Sample, SystemError> {
-        // After the motion, the work of the non-conservative efforts when it is integrated.
-        let n = self.system.dimension();
-        let mut state = y[..n].to_vec();
-        self.system.keep_closed(time, &mut state)?;
-        self.describe(time, state, y.get(n).copied())
-    }
-
-    /// The sample of a state (positions, velocities) on the loops.
-    fn describe(
-        &mut self,
-        time: f64,
-        mut y: Vec<f64>,
-        work: Option<f64>,
-    ) -> Result<Sample, SystemError> {
-        let model = self.system.model;
-        self.system.adopt_phases();
-        self.system.ball_rates(&mut y)?;
-        let (q, v) = model.split_state(&y);
-        let previous = self.system.reference.borrow().clone();
-        let (coordinates, rates) = model.declared(&q, v, &previous)?;
-        *self.system.reference.borrow_mut() = coordinates.clone();
-        let reactions = if self.reactions {
-            self.system.reactions(time, &q, v)?
-        } else {
-            Vec::new()
-        };
-        let data = &mut self.system.data;
-        forward_kinematics(model, data, &q, v)?;
-        let h = momentum(model, data);
-        let declared = Declared {
-            model,
-            coordinates: &coordinates,
-            rates: &rates,
-        };
-        // `+ 0.0` turns a −0 into 0 for the outputs.
-        let potential = potential_energy(model, data, &self.conservative, &declared, time)? + 0.0;
-        let kinetic = kinetic_energy(model, data);
-        let state = EffortState {
-            world: &data.world,
-            velocity: &data.velocity,
-            coordinates: &coordinates,
-            rates: &rates,
-            time,
-        };
-        let outputs = self.outputs.values(&state, &mut self.output_scratch);
-        Ok(Sample {
-            time,
-            coordinates,
-            rates,
-            kinetic_energy: kinetic,
-            potential_energy: Some(potential),
-            work: work.map(|w| w + 0.0),
-            balance: work.map(|w| kinetic + potential - w),
-            momentum: [h[0], h[1], h[2], h[3], h[4], h[5]],
-            reactions,
-            outputs,
-        })
-    }
 }
 
 /// Runs the prepared simulation; `sink` receives every sample as soon as it is computed, and
@@ -610,6 +131,8 @@ pub fn run_from(
     simulate_from(prepared, start, &RunOptions::default(), sink)
 }
 
+/// A run in stages: its system at the start state (`start_system`), integrated with the outputs
+/// observed on it (`integrate_observed`), then its report (`report`).
 fn simulate_from(
     prepared: &Prepared,
     start: &Start<'_>,
@@ -618,41 +141,11 @@ fn simulate_from(
 ) -> Simulation {
     let model = &prepared.model;
     let settings = &prepared.settings;
-    let (q0, v0) = match model.state_from_declared(start.coordinates, start.rates) {
-        Ok(state) => state,
-        Err(e) => {
-            return failed_at_start(
-                prepared,
-                format!(
-                    "the initial state cannot be evaluated: {}",
-                    describe_error(&e)
-                ),
-            )
-        }
+    let (mut system, mut y0) = match start_system(prepared, start) {
+        Ok(started) => started,
+        Err(message) => return failed_at_start(prepared, message),
     };
-    if let Some(refusal) = settings.integrator.refusal(&features(model)) {
-        return failed_at_start(prepared, refusal);
-    }
-    let mut y0 = q0;
-    y0.extend_from_slice(&v0);
-    let reference = Rc::new(RefCell::new(start.coordinates.to_vec()));
-    let mut system = MechanicalSystem::new(model, reference.clone(), settings.stabilisation);
-    // The native code knows nothing of geared rotors, mimic couplings or joint friction: the
-    // model's own evaluation counts them.
-    let plain = model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty();
-    system.use_native(prepared.native.as_ref().filter(|_| plain));
-    // The followers start where their leaders put them, whatever `initial` said (then with
-    // loops, the loops and couplings are closed together).
-    let (q0, v0) = y0.split_at_mut(model.positions());
-    mimics::impose(&model.mimics, q0, v0);
-    if let Err(error) = system.start_loops(&mut y0) {
-        return failed_at_start(prepared, error.to_string());
-    }
-    if let Err(error) = system.start_friction(0.0, &mut y0) {
-        return failed_at_start(prepared, error.to_string());
-    }
     let mut sampler = Sampler {
-        system: MechanicalSystem::new(model, reference.clone(), settings.stabilisation),
         conservative: conservative_forces(model),
         reactions: settings.reactions,
         outputs: &prepared.outputs,
@@ -661,23 +154,15 @@ fn simulate_from(
         unsettled: Vec::new(),
         segment: None,
     };
-    // What the start found of the loops (rank, redundant rows) holds for the outputs too.
-    sampler.system.loops = system.loops.clone();
-    sampler.system.contact_rows = system.contact_rows.clone();
-    sampler.system.loops.samples_outputs = true;
-    // The sampler's reactions see the joints sticking and the stops resting as the run does.
-    sampler.system.mirror_phases(system.share_phases());
     // The work of non-conservative efforts rides along as one more state (not with the
-    // variational integrator, whose steps are its own).
-    let motion = y0.len();
-    // Nor with native code, which computes the accelerations alone (`simulate --compiled`).
+    // variational integrator, whose steps are its own), nor with native code, which computes
+    // the accelerations alone (`simulate --compiled`).
     let tracks_work = !sampler.conservative.complete
         && settings.integrator != Integrator::Symplectic
         && prepared.native.is_none();
     if tracks_work {
         y0.push(0.0);
     }
-    let outputs = output_times(settings.duration, settings.output);
     let mut samples = Vec::new();
     let mut summary = Summary::new(model, sampler.conservative.complete);
     let started = Instant::now();
@@ -691,69 +176,20 @@ fn simulate_from(
             }
         }
     };
-    let mut observer = |t: f64, y: &[f64]| -> Result<(), CallbackError> {
-        deliver(sampler.offer(t, y)?, &mut samples);
+    let mut observer = |system: &mut MechanicalSystem<'_>, t: f64, y: &[f64]| {
+        deliver(sampler.offer(system, t, y)?, &mut samples);
         Ok(())
     };
-    let integrator_settings = IntegratorSettings {
-        rtol: settings.rtol,
-        atol: settings.atol,
-        initial_step: settings.step,
-        max_step: settings.max_step,
-        controlled: Some(motion),
-        max_steps: settings.max_steps,
-        stiffness_check: settings.stiffness_check,
-        interrupt: options.interrupt.clone(),
-        ..IntegratorSettings::default()
-    };
-    let mut with_work = WithWork(&mut system);
-    let ode: &mut dyn OdeSystem = if tracks_work {
-        &mut with_work
-    } else {
-        with_work.0
-    };
-    let fixed_step = settings.step.unwrap_or(settings.output.min(1e-3));
-    let method = match settings.integrator {
-        Integrator::Rk4 => Some(Method::Rk4 { step: fixed_step }),
-        Integrator::DormandPrince => Some(Method::DormandPrince),
-        Integrator::Dop853 => Some(Method::Dop853),
-        Integrator::Implicit => Some(Method::Automatic),
-        Integrator::Symplectic => None,
-    };
-    let result: Result<(Vec<f64>, Stats), IntegrationError> = match method {
-        Some(method) => integrate(
-            &method,
-            ode,
-            0.0,
-            &y0,
-            settings.duration,
-            &outputs,
-            &integrator_settings,
-            &mut observer,
-        ),
-        None => {
-            let system = &mut *with_work.0;
-            // The RATTLE steps keep the loops closed themselves.
-            system.loops.stabilisation = crate::dynamics::loops::Stabilisation::Integrator;
-            variational::integrate(
-                system,
-                0.0,
-                &y0,
-                settings.duration,
-                variational::FixedStep {
-                    step: fixed_step,
-                    rtol: settings.rtol,
-                    atol: settings.atol,
-                    max_steps: settings.max_steps,
-                    interrupt: options.interrupt.clone(),
-                },
-                &outputs,
-                &mut observer,
-            )
-        }
-    };
+    let result = integrate_observed(
+        prepared,
+        &mut system,
+        &y0,
+        tracks_work,
+        options,
+        &mut observer,
+    );
     // The outputs of a stretch with rows set aside that ended with the run.
-    let result = match (result, sampler.finish()) {
+    let result = match (result, sampler.finish(&mut system)) {
         (result, Ok(rest)) => {
             deliver(rest, &mut samples);
             result
@@ -769,7 +205,157 @@ fn simulate_from(
     let cpu_seconds = thread_cpu_seconds()
         .zip(cpu_started)
         .map(|(now, then)| now - then);
-    let (stats, stopped) = match result {
+    let ended = Ended {
+        result,
+        summary: &summary,
+        outputs_off_branch: std::mem::take(&mut sampler.unsettled),
+        cpu_seconds,
+        wall_seconds,
+    };
+    let report = report(prepared, &mut system, ended);
+    Simulation {
+        coordinate_names: prepared.coordinate_names.clone(),
+        reaction_names: reaction_names_of(prepared),
+        output_names: prepared.outputs.names.clone(),
+        samples,
+        report,
+    }
+}
+
+/// The run's system at a start, and the state it starts from (positions, velocities): the
+/// followers where their leaders put them, the loops closed, the friction's phases decided,
+/// the outputs' scratch prepared from the loops as the start found them. Why it cannot start.
+fn start_system<'p>(
+    prepared: &'p Prepared,
+    start: &Start<'_>,
+) -> Result<(MechanicalSystem<'p>, Vec<f64>), String> {
+    let model = &prepared.model;
+    let settings = &prepared.settings;
+    let (q0, v0) = model
+        .state_from_declared(start.coordinates, start.rates)
+        .map_err(|e| {
+            format!(
+                "the initial state cannot be evaluated: {}",
+                describe_error(&e)
+            )
+        })?;
+    if let Some(refusal) = settings.integrator.refusal(&features(model)) {
+        return Err(refusal);
+    }
+    let mut y0 = q0;
+    y0.extend_from_slice(&v0);
+    let reference = start.coordinates.to_vec();
+    let mut system = MechanicalSystem::new(model, reference, settings.stabilisation);
+    system.use_native(prepared.native.as_ref().filter(|_| plain(model)));
+    // The followers start where their leaders put them, whatever `initial` said (then with
+    // loops, the loops and couplings are closed together).
+    let (q0, v0) = y0.split_at_mut(model.positions());
+    mimics::impose(&model.mimics, q0, v0);
+    system.start_loops(&mut y0).map_err(|e| e.to_string())?;
+    system
+        .start_friction(0.0, &mut y0)
+        .map_err(|e| e.to_string())?;
+    // What the start found of the loops (rank, redundant rows) holds for the outputs too.
+    system.prepare_sampling();
+    Ok((system, y0))
+}
+
+/// Whether the model has none of what the native code and the variational integrator know
+/// nothing of: geared rotors, mimic couplings, joint friction (the model's own evaluation
+/// counts them).
+fn plain(model: &Model) -> bool {
+    model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty()
+}
+
+/// Integrates the run's system from y0 with the integrator the settings name, `observer`
+/// receiving every output.
+fn integrate_observed<'m>(
+    prepared: &Prepared,
+    system: &mut MechanicalSystem<'m>,
+    y0: &[f64],
+    tracks_work: bool,
+    options: &RunOptions,
+    observer: &mut RunObserver<'_, 'm>,
+) -> Result<(Vec<f64>, Stats), IntegrationError> {
+    let settings = &prepared.settings;
+    let outputs = output_times(settings.duration, settings.output);
+    let integrator_settings = IntegratorSettings {
+        rtol: settings.rtol,
+        atol: settings.atol,
+        initial_step: settings.step,
+        max_step: settings.max_step,
+        controlled: Some(system.dimension()),
+        max_steps: settings.max_steps,
+        stiffness_check: settings.stiffness_check,
+        interrupt: options.interrupt.clone(),
+        ..IntegratorSettings::default()
+    };
+    let fixed_step = settings.step.unwrap_or(settings.output.min(1e-3));
+    let method = match settings.integrator {
+        Integrator::Rk4 => Some(Method::Rk4 { step: fixed_step }),
+        Integrator::DormandPrince => Some(Method::DormandPrince),
+        Integrator::Dop853 => Some(Method::Dop853),
+        Integrator::Implicit => Some(Method::Automatic),
+        Integrator::Symplectic => None,
+    };
+    match method {
+        Some(method) => {
+            let mut ode = RunOde {
+                system,
+                tracks_work,
+                observer,
+            };
+            integrate(
+                &method,
+                &mut ode,
+                0.0,
+                y0,
+                settings.duration,
+                &outputs,
+                &integrator_settings,
+                // The outputs are the run's own observation (`RunOde::observe`).
+                &mut |_, _| Ok(()),
+            )
+        }
+        None => {
+            // The RATTLE steps keep the loops closed themselves.
+            system.scratch.loops.stabilisation = crate::dynamics::loops::Stabilisation::Integrator;
+            variational::integrate(
+                system,
+                0.0,
+                y0,
+                settings.duration,
+                variational::FixedStep {
+                    step: fixed_step,
+                    rtol: settings.rtol,
+                    atol: settings.atol,
+                    max_steps: settings.max_steps,
+                    interrupt: options.interrupt.clone(),
+                },
+                &outputs,
+                observer,
+            )
+        }
+    }
+}
+
+/// How an integration ended, with what the outputs saw of it.
+struct Ended<'s> {
+    result: Result<(Vec<f64>, Stats), IntegrationError>,
+    summary: &'s Summary,
+    /// The outputs inside a passage the run ended in (`Sampler::unsettled`).
+    outputs_off_branch: Vec<f64>,
+    cpu_seconds: Option<f64>,
+    wall_seconds: f64,
+}
+
+/// The report of an ended run: the integrator's work, the energy and momentum the outputs saw,
+/// the loops' findings, the events, and why it stopped early if it did.
+fn report(prepared: &Prepared, system: &mut MechanicalSystem<'_>, ended: Ended<'_>) -> Report {
+    let model = &prepared.model;
+    let settings = &prepared.settings;
+    let summary = ended.summary;
+    let (stats, stopped) = match ended.result {
         Ok((_, stats)) => (stats, None),
         Err(e) => (*e.stats, Some((e.time, e.failure))),
     };
@@ -788,9 +374,8 @@ fn simulate_from(
             ),
         });
     let constraints = model.has_loops().then(|| {
-        system.loops.absorb(&sampler.system.loops);
-        let mut report = system.loops.report();
-        report.outputs_off_branch = std::mem::take(&mut sampler.unsettled);
+        let mut report = system.scratch.loops.report(&system.state.loops);
+        report.outputs_off_branch = ended.outputs_off_branch;
         report
     });
     let left_branch = constraints
@@ -806,7 +391,7 @@ fn simulate_from(
         (None, left) => left,
         (stopped, _) => stopped,
     };
-    let report = Report {
+    Report {
         integrator: settings.integrator.name().to_string(),
         duration: settings.duration,
         steps: stats.steps,
@@ -815,8 +400,8 @@ fn simulate_from(
         stiff_steps: (settings.integrator == Integrator::Implicit).then_some(stats.stiff_steps),
         method_switches: (settings.integrator == Integrator::Implicit)
             .then_some(stats.method_switches),
-        cpu_seconds,
-        wall_seconds,
+        cpu_seconds: ended.cpu_seconds,
+        wall_seconds: ended.wall_seconds,
         energy_drift: summary.energy_drift(),
         energy_balance: summary.energy_balance(),
         final_energies: summary.final_energies(),
@@ -832,18 +417,10 @@ fn simulate_from(
             .stability_bound
             .as_ref()
             .and_then(|bound| stiffness::describe(prepared, bound)),
-        impacts: std::mem::take(&mut system.impacts),
-        friction_switches: std::mem::take(&mut system.switches),
+        impacts: std::mem::take(&mut system.state.impacts),
+        friction_switches: std::mem::take(&mut system.state.switches),
         failure,
         interrupted,
-    };
-    let reaction_names = reaction_names_of(prepared);
-    Simulation {
-        coordinate_names: prepared.coordinate_names.clone(),
-        reaction_names,
-        output_names: prepared.outputs.names.clone(),
-        samples,
-        report,
     }
 }
 
@@ -864,27 +441,6 @@ fn reaction_names(model: &Model) -> Vec<String> {
         .chain(model.loops.iter().map(|l| l.name.clone()))
         .chain(model.contacts.iter().map(|c| c.name.clone()))
         .collect()
-}
-
-/// Where a failing run was heading: the coordinate moving fastest at the last output.
-fn fastest_coordinate(names: &[String], last: Option<&Sample>) -> String {
-    let Some(last) = last else {
-        return String::new();
-    };
-    let fastest = last.rates.iter().enumerate().max_by(|a, b| {
-        a.1.abs()
-            .total_cmp(&b.1.abs())
-            .then(a.1.is_nan().cmp(&b.1.is_nan()))
-    });
-    match fastest {
-        Some((i, rate)) if i < names.len() && *rate != 0.0 => {
-            format!(
-                " (at t = {}, the fastest coordinate was `{}`, moving at {rate:.3e})",
-                last.time, names[i]
-            )
-        }
-        _ => String::new(),
-    }
 }
 
 fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {

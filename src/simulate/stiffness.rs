@@ -4,16 +4,13 @@
 //! the implicit integrator, and `lsdc simulate` says so (W0901), naming the coordinates that
 //! move in the fast mode and the force element that makes it fast.
 
-use std::cell::RefCell;
-use std::rc::Rc;
-
 use serde::Serialize;
 
-use super::prepare::{Integrator, Prepared};
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::model::Model;
 use crate::integrate::{jacobian_product, StabilityBound};
+use crate::prepare::{Integrator, Prepared};
 use crate::source::Span;
 
 /// The share of ∂f/∂y along the fast mode an element must give to be named.
@@ -210,7 +207,7 @@ fn product_along(
     (time, state): (f64, &[f64]),
     direction: &[f64],
 ) -> Option<Vec<f64>> {
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     let mut y = state.to_vec();
     system.start_loops(&mut y).ok()?;

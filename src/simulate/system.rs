@@ -5,164 +5,90 @@
 //! (contacts, couplings with loops, coordinates held at rest) solved on the response of those
 //! accelerations to forces (`dynamics::rows`, `holding`).
 
-use std::cell::RefCell;
-
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
-use std::rc::Rc;
 
+mod friction;
 mod held_reactions;
 mod holding;
+pub mod impacts;
 mod jacobian;
+pub mod scratch;
 mod stacked;
 mod stop_rows;
 
-use super::constraints::LoopMonitor;
-use super::native::NativeDynamics;
+use super::run_state::RunState;
 use crate::dynamics::algorithms::{
     aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
-    rnea_after_kinematics, rnea_forward, transmitted_wrenches, Data, DynamicsError,
+    rnea_after_kinematics, rnea_forward, transmitted_wrenches, DynamicsError,
 };
-use crate::dynamics::contacts::{self, ContactRows};
+use crate::dynamics::contacts;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
-use crate::dynamics::friction::Phase;
 use crate::dynamics::loops::{
-    self, Extent, LoopError, LoopScratch, ProjectionScratch, Stabilisation, StructureError, Wanted,
-    ROW_NAMES,
+    self, Extent, LoopError, Stabilisation, StructureError, Wanted, ROW_NAMES,
 };
-use crate::dynamics::mimics;
-use crate::dynamics::model::{DeclaredState, Model, Recovered};
-use crate::dynamics::response::Response;
-use crate::dynamics::rows::RowStack;
+use crate::dynamics::model::{Model, Recovered};
+use crate::integrate::CallbackError;
 use crate::kinematics::eval::EvalError;
+use crate::prepare::native::NativeDynamics;
 use crate::spatial;
+use scratch::Scratch;
 
+/// The equations of motion of a run: the model (only read), the run's state (`RunState`, what
+/// every evaluation reads and the events change), and the scratch of the evaluator in use
+/// (`Scratch`); the sampler's own scratch waits in `sampling` while the integrator evaluates.
 pub struct MechanicalSystem<'m> {
     pub model: &'m Model,
-    pub data: Data,
-    /// Declared coordinates at the last output, shared with the sampler: recovered angles stay
-    /// continuous (a spring on an angle sees 3π/2, not −π/2, after one and a half turns).
-    pub reference: Rc<RefCell<Vec<f64>>>,
-    /// How the loops are kept closed, and what the run has seen of them.
-    pub loops: LoopMonitor,
-    /// The power of the non-conservative efforts at the last `derivative`.
-    pub power: f64,
-    /// Scratch of `derivative` for a tree, kept so that it allocates nothing: the normalised
-    /// positions, the accelerations, and the efforts of a mechanism without any.
-    positions: Vec<f64>,
-    accelerations: DVector<f64>,
-    no_efforts: Efforts,
-    /// The efforts at the last evaluation, and the declared coordinates and rates they used.
-    efforts: Efforts,
-    declared: DeclaredState,
-    /// Scratch of the constrained equations: the tree's inverse dynamics and Ma − f (for the
-    /// multipliers), and the loops' rows, factorisation and solution.
-    inverse: DVector<f64>,
-    force: DVector<f64>,
-    loop_scratch: LoopScratch,
-    /// Scratch of the projections: the constraints and factorisations, and the velocities.
-    projection: ProjectionScratch,
-    velocities: Vec<f64>,
-    /// The state of the last evaluation of a mechanism with loops, while `loop_scratch` holds
-    /// its rows (empty otherwise): a projection of that state adopts them.
-    evaluated: Vec<f64>,
-    /// The contact rows kept for the run (decided at the first evaluation, see
-    /// `contacts::independent_rows`), their normal rows, and every contact row at the last
-    /// evaluation.
-    pub contact_rows: Option<Vec<usize>>,
-    normal_rows: Vec<usize>,
-    contact_state: ContactRows,
-    /// Zero velocities or accelerations (tree length), the tree's mass matrix, the basis of
-    /// the velocities a tree's mimic couplings allow (`mimics::basis`), and the response X of
-    /// the accelerations to generalised forces (`response`), with whether it was formed at the
-    /// state of the current evaluation.
-    at_rest: Vec<f64>,
-    mass: DMatrix<f64>,
-    coupled: DMatrix<f64>,
-    response: Response,
-    response_here: bool,
-    /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
-    /// loops, coordinates held at rest), and in the projections onto the velocity rows and onto
-    /// the position rows; the velocities held at the evaluation; a step of the velocities.
-    rows: RowStack,
-    velocity_stack: RowStack,
-    position_stack: RowStack,
-    held: Vec<usize>,
-    step: DVector<f64>,
+    pub state: RunState,
+    /// Boxed, so that handing it to the outputs and back (`sampling`) moves a pointer.
+    pub scratch: Box<Scratch>,
+    /// The scratch of the outputs' evaluations (`sampling`), made at their first.
+    sampling: Option<Box<Scratch>>,
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
-    /// The impacts on the stops so far, in time order.
-    pub impacts: Vec<crate::dynamics::stops::Impact>,
-    /// Per stop, whether its coordinate rests on it, and the contact force holding it there
-    /// at the last evaluation (positive while it pushes the coordinate into its range).
-    pub resting: Vec<bool>,
-    pub contact: Vec<f64>,
-    /// Per joint with friction, its phase (set at the start and at its events), the force
-    /// holding it while it sticks at the last evaluation, and the power of the friction then.
-    pub phases: Vec<Phase>,
-    pub holding: Vec<f64>,
-    friction_power: f64,
-    /// The friction's changes of phase so far, in time order.
-    pub switches: Vec<crate::dynamics::friction::Switch>,
-    /// The phases and resting stops shared with another system of the run (the sampler's),
-    /// which mirrors them (see `simulate::friction`).
-    pub(super) shared_phases: Option<Rc<RefCell<SharedPhases>>>,
-}
-
-/// The friction's phases and the stops' resting flags of a run, as its integrated system last
-/// set them.
-#[derive(Clone, Debug, Default)]
-pub struct SharedPhases {
-    pub phases: Vec<Phase>,
-    pub resting: Vec<bool>,
 }
 
 impl<'m> MechanicalSystem<'m> {
+    /// The equations of motion of `model` for a run starting at the declared coordinates
+    /// `reference`.
     pub fn new(
         model: &'m Model,
-        reference: Rc<RefCell<Vec<f64>>>,
+        reference: Vec<f64>,
         stabilisation: Stabilisation,
     ) -> MechanicalSystem<'m> {
         MechanicalSystem {
             model,
-            data: Data::new(model),
-            reference,
-            loops: LoopMonitor::new(stabilisation),
-            power: 0.0,
-            positions: Vec::new(),
-            accelerations: DVector::zeros(model.velocities()),
-            no_efforts: Efforts::none(model),
-            efforts: Efforts::none(model),
-            declared: DeclaredState::default(),
-            inverse: DVector::zeros(model.nv),
-            force: DVector::zeros(model.velocities()),
-            loop_scratch: LoopScratch::new(model),
-            projection: ProjectionScratch::new(model),
-            velocities: Vec::new(),
-            evaluated: Vec::new(),
-            contact_rows: None,
-            normal_rows: Vec::with_capacity(model.contacts.len()),
-            contact_state: ContactRows::new(model),
-            at_rest: vec![0.0; model.nv],
-            mass: DMatrix::zeros(model.nv, model.nv),
-            coupled: mimics::basis(&model.mimics, model.nv),
-            response: Response::default(),
-            response_here: false,
-            rows: RowStack::new(model),
-            velocity_stack: RowStack::new(model),
-            position_stack: RowStack::new(model),
-            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
-            step: DVector::zeros(model.velocities()),
+            state: RunState::new(model, reference),
+            scratch: Box::new(Scratch::new(model, stabilisation)),
+            sampling: None,
             native: None,
-            impacts: Vec::new(),
-            resting: vec![false; model.stops.len()],
-            contact: vec![0.0; model.stops.len()],
-            phases: vec![Phase::Slipping(1.0); model.frictions.len()],
-            holding: vec![0.0; model.frictions.len()],
-            friction_power: 0.0,
-            switches: Vec::new(),
-            shared_phases: None,
+        }
+    }
+
+    /// Runs `evaluate` with the outputs' scratch in place of the integrator's: the outputs'
+    /// evaluations read and change the same run state, but leave the integrator's caches (its
+    /// last evaluation, its kept rows) as its steps left them. The outputs' monitor starts from
+    /// the loops' structure as the integrator's stood when it was prepared (`prepare_sampling`), and never sets rows
+    /// aside (`LoopMonitor::samples_outputs`).
+    pub fn sampling<R>(&mut self, evaluate: impl FnOnce(&mut Self) -> R) -> R {
+        self.prepare_sampling();
+        let mut scratch = self.sampling.take().expect("prepared");
+        std::mem::swap(&mut self.scratch, &mut scratch);
+        let result = evaluate(self);
+        std::mem::swap(&mut self.scratch, &mut scratch);
+        self.sampling = Some(scratch);
+        result
+    }
+
+    /// Makes the outputs' scratch if it is not made yet, its monitor of the loops from the
+    /// integrator's as it stands (a run prepares it once the loops are started).
+    pub fn prepare_sampling(&mut self) {
+        if self.sampling.is_none() {
+            let loops = &self.scratch.loops;
+            let mut scratch = Box::new(Scratch::new(self.model, loops.stabilisation));
+            scratch.loops = loops.for_outputs();
+            self.sampling = Some(scratch);
         }
     }
 
@@ -186,22 +112,16 @@ impl<'m> MechanicalSystem<'m> {
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
     pub fn efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Efforts, SystemError> {
         self.evaluate_efforts(t, q, v)?;
-        Ok(self.efforts.clone())
+        Ok(self.scratch.efforts.clone())
     }
 
-    /// The efforts at (t, q, v) into `self.efforts`, without allocating once its buffers are
+    /// The efforts at (t, q, v) into `self.scratch.efforts`, without allocating once its buffers are
     /// sized; leaves the forward kinematics of (q, v) in `data`.
     fn evaluate_efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
-        forward_kinematics(model, &mut self.data, q, v)?;
-        let state = &mut self.declared;
-        model.declared_into(
-            q,
-            v,
-            &self.reference.borrow(),
-            state,
-            Recovered::ReadByEfforts,
-        )?;
+        forward_kinematics(model, &mut self.scratch.data, q, v)?;
+        let state = &mut self.scratch.declared;
+        model.declared_into(q, v, &self.state.reference, state, Recovered::ReadByEfforts)?;
         let declared = Declared {
             model,
             coordinates: &state.coordinates,
@@ -209,10 +129,10 @@ impl<'m> MechanicalSystem<'m> {
         };
         Ok(evaluate_into(
             model,
-            &mut self.data,
+            &mut self.scratch.data,
             &declared,
             t,
-            &mut self.efforts,
+            &mut self.scratch.efforts,
         )?)
     }
 
@@ -236,22 +156,22 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         self.evaluate_efforts(t, q, v)?;
         if model.has_contacts() {
-            let state = &mut self.contact_state;
-            contacts::contact_rows_into(model, &mut self.data, v, true, state);
+            let state = &mut self.scratch.contact_state;
+            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
         }
         let efforts = match model.has_efforts() {
-            true => &self.efforts,
-            false => &self.no_efforts,
+            true => &self.scratch.efforts,
+            false => &self.scratch.no_efforts,
         };
-        let (data, bias) = (&mut self.data, &mut self.inverse);
-        rnea_after_kinematics(model, data, &self.at_rest, &efforts.external, bias);
-        crba_after_kinematics(model, &mut self.data, &mut self.mass);
+        let (data, bias) = (&mut self.scratch.data, &mut self.scratch.inverse);
+        rnea_after_kinematics(model, data, &self.scratch.at_rest, &efforts.external, bias);
+        crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
         for (i, a) in accelerations.iter_mut().enumerate() {
-            *a = efforts.tau[i] - self.inverse[i];
+            *a = efforts.tau[i] - self.scratch.inverse[i];
         }
-        self.friction_power = self.add_friction(v, accelerations);
+        self.scratch.friction_power = self.add_friction(v, accelerations);
         self.form_tree_response()?;
-        self.response.apply_vector(accelerations);
+        self.scratch.response.apply_vector(accelerations);
         Ok(())
     }
 
@@ -259,10 +179,13 @@ impl<'m> MechanicalSystem<'m> {
     /// the basis of the velocities the mimic couplings allow.
     fn form_tree_response(&mut self) -> Result<(), SystemError> {
         let formed = match self.model.mimics.is_empty() {
-            true => self.response.on_tree(&self.mass),
-            false => self.response.on_basis(&self.mass, self.coupled.as_view()),
+            true => self.scratch.response.on_tree(&self.scratch.mass),
+            false => self
+                .scratch
+                .response
+                .on_basis(&self.scratch.mass, self.scratch.coupled.as_view()),
         };
-        self.response_here = formed;
+        self.scratch.response_here = formed;
         match formed {
             true => Ok(()),
             false => Err(SystemError::SingularMassMatrix),
@@ -272,22 +195,22 @@ impl<'m> MechanicalSystem<'m> {
     /// Forms the response at q when the evaluation did not (`response_here`): with loops, on
     /// the allowed motions of the last constrained solve (which must be at q).
     fn form_response_at(&mut self, q: &[f64]) -> Result<(), SystemError> {
-        if self.response_here {
+        if self.scratch.response_here {
             return Ok(());
         }
         let model = self.model;
         crate::dynamics::algorithms::crba_into(
             model,
-            &mut self.data,
+            &mut self.scratch.data,
             &q[..model.nq],
-            &mut self.mass,
+            &mut self.scratch.mass,
         )?;
         if !model.has_loops() {
             return self.form_tree_response();
         }
-        let motions = self.loop_scratch.solved_motions();
-        self.response_here = self.response.on_basis(&self.mass, motions);
-        match self.response_here {
+        let motions = self.scratch.loop_scratch.solved_motions();
+        self.scratch.response_here = self.scratch.response.on_basis(&self.scratch.mass, motions);
+        match self.scratch.response_here {
             true => Ok(()),
             false => Err(SystemError::SingularMassMatrix),
         }
@@ -304,39 +227,44 @@ impl<'m> MechanicalSystem<'m> {
         wanted: Wanted,
     ) -> Result<(), SystemError> {
         let model = self.model;
-        self.evaluated.clear();
+        self.scratch.evaluated.clear();
         self.ensure_structure(q)?;
         // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
         // recursions start from.
         self.evaluate_efforts(t, q, v)?;
         // The slipping joints' friction acts with the efforts.
-        let mut tau = std::mem::take(&mut self.efforts.tau);
-        self.friction_power = self.add_friction(v, &mut tau);
-        self.efforts.tau = tau;
-        let scratch = &mut self.loop_scratch;
+        let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
+        self.scratch.friction_power = self.add_friction(v, &mut tau);
+        self.scratch.efforts.tau = tau;
+        let scratch = &mut self.scratch.loop_scratch;
         // Only Baumgarte's feedback reads the position rows.
-        let extent = match self.loops.stabilisation {
+        let extent = match self.scratch.loops.stabilisation {
             Stabilisation::Baumgarte(_) => Extent::WithBias,
             _ => Extent::Motion,
         };
         loops::constraints_into(
             model,
-            &mut self.data,
+            &mut self.scratch.data,
             q,
             v,
             extent,
             &mut scratch.constraints,
         )?;
-        let structure = &self.loops.structure;
-        loops::allowed_motions(structure, self.loops.stabilisation, scratch)
+        let structure = &self.scratch.loops.structure;
+        loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch)
             .map_err(|e| self.loop_error(&e))?;
         // Inverse dynamics' pass out at a₀: the bodies' forces whose power along each allowed
         // motion gives its share of Ma₀ and of the velocity-product forces.
-        let scratch = &mut self.loop_scratch;
+        let scratch = &mut self.scratch.loop_scratch;
         let particular = &scratch.particular()[..model.nv];
-        rnea_forward(model, &mut self.data, particular, &self.efforts.external);
-        let tau = &self.efforts.tau;
-        let solved = loops::solve_reduced(model, &mut self.data, tau, structure, scratch);
+        rnea_forward(
+            model,
+            &mut self.scratch.data,
+            particular,
+            &self.scratch.efforts.external,
+        );
+        let tau = &self.scratch.efforts.tau;
+        let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, structure, scratch);
         solved.map_err(|e| self.loop_error(&e))?;
         if wanted == Wanted::WithMultipliers {
             self.solve_multipliers();
@@ -350,25 +278,31 @@ impl<'m> MechanicalSystem<'m> {
     /// get −τ). `data` holds the forward kinematics of the state.
     pub(super) fn solve_multipliers(&mut self) {
         let model = self.model;
-        let scratch = &mut self.loop_scratch;
+        let scratch = &mut self.scratch.loop_scratch;
         let a = &scratch.accelerations.as_slice()[..model.nv];
-        let external = &self.efforts.external;
-        rnea_after_kinematics(model, &mut self.data, a, external, &mut self.inverse);
-        self.force.copy_from(&self.efforts.tau);
-        self.force.neg_mut();
-        let mut tree = self.force.rows_mut(0, model.nv);
-        tree += &self.inverse;
-        loops::multipliers(&self.force, scratch);
+        let external = &self.scratch.efforts.external;
+        rnea_after_kinematics(
+            model,
+            &mut self.scratch.data,
+            a,
+            external,
+            &mut self.scratch.inverse,
+        );
+        self.scratch.force.copy_from(&self.scratch.efforts.tau);
+        self.scratch.force.neg_mut();
+        let mut tree = self.scratch.force.rows_mut(0, model.nv);
+        tree += &self.scratch.inverse;
+        loops::multipliers(&self.scratch.force, scratch);
     }
 
     /// dy/dt at (t, y), or why it cannot be computed.
     pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), SystemError> {
-        let mut q = std::mem::take(&mut self.positions);
+        let mut q = std::mem::take(&mut self.scratch.positions);
         let v = self.model.split_state_into(y, &mut q);
         let result = self.derivative_at(t, &q, v, dydt);
-        self.positions = q;
+        self.scratch.positions = q;
         if result.is_ok() && self.model.has_loops() {
-            self.evaluated.extend_from_slice(y);
+            self.scratch.evaluated.extend_from_slice(y);
         }
         result
     }
@@ -381,9 +315,9 @@ impl<'m> MechanicalSystem<'m> {
         dydt: &mut [f64],
     ) -> Result<(), SystemError> {
         let model = self.model;
-        self.friction_power = 0.0;
-        self.response_here = false;
-        let mut accelerations = std::mem::take(&mut self.accelerations);
+        self.scratch.friction_power = 0.0;
+        self.scratch.response_here = false;
+        let mut accelerations = std::mem::take(&mut self.scratch.accelerations);
         if accelerations.len() != model.velocities() {
             // Only after a failed evaluation, which took the scratch away.
             accelerations = DVector::zeros(model.velocities());
@@ -397,24 +331,34 @@ impl<'m> MechanicalSystem<'m> {
             // The accelerations are written.
         } else if model.has_loops() {
             self.solve_constrained(t, q, v, Wanted::Accelerations)?;
-            accelerations.copy_from(&self.loop_scratch.accelerations);
+            accelerations.copy_from(&self.scratch.loop_scratch.accelerations);
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
         } else if model.has_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
             self.evaluate_efforts(t, q, v)?;
-            let (tau, external) = (self.efforts.tau.as_slice(), &self.efforts.external);
-            if let Err(e) =
-                aba_after_kinematics(model, &mut self.data, tau, external, &mut accelerations)
-            {
+            let (tau, external) = (
+                self.scratch.efforts.tau.as_slice(),
+                &self.scratch.efforts.external,
+            );
+            if let Err(e) = aba_after_kinematics(
+                model,
+                &mut self.scratch.data,
+                tau,
+                external,
+                &mut accelerations,
+            ) {
                 return Err(self.dynamics_error(&e));
             }
         } else {
             // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
-            let (tau, external) = (self.no_efforts.tau.as_slice(), &self.no_efforts.external);
+            let (tau, external) = (
+                self.scratch.no_efforts.tau.as_slice(),
+                &self.scratch.no_efforts.external,
+            );
             if let Err(e) = aba_into(
                 model,
-                &mut self.data,
+                &mut self.scratch.data,
                 q,
                 v,
                 tau,
@@ -428,14 +372,14 @@ impl<'m> MechanicalSystem<'m> {
         // response together.
         self.solve_rows(q, v, &mut accelerations)?;
         let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
-            &self.efforts
+            &self.scratch.efforts
         } else {
-            &self.no_efforts
+            &self.scratch.no_efforts
         };
-        self.power = if native {
+        self.scratch.power = if native {
             0.0
         } else {
-            efforts.power + self.friction_power
+            efforts.power + self.scratch.friction_power
         };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model
@@ -466,7 +410,7 @@ impl<'m> MechanicalSystem<'m> {
         }
         dq[model.nq..].copy_from_slice(&v[model.nv..]);
         dv.copy_from_slice(accelerations.as_slice());
-        self.accelerations = accelerations;
+        self.scratch.accelerations = accelerations;
         Ok(())
     }
 
@@ -488,7 +432,8 @@ impl<'m> MechanicalSystem<'m> {
         let mut dydt = vec![0.0; self.dimension()];
         self.derivative(t, y, &mut dydt)?;
         let (q, _) = model.split_state(y);
-        let motions = self.motions_off_bounds(self.loop_scratch.solved_motions().into_owned());
+        let motions =
+            self.motions_off_bounds(self.scratch.loop_scratch.solved_motions().into_owned());
         let (positions, velocities) = (model.positions(), model.velocities());
         let count = motions.ncols();
         let mut basis = DMatrix::zeros(positions + velocities, 2 * count);
@@ -530,33 +475,34 @@ impl<'m> MechanicalSystem<'m> {
         if !model.has_loops() {
             return self.keep_stacked(t, y);
         }
-        let free = &self.loops.structure.free;
-        let quality = self.loop_scratch.take_free_quality(free);
-        self.projection.offer_free_quality(quality);
-        self.loop_scratch.refresh();
+        let free = &self.scratch.loops.structure.free;
+        let quality = self.scratch.loop_scratch.take_free_quality(free);
+        self.scratch.projection.offer_free_quality(quality);
+        self.scratch.loop_scratch.refresh();
         let (mut q, mut v) = (
-            std::mem::take(&mut self.positions),
-            std::mem::take(&mut self.velocities),
+            std::mem::take(&mut self.scratch.positions),
+            std::mem::take(&mut self.scratch.velocities),
         );
         v.clear();
         v.extend_from_slice(model.split_state_into(y, &mut q));
-        if self.evaluated == y {
-            let choice = &self.loops.structure.choice;
-            (self.loop_scratch).hand_over(&mut self.projection, choice);
+        if self.scratch.evaluated == y {
+            let choice = &self.scratch.loops.structure.choice;
+            (self.scratch.loop_scratch).hand_over(&mut self.scratch.projection, choice);
         }
-        self.evaluated.clear();
+        self.scratch.evaluated.clear();
         let state = (&mut q[..], &mut v[..]);
-        let kept = self
-            .loops
-            .keep(model, &mut self.data, t, state, &mut self.projection);
-        self.projection.offer_free_quality(None);
+        let scratch = &mut self.scratch;
+        let (data, projection) = (&mut scratch.data, &mut scratch.projection);
+        let findings = &mut self.state.loops;
+        let kept = (scratch.loops).keep(model, data, t, state, projection, findings);
+        self.scratch.projection.offer_free_quality(None);
         if kept.as_ref().is_ok_and(|&moved| moved) {
             y[..q.len()].copy_from_slice(&q);
             y[q.len()..].copy_from_slice(&v);
         }
-        (self.positions, self.velocities) = (q, v);
+        (self.scratch.positions, self.scratch.velocities) = (q, v);
         let moved = kept?;
-        if let Some((time, row, left)) = self.loops.opened {
+        if let Some((time, row, left)) = self.scratch.loops.opened {
             return Err(SystemError::LoopsOpen {
                 time,
                 join: model.loops[row / 6].name.clone(),
@@ -573,7 +519,7 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        if loops::seat_ball_angles(model, &mut self.data, &mut q, &mut v, true)? {
+        if loops::seat_ball_angles(model, &mut self.scratch.data, &mut q, &mut v, true)? {
             y[q.len()..].copy_from_slice(&v);
         }
         Ok(())
@@ -585,11 +531,13 @@ impl<'m> MechanicalSystem<'m> {
         if !model.has_loops() {
             return Ok(());
         }
-        let mut q = std::mem::take(&mut self.positions);
+        let mut q = std::mem::take(&mut self.scratch.positions);
         let v = model.split_state_into(y, &mut q);
-        let measured =
-            (self.loops).measure(model, &mut self.data, t, (&q, v), &mut self.projection);
-        self.positions = q;
+        let scratch = &mut self.scratch;
+        let (data, projection) = (&mut scratch.data, &mut scratch.projection);
+        let findings = &mut self.state.loops;
+        let measured = (scratch.loops).measure(model, data, t, (&q, v), projection, findings);
+        self.scratch.positions = q;
         Ok(measured?)
     }
 
@@ -605,12 +553,13 @@ impl<'m> MechanicalSystem<'m> {
         }
         let (mut q, v) = model.split_state(y);
         let mut v = v.to_vec();
-        loops::close_configuration(model, &mut self.data, &mut q)?;
-        self.loops
-            .start(model, &mut self.data, &q, &v)
-            .map_err(|e| self.structure_error(&e))?;
-        let choice = &self.loops.structure.choice;
-        loops::project(model, &mut self.data, choice, &mut q, &mut v)?;
+        loops::close_configuration(model, &mut self.scratch.data, &mut q)?;
+        let findings = &mut self.state.loops;
+        let scratch = &mut self.scratch;
+        let started = (scratch.loops).start(model, &mut scratch.data, (&q, &v), findings);
+        started.map_err(|e| self.structure_error(&e))?;
+        let choice = &self.scratch.loops.structure.choice;
+        loops::project(model, &mut self.scratch.data, choice, &mut q, &mut v)?;
         y[..q.len()].copy_from_slice(&q);
         y[q.len()..].copy_from_slice(&v);
         self.keep_stacked(0.0, y)?;
@@ -626,10 +575,11 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         let (accelerations, mut external, multipliers) = if model.has_loops() {
             let touching = self.loops_reactions_solve(t, q, v)?;
-            let solution = &self.loop_scratch;
+            let solution = &self.scratch.loop_scratch;
             let (c, multipliers) = (&solution.constraints, &solution.multipliers);
-            let on_bodies = loops::constraint_forces(model, &self.data, c, multipliers);
+            let on_bodies = loops::constraint_forces(model, &self.scratch.data, c, multipliers);
             let external: Vec<_> = self
+                .scratch
                 .efforts
                 .external
                 .iter()
@@ -647,10 +597,14 @@ impl<'m> MechanicalSystem<'m> {
             (accelerations, external, Some(multipliers))
         } else if model.has_contacts() {
             let accelerations = self.solve_every_row(t, q, v)?;
-            let forces = &self.rows.contact_forces;
-            let on_bodies =
-                contacts::contact_body_forces(model, &self.data, &self.contact_state, forces);
-            let external: Vec<_> = (self.efforts.external.iter().zip(&on_bodies))
+            let forces = &self.scratch.rows.contact_forces;
+            let on_bodies = contacts::contact_body_forces(
+                model,
+                &self.scratch.data,
+                &self.scratch.contact_state,
+                forces,
+            );
+            let external: Vec<_> = (self.scratch.efforts.external.iter().zip(&on_bodies))
                 .map(|(a, b)| a + b)
                 .collect();
             let forces = contacts::contact_reactions(forces);
@@ -668,18 +622,20 @@ impl<'m> MechanicalSystem<'m> {
         external.truncate(model.body_count() + 1);
         rnea(
             model,
-            &mut self.data,
+            &mut self.scratch.data,
             q,
             v,
             &accelerations.as_slice()[..model.nv],
             &external,
         )?;
-        let transmitted = transmitted_wrenches(model, &self.data, &external);
+        let transmitted = transmitted_wrenches(model, &self.scratch.data, &external);
         let mut reactions = Vec::with_capacity(6 * (model.joints.len() + model.loops.len()));
         for joint in &model.joints {
-            let frame = self.data.world[joint.child] * joint.on_child;
-            let about_origin =
-                spatial::force_to_parent(&self.data.world[joint.child], &transmitted[joint.child]);
+            let frame = self.scratch.data.world[joint.child] * joint.on_child;
+            let about_origin = spatial::force_to_parent(
+                &self.scratch.data.world[joint.child],
+                &transmitted[joint.child],
+            );
             let at_join = spatial::force_to_child(
                 &spatial::Pose::translation(
                     frame.translation.x,
@@ -705,13 +661,13 @@ impl<'m> MechanicalSystem<'m> {
     /// Decides the loops' structure at q if no run started them (`start_loops`): a state
     /// evaluated on its own, closed.
     pub(super) fn ensure_structure(&mut self, q: &[f64]) -> Result<(), SystemError> {
-        if self.loops.started() {
+        if self.scratch.loops.started() {
             return Ok(());
         }
         let rest = vec![0.0; self.model.velocities()];
-        self.loops
-            .start(self.model, &mut self.data, q, &rest)
-            .map_err(|e| self.structure_error(&e))
+        let (model, findings, scratch) = (self.model, &mut self.state.loops, &mut self.scratch);
+        let started = (scratch.loops).start(model, &mut scratch.data, (q, &rest), findings);
+        started.map_err(|e| self.structure_error(&e))
     }
 
     pub(super) fn loop_error(&self, error: &LoopError) -> SystemError {
@@ -747,6 +703,11 @@ impl<'m> MechanicalSystem<'m> {
         }
     }
 }
+
+/// Observes an output of a run: the run's system (its state and the outputs' scratch, see
+/// `MechanicalSystem::sampling`), the output's time and the integrator's state there.
+pub type RunObserver<'o, 'm> =
+    dyn FnMut(&mut MechanicalSystem<'m>, f64, &[f64]) -> Result<(), CallbackError> + 'o;
 
 /// Why the equations of motion cannot be evaluated at a state.
 #[derive(Clone, Debug, PartialEq)]

@@ -30,14 +30,12 @@ use std::fmt;
 use nalgebra::{DMatrix, DVector};
 
 use super::lie_group::Configuration;
-use super::system::{MechanicalSystem, SystemError};
+use super::system::{MechanicalSystem, RunObserver, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
 use crate::dynamics::loops::{self, Extent, Factored, LoopError, Singular, DAMPING};
-use crate::integrate::{
-    error_norm, Failure, IntegrationError, Interrupt, Observer, Stats, StepError,
-};
+use crate::integrate::{error_norm, Failure, IntegrationError, Interrupt, Stats, StepError};
 
 const MAX_ITERATIONS: usize = 50;
 
@@ -69,20 +67,27 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         let efforts = if model.nq == model.nv {
             // Every joint is a chain: the state is the declared coordinates and rates.
-            forward_kinematics(model, &mut self.data, q, v)?;
+            forward_kinematics(model, &mut self.scratch.data, q, v)?;
             let declared = Declared {
                 model,
                 coordinates: q,
                 rates: v,
             };
-            evaluate(model, &mut self.data, &declared, t)?
+            evaluate(model, &mut self.scratch.data, &declared, t)?
         } else {
             // The spherical and free joints' declared angles are recovered from their
             // quaternions, as for the other integrators.
             self.efforts(t, q, v)?
         };
         let zero = vec![0.0; model.nv];
-        let applied = rnea(model, &mut self.data, q, &zero, &zero, &efforts.external)?;
+        let applied = rnea(
+            model,
+            &mut self.scratch.data,
+            q,
+            &zero,
+            &zero,
+            &efforts.external,
+        )?;
         let mut forcing = efforts.tau;
         let mut tree = forcing.rows_mut(0, model.nv);
         tree -= applied;
@@ -98,7 +103,7 @@ impl MechanicalSystem<'_> {
         t: f64,
     ) -> Result<(DMatrix<f64>, DVector<f64>), SystemError> {
         let model = self.model;
-        let gradient = kinetic_energy_gradient(model, &mut self.data, q, v)?;
+        let gradient = kinetic_energy_gradient(model, &mut self.scratch.data, q, v)?;
         let mut terms = self.generalised_efforts(q, v, t)?;
         let mut tree = terms.rows_mut(0, model.nv);
         tree += gradient;
@@ -108,7 +113,7 @@ impl MechanicalSystem<'_> {
     /// The mass matrix over the state's velocities.
     fn mass(&mut self, q: &[f64]) -> Result<DMatrix<f64>, SystemError> {
         let model = self.model;
-        let tree = crba(model, &mut self.data, q)?;
+        let tree = crba(model, &mut self.scratch.data, q)?;
         if !model.has_loops() {
             return Ok(tree);
         }
@@ -125,9 +130,9 @@ impl MechanicalSystem<'_> {
         }
         self.ensure_structure(q)?;
         let g = self.closure(q)?.1;
-        let start = Factored::new(&g, &self.loops.structure.choice);
+        let start = Factored::new(&g, &self.scratch.loops.structure.choice);
         let basis = Basis::at(&start);
-        let allowed = allowed_by(&start, basis, &self.loops.structure.free)
+        let allowed = allowed_by(&start, basis, &self.scratch.loops.structure.free)
             .map_err(|e| self.loop_error(&e))?;
         let massless = self.massless_motions(basis);
         let allowed = with_mass(&self.mass(q)?, allowed, massless);
@@ -137,7 +142,7 @@ impl MechanicalSystem<'_> {
     /// How many of the allowed motions spanned as `basis` says carry no mass: those the
     /// loops' structure counted, and with the orthonormal basis the idle coordinates' too.
     fn massless_motions(&self, basis: Basis) -> usize {
-        let structure = &self.loops.structure;
+        let structure = &self.scratch.loops.structure;
         match basis {
             Basis::Free => structure.massless,
             Basis::Orthonormal => structure.massless + structure.idle.len(),
@@ -159,7 +164,7 @@ impl MechanicalSystem<'_> {
             return Ok((solve(mass, rhs)?, 0.0));
         };
         let (closure, g_end) = self.closure(q1)?;
-        let end = Factored::new(&g_end, &self.loops.structure.choice);
+        let end = Factored::new(&g_end, &self.scratch.loops.structure.choice);
         let open = closure.amax();
         // A closure already within what the step accepts is not corrected: rows that close their
         // loop only at second order (the meshes) would turn its round-off into corrections of
@@ -169,7 +174,7 @@ impl MechanicalSystem<'_> {
             false => end.kept(&-&closure),
         };
         let (free, massless) = (
-            &self.loops.structure.free,
+            &self.scratch.loops.structure.free,
             self.massless_motions(start.basis),
         );
         let spans = Spans {
@@ -196,9 +201,12 @@ impl MechanicalSystem<'_> {
             return Ok((solve(&mass, p)?, mass));
         }
         let (_, g) = self.closure(q1)?;
-        let end = Factored::new(&g, &self.loops.structure.choice);
-        let rows = DVector::zeros(self.loops.structure.choice.rows.len());
-        let (free, massless) = (&self.loops.structure.free, self.massless_motions(basis));
+        let end = Factored::new(&g, &self.scratch.loops.structure.choice);
+        let rows = DVector::zeros(self.scratch.loops.structure.choice.rows.len());
+        let (free, massless) = (
+            &self.scratch.loops.structure.free,
+            self.massless_motions(basis),
+        );
         let spans = Spans {
             start: None,
             basis,
@@ -216,7 +224,7 @@ impl MechanicalSystem<'_> {
         q: &[f64],
     ) -> Result<(DVector<f64>, loops::ConstraintJacobian), SystemError> {
         let rest = vec![0.0; self.model.velocities()];
-        let c = loops::constraints(self.model, &mut self.data, q, &rest, Extent::Rows)?;
+        let c = loops::constraints(self.model, &mut self.scratch.data, q, &rest, Extent::Rows)?;
         Ok((c.residual, c.jacobian))
     }
 }
@@ -379,14 +387,14 @@ impl FixedStep {
 }
 
 /// Integrates with fixed step `h`, reporting the state (positions, velocities) at each output.
-pub fn integrate(
-    system: &mut MechanicalSystem<'_>,
+pub fn integrate<'m>(
+    system: &mut MechanicalSystem<'m>,
     t0: f64,
     y0: &[f64],
     t_end: f64,
     steps: FixedStep,
     outputs: &[f64],
-    observer: &mut Observer,
+    observer: &mut RunObserver<'_, 'm>,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
     let h = steps.step;
     let model = system.model;
@@ -409,7 +417,7 @@ pub fn integrate(
     let mut p = &mass * &v;
     let mut next_output = 0;
     while next_output < outputs.len() && outputs[next_output] <= t0 {
-        observer(t0, y0).map_err(|m| fail(t0, Failure::Observer(m.to_string()), &stats))?;
+        observer(system, t0, y0).map_err(|m| fail(t0, Failure::Observer(m.to_string()), &stats))?;
         next_output += 1;
     }
     let count = step_count(t0, t_end, h);
@@ -495,7 +503,7 @@ pub fn integrate(
         while next_output < outputs.len() && outputs[next_output] <= t_next {
             let s = (outputs[next_output] - t) / step;
             let y = configuration.interpolate((&q, &v), (&end, &v1), s, step);
-            observer(outputs[next_output], &y).map_err(|m| {
+            observer(system, outputs[next_output], &y).map_err(|m| {
                 fail(
                     outputs[next_output],
                     Failure::Observer(m.to_string()),

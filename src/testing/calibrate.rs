@@ -18,9 +18,9 @@ use super::case::{as_table, compile_and_prepare, run_failure};
 use super::manifest::Case;
 use super::record::rounded;
 use crate::elab::Perturbation;
-use crate::simulate::precision::Reference;
-use crate::simulate::prepare::Prepared;
+use crate::prepare::Prepared;
 use crate::simulate::run::{self, Simulation};
+use crate::studies::precision::Reference;
 
 /// The proposed tolerance is this many times the observed difference.
 pub const SAFETY: f64 = 2.0;

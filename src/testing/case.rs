@@ -8,14 +8,14 @@ use serde::Serialize;
 
 use super::compare::{compare, VariableError};
 use super::manifest::{Case, Checks, ExpectedFailure};
-use crate::analysis;
 use crate::diag::{Diagnostic, Severity};
 use crate::driver::{compile_files_perturbed, Compilation};
 use crate::load::LoadOptions;
 use crate::output::csv::to_csv;
-use crate::simulate::precision::Reference;
-use crate::simulate::prepare::{prepare, Prepared, Settings};
+use crate::prepare::{prepare, Prepared, Settings};
 use crate::simulate::run::{self, Simulation};
+use crate::studies::analysis;
+use crate::studies::precision::Reference;
 
 /// How a case ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use super::manifest::{Case, Measure, Tolerance};
-use crate::simulate::precision::Reference;
+use crate::studies::precision::Reference;
 
 /// One variable's error under its measure, where it is worst.
 #[derive(Clone, Debug, Serialize)]

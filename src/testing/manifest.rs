@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use crate::simulate::prepare::{Integrator, Override};
-use crate::simulate::settings::SettingsChanges;
+use crate::prepare::settings::SettingsChanges;
+use crate::prepare::{Integrator, Override};
 
 /// The file name `lsdc test DIR` looks for.
 pub const MANIFEST_NAME: &str = "lsdtest.toml";

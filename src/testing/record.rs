@@ -11,8 +11,8 @@ use super::case::{as_table, compile_and_prepare, read_reference, run_failure};
 use super::compare::{compare, VariableError};
 use super::manifest::Case;
 use crate::diag::number::shortest;
-use crate::simulate::precision::Reference;
 use crate::simulate::run;
+use crate::studies::precision::Reference;
 
 /// What `--update` did to a case's reference.
 #[derive(Clone, Debug, Serialize)]

@@ -12,9 +12,9 @@ use crate::elab::mechanism::Mechanism;
 use crate::kinematics::drag::{drag, DragError, DragOptions};
 use crate::kinematics::frames::FramePoint;
 use crate::kinematics::penalty;
-use crate::simulate::prepare::Prepared;
+use crate::prepare::settings::SettingsChanges;
+use crate::prepare::Prepared;
 use crate::simulate::run::{run_with, RunOptions};
-use crate::simulate::settings::SettingsChanges;
 use scene::{animation, scene, Animation, Recorded, Scene};
 
 /// A mechanism ready to be shown: its scene, and the animation given with `--results`.

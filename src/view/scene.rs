@@ -11,7 +11,7 @@ use crate::kinematics::eval::EvalError;
 use crate::kinematics::forward::forward;
 use crate::kinematics::frames::{self, quaternion, FramePoint};
 use crate::kinematics::model::{KinematicModel, SingleMotion};
-use crate::simulate::prepare::Prepared;
+use crate::prepare::Prepared;
 use crate::simulate::run::Simulation;
 use crate::spatial::Pose;
 

@@ -60,7 +60,6 @@ fn the_counter_counts() {
 fn holding_a_coordinate_on_its_stop_allocates_nothing() {
     use lsdc::dynamics::friction::Phase;
     use lsdc::simulate::system::MechanicalSystem;
-    use std::{cell::RefCell, rc::Rc};
     let pendulum = "import joints;\n\
         let rod = body mass = 1.2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end;\n\
         let tip = body mass = 0.3, iframe = [0, 0, -0.2] ++ 1, inertia = [0.01, 0.01, 0.001] end;\n\
@@ -77,16 +76,20 @@ fn holding_a_coordinate_on_its_stop_allocates_nothing() {
         let prepared = super::common::programs::prepared_text(&text);
         let model = &prepared.model;
         let y = super::common::programs::initial_state(&prepared);
-        let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+        let reference = prepared.coordinates.clone();
         let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
-        system.resting[0] = true;
-        system.phases.iter_mut().for_each(|p| *p = Phase::Sticking);
+        system.state.resting[0] = true;
+        system
+            .state
+            .phases
+            .iter_mut()
+            .for_each(|p| *p = Phase::Sticking);
         let mut dydt = vec![0.0; y.len()];
         for _ in 0..2 {
             system.derivative(0.0, &y, &mut dydt).expect("derivative");
         }
         assert!(dydt[y.len() / 2].abs() < 1e-14, "held: {dydt:?}");
-        assert!(system.contact[0] > 0.0);
+        assert!(system.scratch.contact[0] > 0.0);
         let made = allocations(|| {
             let _ = system.derivative(0.0, &y, &mut dydt);
         });

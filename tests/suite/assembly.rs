@@ -4,10 +4,10 @@
 //! four-bar, whose closed configurations are known in closed form (both cranks at the same
 //! angle φ, the coupler's joints at −φ and φ).
 
-use lsdc::analysis::{assembled_model, AssemblyReport};
 use lsdc::diag::Diagnostic;
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
+use lsdc::studies::analysis::{assembled_model, AssemblyReport};
 
 use crate::common::programs::example_text;
 

@@ -8,9 +8,9 @@ use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::loops::Stabilisation;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Prepared, Settings};
+use lsdc::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Sample, Simulation};
-use lsdc::simulate::statics::holding_efforts;
+use lsdc::studies::statics::holding_efforts;
 
 #[test]
 fn four_bar_and_slider_crank_conserve_energy_and_stay_closed() {

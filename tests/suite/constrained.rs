@@ -307,8 +307,6 @@ fn projected_integration_conserves_the_energy() {
 
 #[test]
 fn the_simulator_agrees_with_the_reference_formulation() {
-    use std::cell::RefCell;
-    use std::rc::Rc;
     let (mechanism, kinematics, tree_model) = models();
     // The simulator's model of the whole mechanism (loops included).
     let topology = lsdc::topology::build(&mechanism).expect("connected");
@@ -319,7 +317,7 @@ fn the_simulator_agrees_with_the_reference_formulation() {
     .expect("model");
     let mut data = Data::new(&tree_model);
     let (start, fixed) = initial_coordinates(&mechanism, &kinematics).expect("initial");
-    let reference = Rc::new(RefCell::new(start.clone()));
+    let reference = start.clone();
     let mut system = lsdc::simulate::system::MechanicalSystem::new(
         &full,
         reference,

@@ -8,7 +8,7 @@ use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::contacts::contact_rows;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run, Sample, Simulation};
 
 /// Standard gravity, as the `gravity` library gives it.
@@ -221,10 +221,11 @@ fn the_rolling_ball_keeps_its_contact_point_at_rest_and_its_energy() {
 
 #[test]
 fn the_rolling_ball_has_five_position_and_three_velocity_dof() {
-    let report = lsdc::analysis::tree(&mechanism("rolling_ball", &[])).expect("a tree");
+    let report = lsdc::studies::analysis::tree(&mechanism("rolling_ball", &[])).expect("a tree");
     let contacts = report.contacts.expect("contacts");
     assert_eq!((contacts.position_dof, contacts.velocity_dof), (5, 3));
-    let report = lsdc::analysis::tree(&mechanism("rolling_cylinder", &[])).expect("a tree");
+    let report =
+        lsdc::studies::analysis::tree(&mechanism("rolling_cylinder", &[])).expect("a tree");
     let contacts = report.contacts.expect("contacts");
     assert_eq!((contacts.position_dof, contacts.velocity_dof), (2, 1));
 }

@@ -7,9 +7,9 @@
 
 use crate::common::programs::{column, constraints, example_text, prepared, run_text};
 use lsdc::dynamics::friction::Phase;
-use lsdc::simulate::prepare::{Integrator, Settings};
+use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
-use lsdc::simulate::statics::holding_efforts;
+use lsdc::studies::statics::holding_efforts;
 
 fn settings(duration: f64, output: f64, tolerance: f64) -> Settings {
     Settings {

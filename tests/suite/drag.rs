@@ -2,12 +2,12 @@
 //! closed form), by the exact method and by the seed's penalty method; the penalty gaps against
 //! K_L/K_M; the symmetry of the penalty system and its agreement with the energy's Hessian.
 
-use lsdc::drag::{follow_exact, follow_penalty, parse_targets, PenaltyOptions, Target};
 use lsdc::kinematics::assembly::AssemblyOptions;
 use lsdc::kinematics::drag::DragOptions;
 use lsdc::kinematics::frames::{self, FramePoint};
 use lsdc::kinematics::model::KinematicModel;
 use lsdc::kinematics::penalty::{self, PlanarModel, Stiffness};
+use lsdc::studies::drag::{follow_exact, follow_penalty, parse_targets, PenaltyOptions, Target};
 use nalgebra::Vector2;
 
 use crate::common::programs::mechanism;
@@ -17,7 +17,7 @@ fn four_bar() -> (KinematicModel, FramePoint, Vec<f64>) {
     let mechanism = mechanism("four_bar", &[]);
     let topology = lsdc::topology::build(&mechanism).expect("numbered");
     let (model, report, _) =
-        lsdc::analysis::assembled_model(&mechanism, topology, &AssemblyOptions::default())
+        lsdc::studies::analysis::assembled_model(&mechanism, topology, &AssemblyOptions::default())
             .expect("assembles");
     let frame = frames::resolve(&mechanism, &model, "coupler_point").expect("a frame");
     (model, frame, report.coordinates_vector())
@@ -221,7 +221,8 @@ fn a_spatial_mechanism_is_refused_by_the_penalty_method() {
     let mechanism = mechanism("heavy_top", &[]);
     let topology = lsdc::topology::build(&mechanism).unwrap();
     let (model, _, _) =
-        lsdc::analysis::assembled_model(&mechanism, topology, &AssemblyOptions::default()).unwrap();
+        lsdc::studies::analysis::assembled_model(&mechanism, topology, &AssemblyOptions::default())
+            .unwrap();
     let error = penalty::planar_model(&model, Vec::new()).unwrap_err();
     assert!(error.contains("planar mechanisms of pivots"), "{error}");
 }

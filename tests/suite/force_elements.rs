@@ -3,7 +3,7 @@
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 fn simulate(text: &str) -> Simulation {

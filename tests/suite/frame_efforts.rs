@@ -9,7 +9,7 @@ use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, rnea, Data};
 use lsdc::dynamics::efforts::{self, Declared};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Settings};
 
 const IN_COORDINATES: &str = "let k = 200 ; let l0 = 0.5 ; let c = 3 ; let kt = 0.7 ; let ct = 0.2 ;
     let rod = body mass = 0, inertia = 0 end ;

@@ -31,7 +31,7 @@ fn render_diagnostics(input: &Path) -> String {
         match lsdc::topology::build(mechanism) {
             Err(errors) => diagnostics.extend(errors),
             Ok(topology) => {
-                match lsdc::analysis::assembled_model(
+                match lsdc::studies::analysis::assembled_model(
                     mechanism,
                     topology.clone(),
                     &Default::default(),
@@ -42,9 +42,9 @@ fn render_diagnostics(input: &Path) -> String {
                     // a clean program without `simulate` is prepared last (values of `given`,
                     // outputs).
                     Ok((_, _, warnings)) => {
-                        let settings = lsdc::simulate::prepare::Settings::default();
+                        let settings = lsdc::prepare::Settings::default();
                         let prepare = || {
-                            lsdc::simulate::prepare::prepare(mechanism, &[], &settings)
+                            lsdc::prepare::prepare(mechanism, &[], &settings)
                                 .err()
                                 .unwrap_or_default()
                         };

@@ -13,7 +13,7 @@
 use crate::common::max_difference;
 use crate::common::programs::{column, constraints, prepared, simulated};
 use lsdc::dynamics::loops::Stabilisation;
-use lsdc::simulate::prepare::{Integrator, Prepared, Settings};
+use lsdc::prepare::{Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 /// A hard-set program with another integrator, duration, tolerance and step.

@@ -5,7 +5,7 @@
 
 use crate::common::programs::{column, example_text, refusal_codes, run_text};
 use lsdc::dynamics::friction::Phase;
-use lsdc::simulate::prepare::{Integrator, Settings};
+use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
 
 const G: f64 = 9.81;
@@ -230,7 +230,7 @@ fn the_reactions_see_a_sticking_joint_held() {
         reactions: true,
         ..Settings::default()
     };
-    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &settings).expect("prepares");
+    let prepared = lsdc::prepare::prepare(&mechanism, &[], &settings).expect("prepares");
     let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
     assert!(simulation.report.failure.is_none());
     let switches = &simulation.report.friction_switches;

@@ -5,7 +5,6 @@
 
 use std::path::PathBuf;
 
-use lsdc::analysis;
 use lsdc::driver::{compile_files, compile_text};
 use lsdc::elab::mechanism::Mechanism;
 use lsdc::elab::value::BodyRef;
@@ -17,6 +16,7 @@ use lsdc::kinematics::initial_coordinates;
 use lsdc::kinematics::model::{self, KinematicModel};
 use lsdc::load::LoadOptions;
 use lsdc::spatial;
+use lsdc::studies::analysis;
 use lsdc::topology;
 use proptest::prelude::*;
 

@@ -8,7 +8,7 @@
 use proptest::prelude::*;
 
 use crate::common::programs::{constraints, prepared};
-use lsdc::simulate::prepare::{Integrator, Prepared};
+use lsdc::prepare::{Integrator, Prepared};
 use lsdc::simulate::run::run;
 
 /// A four-bar with ground l0, crank l1, coupler l2, rocker l3, assembled with the crank at

@@ -6,7 +6,6 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use lsdc::analysis;
 use lsdc::driver::compile_files;
 use lsdc::elab::mechanism::Mechanism;
 use lsdc::kinematics::assembly::{assemble, AssemblyOptions};
@@ -16,6 +15,7 @@ use lsdc::kinematics::initial_coordinates;
 use lsdc::kinematics::mobility::{constraint_rank, mobility};
 use lsdc::kinematics::model::{self, KinematicModel};
 use lsdc::load::LoadOptions;
+use lsdc::studies::analysis;
 use lsdc::topology;
 
 fn fixture() -> serde_json::Value {

@@ -367,7 +367,7 @@ fn mampey_equals_crba_and_rnea_columns_on_the_urdf_fixtures_and_a_geared_arm() {
         )
         .expect("loads");
         let mechanism = compilation.mechanism.expect("elaborates");
-        let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
+        let prepared = lsdc::prepare::prepare(&mechanism, &[], &Default::default())
             .unwrap_or_else(|d| panic!("{robot}: {d:?}"));
         let model = &prepared.model;
         for seed in 0..3 {
@@ -392,7 +392,7 @@ fn the_geared_arm_conserves_its_energy_rotors_included() {
     )
     .expect("loads");
     let mechanism = compilation.mechanism.expect("elaborates");
-    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
+    let prepared = lsdc::prepare::prepare(&mechanism, &[], &Default::default())
         .unwrap_or_else(|d| panic!("{d:?}"));
     let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
     assert!(simulation.report.failure.is_none());

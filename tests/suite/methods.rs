@@ -5,7 +5,7 @@
 use crate::common::programs::{prepared, simulated};
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+use lsdc::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 const DOUBLE_PENDULUM: &str = "import joints;\n\
@@ -401,8 +401,6 @@ fn the_implicit_integrator_takes_the_stiff_method_early_in_the_governors_transie
     use lsdc::dynamics::loops::Stabilisation;
     use lsdc::integrate::{integrate, Method, Settings as Tolerances};
     use lsdc::simulate::system::MechanicalSystem;
-    use std::cell::RefCell;
-    use std::rc::Rc;
 
     let governor = prepared("governor", &[]);
     let (q, v) = governor
@@ -411,7 +409,7 @@ fn the_implicit_integrator_takes_the_stiff_method_early_in_the_governors_transie
         .expect("state");
     let y0 = [q, v].concat();
     for tolerance in [1e-6, 1e-10] {
-        let reference = Rc::new(RefCell::new(governor.coordinates.clone()));
+        let reference = governor.coordinates.clone();
         let mut system =
             MechanicalSystem::new(&governor.model, reference, Stabilisation::Projection);
         let settings = Tolerances {

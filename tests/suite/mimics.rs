@@ -3,7 +3,7 @@
 //! energy conserved with gravity, impacts that keep it, and the refusals.
 
 use crate::common::programs::{column, example_text, refusal_codes, run_text};
-use lsdc::simulate::prepare::{Integrator, Settings};
+use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
 
 fn settings(integrator: Integrator, duration: f64, tolerance: f64) -> Settings {

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use lsdc::api::{run, Program, SettingsChanges};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::Integrator;
+use lsdc::prepare::Integrator;
 
 /// What a number is replaced by: the degenerate values a user or a typo brings.
 const NUMBERS: [&str; 8] = [
@@ -172,7 +172,8 @@ pub fn exercise(text: &str, dir: Option<&Path>) -> usize {
         return 1;
     };
     let _ = lsdc::topology::notation::notation(mechanism, &topology);
-    let _ = lsdc::analysis::assembled_model(mechanism, topology.clone(), &Default::default());
+    let _ =
+        lsdc::studies::analysis::assembled_model(mechanism, topology.clone(), &Default::default());
     if let Ok(equations) = lsdc::symbolic::generate(mechanism, &topology) {
         let _ = lsdc::symbolic::emit::c(&equations, "mutant.lsd");
         let _ = lsdc::symbolic::emit::text(&equations, "mutant.lsd");

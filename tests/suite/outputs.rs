@@ -10,7 +10,7 @@ use crate::common::programs::{example_text, simulated};
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::Simulation;
 
 fn prepared_text(text: &str) -> Result<Prepared, Vec<String>> {

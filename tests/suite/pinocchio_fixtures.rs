@@ -18,8 +18,8 @@ use lsdc::diag::render;
 use lsdc::driver::{compile_files, compile_text, Compilation};
 use lsdc::load::urdf::{import_urdf, ImportOptions};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::batch::{evaluate_states, Evaluation, StateInput};
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
+use lsdc::studies::batch::{evaluate_states, Evaluation, StateInput};
 use serde_json::Value;
 
 const TOLERANCE: f64 = 1e-10;

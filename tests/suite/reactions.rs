@@ -6,20 +6,17 @@
 //! a rolling cylinder, against Newton–Euler by hand; a mimic coupling's force on a four-bar,
 //! against the plate welded to the crank.
 
-use std::cell::RefCell;
-use std::rc::Rc;
-
 use super::common::programs::{example_text, initial_state, prepared_text};
 use super::rows::rolling_pendulum;
 use lsdc::dynamics::loops::Stabilisation;
 use lsdc::dynamics::stops::{Side, Stop};
-use lsdc::simulate::prepare::Prepared;
+use lsdc::prepare::Prepared;
 use lsdc::simulate::run::reaction_names_of;
 use lsdc::simulate::system::MechanicalSystem;
 use nalgebra::{Matrix2, Rotation3, Vector2, Vector3};
 
 fn system(prepared: &Prepared) -> MechanicalSystem<'_> {
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     MechanicalSystem::new(&prepared.model, reference, Stabilisation::Projection)
 }
 
@@ -38,7 +35,7 @@ fn reactions_resting(prepared: &Prepared, resting: Option<&str>) -> (Vec<f64>, V
         let stops = &prepared.model.stops;
         let lower = |s: &Stop| s.coordinate == coordinate && s.side == Side::Lower;
         let k = stops.iter().position(lower).expect("stop");
-        system.resting[k] = true;
+        system.state.resting[k] = true;
     }
     let mut dydt = vec![0.0; y.len()];
     system.derivative(0.0, &y, &mut dydt).expect("f");

@@ -8,7 +8,7 @@ use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 use lsdc::api::{run, Error, Override, Program, SettingsChanges};
-use lsdc::simulate::prepare::Integrator;
+use lsdc::prepare::Integrator;
 
 use crate::mutants::{exercise, mutate, Choices};
 
@@ -248,7 +248,7 @@ fn an_overflowing_configuration_is_refused() {
     let overflowing = delta.replace("P3p.a = 0 guess", "P3p.a = 1e308 guess");
     let program = Program::from_text("delta.lsd", &overflowing, Some(dir), &Default::default());
     let mechanism = program.mechanism().expect("the program is valid");
-    let tree = lsdc::analysis::tree(mechanism).expect("a tree");
+    let tree = lsdc::studies::analysis::tree(mechanism).expect("a tree");
     assert!(tree.mobility.is_none());
     let why = tree.mobility_unavailable.expect("a reason");
     assert!(why.contains("not a finite number"), "{why}");
@@ -400,7 +400,7 @@ fn states_files_are_explained() {
         ),
     ];
     for (text, expected) in cases {
-        let error = lsdc::simulate::batch::parse_states(text)
+        let error = lsdc::studies::batch::parse_states(text)
             .expect_err("refused")
             .to_string();
         assert!(error.contains(expected), "{error}");

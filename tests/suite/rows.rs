@@ -8,7 +8,7 @@
 
 use super::common::programs::{column, constraints, run_text};
 use super::stop_loops::{assert_impacts_take_normal_energy, assert_rolling, rolling_pendulum_with};
-use lsdc::simulate::prepare::{Integrator, Settings};
+use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::{Sample, Simulation};
 
 /// The seed's gravity, and its incline.
@@ -389,7 +389,7 @@ fn a_mimic_with_a_contact_is_counted_in_both_degrees_of_freedom() {
     };
     let compilation = lsdc::driver::compile_text("test.lsd", &text, None, &options);
     let mechanism = compilation.mechanism.expect("elaborates");
-    let report = lsdc::analysis::tree(&mechanism).expect("a tree report");
+    let report = lsdc::studies::analysis::tree(&mechanism).expect("a tree report");
     let contacts = report.contacts.expect("contacts");
     assert_eq!((contacts.position_dof, contacts.velocity_dof), (2, 1));
     assert_eq!(report.mobility.expect("mobility").mobility, 3);

@@ -7,9 +7,9 @@ use std::time::{Duration, Instant};
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::settings::SettingsChanges;
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run, Simulation};
-use lsdc::simulate::settings::SettingsChanges;
 
 use crate::common::programs::prepared as example;
 
@@ -18,8 +18,8 @@ fn changed(mut prepared: Prepared, changes: SettingsChanges) -> Prepared {
     prepared
 }
 
-fn integrator(name: &str) -> lsdc::simulate::prepare::Integrator {
-    use lsdc::simulate::prepare::Integrator;
+fn integrator(name: &str) -> lsdc::prepare::Integrator {
+    use lsdc::prepare::Integrator;
     match name {
         "rk4" => Integrator::Rk4,
         _ => Integrator::DormandPrince,

@@ -2,7 +2,7 @@
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+use lsdc::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 fn simulate(text: &str, settings: Settings) -> Simulation {

@@ -5,7 +5,7 @@ use lsdc::driver::compile_text;
 use lsdc::dynamics::stops::Impact;
 use lsdc::dynamics::stops::{impact_velocities, Side, Stop};
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Integrator, Settings};
+use lsdc::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{run, Simulation};
 use nalgebra::{DMatrix, DVector};
 
@@ -258,7 +258,6 @@ fn bad_stops_are_located_errors() {
 fn the_jacobian_while_resting_is_the_held_right_hand_sides() {
     use lsdc::integrate::{integrate, Method, OdeSystem, Settings as Steps};
     use lsdc::simulate::system::MechanicalSystem;
-    use std::{cell::RefCell, rc::Rc};
     let text = PENDULUM
         .replace("RESTITUTION", "0")
         .replace("0, pi, ", "0.3, pi, ")
@@ -266,15 +265,15 @@ fn the_jacobian_while_resting_is_the_held_right_hand_sides() {
     let prepared = super::common::programs::prepared_text(&text);
     let y = super::common::programs::initial_state(&prepared);
     let model = &prepared.model;
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let stabilisation = prepared.settings.stabilisation;
     let mut system = MechanicalSystem::new(model, reference.clone(), stabilisation);
-    system.resting[0] = true;
+    system.state.resting[0] = true;
     let n = y.len();
     let mut f = vec![0.0; n];
     system.derivative(0.0, &y, &mut f).expect("f");
     assert!(f[1].abs() < 1e-14, "held acceleration {}", f[1]);
-    assert!(system.contact[0] > 0.0, "the stop pushes");
+    assert!(system.scratch.contact[0] > 0.0, "the stop pushes");
     let mut given = nalgebra::DMatrix::zeros(n, n);
     if OdeSystem::jacobian(&mut system, 0.0, &y, &f, &mut given).expect("jacobian") {
         for j in 0..n {
@@ -297,7 +296,7 @@ fn the_jacobian_while_resting_is_the_held_right_hand_sides() {
     let mut ends = Vec::new();
     for method in [Method::Radau5, Method::DormandPrince] {
         let mut system = MechanicalSystem::new(model, reference.clone(), stabilisation);
-        system.resting[0] = true;
+        system.state.resting[0] = true;
         let mut observer = |_: f64, _: &[f64]| Ok(());
         let (end, _) = integrate(
             &method,

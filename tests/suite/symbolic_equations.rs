@@ -15,7 +15,7 @@ use lsdc::elab::Mechanism;
 use lsdc::kinematics::eval::UnknownValues;
 use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Override, Settings};
+use lsdc::prepare::{prepare, Override, Settings};
 use lsdc::symbolic::{self, Equations};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;

@@ -2,7 +2,7 @@
 //! tape, its joints), so a parameter sweep runs from many starting states at once without a
 //! copy of the model per run.
 
-use lsdc::simulate::prepare::Prepared;
+use lsdc::prepare::Prepared;
 use lsdc::simulate::run::{run_from, Start};
 
 use crate::common::programs::prepared;

@@ -3,12 +3,9 @@
 //! themselves: central differences (truncation error O(δ²)) and forward ones, the implicit
 //! method's own way before.
 
-use std::cell::RefCell;
-use std::rc::Rc;
-
 use crate::common::programs::prepared;
 use lsdc::dynamics::loops::Stabilisation;
-use lsdc::simulate::prepare::Prepared;
+use lsdc::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 use nalgebra::DMatrix;
 
@@ -16,7 +13,7 @@ use nalgebra::DMatrix;
 fn evaluated(system: &mut MechanicalSystem, y: &[f64]) -> (Vec<f64>, f64) {
     let mut dydt = vec![0.0; y.len()];
     system.derivative(0.0, y, &mut dydt).expect("f");
-    (dydt, system.power)
+    (dydt, system.scratch.power)
 }
 
 /// ∂f/∂y and the power's gradient by differences of f, central or forward.
@@ -87,7 +84,7 @@ fn state(prepared: &Prepared, rates: Option<&[f64]>) -> Vec<f64> {
 }
 
 fn system(prepared: &Prepared) -> MechanicalSystem<'_> {
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     MechanicalSystem::new(&prepared.model, reference, Stabilisation::Projection)
 }
 
@@ -224,8 +221,8 @@ fn the_jacobian_keeps_the_couplings_and_the_held_rows() {
     let elbow = arm.model.stops[0].position;
     let phases = |shoulder: Phase, resting: bool| {
         move |system: &mut MechanicalSystem| {
-            system.phases = vec![shoulder, Phase::Slipping(-1.0)];
-            system.resting[0] = resting;
+            system.state.phases = vec![shoulder, Phase::Slipping(-1.0)];
+            system.state.resting[0] = resting;
         }
     };
     let mut on_bound = moving.clone();
@@ -297,8 +294,8 @@ fn the_jacobian_holds_rows_of_very_different_sizes() {
     let prepared = super::common::programs::prepared_text(text);
     let y = state(&prepared, None);
     let held = |system: &mut MechanicalSystem| {
-        system.phases = vec![Phase::Sticking];
-        system.resting[0] = true;
+        system.state.phases = vec![Phase::Sticking];
+        system.state.resting[0] = true;
     };
     let (matrix, gradient) = central_difference(&prepared, &y, held);
     assert!(

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use lsdc::simulate::precision::Reference;
+use lsdc::studies::precision::Reference;
 use lsdc::testing::compare::compare;
 use lsdc::testing::manifest::{self, Measure};
 

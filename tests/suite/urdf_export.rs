@@ -12,7 +12,7 @@ use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::joint::{quaternion, JointType};
 use lsdc::load::LoadOptions;
 use lsdc::output::urdf::{export_urdf, link_frames, ExportError, NO_LIMIT};
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::spatial::{inertia_to_parent, skew, Pose};
 
 fn options() -> LoadOptions {

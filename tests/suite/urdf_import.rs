@@ -959,7 +959,7 @@ fn a_gripper_imports_with_its_mimic_coupling_and_friction_active() {
     let leader = text.find("as left_finger ;").expect("leader");
     let follower = text.find("as right_finger ;").expect("follower");
     assert!(leader < follower, "{text}");
-    let settings = lsdc::simulate::prepare::Settings {
+    let settings = lsdc::prepare::Settings {
         duration: 1.0,
         output: 0.01,
         rtol: 1e-12,
@@ -985,7 +985,7 @@ fn a_gripper_imports_with_its_mimic_coupling_and_friction_active() {
     );
     assert_eq!(switches[0].phase, lsdc::dynamics::friction::Phase::Sticking);
     let mechanism = compile(&text).mechanism.expect("elaborates");
-    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
+    let prepared = lsdc::prepare::prepare(&mechanism, &[], &Default::default())
         .unwrap_or_else(|d| panic!("{d:?}"));
     let exported = lsdc::output::urdf::export_urdf(&prepared.model, "gripper").expect("exports");
     assert!(

@@ -14,7 +14,7 @@ use crate::drag::coupler_point;
 
 fn viewer(name: &str) -> Viewer {
     let mechanism = crate::common::programs::mechanism(name, &[]);
-    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default())
+    let prepared = lsdc::prepare::prepare(&mechanism, &[], &Default::default())
         .unwrap_or_else(|_| panic!("{name} prepares"));
     Viewer::new(mechanism, prepared, name).expect("a scene")
 }

@@ -4,7 +4,7 @@
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 /// An arm on a revolute shoulder: a heavy sensor welded off its axis, a tool welded to the

@@ -24,10 +24,14 @@ impl MechanicalSystem<'_> {
         let accelerations = self.solve_every_row(t, q, v)?;
         let touching = match model.has_contacts() {
             true => {
-                let forces = &self.rows.contact_forces;
-                let on_bodies =
-                    contacts::contact_body_forces(model, &self.data, &self.contact_state, forces);
-                for (external, force) in self.efforts.external.iter_mut().zip(&on_bodies) {
+                let forces = &self.scratch.rows.contact_forces;
+                let on_bodies = contacts::contact_body_forces(
+                    model,
+                    &self.scratch.data,
+                    &self.scratch.contact_state,
+                    forces,
+                );
+                for (external, force) in self.scratch.efforts.external.iter_mut().zip(&on_bodies) {
                     *external += force;
                 }
                 Some(contacts::contact_reactions(forces))
@@ -35,11 +39,15 @@ impl MechanicalSystem<'_> {
             false => None,
         };
         // `solve_rows` left the stack as it was when no row applied at this state.
-        if self.coupling_count() > 0 || !self.held.is_empty() {
-            self.rows
-                .add_coordinate_forces(&model.mimics, &mut self.efforts.tau);
+        if self.coupling_count() > 0 || !self.scratch.held.is_empty() {
+            self.scratch
+                .rows
+                .add_coordinate_forces(&model.mimics, &mut self.scratch.efforts.tau);
         }
-        self.loop_scratch.accelerations.copy_from(&accelerations);
+        self.scratch
+            .loop_scratch
+            .accelerations
+            .copy_from(&accelerations);
         self.solve_multipliers();
         Ok(touching)
     }

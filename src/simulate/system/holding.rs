@@ -25,28 +25,38 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         self.gather_held();
         let couplings = self.coupling_count();
-        if !model.has_contacts() && couplings == 0 && self.held.is_empty() {
+        if !model.has_contacts() && couplings == 0 && self.scratch.held.is_empty() {
             return Ok(());
         }
         self.form_response_at(q)?;
         if model.has_contacts() && model.has_loops() {
             // The loops' solve leaves the kinematics for its own rows: the contacts' start anew.
-            forward_kinematics(model, &mut self.data, q, v)?;
-            let state = &mut self.contact_state;
-            contacts::contact_rows_into(model, &mut self.data, v, true, state);
+            forward_kinematics(model, &mut self.scratch.data, q, v)?;
+            let state = &mut self.scratch.contact_state;
+            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
         }
         self.decide_contact_rows();
-        let kept = self.contact_rows.as_deref().unwrap_or_default();
-        self.rows.arrange(kept, couplings, &self.held);
-        self.rows.gather(&self.contact_state, &model.mimics);
-        let solved = (self.rows).solve(model, &self.contact_state, &mut self.response, a);
+        let kept = self.state.contact_rows.as_deref().unwrap_or_default();
+        self.scratch
+            .rows
+            .arrange(kept, couplings, &self.scratch.held);
+        self.scratch
+            .rows
+            .gather(&self.scratch.contact_state, &model.mimics);
+        let solved = (self.scratch.rows).solve(
+            model,
+            &self.scratch.contact_state,
+            &mut self.scratch.response,
+            a,
+        );
         solved.map_err(|unsettled| SystemError::SingularContact {
             contact: model.contacts[unsettled.contact].name.clone(),
             row: contacts::CONTACT_ROW_NAMES[2],
         })?;
-        a.copy_from(&self.rows.accelerations);
-        let forces = &self.rows.contact_forces;
-        self.efforts.power += contacts::friction_power(model, &self.contact_state, forces);
+        a.copy_from(&self.scratch.rows.accelerations);
+        let forces = &self.scratch.rows.contact_forces;
+        self.scratch.efforts.power +=
+            contacts::friction_power(model, &self.scratch.contact_state, forces);
         self.record_holding();
         Ok(())
     }
@@ -62,11 +72,15 @@ impl MechanicalSystem<'_> {
     /// The velocities held at rest into `held`: the resting stops', then the sticking joints'.
     pub(super) fn gather_held(&mut self) {
         let model = self.model;
-        self.held.clear();
-        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
-        self.held.extend(stops.map(|k| model.stops[k].velocity));
-        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
-        self.held
+        self.scratch.held.clear();
+        let stops = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
+        self.scratch
+            .held
+            .extend(stops.map(|k| model.stops[k].velocity));
+        let frictions =
+            (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
+        self.scratch
+            .held
             .extend(frictions.map(|k| model.frictions[k].velocity));
     }
 
@@ -74,13 +88,18 @@ impl MechanicalSystem<'_> {
     /// rows and the response formed there), then kept.
     pub(super) fn decide_contact_rows(&mut self) {
         let model = self.model;
-        if model.has_contacts() && self.contact_rows.is_none() {
-            let kept = contacts::independent_rows(model, &mut self.response, &self.contact_state);
-            self.contact_rows = Some(kept);
+        if model.has_contacts() && self.state.contact_rows.is_none() {
+            let kept = contacts::independent_rows(
+                model,
+                &mut self.scratch.response,
+                &self.scratch.contact_state,
+            );
+            self.state.contact_rows = Some(kept);
         }
-        let kept = self.contact_rows.as_deref().unwrap_or_default();
-        self.normal_rows.clear();
-        self.normal_rows
+        let kept = self.state.contact_rows.as_deref().unwrap_or_default();
+        self.scratch.normal_rows.clear();
+        self.scratch
+            .normal_rows
             .extend(kept.iter().copied().filter(|r| r % 3 == 2));
     }
 
@@ -89,18 +108,19 @@ impl MechanicalSystem<'_> {
     /// and each friction's holding force.
     fn record_holding(&mut self) {
         let model = self.model;
-        let mut forces = self.rows.held_forces().iter();
-        let stops = (0..model.stops.len()).filter(|&k| self.resting[k]);
+        let mut forces = self.scratch.rows.held_forces().iter();
+        let stops = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
         for (k, force) in stops.zip(forces.by_ref()) {
             // A lower stop pushes the coordinate up, an upper one down.
-            self.contact[k] = match model.stops[k].side {
+            self.scratch.contact[k] = match model.stops[k].side {
                 Side::Lower => *force,
                 Side::Upper => -*force,
             };
         }
-        let frictions = (0..model.frictions.len()).filter(|&k| self.phases[k] == Phase::Sticking);
+        let frictions =
+            (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
         for (k, force) in frictions.zip(forces) {
-            self.holding[k] = *force;
+            self.scratch.holding[k] = *force;
         }
     }
 
@@ -115,7 +135,7 @@ impl MechanicalSystem<'_> {
     ) -> Result<DVector<f64>, SystemError> {
         let mut rates = vec![0.0; self.dimension()];
         self.derivative_at(t, q, v, &mut rates)?;
-        forward_kinematics(self.model, &mut self.data, q, v)?;
+        forward_kinematics(self.model, &mut self.scratch.data, q, v)?;
         Ok(DVector::from_column_slice(&rates[self.model.positions()..]))
     }
 }

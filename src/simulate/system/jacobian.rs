@@ -68,7 +68,7 @@ impl MechanicalSystem<'_> {
         let nv = model.nv;
         let accelerations = &dydt[nv..];
         let at_state = self.residual(t, y, accelerations)?;
-        crba_after_kinematics(model, &mut self.data, &mut self.mass);
+        crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
         let mut differences = DMatrix::zeros(nv, 2 * nv);
         let mut perturbed = y.to_vec();
         for j in 0..2 * nv {
@@ -84,15 +84,15 @@ impl MechanicalSystem<'_> {
         }
         // X = M⁻¹, or S (SᵀMS)⁻¹Sᵀ with the mimic couplings; formed at y for this Jacobian only.
         let formed = self.form_tree_response().is_ok();
-        self.response_here = false;
+        self.scratch.response_here = false;
         if !formed {
             return Ok(false);
         }
         let mut response = DMatrix::zeros(nv, 2 * nv);
-        self.response.apply(&differences, &mut response);
+        self.scratch.response.apply(&differences, &mut response);
         // The coordinates held at rest keep their accelerations zero, whatever the state.
         self.gather_held();
-        if !self.held.is_empty() {
+        if !self.scratch.held.is_empty() {
             self.subtract_held_change(&mut response);
         }
         jacobian.fill(0.0);
@@ -108,19 +108,19 @@ impl MechanicalSystem<'_> {
     /// and its friction) are set aside as the run's solve sets them aside (`rows`).
     fn subtract_held_change(&mut self, columns: &mut DMatrix<f64>) {
         let nv = self.model.nv;
-        let mut units = DMatrix::zeros(nv, self.held.len());
-        for (i, &k) in self.held.iter().enumerate() {
+        let mut units = DMatrix::zeros(nv, self.scratch.held.len());
+        for (i, &k) in self.scratch.held.iter().enumerate() {
             units[(k, i)] = 1.0;
         }
-        let mut moved = DMatrix::zeros(nv, self.held.len());
-        self.response.apply(&units, &mut moved);
+        let mut moved = DMatrix::zeros(nv, self.scratch.held.len());
+        self.scratch.response.apply(&units, &mut moved);
         // Scaled symmetrically, D (E X Eᵀ) D with D of powers of two, for the reason `Pivoted`
         // scales the run's rows: a held angle of a light rotor beside a heavy slider's.
-        let scales: Vec<f64> = (self.held.iter().enumerate())
+        let scales: Vec<f64> = (self.scratch.held.iter().enumerate())
             .map(|(i, &k)| inverse_power_of_two(moved[(k, i)].abs().sqrt()))
             .collect();
-        let mut coupling = moved.select_rows(&self.held);
-        let mut held_rows = columns.select_rows(&self.held);
+        let mut coupling = moved.select_rows(&self.scratch.held);
+        let mut held_rows = columns.select_rows(&self.scratch.held);
         for (i, &scale) in scales.iter().enumerate() {
             coupling.row_mut(i).scale_mut(scale);
             coupling.column_mut(i).scale_mut(scale);
@@ -143,13 +143,19 @@ impl MechanicalSystem<'_> {
         let (q, v) = y.split_at(model.nq);
         let efforts = if model.has_efforts() {
             self.evaluate_efforts(t, q, v)?;
-            &self.efforts
+            &self.scratch.efforts
         } else {
-            forward_kinematics(model, &mut self.data, q, v)?;
-            &self.no_efforts
+            forward_kinematics(model, &mut self.scratch.data, q, v)?;
+            &self.scratch.no_efforts
         };
         let mut values = DVector::zeros(model.nv);
-        rnea_after_kinematics(model, &mut self.data, a, &efforts.external, &mut values);
+        rnea_after_kinematics(
+            model,
+            &mut self.scratch.data,
+            a,
+            &efforts.external,
+            &mut values,
+        );
         values -= &efforts.tau;
         values.neg_mut();
         let power = efforts.power + self.add_friction(v, &mut values);

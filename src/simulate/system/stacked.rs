@@ -42,11 +42,11 @@ impl MechanicalSystem<'_> {
             return Ok(false);
         }
         let (mut q, mut v) = (
-            std::mem::take(&mut self.positions),
-            std::mem::take(&mut self.velocities),
+            std::mem::take(&mut self.scratch.positions),
+            std::mem::take(&mut self.scratch.velocities),
         );
         let kept = self.keep_stacked_in(t, y, &mut q, &mut v, couplings);
-        (self.positions, self.velocities) = (q, v);
+        (self.scratch.positions, self.scratch.velocities) = (q, v);
         kept
     }
 
@@ -63,7 +63,7 @@ impl MechanicalSystem<'_> {
         let positions = model.positions();
         self.split_into(y, q, v);
         let open = self.stacked_rows_at(t, q, v, couplings)?;
-        let largest = self.position_stack.values_mut().amax();
+        let largest = self.scratch.position_stack.values_mut().amax();
         let mut steps = StackedSteps {
             system: self,
             t,
@@ -76,12 +76,12 @@ impl MechanicalSystem<'_> {
         };
         let moved = correct(&mut steps, &STACKED)?.accepted > 0;
         self.gather_held();
-        let kept = self.contact_rows.as_deref().unwrap_or_default();
-        let stack = &mut self.velocity_stack;
-        stack.arrange(kept, couplings, &self.held);
-        stack.gather(&self.contact_state, &model.mimics);
+        let kept = self.state.contact_rows.as_deref().unwrap_or_default();
+        let stack = &mut self.scratch.velocity_stack;
+        stack.arrange(kept, couplings, &self.scratch.held);
+        stack.gather(&self.scratch.contact_state, &model.mimics);
         let rates = stack.values_mut();
-        let (g, state) = (&self.contact_state, &v[..]);
+        let (g, state) = (&self.scratch.contact_state, &v[..]);
         for (i, &row) in kept.iter().enumerate() {
             rates[i] = g.velocity[row];
         }
@@ -90,11 +90,11 @@ impl MechanicalSystem<'_> {
             let rate = state[mimic.velocity] - mimic.multiplier * state[mimic.leader_velocity];
             rates[kept.len() + i] = rate;
         }
-        for (i, &velocity) in self.held.iter().enumerate() {
+        for (i, &velocity) in self.scratch.held.iter().enumerate() {
             rates[kept.len() + couplings + i] = state[velocity];
         }
         let off = stack.values_mut().amax() > 0.0;
-        stack.add_least_change(&mut self.response, v);
+        stack.add_least_change(&mut self.scratch.response, v);
         y[positions..].copy_from_slice(v);
         Ok(moved || off)
     }
@@ -109,9 +109,9 @@ impl MechanicalSystem<'_> {
         couplings: usize,
     ) -> Result<bool, SystemError> {
         self.stacked_geometry(t, q, v)?;
-        let stack = &mut self.position_stack;
-        stack.arrange(&self.normal_rows, couplings, &[]);
-        stack.gather(&self.contact_state, &self.model.mimics);
+        let stack = &mut self.scratch.position_stack;
+        stack.arrange(&self.scratch.normal_rows, couplings, &[]);
+        stack.gather(&self.scratch.contact_state, &self.model.mimics);
         Ok(self.fill_position_values(q))
     }
 
@@ -127,11 +127,11 @@ impl MechanicalSystem<'_> {
     fn fill_position_values(&mut self, q: &[f64]) -> bool {
         let model = self.model;
         let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
-        let gaps = self.normal_rows.len();
-        let values = self.position_stack.values_mut();
+        let gaps = self.scratch.normal_rows.len();
+        let values = self.scratch.position_stack.values_mut();
         let mut open = false;
-        for (i, &row) in self.normal_rows.iter().enumerate() {
-            values[i] = self.contact_state.gap[row / 3];
+        for (i, &row) in self.scratch.normal_rows.iter().enumerate() {
+            values[i] = self.scratch.contact_state.gap[row / 3];
             open |= values[i].abs() > GAP_ROUND_OFF * size;
         }
         let couplings = values.len() - gaps;
@@ -150,19 +150,19 @@ impl MechanicalSystem<'_> {
     /// γ, the response X and the contact rows of the run decided if they were not.
     fn stacked_geometry(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
         let model = self.model;
-        self.response_here = false;
+        self.scratch.response_here = false;
         if model.has_loops() {
             self.solve_constrained(t, q, v, Wanted::Accelerations)?;
             self.form_response_at(q)?;
-            forward_kinematics(model, &mut self.data, q, v)?;
+            forward_kinematics(model, &mut self.scratch.data, q, v)?;
         } else {
-            forward_kinematics(model, &mut self.data, q, v)?;
-            crba_after_kinematics(model, &mut self.data, &mut self.mass);
+            forward_kinematics(model, &mut self.scratch.data, q, v)?;
+            crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
             self.form_tree_response()?;
         }
         if model.has_contacts() {
-            let state = &mut self.contact_state;
-            contacts::contact_rows_into(model, &mut self.data, v, false, state);
+            let state = &mut self.scratch.contact_state;
+            contacts::contact_rows_into(model, &mut self.scratch.data, v, false, state);
         }
         self.decide_contact_rows();
         Ok(())
@@ -196,28 +196,29 @@ impl Correction for StackedSteps<'_, '_> {
 
     fn step(&mut self, _damping: f64) -> Result<Option<f64>, SystemError> {
         let system = &mut *self.system;
-        system.step.fill(0.0);
-        let step = system.step.as_mut_slice();
+        system.scratch.step.fill(0.0);
+        let step = system.scratch.step.as_mut_slice();
         system
+            .scratch
             .position_stack
-            .add_least_change(&mut system.response, step);
+            .add_least_change(&mut system.scratch.response, step);
         Ok(Some(0.0))
     }
 
     fn try_step(&mut self) -> Result<f64, SystemError> {
         let system = &mut *self.system;
         let model = system.model;
-        model.retract(self.q, system.step.as_slice());
+        model.retract(self.q, system.scratch.step.as_slice());
         if model.has_loops() {
-            let choice = &system.loops.structure.choice;
-            loops::project(model, &mut system.data, choice, self.q, self.v)?;
+            let choice = &system.scratch.loops.structure.choice;
+            loops::project(model, &mut system.scratch.data, choice, self.q, self.v)?;
         }
         let positions = model.positions();
         self.y[..positions].copy_from_slice(self.q);
         self.y[positions..].copy_from_slice(self.v);
         system.split_into(self.y, self.q, self.v);
         self.open = system.stacked_rows_at(self.t, self.q, self.v, self.couplings)?;
-        self.largest = system.position_stack.values_mut().amax();
+        self.largest = system.scratch.position_stack.values_mut().amax();
         Ok(self.largest)
     }
 

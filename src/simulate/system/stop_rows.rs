@@ -51,13 +51,13 @@ impl MechanicalSystem<'_> {
         v: &[f64],
     ) -> Result<(DMatrix<f64>, Option<DMatrix<f64>>), SystemError> {
         let model = self.model;
-        let mass = loops::structure::full_mass(&crba(model, &mut self.data, q)?, v.len());
+        let mass = loops::structure::full_mass(&crba(model, &mut self.scratch.data, q)?, v.len());
         let constrained = model.has_loops() || model.has_contacts() || !model.mimics.is_empty();
         let rows = match constrained {
             true => Some(self.velocity_rows(q, v)?),
             false => None,
         };
-        forward_kinematics(model, &mut self.data, q, v)?;
+        forward_kinematics(model, &mut self.scratch.data, q, v)?;
         Ok((mass, rows))
     }
 
@@ -72,7 +72,7 @@ impl MechanicalSystem<'_> {
     ) -> Result<bool, SystemError> {
         let model = self.model;
         let resting: Vec<usize> = (0..model.stops.len())
-            .filter(|&k| self.resting[k])
+            .filter(|&k| self.state.resting[k])
             .collect();
         if resting.is_empty() || !(model.has_loops() || model.has_contacts()) {
             return Ok(false);
@@ -140,7 +140,7 @@ impl MechanicalSystem<'_> {
         };
         if model.has_loops() {
             let c = self.loop_rows_at(q, v)?;
-            let kept = &self.loops.structure.choice.rows;
+            let kept = &self.scratch.loops.structure.choice.rows;
             let residual = DVector::from_iterator(kept.len(), kept.iter().map(|&r| c.residual[r]));
             rows.stack(residual, self.loop_kept_rows(&c.jacobian.dense()));
         }
@@ -186,10 +186,10 @@ impl MechanicalSystem<'_> {
     /// The loops' rows at (q, v).
     fn loop_rows_at(&mut self, q: &[f64], v: &[f64]) -> Result<loops::Constraints, SystemError> {
         let model = self.model;
-        forward_kinematics(model, &mut self.data, q, v)?;
+        forward_kinematics(model, &mut self.scratch.data, q, v)?;
         Ok(loops::constraints(
             model,
-            &mut self.data,
+            &mut self.scratch.data,
             q,
             v,
             Extent::Rows,
@@ -205,15 +205,15 @@ impl MechanicalSystem<'_> {
         v: &[f64],
     ) -> Result<contacts::ContactRows, SystemError> {
         let model = self.model;
-        forward_kinematics(model, &mut self.data, q, v)?;
-        let rows = contacts::contact_rows(model, &mut self.data, v, false);
-        if self.contact_rows.is_none() {
-            self.contact_rows = Some(match model.has_loops() {
+        forward_kinematics(model, &mut self.scratch.data, q, v)?;
+        let rows = contacts::contact_rows(model, &mut self.scratch.data, v, false);
+        if self.state.contact_rows.is_none() {
+            self.state.contact_rows = Some(match model.has_loops() {
                 true => contacts::candidate_rows(model),
                 false => {
-                    self.mass = crba(model, &mut self.data, q)?;
+                    self.scratch.mass = crba(model, &mut self.scratch.data, q)?;
                     self.form_tree_response()?;
-                    contacts::independent_rows(model, &mut self.response, &rows)
+                    contacts::independent_rows(model, &mut self.scratch.response, &rows)
                 }
             });
         }
@@ -222,12 +222,12 @@ impl MechanicalSystem<'_> {
 
     /// The contact rows of the run (`contact_rows_at` decides them).
     fn contact_rows_kept(&self) -> Vec<usize> {
-        self.contact_rows.clone().unwrap_or_default()
+        self.state.contact_rows.clone().unwrap_or_default()
     }
 
     /// The rows of the loops' structure among the 6 per loop of a dense constraint Jacobian.
     fn loop_kept_rows(&self, jacobian: &DMatrix<f64>) -> DMatrix<f64> {
-        jacobian.select_rows(&self.loops.structure.choice.rows)
+        jacobian.select_rows(&self.scratch.loops.structure.choice.rows)
     }
 
     /// The allowed motions `motions` (columns over the state's velocities) restricted to those
@@ -236,7 +236,7 @@ impl MechanicalSystem<'_> {
     pub(super) fn motions_off_bounds(&self, motions: DMatrix<f64>) -> DMatrix<f64> {
         let model = self.model;
         let held: Vec<usize> = (0..model.stops.len())
-            .filter(|&k| self.resting[k])
+            .filter(|&k| self.state.resting[k])
             .map(|k| model.stops[k].velocity)
             .collect();
         if held.is_empty() || motions.ncols() == 0 {

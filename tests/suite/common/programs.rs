@@ -4,8 +4,8 @@
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::constraints::ConstraintReport;
-use lsdc::simulate::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run, Simulation};
 
 /// An example's text with some of it replaced.

@@ -12,9 +12,9 @@ use std::fmt;
 
 use serde::Serialize;
 
-use super::clock::thread_cpu_seconds;
-use super::prepare::{Integrator, Prepared};
-use super::run::{self, Simulation};
+use crate::prepare::{Integrator, Prepared};
+use crate::simulate::clock::thread_cpu_seconds;
+use crate::simulate::run::{self, Simulation};
 
 /// How a method's steps are set: a tolerance (adaptive integrators) or a fixed step (rk4,
 /// symplectic).

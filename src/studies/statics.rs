@@ -8,11 +8,11 @@ use std::fmt;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-use super::prepare::Prepared;
-use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::rnea;
 use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Extent, Stabilisation};
+use crate::prepare::Prepared;
+use crate::simulate::system::{MechanicalSystem, SystemError};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct HeldCoordinate {
@@ -41,12 +41,12 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
         .state_from_declared(&prepared.coordinates, &prepared.rates)
         .map_err(SystemError::from)?;
     let rest = vec![0.0; model.velocities()];
-    let reference = std::rc::Rc::new(std::cell::RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, Stabilisation::Projection);
     let efforts = system.efforts(0.0, &q, &rest)?;
     let applied = rnea(
         model,
-        &mut system.data,
+        &mut system.scratch.data,
         &q,
         &rest,
         &rest[..model.nv],
@@ -57,12 +57,12 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
     let mut tree = force.rows_mut(0, model.nv);
     tree -= applied;
     let allowed = if model.has_loops() {
-        let c = loops::constraints(model, &mut system.data, &q, &rest, Extent::Rows)
+        let c = loops::constraints(model, &mut system.scratch.data, &q, &rest, Extent::Rows)
             .map_err(SystemError::from)?;
         loops::decompose(&c.jacobian.dense()).null_space
     } else if model.has_contacts() {
         // At rest a sliding contact's friction has no direction: only its normal row holds.
-        let rows = contacts::contact_rows(model, &mut system.data, &rest, false);
+        let rows = contacts::contact_rows(model, &mut system.scratch.data, &rest, false);
         let candidates = contacts::candidate_rows(model);
         loops::decompose(&rows.jacobian.select_rows(&candidates)).null_space
     } else {

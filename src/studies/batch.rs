@@ -26,21 +26,19 @@
 //!              "errors": {"aba": "message"}}]}      (only when a quantity failed)
 //! ```
 
-use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::fmt;
-use std::rc::Rc;
 
 use nalgebra::DVector;
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize, Serializer};
 
-use super::prepare::Prepared;
-use super::system::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
 use crate::dynamics::model::Model;
+use crate::prepare::Prepared;
+use crate::simulate::system::{MechanicalSystem, SystemError};
 
 /// One state to evaluate: positions, velocities (zero when absent), and accelerations (for the
 /// inverse dynamics) or generalised forces (for the forward dynamics), or both.
@@ -173,7 +171,7 @@ pub fn evaluate_states(
     states: &[StateInput],
 ) -> Result<Evaluation, StatesError> {
     let model = &prepared.model;
-    let reference = Rc::new(RefCell::new(prepared.coordinates.clone()));
+    let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, Stabilisation::None);
     let mut outputs = Vec::with_capacity(states.len());
     for (index, state) in states.iter().enumerate() {
@@ -249,7 +247,7 @@ fn evaluate_state(
     if efforts.is_err() {
         // Without the kinematics nothing can be computed; with it, only RNEA and ABA need the
         // efforts.
-        forward_kinematics(model, &mut system.data, &state.q, v)
+        forward_kinematics(model, &mut system.scratch.data, &state.q, v)
             .map_err(|e| StateError::Geometry(e.into()))?;
     }
     let frames = frame_poses(system);
@@ -258,8 +256,15 @@ fn evaluate_state(
         (None, _) => None,
         (Some(_), Err(e)) => kept(&mut errors, "rnea", Err(e.clone())),
         (Some(a), Ok(efforts)) => {
-            let tau = rnea(model, &mut system.data, &state.q, v, a, &efforts.external)
-                .map_err(SystemError::from);
+            let tau = rnea(
+                model,
+                &mut system.scratch.data,
+                &state.q,
+                v,
+                a,
+                &efforts.external,
+            )
+            .map_err(SystemError::from);
             kept(
                 &mut errors,
                 "rnea",
@@ -279,7 +284,7 @@ fn evaluate_state(
             let total = DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv);
             let a = aba(
                 model,
-                &mut system.data,
+                &mut system.scratch.data,
                 &state.q,
                 v,
                 total.as_slice(),
@@ -289,8 +294,8 @@ fn evaluate_state(
             kept(&mut errors, "aba", a.map(|a| a.iter().copied().collect()))
         }
     };
-    let mass =
-        crba(model, &mut system.data, &state.q).map_err(|e| StateError::Geometry(e.into()))?;
+    let mass = crba(model, &mut system.scratch.data, &state.q)
+        .map_err(|e| StateError::Geometry(e.into()))?;
     let crba_rows = mass
         .row_iter()
         .map(|row| row.iter().copied().collect())
@@ -320,7 +325,7 @@ fn frame_poses(system: &MechanicalSystem<'_>) -> Vec<FramePose> {
     let model = system.model;
     (1..=model.body_count())
         .map(|i| {
-            let pose = &system.data.world[i];
+            let pose = &system.scratch.data.world[i];
             let r = pose.rotation.to_rotation_matrix();
             let m = r.matrix();
             FramePose {

@@ -1,7 +1,7 @@
 //! The stops of a mechanism during a run: their event functions (the distance of each stopped
 //! coordinate to its bound), and the impact where one is reached, recorded for the report.
 
-use super::system::{MechanicalSystem, SystemError};
+use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::energy::kinetic_energy;
 use crate::dynamics::mimics;
@@ -25,13 +25,13 @@ impl MechanicalSystem<'_> {
         y: &[f64],
         values: &mut [f64],
     ) -> Result<(), SystemError> {
-        if self.resting.contains(&true) {
+        if self.state.resting.contains(&true) {
             let mut dydt = vec![0.0; y.len()];
             self.derivative(t, y, &mut dydt)?;
         }
         for (k, (value, stop)) in values.iter_mut().zip(&self.model.stops).enumerate() {
-            *value = match self.resting[k] {
-                true => self.contact[k],
+            *value = match self.state.resting[k] {
+                true => self.scratch.contact[k],
                 false => stop.distance(y),
             };
         }
@@ -41,9 +41,9 @@ impl MechanicalSystem<'_> {
     /// The event of stop `index` at time t: the release of a resting coordinate, or else an
     /// impact.
     pub fn stop_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), SystemError> {
-        match self.resting[index] {
+        match self.state.resting[index] {
             true => {
-                self.resting[index] = false;
+                self.state.resting[index] = false;
                 Ok(())
             }
             false => self.impact(t, y, index),
@@ -67,7 +67,7 @@ impl MechanicalSystem<'_> {
         let constrained = model.has_loops() || model.has_contacts();
         if constrained {
             let mut held: Vec<usize> = (0..model.stops.len())
-                .filter(|&k| self.resting[k])
+                .filter(|&k| self.state.resting[k])
                 .collect();
             held.push(index);
             self.close_on_bounds(y, &held)?;
@@ -99,17 +99,17 @@ impl MechanicalSystem<'_> {
             kinetic_after: self.kinetic_energy_at(&q, &v_after)?,
             rests: false,
         };
-        self.impacts.push(impact);
+        self.state.impacts.push(impact);
         if self.comes_to_rest(t, y, index)? {
             // Too slow to leave: the coordinate rests on the stop from now on.
-            self.resting[index] = true;
+            self.state.resting[index] = true;
             if constrained {
                 self.keep_on_bounds(y)?;
             } else {
                 y[positions + stop.velocity] = 0.0;
                 mimics::restore(&model.mimics, y, positions, stop.velocity);
             }
-            if let Some(last) = self.impacts.last_mut() {
+            if let Some(last) = self.state.impacts.last_mut() {
                 last.rests = true;
             }
         }
@@ -134,8 +134,8 @@ impl MechanicalSystem<'_> {
     }
 
     fn kinetic_energy_at(&mut self, q: &[f64], v: &[f64]) -> Result<f64, SystemError> {
-        forward_kinematics(self.model, &mut self.data, q, v)?;
-        Ok(kinetic_energy(self.model, &self.data))
+        forward_kinematics(self.model, &mut self.scratch.data, q, v)?;
+        Ok(kinetic_energy(self.model, &self.scratch.data))
     }
 }
 

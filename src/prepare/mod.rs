@@ -2,6 +2,11 @@
 //! on (from `given` and `--set`), the dynamic model, the initial state from `initial`, and the
 //! settings from `simulate` and the command line. Every missing value is reported at once.
 
+pub mod consistent;
+pub mod native;
+pub mod outputs;
+pub mod settings;
+
 use std::collections::{BTreeSet, HashMap};
 
 use crate::diag::Diagnostic;
@@ -14,8 +19,8 @@ pub use crate::kinematics::unknowns::Override;
 use crate::kinematics::unknowns::{constant, names_of, unknown_values};
 use crate::topology::{self, notation, Topology};
 
-use super::settings::program_settings;
-pub use super::settings::{Integrator, Settings};
+use self::settings::program_settings;
+pub use self::settings::{Integrator, Settings};
 
 pub struct Prepared {
     pub model: Model,
@@ -33,9 +38,9 @@ pub struct Prepared {
     pub warnings: Vec<Diagnostic>,
     /// The forward dynamics as native code, when asked for and able to serve
     /// (`compiled::attach`).
-    pub native: Option<super::native::NativeDynamics>,
+    pub native: Option<self::native::NativeDynamics>,
     /// The program's `output` declarations, compiled.
-    pub outputs: super::outputs::Outputs,
+    pub outputs: self::outputs::Outputs,
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
@@ -199,7 +204,7 @@ pub fn prepare(
     let (mut coordinates, mut rates) = initial_state(mechanism, &model)?;
     let mut warnings = Vec::new();
     if model.has_loops() {
-        let consistent = super::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
+        let consistent = self::consistent::initial_state(mechanism, &kinematics, &model, &rates)?;
         (coordinates, rates, warnings) = (
             consistent.coordinates,
             consistent.rates,
@@ -207,7 +212,7 @@ pub fn prepare(
         );
     }
     let settings = program_settings(mechanism, &model, defaults)?;
-    let outputs = super::outputs::Outputs::compile(mechanism, &model)?;
+    let outputs = self::outputs::Outputs::compile(mechanism, &model)?;
     let coordinate_names = kinematics.coordinate_names();
     Ok(Prepared {
         model,

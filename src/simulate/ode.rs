@@ -1,0 +1,158 @@
+//! The run as its integrator sees it: the equations of motion as an ODE system (positions, then
+//! velocities), with the work of the non-conservative efforts as one more state when it is
+//! tracked, and the outputs observed on the same system (`OdeSystem::observe`).
+
+use super::system::{MechanicalSystem, RunObserver};
+use crate::integrate::{CallbackError, OdeSystem};
+
+impl OdeSystem for MechanicalSystem<'_> {
+    fn dimension(&self) -> usize {
+        MechanicalSystem::dimension(self)
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
+        Ok(self.derivative(t, y, dydt)?)
+    }
+
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
+        Ok(self.keep_closed(t, y)?)
+    }
+
+    fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
+        Ok(MechanicalSystem::tangent_basis(self, t, y)?)
+    }
+
+    fn autonomous(&self) -> bool {
+        MechanicalSystem::autonomous(self)
+    }
+
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        dydt: &[f64],
+        jacobian: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<bool, CallbackError> {
+        let mut power_gradient = vec![0.0; y.len()];
+        Ok(MechanicalSystem::jacobian(
+            self,
+            t,
+            y,
+            dydt,
+            jacobian,
+            &mut power_gradient,
+        )?)
+    }
+
+    fn breaks_error_trend(&self) -> bool {
+        self.scratch.loops.breaks_trend
+    }
+
+    fn event_count(&self) -> usize {
+        self.event_total()
+    }
+
+    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        Ok(self.event_values(t, y, values)?)
+    }
+
+    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
+        Ok(self.act_on_event(t, y, index)?)
+    }
+}
+
+/// The run as the integrator sees it: the mechanism's equations of motion, with, when
+/// `tracks_work`, one more state, the work W of its non-conservative efforts (W' = their power;
+/// the step control watches the motion only, so the steps are those of the mechanism alone);
+/// and its outputs, observed on the same system.
+pub(super) struct RunOde<'r, 'm> {
+    pub(super) system: &'r mut MechanicalSystem<'m>,
+    pub(super) tracks_work: bool,
+    pub(super) observer: &'r mut RunObserver<'r, 'm>,
+}
+
+impl OdeSystem for RunOde<'_, '_> {
+    fn dimension(&self) -> usize {
+        self.system.dimension() + usize::from(self.tracks_work)
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
+        let n = self.system.dimension();
+        self.system.derivative(t, &y[..n], &mut dydt[..n])?;
+        if self.tracks_work {
+            dydt[n] = self.system.scratch.power;
+        }
+        Ok(())
+    }
+
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
+        let n = self.system.dimension();
+        Ok(self.system.keep_closed(t, &mut y[..n])?)
+    }
+
+    fn tangent_basis(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<nalgebra::DMatrix<f64>>, CallbackError> {
+        let n = self.system.dimension();
+        Ok(self.system.tangent_basis(t, &y[..n])?)
+    }
+
+    fn autonomous(&self) -> bool {
+        self.system.autonomous()
+    }
+
+    /// The mechanism's Jacobian, and with the work, its rate's gradient as the last row (the
+    /// rate does not depend on the work itself).
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        dydt: &[f64],
+        jacobian: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<bool, CallbackError> {
+        if !self.tracks_work {
+            return OdeSystem::jacobian(&mut *self.system, t, y, dydt, jacobian);
+        }
+        let n = self.system.dimension();
+        let mut motion = nalgebra::DMatrix::zeros(n, n);
+        let mut power_gradient = vec![0.0; n];
+        let given =
+            (self.system).jacobian(t, &y[..n], &dydt[..n], &mut motion, &mut power_gradient)?;
+        jacobian.fill(0.0);
+        jacobian.view_mut((0, 0), (n, n)).copy_from(&motion);
+        for (j, gradient) in power_gradient.iter().enumerate() {
+            jacobian[(n, j)] = *gradient;
+        }
+        Ok(given)
+    }
+
+    fn breaks_error_trend(&self) -> bool {
+        self.system.scratch.loops.breaks_trend
+    }
+
+    fn event_count(&self) -> usize {
+        self.system.event_total()
+    }
+
+    fn events(&mut self, t: f64, y: &[f64], values: &mut [f64]) -> Result<(), CallbackError> {
+        let n = self.system.dimension();
+        Ok(self.system.event_values(t, &y[..n], values)?)
+    }
+
+    /// The impact, release or friction switch; the work of the non-conservative efforts does
+    /// not jump.
+    fn handle_event(&mut self, t: f64, y: &mut [f64], index: usize) -> Result<(), CallbackError> {
+        let n = self.system.dimension();
+        Ok(self.system.act_on_event(t, &mut y[..n], index)?)
+    }
+
+    fn observe(&mut self, t: f64, y: &[f64]) -> Result<(), CallbackError> {
+        (self.observer)(self.system, t, y)
+    }
+}

@@ -1,0 +1,45 @@
+//! What a run has decided and seen so far, held once and read by every evaluation of its
+//! equations, the integrator's and the sampler's alike (MuJoCo's one `mjData`): the declared
+//! coordinates of the last output, the friction's phases and the resting stops, the contact
+//! rows kept, what the loops' monitors found, and the events so far.
+
+use crate::dynamics::friction::{Phase, Switch};
+use crate::dynamics::model::Model;
+use crate::dynamics::stops::Impact;
+use crate::simulate::constraints::LoopFindings;
+
+#[derive(Clone, Debug)]
+pub struct RunState {
+    /// Declared coordinates at the last output: recovered angles stay continuous (a spring on
+    /// an angle sees 3π/2, not −π/2, after one and a half turns).
+    pub reference: Vec<f64>,
+    /// Per joint with friction, its phase (set at the start and at its events).
+    pub phases: Vec<Phase>,
+    /// Per stop, whether its coordinate rests on it.
+    pub resting: Vec<bool>,
+    /// The contact rows kept for the run (decided at the first evaluation, see
+    /// `contacts::independent_rows`).
+    pub contact_rows: Option<Vec<usize>>,
+    /// What the loops' monitors found: the stretches integrated with rows set aside, and the
+    /// residuals, rank changes and singular passages of the steps and of the outputs.
+    pub loops: LoopFindings,
+    /// The impacts on the stops and the friction's changes of phase so far, in time order.
+    pub impacts: Vec<Impact>,
+    pub switches: Vec<Switch>,
+}
+
+impl RunState {
+    /// The state of a run about to start from declared coordinates `reference`: every joint
+    /// with friction slipping, no stop resting, nothing seen.
+    pub fn new(model: &Model, reference: Vec<f64>) -> RunState {
+        RunState {
+            reference,
+            phases: vec![Phase::Slipping(1.0); model.frictions.len()],
+            resting: vec![false; model.stops.len()],
+            contact_rows: None,
+            loops: LoopFindings::default(),
+            impacts: Vec::new(),
+            switches: Vec::new(),
+        }
+    }
+}

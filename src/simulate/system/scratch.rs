@@ -1,0 +1,106 @@
+//! The scratch of one evaluator of the equations of motion (Pinocchio's `Data` beside its
+//! `Model`): the kinematics, efforts, factorisations and row stacks an evaluation writes, and how
+//! this evaluator keeps the loops closed. A run has one for its integrator's evaluations and one
+//! for its sampler's (`MechanicalSystem::sampling`); nothing here is read across evaluations but
+//! for caches of the last state evaluated.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::dynamics::algorithms::Data;
+use crate::dynamics::contacts::ContactRows;
+use crate::dynamics::efforts::Efforts;
+use crate::dynamics::loops::{LoopScratch, ProjectionScratch, Stabilisation};
+use crate::dynamics::mimics;
+use crate::dynamics::model::{DeclaredState, Model};
+use crate::dynamics::response::Response;
+use crate::dynamics::rows::RowStack;
+use crate::simulate::constraints::LoopMonitor;
+
+pub struct Scratch {
+    pub data: Data,
+    /// How this evaluator keeps the loops closed (its kept rows, its passages).
+    pub loops: LoopMonitor,
+    /// The power of the non-conservative efforts at the last `derivative`.
+    pub power: f64,
+    /// Scratch of `derivative` for a tree, kept so that it allocates nothing: the normalised
+    /// positions, the accelerations, and the efforts of a mechanism without any.
+    pub(in crate::simulate) positions: Vec<f64>,
+    pub(in crate::simulate) accelerations: DVector<f64>,
+    pub(in crate::simulate) no_efforts: Efforts,
+    /// The efforts at the last evaluation, and the declared coordinates and rates they used.
+    pub(in crate::simulate) efforts: Efforts,
+    pub(in crate::simulate) declared: DeclaredState,
+    /// Scratch of the constrained equations: the tree's inverse dynamics and Ma − f (for the
+    /// multipliers), and the loops' rows, factorisation and solution.
+    pub(in crate::simulate) inverse: DVector<f64>,
+    pub(in crate::simulate) force: DVector<f64>,
+    pub(in crate::simulate) loop_scratch: LoopScratch,
+    /// Scratch of the projections: the constraints and factorisations, and the velocities.
+    pub(in crate::simulate) projection: ProjectionScratch,
+    pub(in crate::simulate) velocities: Vec<f64>,
+    /// The state of the last evaluation of a mechanism with loops, while `loop_scratch` holds
+    /// its rows (empty otherwise): a projection of that state adopts them.
+    pub(in crate::simulate) evaluated: Vec<f64>,
+    /// The contacts' normal rows, and every contact row at the last evaluation.
+    pub(in crate::simulate) normal_rows: Vec<usize>,
+    pub(in crate::simulate) contact_state: ContactRows,
+    /// Zero velocities or accelerations (tree length), the tree's mass matrix, the basis of
+    /// the velocities a tree's mimic couplings allow (`mimics::basis`), and the response X of
+    /// the accelerations to generalised forces (`response`), with whether it was formed at the
+    /// state of the current evaluation.
+    pub(in crate::simulate) at_rest: Vec<f64>,
+    pub(in crate::simulate) mass: DMatrix<f64>,
+    pub(in crate::simulate) coupled: DMatrix<f64>,
+    pub(in crate::simulate) response: Response,
+    pub(in crate::simulate) response_here: bool,
+    /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
+    /// loops, coordinates held at rest), and in the projections onto the velocity rows and onto
+    /// the position rows; the velocities held at the evaluation; a step of the velocities.
+    pub(in crate::simulate) rows: RowStack,
+    pub(in crate::simulate) velocity_stack: RowStack,
+    pub(in crate::simulate) position_stack: RowStack,
+    pub(in crate::simulate) held: Vec<usize>,
+    pub(in crate::simulate) step: DVector<f64>,
+    /// Per stop, the contact force holding its coordinate on it at the last evaluation
+    /// (positive while it pushes the coordinate into its range); per joint with friction, the
+    /// force holding it while it sticks then, and the power of the slipping friction.
+    pub contact: Vec<f64>,
+    pub holding: Vec<f64>,
+    pub(in crate::simulate) friction_power: f64,
+}
+
+impl Scratch {
+    pub fn new(model: &Model, stabilisation: Stabilisation) -> Scratch {
+        Scratch {
+            data: Data::new(model),
+            loops: LoopMonitor::new(stabilisation),
+            power: 0.0,
+            positions: Vec::new(),
+            accelerations: DVector::zeros(model.velocities()),
+            no_efforts: Efforts::none(model),
+            efforts: Efforts::none(model),
+            declared: DeclaredState::default(),
+            inverse: DVector::zeros(model.nv),
+            force: DVector::zeros(model.velocities()),
+            loop_scratch: LoopScratch::new(model),
+            projection: ProjectionScratch::new(model),
+            velocities: Vec::new(),
+            evaluated: Vec::new(),
+            normal_rows: Vec::with_capacity(model.contacts.len()),
+            contact_state: ContactRows::new(model),
+            at_rest: vec![0.0; model.nv],
+            mass: DMatrix::zeros(model.nv, model.nv),
+            coupled: mimics::basis(&model.mimics, model.nv),
+            response: Response::default(),
+            response_here: false,
+            rows: RowStack::new(model),
+            velocity_stack: RowStack::new(model),
+            position_stack: RowStack::new(model),
+            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            step: DVector::zeros(model.velocities()),
+            contact: vec![0.0; model.stops.len()],
+            holding: vec![0.0; model.frictions.len()],
+            friction_power: 0.0,
+        }
+    }
+}

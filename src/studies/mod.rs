@@ -1,0 +1,10 @@
+//! The studies built on the mechanism and its runs: the dynamics at given states (`lsdc eval`,
+//! `batch`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
+//! precision and cost (`precision`), the `tree` and `assemble` reports (`analysis`), and a
+//! point dragged along a path (`drag`).
+
+pub mod analysis;
+pub mod batch;
+pub mod drag;
+pub mod precision;
+pub mod statics;
