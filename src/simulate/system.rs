@@ -6,21 +6,22 @@
 //! accelerations to forces (`dynamics::rows`, `holding`).
 
 use nalgebra::{DMatrix, DVector};
-use std::fmt;
 
+mod error;
 mod friction;
 mod held_reactions;
 mod holding;
 pub mod impacts;
 mod jacobian;
 pub mod scratch;
+pub use error::{NotFiniteCause, SystemError};
 mod stacked;
 mod stop_rows;
 
 use super::run_state::RunState;
 use crate::dynamics::algorithms::{
-    aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics, rnea,
-    rnea_after_kinematics, rnea_forward, transmitted_wrenches, DynamicsError,
+    aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics,
+    rnea_after_kinematics, rnea_forward, DynamicsError,
 };
 use crate::dynamics::contacts;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
@@ -29,9 +30,7 @@ use crate::dynamics::loops::{
 };
 use crate::dynamics::model::{Model, Recovered};
 use crate::integrate::CallbackError;
-use crate::kinematics::eval::EvalError;
 use crate::prepare::native::NativeDynamics;
-use crate::spatial;
 use scratch::Scratch;
 
 /// The equations of motion of a run: the model (only read), the run's state (`RunState`, what
@@ -566,98 +565,6 @@ impl<'m> MechanicalSystem<'m> {
         Ok(())
     }
 
-    /// The wrench each join transmits to its second body, at the join, in the fixed axes
-    /// (moment, then force): the tree's joins from inverse dynamics with the accelerations of the
-    /// motion and the loops' forces, then the loops' from their multipliers. The coordinates
-    /// held at rest (resting stops, sticking joints) are held as the run holds them, their
-    /// forces in their joins' reactions as a link effort is.
-    pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
-        let model = self.model;
-        let (accelerations, mut external, multipliers) = if model.has_loops() {
-            let touching = self.loops_reactions_solve(t, q, v)?;
-            let solution = &self.scratch.loop_scratch;
-            let (c, multipliers) = (&solution.constraints, &solution.multipliers);
-            let on_bodies = loops::constraint_forces(model, &self.scratch.data, c, multipliers);
-            let external: Vec<_> = self
-                .scratch
-                .efforts
-                .external
-                .iter()
-                .zip(&on_bodies)
-                .map(|(a, b)| a + b)
-                .collect();
-            let accelerations = solution.accelerations.clone();
-            let mut multipliers = multipliers.clone();
-            if let Some(forces) = touching {
-                multipliers = DVector::from_iterator(
-                    multipliers.len() + forces.len(),
-                    multipliers.iter().chain(forces.iter()).copied(),
-                );
-            }
-            (accelerations, external, Some(multipliers))
-        } else if model.has_contacts() {
-            let accelerations = self.solve_every_row(t, q, v)?;
-            let forces = &self.scratch.rows.contact_forces;
-            let on_bodies = contacts::contact_body_forces(
-                model,
-                &self.scratch.data,
-                &self.scratch.contact_state,
-                forces,
-            );
-            let external: Vec<_> = (self.scratch.efforts.external.iter().zip(&on_bodies))
-                .map(|(a, b)| a + b)
-                .collect();
-            let forces = contacts::contact_reactions(forces);
-            (accelerations, external, Some(forces))
-        } else {
-            // The accelerations of the run's own equations: with the geared rotors, the mimic
-            // couplings, the friction's phases and the coordinates held at rest.
-            let mut rates = vec![0.0; self.dimension()];
-            self.derivative_at(t, q, v, &mut rates)?;
-            let a = DVector::from_column_slice(&rates[model.positions()..]);
-            let efforts = self.efforts(t, q, v)?;
-            (a, efforts.external, None)
-        };
-        // The link efforts act across their joints: they are not part of the reaction.
-        external.truncate(model.body_count() + 1);
-        rnea(
-            model,
-            &mut self.scratch.data,
-            q,
-            v,
-            &accelerations.as_slice()[..model.nv],
-            &external,
-        )?;
-        let transmitted = transmitted_wrenches(model, &self.scratch.data, &external);
-        let mut reactions = Vec::with_capacity(6 * (model.joints.len() + model.loops.len()));
-        for joint in &model.joints {
-            let frame = self.scratch.data.world[joint.child] * joint.on_child;
-            let about_origin = spatial::force_to_parent(
-                &self.scratch.data.world[joint.child],
-                &transmitted[joint.child],
-            );
-            let at_join = spatial::force_to_child(
-                &spatial::Pose::translation(
-                    frame.translation.x,
-                    frame.translation.y,
-                    frame.translation.z,
-                ),
-                &about_origin,
-            );
-            // The tree carries the child; a join written from the child's side has it first.
-            let on_second = if joint.first_on_parent {
-                at_join
-            } else {
-                -at_join
-            };
-            reactions.extend_from_slice(on_second.as_slice());
-        }
-        if let Some(multipliers) = multipliers {
-            reactions.extend_from_slice(multipliers.as_slice());
-        }
-        Ok(reactions)
-    }
-
     /// Decides the loops' structure at q if no run started them (`start_loops`): a state
     /// evaluated on its own, closed.
     pub(super) fn ensure_structure(&mut self, q: &[f64]) -> Result<(), SystemError> {
@@ -708,113 +615,6 @@ impl<'m> MechanicalSystem<'m> {
 /// `MechanicalSystem::sampling`), the output's time and the integrator's state there.
 pub type RunObserver<'o, 'm> =
     dyn FnMut(&mut MechanicalSystem<'m>, f64, &[f64]) -> Result<(), CallbackError> + 'o;
-
-/// Why the equations of motion cannot be evaluated at a state.
-#[derive(Clone, Debug, PartialEq)]
-pub enum SystemError {
-    /// An effort or expression has no value there.
-    Evaluation(EvalError),
-    /// An effort drives a motion that moves no mass; `velocity` names the coordinate it moves
-    /// most.
-    MasslessMotion { velocity: String },
-    /// `join` carries no inertia along its motion (nor do `body` and the bodies beyond it).
-    SingularInertia { join: String, body: String },
-    /// The mass matrix could not be factorised.
-    SingularMassMatrix,
-    /// The acceleration of `join` is not finite.
-    AccelerationNotFinite { join: String, cause: NotFiniteCause },
-    /// The loops are exactly at a singular configuration: the constraint `row` of the
-    /// complementary link `join` is no longer independent of the others.
-    SingularConfiguration { join: String, row: &'static str },
-    /// A projection could not close the loops at `time`: `row` of `join` stays open by `left`
-    /// (radians, or metres per metre of the mechanism's size).
-    LoopsOpen {
-        time: f64,
-        join: String,
-        row: &'static str,
-        left: f64,
-    },
-    /// The run starts at a singular configuration, where `row` of `join` is implied by the other
-    /// constraints though it is not at the closed configurations around it.
-    SingularStart { join: String, row: &'static str },
-    /// The kept rows of the contacts stopped being independent: `row` of `contact`.
-    SingularContact { contact: String, row: &'static str },
-    /// An impact on a stop could not be resolved, or left a coordinate resting on its stop.
-    Impact(String),
-}
-
-/// What made an acceleration infinite or NaN.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NotFiniteCause {
-    /// The efforts are finite: the state itself grew too large.
-    StateTooLarge,
-    /// An effort evaluated to NaN or infinity.
-    EffortNotANumber,
-}
-
-impl From<EvalError> for SystemError {
-    fn from(error: EvalError) -> Self {
-        SystemError::Evaluation(error)
-    }
-}
-
-impl fmt::Display for SystemError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            SystemError::Evaluation(EvalError::Missing(_)) => {
-                write!(f, "an effort needs a value that was not given")
-            }
-            SystemError::Evaluation(EvalError::NotGeometric(what)) => {
-                write!(f, "an expression cannot depend on {what} there")
-            }
-            SystemError::Evaluation(EvalError::NotFinite) => {
-                write!(f, "the geometry is not a finite number at this state")
-            }
-            SystemError::MasslessMotion { velocity } => write!(
-                f,
-                "an effort drives a motion that moves no mass (it moves `{velocity}` most): give the bodies it moves mass or inertia"
-            ),
-            SystemError::SingularInertia { join, body } => write!(
-                f,
-                "the mass matrix is singular: join `{join}` carries no inertia along its motion (body `{body}` and the bodies beyond it)"
-            ),
-            SystemError::SingularMassMatrix => write!(f, "the mass matrix is singular"),
-            SystemError::SingularConfiguration { join, row } => write!(
-                f,
-                "the loops reached a singular configuration: the {row} constraint of `{join}` is no longer independent of the others"
-            ),
-            SystemError::LoopsOpen { time, join, row, left } => write!(
-                f,
-                "the loops came open at t = {time}: projecting the state back left the {row} constraint of `{join}` open by {left:.1e} (relative to the mechanism's size); the integration strayed too far from the loops: use a tighter tolerance or a smaller step"
-            ),
-            SystemError::SingularStart { join, row } => write!(
-                f,
-                "the loops start at a singular configuration (the {row} constraint of `{join}` is implied by the others here, not at the configurations around it), where the motion may leave along several branches: start away from it, or give initial values on one branch"
-            ),
-            SystemError::SingularContact { contact, row } => write!(
-                f,
-                "the contacts reached a singular configuration: the {row} row of `{contact}` is no longer independent of the other contacts' rows"
-            ),
-            SystemError::Impact(message) => f.write_str(message),
-            SystemError::AccelerationNotFinite { join, cause } => {
-                write!(f, "the acceleration of join `{join}` is not finite: {cause}")
-            }
-        }
-    }
-}
-
-impl fmt::Display for NotFiniteCause {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            NotFiniteCause::StateTooLarge => "the state became too large",
-            NotFiniteCause::EffortNotANumber => {
-                "an effort is not a number (a square root or logarithm of a negative value, a division by zero)"
-            }
-        })
-    }
-}
-
-impl std::error::Error for SystemError {}
 
 /// Whether the accelerations of a tree need the mass matrix rather than the articulated-body
 /// algorithm: geared rotors (which ABA counts as well; runs have taken them through M, whose
