@@ -11,10 +11,12 @@ fn files(dir: &Path, into: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).expect("a readable folder") {
         let path = entry.expect("a directory entry").path();
         let name = path.file_name().unwrap().to_string_lossy().to_string();
+        // `.git` is a file in a linked work tree, naming where the repository is.
+        if SKIPPED.contains(&name.as_str()) {
+            continue;
+        }
         if path.is_dir() {
-            if !SKIPPED.contains(&name.as_str()) {
-                files(&path, into);
-            }
+            files(&path, into);
         } else {
             into.push(path);
         }
