@@ -121,7 +121,9 @@ fn saddle_point(mass: &DMatrix<f64>, g: &DMatrix<f64>, held: &[usize]) -> DMatri
 /// A rank-revealing solve: redundant constraint rows (a planar loop's, a follower held with
 /// its leader) leave the velocities or accelerations well defined, though not their forces.
 fn rank_revealing_solve(system: DMatrix<f64>, right: &DVector<f64>) -> Option<DVector<f64>> {
-    system.svd(true, true).solve(right, 1e-12).ok()
+    crate::linalg::svd(system, true, true)?
+        .solve(right, 1e-12)
+        .ok()
 }
 
 /// The stops of the tree's links, two per link with both bounds; a link with stops must have

@@ -281,7 +281,10 @@ fn null_space_projector(jacobian: &DMatrix<f64>, n: usize) -> DMatrix<f64> {
     if jacobian.nrows() == 0 {
         return projector;
     }
-    let svd = jacobian.clone().svd(false, true);
+    // A non-finite Jacobian has no decomposition: a projector of NaN makes the step fail.
+    let Some(svd) = crate::linalg::svd(jacobian.clone(), false, true) else {
+        return DMatrix::from_element(n, n, f64::NAN);
+    };
     let Some(v_t) = svd.v_t else {
         return projector;
     };

@@ -397,3 +397,40 @@ fn the_checker_sees_a_cycle() {
     let graph = dependencies(&files);
     assert!(cycles(&nodes, &graph).is_empty());
 }
+
+/// nalgebra's SVD iterates until it converges, which a matrix with a NaN or an infinite entry
+/// never does: every decomposition goes through `linalg::svd`, which refuses such a matrix and
+/// bounds the iterations. A call of nalgebra's own (`.svd(`, `SVD::new`) elsewhere is a run that
+/// can hang.
+#[test]
+fn every_svd_goes_through_the_wrapper_that_ends() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = BTreeMap::new();
+    modules(&src, &Vec::new(), &mut files);
+    let mut found = Vec::new();
+    for (module, text) in &files {
+        // `linalg` is the wrapper; `dynamics::angles` decomposes a 6 × 6 matrix on the stack
+        // (the wrapper takes heap matrices, and that solve must not allocate), checking first,
+        // as the wrapper does, that every entry is finite.
+        let allowed = [vec!["linalg"], vec!["dynamics", "angles"]];
+        if allowed.iter().any(|m| m.iter().eq(module.iter())) {
+            continue;
+        }
+        let code = code(text);
+        for needle in [
+            ".svd(",
+            "SVD::new(",
+            ".svd_unordered(",
+            "SVD::new_unordered(",
+        ] {
+            if code.contains(needle) {
+                found.push(format!("{}: {needle}", name(module)));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "SVDs outside `linalg::svd`:\n{}",
+        found.join("\n")
+    );
+}

@@ -126,7 +126,11 @@ impl MechanicalSystem<'_> {
             coupling.column_mut(i).scale_mut(scale);
             held_rows.row_mut(i).scale_mut(scale);
         }
-        let svd = coupling.svd(true, true);
+        // A non-finite coupling has no decomposition: the columns say so rather than hang.
+        let Some(svd) = crate::linalg::svd(coupling, true, true) else {
+            columns.fill(f64::NAN);
+            return;
+        };
         let cutoff = DEPENDENT_ROWS * svd.singular_values.max();
         if let Ok(mut solved) = svd.solve(&held_rows, cutoff) {
             for (i, &scale) in scales.iter().enumerate() {
