@@ -47,8 +47,9 @@ pub struct DragArgs {
     #[arg(long, default_value_t = 1.0)]
     mouse_stiffness: f64,
     /// Linearised solves per target (penalty method; 1 is the seed's one solve per move).
-    #[arg(long, default_value_t = 1)]
-    iterations: usize,
+    /// Without it, as many as move the configuration, up to 100.
+    #[arg(long)]
+    iterations: Option<usize>,
     /// A target is reached when the point ends this close to it.
     #[arg(long, default_value_t = 1e-9)]
     reach_tolerance: f64,
@@ -65,7 +66,7 @@ pub fn run(args: &DragArgs) -> ExitCode {
         args.mouse_stiffness,
         args.reach_tolerance,
     ];
-    if positive.iter().any(|v| !(v.is_finite() && *v > 0.0)) || args.iterations == 0 {
+    if positive.iter().any(|v| !(v.is_finite() && *v > 0.0)) || args.iterations == Some(0) {
         return usage_error(
             "the stiffnesses, `--reach-tolerance` and `--iterations` must be positive",
         );

@@ -129,11 +129,29 @@ pub fn follow_exact(
     })
 }
 
+/// The most linearised solves per target of the penalty method when it runs to convergence.
+pub const PENALTY_SOLVES: usize = 100;
+
+/// A configuration change (in metres and radians) below which the penalty method's solves have
+/// converged: round-off for coordinates of order one.
+const PENALTY_STILL: f64 = 1e-13;
+
+/// The largest change of a body's coordinates (X, Y, Θ) between two planar configurations.
+fn largest_change(before: &[[f64; 3]], after: &[[f64; 3]]) -> f64 {
+    before
+        .iter()
+        .flatten()
+        .zip(after.iter().flatten())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct PenaltyOptions {
     pub stiffness: Stiffness,
-    /// Linearised solves per target (1: the seed's one solve per move).
-    pub iterations: usize,
+    /// Linearised solves per target (1: the seed's one solve per move), or `None`: as many as
+    /// move the configuration, up to `PENALTY_SOLVES`.
+    pub iterations: Option<usize>,
     pub reach_tolerance: f64,
 }
 
@@ -156,8 +174,16 @@ pub fn follow_penalty(
     let mut rows = Vec::new();
     for target in targets {
         let goal = Vector2::new(target.position[0], target.position[1]);
-        for _ in 0..iterations {
-            state = planar.step(&state, &point, &goal, stiffness);
+        let mut solves = 0;
+        while solves < iterations.unwrap_or(PENALTY_SOLVES) {
+            let next = planar.step(&state, &point, &goal, stiffness);
+            solves += 1;
+            let moved = largest_change(&state, &next);
+            state = next;
+            // A NaN configuration moves no further either.
+            if iterations.is_none() && (moved <= PENALTY_STILL || moved.is_nan()) {
+                break;
+            }
         }
         let position = penalty::point_position(planar, &state, &point);
         let distance = (position.xy() - goal).norm();
@@ -168,7 +194,7 @@ pub fn follow_penalty(
             reached: distance <= reach_tolerance,
             gap: planar.largest_gap(&state),
             energy: planar.energy(&state, &point, &goal, stiffness),
-            iterations,
+            iterations: solves,
             configuration: state.iter().flatten().copied().collect(),
         });
     }

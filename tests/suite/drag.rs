@@ -99,7 +99,7 @@ fn the_converged_penalty_drag_matches_the_exact_configurations() {
             link: 1e6,
             mouse: 1.0,
         },
-        iterations: 20,
+        iterations: Some(20),
         reach_tolerance: 1e-9,
     };
     let run = follow_penalty(&model, &planar(&model), &frame, &q, &targets, &options).unwrap();
@@ -114,6 +114,51 @@ fn the_converged_penalty_drag_matches_the_exact_configurations() {
     }
 }
 
+/// Without a count of solves, the penalty method solves until the configuration stops moving:
+/// the coupler curve, in moves of 0.05 rad of the crank that one solve each left short (the
+/// default was one solve, and such a path was reported out of reach), is followed to round-off.
+#[test]
+fn the_penalty_drag_solves_until_the_configuration_stops_moving() {
+    let (model, frame, q) = four_bar();
+    let angles: Vec<f64> = (0..=10).map(|k| 1.0 + 0.05 * k as f64).collect();
+    let targets = curve(angles.iter().copied());
+    let options = |iterations| PenaltyOptions {
+        stiffness: Stiffness {
+            link: 1e6,
+            mouse: 1.0,
+        },
+        iterations,
+        reach_tolerance: 1e-9,
+    };
+    let one = follow_penalty(
+        &model,
+        &planar(&model),
+        &frame,
+        &q,
+        &targets,
+        &options(Some(1)),
+    );
+    assert!(
+        one.unwrap().unreached().count() > 0,
+        "one solve per move falls short"
+    );
+    let run = follow_penalty(
+        &model,
+        &planar(&model),
+        &frame,
+        &q,
+        &targets,
+        &options(None),
+    );
+    let run = run.unwrap();
+    assert_eq!(run.unreached().count(), 0);
+    for (row, t) in run.rows.iter().zip(&angles) {
+        assert!((row.configuration[2] - t).abs() <= 1e-9, "{row:?}");
+        assert!(row.iterations < 100, "{row:?}");
+    }
+    assert!(run.rows.iter().any(|row| row.iterations > 1));
+}
+
 #[test]
 fn one_solve_per_move_follows_the_curve_to_second_order() {
     // The seed's one linearised solve per move: the gaps left are the linearisation's,
@@ -126,7 +171,7 @@ fn one_solve_per_move_follows_the_curve_to_second_order() {
                 link: 1e6,
                 mouse: 1.0,
             },
-            iterations: 1,
+            iterations: Some(1),
             reach_tolerance: 1e-9,
         };
         let run = follow_penalty(&model, &planar(&model), &frame, &q, &targets, &options).unwrap();
@@ -153,7 +198,7 @@ fn the_penalty_gaps_shrink_as_the_inverse_of_the_stiffness_ratio() {
                 link: ratio,
                 mouse: 1.0,
             },
-            iterations: 50,
+            iterations: Some(50),
             reach_tolerance: 1e-9,
         };
         let run = follow_penalty(&model, &planar(&model), &frame, &q, &targets, &options).unwrap();
