@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::usage_error;
+use super::shared::{err, out, usage_error};
 use lsdc::diag::render;
 
 #[derive(clap::Args)]
@@ -27,7 +27,7 @@ pub fn run(args: &FmtArgs) -> ExitCode {
         let text = match std::fs::read_to_string(&file) {
             Ok(text) => text,
             Err(e) => {
-                eprintln!("error: cannot read `{}`: {e}", file.display());
+                err(&format!("error: cannot read `{}`: {e}\n", file.display()));
                 failed = true;
                 continue;
             }
@@ -38,7 +38,7 @@ pub fn run(args: &FmtArgs) -> ExitCode {
         let formatted = match lsdc::ide::format::format(id, text) {
             Ok(formatted) => formatted,
             Err(diagnostics) => {
-                eprint!("{}", render::to_text(&sources, &diagnostics));
+                err(&render::to_text(&sources, &diagnostics));
                 failed = true;
                 continue;
             }
@@ -47,10 +47,10 @@ pub fn run(args: &FmtArgs) -> ExitCode {
             continue;
         }
         if args.check {
-            println!("{}: not formatted", file.display());
+            out(&format!("{}: not formatted\n", file.display()));
             failed = true;
         } else if let Err(e) = std::fs::write(&file, formatted) {
-            eprintln!("error: cannot write `{}`: {e}", file.display());
+            err(&format!("error: cannot write `{}`: {e}\n", file.display()));
             failed = true;
         }
     }

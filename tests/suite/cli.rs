@@ -1,6 +1,7 @@
 //! The `lsdc` binary: exit codes, summary, JSON diagnostics, library search path.
 
 use crate::common::lsdc;
+use std::path::Path;
 use std::process::Command;
 
 #[test]
@@ -491,4 +492,75 @@ fn precision_compares_with_a_reference_file_and_refuses_bad_ones() {
     let (code, _, stderr) = lsdc(&["precision", "examples/pendulum.lsd", "--plot", "a.txt"]);
     assert_eq!(code, 2);
     assert!(stderr.contains(".svg"), "{stderr}");
+}
+
+/// `lsdc` with standard output or standard error on `/dev/full`, where every write fails.
+fn lsdc_on_full(args: &[&str], full_stdout: bool) -> (i32, String) {
+    let full = || std::fs::OpenOptions::new().write(true).open("/dev/full");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_lsdc"));
+    command.args(args).env_remove("LSD_PATH");
+    match full_stdout {
+        true => command.stdout(full().expect("/dev/full")),
+        false => command.stderr(full().expect("/dev/full")),
+    };
+    let output = command.output().expect("lsdc runs");
+    let message = String::from_utf8_lossy(&output.stderr).into_owned();
+    (output.status.code().unwrap_or(-1), message)
+}
+
+#[test]
+fn a_full_standard_output_is_an_error_and_a_full_standard_error_no_panic() {
+    if !Path::new("/dev/full").exists() {
+        eprintln!("skipped: this system has no /dev/full");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("lsdc-cli-full-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("folder");
+    let path = dir.join("path.csv");
+    std::fs::write(&path, "x,y\n0.5,0.5\n").expect("path");
+    let unformatted = dir.join("unformatted.lsd");
+    std::fs::write(&unformatted, "let   a = 1 ;\n").expect("program");
+    let (path, unformatted) = (path.to_str().unwrap(), unformatted.to_str().unwrap());
+    let pendulum = "examples/pendulum.lsd";
+    let commands: [&[&str]; 13] = [
+        &["check", pendulum],
+        &["tree", pendulum],
+        &["assemble", pendulum],
+        &["parse", pendulum],
+        &["compile", "--emit", "notation", pendulum],
+        &["export-urdf", pendulum],
+        &[
+            "statics",
+            "examples/delta_isir88_reduced.lsd",
+            "--actuate",
+            "A1.q",
+        ],
+        &["simulate", pendulum, "--format", "json"],
+        &["simulate", pendulum],
+        &["precision", pendulum, "--repeats", "1"],
+        &[
+            "drag",
+            "examples/four_bar.lsd",
+            "--point",
+            "coupler_point",
+            "--path",
+            path,
+        ],
+        &["import-urdf", "tests/fixtures/urdf/double_pendulum.urdf"],
+        &["fmt", "--check", unformatted],
+    ];
+    for args in commands {
+        let (code, stderr) = lsdc_on_full(args, true);
+        assert!(
+            code != 0 && stderr.contains("cannot write standard output"),
+            "{args:?}: exit {code}, {stderr}"
+        );
+        let (code, _) = lsdc_on_full(args, false);
+        assert!(
+            (0..=2).contains(&code),
+            "{args:?} with a full standard error: exit {code}"
+        );
+    }
+    let (code, _) = lsdc_on_full(&["check", "no/such/file.lsd"], false);
+    assert_eq!(code, 2, "an error not printed is still an error");
 }
