@@ -10,12 +10,13 @@ use lsdc::diag::render;
 pub struct FmtArgs {
     #[arg(required = true)]
     paths: Vec<PathBuf>,
-    /// Change nothing; list the files that are not formatted and fail if there are any.
+    /// Change nothing; list the files that are not formatted, each with a unified diff of what
+    /// formatting would change, and fail if there are any.
     #[arg(long)]
     check: bool,
 }
 
-/// Formats each file in place, or with `--check` lists those that would change. Exit status 1
+/// Formats each file in place, or with `--check` lists those that would change, with a diff. Exit status 1
 /// when a file cannot be read or parsed, or (with `--check`) is not formatted.
 pub fn run(args: &FmtArgs) -> ExitCode {
     let files = match lsdc::ide::format::lsd_files(&args.paths) {
@@ -47,7 +48,14 @@ pub fn run(args: &FmtArgs) -> ExitCode {
             continue;
         }
         if args.check {
-            out(&format!("{}: not formatted\n", file.display()));
+            let name = file.display().to_string();
+            out(&format!("{name}: not formatted\n"));
+            out(&lsdc::ide::line_diff::unified(
+                text,
+                &formatted,
+                &name,
+                &format!("{name} (formatted)"),
+            ));
             failed = true;
         } else if let Err(e) = std::fs::write(&file, formatted) {
             err(&format!("error: cannot write `{}`: {e}\n", file.display()));

@@ -564,3 +564,61 @@ fn a_full_standard_output_is_an_error_and_a_full_standard_error_no_panic() {
     let (code, _) = lsdc_on_full(&["check", "no/such/file.lsd"], false);
     assert_eq!(code, 2, "an error not printed is still an error");
 }
+
+#[test]
+fn precision_ranks_by_time_only_over_enough_repeats() {
+    let args = |repeats| {
+        let mut args = vec![
+            "precision",
+            "examples/pendulum.lsd",
+            "--integrators",
+            "dopri5,dop853",
+        ];
+        args.extend(["--tolerances", "1e-8,1e-10", "--accuracy", "1e-5"]);
+        args.extend(["--format", "json", "--repeats", repeats]);
+        args.iter().map(|a| a.to_string()).collect::<Vec<_>>()
+    };
+    let run = |repeats| {
+        let args = args(repeats);
+        let (code, stdout, stderr) = lsdc(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert_eq!(code, 0, "{stderr}");
+        let table: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+        table
+    };
+    let table = run("1");
+    let message = table["recommendation"]["message"]
+        .as_str()
+        .expect("a message");
+    assert!(
+        message.contains("not by CPU time: 1 repeat(s) cannot tell"),
+        "{message}"
+    );
+    // Ranked by function evaluations: the fewest among the runs that reached the accuracy.
+    let measurements = table["measurements"].as_array().expect("measurements");
+    let chosen = table["recommendation"]["measurement"]
+        .as_u64()
+        .expect("one") as usize;
+    let evaluations = |m: &serde_json::Value| m["function_evaluations"].as_u64().expect("a count");
+    let fewest = (measurements.iter())
+        .filter(|m| m["errors"]["position"].as_f64().expect("an error") <= 1e-5)
+        .map(evaluations)
+        .min();
+    assert_eq!(Some(evaluations(&measurements[chosen])), fewest);
+}
+
+#[test]
+fn fmt_check_shows_what_formatting_would_change() {
+    let dir = std::env::temp_dir().join(format!("lsdc-cli-fmt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("folder");
+    let file = dir.join("spaced.lsd");
+    let text = "let a = 1 ;\nlet   b = 2 ;\nlet c = 3 ;\n";
+    std::fs::write(&file, text).expect("program");
+    let name = file.to_str().expect("utf-8");
+    let (code, stdout, stderr) = lsdc(&["fmt", "--check", name]);
+    assert_eq!(code, 1, "{stderr}");
+    let expected = format!(
+        "{name}: not formatted\n--- {name}\n+++ {name} (formatted)\n@@ -1,3 +1,3 @@\n let a = 1 ;\n-let   b = 2 ;\n+let b = 2 ;\n let c = 3 ;\n"
+    );
+    assert_eq!(stdout, expected);
+    assert_eq!(std::fs::read_to_string(&file).expect("kept"), text);
+}
