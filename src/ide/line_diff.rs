@@ -1,7 +1,7 @@
 //! A unified diff of two texts, line by line (`diff -u`'s format, 3 lines of context), for
 //! `lsdc fmt --check` to show what formatting would change. The lines are matched by a longest
 //! common subsequence (the classic dynamic programme, Hunt & McIlroy 1976) between the common
-//! first and last lines; past [`LARGEST_TABLE`] cells the middle is shown as removed then added.
+//! first and last lines; past `LARGEST_TABLE` cells the middle is shown as removed then added.
 
 use std::fmt::Write;
 
