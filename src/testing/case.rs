@@ -8,7 +8,6 @@ use serde::Serialize;
 
 use super::compare::{compare, VariableError};
 use super::manifest::{Case, Checks, ExpectedFailure};
-use super::record::stated_digits;
 use crate::analysis;
 use crate::diag::{Diagnostic, Severity};
 use crate::driver::{compile_files_perturbed, Compilation};
@@ -269,6 +268,17 @@ pub(super) fn compile_and_prepare(case: &Case) -> Result<Prepared, String> {
 /// The outputs of a run as a table, the form references are read in.
 pub(super) fn as_table(simulation: &Simulation) -> Reference {
     Reference::from_csv(&to_csv(simulation), "the run").expect("lsdc writes its own CSV")
+}
+
+/// The first line of a recorded reference begins so, then states its digits.
+pub(super) const HEADER_START: &str = "# lsdc test reference: ";
+
+/// The significant digits a reference's first line states, if it states them (a reference
+/// written by hand may not): `None` also when some values were written in full.
+fn stated_digits(text: &str) -> Option<usize> {
+    let line = text.lines().next()?.strip_prefix(HEADER_START)?;
+    let digits = line.strip_suffix(" significant digits")?;
+    digits.parse().ok()
 }
 
 pub(super) fn read_reference(path: &std::path::Path) -> Result<Reference, Stop> {

@@ -7,7 +7,7 @@ use std::fmt::Write;
 
 use serde::Serialize;
 
-use super::case::{as_table, compile_and_prepare, read_reference, run_failure};
+use super::case::{as_table, compile_and_prepare, read_reference, run_failure, HEADER_START};
 use super::compare::{compare, VariableError};
 use super::manifest::Case;
 use crate::diag::number::shortest;
@@ -99,19 +99,8 @@ fn to_csv(run: &Reference, columns: &[String], case: &Case) -> Result<String, St
     ))
 }
 
-/// The first line of a recorded reference begins so, then states its digits.
-pub(super) const HEADER_START: &str = "# lsdc test reference: ";
-
 /// What the first line adds when some values are written in full.
 const FINER_THAN_PRECISION: &str = ", in full where a tolerance is finer";
-
-/// The significant digits a reference's first line states, if it states them (a reference
-/// written by hand may not): `None` also when some values were written in full.
-pub(super) fn stated_digits(text: &str) -> Option<usize> {
-    let line = text.lines().next()?.strip_prefix(HEADER_START)?;
-    let digits = line.strip_suffix(" significant digits")?;
-    digits.parse().ok()
-}
 
 /// `x` rounded to `digits` significant digits, in its shortest form (`diag::number::shortest`);
 /// empty for NaN (no value).
