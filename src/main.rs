@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand};
 
 mod cli;
 
-use cli::shared::{asks_for_json, rejected_arguments, set_modes};
+use cli::shared::{asks_for_json, exit_code, rejected_arguments, set_modes};
 use cli::*;
 
 #[derive(Parser)]
@@ -86,7 +86,7 @@ fn main() -> ExitCode {
         Err(error) => return rejected_arguments(error),
     };
     set_modes(cli.quiet, json_asked);
-    match cli.command {
+    let command_code = match cli.command {
         Command::Check(args) => check::run(&args),
         Command::Tree(args) => tree::run(&args),
         Command::Assemble(args) => assemble::run(&args),
@@ -103,5 +103,6 @@ fn main() -> ExitCode {
         Command::Test(args) => test::run(&args),
         Command::Fmt(args) => fmt::run(&args),
         Command::Lsp => lsp::run(),
-    }
+    };
+    exit_code(command_code)
 }

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::shared::{json, out, printed, usage_error, usage_error_json, Format, LibraryArgs};
+use super::shared::{err, json, out, printed, usage_error, usage_error_json, Format, LibraryArgs};
 use lsdc::api::Program;
 use lsdc::diag::render;
 use lsdc::output::text;
@@ -32,7 +32,7 @@ pub fn run(args: &CheckArgs) -> ExitCode {
                 let mut entry = usage_error_json(&error.to_string());
                 entry["file"] = file.display().to_string().into();
                 reports.push(entry);
-                eprintln!("error: {error}");
+                err(&format!("error: {error}\n"));
                 (all_ok, unreadable) = (false, true);
                 continue;
             }
@@ -65,18 +65,18 @@ pub fn run(args: &CheckArgs) -> ExitCode {
 
 fn print_text_report(file: &Path, program: &Program) {
     let diagnostics = printed(program.diagnostics());
-    eprint!("{}", render::to_text(program.sources(), &diagnostics));
+    err(&render::to_text(program.sources(), &diagnostics));
     match program.mechanism() {
         Ok(mechanism) => out(&text::summary(file, &mechanism.summary())),
         Err(_) => {
             let errors = (program.diagnostics().iter())
                 .filter(|d| d.is_error())
                 .count();
-            eprintln!(
-                "{}: {errors} error{}",
+            err(&format!(
+                "{}: {errors} error{}\n",
                 file.display(),
                 if errors == 1 { "" } else { "s" }
-            );
+            ));
         }
     }
 }

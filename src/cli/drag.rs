@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 
 use super::shared::{
-    json, load_program, parse_sets, report_diagnostics, usage_error, write_output, Format,
+    err, json, load_program, parse_sets, report_diagnostics, usage_error, write_output, Format,
     LibraryArgs, SampleFormat,
 };
 use lsdc::kinematics::assembly::AssemblyOptions;
@@ -110,7 +110,7 @@ pub fn run(args: &DragArgs) -> ExitCode {
     let run = match run {
         Ok(run) => run,
         Err(message) => {
-            eprintln!("error: {message}");
+            err(&format!("error: {message}\n"));
             return ExitCode::from(1);
         }
     };
@@ -193,13 +193,13 @@ fn report_unreached(run: &DragRun) -> ExitCode {
     let Some((first, row)) = unreached.first() else {
         return ExitCode::SUCCESS;
     };
-    eprintln!(
-        "warning: {} of {} targets out of reach; the first, target {} at {:?}, is left {:.3e} away",
+    err(&format!(
+        "warning: {} of {} targets out of reach; the first, target {} at {:?}, is left {:.3e} away\n",
         unreached.len(),
         run.rows.len(),
         first + 1,
         row.target,
         row.distance
-    );
+    ));
     ExitCode::from(1)
 }

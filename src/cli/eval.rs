@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{json, out, prepare_file, usage_error, warn, Format, LibraryArgs};
+use super::shared::{err, json, out, prepare_file, usage_error, warn, Format, LibraryArgs};
 use lsdc::api::{evaluate, parse_states};
 
 #[derive(clap::Args)]
@@ -50,7 +50,7 @@ pub fn run(args: &EvalArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(error) => {
-            eprintln!("error: {error}");
+            err(&format!("error: {error}\n"));
             ExitCode::from(1)
         }
     }

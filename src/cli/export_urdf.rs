@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{prepare_file, warn, write_output, Format, LibraryArgs};
+use super::shared::{err, prepare_file, warn, write_output, Format, LibraryArgs};
 use lsdc::output::urdf;
 
 #[derive(clap::Args)]
@@ -35,7 +35,10 @@ pub fn run(args: &ExportUrdfArgs) -> ExitCode {
     let text = match urdf::export_urdf(&prepared.model, &name) {
         Ok(text) => text,
         Err(e) => {
-            eprintln!("error: {}", e.message(&file.display().to_string()));
+            err(&format!(
+                "error: {}\n",
+                e.message(&file.display().to_string())
+            ));
             return ExitCode::from(1);
         }
     };

@@ -3,19 +3,20 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::usage_error;
+use super::shared::{err, out, usage_error};
 use lsdc::diag::render;
 
 #[derive(clap::Args)]
 pub struct FmtArgs {
     #[arg(required = true)]
     paths: Vec<PathBuf>,
-    /// Change nothing; list the files that are not formatted and fail if there are any.
+    /// Change nothing; list the files that are not formatted, each with a unified diff of what
+    /// formatting would change, and fail if there are any.
     #[arg(long)]
     check: bool,
 }
 
-/// Formats each file in place, or with `--check` lists those that would change. Exit status 1
+/// Formats each file in place, or with `--check` lists those that would change, with a diff. Exit status 1
 /// when a file cannot be read or parsed, or (with `--check`) is not formatted.
 pub fn run(args: &FmtArgs) -> ExitCode {
     let files = match lsdc::ide::format::lsd_files(&args.paths) {
@@ -27,7 +28,7 @@ pub fn run(args: &FmtArgs) -> ExitCode {
         let text = match std::fs::read_to_string(&file) {
             Ok(text) => text,
             Err(e) => {
-                eprintln!("error: cannot read `{}`: {e}", file.display());
+                err(&format!("error: cannot read `{}`: {e}\n", file.display()));
                 failed = true;
                 continue;
             }
@@ -38,7 +39,7 @@ pub fn run(args: &FmtArgs) -> ExitCode {
         let formatted = match lsdc::ide::format::format(id, text) {
             Ok(formatted) => formatted,
             Err(diagnostics) => {
-                eprint!("{}", render::to_text(&sources, &diagnostics));
+                err(&render::to_text(&sources, &diagnostics));
                 failed = true;
                 continue;
             }
@@ -47,10 +48,17 @@ pub fn run(args: &FmtArgs) -> ExitCode {
             continue;
         }
         if args.check {
-            println!("{}: not formatted", file.display());
+            let name = file.display().to_string();
+            out(&format!("{name}: not formatted\n"));
+            out(&lsdc::ide::line_diff::unified(
+                text,
+                &formatted,
+                &name,
+                &format!("{name} (formatted)"),
+            ));
             failed = true;
         } else if let Err(e) = std::fs::write(&file, formatted) {
-            eprintln!("error: cannot write `{}`: {e}", file.display());
+            err(&format!("error: cannot write `{}`: {e}\n", file.display()));
             failed = true;
         }
     }

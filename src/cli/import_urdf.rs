@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{printed, usage_error, write_output};
+use super::shared::{err, printed, usage_error, write_output};
 use lsdc::diag::render;
 use lsdc::load::urdf::{import_urdf_at, ImportOptions};
 
@@ -38,13 +38,10 @@ pub fn run(args: &ImportUrdfArgs) -> ExitCode {
     let imported = match import_urdf_at(id, &name, &sources.file(id).text, &options) {
         Ok(imported) => imported,
         Err(error) => {
-            eprint!("{}", render::to_text(&sources, &[error]));
+            err(&render::to_text(&sources, &[error]));
             return ExitCode::from(1);
         }
     };
-    eprint!(
-        "{}",
-        render::to_text(&sources, &printed(&imported.warnings))
-    );
+    err(&render::to_text(&sources, &printed(&imported.warnings)));
     write_output(args.out.as_deref(), &imported.text)
 }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{out, usage_error};
+use super::shared::{err, out, usage_error};
 use lsdc::diag::render;
 
 #[derive(clap::Args)]
@@ -22,7 +22,7 @@ pub fn run(args: &ParseArgs) -> ExitCode {
     let (program, diagnostics) = lsdc::syntax::parser::parse(id, &sources.file(id).text);
     out(&lsdc::syntax::debug_tree::pretty(&format!("{program:?}")));
     out("\n");
-    eprint!("{}", render::to_text(&sources, &diagnostics));
+    err(&render::to_text(&sources, &diagnostics));
     if diagnostics.is_empty() {
         ExitCode::SUCCESS
     } else {

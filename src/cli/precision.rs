@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{json, prepare_file, usage_error, write_output, Format, LibraryArgs};
+use super::shared::{err, json, prepare_file, usage_error, write_output, Format, LibraryArgs};
 use super::simulate::IntegratorArg;
 use lsdc::api::{Prepared, SettingsChanges};
 use lsdc::studies::precision::{self, computed_reference, Method, Reference, Setting};
@@ -94,7 +94,7 @@ pub fn run(args: &PrecisionArgs) -> ExitCode {
     let table = match table {
         Ok(table) => table,
         Err(message) => {
-            eprintln!("error: {message}");
+            err(&format!("error: {message}\n"));
             return ExitCode::from(1);
         }
     };

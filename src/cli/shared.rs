@@ -6,6 +6,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 use clap::ValueEnum;
 
@@ -50,7 +51,7 @@ pub fn printed(diagnostics: &[Diagnostic]) -> Vec<Diagnostic> {
 /// A warning of the command line itself, on standard error (not under `--quiet`).
 pub fn warn(message: &str) {
     if !quiet() {
-        eprintln!("warning: {message}");
+        err(&format!("warning: {message}\n"));
     }
 }
 
@@ -84,10 +85,43 @@ impl LibraryArgs {
     }
 }
 
-/// Writes to standard output. A closed pipe (`lsdc tree f.lsd | head`) is not an error worth a
-/// message: the reader has what it wanted.
+/// The first write on standard output that failed (a full disk, `> /dev/full`), kept for
+/// [`exit_code`] to report once the command is over.
+static OUTPUT_FAILURE: Mutex<Option<String>> = Mutex::new(None);
+
+/// Writes to standard output, the one way the commands print their results. A failed write is
+/// kept and reported when the command ends ([`exit_code`]); a closed pipe (`lsdc tree f.lsd |
+/// head`) is not an error worth a message: the reader has what it wanted.
 pub fn out(text: &str) {
-    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    let mut stdout = std::io::stdout().lock();
+    let written = (stdout.write_all(text.as_bytes())).and_then(|()| stdout.flush());
+    if let Err(error) = written {
+        let mut failure = OUTPUT_FAILURE.lock().unwrap_or_else(|e| e.into_inner());
+        if error.kind() != std::io::ErrorKind::BrokenPipe && failure.is_none() {
+            *failure = Some(error.to_string());
+        }
+    }
+}
+
+/// Writes to standard error, the one way the commands print messages. A write that fails is
+/// left unsaid: there is nowhere left to say it, and a panic would replace the command's exit
+/// code with 101.
+pub fn err(text: &str) {
+    let _ = std::io::stderr().lock().write_all(text.as_bytes());
+}
+
+/// The command's exit code, unless a write on standard output failed: then the results are
+/// lost, which is said on standard error, with exit code 2 (as for an output file that cannot
+/// be written).
+pub fn exit_code(command_code: ExitCode) -> ExitCode {
+    let failure = OUTPUT_FAILURE.lock().unwrap_or_else(|e| e.into_inner());
+    match failure.as_deref() {
+        Some(error) => {
+            err(&format!("error: cannot write standard output: {error}\n"));
+            ExitCode::from(2)
+        }
+        None => command_code,
+    }
 }
 
 pub fn json(value: &impl serde::Serialize) -> String {
@@ -106,7 +140,7 @@ pub fn usage_error(message: &str) -> ExitCode {
 /// A usage error found after the results were printed: on standard error only, so that standard
 /// output keeps one JSON document.
 pub fn usage_error_after_results(message: &str) -> ExitCode {
-    eprintln!("error: {message}");
+    err(&format!("error: {message}\n"));
     ExitCode::from(2)
 }
 
@@ -158,7 +192,7 @@ pub fn report_diagnostics(program: &Program, diagnostics: &[Diagnostic], format:
     let diagnostics = program.in_context(diagnostics);
     let sources = program.sources();
     match format {
-        Format::Text => eprint!("{}", render::to_text(sources, &printed(&diagnostics))),
+        Format::Text => err(&render::to_text(sources, &printed(&diagnostics))),
         Format::Json => {
             let diagnostics = render::to_json_value(sources, &diagnostics);
             out(&json(

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 
 use super::shared::{
-    json, prepare_program, report_diagnostics, usage_error, usage_error_after_results, Format,
+    err, json, prepare_program, report_diagnostics, usage_error, usage_error_after_results, Format,
     LibraryArgs, SampleFormat,
 };
 use lsdc::api::{
@@ -179,7 +179,7 @@ pub fn run(args: &SimulateArgs) -> ExitCode {
     // A plot that cannot be drawn after the run (a run without outputs) does not change what
     // the run's exit code says.
     if let Err(message) = plotted {
-        eprintln!("error: {message}");
+        err(&format!("error: {message}\n"));
     }
     let report = &simulation.report;
     match (report.interrupted, &report.failure) {
@@ -310,14 +310,14 @@ fn print_run_report(
     match format {
         Format::Text => {
             report_diagnostics(program, &warnings, Format::Text);
-            eprint!("{}", lsdc::output::text::run_report(report));
+            err(&lsdc::output::text::run_report(report));
         }
         Format::Json => {
             let mut value = serde_json::to_value(report).unwrap_or_default();
             if !warnings.is_empty() {
                 value["warnings"] = render::to_json_value(program.sources(), &warnings);
             }
-            eprintln!("{}", json(&value));
+            err(&format!("{}\n", json(&value)));
         }
     }
 }

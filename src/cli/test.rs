@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{json, out, usage_error, usage_error_after_results, Format};
+use super::shared::{err, json, out, usage_error, usage_error_after_results, Format};
 use lsdc::testing::{self, calibrate, record, report, Case};
 
 #[derive(clap::Args)]
@@ -123,7 +123,7 @@ fn print_each<T: serde::Serialize>(
         Format::Json => out(&json(&done)),
     }
     let failures: Vec<&String> = results.iter().filter_map(|r| r.as_ref().err()).collect();
-    failures.iter().for_each(|f| eprintln!("error: {f}"));
+    failures.iter().for_each(|f| err(&format!("error: {f}\n")));
     match failures.is_empty() {
         true => ExitCode::SUCCESS,
         false => ExitCode::from(1),

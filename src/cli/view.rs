@@ -1,10 +1,9 @@
 //! `lsdc view FILE [--results run.json] [--port P | --export page.html]`.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{prepare_program, usage_error, Format, LibraryArgs};
+use super::shared::{out, prepare_program, usage_error, Format, LibraryArgs};
 use lsdc::view::scene::read_results;
 use lsdc::view::{server, Viewer};
 
@@ -91,8 +90,7 @@ fn serve(viewer: &mut Viewer, port: u16) -> ExitCode {
     let address = listener
         .local_addr()
         .map_or(format!("127.0.0.1:{port}"), |a| a.to_string());
-    println!("lsdc view: http://{address}/ (Ctrl+C to stop)");
-    let _ = std::io::stdout().flush();
+    out(&format!("lsdc view: http://{address}/ (Ctrl+C to stop)\n"));
     match server::serve(&listener, viewer, None) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => usage_error(&format!("the server stopped: {e}")),

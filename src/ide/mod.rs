@@ -7,6 +7,7 @@ pub mod analysis;
 mod complete;
 pub mod convert;
 pub mod format;
+pub mod line_diff;
 mod navigate;
 mod outline;
 pub mod server;

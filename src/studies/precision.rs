@@ -452,28 +452,68 @@ pub fn table(
     })
 }
 
-/// The cheapest (least CPU time) run that finished with a position error at most `accuracy`.
+/// Fewer repeats than this cannot tell a difference of CPU times from timing noise (identical
+/// runs measured 15.06 and 15.47 ms).
+pub const TIMED_REPEATS: usize = 3;
+
+/// The cheapest run that finished with a position error at most `accuracy`: the least CPU time
+/// (least of its repeats), unless the times cannot tell the runs apart (fewer than
+/// [`TIMED_REPEATS`] repeats, or times that differ by less than their spread, median − least):
+/// then the fewest function evaluations among those runs, and the message says why.
 pub fn recommend(measurements: &[Measurement], accuracy: f64) -> Recommendation {
-    let reached = |m: &&Measurement| {
-        m.failure.is_none() && m.errors.compared_outputs > 0 && m.errors.position <= accuracy
+    let reached: Vec<(usize, &Measurement)> = (measurements.iter().enumerate())
+        .filter(|(_, m)| {
+            m.failure.is_none() && m.errors.compared_outputs > 0 && m.errors.position <= accuracy
+        })
+        .collect();
+    let by_time = |a: &&(usize, &Measurement), b: &&(usize, &Measurement)| {
+        a.1.cpu_seconds_min.total_cmp(&b.1.cpu_seconds_min)
     };
-    let cheapest = (measurements.iter().enumerate())
-        .filter(|(_, m)| reached(m))
-        .min_by(|a, b| a.1.cpu_seconds_min.total_cmp(&b.1.cpu_seconds_min));
-    let message = match cheapest {
-        Some((_, m)) => format!(
-            "for positions within {accuracy:e}: {} at {} (error {:.1e}, {:.3} ms of CPU)",
-            m.integrator,
-            m.setting,
-            m.errors.position,
-            m.cpu_seconds_min * 1e3
-        ),
-        None => format!(
-            "no run reached positions within {accuracy:e}: tighten the tolerances or shorten the steps"
-        ),
+    let Some(&(_, fastest)) = reached.iter().min_by(by_time) else {
+        return Recommendation {
+            measurement: None,
+            message: format!(
+                "no run reached positions within {accuracy:e}: tighten the tolerances or shorten the steps"
+            ),
+        };
     };
+    let timed = fastest.repeats >= TIMED_REPEATS;
+    let spread = |m: &Measurement| m.cpu_seconds_median - m.cpu_seconds_min;
+    let indistinct: Vec<&(usize, &Measurement)> = (reached.iter())
+        .filter(|(_, m)| {
+            !timed || m.cpu_seconds_min - fastest.cpu_seconds_min <= spread(m).max(spread(fastest))
+        })
+        .collect();
+    let chosen = (indistinct.iter().copied())
+        .min_by(|a, b| {
+            (a.1.function_evaluations.cmp(&b.1.function_evaluations)).then(by_time(a, b))
+        })
+        .filter(|_| indistinct.len() > 1);
+    let (index, m) = *chosen.unwrap_or_else(|| reached.iter().min_by(by_time).expect("one"));
+    let mut message = format!(
+        "for positions within {accuracy:e}: {} at {} (error {:.1e}, {:.3} ms of CPU, {} function evaluations)",
+        m.integrator,
+        m.setting,
+        m.errors.position,
+        m.cpu_seconds_min * 1e3,
+        m.function_evaluations
+    );
+    if chosen.is_some() {
+        message += &match timed {
+            false => format!(
+                "; ranked by function evaluations, not by CPU time: {} repeat(s) cannot tell a \
+                 difference from timing noise (--repeats {TIMED_REPEATS} or more)",
+                m.repeats
+            ),
+            true => format!(
+                "; ranked by function evaluations, not by CPU time: {} runs that reached it have \
+                 CPU times closer than their spread (median − least over the repeats)",
+                indistinct.len()
+            ),
+        };
+    }
     Recommendation {
-        measurement: cheapest.map(|(i, _)| i),
+        measurement: Some(index),
         message,
     }
 }

@@ -152,12 +152,18 @@ fn compare_with_reference(
     if let Some(path) = &case.reference {
         let reference = read_reference(path)?;
         let errors = compare(&as_table(simulation), &reference, case).map_err(Stop::Setup)?;
-        record_comparison(errors, outcome);
+        let digits = std::fs::read_to_string(path)
+            .ok()
+            .and_then(|text| stated_digits(&text));
+        record_comparison(errors, digits, outcome);
     }
     Ok(())
 }
 
-fn record_comparison(mut errors: Vec<VariableError>, outcome: &mut Outcome) {
+/// The failure of a variable, and the reason when its difference is no larger than the
+/// rounding of a reference recorded to `digits` significant digits: the tolerance is finer
+/// than the reference can tell.
+fn record_comparison(mut errors: Vec<VariableError>, digits: Option<usize>, outcome: &mut Outcome) {
     errors.sort_by(|a, b| b.closeness(a));
     outcome.compared_variables = errors.len();
     outcome.worst = errors.first().cloned();
@@ -169,7 +175,30 @@ fn record_comparison(mut errors: Vec<VariableError>, outcome: &mut Outcome) {
             outcome.compared_variables,
             describe(worst)
         ));
+        let within_rounding = |e: &&VariableError| {
+            digits.is_some_and(|d| e.difference <= rounding_of(e.reference, d))
+        };
+        if let (Some(d), Some(e)) = (
+            digits,
+            outcome.failed_variables.iter().find(within_rounding),
+        ) {
+            outcome.failures.push(format!(
+                "`{}` differs by {:.3e}, no more than the reference's rounding to {d} significant \
+                 digits: record it again with a larger `precision` (17 keeps every bit), or \
+                 allow at least that much",
+                e.variable, e.difference
+            ));
+        }
     }
+}
+
+/// The largest change that rounding `x` to `digits` significant digits makes: half a unit of
+/// its last digit.
+fn rounding_of(x: f64, digits: usize) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return 0.0;
+    }
+    0.5 * 10f64.powi(x.abs().log10().floor() as i32 + 1 - digits as i32)
 }
 
 /// A variable's error in one line: where, by how much, against what.
@@ -239,6 +268,17 @@ pub(super) fn compile_and_prepare(case: &Case) -> Result<Prepared, String> {
 /// The outputs of a run as a table, the form references are read in.
 pub(super) fn as_table(simulation: &Simulation) -> Reference {
     Reference::from_csv(&to_csv(simulation), "the run").expect("lsdc writes its own CSV")
+}
+
+/// The first line of a recorded reference begins so, then states its digits.
+pub(super) const HEADER_START: &str = "# lsdc test reference: ";
+
+/// The significant digits a reference's first line states, if it states them (a reference
+/// written by hand may not): `None` also when some values were written in full.
+fn stated_digits(text: &str) -> Option<usize> {
+    let line = text.lines().next()?.strip_prefix(HEADER_START)?;
+    let digits = line.strip_suffix(" significant digits")?;
+    digits.parse().ok()
 }
 
 pub(super) fn read_reference(path: &std::path::Path) -> Result<Reference, Stop> {

@@ -7,7 +7,7 @@ use std::fmt::Write;
 
 use serde::Serialize;
 
-use super::case::{as_table, compile_and_prepare, read_reference, run_failure};
+use super::case::{as_table, compile_and_prepare, read_reference, run_failure, HEADER_START};
 use super::compare::{compare, VariableError};
 use super::manifest::Case;
 use crate::diag::number::shortest;
@@ -43,16 +43,24 @@ pub fn record(case: &Case) -> Result<Recorded, String> {
     }
     let run = as_table(&simulation);
     let columns = case.outputs.clone().unwrap_or_else(|| run.columns.clone());
-    let text = to_csv(&run, &columns, case.precision)?;
+    let text = to_csv(&run, &columns, case)?;
     let old = (path.exists().then(|| read_reference(path)).transpose()).map_err(String::from)?;
     let new = Reference::from_csv(&text, "the new reference").map_err(|e| e.to_string())?;
+    // The documented pattern puts references in a folder of their own (`expected/`).
+    if let Some(folder) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(folder)
+            .map_err(|e| format!("cannot create {}: {e}", folder.display()))?;
+    }
     std::fs::write(path, &text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(summary(case, path, old.as_ref(), &new))
 }
 
-/// The run's `columns` as CSV at `digits` significant digits, the precision stated in a first
-/// comment line.
-fn to_csv(run: &Reference, columns: &[String], digits: usize) -> Result<String, String> {
+/// The run's `columns` as CSV at the case's `precision` significant digits, the precision
+/// stated in a first comment line. A value whose rounding would use more than half of its
+/// variable's tolerance is written in full (shortest round-trip form) instead, so that the run
+/// just recorded passes against its reference; the first line then says so.
+fn to_csv(run: &Reference, columns: &[String], case: &Case) -> Result<String, String> {
+    let digits = case.precision;
     let indices = (columns.iter())
         .map(|name| {
             (run.columns.iter())
@@ -60,19 +68,39 @@ fn to_csv(run: &Reference, columns: &[String], digits: usize) -> Result<String, 
                 .ok_or_else(|| format!("the run has no output `{name}`"))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let mut text = format!("# lsdc test reference: {digits} significant digits\ntime");
+    let tolerances: Vec<_> = columns.iter().map(|c| case.tolerance_of(c)).collect();
+    let mut kept_in_full = false;
+    let mut body = String::from("time");
     for name in columns {
-        let _ = write!(text, ",{name}");
+        let _ = write!(body, ",{name}");
     }
     for (time, row) in &run.rows {
-        let _ = write!(text, "\n{}", rounded(*time, 15));
-        for &i in &indices {
-            let _ = write!(text, ",{}", rounded(row[i], digits));
+        let _ = write!(body, "\n{}", rounded(*time, 15));
+        for (&i, tolerance) in indices.iter().zip(&tolerances) {
+            let x = row[i];
+            let short = rounded(x, digits);
+            let rounding = (short.parse::<f64>().unwrap_or(x) - x).abs();
+            let cell = match rounding > 0.5 * tolerance.allowed(x.abs()) {
+                true => {
+                    kept_in_full = true;
+                    shortest(x)
+                }
+                false => short,
+            };
+            let _ = write!(body, ",{cell}");
         }
     }
-    text.push('\n');
-    Ok(text)
+    let finer = match kept_in_full {
+        true => FINER_THAN_PRECISION,
+        false => "",
+    };
+    Ok(format!(
+        "{HEADER_START}{digits} significant digits{finer}\n{body}\n"
+    ))
 }
+
+/// What the first line adds when some values are written in full.
+const FINER_THAN_PRECISION: &str = ", in full where a tolerance is finer";
 
 /// `x` rounded to `digits` significant digits, in its shortest form (`diag::number::shortest`);
 /// empty for NaN (no value).

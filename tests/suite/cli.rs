@@ -1,6 +1,7 @@
 //! The `lsdc` binary: exit codes, summary, JSON diagnostics, library search path.
 
 use crate::common::lsdc;
+use std::path::Path;
 use std::process::Command;
 
 #[test]
@@ -491,4 +492,133 @@ fn precision_compares_with_a_reference_file_and_refuses_bad_ones() {
     let (code, _, stderr) = lsdc(&["precision", "examples/pendulum.lsd", "--plot", "a.txt"]);
     assert_eq!(code, 2);
     assert!(stderr.contains(".svg"), "{stderr}");
+}
+
+/// `lsdc` with standard output or standard error on `/dev/full`, where every write fails.
+fn lsdc_on_full(args: &[&str], full_stdout: bool) -> (i32, String) {
+    let full = || std::fs::OpenOptions::new().write(true).open("/dev/full");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_lsdc"));
+    command.args(args).env_remove("LSD_PATH");
+    match full_stdout {
+        true => command.stdout(full().expect("/dev/full")),
+        false => command.stderr(full().expect("/dev/full")),
+    };
+    let output = command.output().expect("lsdc runs");
+    let message = String::from_utf8_lossy(&output.stderr).into_owned();
+    (output.status.code().unwrap_or(-1), message)
+}
+
+#[test]
+fn a_full_standard_output_is_an_error_and_a_full_standard_error_no_panic() {
+    if !Path::new("/dev/full").exists() {
+        eprintln!("skipped: this system has no /dev/full");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("lsdc-cli-full-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("folder");
+    let path = dir.join("path.csv");
+    std::fs::write(&path, "x,y\n0.5,0.5\n").expect("path");
+    let unformatted = dir.join("unformatted.lsd");
+    std::fs::write(&unformatted, "let   a = 1 ;\n").expect("program");
+    let (path, unformatted) = (path.to_str().unwrap(), unformatted.to_str().unwrap());
+    let pendulum = "examples/pendulum.lsd";
+    let commands: [&[&str]; 13] = [
+        &["check", pendulum],
+        &["tree", pendulum],
+        &["assemble", pendulum],
+        &["parse", pendulum],
+        &["compile", "--emit", "notation", pendulum],
+        &["export-urdf", pendulum],
+        &[
+            "statics",
+            "examples/delta_isir88_reduced.lsd",
+            "--actuate",
+            "A1.q",
+        ],
+        &["simulate", pendulum, "--format", "json"],
+        &["simulate", pendulum],
+        &["precision", pendulum, "--repeats", "1"],
+        &[
+            "drag",
+            "examples/four_bar.lsd",
+            "--point",
+            "coupler_point",
+            "--path",
+            path,
+        ],
+        &["import-urdf", "tests/fixtures/urdf/double_pendulum.urdf"],
+        &["fmt", "--check", unformatted],
+    ];
+    for args in commands {
+        let (code, stderr) = lsdc_on_full(args, true);
+        assert!(
+            code != 0 && stderr.contains("cannot write standard output"),
+            "{args:?}: exit {code}, {stderr}"
+        );
+        let (code, _) = lsdc_on_full(args, false);
+        assert!(
+            (0..=2).contains(&code),
+            "{args:?} with a full standard error: exit {code}"
+        );
+    }
+    let (code, _) = lsdc_on_full(&["check", "no/such/file.lsd"], false);
+    assert_eq!(code, 2, "an error not printed is still an error");
+}
+
+#[test]
+fn precision_ranks_by_time_only_over_enough_repeats() {
+    let args = |repeats| {
+        let mut args = vec![
+            "precision",
+            "examples/pendulum.lsd",
+            "--integrators",
+            "dopri5,dop853",
+        ];
+        args.extend(["--tolerances", "1e-8,1e-10", "--accuracy", "1e-5"]);
+        args.extend(["--format", "json", "--repeats", repeats]);
+        args.iter().map(|a| a.to_string()).collect::<Vec<_>>()
+    };
+    let run = |repeats| {
+        let args = args(repeats);
+        let (code, stdout, stderr) = lsdc(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert_eq!(code, 0, "{stderr}");
+        let table: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+        table
+    };
+    let table = run("1");
+    let message = table["recommendation"]["message"]
+        .as_str()
+        .expect("a message");
+    assert!(
+        message.contains("not by CPU time: 1 repeat(s) cannot tell"),
+        "{message}"
+    );
+    // Ranked by function evaluations: the fewest among the runs that reached the accuracy.
+    let measurements = table["measurements"].as_array().expect("measurements");
+    let chosen = table["recommendation"]["measurement"]
+        .as_u64()
+        .expect("one") as usize;
+    let evaluations = |m: &serde_json::Value| m["function_evaluations"].as_u64().expect("a count");
+    let fewest = (measurements.iter())
+        .filter(|m| m["errors"]["position"].as_f64().expect("an error") <= 1e-5)
+        .map(evaluations)
+        .min();
+    assert_eq!(Some(evaluations(&measurements[chosen])), fewest);
+}
+
+#[test]
+fn fmt_check_shows_what_formatting_would_change() {
+    let dir = std::env::temp_dir().join(format!("lsdc-cli-fmt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("folder");
+    let file = dir.join("spaced.lsd");
+    let text = "let a = 1 ;\nlet   b = 2 ;\nlet c = 3 ;\n";
+    std::fs::write(&file, text).expect("program");
+    let name = file.to_str().expect("utf-8");
+    let (code, stdout, stderr) = lsdc(&["fmt", "--check", name]);
+    assert_eq!(code, 1, "{stderr}");
+    let expected = format!(
+        "{name}: not formatted\n--- {name}\n+++ {name} (formatted)\n@@ -1,3 +1,3 @@\n let a = 1 ;\n-let   b = 2 ;\n+let b = 2 ;\n let c = 3 ;\n"
+    );
+    assert_eq!(stdout, expected);
+    assert_eq!(std::fs::read_to_string(&file).expect("kept"), text);
 }

@@ -252,3 +252,45 @@ fn the_manifest_of_the_documentation_reads() {
     assert_eq!(four_bar.tolerance_of("rocker.q'").measure, Measure::L2);
     assert_eq!(four_bar.checks.mobility, Some(1));
 }
+
+#[test]
+fn update_creates_the_references_folder_and_records_what_passes_a_fine_tolerance() {
+    let dir = scratch("fine");
+    let program = std::fs::canonicalize("examples/pendulum.lsd").expect("the example");
+    let text = format!(
+        "[[case]]\nname = \"pendulum\"\nprogram = {:?}\nreference = \"expected/pendulum.csv\"\nrelative = 1e-14\nabsolute = 1e-14\n",
+        program.display().to_string()
+    );
+    std::fs::write(dir.join("lsdtest.toml"), text).expect("writes");
+    let (code, stdout, stderr) = lsdc(&["test", "--update", arg(&dir)]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    let reference = dir.join("expected/pendulum.csv");
+    let recorded = std::fs::read_to_string(&reference).expect("recorded in expected/");
+    assert!(
+        recorded.starts_with(
+            "# lsdc test reference: 12 significant digits, in full where a tolerance is finer\n"
+        ),
+        "{recorded}"
+    );
+    let (code, stdout, _) = lsdc(&["test", arg(&dir)]);
+    assert_eq!(code, 0, "the reference just recorded passes: {stdout}");
+
+    // The same values rounded to 12 digits: the failure says that the rounding is the cause.
+    let rounded: Vec<String> = (recorded.lines().skip(1))
+        .map(|line| match line.starts_with("time") {
+            true => line.to_string(),
+            false => (line.split(','))
+                .map(|cell| format!("{:.11e}", cell.parse::<f64>().expect("a number")))
+                .collect::<Vec<_>>()
+                .join(","),
+        })
+        .collect();
+    let text = "# lsdc test reference: 12 significant digits\n".to_string() + &rounded.join("\n");
+    std::fs::write(&reference, text).expect("writes");
+    let (code, stdout, _) = lsdc(&["test", arg(&dir)]);
+    assert_eq!(code, 1, "{stdout}");
+    assert!(
+        stdout.contains("no more than the reference's rounding to 12 significant digits"),
+        "{stdout}"
+    );
+}
