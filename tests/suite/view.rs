@@ -487,3 +487,79 @@ fn the_page_drags_by_the_penalty_method_too() {
     }
     assert_eq!(moved.coordinates, request.coordinates);
 }
+
+#[test]
+fn a_title_cannot_end_the_pages_script_or_fill_its_placeholders() {
+    let title = "a<!--<script>b</script>&\u{2028}{{three}}";
+    let mechanism = crate::common::programs::mechanism("four_bar", &[]);
+    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default()).unwrap();
+    let html = Viewer::new(mechanism, prepared, title).unwrap().page(false);
+    let plain = viewer("four_bar").page(false);
+    assert!(!html.contains("<!--"), "the title opens a comment");
+    assert_eq!(
+        html.matches("<script").count(),
+        plain.matches("<script").count()
+    );
+    assert_eq!(html.matches("window.THREE={").count(), 1);
+    let tag = "<script type=\"application/json\" id=\"scene-data\">";
+    let start = html.find(tag).unwrap() + tag.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let scene: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+    assert_eq!(scene["title"], title);
+}
+
+/// A served viewer of the four-bar that answers `requests` requests, and its address.
+fn serving(requests: usize) -> (String, std::thread::JoinHandle<()>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let handle = std::thread::spawn(move || {
+        server::serve(&listener, &mut viewer("four_bar"), Some(requests)).unwrap()
+    });
+    (address, handle)
+}
+
+#[test]
+fn idle_connections_hold_up_no_request() {
+    let (address, server) = serving(2);
+    // The page's first request, so that building the viewer is not timed.
+    let (status, _) = http(&address, "GET /api/scene HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    let idle: Vec<TcpStream> = (0..100)
+        .map(|_| TcpStream::connect(&address).unwrap())
+        .collect();
+    let start = std::time::Instant::now();
+    let (status, _) = http(&address, "GET /api/scene HTTP/1.1\r\n\r\n");
+    let waited = start.elapsed().as_secs_f64();
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    // One at a time, each idle connection held the others up for its whole timeout.
+    assert!(waited < 2.0, "answered after {waited} s");
+    drop(idle);
+    server.join().unwrap();
+}
+
+#[test]
+fn a_served_simulation_is_bounded() {
+    let (address, server) = serving(2);
+    let start = std::time::Instant::now();
+    let (status, error) = http(
+        &address,
+        "GET /api/simulate?duration=499999 HTTP/1.1\r\n\r\n",
+    );
+    assert_eq!(status, "HTTP/1.1 400 Bad Request", "{error}");
+    assert!(
+        error.contains("frames") && error.contains("--results"),
+        "{error}"
+    );
+    // Within the frames, the steps are bounded: the run stops with its failure said.
+    let (status, animation) = http(&address, "GET /api/simulate?duration=4000 HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    let animation: serde_json::Value = serde_json::from_str(&animation).unwrap();
+    let failure = animation["failure"].as_str().unwrap_or_default();
+    assert!(
+        failure.contains(&format!("{} steps", server::MAX_STEPS)),
+        "{failure}"
+    );
+    let took = start.elapsed().as_secs_f64();
+    assert!(took < 30.0, "{took} s");
+    server.join().unwrap();
+}
