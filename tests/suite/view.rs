@@ -297,9 +297,9 @@ const CHROMIUM: &str = "/usr/bin/chromium";
 /// that takes more than a few seconds over a frame, as it can on a loaded machine; it is off.
 fn chromium(url: &str, virtual_ms: u32, flags: &[&str]) -> Option<std::process::Output> {
     if !std::path::Path::new(CHROMIUM).exists() {
-        eprintln!(
-            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
-        );
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
         return None;
     }
     // A profile of its own: two instances sharing one hand their page over to the first.
@@ -378,9 +378,9 @@ fn picture(path: &std::path::Path) -> (usize, f64) {
 #[test]
 fn the_exported_delta_opens_offline_and_animates_in_chromium() {
     if !std::path::Path::new(CHROMIUM).exists() {
-        eprintln!(
-            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
-        );
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
         return;
     }
     let page = scratch("delta.html");
@@ -425,9 +425,9 @@ fn the_exported_delta_opens_offline_and_animates_in_chromium() {
 #[test]
 fn a_body_dragged_in_chromium_moves() {
     if !std::path::Path::new(CHROMIUM).exists() {
-        eprintln!(
-            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
-        );
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
         return;
     }
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
@@ -562,4 +562,64 @@ fn a_served_simulation_is_bounded() {
     let took = start.elapsed().as_secs_f64();
     assert!(took < 30.0, "{took} s");
     server.join().unwrap();
+}
+
+/// The page of the pendulum's run at `tolerance`, and the plot it drew in Chromium (`None`
+/// where Chromium is missing, after saying so).
+fn plotted(tolerance: &str) -> Option<Vec<serde_json::Value>> {
+    if !std::path::Path::new(CHROMIUM).exists() {
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
+        return None;
+    }
+    let run = scratch(&format!("pendulum-{tolerance}.json"));
+    let page = scratch(&format!("pendulum-{tolerance}.html"));
+    let (code, _, err) = lsdc(&[
+        "simulate",
+        "examples/pendulum.lsd",
+        "--tolerance",
+        tolerance,
+        "--format",
+        "json",
+        "-o",
+        run.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = lsdc(&[
+        "view",
+        "examples/pendulum.lsd",
+        "--results",
+        run.to_str().unwrap(),
+        "--export",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let status = page_status(&format!("file://{}", page.display()), 1000)?;
+    Some(status["plot"].as_array().expect("the plot drawn").clone())
+}
+
+#[test]
+fn a_conserved_energy_is_plotted_flat_with_its_value() {
+    // The pendulum's energy, −m g l cos 60° = −2.943 J, kept to 1e-11 or so at tolerance 1e-12.
+    let Some(plot) = plotted("1e-12") else {
+        return;
+    };
+    let energy = plot.iter().find(|s| s["name"] == "energy").expect("energy");
+    assert_eq!(energy["flat"], true, "{energy}");
+    let value: f64 = energy["low"].as_str().unwrap().parse().unwrap();
+    assert!((value + 2.943).abs() < 1e-8, "{energy}");
+    // The swing angle varies: its axis spans its range.
+    assert!(
+        plot.iter()
+            .any(|s| s["name"] == "swing.q" && s["flat"] == false),
+        "{plot:?}"
+    );
+    // At tolerance 1e-7 the energy drifts by 7e-7 of itself: shown, its ends told apart.
+    let Some(plot) = plotted("1e-7") else {
+        return;
+    };
+    let energy = plot.iter().find(|s| s["name"] == "energy").expect("energy");
+    assert_eq!(energy["flat"], false, "{energy}");
+    assert_ne!(energy["low"], energy["high"], "{energy}");
 }
