@@ -49,12 +49,10 @@ pub fn serve(
         let stopping = Arc::clone(&stopping);
         std::thread::spawn(move || accept(&accepting, &jobs, &stopping))
     };
-    let mut answered = 0;
-    for job in queue.iter() {
+    for (answered, job) in queue.iter().enumerate() {
         // A client that hung up is its own problem, not the server's.
         let _ = job.answer.send(respond(&job.request, viewer));
-        answered += 1;
-        if requests.is_some_and(|n| answered >= n) {
+        if requests.is_some_and(|n| answered + 1 >= n) {
             break;
         }
     }
