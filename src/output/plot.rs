@@ -1,5 +1,5 @@
-//! Plots of a simulation over time, as SVG or PNG: the declared coordinates in the upper panel
-//! and the energy (kinetic, and total when the potential is known) in the lower one.
+//! Plots of a simulation over time, as SVG or PNG: the declared coordinates and the program's
+//! named outputs in the upper panel and the energy (kinetic, and total when the potential is known) in the lower one.
 //!
 //! Text is laid out (and, in PNGs, rasterised) with `ab_glyph` from a font embedded in the
 //! binary, so plotting needs no system fonts, fontconfig or freetype. The font is DejaVu Sans
@@ -338,11 +338,13 @@ where
     let error = PlotError::drawing::<DB::ErrorType>;
     root.fill(&WHITE).map_err(error)?;
     let samples = &simulation.samples;
-    let coordinates: Vec<Line> = simulation
-        .coordinate_names
-        .iter()
-        .enumerate()
+    // The upper panel: the declared coordinates, then the program's named outputs.
+    let coordinates: Vec<Line> = (simulation.coordinate_names.iter().enumerate())
         .map(|(i, name)| Line::new(name, samples, |s| s.coordinates.get(i).copied()))
+        .chain(
+            (simulation.output_names.iter().enumerate())
+                .map(|(i, name)| Line::new(name, samples, |s| s.outputs.get(i).copied())),
+        )
         .collect();
     let mut energy = vec![Line::new("kinetic", samples, |s| Some(s.kinetic_energy))];
     if samples.iter().any(|s| s.potential_energy.is_some()) {
@@ -390,10 +392,15 @@ where
         legend_column,
         legend_columns: columns as usize,
     };
+    let (title, quantity) = if simulation.output_names.is_empty() {
+        ("Coordinates", "coordinate")
+    } else {
+        ("Coordinates and outputs", "value")
+    };
     panel(
         &upper,
-        "Coordinates",
-        "coordinate",
+        title,
+        quantity,
         &coordinate_axis,
         &coordinates,
         &layout,

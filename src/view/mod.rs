@@ -48,14 +48,18 @@ impl Viewer {
     /// Runs the simulation, for `duration` seconds when given (else the program's), and
     /// returns its animation.
     pub fn simulate(&mut self, duration: Option<f64>) -> Result<Animation, String> {
-        let saved = self.prepared.settings.clone();
-        let changes = SettingsChanges {
+        self.simulate_with(&SettingsChanges {
             duration,
             ..SettingsChanges::default()
-        };
+        })
+    }
+
+    /// Runs the simulation with the program's settings changed by `changes`.
+    pub fn simulate_with(&mut self, changes: &SettingsChanges) -> Result<Animation, String> {
+        let saved = self.prepared.settings.clone();
         self.prepared
             .settings
-            .apply(&changes)
+            .apply(changes)
             .map_err(|e| e.to_string())?;
         let simulation = run_with(&self.prepared, &RunOptions::default(), &mut |_| {});
         self.prepared.settings = saved;

@@ -32,11 +32,25 @@ pub fn three_script() -> Option<String> {
     ))
 }
 
-/// JSON that can sit inside a `<script>` element: `</` is written `<\/`.
-fn embedded_json(value: &impl Serialize) -> String {
-    serde_json::to_string(value)
-        .unwrap_or_else(|_| "null".to_string())
-        .replace("</", "<\\/")
+/// JSON that can sit inside a `<script>` element, whatever its strings hold: `<`, `>` and `&`
+/// (which could close the element or open `<!--`, the HTML parser's escaped state) and U+2028/9
+/// (line terminators in older JavaScript) are written as `\uXXXX` escapes. Outside strings,
+/// serde_json writes none of them, so the escapes land only inside strings, where they mean
+/// the same characters.
+pub fn embedded_json(value: &impl Serialize) -> String {
+    let json = serde_json::to_string(value).unwrap_or_else(|_| "null".to_string());
+    let mut escaped = String::with_capacity(json.len());
+    for c in json.chars() {
+        match c {
+            '<' => escaped.push_str("\\u003c"),
+            '>' => escaped.push_str("\\u003e"),
+            '&' => escaped.push_str("\\u0026"),
+            '\u{2028}' => escaped.push_str("\\u2028"),
+            '\u{2029}' => escaped.push_str("\\u2029"),
+            c => escaped.push(c),
+        }
+    }
+    escaped
 }
 
 /// How the page was made: served (`live`: it can run simulations and drag through the server)
@@ -49,13 +63,48 @@ struct Mode {
 /// The page showing `scene`, playing `animation` if there is one.
 pub fn page(scene: &Scene, animation: Option<&Animation>, live: bool) -> String {
     let three = three_script().unwrap_or_else(|| "window.THREE=null;".to_string());
-    TEMPLATE
-        .replace("{{title}}", &html_escape(&scene.title))
-        .replace("{{scene}}", &embedded_json(scene))
-        .replace("{{animation}}", &embedded_json(&animation))
-        .replace("{{mode}}", &embedded_json(&Mode { live }))
-        .replace("{{viewer}}", VIEWER)
-        .replace("{{three}}", &three)
+    fill(
+        TEMPLATE,
+        &[
+            ("title", html_escape(&scene.title)),
+            ("scene", embedded_json(scene)),
+            ("animation", embedded_json(&animation)),
+            ("mode", embedded_json(&Mode { live })),
+            ("viewer", VIEWER.to_string()),
+            ("three", three),
+        ],
+    )
+}
+
+/// The template with each `{{name}}` replaced by its value, in one pass: a value is never
+/// searched for placeholders (a title `{{three}}` stays a title).
+fn fill(template: &str, values: &[(&str, String)]) -> String {
+    let mut page =
+        String::with_capacity(template.len() + values.iter().map(|(_, v)| v.len()).sum::<usize>());
+    let mut rest = template;
+    while let Some(start) = rest.find("{{") {
+        let name_end = rest[start..].find("}}").map(|end| start + end);
+        let value = name_end.and_then(|end| {
+            let name = &rest[start + 2..end];
+            values
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map(|(_, v)| (v, end + 2))
+        });
+        match value {
+            Some((value, after)) => {
+                page.push_str(&rest[..start]);
+                page.push_str(value);
+                rest = &rest[after..];
+            }
+            None => {
+                page.push_str(&rest[..start + 2]);
+                rest = &rest[start + 2..];
+            }
+        }
+    }
+    page.push_str(rest);
+    page
 }
 
 fn html_escape(text: &str) -> String {

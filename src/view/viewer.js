@@ -309,6 +309,22 @@
   }
   seriesList.addEventListener("change", () => drawPlot());
   document.querySelectorAll("input[name=plot-mode]").forEach((r) => r.addEventListener("change", () => drawPlot()));
+  // A series' vertical axis. One whose relative variation is below `FLAT` (an energy conserved
+  // to round-off, drift 2e-10) is drawn flat with its value, not as magnified noise or a
+  // "decline" from 172 to 172; any other spans its values, labelled with the digits that tell
+  // its ends apart.
+  const FLAT = 1e-9;
+  function valueAxis(values) {
+    const lo = Math.min(...values), hi = Math.max(...values);
+    const magnitude = Math.max(Math.abs(lo), Math.abs(hi));
+    const variation = magnitude > 0 ? (hi - lo) / magnitude : 0;
+    if (!(hi - lo > FLAT * magnitude)) {
+      const mean = values.reduce((a, b) => a + b, 0) / values.length;
+      return { flat: true, lo, hi, variation, low: mean.toPrecision(10), high: mean.toPrecision(10) };
+    }
+    const digits = Math.min(Math.max(Math.ceil(Math.log10(magnitude / (hi - lo))) + 2, 3), 15);
+    return { flat: false, lo, hi, variation, low: lo.toPrecision(digits), high: hi.toPrecision(digits) };
+  }
   function drawPlot() {
     const width = plot.clientWidth, height = plot.clientHeight;
     plot.width = width;
@@ -317,6 +333,7 @@
     g.clearRect(0, 0, width, height);
     if (!animation || animation.times.length < 2) return;
     const chosen = Array.from(seriesList.selectedOptions).map((o) => animation.series[+o.value]);
+    status.plot = [];
     if (chosen.length === 0) return;
     const normalised = document.querySelector("input[name=plot-mode]:checked").value === "normalised";
     const times = animation.times, t0 = times[0], t1 = times[times.length - 1];
@@ -328,22 +345,22 @@
     chosen.forEach((series, k) => {
       const band = normalised ? 0 : k;
       const top = 5 + band * bandHeight, bottom = top + bandHeight - 8;
-      const lo = Math.min(...series.values), hi = Math.max(...series.values);
-      // A series constant to round-off is drawn flat, not as magnified noise.
-      const span = Math.max(hi - lo, 1e-9 * Math.max(Math.abs(lo), Math.abs(hi)), 1e-300);
-      const y = (v) => bottom - (v - lo) / span * (bottom - top);
+      const axis = valueAxis(series.values);
+      const y = (v) => (axis.flat ? (top + bottom) / 2 : bottom - (v - axis.lo) / (axis.hi - axis.lo) * (bottom - top));
       g.strokeStyle = "#" + palette[k % palette.length].toString(16).padStart(6, "0");
       g.beginPath();
       series.values.forEach((v, i) => (i ? g.lineTo(x(times[i]), y(v)) : g.moveTo(x(times[i]), y(v))));
       g.stroke();
       g.fillStyle = g.strokeStyle;
-      const label = normalised ? series.name : `${series.name} [${lo.toPrecision(3)}, ${hi.toPrecision(3)}]`;
+      const range = axis.flat ? `= ${axis.low} (constant to ${axis.variation.toExponential(0)})` : `[${axis.low}, ${axis.high}]`;
+      const label = normalised ? series.name : `${series.name} ${range}`;
       g.fillText(label, left + 4, top + 10 + (normalised ? 12 * k : 0));
       if (!normalised) {
         g.fillStyle = "#666";
-        g.fillText(hi.toPrecision(3), 4, top + 8);
-        g.fillText(lo.toPrecision(3), 4, bottom);
+        g.fillText(axis.flat ? axis.low : axis.high, 4, axis.flat ? (top + bottom) / 2 : top + 8);
+        if (!axis.flat) g.fillText(axis.low, 4, bottom);
       }
+      status.plot.push({ name: series.name, flat: axis.flat, low: axis.low, high: axis.high });
     });
     g.strokeStyle = "#000";
     g.beginPath();

@@ -56,7 +56,7 @@ fn libraries_in(cache: &Path) -> Vec<PathBuf> {
 #[test]
 fn compiled_runs_give_the_interpreted_motion_and_reuse_the_cache() {
     let Some(compiler) = c_compiler() else {
-        println!("no C compiler found (CC, cc, gcc, clang): --compiled is not checked");
+        crate::common::skip("no C compiler found (CC, cc, gcc, clang), --compiled is not checked");
         return;
     };
     let cache = fresh_cache("reuse");
@@ -128,7 +128,7 @@ fn loops_and_quaternion_joints_are_declined_by_name() {
 #[test]
 fn non_conservative_efforts_are_said_to_leave_the_balance_out() {
     let Some(compiler) = c_compiler() else {
-        println!("no C compiler found (CC, cc, gcc, clang): --compiled is not checked");
+        crate::common::skip("no C compiler found (CC, cc, gcc, clang), --compiled is not checked");
         return;
     };
     let cache = fresh_cache("work");

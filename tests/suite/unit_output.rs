@@ -85,6 +85,27 @@ mod plot {
     }
 
     #[test]
+    fn the_programs_named_outputs_are_plotted() {
+        let mut simulation = simulation(101, true);
+        simulation.output_names = vec!["tip_height".to_string()];
+        for sample in &mut simulation.samples {
+            sample.outputs = vec![1.5 * sample.coordinates[0].sin()];
+        }
+        let svg = temp_path("outputs.svg");
+        plot(&simulation, &svg).unwrap();
+        let text = std::fs::read_to_string(&svg).unwrap();
+        std::fs::remove_file(svg).unwrap();
+        assert!(text.contains("tip_height"), "the legend names the output");
+        assert!(text.contains("Coordinates and outputs"));
+        // Its line: one polyline more than the run without outputs draws.
+        let without = temp_path("no-outputs.svg");
+        plot(&self::simulation(101, true), &without).unwrap();
+        let plain = std::fs::read_to_string(&without).unwrap();
+        std::fs::remove_file(without).unwrap();
+        assert!(text.matches("<polyline").count() > plain.matches("<polyline").count());
+    }
+
+    #[test]
     fn degenerate_runs_still_plot() {
         // One output, no potential: every range is a single value.
         let path = temp_path("single.png");

@@ -297,9 +297,9 @@ const CHROMIUM: &str = "/usr/bin/chromium";
 /// that takes more than a few seconds over a frame, as it can on a loaded machine; it is off.
 fn chromium(url: &str, virtual_ms: u32, flags: &[&str]) -> Option<std::process::Output> {
     if !std::path::Path::new(CHROMIUM).exists() {
-        eprintln!(
-            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
-        );
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
         return None;
     }
     // A profile of its own: two instances sharing one hand their page over to the first.
@@ -378,9 +378,9 @@ fn picture(path: &std::path::Path) -> (usize, f64) {
 #[test]
 fn the_exported_delta_opens_offline_and_animates_in_chromium() {
     if !std::path::Path::new(CHROMIUM).exists() {
-        eprintln!(
-            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
-        );
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
         return;
     }
     let page = scratch("delta.html");
@@ -425,9 +425,9 @@ fn the_exported_delta_opens_offline_and_animates_in_chromium() {
 #[test]
 fn a_body_dragged_in_chromium_moves() {
     if !std::path::Path::new(CHROMIUM).exists() {
-        eprintln!(
-            "skipped: no {CHROMIUM}; run tools/install-chromium to test the page in a browser"
-        );
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
         return;
     }
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
@@ -486,4 +486,140 @@ fn the_page_drags_by_the_penalty_method_too() {
         assert!((world(penalty, &local) - world(exact, &local)).norm() < 1e-5);
     }
     assert_eq!(moved.coordinates, request.coordinates);
+}
+
+#[test]
+fn a_title_cannot_end_the_pages_script_or_fill_its_placeholders() {
+    let title = "a<!--<script>b</script>&\u{2028}{{three}}";
+    let mechanism = crate::common::programs::mechanism("four_bar", &[]);
+    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default()).unwrap();
+    let html = Viewer::new(mechanism, prepared, title).unwrap().page(false);
+    let plain = viewer("four_bar").page(false);
+    assert!(!html.contains("<!--"), "the title opens a comment");
+    assert_eq!(
+        html.matches("<script").count(),
+        plain.matches("<script").count()
+    );
+    assert_eq!(html.matches("window.THREE={").count(), 1);
+    let tag = "<script type=\"application/json\" id=\"scene-data\">";
+    let start = html.find(tag).unwrap() + tag.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let scene: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+    assert_eq!(scene["title"], title);
+}
+
+/// A served viewer of the four-bar that answers `requests` requests, and its address.
+fn serving(requests: usize) -> (String, std::thread::JoinHandle<()>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let handle = std::thread::spawn(move || {
+        server::serve(&listener, &mut viewer("four_bar"), Some(requests)).unwrap()
+    });
+    (address, handle)
+}
+
+#[test]
+fn idle_connections_hold_up_no_request() {
+    let (address, server) = serving(2);
+    // The page's first request, so that building the viewer is not timed.
+    let (status, _) = http(&address, "GET /api/scene HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    let idle: Vec<TcpStream> = (0..100)
+        .map(|_| TcpStream::connect(&address).unwrap())
+        .collect();
+    let start = std::time::Instant::now();
+    let (status, _) = http(&address, "GET /api/scene HTTP/1.1\r\n\r\n");
+    let waited = start.elapsed().as_secs_f64();
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    // One at a time, each idle connection held the others up for its whole timeout.
+    assert!(waited < 2.0, "answered after {waited} s");
+    drop(idle);
+    server.join().unwrap();
+}
+
+#[test]
+fn a_served_simulation_is_bounded() {
+    let (address, server) = serving(2);
+    let start = std::time::Instant::now();
+    let (status, error) = http(
+        &address,
+        "GET /api/simulate?duration=499999 HTTP/1.1\r\n\r\n",
+    );
+    assert_eq!(status, "HTTP/1.1 400 Bad Request", "{error}");
+    assert!(
+        error.contains("frames") && error.contains("--results"),
+        "{error}"
+    );
+    // Within the frames, the steps are bounded: the run stops with its failure said.
+    let (status, animation) = http(&address, "GET /api/simulate?duration=4000 HTTP/1.1\r\n\r\n");
+    assert_eq!(status, "HTTP/1.1 200 OK");
+    let animation: serde_json::Value = serde_json::from_str(&animation).unwrap();
+    let failure = animation["failure"].as_str().unwrap_or_default();
+    assert!(
+        failure.contains(&format!("{} steps", server::MAX_STEPS)),
+        "{failure}"
+    );
+    let took = start.elapsed().as_secs_f64();
+    assert!(took < 30.0, "{took} s");
+    server.join().unwrap();
+}
+
+/// The page of the pendulum's run at `tolerance`, and the plot it drew in Chromium (`None`
+/// where Chromium is missing, after saying so).
+fn plotted(tolerance: &str) -> Option<Vec<serde_json::Value>> {
+    if !std::path::Path::new(CHROMIUM).exists() {
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
+        return None;
+    }
+    let run = scratch(&format!("pendulum-{tolerance}.json"));
+    let page = scratch(&format!("pendulum-{tolerance}.html"));
+    let (code, _, err) = lsdc(&[
+        "simulate",
+        "examples/pendulum.lsd",
+        "--tolerance",
+        tolerance,
+        "--format",
+        "json",
+        "-o",
+        run.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = lsdc(&[
+        "view",
+        "examples/pendulum.lsd",
+        "--results",
+        run.to_str().unwrap(),
+        "--export",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let status = page_status(&format!("file://{}", page.display()), 1000)?;
+    Some(status["plot"].as_array().expect("the plot drawn").clone())
+}
+
+#[test]
+fn a_conserved_energy_is_plotted_flat_with_its_value() {
+    // The pendulum's energy, −m g l cos 60° = −2.943 J, kept to 1e-11 or so at tolerance 1e-12.
+    let Some(plot) = plotted("1e-12") else {
+        return;
+    };
+    let energy = plot.iter().find(|s| s["name"] == "energy").expect("energy");
+    assert_eq!(energy["flat"], true, "{energy}");
+    let value: f64 = energy["low"].as_str().unwrap().parse().unwrap();
+    assert!((value + 2.943).abs() < 1e-8, "{energy}");
+    // The swing angle varies: its axis spans its range.
+    assert!(
+        plot.iter()
+            .any(|s| s["name"] == "swing.q" && s["flat"] == false),
+        "{plot:?}"
+    );
+    // At tolerance 1e-7 the energy drifts by 7e-7 of itself: shown, its ends told apart.
+    let Some(plot) = plotted("1e-7") else {
+        return;
+    };
+    let energy = plot.iter().find(|s| s["name"] == "energy").expect("energy");
+    assert_eq!(energy["flat"], false, "{energy}");
+    assert_ne!(energy["low"], energy["high"], "{energy}");
 }

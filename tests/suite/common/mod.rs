@@ -24,6 +24,16 @@ pub fn example_paths() -> Vec<std::path::PathBuf> {
     found
 }
 
+/// A test whose tool is missing says so and passes (a developer's machine), or fails where the
+/// environment variable `CI` is set: CI installs every tool (`.ci/run`), so a skip there is a
+/// fault, never a silent pass.
+pub fn skip(reason: &str) {
+    if std::env::var_os("CI").is_some() {
+        panic!("CI is set but {reason}: `.ci/run` installs it");
+    }
+    eprintln!("SKIPPED: {reason}");
+}
+
 /// The first C compiler found: `CC`, `cc`, `gcc`, `clang`.
 pub fn c_compiler() -> Option<String> {
     let candidates = std::env::var("CC")
