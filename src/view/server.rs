@@ -15,7 +15,7 @@ use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use super::Viewer;
-use crate::simulate::settings::SettingsChanges;
+use crate::prepare::settings::SettingsChanges;
 
 /// The largest request body read (a drag request is a few hundred bytes).
 const MAX_BODY: usize = 1 << 20;

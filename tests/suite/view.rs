@@ -492,7 +492,7 @@ fn the_page_drags_by_the_penalty_method_too() {
 fn a_title_cannot_end_the_pages_script_or_fill_its_placeholders() {
     let title = "a<!--<script>b</script>&\u{2028}{{three}}";
     let mechanism = crate::common::programs::mechanism("four_bar", &[]);
-    let prepared = lsdc::simulate::prepare::prepare(&mechanism, &[], &Default::default()).unwrap();
+    let prepared = lsdc::prepare::prepare(&mechanism, &[], &Default::default()).unwrap();
     let html = Viewer::new(mechanism, prepared, title).unwrap().page(false);
     let plain = viewer("four_bar").page(false);
     assert!(!html.contains("<!--"), "the title opens a comment");
