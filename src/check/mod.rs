@@ -608,7 +608,7 @@ fn named(name: &Option<Ident>, decl: Span) -> Vec<(Name, Span, Span)> {
 
 /// Names a declaration introduces in its scope, with the span of the name and of its whole
 /// definition.
-pub(super) fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
+fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
     match &decl.kind {
         DeclKind::Let(bindings) => bindings
             .iter()

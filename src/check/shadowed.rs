@@ -6,6 +6,7 @@
 use super::checker::{Checker, Ctx};
 use super::scope::{ScopeId, Target};
 use crate::diag::Diagnostic;
+use crate::source::Span;
 use crate::syntax::ast::Ident;
 
 impl<'w> Checker<'w> {
@@ -47,14 +48,18 @@ impl<'w> Checker<'w> {
         }
     }
 
-    /// The extent of the declaration of `ident`'s name in `scope`.
-    fn declaration_extent(&self, scope: ScopeId, ident: &Ident) -> Option<crate::source::Span> {
-        self.scope_decls(scope).iter().find_map(|decl| {
-            super::declared_names(decl)
-                .into_iter()
-                .find(|(name, _, _)| *name == ident.name)
-                .map(|(_, _, extent)| extent)
-        })
+    /// The extent of the declaration of `ident`'s name in `scope`: the declaration around the
+    /// name's.
+    fn declaration_extent(&self, scope: ScopeId, ident: &Ident) -> Option<Span> {
+        let name = self.out.scope(scope).names.get(&ident.name)?.span;
+        self.scope_decls(scope)
+            .iter()
+            .map(|decl| decl.span)
+            .find(|extent| {
+                extent.file() == name.file()
+                    && extent.start() <= name.start()
+                    && name.end() <= extent.end()
+            })
     }
 
     /// How to pass the program's value: a library definition with it as a parameter, where the
