@@ -87,6 +87,8 @@ pub struct Checker<'w> {
     pub(super) outputs: std::collections::HashMap<(ScopeId, crate::syntax::ast::Name), Span>,
     /// How many more unknown names get a did-you-mean search (see [`MAX_SUGGESTIONS`]).
     pub(super) suggestions_left: std::cell::Cell<usize>,
+    /// The (definition, name) pairs W0402 has warned about: once each.
+    pub(super) shadow_warned: std::collections::HashSet<(crate::syntax::ast::Name, String)>,
 }
 
 pub(super) const MAX_INSTANTIATION_DEPTH: usize = 64;

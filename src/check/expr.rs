@@ -8,7 +8,8 @@ use super::types::{self, Ty};
 use crate::diag::{suggest, Diagnostic};
 use crate::source::Span;
 use crate::syntax::ast::{
-    BinaryExpr, BinaryOp, ConstructKind, Expr, ExprKind, FieldInit, Ident, LocalExpr, QualifiedName,
+    BinaryExpr, BinaryOp, ConstructKind, DeclKind, Expr, ExprKind, FieldInit, Ident, LocalExpr,
+    QualifiedName,
 };
 
 impl<'w> Checker<'w> {
@@ -85,6 +86,11 @@ impl<'w> Checker<'w> {
         }
         if let Some((target, ty)) = self.lookup_global(&ident.name, ctx.scope, ctx.limit) {
             self.out.resolutions.insert(ident.span, target);
+            if let Target::Global(found) = target {
+                if super::shadowed::found_in_opened_module(self, found, ctx) {
+                    self.warn_if_shadowed(ident, found, ctx);
+                }
+            }
             return ty;
         }
         if let Some(ty) = types::builtin_constant(&ident.name) {
@@ -161,7 +167,11 @@ impl<'w> Checker<'w> {
                         .secondary(later, "defined in the same `let ... and ...`")
                         .help("bindings joined by `and` are simultaneous and do not see each other: use two `let` declarations");
                 }
-                let help = if self.declares_join(extent) {
+                let help = if self.declares_join(extent) && self.in_join(id, ident.span) {
+                    // Written in `name`'s own link, the effort would act on `name`, not on the
+                    // join that reads it.
+                    format!("a link reads only the coordinates of joins declared before it: declare the join `{name}` first (swap the two joins), or apply the effort after both joins, on the two bodies this join connects, as in `apply force value = [2 - 0.1 * {name}.q', 0, 0], body = earth end between base and moved;` (on `moved`, its opposite on `base`)")
+                } else if self.declares_join(extent) {
                     format!("a join's coordinates are read after the join, or inside its own link: write the expression in the link, as in `with motor(axis, 2 - 0.1 * {name}.q') as {name}`")
                 } else {
                     "a name is visible only after its declaration: move the declaration up"
@@ -203,12 +213,22 @@ impl<'w> Checker<'w> {
     }
 
     /// Whether a declaration's extent is a `join` (whose name comes last: `join ... as crank`).
+    /// Whether `span` lies inside a `join` declaration of `scope`.
+    fn in_join(&self, scope: types::ScopeId, span: Span) -> bool {
+        self.scope_decls(scope).iter().any(|decl| {
+            matches!(decl.kind, DeclKind::Join(_))
+                && decl.span.file() == span.file()
+                && decl.span.start() <= span.start()
+                && span.end() <= decl.span.end()
+        })
+    }
+
     fn declares_join(&self, extent: Span) -> bool {
         self.source(extent).starts_with("join")
     }
 
     /// The source text of a span.
-    fn source(&self, span: Span) -> &str {
+    pub(super) fn source(&self, span: Span) -> &str {
         let text = &self.workspace.sources.file(span.file()).text;
         text.get(span.range()).unwrap_or_default()
     }

@@ -9,6 +9,7 @@ mod expr;
 mod output;
 pub mod resolutions;
 pub mod scope;
+mod shadowed;
 mod stdlib_hint;
 pub mod types;
 
@@ -48,6 +49,7 @@ pub fn check(workspace: &Workspace) -> (Checked, Diagnostics) {
         simulate_seen: None,
         outputs: HashMap::new(),
         suggestions_left: std::cell::Cell::new(checker::MAX_SUGGESTIONS),
+        shadow_warned: Default::default(),
     };
     for &root in &workspace.roots {
         checker.module(root);

@@ -80,6 +80,19 @@ impl Resolutions {
         }
     }
 
+    /// The names inside `extent` that resolved to a declaration of `scope`, as spans, in any
+    /// order (a scan of the file's list: for the rare question of what a definition reads).
+    pub fn global_uses_within(&self, extent: Span, scope: ScopeId) -> Vec<Span> {
+        let Some(file) = self.files.get(extent.file().0 as usize) else {
+            return Vec::new();
+        };
+        let target = Packed::new(Target::Global(scope));
+        (file.entries.iter())
+            .filter(|e| e.2 == target && extent.start() <= e.0 && e.1 <= extent.end())
+            .map(|e| Span::new(extent.file(), e.0 as usize, e.1 as usize))
+            .collect()
+    }
+
     /// Where the name at `span` resolved, if it did.
     pub fn get(&self, span: Span) -> Option<Target> {
         self.get_near(span, &mut Cursor::default())

@@ -255,10 +255,9 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
     const F1: &[Ty] = &[Frame];
     const F2: &[Ty] = &[Frame, Frame];
     Some(match name {
-        "sin" | "cos" | "tan" | "asin" | "acos" | "atan" | "sqrt" | "exp" | "log" | "abs" => {
-            (S1, Scalar)
-        }
-        "atan2" => (S2, Scalar),
+        "sin" | "cos" | "tan" | "asin" | "acos" | "atan" | "sqrt" | "exp" | "log" | "abs"
+        | "floor" => (S1, Scalar),
+        "atan2" | "mod" => (S2, Scalar),
         "norm" => (V1, Scalar),
         "dot" => (V2, Scalar),
         "cross" => (V2, Vector),

@@ -241,6 +241,13 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
                 )),
             })
         }
+        "mod" => {
+            let mut args = values.into_iter().map(|v| as_scalar(v, span));
+            let missing = || internal("missing argument");
+            let a = args.next().ok_or_else(missing)??;
+            let b = args.next().ok_or_else(missing)??;
+            Ok(Value::Scalar(floored_modulo(&a, &b)))
+        }
         _ => {
             let args = values
                 .into_iter()
@@ -252,6 +259,14 @@ pub(super) fn builtin_call(name: &str, values: Vec<Value>, span: Span) -> Result
             Ok(Value::Scalar(Arc::new(SExpr::call(static_name, args))))
         }
     }
+}
+
+/// `mod(a, b)`, the floored modulo `a − b·floor(a / b)` (Knuth, TAOCP vol. 1, §1.2.4): its sign
+/// is the divisor's, so `mod(-1, 3)` is 2, the index that wraps around an array. Written with
+/// `floor` so that every emitter and evaluator has it without a function of its own.
+fn floored_modulo(a: &Scalar, b: &Scalar) -> Scalar {
+    let quotient = builtin_scalar("floor", &arith('/', a, b));
+    arith('-', a, &arith('*', b, &quotient))
 }
 
 /// `position(F)`, `velocity(F)`, `angular_velocity(F)`, `orientation(F)`, `distance(A, B)`: the
@@ -303,6 +318,7 @@ fn fold_builtin(name: &str, args: &[Scalar]) -> Option<f64> {
         "exp" => x.exp(),
         "log" => x.ln(),
         "abs" => x.abs(),
+        "floor" => x.floor(),
         "atan2" => x.atan2(constant(args.get(1)?)?),
         _ => return None,
     };
@@ -351,8 +367,8 @@ pub(super) fn is_zero(value: &Value) -> bool {
 }
 
 /// The built-in functions folded on numbers by [`fold_builtin`].
-const FOLDED: [&str; 11] = [
-    "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2",
+const FOLDED: [&str; 12] = [
+    "sin", "cos", "tan", "asin", "acos", "atan", "sqrt", "exp", "log", "abs", "atan2", "floor",
 ];
 
 /// Whether a scalar is an operation on numbers that folding left alone because its result is

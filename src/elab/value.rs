@@ -162,8 +162,10 @@ fn surely_finite(s: &Scalar, depth: u32) -> bool {
         SExpr::Neg(a) => finite(a),
         SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) => finite(a) && finite(b),
         SExpr::Call(call) => {
-            matches!(call.function, "sin" | "cos" | "atan" | "abs" | "atan2")
-                && call.args.iter().all(finite)
+            matches!(
+                call.function,
+                "sin" | "cos" | "atan" | "abs" | "atan2" | "floor"
+            ) && call.args.iter().all(finite)
         }
         _ => false,
     }

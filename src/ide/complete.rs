@@ -34,8 +34,11 @@ pub fn completions(edited: &Analysis, names: &Analysis, offset: usize) -> Vec<Co
         return libraries(analysis);
     }
     match before.chars().last() {
-        Some('.') => fields(analysis, name_before(&before[..before.len() - 1])),
-        Some(':') => package_members(analysis, name_before(&before[..before.len() - 1])),
+        Some('.') => fields(analysis, path_before(&before[..before.len() - 1])),
+        Some(':') => {
+            let package = name_before(without_index(&before[..before.len() - 1]));
+            package_members(analysis, package)
+        }
         _ => {
             let mut items = parameters_of_call(analysis, before);
             items.extend(names_in_scope(
@@ -56,6 +59,41 @@ fn name_before(text: &str) -> &str {
         .last()
         .map_or(text.len(), |(i, _)| i);
     &text[start..]
+}
+
+/// `text` without the instance index that ends it: `leg[1]` is `leg`.
+fn without_index(text: &str) -> &str {
+    if !text.ends_with(']') {
+        return text;
+    }
+    let mut depth = 0;
+    for (i, c) in text.char_indices().rev() {
+        match c {
+            ']' => depth += 1,
+            '[' if depth == 1 => return &text[..i],
+            '[' => depth -= 1,
+            _ => {}
+        }
+    }
+    text
+}
+
+/// The qualified name that ends at the end of `text`, as written (`leg[1]:knee`, `Arm:sh`,
+/// `rod`), and its plain names (`["leg", "knee"]`).
+fn path_before(text: &str) -> (&str, Vec<&str>) {
+    let mut names = Vec::new();
+    let mut rest = text;
+    loop {
+        let name = name_before(rest);
+        rest = &rest[..rest.len() - name.len()];
+        names.push(name);
+        match rest.strip_suffix(':') {
+            Some(package) if !name.is_empty() => rest = without_index(package),
+            _ => break,
+        }
+    }
+    names.reverse();
+    (&text[rest.len()..], names)
 }
 
 fn item(label: &str, kind: CompletionItemKind, detail: Option<String>) -> CompletionItem {
@@ -102,13 +140,19 @@ fn libraries(analysis: &Analysis) -> Vec<CompletionItem> {
     items
 }
 
-/// The fields of the named value: a body's, a frame's, an effort's, a join's coordinates.
-fn fields(analysis: &Analysis, target: &str) -> Vec<CompletionItem> {
-    let Some(definition) = analysis.index.visible_named(target) else {
+/// The fields of the named value: a body's, a frame's, an effort's, a join's coordinates. The
+/// value may be a package's (`Arm:sh`, `leg[1]:knee`).
+fn fields(analysis: &Analysis, (written, path): (&str, Vec<&str>)) -> Vec<CompletionItem> {
+    let definition = match path.as_slice() {
+        [name] => analysis.index.visible_named(name),
+        [.., package, name] => member(analysis, package, name),
+        [] => None,
+    };
+    let Some(definition) = definition else {
         return Vec::new();
     };
     let names = match definition.ty {
-        Some(Ty::Join) => join_coordinates(analysis, definition),
+        Some(Ty::Join) => join_coordinates(analysis, definition, written),
         Some(ty) => field_names(ty),
         None => Vec::new(),
     };
@@ -118,14 +162,17 @@ fn fields(analysis: &Analysis, target: &str) -> Vec<CompletionItem> {
         .collect()
 }
 
-fn join_coordinates(analysis: &Analysis, join: &Definition) -> Vec<String> {
+/// The coordinates of a join, found in the mechanism by the name as written (`leg[1]:knee`, how
+/// the mechanism names a join of an instance) or its plain name.
+fn join_coordinates(analysis: &Analysis, join: &Definition, written: &str) -> Vec<String> {
     let Some(mechanism) = analysis.mechanism() else {
         return Vec::new();
     };
-    mechanism
-        .joins
-        .iter()
-        .find(|j| j.name.as_ref() == Some(&join.name))
+    let named = |name: &str| {
+        (mechanism.joins.iter()).find(|j| j.name.as_ref().is_some_and(|n| &**n == name))
+    };
+    named(written)
+        .or_else(|| named(&join.name))
         .map(|j| {
             let link = &mechanism.links[j.link.0 as usize];
             link.coordinates.iter().map(|c| c.to_string()).collect()
@@ -133,8 +180,32 @@ fn join_coordinates(analysis: &Analysis, join: &Definition) -> Vec<String> {
         .unwrap_or_default()
 }
 
+/// The definition `name` declared in `package`.
+fn member<'a>(analysis: &'a Analysis, package: &str, name: &str) -> Option<&'a Definition> {
+    let members = analysis
+        .index
+        .scope_members
+        .get(&package_scope(analysis, package)?)?;
+    let definitions = &analysis.index.definitions;
+    members
+        .iter()
+        .map(|&id| &definitions[id])
+        .find(|d| &*d.name == name)
+}
+
 fn package_members(analysis: &Analysis, package: &str) -> Vec<CompletionItem> {
-    let scope = analysis
+    let members =
+        package_scope(analysis, package).and_then(|s| analysis.index.scope_members.get(&s));
+    members
+        .into_iter()
+        .flatten()
+        .map(|&id| definition_item(&analysis.index.definitions[id]))
+        .collect()
+}
+
+/// The scope of the package or module named `package`.
+fn package_scope(analysis: &Analysis, package: &str) -> Option<crate::check::scope::ScopeId> {
+    analysis
         .index
         .definitions
         .iter()
@@ -142,13 +213,7 @@ fn package_members(analysis: &Analysis, package: &str) -> Vec<CompletionItem> {
         .find_map(|d| match d.kind {
             DefinitionKind::Package(scope) | DefinitionKind::Module(scope) => scope,
             _ => None,
-        });
-    let members = scope.and_then(|s| analysis.index.scope_members.get(&s));
-    members
-        .into_iter()
-        .flatten()
-        .map(|&id| definition_item(&analysis.index.definitions[id]))
-        .collect()
+        })
 }
 
 /// Inside `f(...)` where `f` is a parameterised definition: its parameters, as `name = `.

@@ -67,7 +67,13 @@ pub fn capabilities() -> ServerCapabilities {
 
 /// Answers the client's messages until it asks the server to shut down.
 pub fn serve(connection: &Connection) -> Result<(), Error> {
-    connection.initialize(serde_json::to_value(capabilities())?)?;
+    let (id, _params) = connection.initialize_start()?;
+    // `serverInfo` tells the client which server and version answers (LSP 3.15).
+    let result = serde_json::json!({
+        "capabilities": capabilities(),
+        "serverInfo": { "name": "lsdc", "version": env!("CARGO_PKG_VERSION") },
+    });
+    connection.initialize_finish(id, result)?;
     let mut server = Server {
         documents: HashMap::new(),
         last_parsed: HashMap::new(),

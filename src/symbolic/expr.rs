@@ -49,6 +49,8 @@ pub enum Function {
     Exp,
     Log,
     Abs,
+    /// The largest integer not above the argument; its derivative is 0 wherever it exists.
+    Floor,
 }
 
 impl Function {
@@ -64,6 +66,7 @@ impl Function {
             "exp" => Function::Exp,
             "log" => Function::Log,
             "abs" => Function::Abs,
+            "floor" => Function::Floor,
             _ => return None,
         })
     }
@@ -81,6 +84,7 @@ impl Function {
             Function::Exp => "exp",
             Function::Log => "log",
             Function::Abs => "abs",
+            Function::Floor => "floor",
         }
     }
 
@@ -96,6 +100,7 @@ impl Function {
             Function::Exp => x.exp(),
             Function::Log => x.ln(),
             Function::Abs => x.abs(),
+            Function::Floor => x.floor(),
         }
     }
 }
@@ -205,9 +210,10 @@ impl Pool {
                 self.surely_finite(a) && self.surely_finite(b)
             }
             Node::Neg(a)
-            | Node::Apply(Function::Sin | Function::Cos | Function::Atan | Function::Abs, a) => {
-                self.surely_finite(a)
-            }
+            | Node::Apply(
+                Function::Sin | Function::Cos | Function::Atan | Function::Abs | Function::Floor,
+                a,
+            ) => self.surely_finite(a),
             Node::Div(..) | Node::Pow(..) | Node::Apply(..) => false,
         }
     }
@@ -450,6 +456,8 @@ impl Pool {
             Function::Exp => e,
             Function::Log => self.div(one, a),
             Function::Abs => self.div(a, e),
+            // A step function: flat between its jumps.
+            Function::Floor => self.constant(0.0),
         }
     }
 

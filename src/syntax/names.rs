@@ -17,6 +17,8 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "log",
     "abs",
     "atan2",
+    "floor",
+    "mod",
     "norm",
     "dot",
     "cross",

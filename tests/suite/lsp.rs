@@ -154,6 +154,11 @@ fn a_session_with_every_request() {
     let mut client = Client::start();
     let initialized = client.request("initialize", json!({"capabilities": {}}));
     assert_eq!(initialized["capabilities"]["hoverProvider"], true);
+    assert_eq!(initialized["serverInfo"]["name"], "lsdc");
+    assert_eq!(
+        initialized["serverInfo"]["version"],
+        env!("CARGO_PKG_VERSION")
+    );
     assert!(
         initialized["capabilities"]["semanticTokensProvider"]["legend"]["tokenTypes"].is_array()
     );
@@ -413,5 +418,56 @@ fn quick_fixes_are_the_fixes_the_diagnostics_carry() {
     let edit = &actions[0]["edit"]["changes"][&uri][0];
     assert_eq!(edit["newText"], "import joints ;\n");
     assert_eq!(edit["range"]["start"], json!({"line": 1, "character": 0}));
+    client.stop();
+}
+
+/// A program with a package and an array of packages, for completion after their names.
+const PACKAGES: &str = "import joints ;
+package Arm =
+  let upper = body mass = 1, iframe = 1, inertia = [0.1, 0.1, 0.1] end ;
+  join earth and upper with revolute([1, 0, 0]) as sh ;
+end ;
+package leg[i in 1 .. 2] =
+  let thigh = body mass = 1, iframe = 1, inertia = [0.1, 0.1, 0.1] end ;
+  join earth and thigh with revolute([0, 1, 0]) as knee ;
+end ;
+";
+
+#[test]
+fn completion_after_a_package_member_and_an_instance() {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("lsp_packages.lsd");
+    let uri = file_uri(&path);
+    let mut client = Client::start();
+    let initialized = client.request("initialize", json!({"capabilities": {}}));
+    assert_eq!(initialized["serverInfo"]["name"], "lsdc");
+    client.notify("initialized", json!({}));
+    assert_eq!(client.open(&uri, PACKAGES), json!([]));
+    let mut version = 1;
+    let mut complete = |client: &mut Client, typed: &str| {
+        version += 1;
+        let text = format!("{PACKAGES}output o = {typed}");
+        client.notify(
+            "textDocument/didChange",
+            json!({"textDocument": {"uri": uri, "version": version}, "contentChanges": [{"text": text}]}),
+        );
+        client.diagnostics();
+        let end = json!({"line": PACKAGES.lines().count(), "character": text.lines().last().unwrap().len()});
+        let items = client.request(
+            "textDocument/completion",
+            json!({"textDocument": {"uri": uri}, "position": end}),
+        );
+        let mut labels: Vec<String> = labels(&items).iter().map(|l| l.to_string()).collect();
+        labels.sort();
+        labels
+    };
+    // The index is a member too: `leg[1]:i` is 1.
+    assert_eq!(complete(&mut client, "leg[1]:"), ["i", "knee", "thigh"]);
+    assert_eq!(complete(&mut client, "Arm:"), ["sh", "upper"]);
+    assert_eq!(complete(&mut client, "Arm:sh."), ["q"]);
+    assert_eq!(complete(&mut client, "leg[1]:knee."), ["q"]);
+    assert_eq!(
+        complete(&mut client, "leg[2]:thigh."),
+        ["frame", "iframe", "inertia", "mass"]
+    );
     client.stop();
 }

@@ -8,6 +8,7 @@ mod allocations;
 mod architecture;
 mod arrays;
 mod assembly;
+mod builtins;
 mod cli;
 mod closed_loops;
 mod constrained;

@@ -57,6 +57,7 @@ impl Language for Latex<'_> {
         let command = match f {
             Function::Sqrt => return format!("\\sqrt{{{argument}}}"),
             Function::Abs => return format!("\\left|{argument}\\right|"),
+            Function::Floor => return format!("\\left\\lfloor {argument}\\right\\rfloor"),
             Function::Asin => "\\arcsin",
             Function::Acos => "\\arccos",
             Function::Atan => "\\arctan",
