@@ -6,7 +6,7 @@ use crate::common::programs::{example_text, simulated};
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
-use lsdc::simulate::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Settings};
 use lsdc::simulate::run::Simulation;
 
 /// The pendulum of `examples/pendulum.lsd` run with extra lines (outputs).
