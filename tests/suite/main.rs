@@ -34,6 +34,7 @@ mod lsp;
 mod mampey;
 mod methods;
 mod mimics;
+mod momentum_basis;
 mod mutants;
 mod native;
 mod outputs;
