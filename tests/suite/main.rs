@@ -35,6 +35,7 @@ mod lsp;
 mod mampey;
 mod methods;
 mod mimics;
+mod momentum_basis;
 mod mutants;
 mod native;
 mod outputs;

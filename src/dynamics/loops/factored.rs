@@ -256,6 +256,11 @@ impl Factored {
         }
     }
 
+    /// How many columns G has (the coordinates the rows are over).
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
     /// How many rows are kept.
     pub fn len(&self) -> usize {
         self.rows.len()

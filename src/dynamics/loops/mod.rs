@@ -4,7 +4,9 @@
 //! parametrise the motions they allow), the sparse factorisation of those rows (`factored`), the
 //! constrained equations of motion solved on them (`solve`, with the allowed motions' reduced
 //! mass matrix from `inertia`), and the projection of a state back
-//! onto the loops (`project`). A singular value decomposition (`basis`) and dense QR
+//! onto the loops (`project`), with an orthonormal basis of the allowed motions from the
+//! sparse factorisation for the outputs' momentum near singular configurations (`orthonormal`).
+//! A singular value decomposition (`basis`) and dense QR
 //! factorisations serve the decisions taken once, never the equations of motion.
 //! The method and its references: `docs/loops.md`.
 
@@ -12,6 +14,7 @@ pub mod basis;
 pub mod factored;
 pub mod inertia;
 pub mod jacobian;
+pub mod orthonormal;
 pub mod project;
 pub mod rows;
 pub mod solve;

@@ -16,6 +16,7 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 
 use super::factored::{projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::inertia::{Reduced, ReducedInertia};
+use super::orthonormal::orthonormal_allowed_motions;
 use super::project::ProjectionScratch;
 use super::rows::{constraints, Constraints, Extent};
 use super::structure::Structure;
@@ -602,9 +603,10 @@ fn massive_solve(
 }
 
 /// Below this conditioning of the kept rows, `project_momentum` asked for `Basis::Orthonormal`
-/// spans the allowed motions with an orthonormal basis from a dense QR factorisation of the
-/// rows: its solves on their normal matrix cost ε/σ² of the velocity (on a row of ten
-/// four-bars at σ = 1e-4, 8.7e-8 rad/s between the cranks, which should turn together).
+/// spans the allowed motions with an orthonormal basis corrected to round-off
+/// (`orthonormal_allowed_motions`): the free coordinates' allowed motions alone, from solves on
+/// the rows' normal matrix, cost ε/σ² of the velocity (on a row of ten four-bars at σ = 1e-4,
+/// 8.7e-8 rad/s between the cranks, which should turn together).
 const DENSE_MOMENTUM_BELOW: f64 = 1e-2;
 
 /// How `project_momentum` spans the allowed motions near a singular configuration.
@@ -612,9 +614,11 @@ const DENSE_MOMENTUM_BELOW: f64 = 1e-2;
 pub enum MomentumBasis {
     /// The free coordinates' allowed motions, by sparse solves, as the equations of motion.
     Free,
-    /// An orthonormal basis from a dense QR factorisation below a conditioning of 1e-2, when
-    /// no motion is idle or without mass (`DENSE_MOMENTUM_BELOW`): for the outputs, whose
-    /// velocities are compared with the motion's own.
+    /// An orthonormal basis exact to round-off below a conditioning of 1e-2, when no motion is
+    /// idle or without mass (`DENSE_MOMENTUM_BELOW`): for the outputs, whose velocities are
+    /// compared with the motion's own. From the sparse factorisation
+    /// (`orthonormal_allowed_motions`), or a dense QR factorisation of the rows where it cannot
+    /// be taken (rows exactly dependent).
     Orthonormal,
 }
 
@@ -641,6 +645,9 @@ pub fn project_momentum(
         && structure.idle.is_empty()
         && structure.massless == 0;
     let allowed = match (dense, damped) {
+        (true, Ok(damped)) if structure.free.len() + factored.len() == factored.columns() => {
+            orthonormal_allowed_motions(&factored, &damped, &structure.free)
+        }
         (true, _) => factored.dense_null_space().clone(),
         (false, Ok(damped)) => damped.allowed_motions(&structure.free),
         (false, Err(_)) => return Ok(()),
