@@ -406,6 +406,14 @@ pub fn integrate<'m>(
         failure,
         stats: Box::new(stats.clone()),
     };
+    let not_converged = |time: f64, step: f64, detail: String, stats: &Stats| {
+        let error = NotConverged {
+            time,
+            step,
+            detail: Some(detail),
+        };
+        fail(time, Failure::System(error.to_string()), stats)
+    };
     let (mut q, mut v) = (
         DVector::from_column_slice(&y0[..positions]),
         DVector::from_column_slice(&y0[positions..]),
@@ -446,9 +454,11 @@ pub fn integrate<'m>(
         for _ in 0..MAX_ITERATIONS {
             let mid = configuration.midpoint(&q, &end);
             let mean = configuration.mean_velocity(&q, &end, step);
+            // An iterate the equations cannot be evaluated at (loops singular there, efforts
+            // not finite) is the iteration failing, not the mechanism: the step is too long.
             (mass_mid, terms) = system
                 .midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step)
-                .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
+                .map_err(|m| not_converged(t, step, m.to_string(), &stats))?;
             stats.rhs_evaluations += 1;
             let mass_mean = &mass_mid * &mean;
             let mut momentum = &mass_mean - &terms * (0.5 * step) - &p;
@@ -462,7 +472,7 @@ pub fn integrate<'m>(
                     end.positions.as_slice(),
                     &(-momentum * step),
                 )
-                .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
+                .map_err(|m| not_converged(t, step, m.to_string(), &stats))?;
             configuration.correct(&q, &mut end, &correction);
             if end.positions.iter().any(|x| !x.is_finite()) {
                 // Diverged: reported below, rather than iterated on.
@@ -477,10 +487,15 @@ pub fn integrate<'m>(
             previous = size;
         }
         if end.positions.iter().any(|x| !x.is_finite()) {
-            return Err(fail(t, Failure::NotFinite, &stats));
+            let detail = "its iterates diverged".to_string();
+            return Err(not_converged(t, step, detail, &stats));
         }
         if !converged {
-            let error = NotConverged { time: t, step };
+            let error = NotConverged {
+                time: t,
+                step,
+                detail: None,
+            };
             return Err(fail(t, Failure::System(error.to_string()), &stats));
         }
         let mean = configuration.mean_velocity(&q, &end, step);
@@ -526,15 +541,21 @@ pub fn integrate<'m>(
 pub struct NotConverged {
     pub time: f64,
     pub step: f64,
+    /// How the iteration failed, where it did before its iterations ran out.
+    pub detail: Option<String>,
 }
 
 impl fmt::Display for NotConverged {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "the implicit equations of the step from t = {} did not converge: use a smaller `step` than {}",
-            self.time, self.step
-        )
+            "the implicit equations of the step from t = {} did not converge",
+            self.time
+        )?;
+        if let Some(detail) = &self.detail {
+            write!(f, " ({detail})")?;
+        }
+        write!(f, ": use a smaller `step` than {}", self.step)
     }
 }
 

@@ -581,3 +581,29 @@ fn column(simulation: &lsdc::api::Simulation, name: &str) -> usize {
         .position(|n| n == name)
         .unwrap_or_else(|| panic!("no column {name}"))
 }
+
+/// A symplectic step too long for a stiff element fails saying so: its implicit equations did
+/// not converge, with the step to shorten. The governor's stiff spring at 0.01 s was reported as
+/// a state that is not finite (and a loop's iterate as a singular configuration), which sent the
+/// user after a fault of the mechanism.
+#[test]
+fn a_symplectic_step_too_long_for_the_motion_says_so() {
+    let text = std::fs::read_to_string("examples/governor.lsd").expect("the example");
+    let program = Program::from_text("governor.lsd", &text, None, &Default::default());
+    let changes = SettingsChanges {
+        integrator: Some(Integrator::Symplectic),
+        step: Some(0.01),
+        duration: Some(0.1),
+        ..Default::default()
+    };
+    let prepared = program.prepare(&[], &changes).expect("prepares");
+    let simulation = run(&prepared, &mut |_| {});
+    let failure = simulation.report.failure.expect("fails");
+    assert!(
+        failure.message.contains("did not converge")
+            && failure.message.contains("use a smaller `step` than 0.01")
+            && !failure.message.contains("not finite"),
+        "{}",
+        failure.message
+    );
+}
