@@ -118,38 +118,11 @@ impl Joint {
         (coordinates, rates): (&mut [f64], &mut [f64]),
         chain_motion: &mut ChainMotion,
     ) -> Result<(), EvalError> {
-        if self.kind == JointType::Chain {
-            coordinates.copy_from_slice(q);
-            rates.copy_from_slice(v);
-            return Ok(());
-        }
-        let free = matches!(self.kind, JointType::Free { .. });
-        let moving = self.declared_coordinates_into(q, previous, coordinates);
-        // Rates: the chain's spatial twist equals S(declared) · rates.
-        let body_twist = body_twist(v, free);
-        let spatial_twist = if self.first_on_parent {
-            motion_to_parent(&moving, &body_twist)
-        } else {
-            -body_twist
-        };
-        self.chain
-            .chain_motion_into(coordinates, None, chain_motion)?;
-        solve_least_squares(chain_motion, &spatial_twist, rates);
-        Ok(())
-    }
-
-    /// The declared coordinates alone from the joint's positions (`previous` keeps the angles
-    /// continuous), and the pose of its moving frame; a chain joint's are its positions.
-    pub fn declared_coordinates_into(
-        &self,
-        q: &[f64],
-        previous: &[f64],
-        coordinates: &mut [f64],
-    ) -> Pose {
         let axes = match &self.kind {
             JointType::Chain => {
                 coordinates.copy_from_slice(q);
-                return Pose::identity();
+                rates.copy_from_slice(v);
+                return Ok(());
             }
             JointType::Spherical { axes } | JointType::Free { axes } => axes,
         };
@@ -176,7 +149,17 @@ impl Joint {
             coordinates[..3].copy_from_slice(chain.translation.vector.as_slice());
         }
         coordinates[angle_start..].copy_from_slice(&angles);
-        moving
+        // Rates: the chain's spatial twist equals S(declared) · rates.
+        let body_twist = body_twist(v, free);
+        let spatial_twist = if self.first_on_parent {
+            motion_to_parent(&moving, &body_twist)
+        } else {
+            -body_twist
+        };
+        self.chain
+            .chain_motion_into(coordinates, None, chain_motion)?;
+        solve_least_squares(chain_motion, &spatial_twist, rates);
+        Ok(())
     }
 
     /// The joint's positions and velocities from declared coordinates and rates.

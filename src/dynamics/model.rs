@@ -121,30 +121,6 @@ impl Model {
     }
 
     /// Whether contacts (`rolling`, `sliding`) constrain the tree's motion.
-    /// The declared angles that the state's quaternions give, each on the branch nearest its
-    /// value in `reference`, written over it (rates are not recovered: this keeps a run's
-    /// reference on its branch from step to step, at the cost of a few arctangents).
-    pub fn follow_angles(&self, q: &[f64], reference: &mut [f64]) {
-        let joints = self.joints.iter().zip(&self.declared_offsets);
-        for (joint, &offset) in joints.filter(|(j, _)| j.kind != JointType::Chain) {
-            let n = joint.chain.coordinate_count();
-            let mut previous = [0.0; 6];
-            previous[..n].copy_from_slice(&reference[offset..offset + n]);
-            let positions = &q[joint.q_offset..joint.q_offset + joint.nq()];
-            joint.declared_coordinates_into(
-                positions,
-                &previous[..n],
-                &mut reference[offset..offset + n],
-            );
-        }
-    }
-
-    /// Whether some declared coordinates are recovered from the state rather than being it:
-    /// the angles of spherical and free joints, integrated as quaternions.
-    pub fn recovers_angles(&self) -> bool {
-        self.joints.iter().any(|j| j.kind != JointType::Chain)
-    }
-
     pub fn has_contacts(&self) -> bool {
         !self.contacts.is_empty()
     }

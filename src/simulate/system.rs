@@ -464,24 +464,7 @@ impl<'m> MechanicalSystem<'m> {
     /// Whether y moved.
     pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let moved = self.keep_rows(t, y)?;
-        let moved = self.keep_on_bounds(y)? || moved;
-        self.follow_reference(y);
-        Ok(moved)
-    }
-
-    /// Moves the run's reference angles to the state y at the end of a step: angles recovered
-    /// from quaternions are taken on the branch nearest the reference, and a reference kept
-    /// only from one output to the next lost a whole turn whenever an angle advanced by more
-    /// than π between them (a top spinning at 60 rad/s, outputs every 0.05 s). A step turns
-    /// far less than that. Nothing for a mechanism without such angles.
-    pub fn follow_reference(&mut self, y: &[f64]) {
-        let model = self.model;
-        if !model.recovers_angles() {
-            return;
-        }
-        let positions = &mut self.scratch.positions;
-        model.split_state_into(y, positions);
-        model.follow_angles(positions, &mut self.state.reference);
+        Ok(self.keep_on_bounds(y)? || moved)
     }
 
     /// Keeps the loops closed after a step (see `LoopMonitor::keep`), then the rows beyond

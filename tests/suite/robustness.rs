@@ -520,68 +520,6 @@ fn an_effort_that_is_nan_is_not_folded_into_a_number() {
     assert_eq!(last(&plain), last(&folded));
 }
 
-/// A run of `text` with `integrator` and outputs every `every` seconds.
-fn run_with(text: &str, integrator: Integrator, every: f64) -> lsdc::api::Simulation {
-    let program = Program::from_text("spun.lsd", text, None, &Default::default());
-    assert!(codes(&program).is_empty(), "{:?}", codes(&program));
-    let name = format!("{integrator:?}");
-    let changes = SettingsChanges {
-        integrator: Some(integrator),
-        output: Some(every),
-        ..Default::default()
-    };
-    let prepared = program.prepare(&[], &changes).expect("prepares");
-    let simulation = run(&prepared, &mut |_| {});
-    assert!(simulation.report.failure.is_none(), "{name}");
-    simulation
-}
-
-/// A spherical joint's reported angles keep every turn, however far apart the outputs: a wheel
-/// spinning at 70 rad/s about its axis turns 70 rad in a second, 11 turns, and its angle was
-/// reported as 0.885 at t = 1 (the branch nearest the previous output), whatever the method.
-/// And a top's angles do not depend on how often it is sampled.
-#[test]
-fn recovered_angles_keep_their_turns_between_outputs() {
-    let wheel = "import joints ;\n\
-        let wheel = body mass = 1, iframe = 0, inertia = [0.5, 0.5, 1] end ;\n\
-        join earth and wheel with spherical as hub ;\n\
-        initial hub.c' = 70 ;\n\
-        simulate duration = 2, output = 1, tolerance = 1e-10 end ;\n";
-    for integrator in INTEGRATORS {
-        let name = format!("{integrator:?}");
-        let simulation = run_with(wheel, integrator, 1.0);
-        let spin = column(&simulation, "hub.c");
-        for sample in &simulation.samples {
-            let expected = 70.0 * sample.time;
-            let got = sample.coordinates[spin];
-            // A lost turn is 2π; what remains is each method's error at this tolerance
-            // (dop853's 1.6e-6 rad after 70 rad).
-            assert!(
-                (got - expected).abs() < 1e-4,
-                "{name} at t = {}: {got}",
-                sample.time
-            );
-        }
-    }
-    let top = std::fs::read_to_string("examples/heavy_top.lsd").expect("the example");
-    let top = top.replace("duration = 10", "duration = 2");
-    let often = run_with(&top, Integrator::DormandPrince, 0.01);
-    let seldom = run_with(&top, Integrator::DormandPrince, 0.2);
-    for sample in &seldom.samples {
-        let twin = (often.samples.iter())
-            .find(|s| (s.time - sample.time).abs() < 1e-12)
-            .expect("a common output time");
-        let difference = crate::common::max_difference(&sample.coordinates, &twin.coordinates);
-        assert!(difference < 1e-8, "t = {}: {difference}", sample.time);
-    }
-}
-
-fn column(simulation: &lsdc::api::Simulation, name: &str) -> usize {
-    (simulation.coordinate_names.iter())
-        .position(|n| n == name)
-        .unwrap_or_else(|| panic!("no column {name}"))
-}
-
 /// A symplectic step too long for a stiff element fails saying so: its implicit equations did
 /// not converge, with the step to shorten. The governor's stiff spring at 0.01 s was reported as
 /// a state that is not finite (and a loop's iterate as a singular configuration), which sent the
