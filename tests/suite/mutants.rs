@@ -6,7 +6,6 @@ use std::path::Path;
 
 use lsdc::api::{run, Program, SettingsChanges};
 use lsdc::load::LoadOptions;
-use lsdc::prepare::Integrator;
 
 /// What a number is replaced by: the degenerate values a user or a typo brings.
 const NUMBERS: [&str; 8] = [
@@ -178,13 +177,11 @@ pub fn exercise(text: &str, dir: Option<&Path>) -> usize {
         let _ = lsdc::symbolic::emit::c(&equations, "mutant.lsd");
         let _ = lsdc::symbolic::emit::text(&equations, "mutant.lsd");
     }
-    for integrator in [
-        Integrator::Rk4,
-        Integrator::DormandPrince,
-        Integrator::Dop853,
-        Integrator::Implicit,
-        Integrator::Symplectic,
-    ] {
+    // Every integrator the registry knows, so that a new one is exercised too.
+    for integrator in lsdc::integrators::INTEGRATORS
+        .iter()
+        .map(|e| e.integrator.clone())
+    {
         let changes = SettingsChanges {
             integrator: Some(integrator),
             duration: Some(0.01),

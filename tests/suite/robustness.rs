@@ -12,13 +12,12 @@ use lsdc::prepare::Integrator;
 
 use crate::mutants::{exercise, mutate, Choices};
 
-const INTEGRATORS: [Integrator; 5] = [
-    Integrator::Rk4,
-    Integrator::DormandPrince,
-    Integrator::Dop853,
-    Integrator::Implicit,
-    Integrator::Symplectic,
-];
+/// Every integrator the registry knows, so that a new one is exercised too.
+fn integrators() -> impl Iterator<Item = Integrator> {
+    lsdc::integrators::INTEGRATORS
+        .iter()
+        .map(|entry| entry.integrator.clone())
+}
 
 fn codes(program: &Program) -> Vec<&str> {
     program.diagnostics().iter().map(|d| d.code).collect()
@@ -31,7 +30,7 @@ fn mechanisms_without_coordinates_simulate() {
     let welded = "import joints ;\nlet b = body mass = 1, iframe = 1, inertia = [1, 1, 1] end ;\njoin earth and b with weld as w ;\n";
     for text in ["", welded] {
         let program = Program::from_text("still.lsd", text, None, &Default::default());
-        for integrator in INTEGRATORS {
+        for integrator in integrators() {
             let name = format!("{integrator:?}");
             let changes = SettingsChanges {
                 integrator: Some(integrator),
