@@ -142,10 +142,11 @@ pub fn arith(op: char, a: &Scalar, b: &Scalar) -> Scalar {
 const FINITENESS_DEPTH: u32 = 32;
 
 /// Whether `s` is finite at every instant and state: numbers that are, the time, coordinates,
-/// rates, unknowns and unknown functions (their values are finite numbers), and sums, differences, products and
-/// negations of finite values, sines, cosines, arctangents and absolute values of them.
-/// Overflow of a sum or product of finite values is not considered. A quotient, a root, a
-/// power, a logarithm, an exponential or an unknown function may be infinite or NaN.
+/// rates, unknowns and unknown functions (their values are finite numbers), and sums,
+/// differences, products and negations of finite values, sines, cosines, arctangents, absolute
+/// values and floors of them. Overflow of a sum or product of finite values is not considered.
+/// A quotient, a root, a power, a logarithm or an exponential may be infinite or NaN. The same
+/// rule as `symbolic::expr::Pool::surely_finite`, on the elaborated values.
 fn surely_finite(s: &Scalar, depth: u32) -> bool {
     if depth == 0 {
         return false;

@@ -406,12 +406,8 @@ pub fn integrate<'m>(
         failure,
         stats: Box::new(stats.clone()),
     };
-    let not_converged = |time: f64, step: f64, detail: String, stats: &Stats| {
-        let error = NotConverged {
-            time,
-            step,
-            detail: Some(detail),
-        };
+    let not_converged = |time: f64, step: f64, detail: Option<String>, stats: &Stats| {
+        let error = NotConverged { time, step, detail };
         fail(time, Failure::System(error.to_string()), stats)
     };
     let (mut q, mut v) = (
@@ -458,7 +454,7 @@ pub fn integrate<'m>(
             // not finite) is the iteration failing, not the mechanism: the step is too long.
             (mass_mid, terms) = system
                 .midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step)
-                .map_err(|m| not_converged(t, step, m.to_string(), &stats))?;
+                .map_err(|m| not_converged(t, step, Some(m.to_string()), &stats))?;
             stats.rhs_evaluations += 1;
             let mass_mean = &mass_mid * &mean;
             let mut momentum = &mass_mean - &terms * (0.5 * step) - &p;
@@ -472,7 +468,7 @@ pub fn integrate<'m>(
                     end.positions.as_slice(),
                     &(-momentum * step),
                 )
-                .map_err(|m| not_converged(t, step, m.to_string(), &stats))?;
+                .map_err(|m| not_converged(t, step, Some(m.to_string()), &stats))?;
             configuration.correct(&q, &mut end, &correction);
             if end.positions.iter().any(|x| !x.is_finite()) {
                 // Diverged: reported below, rather than iterated on.
@@ -487,16 +483,11 @@ pub fn integrate<'m>(
             previous = size;
         }
         if end.positions.iter().any(|x| !x.is_finite()) {
-            let detail = "its iterates diverged".to_string();
+            let detail = Some("its iterates diverged".to_string());
             return Err(not_converged(t, step, detail, &stats));
         }
         if !converged {
-            let error = NotConverged {
-                time: t,
-                step,
-                detail: None,
-            };
-            return Err(fail(t, Failure::System(error.to_string()), &stats));
+            return Err(not_converged(t, step, None, &stats));
         }
         let mean = configuration.mean_velocity(&q, &end, step);
         let mass_mean = &mass_mid * &mean;
