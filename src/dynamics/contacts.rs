@@ -134,7 +134,9 @@ pub fn contact_rows_into(
         let world = &data.world;
         let touch = contact.touch(&world[contact.plane_body], &world[contact.round_body]);
         let passed_flat = touch.disc.is_some() && rows.downs[k].dot(&touch.down) < -0.5;
-        let lies_flat = touch.disc.is_some_and(|(_, sine)| !(sine > DISC_FLAT));
+        let lies_flat = touch
+            .disc
+            .is_some_and(|(_, sine)| sine.is_nan() || sine <= DISC_FLAT);
         if (passed_flat || lies_flat) && rows.flat_disc.is_none() {
             rows.flat_disc = Some(k);
         }
