@@ -356,7 +356,9 @@ fn the_coin_sliding_without_friction_falls_with_its_centre_straight_down() {
 #[test]
 fn the_coin_sliding_with_friction_balances_its_energy_with_the_friction_work() {
     // Spun and launched across its rolling motion, the coin slips: the friction's work is in
-    // the energy balance.
+    // the energy balance (relative to the largest energy). Once the slip dies out (t ≈ 0.06 s)
+    // the regularised friction creeps and its rate 1/ε makes the motion stiff, as for every
+    // sliding contact: the run stops before.
     let prepared = prepared(&[
         ("rolling_disc(r)", "sliding_disc(r, 0.3)"),
         (
@@ -365,7 +367,7 @@ fn the_coin_sliding_with_friction_balances_its_energy_with_the_friction_work() {
         ),
         (
             "duration = 10, output = 0.05",
-            "duration = 0.3, output = 0.01",
+            "duration = 0.05, output = 0.005",
         ),
     ]);
     let simulation = completed(&prepared);
@@ -377,7 +379,7 @@ fn the_coin_sliding_with_friction_balances_its_energy_with_the_friction_work() {
         first - last > 1e-3 * first,
         "the friction dissipates: {first} → {last}"
     );
-    assert!(balance.abs() < 1e-9 * first, "balance {balance:e}");
+    assert!(balance.abs() < 1e-10, "balance {balance:e}");
 }
 
 #[test]
