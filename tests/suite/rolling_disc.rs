@@ -8,9 +8,8 @@
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
+use super::common::contact_rows::rows_along_motion;
 use super::common::programs::{example_text, mechanism};
-use lsdc::dynamics::algorithms::{forward_kinematics, Data};
-use lsdc::dynamics::contacts::contact_rows;
 use lsdc::integrators::{Feature, INTEGRATORS};
 use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run, Sample, Simulation};
@@ -87,6 +86,20 @@ fn contact_integrators() -> impl Iterator<Item = &'static str> {
         .map(|entry| entry.name)
 }
 
+/// The largest of each of the quantities `errors` gives at each sample.
+fn largest_over<const N: usize>(
+    samples: &[Sample],
+    errors: impl Fn(&Sample) -> [f64; N],
+) -> [f64; N] {
+    let mut largest = [0.0f64; N];
+    for sample in samples {
+        for (k, error) in errors(sample).into_iter().enumerate() {
+            largest[k] = largest[k].max(error);
+        }
+    }
+    largest
+}
+
 fn completed(prepared: &Prepared) -> Simulation {
     let simulation = run(prepared, &mut |_| {});
     let failure = &simulation.report.failure;
@@ -122,8 +135,7 @@ fn the_coin_precesses_steadily_as_its_closed_form_says_with_every_integrator() {
         let simulation = completed(&prepared);
         assert_eq!(simulation.samples.len(), 17, "{integrator}");
         let first = total_energy(&simulation.samples[0]);
-        let mut largest = [0.0f64; 6];
-        for sample in &simulation.samples {
+        let largest = largest_over(&simulation.samples, |sample| {
             let heading = precession * sample.time;
             let across = Vector3::new(heading.cos(), heading.sin(), 0.0);
             // The centre turns about (−x_c, 0) at the rate Ω, at the height r sin θ.
@@ -131,38 +143,25 @@ fn the_coin_precesses_steadily_as_its_closed_form_says_with_every_integrator() {
             let axis = orientation(sample) * Vector3::z();
             let expected_axis = -sin * across + cos * Vector3::z();
             let expected_spin = precession * Vector3::z() + (spin_rate - precession * cos) * axis;
-            let errors = [
+            [
                 (centre(sample) - expected_centre).norm(),
                 (axis - expected_axis).norm(),
                 (spin(sample) - expected_spin).norm() / spin_rate.abs(),
                 (spin(sample).dot(&axis) - spin_rate).abs() / spin_rate.abs(),
                 slip(sample).norm(),
                 ((total_energy(sample) - first) / first).abs(),
-            ];
-            for (k, error) in errors.into_iter().enumerate() {
-                largest[k] = largest[k].max(error);
-            }
-        }
-        println!(
-            "{integrator}: centre, axis, spin, n, slip, energy {:?}",
-            largest.map(|x| format!("{x:.1e}"))
-        );
-        let [centre_error, axis_error, spin_error, n_error, slip_error, energy_drift] = largest;
-        assert!(
-            centre_error < 1e-7,
-            "{integrator}: centre off by {centre_error:e} m"
-        );
-        assert!(
-            axis_error < 1e-6,
-            "{integrator}: axis off by {axis_error:e}"
-        );
-        assert!(spin_error < 1e-6, "{integrator}: ω off by {spin_error:e}");
-        assert!(n_error < 1e-7, "{integrator}: n off by {n_error:e}");
-        assert!(slip_error < 1e-9, "{integrator}: slip {slip_error:e} m/s");
-        assert!(
-            energy_drift < 1e-8,
-            "{integrator}: energy drift {energy_drift:e}"
-        );
+            ]
+        });
+        let names = [
+            "centre (m)",
+            "axis",
+            "ω (relative)",
+            "n (relative)",
+            "slip (m/s)",
+            "energy",
+        ];
+        let bounds = [1e-7, 1e-6, 1e-6, 1e-7, 1e-9, 1e-8];
+        assert_below(integrator, names, largest, bounds);
     }
     assert_eq!(
         integrators, 4,
@@ -210,6 +209,40 @@ fn fall_time(start: f64, rolling: bool) -> f64 {
     sum * h / 3.0
 }
 
+/// Each of the `largest` errors below its bound, printed with its name.
+fn assert_below<const N: usize>(run: &str, names: [&str; N], largest: [f64; N], bounds: [f64; N]) {
+    let shown: Vec<String> = (names.iter().zip(&largest))
+        .map(|(name, error)| format!("{name} {error:.1e}"))
+        .collect();
+    println!("{run}: {}", shown.join(", "));
+    for ((name, error), bound) in names.iter().zip(largest).zip(bounds) {
+        assert!(
+            error < bound,
+            "{run}: {name} off by {error:e} (bound {bound:e})"
+        );
+    }
+}
+
+/// The run stopped where the coin fell flat, where the contact has no point: it says so, at
+/// the closed form's time `expected` (within a step).
+fn assert_fell_flat(simulation: &Simulation, expected: f64, integrator: &str) {
+    let failure = (simulation.report.failure.as_ref()).expect("the coin fell flat");
+    let message = &failure.message;
+    assert!(
+        message.contains("the disc of the contact `contact` fell flat"),
+        "{message}"
+    );
+    println!(
+        "{integrator}: flat at t = {} against {expected}",
+        failure.time
+    );
+    assert!(
+        (failure.time - expected).abs() < 2e-3,
+        "{integrator}: flat at t = {} against {expected}",
+        failure.time
+    );
+}
+
 /// The coin started at rest at the tilt `start`, with `law` its contact.
 fn falling(law: &str, start: f64, integrator: &str) -> Simulation {
     let initial = format!(
@@ -237,7 +270,6 @@ fn falling(law: &str, start: f64, integrator: &str) -> Simulation {
 #[test]
 fn the_rolling_coin_falls_as_a_compound_pendulum_about_its_contact_point_then_stops_flat() {
     let start = 80f64.to_radians();
-    let expected_end = fall_time(start, true);
     for integrator in contact_integrators() {
         let settings = match integrator {
             "rk4" => "integrator = rk4, step = 1e-4".to_string(),
@@ -247,68 +279,38 @@ fn the_rolling_coin_falls_as_a_compound_pendulum_about_its_contact_point_then_st
         let first = &simulation.samples[0];
         let contact_start =
             centre(first) - RADIUS * up_the_disc(&(orientation(first) * Vector3::z()));
-        let mut largest = [0.0f64; 5];
-        for sample in &simulation.samples {
+        let largest = largest_over(&simulation.samples, |sample| {
             let axis = orientation(sample) * Vector3::z();
             let tilt = axis.z.acos();
             // The axis turns about the tangent y: θ̇ = −ω_y.
             let rate = -spin(sample).y;
             let contact = centre(sample) - RADIUS * up_the_disc(&axis);
-            let errors = [
+            [
                 (rate * rate - fall_rate_squared(start, tilt, true)).abs(),
                 (sample.coordinates[2] - RADIUS * tilt.sin()).abs(),
                 (contact - contact_start).norm(),
                 slip(sample).norm(),
                 ((total_energy(sample) - total_energy(first)) / total_energy(first)).abs(),
-            ];
-            for (k, error) in errors.into_iter().enumerate() {
-                largest[k] = largest[k].max(error);
-            }
-        }
-        println!(
-            "{integrator}: θ̇², height, contact point, slip, energy {:?}",
-            largest.map(|x| format!("{x:.1e}"))
-        );
-        let [rate_error, height_error, contact_error, slip_error, energy_drift] = largest;
-        // Relative to θ̇² at the end of the fall (1,212 s⁻²).
-        let rate_error = rate_error / fall_rate_squared(start, 0.0, true);
-        assert!(rate_error < 1e-9, "{integrator}: θ̇² off by {rate_error:e}");
-        assert!(
-            height_error < 1e-12,
-            "{integrator}: height off by {height_error:e}"
-        );
-        assert!(
-            contact_error < 1e-9,
-            "{integrator}: the contact point moved {contact_error:e}"
-        );
-        assert!(slip_error < 1e-9, "{integrator}: slip {slip_error:e}");
-        assert!(
-            energy_drift < 1e-8,
-            "{integrator}: energy drift {energy_drift:e}"
-        );
-        // It fell flat, where the contact has no point: the run says so, at the closed form's
-        // time.
-        let failure = simulation
-            .report
-            .failure
-            .as_ref()
-            .expect("the coin fell flat");
-        assert!(
-            failure
-                .message
-                .contains("the disc of the contact `contact` fell flat"),
-            "{}",
-            failure.message
-        );
-        println!(
-            "{integrator}: flat at t = {} against {expected_end}",
-            failure.time
-        );
-        assert!(
-            (failure.time - expected_end).abs() < 2e-3,
-            "{integrator}: flat at t = {} against {expected_end}",
-            failure.time
-        );
+            ]
+        });
+        // θ̇² relative to its value at the end of the fall (1,212 s⁻²).
+        let [rate, rest @ ..] = largest;
+        let largest = [
+            rate / fall_rate_squared(start, 0.0, true),
+            rest[0],
+            rest[1],
+            rest[2],
+            rest[3],
+        ];
+        let names = [
+            "θ̇²",
+            "height (m)",
+            "contact point moved (m)",
+            "slip (m/s)",
+            "energy",
+        ];
+        assert_below(integrator, names, largest, [1e-9, 1e-12, 1e-9, 1e-9, 1e-8]);
+        assert_fell_flat(&simulation, fall_time(start, true), integrator);
     }
 }
 
@@ -321,36 +323,21 @@ fn the_coin_sliding_without_friction_falls_with_its_centre_straight_down() {
         "integrator = dopri5, tolerance = 1e-11",
     );
     let first = &simulation.samples[0];
-    let mut largest = [0.0f64; 3];
-    for sample in &simulation.samples {
+    let largest = largest_over(&simulation.samples, |sample| {
         let axis = orientation(sample) * Vector3::z();
         let tilt = axis.z.acos();
         let rate = -spin(sample).y;
-        let errors = [
+        [
             (rate * rate - fall_rate_squared(start, tilt, false)).abs(),
             (centre(sample).xy() - centre(first).xy()).norm(),
             ((total_energy(sample) - total_energy(first)) / total_energy(first)).abs(),
-        ];
-        for (k, error) in errors.into_iter().enumerate() {
-            largest[k] = largest[k].max(error);
-        }
-    }
-    println!(
-        "θ̇², centre moved, energy {:?}",
-        largest.map(|x| format!("{x:.1e}"))
-    );
-    let [rate_error, moved, energy_drift] = largest;
-    let rate_error = rate_error / fall_rate_squared(start, 0.0, false);
-    assert!(rate_error < 1e-9, "θ̇² off by {rate_error:e}");
-    assert!(moved < 1e-10, "the centre moved {moved:e} sideways");
-    assert!(energy_drift < 1e-8, "energy drift {energy_drift:e}");
-    let failure = simulation.report.failure.as_ref().expect("fell flat");
-    let expected_end = fall_time(start, false);
-    assert!(
-        (failure.time - expected_end).abs() < 2e-3,
-        "flat at t = {} against {expected_end}",
-        failure.time
-    );
+        ]
+    });
+    let [rate, moved, energy] = largest;
+    let largest = [rate / fall_rate_squared(start, 0.0, false), moved, energy];
+    let names = ["θ̇²", "centre moved sideways (m)", "energy"];
+    assert_below("dopri5", names, largest, [1e-9, 1e-10, 1e-8]);
+    assert_fell_flat(&simulation, fall_time(start, false), "dopri5");
 }
 
 #[test]
@@ -393,44 +380,15 @@ fn the_disc_contact_bias_is_the_rate_of_the_rows_along_the_motion() {
     let norm = q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt();
     q[3..7].iter_mut().for_each(|x| *x /= norm);
     let v = vec![0.4, -1.1, 0.3, 2.0, -3.0, 15.0];
-    let mut data = Data::new(model);
-    let rows_at = |q: &[f64], data: &mut Data, with_bias: bool| {
-        forward_kinematics(model, data, q, &v).expect("kinematics");
-        contact_rows(model, data, &v, with_bias)
-    };
-    let here = rows_at(&q, &mut data, true);
+    let rows = rows_along_motion(model, &q, &v, 1e-6);
+    let here = &rows.here;
     assert!(here.flat_disc.is_none());
-    let h = 1e-6;
-    let moved = |sign: f64, data: &mut Data| {
-        let mut moved = q.clone();
-        let step: Vec<f64> = v.iter().map(|x| sign * h * x).collect();
-        model.retract(&mut moved, &step);
-        rows_at(&moved, data, false).velocity
-    };
-    let rate = (moved(1.0, &mut data) - moved(-1.0, &mut data)) / (2.0 * h);
+    rows.assert_bias_is_the_rate();
+    // The normal row is the rate of the gap, r sin θ below the centre's height.
     assert!(
-        rate.rows(0, 3).norm() > 0.1,
-        "a state where the rows change: {rate}"
-    );
-    for row in 0..3 {
-        assert!(
-            (rate[row] - here.bias[row]).abs() < 1e-6 * (1.0 + rate[row].abs()),
-            "row {row}: {} against {}",
-            here.bias[row],
-            rate[row]
-        );
-    }
-    // The normal row is the rate of the gap r sin θ below the centre's height.
-    let gap = |sign: f64, data: &mut Data| {
-        let mut moved = q.clone();
-        let step: Vec<f64> = v.iter().map(|x| sign * h * x).collect();
-        model.retract(&mut moved, &step);
-        rows_at(&moved, data, false).gap[0]
-    };
-    let gap_rate = (gap(1.0, &mut data) - gap(-1.0, &mut data)) / (2.0 * h);
-    assert!(
-        (gap_rate - here.velocity[2]).abs() < 1e-8,
-        "{gap_rate} against {}",
+        (rows.gap_rate[0] - here.velocity[2]).abs() < 1e-8,
+        "{} against {}",
+        rows.gap_rate[0],
         here.velocity[2]
     );
 }
