@@ -155,8 +155,7 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         self.evaluate_efforts(t, q, v)?;
         if model.has_contacts() {
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
+            self.contact_rows_here(v, true)?;
         }
         let efforts = match model.has_efforts() {
             true => &self.scratch.efforts,
@@ -176,6 +175,24 @@ impl<'m> MechanicalSystem<'m> {
 
     /// Forms the response of a tree at the mass matrix in `mass`: M⁻¹, or S (SᵀMS)⁻¹ Sᵀ with S
     /// the basis of the velocities the mimic couplings allow.
+    /// The contacts' rows at the state whose kinematics the scratch holds, into its
+    /// `contact_state` (with γ when `with_bias`). A disc that lies flat, or passed lying flat
+    /// since the last rows, has no contact point: the run ends there.
+    pub(super) fn contact_rows_here(
+        &mut self,
+        v: &[f64],
+        with_bias: bool,
+    ) -> Result<(), SystemError> {
+        let state = &mut self.scratch.contact_state;
+        contacts::contact_rows_into(self.model, &mut self.scratch.data, v, with_bias, state);
+        match state.flat_disc {
+            Some(k) => Err(SystemError::DiscFlat {
+                contact: self.model.contacts[k].name.clone(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     fn form_tree_response(&mut self) -> Result<(), SystemError> {
         let formed = match self.model.mimics.is_empty() {
             true => self.scratch.response.on_tree(&self.scratch.mass),

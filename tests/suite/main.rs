@@ -45,6 +45,7 @@ mod reactions;
 mod regression;
 mod repository;
 mod robustness;
+mod rolling_disc;
 mod rows;
 mod runs;
 mod simulation;

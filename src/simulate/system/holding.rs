@@ -32,8 +32,7 @@ impl MechanicalSystem<'_> {
         if model.has_contacts() && model.has_loops() {
             // The loops' solve leaves the kinematics for its own rows: the contacts' start anew.
             forward_kinematics(model, &mut self.scratch.data, q, v)?;
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
+            self.contact_rows_here(v, true)?;
         }
         self.decide_contact_rows();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();

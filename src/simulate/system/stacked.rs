@@ -11,7 +11,6 @@
 use super::{MechanicalSystem, SystemError};
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
 use crate::dynamics::algorithms::{crba_after_kinematics, forward_kinematics};
-use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Wanted};
 
 /// Newton steps at most that close the position rows.
@@ -161,8 +160,7 @@ impl MechanicalSystem<'_> {
             self.form_tree_response()?;
         }
         if model.has_contacts() {
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, false, state);
+            self.contact_rows_here(v, false)?;
         }
         self.decide_contact_rows();
         Ok(())
