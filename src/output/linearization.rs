@@ -15,6 +15,9 @@ pub fn text(l: &Linearization, modes: bool) -> String {
     if !l.dependent.is_empty() {
         out += &format!("following from them through the loops: {}\n", list(&l.dependent));
     }
+    if !l.held.is_empty() {
+        out += &format!("held where they are (motions without mass): {}\n", list(&l.held));
+    }
     let inputs = match l.inputs.is_empty() {
         true => "none".to_string(),
         false => list(&l.inputs) + " (generalised forces along them)",

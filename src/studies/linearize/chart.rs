@@ -21,14 +21,19 @@ const CLOSURE_ITERATIONS: usize = 30;
 /// corrector goes on to round-off, a few 1e-16 relative to the mechanism's size.
 const CLOSED: f64 = 1e-11;
 
-/// The independent coordinates (their indices among the state's positions, which are those
-/// of the velocities for the joints a linearisation accepts) and how to complete them.
+/// The independent coordinates (their indices among the state's velocities) and how to
+/// complete them.
 #[derive(Clone, Debug)]
 pub struct Chart {
     pub independent: Vec<usize>,
+    /// The independent coordinates' indices among the state's positions.
+    positions: Vec<usize>,
     /// The coordinates that follow from the independent ones through the loops (none in a
     /// tree).
     pub dependent: Vec<usize>,
+    /// Velocities held at the operating point: motions the loops allow that carry no mass (a
+    /// rod spinning about its axis between two ball joints), left out of the linear model.
+    pub held: Vec<usize>,
     /// The operating point's positions, where every closure starts.
     origin: Vec<f64>,
     /// The loops' rows that constrain anything (a ball joint's rotation rows do not).
@@ -50,24 +55,35 @@ impl From<EvalError> for ChartError {
 }
 
 impl Chart {
-    /// Every coordinate of a tree.
+    /// Every coordinate of a tree whose joints are all chains of coordinates.
     pub fn tree(model: &Model, origin: &[f64]) -> Chart {
+        let independent: Vec<usize> = (0..model.velocities()).collect();
         Chart {
-            independent: (0..model.velocities()).collect(),
+            positions: independent.iter().filter_map(|&i| position_of(model, i)).collect(),
+            independent,
             dependent: Vec::new(),
+            held: Vec::new(),
             origin: origin.to_vec(),
             rows: Vec::new(),
         }
     }
 
-    /// The coordinates `independent` of a mechanism with loops closed at `origin`.
-    pub fn with_loops(model: &Model, independent: Vec<usize>, origin: &[f64]) -> Chart {
+    /// The coordinates `independent` (each a coordinate of a chain, see [`position_of`]) of a
+    /// mechanism with loops closed at `origin`, the velocities `held` where they are.
+    pub fn with_loops(
+        model: &Model,
+        independent: Vec<usize>,
+        held: Vec<usize>,
+        origin: &[f64],
+    ) -> Chart {
         let active = loops::active_rows(model);
         let rows = (0..active.len()).filter(|&r| active[r]).collect();
         Chart {
             dependent: (0..model.velocities())
-                .filter(|i| !independent.contains(i))
+                .filter(|i| !independent.contains(i) && !held.contains(i))
                 .collect(),
+            held,
+            positions: independent.iter().filter_map(|&i| position_of(model, i)).collect(),
             independent,
             origin: origin.to_vec(),
             rows,
@@ -75,7 +91,7 @@ impl Chart {
     }
 
     /// Whether the loops' rows, at the chart's origin, leave the dependent coordinates
-    /// determined by the independent ones: removing the independent columns from G keeps its
+    /// determined by the independent and held ones: removing their columns from G keeps its
     /// rank.
     pub fn parametrises(&self, model: &Model, data: &mut Data) -> Result<bool, EvalError> {
         let jacobian = self.rows_jacobian(model, data, &self.origin)?;
@@ -94,8 +110,8 @@ impl Chart {
     ) -> Result<(Vec<f64>, Vec<f64>), ChartError> {
         let mut q = self.origin.clone();
         let mut v = vec![0.0; model.velocities()];
-        for (k, &i) in self.independent.iter().enumerate() {
-            q[i] = z[k];
+        for (k, (&i, &p)) in self.independent.iter().zip(&self.positions).enumerate() {
+            q[p] = z[k];
             v[i] = rates[k];
         }
         if self.dependent.is_empty() {
@@ -128,6 +144,11 @@ impl Chart {
         Ok((q, v))
     }
 
+    /// The independent coordinates' values at positions q.
+    pub fn coordinates(&self, q: &[f64]) -> Vec<f64> {
+        self.positions.iter().map(|&p| q[p]).collect()
+    }
+
     /// The active rows of G at q, one column per state velocity.
     fn rows_jacobian(
         &self,
@@ -140,14 +161,25 @@ impl Chart {
         Ok(c.jacobian.dense().select_rows(&self.rows))
     }
 
-    /// `jacobian` with the independent coordinates' columns zeroed: its minimum-norm steps
-    /// leave them where they are.
+    /// `jacobian` with the independent and held velocities' columns zeroed: its minimum-norm
+    /// steps leave them where they are.
     fn without_independent(&self, mut jacobian: DMatrix<f64>) -> DMatrix<f64> {
-        for &i in &self.independent {
+        for &i in self.independent.iter().chain(&self.held) {
             jacobian.column_mut(i).fill(0.0);
         }
         jacobian
     }
+}
+
+/// The position of state velocity `velocity` when it is the rate of a coordinate (a chain's,
+/// or a complementary link's); `None` for a spherical or free joint's angular or linear
+/// velocity, whose positions are a quaternion and a point.
+pub fn position_of(model: &Model, velocity: usize) -> Option<usize> {
+    if velocity >= model.nv {
+        return Some(model.nq + velocity - model.nv);
+    }
+    let joint = (model.joints.iter()).find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&velocity))?;
+    (!joint.is_quaternion()).then(|| joint.q_offset + velocity - joint.v_offset)
 }
 
 /// Gauss–Newton to round-off: a step is kept while it reduces the largest row.

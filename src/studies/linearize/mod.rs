@@ -75,6 +75,9 @@ pub struct Linearization {
     /// the independent ones were chosen.
     pub coordinates: Vec<String>,
     pub dependent: Vec<String>,
+    /// Motions held at the operating point: allowed by the loops, without mass, no
+    /// coordinate's rate (rods spinning between ball joints).
+    pub held: Vec<String>,
     pub choice: &'static str,
     /// `crank.q` for a coordinate, `crank.q'` for its rate: the coordinates, then their rates.
     pub states: Vec<String>,
@@ -140,7 +143,7 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     };
     let (q, v) = model.split_state(&y);
     let n = chart.independent.len();
-    let x: Vec<f64> = (chart.independent.iter().map(|&i| q[i]))
+    let x: Vec<f64> = (chart.coordinates(&q).into_iter())
         .chain(chart.independent.iter().map(|&i| v[i]))
         .collect();
     let mut evaluator = Evaluator {
@@ -201,6 +204,7 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
         time,
         coordinates: chart.independent.iter().map(|&i| model.velocity_name(i)).collect(),
         dependent: chart.dependent.iter().map(|&i| model.velocity_name(i)).collect(),
+        held: chart.held.iter().map(|&i| model.velocity_name(i)).collect(),
         choice,
         states,
         inputs: request.inputs.clone(),
@@ -295,7 +299,11 @@ fn operating_state(
     }
 }
 
-/// The chart of a mechanism with loops: the run's free coordinates, or those named.
+/// The chart of a mechanism with loops: the run's free coordinates, or those named, as many as
+/// the motions with mass. The massless motions (a rod spinning between two ball joints) are
+/// held where they are by as many of the free spherical joints' velocities, the first set
+/// (in the run's order) that the named coordinates complete into a chart: holding them only
+/// fixes how far the massless parts have spun, which no force depends on.
 fn choose_coordinates(
     prepared: &Prepared,
     system: &mut MechanicalSystem<'_>,
@@ -304,29 +312,58 @@ fn choose_coordinates(
     q: &[f64],
 ) -> Result<(Chart, &'static str), LinearizeError> {
     let model = &prepared.model;
-    if named.is_empty() {
-        let chart = Chart::with_loops(model, free, q);
-        return Ok((chart, "the free coordinates the run chooses"));
-    }
-    let chosen = indices(prepared, named)?;
+    let massless = system.scratch.loops.structure.massless;
+    let (spins, coordinates): (Vec<usize>, Vec<usize>) =
+        (free.iter()).partition(|&&i| chart::position_of(model, i).is_none());
     let run_choice = || free.iter().map(|&i| model.velocity_name(i)).collect();
-    if chosen.len() != free.len() {
+    let with_mass = free.len().saturating_sub(massless);
+    let (independent, choice) = if named.is_empty() {
+        if coordinates.len() != with_mass || spins.len() > massless {
+            return Err(LinearizeError::FreeQuaternion {
+                with_mass,
+                run_choice: run_choice(),
+            });
+        }
+        (coordinates, "the free coordinates the run chooses")
+    } else {
+        (indices(prepared, named)?, "the coordinates named with --coordinate")
+    };
+    if independent.len() != with_mass {
         return Err(LinearizeError::CoordinateCount {
-            given: chosen.len(),
+            given: independent.len(),
+            with_mass,
             run_choice: run_choice(),
         });
     }
-    let chart = Chart::with_loops(model, chosen, q);
-    let parametrises = chart
-        .parametrises(model, &mut system.scratch.data)
-        .map_err(|e| LinearizeError::System(SystemError::from(e)))?;
-    if !parametrises {
-        return Err(LinearizeError::NotIndependent {
-            given: named.to_vec(),
-            run_choice: run_choice(),
-        });
+    let data = &mut system.scratch.data;
+    for held in subsets(&spins, massless) {
+        let chart = Chart::with_loops(model, independent.clone(), held, q);
+        let parametrises = (chart.parametrises(model, data))
+            .map_err(|e| LinearizeError::System(SystemError::from(e)))?;
+        if parametrises {
+            return Ok((chart, choice));
+        }
     }
-    Ok((chart, "the coordinates named with --coordinate"))
+    Err(LinearizeError::NotIndependent {
+        given: named.to_vec(),
+        run_choice: run_choice(),
+    })
+}
+
+/// The subsets of `count` of `items`, in order (those that leave out the last items first).
+fn subsets(items: &[usize], count: usize) -> Vec<Vec<usize>> {
+    if count == 0 {
+        return vec![Vec::new()];
+    }
+    if items.len() < count {
+        return Vec::new();
+    }
+    let mut found: Vec<Vec<usize>> = subsets(&items[1..], count - 1)
+        .into_iter()
+        .map(|rest| std::iter::once(items[0]).chain(rest).collect())
+        .collect();
+    found.extend(subsets(&items[1..], count));
+    found
 }
 
 /// What a linearisation does not handle.
@@ -371,7 +408,10 @@ fn refuse_unsupported(prepared: &Prepared) -> Result<(), LinearizeError> {
         name: name.to_string(),
         kind,
     };
-    if let Some(joint) = model.joints.iter().find(|j| j.kind != JointType::Chain) {
+    // With loops, such a joint may follow from the independent coordinates
+    // (`choose_coordinates` refuses it among them).
+    let quaternion = model.joints.iter().find(|j| j.kind != JointType::Chain);
+    if let (false, Some(joint)) = (model.has_loops(), quaternion) {
         return Err(refuse(&joint.chain.name, Unsupported::Quaternion));
     }
     if let Some(contact) = model.contacts.first() {
@@ -453,8 +493,18 @@ pub enum LinearizeError {
     Repeated { name: String },
     /// `--coordinate` for a tree, whose coordinates are all independent.
     TreeCoordinates,
-    /// As many independent coordinates as the mobility are needed; the run's choice.
-    CoordinateCount { given: usize, run_choice: Vec<String> },
+    /// As many independent coordinates as the motions with mass are needed; the run's choice.
+    CoordinateCount {
+        given: usize,
+        with_mass: usize,
+        run_choice: Vec<String>,
+    },
+    /// The run's free coordinates include spherical or free joints' velocities, which are no
+    /// coordinate's rates, beyond the massless motions: coordinates must be named.
+    FreeQuaternion {
+        with_mass: usize,
+        run_choice: Vec<String>,
+    },
     /// The coordinates named leave some of the others undetermined by the loops.
     NotIndependent { given: Vec<String>, run_choice: Vec<String> },
     /// A join or contact (`name`) of a kind a linearisation does not handle.
@@ -514,10 +564,18 @@ impl fmt::Display for LinearizeError {
                 f,
                 "--coordinate chooses the independent coordinates of closed loops; every coordinate of a tree is independent"
             ),
-            LinearizeError::CoordinateCount { given, run_choice } => write!(
+            LinearizeError::CoordinateCount {
+                given,
+                with_mass,
+                run_choice,
+            } => write!(
                 f,
-                "{given} coordinate(s) given with --coordinate, but the loops leave {} independent ({})",
-                run_choice.len(),
+                "{given} coordinate(s) given with --coordinate, but the loops leave {with_mass} independent motions with mass (the run's free coordinates: {})",
+                quoted(run_choice)
+            ),
+            LinearizeError::FreeQuaternion { with_mass, run_choice } => write!(
+                f,
+                "the run's free coordinates ({}) include velocities of spherical joints, which are no coordinates' rates: name {with_mass} independent coordinates of revolute or prismatic joints with --coordinate (the actuated ones of a parallel robot)",
                 quoted(run_choice)
             ),
             LinearizeError::NotIndependent { given, run_choice } => write!(
