@@ -13,10 +13,16 @@ pub fn text(l: &Linearization, modes: bool) -> String {
     let mut out = format!("linearised at the {} state, t = {}\n", l.point, l.time);
     out += &format!("coordinates: {} ({})\n", list(&l.coordinates), l.choice);
     if !l.dependent.is_empty() {
-        out += &format!("following from them through the loops: {}\n", list(&l.dependent));
+        out += &format!(
+            "following from them through the loops: {}\n",
+            list(&l.dependent)
+        );
     }
     if !l.held.is_empty() {
-        out += &format!("held where they are (motions without mass): {}\n", list(&l.held));
+        out += &format!(
+            "held where they are (motions without mass): {}\n",
+            list(&l.held)
+        );
     }
     let inputs = match l.inputs.is_empty() {
         true => "none".to_string(),
@@ -28,7 +34,10 @@ pub fn text(l: &Linearization, modes: bool) -> String {
     if !l.inputs.is_empty() {
         out += &vector("operating inputs u", &l.inputs, &l.input);
     }
-    let accelerations: Vec<String> = l.states[l.coordinates.len()..].iter().map(|s| format!("{s}'")).collect();
+    let accelerations: Vec<String> = l.states[l.coordinates.len()..]
+        .iter()
+        .map(|s| format!("{s}'"))
+        .collect();
     out += &vector("accelerations there", &accelerations, &l.accelerations);
     out += &matrix("A", &l.states, &l.states, &l.a);
     out += &matrix("B", &l.states, &l.inputs, &l.b);
@@ -73,17 +82,27 @@ pub fn matlab(l: &Linearization, source: &str) -> String {
     for (name, m) in [("A", &l.a), ("B", &l.b), ("C", &l.c), ("D", &l.d)] {
         out += &format!("{name} = {};\n", matlab_matrix(m));
     }
-    out += &format!("x0 = {};\n", matlab_matrix(&DMatrix::from_column_slice(l.state.len(), 1, &l.state)));
-    out += &format!("u0 = {};\n", matlab_matrix(&DMatrix::from_column_slice(l.input.len(), 1, &l.input)));
+    out += &format!(
+        "x0 = {};\n",
+        matlab_matrix(&DMatrix::from_column_slice(l.state.len(), 1, &l.state))
+    );
+    out += &format!(
+        "u0 = {};\n",
+        matlab_matrix(&DMatrix::from_column_slice(l.input.len(), 1, &l.input))
+    );
     for (name, names) in [
         ("states", &l.states),
         ("inputs", &l.inputs),
         ("outputs", &l.outputs),
     ] {
-        let quoted: Vec<String> = names.iter().map(|n| format!("'{}'", n.replace('\'', "''"))).collect();
+        let quoted: Vec<String> = names
+            .iter()
+            .map(|n| format!("'{}'", n.replace('\'', "''")))
+            .collect();
         out += &format!("{name} = {{{}}};\n", quoted.join(", "));
     }
-    out += "sys = ss(A, B, C, D, 'StateName', states, 'InputName', inputs, 'OutputName', outputs);\n";
+    out +=
+        "sys = ss(A, B, C, D, 'StateName', states, 'InputName', inputs, 'OutputName', outputs);\n";
     out
 }
 
@@ -133,7 +152,12 @@ fn matrix(title: &str, rows: &[String], columns: &[String], m: &DMatrix<f64>) ->
         return format!("{title} ({} × {}): empty\n\n", m.nrows(), m.ncols());
     }
     let width = rows.iter().map(|n| n.chars().count()).max().unwrap_or(0);
-    let column_width = columns.iter().map(|n| n.chars().count()).max().unwrap_or(0).max(14);
+    let column_width = columns
+        .iter()
+        .map(|n| n.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(14);
     let mut out = format!("{title}:\n  {:width$}", "");
     for name in columns {
         out += &format!("  {name:>column_width$}");

@@ -45,7 +45,9 @@ pub struct Chart {
 pub enum ChartError {
     Evaluation(EvalError),
     /// The loops could not be closed at these independent coordinates: the largest row left.
-    NotClosed { residual: f64 },
+    NotClosed {
+        residual: f64,
+    },
 }
 
 impl From<EvalError> for ChartError {
@@ -59,7 +61,10 @@ impl Chart {
     pub fn tree(model: &Model, origin: &[f64]) -> Chart {
         let independent: Vec<usize> = (0..model.velocities()).collect();
         Chart {
-            positions: independent.iter().filter_map(|&i| position_of(model, i)).collect(),
+            positions: independent
+                .iter()
+                .filter_map(|&i| position_of(model, i))
+                .collect(),
             independent,
             dependent: Vec::new(),
             held: Vec::new(),
@@ -83,7 +88,10 @@ impl Chart {
                 .filter(|i| !independent.contains(i) && !held.contains(i))
                 .collect(),
             held,
-            positions: independent.iter().filter_map(|&i| position_of(model, i)).collect(),
+            positions: independent
+                .iter()
+                .filter_map(|&i| position_of(model, i))
+                .collect(),
             independent,
             origin: origin.to_vec(),
             rows,
@@ -140,7 +148,9 @@ impl Chart {
         let dependent = self.without_independent(jacobian);
         let completion = corrector::minimum_norm_step(&dependent, &moving, SOLVE_TOLERANCE)
             .ok_or(ChartError::NotClosed { residual: f64::NAN })?;
-        v.iter_mut().zip(completion.iter()).for_each(|(v, c)| *v += c);
+        v.iter_mut()
+            .zip(completion.iter())
+            .for_each(|(v, c)| *v += c);
         Ok((q, v))
     }
 
@@ -178,7 +188,8 @@ pub fn position_of(model: &Model, velocity: usize) -> Option<usize> {
     if velocity >= model.nv {
         return Some(model.nq + velocity - model.nv);
     }
-    let joint = (model.joints.iter()).find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&velocity))?;
+    let joint =
+        (model.joints.iter()).find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&velocity))?;
     (!joint.is_quaternion()).then(|| joint.q_offset + velocity - joint.v_offset)
 }
 

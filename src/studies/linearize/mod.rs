@@ -129,7 +129,11 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     let inputs = indices(prepared, &request.inputs)?;
     let (time, q, v, input) = operating_state(prepared, request.point, &request.inputs)?;
     let mut y: Vec<f64> = q.iter().chain(&v).copied().collect();
-    let mut system = MechanicalSystem::new(model, prepared.coordinates.clone(), Stabilisation::Projection);
+    let mut system = MechanicalSystem::new(
+        model,
+        prepared.coordinates.clone(),
+        Stabilisation::Projection,
+    );
     let (chart, choice) = if model.has_loops() {
         system.start_loops(&mut y)?;
         let free = system.scratch.loops.structure.free.clone();
@@ -161,7 +165,10 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
             .filter(|(_, a)| a.abs() > EQUILIBRIUM)
         {
             let coordinate = model.velocity_name(evaluator.chart.independent[k]);
-            return Err(LinearizeError::NotAnEquilibrium { coordinate, acceleration: left });
+            return Err(LinearizeError::NotAnEquilibrium {
+                coordinate,
+                acceleration: left,
+            });
         }
     }
     let all: Vec<usize> = (0..2 * n).collect();
@@ -190,7 +197,11 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     } else {
         let count = prepared.outputs.names.len();
         let derivative = differences::jacobian(&x, &all, count, |x| evaluator.outputs(x))?;
-        (prepared.outputs.names.clone(), derivative.value, derivative.error)
+        (
+            prepared.outputs.names.clone(),
+            derivative.value,
+            derivative.error,
+        )
     };
     let d = DMatrix::zeros(outputs.len(), evaluator.inputs.len());
     let eigenvalues = modes::eigenvalues(&a).ok_or(LinearizeError::NoEigenvalues)?;
@@ -202,8 +213,16 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
             OperatingPoint::Equilibrium => "equilibrium",
         },
         time,
-        coordinates: chart.independent.iter().map(|&i| model.velocity_name(i)).collect(),
-        dependent: chart.dependent.iter().map(|&i| model.velocity_name(i)).collect(),
+        coordinates: chart
+            .independent
+            .iter()
+            .map(|&i| model.velocity_name(i))
+            .collect(),
+        dependent: chart
+            .dependent
+            .iter()
+            .map(|&i| model.velocity_name(i))
+            .collect(),
         held: chart.held.iter().map(|&i| model.velocity_name(i)).collect(),
         choice,
         states,
@@ -226,7 +245,10 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
 
 /// The coordinates `crank.q`, then their rates `crank.q'`.
 fn state_names(model: &crate::dynamics::model::Model, independent: &[usize]) -> Vec<String> {
-    let names: Vec<String> = independent.iter().map(|&i| model.velocity_name(i)).collect();
+    let names: Vec<String> = independent
+        .iter()
+        .map(|&i| model.velocity_name(i))
+        .collect();
     names
         .iter()
         .cloned()
@@ -267,7 +289,11 @@ fn operating_state(
         OperatingPoint::EndOfRun => {
             let mut last = None;
             let simulation = crate::simulate::run::run(prepared, &mut |sample| {
-                last = Some((sample.time, sample.coordinates.clone(), sample.rates.clone()))
+                last = Some((
+                    sample.time,
+                    sample.coordinates.clone(),
+                    sample.rates.clone(),
+                ))
             });
             if let Some(failure) = simulation.report.failure {
                 return Err(LinearizeError::RunFailed {
@@ -326,7 +352,10 @@ fn choose_coordinates(
         }
         (coordinates, "the free coordinates the run chooses")
     } else {
-        (indices(prepared, named)?, "the coordinates named with --coordinate")
+        (
+            indices(prepared, named)?,
+            "the coordinates named with --coordinate",
+        )
     };
     if independent.len() != with_mass {
         return Err(LinearizeError::CoordinateCount {
@@ -455,12 +484,18 @@ impl Evaluator<'_> {
         for (&i, &value) in self.inputs.iter().zip(u) {
             forces[i] += value;
         }
-        self.system.set_inputs((!self.inputs.is_empty()).then_some(forces));
+        self.system
+            .set_inputs((!self.inputs.is_empty()).then_some(forces));
         let y: Vec<f64> = q.iter().chain(&v).copied().collect();
         let mut dydt = vec![0.0; y.len()];
         self.system.derivative(self.time, &y, &mut dydt)?;
         let positions = model.positions();
-        Ok(self.chart.independent.iter().map(|&i| dydt[positions + i]).collect())
+        Ok(self
+            .chart
+            .independent
+            .iter()
+            .map(|&i| dydt[positions + i])
+            .collect())
     }
 
     /// The program's outputs at state x.
@@ -490,7 +525,9 @@ pub enum LinearizeError {
     /// An input or coordinate names no coordinate that can carry one (see `StaticsError`).
     Name(StaticsError),
     /// A coordinate named twice among the inputs or the coordinates.
-    Repeated { name: String },
+    Repeated {
+        name: String,
+    },
     /// `--coordinate` for a tree, whose coordinates are all independent.
     TreeCoordinates,
     /// As many independent coordinates as the motions with mass are needed; the run's choice.
@@ -506,13 +543,25 @@ pub enum LinearizeError {
         run_choice: Vec<String>,
     },
     /// The coordinates named leave some of the others undetermined by the loops.
-    NotIndependent { given: Vec<String>, run_choice: Vec<String> },
+    NotIndependent {
+        given: Vec<String>,
+        run_choice: Vec<String>,
+    },
     /// A join or contact (`name`) of a kind a linearisation does not handle.
-    Unsupported { name: String, kind: Unsupported },
+    Unsupported {
+        name: String,
+        kind: Unsupported,
+    },
     /// At an equilibrium the inputs do not hold the mechanism: the largest acceleration left.
-    NotAnEquilibrium { coordinate: String, acceleration: f64 },
+    NotAnEquilibrium {
+        coordinate: String,
+        acceleration: f64,
+    },
     /// The run to the operating point failed.
-    RunFailed { time: f64, message: String },
+    RunFailed {
+        time: f64,
+        message: String,
+    },
     /// The loops cannot be closed at a state near the operating point.
     Chart(ChartError),
     System(SystemError),
@@ -542,15 +591,18 @@ impl LinearizeError {
         let span = match joins.find(|&id| mechanism.join_name(id) == *name) {
             Some(id) => mechanism.join(id).span,
             None => {
-                let index = (0..mechanism.contacts.len())
-                    .find(|&k| mechanism.contact_name(k) == *name)?;
+                let index =
+                    (0..mechanism.contacts.len()).find(|&k| mechanism.contact_name(k) == *name)?;
                 mechanism.contacts[index].span
             }
         };
         Some(
-            Diagnostic::error("E0850", format!("`{name}` cannot be linearised: {}", kind.what()))
-                .primary(span, kind.what())
-                .help(kind.help()),
+            Diagnostic::error(
+                "E0850",
+                format!("`{name}` cannot be linearised: {}", kind.what()),
+            )
+            .primary(span, kind.what())
+            .help(kind.help()),
         )
     }
 }
@@ -570,7 +622,7 @@ impl fmt::Display for LinearizeError {
                 run_choice,
             } => write!(
                 f,
-                "{given} coordinate(s) given with --coordinate, but the loops leave {with_mass} independent motions with mass (the run's free coordinates: {})",
+                "{given} coordinate(s) given with --coordinate, but the loops leave {with_mass} independent motion(s) with mass (the run's free coordinates: {})",
                 quoted(run_choice)
             ),
             LinearizeError::FreeQuaternion { with_mass, run_choice } => write!(

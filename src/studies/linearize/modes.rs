@@ -54,7 +54,8 @@ pub fn modes(eigenvalues: &[Eigenvalue]) -> Vec<Mode> {
         .iter()
         .map(|&eigenvalue| {
             let natural_frequency = eigenvalue.re.hypot(eigenvalue.im);
-            let damping_ratio = (natural_frequency > 0.0).then(|| -eigenvalue.re / natural_frequency);
+            let damping_ratio =
+                (natural_frequency > 0.0).then(|| -eigenvalue.re / natural_frequency);
             Mode {
                 eigenvalue,
                 natural_frequency,
