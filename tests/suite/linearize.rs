@@ -334,8 +334,8 @@ fn differences_reach_round_off_on_a_smooth_function() {
     })
     .unwrap();
     let exact = [x[0].cos() * x[1].exp(), x[0].sin() * x[1].exp()];
-    for c in 0..2 {
-        let error = (found.value[(0, c)] - exact[c]).abs();
+    for (c, exact) in exact.iter().enumerate() {
+        let error = (found.value[(0, c)] - exact).abs();
         assert!(error < 1e-12, "column {c}: {error}");
         assert!(found.error[(0, c)] >= error && found.error[(0, c)] < 1e-10);
     }

@@ -3,11 +3,11 @@
 //!
 //! Each column j is the central difference D(h) = (f(x + h eⱼ) − f(x − h eⱼ)) / 2h at the steps
 //! h, h/2, h/4, h/8, whose error is a series in h², extrapolated in Neville's tableau
-//! T[i][k] = (4ᵏ T[i][k−1] − T[i−1][k−1]) / (4ᵏ − 1): T[3][3] is exact to O(h⁸). Its truncation
+//! T(i, k) = (4ᵏ T(i, k−1) − T(i−1, k−1)) / (4ᵏ − 1): T(3, 3) is exact to O(h⁸). Its truncation
 //! error is estimated as in Ridders' method (C. J. F. Ridders, "Accurate computation of F′(x)
 //! and F′(x) F″(x)", Adv. Eng. Software 4(2), 1982; Numerical Recipes, 3rd ed., §5.7) by the
-//! larger of its distances to the extrapolation of one order less (T[3][2]) and to the best
-//! one of the steps before (T[2][2]). Rounding is not seen by those distances where f is near
+//! larger of its distances to the extrapolation of one order less (T(3, 2)) and to the best
+//! one of the steps before (T(2, 2)). Rounding is not seen by those distances where f is near
 //! zero while the terms it sums are not (at an equilibrium); it is bounded apart, assuming
 //! each value of f is computed to `ROUNDING` ε max(1, |f|): a central difference at the
 //! smallest step h/8 divides that by h/8.

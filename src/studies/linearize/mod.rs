@@ -127,7 +127,8 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     let model = &prepared.model;
     refuse_unsupported(prepared)?;
     let inputs = indices(prepared, &request.inputs)?;
-    let (time, q, v, input) = operating_state(prepared, request.point, &request.inputs)?;
+    let Operating { time, q, v, input } =
+        operating_state(prepared, request.point, &request.inputs)?;
     let mut y: Vec<f64> = q.iter().chain(&v).copied().collect();
     let mut system = MechanicalSystem::new(
         model,
@@ -269,12 +270,20 @@ fn indices(prepared: &Prepared, names: &[String]) -> Result<Vec<usize>, Lineariz
         .collect()
 }
 
-/// The time, positions, velocities and inputs of the operating point.
+/// The operating point's time, positions, velocities and inputs.
+struct Operating {
+    time: f64,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    input: Vec<f64>,
+}
+
+/// The operating point `point` asks for.
 fn operating_state(
     prepared: &Prepared,
     point: OperatingPoint,
     inputs: &[String],
-) -> Result<(f64, Vec<f64>, Vec<f64>, Vec<f64>), LinearizeError> {
+) -> Result<Operating, LinearizeError> {
     let model = &prepared.model;
     let declared = |coordinates: &[f64], rates: &[f64]| {
         model
@@ -284,7 +293,13 @@ fn operating_state(
     match point {
         OperatingPoint::Initial => {
             let (q, v) = declared(&prepared.coordinates, &prepared.rates)?;
-            Ok((0.0, q, v, vec![0.0; inputs.len()]))
+            let input = vec![0.0; inputs.len()];
+            Ok(Operating {
+                time: 0.0,
+                q,
+                v,
+                input,
+            })
         }
         OperatingPoint::EndOfRun => {
             let mut last = None;
@@ -306,7 +321,8 @@ fn operating_state(
                 message: "the run wrote no sample".to_string(),
             })?;
             let (q, v) = declared(&coordinates, &rates)?;
-            Ok((time, q, v, vec![0.0; inputs.len()]))
+            let input = vec![0.0; inputs.len()];
+            Ok(Operating { time, q, v, input })
         }
         OperatingPoint::Equilibrium => {
             let rest = vec![0.0; prepared.rates.len()];
@@ -320,7 +336,12 @@ fn operating_state(
                     .map(|e| e.effort)
                     .collect(),
             };
-            Ok((0.0, q, v, input))
+            Ok(Operating {
+                time: 0.0,
+                q,
+                v,
+                input,
+            })
         }
     }
 }
