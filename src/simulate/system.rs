@@ -46,6 +46,10 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
+    /// Generalised forces a caller sets from outside the program (one per state velocity),
+    /// added to the efforts' at every evaluation: the inputs of a linearisation
+    /// (`studies::linearize`).
+    inputs: Option<DVector<f64>>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -62,7 +66,19 @@ impl<'m> MechanicalSystem<'m> {
             scratch: Box::new(Scratch::new(model, stabilisation)),
             sampling: None,
             native: None,
+            inputs: None,
         }
+    }
+
+    /// Sets the generalised forces added to the program's efforts from now on (one per state
+    /// velocity; `None` for none). Their power counts as the power of non-conservative efforts.
+    pub fn set_inputs(&mut self, inputs: Option<DVector<f64>>) {
+        self.inputs = inputs;
+    }
+
+    /// Whether an evaluation computes efforts: the program applies some, or a caller set inputs.
+    fn reads_efforts(&self) -> bool {
+        self.model.has_efforts() || self.inputs.is_some()
     }
 
     /// Runs `evaluate` with the outputs' scratch in place of the integrator's: the outputs'
@@ -126,13 +142,19 @@ impl<'m> MechanicalSystem<'m> {
             coordinates: &state.coordinates,
             rates: &state.rates,
         };
-        Ok(evaluate_into(
+        evaluate_into(
             model,
             &mut self.scratch.data,
             &declared,
             t,
             &mut self.scratch.efforts,
-        )?)
+        )?;
+        if let Some(inputs) = &self.inputs {
+            let efforts = &mut self.scratch.efforts;
+            efforts.tau += inputs;
+            efforts.power += inputs.iter().zip(v).map(|(u, rate)| u * rate).sum::<f64>();
+        }
+        Ok(())
     }
 
     /// Whether this tree's accelerations come from its mass matrix ([`needs_mass_matrix`]).
@@ -157,7 +179,7 @@ impl<'m> MechanicalSystem<'m> {
         if model.has_contacts() {
             self.contact_rows_here(v, true)?;
         }
-        let efforts = match model.has_efforts() {
+        let efforts = match self.reads_efforts() {
             true => &self.scratch.efforts,
             false => &self.scratch.no_efforts,
         };
@@ -350,7 +372,7 @@ impl<'m> MechanicalSystem<'m> {
             accelerations.copy_from(&self.scratch.loop_scratch.accelerations);
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
-        } else if model.has_efforts() {
+        } else if self.reads_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
             self.evaluate_efforts(t, q, v)?;
             let (tau, external) = (
@@ -387,7 +409,7 @@ impl<'m> MechanicalSystem<'m> {
         // The contacts, the couplings with loops and the coordinates held at rest, solved on the
         // response together.
         self.solve_rows(q, v, &mut accelerations)?;
-        let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
+        let efforts = if self.reads_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
         } else {
             &self.scratch.no_efforts
