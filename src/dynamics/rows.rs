@@ -79,6 +79,9 @@ pub enum Holder {
     /// The joint friction `index`, sticking: at rest, no position row (the friction holds the
     /// rate, not the place).
     Friction { index: usize },
+    /// The stop `index` at an impact: its rate brought to `rate_after` (−e times the rate
+    /// before), the other rows to rest; a velocity row only.
+    Impact { index: usize, rate_after: f64 },
 }
 
 /// Relative size of a coupling's violation below which it is not corrected.
@@ -120,6 +123,36 @@ pub struct RowStack {
     pub accelerations: DVector<f64>,
 }
 
+/// The velocities just after an impact, from `v` (before it) into `after`: the change of least
+/// kinetic metric along X that brings the stop's row (`impact`, a held row with
+/// [`Holder::Impact`]) to its rate after and every other row of `stack` to rest, the impulse
+/// P = (G X Gᵀ)⁺ (G v − w) acting through the response as the forces do
+/// (Pfeiffer & Glocker, *Multibody Dynamics with Unilateral Contacts*, 1996, §7: Newton's
+/// impact law on one contact, the bilateral rows kept). `stack` arranged with `impact` last
+/// among its held rows, G gathered, X formed at the state. False when the result is not
+/// finite (no inertia along the stopped coordinate).
+pub fn impact_velocities(
+    stack: &mut RowStack,
+    response: &mut Response,
+    all: &ContactRows,
+    mimics: &[Mimic],
+    v: &[f64],
+    after: &mut [f64],
+) -> bool {
+    after.copy_from_slice(v);
+    stack.velocity_values(all, mimics, v);
+    stack.add_least_change(response, after);
+    // The law holds exactly on the stop's row: the solve leaves its rate within round-off of
+    // the target, and after a dead stop (e = 0) a rate of −1e-17 into the stop would be a
+    // second impact at once. The other rows move by that round-off at most.
+    for held in &stack.held {
+        if let Holder::Impact { rate_after, .. } = held.holder {
+            after[held.velocity] = rate_after;
+        }
+    }
+    after.iter().all(|x| x.is_finite())
+}
+
 /// Why the rows' solve failed: a sliding contact's normal force changes sign at every solve
 /// (the contact named).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -130,11 +163,19 @@ pub struct Unsettled {
 impl RowStack {
     /// An empty stack for the velocities of `model`.
     pub fn new(model: &Model) -> RowStack {
-        let n = model.velocities();
+        let mut stack = RowStack::over(model.velocities(), model.contacts.len());
+        stack
+            .held
+            .reserve(model.stops.len() + model.frictions.len());
+        stack
+    }
+
+    /// An empty stack for `n` velocities and `contacts` contacts.
+    pub fn over(n: usize, contacts: usize) -> RowStack {
         RowStack {
             contacts: Vec::new(),
             couplings: 0,
-            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            held: Vec::new(),
             g: DMatrix::zeros(0, n),
             directions: DMatrix::zeros(n, 0),
             bias: DVector::zeros(0),
@@ -142,8 +183,8 @@ impl RowStack {
             coupling: DMatrix::zeros(0, 0),
             right: DVector::zeros(0),
             pivoted: Pivoted::default(),
-            pressing: vec![1.0; model.contacts.len()],
-            contact_forces: vec![Vector3::zeros(); model.contacts.len()],
+            pressing: vec![1.0; contacts],
+            contact_forces: vec![Vector3::zeros(); contacts],
             accelerations: DVector::zeros(n),
         }
     }
@@ -287,7 +328,11 @@ impl RowStack {
         }
         let first = contacts + self.couplings;
         for (i, held) in self.held.iter().enumerate() {
-            self.right[first + i] = v[held.velocity];
+            let target = match held.holder {
+                Holder::Impact { rate_after, .. } => rate_after,
+                Holder::Stop { .. } | Holder::Friction { .. } => 0.0,
+            };
+            self.right[first + i] = v[held.velocity] - target;
         }
         self.right.amax() > 0.0
     }
@@ -323,7 +368,7 @@ impl RowStack {
                 Holder::Stop {
                     position, bound, ..
                 } => (q[position] - bound, bound.abs().max(1.0)),
-                Holder::Friction { .. } => (0.0, 1.0),
+                Holder::Friction { .. } | Holder::Impact { .. } => (0.0, 1.0),
             };
             self.right[first + i] = value;
             open |= value.abs() > BOUND_ROUND_OFF * size;

@@ -127,6 +127,8 @@ impl MechanicalSystem<'_> {
                     }
                 }
                 Holder::Friction { index } => self.scratch.holding[index] = force,
+                // An impact's row is solved at its event, never among an evaluation's rows.
+                Holder::Impact { .. } => {}
             }
         }
     }

@@ -105,7 +105,12 @@ impl MechanicalSystem<'_> {
 
     /// At (q, v): the loops' allowed motions (a constrained solve), the contacts' rows without
     /// γ, the response X and the contact rows of the run decided if they were not.
-    fn stacked_geometry(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+    pub(super) fn stacked_geometry(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SystemError> {
         let model = self.model;
         self.scratch.response_here = false;
         if model.has_loops() {

@@ -1,7 +1,7 @@
 //! Stops in a mechanism with closed loops, contacts or mimic couplings: a stop is one more row
-//! of the constraints, unilateral. At an impact its row joins every other row (the loops', the
-//! contacts', the couplings') in the impulse's saddle-point system (restitution on the stop's
-//! row alone, the other rows brought to zero velocity, `stops::impact_velocities`); while its
+//! of the constraints, unilateral. At an impact its row joins the constraint stack, solved on
+//! the response that keeps the loops (restitution on the stop's row alone, the stack's other
+//! rows brought to zero velocity, `rows::impact_velocities`); while its
 //! coordinate rests on it, it is an active bilateral row: its acceleration is held at zero with
 //! the other rows kept (`holding`), and after each step the positions are brought back onto the
 //! other rows' position constraints and the bound together, the velocities onto all the rows.
@@ -38,25 +38,6 @@ struct Rows {
 }
 
 impl MechanicalSystem<'_> {
-    /// The mass matrix over the state's velocities (the complementary links' coordinates carry
-    /// no inertia) and the constraint rows kept through an impact at (q, v), dense
-    /// (`velocity_rows`; None without any). Leaves the forward kinematics of (q, v) in `data`.
-    pub(in crate::simulate) fn impact_system(
-        &mut self,
-        q: &[f64],
-        v: &[f64],
-    ) -> Result<(DMatrix<f64>, Option<DMatrix<f64>>), SystemError> {
-        let model = self.model;
-        let mass = loops::structure::full_mass(&crba(model, &mut self.scratch.data, q)?, v.len());
-        let constrained = model.has_loops() || model.has_contacts() || !model.mimics.is_empty();
-        let rows = match constrained {
-            true => Some(self.velocity_rows(q, v, &[])?),
-            false => None,
-        };
-        forward_kinematics(model, &mut self.scratch.data, q, v)?;
-        Ok((mass, rows))
-    }
-
     /// Brings a state back onto the rows and the bounds of the resting stops together, after
     /// the loops' or the contacts' own projection: Gauss–Newton on the positions with
     /// minimum-norm steps on the rows' position constraints and qₖ = bound, then the velocities'
