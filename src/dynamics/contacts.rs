@@ -40,8 +40,8 @@ use crate::spatial::{self, Motion};
 pub const CONTACT_ROW_NAMES: [&str; 3] = ["slip along x", "slip along y", "normal"];
 
 /// The contacts' rows at a state: three per contact, every row computed (the kept ones are
-/// chosen by the caller).
-#[derive(Clone, Debug)]
+/// chosen by the caller); empty by default.
+#[derive(Clone, Debug, Default)]
 pub struct ContactRows {
     /// 3 per contact × nv: the relative velocity at the contact point along the plane's axes.
     pub jacobian: DMatrix<f64>,

@@ -406,8 +406,9 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        // The contacts, the couplings with loops and the coordinates held at rest, solved on the
-        // response together.
+        // The constraint stack's rows (`dynamics::rows`: the contacts, the couplings with loops,
+        // the coordinates held), solved together on the response of the base solve above (the
+        // loops' block, or the tree's): the one place every evaluation of the run solves them.
         self.solve_rows(q, v, &mut accelerations)?;
         let efforts = if self.reads_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
