@@ -13,6 +13,7 @@
 //! | contacts' gaps and couplings (`simulate::system::stacked`) | none: every step is kept | every row at its round-off | none | 4 | — |
 //! | assembly (`kinematics::assembly`) | squared norm | largest row ≤ tolerance (1e-12) | LM from 1e-6, floor 1e-15, 30 tries | 200 | a rejected step under 1e-16 ends it |
 //! | assembly's polish (same file) | norm | 0 | none | 8 | any reduction continues |
+//! | assembly's nearest closed configuration to given values (same file) | none: every step is kept | a step under 1e-13 of the largest coordinate | none | 50 | — |
 //! | drag (`kinematics::drag`) | distance to the target | distance 0 | LM from 1e-6, floor 1e-15, 30 tries | 100 | progress ≤ 1e-15·max(distance, 1) ends it |
 //!
 //! What differs between them is what each caller supplies ([`Correction`]): its residual and

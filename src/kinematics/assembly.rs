@@ -209,13 +209,13 @@ fn given_distance(start: &[f64], q: &[f64], holds: &[Hold]) -> f64 {
 }
 
 /// From `q`, the closed configuration nearest to the given values of `start`: Gauss–Newton on
-/// the optimality conditions. Each step changes the given coordinates g by the least that
-/// brings them nearest to their values while closing the linearised loops, the free
-/// coordinates f taking what they must: with P the projection away from what the free
-/// coordinates can do (the range of J_f), g moves to the least-norm solution of
-/// P J_g (g' − g₀) = P (J_g (g − g₀) − r), then f by the least-norm solution of
-/// J_f Δf = −r − J_g Δg. The result is closed again at the assembly tolerance; `None` when
-/// the iteration does not settle.
+/// the optimality conditions, iterated by the house's corrector (`NearestSteps`). Each step
+/// changes the given coordinates g by the least that brings them nearest to their values while
+/// closing the linearised loops, the free coordinates f taking what they must: with P the
+/// projection away from what the free coordinates can do (the range of J_f), g moves to the
+/// least-norm solution of P J_g (g' − g₀) = P (J_g (g − g₀) − r), then f by the least-norm
+/// solution of J_f Δf = −r − J_g Δg. The result is closed again at the assembly tolerance;
+/// `None` when the iteration does not settle.
 fn nearest_closed(
     model: &KinematicModel,
     start: &[f64],
@@ -223,25 +223,78 @@ fn nearest_closed(
     q: &[f64],
     options: &AssemblyOptions,
 ) -> Result<Option<Assembled>, AssemblyError> {
-    let given: Vec<usize> = (0..q.len()).filter(|&i| holds[i] == Hold::Given).collect();
-    let free: Vec<usize> = (0..q.len()).filter(|&i| holds[i] == Hold::Free).collect();
-    let mut q = q.to_vec();
-    let mut change = f64::INFINITY;
-    for _ in 0..50 {
-        let current = closure(model, &q)?;
-        let columns = |of: &[usize]| {
-            DMatrix::from_fn(current.jacobian.nrows(), of.len(), |r, c| {
-                current.jacobian[(r, of[c])]
-            })
-        };
-        let (j_given, j_free) = (columns(&given), columns(&free));
+    let mut steps = NearestSteps {
+        model,
+        start,
+        given: (0..q.len()).filter(|&i| holds[i] == Hold::Given).collect(),
+        free: (0..q.len()).filter(|&i| holds[i] == Hold::Free).collect(),
+        q: q.to_vec(),
+        change: f64::INFINITY,
+        trial: Vec::new(),
+    };
+    let outcome = correct(&mut steps, &NEAREST)?;
+    if outcome.stop == Stop::NoStep || steps.change > 1e-8 {
+        return Ok(None);
+    }
+    let fixed = held(holds);
+    match solve(model, &steps.q, &fixed, options) {
+        Ok(assembled) => Ok(Some(assembled)),
+        Err(AssemblyError::NoAssembly { .. }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// The search for the nearest closed configuration: undamped steps, each one kept (they solve
+/// the optimality conditions, which no single merit measures), at most 50.
+const NEAREST: Settings = Settings {
+    iterations: 50,
+    damping: Damping::None,
+    acceptance: Acceptance::EveryStep,
+    progress: Progress::Any,
+};
+
+/// The steps of [`nearest_closed`], for the corrector: settled once a step changes no
+/// coordinate by more than 1e-13 of the largest.
+struct NearestSteps<'a> {
+    model: &'a KinematicModel,
+    start: &'a [f64],
+    given: Vec<usize>,
+    free: Vec<usize>,
+    q: Vec<f64>,
+    /// The largest component of the last step (infinite before the first).
+    change: f64,
+    /// The coordinates the step leads to.
+    trial: Vec<f64>,
+}
+
+impl Correction for NearestSteps<'_> {
+    type Error = AssemblyError;
+
+    fn settled(&self) -> bool {
+        let size = self.q.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
+        self.change < 1e-13 * size
+    }
+
+    fn merit(&self) -> f64 {
+        self.change
+    }
+
+    fn step(&mut self, _damping: f64) -> Result<Option<f64>, AssemblyError> {
+        let current = closure(self.model, &self.q)?;
+        let (j_given, j_free) = (
+            free_columns(&current.jacobian, &self.given),
+            free_columns(&current.jacobian, &self.free),
+        );
         let away_from_free = |m: &DMatrix<f64>| -> DMatrix<f64> {
             match free_range(&j_free) {
                 Some(u) => m - &u * (u.transpose() * m),
                 None => m.clone(),
             }
         };
-        let offset = DVector::from_iterator(given.len(), given.iter().map(|&i| q[i] - start[i]));
+        let offset = DVector::from_iterator(
+            self.given.len(),
+            self.given.iter().map(|&i| self.q[i] - self.start[i]),
+        );
         let a = away_from_free(&j_given);
         let b = away_from_free(&DMatrix::from_column_slice(
             current.residual.len(),
@@ -254,31 +307,29 @@ fn nearest_closed(
         let given_step = &next_offset - &offset;
         let free_step = match least_norm(j_free, &(-&current.residual - &j_given * &given_step)) {
             Some(step) => step,
-            None => DVector::zeros(free.len()),
+            None => DVector::zeros(self.free.len()),
         };
-        change = given_step.amax().max(free_step.amax());
-        for (k, &i) in given.iter().enumerate() {
-            q[i] += given_step[k];
-        }
-        for (k, &i) in free.iter().enumerate() {
-            q[i] += free_step[k];
-        }
+        let change = given_step.amax().max(free_step.amax());
         if !change.is_finite() {
             return Ok(None);
         }
-        let size = q.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
-        if change < 1e-13 * size {
-            break;
+        self.trial.clone_from(&self.q);
+        for (k, &i) in self.given.iter().enumerate() {
+            self.trial[i] += given_step[k];
         }
+        for (k, &i) in self.free.iter().enumerate() {
+            self.trial[i] += free_step[k];
+        }
+        self.change = change;
+        Ok(Some(change))
     }
-    if change > 1e-8 {
-        return Ok(None);
+
+    fn try_step(&mut self) -> Result<f64, AssemblyError> {
+        Ok(self.change)
     }
-    let fixed = held(holds);
-    match solve(model, &q, &fixed, options) {
-        Ok(assembled) => Ok(Some(assembled)),
-        Err(AssemblyError::NoAssembly { .. }) => Ok(None),
-        Err(e) => Err(e),
+
+    fn accept(&mut self) {
+        std::mem::swap(&mut self.q, &mut self.trial);
     }
 }
 
