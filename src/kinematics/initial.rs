@@ -130,20 +130,10 @@ fn moved_warning(names: &[String], moved: &[Moved], starting: &Starting) -> Opti
         1 => format!("assembly moved {}", change(first)),
         n => format!("assembly moved {n} given values"),
     };
-    let mut warning = Diagnostic::warning("W0801", message);
-    for (k, m) in moved.iter().enumerate() {
-        if let Some(span) = starting.spans[m.coordinate] {
-            let label = format!("moved to {}", shortest(m.assembled));
-            warning = if k == 0 {
-                warning.primary(span, label)
-            } else {
-                warning.secondary(span, label)
-            };
-        }
-        if moved.len() > 1 {
-            warning = warning.note(change(m));
-        }
-    }
+    let changes: Vec<(usize, f64, String)> = (moved.iter())
+        .map(|m| (m.coordinate, m.assembled, change(m)))
+        .collect();
+    let warning = labelled_at_each_value(Diagnostic::warning("W0801", message), &changes, starting);
     warning
         .note("no closed configuration holds every given value: this is the smallest change that closes the loops")
         .help("give the values of a closed configuration (the ones above), mark the values to hold `fixed` (the others then move), or mark starting guesses `guess`")
@@ -261,22 +251,36 @@ fn far_guesses_warning(
         1 => format!("assembly moved the guess {}", change(first)),
         n => format!("assembly moved {n} guesses by more than a quarter turn"),
     };
-    let mut warning = Diagnostic::warning("W0805", message);
-    for (k, f) in far.iter().enumerate() {
-        if let Some(span) = starting.spans[f.coordinate] {
-            let label = format!("moved to {}", shortest(f.assembled));
+    let changes: Vec<(usize, f64, String)> = (far.iter())
+        .map(|f| (f.coordinate, f.assembled, change(f)))
+        .collect();
+    let warning = labelled_at_each_value(Diagnostic::warning("W0805", message), &changes, starting);
+    warning
+        .note("the configuration reached may lie on another assembly branch than the one the guesses describe")
+        .help("give guesses near the configuration you mean (mark them `fixed` to hold them), and check what `lsdc assemble` prints")
+}
+
+/// `warning` labelled at the `initial` of each starting value assembly moved (coordinate, value
+/// reached, its change in words), the first label primary, with a note per value when there
+/// are several.
+fn labelled_at_each_value(
+    mut warning: Diagnostic,
+    changes: &[(usize, f64, String)],
+    starting: &Starting,
+) -> Diagnostic {
+    for (k, (coordinate, assembled, change)) in changes.iter().enumerate() {
+        if let Some(span) = starting.spans[*coordinate] {
+            let label = format!("moved to {}", shortest(*assembled));
             warning = match k {
                 0 => warning.primary(span, label),
                 _ => warning.secondary(span, label),
             };
         }
-        if far.len() > 1 {
-            warning = warning.note(change(f));
+        if changes.len() > 1 {
+            warning = warning.note(change.clone());
         }
     }
     warning
-        .note("the configuration reached may lie on another assembly branch than the one the guesses describe")
-        .help("give guesses near the configuration you mean (mark them `fixed` to hold them), and check what `lsdc assemble` prints")
 }
 
 /// Four significant digits, for positions and changes read by people.
