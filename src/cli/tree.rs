@@ -17,8 +17,12 @@ pub struct TreeArgs {
 }
 
 pub fn run(args: &TreeArgs) -> ExitCode {
-    let analyse =
-        |mechanism: &Mechanism| lsdc::studies::analysis::tree(mechanism).map(|r| (r, Vec::new()));
+    let analyse = |mechanism: &Mechanism| {
+        lsdc::studies::analysis::tree(mechanism).map(|mut report| {
+            let warnings = std::mem::take(&mut report.warnings);
+            (report, warnings)
+        })
+    };
     let options = args.libraries.options();
     report(
         &args.file,

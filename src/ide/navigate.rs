@@ -29,8 +29,13 @@ pub fn definition(analysis: &Analysis, offset: usize) -> Option<Location> {
 pub fn hover(analysis: &Analysis, offset: usize) -> Option<Hover> {
     let occurrence = occurrence(analysis, offset)?;
     let name = &analysis.text(analysis.root)[occurrence.span.range()];
+    let text = analysis.text(analysis.root);
     let value = match occurrence.reference {
-        Reference::Definition(id) => definition_hover(analysis, &analysis.index.definitions[id]),
+        Reference::Definition(id) => definition_hover(
+            analysis,
+            &analysis.index.definitions[id],
+            qualifier(&text[..occurrence.span.start() as usize]),
+        ),
         Reference::Builtin => builtin_hover(name)?,
         Reference::Field | Reference::Unresolved => return None,
     };
@@ -57,9 +62,25 @@ fn builtin_hover(name: &str) -> Option<String> {
     Ty::from_annotation(name).map(|ty| format!("type `{ty}`"))
 }
 
-/// The declaration's source, what the name is, what the mechanism makes of it and its
-/// documentation.
-fn definition_hover(analysis: &Analysis, definition: &Definition) -> String {
+/// The instance path written before a name, from the text that precedes it: `leg[1]:` in
+/// `leg[1]:knee`, `Arm:` in `Arm:sh`; empty for a name written alone.
+fn qualifier(before: &str) -> &str {
+    if !before.ends_with(':') {
+        return "";
+    }
+    let path = |c: char| c.is_alphanumeric() || matches!(c, '_' | '[' | ']' | ':' | '\'');
+    let start = before
+        .char_indices()
+        .rev()
+        .take_while(|&(_, c)| path(c))
+        .last()
+        .map_or(before.len(), |(i, _)| i);
+    &before[start..]
+}
+
+/// The declaration's source, what the name is, what the mechanism makes of it (for the
+/// instance `qualifier` names, when it names one) and its documentation.
+fn definition_hover(analysis: &Analysis, definition: &Definition, qualifier: &str) -> String {
     let mut parts = Vec::new();
     let source = &analysis.text(definition.declaration.file())[definition.declaration.range()];
     let mut lines: Vec<&str> = source.lines().take(HOVER_LINES).collect();
@@ -70,7 +91,7 @@ fn definition_hover(analysis: &Analysis, definition: &Definition) -> String {
         parts.push(format!("```lsd\n{}\n```", lines.join("\n")));
     }
     parts.push(describe(analysis, definition));
-    if let Some(facts) = mechanism_facts(analysis, definition) {
+    if let Some(facts) = mechanism_facts(analysis, definition, qualifier) {
         parts.push(facts);
     }
     if let Some(doc) = &definition.doc {
@@ -120,8 +141,13 @@ fn describe(analysis: &Analysis, definition: &Definition) -> String {
 }
 
 /// A body's mass properties, a join's coordinates: from the elaborated mechanism, when the
-/// program has no errors.
-fn mechanism_facts(analysis: &Analysis, definition: &Definition) -> Option<String> {
+/// program has no errors. A join declared in an array of packages has one instance per element
+/// (`leg[1]:knee`, `leg[2]:knee`): the one `qualifier` names, or all of them.
+fn mechanism_facts(
+    analysis: &Analysis,
+    definition: &Definition,
+    qualifier: &str,
+) -> Option<String> {
     let mechanism = analysis.mechanism()?;
     let inside = |span: crate::source::Span| {
         let declaration = definition.declaration;
@@ -159,17 +185,31 @@ fn mechanism_facts(analysis: &Analysis, definition: &Definition) -> Option<Strin
             ))
         }
         (DefinitionKind::Join, _) => {
-            let join = mechanism
-                .joins
-                .iter()
-                .find(|j| named(&j.name) && inside(j.span))?;
-            let link = &mechanism.links[join.link.0 as usize];
-            let coordinates: Vec<String> = link
-                .coordinates
-                .iter()
-                .map(|c| format!("`{}.{c}`", definition.name))
+            let instance = format!("{}:{}", qualifier.trim_end_matches(':'), definition.name);
+            let instances: Vec<_> = (mechanism.joins.iter())
+                .filter(|j| inside(j.span))
+                .filter(|j| {
+                    let name = j.name.as_deref().unwrap_or_default();
+                    named(&j.name) || name.ends_with(&format!(":{}", definition.name))
+                })
                 .collect();
-            Some(format!("coordinates: {}", coordinates.join(", ")))
+            let named_here: Vec<_> = (instances.iter())
+                .filter(|j| j.name.as_deref() == Some(instance.as_str()))
+                .copied()
+                .collect();
+            let shown = if named_here.is_empty() {
+                instances
+            } else {
+                named_here
+            };
+            let coordinates: Vec<String> = (shown.iter())
+                .flat_map(|join| {
+                    let name = join.name.as_deref().unwrap_or_default();
+                    let link = &mechanism.links[join.link.0 as usize];
+                    (link.coordinates.iter()).map(move |c| format!("`{name}.{c}`"))
+                })
+                .collect();
+            (!coordinates.is_empty()).then(|| format!("coordinates: {}", coordinates.join(", ")))
         }
         _ => None,
     }

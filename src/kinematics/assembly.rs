@@ -186,7 +186,7 @@ pub fn assemble_respecting(
 }
 
 /// An angle's change brought within half a turn, (−π, π], by whole turns.
-fn within_half_turn(change: f64) -> f64 {
+pub(crate) fn within_half_turn(change: f64) -> f64 {
     let turn = std::f64::consts::TAU;
     let wrapped = change - turn * (change / turn).round();
     if wrapped <= -std::f64::consts::PI {

@@ -9,6 +9,7 @@ use crate::source::Span;
 use super::assembly::{
     assemble_respecting, held, Assembled, AssemblyError, AssemblyOptions, Hold, Moved,
 };
+use super::branch::{self, Coincidence, FarGuess};
 use super::eval;
 use super::model::KinematicModel;
 
@@ -70,8 +71,9 @@ pub fn starting(mechanism: &Mechanism, model: &KinematicModel) -> Result<Startin
     Ok(starting)
 }
 
-/// An assembled starting configuration, with a warning (W0801) for each given value assembly
-/// had to change.
+/// An assembled starting configuration, with its warnings: the given values assembly had to
+/// change (W0801), and the signs that it reached another branch than the one meant (W0803
+/// singular, W0804 joins brought together, W0805 guesses moved far).
 pub struct InitialAssembly {
     pub assembled: Assembled,
     pub fixed: Vec<bool>,
@@ -90,9 +92,10 @@ pub fn assemble_initial(
     match assemble_respecting(model, &starting.q, &starting.holds, options) {
         Ok(assembled) => {
             let names = model.coordinate_names();
-            let warnings = moved_warning(&names, &assembled.moved, &starting)
+            let mut warnings: Vec<Diagnostic> = moved_warning(&names, &assembled.moved, &starting)
                 .into_iter()
                 .collect();
+            warnings.extend(branch_warnings(mechanism, model, &starting, &assembled.q));
             Ok(InitialAssembly {
                 assembled,
                 fixed: starting.fixed(),
@@ -127,24 +130,162 @@ fn moved_warning(names: &[String], moved: &[Moved], starting: &Starting) -> Opti
         1 => format!("assembly moved {}", change(first)),
         n => format!("assembly moved {n} given values"),
     };
-    let mut warning = Diagnostic::warning("W0801", message);
-    for (k, m) in moved.iter().enumerate() {
-        if let Some(span) = starting.spans[m.coordinate] {
-            let label = format!("moved to {}", shortest(m.assembled));
-            warning = if k == 0 {
-                warning.primary(span, label)
-            } else {
-                warning.secondary(span, label)
-            };
-        }
-        if moved.len() > 1 {
-            warning = warning.note(change(m));
-        }
-    }
+    let changes: Vec<(usize, f64, String)> = (moved.iter())
+        .map(|m| (m.coordinate, m.assembled, change(m)))
+        .collect();
+    let warning = labelled_at_each_value(Diagnostic::warning("W0801", message), &changes, starting);
     warning
         .note("no closed configuration holds every given value: this is the smallest change that closes the loops")
         .help("give the values of a closed configuration (the ones above), mark the values to hold `fixed` (the others then move), or mark starting guesses `guess`")
         .into()
+}
+
+/// The warnings on the branch a closed configuration lies on (`branch`): none for a tree, nor
+/// when a configuration sampled to compare with cannot be evaluated (the assembled one was).
+fn branch_warnings(
+    mechanism: &Mechanism,
+    model: &KinematicModel,
+    starting: &Starting,
+    q: &[f64],
+) -> Vec<Diagnostic> {
+    let Some(first_loop) = model.complementary().first() else {
+        return Vec::new();
+    };
+    let mut warnings = Vec::new();
+    let help = "give starting values near the configuration you mean with `initial` (from values all zero, a linkage often assembles folded), and check what `lsdc assemble` prints";
+    if let Ok(found) = branch::examine(model, q) {
+        if found.singular() {
+            let more = found.generic_rank - found.rank;
+            let ways = if more == 1 { "way" } else { "ways" };
+            warnings.push(
+                Diagnostic::warning(
+                    "W0803",
+                    format!("the assembled configuration is singular: it moves in {more} {ways} more than the mechanism"),
+                )
+                .primary(mechanism.join(first_loop.join).span, "closes a loop of this configuration")
+                .note(format!(
+                    "the loops' constraints have rank {} here and {} at other closed configurations of the mechanism (tree dof {})",
+                    found.rank, found.generic_rank, found.tree_dof
+                ))
+                .help(help),
+            );
+        }
+        if let Some(first) = found.coinciding.first() {
+            warnings.push(coinciding_warning(
+                mechanism,
+                model,
+                &found.coinciding,
+                first,
+                help,
+            ));
+        }
+    }
+    let guessed: Vec<bool> = (0..q.len())
+        .map(|i| starting.holds[i] == Hold::Free && starting.spans[i].is_some())
+        .collect();
+    let far = branch::far_guesses(model, &starting.q, q, &guessed);
+    if let Some(first) = far.first() {
+        warnings.push(far_guesses_warning(model, starting, &far, first));
+    }
+    warnings
+}
+
+/// W0804: joins brought to one point that stand apart elsewhere.
+fn coinciding_warning(
+    mechanism: &Mechanism,
+    model: &KinematicModel,
+    coinciding: &[Coincidence],
+    first: &Coincidence,
+    help: &str,
+) -> Diagnostic {
+    let name = |joint: usize| &model.joints[joint].name;
+    let span = |joint: usize| mechanism.join(model.joints[joint].join).span;
+    let point = |p: &nalgebra::Vector3<f64>| {
+        format!("[{}, {}, {}]", rounded(p.x), rounded(p.y), rounded(p.z))
+    };
+    let mut warning = Diagnostic::warning(
+        "W0804",
+        format!(
+            "the joins `{}` and `{}` stand at one point, {}",
+            name(first.first),
+            name(first.second),
+            point(&first.point)
+        ),
+    )
+    .primary(span(first.first), "here")
+    .secondary(span(first.second), "at the same point");
+    for other in &coinciding[1..] {
+        warning = warning.note(format!(
+            "so do `{}` and `{}`, at {}",
+            name(other.first),
+            name(other.second),
+            point(&other.point)
+        ));
+    }
+    warning
+        .note(format!(
+            "at other closed configurations of the mechanism they stand {} apart: this one is folded",
+            rounded(first.apart)
+        ))
+        .help(help)
+}
+
+/// W0805: guesses that assembly moved by more than a quarter turn.
+fn far_guesses_warning(
+    model: &KinematicModel,
+    starting: &Starting,
+    far: &[FarGuess],
+    first: &FarGuess,
+) -> Diagnostic {
+    let names = model.coordinate_names();
+    let change = |f: &FarGuess| {
+        format!(
+            "`{}` from {} to {} (a change of {} rad, whole turns aside)",
+            names[f.coordinate],
+            shortest(f.guess),
+            shortest(f.assembled),
+            rounded(f.change)
+        )
+    };
+    let message = match far.len() {
+        1 => format!("assembly moved the guess {}", change(first)),
+        n => format!("assembly moved {n} guesses by more than a quarter turn"),
+    };
+    let changes: Vec<(usize, f64, String)> = (far.iter())
+        .map(|f| (f.coordinate, f.assembled, change(f)))
+        .collect();
+    let warning = labelled_at_each_value(Diagnostic::warning("W0805", message), &changes, starting);
+    warning
+        .note("the configuration reached may lie on another assembly branch than the one the guesses describe")
+        .help("give guesses near the configuration you mean (mark them `fixed` to hold them), and check what `lsdc assemble` prints")
+}
+
+/// `warning` labelled at the `initial` of each starting value assembly moved (coordinate, value
+/// reached, its change in words), the first label primary, with a note per value when there
+/// are several.
+fn labelled_at_each_value(
+    mut warning: Diagnostic,
+    changes: &[(usize, f64, String)],
+    starting: &Starting,
+) -> Diagnostic {
+    for (k, (coordinate, assembled, change)) in changes.iter().enumerate() {
+        if let Some(span) = starting.spans[*coordinate] {
+            let label = format!("moved to {}", shortest(*assembled));
+            warning = match k {
+                0 => warning.primary(span, label),
+                _ => warning.secondary(span, label),
+            };
+        }
+        if changes.len() > 1 {
+            warning = warning.note(change.clone());
+        }
+    }
+    warning
+}
+
+/// Four significant digits, for positions and changes read by people.
+fn rounded(value: f64) -> String {
+    shortest(format!("{value:.3e}").parse().unwrap_or(value))
 }
 
 /// A residual for people: three significant digits, and "< 1e-6" for what is only round-off.

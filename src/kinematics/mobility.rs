@@ -11,7 +11,7 @@
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-use super::assembly::{assemble, jitter, singular_values, AssemblyOptions};
+use super::assembly::{assemble, jitter, singular_values, AssemblyError, AssemblyOptions};
 use super::closure::closure;
 use super::eval::EvalError;
 use super::model::KinematicModel;
@@ -46,8 +46,8 @@ pub struct Mobility {
     pub mobility: usize,
     /// constraint_rows − rank.
     pub redundant: usize,
-    /// rank(Δ) at nearby assembled configurations, when higher than here (a singular
-    /// configuration).
+    /// rank(Δ) at other assembled configurations (nearby, and spread over the mechanism), when
+    /// higher than here (a singular configuration).
     pub generic_rank: usize,
     pub singular: bool,
     /// Bodies that can move alone (body number, how many ways).
@@ -117,13 +117,9 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
     let (rank_here, rows) = constraint_rank(model, q)?;
     // Degrees of freedom of the tree: the ranks of the principal joints' motion subspaces (the
     // coordinate count, unless a link's coordinates are redundant).
-    let mut tree_dof = 0;
-    for joint in model.principal() {
-        let (_, subspace) =
-            joint.chain(&q[joint.offset..joint.offset + joint.coordinate_count()])?;
-        tree_dof += rank(&subspace);
-    }
-    let generic_rank = nearby_rank(model, q)?.max(rank_here);
+    let tree_dof = tree_dof(model, q)?;
+    let spread = spread_configurations(model, q)?;
+    let generic_rank = nearby_rank(model, q)?.max(generic_rank(model, rank_here, &spread)?);
     let first_order = tree_dof.saturating_sub(rank_here);
     Ok(Mobility {
         tree_dof,
@@ -145,6 +141,79 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
         internal: internal_mobilities(model, q)?,
         tolerance: RANK_TOLERANCE,
     })
+}
+
+/// Degrees of freedom of the tree at q: the ranks of the principal joints' motion subspaces
+/// (the coordinate count, unless a link's coordinates are redundant).
+pub fn tree_dof(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
+    let mut dof = 0;
+    for joint in model.principal() {
+        let (_, subspace) =
+            joint.chain(&q[joint.offset..joint.offset + joint.coordinate_count()])?;
+        dof += rank(&subspace);
+    }
+    Ok(dof)
+}
+
+/// Closed configurations spread over the mechanism, for what it is generically (its rank,
+/// which joins stand apart): assembled, nothing held, from starts that turn every angle of q by
+/// up to half a turn and move every other coordinate by up to 0.5 (deterministic). Perturbations
+/// of a few hundredths (`nearby_rank`) are not enough: a folded linkage's closed set can be of
+/// higher dimension than its working branch, and nearby starts assemble folded again. The starts
+/// that do not assemble are left out.
+pub fn spread_configurations(
+    model: &KinematicModel,
+    q: &[f64],
+) -> Result<Vec<Vec<f64>>, EvalError> {
+    if model.complementary().is_empty() {
+        return Ok(Vec::new());
+    }
+    let turning = model.turning();
+    let fixed = vec![false; model.coordinate_count];
+    let options = AssemblyOptions::default();
+    let mut spread = Vec::new();
+    for sample in 0..SPREAD_SAMPLES {
+        let start = spread_start(q, &turning, SPREAD_SEED + sample);
+        match assemble(model, &start, &fixed, &options) {
+            Ok(assembled) => spread.push(assembled.q),
+            Err(AssemblyError::Evaluation(e)) => return Err(e),
+            Err(AssemblyError::NoAssembly { .. }) => {}
+        }
+    }
+    Ok(spread)
+}
+
+/// A start spread from q: every angle that turns moved by up to half a turn, every other
+/// coordinate by up to 0.5 (`jitter` of sample `sample`).
+pub fn spread_start(q: &[f64], turning: &[bool], sample: usize) -> Vec<f64> {
+    (q.iter().enumerate())
+        .map(|(i, x)| {
+            let reach = if turning[i] {
+                std::f64::consts::PI
+            } else {
+                0.5
+            };
+            x + reach * jitter(sample, i)
+        })
+        .collect()
+}
+
+/// How many spread configurations are sampled, and the first sample number given to `jitter`
+/// (apart from the numbers assembly's restarts and the closed set's sampling use).
+const SPREAD_SAMPLES: usize = 4;
+const SPREAD_SEED: usize = 1000;
+
+/// The mechanism's generic rank(Δ): the largest of `rank_here` and the ranks at `spread`.
+pub fn generic_rank(
+    model: &KinematicModel,
+    rank_here: usize,
+    spread: &[Vec<f64>],
+) -> Result<usize, EvalError> {
+    let mut generic = rank_here;
+    for q in spread {
+        generic = generic.max(constraint_rank(model, q)?.0);
+    }
+    Ok(generic)
 }
 
 /// Dimension of the set of closed configurations near q: assemble from perturbations of size
@@ -183,7 +252,7 @@ fn closed_set_dimension(model: &KinematicModel, q: &[f64]) -> Result<Option<usiz
 }
 
 /// The largest rank(Δ) at assembled configurations near q (deterministic perturbations).
-fn nearby_rank(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
+pub fn nearby_rank(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
     if model.complementary().is_empty() {
         return Ok(0);
     }

@@ -2,6 +2,7 @@
 //! Jacobians, closure of the complementary links, assembly, joint analysis and mobility.
 
 pub mod assembly;
+pub mod branch;
 pub mod chain;
 pub mod closure;
 pub mod contacts;

@@ -93,7 +93,7 @@ pub fn tree(report: &TreeReport) -> String {
             }
             if m.singular {
                 out += &format!(
-                    "singular configuration: the rank is {} here and {} at nearby configurations\n",
+                    "singular configuration: the rank is {} here and {} at other closed configurations\n",
                     m.rank, m.generic_rank
                 );
             }

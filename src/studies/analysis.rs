@@ -52,6 +52,9 @@ pub struct TreeReport {
     /// The degrees of freedom in position and in velocity the contacts leave, if there are any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contacts: Option<ContactMobility>,
+    /// The assembly's warnings (the branch it reached, given values it moved).
+    #[serde(skip)]
+    pub warnings: Vec<Diagnostic>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -161,14 +164,19 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
             mobility,
             mobility_unavailable: unavailable,
             contacts,
+            warnings: Vec::new(),
         });
     }
+    let mut warnings = Vec::new();
     let (mobility, mobility_unavailable) =
         match assembled_model(mechanism, topology, &AssemblyOptions::default()) {
-            Ok((model, assembled, _)) => match mobility(&model, &assembled.coordinates_vector()) {
-                Ok(m) => (Some(m.with_couplings(couplings)), None),
-                Err(e) => (None, Some(crate::kinematics::eval::describe(&e, mechanism))),
-            },
+            Ok((model, assembled, assembly_warnings)) => {
+                warnings = assembly_warnings;
+                match mobility(&model, &assembled.coordinates_vector()) {
+                    Ok(m) => (Some(m.with_couplings(couplings)), None),
+                    Err(e) => (None, Some(crate::kinematics::eval::describe(&e, mechanism))),
+                }
+            }
             Err(diagnostics) => (
                 None,
                 Some(
@@ -186,6 +194,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         mobility,
         mobility_unavailable,
         contacts: None,
+        warnings,
     })
 }
 

@@ -256,3 +256,121 @@ fn a_turned_angle_is_reported_within_half_a_turn() {
         "tip at ({x}, {y})"
     );
 }
+
+/// The Delta robot's forward geometric model from the example's own starting guesses (written
+/// for 40 degrees), at the ten poses of table T4 of the project's notes on the Delta seed:
+/// each is found (the nacelle where T4 puts it, to 1e-9 m) or assembly warns that it moved the
+/// guesses far (W0805). From them, at 90 degrees, it reaches the nacelle 72.26 mm above the
+/// base instead of T4's 472.26 mm below, and says so.
+#[test]
+fn the_deltas_poses_from_its_guesses_are_found_or_warned() {
+    let table = [
+        ([30.0, 30.0, 30.0], [0.0, 0.0, -121.8247]),
+        ([40.0, 40.0, 40.0], [0.0, 0.0, -238.2954]),
+        ([45.0, 45.0, 45.0], [0.0, 0.0, -277.3839]),
+        ([48.205906, 48.205906, 48.205906], [0.0, 0.0, -300.0000]),
+        ([60.0, 60.0, 60.0], [0.0, 0.0, -370.4967]),
+        ([90.0, 90.0, 90.0], [0.0, 0.0, -472.2572]),
+        ([20.0, 40.0, 60.0], [62.0701, 42.1437, -225.8404]),
+        ([30.0, 50.0, 70.0], [76.6578, 51.7214, -294.4160]),
+        ([50.0, 30.0, 40.0], [-33.4866, 17.7675, -235.1534]),
+        ([35.0, 60.0, 45.0], [43.8350, -35.3691, -282.7488]),
+    ];
+    let mut warned = Vec::new();
+    for (alpha, expected) in table {
+        let held = |k: usize| format!("A{k}.q = {} * pi / 180 fixed", alpha[k - 1]);
+        let mechanism = crate::common::programs::mechanism(
+            "delta_isir88",
+            &[
+                ("A1.q = 40 * pi / 180 fixed", &held(1)),
+                ("A2.q = 40 * pi / 180 fixed", &held(2)),
+                ("A3.q = 40 * pi / 180 fixed", &held(3)),
+            ],
+        );
+        let topology = lsdc::topology::build(&mechanism).expect("topology");
+        let (model, report, warnings) =
+            assembled_model(&mechanism, topology, &Default::default()).expect("assembles");
+        let index = (mechanism.bodies.iter())
+            .position(|b| b.name.as_deref() == Some("nacelle"))
+            .expect("a nacelle");
+        let nacelle =
+            model
+                .topology
+                .number(lsdc::elab::value::BodyRef::Body(lsdc::elab::value::BodyId(
+                    index as u32,
+                )));
+        let q = report.coordinates_vector();
+        let position = lsdc::kinematics::forward::forward(&model, &q)
+            .expect("evaluates")
+            .poses[nacelle]
+            .translation
+            .vector
+            * 1000.0;
+        let found = (0..3).all(|k| (position[k] - expected[k]).abs() < 1e-4);
+        let codes: Vec<&str> = warnings.iter().map(|w| w.code).collect();
+        if codes.contains(&"W0805") {
+            warned.push(alpha[0]);
+        } else {
+            assert!(
+                found,
+                "α = {alpha:?}: the nacelle at {position:?} mm, T4 says {expected:?}, no warning"
+            );
+            assert!(codes.is_empty(), "α = {alpha:?}: {codes:?}");
+        }
+    }
+    assert_eq!(warned, [90.0], "the poses warned");
+}
+
+/// The Peaucellier–Lipkin linkage of the golden file `branch_folded_linkage.lsd`, given a
+/// starting configuration on its working branch (the arms apart, P inside the rhombus): no
+/// warning, and Q on its straight line x = (L² − s²)/(2b) = 0.525 at every crank angle, the
+/// linkage's inversion OP·OQ = L² − s² (Peaucellier, 1864).
+#[test]
+fn the_peaucellier_linkage_on_its_working_branch_draws_a_line() {
+    let text = std::fs::read_to_string("tests/golden/branch_folded_linkage.lsd").expect("golden");
+    let (l, s, b) = (0.5_f64, 0.2_f64, 0.2_f64);
+    let angle = |x: f64, y: f64| y.atan2(x);
+    let jitter = |k: usize| if k.is_multiple_of(2) { 1.0 } else { -1.0 };
+    for crank in [-1.0_f64, -0.5, 0.3, 0.8] {
+        // Starting guesses a tenth of a radian off the working branch: P on the crank's circle,
+        // A and C either side of OP, Q beyond P on OP (the joints that close the loops, `P`,
+        // `Q` and `BP`, need their angles too: left at 0 they would fold the linkage again).
+        let (p_x, p_y) = (b + b * crank.cos(), b * crank.sin());
+        let (d, phi) = (p_x.hypot(p_y), angle(p_x, p_y));
+        let gamma = ((l * l + d * d - s * s) / (2.0 * l * d)).acos();
+        let q_d = (l * l - s * s) / d;
+        let (q_x, q_y) = (q_d * phi.cos(), q_d * phi.sin());
+        // The bars' directions in the fixed axes, then each joint's angle between its bodies.
+        let (o_a, o_c) = (phi + gamma, phi - gamma);
+        let toward = |o: f64, x: f64, y: f64| angle(x - l * o.cos(), y - l * o.sin());
+        let (a_p, a_q) = (toward(o_a, p_x, p_y), toward(o_a, q_x, q_y));
+        let (c_p, c_q) = (toward(o_c, p_x, p_y), toward(o_c, q_x, q_y));
+        let joints = [
+            ("OA", o_a),
+            ("OC", o_c),
+            ("AP", a_p - o_a),
+            ("AQ", a_q - o_a),
+            ("CP", c_p - o_c),
+            ("CQ", c_q - o_c),
+            ("P", c_p - a_p),
+            ("Q", c_q - a_q),
+            ("BP", a_p - crank),
+        ];
+        let guesses: Vec<String> = (joints.iter().enumerate())
+            .map(|(k, (name, value))| format!("{name}.q = {} guess", value + 0.1 * jitter(k)))
+            .collect();
+        let program = format!(
+            "{text}\ninitial B.q = {crank} fixed, {} ;\n",
+            guesses.join(", ")
+        );
+        let (report, warnings) = assembled(&program);
+        assert!(warnings.is_empty(), "crank {crank}: {warnings:?}");
+        // Q from arm1 and its bar aq, from the assembled angles.
+        let (oa, aq) = (value(&report, "OA.q"), value(&report, "AQ.q"));
+        let assembled_q_x = l * oa.cos() + s * (oa + aq).cos();
+        assert!(
+            (assembled_q_x - (l * l - s * s) / (2.0 * b)).abs() < 1e-9,
+            "crank {crank}: Q.x = {assembled_q_x}"
+        );
+    }
+}

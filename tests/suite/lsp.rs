@@ -471,3 +471,36 @@ fn completion_after_a_package_member_and_an_instance() {
     );
     client.stop();
 }
+
+/// Hover on a join of a package and of an array of packages, where a program reads it: the
+/// coordinates of the instance named (`leg[1]:knee.q`), as for a join of the main program.
+#[test]
+fn hover_on_an_instances_join_lists_its_coordinates() {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("lsp_instance_hover.lsd");
+    let uri = file_uri(&path);
+    let text = format!("{PACKAGES}output o = leg[1]:knee.q ;\noutput p = Arm:sh.q ;\n");
+    let mut client = Client::start();
+    client.initialize();
+    assert_eq!(client.open(&uri, &text), json!([]));
+    let hover = |client: &mut Client, at: &str| {
+        let found = client.request(
+            "textDocument/hover",
+            json!({"textDocument": {"uri": uri}, "position": position(&text, at, 0)}),
+        );
+        found["contents"]["value"]
+            .as_str()
+            .unwrap_or_else(|| panic!("a hover at `{at}`: {found}"))
+            .to_string()
+    };
+    let knee = hover(&mut client, "knee.q");
+    assert!(knee.contains("coordinates: `leg[1]:knee.q`"), "{knee}");
+    // At the declaration, every instance's.
+    let declared = hover(&mut client, "knee ;");
+    assert!(
+        declared.contains("coordinates: `leg[1]:knee.q`, `leg[2]:knee.q`"),
+        "{declared}"
+    );
+    let sh = hover(&mut client, "sh.q");
+    assert!(sh.contains("coordinates: `sh.q`"), "{sh}");
+    client.stop();
+}
