@@ -50,6 +50,9 @@ enum Command {
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics(statics::StaticsArgs),
+    /// The velocity and acceleration models from actuated coordinates to a frame (direct and
+    /// inverse), their conditioning and singularities, at configurations or along a run.
+    Kinematics(kinematics::KinematicsArgs),
     /// Compile a program and print what `--emit` asks for.
     Compile(compile::CompileArgs),
     /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
@@ -95,6 +98,7 @@ fn main() -> ExitCode {
         Command::Drag(args) => drag::run(&args),
         Command::View(args) => view::run(&args),
         Command::Statics(args) => statics::run(&args),
+        Command::Kinematics(args) => kinematics::run(&args),
         Command::Compile(args) => compile::run(&args),
         Command::Eval(args) => eval::run(&args),
         Command::ExportUrdf(args) => export_urdf::run(&args),

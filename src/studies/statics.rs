@@ -93,7 +93,7 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
 }
 
 /// The state velocity of coordinate `join.coordinate`.
-fn velocity_index(prepared: &Prepared, name: &str) -> Result<usize, StaticsError> {
+pub fn velocity_index(prepared: &Prepared, name: &str) -> Result<usize, StaticsError> {
     let model = &prepared.model;
     let Some(declared) = prepared.coordinate_names.iter().position(|n| n == name) else {
         let suggestion = crate::diag::suggest::did_you_mean(
