@@ -10,8 +10,7 @@ use super::shared::{err, json, out, prepare_file, usage_error, Format, LibraryAr
 use lsdc::prepare::Prepared;
 use lsdc::studies::configurations::{self, Declared};
 use lsdc::studies::kinematic_models::{
-    actuation, models_at, Actuation, KinematicModels, Output, OutputKind, Rows,
-    SINGULAR_TOLERANCE,
+    actuation, models_at, Actuation, KinematicModels, Output, OutputKind, Rows, SINGULAR_TOLERANCE,
 };
 use lsdc::studies::singularities::{scan, Scan};
 
@@ -54,11 +53,11 @@ pub fn run(args: &KinematicsArgs) -> ExitCode {
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return usage_error("`--tolerance` must be positive");
     }
-    let (program, prepared) = match prepare_file(&args.file, &args.libraries, &args.sets, args.format)
-    {
-        Ok(prepared) => prepared,
-        Err(code) => return code,
-    };
+    let (program, prepared) =
+        match prepare_file(&args.file, &args.libraries, &args.sets, args.format) {
+            Ok(prepared) => prepared,
+            Err(code) => return code,
+        };
     let Ok(mechanism) = program.mechanism() else {
         return ExitCode::from(1);
     };
@@ -77,13 +76,19 @@ pub fn run(args: &KinematicsArgs) -> ExitCode {
         Err(error) => return usage_error(&error.to_string()),
     };
     if let Some(along) = &args.along {
-        let samples = match read(along)
-            .and_then(|text| configurations::read_samples(&prepared, &text, &along.display().to_string()))
-        {
+        let samples = match read(along).and_then(|text| {
+            configurations::read_samples(&prepared, &text, &along.display().to_string())
+        }) {
             Ok(samples) => samples,
             Err(message) => return usage_error(&message),
         };
-        return match scan(&prepared.model, &actuation, &output, &samples, args.tolerance) {
+        return match scan(
+            &prepared.model,
+            &actuation,
+            &output,
+            &samples,
+            args.tolerance,
+        ) {
             Ok(scan) => {
                 match args.format {
                     Format::Text => out(&scan_text(&scan)),
@@ -121,7 +126,11 @@ pub fn run(args: &KinematicsArgs) -> ExitCode {
         }
     }
     match args.format {
-        Format::Text => out(&results.iter().map(models_text).collect::<Vec<_>>().join("\n")),
+        Format::Text => out(&results
+            .iter()
+            .map(models_text)
+            .collect::<Vec<_>>()
+            .join("\n")),
         Format::Json => out(&json(&serde_json::json!({ "configurations": results }))),
     }
     ExitCode::SUCCESS

@@ -70,6 +70,17 @@ pub fn close(
     request: &StateRequest,
     frame: &FramePoint,
 ) -> Result<Declared, String> {
+    close_from(prepared, &prepared.coordinates, request, frame)
+}
+
+/// As [`close`], from the declared coordinates `start` (a neighbouring configuration: a
+/// sweep stays on its assembly mode).
+pub fn close_from(
+    prepared: &Prepared,
+    start: &[f64],
+    request: &StateRequest,
+    frame: &FramePoint,
+) -> Result<Declared, String> {
     let names = &prepared.coordinate_names;
     let index_of = |name: &String| {
         names.iter().position(|n| n == name).ok_or_else(|| {
@@ -78,7 +89,7 @@ pub fn close(
             format!("`{name}` is not a coordinate of the mechanism{close}")
         })
     };
-    let mut start = prepared.coordinates.clone();
+    let mut start = start.to_vec();
     let mut fixed = vec![false; start.len()];
     for (name, &value) in &request.coordinates {
         let index = index_of(name)?;
@@ -138,7 +149,11 @@ pub fn read_samples(prepared: &Prepared, text: &str, file: &str) -> Result<Vec<D
     let names = &prepared.coordinate_names;
     let positions = names
         .iter()
-        .map(|n| column(n).ok_or_else(|| format!("{file}: no column `{n}` (every coordinate of the mechanism is needed)")))
+        .map(|n| {
+            column(n).ok_or_else(|| {
+                format!("{file}: no column `{n}` (every coordinate of the mechanism is needed)")
+            })
+        })
         .collect::<Result<Vec<usize>, String>>()?;
     let rates: Vec<Option<usize>> = names.iter().map(|n| column(&format!("{n}'"))).collect();
     let time = column("time");
@@ -159,7 +174,10 @@ pub fn read_samples(prepared: &Prepared, text: &str, file: &str) -> Result<Vec<D
                 .parse::<f64>()
                 .map_err(|_| format!("{file}:{}: `{}` is not a number", index + 1, fields[c]))
         };
-        let coordinates = positions.iter().map(|&c| number(c)).collect::<Result<_, _>>()?;
+        let coordinates = positions
+            .iter()
+            .map(|&c| number(c))
+            .collect::<Result<_, _>>()?;
         let rates = (rates.iter())
             .map(|c| c.map_or(Ok(0.0), number))
             .collect::<Result<_, _>>()?;

@@ -143,8 +143,12 @@ pub enum SingularKind {
 impl SingularKind {
     pub fn describe(self) -> &'static str {
         match self {
-            SingularKind::Type1 => "type 1 (inverse model singular: the actuators move, the frame does not)",
-            SingularKind::Type2 => "type 2 (direct model singular: the frame moves, the actuators are locked)",
+            SingularKind::Type1 => {
+                "type 1 (inverse model singular: the actuators move, the frame does not)"
+            }
+            SingularKind::Type2 => {
+                "type 2 (direct model singular: the frame moves, the actuators are locked)"
+            }
             SingularKind::Both => "types 1 and 2 at once",
         }
     }
@@ -267,10 +271,7 @@ pub fn models_at(
     let inverse = DMatrix::from_fn(actuated_scales.len(), rows, |r, c| {
         inverse_scaled[(r, c)] * actuated_scales[r] / unit_rows[(c, 0)]
     });
-    let singular_types = (
-        type1_measure < tolerance,
-        type2_measure < tolerance,
-    );
+    let singular_types = (type1_measure < tolerance, type2_measure < tolerance);
     let kind = match singular_types {
         (false, false) => None,
         (true, false) => Some(SingularKind::Type1),
@@ -294,8 +295,16 @@ pub fn models_at(
     );
     let v_scaled = &basis * (&a_plus * &actuated_scaled);
     let v: Vec<f64> = (0..n).map(|c| v_scaled[c] * scales[c]).collect();
-    let (direct_term, inverse_term, output_rates) =
-        acceleration_terms(model, output, q, &v, &scales, length, (&direct, &inverse), actuation)?;
+    let (direct_term, inverse_term, output_rates) = acceleration_terms(
+        model,
+        output,
+        q,
+        &v,
+        &scales,
+        length,
+        (&direct, &inverse),
+        actuation,
+    )?;
     Ok(KinematicModels {
         actuated: actuation.names.clone(),
         outputs: output.names(),
@@ -350,8 +359,10 @@ fn acceleration_terms(
         (moving.bias.iter().enumerate()).map(|(r, x)| x * row_scale(r, length)),
     );
     let particular_scaled = -(loops::decompose(&g).pseudo_inverse * gamma);
-    let particular =
-        DVector::from_iterator(v.len(), (0..v.len()).map(|c| particular_scaled[c] * scales[c]));
+    let particular = DVector::from_iterator(
+        v.len(),
+        (0..v.len()).map(|c| particular_scaled[c] * scales[c]),
+    );
     let frame_jacobian = frame_jacobian(model, &data, output, &point);
     let body = output.frame.body;
     let world = |m: &Motion| spatial::motion_to_parent(&data.world[body], m);
@@ -403,7 +414,12 @@ fn allowed_motions(model: &Model, g: &DMatrix<f64>) -> DMatrix<f64> {
 
 /// The frame's motion (point velocity or twist, in fixed axes, about its origin `point`) per
 /// unit rate of each state velocity.
-fn frame_jacobian(model: &Model, data: &Data, output: &Output, point: &Vector3<f64>) -> DMatrix<f64> {
+fn frame_jacobian(
+    model: &Model,
+    data: &Data,
+    output: &Output,
+    point: &Vector3<f64>,
+) -> DMatrix<f64> {
     let rows = output.rows();
     let offset = 6 - rows;
     let mut jacobian = DMatrix::zeros(rows, model.velocities());
@@ -584,7 +600,10 @@ pub enum KinematicsError {
     Coordinate(StaticsError),
     Evaluation(EvalError),
     /// A state of `--at` cannot be closed or read.
-    State { index: usize, message: String },
+    State {
+        index: usize,
+        message: String,
+    },
 }
 
 impl From<EvalError> for KinematicsError {

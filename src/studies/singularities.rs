@@ -134,7 +134,11 @@ fn meeting(series: &[(f64, f64)], i: usize) -> Option<(f64, f64)> {
         let slope = (mb - ma) / (tb - ta);
         (slope, ma - slope * ta)
     };
-    let left = if i >= 2 { line(i - 2, i - 1) } else { line(i.checked_sub(1)?, i) };
+    let left = if i >= 2 {
+        line(i - 2, i - 1)
+    } else {
+        line(i.checked_sub(1)?, i)
+    };
     let right = if i + 2 < series.len() {
         line(i + 1, i + 2)
     } else {

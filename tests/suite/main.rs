@@ -29,6 +29,7 @@ mod integrator_registry;
 mod integrators;
 mod joint_friction;
 mod kinematics;
+mod kinematics_models;
 mod loop_properties;
 mod loops;
 mod lsp;
