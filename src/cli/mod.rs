@@ -19,3 +19,4 @@ pub mod statics;
 pub mod test;
 pub mod tree;
 pub mod view;
+pub mod workspace;

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use nalgebra::Vector3;
 use serde::Deserialize;
 
-use crate::kinematics::assembly::{assemble, AssemblyOptions};
+use crate::kinematics::assembly::{assemble, AssemblyError, AssemblyOptions};
 use crate::kinematics::drag::{drag, DragOptions};
 use crate::kinematics::frames::FramePoint;
 use crate::prepare::Prepared;
@@ -98,7 +98,18 @@ pub fn close_from(
     }
     let options = AssemblyOptions::default();
     let mut coordinates = assemble(&prepared.kinematics, &start, &fixed, &options)
-        .map_err(|_| "the loops do not close with these coordinates held".to_string())?
+        .map_err(|error| match error {
+            AssemblyError::NoAssembly { loop_errors, .. } => {
+                let (position, rotation) = (loop_errors.iter())
+                    .fold((0.0f64, 0.0f64), |(p, r), (lp, lr)| (p.max(*lp), r.max(*lr)));
+                format!(
+                    "the loops do not close with these coordinates held (closest: {position:.3e} m and {rotation:.3e} rad apart)"
+                )
+            }
+            AssemblyError::Evaluation(_) => {
+                "the geometry cannot be evaluated at these coordinates".to_string()
+            }
+        })?
         .q;
     if let Some(point) = request.point {
         if !request.coordinates.is_empty() {

@@ -13,3 +13,4 @@ pub mod kinematic_models;
 pub mod precision;
 pub mod singularities;
 pub mod statics;
+pub mod workspace;

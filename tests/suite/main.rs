@@ -30,6 +30,7 @@ mod integrators;
 mod joint_friction;
 mod kinematics;
 mod kinematics_models;
+mod kinematics_workspace;
 mod loop_properties;
 mod loops;
 mod lsp;

@@ -1,0 +1,138 @@
+//! `lsdc workspace` on the Delta ISIR88: the volume of the nacelle's workspace over the arms'
+//! box [0.6, 1.2]³ rad converging at second order as the grid is refined, against an
+//! independent count of the positions whose closed-form inverse geometric model (the seed's,
+//! §3.3, branch β − δ) falls in the box; and the commands' diagnostics against their golden
+//! files (`tests/golden/commands/NAME.args` → `NAME.stderr`).
+
+use lsdc::studies::kinematic_models::{actuation, Output, OutputKind, SINGULAR_TOLERANCE};
+use lsdc::studies::workspace::{sample, Range};
+
+use crate::common::lsdc;
+use crate::common::programs::{mechanism, prepared};
+
+const L1: f64 = 0.200;
+const L2: f64 = 0.300;
+const R: f64 = 0.126;
+
+/// Whether the seed's inverse geometric model reaches p with every arm in [low, high].
+fn in_box(p: [f64; 3], low: f64, high: f64) -> bool {
+    (0..3).all(|i| {
+        let phi = 2.0 * std::f64::consts::PI * i as f64 / 3.0;
+        let (s, c) = phi.sin_cos();
+        let (x, y, z) = (c * p[0] + s * p[1], -s * p[0] + c * p[1], p[2]);
+        let e2 = L2 * L2 - y * y;
+        let ab = (z * z + (x - R).powi(2)).sqrt();
+        let cosine = (L1 * L1 + ab * ab - e2) / (2.0 * L1 * ab);
+        let alpha = (-z).atan2(x - R) - cosine.acos();
+        e2 >= 0.0 && cosine.abs() <= 1.0 && (low..=high).contains(&alpha)
+    })
+}
+
+/// The volume of the positions in the box, counted on a grid of n³ cells over a box holding
+/// them (x, y in ±0.12 m, z in [−0.42, −0.14] m: the sampled points span ±0.09 and
+/// [−0.41, −0.19]).
+fn counted_volume(n: usize, low: f64, high: f64) -> f64 {
+    let (lower, upper) = ([-0.12, -0.12, -0.42], [0.12, 0.12, -0.14]);
+    let h: [f64; 3] = std::array::from_fn(|k| (upper[k] - lower[k]) / n as f64);
+    let mut count = 0usize;
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let cell = [i, j, k];
+                let p = std::array::from_fn(|d| lower[d] + (cell[d] as f64 + 0.5) * h[d]);
+                count += usize::from(in_box(p, low, high));
+            }
+        }
+    }
+    count as f64 * h.iter().product::<f64>()
+}
+
+#[test]
+fn kinematics_workspace_volume_of_the_delta_converges_to_the_counted_volume() {
+    let prepared = prepared("delta_isir88", &[]);
+    let frame = lsdc::kinematics::frames::resolve(
+        &mechanism("delta_isir88", &[]),
+        &prepared.kinematics,
+        "nacelle",
+    )
+    .expect("a body");
+    let names = ["A1.q", "A2.q", "A3.q"].map(String::from);
+    let actuation = actuation(&prepared, &names).expect("the arms");
+    let output = Output {
+        frame,
+        kind: OutputKind::Point,
+    };
+    let (low, high) = (0.6, 1.2);
+    let ranges: Vec<Range> = (names.iter())
+        .map(|name| Range {
+            name: name.clone(),
+            low,
+            high,
+        })
+        .collect();
+    let volumes: Vec<f64> = [4, 8, 16]
+        .iter()
+        .map(|&n| {
+            let workspace = sample(
+                &prepared,
+                &actuation,
+                &output,
+                &ranges,
+                n,
+                SINGULAR_TOLERANCE,
+            )
+            .expect("sampled");
+            assert_eq!(
+                workspace.reachable,
+                n * n * n,
+                "every arm angle in the box assembles"
+            );
+            assert!(
+                workspace.crossings.is_empty(),
+                "no singular locus in the box"
+            );
+            workspace.volume
+        })
+        .collect();
+    // The midpoint rule: the error falls fourfold when the cells halve.
+    let ratio = (volumes[0] - volumes[1]) / (volumes[1] - volumes[2]);
+    assert!((3.5..4.5).contains(&ratio), "{volumes:?}: ratio {ratio}");
+    let extrapolated = volumes[2] + (volumes[2] - volumes[1]) / 3.0;
+    let counted = counted_volume(100, low, high);
+    let difference = (extrapolated - counted).abs() / counted;
+    assert!(
+        difference < 2e-3,
+        "{volumes:?} → {extrapolated:e} against {counted:e}"
+    );
+}
+
+/// Each `tests/golden/commands/NAME.args` (the arguments, one per line) gives the standard
+/// error of `lsdc` in `NAME.stderr`; `UPDATE_GOLDEN=1` rewrites them.
+#[test]
+fn kinematics_commands_diagnostics_match_golden_files() {
+    let update = std::env::var_os("UPDATE_GOLDEN").is_some();
+    let mut inputs: Vec<_> = std::fs::read_dir("tests/golden/commands")
+        .expect("tests/golden/commands")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "args"))
+        .collect();
+    inputs.sort();
+    assert!(inputs.len() >= 4, "the commands' golden files are gone");
+    let mut failures = Vec::new();
+    for input in inputs {
+        let text = std::fs::read_to_string(&input).expect("readable");
+        let args: Vec<&str> = text.lines().filter(|l| !l.is_empty()).collect();
+        let (code, _, stderr) = lsdc(&args);
+        let actual = format!("exit code {code}\n{stderr}");
+        let expected_path = input.with_extension("stderr");
+        if update {
+            std::fs::write(&expected_path, &actual).expect("writable");
+            continue;
+        }
+        let expected = std::fs::read_to_string(&expected_path).unwrap_or_default();
+        if actual != expected {
+            failures.push(format!("--- {}\n{actual}", expected_path.display()));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
