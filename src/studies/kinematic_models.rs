@@ -181,6 +181,10 @@ pub struct Singularity {
     pub type1_motion: Option<SingularMotion>,
     /// The motion of the frame with the actuators locked (at a type 2).
     pub type2_motion: Option<SingularMotion>,
+    /// The motions of the smallest singular values of B and A, singular or not: what a
+    /// passage between samples lets through (`singularities`).
+    #[serde(skip)]
+    pub weakest_motions: [Option<SingularMotion>; 2],
 }
 
 /// The kinematic models at one configuration.
@@ -282,12 +286,12 @@ pub fn models_at(
         let scaled = &basis * xi;
         singular_motion(model, &at_rest, &scaled)
     };
-    let type1_motion = singular_types
-        .0
-        .then(|| name_motion(weakest(&b, &b_svd, motions)));
-    let type2_motion = singular_types
-        .1
-        .then(|| name_motion(weakest(&a, &a_svd, motions)));
+    let weakest_motions = [
+        (motions > 0).then(|| name_motion(weakest(&b, &b_svd, motions))),
+        (motions > 0).then(|| name_motion(weakest(&a, &a_svd, motions))),
+    ];
+    let type1_motion = weakest_motions[0].clone().filter(|_| singular_types.0);
+    let type2_motion = weakest_motions[1].clone().filter(|_| singular_types.1);
     // The rates: the actuated ones given, the others as the allowed motions carry them.
     let actuated_scaled = DVector::from_iterator(
         actuated_rates.len(),
@@ -326,6 +330,7 @@ pub fn models_at(
             tolerance,
             type1_motion,
             type2_motion,
+            weakest_motions,
         },
     })
 }

@@ -1,10 +1,12 @@
 //! Singular configurations along a run or a drag (`lsdc kinematics --along`): both measures of
 //! `kinematic_models` at every sample, and the singular passages located in time as events.
 //!
-//! Near a configuration where a measure vanishes transversally it behaves as |t − t₀| (a
-//! singular value through zero), so a passage shows in the samples as a local minimum: the two
-//! lines through the two samples on each side of it meet at (t₀, m₀). A passage is an event
-//! when m₀ is below the tolerance, and the samples need not fall on it.
+//! Near a configuration where a measure vanishes transversally it is |f(t)| for a smooth f (a
+//! singular value through zero), so a passage shows in the samples as a local minimum. With
+//! the samples' signs flipped past it, the cubic through the two samples on each side has its
+//! root t₀ between them; the minimum is a passage when that cubic also gives the sample at the
+//! minimum (to a tenth of its neighbours' measures), which a smooth minimum away from zero does
+//! not. A sample below the tolerance is an event too. The samples need not fall on t₀.
 
 use serde::Serialize;
 
@@ -26,10 +28,10 @@ pub struct SampleMeasures {
 /// A singular passage.
 #[derive(Clone, Debug, Serialize)]
 pub struct SingularEvent {
-    /// Where the lines through the samples on either side meet.
+    /// Where the measure passes through zero (or the sample below the tolerance).
     pub time: f64,
     pub kind: SingularKind,
-    /// The measure there (extrapolated) and at the nearest sample.
+    /// The measure there (0 at a passage between samples) and at the nearest sample.
     pub measure: f64,
     pub sampled_measure: f64,
     /// The motion the singularity lets through, at the nearest sample.
@@ -69,7 +71,7 @@ pub fn scan(
             type2_measure: s.type2_measure,
             kind: s.kind,
         });
-        motions.push((s.type1_motion, s.type2_motion));
+        motions.push(s.weakest_motions);
     }
     let mut events = Vec::new();
     let kinds = [SingularKind::Type1, SingularKind::Type2];
@@ -78,10 +80,7 @@ pub fn scan(
             .map(|m| (m.time, [m.type1_measure, m.type2_measure][which]))
             .collect();
         for (index, time, measure) in passages(&series, tolerance) {
-            let motion = match kind {
-                SingularKind::Type1 => motions[index].0.clone(),
-                _ => motions[index].1.clone(),
-            };
+            let motion = motions[index][which].clone();
             events.push(SingularEvent {
                 time,
                 kind,
@@ -99,8 +98,8 @@ pub fn scan(
     })
 }
 
-/// The local minima of a series (time, measure) whose passage, extrapolated from the two
-/// samples on each side, reaches below `tolerance`: (nearest sample, time, measure there).
+/// The local minima of a series (time, measure) that are passages through zero, or below
+/// `tolerance`: (nearest sample, time, measure there).
 fn passages(series: &[(f64, f64)], tolerance: f64) -> Vec<(usize, f64, f64)> {
     let mut found = Vec::new();
     for i in 0..series.len() {
@@ -113,44 +112,49 @@ fn passages(series: &[(f64, f64)], tolerance: f64) -> Vec<(usize, f64, f64)> {
         }
         if here < tolerance {
             found.push((i, series[i].0, here));
-            continue;
-        }
-        // The minimum lies between samples i − 1 and i + 1: meet the line through samples
-        // i − 2, i − 1 (or i − 1, i) with the line through i + 1, i + 2 (or i, i + 1).
-        let Some((t, m)) = meeting(series, i) else {
-            continue;
-        };
-        if m < tolerance {
-            found.push((i, t, m.max(0.0)));
+        } else if let Some(time) = passage(series, i) {
+            found.push((i, time, 0.0));
         }
     }
     found
 }
 
-/// Where the falling line before sample i meets the rising line after it.
-fn meeting(series: &[(f64, f64)], i: usize) -> Option<(f64, f64)> {
-    let line = |a: usize, b: usize| {
-        let ((ta, ma), (tb, mb)) = (series[a], series[b]);
-        let slope = (mb - ma) / (tb - ta);
-        (slope, ma - slope * ta)
-    };
-    let left = if i >= 2 {
-        line(i - 2, i - 1)
-    } else {
-        line(i.checked_sub(1)?, i)
-    };
-    let right = if i + 2 < series.len() {
-        line(i + 1, i + 2)
-    } else {
-        line(i, (i + 1 < series.len()).then_some(i + 1)?)
-    };
-    let ((s1, c1), (s2, c2)) = (left, right);
-    if !(s1 < 0.0 && s2 > 0.0) {
+/// The time of the passage through zero at the local minimum i, if it is one (see the
+/// module's comment).
+fn passage(series: &[(f64, f64)], i: usize) -> Option<f64> {
+    if i < 2 || i + 2 >= series.len() {
         return None;
     }
-    let t = (c2 - c1) / (s1 - s2);
-    // Only a meeting between the neighbouring samples locates this minimum.
-    let lower = series[i.saturating_sub(1)].0;
-    let upper = series[(i + 1).min(series.len() - 1)].0;
-    (lower..=upper).contains(&t).then_some((t, s1 * t + c1))
+    let points: Vec<(f64, f64)> = [i - 2, i - 1, i + 1, i + 2]
+        .iter()
+        .enumerate()
+        .map(|(k, &j)| (series[j].0, if k < 2 { series[j].1 } else { -series[j].1 }))
+        .collect();
+    // The cubic through the four signed samples (Lagrange).
+    let cubic = |t: f64| {
+        (0..4)
+            .map(|a| {
+                let weight: f64 = (0..4)
+                    .filter(|&b| b != a)
+                    .map(|b| (t - points[b].0) / (points[a].0 - points[b].0))
+                    .product();
+                weight * points[a].1
+            })
+            .sum::<f64>()
+    };
+    let scale = series[i - 1].1.min(series[i + 1].1);
+    if (cubic(series[i].0).abs() - series[i].1).abs() > 0.1 * scale {
+        return None;
+    }
+    // Its root between the neighbours (positive before, negative after), by bisection.
+    let (mut low, mut high) = (series[i - 1].0, series[i + 1].0);
+    for _ in 0..60 {
+        let middle = 0.5 * (low + high);
+        if cubic(middle) > 0.0 {
+            low = middle;
+        } else {
+            high = middle;
+        }
+    }
+    Some(0.5 * (low + high))
 }

@@ -136,3 +136,76 @@ fn kinematics_commands_diagnostics_match_golden_files() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// The slider-crank of examples/slider_crank.lsd turning over: its dead centres, where crank
+/// and rod align (crank.q a multiple of π), are type-1 passages with the crank actuated and the
+/// slider's point as output (the crank turns, the slider stops), type-2 ones with the slider
+/// actuated and the crank's tip as output (the crank turns, the slider is locked); located in time to a tenth of the sampling interval (0.05 s; 1e-3 s measured).
+#[test]
+fn kinematics_slider_crank_dead_centres_are_singular_passages_along_a_run() {
+    let dir = std::env::temp_dir().join(format!("lsdc-kinematics-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    let run = dir.join("run.csv");
+    let run_path = run.to_str().expect("a path");
+    let (code, _, stderr) = lsdc(&["simulate", "examples/slider_crank.lsd", "-o", run_path]);
+    assert_eq!(code, 0, "{stderr}");
+    let text = std::fs::read_to_string(&run).expect("samples");
+    let rows: Vec<Vec<f64>> = (text.lines().skip(1))
+        .map(|l| l.split(',').map(|f| f.parse().expect("a number")).collect())
+        .collect();
+    // The dead centres from the samples: crank.q (column 1) crossing kπ, interpolated.
+    let mut crossings = Vec::new();
+    for pair in rows.windows(2) {
+        let (a, b) = (
+            pair[0][1] / std::f64::consts::PI,
+            pair[1][1] / std::f64::consts::PI,
+        );
+        if a.floor() != b.floor() {
+            let k = a.floor().max(b.floor());
+            crossings.push(pair[0][0] + (k - a) / (b - a) * (pair[1][0] - pair[0][0]));
+        }
+    }
+    // A passage is located from two samples on each side: none within two of the run's ends.
+    let last = rows.last().expect("samples")[0];
+    crossings.retain(|t| *t > 0.1 && *t < last - 0.1);
+    assert!(crossings.len() >= 10, "the crank turns over: {crossings:?}");
+    // Crank actuated, the slider's point as output; slider actuated, the crank's tip (the
+    // rod's frame) as output.
+    for (actuated, point, kind) in [("crank.q", "s3", "type1"), ("slider.q", "s2", "type2")] {
+        let (code, stdout, stderr) = lsdc(&[
+            "kinematics",
+            "examples/slider_crank.lsd",
+            "--actuate",
+            actuated,
+            "--point",
+            point,
+            "--along",
+            run_path,
+            "--format",
+            "json",
+        ]);
+        assert_eq!(code, 0, "{stderr}");
+        let scan: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+        let events = scan["events"].as_array().expect("events");
+        let times: Vec<f64> = events
+            .iter()
+            .map(|e| e["time"].as_f64().expect(""))
+            .collect();
+        assert_eq!(
+            times.len(),
+            crossings.len(),
+            "{actuated}: {times:?} against {crossings:?}"
+        );
+        for (event, (time, expected)) in events.iter().zip(times.iter().zip(&crossings)) {
+            assert_eq!(event["kind"], kind, "{event}");
+            assert!(
+                (time - expected).abs() < 5e-3,
+                "{actuated}: {time} against {expected}"
+            );
+            let moved = event["motion"]["coordinates"].as_array().expect("named");
+            assert!(moved.iter().any(|c| c == "crank.q"), "{event}");
+            assert_eq!(event["motion"]["loops"][0], "pin", "{event}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
