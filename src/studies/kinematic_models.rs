@@ -335,6 +335,9 @@ pub fn models_at(
     })
 }
 
+/// The direct model's acceleration term, the inverse model's, and the frame's motion.
+type AccelerationTerms = (Vec<f64>, Vec<f64>, Vec<f64>);
+
 /// The acceleration terms of the direct and inverse models at rates `v` (state velocities on
 /// the loops' allowed motions), and the frame's motion at those rates. The loops' acceleration
 /// rows G v̇ + γ = 0 give the least-norm v̇ₚ = −G⁺γ; the frame's acceleration is J v̇ + β (β from
@@ -350,7 +353,7 @@ fn acceleration_terms(
     length: f64,
     (direct, inverse): (&DMatrix<f64>, &DMatrix<f64>),
     actuation: &Actuation,
-) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>), KinematicsError> {
+) -> Result<AccelerationTerms, KinematicsError> {
     let mut data = Data::new(model);
     let moving = loops::constraints(model, &mut data, q, v, Extent::WithBias)?;
     if !model.has_loops() {

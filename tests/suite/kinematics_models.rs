@@ -62,13 +62,14 @@ fn inverse_jacobian(p: &Vector3<f64>) -> Matrix3<f64> {
     j
 }
 
-struct Delta {
-    prepared: Prepared,
-    output: Output,
-    actuation: Actuation,
+/// The Delta example with its arms actuated and the nacelle as output.
+pub struct Delta {
+    pub prepared: Prepared,
+    pub output: Output,
+    pub actuation: Actuation,
 }
 
-fn delta() -> Delta {
+pub fn delta() -> Delta {
     let prepared = prepared("delta_isir88", &[]);
     let frame = lsdc::kinematics::frames::resolve(
         &mechanism("delta_isir88", &[]),

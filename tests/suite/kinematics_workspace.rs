@@ -4,11 +4,11 @@
 //! §3.3, branch β − δ) falls in the box; and the commands' diagnostics against their golden
 //! files (`tests/golden/commands/NAME.args` → `NAME.stderr`).
 
-use lsdc::studies::kinematic_models::{actuation, Output, OutputKind, SINGULAR_TOLERANCE};
+use lsdc::studies::kinematic_models::SINGULAR_TOLERANCE;
 use lsdc::studies::workspace::{sample, Range};
 
 use crate::common::lsdc;
-use crate::common::programs::{mechanism, prepared};
+use crate::kinematics_models::{delta, Delta};
 
 const L1: f64 = 0.200;
 const L2: f64 = 0.300;
@@ -49,21 +49,13 @@ fn counted_volume(n: usize, low: f64, high: f64) -> f64 {
 
 #[test]
 fn kinematics_workspace_volume_of_the_delta_converges_to_the_counted_volume() {
-    let prepared = prepared("delta_isir88", &[]);
-    let frame = lsdc::kinematics::frames::resolve(
-        &mechanism("delta_isir88", &[]),
-        &prepared.kinematics,
-        "nacelle",
-    )
-    .expect("a body");
-    let names = ["A1.q", "A2.q", "A3.q"].map(String::from);
-    let actuation = actuation(&prepared, &names).expect("the arms");
-    let output = Output {
-        frame,
-        kind: OutputKind::Point,
-    };
+    let Delta {
+        prepared,
+        output,
+        actuation,
+    } = delta();
     let (low, high) = (0.6, 1.2);
-    let ranges: Vec<Range> = (names.iter())
+    let ranges: Vec<Range> = (actuation.names.iter())
         .map(|name| Range {
             name: name.clone(),
             low,
