@@ -53,6 +53,12 @@ enum Command {
     /// The linear model (A, B, C, D) of the mechanism about its initial state, a run's state
     /// at a time or an equilibrium, in independent coordinates; eigenvalues and modes.
     Linearize(linearize::LinearizeArgs),
+    /// The velocity and acceleration models from actuated coordinates to a frame (direct and
+    /// inverse), their conditioning and singularities, at configurations or along a run.
+    Kinematics(kinematics::KinematicsArgs),
+    /// The workspace of a point sampled over the actuated coordinates: its volume, boundary,
+    /// singular loci and dexterity, as CSV or JSON.
+    Workspace(workspace::WorkspaceArgs),
     /// Compile a program and print what `--emit` asks for.
     Compile(compile::CompileArgs),
     /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
@@ -99,6 +105,8 @@ fn main() -> ExitCode {
         Command::View(args) => view::run(&args),
         Command::Statics(args) => statics::run(&args),
         Command::Linearize(args) => linearize::run(&args),
+        Command::Kinematics(args) => kinematics::run(&args),
+        Command::Workspace(args) => workspace::run(&args),
         Command::Compile(args) => compile::run(&args),
         Command::Eval(args) => eval::run(&args),
         Command::ExportUrdf(args) => export_urdf::run(&args),

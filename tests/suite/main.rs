@@ -29,6 +29,8 @@ mod integrator_registry;
 mod integrators;
 mod joint_friction;
 mod kinematics;
+mod kinematics_models;
+mod kinematics_workspace;
 mod linearize;
 mod loop_properties;
 mod loops;

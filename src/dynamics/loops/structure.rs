@@ -343,7 +343,7 @@ fn reproduction(
 
 /// The diagonal of the box holding the bodies' origins, the joints' frames and the loop points,
 /// in metres; 1 for a mechanism whose points all coincide (only its rotations then matter).
-fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64 {
+pub fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64 {
     let mut points: Vec<Vector3<f64>> = data
         .world
         .iter()
