@@ -42,6 +42,7 @@ mod outputs;
 mod pinocchio_fixtures;
 mod properties;
 mod reactions;
+mod recovered_angles;
 mod regression;
 mod repository;
 mod robustness;
