@@ -1,8 +1,9 @@
 //! The angles a program declared for a spherical or free joint, recovered from the quaternion
 //! the dynamics integrates (and back). Three rotations about axes a1, a2, a3 with a1 ⊥ a2 and
 //! a2 ⊥ a3 (Euler and Bryant angles) reach every rotation; at the singularity (the middle angle
-//! makes a1 and a3 parallel) only the sum or difference of the outer angles is defined, and the
-//! previous values choose among the solutions, so reported angles stay continuous.
+//! makes a1 and a3 parallel) only the sum or difference of the outer angles is defined. A
+//! reference (the run's angles and rates at its last step, [`AngleReference`]) chooses among
+//! the solutions, so reported angles stay continuous and keep their turns.
 
 use std::f64::consts::PI;
 
@@ -42,6 +43,19 @@ pub fn angles_from_rotation(
     r: &UnitQuaternion<f64>,
     previous: &[f64; 3],
 ) -> [f64; 3] {
+    let branches = angle_branches(axes, r, previous[0]);
+    nearest_branch(&branches, &[*previous; 2]).1
+}
+
+/// The two solutions (θ1, θ2, θ3) of R = R(a1, θ1) R(a2, θ2) R(a3, θ3), each up to turns: the
+/// middle angle θ2 = φ ± s, and its mirror, whose outer angles differ by π. Near the
+/// singularity (s or π − s below 1e-7), where only a combination of the outer angles is
+/// defined, the first is `first_if_singular` and the third takes the rest.
+pub fn angle_branches(
+    axes: &[Vector3<f64>; 3],
+    r: &UnitQuaternion<f64>,
+    first_if_singular: f64,
+) -> [[f64; 3]; 2] {
     let [a1, a2, a3] = axes;
     // a1·R a3 = a1·R(a2, θ2) a3 = α cos θ2 + β sin θ2.
     let target = a1.dot(&(r * a3));
@@ -49,62 +63,88 @@ pub fn angles_from_rotation(
     let rho = (alpha * alpha + beta * beta).sqrt();
     let phi = beta.atan2(alpha);
     let spread = (target / rho).clamp(-1.0, 1.0).acos();
-    let mut best = [0.0; 3];
-    let mut best_distance = f64::INFINITY;
-    for middle in [phi + spread, phi - spread] {
-        let middle = unwrap(middle, previous[1]);
-        let w = rotate(a2, middle, a3);
-        let first_raw = angle_between(a1, &w, &(r * a3));
-        let w_back = rotate(a2, -middle, a1);
-        let third_raw = -angle_between(a3, &w_back, &(r.inverse() * a1));
-        // Near the singularity the outer angles are coupled: keep the first where it was and
-        // solve for the third from the whole rotation.
-        let singular = spread.abs() < 1e-7 || (PI - spread).abs() < 1e-7;
-        let (first, third) = if singular {
-            let first = previous[0];
+    let singular = spread.abs() < 1e-7 || (PI - spread).abs() < 1e-7;
+    [phi + spread, phi - spread].map(|middle| {
+        if singular {
+            // The outer angles are coupled: keep the first and solve for the third from the
+            // whole rotation.
+            let first = first_if_singular;
             let rest = UnitQuaternion::from_axis_angle(&Unit::new_normalize(*a2), middle).inverse()
                 * UnitQuaternion::from_axis_angle(&Unit::new_normalize(*a1), first).inverse()
                 * r;
-            let third = angle_between(
-                a3,
-                &a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2),
-                &(rest * a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2)),
-            );
-            (first, unwrap(third, previous[2]))
-        } else {
-            (
-                unwrap(first_raw, previous[0]),
-                unwrap(third_raw, previous[2]),
-            )
-        };
-        let candidate = [first, middle, third];
-        let distance: f64 = candidate
-            .iter()
-            .zip(previous)
+            let normal = a1.cross(a3).try_normalize(1e-12).unwrap_or(*a2);
+            return [first, middle, angle_between(a3, &normal, &(rest * normal))];
+        }
+        let w = rotate(a2, middle, a3);
+        let first = angle_between(a1, &w, &(r * a3));
+        let w_back = rotate(a2, -middle, a1);
+        let third = -angle_between(a3, &w_back, &(r.inverse() * a1));
+        [first, middle, third]
+    })
+}
+
+/// Of the two branches, each angle moved by whole turns to its nearest to `predicted` (one
+/// prediction per branch), the branch nearest its prediction over the three angles together,
+/// and which it is.
+pub fn nearest_branch(branches: &[[f64; 3]; 2], predicted: &[[f64; 3]; 2]) -> (usize, [f64; 3]) {
+    let unwrapped = [0, 1].map(|k| [0, 1, 2].map(|i| unwrap(branches[k][i], predicted[k][i])));
+    let distance = |k: usize| -> f64 {
+        (unwrapped[k].iter().zip(&predicted[k]))
             .map(|(a, b)| (a - b).abs())
-            .sum();
-        if distance < best_distance {
-            best_distance = distance;
-            best = candidate;
+            .sum()
+    };
+    let nearest = usize::from(distance(1) < distance(0));
+    (nearest, unwrapped[nearest])
+}
+
+/// Where the declared coordinates of a run are expected: their values and rates at `time`. An
+/// angle recovered from a quaternion at time t is taken on the branch and turn nearest the
+/// trapezoid prediction c + ½ (ċ + ċ(t)) (t − time), from the reference's rates and the
+/// state's own: the angles keep every turn however far an angle advances between two
+/// references as long as its rate changes by much less than π over the interval, and the
+/// middle angle passes a singular configuration on the side its rate carries it to.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AngleReference {
+    pub time: f64,
+    pub coordinates: Vec<f64>,
+    pub rates: Vec<f64>,
+}
+
+impl AngleReference {
+    /// The reference of coordinates at rest at t = 0: angles are taken nearest them.
+    pub fn at_rest(coordinates: Vec<f64>) -> AngleReference {
+        let rates = vec![0.0; coordinates.len()];
+        AngleReference {
+            time: 0.0,
+            coordinates,
+            rates,
         }
     }
-    best
+}
+
+/// One joint's share of an [`AngleReference`], seen from time t.
+#[derive(Clone, Copy, Debug)]
+pub struct JointReference<'r> {
+    pub coordinates: &'r [f64],
+    pub rates: &'r [f64],
+    /// t less the reference's time.
+    pub elapsed: f64,
 }
 
 impl Joint {
-    /// Declared coordinates and their rates from the joint's positions and velocities.
-    /// `previous` (declared coordinates at the last output) keeps angles continuous.
+    /// Declared coordinates and their rates from the joint's positions and velocities, angles
+    /// on the branch nearest `reference` (see [`AngleReference`]).
     pub fn declared(
         &self,
         q: &[f64],
         v: &[f64],
-        previous: &[f64],
+        reference: JointReference,
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let n = self.chain.coordinate_count();
         let (mut coordinates, mut rates) = (vec![0.0; n], vec![0.0; n]);
         let mut chain = ChainMotion::default();
         let out = (&mut coordinates[..], &mut rates[..]);
-        self.declared_into(q, v, previous, out, &mut chain)?;
+        self.declared_into(q, v, reference, out, &mut chain)?;
         Ok((coordinates, rates))
     }
 
@@ -114,7 +154,7 @@ impl Joint {
         &self,
         q: &[f64],
         v: &[f64],
-        previous: &[f64],
+        reference: JointReference,
         (coordinates, rates): (&mut [f64], &mut [f64]),
         chain_motion: &mut ChainMotion,
     ) -> Result<(), EvalError> {
@@ -138,18 +178,22 @@ impl Joint {
         } else {
             moving.inverse()
         };
-        let angle_start = if free { 3 } else { 0 };
-        let reference = [
-            previous[angle_start],
-            previous[angle_start + 1],
-            previous[angle_start + 2],
-        ];
-        let angles = angles_from_rotation(axes, &chain.rotation, &reference);
+        let start = if free { 3 } else { 0 };
+        let JointReference {
+            coordinates: before,
+            rates: rates_before,
+            elapsed,
+        } = reference;
+        let first_if_singular = before[start] + rates_before[start] * elapsed;
+        let branches = angle_branches(axes, &chain.rotation, first_if_singular);
         if free {
             coordinates[..3].copy_from_slice(chain.translation.vector.as_slice());
         }
-        coordinates[angle_start..].copy_from_slice(&angles);
-        // Rates: the chain's spatial twist equals S(declared) · rates.
+        // Rates: the chain's spatial twist equals S(declared) · rates. S has the angles' period
+        // 2π, so the first branch gives them whatever its turns; the mirror branch, whose
+        // outer angles differ by the constant π, has the same outer rates and the opposite
+        // middle one.
+        coordinates[start..].copy_from_slice(&branches[0]);
         let body_twist = body_twist(v, free);
         let spatial_twist = if self.first_on_parent {
             motion_to_parent(&moving, &body_twist)
@@ -159,6 +203,19 @@ impl Joint {
         self.chain
             .chain_motion_into(coordinates, None, chain_motion)?;
         solve_least_squares(chain_motion, &spatial_twist, rates);
+        let branch_rates = [
+            [rates[start], rates[start + 1], rates[start + 2]],
+            [rates[start], -rates[start + 1], rates[start + 2]],
+        ];
+        let predicted = branch_rates.map(|now| {
+            [0, 1, 2].map(|i| {
+                let k = start + i;
+                before[k] + 0.5 * (rates_before[k] + now[i]) * elapsed
+            })
+        });
+        let (branch, angles) = nearest_branch(&branches, &predicted);
+        rates[start + 1] = branch_rates[branch][1];
+        coordinates[start..].copy_from_slice(&angles);
         Ok(())
     }
 

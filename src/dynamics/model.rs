@@ -3,6 +3,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use super::angles::{AngleReference, JointReference};
 use super::compiled::{EffortTape, Link, TapeBuilder};
 pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
@@ -118,6 +119,18 @@ impl Model {
 
     pub fn has_loops(&self) -> bool {
         !self.loops.is_empty()
+    }
+
+    /// Where the angles recovered from quaternions (of spherical and free joints) lie among the
+    /// declared coordinates: the last three of each such joint's.
+    pub fn recovered_angles(&self) -> impl Iterator<Item = usize> + '_ {
+        let joints = self.joints.iter().zip(&self.declared_offsets);
+        joints
+            .filter(|(joint, _)| joint.kind != JointType::Chain)
+            .flat_map(|(joint, &offset)| {
+                let end = offset + joint.chain.coordinate_count();
+                end - 3..end
+            })
     }
 
     /// Whether contacts (`rolling`, `sliding`) constrain the tree's motion.
@@ -844,16 +857,15 @@ impl Model {
         Ok((q, v))
     }
 
-    /// Declared coordinates and rates at (q, v); `previous` declared coordinates keep recovered
-    /// angles continuous.
+    /// Declared coordinates and rates at (q, v) at time t; `reference` keeps recovered angles
+    /// continuous (see [`AngleReference`]).
     pub fn declared(
         &self,
-        q: &[f64],
-        v: &[f64],
-        previous: &[f64],
+        (t, q, v): (f64, &[f64], &[f64]),
+        reference: &AngleReference,
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let mut declared = DeclaredState::default();
-        self.declared_into(q, v, previous, &mut declared, Recovered::Every)?;
+        self.declared_into((t, q, v), reference, &mut declared, Recovered::Every)?;
         Ok((declared.coordinates, declared.rates))
     }
 
@@ -862,9 +874,8 @@ impl Model {
     /// and rates are left as they were.
     pub fn declared_into(
         &self,
-        q: &[f64],
-        v: &[f64],
-        previous: &[f64],
+        (t, q, v): (f64, &[f64], &[f64]),
+        reference: &AngleReference,
         declared: &mut DeclaredState,
         which: Recovered,
     ) -> Result<(), EvalError> {
@@ -888,10 +899,15 @@ impl Model {
                 rates[offset..offset + n].copy_from_slice(&v[joint.v_offset..][..n]);
                 continue;
             }
+            let reference = JointReference {
+                coordinates: &reference.coordinates[offset..offset + n],
+                rates: &reference.rates[offset..offset + n],
+                elapsed: t - reference.time,
+            };
             joint.declared_into(
                 &q[joint.q_offset..joint.q_offset + joint.nq()],
                 &v[joint.v_offset..joint.v_offset + joint.nv()],
-                &previous[offset..offset + n],
+                reference,
                 (
                     &mut coordinates[offset..offset + n],
                     &mut rates[offset..offset + n],

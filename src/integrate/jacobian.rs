@@ -1,8 +1,9 @@
 //! The Jacobian ∂f/∂y along the state's leading components, for the implicit methods: the
 //! system's own when it gives one ([`OdeSystem::jacobian`](super::OdeSystem::jacobian)),
-//! forward differences of f otherwise.
+//! forward differences of f otherwise; an orthonormal basis of the directions a system moves
+//! along.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use super::evaluator::{Evaluator, Halt};
 
@@ -44,4 +45,36 @@ pub(super) fn leading_columns(
         perturbed[j] = y[j];
     }
     Ok(image)
+}
+
+/// An orthonormal basis of the span of `spanning`'s columns, padded with zero rows to `rows`
+/// (the components past the system's own, such as a quadrature carried along).
+pub(super) fn orthonormal(spanning: DMatrix<f64>, rows: usize) -> DMatrix<f64> {
+    let mut padded = DMatrix::zeros(rows, spanning.ncols());
+    let height = spanning.nrows().min(rows);
+    padded
+        .rows_mut(0, height)
+        .copy_from(&spanning.rows(0, height));
+    if padded.ncols() == 0 {
+        return padded;
+    }
+    // Modified Gram–Schmidt, dropping the columns the others already span.
+    let mut kept: Vec<DVector<f64>> = Vec::new();
+    let largest = padded
+        .column_iter()
+        .map(|c| c.norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    for column in padded.column_iter() {
+        let mut v = column.into_owned();
+        for u in &kept {
+            let along = u.dot(&v);
+            v.axpy(-along, u, 1.0);
+        }
+        let norm = v.norm();
+        if norm > 1e-10 * largest {
+            kept.push(v / norm);
+        }
+    }
+    DMatrix::from_columns(&kept).resize(rows, kept.len(), 0.0)
 }

@@ -36,7 +36,7 @@ use super::control::{error_norm, Gains, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::hermite::HermiteSegment;
-use super::jacobian::leading_columns;
+use super::jacobian::{leading_columns, orthonormal};
 use super::settings::Settings;
 
 /// ROS34PW2's number of stages.
@@ -547,38 +547,6 @@ fn change(old: &Jacobian, directions: &Directions, image: &DMatrix<f64>) -> f64 
         _ => return f64::INFINITY,
     };
     (image - before).norm()
-}
-
-/// An orthonormal basis of the span of `spanning`'s columns, padded with zero rows to `rows`
-/// (the components past the system's own, such as a quadrature carried along).
-fn orthonormal(spanning: DMatrix<f64>, rows: usize) -> DMatrix<f64> {
-    let mut padded = DMatrix::zeros(rows, spanning.ncols());
-    let height = spanning.nrows().min(rows);
-    padded
-        .rows_mut(0, height)
-        .copy_from(&spanning.rows(0, height));
-    if padded.ncols() == 0 {
-        return padded;
-    }
-    // Modified Gram–Schmidt, dropping the columns the others already span.
-    let mut kept: Vec<DVector<f64>> = Vec::new();
-    let largest = padded
-        .column_iter()
-        .map(|c| c.norm())
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    for column in padded.column_iter() {
-        let mut v = column.into_owned();
-        for u in &kept {
-            let along = u.dot(&v);
-            v.axpy(-along, u, 1.0);
-        }
-        let norm = v.norm();
-        if norm > 1e-10 * largest {
-            kept.push(v / norm);
-        }
-    }
-    DMatrix::from_columns(&kept).resize(rows, kept.len(), 0.0)
 }
 
 impl AdaptiveStepper for RosenbrockW {

@@ -9,6 +9,15 @@
 //! scales of positions and velocities, while J² v = −ω² v on their plane. The vector is kept
 //! from check to check, so the iteration goes on converging along the run.
 //!
+//! On a system kept on a manifold after each step (a mechanism's closed loops, projected onto
+//! their constraints), only the motions along the manifold are integrated: the directions off
+//! it are removed by the projection, never stepped. So the iteration runs on the tangent space
+//! ([`OdeSystem::tangent_basis`]), each product projected back onto it: P J P. Off it, near a
+//! singular configuration of the loops (a parallelogram four-bar passing flat), ∂f/∂y grows
+//! like the inverse of the constraints' conditioning (1.2e4 /s at a conditioning of 3e-4 on
+//! `examples/hard/four_bar_row_1.lsd`), a rate no step ever sees: RK4 at 1 ms ran through such
+//! passages with an energy drift of 4e-8 while the check said it diverged.
+//!
 //! Where h ρ reaches `HELD` of the method's stability limit on `PERSISTENCE` checks in a row
 //! (taken at consecutive steps once one says so), the run's steps are those stability allows:
 //! an adaptive method's controller has found the boundary (and h ρ stays below
@@ -20,7 +29,10 @@
 //! ‖J v‖ / ‖v‖ along the step's stage difference only; a warning must not depend on what one
 //! step happened to excite.
 
+use nalgebra::{DMatrix, DVector};
+
 use super::evaluator::Evaluator;
+use super::jacobian::orthonormal;
 use super::outcome::StabilityBound;
 use super::settings::Settings;
 use super::system::OdeSystem;
@@ -54,6 +66,9 @@ pub(super) struct PowerIteration {
     perturbed: Vec<f64>,
     /// Whether `direction` has been iterated on at all (else it is the starting vector).
     warm: bool,
+    /// An orthonormal basis of the system's tangent space at the point of the estimate (over
+    /// the controlled components), `None` for a system that moves freely.
+    tangent: Option<DMatrix<f64>>,
 }
 
 impl PowerIteration {
@@ -66,6 +81,7 @@ impl PowerIteration {
             probe: zeros.clone(),
             perturbed: zeros,
             warm: false,
+            tangent: None,
         }
     }
 
@@ -94,6 +110,18 @@ impl PowerIteration {
         y: &[f64],
         iterations: usize,
     ) -> Option<f64> {
+        let n = self.controlled;
+        let tangent = eval.tangent_basis(t, y).ok()?;
+        self.tangent = tangent.map(|basis| {
+            let rows = basis.nrows().min(n);
+            orthonormal(basis.rows(0, rows).into_owned(), n)
+        });
+        self.onto_tangent();
+        if normalise(&mut self.direction[..n]).is_none() {
+            self.direction = starting_vector(self.direction.len(), n);
+            self.onto_tangent();
+            normalise(&mut self.direction[..n]);
+        }
         eval.rhs(t, y, &mut self.slope).ok()?;
         let mut rate: Option<f64> = None;
         for _ in 0..iterations {
@@ -124,11 +152,23 @@ impl PowerIteration {
         for i in 0..n {
             self.direction[i] = (self.perturbed[i] - self.slope[i]) / epsilon;
         }
+        self.onto_tangent();
         let norm = normalise(&mut self.direction[..n]);
         if norm.is_none() {
             self.direction = starting_vector(self.direction.len(), n);
         }
         norm
+    }
+}
+
+impl PowerIteration {
+    /// Projects the direction onto the tangent space, when the system has one.
+    fn onto_tangent(&mut self) {
+        let Some(basis) = &self.tangent else { return };
+        let n = self.controlled;
+        let direction = DVector::from_column_slice(&self.direction[..n]);
+        let projected = basis * basis.tr_mul(&direction);
+        self.direction[..n].copy_from_slice(projected.as_slice());
     }
 }
 

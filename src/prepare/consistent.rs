@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::diag::Diagnostic;
 use crate::dynamics::algorithms::Data;
+use crate::dynamics::angles::AngleReference;
 use crate::dynamics::loops::{close_configuration, constraints, decompose, Extent};
 use crate::dynamics::model::Model;
 use crate::elab::mechanism::Mechanism;
@@ -54,7 +55,10 @@ pub fn initial_state(
         .map_err(|opening| vec![incompatible_rates(mechanism, &given, opening)])?;
     let mut warnings = initial.warnings;
     warnings.extend(amplified_rates(mechanism, model, &given, &v));
-    let (coordinates, rates) = model.declared(&q, &v, &coordinates).map_err(evaluation)?;
+    let reference = AngleReference::at_rest(coordinates);
+    let (coordinates, rates) = model
+        .declared((0.0, &q, &v), &reference)
+        .map_err(evaluation)?;
     Ok(ConsistentState {
         coordinates,
         rates,

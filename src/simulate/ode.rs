@@ -14,8 +14,11 @@ impl OdeSystem for MechanicalSystem<'_> {
         Ok(self.derivative(t, y, dydt)?)
     }
 
+    /// Keeps the step's end on the constraints, and the reference angles follow it.
     fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
-        Ok(self.keep_closed(t, y)?)
+        let moved = self.keep_closed(t, y)?;
+        self.follow_reference(t, y)?;
+        Ok(moved)
     }
 
     fn tangent_basis(
@@ -91,7 +94,7 @@ impl OdeSystem for RunOde<'_, '_> {
 
     fn project(&mut self, t: f64, y: &mut [f64]) -> Result<bool, CallbackError> {
         let n = self.system.dimension();
-        Ok(self.system.keep_closed(t, &mut y[..n])?)
+        OdeSystem::project(&mut *self.system, t, &mut y[..n])
     }
 
     fn tangent_basis(

@@ -257,6 +257,9 @@ fn start_system<'p>(
         .map_err(|e| e.to_string())?;
     // What the start found of the loops (rank, redundant rows) holds for the outputs too.
     system.prepare_sampling();
+    system
+        .start_reference(0.0, &y0)
+        .map_err(|e| e.to_string())?;
     Ok((system, y0))
 }
 

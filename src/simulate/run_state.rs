@@ -1,8 +1,9 @@
 //! What a run has decided and seen so far, held once and read by every evaluation of its
 //! equations, the integrator's and the sampler's alike (MuJoCo's one `mjData`): the declared
-//! coordinates of the last output, the friction's phases and the resting stops, the contact
+//! coordinates and rates at the last step, the friction's phases and the resting stops, the contact
 //! rows kept, what the loops' monitors found, and the events so far.
 
+use crate::dynamics::angles::AngleReference;
 use crate::dynamics::friction::{Phase, Switch};
 use crate::dynamics::model::Model;
 use crate::dynamics::stops::Impact;
@@ -10,9 +11,11 @@ use crate::simulate::constraints::LoopFindings;
 
 #[derive(Clone, Debug)]
 pub struct RunState {
-    /// Declared coordinates at the last output: recovered angles stay continuous (a spring on
-    /// an angle sees 3π/2, not −π/2, after one and a half turns).
-    pub reference: Vec<f64>,
+    /// Declared coordinates and rates at the end of the last step (`follow_reference`):
+    /// recovered angles stay continuous and keep their turns (a spring on an angle sees 3π/2,
+    /// not −π/2, after one and a half turns), and the state there.
+    pub reference: AngleReference,
+    pub reference_state: Vec<f64>,
     /// Per joint with friction, its phase (set at the start and at its events).
     pub phases: Vec<Phase>,
     /// Per stop, whether its coordinate rests on it.
@@ -29,11 +32,13 @@ pub struct RunState {
 }
 
 impl RunState {
-    /// The state of a run about to start from declared coordinates `reference`: every joint
-    /// with friction slipping, no stop resting, nothing seen.
+    /// The state of a run about to start from declared coordinates `reference` (taken at rest
+    /// at t = 0 until the run's start sets it): every joint with friction slipping, no stop
+    /// resting, nothing seen.
     pub fn new(model: &Model, reference: Vec<f64>) -> RunState {
         RunState {
-            reference,
+            reference: AngleReference::at_rest(reference),
+            reference_state: Vec::new(),
             phases: vec![Phase::Slipping(1.0); model.frictions.len()],
             resting: vec![false; model.stops.len()],
             contact_rows: None,

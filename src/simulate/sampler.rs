@@ -192,8 +192,7 @@ impl Sampler<'_> {
         let model = system.model;
         system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
-        let (coordinates, rates) = model.declared(&q, v, &system.state.reference)?;
-        system.state.reference.clone_from(&coordinates);
+        let (coordinates, rates) = model.declared((time, &q, v), &system.state.reference)?;
         let reactions = if self.reactions {
             system.reactions(time, &q, v)?
         } else {

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
+use crate::dynamics::angles::AngleReference;
 use crate::dynamics::model::Model;
 use crate::integrate::{jacobian_product, StabilityBound};
 use crate::prepare::{Integrator, Prepared};
@@ -107,9 +108,11 @@ fn moving_coordinates(
     rate: f64,
 ) -> Vec<String> {
     let model = &prepared.model;
+    // Both states against the same reference: their angles differ by the mode's motion.
+    let reference = AngleReference::at_rest(prepared.coordinates.clone());
     let declared = |y: &[f64]| {
         let (q, v) = model.split_state(y);
-        model.declared(&q, v, &prepared.coordinates).ok()
+        model.declared((0.0, &q, v), &reference).ok()
     };
     let size = state.iter().map(|v| v * v).sum::<f64>().sqrt();
     let epsilon = 1e-7 * (1.0 + size);

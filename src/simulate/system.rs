@@ -13,6 +13,7 @@ mod held_reactions;
 mod holding;
 pub mod impacts;
 mod jacobian;
+mod reference;
 pub mod scratch;
 pub use error::{NotFiniteCause, SystemError};
 mod stacked;
@@ -136,7 +137,8 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let state = &mut self.scratch.declared;
-        model.declared_into(q, v, &self.state.reference, state, Recovered::ReadByEfforts)?;
+        let reference = &self.state.reference;
+        model.declared_into((t, q, v), reference, state, Recovered::ReadByEfforts)?;
         let declared = Declared {
             model,
             coordinates: &state.coordinates,

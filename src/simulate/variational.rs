@@ -506,6 +506,9 @@ pub fn integrate<'m>(
         system
             .measure_loops(t_next, &end_state)
             .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
+        system
+            .follow_reference(t_next, &end_state)
+            .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
         while next_output < outputs.len() && outputs[next_output] <= t_next {
             let s = (outputs[next_output] - t) / step;
             let y = configuration.interpolate((&q, &v), (&end, &v1), s, step);

@@ -45,6 +45,7 @@ mod outputs;
 mod pinocchio_fixtures;
 mod properties;
 mod reactions;
+mod recovered_angles;
 mod regression;
 mod repository;
 mod robustness;

@@ -30,6 +30,8 @@ pub struct Scratch {
     /// The efforts at the last evaluation, and the declared coordinates and rates they used.
     pub(in crate::simulate) efforts: Efforts,
     pub(in crate::simulate) declared: DeclaredState,
+    /// The storage of the run's next reference angles (`follow_reference`).
+    pub(in crate::simulate) next_reference: DeclaredState,
     /// Scratch of the constrained equations: the tree's inverse dynamics and Ma − f (for the
     /// multipliers), and the loops' rows, factorisation and solution.
     pub(in crate::simulate) inverse: DVector<f64>,
@@ -80,6 +82,7 @@ impl Scratch {
             no_efforts: Efforts::none(model),
             efforts: Efforts::none(model),
             declared: DeclaredState::default(),
+            next_reference: DeclaredState::default(),
             inverse: DVector::zeros(model.nv),
             force: DVector::zeros(model.velocities()),
             loop_scratch: LoopScratch::new(model),
