@@ -1,6 +1,7 @@
 //! Integrators for ordinary differential equations `dy/dt = f(t, y)`, independent of mechanics.
 //!
-//! The methods share one entry point, [`integrate`]:
+//! The methods share one entry point, [`integrate`], which takes the steps of an
+//! [`Integration`] to the end (a caller may take them one by one):
 //! - [`Method::Rk4`]: the classic fixed-step Runge–Kutta method of order 4;
 //! - [`Method::DormandPrince`]: the adaptive explicit Dormand–Prince 5(4) pair with dense output;
 //! - [`Method::Dop853`]: the adaptive explicit 8(5,3) pair DOP853 with its dense output of
@@ -32,6 +33,7 @@ mod rk4;
 pub mod rosenbrock;
 mod settings;
 pub mod stability;
+mod stepping;
 mod switching;
 mod system;
 
@@ -40,6 +42,7 @@ pub use hermite::HermiteSegment;
 pub use outcome::{Failure, InputError, IntegrationError, StabilityBound, Stats, StepError};
 pub use settings::{Interrupt, Method, Settings};
 pub use stability::jacobian_product;
+pub use stepping::Integration;
 pub use system::{CallbackError, Observer, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,
@@ -94,67 +97,12 @@ pub fn integrate(
         stats: Box::default(),
     };
     check_problem(system.dimension(), t0, y0, t_end, outputs).map_err(invalid)?;
-    check_settings(method, settings).map_err(invalid)?;
-    let problem = driver::Problem {
-        t0,
-        y0,
-        t_end,
-        outputs,
-        settings,
-    };
-    match method {
-        Method::Rk4 { step } => rk4::integrate(system, &problem, *step, observer),
-        Method::DormandPrince => driver::integrate_adaptive(
-            &mut dopri5::DormandPrince::new(y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Dop853 => driver::integrate_adaptive(
-            &mut dop853::Dop853::new(y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Rosenbrock => driver::integrate_adaptive(
-            &mut rosenbrock::RosenbrockW::new(rosenbrock::Scheme::Ros34pw2, y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Rodas4 => driver::integrate_adaptive(
-            &mut rosenbrock::RosenbrockW::new(rosenbrock::Scheme::Rodas4, y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Radau5 => driver::integrate_adaptive(
-            &mut radau::Radau5::new(y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Automatic => {
-            let implicit = stiff_method(system, t0, y0, settings);
-            let mut stepper = switching::Switching::new(implicit, y0.len(), settings);
-            let result = driver::integrate_adaptive(&mut stepper, system, &problem, observer);
-            let count = |stats: &mut Stats| {
-                stats.stiff_steps = stepper.implicit_steps;
-                stats.method_switches = stepper.switches;
-                stats.stiff_from = stepper.stiff_from;
-            };
-            match result {
-                Ok((y, mut stats)) => {
-                    count(&mut stats);
-                    Ok((y, stats))
-                }
-                Err(mut error) => {
-                    count(&mut error.stats);
-                    Err(error)
-                }
-            }
-        }
+    let mut integration = Integration::new(method, system, t0, y0, outputs.to_vec(), settings)?;
+    while integration.time() < t_end {
+        integration.step(system, t_end, observer)?;
     }
+    integration.deliver_rest(system, observer)?;
+    Ok((integration.state().to_vec(), integration.stats()))
 }
 
 /// The stiff method of [`Method::Automatic`]: Radau IIA of order 5, except on a system that

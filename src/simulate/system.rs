@@ -102,10 +102,18 @@ impl<'m> MechanicalSystem<'m> {
         self.model.positions() + self.model.velocities()
     }
 
-    /// Whether the equations of motion do not depend on the time: no effort reads it.
+    /// Whether the equations of motion do not depend on the time: no effort reads it (an
+    /// input's law may).
     pub fn autonomous(&self) -> bool {
         let model = self.model;
-        !model.has_efforts() || model.effort_tape.as_ref().is_ok_and(|t| !t.reads_time())
+        let program =
+            !model.has_efforts() || model.effort_tape.as_ref().is_ok_and(|t| !t.reads_time());
+        program && self.state.inputs.law.is_none()
+    }
+
+    /// Whether an evaluation has efforts to evaluate: the program's, or inputs.
+    pub(super) fn has_efforts(&self) -> bool {
+        self.model.has_efforts() || self.state.inputs.any()
     }
 
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
@@ -120,19 +128,24 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let state = &mut self.scratch.declared;
-        model.declared_into(q, v, &self.state.reference, state, Recovered::ReadByEfforts)?;
+        // An input's law reads every declared coordinate.
+        let recovered = match self.state.inputs.law {
+            Some(_) => Recovered::Every,
+            None => Recovered::ReadByEfforts,
+        };
+        model.declared_into(q, v, &self.state.reference, state, recovered)?;
         let declared = Declared {
             model,
             coordinates: &state.coordinates,
             rates: &state.rates,
         };
-        Ok(evaluate_into(
-            model,
-            &mut self.scratch.data,
-            &declared,
-            t,
-            &mut self.scratch.efforts,
-        )?)
+        let efforts = &mut self.scratch.efforts;
+        evaluate_into(model, &mut self.scratch.data, &declared, t, efforts)?;
+        if self.state.inputs.any() {
+            let read = (&state.coordinates[..], &state.rates[..]);
+            efforts.power += (self.state.inputs).add_to(t, read, v, &mut efforts.tau);
+        }
+        Ok(())
     }
 
     /// Whether this tree's accelerations come from its mass matrix ([`needs_mass_matrix`]).
@@ -158,7 +171,7 @@ impl<'m> MechanicalSystem<'m> {
             let state = &mut self.scratch.contact_state;
             contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
         }
-        let efforts = match model.has_efforts() {
+        let efforts = match self.has_efforts() {
             true => &self.scratch.efforts,
             false => &self.scratch.no_efforts,
         };
@@ -333,7 +346,7 @@ impl<'m> MechanicalSystem<'m> {
             accelerations.copy_from(&self.scratch.loop_scratch.accelerations);
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
-        } else if model.has_efforts() {
+        } else if self.has_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
             self.evaluate_efforts(t, q, v)?;
             let (tau, external) = (
@@ -370,7 +383,7 @@ impl<'m> MechanicalSystem<'m> {
         // The contacts, the couplings with loops and the coordinates held at rest, solved on the
         // response together.
         self.solve_rows(q, v, &mut accelerations)?;
-        let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
+        let efforts = if self.has_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
         } else {
             &self.scratch.no_efforts

@@ -145,7 +145,7 @@ impl MechanicalSystem<'_> {
     fn residual(&mut self, t: f64, y: &[f64], a: &[f64]) -> Result<Residual, SystemError> {
         let model = self.model;
         let (q, v) = y.split_at(model.nq);
-        let efforts = if model.has_efforts() {
+        let efforts = if self.has_efforts() {
             self.evaluate_efforts(t, q, v)?;
             &self.scratch.efforts
         } else {
