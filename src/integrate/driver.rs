@@ -159,6 +159,18 @@ impl Marching for AdaptiveMarch {
         Ok(())
     }
 
+    /// dy/dt and the events' values again at the current point, the error's trend forgotten.
+    fn restart(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
+        (self.stepper)
+            .start(eval, self.t, &self.y)
+            .map_err(Halt::made_fatal)?;
+        self.controller.forget_trend();
+        if let Some(watch) = &mut self.events {
+            watch.restart(eval, self.t, &self.y)?;
+        }
+        Ok(())
+    }
+
     fn count(&self, stats: &mut Stats) {
         stats.stability_bound = self.watch.as_ref().and_then(StabilityWatch::finding);
         self.stepper.count(stats);

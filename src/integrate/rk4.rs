@@ -139,6 +139,15 @@ impl Marching for Rk4March {
         Ok(())
     }
 
+    /// The next step's first stage evaluated again, and the events' values.
+    fn restart(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
+        self.rk4.derivative_known = false;
+        if let Some(watch) = &mut self.events {
+            watch.restart(eval, self.rk4.t, &self.rk4.y)?;
+        }
+        Ok(())
+    }
+
     fn count(&self, stats: &mut Stats) {
         stats.stability_bound = self.watch.as_ref().and_then(StabilityWatch::finding);
     }

@@ -29,6 +29,10 @@ pub(super) trait Marching {
         outputs: &mut Outputs,
         observer: &mut Observer,
     ) -> Result<(), Halt>;
+    /// Starts again from the current point, whose derivative changed (an effort set between
+    /// two steps): nothing the last step left of it (its end derivative, its error's trend)
+    /// is reused.
+    fn restart(&mut self, eval: &mut Evaluator) -> Result<(), Halt>;
     /// Adds to `stats` what the method counts beside the evaluator (its stiffness check, its
     /// switches).
     fn count(&self, stats: &mut Stats);
@@ -69,8 +73,10 @@ pub struct Integration {
     settings: Settings,
     t0: f64,
     march: Box<dyn Marching>,
-    /// Whether the first step started the method.
+    /// Whether the first step started the method, and whether the next must start it again
+    /// (`Integration::restart`).
     started: bool,
+    restart: bool,
     outputs: Outputs,
     /// What the evaluations counted so far.
     stats: Stats,
@@ -119,6 +125,7 @@ impl Integration {
             settings: settings.clone(),
             t0,
             started: false,
+            restart: false,
             outputs: Outputs::new(outputs, dimension),
             stats: Stats::default(),
             failure: None,
@@ -168,13 +175,14 @@ impl Integration {
             settings: &self.settings,
         };
         let (march, outputs) = (&mut self.march, &mut self.outputs);
-        let started = match self.started {
-            true => Ok(()),
-            false => outputs
+        let started = match (self.started, self.restart) {
+            (true, false) => Ok(()),
+            (true, true) => march.restart(&mut eval),
+            (false, _) => outputs
                 .deliver_start(self.t0, march.state(), (&mut eval, observer))
                 .and_then(|()| march.start(&mut eval, &problem)),
         };
-        self.started = true;
+        (self.started, self.restart) = (true, false);
         let stepped = started.and_then(|()| march.step(&mut eval, &problem, outputs, observer));
         self.stats = eval.stats;
         stepped.map_err(|halt| {
@@ -182,6 +190,13 @@ impl Integration {
             self.failure = Some(failure.clone());
             failure
         })
+    }
+
+    /// Says that the system's derivative changed at the current point, between two steps (an
+    /// effort set from outside): the next step starts the method again from there, as after
+    /// an event, rather than reuse what the last step computed at its end.
+    pub fn restart(&mut self) {
+        self.restart = true;
     }
 
     /// Delivers the outputs not passed yet at the current state (those after the end).

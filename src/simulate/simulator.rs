@@ -188,7 +188,16 @@ impl<'p> Simulator<'p> {
             return Err(self.failure_now(message));
         }
         held.copy_from_slice(efforts);
+        self.restart();
         Ok(())
+    }
+
+    /// The equations of motion changed at the current point: the integrator starts again from
+    /// it rather than reuse what its last step computed there.
+    fn restart(&mut self) {
+        if let Stepping::Ode(integration) = &mut self.stepping {
+            integration.restart();
+        }
     }
 
     /// Sets a law of the inputs' efforts, `law(t, coordinates, rates, efforts)`, evaluated with
@@ -201,6 +210,7 @@ impl<'p> Simulator<'p> {
     ) {
         let law: InputLaw = Arc::new(law);
         self.system.state.inputs.law = Some(law);
+        self.restart();
     }
 
     /// Takes one step of the integrator towards the end of the settings' duration (one
@@ -229,20 +239,13 @@ impl<'p> Simulator<'p> {
     /// Starts again from `start` at time 0, the inputs, their law and the samples not taken
     /// kept, everything the run found forgotten (as a new simulator would start).
     pub fn reset(&mut self, start: &Start<'_>) -> Result<(), RunFailure> {
-        let mut inputs = std::mem::take(&mut self.system.state.inputs);
-        let names: Vec<String> = self.input_names();
+        let names = self.input_names();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        let fresh = Simulator::from_start(self.prepared, start, &names, self.interrupt.clone());
-        let mut fresh = match fresh {
-            Ok(fresh) => fresh,
-            Err(failure) => {
-                self.system.state.inputs = inputs;
-                return Err(failure);
-            }
-        };
-        std::mem::swap(&mut fresh.system.state.inputs, &mut inputs);
-        fresh.system.state.inputs.held = inputs.held;
-        fresh.system.state.inputs.law = inputs.law;
+        let interrupt = self.interrupt.clone();
+        let mut fresh = Simulator::from_start(self.prepared, start, &names, interrupt)?;
+        let (inputs, kept) = (&self.system.state.inputs, &mut fresh.system.state.inputs);
+        kept.held.clone_from(&inputs.held);
+        kept.law.clone_from(&inputs.law);
         fresh.samples = std::mem::take(&mut self.samples);
         *self = fresh;
         Ok(())

@@ -48,6 +48,7 @@ mod robustness;
 mod rows;
 mod runs;
 mod simulation;
+mod stepping;
 mod stop_loops;
 mod stops;
 mod symbolic;
