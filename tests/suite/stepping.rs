@@ -215,10 +215,10 @@ fn stepping_says_what_it_cannot_do() {
         unknown.message
     );
     let mut simulator = Simulator::new(&plant, &["swing.q"]).expect("starts");
-    let wrong = simulator.set_inputs(&[1.0, 2.0]).err().expect("refused");
+    let wrong = simulator.set_inputs(&[1.0, 2.0]).expect_err("refused");
     assert_eq!(wrong.message, "2 input efforts given for 1 inputs");
     simulator.advance_to(5.0).expect("steps");
-    let past = simulator.step().err().expect("at the end");
+    let past = simulator.step().expect_err("at the end");
     assert!(
         past.message.contains("advance it with `advance_to`"),
         "{}",
