@@ -478,9 +478,8 @@ impl VariationalMarch {
         system: &mut MechanicalSystem<'m>,
         observer: &mut RunObserver<'_, 'm>,
     ) -> Result<(), IntegrationError> {
-        let y = self.state();
         while let Some(&time) = self.outputs.get(self.next_output).filter(|&&t| t <= self.t) {
-            let observed = observer(system, self.t, &y);
+            let observed = observer(system, self.t, &self.state());
             observed.map_err(|m| failure(time, Failure::Observer(m.to_string()), &self.stats))?;
             self.next_output += 1;
         }
