@@ -4,20 +4,12 @@
 use super::control::StepController;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::events::{EventWatch, Located};
+use super::march::{Marching, Problem};
 use super::outcome::{Failure, Stats};
 use super::output::Outputs;
 use super::settings::Settings;
 use super::stability::StabilityWatch;
-use super::stepping::Marching;
 use super::system::Observer;
-
-/// Where the steps go: from `t0` (the integration's start, for the rounding of t) to `t_end`,
-/// which the last step lands on exactly, under `settings`.
-pub(super) struct Problem<'a> {
-    pub(super) t0: f64,
-    pub(super) t_end: f64,
-    pub(super) settings: &'a Settings,
-}
 
 /// One adaptive method, stepping from the current point of the solution.
 pub(super) trait AdaptiveStepper {

@@ -26,6 +26,7 @@ mod evaluator;
 mod events;
 mod hermite;
 mod jacobian;
+mod march;
 mod outcome;
 mod output;
 pub mod radau;
@@ -105,27 +106,6 @@ pub fn integrate(
     Ok((integration.state().to_vec(), integration.stats()))
 }
 
-/// The stiff method of [`Method::Automatic`]: Radau IIA of order 5, except on a system that
-/// moves on a manifold (a mechanism's closed loops), whose Jacobian is formed along the
-/// manifold's tangent directions only: there the W-method ROS34PW2, whose order holds with any
-/// matrix (on a stiff four-bar over 2 s at 1e-8, RODAS4 took 26,460 steps, ROS34PW2 638).
-fn stiff_method(
-    system: &mut dyn OdeSystem,
-    t0: f64,
-    y0: &[f64],
-    settings: &Settings,
-) -> switching::Stiff {
-    let n = y0.len();
-    match system.tangent_basis(t0, y0) {
-        Ok(Some(_)) => switching::Stiff::Rosenbrock(rosenbrock::RosenbrockW::new(
-            rosenbrock::Scheme::Ros34pw2,
-            n,
-            settings,
-        )),
-        _ => switching::Stiff::Radau(radau::Radau5::new(n, settings)),
-    }
-}
-
 fn check_problem(
     dimension: usize,
     t0: f64,
@@ -147,33 +127,6 @@ fn check_problem(
     }
     if outputs.windows(2).any(|pair| pair[0] > pair[1]) {
         return Err(InputError::UnsortedOutputs);
-    }
-    Ok(())
-}
-
-fn check_settings(method: &Method, settings: &Settings) -> Result<(), InputError> {
-    if let Method::Rk4 { step } = *method {
-        if !(step.is_finite() && step > 0.0) {
-            return Err(InputError::Rk4Step { step });
-        }
-        return Ok(());
-    }
-    let Settings {
-        rtol,
-        atol,
-        initial_step,
-        max_step,
-        min_step,
-        ..
-    } = *settings;
-    if !(rtol >= 0.0 && atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite()) {
-        return Err(InputError::Tolerances { rtol, atol });
-    }
-    if !(max_step > 0.0 && min_step >= 0.0 && min_step <= max_step) {
-        return Err(InputError::StepLimits { min_step, max_step });
-    }
-    if initial_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
-        return Err(InputError::InitialStep);
     }
     Ok(())
 }

@@ -13,15 +13,14 @@
 //! norm of the tolerances, so that a step too long for the motion is not a silent wrong answer.
 
 use super::control::error_norm;
-use super::driver::Problem;
 use super::evaluator::{Evaluator, Halt};
 use super::events::{EventWatch, Located};
 use super::hermite::HermiteSegment;
+use super::march::{Marching, Problem};
 use super::outcome::{Failure, Stats, StepError};
 use super::output::Outputs;
 use super::settings::Settings;
 use super::stability::StabilityWatch;
-use super::stepping::Marching;
 use super::system::Observer;
 
 /// A remainder below this fraction of a step joins the last full step instead of making a sliver.

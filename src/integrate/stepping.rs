@@ -4,39 +4,15 @@
 //! a program owns steps the same way (MuJoCo's `mj_step` over one `mjData`, rapier's
 //! `PhysicsPipeline::step`).
 
-use super::driver::{AdaptiveMarch, AdaptiveStepper, Problem};
+use super::driver::{AdaptiveMarch, AdaptiveStepper};
 use super::evaluator::{all_finite, Evaluator, Halt};
+use super::march::{Marching, Problem};
 use super::outcome::{Failure, InputError, IntegrationError, Stats};
 use super::output::Outputs;
 use super::rk4::Rk4March;
 use super::settings::{Method, Settings};
 use super::system::{Observer, OdeSystem};
-use super::{check_settings, dop853, dopri5, radau, rosenbrock, stiff_method, switching};
-
-/// One method's integration between two steps.
-pub(super) trait Marching {
-    /// The current point of the solution.
-    fn time(&self) -> f64;
-    fn state(&self) -> &[f64];
-    /// Prepares the first step from the current point, the start (dy/dt there, say).
-    fn start(&mut self, eval: &mut Evaluator, problem: &Problem) -> Result<(), Halt>;
-    /// Takes one step from the current point (attempts rejected on the way included), landing
-    /// exactly on `problem.t_end` if it reaches it, and delivers the outputs the step passes.
-    fn step(
-        &mut self,
-        eval: &mut Evaluator,
-        problem: &Problem,
-        outputs: &mut Outputs,
-        observer: &mut Observer,
-    ) -> Result<(), Halt>;
-    /// Starts again from the current point, whose derivative changed (an effort set between
-    /// two steps): nothing the last step left of it (its end derivative, its error's trend)
-    /// is reused.
-    fn restart(&mut self, eval: &mut Evaluator) -> Result<(), Halt>;
-    /// Adds to `stats` what the method counts beside the evaluator (its stiffness check, its
-    /// switches).
-    fn count(&self, stats: &mut Stats);
-}
+use super::{dop853, dopri5, radau, rosenbrock, switching};
 
 /// An integration from (t0, y0) with one of the methods of [`Method`], advanced by
 /// [`step`](Integration::step) towards an end its caller chooses at each step; outputs at the
@@ -236,4 +212,52 @@ fn march(
         }
     };
     Box::new(AdaptiveMarch::new(stepper, t0, y0, settings))
+}
+
+/// The stiff method of [`Method::Automatic`]: Radau IIA of order 5, except on a system that
+/// moves on a manifold (a mechanism's closed loops), whose Jacobian is formed along the
+/// manifold's tangent directions only: there the W-method ROS34PW2, whose order holds with any
+/// matrix (on a stiff four-bar over 2 s at 1e-8, RODAS4 took 26,460 steps, ROS34PW2 638).
+fn stiff_method(
+    system: &mut dyn OdeSystem,
+    t0: f64,
+    y0: &[f64],
+    settings: &Settings,
+) -> switching::Stiff {
+    let n = y0.len();
+    match system.tangent_basis(t0, y0) {
+        Ok(Some(_)) => switching::Stiff::Rosenbrock(rosenbrock::RosenbrockW::new(
+            rosenbrock::Scheme::Ros34pw2,
+            n,
+            settings,
+        )),
+        _ => switching::Stiff::Radau(radau::Radau5::new(n, settings)),
+    }
+}
+
+pub(super) fn check_settings(method: &Method, settings: &Settings) -> Result<(), InputError> {
+    if let Method::Rk4 { step } = *method {
+        if !(step.is_finite() && step > 0.0) {
+            return Err(InputError::Rk4Step { step });
+        }
+        return Ok(());
+    }
+    let Settings {
+        rtol,
+        atol,
+        initial_step,
+        max_step,
+        min_step,
+        ..
+    } = *settings;
+    if !(rtol >= 0.0 && atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite()) {
+        return Err(InputError::Tolerances { rtol, atol });
+    }
+    if !(max_step > 0.0 && min_step >= 0.0 && min_step <= max_step) {
+        return Err(InputError::StepLimits { min_step, max_step });
+    }
+    if initial_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
+        return Err(InputError::InitialStep);
+    }
+    Ok(())
 }

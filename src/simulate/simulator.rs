@@ -10,8 +10,7 @@ use std::time::Instant;
 use super::clock::thread_cpu_seconds;
 use super::inputs::{InputLaw, Inputs};
 use super::ode::RunOde;
-use super::report::{failure_message, fastest_coordinate, RunFailure};
-use super::run::{report, Ended, Start};
+use super::report::{failure_message, fastest_coordinate, report, Ended, Report, RunFailure};
 use super::sample::Sample;
 use super::sampler::Sampler;
 use super::summary::Summary;
@@ -28,6 +27,14 @@ use crate::integrate::{
 };
 use crate::integrators::Feature;
 use crate::prepare::{Integrator, Prepared};
+
+/// A starting state of a prepared mechanism: declared coordinates and rates (for a mechanism
+/// with loops, closed ones: the prepared start is).
+#[derive(Clone, Copy, Debug)]
+pub struct Start<'a> {
+    pub coordinates: &'a [f64],
+    pub rates: &'a [f64],
+}
 
 /// A simulation of a prepared mechanism that its caller advances: [`step`](Simulator::step)
 /// takes one step of the integrator the settings name, [`advance_to`](Simulator::advance_to)
@@ -258,7 +265,7 @@ impl<'p> Simulator<'p> {
 
     /// Ends the run: the outputs it did not reach yet (when it reached the end of its steps)
     /// and those still pending, then its report.
-    pub fn finish(mut self) -> (Vec<Sample>, super::report::Report) {
+    pub fn finish(mut self) -> (Vec<Sample>, Report) {
         let end = self.prepared.settings.duration;
         if let (None, Stepping::Ode(integration)) = (&self.stopped, &mut self.stepping) {
             let mut observer =
