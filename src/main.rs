@@ -50,6 +50,9 @@ enum Command {
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics(statics::StaticsArgs),
+    /// The linear model (A, B, C, D) of the mechanism about its initial state, a run's state
+    /// at a time or an equilibrium, in independent coordinates; eigenvalues and modes.
+    Linearize(linearize::LinearizeArgs),
     /// Compile a program and print what `--emit` asks for.
     Compile(compile::CompileArgs),
     /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
@@ -95,6 +98,7 @@ fn main() -> ExitCode {
         Command::Drag(args) => drag::run(&args),
         Command::View(args) => view::run(&args),
         Command::Statics(args) => statics::run(&args),
+        Command::Linearize(args) => linearize::run(&args),
         Command::Compile(args) => compile::run(&args),
         Command::Eval(args) => eval::run(&args),
         Command::ExportUrdf(args) => export_urdf::run(&args),

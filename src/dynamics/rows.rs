@@ -1,23 +1,40 @@
-//! One set of constraint rows for everything a state's motion must keep beyond what the response
-//! X keeps (`response`: the tree's joints, the mimic couplings of a tree, the closed loops), in
-//! this order:
+//! The constraint stack: every row a state's motion must keep, in blocks by kind, with one
+//! solve, one projection and one reactions path for all of them (MuJoCo's rows of one Jacobian
+//! by kind, Todorov, Erez & Tassa 2012; Pinocchio's `constraintDynamics`, Carpentier et al.
+//! 2019). The blocks, in their order:
 //!
-//! - the contacts' kept rows (`contacts`), with their velocity-product terms γ;
-//! - with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
-//!   in X instead);
-//! - one unit row eₖᵀ per coordinate held at rest: on a stop it rests on, or held by its dry
-//!   friction (sticking).
+//! 1. the tree's joints and the closed loops: the response X (`response`) eliminates them, a
+//!    tree by its mass matrix, the tree's mimic couplings by their basis, the loops by their
+//!    sparse factorisation (`loops`: the loops' block has its own specialised solve, whose
+//!    allowed motions N give X = N (NᵀMN)⁻¹ Nᵀ, so that G X = 0 for its rows);
+//! 2. the contacts' kept rows (`contacts`), with their velocity-product terms γ;
+//! 3. with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
+//!    in X instead);
+//! 4. one unit row eₖᵀ per coordinate held ([`HeldRow`]): on a stop it rests on, or held by its
+//!    dry friction (sticking).
 //!
-//! With G the rows and H the rows their forces act along (G, but on a sliding contact's normal
-//! row, whose force carries the friction it causes), the accelerations a₀ the base solve found
-//! without them become a = a₀ + X Hᵀλ with (G X Hᵀ) λ = −(G a₀ + γ): the saddle-point system
-//! [M −Hᵀ; G 0] solved on the response. The same rows, without γ, bring a state's velocities
-//! (or positions, on their position rows) back onto them by the change of least kinetic metric
-//! along X Gᵀ ([`RowStack::add_least_change`]). The solve is rank-revealing (`Pivoted`): a
-//! follower held with its leader, or a coordinate held by a stop and its friction, gives
-//! dependent rows, which leave the motion determined though not their forces. Nothing is
-//! allocated once the storage is sized for the rows (`RowStack::arrange`), which change only at
-//! events.
+//! The blocks 2 to 4 are this stack's rows G, solved on X. With H the rows their forces act
+//! along (G, but on a sliding contact's normal row, whose force carries the friction it
+//! causes), the accelerations a₀ the base solve found without them become a = a₀ + X Hᵀλ with
+//! (G X Hᵀ) λ = −(G a₀ + γ): the saddle-point system [M −Hᵀ; G 0] solved on the response
+//! ([`RowStack::solve`]). The same rows bring a state's velocities (their values G v − w,
+//! [`RowStack::velocity_values`]) or positions (their values φ(q, t),
+//! [`RowStack::position_values`]) back onto them by the change of least kinetic metric along
+//! X Gᵀ ([`RowStack::add_least_change`]); their forces join the generalised forces for the
+//! reactions ([`RowStack::add_coordinate_forces`], the contacts' act on bodies instead). The
+//! solve is rank-revealing (`Pivoted`): a follower held with its leader, or a coordinate held
+//! by a stop and its friction, gives dependent rows, which leave the motion determined though
+//! not their forces. Nothing is allocated once the storage is sized for the rows
+//! ([`RowStack::arrange`]), which change only at events.
+//!
+//! Each row has a right-hand side at each level: its position value φ, its velocity target w
+//! (G v = w) and its acceleration term γ (G a + γ = 0). A kind fixed in time (every kind today)
+//! has w = 0 and no ∂/∂t terms. A rheonomic kind, a coordinate driven by a law of time
+//! q = d(t), is one more [`Holder`] of a held row: φ = q − d(t), w = ḋ(t), γ = −d̈(t). To add a
+//! kind: give it a block here (its rows in `gather`, its values in `position_values` and
+//! `velocity_values`, its term in `gather`'s γ, its forces in `add_coordinate_forces`), and
+//! have the run arrange it (`simulate::system::holding`), where the rows' forces are handed
+//! back to what holds them.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -26,6 +43,56 @@ use super::dense::Pivoted;
 use super::mimics::Mimic;
 use super::model::Model;
 use super::response::Response;
+use super::stops::Stop;
+
+/// A coordinate held by a unit row eₖᵀ of the stack, and what holds it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldRow {
+    /// The held coordinate's index among the state's velocities.
+    pub velocity: usize,
+    pub holder: Holder,
+}
+
+impl HeldRow {
+    /// The row of a coordinate resting on the stop `index`, `stop`.
+    pub fn on_stop(index: usize, stop: &Stop) -> HeldRow {
+        HeldRow {
+            velocity: stop.velocity,
+            holder: Holder::Stop {
+                index,
+                position: stop.position,
+                bound: stop.bound,
+            },
+        }
+    }
+}
+
+/// What holds a coordinate, which decides its row's right-hand sides and where its force goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Holder {
+    /// The stop `index` it rests on: at rest, its position row q − bound.
+    Stop {
+        index: usize,
+        position: usize,
+        bound: f64,
+    },
+    /// The joint friction `index`, sticking: at rest, no position row (the friction holds the
+    /// rate, not the place).
+    Friction { index: usize },
+    /// The stop `index` at an impact: its rate brought to `rate_after` (−e times the rate
+    /// before), the other rows to rest; a velocity row only.
+    Impact { index: usize, rate_after: f64 },
+}
+
+/// Relative size of a coupling's violation below which it is not corrected.
+const COUPLING_ROUND_OFF: f64 = 1e-13;
+
+/// Relative size of a contact's gap (to the largest radius) below which it is not corrected.
+const GAP_ROUND_OFF: f64 = 1e-15;
+
+/// A held coordinate's distance to its bound below this (relative to max(1, |bound|)) is at
+/// round-off.
+pub const BOUND_ROUND_OFF: f64 = 1e-14;
 
 /// Entries of G X Hᵀ below this fraction of its largest are taken as zero: the rows left are
 /// dependent on the others.
@@ -36,9 +103,9 @@ pub const DEPENDENT_ROWS: f64 = 1e-12;
 pub struct RowStack {
     /// The contacts' rows stacked (indices among the three per contact of `ContactRows`).
     contacts: Vec<usize>,
-    /// How many coupling rows follow them, then the velocities held at rest.
+    /// How many coupling rows follow them, then the coordinates held.
     couplings: usize,
-    held: Vec<usize>,
+    held: Vec<HeldRow>,
     /// G (rows × velocities), Hᵀ (velocities × rows), γ, X Hᵀ, G X Hᵀ.
     g: DMatrix<f64>,
     directions: DMatrix<f64>,
@@ -56,6 +123,36 @@ pub struct RowStack {
     pub accelerations: DVector<f64>,
 }
 
+/// The velocities just after an impact, from `v` (before it) into `after`: the change of least
+/// kinetic metric along X that brings the stop's row (`impact`, a held row with
+/// [`Holder::Impact`]) to its rate after and every other row of `stack` to rest, the impulse
+/// P = (G X Gᵀ)⁺ (G v − w) acting through the response as the forces do
+/// (Pfeiffer & Glocker, *Multibody Dynamics with Unilateral Contacts*, 1996, §7: Newton's
+/// impact law on one contact, the bilateral rows kept). `stack` arranged with `impact` last
+/// among its held rows, G gathered, X formed at the state. False when the result is not
+/// finite (no inertia along the stopped coordinate).
+pub fn impact_velocities(
+    stack: &mut RowStack,
+    response: &mut Response,
+    all: &ContactRows,
+    mimics: &[Mimic],
+    v: &[f64],
+    after: &mut [f64],
+) -> bool {
+    after.copy_from_slice(v);
+    stack.velocity_values(all, mimics, v);
+    stack.add_least_change(response, after);
+    // The law holds exactly on the stop's row: the solve leaves its rate within round-off of
+    // the target, and after a dead stop (e = 0) a rate of −1e-17 into the stop would be a
+    // second impact at once. The other rows move by that round-off at most.
+    for held in &stack.held {
+        if let Holder::Impact { rate_after, .. } = held.holder {
+            after[held.velocity] = rate_after;
+        }
+    }
+    after.iter().all(|x| x.is_finite())
+}
+
 /// Why the rows' solve failed: a sliding contact's normal force changes sign at every solve
 /// (the contact named).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,11 +163,19 @@ pub struct Unsettled {
 impl RowStack {
     /// An empty stack for the velocities of `model`.
     pub fn new(model: &Model) -> RowStack {
-        let n = model.velocities();
+        let mut stack = RowStack::over(model.velocities(), model.contacts.len());
+        stack
+            .held
+            .reserve(model.stops.len() + model.frictions.len());
+        stack
+    }
+
+    /// An empty stack for `n` velocities and `contacts` contacts.
+    pub fn over(n: usize, contacts: usize) -> RowStack {
         RowStack {
             contacts: Vec::new(),
             couplings: 0,
-            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            held: Vec::new(),
             g: DMatrix::zeros(0, n),
             directions: DMatrix::zeros(n, 0),
             bias: DVector::zeros(0),
@@ -78,15 +183,15 @@ impl RowStack {
             coupling: DMatrix::zeros(0, 0),
             right: DVector::zeros(0),
             pivoted: Pivoted::default(),
-            pressing: vec![1.0; model.contacts.len()],
-            contact_forces: vec![Vector3::zeros(); model.contacts.len()],
+            pressing: vec![1.0; contacts],
+            contact_forces: vec![Vector3::zeros(); contacts],
             accelerations: DVector::zeros(n),
         }
     }
 
     /// Stacks the contact rows `contacts`, `couplings` coupling rows and the unit rows of the
-    /// velocities `held`; the storage is sized anew only when the number of rows changes.
-    pub fn arrange(&mut self, contacts: &[usize], couplings: usize, held: &[usize]) {
+    /// coordinates `held`; the storage is sized anew only when the number of rows changes.
+    pub fn arrange(&mut self, contacts: &[usize], couplings: usize, held: &[HeldRow]) {
         if self.contacts != contacts {
             self.contacts.clear();
             self.contacts.extend_from_slice(contacts);
@@ -134,8 +239,8 @@ impl RowStack {
             self.g[(first + i, mimic.leader_velocity)] -= mimic.multiplier;
         }
         let first = first + self.couplings;
-        for (i, &velocity) in self.held.iter().enumerate() {
-            self.g[(first + i, velocity)] = 1.0;
+        for (i, held) in self.held.iter().enumerate() {
+            self.g[(first + i, held.velocity)] = 1.0;
         }
     }
 
@@ -198,9 +303,77 @@ impl RowStack {
         self.right.as_slice()
     }
 
-    /// The forces that held the velocities `held` at the last solve.
-    pub fn held_forces(&self) -> &[f64] {
-        &self.right.as_slice()[self.contacts.len() + self.couplings..]
+    /// The coordinates held, each with the force that held it at the last solve.
+    pub fn held_forces(&self) -> impl Iterator<Item = (&HeldRow, f64)> {
+        let forces = &self.right.as_slice()[self.contacts.len() + self.couplings..];
+        self.held.iter().zip(forces.iter().copied())
+    }
+
+    /// The rows G, gathered (`gather`).
+    pub fn rows(&self) -> &DMatrix<f64> {
+        &self.g
+    }
+
+    /// Sets the rows' values to their velocities' distance from their targets at the
+    /// velocities `v`, G v − w (`values_mut`, for `add_least_change`): the contacts' rates as
+    /// `all` holds them, the couplings' q̇_f − m q̇_l, the held rates. Whether any is non-zero.
+    pub fn velocity_values(&mut self, all: &ContactRows, mimics: &[Mimic], v: &[f64]) -> bool {
+        let contacts = self.contacts.len();
+        for (i, &row) in self.contacts.iter().enumerate() {
+            self.right[i] = all.velocity[row];
+        }
+        for (i, mimic) in mimics.iter().take(self.couplings).enumerate() {
+            self.right[contacts + i] =
+                v[mimic.velocity] - mimic.multiplier * v[mimic.leader_velocity];
+        }
+        let first = contacts + self.couplings;
+        for (i, held) in self.held.iter().enumerate() {
+            let target = match held.holder {
+                Holder::Impact { rate_after, .. } => rate_after,
+                Holder::Stop { .. } | Holder::Friction { .. } => 0.0,
+            };
+            self.right[first + i] = v[held.velocity] - target;
+        }
+        self.right.amax() > 0.0
+    }
+
+    /// Sets the rows' values to their position values at q, φ(q) (`values_mut`, for
+    /// `add_least_change`): the gaps of the contacts' rows (normal rows only: the others are
+    /// not integrable), the couplings' violations, the held coordinates' distances to their
+    /// bounds (none for a row of velocities only). Whether any is above its round-off (a gap's relative to the largest radius, a
+    /// coupling's to its follower's coordinate, a bound's to the bound).
+    pub fn position_values(&mut self, model: &Model, all: &ContactRows, q: &[f64]) -> bool {
+        let radius = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
+        let mut open = false;
+        for (i, &row) in self.contacts.iter().enumerate() {
+            debug_assert_eq!(row % 3, 2, "a contact's position row is its normal row");
+            self.right[i] = all.gap[row / 3];
+            open |= self.right[i].abs() > GAP_ROUND_OFF * radius;
+        }
+        let first = self.contacts.len();
+        let couplings = &model.mimics[..self.couplings];
+        let scale = 1.0
+            + couplings
+                .iter()
+                .map(|m| q[m.position].abs())
+                .fold(0.0, f64::max);
+        for (i, mimic) in couplings.iter().enumerate() {
+            self.right[first + i] = mimic.violation(q);
+            open |= self.right[first + i].abs() > COUPLING_ROUND_OFF * scale;
+        }
+        let first = first + self.couplings;
+        for (i, held) in self.held.iter().enumerate() {
+            // A row of velocities only has no position to correct.
+            let (value, size) = match held.holder {
+                Holder::Stop {
+                    position, bound, ..
+                } => (q[position] - bound, bound.abs().max(1.0)),
+                Holder::Friction { .. } | Holder::Impact { .. } => (0.0, 1.0),
+            };
+            self.right[first + i] = value;
+            open |= value.abs() > BOUND_ROUND_OFF * size;
+        }
+        open
     }
 
     /// Adds the forces of the last solve's coupling and held rows to the generalised forces
@@ -213,8 +386,8 @@ impl RowStack {
             tau[mimic.velocity] += force;
             tau[mimic.leader_velocity] -= mimic.multiplier * force;
         }
-        for (&velocity, force) in self.held.iter().zip(held) {
-            tau[velocity] += force;
+        for (row, force) in self.held.iter().zip(held) {
+            tau[row.velocity] += force;
         }
     }
 

@@ -46,6 +46,10 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
+    /// Generalised forces a caller sets from outside the program (one per state velocity),
+    /// added to the efforts' at every evaluation: the inputs of a linearisation
+    /// (`studies::linearize`).
+    inputs: Option<DVector<f64>>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -62,7 +66,20 @@ impl<'m> MechanicalSystem<'m> {
             scratch: Box::new(Scratch::new(model, stabilisation)),
             sampling: None,
             native: None,
+            inputs: None,
         }
+    }
+
+    /// Sets the generalised forces added to the program's efforts from now on (one per state
+    /// velocity; `None` for none). Their power counts as the power of non-conservative efforts.
+    pub fn set_inputs(&mut self, inputs: Option<DVector<f64>>) {
+        self.inputs = inputs;
+    }
+
+    /// Whether an evaluation computes efforts: the program applies some, or a caller set inputs
+    /// (a linearisation's, or a run's, `RunState::inputs`).
+    fn reads_efforts(&self) -> bool {
+        self.model.has_efforts() || self.inputs.is_some() || self.state.inputs.any()
     }
 
     /// Runs `evaluate` with the outputs' scratch in place of the integrator's: the outputs'
@@ -111,11 +128,6 @@ impl<'m> MechanicalSystem<'m> {
         program && self.state.inputs.law.is_none()
     }
 
-    /// Whether an evaluation has efforts to evaluate: the program's, or inputs.
-    pub(super) fn has_efforts(&self) -> bool {
-        self.model.has_efforts() || self.state.inputs.any()
-    }
-
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
     pub fn efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Efforts, SystemError> {
         self.evaluate_efforts(t, q, v)?;
@@ -145,6 +157,10 @@ impl<'m> MechanicalSystem<'m> {
             let read = (&state.coordinates[..], &state.rates[..]);
             efforts.power += (self.state.inputs).add_to(t, read, v, &mut efforts.tau);
         }
+        if let Some(inputs) = &self.inputs {
+            efforts.tau += inputs;
+            efforts.power += inputs.iter().zip(v).map(|(u, rate)| u * rate).sum::<f64>();
+        }
         Ok(())
     }
 
@@ -168,10 +184,9 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         self.evaluate_efforts(t, q, v)?;
         if model.has_contacts() {
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
+            self.contact_rows_here(v, true)?;
         }
-        let efforts = match self.has_efforts() {
+        let efforts = match self.reads_efforts() {
             true => &self.scratch.efforts,
             false => &self.scratch.no_efforts,
         };
@@ -189,6 +204,24 @@ impl<'m> MechanicalSystem<'m> {
 
     /// Forms the response of a tree at the mass matrix in `mass`: M⁻¹, or S (SᵀMS)⁻¹ Sᵀ with S
     /// the basis of the velocities the mimic couplings allow.
+    /// The contacts' rows at the state whose kinematics the scratch holds, into its
+    /// `contact_state` (with γ when `with_bias`). A disc that lies flat, or passed lying flat
+    /// since the last rows, has no contact point: the run ends there.
+    pub(super) fn contact_rows_here(
+        &mut self,
+        v: &[f64],
+        with_bias: bool,
+    ) -> Result<(), SystemError> {
+        let state = &mut self.scratch.contact_state;
+        contacts::contact_rows_into(self.model, &mut self.scratch.data, v, with_bias, state);
+        match state.flat_disc {
+            Some(k) => Err(SystemError::DiscFlat {
+                contact: self.model.contacts[k].name.clone(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     fn form_tree_response(&mut self) -> Result<(), SystemError> {
         let formed = match self.model.mimics.is_empty() {
             true => self.scratch.response.on_tree(&self.scratch.mass),
@@ -346,7 +379,7 @@ impl<'m> MechanicalSystem<'m> {
             accelerations.copy_from(&self.scratch.loop_scratch.accelerations);
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
-        } else if self.has_efforts() {
+        } else if self.reads_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
             self.evaluate_efforts(t, q, v)?;
             let (tau, external) = (
@@ -380,10 +413,11 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        // The contacts, the couplings with loops and the coordinates held at rest, solved on the
-        // response together.
+        // The constraint stack's rows (`dynamics::rows`: the contacts, the couplings with loops,
+        // the coordinates held), solved together on the response of the base solve above (the
+        // loops' block, or the tree's): the one place every evaluation of the run solves them.
         self.solve_rows(q, v, &mut accelerations)?;
-        let efforts = if self.has_efforts() || model.has_loops() || model.has_contacts() {
+        let efforts = if self.reads_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
         } else {
             &self.scratch.no_efforts

@@ -540,7 +540,6 @@ fn idle_connections_hold_up_no_request() {
 #[test]
 fn a_served_simulation_is_bounded() {
     let (address, server) = serving(2);
-    let start = std::time::Instant::now();
     let (status, error) = http(
         &address,
         "GET /api/simulate?duration=499999 HTTP/1.1\r\n\r\n",
@@ -559,8 +558,6 @@ fn a_served_simulation_is_bounded() {
         failure.contains(&format!("{} steps", server::MAX_STEPS)),
         "{failure}"
     );
-    let took = start.elapsed().as_secs_f64();
-    assert!(took < 30.0, "{took} s");
     server.join().unwrap();
 }
 

@@ -11,6 +11,7 @@ use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::contacts;
 use crate::dynamics::friction::Phase;
+use crate::dynamics::rows::{HeldRow, Holder};
 use crate::dynamics::stops::Side;
 
 impl MechanicalSystem<'_> {
@@ -32,8 +33,7 @@ impl MechanicalSystem<'_> {
         if model.has_contacts() && model.has_loops() {
             // The loops' solve leaves the kinematics for its own rows: the contacts' start anew.
             forward_kinematics(model, &mut self.scratch.data, q, v)?;
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
+            self.contact_rows_here(v, true)?;
         }
         self.decide_contact_rows();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
@@ -69,19 +69,27 @@ impl MechanicalSystem<'_> {
         }
     }
 
-    /// The velocities held at rest into `held`: the resting stops', then the sticking joints'.
+    /// The coordinates held at rest into `held`: the resting stops', then the sticking
+    /// joints'.
     pub(super) fn gather_held(&mut self) {
+        let mut held = std::mem::take(&mut self.scratch.held);
+        held.clear();
+        held.extend(self.resting_stop_rows());
         let model = self.model;
-        self.scratch.held.clear();
-        let stops = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
-        self.scratch
-            .held
-            .extend(stops.map(|k| model.stops[k].velocity));
         let frictions =
             (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
-        self.scratch
-            .held
-            .extend(frictions.map(|k| model.frictions[k].velocity));
+        held.extend(frictions.map(|index| HeldRow {
+            velocity: model.frictions[index].velocity,
+            holder: Holder::Friction { index },
+        }));
+        self.scratch.held = held;
+    }
+
+    /// The held rows of the stops the run's coordinates rest on.
+    pub(super) fn resting_stop_rows(&self) -> impl Iterator<Item = HeldRow> + '_ {
+        let model = self.model;
+        let resting = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
+        resting.map(|index| HeldRow::on_stop(index, &model.stops[index]))
     }
 
     /// The contact rows of the run, decided at the first state evaluated (from the contacts'
@@ -108,19 +116,19 @@ impl MechanicalSystem<'_> {
     /// and each friction's holding force.
     fn record_holding(&mut self) {
         let model = self.model;
-        let mut forces = self.scratch.rows.held_forces().iter();
-        let stops = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
-        for (k, force) in stops.zip(forces.by_ref()) {
-            // A lower stop pushes the coordinate up, an upper one down.
-            self.scratch.contact[k] = match model.stops[k].side {
-                Side::Lower => *force,
-                Side::Upper => -*force,
-            };
-        }
-        let frictions =
-            (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
-        for (k, force) in frictions.zip(forces) {
-            self.scratch.holding[k] = *force;
+        for (row, force) in self.scratch.rows.held_forces() {
+            match row.holder {
+                // A lower stop pushes the coordinate up, an upper one down.
+                Holder::Stop { index, .. } => {
+                    self.scratch.contact[index] = match model.stops[index].side {
+                        Side::Lower => force,
+                        Side::Upper => -force,
+                    }
+                }
+                Holder::Friction { index } => self.scratch.holding[index] = force,
+                // An impact's row is solved at its event, never among an evaluation's rows.
+                Holder::Impact { .. } => {}
+            }
         }
     }
 

@@ -13,7 +13,7 @@ use crate::dynamics::loops::{LoopScratch, ProjectionScratch, Stabilisation};
 use crate::dynamics::mimics;
 use crate::dynamics::model::{DeclaredState, Model};
 use crate::dynamics::response::Response;
-use crate::dynamics::rows::RowStack;
+use crate::dynamics::rows::{HeldRow, RowStack};
 use crate::simulate::constraints::LoopMonitor;
 
 pub struct Scratch {
@@ -59,7 +59,7 @@ pub struct Scratch {
     pub(in crate::simulate) rows: RowStack,
     pub(in crate::simulate) velocity_stack: RowStack,
     pub(in crate::simulate) position_stack: RowStack,
-    pub(in crate::simulate) held: Vec<usize>,
+    pub(in crate::simulate) held: Vec<HeldRow>,
     pub(in crate::simulate) step: DVector<f64>,
     /// Per stop, the contact force holding its coordinate on it at the last evaluation
     /// (positive while it pushes the coordinate into its range); per joint with friction, the

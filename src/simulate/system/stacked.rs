@@ -11,7 +11,6 @@
 use super::{MechanicalSystem, SystemError};
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
 use crate::dynamics::algorithms::{crba_after_kinematics, forward_kinematics};
-use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Wanted};
 
 /// Newton steps at most that close the position rows.
@@ -25,12 +24,6 @@ const STACKED: Settings = Settings {
     acceptance: Acceptance::EveryStep,
     progress: Progress::Any,
 };
-
-/// Relative size of a coupling's violation below which it is not corrected.
-const COUPLING_ROUND_OFF: f64 = 1e-13;
-
-/// Relative size of a contact's gap (to the largest radius) below which it is not corrected.
-const GAP_ROUND_OFF: f64 = 1e-15;
 
 impl MechanicalSystem<'_> {
     /// Keeps the contacts' rows and the couplings solved as rows in the state y (see the
@@ -80,20 +73,7 @@ impl MechanicalSystem<'_> {
         let stack = &mut self.scratch.velocity_stack;
         stack.arrange(kept, couplings, &self.scratch.held);
         stack.gather(&self.scratch.contact_state, &model.mimics);
-        let rates = stack.values_mut();
-        let (g, state) = (&self.scratch.contact_state, &v[..]);
-        for (i, &row) in kept.iter().enumerate() {
-            rates[i] = g.velocity[row];
-        }
-        let mimics = model.mimics.iter().take(couplings);
-        for (i, mimic) in mimics.enumerate() {
-            let rate = state[mimic.velocity] - mimic.multiplier * state[mimic.leader_velocity];
-            rates[kept.len() + i] = rate;
-        }
-        for (i, &velocity) in self.scratch.held.iter().enumerate() {
-            rates[kept.len() + couplings + i] = state[velocity];
-        }
-        let off = stack.values_mut().amax() > 0.0;
+        let off = stack.velocity_values(&self.scratch.contact_state, &model.mimics, v);
         stack.add_least_change(&mut self.scratch.response, v);
         y[positions..].copy_from_slice(v);
         Ok(moved || off)
@@ -112,7 +92,7 @@ impl MechanicalSystem<'_> {
         let stack = &mut self.scratch.position_stack;
         stack.arrange(&self.scratch.normal_rows, couplings, &[]);
         stack.gather(&self.scratch.contact_state, &self.model.mimics);
-        Ok(self.fill_position_values(q))
+        Ok(stack.position_values(self.model, &self.scratch.contact_state, q))
     }
 
     /// The positions and velocities of y into `q` (quaternions at unit length) and `v`.
@@ -122,33 +102,14 @@ impl MechanicalSystem<'_> {
         v.extend_from_slice(rates);
     }
 
-    /// The position rows' values into the position stack (the gaps of its contact rows, then
-    /// the couplings' violations at q); false when all are at round-off.
-    fn fill_position_values(&mut self, q: &[f64]) -> bool {
-        let model = self.model;
-        let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
-        let gaps = self.scratch.normal_rows.len();
-        let values = self.scratch.position_stack.values_mut();
-        let mut open = false;
-        for (i, &row) in self.scratch.normal_rows.iter().enumerate() {
-            values[i] = self.scratch.contact_state.gap[row / 3];
-            open |= values[i].abs() > GAP_ROUND_OFF * size;
-        }
-        let couplings = values.len() - gaps;
-        let scale = 1.0
-            + (model.mimics.iter().take(couplings))
-                .map(|m| q[m.position].abs())
-                .fold(0.0, f64::max);
-        for (i, mimic) in model.mimics.iter().take(couplings).enumerate() {
-            values[gaps + i] = mimic.violation(q);
-            open |= values[gaps + i].abs() > COUPLING_ROUND_OFF * scale;
-        }
-        open
-    }
-
     /// At (q, v): the loops' allowed motions (a constrained solve), the contacts' rows without
     /// γ, the response X and the contact rows of the run decided if they were not.
-    fn stacked_geometry(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+    pub(super) fn stacked_geometry(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SystemError> {
         let model = self.model;
         self.scratch.response_here = false;
         if model.has_loops() {
@@ -161,8 +122,7 @@ impl MechanicalSystem<'_> {
             self.form_tree_response()?;
         }
         if model.has_contacts() {
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, false, state);
+            self.contact_rows_here(v, false)?;
         }
         self.decide_contact_rows();
         Ok(())
