@@ -9,6 +9,8 @@
 //! 3. [`run`]: the integration, every sample handed to a sink as it is computed, and the
 //!    [`Simulation`] with its report (its warnings by [`Report::warnings`]); [`run_with`] with
 //!    options. [`evaluate`] gives the dynamics at chosen states instead.
+//! 4. [`Simulator`]: the same run owned by its caller and advanced step by step, with efforts
+//!    applied from Rust between steps (see below).
 //!
 //! Every failure is an [`Error`]; errors in the program are [`Diagnostic`]s, which
 //! [`Program::render`] shows as the command line does.
@@ -25,6 +27,59 @@
 //! assert_eq!(times.last(), Some(&0.5));
 //! # Ok::<(), lsdc::api::Error>(())
 //! ```
+//!
+//! # Stepping a simulation from Rust
+//!
+//! A [`Simulator`] holds one run: [`step`](Simulator::step) takes one step of the integrator
+//! the settings name, [`advance_to`](Simulator::advance_to) steps to a time and lands on it;
+//! between steps the caller reads the state ([`time`](Simulator::time),
+//! [`coordinates`](Simulator::coordinates), [`sample`](Simulator::sample)) and sets efforts
+//! along the velocities it named as inputs: held values ([`set_inputs`](Simulator::set_inputs),
+//! a zero-order hold, as a sampled controller applies its commands) and a law of the time and
+//! the declared coordinates and rates ([`set_law`](Simulator::set_law)), which every evaluation
+//! of the equations of motion evaluates, at every stage of every step, as it evaluates the
+//! program's own efforts. Closed through a law, a loop gives the motion the same law written in
+//! LSD gives, to round-off; this one is a PD controller on the bundled pendulum:
+//!
+//! ```
+//! use lsdc::api::{run, Program, SettingsChanges, Simulator};
+//!
+//! const KP: f64 = 20.0;
+//! const KD: f64 = 3.0;
+//! const TARGET: f64 = 0.5;
+//! let changes = SettingsChanges { duration: Some(2.0), ..Default::default() };
+//!
+//! // The pendulum, its torque along `swing.q` computed in Rust at every stage.
+//! let pendulum = Program::from_file("examples/pendulum.lsd", &Default::default())?;
+//! let pendulum = pendulum.prepare(&[], &changes)?;
+//! let mut simulator = Simulator::new(&pendulum, &["swing.q"])?;
+//! simulator.set_law(|_t, q, v, torque| torque[0] = -KP * (q[0] - TARGET) - KD * v[0]);
+//! simulator.advance_to(2.0)?;
+//! let (from_rust, report) = simulator.finish();
+//! assert!(report.failure.is_none());
+//!
+//! // The same law written in LSD, as the torque of the pendulum's revolute joint.
+//! let text = "
+//!     import joints;
+//!     let rod = body mass = 1.2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end;
+//!     let pd = link(q) dof = q || [1, 0, 0], torque = [-20 * (q - 0.5) - 3 * q', 0, 0] end;
+//!     join earth and rod with pd as swing;
+//!     apply force value = [0, 0, -9.81 * rod.mass], body = earth end on rod.iframe;
+//!     initial swing.q = pi / 3;
+//!     simulate duration = 5, output = 0.05, integrator = dopri5, tolerance = 1e-10 end;";
+//! let in_lsd = Program::from_text("pd.lsd", text, None, &Default::default());
+//! let in_lsd = run(&in_lsd.prepare(&[], &changes)?, &mut |_| {});
+//!
+//! assert_eq!(from_rust.len(), in_lsd.samples.len());
+//! for (rust, lsd) in from_rust.iter().zip(&in_lsd.samples) {
+//!     assert_eq!(rust.time, lsd.time);
+//!     assert!((rust.coordinates[0] - lsd.coordinates[0]).abs() <= 1e-12);
+//!     assert!((rust.rates[0] - lsd.rates[0]).abs() <= 1e-12);
+//! }
+//! // The controller holds the rod near its target, which gravity pulls it below.
+//! assert!((from_rust.last().unwrap().coordinates[0] - TARGET).abs() < 0.15);
+//! # Ok::<(), lsdc::api::Error>(())
+//! ```
 
 use std::fmt;
 use std::path::Path;
@@ -38,7 +93,9 @@ pub use crate::load::{LoadError, LoadOptions};
 use crate::prepare::outputs::Outputs;
 pub use crate::prepare::settings::{Integrator, Settings, SettingsChanges, SettingsError};
 pub use crate::prepare::Prepared;
-pub use crate::simulate::run::{Report, RunOptions, Sample, Simulation};
+pub use crate::simulate::run::{
+    Report, RunFailure, RunOptions, Sample, Simulation, Simulator, Start,
+};
 pub use crate::source::SourceMap;
 pub use crate::studies::batch::{parse_states, Evaluation, StateInput, StatesError};
 
@@ -56,6 +113,8 @@ pub enum Error {
     States(StatesError),
     /// A frame asked for by name cannot be found, or followed by the outputs.
     Frame(String),
+    /// A [`Simulator`] cannot start, or its run stopped: when and why.
+    Run(RunFailure),
 }
 
 impl fmt::Display for Error {
@@ -65,6 +124,7 @@ impl fmt::Display for Error {
             Error::Settings(error) => error.fmt(f),
             Error::States(error) => error.fmt(f),
             Error::Frame(message) => f.write_str(message),
+            Error::Run(failure) => write!(f, "at t = {}: {}", failure.time, failure.message),
             Error::Program(diagnostics) => {
                 let errors: Vec<String> = diagnostics
                     .iter()
@@ -83,7 +143,7 @@ impl std::error::Error for Error {
             Error::Load(error) => Some(error),
             Error::Settings(error) => Some(error),
             Error::States(error) => Some(error),
-            Error::Program(_) | Error::Frame(_) => None,
+            Error::Program(_) | Error::Frame(_) | Error::Run(_) => None,
         }
     }
 }
@@ -103,6 +163,12 @@ impl From<SettingsError> for Error {
 impl From<StatesError> for Error {
     fn from(error: StatesError) -> Error {
         Error::States(error)
+    }
+}
+
+impl From<RunFailure> for Error {
+    fn from(failure: RunFailure) -> Error {
+        Error::Run(failure)
     }
 }
 

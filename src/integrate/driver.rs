@@ -1,23 +1,15 @@
-//! The loop shared by the adaptive methods: step-size selection, acceptance, output delivery and
+//! The steps shared by the adaptive methods: step-size selection, acceptance, output delivery and
 //! failure detection. Each method supplies only how to attempt and interpolate one step.
 
 use super::control::StepController;
 use super::evaluator::{all_finite, Evaluator, Halt};
 use super::events::{EventWatch, Located};
-use super::outcome::{Failure, IntegrationError, Stats};
+use super::march::{Marching, Problem};
+use super::outcome::{Failure, Stats};
 use super::output::Outputs;
 use super::settings::Settings;
 use super::stability::StabilityWatch;
-use super::system::{Observer, OdeSystem};
-
-/// What to integrate, already checked for consistency.
-pub(super) struct Problem<'a> {
-    pub(super) t0: f64,
-    pub(super) y0: &'a [f64],
-    pub(super) t_end: f64,
-    pub(super) outputs: &'a [f64],
-    pub(super) settings: &'a Settings,
-}
+use super::system::Observer;
 
 /// One adaptive method, stepping from the current point of the solution.
 pub(super) trait AdaptiveStepper {
@@ -71,79 +63,14 @@ pub(super) trait AdaptiveStepper {
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]);
     /// The dense output of the last accepted step at `t`.
     fn interpolate(&self, t: f64, out: &mut [f64]);
+    /// Adds to `stats` what the method counts itself (a method that switches between two).
+    fn count(&self, _stats: &mut Stats) {}
 }
 
-pub(super) fn integrate_adaptive(
-    stepper: &mut dyn AdaptiveStepper,
-    system: &mut dyn OdeSystem,
-    problem: &Problem,
-    observer: &mut Observer,
-) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    let mut eval = Evaluator::new(system);
-    let dimension = problem.y0.len();
-    let mut watch = stepper
-        .stability_limit()
-        .and_then(|limit| StabilityWatch::new(limit, true, dimension, problem.settings));
-    let result = run(stepper, &mut eval, problem, &mut watch, observer);
-    eval.stats.stability_bound = watch.and_then(|mut watch| watch.finding());
-    match result {
-        Ok(y) => Ok((y, eval.stats)),
-        Err(halt) => Err(halt.made_fatal().into_error(eval.stats)),
-    }
-}
-
-fn run(
-    stepper: &mut dyn AdaptiveStepper,
-    eval: &mut Evaluator,
-    problem: &Problem,
-    watch: &mut Option<StabilityWatch>,
-    observer: &mut Observer,
-) -> Result<Vec<f64>, Halt> {
-    let Problem {
-        t0,
-        y0,
-        t_end,
-        settings,
-        ..
-    } = *problem;
-    let mut outputs = Outputs::new(problem.outputs, y0.len());
-    if !all_finite(y0) {
-        return Err(Halt::fatal(t0, Failure::NotFinite));
-    }
-    outputs.deliver_start(t0, y0, (eval, observer))?;
-    if t0 == t_end {
-        return Ok(y0.to_vec());
-    }
-    // A non-finite derivative at a point of the solution cannot be avoided by a shorter step.
-    stepper.start(eval, t0, y0).map_err(Halt::made_fatal)?;
-    let h = match settings.initial_step {
-        Some(h) => h,
-        None => initial_step(stepper, eval, problem)?,
-    };
-    let mut march = March {
-        t: t0,
-        y: y0.to_vec(),
-        y_new: vec![0.0; y0.len()],
-        h,
-        last_step: h,
-        attempts: 0,
-        controller: stepper.controller(),
-        outputs,
-        events: EventWatch::new(eval, t0, y0)?,
-    };
-    while march.t < t_end {
-        if march.step(stepper, eval, problem, observer)? {
-            if let Some(watch) = watch {
-                watch.after_step(eval, march.t, &march.y, march.last_step);
-            }
-        }
-    }
-    march.outputs.deliver_rest(&march.y, (eval, observer))?;
-    Ok(march.y)
-}
-
-/// The state of the integration between steps.
-struct March<'a> {
+/// An adaptive method's integration between steps: the method, the current point, the step
+/// to try next, and the watches over the stability region and the system's events.
+pub(super) struct AdaptiveMarch {
+    stepper: Box<dyn AdaptiveStepper>,
     t: f64,
     y: Vec<f64>,
     y_new: Vec<f64>,
@@ -152,33 +79,118 @@ struct March<'a> {
     last_step: f64,
     attempts: usize,
     controller: StepController,
-    outputs: Outputs<'a>,
+    /// The stiffness check of an explicit method, when the settings ask for it.
+    watch: Option<StabilityWatch>,
     /// The system's event functions, when it has any.
     events: Option<EventWatch>,
 }
 
-impl March<'_> {
-    /// One attempt: either advances the solution (and says so) or shrinks the step.
+impl AdaptiveMarch {
+    /// `stepper` at (t0, y0), to be started (`Marching::start`).
+    pub(super) fn new(
+        stepper: Box<dyn AdaptiveStepper>,
+        t0: f64,
+        y0: &[f64],
+        settings: &Settings,
+    ) -> AdaptiveMarch {
+        let watch = stepper
+            .stability_limit()
+            .and_then(|limit| StabilityWatch::new(limit, true, y0.len(), settings));
+        AdaptiveMarch {
+            controller: stepper.controller(),
+            stepper,
+            t: t0,
+            y: y0.to_vec(),
+            y_new: vec![0.0; y0.len()],
+            h: 0.0,
+            last_step: 0.0,
+            attempts: 0,
+            watch,
+            events: None,
+        }
+    }
+}
+
+impl Marching for AdaptiveMarch {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// dy/dt at the start (a non-finite one cannot be avoided by a shorter step), the first
+    /// step's size, the events' values.
+    fn start(&mut self, eval: &mut Evaluator, problem: &Problem) -> Result<(), Halt> {
+        let (t0, y0) = (self.t, &self.y[..]);
+        (self.stepper)
+            .start(eval, t0, y0)
+            .map_err(Halt::made_fatal)?;
+        self.h = match problem.settings.initial_step {
+            Some(h) => h,
+            None => initial_step(&mut *self.stepper, eval, problem, y0)?,
+        };
+        self.last_step = self.h;
+        self.events = EventWatch::new(eval, t0, y0)?;
+        Ok(())
+    }
+
+    /// Attempts steps until one is accepted (the rejected ones shrink the step).
     fn step(
         &mut self,
-        stepper: &mut dyn AdaptiveStepper,
         eval: &mut Evaluator,
         problem: &Problem,
+        outputs: &mut Outputs,
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
+        while !self.attempt(eval, problem, outputs, observer)? {}
+        if let Some(watch) = &mut self.watch {
+            watch.after_step(eval, self.t, &self.y, self.last_step);
+        }
+        Ok(())
+    }
+
+    /// dy/dt and the events' values again at the current point, the error's trend forgotten.
+    fn restart(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
+        (self.stepper)
+            .start(eval, self.t, &self.y)
+            .map_err(Halt::made_fatal)?;
+        self.controller.forget_trend();
+        if let Some(watch) = &mut self.events {
+            watch.restart(eval, self.t, &self.y)?;
+        }
+        Ok(())
+    }
+
+    fn count(&self, stats: &mut Stats) {
+        stats.stability_bound = self.watch.as_ref().and_then(StabilityWatch::finding);
+        self.stepper.count(stats);
+    }
+}
+
+impl AdaptiveMarch {
+    /// One attempt: either advances the solution (and says so) or shrinks the step.
+    fn attempt(
+        &mut self,
+        eval: &mut Evaluator,
+        problem: &Problem,
+        outputs: &mut Outputs,
         observer: &mut Observer,
     ) -> Result<bool, Halt> {
-        let h = self.next_step_size(problem, stepper.step_limit())?;
-        let attempt = stepper.attempt(eval, self.t, &self.y, h, &mut self.y_new);
+        let h = self.next_step_size(problem, self.stepper.step_limit())?;
+        let attempt = (self.stepper).attempt(eval, self.t, &self.y, h, &mut self.y_new);
         let attempt = attempt.and_then(|error| match all_finite(&self.y_new) {
             true => Ok(error),
             false => Err(Halt::NotFinite { time: self.t + h }),
         });
         match attempt {
             Ok(error) if error <= 1.0 => {
-                self.advance(stepper, eval, problem, h, observer)?;
+                self.advance(eval, problem, h, outputs, observer)?;
                 eval.stats.steps += 1;
                 self.last_step = h;
                 self.h = self.controller.after_accept(h, error);
-                if let Some(controller) = stepper.switched_controller() {
+                if let Some(controller) = self.stepper.switched_controller() {
                     self.controller = controller;
                 }
                 if eval.breaks_error_trend() {
@@ -206,19 +218,20 @@ impl March<'_> {
     /// delivering the outputs it passes.
     fn advance(
         &mut self,
-        stepper: &mut dyn AdaptiveStepper,
         eval: &mut Evaluator,
         problem: &Problem,
         h: f64,
+        outputs: &mut Outputs,
         observer: &mut Observer,
     ) -> Result<(), Halt> {
+        let stepper = &mut self.stepper;
         let lands_on_end = h >= problem.t_end - self.t || self.t + h >= problem.t_end;
         let t_new = if lands_on_end {
             problem.t_end
         } else {
             self.t + h
         };
-        if self.outputs.wants_interior(self.t, t_new) || self.events.is_some() {
+        if outputs.wants_interior(self.t, t_new) || self.events.is_some() {
             // A failure here is past the step's acceptance: a shorter step would not avoid it.
             (stepper.prepare_interpolation(eval, self.t, &self.y, h)).map_err(Halt::made_fatal)?;
         }
@@ -227,7 +240,7 @@ impl March<'_> {
         if let Some(watch) = &mut self.events {
             let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
             if let Some(event) = watch.search(eval, (self.t, t_new), &self.y_new, &interpolate)? {
-                return self.act_on_event(stepper, eval, event, observer);
+                return self.act_on_event(eval, event, outputs, observer);
             }
         }
         if eval.project(t_new, &mut self.y_new)? {
@@ -237,8 +250,7 @@ impl March<'_> {
                 .map_err(Halt::made_fatal)?;
         }
         let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
-        self.outputs
-            .deliver_step((self.t, t_new), &self.y_new, interpolate, (eval, observer))?;
+        outputs.deliver_step((self.t, t_new), &self.y_new, interpolate, (eval, observer))?;
         std::mem::swap(&mut self.y, &mut self.y_new);
         self.t = t_new;
         Ok(())
@@ -249,19 +261,19 @@ impl March<'_> {
     /// error's trend forgotten (the motion after an impact owes nothing to the one before).
     fn act_on_event(
         &mut self,
-        stepper: &mut dyn AdaptiveStepper,
         eval: &mut Evaluator,
         event: Located,
+        outputs: &mut Outputs,
         observer: &mut Observer,
     ) -> Result<(), Halt> {
+        let stepper = &mut self.stepper;
         let Located {
             index,
             time,
             mut state,
         } = event;
         let interpolate = |t: f64, out: &mut [f64]| stepper.interpolate(t, out);
-        self.outputs
-            .deliver_step((self.t, time), &state, interpolate, (eval, observer))?;
+        outputs.deliver_step((self.t, time), &state, interpolate, (eval, observer))?;
         eval.handle_event(time, &mut state, index)?;
         eval.project(time, &mut state)?;
         stepper
@@ -313,13 +325,12 @@ fn initial_step(
     stepper: &mut dyn AdaptiveStepper,
     eval: &mut Evaluator,
     problem: &Problem,
+    y0: &[f64],
 ) -> Result<f64, Halt> {
     let Problem {
         t0,
-        y0,
         t_end,
         settings,
-        ..
     } = *problem;
     let f0 = stepper.derivative().to_vec();
     let controlled = settings.controlled_len(y0.len());

@@ -45,11 +45,9 @@ pub(super) struct Evaluator<'s> {
 }
 
 impl<'s> Evaluator<'s> {
-    pub(super) fn new(system: &'s mut dyn OdeSystem) -> Self {
-        Evaluator {
-            system,
-            stats: Stats::default(),
-        }
+    /// Evaluates `system`, counting on from `stats` (an integration's so far).
+    pub(super) fn resume(system: &'s mut dyn OdeSystem, stats: Stats) -> Self {
+        Evaluator { system, stats }
     }
 
     /// The system's observation of the output at (t, y) (`OdeSystem::observe`).

@@ -1,6 +1,7 @@
 //! Integrators for ordinary differential equations `dy/dt = f(t, y)`, independent of mechanics.
 //!
-//! The methods share one entry point, [`integrate`]:
+//! The methods share one entry point, [`integrate`], which takes the steps of an
+//! [`Integration`] to the end (a caller may take them one by one):
 //! - [`Method::Rk4`]: the classic fixed-step Runge–Kutta method of order 4;
 //! - [`Method::DormandPrince`]: the adaptive explicit Dormand–Prince 5(4) pair with dense output;
 //! - [`Method::Dop853`]: the adaptive explicit 8(5,3) pair DOP853 with its dense output of
@@ -25,6 +26,7 @@ mod evaluator;
 mod events;
 mod hermite;
 mod jacobian;
+mod march;
 mod outcome;
 mod output;
 pub mod radau;
@@ -32,6 +34,7 @@ mod rk4;
 pub mod rosenbrock;
 mod settings;
 pub mod stability;
+mod stepping;
 mod switching;
 mod system;
 
@@ -40,6 +43,7 @@ pub use hermite::HermiteSegment;
 pub use outcome::{Failure, InputError, IntegrationError, StabilityBound, Stats, StepError};
 pub use settings::{Interrupt, Method, Settings};
 pub use stability::jacobian_product;
+pub use stepping::Integration;
 pub use system::{CallbackError, Observer, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,
@@ -94,88 +98,12 @@ pub fn integrate(
         stats: Box::default(),
     };
     check_problem(system.dimension(), t0, y0, t_end, outputs).map_err(invalid)?;
-    check_settings(method, settings).map_err(invalid)?;
-    let problem = driver::Problem {
-        t0,
-        y0,
-        t_end,
-        outputs,
-        settings,
-    };
-    match method {
-        Method::Rk4 { step } => rk4::integrate(system, &problem, *step, observer),
-        Method::DormandPrince => driver::integrate_adaptive(
-            &mut dopri5::DormandPrince::new(y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Dop853 => driver::integrate_adaptive(
-            &mut dop853::Dop853::new(y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Rosenbrock => driver::integrate_adaptive(
-            &mut rosenbrock::RosenbrockW::new(rosenbrock::Scheme::Ros34pw2, y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Rodas4 => driver::integrate_adaptive(
-            &mut rosenbrock::RosenbrockW::new(rosenbrock::Scheme::Rodas4, y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Radau5 => driver::integrate_adaptive(
-            &mut radau::Radau5::new(y0.len(), settings),
-            system,
-            &problem,
-            observer,
-        ),
-        Method::Automatic => {
-            let implicit = stiff_method(system, t0, y0, settings);
-            let mut stepper = switching::Switching::new(implicit, y0.len(), settings);
-            let result = driver::integrate_adaptive(&mut stepper, system, &problem, observer);
-            let count = |stats: &mut Stats| {
-                stats.stiff_steps = stepper.implicit_steps;
-                stats.method_switches = stepper.switches;
-                stats.stiff_from = stepper.stiff_from;
-            };
-            match result {
-                Ok((y, mut stats)) => {
-                    count(&mut stats);
-                    Ok((y, stats))
-                }
-                Err(mut error) => {
-                    count(&mut error.stats);
-                    Err(error)
-                }
-            }
-        }
+    let mut integration = Integration::new(method, system, t0, y0, outputs.to_vec(), settings)?;
+    while integration.time() < t_end {
+        integration.step(system, t_end, observer)?;
     }
-}
-
-/// The stiff method of [`Method::Automatic`]: Radau IIA of order 5, except on a system that
-/// moves on a manifold (a mechanism's closed loops), whose Jacobian is formed along the
-/// manifold's tangent directions only: there the W-method ROS34PW2, whose order holds with any
-/// matrix (on a stiff four-bar over 2 s at 1e-8, RODAS4 took 26,460 steps, ROS34PW2 638).
-fn stiff_method(
-    system: &mut dyn OdeSystem,
-    t0: f64,
-    y0: &[f64],
-    settings: &Settings,
-) -> switching::Stiff {
-    let n = y0.len();
-    match system.tangent_basis(t0, y0) {
-        Ok(Some(_)) => switching::Stiff::Rosenbrock(rosenbrock::RosenbrockW::new(
-            rosenbrock::Scheme::Ros34pw2,
-            n,
-            settings,
-        )),
-        _ => switching::Stiff::Radau(radau::Radau5::new(n, settings)),
-    }
+    integration.deliver_rest(system, observer)?;
+    Ok((integration.state().to_vec(), integration.stats()))
 }
 
 fn check_problem(
@@ -199,33 +127,6 @@ fn check_problem(
     }
     if outputs.windows(2).any(|pair| pair[0] > pair[1]) {
         return Err(InputError::UnsortedOutputs);
-    }
-    Ok(())
-}
-
-fn check_settings(method: &Method, settings: &Settings) -> Result<(), InputError> {
-    if let Method::Rk4 { step } = *method {
-        if !(step.is_finite() && step > 0.0) {
-            return Err(InputError::Rk4Step { step });
-        }
-        return Ok(());
-    }
-    let Settings {
-        rtol,
-        atol,
-        initial_step,
-        max_step,
-        min_step,
-        ..
-    } = *settings;
-    if !(rtol >= 0.0 && atol >= 0.0 && rtol + atol > 0.0 && rtol.is_finite() && atol.is_finite()) {
-        return Err(InputError::Tolerances { rtol, atol });
-    }
-    if !(max_step > 0.0 && min_step >= 0.0 && min_step <= max_step) {
-        return Err(InputError::StepLimits { min_step, max_step });
-    }
-    if initial_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
-        return Err(InputError::InitialStep);
     }
     Ok(())
 }

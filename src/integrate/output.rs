@@ -9,14 +9,14 @@ use super::system::Observer;
 const COINCIDENCE: f64 = 1e-9;
 
 /// The output times and how many of them were delivered.
-pub(super) struct Outputs<'a> {
-    times: &'a [f64],
+pub(super) struct Outputs {
+    times: Vec<f64>,
     next: usize,
     value: Vec<f64>,
 }
 
-impl<'a> Outputs<'a> {
-    pub(super) fn new(times: &'a [f64], dimension: usize) -> Self {
+impl Outputs {
+    pub(super) fn new(times: Vec<f64>, dimension: usize) -> Self {
         Outputs {
             times,
             next: 0,

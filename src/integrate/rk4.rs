@@ -13,14 +13,15 @@
 //! norm of the tolerances, so that a step too long for the motion is not a silent wrong answer.
 
 use super::control::error_norm;
-use super::driver::Problem;
-use super::evaluator::{all_finite, Evaluator, Halt};
+use super::evaluator::{Evaluator, Halt};
 use super::events::{EventWatch, Located};
 use super::hermite::HermiteSegment;
-use super::outcome::{Failure, IntegrationError, Stats, StepError};
+use super::march::{Marching, Problem};
+use super::outcome::{Failure, Stats, StepError};
 use super::output::Outputs;
+use super::settings::Settings;
 use super::stability::StabilityWatch;
-use super::system::{Observer, OdeSystem};
+use super::system::Observer;
 
 /// A remainder below this fraction of a step joins the last full step instead of making a sliver.
 const SLIVER: f64 = 1e-9;
@@ -29,74 +30,91 @@ const SLIVER: f64 = 1e-9;
 /// 2√2 on the imaginary one.
 pub const STABILITY_LIMIT: f64 = 2.8;
 
-pub(super) fn integrate(
-    system: &mut dyn OdeSystem,
-    problem: &Problem,
+/// RK4's integration between steps: the current point and its grid, the watches over the
+/// stability region and the system's events.
+pub(super) struct Rk4March {
+    rk4: Rk4,
     step: f64,
-    observer: &mut Observer,
-) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    let mut eval = Evaluator::new(system);
-    let dimension = problem.y0.len();
-    let mut watch = StabilityWatch::new(STABILITY_LIMIT, false, dimension, problem.settings);
-    let result = run(&mut eval, problem, step, &mut watch, observer);
-    eval.stats.stability_bound = watch.and_then(|mut watch| watch.finding());
-    match result {
-        Ok(y) => Ok((y, eval.stats)),
-        Err(halt) => Err(halt.made_fatal().into_error(eval.stats)),
+    /// The grid's origin, and the number of its points passed.
+    t0: f64,
+    k: usize,
+    watch: Option<StabilityWatch>,
+    events: Option<EventWatch>,
+}
+
+impl Rk4March {
+    /// At (t0, y0), with steps of `step` on the grid t0 + k step, to be started
+    /// (`Marching::start`).
+    pub(super) fn new(t0: f64, y0: &[f64], step: f64, settings: &Settings) -> Rk4March {
+        Rk4March {
+            rk4: Rk4::new(t0, y0),
+            step,
+            t0,
+            k: 0,
+            watch: StabilityWatch::new(STABILITY_LIMIT, false, y0.len(), settings),
+            events: None,
+        }
     }
 }
 
-fn run(
-    eval: &mut Evaluator,
-    problem: &Problem,
-    step: f64,
-    watch: &mut Option<StabilityWatch>,
-    observer: &mut Observer,
-) -> Result<Vec<f64>, Halt> {
-    let Problem { t0, y0, t_end, .. } = *problem;
-    let mut outputs = Outputs::new(problem.outputs, y0.len());
-    if !all_finite(y0) {
-        return Err(Halt::fatal(t0, Failure::NotFinite));
+impl Marching for Rk4March {
+    fn time(&self) -> f64 {
+        self.rk4.t
     }
-    outputs.deliver_start(t0, y0, (eval, observer))?;
-    let step_count = step_count(t_end - t0, step);
-    let mut rk4 = Rk4::new(t0, y0);
-    let mut events = EventWatch::new(eval, t0, y0)?;
-    let mut k = 0usize;
-    while (k as f64) < step_count {
+
+    fn state(&self) -> &[f64] {
+        &self.rk4.y
+    }
+
+    /// The events' values at the start.
+    fn start(&mut self, eval: &mut Evaluator, _problem: &Problem) -> Result<(), Halt> {
+        self.events = EventWatch::new(eval, self.rk4.t, &self.rk4.y)?;
+        Ok(())
+    }
+
+    /// One step to the next grid point, or to the end when it comes first, or to the first
+    /// event in between.
+    fn step(
+        &mut self,
+        eval: &mut Evaluator,
+        problem: &Problem,
+        outputs: &mut Outputs,
+        observer: &mut Observer,
+    ) -> Result<(), Halt> {
+        let rk4 = &mut self.rk4;
         if let Some(value) = problem.settings.interrupted() {
             return Err(Halt::fatal(rk4.t, Failure::Interrupted(value)));
         }
-        if k >= problem.settings.max_steps {
+        if self.k >= problem.settings.max_steps {
             return Err(Halt::fatal(rk4.t, Failure::TooManySteps));
         }
-        k += 1;
+        self.k += 1;
         // Grid points by multiplication, so that rounding does not accumulate over many steps.
-        let t_new = if k as f64 >= step_count {
-            t_end
-        } else {
-            t0 + k as f64 * step
+        let grid_point = self.t0 + self.k as f64 * self.step;
+        let t_new = match self.k as f64 >= step_count(problem.t_end - self.t0, self.step) {
+            true => problem.t_end,
+            false => grid_point,
         };
         rk4.step(eval, t_new)?;
         // Before the end derivative is evaluated, so that what the next step reuses is taken at
         // the projected state and the interpolant joins the projected ends.
         eval.project(t_new, &mut rk4.y_new)?;
         rk4.end_slope(eval)?;
-        let error = rk4.error_estimate(problem);
+        let error = rk4.error_estimate(problem.settings);
         StepError::keep_largest(&mut eval.stats.largest_step_error, error, t_new);
-        if outputs.wants_interior(rk4.t, t_new) || events.is_some() {
+        if outputs.wants_interior(rk4.t, t_new) || self.events.is_some() {
             rk4.prepare_interpolation();
         }
-        if let Some(watch) = &mut events {
+        if let Some(watch) = &mut self.events {
             let segment = &rk4.segment;
             let interpolate = |t: f64, out: &mut [f64]| segment.evaluate(t, out);
             if let Some(event) = watch.search(eval, (rk4.t, t_new), &rk4.y_new, &interpolate)? {
-                rk4.act_on_event(eval, event, &mut outputs, observer)?;
+                rk4.act_on_event(eval, event, outputs, observer)?;
                 watch.restart(eval, rk4.t, &rk4.y)?;
                 // The step to the grid point is taken again, from the event.
-                k -= 1;
+                self.k -= 1;
                 eval.stats.steps += 1;
-                continue;
+                return Ok(());
             }
         }
         let segment = &rk4.segment;
@@ -109,12 +127,29 @@ fn run(
         let h = rk4.h;
         rk4.advance(t_new);
         eval.stats.steps += 1;
-        if let Some(watch) = watch {
+        // A step the end cut short of its grid point leaves that point for the next step, when
+        // the integration goes on to a later end (`Integration::step`).
+        if t_new < grid_point {
+            self.k -= 1;
+        }
+        if let Some(watch) = &mut self.watch {
             watch.after_step(eval, rk4.t, &rk4.y, h);
         }
+        Ok(())
     }
-    outputs.deliver_rest(&rk4.y, (eval, observer))?;
-    Ok(rk4.y)
+
+    /// The next step's first stage evaluated again, and the events' values.
+    fn restart(&mut self, eval: &mut Evaluator) -> Result<(), Halt> {
+        self.rk4.derivative_known = false;
+        if let Some(watch) = &mut self.events {
+            watch.restart(eval, self.rk4.t, &self.rk4.y)?;
+        }
+        Ok(())
+    }
+
+    fn count(&self, stats: &mut Stats) {
+        stats.stability_bound = self.watch.as_ref().and_then(StabilityWatch::finding);
+    }
 }
 
 /// The number of steps of the grid over a run of length `span`: a remainder under `SLIVER` of a
@@ -188,8 +223,7 @@ impl Rk4 {
 
     /// The norm of h (k4 − k5) / 6 over the components the tolerances control: the embedded
     /// order-3 solution's distance from the step's end (see the module's documentation).
-    fn error_estimate(&mut self, problem: &Problem) -> f64 {
-        let settings = problem.settings;
+    fn error_estimate(&mut self, settings: &Settings) -> f64 {
         let controlled = settings.controlled_len(self.y.len());
         let difference = &mut self.stage_state;
         for (i, d) in difference.iter_mut().enumerate() {

@@ -183,7 +183,7 @@ pub fn jacobian_product(
 ) -> Option<Vec<f64>> {
     let mut iteration = PowerIteration::new(y.len(), controlled.min(y.len()));
     let size = iteration.start_from(direction)?;
-    let mut eval = Evaluator::new(system);
+    let mut eval = Evaluator::resume(system, Default::default());
     eval.rhs(t, y, &mut iteration.slope).ok()?;
     let norm = iteration.multiply(&mut eval, t, y)?;
     Some(
@@ -284,7 +284,7 @@ impl StabilityWatch {
         }
     }
 
-    pub(super) fn finding(&mut self) -> Option<StabilityBound> {
-        self.found.take()
+    pub(super) fn finding(&self) -> Option<StabilityBound> {
+        self.found.clone()
     }
 }

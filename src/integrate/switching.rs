@@ -26,6 +26,7 @@ use super::control::StepController;
 use super::dopri5::DormandPrince;
 use super::driver::AdaptiveStepper;
 use super::evaluator::{Evaluator, Halt};
+use super::outcome::Stats;
 use super::radau::Radau5;
 use super::rosenbrock::RosenbrockW;
 use super::settings::Settings;
@@ -225,5 +226,11 @@ impl AdaptiveStepper for Switching {
             true => self.implicit.interpolate(t, out),
             false => self.explicit.interpolate(t, out),
         }
+    }
+
+    fn count(&self, stats: &mut Stats) {
+        stats.stiff_steps = self.implicit_steps;
+        stats.method_switches = self.switches;
+        stats.stiff_from = self.stiff_from;
     }
 }

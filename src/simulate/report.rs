@@ -3,13 +3,17 @@
 
 use serde::Serialize;
 
+use super::branch;
 use super::constraints::ConstraintReport;
 use super::sample::{MomentumDrift, Sample};
 use super::stiffness::{self, StiffnessReport};
+use super::summary::Summary;
+use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::friction::Switch;
 use crate::dynamics::stops::Impact;
-use crate::integrate::Failure;
+use crate::integrate::{Failure, IntegrationError, Stats};
+use crate::prepare::{Integrator, Prepared};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct RunFailure {
@@ -175,5 +179,94 @@ impl Report {
             passage_output_warning(self),
         ];
         found.into_iter().flatten().collect()
+    }
+}
+
+/// How an integration ended, with what the outputs saw of it.
+pub(super) struct Ended<'s> {
+    pub(super) result: Result<(Vec<f64>, Stats), IntegrationError>,
+    pub(super) summary: &'s Summary,
+    /// The outputs inside a passage the run ended in (`Sampler::unsettled`).
+    pub(super) outputs_off_branch: Vec<f64>,
+    pub(super) cpu_seconds: Option<f64>,
+    pub(super) wall_seconds: f64,
+}
+
+/// The report of an ended run: the integrator's work, the energy and momentum the outputs saw,
+/// the loops' findings, the events, and why it stopped early if it did.
+pub(super) fn report(
+    prepared: &Prepared,
+    system: &mut MechanicalSystem<'_>,
+    ended: Ended<'_>,
+) -> Report {
+    let model = &prepared.model;
+    let settings = &prepared.settings;
+    let summary = ended.summary;
+    let (stats, stopped) = match ended.result {
+        Ok((_, stats)) => (stats, None),
+        Err(e) => (*e.stats, Some((e.time, e.failure))),
+    };
+    let interrupted = match stopped {
+        Some((time, Failure::Interrupted(signal))) => Some(Interruption { time, signal }),
+        _ => None,
+    };
+    let failure = stopped
+        .filter(|(_, failure)| !matches!(failure, Failure::Interrupted(_)))
+        .map(|(time, failure)| RunFailure {
+            time,
+            message: format!(
+                "{}{}",
+                failure_message(&failure, settings.max_steps),
+                fastest_coordinate(&prepared.coordinate_names, summary.last())
+            ),
+        });
+    let constraints = model.has_loops().then(|| {
+        let mut report = system.scratch.loops.report(&system.state.loops);
+        report.outputs_off_branch = ended.outputs_off_branch;
+        report
+    });
+    let left_branch = constraints
+        .as_ref()
+        .filter(|c| !c.singular.is_empty())
+        .and_then(|c| branch::left_branch(summary.branch_outputs(), &c.singular))
+        .map(|left| RunFailure {
+            time: left.time,
+            message: left.message,
+        });
+    let failure = match (failure, left_branch) {
+        (Some(stopped), Some(left)) if left.time < stopped.time => Some(left),
+        (None, left) => left,
+        (stopped, _) => stopped,
+    };
+    Report {
+        integrator: settings.integrator.name().to_string(),
+        duration: settings.duration,
+        steps: stats.steps,
+        rejected_steps: stats.rejected,
+        function_evaluations: stats.rhs_evaluations,
+        stiff_steps: (settings.integrator == Integrator::Implicit).then_some(stats.stiff_steps),
+        method_switches: (settings.integrator == Integrator::Implicit)
+            .then_some(stats.method_switches),
+        cpu_seconds: ended.cpu_seconds,
+        wall_seconds: ended.wall_seconds,
+        energy_drift: summary.energy_drift(),
+        energy_balance: summary.energy_balance(),
+        final_energies: summary.final_energies(),
+        momentum_drift: summary.momentum_drift(),
+        constraints,
+        step_error: stats.largest_step_error.map(|e| StepErrorReport {
+            largest: e.norm,
+            time: e.time,
+            rtol: settings.rtol,
+            atol: settings.atol,
+        }),
+        stiffness: stats
+            .stability_bound
+            .as_ref()
+            .and_then(|bound| stiffness::describe(prepared, bound)),
+        impacts: std::mem::take(&mut system.state.impacts),
+        friction_switches: std::mem::take(&mut system.state.switches),
+        failure,
+        interrupted,
     }
 }

@@ -1,13 +1,15 @@
 //! What a run has decided and seen so far, held once and read by every evaluation of its
 //! equations, the integrator's and the sampler's alike (MuJoCo's one `mjData`): the declared
 //! coordinates and rates at the last step, the friction's phases and the resting stops, the contact
-//! rows kept, what the loops' monitors found, and the events so far.
+//! rows kept, what the loops' monitors found, the events so far, and the efforts applied from
+//! outside the program.
 
 use crate::dynamics::angles::AngleReference;
 use crate::dynamics::friction::{Phase, Switch};
 use crate::dynamics::model::Model;
 use crate::dynamics::stops::Impact;
 use crate::simulate::constraints::LoopFindings;
+use crate::simulate::inputs::Inputs;
 
 #[derive(Clone, Debug)]
 pub struct RunState {
@@ -29,6 +31,8 @@ pub struct RunState {
     /// The impacts on the stops and the friction's changes of phase so far, in time order.
     pub impacts: Vec<Impact>,
     pub switches: Vec<Switch>,
+    /// The efforts applied from outside the program (`Simulator`), read by every evaluation.
+    pub inputs: Inputs,
 }
 
 impl RunState {
@@ -45,6 +49,7 @@ impl RunState {
             loops: LoopFindings::default(),
             impacts: Vec::new(),
             switches: Vec::new(),
+            inputs: Inputs::default(),
         }
     }
 }

@@ -168,7 +168,7 @@ impl Sampler<'_> {
     }
 
     /// The sample of the integrator's state `y` at `time`, projected onto the loops.
-    fn sample(
+    pub(super) fn sample(
         &mut self,
         system: &mut MechanicalSystem<'_>,
         time: f64,

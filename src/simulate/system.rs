@@ -77,9 +77,10 @@ impl<'m> MechanicalSystem<'m> {
         self.inputs = inputs;
     }
 
-    /// Whether an evaluation computes efforts: the program applies some, or a caller set inputs.
+    /// Whether an evaluation computes efforts: the program applies some, or a caller set inputs
+    /// (a linearisation's, or a run's, `RunState::inputs`).
     fn reads_efforts(&self) -> bool {
-        self.model.has_efforts() || self.inputs.is_some()
+        self.model.has_efforts() || self.inputs.is_some() || self.state.inputs.any()
     }
 
     /// Runs `evaluate` with the outputs' scratch in place of the integrator's: the outputs'
@@ -119,10 +120,13 @@ impl<'m> MechanicalSystem<'m> {
         self.model.positions() + self.model.velocities()
     }
 
-    /// Whether the equations of motion do not depend on the time: no effort reads it.
+    /// Whether the equations of motion do not depend on the time: no effort reads it (an
+    /// input's law may).
     pub fn autonomous(&self) -> bool {
         let model = self.model;
-        !model.has_efforts() || model.effort_tape.as_ref().is_ok_and(|t| !t.reads_time())
+        let program =
+            !model.has_efforts() || model.effort_tape.as_ref().is_ok_and(|t| !t.reads_time());
+        program && self.state.inputs.law.is_none()
     }
 
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
@@ -137,22 +141,24 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let state = &mut self.scratch.declared;
-        let reference = &self.state.reference;
-        model.declared_into((t, q, v), reference, state, Recovered::ReadByEfforts)?;
+        // An input's law reads every declared coordinate.
+        let recovered = match self.state.inputs.law {
+            Some(_) => Recovered::Every,
+            None => Recovered::ReadByEfforts,
+        };
+        model.declared_into((t, q, v), &self.state.reference, state, recovered)?;
         let declared = Declared {
             model,
             coordinates: &state.coordinates,
             rates: &state.rates,
         };
-        evaluate_into(
-            model,
-            &mut self.scratch.data,
-            &declared,
-            t,
-            &mut self.scratch.efforts,
-        )?;
+        let efforts = &mut self.scratch.efforts;
+        evaluate_into(model, &mut self.scratch.data, &declared, t, efforts)?;
+        if self.state.inputs.any() {
+            let read = (&state.coordinates[..], &state.rates[..]);
+            efforts.power += (self.state.inputs).add_to(t, read, v, &mut efforts.tau);
+        }
         if let Some(inputs) = &self.inputs {
-            let efforts = &mut self.scratch.efforts;
             efforts.tau += inputs;
             efforts.power += inputs.iter().zip(v).map(|(u, rate)| u * rate).sum::<f64>();
         }

@@ -386,7 +386,8 @@ impl FixedStep {
     }
 }
 
-/// Integrates with fixed step `h`, reporting the state (positions, velocities) at each output.
+/// Integrates with fixed step `h`, reporting the state (positions, velocities) at each output:
+/// the steps of a [`VariationalMarch`] to `t_end`.
 pub fn integrate<'m>(
     system: &mut MechanicalSystem<'m>,
     t0: f64,
@@ -396,69 +397,153 @@ pub fn integrate<'m>(
     outputs: &[f64],
     observer: &mut RunObserver<'_, 'm>,
 ) -> Result<(Vec<f64>, Stats), IntegrationError> {
-    let h = steps.step;
-    let model = system.model;
-    let configuration = Configuration::of(model);
-    let positions = model.positions();
-    let mut stats = Stats::default();
-    let fail = |time: f64, failure: Failure, stats: &Stats| IntegrationError {
-        time,
-        failure,
-        stats: Box::new(stats.clone()),
-    };
-    let not_converged = |time: f64, step: f64, detail: Option<String>, stats: &Stats| {
-        let error = NotConverged { time, step, detail };
-        fail(time, Failure::System(error.to_string()), stats)
-    };
-    let (mut q, mut v) = (
-        DVector::from_column_slice(&y0[..positions]),
-        DVector::from_column_slice(&y0[positions..]),
-    );
-    let mut t = t0;
-    let mass = system
-        .mass(q.as_slice())
-        .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
-    let mut p = &mass * &v;
-    let mut next_output = 0;
-    while next_output < outputs.len() && outputs[next_output] <= t0 {
-        observer(system, t0, y0).map_err(|m| fail(t0, Failure::Observer(m.to_string()), &stats))?;
-        next_output += 1;
+    let mut march = VariationalMarch::new(system, t0, y0, steps, outputs.to_vec())?;
+    while march.time() < t_end {
+        march.step(system, t_end, observer)?;
     }
-    let count = step_count(t0, t_end, h);
-    for k in 0..count {
-        if let Some(value) = steps.interrupt.as_ref().and_then(Interrupt::requested) {
-            return Err(fail(t, Failure::Interrupted(value), &stats));
+    Ok((march.state(), march.stats.clone()))
+}
+
+/// The steps of a grid from `t0` to `t_end`, evenly spaced, and how many were taken.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    t0: f64,
+    t_end: f64,
+    count: usize,
+    taken: usize,
+}
+
+/// The variational integration between two steps: the state (positions, velocities, and the
+/// momentum the next step starts from), the grid of its steps, the outputs not passed yet.
+pub struct VariationalMarch {
+    configuration: Configuration,
+    steps: FixedStep,
+    t: f64,
+    q: DVector<f64>,
+    v: DVector<f64>,
+    p: DVector<f64>,
+    /// The grid to the end of the last step's call (made again for another end).
+    grid: Option<Grid>,
+    outputs: Vec<f64>,
+    next_output: usize,
+    pub stats: Stats,
+}
+
+impl VariationalMarch {
+    /// The integration of `system` from (t0, y0), its outputs at `outputs` (sorted).
+    pub fn new(
+        system: &mut MechanicalSystem<'_>,
+        t0: f64,
+        y0: &[f64],
+        steps: FixedStep,
+        outputs: Vec<f64>,
+    ) -> Result<VariationalMarch, IntegrationError> {
+        let model = system.model;
+        let positions = model.positions();
+        let (q, v) = (
+            DVector::from_column_slice(&y0[..positions]),
+            DVector::from_column_slice(&y0[positions..]),
+        );
+        let mass = system
+            .mass(q.as_slice())
+            .map_err(|m| failure(t0, Failure::System(m.to_string()), &Stats::default()))?;
+        Ok(VariationalMarch {
+            configuration: Configuration::of(model),
+            steps,
+            t: t0,
+            p: &mass * &v,
+            q,
+            v,
+            grid: None,
+            outputs,
+            next_output: 0,
+            stats: Stats::default(),
+        })
+    }
+
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// The state at the current point (positions, velocities).
+    pub fn state(&self) -> Vec<f64> {
+        let mut y = self.q.as_slice().to_vec();
+        y.extend_from_slice(self.v.as_slice());
+        y
+    }
+
+    /// Delivers the outputs up to the current time at the current state (those at the start).
+    fn deliver_start<'m>(
+        &mut self,
+        system: &mut MechanicalSystem<'m>,
+        observer: &mut RunObserver<'_, 'm>,
+    ) -> Result<(), IntegrationError> {
+        while let Some(&time) = self.outputs.get(self.next_output).filter(|&&t| t <= self.t) {
+            let observed = observer(system, self.t, &self.state());
+            observed.map_err(|m| failure(time, Failure::Observer(m.to_string()), &self.stats))?;
+            self.next_output += 1;
         }
-        if k >= steps.max_steps {
-            return Err(fail(t, Failure::TooManySteps, &stats));
+        Ok(())
+    }
+
+    /// One step of the grid from the current point to `t_end` (evenly spaced, the last landing
+    /// on `t_end`), delivering the outputs it passes (the first step, those at the start too).
+    pub fn step<'m>(
+        &mut self,
+        system: &mut MechanicalSystem<'m>,
+        t_end: f64,
+        observer: &mut RunObserver<'_, 'm>,
+    ) -> Result<(), IntegrationError> {
+        self.deliver_start(system, observer)?;
+        let (t, h) = (self.t, self.steps.step);
+        let not_converged = |time: f64, step: f64, detail: Option<String>, stats: &Stats| {
+            let error = NotConverged { time, step, detail };
+            failure(time, Failure::System(error.to_string()), stats)
+        };
+        if let Some(value) = self.steps.interrupt.as_ref().and_then(Interrupt::requested) {
+            return Err(failure(t, Failure::Interrupted(value), &self.stats));
         }
+        if self.stats.steps >= self.steps.max_steps {
+            return Err(failure(t, Failure::TooManySteps, &self.stats));
+        }
+        let grid = match self.grid {
+            Some(grid) if grid.t_end == t_end => grid,
+            _ => Grid {
+                t0: t,
+                t_end,
+                count: step_count(t, t_end, h),
+                taken: 0,
+            },
+        };
         // The last step ends exactly at t_end: t + (t_end − t) may round below it, and the
         // output there would be lost.
-        let t_next = match k + 1 == count {
+        let k = grid.taken;
+        let t_next = match k + 1 == grid.count {
             true => t_end,
-            false => t0 + (t_end - t0) * (k + 1) as f64 / count as f64,
+            false => grid.t0 + (t_end - grid.t0) * (k + 1) as f64 / grid.count as f64,
         };
         let step = t_next - t;
+        let (configuration, q, v) = (&self.configuration, &self.q, &self.v);
         let start = system
             .allowed_motions(q.as_slice())
-            .map_err(|m| fail(t, Failure::System(m.to_string()), &stats))?;
+            .map_err(|m| failure(t, Failure::System(m.to_string()), &self.stats))?;
         let basis = start.as_ref().map_or(Basis::Free, |start| start.basis);
-        let mut end = configuration.first_guess(&q, &v, step);
+        let mut end = configuration.first_guess(q, v, step);
         let mut converged = false;
         let mut previous = f64::INFINITY;
         let (mut mass_mid, mut terms) = (DMatrix::zeros(0, 0), DVector::zeros(0));
         for _ in 0..MAX_ITERATIONS {
-            let mid = configuration.midpoint(&q, &end);
-            let mean = configuration.mean_velocity(&q, &end, step);
+            let mid = configuration.midpoint(q, &end);
+            let mean = configuration.mean_velocity(q, &end, step);
             // An iterate the equations cannot be evaluated at (loops singular there, efforts
             // not finite) is the iteration failing, not the mechanism: the step is too long.
             (mass_mid, terms) = system
                 .midpoint_terms(mid.as_slice(), mean.as_slice(), t + 0.5 * step)
-                .map_err(|m| not_converged(t, step, Some(m.to_string()), &stats))?;
-            stats.rhs_evaluations += 1;
+                .map_err(|m| not_converged(t, step, Some(m.to_string()), &self.stats))?;
+            self.stats.rhs_evaluations += 1;
             let mass_mean = &mass_mid * &mean;
-            let mut momentum = &mass_mean - &terms * (0.5 * step) - &p;
-            configuration.start_balance(&end, (&mass_mean, &terms), &p, step, &mut momentum);
+            let mut momentum = &mass_mean - &terms * (0.5 * step) - &self.p;
+            configuration.start_balance(&end, (&mass_mean, &terms), &self.p, step, &mut momentum);
             // Newton with the leading part of the Jacobian, M/h (scaled by h): converges quickly
             // for small h.
             let (correction, open) = system
@@ -468,8 +553,8 @@ pub fn integrate<'m>(
                     end.positions.as_slice(),
                     &(-momentum * step),
                 )
-                .map_err(|m| not_converged(t, step, Some(m.to_string()), &stats))?;
-            configuration.correct(&q, &mut end, &correction);
+                .map_err(|m| not_converged(t, step, Some(m.to_string()), &self.stats))?;
+            configuration.correct(q, &mut end, &correction);
             if end.positions.iter().any(|x| !x.is_finite()) {
                 // Diverged: reported below, rather than iterated on.
                 break;
@@ -484,48 +569,54 @@ pub fn integrate<'m>(
         }
         if end.positions.iter().any(|x| !x.is_finite()) {
             let detail = Some("its iterates diverged".to_string());
-            return Err(not_converged(t, step, detail, &stats));
+            return Err(not_converged(t, step, detail, &self.stats));
         }
         if !converged {
-            return Err(not_converged(t, step, None, &stats));
+            return Err(not_converged(t, step, None, &self.stats));
         }
-        let mean = configuration.mean_velocity(&q, &end, step);
+        let mean = configuration.mean_velocity(q, &end, step);
         let mass_mean = &mass_mid * &mean;
         let mut p_end = &mass_mean + &terms * (0.5 * step);
         configuration.end_momentum(&end, (&mass_mean, &terms), step, &mut p_end);
         let (v1, mass_end) = system
             .end_velocity(end.positions.as_slice(), &p_end, basis)
-            .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
-        p = &mass_end * &v1;
-        let defect = steps.defect_norm(&mean, &v, &v1);
-        StepError::keep_largest(&mut stats.largest_step_error, defect, t_next);
-        stats.steps += 1;
+            .map_err(|m| failure(t_next, Failure::System(m.to_string()), &self.stats))?;
+        let p = &mass_end * &v1;
+        let defect = self.steps.defect_norm(&mean, v, &v1);
+        StepError::keep_largest(&mut self.stats.largest_step_error, defect, t_next);
+        self.stats.steps += 1;
         let mut end_state = end.positions.as_slice().to_vec();
         end_state.extend_from_slice(v1.as_slice());
         // Only recorded: projecting would spoil the symplectic map.
         system
             .measure_loops(t_next, &end_state)
-            .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
+            .map_err(|m| failure(t_next, Failure::System(m.to_string()), &self.stats))?;
         system
             .follow_reference(t_next, &end_state)
-            .map_err(|m| fail(t_next, Failure::System(m.to_string()), &stats))?;
-        while next_output < outputs.len() && outputs[next_output] <= t_next {
-            let s = (outputs[next_output] - t) / step;
-            let y = configuration.interpolate((&q, &v), (&end, &v1), s, step);
-            observer(system, outputs[next_output], &y).map_err(|m| {
-                fail(
-                    outputs[next_output],
-                    Failure::Observer(m.to_string()),
-                    &stats,
-                )
-            })?;
-            next_output += 1;
+            .map_err(|m| failure(t_next, Failure::System(m.to_string()), &self.stats))?;
+        while let Some(&time) = self.outputs.get(self.next_output).filter(|&&o| o <= t_next) {
+            let s = (time - t) / step;
+            let y = configuration.interpolate((q, v), (&end, &v1), s, step);
+            let observed = observer(system, time, &y);
+            observed.map_err(|m| failure(time, Failure::Observer(m.to_string()), &self.stats))?;
+            self.next_output += 1;
         }
-        (q, v, t) = (end.positions, v1, t_next);
+        (self.q, self.v, self.p, self.t) = (end.positions, v1, p, t_next);
+        self.grid = Some(Grid {
+            taken: k + 1,
+            ..grid
+        });
+        Ok(())
     }
-    let mut y = q.as_slice().to_vec();
-    y.extend_from_slice(v.as_slice());
-    Ok((y, stats))
+}
+
+/// A failure of the integration at `time`, with the work done so far.
+fn failure(time: f64, failure: Failure, stats: &Stats) -> IntegrationError {
+    IntegrationError {
+        time,
+        failure,
+        stats: Box::new(stats.clone()),
+    }
 }
 
 /// The implicit equations of the step from `time` did not converge within the iterations

@@ -53,6 +53,7 @@ mod rolling_disc;
 mod rows;
 mod runs;
 mod simulation;
+mod stepping;
 mod stop_loops;
 mod stops;
 mod symbolic;

@@ -30,6 +30,7 @@ use self::chart::{Chart, ChartError};
 use self::modes::{Eigenvalue, Mode};
 use super::statics::{holding_efforts, velocity_index, StaticsError};
 use crate::diag::Diagnostic;
+use crate::dynamics::angles::AngleReference;
 use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
@@ -523,8 +524,10 @@ impl Evaluator<'_> {
     fn outputs(&mut self, x: &[f64]) -> Result<Vec<f64>, LinearizeError> {
         let model = self.system.model;
         let (q, v) = self.state(x)?;
+        // Angles against the program's initial values, as every output of the study.
+        let reference = AngleReference::at_rest(self.prepared.coordinates.clone());
         let (coordinates, rates) = model
-            .declared(&q, &v, &self.prepared.coordinates)
+            .declared((self.time, &q, &v), &reference)
             .map_err(|e| LinearizeError::System(SystemError::from(e)))?;
         let data = &mut self.system.scratch.data;
         crate::dynamics::algorithms::forward_kinematics(model, data, &q, &v)
