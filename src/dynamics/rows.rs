@@ -5,6 +5,8 @@
 //! - the contacts' kept rows (`contacts`), with their velocity-product terms γ;
 //! - with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
 //!   in X instead);
+//! - one unit row eₖᵀ per driven coordinate (`drives`), its right-hand side the law's
+//!   acceleration: eₖᵀ a = law''(t), set by [`RowStack::prescribe`];
 //! - one unit row eₖᵀ per coordinate held at rest: on a stop it rests on, or held by its dry
 //!   friction (sticking).
 //!
@@ -36,8 +38,10 @@ pub const DEPENDENT_ROWS: f64 = 1e-12;
 pub struct RowStack {
     /// The contacts' rows stacked (indices among the three per contact of `ContactRows`).
     contacts: Vec<usize>,
-    /// How many coupling rows follow them, then the velocities held at rest.
+    /// How many coupling rows follow them, then the driven velocities, then the velocities
+    /// held at rest.
     couplings: usize,
+    drives: Vec<usize>,
     held: Vec<usize>,
     /// G (rows × velocities), Hᵀ (velocities × rows), γ, X Hᵀ, G X Hᵀ.
     g: DMatrix<f64>,
@@ -70,6 +74,7 @@ impl RowStack {
         RowStack {
             contacts: Vec::new(),
             couplings: 0,
+            drives: Vec::with_capacity(model.drives.len()),
             held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
             g: DMatrix::zeros(0, n),
             directions: DMatrix::zeros(n, 0),
@@ -85,13 +90,22 @@ impl RowStack {
     }
 
     /// Stacks the contact rows `contacts`, `couplings` coupling rows and the unit rows of the
-    /// velocities `held`; the storage is sized anew only when the number of rows changes.
-    pub fn arrange(&mut self, contacts: &[usize], couplings: usize, held: &[usize]) {
+    /// velocities `drives` (driven) and `held`; the storage is sized anew only when the number
+    /// of rows changes.
+    pub fn arrange(
+        &mut self,
+        contacts: &[usize],
+        couplings: usize,
+        drives: &[usize],
+        held: &[usize],
+    ) {
         if self.contacts != contacts {
             self.contacts.clear();
             self.contacts.extend_from_slice(contacts);
         }
         self.couplings = couplings;
+        self.drives.clear();
+        self.drives.extend_from_slice(drives);
         self.held.clear();
         self.held.extend_from_slice(held);
         let (rows, n) = (self.len(), self.g.ncols());
@@ -107,7 +121,7 @@ impl RowStack {
 
     /// The number of rows stacked.
     pub fn len(&self) -> usize {
-        self.contacts.len() + self.couplings + self.held.len()
+        self.contacts.len() + self.couplings + self.drives.len() + self.held.len()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -120,7 +134,8 @@ impl RowStack {
     }
 
     /// Fills G and γ from the contacts' rows `all` (γ as they hold it) and the couplings
-    /// `mimics` (the first `couplings` of them), the unit rows after them.
+    /// `mimics` (the first `couplings` of them), the unit rows after them (the driven rows'
+    /// γ at zero until `prescribe`).
     pub fn gather(&mut self, all: &ContactRows, mimics: &[Mimic]) {
         self.g.fill(0.0);
         self.bias.fill(0.0);
@@ -134,8 +149,21 @@ impl RowStack {
             self.g[(first + i, mimic.leader_velocity)] -= mimic.multiplier;
         }
         let first = first + self.couplings;
-        for (i, &velocity) in self.held.iter().enumerate() {
+        for (i, &velocity) in self.drives.iter().chain(&self.held).enumerate() {
             self.g[(first + i, velocity)] = 1.0;
+        }
+    }
+
+    /// Sets the driven rows' right-hand sides, eₖᵀ a = `accelerations[k]` (the laws'
+    /// accelerations, in the order of the driven velocities): γₖ = −law''(t).
+    pub fn prescribe(&mut self, accelerations: impl IntoIterator<Item = f64>) {
+        let first = self.contacts.len() + self.couplings;
+        for (i, acceleration) in accelerations
+            .into_iter()
+            .take(self.drives.len())
+            .enumerate()
+        {
+            self.bias[first + i] = -acceleration;
         }
     }
 
@@ -193,27 +221,33 @@ impl RowStack {
     }
 
     /// The multipliers of the last solve: the contacts' rows', then the couplings', then the
-    /// held velocities' (each a force along its velocity).
+    /// driven and the held velocities' (each a force along its velocity).
     pub fn multipliers(&self) -> &[f64] {
         self.right.as_slice()
     }
 
     /// The forces that held the velocities `held` at the last solve.
     pub fn held_forces(&self) -> &[f64] {
-        &self.right.as_slice()[self.contacts.len() + self.couplings..]
+        &self.right.as_slice()[self.contacts.len() + self.couplings + self.drives.len()..]
     }
 
-    /// Adds the forces of the last solve's coupling and held rows to the generalised forces
+    /// The forces that imposed the driven velocities at the last solve: the drives' efforts.
+    pub fn drive_forces(&self) -> &[f64] {
+        let first = self.contacts.len() + self.couplings;
+        &self.right.as_slice()[first..first + self.drives.len()]
+    }
+
+    /// Adds the forces of the last solve's coupling, driven and held rows to the generalised forces
     /// `tau` (over the state's velocities): they act along coordinates, as link efforts do
     /// (the contacts' act on bodies instead, `contact_forces`).
     pub fn add_coordinate_forces(&self, mimics: &[Mimic], tau: &mut DVector<f64>) {
         let multipliers = &self.right.as_slice()[self.contacts.len()..];
-        let (couplings, held) = multipliers.split_at(self.couplings);
+        let (couplings, unit) = multipliers.split_at(self.couplings);
         for (mimic, force) in mimics.iter().zip(couplings) {
             tau[mimic.velocity] += force;
             tau[mimic.leader_velocity] -= mimic.multiplier * force;
         }
-        for (&velocity, force) in self.held.iter().zip(held) {
+        for (&velocity, force) in self.drives.iter().chain(&self.held).zip(unit) {
             tau[velocity] += force;
         }
     }

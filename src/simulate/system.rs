@@ -315,6 +315,7 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         self.scratch.friction_power = 0.0;
+        self.scratch.drive_power = 0.0;
         self.scratch.response_here = false;
         let mut accelerations = std::mem::take(&mut self.scratch.accelerations);
         if accelerations.len() != model.velocities() {
@@ -369,7 +370,7 @@ impl<'m> MechanicalSystem<'m> {
         }
         // The contacts, the couplings with loops and the coordinates held at rest, solved on the
         // response together.
-        self.solve_rows(q, v, &mut accelerations)?;
+        self.solve_rows(t, q, v, &mut accelerations)?;
         let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
         } else {
@@ -378,7 +379,7 @@ impl<'m> MechanicalSystem<'m> {
         self.scratch.power = if native {
             0.0
         } else {
-            efforts.power + self.scratch.friction_power
+            efforts.power + self.scratch.friction_power + self.scratch.drive_power
         };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model

@@ -135,7 +135,7 @@ impl MechanicalSystem<'_> {
             false => None,
         };
         // `solve_rows` left the stack as it was when no row applied at this state.
-        if self.coupling_count() > 0 || !self.scratch.held.is_empty() {
+        if self.coupling_count() > 0 || !model.drives.is_empty() || !self.scratch.held.is_empty() {
             self.scratch
                 .rows
                 .add_coordinate_forces(&model.mimics, &mut self.scratch.efforts.tau);

@@ -1,5 +1,7 @@
 //! The rows an evaluation solves on the response X after the base solve (`rows::RowStack`): the
-//! contacts' kept rows, the mimic couplings with closed loops, and the coordinates held at rest,
+//! contacts' kept rows, the mimic couplings with closed loops, the driven coordinates (their
+//! laws' accelerations at t, the drives' efforts recorded with their power), and the
+//! coordinates held at rest,
 //! on their stops (resting on a bound) or stuck by their friction, each a unit row eₖᵀ a = 0
 //! with a force μₖ along the coordinate. Whatever the mechanism (a tree, closed loops, contacts
 //! or both), they are solved together in one saddle-point system; the held forces are recorded
@@ -14,10 +16,12 @@ use crate::dynamics::friction::Phase;
 use crate::dynamics::stops::Side;
 
 impl MechanicalSystem<'_> {
-    /// Solves the rows at (q, v) from the accelerations `a` of the base solve (the loops', or
-    /// the tree's), which they replace; records the contacts' forces and the held forces.
+    /// Solves the rows at (t, q, v) from the accelerations `a` of the base solve (the loops',
+    /// or the tree's), which they replace; records the contacts' forces, the held forces and
+    /// the drives' efforts.
     pub(super) fn solve_rows(
         &mut self,
+        t: f64,
         q: &[f64],
         v: &[f64],
         a: &mut DVector<f64>,
@@ -25,7 +29,8 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         self.gather_held();
         let couplings = self.coupling_count();
-        if !model.has_contacts() && couplings == 0 && self.scratch.held.is_empty() {
+        let driven = !model.drives.is_empty();
+        if !model.has_contacts() && couplings == 0 && !driven && self.scratch.held.is_empty() {
             return Ok(());
         }
         self.form_response_at(q)?;
@@ -37,12 +42,10 @@ impl MechanicalSystem<'_> {
         }
         self.decide_contact_rows();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
-        self.scratch
-            .rows
-            .arrange(kept, couplings, &self.scratch.held);
-        self.scratch
-            .rows
-            .gather(&self.scratch.contact_state, &model.mimics);
+        let rows = &mut self.scratch.rows;
+        rows.arrange(kept, couplings, &self.scratch.driven, &self.scratch.held);
+        rows.gather(&self.scratch.contact_state, &model.mimics);
+        rows.prescribe(model.drives.iter().map(|d| d.at(t).acceleration));
         let solved = (self.scratch.rows).solve(
             model,
             &self.scratch.contact_state,
@@ -58,7 +61,20 @@ impl MechanicalSystem<'_> {
         self.scratch.efforts.power +=
             contacts::friction_power(model, &self.scratch.contact_state, forces);
         self.record_holding();
+        self.record_drives(v);
         Ok(())
+    }
+
+    /// The drives' efforts of the last solve, and their power (the work a drive does on the
+    /// mechanism counts in its energy balance).
+    fn record_drives(&mut self, v: &[f64]) {
+        let forces = self.scratch.rows.drive_forces();
+        self.scratch.drive_efforts.copy_from_slice(forces);
+        let power: f64 = (self.scratch.driven.iter())
+            .zip(forces)
+            .map(|(&velocity, force)| force * v[velocity])
+            .sum();
+        self.scratch.drive_power = power;
     }
 
     /// The mimic couplings solved as rows: with closed loops (a tree's response keeps them).

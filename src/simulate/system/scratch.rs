@@ -61,6 +61,11 @@ pub struct Scratch {
     pub(in crate::simulate) position_stack: RowStack,
     pub(in crate::simulate) held: Vec<usize>,
     pub(in crate::simulate) step: DVector<f64>,
+    /// The driven velocities (`Model::drives`), and the effort that imposed each at the last
+    /// evaluation (the drives' multipliers).
+    pub(in crate::simulate) driven: Vec<usize>,
+    pub drive_efforts: Vec<f64>,
+    pub(in crate::simulate) drive_power: f64,
     /// Per stop, the contact force holding its coordinate on it at the last evaluation
     /// (positive while it pushes the coordinate into its range); per joint with friction, the
     /// force holding it while it sticks then, and the power of the slipping friction.
@@ -98,6 +103,9 @@ impl Scratch {
             position_stack: RowStack::new(model),
             held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
             step: DVector::zeros(model.velocities()),
+            driven: model.drives.iter().map(|d| d.velocity).collect(),
+            drive_efforts: vec![0.0; model.drives.len()],
+            drive_power: 0.0,
             contact: vec![0.0; model.stops.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,

@@ -1,6 +1,7 @@
-//! Keeps the rows beyond the loops' after a step (the contacts' and, with closed loops, the
-//! mimic couplings'), on the response X as the accelerations solve them (`holding`). After the
-//! loops' own projection, the position rows (the contacts' gaps, the couplings' violations) are
+//! Keeps the rows beyond the loops' after a step (the contacts', the driven coordinates' and,
+//! with closed loops, the mimic couplings'), on the response X as the accelerations solve them
+//! (`holding`). After the loops' own projection, the position rows (the contacts' gaps, the
+//! couplings' violations, the driven coordinates' distances to their laws at t) are
 //! closed by Newton steps of least kinetic metric along X Gᵀ (along the loops and the tree's
 //! couplings to first order), each followed by the loops' projection; then the velocities are
 //! projected along X onto every kept row (the rolling rows, not integrable, on velocities only)
@@ -38,7 +39,7 @@ impl MechanicalSystem<'_> {
     pub(super) fn keep_stacked(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
         let couplings = self.coupling_count();
-        if !model.has_contacts() && couplings == 0 {
+        if !model.has_contacts() && couplings == 0 && model.drives.is_empty() {
             return Ok(false);
         }
         let (mut q, mut v) = (
@@ -78,7 +79,7 @@ impl MechanicalSystem<'_> {
         self.gather_held();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
         let stack = &mut self.scratch.velocity_stack;
-        stack.arrange(kept, couplings, &self.scratch.held);
+        stack.arrange(kept, couplings, &self.scratch.driven, &self.scratch.held);
         stack.gather(&self.scratch.contact_state, &model.mimics);
         let rates = stack.values_mut();
         let (g, state) = (&self.scratch.contact_state, &v[..]);
@@ -90,8 +91,13 @@ impl MechanicalSystem<'_> {
             let rate = state[mimic.velocity] - mimic.multiplier * state[mimic.leader_velocity];
             rates[kept.len() + i] = rate;
         }
+        let first = kept.len() + couplings;
+        for (i, drive) in model.drives.iter().enumerate() {
+            rates[first + i] = state[drive.velocity] - drive.at(t).rate;
+        }
+        let first = first + model.drives.len();
         for (i, &velocity) in self.scratch.held.iter().enumerate() {
-            rates[kept.len() + couplings + i] = state[velocity];
+            rates[first + i] = state[velocity];
         }
         let off = stack.values_mut().amax() > 0.0;
         stack.add_least_change(&mut self.scratch.response, v);
@@ -110,9 +116,14 @@ impl MechanicalSystem<'_> {
     ) -> Result<bool, SystemError> {
         self.stacked_geometry(t, q, v)?;
         let stack = &mut self.scratch.position_stack;
-        stack.arrange(&self.scratch.normal_rows, couplings, &[]);
+        stack.arrange(
+            &self.scratch.normal_rows,
+            couplings,
+            &self.scratch.driven,
+            &[],
+        );
         stack.gather(&self.scratch.contact_state, &self.model.mimics);
-        Ok(self.fill_position_values(q))
+        Ok(self.fill_position_values(t, q))
     }
 
     /// The positions and velocities of y into `q` (quaternions at unit length) and `v`.
@@ -123,8 +134,9 @@ impl MechanicalSystem<'_> {
     }
 
     /// The position rows' values into the position stack (the gaps of its contact rows, then
-    /// the couplings' violations at q); false when all are at round-off.
-    fn fill_position_values(&mut self, q: &[f64]) -> bool {
+    /// the couplings' violations at q, then the driven coordinates' distances to their laws at
+    /// t); false when all are at round-off.
+    fn fill_position_values(&mut self, t: f64, q: &[f64]) -> bool {
         let model = self.model;
         let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
         let gaps = self.scratch.normal_rows.len();
@@ -134,7 +146,7 @@ impl MechanicalSystem<'_> {
             values[i] = self.scratch.contact_state.gap[row / 3];
             open |= values[i].abs() > GAP_ROUND_OFF * size;
         }
-        let couplings = values.len() - gaps;
+        let couplings = values.len() - gaps - model.drives.len();
         let scale = 1.0
             + (model.mimics.iter().take(couplings))
                 .map(|m| q[m.position].abs())
@@ -142,6 +154,13 @@ impl MechanicalSystem<'_> {
         for (i, mimic) in model.mimics.iter().take(couplings).enumerate() {
             values[gaps + i] = mimic.violation(q);
             open |= values[gaps + i].abs() > COUPLING_ROUND_OFF * scale;
+        }
+        let first = gaps + couplings;
+        for (i, drive) in model.drives.iter().enumerate() {
+            let law = drive.at(t).position;
+            values[first + i] = q[drive.position] - law;
+            let scale = 1.0 + law.abs();
+            open |= values[first + i].abs() > COUPLING_ROUND_OFF * scale;
         }
         open
     }
