@@ -50,6 +50,10 @@ enum Command {
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics(statics::StaticsArgs),
+    /// Inverse dynamics along the program's drives (`drive crank.q = law;`, every degree of
+    /// freedom driven): the efforts that impose them, the power and, with `--reactions`, every
+    /// join's reaction; CSV or JSON.
+    Inverse(inverse::InverseArgs),
     /// Compile a program and print what `--emit` asks for.
     Compile(compile::CompileArgs),
     /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
@@ -95,6 +99,7 @@ fn main() -> ExitCode {
         Command::Drag(args) => drag::run(&args),
         Command::View(args) => view::run(&args),
         Command::Statics(args) => statics::run(&args),
+        Command::Inverse(args) => inverse::run(&args),
         Command::Compile(args) => compile::run(&args),
         Command::Eval(args) => eval::run(&args),
         Command::ExportUrdf(args) => export_urdf::run(&args),

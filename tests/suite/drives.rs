@@ -189,3 +189,45 @@ join earth and b with spherical as ball;
     assert_eq!(codes("drve first.q = time;"), ["E0480"]);
     assert!(codes("drive first.q = sin(time) ^ 2;").is_empty());
 }
+
+/// `lsdc inverse` on the driven four-bar: its torque column is the closed form, the crank's
+/// reaction moment about its axis is that torque, and the power is torque × rate; a program
+/// without drives is refused (exit code 2) with what to declare.
+#[test]
+fn inverse_gives_the_driving_torque_its_reaction_and_its_power() {
+    let (code, out, err) = crate::common::lsdc(&[
+        "inverse",
+        "examples/four_bar_driven.lsd",
+        "--every",
+        "0.05",
+        "--reactions",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let mut lines = out.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let at = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (angle, torque, power, moment) = (
+        at("crank.q"),
+        at("crank.drive_effort"),
+        at("power"),
+        at("crank.reaction.mz"),
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().expect("a number")).collect())
+        .collect();
+    assert_eq!(rows.len(), 21);
+    let largest = rows.iter().map(|r| r[torque].abs()).fold(0.0, f64::max);
+    for row in &rows {
+        let expected = four_bar_torque(row[angle]);
+        assert!((row[torque] - expected).abs() < 1e-9 * largest, "{row:?}");
+        assert!(
+            (row[moment] - row[torque]).abs() < 1e-9 * largest,
+            "{row:?}"
+        );
+        let rate = 2.0 * std::f64::consts::PI;
+        assert!((row[power] - rate * row[torque]).abs() < 1e-12 * rate * largest);
+    }
+    let (code, _, err) = crate::common::lsdc(&["inverse", "examples/four_bar.lsd"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("drives no coordinate"), "{err}");
+}
