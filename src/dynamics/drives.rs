@@ -27,6 +27,11 @@ impl DrivenCoordinate {
         self.law.at(t)
     }
 
+    /// The law at time `t`, evaluated in `values` (see `DriveLaw::evaluate`).
+    pub fn evaluate(&self, t: f64, values: &mut Vec<f64>) -> LawAt {
+        self.law.evaluate(t, values)
+    }
+
     /// The name of its effort among the outputs: `crank.drive_effort` (a drive imposes the
     /// one coordinate of its join).
     pub fn effort_name(&self) -> String {

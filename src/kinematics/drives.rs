@@ -36,11 +36,18 @@ pub struct LawAt {
 impl DriveLaw {
     /// The law, its rate and its acceleration at time `t`.
     pub fn at(&self, t: f64) -> LawAt {
-        let values = self.tape.eval(&[t]);
+        self.evaluate(t, &mut Vec::new())
+    }
+
+    /// As `at`, the tape's nodes evaluated in `values` (which keeps its storage: a run's
+    /// evaluations allocate nothing).
+    pub fn evaluate(&self, t: f64, values: &mut Vec<f64>) -> LawAt {
+        self.tape.eval_into(&[t], values);
+        let root = |k: usize| values[self.tape.roots[k]];
         LawAt {
-            position: values[0],
-            rate: values[1],
-            acceleration: values[2],
+            position: root(0),
+            rate: root(1),
+            acceleration: root(2),
         }
     }
 }

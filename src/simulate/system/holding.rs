@@ -42,10 +42,15 @@ impl MechanicalSystem<'_> {
         }
         self.decide_contact_rows();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
-        let rows = &mut self.scratch.rows;
+        let (rows, values) = (&mut self.scratch.rows, &mut self.scratch.law_values);
         rows.arrange(kept, couplings, &self.scratch.driven, &self.scratch.held);
         rows.gather(&self.scratch.contact_state, &model.mimics);
-        rows.prescribe(model.drives.iter().map(|d| d.at(t).acceleration));
+        rows.prescribe(
+            model
+                .drives
+                .iter()
+                .map(|d| d.evaluate(t, values).acceleration),
+        );
         let solved = (self.scratch.rows).solve(
             model,
             &self.scratch.contact_state,

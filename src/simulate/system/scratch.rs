@@ -66,6 +66,8 @@ pub struct Scratch {
     pub(in crate::simulate) driven: Vec<usize>,
     pub drive_efforts: Vec<f64>,
     pub(in crate::simulate) drive_power: f64,
+    /// Where the drives' laws are evaluated.
+    pub(in crate::simulate) law_values: Vec<f64>,
     /// Per stop, the contact force holding its coordinate on it at the last evaluation
     /// (positive while it pushes the coordinate into its range); per joint with friction, the
     /// force holding it while it sticks then, and the power of the slipping friction.
@@ -106,6 +108,7 @@ impl Scratch {
             driven: model.drives.iter().map(|d| d.velocity).collect(),
             drive_efforts: vec![0.0; model.drives.len()],
             drive_power: 0.0,
+            law_values: Vec::new(),
             contact: vec![0.0; model.stops.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,

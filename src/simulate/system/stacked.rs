@@ -93,7 +93,8 @@ impl MechanicalSystem<'_> {
         }
         let first = kept.len() + couplings;
         for (i, drive) in model.drives.iter().enumerate() {
-            rates[first + i] = state[drive.velocity] - drive.at(t).rate;
+            let law = drive.evaluate(t, &mut self.scratch.law_values);
+            rates[first + i] = state[drive.velocity] - law.rate;
         }
         let first = first + model.drives.len();
         for (i, &velocity) in self.scratch.held.iter().enumerate() {
@@ -157,7 +158,7 @@ impl MechanicalSystem<'_> {
         }
         let first = gaps + couplings;
         for (i, drive) in model.drives.iter().enumerate() {
-            let law = drive.at(t).position;
+            let law = drive.evaluate(t, &mut self.scratch.law_values).position;
             values[first + i] = q[drive.position] - law;
             let scale = 1.0 + law.abs();
             open |= values[first + i].abs() > COUPLING_ROUND_OFF * scale;
