@@ -3,7 +3,7 @@
 //! Wright, *Numerical Optimization*, 2nd ed., §10.3 for both methods, §4 for the damping as a
 //! trust region; Marquardt, "An algorithm for least-squares estimation of nonlinear
 //! parameters", SIAM J. Appl. Math. 11(2), 1963, for the damping's tenfold updates). It serves
-//! every position correction of the house:
+//! every position correction of the house (there is no other Gauss–Newton loop in the crate):
 //!
 //! | caller | merit a step must reduce | settled when | damping | iterations | a slow step |
 //! |---|---|---|---|---|---|
@@ -13,6 +13,7 @@
 //! | contacts' gaps and couplings (`simulate::system::stacked`) | none: every step is kept | every row at its round-off | none | 4 | — |
 //! | assembly (`kinematics::assembly`) | squared norm | largest row ≤ tolerance (1e-12) | LM from 1e-6, floor 1e-15, 30 tries | 200 | a rejected step under 1e-16 ends it |
 //! | assembly's polish (same file) | norm | 0 | none | 8 | any reduction continues |
+//! | the closed configuration nearest to the given values (same file) | none: every step is kept | step ≤ 1e-13 of the largest coordinate | none | 50 | — (a last step over 1e-8 refuses the result) |
 //! | drag (`kinematics::drag`) | distance to the target | distance 0 | LM from 1e-6, floor 1e-15, 30 tries | 100 | progress ≤ 1e-15·max(distance, 1) ends it |
 //!
 //! What differs between them is what each caller supplies ([`Correction`]): its residual and

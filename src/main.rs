@@ -54,6 +54,9 @@ enum Command {
     /// freedom driven): the efforts that impose them, the power and, with `--reactions`, every
     /// join's reaction; CSV or JSON.
     Inverse(inverse::InverseArgs),
+    /// The linear model (A, B, C, D) of the mechanism about its initial state, a run's state
+    /// at a time or an equilibrium, in independent coordinates; eigenvalues and modes.
+    Linearize(linearize::LinearizeArgs),
     /// Compile a program and print what `--emit` asks for.
     Compile(compile::CompileArgs),
     /// Evaluate inverse dynamics (RNEA), the mass matrix (CRBA), forward dynamics (ABA) and the
@@ -100,6 +103,7 @@ fn main() -> ExitCode {
         Command::View(args) => view::run(&args),
         Command::Statics(args) => statics::run(&args),
         Command::Inverse(args) => inverse::run(&args),
+        Command::Linearize(args) => linearize::run(&args),
         Command::Compile(args) => compile::run(&args),
         Command::Eval(args) => eval::run(&args),
         Command::ExportUrdf(args) => export_urdf::run(&args),

@@ -10,6 +10,7 @@ pub mod export_urdf;
 pub mod fmt;
 pub mod import_urdf;
 pub mod inverse;
+pub mod linearize;
 pub mod lsp;
 pub mod parse;
 pub mod precision;

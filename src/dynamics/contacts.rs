@@ -1,14 +1,17 @@
 //! Contacts of a round body on a plane (`join plane and ball with rolling(r)` or
-//! `sliding(r, f)`): constraints on the tree's motion written on velocities, not joints.
+//! `sliding(r, f)`, `rolling_disc(r)` or `sliding_disc(r, f)` for a disc): constraints on the
+//! tree's motion written on velocities, not joints.
 //!
 //! The plane passes through its frame's origin O, normal to the frame's z axis n (pointing
-//! towards the round body); the round body is a sphere of radius r about its frame's origin C,
-//! or a cylinder whose axis stays parallel to the plane. The contact point is p = C − r n. Each
-//! contact has three candidate rows, the relative velocity of the two bodies' material points at
-//! p along the plane frame's axes x, y (tangential) and z (normal):
+//! towards the round body); the round body is a sphere of radius r about its frame's origin C
+//! (or a cylinder whose axis stays parallel to the plane), touching at p = C − r n, or a thin
+//! disc touching at the lowest point of its rim (`ContactModel::touch`). Each contact has
+//! three candidate rows, the relative velocity of the two bodies' material points at p along
+//! the plane frame's axes x, y (tangential) and z (normal):
 //!
-//! - the normal row is the rate of the gap g = (C − O)·n − r, a holonomic constraint: it is
-//!   kept at the position level too (projected after every step);
+//! - the normal row is the rate of the gap g (g = (C − O)·n − r for a sphere; for a disc,
+//!   (C − O)·n − r s, which the rim's lowest point makes the normal velocity there too), a
+//!   holonomic constraint: it is kept at the position level too (projected after every step);
 //! - the tangential rows of a rolling contact say that the body rolls without slipping. They
 //!   are non-holonomic (a ball on a plane can reach any position with any orientation): they
 //!   hold on velocities and accelerations only, and nothing projects positions onto them;
@@ -22,22 +25,23 @@
 //! H = Gₙ − f σ sᵀ Gₜ with σ the sign of λₙ. γ is the rows' velocity-product term: with V
 //! the bodies' twists in fixed axes and A their accelerations at zero joint accelerations,
 //! d/dt [e·(V_B − V_P)(p)] = (ω_P × e)·w + e·[(A_B − A_P)(p) + (ω_B − ω_P) × ṗ],
-//! ṗ = v_C − r ω_P × n (the contact point moves over both bodies).
+//! where ṗ, the rate of the contact point as it moves over both bodies, is v_C − r ω_P × n for
+//! a sphere and v_C − r u̇ for a disc (`ContactModel::down_rate`).
 
 use nalgebra::{DMatrix, DVector, DVectorView, Matrix3, Vector3};
 
 use super::algorithms::{bias_accelerations, Data};
 use super::model::Model;
 use super::response::Response;
-pub use crate::kinematics::contacts::{ContactModel, SLIP_REGULARISATION};
+pub use crate::kinematics::contacts::{ContactModel, Touch, SLIP_REGULARISATION};
 use crate::spatial::{self, Motion};
 
 /// Names of a contact's three rows.
 pub const CONTACT_ROW_NAMES: [&str; 3] = ["slip along x", "slip along y", "normal"];
 
 /// The contacts' rows at a state: three per contact, every row computed (the kept ones are
-/// chosen by the caller).
-#[derive(Clone, Debug)]
+/// chosen by the caller); empty by default.
+#[derive(Clone, Debug, Default)]
 pub struct ContactRows {
     /// 3 per contact × nv: the relative velocity at the contact point along the plane's axes.
     pub jacobian: DMatrix<f64>,
@@ -50,7 +54,19 @@ pub struct ContactRows {
     /// Per contact, the contact point and the plane's axes (columns x, y, n), fixed axes.
     pub points: Vec<Vector3<f64>>,
     pub axes: Vec<Matrix3<f64>>,
+    /// Per contact, the direction from the centre to the contact point at the last state these
+    /// rows were computed at (zero before the first).
+    downs: Vec<Vector3<f64>>,
+    /// The first contact whose disc lies flat at this state, or passed lying flat since the
+    /// rows were last computed (`DISC_FLAT`): it has no contact point.
+    pub flat_disc: Option<usize>,
 }
+
+/// A disc whose tilt from lying flat has a sine below this lies flat: its lowest point turns
+/// by r/s per unit of tilt. A disc that passed lying flat between two states is caught by its
+/// contact point's direction turning by more than 120° (the cosine below −1/2) between them:
+/// the lowest point jumps across the rim there.
+pub const DISC_FLAT: f64 = 1e-9;
 
 /// The fixed-frame twist of a body (index 0: earth, at rest).
 fn world_twist(data: &Data, body: usize) -> Motion {
@@ -85,6 +101,8 @@ impl ContactRows {
             gap: vec![0.0; count],
             points: vec![Vector3::zeros(); count],
             axes: vec![Matrix3::identity(); count],
+            downs: vec![Vector3::zeros(); count],
+            flat_disc: None,
         }
     }
 }
@@ -111,28 +129,32 @@ pub fn contact_rows_into(
     if with_bias {
         bias_accelerations(model, data);
     }
+    rows.flat_disc = None;
     for (k, contact) in model.contacts.iter().enumerate() {
-        let plane = data.world[contact.plane_body] * contact.plane;
-        let centre = (data.world[contact.round_body] * contact.centre)
-            .translation
-            .vector;
-        let axes = plane.rotation.to_rotation_matrix().into_inner();
-        let normal = axes.column(2).into_owned();
-        let point = centre - contact.radius * normal;
-        rows.gap[k] = (centre - plane.translation.vector).dot(&normal) - contact.radius;
-        rows.points[k] = point;
-        rows.axes[k] = axes;
+        let world = &data.world;
+        let touch = contact.touch(&world[contact.plane_body], &world[contact.round_body]);
+        let passed_flat = touch.disc.is_some() && rows.downs[k].dot(&touch.down) < -0.5;
+        let lies_flat = touch
+            .disc
+            .is_some_and(|(_, sine)| sine.is_nan() || sine <= DISC_FLAT);
+        if (passed_flat || lies_flat) && rows.flat_disc.is_none() {
+            rows.flat_disc = Some(k);
+        }
+        rows.downs[k] = touch.down;
+        rows.gap[k] = touch.gap;
+        rows.points[k] = touch.point;
+        rows.axes[k] = touch.axes;
         fill_jacobian(
             model,
             data,
             contact,
-            &point,
-            &axes,
+            &touch.point,
+            &touch.axes,
             3 * k,
             &mut rows.jacobian,
         );
         if with_bias {
-            let bias = contact_bias(data, contact, &centre, &point, &axes);
+            let bias = contact_bias(data, contact, &touch);
             rows.bias.rows_mut(3 * k, 3).copy_from(&bias);
         }
     }
@@ -167,25 +189,20 @@ fn fill_jacobian(
 }
 
 /// γ of a contact's three rows (see the module's documentation).
-fn contact_bias(
-    data: &Data,
-    contact: &ContactModel,
-    centre: &Vector3<f64>,
-    point: &Vector3<f64>,
-    axes: &Matrix3<f64>,
-) -> Vector3<f64> {
+fn contact_bias(data: &Data, contact: &ContactModel, touch: &Touch) -> Vector3<f64> {
     let (round, plane) = (
         world_twist(data, contact.round_body),
         world_twist(data, contact.plane_body),
     );
     let (spin_round, spin_plane) = (spatial::angular(&round), spatial::angular(&plane));
-    let normal = axes.column(2).into_owned();
+    let point = &touch.point;
     let relative = at_point(point, &(round - plane));
-    let point_rate = at_point(centre, &round) - contact.radius * spin_plane.cross(&normal);
+    let down_rate = contact.down_rate(touch, &spin_round, &spin_plane);
+    let point_rate = at_point(&touch.centre, &round) + contact.radius * down_rate;
     let accelerations = world_bias(data, contact.round_body) - world_bias(data, contact.plane_body);
     let material = at_point(point, &accelerations) + (spin_round - spin_plane).cross(&point_rate);
     Vector3::from_fn(|i, _| {
-        let axis = axes.column(i).into_owned();
+        let axis = touch.axes.column(i).into_owned();
         spin_plane.cross(&axis).dot(&relative) + axis.dot(&material)
     })
 }

@@ -1,33 +1,124 @@
-//! One set of constraint rows for everything a state's motion must keep beyond what the response
-//! X keeps (`response`: the tree's joints, the mimic couplings of a tree, the closed loops), in
-//! this order:
+//! The constraint stack: every row a state's motion must keep, in blocks by kind, with one
+//! solve, one projection and one reactions path for all of them (MuJoCo's rows of one Jacobian
+//! by kind, Todorov, Erez & Tassa 2012; Pinocchio's `constraintDynamics`, Carpentier et al.
+//! 2019). The blocks, in their order:
 //!
-//! - the contacts' kept rows (`contacts`), with their velocity-product terms γ;
-//! - with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
-//!   in X instead);
-//! - one unit row eₖᵀ per driven coordinate (`drives`), its right-hand side the law's
-//!   acceleration: eₖᵀ a = law''(t), set by [`RowStack::prescribe`];
-//! - one unit row eₖᵀ per coordinate held at rest: on a stop it rests on, or held by its dry
-//!   friction (sticking).
+//! 1. the tree's joints and the closed loops: the response X (`response`) eliminates them, a
+//!    tree by its mass matrix, the tree's mimic couplings by their basis, the loops by their
+//!    sparse factorisation (`loops`: the loops' block has its own specialised solve, whose
+//!    allowed motions N give X = N (NᵀMN)⁻¹ Nᵀ, so that G X = 0 for its rows);
+//! 2. the contacts' kept rows (`contacts`), with their velocity-product terms γ;
+//! 3. with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
+//!    in X instead);
+//! 4. one unit row eₖᵀ per coordinate held ([`HeldRow`]): driven by a law of time (`drive`),
+//!    on a stop it rests on, or held by its dry friction (sticking).
 //!
-//! With G the rows and H the rows their forces act along (G, but on a sliding contact's normal
-//! row, whose force carries the friction it causes), the accelerations a₀ the base solve found
-//! without them become a = a₀ + X Hᵀλ with (G X Hᵀ) λ = −(G a₀ + γ): the saddle-point system
-//! [M −Hᵀ; G 0] solved on the response. The same rows, without γ, bring a state's velocities
-//! (or positions, on their position rows) back onto them by the change of least kinetic metric
-//! along X Gᵀ ([`RowStack::add_least_change`]). The solve is rank-revealing (`Pivoted`): a
-//! follower held with its leader, or a coordinate held by a stop and its friction, gives
-//! dependent rows, which leave the motion determined though not their forces. Nothing is
-//! allocated once the storage is sized for the rows (`RowStack::arrange`), which change only at
-//! events.
+//! The blocks 2 to 4 are this stack's rows G, solved on X. With H the rows their forces act
+//! along (G, but on a sliding contact's normal row, whose force carries the friction it
+//! causes), the accelerations a₀ the base solve found without them become a = a₀ + X Hᵀλ with
+//! (G X Hᵀ) λ = −(G a₀ + γ): the saddle-point system [M −Hᵀ; G 0] solved on the response
+//! ([`RowStack::solve`]). The same rows bring a state's velocities (their values G v − w,
+//! [`RowStack::velocity_values`]) or positions (their values φ(q, t),
+//! [`RowStack::position_values`]) back onto them by the change of least kinetic metric along
+//! X Gᵀ ([`RowStack::add_least_change`]); their forces join the generalised forces for the
+//! reactions ([`RowStack::add_coordinate_forces`], the contacts' act on bodies instead). The
+//! solve is rank-revealing (`Pivoted`): a follower held with its leader, or a coordinate held
+//! by a stop and its friction, gives dependent rows, which leave the motion determined though
+//! not their forces. Nothing is allocated once the storage is sized for the rows
+//! ([`RowStack::arrange`]), which change only at events.
+//!
+//! Each row has a right-hand side at each level: its position value φ, its velocity target w
+//! (G v = w) and its acceleration term γ (G a + γ = 0). A kind fixed in time has w = 0 and no
+//! ∂/∂t terms. The rheonomic kind, a coordinate driven by a law of time q = d(t), is the held
+//! row of [`Holder::Drive`], which carries the law evaluated at the row's time:
+//! φ = q − d(t), w = ḋ(t), γ = −d̈(t), its force the drive's effort. To add a kind: give it
+//! a block here (its rows in `gather`, its values in `position_values` and `velocity_values`,
+//! its term in `gather`'s γ, its forces in `add_coordinate_forces`), and have the run arrange
+//! it (`simulate::system::holding`), where the rows' forces are handed back to what holds
+//! them.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::contacts::{self, ContactRows};
 use super::dense::Pivoted;
+use super::drives::DrivenCoordinate;
 use super::mimics::Mimic;
 use super::model::Model;
 use super::response::Response;
+use super::stops::Stop;
+use crate::kinematics::drives::LawAt;
+
+/// A coordinate held by a unit row eₖᵀ of the stack, and what holds it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldRow {
+    /// The held coordinate's index among the state's velocities.
+    pub velocity: usize,
+    pub holder: Holder,
+}
+
+impl HeldRow {
+    /// The row of a coordinate resting on the stop `index`, `stop`.
+    pub fn on_stop(index: usize, stop: &Stop) -> HeldRow {
+        HeldRow {
+            velocity: stop.velocity,
+            holder: Holder::Stop {
+                index,
+                position: stop.position,
+                bound: stop.bound,
+            },
+        }
+    }
+
+    /// The row of the drive `index`, `drive`, its law evaluated at the row's time (`law`).
+    pub fn driven(index: usize, drive: &DrivenCoordinate, law: LawAt) -> HeldRow {
+        HeldRow {
+            velocity: drive.velocity,
+            holder: Holder::Drive {
+                index,
+                position: drive.position,
+                law,
+            },
+        }
+    }
+}
+
+/// What holds a coordinate, which decides its row's right-hand sides and where its force goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Holder {
+    /// The drive `index` (`Model::drives`), its law d at the row's time: φ = q − d(t),
+    /// w = ḋ(t), γ = −d̈(t); its force is the drive's effort.
+    Drive {
+        index: usize,
+        position: usize,
+        law: LawAt,
+    },
+    /// The stop `index` it rests on: at rest, its position row q − bound.
+    Stop {
+        index: usize,
+        position: usize,
+        bound: f64,
+    },
+    /// The joint friction `index`, sticking: at rest, no position row (the friction holds the
+    /// rate, not the place).
+    Friction { index: usize },
+    /// The stop `index` at an impact: its rate brought to `rate_after` (−e times the rate
+    /// before), the other rows to rest; a velocity row only.
+    Impact { index: usize, rate_after: f64 },
+}
+
+/// Relative size of a coupling's violation below which it is not corrected.
+const COUPLING_ROUND_OFF: f64 = 1e-13;
+
+/// Relative size of a driven coordinate's distance to its law (to 1 + |d(t)|) below which it
+/// is not corrected.
+const LAW_ROUND_OFF: f64 = 1e-13;
+
+/// Relative size of a contact's gap (to the largest radius) below which it is not corrected.
+const GAP_ROUND_OFF: f64 = 1e-15;
+
+/// A held coordinate's distance to its bound below this (relative to max(1, |bound|)) is at
+/// round-off.
+pub const BOUND_ROUND_OFF: f64 = 1e-14;
 
 /// Entries of G X Hᵀ below this fraction of its largest are taken as zero: the rows left are
 /// dependent on the others.
@@ -38,11 +129,9 @@ pub const DEPENDENT_ROWS: f64 = 1e-12;
 pub struct RowStack {
     /// The contacts' rows stacked (indices among the three per contact of `ContactRows`).
     contacts: Vec<usize>,
-    /// How many coupling rows follow them, then the driven velocities, then the velocities
-    /// held at rest.
+    /// How many coupling rows follow them, then the coordinates held.
     couplings: usize,
-    drives: Vec<usize>,
-    held: Vec<usize>,
+    held: Vec<HeldRow>,
     /// G (rows × velocities), Hᵀ (velocities × rows), γ, X Hᵀ, G X Hᵀ.
     g: DMatrix<f64>,
     directions: DMatrix<f64>,
@@ -60,6 +149,36 @@ pub struct RowStack {
     pub accelerations: DVector<f64>,
 }
 
+/// The velocities just after an impact, from `v` (before it) into `after`: the change of least
+/// kinetic metric along X that brings the stop's row (`impact`, a held row with
+/// [`Holder::Impact`]) to its rate after and every other row of `stack` to rest, the impulse
+/// P = (G X Gᵀ)⁺ (G v − w) acting through the response as the forces do
+/// (Pfeiffer & Glocker, *Multibody Dynamics with Unilateral Contacts*, 1996, §7: Newton's
+/// impact law on one contact, the bilateral rows kept). `stack` arranged with `impact` last
+/// among its held rows, G gathered, X formed at the state. False when the result is not
+/// finite (no inertia along the stopped coordinate).
+pub fn impact_velocities(
+    stack: &mut RowStack,
+    response: &mut Response,
+    all: &ContactRows,
+    mimics: &[Mimic],
+    v: &[f64],
+    after: &mut [f64],
+) -> bool {
+    after.copy_from_slice(v);
+    stack.velocity_values(all, mimics, v);
+    stack.add_least_change(response, after);
+    // The law holds exactly on the stop's row: the solve leaves its rate within round-off of
+    // the target, and after a dead stop (e = 0) a rate of −1e-17 into the stop would be a
+    // second impact at once. The other rows move by that round-off at most.
+    for held in &stack.held {
+        if let Holder::Impact { rate_after, .. } = held.holder {
+            after[held.velocity] = rate_after;
+        }
+    }
+    after.iter().all(|x| x.is_finite())
+}
+
 /// Why the rows' solve failed: a sliding contact's normal force changes sign at every solve
 /// (the contact named).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,12 +189,19 @@ pub struct Unsettled {
 impl RowStack {
     /// An empty stack for the velocities of `model`.
     pub fn new(model: &Model) -> RowStack {
-        let n = model.velocities();
+        let mut stack = RowStack::over(model.velocities(), model.contacts.len());
+        stack
+            .held
+            .reserve(model.drives.len() + model.stops.len() + model.frictions.len());
+        stack
+    }
+
+    /// An empty stack for `n` velocities and `contacts` contacts.
+    pub fn over(n: usize, contacts: usize) -> RowStack {
         RowStack {
             contacts: Vec::new(),
             couplings: 0,
-            drives: Vec::with_capacity(model.drives.len()),
-            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            held: Vec::new(),
             g: DMatrix::zeros(0, n),
             directions: DMatrix::zeros(n, 0),
             bias: DVector::zeros(0),
@@ -83,29 +209,20 @@ impl RowStack {
             coupling: DMatrix::zeros(0, 0),
             right: DVector::zeros(0),
             pivoted: Pivoted::default(),
-            pressing: vec![1.0; model.contacts.len()],
-            contact_forces: vec![Vector3::zeros(); model.contacts.len()],
+            pressing: vec![1.0; contacts],
+            contact_forces: vec![Vector3::zeros(); contacts],
             accelerations: DVector::zeros(n),
         }
     }
 
     /// Stacks the contact rows `contacts`, `couplings` coupling rows and the unit rows of the
-    /// velocities `drives` (driven) and `held`; the storage is sized anew only when the number
-    /// of rows changes.
-    pub fn arrange(
-        &mut self,
-        contacts: &[usize],
-        couplings: usize,
-        drives: &[usize],
-        held: &[usize],
-    ) {
+    /// coordinates `held`; the storage is sized anew only when the number of rows changes.
+    pub fn arrange(&mut self, contacts: &[usize], couplings: usize, held: &[HeldRow]) {
         if self.contacts != contacts {
             self.contacts.clear();
             self.contacts.extend_from_slice(contacts);
         }
         self.couplings = couplings;
-        self.drives.clear();
-        self.drives.extend_from_slice(drives);
         self.held.clear();
         self.held.extend_from_slice(held);
         let (rows, n) = (self.len(), self.g.ncols());
@@ -121,7 +238,7 @@ impl RowStack {
 
     /// The number of rows stacked.
     pub fn len(&self) -> usize {
-        self.contacts.len() + self.couplings + self.drives.len() + self.held.len()
+        self.contacts.len() + self.couplings + self.held.len()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -134,8 +251,8 @@ impl RowStack {
     }
 
     /// Fills G and γ from the contacts' rows `all` (γ as they hold it) and the couplings
-    /// `mimics` (the first `couplings` of them), the unit rows after them (the driven rows'
-    /// γ at zero until `prescribe`).
+    /// `mimics` (the first `couplings` of them), the unit rows after them (γ = −d̈(t) on a
+    /// driven row, 0 on the others).
     pub fn gather(&mut self, all: &ContactRows, mimics: &[Mimic]) {
         self.g.fill(0.0);
         self.bias.fill(0.0);
@@ -149,21 +266,11 @@ impl RowStack {
             self.g[(first + i, mimic.leader_velocity)] -= mimic.multiplier;
         }
         let first = first + self.couplings;
-        for (i, &velocity) in self.drives.iter().chain(&self.held).enumerate() {
-            self.g[(first + i, velocity)] = 1.0;
-        }
-    }
-
-    /// Sets the driven rows' right-hand sides, eₖᵀ a = `accelerations[k]` (the laws'
-    /// accelerations, in the order of the driven velocities): γₖ = −law''(t).
-    pub fn prescribe(&mut self, accelerations: impl IntoIterator<Item = f64>) {
-        let first = self.contacts.len() + self.couplings;
-        for (i, acceleration) in accelerations
-            .into_iter()
-            .take(self.drives.len())
-            .enumerate()
-        {
-            self.bias[first + i] = -acceleration;
+        for (i, held) in self.held.iter().enumerate() {
+            self.g[(first + i, held.velocity)] = 1.0;
+            if let Holder::Drive { law, .. } = held.holder {
+                self.bias[first + i] = -law.acceleration;
+            }
         }
     }
 
@@ -221,34 +328,103 @@ impl RowStack {
     }
 
     /// The multipliers of the last solve: the contacts' rows', then the couplings', then the
-    /// driven and the held velocities' (each a force along its velocity).
+    /// held velocities' (each a force along its velocity: a drive's is its effort).
     pub fn multipliers(&self) -> &[f64] {
         self.right.as_slice()
     }
 
-    /// The forces that held the velocities `held` at the last solve.
-    pub fn held_forces(&self) -> &[f64] {
-        &self.right.as_slice()[self.contacts.len() + self.couplings + self.drives.len()..]
+    /// The coordinates held, each with the force that held it at the last solve.
+    pub fn held_forces(&self) -> impl Iterator<Item = (&HeldRow, f64)> {
+        let forces = &self.right.as_slice()[self.contacts.len() + self.couplings..];
+        self.held.iter().zip(forces.iter().copied())
     }
 
-    /// The forces that imposed the driven velocities at the last solve: the drives' efforts.
-    pub fn drive_forces(&self) -> &[f64] {
-        let first = self.contacts.len() + self.couplings;
-        &self.right.as_slice()[first..first + self.drives.len()]
+    /// The rows G, gathered (`gather`).
+    pub fn rows(&self) -> &DMatrix<f64> {
+        &self.g
     }
 
-    /// Adds the forces of the last solve's coupling, driven and held rows to the generalised forces
+    /// Sets the rows' values to their velocities' distance from their targets at the
+    /// velocities `v`, G v − w (`values_mut`, for `add_least_change`): the contacts' rates as
+    /// `all` holds them, the couplings' q̇_f − m q̇_l, the held rates (a driven one from its
+    /// law's, q̇ − ḋ(t)). Whether any is non-zero.
+    pub fn velocity_values(&mut self, all: &ContactRows, mimics: &[Mimic], v: &[f64]) -> bool {
+        let contacts = self.contacts.len();
+        for (i, &row) in self.contacts.iter().enumerate() {
+            self.right[i] = all.velocity[row];
+        }
+        for (i, mimic) in mimics.iter().take(self.couplings).enumerate() {
+            self.right[contacts + i] =
+                v[mimic.velocity] - mimic.multiplier * v[mimic.leader_velocity];
+        }
+        let first = contacts + self.couplings;
+        for (i, held) in self.held.iter().enumerate() {
+            let target = match held.holder {
+                Holder::Impact { rate_after, .. } => rate_after,
+                Holder::Drive { law, .. } => law.rate,
+                Holder::Stop { .. } | Holder::Friction { .. } => 0.0,
+            };
+            self.right[first + i] = v[held.velocity] - target;
+        }
+        self.right.amax() > 0.0
+    }
+
+    /// Sets the rows' values to their position values at q, φ(q, t) (`values_mut`, for
+    /// `add_least_change`): the gaps of the contacts' rows (normal rows only: the others are
+    /// not integrable), the couplings' violations, the held coordinates' distances to their
+    /// bounds or their laws, q − d(t) (none for a row of velocities only). Whether any is above
+    /// its round-off (a gap's relative to the largest radius, a coupling's to its follower's
+    /// coordinate, a bound's to the bound, a law's distance to 1 + |d(t)|).
+    pub fn position_values(&mut self, model: &Model, all: &ContactRows, q: &[f64]) -> bool {
+        let radius = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
+        let mut open = false;
+        for (i, &row) in self.contacts.iter().enumerate() {
+            debug_assert_eq!(row % 3, 2, "a contact's position row is its normal row");
+            self.right[i] = all.gap[row / 3];
+            open |= self.right[i].abs() > GAP_ROUND_OFF * radius;
+        }
+        let first = self.contacts.len();
+        let couplings = &model.mimics[..self.couplings];
+        let scale = 1.0
+            + couplings
+                .iter()
+                .map(|m| q[m.position].abs())
+                .fold(0.0, f64::max);
+        for (i, mimic) in couplings.iter().enumerate() {
+            self.right[first + i] = mimic.violation(q);
+            open |= self.right[first + i].abs() > COUPLING_ROUND_OFF * scale;
+        }
+        let first = first + self.couplings;
+        for (i, held) in self.held.iter().enumerate() {
+            // A row of velocities only has no position to correct.
+            let (value, round_off) = match held.holder {
+                Holder::Stop {
+                    position, bound, ..
+                } => (q[position] - bound, BOUND_ROUND_OFF * bound.abs().max(1.0)),
+                Holder::Drive { position, law, .. } => (
+                    q[position] - law.position,
+                    LAW_ROUND_OFF * (1.0 + law.position.abs()),
+                ),
+                Holder::Friction { .. } | Holder::Impact { .. } => (0.0, 0.0),
+            };
+            self.right[first + i] = value;
+            open |= value.abs() > round_off;
+        }
+        open
+    }
+
+    /// Adds the forces of the last solve's coupling and held rows to the generalised forces
     /// `tau` (over the state's velocities): they act along coordinates, as link efforts do
     /// (the contacts' act on bodies instead, `contact_forces`).
     pub fn add_coordinate_forces(&self, mimics: &[Mimic], tau: &mut DVector<f64>) {
         let multipliers = &self.right.as_slice()[self.contacts.len()..];
-        let (couplings, unit) = multipliers.split_at(self.couplings);
+        let (couplings, held) = multipliers.split_at(self.couplings);
         for (mimic, force) in mimics.iter().zip(couplings) {
             tau[mimic.velocity] += force;
             tau[mimic.leader_velocity] -= mimic.multiplier * force;
         }
-        for (&velocity, force) in self.drives.iter().chain(&self.held).zip(unit) {
-            tau[velocity] += force;
+        for (row, force) in self.held.iter().zip(held) {
+            tau[row.velocity] += force;
         }
     }
 

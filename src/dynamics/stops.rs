@@ -2,9 +2,9 @@
 //! q ≥ lower, q ≤ upper that the simulation treats as events. Each bound is one event function,
 //! positive while the coordinate is inside its range; where it crosses zero the integrator
 //! locates the time and the impact law reverses the coordinate's rate, scaled by the
-//! coefficient of restitution e, with the impulse acting through the mass matrix.
+//! coefficient of restitution e, with the impulse acting through the mass matrix: the stop's
+//! row joins the constraint stack for the impact (`rows::impact_velocities`).
 
-use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use super::joint::{refuse_declared, Joint, JointType};
@@ -70,60 +70,6 @@ impl Stop {
             Side::Upper => v[self.velocity],
         }
     }
-}
-
-/// The velocities just after an impact on `stop`: v⁺ = v⁻ + M⁻¹ eₖ P, with the impulse P such
-/// that the coordinate's rate becomes −e times what it was. With constraint rows `g` (closed
-/// loops, contacts or mimic couplings), the impulse is found with their reactions Λ from the
-/// saddle-point system, which brings their rates to zero (G v⁺ = 0): the stop's row is one more
-/// row of the constraints, with restitution on it alone.
-pub fn impact_velocities(
-    stop: &Stop,
-    mass: &DMatrix<f64>,
-    loops: Option<&DMatrix<f64>>,
-    v: &[f64],
-) -> Option<DVector<f64>> {
-    let n = mass.nrows();
-    let k = stop.velocity;
-    let empty = DMatrix::zeros(0, n);
-    let g = loops.unwrap_or(&empty);
-    let rows = g.nrows();
-    // [M  −Gᵀ  −eₖ] [Δv]   [0]
-    // [G   0    0 ] [Λ ] = [−G v⁻]
-    // [eₖᵀ 0    0 ] [P ]   [−(1 + e) vₖ]
-    let system = saddle_point(mass, g, &[k]);
-    let mut right = DVector::zeros(n + rows + 1);
-    let before = DVector::from_column_slice(v);
-    right.rows_mut(n, rows).copy_from(&(-(g * &before)));
-    right[n + rows] = -(1.0 + stop.restitution) * v[k];
-    let solution = rank_revealing_solve(system, &right)?;
-    Some(before + solution.rows(0, n))
-}
-
-/// The saddle-point matrix of the mass matrix `mass`, the constraint rows `g` and the unit rows
-/// of the velocities `held`: [M −Gᵀ −Eᵀ; G 0 0; E 0 0].
-fn saddle_point(mass: &DMatrix<f64>, g: &DMatrix<f64>, held: &[usize]) -> DMatrix<f64> {
-    let (n, rows) = (mass.nrows(), g.nrows());
-    let size = n + rows + held.len();
-    let mut system = DMatrix::zeros(size, size);
-    system.view_mut((0, 0), (n, n)).copy_from(mass);
-    system
-        .view_mut((0, n), (n, rows))
-        .copy_from(&(-g.transpose()));
-    system.view_mut((n, 0), (rows, n)).copy_from(g);
-    for (i, &k) in held.iter().enumerate() {
-        system[(k, n + rows + i)] = -1.0;
-        system[(n + rows + i, k)] = 1.0;
-    }
-    system
-}
-
-/// A rank-revealing solve: redundant constraint rows (a planar loop's, a follower held with
-/// its leader) leave the velocities or accelerations well defined, though not their forces.
-fn rank_revealing_solve(system: DMatrix<f64>, right: &DVector<f64>) -> Option<DVector<f64>> {
-    crate::linalg::svd(system, true, true)?
-        .solve(right, 1e-12)
-        .ok()
 }
 
 /// The stops of the tree's links, two per link with both bounds; a link with stops must have

@@ -751,8 +751,13 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             ),
         };
         if target == Target::Builtin {
-            if matches!(&*ident.name, "rolling" | "sliding") {
-                return self.contact_link(values, span);
+            let shape = match &*ident.name {
+                "rolling" | "sliding" => Some(RoundShape::Sphere),
+                "rolling_disc" | "sliding_disc" => Some(RoundShape::Disc),
+                _ => None,
+            };
+            if let Some(shape) = shape {
+                return self.contact_link(shape, values, span);
             }
             return builtin_call(&ident.name, values, span);
         }
@@ -954,9 +959,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         Ok(Value::Link(LinkId(self.mechanism.links.len() as u32 - 1)))
     }
 
-    /// `rolling(radius)` or `sliding(radius, friction)`: a link without coordinates that makes
-    /// its join a contact (see `mechanism::Contact`).
-    fn contact_link(&mut self, values: Vec<Value>, span: Span) -> Result<Value> {
+    /// `rolling(radius)` or `sliding(radius, friction)`, or their disc's forms
+    /// (`rolling_disc`, `sliding_disc`): a link without coordinates that makes its join a
+    /// contact (see `mechanism::Contact`).
+    fn contact_link(&mut self, shape: RoundShape, values: Vec<Value>, span: Span) -> Result<Value> {
         let mut scalars = values.into_iter().map(|v| as_scalar(v, span));
         let radius = scalars
             .next()
@@ -965,6 +971,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
         let mut link = Link::new(span, Vec::new());
         link.extras_mut().contact = Some(ContactLaw {
             radius,
+            shape,
             friction,
             span,
         });

@@ -160,14 +160,28 @@ impl Link {
 /// How a round body touches a plane: which rows a contact adds to the equations of motion.
 #[derive(Clone, Debug)]
 pub struct ContactLaw {
-    /// The body's radius: a sphere about the second frame's origin, or a cylinder whose axis
-    /// stays parallel to the plane.
+    /// The body's radius: of a sphere about the second frame's origin (or a cylinder whose
+    /// axis stays parallel to the plane), or of a disc's rim.
     pub radius: Scalar,
+    /// Which point of the body touches the plane.
+    pub shape: RoundShape,
     /// `None`: rolling without slipping (the contact point of the body has no velocity relative
     /// to the plane). `Some(f)`: sliding under Coulomb friction of coefficient f.
     pub friction: Option<Scalar>,
     /// Where `rolling(...)` or `sliding(...)` is written.
     pub span: Span,
+}
+
+/// The shape of a contact's round body, which decides where it touches the plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RoundShape {
+    /// `rolling(r)`, `sliding(r, f)`: a sphere of radius r about the second frame's origin,
+    /// touching at the centre moved by r against the plane's normal.
+    Sphere,
+    /// `rolling_disc(r)`, `sliding_disc(r, f)`: a thin disc (a coin, a wheel) of radius r
+    /// centred on the second frame's origin, its axis the frame's z axis, touching at the
+    /// lowest point of its rim.
+    Disc,
 }
 
 /// `join plane and ball with rolling(r)`: a contact between the plane through the first frame's

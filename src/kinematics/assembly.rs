@@ -209,13 +209,8 @@ fn given_distance(start: &[f64], q: &[f64], holds: &[Hold]) -> f64 {
 }
 
 /// From `q`, the closed configuration nearest to the given values of `start`: Gauss–Newton on
-/// the optimality conditions. Each step changes the given coordinates g by the least that
-/// brings them nearest to their values while closing the linearised loops, the free
-/// coordinates f taking what they must: with P the projection away from what the free
-/// coordinates can do (the range of J_f), g moves to the least-norm solution of
-/// P J_g (g' − g₀) = P (J_g (g − g₀) − r), then f by the least-norm solution of
-/// J_f Δf = −r − J_g Δg. The result is closed again at the assembly tolerance; `None` when
-/// the iteration does not settle.
+/// the optimality conditions (`corrector`, [`NearestSteps`]), then closed again at the assembly
+/// tolerance; `None` when the iteration does not settle.
 fn nearest_closed(
     model: &KinematicModel,
     start: &[f64],
@@ -223,25 +218,96 @@ fn nearest_closed(
     q: &[f64],
     options: &AssemblyOptions,
 ) -> Result<Option<Assembled>, AssemblyError> {
-    let given: Vec<usize> = (0..q.len()).filter(|&i| holds[i] == Hold::Given).collect();
-    let free: Vec<usize> = (0..q.len()).filter(|&i| holds[i] == Hold::Free).collect();
-    let mut q = q.to_vec();
-    let mut change = f64::INFINITY;
-    for _ in 0..50 {
-        let current = closure(model, &q)?;
-        let columns = |of: &[usize]| {
-            DMatrix::from_fn(current.jacobian.nrows(), of.len(), |r, c| {
-                current.jacobian[(r, of[c])]
-            })
-        };
-        let (j_given, j_free) = (columns(&given), columns(&free));
+    let mut steps = NearestSteps {
+        model,
+        start,
+        given: (0..q.len()).filter(|&i| holds[i] == Hold::Given).collect(),
+        free: (0..q.len()).filter(|&i| holds[i] == Hold::Free).collect(),
+        q: q.to_vec(),
+        current: None,
+        step: Vec::new(),
+        change: f64::INFINITY,
+    };
+    let outcome = correct(&mut steps, &NEAREST)?;
+    if outcome.stop == Stop::NoStep || steps.change > NEAREST_SETTLED {
+        return Ok(None);
+    }
+    let fixed = held(holds);
+    match solve(model, &steps.q, &fixed, options) {
+        Ok(assembled) => Ok(Some(assembled)),
+        Err(AssemblyError::NoAssembly { .. }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// The nearest configuration's iteration: every Gauss–Newton step is kept (each one solves the
+/// linearised optimality conditions, which no one merit measures), until the step is at the
+/// coordinates' round-off (1e-13 of the largest, or of 1) or 50 steps are taken.
+const NEAREST: Settings = Settings {
+    iterations: 50,
+    damping: Damping::None,
+    acceptance: Acceptance::EveryStep,
+    progress: Progress::Any,
+};
+
+/// The last step of the nearest configuration's iteration must be below this for its result to
+/// be closed again and taken: a larger one has not settled on the optimality conditions.
+const NEAREST_SETTLED: f64 = 1e-8;
+
+/// The steps towards the closed configuration nearest to the given values, for the corrector.
+/// Each changes the given coordinates g by the least that brings them nearest to their values
+/// while closing the linearised loops, the free coordinates f taking what they must: with P
+/// the projection away from what the free coordinates can do (the range of J_f), g moves to the
+/// least-norm solution of P J_g (g' − g₀) = P (J_g (g − g₀) − r), then f by the least-norm
+/// solution of J_f Δf = −r − J_g Δg.
+struct NearestSteps<'a> {
+    model: &'a KinematicModel,
+    start: &'a [f64],
+    given: Vec<usize>,
+    free: Vec<usize>,
+    q: Vec<f64>,
+    /// The closure at `q` (`linearise`).
+    current: Option<Closure>,
+    /// The step formed, over every coordinate.
+    step: Vec<f64>,
+    /// The largest component of the last step taken.
+    change: f64,
+}
+
+impl Correction for NearestSteps<'_> {
+    type Error = AssemblyError;
+
+    fn settled(&self) -> bool {
+        let size = self.q.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
+        self.change < 1e-13 * size
+    }
+
+    fn merit(&self) -> f64 {
+        self.change
+    }
+
+    fn linearise(&mut self) -> Result<(), AssemblyError> {
+        self.current = Some(closure(self.model, &self.q)?);
+        Ok(())
+    }
+
+    fn step(&mut self, _damping: f64) -> Result<Option<f64>, AssemblyError> {
+        let current = self.current.as_ref().expect("linearised");
+        let (given, free) = (&self.given, &self.free);
+        let (j_given, j_free) = (
+            free_columns(&current.jacobian, given),
+            free_columns(&current.jacobian, free),
+        );
         let away_from_free = |m: &DMatrix<f64>| -> DMatrix<f64> {
             match free_range(&j_free) {
                 Some(u) => m - &u * (u.transpose() * m),
                 None => m.clone(),
             }
         };
-        let offset = DVector::from_iterator(given.len(), given.iter().map(|&i| q[i] - start[i]));
+        let offset = DVector::from_iterator(
+            given.len(),
+            given.iter().map(|&i| self.q[i] - self.start[i]),
+        );
         let a = away_from_free(&j_given);
         let b = away_from_free(&DMatrix::from_column_slice(
             current.residual.len(),
@@ -256,29 +322,30 @@ fn nearest_closed(
             Some(step) => step,
             None => DVector::zeros(free.len()),
         };
-        change = given_step.amax().max(free_step.amax());
-        for (k, &i) in given.iter().enumerate() {
-            q[i] += given_step[k];
-        }
-        for (k, &i) in free.iter().enumerate() {
-            q[i] += free_step[k];
-        }
+        let change = given_step.amax().max(free_step.amax());
         if !change.is_finite() {
             return Ok(None);
         }
-        let size = q.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
-        if change < 1e-13 * size {
-            break;
+        self.step.clear();
+        self.step.resize(self.q.len(), 0.0);
+        for (k, &i) in given.iter().enumerate() {
+            self.step[i] = given_step[k];
         }
+        for (k, &i) in free.iter().enumerate() {
+            self.step[i] = free_step[k];
+        }
+        self.change = change;
+        Ok(Some(change))
     }
-    if change > 1e-8 {
-        return Ok(None);
+
+    fn try_step(&mut self) -> Result<f64, AssemblyError> {
+        Ok(self.change)
     }
-    let fixed = held(holds);
-    match solve(model, &q, &fixed, options) {
-        Ok(assembled) => Ok(Some(assembled)),
-        Err(AssemblyError::NoAssembly { .. }) => Ok(None),
-        Err(e) => Err(e),
+
+    fn accept(&mut self) {
+        for (q, step) in self.q.iter_mut().zip(&self.step) {
+            *q += step;
+        }
     }
 }
 

@@ -1,12 +1,21 @@
-//! The contacts of a mechanism (`join plane and ball with rolling(r)`, `sliding(r, f)`), their
-//! numbers evaluated, and the degrees of freedom they leave a tree: their rows in position and
-//! in velocity. The rows for the equations of motion and their solve are in
-//! `dynamics::contacts`.
+//! The contacts of a mechanism (`join plane and ball with rolling(r)`, `sliding(r, f)`, and a
+//! disc's `rolling_disc(r)`, `sliding_disc(r, f)`), their numbers evaluated, where each touches
+//! its plane, and the degrees of freedom they leave a tree: their rows in position and in
+//! velocity. The rows for the equations of motion and their solve are in `dynamics::contacts`.
+//!
+//! A sphere of centre C and radius r touches the plane of normal n at p = C − r n. A thin disc
+//! of centre C, axis a and radius r touches it at the lowest point of its rim, p = C − r u,
+//! with u = (n − (n·a) a)/s the unit vector of the disc's plane closest to n and
+//! s = |n − (n·a) a| = √(1 − (n·a)²) the sine of the disc's tilt from lying flat: its centre
+//! is at the height r s (O'Reilly, *Intermediate Dynamics for Engineers*, 2008, §9.5, the
+//! rolling disk). At s = 0 the disc lies flat and every point of its rim is lowest: the
+//! contact has no point there.
 
 use crate::diag::Diagnostic;
-use crate::elab::mechanism::Mechanism;
+use crate::elab::mechanism::{Mechanism, RoundShape};
 use crate::elab::value::BodyRef;
-use nalgebra::DMatrix;
+use crate::source::Span;
+use nalgebra::{DMatrix, Matrix3, Vector3};
 use serde::Serialize;
 
 use super::eval::eval;
@@ -33,8 +42,31 @@ pub struct ContactModel {
     pub round_body: usize,
     pub centre: Pose,
     pub radius: f64,
+    /// A sphere, or a disc whose axis is the z axis of `centre`.
+    pub shape: RoundShape,
     /// `None` for rolling without slipping; the Coulomb coefficient of a sliding contact.
     pub friction: Option<f64>,
+    /// Where its law (`rolling(...)`, …) is written.
+    pub span: Span,
+}
+
+/// Where a contact's round body touches its plane, in fixed axes.
+#[derive(Clone, Copy, Debug)]
+pub struct Touch {
+    /// The plane's axes: columns x, y (tangential) and its normal n.
+    pub axes: Matrix3<f64>,
+    pub centre: Vector3<f64>,
+    /// The unit vector from the centre towards the contact point: −n for a sphere, −u for a
+    /// disc (see the module's documentation).
+    pub down: Vector3<f64>,
+    /// The contact point, centre + r `down`.
+    pub point: Vector3<f64>,
+    /// The gap between the body and the plane: (C − O)·n − r for a sphere, (C − O)·n − r s
+    /// for a disc; zero when they touch.
+    pub gap: f64,
+    /// A disc's axis a (the z axis of its centre frame), and s, the sine of its tilt from lying
+    /// flat (0 flat, 1 upright); `None` for a sphere.
+    pub disc: Option<(Vector3<f64>, f64)>,
 }
 
 impl ContactModel {
@@ -44,6 +76,58 @@ impl ContactModel {
             None => &[0, 1, 2],
             Some(_) => &[2],
         }
+    }
+
+    /// Where the round body touches the plane, with `plane_body` and `round_body` the fixed-axes
+    /// poses of the contact's two bodies. A disc lying flat (s = 0) gives a NaN point.
+    pub fn touch(&self, plane_body: &Pose, round_body: &Pose) -> Touch {
+        let plane = plane_body * self.plane;
+        let centre_frame = round_body * self.centre;
+        let centre = centre_frame.translation.vector;
+        let axes = plane.rotation.to_rotation_matrix().into_inner();
+        let normal = axes.column(2).into_owned();
+        let height = (centre - plane.translation.vector).dot(&normal);
+        let (down, gap, disc) = match self.shape {
+            RoundShape::Sphere => (-normal, height - self.radius, None),
+            RoundShape::Disc => {
+                let axis = centre_frame.rotation * Vector3::z();
+                let in_plane = normal - normal.dot(&axis) * axis;
+                let sine = in_plane.norm();
+                let down = -in_plane / sine;
+                (down, height - self.radius * sine, Some((axis, sine)))
+            }
+        };
+        Touch {
+            axes,
+            centre,
+            down,
+            point: centre + self.radius * down,
+            gap,
+            disc,
+        }
+    }
+
+    /// The rate of `touch.down` (the contact point's rate is the centre's velocity plus r times
+    /// it), with `round_spin` and `plane_spin` the two bodies' angular velocities in fixed axes.
+    /// A sphere's turns with the plane; a disc's, u̇ = (ẇ − u (u·ẇ))/s for w = n − (n·a) a, with
+    /// ṅ = ω_plane × n and ȧ = ω_disc × a.
+    pub fn down_rate(
+        &self,
+        touch: &Touch,
+        round_spin: &Vector3<f64>,
+        plane_spin: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let normal = touch.axes.column(2).into_owned();
+        let normal_rate = plane_spin.cross(&normal);
+        let Some((axis, sine)) = touch.disc else {
+            return -normal_rate;
+        };
+        let axis_rate = round_spin.cross(&axis);
+        let cosine = normal.dot(&axis);
+        let cosine_rate = normal_rate.dot(&axis) + normal.dot(&axis_rate);
+        let in_plane_rate = normal_rate - cosine_rate * axis - cosine * axis_rate;
+        let up = -touch.down;
+        -(in_plane_rate - up * up.dot(&in_plane_rate)) / sine
     }
 }
 
@@ -138,7 +222,9 @@ pub fn contact_models(
             round_body,
             centre,
             radius,
+            shape: law.shape,
             friction,
+            span: law.span,
         });
     }
     contacts
@@ -183,12 +269,9 @@ fn contact_jacobians(
     let mut normal = Vec::new();
     let mut all = Vec::new();
     for contact in contacts {
-        let plane = configuration.poses[contact.plane_body] * contact.plane;
-        let centre = (configuration.poses[contact.round_body] * contact.centre)
-            .translation
-            .vector;
-        let axes = plane.rotation.to_rotation_matrix().into_inner();
-        let point = centre - contact.radius * axes.column(2);
+        let poses = &configuration.poses;
+        let touch = contact.touch(&poses[contact.plane_body], &poses[contact.round_body]);
+        let (axes, point) = (touch.axes, touch.point);
         let velocity_at = |body: usize, column: usize| {
             let twist = spatial::Motion::from_iterator(
                 configuration.jacobians[body].column(column).iter().copied(),

@@ -15,6 +15,7 @@ pub mod joint;
 pub mod mobility;
 pub mod model;
 pub mod penalty;
+pub mod sphere_on_disc;
 pub mod unknowns;
 
 pub use initial::initial_coordinates;

@@ -629,7 +629,10 @@ pub fn link_only(
     })
 }
 
-fn constant_vector(v: &[Scalar; 3], unknowns: &UnknownValues) -> Result<Vector3<f64>, EvalError> {
+pub fn constant_vector(
+    v: &[Scalar; 3],
+    unknowns: &UnknownValues,
+) -> Result<Vector3<f64>, EvalError> {
     let value = |s: &Scalar| {
         eval(s, unknowns).map_err(|e| match e {
             EvalError::NotGeometric("a coordinate of another link") => {

@@ -1,8 +1,9 @@
-//! Output: text renderings of reports, simulation samples (CSV, JSON) behind one writer, plots
+//! Output: text renderings of reports (a linearisation also for MATLAB), simulation samples (CSV, JSON) behind one writer, plots
 //! (the reports' JSON comes from their `Serialize` forms).
 
 pub mod csv;
 pub mod json;
+pub mod linearization;
 pub mod plot;
 pub mod precision_plot;
 pub mod sample_writer;

@@ -15,6 +15,7 @@ use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
 use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, UnknownId, Vector};
 use crate::kinematics::eval::{eval, UnknownValues};
 use crate::kinematics::model as kinematic_model;
+use crate::kinematics::sphere_on_disc::sphere_contacts_on_discs;
 pub use crate::kinematics::unknowns::Override;
 use crate::kinematics::unknowns::{constant, names_of, unknown_values};
 use crate::topology::{self, notation, Topology};
@@ -211,6 +212,11 @@ pub fn prepare(
             consistent.warnings,
         );
     }
+    warnings.extend(sphere_contacts_on_discs(
+        mechanism,
+        &kinematics,
+        &coordinates,
+    ));
     let settings = program_settings(mechanism, &model, defaults)?;
     let outputs = self::outputs::Outputs::compile(mechanism, &model)?;
     let coordinate_names = kinematics.coordinate_names();

@@ -46,6 +46,10 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
+    /// Generalised forces a caller sets from outside the program (one per state velocity),
+    /// added to the efforts' at every evaluation: the inputs of a linearisation
+    /// (`studies::linearize`).
+    inputs: Option<DVector<f64>>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -62,7 +66,19 @@ impl<'m> MechanicalSystem<'m> {
             scratch: Box::new(Scratch::new(model, stabilisation)),
             sampling: None,
             native: None,
+            inputs: None,
         }
+    }
+
+    /// Sets the generalised forces added to the program's efforts from now on (one per state
+    /// velocity; `None` for none). Their power counts as the power of non-conservative efforts.
+    pub fn set_inputs(&mut self, inputs: Option<DVector<f64>>) {
+        self.inputs = inputs;
+    }
+
+    /// Whether an evaluation computes efforts: the program applies some, or a caller set inputs.
+    fn reads_efforts(&self) -> bool {
+        self.model.has_efforts() || self.inputs.is_some()
     }
 
     /// Runs `evaluate` with the outputs' scratch in place of the integrator's: the outputs'
@@ -126,13 +142,19 @@ impl<'m> MechanicalSystem<'m> {
             coordinates: &state.coordinates,
             rates: &state.rates,
         };
-        Ok(evaluate_into(
+        evaluate_into(
             model,
             &mut self.scratch.data,
             &declared,
             t,
             &mut self.scratch.efforts,
-        )?)
+        )?;
+        if let Some(inputs) = &self.inputs {
+            let efforts = &mut self.scratch.efforts;
+            efforts.tau += inputs;
+            efforts.power += inputs.iter().zip(v).map(|(u, rate)| u * rate).sum::<f64>();
+        }
+        Ok(())
     }
 
     /// Whether this tree's accelerations come from its mass matrix ([`needs_mass_matrix`]).
@@ -155,10 +177,9 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         self.evaluate_efforts(t, q, v)?;
         if model.has_contacts() {
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
+            self.contact_rows_here(v, true)?;
         }
-        let efforts = match model.has_efforts() {
+        let efforts = match self.reads_efforts() {
             true => &self.scratch.efforts,
             false => &self.scratch.no_efforts,
         };
@@ -176,6 +197,24 @@ impl<'m> MechanicalSystem<'m> {
 
     /// Forms the response of a tree at the mass matrix in `mass`: M⁻¹, or S (SᵀMS)⁻¹ Sᵀ with S
     /// the basis of the velocities the mimic couplings allow.
+    /// The contacts' rows at the state whose kinematics the scratch holds, into its
+    /// `contact_state` (with γ when `with_bias`). A disc that lies flat, or passed lying flat
+    /// since the last rows, has no contact point: the run ends there.
+    pub(super) fn contact_rows_here(
+        &mut self,
+        v: &[f64],
+        with_bias: bool,
+    ) -> Result<(), SystemError> {
+        let state = &mut self.scratch.contact_state;
+        contacts::contact_rows_into(self.model, &mut self.scratch.data, v, with_bias, state);
+        match state.flat_disc {
+            Some(k) => Err(SystemError::DiscFlat {
+                contact: self.model.contacts[k].name.clone(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     fn form_tree_response(&mut self) -> Result<(), SystemError> {
         let formed = match self.model.mimics.is_empty() {
             true => self.scratch.response.on_tree(&self.scratch.mass),
@@ -334,7 +373,7 @@ impl<'m> MechanicalSystem<'m> {
             accelerations.copy_from(&self.scratch.loop_scratch.accelerations);
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
-        } else if model.has_efforts() {
+        } else if self.reads_efforts() {
             // ABA goes on from the kinematics the efforts were computed from.
             self.evaluate_efforts(t, q, v)?;
             let (tau, external) = (
@@ -368,10 +407,12 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        // The contacts, the couplings with loops and the coordinates held at rest, solved on the
-        // response together.
+        // The constraint stack's rows (`dynamics::rows`: the contacts, the couplings with loops,
+        // the coordinates held or driven), solved together on the response of the base solve
+        // above (the loops' block, or the tree's): the one place every evaluation of the run
+        // solves them.
         self.solve_rows(t, q, v, &mut accelerations)?;
-        let efforts = if model.has_efforts() || model.has_loops() || model.has_contacts() {
+        let efforts = if self.reads_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
         } else {
             &self.scratch.no_efforts

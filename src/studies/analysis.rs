@@ -15,6 +15,7 @@ use crate::kinematics::joint;
 use crate::kinematics::joint::{analyse, JointAnalysis};
 use crate::kinematics::mobility::{mobility, Mobility};
 use crate::kinematics::model::{self, KinematicModel};
+use crate::kinematics::sphere_on_disc::sphere_contacts_on_discs;
 use crate::kinematics::unknowns::{given_values, unknown_values, Override};
 use crate::topology::{self, notation, Topology};
 
@@ -275,7 +276,9 @@ pub fn assembled_model_with(
         residual: assembled.residual,
         moved,
     };
-    Ok((model, report, initial.warnings))
+    let mut warnings = initial.warnings;
+    warnings.extend(sphere_contacts_on_discs(mechanism, &model, &assembled.q));
+    Ok((model, report, warnings))
 }
 
 pub use joint::JointKind;

@@ -1,12 +1,13 @@
 //! The studies built on the mechanism and its runs: the dynamics at given states (`lsdc eval`,
 //! `batch`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
 //! precision and cost (`precision`), the `tree` and `assemble` reports (`analysis`), a
-//! point dragged along a path (`drag`), and the efforts along the program's drives
-//! (`inverse`).
+//! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`),
+//! and the linear model about an operating point (`linearize`).
 
 pub mod analysis;
 pub mod batch;
 pub mod drag;
 pub mod inverse;
+pub mod linearize;
 pub mod precision;
 pub mod statics;

@@ -92,8 +92,9 @@ pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holdi
     })
 }
 
-/// The state velocity of coordinate `join.coordinate`.
-fn velocity_index(prepared: &Prepared, name: &str) -> Result<usize, StaticsError> {
+/// The state velocity of coordinate `join.coordinate` (a coordinate in its own right: not a
+/// quaternion joint's angle).
+pub fn velocity_index(prepared: &Prepared, name: &str) -> Result<usize, StaticsError> {
     let model = &prepared.model;
     let Some(declared) = prepared.coordinate_names.iter().position(|n| n == name) else {
         let suggestion = crate::diag::suggest::did_you_mean(

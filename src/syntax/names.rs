@@ -29,4 +29,6 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "distance",
     "rolling",
     "sliding",
+    "rolling_disc",
+    "sliding_disc",
 ];

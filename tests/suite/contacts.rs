@@ -3,10 +3,9 @@
 //! of a ball rolling on a plane; γ (the rows' velocity-product term) against finite
 //! differences of the rows along the motion.
 
+use super::common::contact_rows::rows_along_motion;
 use super::common::programs::{example_text, mechanism};
 use lsdc::driver::compile_text;
-use lsdc::dynamics::algorithms::{forward_kinematics, Data};
-use lsdc::dynamics::contacts::contact_rows;
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run, Sample, Simulation};
@@ -243,32 +242,8 @@ fn the_contact_bias_is_the_rate_of_the_rows_along_the_motion() {
     let norm = q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt();
     q[3..7].iter_mut().for_each(|x| *x /= norm);
     let v = vec![0.4, -1.1, 0.3, 2.0, -3.0, 1.5];
-    let mut data = Data::new(model);
-    let rows_at = |q: &[f64], data: &mut Data, with_bias: bool| {
-        forward_kinematics(model, data, q, &v).expect("kinematics");
-        contact_rows(model, data, &v, with_bias)
-    };
-    let here = rows_at(&q, &mut data, true);
-    let h = 1e-5;
-    let moved = |sign: f64, data: &mut Data| {
-        let mut moved = q.clone();
-        let step: Vec<f64> = v.iter().map(|x| sign * h * x).collect();
-        model.retract(&mut moved, &step);
-        rows_at(&moved, data, false).velocity
-    };
-    let rate = (moved(1.0, &mut data) - moved(-1.0, &mut data)) / (2.0 * h);
-    assert!(
-        rate.rows(0, 3).norm() > 0.1,
-        "a state where the rows change: {rate}"
-    );
-    for row in 0..3 {
-        assert!(
-            (rate[row] - here.bias[row]).abs() < 1e-6 * (1.0 + rate[row].abs()),
-            "row {row}: {} against {}",
-            here.bias[row],
-            rate[row]
-        );
-    }
+    let rows = rows_along_motion(model, &q, &v, 1e-5);
+    rows.assert_bias_is_the_rate();
 }
 
 fn diagnostics_of(text: &str) -> Vec<String> {

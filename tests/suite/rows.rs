@@ -6,9 +6,12 @@
 //! the energy an impact takes from the reduced equations (a (1 − e²) share of the kinetic
 //! energy normal to the stop), and the same mechanism built without its redundant loop.
 
-use super::common::programs::{column, constraints, run_text};
+use super::common::programs::{column, constraints, mechanism, run_text};
 use super::stop_loops::{assert_impacts_take_normal_energy, assert_rolling, rolling_pendulum_with};
-use lsdc::prepare::{Integrator, Settings};
+use lsdc::dynamics::algorithms::{forward_kinematics, Data};
+use lsdc::dynamics::contacts::contact_rows;
+use lsdc::dynamics::rows::{HeldRow, Holder, RowStack};
+use lsdc::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{Sample, Simulation};
 
 /// The seed's gravity, and its incline.
@@ -474,4 +477,56 @@ fn a_mimic_a_contact_friction_and_a_loop_are_solved_together() {
         assert_closed(&simulation);
         assert!(simulation.report.friction_switches.is_empty());
     }
+}
+
+#[test]
+fn the_stack_values_are_its_rows_at_the_state() {
+    // The ball of `rolling_ball` (radius 0.05 on the plane z = 0) with its three contact rows,
+    // a coordinate held on a stop at 0.1 and one held by friction: the velocity values of each
+    // kind are its rows applied to the velocities (G v), and the position values the closed
+    // forms: the gap z − r, the held coordinate's distance to its bound, nothing for friction.
+    let prepared = prepare(&mechanism("rolling_ball", &[]), &[], &Settings::default())
+        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()));
+    let model = &prepared.model;
+    let mut q = vec![0.3, -0.2, 0.08, 0.5, -0.1, 0.3, 0.8];
+    let norm = q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt();
+    q[3..7].iter_mut().for_each(|x| *x /= norm);
+    let v = vec![0.4, -1.1, 0.3, 2.0, -3.0, 1.5];
+    let mut data = Data::new(model);
+    forward_kinematics(model, &mut data, &q, &v).expect("kinematics");
+    let all = contact_rows(model, &mut data, &v, false);
+    let held = [
+        HeldRow {
+            velocity: 0,
+            holder: Holder::Stop {
+                index: 0,
+                position: 0,
+                bound: 0.1,
+            },
+        },
+        HeldRow {
+            velocity: 4,
+            holder: Holder::Friction { index: 0 },
+        },
+    ];
+    let mut stack = RowStack::new(model);
+    stack.arrange(&[0, 1, 2], 0, &held);
+    stack.gather(&all, &model.mimics);
+    assert!(stack.velocity_values(&all, &model.mimics, &v));
+    let applied = stack.rows() * nalgebra::DVector::from_column_slice(&v);
+    let values = stack.values_mut().clone();
+    assert!(
+        (&values - &applied).amax() <= 1e-15 * applied.amax(),
+        "values {values} against G v {applied}"
+    );
+    stack.arrange(&[2], 0, &held);
+    stack.gather(&all, &model.mimics);
+    assert!(stack.position_values(model, &all, &q));
+    let values = stack.values_mut();
+    assert!(
+        (values[0] - (0.08 - 0.05)).abs() <= 1e-15,
+        "gap {}",
+        values[0]
+    );
+    assert_eq!((values[1], values[2]), (0.3 - 0.1, 0.0));
 }

@@ -34,6 +34,9 @@ pub enum SystemError {
     SingularStart { join: String, row: &'static str },
     /// The kept rows of the contacts stopped being independent: `row` of `contact`.
     SingularContact { contact: String, row: &'static str },
+    /// The disc of `contact` (`rolling_disc`, `sliding_disc`) lies flat on its plane, or passed
+    /// lying flat: every point of its rim is lowest, and the contact has no point.
+    DiscFlat { contact: String },
     /// An impact on a stop could not be resolved, or left a coordinate resting on its stop.
     Impact(String),
 }
@@ -89,6 +92,10 @@ impl fmt::Display for SystemError {
             SystemError::SingularContact { contact, row } => write!(
                 f,
                 "the contacts reached a singular configuration: the {row} row of `{contact}` is no longer independent of the other contacts' rows"
+            ),
+            SystemError::DiscFlat { contact } => write!(
+                f,
+                "the disc of the contact `{contact}` fell flat on its plane: every point of its rim touches it there, so the contact has no point and the motion beyond is an impact that rolling and sliding do not model"
             ),
             SystemError::Impact(message) => f.write_str(message),
             SystemError::AccelerationNotFinite { join, cause } => {

@@ -45,17 +45,8 @@ impl MechanicalSystem<'_> {
             (accelerations, external, Some(multipliers))
         } else if model.has_contacts() {
             let accelerations = self.solve_every_row(t, q, v)?;
-            let forces = &self.scratch.rows.contact_forces;
-            let on_bodies = contacts::contact_body_forces(
-                model,
-                &self.scratch.data,
-                &self.scratch.contact_state,
-                forces,
-            );
-            let external: Vec<_> = (self.scratch.efforts.external.iter().zip(&on_bodies))
-                .map(|(a, b)| a + b)
-                .collect();
-            let forces = contacts::contact_reactions(forces);
+            let forces = self.contact_forces_among_efforts();
+            let external = self.scratch.efforts.external.clone();
             (accelerations, external, Some(forces))
         } else {
             // The accelerations of the run's own equations: with the geared rotors, the mimic
@@ -106,6 +97,22 @@ impl MechanicalSystem<'_> {
         Ok(reactions)
     }
 
+    /// The contacts' forces of the last solve (`holding`) added to the efforts' external forces
+    /// (they act on the bodies); their reactions (`contacts::contact_reactions`).
+    fn contact_forces_among_efforts(&mut self) -> DVector<f64> {
+        let forces = &self.scratch.rows.contact_forces;
+        let on_bodies = contacts::contact_body_forces(
+            self.model,
+            &self.scratch.data,
+            &self.scratch.contact_state,
+            forces,
+        );
+        for (external, force) in self.scratch.efforts.external.iter_mut().zip(&on_bodies) {
+            *external += force;
+        }
+        contacts::contact_reactions(forces)
+    }
+
     /// Solves a mechanism with loops at (t, q, v) for its reactions: the accelerations and the
     /// loops' multipliers left in the loops' scratch, the rows' forces among the efforts, the
     /// forward kinematics of (q, v) in `data`; with contacts, their reactions
@@ -118,24 +125,11 @@ impl MechanicalSystem<'_> {
     ) -> Result<Option<DVector<f64>>, SystemError> {
         let model = self.model;
         let accelerations = self.solve_every_row(t, q, v)?;
-        let touching = match model.has_contacts() {
-            true => {
-                let forces = &self.scratch.rows.contact_forces;
-                let on_bodies = contacts::contact_body_forces(
-                    model,
-                    &self.scratch.data,
-                    &self.scratch.contact_state,
-                    forces,
-                );
-                for (external, force) in self.scratch.efforts.external.iter_mut().zip(&on_bodies) {
-                    *external += force;
-                }
-                Some(contacts::contact_reactions(forces))
-            }
-            false => None,
-        };
+        let touching = model
+            .has_contacts()
+            .then(|| self.contact_forces_among_efforts());
         // `solve_rows` left the stack as it was when no row applied at this state.
-        if self.coupling_count() > 0 || !model.drives.is_empty() || !self.scratch.held.is_empty() {
+        if self.coupling_count() > 0 || !self.scratch.held.is_empty() {
             self.scratch
                 .rows
                 .add_coordinate_forces(&model.mimics, &mut self.scratch.efforts.tau);

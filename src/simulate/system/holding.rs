@@ -1,11 +1,10 @@
 //! The rows an evaluation solves on the response X after the base solve (`rows::RowStack`): the
-//! contacts' kept rows, the mimic couplings with closed loops, the driven coordinates (their
-//! laws' accelerations at t, the drives' efforts recorded with their power), and the
-//! coordinates held at rest,
-//! on their stops (resting on a bound) or stuck by their friction, each a unit row eₖᵀ a = 0
-//! with a force μₖ along the coordinate. Whatever the mechanism (a tree, closed loops, contacts
-//! or both), they are solved together in one saddle-point system; the held forces are recorded
-//! for the events (`contact`, `holding`).
+//! contacts' kept rows, the mimic couplings with closed loops, and the coordinates held: driven
+//! by their laws (eₖᵀ a = d̈ₖ(t)), on their stops (resting on a bound) or stuck by their
+//! friction (eₖᵀ a = 0), each with a force μₖ along the coordinate. Whatever the mechanism (a
+//! tree, closed loops, contacts or both), they are solved together in one saddle-point system;
+//! the held forces are handed back to what holds them: the events' (`contact`, `holding`) and
+//! the drives' efforts, with their power (the work a drive does counts in the energy balance).
 
 use nalgebra::DVector;
 
@@ -13,6 +12,7 @@ use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::contacts;
 use crate::dynamics::friction::Phase;
+use crate::dynamics::rows::{HeldRow, Holder};
 use crate::dynamics::stops::Side;
 
 impl MechanicalSystem<'_> {
@@ -27,30 +27,22 @@ impl MechanicalSystem<'_> {
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
         let model = self.model;
-        self.gather_held();
+        self.gather_held(t);
         let couplings = self.coupling_count();
-        let driven = !model.drives.is_empty();
-        if !model.has_contacts() && couplings == 0 && !driven && self.scratch.held.is_empty() {
+        if !model.has_contacts() && couplings == 0 && self.scratch.held.is_empty() {
             return Ok(());
         }
         self.form_response_at(q)?;
         if model.has_contacts() && model.has_loops() {
             // The loops' solve leaves the kinematics for its own rows: the contacts' start anew.
             forward_kinematics(model, &mut self.scratch.data, q, v)?;
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, true, state);
+            self.contact_rows_here(v, true)?;
         }
         self.decide_contact_rows();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
-        let (rows, values) = (&mut self.scratch.rows, &mut self.scratch.law_values);
-        rows.arrange(kept, couplings, &self.scratch.driven, &self.scratch.held);
+        let rows = &mut self.scratch.rows;
+        rows.arrange(kept, couplings, &self.scratch.held);
         rows.gather(&self.scratch.contact_state, &model.mimics);
-        rows.prescribe(
-            model
-                .drives
-                .iter()
-                .map(|d| d.evaluate(t, values).acceleration),
-        );
         let solved = (self.scratch.rows).solve(
             model,
             &self.scratch.contact_state,
@@ -65,21 +57,8 @@ impl MechanicalSystem<'_> {
         let forces = &self.scratch.rows.contact_forces;
         self.scratch.efforts.power +=
             contacts::friction_power(model, &self.scratch.contact_state, forces);
-        self.record_holding();
-        self.record_drives(v);
+        self.record_holding(v);
         Ok(())
-    }
-
-    /// The drives' efforts of the last solve, and their power (the work a drive does on the
-    /// mechanism counts in its energy balance).
-    fn record_drives(&mut self, v: &[f64]) {
-        let forces = self.scratch.rows.drive_forces();
-        self.scratch.drive_efforts.copy_from_slice(forces);
-        let power: f64 = (self.scratch.driven.iter())
-            .zip(forces)
-            .map(|(&velocity, force)| force * v[velocity])
-            .sum();
-        self.scratch.drive_power = power;
     }
 
     /// The mimic couplings solved as rows: with closed loops (a tree's response keeps them).
@@ -90,19 +69,32 @@ impl MechanicalSystem<'_> {
         }
     }
 
-    /// The velocities held at rest into `held`: the resting stops', then the sticking joints'.
-    pub(super) fn gather_held(&mut self) {
+    /// The coordinates held at time `t` into `held`: the driven ones' (their laws evaluated at
+    /// t), then the resting stops', then the sticking joints'.
+    pub(super) fn gather_held(&mut self, t: f64) {
         let model = self.model;
-        self.scratch.held.clear();
-        let stops = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
-        self.scratch
-            .held
-            .extend(stops.map(|k| model.stops[k].velocity));
+        let mut held = std::mem::take(&mut self.scratch.held);
+        held.clear();
+        let values = &mut self.scratch.law_values;
+        held.extend(
+            (model.drives.iter().enumerate())
+                .map(|(index, drive)| HeldRow::driven(index, drive, drive.evaluate(t, values))),
+        );
+        held.extend(self.resting_stop_rows());
         let frictions =
             (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
-        self.scratch
-            .held
-            .extend(frictions.map(|k| model.frictions[k].velocity));
+        held.extend(frictions.map(|index| HeldRow {
+            velocity: model.frictions[index].velocity,
+            holder: Holder::Friction { index },
+        }));
+        self.scratch.held = held;
+    }
+
+    /// The held rows of the stops the run's coordinates rest on.
+    pub(super) fn resting_stop_rows(&self) -> impl Iterator<Item = HeldRow> + '_ {
+        let model = self.model;
+        let resting = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
+        resting.map(|index| HeldRow::on_stop(index, &model.stops[index]))
     }
 
     /// The contact rows of the run, decided at the first state evaluated (from the contacts'
@@ -124,24 +116,34 @@ impl MechanicalSystem<'_> {
             .extend(kept.iter().copied().filter(|r| r % 3 == 2));
     }
 
-    /// The held forces of the last solve, in the order of the held rows (the resting stops,
-    /// then the sticking frictions), into each stop's contact force (positive while it pushes)
-    /// and each friction's holding force.
-    fn record_holding(&mut self) {
+    /// The driven coordinates' rows among the held ones (`gather_held` puts them first).
+    pub(super) fn drive_rows(&self) -> &[HeldRow] {
+        &self.scratch.held[..self.model.drives.len()]
+    }
+
+    /// The held forces of the last solve, in the order of the held rows, into each drive's
+    /// effort (with their power at the velocities `v`), each stop's contact force (positive
+    /// while it pushes) and each friction's holding force.
+    fn record_holding(&mut self, v: &[f64]) {
         let model = self.model;
-        let mut forces = self.scratch.rows.held_forces().iter();
-        let stops = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
-        for (k, force) in stops.zip(forces.by_ref()) {
-            // A lower stop pushes the coordinate up, an upper one down.
-            self.scratch.contact[k] = match model.stops[k].side {
-                Side::Lower => *force,
-                Side::Upper => -*force,
-            };
-        }
-        let frictions =
-            (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
-        for (k, force) in frictions.zip(forces) {
-            self.scratch.holding[k] = *force;
+        self.scratch.drive_power = 0.0;
+        for (row, force) in self.scratch.rows.held_forces() {
+            match row.holder {
+                Holder::Drive { index, .. } => {
+                    self.scratch.drive_efforts[index] = force;
+                    self.scratch.drive_power += force * v[row.velocity];
+                }
+                // A lower stop pushes the coordinate up, an upper one down.
+                Holder::Stop { index, .. } => {
+                    self.scratch.contact[index] = match model.stops[index].side {
+                        Side::Lower => force,
+                        Side::Upper => -force,
+                    }
+                }
+                Holder::Friction { index } => self.scratch.holding[index] = force,
+                // An impact's row is solved at its event, never among an evaluation's rows.
+                Holder::Impact { .. } => {}
+            }
         }
     }
 

@@ -90,8 +90,9 @@ impl MechanicalSystem<'_> {
         }
         let mut response = DMatrix::zeros(nv, 2 * nv);
         self.scratch.response.apply(&differences, &mut response);
-        // The coordinates held at rest keep their accelerations zero, whatever the state.
-        self.gather_held();
+        // The coordinates held keep their accelerations (zero at rest, d̈(t) when driven),
+        // whatever the state.
+        self.gather_held(t);
         if !self.scratch.held.is_empty() {
             self.subtract_held_change(&mut response);
         }
@@ -108,19 +109,20 @@ impl MechanicalSystem<'_> {
     /// and its friction) are set aside as the run's solve sets them aside (`rows`).
     fn subtract_held_change(&mut self, columns: &mut DMatrix<f64>) {
         let nv = self.model.nv;
-        let mut units = DMatrix::zeros(nv, self.scratch.held.len());
-        for (i, &k) in self.scratch.held.iter().enumerate() {
+        let held: Vec<usize> = self.scratch.held.iter().map(|h| h.velocity).collect();
+        let mut units = DMatrix::zeros(nv, held.len());
+        for (i, &k) in held.iter().enumerate() {
             units[(k, i)] = 1.0;
         }
-        let mut moved = DMatrix::zeros(nv, self.scratch.held.len());
+        let mut moved = DMatrix::zeros(nv, held.len());
         self.scratch.response.apply(&units, &mut moved);
         // Scaled symmetrically, D (E X Eᵀ) D with D of powers of two, for the reason `Pivoted`
         // scales the run's rows: a held angle of a light rotor beside a heavy slider's.
-        let scales: Vec<f64> = (self.scratch.held.iter().enumerate())
+        let scales: Vec<f64> = (held.iter().enumerate())
             .map(|(i, &k)| inverse_power_of_two(moved[(k, i)].abs().sqrt()))
             .collect();
-        let mut coupling = moved.select_rows(&self.scratch.held);
-        let mut held_rows = columns.select_rows(&self.scratch.held);
+        let mut coupling = moved.select_rows(&held);
+        let mut held_rows = columns.select_rows(&held);
         for (i, &scale) in scales.iter().enumerate() {
             coupling.row_mut(i).scale_mut(scale);
             coupling.column_mut(i).scale_mut(scale);
@@ -145,7 +147,7 @@ impl MechanicalSystem<'_> {
     fn residual(&mut self, t: f64, y: &[f64], a: &[f64]) -> Result<Residual, SystemError> {
         let model = self.model;
         let (q, v) = y.split_at(model.nq);
-        let efforts = if model.has_efforts() {
+        let efforts = if self.reads_efforts() {
             self.evaluate_efforts(t, q, v)?;
             &self.scratch.efforts
         } else {

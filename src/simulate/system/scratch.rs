@@ -13,7 +13,7 @@ use crate::dynamics::loops::{LoopScratch, ProjectionScratch, Stabilisation};
 use crate::dynamics::mimics;
 use crate::dynamics::model::{DeclaredState, Model};
 use crate::dynamics::response::Response;
-use crate::dynamics::rows::RowStack;
+use crate::dynamics::rows::{HeldRow, RowStack};
 use crate::simulate::constraints::LoopMonitor;
 
 pub struct Scratch {
@@ -54,16 +54,16 @@ pub struct Scratch {
     pub(in crate::simulate) response: Response,
     pub(in crate::simulate) response_here: bool,
     /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
-    /// loops, coordinates held at rest), and in the projections onto the velocity rows and onto
-    /// the position rows; the velocities held at the evaluation; a step of the velocities.
+    /// loops, coordinates held or driven), and in the projections onto the velocity rows and
+    /// onto the position rows; the coordinates held at the evaluation (the drives' first); a
+    /// step of the velocities.
     pub(in crate::simulate) rows: RowStack,
     pub(in crate::simulate) velocity_stack: RowStack,
     pub(in crate::simulate) position_stack: RowStack,
-    pub(in crate::simulate) held: Vec<usize>,
+    pub(in crate::simulate) held: Vec<HeldRow>,
     pub(in crate::simulate) step: DVector<f64>,
-    /// The driven velocities (`Model::drives`), and the effort that imposed each at the last
-    /// evaluation (the drives' multipliers).
-    pub(in crate::simulate) driven: Vec<usize>,
+    /// Per drive (`Model::drives`), the effort that imposed it at the last evaluation (its
+    /// held row's multiplier), and their power then.
     pub drive_efforts: Vec<f64>,
     pub(in crate::simulate) drive_power: f64,
     /// Where the drives' laws are evaluated.
@@ -103,9 +103,10 @@ impl Scratch {
             rows: RowStack::new(model),
             velocity_stack: RowStack::new(model),
             position_stack: RowStack::new(model),
-            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            held: Vec::with_capacity(
+                model.drives.len() + model.stops.len() + model.frictions.len(),
+            ),
             step: DVector::zeros(model.velocities()),
-            driven: model.drives.iter().map(|d| d.velocity).collect(),
             drive_efforts: vec![0.0; model.drives.len()],
             drive_power: 0.0,
             law_values: Vec::new(),

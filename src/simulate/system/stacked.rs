@@ -5,14 +5,13 @@
 //! closed by Newton steps of least kinetic metric along X Gᵀ (along the loops and the tree's
 //! couplings to first order), each followed by the loops' projection; then the velocities are
 //! projected along X onto every kept row (the rolling rows, not integrable, on velocities only)
-//! and onto the rates held at rest (a joint stuck by its friction, a stop's resting
-//! coordinate): the loops' velocity rows and a tree's couplings stay kept, since G X = 0 for
-//! them.
+//! and onto the rates held (a driven coordinate's law's rate at t; at rest, a joint stuck by
+//! its friction, a stop's resting coordinate): the loops' velocity rows and a tree's couplings
+//! stay kept, since G X = 0 for them.
 
 use super::{MechanicalSystem, SystemError};
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
 use crate::dynamics::algorithms::{crba_after_kinematics, forward_kinematics};
-use crate::dynamics::contacts;
 use crate::dynamics::loops::{self, Wanted};
 
 /// Newton steps at most that close the position rows.
@@ -26,12 +25,6 @@ const STACKED: Settings = Settings {
     acceptance: Acceptance::EveryStep,
     progress: Progress::Any,
 };
-
-/// Relative size of a coupling's violation below which it is not corrected.
-const COUPLING_ROUND_OFF: f64 = 1e-13;
-
-/// Relative size of a contact's gap (to the largest radius) below which it is not corrected.
-const GAP_ROUND_OFF: f64 = 1e-15;
 
 impl MechanicalSystem<'_> {
     /// Keeps the contacts' rows and the couplings solved as rows in the state y (see the
@@ -63,6 +56,7 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         let positions = model.positions();
         self.split_into(y, q, v);
+        self.gather_held(t);
         let open = self.stacked_rows_at(t, q, v, couplings)?;
         let largest = self.scratch.position_stack.values_mut().amax();
         let mut steps = StackedSteps {
@@ -76,31 +70,12 @@ impl MechanicalSystem<'_> {
             largest,
         };
         let moved = correct(&mut steps, &STACKED)?.accepted > 0;
-        self.gather_held();
+        self.gather_held(t);
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
         let stack = &mut self.scratch.velocity_stack;
-        stack.arrange(kept, couplings, &self.scratch.driven, &self.scratch.held);
+        stack.arrange(kept, couplings, &self.scratch.held);
         stack.gather(&self.scratch.contact_state, &model.mimics);
-        let rates = stack.values_mut();
-        let (g, state) = (&self.scratch.contact_state, &v[..]);
-        for (i, &row) in kept.iter().enumerate() {
-            rates[i] = g.velocity[row];
-        }
-        let mimics = model.mimics.iter().take(couplings);
-        for (i, mimic) in mimics.enumerate() {
-            let rate = state[mimic.velocity] - mimic.multiplier * state[mimic.leader_velocity];
-            rates[kept.len() + i] = rate;
-        }
-        let first = kept.len() + couplings;
-        for (i, drive) in model.drives.iter().enumerate() {
-            let law = drive.evaluate(t, &mut self.scratch.law_values);
-            rates[first + i] = state[drive.velocity] - law.rate;
-        }
-        let first = first + model.drives.len();
-        for (i, &velocity) in self.scratch.held.iter().enumerate() {
-            rates[first + i] = state[velocity];
-        }
-        let off = stack.values_mut().amax() > 0.0;
+        let off = stack.velocity_values(&self.scratch.contact_state, &model.mimics, v);
         stack.add_least_change(&mut self.scratch.response, v);
         y[positions..].copy_from_slice(v);
         Ok(moved || off)
@@ -117,14 +92,11 @@ impl MechanicalSystem<'_> {
     ) -> Result<bool, SystemError> {
         self.stacked_geometry(t, q, v)?;
         let stack = &mut self.scratch.position_stack;
-        stack.arrange(
-            &self.scratch.normal_rows,
-            couplings,
-            &self.scratch.driven,
-            &[],
-        );
+        // The held rows with a position are the stops' (kept by `stop_rows`) and the drives'.
+        let drives = &self.scratch.held[..self.model.drives.len()];
+        stack.arrange(&self.scratch.normal_rows, couplings, drives);
         stack.gather(&self.scratch.contact_state, &self.model.mimics);
-        Ok(self.fill_position_values(t, q))
+        Ok(stack.position_values(self.model, &self.scratch.contact_state, q))
     }
 
     /// The positions and velocities of y into `q` (quaternions at unit length) and `v`.
@@ -134,41 +106,14 @@ impl MechanicalSystem<'_> {
         v.extend_from_slice(rates);
     }
 
-    /// The position rows' values into the position stack (the gaps of its contact rows, then
-    /// the couplings' violations at q, then the driven coordinates' distances to their laws at
-    /// t); false when all are at round-off.
-    fn fill_position_values(&mut self, t: f64, q: &[f64]) -> bool {
-        let model = self.model;
-        let size = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
-        let gaps = self.scratch.normal_rows.len();
-        let values = self.scratch.position_stack.values_mut();
-        let mut open = false;
-        for (i, &row) in self.scratch.normal_rows.iter().enumerate() {
-            values[i] = self.scratch.contact_state.gap[row / 3];
-            open |= values[i].abs() > GAP_ROUND_OFF * size;
-        }
-        let couplings = values.len() - gaps - model.drives.len();
-        let scale = 1.0
-            + (model.mimics.iter().take(couplings))
-                .map(|m| q[m.position].abs())
-                .fold(0.0, f64::max);
-        for (i, mimic) in model.mimics.iter().take(couplings).enumerate() {
-            values[gaps + i] = mimic.violation(q);
-            open |= values[gaps + i].abs() > COUPLING_ROUND_OFF * scale;
-        }
-        let first = gaps + couplings;
-        for (i, drive) in model.drives.iter().enumerate() {
-            let law = drive.evaluate(t, &mut self.scratch.law_values).position;
-            values[first + i] = q[drive.position] - law;
-            let scale = 1.0 + law.abs();
-            open |= values[first + i].abs() > COUPLING_ROUND_OFF * scale;
-        }
-        open
-    }
-
     /// At (q, v): the loops' allowed motions (a constrained solve), the contacts' rows without
     /// γ, the response X and the contact rows of the run decided if they were not.
-    fn stacked_geometry(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+    pub(super) fn stacked_geometry(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SystemError> {
         let model = self.model;
         self.scratch.response_here = false;
         if model.has_loops() {
@@ -181,8 +126,7 @@ impl MechanicalSystem<'_> {
             self.form_tree_response()?;
         }
         if model.has_contacts() {
-            let state = &mut self.scratch.contact_state;
-            contacts::contact_rows_into(model, &mut self.scratch.data, v, false, state);
+            self.contact_rows_here(v, false)?;
         }
         self.decide_contact_rows();
         Ok(())

@@ -1,7 +1,7 @@
 //! Stops in a mechanism with closed loops, contacts or mimic couplings: a stop is one more row
-//! of the constraints, unilateral. At an impact its row joins every other row (the loops', the
-//! contacts', the couplings') in the impulse's saddle-point system (restitution on the stop's
-//! row alone, the other rows brought to zero velocity, `stops::impact_velocities`); while its
+//! of the constraints, unilateral. At an impact its row joins the constraint stack, solved on
+//! the response that keeps the loops (restitution on the stop's row alone, the stack's other
+//! rows brought to zero velocity, `rows::impact_velocities`); while its
 //! coordinate rests on it, it is an active bilateral row: its acceleration is held at zero with
 //! the other rows kept (`holding`), and after each step the positions are brought back onto the
 //! other rows' position constraints and the bound together, the velocities onto all the rows.
@@ -18,14 +18,10 @@ use crate::dynamics::algorithms::{crba, forward_kinematics};
 use crate::dynamics::contacts::{self, holonomic_rows};
 use crate::dynamics::loops::basis::SOLVE_TOLERANCE;
 use crate::dynamics::loops::{self, decompose, Extent};
-use crate::dynamics::mimics;
+use crate::dynamics::rows::{HeldRow, BOUND_ROUND_OFF};
 
 /// Newton steps at most when moving the positions onto the rows and the bounds.
 const NEWTON_ITERATIONS: usize = 8;
-
-/// A stop's row within this of its bound (relative to max(1, |bound|)) after the positions'
-/// Newton steps is at round-off.
-const SNAP: f64 = 1e-14;
 
 /// Gauss–Newton onto the rows and the bounds: a step kept while it reduces the largest residual.
 const ON_BOUNDS: Settings = Settings {
@@ -42,25 +38,6 @@ struct Rows {
 }
 
 impl MechanicalSystem<'_> {
-    /// The mass matrix over the state's velocities (the complementary links' coordinates carry
-    /// no inertia) and the constraint rows kept through an impact at (q, v), dense
-    /// (`velocity_rows`; None without any). Leaves the forward kinematics of (q, v) in `data`.
-    pub(in crate::simulate) fn impact_system(
-        &mut self,
-        q: &[f64],
-        v: &[f64],
-    ) -> Result<(DMatrix<f64>, Option<DMatrix<f64>>), SystemError> {
-        let model = self.model;
-        let mass = loops::structure::full_mass(&crba(model, &mut self.scratch.data, q)?, v.len());
-        let constrained = model.has_loops() || model.has_contacts() || !model.mimics.is_empty();
-        let rows = match constrained {
-            true => Some(self.velocity_rows(q, v)?),
-            false => None,
-        };
-        forward_kinematics(model, &mut self.scratch.data, q, v)?;
-        Ok((mass, rows))
-    }
-
     /// Brings a state back onto the rows and the bounds of the resting stops together, after
     /// the loops' or the contacts' own projection: Gauss–Newton on the positions with
     /// minimum-norm steps on the rows' position constraints and qₖ = bound, then the velocities'
@@ -80,8 +57,8 @@ impl MechanicalSystem<'_> {
         let before = y.to_vec();
         self.close_on_bounds(y, &resting)?;
         let (q, v) = model.split_state(y);
-        let mut rows = self.velocity_rows(&q, v)?;
-        rows = stack_units(&rows, resting.iter().map(|&k| model.stops[k].velocity));
+        let held: Vec<HeldRow> = self.resting_stop_rows().collect();
+        let rows = self.velocity_rows(&q, v, &held)?;
         let velocity = DVector::from_column_slice(v);
         let projected = &velocity - decompose(&rows).pseudo_inverse * (&rows * &velocity);
         let positions = model.positions();
@@ -116,7 +93,8 @@ impl MechanicalSystem<'_> {
         // (a change at round-off, which leaves the other rows closed), so that the stop's event
         // function starts the next step at zero, not below it where its crossing would be missed.
         for stop in stops.iter().map(|&k| &model.stops[k]) {
-            if (q[stop.position] - stop.bound).abs() <= SNAP * stop.bound.abs().max(1.0) {
+            let snap = BOUND_ROUND_OFF * stop.bound.abs().max(1.0);
+            if (q[stop.position] - stop.bound).abs() <= snap {
                 q[stop.position] = stop.bound;
             }
         }
@@ -125,8 +103,8 @@ impl MechanicalSystem<'_> {
     }
 
     /// Every position constraint at q, with its Jacobian over the velocities: the loops' kept
-    /// rows, the contacts' kept normal rows (their gaps), the mimic couplings' violations, then
-    /// the stops' rows qₖ − bound.
+    /// rows, then the constraint stack's (`rows`) of the contacts' kept normal rows (their
+    /// gaps), every mimic coupling and the bounds of the stops `stops`, qₖ − bound.
     fn position_rows(
         &mut self,
         q: &[f64],
@@ -144,43 +122,40 @@ impl MechanicalSystem<'_> {
             let residual = DVector::from_iterator(kept.len(), kept.iter().map(|&r| c.residual[r]));
             rows.stack(residual, self.loop_kept_rows(&c.jacobian.dense()));
         }
-        if model.has_contacts() {
-            let all = self.contact_rows_at(q, v)?;
-            let normal = holonomic_rows(&self.contact_rows_kept());
-            let residual = normal.iter().map(|&r| all.gap[r / 3]);
-            let residual = DVector::from_iterator(normal.len(), residual);
-            rows.stack(residual, all.jacobian.select_rows(&normal));
-        }
-        let violations = model.mimics.iter().map(|m| m.violation(q));
-        let residual = DVector::from_iterator(model.mimics.len(), violations);
-        rows.stack(residual, mimics::rows(&model.mimics, model.velocities()));
-        let stop_rows = stops.iter().map(|&k| &model.stops[k]);
-        let units = stack_units(
-            &DMatrix::zeros(0, model.velocities()),
-            stop_rows.clone().map(|s| s.velocity),
-        );
-        let offsets = stop_rows.map(|s| q[s.position] - s.bound);
-        rows.stack(DVector::from_iterator(stops.len(), offsets), units);
+        let all = self.contact_rows_at(q, v)?;
+        let normal = holonomic_rows(&self.contact_rows_kept());
+        let held: Vec<HeldRow> = (stops.iter())
+            .map(|&index| HeldRow::on_stop(index, &model.stops[index]))
+            .collect();
+        let stack = &mut self.scratch.position_stack;
+        stack.arrange(&normal, model.mimics.len(), &held);
+        stack.gather(&all, &model.mimics);
+        stack.position_values(model, &all, q);
+        rows.stack(stack.values_mut().clone(), stack.rows().clone());
         Ok(rows)
     }
 
     /// Every velocity row at (q, v), dense over the state's velocities: the loops' kept rows,
-    /// the contacts' kept rows and the mimic couplings.
-    fn velocity_rows(&mut self, q: &[f64], v: &[f64]) -> Result<DMatrix<f64>, SystemError> {
+    /// then the constraint stack's (`rows`) of the contacts' kept rows, every mimic coupling
+    /// and the coordinates `held`.
+    fn velocity_rows(
+        &mut self,
+        q: &[f64],
+        v: &[f64],
+        held: &[HeldRow],
+    ) -> Result<DMatrix<f64>, SystemError> {
         let model = self.model;
         let mut rows = DMatrix::zeros(0, model.velocities());
         if model.has_loops() {
             let c = self.loop_rows_at(q, v)?;
             rows = self.loop_kept_rows(&c.jacobian.dense());
         }
-        if model.has_contacts() {
-            let all = self.contact_rows_at(q, v)?;
-            rows = stack(&rows, &all.jacobian.select_rows(&self.contact_rows_kept()));
-        }
-        Ok(stack(
-            &rows,
-            &mimics::rows(&model.mimics, model.velocities()),
-        ))
+        let all = self.contact_rows_at(q, v)?;
+        let kept = self.contact_rows_kept();
+        let stack = &mut self.scratch.velocity_stack;
+        stack.arrange(&kept, model.mimics.len(), held);
+        stack.gather(&all, &model.mimics);
+        Ok(stack_below(&rows, stack.rows()))
     }
 
     /// The loops' rows at (q, v).
@@ -196,15 +171,18 @@ impl MechanicalSystem<'_> {
         )?)
     }
 
-    /// The contacts' rows at (q, v). The contact rows of the run are decided by the first
-    /// evaluation; a state evaluated here first keeps those independent on the tree (M⁻¹) or,
-    /// with loops, every candidate row.
+    /// The contacts' rows at (q, v) (none without contacts). The contact rows of the run are
+    /// decided by the first evaluation; a state evaluated here first keeps those independent
+    /// on the tree (M⁻¹) or, with loops, every candidate row.
     fn contact_rows_at(
         &mut self,
         q: &[f64],
         v: &[f64],
     ) -> Result<contacts::ContactRows, SystemError> {
         let model = self.model;
+        if !model.has_contacts() {
+            return Ok(contacts::ContactRows::new(model));
+        }
         forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let rows = contacts::contact_rows(model, &mut self.scratch.data, v, false);
         if self.state.contact_rows.is_none() {
@@ -301,28 +279,16 @@ impl Rows {
     fn stack(&mut self, residual: DVector<f64>, jacobian: DMatrix<f64>) {
         let values = self.residual.iter().chain(residual.iter()).copied();
         self.residual = DVector::from_iterator(self.residual.len() + residual.len(), values);
-        self.jacobian = stack(&self.jacobian, &jacobian);
+        self.jacobian = stack_below(&self.jacobian, &jacobian);
     }
 }
 
 /// `upper` with the rows of `lower` below.
-fn stack(upper: &DMatrix<f64>, lower: &DMatrix<f64>) -> DMatrix<f64> {
+fn stack_below(upper: &DMatrix<f64>, lower: &DMatrix<f64>) -> DMatrix<f64> {
     let mut stacked = DMatrix::zeros(upper.nrows() + lower.nrows(), upper.ncols());
     stacked.rows_mut(0, upper.nrows()).copy_from(upper);
     stacked
         .rows_mut(upper.nrows(), lower.nrows())
         .copy_from(lower);
-    stacked
-}
-
-/// `rows` with one more unit row per velocity of `units`.
-fn stack_units(rows: &DMatrix<f64>, units: impl Iterator<Item = usize>) -> DMatrix<f64> {
-    let units: Vec<usize> = units.collect();
-    let mut stacked = rows
-        .clone()
-        .resize_vertically(rows.nrows() + units.len(), 0.0);
-    for (i, &k) in units.iter().enumerate() {
-        stacked[(rows.nrows() + i, k)] = 1.0;
-    }
     stacked
 }

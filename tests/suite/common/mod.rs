@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod contact_rows;
 pub mod programs;
 pub mod symbolic;
 pub mod trees;
