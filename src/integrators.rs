@@ -29,6 +29,8 @@ pub enum Feature {
     Mimics,
     /// Joints' dry and viscous friction.
     Friction,
+    /// Coordinates imposed as laws of time (`drive`).
+    Drives,
 }
 
 impl Feature {
@@ -40,6 +42,7 @@ impl Feature {
             Feature::GearedRotors => "geared rotors",
             Feature::Mimics => "mimic joints",
             Feature::Friction => "joint friction",
+            Feature::Drives => "drives (`drive`)",
         }
     }
 }
@@ -101,6 +104,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
             Feature::GearedRotors,
             Feature::Mimics,
             Feature::Friction,
+            Feature::Drives,
         ],
     },
 ];

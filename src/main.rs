@@ -50,6 +50,10 @@ enum Command {
     /// The efforts actuators must apply along the given coordinates to hold the mechanism at
     /// rest in its initial (assembled) configuration.
     Statics(statics::StaticsArgs),
+    /// Inverse dynamics along the program's drives (`drive crank.q = law;`, every degree of
+    /// freedom driven): the efforts that impose them, the power and, with `--reactions`, every
+    /// join's reaction; CSV or JSON.
+    Inverse(inverse::InverseArgs),
     /// The linear model (A, B, C, D) of the mechanism about its initial state, a run's state
     /// at a time or an equilibrium, in independent coordinates; eigenvalues and modes.
     Linearize(linearize::LinearizeArgs),
@@ -104,6 +108,7 @@ fn main() -> ExitCode {
         Command::Drag(args) => drag::run(&args),
         Command::View(args) => view::run(&args),
         Command::Statics(args) => statics::run(&args),
+        Command::Inverse(args) => inverse::run(&args),
         Command::Linearize(args) => linearize::run(&args),
         Command::Kinematics(args) => kinematics::run(&args),
         Command::Workspace(args) => workspace::run(&args),

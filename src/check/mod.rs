@@ -198,6 +198,10 @@ impl<'w> Checker<'w> {
                     self.expect_value(&given.value, value, expected, "a given value");
                 }
             }
+            DeclKind::Drive(drive) => {
+                let mut ctx = self.ctx(scope);
+                self.drive(drive, &mut ctx);
+            }
             DeclKind::Simulate(fields) => self.simulate(fields, decl.span, scope),
             DeclKind::Output(output) => self.output(output, scope),
             DeclKind::Apply(apply) => {
@@ -472,6 +476,42 @@ impl<'w> Checker<'w> {
         }
         let value_ty = self.expr(&initial.value, ctx);
         self.expect_value(&initial.value, value_ty, Ty::Scalar, "an initial value");
+    }
+
+    /// `drive crank.q = law`: the word is `drive` (E0480), the target a coordinate of a named
+    /// join (E0481), the law a scalar. What the law may depend on (the time and numbers) and
+    /// which coordinates may be driven are decided with the mechanism (`kinematics::drives`).
+    fn drive(&mut self, drive: &'w crate::syntax::ast::DriveDecl, ctx: &mut Ctx) {
+        if drive.word.name.as_str() != "drive" {
+            self.report(
+                Diagnostic::error("E0480", format!("unknown declaration `{}`", drive.word.name))
+                    .primary(drive.word.span, "a declaration starts with a keyword")
+                    .help("did you mean `drive`? `drive crank.q = 2 * pi * time;` imposes a coordinate as a law of time"),
+            );
+            return;
+        }
+        let ty = self.expr(&drive.target, ctx);
+        let target_ty = match &drive.target.kind {
+            crate::syntax::ast::ExprKind::Field(access) => {
+                self.expr_type_silently(&access.target, ctx)
+            }
+            _ => Ty::Error,
+        };
+        if target_ty != Ty::Join && ty != Ty::Error {
+            let found = match &drive.target.kind {
+                crate::syntax::ast::ExprKind::Prime(_) => {
+                    "a rate: the law gives the position, its rates follow"
+                }
+                _ => "not a coordinate of a named join",
+            };
+            self.report(
+                Diagnostic::error("E0481", "`drive` imposes a joint coordinate: `drive <join>.<coordinate> = <law of time>`")
+                    .primary(drive.target.span, found)
+                    .help("name the join with `join ... with <link> as crank;`, then write `drive crank.q = 2 * pi * time`"),
+            );
+        }
+        let value_ty = self.expr(&drive.value, ctx);
+        self.expect_value(&drive.value, value_ty, Ty::Scalar, "the law of a drive");
     }
 
     /// The type of an expression already checked (its diagnostics were reported then).

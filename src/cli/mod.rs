@@ -9,6 +9,7 @@ pub mod eval;
 pub mod export_urdf;
 pub mod fmt;
 pub mod import_urdf;
+pub mod inverse;
 pub mod kinematics;
 pub mod linearize;
 pub mod lsp;

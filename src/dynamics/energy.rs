@@ -56,7 +56,9 @@ pub fn conservative_forces(model: &Model) -> Conservative {
         && model.link_efforts.iter().all(|e| e.conservative)
         // Coulomb friction dissipates: its power is tracked as work (see `simulate::system`).
         && model.contacts.iter().all(|c| c.friction.is_none())
-        && model.frictions.iter().all(|f| f.dry == 0.0 && f.viscous == 0.0);
+        && model.frictions.iter().all(|f| f.dry == 0.0 && f.viscous == 0.0)
+        // A drive does work on the mechanism: tracked as work too.
+        && model.drives.is_empty();
     Conservative {
         constant,
         applied,

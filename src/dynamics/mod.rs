@@ -8,6 +8,7 @@ pub mod compiled;
 pub mod contacts;
 pub mod dense;
 pub mod derivatives;
+pub mod drives;
 pub mod efforts;
 pub mod elements;
 pub mod energy;

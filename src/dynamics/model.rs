@@ -5,6 +5,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::angles::{AngleReference, JointReference};
 use super::compiled::{EffortTape, Link, TapeBuilder};
+use super::drives::{self, DrivenCoordinate};
 pub use super::elements::{
     AppliedEffort, AppliedGroup, BodyInertia, EffortFrame, LinkEffort, LinkPotential,
 };
@@ -90,6 +91,8 @@ pub struct Model {
     pub mimics: Vec<Mimic>,
     /// The friction in the tree's joints (`friction`, `damping`).
     pub frictions: Vec<Friction>,
+    /// The coordinates imposed as laws of time (`drive`): rows of the constraint rows.
+    pub drives: Vec<DrivenCoordinate>,
 }
 
 impl Model {
@@ -329,6 +332,7 @@ pub fn build_with(
     let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let mimics = mimics::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
+    let drives = drives::build(mechanism, kinematics, &joints, &mut errors);
     let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
     let link_potentials = joints
         .iter()
@@ -386,6 +390,7 @@ pub fn build_with(
         rotors,
         mimics,
         frictions,
+        drives,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),

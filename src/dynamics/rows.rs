@@ -10,8 +10,8 @@
 //! 2. the contacts' kept rows (`contacts`), with their velocity-product terms γ;
 //! 3. with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
 //!    in X instead);
-//! 4. one unit row eₖᵀ per coordinate held ([`HeldRow`]): on a stop it rests on, or held by its
-//!    dry friction (sticking).
+//! 4. one unit row eₖᵀ per coordinate held ([`HeldRow`]): driven by a law of time (`drive`),
+//!    on a stop it rests on, or held by its dry friction (sticking).
 //!
 //! The blocks 2 to 4 are this stack's rows G, solved on X. With H the rows their forces act
 //! along (G, but on a sliding contact's normal row, whose force carries the friction it
@@ -28,22 +28,25 @@
 //! ([`RowStack::arrange`]), which change only at events.
 //!
 //! Each row has a right-hand side at each level: its position value φ, its velocity target w
-//! (G v = w) and its acceleration term γ (G a + γ = 0). A kind fixed in time (every kind today)
-//! has w = 0 and no ∂/∂t terms. A rheonomic kind, a coordinate driven by a law of time
-//! q = d(t), is one more [`Holder`] of a held row: φ = q − d(t), w = ḋ(t), γ = −d̈(t). To add a
-//! kind: give it a block here (its rows in `gather`, its values in `position_values` and
-//! `velocity_values`, its term in `gather`'s γ, its forces in `add_coordinate_forces`), and
-//! have the run arrange it (`simulate::system::holding`), where the rows' forces are handed
-//! back to what holds them.
+//! (G v = w) and its acceleration term γ (G a + γ = 0). A kind fixed in time has w = 0 and no
+//! ∂/∂t terms. The rheonomic kind, a coordinate driven by a law of time q = d(t), is the held
+//! row of [`Holder::Drive`], which carries the law evaluated at the row's time:
+//! φ = q − d(t), w = ḋ(t), γ = −d̈(t), its force the drive's effort. To add a kind: give it
+//! a block here (its rows in `gather`, its values in `position_values` and `velocity_values`,
+//! its term in `gather`'s γ, its forces in `add_coordinate_forces`), and have the run arrange
+//! it (`simulate::system::holding`), where the rows' forces are handed back to what holds
+//! them.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::contacts::{self, ContactRows};
 use super::dense::Pivoted;
+use super::drives::DrivenCoordinate;
 use super::mimics::Mimic;
 use super::model::Model;
 use super::response::Response;
 use super::stops::Stop;
+use crate::kinematics::drives::LawAt;
 
 /// A coordinate held by a unit row eₖᵀ of the stack, and what holds it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,11 +68,30 @@ impl HeldRow {
             },
         }
     }
+
+    /// The row of the drive `index`, `drive`, its law evaluated at the row's time (`law`).
+    pub fn driven(index: usize, drive: &DrivenCoordinate, law: LawAt) -> HeldRow {
+        HeldRow {
+            velocity: drive.velocity,
+            holder: Holder::Drive {
+                index,
+                position: drive.position,
+                law,
+            },
+        }
+    }
 }
 
 /// What holds a coordinate, which decides its row's right-hand sides and where its force goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Holder {
+    /// The drive `index` (`Model::drives`), its law d at the row's time: φ = q − d(t),
+    /// w = ḋ(t), γ = −d̈(t); its force is the drive's effort.
+    Drive {
+        index: usize,
+        position: usize,
+        law: LawAt,
+    },
     /// The stop `index` it rests on: at rest, its position row q − bound.
     Stop {
         index: usize,
@@ -86,6 +108,10 @@ pub enum Holder {
 
 /// Relative size of a coupling's violation below which it is not corrected.
 const COUPLING_ROUND_OFF: f64 = 1e-13;
+
+/// Relative size of a driven coordinate's distance to its law (to 1 + |d(t)|) below which it
+/// is not corrected.
+const LAW_ROUND_OFF: f64 = 1e-13;
 
 /// Relative size of a contact's gap (to the largest radius) below which it is not corrected.
 const GAP_ROUND_OFF: f64 = 1e-15;
@@ -166,7 +192,7 @@ impl RowStack {
         let mut stack = RowStack::over(model.velocities(), model.contacts.len());
         stack
             .held
-            .reserve(model.stops.len() + model.frictions.len());
+            .reserve(model.drives.len() + model.stops.len() + model.frictions.len());
         stack
     }
 
@@ -225,7 +251,8 @@ impl RowStack {
     }
 
     /// Fills G and γ from the contacts' rows `all` (γ as they hold it) and the couplings
-    /// `mimics` (the first `couplings` of them), the unit rows after them.
+    /// `mimics` (the first `couplings` of them), the unit rows after them (γ = −d̈(t) on a
+    /// driven row, 0 on the others).
     pub fn gather(&mut self, all: &ContactRows, mimics: &[Mimic]) {
         self.g.fill(0.0);
         self.bias.fill(0.0);
@@ -241,6 +268,9 @@ impl RowStack {
         let first = first + self.couplings;
         for (i, held) in self.held.iter().enumerate() {
             self.g[(first + i, held.velocity)] = 1.0;
+            if let Holder::Drive { law, .. } = held.holder {
+                self.bias[first + i] = -law.acceleration;
+            }
         }
     }
 
@@ -298,7 +328,7 @@ impl RowStack {
     }
 
     /// The multipliers of the last solve: the contacts' rows', then the couplings', then the
-    /// held velocities' (each a force along its velocity).
+    /// held velocities' (each a force along its velocity: a drive's is its effort).
     pub fn multipliers(&self) -> &[f64] {
         self.right.as_slice()
     }
@@ -316,7 +346,8 @@ impl RowStack {
 
     /// Sets the rows' values to their velocities' distance from their targets at the
     /// velocities `v`, G v − w (`values_mut`, for `add_least_change`): the contacts' rates as
-    /// `all` holds them, the couplings' q̇_f − m q̇_l, the held rates. Whether any is non-zero.
+    /// `all` holds them, the couplings' q̇_f − m q̇_l, the held rates (a driven one from its
+    /// law's, q̇ − ḋ(t)). Whether any is non-zero.
     pub fn velocity_values(&mut self, all: &ContactRows, mimics: &[Mimic], v: &[f64]) -> bool {
         let contacts = self.contacts.len();
         for (i, &row) in self.contacts.iter().enumerate() {
@@ -330,6 +361,7 @@ impl RowStack {
         for (i, held) in self.held.iter().enumerate() {
             let target = match held.holder {
                 Holder::Impact { rate_after, .. } => rate_after,
+                Holder::Drive { law, .. } => law.rate,
                 Holder::Stop { .. } | Holder::Friction { .. } => 0.0,
             };
             self.right[first + i] = v[held.velocity] - target;
@@ -337,11 +369,12 @@ impl RowStack {
         self.right.amax() > 0.0
     }
 
-    /// Sets the rows' values to their position values at q, φ(q) (`values_mut`, for
+    /// Sets the rows' values to their position values at q, φ(q, t) (`values_mut`, for
     /// `add_least_change`): the gaps of the contacts' rows (normal rows only: the others are
     /// not integrable), the couplings' violations, the held coordinates' distances to their
-    /// bounds (none for a row of velocities only). Whether any is above its round-off (a gap's relative to the largest radius, a
-    /// coupling's to its follower's coordinate, a bound's to the bound).
+    /// bounds or their laws, q − d(t) (none for a row of velocities only). Whether any is above
+    /// its round-off (a gap's relative to the largest radius, a coupling's to its follower's
+    /// coordinate, a bound's to the bound, a law's distance to 1 + |d(t)|).
     pub fn position_values(&mut self, model: &Model, all: &ContactRows, q: &[f64]) -> bool {
         let radius = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
         let mut open = false;
@@ -364,14 +397,18 @@ impl RowStack {
         let first = first + self.couplings;
         for (i, held) in self.held.iter().enumerate() {
             // A row of velocities only has no position to correct.
-            let (value, size) = match held.holder {
+            let (value, round_off) = match held.holder {
                 Holder::Stop {
                     position, bound, ..
-                } => (q[position] - bound, bound.abs().max(1.0)),
-                Holder::Friction { .. } | Holder::Impact { .. } => (0.0, 1.0),
+                } => (q[position] - bound, BOUND_ROUND_OFF * bound.abs().max(1.0)),
+                Holder::Drive { position, law, .. } => (
+                    q[position] - law.position,
+                    LAW_ROUND_OFF * (1.0 + law.position.abs()),
+                ),
+                Holder::Friction { .. } | Holder::Impact { .. } => (0.0, 0.0),
             };
             self.right[first + i] = value;
-            open |= value.abs() > BOUND_ROUND_OFF * size;
+            open |= value.abs() > round_off;
         }
         open
     }

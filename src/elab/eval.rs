@@ -223,6 +223,25 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
+            DeclKind::Drive(drive) => {
+                let Value::Scalar(target) = self.expr(&drive.target, &mut locals)? else {
+                    return Err(internal("drive of a non-coordinate"));
+                };
+                let SExpr::JoinCoordinate { join, index, .. } = *target else {
+                    return Err(internal("drive of a non-coordinate"));
+                };
+                let law = self
+                    .expr(&drive.value, &mut locals)
+                    .and_then(|v| as_scalar(v, drive.value.span))?;
+                self.mechanism.drives.push(Drive {
+                    join,
+                    coordinate: index as usize,
+                    law,
+                    span: drive.target.span,
+                    law_span: drive.value.span,
+                });
+                Ok(())
+            }
             DeclKind::Apply(apply) => {
                 let ApplyDecl {
                     effort,

@@ -288,6 +288,18 @@ pub struct InitialValue {
     pub span: Span,
 }
 
+/// `drive crank.q = 2 * pi * time`: a coordinate imposed as a law of time (its rates are the
+/// law's derivatives).
+#[derive(Clone, Debug)]
+pub struct Drive {
+    pub join: JoinId,
+    pub coordinate: usize,
+    pub law: Scalar,
+    /// The driven coordinate as written, and the law.
+    pub span: Span,
+    pub law_span: Span,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EffortKind {
@@ -376,6 +388,8 @@ pub struct Mechanism {
     pub applications: Vec<Application>,
     pub unknowns: Vec<Unknown>,
     pub initial: Vec<InitialValue>,
+    /// The `drive` declarations, in declaration order.
+    pub drives: Vec<Drive>,
     /// `given` values of unknowns.
     pub given: Vec<(UnknownId, Scalar, Span)>,
     pub scenario: Option<Scenario>,

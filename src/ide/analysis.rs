@@ -363,6 +363,10 @@ impl Builder<'_> {
                         self.expr(&value.value, &mut locals);
                     }
                 }
+                DeclKind::Drive(drive) => {
+                    self.expr(&drive.target, &mut locals);
+                    self.expr(&drive.value, &mut locals);
+                }
                 DeclKind::Simulate(fields) => self.fields(fields, &mut locals),
                 DeclKind::Output(output) => self.expr(&output.value, &mut locals),
                 DeclKind::Apply(apply) => {

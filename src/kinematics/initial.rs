@@ -40,7 +40,8 @@ pub fn initial_coordinates(
     Ok((starting.q, fixed))
 }
 
-/// The starting configuration the program's `initial` declarations give.
+/// The starting configuration the program's `initial` declarations give, each driven
+/// coordinate at its law's value at time 0 and held there (a drive overrides `initial`).
 pub fn starting(mechanism: &Mechanism, model: &KinematicModel) -> Result<Starting, Diagnostic> {
     let count = model.coordinate_count;
     let mut starting = Starting {
@@ -68,7 +69,18 @@ pub fn starting(mechanism: &Mechanism, model: &KinematicModel) -> Result<Startin
             _ => Hold::Given,
         };
     }
+    let drives = super::drives::resolve(mechanism, model).map_err(first_error)?;
+    for drive in &drives {
+        starting.q[drive.coordinate] = drive.law.at(0.0).position;
+        starting.holds[drive.coordinate] = Hold::Fixed;
+        starting.spans[drive.coordinate] = Some(drive.span);
+    }
     Ok(starting)
+}
+
+/// The first of several diagnostics (the rest are reported when the model is built).
+fn first_error(mut errors: Vec<Diagnostic>) -> Diagnostic {
+    errors.swap_remove(0)
 }
 
 /// An assembled starting configuration, with its warnings: the given values assembly had to

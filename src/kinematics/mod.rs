@@ -7,6 +7,7 @@ pub mod chain;
 pub mod closure;
 pub mod contacts;
 pub mod drag;
+pub mod drives;
 pub mod eval;
 pub mod forward;
 pub mod frames;

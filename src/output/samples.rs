@@ -7,7 +7,7 @@ use super::csv::CsvWriter;
 use super::json::JsonWriter;
 pub use super::sample_writer::SampleWriter;
 use crate::prepare::Prepared;
-use crate::simulate::run::reaction_names_of;
+use crate::simulate::run::{output_names_of, reaction_names_of};
 
 /// The formats of a run's samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,7 +27,7 @@ pub fn writer(
             out,
             &prepared.coordinate_names,
             &reaction_names_of(prepared),
-            &prepared.outputs.names,
+            &output_names_of(prepared),
         )),
         SampleFormat::Json => Box::new(JsonWriter::new(out, &prepared.outputs.frame_names)),
     }

@@ -111,13 +111,22 @@ fn simulate_from(
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),
         reaction_names: reaction_names_of(prepared),
-        output_names: prepared.outputs.names.clone(),
+        output_names: output_names_of(prepared),
         samples,
         report,
     }
 }
 
 /// The joins whose reactions the samples carry: none unless the settings ask for them.
+/// The outputs' columns: the drives' efforts (`crank.drive_effort`), then the program's
+/// outputs and the named frames' states (`Outputs::names`).
+pub fn output_names_of(prepared: &Prepared) -> Vec<String> {
+    let drives = prepared.model.drives.iter().map(|d| d.effort_name());
+    drives
+        .chain(prepared.outputs.names.iter().cloned())
+        .collect()
+}
+
 pub fn reaction_names_of(prepared: &Prepared) -> Vec<String> {
     match prepared.settings.reactions {
         true => reaction_names(&prepared.model),
@@ -162,7 +171,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),
         reaction_names: Vec::new(),
-        output_names: prepared.outputs.names.clone(),
+        output_names: output_names_of(prepared),
         samples: Vec::new(),
         report,
     }

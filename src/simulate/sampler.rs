@@ -1,6 +1,6 @@
 //! The outputs of a run, observed on the run's own system (`MechanicalSystem::sampling`):
-//! declared coordinates continuous with the previous output, energy, momentum, the program's
-//! outputs and, when asked for, the reactions.
+//! declared coordinates continuous with the previous output, energy, momentum, the drives'
+//! efforts, the program's outputs and, when asked for, the reactions.
 
 use super::constraints::ReleasedStretch;
 use super::sample::Sample;
@@ -198,6 +198,13 @@ impl Sampler<'_> {
         } else {
             Vec::new()
         };
+        // The drives' efforts: the multipliers of their rows in the equations at the sample.
+        let mut outputs = Vec::with_capacity(model.drives.len() + self.outputs.names.len());
+        if !model.drives.is_empty() {
+            let mut rates = vec![0.0; y.len()];
+            system.derivative(time, &y, &mut rates)?;
+            outputs.extend_from_slice(&system.scratch.drive_efforts);
+        }
         let data = &mut system.scratch.data;
         forward_kinematics(model, data, &q, v)?;
         let h = momentum(model, data);
@@ -216,7 +223,7 @@ impl Sampler<'_> {
             rates: &rates,
             time,
         };
-        let outputs = self.outputs.values(&state, &mut self.output_scratch);
+        outputs.extend(self.outputs.values(&state, &mut self.output_scratch));
         Ok(Sample {
             time,
             coordinates,

@@ -412,6 +412,7 @@ fn features(model: &Model) -> Vec<Feature> {
         (Feature::GearedRotors, !model.rotors.is_empty()),
         (Feature::Mimics, !model.mimics.is_empty()),
         (Feature::Friction, !model.frictions.is_empty()),
+        (Feature::Drives, !model.drives.is_empty()),
     ];
     present
         .iter()

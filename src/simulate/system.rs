@@ -362,6 +362,7 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         self.scratch.friction_power = 0.0;
+        self.scratch.drive_power = 0.0;
         self.scratch.response_here = false;
         let mut accelerations = std::mem::take(&mut self.scratch.accelerations);
         if accelerations.len() != model.velocities() {
@@ -415,9 +416,10 @@ impl<'m> MechanicalSystem<'m> {
             }
         }
         // The constraint stack's rows (`dynamics::rows`: the contacts, the couplings with loops,
-        // the coordinates held), solved together on the response of the base solve above (the
-        // loops' block, or the tree's): the one place every evaluation of the run solves them.
-        self.solve_rows(q, v, &mut accelerations)?;
+        // the coordinates held or driven), solved together on the response of the base solve
+        // above (the loops' block, or the tree's): the one place every evaluation of the run
+        // solves them.
+        self.solve_rows(t, q, v, &mut accelerations)?;
         let efforts = if self.reads_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
         } else {
@@ -426,7 +428,7 @@ impl<'m> MechanicalSystem<'m> {
         self.scratch.power = if native {
             0.0
         } else {
-            efforts.power + self.scratch.friction_power
+            efforts.power + self.scratch.friction_power + self.scratch.drive_power
         };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
             let joint = model

@@ -1,15 +1,17 @@
 //! The studies built on the mechanism and its runs: the dynamics at given states (`lsdc eval`,
 //! `batch`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
 //! precision and cost (`precision`), the `tree` and `assemble` reports (`analysis`), a
-//! point dragged along a path (`drag`), the velocity and acceleration models and their
-//! singularities at configurations (`kinematic_models`, closed by `configurations`) and along
-//! runs (`singularities`), the workspace of a point (`workspace`), and the linear model about
-//! an operating point (`linearize`).
+//! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`),
+//! the velocity and acceleration models and their singularities at configurations
+//! (`kinematic_models`, closed by `configurations`) and along runs (`singularities`), the
+//! workspace of a point (`workspace`), and the linear model about an operating point
+//! (`linearize`).
 
 pub mod analysis;
 pub mod batch;
 pub mod configurations;
 pub mod drag;
+pub mod inverse;
 pub mod kinematic_models;
 pub mod linearize;
 pub mod precision;

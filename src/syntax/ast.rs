@@ -60,6 +60,8 @@ pub enum DeclKind {
     Initial(Nodes<InitialValue>),
     /// `given L = 0.8, arm.mass = 2`: values of unknowns and generic quantities for simulation.
     Given(Nodes<GivenValue>),
+    /// `drive crank.q = 2 * pi * time`: a join's coordinate imposed as a law of time.
+    Drive(Node<DriveDecl>),
     /// `simulate duration = 10, integrator = dopri5 end`: how to simulate.
     Simulate(Nodes<FieldInit>),
     /// `output tip = position(arm.tip)`: a named quantity of the state, written by `simulate`
@@ -99,6 +101,15 @@ pub struct PackageIndex {
     pub variable: Ident,
     pub first: Expr,
     pub last: Expr,
+}
+
+/// `drive target = law`: `word` is `drive` in a well-formed program (the parser reads any
+/// word there, so that a join may still be called `drive`; the checker refuses others).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveDecl {
+    pub word: Ident,
+    pub target: Expr,
+    pub value: Expr,
 }
 
 /// `join first and second with link [as name]`

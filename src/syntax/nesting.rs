@@ -69,6 +69,7 @@ fn decl_exprs<'a>(kind: &'a DeclKind, out: &mut Vec<&'a Expr>) {
             out.extend(values.iter().flat_map(|v| [&v.target, &v.value]));
         }
         DeclKind::Given(values) => out.extend(values.iter().flat_map(|v| [&v.target, &v.value])),
+        DeclKind::Drive(drive) => out.extend([&drive.target, &drive.value]),
         DeclKind::Simulate(fields) => out.extend(fields.iter().map(|f| &f.value)),
         DeclKind::Output(output) => out.push(&output.value),
         DeclKind::Apply(apply) => {
@@ -130,6 +131,10 @@ fn dismantle(kind: DeclKind) {
                         .into_iter()
                         .flat_map(|v| [v.target, v.value]),
                 );
+            }
+            DeclKind::Drive(drive) => {
+                let drive = drive.into_inner();
+                exprs.extend([drive.target, drive.value]);
             }
             DeclKind::Simulate(fields) => {
                 exprs.extend(fields.into_vec().into_iter().map(|f| f.value))

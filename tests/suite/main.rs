@@ -15,6 +15,7 @@ mod constrained;
 mod contacts;
 mod coupled_loops;
 mod drag;
+mod drives;
 mod dynamics;
 mod examples;
 mod force_elements;

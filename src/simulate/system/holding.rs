@@ -1,9 +1,10 @@
 //! The rows an evaluation solves on the response X after the base solve (`rows::RowStack`): the
-//! contacts' kept rows, the mimic couplings with closed loops, and the coordinates held at rest,
-//! on their stops (resting on a bound) or stuck by their friction, each a unit row eₖᵀ a = 0
-//! with a force μₖ along the coordinate. Whatever the mechanism (a tree, closed loops, contacts
-//! or both), they are solved together in one saddle-point system; the held forces are recorded
-//! for the events (`contact`, `holding`).
+//! contacts' kept rows, the mimic couplings with closed loops, and the coordinates held: driven
+//! by their laws (eₖᵀ a = d̈ₖ(t)), on their stops (resting on a bound) or stuck by their
+//! friction (eₖᵀ a = 0), each with a force μₖ along the coordinate. Whatever the mechanism (a
+//! tree, closed loops, contacts or both), they are solved together in one saddle-point system;
+//! the held forces are handed back to what holds them: the events' (`contact`, `holding`) and
+//! the drives' efforts, with their power (the work a drive does counts in the energy balance).
 
 use nalgebra::DVector;
 
@@ -15,16 +16,18 @@ use crate::dynamics::rows::{HeldRow, Holder};
 use crate::dynamics::stops::Side;
 
 impl MechanicalSystem<'_> {
-    /// Solves the rows at (q, v) from the accelerations `a` of the base solve (the loops', or
-    /// the tree's), which they replace; records the contacts' forces and the held forces.
+    /// Solves the rows at (t, q, v) from the accelerations `a` of the base solve (the loops',
+    /// or the tree's), which they replace; records the contacts' forces, the held forces and
+    /// the drives' efforts.
     pub(super) fn solve_rows(
         &mut self,
+        t: f64,
         q: &[f64],
         v: &[f64],
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
         let model = self.model;
-        self.gather_held();
+        self.gather_held(t);
         let couplings = self.coupling_count();
         if !model.has_contacts() && couplings == 0 && self.scratch.held.is_empty() {
             return Ok(());
@@ -37,12 +40,9 @@ impl MechanicalSystem<'_> {
         }
         self.decide_contact_rows();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
-        self.scratch
-            .rows
-            .arrange(kept, couplings, &self.scratch.held);
-        self.scratch
-            .rows
-            .gather(&self.scratch.contact_state, &model.mimics);
+        let rows = &mut self.scratch.rows;
+        rows.arrange(kept, couplings, &self.scratch.held);
+        rows.gather(&self.scratch.contact_state, &model.mimics);
         let solved = (self.scratch.rows).solve(
             model,
             &self.scratch.contact_state,
@@ -57,7 +57,7 @@ impl MechanicalSystem<'_> {
         let forces = &self.scratch.rows.contact_forces;
         self.scratch.efforts.power +=
             contacts::friction_power(model, &self.scratch.contact_state, forces);
-        self.record_holding();
+        self.record_holding(v);
         Ok(())
     }
 
@@ -69,13 +69,18 @@ impl MechanicalSystem<'_> {
         }
     }
 
-    /// The coordinates held at rest into `held`: the resting stops', then the sticking
-    /// joints'.
-    pub(super) fn gather_held(&mut self) {
+    /// The coordinates held at time `t` into `held`: the driven ones' (their laws evaluated at
+    /// t), then the resting stops', then the sticking joints'.
+    pub(super) fn gather_held(&mut self, t: f64) {
+        let model = self.model;
         let mut held = std::mem::take(&mut self.scratch.held);
         held.clear();
+        let values = &mut self.scratch.law_values;
+        held.extend(
+            (model.drives.iter().enumerate())
+                .map(|(index, drive)| HeldRow::driven(index, drive, drive.evaluate(t, values))),
+        );
         held.extend(self.resting_stop_rows());
-        let model = self.model;
         let frictions =
             (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
         held.extend(frictions.map(|index| HeldRow {
@@ -111,13 +116,23 @@ impl MechanicalSystem<'_> {
             .extend(kept.iter().copied().filter(|r| r % 3 == 2));
     }
 
-    /// The held forces of the last solve, in the order of the held rows (the resting stops,
-    /// then the sticking frictions), into each stop's contact force (positive while it pushes)
-    /// and each friction's holding force.
-    fn record_holding(&mut self) {
+    /// The driven coordinates' rows among the held ones (`gather_held` puts them first).
+    pub(super) fn drive_rows(&self) -> &[HeldRow] {
+        &self.scratch.held[..self.model.drives.len()]
+    }
+
+    /// The held forces of the last solve, in the order of the held rows, into each drive's
+    /// effort (with their power at the velocities `v`), each stop's contact force (positive
+    /// while it pushes) and each friction's holding force.
+    fn record_holding(&mut self, v: &[f64]) {
         let model = self.model;
+        self.scratch.drive_power = 0.0;
         for (row, force) in self.scratch.rows.held_forces() {
             match row.holder {
+                Holder::Drive { index, .. } => {
+                    self.scratch.drive_efforts[index] = force;
+                    self.scratch.drive_power += force * v[row.velocity];
+                }
                 // A lower stop pushes the coordinate up, an upper one down.
                 Holder::Stop { index, .. } => {
                     self.scratch.contact[index] = match model.stops[index].side {

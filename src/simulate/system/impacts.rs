@@ -138,8 +138,9 @@ impl MechanicalSystem<'_> {
 
     /// The velocities just after an impact on stop `index` at (t, q), from `v`, into `after`:
     /// the stop's row joins the constraint stack (`dynamics::rows`) with its rate after,
-    /// −e times the one before, every other row brought to rest (the loops' and a tree's
-    /// couplings by X, the stack's contacts' and couplings' with loops as rows), solved on the
+    /// −e times the one before, the drives' rows to their laws' rates and every other row
+    /// brought to rest (the loops' and a tree's couplings by X, the stack's contacts' and
+    /// couplings' with loops as rows), solved on the
     /// response X formed at q. The same velocities as the saddle-point system
     /// [M −Gᵀ −eₖ; G 0 0; eₖᵀ 0 0] of every row (`tests/suite/stops.rs` checks the two against
     /// each other). Whether the result is finite.
@@ -172,11 +173,15 @@ impl MechanicalSystem<'_> {
             (kept_rows.rows_mut(0, model.nv)).gemv(1.0, &self.scratch.mass, &tree, 0.0);
             self.scratch.response.apply_vector(&mut kept_rows);
         }
+        // The drives keep their laws' rates through the impulse; the stop's row is last.
+        self.gather_held(t);
+        let mut held = self.drive_rows().to_vec();
+        held.push(row);
         let couplings = self.coupling_count();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
         let scratch = &mut *self.scratch;
         let stack = &mut scratch.velocity_stack;
-        stack.arrange(kept, couplings, &[row]);
+        stack.arrange(kept, couplings, &held);
         stack.gather(&scratch.contact_state, &model.mimics);
         let all = &scratch.contact_state;
         let response = &mut scratch.response;

@@ -90,8 +90,9 @@ impl MechanicalSystem<'_> {
         }
         let mut response = DMatrix::zeros(nv, 2 * nv);
         self.scratch.response.apply(&differences, &mut response);
-        // The coordinates held at rest keep their accelerations zero, whatever the state.
-        self.gather_held();
+        // The coordinates held keep their accelerations (zero at rest, d̈(t) when driven),
+        // whatever the state.
+        self.gather_held(t);
         if !self.scratch.held.is_empty() {
             self.subtract_held_change(&mut response);
         }

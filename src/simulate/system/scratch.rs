@@ -56,13 +56,20 @@ pub struct Scratch {
     pub(in crate::simulate) response: Response,
     pub(in crate::simulate) response_here: bool,
     /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
-    /// loops, coordinates held at rest), and in the projections onto the velocity rows and onto
-    /// the position rows; the velocities held at the evaluation; a step of the velocities.
+    /// loops, coordinates held or driven), and in the projections onto the velocity rows and
+    /// onto the position rows; the coordinates held at the evaluation (the drives' first); a
+    /// step of the velocities.
     pub(in crate::simulate) rows: RowStack,
     pub(in crate::simulate) velocity_stack: RowStack,
     pub(in crate::simulate) position_stack: RowStack,
     pub(in crate::simulate) held: Vec<HeldRow>,
     pub(in crate::simulate) step: DVector<f64>,
+    /// Per drive (`Model::drives`), the effort that imposed it at the last evaluation (its
+    /// held row's multiplier), and their power then.
+    pub drive_efforts: Vec<f64>,
+    pub(in crate::simulate) drive_power: f64,
+    /// Where the drives' laws are evaluated.
+    pub(in crate::simulate) law_values: Vec<f64>,
     /// Per stop, the contact force holding its coordinate on it at the last evaluation
     /// (positive while it pushes the coordinate into its range); per joint with friction, the
     /// force holding it while it sticks then, and the power of the slipping friction.
@@ -99,8 +106,13 @@ impl Scratch {
             rows: RowStack::new(model),
             velocity_stack: RowStack::new(model),
             position_stack: RowStack::new(model),
-            held: Vec::with_capacity(model.stops.len() + model.frictions.len()),
+            held: Vec::with_capacity(
+                model.drives.len() + model.stops.len() + model.frictions.len(),
+            ),
             step: DVector::zeros(model.velocities()),
+            drive_efforts: vec![0.0; model.drives.len()],
+            drive_power: 0.0,
+            law_values: Vec::new(),
             contact: vec![0.0; model.stops.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,

@@ -1,12 +1,13 @@
-//! Keeps the rows beyond the loops' after a step (the contacts' and, with closed loops, the
-//! mimic couplings'), on the response X as the accelerations solve them (`holding`). After the
-//! loops' own projection, the position rows (the contacts' gaps, the couplings' violations) are
+//! Keeps the rows beyond the loops' after a step (the contacts', the driven coordinates' and,
+//! with closed loops, the mimic couplings'), on the response X as the accelerations solve them
+//! (`holding`). After the loops' own projection, the position rows (the contacts' gaps, the
+//! couplings' violations, the driven coordinates' distances to their laws at t) are
 //! closed by Newton steps of least kinetic metric along X Gᵀ (along the loops and the tree's
 //! couplings to first order), each followed by the loops' projection; then the velocities are
 //! projected along X onto every kept row (the rolling rows, not integrable, on velocities only)
-//! and onto the rates held at rest (a joint stuck by its friction, a stop's resting
-//! coordinate): the loops' velocity rows and a tree's couplings stay kept, since G X = 0 for
-//! them.
+//! and onto the rates held (a driven coordinate's law's rate at t; at rest, a joint stuck by
+//! its friction, a stop's resting coordinate): the loops' velocity rows and a tree's couplings
+//! stay kept, since G X = 0 for them.
 
 use super::{MechanicalSystem, SystemError};
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
@@ -31,7 +32,7 @@ impl MechanicalSystem<'_> {
     pub(super) fn keep_stacked(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
         let model = self.model;
         let couplings = self.coupling_count();
-        if !model.has_contacts() && couplings == 0 {
+        if !model.has_contacts() && couplings == 0 && model.drives.is_empty() {
             return Ok(false);
         }
         let (mut q, mut v) = (
@@ -55,6 +56,7 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         let positions = model.positions();
         self.split_into(y, q, v);
+        self.gather_held(t);
         let open = self.stacked_rows_at(t, q, v, couplings)?;
         let largest = self.scratch.position_stack.values_mut().amax();
         let mut steps = StackedSteps {
@@ -68,7 +70,7 @@ impl MechanicalSystem<'_> {
             largest,
         };
         let moved = correct(&mut steps, &STACKED)?.accepted > 0;
-        self.gather_held();
+        self.gather_held(t);
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
         let stack = &mut self.scratch.velocity_stack;
         stack.arrange(kept, couplings, &self.scratch.held);
@@ -90,7 +92,9 @@ impl MechanicalSystem<'_> {
     ) -> Result<bool, SystemError> {
         self.stacked_geometry(t, q, v)?;
         let stack = &mut self.scratch.position_stack;
-        stack.arrange(&self.scratch.normal_rows, couplings, &[]);
+        // The held rows with a position are the stops' (kept by `stop_rows`) and the drives'.
+        let drives = &self.scratch.held[..self.model.drives.len()];
+        stack.arrange(&self.scratch.normal_rows, couplings, drives);
         stack.gather(&self.scratch.contact_state, &self.model.mimics);
         Ok(stack.position_values(self.model, &self.scratch.contact_state, q))
     }
