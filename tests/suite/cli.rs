@@ -622,3 +622,19 @@ fn fmt_check_shows_what_formatting_would_change() {
     assert_eq!(stdout, expected);
     assert_eq!(std::fs::read_to_string(&file).expect("kept"), text);
 }
+
+#[test]
+fn rk4_in_place_of_a_programs_adaptive_settings_warns_once_per_run() {
+    // Programs written for an adaptive method (their own `tolerance`) run with `--integrator
+    // rk4` at its default step: the step too long for their tolerances is one warning after
+    // the run with its largest estimate, never one per step or per output.
+    for program in ["examples/slider_crank.lsd", "examples/heavy_top.lsd"] {
+        let (code, _, stderr) = lsdc(&["simulate", program, "--integrator", "rk4"]);
+        assert_eq!(code, 0, "{program}: {stderr}");
+        assert_eq!(
+            stderr.matches("warning[W0902]").count(),
+            1,
+            "{program}: {stderr}"
+        );
+    }
+}
