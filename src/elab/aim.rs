@@ -5,10 +5,10 @@
 //! it is the chain `Rz(φ) · Ry(θ) · Rz(−φ)` of rotations about the frame's own axes, with
 //! φ = atan2(u_y, u_x) the azimuth of u and θ = atan2(√(u_x² + u_y²), u_z) its angle from z: the
 //! rotation by θ about Rz(φ)·y, which is along z × u, so the same minimal rotation, and every
-//! step is defined at u = ±z (θ = 0 or π, φ = 0). Its rotated z axis is
+//! step is defined at u = ±z (θ = 0 or π, φ = atan2(0, ±0) = 0 or ±π). Its rotated z axis is
 //! (sin θ cos φ, sin θ sin φ, cos θ) = u / |u| (the spherical angles of u). At u = −z the
-//! rotation is the half turn about y (φ = 0), a choice: every half turn about an axis of the
-//! xy-plane takes z to −z.
+//! rotation is the half turn about y (about ±y, the same rotation, whatever the signs of the
+//! zeros), a choice: every half turn about an axis of the xy-plane takes z to −z.
 //!
 //! With `v`, a last turn ψ about the new z axis takes the new x axis toward v: ψ is the azimuth
 //! of v in the aimed frame (`R⁻¹ v`), and the whole chain is `Rz(φ) · Ry(θ) · Rz(ψ − φ)`.
@@ -62,11 +62,6 @@ pub(super) fn aim(values: Vec<Value>, arg_spans: &[Span], span: Span) -> Result<
         span,
     )?;
     let theta = atan2(&as_scalar(along_z, span)?, &u[2], span)?;
-    // At u = ±z the azimuth is 0 whatever the signs of the zero components: atan2(0, −0) is π.
-    let phi = match numbers(u) {
-        Some(u) if u.x == 0.0 && u.y == 0.0 => num(0.0),
-        _ => phi,
-    };
     let spin = match vectors.get(1) {
         None => num(0.0),
         Some(v) => {
