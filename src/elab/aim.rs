@@ -41,7 +41,10 @@ pub(super) fn aim(values: Vec<Value>, arg_spans: &[Span], span: Span) -> Result<
     for (value, &arg_span) in values.into_iter().zip(arg_spans) {
         let vector = as_vector(value, arg_span)?;
         refuse_motion(&vector, arg_span)?;
-        vectors.push(vector);
+        vectors.push(match numbers(&vector) {
+            Some(n) => power_of_two_scaled(n).map(num).into(),
+            None => vector,
+        });
     }
     let u = vectors
         .first()
@@ -125,6 +128,20 @@ fn atan2(y: &Scalar, x: &Scalar, span: Span) -> Result<Scalar> {
         span,
     )?;
     as_scalar(value, span)
+}
+
+/// A direction of numbers scaled by a power of two, exactly, to bring its largest component into
+/// [1, 2): its squares neither overflow nor vanish, so `[1e200, 0, 1e200]` and
+/// `[1e-200, 0, 1e-200]` aim like `[1, 0, 1]`.
+fn power_of_two_scaled(v: Vector3<f64>) -> Vector3<f64> {
+    let largest = v.amax();
+    if largest == 0.0 || !largest.is_finite() {
+        return v;
+    }
+    let exponent = largest.log2().floor() as i32;
+    // In two factors: 2^1074, for the smallest subnormals, is not a double.
+    let half = -exponent / 2;
+    v * 2f64.powi(half) * 2f64.powi(-exponent - half)
 }
 
 /// The components of a vector of numbers.

@@ -90,8 +90,9 @@ fn floor_and_mod_of_run_quantities_keep_their_defining_properties() {
 }
 
 /// The directions `aim` is tested with: general ones, ±z exactly (−z also with negative zeros,
-/// whose azimuth atan2(−0, −0) is −π: the half turn about −y, the same), and 1e-9 off them.
-const DIRECTIONS: [[f64; 3]; 10] = [
+/// whose azimuth atan2(−0, −0) is −π: the half turn about −y, the same), 1e-9 off them, and
+/// directions whose squares overflow or vanish.
+const DIRECTIONS: [[f64; 3]; 12] = [
     [1.0, 2.0, 3.0],
     [-0.3, 0.4, -12.0],
     [5.0, 0.0, 0.0],
@@ -102,6 +103,8 @@ const DIRECTIONS: [[f64; 3]; 10] = [
     [0.0, -1e-9, 1.0],
     [1e-9, 1e-9, -1.0],
     [-1e-9, 0.0, -1.0],
+    [1e200, -1e200, 3e200],
+    [1e-300, 0.0, -1e-300],
 ];
 
 /// The rotation of the frame `[0, 0, 0] ++ rotation @ earth`, as `orientation` reports it.
@@ -122,6 +125,13 @@ fn orientations(rotations: &[String]) -> Vec<Matrix3<f64>> {
             })
         })
         .collect()
+}
+
+/// The direction u scaled by its largest component, so that its norm neither overflows nor
+/// vanishes (a relative 1e-16 on each component).
+fn unit_scale(u: [f64; 3]) -> Vector3<f64> {
+    let u = Vector3::from(u);
+    u / u.amax()
 }
 
 fn vector(v: [f64; 3]) -> String {
@@ -152,7 +162,7 @@ fn aim_turns_z_to_u_by_the_minimal_rotation_at_and_near_z() {
         .map(|u| format!("aim({})", vector(*u)))
         .collect();
     for (r, u) in orientations(&rotations).iter().zip(DIRECTIONS) {
-        let u = Vector3::from(u);
+        let u = unit_scale(u);
         let what = format!("aim({u:?})");
         assert_rotation(r, &what);
         assert_close(r.column(2).into(), u.normalize(), &what);
@@ -181,7 +191,7 @@ fn aim_with_v_turns_x_to_the_gram_schmidt_of_v() {
     for u in DIRECTIONS {
         for v in others {
             // Not parallel: v along u is refused (E0611, a golden file).
-            if Vector3::from(u).normalize().cross(&Vector3::from(v)).norm() > 1e-3 {
+            if unit_scale(u).normalize().cross(&Vector3::from(v)).norm() > 1e-3 {
                 pairs.push((u, v));
             }
         }
@@ -191,7 +201,7 @@ fn aim_with_v_turns_x_to_the_gram_schmidt_of_v() {
         .map(|(u, v)| format!("aim({}, {})", vector(*u), vector(*v)))
         .collect();
     for (r, (u, v)) in orientations(&rotations).iter().zip(&pairs) {
-        let (u, v) = (Vector3::from(*u), Vector3::from(*v));
+        let (u, v) = (unit_scale(*u), Vector3::from(*v));
         let what = format!("aim({u:?}, {v:?})");
         assert_rotation(r, &what);
         let z = u.normalize();
