@@ -81,14 +81,10 @@ impl<'w> Checker<'w> {
         span: Span,
     ) -> Ty {
         self.positional_only(args);
-        if args.len() != params.len() {
-            self.report(arity_error(
-                &ident.name,
-                params.len(),
-                args.len(),
-                span,
-                None,
-            ));
+        let required = params.len() - types::builtin_optional_parameters(&ident.name);
+        if !(required..=params.len()).contains(&args.len()) {
+            let expected = args.len().clamp(required, params.len());
+            self.report(arity_error(&ident.name, expected, args.len(), span, None));
             return Ty::Error;
         }
         for ((arg, ty), param) in args.iter().zip(arg_types).zip(params) {

@@ -261,6 +261,8 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
         "norm" => (V1, Scalar),
         "dot" => (V2, Scalar),
         "cross" => (V2, Vector),
+        // A rotation aiming a frame's z axis along u (and its x axis toward v): `aim(u[, v])`.
+        "aim" => (V2, Rotation),
         // The state of a frame at the current instant, in the fixed axes (efforts only).
         "position" | "velocity" | "angular_velocity" => (F1, Vector),
         "orientation" => (F1, Matrix),
@@ -270,6 +272,15 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
         "sliding" | "sliding_disc" => (S2, Link),
         _ => return None,
     })
+}
+
+/// How many of a built-in function's last parameters may be left out: `aim(u)` is `aim(u, v)`
+/// without its second direction.
+pub fn builtin_optional_parameters(name: &str) -> usize {
+    match name {
+        "aim" => 1,
+        _ => 0,
+    }
 }
 
 /// The numeric fields of `simulate`.

@@ -759,6 +759,10 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             if let Some(shape) = shape {
                 return self.contact_link(shape, values, span);
             }
+            if ident.name == "aim" {
+                let spans: Vec<Span> = args.iter().map(|a| a.value.span).collect();
+                return super::aim::aim(values, &spans, span);
+            }
             return builtin_call(&ident.name, values, span);
         }
         // The instance the definition was declared in: its body's names take their values there.

@@ -3,6 +3,7 @@
 //! fresh unknown; a `let` evaluates its value once, when first used, so `let L = ?s;` is one
 //! shared unknown and an unused definition costs nothing.
 
+mod aim;
 mod arrays;
 mod constants;
 mod decls;

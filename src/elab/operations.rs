@@ -169,7 +169,7 @@ fn arithmetic(op: BinaryOp, left: Value, right: Value, span: Span) -> Result<Val
 }
 
 /// Applies a rotation chain to a vector (Rodrigues' formula, symbolic).
-fn rotate(rotation: &Displacement, v: Vector) -> Vector {
+pub(super) fn rotate(rotation: &Displacement, v: Vector) -> Vector {
     rotation.0.iter().rev().fold(v, |v, step| match step {
         Elementary::Rotation { angle, axis } => rotate_about(angle, axis, &v),
         Elementary::Translation(_) => v,

@@ -355,6 +355,20 @@ impl SExpr {
         self.any(&|e| matches!(e, SExpr::FrameState(..)))
     }
 
+    /// Whether the expression may change during a motion: it uses a coordinate (of its link or
+    /// of a join), `time` or the state of a frame. Numbers and unknowns do not.
+    pub fn varies_with_motion(&self) -> bool {
+        self.any(&|e| {
+            matches!(
+                e,
+                SExpr::Time
+                    | SExpr::Coordinate { .. }
+                    | SExpr::JoinCoordinate { .. }
+                    | SExpr::FrameState(..)
+            )
+        })
+    }
+
     /// Whether the expression uses coordinate `index` of its link (or its rates).
     pub fn uses_coordinate(&self, index: u32) -> bool {
         self.any(&|e| matches!(e, SExpr::Coordinate { index: i, .. } if *i == index))

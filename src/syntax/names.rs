@@ -22,6 +22,7 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "norm",
     "dot",
     "cross",
+    "aim",
     "position",
     "velocity",
     "angular_velocity",
