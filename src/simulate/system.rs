@@ -47,10 +47,6 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
-    /// Generalised forces a caller sets from outside the program (one per state velocity),
-    /// added to the efforts' at every evaluation: the inputs of a linearisation
-    /// (`studies::linearize`).
-    inputs: Option<DVector<f64>>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -67,20 +63,13 @@ impl<'m> MechanicalSystem<'m> {
             scratch: Box::new(Scratch::new(model, stabilisation)),
             sampling: None,
             native: None,
-            inputs: None,
         }
     }
 
-    /// Sets the generalised forces added to the program's efforts from now on (one per state
-    /// velocity; `None` for none). Their power counts as the power of non-conservative efforts.
-    pub fn set_inputs(&mut self, inputs: Option<DVector<f64>>) {
-        self.inputs = inputs;
-    }
-
     /// Whether an evaluation computes efforts: the program applies some, or a caller set inputs
-    /// (a linearisation's, or a run's, `RunState::inputs`).
+    /// (`RunState::inputs`: a stepped run's, a linearisation's).
     fn reads_efforts(&self) -> bool {
-        self.model.has_efforts() || self.inputs.is_some() || self.state.inputs.any()
+        self.model.has_efforts() || self.state.inputs.any()
     }
 
     /// Runs `evaluate` with the outputs' scratch in place of the integrator's: the outputs'
@@ -157,10 +146,6 @@ impl<'m> MechanicalSystem<'m> {
         if self.state.inputs.any() {
             let read = (&state.coordinates[..], &state.rates[..]);
             efforts.power += (self.state.inputs).add_to(t, read, v, &mut efforts.tau);
-        }
-        if let Some(inputs) = &self.inputs {
-            efforts.tau += inputs;
-            efforts.power += inputs.iter().zip(v).map(|(u, rate)| u * rate).sum::<f64>();
         }
         Ok(())
     }

@@ -23,7 +23,7 @@ pub mod modes;
 
 use std::fmt;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use serde::{Serialize, Serializer};
 
 use self::chart::{Chart, ChartError};
@@ -37,6 +37,7 @@ use crate::dynamics::loops::Stabilisation;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::JoinId;
 use crate::prepare::Prepared;
+use crate::simulate::inputs::Inputs;
 use crate::simulate::system::{MechanicalSystem, SystemError};
 
 /// The largest acceleration (rad/s² or m/s²) left at an equilibrium by the efforts that hold
@@ -136,6 +137,8 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
         prepared.coordinates.clone(),
         Stabilisation::Projection,
     );
+    // The inputs act as a stepped run's do: efforts held along their velocities.
+    system.state.inputs = Inputs::along(inputs.clone());
     let (chart, choice) = if model.has_loops() {
         system.start_loops(&mut y)?;
         let free = system.scratch.loops.structure.free.clone();
@@ -502,12 +505,7 @@ impl Evaluator<'_> {
     fn accelerations(&mut self, x: &[f64], u: &[f64]) -> Result<Vec<f64>, LinearizeError> {
         let model = self.system.model;
         let (q, v) = self.state(x)?;
-        let mut forces = DVector::zeros(model.velocities());
-        for (&i, &value) in self.inputs.iter().zip(u) {
-            forces[i] += value;
-        }
-        self.system
-            .set_inputs((!self.inputs.is_empty()).then_some(forces));
+        self.system.state.inputs.held.copy_from_slice(u);
         let y: Vec<f64> = q.iter().chain(&v).copied().collect();
         let mut dydt = vec![0.0; y.len()];
         self.system.derivative(self.time, &y, &mut dydt)?;
