@@ -39,17 +39,12 @@ impl<'w> Checker<'w> {
             self.report(diagnostic);
             return Ty::Error;
         }
-        // Positions: the ends of `Between`, every second argument of `Through`.
-        let is_position = |k: usize| match arguments {
-            LawArguments::Between(_) => k == 2 || k == 4,
-            LawArguments::Through => k >= 2 && k % 2 == 0,
-        };
         let role = format!("an argument of `{name}`");
         // The positions' kind, from the first that is not the literal `0` (which fits both).
         let mut kind: Option<Ty> = None;
         let mut failed = false;
         for (k, (arg, &ty)) in args.iter().zip(arg_types).enumerate() {
-            if !is_position(k) {
+            if !arguments.is_position(k) {
                 failed |= !self.expect_value(&arg.value, ty, Ty::Scalar, &role);
                 continue;
             }

@@ -288,6 +288,16 @@ pub enum LawArguments {
     Through,
 }
 
+impl LawArguments {
+    /// Whether argument `k` of a call is a position (the time is argument 0).
+    pub fn is_position(self, k: usize) -> bool {
+        match self {
+            LawArguments::Between(_) => k == 2 || k == 4,
+            LawArguments::Through => k >= 2 && k.is_multiple_of(2),
+        }
+    }
+}
+
 /// The reference laws of time (`quintic(time, 0, 0, 2, pi)`): the positions `q` are scalars
 /// (a joint's law) or vectors (a point's law), the rest scalars.
 pub fn reference_law(name: &str) -> Option<LawArguments> {

@@ -25,14 +25,10 @@ type Positions = Vec<Scalar>;
 pub(super) fn law(name: &str, values: Vec<Value>, spans: &[Span], span: Span) -> Result<Value> {
     let vector = values.iter().any(|v| matches!(v, Value::Vector(_)));
     let arguments = reference_law(name).ok_or_else(|| internal(format!("`{name}` is no law")))?;
-    let is_position = |k: usize| match arguments {
-        LawArguments::Between(_) => k == 2 || k == 4,
-        LawArguments::Through => k >= 2 && k % 2 == 0,
-    };
     let mut scalars: Vec<Scalar> = Vec::new();
     let mut positions: Vec<Positions> = Vec::new();
     for (k, value) in values.into_iter().enumerate() {
-        match (is_position(k), vector) {
+        match (arguments.is_position(k), vector) {
             (true, true) => positions.push(as_vector(value, span)?.to_vec()),
             (true, false) => positions.push(vec![as_scalar(value, span)?]),
             (false, _) => scalars.push(as_scalar(value, span)?),

@@ -223,8 +223,9 @@ fn spline_by_moments(knots: &[f64], q: &[f64]) -> impl Fn(f64) -> Triple {
         a.swap(col, pivot);
         for row in col + 1..size {
             let factor = a[row][col] / a[col][col];
-            for c in col..=size {
-                a[row][c] -= factor * a[col][c];
+            let pivot_row = a[col].clone();
+            for (entry, pivot_entry) in a[row].iter_mut().zip(&pivot_row).skip(col) {
+                *entry -= factor * pivot_entry;
             }
         }
     }
