@@ -41,6 +41,16 @@ impl<'w> Checker<'w> {
                         .lookup_global(&ident.name, ctx.scope, ctx.limit)
                         .is_none()
                 {
+                    if let Some(arguments) = types::reference_law(&ident.name) {
+                        self.out.resolutions.insert(ident.span, Target::Builtin);
+                        self.positional_only(args);
+                        return self.law_call(ident, arguments, args, &arg_types, span);
+                    }
+                    if ident.name == "derivative" {
+                        self.out.resolutions.insert(ident.span, Target::Builtin);
+                        self.positional_only(args);
+                        return self.derivative_call(ident, args, &arg_types, span);
+                    }
                     if let Some((params, result)) = types::builtin_function(&ident.name) {
                         self.out.resolutions.insert(ident.span, Target::Builtin);
                         return self.builtin_call(ident, params, result, args, &arg_types, span);
@@ -262,7 +272,7 @@ impl<'w> Checker<'w> {
     }
 }
 
-fn arity_error(
+pub(super) fn arity_error(
     name: &str,
     expected: usize,
     found: usize,

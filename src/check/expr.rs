@@ -97,7 +97,7 @@ impl<'w> Checker<'w> {
             self.out.resolutions.insert(ident.span, Target::Builtin);
             return ty;
         }
-        if types::builtin_function(&ident.name).is_some() {
+        if types::is_builtin_function(&ident.name) {
             self.report(
                 Diagnostic::error(
                     "E0417",

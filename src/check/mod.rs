@@ -6,6 +6,7 @@
 mod calls;
 mod checker;
 mod expr;
+mod laws;
 mod output;
 pub mod resolutions;
 pub mod scope;

@@ -250,6 +250,7 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
     use Ty::*;
     const S1: &[Ty] = &[Scalar];
     const S2: &[Ty] = &[Scalar, Scalar];
+    const S3: &[Ty] = &[Scalar, Scalar, Scalar];
     const V1: &[Ty] = &[Vector];
     const V2: &[Ty] = &[Vector, Vector];
     const F1: &[Ty] = &[Frame];
@@ -258,6 +259,9 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
         "sin" | "cos" | "tan" | "asin" | "acos" | "atan" | "sqrt" | "exp" | "log" | "abs"
         | "floor" => (S1, Scalar),
         "atan2" | "mod" => (S2, Scalar),
+        // Piecewise functions of a signal (`x` bounded to [lo, hi], or 0 within a width).
+        "saturate" => (S3, Scalar),
+        "dead_zone" => (S2, Scalar),
         "norm" => (V1, Scalar),
         "dot" => (V2, Scalar),
         "cross" => (V2, Vector),
@@ -272,6 +276,44 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
         "sliding" | "sliding_disc" => (S2, Link),
         _ => return None,
     })
+}
+
+/// The arguments of a reference law of time after its first, the time (see `check::laws`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LawArguments {
+    /// From a start to an end at rest, `(t, t0, q0, t1, q1, extra...)`: the names of the
+    /// scalar parameters that follow the ends.
+    Between(&'static [&'static str]),
+    /// Through via points `(t, t0, q0, t1, q1, ..., tn, qn)`, two at least.
+    Through,
+}
+
+impl LawArguments {
+    /// Whether argument `k` of a call is a position (the time is argument 0).
+    pub fn is_position(self, k: usize) -> bool {
+        match self {
+            LawArguments::Between(_) => k == 2 || k == 4,
+            LawArguments::Through => k >= 2 && k.is_multiple_of(2),
+        }
+    }
+}
+
+/// The reference laws of time (`quintic(time, 0, 0, 2, pi)`): the positions `q` are scalars
+/// (a joint's law) or vectors (a point's law), the rest scalars.
+pub fn reference_law(name: &str) -> Option<LawArguments> {
+    use LawArguments::*;
+    Some(match name {
+        "linear" | "parabolic" | "cubic" | "quintic" | "harmonic" | "cycloidal" => Between(&[]),
+        "trapezoidal" => Between(&["ramp"]),
+        "spline" => Through,
+        _ => return None,
+    })
+}
+
+/// Whether `name` is a built-in function of any shape: a fixed signature, a reference law, or
+/// `derivative` (a scalar's or a vector's time derivative).
+pub fn is_builtin_function(name: &str) -> bool {
+    builtin_function(name).is_some() || reference_law(name).is_some() || name == "derivative"
 }
 
 /// How many of a built-in function's last parameters may be left out: `aim(u)` is `aim(u, v)`

@@ -759,9 +759,30 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             if let Some(shape) = shape {
                 return self.contact_link(shape, values, span);
             }
+            let spans: Vec<Span> = args.iter().map(|a| a.value.span).collect();
             if ident.name == "aim" {
-                let spans: Vec<Span> = args.iter().map(|a| a.value.span).collect();
                 return super::aim::aim(values, &spans, span);
+            }
+            if crate::check::types::reference_law(&ident.name).is_some() {
+                return super::laws::law(&ident.name, values, &spans, span);
+            }
+            match &*ident.name {
+                "derivative" => {
+                    let value = values.into_iter().next();
+                    let value = value.ok_or_else(|| internal("`derivative` without argument"))?;
+                    return super::laws::derivative(value, spans[0], span);
+                }
+                "saturate" | "dead_zone" => {
+                    let scalars = values
+                        .into_iter()
+                        .map(|v| as_scalar(v, span))
+                        .collect::<Result<Vec<_>>>()?;
+                    return Ok(Value::Scalar(match &*ident.name {
+                        "saturate" => super::piecewise::saturate(&scalars, &spans)?,
+                        _ => super::piecewise::dead_zone(&scalars, &spans)?,
+                    }));
+                }
+                _ => {}
             }
             return builtin_call(&ident.name, values, span);
         }

@@ -11,11 +11,13 @@ mod elaborator;
 mod eval;
 mod fields;
 mod instances;
+mod laws;
 pub mod mechanism;
 mod operations;
 mod output;
 mod own_join;
 mod owned;
+mod piecewise;
 pub mod value;
 
 use crate::check::Checked;

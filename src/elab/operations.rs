@@ -193,7 +193,7 @@ fn rotate_about(angle: &Scalar, axis: &Vector, v: &Vector) -> Vector {
     })
 }
 
-fn builtin_scalar(name: &'static str, x: &Scalar) -> Scalar {
+pub(super) fn builtin_scalar(name: &'static str, x: &Scalar) -> Scalar {
     match fold_builtin(name, std::slice::from_ref(x)) {
         Some(v) => num(v),
         None => Arc::new(SExpr::call(name, vec![x.clone()])),

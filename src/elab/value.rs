@@ -162,6 +162,8 @@ fn surely_finite(s: &Scalar, depth: u32) -> bool {
         | SExpr::FrameState(..) => true,
         SExpr::Neg(a) => finite(a),
         SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) => finite(a) && finite(b),
+        // A piecewise value is one of its branches, whatever its test.
+        SExpr::Call(call) if call.function == "select" => call.args[1..].iter().all(finite),
         SExpr::Call(call) => {
             matches!(
                 call.function,
@@ -365,6 +367,17 @@ impl SExpr {
                     | SExpr::Coordinate { .. }
                     | SExpr::JoinCoordinate { .. }
                     | SExpr::FrameState(..)
+            )
+        })
+    }
+
+    /// Whether the expression reads the mechanism's state: a coordinate or a rate (of its link
+    /// or of a join), or the state of a frame. Numbers, unknowns and `time` do not.
+    pub fn reads_state(&self) -> bool {
+        self.any(&|e| {
+            matches!(
+                e,
+                SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } | SExpr::FrameState(..)
             )
         })
     }

@@ -59,6 +59,25 @@ fn builtin_hover(name: &str) -> Option<String> {
             params.join(", ")
         ));
     }
+    if let Some(arguments) = crate::check::types::reference_law(name) {
+        let rest = match arguments {
+            crate::check::types::LawArguments::Between(extra) => ["t0", "q0", "t1", "q1"]
+                .iter()
+                .chain(extra)
+                .copied()
+                .collect::<Vec<_>>()
+                .join(", "),
+            crate::check::types::LawArguments::Through => "t0, q0, t1, q1, ...".to_string(),
+        };
+        return Some(format!(
+            "built-in reference law `{name}(t, {rest})`: q scalars or vectors"
+        ));
+    }
+    if name == "derivative" {
+        return Some(
+            "built-in function `derivative(law)`: the time derivative of a law of time".to_string(),
+        );
+    }
     Ty::from_annotation(name).map(|ty| format!("type `{ty}`"))
 }
 

@@ -263,7 +263,7 @@ fn identifier(analysis: &Analysis, start: usize) -> (TokenType, u32) {
             let text = &analysis.text(analysis.root)[occurrence.span.range()];
             let kind = if Ty::from_annotation(text).is_some() {
                 TokenType::Type
-            } else if crate::check::types::builtin_function(text).is_some() {
+            } else if crate::check::types::is_builtin_function(text) {
                 TokenType::Function
             } else {
                 TokenType::Variable

@@ -34,6 +34,15 @@ pub enum Node {
     /// `atan2(y, x)`.
     Atan2(ExprId, ExprId),
     Apply(Function, ExprId),
+    /// `when_nonnegative` where `test ≥ 0`, else `otherwise` (a NaN test takes `otherwise`): the
+    /// one piecewise node, behind saturation, dead zones and the piecewise reference laws. Each
+    /// piece is differentiated on its own, so the derivative is exact inside every piece and the
+    /// right-hand one where a rising test crosses 0.
+    Select {
+        test: ExprId,
+        when_nonnegative: ExprId,
+        otherwise: ExprId,
+    },
 }
 
 /// The functions of one argument LSD programs may call.
@@ -214,6 +223,12 @@ impl Pool {
                 Function::Sin | Function::Cos | Function::Atan | Function::Abs | Function::Floor,
                 a,
             ) => self.surely_finite(a),
+            // Only the value taken matters, whatever the test.
+            Node::Select {
+                when_nonnegative,
+                otherwise,
+                ..
+            } => self.surely_finite(when_nonnegative) && self.surely_finite(otherwise),
             Node::Div(..) | Node::Pow(..) | Node::Apply(..) => false,
         }
     }
@@ -328,6 +343,23 @@ impl Pool {
         }
     }
 
+    /// `when_nonnegative` where `test ≥ 0`, else `otherwise`: decided now for a constant test,
+    /// and one branch when both are the same node.
+    pub fn select(&mut self, test: ExprId, when_nonnegative: ExprId, otherwise: ExprId) -> ExprId {
+        if when_nonnegative == otherwise {
+            return otherwise;
+        }
+        match self.as_constant(test) {
+            Some(c) if c >= 0.0 => when_nonnegative,
+            Some(_) => otherwise,
+            None => self.intern(Node::Select {
+                test,
+                when_nonnegative,
+                otherwise,
+            }),
+        }
+    }
+
     /// The sum of `terms` (0 when empty).
     pub fn sum(&mut self, terms: impl IntoIterator<Item = ExprId>) -> ExprId {
         let zero = self.constant(0.0);
@@ -378,6 +410,18 @@ impl Pool {
                 let (ww, yy) = (self.mul(w, w), self.mul(y, y));
                 let denominator = self.add(ww, yy);
                 self.div(numerator, denominator)
+            }
+            Node::Select {
+                test,
+                when_nonnegative,
+                otherwise,
+            } => {
+                // Piece by piece: exact inside each piece; the test's own derivative plays no
+                // part (the pieces' values meet where the laws are continuous, and the jump of
+                // a discontinuous one is not differentiated).
+                let high = self.derivative(when_nonnegative, x, memo);
+                let low = self.derivative(otherwise, x, memo);
+                self.select(test, high, low)
             }
             Node::Apply(f, a) => {
                 let da = self.derivative(a, x, memo);
@@ -471,6 +515,11 @@ impl Pool {
             | Node::Pow(a, b)
             | Node::Atan2(a, b) => vec![a, b],
             Node::Neg(a) | Node::Apply(_, a) => vec![a],
+            Node::Select {
+                test,
+                when_nonnegative,
+                otherwise,
+            } => vec![test, when_nonnegative, otherwise],
         }
     }
 
@@ -506,19 +555,22 @@ enum Step {
     Pow(usize, usize),
     Atan2(usize, usize),
     Apply(Function, usize),
+    /// `b` where `a ≥ 0`, else `c`.
+    Select(usize, usize, usize),
 }
 
 impl Step {
-    fn operands(self) -> [Option<usize>; 2] {
+    fn operands(self) -> [Option<usize>; 3] {
         match self {
-            Step::Constant(_) | Step::Symbol(_) => [None, None],
-            Step::Neg(a) | Step::Apply(_, a) => [Some(a), None],
+            Step::Constant(_) | Step::Symbol(_) => [None, None, None],
+            Step::Neg(a) | Step::Apply(_, a) => [Some(a), None, None],
             Step::Add(a, b)
             | Step::Sub(a, b)
             | Step::Mul(a, b)
             | Step::Div(a, b)
             | Step::Pow(a, b)
-            | Step::Atan2(a, b) => [Some(a), Some(b)],
+            | Step::Atan2(a, b) => [Some(a), Some(b), None],
+            Step::Select(a, b, c) => [Some(a), Some(b), Some(c)],
         }
     }
 }
@@ -580,6 +632,11 @@ impl Tape {
                 Node::Pow(a, b) => Step::Pow(at(a), at(b)),
                 Node::Atan2(a, b) => Step::Atan2(at(a), at(b)),
                 Node::Apply(f, a) => Step::Apply(f, at(a)),
+                Node::Select {
+                    test,
+                    when_nonnegative,
+                    otherwise,
+                } => Step::Select(at(test), at(when_nonnegative), at(otherwise)),
             })
             .collect();
         let roots: Vec<usize> = roots.iter().map(|r| position[r]).collect();
@@ -656,6 +713,10 @@ impl Tape {
                 Step::Pow(a, b) => value[a].powf(value[b]),
                 Step::Atan2(a, b) => value[a].atan2(value[b]),
                 Step::Apply(f, a) => f.eval(value[a]),
+                Step::Select(test, high, low) => match value[test] >= 0.0 {
+                    true => value[high],
+                    false => value[low],
+                },
             };
         }
     }

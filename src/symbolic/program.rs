@@ -3,6 +3,8 @@
 //! needs (the geometry's constants and dof chains in `kinematics::eval`, the efforts in
 //! `dynamics::compiled`, the equations in `symbolic::lower`).
 
+use std::collections::HashMap;
+
 use super::expr::{ExprId, Function, Pool};
 use crate::elab::value::SExpr;
 
@@ -64,21 +66,45 @@ pub fn lower_structure<L: Lower + ?Sized>(lowering: &mut L, s: &SExpr) -> Result
                 _ => lowering.pool().pow(a, b),
             }
         }
-        SExpr::Call(call) => {
-            let (name, args) = (&call.function, &call.args);
-            let arity = if *name == "atan2" { 2 } else { 1 };
-            if args.len() != arity {
-                let error = MalformedCall("a call with another number of arguments");
-                return Err(error.into());
-            }
-            let x = lowering.lower(&args[0])?;
-            if *name == "atan2" {
-                let second = lowering.lower(&args[1])?;
-                return Ok(lowering.pool().atan2(x, second));
-            }
+        SExpr::Call(call) => lower_call(lowering, call.function, &call.args)?,
+        leaf => lowering.leaf(leaf)?,
+    })
+}
+
+/// A call of a built-in function: `atan2(y, x)`, a function of one argument, the piecewise
+/// `select(test, a, b)` (a where test ≥ 0, else b) that saturations and the reference laws are
+/// written with, and `derivative(e)`, the time derivative of a law of time, taken on the pool
+/// (`Pool::derivative` with respect to the time's symbol, exact).
+fn lower_call<L: Lower + ?Sized>(
+    lowering: &mut L,
+    name: &str,
+    args: &[crate::elab::value::Scalar],
+) -> Result<ExprId, L::Error> {
+    let arity = match name {
+        "atan2" => 2,
+        "select" => 3,
+        _ => 1,
+    };
+    if args.len() != arity {
+        return Err(MalformedCall("a call with another number of arguments").into());
+    }
+    let x = lowering.lower(&args[0])?;
+    Ok(match name {
+        "atan2" => {
+            let second = lowering.lower(&args[1])?;
+            lowering.pool().atan2(x, second)
+        }
+        "select" => {
+            let (high, low) = (lowering.lower(&args[1])?, lowering.lower(&args[2])?);
+            lowering.pool().select(x, high, low)
+        }
+        "derivative" => {
+            let time = lowering.leaf(&SExpr::Time)?;
+            lowering.pool().derivative(x, time, &mut HashMap::new())
+        }
+        _ => {
             let function = Function::from_name(name).ok_or(MalformedCall("an unknown function"))?;
             lowering.pool().apply(function, x)
         }
-        leaf => lowering.leaf(leaf)?,
     })
 }

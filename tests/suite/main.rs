@@ -47,6 +47,7 @@ mod pinocchio_fixtures;
 mod properties;
 mod reactions;
 mod recovered_angles;
+mod references;
 mod regression;
 mod repository;
 mod robustness;

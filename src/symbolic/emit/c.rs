@@ -35,6 +35,9 @@ impl Language for C {
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("atan2({y}, {x})")
     }
+    fn select(&self, test: &str, when_nonnegative: &str, otherwise: &str) -> String {
+        format!("({test} >= 0.0 ? {when_nonnegative} : {otherwise})")
+    }
     fn power_syntax(&self) -> PowerSyntax {
         PowerSyntax::Call
     }

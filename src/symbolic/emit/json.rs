@@ -67,6 +67,12 @@ fn node(symbols: &Symbols, id: ExprId, index: &HashMap<ExprId, usize>) -> Value 
         Node::Atan2(y, x) => json!({ "op": "atan2", "args": args(&[y, x]) }),
         Node::Neg(a) => json!({ "op": "neg", "args": args(&[a]) }),
         Node::Apply(f, a) => json!({ "op": f.name(), "args": args(&[a]) }),
+        // `args[1]` where `args[0] >= 0`, else `args[2]`.
+        Node::Select {
+            test,
+            when_nonnegative,
+            otherwise,
+        } => json!({ "op": "select", "args": args(&[test, when_nonnegative, otherwise]) }),
     }
 }
 

@@ -72,6 +72,9 @@ impl Language for Latex<'_> {
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("\\operatorname{{atan2}}\\left({y}, {x}\\right)")
     }
+    fn select(&self, test: &str, when_nonnegative: &str, otherwise: &str) -> String {
+        format!("\\begin{{cases}} {when_nonnegative} & \\text{{if }} {test} \\geq 0 \\\\ {otherwise} & \\text{{otherwise}} \\end{{cases}}")
+    }
     fn power_syntax(&self) -> PowerSyntax {
         PowerSyntax::Operator {
             exponent: Precedence::Lowest,

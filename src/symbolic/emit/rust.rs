@@ -34,6 +34,9 @@ impl Language for Rust {
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("f64::atan2({y}, {x})")
     }
+    fn select(&self, test: &str, when_nonnegative: &str, otherwise: &str) -> String {
+        format!("(if {test} >= 0.0 {{ {when_nonnegative} }} else {{ {otherwise} }})")
+    }
     fn power_syntax(&self) -> PowerSyntax {
         PowerSyntax::Call
     }

@@ -238,6 +238,9 @@ pub trait Language {
     /// A known function applied to its printed argument.
     fn function(&self, f: Function, argument: &str) -> String;
     fn atan2(&self, y: &str, x: &str) -> String;
+    /// `when_nonnegative` where `test ≥ 0`, else `otherwise`, as an atom (a NaN test takes
+    /// `otherwise`, as the tape does).
+    fn select(&self, test: &str, when_nonnegative: &str, otherwise: &str) -> String;
     fn power_syntax(&self) -> PowerSyntax;
     /// `pow(a, b)`, for `PowerSyntax::Call`.
     fn power_call(&self, base: &str, exponent: &str) -> String {
@@ -370,6 +373,18 @@ impl<L: Language> Printer<'_, L> {
                 Atom,
             ),
             Node::Apply(f, a) => (language.function(f, &self.expression(a)), Atom),
+            Node::Select {
+                test,
+                when_nonnegative,
+                otherwise,
+            } => (
+                language.select(
+                    &self.expression(test),
+                    &self.expression(when_nonnegative),
+                    &self.expression(otherwise),
+                ),
+                Atom,
+            ),
         }
     }
 

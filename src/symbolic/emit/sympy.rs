@@ -150,6 +150,9 @@ impl Language for Python<'_> {
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("sp.atan2({y}, {x})")
     }
+    fn select(&self, test: &str, when_nonnegative: &str, otherwise: &str) -> String {
+        format!("sp.Piecewise(({when_nonnegative}, {test} >= 0), ({otherwise}, True))")
+    }
     fn power_syntax(&self) -> PowerSyntax {
         PowerSyntax::Operator {
             exponent: Precedence::Unary,

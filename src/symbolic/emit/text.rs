@@ -36,6 +36,9 @@ impl Language for Text {
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("atan2({y}, {x})")
     }
+    fn select(&self, test: &str, when_nonnegative: &str, otherwise: &str) -> String {
+        format!("select({test} >= 0, {when_nonnegative}, {otherwise})")
+    }
     fn power_syntax(&self) -> PowerSyntax {
         PowerSyntax::Operator {
             exponent: Precedence::Unary,
