@@ -16,6 +16,7 @@ mod operations;
 mod output;
 mod own_join;
 mod owned;
+mod states;
 pub mod value;
 
 use crate::check::Checked;

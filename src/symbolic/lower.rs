@@ -329,6 +329,12 @@ impl Lower for Symbolic<'_, '_, '_> {
                 lowering.coordinate(*join, *index, *order)?
             }
             SExpr::FrameState(frame, quantity) => lowering.frame_state(frame, *quantity)?,
+            SExpr::State(_) => {
+                return Err(LowerError(
+                    "a state (`state(...)`): the equations written are the mechanism's alone"
+                        .to_string(),
+                ))
+            }
             other => return Err(LowerError(format!("{other:?} is not a leaf"))),
         })
     }
