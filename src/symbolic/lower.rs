@@ -331,7 +331,7 @@ impl Lower for Symbolic<'_, '_, '_> {
             SExpr::FrameState(frame, quantity) => lowering.frame_state(frame, *quantity)?,
             SExpr::State(_) => {
                 return Err(LowerError(
-                    "a state (`state(...)`): the equations written are the mechanism's alone"
+                    "it reads a state (`state(...)`), whose own equation is not among them"
                         .to_string(),
                 ))
             }
