@@ -195,12 +195,7 @@ impl Model {
 
 /// The error of a value that must be a constant number and is not; `at` is the declaration it
 /// belongs to, where one is known.
-pub(super) fn missing(
-    mechanism: &Mechanism,
-    error: EvalError,
-    what: &str,
-    at: Option<Span>,
-) -> Diagnostic {
+fn missing(mechanism: &Mechanism, error: EvalError, what: &str, at: Option<Span>) -> Diagnostic {
     let located = |diagnostic: Diagnostic, label: &str| match at {
         Some(span) => diagnostic.primary(span, label.to_string()),
         None => diagnostic,
@@ -341,7 +336,8 @@ pub fn build_with(
     let mimics = mimics::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let drives = drives::build(mechanism, kinematics, &joints, &mut errors);
-    let states = states::build(mechanism, unknowns, &mut errors);
+    let state_value = |e, what: &str, at| missing(mechanism, e, what, Some(at));
+    let states = states::build(mechanism, unknowns, &state_value, &mut errors);
     let read = EffortsRead {
         applied: &applied,
         links: &link_efforts,

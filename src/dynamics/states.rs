@@ -3,11 +3,11 @@
 //! lowered into the efforts' tape (`compiled`) beside the efforts that read it, so that one
 //! evaluation of the tape gives the efforts and the states' rates at a state of the run.
 
-use super::model::missing;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::Scalar;
-use crate::kinematics::eval::{eval, UnknownValues};
+use crate::kinematics::eval::{eval, EvalError, UnknownValues};
+use crate::source::Span;
 
 /// One state of the model.
 #[derive(Clone, Debug)]
@@ -22,11 +22,16 @@ pub struct StateModel {
     pub rate_root: usize,
 }
 
+/// Why a value the model needs is not a number, in the model's words (E0806, E0807): what,
+/// and where it was written.
+pub type Missing<'a> = &'a dyn Fn(EvalError, &str, Span) -> Diagnostic;
+
 /// The mechanism's states, in the order they were made: E0488 for a state without `rate`,
-/// E0806 and E0807 for a starting value that is not a number.
+/// and `missing` for a starting value that is not a number.
 pub fn build(
     mechanism: &Mechanism,
     unknowns: &UnknownValues,
+    missing: Missing<'_>,
     errors: &mut Vec<Diagnostic>,
 ) -> Vec<StateModel> {
     let mut states = Vec::new();
@@ -50,7 +55,7 @@ pub fn build(
                 rate: rate.clone(),
                 rate_root: 0,
             }),
-            Err(e) => errors.push(missing(mechanism, e, &what, Some(state.span))),
+            Err(e) => errors.push(missing(e, &what, state.span)),
         }
     }
     states
