@@ -4,7 +4,7 @@
 //! refusal); on a closed loop, a state integrating the crank's rate follows the crank's angle to
 //! the integrator's tolerance while the integral action holds the crank; the refusals.
 
-use crate::common::programs::{example_text, refusal_codes, run_text};
+use crate::common::programs::{example_text, output, refusal_codes, run_text};
 use lsdc::integrators::{Feature, INTEGRATORS};
 use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
@@ -26,12 +26,6 @@ fn settings(integrator: &Integrator, duration: f64, tolerance: f64) -> Settings 
         step: Some(1e-3),
         ..Settings::default()
     }
-}
-
-fn output(simulation: &Simulation, name: &str) -> usize {
-    (simulation.output_names.iter())
-        .position(|n| n == name)
-        .unwrap_or_else(|| panic!("no output {name} in {:?}", simulation.output_names))
 }
 
 /// Whether the integrator refused the run for its states (saying so); otherwise the run must
