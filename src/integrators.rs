@@ -31,6 +31,8 @@ pub enum Feature {
     Friction,
     /// Coordinates imposed as laws of time (`drive`).
     Drives,
+    /// The program's states (`state(x0)` and `rate`).
+    States,
 }
 
 impl Feature {
@@ -43,6 +45,7 @@ impl Feature {
             Feature::Mimics => "mimic joints",
             Feature::Friction => "joint friction",
             Feature::Drives => "drives (`drive`)",
+            Feature::States => "states (`state` and `rate`)",
         }
     }
 }
@@ -105,6 +108,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
             Feature::Mimics,
             Feature::Friction,
             Feature::Drives,
+            Feature::States,
         ],
     },
 ];

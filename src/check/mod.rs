@@ -483,13 +483,21 @@ impl<'w> Checker<'w> {
     /// join (E0481), the law a scalar. What the law may depend on (the time and numbers) and
     /// which coordinates may be driven are decided with the mechanism (`kinematics::drives`).
     fn drive(&mut self, drive: &'w crate::syntax::ast::DriveDecl, ctx: &mut Ctx) {
-        if drive.word.name.as_str() != "drive" {
-            self.report(
-                Diagnostic::error("E0480", format!("unknown declaration `{}`", drive.word.name))
-                    .primary(drive.word.span, "a declaration starts with a keyword")
-                    .help("did you mean `drive`? `drive crank.q = 2 * pi * time;` imposes a coordinate as a law of time"),
-            );
-            return;
+        match drive.word.name.as_str() {
+            "drive" => {}
+            "rate" => return self.rate(drive, ctx),
+            word => {
+                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate"]) {
+                    Some("rate") => "did you mean `rate`? `rate integral = error;` gives the derivative of a state",
+                    _ => "did you mean `drive`? `drive crank.q = 2 * pi * time;` imposes a coordinate as a law of time",
+                };
+                self.report(
+                    Diagnostic::error("E0480", format!("unknown declaration `{word}`"))
+                        .primary(drive.word.span, "a declaration starts with a keyword")
+                        .help(help),
+                );
+                return;
+            }
         }
         let ty = self.expr(&drive.target, ctx);
         let target_ty = match &drive.target.kind {
@@ -513,6 +521,15 @@ impl<'w> Checker<'w> {
         }
         let value_ty = self.expr(&drive.value, ctx);
         self.expect_value(&drive.value, value_ty, Ty::Scalar, "the law of a drive");
+    }
+
+    /// `rate s = f`: the target and the rate are scalars (that the target is a state made by
+    /// `state(x0)` is known once evaluated: E0486).
+    fn rate(&mut self, rate: &'w crate::syntax::ast::DriveDecl, ctx: &mut Ctx) {
+        let target_ty = self.expr(&rate.target, ctx);
+        self.expect_value(&rate.target, target_ty, Ty::Scalar, "the state of `rate`");
+        let value_ty = self.expr(&rate.value, ctx);
+        self.expect_value(&rate.value, value_ty, Ty::Scalar, "the rate of a state");
     }
 
     /// The type of an expression already checked (its diagnostics were reported then).

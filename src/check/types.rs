@@ -271,6 +271,8 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
         "position" | "velocity" | "angular_velocity" => (F1, Vector),
         "orientation" => (F1, Matrix),
         "distance" => (F2, Scalar),
+        // A new state starting at its argument (`let integral = state(0);`).
+        "state" => (S1, Scalar),
         // Contacts of a sphere or a disc on a plane, as links (`join plane and ball with rolling(r)`).
         "rolling" | "rolling_disc" => (S1, Link),
         "sliding" | "sliding_disc" => (S2, Link),

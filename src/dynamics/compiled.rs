@@ -31,6 +31,8 @@ enum Source {
     Rate(usize),
     /// A component of the state of `effort_frames[k]`.
     Frame(usize, FrameQuantity),
+    /// The value of the program's state `k` (`state(x0)`).
+    State(usize),
 }
 
 /// The compiled efforts: one tape whose roots are every effort's components.
@@ -67,13 +69,15 @@ impl Needs {
     }
 }
 
-/// The state an effort tape reads: the declared coordinates and rates of every join, the time,
-/// and the forward kinematics of the state (each body's pose and velocity, for the frames).
+/// The state an effort tape reads: the declared coordinates and rates of every join, the
+/// values of the program's states, the time, and the forward kinematics of the state (each
+/// body's pose and velocity, for the frames).
 pub struct EffortState<'a> {
     pub world: &'a [Pose],
     pub velocity: &'a [Motion],
     pub coordinates: &'a [f64],
     pub rates: &'a [f64],
+    pub states: &'a [f64],
     pub time: f64,
 }
 
@@ -110,6 +114,7 @@ impl EffortTape {
                 Source::Time => state.time,
                 Source::Coordinate(i) => state.coordinates[i],
                 Source::Rate(i) => state.rates[i],
+                Source::State(k) => state.states[k],
                 Source::Frame(k, quantity) => scratch.frames[k].component(quantity),
             }));
         let count = if energy {
@@ -302,6 +307,7 @@ impl Lower for TapeBuilder<'_> {
     fn leaf(&mut self, s: &SExpr) -> Result<ExprId, EvalError> {
         Ok(match s {
             SExpr::Time => self.symbol(Source::Time),
+            SExpr::State(id) => self.symbol(Source::State(id.0 as usize)),
             SExpr::Unknown(id) => {
                 let value = *self.unknowns.get(id).ok_or(EvalError::Missing(*id))?;
                 self.pool.constant(value)

@@ -51,17 +51,20 @@ impl Efforts {
 }
 
 impl Model {
-    /// Whether the program applies any effort besides the gravity field.
+    /// Whether the program applies any effort besides the gravity field, or has states (whose
+    /// rates the efforts' tape gives).
     pub fn has_efforts(&self) -> bool {
-        !self.applied.is_empty() || !self.link_efforts.is_empty()
+        !self.applied.is_empty() || !self.link_efforts.is_empty() || !self.states.is_empty()
     }
 }
 
-/// Declared coordinates and rates of every join, for expressions.
+/// Declared coordinates and rates of every join, and the values of the states, for
+/// expressions.
 pub struct Declared<'a> {
     pub model: &'a Model,
     pub coordinates: &'a [f64],
     pub rates: &'a [f64],
+    pub states: &'a [f64],
 }
 
 impl<'a> Declared<'a> {
@@ -79,6 +82,7 @@ impl<'a> Declared<'a> {
             velocity: &data.velocity,
             coordinates: self.coordinates,
             rates: self.rates,
+            states: self.states,
             time,
         };
         tape.eval(&self.model.effort_frames, &state, energy, &mut data.efforts);

@@ -20,5 +20,6 @@ pub mod model;
 pub mod response;
 pub mod rotors;
 pub mod rows;
+pub mod states;
 pub mod stops;
 pub mod welds;

@@ -13,6 +13,7 @@ use super::friction::{self, Friction};
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::mimics::{self, Mimic};
 use super::rotors::{self, Rotor};
+use super::states::{self, StateModel};
 use super::stops::{self, Stop};
 use super::welds;
 use crate::diag::Diagnostic;
@@ -93,6 +94,8 @@ pub struct Model {
     pub frictions: Vec<Friction>,
     /// The coordinates imposed as laws of time (`drive`): rows of the constraint rows.
     pub drives: Vec<DrivenCoordinate>,
+    /// The program's states (`state(x0)`), integrated with the motion after the velocities.
+    pub states: Vec<StateModel>,
 }
 
 impl Model {
@@ -333,7 +336,14 @@ pub fn build_with(
     let mimics = mimics::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let drives = drives::build(mechanism, kinematics, &joints, &mut errors);
-    let effort_frames = effort_frames(mechanism, kinematics, &applied, &link_efforts, &mut errors);
+    let state_value = |e, what: &str, at| missing(mechanism, e, what, Some(at));
+    let states = states::build(mechanism, unknowns, &state_value, &mut errors);
+    let read = EffortsRead {
+        applied: &applied,
+        links: &link_efforts,
+        states: &states,
+    };
+    let effort_frames = effort_frames(mechanism, kinematics, read, &mut errors);
     let link_potentials = joints
         .iter()
         .map(|j| &j.chain)
@@ -391,6 +401,7 @@ pub fn build_with(
         mimics,
         frictions,
         drives,
+        states,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),
@@ -495,11 +506,14 @@ impl Model {
                 let offset = self.declared_offset(self.chain(potential.joint).join);
                 potentials.push(builder.potential(&potential.value, Link(offset))?);
             }
-            Ok((potentials_applied, groups, links, potentials))
+            let rates = (self.states.iter())
+                .map(|state| builder.scalar(&state.rate, Link(None)))
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok((potentials_applied, groups, links, potentials, rates))
         };
         let lowered = lower();
         let tape = builder.build();
-        let (potentials_applied, groups, links, potentials) = match lowered {
+        let (potentials_applied, groups, links, potentials, rates) = match lowered {
             Ok(roots) => roots,
             Err(e) => {
                 self.effort_tape = Err(e);
@@ -515,6 +529,9 @@ impl Model {
         }
         for (potential, root) in self.link_potentials.iter_mut().zip(potentials) {
             potential.root = root;
+        }
+        for (state, root) in self.states.iter_mut().zip(rates) {
+            state.rate_root = root;
         }
         self.declared_read = self.joints_read(&tape);
         self.effort_tape = Ok(tape);
@@ -646,19 +663,27 @@ fn applied_efforts(
 }
 
 /// The frames the efforts' values and potentials use, placed on their bodies.
+/// What the efforts' tape evaluates besides the links' potentials: the applied efforts, the
+/// link efforts and the states' rates.
+#[derive(Clone, Copy)]
+struct EffortsRead<'a> {
+    applied: &'a [AppliedEffort],
+    links: &'a [LinkEffort],
+    states: &'a [StateModel],
+}
+
 fn effort_frames(
     mechanism: &Mechanism,
     kinematics: &KinematicModel,
-    applied: &[AppliedEffort],
-    links: &[LinkEffort],
+    read: EffortsRead<'_>,
     errors: &mut Vec<Diagnostic>,
 ) -> Vec<EffortFrame> {
     let mut frames = Vec::new();
-    let expressions = applied
-        .iter()
+    let expressions = (read.applied.iter())
         .flat_map(|e| e.value.iter().chain(&e.potential))
-        .chain(links.iter().flat_map(|e| e.value.iter()))
-        .chain(mechanism.links.iter().flat_map(|l| &l.potential));
+        .chain(read.links.iter().flat_map(|e| e.value.iter()))
+        .chain(mechanism.links.iter().flat_map(|l| &l.potential))
+        .chain(read.states.iter().map(|s| &s.rate));
     for s in expressions {
         s.frames_used(&mut frames);
     }

@@ -223,6 +223,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
+            DeclKind::Drive(rate) if rate.word.name.as_str() == "rate" => {
+                self.rate_decl(rate, &mut locals)
+            }
             DeclKind::Drive(drive) => {
                 let Value::Scalar(target) = self.expr(&drive.target, &mut locals)? else {
                     return Err(internal("drive of a non-coordinate"));
@@ -421,6 +424,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             Value::Force(id) | Value::Torque(id) => &mut self.mechanism.efforts[id.0 as usize].name,
             Value::Scalar(s) => match **s {
                 SExpr::Unknown(id) => &mut self.mechanism.unknowns[id.0 as usize].name,
+                SExpr::State(id) => &mut self.mechanism.states[id.0 as usize].name,
                 _ => return,
             },
             _ => return,
@@ -758,6 +762,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             };
             if let Some(shape) = shape {
                 return self.contact_link(shape, values, span);
+            }
+            if ident.name == "state" {
+                return self.new_state(values, span);
             }
             let spans: Vec<Span> = args.iter().map(|a| a.value.span).collect();
             if ident.name == "aim" {

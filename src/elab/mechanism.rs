@@ -300,6 +300,31 @@ pub struct Drive {
     pub law_span: Span,
 }
 
+/// A state: a variable with its own differential equation, integrated with the motion (an
+/// integral of an error, a motor's current, an estimate). `let s = state(x0);` makes it,
+/// `rate s = f;` gives its derivative.
+#[derive(Clone, Debug)]
+pub struct StateVariable {
+    /// The name it is first bound to (`integral`, `motor[2]:current`).
+    pub name: Option<Name>,
+    /// Its value at the start of a run (`x0`).
+    pub initial: Scalar,
+    /// Its derivative (`rate s = ...`), and where it was declared.
+    pub rate: Option<(Scalar, Span)>,
+    /// The call `state(x0)` that made it.
+    pub span: Span,
+}
+
+impl StateVariable {
+    /// Its name in columns and messages: the name it was bound to, else its number.
+    pub fn label(&self, index: usize) -> String {
+        match &self.name {
+            Some(name) => name.to_string(),
+            None => format!("state#{}", index + 1),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EffortKind {
@@ -390,6 +415,8 @@ pub struct Mechanism {
     pub initial: Vec<InitialValue>,
     /// The `drive` declarations, in declaration order.
     pub drives: Vec<Drive>,
+    /// The states (`state(x0)`), in the order they were made.
+    pub states: Vec<StateVariable>,
     /// `given` values of unknowns.
     pub given: Vec<(UnknownId, Scalar, Span)>,
     pub scenario: Option<Scenario>,

@@ -18,6 +18,7 @@ mod output;
 mod own_join;
 mod owned;
 mod piecewise;
+mod states;
 pub mod value;
 
 use crate::check::Checked;

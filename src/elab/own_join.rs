@@ -96,7 +96,8 @@ impl Replacement {
             | SExpr::Time
             | SExpr::Unknown(_)
             | SExpr::Coordinate { .. }
-            | SExpr::JoinCoordinate { .. } => return s.clone(),
+            | SExpr::JoinCoordinate { .. }
+            | SExpr::State(_) => return s.clone(),
             SExpr::UnknownFunction(call) => {
                 SExpr::unknown_function(call.function, self.list(&call.args))
             }

@@ -18,6 +18,9 @@ pub struct LinkId(pub u32);
 pub struct EffortId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct JoinId(pub u32);
+/// A state of the program (`state(x0)`), by its index among the mechanism's states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct StateId(pub u32);
 
 pub type Scalar = Arc<SExpr>;
 
@@ -62,6 +65,9 @@ pub enum SExpr {
     /// One component of the state of a frame at the current instant, in the fixed axes
     /// (`position(F)`, `velocity(F)`, …): only efforts may depend on it.
     FrameState(Arc<Frame>, FrameQuantity),
+    /// The value of a state (`let integral = state(0);`) at the current instant: a variable
+    /// with its own differential equation (`rate integral = ...;`), integrated with the motion.
+    State(StateId),
 }
 
 /// A component of a frame's state, in the fixed axes.
@@ -159,7 +165,8 @@ fn surely_finite(s: &Scalar, depth: u32) -> bool {
         | SExpr::Coordinate { .. }
         | SExpr::JoinCoordinate { .. }
         | SExpr::UnknownFunction(_)
-        | SExpr::FrameState(..) => true,
+        | SExpr::FrameState(..)
+        | SExpr::State(_) => true,
         SExpr::Neg(a) => finite(a),
         SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) => finite(a) && finite(b),
         // A piecewise value is one of its branches, whatever its test.
@@ -302,7 +309,8 @@ impl SExpr {
             SExpr::Num(_)
             | SExpr::Time
             | SExpr::Coordinate { .. }
-            | SExpr::JoinCoordinate { .. } => {}
+            | SExpr::JoinCoordinate { .. }
+            | SExpr::State(_) => {}
             SExpr::Unknown(id) => {
                 into.insert(*id);
             }
@@ -348,7 +356,8 @@ impl SExpr {
             | SExpr::Time
             | SExpr::Unknown(_)
             | SExpr::Coordinate { .. }
-            | SExpr::JoinCoordinate { .. } => {}
+            | SExpr::JoinCoordinate { .. }
+            | SExpr::State(_) => {}
         }
     }
 
@@ -367,6 +376,7 @@ impl SExpr {
                     | SExpr::Coordinate { .. }
                     | SExpr::JoinCoordinate { .. }
                     | SExpr::FrameState(..)
+                    | SExpr::State(_)
             )
         })
     }
@@ -408,7 +418,8 @@ impl SExpr {
             | SExpr::Time
             | SExpr::Unknown(_)
             | SExpr::Coordinate { .. }
-            | SExpr::JoinCoordinate { .. } => false,
+            | SExpr::JoinCoordinate { .. }
+            | SExpr::State(_) => false,
         }
     }
 
@@ -479,6 +490,7 @@ impl SExpr {
                 FrameQuantity::AngularVelocity(i) => format!("angular_velocity(frame)[{i}]"),
                 FrameQuantity::Orientation(i, j) => format!("orientation(frame)[{i}][{j}]"),
             },
+            SExpr::State(id) => format!("state#{}", id.0 + 1),
         }
     }
 }

@@ -118,11 +118,15 @@ fn simulate_from(
 }
 
 /// The joins whose reactions the samples carry: none unless the settings ask for them.
-/// The outputs' columns: the drives' efforts (`crank.drive_effort`), then the program's
-/// outputs and the named frames' states (`Outputs::names`).
+/// The outputs' columns: the drives' efforts (`crank.drive_effort`), the program's states by
+/// name (`integral`), then the program's outputs and the named frames' states
+/// (`Outputs::names`).
 pub fn output_names_of(prepared: &Prepared) -> Vec<String> {
-    let drives = prepared.model.drives.iter().map(|d| d.effort_name());
+    let model = &prepared.model;
+    let drives = model.drives.iter().map(|d| d.effort_name());
+    let states = model.states.iter().map(|s| s.name.clone());
     drives
+        .chain(states)
         .chain(prepared.outputs.names.iter().cloned())
         .collect()
 }

@@ -33,6 +33,9 @@ pub struct RunState {
     pub switches: Vec<Switch>,
     /// The efforts applied from outside the program (`Simulator`), read by every evaluation.
     pub inputs: Inputs,
+    /// The values of the program's states (`state(x0)`) at the point being evaluated: the
+    /// integrator's state past the mechanism's, set before each evaluation (`RunOde`).
+    pub states: Vec<f64>,
 }
 
 impl RunState {
@@ -50,6 +53,7 @@ impl RunState {
             impacts: Vec::new(),
             switches: Vec::new(),
             inputs: Inputs::default(),
+            states: model.states.iter().map(|s| s.initial).collect(),
         }
     }
 }

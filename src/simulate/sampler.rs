@@ -123,7 +123,7 @@ impl Sampler<'_> {
             self.interpolant(system, &stretch)?
                 .evaluate(time, &mut state);
             system.measure_loops(time, &state)?;
-            samples.push(self.describe(system, time, state, y.get(n).copied())?);
+            samples.push(self.describe(system, time, state, &y[n..])?);
         }
         Ok(samples)
     }
@@ -174,22 +174,29 @@ impl Sampler<'_> {
         time: f64,
         y: &[f64],
     ) -> Result<Sample, SystemError> {
-        // After the motion, the work of the non-conservative efforts when it is integrated.
+        // After the motion, the program's states, then the work of the non-conservative
+        // efforts when it is integrated.
         let n = system.dimension();
         let mut state = y[..n].to_vec();
+        system.set_states(&y[n..n + system.state_count()]);
         system.keep_closed(time, &mut state)?;
-        self.describe(system, time, state, y.get(n).copied())
+        self.describe(system, time, state, &y[n..])
     }
 
-    /// The sample of a state (positions, velocities) on the loops.
+    /// The sample of a state (positions, velocities) on the loops, with `after` the
+    /// integrator's state past the motion: the program's states, then the work when it is
+    /// integrated.
     fn describe(
         &mut self,
         system: &mut MechanicalSystem<'_>,
         time: f64,
         mut y: Vec<f64>,
-        work: Option<f64>,
+        after: &[f64],
     ) -> Result<Sample, SystemError> {
         let model = system.model;
+        let (states, work) = after.split_at(system.state_count());
+        let work = work.first().copied();
+        system.set_states(states);
         system.ball_rates(&mut y)?;
         let (q, v) = model.split_state(&y);
         let (coordinates, rates) = model.declared((time, &q, v), &system.state.reference)?;
@@ -198,13 +205,16 @@ impl Sampler<'_> {
         } else {
             Vec::new()
         };
-        // The drives' efforts: the multipliers of their rows in the equations at the sample.
-        let mut outputs = Vec::with_capacity(model.drives.len() + self.outputs.names.len());
+        // The drives' efforts: the multipliers of their rows in the equations at the sample;
+        // then the states' values.
+        let columns = model.drives.len() + states.len() + self.outputs.names.len();
+        let mut outputs = Vec::with_capacity(columns);
         if !model.drives.is_empty() {
             let mut rates = vec![0.0; y.len()];
             system.derivative(time, &y, &mut rates)?;
             outputs.extend_from_slice(&system.scratch.drive_efforts);
         }
+        outputs.extend_from_slice(states);
         let data = &mut system.scratch.data;
         forward_kinematics(model, data, &q, v)?;
         let h = momentum(model, data);
@@ -212,6 +222,7 @@ impl Sampler<'_> {
             model,
             coordinates: &coordinates,
             rates: &rates,
+            states,
         };
         // `+ 0.0` turns a −0 into 0 for the outputs.
         let potential = potential_energy(model, data, &self.conservative, &declared, time)? + 0.0;
@@ -221,6 +232,7 @@ impl Sampler<'_> {
             velocity: &data.velocity,
             coordinates: &coordinates,
             rates: &rates,
+            states,
             time,
         };
         outputs.extend(self.outputs.values(&state, &mut self.output_scratch));

@@ -99,6 +99,8 @@ impl<'p> Simulator<'p> {
             ));
         }
         let (mut system, mut y0) = start_system(prepared, start, inputs).map_err(at_start)?;
+        // The program's states ride along after the motion, from their starting values.
+        y0.extend(model.states.iter().map(|state| state.initial));
         let conservative = conservative_forces(model);
         // The work of non-conservative efforts (inputs among them) rides along as one more
         // state (not with the variational integrator, whose steps are its own), nor with native
@@ -144,8 +146,9 @@ impl<'p> Simulator<'p> {
     }
 
     /// The current state as the integrator holds it: the model's positions then velocities
-    /// (quaternions for ball and free joints), then the work of the non-conservative efforts
-    /// when it is tracked.
+    /// (quaternions for ball and free joints), then the program's states (`state(x0)`, in the
+    /// order of [`Simulator::state_names`]), then the work of the non-conservative efforts when
+    /// it is tracked.
     pub fn state(&self) -> Vec<f64> {
         match &self.stepping {
             Stepping::Ode(integration) => integration.state().to_vec(),
@@ -171,6 +174,20 @@ impl<'p> Simulator<'p> {
         let sampler = &mut self.sampler;
         let sampled = (self.system).sampling(|system| sampler.sample(system, time, &state));
         sampled.map_err(|e| self.failure_now(e.to_string()))
+    }
+
+    /// The names of the program's states (`let integral = state(0);`), in their order in
+    /// [`Simulator::state`] after the positions and velocities.
+    pub fn state_names(&self) -> Vec<String> {
+        let states = &self.system.model.states;
+        states.iter().map(|state| state.name.clone()).collect()
+    }
+
+    /// The values of the program's states at the current state, in the order of
+    /// [`Simulator::state_names`].
+    pub fn states(&self) -> Vec<f64> {
+        let n = self.system.dimension();
+        self.state()[n..n + self.system.state_count()].to_vec()
     }
 
     /// The names of the inputs' velocities, in the order of their efforts.
@@ -413,6 +430,7 @@ fn features(model: &Model) -> Vec<Feature> {
         (Feature::Mimics, !model.mimics.is_empty()),
         (Feature::Friction, !model.frictions.is_empty()),
         (Feature::Drives, !model.drives.is_empty()),
+        (Feature::States, !model.states.is_empty()),
     ];
     present
         .iter()
@@ -468,10 +486,13 @@ fn start_system<'p>(
 }
 
 /// Whether the model has none of what the native code and the variational integrator know
-/// nothing of: geared rotors, mimic couplings, joint friction (the model's own evaluation
-/// counts them).
+/// nothing of: geared rotors, mimic couplings, joint friction, states (the model's own
+/// evaluation counts them).
 fn plain(model: &Model) -> bool {
-    model.rotors.is_empty() && model.mimics.is_empty() && model.frictions.is_empty()
+    model.rotors.is_empty()
+        && model.mimics.is_empty()
+        && model.frictions.is_empty()
+        && model.states.is_empty()
 }
 
 fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
@@ -533,7 +554,7 @@ fn stepping(
         atol: settings.atol,
         initial_step: settings.step,
         max_step: settings.max_step,
-        controlled: Some(system.dimension()),
+        controlled: Some(system.dimension() + system.state_count()),
         max_steps: settings.max_steps,
         stiffness_check: settings.stiffness_check,
         interrupt,

@@ -17,6 +17,7 @@ mod reference;
 pub mod scratch;
 pub use error::{NotFiniteCause, SystemError};
 mod stacked;
+mod states;
 mod stop_rows;
 
 use super::run_state::RunState;
@@ -140,6 +141,7 @@ impl<'m> MechanicalSystem<'m> {
             model,
             coordinates: &state.coordinates,
             rates: &state.rates,
+            states: &self.state.states,
         };
         let efforts = &mut self.scratch.efforts;
         evaluate_into(model, &mut self.scratch.data, &declared, t, efforts)?;

@@ -68,10 +68,12 @@ impl MechanicalSystem<'_> {
         let efforts = if model.nq == model.nv {
             // Every joint is a chain: the state is the declared coordinates and rates.
             forward_kinematics(model, &mut self.scratch.data, q, v)?;
+            // The symplectic integrator refuses states (`integrators`): none to read.
             let declared = Declared {
                 model,
                 coordinates: q,
                 rates: v,
+                states: &[],
             };
             evaluate(model, &mut self.scratch.data, &declared, t)?
         } else {

@@ -329,6 +329,12 @@ impl Lower for Symbolic<'_, '_, '_> {
                 lowering.coordinate(*join, *index, *order)?
             }
             SExpr::FrameState(frame, quantity) => lowering.frame_state(frame, *quantity)?,
+            SExpr::State(_) => {
+                return Err(LowerError(
+                    "it reads a state (`state(...)`), whose own equation is not among them"
+                        .to_string(),
+                ))
+            }
             other => return Err(LowerError(format!("{other:?} is not a leaf"))),
         })
     }

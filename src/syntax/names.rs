@@ -28,6 +28,7 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "angular_velocity",
     "orientation",
     "distance",
+    "state",
     "rolling",
     "sliding",
     "rolling_disc",

@@ -175,6 +175,7 @@ fn external_forces(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Vec<
         model,
         coordinates: q,
         rates: v,
+        states: &[],
     };
     lsdc::dynamics::efforts::evaluate(model, data, &declared, 0.0)
         .expect("efforts")

@@ -3,7 +3,7 @@
 //! drive's work, with every integrator of the registry (or its refusal); a driven tree against
 //! its inverse dynamics; the refusals.
 
-use crate::common::programs::{column, example_text, refusal_codes, run_text};
+use crate::common::programs::{column, example_text, output, refusal_codes, run_text};
 use lsdc::integrators::{Feature, INTEGRATORS};
 use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
@@ -18,12 +18,6 @@ fn settings(integrator: Integrator) -> Settings {
         step: Some(1e-3),
         ..Settings::default()
     }
-}
-
-fn output(simulation: &Simulation, name: &str) -> usize {
-    (simulation.output_names.iter())
-        .position(|n| n == name)
-        .unwrap_or_else(|| panic!("no output {name} in {:?}", simulation.output_names))
 }
 
 /// The planar four-bar of `four_bar_driven.lsd` in closed form along its crank angle θ₁ with

@@ -37,6 +37,7 @@ fn right_hand_side(text: &str, coordinates: &[f64], rates: &[f64]) -> Vec<f64> {
         model: &model,
         coordinates,
         rates,
+        states: &[],
     };
     let efforts = efforts::evaluate(&model, &mut data, &declared, 0.0).expect("efforts");
     let bias = rnea(

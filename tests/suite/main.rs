@@ -55,6 +55,7 @@ mod rolling_disc;
 mod rows;
 mod runs;
 mod simulation;
+mod states;
 mod stepping;
 mod stop_loops;
 mod stops;

@@ -119,6 +119,7 @@ fn numeric(
         model: &model,
         coordinates,
         rates,
+        states: &[],
     };
     let efforts = if with_efforts {
         efforts::evaluate(&model, &mut data, &declared, time).expect("efforts")

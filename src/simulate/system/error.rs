@@ -39,6 +39,8 @@ pub enum SystemError {
     DiscFlat { contact: String },
     /// An impact on a stop could not be resolved, or left a coordinate resting on its stop.
     Impact(String),
+    /// The rate of the program's state `state` is not finite.
+    StateRateNotFinite { state: String },
 }
 
 /// What made an acceleration infinite or NaN.
@@ -98,6 +100,10 @@ impl fmt::Display for SystemError {
                 "the disc of the contact `{contact}` fell flat on its plane: every point of its rim touches it there, so the contact has no point and the motion beyond is an impact that rolling and sliding do not model"
             ),
             SystemError::Impact(message) => f.write_str(message),
+            SystemError::StateRateNotFinite { state } => write!(
+                f,
+                "the rate of state `{state}` is not finite: its value grew too large, or its `rate` is not a number there (a square root or logarithm of a negative value, a division by zero)"
+            ),
             SystemError::AccelerationNotFinite { join, cause } => {
                 write!(f, "the acceleration of join `{join}` is not finite: {cause}")
             }

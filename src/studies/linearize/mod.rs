@@ -432,6 +432,8 @@ pub enum Unsupported {
     Mimic,
     /// Joint friction: not smooth at rest.
     Friction,
+    /// A state of the program (`state(x0)`): its equation is not among the mechanism's yet.
+    State,
 }
 
 impl Unsupported {
@@ -441,6 +443,7 @@ impl Unsupported {
             Unsupported::Contact => "a contact",
             Unsupported::Mimic => "a coupled (mimic) joint",
             Unsupported::Friction => "a joint with friction",
+            Unsupported::State => "a state",
         }
     }
 
@@ -450,6 +453,7 @@ impl Unsupported {
             Unsupported::Contact => "a contact constrains velocities, not positions: independent coordinates do not describe it",
             Unsupported::Mimic => "write the coupling as a loop of the mechanism, or linearise without it",
             Unsupported::Friction => "friction is not smooth at rest: linearise without it, or with a viscous damper written as an effort",
+            Unsupported::State => "the linear model is the mechanism's alone: linearise without the states (a controller's integral, a motor's current)",
         }
     }
 }
@@ -478,6 +482,9 @@ fn refuse_unsupported(prepared: &Prepared) -> Result<(), LinearizeError> {
     if let Some(friction) = model.frictions.first() {
         let join = &model.joints[friction.joint].chain.name;
         return Err(refuse(join, Unsupported::Friction));
+    }
+    if let Some(state) = model.states.first() {
+        return Err(refuse(&state.name, Unsupported::State));
     }
     Ok(())
 }
@@ -535,6 +542,7 @@ impl Evaluator<'_> {
             velocity: &data.velocity,
             coordinates: &coordinates,
             rates: &rates,
+            states: &[],
             time: self.time,
         };
         Ok(self.prepared.outputs.values(&state, &mut self.scratch))

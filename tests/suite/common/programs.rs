@@ -72,6 +72,13 @@ pub fn column(simulation: &Simulation, name: &str) -> usize {
         .unwrap_or_else(|| panic!("no coordinate {name}"))
 }
 
+/// The column of the output `name` (a drive's effort, a state, a program's output).
+pub fn output(simulation: &Simulation, name: &str) -> usize {
+    (simulation.output_names.iter())
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no output {name} in {:?}", simulation.output_names))
+}
+
 /// A program's run with `settings` (its own `simulate` declaration overridden).
 pub fn run_text(text: &str, settings: Settings) -> Simulation {
     let compilation = compile_text("test.lsd", text, None, &no_library_path());
