@@ -6,7 +6,9 @@
 //! 1. the tree's joints and the closed loops: the response X (`response`) eliminates them, a
 //!    tree by its mass matrix, the tree's mimic couplings by their basis, the loops by their
 //!    sparse factorisation (`loops`: the loops' block has its own specialised solve, whose
-//!    allowed motions N give X = N (NᵀMN)⁻¹ Nᵀ, so that G X = 0 for its rows);
+//!    allowed motions N give X = N (NᵀMN)⁻¹ Nᵀ, so that G X = 0 for its rows; the run solves
+//!    it first in the same call as the others, `simulate::system::stack`, and the symplectic
+//!    integrator's RATTLE steps solve the same block with their own right-hand sides);
 //! 2. the contacts' kept rows (`contacts`), with their velocity-product terms γ;
 //! 3. with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
 //!    in X instead);
@@ -17,15 +19,18 @@
 //! along (G, but on a sliding contact's normal row, whose force carries the friction it
 //! causes), the accelerations a₀ the base solve found without them become a = a₀ + X Hᵀλ with
 //! (G X Hᵀ) λ = −(G a₀ + γ): the saddle-point system [M −Hᵀ; G 0] solved on the response
-//! ([`RowStack::solve`]). The same rows bring a state's velocities (their values G v − w,
-//! [`RowStack::velocity_values`]) or positions (their values φ(q, t),
-//! [`RowStack::position_values`]) back onto them by the change of least kinetic metric along
-//! X Gᵀ ([`RowStack::add_least_change`]); their forces join the generalised forces for the
-//! reactions ([`RowStack::add_coordinate_forces`], the contacts' act on bodies instead). The
-//! solve is rank-revealing (`Pivoted`): a follower held with its leader, or a coordinate held
-//! by a stop and its friction, gives dependent rows, which leave the motion determined though
-//! not their forces. Nothing is allocated once the storage is sized for the rows
-//! ([`RowStack::arrange`]), which change only at events.
+//! ([`RowStack::solve`]), at one call site of the run for every block
+//! (`MechanicalSystem::solve_stack`, in `derivative_at`). The same rows bring a state's
+//! velocities (their values G v − w, [`RowStack::velocity_values`]) or positions (their values
+//! φ(q, t), [`RowStack::position_values`]) back onto them by the change of least kinetic
+//! metric along X Gᵀ ([`RowStack::add_least_change`]: the steps of the one position corrector,
+//! `corrector`, for every kind with a position, the drives' laws and the resting stops' bounds
+//! among them); their forces join the generalised forces for the reactions, before the loops'
+//! multipliers are found ([`RowStack::add_coordinate_forces`], the contacts' act on bodies
+//! instead). The solve is rank-revealing (`Pivoted`): a follower held with its leader, or a
+//! coordinate held by a stop and its friction, gives dependent rows, which leave the motion
+//! determined though not their forces. Nothing is allocated once the storage is sized for the
+//! rows ([`RowStack::arrange`]), which change only at events.
 //!
 //! Each row has a right-hand side at each level: its position value φ, its velocity target w
 //! (G v = w) and its acceleration term γ (G a + γ = 0). A kind fixed in time has w = 0 and no

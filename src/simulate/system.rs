@@ -1,9 +1,10 @@
 //! The equations of motion as a first-order system y' = f(t, y), with y = (positions,
 //! velocities): positions move with the joint velocities (quaternions included), velocities with
 //! the accelerations from the articulated-body algorithm under the efforts (trees), or from the
-//! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (loops), then with every other row
-//! (contacts, couplings with loops, coordinates held at rest) solved on the response of those
-//! accelerations to forces (`dynamics::rows`, `holding`).
+//! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (the loops' block of the constraint
+//! stack), then with every other row (contacts, couplings with loops, coordinates held or
+//! driven) solved on the response of those accelerations to forces: the whole stack in one
+//! call (`stack`, `holding`, `dynamics::rows`).
 
 use nalgebra::DVector;
 
