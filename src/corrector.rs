@@ -9,8 +9,7 @@
 //! |---|---|---|---|---|---|
 //! | loops' projection (`dynamics::loops::project`) | largest row | 0, or kept rows at round-off (1e-13, well conditioned) | none | 8 | under fourfold ends it, unless an earlier factor served it (then a fresh one) |
 //! | closing a configuration on every loop row (same file) | largest row | 0 | none | 8 | under fourfold ends it |
-//! | stops resting with loops or contacts (`simulate::system::stop_rows`) | largest row | 0 | none | 8 | any reduction continues |
-//! | contacts' gaps and couplings (`simulate::system::stacked`) | none: every step is kept | every row at its round-off | none | 4 | — |
+//! | the constraint stack's rows beyond the loops' (`simulate::system::stacked`): contacts' gaps, couplings, drives' laws, resting and impacting stops' bounds | none: every step is kept | every row at its round-off (a bound's: 4 ulps) | none | 4 | — |
 //! | assembly (`kinematics::assembly`) | squared norm | largest row ≤ tolerance (1e-12) | LM from 1e-6, floor 1e-15, 30 tries | 200 | a rejected step under 1e-16 ends it |
 //! | assembly's polish (same file) | norm | 0 | none | 8 | any reduction continues |
 //! | the closed configuration nearest to the given values (same file) | none: every step is kept | step ≤ 1e-13 of the largest coordinate | none | 50 | — (a last step over 1e-8 refuses the result) |
@@ -19,9 +18,9 @@
 //! What differs between them is what each caller supplies ([`Correction`]): its residual and
 //! how it measures it, its linear solve (the loops' sparse factorisation with its own damping
 //! and a factor kept along a projection; a dense singular value decomposition; the response X
-//! of the contacts' and couplings' stack; Cholesky on damped normal equations), the
-//! coordinates it holds (assembly's `fixed` ones: its steps leave them out; the resting stops'
-//! rows stacked under the others) and how it moves a state (retraction on the joints'
+//! of the constraint stack; Cholesky on damped normal equations), the coordinates it holds
+//! (assembly's `fixed` ones: its steps leave them out; the stack's held rows: the drives' laws
+//! and the resting stops' bounds) and how it moves a state (retraction on the joints'
 //! manifolds, then, for the stacked rows, the loops' own projection). The iteration itself is
 //! one, [`correct`]: from the current point, while it is not settled and iterations remain,
 //! take the step at the current damping; keep it if it reduces the merit (or always, for

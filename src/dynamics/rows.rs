@@ -6,7 +6,9 @@
 //! 1. the tree's joints and the closed loops: the response X (`response`) eliminates them, a
 //!    tree by its mass matrix, the tree's mimic couplings by their basis, the loops by their
 //!    sparse factorisation (`loops`: the loops' block has its own specialised solve, whose
-//!    allowed motions N give X = N (NᵀMN)⁻¹ Nᵀ, so that G X = 0 for its rows);
+//!    allowed motions N give X = N (NᵀMN)⁻¹ Nᵀ, so that G X = 0 for its rows; the run solves
+//!    it first in the same call as the others, `simulate::system::stack`, and the symplectic
+//!    integrator's RATTLE steps solve the same block with their own right-hand sides);
 //! 2. the contacts' kept rows (`contacts`), with their velocity-product terms γ;
 //! 3. with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
 //!    in X instead);
@@ -17,15 +19,18 @@
 //! along (G, but on a sliding contact's normal row, whose force carries the friction it
 //! causes), the accelerations a₀ the base solve found without them become a = a₀ + X Hᵀλ with
 //! (G X Hᵀ) λ = −(G a₀ + γ): the saddle-point system [M −Hᵀ; G 0] solved on the response
-//! ([`RowStack::solve`]). The same rows bring a state's velocities (their values G v − w,
-//! [`RowStack::velocity_values`]) or positions (their values φ(q, t),
-//! [`RowStack::position_values`]) back onto them by the change of least kinetic metric along
-//! X Gᵀ ([`RowStack::add_least_change`]); their forces join the generalised forces for the
-//! reactions ([`RowStack::add_coordinate_forces`], the contacts' act on bodies instead). The
-//! solve is rank-revealing (`Pivoted`): a follower held with its leader, or a coordinate held
-//! by a stop and its friction, gives dependent rows, which leave the motion determined though
-//! not their forces. Nothing is allocated once the storage is sized for the rows
-//! ([`RowStack::arrange`]), which change only at events.
+//! ([`RowStack::solve`]), at one call site of the run for every block
+//! (`MechanicalSystem::solve_stack`, in `derivative_at`). The same rows bring a state's
+//! velocities (their values G v − w, [`RowStack::velocity_values`]) or positions (their values
+//! φ(q, t), [`RowStack::position_values`]) back onto them by the change of least kinetic
+//! metric along X Gᵀ ([`RowStack::add_least_change`]: the steps of the one position corrector,
+//! `corrector`, for every kind with a position, the drives' laws and the resting stops' bounds
+//! among them); their forces join the generalised forces for the reactions, before the loops'
+//! multipliers are found ([`RowStack::add_coordinate_forces`], the contacts' act on bodies
+//! instead). The solve is rank-revealing (`Pivoted`): a follower held with its leader, or a
+//! coordinate held by a stop and its friction, gives dependent rows, which leave the motion
+//! determined though not their forces. Nothing is allocated once the storage is sized for the
+//! rows ([`RowStack::arrange`]), which change only at events.
 //!
 //! Each row has a right-hand side at each level: its position value φ, its velocity target w
 //! (G v = w) and its acceleration term γ (G a + γ = 0). A kind fixed in time has w = 0 and no
@@ -117,8 +122,16 @@ const LAW_ROUND_OFF: f64 = 1e-13;
 const GAP_ROUND_OFF: f64 = 1e-15;
 
 /// A held coordinate's distance to its bound below this (relative to max(1, |bound|)) is at
-/// round-off.
+/// round-off: it is set on the bound alone (`simulate::system::stacked`).
 pub const BOUND_ROUND_OFF: f64 = 1e-14;
+
+/// A held coordinate's distance to its bound above this (relative to max(1, |bound|)) is
+/// corrected with the other rows: a stop's row is linear in the positions, so one step closes
+/// it to a few units in the last place, and a coordinate then set on its bound alone leaves the
+/// other rows closed. At `BOUND_ROUND_OFF` instead, the crank of `limited_four_bar` (dop853),
+/// found 7.9e-15 below its bound at an impact and set on it alone, was 8e-13 below it when the
+/// integration restarted: its next crossing, from below, was missed.
+const BOUND_CLOSED: f64 = 4.0 * f64::EPSILON;
 
 /// Entries of G X Hᵀ below this fraction of its largest are taken as zero: the rows left are
 /// dependent on the others.
@@ -374,7 +387,8 @@ impl RowStack {
     /// not integrable), the couplings' violations, the held coordinates' distances to their
     /// bounds or their laws, q − d(t) (none for a row of velocities only). Whether any is above
     /// its round-off (a gap's relative to the largest radius, a coupling's to its follower's
-    /// coordinate, a bound's to the bound, a law's distance to 1 + |d(t)|).
+    /// coordinate, a bound's to the bound (a few units in the last place), a law's distance to
+    /// 1 + |d(t)|).
     pub fn position_values(&mut self, model: &Model, all: &ContactRows, q: &[f64]) -> bool {
         let radius = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
         let mut open = false;
@@ -400,7 +414,7 @@ impl RowStack {
             let (value, round_off) = match held.holder {
                 Holder::Stop {
                     position, bound, ..
-                } => (q[position] - bound, BOUND_ROUND_OFF * bound.abs().max(1.0)),
+                } => (q[position] - bound, BOUND_CLOSED * bound.abs().max(1.0)),
                 Holder::Drive { position, law, .. } => (
                     q[position] - law.position,
                     LAW_ROUND_OFF * (1.0 + law.position.abs()),

@@ -1,11 +1,12 @@
 //! The equations of motion as a first-order system y' = f(t, y), with y = (positions,
 //! velocities): positions move with the joint velocities (quaternions included), velocities with
 //! the accelerations from the articulated-body algorithm under the efforts (trees), or from the
-//! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (loops), then with every other row
-//! (contacts, couplings with loops, coordinates held at rest) solved on the response of those
-//! accelerations to forces (`dynamics::rows`, `holding`).
+//! constrained equations M v̇ = f + Gᵀλ, G v̇ + γ = 0 (the loops' block of the constraint
+//! stack), then with every other row (contacts, couplings with loops, coordinates held or
+//! driven) solved on the response of those accelerations to forces: the whole stack in one
+//! call (`stack`, `holding`, `dynamics::rows`).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 mod error;
 mod friction;
@@ -16,20 +17,19 @@ mod jacobian;
 mod reference;
 pub mod scratch;
 pub use error::{NotFiniteCause, SystemError};
+mod stack;
 mod stacked;
 mod states;
-mod stop_rows;
+mod tangent;
 
 use super::run_state::RunState;
 use crate::dynamics::algorithms::{
     aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics,
-    rnea_after_kinematics, rnea_forward, DynamicsError,
+    rnea_after_kinematics, DynamicsError,
 };
 use crate::dynamics::contacts;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
-use crate::dynamics::loops::{
-    self, Extent, LoopError, Stabilisation, StructureError, Wanted, ROW_NAMES,
-};
+use crate::dynamics::loops::{self, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
@@ -225,109 +225,6 @@ impl<'m> MechanicalSystem<'m> {
         }
     }
 
-    /// Forms the response at q when the evaluation did not (`response_here`): with loops, on
-    /// the allowed motions of the last constrained solve (which must be at q).
-    fn form_response_at(&mut self, q: &[f64]) -> Result<(), SystemError> {
-        if self.scratch.response_here {
-            return Ok(());
-        }
-        let model = self.model;
-        crate::dynamics::algorithms::crba_into(
-            model,
-            &mut self.scratch.data,
-            &q[..model.nq],
-            &mut self.scratch.mass,
-        )?;
-        if !model.has_loops() {
-            return self.form_tree_response();
-        }
-        let motions = self.scratch.loop_scratch.solved_motions();
-        self.scratch.response_here = self.scratch.response.on_basis(&self.scratch.mass, motions);
-        match self.scratch.response_here {
-            true => Ok(()),
-            false => Err(SystemError::SingularMassMatrix),
-        }
-    }
-
-    /// The accelerations and constraint forces of a mechanism with loops at (t, q, v), left in
-    /// `loop_scratch` with the constraint rows they come from, the efforts in `efforts`;
-    /// nothing is allocated once the buffers are sized.
-    pub(super) fn solve_constrained(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        wanted: Wanted,
-    ) -> Result<(), SystemError> {
-        let model = self.model;
-        self.scratch.evaluated.clear();
-        self.ensure_structure(q)?;
-        // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
-        // recursions start from.
-        self.evaluate_efforts(t, q, v)?;
-        // The slipping joints' friction acts with the efforts.
-        let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
-        self.scratch.friction_power = self.add_friction(v, &mut tau);
-        self.scratch.efforts.tau = tau;
-        let scratch = &mut self.scratch.loop_scratch;
-        // Only Baumgarte's feedback reads the position rows.
-        let extent = match self.scratch.loops.stabilisation {
-            Stabilisation::Baumgarte(_) => Extent::WithBias,
-            _ => Extent::Motion,
-        };
-        loops::constraints_into(
-            model,
-            &mut self.scratch.data,
-            q,
-            v,
-            extent,
-            &mut scratch.constraints,
-        )?;
-        let structure = &self.scratch.loops.structure;
-        loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch)
-            .map_err(|e| self.loop_error(&e))?;
-        // Inverse dynamics' pass out at a₀: the bodies' forces whose power along each allowed
-        // motion gives its share of Ma₀ and of the velocity-product forces.
-        let scratch = &mut self.scratch.loop_scratch;
-        let particular = &scratch.particular()[..model.nv];
-        rnea_forward(
-            model,
-            &mut self.scratch.data,
-            particular,
-            &self.scratch.efforts.external,
-        );
-        let tau = &self.scratch.efforts.tau;
-        let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, structure, scratch);
-        solved.map_err(|e| self.loop_error(&e))?;
-        if wanted == Wanted::WithMultipliers {
-            self.solve_multipliers();
-        }
-        Ok(())
-    }
-
-    /// The multipliers of the accelerations `solve_constrained` left in `loop_scratch`, from
-    /// Ma − f: inverse dynamics at those accelerations under the efforts' external forces,
-    /// less the efforts' generalised forces (the complementary coordinates, without inertia,
-    /// get −τ). `data` holds the forward kinematics of the state.
-    pub(super) fn solve_multipliers(&mut self) {
-        let model = self.model;
-        let scratch = &mut self.scratch.loop_scratch;
-        let a = &scratch.accelerations.as_slice()[..model.nv];
-        let external = &self.scratch.efforts.external;
-        rnea_after_kinematics(
-            model,
-            &mut self.scratch.data,
-            a,
-            external,
-            &mut self.scratch.inverse,
-        );
-        self.scratch.force.copy_from(&self.scratch.efforts.tau);
-        self.scratch.force.neg_mut();
-        let mut tree = self.scratch.force.rows_mut(0, model.nv);
-        tree += &self.scratch.inverse;
-        loops::multipliers(&self.scratch.force, scratch);
-    }
-
     /// dy/dt at (t, y), or why it cannot be computed.
     pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), SystemError> {
         let mut q = std::mem::take(&mut self.scratch.positions);
@@ -361,11 +258,8 @@ impl<'m> MechanicalSystem<'m> {
         let native = self
             .native
             .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
-        if native {
-            // The accelerations are written.
-        } else if model.has_loops() {
-            self.solve_constrained(t, q, v, Wanted::Accelerations)?;
-            accelerations.copy_from(&self.scratch.loop_scratch.accelerations);
+        if native || model.has_loops() {
+            // The accelerations are written, or are the loops' block's (`solve_stack`).
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
         } else if self.reads_efforts() {
@@ -402,11 +296,11 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
-        // The constraint stack's rows (`dynamics::rows`: the contacts, the couplings with loops,
-        // the coordinates held or driven), solved together on the response of the base solve
-        // above (the loops' block, or the tree's): the one place every evaluation of the run
-        // solves them.
-        self.solve_rows(t, q, v, &mut accelerations)?;
+        // The constraint stack (`stack`): the loops' block by its sparse factorisation, then
+        // the rows of the contacts, the couplings with loops and the coordinates held or
+        // driven, on the response of the loops' block or of the tree's base solve above: the
+        // one place every evaluation of the run solves constraint rows.
+        self.solve_stack(t, q, v, &mut accelerations)?;
         let efforts = if self.reads_efforts() || model.has_loops() || model.has_contacts() {
             &self.scratch.efforts
         } else {
@@ -450,58 +344,11 @@ impl<'m> MechanicalSystem<'m> {
         Ok(())
     }
 
-    /// The tangent space of the loops' constraints at y, for the implicit method's Jacobian:
-    /// for each allowed motion n of the velocities (the massive ones the equations of motion
-    /// solve on) that leaves the resting stops' coordinates at rest, the state's direction
-    /// (q̇(n), 0) that moves the positions along it and (0, n) that moves the velocities along
-    /// it. `None` for a tree, whose state moves freely.
-    /// Evaluates the equations of motion at y once (their solve finds the allowed motions).
-    pub fn tangent_basis(
-        &mut self,
-        t: f64,
-        y: &[f64],
-    ) -> Result<Option<DMatrix<f64>>, SystemError> {
-        let model = self.model;
-        if !model.has_loops() {
-            return Ok(None);
-        }
-        let mut dydt = vec![0.0; self.dimension()];
-        self.derivative(t, y, &mut dydt)?;
-        let (q, _) = model.split_state(y);
-        let motions =
-            self.motions_off_bounds(self.scratch.loop_scratch.solved_motions().into_owned());
-        let (positions, velocities) = (model.positions(), model.velocities());
-        let count = motions.ncols();
-        let mut basis = DMatrix::zeros(positions + velocities, 2 * count);
-        for k in 0..count {
-            let motion = motions.column(k);
-            let mut column = basis.column_mut(k);
-            let rates = column.as_mut_slice();
-            for joint in &model.joints {
-                let range = joint.q_offset..joint.q_offset + joint.nq();
-                let v_range = joint.v_offset..joint.v_offset + joint.nv();
-                joint.position_rate(
-                    &q[range.clone()],
-                    &motion.as_slice()[v_range],
-                    &mut rates[range],
-                );
-            }
-            for (i, rate) in motion.iter().enumerate().skip(model.nv) {
-                rates[model.nq + i - model.nv] = *rate;
-            }
-            basis
-                .view_mut((positions, count + k), (velocities, 1))
-                .copy_from(&motion);
-        }
-        Ok(Some(basis))
-    }
-
-    /// Keeps the loops closed or the contacts kept after a step (`keep_rows`), with the
-    /// resting stops' bounds in mechanisms with them (`keep_on_bounds`); nothing for a tree.
-    /// Whether y moved.
+    /// Keeps the loops closed, and the stack's other rows kept, after a step (`keep_rows`,
+    /// the resting stops' bounds among them); nothing for a tree without such rows. Whether y
+    /// moved.
     pub fn keep_closed(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
-        let moved = self.keep_rows(t, y)?;
-        Ok(self.keep_on_bounds(y)? || moved)
+        self.keep_rows(t, y)
     }
 
     /// Keeps the loops closed after a step (see `LoopMonitor::keep`), then the rows beyond

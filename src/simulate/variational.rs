@@ -24,6 +24,17 @@
 //! null-space method (Leyendecker, Marsden and Ortiz, ZAMM 88 (2008) 677–708) in the
 //! least-squares sense, so redundant constraints cost nothing special, and on the allowed
 //! motions that carry mass: those without mass are left at rest (see `with_mass`).
+//!
+//! The loops are the constraint stack's first block (`system::stack`), and the steps solve that
+//! block as the run's equations do: the same kept rows in the same sparse factorisation
+//! (`MechanicalSystem::loop_block_at`), its particular solutions and allowed motions. What is
+//! the integrator's own is inherent to the method: the right-hand sides (the impulse acts
+//! along the rows at the step's start, G(q₀)ᵀ, while the closure holds at its end, G(q₁)), and
+//! the positions' closure, which is one of the step's implicit equations, solved with the
+//! momentum balance by the same Newton iteration, not a projection after the step (a projection
+//! through the corrector would break the map's symplecticity; the end state is only measured,
+//! `measure_loops`). The integrator refuses every other kind of row (`integrators`), so the
+//! loops' block is the whole stack it meets.
 
 use std::fmt;
 
@@ -34,7 +45,7 @@ use super::system::{MechanicalSystem, RunObserver, SystemError};
 use crate::dynamics::algorithms::{crba, forward_kinematics, rnea};
 use crate::dynamics::derivatives::kinetic_energy_gradient;
 use crate::dynamics::efforts::{evaluate, Declared};
-use crate::dynamics::loops::{self, Extent, Factored, LoopError, Singular, DAMPING};
+use crate::dynamics::loops::{self, Factored, LoopError, Singular, DAMPING};
 use crate::integrate::{error_norm, Failure, IntegrationError, Interrupt, Stats, StepError};
 
 const MAX_ITERATIONS: usize = 50;
@@ -130,9 +141,7 @@ impl MechanicalSystem<'_> {
         if !self.model.has_loops() {
             return Ok(None);
         }
-        self.ensure_structure(q)?;
-        let g = self.closure(q)?.1;
-        let start = Factored::new(&g, &self.scratch.loops.structure.choice);
+        let (_, start) = self.loop_block_at(q)?;
         let basis = Basis::at(&start);
         let allowed = allowed_by(&start, basis, &self.scratch.loops.structure.free)
             .map_err(|e| self.loop_error(&e))?;
@@ -165,8 +174,7 @@ impl MechanicalSystem<'_> {
         let Some(start) = start else {
             return Ok((solve(mass, rhs)?, 0.0));
         };
-        let (closure, g_end) = self.closure(q1)?;
-        let end = Factored::new(&g_end, &self.scratch.loops.structure.choice);
+        let (closure, end) = self.loop_block_at(q1)?;
         let open = closure.amax();
         // A closure already within what the step accepts is not corrected: rows that close their
         // loop only at second order (the meshes) would turn its round-off into corrections of
@@ -202,8 +210,7 @@ impl MechanicalSystem<'_> {
         if !self.model.has_loops() {
             return Ok((solve(&mass, p)?, mass));
         }
-        let (_, g) = self.closure(q1)?;
-        let end = Factored::new(&g, &self.scratch.loops.structure.choice);
+        let (_, end) = self.loop_block_at(q1)?;
         let rows = DVector::zeros(self.scratch.loops.structure.choice.rows.len());
         let (free, massless) = (
             &self.scratch.loops.structure.free,
@@ -218,16 +225,6 @@ impl MechanicalSystem<'_> {
         let velocity =
             constrained_solve(&mass, &end, &spans, p, &rows).map_err(|e| self.loop_error(&e))?;
         Ok((velocity, mass))
-    }
-
-    /// Position rows and their Jacobian G at q.
-    fn closure(
-        &mut self,
-        q: &[f64],
-    ) -> Result<(DVector<f64>, loops::ConstraintJacobian), SystemError> {
-        let rest = vec![0.0; self.model.velocities()];
-        let c = loops::constraints(self.model, &mut self.scratch.data, q, &rest, Extent::Rows)?;
-        Ok((c.residual, c.jacobian))
     }
 }
 

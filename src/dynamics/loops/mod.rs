@@ -32,6 +32,6 @@ pub use rows::{
 };
 pub use solve::{
     allowed_motions, multipliers, project_momentum, solve_reduced, LoopError, LoopScratch,
-    MomentumBasis, Stabilisation, Wanted,
+    MomentumBasis, Stabilisation,
 };
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

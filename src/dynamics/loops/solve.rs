@@ -167,14 +167,6 @@ pub enum LoopError {
 /// Delta's rod spins) of evaluating forces that balance exactly.
 const MASSLESS_FORCE: f64 = 1e-3;
 
-/// What a constrained solve computes: the accelerations alone (what the equations of motion
-/// need), or the multipliers too (the loops' reactions, for outputs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Wanted {
-    Accelerations,
-    WithMultipliers,
-}
-
 /// The first half of the solve of `M v̇ = f + Gᵀλ`, `G v̇ + γ = 0` on the kept rows (γ with
 /// Baumgarte's terms when asked for) at the constraints in `scratch`: the factorisation, the
 /// particular acceleration a₀ (`LoopScratch::particular`) and the allowed motions N. The caller

@@ -1,9 +1,10 @@
-//! The reactions: the wrench each join transmits (`reactions`), and the solve behind those of
-//! a mechanism with closed loops. The loops' multipliers come
-//! from M a − f at the accelerations of the run's own equations, every row solved (`holding`):
-//! the contacts' forces act on the bodies, so they join the efforts' external forces; the other
-//! rows' forces (a mimic coupling's, a resting stop's, a sticking joint's) act along
-//! coordinates, as link efforts do, so they join the efforts' generalised forces.
+//! The reactions: the wrench each join transmits (`reactions`), from the forces of every block
+//! of the constraint stack at the accelerations of the run's own equations, every row solved
+//! (`stack_reactions`, the one reactions path): the contacts' forces act on the bodies, so
+//! they join the efforts' external forces; the other rows' forces (a mimic coupling's, a
+//! resting stop's, a sticking joint's, a drive's) act along coordinates, as link efforts do, so
+//! they join the efforts' generalised forces; the loops' block's multipliers then come from
+//! M a − f, and act on the bodies their loops close.
 
 use nalgebra::DVector;
 
@@ -13,50 +14,30 @@ use crate::dynamics::contacts;
 use crate::dynamics::loops;
 use crate::spatial;
 
+/// The forces of every block of the stack at one state (`stack_reactions`).
+struct StackForces {
+    /// The accelerations, every row solved.
+    accelerations: DVector<f64>,
+    /// The forces on the bodies: the efforts', the contacts' and the loops' closing forces.
+    external: Vec<spatial::Force>,
+    /// What the reactions list after the tree's joins: the loops' multipliers (6 per loop),
+    /// then the contacts' reactions.
+    listed: Option<DVector<f64>>,
+}
+
 impl MechanicalSystem<'_> {
     /// The wrench each join transmits to its second body, at the join, in the fixed axes
     /// (moment, then force): the tree's joins from inverse dynamics with the accelerations of the
-    /// motion and the loops' forces, then the loops' from their multipliers. The coordinates
-    /// held at rest (resting stops, sticking joints) are held as the run holds them, their
-    /// forces in their joins' reactions as a link effort is.
+    /// motion and the stack's forces, then the loops' from their multipliers and the contacts'.
+    /// The coordinates held (resting stops, sticking joints, drives) are held as the run holds
+    /// them, their forces in their joins' reactions as a link effort is.
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
-        let (accelerations, mut external, multipliers) = if model.has_loops() {
-            let touching = self.loops_reactions_solve(t, q, v)?;
-            let solution = &self.scratch.loop_scratch;
-            let (c, multipliers) = (&solution.constraints, &solution.multipliers);
-            let on_bodies = loops::constraint_forces(model, &self.scratch.data, c, multipliers);
-            let external: Vec<_> = self
-                .scratch
-                .efforts
-                .external
-                .iter()
-                .zip(&on_bodies)
-                .map(|(a, b)| a + b)
-                .collect();
-            let accelerations = solution.accelerations.clone();
-            let mut multipliers = multipliers.clone();
-            if let Some(forces) = touching {
-                multipliers = DVector::from_iterator(
-                    multipliers.len() + forces.len(),
-                    multipliers.iter().chain(forces.iter()).copied(),
-                );
-            }
-            (accelerations, external, Some(multipliers))
-        } else if model.has_contacts() {
-            let accelerations = self.solve_every_row(t, q, v)?;
-            let forces = self.contact_forces_among_efforts();
-            let external = self.scratch.efforts.external.clone();
-            (accelerations, external, Some(forces))
-        } else {
-            // The accelerations of the run's own equations: with the geared rotors, the mimic
-            // couplings, the friction's phases and the coordinates held at rest.
-            let mut rates = vec![0.0; self.dimension()];
-            self.derivative_at(t, q, v, &mut rates)?;
-            let a = DVector::from_column_slice(&rates[model.positions()..]);
-            let efforts = self.efforts(t, q, v)?;
-            (a, efforts.external, None)
-        };
+        let StackForces {
+            accelerations,
+            mut external,
+            listed,
+        } = self.stack_reactions(t, q, v)?;
         // The link efforts act across their joints: they are not part of the reaction.
         external.truncate(model.body_count() + 1);
         rnea(
@@ -91,8 +72,8 @@ impl MechanicalSystem<'_> {
             };
             reactions.extend_from_slice(on_second.as_slice());
         }
-        if let Some(multipliers) = multipliers {
-            reactions.extend_from_slice(multipliers.as_slice());
+        if let Some(listed) = listed {
+            reactions.extend_from_slice(listed.as_slice());
         }
         Ok(reactions)
     }
@@ -113,32 +94,61 @@ impl MechanicalSystem<'_> {
         contacts::contact_reactions(forces)
     }
 
-    /// Solves a mechanism with loops at (t, q, v) for its reactions: the accelerations and the
-    /// loops' multipliers left in the loops' scratch, the rows' forces among the efforts, the
-    /// forward kinematics of (q, v) in `data`; with contacts, their reactions
-    /// (`contacts::contact_reactions`) returned.
-    pub(super) fn loops_reactions_solve(
+    /// The forces of every block of the stack at (t, q, v), the whole stack solved as the run's
+    /// equations solve it (`solve_every_row`), the forward kinematics of (q, v) left in `data`:
+    /// see the module's documentation.
+    fn stack_reactions(
         &mut self,
         t: f64,
         q: &[f64],
         v: &[f64],
-    ) -> Result<Option<DVector<f64>>, SystemError> {
+    ) -> Result<StackForces, SystemError> {
         let model = self.model;
         let accelerations = self.solve_every_row(t, q, v)?;
-        let touching = model
-            .has_contacts()
-            .then(|| self.contact_forces_among_efforts());
+        if !model.has_loops() && !model.has_contacts() {
+            // A tree's evaluation may skip the efforts (none applied): they are taken here.
+            let efforts = self.efforts(t, q, v)?;
+            let (external, listed) = (efforts.external, None);
+            return Ok(StackForces {
+                accelerations,
+                external,
+                listed,
+            });
+        }
+        let touching = (model.has_contacts()).then(|| self.contact_forces_among_efforts());
+        if !model.has_loops() {
+            let external = self.scratch.efforts.external.clone();
+            return Ok(StackForces {
+                accelerations,
+                external,
+                listed: touching,
+            });
+        }
         // `solve_rows` left the stack as it was when no row applied at this state.
         if self.coupling_count() > 0 || !self.scratch.held.is_empty() {
             self.scratch
                 .rows
                 .add_coordinate_forces(&model.mimics, &mut self.scratch.efforts.tau);
         }
-        self.scratch
-            .loop_scratch
-            .accelerations
-            .copy_from(&accelerations);
-        self.solve_multipliers();
-        Ok(touching)
+        self.loop_block_multipliers(&accelerations);
+        let solution = &self.scratch.loop_scratch;
+        let (c, multipliers) = (&solution.constraints, &solution.multipliers);
+        let on_bodies = loops::constraint_forces(model, &self.scratch.data, c, multipliers);
+        let external = (self.scratch.efforts.external.iter())
+            .zip(&on_bodies)
+            .map(|(a, b)| a + b)
+            .collect();
+        let listed = match touching {
+            Some(forces) => DVector::from_iterator(
+                multipliers.len() + forces.len(),
+                multipliers.iter().chain(forces.iter()).copied(),
+            ),
+            None => multipliers.clone(),
+        };
+        Ok(StackForces {
+            accelerations,
+            external,
+            listed: Some(listed),
+        })
     }
 }

@@ -1,4 +1,5 @@
-//! The rows an evaluation solves on the response X after the base solve (`rows::RowStack`): the
+//! The blocks 2 to 4 of the constraint stack (`stack`), which an evaluation solves on the
+//! response X of the first (`rows::RowStack`): the
 //! contacts' kept rows, the mimic couplings with closed loops, and the coordinates held: driven
 //! by their laws (eₖᵀ a = d̈ₖ(t)), on their stops (resting on a bound) or stuck by their
 //! friction (eₖᵀ a = 0), each with a force μₖ along the coordinate. Whatever the mechanism (a
@@ -16,9 +17,9 @@ use crate::dynamics::rows::{HeldRow, Holder};
 use crate::dynamics::stops::Side;
 
 impl MechanicalSystem<'_> {
-    /// Solves the rows at (t, q, v) from the accelerations `a` of the base solve (the loops',
-    /// or the tree's), which they replace; records the contacts' forces, the held forces and
-    /// the drives' efforts.
+    /// Solves the rows at (t, q, v) from the accelerations `a` of the base solve (the loops'
+    /// block, or the tree's), which they replace; records the contacts' forces, the held forces
+    /// and the drives' efforts. Called by `solve_stack` only.
     pub(super) fn solve_rows(
         &mut self,
         t: f64,

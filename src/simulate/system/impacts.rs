@@ -66,14 +66,11 @@ impl MechanicalSystem<'_> {
         let kinetic_before = self.kinetic_energy_at(&q, &v)?;
         // The event was located past the bound by at most the time resolution: the coordinate
         // starts again from the bound itself, so that the next crossing begins at zero. With
-        // loops or contacts the positions move onto their rows and the bounds together.
+        // loops or contacts the positions move onto the stack's rows (the drives' laws among
+        // them) and the bounds together.
         let constrained = model.has_loops() || model.has_contacts();
         if constrained {
-            let mut held: Vec<usize> = (0..model.stops.len())
-                .filter(|&k| self.state.resting[k])
-                .collect();
-            held.push(index);
-            self.close_on_bounds(y, &held)?;
+            self.close_for_impact(t, y, index)?;
         }
         let (q, _) = model.split_state(y);
         let mut after = vec![0.0; v.len()];
@@ -107,7 +104,7 @@ impl MechanicalSystem<'_> {
             // Too slow to leave: the coordinate rests on the stop from now on.
             self.state.resting[index] = true;
             if constrained {
-                self.keep_on_bounds(y)?;
+                self.keep_stacked(t, y)?;
             } else {
                 y[positions + stop.velocity] = 0.0;
                 mimics::restore(&model.mimics, y, positions, stop.velocity);

@@ -57,12 +57,13 @@ pub struct Scratch {
     pub(in crate::simulate) response_here: bool,
     /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
     /// loops, coordinates held or driven), and in the projections onto the velocity rows and
-    /// onto the position rows; the coordinates held at the evaluation (the drives' first); a
-    /// step of the velocities.
+    /// onto the position rows; the coordinates held at the evaluation (the drives' first), and
+    /// those with a position the projection keeps (`stacked`); a step of the velocities.
     pub(in crate::simulate) rows: RowStack,
     pub(in crate::simulate) velocity_stack: RowStack,
     pub(in crate::simulate) position_stack: RowStack,
     pub(in crate::simulate) held: Vec<HeldRow>,
+    pub(in crate::simulate) position_held: Vec<HeldRow>,
     pub(in crate::simulate) step: DVector<f64>,
     /// Per drive (`Model::drives`), the effort that imposed it at the last evaluation (its
     /// held row's multiplier), and their power then.
@@ -109,6 +110,7 @@ impl Scratch {
             held: Vec::with_capacity(
                 model.drives.len() + model.stops.len() + model.frictions.len(),
             ),
+            position_held: Vec::with_capacity(model.drives.len() + model.stops.len()),
             step: DVector::zeros(model.velocities()),
             drive_efforts: vec![0.0; model.drives.len()],
             drive_power: 0.0,
