@@ -49,6 +49,7 @@ mod reactions;
 mod recovered_angles;
 mod regression;
 mod repository;
+mod rheonomic;
 mod robustness;
 mod rolling_disc;
 mod rows;
