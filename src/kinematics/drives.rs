@@ -83,7 +83,13 @@ pub fn resolve(
     let mut first_span = HashMap::new();
     for drive in &mechanism.drives {
         let target = driven_coordinate(mechanism, model, drive);
-        let law = law(mechanism, &drive.law, drive.law_span, "a drive", &model.unknowns);
+        let law = law(
+            mechanism,
+            &drive.law,
+            drive.law_span,
+            "a drive",
+            &model.unknowns,
+        );
         match (target, law) {
             (Ok((coordinate, name)), Ok(law)) => {
                 if let Some(&first) = first_span.get(&coordinate) {
@@ -265,7 +271,11 @@ fn law(
     let time = lowering.time;
     let pool = &mut lowering.geometric.pool;
     if let Some(function) = not_smooth(pool, position, time) {
-        return Err(not_smooth_error(&format!("the law of {subject}"), function, span));
+        return Err(not_smooth_error(
+            &format!("the law of {subject}"),
+            function,
+            span,
+        ));
     }
     let rate = pool.derivative(position, time, &mut HashMap::new());
     let acceleration = pool.derivative(rate, time, &mut HashMap::new());

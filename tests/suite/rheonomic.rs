@@ -68,8 +68,14 @@ fn kapitza_reference(at: &[f64]) -> Vec<(f64, f64)> {
     for &target in at {
         while t < target - h / 2.0 {
             let k1 = field(t, y);
-            let k2 = field(t + h / 2.0, [y[0] + h / 2.0 * k1[0], y[1] + h / 2.0 * k1[1]]);
-            let k3 = field(t + h / 2.0, [y[0] + h / 2.0 * k2[0], y[1] + h / 2.0 * k2[1]]);
+            let k2 = field(
+                t + h / 2.0,
+                [y[0] + h / 2.0 * k1[0], y[1] + h / 2.0 * k1[1]],
+            );
+            let k3 = field(
+                t + h / 2.0,
+                [y[0] + h / 2.0 * k2[0], y[1] + h / 2.0 * k2[1]],
+            );
             let k4 = field(t + h, [y[0] + h * k3[0], y[1] + h * k3[1]]);
             for i in 0..2 {
                 y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
@@ -110,9 +116,15 @@ fn kapitza_pendulum_follows_its_equation_with_every_integrator() {
             assert!(error < 1e-9, "{name}: θ at t = {t}: {error:e}");
             let law = a * (w * t).sin();
             assert!((sample.coordinates[pivot] - law).abs() < 1e-12, "{name}");
-            assert!((sample.rates[pivot] - a * w * (w * t).cos()).abs() < 1e-12, "{name}");
+            assert!(
+                (sample.rates[pivot] - a * w * (w * t).cos()).abs() < 1e-12,
+                "{name}"
+            );
             let error = (sample.outputs[force] - expected_force(t, theta, rate)).abs();
-            assert!(error < 1e-9 * largest, "{name}: force at t = {t}: {error:e}");
+            assert!(
+                error < 1e-9 * largest,
+                "{name}: force at t = {t}: {error:e}"
+            );
         }
     });
 }
@@ -123,7 +135,10 @@ fn kapitza_pendulum_follows_its_equation_with_every_integrator() {
 fn a_bead_on_a_spinning_rod_follows_the_closed_form_with_every_integrator() {
     let (w, m, r0) = (3.0, 0.5, 0.1);
     with_every_integrator("bead_on_spinning_rod", 1.0, |name, simulation| {
-        let (length, turn) = (column(simulation, "rod.r"), column(simulation, "rod.motion1"));
+        let (length, turn) = (
+            column(simulation, "rod.r"),
+            column(simulation, "rod.motion1"),
+        );
         let torque = output(simulation, "rod.motion1_effort");
         let closed = |t: f64| (r0 * (w * t).cosh(), r0 * w * (w * t).sinh());
         let largest = 2.0 * m * w * closed(1.0).0 * closed(1.0).1;
@@ -134,7 +149,10 @@ fn a_bead_on_a_spinning_rod_follows_the_closed_form_with_every_integrator() {
             assert!(error < 1e-9, "{name}: r at t = {t}: {error:e}");
             assert!((sample.coordinates[turn] - w * t).abs() < 1e-12, "{name}");
             let error = (sample.outputs[torque] - 2.0 * m * w * r * rate).abs();
-            assert!(error < 1e-9 * largest, "{name}: torque at t = {t}: {error:e}");
+            assert!(
+                error < 1e-9 * largest,
+                "{name}: torque at t = {t}: {error:e}"
+            );
         }
     });
 }
