@@ -616,7 +616,11 @@ pub fn link_only(
         .iter()
         .map(|c| c.to_string())
         .collect();
-    let prescribed = rheonomic::rewrite(&mut steps, coordinate_names.len());
+    let parameters = steps.iter_mut().flat_map(|step| match step {
+        Step::Translation(v) => v.iter_mut().collect::<Vec<_>>(),
+        Step::Rotation { angle, .. } => vec![angle],
+    });
+    let prescribed = rheonomic::rewrite(parameters, coordinate_names.len());
     for k in 1..=prescribed.len() {
         coordinate_names.push(rheonomic::hidden_name(&coordinate_names, k));
     }

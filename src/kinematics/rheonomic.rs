@@ -17,7 +17,6 @@
 
 use std::sync::Arc;
 
-use super::model::Step;
 use crate::elab::value::{arith, negate, num, Applied, SExpr, Scalar};
 
 /// A hidden coordinate of a rheonomic joint and the law that imposes it.
@@ -43,45 +42,43 @@ pub fn hidden_name(declared: &[String], k: usize) -> String {
     name
 }
 
-/// The steps with every parameter that uses the time rewritten on a hidden coordinate, the
-/// hidden coordinates numbered from `declared` (the count of the link's own coordinates).
-pub fn rewrite(steps: &mut [Step], declared: usize) -> Vec<PrescribedMotion> {
+/// Rewrites every parameter of a chain (`parameters`, in the chain's order) that uses the time
+/// on a hidden coordinate, the hidden coordinates numbered from `declared` (the count of the
+/// link's own coordinates).
+pub fn rewrite<'a>(
+    parameters: impl Iterator<Item = &'a mut Scalar>,
+    declared: usize,
+) -> Vec<PrescribedMotion> {
     let mut prescribed = Vec::new();
-    for step in steps.iter_mut() {
-        let parameters: Vec<&mut Scalar> = match step {
-            Step::Translation(v) => v.iter_mut().collect(),
-            Step::Rotation { angle, .. } => vec![angle],
+    for parameter in parameters.filter(|p| p.uses_time()) {
+        let written = parameter.clone();
+        let coordinate = declared + prescribed.len();
+        let hidden = Arc::new(SExpr::Coordinate {
+            index: coordinate as u32,
+            order: 0,
+        });
+        let (rewritten, motion) = match split(parameter) {
+            Some((rest, law)) => (
+                arith('+', &rest, &hidden),
+                PrescribedMotion {
+                    coordinate,
+                    law,
+                    clock: false,
+                    written,
+                },
+            ),
+            None => (
+                time_replaced(parameter, &hidden),
+                PrescribedMotion {
+                    coordinate,
+                    law: Arc::new(SExpr::Time),
+                    clock: true,
+                    written,
+                },
+            ),
         };
-        for parameter in parameters.into_iter().filter(|p| p.uses_time()) {
-            let written = parameter.clone();
-            let coordinate = declared + prescribed.len();
-            let hidden = Arc::new(SExpr::Coordinate {
-                index: coordinate as u32,
-                order: 0,
-            });
-            let (rewritten, motion) = match split(parameter) {
-                Some((rest, law)) => (
-                    arith('+', &rest, &hidden),
-                    PrescribedMotion {
-                        coordinate,
-                        law,
-                        clock: false,
-                        written,
-                    },
-                ),
-                None => (
-                    time_replaced(parameter, &hidden),
-                    PrescribedMotion {
-                        coordinate,
-                        law: Arc::new(SExpr::Time),
-                        clock: true,
-                        written,
-                    },
-                ),
-            };
-            *parameter = rewritten;
-            prescribed.push(motion);
-        }
+        *parameter = rewritten;
+        prescribed.push(motion);
     }
     prescribed
 }
