@@ -20,7 +20,8 @@ fn settings(integrator: Integrator) -> Settings {
     }
 }
 
-fn output(simulation: &Simulation, name: &str) -> usize {
+/// The index of output `name` among a run's outputs.
+pub fn output(simulation: &Simulation, name: &str) -> usize {
     (simulation.output_names.iter())
         .position(|n| n == name)
         .unwrap_or_else(|| panic!("no output {name} in {:?}", simulation.output_names))

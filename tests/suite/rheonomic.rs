@@ -5,6 +5,7 @@
 //! coordinates on their laws and the energy balance with their work; the refusals.
 
 use crate::common::programs::{column, example_text, refusal_codes, run_text};
+use crate::drives::output;
 use lsdc::integrators::{Feature, INTEGRATORS};
 use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
@@ -19,12 +20,6 @@ fn settings(integrator: Integrator, duration: f64) -> Settings {
         step: Some(2e-5),
         ..Settings::default()
     }
-}
-
-fn output(simulation: &Simulation, name: &str) -> usize {
-    (simulation.output_names.iter())
-        .position(|n| n == name)
-        .unwrap_or_else(|| panic!("no output {name} in {:?}", simulation.output_names))
 }
 
 /// Runs `example` with every integrator of the registry, checking the refusal of those that
