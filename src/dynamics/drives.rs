@@ -2,9 +2,10 @@
 //! differentiated in `kinematics::drives`): each one a unit row of the constraint rows
 //! (`rows`) whose right-hand side follows the law, q̈ₖ = law''(t), kept at the position and
 //! velocity levels after each step (qₖ = law(t), q̇ₖ = law'(t)); its multiplier is the
-//! generalised force that imposes the motion, the drive's effort.
+//! generalised force that imposes the motion, the drive's effort. The hidden coordinates of
+//! rheonomic joints (`time` in a dof chain, `kinematics::rheonomic`) are driven alike.
 
-use super::joint::Joint;
+use super::joint::{Joint, JointType};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::drives::{resolve, DriveLaw, LawAt};
@@ -15,10 +16,14 @@ use crate::kinematics::model::KinematicModel;
 pub struct DrivenCoordinate {
     /// `crank.q`.
     pub coordinate: String,
+    /// Its index among the declared coordinates.
+    pub declared: usize,
     /// Its indices among the state's positions and velocities.
     pub position: usize,
     pub velocity: usize,
     pub law: DriveLaw,
+    /// Its effort's name among the outputs.
+    pub effort: String,
 }
 
 impl DrivenCoordinate {
@@ -32,14 +37,9 @@ impl DrivenCoordinate {
         self.law.evaluate(t, values)
     }
 
-    /// The name of its effort among the outputs: `crank.drive_effort` (a drive imposes the
-    /// one coordinate of its join).
+    /// The name of its effort among the outputs (`crank.drive_effort`, `ResolvedDrive::effort`).
     pub fn effort_name(&self) -> String {
-        let join = self
-            .coordinate
-            .rsplit_once('.')
-            .map_or("", |(join, _)| join);
-        format!("{join}.drive_effort")
+        self.effort.clone()
     }
 }
 
@@ -61,14 +61,21 @@ pub fn build(
     resolved
         .into_iter()
         .filter_map(|drive| {
-            let joint = joints
-                .iter()
-                .find(|j| j.is_single_coordinate() && j.chain.offset == drive.coordinate)?;
+            // A drive imposes a coordinate of a joint in its own coordinates (`Chain`): as
+            // many positions as velocities.
+            let joint = joints.iter().find(|j| {
+                let first = j.chain.offset;
+                j.kind == JointType::Chain
+                    && (first..first + j.chain.coordinate_count()).contains(&drive.coordinate)
+            })?;
+            let k = drive.coordinate - joint.chain.offset;
             Some(DrivenCoordinate {
                 coordinate: drive.name,
-                position: joint.q_offset,
-                velocity: joint.v_offset,
+                declared: drive.coordinate,
+                position: joint.q_offset + k,
+                velocity: joint.v_offset + k,
                 law: drive.law,
+                effort: drive.effort,
             })
         })
         .collect()

@@ -201,6 +201,10 @@ pub fn classify(chain: &JointModel) -> JointType {
             axes[0].cross(&axes[1]).norm() > 1e-9 && axes[1].cross(&axes[2]).norm() > 1e-9;
         independent.then_some(axes)
     };
+    if !chain.prescribed.is_empty() {
+        // A rheonomic chain's hidden coordinates are driven one by one: no quaternion.
+        return JointType::Chain;
+    }
     match chain.steps.as_slice() {
         [a, b, c] if chain.coordinate_count() == 3 => {
             match rotations(&[a.clone(), b.clone(), c.clone()], 0) {

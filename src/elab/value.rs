@@ -392,6 +392,22 @@ impl SExpr {
         })
     }
 
+    /// Whether the expression uses `time`.
+    pub fn uses_time(&self) -> bool {
+        self.any(&|e| matches!(e, SExpr::Time))
+    }
+
+    /// Whether the expression uses a coordinate (of its link or of a join) or the state of a
+    /// frame: what varies with a motion apart from the time.
+    pub fn uses_state(&self) -> bool {
+        self.any(&|e| {
+            matches!(
+                e,
+                SExpr::Coordinate { .. } | SExpr::JoinCoordinate { .. } | SExpr::FrameState(..)
+            )
+        })
+    }
+
     /// Whether the expression uses coordinate `index` of its link (or its rates).
     pub fn uses_coordinate(&self, index: u32) -> bool {
         self.any(&|e| matches!(e, SExpr::Coordinate { index: i, .. } if *i == index))

@@ -7,15 +7,19 @@
 //! configuration, the dynamics): one coordinate of a revolute or prismatic join of the tree that
 //! no other declaration imposes (not a mimic, not closing a loop, not driven twice: E0482,
 //! E0485), by a law of the time and numbers only (E0483) that is twice differentiable
-//! (E0484: `floor` and `abs` are not).
+//! (E0484: `floor` and `abs` are not). The hidden coordinates of rheonomic joints (`time` in a
+//! dof chain, `rheonomic`) are driven alike, by the time's part of their parameters, on joins of
+//! the tree only (E0489).
 
 use std::collections::HashMap;
 
 use super::eval::{describe, EvalError, Geometric, UnknownValues};
-use super::model::KinematicModel;
+use super::mobility::rank;
+use super::model::{JointModel, KinematicModel};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{Drive, Mechanism};
-use crate::elab::value::SExpr;
+use crate::elab::value::{SExpr, Scalar};
+use crate::source::Span;
 use crate::symbolic::expr::{ExprId, Function, Node, Pool, Tape};
 use crate::symbolic::program::Lower;
 
@@ -60,8 +64,12 @@ pub struct ResolvedDrive {
     /// `crank.q`, as outputs name it.
     pub name: String,
     pub law: DriveLaw,
-    /// Where the program drives it.
+    /// Where the program drives it (for a rheonomic joint's hidden coordinate: its link).
     pub span: crate::source::Span,
+    /// The name of its effort among the outputs: `crank.drive_effort`; for a rheonomic joint's
+    /// hidden coordinate, `spin.motion1_effort` (a force or torque along its parameter) or
+    /// `spin.motion1_power` (the time itself, see `rheonomic`).
+    pub effort: String,
 }
 
 /// The program's drives, each checked (see the module's documentation); every refusal is
@@ -75,7 +83,13 @@ pub fn resolve(
     let mut first_span = HashMap::new();
     for drive in &mechanism.drives {
         let target = driven_coordinate(mechanism, model, drive);
-        let law = law(mechanism, drive, &model.unknowns);
+        let law = law(
+            mechanism,
+            &drive.law,
+            drive.law_span,
+            "a drive",
+            &model.unknowns,
+        );
         match (target, law) {
             (Ok((coordinate, name)), Ok(law)) => {
                 if let Some(&first) = first_span.get(&coordinate) {
@@ -88,14 +102,22 @@ pub fn resolve(
                     continue;
                 }
                 first_span.insert(coordinate, drive.span);
+                let join = mechanism.join_name(drive.join);
                 resolved.push(ResolvedDrive {
                     coordinate,
                     name,
                     law,
                     span: drive.span,
+                    effort: format!("{join}.drive_effort"),
                 });
             }
             (target, law) => errors.extend(target.err().into_iter().chain(law.err())),
+        }
+    }
+    for joint in &model.joints {
+        match prescribed_motions(mechanism, model, joint) {
+            Ok(motions) => resolved.extend(motions),
+            Err(refused) => errors.push(refused),
         }
     }
     match errors.is_empty() {
@@ -144,11 +166,11 @@ fn driven_coordinate(
             "drive the leader instead: the follower follows it",
         ));
     }
-    if joint.coordinate_count() != 1 {
+    if joint.declared_count() != 1 {
         return Err(refuse(
             format!(
                 "`{name}` is one of {} coordinates of its join: a drive imposes the coordinate of a join with one",
-                joint.coordinate_count()
+                joint.declared_count()
             ),
             "a coordinate of a join with several",
             "drive a revolute or prismatic join (split the join into single joints to drive one of its motions)",
@@ -157,39 +179,103 @@ fn driven_coordinate(
     Ok((joint.offset + drive.coordinate, name))
 }
 
-/// The law of time of a drive, differentiated twice.
+/// The drives of the hidden coordinates of `joint`'s rheonomic chain (`rheonomic`): none for a
+/// chain without `time`; refused (E0489) on a join that closes a loop, whose coordinates the
+/// closure decides.
+fn prescribed_motions(
+    mechanism: &Mechanism,
+    model: &KinematicModel,
+    joint: &JointModel,
+) -> Result<Vec<ResolvedDrive>, Diagnostic> {
+    if joint.prescribed.is_empty() {
+        return Ok(Vec::new());
+    }
+    let join = mechanism.join(joint.join);
+    let link_span = mechanism.link(join.link).span;
+    if model.complementary().iter().any(|j| j.join == joint.join) {
+        return Err(Diagnostic::error(
+            "E0489",
+            format!("the dof chain of `{}` depends on the time, and its join closes a loop", joint.name),
+        )
+        .primary(link_span, "a motion imposed in time")
+        .secondary(join.span, "this join closes a loop")
+        .note("the closure of a loop decides the coordinates of the join that closes it, and it cannot impose a motion")
+        .help("join the moving part by a join of the tree (`lsdc tree` lists the joins that close loops), or declare the joins in another order"));
+    }
+    if let Some(refused) = not_independent(joint, link_span, join.span) {
+        return Err(refused);
+    }
+    let subject = format!("the motion in time of `{}`", joint.name);
+    let declared = joint.declared_count();
+    let mut motions = Vec::new();
+    for motion in &joint.prescribed {
+        let coordinate = &joint.coordinate_names[motion.coordinate];
+        if let Some(function) = rough(&motion.written, declared, &model.unknowns) {
+            return Err(not_smooth_error(&subject, function, link_span));
+        }
+        motions.push(ResolvedDrive {
+            coordinate: joint.offset + motion.coordinate,
+            name: format!("{}.{coordinate}", joint.name),
+            law: law(mechanism, &motion.law, link_span, &subject, &model.unknowns)?,
+            span: link_span,
+            effort: format!(
+                "{}.{coordinate}_{}",
+                joint.name,
+                if motion.clock { "power" } else { "effort" }
+            ),
+        });
+    }
+    Ok(motions)
+}
+
+/// E0490 when the motions the time imposes on `joint` are not independent of the motions of
+/// its declared coordinates (at a generic configuration and instant), as in `rz(q + w * time)`
+/// or `[q * cos(time), 0, 0]`: a hidden coordinate is a coordinate of the state held by its row,
+/// and two coordinates along one motion make the mass matrix singular. `None` when they are,
+/// or when the chain cannot be evaluated (reported where it is evaluated).
+fn not_independent(joint: &JointModel, link_span: Span, join_span: Span) -> Option<Diagnostic> {
+    let generic = super::joint::generic_coordinates(joint.coordinate_count());
+    let (_, subspace) = joint.chain(&generic).ok()?;
+    let declared = subspace.columns(0, joint.declared_count()).into_owned();
+    let independent = rank(&subspace) == rank(&declared) + joint.prescribed.len();
+    let names = &joint.coordinate_names[..joint.declared_count()];
+    (!independent).then(|| {
+        Diagnostic::error(
+            "E0490",
+            format!(
+                "the motion in time of `{}` moves along its coordinates ({}): lsdc imposes a motion in time only along directions its coordinates do not move",
+                joint.name,
+                names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+            ),
+        )
+        .primary(link_span, "the time and a coordinate move the same way")
+        .secondary(join_span, "the join")
+        .help("write the chain as a motion in time followed by the coordinates' own motions (`(w * time || axis) * (q || other axis)`), or drive the coordinate itself (`drive spin.q = w * time`)")
+    })
+}
+
+/// The law of time `written` (of `subject`, "a drive"), differentiated twice.
 fn law(
     mechanism: &Mechanism,
-    drive: &Drive,
+    written: &Scalar,
+    span: Span,
+    subject: &str,
     unknowns: &UnknownValues,
 ) -> Result<DriveLaw, Diagnostic> {
-    let mut lowering = LawLowering {
-        geometric: Geometric {
-            pool: Pool::new(),
-            unknowns,
-            coordinates: Vec::new(),
-        },
-        time: None,
-    };
-    let time = lowering.geometric.pool.symbol("t");
-    lowering.time = Some(time);
-    let position = lowering.lower(&drive.law).map_err(|e| {
-        Diagnostic::error("E0483", format!("the law of a drive is a function of the time: {}", describe(&e, mechanism)))
-            .primary(drive.law_span, "not a law of time")
+    let mut lowering = LawLowering::new(unknowns, 0);
+    let position = lowering.lower(written).map_err(|e| {
+        Diagnostic::error("E0483", format!("the law of {subject} is a function of the time: {}", describe(&e, mechanism)))
+            .primary(span, "not a law of time")
             .help("write the law with `time`, numbers and the program's constants (`drive crank.q = 2 * pi * time`)")
     })?;
+    let time = lowering.time;
     let pool = &mut lowering.geometric.pool;
-    if let Some(function) = not_smooth(pool, position) {
-        let why = match function {
-            Function::Floor => "it jumps at every integer",
-            _ => "its slope jumps at zero",
-        };
-        return Err(Diagnostic::error(
-            "E0484",
-            format!("the law of a drive must be twice differentiable, and `{}` is not: {why}", function.name()),
-        )
-        .primary(drive.law_span, format!("uses `{}`", function.name()))
-        .help("impose a smooth law (a polynomial, sines, the seed's trajectory laws): the drive's effort needs its second derivative"));
+    if let Some(function) = not_smooth(pool, position, time) {
+        return Err(not_smooth_error(
+            &format!("the law of {subject}"),
+            function,
+            span,
+        ));
     }
     let rate = pool.derivative(position, time, &mut HashMap::new());
     let acceleration = pool.derivative(rate, time, &mut HashMap::new());
@@ -198,23 +284,80 @@ fn law(
     })
 }
 
-/// A function in the law whose derivatives jump (`floor`) or do not exist somewhere (`abs`).
-fn not_smooth(pool: &Pool, root: ExprId) -> Option<Function> {
+/// E0484: `subject` (a law of time) uses `function`, whose derivatives jump.
+fn not_smooth_error(subject: &str, function: Function, span: Span) -> Diagnostic {
+    let why = match function {
+        Function::Floor => "it jumps at every integer",
+        _ => "its slope jumps at zero",
+    };
+    Diagnostic::error(
+        "E0484",
+        format!("{subject} must be twice differentiable, and `{}` is not: {why}", function.name()),
+    )
+    .primary(span, format!("uses `{}`", function.name()))
+    .help("impose a smooth law (a polynomial, sines, the seed's trajectory laws): the effort that imposes it needs its second derivative")
+}
+
+/// A function of the time in `parameter` (of `coordinates` coordinates and the time) whose
+/// derivatives jump; `None` when it is smooth in time or cannot be lowered (reported where
+/// the chain is evaluated).
+fn rough(parameter: &Scalar, coordinates: usize, unknowns: &UnknownValues) -> Option<Function> {
+    let mut lowering = LawLowering::new(unknowns, coordinates);
+    let root = lowering.lower(parameter).ok()?;
+    not_smooth(&lowering.geometric.pool, root, lowering.time)
+}
+
+/// A function applied to something that depends on `symbol` whose derivatives jump (`floor`)
+/// or do not exist somewhere (`abs`).
+fn not_smooth(pool: &Pool, root: ExprId, symbol: ExprId) -> Option<Function> {
     let mut stack = vec![root];
     while let Some(e) = stack.pop() {
-        if let Node::Apply(f @ (Function::Floor | Function::Abs), _) = pool.node(e) {
-            return Some(f);
+        if let Node::Apply(f @ (Function::Floor | Function::Abs), argument) = pool.node(e) {
+            if depends_on(pool, argument, symbol) {
+                return Some(f);
+            }
         }
         stack.extend(pool.operands(e));
     }
     None
 }
 
-/// The leaves of a law: the time is the pool's symbol `t`; the rest as in geometry (numbers and
-/// unknowns with values), coordinates refused.
+/// Whether the expression `root` contains `symbol`.
+fn depends_on(pool: &Pool, root: ExprId, symbol: ExprId) -> bool {
+    let mut stack = vec![root];
+    while let Some(e) = stack.pop() {
+        if e == symbol {
+            return true;
+        }
+        stack.extend(pool.operands(e));
+    }
+    false
+}
+
+/// The leaves of a law: the time is the pool's symbol `t`; the rest as in geometry (numbers,
+/// unknowns with values and the link's first `coordinates` coordinates as symbols), other
+/// coordinates refused.
 struct LawLowering<'a> {
     geometric: Geometric<'a>,
-    time: Option<ExprId>,
+    time: ExprId,
+}
+
+impl<'a> LawLowering<'a> {
+    fn new(unknowns: &'a UnknownValues, coordinates: usize) -> LawLowering<'a> {
+        let mut pool = Pool::new();
+        let time = pool.symbol("t");
+        let coordinates = (0..coordinates)
+            .map(|k| pool.symbol(&format!("q{k}")))
+            .collect();
+        LawLowering {
+            geometric: Geometric {
+                pool,
+                unknowns,
+                coordinates,
+            },
+            time,
+        }
+    }
 }
 
 impl Lower for LawLowering<'_> {
@@ -225,8 +368,8 @@ impl Lower for LawLowering<'_> {
     }
 
     fn leaf(&mut self, s: &SExpr) -> Result<ExprId, EvalError> {
-        match (s, self.time) {
-            (SExpr::Time, Some(time)) => Ok(time),
+        match s {
+            SExpr::Time => Ok(self.time),
             _ => self.geometric.leaf(s),
         }
     }

@@ -36,18 +36,21 @@ pub struct JointAnalysis {
 }
 
 /// A generic configuration: coordinates no rational design would pick.
-fn generic_coordinates(n: usize) -> Vec<f64> {
+pub(crate) fn generic_coordinates(n: usize) -> Vec<f64> {
     (0..n).map(|i| 0.3719 + 0.2113 * i as f64).collect()
 }
 
 pub fn analyse(joint: &JointModel) -> Result<JointAnalysis, EvalError> {
     let n = joint.coordinate_count();
     let (_, subspace) = joint.chain(&generic_coordinates(n))?;
+    // A rheonomic chain's hidden coordinates are imposed, not freedoms: its declared ones at
+    // a generic instant.
+    let subspace = subspace.columns(0, joint.declared_count()).into_owned();
     let dof = rank(&subspace);
     let kind = classify(&subspace, dof);
     Ok(JointAnalysis {
         kind,
-        coordinates: n,
+        coordinates: joint.declared_count(),
         dof,
         constraint: 6 - dof,
     })

@@ -144,13 +144,15 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
 }
 
 /// Degrees of freedom of the tree at q: the ranks of the principal joints' motion subspaces
-/// (the coordinate count, unless a link's coordinates are redundant).
+/// over their declared coordinates (the coordinate count, unless a link's coordinates are
+/// redundant).
 pub fn tree_dof(model: &KinematicModel, q: &[f64]) -> Result<usize, EvalError> {
     let mut dof = 0;
     for joint in model.principal() {
         let (_, subspace) =
             joint.chain(&q[joint.offset..joint.offset + joint.coordinate_count()])?;
-        dof += rank(&subspace);
+        // A rheonomic chain's hidden coordinates (the last ones) are imposed, not freedoms.
+        dof += rank(&subspace.columns(0, joint.declared_count()).into_owned());
     }
     Ok(dof)
 }

@@ -16,6 +16,7 @@ pub mod joint;
 pub mod mobility;
 pub mod model;
 pub mod penalty;
+pub mod rheonomic;
 pub mod sphere_on_disc;
 pub mod unknowns;
 

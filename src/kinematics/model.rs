@@ -6,6 +6,7 @@ use nalgebra::{DMatrix, Matrix6, Vector3};
 
 use super::chain::{ChainScratch, CompiledChain};
 use super::eval::{eval, EvalError, Geometric, UnknownValues};
+use super::rheonomic::{self, PrescribedMotion};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId, SExpr, Scalar};
@@ -35,13 +36,22 @@ pub struct JointModel {
     pub coordinate_names: Vec<String>,
     /// Index of the joint's first coordinate in the mechanism's coordinate vector.
     pub offset: usize,
+    /// The hidden coordinates of a rheonomic chain (`time` in it), after the declared ones,
+    /// with their laws (`rheonomic`).
+    pub prescribed: Vec<PrescribedMotion>,
     /// The steps' parameters compiled, or why they could not be (reported when evaluated).
     compiled: Result<CompiledChain, EvalError>,
 }
 
 impl JointModel {
+    /// Its coordinates: the declared ones, then the hidden ones of a rheonomic chain.
     pub fn coordinate_count(&self) -> usize {
         self.coordinate_names.len()
+    }
+
+    /// The coordinates its link declares (the first ones).
+    pub fn declared_count(&self) -> usize {
+        self.coordinate_count() - self.prescribed.len()
     }
 
     /// Whether coordinate `index` is an angle that gives the same pose every full turn: the
@@ -399,27 +409,17 @@ fn joint_model(
     offset: usize,
 ) -> Result<JointModel, Diagnostic> {
     let join = mechanism.join(id);
-    let link = mechanism.link(join.link);
     let name = mechanism.join_name(id);
     let frame = |d: &Displacement| {
         constant_pose(d, unknowns).map_err(|e| geometry_error(mechanism, e, join.span, &name))
     };
     let first = frame(&join.first.displacement)?;
     let second = frame(&join.second.displacement)?;
-    let steps = link_steps(mechanism, id, unknowns)?;
-    let coordinate_names: Vec<String> = link.coordinates.iter().map(|c| c.to_string()).collect();
-    Ok(JointModel {
-        join: id,
-        name,
-        first_body: topology.number(join.first.body),
-        second_body: topology.number(join.second.body),
-        first,
-        second,
-        compiled: compile(&steps, coordinate_names.len(), unknowns),
-        steps,
-        coordinate_names,
-        offset,
-    })
+    let mut joint = link_only(mechanism, id, unknowns)?;
+    joint.first_body = topology.number(join.first.body);
+    joint.second_body = topology.number(join.second.body);
+    (joint.first, joint.second, joint.offset) = (first, second, offset);
+    Ok(joint)
 }
 
 /// The steps of a join's dof chain, with rotation axes evaluated and normalised.
@@ -601,20 +601,29 @@ fn motionless(
     )
 }
 
-/// A joint model of the link alone (frames at identity): enough to analyse the joint.
+/// A joint model of the link alone (frames at identity): enough to analyse the joint; a
+/// rheonomic chain's parameters rewritten on their hidden coordinates (`rheonomic`).
 pub fn link_only(
     mechanism: &Mechanism,
     id: JoinId,
     unknowns: &UnknownValues,
 ) -> Result<JointModel, Diagnostic> {
     let join = mechanism.join(id);
-    let steps = link_steps(mechanism, id, unknowns)?;
-    let coordinate_names: Vec<String> = mechanism
+    let mut steps = link_steps(mechanism, id, unknowns)?;
+    let mut coordinate_names: Vec<String> = mechanism
         .link(join.link)
         .coordinates
         .iter()
         .map(|c| c.to_string())
         .collect();
+    let parameters = steps.iter_mut().flat_map(|step| match step {
+        Step::Translation(v) => v.iter_mut().collect::<Vec<_>>(),
+        Step::Rotation { angle, .. } => vec![angle],
+    });
+    let prescribed = rheonomic::rewrite(parameters, coordinate_names.len());
+    for k in 1..=prescribed.len() {
+        coordinate_names.push(rheonomic::hidden_name(&coordinate_names, k));
+    }
     Ok(JointModel {
         join: id,
         name: mechanism.join_name(id),
@@ -625,6 +634,7 @@ pub fn link_only(
         compiled: compile(&steps, coordinate_names.len(), unknowns),
         steps,
         coordinate_names,
+        prescribed,
         offset: 0,
     })
 }

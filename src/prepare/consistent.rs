@@ -104,7 +104,8 @@ fn amplified_rates(
     Some(warning)
 }
 
-/// State velocities whose value the program gives (`initial j.q' = …`). A quaternion joint's
+/// State velocities whose value the program gives (`initial j.q' = …`), and the driven ones (their laws'
+/// rates). A quaternion joint's
 /// velocities are not its declared rates, so they are never held.
 fn given_velocities(mechanism: &Mechanism, model: &Model) -> Vec<(usize, String)> {
     let mut given = Vec::new();
@@ -124,6 +125,12 @@ fn given_velocities(mechanism: &Mechanism, model: &Model) -> Vec<(usize, String)
             .link(mechanism.join(initial.join).link)
             .coordinates[initial.coordinate];
         given.push((index, format!("{name}.{coordinate}'")));
+    }
+    // A driven coordinate's rate is its law's (`initial_state` of `prepare`): kept too.
+    for drive in &model.drives {
+        if !given.iter().any(|(index, _)| *index == drive.velocity) {
+            given.push((drive.velocity, format!("{}'", drive.coordinate)));
+        }
     }
     given
 }

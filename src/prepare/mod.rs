@@ -257,5 +257,11 @@ fn initial_state(
             rates[index] = value;
         }
     }
+    // A driven coordinate starts on its law, whatever `initial` gives it: then the start's
+    // projection onto the held rows has nothing to change, and leaves the other rates alone.
+    for drive in &model.drives {
+        let law = drive.at(0.0);
+        (coordinates[drive.declared], rates[drive.declared]) = (law.position, law.rate);
+    }
     Ok((coordinates, rates))
 }

@@ -109,8 +109,9 @@ pub fn build(
     topology: &Topology,
     values: &UnknownValues,
 ) -> Result<NativeDynamics, Unavailable> {
-    let equations = symbolic::generate(mechanism, topology).map_err(|_| {
-        Unavailable::Unsupported("the equations of motion cannot be written".into())
+    let equations = symbolic::generate(mechanism, topology).map_err(|refused| {
+        let why = refused.first().map_or("", |d| d.message.as_str());
+        Unavailable::Unsupported(format!("the equations of motion cannot be written: {why}"))
     })?;
     supported(&equations)?;
     let parameters = parameter_values(&equations, values)?;

@@ -24,6 +24,11 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
             "the mechanism has contacts (the native code serves trees without constraints)".into(),
         ));
     }
+    if !model.drives.is_empty() {
+        return Err(Unavailable::Unsupported(
+            "the mechanism has motions imposed in time (`drive`, `time` in a dof chain), which the native code does not impose".into(),
+        ));
+    }
     if model.nq != model.nv || model.positions() != model.nq {
         return Err(Unavailable::Unsupported(
             "its state is not its declared coordinates and rates (a free or spherical joint)"

@@ -27,6 +27,7 @@ use super::vector as v;
 use super::vector::Wrench;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
+use crate::elab::value::Elementary;
 use crate::topology::Topology;
 
 pub struct Equations {
@@ -151,6 +152,39 @@ pub struct Values {
 }
 
 /// Generates the equations of a mechanism whose bodies are numbered by `topology`.
+/// E0828 for a motion imposed in time: a `drive`, whose row and effort the equations do not
+/// carry (they would be the free mechanism's), or `time` in a dof chain, whose motion's rates
+/// the generator's velocities (by the coordinates' rates alone) would leave out.
+fn imposed_motion(mechanism: &Mechanism) -> Option<Diagnostic> {
+    let refused = |span, label: &str| {
+        Diagnostic::error(
+            "E0828",
+            "the equations of motion of a mechanism with motions imposed in time (`drive`, `time` in a dof chain) are not written",
+        )
+        .primary(span, label.to_string())
+        .help("`lsdc simulate` integrates it and `lsdc inverse` gives the efforts that impose the motion; the symbolic equations cover free coordinates only")
+    };
+    if let Some(drive) = mechanism.drives.first() {
+        return Some(refused(drive.span, "this drive imposes a motion"));
+    }
+    let rheonomic = mechanism.joins.iter().find(|join| {
+        let link = mechanism.link(join.link);
+        link.dofs
+            .iter()
+            .flat_map(|d| d.0.iter())
+            .any(|step| match step {
+                Elementary::Translation(v) => v.iter().any(|s| s.uses_time()),
+                Elementary::Rotation { angle, axis } => {
+                    angle.uses_time() || axis.iter().any(|s| s.uses_time())
+                }
+            })
+    })?;
+    Some(refused(
+        mechanism.link(rheonomic.link).span,
+        "this dof chain depends on the time",
+    ))
+}
+
 pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {
     if let Some(contact) = mechanism.contacts.first() {
         // The equations below are the tree's and its loops'; leaving the contacts' rows out
@@ -190,6 +224,9 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
         .help(
             "`lsdc simulate` integrates it; the symbolic equations cover the bodies' inertia only",
         )]);
+    }
+    if let Some(refused) = imposed_motion(mechanism) {
+        return Err(vec![refused]);
     }
     let mut generator = Generator::new(mechanism, topology);
     generator.run().map_err(|e| {

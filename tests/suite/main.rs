@@ -50,6 +50,7 @@ mod recovered_angles;
 mod references;
 mod regression;
 mod repository;
+mod rheonomic;
 mod robustness;
 mod rolling_disc;
 mod rows;

@@ -628,3 +628,24 @@ fn a_conserved_energy_is_plotted_flat_with_its_value() {
     assert_eq!(energy["flat"], false, "{energy}");
     assert_ne!(energy["low"], energy["high"], "{energy}");
 }
+
+/// A rheonomic joint in the viewer: the bead on the spinning rod moves on its closed form,
+/// r0 cosh(w t) along the rod turned by w t, and the torque that turns the rod is one of the
+/// page's series.
+#[test]
+fn the_viewer_moves_a_rheonomic_joint_and_plots_its_effort() {
+    let mut viewer = viewer("bead_on_spinning_rod");
+    let animation = viewer.simulate(Some(1.0)).expect("a run");
+    let (w, r0) = (3.0, 0.1);
+    for (t, poses) in animation.times.iter().zip(&animation.poses) {
+        let (r, angle) = (r0 * (w * t).cosh(), w * t);
+        let bead = world(&poses[0], &[0.0, 0.0, 0.0]);
+        let expected = Vector3::new(r * angle.cos(), r * angle.sin(), 0.0);
+        assert!((bead - expected).norm() < 1e-8 * r, "t = {t}: {bead:?}");
+    }
+    let torque = (animation.series.iter())
+        .find(|s| s.name == "rod.motion1_effort")
+        .expect("the effort's series");
+    assert_eq!(torque.values.len(), animation.times.len());
+    assert!(torque.values.last().is_some_and(|&v| v > 9.0));
+}

@@ -13,11 +13,12 @@ pub fn equations_of(path: &str) -> Equations {
 }
 
 /// The equations of the program at `path`, or `None` for a mechanism whose equations are
-/// refused (contacts E0825, geared rotors E0826; `symbolic_equations` checks the refusals).
+/// refused (contacts E0825, geared rotors E0826, motions imposed in time E0828;
+/// `symbolic_equations` checks the refusals).
 pub fn written_equations(path: &str) -> Option<Equations> {
     match generated(path) {
         Ok(equations) => Some(equations),
-        Err(refused) if ["E0825", "E0826"].contains(&refused[0].code) => None,
+        Err(refused) if ["E0825", "E0826", "E0828"].contains(&refused[0].code) => None,
         Err(errors) => panic!("{path}: {errors:?}"),
     }
 }
