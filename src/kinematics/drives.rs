@@ -13,16 +13,19 @@ use std::collections::HashMap;
 
 use super::eval::{describe, EvalError, Geometric, UnknownValues};
 use super::model::KinematicModel;
+use super::tabulated_law::TabulatedLaw;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{Drive, Mechanism};
 use crate::elab::value::SExpr;
 use crate::symbolic::expr::{ExprId, Function, Node, Pool, Tape};
 use crate::symbolic::program::Lower;
 
-/// A law of time with its first two derivatives, as one tape.
+/// A law of time with its first two derivatives: the program's expression as one tape, or
+/// knots read from a file (`lsdc inverse --motion`).
 #[derive(Clone, Debug)]
-pub struct DriveLaw {
-    tape: Tape,
+pub enum DriveLaw {
+    Expression(Tape),
+    Tabulated(TabulatedLaw),
 }
 
 /// A law's value and its first two time derivatives at one instant.
@@ -42,12 +45,17 @@ impl DriveLaw {
     /// As `at`, the tape's nodes evaluated in `values` (which keeps its storage: a run's
     /// evaluations allocate nothing).
     pub fn evaluate(&self, t: f64, values: &mut Vec<f64>) -> LawAt {
-        self.tape.eval_into(&[t], values);
-        let root = |k: usize| values[self.tape.roots[k]];
+        let [position, rate, acceleration] = match self {
+            DriveLaw::Expression(tape) => {
+                tape.eval_into(&[t], values);
+                [0, 1, 2].map(|k| values[tape.roots[k]])
+            }
+            DriveLaw::Tabulated(law) => law.at(t),
+        };
         LawAt {
-            position: root(0),
-            rate: root(1),
-            acceleration: root(2),
+            position,
+            rate,
+            acceleration,
         }
     }
 }
@@ -193,9 +201,10 @@ fn law(
     }
     let rate = pool.derivative(position, time, &mut HashMap::new());
     let acceleration = pool.derivative(rate, time, &mut HashMap::new());
-    Ok(DriveLaw {
-        tape: Tape::new(pool, &[position, rate, acceleration]),
-    })
+    Ok(DriveLaw::Expression(Tape::new(
+        pool,
+        &[position, rate, acceleration],
+    )))
 }
 
 /// A function in the law whose derivatives jump (`floor`) or do not exist somewhere (`abs`).

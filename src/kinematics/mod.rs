@@ -17,6 +17,7 @@ pub mod mobility;
 pub mod model;
 pub mod penalty;
 pub mod sphere_on_disc;
+pub mod tabulated_law;
 pub mod unknowns;
 
 pub use initial::initial_coordinates;
