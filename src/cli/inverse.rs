@@ -132,8 +132,9 @@ fn imposed_motion(
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
     let motion = read_motion(&text, &path.display().to_string(), args.smoothing)?;
+    let in_file = |why: String| format!("{}: {why}", path.display());
     let imposed = match &args.frame {
-        None => impose(prepared, &motion, Target::Coordinates)?,
+        None => impose(prepared, &motion, Target::Coordinates).map_err(in_file)?,
         Some(name) => {
             let mechanism = program
                 .mechanism()
@@ -151,7 +152,7 @@ fn imposed_motion(
                 output: &output,
                 actuation: &actuation,
             };
-            impose(prepared, &motion, target)?
+            impose(prepared, &motion, target).map_err(in_file)?
         }
     };
     let splined: Vec<&str> = (imposed.columns.iter())

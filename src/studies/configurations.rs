@@ -156,6 +156,25 @@ pub fn assemble_holding(
     Ok(assembled.q)
 }
 
+/// The fields of the CSV line `line` (line `index` + 1 of `file`), as many as the header's
+/// `columns`.
+pub(crate) fn row_fields<'a>(
+    line: &'a str,
+    columns: usize,
+    file: &str,
+    index: usize,
+) -> Result<Vec<&'a str>, String> {
+    let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+    match fields.len() == columns {
+        true => Ok(fields),
+        false => Err(format!(
+            "{file}:{}: {} fields for {columns} columns",
+            index + 1,
+            fields.len(),
+        )),
+    }
+}
+
 /// Reads the samples of a run (`lsdc simulate`'s CSV: `time`, the coordinates, their rates
 /// `name'`) or of a drag (`lsdc drag`'s CSV, the coordinates among its columns): every declared
 /// coordinate must be a column; rates are read where present, zero otherwise; without a `time`
@@ -183,15 +202,7 @@ pub fn read_samples(prepared: &Prepared, text: &str, file: &str) -> Result<Vec<D
     let time = column("time");
     let mut samples = Vec::new();
     for (row, (index, line)) in lines.enumerate() {
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() != columns.len() {
-            return Err(format!(
-                "{file}:{}: {} fields for {} columns",
-                index + 1,
-                fields.len(),
-                columns.len()
-            ));
-        }
+        let fields = row_fields(line, columns.len(), file, index)?;
         // Only the columns read need be numbers (a drag's `reached` is not).
         let number = |c: usize| {
             fields[c]

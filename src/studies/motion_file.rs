@@ -11,6 +11,8 @@
 
 use serde::Serialize;
 
+use super::configurations::row_fields;
+
 /// Where a rate or an acceleration comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -72,15 +74,7 @@ pub fn read_motion(text: &str, file: &str, variance: f64) -> Result<MotionFile, 
     }
     let mut rows: Vec<Vec<f64>> = Vec::new();
     for (index, line) in lines {
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() != columns.len() {
-            return Err(format!(
-                "{file}:{}: {} fields for {} columns",
-                index + 1,
-                fields.len(),
-                columns.len()
-            ));
-        }
+        let fields = row_fields(line, columns.len(), file, index)?;
         let row = (fields.iter())
             .map(|f| match f.parse::<f64>() {
                 Ok(x) if x.is_finite() => Ok(x),

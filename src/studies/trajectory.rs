@@ -142,9 +142,9 @@ fn even_step(times: &[f64]) -> Result<f64, String> {
     let last = times[times.len() - 1];
     match (times.iter().enumerate()).find(|(k, &t)| (t - *k as f64 * step).abs() > EVEN_SPACING * last) {
         Some((k, t)) => Err(format!(
-            "the motion's times are not evenly spaced: row {} is at t = {t}, not {} (the run samples at a fixed interval: resample the file)",
+            "the motion's times are not evenly spaced: its row {} is at t = {t}, not {} as the first interval, {step}, makes it (the run samples at a fixed interval: resample the file)",
             k + 1,
-            k as f64 * step
+            (k as f64 * step * 1e9).round() / 1e9
         )),
         None => Ok(step),
     }
