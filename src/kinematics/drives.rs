@@ -16,6 +16,7 @@ use std::collections::HashMap;
 use super::eval::{describe, EvalError, Geometric, UnknownValues};
 use super::mobility::rank;
 use super::model::{JointModel, KinematicModel};
+use super::tabulated_law::TabulatedLaw;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{Drive, Mechanism};
 use crate::elab::value::{SExpr, Scalar};
@@ -23,10 +24,12 @@ use crate::source::Span;
 use crate::symbolic::expr::{ExprId, Function, Node, Pool, Tape};
 use crate::symbolic::program::Lower;
 
-/// A law of time with its first two derivatives, as one tape.
+/// A law of time with its first two derivatives: the program's expression as one tape, or
+/// knots read from a file (`lsdc inverse --motion`).
 #[derive(Clone, Debug)]
-pub struct DriveLaw {
-    tape: Tape,
+pub enum DriveLaw {
+    Expression(Tape),
+    Tabulated(TabulatedLaw),
 }
 
 /// A law's value and its first two time derivatives at one instant.
@@ -46,12 +49,17 @@ impl DriveLaw {
     /// As `at`, the tape's nodes evaluated in `values` (which keeps its storage: a run's
     /// evaluations allocate nothing).
     pub fn evaluate(&self, t: f64, values: &mut Vec<f64>) -> LawAt {
-        self.tape.eval_into(&[t], values);
-        let root = |k: usize| values[self.tape.roots[k]];
+        let [position, rate, acceleration] = match self {
+            DriveLaw::Expression(tape) => {
+                tape.eval_into(&[t], values);
+                [0, 1, 2].map(|k| values[tape.roots[k]])
+            }
+            DriveLaw::Tabulated(law) => law.at(t),
+        };
         LawAt {
-            position: root(0),
-            rate: root(1),
-            acceleration: root(2),
+            position,
+            rate,
+            acceleration,
         }
     }
 }
@@ -279,9 +287,10 @@ fn law(
     }
     let rate = pool.derivative(position, time, &mut HashMap::new());
     let acceleration = pool.derivative(rate, time, &mut HashMap::new());
-    Ok(DriveLaw {
-        tape: Tape::new(pool, &[position, rate, acceleration]),
-    })
+    Ok(DriveLaw::Expression(Tape::new(
+        pool,
+        &[position, rate, acceleration],
+    )))
 }
 
 /// E0484: `subject` (a law of time) uses `function`, whose derivatives jump.

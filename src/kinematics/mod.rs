@@ -18,6 +18,7 @@ pub mod model;
 pub mod penalty;
 pub mod rheonomic;
 pub mod sphere_on_disc;
+pub mod tabulated_law;
 pub mod unknowns;
 
 pub use initial::initial_coordinates;

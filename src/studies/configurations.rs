@@ -81,36 +81,7 @@ pub fn close_from(
     request: &StateRequest,
     frame: &FramePoint,
 ) -> Result<Declared, String> {
-    let names = &prepared.coordinate_names;
-    let index_of = |name: &String| {
-        names.iter().position(|n| n == name).ok_or_else(|| {
-            let close = crate::diag::suggest::did_you_mean(name, names.iter().map(String::as_str))
-                .map_or(String::new(), |c| format!("; did you mean `{c}`?"));
-            format!("`{name}` is not a coordinate of the mechanism{close}")
-        })
-    };
-    let mut start = start.to_vec();
-    let mut fixed = vec![false; start.len()];
-    for (name, &value) in &request.coordinates {
-        let index = index_of(name)?;
-        start[index] = value;
-        fixed[index] = true;
-    }
-    let options = AssemblyOptions::default();
-    let mut coordinates = assemble(&prepared.kinematics, &start, &fixed, &options)
-        .map_err(|error| match error {
-            AssemblyError::NoAssembly { loop_errors, .. } => {
-                let (position, rotation) = (loop_errors.iter())
-                    .fold((0.0f64, 0.0f64), |(p, r), (lp, lr)| (p.max(*lp), r.max(*lr)));
-                format!(
-                    "the loops do not close with these coordinates held (closest: {position:.3e} m and {rotation:.3e} rad apart)"
-                )
-            }
-            AssemblyError::Evaluation(_) => {
-                "the geometry cannot be evaluated at these coordinates".to_string()
-            }
-        })?
-        .q;
+    let mut coordinates = assemble_holding(prepared, start, &request.coordinates)?;
     if let Some(point) = request.point {
         if !request.coordinates.is_empty() {
             return Err("give either coordinates or a point, not both".to_string());
@@ -134,13 +105,74 @@ pub fn close_from(
     }
     let mut rates = vec![0.0; coordinates.len()];
     for (name, &value) in &request.rates {
-        rates[index_of(name)?] = value;
+        rates[coordinate_index(prepared, name)?] = value;
     }
     Ok(Declared {
         coordinates,
         rates,
         time: 0.0,
     })
+}
+
+/// The declared coordinate `name`'s index, or why there is none.
+fn coordinate_index(prepared: &Prepared, name: &str) -> Result<usize, String> {
+    let names = &prepared.coordinate_names;
+    names.iter().position(|n| n == name).ok_or_else(|| {
+        let close = crate::diag::suggest::did_you_mean(name, names.iter().map(String::as_str))
+            .map_or(String::new(), |c| format!("; did you mean `{c}`?"));
+        format!("`{name}` is not a coordinate of the mechanism{close}")
+    })
+}
+
+/// The configuration assembled from the declared coordinates `start` with the coordinates
+/// `held` at their values (the direct geometric model).
+pub fn assemble_holding(
+    prepared: &Prepared,
+    start: &[f64],
+    held: &BTreeMap<String, f64>,
+) -> Result<Vec<f64>, String> {
+    let mut start = start.to_vec();
+    let mut fixed = vec![false; start.len()];
+    for (name, &value) in held {
+        let index = coordinate_index(prepared, name)?;
+        start[index] = value;
+        fixed[index] = true;
+    }
+    let options = AssemblyOptions::default();
+    let assembled = assemble(&prepared.kinematics, &start, &fixed, &options).map_err(|error| {
+        match error {
+            AssemblyError::NoAssembly { loop_errors, .. } => {
+                let (position, rotation) = (loop_errors.iter())
+                    .fold((0.0f64, 0.0f64), |(p, r), (lp, lr)| (p.max(*lp), r.max(*lr)));
+                format!(
+                    "the loops do not close with these coordinates held (closest: {position:.3e} m and {rotation:.3e} rad apart)"
+                )
+            }
+            AssemblyError::Evaluation(_) => {
+                "the geometry cannot be evaluated at these coordinates".to_string()
+            }
+        }
+    })?;
+    Ok(assembled.q)
+}
+
+/// The fields of the CSV line `line` (line `index` + 1 of `file`), as many as the header's
+/// `columns`.
+pub(crate) fn row_fields<'a>(
+    line: &'a str,
+    columns: usize,
+    file: &str,
+    index: usize,
+) -> Result<Vec<&'a str>, String> {
+    let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+    match fields.len() == columns {
+        true => Ok(fields),
+        false => Err(format!(
+            "{file}:{}: {} fields for {columns} columns",
+            index + 1,
+            fields.len(),
+        )),
+    }
 }
 
 /// Reads the samples of a run (`lsdc simulate`'s CSV: `time`, the coordinates, their rates
@@ -170,15 +202,7 @@ pub fn read_samples(prepared: &Prepared, text: &str, file: &str) -> Result<Vec<D
     let time = column("time");
     let mut samples = Vec::new();
     for (row, (index, line)) in lines.enumerate() {
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() != columns.len() {
-            return Err(format!(
-                "{file}:{}: {} fields for {} columns",
-                index + 1,
-                fields.len(),
-                columns.len()
-            ));
-        }
+        let fields = row_fields(line, columns.len(), file, index)?;
         // Only the columns read need be numbers (a drag's `reached` is not).
         let number = |c: usize| {
             fields[c]

@@ -23,6 +23,9 @@ pub struct InverseDynamics {
     /// The joins whose reactions the samples carry (empty unless asked for).
     pub reaction_names: Vec<String>,
     pub samples: Vec<InverseSample>,
+    /// The motion file's drives and how its columns were read (`lsdc inverse --motion`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<crate::studies::trajectory::Imposed>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -116,6 +119,7 @@ pub fn from_run(prepared: &Prepared, simulation: &Simulation) -> InverseDynamics
         efforts: drives.iter().map(|d| d.effort_name()).collect(),
         reaction_names: reaction_names_of(prepared),
         samples,
+        motion: None,
     }
 }
 

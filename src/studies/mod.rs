@@ -1,7 +1,8 @@
 //! The studies built on the mechanism and its runs: the dynamics at given states (`lsdc eval`,
 //! `batch`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
 //! precision and cost (`precision`), the `tree` and `assemble` reports (`analysis`), a
-//! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`),
+//! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`) or
+//! along a motion read from a file (`motion_file`, made drives by `trajectory`),
 //! the velocity and acceleration models and their singularities at configurations
 //! (`kinematic_models`, closed by `configurations`) and along runs (`singularities`), the
 //! workspace of a point (`workspace`), and the linear model about an operating point
@@ -14,7 +15,9 @@ pub mod drag;
 pub mod inverse;
 pub mod kinematic_models;
 pub mod linearize;
+pub mod motion_file;
 pub mod precision;
 pub mod singularities;
 pub mod statics;
+pub mod trajectory;
 pub mod workspace;

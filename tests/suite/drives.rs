@@ -26,8 +26,12 @@ fn settings(integrator: Integrator) -> Settings {
 /// rates and accelerations from the loop's equation differentiated once and twice, then the
 /// crank torque by virtual power, τ ω₁ = d(T + V)/dt = Σ m a_G·v_G + I α ω + m g v_G,y.
 fn four_bar_torque(theta1: f64) -> f64 {
+    four_bar_torque_moving(theta1, 2.0 * std::f64::consts::PI, 0.0)
+}
+
+/// As [`four_bar_torque`], the crank at the rate ω₁ and the acceleration α₁.
+pub fn four_bar_torque_moving(theta1: f64, w1: f64, a1: f64) -> f64 {
     let (l0, l1, l2, l3, g) = (4.0, 1.0, 3.5, 3.0, 9.81);
-    let (w1, a1) = (2.0 * std::f64::consts::PI, 0.0);
     let e = |t: f64| [t.cos(), t.sin()];
     let n = |t: f64| [-t.sin(), t.cos()];
     let b = [l1 * theta1.cos(), l1 * theta1.sin()];

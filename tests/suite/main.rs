@@ -65,6 +65,7 @@ mod symbolic_equations;
 mod symplectic_groups;
 mod textmate;
 mod threads;
+mod trajectory;
 mod tree_jacobian;
 mod unit_check;
 mod unit_corrector;

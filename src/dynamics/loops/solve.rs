@@ -64,6 +64,10 @@ pub struct LoopScratch {
     quality_of: Vec<usize>,
     /// How many of `null`'s columns the last solve moved along (the massive ones).
     solved_motions: usize,
+    /// The massive motions of a solve that chose them (`Massive::choose`): `null` is then in
+    /// the order of the free coordinates, the massive ones not first, so they are copied here
+    /// (empty otherwise: `null`'s first columns are the massive ones).
+    chosen_motions: DMatrix<f64>,
     /// How the reduced equations are formed, and their scratch.
     inertia: ReducedInertia,
     /// Accelerations of every state velocity.
@@ -94,6 +98,7 @@ impl LoopScratch {
             free_quality: None,
             quality_of: Vec::new(),
             solved_motions: 0,
+            chosen_motions: DMatrix::zeros(columns, 0),
             inertia: ReducedInertia::new(model),
             accelerations: DVector::zeros(columns),
             multipliers: DVector::zeros(rows),
@@ -136,7 +141,10 @@ impl LoopScratch {
     /// The allowed motions the last solve moved along (one column per free coordinate that
     /// carries mass, over the state's velocities): a basis of the velocities the loops allow.
     pub fn solved_motions(&self) -> nalgebra::DMatrixView<'_, f64> {
-        self.null.columns(0, self.solved_motions)
+        match self.chosen_motions.ncols() {
+            0 => self.null.columns(0, self.solved_motions),
+            kept => self.chosen_motions.columns(0, kept),
+        }
     }
 
     /// Sizes the allowed motions' matrices for `free` coordinates (allocates only when their
@@ -255,6 +263,7 @@ pub fn solve_reduced(
         inertia,
         accelerations,
         solved_motions,
+        chosen_motions,
         ..
     } = scratch;
     let (every, checking) = massive.plan(structure);
@@ -299,6 +308,12 @@ pub fn solve_reduced(
     })?;
     let z = reduced_force.rows(0, m);
     *solved_motions = m;
+    // A solve that chose the massive motions solved along them only: the others are left at
+    // rest, and a response over every column would be singular along them.
+    *chosen_motions = match every && structure.massless > 0 {
+        true => null.select_columns(&massive.kept),
+        false => DMatrix::zeros(null.nrows(), 0),
+    };
     accelerations.copy_from(particular);
     accelerations.gemv(1.0, &null.columns(0, m), &z, 1.0);
     Ok(())
