@@ -3,7 +3,8 @@
 //! precision and cost (`precision`), the `tree` and `assemble` reports (`analysis`), a
 //! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`),
 //! the velocity and acceleration models and their singularities at configurations
-//! (`kinematic_models`, closed by `configurations`) and along runs (`singularities`), the
+//! (`kinematic_models`, closed by `configurations`) along runs (`singularities`), the singular points of the inverse geometric model
+//! (`singular_points`), the
 //! workspace of a point (`workspace`), and the linear model about an operating point
 //! (`linearize`).
 
@@ -15,6 +16,8 @@ pub mod inverse;
 pub mod kinematic_models;
 pub mod linearize;
 pub mod precision;
+pub mod singular_points;
 pub mod singularities;
 pub mod statics;
 pub mod workspace;
+pub mod workspace_positions;
