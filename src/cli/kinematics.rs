@@ -121,7 +121,9 @@ pub fn run(args: &KinematicsArgs) -> ExitCode {
     };
     if args.find_singular {
         if output.kind != OutputKind::Point {
-            return usage_error("`--find-singular` looks for positions of a point: give `--point FRAME`");
+            return usage_error(
+                "`--find-singular` looks for positions of a point: give `--point FRAME`",
+            );
         }
         let found = find(
             &prepared,

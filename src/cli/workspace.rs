@@ -8,8 +8,8 @@ use std::process::ExitCode;
 use super::shared::{
     err, json, prepare_file, usage_error, write_output, Format, LibraryArgs, SampleFormat,
 };
-use lsdc::studies::kinematic_models::{actuation, Output, OutputKind, SINGULAR_TOLERANCE};
 use lsdc::output::workspace_plot::{plot, SlicePoint, Slices};
+use lsdc::studies::kinematic_models::{actuation, Output, OutputKind, SINGULAR_TOLERANCE};
 use lsdc::studies::workspace::{ranges, sample, to_csv, Workspace};
 use lsdc::studies::workspace_positions::{
     positions_to_csv, sample_positions, PositionBox, PositionWorkspace,
@@ -36,7 +36,7 @@ pub struct WorkspaceArgs {
     /// Sample a box of positions of the point instead (`XLOW:XHIGH,YLOW:YHIGH,ZLOW:ZHIGH`,
     /// metres): reachable where the inverse geometric model reaches it with the actuated
     /// coordinates within their ranges.
-    #[arg(long, value_name = "BOX")]
+    #[arg(long, value_name = "BOX", allow_hyphen_values = true)]
     positions: Option<String>,
     /// Draw slices of the reachable set (dexterity, boundary, singular loci) to this file
     /// (`.svg` or `.png`).
@@ -71,7 +71,11 @@ fn parse_range(text: &str) -> Result<(String, f64, f64), String> {
 
 /// `XLOW:XHIGH,YLOW:YHIGH,ZLOW:ZHIGH`.
 fn parse_box(text: &str) -> Result<PositionBox, String> {
-    let bad = || format!("`--positions {text}`: expected XLOW:XHIGH,YLOW:YHIGH,ZLOW:ZHIGH with each LOW < HIGH");
+    let bad = || {
+        format!(
+            "`--positions {text}`: expected XLOW:XHIGH,YLOW:YHIGH,ZLOW:ZHIGH with each LOW < HIGH"
+        )
+    };
     let axes: Vec<&str> = text.split(',').collect();
     if axes.len() != 3 {
         return Err(bad());
@@ -91,7 +95,10 @@ fn parse_box(text: &str) -> Result<PositionBox, String> {
 /// The slices of a workspace sampled over the actuated coordinates.
 fn joint_slices(workspace: &Workspace) -> Slices {
     Slices {
-        title: format!("workspace of `{}` over the actuated coordinates", workspace.point),
+        title: format!(
+            "workspace of `{}` over the actuated coordinates",
+            workspace.point
+        ),
         points: (workspace.samples.iter())
             .filter_map(|s| {
                 s.point.map(|position| SlicePoint {
@@ -236,7 +243,10 @@ pub fn run(args: &WorkspaceArgs) -> ExitCode {
     };
     if let Some(path) = &args.plot {
         if let Err(error) = plot(&slices, path) {
-            err(&format!("error: cannot plot to `{}`: {error}\n", path.display()));
+            err(&format!(
+                "error: cannot plot to `{}`: {error}\n",
+                path.display()
+            ));
             return ExitCode::from(1);
         }
     }

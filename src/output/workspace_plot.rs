@@ -81,10 +81,7 @@ impl Figure for Slices {
         );
         // Equal margins around the reach, the same in x and y (the slices are to scale).
         let half = 0.55 * (x_range.1 - x_range.0).max(y_range.1 - y_range.0).max(1e-9);
-        let centre = (
-            0.5 * (x_range.0 + x_range.1),
-            0.5 * (y_range.0 + y_range.1),
-        );
+        let centre = (0.5 * (x_range.0 + x_range.1), 0.5 * (y_range.0 + y_range.1));
         let logs = extent(
             (self.points.iter())
                 .filter_map(|p| p.dexterity)
@@ -146,8 +143,9 @@ impl Figure for Slices {
                 .map_err(error)?;
             chart
                 .draw_series(
-                    (in_slab.iter().filter(|p| p.boundary))
-                        .map(|p| Circle::new(at(&p.position), px(4.0), BLACK.stroke_width(px(1.0)))),
+                    (in_slab.iter().filter(|p| p.boundary)).map(|p| {
+                        Circle::new(at(&p.position), px(4.0), BLACK.stroke_width(px(1.0)))
+                    }),
                 )
                 .map_err(error)?;
             chart

@@ -568,7 +568,7 @@ fn dimensionless_rows(g: &DMatrix<f64>, length: f64, scales: &[f64]) -> DMatrix<
 
 /// An orthonormal basis (columns) of the row space of `m`: its right singular vectors of the
 /// singular values above the rank tolerance.
-pub(crate) fn row_space(m: &DMatrix<f64>) -> DMatrix<f64> {
+fn row_space(m: &DMatrix<f64>) -> DMatrix<f64> {
     let svd = singular(m);
     let largest = svd.values.first().copied().unwrap_or(0.0);
     let rank = (svd.values.iter())
@@ -653,7 +653,11 @@ fn condition(m: &DMatrix<f64>) -> Option<f64> {
 
 /// A singular motion (dimensionless state velocities) named: the coordinates it moves beyond a
 /// hundredth of the largest, largest first, and the loops whose rows they enter.
-pub(crate) fn singular_motion(model: &Model, c: &Constraints, scaled: &DVector<f64>) -> SingularMotion {
+pub(crate) fn singular_motion(
+    model: &Model,
+    c: &Constraints,
+    scaled: &DVector<f64>,
+) -> SingularMotion {
     let norm = scaled.norm();
     let largest = scaled.amax();
     let mut moved: Vec<usize> = (0..scaled.len())

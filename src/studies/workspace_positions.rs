@@ -108,8 +108,8 @@ pub fn sample_positions(
                     let (q, _) =
                         model.state_from_declared(&declared.coordinates, &declared.rates)?;
                     let rates = vec![0.0; actuation.velocities.len()];
-                    dexterity =
-                        models_at(model, actuation, output, &q, &rates, tolerance)?.inverse_condition;
+                    dexterity = models_at(model, actuation, output, &q, &rates, tolerance)?
+                        .inverse_condition;
                     last.clone_from(&declared.coordinates);
                     configurations[index] = Some(declared.coordinates);
                 }

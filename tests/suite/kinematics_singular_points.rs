@@ -44,9 +44,7 @@ fn kinematics_singular_points_of_the_delta_are_the_seeds_six() {
         for b in angles {
             for c in angles {
                 let request = StateRequest {
-                    coordinates: (actuation.names.iter().cloned())
-                        .zip([a, b, c])
-                        .collect(),
+                    coordinates: (actuation.names.iter().cloned()).zip([a, b, c]).collect(),
                     ..Default::default()
                 };
                 seeds.push(close_from(
