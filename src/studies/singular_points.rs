@@ -53,7 +53,7 @@ const DIFFERENCE: f64 = 1e-5;
 /// The largest motion of the point along the conditions' curve at a singular point (lengths in
 /// L per unit motion): there it is the actuators' motion holding the point, 0 but for the
 /// differences' error (at most 9e-9 on the Delta's points; 7e-5 and more on the curves refused).
-const CURVE_DRIFT: f64 = 1e-6;
+pub const CURVE_DRIFT: f64 = 1e-6;
 /// The longest step of one iteration (dimensionless), a trust region for far seeds.
 const LONGEST_STEP: f64 = 0.2;
 

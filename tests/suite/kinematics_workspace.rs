@@ -4,7 +4,7 @@
 //! §3.3, branch β − δ) falls in the box; and the commands' diagnostics against their golden
 //! files (`tests/golden/commands/NAME.args` → `NAME.stderr`).
 
-use lsdc::studies::kinematic_models::SINGULAR_TOLERANCE;
+use lsdc::studies::kinematic_models::{Actuation, SINGULAR_TOLERANCE};
 use lsdc::studies::workspace::{sample, Range};
 use lsdc::studies::workspace_positions::{sample_positions, PositionBox};
 
@@ -48,6 +48,17 @@ fn counted_volume(n: usize, low: f64, high: f64) -> f64 {
     count as f64 * h.iter().product::<f64>()
 }
 
+/// Every actuated coordinate over [low, high].
+fn same_ranges(actuation: &Actuation, low: f64, high: f64) -> Vec<Range> {
+    (actuation.names.iter())
+        .map(|name| Range {
+            name: name.clone(),
+            low,
+            high,
+        })
+        .collect()
+}
+
 #[test]
 fn kinematics_workspace_volume_of_the_delta_converges_to_the_counted_volume() {
     let Delta {
@@ -56,13 +67,7 @@ fn kinematics_workspace_volume_of_the_delta_converges_to_the_counted_volume() {
         actuation,
     } = delta();
     let (low, high) = (0.6, 1.2);
-    let ranges: Vec<Range> = (actuation.names.iter())
-        .map(|name| Range {
-            name: name.clone(),
-            low,
-            high,
-        })
-        .collect();
+    let ranges = same_ranges(&actuation, low, high);
     let volumes: Vec<f64> = [4, 8, 16]
         .iter()
         .map(|&n| {
@@ -215,13 +220,7 @@ fn kinematics_workspace_over_positions_is_the_closed_form_inverse_model() {
         actuation,
     } = delta();
     let (low, high) = (0.6, 1.2);
-    let ranges: Vec<Range> = (actuation.names.iter())
-        .map(|name| Range {
-            name: name.clone(),
-            low,
-            high,
-        })
-        .collect();
+    let ranges = same_ranges(&actuation, low, high);
     let positions = PositionBox {
         lower: [-0.12, -0.12, -0.42],
         upper: [0.12, 0.12, -0.14],
