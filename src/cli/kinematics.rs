@@ -12,6 +12,7 @@ use lsdc::studies::configurations::{self, Declared};
 use lsdc::studies::kinematic_models::{
     actuation, models_at, Actuation, KinematicModels, Output, OutputKind, Rows, SINGULAR_TOLERANCE,
 };
+use lsdc::studies::singular_points::{find, SearchOutcome, SingularPoints};
 use lsdc::studies::singularities::{scan, Scan};
 
 #[derive(clap::Args)]
@@ -42,6 +43,10 @@ pub struct KinematicsArgs {
     /// passages along them.
     #[arg(long, value_name = "FILE")]
     along: Option<PathBuf>,
+    /// Search for the singular points of the inverse geometric model (where the point held
+    /// leaves an actuator free), from each configuration of `--at` (or the initial one).
+    #[arg(long, conflicts_with = "along")]
+    find_singular: bool,
     /// A configuration is singular where a measure falls below this.
     #[arg(long, default_value_t = SINGULAR_TOLERANCE)]
     tolerance: f64,
@@ -114,6 +119,25 @@ pub fn run(args: &KinematicsArgs) -> ExitCode {
         Ok(c) => c,
         Err(message) => return usage_error(&message),
     };
+    if args.find_singular {
+        if output.kind != OutputKind::Point {
+            return usage_error(
+                "`--find-singular` looks for positions of a point: give `--point FRAME`",
+            );
+        }
+        let found = find(
+            &prepared,
+            &actuation,
+            &output,
+            &configurations,
+            args.tolerance,
+        );
+        match args.format {
+            Format::Text => out(&singular_points_text(&found)),
+            Format::Json => out(&json(&found)),
+        }
+        return ExitCode::SUCCESS;
+    }
     let mut results = Vec::new();
     for (index, configuration) in configurations.into_iter().enumerate() {
         let models = configuration.and_then(|declared| {
@@ -277,6 +301,41 @@ fn scan_text(scan: &Scan) -> String {
             }
         }
         text += "\n";
+    }
+    text
+}
+
+fn singular_points_text(found: &SingularPoints) -> String {
+    let mut text = format!(
+        "singular points of the inverse geometric model of `{}` ({} seeds): {}\n",
+        found.point,
+        found.searches.len(),
+        found.points.len()
+    );
+    for p in &found.points {
+        text += &format!(
+            "  ({:.9}, {:.9}, {:.9}) m: {}; {} = ({}); measures {:.1e} (second order {:.1e}), type 2 {:.1e}",
+            p.point[0],
+            p.point[1],
+            p.point[2],
+            p.kind.map_or("not classified singular", |k| k.describe()),
+            found.actuated.join(", "),
+            (p.actuated.iter().map(|a| format!("{a:.6}")))
+                .collect::<Vec<_>>()
+                .join(", "),
+            p.type1_measure,
+            p.second_order,
+            p.type2_measure
+        );
+        if let Some(motion) = &p.motion {
+            text += &format!("; the point held, moves {}", motion.coordinates.join(", "));
+        }
+        text += "\n";
+    }
+    for search in &found.searches {
+        if let SearchOutcome::NotFound { seed, reason, .. } = search {
+            text += &format!("  seed {seed}: {reason}\n");
+        }
     }
     text
 }

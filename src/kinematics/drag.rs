@@ -86,14 +86,14 @@ impl From<AssemblyError> for DragError {
 
 /// The point's position and its Jacobian (3 × coordinates) at `q`, with the loops' residual
 /// and Jacobian.
-struct Linearised {
-    point: Vector3<f64>,
-    point_jacobian: DMatrix<f64>,
-    residual: DVector<f64>,
-    closure_jacobian: DMatrix<f64>,
+pub(crate) struct Linearised {
+    pub point: Vector3<f64>,
+    pub point_jacobian: DMatrix<f64>,
+    pub residual: DVector<f64>,
+    pub closure_jacobian: DMatrix<f64>,
 }
 
-fn linearise(
+pub(crate) fn linearise(
     model: &KinematicModel,
     frame: &FramePoint,
     q: &[f64],

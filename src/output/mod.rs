@@ -10,4 +10,5 @@ pub mod sample_writer;
 pub mod samples;
 pub mod text;
 pub mod urdf;
+pub mod workspace_plot;
 pub mod xml;

@@ -175,6 +175,17 @@ pub(crate) fn row_fields<'a>(
     }
 }
 
+/// Where `frame`'s origin is (fixed axes) at the declared coordinates.
+pub fn point_of(
+    prepared: &Prepared,
+    frame: &FramePoint,
+    coordinates: &[f64],
+) -> Result<[f64; 3], crate::kinematics::eval::EvalError> {
+    let configuration = crate::kinematics::forward::forward(&prepared.kinematics, coordinates)?;
+    let p = frame.pose(&configuration).translation.vector;
+    Ok([p.x, p.y, p.z])
+}
+
 /// Reads the samples of a run (`lsdc simulate`'s CSV: `time`, the coordinates, their rates
 /// `name'`) or of a drag (`lsdc drag`'s CSV, the coordinates among its columns): every declared
 /// coordinate must be a column; rates are read where present, zero otherwise; without a `time`

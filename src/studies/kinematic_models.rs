@@ -70,7 +70,7 @@ impl Output {
             .collect()
     }
 
-    fn rows(&self) -> usize {
+    pub(crate) fn rows(&self) -> usize {
         match self.kind {
             OutputKind::Point => 3,
             OutputKind::Twist => 6,
@@ -78,7 +78,7 @@ impl Output {
     }
 
     /// Whether row r is a linear velocity (in metres per second).
-    fn linear(&self, r: usize) -> bool {
+    pub(crate) fn linear(&self, r: usize) -> bool {
         self.kind == OutputKind::Point || r >= 3
     }
 }
@@ -227,41 +227,21 @@ pub fn models_at(
     actuated_rates: &[f64],
     tolerance: f64,
 ) -> Result<KinematicModels, KinematicsError> {
-    let mut data = Data::new(model);
-    let rest = vec![0.0; model.velocities()];
-    let at_rest = loops::constraints(model, &mut data, q, &rest, Extent::Rows)?;
-    let length = structure::characteristic_length(model, &data, &at_rest);
-    let scales = velocity_scales(model, &data, &at_rest, length);
+    let MotionBasis {
+        length,
+        scales,
+        allowed,
+        basis,
+        unit_rows,
+        at_rest,
+        a,
+        b,
+        a_svd,
+        b_svd,
+    } = motion_basis(model, actuation, output, q)?;
     let rows = output.rows();
-    let point = frame_origin(&data, &output.frame);
-    let g = dimensionless_rows(&at_rest.jacobian.dense(), length, &scales);
-    let allowed = allowed_motions(model, &g);
     let n = model.velocities();
-    let select = DMatrix::from_fn(actuation.velocities.len(), n, |r, c| {
-        f64::from(u8::from(actuation.velocities[r] == c))
-    });
-    let frame_jacobian = frame_jacobian(model, &data, output, &point);
-    let unit_rows = DMatrix::from_fn(rows, 1, |r, _| if output.linear(r) { length } else { 1.0 });
-    let frame_scaled = DMatrix::from_fn(rows, n, |r, c| {
-        frame_jacobian[(r, c)] * scales[c] / unit_rows[(r, 0)]
-    });
-    // Set the idle motions aside: keep the row space of [A; B] on the allowed motions.
-    let on_allowed = {
-        let mut stacked = DMatrix::zeros(select.nrows() + rows, allowed.ncols());
-        stacked
-            .rows_mut(0, select.nrows())
-            .copy_from(&(&select * &allowed));
-        stacked
-            .rows_mut(select.nrows(), rows)
-            .copy_from(&(&frame_scaled * &allowed));
-        stacked
-    };
-    let kept = row_space(&on_allowed);
-    let basis = &allowed * &kept;
-    let a = &select * &basis;
-    let b = &frame_scaled * &basis;
-    let (a_svd, b_svd) = (singular(&a), singular(&b));
-    let motions = kept.ncols();
+    let motions = basis.ncols();
     let type2_measure = kth(&a_svd.values, motions);
     let type1_measure = kth(&b_svd.values, motions.min(rows));
     let a_plus = pseudo_inverse(&a, &a_svd);
@@ -304,8 +284,7 @@ pub fn models_at(
         output,
         q,
         &v,
-        &scales,
-        length,
+        (&scales, length),
         (&direct, &inverse),
         actuation,
     )?;
@@ -335,25 +314,132 @@ pub fn models_at(
     })
 }
 
+/// The motions the loops allow at a configuration, in the mechanism's units (see the module's
+/// comment): an orthonormal basis of the non-idle ones, and on it the actuated rates (A) and
+/// the frame's motion (B), each with its singular value decomposition.
+pub(crate) struct MotionBasis {
+    /// The characteristic length L.
+    pub length: f64,
+    /// Per state velocity, what makes it dimensionless (L for a sliding one, 1 otherwise).
+    pub scales: Vec<f64>,
+    /// Every allowed motion, idle ones included (columns, dimensionless state velocities).
+    pub allowed: DMatrix<f64>,
+    /// The non-idle ones (columns, dimensionless state velocities).
+    pub basis: DMatrix<f64>,
+    /// Per row of the frame's motion, its unit (L for a linear velocity, 1 otherwise).
+    pub unit_rows: DMatrix<f64>,
+    pub at_rest: Constraints,
+    pub a: DMatrix<f64>,
+    pub b: DMatrix<f64>,
+    pub a_svd: Singular,
+    pub b_svd: Singular,
+}
+
+pub(crate) fn motion_basis(
+    model: &Model,
+    actuation: &Actuation,
+    output: &Output,
+    q: &[f64],
+) -> Result<MotionBasis, KinematicsError> {
+    let mut data = Data::new(model);
+    let rest = vec![0.0; model.velocities()];
+    let at_rest = loops::constraints(model, &mut data, q, &rest, Extent::Rows)?;
+    let length = structure::characteristic_length(model, &data, &at_rest);
+    let scales = velocity_scales(model, &data, &at_rest, length);
+    let rows = output.rows();
+    let point = frame_origin(&data, &output.frame);
+    let g = dimensionless_rows(&at_rest.jacobian.dense(), length, &scales);
+    let allowed = allowed_motions(model, &g);
+    let n = model.velocities();
+    let select = DMatrix::from_fn(actuation.velocities.len(), n, |r, c| {
+        f64::from(u8::from(actuation.velocities[r] == c))
+    });
+    let frame_jacobian = frame_jacobian(model, &data, output, &point);
+    let unit_rows = DMatrix::from_fn(rows, 1, |r, _| if output.linear(r) { length } else { 1.0 });
+    let frame_scaled = DMatrix::from_fn(rows, n, |r, c| {
+        frame_jacobian[(r, c)] * scales[c] / unit_rows[(r, 0)]
+    });
+    // Set the idle motions aside: keep the row space of [A; B] on the allowed motions.
+    let on_allowed = {
+        let mut stacked = DMatrix::zeros(select.nrows() + rows, allowed.ncols());
+        stacked
+            .rows_mut(0, select.nrows())
+            .copy_from(&(&select * &allowed));
+        stacked
+            .rows_mut(select.nrows(), rows)
+            .copy_from(&(&frame_scaled * &allowed));
+        stacked
+    };
+    let kept = row_space(&on_allowed);
+    let basis = &allowed * &kept;
+    let a = &select * &basis;
+    let b = &frame_scaled * &basis;
+    let (a_svd, b_svd) = (singular(&a), singular(&b));
+    Ok(MotionBasis {
+        length,
+        scales,
+        allowed,
+        basis,
+        unit_rows,
+        at_rest,
+        a,
+        b,
+        a_svd,
+        b_svd,
+    })
+}
+
 /// The direct model's acceleration term, the inverse model's, and the frame's motion.
 type AccelerationTerms = (Vec<f64>, Vec<f64>, Vec<f64>);
 
 /// The acceleration terms of the direct and inverse models at rates `v` (state velocities on
-/// the loops' allowed motions), and the frame's motion at those rates. The loops' acceleration
-/// rows G v̇ + γ = 0 give the least-norm v̇ₚ = −G⁺γ; the frame's acceleration is J v̇ + β (β from
-/// the bodies' bias accelerations), the actuated ones S v̇: the terms are what they are when
-/// the actuated (direct) or the frame's (inverse) accelerations vanish.
-#[allow(clippy::too_many_arguments)]
+/// the loops' allowed motions), and the frame's motion at those rates: they are what the
+/// accelerations of [`SecondOrder`] make them when the actuated (direct) or the frame's
+/// (inverse) accelerations vanish.
 fn acceleration_terms(
+    model: &Model,
+    output: &Output,
+    q: &[f64],
+    v: &[f64],
+    (scales, length): (&[f64], f64),
+    (direct, inverse): (&DMatrix<f64>, &DMatrix<f64>),
+    actuation: &Actuation,
+) -> Result<AccelerationTerms, KinematicsError> {
+    let second = second_order(model, output, q, v, scales, length)?;
+    let actuated_part = DVector::from_iterator(
+        actuation.velocities.len(),
+        actuation.velocities.iter().map(|&c| second.particular[c]),
+    );
+    let direct_term = &second.frame - direct * &actuated_part;
+    let inverse_term = &actuated_part - inverse * &second.frame;
+    Ok((
+        direct_term.iter().copied().collect(),
+        inverse_term.iter().copied().collect(),
+        second.output_rates,
+    ))
+}
+
+/// The accelerations a motion at rates `v` needs to stay on the loops, at least: the loops'
+/// acceleration rows G v̇ + γ = 0 give the least-norm v̇ₚ = −G⁺γ (any other differs by an
+/// allowed motion), and the frame's acceleration is then J v̇ₚ + β (β from the bodies' bias
+/// accelerations).
+pub(crate) struct SecondOrder {
+    /// v̇ₚ (state accelerations).
+    pub particular: DVector<f64>,
+    /// The frame's acceleration with v̇ₚ (classical: the acceleration of its origin).
+    pub frame: DVector<f64>,
+    /// The frame's motion at `v`.
+    pub output_rates: Vec<f64>,
+}
+
+pub(crate) fn second_order(
     model: &Model,
     output: &Output,
     q: &[f64],
     v: &[f64],
     scales: &[f64],
     length: f64,
-    (direct, inverse): (&DMatrix<f64>, &DMatrix<f64>),
-    actuation: &Actuation,
-) -> Result<AccelerationTerms, KinematicsError> {
+) -> Result<SecondOrder, KinematicsError> {
     let mut data = Data::new(model);
     let moving = loops::constraints(model, &mut data, q, v, Extent::WithBias)?;
     if !model.has_loops() {
@@ -386,18 +472,12 @@ fn acceleration_terms(
     let offset = 6 - output.rows();
     let bias_output = DVector::from_fn(output.rows(), |r, _| classical[offset + r]);
     let output_rates: Vec<f64> = (0..output.rows()).map(|r| velocity[offset + r]).collect();
-    let frame_part = &frame_jacobian * &particular + bias_output;
-    let actuated_part = DVector::from_iterator(
-        actuation.velocities.len(),
-        actuation.velocities.iter().map(|&c| particular[c]),
-    );
-    let direct_term = &frame_part - direct * &actuated_part;
-    let inverse_term = &actuated_part - inverse * &frame_part;
-    Ok((
-        direct_term.iter().copied().collect(),
-        inverse_term.iter().copied().collect(),
+    let frame = &frame_jacobian * &particular + bias_output;
+    Ok(SecondOrder {
+        particular,
+        frame,
         output_rates,
-    ))
+    })
 }
 
 /// An orthonormal basis of the motions the loops allow (the null space of the dimensionless
@@ -503,13 +583,13 @@ fn frame_origin(data: &Data, frame: &FramePoint) -> Vector3<f64> {
 }
 
 /// Singular values (largest first) and right singular vectors (columns, same order).
-struct Singular {
-    values: Vec<f64>,
-    right: DMatrix<f64>,
-    left: DMatrix<f64>,
+pub(crate) struct Singular {
+    pub values: Vec<f64>,
+    pub right: DMatrix<f64>,
+    pub left: DMatrix<f64>,
 }
 
-fn singular(m: &DMatrix<f64>) -> Singular {
+pub(crate) fn singular(m: &DMatrix<f64>) -> Singular {
     let (rows, columns) = m.shape();
     let mut values = Vec::new();
     let (mut left, mut right) = (DMatrix::zeros(rows, 0), DMatrix::zeros(columns, 0));
@@ -534,7 +614,7 @@ fn singular(m: &DMatrix<f64>) -> Singular {
 
 /// The k-th singular value (largest first; 0 when there are fewer than k, 1 for k = 0: a
 /// mechanism without motions is singular in no way).
-fn kth(values: &[f64], k: usize) -> f64 {
+pub(crate) fn kth(values: &[f64], k: usize) -> f64 {
     match k {
         0 => 1.0,
         _ => values.get(k - 1).copied().unwrap_or(0.0),
@@ -573,7 +653,11 @@ fn condition(m: &DMatrix<f64>) -> Option<f64> {
 
 /// A singular motion (dimensionless state velocities) named: the coordinates it moves beyond a
 /// hundredth of the largest, largest first, and the loops whose rows they enter.
-fn singular_motion(model: &Model, c: &Constraints, scaled: &DVector<f64>) -> SingularMotion {
+pub(crate) fn singular_motion(
+    model: &Model,
+    c: &Constraints,
+    scaled: &DVector<f64>,
+) -> SingularMotion {
     let norm = scaled.norm();
     let largest = scaled.amax();
     let mut moved: Vec<usize> = (0..scaled.len())

@@ -4,7 +4,8 @@
 //! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`) or
 //! along a motion read from a file (`motion_file`, made drives by `trajectory`),
 //! the velocity and acceleration models and their singularities at configurations
-//! (`kinematic_models`, closed by `configurations`) and along runs (`singularities`), the
+//! (`kinematic_models`, closed by `configurations`) along runs (`singularities`), the singular points of the inverse geometric model
+//! (`singular_points`), the
 //! workspace of a point (`workspace`), and the linear model about an operating point
 //! (`linearize`).
 
@@ -17,7 +18,9 @@ pub mod kinematic_models;
 pub mod linearize;
 pub mod motion_file;
 pub mod precision;
+pub mod singular_points;
 pub mod singularities;
 pub mod statics;
 pub mod trajectory;
 pub mod workspace;
+pub mod workspace_positions;

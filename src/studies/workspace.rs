@@ -15,9 +15,8 @@
 
 use serde::Serialize;
 
-use super::configurations::{close_from, StateRequest};
+use super::configurations::{close_from, point_of, StateRequest};
 use super::kinematic_models::{models_at, Actuation, KinematicsError, Output};
-use crate::kinematics::frames::FramePoint;
 use crate::prepare::Prepared;
 
 /// An actuated coordinate's sampled range.
@@ -248,19 +247,9 @@ fn unreachable_sample(actuated: Vec<f64>) -> WorkspaceSample {
     }
 }
 
-fn point_of(
-    prepared: &Prepared,
-    frame: &FramePoint,
-    coordinates: &[f64],
-) -> Result<[f64; 3], KinematicsError> {
-    let configuration = crate::kinematics::forward::forward(&prepared.kinematics, coordinates)?;
-    let p = frame.pose(&configuration).translation.vector;
-    Ok([p.x, p.y, p.z])
-}
-
 /// The grid indices of step `step` of a walk that goes back and forth (boustrophedon): each
 /// step changes one index by one, so each sample starts from its neighbour's configuration.
-fn back_and_forth(step: usize, count: usize, dimension: usize) -> Vec<usize> {
+pub(crate) fn back_and_forth(step: usize, count: usize, dimension: usize) -> Vec<usize> {
     let mut digits = unflat(step, count, dimension);
     // The last index runs fastest; it runs backwards when the indices before it sum to odd.
     for d in (0..dimension).rev() {
@@ -273,7 +262,7 @@ fn back_and_forth(step: usize, count: usize, dimension: usize) -> Vec<usize> {
 }
 
 /// The indices (first slowest) of a flat index.
-fn unflat(mut index: usize, count: usize, dimension: usize) -> Vec<usize> {
+pub(crate) fn unflat(mut index: usize, count: usize, dimension: usize) -> Vec<usize> {
     let mut digits = vec![0; dimension];
     for d in (0..dimension).rev() {
         digits[d] = index % count;
@@ -282,7 +271,7 @@ fn unflat(mut index: usize, count: usize, dimension: usize) -> Vec<usize> {
     digits
 }
 
-fn flat(digits: &[usize], count: usize) -> usize {
+pub(crate) fn flat(digits: &[usize], count: usize) -> usize {
     digits.iter().fold(0, |flat, &d| flat * count + d)
 }
 

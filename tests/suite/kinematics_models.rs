@@ -23,7 +23,7 @@ const PHI: [f64; 3] = [
 ];
 
 /// The seed's inverse geometric model (§3.3, with its fixes), branch α = β − δ.
-fn igm(p: &Vector3<f64>) -> Vector3<f64> {
+pub fn igm(p: &Vector3<f64>) -> Vector3<f64> {
     Vector3::from_fn(|i, _| igm_branches(p, i)[0])
 }
 

@@ -4,11 +4,12 @@
 //! §3.3, branch β − δ) falls in the box; and the commands' diagnostics against their golden
 //! files (`tests/golden/commands/NAME.args` → `NAME.stderr`).
 
-use lsdc::studies::kinematic_models::SINGULAR_TOLERANCE;
+use lsdc::studies::kinematic_models::{Actuation, SINGULAR_TOLERANCE};
 use lsdc::studies::workspace::{sample, Range};
+use lsdc::studies::workspace_positions::{sample_positions, PositionBox};
 
 use crate::common::lsdc;
-use crate::kinematics_models::{delta, Delta};
+use crate::kinematics_models::{delta, igm, Delta};
 
 const L1: f64 = 0.200;
 const L2: f64 = 0.300;
@@ -47,6 +48,17 @@ fn counted_volume(n: usize, low: f64, high: f64) -> f64 {
     count as f64 * h.iter().product::<f64>()
 }
 
+/// Every actuated coordinate over [low, high].
+fn same_ranges(actuation: &Actuation, low: f64, high: f64) -> Vec<Range> {
+    (actuation.names.iter())
+        .map(|name| Range {
+            name: name.clone(),
+            low,
+            high,
+        })
+        .collect()
+}
+
 #[test]
 fn kinematics_workspace_volume_of_the_delta_converges_to_the_counted_volume() {
     let Delta {
@@ -55,13 +67,7 @@ fn kinematics_workspace_volume_of_the_delta_converges_to_the_counted_volume() {
         actuation,
     } = delta();
     let (low, high) = (0.6, 1.2);
-    let ranges: Vec<Range> = (actuation.names.iter())
-        .map(|name| Range {
-            name: name.clone(),
-            low,
-            high,
-        })
-        .collect();
+    let ranges = same_ranges(&actuation, low, high);
     let volumes: Vec<f64> = [4, 8, 16]
         .iter()
         .map(|&n| {
@@ -200,4 +206,55 @@ fn kinematics_slider_crank_dead_centres_are_singular_passages_along_a_run() {
         }
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `lsdc workspace --positions` on the Delta: over a box of positions holding the arms' box
+/// [0.6, 1.2]³ rad, a position is reachable exactly where the seed's closed-form inverse
+/// geometric model (branch β − δ) puts every arm in the box, with the arms it gives to 1e-9
+/// rad; the volume is the count of those cells.
+#[test]
+fn kinematics_workspace_over_positions_is_the_closed_form_inverse_model() {
+    let Delta {
+        prepared,
+        output,
+        actuation,
+    } = delta();
+    let (low, high) = (0.6, 1.2);
+    let ranges = same_ranges(&actuation, low, high);
+    let positions = PositionBox {
+        lower: [-0.12, -0.12, -0.42],
+        upper: [0.12, 0.12, -0.14],
+    };
+    let n = 8;
+    let workspace = sample_positions(
+        &prepared,
+        &actuation,
+        &output,
+        &ranges,
+        &positions,
+        n,
+        SINGULAR_TOLERANCE,
+    )
+    .expect("sampled");
+    let mut counted = 0;
+    for s in &workspace.samples {
+        let expected = in_box(s.point, low, high);
+        assert_eq!(s.reachable, expected, "{s:?}");
+        if expected {
+            counted += 1;
+            let arms = igm(&nalgebra::Vector3::from(s.point));
+            let reached = s.actuated.as_ref().expect("reached");
+            for k in 0..3 {
+                assert!(
+                    (reached[k] - arms[k]).abs() < 1e-9,
+                    "{s:?} against {arms:?}"
+                );
+            }
+        }
+    }
+    assert!(counted > 40, "{counted} cells reachable");
+    let cell: f64 = (0..3)
+        .map(|d| (positions.upper[d] - positions.lower[d]) / n as f64)
+        .product();
+    assert!((workspace.volume - counted as f64 * cell).abs() < 1e-15);
 }

@@ -31,6 +31,7 @@ mod integrators;
 mod joint_friction;
 mod kinematics;
 mod kinematics_models;
+mod kinematics_singular_points;
 mod kinematics_workspace;
 mod linearize;
 mod loop_properties;
