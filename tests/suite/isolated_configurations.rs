@@ -2,9 +2,11 @@
 //! (a chain stretched to the full length it spans) is refused before a run (E0830), and
 //! mechanisms that move from singular configurations are not. Oracles: the triangle inequality
 //! (bars a, b, c on a ground d with b = a + c + d close only on one line, and close with room
-//! to move when d is longer), and a second, independent algorithm: the dimension of the closed
+//! to move when d is longer: a joint of the tree held off the line, the others free, does not
+//! close), and, for the mechanisms that move, a second algorithm: the dimension of the closed
 //! set near the configuration, sampled by assembling from small perturbations
-//! (`kinematics::mobility`).
+//! (`kinematics::mobility`; it cannot tell an isolated configuration, where the samples come
+//! back only to assembly's tolerance, from one that moves).
 
 use lsdc::driver::compile_text;
 use lsdc::kinematics::assembly::{assemble, AssemblyOptions};
@@ -87,10 +89,8 @@ fn a_chain_stretched_to_the_length_it_spans_is_refused_before_a_run() {
         let (model, q) = assembled(&text);
         let found = isolated(&model, &q).expect("evaluates");
         let found = found.unwrap_or_else(|| panic!("{what}: no certificate of isolation"));
-        // The other algorithm: the closed configurations sampled nearby all come back here.
-        let sampled = mobility(&model, &q).expect("evaluates");
-        assert_eq!(sampled.mobility, 0, "{what}: {sampled:?}");
-        assert_eq!(found.first_order, sampled.first_order_mobility, "{what}");
+        let ranks = mobility(&model, &q).expect("evaluates");
+        assert_eq!(found.first_order, ranks.first_order_mobility, "{what}");
         assert!(found.first_order > 0, "{what}");
         assert!(found.margin > 1e-2, "{what}: margin {}", found.margin);
         // Every bar is on the x axis.
@@ -99,7 +99,29 @@ fn a_chain_stretched_to_the_length_it_spans_is_refused_before_a_run() {
             let y = pose.translation.vector.y;
             assert!(y.abs() < 1e-6, "{what}: a bar off the line, y = {y}");
         }
+        // The triangle inequality: a chain that spans its full length closes only straight, so
+        // no joint of the tree turned off the line, either way, by 1 or 10 mrad, closes.
+        for i in 0..model.tree_coordinate_count() {
+            for change in [-1e-2, -1e-3, 1e-3, 1e-2] {
+                assert!(
+                    closes_with(&model, &q, i, change).is_none(),
+                    "{what}: closes with {} moved by {change}",
+                    model.coordinate_names()[i]
+                );
+            }
+        }
     }
+}
+
+/// The closed configuration with coordinate `i` held at its value in `q` moved by `change`,
+/// the others free, if there is one.
+fn closes_with(model: &KinematicModel, q: &[f64], i: usize, change: f64) -> Option<Vec<f64>> {
+    let mut start = q.to_vec();
+    start[i] += change;
+    let mut fixed = vec![false; q.len()];
+    fixed[i] = true;
+    let assembled = assemble(model, &start, &fixed, &AssemblyOptions::default()).ok()?;
+    Some(assembled.q)
 }
 
 #[test]
@@ -114,6 +136,9 @@ fn a_chain_with_room_to_move_is_not_refused() {
             isolated(&model, &q).expect("evaluates").is_none(),
             "ground {ground}"
         );
+        // The crank turns on a little, one way or the other, with the loop closed.
+        let turned = [-1e-5, 1e-5].map(|change| closes_with(&model, &q, 0, change));
+        assert!(turned.iter().any(Option::is_some), "ground {ground}: stuck");
     }
 }
 
