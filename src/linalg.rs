@@ -4,7 +4,7 @@
 //! why it cannot go on. Beside them, the exact power-of-two scaling that brings rows of different
 //! units to one size before a decomposition.
 
-use nalgebra::{DMatrix, Dyn, SVD};
+use nalgebra::{DMatrix, DVector, Dyn, SymmetricEigen, SVD};
 
 /// Iterations of the SVD per row and column before it gives up: far more than a finite matrix
 /// needs, so that only a pathological one is refused.
@@ -23,6 +23,44 @@ pub fn svd(m: DMatrix<f64>, compute_u: bool, compute_v: bool) -> Option<SVD<f64,
 /// The pseudo-inverse, singular values up to `floor` taken as zero; `None` as for [`svd`].
 pub fn pseudo_inverse(m: DMatrix<f64>, floor: f64) -> Option<DMatrix<f64>> {
     svd(m, true, true)?.pseudo_inverse(floor).ok()
+}
+
+/// An orthonormal basis (as columns) of the vectors x with m·x = 0, singular values up to
+/// `relative_floor` times the largest taken as zero (all of them when the largest is zero);
+/// `None` as for [`svd`]. A wide matrix is padded with zero rows first, so that the
+/// decomposition has every right singular vector.
+pub fn null_space(m: &DMatrix<f64>, relative_floor: f64) -> Option<DMatrix<f64>> {
+    let (rows, columns) = m.shape();
+    if columns == 0 {
+        return Some(DMatrix::zeros(0, 0));
+    }
+    let mut padded = DMatrix::zeros(rows.max(columns), columns);
+    padded.rows_mut(0, rows).copy_from(m);
+    let decomposition = svd(padded, false, true)?;
+    let v_t = decomposition.v_t?;
+    let largest = decomposition.singular_values.max();
+    let null: Vec<usize> = (0..columns)
+        .filter(|&k| decomposition.singular_values[k] <= relative_floor * largest)
+        .collect();
+    Some(DMatrix::from_fn(columns, null.len(), |i, k| {
+        v_t[(null[k], i)]
+    }))
+}
+
+/// The smallest eigenvalue of the symmetric matrix `m` (its lower triangle is read) and a unit
+/// eigenvector for it; `None` for an empty matrix, one with an entry that is not finite, or an
+/// iteration that does not converge.
+pub fn smallest_eigenpair(m: &DMatrix<f64>) -> Option<(f64, DVector<f64>)> {
+    if m.is_empty() || !m.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let limit = ITERATIONS_PER_DIMENSION * 2 * m.nrows();
+    let eigen = SymmetricEigen::try_new(m.clone(), f64::EPSILON * 5.0, limit)?;
+    let smallest = eigen.eigenvalues.imin();
+    Some((
+        eigen.eigenvalues[smallest],
+        eigen.eigenvectors.column(smallest).into_owned(),
+    ))
 }
 
 /// The power of two 2⁻ᵉ for `largest` in [2ᵉ, 2ᵉ⁺¹), read from its exponent's bits (no

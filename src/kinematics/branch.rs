@@ -149,7 +149,10 @@ fn sharing_groups(model: &KinematicModel) -> Vec<usize> {
 }
 
 /// The origin of every join's first frame, in the fixed axes, in the model's joint order.
-fn join_points(model: &KinematicModel, q: &[f64]) -> Result<Vec<Vector3<f64>>, EvalError> {
+pub(super) fn join_points(
+    model: &KinematicModel,
+    q: &[f64],
+) -> Result<Vec<Vector3<f64>>, EvalError> {
     let configuration = forward(model, q)?;
     Ok((model.joints.iter())
         .map(|joint| {
@@ -161,7 +164,7 @@ fn join_points(model: &KinematicModel, q: &[f64]) -> Result<Vec<Vector3<f64>>, E
 }
 
 /// The largest distance between two of `points`: the scale of "close" (never zero).
-fn size(points: &[Vector3<f64>]) -> f64 {
+pub(super) fn size(points: &[Vector3<f64>]) -> f64 {
     let mut size = 1e-300_f64;
     for a in points {
         for b in points {

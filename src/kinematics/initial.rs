@@ -11,6 +11,7 @@ use super::assembly::{
 };
 use super::branch::{self, Coincidence, FarGuess};
 use super::eval;
+use super::isolation::{self, Isolated};
 use super::model::KinematicModel;
 
 /// The program's starting configuration: a value per coordinate (0 where none is given), how
@@ -103,6 +104,10 @@ pub fn assemble_initial(
     let starting = starting(mechanism, model).map_err(|d| vec![d])?;
     match assemble_respecting(model, &starting.q, &starting.holds, options) {
         Ok(assembled) => {
+            let isolated = isolation::isolated(model, &assembled.q);
+            if let Ok(Some(isolated)) = &isolated {
+                return Err(vec![isolated_error(mechanism, model, isolated)]);
+            }
             let names = model.coordinate_names();
             let mut warnings: Vec<Diagnostic> = moved_warning(&names, &assembled.moved, &starting)
                 .into_iter()
@@ -125,6 +130,48 @@ pub fn assemble_initial(
             Err(vec![no_assembly(mechanism, model, &loop_errors)])
         }
     }
+}
+
+/// E0830: a closed configuration the loops hold still, though they allow motions to first
+/// order.
+fn isolated_error(
+    mechanism: &Mechanism,
+    model: &KinematicModel,
+    isolated: &Isolated,
+) -> Diagnostic {
+    let joint = &model.complementary()[isolated.stressed_loop()];
+    let mut joins: Vec<String> = Vec::new();
+    for &coordinate in &isolated.moving {
+        let moving = (model.joints.iter())
+            .find(|j| (j.offset..j.offset + j.coordinate_count()).contains(&coordinate));
+        if let Some(name) = moving.map(|j| format!("`{}`", j.name)) {
+            if !joins.contains(&name) {
+                joins.push(name);
+            }
+        }
+    }
+    let joins = match joins.split_last() {
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+        None => "the joins".to_string(),
+    };
+    let ways = match isolated.first_order {
+        1 => "1 way".to_string(),
+        n => format!("{n} independent ways"),
+    };
+    Diagnostic::error(
+        "E0830",
+        "the mechanism cannot move: its loops close only at the assembled configuration",
+    )
+    .primary(
+        mechanism.join(joint.join).span,
+        "closes a loop that holds the mechanism still",
+    )
+    .note(format!(
+        "to first order the loops let {joins} move in {ways}, but each of those motions opens a loop at second order: no other closed configuration is near this one"
+    ))
+    .note("a planar chain is held so when one of its bars, or its ground, is exactly as long as all the others together: it closes only stretched on one line")
+    .help("a run from here cannot move and would shrink its steps to nothing; change a length so that the loop closes with room to move (each bar shorter than the others together), or join the bodies with `weld` if a rigid structure is meant")
 }
 
 /// One warning for the given values assembly changed, each labelled where it was given.

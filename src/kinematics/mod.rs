@@ -12,6 +12,7 @@ pub mod eval;
 pub mod forward;
 pub mod frames;
 pub mod initial;
+pub mod isolation;
 pub mod joint;
 pub mod mobility;
 pub mod model;

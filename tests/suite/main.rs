@@ -28,6 +28,7 @@ mod hard_loops;
 mod integrate_projection;
 mod integrator_registry;
 mod integrators;
+mod isolated_configurations;
 mod joint_friction;
 mod kinematics;
 mod kinematics_models;
