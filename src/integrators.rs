@@ -31,6 +31,8 @@ pub enum Feature {
     Friction,
     /// Coordinates imposed as laws of time (`drive`).
     Drives,
+    /// Efforts along coordinates whose laws may read the model (`actuate`).
+    Actuators,
 }
 
 impl Feature {
@@ -43,6 +45,7 @@ impl Feature {
             Feature::Mimics => "mimic joints",
             Feature::Friction => "joint friction",
             Feature::Drives => "drives (`drive`)",
+            Feature::Actuators => "actuators (`actuate`)",
         }
     }
 }
@@ -105,6 +108,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
             Feature::Mimics,
             Feature::Friction,
             Feature::Drives,
+            Feature::Actuators,
         ],
     },
 ];

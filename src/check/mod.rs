@@ -7,6 +7,7 @@ mod calls;
 mod checker;
 mod expr;
 mod laws;
+mod model_laws;
 mod output;
 pub mod resolutions;
 pub mod scope;
@@ -483,6 +484,9 @@ impl<'w> Checker<'w> {
     /// join (E0481), the law a scalar. What the law may depend on (the time and numbers) and
     /// which coordinates may be driven are decided with the mechanism (`kinematics::drives`).
     fn drive(&mut self, drive: &'w crate::syntax::ast::DriveDecl, ctx: &mut Ctx) {
+        if drive.word.name.as_str() == "actuate" {
+            return self.actuate(drive, ctx);
+        }
         if drive.word.name.as_str() != "drive" {
             self.report(
                 Diagnostic::error("E0480", format!("unknown declaration `{}`", drive.word.name))
@@ -516,7 +520,7 @@ impl<'w> Checker<'w> {
     }
 
     /// The type of an expression already checked (its diagnostics were reported then).
-    fn expr_type_silently(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
+    pub(super) fn expr_type_silently(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         let reported = self.diagnostics.list.len();
         let ty = self.expr(expr, ctx);
         self.diagnostics.truncate(reported);
@@ -590,7 +594,7 @@ impl<'w> Checker<'w> {
     }
 
     /// Checks that an expression's type fits the expected one.
-    fn expect_value(&mut self, expr: &Expr, ty: Ty, expected: Ty, role: &str) -> bool {
+    pub(super) fn expect_value(&mut self, expr: &Expr, ty: Ty, expected: Ty, role: &str) -> bool {
         if ty.fits(expected) {
             return true;
         }

@@ -51,9 +51,9 @@ impl Efforts {
 }
 
 impl Model {
-    /// Whether the program applies any effort besides the gravity field.
+    /// Whether the program applies any effort besides the gravity field (actuators included).
     pub fn has_efforts(&self) -> bool {
-        !self.applied.is_empty() || !self.link_efforts.is_empty()
+        !self.applied.is_empty() || !self.link_efforts.is_empty() || self.actuation.is_some()
     }
 }
 
@@ -80,6 +80,7 @@ impl<'a> Declared<'a> {
             coordinates: self.coordinates,
             rates: self.rates,
             time,
+            model: &[],
         };
         tape.eval(&self.model.effort_frames, &state, energy, &mut data.efforts);
         Ok(tape)

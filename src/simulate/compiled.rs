@@ -24,6 +24,12 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
             "the mechanism has contacts (the native code serves trees without constraints)".into(),
         ));
     }
+    if model.actuation.is_some() {
+        return Err(Unavailable::Unsupported(
+            "the mechanism has actuators (`actuate`), whose laws the native code does not compute"
+                .into(),
+        ));
+    }
     if model.nq != model.nv || model.positions() != model.nq {
         return Err(Unavailable::Unsupported(
             "its state is not its declared coordinates and rates (a free or spherical joint)"

@@ -200,12 +200,18 @@ impl Sampler<'_> {
         };
         // The drives' efforts: the multipliers of their rows in the equations at the sample.
         let mut outputs = Vec::with_capacity(model.drives.len() + self.outputs.names.len());
-        if !model.drives.is_empty() {
+        // The drives' efforts, and the model that outputs may read, are those of an evaluation.
+        if !model.drives.is_empty() || self.outputs.reads_model {
             let mut rates = vec![0.0; y.len()];
             system.derivative(time, &y, &mut rates)?;
             outputs.extend_from_slice(&system.scratch.drive_efforts);
         }
-        let data = &mut system.scratch.data;
+        let scratch = &mut *system.scratch;
+        let model_values = scratch
+            .model_laws
+            .as_ref()
+            .map_or(&[][..], |r| &r.values[..]);
+        let data = &mut scratch.data;
         forward_kinematics(model, data, &q, v)?;
         let h = momentum(model, data);
         let declared = Declared {
@@ -222,6 +228,7 @@ impl Sampler<'_> {
             coordinates: &coordinates,
             rates: &rates,
             time,
+            model: model_values,
         };
         outputs.extend(self.outputs.values(&state, &mut self.output_scratch));
         Ok(Sample {

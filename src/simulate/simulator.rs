@@ -413,6 +413,7 @@ fn features(model: &Model) -> Vec<Feature> {
         (Feature::Mimics, !model.mimics.is_empty()),
         (Feature::Friction, !model.frictions.is_empty()),
         (Feature::Drives, !model.drives.is_empty()),
+        (Feature::Actuators, model.actuation.is_some()),
     ];
     present
         .iter()

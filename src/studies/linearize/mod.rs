@@ -536,6 +536,7 @@ impl Evaluator<'_> {
             coordinates: &coordinates,
             rates: &rates,
             time: self.time,
+            model: &[],
         };
         Ok(self.prepared.outputs.values(&state, &mut self.scratch))
     }
