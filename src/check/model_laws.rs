@@ -21,7 +21,7 @@ impl<'w> Checker<'w> {
         arg_types: &[Ty],
         span: Span,
     ) -> Ty {
-        if args.len() < 3 || args.len() % 2 == 0 {
+        if args.len() < 3 || args.len().is_multiple_of(2) {
             let diagnostic = match args.len() {
                 0 => arity_error(&ident.name, 3, 0, span, None),
                 _ => Diagnostic::error(
