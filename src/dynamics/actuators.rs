@@ -10,7 +10,7 @@
 //! law would be implicit); a law that reads the model along a coordinate that is not actuated
 //! (E0656); the model with contacts or mimic couplings (E0657), whose rows it does not reduce.
 
-use super::compiled::{EffortTape, Link, TapeBuilder};
+use super::compiled::{EffortTape, Link, ModelReads, TapeBuilder};
 use super::drives::DrivenCoordinate;
 use super::elements::EffortFrame;
 use super::joint::{Joint, JointType};
@@ -20,40 +20,6 @@ use crate::elab::model_laws::reads_model;
 use crate::elab::value::{JoinId, SExpr, Scalar};
 use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::source::Span;
-
-/// Which of the model's quantities the laws read (the others are not computed).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ModelReads {
-    pub mass: bool,
-    pub bias: bool,
-    pub gravity: bool,
-}
-
-impl ModelReads {
-    pub fn any(&self) -> bool {
-        self.mass || self.bias || self.gravity
-    }
-
-    /// Adds the quantities that the calls in `s` read (`inverse_dynamics` was written with
-    /// `mass_matrix` and `bias`).
-    pub fn add_calls(&mut self, s: &Scalar) {
-        let calls = |name: &'static str| {
-            s.any(&|e| matches!(e, SExpr::Call(call) if call.function == name))
-        };
-        self.mass |= calls("mass_matrix");
-        self.bias |= calls("bias");
-        self.gravity |= calls("gravity_effort");
-    }
-
-    /// The quantity at `slot` of the model's values (Mₐ by rows, Nₐ, Gₐ) for m coordinates.
-    pub fn add_slot(&mut self, slot: usize, m: usize) {
-        match slot {
-            s if s < m * m => self.mass = true,
-            s if s < m * m + m => self.bias = true,
-            _ => self.gravity = true,
-        }
-    }
-}
 
 /// An actuated coordinate in the model's numbering.
 #[derive(Clone, Debug)]

@@ -14,7 +14,6 @@ use std::collections::HashMap;
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::actuators::ModelReads;
 use super::elements::EffortFrame;
 use crate::elab::value::{FrameQuantity, SExpr, Scalar, Vector};
 use crate::kinematics::eval::{EvalError, UnknownValues};
@@ -35,6 +34,40 @@ enum Source {
     /// One of the model's values in the actuated coordinates (`reduced_model`): Mₐ by rows,
     /// then Nₐ, then Gₐ.
     Model(usize),
+}
+
+/// Which of the model's quantities the laws read (the others are not computed).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ModelReads {
+    pub mass: bool,
+    pub bias: bool,
+    pub gravity: bool,
+}
+
+impl ModelReads {
+    pub fn any(&self) -> bool {
+        self.mass || self.bias || self.gravity
+    }
+
+    /// Adds the quantities that the calls in `s` read (`inverse_dynamics` was written with
+    /// `mass_matrix` and `bias`).
+    pub fn add_calls(&mut self, s: &Scalar) {
+        let calls = |name: &'static str| {
+            s.any(&|e| matches!(e, SExpr::Call(call) if call.function == name))
+        };
+        self.mass |= calls("mass_matrix");
+        self.bias |= calls("bias");
+        self.gravity |= calls("gravity_effort");
+    }
+
+    /// The quantity at `slot` of the model's values (Mₐ by rows, Nₐ, Gₐ) for m coordinates.
+    pub fn add_slot(&mut self, slot: usize, m: usize) {
+        match slot {
+            s if s < m * m => self.mass = true,
+            s if s < m * m + m => self.bias = true,
+            _ => self.gravity = true,
+        }
+    }
 }
 
 /// The compiled efforts: one tape whose roots are every effort's components.

@@ -19,8 +19,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::actuators::ModelReads;
 use super::algorithms::{crba_after_kinematics, forward_kinematics, rnea_after_kinematics, Data};
+use super::compiled::ModelReads;
 use super::efforts::{evaluate_into, Declared, Efforts};
 use super::loops::{constraints_into, Constraints, Extent};
 use super::model::Model;

@@ -145,3 +145,51 @@ fn the_gravity_efforts_are_what_statics_holds() {
         "{gravity:e}"
     );
 }
+
+/// The four-bar reduced to its crank's angle: the reduced mass and the gravity effort against
+/// the reduced Lagrangian written by hand (`linearize::four_bar_reference`), through its loop.
+#[test]
+fn the_four_bars_model_in_its_crank_angle_is_its_reduced_lagrangian() {
+    let program = prepared(
+        "four_bar",
+        &[(
+            "simulate duration = 10,",
+            "actuate crank.q = 0 ;\noutput m = mass_matrix(crank.q, crank.q) ;\noutput g = gravity_effort(crank.q) ;\noutput b = bias(crank.q) ;\nsimulate duration = 0.5,",
+        )],
+    );
+    let simulation = simulated(&program);
+    let crank = simulation
+        .coordinate_names
+        .iter()
+        .position(|n| n == "crank.q")
+        .unwrap();
+    let first = &simulation.samples[0];
+    let reference = crate::linearize::four_bar_reference(first.coordinates[crank]);
+    let (mass, gravity) = (output(&simulation, "m")[0].1, output(&simulation, "g")[0].1);
+    let bias = output(&simulation, "b")[0].1;
+    println!(
+        "four-bar: M {mass:e} (by hand {:e}), G {gravity:e} (by hand {:e})",
+        reference.mass, reference.holding
+    );
+    assert!(
+        (mass - reference.mass).abs() < 1e-10 * reference.mass,
+        "{mass:e}"
+    );
+    assert!(
+        (gravity - reference.holding).abs() < 1e-10 * reference.holding.abs(),
+        "{gravity:e}"
+    );
+    // At rest the bias is the gravity effort.
+    assert!((bias - gravity).abs() < 1e-12 * gravity.abs(), "{bias:e}");
+    // Along the run (the crank falling under gravity), the model in the crank's angle at each
+    // sample.
+    for (k, sample) in simulation.samples.iter().enumerate() {
+        let reference = crate::linearize::four_bar_reference(sample.coordinates[crank]);
+        let mass = output(&simulation, "m")[k].1;
+        assert!(
+            (mass - reference.mass).abs() < 1e-9 * reference.mass,
+            "t = {}: {mass:e}",
+            sample.time
+        );
+    }
+}
