@@ -33,6 +33,8 @@ pub enum Feature {
     Drives,
     /// The program's states (`state(x0)` and `rate`).
     States,
+    /// Efforts along coordinates whose laws may read the model (`actuate`).
+    Actuators,
 }
 
 impl Feature {
@@ -46,6 +48,7 @@ impl Feature {
             Feature::Friction => "joint friction",
             Feature::Drives => "drives (`drive`)",
             Feature::States => "states (`state` and `rate`)",
+            Feature::Actuators => "actuators (`actuate`)",
         }
     }
 }
@@ -109,6 +112,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
             Feature::Friction,
             Feature::Drives,
             Feature::States,
+            Feature::Actuators,
         ],
     },
 ];

@@ -46,6 +46,11 @@ impl<'w> Checker<'w> {
                         self.positional_only(args);
                         return self.law_call(ident, arguments, args, &arg_types, span);
                     }
+                    if ident.name == "inverse_dynamics" {
+                        self.out.resolutions.insert(ident.span, Target::Builtin);
+                        self.positional_only(args);
+                        return self.inverse_dynamics_call(ident, args, &arg_types, span);
+                    }
                     if ident.name == "derivative" {
                         self.out.resolutions.insert(ident.span, Target::Builtin);
                         self.positional_only(args);

@@ -7,6 +7,7 @@ mod calls;
 mod checker;
 mod expr;
 mod laws;
+mod model_laws;
 mod output;
 pub mod resolutions;
 pub mod scope;
@@ -486,9 +487,11 @@ impl<'w> Checker<'w> {
         match drive.word.name.as_str() {
             "drive" => {}
             "rate" => return self.rate(drive, ctx),
+            "actuate" => return self.actuate(drive, ctx),
             word => {
-                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate"]) {
+                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "actuate"]) {
                     Some("rate") => "did you mean `rate`? `rate integral = error;` gives the derivative of a state",
+                    Some("actuate") => "did you mean `actuate`? `actuate arm.q = law;` applies an effort along a coordinate",
                     _ => "did you mean `drive`? `drive crank.q = 2 * pi * time;` imposes a coordinate as a law of time",
                 };
                 self.report(
@@ -533,7 +536,7 @@ impl<'w> Checker<'w> {
     }
 
     /// The type of an expression already checked (its diagnostics were reported then).
-    fn expr_type_silently(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
+    pub(super) fn expr_type_silently(&mut self, expr: &'w Expr, ctx: &mut Ctx) -> Ty {
         let reported = self.diagnostics.list.len();
         let ty = self.expr(expr, ctx);
         self.diagnostics.truncate(reported);
@@ -607,7 +610,7 @@ impl<'w> Checker<'w> {
     }
 
     /// Checks that an expression's type fits the expected one.
-    fn expect_value(&mut self, expr: &Expr, ty: Ty, expected: Ty, role: &str) -> bool {
+    pub(super) fn expect_value(&mut self, expr: &Expr, ty: Ty, expected: Ty, role: &str) -> bool {
         if ty.fits(expected) {
             return true;
         }

@@ -262,6 +262,9 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
         // Piecewise functions of a signal (`x` bounded to [lo, hi], or 0 within a width).
         "saturate" => (S3, Scalar),
         "dead_zone" => (S2, Scalar),
+        // The model at the current state, along actuated coordinates (see `check::model_laws`).
+        "mass_matrix" => (S2, Scalar),
+        "bias" | "gravity_effort" => (S1, Scalar),
         "norm" => (V1, Scalar),
         "dot" => (V2, Scalar),
         "cross" => (V2, Vector),
@@ -313,9 +316,13 @@ pub fn reference_law(name: &str) -> Option<LawArguments> {
 }
 
 /// Whether `name` is a built-in function of any shape: a fixed signature, a reference law, or
-/// `derivative` (a scalar's or a vector's time derivative).
+/// `derivative` (a scalar's or a vector's time derivative), or `inverse_dynamics` (a coordinate,
+/// then pairs of a coordinate and its acceleration).
 pub fn is_builtin_function(name: &str) -> bool {
-    builtin_function(name).is_some() || reference_law(name).is_some() || name == "derivative"
+    builtin_function(name).is_some()
+        || reference_law(name).is_some()
+        || name == "derivative"
+        || name == "inverse_dynamics"
 }
 
 /// How many of a built-in function's last parameters may be left out: `aim(u)` is `aim(u, v)`

@@ -15,7 +15,7 @@ use std::collections::HashMap;
 use nalgebra::{Matrix3, Vector3};
 
 use super::elements::EffortFrame;
-use crate::elab::value::{FrameQuantity, SExpr, Vector};
+use crate::elab::value::{FrameQuantity, SExpr, Scalar, Vector};
 use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::spatial::{Motion, Pose};
 use crate::symbolic::expr::{ExprId, Pool, Tape};
@@ -33,6 +33,43 @@ enum Source {
     Frame(usize, FrameQuantity),
     /// The value of the program's state `k` (`state(x0)`).
     State(usize),
+    /// One of the model's values in the actuated coordinates (`reduced_model`): Mₐ by rows,
+    /// then Nₐ, then Gₐ.
+    Model(usize),
+}
+
+/// Which of the model's quantities the laws read (the others are not computed).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ModelReads {
+    pub mass: bool,
+    pub bias: bool,
+    pub gravity: bool,
+}
+
+impl ModelReads {
+    pub fn any(&self) -> bool {
+        self.mass || self.bias || self.gravity
+    }
+
+    /// Adds the quantities that the calls in `s` read (`inverse_dynamics` was written with
+    /// `mass_matrix` and `bias`).
+    pub fn add_calls(&mut self, s: &Scalar) {
+        let calls = |name: &'static str| {
+            s.any(&|e| matches!(e, SExpr::Call(call) if call.function == name))
+        };
+        self.mass |= calls("mass_matrix");
+        self.bias |= calls("bias");
+        self.gravity |= calls("gravity_effort");
+    }
+
+    /// The quantity at `slot` of the model's values (Mₐ by rows, Nₐ, Gₐ) for m coordinates.
+    pub fn add_slot(&mut self, slot: usize, m: usize) {
+        match slot {
+            s if s < m * m => self.mass = true,
+            s if s < m * m + m => self.bias = true,
+            _ => self.gravity = true,
+        }
+    }
 }
 
 /// The compiled efforts: one tape whose roots are every effort's components.
@@ -79,6 +116,9 @@ pub struct EffortState<'a> {
     pub rates: &'a [f64],
     pub states: &'a [f64],
     pub time: f64,
+    /// The model's values in the actuated coordinates, for the laws that read them (empty
+    /// for the others).
+    pub model: &'a [f64],
 }
 
 /// Where an effort tape is evaluated: kept from one evaluation to the next, so that evaluating
@@ -116,6 +156,8 @@ impl EffortTape {
                 Source::Rate(i) => state.rates[i],
                 Source::State(k) => state.states[k],
                 Source::Frame(k, quantity) => scratch.frames[k].component(quantity),
+                // Outputs read by a study that computes no model see NaN.
+                Source::Model(k) => state.model.get(k).copied().unwrap_or(f64::NAN),
             }));
         let count = if energy {
             self.tape.size()
@@ -144,6 +186,17 @@ impl EffortTape {
         self.sources.contains(&Source::Time)
     }
 
+    /// What the tape reads of the model, for `m` actuated coordinates.
+    pub fn model_reads(&self, m: usize) -> ModelReads {
+        let mut reads = ModelReads::default();
+        for source in &self.sources {
+            if let Source::Model(slot) = *source {
+                reads.add_slot(slot, m);
+            }
+        }
+        reads
+    }
+
     /// Number of distinct nodes evaluated per state.
     pub fn size(&self) -> usize {
         self.tape.size()
@@ -169,6 +222,8 @@ pub struct TapeBuilder<'a> {
     lowered: HashMap<(*const SExpr, Link), ExprId>,
     /// The link of the expression being lowered.
     link: Link,
+    /// The actuated coordinates (declared indices), along which the model is read.
+    model_coordinates: Vec<usize>,
 }
 
 impl<'a> TapeBuilder<'a> {
@@ -187,7 +242,15 @@ impl<'a> TapeBuilder<'a> {
             declared_offset,
             lowered: HashMap::new(),
             link: Link(None),
+            model_coordinates: Vec::new(),
         }
+    }
+
+    /// The builder of laws that read the model along the actuated coordinates `coordinates`
+    /// (declared indices, in order).
+    pub fn reading_model(mut self, coordinates: Vec<usize>) -> TapeBuilder<'a> {
+        self.model_coordinates = coordinates;
+        self
     }
 
     /// Adds a potential's root, evaluated only when the energy is asked for; returns its index
@@ -341,6 +404,34 @@ impl Lower for TapeBuilder<'_> {
             }
             _ => unreachable!("numbers, arithmetic and calls are lowered by their structure"),
         })
+    }
+
+    /// `mass_matrix(a, b)`, `bias(a)`, `gravity_effort(a)`: the model's value at its slot.
+    fn model_quantity(&mut self, name: &str, args: &[Scalar]) -> Result<ExprId, EvalError> {
+        let not_actuated =
+            EvalError::NotGeometric("the model along a coordinate that is not actuated");
+        let index = |s: &Scalar| -> Result<usize, EvalError> {
+            let SExpr::JoinCoordinate {
+                join,
+                index,
+                order: 0,
+            } = **s
+            else {
+                return Err(not_actuated.clone());
+            };
+            let declared =
+                (self.declared_offset)(join).ok_or(not_actuated.clone())? + index as usize;
+            let found = self.model_coordinates.iter().position(|&c| c == declared);
+            found.ok_or(not_actuated.clone())
+        };
+        let m = self.model_coordinates.len();
+        let slot = match (name, args) {
+            ("mass_matrix", [a, b]) => index(a)? * m + index(b)?,
+            ("bias", [a]) => m * m + index(a)?,
+            ("gravity_effort", [a]) => m * m + m + index(a)?,
+            _ => return Err(not_actuated),
+        };
+        Ok(self.symbol(Source::Model(slot)))
     }
 }
 

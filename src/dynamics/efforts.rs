@@ -51,10 +51,13 @@ impl Efforts {
 }
 
 impl Model {
-    /// Whether the program applies any effort besides the gravity field, or has states (whose
-    /// rates the efforts' tape gives).
+    /// Whether the program applies any effort besides the gravity field (actuators included),
+    /// or has states (whose rates the efforts' tape gives).
     pub fn has_efforts(&self) -> bool {
-        !self.applied.is_empty() || !self.link_efforts.is_empty() || !self.states.is_empty()
+        !self.applied.is_empty()
+            || !self.link_efforts.is_empty()
+            || self.actuation.is_some()
+            || !self.states.is_empty()
     }
 }
 
@@ -84,6 +87,7 @@ impl<'a> Declared<'a> {
             rates: self.rates,
             states: self.states,
             time,
+            model: &[],
         };
         tape.eval(&self.model.effort_frames, &state, energy, &mut data.efforts);
         Ok(tape)

@@ -2,6 +2,7 @@
 //! [`algorithms::Data`], and the recursive algorithms on them: inverse dynamics (RNEA), the mass
 //! matrix (CRBA), forward dynamics (ABA), energy and momentum.
 
+pub mod actuators;
 pub mod algorithms;
 pub mod angles;
 pub mod compiled;
@@ -17,6 +18,7 @@ pub mod joint;
 pub mod loops;
 pub mod mimics;
 pub mod model;
+pub mod reduced_model;
 pub mod response;
 pub mod rotors;
 pub mod rows;

@@ -3,6 +3,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use super::actuators::{self, Actuation};
 use super::angles::{AngleReference, JointReference};
 use super::compiled::{EffortTape, Link, TapeBuilder};
 use super::drives::{self, DrivenCoordinate};
@@ -96,6 +97,8 @@ pub struct Model {
     pub drives: Vec<DrivenCoordinate>,
     /// The program's states (`state(x0)`), integrated with the motion after the velocities.
     pub states: Vec<StateModel>,
+    /// The actuators (`actuate`), whose laws may read the model; `None` without any.
+    pub actuation: Option<Actuation>,
 }
 
 impl Model {
@@ -405,8 +408,10 @@ pub fn build_with(
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),
+        actuation: None,
     };
     model.compile_efforts();
+    model.compile_actuators(mechanism)?;
     Ok(model)
 }
 
@@ -443,6 +448,41 @@ fn refuse_rotors_on_welds(
 }
 
 impl Model {
+    /// Compiles the actuators' laws (`actuators`), and marks the joints they read as read by
+    /// the efforts.
+    fn compile_actuators(&mut self, mechanism: &Mechanism) -> Result<(), Vec<Diagnostic>> {
+        let mut errors = Vec::new();
+        let compiling = self.actuators_compiling(mechanism);
+        let actuation = actuators::build(&compiling, &mut errors);
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        if let Some(actuation) = &actuation {
+            for (k, joint) in self.joints.iter().enumerate() {
+                let offset = self.declared_offsets[k];
+                let range = offset..offset + joint.chain.coordinate_count();
+                if let Some(read) = self.declared_read.get_mut(k) {
+                    *read |= actuation.tape.reads_declared(range);
+                }
+            }
+        }
+        self.actuation = actuation;
+        Ok(())
+    }
+
+    /// What the actuators' laws, and outputs that read the model, are compiled from.
+    pub fn actuators_compiling<'a>(&'a self, mechanism: &'a Mechanism) -> actuators::Compiling<'a> {
+        actuators::Compiling {
+            mechanism,
+            joints: &self.joints,
+            declared_offsets: &self.declared_offsets,
+            drives: &self.drives,
+            unknowns: &self.unknowns,
+            frames: &self.effort_frames,
+            constrained: !self.contacts.is_empty() || !self.mimics.is_empty(),
+        }
+    }
+
     /// Lowers every effort into one tape and records where each effort's values lie in it
     /// (done when the model is built; again after changing its efforts or joints).
     pub fn compile_efforts(&mut self) {
@@ -683,7 +723,8 @@ fn effort_frames(
         .flat_map(|e| e.value.iter().chain(&e.potential))
         .chain(read.links.iter().flat_map(|e| e.value.iter()))
         .chain(mechanism.links.iter().flat_map(|l| &l.potential))
-        .chain(read.states.iter().map(|s| &s.rate));
+        .chain(read.states.iter().map(|s| &s.rate))
+        .chain(mechanism.actuators.iter().map(|a| &a.law));
     for s in expressions {
         s.frames_used(&mut frames);
     }

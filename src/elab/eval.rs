@@ -236,6 +236,16 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let law = self
                     .expr(&drive.value, &mut locals)
                     .and_then(|v| as_scalar(v, drive.value.span))?;
+                if drive.word.name.as_str() == "actuate" {
+                    self.mechanism.actuators.push(Actuator {
+                        join,
+                        coordinate: index as usize,
+                        law,
+                        span: drive.target.span,
+                        law_span: drive.value.span,
+                    });
+                    return Ok(());
+                }
                 self.mechanism.drives.push(Drive {
                     join,
                     coordinate: index as usize,
@@ -772,6 +782,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             if crate::check::types::reference_law(&ident.name).is_some() {
                 return super::laws::law(&ident.name, values, &spans, span);
+            }
+            if super::model_laws::is_model_function(&ident.name) {
+                return super::model_laws::model_call(&ident.name, values, &spans, span);
             }
             match &*ident.name {
                 "derivative" => {

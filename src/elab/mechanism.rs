@@ -325,6 +325,19 @@ impl StateVariable {
     }
 }
 
+/// `actuate shoulder.q = law`: a generalised effort along a coordinate (a torque about a
+/// revolute joint's axis, a force along a prismatic one), whose law may read the model
+/// (`mass_matrix`, `bias`, `gravity_effort`, `inverse_dynamics`), which does not count it.
+#[derive(Clone, Debug)]
+pub struct Actuator {
+    pub join: JoinId,
+    pub coordinate: usize,
+    pub law: Scalar,
+    /// The actuated coordinate as written, and the law.
+    pub span: Span,
+    pub law_span: Span,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EffortKind {
@@ -417,6 +430,8 @@ pub struct Mechanism {
     pub drives: Vec<Drive>,
     /// The states (`state(x0)`), in the order they were made.
     pub states: Vec<StateVariable>,
+    /// The `actuate` declarations, in declaration order: the model's coordinates.
+    pub actuators: Vec<Actuator>,
     /// `given` values of unknowns.
     pub given: Vec<(UnknownId, Scalar, Span)>,
     pub scenario: Option<Scenario>,

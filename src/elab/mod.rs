@@ -13,6 +13,7 @@ mod fields;
 mod instances;
 mod laws;
 pub mod mechanism;
+pub mod model_laws;
 mod operations;
 mod output;
 mod own_join;

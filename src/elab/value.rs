@@ -415,7 +415,7 @@ impl SExpr {
 
     /// Whether `test` holds for the expression or one of its subexpressions (the arguments of
     /// calls included, the displacement of a frame whose state is read not).
-    fn any(&self, test: &dyn Fn(&SExpr) -> bool) -> bool {
+    pub(crate) fn any(&self, test: &dyn Fn(&SExpr) -> bool) -> bool {
         if test(self) {
             return true;
         }

@@ -9,6 +9,7 @@ use std::sync::Arc;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 
 use crate::diag::Diagnostic;
+use crate::dynamics::actuators::refuse_unactuated;
 use crate::dynamics::compiled::{EffortScratch, EffortState, EffortTape, Link, TapeBuilder};
 use crate::dynamics::model::{EffortFrame, Model};
 use crate::elab::mechanism::{Mechanism, NamedOutput, OutputValue};
@@ -42,6 +43,9 @@ pub struct Outputs {
     layouts: Vec<Layout>,
     tape: Option<EffortTape>,
     frames: Vec<EffortFrame>,
+    /// Whether an output reads the model in the actuated coordinates (`mass_matrix`, …): the
+    /// sample then comes from an evaluation, which computes it.
+    pub reads_model: bool,
 }
 
 /// The state an output is evaluated at: the forward kinematics of the dynamic model (each
@@ -123,9 +127,25 @@ fn compile_list(
     // subexpressions it has lowered by their address.
     let components: Vec<Vec<Scalar>> = list.iter().map(components).collect();
     let declared_offset = |join| model.declared_offset(join);
-    let mut builder = TapeBuilder::new(&model.unknowns, &frames, &declared_offset);
-    let mut outputs = Outputs::default();
+    let actuated: Vec<usize> = model
+        .actuation
+        .iter()
+        .flat_map(|a| a.coordinates.iter().map(|c| c.declared))
+        .collect();
     let mut errors = Vec::new();
+    let compiling = model.actuators_compiling(mechanism);
+    for (output, components) in list.iter().zip(&components) {
+        for component in components {
+            refuse_unactuated(&compiling, &actuated, component, output.span, &mut errors);
+        }
+    }
+    if !errors.is_empty() {
+        errors.dedup_by(|a, b| a.message == b.message);
+        return Err(errors);
+    }
+    let mut builder = TapeBuilder::new(&model.unknowns, &frames, &declared_offset)
+        .reading_model(actuated.clone());
+    let mut outputs = Outputs::default();
     for (output, components) in list.iter().zip(&components) {
         let roots: Result<Vec<usize>, EvalError> = components
             .iter()
@@ -142,7 +162,9 @@ fn compile_list(
     if !errors.is_empty() {
         return Err(errors);
     }
-    outputs.tape = Some(builder.build());
+    let tape = builder.build();
+    outputs.reads_model = tape.model_reads(actuated.len()).any();
+    outputs.tape = Some(tape);
     outputs.frames = frames;
     Ok(outputs)
 }

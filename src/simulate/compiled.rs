@@ -29,6 +29,12 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
             "the mechanism has motions imposed in time (`drive`, `time` in a dof chain), which the native code does not impose".into(),
         ));
     }
+    if model.actuation.is_some() {
+        return Err(Unavailable::Unsupported(
+            "the mechanism has actuators (`actuate`), whose laws the native code does not compute"
+                .into(),
+        ));
+    }
     if model.nq != model.nv || model.positions() != model.nq {
         return Err(Unavailable::Unsupported(
             "its state is not its declared coordinates and rates (a free or spherical joint)"

@@ -206,16 +206,22 @@ impl Sampler<'_> {
             Vec::new()
         };
         // The drives' efforts: the multipliers of their rows in the equations at the sample;
-        // then the states' values.
+        // then the states' values. The drives' efforts, and the model that outputs may read,
+        // are those of an evaluation.
         let columns = model.drives.len() + states.len() + self.outputs.names.len();
         let mut outputs = Vec::with_capacity(columns);
-        if !model.drives.is_empty() {
+        if !model.drives.is_empty() || self.outputs.reads_model {
             let mut rates = vec![0.0; y.len()];
             system.derivative(time, &y, &mut rates)?;
             outputs.extend_from_slice(&system.scratch.drive_efforts);
         }
         outputs.extend_from_slice(states);
-        let data = &mut system.scratch.data;
+        let scratch = &mut *system.scratch;
+        let model_values = scratch
+            .model_laws
+            .as_ref()
+            .map_or(&[][..], |r| &r.values[..]);
+        let data = &mut scratch.data;
         forward_kinematics(model, data, &q, v)?;
         let h = momentum(model, data);
         let declared = Declared {
@@ -234,6 +240,7 @@ impl Sampler<'_> {
             rates: &rates,
             states,
             time,
+            model: model_values,
         };
         outputs.extend(self.outputs.values(&state, &mut self.output_scratch));
         Ok(Sample {

@@ -431,6 +431,7 @@ fn features(model: &Model) -> Vec<Feature> {
         (Feature::Friction, !model.frictions.is_empty()),
         (Feature::Drives, !model.drives.is_empty()),
         (Feature::States, !model.states.is_empty()),
+        (Feature::Actuators, model.actuation.is_some()),
     ];
     present
         .iter()

@@ -8,6 +8,7 @@
 
 use nalgebra::DVector;
 
+mod actuated;
 mod error;
 mod friction;
 mod held_reactions;
@@ -116,7 +117,11 @@ impl<'m> MechanicalSystem<'m> {
         let model = self.model;
         let program =
             !model.has_efforts() || model.effort_tape.as_ref().is_ok_and(|t| !t.reads_time());
-        program && self.state.inputs.law.is_none()
+        let actuators = model
+            .actuation
+            .as_ref()
+            .is_none_or(|a| !a.tape.reads_time());
+        program && actuators && self.state.inputs.law.is_none()
     }
 
     /// The efforts at (t, q, v); leaves the forward kinematics of (q, v) in `data`.
@@ -145,6 +150,8 @@ impl<'m> MechanicalSystem<'m> {
         };
         let efforts = &mut self.scratch.efforts;
         evaluate_into(model, &mut self.scratch.data, &declared, t, efforts)?;
+        self.actuate(t, q, v)?;
+        let (state, efforts) = (&self.scratch.declared, &mut self.scratch.efforts);
         if self.state.inputs.any() {
             let read = (&state.coordinates[..], &state.rates[..]);
             efforts.power += (self.state.inputs).add_to(t, read, v, &mut efforts.tau);

@@ -25,6 +25,16 @@ pub trait Lower {
     /// A scalar that is neither a number, arithmetic nor a call.
     fn leaf(&mut self, s: &SExpr) -> Result<ExprId, Self::Error>;
 
+    /// A call that reads the model at the state (`mass_matrix(a.q, b.q)`, `bias(a.q)`,
+    /// `gravity_effort(a.q)`): only the laws of actuators and outputs may.
+    fn model_quantity(
+        &mut self,
+        _name: &str,
+        _args: &[crate::elab::value::Scalar],
+    ) -> Result<ExprId, Self::Error> {
+        Err(MalformedCall("the model, which only actuators' laws and outputs read").into())
+    }
+
     /// Lowers `s` (override to remember subexpressions already lowered).
     fn lower(&mut self, s: &SExpr) -> Result<ExprId, Self::Error> {
         lower_structure(self, s)
@@ -65,6 +75,9 @@ pub fn lower_structure<L: Lower + ?Sized>(lowering: &mut L, s: &SExpr) -> Result
                 Some(2.0) => lowering.pool().mul(a, a),
                 _ => lowering.pool().pow(a, b),
             }
+        }
+        SExpr::Call(call) if crate::elab::model_laws::is_model_function(call.function) => {
+            lowering.model_quantity(call.function, &call.args)?
         }
         SExpr::Call(call) => lower_call(lowering, call.function, &call.args)?,
         leaf => lowering.leaf(leaf)?,

@@ -44,4 +44,8 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "cycloidal",
     "trapezoidal",
     "spline",
+    "mass_matrix",
+    "bias",
+    "gravity_effort",
+    "inverse_dynamics",
 ];

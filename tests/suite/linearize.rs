@@ -95,15 +95,17 @@ fn cart_pole_matches_its_closed_form() {
 /// φ', ψ' and φ'', ψ'' from the closure's first and second derivatives in θ, then
 /// M(θ) = I_O1 + m2 |v_G2|² + I_G2 φ'² + I_D3 ψ'² and V(θ) = g Σ m y_G. At rest, held by
 /// u* = V'(θ*), θ'' = (u − V'(θ))/M(θ) linearises to A = [[0, 1], [−V''/M, 0]], B = [0; 1/M].
-struct FourBarReference {
-    holding: f64,
+pub(crate) struct FourBarReference {
+    /// M(θ), the reduced mass in the crank's angle.
+    pub(crate) mass: f64,
+    pub(crate) holding: f64,
     a21: f64,
     b: f64,
     /// d(coupler.q)/dθ = φ' − 1.
     coupler_rate: f64,
 }
 
-fn four_bar_reference(theta: f64) -> FourBarReference {
+pub(crate) fn four_bar_reference(theta: f64) -> FourBarReference {
     let (l0, l1, l2, l3, g) = (4.0_f64, 1.0_f64, 3.5_f64, 3.0_f64, 9.81);
     let (m1, m2, m3) = (l1, l2, l3);
     let b = (l1 * theta.cos(), l1 * theta.sin());
@@ -154,6 +156,7 @@ fn four_bar_reference(theta: f64) -> FourBarReference {
             + m2 * (-l1 * theta.sin() + l2 / 2.0 * (phi.cos() * p2 - phi.sin() * p1 * p1))
             + m3 * l3 / 2.0 * (psi.cos() * s2 - psi.sin() * s1 * s1));
     FourBarReference {
+        mass,
         holding: first,
         a21: -second / mass,
         b: 1.0 / mass,

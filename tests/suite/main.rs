@@ -41,6 +41,7 @@ mod lsp;
 mod mampey;
 mod methods;
 mod mimics;
+mod model_laws;
 mod momentum_basis;
 mod mutants;
 mod native;

@@ -282,9 +282,12 @@ pub fn solve_reduced(
     inertia.reduced_into(model, data, null, (count, m), tau, reduced);
     // An idle coordinate's motion is its unit motion (no mass, no kept row): its share of the
     // reduced forces is the effort on it.
+    // The generalised forces themselves count in the scale: held in balance (a computed torque
+    // at rest), the reduced forces vanish while the residue on the massless motions does not.
     let idle_force = structure.idle.iter().map(|&c| tau[c].abs());
     let scale = idle_force
         .fold(reduced_force.rows(0, count).amax(), f64::max)
+        .max(tau.amax())
         .max(f64::MIN_POSITIVE);
     if let Some(&velocity) = structure
         .idle

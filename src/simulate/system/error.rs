@@ -41,6 +41,9 @@ pub enum SystemError {
     Impact(String),
     /// The rate of the program's state `state` is not finite.
     StateRateNotFinite { state: String },
+    /// The model read by the actuators' laws has no value: the actuated coordinates leave a
+    /// motion with mass free, or the loops fix a combination of them.
+    ActuatedUndetermined,
 }
 
 /// What made an acceleration infinite or NaN.
@@ -79,6 +82,10 @@ impl fmt::Display for SystemError {
                 "the mass matrix is singular: join `{join}` carries no inertia along its motion (body `{body}` and the bodies beyond it)"
             ),
             SystemError::SingularMassMatrix => write!(f, "the mass matrix is singular"),
+            SystemError::ActuatedUndetermined => write!(
+                f,
+                "the actuated coordinates do not determine the motion here, so the model the actuators' laws read has no value: actuate as many coordinates as the mechanism has motions with mass, away from a singular configuration"
+            ),
             SystemError::SingularConfiguration { join, row } => write!(
                 f,
                 "the loops reached a singular configuration: the {row} constraint of `{join}` is no longer independent of the others"

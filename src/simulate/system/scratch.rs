@@ -7,11 +7,13 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::dynamics::algorithms::Data;
+use crate::dynamics::compiled::EffortScratch;
 use crate::dynamics::contacts::ContactRows;
 use crate::dynamics::efforts::Efforts;
 use crate::dynamics::loops::{LoopScratch, ProjectionScratch, Stabilisation};
 use crate::dynamics::mimics;
 use crate::dynamics::model::{DeclaredState, Model};
+use crate::dynamics::reduced_model::ReducedScratch;
 use crate::dynamics::response::Response;
 use crate::dynamics::rows::{HeldRow, RowStack};
 use crate::simulate::constraints::LoopMonitor;
@@ -77,6 +79,10 @@ pub struct Scratch {
     pub contact: Vec<f64>,
     pub holding: Vec<f64>,
     pub(in crate::simulate) friction_power: f64,
+    /// The model in the actuated coordinates at the last evaluation (made at the first), and
+    /// where the actuators' laws are evaluated.
+    pub model_laws: Option<ReducedScratch>,
+    pub(in crate::simulate) actuator_tape: EffortScratch,
 }
 
 impl Scratch {
@@ -90,6 +96,8 @@ impl Scratch {
             no_efforts: Efforts::none(model),
             efforts: Efforts::none(model),
             declared: DeclaredState::default(),
+            model_laws: None,
+            actuator_tape: EffortScratch::default(),
             next_reference: DeclaredState::default(),
             inverse: DVector::zeros(model.nv),
             force: DVector::zeros(model.velocities()),

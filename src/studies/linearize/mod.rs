@@ -544,6 +544,7 @@ impl Evaluator<'_> {
             rates: &rates,
             states: &[],
             time: self.time,
+            model: &[],
         };
         Ok(self.prepared.outputs.values(&state, &mut self.scratch))
     }

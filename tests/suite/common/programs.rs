@@ -22,12 +22,10 @@ pub fn example_text(name: &str, replacements: &[(&str, &str)]) -> String {
 pub fn mechanism(name: &str, replacements: &[(&str, &str)]) -> lsdc::elab::Mechanism {
     let options = no_library_path();
     let text = example_text(name, replacements);
-    let compilation = compile_text(
-        &format!("{name}.lsd"),
-        &text,
-        Some(std::path::Path::new("examples")),
-        &options,
-    );
+    // Imports are found from the example's own folder, as the command line finds them.
+    let folder = std::path::Path::new("examples")
+        .join(std::path::Path::new(name).parent().unwrap_or("".as_ref()));
+    let compilation = compile_text(&format!("{name}.lsd"), &text, Some(&folder), &options);
     assert!(
         !compilation.has_errors(),
         "{name}: {:?}",

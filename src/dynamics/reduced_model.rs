@@ -1,0 +1,244 @@
+//! The model in the actuated coordinates at one state: the mass matrix, the bias and the
+//! gravity efforts that the laws of `actuate` read (`mass_matrix`, `bias`, `gravity_effort`,
+//! `inverse_dynamics`).
+//!
+//! With u the actuated coordinates, the velocities the loops allow are v = X u̇ and their
+//! accelerations v̇ = X ü + c, where X and c solve [G; E] X = [0; I] and [G; E] c = [−γ; 0]
+//! (G v̇ + γ = 0 the loops' rows, E the rows selecting u). Premultiplying the equations of
+//! motion M v̇ + h = Eᵀ τ + Gᵀ λ by Xᵀ (G X = 0, E X = I) leaves the reduced model
+//!
+//! τ = Mₐ ü + Nₐ,  Mₐ = Xᵀ M X,  Nₐ = Xᵀ (M c + h),
+//!
+//! with h = RNEA(q, v, 0) less the generalised forces of the program's other efforts, the
+//! seed's Z and M, N in its actuated coordinates (notes on the Delta seed, §4.4); the gravity
+//! efforts Gₐ = Xᵀ h₀ are the bias at rest (v = 0), what `lsdc statics` holds. For a tree
+//! whose every coordinate is actuated, X selects them and c = 0: the mass matrix from CRBA and
+//! the bias from RNEA. X and c come from one singular value decomposition of [G; E]; motions
+//! it leaves free must move no mass (a Delta's rods spinning about their axes): otherwise the
+//! actuated coordinates do not determine the motion, and the model has no value.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::algorithms::{crba_after_kinematics, forward_kinematics, rnea_after_kinematics, Data};
+use super::compiled::ModelReads;
+use super::efforts::{evaluate_into, Declared, Efforts};
+use super::loops::{constraints_into, Constraints, Extent};
+use super::model::Model;
+use crate::kinematics::eval::EvalError;
+
+/// Why the model has no value in the actuated coordinates at a state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ReducedError {
+    Evaluation(EvalError),
+    /// The actuated coordinates leave a motion with mass free, or the loops fix a combination
+    /// of them (too few actuated coordinates, or a singular configuration).
+    Undetermined,
+}
+
+impl From<EvalError> for ReducedError {
+    fn from(error: EvalError) -> Self {
+        ReducedError::Evaluation(error)
+    }
+}
+
+/// The model's scratch, kept from one evaluation to the next, and its values: `values` holds
+/// Mₐ by rows (m² entries), then Nₐ (m), then Gₐ (m), for m actuated coordinates.
+pub struct ReducedScratch {
+    pub values: Vec<f64>,
+    mass: DMatrix<f64>,
+    bias: DVector<f64>,
+    /// The state's velocities' generalised forces: h, then h₀.
+    full: DVector<f64>,
+    constraints: Option<Constraints>,
+    /// The gravity efforts' own forward kinematics at rest, and efforts at rest.
+    at_rest: Option<(Data, Efforts)>,
+    zero_velocities: Vec<f64>,
+    zero_rates: Vec<f64>,
+    /// Whether the free motions were found massless (at the first state).
+    checked_free: bool,
+}
+
+impl ReducedScratch {
+    pub fn new(model: &Model, actuated: usize) -> ReducedScratch {
+        ReducedScratch {
+            values: vec![0.0; actuated * actuated + 2 * actuated],
+            mass: DMatrix::zeros(model.nv, model.nv),
+            bias: DVector::zeros(model.nv),
+            full: DVector::zeros(model.velocities()),
+            constraints: model.has_loops().then(|| Constraints::new(model)),
+            at_rest: None,
+            zero_velocities: vec![0.0; model.velocities()],
+            zero_rates: vec![0.0; model.declared_count],
+            checked_free: false,
+        }
+    }
+}
+
+/// The state the model is evaluated at: positions and velocities of the whole state, the
+/// declared coordinates and rates, the time, the efforts of the program (the actuators'
+/// excluded) at that state; `data` holds its forward kinematics.
+pub struct ReducedState<'a> {
+    pub q: &'a [f64],
+    pub v: &'a [f64],
+    pub coordinates: &'a [f64],
+    /// The program's states' values (`state(x0)`), which the other efforts may read.
+    pub states: &'a [f64],
+    pub time: f64,
+    pub efforts: &'a Efforts,
+}
+
+/// Writes the model in the actuated coordinates (`velocities`, indices of the state's
+/// velocities) into `scratch.values`, the quantities `reads` asks for.
+pub fn reduced_model(
+    model: &Model,
+    data: &mut Data,
+    state: &ReducedState<'_>,
+    velocities: &[usize],
+    reads: ModelReads,
+    scratch: &mut ReducedScratch,
+) -> Result<(), ReducedError> {
+    let m = velocities.len();
+    let n = model.velocities();
+    crba_after_kinematics(model, data, &mut scratch.mass);
+    // [G; E] and its right-hand sides [0 | −γ; I | 0].
+    let rows = scratch
+        .constraints
+        .as_ref()
+        .map_or(0, |c| c.jacobian.nrows());
+    let mut stacked = DMatrix::zeros(rows + m, n);
+    let mut sides = DMatrix::zeros(rows + m, m + 1);
+    if let Some(constraints) = scratch.constraints.as_mut() {
+        constraints_into(model, data, state.q, state.v, Extent::Motion, constraints)?;
+        stacked
+            .view_mut((0, 0), (rows, n))
+            .copy_from(&constraints.jacobian.dense());
+        sides
+            .view_mut((0, m), (rows, 1))
+            .copy_from(&(-&constraints.bias));
+    }
+    for (k, &velocity) in velocities.iter().enumerate() {
+        stacked[(rows + k, velocity)] = 1.0;
+        sides[(rows + k, k)] = 1.0;
+    }
+    // Which motions the actuated coordinates leave free is decided by the structure, once, at
+    // the first state (a closed one): an integrator's stages off the loops by their truncation
+    // error would give the rods' spins a share of mass.
+    let solution = solve_stacked(stacked, &sides, &scratch.mass, !scratch.checked_free)?;
+    scratch.checked_free = true;
+    let motions = solution.columns(0, m);
+    let mass_times = |x: &DVector<f64>| -> DVector<f64> {
+        let mut product = DVector::zeros(n);
+        let tree = &scratch.mass * x.rows(0, model.nv);
+        product.rows_mut(0, model.nv).copy_from(&tree);
+        product
+    };
+    let values = &mut scratch.values;
+    if reads.mass {
+        for i in 0..m {
+            let column = mass_times(&motions.column(i).into_owned());
+            for j in 0..m {
+                values[j * m + i] = motions.column(j).dot(&column);
+            }
+        }
+    }
+    if reads.bias {
+        rnea_after_kinematics(
+            model,
+            data,
+            &vec![0.0; model.nv],
+            &state.efforts.external,
+            &mut scratch.bias,
+        );
+        generalised(model, &scratch.bias, state.efforts, &mut scratch.full);
+        let accelerating = mass_times(&solution.column(m).into_owned());
+        let total = &scratch.full + accelerating;
+        for k in 0..m {
+            values[m * m + k] = motions.column(k).dot(&total);
+        }
+    }
+    if reads.gravity {
+        let (rest, efforts) = scratch
+            .at_rest
+            .get_or_insert_with(|| (Data::new(model), Efforts::none(model)));
+        forward_kinematics(model, rest, state.q, &scratch.zero_velocities)?;
+        let declared = Declared {
+            model,
+            coordinates: state.coordinates,
+            rates: &scratch.zero_rates,
+            states: state.states,
+        };
+        evaluate_into(model, rest, &declared, state.time, efforts)?;
+        rnea_after_kinematics(
+            model,
+            rest,
+            &vec![0.0; model.nv],
+            &efforts.external,
+            &mut scratch.bias,
+        );
+        generalised(model, &scratch.bias, efforts, &mut scratch.full);
+        for k in 0..m {
+            values[m * m + m + k] = motions.column(k).dot(&scratch.full);
+        }
+    }
+    Ok(())
+}
+
+/// h on the state's velocities: RNEA's on the tree's (`tree`), less the link efforts' τ.
+fn generalised(model: &Model, tree: &DVector<f64>, efforts: &Efforts, full: &mut DVector<f64>) {
+    full.fill(0.0);
+    full.rows_mut(0, model.nv).copy_from(tree);
+    *full -= &efforts.tau;
+}
+
+/// The minimum-norm solution of `stacked` x = `sides`, refused when it does not solve it or
+/// leaves free a motion with mass: the null space of `stacked` must move no mass.
+fn solve_stacked(
+    stacked: DMatrix<f64>,
+    sides: &DMatrix<f64>,
+    mass: &DMatrix<f64>,
+    check_free: bool,
+) -> Result<DMatrix<f64>, ReducedError> {
+    let nv = mass.nrows();
+    let svd = crate::linalg::svd(stacked.clone(), true, true)
+        .ok_or(ReducedError::Evaluation(EvalError::NotFinite))?;
+    let largest = svd.singular_values.max();
+    let floor = largest * RANK_FLOOR;
+    let solution = svd
+        .solve(sides, floor)
+        .map_err(|_| ReducedError::Evaluation(EvalError::NotFinite))?;
+    let residual = (&stacked * &solution - sides).amax();
+    if residual > SOLVED * (1.0 + sides.amax()) {
+        return Err(ReducedError::Undetermined);
+    }
+    if !check_free {
+        return Ok(solution);
+    }
+    // The free motions: the projector I − Σ vₖvₖᵀ off the rows' space (σₖ above the floor).
+    let v_t = svd.v_t.as_ref().expect("asked for");
+    let n = stacked.ncols();
+    let mut free = DMatrix::identity(n, n);
+    for (k, &value) in svd.singular_values.iter().enumerate() {
+        if value > floor {
+            let row = v_t.row(k);
+            free -= row.transpose() * row;
+        }
+    }
+    // The kinetic energy of the free motions, over an orthonormal basis of them: trace(Pᵀ M P).
+    // Quadratic in the motions, it stays at round-off for the massless ones however far an
+    // integrator's stage is off the loops.
+    let tree = free.rows(0, nv);
+    let free_kinetic = tree.component_mul(&(mass * tree)).sum();
+    if free_kinetic > MASSLESS * mass.trace().max(f64::MIN_POSITIVE) {
+        return Err(ReducedError::Undetermined);
+    }
+    Ok(solution)
+}
+
+/// Singular values below this fraction of the largest are taken as zero.
+const RANK_FLOOR: f64 = 1e-9;
+/// The largest residual of [G; E] X = [0; I] accepted, relative to the right-hand side.
+const SOLVED: f64 = 1e-8;
+/// The free motions move no mass when their kinetic metric's trace is below this fraction of
+/// M's (a Delta's spinning rods: 1e-30 at its start); a motion the actuated coordinates leave
+/// free has a share of the whole.
+const MASSLESS: f64 = 1e-9;
