@@ -321,7 +321,8 @@ impl LoopMonitor {
                     true => MomentumBasis::Orthonormal,
                     false => MomentumBasis::Free,
                 };
-                loops::project_momentum(model, data, &self.structure, (q, v), basis)?;
+                let structure = &self.structure;
+                loops::project_momentum(model, data, structure, (q, v), basis, scratch)?;
             }
             if let (left, Some(row)) = projection.left {
                 if left > OPEN && self.opened.is_none() {

@@ -148,6 +148,9 @@ pub struct Factored {
     columns: usize,
     /// Indices among the 6 per loop, and the factors that made each row dimensionless.
     indices: Vec<usize>,
+    /// Per row of G (6 per loop), whether it is among `indices`: the rows left out are found
+    /// without searching them (`Damped::reproduction`).
+    is_kept: Vec<bool>,
     scales: Vec<f64>,
     firm: usize,
     /// A = GₛGₛᵀ, undamped, and the products that fill it.
@@ -179,6 +182,7 @@ impl Factored {
             rows: KeptRows::default(),
             columns: 0,
             indices: Vec::new(),
+            is_kept: Vec::new(),
             scales: Vec::new(),
             firm: 0,
             normal: Envelope::default(),
@@ -216,6 +220,11 @@ impl Factored {
     /// The layout of `choice`'s rows of `jacobian`, filled by `refill`.
     fn lay_out(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
         self.indices.clone_from(&choice.rows);
+        self.is_kept.clear();
+        self.is_kept.resize(jacobian.nrows(), false);
+        for &row in &self.indices {
+            self.is_kept[row] = true;
+        }
         self.columns = jacobian.ncols();
         self.rows.lay_out(jacobian, &self.indices);
         self.index_columns();
@@ -477,7 +486,7 @@ impl Damped<'_> {
         let factored = self.factored;
         let largest = (factored.rows.values.iter()).fold(0.0_f64, |m, v| m.max(v.abs()));
         let mut smallest = 1.0_f64;
-        for r in (0..jacobian.nrows()).filter(|r| active[*r] && !factored.indices.contains(r)) {
+        for r in (0..jacobian.nrows()).filter(|&r| active[r] && !factored.is_kept[r]) {
             let scale = row_scale(r, length);
             let size = jacobian
                 .row(r)

@@ -4,8 +4,9 @@
 //! parametrise the motions they allow), the sparse factorisation of those rows (`factored`), the
 //! constrained equations of motion solved on them (`solve`, with the allowed motions' reduced
 //! mass matrix from `inertia`), and the projection of a state back
-//! onto the loops (`project`), with an orthonormal basis of the allowed motions from the
-//! sparse factorisation for the outputs' momentum near singular configurations (`orthonormal`).
+//! onto the loops (`project`), then, near singular configurations, of its velocities by the
+//! constraints' impulse (`momentum`), with an orthonormal basis of the allowed motions from the
+//! sparse factorisation for the outputs (`orthonormal`).
 //! A singular value decomposition (`basis`) and dense QR
 //! factorisations serve the decisions taken once, never the equations of motion.
 //! The method and its references: `docs/loops.md`.
@@ -14,6 +15,7 @@ pub mod basis;
 pub mod factored;
 pub mod inertia;
 pub mod jacobian;
+pub mod momentum;
 pub mod orthonormal;
 pub mod project;
 pub mod rows;
@@ -23,6 +25,7 @@ pub mod structure;
 pub use basis::{decompose, decompose_with, Decomposition};
 pub use factored::{Damped, Envelope, Factored, RowChoice, Singular, DAMPING};
 pub use jacobian::ConstraintJacobian;
+pub use momentum::{project_momentum, MomentumBasis};
 pub use project::{
     close_configuration, project, project_from, Projection, ProjectionScratch, Residuals,
 };
@@ -31,7 +34,6 @@ pub use rows::{
     Extent, ROW_NAMES,
 };
 pub use solve::{
-    allowed_motions, multipliers, project_momentum, solve_reduced, LoopError, LoopScratch,
-    MomentumBasis, Stabilisation,
+    allowed_motions, multipliers, solve_reduced, LoopError, LoopScratch, Stabilisation,
 };
 pub use structure::{Structure, StructureError, RANK_TOLERANCE};

@@ -7,7 +7,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::basis::decompose;
-use super::factored::{Envelope, Factored, RowChoice, DAMPING, PROJECTION_DAMPING};
+use super::factored::{
+    Damped, Envelope, Factored, RowChoice, Singular, DAMPING, PROJECTION_DAMPING,
+};
 use super::rows::{
     complete_rotations, complete_rows, constraints_into, seat_ball_angles_at_poses, Constraints,
     Extent,
@@ -346,6 +348,30 @@ impl ProjectionScratch {
         );
         self.factor = damped.into_storage();
         Some(value)
+    }
+
+    /// Hands `use_rows` the kept rows of `choice` at the current constraints (where the last
+    /// projection ended) and their factorisation damped by `DAMPING`, which is then held as
+    /// the conditioning's (`conditioning`). The rows are filled again only if the projection's
+    /// last factor was of earlier rows (`Held::Earlier`); their layout is the projection's own.
+    pub fn with_final_rows<T>(
+        &mut self,
+        choice: &RowChoice,
+        use_rows: impl FnOnce(&Factored, &Result<Damped<'_>, Singular>) -> T,
+    ) -> T {
+        self.fill_rows(choice);
+        let damped = self
+            .factored
+            .damped_in(DAMPING, std::mem::take(&mut self.factor));
+        let result = use_rows(&self.factored, &damped);
+        self.held = match damped {
+            Ok(damped) => {
+                self.factor = damped.into_storage();
+                Held::Conditioning
+            }
+            Err(_) => Held::Nothing,
+        };
+        result
     }
 
     /// Factors the kept rows of the current constraints (damped by `PROJECTION_DAMPING`);

@@ -16,14 +16,12 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 
 use super::factored::{projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::inertia::{Reduced, ReducedInertia};
-use super::orthonormal::orthonormal_allowed_motions;
 use super::project::ProjectionScratch;
-use super::rows::{constraints, Constraints, Extent};
+use super::rows::Constraints;
 use super::structure::Structure;
-use crate::dynamics::algorithms::{crba, Data};
+use crate::dynamics::algorithms::Data;
 use crate::dynamics::dense::dense_cholesky;
 use crate::dynamics::model::Model;
-use crate::kinematics::eval::EvalError;
 
 /// How the constraints are kept: by projecting the state after each step (exact), by Baumgarte's
 /// feedback in the accelerations (with this rate, in 1/s, critically damped), by the integrator's
@@ -609,73 +607,5 @@ fn massive_solve(
         }
     }
     b.copy_from(&z);
-    Ok(())
-}
-
-/// Below this conditioning of the kept rows, `project_momentum` asked for `Basis::Orthonormal`
-/// spans the allowed motions with an orthonormal basis corrected to round-off
-/// (`orthonormal_allowed_motions`): the free coordinates' allowed motions alone, from solves on
-/// the rows' normal matrix, cost ε/σ² of the velocity (on a row of ten four-bars at σ = 1e-4,
-/// 8.7e-8 rad/s between the cranks, which should turn together).
-const DENSE_MOMENTUM_BELOW: f64 = 1e-2;
-
-/// How `project_momentum` spans the allowed motions near a singular configuration.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum MomentumBasis {
-    /// The free coordinates' allowed motions, by sparse solves, as the equations of motion.
-    Free,
-    /// An orthonormal basis exact to round-off below a conditioning of 1e-2, when no motion is
-    /// idle or without mass (`DENSE_MOMENTUM_BELOW`): for the outputs, whose velocities are
-    /// compared with the motion's own. From the sparse factorisation
-    /// (`orthonormal_allowed_motions`), or a dense QR factorisation of the rows where it cannot
-    /// be taken (rows exactly dependent).
-    Orthonormal,
-}
-
-/// Replaces v by the motion the kept rows allow that has the same momentum along every allowed
-/// motion: v' = N(NᵀMN)⁻¹NᵀMv over the allowed motions N of the structure's free coordinates,
-/// the velocity an impulsive reaction of the constraints leaves (it does no work on the allowed
-/// motions, and removes only the kinetic energy of the motion across them). Used where the
-/// constraints come back after a passage through a singular configuration: what the released
-/// rows let the motion gain across them is taken away whole, and nothing along the branch.
-/// Leaves v as it is when some allowed motion has no mass (the projection is then not defined).
-pub fn project_momentum(
-    model: &Model,
-    data: &mut Data,
-    structure: &Structure,
-    (q, v): (&[f64], &mut [f64]),
-    basis: MomentumBasis,
-) -> Result<(), EvalError> {
-    let rest = vec![0.0; v.len()];
-    let c = constraints(model, data, q, &rest, Extent::Rows)?;
-    let factored = Factored::new(&c.jacobian, &structure.choice);
-    let damped = factored.damped(DAMPING);
-    let dense = basis == MomentumBasis::Orthonormal
-        && factored.conditioning_of(&damped).0 < DENSE_MOMENTUM_BELOW
-        && structure.idle.is_empty()
-        && structure.massless == 0;
-    let allowed = match (dense, damped) {
-        (true, Ok(damped)) if structure.free.len() + factored.len() == factored.columns() => {
-            orthonormal_allowed_motions(&factored, &damped, &structure.free)
-        }
-        (true, _) => factored.dense_null_space().clone(),
-        (false, Ok(damped)) => damped.allowed_motions(&structure.free),
-        (false, Err(_)) => return Ok(()),
-    };
-    let mass = crba(model, data, &q[..model.nq])?;
-    let tree = allowed.rows(0, model.nv);
-    let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
-    let reduced = tree.transpose() * (&mass * tree);
-    let Some(cholesky) = reduced.cholesky() else {
-        return Ok(());
-    };
-    let moved = &allowed * cholesky.solve(&(tree.transpose() * momentum));
-    // The idle coordinates' unit motions are allowed as they are and carry no momentum: their
-    // rates stay.
-    for (k, value) in moved.iter().enumerate() {
-        if !structure.idle.contains(&k) {
-            v[k] = *value;
-        }
-    }
     Ok(())
 }

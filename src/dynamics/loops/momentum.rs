@@ -1,0 +1,100 @@
+//! The velocities an impulse of the constraints leaves (`project_momentum`): after a projection
+//! near a singular configuration, where the outputs' velocities and those of a run whose rows
+//! come back after a passage must keep their momentum along the allowed motions. It works on the
+//! rows and the factorisation the projection just ended with (`ProjectionScratch`), not on
+//! rows evaluated again.
+
+use nalgebra::DVector;
+
+use super::factored::Factored;
+use super::orthonormal::orthonormal_allowed_motions;
+use super::project::ProjectionScratch;
+use super::structure::Structure;
+use crate::dynamics::algorithms::{crba, forward_kinematics, Data};
+use crate::dynamics::model::Model;
+use crate::kinematics::eval::EvalError;
+
+/// Below this conditioning of the kept rows, `project_momentum` asked for `Basis::Orthonormal`
+/// spans the allowed motions with an orthonormal basis corrected to round-off
+/// (`orthonormal_allowed_motions`): the free coordinates' allowed motions alone, from solves on
+/// the rows' normal matrix, cost ε/σ² of the velocity (on a row of ten four-bars at σ = 1e-4,
+/// 8.7e-8 rad/s between the cranks, which should turn together).
+const DENSE_MOMENTUM_BELOW: f64 = 1e-2;
+
+/// How `project_momentum` spans the allowed motions near a singular configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MomentumBasis {
+    /// The free coordinates' allowed motions, by sparse solves, as the equations of motion.
+    Free,
+    /// An orthonormal basis exact to round-off below a conditioning of 1e-2, when no motion is
+    /// idle or without mass (`DENSE_MOMENTUM_BELOW`): for the outputs, whose velocities are
+    /// compared with the motion's own. From the sparse factorisation
+    /// (`orthonormal_allowed_motions`), or a dense QR factorisation of the rows where it cannot
+    /// be taken (rows exactly dependent).
+    Orthonormal,
+}
+
+/// Replaces v by the motion the kept rows allow that has the same momentum along every allowed
+/// motion: v' = N(NᵀMN)⁻¹NᵀMv over the allowed motions N of the structure's free coordinates,
+/// the velocity an impulsive reaction of the constraints leaves (it does no work on the allowed
+/// motions, and removes only the kinetic energy of the motion across them). Used where the
+/// constraints come back after a passage through a singular configuration: what the released
+/// rows let the motion gain across them is taken away whole, and nothing along the branch.
+/// Leaves v as it is when some allowed motion has no mass (the projection is then not defined).
+/// q must be where `projection` last ended (`project_from`): its rows and their layout serve
+/// here as they are, evaluated again only where it seated ball angles after them.
+pub fn project_momentum(
+    model: &Model,
+    data: &mut Data,
+    structure: &Structure,
+    (q, v): (&[f64], &mut [f64]),
+    basis: MomentumBasis,
+    projection: &mut ProjectionScratch,
+) -> Result<(), EvalError> {
+    if model.loop_balls.iter().any(Option::is_some) {
+        // The projection seated the complementary balls' angles after its last rows were
+        // taken: the rows again at the seated positions.
+        let rest = vec![0.0; v.len()];
+        forward_kinematics(model, data, q, &rest)?;
+        projection.constraints_at(model, data, q, &rest)?;
+    }
+    let allowed = projection.with_final_rows(&structure.choice, |factored, damped| {
+        let dense = basis == MomentumBasis::Orthonormal
+            && factored.conditioning_of(damped).0 < DENSE_MOMENTUM_BELOW
+            && structure.idle.is_empty()
+            && structure.massless == 0;
+        match (dense, damped) {
+            (true, Ok(damped)) if parametrised(factored, structure) => Some(
+                orthonormal_allowed_motions(factored, damped, &structure.free),
+            ),
+            (true, _) => Some(factored.dense_null_space().clone()),
+            (false, Ok(damped)) => Some(damped.allowed_motions(&structure.free)),
+            (false, Err(_)) => None,
+        }
+    });
+    let Some(allowed) = allowed else {
+        return Ok(());
+    };
+    let mass = crba(model, data, &q[..model.nq])?;
+    let tree = allowed.rows(0, model.nv);
+    let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
+    let reduced = tree.transpose() * (&mass * tree);
+    let Some(cholesky) = reduced.cholesky() else {
+        return Ok(());
+    };
+    let moved = &allowed * cholesky.solve(&(tree.transpose() * momentum));
+    // The idle coordinates' unit motions are allowed as they are and carry no momentum: their
+    // rates stay.
+    for (k, value) in moved.iter().enumerate() {
+        if !structure.idle.contains(&k) {
+            v[k] = *value;
+        }
+    }
+    Ok(())
+}
+
+/// Whether the structure's free coordinates and the kept rows together number the coordinates
+/// (so that the free coordinates' allowed motions span the allowed motions).
+fn parametrised(factored: &Factored, structure: &Structure) -> bool {
+    structure.free.len() + factored.len() == factored.columns()
+}
