@@ -442,3 +442,45 @@ fn outputs_through_a_flat_passage_stay_on_the_branch_with_every_integrator() {
         }
     }
 }
+
+#[test]
+fn dop853_on_the_squeezer_follows_its_tolerance_in_trend() {
+    // Andrews' squeezer at t = 0.03 s against the test set's published solution, over the
+    // ladder rtol = atol = 10^(-6 - k/6), k = 0..18 (bench/hard/squeezer_ladder.py). An
+    // adaptive method's global error follows its tolerance in trend, not rung by rung
+    // (docs/guarantees.md, "Accuracy against tolerance"): no rung above 5 times its tolerance
+    // (the published solution's own floor, its agreement with an independent integration, is
+    // 1.5e-9), and the fitted slope of log error against log tolerance near one.
+    let reference: serde_json::Value =
+        serde_json::from_str(include_str!("../fixtures/hard/squeezer_reference.json")).unwrap();
+    let names = reference["coordinates"].as_array().unwrap();
+    let published = reference["published"]["positions"].as_array().unwrap();
+    let mut ladder = Vec::new();
+    for k in 0..19 {
+        let tolerance = 10f64.powf(-6.0 - f64::from(k) / 6.0);
+        let run = simulated(&hard("squeezer", Integrator::Dop853, 0.03, tolerance, None));
+        let error = (names.iter().zip(published))
+            .map(|(name, p)| {
+                let name = format!("{}.q", name.as_str().unwrap());
+                (last(&run, &name) - p.as_f64().unwrap()).abs()
+            })
+            .fold(0.0, f64::max);
+        assert!(
+            error <= 5.0 * tolerance + 2e-9,
+            "error {error:e} at tolerance {tolerance:e}"
+        );
+        ladder.push((tolerance.log10(), error.log10()));
+    }
+    let n = ladder.len() as f64;
+    let (mx, my) = ladder
+        .iter()
+        .fold((0.0, 0.0), |(x, y), (a, b)| (x + a / n, y + b / n));
+    let (sxy, sxx) = ladder.iter().fold((0.0, 0.0), |(xy, xx), (a, b)| {
+        (xy + (a - mx) * (b - my), xx + (a - mx) * (a - mx))
+    });
+    let slope = sxy / sxx;
+    assert!(
+        slope > 0.7,
+        "error against tolerance: slope {slope} {ladder:?}"
+    );
+}
