@@ -4,8 +4,8 @@
 //! against 2 m w r r'; with every integrator of the registry (or its refusal), the hidden
 //! coordinates on their laws and the energy balance with their work; the refusals.
 
-use crate::common::programs::{column, example_text, refusal_codes, run_text};
 use crate::common::programs::output;
+use crate::common::programs::{column, example_text, refusal_codes, run_text};
 use lsdc::integrators::{Feature, INTEGRATORS};
 use lsdc::prepare::{Integrator, Settings};
 use lsdc::simulate::run::Simulation;
