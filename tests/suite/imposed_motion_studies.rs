@@ -8,7 +8,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::common::programs::{example_text, prepared, prepared_text};
+use crate::common::programs::{prepared, prepared_text};
 use lsdc::studies::linearize::{linearize, Linearization, OperatingPoint, Request};
 use lsdc::studies::statics::{holding_efforts, StaticsError};
 
