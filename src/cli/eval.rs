@@ -4,7 +4,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{err, json, out, prepare_file, usage_error, warn, Format, LibraryArgs};
+use super::shared::{
+    err, json, out, prepare_file, refuse_imposed_motion, usage_error, warn, Format, LibraryArgs,
+};
 use lsdc::api::{evaluate, parse_states};
 
 #[derive(clap::Args)]
@@ -33,10 +35,15 @@ pub fn run(args: &EvalArgs) -> ExitCode {
             ))
         }
     };
-    let (_, prepared) = match prepare_file(&args.file, &args.libraries, &args.sets, Format::Text) {
-        Ok(prepared) => prepared,
-        Err(code) => return code,
-    };
+    let (program, prepared) =
+        match prepare_file(&args.file, &args.libraries, &args.sets, Format::Text) {
+            Ok(prepared) => prepared,
+            Err(code) => return code,
+        };
+    let help = "its forward dynamics would leave the drives' rows out: `lsdc simulate` integrates the driven mechanism and `lsdc inverse` gives the efforts that impose the motion";
+    if let Err(code) = refuse_imposed_motion(&program, "`lsdc eval`", help, Format::Text) {
+        return code;
+    }
     match evaluate(&prepared, &inputs) {
         Ok(evaluation) => {
             let failed = evaluation.states.iter().enumerate();

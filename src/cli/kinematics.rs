@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::shared::{err, json, out, prepare_file, usage_error, Format, LibraryArgs};
+use super::shared::{
+    err, json, out, prepare_file, refuse_imposed_motion, usage_error, Format, LibraryArgs,
+};
 use lsdc::prepare::Prepared;
 use lsdc::studies::configurations::{self, Declared};
 use lsdc::studies::kinematic_models::{
@@ -63,6 +65,10 @@ pub fn run(args: &KinematicsArgs) -> ExitCode {
             Ok(prepared) => prepared,
             Err(code) => return code,
         };
+    let help = "its models take every coordinate as free to move: leave the motion free (remove the drive, or the time from the dof chain) and name the coordinate with --actuate";
+    if let Err(code) = refuse_imposed_motion(&program, "`lsdc kinematics`", help, args.format) {
+        return code;
+    }
     let Ok(mechanism) = program.mechanism() else {
         return ExitCode::from(1);
     };

@@ -239,6 +239,25 @@ pub fn prepare_file(
     Ok((program, prepared))
 }
 
+/// E0491, reported, when the program imposes motions in time, which `subject` (a command,
+/// "`lsdc statics`") does not handle; `help` says what to run instead.
+pub fn refuse_imposed_motion(
+    program: &Program,
+    subject: &str,
+    help: &str,
+    format: Format,
+) -> Result<(), ExitCode> {
+    let refused = (program.mechanism().ok())
+        .and_then(|m| lsdc::elab::imposed_motion::refused_by(m, subject, help));
+    match refused {
+        Some(diagnostic) => {
+            report_diagnostics(program, &[diagnostic], format);
+            Err(ExitCode::from(1))
+        }
+        None => Ok(()),
+    }
+}
+
 /// The values of `--set NAME=VALUE`.
 pub fn parse_sets(sets: &[String]) -> Result<Vec<Override>, ExitCode> {
     sets.iter()

@@ -4,7 +4,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{json, out, prepare_file, usage_error, Format, LibraryArgs};
+use super::shared::{
+    json, out, prepare_file, refuse_imposed_motion, usage_error, Format, LibraryArgs,
+};
 use lsdc::output::text;
 
 #[derive(clap::Args)]
@@ -23,10 +25,15 @@ pub struct StaticsArgs {
 }
 
 pub fn run(args: &StaticsArgs) -> ExitCode {
-    let (_, prepared) = match prepare_file(&args.file, &args.libraries, &args.sets, args.format) {
-        Ok(prepared) => prepared,
-        Err(code) => return code,
-    };
+    let (program, prepared) =
+        match prepare_file(&args.file, &args.libraries, &args.sets, args.format) {
+            Ok(prepared) => prepared,
+            Err(code) => return code,
+        };
+    let help = "the efforts that impose the motion are `lsdc inverse`'s; for the efforts that hold the mechanism at rest, leave the motion free (remove the drive, or the time from the dof chain) and name its coordinate with --actuate";
+    if let Err(code) = refuse_imposed_motion(&program, "`lsdc statics`", help, args.format) {
+        return code;
+    }
     let holding = match lsdc::studies::statics::holding_efforts(&prepared, &args.actuated) {
         Ok(h) => h,
         Err(error) => return usage_error(&error.to_string()),

@@ -10,6 +10,7 @@ mod decls;
 mod elaborator;
 mod eval;
 mod fields;
+pub mod imposed_motion;
 mod instances;
 mod laws;
 pub mod mechanism;

@@ -24,6 +24,13 @@ pub fn text(l: &Linearization, modes: bool) -> String {
             list(&l.held)
         );
     }
+    if !l.driven.is_empty() {
+        out += &format!(
+            "imposed by their laws of time at t = {} (not states): {}\n",
+            l.time,
+            list(&l.driven)
+        );
+    }
     let inputs = match l.inputs.is_empty() {
         true => "none".to_string(),
         false => list(&l.inputs) + " (generalised forces along them)",

@@ -33,6 +33,11 @@ pub struct Holding {
 /// a quaternion joint's) that hold the mechanism at rest at its initial configuration.
 pub fn holding_efforts(prepared: &Prepared, actuated: &[String]) -> Result<Holding, StaticsError> {
     let model = &prepared.model;
+    if let Some(driven) = model.drives.first() {
+        return Err(StaticsError::ImposedMotion {
+            name: driven.coordinate.clone(),
+        });
+    }
     let indices = actuated
         .iter()
         .map(|name| velocity_index(prepared, name))
@@ -140,6 +145,9 @@ pub enum StaticsError {
     NotInTree { name: String },
     /// `name` is an angle of a ball or free joint, whose motion is not along it.
     QuaternionAngle { name: String },
+    /// `name` is imposed by a law of time (a drive, or `time` in a dof chain): the mechanism
+    /// is not at rest, and its coordinates are not all free to be held.
+    ImposedMotion { name: String },
     /// The efforts or the loops cannot be evaluated at the initial configuration.
     System(SystemError),
 }
@@ -166,6 +174,10 @@ impl fmt::Display for StaticsError {
             StaticsError::QuaternionAngle { name } => write!(
                 f,
                 "`{name}` is an angle of a ball or free joint, not a coordinate an actuator can drive"
+            ),
+            StaticsError::ImposedMotion { name } => write!(
+                f,
+                "`{name}` is imposed by a law of time: the efforts that impose a motion are `lsdc inverse`'s, and the efforts that hold a mechanism at rest need its coordinates free"
             ),
             StaticsError::System(error) => write!(f, "{error}"),
         }

@@ -26,8 +26,8 @@ use super::lower::{LowerError, Variables};
 use super::vector as v;
 use super::vector::Wrench;
 use crate::diag::Diagnostic;
+use crate::elab::imposed_motion::first_imposed_motion;
 use crate::elab::mechanism::Mechanism;
-use crate::elab::value::Elementary;
 use crate::topology::Topology;
 
 pub struct Equations {
@@ -156,33 +156,15 @@ pub struct Values {
 /// carry (they would be the free mechanism's), or `time` in a dof chain, whose motion's rates
 /// the generator's velocities (by the coordinates' rates alone) would leave out.
 fn imposed_motion(mechanism: &Mechanism) -> Option<Diagnostic> {
-    let refused = |span, label: &str| {
+    let motion = first_imposed_motion(mechanism)?;
+    Some(
         Diagnostic::error(
             "E0828",
             "the equations of motion of a mechanism with motions imposed in time (`drive`, `time` in a dof chain) are not written",
         )
-        .primary(span, label.to_string())
-        .help("`lsdc simulate` integrates it and `lsdc inverse` gives the efforts that impose the motion; the symbolic equations cover free coordinates only")
-    };
-    if let Some(drive) = mechanism.drives.first() {
-        return Some(refused(drive.span, "this drive imposes a motion"));
-    }
-    let rheonomic = mechanism.joins.iter().find(|join| {
-        let link = mechanism.link(join.link);
-        link.dofs
-            .iter()
-            .flat_map(|d| d.0.iter())
-            .any(|step| match step {
-                Elementary::Translation(v) => v.iter().any(|s| s.uses_time()),
-                Elementary::Rotation { angle, axis } => {
-                    angle.uses_time() || axis.iter().any(|s| s.uses_time())
-                }
-            })
-    })?;
-    Some(refused(
-        mechanism.link(rheonomic.link).span,
-        "this dof chain depends on the time",
-    ))
+        .primary(motion.span, motion.label)
+        .help("`lsdc simulate` integrates it and `lsdc inverse` gives the efforts that impose the motion; the symbolic equations cover free coordinates only"),
+    )
 }
 
 pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {

@@ -25,6 +25,7 @@ mod geared_loops;
 mod generated_code;
 mod golden;
 mod hard_loops;
+mod imposed_motion_studies;
 mod integrate_projection;
 mod integrator_registry;
 mod integrators;

@@ -34,7 +34,11 @@ pub struct Chart {
     /// Velocities held at the operating point: motions the loops allow that carry no mass (a
     /// rod spinning about its axis between two ball joints), left out of the linear model.
     pub held: Vec<usize>,
-    /// The operating point's positions, where every closure starts.
+    /// The coordinates imposed by laws of time (their state velocities), each with its rate at
+    /// the operating point's time: not states of the linear model (a tree's only).
+    pub driven: Vec<(usize, f64)>,
+    /// The operating point's positions, where every closure starts (the driven coordinates'
+    /// on their laws).
     origin: Vec<f64>,
     /// The loops' rows that constrain anything (a ball joint's rotation rows do not).
     rows: Vec<usize>,
@@ -57,10 +61,18 @@ impl From<EvalError> for ChartError {
 }
 
 impl Chart {
-    /// Every coordinate of a tree whose joints are all chains of coordinates.
-    pub fn tree(model: &Model, origin: &[f64]) -> Chart {
-        let independent: Vec<usize> = (0..model.velocities()).collect();
+    /// Every coordinate of a tree whose joints are all chains of coordinates, but those its
+    /// drives impose: they stay on their laws, at the positions of `origin` and the rates of
+    /// `rates` (the operating point's).
+    pub fn tree(model: &Model, origin: &[f64], rates: &[f64]) -> Chart {
+        let driven: Vec<(usize, f64)> = (model.drives.iter())
+            .map(|d| (d.velocity, rates[d.velocity]))
+            .collect();
+        let independent: Vec<usize> = (0..model.velocities())
+            .filter(|i| !driven.iter().any(|(d, _)| d == i))
+            .collect();
         Chart {
+            driven,
             positions: independent
                 .iter()
                 .filter_map(|&i| position_of(model, i))
@@ -84,6 +96,7 @@ impl Chart {
         let active = loops::active_rows(model);
         let rows = (0..active.len()).filter(|&r| active[r]).collect();
         Chart {
+            driven: Vec::new(),
             dependent: (0..model.velocities())
                 .filter(|i| !independent.contains(i) && !held.contains(i))
                 .collect(),
@@ -118,6 +131,9 @@ impl Chart {
     ) -> Result<(Vec<f64>, Vec<f64>), ChartError> {
         let mut q = self.origin.clone();
         let mut v = vec![0.0; model.velocities()];
+        for &(i, rate) in &self.driven {
+            v[i] = rate;
+        }
         for (k, (&i, &p)) in self.independent.iter().zip(&self.positions).enumerate() {
             q[p] = z[k];
             v[i] = rates[k];

@@ -34,6 +34,7 @@ use crate::dynamics::angles::AngleReference;
 use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
+use crate::elab::imposed_motion::refused_by;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::JoinId;
 use crate::prepare::Prepared;
@@ -80,6 +81,9 @@ pub struct Linearization {
     /// Motions held at the operating point: allowed by the loops, without mass, no
     /// coordinate's rate (rods spinning between ball joints).
     pub held: Vec<String>,
+    /// Coordinates imposed by laws of time (drives, `time` in a dof chain): not states, but
+    /// on their laws at the operating point's time, which makes A, B and C those of that time.
+    pub driven: Vec<String>,
     pub choice: &'static str,
     /// `crank.q` for a coordinate, `crank.q'` for its rate: the coordinates, then their rates.
     pub states: Vec<String>,
@@ -128,6 +132,7 @@ max(1, |x|)), each entry with Ridders' estimate of its truncation error plus a b
 pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization, LinearizeError> {
     let model = &prepared.model;
     refuse_unsupported(prepared)?;
+    refuse_imposed_motion(prepared, request.point)?;
     let inputs = indices(prepared, &request.inputs)?;
     let Operating { time, q, v, input } =
         operating_state(prepared, request.point, &request.inputs)?;
@@ -148,7 +153,11 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
         if !request.coordinates.is_empty() {
             return Err(LinearizeError::TreeCoordinates);
         }
-        (Chart::tree(model, &q), "every coordinate of the tree")
+        let choice = match model.drives.is_empty() {
+            true => "every coordinate of the tree",
+            false => "every coordinate of the tree but those imposed in time",
+        };
+        (Chart::tree(model, &q, &v), choice)
     };
     let (q, v) = model.split_state(&y);
     let n = chart.independent.len();
@@ -229,6 +238,9 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
             .map(|&i| model.velocity_name(i))
             .collect(),
         held: chart.held.iter().map(|&i| model.velocity_name(i)).collect(),
+        driven: (chart.driven.iter())
+            .map(|&(i, _)| model.velocity_name(i))
+            .collect(),
         choice,
         states,
         inputs: request.inputs.clone(),
@@ -268,9 +280,16 @@ fn indices(prepared: &Prepared, names: &[String]) -> Result<Vec<usize>, Lineariz
             return Err(LinearizeError::Repeated { name: name.clone() });
         }
     }
+    let model = &prepared.model;
     names
         .iter()
-        .map(|name| velocity_index(prepared, name).map_err(LinearizeError::Name))
+        .map(|name| {
+            let index = velocity_index(prepared, name).map_err(LinearizeError::Name)?;
+            match model.drives.iter().any(|d| d.velocity == index) {
+                true => Err(LinearizeError::DrivenInput { name: name.clone() }),
+                false => Ok(index),
+            }
+        })
         .collect()
 }
 
@@ -282,8 +301,23 @@ struct Operating {
     input: Vec<f64>,
 }
 
-/// The operating point `point` asks for.
+/// The operating point `point` asks for, its driven coordinates on their laws at its time.
 fn operating_state(
+    prepared: &Prepared,
+    point: OperatingPoint,
+    inputs: &[String],
+) -> Result<Operating, LinearizeError> {
+    let mut operating = free_operating_state(prepared, point, inputs)?;
+    for driven in &prepared.model.drives {
+        let law = driven.at(operating.time);
+        operating.q[driven.position] = law.position;
+        operating.v[driven.velocity] = law.rate;
+    }
+    Ok(operating)
+}
+
+/// The operating point's state as the initial values, a run or the statics give it.
+fn free_operating_state(
     prepared: &Prepared,
     point: OperatingPoint,
     inputs: &[String],
@@ -489,6 +523,25 @@ fn refuse_unsupported(prepared: &Prepared) -> Result<(), LinearizeError> {
     Ok(())
 }
 
+/// Refuses motions imposed in time where the linear model would not be the driven
+/// mechanism's: with loops (the chart's closure would move the driven coordinates off their
+/// laws) and at an equilibrium (a driven coordinate is not at rest, nor held by the inputs).
+fn refuse_imposed_motion(prepared: &Prepared, point: OperatingPoint) -> Result<(), LinearizeError> {
+    let model = &prepared.model;
+    let Some(driven) = model.drives.first() else {
+        return Ok(());
+    };
+    let context = match (model.has_loops(), point) {
+        (true, _) => ImposedContext::Loops,
+        (false, OperatingPoint::Equilibrium) => ImposedContext::Equilibrium,
+        (false, _) => return Ok(()),
+    };
+    Err(LinearizeError::ImposedMotion {
+        name: driven.coordinate.clone(),
+        context,
+    })
+}
+
 /// The equations of motion in the chart's coordinates, and the outputs.
 struct Evaluator<'p> {
     prepared: &'p Prepared,
@@ -550,6 +603,30 @@ impl Evaluator<'_> {
     }
 }
 
+/// Where a linearisation refuses motions imposed in time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImposedContext {
+    Loops,
+    Equilibrium,
+}
+
+impl ImposedContext {
+    /// The command as the user ran it, for the refusal.
+    fn command(self) -> &'static str {
+        match self {
+            ImposedContext::Loops => "`lsdc linearize` of a mechanism with closed loops",
+            ImposedContext::Equilibrium => "`lsdc linearize --equilibrium`",
+        }
+    }
+
+    fn help(self) -> &'static str {
+        match self {
+            ImposedContext::Loops => "linearise the mechanism without the motion imposed in time (remove the drive, or the time from the dof chain); a tree is linearised with its drives on their laws",
+            ImposedContext::Equilibrium => "a coordinate imposed in time is not at rest: linearise about the initial state, or a run's state with --at-time T, where the drives are on their laws",
+        }
+    }
+}
+
 /// Why a mechanism cannot be linearised as asked.
 #[derive(Debug)]
 pub enum LinearizeError {
@@ -577,6 +654,15 @@ pub enum LinearizeError {
     NotIndependent {
         given: Vec<String>,
         run_choice: Vec<String>,
+    },
+    /// An input along a coordinate a drive imposes: no force moves it.
+    DrivenInput {
+        name: String,
+    },
+    /// A coordinate imposed in time (`name`) where it is not handled.
+    ImposedMotion {
+        name: String,
+        context: ImposedContext,
     },
     /// A join or contact (`name`) of a kind a linearisation does not handle.
     Unsupported {
@@ -615,6 +701,9 @@ impl From<ChartError> for LinearizeError {
 impl LinearizeError {
     /// The error as a diagnostic located in the program, where it is about a part of it (E0850).
     pub fn diagnostic(&self, mechanism: &Mechanism) -> Option<Diagnostic> {
+        if let LinearizeError::ImposedMotion { context, .. } = self {
+            return refused_by(mechanism, context.command(), context.help());
+        }
         let LinearizeError::Unsupported { name, kind } = self else {
             return None;
         };
@@ -670,6 +759,16 @@ impl fmt::Display for LinearizeError {
             LinearizeError::Unsupported { name, kind } => {
                 write!(f, "`{name}` cannot be linearised: {}", kind.what())
             }
+            LinearizeError::DrivenInput { name } => write!(
+                f,
+                "`{name}` is imposed by a law of time: a force along it moves nothing (it becomes the drive's effort); name a free coordinate with --input"
+            ),
+            LinearizeError::ImposedMotion { name, context } => write!(
+                f,
+                "`{name}` is imposed by a law of time, which {} does not handle: {}",
+                context.command(),
+                context.help()
+            ),
             LinearizeError::NotAnEquilibrium { coordinate, acceleration } => write!(
                 f,
                 "the initial configuration is not an equilibrium: `{coordinate}` accelerates at {acceleration:.6e} with the inputs holding it as well as they can; name inputs (--input) that can hold it"
