@@ -116,7 +116,7 @@ pub fn resolve(
                     name,
                     law,
                     span: drive.span,
-                    effort: format!("{join}.drive_effort"),
+                    effort: drive_effort_name(join),
                 });
             }
             (target, law) => errors.extend(target.err().into_iter().chain(law.err())),
@@ -291,6 +291,12 @@ fn law(
         pool,
         &[position, rate, acceleration],
     )))
+}
+
+/// The output that carries the effort imposing join `join`'s driven coordinate
+/// (`crank.drive_effort`).
+pub fn drive_effort_name(join: impl std::fmt::Display) -> String {
+    format!("{join}.drive_effort")
 }
 
 /// E0484: `subject` (a law of time) uses `function`, whose derivatives jump.

@@ -24,7 +24,7 @@ use super::kinematic_models::{models_at, Actuation, Output, OutputKind, SINGULAR
 use super::motion_file::{Derivation, MotionFile};
 use super::statics::velocity_index;
 use crate::dynamics::drives::DrivenCoordinate;
-use crate::kinematics::drives::DriveLaw;
+use crate::kinematics::drives::{drive_effort_name, DriveLaw};
 use crate::kinematics::tabulated_law::TabulatedLaw;
 use crate::prepare::Prepared;
 
@@ -71,6 +71,7 @@ pub fn impose(
         Target::Frame { output, actuation } => frame_knots(prepared, motion, output, actuation)?,
     };
     let mut driven = Vec::new();
+    let mut rates = vec![0.0; prepared.coordinates.len()];
     for knot in &knots.series {
         let (position, velocity) = drivable(prepared, &knot.name)?;
         let law = TabulatedLaw::through(
@@ -86,19 +87,17 @@ pub fn impose(
             )
         })?;
         let join = knot.name.rsplit_once('.').map_or("", |(join, _)| join);
+        let declared = declared_index(prepared, &knot.name)?;
+        rates[declared] = knot.rates[0];
         prepared.model.drives.push(DrivenCoordinate {
             coordinate: knot.name.clone(),
-            declared: declared_index(prepared, &knot.name)?,
+            declared,
             position,
             velocity,
             law: DriveLaw::Tabulated(law),
-            effort: format!("{join}.drive_effort"),
+            effort: drive_effort_name(join),
         });
         driven.push(knot.name.clone());
-    }
-    let mut rates = vec![0.0; prepared.coordinates.len()];
-    for knot in &knots.series {
-        rates[declared_index(prepared, &knot.name)?] = knot.rates[0];
     }
     prepared.coordinates = knots.start;
     prepared.rates = rates;
