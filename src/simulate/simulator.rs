@@ -334,7 +334,7 @@ impl<'p> Simulator<'p> {
             outputs_off_branch: std::mem::take(&mut self.sampler.unsettled),
             cpu_seconds,
             wall_seconds,
-            sampling: (self.sampling.as_mut()).map(|clock| clock.report(&self.system.model)),
+            sampling: (self.sampling.as_mut()).map(|clock| clock.report(self.system.model)),
         };
         let report = report(self.prepared, &mut self.system, ended);
         (self.samples, report)

@@ -199,7 +199,13 @@ fn the_sampling_instants_are_in_the_report() {
     assert_eq!(report["sampling"]["states"][0], "u");
     // The first rows: the held value before the first instant is --set's, the output at the
     // first instant still shows it (the values held up to an instant).
-    let column = |row: &str| row.split(',').last().expect("u").parse::<f64>().expect("u");
+    let column = |row: &str| {
+        row.rsplit(',')
+            .next()
+            .expect("u")
+            .parse::<f64>()
+            .expect("u")
+    };
     let rows: Vec<&str> = samples.lines().collect();
     assert!(rows[0].ends_with(",u"), "{}", rows[0]);
     assert_eq!(column(rows[1]), 1.5);
