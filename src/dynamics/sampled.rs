@@ -1,6 +1,6 @@
 //! Sampled states in the dynamic model (`let u = sample(period, x0); update u = f;`): a
 //! discrete-time controller's states, held between their sampling instants (a zero-order hold)
-//! and given a new value at each instant by their update, x[k+1] = f(x[k], measurements at
+//! and given a new value at each instant by their update, x\[k+1\] = f(x\[k\], measurements at
 //! t_k). The model keeps each one's period; the run lands on the instants and applies the
 //! updates (`simulate::sampling`). What cannot take them says so here, at the `sample` call.
 

@@ -1,9 +1,9 @@
 //! A run's sampling instants (`let u = sample(period, x0); update u = f;`): a discrete-time
 //! controller evaluated at its period, its states held between instants (a zero-order hold).
 //! The run's steps are cut at every instant so that each lands on it exactly (as
-//! [`Simulator::advance_to`](super::Simulator::advance_to) lands on a time), whatever the
+//! [`Simulator::advance_to`](super::simulator::Simulator::advance_to) lands on a time), whatever the
 //! integrator; there every sampled state due takes its update's value at the state reached,
-//! x[k+1] = f(x[k], measurements at t_k), all of them from the values before the instant, and
+//! x\[k+1\] = f(x\[k\], measurements at t_k), all of them from the values before the instant, and
 //! the integrator starts again from the new state. An output at an instant shows the values
 //! held up to it; the report lists every instant with the values it set.
 

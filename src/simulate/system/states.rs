@@ -28,12 +28,17 @@ impl MechanicalSystem<'_> {
                 false => 0.0,
             };
         }
-        if let Some(k) = rates.iter().position(|r| !r.is_finite()) {
-            return Err(SystemError::StateRateNotFinite {
-                state: self.model.states[k].name.clone(),
-            });
+        match self.first_not_finite(rates) {
+            Some(state) => Err(SystemError::StateRateNotFinite { state }),
+            None => Ok(()),
         }
-        Ok(())
+    }
+
+    /// The name of the first state whose computed value (its rate, or a sampled state's
+    /// update) is not finite.
+    fn first_not_finite(&self, values: &[f64]) -> Option<String> {
+        let k = values.iter().position(|v| !v.is_finite())?;
+        Some(self.model.states[k].name.clone())
     }
 }
 
@@ -60,10 +65,8 @@ impl MechanicalSystem<'_> {
                 false => tape.root(values, state.rate_root),
             };
         }
-        match updates.iter().position(|u| !u.is_finite()) {
-            Some(k) => Err(SystemError::StateRateNotFinite {
-                state: self.model.states[k].name.clone(),
-            }),
+        match self.first_not_finite(updates) {
+            Some(state) => Err(SystemError::UpdateNotFinite { state }),
             None => Ok(()),
         }
     }
