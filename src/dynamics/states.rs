@@ -1,9 +1,10 @@
 //! The program's states in the dynamic model (`let s = state(x0); rate s = f;`): each one's
 //! starting value, evaluated with the values of the unknowns (`given`, `--set`), and its rate,
 //! lowered into the efforts' tape (`compiled`) beside the efforts that read it, so that one
-//! evaluation of the tape gives the efforts and the states' rates at a state of the run.
+//! evaluation of the tape gives the efforts and the states' rates at a state of the run. A
+//! sampled state (`let u = sample(period, x0); update u = f;`) is one of them with its period,
+//! its update in place of the rate (`dynamics::sampled`).
 
-use super::sampled::{self, Sampling};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::Scalar;
@@ -53,7 +54,7 @@ pub fn build(
             continue;
         };
         let sampling = match &state.period {
-            Some(period) => match sampled::period(&name, period, unknowns, missing, state.span) {
+            Some(period) => match self::period(&name, period, unknowns, missing, state.span) {
                 Ok(period) => Some(Sampling {
                     period,
                     span: state.span,
@@ -95,4 +96,35 @@ fn without_law(name: &str, sampled: bool, made: Span) -> Diagnostic {
     Diagnostic::error("E0488", message)
         .primary(made, "made here")
         .help(help)
+}
+
+/// The sampling of one sampled state.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampling {
+    /// Seconds between two instants; the first is one period after the start.
+    pub period: f64,
+    /// The call `sample(period, x0)` that made the state.
+    pub span: Span,
+}
+
+/// The period of sampled state `name`, a positive number (E0497; `missing` when it is not a
+/// number).
+fn period(
+    name: &str,
+    period: &Scalar,
+    unknowns: &UnknownValues,
+    missing: Missing<'_>,
+    span: Span,
+) -> Result<f64, Diagnostic> {
+    let what = format!("the period of sampled state `{name}`");
+    let value = eval(period, unknowns).map_err(|e| missing(e, &what, span))?;
+    if value > 0.0 && value.is_finite() {
+        return Ok(value);
+    }
+    Err(Diagnostic::error(
+        "E0497",
+        format!("the period of sampled state `{name}` is {value}: it must be a positive number of seconds"),
+    )
+    .primary(span, "sampled here")
+    .help("`sample(0.01, 0)` takes its update every 10 ms and holds 0 until the first instant"))
 }
