@@ -33,6 +33,8 @@ pub enum Feature {
     Drives,
     /// The program's states (`state(x0)` and `rate`).
     States,
+    /// The program's sampled states (`sample(period, x0)` and `update`).
+    Sampled,
     /// Efforts along coordinates whose laws may read the model (`actuate`).
     Actuators,
 }
@@ -48,6 +50,7 @@ impl Feature {
             Feature::Friction => "joint friction",
             Feature::Drives => "drives (`drive`)",
             Feature::States => "states (`state` and `rate`)",
+            Feature::Sampled => "sampled states (`sample` and `update`)",
             Feature::Actuators => "actuators (`actuate`)",
         }
     }
@@ -112,6 +115,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
             Feature::Friction,
             Feature::Drives,
             Feature::States,
+            Feature::Sampled,
             Feature::Actuators,
         ],
     },

@@ -486,11 +486,12 @@ impl<'w> Checker<'w> {
     fn drive(&mut self, drive: &'w crate::syntax::ast::DriveDecl, ctx: &mut Ctx) {
         match drive.word.name.as_str() {
             "drive" => {}
-            "rate" => return self.rate(drive, ctx),
+            "rate" | "update" => return self.rate(drive, ctx),
             "actuate" => return self.actuate(drive, ctx),
             word => {
-                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "actuate"]) {
+                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "update", "actuate"]) {
                     Some("rate") => "did you mean `rate`? `rate integral = error;` gives the derivative of a state",
+                    Some("update") => "did you mean `update`? `update u = -k * arm.q;` gives the next value of a sampled state",
                     Some("actuate") => "did you mean `actuate`? `actuate arm.q = law;` applies an effort along a coordinate",
                     _ => "did you mean `drive`? `drive crank.q = 2 * pi * time;` imposes a coordinate as a law of time",
                 };
@@ -526,13 +527,18 @@ impl<'w> Checker<'w> {
         self.expect_value(&drive.value, value_ty, Ty::Scalar, "the law of a drive");
     }
 
-    /// `rate s = f`: the target and the rate are scalars (that the target is a state made by
-    /// `state(x0)` is known once evaluated: E0486).
+    /// `rate s = f` and `update s = f`: the target and the law are scalars (that the target is
+    /// a state made by `state(x0)`, or by `sample(period, x0)` for `update`, is known once
+    /// evaluated: E0486, E0495, E0496).
     fn rate(&mut self, rate: &'w crate::syntax::ast::DriveDecl, ctx: &mut Ctx) {
+        let (target, law) = match rate.word.name.as_str() {
+            "update" => ("the state of `update`", "the update of a sampled state"),
+            _ => ("the state of `rate`", "the rate of a state"),
+        };
         let target_ty = self.expr(&rate.target, ctx);
-        self.expect_value(&rate.target, target_ty, Ty::Scalar, "the state of `rate`");
+        self.expect_value(&rate.target, target_ty, Ty::Scalar, target);
         let value_ty = self.expr(&rate.value, ctx);
-        self.expect_value(&rate.value, value_ty, Ty::Scalar, "the rate of a state");
+        self.expect_value(&rate.value, value_ty, Ty::Scalar, law);
     }
 
     /// The type of an expression already checked (its diagnostics were reported then).

@@ -276,6 +276,9 @@ pub fn builtin_function(name: &str) -> Option<(&'static [Ty], Ty)> {
         "distance" => (F2, Scalar),
         // A new state starting at its argument (`let integral = state(0);`).
         "state" => (S1, Scalar),
+        // A sampled state: its period and its value before the first instant
+        // (`let u = sample(0.01, 0);`).
+        "sample" => (S2, Scalar),
         // Contacts of a sphere or a disc on a plane, as links (`join plane and ball with rolling(r)`).
         "rolling" | "rolling_disc" => (S1, Link),
         "sliding" | "sliding_disc" => (S2, Link),

@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 
 use super::shared::{
-    json, prepare_program, report_diagnostics, usage_error, write_output, LibraryArgs,
+    json, prepare_program, refuse_sampled, report_diagnostics, usage_error, write_output,
+    LibraryArgs,
 };
 use lsdc::api::SettingsChanges;
 use lsdc::output::linearization;
@@ -77,6 +78,10 @@ pub fn run(args: &LinearizeArgs) -> ExitCode {
         };
     if !prepared.warnings.is_empty() {
         report_diagnostics(&program, &prepared.warnings, format);
+    }
+    let help = "a sampled controller is not a linear time-invariant system: linearise the mechanism without it, or write its law as a continuous one";
+    if let Err(code) = refuse_sampled(&program, &prepared, "`lsdc linearize`", help, format) {
+        return code;
     }
     let point = match (args.at_time, args.equilibrium) {
         (Some(_), _) => OperatingPoint::EndOfRun,

@@ -258,6 +258,24 @@ pub fn refuse_imposed_motion(
     }
 }
 
+/// E0498, reported, when the program has sampled states (`sample`), which `subject` (a
+/// command, "`lsdc linearize`") does not handle; `help` says what to run instead.
+pub fn refuse_sampled(
+    program: &Program,
+    prepared: &Prepared,
+    subject: &str,
+    help: &str,
+    format: Format,
+) -> Result<(), ExitCode> {
+    match lsdc::dynamics::sampled::refusal(&prepared.model, subject, help) {
+        Some(diagnostic) => {
+            report_diagnostics(program, &[diagnostic], format);
+            Err(ExitCode::from(1))
+        }
+        None => Ok(()),
+    }
+}
+
 /// The values of `--set NAME=VALUE`.
 pub fn parse_sets(sets: &[String]) -> Result<Vec<Override>, ExitCode> {
     sets.iter()

@@ -8,8 +8,8 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 
 use super::shared::{
-    err, json, prepare_program, report_diagnostics, usage_error, usage_error_after_results, Format,
-    LibraryArgs, SampleFormat,
+    err, json, prepare_program, refuse_sampled, report_diagnostics, usage_error,
+    usage_error_after_results, Format, LibraryArgs, SampleFormat,
 };
 use lsdc::api::{
     run_with, Diagnostic, Prepared, Program, Report, RunOptions, SettingsChanges, Simulation,
@@ -139,6 +139,12 @@ pub fn run(args: &SimulateArgs) -> ExitCode {
         }
     }
     if args.compiled {
+        let help = "run without --compiled: the run lands on every sampling instant";
+        let format = args.report;
+        let refused = refuse_sampled(&program, &prepared, "`simulate --compiled`", help, format);
+        if let Err(code) = refused {
+            return code;
+        }
         let native = program.attach_native(&mut prepared).unwrap_or_default();
         prepared.warnings.extend(native);
     }

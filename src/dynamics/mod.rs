@@ -22,6 +22,7 @@ pub mod reduced_model;
 pub mod response;
 pub mod rotors;
 pub mod rows;
+pub mod sampled;
 pub mod states;
 pub mod stops;
 pub mod welds;

@@ -1,7 +1,9 @@
 //! The program's states in the dynamic model (`let s = state(x0); rate s = f;`): each one's
 //! starting value, evaluated with the values of the unknowns (`given`, `--set`), and its rate,
 //! lowered into the efforts' tape (`compiled`) beside the efforts that read it, so that one
-//! evaluation of the tape gives the efforts and the states' rates at a state of the run.
+//! evaluation of the tape gives the efforts and the states' rates at a state of the run. A
+//! sampled state (`let u = sample(period, x0); update u = f;`) is one of them with its period,
+//! its update in place of the rate (`dynamics::sampled`).
 
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
@@ -16,10 +18,20 @@ pub struct StateModel {
     pub name: String,
     /// Its value at the start of a run.
     pub initial: f64,
-    /// Its rate, as written.
+    /// Its rate, as written; for a sampled state, its update (its value after each instant).
     pub rate: Scalar,
     /// The rate's root in the efforts' tape (set when the efforts are compiled).
     pub rate_root: usize,
+    /// For a sampled state (`sample(period, x0)`), its period and where it was made: its rate
+    /// in the run is zero, its update applied at each instant (`simulate::sampling`).
+    pub sampling: Option<Sampling>,
+}
+
+impl StateModel {
+    /// Whether it moves continuously, by its rate (not a sampled state).
+    pub fn continuous(&self) -> bool {
+        self.sampling.is_none()
+    }
 }
 
 /// Why a value the model needs is not a number, in the model's words (E0806, E0807): what,
@@ -38,14 +50,21 @@ pub fn build(
     for (index, state) in mechanism.states.iter().enumerate() {
         let name = state.label(index);
         let Some((rate, _)) = &state.rate else {
-            errors.push(
-                Diagnostic::error("E0488", format!("the state `{name}` has no rate"))
-                    .primary(state.span, "made here")
-                    .help(format!(
-                        "give its derivative: `rate {name} = ...;` (a constant state has `rate {name} = 0;`)"
-                    )),
-            );
+            errors.push(without_law(&name, state.period.is_some(), state.span));
             continue;
+        };
+        let sampling = match &state.period {
+            Some(period) => match self::period(&name, period, unknowns, missing, state.span) {
+                Ok(period) => Some(Sampling {
+                    period,
+                    span: state.span,
+                }),
+                Err(error) => {
+                    errors.push(error);
+                    continue;
+                }
+            },
+            None => None,
         };
         let what = format!("the starting value of state `{name}`");
         match eval(&state.initial, unknowns) {
@@ -54,9 +73,58 @@ pub fn build(
                 initial,
                 rate: rate.clone(),
                 rate_root: 0,
+                sampling,
             }),
             Err(e) => errors.push(missing(e, &what, state.span)),
         }
     }
     states
+}
+
+/// E0488: a state without its law (`rate`, or `update` for a sampled one).
+fn without_law(name: &str, sampled: bool, made: Span) -> Diagnostic {
+    let (message, help) = match sampled {
+        true => (
+            format!("the sampled state `{name}` has no update"),
+            format!("give its value after each sampling instant: `update {name} = ...;` (a held value has `update {name} = {name};`)"),
+        ),
+        false => (
+            format!("the state `{name}` has no rate"),
+            format!("give its derivative: `rate {name} = ...;` (a constant state has `rate {name} = 0;`)"),
+        ),
+    };
+    Diagnostic::error("E0488", message)
+        .primary(made, "made here")
+        .help(help)
+}
+
+/// The sampling of one sampled state.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampling {
+    /// Seconds between two instants; the first is one period after the start.
+    pub period: f64,
+    /// The call `sample(period, x0)` that made the state.
+    pub span: Span,
+}
+
+/// The period of sampled state `name`, a positive number (E0497; `missing` when it is not a
+/// number).
+fn period(
+    name: &str,
+    period: &Scalar,
+    unknowns: &UnknownValues,
+    missing: Missing<'_>,
+    span: Span,
+) -> Result<f64, Diagnostic> {
+    let what = format!("the period of sampled state `{name}`");
+    let value = eval(period, unknowns).map_err(|e| missing(e, &what, span))?;
+    if value > 0.0 && value.is_finite() {
+        return Ok(value);
+    }
+    Err(Diagnostic::error(
+        "E0497",
+        format!("the period of sampled state `{name}` is {value}: it must be a positive number of seconds"),
+    )
+    .primary(span, "sampled here")
+    .help("`sample(0.01, 0)` takes its update every 10 ms and holds 0 until the first instant"))
 }

@@ -223,7 +223,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
-            DeclKind::Drive(rate) if rate.word.name.as_str() == "rate" => {
+            DeclKind::Drive(rate) if matches!(rate.word.name.as_str(), "rate" | "update") => {
                 self.rate_decl(rate, &mut locals)
             }
             DeclKind::Drive(drive) => {
@@ -775,6 +775,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             }
             if ident.name == "state" {
                 return self.new_state(values, span);
+            }
+            if ident.name == "sample" {
+                return self.new_sampled_state(values, span);
             }
             let spans: Vec<Span> = args.iter().map(|a| a.value.span).collect();
             if ident.name == "aim" {

@@ -302,16 +302,21 @@ pub struct Drive {
 
 /// A state: a variable with its own differential equation, integrated with the motion (an
 /// integral of an error, a motor's current, an estimate). `let s = state(x0);` makes it,
-/// `rate s = f;` gives its derivative.
+/// `rate s = f;` gives its derivative; `let u = sample(period, x0);` makes a sampled one,
+/// `update u = f;` gives its value after each sampling instant.
 #[derive(Clone, Debug)]
 pub struct StateVariable {
     /// The name it is first bound to (`integral`, `motor[2]:current`).
     pub name: Option<Name>,
     /// Its value at the start of a run (`x0`).
     pub initial: Scalar,
-    /// Its derivative (`rate s = ...`), and where it was declared.
+    /// Its derivative (`rate s = ...`), or for a sampled state its next value
+    /// (`update s = ...`), and where it was declared.
     pub rate: Option<(Scalar, Span)>,
-    /// The call `state(x0)` that made it.
+    /// For a sampled state (`sample(period, x0)`), its period: its value is held between the
+    /// sampling instants and changes at each one by its `update`.
+    pub period: Option<Scalar>,
+    /// The call `state(x0)` or `sample(period, x0)` that made it.
     pub span: Span,
 }
 

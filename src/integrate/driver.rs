@@ -120,6 +120,10 @@ impl Marching for AdaptiveMarch {
         &self.y
     }
 
+    fn state_mut(&mut self) -> &mut [f64] {
+        &mut self.y
+    }
+
     /// dy/dt at the start (a non-finite one cannot be avoided by a shorter step), the first
     /// step's size, the events' values.
     fn start(&mut self, eval: &mut Evaluator, problem: &Problem) -> Result<(), Halt> {

@@ -20,6 +20,8 @@ pub(super) trait Marching {
     /// The current point of the solution.
     fn time(&self) -> f64;
     fn state(&self) -> &[f64];
+    /// The current state, to change between two steps (then `restart`).
+    fn state_mut(&mut self) -> &mut [f64];
     /// Prepares the first step from the current point, the start (dy/dt there, say).
     fn start(&mut self, eval: &mut Evaluator, problem: &Problem) -> Result<(), Halt>;
     /// Takes one step from the current point (attempts rejected on the way included), landing

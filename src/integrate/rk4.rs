@@ -66,6 +66,10 @@ impl Marching for Rk4March {
         &self.rk4.y
     }
 
+    fn state_mut(&mut self) -> &mut [f64] {
+        &mut self.rk4.y
+    }
+
     /// The events' values at the start.
     fn start(&mut self, eval: &mut Evaluator, _problem: &Problem) -> Result<(), Halt> {
         self.events = EventWatch::new(eval, self.rk4.t, &self.rk4.y)?;

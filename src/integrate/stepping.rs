@@ -175,6 +175,14 @@ impl Integration {
         self.restart = true;
     }
 
+    /// Changes the state at the current point, between two steps (a sampled controller's
+    /// states at its instant): the next step starts the method again from the new state, as
+    /// [`restart`](Integration::restart) does. `y` has the system's dimension.
+    pub fn set_state(&mut self, y: &[f64]) {
+        self.march.state_mut().copy_from_slice(y);
+        self.restart = true;
+    }
+
     /// Delivers the outputs not passed yet at the current state (those after the end).
     pub fn deliver_rest(
         &mut self,

@@ -209,6 +209,9 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     for impact in &report.impacts {
         out += &impact_line(impact);
     }
+    if let Some(sampling) = &report.sampling {
+        out += &sampling_line(sampling);
+    }
     for switch in &report.friction_switches {
         out += &format!(
             "friction at t = {:.12}: `{}` {} at {:.9e}\n",
@@ -364,4 +367,23 @@ pub fn precision(table: &crate::studies::precision::Table) -> String {
         out += &format!("\nRecommended {}\n", recommendation.message);
     }
     out
+}
+
+/// The sampling instants of a run: how many, of which states at which periods, the first and
+/// the last (the JSON report lists each with the values it set).
+fn sampling_line(sampling: &crate::simulate::sampling::SamplingReport) -> String {
+    let states: Vec<String> = (sampling.states.iter().zip(&sampling.periods))
+        .map(|(name, period)| format!("`{name}` every {period} s"))
+        .collect();
+    let instants = &sampling.instants;
+    let span = match (instants.first(), instants.last()) {
+        (Some(first), Some(last)) => format!(", from t = {} to t = {}", first.time, last.time),
+        _ => String::new(),
+    };
+    format!(
+        "sampling: {} instant{} ({}){span}\n",
+        instants.len(),
+        if instants.len() == 1 { "" } else { "s" },
+        states.join(", ")
+    )
 }

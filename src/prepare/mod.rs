@@ -218,6 +218,11 @@ pub fn prepare(
         &coordinates,
     ));
     let settings = program_settings(mechanism, &model, defaults)?;
+    if settings.integrator == Integrator::Symplectic {
+        let help = "choose `rk4`, `dopri5`, `dop853` or `implicit`: their steps land on every sampling instant";
+        let refused = crate::dynamics::sampled::refusal(&model, "the symplectic integrator", help);
+        refused.map_or(Ok(()), |error| Err(vec![error]))?;
+    }
     let outputs = self::outputs::Outputs::compile(mechanism, &model)?;
     let coordinate_names = kinematics.coordinate_names();
     Ok(Prepared {

@@ -13,6 +13,7 @@ pub mod run;
 pub mod run_state;
 mod sample;
 mod sampler;
+pub mod sampling;
 pub mod simulator;
 pub mod stiffness;
 mod summary;

@@ -6,6 +6,7 @@ use serde::Serialize;
 use super::branch;
 use super::constraints::ConstraintReport;
 use super::sample::{MomentumDrift, Sample};
+use super::sampling::SamplingReport;
 use super::stiffness::{self, StiffnessReport};
 use super::summary::Summary;
 use super::system::MechanicalSystem;
@@ -61,6 +62,9 @@ pub struct Report {
     /// The joints' friction switching between slipping and sticking, in time order.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub friction_switches: Vec<Switch>,
+    /// The sampling instants of the program's sampled states (`sample`), in time order.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampling: Option<SamplingReport>,
     /// Where an explicit integrator's steps were found held by its stability region (W0901).
     pub stiffness: Option<StiffnessReport>,
     pub failure: Option<RunFailure>,
@@ -190,6 +194,8 @@ pub(super) struct Ended<'s> {
     pub(super) outputs_off_branch: Vec<f64>,
     pub(super) cpu_seconds: Option<f64>,
     pub(super) wall_seconds: f64,
+    /// The sampling instants passed, with a program's sampled states.
+    pub(super) sampling: Option<SamplingReport>,
 }
 
 /// The report of an ended run: the integrator's work, the energy and momentum the outputs saw,
@@ -266,6 +272,7 @@ pub(super) fn report(
             .and_then(|bound| stiffness::describe(prepared, bound)),
         impacts: std::mem::take(&mut system.state.impacts),
         friction_switches: std::mem::take(&mut system.state.switches),
+        sampling: ended.sampling,
         failure,
         interrupted,
     }

@@ -169,6 +169,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         stiffness: None,
         impacts: Vec::new(),
         friction_switches: Vec::new(),
+        sampling: None,
         failure: Some(RunFailure { time: 0.0, message }),
         interrupted: None,
     };

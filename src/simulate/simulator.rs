@@ -13,6 +13,7 @@ use super::ode::RunOde;
 use super::report::{failure_message, fastest_coordinate, report, Ended, Report, RunFailure};
 use super::sample::Sample;
 use super::sampler::Sampler;
+use super::sampling::SamplingClock;
 use super::summary::Summary;
 use super::system::MechanicalSystem;
 use super::variational::{FixedStep, VariationalMarch};
@@ -61,6 +62,8 @@ pub struct Simulator<'p> {
     cpu_started: Option<f64>,
     /// Why the run stopped, once it did.
     stopped: Option<IntegrationError>,
+    /// The sampling instants of the program's sampled states, which the steps land on.
+    sampling: Option<SamplingClock>,
 }
 
 /// The integrator between two steps: one of the ODE methods, or the variational integrator.
@@ -134,6 +137,7 @@ impl<'p> Simulator<'p> {
             started: Instant::now(),
             cpu_started: thread_cpu_seconds(),
             stopped: None,
+            sampling: SamplingClock::new(model),
         })
     }
 
@@ -330,16 +334,19 @@ impl<'p> Simulator<'p> {
             outputs_off_branch: std::mem::take(&mut self.sampler.unsettled),
             cpu_seconds,
             wall_seconds,
+            sampling: (self.sampling.as_mut()).map(|clock| clock.report(self.system.model)),
         };
         let report = report(self.prepared, &mut self.system, ended);
         (self.samples, report)
     }
 
-    /// One step towards `t_end`, the samples it passes kept.
+    /// One step towards `t_end`, or the next sampling instant before it, the samples it
+    /// passes kept; on an instant, the sampled states updated.
     fn step_towards(&mut self, t_end: f64) -> Result<(), RunFailure> {
         if let Some(stopped) = &self.stopped {
             return Err(self.failure(stopped.time, &stopped.failure));
         }
+        let t_end = (self.sampling.as_ref()).map_or(t_end, |clock| clock.landing(t_end));
         let mut observer = observe_into(&mut self.sampler, &mut self.summary, &mut self.samples);
         let stepped = match &mut self.stepping {
             Stepping::Ode(integration) => {
@@ -354,11 +361,35 @@ impl<'p> Simulator<'p> {
             Stepping::Variational(march) => march.step(&mut self.system, t_end, &mut observer),
         };
         drop(observer);
+        let stepped = stepped.and_then(|()| self.sample_instant());
         stepped.map_err(|error| {
             let failure = self.failure(error.time, &error.failure);
             self.stopped = Some(error);
             failure
         })
+    }
+
+    /// On a sampling instant, the sampled states' updates set in the integrator's state, from
+    /// which it starts again (`sampling`).
+    fn sample_instant(&mut self) -> Result<(), IntegrationError> {
+        let (Some(clock), Stepping::Ode(integration)) = (&mut self.sampling, &mut self.stepping)
+        else {
+            return Ok(());
+        };
+        let t = integration.time();
+        let mut y = integration.state().to_vec();
+        match clock.sample(&mut self.system, t, &mut y) {
+            Ok(true) => integration.set_state(&y),
+            Ok(false) => {}
+            Err(error) => {
+                return Err(IntegrationError {
+                    time: t,
+                    failure: Failure::System(error.to_string()),
+                    stats: Box::new(integration.stats()),
+                })
+            }
+        }
+        Ok(())
     }
 
     /// A failure at `time` in the run's words, with where the run was heading.
@@ -430,7 +461,11 @@ fn features(model: &Model) -> Vec<Feature> {
         (Feature::Mimics, !model.mimics.is_empty()),
         (Feature::Friction, !model.frictions.is_empty()),
         (Feature::Drives, !model.drives.is_empty()),
-        (Feature::States, !model.states.is_empty()),
+        (Feature::States, model.states.iter().any(|s| s.continuous())),
+        (
+            Feature::Sampled,
+            model.states.iter().any(|s| !s.continuous()),
+        ),
         (Feature::Actuators, model.actuation.is_some()),
     ];
     present

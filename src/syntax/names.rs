@@ -29,6 +29,7 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "orientation",
     "distance",
     "state",
+    "sample",
     "rolling",
     "sliding",
     "rolling_disc",

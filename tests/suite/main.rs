@@ -59,6 +59,7 @@ mod robustness;
 mod rolling_disc;
 mod rows;
 mod runs;
+mod sampled;
 mod simulation;
 mod states;
 mod stepping;

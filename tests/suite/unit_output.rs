@@ -51,6 +51,7 @@ mod plot {
                 stiffness: None,
                 impacts: Vec::new(),
                 friction_switches: Vec::new(),
+                sampling: None,
                 failure: None,
                 interrupted: None,
             },

@@ -41,6 +41,8 @@ pub enum SystemError {
     Impact(String),
     /// The rate of the program's state `state` is not finite.
     StateRateNotFinite { state: String },
+    /// The update of the program's sampled state `state` at an instant is not finite.
+    UpdateNotFinite { state: String },
     /// The model read by the actuators' laws has no value: the actuated coordinates leave a
     /// motion with mass free, or the loops fix a combination of them.
     ActuatedUndetermined,
@@ -107,6 +109,10 @@ impl fmt::Display for SystemError {
                 "the disc of the contact `{contact}` fell flat on its plane: every point of its rim touches it there, so the contact has no point and the motion beyond is an impact that rolling and sliding do not model"
             ),
             SystemError::Impact(message) => f.write_str(message),
+            SystemError::UpdateNotFinite { state } => write!(
+                f,
+                "the update of sampled state `{state}` is not finite: its `update` is not a number there (a square root or logarithm of a negative value, a division by zero), or its values grew too large"
+            ),
             SystemError::StateRateNotFinite { state } => write!(
                 f,
                 "the rate of state `{state}` is not finite: its value grew too large, or its `rate` is not a number there (a square root or logarithm of a negative value, a division by zero)"
