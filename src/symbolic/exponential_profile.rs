@@ -14,7 +14,7 @@
 //! ordinary nodes, so that the rate and the acceleration a drive takes are exact, and the
 //! position is the quadrature's. The quadrature: by the symmetry r(τ) = r(1 − τ), R = 2 P(1/2)
 //! and s(τ) = 1 − s(1 − τ), so only P(x) = ∫₀^x r for x ≤ 1/2 is computed, by the composite
-//! Gauss–Legendre rule of [`POINTS`] points on [`PANELS`] equal panels of [0, x] (Davis &
+//! Gauss–Legendre rule of `POINTS` (10) points on `PANELS` (32) equal panels of [0, x] (Davis &
 //! Rabinowitz, *Methods of Numerical Integration*, 2nd ed., 1984, §2.7), the first panel
 //! halved towards 0 ([h/2, h], [h/4, h/2], …): r = exp(−σ (4τ)^−λ …) is smooth but not
 //! analytic at 0, and a panel that touches 0 converges slowly (with σ = 1, λ = 0.2 the 8-point
