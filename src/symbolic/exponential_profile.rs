@@ -10,9 +10,9 @@
 //! ends (for σ, λ > 0), one at the middle over R.
 //!
 //! The position s(τ) = ∫₀^τ r / R has no closed form: it is a node of its own on the
-//! expression pool, whose value is a quadrature and whose derivative is the rate above as
-//! ordinary nodes, so that the rate and the acceleration a drive takes are exact, and the
-//! position is the quadrature's. The quadrature: by the symmetry r(τ) = r(1 − τ), R = 2 P(1/2)
+//! expression pool (`expr`), whose value is a quadrature and whose derivative is the rate
+//! above as ordinary nodes (`Pool::exponential_rate`), so that the rate and the acceleration
+//! a drive takes are exact, and the position is the quadrature's. The quadrature: by the symmetry r(τ) = r(1 − τ), R = 2 P(1/2)
 //! and s(τ) = 1 − s(1 − τ), so only P(x) = ∫₀^x r for x ≤ 1/2 is computed, by the composite
 //! Gauss–Legendre rule of `POINTS` (10) points on `PANELS` (32) equal panels of [0, x] (Davis &
 //! Rabinowitz, *Methods of Numerical Integration*, 2nd ed., 1984, §2.7), the first panel
@@ -24,8 +24,6 @@
 //! σ from 1 to 30 and λ from 0.2 to 2 (tests/suite/references.rs).
 
 use std::sync::OnceLock;
-
-use super::expr::{ExprId, Pool};
 
 /// Gauss–Legendre points per panel.
 pub(crate) const POINTS: usize = 10;
@@ -124,26 +122,6 @@ impl ExponentialProfile {
             true => self.partial(tau) / self.total(),
             false => 1.0 - self.partial(1.0 - tau) / self.total(),
         }
-    }
-
-    /// s'(τ) = r(τ)/R as nodes of `pool`, τ the node `tau` (0 where g ≤ 0, as its derivatives).
-    pub fn rate(self, pool: &mut Pool, tau: ExprId) -> ExprId {
-        let (one, four) = (pool.constant(1.0), pool.constant(4.0));
-        let rest = pool.sub(one, tau);
-        let product = pool.mul(tau, rest);
-        let g = pool.mul(four, product);
-        let minus_lambda = pool.constant(-self.lambda());
-        let inverse_power = pool.pow(g, minus_lambda);
-        let complement = pool.sub(one, g);
-        let f = pool.mul(complement, inverse_power);
-        let minus_sigma = pool.constant(-self.sigma());
-        let exponent = pool.mul(minus_sigma, f);
-        let rate = pool.apply(super::expr::Function::Exp, exponent);
-        let total = pool.constant(self.total());
-        let normalised = pool.div(rate, total);
-        let outside = pool.neg(g);
-        let zero = pool.constant(0.0);
-        pool.select(outside, zero, normalised)
     }
 }
 

@@ -514,8 +514,29 @@ impl Pool {
             Function::Abs => self.div(a, e),
             // A step function: flat between its jumps.
             Function::Floor => self.constant(0.0),
-            Function::ExponentialProfile(profile) => profile.rate(self, a),
+            Function::ExponentialProfile(profile) => self.exponential_rate(profile, a),
         }
+    }
+
+    /// The exponential law's rate s'(τ) = r(τ)/R at the node `tau`, r = exp(−σ (1 − g)/g^λ),
+    /// g = 4τ(1 − τ) (`exponential_profile`); 0 where g ≤ 0, as are its derivatives there.
+    fn exponential_rate(&mut self, profile: ExponentialProfile, tau: ExprId) -> ExprId {
+        let (one, four) = (self.constant(1.0), self.constant(4.0));
+        let rest = self.sub(one, tau);
+        let product = self.mul(tau, rest);
+        let g = self.mul(four, product);
+        let minus_lambda = self.constant(-profile.lambda());
+        let inverse_power = self.pow(g, minus_lambda);
+        let complement = self.sub(one, g);
+        let f = self.mul(complement, inverse_power);
+        let minus_sigma = self.constant(-profile.sigma());
+        let exponent = self.mul(minus_sigma, f);
+        let rate = self.apply(Function::Exp, exponent);
+        let total = self.constant(profile.total());
+        let normalised = self.div(rate, total);
+        let outside = self.neg(g);
+        let zero = self.constant(0.0);
+        self.select(outside, zero, normalised)
     }
 
     /// The operands of a node.

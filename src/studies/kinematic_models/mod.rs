@@ -43,6 +43,3 @@ pub(crate) use second_order::second_order;
 /// A measure below this is a singular configuration (both measures are singular values of
 /// dimensionless matrices, at most about 1: see `Singularity`).
 pub const SINGULAR_TOLERANCE: f64 = 1e-6;
-
-/// Relative size of a singular value counted as zero when the idle motions are set aside.
-const RANK_TOLERANCE: f64 = 1e-9;

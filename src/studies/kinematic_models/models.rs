@@ -5,10 +5,11 @@
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
+use super::error::KinematicsError;
 use super::motion_basis::{motion_basis, MotionBasis};
+use super::output::{Actuation, Output};
 use super::second_order::second_order;
 use super::singular_values::{condition, kth, pseudo_inverse, weakest};
-use super::{Actuation, KinematicsError, Output};
 use crate::dynamics::loops::Constraints;
 use crate::dynamics::model::Model;
 

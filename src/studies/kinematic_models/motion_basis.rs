@@ -5,8 +5,9 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use super::singular_values::{singular, Singular};
-use super::{Actuation, KinematicsError, Output, RANK_TOLERANCE};
+use super::error::KinematicsError;
+use super::output::{Actuation, Output};
+use super::singular_values::{singular, Singular, RANK_TOLERANCE};
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::loops::{self, structure, Constraints, Extent};
 use crate::dynamics::model::Model;

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use super::KinematicsError;
+use super::error::KinematicsError;
 use crate::kinematics::frames::FramePoint;
 use crate::prepare::Prepared;
 use crate::studies::statics::{velocity_index, StaticsError};

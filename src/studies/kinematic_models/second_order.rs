@@ -4,8 +4,9 @@
 
 use nalgebra::DVector;
 
+use super::error::KinematicsError;
 use super::motion_basis::{dimensionless_rows, frame_jacobian, frame_origin, row_scale};
-use super::{KinematicsError, Output};
+use super::output::Output;
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::loops::{self, Extent};
 use crate::dynamics::model::Model;

@@ -3,8 +3,11 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::RANK_TOLERANCE;
 use crate::dynamics::loops;
+
+/// Relative size of a singular value counted as zero (the idle motions set aside, the
+/// pseudo-inverses, the condition numbers).
+pub(super) const RANK_TOLERANCE: f64 = 1e-9;
 
 /// Singular values (largest first) and right singular vectors (columns, same order).
 pub(crate) struct Singular {
