@@ -313,6 +313,7 @@ pub fn reference_law(name: &str) -> Option<LawArguments> {
     Some(match name {
         "linear" | "parabolic" | "cubic" | "quintic" | "harmonic" | "cycloidal" => Between(&[]),
         "trapezoidal" => Between(&["ramp"]),
+        "exponential" => Between(&["sigma", "lambda"]),
         "spline" => Through,
         _ => return None,
     })

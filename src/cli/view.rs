@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::shared::{out, prepare_program, usage_error, Format, LibraryArgs};
+use super::shared::{err, out, prepare_program, usage_error, Format, LibraryArgs};
+use super::workspace::{check_sampling, sample_workspace, Sampling};
 use lsdc::view::scene::read_results;
 use lsdc::view::{server, Viewer};
 
@@ -27,9 +28,24 @@ pub struct ViewArgs {
     /// The port on 127.0.0.1 to serve on (0: any free port).
     #[arg(long, default_value_t = 8000)]
     port: u16,
+    /// Show the workspace of this frame's origin as a layer, sampled as `lsdc workspace
+    /// --point FRAME` samples it (with the options below).
+    #[arg(long, value_name = "FRAME")]
+    workspace: Option<String>,
+    #[command(flatten)]
+    sampling: Sampling,
 }
 
 pub fn run(args: &ViewArgs) -> ExitCode {
+    if args.workspace.is_none() && args.sampling.given() {
+        return usage_error(
+            "`--actuate`, `--range` and `--positions` sample a workspace: give `--workspace FRAME`",
+        );
+    }
+    let request = match check_sampling(&args.sampling) {
+        Ok(request) => request,
+        Err(code) => return code,
+    };
     let changes = Default::default();
     let (program, prepared) = match prepare_program(
         &args.file,
@@ -48,10 +64,21 @@ pub fn run(args: &ViewArgs) -> ExitCode {
         .file
         .file_stem()
         .map_or("mechanism".into(), |s| s.to_string_lossy().to_string());
+    let sampled = match &args.workspace {
+        Some(point) => match sample_workspace(&request, point, &mechanism, &prepared) {
+            Ok(sampled) => Some(sampled),
+            Err(code) => return code,
+        },
+        None => None,
+    };
     let mut viewer = match Viewer::new(mechanism, prepared, &title) {
         Ok(v) => v,
         Err(message) => return usage_error(&message),
     };
+    if let Some(sampled) = sampled {
+        err(&sampled.summary());
+        viewer.show_workspace(&sampled.slices());
+    }
     if let Some(path) = &args.results {
         let name = path.display().to_string();
         let recorded = std::fs::read_to_string(path)

@@ -8,7 +8,9 @@ use std::process::ExitCode;
 use super::shared::{
     err, json, prepare_file, usage_error, write_output, Format, LibraryArgs, SampleFormat,
 };
-use lsdc::output::workspace_plot::{plot, SlicePoint, Slices};
+use lsdc::elab::mechanism::Mechanism;
+use lsdc::output::workspace_plot::{plot, Slices};
+use lsdc::prepare::Prepared;
 use lsdc::studies::kinematic_models::{actuation, Output, OutputKind, SINGULAR_TOLERANCE};
 use lsdc::studies::workspace::{ranges, sample, to_csv, Workspace};
 use lsdc::studies::workspace_positions::{
@@ -26,6 +28,22 @@ pub struct WorkspaceArgs {
     /// The frame whose origin's workspace is sampled (a frame the program names, or a body).
     #[arg(long, value_name = "FRAME")]
     point: String,
+    #[command(flatten)]
+    sampling: Sampling,
+    /// Draw slices of the reachable set (dexterity, boundary, singular loci) to this file
+    /// (`.svg` or `.png`).
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+    #[arg(long, value_enum, default_value = "csv")]
+    format: SampleFormat,
+    /// Write the samples to this file instead of standard output.
+    #[arg(short = 'o', long = "out")]
+    out: Option<PathBuf>,
+}
+
+/// How a workspace is sampled: shared by `lsdc workspace` and `lsdc view --workspace`.
+#[derive(clap::Args)]
+pub struct Sampling {
     /// An actuated coordinate, `join.coordinate` (repeatable; for a tree, every coordinate
     /// without it).
     #[arg(long = "actuate", value_name = "JOIN.COORDINATE")]
@@ -38,20 +56,11 @@ pub struct WorkspaceArgs {
     /// coordinates within their ranges.
     #[arg(long, value_name = "BOX", allow_hyphen_values = true)]
     positions: Option<String>,
-    /// Draw slices of the reachable set (dexterity, boundary, singular loci) to this file
-    /// (`.svg` or `.png`).
-    #[arg(long, value_name = "FILE")]
-    plot: Option<PathBuf>,
     /// Cells per actuated coordinate (per axis with `--positions`).
     #[arg(long, default_value_t = 12)]
     samples: usize,
     #[arg(long, default_value_t = SINGULAR_TOLERANCE)]
     tolerance: f64,
-    #[arg(long, value_enum, default_value = "csv")]
-    format: SampleFormat,
-    /// Write the samples to this file instead of standard output.
-    #[arg(short = 'o', long = "out")]
-    out: Option<PathBuf>,
 }
 
 /// `NAME=LOW:HIGH`.
@@ -92,61 +101,133 @@ fn parse_box(text: &str) -> Result<PositionBox, String> {
     Ok(positions)
 }
 
-/// The slices of a workspace sampled over the actuated coordinates.
-fn joint_slices(workspace: &Workspace) -> Slices {
-    Slices {
-        title: format!(
-            "workspace of `{}` over the actuated coordinates",
-            workspace.point
-        ),
-        points: (workspace.samples.iter())
-            .filter_map(|s| {
-                s.point.map(|position| SlicePoint {
-                    position,
-                    dexterity: s.dexterity,
-                    boundary: s.boundary,
-                })
-            })
-            .collect(),
-        singular: workspace.crossings.iter().map(|c| c.point).collect(),
+/// A sampled workspace, over the actuated coordinates or a box of positions.
+pub enum Sampled {
+    Joints(Workspace),
+    Positions(PositionWorkspace),
+}
+
+impl Sampled {
+    pub fn slices(&self) -> Slices {
+        match self {
+            Sampled::Joints(workspace) => Slices::from(workspace),
+            Sampled::Positions(workspace) => Slices::from(workspace),
+        }
+    }
+
+    /// The one-line summary written to standard error.
+    pub fn summary(&self) -> String {
+        match self {
+            Sampled::Positions(workspace) => format!(
+                "workspace of `{}` over a box of positions: volume {:.6e} ({} of {} positions reachable, {} on the boundary)\n",
+                workspace.point,
+                workspace.volume,
+                workspace.reachable,
+                workspace.samples.len(),
+                workspace.boundary
+            ),
+            Sampled::Joints(workspace) => format!(
+                "workspace of `{}`: volume {:.6e} ({} of {} samples reachable, {} on the boundary, {} singular crossings)\n",
+                workspace.point,
+                workspace.volume,
+                workspace.reachable,
+                workspace.samples.len(),
+                workspace.boundary,
+                workspace.crossings.len()
+            ),
+        }
+    }
+
+    fn text(&self, format: SampleFormat) -> String {
+        match (self, format) {
+            (Sampled::Positions(workspace), SampleFormat::Csv) => positions_to_csv(workspace),
+            (Sampled::Positions(workspace), SampleFormat::Json) => json(workspace),
+            (Sampled::Joints(workspace), SampleFormat::Csv) => to_csv(workspace),
+            (Sampled::Joints(workspace), SampleFormat::Json) => json(workspace),
+        }
     }
 }
 
-/// The slices of a workspace sampled over a box of positions.
-fn position_slices(workspace: &PositionWorkspace) -> Slices {
-    Slices {
-        title: format!("workspace of `{}` over a box of positions", workspace.point),
-        points: (workspace.samples.iter())
-            .filter(|s| s.reachable)
-            .map(|s| SlicePoint {
-                position: s.point,
-                dexterity: s.dexterity,
-                boundary: s.boundary,
-            })
-            .collect(),
-        singular: (workspace.samples.iter())
-            .filter(|s| s.reachable && s.dexterity.is_none())
-            .map(|s| s.point)
-            .collect(),
+impl Sampling {
+    /// Whether any option of the sampling's own is given (the coordinates, ranges or box).
+    pub fn given(&self) -> bool {
+        !self.actuated.is_empty() || !self.ranges.is_empty() || self.positions.is_some()
+    }
+}
+
+/// The sampling's arguments read and checked, before the program is (usage errors first).
+pub struct Request<'a> {
+    sampling: &'a Sampling,
+    given: Vec<(String, f64, f64)>,
+    positions: Option<PositionBox>,
+}
+
+pub fn check_sampling(sampling: &Sampling) -> Result<Request<'_>, ExitCode> {
+    if sampling.samples == 0 || !(sampling.tolerance.is_finite() && sampling.tolerance > 0.0) {
+        return Err(usage_error(
+            "`--samples` and `--tolerance` must be positive",
+        ));
+    }
+    let given = (sampling.ranges.iter())
+        .map(|r| parse_range(r))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|message| usage_error(&message))?;
+    let positions = (sampling.positions.as_deref().map(parse_box).transpose())
+        .map_err(|message| usage_error(&message))?;
+    Ok(Request {
+        sampling,
+        given,
+        positions,
+    })
+}
+
+/// Samples the workspace of the frame `point` of a prepared program.
+pub fn sample_workspace(
+    request: &Request,
+    point: &str,
+    mechanism: &Mechanism,
+    prepared: &Prepared,
+) -> Result<Sampled, ExitCode> {
+    let Request {
+        sampling,
+        given,
+        positions,
+    } = request;
+    let frame = lsdc::kinematics::frames::resolve(mechanism, &prepared.kinematics, point)
+        .map_err(|message| usage_error(&message))?;
+    let output = Output {
+        frame,
+        kind: OutputKind::Point,
+    };
+    let actuation =
+        actuation(prepared, &sampling.actuated).map_err(|error| usage_error(&error.to_string()))?;
+    let ranges = ranges(prepared, &actuation, given).map_err(|message| usage_error(&message))?;
+    let failed = |error: lsdc::studies::kinematic_models::KinematicsError| {
+        err(&format!("error: {error}\n"));
+        ExitCode::from(1)
+    };
+    let (samples, tolerance) = (sampling.samples, sampling.tolerance);
+    match positions {
+        Some(positions) => sample_positions(
+            prepared, &actuation, &output, &ranges, positions, samples, tolerance,
+        )
+        .map(Sampled::Positions)
+        .map_err(failed),
+        None => {
+            if ranges.len() > 3 {
+                return Err(usage_error("sample at most three actuated coordinates"));
+            }
+            sample(prepared, &actuation, &output, &ranges, samples, tolerance)
+                .map(Sampled::Joints)
+                .map_err(failed)
+        }
     }
 }
 
 pub fn run(args: &WorkspaceArgs) -> ExitCode {
-    if args.samples == 0 || !(args.tolerance.is_finite() && args.tolerance > 0.0) {
-        return usage_error("`--samples` and `--tolerance` must be positive");
-    }
-    let given = match args
-        .ranges
-        .iter()
-        .map(|r| parse_range(r))
-        .collect::<Result<Vec<_>, _>>()
-    {
-        Ok(given) => given,
-        Err(message) => return usage_error(&message),
-    };
-    let positions = match args.positions.as_deref().map(parse_box).transpose() {
-        Ok(positions) => positions,
-        Err(message) => return usage_error(&message),
+    let request = match check_sampling(&args.sampling) {
+        Ok(request) => request,
+        Err(code) => return code,
     };
     if let Some(path) = &args.plot {
         if let Err(error) = lsdc::output::plot::check_path(path) {
@@ -161,88 +242,12 @@ pub fn run(args: &WorkspaceArgs) -> ExitCode {
     let Ok(mechanism) = program.mechanism() else {
         return ExitCode::from(1);
     };
-    let frame =
-        match lsdc::kinematics::frames::resolve(mechanism, &prepared.kinematics, &args.point) {
-            Ok(frame) => frame,
-            Err(message) => return usage_error(&message),
-        };
-    let output = Output {
-        frame,
-        kind: OutputKind::Point,
-    };
-    let actuation = match actuation(&prepared, &args.actuated) {
-        Ok(actuation) => actuation,
-        Err(error) => return usage_error(&error.to_string()),
-    };
-    let ranges = match ranges(&prepared, &actuation, &given) {
-        Ok(ranges) => ranges,
-        Err(message) => return usage_error(&message),
-    };
-    let failed = |error: lsdc::studies::kinematic_models::KinematicsError| {
-        err(&format!("error: {error}\n"));
-        ExitCode::from(1)
-    };
-    let (text, slices, summary) = match positions {
-        Some(positions) => {
-            let workspace = match sample_positions(
-                &prepared,
-                &actuation,
-                &output,
-                &ranges,
-                &positions,
-                args.samples,
-                args.tolerance,
-            ) {
-                Ok(workspace) => workspace,
-                Err(error) => return failed(error),
-            };
-            let summary = format!(
-                "workspace of `{}` over a box of positions: volume {:.6e} ({} of {} positions reachable, {} on the boundary)\n",
-                workspace.point,
-                workspace.volume,
-                workspace.reachable,
-                workspace.samples.len(),
-                workspace.boundary
-            );
-            let text = match args.format {
-                SampleFormat::Csv => positions_to_csv(&workspace),
-                SampleFormat::Json => json(&workspace),
-            };
-            (text, position_slices(&workspace), summary)
-        }
-        None => {
-            if ranges.len() > 3 {
-                return usage_error("sample at most three actuated coordinates");
-            }
-            let workspace = match sample(
-                &prepared,
-                &actuation,
-                &output,
-                &ranges,
-                args.samples,
-                args.tolerance,
-            ) {
-                Ok(workspace) => workspace,
-                Err(error) => return failed(error),
-            };
-            let summary = format!(
-                "workspace of `{}`: volume {:.6e} ({} of {} samples reachable, {} on the boundary, {} singular crossings)\n",
-                workspace.point,
-                workspace.volume,
-                workspace.reachable,
-                workspace.samples.len(),
-                workspace.boundary,
-                workspace.crossings.len()
-            );
-            let text = match args.format {
-                SampleFormat::Csv => to_csv(&workspace),
-                SampleFormat::Json => json(&workspace),
-            };
-            (text, joint_slices(&workspace), summary)
-        }
+    let sampled = match sample_workspace(&request, &args.point, mechanism, &prepared) {
+        Ok(sampled) => sampled,
+        Err(code) => return code,
     };
     if let Some(path) = &args.plot {
-        if let Err(error) = plot(&slices, path) {
+        if let Err(error) = plot(&sampled.slices(), path) {
             err(&format!(
                 "error: cannot plot to `{}`: {error}\n",
                 path.display()
@@ -250,9 +255,9 @@ pub fn run(args: &WorkspaceArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     }
-    let code = write_output(args.out.as_deref(), &text);
+    let code = write_output(args.out.as_deref(), &sampled.text(args.format));
     if code == ExitCode::SUCCESS {
-        err(&summary);
+        err(&sampled.summary());
     }
     code
 }

@@ -123,6 +123,7 @@ fn profile(
             sub(tau, &arith('/', &sine, &n(2.0 * pi)))
         }
         "trapezoidal" => trapezoid(tau, &extra[0], duration, spans[5])?,
+        "exponential" => exponential(tau, &extra[0], &extra[1], [spans[5], spans[6]])?,
         _ => return Err(internal(format!("no profile for `{name}`"))),
     })
 }
@@ -161,6 +162,39 @@ fn trapezoid(tau: &Scalar, ramp: &Scalar, duration: &Scalar, ramp_span: Span) ->
     let braking = arith('-', tau, &arith('-', &n(1.0), &alpha));
     let cruising_or_accelerating = select(&arith('-', tau, &alpha), &cruising, &accelerating);
     Ok(select(&braking, &decelerating, &cruising_or_accelerating))
+}
+
+/// The exponential law's profile (the Delta seed's, Biagiotti & Melchiorri §2.3): its velocity
+/// is v_c exp(−σ (2τ')²/|1 − (2τ')²|^λ) with τ' = τ − 1/2, its position a quadrature node of
+/// the pool (`symbolic::exponential_profile`). σ and λ are numbers (they decide the
+/// normalisation, computed once), both positive (E0650): with λ = 0 the velocity would not
+/// vanish at the ends, with σ ≤ 0 it would not be a law between rests.
+fn exponential(tau: &Scalar, sigma: &Scalar, lambda: &Scalar, spans: [Span; 2]) -> Result<Scalar> {
+    for (value, span, name) in [(sigma, spans[0], "σ"), (lambda, spans[1], "λ")] {
+        match constant(value) {
+            Some(v) if v > 0.0 && v.is_finite() => {}
+            Some(v) => {
+                return Err(Diagnostic::error(
+                    "E0650",
+                    format!("`exponential` with {name} = {}: σ and λ are positive", shown(v)),
+                )
+                .primary(span, "not positive")
+                .help("the velocity v_c exp(-σ (2τ')²/|1 - (2τ')²|^λ) vanishes at both ends when σ > 0 and λ > 0"))
+            }
+            None => {
+                return Err(Diagnostic::error(
+                    "E0650",
+                    format!("the {name} of an `exponential` law must be a number"),
+                )
+                .primary(span, "not a number")
+                .help("write σ and λ with numbers and constants: they decide the law's normalisation, computed once"))
+            }
+        }
+    }
+    Ok(std::sync::Arc::new(super::value::SExpr::call(
+        "exponential_profile",
+        vec![tau.clone(), sigma.clone(), lambda.clone()],
+    )))
 }
 
 /// The cubic spline through via points (t_k, q_k) at rest at both ends: continuous position,

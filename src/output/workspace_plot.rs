@@ -9,6 +9,9 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use crate::studies::workspace::Workspace;
+use crate::studies::workspace_positions::PositionWorkspace;
+
 use super::plot::{write_figure, Figure, PlotError, Render, CAPTION_SIZE, LABEL_SIZE};
 
 /// A reachable position and what the slices show of it.
@@ -45,8 +48,42 @@ fn extent(values: impl Iterator<Item = f64>) -> (f64, f64) {
     })
 }
 
+/// The colours of the dexterity, shared by the slices and the viewer's workspace layer: a
+/// logarithmic scale over the dexterities of the points, from yellow (the best conditioned) to
+/// purple (the worst), through green and blue as viridis runs; grey where the dexterity is
+/// infinite (a singular sample).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DexterityScale {
+    /// log₁₀ of the smallest and largest finite dexterity (`None`: no finite one).
+    pub logs: Option<(f64, f64)>,
+}
+
+impl DexterityScale {
+    /// The scale spanning the dexterities of `points`.
+    pub fn of(points: &[SlicePoint]) -> DexterityScale {
+        let logs = extent(points.iter().filter_map(|p| p.dexterity).map(f64::log10));
+        DexterityScale {
+            logs: logs.0.is_finite().then_some(logs),
+        }
+    }
+
+    /// The smallest and largest dexterity of the scale.
+    pub fn range(&self) -> Option<(f64, f64)> {
+        self.logs.map(|(lo, hi)| (10f64.powf(lo), 10f64.powf(hi)))
+    }
+
+    /// The colour (red, green, blue) of a dexterity.
+    pub fn colour(&self, dexterity: Option<f64>) -> [u8; 3] {
+        const SINGULAR: [u8; 3] = [160, 160, 160];
+        match (dexterity, self.logs) {
+            (Some(d), Some((lo, hi))) => viridis((d.log10() - lo) / (hi - lo).max(1e-12)),
+            _ => SINGULAR,
+        }
+    }
+}
+
 /// A colour from yellow (0) to purple (1) through green and blue, as viridis runs.
-fn colour(t: f64) -> RGBColor {
+fn viridis(t: f64) -> [u8; 3] {
     const STOPS: [(f64, f64, f64); 5] = [
         (253.0, 231.0, 37.0),
         (94.0, 201.0, 98.0),
@@ -59,7 +96,50 @@ fn colour(t: f64) -> RGBColor {
     let f = t - k as f64;
     let mix = |a: f64, b: f64| (a + (b - a) * f).round() as u8;
     let (a, b) = (STOPS[k], STOPS[k + 1]);
-    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    [mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2)]
+}
+
+impl From<&Workspace> for Slices {
+    /// The slices of a workspace sampled over the actuated coordinates.
+    fn from(workspace: &Workspace) -> Slices {
+        Slices {
+            title: format!(
+                "workspace of `{}` over the actuated coordinates",
+                workspace.point
+            ),
+            points: (workspace.samples.iter())
+                .filter_map(|s| {
+                    s.point.map(|position| SlicePoint {
+                        position,
+                        dexterity: s.dexterity,
+                        boundary: s.boundary,
+                    })
+                })
+                .collect(),
+            singular: workspace.crossings.iter().map(|c| c.point).collect(),
+        }
+    }
+}
+
+impl From<&PositionWorkspace> for Slices {
+    /// The slices of a workspace sampled over a box of positions.
+    fn from(workspace: &PositionWorkspace) -> Slices {
+        Slices {
+            title: format!("workspace of `{}` over a box of positions", workspace.point),
+            points: (workspace.samples.iter())
+                .filter(|s| s.reachable)
+                .map(|s| SlicePoint {
+                    position: s.point,
+                    dexterity: s.dexterity,
+                    boundary: s.boundary,
+                })
+                .collect(),
+            singular: (workspace.samples.iter())
+                .filter(|s| s.reachable && s.dexterity.is_none())
+                .map(|s| s.point)
+                .collect(),
+        }
+    }
 }
 
 impl Figure for Slices {
@@ -82,20 +162,13 @@ impl Figure for Slices {
         // Equal margins around the reach, the same in x and y (the slices are to scale).
         let half = 0.55 * (x_range.1 - x_range.0).max(y_range.1 - y_range.0).max(1e-9);
         let centre = (0.5 * (x_range.0 + x_range.1), 0.5 * (y_range.0 + y_range.1));
-        let logs = extent(
-            (self.points.iter())
-                .filter_map(|p| p.dexterity)
-                .map(f64::log10),
-        );
-        let span = (logs.1 - logs.0).max(1e-12);
-        let caption = match logs.0.is_finite() {
-            true => format!(
-                "{}: dexterity from {:.3} (yellow) to {:.3} (purple), boundary ringed, singular loci ×",
-                self.title,
-                10f64.powf(logs.0),
-                10f64.powf(logs.1)
+        let scale = DexterityScale::of(&self.points);
+        let caption = match scale.range() {
+            Some((best, worst)) => format!(
+                "{}: dexterity from {best:.3} (yellow) to {worst:.3} (purple), boundary ringed, singular loci ×",
+                self.title
             ),
-            false => format!("{}: boundary ringed, singular loci ×", self.title),
+            None => format!("{}: boundary ringed, singular loci ×", self.title),
         };
         let root = root
             .titled(&caption, render.font(CAPTION_SIZE * 0.8))
@@ -135,9 +208,8 @@ impl Figure for Slices {
             let at = |p: &[f64; 3]| (p[0], p[1]);
             chart
                 .draw_series(in_slab.iter().map(|p| {
-                    let fill = p.dexterity.map_or(RGBColor(160, 160, 160), |d| {
-                        colour((d.log10() - logs.0) / span)
-                    });
+                    let [red, green, blue] = scale.colour(p.dexterity);
+                    let fill = RGBColor(red, green, blue);
                     Circle::new(at(&p.position), px(3.0), fill.filled())
                 }))
                 .map_err(error)?;

@@ -7,6 +7,8 @@
 
 use std::collections::HashMap;
 
+pub use super::exponential_profile::ExponentialProfile;
+
 /// An expression: an index into its `Pool`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ExprId(u32);
@@ -60,6 +62,9 @@ pub enum Function {
     Abs,
     /// The largest integer not above the argument; its derivative is 0 wherever it exists.
     Floor,
+    /// The normalised profile of the exponential law of motion, a quadrature (see
+    /// `exponential_profile`); its derivative is its rate, as ordinary nodes.
+    ExponentialProfile(ExponentialProfile),
 }
 
 impl Function {
@@ -94,6 +99,7 @@ impl Function {
             Function::Log => "log",
             Function::Abs => "abs",
             Function::Floor => "floor",
+            Function::ExponentialProfile(_) => "exponential_profile",
         }
     }
 
@@ -110,6 +116,7 @@ impl Function {
             Function::Log => x.ln(),
             Function::Abs => x.abs(),
             Function::Floor => x.floor(),
+            Function::ExponentialProfile(profile) => profile.value(x),
         }
     }
 }
@@ -131,6 +138,11 @@ impl Pool {
 
     pub fn node(&self, id: ExprId) -> Node {
         self.nodes[id.0 as usize]
+    }
+
+    /// Whether a node is the exponential law's profile (code emitters then define it).
+    pub fn uses_exponential_profile(&self) -> bool {
+        (self.nodes.iter()).any(|n| matches!(n, Node::Apply(Function::ExponentialProfile(_), _)))
     }
 
     /// Number of distinct nodes in the pool.
@@ -502,7 +514,29 @@ impl Pool {
             Function::Abs => self.div(a, e),
             // A step function: flat between its jumps.
             Function::Floor => self.constant(0.0),
+            Function::ExponentialProfile(profile) => self.exponential_rate(profile, a),
         }
+    }
+
+    /// The exponential law's rate s'(τ) = r(τ)/R at the node `tau`, r = exp(−σ (1 − g)/g^λ),
+    /// g = 4τ(1 − τ) (`exponential_profile`); 0 where g ≤ 0, as are its derivatives there.
+    fn exponential_rate(&mut self, profile: ExponentialProfile, tau: ExprId) -> ExprId {
+        let (one, four) = (self.constant(1.0), self.constant(4.0));
+        let rest = self.sub(one, tau);
+        let product = self.mul(tau, rest);
+        let g = self.mul(four, product);
+        let minus_lambda = self.constant(-profile.lambda());
+        let inverse_power = self.pow(g, minus_lambda);
+        let complement = self.sub(one, g);
+        let f = self.mul(complement, inverse_power);
+        let minus_sigma = self.constant(-profile.sigma());
+        let exponent = self.mul(minus_sigma, f);
+        let rate = self.apply(Function::Exp, exponent);
+        let total = self.constant(profile.total());
+        let normalised = self.div(rate, total);
+        let outside = self.neg(g);
+        let zero = self.constant(0.0);
+        self.select(outside, zero, normalised)
     }
 
     /// The operands of a node.

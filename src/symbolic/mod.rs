@@ -9,6 +9,7 @@ pub mod articulated;
 mod closure;
 pub mod emit;
 pub mod equations;
+pub mod exponential_profile;
 pub mod expr;
 mod forward;
 mod generator;

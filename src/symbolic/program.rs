@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use super::expr::{ExprId, Function, Pool};
+use super::expr::{ExponentialProfile, ExprId, Function, Pool};
 use crate::elab::value::SExpr;
 
 /// A call the pool cannot express: another number of arguments than the function takes, or a
@@ -95,7 +95,7 @@ fn lower_call<L: Lower + ?Sized>(
 ) -> Result<ExprId, L::Error> {
     let arity = match name {
         "atan2" => 2,
-        "select" => 3,
+        "select" | "exponential_profile" => 3,
         _ => 1,
     };
     if args.len() != arity {
@@ -110,6 +110,21 @@ fn lower_call<L: Lower + ?Sized>(
         "select" => {
             let (high, low) = (lowering.lower(&args[1])?, lowering.lower(&args[2])?);
             lowering.pool().select(x, high, low)
+        }
+        // The exponential law's profile of τ, its σ and λ numbers (checked where it is written).
+        "exponential_profile" => {
+            let (sigma, lambda) = (lowering.lower(&args[1])?, lowering.lower(&args[2])?);
+            let pool = lowering.pool();
+            let (Some(sigma), Some(lambda)) = (pool.as_constant(sigma), pool.as_constant(lambda))
+            else {
+                return Err(
+                    MalformedCall("an exponential law whose σ or λ is not a number").into(),
+                );
+            };
+            pool.apply(
+                Function::ExponentialProfile(ExponentialProfile::new(sigma, lambda)),
+                x,
+            )
         }
         "derivative" => {
             let time = lowering.leaf(&SExpr::Time)?;

@@ -44,6 +44,7 @@ pub const BUILTIN_NAMES: &[&str] = &[
     "harmonic",
     "cycloidal",
     "trapezoidal",
+    "exponential",
     "spline",
     "mass_matrix",
     "bias",

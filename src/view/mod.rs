@@ -4,6 +4,7 @@
 pub mod page;
 pub mod scene;
 pub mod server;
+pub mod workspace_layer;
 
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
@@ -66,6 +67,11 @@ impl Viewer {
         let recorded = Recorded::from(&simulation);
         animation(&self.mechanism, &self.prepared, &recorded)
             .map_err(|e| crate::kinematics::eval::describe(&e, &self.mechanism))
+    }
+
+    /// Shows the workspace sampled in `slices` as a layer of the scene.
+    pub fn show_workspace(&mut self, slices: &crate::output::workspace_plot::Slices) {
+        self.scene.workspace = Some(slices.into());
     }
 
     /// The page, standalone (`live` false) or served.

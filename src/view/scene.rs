@@ -15,6 +15,8 @@ use crate::prepare::Prepared;
 use crate::simulate::run::Simulation;
 use crate::spatial::Pose;
 
+use super::workspace_layer::WorkspaceLayer;
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Scene {
     pub title: String,
@@ -27,6 +29,8 @@ pub struct Scene {
     pub coordinate_names: Vec<String>,
     /// The bodies' poses in that configuration.
     pub poses: Vec<[f64; 7]>,
+    /// The workspace of a point, when asked for (`lsdc view --workspace`).
+    pub workspace: Option<WorkspaceLayer>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -175,6 +179,7 @@ pub fn scene(mechanism: &Mechanism, prepared: &Prepared, title: &str) -> Result<
         poses: body_poses(model, &prepared.coordinates)?,
         coordinates: prepared.coordinates.clone(),
         coordinate_names: prepared.coordinate_names.clone(),
+        workspace: None,
     })
 }
 

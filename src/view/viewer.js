@@ -57,6 +57,8 @@
     bounds.expandByPoint(worldPoint(scene.poses[i], [0, 0, 0]));
     body.points.forEach((p) => bounds.expandByPoint(worldPoint(scene.poses[i], p)));
   });
+  // The workspace's points are in view too.
+  if (scene.workspace) scene.workspace.points.forEach((p) => bounds.expandByPoint(new THREE.Vector3(...p)));
   const centre = bounds.getCenter(new THREE.Vector3());
   const radius = Math.max(bounds.getSize(new THREE.Vector3()).length() / 2, 0.05);
   const thickness = radius * 0.025;
@@ -151,6 +153,50 @@
     frameHelpers.push(helper);
     groups[frame.body].add(helper);
   });
+
+  // The workspace (`lsdc view --workspace`): its reachable points coloured by dexterity (the
+  // colours come with the scene, on the scale of `lsdc workspace --plot`), its boundary and its
+  // singular loci, each a layer of dots of a constant size on the screen.
+  const workspaceLayers = {};
+  function dots(points, size, colour, colours) {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute("position", new THREE.Float32BufferAttribute(points.flat(), 3));
+    const material = new THREE.PointsMaterial({ size, sizeAttenuation: false });
+    if (colours) {
+      // The scene's colours are sRGB; three.js keeps vertex colours linear.
+      const linear = colours.flatMap(([r, g, b]) => new THREE.Color().setRGB(r / 255, g / 255, b / 255, THREE.SRGBColorSpace).toArray());
+      geometry.setAttribute("color", new THREE.Float32BufferAttribute(linear, 3));
+      material.vertexColors = true;
+    } else {
+      material.color = new THREE.Color(colour);
+    }
+    const layer = new THREE.Points(geometry, material);
+    world.add(layer);
+    return layer;
+  }
+  const workspace = scene.workspace;
+  document.getElementById("workspace-tools").style.display = workspace ? "" : "none";
+  if (workspace) {
+    workspaceLayers.workspace = dots(workspace.points, 6, null, workspace.colours);
+    workspaceLayers.boundary = dots(workspace.boundary.map((k) => workspace.points[k]), 8, 0x000000, null);
+    workspaceLayers.singular = dots(workspace.singular, 10, 0xd62728, null);
+    workspaceLayers.boundary.visible = false;
+    const [best, worst] = workspace.dexterity || [null, null];
+    document.getElementById("workspace-scale").textContent = workspace.title + (best === null ? "" :
+      ": dexterity from " + best.toPrecision(4) + " (yellow) to " + worst.toPrecision(4) + " (purple), grey where singular");
+    status.workspace = { points: workspace.points.length, boundary: workspace.boundary.length, singular: workspace.singular.length };
+  }
+  const showLayers = () => {
+    if (!status.workspace) return;
+    Object.entries(workspaceLayers).forEach(([name, layer]) => { status.workspace[name + "_shown"] = layer.visible; });
+  };
+  [["show-workspace", "workspace"], ["show-boundary", "boundary"], ["show-singular", "singular"]].forEach(([id, name]) => {
+    document.getElementById(id).addEventListener("change", (e) => {
+      if (workspaceLayers[name]) workspaceLayers[name].visible = e.target.checked;
+      showLayers();
+    });
+  });
+  showLayers();
 
   status.bodies = scene.bodies.length;
   status.joints = scene.joints.length;
@@ -474,6 +520,11 @@
   const speed = document.getElementById("speed");
   if (Array.from(speed.options).some((o) => o.value === params.get("speed"))) speed.value = params.get("speed");
   if (params.get("play") === "1") setPlaying(true);
+  // `?workspace=0`, `?boundary=1`, `?singular=0`: the workspace's layers shown or not.
+  ["workspace", "boundary", "singular"].forEach((name) => {
+    const box = document.getElementById("show-" + name);
+    if (params.has(name) && box.checked !== (params.get(name) === "1")) box.click();
+  });
   status.ready = true;
   report();
   if (params.get("drag-method")) document.getElementById("drag-method").value = params.get("drag-method");

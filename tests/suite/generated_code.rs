@@ -668,3 +668,26 @@ fn generated_c_of_every_example_compiles_without_warnings() {
     let _ = std::fs::remove_dir_all(&dir);
     println!("{} examples: C without warnings", examples.len());
 }
+
+/// A torque on the exponential law of motion (a quadrature node of the pool): the generated
+/// Rust and C define `exponential_profile` with lsdc's rule, and give the equations' values at
+/// states inside the law (its times from −1 to 1, the states' times in [−1, 1)).
+#[test]
+fn generated_code_evaluates_the_exponential_law_as_lsdc_does() {
+    let path = "tests/fixtures/exponential_torque.lsd";
+    let eq = equations_of(path);
+    assert!(eq.pool.uses_exponential_profile());
+    let states = states(&eq, 6);
+    let output = build_and_run_rust("exponential_torque", &eq, &states);
+    let (values, _) = compare(&eq, &states, &output, "Rust for the exponential law");
+    println!("Rust: equations within {values:.1e}");
+    let Some(compiler) = c_compiler() else {
+        crate::common::skip(
+            "no C compiler found (CC, cc, gcc, clang), the generated C is not checked",
+        );
+        return;
+    };
+    let output = build_and_run_c(&compiler, "exponential_torque", &eq, &states);
+    let (values, _) = compare(&eq, &states, &output, "C for the exponential law");
+    println!("C: equations within {values:.1e}");
+}

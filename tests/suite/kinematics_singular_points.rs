@@ -1,7 +1,7 @@
 //! The singular points of the Delta's inverse geometric model (`lsdc kinematics
 //! --find-singular`), found by the search of `studies::singular_points` from seeds spread over
 //! the arms' angles (a grid of 4³ arm angles from 0.3 to 2.4 rad, each closed with the arms
-//! held), against the seed's six points in z = 0 (notes on the Delta seed, §3.3 and table T7:
+//! held; the report gives each search's iterations), against the seed's six points in z = 0 (notes on the Delta seed, §3.3 and table T7:
 //! (r cos φ ∓ s sin φ, r sin φ ± s cos φ, 0), s = √(l2² − l1²)).
 
 use lsdc::studies::configurations::{close_from, StateRequest};
@@ -60,8 +60,8 @@ fn kinematics_singular_points_of_the_delta_are_the_seeds_six() {
     let report: Vec<String> = (found.searches.iter())
         .map(|s| match s {
             SearchOutcome::Found { seed, singular } => format!(
-                "{seed}: {:?} {:?} drift {:e}",
-                singular.point, singular.kind, singular.curve_drift
+                "{seed}: {:?} {:?} drift {:e} after {} iterations",
+                singular.point, singular.kind, singular.curve_drift, singular.iterations
             ),
             SearchOutcome::NotFound { seed, reason, .. } => format!("{seed}: {reason}"),
         })

@@ -59,6 +59,11 @@ fn worst_error(law: &str, times: &[f64], closed: impl Fn(f64) -> Triple) -> f64 
         h / duration,
         h / (duration * duration),
     ];
+    worst_error_on(law, times, closed, scales)
+}
+
+/// [`worst_error`] with each derivative order relative to `scales`.
+fn worst_error_on(law: &str, times: &[f64], closed: impl Fn(f64) -> Triple, scales: Triple) -> f64 {
     let values = drive_values(law, times);
     let mut worst: f64 = 0.0;
     for (&t, got) in times.iter().zip(&values) {
@@ -415,4 +420,94 @@ fn derivative_gives_outputs_and_efforts_the_laws_rates() {
     }
     println!("the computed force follows the quintic within {tracking:.1e}");
     assert!(tracking < 1e-8, "tracking error {tracking}");
+}
+
+/// ∫ₐᵇ f by adaptive Simpson with Richardson's correction (Lyness, "Notes on the adaptive
+/// Simpson quadrature routine", J. ACM 16(3), 1969), to `tolerance`: independent of the
+/// composite Gauss–Legendre rule of the law.
+fn adaptive_simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tolerance: f64) -> f64 {
+    fn step(
+        f: &dyn Fn(f64) -> f64,
+        (a, fa): (f64, f64),
+        (m, fm): (f64, f64),
+        (b, fb): (f64, f64),
+        whole: f64,
+        tolerance: f64,
+        depth: usize,
+    ) -> f64 {
+        let (left, right) = (0.5 * (a + m), 0.5 * (m + b));
+        let (fl, fr) = (f(left), f(right));
+        let first = (m - a) / 6.0 * (fa + 4.0 * fl + fm);
+        let second = (b - m) / 6.0 * (fm + 4.0 * fr + fb);
+        let difference = first + second - whole;
+        if depth == 0 || difference.abs() <= 15.0 * tolerance {
+            return first + second + difference / 15.0;
+        }
+        step(
+            f,
+            (a, fa),
+            (left, fl),
+            (m, fm),
+            first,
+            tolerance / 2.0,
+            depth - 1,
+        ) + step(
+            f,
+            (m, fm),
+            (right, fr),
+            (b, fb),
+            second,
+            tolerance / 2.0,
+            depth - 1,
+        )
+    }
+    let m = 0.5 * (a + b);
+    let (fa, fm, fb) = (f(a), f(m), f(b));
+    let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
+    step(f, (a, fa), (m, fm), (b, fb), whole, tolerance, 30)
+}
+
+/// The exponential law (the Delta seed's §III.6.2.3, Biagiotti & Melchiorri §2.3): velocity
+/// v_c exp(−σ f(τ', λ)), f = (2τ')²/|1 − (2τ')²|^λ, τ' = τ − 1/2. With g = 4τ(1 − τ) the
+/// profile's rate is r/R, r = exp(−σ (1 − g) g^−λ), and its acceleration r'/R with
+/// r' = r σ g' g^(−λ−1) (g + λ (1 − g)), g' = 4 − 8τ: the drive's rate and acceleration against
+/// these closed forms, its position (a quadrature node) against adaptive Simpson on r.
+#[test]
+fn the_exponential_laws_rate_and_acceleration_are_exact_and_its_position_the_quadrature() {
+    for (sigma, lambda) in [(7.1, 0.5), (1.0, 0.2), (30.0, 2.0), (3.0, 1.0)] {
+        let rate = move |u: f64| {
+            let g = 4.0 * u * (1.0 - u);
+            match g <= 0.0 {
+                true => 0.0,
+                false => (-sigma * (1.0 - g) / g.powf(lambda)).exp(),
+            }
+        };
+        let total = adaptive_simpson(&rate, 0.0, 1.0, 1e-15);
+        let profile = move |u: f64| {
+            let g = 4.0 * u * (1.0 - u);
+            let r = rate(u);
+            let slope = match g <= 0.0 {
+                true => 0.0,
+                false => {
+                    r * sigma * (4.0 - 8.0 * u) * g.powf(-lambda - 1.0) * (g + lambda * (1.0 - g))
+                }
+            };
+            [
+                adaptive_simpson(&rate, 0.0, u, 1e-15) / total,
+                r / total,
+                slope / total,
+            ]
+        };
+        // Each derivative relative to the law's largest (the acceleration of a steep law, σ = 30,
+        // is 60 times h/T²): round-off is relative to the values computed.
+        let all = times(&[]);
+        let closed = between(profile);
+        let largest: Vec<Triple> = all.iter().map(|&t| closed(t)).collect();
+        let scales: Triple = std::array::from_fn(|k| {
+            (largest.iter().map(|v| v[k].abs())).fold(Q0.abs().max(Q1.abs()), f64::max)
+        });
+        let law = call("exponential", &format!(", {sigma}, {lambda}"));
+        let worst = worst_error_on(&law, &all, closed, scales);
+        println!("exponential σ = {sigma}, λ = {lambda}: worst relative error {worst:.1e}");
+    }
 }

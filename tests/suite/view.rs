@@ -361,16 +361,23 @@ fn status_in(dom: &str) -> Option<serde_json::Value> {
     serde_json::from_str(&dom[start..end]).ok()
 }
 
-/// Distinct colours of a PNG and the share of pixels unlike the top-left one.
-fn picture(path: &std::path::Path) -> (usize, f64) {
+/// The pixels of a PNG, red, green and blue.
+fn pixels(path: &std::path::Path) -> Vec<[u8; 3]> {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
     let mut reader = decoder.read_info().unwrap();
     let mut buffer = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buffer).unwrap();
     let channels = info.color_type.samples();
-    let pixels: Vec<&[u8]> = buffer[..info.buffer_size()].chunks(channels).collect();
+    (buffer[..info.buffer_size()].chunks(channels))
+        .map(|p| [p[0], p[1], p[2]])
+        .collect()
+}
+
+/// Distinct colours of a PNG and the share of pixels unlike the top-left one.
+fn picture(path: &std::path::Path) -> (usize, f64) {
+    let pixels = pixels(path);
     let background = pixels[0];
-    let colours: std::collections::HashSet<&[u8]> = pixels.iter().copied().collect();
+    let colours: std::collections::HashSet<&[u8; 3]> = pixels.iter().collect();
     let different = pixels.iter().filter(|p| **p != background).count();
     (colours.len(), different as f64 / pixels.len() as f64)
 }
@@ -648,4 +655,157 @@ fn the_viewer_moves_a_rheonomic_joint_and_plots_its_effort() {
         .expect("the effort's series");
     assert_eq!(torque.values.len(), animation.times.len());
     assert!(torque.values.last().is_some_and(|&v| v > 9.0));
+}
+
+/// The Delta's workspace over the arms' box [0.6, 1.2]³ rad, `cells` per arm, in an exported
+/// page: the page, and `lsdc workspace --format json` on the same sampling.
+fn delta_workspace_page(cells: &str) -> (PathBuf, serde_json::Value) {
+    let sampling = [
+        "--actuate",
+        "A1.q",
+        "--actuate",
+        "A2.q",
+        "--actuate",
+        "A3.q",
+        "--range",
+        "A1.q=0.6:1.2",
+        "--range",
+        "A2.q=0.6:1.2",
+        "--range",
+        "A3.q=0.6:1.2",
+        "--samples",
+        cells,
+    ];
+    let page = scratch(&format!("delta-workspace-{cells}.html"));
+    let mut view = vec![
+        "view",
+        "examples/delta_isir88.lsd",
+        "--workspace",
+        "nacelle",
+    ];
+    view.extend(sampling);
+    view.extend(["--duration", "0.1", "--export", page.to_str().unwrap()]);
+    let (code, _, err) = lsdc(&view);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("workspace of `nacelle`: volume"), "{err}");
+    let mut workspace = vec![
+        "workspace",
+        "examples/delta_isir88.lsd",
+        "--point",
+        "nacelle",
+    ];
+    workspace.extend(sampling);
+    workspace.extend(["--format", "json"]);
+    let (code, out, err) = lsdc(&workspace);
+    assert_eq!(code, 0, "{err}");
+    (page, serde_json::from_str(&out).unwrap())
+}
+
+/// The scene's JSON in an exported page.
+fn scene_of(page: &std::path::Path) -> serde_json::Value {
+    let html = std::fs::read_to_string(page).unwrap();
+    let tag = "<script type=\"application/json\" id=\"scene-data\">";
+    let start = html.find(tag).unwrap() + tag.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    serde_json::from_str(&html[start..end]).unwrap()
+}
+
+/// The workspace layer of `lsdc view --workspace` holds what `lsdc workspace` samples: every
+/// reachable point in the same order, the boundary samples, and the colours of the dexterity's
+/// scale (the best conditioned yellow, the worst purple, as the slices draw them).
+#[test]
+fn the_workspace_layer_is_the_sampled_workspace_coloured_by_dexterity() {
+    let (page, sampled) = delta_workspace_page("4");
+    let layer = &scene_of(&page)["workspace"];
+    let samples = sampled["samples"].as_array().unwrap();
+    let reachable: Vec<&serde_json::Value> = (samples.iter())
+        .filter(|s| s["reachable"] == true)
+        .collect();
+    let points = layer["points"].as_array().unwrap();
+    assert_eq!(points.len(), 64);
+    assert_eq!(points.len(), reachable.len());
+    for (point, sample) in points.iter().zip(&reachable) {
+        assert_eq!(point, &sample["point"], "{sample}");
+    }
+    let boundary: Vec<u64> = (reachable.iter().enumerate())
+        .filter(|(_, s)| s["boundary"] == true)
+        .map(|(k, _)| k as u64)
+        .collect();
+    let layer_boundary: Vec<u64> = (layer["boundary"].as_array().unwrap().iter())
+        .map(|k| k.as_u64().unwrap())
+        .collect();
+    // The 4³ grid's 56 samples on the box's faces (every arm angle assembles).
+    assert_eq!(layer_boundary, boundary);
+    assert_eq!(boundary.len(), 56);
+    let dexterity: Vec<f64> = (reachable.iter())
+        .map(|s| s["dexterity"].as_f64().unwrap())
+        .collect();
+    let colour = |k: usize| -> Vec<u64> {
+        (layer["colours"][k].as_array().unwrap().iter())
+            .map(|c| c.as_u64().unwrap())
+            .collect()
+    };
+    let best = (0..dexterity.len())
+        .min_by(|&a, &b| dexterity[a].total_cmp(&dexterity[b]))
+        .unwrap();
+    let worst = (0..dexterity.len())
+        .max_by(|&a, &b| dexterity[a].total_cmp(&dexterity[b]))
+        .unwrap();
+    assert_eq!(colour(best), [253, 231, 37]);
+    assert_eq!(colour(worst), [68, 1, 84]);
+    let range = layer["dexterity"].as_array().unwrap();
+    assert!((range[0].as_f64().unwrap() / dexterity[best] - 1.0).abs() < 1e-12);
+    assert!((range[1].as_f64().unwrap() / dexterity[worst] - 1.0).abs() < 1e-12);
+    assert!(layer["singular"].as_array().unwrap().is_empty());
+    // The sampling's options belong to the workspace.
+    let (code, _, err) = lsdc(&["view", "examples/delta_isir88.lsd", "--actuate", "A1.q"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("give `--workspace FRAME`"), "{err}");
+}
+
+/// In a browser the layer is drawn: its dots, in the colours of the scale, cover pixels of the
+/// picture that the page with the layer unticked (`?workspace=0`) does not have.
+#[test]
+fn the_workspace_layer_is_drawn_and_toggled_in_chromium() {
+    if !std::path::Path::new(CHROMIUM).exists() {
+        crate::common::skip(&format!(
+            "no {CHROMIUM}, the page is not tested in a browser (tools/install-chromium installs it)"
+        ));
+        return;
+    }
+    let (page, _) = delta_workspace_page("8");
+    let layer = &scene_of(&page)["workspace"];
+    let colours: Vec<[u8; 3]> = (layer["colours"].as_array().unwrap().iter())
+        .map(|c| std::array::from_fn(|k| c[k].as_u64().unwrap() as u8))
+        .collect();
+    let url = |query: &str| format!("file://{}?{query}", page.display());
+    let mut counts = Vec::new();
+    for (query, shown) in [("workspace=1", true), ("workspace=0", false)] {
+        let Some(status) = page_status(&url(query), 1000) else {
+            return;
+        };
+        assert_eq!(status["error"], serde_json::Value::Null);
+        let workspace = &status["workspace"];
+        assert_eq!(workspace["points"], 512, "{status}");
+        assert_eq!(workspace["workspace_shown"], shown, "{status}");
+        assert_eq!(workspace["boundary_shown"], false, "{status}");
+        let shot = scratch(&format!("delta-workspace-{shown}.png"));
+        chromium(
+            &url(query),
+            1000,
+            &[&format!("--screenshot={}", shot.display())],
+        );
+        // Pixels within 2 of a colour of the layer in each channel (the page's sRGB output
+        // rounds the dots' colours back to themselves, or next to them).
+        let near = |p: &[u8; 3]| {
+            colours
+                .iter()
+                .any(|c| (0..3).all(|k| p[k].abs_diff(c[k]) <= 2))
+        };
+        counts.push(pixels(&shot).iter().filter(|p| near(p)).count());
+    }
+    assert!(
+        counts[0] > 2000 && counts[0] > 10 * counts[1].max(1),
+        "pixels in the layer's colours, shown and hidden: {counts:?}"
+    );
 }

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use serde_json::{json, Value};
 
 use super::shared::{Listing, Role, Symbols};
-use crate::symbolic::expr::{ExprId, Node};
+use crate::symbolic::expr::{ExprId, Function, Node};
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
 
@@ -66,6 +66,12 @@ fn node(symbols: &Symbols, id: ExprId, index: &HashMap<ExprId, usize>) -> Value 
         Node::Pow(a, b) => json!({ "op": "pow", "args": args(&[a, b]) }),
         Node::Atan2(y, x) => json!({ "op": "atan2", "args": args(&[y, x]) }),
         Node::Neg(a) => json!({ "op": "neg", "args": args(&[a]) }),
+        Node::Apply(Function::ExponentialProfile(profile), a) => json!({
+            "op": "exponential_profile",
+            "args": args(&[a]),
+            "sigma": profile.sigma(),
+            "lambda": profile.lambda()
+        }),
         Node::Apply(f, a) => json!({ "op": f.name(), "args": args(&[a]) }),
         // `args[1]` where `args[0] >= 0`, else `args[2]`.
         Node::Select {

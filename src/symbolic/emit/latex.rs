@@ -7,7 +7,7 @@ use super::shared::{
     described, nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax,
     Precedence, Printer, Role, Symbols,
 };
-use crate::symbolic::expr::{ExprId, Function};
+use crate::symbolic::expr::{ExponentialProfile, ExprId, Function};
 use crate::symbolic::Equations;
 
 const GREEK: [&str; 35] = [
@@ -58,6 +58,9 @@ impl Language for Latex<'_> {
             Function::Sqrt => return format!("\\sqrt{{{argument}}}"),
             Function::Abs => return format!("\\left|{argument}\\right|"),
             Function::Floor => return format!("\\left\\lfloor {argument}\\right\\rfloor"),
+            Function::ExponentialProfile(profile) => {
+                return self.exponential_profile(argument, profile)
+            }
             Function::Asin => "\\arcsin",
             Function::Acos => "\\arccos",
             Function::Atan => "\\arctan",
@@ -68,6 +71,13 @@ impl Language for Latex<'_> {
             Function::Log => "\\log",
         };
         format!("{command}\\left({argument}\\right)")
+    }
+    fn exponential_profile(&self, tau: &str, profile: ExponentialProfile) -> String {
+        format!(
+            "\\operatorname{{exponential\\_profile}}\\left({tau}, {}, {}\\right)",
+            profile.sigma(),
+            profile.lambda()
+        )
     }
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("\\operatorname{{atan2}}\\left({y}, {x}\\right)")

@@ -61,6 +61,9 @@ pub fn rust(equations: &Equations, source: &str) -> String {
     let symbols = Symbols::new(equations);
     let routines = Routines::new(&symbols, equations);
     let mut out = header(equations, source);
+    if equations.pool.uses_exponential_profile() {
+        out.push_str(&crate::symbolic::exponential_profile::rust_definition());
+    }
     let with_f = |routine: &Routine| {
         if routine.uses_functions {
             format!(", {FUNCTION_ARGUMENT}")

@@ -8,7 +8,7 @@
 
 use std::collections::HashMap;
 
-use crate::symbolic::expr::{ExprId, Function, Node, Pool};
+use crate::symbolic::expr::{ExponentialProfile, ExprId, Function, Node, Pool};
 use crate::symbolic::lower::Variables;
 use crate::symbolic::Equations;
 
@@ -237,6 +237,15 @@ pub trait Language {
     fn unknown_function(&self, index: usize, name: &str, arguments: &[String]) -> String;
     /// A known function applied to its printed argument.
     fn function(&self, f: Function, argument: &str) -> String;
+    /// The exponential law's profile at τ (`symbolic::exponential_profile`): the function of
+    /// that name with its σ and λ, which the code emitters define beside the equations.
+    fn exponential_profile(&self, tau: &str, profile: ExponentialProfile) -> String {
+        format!(
+            "exponential_profile({tau}, {:?}, {:?})",
+            profile.sigma(),
+            profile.lambda()
+        )
+    }
     fn atan2(&self, y: &str, x: &str) -> String;
     /// `when_nonnegative` where `test ≥ 0`, else `otherwise`, as an atom (a NaN test takes
     /// `otherwise`, as the tape does).
@@ -370,6 +379,10 @@ impl<L: Language> Printer<'_, L> {
             },
             Node::Atan2(y, x) => (
                 language.atan2(&self.expression(y), &self.expression(x)),
+                Atom,
+            ),
+            Node::Apply(Function::ExponentialProfile(profile), a) => (
+                language.exponential_profile(&self.expression(a), profile),
                 Atom,
             ),
             Node::Apply(f, a) => (language.function(f, &self.expression(a)), Atom),

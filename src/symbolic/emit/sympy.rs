@@ -9,7 +9,7 @@ use super::shared::{
     nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax, Precedence, Printer,
     Role, Symbols,
 };
-use crate::symbolic::expr::{ExprId, Function};
+use crate::symbolic::expr::{ExponentialProfile, ExprId, Function};
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
 
@@ -146,6 +146,14 @@ impl Language for Python<'_> {
     fn function(&self, f: Function, argument: &str) -> String {
         let name = if f == Function::Abs { "Abs" } else { f.name() };
         format!("sp.{name}({argument})")
+    }
+    /// An undefined SymPy function: its value is a quadrature (`symbolic::exponential_profile`).
+    fn exponential_profile(&self, tau: &str, profile: ExponentialProfile) -> String {
+        format!(
+            "sp.Function('exponential_profile')({tau}, {:?}, {:?})",
+            profile.sigma(),
+            profile.lambda()
+        )
     }
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("sp.atan2({y}, {x})")
