@@ -36,6 +36,7 @@ mod kinematics_models;
 mod kinematics_singular_points;
 mod kinematics_workspace;
 mod linearize;
+mod linearize_states;
 mod loop_properties;
 mod loops;
 mod lsp;
