@@ -5,6 +5,8 @@
 use nalgebra::DMatrix;
 
 use crate::common::programs::{prepared, prepared_text};
+use lsdc::dynamics::loops::Stabilisation;
+use lsdc::simulate::system::MechanicalSystem;
 use lsdc::studies::linearize::{linearize, OperatingPoint, Request};
 
 fn request(point: OperatingPoint, inputs: &[&str]) -> Request {
@@ -132,4 +134,160 @@ fn a_state_with_a_rate_is_no_input() {
         .unwrap_err()
         .to_string();
     assert!(error.contains("`current` has a rate"), "{error}");
+}
+
+/// The seed's motor constants (table III.2) and reduction.
+const SEED_MOTOR: (f64, f64, f64, f64, f64) = (1.35, 1.2e-3, 0.1194, 0.119, 12.0);
+
+fn delta_request(inputs: &[&str]) -> Request {
+    Request {
+        point: OperatingPoint::Initial,
+        inputs: inputs.iter().map(|s| s.to_string()).collect(),
+        coordinates: (1..=3).map(|i| format!("leg[{i}]:A.q")).collect(),
+    }
+}
+
+/// `by` in leg k's instance and 0 in the others: Lagrange's basis polynomial on the indices
+/// 1, 2, 3, written with the package's index `i`.
+fn in_leg(k: usize, by: f64) -> String {
+    let others: Vec<usize> = (1..=3).filter(|&j| j != k).collect();
+    let denominator: f64 = others.iter().map(|&j| k as f64 - j as f64).product();
+    format!(
+        "({by:e} / {denominator:e}) * (i - {}) * (i - {})",
+        others[0], others[1]
+    )
+}
+
+/// The Delta with the seed's motors (examples/control/delta_motors.lsd) in its arms' angles:
+/// A has the seed's blocks [[0, I, 0], [Q, R, L], [0, N b2 I, b1 I]] and B = [0; 0; b3 I]
+/// (§6; N b2 since the states are the arms' angles, θ = N α); L is N K_i times the response to
+/// a torque on each arm (B's exact columns for generalised forces); and every row of A matches
+/// plain central differences (step 1e-5) of the closed-loop model, each state made by the
+/// program's own assembly (an arm's angle or rate, or a motor's starting current, moved in one
+/// instance of the legs).
+#[test]
+fn delta_with_its_motors_has_the_seeds_state_model() {
+    let (r, inductance, ke, ki, n) = SEED_MOTOR;
+    let (b1, b2, b3) = (-r / inductance, -ke / inductance, 1.0 / inductance);
+    let voltages = ["leg[1]:voltage", "leg[2]:voltage", "leg[3]:voltage"];
+    let torques = ["leg[1]:A.q", "leg[2]:A.q", "leg[3]:A.q"];
+    let inputs: Vec<&str> = voltages.iter().chain(&torques).copied().collect();
+    let l = linearize(
+        &prepared("control/delta_motors", &[]),
+        &delta_request(&inputs),
+    )
+    .unwrap();
+    let currents = ["leg[1]:current", "leg[2]:current", "leg[3]:current"];
+    assert_eq!(&l.states[6..], currents);
+    let block = |m: &DMatrix<f64>, row: usize, column: usize| {
+        m.view((3 * row, 3 * column), (3, 3)).into_owned()
+    };
+    let identity = DMatrix::<f64>::identity(3, 3);
+    let zero = DMatrix::<f64>::zeros(3, 3);
+    let close = |found: DMatrix<f64>, expected: DMatrix<f64>, tolerance: f64, what: &str| {
+        let gap = (&found - &expected).amax();
+        assert!(gap <= tolerance, "{what}: {gap:e}\n{found}\n{expected}");
+    };
+    close(block(&l.a, 0, 0), zero.clone(), 0.0, "[0 I 0]");
+    close(block(&l.a, 0, 1), identity.clone(), 0.0, "[0 I 0]");
+    close(block(&l.a, 0, 2), zero.clone(), 0.0, "[0 I 0]");
+    close(
+        block(&l.a, 2, 0),
+        zero.clone(),
+        1e-9,
+        "the currents along the angles",
+    );
+    close(
+        block(&l.a, 2, 1),
+        &identity * (n * b2),
+        1e-9 * (n * b2).abs(),
+        "N b2 I",
+    );
+    close(block(&l.a, 2, 2), &identity * b1, 1e-9 * b1.abs(), "b1 I");
+    let b_voltages = l.b.columns(0, 3).into_owned();
+    let b_torques = l.b.columns(3, 3).into_owned();
+    close(
+        b_voltages.rows(0, 6).into_owned(),
+        DMatrix::zeros(6, 3),
+        0.0,
+        "B's zeros",
+    );
+    close(
+        b_voltages.rows(6, 3).into_owned(),
+        &identity * b3,
+        1e-9 * b3,
+        "b3 I",
+    );
+    // L = Mₐ⁻¹ N K_i: the currents' columns against the torques' exact ones.
+    let response = b_torques.rows(3, 3).into_owned();
+    let l_block = block(&l.a, 1, 2);
+    close(
+        l_block.clone(),
+        &response * (n * ki),
+        1e-9 * l_block.amax(),
+        "L = Mₐ⁻¹ N K_i",
+    );
+    // At rest the velocity products vanish: R = 0 (to the differences' rounding).
+    close(block(&l.a, 1, 1), zero, 1e-9, "R at rest");
+
+    // Every row of A against plain central differences through the program's assembly.
+    let rates_at = |moved: usize, by: f64| -> Vec<f64> {
+        let leg = moved % 3 + 1;
+        let (from, to) = match moved / 3 {
+            0 => (
+                "initial A.q = 40 * pi / 180 fixed,".to_string(),
+                format!("initial A.q = 40 * pi / 180 + {} fixed,", in_leg(leg, by)),
+            ),
+            1 => (
+                "initial A.q = 40 * pi / 180 fixed,".to_string(),
+                format!(
+                    "initial A.q = 40 * pi / 180 fixed, A.q' = {},",
+                    in_leg(leg, by)
+                ),
+            ),
+            _ => (
+                "dc_current(0)".to_string(),
+                format!("dc_current({})", in_leg(leg, by)),
+            ),
+        };
+        let prepared = prepared("control/delta_motors", &[(&from, &to)]);
+        let model = &prepared.model;
+        let (q, v) = model
+            .state_from_declared(&prepared.coordinates, &prepared.rates)
+            .unwrap();
+        let mut y: Vec<f64> = q.into_iter().chain(v).collect();
+        let reference = prepared.coordinates.clone();
+        let mut system = MechanicalSystem::new(model, reference, Stabilisation::Projection);
+        system.start_loops(&mut y).unwrap();
+        let mut dydt = vec![0.0; y.len()];
+        system.derivative(0.0, &y, &mut dydt).unwrap();
+        let mut states = vec![0.0; model.states.len()];
+        system.state_rates(&mut states).unwrap();
+        let names: Vec<String> = (0..model.velocities())
+            .map(|i| model.velocity_name(i))
+            .collect();
+        let accelerations = torques
+            .iter()
+            .map(|a| dydt[model.positions() + names.iter().position(|n| n == a).unwrap()]);
+        let current_rates = currents
+            .iter()
+            .map(|c| states[model.states.iter().position(|s| s.name == *c).unwrap()]);
+        accelerations.chain(current_rates).collect()
+    };
+    let step = 1e-5;
+    let mut largest = 0.0_f64;
+    for column in 0..9 {
+        let ahead = rates_at(column, step);
+        let behind = rates_at(column, -step);
+        for row in 0..6 {
+            let difference = (ahead[row] - behind[row]) / (2.0 * step);
+            let gap = (difference - l.a[(3 + row, column)]).abs();
+            largest = largest.max(gap / l.a[(3 + row, column)].abs().max(1.0));
+        }
+    }
+    assert!(
+        largest < 1e-6,
+        "largest relative difference {largest:e}\n{}",
+        l.a
+    );
 }
