@@ -38,6 +38,7 @@ mod kinematics_workspace;
 mod linearize;
 mod linearize_states;
 mod loop_properties;
+mod loop_shaping;
 mod loops;
 mod lsp;
 mod mampey;
