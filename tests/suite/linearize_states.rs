@@ -4,9 +4,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::common::programs::{prepared, prepared_text};
-use lsdc::dynamics::loops::Stabilisation;
-use lsdc::simulate::system::MechanicalSystem;
+use crate::common::programs::{assembled_rates, prepared, prepared_text};
 use lsdc::studies::linearize::{linearize, OperatingPoint, Request};
 
 fn request(point: OperatingPoint, inputs: &[&str]) -> Request {
@@ -251,28 +249,16 @@ fn delta_with_its_motors_has_the_seeds_state_model() {
             ),
         };
         let prepared = prepared("control/delta_motors", &[(&from, &to)]);
-        let model = &prepared.model;
-        let (q, v) = model
-            .state_from_declared(&prepared.coordinates, &prepared.rates)
-            .unwrap();
-        let mut y: Vec<f64> = q.into_iter().chain(v).collect();
-        let reference = prepared.coordinates.clone();
-        let mut system = MechanicalSystem::new(model, reference, Stabilisation::Projection);
-        system.start_loops(&mut y).unwrap();
-        let mut dydt = vec![0.0; y.len()];
-        system.derivative(0.0, &y, &mut dydt).unwrap();
-        let mut states = vec![0.0; model.states.len()];
-        system.state_rates(&mut states).unwrap();
-        let names: Vec<String> = (0..model.velocities())
-            .map(|i| model.velocity_name(i))
+        let (accelerations, states) = assembled_rates(&prepared, &torques);
+        let state_names: Vec<&str> = (prepared.model.states.iter())
+            .map(|s| s.name.as_str())
             .collect();
-        let accelerations = torques
-            .iter()
-            .map(|a| dydt[model.positions() + names.iter().position(|n| n == a).unwrap()]);
-        let current_rates = currents
-            .iter()
-            .map(|c| states[model.states.iter().position(|s| s.name == *c).unwrap()]);
-        accelerations.chain(current_rates).collect()
+        let current_rates =
+            (currents.iter()).map(|c| states[state_names.iter().position(|s| s == c).unwrap()]);
+        accelerations
+            .into_iter()
+            .chain(current_rates)
+            .collect::<Vec<f64>>()
     };
     let step = 1e-5;
     let mut largest = 0.0_f64;
