@@ -277,3 +277,31 @@ fn delta_with_its_motors_has_the_seeds_state_model() {
         l.a
     );
 }
+
+/// At the state a run reaches (`--at-time`), the program's states are the run's: the linear
+/// model's operating state is the run's last sample, states included.
+#[test]
+fn at_a_run_s_state_the_states_are_the_run_s() {
+    let text = format!(
+        "{PI_MOTOR}simulate duration = 0.25, output = 0.05, integrator = dopri5, tolerance = 1e-10 end ;\n"
+    );
+    let prepared = prepared_text(&text);
+    let l = linearize(
+        &prepared,
+        &request(OperatingPoint::EndOfRun, &["disturbance"]),
+    )
+    .unwrap();
+    let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
+    let last = simulation.samples.last().unwrap();
+    let column = |name: &str| crate::common::programs::output(&simulation, name);
+    assert_eq!(l.time, last.time);
+    assert_eq!(l.state[..2], [last.coordinates[0], last.rates[0]]);
+    let states = [
+        last.outputs[column("integral")],
+        last.outputs[column("current")],
+    ];
+    assert_eq!(l.state[2..], states);
+    // The states moved: the run is not at its start.
+    assert!(states[0] != 0.25 && states[1] != 1.5, "{states:?}");
+    assert_eq!(l.input, [0.5]);
+}

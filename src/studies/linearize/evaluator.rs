@@ -3,8 +3,8 @@
 //! values of the states held as inputs give (z̈, ṡ), and the program's outputs.
 
 use super::chart::Chart;
+use super::error::LinearizeError;
 use super::inputs::Inputs;
-use super::LinearizeError;
 use crate::dynamics::algorithms::forward_kinematics;
 use crate::dynamics::angles::AngleReference;
 use crate::dynamics::compiled::{EffortScratch, EffortState};

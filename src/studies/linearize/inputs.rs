@@ -3,8 +3,9 @@
 //! (`let voltage = state(0); rate voltage = 0;`, a motor's voltage), whose value becomes an
 //! input instead of a state. Every other state of the program is a state of the linear model.
 
-use super::{coordinate_index, refuse_repeated, LinearizeError};
+use super::error::LinearizeError;
 use crate::prepare::Prepared;
+use crate::studies::statics::velocity_index;
 
 /// One input, in the order named.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,5 +68,26 @@ impl Inputs {
         for (&k, &value) in self.held_states.iter().zip(held) {
             states[k] = value;
         }
+    }
+}
+
+/// Refuses a name given twice (as an input or a coordinate).
+pub(super) fn refuse_repeated(names: &[String]) -> Result<(), LinearizeError> {
+    match (1..names.len()).find(|&k| names[..k].contains(&names[k])) {
+        Some(k) => Err(LinearizeError::Repeated {
+            name: names[k].clone(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The state velocity of the coordinate `join.coordinate`, which no drive imposes.
+pub(super) fn coordinate_index(prepared: &Prepared, name: &str) -> Result<usize, LinearizeError> {
+    let index = velocity_index(prepared, name).map_err(LinearizeError::Name)?;
+    match prepared.model.drives.iter().any(|d| d.velocity == index) {
+        true => Err(LinearizeError::DrivenInput {
+            name: name.to_string(),
+        }),
+        false => Ok(index),
     }
 }
