@@ -32,9 +32,10 @@ pub struct LinearizeArgs {
     /// Value of an unknown, as for `simulate`. Repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     sets: Vec<String>,
-    /// A coordinate along which a generalised force is an input, `join.coordinate`
-    /// (repeatable; in this order).
-    #[arg(long = "input", value_name = "JOIN.COORDINATE")]
+    /// An input (repeatable; in this order): a coordinate `join.coordinate` along which a
+    /// generalised force is one, or a constant state of the program (`rate voltage = 0;`)
+    /// held at the input's value.
+    #[arg(long = "input", value_name = "JOIN.COORDINATE|STATE")]
     inputs: Vec<String>,
     /// With closed loops: an independent coordinate (repeatable, as many as the mobility);
     /// by default, the free coordinates the run chooses.

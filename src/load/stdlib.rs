@@ -2,6 +2,7 @@
 
 const MODULES: &[(&str, &str)] = &[
     ("forces", include_str!("../../stdlib/forces.lsd")),
+    ("motors", include_str!("../../stdlib/motors.lsd")),
     ("gravity", include_str!("../../stdlib/gravity.lsd")),
     ("joints", include_str!("../../stdlib/joints.lsd")),
 ];

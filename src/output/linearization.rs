@@ -31,9 +31,12 @@ pub fn text(l: &Linearization, modes: bool) -> String {
             list(&l.driven)
         );
     }
+    if !l.program_states.is_empty() {
+        out += &format!("states of the program: {}\n", list(&l.program_states));
+    }
     let inputs = match l.inputs.is_empty() {
         true => "none".to_string(),
-        false => list(&l.inputs) + " (generalised forces along them)",
+        false => list(&l.inputs) + " (generalised forces along coordinates, or states held)",
     };
     out += &format!("inputs: {inputs}\n");
     out += &format!("outputs: {}\n\n", list(&l.outputs));
@@ -41,19 +44,27 @@ pub fn text(l: &Linearization, modes: bool) -> String {
     if !l.inputs.is_empty() {
         out += &vector("operating inputs u", &l.inputs, &l.input);
     }
-    let accelerations: Vec<String> = l.states[l.coordinates.len()..]
-        .iter()
+    let n = l.coordinates.len();
+    let rates: Vec<String> = (l.states[n..2 * n].iter())
+        .chain(&l.program_states)
         .map(|s| format!("{s}'"))
         .collect();
-    out += &vector("accelerations there", &accelerations, &l.accelerations);
+    let values: Vec<f64> = l
+        .accelerations
+        .iter()
+        .chain(&l.state_rates)
+        .copied()
+        .collect();
+    out += &vector("rates there", &rates, &values);
     out += &matrix("A", &l.states, &l.states, &l.a);
     out += &matrix("B", &l.states, &l.inputs, &l.b);
     out += &matrix("C", &l.outputs, &l.states, &l.c);
     out += &matrix("D", &l.outputs, &l.inputs, &l.d);
     out += &format!(
-        "derivatives: {}; largest error estimate {:.1e} in A, {:.1e} in C\n",
+        "derivatives: {}; largest error estimate {:.1e} in A, {:.1e} in B, {:.1e} in C\n",
         l.method,
         l.a_error.amax(),
+        l.b_error.amax(),
         l.c_error.amax()
     );
     if modes {

@@ -7,10 +7,8 @@
 
 use nalgebra::DMatrix;
 
-use crate::common::programs::{example_text, prepared};
+use crate::common::programs::{assembled_rates, example_text, prepared};
 use crate::common::{lsdc, skip};
-use lsdc::dynamics::loops::Stabilisation;
-use lsdc::simulate::system::MechanicalSystem;
 use lsdc::studies::linearize::differences;
 use lsdc::studies::linearize::{linearize, Linearization, OperatingPoint, Request};
 
@@ -222,23 +220,7 @@ fn delta_matches_central_differences_of_its_closed_loop_model() {
             }
         };
         let prepared = prepared("delta_isir88", &[(&from, &to)]);
-        let model = &prepared.model;
-        let (q, v) = model
-            .state_from_declared(&prepared.coordinates, &prepared.rates)
-            .unwrap();
-        let mut y: Vec<f64> = q.into_iter().chain(v).collect();
-        let reference = prepared.coordinates.clone();
-        let mut system = MechanicalSystem::new(model, reference, Stabilisation::Projection);
-        system.start_loops(&mut y).unwrap();
-        let mut dydt = vec![0.0; y.len()];
-        system.derivative(0.0, &y, &mut dydt).unwrap();
-        let names: Vec<String> = (0..model.velocities())
-            .map(|i| model.velocity_name(i))
-            .collect();
-        actuated
-            .iter()
-            .map(|a| dydt[model.positions() + names.iter().position(|n| n == a).unwrap()])
-            .collect()
+        assembled_rates(&prepared, &actuated).0
     };
     let step = 1e-4;
     let states = ["A1.q", "A2.q", "A3.q", "A1.q'", "A2.q'", "A3.q'"];

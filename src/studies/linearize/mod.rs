@@ -19,26 +19,25 @@
 
 pub mod chart;
 pub mod differences;
+mod error;
+mod evaluator;
+pub mod inputs;
 pub mod modes;
-
-use std::fmt;
 
 use nalgebra::DMatrix;
 use serde::{Serialize, Serializer};
 
-use self::chart::{Chart, ChartError};
+use self::chart::Chart;
+pub use self::error::{ImposedContext, LinearizeError, Unsupported};
+use self::evaluator::Evaluator;
+use self::inputs::{coordinate_index, refuse_repeated, Input, Inputs};
 use self::modes::{Eigenvalue, Mode};
-use super::statics::{holding_efforts, velocity_index, StaticsError};
-use crate::diag::Diagnostic;
-use crate::dynamics::angles::AngleReference;
-use crate::dynamics::compiled::{EffortScratch, EffortState};
+use super::statics::holding_efforts;
+use crate::dynamics::compiled::EffortScratch;
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
-use crate::elab::imposed_motion::refused_by;
-use crate::elab::mechanism::Mechanism;
-use crate::elab::value::JoinId;
 use crate::prepare::Prepared;
-use crate::simulate::inputs::Inputs;
+use crate::simulate::inputs::Inputs as SystemInputs;
 use crate::simulate::system::{MechanicalSystem, SystemError};
 
 /// The largest acceleration (rad/s² or m/s²) left at an equilibrium by the efforts that hold
@@ -85,16 +84,21 @@ pub struct Linearization {
     /// on their laws at the operating point's time, which makes A, B and C those of that time.
     pub driven: Vec<String>,
     pub choice: &'static str,
-    /// `crank.q` for a coordinate, `crank.q'` for its rate: the coordinates, then their rates.
+    /// The program's states that are states of the linear model (those not named as inputs).
+    pub program_states: Vec<String>,
+    /// `crank.q` for a coordinate, `crank.q'` for its rate: the coordinates, then their rates,
+    /// then the program's states.
     pub states: Vec<String>,
     pub inputs: Vec<String>,
     /// The program's outputs, or the states when it declares none.
     pub outputs: Vec<String>,
     /// The operating point: the state, the inputs (the holding efforts at an equilibrium), and
-    /// the coordinates' accelerations there (zero at an equilibrium).
+    /// the coordinates' accelerations and the program's states' rates there (zero at an
+    /// equilibrium).
     pub state: Vec<f64>,
     pub input: Vec<f64>,
     pub accelerations: Vec<f64>,
+    pub state_rates: Vec<f64>,
     #[serde(rename = "A", serialize_with = "rows")]
     pub a: DMatrix<f64>,
     #[serde(rename = "B", serialize_with = "rows")]
@@ -103,9 +107,11 @@ pub struct Linearization {
     pub c: DMatrix<f64>,
     #[serde(rename = "D", serialize_with = "rows")]
     pub d: DMatrix<f64>,
-    /// The estimated error of each entry of A and C (zero where exact).
+    /// The estimated error of each entry of A, B and C (zero where exact).
     #[serde(rename = "A_error", serialize_with = "rows")]
     pub a_error: DMatrix<f64>,
+    #[serde(rename = "B_error", serialize_with = "rows")]
+    pub b_error: DMatrix<f64>,
     #[serde(rename = "C_error", serialize_with = "rows")]
     pub c_error: DMatrix<f64>,
     /// How the derivatives were obtained, for people.
@@ -124,7 +130,8 @@ fn rows<S: Serializer>(matrix: &DMatrix<f64>, serializer: S) -> Result<S::Ok, S:
 }
 
 /// How the entries that are not exact are computed.
-pub const METHOD: &str = "rows of the coordinates, B and D exact; accelerations' rows of A and \
+pub const METHOD: &str = "rows of the coordinates, B's columns of generalised forces and D's \
+exact; accelerations' and states' rows of A, B's and D's columns of states held as inputs, and \
 C by central differences with Richardson extrapolation (steps h, h/2, h/4, h/8 with h = 1e-2 \
 max(1, |x|)), each entry with Ridders' estimate of its truncation error plus a bound on rounding";
 
@@ -133,9 +140,14 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     let model = &prepared.model;
     refuse_unsupported(prepared)?;
     refuse_imposed_motion(prepared, request.point)?;
-    let inputs = indices(prepared, &request.inputs)?;
-    let Operating { time, q, v, input } =
-        operating_state(prepared, request.point, &request.inputs)?;
+    let named = Inputs::named(prepared, &request.inputs)?;
+    let Operating {
+        time,
+        q,
+        v,
+        efforts,
+        states,
+    } = operating_state(prepared, request.point, &named.effort_names)?;
     let mut y: Vec<f64> = q.iter().chain(&v).copied().collect();
     let mut system = MechanicalSystem::new(
         model,
@@ -143,7 +155,8 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
         Stabilisation::Projection,
     );
     // The inputs act as a stepped run's do: efforts held along their velocities.
-    system.state.inputs = Inputs::along(inputs.clone());
+    system.state.inputs = SystemInputs::along(named.efforts.clone());
+    system.set_states(&states);
     let (chart, choice) = if model.has_loops() {
         system.start_loops(&mut y)?;
         let free = system.scratch.loops.structure.free.clone();
@@ -161,65 +174,128 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     };
     let (q, v) = model.split_state(&y);
     let n = chart.independent.len();
+    // x = (z, ż, s): the independent coordinates, their rates, the program's kept states;
+    // z_all = x followed by the held states' values, the inputs differenced with x.
     let x: Vec<f64> = (chart.coordinates(&q).into_iter())
         .chain(chart.independent.iter().map(|&i| v[i]))
+        .chain(named.kept_states.iter().map(|&k| states[k]))
         .collect();
+    let held: Vec<f64> = named.held_states.iter().map(|&k| states[k]).collect();
+    let size = x.len();
+    let with_held: Vec<f64> = x.iter().chain(&held).copied().collect();
     let mut evaluator = Evaluator {
         prepared,
         system,
         chart,
         time,
-        inputs,
+        inputs: named,
         scratch: EffortScratch::default(),
     };
-    let accelerations = evaluator.accelerations(&x, &input)?;
+    let rates = evaluator.rates(&x, &efforts, &held)?;
     if request.point == OperatingPoint::Equilibrium {
-        if let Some((k, &left)) = (accelerations.iter().enumerate())
+        if let Some((k, &left)) = (rates.iter().enumerate())
             .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
             .filter(|(_, a)| a.abs() > EQUILIBRIUM)
         {
-            let coordinate = model.velocity_name(evaluator.chart.independent[k]);
+            let coordinate = match k < n {
+                true => model.velocity_name(evaluator.chart.independent[k]),
+                false => model.states[evaluator.inputs.kept_states[k - n]]
+                    .name
+                    .clone(),
+            };
             return Err(LinearizeError::NotAnEquilibrium {
                 coordinate,
                 acceleration: left,
             });
         }
     }
-    let all: Vec<usize> = (0..2 * n).collect();
-    let lower = differences::jacobian(&x, &all, n, |x| evaluator.accelerations(x, &input))?;
-    let mut a = DMatrix::zeros(2 * n, 2 * n);
-    let mut a_error = DMatrix::zeros(2 * n, 2 * n);
+    let every: Vec<usize> = (0..with_held.len()).collect();
+    let split = |z: &[f64]| (z[..size].to_vec(), z[size..].to_vec());
+    let lower = differences::jacobian(&with_held, &every, rates.len(), |z| {
+        let (x, held) = split(z);
+        evaluator.rates(&x, &efforts, &held)
+    })?;
+    let mut a = DMatrix::zeros(size, size);
+    let mut a_error = DMatrix::zeros(size, size);
     a.view_mut((0, n), (n, n)).fill_with_identity();
-    a.view_mut((n, 0), (n, 2 * n)).copy_from(&lower.value);
-    a_error.view_mut((n, 0), (n, 2 * n)).copy_from(&lower.error);
-    let mut b = DMatrix::zeros(2 * n, evaluator.inputs.len());
-    for k in 0..evaluator.inputs.len() {
-        // The accelerations are affine in the input: a unit's worth of change (scaled to the
-        // operating input, so that adding it loses nothing to rounding) gives the column.
-        let size = input[k].abs().max(1.0);
-        let mut moved = input.clone();
-        moved[k] += size;
-        let changed = evaluator.accelerations(&x, &moved)?;
-        for r in 0..n {
-            b[(n + r, k)] = (changed[r] - accelerations[r]) / size;
+    let below = size - n;
+    a.view_mut((n, 0), (below, size))
+        .copy_from(&lower.value.columns(0, size));
+    a_error
+        .view_mut((n, 0), (below, size))
+        .copy_from(&lower.error.columns(0, size));
+    let inputs = &evaluator.inputs.inputs.clone();
+    let mut b = DMatrix::zeros(size, inputs.len());
+    let mut b_error = DMatrix::zeros(size, inputs.len());
+    let (mut effort_column, mut held_column) = (0, 0);
+    for (k, input) in inputs.iter().enumerate() {
+        match input {
+            Input::Effort(_) => {
+                // The accelerations are affine in a generalised force, the states' rates
+                // independent of it: a unit's worth of change (scaled to the operating input,
+                // so that adding it loses nothing to rounding) gives the column.
+                let j = effort_column;
+                effort_column += 1;
+                let step = efforts[j].abs().max(1.0);
+                let mut moved = efforts.clone();
+                moved[j] += step;
+                let changed = evaluator.rates(&x, &moved, &held)?;
+                for r in 0..below {
+                    b[(n + r, k)] = (changed[r] - rates[r]) / step;
+                }
+            }
+            Input::State(_) => {
+                let column = size + held_column;
+                held_column += 1;
+                for r in 0..below {
+                    b[(n + r, k)] = lower.value[(r, column)];
+                    b_error[(n + r, k)] = lower.error[(r, column)];
+                }
+            }
         }
     }
-    let states = state_names(model, &evaluator.chart.independent);
-    let (outputs, c, c_error) = if prepared.outputs.is_empty() {
-        let identity = DMatrix::identity(2 * n, 2 * n);
-        (states.clone(), identity, DMatrix::zeros(2 * n, 2 * n))
+    let states_named = state_names(model, &evaluator.chart.independent, &evaluator.inputs);
+    let (outputs, c, c_error, d) = if prepared.outputs.is_empty() {
+        let identity = DMatrix::identity(size, size);
+        let d = DMatrix::zeros(size, inputs.len());
+        (
+            states_named.clone(),
+            identity,
+            DMatrix::zeros(size, size),
+            d,
+        )
     } else {
         let count = prepared.outputs.names.len();
-        let derivative = differences::jacobian(&x, &all, count, |x| evaluator.outputs(x))?;
+        let derivative = differences::jacobian(&with_held, &every, count, |z| {
+            let (x, held) = split(z);
+            evaluator.outputs(&x, &efforts, &held)
+        })?;
+        // D: the outputs read no generalised force (the model they read counts none of the
+        // inputs); the held states' columns are differenced with C's.
+        let mut d = DMatrix::zeros(count, inputs.len());
+        let held_columns =
+            (inputs.iter().enumerate()).filter(|(_, i)| matches!(i, Input::State(_)));
+        for ((k, _), column) in held_columns.zip(size..) {
+            d.set_column(k, &derivative.value.column(column));
+        }
         (
             prepared.outputs.names.clone(),
-            derivative.value,
-            derivative.error,
+            derivative.value.columns(0, size).into_owned(),
+            derivative.error.columns(0, size).into_owned(),
+            d,
         )
     };
-    let d = DMatrix::zeros(outputs.len(), evaluator.inputs.len());
     let eigenvalues = modes::eigenvalues(&a).ok_or(LinearizeError::NoEigenvalues)?;
     let chart = &evaluator.chart;
+    let input: Vec<f64> = {
+        let (mut effort, mut state) = (efforts.iter(), held.iter());
+        (inputs.iter())
+            .map(|i| match i {
+                Input::Effort(_) => *effort.next().expect("one per effort input"),
+                Input::State(_) => *state.next().expect("one per state input"),
+            })
+            .collect()
+    };
     Ok(Linearization {
         point: match request.point {
             OperatingPoint::Initial => "initial",
@@ -242,17 +318,22 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
             .map(|&(i, _)| model.velocity_name(i))
             .collect(),
         choice,
-        states,
+        program_states: (evaluator.inputs.kept_states.iter())
+            .map(|&k| model.states[k].name.clone())
+            .collect(),
+        states: states_named,
         inputs: request.inputs.clone(),
         outputs,
         state: x,
         input,
-        accelerations,
+        accelerations: rates[..n].to_vec(),
+        state_rates: rates[n..].to_vec(),
         a,
         b,
         c,
         d,
         a_error,
+        b_error,
         c_error,
         method: METHOD,
         modes: modes::modes(&eigenvalues),
@@ -260,8 +341,12 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     })
 }
 
-/// The coordinates `crank.q`, then their rates `crank.q'`.
-fn state_names(model: &crate::dynamics::model::Model, independent: &[usize]) -> Vec<String> {
+/// The coordinates `crank.q`, then their rates `crank.q'`, then the program's kept states.
+fn state_names(
+    model: &crate::dynamics::model::Model,
+    independent: &[usize],
+    inputs: &Inputs,
+) -> Vec<String> {
     let names: Vec<String> = independent
         .iter()
         .map(|&i| model.velocity_name(i))
@@ -270,35 +355,31 @@ fn state_names(model: &crate::dynamics::model::Model, independent: &[usize]) -> 
         .iter()
         .cloned()
         .chain(names.iter().map(|n| format!("{n}'")))
+        .chain(
+            inputs
+                .kept_states
+                .iter()
+                .map(|&k| model.states[k].name.clone()),
+        )
         .collect()
 }
 
 /// The state velocities of coordinates named `join.coordinate`, each named once.
 fn indices(prepared: &Prepared, names: &[String]) -> Result<Vec<usize>, LinearizeError> {
-    for (k, name) in names.iter().enumerate() {
-        if names[..k].contains(name) {
-            return Err(LinearizeError::Repeated { name: name.clone() });
-        }
-    }
-    let model = &prepared.model;
-    names
-        .iter()
-        .map(|name| {
-            let index = velocity_index(prepared, name).map_err(LinearizeError::Name)?;
-            match model.drives.iter().any(|d| d.velocity == index) {
-                true => Err(LinearizeError::DrivenInput { name: name.clone() }),
-                false => Ok(index),
-            }
-        })
+    refuse_repeated(names)?;
+    (names.iter())
+        .map(|name| coordinate_index(prepared, name))
         .collect()
 }
 
-/// The operating point's time, positions, velocities and inputs.
+/// The operating point's time, positions, velocities, generalised forces along the inputs'
+/// coordinates and the program's states.
 struct Operating {
     time: f64,
     q: Vec<f64>,
     v: Vec<f64>,
-    input: Vec<f64>,
+    efforts: Vec<f64>,
+    states: Vec<f64>,
 }
 
 /// The operating point `point` asks for, its driven coordinates on their laws at its time.
@@ -316,7 +397,8 @@ fn operating_state(
     Ok(operating)
 }
 
-/// The operating point's state as the initial values, a run or the statics give it.
+/// The operating point's state as the initial values, a run or the statics give it; the
+/// program's states at their starting values but where a run ends.
 fn free_operating_state(
     prepared: &Prepared,
     point: OperatingPoint,
@@ -328,24 +410,28 @@ fn free_operating_state(
             .state_from_declared(coordinates, rates)
             .map_err(|e| LinearizeError::System(SystemError::from(e)))
     };
+    let starting: Vec<f64> = model.states.iter().map(|s| s.initial).collect();
     match point {
         OperatingPoint::Initial => {
             let (q, v) = declared(&prepared.coordinates, &prepared.rates)?;
-            let input = vec![0.0; inputs.len()];
             Ok(Operating {
                 time: 0.0,
                 q,
                 v,
-                input,
+                efforts: vec![0.0; inputs.len()],
+                states: starting,
             })
         }
         OperatingPoint::EndOfRun => {
             let mut last = None;
+            // A sample's outputs start with the drives' efforts, then the states' values.
+            let states = model.drives.len()..model.drives.len() + model.states.len();
             let simulation = crate::simulate::run::run(prepared, &mut |sample| {
                 last = Some((
                     sample.time,
                     sample.coordinates.clone(),
                     sample.rates.clone(),
+                    sample.outputs[states.clone()].to_vec(),
                 ))
             });
             if let Some(failure) = simulation.report.failure {
@@ -354,18 +440,23 @@ fn free_operating_state(
                     message: failure.message,
                 });
             }
-            let (time, coordinates, rates) = last.ok_or(LinearizeError::RunFailed {
+            let (time, coordinates, rates, states) = last.ok_or(LinearizeError::RunFailed {
                 time: 0.0,
                 message: "the run wrote no sample".to_string(),
             })?;
             let (q, v) = declared(&coordinates, &rates)?;
-            let input = vec![0.0; inputs.len()];
-            Ok(Operating { time, q, v, input })
+            Ok(Operating {
+                time,
+                q,
+                v,
+                efforts: vec![0.0; inputs.len()],
+                states,
+            })
         }
         OperatingPoint::Equilibrium => {
             let rest = vec![0.0; prepared.rates.len()];
             let (q, v) = declared(&prepared.coordinates, &rest)?;
-            let input = match inputs.is_empty() {
+            let efforts = match inputs.is_empty() {
                 true => Vec::new(),
                 false => holding_efforts(prepared, inputs)
                     .map_err(LinearizeError::Name)?
@@ -378,7 +469,8 @@ fn free_operating_state(
                 time: 0.0,
                 q,
                 v,
-                input,
+                efforts,
+                states: starting,
             })
         }
     }
@@ -454,44 +546,6 @@ fn subsets(items: &[usize], count: usize) -> Vec<Vec<usize>> {
     found
 }
 
-/// What a linearisation does not handle.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Unsupported {
-    /// A spherical or free joint: its orientation is a quaternion, not coordinates to
-    /// differentiate along.
-    Quaternion,
-    /// A contact: its rolling rows constrain velocities, not positions.
-    Contact,
-    /// A coupled (mimic) joint: its coordinate is not independent, nor closed by a loop.
-    Mimic,
-    /// Joint friction: not smooth at rest.
-    Friction,
-    /// A state of the program (`state(x0)`): its equation is not among the mechanism's yet.
-    State,
-}
-
-impl Unsupported {
-    pub fn what(self) -> &'static str {
-        match self {
-            Unsupported::Quaternion => "a spherical or free joint",
-            Unsupported::Contact => "a contact",
-            Unsupported::Mimic => "a coupled (mimic) joint",
-            Unsupported::Friction => "a joint with friction",
-            Unsupported::State => "a state",
-        }
-    }
-
-    fn help(self) -> &'static str {
-        match self {
-            Unsupported::Quaternion => "its orientation is a quaternion, not coordinates to linearise along: write the joint as a chain of revolutes (`link(a, b, c) dof = ...`)",
-            Unsupported::Contact => "a contact constrains velocities, not positions: independent coordinates do not describe it",
-            Unsupported::Mimic => "write the coupling as a loop of the mechanism, or linearise without it",
-            Unsupported::Friction => "friction is not smooth at rest: linearise without it, or with a viscous damper written as an effort",
-            Unsupported::State => "the linear model is the mechanism's alone: linearise without the states (a controller's integral, a motor's current)",
-        }
-    }
-}
-
 /// Refuses, before anything is computed, a mechanism with a part a linearisation does not
 /// handle (`Unsupported`), naming the first such join or contact.
 fn refuse_unsupported(prepared: &Prepared) -> Result<(), LinearizeError> {
@@ -517,9 +571,6 @@ fn refuse_unsupported(prepared: &Prepared) -> Result<(), LinearizeError> {
         let join = &model.joints[friction.joint].chain.name;
         return Err(refuse(join, Unsupported::Friction));
     }
-    if let Some(state) = model.states.first() {
-        return Err(refuse(&state.name, Unsupported::State));
-    }
     Ok(())
 }
 
@@ -541,259 +592,3 @@ fn refuse_imposed_motion(prepared: &Prepared, point: OperatingPoint) -> Result<(
         context,
     })
 }
-
-/// The equations of motion in the chart's coordinates, and the outputs.
-struct Evaluator<'p> {
-    prepared: &'p Prepared,
-    system: MechanicalSystem<'p>,
-    chart: Chart,
-    time: f64,
-    /// The inputs' state velocities.
-    inputs: Vec<usize>,
-    scratch: EffortScratch,
-}
-
-impl Evaluator<'_> {
-    fn state(&mut self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), LinearizeError> {
-        let n = self.chart.independent.len();
-        let model = self.system.model;
-        let data = &mut self.system.scratch.data;
-        Ok(self.chart.state(model, data, &x[..n], &x[n..])?)
-    }
-
-    /// The independent coordinates' accelerations at state x under inputs u.
-    fn accelerations(&mut self, x: &[f64], u: &[f64]) -> Result<Vec<f64>, LinearizeError> {
-        let model = self.system.model;
-        let (q, v) = self.state(x)?;
-        self.system.state.inputs.held.copy_from_slice(u);
-        let y: Vec<f64> = q.iter().chain(&v).copied().collect();
-        let mut dydt = vec![0.0; y.len()];
-        self.system.derivative(self.time, &y, &mut dydt)?;
-        let positions = model.positions();
-        Ok(self
-            .chart
-            .independent
-            .iter()
-            .map(|&i| dydt[positions + i])
-            .collect())
-    }
-
-    /// The program's outputs at state x.
-    fn outputs(&mut self, x: &[f64]) -> Result<Vec<f64>, LinearizeError> {
-        let model = self.system.model;
-        let (q, v) = self.state(x)?;
-        // Angles against the program's initial values, as every output of the study.
-        let reference = AngleReference::at_rest(self.prepared.coordinates.clone());
-        let (coordinates, rates) = model
-            .declared((self.time, &q, &v), &reference)
-            .map_err(|e| LinearizeError::System(SystemError::from(e)))?;
-        let data = &mut self.system.scratch.data;
-        crate::dynamics::algorithms::forward_kinematics(model, data, &q, &v)
-            .map_err(|e| LinearizeError::System(SystemError::from(e)))?;
-        let state = EffortState {
-            world: &data.world,
-            velocity: &data.velocity,
-            coordinates: &coordinates,
-            rates: &rates,
-            states: &[],
-            time: self.time,
-            model: &[],
-        };
-        Ok(self.prepared.outputs.values(&state, &mut self.scratch))
-    }
-}
-
-/// Where a linearisation refuses motions imposed in time.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ImposedContext {
-    Loops,
-    Equilibrium,
-}
-
-impl ImposedContext {
-    /// The command as the user ran it, for the refusal.
-    fn command(self) -> &'static str {
-        match self {
-            ImposedContext::Loops => "`lsdc linearize` of a mechanism with closed loops",
-            ImposedContext::Equilibrium => "`lsdc linearize --equilibrium`",
-        }
-    }
-
-    fn help(self) -> &'static str {
-        match self {
-            ImposedContext::Loops => "linearise the mechanism without the motion imposed in time (remove the drive, or the time from the dof chain); a tree is linearised with its drives on their laws",
-            ImposedContext::Equilibrium => "a coordinate imposed in time is not at rest: linearise about the initial state, or a run's state with --at-time T, where the drives are on their laws",
-        }
-    }
-}
-
-/// Why a mechanism cannot be linearised as asked.
-#[derive(Debug)]
-pub enum LinearizeError {
-    /// An input or coordinate names no coordinate that can carry one (see `StaticsError`).
-    Name(StaticsError),
-    /// A coordinate named twice among the inputs or the coordinates.
-    Repeated {
-        name: String,
-    },
-    /// `--coordinate` for a tree, whose coordinates are all independent.
-    TreeCoordinates,
-    /// As many independent coordinates as the motions with mass are needed; the run's choice.
-    CoordinateCount {
-        given: usize,
-        with_mass: usize,
-        run_choice: Vec<String>,
-    },
-    /// The run's free coordinates include spherical or free joints' velocities, which are no
-    /// coordinate's rates, beyond the massless motions: coordinates must be named.
-    FreeQuaternion {
-        with_mass: usize,
-        run_choice: Vec<String>,
-    },
-    /// The coordinates named leave some of the others undetermined by the loops.
-    NotIndependent {
-        given: Vec<String>,
-        run_choice: Vec<String>,
-    },
-    /// An input along a coordinate a drive imposes: no force moves it.
-    DrivenInput {
-        name: String,
-    },
-    /// A coordinate imposed in time (`name`) where it is not handled.
-    ImposedMotion {
-        name: String,
-        context: ImposedContext,
-    },
-    /// A join or contact (`name`) of a kind a linearisation does not handle.
-    Unsupported {
-        name: String,
-        kind: Unsupported,
-    },
-    /// At an equilibrium the inputs do not hold the mechanism: the largest acceleration left.
-    NotAnEquilibrium {
-        coordinate: String,
-        acceleration: f64,
-    },
-    /// The run to the operating point failed.
-    RunFailed {
-        time: f64,
-        message: String,
-    },
-    /// The loops cannot be closed at a state near the operating point.
-    Chart(ChartError),
-    System(SystemError),
-    /// The eigenvalues of A could not be computed (a value not finite).
-    NoEigenvalues,
-}
-
-impl From<SystemError> for LinearizeError {
-    fn from(error: SystemError) -> Self {
-        LinearizeError::System(error)
-    }
-}
-
-impl From<ChartError> for LinearizeError {
-    fn from(error: ChartError) -> Self {
-        LinearizeError::Chart(error)
-    }
-}
-
-impl LinearizeError {
-    /// The error as a diagnostic located in the program, where it is about a part of it (E0850).
-    pub fn diagnostic(&self, mechanism: &Mechanism) -> Option<Diagnostic> {
-        if let LinearizeError::ImposedMotion { context, .. } = self {
-            return refused_by(mechanism, context.command(), context.help());
-        }
-        let LinearizeError::Unsupported { name, kind } = self else {
-            return None;
-        };
-        let mut joins = (0..mechanism.joins.len() as u32).map(JoinId);
-        let span = match joins.find(|&id| mechanism.join_name(id) == *name) {
-            Some(id) => mechanism.join(id).span,
-            None => {
-                let index =
-                    (0..mechanism.contacts.len()).find(|&k| mechanism.contact_name(k) == *name)?;
-                mechanism.contacts[index].span
-            }
-        };
-        Some(
-            Diagnostic::error(
-                "E0850",
-                format!("`{name}` cannot be linearised: {}", kind.what()),
-            )
-            .primary(span, kind.what())
-            .help(kind.help()),
-        )
-    }
-}
-
-impl fmt::Display for LinearizeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            LinearizeError::Name(error) => write!(f, "{error}"),
-            LinearizeError::Repeated { name } => write!(f, "`{name}` is named twice"),
-            LinearizeError::TreeCoordinates => write!(
-                f,
-                "--coordinate chooses the independent coordinates of closed loops; every coordinate of a tree is independent"
-            ),
-            LinearizeError::CoordinateCount {
-                given,
-                with_mass,
-                run_choice,
-            } => write!(
-                f,
-                "{given} coordinate(s) given with --coordinate, but the loops leave {with_mass} independent motion(s) with mass (the run's free coordinates: {})",
-                quoted(run_choice)
-            ),
-            LinearizeError::FreeQuaternion { with_mass, run_choice } => write!(
-                f,
-                "the run's free coordinates ({}) include velocities of spherical joints, which are no coordinates' rates: name {with_mass} independent coordinates of revolute or prismatic joints with --coordinate (the actuated ones of a parallel robot)",
-                quoted(run_choice)
-            ),
-            LinearizeError::NotIndependent { given, run_choice } => write!(
-                f,
-                "the loops do not determine the other coordinates from {}: choose coordinates that move independently, as the run's {}",
-                quoted(given),
-                quoted(run_choice)
-            ),
-            LinearizeError::Unsupported { name, kind } => {
-                write!(f, "`{name}` cannot be linearised: {}", kind.what())
-            }
-            LinearizeError::DrivenInput { name } => write!(
-                f,
-                "`{name}` is imposed by a law of time: a force along it moves nothing (it becomes the drive's effort); name a free coordinate with --input"
-            ),
-            LinearizeError::ImposedMotion { name, context } => write!(
-                f,
-                "`{name}` is imposed by a law of time, which {} does not handle: {}",
-                context.command(),
-                context.help()
-            ),
-            LinearizeError::NotAnEquilibrium { coordinate, acceleration } => write!(
-                f,
-                "the initial configuration is not an equilibrium: `{coordinate}` accelerates at {acceleration:.6e} with the inputs holding it as well as they can; name inputs (--input) that can hold it"
-            ),
-            LinearizeError::RunFailed { time, message } => {
-                write!(f, "the run to the operating point failed at t = {time}: {message}")
-            }
-            LinearizeError::Chart(ChartError::NotClosed { residual }) => write!(
-                f,
-                "the loops cannot be closed near the operating point (a row left at {residual:.3e}): it may be a singular configuration"
-            ),
-            LinearizeError::Chart(ChartError::Evaluation(error)) => {
-                write!(f, "{}", SystemError::from(error.clone()))
-            }
-            LinearizeError::System(error) => write!(f, "{error}"),
-            LinearizeError::NoEigenvalues => {
-                write!(f, "the eigenvalues of A cannot be computed: it has a value that is not finite")
-            }
-        }
-    }
-}
-
-fn quoted(names: &[String]) -> String {
-    let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
-    names.join(", ")
-}
-
-impl std::error::Error for LinearizeError {}

@@ -125,3 +125,29 @@ fn no_library_path() -> LoadOptions {
         use_environment: false,
     }
 }
+
+/// The accelerations of the velocities `velocities` (named as `Model::velocity_name`) and the
+/// rates of the program's states, at the prepared program's initial state as its own assembly
+/// closes it, at t = 0: an evaluation of the closed-loop model independent of a
+/// linearisation's chart.
+pub fn assembled_rates(prepared: &Prepared, velocities: &[&str]) -> (Vec<f64>, Vec<f64>) {
+    use lsdc::dynamics::loops::Stabilisation;
+    use lsdc::simulate::system::MechanicalSystem;
+    let model = &prepared.model;
+    let mut y = initial_state(prepared);
+    let reference = prepared.coordinates.clone();
+    let mut system = MechanicalSystem::new(model, reference, Stabilisation::Projection);
+    system.start_loops(&mut y).unwrap();
+    let mut dydt = vec![0.0; y.len()];
+    system.derivative(0.0, &y, &mut dydt).unwrap();
+    let mut states = vec![0.0; model.states.len()];
+    system.state_rates(&mut states).unwrap();
+    let names: Vec<String> = (0..model.velocities())
+        .map(|i| model.velocity_name(i))
+        .collect();
+    let accelerations = velocities
+        .iter()
+        .map(|a| dydt[model.positions() + names.iter().position(|n| n == a).unwrap()])
+        .collect();
+    (accelerations, states)
+}
