@@ -11,11 +11,12 @@ use super::shared::{
     err, json, out, prepare_program, usage_error, Format, LibraryArgs, SampleFormat,
 };
 use lsdc::api::SettingsChanges;
+use lsdc::kinematics::frames::FramePoint;
 use lsdc::prepare::Prepared;
 use lsdc::studies::inverse::{check_driven, from_run};
 use lsdc::studies::kinematic_models::{actuation, Output, OutputKind};
-use lsdc::studies::motion_file::{read_motion, Derivation};
-use lsdc::studies::trajectory::{impose, Imposed, Target};
+use lsdc::studies::motion_file::{read_motion, Derivation, MotionFile};
+use lsdc::studies::trajectory::{impose, program_path, Imposed, Target};
 
 #[derive(clap::Args)]
 pub struct InverseArgs {
@@ -40,8 +41,9 @@ pub struct InverseArgs {
     /// coordinates `--actuate` through the inverse geometric model.
     #[arg(long, value_name = "FRAME", requires = "motion")]
     frame: Option<String>,
-    /// An actuated coordinate `join.coordinate` driving the frame `--frame` (repeatable).
-    #[arg(long = "actuate", value_name = "JOIN.COORDINATE", requires = "frame")]
+    /// An actuated coordinate `join.coordinate` driving the frame `--frame`, or the frame of
+    /// the program's position drive (repeatable).
+    #[arg(long = "actuate", value_name = "JOIN.COORDINATE")]
     actuated: Vec<String>,
     /// The error variance of the motion's positions for the spline of the rates and
     /// accelerations not in the file (their units squared; 0, the default: the spline
@@ -76,12 +78,28 @@ pub fn run(args: &InverseArgs) -> ExitCode {
         Ok(prepared) => prepared,
         Err(code) => return code,
     };
-    let imposed = match &args.motion {
-        Some(motion) => match imposed_motion(args, &program, &mut prepared, motion) {
+    let settings = &prepared.settings;
+    let path = program_path(&prepared, settings.duration, settings.output);
+    let imposed = match (&args.motion, path) {
+        (Some(_), Some(_)) => {
+            let drive = &prepared.model.position_drives[0];
+            return usage_error(&format!("the program drives the position of `{}`: a motion from a file would drive the mechanism twice (leave out `--motion`, or the position drive)", drive.frame.name));
+        }
+        (Some(motion), None) => match imposed_motion(args, &program, &mut prepared, motion) {
             Ok(imposed) => Some(imposed),
             Err(why) => return usage_error(&why),
         },
-        None => None,
+        // Without actuated coordinates the path's own rows impose it: the efforts are the
+        // forces along x, y, z at the frame's origin.
+        (None, Some(_)) if args.actuated.is_empty() => None,
+        (None, Some(path)) => match path.and_then(|path| follow_path(args, &mut prepared, path)) {
+            Ok(imposed) => Some(imposed),
+            Err(why) => return usage_error(&why),
+        },
+        (None, None) if !args.actuated.is_empty() => {
+            return usage_error("`--actuate` names the coordinates that move a frame along a path: give the path with `--motion FILE --frame FRAME`, or drive the frame's position in the program (`drive position(nacelle) = [x, y, z];`)");
+        }
+        (None, None) => None,
     };
     if let Err(why) = check_driven(&prepared) {
         return usage_error(&why.to_string());
@@ -118,6 +136,28 @@ pub fn run(args: &InverseArgs) -> ExitCode {
     }
 }
 
+/// The program's position drive followed through the actuated coordinates `--actuate` (see
+/// `studies::trajectory`): their drives added to `prepared`, in its place.
+fn follow_path(
+    args: &InverseArgs,
+    prepared: &mut Prepared,
+    (motion, frame): (MotionFile, FramePoint),
+) -> Result<Imposed, String> {
+    let actuation = actuation(prepared, &args.actuated).map_err(|e| e.to_string())?;
+    let output = Output {
+        frame,
+        kind: OutputKind::Point,
+    };
+    let target = Target::Frame {
+        output: &output,
+        actuation: &actuation,
+    };
+    let imposed = impose(prepared, &motion, target)
+        .map_err(|why| format!("the position drive of `{}`: {why}", output.frame.name))?;
+    prepared.model.position_drives.clear();
+    Ok(imposed)
+}
+
 /// The drives of the motion file `path` added to `prepared` (see `studies::trajectory`); the
 /// rates and accelerations taken from the spline are said on standard error.
 fn imposed_motion(
@@ -126,6 +166,9 @@ fn imposed_motion(
     prepared: &mut Prepared,
     path: &std::path::Path,
 ) -> Result<Imposed, String> {
+    if args.frame.is_none() && !args.actuated.is_empty() {
+        return Err("`--actuate` names the coordinates that move the frame `--frame` along the file's path: give `--frame FRAME`".to_string());
+    }
     if !(args.smoothing.is_finite() && args.smoothing >= 0.0) {
         return Err("`--smoothing` must be 0 or positive".to_string());
     }

@@ -528,6 +528,12 @@ fn refuse_unsupported(prepared: &Prepared) -> Result<(), LinearizeError> {
 /// laws) and at an equilibrium (a driven coordinate is not at rest, nor held by the inputs).
 fn refuse_imposed_motion(prepared: &Prepared, point: OperatingPoint) -> Result<(), LinearizeError> {
     let model = &prepared.model;
+    if let Some(path) = model.position_drives.first() {
+        return Err(LinearizeError::ImposedMotion {
+            name: path.frame.name.clone(),
+            context: ImposedContext::Path,
+        });
+    }
     let Some(driven) = model.drives.first() else {
         return Ok(());
     };
@@ -608,6 +614,9 @@ impl Evaluator<'_> {
 pub enum ImposedContext {
     Loops,
     Equilibrium,
+    /// A frame's position imposed (`drive position(F) = law`), whose rows the chart does not
+    /// keep.
+    Path,
 }
 
 impl ImposedContext {
@@ -616,6 +625,9 @@ impl ImposedContext {
         match self {
             ImposedContext::Loops => "`lsdc linearize` of a mechanism with closed loops",
             ImposedContext::Equilibrium => "`lsdc linearize --equilibrium`",
+            ImposedContext::Path => {
+                "`lsdc linearize` of a mechanism whose frame's position is imposed"
+            }
         }
     }
 
@@ -623,6 +635,7 @@ impl ImposedContext {
         match self {
             ImposedContext::Loops => "linearise the mechanism without the motion imposed in time (remove the drive, or the time from the dof chain); a tree is linearised with its drives on their laws",
             ImposedContext::Equilibrium => "a coordinate imposed in time is not at rest: linearise about the initial state, or a run's state with --at-time T, where the drives are on their laws",
+            ImposedContext::Path => "linearise the mechanism without its position drive, or drive its coordinates instead (`drive crank.q = law`)",
         }
     }
 }
