@@ -11,12 +11,11 @@ use super::shared::{
     err, json, out, prepare_program, usage_error, Format, LibraryArgs, SampleFormat,
 };
 use lsdc::api::SettingsChanges;
-use lsdc::kinematics::frames::FramePoint;
 use lsdc::prepare::Prepared;
 use lsdc::studies::inverse::{check_driven, from_run};
 use lsdc::studies::kinematic_models::{actuation, Output, OutputKind};
-use lsdc::studies::motion_file::{read_motion, Derivation, MotionFile};
-use lsdc::studies::trajectory::{impose, program_path, Imposed, Target};
+use lsdc::studies::motion_file::{read_motion, Derivation};
+use lsdc::studies::trajectory::{follow_program_path, impose, Imposed, Target};
 
 #[derive(clap::Args)]
 pub struct InverseArgs {
@@ -78,28 +77,28 @@ pub fn run(args: &InverseArgs) -> ExitCode {
         Ok(prepared) => prepared,
         Err(code) => return code,
     };
-    let settings = &prepared.settings;
-    let path = program_path(&prepared, settings.duration, settings.output);
-    let imposed = match (&args.motion, path) {
-        (Some(_), Some(_)) => {
+    let has_path = !prepared.model.position_drives.is_empty();
+    let imposed = match (&args.motion, has_path) {
+        (Some(_), true) => {
             let drive = &prepared.model.position_drives[0];
             return usage_error(&format!("the program drives the position of `{}`: a motion from a file would drive the mechanism twice (leave out `--motion`, or the position drive)", drive.frame.name));
         }
-        (Some(motion), None) => match imposed_motion(args, &program, &mut prepared, motion) {
+        (Some(motion), false) => match imposed_motion(args, &program, &mut prepared, motion) {
             Ok(imposed) => Some(imposed),
             Err(why) => return usage_error(&why),
         },
         // Without actuated coordinates the path's own rows impose it: the efforts are the
         // forces along x, y, z at the frame's origin.
-        (None, Some(_)) if args.actuated.is_empty() => None,
-        (None, Some(path)) => match path.and_then(|path| follow_path(args, &mut prepared, path)) {
-            Ok(imposed) => Some(imposed),
-            Err(why) => return usage_error(&why),
+        (None, true) if args.actuated.is_empty() => None,
+        (None, true) => match follow_program_path(&mut prepared, &args.actuated) {
+            Some(Ok(imposed)) => Some(imposed),
+            Some(Err(why)) => return usage_error(&why),
+            None => None,
         },
-        (None, None) if !args.actuated.is_empty() => {
+        (None, false) if !args.actuated.is_empty() => {
             return usage_error("`--actuate` names the coordinates that move a frame along a path: give the path with `--motion FILE --frame FRAME`, or drive the frame's position in the program (`drive position(nacelle) = [x, y, z];`)");
         }
-        (None, None) => None,
+        (None, false) => None,
     };
     if let Err(why) = check_driven(&prepared) {
         return usage_error(&why.to_string());
@@ -134,28 +133,6 @@ pub fn run(args: &InverseArgs) -> ExitCode {
         }
         None => ExitCode::SUCCESS,
     }
-}
-
-/// The program's position drive followed through the actuated coordinates `--actuate` (see
-/// `studies::trajectory`): their drives added to `prepared`, in its place.
-fn follow_path(
-    args: &InverseArgs,
-    prepared: &mut Prepared,
-    (motion, frame): (MotionFile, FramePoint),
-) -> Result<Imposed, String> {
-    let actuation = actuation(prepared, &args.actuated).map_err(|e| e.to_string())?;
-    let output = Output {
-        frame,
-        kind: OutputKind::Point,
-    };
-    let target = Target::Frame {
-        output: &output,
-        actuation: &actuation,
-    };
-    let imposed = impose(prepared, &motion, target)
-        .map_err(|why| format!("the position drive of `{}`: {why}", output.frame.name))?;
-    prepared.model.position_drives.clear();
-    Ok(imposed)
 }
 
 /// The drives of the motion file `path` added to `prepared` (see `studies::trajectory`); the

@@ -109,18 +109,16 @@ pub fn point_rows_into(
                 rows.bias[3 * k + axis] = material[axis] - laws[axis].acceleration;
             }
         }
-        let path = Vector3::from_fn(|axis, _| laws[axis].position);
-        for axis in 0..3 {
-            rows.position[3 * k + axis] = origin[axis] - path[axis];
+        for (axis, law) in laws.iter().enumerate() {
+            rows.position[3 * k + axis] = origin[axis] - law.position;
         }
         rows.laws.push(laws);
     }
     let v = nalgebra::DVectorView::from_slice(v, v.len());
     rows.velocity.gemv(1.0, &rows.jacobian, &v, 0.0);
-    for (k, laws) in rows.laws.iter().enumerate() {
-        for axis in 0..3 {
-            rows.velocity[3 * k + axis] -= laws[axis].rate;
-        }
+    let rates = rows.laws.iter().flatten().map(|law| law.rate);
+    for (velocity, rate) in rows.velocity.iter_mut().zip(rates) {
+        *velocity -= rate;
     }
 }
 

@@ -24,7 +24,9 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use super::configurations::{assemble_holding, close_from, StateRequest};
-use super::kinematic_models::{models_at, Actuation, Output, OutputKind, SINGULAR_TOLERANCE};
+use super::kinematic_models::{
+    actuation, models_at, Actuation, Output, OutputKind, SINGULAR_TOLERANCE,
+};
 use super::motion_file::{Derivation, MotionFile, Series};
 use super::statics::velocity_index;
 use crate::dynamics::drives::DrivenCoordinate;
@@ -156,6 +158,33 @@ pub fn program_path(
         })
         .collect();
     Some(Ok((MotionFile { times, series }, drive.frame.clone())))
+}
+
+/// The program's position drive followed through the actuated coordinates `actuated`
+/// (`join.coordinate`, one per degree of freedom): its path sampled at the run's output times
+/// ([`program_path`]) imposed as a file's path is, the actuated coordinates' drives added to
+/// `prepared` in the place of the position drive. `None` without a position drive.
+pub fn follow_program_path(
+    prepared: &mut Prepared,
+    actuated: &[String],
+) -> Option<Result<Imposed, String>> {
+    let settings = &prepared.settings;
+    let path = program_path(prepared, settings.duration, settings.output)?;
+    Some(path.and_then(|(motion, frame)| {
+        let actuation = actuation(prepared, actuated).map_err(|e| e.to_string())?;
+        let output = Output {
+            frame,
+            kind: OutputKind::Point,
+        };
+        let target = Target::Frame {
+            output: &output,
+            actuation: &actuation,
+        };
+        let imposed = impose(prepared, &motion, target)
+            .map_err(|why| format!("the position drive of `{}`: {why}", output.frame.name))?;
+        prepared.model.position_drives.clear();
+        Ok(imposed)
+    }))
 }
 
 /// The positions, rates and accelerations of the driven coordinates at the file's times, and

@@ -6,14 +6,16 @@
 //! direct velocity model) and followed through the actuated arms (`lsdc inverse --actuate`),
 //! both against the independent computation; the refusals.
 
-use crate::common::programs::{output, refusal_codes, run_text};
+use crate::common::programs::{output, refusal_codes};
+use crate::rheonomic::run_with_every_integrator;
+use crate::trajectory::inverse_run;
 use lsdc::api::{Program, SettingsChanges};
 use lsdc::integrators::{Feature, INTEGRATORS};
 use lsdc::prepare::Settings;
 use lsdc::simulate::run::Simulation;
-use lsdc::studies::inverse::{check_driven, from_run};
+use lsdc::studies::inverse::check_driven;
 use lsdc::studies::kinematic_models::{actuation, models_at, Output, OutputKind};
-use lsdc::studies::trajectory::{impose, program_path, Target};
+use lsdc::studies::trajectory::follow_program_path;
 
 fn settings(integrator: lsdc::prepare::Integrator, duration: f64) -> Settings {
     Settings {
@@ -47,9 +49,9 @@ fn off_path(simulation: &Simulation, path: impl Fn(f64) -> [f64; 3]) -> f64 {
     let first = output(simulation, "p.x");
     let mut largest: f64 = 0.0;
     for sample in &simulation.samples {
-        let law = path(sample.time);
-        for axis in 0..3 {
-            largest = largest.max((sample.outputs[first + axis] - law[axis]).abs());
+        let ours = &sample.outputs[first..first + 3];
+        for (x, law) in ours.iter().zip(path(sample.time)) {
+            largest = largest.max((x - law).abs());
         }
     }
     largest
@@ -60,20 +62,9 @@ fn off_path(simulation: &Simulation, path: impl Fn(f64) -> [f64; 3]) -> f64 {
 /// closes to 1e-9, with every integrator that imposes drives (the others refuse).
 #[test]
 fn a_point_mass_on_slides_needs_the_force_of_its_closed_form_with_every_integrator() {
-    for entry in INTEGRATORS {
-        let simulation = run_text(SLIDES, settings(entry.integrator.clone(), 1.0));
-        if entry.unsupported.contains(&Feature::Drives) {
-            let failure = simulation.report.failure.expect("refused");
-            assert!(failure.message.contains("drives"), "{}", failure.message);
-            continue;
-        }
-        assert!(
-            simulation.report.failure.is_none(),
-            "{}: {:?}",
-            entry.name,
-            simulation.report.failure
-        );
-        let force = output(&simulation, "ball.drive_force.x");
+    let settings = |integrator| settings(integrator, 1.0);
+    run_with_every_integrator(SLIDES, settings, |name, simulation| {
+        let force = output(simulation, "ball.drive_force.x");
         let mut error: f64 = 0.0;
         for sample in &simulation.samples {
             let (_, acceleration) = helix(sample.time);
@@ -82,17 +73,15 @@ fn a_point_mass_on_slides_needs_the_force_of_its_closed_form_with_every_integrat
                 2.0 * acceleration[1],
                 2.0 * (acceleration[2] + 9.81),
             ];
-            for axis in 0..3 {
-                let ours = sample.outputs[force + axis];
-                error = error.max((ours - expected[axis]).abs() / 19.62);
+            let ours = &sample.outputs[force..force + 3];
+            for (x, expected) in ours.iter().zip(expected) {
+                error = error.max((x - expected).abs() / 19.62);
             }
         }
-        assert!(error < 1e-9, "{}: force {error:e}", entry.name);
-        let off = off_path(&simulation, |t| helix(t).0);
-        assert!(off < 1e-12, "{}: off the path by {off:e}", entry.name);
-        let balance = simulation.report.energy_balance.expect("work tracked");
-        assert!(balance < 1e-9, "{}: energy balance {balance:e}", entry.name);
-    }
+        assert!(error < 1e-9, "{name}: force {error:e}");
+        let off = off_path(simulation, |t| helix(t).0);
+        assert!(off < 1e-12, "{name}: off the path by {off:e}");
+    });
 }
 
 /// The Delta with its nacelle's harmonic path in the program (examples/delta_isir88_path.lsd).
@@ -182,13 +171,7 @@ fn delta_by_its_path(changes: &SettingsChanges) -> (Vec<[f64; 4]>, f64, f64) {
     let program = delta_path();
     let prepared = program.prepare(&[], changes).expect("prepares");
     check_driven(&prepared).expect("the path drives every degree of freedom");
-    let simulation = lsdc::api::run(&prepared, &mut |_| {});
-    assert!(
-        simulation.report.failure.is_none(),
-        "{:?}",
-        simulation.report.failure
-    );
-    let inverse = from_run(&prepared, &simulation);
+    let (simulation, inverse) = inverse_run(&prepared);
     assert_eq!(inverse.driven, ["nacelle.x", "nacelle.y", "nacelle.z"]);
     let names: Vec<String> = ["A1.q", "A2.q", "A3.q"].map(String::from).to_vec();
     let actuated = actuation(&prepared, &names).expect("actuated");
@@ -233,25 +216,11 @@ fn the_delta_path_in_the_program_followed_by_its_arms_needs_the_torques_of_virtu
     let mut prepared = program
         .prepare(&[], &bench_samples(None))
         .expect("prepares");
-    let (duration, step) = (prepared.settings.duration, prepared.settings.output);
-    let (motion, frame) = program_path(&prepared, duration, step)
+    let actuated = ["A1.q", "A2.q", "A3.q"].map(String::from);
+    follow_program_path(&mut prepared, &actuated)
         .expect("a position drive")
-        .expect("sampled");
-    let names: Vec<String> = ["A1.q", "A2.q", "A3.q"].map(String::from).to_vec();
-    let actuated = actuation(&prepared, &names).expect("actuated");
-    let point = Output {
-        frame,
-        kind: OutputKind::Point,
-    };
-    let target = Target::Frame {
-        output: &point,
-        actuation: &actuated,
-    };
-    impose(&mut prepared, &motion, target).expect("imposes");
-    prepared.model.position_drives.clear();
-    let simulation = lsdc::api::run(&prepared, &mut |_| {});
-    assert!(simulation.report.failure.is_none());
-    let inverse = from_run(&prepared, &simulation);
+        .expect("followed");
+    let (_, inverse) = inverse_run(&prepared);
     assert_eq!(inverse.driven, ["A1.q", "A2.q", "A3.q"]);
     let torques: Vec<[f64; 4]> = (inverse.samples.iter())
         .map(|s| [s.time, s.efforts[0], s.efforts[1], s.efforts[2]])

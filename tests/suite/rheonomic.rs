@@ -26,8 +26,19 @@ fn settings(integrator: Integrator, duration: f64) -> Settings {
 /// do not handle drives; `check` receives the others' runs.
 fn with_every_integrator(example: &str, duration: f64, check: impl Fn(&str, &Simulation)) {
     let text = example_text(example, &[]);
+    run_with_every_integrator(&text, |integrator| settings(integrator, duration), check);
+}
+
+/// Runs the program `text` with every integrator of the registry (its settings from
+/// `settings`), checking the refusal of those that do not handle drives and the energy balance
+/// of the others' runs (to 1e-9), which `check` receives.
+pub fn run_with_every_integrator(
+    text: &str,
+    settings: impl Fn(Integrator) -> Settings,
+    check: impl Fn(&str, &Simulation),
+) {
     for entry in INTEGRATORS {
-        let simulation = run_text(&text, settings(entry.integrator.clone(), duration));
+        let simulation = run_text(text, settings(entry.integrator.clone()));
         if entry.unsupported.contains(&Feature::Drives) {
             let failure = simulation.report.failure.expect("refused");
             assert!(failure.message.contains("drives"), "{}", failure.message);
