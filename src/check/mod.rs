@@ -503,6 +503,9 @@ impl<'w> Checker<'w> {
                 return;
             }
         }
+        if let Some(frame) = drive.position_target() {
+            return self.position_drive(drive, frame, ctx);
+        }
         let ty = self.expr(&drive.target, ctx);
         let target_ty = match &drive.target.kind {
             crate::syntax::ast::ExprKind::Field(access) => {
@@ -525,6 +528,32 @@ impl<'w> Checker<'w> {
         }
         let value_ty = self.expr(&drive.value, ctx);
         self.expect_value(&drive.value, value_ty, Ty::Scalar, "the law of a drive");
+    }
+
+    /// `drive position(F) = law`: F a frame (E0492), the law a vector (E0493). Whether the
+    /// path over-constrains the mechanism is decided with it (`kinematics::position_drives`).
+    fn position_drive(
+        &mut self,
+        drive: &'w crate::syntax::ast::DriveDecl,
+        frame: &'w Expr,
+        ctx: &mut Ctx,
+    ) {
+        let frame_ty = self.expr(frame, ctx);
+        if !frame_ty.fits(Ty::Frame) {
+            self.report(
+                Diagnostic::error("E0492", format!("`drive position(...)` imposes the position of a frame, not of {}", frame_ty.with_article()))
+                    .primary(frame.span, format!("this is {}, not a frame", frame_ty.with_article()))
+                    .help("name a body or a frame (`drive position(nacelle) = [x, y, z]`, `drive position(arm.tip) = ...`); to impose a join's coordinate, `drive crank.q = law`"),
+            );
+        }
+        let law_ty = self.expr(&drive.value, ctx);
+        if !law_ty.fits(Ty::Vector) {
+            self.report(
+                Diagnostic::error("E0493", format!("the law of a position drive is a vector of three laws of time (x, y, z in the fixed axes), not {}", law_ty.with_article()))
+                    .primary(drive.value.span, format!("this is {}", law_ty.with_article()))
+                    .help("write the three coordinates of the path: `drive position(nacelle) = [0.05 * cos(time), 0.05 * sin(time), -0.3];`"),
+            );
+        }
     }
 
     /// `rate s = f` and `update s = f`: the target and the law are scalars (that the target is

@@ -15,7 +15,7 @@ use lsdc::prepare::Prepared;
 use lsdc::studies::inverse::{check_driven, from_run};
 use lsdc::studies::kinematic_models::{actuation, Output, OutputKind};
 use lsdc::studies::motion_file::{read_motion, Derivation};
-use lsdc::studies::trajectory::{impose, Imposed, Target};
+use lsdc::studies::trajectory::{follow_program_path, impose, Imposed, Target};
 
 #[derive(clap::Args)]
 pub struct InverseArgs {
@@ -40,8 +40,9 @@ pub struct InverseArgs {
     /// coordinates `--actuate` through the inverse geometric model.
     #[arg(long, value_name = "FRAME", requires = "motion")]
     frame: Option<String>,
-    /// An actuated coordinate `join.coordinate` driving the frame `--frame` (repeatable).
-    #[arg(long = "actuate", value_name = "JOIN.COORDINATE", requires = "frame")]
+    /// An actuated coordinate `join.coordinate` driving the frame `--frame`, or the frame of
+    /// the program's position drive (repeatable).
+    #[arg(long = "actuate", value_name = "JOIN.COORDINATE")]
     actuated: Vec<String>,
     /// The error variance of the motion's positions for the spline of the rates and
     /// accelerations not in the file (their units squared; 0, the default: the spline
@@ -76,12 +77,28 @@ pub fn run(args: &InverseArgs) -> ExitCode {
         Ok(prepared) => prepared,
         Err(code) => return code,
     };
-    let imposed = match &args.motion {
-        Some(motion) => match imposed_motion(args, &program, &mut prepared, motion) {
+    let has_path = !prepared.model.position_drives.is_empty();
+    let imposed = match (&args.motion, has_path) {
+        (Some(_), true) => {
+            let drive = &prepared.model.position_drives[0];
+            return usage_error(&format!("the program drives the position of `{}`: a motion from a file would drive the mechanism twice (leave out `--motion`, or the position drive)", drive.frame.name));
+        }
+        (Some(motion), false) => match imposed_motion(args, &program, &mut prepared, motion) {
             Ok(imposed) => Some(imposed),
             Err(why) => return usage_error(&why),
         },
-        None => None,
+        // Without actuated coordinates the path's own rows impose it: the efforts are the
+        // forces along x, y, z at the frame's origin.
+        (None, true) if args.actuated.is_empty() => None,
+        (None, true) => match follow_program_path(&mut prepared, &args.actuated) {
+            Some(Ok(imposed)) => Some(imposed),
+            Some(Err(why)) => return usage_error(&why),
+            None => None,
+        },
+        (None, false) if !args.actuated.is_empty() => {
+            return usage_error("`--actuate` names the coordinates that move a frame along a path: give the path with `--motion FILE --frame FRAME`, or drive the frame's position in the program (`drive position(nacelle) = [x, y, z];`)");
+        }
+        (None, false) => None,
     };
     if let Err(why) = check_driven(&prepared) {
         return usage_error(&why.to_string());
@@ -126,6 +143,9 @@ fn imposed_motion(
     prepared: &mut Prepared,
     path: &std::path::Path,
 ) -> Result<Imposed, String> {
+    if args.frame.is_none() && !args.actuated.is_empty() {
+        return Err("`--actuate` names the coordinates that move the frame `--frame` along the file's path: give `--frame FRAME`".to_string());
+    }
     if !(args.smoothing.is_finite() && args.smoothing >= 0.0) {
         return Err("`--smoothing` must be 0 or positive".to_string());
     }

@@ -69,7 +69,7 @@ pub struct ContactRows {
 pub const DISC_FLAT: f64 = 1e-9;
 
 /// The fixed-frame twist of a body (index 0: earth, at rest).
-fn world_twist(data: &Data, body: usize) -> Motion {
+pub(super) fn world_twist(data: &Data, body: usize) -> Motion {
     if body == 0 {
         return Motion::zeros();
     }
@@ -78,7 +78,7 @@ fn world_twist(data: &Data, body: usize) -> Motion {
 
 /// The fixed-frame acceleration of a body at zero joint accelerations (after
 /// `bias_accelerations`).
-fn world_bias(data: &Data, body: usize) -> Motion {
+pub(super) fn world_bias(data: &Data, body: usize) -> Motion {
     if body == 0 {
         return Motion::zeros();
     }
@@ -86,7 +86,7 @@ fn world_bias(data: &Data, body: usize) -> Motion {
 }
 
 /// Velocity at `point` of a fixed-frame twist.
-fn at_point(point: &Vector3<f64>, twist: &Motion) -> Vector3<f64> {
+pub(super) fn at_point(point: &Vector3<f64>, twist: &Motion) -> Vector3<f64> {
     spatial::linear(&spatial::shifted(point, twist))
 }
 
@@ -174,16 +174,33 @@ fn fill_jacobian(
     jacobian: &mut DMatrix<f64>,
 ) {
     for (body, sign) in [(contact.round_body, 1.0), (contact.plane_body, -1.0)] {
-        for on_path in model.path_to_earth(body) {
-            let joint = &model.joints[on_path - 1];
-            let state = &data.states[on_path - 1];
-            for column in 0..joint.nv() {
-                let local = Motion::from_column_slice(state.subspace.column(column).as_slice());
-                let twist = spatial::motion_to_parent(&data.world[joint.child], &local);
-                let along = axes.transpose() * at_point(point, &twist);
-                let mut entries = jacobian.view_mut((row, joint.v_offset + column), (3, 1));
-                entries += sign * along;
-            }
+        add_point_jacobian(model, data, body, point, axes, sign, row, jacobian);
+    }
+}
+
+/// Adds to the rows `row`, `row + 1`, `row + 2` of `jacobian` `sign` times the velocity that
+/// each state velocity gives the material point of `body` at `point` (fixed axes), along the
+/// columns of `axes`; `data` holds the forward kinematics.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn add_point_jacobian(
+    model: &Model,
+    data: &Data,
+    body: usize,
+    point: &Vector3<f64>,
+    axes: &Matrix3<f64>,
+    sign: f64,
+    row: usize,
+    jacobian: &mut DMatrix<f64>,
+) {
+    for on_path in model.path_to_earth(body) {
+        let joint = &model.joints[on_path - 1];
+        let state = &data.states[on_path - 1];
+        for column in 0..joint.nv() {
+            let local = Motion::from_column_slice(state.subspace.column(column).as_slice());
+            let twist = spatial::motion_to_parent(&data.world[joint.child], &local);
+            let along = axes.transpose() * at_point(point, &twist);
+            let mut entries = jacobian.view_mut((row, joint.v_offset + column), (3, 1));
+            entries += sign * along;
         }
     }
 }

@@ -58,7 +58,8 @@ pub fn conservative_forces(model: &Model) -> Conservative {
         && model.contacts.iter().all(|c| c.friction.is_none())
         && model.frictions.iter().all(|f| f.dry == 0.0 && f.viscous == 0.0)
         // A drive does work on the mechanism: tracked as work too.
-        && model.drives.is_empty();
+        && model.drives.is_empty()
+        && model.position_drives.is_empty();
     Conservative {
         constant,
         applied,

@@ -9,6 +9,7 @@ pub mod compiled;
 pub mod contacts;
 pub mod dense;
 pub mod derivatives;
+pub mod driven_points;
 pub mod drives;
 pub mod efforts;
 pub mod elements;

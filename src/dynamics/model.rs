@@ -23,6 +23,7 @@ use crate::elab::value::{BodyRef, JoinId, Scalar, Vector};
 use crate::kinematics::contacts::{contact_models, ContactModel};
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::kinematics::model::{constant_pose, ChainMotion, JointModel, KinematicModel};
+use crate::kinematics::position_drives::{self, ResolvedPositionDrive};
 use crate::source::Span;
 use crate::spatial::{self, Inertia, Pose, RigidInertia, Transform};
 use crate::symbolic::expr::ExprId;
@@ -95,6 +96,9 @@ pub struct Model {
     pub frictions: Vec<Friction>,
     /// The coordinates imposed as laws of time (`drive`): rows of the constraint rows.
     pub drives: Vec<DrivenCoordinate>,
+    /// The frames' positions imposed as laws of time (`drive position(F) = law`): three rows
+    /// each (`driven_points`).
+    pub position_drives: Vec<ResolvedPositionDrive>,
     /// The program's states (`state(x0)`), integrated with the motion after the velocities.
     pub states: Vec<StateModel>,
     /// The actuators (`actuate`), whose laws may read the model; `None` without any.
@@ -339,6 +343,13 @@ pub fn build_with(
     let mimics = mimics::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let drives = drives::build(mechanism, kinematics, &joints, &mut errors);
+    let position_drives = match position_drives::resolve(mechanism, kinematics) {
+        Ok(resolved) => resolved,
+        Err(refused) => {
+            errors.extend(refused);
+            Vec::new()
+        }
+    };
     let state_value = |e, what: &str, at| missing(mechanism, e, what, Some(at));
     let states = states::build(mechanism, unknowns, &state_value, &mut errors);
     let read = EffortsRead {
@@ -404,6 +415,7 @@ pub fn build_with(
         mimics,
         frictions,
         drives,
+        position_drives,
         states,
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),

@@ -12,10 +12,12 @@
 //! 2. the contacts' kept rows (`contacts`), with their velocity-product terms γ;
 //! 3. with closed loops, one row per mimic coupling, q̇_f − m q̇_l = 0 (a tree eliminates them
 //!    in X instead);
-//! 4. one unit row eₖᵀ per coordinate held ([`HeldRow`]): driven by a law of time (`drive`),
+//! 4. three rows per position drive (`driven_points`), the velocity of a frame's origin along
+//!    the fixed axes, whose forces act on its body at the origin;
+//! 5. one unit row eₖᵀ per coordinate held ([`HeldRow`]): driven by a law of time (`drive`),
 //!    on a stop it rests on, or held by its dry friction (sticking).
 //!
-//! The blocks 2 to 4 are this stack's rows G, solved on X. With H the rows their forces act
+//! The blocks 2 to 5 are this stack's rows G, solved on X. With H the rows their forces act
 //! along (G, but on a sliding contact's normal row, whose force carries the friction it
 //! causes), the accelerations a₀ the base solve found without them become a = a₀ + X Hᵀλ with
 //! (G X Hᵀ) λ = −(G a₀ + γ): the saddle-point system [M −Hᵀ; G 0] solved on the response
@@ -46,6 +48,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::contacts::{self, ContactRows};
 use super::dense::Pivoted;
+use super::driven_points::PointRows;
 use super::drives::DrivenCoordinate;
 use super::mimics::Mimic;
 use super::model::Model;
@@ -142,8 +145,10 @@ pub const DEPENDENT_ROWS: f64 = 1e-12;
 pub struct RowStack {
     /// The contacts' rows stacked (indices among the three per contact of `ContactRows`).
     contacts: Vec<usize>,
-    /// How many coupling rows follow them, then the coordinates held.
+    /// How many coupling rows follow them, then how many position drives' rows (three per
+    /// drive), then the coordinates held.
     couplings: usize,
+    points: usize,
     held: Vec<HeldRow>,
     /// G (rows × velocities), Hᵀ (velocities × rows), γ, X Hᵀ, G X Hᵀ.
     g: DMatrix<f64>,
@@ -175,11 +180,12 @@ pub fn impact_velocities(
     response: &mut Response,
     all: &ContactRows,
     mimics: &[Mimic],
+    points: &PointRows,
     v: &[f64],
     after: &mut [f64],
 ) -> bool {
     after.copy_from_slice(v);
-    stack.velocity_values(all, mimics, v);
+    stack.velocity_values(all, mimics, points, v);
     stack.add_least_change(response, after);
     // The law holds exactly on the stop's row: the solve leaves its rate within round-off of
     // the target, and after a dead stop (e = 0) a rate of −1e-17 into the stop would be a
@@ -214,6 +220,7 @@ impl RowStack {
         RowStack {
             contacts: Vec::new(),
             couplings: 0,
+            points: 0,
             held: Vec::new(),
             g: DMatrix::zeros(0, n),
             directions: DMatrix::zeros(n, 0),
@@ -228,14 +235,22 @@ impl RowStack {
         }
     }
 
-    /// Stacks the contact rows `contacts`, `couplings` coupling rows and the unit rows of the
-    /// coordinates `held`; the storage is sized anew only when the number of rows changes.
-    pub fn arrange(&mut self, contacts: &[usize], couplings: usize, held: &[HeldRow]) {
+    /// Stacks the contact rows `contacts`, `couplings` coupling rows, the position drives' rows
+    /// of `points` and the unit rows of the coordinates `held`; the storage is sized anew only
+    /// when the number of rows changes.
+    pub fn arrange(
+        &mut self,
+        contacts: &[usize],
+        couplings: usize,
+        points: &PointRows,
+        held: &[HeldRow],
+    ) {
         if self.contacts != contacts {
             self.contacts.clear();
             self.contacts.extend_from_slice(contacts);
         }
         self.couplings = couplings;
+        self.points = points.len();
         self.held.clear();
         self.held.extend_from_slice(held);
         let (rows, n) = (self.len(), self.g.ncols());
@@ -251,7 +266,7 @@ impl RowStack {
 
     /// The number of rows stacked.
     pub fn len(&self) -> usize {
-        self.contacts.len() + self.couplings + self.held.len()
+        self.contacts.len() + self.couplings + self.points + self.held.len()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -263,10 +278,10 @@ impl RowStack {
         &self.contacts
     }
 
-    /// Fills G and γ from the contacts' rows `all` (γ as they hold it) and the couplings
-    /// `mimics` (the first `couplings` of them), the unit rows after them (γ = −d̈(t) on a
-    /// driven row, 0 on the others).
-    pub fn gather(&mut self, all: &ContactRows, mimics: &[Mimic]) {
+    /// Fills G and γ from the contacts' rows `all` (γ as they hold it), the couplings
+    /// `mimics` (the first `couplings` of them) and the position drives' rows `points` (γ as
+    /// they hold it), the unit rows after them (γ = −d̈(t) on a driven row, 0 on the others).
+    pub fn gather(&mut self, all: &ContactRows, mimics: &[Mimic], points: &PointRows) {
         self.g.fill(0.0);
         self.bias.fill(0.0);
         for (i, &row) in self.contacts.iter().enumerate() {
@@ -279,6 +294,11 @@ impl RowStack {
             self.g[(first + i, mimic.leader_velocity)] -= mimic.multiplier;
         }
         let first = first + self.couplings;
+        for i in 0..self.points {
+            self.g.row_mut(first + i).copy_from(&points.jacobian.row(i));
+            self.bias[first + i] = points.bias[i];
+        }
+        let first = first + self.points;
         for (i, held) in self.held.iter().enumerate() {
             self.g[(first + i, held.velocity)] = 1.0;
             if let Holder::Drive { law, .. } = held.holder {
@@ -341,15 +361,24 @@ impl RowStack {
     }
 
     /// The multipliers of the last solve: the contacts' rows', then the couplings', then the
-    /// held velocities' (each a force along its velocity: a drive's is its effort).
+    /// position drives' (forces along x, y, z at their frames' origins), then the held
+    /// velocities' (each a force along its velocity: a drive's is its effort).
     pub fn multipliers(&self) -> &[f64] {
         self.right.as_slice()
     }
 
     /// The coordinates held, each with the force that held it at the last solve.
     pub fn held_forces(&self) -> impl Iterator<Item = (&HeldRow, f64)> {
-        let forces = &self.right.as_slice()[self.contacts.len() + self.couplings..];
+        let first = self.contacts.len() + self.couplings + self.points;
+        let forces = &self.right.as_slice()[first..];
         self.held.iter().zip(forces.iter().copied())
+    }
+
+    /// The position drives' forces of the last solve: per drive, the force along x, y, z at
+    /// its frame's origin that imposes the path.
+    pub fn point_forces(&self) -> &[f64] {
+        let first = self.contacts.len() + self.couplings;
+        &self.right.as_slice()[first..first + self.points]
     }
 
     /// The rows G, gathered (`gather`).
@@ -359,9 +388,16 @@ impl RowStack {
 
     /// Sets the rows' values to their velocities' distance from their targets at the
     /// velocities `v`, G v − w (`values_mut`, for `add_least_change`): the contacts' rates as
-    /// `all` holds them, the couplings' q̇_f − m q̇_l, the held rates (a driven one from its
-    /// law's, q̇ − ḋ(t)). Whether any is non-zero.
-    pub fn velocity_values(&mut self, all: &ContactRows, mimics: &[Mimic], v: &[f64]) -> bool {
+    /// `all` holds them, the couplings' q̇_f − m q̇_l, the position drives' J v − ṗ(t) as
+    /// `points` holds them, the held rates (a driven one from its law's, q̇ − ḋ(t)). Whether
+    /// any is non-zero.
+    pub fn velocity_values(
+        &mut self,
+        all: &ContactRows,
+        mimics: &[Mimic],
+        points: &PointRows,
+        v: &[f64],
+    ) -> bool {
         let contacts = self.contacts.len();
         for (i, &row) in self.contacts.iter().enumerate() {
             self.right[i] = all.velocity[row];
@@ -371,6 +407,10 @@ impl RowStack {
                 v[mimic.velocity] - mimic.multiplier * v[mimic.leader_velocity];
         }
         let first = contacts + self.couplings;
+        for i in 0..self.points {
+            self.right[first + i] = points.velocity[i];
+        }
+        let first = first + self.points;
         for (i, held) in self.held.iter().enumerate() {
             let target = match held.holder {
                 Holder::Impact { rate_after, .. } => rate_after,
@@ -385,11 +425,18 @@ impl RowStack {
     /// Sets the rows' values to their position values at q, φ(q, t) (`values_mut`, for
     /// `add_least_change`): the gaps of the contacts' rows (normal rows only: the others are
     /// not integrable), the couplings' violations, the held coordinates' distances to their
-    /// bounds or their laws, q − d(t) (none for a row of velocities only). Whether any is above
-    /// its round-off (a gap's relative to the largest radius, a coupling's to its follower's
-    /// coordinate, a bound's to the bound (a few units in the last place), a law's distance to
-    /// 1 + |d(t)|).
-    pub fn position_values(&mut self, model: &Model, all: &ContactRows, q: &[f64]) -> bool {
+    /// bounds or their laws, q − d(t) (none for a row of velocities only), the position
+    /// drives' o(q) − p(t) as `points` holds them. Whether any is above its round-off (a gap's
+    /// relative to the largest radius, a coupling's to its follower's coordinate, a bound's to
+    /// the bound (a few units in the last place), a law's distance to 1 + |d(t)|, a path's to
+    /// 1 + |p(t)|).
+    pub fn position_values(
+        &mut self,
+        model: &Model,
+        all: &ContactRows,
+        points: &PointRows,
+        q: &[f64],
+    ) -> bool {
         let radius = model.contacts.iter().map(|c| c.radius).fold(0.0, f64::max);
         let mut open = false;
         for (i, &row) in self.contacts.iter().enumerate() {
@@ -409,6 +456,12 @@ impl RowStack {
             open |= self.right[first + i].abs() > COUPLING_ROUND_OFF * scale;
         }
         let first = first + self.couplings;
+        for i in 0..self.points {
+            let path = points.laws[i / 3][i % 3].position;
+            self.right[first + i] = points.position[i];
+            open |= points.position[i].abs() > LAW_ROUND_OFF * (1.0 + path.abs());
+        }
+        let first = first + self.points;
         for (i, held) in self.held.iter().enumerate() {
             // A row of velocities only has no position to correct.
             let (value, round_off) = match held.holder {
@@ -429,10 +482,12 @@ impl RowStack {
 
     /// Adds the forces of the last solve's coupling and held rows to the generalised forces
     /// `tau` (over the state's velocities): they act along coordinates, as link efforts do
-    /// (the contacts' act on bodies instead, `contact_forces`).
+    /// (the contacts' and the position drives' act on bodies instead, `contact_forces`,
+    /// `point_forces`).
     pub fn add_coordinate_forces(&self, mimics: &[Mimic], tau: &mut DVector<f64>) {
         let multipliers = &self.right.as_slice()[self.contacts.len()..];
-        let (couplings, held) = multipliers.split_at(self.couplings);
+        let (couplings, rest) = multipliers.split_at(self.couplings);
+        let held = &rest[self.points..];
         for (mimic, force) in mimics.iter().zip(couplings) {
             tau[mimic.velocity] += force;
             tau[mimic.leader_velocity] -= mimic.multiplier * force;

@@ -226,6 +226,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             DeclKind::Drive(rate) if matches!(rate.word.name.as_str(), "rate" | "update") => {
                 self.rate_decl(rate, &mut locals)
             }
+            DeclKind::Drive(drive) if drive.position_target().is_some() => {
+                self.position_drive(drive, &mut locals)
+            }
             DeclKind::Drive(drive) => {
                 let Value::Scalar(target) = self.expr(&drive.target, &mut locals)? else {
                     return Err(internal("drive of a non-coordinate"));

@@ -1,12 +1,46 @@
-//! The motions a program imposes in time: a `drive` (`drive crank.q = 2 * pi * time`) or
-//! `time` in a dof chain (a rheonomic joint, `kinematics::rheonomic`). The studies that read a
+//! The motions a program imposes in time: a `drive` (`drive crank.q = 2 * pi * time`), a
+//! position drive (`drive position(nacelle) = [x, y, z]`, elaborated here) or `time` in a dof
+//! chain (a rheonomic joint, `kinematics::rheonomic`). The studies that read a
 //! mechanism as free coordinates (the symbolic equations, `statics`, `eval`, `kinematics`)
 //! refuse them at the place the program imposes one, rather than answer for another mechanism.
 
-use super::mechanism::Mechanism;
+use super::elaborator::{internal, Elaborator};
+use super::eval::Locals;
+use super::mechanism::{Mechanism, PositionDrive};
+use super::operations::{as_frame, as_vector};
 use super::value::Elementary;
 use crate::diag::Diagnostic;
 use crate::source::Span;
+use crate::syntax::ast::DriveDecl;
+
+type Result<T> = std::result::Result<T, Diagnostic>;
+
+impl Elaborator<'_, '_> {
+    /// `drive position(F) = law`: the frame and the three laws (the checker made sure of
+    /// their types).
+    pub(super) fn position_drive(&mut self, decl: &DriveDecl, locals: &mut Locals) -> Result<()> {
+        let Some(written) = decl.position_target() else {
+            return Err(internal("a position drive without a frame"));
+        };
+        let frame = self
+            .expr(written, locals)
+            .and_then(|v| as_frame(v, written.span))?;
+        let law = self
+            .expr(&decl.value, locals)
+            .and_then(|v| as_vector(v, decl.value.span))?;
+        let count = self.mechanism.position_drives.len();
+        self.mechanism.position_drives.push(PositionDrive {
+            frame,
+            name: written
+                .as_path()
+                .unwrap_or_else(|| format!("position_drive{}", count + 1)),
+            law,
+            span: decl.target.span,
+            law_span: decl.value.span,
+        });
+        Ok(())
+    }
+}
 
 /// Where a program imposes a motion in time, and what the label there says.
 #[derive(Clone, Debug)]
@@ -26,6 +60,12 @@ pub fn first_imposed_motion(mechanism: &Mechanism) -> Option<ImposedMotion> {
                 "this drive imposes the motion of `{}`",
                 mechanism.join_name(drive.join)
             ),
+        });
+    }
+    if let Some(drive) = mechanism.position_drives.first() {
+        return Some(ImposedMotion {
+            span: drive.span,
+            label: format!("this drive imposes the position of `{}`", drive.name),
         });
     }
     let uses_time = |step: &Elementary| match step {

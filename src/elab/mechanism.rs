@@ -300,6 +300,19 @@ pub struct Drive {
     pub law_span: Span,
 }
 
+/// `drive position(nacelle) = [x(time), y(time), z(time)]`: the position of a frame's origin
+/// in the fixed axes imposed as three laws of time (`kinematics::position_drives`).
+#[derive(Clone, Debug)]
+pub struct PositionDrive {
+    pub frame: Frame,
+    /// The frame as written (`nacelle`, `arm.tip`): the name of its efforts.
+    pub name: String,
+    pub law: Vector,
+    /// The driven frame as written, and the law.
+    pub span: Span,
+    pub law_span: Span,
+}
+
 /// A state: a variable with its own differential equation, integrated with the motion (an
 /// integral of an error, a motor's current, an estimate). `let s = state(x0);` makes it,
 /// `rate s = f;` gives its derivative; `let u = sample(period, x0);` makes a sampled one,
@@ -433,6 +446,8 @@ pub struct Mechanism {
     pub initial: Vec<InitialValue>,
     /// The `drive` declarations, in declaration order.
     pub drives: Vec<Drive>,
+    /// The `drive position(F) = law` declarations, in declaration order.
+    pub position_drives: Vec<PositionDrive>,
     /// The states (`state(x0)`), in the order they were made.
     pub states: Vec<StateVariable>,
     /// The `actuate` declarations, in declaration order: the model's coordinates.

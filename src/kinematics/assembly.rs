@@ -368,10 +368,10 @@ fn free_range(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
 }
 
 /// The least-norm least-squares solution of m x = b (singular values below 1e-12 of the
-/// largest treated as zero).
+/// largest treated as zero); zero without rows (a tree's closure: nothing to solve).
 pub(crate) fn least_norm(m: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
-    if m.ncols() == 0 {
-        return Some(DVector::zeros(0));
+    if m.ncols() == 0 || m.nrows() == 0 {
+        return Some(DVector::zeros(m.ncols()));
     }
     let svd = crate::linalg::svd(m, true, true)?;
     let floor = 1e-12 * svd.singular_values.max();

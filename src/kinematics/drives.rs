@@ -258,12 +258,13 @@ fn not_independent(joint: &JointModel, link_span: Span, join_span: Span) -> Opti
         )
         .primary(link_span, "the time and a coordinate move the same way")
         .secondary(join_span, "the join")
-        .help("write the chain as a motion in time followed by the coordinates' own motions (`(w * time || axis) * (q || other axis)`), or drive the coordinate itself (`drive spin.q = w * time`)")
+        .note("the time and the coordinates would be two coordinates of one motion, and the mass matrix singular")
+        .help("the time only changes how the coordinates measure a motion they already make: declare the coordinate of that motion (`link(theta) dof = theta || axis end`) and read `theta - w * time` where the old coordinate was read; a motion in time along another direction is its own step (`dof1 = w * time || axis, dof2 = q || other axis`)")
     })
 }
 
 /// The law of time `written` (of `subject`, "a drive"), differentiated twice.
-fn law(
+pub(super) fn law(
     mechanism: &Mechanism,
     written: &Scalar,
     span: Span,

@@ -143,6 +143,19 @@ pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError
     })
 }
 
+/// The degrees of freedom at q a motion must impose: the mobility with `couplings` mimic
+/// couplings, less the bodies' internal motions (a rod spinning between two ball joints),
+/// which no drive reaches and no effort needs.
+pub fn useful_degrees(
+    model: &KinematicModel,
+    q: &[f64],
+    couplings: usize,
+) -> Result<usize, EvalError> {
+    let found = mobility(model, q)?.with_couplings(couplings);
+    let internal: usize = found.internal.iter().map(|(_, ways)| ways).sum();
+    Ok(found.mobility.saturating_sub(internal))
+}
+
 /// Degrees of freedom of the tree at q: the ranks of the principal joints' motion subspaces
 /// over their declared coordinates (the coordinate count, unless a link's coordinates are
 /// redundant).

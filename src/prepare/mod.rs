@@ -15,6 +15,7 @@ use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
 use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, UnknownId, Vector};
 use crate::kinematics::eval::{eval, UnknownValues};
 use crate::kinematics::model as kinematic_model;
+use crate::kinematics::position_drives;
 use crate::kinematics::sphere_on_disc::sphere_contacts_on_discs;
 pub use crate::kinematics::unknowns::Override;
 use crate::kinematics::unknowns::{constant, names_of, unknown_values};
@@ -225,6 +226,16 @@ pub fn prepare(
     }
     let outputs = self::outputs::Outputs::compile(mechanism, &model)?;
     let coordinate_names = kinematics.coordinate_names();
+    if !model.position_drives.is_empty() {
+        let paths = &model.position_drives;
+        coordinates = position_drives::start_on_paths(&kinematics, paths, coordinates)
+            .map_err(|refused| vec![refused])?;
+        if let Some(over) =
+            position_drives::over_constrained(mechanism, &kinematics, paths, &coordinates)
+        {
+            return Err(vec![over]);
+        }
+    }
     Ok(Prepared {
         model,
         topology,

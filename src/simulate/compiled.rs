@@ -24,7 +24,7 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
             "the mechanism has contacts (the native code serves trees without constraints)".into(),
         ));
     }
-    if !model.drives.is_empty() {
+    if !model.drives.is_empty() || !model.position_drives.is_empty() {
         return Err(Unavailable::Unsupported(
             "the mechanism has motions imposed in time (`drive`, `time` in a dof chain), which the native code does not impose".into(),
         ));

@@ -10,6 +10,7 @@ pub use super::report::{
 };
 pub use super::sample::{MomentumDrift, Sample};
 pub use super::simulator::{Simulator, Start};
+use crate::dynamics::driven_points;
 use crate::dynamics::model::Model;
 use crate::integrate::Interrupt;
 use crate::prepare::Prepared;
@@ -124,8 +125,10 @@ fn simulate_from(
 pub fn output_names_of(prepared: &Prepared) -> Vec<String> {
     let model = &prepared.model;
     let drives = model.drives.iter().map(|d| d.effort_name());
+    let points = (model.position_drives.iter()).flat_map(driven_points::force_names);
     let states = model.states.iter().map(|s| s.name.clone());
     drives
+        .chain(points)
         .chain(states)
         .chain(prepared.outputs.names.iter().cloned())
         .collect()

@@ -205,15 +205,17 @@ impl Sampler<'_> {
         } else {
             Vec::new()
         };
-        // The drives' efforts: the multipliers of their rows in the equations at the sample;
-        // then the states' values. The drives' efforts, and the model that outputs may read,
-        // are those of an evaluation.
-        let columns = model.drives.len() + states.len() + self.outputs.names.len();
+        // The drives' efforts (the coordinates', then the position drives' forces): the
+        // multipliers of their rows in the equations at the sample; then the states' values.
+        // The drives' efforts, and the model that outputs may read, are those of an evaluation.
+        let points = 3 * model.position_drives.len();
+        let columns = model.drives.len() + points + states.len() + self.outputs.names.len();
         let mut outputs = Vec::with_capacity(columns);
-        if !model.drives.is_empty() || self.outputs.reads_model {
+        if !model.drives.is_empty() || points > 0 || self.outputs.reads_model {
             let mut rates = vec![0.0; y.len()];
             system.derivative(time, &y, &mut rates)?;
             outputs.extend_from_slice(&system.scratch.drive_efforts);
+            outputs.extend_from_slice(&system.scratch.point_forces);
         }
         outputs.extend_from_slice(states);
         let scratch = &mut *system.scratch;

@@ -460,7 +460,10 @@ fn features(model: &Model) -> Vec<Feature> {
         (Feature::GearedRotors, !model.rotors.is_empty()),
         (Feature::Mimics, !model.mimics.is_empty()),
         (Feature::Friction, !model.frictions.is_empty()),
-        (Feature::Drives, !model.drives.is_empty()),
+        (
+            Feature::Drives,
+            !model.drives.is_empty() || !model.position_drives.is_empty(),
+        ),
         (Feature::States, model.states.iter().any(|s| s.continuous())),
         (
             Feature::Sampled,

@@ -29,6 +29,7 @@ use crate::dynamics::algorithms::{
     rnea_after_kinematics, DynamicsError,
 };
 use crate::dynamics::contacts;
+use crate::dynamics::driven_points;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
@@ -215,6 +216,21 @@ impl<'m> MechanicalSystem<'m> {
             }),
             None => Ok(()),
         }
+    }
+
+    /// The position drives' rows at time `t` and the state whose forward kinematics the
+    /// scratch holds (velocities `v`), into its `point_state` (with γ when `with_bias`).
+    pub(super) fn point_rows_here(&mut self, t: f64, v: &[f64], with_bias: bool) {
+        let scratch = &mut self.scratch;
+        driven_points::point_rows_into(
+            self.model,
+            &mut scratch.data,
+            t,
+            v,
+            with_bias,
+            &mut scratch.law_values,
+            &mut scratch.point_state,
+        );
     }
 
     fn form_tree_response(&mut self) -> Result<(), SystemError> {

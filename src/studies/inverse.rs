@@ -9,7 +9,8 @@
 
 use serde::Serialize;
 
-use crate::kinematics::mobility::mobility;
+use crate::dynamics::driven_points;
+use crate::kinematics::mobility::useful_degrees;
 use crate::prepare::Prepared;
 use crate::simulate::run::{output_names_of, reaction_names_of, Simulation};
 
@@ -73,15 +74,14 @@ impl std::error::Error for NotDriven {}
 
 /// Checks that the drives of `prepared` impose its every useful degree of freedom.
 pub fn check_driven(prepared: &Prepared) -> Result<(), NotDriven> {
-    let drives = prepared.model.drives.len();
+    let model = &prepared.model;
+    let drives = model.drives.len() + 3 * model.position_drives.len();
     if drives == 0 {
         return Err(NotDriven::NoDrives);
     }
-    let found = mobility(&prepared.kinematics, &prepared.coordinates)
+    let couplings = prepared.model.mimics.len();
+    let degrees = useful_degrees(&prepared.kinematics, &prepared.coordinates, couplings)
         .map_err(|e| NotDriven::Geometry(format!("{e:?}")))?;
-    let found = found.with_couplings(prepared.model.mimics.len());
-    let internal: usize = found.internal.iter().map(|(_, ways)| ways).sum();
-    let degrees = found.mobility.saturating_sub(internal);
     match degrees > drives {
         true => Err(NotDriven::Underdriven { degrees, drives }),
         false => Ok(()),
@@ -91,15 +91,27 @@ pub fn check_driven(prepared: &Prepared) -> Result<(), NotDriven> {
 /// The inverse dynamics read from a run of `prepared` (the drives' efforts among its
 /// outputs, see `simulate::run::output_names_of`).
 pub fn from_run(prepared: &Prepared, simulation: &Simulation) -> InverseDynamics {
-    let drives = &prepared.model.drives;
+    let model = &prepared.model;
+    let (drives, paths) = (&model.drives, &model.position_drives);
+    // The coordinates' drives, then each position drive's x, y and z (its efforts the force
+    // along each at the frame's origin).
+    let driven: Vec<String> = (drives.iter().map(|d| d.coordinate.clone()))
+        .chain(paths.iter().flat_map(|p| p.component_names()))
+        .collect();
+    let efforts: Vec<String> = (drives.iter().map(|d| d.effort_name()))
+        .chain(paths.iter().flat_map(driven_points::force_names))
+        .collect();
     let names = output_names_of(prepared);
     let first = (names.iter())
-        .position(|n| *n == drives[0].effort_name())
+        .position(|n| Some(n) == efforts.first())
         .unwrap_or_default();
     let samples = (simulation.samples.iter())
         .map(|sample| {
-            let laws: Vec<_> = drives.iter().map(|d| d.at(sample.time)).collect();
-            let efforts = sample.outputs[first..first + drives.len()].to_vec();
+            let t = sample.time;
+            let laws: Vec<_> = (drives.iter().map(|d| d.at(t)))
+                .chain(paths.iter().flat_map(|p| p.at(t)))
+                .collect();
+            let efforts = sample.outputs[first..first + laws.len()].to_vec();
             let power = (efforts.iter().zip(&laws))
                 .map(|(effort, law)| effort * law.rate)
                 .sum();
@@ -115,8 +127,8 @@ pub fn from_run(prepared: &Prepared, simulation: &Simulation) -> InverseDynamics
         })
         .collect();
     InverseDynamics {
-        driven: drives.iter().map(|d| d.coordinate.clone()).collect(),
-        efforts: drives.iter().map(|d| d.effort_name()).collect(),
+        driven,
+        efforts,
         reaction_names: reaction_names_of(prepared),
         samples,
         motion: None,

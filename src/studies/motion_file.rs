@@ -21,6 +21,8 @@ pub enum Derivation {
     File,
     /// The quintic spline of the positions.
     Spline,
+    /// The program's law, differentiated on its expression (a position drive's path).
+    Law,
 }
 
 /// One imposed quantity along the file's times.

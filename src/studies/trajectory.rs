@@ -9,6 +9,10 @@
 //!   (`kinematic_models`: q̇ₐ = J⁻¹ẋ, q̈ₐ = J⁻¹ẍ + the term of J̇), give the actuated
 //!   coordinates' positions, rates and accelerations.
 //!
+//! - The program's position drive (`drive position(nacelle) = [x, y, z]`): its path sampled
+//!   at the run's output times, with the laws' exact rates and accelerations
+//!   ([`program_path`]), followed as a file's path is.
+//!
 //! Either way the drives' laws pass through those values at the file's times (quintic Hermite
 //! interpolation, `kinematics::tabulated_law`), the run's outputs are the file's times, and the
 //! run starts from the configuration of the first one. With every degree of freedom driven the
@@ -20,11 +24,14 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use super::configurations::{assemble_holding, close_from, StateRequest};
-use super::kinematic_models::{models_at, Actuation, Output, OutputKind, SINGULAR_TOLERANCE};
-use super::motion_file::{Derivation, MotionFile};
+use super::kinematic_models::{
+    actuation, models_at, Actuation, Output, OutputKind, SINGULAR_TOLERANCE,
+};
+use super::motion_file::{Derivation, MotionFile, Series};
 use super::statics::velocity_index;
 use crate::dynamics::drives::DrivenCoordinate;
-use crate::kinematics::drives::{drive_effort_name, DriveLaw};
+use crate::kinematics::drives::{drive_effort_name, DriveLaw, LawAt};
+use crate::kinematics::frames::FramePoint;
 use crate::kinematics::tabulated_law::TabulatedLaw;
 use crate::prepare::Prepared;
 
@@ -113,6 +120,71 @@ pub fn impose(
             })
             .collect(),
     })
+}
+
+/// The path of the program's position drive as a motion file: its frame's position, with the
+/// laws' exact rates and accelerations, at the times 0, `step`, 2 `step`, … up to `duration`
+/// (the last at most half a step from it). `None` when the program has no position drive;
+/// refused when it has several (a path moves one frame through its actuated coordinates).
+pub fn program_path(
+    prepared: &Prepared,
+    duration: f64,
+    step: f64,
+) -> Option<Result<(MotionFile, FramePoint), String>> {
+    let drives = &prepared.model.position_drives;
+    let drive = drives.first()?;
+    if drives.len() > 1 {
+        return Some(Err(format!(
+            "the program drives the positions of {} frames: `lsdc inverse` follows the path of one through the actuated coordinates",
+            drives.len()
+        )));
+    }
+    if !(step > 0.0 && duration >= step) {
+        return Some(Err(format!(
+            "the path is sampled every {step} s for {duration} s: give a positive interval no longer than the duration (`--every`, `--duration`)"
+        )));
+    }
+    let rows = (duration / step).round() as usize;
+    let times: Vec<f64> = (0..=rows).map(|k| k as f64 * step).collect();
+    let laws: Vec<[LawAt; 3]> = times.iter().map(|&t| drive.at(t)).collect();
+    let series = (drive.component_names().into_iter().enumerate())
+        .map(|(axis, name)| Series {
+            name,
+            positions: laws.iter().map(|at| at[axis].position).collect(),
+            rates: laws.iter().map(|at| at[axis].rate).collect(),
+            accelerations: laws.iter().map(|at| at[axis].acceleration).collect(),
+            rates_from: Derivation::Law,
+            accelerations_from: Derivation::Law,
+        })
+        .collect();
+    Some(Ok((MotionFile { times, series }, drive.frame.clone())))
+}
+
+/// The program's position drive followed through the actuated coordinates `actuated`
+/// (`join.coordinate`, one per degree of freedom): its path sampled at the run's output times
+/// ([`program_path`]) imposed as a file's path is, the actuated coordinates' drives added to
+/// `prepared` in the place of the position drive. `None` without a position drive.
+pub fn follow_program_path(
+    prepared: &mut Prepared,
+    actuated: &[String],
+) -> Option<Result<Imposed, String>> {
+    let settings = &prepared.settings;
+    let path = program_path(prepared, settings.duration, settings.output)?;
+    Some(path.and_then(|(motion, frame)| {
+        let actuation = actuation(prepared, actuated).map_err(|e| e.to_string())?;
+        let output = Output {
+            frame,
+            kind: OutputKind::Point,
+        };
+        let target = Target::Frame {
+            output: &output,
+            actuation: &actuation,
+        };
+        let imposed = impose(prepared, &motion, target)
+            .map_err(|why| format!("the position drive of `{}`: {why}", output.frame.name))?;
+        prepared.model.position_drives.clear();
+        Ok(imposed)
+    }))
 }
 
 /// The positions, rates and accelerations of the driven coordinates at the file's times, and

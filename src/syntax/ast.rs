@@ -112,6 +112,24 @@ pub struct DriveDecl {
     pub value: Expr,
 }
 
+impl DriveDecl {
+    /// The frame `F` of a position drive, `drive position(F) = law`; `None` for a drive of a
+    /// coordinate (`drive crank.q = law`).
+    pub fn position_target(&self) -> Option<&Expr> {
+        let ExprKind::Call(call) = &self.target.kind else {
+            return None;
+        };
+        match (&call.callee, &call.args[..]) {
+            (Callee::Name(name), [frame])
+                if name.name.as_str() == "position" && frame.name.is_none() =>
+            {
+                Some(&frame.value)
+            }
+            _ => None,
+        }
+    }
+}
+
 /// `join first and second with link [as name]`
 #[derive(Clone, Debug, PartialEq)]
 pub struct JoinDecl {
@@ -205,6 +223,20 @@ impl Expr {
                 name: *name,
                 span: self.span,
             }),
+            _ => None,
+        }
+    }
+
+    /// A name or a chain of fields as written (`nacelle`, `leg.tip`), for naming what it
+    /// designates; `None` for any other expression.
+    pub fn as_path(&self) -> Option<String> {
+        match &self.kind {
+            ExprKind::Name(name) => Some(name.as_str().to_string()),
+            ExprKind::Field(access) => Some(format!(
+                "{}.{}",
+                access.target.as_path()?,
+                access.field.name.as_str()
+            )),
             _ => None,
         }
     }

@@ -50,6 +50,7 @@ mod mutants;
 mod native;
 mod outputs;
 mod pinocchio_fixtures;
+mod position_drives;
 mod properties;
 mod reactions;
 mod recovered_angles;

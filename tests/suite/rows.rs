@@ -10,6 +10,7 @@ use super::common::programs::{column, constraints, mechanism, run_text};
 use super::stop_loops::{assert_impacts_take_normal_energy, assert_rolling, rolling_pendulum_with};
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::contacts::contact_rows;
+use lsdc::dynamics::driven_points::PointRows;
 use lsdc::dynamics::rows::{HeldRow, Holder, RowStack};
 use lsdc::prepare::{prepare, Integrator, Settings};
 use lsdc::simulate::run::{Sample, Simulation};
@@ -510,18 +511,19 @@ fn the_stack_values_are_its_rows_at_the_state() {
         },
     ];
     let mut stack = RowStack::new(model);
-    stack.arrange(&[0, 1, 2], 0, &held);
-    stack.gather(&all, &model.mimics);
-    assert!(stack.velocity_values(&all, &model.mimics, &v));
+    let points = PointRows::default();
+    stack.arrange(&[0, 1, 2], 0, &points, &held);
+    stack.gather(&all, &model.mimics, &points);
+    assert!(stack.velocity_values(&all, &model.mimics, &points, &v));
     let applied = stack.rows() * nalgebra::DVector::from_column_slice(&v);
     let values = stack.values_mut().clone();
     assert!(
         (&values - &applied).amax() <= 1e-15 * applied.amax(),
         "values {values} against G v {applied}"
     );
-    stack.arrange(&[2], 0, &held);
-    stack.gather(&all, &model.mimics);
-    assert!(stack.position_values(model, &all, &q));
+    stack.arrange(&[2], 0, &points, &held);
+    stack.gather(&all, &model.mimics, &points);
+    assert!(stack.position_values(model, &all, &points, &q));
     let values = stack.values_mut();
     assert!(
         (values[0] - (0.08 - 0.05)).abs() <= 1e-15,

@@ -151,6 +151,11 @@ fn w0901_never_fires_on_the_examples_that_are_not_stiff() {
         // The Deltas braked by their shorted motors (c / J ~ 200 /s over a 10 s run) are
         // mildly stiff, which is why they run with the implicit integrator: dopri5 says so,
         // naming an arm, on which a brake acts.
+        // The Delta driven along its nacelle's path moves as the kinematics of the path (its
+        // rows hold every useful degree of freedom): nothing is integrated freely there.
+        if name == "delta_isir88_path" {
+            continue;
+        }
         if name.starts_with("delta") {
             prepared.settings.integrator = integrator("dopri5");
             let stiffness = run(&prepared, &mut |_| {}).report.stiffness;

@@ -3,6 +3,7 @@
 
 use lsdc::driver::compile_text;
 use lsdc::dynamics::contacts::ContactRows;
+use lsdc::dynamics::driven_points::PointRows;
 use lsdc::dynamics::mimics::Mimic;
 use lsdc::dynamics::response::Response;
 use lsdc::dynamics::rows::{impact_velocities, HeldRow, Holder, RowStack};
@@ -219,14 +220,16 @@ fn stack_impact(stop: &Stop, mass: &DMatrix<f64>, mimics: &[Mimic], v: &[f64]) -
         },
     };
     let contacts = ContactRows::default();
-    stack.arrange(&[], mimics.len(), &[row]);
-    stack.gather(&contacts, mimics);
+    let points = PointRows::default();
+    stack.arrange(&[], mimics.len(), &points, &[row]);
+    stack.gather(&contacts, mimics, &points);
     let mut after = vec![0.0; n];
     assert!(impact_velocities(
         &mut stack,
         &mut response,
         &contacts,
         mimics,
+        &points,
         v,
         &mut after
     ));

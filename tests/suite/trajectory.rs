@@ -59,13 +59,18 @@ fn driven_run(
             impose(&mut prepared, &motion, target).expect("imposes")
         }
     };
-    let simulation = lsdc::api::run(&prepared, &mut |_| {});
+    inverse_run(&prepared)
+}
+
+/// The run of `prepared`, which must not fail, and its inverse dynamics.
+pub fn inverse_run(prepared: &lsdc::prepare::Prepared) -> (Simulation, InverseDynamics) {
+    let simulation = lsdc::api::run(prepared, &mut |_| {});
     assert!(
         simulation.report.failure.is_none(),
         "{:?}",
         simulation.report.failure
     );
-    let inverse = from_run(&prepared, &simulation);
+    let inverse = from_run(prepared, &simulation);
     (simulation, inverse)
 }
 

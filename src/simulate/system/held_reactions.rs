@@ -1,7 +1,7 @@
 //! The reactions: the wrench each join transmits (`reactions`), from the forces of every block
 //! of the constraint stack at the accelerations of the run's own equations, every row solved
-//! (`stack_reactions`, the one reactions path): the contacts' forces act on the bodies, so
-//! they join the efforts' external forces; the other rows' forces (a mimic coupling's, a
+//! (`stack_reactions`, the one reactions path): the contacts' and the position drives' forces
+//! act on the bodies, so they join the efforts' external forces; the other rows' forces (a mimic coupling's, a
 //! resting stop's, a sticking joint's, a drive's) act along coordinates, as link efforts do, so
 //! they join the efforts' generalised forces; the loops' block's multipliers then come from
 //! M a − f, and act on the bodies their loops close.
@@ -11,6 +11,7 @@ use nalgebra::DVector;
 use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{rnea, transmitted_wrenches};
 use crate::dynamics::contacts;
+use crate::dynamics::driven_points;
 use crate::dynamics::loops;
 use crate::spatial;
 
@@ -94,6 +95,13 @@ impl MechanicalSystem<'_> {
         contacts::contact_reactions(forces)
     }
 
+    /// The position drives' forces of the last solve added to the forces on the bodies
+    /// `external`; `data` holds the forward kinematics of the state.
+    fn add_point_forces(&self, external: &mut [spatial::Force]) {
+        let forces = &self.scratch.point_forces;
+        driven_points::add_body_forces(self.model, &self.scratch.data, forces, external);
+    }
+
     /// The forces of every block of the stack at (t, q, v), the whole stack solved as the run's
     /// equations solve it (`solve_every_row`), the forward kinematics of (q, v) left in `data`:
     /// see the module's documentation.
@@ -107,14 +115,18 @@ impl MechanicalSystem<'_> {
         let accelerations = self.solve_every_row(t, q, v)?;
         if !model.has_loops() && !model.has_contacts() {
             // A tree's evaluation may skip the efforts (none applied): they are taken here.
-            let efforts = self.efforts(t, q, v)?;
-            let (external, listed) = (efforts.external, None);
+            let mut external = self.efforts(t, q, v)?.external;
+            self.add_point_forces(&mut external);
+            let listed = None;
             return Ok(StackForces {
                 accelerations,
                 external,
                 listed,
             });
         }
+        let mut external = std::mem::take(&mut self.scratch.efforts.external);
+        self.add_point_forces(&mut external);
+        self.scratch.efforts.external = external;
         let touching = (model.has_contacts()).then(|| self.contact_forces_among_efforts());
         if !model.has_loops() {
             let external = self.scratch.efforts.external.clone();

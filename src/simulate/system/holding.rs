@@ -30,7 +30,8 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         self.gather_held(t);
         let couplings = self.coupling_count();
-        if !model.has_contacts() && couplings == 0 && self.scratch.held.is_empty() {
+        let points = !model.position_drives.is_empty();
+        if !model.has_contacts() && couplings == 0 && self.scratch.held.is_empty() && !points {
             return Ok(());
         }
         self.form_response_at(q)?;
@@ -39,11 +40,17 @@ impl MechanicalSystem<'_> {
             forward_kinematics(model, &mut self.scratch.data, q, v)?;
             self.contact_rows_here(v, true)?;
         }
+        if points {
+            // The response's mass matrix leaves the kinematics of q only.
+            forward_kinematics(model, &mut self.scratch.data, q, v)?;
+            self.point_rows_here(t, v, true);
+        }
         self.decide_contact_rows();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
         let rows = &mut self.scratch.rows;
-        rows.arrange(kept, couplings, &self.scratch.held);
-        rows.gather(&self.scratch.contact_state, &model.mimics);
+        let point_state = &self.scratch.point_state;
+        rows.arrange(kept, couplings, point_state, &self.scratch.held);
+        rows.gather(&self.scratch.contact_state, &model.mimics, point_state);
         let solved = (self.scratch.rows).solve(
             model,
             &self.scratch.contact_state,
@@ -128,6 +135,14 @@ impl MechanicalSystem<'_> {
     fn record_holding(&mut self, v: &[f64]) {
         let model = self.model;
         self.scratch.drive_power = 0.0;
+        // A position drive's force at its frame's origin, times the origin's velocity J v.
+        let points = &self.scratch.point_state;
+        let forces = self.scratch.rows.point_forces();
+        for (i, &force) in forces.iter().enumerate() {
+            let rate = points.velocity[i] + points.laws[i / 3][i % 3].rate;
+            self.scratch.drive_power += force * rate;
+        }
+        self.scratch.point_forces.copy_from_slice(forces);
         for (row, force) in self.scratch.rows.held_forces() {
             match row.holder {
                 Holder::Drive { index, .. } => {

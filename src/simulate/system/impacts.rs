@@ -178,8 +178,9 @@ impl MechanicalSystem<'_> {
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
         let scratch = &mut *self.scratch;
         let stack = &mut scratch.velocity_stack;
-        stack.arrange(kept, couplings, &held);
-        stack.gather(&scratch.contact_state, &model.mimics);
+        let points = &scratch.point_state;
+        stack.arrange(kept, couplings, points, &held);
+        stack.gather(&scratch.contact_state, &model.mimics, points);
         let all = &scratch.contact_state;
         let response = &mut scratch.response;
         Ok(impact_velocities(
@@ -187,6 +188,7 @@ impl MechanicalSystem<'_> {
             response,
             all,
             &model.mimics,
+            points,
             kept_rows.as_slice(),
             after,
         ))

@@ -39,7 +39,8 @@ struct Residual {
 
 impl MechanicalSystem<'_> {
     /// Whether [`MechanicalSystem::jacobian`] applies: a tree whose joints' coordinates move
-    /// with their rates, evaluated in the library (not native code), without contacts.
+    /// with their rates, evaluated in the library (not native code), without contacts or
+    /// position drives.
     pub fn has_tree_jacobian(&self) -> bool {
         let model = self.model;
         !model.has_loops()
@@ -47,6 +48,8 @@ impl MechanicalSystem<'_> {
             && self.native.is_none()
             && model.positions() == model.velocities()
             && model.joints.iter().all(|j| j.kind == JointType::Chain)
+            // A position drive's rows are not among the held coordinates it differentiates.
+            && model.position_drives.is_empty()
     }
 
     /// ∂f/∂y at (t, y), where `dydt` = f(t, y), into `jacobian` (a square of the state's

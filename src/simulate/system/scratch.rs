@@ -9,6 +9,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::compiled::EffortScratch;
 use crate::dynamics::contacts::ContactRows;
+use crate::dynamics::driven_points::PointRows;
 use crate::dynamics::efforts::Efforts;
 use crate::dynamics::loops::{LoopScratch, ProjectionScratch, Stabilisation};
 use crate::dynamics::mimics;
@@ -48,6 +49,8 @@ pub struct Scratch {
     /// The contacts' normal rows, and every contact row at the last evaluation.
     pub(in crate::simulate) normal_rows: Vec<usize>,
     pub(in crate::simulate) contact_state: ContactRows,
+    /// The position drives' rows at the last evaluation or projection.
+    pub(in crate::simulate) point_state: PointRows,
     /// Zero velocities or accelerations (tree length), the tree's mass matrix, the basis of
     /// the velocities a tree's mimic couplings allow (`mimics::basis`), and the response X of
     /// the accelerations to generalised forces (`response`), with whether it was formed at the
@@ -70,6 +73,9 @@ pub struct Scratch {
     /// Per drive (`Model::drives`), the effort that imposed it at the last evaluation (its
     /// held row's multiplier), and their power then.
     pub drive_efforts: Vec<f64>,
+    /// Per position drive (`Model::position_drives`), the force along x, y, z at its frame's
+    /// origin that imposed the path at the last evaluation (its rows' multipliers).
+    pub point_forces: Vec<f64>,
     pub(in crate::simulate) drive_power: f64,
     /// Where the drives' laws are evaluated.
     pub(in crate::simulate) law_values: Vec<f64>,
@@ -107,6 +113,7 @@ impl Scratch {
             evaluated: Vec::new(),
             normal_rows: Vec::with_capacity(model.contacts.len()),
             contact_state: ContactRows::new(model),
+            point_state: PointRows::new(model),
             at_rest: vec![0.0; model.nv],
             mass: DMatrix::zeros(model.nv, model.nv),
             coupled: mimics::basis(&model.mimics, model.nv),
@@ -121,6 +128,7 @@ impl Scratch {
             position_held: Vec::with_capacity(model.drives.len() + model.stops.len()),
             step: DVector::zeros(model.velocities()),
             drive_efforts: vec![0.0; model.drives.len()],
+            point_forces: vec![0.0; 3 * model.position_drives.len()],
             drive_power: 0.0,
             law_values: Vec::new(),
             contact: vec![0.0; model.stops.len()],

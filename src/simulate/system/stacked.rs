@@ -63,7 +63,11 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         let bounds =
             (model.has_loops() || model.has_contacts()) && self.state.resting.contains(&true);
-        model.has_contacts() || self.coupling_count() > 0 || !model.drives.is_empty() || bounds
+        model.has_contacts()
+            || self.coupling_count() > 0
+            || !model.drives.is_empty()
+            || !model.position_drives.is_empty()
+            || bounds
     }
 
     /// Runs `keep` with the storage of the positions and velocities.
@@ -120,9 +124,10 @@ impl MechanicalSystem<'_> {
         let couplings = self.coupling_count();
         let kept = self.state.contact_rows.as_deref().unwrap_or_default();
         let stack = &mut self.scratch.velocity_stack;
-        stack.arrange(kept, couplings, &self.scratch.held);
-        stack.gather(&self.scratch.contact_state, &model.mimics);
-        let off = stack.velocity_values(&self.scratch.contact_state, &model.mimics, v);
+        let points = &self.scratch.point_state;
+        stack.arrange(kept, couplings, points, &self.scratch.held);
+        stack.gather(&self.scratch.contact_state, &model.mimics, points);
+        let off = stack.velocity_values(&self.scratch.contact_state, &model.mimics, points, v);
         stack.add_least_change(&mut self.scratch.response, v);
         y[model.positions()..].copy_from_slice(v);
         off
@@ -180,13 +185,16 @@ impl MechanicalSystem<'_> {
     ) -> Result<bool, SystemError> {
         self.stacked_geometry(t, q, v)?;
         let stack = &mut self.scratch.position_stack;
+        let points = &self.scratch.point_state;
         stack.arrange(
             &self.scratch.normal_rows,
             couplings,
+            points,
             &self.scratch.position_held,
         );
-        stack.gather(&self.scratch.contact_state, &self.model.mimics);
-        Ok(stack.position_values(self.model, &self.scratch.contact_state, q))
+        stack.gather(&self.scratch.contact_state, &self.model.mimics, points);
+        let contacts = &self.scratch.contact_state;
+        Ok(stack.position_values(self.model, contacts, points, q))
     }
 
     /// The positions and velocities of y into `q` (quaternions at unit length) and `v`.
@@ -209,6 +217,7 @@ impl MechanicalSystem<'_> {
         if self.model.has_contacts() {
             self.contact_rows_here(v, false)?;
         }
+        self.point_rows_here(t, v, false);
         self.decide_contact_rows();
         Ok(())
     }

@@ -51,6 +51,9 @@ impl Unsupported {
 pub enum ImposedContext {
     Loops,
     Equilibrium,
+    /// A frame's position imposed (`drive position(F) = law`), whose rows the chart does not
+    /// keep.
+    Path,
 }
 
 impl ImposedContext {
@@ -59,6 +62,9 @@ impl ImposedContext {
         match self {
             ImposedContext::Loops => "`lsdc linearize` of a mechanism with closed loops",
             ImposedContext::Equilibrium => "`lsdc linearize --equilibrium`",
+            ImposedContext::Path => {
+                "`lsdc linearize` of a mechanism whose frame's position is imposed"
+            }
         }
     }
 
@@ -66,6 +72,7 @@ impl ImposedContext {
         match self {
             ImposedContext::Loops => "linearise the mechanism without the motion imposed in time (remove the drive, or the time from the dof chain); a tree is linearised with its drives on their laws",
             ImposedContext::Equilibrium => "a coordinate imposed in time is not at rest: linearise about the initial state, or a run's state with --at-time T, where the drives are on their laws",
+            ImposedContext::Path => "linearise the mechanism without its position drive, or drive its coordinates instead (`drive crank.q = law`)",
         }
     }
 }

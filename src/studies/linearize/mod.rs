@@ -579,6 +579,12 @@ fn refuse_unsupported(prepared: &Prepared) -> Result<(), LinearizeError> {
 /// laws) and at an equilibrium (a driven coordinate is not at rest, nor held by the inputs).
 fn refuse_imposed_motion(prepared: &Prepared, point: OperatingPoint) -> Result<(), LinearizeError> {
     let model = &prepared.model;
+    if let Some(path) = model.position_drives.first() {
+        return Err(LinearizeError::ImposedMotion {
+            name: path.frame.name.clone(),
+            context: ImposedContext::Path,
+        });
+    }
     let Some(driven) = model.drives.first() else {
         return Ok(());
     };
