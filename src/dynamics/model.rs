@@ -458,6 +458,11 @@ impl Model {
             return Err(errors);
         }
         if let Some(actuation) = &actuation {
+            for &(state, root) in &actuation.state_roots {
+                self.states[state].rate_root = root;
+            }
+        }
+        if let Some(actuation) = &actuation {
             for (k, joint) in self.joints.iter().enumerate() {
                 let offset = self.declared_offsets[k];
                 let range = offset..offset + joint.chain.coordinate_count();
@@ -479,6 +484,7 @@ impl Model {
             drives: &self.drives,
             unknowns: &self.unknowns,
             frames: &self.effort_frames,
+            states: &self.states,
             constrained: !self.contacts.is_empty() || !self.mimics.is_empty(),
         }
     }
@@ -546,8 +552,12 @@ impl Model {
                 let offset = self.declared_offset(self.chain(potential.joint).join);
                 potentials.push(builder.potential(&potential.value, Link(offset))?);
             }
+            // A rate that reads the model is the actuators' (`actuators::build`).
             let rates = (self.states.iter())
-                .map(|state| builder.scalar(&state.rate, Link(None)))
+                .map(|state| match state.reads_model {
+                    true => Ok(None),
+                    false => builder.scalar(&state.rate, Link(None)).map(Some),
+                })
                 .collect::<Result<Vec<_>, _>>()?;
             Ok((potentials_applied, groups, links, potentials, rates))
         };
@@ -571,7 +581,9 @@ impl Model {
             potential.root = root;
         }
         for (state, root) in self.states.iter_mut().zip(rates) {
-            state.rate_root = root;
+            if let Some(root) = root {
+                state.rate_root = root;
+            }
         }
         self.declared_read = self.joints_read(&tape);
         self.effort_tape = Ok(tape);

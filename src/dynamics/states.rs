@@ -1,10 +1,13 @@
 //! The program's states in the dynamic model (`let s = state(x0); rate s = f;`): each one's
 //! starting value, evaluated with the values of the unknowns (`given`, `--set`), and its rate,
 //! lowered into the efforts' tape (`compiled`) beside the efforts that read it, so that one
-//! evaluation of the tape gives the efforts and the states' rates at a state of the run.
+//! evaluation of the tape gives the efforts and the states' rates at a state of the run. A rate
+//! that reads the model (`mass_matrix`, `inverse_dynamics`, …: a backstepping law's voltage, an
+//! estimator's update) is lowered into the actuators' tape instead, evaluated after the model.
 
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
+use crate::elab::model_laws::reads_model;
 use crate::elab::value::Scalar;
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::source::Span;
@@ -16,9 +19,13 @@ pub struct StateModel {
     pub name: String,
     /// Its value at the start of a run.
     pub initial: f64,
-    /// Its rate, as written.
+    /// Its rate, as written, and where.
     pub rate: Scalar,
-    /// The rate's root in the efforts' tape (set when the efforts are compiled).
+    pub rate_span: Span,
+    /// The rate reads the model: it is a root of the actuators' tape, not the efforts'.
+    pub reads_model: bool,
+    /// The rate's root in the efforts' tape (set when the efforts are compiled), or in the
+    /// actuators' tape when it reads the model (set when the actuators are compiled).
     pub rate_root: usize,
 }
 
@@ -37,7 +44,7 @@ pub fn build(
     let mut states = Vec::new();
     for (index, state) in mechanism.states.iter().enumerate() {
         let name = state.label(index);
-        let Some((rate, _)) = &state.rate else {
+        let Some((rate, rate_span)) = &state.rate else {
             errors.push(
                 Diagnostic::error("E0488", format!("the state `{name}` has no rate"))
                     .primary(state.span, "made here")
@@ -53,6 +60,8 @@ pub fn build(
                 name,
                 initial,
                 rate: rate.clone(),
+                rate_span: *rate_span,
+                reads_model: reads_model(rate),
                 rate_root: 0,
             }),
             Err(e) => errors.push(missing(e, &what, state.span)),

@@ -1,7 +1,9 @@
 //! The program's states in a run (`let s = state(x0); rate s = f;`): the integrator carries
 //! their values after the mechanism's positions and velocities (`RunOde`), sets them in the run
 //! state before each evaluation, and reads their rates from the efforts' tape that evaluation
-//! computed: the efforts and the rates at one point cost one evaluation of one tape.
+//! computed: the efforts and the rates at one point cost one evaluation of one tape. The rates
+//! that read the model come from the actuators' tape, which the same evaluation computed after
+//! the model.
 
 use super::{MechanicalSystem, SystemError};
 
@@ -21,8 +23,12 @@ impl MechanicalSystem<'_> {
     pub fn state_rates(&self, rates: &mut [f64]) -> Result<(), SystemError> {
         let tape = self.model.effort_tape.as_ref().map_err(Clone::clone)?;
         let values = &self.scratch.data.efforts;
+        let laws = self.model.actuation.as_ref().map(|a| &a.tape);
         for (rate, state) in rates.iter_mut().zip(&self.model.states) {
-            *rate = tape.root(values, state.rate_root);
+            *rate = match (state.reads_model, laws) {
+                (true, Some(laws)) => laws.root(&self.scratch.actuator_tape, state.rate_root),
+                _ => tape.root(values, state.rate_root),
+            };
         }
         if let Some(k) = rates.iter().position(|r| !r.is_finite()) {
             return Err(SystemError::StateRateNotFinite {
