@@ -45,6 +45,7 @@ mod mimics;
 mod model_laws;
 mod momentum_basis;
 mod mutants;
+mod nonlinear_delta;
 mod native;
 mod outputs;
 mod pinocchio_fixtures;
