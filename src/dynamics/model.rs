@@ -448,8 +448,8 @@ fn refuse_rotors_on_welds(
 }
 
 impl Model {
-    /// Compiles the actuators' laws (`actuators`), and marks the joints they read as read by
-    /// the efforts.
+    /// Compiles the actuators' laws and the states' rates that read the model (`actuators`),
+    /// and marks the joints they read as read by the efforts.
     fn compile_actuators(&mut self, mechanism: &Mechanism) -> Result<(), Vec<Diagnostic>> {
         let mut errors = Vec::new();
         let compiling = self.actuators_compiling(mechanism);
@@ -461,8 +461,6 @@ impl Model {
             for &(state, root) in &actuation.state_roots {
                 self.states[state].rate_root = root;
             }
-        }
-        if let Some(actuation) = &actuation {
             for (k, joint) in self.joints.iter().enumerate() {
                 let offset = self.declared_offsets[k];
                 let range = offset..offset + joint.chain.coordinate_count();
