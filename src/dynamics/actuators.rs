@@ -9,11 +9,16 @@
 //! twice; an applied or link effort that reads the model (E0655: the model counts it, so the
 //! law would be implicit); a law that reads the model along a coordinate that is not actuated
 //! (E0656); the model with contacts or mimic couplings (E0657), whose rows it does not reduce.
+//!
+//! The rates of states that read the model (`rate current = ... inverse_dynamics(...) ...;`)
+//! are roots of the same tape: they are laws of the controller as the actuators' are, read
+//! after the model at each evaluation.
 
 use super::compiled::{EffortTape, Link, ModelReads, TapeBuilder};
 use super::drives::DrivenCoordinate;
 use super::elements::EffortFrame;
 use super::joint::{Joint, JointType};
+use super::states::StateModel;
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{Mechanism, OutputValue};
 use crate::elab::model_laws::reads_model;
@@ -39,6 +44,8 @@ pub struct Actuation {
     /// The laws, one root each (in `coordinates`' order).
     pub tape: EffortTape,
     pub roots: Vec<usize>,
+    /// The rates of the states that read the model: (the state's index, its root).
+    pub state_roots: Vec<(usize, usize)>,
     /// What the laws read of the model.
     pub reads: ModelReads,
 }
@@ -52,6 +59,8 @@ pub struct Compiling<'a> {
     pub drives: &'a [DrivenCoordinate],
     pub unknowns: &'a UnknownValues,
     pub frames: &'a [EffortFrame],
+    /// The program's states: the rates that read the model are compiled with the laws.
+    pub states: &'a [StateModel],
     /// Contacts or mimic couplings constrain the tree.
     pub constrained: bool,
 }
@@ -78,7 +87,13 @@ impl Compiling<'_> {
 pub fn build(compiling: &Compiling<'_>, errors: &mut Vec<Diagnostic>) -> Option<Actuation> {
     refuse_implicit_efforts(compiling.mechanism, errors);
     let actuators = &compiling.mechanism.actuators;
+    let model_rates: Vec<(usize, &StateModel)> = (compiling.states.iter().enumerate())
+        .filter(|(_, state)| state.reads_model)
+        .collect();
     if actuators.is_empty() {
+        for (_, state) in &model_rates {
+            refuse_unactuated(compiling, &[], &state.rate, state.rate_span, errors);
+        }
         return None;
     }
     let mut coordinates: Vec<ActuatedCoordinate> = Vec::new();
@@ -116,7 +131,9 @@ pub fn build(compiling: &Compiling<'_>, errors: &mut Vec<Diagnostic>) -> Option<
             ),
         }
     }
-    let reading: Vec<(&Scalar, Span)> = actuators.iter().map(|a| (&a.law, a.law_span)).collect();
+    let reading: Vec<(&Scalar, Span)> = (actuators.iter().map(|a| (&a.law, a.law_span)))
+        .chain(model_rates.iter().map(|(_, s)| (&s.rate, s.rate_span)))
+        .collect();
     let declared: Vec<usize> = coordinates.iter().map(|c| c.declared).collect();
     for (law, span) in &reading {
         refuse_unactuated(compiling, &declared, law, *span, errors);
@@ -132,7 +149,7 @@ pub fn build(compiling: &Compiling<'_>, errors: &mut Vec<Diagnostic>) -> Option<
         .map(|(law, _)| builder.scalar(law, Link(None)))
         .collect();
     let tape = builder.build();
-    let roots = match roots {
+    let mut roots = match roots {
         Ok(roots) => roots,
         Err(error) => {
             errors.push(
@@ -144,6 +161,10 @@ pub fn build(compiling: &Compiling<'_>, errors: &mut Vec<Diagnostic>) -> Option<
             return None;
         }
     };
+    let rate_roots = roots.split_off(actuators.len());
+    let state_roots = (model_rates.iter().map(|(k, _)| *k))
+        .zip(rate_roots)
+        .collect();
     // The model is computed once per evaluation for the laws and the outputs alike.
     let mut reads = tape.model_reads(declared.len());
     for output in &compiling.mechanism.outputs {
@@ -158,6 +179,7 @@ pub fn build(compiling: &Compiling<'_>, errors: &mut Vec<Diagnostic>) -> Option<
         coordinates,
         tape,
         roots,
+        state_roots,
         reads,
     })
 }

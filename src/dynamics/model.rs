@@ -460,8 +460,8 @@ fn refuse_rotors_on_welds(
 }
 
 impl Model {
-    /// Compiles the actuators' laws (`actuators`), and marks the joints they read as read by
-    /// the efforts.
+    /// Compiles the actuators' laws and the states' rates that read the model (`actuators`),
+    /// and marks the joints they read as read by the efforts.
     fn compile_actuators(&mut self, mechanism: &Mechanism) -> Result<(), Vec<Diagnostic>> {
         let mut errors = Vec::new();
         let compiling = self.actuators_compiling(mechanism);
@@ -470,6 +470,9 @@ impl Model {
             return Err(errors);
         }
         if let Some(actuation) = &actuation {
+            for &(state, root) in &actuation.state_roots {
+                self.states[state].rate_root = root;
+            }
             for (k, joint) in self.joints.iter().enumerate() {
                 let offset = self.declared_offsets[k];
                 let range = offset..offset + joint.chain.coordinate_count();
@@ -491,6 +494,7 @@ impl Model {
             drives: &self.drives,
             unknowns: &self.unknowns,
             frames: &self.effort_frames,
+            states: &self.states,
             constrained: !self.contacts.is_empty() || !self.mimics.is_empty(),
         }
     }
@@ -558,8 +562,12 @@ impl Model {
                 let offset = self.declared_offset(self.chain(potential.joint).join);
                 potentials.push(builder.potential(&potential.value, Link(offset))?);
             }
+            // A rate that reads the model is the actuators' (`actuators::build`).
             let rates = (self.states.iter())
-                .map(|state| builder.scalar(&state.rate, Link(None)))
+                .map(|state| match state.reads_model {
+                    true => Ok(None),
+                    false => builder.scalar(&state.rate, Link(None)).map(Some),
+                })
                 .collect::<Result<Vec<_>, _>>()?;
             Ok((potentials_applied, groups, links, potentials, rates))
         };
@@ -583,7 +591,9 @@ impl Model {
             potential.root = root;
         }
         for (state, root) in self.states.iter_mut().zip(rates) {
-            state.rate_root = root;
+            if let Some(root) = root {
+                state.rate_root = root;
+            }
         }
         self.declared_read = self.joints_read(&tape);
         self.effort_tape = Ok(tape);

@@ -3,10 +3,14 @@
 //! lowered into the efforts' tape (`compiled`) beside the efforts that read it, so that one
 //! evaluation of the tape gives the efforts and the states' rates at a state of the run. A
 //! sampled state (`let u = sample(period, x0); update u = f;`) is one of them with its period,
-//! its update in place of the rate (`dynamics::sampled`).
+//! its update in place of the rate (`dynamics::sampled`). A rate
+//! or update that reads the model (`mass_matrix`, `inverse_dynamics`, …: a backstepping law's
+//! voltage, an estimator's update) is lowered into the actuators' tape instead, evaluated after
+//! the model.
 
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
+use crate::elab::model_laws::reads_model;
 use crate::elab::value::Scalar;
 use crate::kinematics::eval::{eval, EvalError, UnknownValues};
 use crate::source::Span;
@@ -18,9 +22,14 @@ pub struct StateModel {
     pub name: String,
     /// Its value at the start of a run.
     pub initial: f64,
-    /// Its rate, as written; for a sampled state, its update (its value after each instant).
+    /// Its rate, as written, and where; for a sampled state, its update (its value after each
+    /// instant).
     pub rate: Scalar,
-    /// The rate's root in the efforts' tape (set when the efforts are compiled).
+    pub rate_span: Span,
+    /// The rate reads the model: it is a root of the actuators' tape, not the efforts'.
+    pub reads_model: bool,
+    /// The rate's root in the efforts' tape (set when the efforts are compiled), or in the
+    /// actuators' tape when it reads the model (set when the actuators are compiled).
     pub rate_root: usize,
     /// For a sampled state (`sample(period, x0)`), its period and where it was made: its rate
     /// in the run is zero, its update applied at each instant (`simulate::sampling`).
@@ -49,7 +58,7 @@ pub fn build(
     let mut states = Vec::new();
     for (index, state) in mechanism.states.iter().enumerate() {
         let name = state.label(index);
-        let Some((rate, _)) = &state.rate else {
+        let Some((rate, rate_span)) = &state.rate else {
             errors.push(without_law(&name, state.period.is_some(), state.span));
             continue;
         };
@@ -72,6 +81,8 @@ pub fn build(
                 name,
                 initial,
                 rate: rate.clone(),
+                rate_span: *rate_span,
+                reads_model: reads_model(rate),
                 rate_root: 0,
                 sampling,
             }),

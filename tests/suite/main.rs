@@ -48,6 +48,7 @@ mod model_laws;
 mod momentum_basis;
 mod mutants;
 mod native;
+mod nonlinear_delta;
 mod outputs;
 mod pinocchio_fixtures;
 mod position_drives;

@@ -30,7 +30,7 @@ fn settings(integrator: &Integrator, duration: f64, tolerance: f64) -> Settings 
 
 /// Whether the integrator refused the run for its states (saying so); otherwise the run must
 /// have succeeded.
-fn refused(simulation: &Simulation, integrator: &Integrator) -> bool {
+pub(crate) fn refused(simulation: &Simulation, integrator: &Integrator) -> bool {
     let entry = integrator.entry();
     if entry.unsupported.contains(&Feature::States) {
         let failure = simulation.report.failure.as_ref().expect("refused");

@@ -1,9 +1,12 @@
 //! The program's states in a run (`let s = state(x0); rate s = f;`): the integrator carries
 //! their values after the mechanism's positions and velocities (`RunOde`), sets them in the run
 //! state before each evaluation, and reads their rates from the efforts' tape that evaluation
-//! computed: the efforts and the rates at one point cost one evaluation of one tape.
+//! computed: the efforts and the rates at one point cost one evaluation of one tape. The rates
+//! that read the model come from the actuators' tape, which the same evaluation computed after
+//! the model.
 
 use super::{MechanicalSystem, SystemError};
+use crate::dynamics::states::StateModel;
 
 impl MechanicalSystem<'_> {
     /// How many states the program has.
@@ -20,11 +23,9 @@ impl MechanicalSystem<'_> {
     /// (`derivative`), which evaluated the efforts' tape there, into `rates`: zero for a
     /// sampled state, held between its instants.
     pub fn state_rates(&self, rates: &mut [f64]) -> Result<(), SystemError> {
-        let tape = self.model.effort_tape.as_ref().map_err(Clone::clone)?;
-        let values = &self.scratch.data.efforts;
         for (rate, state) in rates.iter_mut().zip(&self.model.states) {
             *rate = match state.continuous() {
-                true => tape.root(values, state.rate_root),
+                true => self.law_value(state)?,
                 false => 0.0,
             };
         }
@@ -32,6 +33,20 @@ impl MechanicalSystem<'_> {
             Some(state) => Err(SystemError::StateRateNotFinite { state }),
             None => Ok(()),
         }
+    }
+
+    /// The value of `state`'s law (its rate, or a sampled state's update) at the last evaluation
+    /// of the equations of motion: a root of the actuators' tape when it reads the model (that
+    /// tape is evaluated after the model), of the efforts' tape otherwise.
+    fn law_value(&self, state: &StateModel) -> Result<f64, SystemError> {
+        let laws = self.model.actuation.as_ref().map(|a| &a.tape);
+        Ok(match (state.reads_model, laws) {
+            (true, Some(laws)) => laws.root(&self.scratch.actuator_tape, state.rate_root),
+            _ => {
+                let tape = self.model.effort_tape.as_ref().map_err(Clone::clone)?;
+                tape.root(&self.scratch.data.efforts, state.rate_root)
+            }
+        })
     }
 
     /// The name of the first state whose computed value (its rate, or a sampled state's
@@ -57,12 +72,10 @@ impl MechanicalSystem<'_> {
         self.set_states(&y[n..n + states]);
         let mut rates = vec![0.0; n];
         self.derivative(t, &y[..n], &mut rates)?;
-        let tape = self.model.effort_tape.as_ref().map_err(Clone::clone)?;
-        let values = &self.scratch.data.efforts;
         for ((update, state), value) in updates.iter_mut().zip(&self.model.states).zip(&y[n..]) {
             *update = match state.continuous() {
                 true => *value,
-                false => tape.root(values, state.rate_root),
+                false => self.law_value(state)?,
             };
         }
         match self.first_not_finite(updates) {
