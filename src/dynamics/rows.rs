@@ -254,13 +254,9 @@ impl RowStack {
         self.contacts.len() + self.couplings + self.held.len()
     }
 
+    #[cfg(lsdc_internals)]
     pub fn is_empty(&self) -> bool {
         self.len() == 0
-    }
-
-    /// The contact rows stacked.
-    pub fn contact_rows(&self) -> &[usize] {
-        &self.contacts
     }
 
     /// Fills G and γ from the contacts' rows `all` (γ as they hold it) and the couplings
@@ -340,12 +336,6 @@ impl RowStack {
         })
     }
 
-    /// The multipliers of the last solve: the contacts' rows', then the couplings', then the
-    /// held velocities' (each a force along its velocity: a drive's is its effort).
-    pub fn multipliers(&self) -> &[f64] {
-        self.right.as_slice()
-    }
-
     /// The coordinates held, each with the force that held it at the last solve.
     pub fn held_forces(&self) -> impl Iterator<Item = (&HeldRow, f64)> {
         let forces = &self.right.as_slice()[self.contacts.len() + self.couplings..];
@@ -353,6 +343,7 @@ impl RowStack {
     }
 
     /// The rows G, gathered (`gather`).
+    #[cfg(lsdc_internals)]
     pub fn rows(&self) -> &DMatrix<f64> {
         &self.g
     }

@@ -196,20 +196,6 @@ pub struct Expr {
     pub span: Span,
 }
 
-impl Expr {
-    /// The name this expression is, with the expression's span: `ExprKind::Name` stores only
-    /// the spelling.
-    pub fn as_ident(&self) -> Option<Ident> {
-        match &self.kind {
-            ExprKind::Name(name) => Some(Ident {
-                name: *name,
-                span: self.span,
-            }),
-            _ => None,
-        }
-    }
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BinaryOp {
     Add,
