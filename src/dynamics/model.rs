@@ -931,7 +931,7 @@ impl Model {
     }
 
     /// Declared coordinates and rates at (q, v) at time t; `reference` keeps recovered angles
-    /// continuous (see [`AngleReference`]).
+    /// continuous (see `dynamics::angles::AngleReference`, the library's own).
     pub fn declared(
         &self,
         (t, q, v): (f64, &[f64], &[f64]),
