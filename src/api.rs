@@ -94,7 +94,7 @@ use crate::prepare::outputs::Outputs;
 pub use crate::prepare::settings::{Integrator, Settings, SettingsChanges, SettingsError};
 pub use crate::prepare::Prepared;
 pub use crate::simulate::run::{
-    Report, RunFailure, RunOptions, Sample, Simulation, Simulator, Start,
+    run_from, Report, RunFailure, RunOptions, Sample, Simulation, Simulator, Start,
 };
 pub use crate::source::SourceMap;
 pub use crate::studies::batch::{parse_states, Evaluation, StateInput, StatesError};

@@ -32,6 +32,7 @@ enum Tree {
 }
 
 /// Compiles files from disk.
+#[cfg(lsdc_internals)]
 pub fn compile_files(paths: &[PathBuf], options: &LoadOptions) -> Result<Compilation, LoadError> {
     compile_files_perturbed(paths, options, None)
 }

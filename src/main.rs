@@ -1,15 +1,15 @@
 //! The `lsdc` command line: parses the arguments and hands them to the command's file in
-//! `cli/`, which calls the library and prints the result.
+//! `cli/` (a module of the library, so that the binary needs nothing else of it), which calls
+//! the library and prints the result.
 //! Exit codes: 0 clean, 1 errors in the program, 2 usage errors (bad flags, unreadable files).
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-mod cli;
-
 use cli::shared::{asks_for_json, exit_code, rejected_arguments, set_modes};
 use cli::*;
+use lsdc::cli;
 
 #[derive(Parser)]
 #[command(

@@ -66,6 +66,7 @@ impl Scope {
         self.order.len() as u32
     }
 
+    #[cfg(lsdc_internals)]
     pub fn is_empty(&self) -> bool {
         self.order.is_empty()
     }

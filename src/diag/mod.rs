@@ -183,8 +183,4 @@ impl Diagnostics {
     pub fn has_errors(&self) -> bool {
         self.list.iter().any(Diagnostic::is_error)
     }
-
-    pub fn error_count(&self) -> usize {
-        self.list.iter().filter(|d| d.is_error()).count()
-    }
 }

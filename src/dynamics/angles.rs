@@ -31,6 +31,7 @@ fn unwrap(angle: f64, reference: f64) -> f64 {
     angle + 2.0 * PI * ((reference - angle) / (2.0 * PI)).round()
 }
 
+#[cfg(lsdc_internals)]
 pub fn rotation_from_angles(axes: &[Vector3<f64>; 3], angles: &[f64]) -> UnitQuaternion<f64> {
     (0..3).fold(UnitQuaternion::identity(), |r, k| {
         r * UnitQuaternion::from_axis_angle(&Unit::new_normalize(axes[k]), angles[k])
@@ -220,7 +221,7 @@ impl Joint {
     }
 
     /// The joint's positions and velocities from declared coordinates and rates.
-    pub fn from_declared(
+    pub fn state_from_declared(
         &self,
         coordinates: &[f64],
         rates: &[f64],

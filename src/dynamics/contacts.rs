@@ -287,11 +287,6 @@ pub fn candidate_rows(model: &Model) -> Vec<usize> {
         .collect()
 }
 
-/// The holonomic rows among `kept`: the normal rows, which positions are projected onto.
-pub fn holonomic_rows(kept: &[usize]) -> Vec<usize> {
-    kept.iter().copied().filter(|r| r % 3 == 2).collect()
-}
-
 /// Hᵀ for the stacked contact rows `stacked` (the first columns of `directions`, which holds
 /// Gᵀ): a sliding contact's normal row also carries the friction its normal force causes,
 /// −f σ (sₓ Gₓ + s_y G_y), with σ = `pressing` (±1) the normal force's sign.
@@ -350,13 +345,6 @@ pub fn flip_pulling(model: &Model, forces: &[Vector3<f64>], pressing: &mut [f64]
         }
     }
     flipped
-}
-
-/// The largest gap of the contacts' rows `stacked` that are normal rows.
-pub fn largest_gap(rows: &ContactRows, stacked: &[usize]) -> f64 {
-    (stacked.iter().filter(|r| *r % 3 == 2))
-        .map(|r| rows.gap[r / 3].abs())
-        .fold(0.0, f64::max)
 }
 
 /// The contact forces as forces on the bodies (in their frames, about their origins): each

@@ -72,6 +72,7 @@ impl Factor {
 /// Solves A x = b by Gaussian elimination with partial pivoting, overwriting A and leaving x in
 /// `b`; Err(k) when the k-th unknown is not determined (an exactly zero pivot, as where rows
 /// are dependent), with A and b then spoilt.
+#[cfg(lsdc_internals)]
 pub fn solve_in_place(a: &mut DMatrix<f64>, b: &mut DVector<f64>) -> Result<(), usize> {
     let n = a.nrows();
     for k in 0..n {

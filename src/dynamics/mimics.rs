@@ -86,16 +86,6 @@ pub fn basis(mimics: &[Mimic], nv: usize) -> DMatrix<f64> {
     s
 }
 
-/// The coupling rows G (followers × nv), G v = 0 for the velocities the couplings allow.
-pub fn rows(mimics: &[Mimic], nv: usize) -> DMatrix<f64> {
-    let mut g = DMatrix::zeros(mimics.len(), nv);
-    for (r, mimic) in mimics.iter().enumerate() {
-        g[(r, mimic.velocity)] = 1.0;
-        g[(r, mimic.leader_velocity)] -= mimic.multiplier;
-    }
-    g
-}
-
 /// The couplings of the tree's links. Follower and leader must each have one coordinate
 /// (E0470) and be a join of the tree, not one closing a loop (E0471); a leader that follows
 /// another join, or the follower itself, is refused (E0472); the multiplier and offset must be

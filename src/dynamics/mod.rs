@@ -2,28 +2,31 @@
 //! [`algorithms::Data`], and the recursive algorithms on them: inverse dynamics (RNEA), the mass
 //! matrix (CRBA), forward dynamics (ABA), energy and momentum.
 
-pub mod actuators;
 pub mod algorithms;
-pub mod angles;
-pub mod compiled;
-pub mod contacts;
-pub mod dense;
-pub mod derivatives;
-pub mod driven_points;
-pub mod drives;
-pub mod efforts;
-pub mod elements;
-pub mod energy;
-pub mod friction;
-pub mod joint;
-pub mod loops;
-pub mod mimics;
 pub mod model;
-pub mod reduced_model;
-pub mod response;
-pub mod rotors;
-pub mod rows;
-pub mod sampled;
-pub mod states;
-pub mod stops;
-pub mod welds;
+
+internal! {
+    mod actuators;
+    mod angles;
+    mod compiled;
+    mod contacts;
+    mod dense;
+    mod derivatives;
+    mod driven_points;
+    mod drives;
+    mod efforts;
+    mod elements;
+    mod energy;
+    mod friction;
+    mod joint;
+    mod loops;
+    mod mimics;
+    mod reduced_model;
+    mod response;
+    mod rotors;
+    mod rows;
+    mod sampled;
+    mod states;
+    mod stops;
+    mod welds;
+}

@@ -942,8 +942,10 @@ impl Model {
         v[self.nv..].copy_from_slice(&rates[tree..]);
         for (joint, &offset) in self.joints.iter().zip(&self.declared_offsets) {
             let n = joint.chain.coordinate_count();
-            let (jq, jv) = joint
-                .from_declared(&coordinates[offset..offset + n], &rates[offset..offset + n])?;
+            let (jq, jv) = joint.state_from_declared(
+                &coordinates[offset..offset + n],
+                &rates[offset..offset + n],
+            )?;
             q[joint.q_offset..joint.q_offset + joint.nq()].copy_from_slice(&jq);
             v[joint.v_offset..joint.v_offset + joint.nv()].copy_from_slice(&jv);
         }
@@ -951,7 +953,7 @@ impl Model {
     }
 
     /// Declared coordinates and rates at (q, v) at time t; `reference` keeps recovered angles
-    /// continuous (see [`AngleReference`]).
+    /// continuous (see `dynamics::angles::AngleReference`, the library's own).
     pub fn declared(
         &self,
         (t, q, v): (f64, &[f64], &[f64]),

@@ -269,13 +269,9 @@ impl RowStack {
         self.contacts.len() + self.couplings + self.points + self.held.len()
     }
 
+    #[cfg(lsdc_internals)]
     pub fn is_empty(&self) -> bool {
         self.len() == 0
-    }
-
-    /// The contact rows stacked.
-    pub fn contact_rows(&self) -> &[usize] {
-        &self.contacts
     }
 
     /// Fills G and γ from the contacts' rows `all` (γ as they hold it), the couplings
@@ -360,13 +356,6 @@ impl RowStack {
         })
     }
 
-    /// The multipliers of the last solve: the contacts' rows', then the couplings', then the
-    /// position drives' (forces along x, y, z at their frames' origins), then the held
-    /// velocities' (each a force along its velocity: a drive's is its effort).
-    pub fn multipliers(&self) -> &[f64] {
-        self.right.as_slice()
-    }
-
     /// The coordinates held, each with the force that held it at the last solve.
     pub fn held_forces(&self) -> impl Iterator<Item = (&HeldRow, f64)> {
         let first = self.contacts.len() + self.couplings + self.points;
@@ -382,6 +371,7 @@ impl RowStack {
     }
 
     /// The rows G, gathered (`gather`).
+    #[cfg(lsdc_internals)]
     pub fn rows(&self) -> &DMatrix<f64> {
         &self.g
     }

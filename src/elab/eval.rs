@@ -340,7 +340,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             .ok_or_else(|| internal(format!("`{name}` not declared")))?;
         let value = match entry.ty {
             Ty::Definition(def) => Value::Definition(def),
-            Ty::Package(package) => Value::Package(package),
+            Ty::Package(_) => Value::Package,
             Ty::Join => {
                 let shown = self.qualified_name(name, instance);
                 return Err(Diagnostic::error(

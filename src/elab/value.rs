@@ -5,7 +5,6 @@
 use std::fmt;
 use std::sync::{Arc, LazyLock};
 
-use crate::check::scope::ScopeId;
 use crate::check::types::DefId;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -279,7 +278,7 @@ pub enum Value {
     Zero,
     /// The literal `1`, until its context says what it is.
     One,
-    Package(ScopeId),
+    Package,
     Definition(DefId),
 }
 

@@ -12,4 +12,5 @@ mod navigate;
 mod outline;
 pub mod server;
 
+#[cfg(lsdc_internals)]
 pub use outline::semantic_tokens;

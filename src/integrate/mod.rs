@@ -40,11 +40,15 @@ mod system;
 
 pub use control::error_norm;
 pub use hermite::HermiteSegment;
-pub use outcome::{Failure, InputError, IntegrationError, StabilityBound, Stats, StepError};
+#[cfg(lsdc_internals)]
+pub use outcome::InputError;
+pub use outcome::{Failure, IntegrationError, StabilityBound, Stats, StepError};
 pub use settings::{Interrupt, Method, Settings};
 pub use stability::jacobian_product;
 pub use stepping::Integration;
-pub use system::{CallbackError, Observer, OdeSystem};
+#[cfg(lsdc_internals)]
+pub use system::Observer;
+pub use system::{CallbackError, OdeSystem};
 
 /// Integrates from `t0` to `t_end`, calling `observer(t, y)` at every time in `outputs` (sorted,
 /// within `[t0, t_end]`) as soon as the integration has passed it, and returns the state at
@@ -82,6 +86,7 @@ pub use system::{CallbackError, Observer, OdeSystem};
 /// assert!(stats.steps > 0);
 /// ```
 #[allow(clippy::too_many_arguments)]
+#[cfg(lsdc_internals)]
 pub fn integrate(
     method: &Method,
     system: &mut dyn OdeSystem,
@@ -106,6 +111,7 @@ pub fn integrate(
     Ok((integration.state().to_vec(), integration.stats()))
 }
 
+#[cfg(lsdc_internals)]
 fn check_problem(
     dimension: usize,
     t0: f64,

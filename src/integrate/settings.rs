@@ -16,14 +16,18 @@ pub enum Method {
     Dop853,
     /// ROS34PW2, a Rosenbrock-W method of order 3 for stiff problems, with a finite-difference
     /// Jacobian kept across steps (along the system's tangent directions when it gives them).
+    /// (A run reaches the three stiff methods through `Automatic`; the tests name each.)
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     Rosenbrock,
     /// RODAS4, a Rosenbrock method of order 4 for stiff problems, with a Jacobian formed at
     /// every step: the system's own ([`OdeSystem::jacobian`](super::OdeSystem::jacobian)) when
     /// it gives one, finite differences otherwise (along the system's tangent directions when it
     /// gives them).
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     Rodas4,
     /// Radau IIA of order 5 (RADAU5's method) for stiff problems, its Jacobian (the system's own
     /// or by finite differences) kept across steps while its Newton iteration converges fast.
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     Radau5,
     /// Dormand–Prince where the problem is not stiff, Radau IIA (ROS34PW2 on a system with
     /// tangent directions) where it is: the method changes

@@ -132,6 +132,7 @@ impl CompiledChain {
     }
 
     /// Number of distinct nodes evaluated with rates.
+    #[cfg(lsdc_internals)]
     pub fn size(&self) -> usize {
         self.tape.size()
     }

@@ -67,6 +67,7 @@ pub const STATE_COMPONENTS: [&str; 13] = [
 
 impl FrameState {
     /// The 13 numbers, in [`STATE_COMPONENTS`] order.
+    #[cfg(lsdc_internals)]
     pub fn values(&self) -> impl Iterator<Item = f64> + '_ {
         self.position
             .iter()
@@ -119,12 +120,4 @@ pub fn states(
         .iter()
         .map(|frame| frame.state(&configuration, rates))
         .collect())
-}
-
-/// The CSV columns of the frames' states: `tip.x`, `tip.y`, …, `tip.wz` for each.
-pub fn column_names(frames: &[FramePoint]) -> Vec<String> {
-    frames
-        .iter()
-        .flat_map(|f| STATE_COMPONENTS.map(|c| format!("{}.{c}", f.name)))
-        .collect()
 }

@@ -32,6 +32,7 @@ impl Starting {
 
 /// Starting coordinates and which of them are held, from the program's `initial` declarations
 /// (coordinates without one start at 0).
+#[cfg(lsdc_internals)]
 pub fn initial_coordinates(
     mechanism: &Mechanism,
     model: &KinematicModel,

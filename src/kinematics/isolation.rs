@@ -32,7 +32,9 @@ pub struct Isolated {
     /// rows then three position rows, the position rows per length of the mechanism).
     pub stress: DVector<f64>,
     /// The smallest eigenvalue of the stress's form on the first-order motions, relative to
-    /// the closure's derivatives (`Bending::scale`): how clearly definite it is.
+    /// the closure's derivatives (`Bending::scale`): how clearly definite it is (read by the
+    /// tests).
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     pub margin: f64,
     /// The coordinates that the first-order motions move.
     pub moving: Vec<usize>,

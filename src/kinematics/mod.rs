@@ -23,4 +23,5 @@ pub mod sphere_on_disc;
 pub mod tabulated_law;
 pub mod unknowns;
 
+#[cfg(lsdc_internals)]
 pub use initial::initial_coordinates;

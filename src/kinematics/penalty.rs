@@ -25,7 +25,6 @@ use crate::spatial::Pose;
 /// `second_body` (0 = earth), both in their body's coordinates.
 #[derive(Clone, Debug)]
 pub struct Pivot {
-    pub name: String,
     pub first_body: usize,
     pub first: Vector2<f64>,
     pub second_body: usize,
@@ -75,7 +74,6 @@ pub fn planar_model(
             ));
         }
         pivots.push(Pivot {
-            name: joint.name.clone(),
             first_body: joint.first_body,
             first: joint.first.translation.vector.xy(),
             second_body: joint.second_body,

@@ -140,6 +140,7 @@ pub fn robot(model: &Model, robot_name: &str) -> Result<Robot, ExportError> {
 }
 
 /// Where each body's URDF link frame is in the body's frame, by body number (0 is the earth).
+#[cfg(lsdc_internals)]
 pub fn link_frames(model: &Model) -> Result<Vec<Pose>, ExportError> {
     Ok(frames_of(model, &layouts(model)?))
 }

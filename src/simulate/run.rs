@@ -4,11 +4,12 @@
 
 use serde::Serialize;
 
-pub use super::report::{
-    passage_output_warning, step_error_warning, stiffness_warning, Interruption, Report,
-    RunFailure, StepErrorReport,
-};
-pub use super::sample::{MomentumDrift, Sample};
+#[cfg(lsdc_internals)]
+pub use super::report::stiffness_warning;
+pub use super::report::{Report, RunFailure};
+#[cfg(lsdc_internals)]
+pub use super::sample::MomentumDrift;
+pub use super::sample::Sample;
 pub use super::simulator::{Simulator, Start};
 use crate::dynamics::driven_points;
 use crate::dynamics::model::Model;

@@ -387,6 +387,7 @@ impl FixedStep {
 
 /// Integrates with fixed step `h`, reporting the state (positions, velocities) at each output:
 /// the steps of a [`VariationalMarch`] to `t_end`.
+#[cfg(lsdc_internals)]
 pub fn integrate<'m>(
     system: &mut MechanicalSystem<'m>,
     t0: f64,

@@ -11,7 +11,6 @@ use crate::kinematics::contacts::{contact_mobility, contact_models, ContactMobil
 use crate::kinematics::eval::UnknownValues;
 use crate::kinematics::forward::forward;
 use crate::kinematics::initial::assemble_initial;
-use crate::kinematics::joint;
 use crate::kinematics::joint::{analyse, JointAnalysis};
 use crate::kinematics::mobility::{mobility, Mobility};
 use crate::kinematics::model::{self, KinematicModel};
@@ -289,5 +288,3 @@ pub fn assembled_model_with(
     warnings.extend(sphere_contacts_on_discs(mechanism, &model, &assembled.q));
     Ok((model, report, warnings))
 }
-
-pub use joint::JointKind;

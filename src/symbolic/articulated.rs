@@ -283,10 +283,6 @@ pub fn add(pool: &mut Pool, a: &Spatial, b: &Spatial) -> Spatial {
     std::array::from_fn(|i| pool.add(a[i], b[i]))
 }
 
-pub fn sub(pool: &mut Pool, a: &Spatial, b: &Spatial) -> Spatial {
-    std::array::from_fn(|i| pool.sub(a[i], b[i]))
-}
-
 fn dot(pool: &mut Pool, a: &Spatial, b: &Spatial) -> ExprId {
     let terms: Vec<ExprId> = (0..6).map(|i| pool.mul(a[i], b[i])).collect();
     pool.sum(terms)

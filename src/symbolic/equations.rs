@@ -17,10 +17,12 @@
 //! The complementary links' own coordinates are variables of the equations (after the tree's),
 //! with no inertia: their rows of M and S are zero, their rows of F hold their links' efforts.
 
+#[cfg(lsdc_internals)]
 use nalgebra::{DMatrix, DVector};
 
-pub use super::closure::ROW_NAMES;
-use super::expr::{ExprId, Pool, Tape};
+#[cfg(lsdc_internals)]
+use super::expr::Tape;
+use super::expr::{ExprId, Pool};
 use super::generator::Generator;
 use super::lower::{LowerError, Variables};
 use super::vector as v;
@@ -33,9 +35,6 @@ use crate::topology::Topology;
 pub struct Equations {
     pub pool: Pool,
     pub variables: Variables,
-    /// The first `tree_coordinates` positions are the tree's; the others the complementary
-    /// links'.
-    pub tree_coordinates: usize,
     /// M, row-major, n × n with n the number of positions.
     pub mass: Vec<ExprId>,
     /// S: the velocity-product terms.
@@ -82,16 +81,19 @@ impl Equations {
 
     /// Number of distinct nodes of the equations: their size once common subexpressions are
     /// shared.
+    #[cfg(lsdc_internals)]
     pub fn size(&self) -> usize {
         self.tape().size()
     }
 
     /// The tape that evaluates every root, in the order of `roots`.
+    #[cfg(lsdc_internals)]
     pub fn tape(&self) -> Tape {
         Tape::new(&self.pool, &self.roots())
     }
 
     /// Values for every symbol of the pool, by name; the first symbol without one otherwise.
+    #[cfg(lsdc_internals)]
     pub fn symbol_values(
         &self,
         value: impl Fn(&str) -> Option<f64>,
@@ -105,6 +107,7 @@ impl Equations {
     }
 
     /// The equations at `symbols` (one value per pool symbol), evaluated by `tape`.
+    #[cfg(lsdc_internals)]
     pub fn evaluate(&self, tape: &Tape, symbols: &[f64]) -> Values {
         let values = tape.eval(symbols);
         let (n, m) = (self.dimension(), self.constraint_rows());
@@ -130,18 +133,22 @@ impl Equations {
 
 /// A symbol of the equations that was given no value.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[cfg(lsdc_internals)]
 pub struct MissingSymbol(pub String);
 
+#[cfg(lsdc_internals)]
 impl std::fmt::Display for MissingSymbol {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "no value for the symbol `{}`", self.0)
     }
 }
 
+#[cfg(lsdc_internals)]
 impl std::error::Error for MissingSymbol {}
 
 /// The equations' values at one point.
 #[derive(Clone, Debug)]
+#[cfg(lsdc_internals)]
 pub struct Values {
     pub mass: DMatrix<f64>,
     pub second_member: DVector<f64>,
@@ -256,7 +263,6 @@ impl Generator<'_> {
         Ok(Equations {
             pool: std::mem::take(&mut self.pool),
             variables: self.lowering.variables.clone(),
-            tree_coordinates,
             mass,
             second_member,
             forces,

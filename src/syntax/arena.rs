@@ -46,6 +46,7 @@ static MAPPED: AtomicUsize = AtomicUsize::new(0);
 
 /// The bytes of all chunks mapped now, by every thread: what the syntax trees alive hold, with
 /// the free ends of the chunks being carved.
+#[cfg(lsdc_internals)]
 pub fn mapped_bytes() -> usize {
     MAPPED.load(Ordering::Relaxed)
 }

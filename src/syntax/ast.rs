@@ -215,18 +215,6 @@ pub struct Expr {
 }
 
 impl Expr {
-    /// The name this expression is, with the expression's span: `ExprKind::Name` stores only
-    /// the spelling.
-    pub fn as_ident(&self) -> Option<Ident> {
-        match &self.kind {
-            ExprKind::Name(name) => Some(Ident {
-                name: *name,
-                span: self.span,
-            }),
-            _ => None,
-        }
-    }
-
     /// A name or a chain of fields as written (`nacelle`, `leg.tip`), for naming what it
     /// designates; `None` for any other expression.
     pub fn as_path(&self) -> Option<String> {

@@ -80,8 +80,6 @@ pub struct Case {
     pub program: PathBuf,
     pub reference: Option<PathBuf>,
     pub overrides: Vec<Override>,
-    /// The `--set` texts of the overrides, as written.
-    pub sets: Vec<String>,
     pub settings: SettingsChanges,
     /// The variables compared (all of the reference's when `None`).
     pub outputs: Option<Vec<String>>,
@@ -304,7 +302,6 @@ fn resolve(
         program: folder.join(entry.program),
         reference: entry.reference.map(|r| folder.join(r)),
         overrides,
-        sets: entry.set.into_iter().map(Spanned::into_inner).collect(),
         settings: entry.simulate.changes(),
         outputs: entry.outputs,
         tolerance,

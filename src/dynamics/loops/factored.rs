@@ -248,14 +248,6 @@ impl Factored {
         self.indices == choice.rows && self.scales == choice.scales && self.firm == choice.firm()
     }
 
-    /// The kept rows (among the 6 per loop), each with the factor making it dimensionless.
-    pub fn kept_rows(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        self.indices
-            .iter()
-            .copied()
-            .zip(self.scales.iter().copied())
-    }
-
     /// The factorisation of these rows from a factor already taken of them (`damped_in`, then
     /// `Damped::into_storage`) with the rows unchanged since: no work, no allocation.
     pub fn with_factor(&self, factor: Envelope) -> Damped<'_> {
@@ -275,6 +267,7 @@ impl Factored {
         self.rows.len()
     }
 
+    #[cfg(lsdc_internals)]
     pub fn is_empty(&self) -> bool {
         self.rows.len() == 0
     }

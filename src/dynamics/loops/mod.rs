@@ -22,13 +22,11 @@ pub mod rows;
 pub mod solve;
 pub mod structure;
 
-pub use basis::{decompose, decompose_with, Decomposition};
-pub use factored::{Damped, Envelope, Factored, RowChoice, Singular, DAMPING};
+pub use basis::{decompose, decompose_with};
+pub use factored::{Factored, RowChoice, Singular, DAMPING};
 pub use jacobian::ConstraintJacobian;
 pub use momentum::{project_momentum, MomentumBasis};
-pub use project::{
-    close_configuration, project, project_from, Projection, ProjectionScratch, Residuals,
-};
+pub use project::{close_configuration, project, project_from, ProjectionScratch, Residuals};
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
     Extent, ROW_NAMES,
@@ -36,4 +34,4 @@ pub use rows::{
 pub use solve::{
     allowed_motions, multipliers, solve_reduced, LoopError, LoopScratch, Stabilisation,
 };
-pub use structure::{Structure, StructureError, RANK_TOLERANCE};
+pub use structure::{Structure, StructureError};

@@ -34,6 +34,7 @@ mod tree;
 use crate::diag::Diagnostic;
 use crate::source::FileId;
 use document::Source;
+#[cfg(lsdc_internals)]
 pub use names::lsd_name;
 pub use options::ImportOptions;
 use program::Importer;
@@ -51,6 +52,7 @@ pub struct Imported {
 /// Imports a URDF text. `name` is the file name shown in the program's header. The
 /// diagnostics' spans are in `FileId(0)`: render them against a `SourceMap` whose first file is
 /// `xml` (use [`import_urdf_at`] for another file).
+#[cfg(lsdc_internals)]
 pub fn import_urdf(name: &str, xml: &str, options: &ImportOptions) -> Result<Imported, Diagnostic> {
     import_urdf_at(FileId(0), name, xml, options)
 }

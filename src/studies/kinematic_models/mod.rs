@@ -35,7 +35,7 @@ mod second_order;
 mod singular_values;
 
 pub use error::KinematicsError;
-pub use models::{models_at, KinematicModels, Rows, SingularKind, SingularMotion, Singularity};
+pub use models::{models_at, KinematicModels, Rows, SingularKind, SingularMotion};
 pub(crate) use motion_basis::motion_basis;
 pub use output::{actuation, Actuation, Output, OutputKind};
 pub(crate) use second_order::second_order;
