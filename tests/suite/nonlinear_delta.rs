@@ -27,7 +27,8 @@ fn backstepping(replacements: &[(&str, &str)], settings: Settings) -> Simulation
     run(&prepared, &mut |_| {})
 }
 
-fn settings(integrator: &Integrator, duration: f64) -> Settings {
+/// The Delta's closed-loop runs' settings (shared with `cascade_delta.rs`).
+pub(crate) fn settings(integrator: &Integrator, duration: f64) -> Settings {
     Settings {
         integrator: integrator.clone(),
         duration,
@@ -42,7 +43,7 @@ fn settings(integrator: &Integrator, duration: f64) -> Settings {
 }
 
 /// The largest tracking error of the three arms (rad of the arm) at the outputs in [from, to).
-fn largest_error(simulation: &Simulation, from: f64, to: f64) -> f64 {
+pub(crate) fn largest_error(simulation: &Simulation, from: f64, to: f64) -> f64 {
     let errors = ["error1", "error2", "error3"].map(|name| output(simulation, name));
     let samples = simulation.samples.iter();
     samples
