@@ -5,12 +5,12 @@
 //! the arms track their quintic references with every integrator that integrates states, and
 //! reject the seed's input disturbance (a step at 0.1 s and a 10 Hz sinusoid from 0.5 s).
 
-use crate::common::programs::mechanism;
+use crate::common::programs::run_example;
 use crate::nonlinear_delta::{largest_error, settings};
 use crate::states::refused;
 use lsdc::integrators::INTEGRATORS;
-use lsdc::prepare::{prepare, Integrator, Settings};
-use lsdc::simulate::run::{run, Simulation};
+use lsdc::prepare::{Integrator, Settings};
+use lsdc::simulate::run::Simulation;
 
 const EXAMPLE: &str = "control/cascade_delta";
 /// The example's own settings and test signal, which the tests replace.
@@ -20,11 +20,7 @@ const SIGNAL: &str = "given A_in = 0 ;";
 
 /// A run of the example with `replacements`, its `simulate` declaration replaced by `settings`.
 fn cascade(replacements: &[(&str, &str)], settings: Settings) -> Simulation {
-    let mut replaced = vec![(SETTINGS, "")];
-    replaced.extend_from_slice(replacements);
-    let prepared = prepare(&mechanism(EXAMPLE, &replaced), &[], &settings)
-        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()));
-    run(&prepared, &mut |_| {})
+    run_example(EXAMPLE, SETTINGS, replacements, &settings)
 }
 
 /// The arms follow their quintic laws out (0.2 to 0.7 s) and back (1.0 to 1.5 s) within 1e-4
