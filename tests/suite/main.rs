@@ -9,6 +9,7 @@ mod architecture;
 mod arrays;
 mod assembly;
 mod builtins;
+mod cascade_delta;
 mod cli;
 mod closed_loops;
 mod constrained;

@@ -5,11 +5,11 @@
 //! what the seed reports (R22, R23). And the language feature the law needs: a state's rate that
 //! reads the model, against closed forms.
 
-use crate::common::programs::{mechanism, output, run_text};
+use crate::common::programs::{output, run_example, run_text};
 use crate::states::refused;
 use lsdc::integrators::{Feature, INTEGRATORS};
-use lsdc::prepare::{prepare, Integrator, Settings};
-use lsdc::simulate::run::{run, Simulation};
+use lsdc::prepare::{Integrator, Settings};
+use lsdc::simulate::run::Simulation;
 
 const EXAMPLE: &str = "control/backstepping_delta";
 /// The example's own settings and test signals, which the tests replace.
@@ -20,14 +20,11 @@ const BIAS_GAIN: &str = "given bias_gain = 1200 ;";
 
 /// A run of the example with `replacements`, its `simulate` declaration replaced by `settings`.
 fn backstepping(replacements: &[(&str, &str)], settings: Settings) -> Simulation {
-    let mut replaced = vec![(SETTINGS, "")];
-    replaced.extend_from_slice(replacements);
-    let prepared = prepare(&mechanism(EXAMPLE, &replaced), &[], &settings)
-        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()));
-    run(&prepared, &mut |_| {})
+    run_example(EXAMPLE, SETTINGS, replacements, &settings)
 }
 
-fn settings(integrator: &Integrator, duration: f64) -> Settings {
+/// The Delta's closed-loop runs' settings (shared with `cascade_delta.rs`).
+pub(crate) fn settings(integrator: &Integrator, duration: f64) -> Settings {
     Settings {
         integrator: integrator.clone(),
         duration,
@@ -42,7 +39,7 @@ fn settings(integrator: &Integrator, duration: f64) -> Settings {
 }
 
 /// The largest tracking error of the three arms (rad of the arm) at the outputs in [from, to).
-fn largest_error(simulation: &Simulation, from: f64, to: f64) -> f64 {
+pub(crate) fn largest_error(simulation: &Simulation, from: f64, to: f64) -> f64 {
     let errors = ["error1", "error2", "error3"].map(|name| output(simulation, name));
     let samples = simulation.samples.iter();
     samples

@@ -44,6 +44,21 @@ pub fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
     })
 }
 
+/// A run of the example `name` with `replacements` and `settings`, its own `simulate`
+/// declaration `declaration` removed so that `settings` rule.
+pub fn run_example(
+    name: &str,
+    declaration: &str,
+    replacements: &[(&str, &str)],
+    settings: &Settings,
+) -> Simulation {
+    let mut replaced = vec![(declaration, "")];
+    replaced.extend_from_slice(replacements);
+    let prepared = prepare(&mechanism(name, &replaced), &[], settings)
+        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()));
+    run(&prepared, &mut |_| {})
+}
+
 pub fn simulated(prepared: &Prepared) -> Simulation {
     let simulation = run(prepared, &mut |_| {});
     assert!(
