@@ -88,6 +88,9 @@ use crate::diag::render;
 pub use crate::diag::Diagnostic;
 use crate::driver::{self, Compilation};
 pub use crate::elab::Mechanism;
+/// The flag that stops a [`Simulator`] or a [`run_with`] between two steps (`lsdc simulate`
+/// sets it on SIGINT and SIGTERM), so that a caller can name it.
+pub use crate::integrate::Interrupt;
 pub use crate::kinematics::unknowns::Override;
 pub use crate::load::{LoadError, LoadOptions};
 use crate::prepare::outputs::Outputs;

@@ -282,7 +282,7 @@ fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
 /// A flag that SIGINT and SIGTERM set to their number, for the run to stop between two steps
 /// and its output and report to be finished; a second signal ends the process at once. `None`
 /// where the handlers cannot be installed (the signals then end the process as usual).
-fn interrupt_on_signals() -> Option<lsdc::integrate::Interrupt> {
+fn interrupt_on_signals() -> Option<lsdc::api::Interrupt> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     use std::sync::atomic::{AtomicBool, AtomicUsize};
     use std::sync::Arc;
@@ -298,7 +298,7 @@ fn interrupt_on_signals() -> Option<lsdc::integrate::Interrupt> {
                 });
         installed.ok()?;
     }
-    Some(lsdc::integrate::Interrupt(requested))
+    Some(lsdc::api::Interrupt(requested))
 }
 
 /// The warnings the run found and its report, on standard error (in JSON, the warnings inside
