@@ -155,7 +155,7 @@ def numbers(values):
 
 
 def matrix(block):
-    return "[" + ",\n   ".join(numbers(row) for row in block) + "]"
+    return "[" + ",\n    ".join(numbers(row) for row in block) + "]"
 
 
 def table(points):
