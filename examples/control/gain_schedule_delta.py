@@ -48,7 +48,8 @@ PROGRAM = "examples/control/gain_scheduled_delta.lsd"
 POLES = [-100.0, -120.0, -140.0, -2250.0]
 # The operating points: every 0.05 s along the move out (0.2 to 0.7 s) and back (1.0 to
 # 1.5 s); the reference rests between them, where the gains are those of its ends.
-TIMES = [round(0.2 + 0.05 * k, 2) for k in range(11)] + [round(1.0 + 0.05 * k, 2) for k in range(11)]
+TIMES = ([round(0.2 + 0.05 * k, 2) for k in range(11)]
+         + [round(1.0 + 0.05 * k, 2) for k in range(11)])
 # The reference of gain_scheduled_delta.lsd: from 40 degrees, each arm out by its move in
 # 0.2 to 0.7 s and back in 1.0 to 1.5 s, on quintics.
 START = 40 * math.pi / 180
@@ -123,8 +124,8 @@ def eigenvalue_gap(a, b, gain):
 def gains(a, b):
     """The gain K placing POLES (each once per arm) on A_e - B_e K, checked."""
     with warnings.catch_warnings():
-        # The iteration that improves the eigenvectors' conditioning cannot move repeated
-        # poles' and says it did not converge; the placement itself is checked below.
+        # Tits and Yang's iteration, which improves the eigenvectors' conditioning, reports no
+        # convergence when poles repeat; the placement itself is checked below.
         warnings.simplefilter("ignore", UserWarning)
         gain = place_poles(a, b, np.repeat(POLES, 3), method="YT").gain_matrix
     gap, _ = eigenvalue_gap(a, b, gain)
@@ -183,7 +184,8 @@ def table(points):
         lines.append(f"   currents {numbers(currents)} *)")
         blocks = ",\n  ".join(matrix(gain[:, 3 * j:3 * j + 3]) for j in range(4))
         lines.append(f"let feedback{k} = feedback(\n  {blocks}) ;")
-    lines.append(f"let scheduled_feedback = schedule({', '.join(f'feedback{k}' for k in range(len(points)))}) ;")
+    arguments = ", ".join(f"feedback{k}" for k in range(len(points)))
+    lines.append(f"let scheduled_feedback = schedule({arguments}) ;")
     lines.append(END)
     return "\n".join(lines)
 
