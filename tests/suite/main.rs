@@ -22,6 +22,7 @@ mod examples;
 mod force_elements;
 mod format;
 mod frame_efforts;
+mod gain_scheduled_delta;
 mod geared_loops;
 mod generated_code;
 mod golden;
