@@ -131,6 +131,11 @@ impl Link {
         self.extras.get_or_insert_with(Default::default)
     }
 
+    /// The rarely written fields when one is written, to change them in place.
+    pub fn written_extras_mut(&mut self) -> Option<&mut LinkExtras> {
+        self.extras.as_deref_mut()
+    }
+
     /// `rolling(r)` or `sliding(r, f)`: see [`LinkExtras::contact`].
     pub fn contact(&self) -> Option<&ContactLaw> {
         self.extras().contact.as_ref()
@@ -298,6 +303,9 @@ pub struct Drive {
     /// The driven coordinate as written, and the law.
     pub span: Span,
     pub law_span: Span,
+    /// `lock crank.q = 0.3` (in a scene): the coordinate held at one value, its law a
+    /// constant of the program.
+    pub locked: bool,
 }
 
 /// `drive position(nacelle) = [x(time), y(time), z(time)]`: the position of a frame's origin
@@ -459,6 +467,9 @@ pub struct Mechanism {
     pub frames: Vec<NamedFrame>,
     /// The `output` declarations, in the order they were evaluated.
     pub outputs: Vec<NamedOutput>,
+    /// The scene the mechanism was reduced for, and what its model holds
+    /// (`elab::scene::reduce`); `None` for a program without scenes.
+    pub scene: Option<super::scene::SceneModel>,
 }
 
 /// What an `output` declaration writes at each output of a run.

@@ -20,6 +20,7 @@ mod output;
 mod own_join;
 mod owned;
 mod piecewise;
+pub mod scene;
 mod states;
 pub mod value;
 

@@ -1,0 +1,300 @@
+//! A scene compiled to the smallest model that serves it ("model only what a scene needs").
+//!
+//! A scene reads its outputs (`output` declarations: what `simulate`, `test` and `view` show
+//! beside the kept coordinates). The parts of the mechanism that no output depends on are
+//! left out before the mechanism is numbered: the groups of bodies that meet the parts read
+//! only at `earth` and that no effort, law, mimic or state couples to them (`groups.rs`). The
+//! reduction is exact: the equations of the groups kept are those of the full model (block
+//! diagonal mass matrix, no constraint row across groups), so that their motion and the
+//! outputs are the full model's to round-off (`tests/suite/scenes.rs` compares them).
+//!
+//! What is kept whatever the outputs: every part when the scene declares no output (its runs
+//! write every coordinate), the groups with a contact or a state (other parts of a run name
+//! them by number). Bodies no join reaches are never in a model; links and efforts that only
+//! left-out parts use stay in the mechanism's tables, unread.
+
+mod groups;
+mod renumber;
+mod values;
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use serde::Serialize;
+
+use super::mechanism::Mechanism;
+use super::value::{BodyId, BodyRef, JoinId};
+use crate::diag::Diagnostic;
+use crate::source::Span;
+use groups::{Groups, Staying};
+use renumber::Renumbering;
+
+/// What a scene's model holds, for the reports (`model` in a run's report, `lsdc tree`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct SceneModel {
+    /// The scene's name.
+    pub scene: String,
+    /// The bodies joined in the scene's model, and in the whole program.
+    pub bodies: usize,
+    pub bodies_total: usize,
+    /// The independent loops (joins beyond a spanning tree) in the model, and in the program.
+    pub loops: usize,
+    pub loops_total: usize,
+    /// The parts left out, each a group of bodies, and why.
+    pub left_out: Vec<LeftOut>,
+}
+
+/// A group of bodies left out of a scene's model.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct LeftOut {
+    pub bodies: Vec<String>,
+    pub reason: String,
+}
+
+/// Why a group is left out.
+const NOT_READ: &str = "not read by the scene's outputs";
+
+impl SceneModel {
+    /// `model of scene `arm`: 3 of 6 bodies, 0 of 0 loops; left out: right:base, right:upper
+    /// and 1 other body (not read by the scene's outputs)`.
+    pub fn describe(&self) -> String {
+        let mut text = format!(
+            "model of scene `{}`: {} of {} bodies, {} of {} loops",
+            self.scene, self.bodies, self.bodies_total, self.loops, self.loops_total
+        );
+        // The parts in order, each reason said once after the last part it explains.
+        let mut parts = Vec::new();
+        for (i, part) in self.left_out.iter().enumerate() {
+            let mut said = listed(&part.bodies);
+            if self.left_out.get(i + 1).is_none_or(|next| next.reason != part.reason) {
+                said += &format!(" ({})", part.reason);
+            }
+            parts.push(said);
+        }
+        if !parts.is_empty() {
+            text += &format!("; left out: {}", parts.join("; "));
+        }
+        text
+    }
+}
+
+/// Up to three names, then how many more.
+fn listed(names: &[String]) -> String {
+    match names {
+        [one] => one.clone(),
+        [a, b] => format!("{a} and {b}"),
+        [a, b, c] => format!("{a}, {b} and {c}"),
+        [a, b, rest @ ..] => format!(
+            "{a}, {b} and {} other bod{}",
+            rest.len(),
+            if rest.len() == 1 { "y" } else { "ies" }
+        ),
+        [] => String::new(),
+    }
+}
+
+/// The bodies joins reach, and the loops: joins beyond one per body (each group hangs from
+/// `earth` by a tree of joins).
+fn extent(mechanism: &Mechanism) -> (usize, usize) {
+    let bodies: BTreeSet<BodyId> = (mechanism.joins.iter())
+        .flat_map(|j| [j.first.body, j.second.body])
+        .filter_map(|b| match b {
+            BodyRef::Body(id) => Some(id),
+            BodyRef::Earth => None,
+        })
+        .collect();
+    let loops = mechanism.joins.len().saturating_sub(bodies.len());
+    (bodies.len(), loops)
+}
+
+/// The mechanism reduced for the scene `scene` (declared at `scene_span`), with its
+/// [`SceneModel`], and the warnings (W0700) for the scene's own declarations on parts left out.
+pub fn reduce(
+    mut mechanism: Mechanism,
+    scene: &str,
+    scene_span: Option<Span>,
+) -> (Mechanism, Vec<Diagnostic>) {
+    let (bodies_total, loops_total) = extent(&mechanism);
+    let mut model = SceneModel {
+        scene: scene.to_string(),
+        bodies: bodies_total,
+        bodies_total,
+        loops: loops_total,
+        loops_total,
+        left_out: Vec::new(),
+    };
+    if mechanism.outputs.is_empty() {
+        mechanism.scene = Some(model);
+        return (mechanism, Vec::new());
+    }
+    let staying = Groups::of(&mut mechanism).staying();
+    let kept_joins: Vec<bool> = (0..mechanism.joins.len())
+        .map(|j| staying.join(JoinId(j as u32)))
+        .collect();
+    if kept_joins.iter().all(|&k| k) {
+        mechanism.scene = Some(model);
+        return (mechanism, Vec::new());
+    }
+    let full = mechanism.clone();
+    let mut left_out: BTreeMap<usize, Vec<String>> = BTreeMap::new();
+    let mut seen = BTreeSet::new();
+    for join in &mechanism.joins {
+        for body in [join.first.body, join.second.body] {
+            if let BodyRef::Body(id) = body {
+                if seen.insert(id) && !staying.body(body) {
+                    let group = staying.roots[id.0 as usize];
+                    left_out.entry(group).or_default().push(mechanism.body_name(body));
+                }
+            }
+        }
+    }
+    let warnings = scene_declarations_left_out(&mechanism, &staying, scene, scene_span);
+    let mut renumbering = Renumbering::new(&kept_joins);
+    let mut kept_links = BTreeSet::new();
+    let joins = std::mem::take(&mut mechanism.joins);
+    for (mut join, _) in joins.into_iter().zip(&kept_joins).filter(|(_, &k)| k) {
+        renumbering.frame(&mut join.first);
+        renumbering.frame(&mut join.second);
+        kept_links.insert(join.link);
+        mechanism.joins.push(join);
+    }
+    for contact in &mut mechanism.contacts {
+        renumbering.frame(&mut contact.first);
+        renumbering.frame(&mut contact.second);
+        kept_links.insert(contact.link);
+    }
+    for &id in &kept_links {
+        let link = &mut mechanism.links[id.0 as usize];
+        values::link(link, &mut |s| renumbering.in_place(s));
+        if let Some(extras) = link.written_extras_mut() {
+            if let Some((leader, _)) = &mut extras.mimic.leader {
+                *leader = renumbering.join(*leader);
+            }
+        }
+    }
+    for body in &mut mechanism.bodies {
+        values::body(body, &mut |s| renumbering.in_place(s));
+    }
+    mechanism.initial.retain(|v| staying.join(v.join));
+    for value in &mut mechanism.initial {
+        value.join = renumbering.join(value.join);
+        renumbering.in_place(&mut value.value);
+    }
+    mechanism.drives.retain(|d| staying.join(d.join));
+    for drive in &mut mechanism.drives {
+        drive.join = renumbering.join(drive.join);
+        renumbering.in_place(&mut drive.law);
+    }
+    mechanism.actuators.retain(|a| staying.join(a.join));
+    for actuator in &mut mechanism.actuators {
+        actuator.join = renumbering.join(actuator.join);
+        renumbering.in_place(&mut actuator.law);
+    }
+    mechanism
+        .applications
+        .retain(|a| staying.body(a.target.body));
+    let mut kept_efforts = BTreeSet::new();
+    for application in &mut mechanism.applications {
+        renumbering.frame(&mut application.target);
+        kept_efforts.insert(application.effort);
+    }
+    for &id in &kept_efforts {
+        values::effort(&mut mechanism.efforts[id.0 as usize], &mut |s| {
+            renumbering.in_place(s)
+        });
+    }
+    mechanism
+        .position_drives
+        .retain(|d| staying.body(d.frame.body));
+    for drive in &mut mechanism.position_drives {
+        renumbering.frame(&mut drive.frame);
+        values::vector(&mut drive.law, &mut |s| renumbering.in_place(s));
+    }
+    for state in &mut mechanism.states {
+        renumbering.in_place(&mut state.initial);
+        if let Some((rate, _)) = &mut state.rate {
+            renumbering.in_place(rate);
+        }
+        if let Some(period) = &mut state.period {
+            renumbering.in_place(period);
+        }
+    }
+    for (_, value, _) in &mut mechanism.given {
+        renumbering.in_place(value);
+    }
+    mechanism
+        .frames
+        .retain(|f| staying.body(f.frame.body));
+    for frame in &mut mechanism.frames {
+        renumbering.frame(&mut frame.frame);
+    }
+    for output in &mut mechanism.outputs {
+        values::output(output, &mut |s| renumbering.in_place(s));
+        if let super::mechanism::OutputValue::Frame(frame) = &mut output.value {
+            renumbering.frame(frame);
+        }
+    }
+    if renumbering.stale {
+        // Not expected (the groups couple whatever reads a join); the full model is exact.
+        let mut full = full;
+        full.scene = Some(model);
+        return (full, warnings);
+    }
+    (model.bodies, model.loops) = extent(&mechanism);
+    model.left_out = (left_out.into_values())
+        .map(|bodies| LeftOut {
+            bodies,
+            reason: NOT_READ.to_string(),
+        })
+        .collect();
+    mechanism.scene = Some(model);
+    (mechanism, warnings)
+}
+
+/// W0700: a declaration of the scene itself (a drive, a lock, an initial value, an applied
+/// effort) on a part left out: the user named it in this scene, so its absence from the model
+/// is said, never silent.
+fn scene_declarations_left_out(
+    mechanism: &Mechanism,
+    staying: &Staying,
+    scene: &str,
+    scene_span: Option<Span>,
+) -> Vec<Diagnostic> {
+    let Some(scene_span) = scene_span else {
+        return Vec::new();
+    };
+    let inside = |span: Span| {
+        span.file() == scene_span.file()
+            && span.start() >= scene_span.start()
+            && span.end() <= scene_span.end()
+    };
+    let mut named: Vec<(Span, String)> = Vec::new();
+    let join_left_out = |join: JoinId| !staying.join(join);
+    for value in mechanism.initial.iter().filter(|v| join_left_out(v.join)) {
+        named.push((value.span, format!("gives `{}` an initial value", mechanism.join_name(value.join))));
+    }
+    for drive in mechanism.drives.iter().filter(|d| join_left_out(d.join)) {
+        let what = if drive.locked { "locks" } else { "drives" };
+        named.push((drive.span, format!("{what} `{}`", mechanism.join_name(drive.join))));
+    }
+    for actuator in mechanism.actuators.iter().filter(|a| join_left_out(a.join)) {
+        named.push((actuator.span, format!("actuates `{}`", mechanism.join_name(actuator.join))));
+    }
+    for application in &mechanism.applications {
+        if !staying.body(application.target.body) {
+            let body = mechanism.body_name(application.target.body);
+            named.push((application.span, format!("applies an effort on `{body}`")));
+        }
+    }
+    named
+        .into_iter()
+        .filter(|(span, _)| inside(*span))
+        .map(|(span, what)| {
+            Diagnostic::warning(
+                "W0700",
+                format!("the scene `{scene}` {what}, in a part none of its outputs reads: that part is left out of its model"),
+            )
+            .primary(span, "left out with its part")
+            .help("add an output that reads this part (`output elbow = arm.q;`), or take the declaration out of the scene")
+        })
+        .collect()
+}
