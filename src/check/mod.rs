@@ -385,7 +385,8 @@ impl<'w> Checker<'w> {
             self.report(
                 Diagnostic::error("E0418", "a program has one `simulate` declaration")
                     .primary(span, "a second one")
-                    .secondary(previous, "the first one"),
+                    .secondary(previous, "the first one")
+                    .help("keep one; for several studies of the program, give each its own in a scene (`scene fast = simulate duration = 1 end; end;`)"),
             );
         }
         let mut ctx = self.ctx(scope);

@@ -85,11 +85,16 @@ pub fn select(
     };
     let selected = (chosen.as_ref()).and_then(|name| scenes.into_iter().find(|s| s.name == *name));
     let selected_span = selected.as_ref().map(|s| s.span);
-    let added = selected.map(|s| s.decls).unwrap_or_default();
+    let mut added = selected.map(|s| s.decls).unwrap_or_default();
     let is_simulate = |decl: &Decl| matches!(decl.kind, DeclKind::Simulate(_));
-    // The scene's settings replace the program's; two of the program's own stay, for E0418.
-    if added.iter().any(is_simulate) && own.iter().filter(|d| is_simulate(d)).count() == 1 {
-        own.retain(|decl| !is_simulate(decl));
+    // The scene's settings replace the program's; when the program has two, they stay for the
+    // checker's E0418 and the scene's are set aside (one error, where the fault is).
+    if added.iter().any(is_simulate) {
+        match own.iter().filter(|d| is_simulate(d)).count() {
+            0 => {}
+            1 => own.retain(|decl| !is_simulate(decl)),
+            _ => added.retain(|decl| !is_simulate(decl)),
+        }
     }
     own.extend(added);
     program.decls = own;
