@@ -252,7 +252,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 let locked = drive.word.name.as_str() == "lock";
                 if locked && law.varies_with_motion() {
                     return Err(Diagnostic::error(
-                        "E0701",
+                        "E0711",
                         "a lock holds a coordinate at one value: its value cannot vary",
                     )
                     .primary(drive.value.span, "this varies with the time or the motion")

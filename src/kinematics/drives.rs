@@ -80,11 +80,11 @@ pub struct ResolvedDrive {
     pub effort: String,
 }
 
-/// E0700: a coordinate both locked (`lock`, in a scene) and driven, or locked twice; the
+/// E0710: a coordinate both locked (`lock`, in a scene) and driven, or locked twice; the
 /// labels say which is which.
 fn lock_on_driven(name: &str, second: (Span, bool), first: (Span, bool)) -> Diagnostic {
     let what = |locked: bool| if locked { "locked here" } else { "driven here" };
-    Diagnostic::error("E0700", format!("`{name}` is locked and driven: a lock holds a coordinate nothing else imposes"))
+    Diagnostic::error("E0710", format!("`{name}` is locked and driven: a lock holds a coordinate nothing else imposes"))
         .primary(second.0, what(second.1))
         .secondary(first.0, what(first.1))
         .help("keep the lock or the drive: a scene locks a coordinate the program leaves free, or drives it with its own `drive` instead")

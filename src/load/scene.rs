@@ -35,8 +35,8 @@ struct Declared {
 
 /// Selects the scene `wanted` (the first declared when `None`) in a root program: its
 /// declarations follow the program's and its `simulate` replaces the program's. Errors: a scene
-/// inside a package (E0702), two scenes of one name (E0703), a scene asked for that the
-/// program does not declare (E0704).
+/// inside a package (E0712), two scenes of one name (E0713), a scene asked for that the
+/// program does not declare (E0714).
 pub fn select(
     program: &mut Program,
     wanted: Option<&str>,
@@ -52,7 +52,7 @@ pub fn select(
                 if let Some(first) = scenes.iter().find(|s| *s.name == *scene.name.name) {
                     diagnostics.push(
                         Diagnostic::error(
-                            "E0703",
+                            "E0713",
                             format!("the scene `{}` is declared twice", scene.name.name),
                         )
                         .primary(scene.name.span, "a second scene of this name")
@@ -112,10 +112,10 @@ pub fn leave_out(program: &mut Program) {
         .retain(|decl| !matches!(decl.kind, DeclKind::Scene(_)));
 }
 
-/// E0704: `--scene NAME` names no scene of the program.
+/// E0714: `--scene NAME` names no scene of the program.
 fn unknown_scene(wanted: &str, names: &[String]) -> Diagnostic {
     let diagnostic = Diagnostic::error(
-        "E0704",
+        "E0714",
         format!("the program declares no scene `{wanted}`"),
     );
     if names.is_empty() {
@@ -128,7 +128,7 @@ fn unknown_scene(wanted: &str, names: &[String]) -> Diagnostic {
     }
 }
 
-/// E0702: a scene is a study of the whole program, declared at its top level.
+/// E0712: a scene is a study of the whole program, declared at its top level.
 fn refuse_nested(decls: &[Decl], diagnostics: &mut Vec<Diagnostic>) {
     for decl in decls {
         let inner = match &decl.kind {
@@ -139,7 +139,7 @@ fn refuse_nested(decls: &[Decl], diagnostics: &mut Vec<Diagnostic>) {
         for nested in inner {
             if let DeclKind::Scene(scene) = &nested.kind {
                 diagnostics.push(
-                    Diagnostic::error("E0702", "a scene is declared at the top level of a program")
+                    Diagnostic::error("E0712", "a scene is declared at the top level of a program")
                         .primary(scene.name.span, "a scene inside another declaration")
                         .help("move the scene out to the program's top level: it studies the whole program"),
                 );

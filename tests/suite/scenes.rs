@@ -227,7 +227,75 @@ fn an_unknown_scene_is_an_error_that_names_the_scenes() {
     );
     let rendered = program.render();
     assert!(
-        rendered.contains("E0704") && rendered.contains("did you mean `left_trajectory`?"),
+        rendered.contains("E0714") && rendered.contains("did you mean `left_trajectory`?"),
         "{rendered}"
     );
+}
+
+/// A run of a file's scene with the given changes.
+fn run_file(path: &str, scene: Option<&str>, changes: &SettingsChanges) -> Simulation {
+    let program = Program::from_file(path, &options(scene)).expect("readable");
+    assert!(!program.has_errors(), "{}", program.render());
+    let prepared = program.prepare(&[], changes).expect("prepares");
+    let simulation = run(&prepared, &mut |_| {});
+    assert!(
+        simulation.report.failure.is_none(),
+        "{:?}",
+        simulation.report.failure
+    );
+    simulation
+}
+
+#[test]
+fn the_delta_passive_scene_is_the_delta_legs_example() {
+    let changes = SettingsChanges {
+        duration: Some(0.5),
+        ..Default::default()
+    };
+    let scene = run_file("examples/delta_scenes.lsd", Some("passive"), &changes);
+    let example = run_file("examples/delta_legs.lsd", None, &changes);
+    for name in ["leg[1]:A.q", "leg[2]:A.q", "leg[3]:A.q", "leg[1]:Pp.b"] {
+        let difference = relative_difference(&scene, &example, name);
+        assert!(difference <= 1e-12, "{name}: {difference:e}");
+    }
+}
+
+#[test]
+fn the_delta_controlled_scene_tracks_with_the_closed_form_error() {
+    // e'' + 40 e' + 400 e = 0 from e(0) = -0.02, e'(0) = 0: e = -0.02 (1 + 20 t) exp(-20 t).
+    let run = run_file(
+        "examples/delta_scenes.lsd",
+        Some("controlled"),
+        &Default::default(),
+    );
+    let worst = (run.samples.iter())
+        .map(|s| {
+            let exact = -0.02 * (1.0 + 20.0 * s.time) * (-20.0 * s.time).exp();
+            s.outputs
+                .iter()
+                .map(|e| (e - exact).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-8, "{worst:e}");
+}
+
+#[test]
+fn the_delta_kinematics_scene_follows_its_drives() {
+    let run = run_file(
+        "examples/delta_scenes.lsd",
+        Some("kinematics"),
+        &Default::default(),
+    );
+    let start = 40f64.to_radians();
+    let last = run.samples.last().expect("samples");
+    assert!((last.time - 1.0).abs() < 1e-12);
+    let arm = |name: &str| column(&run, name).last().copied().expect("a value");
+    for (name, end) in [
+        ("leg[1]:A.q", start + 0.3),
+        ("leg[2]:A.q", start - 0.1),
+        ("leg[3]:A.q", start + 0.2),
+    ] {
+        assert!((arm(name) - end).abs() < 1e-12, "{name}: {}", arm(name));
+    }
 }

@@ -107,7 +107,7 @@ fn extent(mechanism: &Mechanism) -> (usize, usize) {
 }
 
 /// The mechanism reduced for the scene `scene` (declared at `scene_span`), with its
-/// [`SceneModel`], and the warnings (W0700) for the scene's own declarations on parts left out.
+/// [`SceneModel`], and the warnings (W0710) for the scene's own declarations on parts left out.
 pub fn reduce(
     mut mechanism: Mechanism,
     scene: &str,
@@ -250,7 +250,7 @@ pub fn reduce(
     (mechanism, warnings)
 }
 
-/// W0700: a declaration of the scene itself (a drive, a lock, an initial value, an applied
+/// W0710: a declaration of the scene itself (a drive, a lock, an initial value, an applied
 /// effort) on a part left out: the user named it in this scene, so its absence from the model
 /// is said, never silent.
 fn scene_declarations_left_out(
@@ -290,7 +290,7 @@ fn scene_declarations_left_out(
         .filter(|(span, _)| inside(*span))
         .map(|(span, what)| {
             Diagnostic::warning(
-                "W0700",
+                "W0710",
                 format!("the scene `{scene}` {what}, in a part none of its outputs reads: that part is left out of its model"),
             )
             .primary(span, "left out with its part")
