@@ -131,6 +131,12 @@ impl Link {
         self.extras.get_or_insert_with(Default::default)
     }
 
+    /// Whether one of the rarely written fields is written (a contact, stops, a rotor, a mimic,
+    /// friction).
+    pub fn has_extras(&self) -> bool {
+        self.extras.is_some()
+    }
+
     /// The rarely written fields when one is written, to change them in place.
     pub fn written_extras_mut(&mut self) -> Option<&mut LinkExtras> {
         self.extras.as_deref_mut()

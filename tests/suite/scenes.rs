@@ -200,20 +200,47 @@ fn the_first_scene_is_the_default_and_the_scene_replaces_the_programs_settings()
 }
 
 #[test]
-fn a_lock_holds_the_coordinate_as_a_drive_at_that_value_does() {
-    let base = "import joints ;\nimport gravity ;\nlet a = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\nlet b = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and a with revolute([1, 0, 0]) as shoulder ;\njoin [0, 0, -1] ++ 1 @ a and b with revolute([1, 0, 0]) as elbow ;\napply weight(a) on a.iframe ;\napply weight(b) on b.iframe ;\ninitial shoulder.q = 0.3 ;\n";
+fn a_lock_welds_the_joint_and_moves_as_a_drive_at_that_value() {
+    let base = "import joints ;\nimport gravity ;\nlet a = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\nlet b = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and a with revolute([1, 0, 0]) as shoulder ;\njoin [0, 0, -1] ++ 1 @ a and b with revolute([1, 0, 0]) as elbow ;\napply weight(a) on a.iframe ;\napply weight(b) on b.iframe ;\ninitial shoulder.q = 0.3 ;\noutput tip = position([0, 0, -1] ++ 1 @ b) ;\n";
     let locked = program(
         &format!("{base}scene rigid =\n  lock elbow.q = 0.4 ;\nend ;"),
         None,
     );
     let driven = program(&format!("{base}drive elbow.q = 0.4 ;"), None);
-    let drive = &locked.mechanism().unwrap().drives[0];
-    assert!(drive.locked);
+    let mechanism = locked.mechanism().unwrap();
+    assert!(mechanism.drives.is_empty());
+    assert!(mechanism
+        .link(mechanism.joins[1].link)
+        .coordinates
+        .is_empty());
+    let model = scene_model(&locked);
+    assert_eq!(model.welded, 1);
+    assert!(
+        model.describe().ends_with("; 1 locked coordinate welded"),
+        "{}",
+        model.describe()
+    );
     let (locked, driven) = (run_fixed(&locked, 1.0), run_fixed(&driven, 1.0));
-    for name in ["shoulder.q", "elbow.q"] {
-        assert_eq!(column(&locked, name), column(&driven, name), "{name}");
+    assert_eq!(locked.coordinate_names, ["shoulder.q"]);
+    for name in ["shoulder.q", "tip.x", "tip.y", "tip.z"] {
+        let difference = relative_difference(&locked, &driven, name);
+        assert!(difference <= 1e-12, "{name}: {difference:e}");
     }
-    assert!(column(&locked, "elbow.q").iter().all(|&q| q == 0.4));
+    // A lock on a coordinate that is also driven is not welded: E0710 says so.
+    let both = program(
+        &format!("{base}drive elbow.q = time ;\nscene rigid =\n  lock elbow.q = 0.4 ;\nend ;"),
+        None,
+    );
+    assert_eq!(scene_model(&both).welded, 0);
+    let refused = both
+        .prepare(&[], &Default::default())
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        refused.contains("E0710") || refused.contains("locked and driven"),
+        "{refused}"
+    );
 }
 
 #[test]
@@ -297,5 +324,28 @@ fn the_delta_kinematics_scene_follows_its_drives() {
         ("leg[3]:A.q", start + 0.2),
     ] {
         assert!((arm(name) - end).abs() < 1e-12, "{name}: {}", arm(name));
+    }
+}
+
+#[test]
+fn efforts_identically_zero_are_left_out_and_change_nothing() {
+    let base = "import joints ;\nimport gravity ;\nlet a = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and a with revolute([1, 0, 0]) as swing ;\napply weight(a) on a.iframe ;\napply force value = [0, 0, 0], body = a end on a.iframe ;\napply torque value = 0 * [1, 2, 3] end on a ;\ninitial swing.q = 1 ;\noutput angle = swing.q ;\n";
+    let reduced = program(&format!("{base}scene swinging =\nend ;"), None);
+    let model = scene_model(&reduced);
+    assert_eq!(model.zero_efforts, 2);
+    assert!(
+        model
+            .describe()
+            .ends_with("left out: 2 applied efforts identically zero"),
+        "{}",
+        model.describe()
+    );
+    assert_eq!(reduced.mechanism().unwrap().applications.len(), 1);
+    let full = program(base, None);
+    assert_eq!(full.mechanism().unwrap().applications.len(), 3);
+    let (reduced, full) = (run_fixed(&reduced, 1.0), run_fixed(&full, 1.0));
+    for name in ["angle", "swing.q"] {
+        let difference = relative_difference(&reduced, &full, name);
+        assert!(difference <= 1e-12, "{name}: {difference:e}");
     }
 }

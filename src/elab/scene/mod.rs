@@ -22,7 +22,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use serde::Serialize;
 
 use super::mechanism::Mechanism;
-use super::value::{BodyId, BodyRef, JoinId};
+use super::value::{BodyId, BodyRef, JoinId, LinkId};
 use crate::diag::Diagnostic;
 use crate::source::Span;
 use groups::{Groups, Staying};
@@ -41,6 +41,11 @@ pub struct SceneModel {
     pub loops_total: usize,
     /// The parts left out, each a group of bodies, and why.
     pub left_out: Vec<LeftOut>,
+    /// Applications of efforts left out because their value is identically zero (a zero
+    /// vector written as numbers, with no potential and no field).
+    pub zero_efforts: usize,
+    /// Coordinates the scene locks, welded (their joins' bodies merged when all are locked).
+    pub welded: usize,
 }
 
 /// A group of bodies left out of a scene's model.
@@ -69,6 +74,14 @@ impl SceneModel {
                 said += &format!(" ({})", part.reason);
             }
             parts.push(said);
+        }
+        if self.welded > 0 {
+            let plural = if self.welded == 1 { "" } else { "s" };
+            text += &format!("; {} locked coordinate{plural} welded", self.welded);
+        }
+        if self.zero_efforts > 0 {
+            let plural = if self.zero_efforts == 1 { "" } else { "s" };
+            parts.push(format!("{} applied effort{plural} identically zero", self.zero_efforts));
         }
         if !parts.is_empty() {
             text += &format!("; left out: {}", parts.join("; "));
@@ -121,6 +134,8 @@ pub fn reduce(
         loops: loops_total,
         loops_total,
         left_out: Vec::new(),
+        zero_efforts: leave_out_zero_efforts(&mut mechanism),
+        welded: weld_locks(&mut mechanism),
     };
     if mechanism.outputs.is_empty() {
         mechanism.scene = Some(model);
@@ -149,90 +164,17 @@ pub fn reduce(
     }
     let warnings = scene_declarations_left_out(&mechanism, &staying, scene, scene_span);
     let mut renumbering = Renumbering::new(&kept_joins);
-    let mut kept_links = BTreeSet::new();
     let joins = std::mem::take(&mut mechanism.joins);
-    for (mut join, _) in joins.into_iter().zip(&kept_joins).filter(|(_, &k)| k) {
-        renumbering.frame(&mut join.first);
-        renumbering.frame(&mut join.second);
-        kept_links.insert(join.link);
-        mechanism.joins.push(join);
-    }
-    for contact in &mut mechanism.contacts {
-        renumbering.frame(&mut contact.first);
-        renumbering.frame(&mut contact.second);
-        kept_links.insert(contact.link);
-    }
-    for &id in &kept_links {
-        let link = &mut mechanism.links[id.0 as usize];
-        values::link(link, &mut |s| renumbering.in_place(s));
-        if let Some(extras) = link.written_extras_mut() {
-            if let Some((leader, _)) = &mut extras.mimic.leader {
-                *leader = renumbering.join(*leader);
-            }
-        }
-    }
-    for body in &mut mechanism.bodies {
-        values::body(body, &mut |s| renumbering.in_place(s));
-    }
+    mechanism.joins = (joins.into_iter().zip(&kept_joins))
+        .filter_map(|(join, &kept)| kept.then_some(join))
+        .collect();
     mechanism.initial.retain(|v| staying.join(v.join));
-    for value in &mut mechanism.initial {
-        value.join = renumbering.join(value.join);
-        renumbering.in_place(&mut value.value);
-    }
     mechanism.drives.retain(|d| staying.join(d.join));
-    for drive in &mut mechanism.drives {
-        drive.join = renumbering.join(drive.join);
-        renumbering.in_place(&mut drive.law);
-    }
     mechanism.actuators.retain(|a| staying.join(a.join));
-    for actuator in &mut mechanism.actuators {
-        actuator.join = renumbering.join(actuator.join);
-        renumbering.in_place(&mut actuator.law);
-    }
-    mechanism
-        .applications
-        .retain(|a| staying.body(a.target.body));
-    let mut kept_efforts = BTreeSet::new();
-    for application in &mut mechanism.applications {
-        renumbering.frame(&mut application.target);
-        kept_efforts.insert(application.effort);
-    }
-    for &id in &kept_efforts {
-        values::effort(&mut mechanism.efforts[id.0 as usize], &mut |s| {
-            renumbering.in_place(s)
-        });
-    }
-    mechanism
-        .position_drives
-        .retain(|d| staying.body(d.frame.body));
-    for drive in &mut mechanism.position_drives {
-        renumbering.frame(&mut drive.frame);
-        values::vector(&mut drive.law, &mut |s| renumbering.in_place(s));
-    }
-    for state in &mut mechanism.states {
-        renumbering.in_place(&mut state.initial);
-        if let Some((rate, _)) = &mut state.rate {
-            renumbering.in_place(rate);
-        }
-        if let Some(period) = &mut state.period {
-            renumbering.in_place(period);
-        }
-    }
-    for (_, value, _) in &mut mechanism.given {
-        renumbering.in_place(value);
-    }
-    mechanism
-        .frames
-        .retain(|f| staying.body(f.frame.body));
-    for frame in &mut mechanism.frames {
-        renumbering.frame(&mut frame.frame);
-    }
-    for output in &mut mechanism.outputs {
-        values::output(output, &mut |s| renumbering.in_place(s));
-        if let super::mechanism::OutputValue::Frame(frame) = &mut output.value {
-            renumbering.frame(frame);
-        }
-    }
+    (mechanism.applications).retain(|a| staying.body(a.target.body));
+    (mechanism.position_drives).retain(|d| staying.body(d.frame.body));
+    (mechanism.frames).retain(|f| staying.body(f.frame.body));
+    rewrite_values(&mut mechanism, &mut renumbering, &BTreeSet::new());
     if renumbering.stale {
         // Not expected (the groups couple whatever reads a join); the full model is exact.
         let mut full = full;
@@ -248,6 +190,151 @@ pub fn reduce(
         .collect();
     mechanism.scene = Some(model);
     (mechanism, warnings)
+}
+
+/// Leaves out the applications of efforts whose value is identically zero: they change no
+/// equation. An effort with a potential or a field is kept (the energy report reads it).
+/// Rewrites every value the mechanism's kept parts hold (each once: a value rewritten twice
+/// would have its joins renumbered twice): the joins and the coordinates they name renumbered,
+/// held coordinates replaced by their values. The links in `done` were rewritten already.
+fn rewrite_values(mechanism: &mut Mechanism, r: &mut Renumbering, done: &BTreeSet<LinkId>) {
+    let mut links = BTreeSet::new();
+    for join in &mut mechanism.joins {
+        r.frame(&mut join.first);
+        r.frame(&mut join.second);
+        links.insert(join.link);
+    }
+    for contact in &mut mechanism.contacts {
+        r.frame(&mut contact.first);
+        r.frame(&mut contact.second);
+        links.insert(contact.link);
+    }
+    for &id in links.difference(done) {
+        let link = &mut mechanism.links[id.0 as usize];
+        values::link(link, &mut |s| r.in_place(s));
+        if let Some(extras) = link.written_extras_mut() {
+            if let Some((leader, _)) = &mut extras.mimic.leader {
+                *leader = r.join(*leader);
+            }
+        }
+    }
+    for body in &mut mechanism.bodies {
+        values::body(body, &mut |s| r.in_place(s));
+    }
+    for value in &mut mechanism.initial {
+        (value.join, value.coordinate) = r.coordinate(value.join, value.coordinate);
+        r.in_place(&mut value.value);
+    }
+    for drive in &mut mechanism.drives {
+        (drive.join, drive.coordinate) = r.coordinate(drive.join, drive.coordinate);
+        r.in_place(&mut drive.law);
+    }
+    for actuator in &mut mechanism.actuators {
+        (actuator.join, actuator.coordinate) = r.coordinate(actuator.join, actuator.coordinate);
+        r.in_place(&mut actuator.law);
+    }
+    let mut efforts = BTreeSet::new();
+    for application in &mut mechanism.applications {
+        r.frame(&mut application.target);
+        efforts.insert(application.effort);
+    }
+    for &id in &efforts {
+        values::effort(&mut mechanism.efforts[id.0 as usize], &mut |s| r.in_place(s));
+    }
+    for drive in &mut mechanism.position_drives {
+        r.frame(&mut drive.frame);
+        values::vector(&mut drive.law, &mut |s| r.in_place(s));
+    }
+    for state in &mut mechanism.states {
+        r.in_place(&mut state.initial);
+        if let Some((rate, _)) = &mut state.rate {
+            r.in_place(rate);
+        }
+        if let Some(period) = &mut state.period {
+            r.in_place(period);
+        }
+    }
+    for (_, value, _) in &mut mechanism.given {
+        r.in_place(value);
+    }
+    for frame in &mut mechanism.frames {
+        r.frame(&mut frame.frame);
+    }
+    for output in &mut mechanism.outputs {
+        values::output(output, &mut |s| r.in_place(s));
+    }
+}
+
+/// Welds the joints the scene locks (`lock elbow.q = 0.4`): each locked coordinate replaced by
+/// its value in its link (a copy) and wherever it is read, its rates by 0, so that a join
+/// whose coordinates are all locked is a weld and its bodies are merged into one composite
+/// body for the recursions (`dynamics::welds`). The motion is the one of the lock as a drive at
+/// that value (`tests/suite/scenes.rs`). Not welded, left a drive: a lock whose value is not a
+/// number, on a link with stops, a rotor, friction, a mimic or a contact, on a mimic's leader,
+/// or on a coordinate something else imposes or starts (E0710 is then reported as for any
+/// drive). Returns how many coordinates were welded.
+fn weld_locks(mechanism: &mut Mechanism) -> usize {
+    let leaders: BTreeSet<JoinId> = (mechanism.links.iter())
+        .filter_map(|l| l.mimic().leader.map(|(join, _)| join))
+        .collect();
+    let targets = |join: JoinId, coordinate: usize| {
+        let drives = mechanism.drives.iter().map(|d| (d.join, d.coordinate));
+        let actuators = mechanism.actuators.iter().map(|a| (a.join, a.coordinate));
+        let initial = mechanism.initial.iter().map(|v| (v.join, v.coordinate));
+        (drives.chain(actuators).chain(initial))
+            .filter(|&target| target == (join, coordinate))
+            .count()
+    };
+    let mut held: BTreeMap<u32, Vec<(u32, f64)>> = BTreeMap::new();
+    for drive in mechanism.drives.iter().filter(|d| d.locked) {
+        let link = mechanism.link(mechanism.join(drive.join).link);
+        let weldable = !link.has_extras()
+            && !leaders.contains(&drive.join)
+            && targets(drive.join, drive.coordinate) == 1;
+        if let (Some(value), true) = (super::value::constant(&drive.law), weldable) {
+            let coordinates = held.entry(drive.join.0).or_default();
+            coordinates.push((drive.coordinate as u32, value));
+        }
+    }
+    if held.is_empty() {
+        return 0;
+    }
+    let welded_count = held.values().map(Vec::len).sum();
+    let mut r = Renumbering::new(&vec![true; mechanism.joins.len()]).holding(held.clone());
+    let mut welded = BTreeSet::new();
+    for (&join, coordinates) in &held {
+        let mut link = mechanism.link(mechanism.joins[join as usize].link).clone();
+        r.own_held(coordinates.clone());
+        values::link(&mut link, &mut |s| r.in_place(s));
+        let mut indices: Vec<usize> = coordinates.iter().map(|&(i, _)| i as usize).collect();
+        indices.sort_unstable_by(|a, b| b.cmp(a));
+        for index in indices {
+            link.coordinates.remove(index);
+        }
+        mechanism.links.push(link);
+        let id = LinkId(mechanism.links.len() as u32 - 1);
+        mechanism.joins[join as usize].link = id;
+        welded.insert(id);
+    }
+    r.own_held(Vec::new());
+    mechanism.drives.retain(|d| !r.is_held(d.join, d.coordinate));
+    rewrite_values(mechanism, &mut r, &welded);
+    welded_count
+}
+
+fn leave_out_zero_efforts(mechanism: &mut Mechanism) -> usize {
+    let efforts = &mechanism.efforts;
+    let zero = |id: super::value::EffortId| {
+        let effort = &efforts[id.0 as usize];
+        let value = effort.value.value();
+        effort.value.is_declared()
+            && effort.potential.is_none()
+            && effort.field.is_none()
+            && value.iter().all(|s| super::value::constant(s) == Some(0.0))
+    };
+    let before = mechanism.applications.len();
+    mechanism.applications.retain(|a| !zero(a.effort));
+    before - mechanism.applications.len()
 }
 
 /// W0710: a declaration of the scene itself (a drive, a lock, an initial value, an applied
