@@ -3,9 +3,11 @@
 //! (the same declarations outside any scene: a program without scenes is never reduced) at the
 //! same fixed steps, and the report's counts show that the reduction happened.
 
-use lsdc::api::{run, Program, SettingsChanges, Simulation};
+use lsdc::api::{Program, SettingsChanges, Simulation};
 use lsdc::load::LoadOptions;
 use lsdc::prepare::Integrator;
+
+use crate::common::programs::simulated;
 
 const CELL: &str = "examples/robot_cell.lsd";
 
@@ -43,14 +45,7 @@ fn run_fixed(program: &Program, duration: f64) -> Simulation {
         output: Some(0.01),
         ..Default::default()
     };
-    let prepared = program.prepare(&[], &changes).expect("the scene prepares");
-    let simulation = run(&prepared, &mut |_| {});
-    assert!(
-        simulation.report.failure.is_none(),
-        "{:?}",
-        simulation.report.failure
-    );
-    simulation
+    simulated(&program.prepare(&[], &changes).expect("the scene prepares"))
 }
 
 /// The column `name` (a coordinate or an output) of every sample.
@@ -263,14 +258,7 @@ fn an_unknown_scene_is_an_error_that_names_the_scenes() {
 fn run_file(path: &str, scene: Option<&str>, changes: &SettingsChanges) -> Simulation {
     let program = Program::from_file(path, &options(scene)).expect("readable");
     assert!(!program.has_errors(), "{}", program.render());
-    let prepared = program.prepare(&[], changes).expect("prepares");
-    let simulation = run(&prepared, &mut |_| {});
-    assert!(
-        simulation.report.failure.is_none(),
-        "{:?}",
-        simulation.report.failure
-    );
-    simulation
+    simulated(&program.prepare(&[], changes).expect("prepares"))
 }
 
 #[test]

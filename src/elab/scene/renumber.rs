@@ -6,7 +6,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
-use crate::elab::value::{num, Applied, Frame, JoinId, SExpr, Scalar};
+use crate::elab::value::{num, Frame, JoinId, SExpr, Scalar};
 
 use super::values;
 
@@ -126,30 +126,15 @@ impl Renumbering {
                     },
                 }
             }
-            SExpr::Neg(a) => SExpr::Neg(self.scalar(a)),
-            SExpr::Add(a, b) => SExpr::Add(self.scalar(a), self.scalar(b)),
-            SExpr::Sub(a, b) => SExpr::Sub(self.scalar(a), self.scalar(b)),
-            SExpr::Mul(a, b) => SExpr::Mul(self.scalar(a), self.scalar(b)),
-            SExpr::Div(a, b) => SExpr::Div(self.scalar(a), self.scalar(b)),
-            SExpr::Pow(a, b) => SExpr::Pow(self.scalar(a), self.scalar(b)),
-            SExpr::Call(call) => SExpr::Call(Box::new(Applied {
-                function: call.function,
-                args: call.args.iter().map(|a| self.scalar(a)).collect(),
-            })),
-            SExpr::UnknownFunction(call) => SExpr::UnknownFunction(Box::new(Applied {
-                function: call.function,
-                args: call.args.iter().map(|a| self.scalar(a)).collect(),
-            })),
             SExpr::FrameState(frame, quantity) => {
                 let mut frame = (**frame).clone();
                 self.frame(&mut frame);
                 SExpr::FrameState(Arc::new(frame), *quantity)
             }
-            SExpr::Num(_)
-            | SExpr::Time
-            | SExpr::Unknown(_)
-            | SExpr::Coordinate { .. }
-            | SExpr::State(_) => return s.clone(),
+            other => match other.with_operands(&mut |a| self.scalar(a)) {
+                Some(rewritten) => rewritten,
+                None => return s.clone(),
+            },
         };
         let rewritten = Arc::new(rewritten);
         self.done.insert(key, (s.clone(), rewritten.clone()));

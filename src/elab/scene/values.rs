@@ -9,7 +9,9 @@ use crate::elab::value::{Displacement, Elementary, Frame, Scalar, Vector};
 pub(super) type Visit<'a> = &'a mut dyn FnMut(&mut Scalar);
 
 pub(super) fn vector(v: &mut Vector, visit: Visit) {
-    v.iter_mut().for_each(|s| visit(s));
+    for s in v.iter_mut() {
+        visit(s);
+    }
 }
 
 pub(super) fn displacement(d: &mut Displacement, visit: Visit) {
