@@ -475,7 +475,7 @@ pub struct Mechanism {
     pub outputs: Vec<NamedOutput>,
     /// The scene the mechanism was reduced for, and what its model holds
     /// (`elab::scene::reduce`); `None` for a program without scenes.
-    pub scene: Option<super::scene::SceneModel>,
+    pub scene: Option<super::scene_model::SceneModel>,
 }
 
 /// What an `output` declaration writes at each output of a run.

@@ -21,6 +21,7 @@ mod own_join;
 mod owned;
 mod piecewise;
 pub mod scene;
+pub mod scene_model;
 mod states;
 pub mod value;
 

@@ -44,7 +44,7 @@ pub struct Prepared {
     /// The program's `output` declarations, compiled.
     pub outputs: self::outputs::Outputs,
     /// The scene prepared and what its model holds (`elab::scene`); `None` without scenes.
-    pub scene: Option<crate::elab::scene::SceneModel>,
+    pub scene: Option<crate::elab::scene_model::SceneModel>,
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {

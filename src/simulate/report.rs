@@ -70,7 +70,7 @@ pub struct Report {
     pub failure: Option<RunFailure>,
     /// The scene run and what its model holds: bodies and loops kept, parts left out.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub model: Option<crate::elab::scene::SceneModel>,
+    pub model: Option<crate::elab::scene_model::SceneModel>,
     /// When the run was stopped from outside (`RunOptions::interrupt`): not a failure, but the
     /// outputs end there.
     pub interrupted: Option<Interruption>,

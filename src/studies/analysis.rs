@@ -56,7 +56,7 @@ pub struct TreeReport {
     pub warnings: Vec<Diagnostic>,
     /// The scene numbered and what its model holds (`elab::scene`); absent without scenes.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub model: Option<crate::elab::scene::SceneModel>,
+    pub model: Option<crate::elab::scene_model::SceneModel>,
 }
 
 #[derive(Clone, Debug, Serialize)]

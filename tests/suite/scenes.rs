@@ -77,7 +77,7 @@ fn relative_difference(reduced: &Simulation, full: &Simulation, name: &str) -> f
     worst / scale
 }
 
-fn scene_model(program: &Program) -> lsdc::elab::scene::SceneModel {
+fn scene_model(program: &Program) -> lsdc::elab::scene_model::SceneModel {
     let mechanism = program.mechanism().expect("a mechanism");
     mechanism.scene.clone().expect("a scene's model")
 }
