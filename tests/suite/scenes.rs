@@ -265,6 +265,7 @@ fn run_file(path: &str, scene: Option<&str>, changes: &SettingsChanges) -> Simul
 fn the_delta_passive_scene_is_the_delta_legs_example() {
     let changes = SettingsChanges {
         duration: Some(0.5),
+        output: Some(0.05),
         ..Default::default()
     };
     let scene = run_file("examples/delta_scenes.lsd", Some("passive"), &changes);
