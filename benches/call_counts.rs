@@ -28,6 +28,7 @@ fn load(file: &str) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_files(&[PathBuf::from(file)], &options).expect("the program loads");
     let mechanism = compilation.mechanism.expect("the program elaborates");

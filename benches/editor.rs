@@ -58,6 +58,7 @@ fn measure(name: &str, text: &str) {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let path = Path::new("chain.lsd");
     let mut times = Vec::new();

@@ -18,6 +18,7 @@ fn prepared(text: &str) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text(
         "bench.lsd",

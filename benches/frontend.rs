@@ -35,6 +35,7 @@ fn run(text: &str) -> Timing {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let start = Instant::now();
     let (workspace, diagnostics) = load_text("chain.lsd", text, None, &options);
@@ -96,6 +97,7 @@ fn library_cost() {
         let options = LoadOptions {
             library_dirs: Vec::new(),
             use_environment: false,
+            scene: None,
         };
         let (workspace, _) = load_text("library.lsd", &text, None, &options);
         let (checked, _) = lsdc::check::check(&workspace);

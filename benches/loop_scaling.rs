@@ -57,6 +57,7 @@ fn prepared(text: &str) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("row.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);

@@ -104,6 +104,7 @@ fn load(file: &str) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_files(&[PathBuf::from(format!("examples/{file}.lsd"))], &options)
         .expect("example loads");

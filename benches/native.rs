@@ -48,6 +48,7 @@ fn compare(text: &str, cache: &std::path::Path) -> Result<(f64, f64, f64), Strin
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let directory = Some(std::path::Path::new("examples"));
     let compilation = compile_text("bench.lsd", text, directory, &options);

@@ -40,6 +40,7 @@ fn load(path: &PathBuf) -> Model {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_files(std::slice::from_ref(path), &options).expect("readable");
     let mechanism = compilation.mechanism.unwrap_or_else(|| {

@@ -46,6 +46,7 @@ fn mechanism(text: &str) -> (Mechanism, Topology) {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("pendulum.lsd", text, None, &options);
     let mechanism = compilation.mechanism.expect("elaborates");
@@ -177,6 +178,7 @@ fn evaluation() {
         let options = LoadOptions {
             library_dirs: Vec::new(),
             use_environment: false,
+            scene: None,
         };
         let Some(mechanism) = compile_files(&[path], &options)
             .ok()

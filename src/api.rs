@@ -220,6 +220,16 @@ impl Program {
         }
     }
 
+    /// The names of the scenes the program declares (`scene NAME = ... end`), in order.
+    pub fn scene_names(&self) -> &[String] {
+        &self.compilation.workspace.scenes.names
+    }
+
+    /// The scene the program was compiled for: the one its options name, else its first.
+    pub fn scene(&self) -> Option<&str> {
+        self.compilation.workspace.scenes.selected.as_deref()
+    }
+
     /// Errors and warnings of every phase, in the order found.
     pub fn diagnostics(&self) -> &[Diagnostic] {
         &self.compilation.diagnostics

@@ -84,8 +84,24 @@ fn finish(
             Tree::Keep => elab::elaborate_perturbed(&workspace, &checked, numbers),
             Tree::Free => elab::elaborate_consuming(&mut workspace, &checked, numbers),
         });
+        mechanism = mechanism.map(|m| for_scene(m, &workspace, &mut diagnostics));
     }
     in_import_context(workspace, diagnostics, mechanism)
+}
+
+/// The mechanism reduced for the selected scene (`elab::scene`), when the program has scenes.
+fn for_scene(
+    mechanism: Mechanism,
+    workspace: &Workspace,
+    diagnostics: &mut Vec<Diagnostic>,
+) -> Mechanism {
+    let scenes = &workspace.scenes;
+    let Some(name) = &scenes.selected else {
+        return mechanism;
+    };
+    let (reduced, warnings) = elab::scene::reduce(mechanism, name, scenes.selected_span);
+    diagnostics.extend(warnings);
+    reduced
 }
 
 /// Compiles a program given as text for an editor: as [`compile_text`], and `inspect` sees the

@@ -75,6 +75,7 @@ pub fn per_evaluation(file: &Path) -> Option<(usize, usize, Option<usize>)> {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_files(&[file.to_path_buf()], &options).ok()?;
     let prepared = prepare(&compilation.mechanism?, &[], &Settings::default()).ok()?;

@@ -12,6 +12,7 @@ fuzz_target!(|data: &[u8]| {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = lsdc::driver::compile_text("fuzz.lsd", text, None, &options);
     let _ = lsdc::diag::render::to_text(&compilation.workspace.sources, &compilation.diagnostics);

@@ -239,7 +239,8 @@ impl<'w> Checker<'w> {
                     }
                 }
             }
-            DeclKind::Error => {}
+            // Scenes are selected by the loader (`load::scene`) and never reach the checker.
+            DeclKind::Scene(_) | DeclKind::Error => {}
         }
     }
 
@@ -384,7 +385,8 @@ impl<'w> Checker<'w> {
             self.report(
                 Diagnostic::error("E0418", "a program has one `simulate` declaration")
                     .primary(span, "a second one")
-                    .secondary(previous, "the first one"),
+                    .secondary(previous, "the first one")
+                    .help("keep one; for several studies of the program, give each its own in a scene (`scene fast = simulate duration = 1 end; end;`)"),
             );
         }
         let mut ctx = self.ctx(scope);
@@ -485,14 +487,16 @@ impl<'w> Checker<'w> {
     /// which coordinates may be driven are decided with the mechanism (`kinematics::drives`).
     fn drive(&mut self, drive: &'w crate::syntax::ast::DriveDecl, ctx: &mut Ctx) {
         match drive.word.name.as_str() {
-            "drive" => {}
+            // `lock crank.q = 0.3`: a drive at one value (`elab` refuses a value that varies).
+            "drive" | "lock" => {}
             "rate" | "update" => return self.rate(drive, ctx),
             "actuate" => return self.actuate(drive, ctx),
             word => {
-                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "update", "actuate"]) {
+                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "update", "actuate", "lock"]) {
                     Some("rate") => "did you mean `rate`? `rate integral = error;` gives the derivative of a state",
                     Some("update") => "did you mean `update`? `update u = -k * arm.q;` gives the next value of a sampled state",
                     Some("actuate") => "did you mean `actuate`? `actuate arm.q = law;` applies an effort along a coordinate",
+                    Some("lock") => "did you mean `lock`? `lock elbow.q = 0.4;` holds a coordinate at one value",
                     _ => "did you mean `drive`? `drive crank.q = 2 * pi * time;` imposes a coordinate as a law of time",
                 };
                 self.report(

@@ -38,10 +38,16 @@ pub fn run(args: &CheckArgs) -> ExitCode {
             }
             Err(error) => return usage_error(&error.to_string()),
         };
-        all_ok &= !program.has_errors();
+        let others = other_scenes(file, args, &program);
+        all_ok &= !program.has_errors() && others.iter().all(|p| !p.has_errors());
         match format {
-            Format::Text => print_text_report(file, &program),
-            Format::Json => reports.push(json_report(file, &program)),
+            Format::Text => {
+                print_text_report(file, &program);
+                for other in &others {
+                    print_other_scene(&program, other);
+                }
+            }
+            Format::Json => reports.push(json_report(file, &program, &others)),
         }
         if i + 1 == files.len() {
             // The process ends next: the system takes back its memory at once, whereas freeing
@@ -63,11 +69,50 @@ pub fn run(args: &CheckArgs) -> ExitCode {
     }
 }
 
+/// The program compiled for each of its scenes but the one `program` was (every scene is
+/// checked unless `--scene` names one).
+fn other_scenes(file: &Path, args: &CheckArgs, program: &Program) -> Vec<Program> {
+    if args.libraries.scene().is_some() {
+        return Vec::new();
+    }
+    let others = (program.scene_names().iter()).filter(|n| Some(n.as_str()) != program.scene());
+    others
+        .filter_map(|name| {
+            let mut options = args.libraries.options();
+            options.scene = Some(name.clone());
+            Program::from_file(file, &options).ok()
+        })
+        .collect()
+}
+
+/// What compiling another scene found that the first compilation did not (the program's own
+/// declarations are the same in every scene: their diagnostics are printed once).
+fn new_in_scene<'p>(first: &Program, other: &'p Program) -> Vec<&'p lsdc::diag::Diagnostic> {
+    let already: Vec<_> = first.diagnostics().iter().collect();
+    let seen = |d: &&lsdc::diag::Diagnostic| {
+        already.iter().any(|a| {
+            a.code == d.code && a.message == d.message && a.primary_span() == d.primary_span()
+        })
+    };
+    other.diagnostics().iter().filter(|d| !seen(d)).collect()
+}
+
+fn print_other_scene(first: &Program, other: &Program) {
+    let found: Vec<_> = new_in_scene(first, other).into_iter().cloned().collect();
+    err(&render::to_text(other.sources(), &printed(&found)));
+}
+
 fn print_text_report(file: &Path, program: &Program) {
     let diagnostics = printed(program.diagnostics());
     err(&render::to_text(program.sources(), &diagnostics));
     match program.mechanism() {
-        Ok(mechanism) => out(&text::summary(file, &mechanism.summary())),
+        Ok(mechanism) => {
+            out(&text::summary(file, &mechanism.summary()));
+            if let Some(model) = &mechanism.scene {
+                let scenes = program.scene_names().join(", ");
+                out(&format!("  scenes    {scenes}\n  {}\n", model.describe()));
+            }
+        }
         Err(_) => {
             let errors = (program.diagnostics().iter())
                 .filter(|d| d.is_error())
@@ -81,12 +126,20 @@ fn print_text_report(file: &Path, program: &Program) {
     }
 }
 
-fn json_report(file: &Path, program: &Program) -> serde_json::Value {
-    let diagnostics = render::to_json_value(program.sources(), program.diagnostics());
-    serde_json::json!({
+fn json_report(file: &Path, program: &Program, others: &[Program]) -> serde_json::Value {
+    let mut diagnostics: Vec<_> = program.diagnostics().to_vec();
+    for other in others {
+        diagnostics.extend(new_in_scene(program, other).into_iter().cloned());
+    }
+    let ok = !diagnostics.iter().any(|d| d.is_error());
+    let mut report = serde_json::json!({
         "file": file.display().to_string(),
-        "ok": !program.has_errors(),
-        "diagnostics": diagnostics,
+        "ok": ok,
+        "diagnostics": render::to_json_value(program.sources(), &diagnostics),
         "summary": program.mechanism().ok().map(|m| m.summary()),
-    })
+    });
+    if !program.scene_names().is_empty() {
+        report["scenes"] = program.scene_names().to_vec().into();
+    }
+    report
 }

@@ -74,13 +74,24 @@ pub struct LibraryArgs {
     /// directory, before LSD_PATH and the standard library).
     #[arg(short = 'L', value_name = "DIR")]
     library_dirs: Vec<PathBuf>,
+    /// Study the program's scene NAME (`scene NAME = ... end`): its settings, values, drives,
+    /// locks, efforts and outputs, in the smallest model that serves it. Default: the first
+    /// scene the program declares.
+    #[arg(long, value_name = "NAME")]
+    scene: Option<String>,
 }
 
 impl LibraryArgs {
+    /// `--scene NAME`, when given.
+    pub fn scene(&self) -> Option<&str> {
+        self.scene.as_deref()
+    }
+
     pub fn options(&self) -> LoadOptions {
         LoadOptions {
             library_dirs: self.library_dirs.clone(),
             use_environment: true,
+            scene: self.scene.clone(),
         }
     }
 }

@@ -249,12 +249,22 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     });
                     return Ok(());
                 }
+                let locked = drive.word.name.as_str() == "lock";
+                if locked && law.varies_with_motion() {
+                    return Err(Diagnostic::error(
+                        "E0711",
+                        "a lock holds a coordinate at one value: its value cannot vary",
+                    )
+                    .primary(drive.value.span, "this varies with the time or the motion")
+                    .help("lock at a number (`lock elbow.q = 0.4;`), or impose a motion with `drive elbow.q = law;`"));
+                }
                 self.mechanism.drives.push(Drive {
                     join,
                     coordinate: index as usize,
                     law,
                     span: drive.target.span,
                     law_span: drive.value.span,
+                    locked,
                 });
                 Ok(())
             }
@@ -311,6 +321,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 None => Err(internal("unresolved import")),
             },
             DeclKind::Error => Err(internal("declaration with a syntax error")),
+            DeclKind::Scene(_) => Err(internal("a scene left after loading (`load::scene`)")),
         }
     }
 

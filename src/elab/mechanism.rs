@@ -131,6 +131,17 @@ impl Link {
         self.extras.get_or_insert_with(Default::default)
     }
 
+    /// Whether one of the rarely written fields is written (a contact, stops, a rotor, a mimic,
+    /// friction).
+    pub fn has_extras(&self) -> bool {
+        self.extras.is_some()
+    }
+
+    /// The rarely written fields when one is written, to change them in place.
+    pub fn written_extras_mut(&mut self) -> Option<&mut LinkExtras> {
+        self.extras.as_deref_mut()
+    }
+
     /// `rolling(r)` or `sliding(r, f)`: see [`LinkExtras::contact`].
     pub fn contact(&self) -> Option<&ContactLaw> {
         self.extras().contact.as_ref()
@@ -298,6 +309,9 @@ pub struct Drive {
     /// The driven coordinate as written, and the law.
     pub span: Span,
     pub law_span: Span,
+    /// `lock crank.q = 0.3` (in a scene): the coordinate held at one value, its law a
+    /// constant of the program.
+    pub locked: bool,
 }
 
 /// `drive position(nacelle) = [x(time), y(time), z(time)]`: the position of a frame's origin
@@ -459,6 +473,9 @@ pub struct Mechanism {
     pub frames: Vec<NamedFrame>,
     /// The `output` declarations, in the order they were evaluated.
     pub outputs: Vec<NamedOutput>,
+    /// The scene the mechanism was reduced for, and what its model holds
+    /// (`elab::scene::reduce`); `None` for a program without scenes.
+    pub scene: Option<super::scene_model::SceneModel>,
 }
 
 /// What an `output` declaration writes at each output of a run.

@@ -20,6 +20,8 @@ mod output;
 mod own_join;
 mod owned;
 mod piecewise;
+pub mod scene;
+pub mod scene_model;
 mod states;
 pub mod value;
 

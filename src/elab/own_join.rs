@@ -85,36 +85,17 @@ struct Replacement {
 
 impl Replacement {
     fn scalar(&self, s: &Scalar) -> Scalar {
-        Arc::new(match &**s {
+        match &**s {
             SExpr::JoinCoordinate { join, index, order } if *join == self.join => {
-                SExpr::Coordinate {
+                Arc::new(SExpr::Coordinate {
                     index: self.indices[*index as usize],
                     order: *order,
-                }
+                })
             }
-            SExpr::Num(_)
-            | SExpr::Time
-            | SExpr::Unknown(_)
-            | SExpr::Coordinate { .. }
-            | SExpr::JoinCoordinate { .. }
-            | SExpr::State(_) => return s.clone(),
-            SExpr::UnknownFunction(call) => {
-                SExpr::unknown_function(call.function, self.list(&call.args))
-            }
-            SExpr::Call(call) => SExpr::call(call.function, self.list(&call.args)),
-            SExpr::Neg(a) => SExpr::Neg(self.scalar(a)),
-            SExpr::Add(a, b) => SExpr::Add(self.scalar(a), self.scalar(b)),
-            SExpr::Sub(a, b) => SExpr::Sub(self.scalar(a), self.scalar(b)),
-            SExpr::Mul(a, b) => SExpr::Mul(self.scalar(a), self.scalar(b)),
-            SExpr::Div(a, b) => SExpr::Div(self.scalar(a), self.scalar(b)),
-            SExpr::Pow(a, b) => SExpr::Pow(self.scalar(a), self.scalar(b)),
-            // A frame's state is geometric: it cannot hold a join's coordinate.
-            SExpr::FrameState(..) => return s.clone(),
-        })
-    }
-
-    fn list(&self, args: &[Scalar]) -> Vec<Scalar> {
-        args.iter().map(|a| self.scalar(a)).collect()
+            // A frame's state is geometric: it cannot hold a join's coordinate (a frame's
+            // state has no operands to rewrite).
+            other => (other.with_operands(&mut |a| self.scalar(a))).map_or_else(|| s.clone(), Arc::new),
+        }
     }
 
     fn vector(&self, v: &Vector) -> Vector {

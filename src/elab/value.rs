@@ -293,6 +293,31 @@ impl SExpr {
         SExpr::UnknownFunction(Box::new(Applied { function, args }))
     }
 
+    /// The expression with each operand `a` replaced by `f(a)` (the arguments of calls
+    /// included), for the rewritings of expressions; `None` for a node without operands (a
+    /// number, `time`, an unknown, a coordinate, a state, the state of a frame).
+    pub fn with_operands(&self, f: &mut dyn FnMut(&Scalar) -> Scalar) -> Option<SExpr> {
+        Some(match self {
+            SExpr::Neg(a) => SExpr::Neg(f(a)),
+            SExpr::Add(a, b) => SExpr::Add(f(a), f(b)),
+            SExpr::Sub(a, b) => SExpr::Sub(f(a), f(b)),
+            SExpr::Mul(a, b) => SExpr::Mul(f(a), f(b)),
+            SExpr::Div(a, b) => SExpr::Div(f(a), f(b)),
+            SExpr::Pow(a, b) => SExpr::Pow(f(a), f(b)),
+            SExpr::Call(call) => SExpr::call(call.function, call.args.iter().map(&mut *f).collect()),
+            SExpr::UnknownFunction(call) => {
+                SExpr::unknown_function(call.function, call.args.iter().map(f).collect())
+            }
+            SExpr::Num(_)
+            | SExpr::Time
+            | SExpr::Unknown(_)
+            | SExpr::Coordinate { .. }
+            | SExpr::JoinCoordinate { .. }
+            | SExpr::State(_)
+            | SExpr::FrameState(..) => return None,
+        })
+    }
+
     /// The arguments of a call, known or unknown; none for any other node.
     pub fn arguments(&self) -> &[Scalar] {
         match self {

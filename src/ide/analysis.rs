@@ -382,7 +382,7 @@ impl Builder<'_> {
                     }
                     self.declarations(&package.decls)
                 }
-                DeclKind::Import(_) | DeclKind::Error => {}
+                DeclKind::Import(_) | DeclKind::Scene(_) | DeclKind::Error => {}
             }
         }
     }

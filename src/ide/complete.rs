@@ -10,7 +10,7 @@ use crate::syntax::names::BUILTIN_NAMES;
 
 const KEYWORDS: &[&str] = &[
     "and", "apply", "as", "between", "body", "end", "force", "given", "import", "fixed", "guess",
-    "in", "initial", "join", "let", "link", "local", "on", "output", "package", "simulate",
+    "in", "initial", "join", "let", "link", "local", "on", "output", "package", "scene", "simulate",
     "torque", "with",
 ];
 

@@ -222,7 +222,7 @@ impl<'a> Printer<'a> {
             Tok::LBracket => self.push(false),
             Tok::Body | Tok::Force | Tok::Torque if !field_name => self.push(false),
             Tok::Link | Tok::Local | Tok::Simulate => self.push(false),
-            Tok::Package => {
+            Tok::Package | Tok::Scene => {
                 self.push(true);
                 self.package_header = true;
             }

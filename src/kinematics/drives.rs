@@ -80,6 +80,16 @@ pub struct ResolvedDrive {
     pub effort: String,
 }
 
+/// E0710: a coordinate both locked (`lock`, in a scene) and driven, or locked twice; the
+/// labels say which is which.
+fn lock_on_driven(name: &str, second: (Span, bool), first: (Span, bool)) -> Diagnostic {
+    let what = |locked: bool| if locked { "locked here" } else { "driven here" };
+    Diagnostic::error("E0710", format!("`{name}` is locked and driven: a lock holds a coordinate nothing else imposes"))
+        .primary(second.0, what(second.1))
+        .secondary(first.0, what(first.1))
+        .help("keep the lock or the drive: a scene locks a coordinate the program leaves free, or drives it with its own `drive` instead")
+}
+
 /// The program's drives, each checked (see the module's documentation); every refusal is
 /// reported.
 pub fn resolve(
@@ -100,16 +110,18 @@ pub fn resolve(
         );
         match (target, law) {
             (Ok((coordinate, name)), Ok(law)) => {
-                if let Some(&first) = first_span.get(&coordinate) {
-                    errors.push(
+                if let Some(&(first, first_locked)) = first_span.get(&coordinate) {
+                    errors.push(if drive.locked || first_locked {
+                        lock_on_driven(&name, (drive.span, drive.locked), (first, first_locked))
+                    } else {
                         Diagnostic::error("E0485", format!("`{name}` is driven twice"))
                             .primary(drive.span, "driven again here")
                             .secondary(first, "first driven here")
-                            .help("keep one law per coordinate (a sum of motions is one law)"),
-                    );
+                            .help("keep one law per coordinate (a sum of motions is one law)")
+                    });
                     continue;
                 }
-                first_span.insert(coordinate, drive.span);
+                first_span.insert(coordinate, (drive.span, drive.locked));
                 let join = mechanism.join_name(drive.join);
                 resolved.push(ResolvedDrive {
                     coordinate,

@@ -2,6 +2,7 @@
 //! the search path (the importing file's directory, `-L` directories, `LSD_PATH`, then the
 //! standard library embedded in the binary), detect import cycles and missing files.
 
+pub mod scene;
 pub mod stdlib;
 pub mod urdf;
 
@@ -38,6 +39,8 @@ pub struct Workspace {
     pub modules: Vec<Module>,
     pub roots: Vec<ModuleId>,
     pub imports: HashMap<Span, ModuleId>,
+    /// The scenes of the root programs and the one selected (`scene::select`).
+    pub scenes: scene::Scenes,
 }
 
 impl Workspace {
@@ -99,6 +102,8 @@ pub struct LoadOptions {
     pub library_dirs: Vec<PathBuf>,
     /// Also search the directories of `LSD_PATH`.
     pub use_environment: bool,
+    /// The scene to select in the root programs (`--scene`); `None`: the first each declares.
+    pub scene: Option<String>,
 }
 
 impl Default for LoadOptions {
@@ -106,6 +111,7 @@ impl Default for LoadOptions {
         LoadOptions {
             library_dirs: Vec::new(),
             use_environment: true,
+            scene: None,
         }
     }
 }
@@ -121,6 +127,8 @@ enum Origin {
 
 struct Loader {
     search_dirs: Vec<PathBuf>,
+    /// `LoadOptions::scene`.
+    scene: Option<String>,
     workspace: Workspace,
     by_origin: HashMap<Origin, ModuleId>,
     /// Modules whose imports are being followed: an import of one of them is a cycle.
@@ -232,11 +240,13 @@ impl Loader {
         }
         Loader {
             search_dirs,
+            scene: options.scene.clone(),
             workspace: Workspace {
                 sources: SourceMap::new(),
                 modules: Vec::new(),
                 roots: Vec::new(),
                 imports: HashMap::new(),
+                scenes: scene::Scenes::default(),
             },
             by_origin: HashMap::new(),
             in_progress: Vec::new(),
@@ -257,9 +267,19 @@ impl Loader {
         imported_at: Option<(Span, ModuleId)>,
     ) -> ModuleId {
         let file = self.workspace.sources.add(display_name, text);
-        let (program, errors) = parse(file, &self.workspace.sources.file(file).text);
+        let (mut program, errors) = parse(file, &self.workspace.sources.file(file).text);
         for error in errors {
             self.diagnostics.push(error);
+        }
+        if imported_at.is_some() {
+            scene::leave_out(&mut program);
+        } else {
+            let mut found = Vec::new();
+            let scenes = scene::select(&mut program, self.scene.as_deref(), &mut found);
+            found.into_iter().for_each(|d| self.diagnostics.push(d));
+            if !scenes.names.is_empty() || self.scene.is_some() {
+                self.workspace.scenes = scenes;
+            }
         }
         let name = module_name(&origin);
         let id = ModuleId(self.workspace.modules.len() as u32);

@@ -40,7 +40,11 @@ pub fn tree(report: &TreeReport) -> String {
             report.bodies[n - 1].name.clone()
         }
     };
-    let mut out = String::from("bodies (breadth-first from earth)\n");
+    let mut out = match &report.model {
+        Some(model) => format!("{}\n", model.describe()),
+        None => String::new(),
+    };
+    out += "bodies (breadth-first from earth)\n";
     for body in &report.bodies {
         out += &format!(
             "  {:>3}  {:<20} parent {:<20} link {:>3}  {} ({})\n",
@@ -182,6 +186,9 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
         report.duration,
         report.wall_seconds,
     );
+    if let Some(model) = &report.model {
+        out += &format!("{}\n", model.describe());
+    }
     if let (Some(stiff), Some(switches)) = (report.stiff_steps, report.method_switches) {
         out += &format!(
             "stiff steps (implicit): {stiff} of {}, {switches} changes of method\n",

@@ -43,6 +43,8 @@ pub struct Prepared {
     pub native: Option<self::native::NativeDynamics>,
     /// The program's `output` declarations, compiled.
     pub outputs: self::outputs::Outputs,
+    /// The scene prepared and what its model holds (`elab::scene`); `None` without scenes.
+    pub scene: Option<crate::elab::scene_model::SceneModel>,
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
@@ -247,6 +249,7 @@ pub fn prepare(
         warnings,
         native: None,
         outputs,
+        scene: mechanism.scene.clone(),
     })
 }
 

@@ -68,6 +68,9 @@ pub struct Report {
     /// Where an explicit integrator's steps were found held by its stability region (W0901).
     pub stiffness: Option<StiffnessReport>,
     pub failure: Option<RunFailure>,
+    /// The scene run and what its model holds: bodies and loops kept, parts left out.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<crate::elab::scene_model::SceneModel>,
     /// When the run was stopped from outside (`RunOptions::interrupt`): not a failure, but the
     /// outputs end there.
     pub interrupted: Option<Interruption>,
@@ -274,6 +277,7 @@ pub(super) fn report(
         friction_switches: std::mem::take(&mut system.state.switches),
         sampling: ended.sampling,
         failure,
+        model: prepared.scene.clone(),
         interrupted,
     }
 }

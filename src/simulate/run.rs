@@ -175,6 +175,7 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
         friction_switches: Vec::new(),
         sampling: None,
         failure: Some(RunFailure { time: 0.0, message }),
+        model: prepared.scene.clone(),
         interrupted: None,
     };
     Simulation {

@@ -54,6 +54,9 @@ pub struct TreeReport {
     /// The assembly's warnings (the branch it reached, given values it moved).
     #[serde(skip)]
     pub warnings: Vec<Diagnostic>,
+    /// The scene numbered and what its model holds (`elab::scene`); absent without scenes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<crate::elab::scene_model::SceneModel>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -164,6 +167,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
             mobility_unavailable: unavailable,
             contacts,
             warnings: Vec::new(),
+            model: mechanism.scene.clone(),
         });
     }
     let mut warnings = Vec::new();
@@ -194,6 +198,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         mobility_unavailable,
         contacts: None,
         warnings,
+        model: mechanism.scene.clone(),
     })
 }
 

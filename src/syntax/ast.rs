@@ -72,6 +72,9 @@ pub enum DeclKind {
     Apply(Node<ApplyDecl>),
     /// `package P = decls end`
     Package(Node<PackageDecl>),
+    /// `scene name = decls end`: a study of the program with its own settings, values, drives,
+    /// locks, efforts and outputs (`load::scene` selects one).
+    Scene(Node<SceneDecl>),
     /// `import joints`, `import "lib/robot.lsd"`, optionally `as P`
     Import(Node<ImportDecl>),
     /// A declaration the parser could not read; its error was already reported.
@@ -92,6 +95,13 @@ pub struct DefineDecl {
 pub struct PackageDecl {
     pub name: Ident,
     pub index: Option<PackageIndex>,
+    pub decls: Vec<Decl>,
+}
+
+/// `scene name = decls end`: the declarations one study adds to the program's own.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneDecl {
+    pub name: Ident,
     pub decls: Vec<Decl>,
 }
 

@@ -63,6 +63,8 @@ pub enum Tok<'input> {
     Output,
     #[token("package")]
     Package,
+    #[token("scene")]
+    Scene,
     #[token("simulate")]
     Simulate,
     #[token("torque")]
@@ -233,6 +235,7 @@ impl Tok<'_> {
             Tok::On => "on",
             Tok::Output => "output",
             Tok::Package => "package",
+            Tok::Scene => "scene",
             Tok::Simulate => "simulate",
             Tok::Torque => "torque",
             Tok::With => "with",

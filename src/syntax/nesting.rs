@@ -43,8 +43,12 @@ fn too_deep<'a>(decl: &'a Decl, children: &mut Vec<&'a Expr>) -> Option<Span> {
         if depth > MAX_NESTING {
             return Some(decl.span);
         }
-        if let DeclKind::Package(package) = &decl.kind {
-            decls.extend(package.decls.iter().map(|d| (d, depth + 1)));
+        match &decl.kind {
+            DeclKind::Package(package) => {
+                decls.extend(package.decls.iter().map(|d| (d, depth + 1)))
+            }
+            DeclKind::Scene(scene) => decls.extend(scene.decls.iter().map(|d| (d, depth + 1))),
+            _ => {}
         }
         decl_exprs(&decl.kind, children);
         exprs.extend(children.drain(..).map(|e| (e, depth + 1)));
@@ -76,7 +80,7 @@ fn decl_exprs<'a>(kind: &'a DeclKind, out: &mut Vec<&'a Expr>) {
             out.push(&apply.effort);
             out.extend(apply.target.iter().chain(&apply.reaction));
         }
-        DeclKind::Package(_) | DeclKind::Import(_) | DeclKind::Error => {}
+        DeclKind::Package(_) | DeclKind::Scene(_) | DeclKind::Import(_) | DeclKind::Error => {}
     }
 }
 
@@ -147,6 +151,9 @@ fn dismantle(kind: DeclKind) {
             }
             DeclKind::Package(package) => {
                 decls.extend(package.into_inner().decls.into_iter().map(|d| d.kind));
+            }
+            DeclKind::Scene(scene) => {
+                decls.extend(scene.into_inner().decls.into_iter().map(|d| d.kind));
             }
             DeclKind::Import(_) | DeclKind::Error => {}
         }

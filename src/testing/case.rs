@@ -226,7 +226,10 @@ pub fn describe(error: &VariableError) -> String {
 
 /// The program compiled; its diagnostics make a `Stop::Program` when it has errors.
 pub(super) fn compile(case: &Case) -> Result<Compilation, Stop> {
-    let options = LoadOptions::default();
+    let options = LoadOptions {
+        scene: case.scene.clone(),
+        ..LoadOptions::default()
+    };
     let program = std::slice::from_ref(&case.program);
     let compilation = compile_files_perturbed(program, &options, case.numbers)
         .map_err(|error| Stop::Setup(format!("{}: {error}", case.program.display())))?;

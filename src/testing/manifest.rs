@@ -78,6 +78,8 @@ pub struct Case {
     pub manifest: PathBuf,
     pub line: usize,
     pub program: PathBuf,
+    /// The program's scene the case runs (`scene = "NAME"`; its first scene when `None`).
+    pub scene: Option<String>,
     pub reference: Option<PathBuf>,
     pub overrides: Vec<Override>,
     pub settings: SettingsChanges,
@@ -159,6 +161,7 @@ struct ToleranceEntry {
 struct CaseEntry {
     name: String,
     program: String,
+    scene: Option<String>,
     reference: Option<String>,
     #[serde(default)]
     set: Vec<Spanned<String>>,
@@ -300,6 +303,7 @@ fn resolve(
         manifest: PathBuf::new(),
         line: 0,
         program: folder.join(entry.program),
+        scene: entry.scene,
         reference: entry.reference.map(|r| folder.join(r)),
         overrides,
         settings: entry.simulate.changes(),

@@ -26,6 +26,7 @@ fn assembled(text: &str) -> (AssemblyReport, Vec<Diagnostic>) {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("parallelogram.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
@@ -135,6 +136,7 @@ fn a_starting_velocity_cannot_be_a_guess() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("parallelogram.lsd", &text, None, &options);
     let error = compilation

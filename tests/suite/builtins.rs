@@ -19,6 +19,7 @@ fn pendulum_with(lines: &str) -> Simulation {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text(
         "program.lsd",

@@ -283,6 +283,7 @@ fn incompatible_initial_rates_are_an_error() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let mechanism = compile_text("four_bar.lsd", &text, None, &options)
         .mechanism
@@ -307,6 +308,7 @@ fn rates_the_loops_make_far_larger_than_the_given_ones_are_reported() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let path = "tests/fixtures/amplified_initial_rates.lsd";
     let text = std::fs::read_to_string(path).expect("fixture");
@@ -758,6 +760,7 @@ fn a_loop_closed_by_a_prismatic_link_conserves_energy() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let mechanism = compile_text("lever.lsd", text, None, &options)
         .mechanism

@@ -148,6 +148,7 @@ fn models() -> (lsdc::elab::Mechanism, KinematicModel, Model) {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("four_bar.lsd", FOUR_BAR, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);

@@ -250,6 +250,7 @@ fn diagnostics_of(text: &str) -> Vec<String> {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("contact.lsd", text, None, &options);
     let mechanism = compilation.mechanism.expect("elaborates");

@@ -19,6 +19,7 @@ fn model_of(text: &str) -> Model {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("tree.lsd", text, None, &options);
     assert!(

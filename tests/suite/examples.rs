@@ -10,6 +10,7 @@ fn options() -> LoadOptions {
     LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     }
 }
 

@@ -10,6 +10,7 @@ fn simulate(text: &str) -> Simulation {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("elements.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
@@ -211,6 +212,7 @@ fn stiff_chain(integrator: &str, tolerance: f64) -> (Simulation, Option<lsdc::di
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("stiff.lsd", &text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);

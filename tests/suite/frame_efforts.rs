@@ -24,6 +24,7 @@ fn right_hand_side(text: &str, coordinates: &[f64], rates: &[f64]) -> Vec<f64> {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("program.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
@@ -83,6 +84,7 @@ fn frame_states_are_refused_where_the_geometry_must_be_constant() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("geometry.lsd", text, None, &options);
     let mechanism = compilation.mechanism.expect("a mechanism");

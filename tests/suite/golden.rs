@@ -24,6 +24,7 @@ fn render_diagnostics(input: &Path) -> String {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_files(&[input.to_path_buf()], &options).expect("input readable");
     let mut diagnostics = compilation.diagnostics.clone();
@@ -107,6 +108,7 @@ fn json_diagnostics_carry_positions_and_labels() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_files(&[PathBuf::from("tests/golden/library_error.lsd")], &options)
         .expect("readable");
@@ -130,6 +132,7 @@ fn notation_tables_match_golden_files() {
         let options = LoadOptions {
             library_dirs: Vec::new(),
             use_environment: false,
+            scene: None,
         };
         let compilation = compile_files(&[PathBuf::from(format!("examples/{name}.lsd"))], &options)
             .expect("readable");
@@ -156,6 +159,7 @@ fn applying_the_offered_fixes_makes_the_program_check_clean() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     for name in [
         "stdlib_name_not_imported",

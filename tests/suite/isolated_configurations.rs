@@ -67,6 +67,7 @@ fn assembled(text: &str) -> (KinematicModel, Vec<f64>) {
     let options = LoadOptions {
         library_dirs: vec!["examples/lib".into()],
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("chain.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);

@@ -223,6 +223,7 @@ fn the_reactions_see_a_sticking_joint_held() {
         &lsdc::load::LoadOptions {
             library_dirs: Vec::new(),
             use_environment: false,
+            scene: None,
         },
     );
     let mechanism = compilation.mechanism.expect("elaborates");

@@ -27,6 +27,7 @@ fn load(path: &str) -> (Mechanism, KinematicModel) {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_files(&[PathBuf::from(path)], &options).expect("readable");
     assert!(

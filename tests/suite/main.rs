@@ -66,6 +66,7 @@ mod rolling_disc;
 mod rows;
 mod runs;
 mod sampled;
+mod scenes;
 mod simulation;
 mod states;
 mod stepping;

@@ -363,6 +363,7 @@ fn mampey_equals_crba_and_rnea_columns_on_the_urdf_fixtures_and_a_geared_arm() {
             &lsdc::load::LoadOptions {
                 library_dirs: Vec::new(),
                 use_environment: false,
+                scene: None,
             },
         )
         .expect("loads");
@@ -388,6 +389,7 @@ fn the_geared_arm_conserves_its_energy_rotors_included() {
         &lsdc::load::LoadOptions {
             library_dirs: Vec::new(),
             use_environment: false,
+            scene: None,
         },
     )
     .expect("loads");

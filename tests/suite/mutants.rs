@@ -161,6 +161,7 @@ pub fn exercise(text: &str, dir: Option<&Path>) -> usize {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let program = Program::from_text("mutant.lsd", text, dir, &options);
     let _ = program.render();

@@ -17,6 +17,7 @@ fn prepared_text(text: &str) -> Result<Prepared, Vec<String>> {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text(
         "program.lsd",
@@ -368,6 +369,7 @@ fn the_viewer_plots_every_output_column() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let mechanism = compile_text("pendulum.lsd", &text, None, &options)
         .mechanism

@@ -88,6 +88,7 @@ fn load(robot: &str, fixture: &Value) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = if floating {
         let xml = std::fs::read_to_string(urdf)

@@ -91,6 +91,7 @@ fn run_front_end(text: &str) {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text(
         "random.lsd",

@@ -259,6 +259,7 @@ fn falling(law: &str, start: f64, integrator: &str) -> Simulation {
         &lsdc::load::LoadOptions {
             library_dirs: Vec::new(),
             use_environment: false,
+            scene: None,
         },
     );
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);

@@ -390,6 +390,7 @@ fn a_mimic_with_a_contact_is_counted_in_both_degrees_of_freedom() {
     let options = lsdc::load::LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = lsdc::driver::compile_text("test.lsd", &text, None, &options);
     let mechanism = compilation.mechanism.expect("elaborates");

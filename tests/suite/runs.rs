@@ -127,6 +127,7 @@ fn w0901_never_fires_on_the_examples_that_are_not_stiff() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let mut checked = Vec::new();
     for name in simulated_examples() {
@@ -207,6 +208,7 @@ fn the_stiffness_check_does_not_hang_on_a_tree_of_100_planar_rods() {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("rods.lsd", &rod_tree(100), None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);

@@ -9,6 +9,7 @@ fn simulate(text: &str, settings: Settings) -> Simulation {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("test.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);

@@ -18,6 +18,7 @@ fn compile(text: &str) -> lsdc::driver::Compilation {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     compile_text("test.lsd", text, None, &options)
 }

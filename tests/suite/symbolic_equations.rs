@@ -512,7 +512,7 @@ proptest! {
     ) {
         let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
         let text = tree_program(&parents, &kinds, &numbers);
-        let options = LoadOptions { library_dirs: Vec::new(), use_environment: false };
+        let options = LoadOptions { library_dirs: Vec::new(), use_environment: false, scene: None };
         let compilation = lsdc::driver::compile_text("tree.lsd", &text, None, &options);
         prop_assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
         let mechanism = compilation.mechanism.as_ref().expect("a mechanism");

@@ -53,6 +53,7 @@ mod plot {
                 friction_switches: Vec::new(),
                 sampling: None,
                 failure: None,
+                model: None,
                 interrupted: None,
             },
         }

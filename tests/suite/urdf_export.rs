@@ -19,6 +19,7 @@ fn options() -> LoadOptions {
     LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     }
 }
 

@@ -92,6 +92,7 @@ fn options() -> LoadOptions {
     LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     }
 }
 

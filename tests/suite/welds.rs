@@ -37,6 +37,7 @@ fn prepared(keep_welds: bool) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let compilation = compile_text("arm.lsd", &arm(keep_welds), None, &options);
     let mechanism = compilation

@@ -138,6 +138,7 @@ fn no_library_path() -> LoadOptions {
     LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     }
 }
 
