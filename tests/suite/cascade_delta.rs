@@ -94,7 +94,7 @@ fn cascade_with_its_observer_rejects_the_seeds_disturbances_and_noise() {
 /// knows it. Measured (the observer's gains designed for the arms without payload): 5.3e-5 rad
 /// of the arm with 5 or 10 kg while the currents build up in the first 15 ms, 1.7e-5 after
 /// 0.1 s, against 6.5e-5 without (the heavier axes follow the current loop's lag less); the
-/// motors' torques up to 0.69 N m with 5 kg and 1.38 N m with 10 kg.
+/// motors' torques up to 0.70 N m with 5 kg and 1.38 N m with 10 kg.
 #[test]
 fn cascade_tracks_the_references_with_the_seeds_payloads() {
     for payload in [5.0, 10.0] {
