@@ -49,9 +49,14 @@ pub struct SimulateArgs {
     /// Format of the run report (written to standard error).
     #[arg(long, value_enum, default_value = "text")]
     report: Format,
-    /// Draw the coordinates and the energy over time to an .svg or .png file.
+    /// Draw the coordinates, the outputs and the energy over time to an .svg or .png file.
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Draw only these columns (names of the samples' CSV header, separated by commas: a
+    /// coordinate, its rate `name'`, `kinetic_energy`, `potential_energy`, an output), in one
+    /// panel with its own scale; repeat it for more panels. Needs `--plot`.
+    #[arg(long = "plot-columns", value_name = "NAMES", requires = "plot")]
+    plot_columns: Vec<String>,
     /// How loops are kept closed: project the state onto the constraints after each step
     /// (exact), Baumgarte's feedback in the accelerations, or nothing.
     #[arg(long, value_enum, default_value = "projection")]
@@ -138,6 +143,15 @@ pub fn run(args: &SimulateArgs) -> ExitCode {
             return usage_error(&error.to_string());
         }
     }
+    // The plot's columns are checked before anything is written.
+    let plot_columns = match lsdc::output::plot_columns::resolve(
+        &prepared.coordinate_names,
+        &lsdc::simulate::run::output_names_of(&prepared),
+        &args.plot_columns,
+    ) {
+        Ok(columns) => columns,
+        Err(unknown) => return usage_error(&unknown.to_string()),
+    };
     if args.compiled {
         let help = "run without --compiled: the run lands on every sampling instant";
         let format = args.report;
@@ -174,7 +188,7 @@ pub fn run(args: &SimulateArgs) -> ExitCode {
     let writer = samples::writer(sample_format(args.format), samples_out, &prepared);
     let (simulation, written) = run_and_write(args, &prepared, writer);
     let plotted = match &args.plot {
-        Some(path) => lsdc::output::plot::plot(&simulation, path)
+        Some(path) => lsdc::output::plot::plot_columns(&simulation, path, &plot_columns)
             .map_err(|error| format!("cannot draw `{}`: {error}", path.display())),
         None => Ok(()),
     };

@@ -5,6 +5,7 @@ pub mod csv;
 pub mod json;
 pub mod linearization;
 pub mod plot;
+pub mod plot_columns;
 pub mod precision_plot;
 pub mod sample_writer;
 pub mod samples;

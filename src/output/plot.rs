@@ -1,5 +1,6 @@
 //! Plots of a simulation over time, as SVG or PNG: the declared coordinates and the program's
-//! named outputs in the upper panel and the energy (kinetic, and total when the potential is known) in the lower one.
+//! named outputs in the upper panel and the energy (kinetic, and total when the potential is
+//! known) in the lower one, or the columns a user chooses, in panels of their own.
 //!
 //! Text is laid out (and, in PNGs, rasterised) with `ab_glyph` from a font embedded in the
 //! binary, so plotting needs no system fonts, fontconfig or freetype. The font is DejaVu Sans
@@ -22,6 +23,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle};
 
+use super::plot_columns::Column;
 use crate::simulate::run::{Sample, Simulation};
 
 /// The width of a plot, in pixels.
@@ -70,11 +72,22 @@ enum Format {
 /// Draws the simulation's coordinates and energy over time to `path`, an SVG when it ends in
 /// `.svg` and a PNG when it ends in `.png`.
 pub fn plot(simulation: &Simulation, path: &Path) -> Result<(), PlotError> {
+    plot_columns(simulation, path, &[])
+}
+
+/// As [`plot`], with only the chosen columns (`columns`, from
+/// [`resolve`](super::plot_columns::resolve)), each group in a panel of its own; the
+/// coordinates, outputs and energy when `columns` is empty.
+pub fn plot_columns(
+    simulation: &Simulation,
+    path: &Path,
+    columns: &[Vec<Column>],
+) -> Result<(), PlotError> {
     format_of(path)?;
     if simulation.samples.is_empty() {
         return Err(PlotError::NoOutputs);
     }
-    write_figure(&OverTime(simulation), path)
+    write_figure(&OverTime(simulation, columns), path)
 }
 
 /// Checks that a plot's file name ends in `.svg` or `.png`, before the work that the plot shows.
@@ -114,8 +127,8 @@ pub(super) trait Figure {
         DB::ErrorType: 'static;
 }
 
-/// The coordinates and the energy of a simulation over time.
-struct OverTime<'s>(&'s Simulation);
+/// The coordinates and the energy of a simulation over time, or the columns chosen.
+struct OverTime<'s>(&'s Simulation, &'s [Vec<Column>]);
 
 impl Figure for OverTime<'_> {
     fn draw<DB: DrawingBackend>(
@@ -126,7 +139,11 @@ impl Figure for OverTime<'_> {
     where
         DB::ErrorType: 'static,
     {
-        draw(root, self.0, render)
+        let panels = match self.1 {
+            [] => standard_panels(self.0),
+            chosen => chosen_panels(self.0, chosen),
+        };
+        draw(root, &self.0.samples, &panels, render)
     }
 }
 
@@ -327,18 +344,19 @@ struct Layout {
     legend_columns: usize,
 }
 
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    simulation: &Simulation,
-    render: Render,
-) -> Result<(), PlotError>
-where
-    DB::ErrorType: 'static,
-{
-    let error = PlotError::drawing::<DB::ErrorType>;
-    root.fill(&WHITE).map_err(error)?;
+/// One panel of a plot: its caption, what its values are, its lines and its share of the
+/// height.
+struct Panel {
+    caption: String,
+    quantity: &'static str,
+    lines: Vec<Line>,
+    share: f64,
+}
+
+/// The plot without a choice of columns: the declared coordinates and the program's named
+/// outputs above, the energy (kinetic, and total when the potential is known) below.
+fn standard_panels(simulation: &Simulation) -> Vec<Panel> {
     let samples = &simulation.samples;
-    // The upper panel: the declared coordinates, then the program's named outputs.
     let coordinates: Vec<Line> = (simulation.coordinate_names.iter().enumerate())
         .map(|(i, name)| Line::new(name, samples, |s| s.coordinates.get(i).copied()))
         .chain(
@@ -354,11 +372,69 @@ where
         total.dashed = true;
         energy.push(total);
     }
-    let coordinate_axis = Axis::new(values(&coordinates), true);
-    let energy_axis = Axis::new(values(&energy), true);
+    let (caption, quantity) = if simulation.output_names.is_empty() {
+        ("Coordinates", "coordinate")
+    } else {
+        ("Coordinates and outputs", "value")
+    };
+    vec![
+        Panel {
+            caption: caption.to_string(),
+            quantity,
+            lines: coordinates,
+            share: UPPER_SHARE,
+        },
+        Panel {
+            caption: "Energy".to_string(),
+            quantity: "energy",
+            lines: energy,
+            share: 1.0 - UPPER_SHARE,
+        },
+    ]
+}
 
-    let (_, height) = root.dim_in_pixel();
-    let (upper, lower) = root.split_vertically((height as f64 * UPPER_SHARE) as u32);
+/// The chosen columns, a panel per group, the panels sharing the height equally; each panel is
+/// captioned with its columns' names.
+fn chosen_panels(simulation: &Simulation, groups: &[Vec<Column>]) -> Vec<Panel> {
+    let samples = &simulation.samples;
+    (groups.iter())
+        .map(|columns| Panel {
+            caption: (columns.iter().map(|c| c.name.as_str()))
+                .collect::<Vec<_>>()
+                .join(", "),
+            quantity: "value",
+            lines: (columns.iter())
+                .map(|column| Line::new(&column.name, samples, |s| column.value(s)))
+                .collect(),
+            share: 1.0 / groups.len() as f64,
+        })
+        .collect()
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    samples: &[Sample],
+    panels: &[Panel],
+    render: Render,
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
+    let error = PlotError::drawing::<DB::ErrorType>;
+    root.fill(&WHITE).map_err(error)?;
+    let axes: Vec<Axis> = (panels.iter())
+        .map(|panel| Axis::new(values(&panel.lines), true))
+        .collect();
+    // The panels' areas, top to bottom, by their shares of the height.
+    let (width, height) = root.dim_in_pixel();
+    let mut areas = Vec::new();
+    let mut rest = root.clone();
+    for panel in &panels[..panels.len().saturating_sub(1)] {
+        let (area, below) = rest.split_vertically((height as f64 * panel.share) as u32);
+        areas.push(area);
+        rest = below;
+    }
+    areas.push(rest);
     let label_style = render.font(LABEL_SIZE);
     let text_width = |text: &str| {
         root.estimate_text_size(text, &label_style)
@@ -366,21 +442,24 @@ where
             .map_err(error)
     };
     let mut y_label_width = 0;
-    for axis in [&coordinate_axis, &energy_axis] {
+    for axis in &axes {
         for value in [axis.range.start, axis.range.end] {
             y_label_width = y_label_width.max(text_width(&axis.label(value))?);
         }
     }
     let mut legend_column = 0;
-    for line in coordinates.iter().chain(&energy) {
+    for line in panels.iter().flat_map(|p| &p.lines) {
         legend_column = legend_column.max(text_width(&line.label)?);
     }
     let legend_column = legend_column + render.px(LEGEND_LINE + LEGEND_GAP + LEGEND_PAD);
-    // As many columns as the coordinates need, within half the width.
-    let (width, _) = root.dim_in_pixel();
-    let needed = coordinates
-        .len()
-        .div_ceil(legend_rows(&upper, coordinates.len(), render))
+    // As many columns as the most crowded panel needs, within half the width.
+    let needed = (panels.iter().zip(&areas))
+        .map(|(panel, area)| {
+            let lines = panel.lines.len();
+            lines.div_ceil(legend_rows(area, lines, render))
+        })
+        .max()
+        .unwrap_or(1)
         .max(1) as u32;
     let columns =
         needed.min(((width / 2).saturating_sub(render.px(LEGEND_PAD)) / legend_column).max(1));
@@ -392,20 +471,11 @@ where
         legend_column,
         legend_columns: columns as usize,
     };
-    let (title, quantity) = if simulation.output_names.is_empty() {
-        ("Coordinates", "coordinate")
-    } else {
-        ("Coordinates and outputs", "value")
-    };
-    panel(
-        &upper,
-        title,
-        quantity,
-        &coordinate_axis,
-        &coordinates,
-        &layout,
-    )?;
-    panel(&lower, "Energy", "energy", &energy_axis, &energy, &layout)
+    for ((panel, axis), area) in panels.iter().zip(&axes).zip(&areas) {
+        let caption = &panel.caption;
+        self::panel(area, caption, panel.quantity, axis, &panel.lines, &layout)?;
+    }
+    Ok(())
 }
 
 fn values(lines: &[Line]) -> impl Iterator<Item = f64> + '_ {

@@ -390,6 +390,57 @@ fn a_run_ending_inside_a_singular_passage_warns_about_its_last_outputs() {
     assert!(!stderr.contains("W0903"), "{stderr}");
 }
 
+/// `simulate --plot-columns`: the chosen columns only, a panel per option (the Delta's
+/// documented commands plot errors and torques so); a misspelt name stops the command before
+/// the run (its golden file: `tests/golden/commands/simulate_plot_unknown_column`).
+#[test]
+fn simulate_plots_the_chosen_columns() {
+    let plot = std::env::temp_dir().join(format!("lsdc-columns-{}.svg", std::process::id()));
+    let plot_name = plot.display().to_string();
+    let example = "examples/control/discrete_pd_pendulum.lsd";
+    let args = [
+        "simulate",
+        example,
+        "--duration",
+        "0.5",
+        "-o",
+        "/dev/null",
+        "--plot",
+        &plot_name,
+        "--plot-columns",
+        "swing.q",
+        "--plot-columns",
+        "u,kinetic_energy",
+    ];
+    let (code, _, stderr) = lsdc(&args);
+    assert_eq!(code, 0, "{stderr}");
+    let svg = std::fs::read_to_string(&plot).expect("the plot is written");
+    let _ = std::fs::remove_file(&plot);
+    // The SVG's texts (a line each): captions and legends of the two panels, and nothing of
+    // the standard plot's.
+    let texts: Vec<&str> = svg.lines().filter(|l| !l.starts_with('<')).collect();
+    let count = |wanted: &str| texts.iter().filter(|&&t| t == wanted).count();
+    assert_eq!(count("swing.q"), 2, "{texts:?}");
+    assert_eq!(count("u, kinetic_energy"), 1, "{texts:?}");
+    assert_eq!((count("u"), count("kinetic_energy")), (1, 1), "{texts:?}");
+    assert_eq!(
+        count("swing.q&apos;") + count("Energy") + count("kinetic"),
+        0
+    );
+    let misspelt = [
+        "simulate",
+        example,
+        "--plot",
+        &plot_name,
+        "--plot-columns",
+        "swing.q'',u",
+    ];
+    let (code, stdout, stderr) = lsdc(&misspelt);
+    assert_eq!((code, stdout.as_str()), (2, ""), "{stderr}");
+    assert!(stderr.contains("did you mean `swing.q'`?"), "{stderr}");
+    assert!(!plot.exists(), "nothing drawn");
+}
+
 #[test]
 fn precision_errors_decrease_with_the_tolerance_and_its_json_is_a_table() {
     let plot = std::env::temp_dir().join(format!("lsdc-precision-{}.svg", std::process::id()));

@@ -147,6 +147,55 @@ mod plot {
         assert_eq!(Axis::new(std::iter::empty(), true).range, -1.0..1.0);
     }
 
+    /// `--plot-columns`: the chosen columns, a panel per group captioned with their names, and
+    /// nothing else (no other coordinate, no energy panel); a column's values are the samples'
+    /// (a rate, an energy); a misspelt name is refused with the closest column.
+    #[test]
+    fn chosen_columns_are_plotted_alone() {
+        use lsdc::output::plot_columns::{resolve, UnknownColumn};
+        let simulation = simulation(101, true);
+        let groups = [
+            "crank.q, slider.x'".to_string(),
+            "kinetic_energy".to_string(),
+        ];
+        let panels = resolve(&simulation.coordinate_names, &[], &groups).unwrap();
+        let names: Vec<Vec<&str>> = (panels.iter())
+            .map(|p| p.iter().map(|c| c.name.as_str()).collect())
+            .collect();
+        assert_eq!(
+            names,
+            [vec!["crank.q", "slider.x'"], vec!["kinetic_energy"]]
+        );
+        let sample = &simulation.samples[7];
+        assert_eq!(panels[0][1].value(sample), Some(sample.rates[1]));
+        assert_eq!(panels[1][0].value(sample), Some(sample.kinetic_energy));
+        let svg = temp_path("columns.svg");
+        plot_columns(&simulation, &svg, &panels).unwrap();
+        let text = std::fs::read_to_string(&svg).unwrap();
+        std::fs::remove_file(svg).unwrap();
+        // The SVG's texts (a line each): the captions, the legends, the axes' labels.
+        let texts: Vec<&str> = text.lines().filter(|l| !l.starts_with('<')).collect();
+        let count = |wanted: &str| texts.iter().filter(|&&t| t == wanted).count();
+        assert_eq!(count("crank.q, slider.x&apos;"), 1, "a caption");
+        assert_eq!(count("kinetic_energy"), 2, "a caption and a legend");
+        assert_eq!(
+            (count("crank.q"), count("slider.x&apos;")),
+            (1, 1),
+            "legends"
+        );
+        assert_eq!(
+            (count("slider.x"), count("Energy"), count("kinetic")),
+            (0, 0, 0)
+        );
+        let misspelt = ["crank.q,slider.y".to_string()];
+        let unknown = resolve(&simulation.coordinate_names, &[], &misspelt).unwrap_err();
+        let expected = UnknownColumn {
+            name: "slider.y".to_string(),
+            suggestion: Some("slider.x".to_string()),
+        };
+        assert_eq!(unknown, expected);
+    }
+
     #[test]
     fn rejects_other_extensions_and_empty_runs() {
         let error = plot(&simulation(3, true), &temp_path("plot.pdf"))
