@@ -68,7 +68,11 @@ fn kinematics_workspace_volume_of_the_delta_converges_to_the_counted_volume() {
     } = delta();
     let (low, high) = (0.6, 1.2);
     let ranges = same_ranges(&actuation, low, high);
-    let volumes: Vec<f64> = [4, 8, 16]
+    // Grids of 2³, 4³ and 8³ cells (measured: volumes 1.6563e-3, 1.6425e-3, 1.6391e-3 m³,
+    // ratio 4.05, extrapolated 2.7e-4 from the count): the ratio and the extrapolation hold
+    // from the coarsest grids, so the finer 16³ grid (4,096 closures, 9 % of the suite's run
+    // with the test below) is not needed for them.
+    let volumes: Vec<f64> = [2, 4, 8]
         .iter()
         .map(|&n| {
             let workspace = sample(
