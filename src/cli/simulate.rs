@@ -82,6 +82,10 @@ pub struct SimulateArgs {
     /// run goes on without it.
     #[arg(long)]
     compiled: bool,
+    /// Keep the spatial form of a planar mechanism's equations (6-vectors, 6 rows per loop),
+    /// for comparison and debugging: the results agree with the planar form's to round-off.
+    #[arg(long)]
+    spatial: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -133,6 +137,9 @@ pub fn run(args: &SimulateArgs) -> ExitCode {
         Ok(prepared) => prepared,
         Err(code) => return code,
     };
+    if args.spatial {
+        prepared.model.keep_spatial();
+    }
     if !args.output_frames.is_empty() {
         if let Err(error) = program.output_frames(&mut prepared, &args.output_frames) {
             return usage_error(&error.to_string());

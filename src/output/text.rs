@@ -182,6 +182,9 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
         report.duration,
         report.wall_seconds,
     );
+    if report.planar {
+        out += "planar: the recursions in planar vectors (3 per body), 3 rows per loop\n";
+    }
     if let (Some(stiff), Some(switches)) = (report.stiff_steps, report.method_switches) {
         out += &format!(
             "stiff steps (implicit): {stiff} of {}, {switches} changes of method\n",

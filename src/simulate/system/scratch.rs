@@ -85,6 +85,9 @@ pub struct Scratch {
     pub contact: Vec<f64>,
     pub holding: Vec<f64>,
     pub(in crate::simulate) friction_power: f64,
+    /// Whether the evaluations in this scratch take the model's planar form (the run's
+    /// integrator's, `MechanicalSystem::use_planar`).
+    pub(in crate::simulate) planar: bool,
     /// The model in the actuated coordinates at the last evaluation (made at the first), and
     /// where the actuators' laws are evaluated.
     pub model_laws: Option<ReducedScratch>,
@@ -134,6 +137,7 @@ impl Scratch {
             contact: vec![0.0; model.stops.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,
+            planar: false,
         }
     }
 }

@@ -1,0 +1,86 @@
+//! The loops' rows in planar form (`dynamics::planar`): of a planar loop's six rows (`rows`),
+//! only the rotation about the normal and the two translations in the plane can be non-zero;
+//! they are computed here from the planar kinematics, three per loop, and written in the
+//! fixed axes where the loops' block reads them (ω n, v₁ e₁ + v₂ e₂: for a plane normal to a
+//! fixed axis, three entries of the six, the others zero). The equations of motion read G and
+//! γ (`Extent::Motion`), which is all this computes.
+
+use nalgebra::Vector2;
+
+use super::rows::Constraints;
+use crate::dynamics::model::Model;
+use crate::dynamics::planar::algebra::{cross_motion, PlanarMotion, PlanarTransform};
+use crate::dynamics::planar::algorithms::{bias_accelerations, PlanarData};
+use crate::dynamics::planar::model::{PlanarLoopKind, PlanarModel};
+
+/// A motion of the fixed plane about its origin, taken about the point `p`: v + ω n̂ × p.
+fn shifted(p: &Vector2<f64>, m: &PlanarMotion) -> PlanarMotion {
+    PlanarMotion::new(m[0], m[1] - m[0] * p.y, m[2] + m[0] * p.x)
+}
+
+/// G and γ of every loop at (q, v) into `c`, with the position and velocity rows left at zero
+/// (as `constraints_into` at `Extent::Motion`); `data` must hold the planar kinematics of
+/// (q, v) (`planar::algorithms::kinematics`).
+pub fn planar_constraints_into(
+    model: &Model,
+    planar: &PlanarModel,
+    data: &mut PlanarData,
+    (q, v): (&[f64], &[f64]),
+    c: &mut Constraints,
+) {
+    bias_accelerations(planar, data);
+    for joint in &planar.joints {
+        if joint.nv() == 1 {
+            data.world_columns[joint.v_offset] =
+                data.world[joint.child].motion_to_parent(&joint.column);
+        }
+    }
+    let world = |data: &PlanarData, motions: &[PlanarMotion], body: usize| match body {
+        0 => PlanarMotion::zeros(),
+        b => data.world[b].motion_to_parent(&motions[b]),
+    };
+    for (k, closing) in planar.loops.iter().enumerate() {
+        let own = model.loop_offset(k);
+        let (coordinate, rate) = (q[model.nq + own], v[model.nv + own]);
+        let base: PlanarTransform = data.world[closing.first_body];
+        // The loop point, and the chain's motion there per unit rate (fixed plane's axes).
+        let (point, unit) = match &closing.kind {
+            PlanarLoopKind::Revolute { rate } => (
+                base.point_to_parent(&closing.first),
+                PlanarMotion::new(*rate, 0.0, 0.0),
+            ),
+            PlanarLoopKind::Prismatic { direction } => {
+                let along = base.rotate(direction);
+                (
+                    base.point_to_parent(&(closing.first + direction * coordinate)),
+                    PlanarMotion::new(0.0, along.x, along.y),
+                )
+            }
+        };
+        let block = &mut c.jacobian.blocks[k];
+        for &(local, column, sign) in &c.path_signs[k] {
+            let moved = shifted(&point, &data.world_columns[column]) * sign;
+            block
+                .values
+                .column_mut(local)
+                .copy_from(&planar.spatial_motion(&moved));
+        }
+        let local = block.local(model.nv + own);
+        block
+            .values
+            .column_mut(local)
+            .copy_from(&planar.spatial_motion(&-unit));
+        // γ: the difference of the two frames' accelerations at the loop point at zero joint
+        // accelerations; the chain's velocity about the origin is its motion about the point
+        // moved back there.
+        let first_velocity = world(data, &data.velocity, closing.first_body);
+        let chain_velocity = shifted(&-point, &(unit * rate));
+        let end_acceleration = world(data, &data.acceleration, closing.first_body)
+            + cross_motion(&first_velocity, &chain_velocity);
+        let difference = world(data, &data.acceleration, closing.second_body) - end_acceleration;
+        c.bias
+            .fixed_rows_mut::<6>(6 * k)
+            .copy_from(&planar.spatial_motion(&shifted(&point, &difference)));
+    }
+    c.velocity.fill(0.0);
+}
