@@ -138,7 +138,7 @@ pub fn run(args: &SimulateArgs) -> ExitCode {
         Err(code) => return code,
     };
     if args.spatial {
-        prepared.model.keep_spatial();
+        prepared.keep_spatial();
     }
     if !args.output_frames.is_empty() {
         if let Err(error) = program.output_frames(&mut prepared, &args.output_frames) {

@@ -10,7 +10,6 @@ use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 use super::compiled::EffortScratch;
 use super::joint::JointState;
 use super::model::Model;
-use super::planar::PlanarData;
 use crate::kinematics::eval::EvalError;
 use crate::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
 
@@ -51,8 +50,6 @@ pub struct Data {
     rotor_of_joint: Vec<Option<usize>>,
     rotor_u: Vec<Force>,
     rotor_coriolis: Vec<Motion>,
-    /// The planar algorithms' scratch, for a model with a planar form (`dynamics::planar`).
-    pub planar: Option<Box<PlanarData>>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -106,9 +103,6 @@ impl Data {
             rotor_of_joint: rotors_of_joints(model),
             rotor_u: vec![Force::zeros(); model.rotors.len()],
             rotor_coriolis: vec![Motion::zeros(); model.rotors.len()],
-            planar: model
-                .planar_form()
-                .map(|_| Box::new(PlanarData::new(model))),
         }
     }
 }

@@ -13,7 +13,6 @@ pub use super::elements::{
 use super::friction::{self, Friction};
 use super::joint::{classify, kernel, Joint, JointType, Kernel};
 use super::mimics::{self, Mimic};
-use super::planar::{self, PlanarModel};
 use super::rotors::{self, Rotor};
 use super::states::{self, StateModel};
 use super::stops::{self, Stop};
@@ -104,28 +103,9 @@ pub struct Model {
     pub states: Vec<StateModel>,
     /// The actuators (`actuate`), whose laws may read the model; `None` without any.
     pub actuation: Option<Actuation>,
-    /// The model's planar form when the mechanism is planar (`planar::decide`), or why it
-    /// keeps the spatial form: the run's right-hand side takes it.
-    pub planar: Result<Box<PlanarModel>, String>,
 }
 
 impl Model {
-    /// Decides the planar form again (`planar::decide`), after a change of the joints, loops
-    /// or efforts.
-    pub fn decide_planar(&mut self) {
-        self.planar = planar::decide(self).map(Box::new);
-    }
-
-    /// Keeps the spatial form (`simulate --spatial`): for comparison and debugging.
-    pub fn keep_spatial(&mut self) {
-        self.planar = Err("the spatial form was asked for".to_string());
-    }
-
-    /// The planar form, when the model has one.
-    pub fn planar_form(&self) -> Option<&PlanarModel> {
-        self.planar.as_deref().ok()
-    }
-
     pub fn body_count(&self) -> usize {
         self.joints.len()
     }
@@ -441,11 +421,9 @@ pub fn build_with(
         applied_groups: Vec::new(),
         declared_read: Vec::new(),
         actuation: None,
-        planar: Err(String::new()),
     };
     model.compile_efforts();
     model.compile_actuators(mechanism)?;
-    model.decide_planar();
     Ok(model)
 }
 

@@ -11,6 +11,7 @@ use std::collections::{BTreeSet, HashMap};
 
 use crate::diag::Diagnostic;
 use crate::dynamics::model::{self as dynamic_model, Model};
+use crate::dynamics::planar::{self, PlanarModel};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
 use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, UnknownId, Vector};
 use crate::kinematics::eval::{eval, UnknownValues};
@@ -43,6 +44,22 @@ pub struct Prepared {
     pub native: Option<self::native::NativeDynamics>,
     /// The program's `output` declarations, compiled.
     pub outputs: self::outputs::Outputs,
+    /// The model's planar form, which the run's right-hand side takes, when the mechanism is
+    /// planar (`dynamics::planar::decide`); otherwise why not.
+    pub planar: Result<Box<PlanarModel>, String>,
+}
+
+impl Prepared {
+    /// Keeps the spatial form of a planar mechanism's equations (`simulate --spatial`): for
+    /// comparison and debugging.
+    pub fn keep_spatial(&mut self) {
+        self.planar = Err("the spatial form was asked for".to_string());
+    }
+
+    /// The planar form, when the run takes one.
+    pub fn planar_form(&self) -> Option<&PlanarModel> {
+        self.planar.as_deref().ok()
+    }
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
@@ -237,6 +254,7 @@ pub fn prepare(
         }
     }
     Ok(Prepared {
+        planar: planar::decide(&model).map(Box::new),
         model,
         topology,
         kinematics,

@@ -33,7 +33,7 @@ use crate::dynamics::driven_points;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
-use crate::dynamics::planar::{self, PlanarModel};
+use crate::dynamics::planar::{self, PlanarData, PlanarModel};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
 use scratch::Scratch;
@@ -51,6 +51,8 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
+    /// The model's planar form, when the right-hand side takes it (`use_planar`).
+    planar: Option<&'m PlanarModel>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -67,6 +69,7 @@ impl<'m> MechanicalSystem<'m> {
             scratch: Box::new(Scratch::new(model, stabilisation)),
             sampling: None,
             native: None,
+            planar: None,
         }
     }
 
@@ -109,11 +112,13 @@ impl<'m> MechanicalSystem<'m> {
         self.native = native;
     }
 
-    /// Evaluates the right-hand side in the model's planar form, when it has one (`on`), from
-    /// now on: the run's integrator's evaluations. The outputs' own evaluations, the
-    /// reactions and the projections keep the spatial form.
-    pub fn use_planar(&mut self, on: bool) {
-        self.scratch.planar = on;
+    /// Evaluates the right-hand side in `planar`, the model's planar form
+    /// (`dynamics::planar::decide`), from now on, or in the spatial form with `None`: the run's
+    /// integrator's evaluations. The outputs' own evaluations, the reactions and the
+    /// projections keep the spatial form.
+    pub fn use_planar(&mut self, planar: Option<&'m PlanarModel>) {
+        self.planar = planar;
+        self.scratch.planar = planar.map(|_| Box::new(PlanarData::new(self.model)));
     }
 
     /// Whether the right-hand side takes the model's planar form.
@@ -121,12 +126,11 @@ impl<'m> MechanicalSystem<'m> {
         self.planar_here().is_some()
     }
 
-    /// The planar form the right-hand side takes here: the model's, when this scratch uses it
+    /// The planar form the right-hand side takes here: when this scratch has the planar one
     /// and no native code computes the accelerations instead.
     fn planar_here(&self) -> Option<&'m PlanarModel> {
-        let model: &'m Model = self.model;
-        let on = self.scratch.planar && self.native.is_none();
-        model.planar_form().filter(|_| on)
+        let on = self.scratch.planar.is_some() && self.native.is_none();
+        self.planar.filter(|_| on)
     }
 
     pub fn dimension(&self) -> usize {
@@ -209,7 +213,7 @@ impl<'m> MechanicalSystem<'m> {
         };
         let planar = self.planar_here();
         let (data, bias) = (&mut self.scratch.data, &mut self.scratch.inverse);
-        match (planar, data.planar.as_deref_mut()) {
+        match (planar, self.scratch.planar.as_deref_mut()) {
             (Some(planar), Some(planar_data)) => {
                 planar::algorithms::kinematics(planar, planar_data, q, v);
                 planar_data.set_external(planar, &efforts.external);
@@ -248,8 +252,8 @@ impl<'m> MechanicalSystem<'m> {
             }
             false => &self.scratch.no_efforts,
         };
-        let planar_data = self.scratch.data.planar.as_deref_mut();
-        let planar_data = planar_data.expect("a planar model's scratch has the planar one");
+        let planar_data = self.scratch.planar.as_deref_mut();
+        let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
         planar::algorithms::kinematics(planar, planar_data, q, v);
         planar_data.set_external(planar, &efforts.external);
         let tau = efforts.tau.as_slice();

@@ -218,7 +218,7 @@ fn planarity(
         .map_err(|d| joined_messages(&d))?;
     let dynamics = crate::dynamics::model::build(mechanism, &kinematics)
         .map_err(|d| joined_messages(&d))?;
-    dynamics.planar.map(|_| ())
+    crate::dynamics::planar::decide(&dynamics).map(|_| ())
 }
 
 fn joined_messages(diagnostics: &[Diagnostic]) -> String {

@@ -69,7 +69,8 @@ impl ReducedInertia {
     /// length) and `data` holding the forward kinematics and inverse dynamics' pass out at a₀
     /// (`rnea_forward`). By passes when `kept` (the motions every evaluation solves on, which
     /// decide the method, so that it is the same at every evaluation) is small enough. In
-    /// planar form with `planar`, from the planar kinematics and pass out in `data.planar`.
+    /// planar form with `planar`: the planar model and its scratch, holding the planar
+    /// kinematics and pass out.
     #[allow(clippy::too_many_arguments)]
     pub fn reduced_into(
         &mut self,
@@ -79,14 +80,14 @@ impl ReducedInertia {
         (count, kept): (usize, usize),
         tau: &DVector<f64>,
         reduced: Reduced<'_>,
-        planar: Option<&PlanarModel>,
+        planar: Option<(&PlanarModel, &mut PlanarData)>,
     ) {
         let by_passes = kept <= self.passes_up_to;
-        match (planar, data.planar.as_deref_mut()) {
-            (Some(planar), Some(planar_data)) if by_passes => {
+        match planar {
+            Some((planar, planar_data)) if by_passes => {
                 self.planar_by_passes(model, planar, planar_data, null, count, tau, reduced)
             }
-            (Some(planar), Some(planar_data)) => {
+            Some((planar, planar_data)) => {
                 planar::rnea_backward(planar, planar_data, &mut self.inverse);
                 planar::crba(model, planar, planar_data, &mut self.mass);
                 self.reduce_mass_matrix(model, null, count, tau, reduced);

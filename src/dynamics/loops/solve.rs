@@ -22,7 +22,7 @@ use super::structure::Structure;
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::dense::dense_cholesky;
 use crate::dynamics::model::Model;
-use crate::dynamics::planar::PlanarModel;
+use crate::dynamics::planar::{PlanarData, PlanarModel};
 
 /// How the constraints are kept: by projecting the state after each step (exact), by Baumgarte's
 /// feedback in the accelerations (with this rate, in 1/s, critically damped), by the integrator's
@@ -244,12 +244,12 @@ pub fn allowed_motions(
 /// (NᵀMN) z = Nᵀ(f − Ma₀), formed on the tree (`ReducedInertia`) from `tau`, the efforts'
 /// generalised forces over the state's velocities, with `data` holding the forward kinematics
 /// and inverse dynamics' pass out at a₀ (`rnea_forward`), or with `planar` their planar form
-/// in `data.planar`. The accelerations are left in `scratch`.
+/// in its scratch. The accelerations are left in `scratch`.
 pub fn solve_reduced(
     model: &Model,
     data: &mut Data,
     tau: &DVector<f64>,
-    (structure, planar): (&Structure, Option<&PlanarModel>),
+    (structure, planar): (&Structure, Option<(&PlanarModel, &mut PlanarData)>),
     scratch: &mut LoopScratch,
 ) -> Result<(), LoopError> {
     let LoopScratch {

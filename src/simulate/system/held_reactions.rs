@@ -35,7 +35,7 @@ impl MechanicalSystem<'_> {
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         // The reactions read the spatial kinematics and inverse dynamics of the stack's solve.
-        let planar = std::mem::replace(&mut self.scratch.planar, false);
+        let planar = self.scratch.planar.take();
         let forces = self.stack_reactions(t, q, v);
         self.scratch.planar = planar;
         let StackForces {

@@ -180,8 +180,8 @@ impl MechanicalSystem<'_> {
         let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
         self.scratch.friction_power = self.add_friction(v, &mut tau);
         self.scratch.efforts.tau = tau;
-        let planar_data = self.scratch.data.planar.as_deref_mut();
-        let planar_data = planar_data.expect("a planar model's scratch has the planar one");
+        let planar_data = self.scratch.planar.as_deref_mut();
+        let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
         planar_algorithms::kinematics(planar, planar_data, q, v);
         planar_data.set_external(planar, &self.scratch.efforts.external);
         let scratch = &mut self.scratch.loop_scratch;
@@ -195,7 +195,7 @@ impl MechanicalSystem<'_> {
         let particular = &scratch.particular()[..model.nv];
         planar_algorithms::rnea_forward(planar, planar_data, particular);
         let tau = &self.scratch.efforts.tau;
-        let solve = (structure, Some(planar));
+        let solve = (structure, Some((planar, planar_data)));
         let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, solve, scratch);
         solved.map_err(|e| self.loop_error(&e))
     }

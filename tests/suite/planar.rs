@@ -1,0 +1,234 @@
+//! The planar form of planar mechanisms (`dynamics::planar`): the right-hand side in planar
+//! vectors and planar loop rows gives the spatial form's results to round-off (the spatial
+//! form, `simulate --spatial`, is the independent algorithm it is checked against), on loops,
+//! trees with prismatic joints, efforts in the plane and planes normal to each fixed axis;
+//! mechanisms that are not planar keep the spatial form, with the reason.
+
+use lsdc::prepare::{Integrator, Prepared};
+use lsdc::simulate::run::run;
+use lsdc::simulate::system::MechanicalSystem;
+
+use crate::common::programs::{prepared, prepared_text};
+
+/// Relative agreement asked of the two forms.
+const AGREEMENT: f64 = 1e-12;
+
+/// The step of the motion along which the two forms are compared: short enough that forward
+/// Euler's steps stay bounded over 0.2 s on every case (the values, not only their
+/// differences, would grow otherwise).
+const STEP: f64 = 2e-3;
+
+/// A planar tree: a cart on a track, an arm on the cart (its joint frame off the plane, along
+/// the normal), a slider along the arm and a hand on the slider whose principal axes are tilted
+/// out of the plane (products of inertia with the normal, which only the joints' reactions
+/// feel); efforts in the plane that read the state: a force in the fixed basis, a damping
+/// torque along the normal, a force written in the arm's basis.
+const PRISMATIC_TREE: &str = "import joints ;
+let cart = body mass = 2, iframe = 0, inertia = [0.1, 0.2, 0.3] end ;
+let arm = body mass = 1, iframe = [0.5, 0, 0] ++ 1, inertia = [0.01, 0.08, 0.08] end ;
+let slider = body mass = 0.3, iframe = [0, 0.1, 0] ++ 1, inertia = [0.001, 0.002, 0.003] end ;
+let hand = body mass = 0.5, iframe = [0.2, 0, 0.05] ++ (0.3 || [1, 0, 0]), inertia = [0.01, 0.02, 0.03] end ;
+join earth and cart with prismatic([1, 0, 0]) as track ;
+join [0, 0, 0.2] ++ 1 @ cart and arm with revolute([0, 0, 1]) as shoulder ;
+join arm and slider with prismatic([1, 0, 0]) as slide ;
+join [0.3, 0, 0] ++ (0.4 || [0, 0, 1]) @ slider and hand with revolute([0, 0, -1]) as wrist ;
+apply force value = [0, -9.81 * cart.mass, 0], body = earth end on cart.iframe ;
+apply force value = [0, -9.81 * arm.mass, 0], body = earth end on arm.iframe ;
+apply force value = [0, -9.81 * slider.mass, 0], body = earth end on slider.iframe ;
+apply force value = [0, -9.81 * hand.mass, 0], body = earth end on hand.iframe ;
+apply force value = [-3 * track.q - 0.5 * track.q', 2 * sin(shoulder.q), 0], body = earth end on arm.iframe ;
+apply torque value = [0, 0, -0.4 * wrist.q'], body = hand end on hand ;
+apply force value = [-20 * slide.q, 0, 0], body = arm end on slider.iframe ;
+initial track.q = 0.1, shoulder.q = 0.7, slide.q = 0.2, wrist.q = -0.5, shoulder.q' = 2, slide.q' = -1, wrist.q' = 3 ;
+";
+
+/// The spatial twin of a prepared program: the same program, its planar form refused.
+fn spatial(mut prepared: Prepared) -> Prepared {
+    prepared.keep_spatial();
+    prepared
+}
+
+/// A system evaluating in the form its model has, its loops closed at the initial state.
+fn started(prepared: &Prepared) -> (MechanicalSystem<'_>, Vec<f64>) {
+    let model = &prepared.model;
+    let (mut y, v) =
+        (model.state_from_declared(&prepared.coordinates, &prepared.rates)).expect("initial state");
+    y.extend_from_slice(&v);
+    let reference = prepared.coordinates.clone();
+    let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
+    system.use_planar(prepared.planar_form());
+    system.start_loops(&mut y).expect("starts");
+    (system, y)
+}
+
+/// The largest difference of the two forms' right-hand sides over states along a motion (forward
+/// Euler steps of 2 ms of the spatial form, kept on the loops), relative to the largest rate.
+fn largest_difference(planar: &Prepared, spatial: &Prepared, steps: usize) -> f64 {
+    let (mut planar_system, _) = started(planar);
+    let (mut spatial_system, mut y) = started(spatial);
+    assert!(planar_system.uses_planar(), "the planar form is taken");
+    assert!(!spatial_system.uses_planar());
+    let (mut planar_rates, mut spatial_rates) = (vec![0.0; y.len()], vec![0.0; y.len()]);
+    let mut largest = 0.0f64;
+    for step in 0..steps {
+        let t = STEP * step as f64;
+        planar_system
+            .derivative(t, &y, &mut planar_rates)
+            .expect("planar");
+        spatial_system
+            .derivative(t, &y, &mut spatial_rates)
+            .expect("spatial");
+        let scale = spatial_rates.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let difference = (planar_rates.iter().zip(&spatial_rates))
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        largest = largest.max(difference / scale);
+        y.iter_mut()
+            .zip(&spatial_rates)
+            .for_each(|(y, rate)| *y += STEP * rate);
+        spatial_system.keep_closed(t, &mut y).expect("closes");
+    }
+    largest
+}
+
+fn assert_forms_agree(name: &str, planar: Prepared, spatial: Prepared) {
+    assert!(planar.planar_form().is_some(), "{name}: planar");
+    let difference = largest_difference(&planar, &spatial, 100);
+    assert!(
+        difference <= AGREEMENT,
+        "{name}: the planar and spatial right-hand sides differ by {difference:e}"
+    );
+}
+
+#[test]
+fn planar_and_spatial_right_hand_sides_agree_on_loops() {
+    let loops = [
+        "four_bar",
+        "slider_crank",
+        "hard/four_bar_row_10",
+        "hard/watt_six_bar",
+    ];
+    // Joint friction, a mimic coupling and stops: rows of the stack beyond the loops.
+    let stacked = ["four_bar_friction", "four_bar_mimic", "limited_four_bar"];
+    for name in loops.into_iter().chain(stacked) {
+        let planar = prepared(name, &[]);
+        assert_forms_agree(name, planar, spatial(prepared(name, &[])));
+    }
+}
+
+#[test]
+fn planar_and_spatial_right_hand_sides_agree_on_trees() {
+    // The double pendulum turns about x (its plane is normal to the fixed x axis).
+    for name in ["double_pendulum", "pendulum"] {
+        let planar = prepared(name, &[]);
+        assert_forms_agree(name, planar, spatial(prepared(name, &[])));
+    }
+    let planar = prepared_text(PRISMATIC_TREE);
+    assert_forms_agree(
+        "prismatic tree",
+        planar,
+        spatial(prepared_text(PRISMATIC_TREE)),
+    );
+}
+
+#[test]
+fn planar_and_spatial_right_hand_sides_agree_with_efforts_in_the_plane() {
+    // A four-bar in the plane normal to y, a spring torque on its crank and a force on its
+    // coupler, with joint friction (the slipping joints' forces act with the efforts).
+    let replacements = [
+        (
+            "revolute([0, 0, 1]) as crank",
+            "revolute([0, -1, 0]) as crank",
+        ),
+        (
+            "revolute([0, 0, 1]) as coupler",
+            "revolute([0, 1, 0]) as coupler",
+        ),
+        ("revolute([0, 0, 1]) as c ;", "revolute([0, 1, 0]) as c ;"),
+        (
+            "revolute([0, 0, 1]) as rocker",
+            "revolute([0, 1, 0]) as rocker",
+        ),
+        (
+            "let down = [0, -9.81, 0] ;",
+            "let down = [0, 0, -9.81] ;
+apply torque value = [0, -2 * crank.q - 0.3 * crank.q', 0], body = earth end on bar1 ;
+apply force value = [1.5 * cos(rocker.q), 0, 0.5], body = bar2 end on coupler_point ;",
+        ),
+    ];
+    let planar = prepared("four_bar", &replacements);
+    let twin = spatial(prepared("four_bar", &replacements));
+    assert_forms_agree("four_bar in the plane normal to y", planar, twin);
+}
+
+#[test]
+fn planar_and_spatial_runs_agree() {
+    // Whole runs: the same steps, the same outputs to round-off (RK4's fixed steps).
+    for name in ["four_bar", "slider_crank", "hard/four_bar_row_2"] {
+        let with_rk4 = |mut prepared: Prepared| {
+            let settings = &mut prepared.settings;
+            (settings.integrator, settings.step) = (Integrator::Rk4, Some(1e-3));
+            (settings.duration, settings.output) = (0.5, 0.01);
+            prepared
+        };
+        let planar = with_rk4(prepared(name, &[]));
+        let twin = with_rk4(spatial(prepared(name, &[])));
+        let (planar_run, spatial_run) = (run(&planar, &mut |_| {}), run(&twin, &mut |_| {}));
+        assert!(planar_run.report.planar && !spatial_run.report.planar);
+        assert_eq!(planar_run.report.steps, spatial_run.report.steps, "{name}");
+        let scale = (spatial_run.samples.iter().flat_map(|s| &s.coordinates))
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        let difference = (planar_run.samples.iter().zip(&spatial_run.samples))
+            .flat_map(|(p, s)| p.coordinates.iter().zip(&s.coordinates))
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(
+            difference <= AGREEMENT * scale,
+            "{name}: runs differ by {difference:e} (scale {scale})"
+        );
+    }
+}
+
+/// Why the model of a program keeps the spatial form.
+fn refusal(prepared: &Prepared) -> String {
+    prepared.planar.clone().err().expect("not planar")
+}
+
+#[test]
+fn mechanisms_that_are_not_planar_keep_the_spatial_form() {
+    // A spatial loop.
+    let bennett = prepared("hard/bennett", &[]);
+    assert!(
+        refusal(&bennett).contains("out of the plane"),
+        "{}",
+        refusal(&bennett)
+    );
+    // An effort with a component along the normal.
+    let pushed = prepared(
+        "four_bar",
+        &[(
+            "let down = [0, -9.81, 0] ;",
+            "let down = [0, -9.81, 0] ;\napply force value = [0, 0, 0.1 * crank.q], body = earth end on bar2 ;",
+        )],
+    );
+    assert!(
+        refusal(&pushed).contains("not written in the plane"),
+        "{}",
+        refusal(&pushed)
+    );
+    // A tilted axis.
+    let tilted = prepared_text(&PRISMATIC_TREE.replace(
+        "revolute([0, 0, -1]) as wrist",
+        "revolute([0, 0.01, -1]) as wrist",
+    ));
+    assert!(refusal(&tilted).contains("`wrist`"), "{}", refusal(&tilted));
+    // A gravity field out of the plane.
+    let tipped = prepared(
+        "four_bar",
+        &[("let down = [0, -9.81, 0] ;", "let down = [0, -9.81, 0.1] ;")],
+    );
+    assert!(refusal(&tipped).contains("gravity"), "{}", refusal(&tipped));
+    // Each runs in the spatial form and says so.
+    for prepared in [bennett, pushed] {
+        let (system, _) = started(&prepared);
+        assert!(!system.uses_planar());
+    }
+}
