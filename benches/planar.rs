@@ -8,7 +8,10 @@
 //! median batch. The ratios are the result.
 
 mod common;
+#[path = "common/loop_costs.rs"]
+mod loop_costs;
 use common::cpu_time_per_call;
+use loop_costs::{loop_system, median};
 use std::hint::black_box;
 
 use lsdc::driver::compile_files;
@@ -44,23 +47,11 @@ fn prepared(name: &str, spatial: bool) -> Prepared {
 }
 
 /// The run's system at the initial state (its loops closed), evaluating in planar form where
-/// the model has one, and that state.
+/// the program has one, and that state.
 fn system(prepared: &Prepared) -> (MechanicalSystem<'_>, Vec<f64>) {
-    let model = &prepared.model;
-    let (mut y, v) = model
-        .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .expect("initial state");
-    y.extend_from_slice(&v);
-    let reference = prepared.coordinates.clone();
-    let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
+    let (mut system, y) = loop_system(prepared);
     system.use_planar(prepared.planar_form());
-    system.start_loops(&mut y).expect("loops close");
     (system, y)
-}
-
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 fn main() {

@@ -33,6 +33,7 @@ use crate::dynamics::driven_points;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
+use crate::dynamics::planar::algebra::PlanarForce;
 use crate::dynamics::planar::{self, PlanarData, PlanarModel};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
@@ -245,7 +246,8 @@ impl<'m> MechanicalSystem<'m> {
         (q, v): (&[f64], &[f64]),
         accelerations: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
-        let efforts = match self.reads_efforts() {
+        let reads_efforts = self.reads_efforts();
+        let efforts = match reads_efforts {
             true => {
                 self.evaluate_efforts(t, q, v)?;
                 &self.scratch.efforts
@@ -255,7 +257,10 @@ impl<'m> MechanicalSystem<'m> {
         let planar_data = self.scratch.planar.as_deref_mut();
         let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
         planar::algorithms::kinematics(planar, planar_data, q, v);
-        planar_data.set_external(planar, &efforts.external);
+        match reads_efforts {
+            true => planar_data.set_external(planar, &efforts.external),
+            false => planar_data.external.fill(PlanarForce::zeros()),
+        }
         let tau = efforts.tau.as_slice();
         let solved = planar::algorithms::aba(planar, planar_data, tau, accelerations);
         solved.map_err(|e| self.dynamics_error(&e))

@@ -117,8 +117,16 @@ fn planar_and_spatial_right_hand_sides_agree_on_loops() {
 
 #[test]
 fn planar_and_spatial_right_hand_sides_agree_on_trees() {
-    // The double pendulum turns about x (its plane is normal to the fixed x axis).
-    for name in ["double_pendulum", "pendulum"] {
+    // The double pendulum turns about x (its plane is normal to the fixed x axis); the meshed
+    // gears' mimic coupling takes the tree through its mass matrix, the elliptic pendulum
+    // hangs from a slider, the limited pendulum has stops.
+    let trees = [
+        "double_pendulum",
+        "pendulum",
+        "meshed_gears",
+        "elliptic_pendulum",
+    ];
+    for name in trees.into_iter().chain(["limited_pendulum"]) {
         let planar = prepared(name, &[]);
         assert_forms_agree(name, planar, spatial(prepared(name, &[])));
     }

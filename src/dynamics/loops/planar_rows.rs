@@ -2,8 +2,9 @@
 //! only the rotation about the normal and the two translations in the plane can be non-zero;
 //! they are computed here from the planar kinematics, three per loop, and written in the
 //! fixed axes where the loops' block reads them (ω n, v₁ e₁ + v₂ e₂: for a plane normal to a
-//! fixed axis, three entries of the six, the others zero). The equations of motion read G and
-//! γ (`Extent::Motion`), which is all this computes.
+//! fixed axis, three entries of the six; the others, out of the plane, are never among the
+//! kept rows, and are left as they are). The equations of motion read G and γ
+//! (`Extent::Motion`), which is all this computes.
 
 use nalgebra::Vector2;
 
@@ -60,16 +61,10 @@ pub fn planar_constraints_into(
         let block = &mut c.jacobian.blocks[k];
         for &(local, column, sign) in &c.path_signs[k] {
             let moved = shifted(&point, &data.world_columns[column]) * sign;
-            block
-                .values
-                .column_mut(local)
-                .copy_from(&planar.spatial_motion(&moved));
+            planar.write_spatial(&moved, &mut block.values.column_mut(local));
         }
         let local = block.local(model.nv + own);
-        block
-            .values
-            .column_mut(local)
-            .copy_from(&planar.spatial_motion(&-unit));
+        planar.write_spatial(&-unit, &mut block.values.column_mut(local));
         // γ: the difference of the two frames' accelerations at the loop point at zero joint
         // accelerations; the chain's velocity about the origin is its motion about the point
         // moved back there.
@@ -78,9 +73,8 @@ pub fn planar_constraints_into(
         let end_acceleration = world(data, &data.acceleration, closing.first_body)
             + cross_motion(&first_velocity, &chain_velocity);
         let difference = world(data, &data.acceleration, closing.second_body) - end_acceleration;
-        c.bias
-            .fixed_rows_mut::<6>(6 * k)
-            .copy_from(&planar.spatial_motion(&shifted(&point, &difference)));
+        let gamma = shifted(&point, &difference);
+        planar.write_spatial(&gamma, &mut c.bias.fixed_rows_mut::<6>(6 * k));
     }
     c.velocity.fill(0.0);
 }

@@ -30,6 +30,7 @@ const ROUND_OFF: f64 = 1e-12;
 /// The model's planar form, or why it keeps the spatial form.
 pub fn decide(model: &Model) -> Result<PlanarModel, String> {
     refuse_elements(model)?;
+    refuse_joint_kinds(model)?;
     let mut data = Data::new(model);
     let zeros = vec![0.0; model.nq.max(model.nv)];
     forward_kinematics(model, &mut data, &zeros[..model.nq], &zeros[..model.nv])
@@ -54,7 +55,7 @@ pub fn decide(model: &Model) -> Result<PlanarModel, String> {
         .map(|k| planar_loop(model, &to_planar, k))
         .collect::<Result<Vec<_>, _>>()?;
     let gravity = basis.transpose() * model.gravity;
-    if gravity.z.abs() > ROUND_OFF * model.gravity.norm() {
+    if !(gravity.z.abs() <= ROUND_OFF * model.gravity.norm()) {
         return Err("its gravity field is not in the plane".to_string());
     }
     refuse_efforts_out_of_plane(model, &to_planar)?;
@@ -75,6 +76,7 @@ pub fn decide(model: &Model) -> Result<PlanarModel, String> {
         })
         .unzip();
     Ok(PlanarModel {
+        rows: axis_rows(&basis),
         basis,
         joints,
         to_planar,
@@ -102,6 +104,20 @@ fn refuse_elements(model: &Model) -> Result<(), String> {
     }
 }
 
+/// The joints that are not one rotation or translation (or a weld, in the tree).
+fn refuse_joint_kinds(model: &Model) -> Result<(), String> {
+    let tree = model.dynamic_joints.iter().map(|&k| &model.joints[k]);
+    let kinds = tree.map(|joint| {
+        let single = joint.kind == JointType::Chain && joint.kernel != Kernel::General;
+        (single, &joint.chain.name)
+    });
+    let closing = (model.loops.iter()).map(|chain| (chain.single_motion().is_some(), &chain.name));
+    match kinds.chain(closing).find(|(single, _)| !single) {
+        Some((_, name)) => Err(format!("`{name}` is not one rotation or translation")),
+        None => Ok(()),
+    }
+}
+
 /// The plane's normal: the axis of the first revolute joint (tree or loop) in the fixed axes,
 /// its largest component made positive.
 fn normal(model: &Model, data: &Data) -> Option<Vector3<f64>> {
@@ -120,7 +136,8 @@ fn normal(model: &Model, data: &Data) -> Option<Vector3<f64>> {
             _ => None,
         })
     };
-    let axis = tree.or_else(closing)?.normalize();
+    let axis = tree.or_else(closing)?;
+    let axis = axis.try_normalize(0.0).filter(|a| a.iter().all(|x| x.is_finite()))?;
     let largest = axis.iamax();
     Some(axis * axis[largest].signum())
 }
@@ -140,6 +157,19 @@ fn plane_basis(normal: &Vector3<f64>) -> Matrix3<f64> {
     let e1 = (axis - normal * normal.dot(&axis)).normalize();
     let e2 = normal.cross(&e1);
     Matrix3::from_columns(&[e1, e2, *normal])
+}
+
+/// The spatial rows of a planar motion's three components (`PlanarModel::rows`), when the
+/// basis's columns are fixed axes or their opposites.
+fn axis_rows(basis: &Matrix3<f64>) -> Option<[(usize, f64); 3]> {
+    let axis = |column: usize| {
+        let c = basis.column(column);
+        (0..3)
+            .find(|&k| c[k].abs() == 1.0 && (0..3).all(|m| m == k || c[m] == 0.0))
+            .map(|k| (k, c[k]))
+    };
+    let ((n, n_sign), (e1, e1_sign), (e2, e2_sign)) = (axis(2)?, axis(0)?, axis(1)?);
+    Some([(n, n_sign), (3 + e1, e1_sign), (3 + e2, e2_sign)])
 }
 
 /// Tree joint `k` in the plane, from its spatial kernel at q = 0: every body's planar frame
@@ -162,7 +192,11 @@ fn planar_joint(model: &Model, to_planar: &[Matrix3<f64>], k: usize) -> Result<P
             let angular = to_planar[child] * column.fixed_rows::<3>(0);
             let linear = to_planar[child] * column.fixed_rows::<3>(3);
             let size = column.norm();
-            if angular.xy().norm() > ROUND_OFF * size || linear.z.abs() > ROUND_OFF * size {
+            // Written so that a value that is not a number refuses.
+            let in_plane = angular.xy().norm() <= ROUND_OFF * size
+                && linear.z.abs() <= ROUND_OFF * size
+                && size > 0.0;
+            if !in_plane {
                 return Err(refused("moves out of the plane of the others"));
             }
             let column = PlanarMotion::new(angular.z, linear.x, linear.y);
@@ -206,7 +240,7 @@ fn planar_loop(model: &Model, to_planar: &[Matrix3<f64>], k: usize) -> Result<Pl
     let kind = match chain.single_motion() {
         Some(SingleMotion::Rotation { axis, scale }) => {
             let axis = to_first * axis;
-            if axis.xy().norm() > ROUND_OFF * axis.norm() {
+            if !(axis.xy().norm() <= ROUND_OFF * axis.norm() && axis.z != 0.0) {
                 return Err(refused("turns about an axis out of the plane's normal"));
             }
             PlanarLoopKind::Revolute {
@@ -215,7 +249,7 @@ fn planar_loop(model: &Model, to_planar: &[Matrix3<f64>], k: usize) -> Result<Pl
         }
         Some(SingleMotion::Translation { direction }) => {
             let direction = to_first * direction;
-            if direction.z.abs() > ROUND_OFF * direction.norm() {
+            if !(direction.z.abs() <= ROUND_OFF * direction.norm()) {
                 return Err(refused("slides out of the plane"));
             }
             PlanarLoopKind::Prismatic {

@@ -102,6 +102,10 @@ pub struct PlanarLoop {
 pub struct PlanarModel {
     /// The plane's basis in the fixed axes: columns e₁, e₂ and the normal n.
     pub basis: Matrix3<f64>,
+    /// When each of n, e₁ and e₂ is a fixed axis or its opposite, the rows of a spatial motion
+    /// (`spatial_motion`) that its three planar components give, with their signs: ω n is
+    /// row k of the angular part, v₁ e₁ and v₂ e₂ rows 3 + k of the linear one.
+    pub rows: Option<[(usize, f64); 3]>,
     /// The dynamic joints (the model's `dynamic_joints`, in their order).
     pub joints: Vec<PlanarJoint>,
     /// Per body number (0 is earth), the rotation from its frame's axes to its planar frame's:
@@ -130,6 +134,29 @@ impl PlanarModel {
         let moment = r.row(2).transpose().dot(&f.fixed_rows::<3>(0));
         let force = r.fixed_rows::<2>(0) * f.fixed_rows::<3>(3);
         PlanarForce::new(moment, force.x, force.y)
+    }
+
+    /// Writes the planar motion `m` of the fixed plane into `column` as a spatial motion in the
+    /// fixed axes, ω n and v₁ e₁ + v₂ e₂: where the basis is made of fixed axes, its three
+    /// rows alone (the others are left as they are: zero wherever the motion is planar).
+    #[inline]
+    pub fn write_spatial<S>(&self, m: &PlanarMotion, column: &mut S)
+    where
+        S: std::ops::IndexMut<usize, Output = f64>,
+    {
+        match &self.rows {
+            Some(rows) => {
+                for (&(row, sign), value) in rows.iter().zip(m.iter()) {
+                    column[row] = sign * value;
+                }
+            }
+            None => {
+                let spatial = self.spatial_motion(m);
+                for (row, value) in spatial.iter().enumerate() {
+                    column[row] = *value;
+                }
+            }
+        }
     }
 
     /// A planar motion of the fixed plane as a spatial motion in the fixed axes: ω n and

@@ -4,7 +4,8 @@
 //! its first block gives the others. The blocks, in their order:
 //!
 //! 1. the closed loops' kept rows, solved by their sparse factorisation (`dynamics::loops`:
-//!    [`MechanicalSystem::solve_loop_block`]), the block's specialised solve: the
+//!    [`MechanicalSystem::solve_loop_block`], in planar form for a planar mechanism's
+//!    integrator), the block's specialised solve: the
 //!    accelerations under the efforts, the allowed motions N that give X = N (NᵀMN)⁻¹Nᵀ and,
 //!    for the reactions, the loops' multipliers from M a − f ([`MechanicalSystem::
 //!    loop_block_multipliers`]). A tree has no such block: its X is M⁻¹, or the mimic
@@ -28,6 +29,7 @@ use crate::dynamics::algorithms::{
 use crate::dynamics::loops::planar_rows::planar_constraints_into;
 use crate::dynamics::loops::{self, Extent, Factored, Stabilisation};
 use crate::dynamics::planar::algorithms as planar_algorithms;
+use crate::dynamics::planar::algebra::PlanarForce;
 use crate::dynamics::planar::PlanarModel;
 use crate::spatial::Force;
 
@@ -119,16 +121,12 @@ impl MechanicalSystem<'_> {
         }
         // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
         // recursions start from.
-        self.evaluate_efforts(t, q, v)?;
-        // The slipping joints' friction acts with the efforts.
-        let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
-        self.scratch.friction_power = self.add_friction(v, &mut tau);
-        self.scratch.efforts.tau = tau;
+        self.efforts_with_friction(t, (q, v), true)?;
         let scratch = &mut self.scratch.loop_scratch;
         // Only Baumgarte's feedback reads the position rows.
-        let extent = match self.scratch.loops.stabilisation {
-            Stabilisation::Baumgarte(_) => Extent::WithBias,
-            _ => Extent::Motion,
+        let extent = match baumgarte {
+            true => Extent::WithBias,
+            false => Extent::Motion,
         };
         loops::constraints_into(
             model,
@@ -169,21 +167,15 @@ impl MechanicalSystem<'_> {
         v: &[f64],
     ) -> Result<(), SystemError> {
         let model = self.model;
-        if self.reads_efforts() {
-            self.evaluate_efforts(t, q, v)?;
-        } else {
-            let efforts = &mut self.scratch.efforts;
-            efforts.tau.fill(0.0);
-            efforts.external.fill(Force::zeros());
-            efforts.power = 0.0;
-        }
-        let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
-        self.scratch.friction_power = self.add_friction(v, &mut tau);
-        self.scratch.efforts.tau = tau;
+        let reads_efforts = self.reads_efforts();
+        self.efforts_with_friction(t, (q, v), reads_efforts)?;
         let planar_data = self.scratch.planar.as_deref_mut();
         let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
         planar_algorithms::kinematics(planar, planar_data, q, v);
-        planar_data.set_external(planar, &self.scratch.efforts.external);
+        match reads_efforts {
+            true => planar_data.set_external(planar, &self.scratch.efforts.external),
+            false => planar_data.external.fill(PlanarForce::zeros()),
+        }
         let scratch = &mut self.scratch.loop_scratch;
         let state = (q, v);
         planar_constraints_into(model, planar, planar_data, state, &mut scratch.constraints);
@@ -198,6 +190,30 @@ impl MechanicalSystem<'_> {
         let solve = (structure, Some((planar, planar_data)));
         let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, solve, scratch);
         solved.map_err(|e| self.loop_error(&e))
+    }
+
+    /// The efforts at (t, q, v) into `efforts`, the slipping joints' friction added to their
+    /// generalised forces: evaluated when `evaluate` (leaving the forward kinematics of (q, v)
+    /// in `data`), zero otherwise (a planar block whose model applies none needs no spatial
+    /// kinematics).
+    fn efforts_with_friction(
+        &mut self,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        evaluate: bool,
+    ) -> Result<(), SystemError> {
+        if evaluate {
+            self.evaluate_efforts(t, q, v)?;
+        } else {
+            let efforts = &mut self.scratch.efforts;
+            efforts.tau.fill(0.0);
+            efforts.external.fill(Force::zeros());
+            efforts.power = 0.0;
+        }
+        let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
+        self.scratch.friction_power = self.add_friction(v, &mut tau);
+        self.scratch.efforts.tau = tau;
+        Ok(())
     }
 
     /// The loops' block's multipliers at the accelerations `a` of the whole stack (every row
