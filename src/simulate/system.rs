@@ -216,7 +216,7 @@ impl<'m> MechanicalSystem<'m> {
         let (data, bias) = (&mut self.scratch.data, &mut self.scratch.inverse);
         match (planar, self.scratch.planar.as_deref_mut()) {
             (Some(planar), Some(planar_data)) => {
-                planar::algorithms::kinematics(planar, planar_data, q, v);
+                planar::algorithms::kinematics(planar, planar_data, (q, v), false);
                 planar_data.set_external(planar, &efforts.external);
                 planar::algorithms::rnea_forward(planar, planar_data, &self.scratch.at_rest);
                 planar::algorithms::rnea_backward(planar, planar_data, bias);
@@ -256,7 +256,7 @@ impl<'m> MechanicalSystem<'m> {
         };
         let planar_data = self.scratch.planar.as_deref_mut();
         let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
-        planar::algorithms::kinematics(planar, planar_data, q, v);
+        planar::algorithms::kinematics(planar, planar_data, (q, v), false);
         match reads_efforts {
             true => planar_data.set_external(planar, &efforts.external),
             false => planar_data.external.fill(PlanarForce::zeros()),

@@ -166,6 +166,21 @@ apply force value = [1.5 * cos(rocker.q), 0, 0.5], body = bar2 end on coupler_po
     let planar = prepared("four_bar", &replacements);
     let twin = spatial(prepared("four_bar", &replacements));
     assert_forms_agree("four_bar in the plane normal to y", planar, twin);
+    // A plane normal to none of the fixed axes: its rows mix the fixed axes' six.
+    let tilted = [
+        ("revolute([0, 0, 1])", "revolute([0, 0.6, 0.8])"),
+        (
+            "let down = [0, -9.81, 0] ;",
+            "let down = [0, -9.81 * 0.8, 9.81 * 0.6] ;",
+        ),
+    ];
+    let planar = prepared("four_bar", &tilted);
+    assert!(planar.planar_form().is_some_and(|p| p.rows.is_none()));
+    assert_forms_agree(
+        "tilted four_bar",
+        planar,
+        spatial(prepared("four_bar", &tilted)),
+    );
 }
 
 #[test]

@@ -35,9 +35,8 @@ pub struct ReducedInertia {
     mass_null: DMatrix<f64>,
     inverse: DVector<f64>,
     applied: DVector<f64>,
-    /// The passes in planar form (`planar_by_passes`).
+    /// The passes' body motions in planar form (`planar_by_passes`).
     planar_motions: Vec<PlanarMotion>,
-    planar_momenta: Vec<PlanarForce>,
 }
 
 /// The reduced equations' two sides, filled by `ReducedInertia::reduced_into`: NᵀMN in the
@@ -60,7 +59,6 @@ impl ReducedInertia {
             inverse: DVector::zeros(model.nv),
             applied: DVector::zeros(model.velocities()),
             planar_motions: Vec::new(),
-            planar_momenta: Vec::new(),
         }
     }
 
@@ -111,33 +109,29 @@ impl ReducedInertia {
         reduced: Reduced<'_>,
     ) {
         let bodies = model.body_count() + 1;
-        let (motions, momenta) = (&mut self.planar_motions, &mut self.planar_momenta);
+        let motions = &mut self.planar_motions;
         motions.resize(bodies * count, PlanarMotion::zeros());
-        momenta.resize(bodies * count, PlanarForce::zeros());
         for k in 0..count {
             let motion = null.column(k);
             let own = &mut motions[k * bodies..(k + 1) * bodies];
             planar::body_motions(planar, data, &motion.as_slice()[..model.nv], own);
+            // The power along motion k and its kinetic energy's bilinear form with the motions
+            // before it, in one pass over the bodies.
             let mut power = 0.0;
+            (0..=k).for_each(|l| reduced.mass[(k, l)] = 0.0);
             for joint in &planar.joints {
                 let i = joint.child;
-                momenta[k * bodies + i] = match planar.massless[i - 1] {
+                let momentum = match planar.massless[i - 1] {
                     true => PlanarForce::zeros(),
-                    false => planar.bodies[i - 1].times(&own[i]),
+                    false => planar.bodies[i - 1].times(&motions[k * bodies + i]),
                 };
-                power += own[i].dot(&data.force[i]);
+                power += motions[k * bodies + i].dot(&data.force[i]);
+                for l in 0..=k {
+                    reduced.mass[(k, l)] += motions[l * bodies + i].dot(&momentum);
+                }
             }
+            (0..k).for_each(|l| reduced.mass[(l, k)] = reduced.mass[(k, l)]);
             reduced.force[k] = motion.dot(tau) - power;
-        }
-        for k in 0..count {
-            for l in 0..=k {
-                let value = planar.joints.iter().fold(0.0, |sum, joint| {
-                    let i = joint.child;
-                    sum + motions[l * bodies + i].dot(&momenta[k * bodies + i])
-                });
-                reduced.mass[(k, l)] = value;
-                reduced.mass[(l, k)] = value;
-            }
         }
     }
 

@@ -11,7 +11,7 @@ use nalgebra::Vector2;
 use super::rows::Constraints;
 use crate::dynamics::model::Model;
 use crate::dynamics::planar::algebra::{cross_motion, PlanarMotion, PlanarTransform};
-use crate::dynamics::planar::algorithms::{bias_accelerations, PlanarData};
+use crate::dynamics::planar::algorithms::PlanarData;
 use crate::dynamics::planar::model::{PlanarLoopKind, PlanarModel};
 
 /// A motion of the fixed plane about its origin, taken about the point `p`: v + ω n̂ × p.
@@ -21,21 +21,14 @@ fn shifted(p: &Vector2<f64>, m: &PlanarMotion) -> PlanarMotion {
 
 /// G and γ of every loop at (q, v) into `c`, with the position and velocity rows left at zero
 /// (as `constraints_into` at `Extent::Motion`); `data` must hold the planar kinematics of
-/// (q, v) (`planar::algorithms::kinematics`).
+/// (q, v) for the rows (`planar::algorithms::kinematics` with `for_rows`).
 pub fn planar_constraints_into(
     model: &Model,
     planar: &PlanarModel,
-    data: &mut PlanarData,
+    data: &PlanarData,
     (q, v): (&[f64], &[f64]),
     c: &mut Constraints,
 ) {
-    bias_accelerations(planar, data);
-    for joint in &planar.joints {
-        if joint.nv() == 1 {
-            data.world_columns[joint.v_offset] =
-                data.world[joint.child].motion_to_parent(&joint.column);
-        }
-    }
     let world = |data: &PlanarData, motions: &[PlanarMotion], body: usize| match body {
         0 => PlanarMotion::zeros(),
         b => data.world[b].motion_to_parent(&motions[b]),

@@ -73,8 +73,16 @@ impl PlanarData {
 }
 
 /// The joints' transforms and the bodies' planar poses in the fixed plane, velocities and
-/// velocity-product accelerations at (q, v).
-pub fn kinematics(planar: &PlanarModel, data: &mut PlanarData, q: &[f64], v: &[f64]) {
+/// velocity-product accelerations vᵢ × Sᵢq̇ᵢ at (q, v). With `for_rows`, in the same pass,
+/// what the loops' rows read (`loops::planar_rows`): the bodies' accelerations at zero joint
+/// accelerations without gravity in `acceleration`, and each velocity's motion in the fixed
+/// plane's frame in `world_columns`.
+pub fn kinematics(
+    planar: &PlanarModel,
+    data: &mut PlanarData,
+    (q, v): (&[f64], &[f64]),
+    for_rows: bool,
+) {
     for joint in &planar.joints {
         let (i, parent) = (joint.child, joint.parent);
         let x = joint.transform(q.get(joint.q_offset).copied().unwrap_or(0.0));
@@ -86,17 +94,12 @@ pub fn kinematics(planar: &PlanarModel, data: &mut PlanarData, q: &[f64], v: &[f
         };
         data.velocity[i] = x.motion_to_child(&data.velocity[parent]) + own;
         data.coriolis[i] = cross_motion(&data.velocity[i], &own);
-    }
-}
-
-/// The bodies' accelerations at zero joint accelerations without gravity (the
-/// velocity-product terms alone), after `kinematics`.
-pub fn bias_accelerations(planar: &PlanarModel, data: &mut PlanarData) {
-    for joint in &planar.joints {
-        let (i, parent) = (joint.child, joint.parent);
-        data.acceleration[i] =
-            data.transforms[joint.index].motion_to_child(&data.acceleration[parent])
-                + data.coriolis[i];
+        if for_rows {
+            data.acceleration[i] = x.motion_to_child(&data.acceleration[parent]) + data.coriolis[i];
+            if joint.nv() == 1 {
+                data.world_columns[joint.v_offset] = data.world[i].motion_to_parent(&joint.column);
+            }
+        }
     }
 }
 

@@ -171,7 +171,7 @@ impl MechanicalSystem<'_> {
         self.efforts_with_friction(t, (q, v), reads_efforts)?;
         let planar_data = self.scratch.planar.as_deref_mut();
         let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
-        planar_algorithms::kinematics(planar, planar_data, q, v);
+        planar_algorithms::kinematics(planar, planar_data, (q, v), true);
         match reads_efforts {
             true => planar_data.set_external(planar, &self.scratch.efforts.external),
             false => planar_data.external.fill(PlanarForce::zeros()),
