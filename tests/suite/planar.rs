@@ -212,7 +212,7 @@ fn planar_and_spatial_runs_agree() {
 
 /// Why the model of a program keeps the spatial form.
 fn refusal(prepared: &Prepared) -> String {
-    prepared.planar.clone().err().expect("not planar")
+    prepared.planar.clone().expect_err("not planar")
 }
 
 #[test]

@@ -55,7 +55,8 @@ pub fn decide(model: &Model) -> Result<PlanarModel, String> {
         .map(|k| planar_loop(model, &to_planar, k))
         .collect::<Result<Vec<_>, _>>()?;
     let gravity = basis.transpose() * model.gravity;
-    if !(gravity.z.abs() <= ROUND_OFF * model.gravity.norm()) {
+    let in_plane = gravity.z.abs() <= ROUND_OFF * model.gravity.norm();
+    if !in_plane {
         return Err("its gravity field is not in the plane".to_string());
     }
     refuse_efforts_out_of_plane(model, &to_planar)?;
@@ -249,7 +250,8 @@ fn planar_loop(model: &Model, to_planar: &[Matrix3<f64>], k: usize) -> Result<Pl
         }
         Some(SingleMotion::Translation { direction }) => {
             let direction = to_first * direction;
-            if !(direction.z.abs() <= ROUND_OFF * direction.norm()) {
+            let in_plane = direction.z.abs() <= ROUND_OFF * direction.norm();
+            if !in_plane {
                 return Err(refused("slides out of the plane"));
             }
             PlanarLoopKind::Prismatic {
