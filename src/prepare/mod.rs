@@ -44,21 +44,26 @@ pub struct Prepared {
     pub native: Option<self::native::NativeDynamics>,
     /// The program's `output` declarations, compiled.
     pub outputs: self::outputs::Outputs,
-    /// The model's planar form, which the run's right-hand side takes, when the mechanism is
-    /// planar (`dynamics::planar::decide`); otherwise why not.
+    /// The model's planar form when the mechanism is planar (`dynamics::planar::decide`);
+    /// otherwise why not.
     pub planar: Result<Box<PlanarModel>, String>,
+    /// Whether the run's right-hand side takes the planar form (`simulate --planar`). Not by
+    /// default: through singular configurations of its loops, runs in either form differ at
+    /// round-off and the passages amplify that (docs/guarantees.md).
+    pub takes_planar: bool,
 }
 
 impl Prepared {
-    /// Keeps the spatial form of a planar mechanism's equations (`simulate --spatial`): for
-    /// comparison and debugging.
-    pub fn keep_spatial(&mut self) {
-        self.planar = Err("the spatial form was asked for".to_string());
+    /// Has the run's right-hand side take the planar form of a planar mechanism (`simulate
+    /// --planar`); why it cannot, when the mechanism is not planar (it keeps the spatial form).
+    pub fn take_planar(&mut self) -> Result<(), String> {
+        self.takes_planar = true;
+        self.planar.as_ref().map(|_| ()).map_err(Clone::clone)
     }
 
     /// The planar form, when the run takes one.
     pub fn planar_form(&self) -> Option<&PlanarModel> {
-        self.planar.as_deref().ok()
+        self.planar.as_deref().ok().filter(|_| self.takes_planar)
     }
 }
 
@@ -255,6 +260,7 @@ pub fn prepare(
     }
     Ok(Prepared {
         planar: planar::decide(&model).map(Box::new),
+        takes_planar: false,
         model,
         topology,
         kinematics,

@@ -1,13 +1,15 @@
-//! The planar form of planar mechanisms (`dynamics::planar`): the right-hand side in planar
-//! vectors and planar loop rows gives the spatial form's results to round-off (the spatial
-//! form, `simulate --spatial`, is the independent algorithm it is checked against), on loops,
-//! trees with prismatic joints, efforts in the plane and planes normal to each fixed axis;
-//! mechanisms that are not planar keep the spatial form, with the reason.
+//! The planar form of planar mechanisms (`dynamics::planar`, `simulate --planar`): the
+//! right-hand side in planar vectors and planar loop rows gives the spatial form's results to
+//! round-off (the spatial form, the default, is the independent algorithm it is checked
+//! against), on loops, trees with prismatic joints, efforts in the plane, planes normal to each
+//! fixed axis, and states next to the singular configurations of loops; mechanisms that are not
+//! planar keep the spatial form, with the reason.
 
 use lsdc::prepare::{Integrator, Prepared};
 use lsdc::simulate::run::run;
 use lsdc::simulate::system::MechanicalSystem;
 
+use crate::common::lsdc;
 use crate::common::programs::{prepared, prepared_text};
 
 /// Relative agreement asked of the two forms.
@@ -42,9 +44,9 @@ apply force value = [-20 * slide.q, 0, 0], body = arm end on slider.iframe ;
 initial track.q = 0.1, shoulder.q = 0.7, slide.q = 0.2, wrist.q = -0.5, shoulder.q' = 2, slide.q' = -1, wrist.q' = 3 ;
 ";
 
-/// The spatial twin of a prepared program: the same program, its planar form refused.
-fn spatial(mut prepared: Prepared) -> Prepared {
-    prepared.keep_spatial();
+/// The planar twin of a prepared program: the same program, its run taking the planar form.
+fn planar(mut prepared: Prepared) -> Prepared {
+    prepared.take_planar().expect("planar");
     prepared
 }
 
@@ -110,8 +112,8 @@ fn planar_and_spatial_right_hand_sides_agree_on_loops() {
     // Joint friction, a mimic coupling and stops: rows of the stack beyond the loops.
     let stacked = ["four_bar_friction", "four_bar_mimic", "limited_four_bar"];
     for name in loops.into_iter().chain(stacked) {
-        let planar = prepared(name, &[]);
-        assert_forms_agree(name, planar, spatial(prepared(name, &[])));
+        let spatial = prepared(name, &[]);
+        assert_forms_agree(name, planar(prepared(name, &[])), spatial);
     }
 }
 
@@ -127,14 +129,13 @@ fn planar_and_spatial_right_hand_sides_agree_on_trees() {
         "elliptic_pendulum",
     ];
     for name in trees.into_iter().chain(["limited_pendulum"]) {
-        let planar = prepared(name, &[]);
-        assert_forms_agree(name, planar, spatial(prepared(name, &[])));
+        let spatial = prepared(name, &[]);
+        assert_forms_agree(name, planar(prepared(name, &[])), spatial);
     }
-    let planar = prepared_text(PRISMATIC_TREE);
     assert_forms_agree(
         "prismatic tree",
-        planar,
-        spatial(prepared_text(PRISMATIC_TREE)),
+        planar(prepared_text(PRISMATIC_TREE)),
+        prepared_text(PRISMATIC_TREE),
     );
 }
 
@@ -163,9 +164,9 @@ apply torque value = [0, -2 * crank.q - 0.3 * crank.q', 0], body = earth end on 
 apply force value = [1.5 * cos(rocker.q), 0, 0.5], body = bar2 end on coupler_point ;",
         ),
     ];
-    let planar = prepared("four_bar", &replacements);
-    let twin = spatial(prepared("four_bar", &replacements));
-    assert_forms_agree("four_bar in the plane normal to y", planar, twin);
+    let in_plane = planar(prepared("four_bar", &replacements));
+    let twin = prepared("four_bar", &replacements);
+    assert_forms_agree("four_bar in the plane normal to y", in_plane, twin);
     // A plane normal to none of the fixed axes: its rows mix the fixed axes' six.
     let tilted = [
         ("revolute([0, 0, 1])", "revolute([0, 0.6, 0.8])"),
@@ -174,13 +175,9 @@ apply force value = [1.5 * cos(rocker.q), 0, 0.5], body = bar2 end on coupler_po
             "let down = [0, -9.81 * 0.8, 9.81 * 0.6] ;",
         ),
     ];
-    let planar = prepared("four_bar", &tilted);
-    assert!(planar.planar_form().is_some_and(|p| p.rows.is_none()));
-    assert_forms_agree(
-        "tilted four_bar",
-        planar,
-        spatial(prepared("four_bar", &tilted)),
-    );
+    let in_plane = planar(prepared("four_bar", &tilted));
+    assert!(in_plane.planar_form().is_some_and(|p| p.rows.is_none()));
+    assert_forms_agree("tilted four_bar", in_plane, prepared("four_bar", &tilted));
 }
 
 #[test]
@@ -193,9 +190,9 @@ fn planar_and_spatial_runs_agree() {
             (settings.duration, settings.output) = (0.5, 0.01);
             prepared
         };
-        let planar = with_rk4(prepared(name, &[]));
-        let twin = with_rk4(spatial(prepared(name, &[])));
-        let (planar_run, spatial_run) = (run(&planar, &mut |_| {}), run(&twin, &mut |_| {}));
+        let in_plane = with_rk4(planar(prepared(name, &[])));
+        let twin = with_rk4(prepared(name, &[]));
+        let (planar_run, spatial_run) = (run(&in_plane, &mut |_| {}), run(&twin, &mut |_| {}));
         assert!(planar_run.report.planar && !spatial_run.report.planar);
         assert_eq!(planar_run.report.steps, spatial_run.report.steps, "{name}");
         let scale = (spatial_run.samples.iter().flat_map(|s| &s.coordinates))
@@ -249,9 +246,110 @@ fn mechanisms_that_are_not_planar_keep_the_spatial_form() {
         &[("let down = [0, -9.81, 0] ;", "let down = [0, -9.81, 0.1] ;")],
     );
     assert!(refusal(&tipped).contains("gravity"), "{}", refusal(&tipped));
-    // Each runs in the spatial form and says so.
-    for prepared in [bennett, pushed] {
+    // Each runs in the spatial form when the planar form is asked for, and says why.
+    for mut prepared in [bennett, pushed] {
+        let why = prepared.take_planar().expect_err("not planar");
+        assert_eq!(why, refusal(&prepared));
         let (system, _) = started(&prepared);
         assert!(!system.uses_planar());
     }
+}
+
+#[test]
+fn the_spatial_form_is_the_default_and_simulate_planar_takes_the_planar_form() {
+    // Planar, and run in spatial form unless asked.
+    let four_bar = prepared("four_bar", &[]);
+    assert!(four_bar.planar.is_ok() && four_bar.planar_form().is_none());
+    let (system, _) = started(&four_bar);
+    assert!(!system.uses_planar());
+    let asked = planar(prepared("four_bar", &[]));
+    let (system, _) = started(&asked);
+    assert!(system.uses_planar());
+    let said = |args: &[&str]| {
+        // The samples on standard output, the report on standard error.
+        let (code, _, stderr) = lsdc(args);
+        assert_eq!(code, 0, "{stderr}");
+        let report: serde_json::Value = serde_json::from_str(&stderr).expect("a JSON report");
+        report["planar"].clone()
+    };
+    let base = [
+        "simulate",
+        "examples/four_bar.lsd",
+        "--report",
+        "json",
+        "--duration",
+        "0.01",
+    ];
+    assert_eq!(said(&base), serde_json::json!(false));
+    assert_eq!(
+        said(&[&base[..], &["--planar"]].concat()),
+        serde_json::json!(true)
+    );
+    // Asked of a spatial loop: the spatial form, and the warning says why.
+    let bennett = [
+        "simulate",
+        "examples/hard/bennett.lsd",
+        "--report",
+        "json",
+        "--duration",
+        "0.01",
+        "--planar",
+    ];
+    let (code, _, stderr) = lsdc(&bennett);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("W0906") && stderr.contains("out of the plane"),
+        "{stderr}"
+    );
+    // The option of the spatial form is gone with its default.
+    let (code, _, stderr) = lsdc(&[&base[..], &["--spatial"]].concat());
+    assert_ne!(code, 0, "{stderr}");
+}
+
+#[test]
+fn planar_and_spatial_right_hand_sides_agree_next_to_singular_configurations() {
+    // The states of a run of a parallelogram through its flat configurations, every
+    // millisecond over 1.5 s (RK4 at 1 ms), four flat configurations among them: the two forms'
+    // right-hand sides at those states, whose kept rows come within 3.2e-4 of dependent
+    // (conditioning), where a difference in the rows is amplified most.
+    let with_rk4 = |mut prepared: Prepared| {
+        let settings = &mut prepared.settings;
+        (settings.integrator, settings.step) = (Integrator::Rk4, Some(1e-3));
+        (settings.duration, settings.output) = (1.5, 1e-3);
+        prepared
+    };
+    let twin = with_rk4(prepared("hard/four_bar_row_1", &[]));
+    let motion = run(&twin, &mut |_| {});
+    let loops = motion.report.constraints.as_ref().expect("loops");
+    let closest = loops.closest.as_ref().expect("a closest approach").ratio;
+    assert!(
+        closest < 5e-4 && loops.singular.len() == 4,
+        "{closest}, {:?}",
+        loops.singular
+    );
+    let in_plane = planar(prepared("hard/four_bar_row_1", &[]));
+    let (mut planar_system, start) = started(&in_plane);
+    let (mut spatial_system, _) = started(&twin);
+    let (mut planar_rates, mut spatial_rates) = (vec![0.0; start.len()], vec![0.0; start.len()]);
+    let mut largest = (0.0f64, 0.0);
+    for sample in &motion.samples {
+        let (mut y, v) = (twin.model)
+            .state_from_declared(&sample.coordinates, &sample.rates)
+            .expect("state");
+        y.extend_from_slice(&v);
+        let t = sample.time;
+        planar_system
+            .derivative(t, &y, &mut planar_rates)
+            .expect("planar");
+        spatial_system
+            .derivative(t, &y, &mut spatial_rates)
+            .expect("spatial");
+        let scale = spatial_rates.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let difference = (planar_rates.iter().zip(&spatial_rates))
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        if difference / scale > largest.0 {
+            largest = (difference / scale, t);
+        }
+    }
+    assert!(largest.0 <= AGREEMENT, "{largest:?}");
 }
