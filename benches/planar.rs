@@ -1,6 +1,7 @@
 //! What the planar form saves (`dynamics::planar`): one right-hand side of planar mechanisms in
-//! planar form (3-vectors per body, 3 rows per loop) against the same in spatial form
-//! (the default; `simulate --planar` takes the planar form), at the initial state, with the largest difference of their results.
+//! planar form (3-vectors per body, 3 rows per loop; `simulate --planar`) against the same in
+//! spatial form (the default), at the initial state, with the largest difference of their
+//! results.
 //! The row of 40 four-bars is the target (at least 2× per right-hand side). Run with
 //! `cargo bench --bench planar`. Times are CPU times of the timing thread, the two forms timed
 //! in turn within each round (interleaved, so that a change of the machine's speed falls on
