@@ -63,31 +63,56 @@ fn started(prepared: &Prepared) -> (MechanicalSystem<'_>, Vec<f64>) {
     (system, y)
 }
 
+/// A planar mechanism's systems in both forms, and their rates at the last state compared.
+struct Twins<'p> {
+    planar: MechanicalSystem<'p>,
+    spatial: MechanicalSystem<'p>,
+    planar_rates: Vec<f64>,
+    spatial_rates: Vec<f64>,
+}
+
+impl<'p> Twins<'p> {
+    /// Both forms' systems started (their loops closed at the initial state), and the spatial
+    /// one's initial state.
+    fn started(planar: &'p Prepared, spatial: &'p Prepared) -> (Twins<'p>, Vec<f64>) {
+        let (planar, _) = started(planar);
+        let (spatial, y) = started(spatial);
+        assert!(planar.uses_planar(), "the planar form is taken");
+        assert!(!spatial.uses_planar());
+        let (planar_rates, spatial_rates) = (vec![0.0; y.len()], vec![0.0; y.len()]);
+        let twins = Twins {
+            planar,
+            spatial,
+            planar_rates,
+            spatial_rates,
+        };
+        (twins, y)
+    }
+
+    /// The difference of the two forms' right-hand sides at (t, y), relative to the largest
+    /// rate.
+    fn difference(&mut self, t: f64, y: &[f64]) -> f64 {
+        (self.planar.derivative(t, y, &mut self.planar_rates)).expect("planar");
+        (self.spatial.derivative(t, y, &mut self.spatial_rates)).expect("spatial");
+        let scale = (self.spatial_rates.iter()).fold(0.0f64, |m, x| m.max(x.abs()));
+        let difference = (self.planar_rates.iter().zip(&self.spatial_rates))
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        difference / scale
+    }
+}
+
 /// The largest difference of the two forms' right-hand sides over states along a motion (forward
 /// Euler steps of 2 ms of the spatial form, kept on the loops), relative to the largest rate.
 fn largest_difference(planar: &Prepared, spatial: &Prepared, steps: usize) -> f64 {
-    let (mut planar_system, _) = started(planar);
-    let (mut spatial_system, mut y) = started(spatial);
-    assert!(planar_system.uses_planar(), "the planar form is taken");
-    assert!(!spatial_system.uses_planar());
-    let (mut planar_rates, mut spatial_rates) = (vec![0.0; y.len()], vec![0.0; y.len()]);
+    let (mut twins, mut y) = Twins::started(planar, spatial);
     let mut largest = 0.0f64;
     for step in 0..steps {
         let t = STEP * step as f64;
-        planar_system
-            .derivative(t, &y, &mut planar_rates)
-            .expect("planar");
-        spatial_system
-            .derivative(t, &y, &mut spatial_rates)
-            .expect("spatial");
-        let scale = spatial_rates.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let difference = (planar_rates.iter().zip(&spatial_rates))
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        largest = largest.max(difference / scale);
+        largest = largest.max(twins.difference(t, &y));
         y.iter_mut()
-            .zip(&spatial_rates)
+            .zip(&twins.spatial_rates)
             .for_each(|(y, rate)| *y += STEP * rate);
-        spatial_system.keep_closed(t, &mut y).expect("closes");
+        twins.spatial.keep_closed(t, &mut y).expect("closes");
     }
     largest
 }
@@ -328,27 +353,16 @@ fn planar_and_spatial_right_hand_sides_agree_next_to_singular_configurations() {
         loops.singular
     );
     let in_plane = planar(prepared("hard/four_bar_row_1", &[]));
-    let (mut planar_system, start) = started(&in_plane);
-    let (mut spatial_system, _) = started(&twin);
-    let (mut planar_rates, mut spatial_rates) = (vec![0.0; start.len()], vec![0.0; start.len()]);
+    let (mut twins, _) = Twins::started(&in_plane, &twin);
     let mut largest = (0.0f64, 0.0);
     for sample in &motion.samples {
         let (mut y, v) = (twin.model)
             .state_from_declared(&sample.coordinates, &sample.rates)
             .expect("state");
         y.extend_from_slice(&v);
-        let t = sample.time;
-        planar_system
-            .derivative(t, &y, &mut planar_rates)
-            .expect("planar");
-        spatial_system
-            .derivative(t, &y, &mut spatial_rates)
-            .expect("spatial");
-        let scale = spatial_rates.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let difference = (planar_rates.iter().zip(&spatial_rates))
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        if difference / scale > largest.0 {
-            largest = (difference / scale, t);
+        let difference = twins.difference(sample.time, &y);
+        if difference > largest.0 {
+            largest = (difference, sample.time);
         }
     }
     assert!(largest.0 <= AGREEMENT, "{largest:?}");
