@@ -87,6 +87,11 @@ pub struct SimulateArgs {
     /// run goes on without it.
     #[arg(long)]
     compiled: bool,
+    /// Evaluate a planar mechanism's equations of motion in planar form (3-vectors, 3 rows per
+    /// loop): the same right-hand side to round-off, cheaper; off by default, since runs
+    /// through singular configurations of loops amplify that round-off (docs/guarantees.md).
+    #[arg(long)]
+    planar: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -138,6 +143,11 @@ pub fn run(args: &SimulateArgs) -> ExitCode {
         Ok(prepared) => prepared,
         Err(code) => return code,
     };
+    if args.planar {
+        if let Err(why) = prepared.take_planar() {
+            prepared.warnings.push(not_planar_warning(&why));
+        }
+    }
     if !args.output_frames.is_empty() {
         if let Err(error) = program.output_frames(&mut prepared, &args.output_frames) {
             return usage_error(&error.to_string());
@@ -340,4 +350,13 @@ fn print_run_report(
             err(&format!("{}\n", json(&value)));
         }
     }
+}
+
+/// Why `--planar` leaves the run in the spatial form (W0906).
+fn not_planar_warning(why: &str) -> Diagnostic {
+    Diagnostic::warning(
+        "W0906",
+        format!("--planar: the mechanism is not planar ({why}); the run keeps the spatial form"),
+    )
+    .help("`lsdc tree --format json` says whether a mechanism is planar, and if not, why")
 }

@@ -21,6 +21,7 @@ internal! {
     mod joint;
     mod loops;
     mod mimics;
+    mod planar;
     mod reduced_model;
     mod response;
     mod rotors;

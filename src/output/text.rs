@@ -189,6 +189,9 @@ pub fn run_report(report: &crate::simulate::run::Report) -> String {
     if let Some(model) = &report.model {
         out += &format!("{}\n", model.describe());
     }
+    if report.planar {
+        out += "planar: the recursions in planar vectors (3 per body), 3 rows per loop\n";
+    }
     if let (Some(stiff), Some(switches)) = (report.stiff_steps, report.method_switches) {
         out += &format!(
             "stiff steps (implicit): {stiff} of {}, {switches} changes of method\n",

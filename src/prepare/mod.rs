@@ -11,6 +11,7 @@ use std::collections::{BTreeSet, HashMap};
 
 use crate::diag::Diagnostic;
 use crate::dynamics::model::{self as dynamic_model, Model};
+use crate::dynamics::planar::{self, PlanarModel};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
 use crate::elab::value::{BodyRef, Displacement, Elementary, SExpr, UnknownId, Vector};
 use crate::kinematics::eval::{eval, UnknownValues};
@@ -45,6 +46,27 @@ pub struct Prepared {
     pub outputs: self::outputs::Outputs,
     /// The scene prepared and what its model holds (`elab::scene`); `None` without scenes.
     pub scene: Option<crate::elab::scene_model::SceneModel>,
+    /// The model's planar form when the mechanism is planar (`dynamics::planar::decide`);
+    /// otherwise why not.
+    pub planar: Result<Box<PlanarModel>, String>,
+    /// Whether the run's right-hand side takes the planar form (`simulate --planar`). Not by
+    /// default: through singular configurations of its loops, runs in either form differ at
+    /// round-off and the passages amplify that (docs/guarantees.md).
+    pub takes_planar: bool,
+}
+
+impl Prepared {
+    /// Has the run's right-hand side take the planar form of a planar mechanism (`simulate
+    /// --planar`); why it cannot, when the mechanism is not planar (it keeps the spatial form).
+    pub fn take_planar(&mut self) -> Result<(), String> {
+        self.takes_planar = true;
+        self.planar.as_ref().map(|_| ()).map_err(Clone::clone)
+    }
+
+    /// The planar form, when the run takes one.
+    pub fn planar_form(&self) -> Option<&PlanarModel> {
+        self.planar.as_deref().ok().filter(|_| self.takes_planar)
+    }
 }
 
 fn collect(s: &SExpr, into: &mut BTreeSet<UnknownId>) {
@@ -239,6 +261,8 @@ pub fn prepare(
         }
     }
     Ok(Prepared {
+        planar: planar::decide(&model).map(Box::new),
+        takes_planar: false,
         model,
         topology,
         kinematics,

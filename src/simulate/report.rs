@@ -25,6 +25,8 @@ pub struct RunFailure {
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
     pub integrator: String,
+    /// Whether the right-hand side took the model's planar form (`dynamics::planar`).
+    pub planar: bool,
     pub duration: f64,
     pub steps: usize,
     pub rejected_steps: usize,
@@ -249,6 +251,7 @@ pub(super) fn report(
     };
     Report {
         integrator: settings.integrator.name().to_string(),
+        planar: system.uses_planar(),
         duration: settings.duration,
         steps: stats.steps,
         rejected_steps: stats.rejected,

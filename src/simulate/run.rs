@@ -156,6 +156,7 @@ fn reaction_names(model: &Model) -> Vec<String> {
 fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
     let report = Report {
         integrator: prepared.settings.integrator.name().to_string(),
+        planar: false,
         duration: prepared.settings.duration,
         steps: 0,
         rejected_steps: 0,

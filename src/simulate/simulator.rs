@@ -507,6 +507,7 @@ fn start_system<'p>(
     // Native code computes the program's accelerations alone: not with inputs.
     let native = prepared.native.as_ref();
     system.use_native(native.filter(|_| plain(model) && !inputs.any()));
+    system.use_planar(prepared.planar_form());
     system.state.inputs = inputs;
     // The followers start where their leaders put them, whatever `initial` said (then with
     // loops, the loops and couplings are closed together).

@@ -33,6 +33,8 @@ use crate::dynamics::driven_points;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{self, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
+use crate::dynamics::planar::algebra::PlanarForce;
+use crate::dynamics::planar::{self, PlanarData, PlanarModel};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
 use scratch::Scratch;
@@ -50,6 +52,8 @@ pub struct MechanicalSystem<'m> {
     /// The forward dynamics as native code (`simulate --compiled`), in place of the efforts
     /// and the articulated-body algorithm.
     native: Option<&'m NativeDynamics>,
+    /// The model's planar form, when the right-hand side takes it (`use_planar`).
+    planar: Option<&'m PlanarModel>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -66,6 +70,7 @@ impl<'m> MechanicalSystem<'m> {
             scratch: Box::new(Scratch::new(model, stabilisation)),
             sampling: None,
             native: None,
+            planar: None,
         }
     }
 
@@ -106,6 +111,27 @@ impl<'m> MechanicalSystem<'m> {
     /// computed: it is left at zero.
     pub fn use_native(&mut self, native: Option<&'m NativeDynamics>) {
         self.native = native;
+    }
+
+    /// Evaluates the right-hand side in `planar`, the model's planar form
+    /// (`dynamics::planar::decide`), from now on, or in the spatial form with `None`: the run's
+    /// integrator's evaluations. The outputs' own evaluations, the reactions and the
+    /// projections keep the spatial form.
+    pub fn use_planar(&mut self, planar: Option<&'m PlanarModel>) {
+        self.planar = planar;
+        self.scratch.planar = planar.map(|_| Box::new(PlanarData::new(self.model)));
+    }
+
+    /// Whether the right-hand side takes the model's planar form.
+    pub fn uses_planar(&self) -> bool {
+        self.planar_here().is_some()
+    }
+
+    /// The planar form the right-hand side takes here: when this scratch has the planar one
+    /// and no native code computes the accelerations instead.
+    fn planar_here(&self) -> Option<&'m PlanarModel> {
+        let on = self.scratch.planar.is_some() && self.native.is_none();
+        self.planar.filter(|_| on)
     }
 
     pub fn dimension(&self) -> usize {
@@ -186,9 +212,22 @@ impl<'m> MechanicalSystem<'m> {
             true => &self.scratch.efforts,
             false => &self.scratch.no_efforts,
         };
+        let planar = self.planar_here();
         let (data, bias) = (&mut self.scratch.data, &mut self.scratch.inverse);
-        rnea_after_kinematics(model, data, &self.scratch.at_rest, &efforts.external, bias);
-        crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
+        match (planar, self.scratch.planar.as_deref_mut()) {
+            (Some(planar), Some(planar_data)) => {
+                planar::algorithms::kinematics(planar, planar_data, (q, v), false);
+                planar_data.set_external(planar, &efforts.external);
+                planar::algorithms::rnea_forward(planar, planar_data, &self.scratch.at_rest);
+                planar::algorithms::rnea_backward(planar, planar_data, bias);
+                let mass = &mut self.scratch.mass;
+                planar::algorithms::crba(model, planar, planar_data, mass);
+            }
+            _ => {
+                rnea_after_kinematics(model, data, &self.scratch.at_rest, &efforts.external, bias);
+                crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
+            }
+        }
         for (i, a) in accelerations.iter_mut().enumerate() {
             *a = efforts.tau[i] - self.scratch.inverse[i];
         }
@@ -198,8 +237,35 @@ impl<'m> MechanicalSystem<'m> {
         Ok(())
     }
 
-    /// Forms the response of a tree at the mass matrix in `mass`: M⁻¹, or S (SᵀMS)⁻¹ Sᵀ with S
-    /// the basis of the velocities the mimic couplings allow.
+    /// The accelerations of a planar tree by the planar articulated-body algorithm, under the
+    /// efforts (evaluated on the spatial kinematics they read, when the model has any).
+    fn planar_tree_accelerations(
+        &mut self,
+        planar: &PlanarModel,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        accelerations: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let reads_efforts = self.reads_efforts();
+        let efforts = match reads_efforts {
+            true => {
+                self.evaluate_efforts(t, q, v)?;
+                &self.scratch.efforts
+            }
+            false => &self.scratch.no_efforts,
+        };
+        let planar_data = self.scratch.planar.as_deref_mut();
+        let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
+        planar::algorithms::kinematics(planar, planar_data, (q, v), false);
+        match reads_efforts {
+            true => planar_data.set_external(planar, &efforts.external),
+            false => planar_data.external.fill(PlanarForce::zeros()),
+        }
+        let tau = efforts.tau.as_slice();
+        let solved = planar::algorithms::aba(planar, planar_data, tau, accelerations);
+        solved.map_err(|e| self.dynamics_error(&e))
+    }
+
     /// The contacts' rows at the state whose kinematics the scratch holds, into its
     /// `contact_state` (with γ when `with_bias`). A disc that lies flat, or passed lying flat
     /// since the last rows, has no contact point: the run ends there.
@@ -233,6 +299,8 @@ impl<'m> MechanicalSystem<'m> {
         );
     }
 
+    /// Forms the response of a tree at the mass matrix in `mass`: M⁻¹, or S (SᵀMS)⁻¹ Sᵀ with S
+    /// the basis of the velocities the mimic couplings allow.
     fn form_tree_response(&mut self) -> Result<(), SystemError> {
         let formed = match self.model.mimics.is_empty() {
             true => self.scratch.response.on_tree(&self.scratch.mass),
@@ -254,7 +322,8 @@ impl<'m> MechanicalSystem<'m> {
         let v = self.model.split_state_into(y, &mut q);
         let result = self.derivative_at(t, &q, v, dydt);
         self.scratch.positions = q;
-        if result.is_ok() && self.model.has_loops() {
+        // The planar rows are not the rows a projection continues from (`hand_over`).
+        if result.is_ok() && self.model.has_loops() && self.planar_here().is_none() {
             self.scratch.evaluated.extend_from_slice(y);
         }
         result
@@ -283,6 +352,8 @@ impl<'m> MechanicalSystem<'m> {
             .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
         if native || model.has_loops() {
             // The accelerations are written, or are the loops' block's (`solve_stack`).
+        } else if let Some(planar) = self.planar_here().filter(|_| !self.needs_mass_matrix()) {
+            self.planar_tree_accelerations(planar, t, (q, v), &mut accelerations)?;
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
         } else if self.reads_efforts() {

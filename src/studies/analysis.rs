@@ -51,6 +51,11 @@ pub struct TreeReport {
     /// The degrees of freedom in position and in velocity the contacts leave, if there are any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contacts: Option<ContactMobility>,
+    /// Whether a run takes the planar form of the mechanism's equations (`dynamics::planar`),
+    /// and if not, why.
+    pub planar: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_planar: Option<String>,
     /// The assembly's warnings (the branch it reached, given values it moved).
     #[serde(skip)]
     pub warnings: Vec<Diagnostic>,
@@ -136,6 +141,7 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     let couplings = (mechanism.joins.iter())
         .filter(|j| mechanism.link(j.link).mimic().is_declared())
         .count();
+    let not_planar = planarity(mechanism, &topology, unknowns).err();
     if topology.complementary.is_empty() {
         // A tree: no constraint, the mobility is the sum of the links' degrees of freedom.
         let joints: Option<Vec<&JointAnalysis>> = bodies
@@ -166,6 +172,8 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
             mobility,
             mobility_unavailable: unavailable,
             contacts,
+            planar: not_planar.is_none(),
+            not_planar,
             warnings: Vec::new(),
             model: mechanism.scene.clone(),
         });
@@ -197,9 +205,25 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
         mobility,
         mobility_unavailable,
         contacts: None,
+        planar: not_planar.is_none(),
+        not_planar,
         warnings,
         model: mechanism.scene.clone(),
     })
+}
+
+/// Whether the mechanism's dynamic model, with the program's own values, has a planar form;
+/// if not, why (a value it lacks among the reasons).
+fn planarity(
+    mechanism: &Mechanism,
+    topology: &Topology,
+    unknowns: UnknownValues,
+) -> Result<(), String> {
+    let kinematics = model::build(mechanism, topology.clone(), unknowns)
+        .map_err(|d| joined_messages(&d))?;
+    let dynamics = crate::dynamics::model::build(mechanism, &kinematics)
+        .map_err(|d| joined_messages(&d))?;
+    crate::dynamics::planar::decide(&dynamics).map(|_| ())
 }
 
 fn joined_messages(diagnostics: &[Diagnostic]) -> String {

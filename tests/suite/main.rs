@@ -53,6 +53,7 @@ mod native;
 mod nonlinear_delta;
 mod outputs;
 mod pinocchio_fixtures;
+mod planar;
 mod position_drives;
 mod properties;
 mod reactions;

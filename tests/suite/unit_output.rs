@@ -34,6 +34,7 @@ mod plot {
             samples,
             report: Report {
                 integrator: "rk4".to_string(),
+                planar: false,
                 duration: (count.max(1) - 1) as f64 * 0.05,
                 steps: count,
                 rejected_steps: 0,

@@ -13,6 +13,9 @@ use crate::dynamics::algorithms::{
     body_motions, crba_after_kinematics, mass_rows, mass_times, rnea_backward, rotor_spin, Data,
 };
 use crate::dynamics::model::Model;
+use crate::dynamics::planar::algebra::{PlanarForce, PlanarMotion};
+use crate::dynamics::planar::algorithms::{self as planar, PlanarData};
+use crate::dynamics::planar::PlanarModel;
 use crate::dynamics::rotors::Rotor;
 use crate::spatial::{Force, Motion};
 
@@ -32,6 +35,8 @@ pub struct ReducedInertia {
     mass_null: DMatrix<f64>,
     inverse: DVector<f64>,
     applied: DVector<f64>,
+    /// The passes' body motions in planar form (`planar_by_passes`).
+    planar_motions: Vec<PlanarMotion>,
 }
 
 /// The reduced equations' two sides, filled by `ReducedInertia::reduced_into`: NᵀMN in the
@@ -53,6 +58,7 @@ impl ReducedInertia {
             mass_null: DMatrix::zeros(model.nv, 0),
             inverse: DVector::zeros(model.nv),
             applied: DVector::zeros(model.velocities()),
+            planar_motions: Vec::new(),
         }
     }
 
@@ -60,7 +66,10 @@ impl ReducedInertia {
     /// velocities; only the tree's meet M), with `tau` the efforts' generalised forces (state
     /// length) and `data` holding the forward kinematics and inverse dynamics' pass out at a₀
     /// (`rnea_forward`). By passes when `kept` (the motions every evaluation solves on, which
-    /// decide the method, so that it is the same at every evaluation) is small enough.
+    /// decide the method, so that it is the same at every evaluation) is small enough. In
+    /// planar form with `planar`: the planar model and its scratch, holding the planar
+    /// kinematics and pass out.
+    #[allow(clippy::too_many_arguments)]
     pub fn reduced_into(
         &mut self,
         model: &Model,
@@ -69,11 +78,60 @@ impl ReducedInertia {
         (count, kept): (usize, usize),
         tau: &DVector<f64>,
         reduced: Reduced<'_>,
+        planar: Option<(&PlanarModel, &mut PlanarData)>,
     ) {
-        if kept <= self.passes_up_to {
-            self.by_passes(model, data, null, count, tau, reduced);
-        } else {
-            self.with_mass_matrix(model, data, null, count, tau, reduced);
+        let by_passes = kept <= self.passes_up_to;
+        match planar {
+            Some((planar, planar_data)) if by_passes => {
+                self.planar_by_passes(model, planar, planar_data, null, count, tau, reduced)
+            }
+            Some((planar, planar_data)) => {
+                planar::rnea_backward(planar, planar_data, &mut self.inverse);
+                planar::crba(model, planar, planar_data, &mut self.mass);
+                self.reduce_mass_matrix(model, null, count, tau, reduced);
+            }
+            _ if by_passes => self.by_passes(model, data, null, count, tau, reduced),
+            _ => self.with_mass_matrix(model, data, null, count, tau, reduced),
+        }
+    }
+
+    /// `by_passes` in planar form: the bodies' planar motions under each allowed motion, their
+    /// momenta, and the power of the planar forces of inverse dynamics' pass out.
+    #[allow(clippy::too_many_arguments)]
+    fn planar_by_passes(
+        &mut self,
+        model: &Model,
+        planar: &PlanarModel,
+        data: &PlanarData,
+        null: &DMatrix<f64>,
+        count: usize,
+        tau: &DVector<f64>,
+        reduced: Reduced<'_>,
+    ) {
+        let bodies = model.body_count() + 1;
+        let motions = &mut self.planar_motions;
+        motions.resize(bodies * count, PlanarMotion::zeros());
+        for k in 0..count {
+            let motion = null.column(k);
+            let own = &mut motions[k * bodies..(k + 1) * bodies];
+            planar::body_motions(planar, data, &motion.as_slice()[..model.nv], own);
+            // The power along motion k and its kinetic energy's bilinear form with the motions
+            // before it, in one pass over the bodies.
+            let mut power = 0.0;
+            (0..=k).for_each(|l| reduced.mass[(k, l)] = 0.0);
+            for joint in &planar.joints {
+                let i = joint.child;
+                let momentum = match planar.massless[i - 1] {
+                    true => PlanarForce::zeros(),
+                    false => planar.bodies[i - 1].times(&motions[k * bodies + i]),
+                };
+                power += motions[k * bodies + i].dot(&data.force[i]);
+                for l in 0..=k {
+                    reduced.mass[(k, l)] += motions[l * bodies + i].dot(&momentum);
+                }
+            }
+            (0..k).for_each(|l| reduced.mass[(l, k)] = reduced.mass[(k, l)]);
+            reduced.force[k] = motion.dot(tau) - power;
         }
     }
 
@@ -145,15 +203,28 @@ impl ReducedInertia {
         tau: &DVector<f64>,
         reduced: Reduced<'_>,
     ) {
-        let nv = model.nv;
         rnea_backward(model, data, &mut self.inverse);
+        crba_after_kinematics(model, data, &mut self.mass);
+        self.reduce_mass_matrix(model, null, count, tau, reduced);
+    }
+
+    /// The reduced equations from the generalised forces of inverse dynamics in `inverse` and
+    /// the mass matrix in `mass`.
+    fn reduce_mass_matrix(
+        &mut self,
+        model: &Model,
+        null: &DMatrix<f64>,
+        count: usize,
+        tau: &DVector<f64>,
+        reduced: Reduced<'_>,
+    ) {
+        let nv = model.nv;
         self.applied.copy_from(tau);
         let mut tree = self.applied.rows_mut(0, nv);
         tree -= &self.inverse;
         let motions = null.columns(0, count);
         let mut force = reduced.force.rows_mut(0, count);
         force.gemv_tr(1.0, &motions, &self.applied, 0.0);
-        crba_after_kinematics(model, data, &mut self.mass);
         if self.mass_null.ncols() < count {
             self.mass_null = DMatrix::zeros(nv, count);
         }

@@ -7,6 +7,7 @@
 //! onto the loops (`project`), then, near singular configurations, of its velocities by the
 //! constraints' impulse (`momentum`), with an orthonormal basis of the allowed motions from the
 //! sparse factorisation for the outputs (`orthonormal`).
+//! A planar mechanism's right-hand side computes its rows in planar form (`planar_rows`).
 //! A singular value decomposition (`basis`) and dense QR
 //! factorisations serve the decisions taken once, never the equations of motion.
 //! The method and its references: `docs/loops.md`.
@@ -17,6 +18,7 @@ pub mod inertia;
 pub mod jacobian;
 pub mod momentum;
 pub mod orthonormal;
+pub mod planar_rows;
 pub mod project;
 pub mod rows;
 pub mod solve;

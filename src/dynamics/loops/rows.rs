@@ -52,7 +52,7 @@ pub struct Constraints {
     /// Per loop, its tree columns (local index, state velocity) with the sign they enter its
     /// rows with: +1 on the second body's path to earth, −1 on the first's (a velocity on both
     /// moves both frames alike and is left out).
-    path_signs: Vec<Vec<(usize, usize, f64)>>,
+    pub(super) path_signs: Vec<Vec<(usize, usize, f64)>>,
 }
 
 impl Constraints {

@@ -22,6 +22,7 @@ use super::structure::Structure;
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::dense::dense_cholesky;
 use crate::dynamics::model::Model;
+use crate::dynamics::planar::{PlanarData, PlanarModel};
 
 /// How the constraints are kept: by projecting the state after each step (exact), by Baumgarte's
 /// feedback in the accelerations (with this rate, in 1/s, critically damped), by the integrator's
@@ -242,13 +243,13 @@ pub fn allowed_motions(
 /// The second half of the solve (after `allowed_motions`): a = a₀ + Nz with
 /// (NᵀMN) z = Nᵀ(f − Ma₀), formed on the tree (`ReducedInertia`) from `tau`, the efforts'
 /// generalised forces over the state's velocities, with `data` holding the forward kinematics
-/// and inverse dynamics' pass out at a₀ (`rnea_forward`). The accelerations are left in
-/// `scratch`.
+/// and inverse dynamics' pass out at a₀ (`rnea_forward`), or with `planar` their planar form
+/// in its scratch. The accelerations are left in `scratch`.
 pub fn solve_reduced(
     model: &Model,
     data: &mut Data,
     tau: &DVector<f64>,
-    structure: &Structure,
+    (structure, planar): (&Structure, Option<(&PlanarModel, &mut PlanarData)>),
     scratch: &mut LoopScratch,
 ) -> Result<(), LoopError> {
     let LoopScratch {
@@ -277,7 +278,7 @@ pub fn solve_reduced(
         mass: reduced_mass,
         force: reduced_force,
     };
-    inertia.reduced_into(model, data, null, (count, m), tau, reduced);
+    inertia.reduced_into(model, data, null, (count, m), tau, reduced, planar);
     // An idle coordinate's motion is its unit motion (no mass, no kept row): its share of the
     // reduced forces is the effort on it.
     // The generalised forces themselves count in the scale: held in balance (a computed torque

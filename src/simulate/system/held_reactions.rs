@@ -34,11 +34,15 @@ impl MechanicalSystem<'_> {
     /// them, their forces in their joins' reactions as a link effort is.
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
+        // The reactions read the spatial kinematics and inverse dynamics of the stack's solve.
+        let planar = self.scratch.planar.take();
+        let forces = self.stack_reactions(t, q, v);
+        self.scratch.planar = planar;
         let StackForces {
             accelerations,
             mut external,
             listed,
-        } = self.stack_reactions(t, q, v)?;
+        } = forces?;
         // The link efforts act across their joints: they are not part of the reaction.
         external.truncate(model.body_count() + 1);
         rnea(

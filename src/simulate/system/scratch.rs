@@ -4,6 +4,7 @@
 //! for its sampler's (`MechanicalSystem::sampling`); nothing here is read across evaluations but
 //! for caches of the last state evaluated.
 
+use crate::dynamics::planar::PlanarData;
 use nalgebra::{DMatrix, DVector};
 
 use crate::dynamics::algorithms::Data;
@@ -85,6 +86,9 @@ pub struct Scratch {
     pub contact: Vec<f64>,
     pub holding: Vec<f64>,
     pub(in crate::simulate) friction_power: f64,
+    /// The planar algorithms' scratch, when the evaluations in this scratch take the planar
+    /// form (the run's integrator's, `MechanicalSystem::use_planar`).
+    pub(in crate::simulate) planar: Option<Box<PlanarData>>,
     /// The model in the actuated coordinates at the last evaluation (made at the first), and
     /// where the actuators' laws are evaluated.
     pub model_laws: Option<ReducedScratch>,
@@ -134,6 +138,7 @@ impl Scratch {
             contact: vec![0.0; model.stops.len()],
             holding: vec![0.0; model.frictions.len()],
             friction_power: 0.0,
+            planar: None,
         }
     }
 }

@@ -4,7 +4,8 @@
 //! its first block gives the others. The blocks, in their order:
 //!
 //! 1. the closed loops' kept rows, solved by their sparse factorisation (`dynamics::loops`:
-//!    [`MechanicalSystem::solve_loop_block`]), the block's specialised solve: the
+//!    [`MechanicalSystem::solve_loop_block`], in planar form for a planar mechanism's
+//!    integrator), the block's specialised solve: the
 //!    accelerations under the efforts, the allowed motions N that give X = N (NᵀMN)⁻¹Nᵀ and,
 //!    for the reactions, the loops' multipliers from M a − f ([`MechanicalSystem::
 //!    loop_block_multipliers`]). A tree has no such block: its X is M⁻¹, or the mimic
@@ -25,7 +26,12 @@ use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{
     crba_after_kinematics, crba_into, forward_kinematics, rnea_after_kinematics, rnea_forward,
 };
+use crate::dynamics::loops::planar_rows::planar_constraints_into;
 use crate::dynamics::loops::{self, Extent, Factored, Stabilisation};
+use crate::dynamics::planar::algorithms as planar_algorithms;
+use crate::dynamics::planar::algebra::PlanarForce;
+use crate::dynamics::planar::PlanarModel;
+use crate::spatial::Force;
 
 impl MechanicalSystem<'_> {
     /// Solves every constraint row of the run at (t, q, v), block by block (see the module's
@@ -107,18 +113,20 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         self.scratch.evaluated.clear();
         self.ensure_structure(q)?;
+        let stabilisation = self.scratch.loops.stabilisation;
+        // Baumgarte's feedback reads the position rows, which the planar rows leave out.
+        let baumgarte = matches!(stabilisation, Stabilisation::Baumgarte(_));
+        if let Some(planar) = self.planar_here().filter(|_| !baumgarte) {
+            return self.solve_planar_loop_block(planar, t, q, v);
+        }
         // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
         // recursions start from.
-        self.evaluate_efforts(t, q, v)?;
-        // The slipping joints' friction acts with the efforts.
-        let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
-        self.scratch.friction_power = self.add_friction(v, &mut tau);
-        self.scratch.efforts.tau = tau;
+        self.efforts_with_friction(t, (q, v), true)?;
         let scratch = &mut self.scratch.loop_scratch;
         // Only Baumgarte's feedback reads the position rows.
-        let extent = match self.scratch.loops.stabilisation {
-            Stabilisation::Baumgarte(_) => Extent::WithBias,
-            _ => Extent::Motion,
+        let extent = match baumgarte {
+            true => Extent::WithBias,
+            false => Extent::Motion,
         };
         loops::constraints_into(
             model,
@@ -142,8 +150,70 @@ impl MechanicalSystem<'_> {
             &self.scratch.efforts.external,
         );
         let tau = &self.scratch.efforts.tau;
-        let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, structure, scratch);
+        let solve = (structure, None);
+        let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, solve, scratch);
         solved.map_err(|e| self.loop_error(&e))
+    }
+
+    /// `solve_loop_block` in the model's planar form: the planar kinematics, the loops' three
+    /// rows in the plane each (`loops::planar_rows`), the same solve on the kept rows, and
+    /// the reduced equations from the planar recursions. The efforts are evaluated on the
+    /// spatial kinematics they read, when the model has any.
+    fn solve_planar_loop_block(
+        &mut self,
+        planar: &PlanarModel,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        let reads_efforts = self.reads_efforts();
+        self.efforts_with_friction(t, (q, v), reads_efforts)?;
+        let planar_data = self.scratch.planar.as_deref_mut();
+        let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
+        planar_algorithms::kinematics(planar, planar_data, (q, v), true);
+        match reads_efforts {
+            true => planar_data.set_external(planar, &self.scratch.efforts.external),
+            false => planar_data.external.fill(PlanarForce::zeros()),
+        }
+        let scratch = &mut self.scratch.loop_scratch;
+        let state = (q, v);
+        planar_constraints_into(model, planar, planar_data, state, &mut scratch.constraints);
+        let structure = &self.scratch.loops.structure;
+        let allowed = loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch);
+        if let Err(e) = allowed {
+            return Err(self.loop_error(&e));
+        }
+        let particular = &scratch.particular()[..model.nv];
+        planar_algorithms::rnea_forward(planar, planar_data, particular);
+        let tau = &self.scratch.efforts.tau;
+        let solve = (structure, Some((planar, planar_data)));
+        let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, solve, scratch);
+        solved.map_err(|e| self.loop_error(&e))
+    }
+
+    /// The efforts at (t, q, v) into `efforts`, the slipping joints' friction added to their
+    /// generalised forces: evaluated when `evaluate` (leaving the forward kinematics of (q, v)
+    /// in `data`), zero otherwise (a planar block whose model applies none needs no spatial
+    /// kinematics).
+    fn efforts_with_friction(
+        &mut self,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        evaluate: bool,
+    ) -> Result<(), SystemError> {
+        if evaluate {
+            self.evaluate_efforts(t, q, v)?;
+        } else {
+            let efforts = &mut self.scratch.efforts;
+            efforts.tau.fill(0.0);
+            efforts.external.fill(Force::zeros());
+            efforts.power = 0.0;
+        }
+        let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
+        self.scratch.friction_power = self.add_friction(v, &mut tau);
+        self.scratch.efforts.tau = tau;
+        Ok(())
     }
 
     /// The loops' block's multipliers at the accelerations `a` of the whole stack (every row
