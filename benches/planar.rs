@@ -35,6 +35,7 @@ fn prepared(name: &str, spatial: bool) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
+        scene: None,
     };
     let path = std::path::PathBuf::from(format!("examples/{name}.lsd"));
     let compilation = compile_files(&[path], &options).expect("loads");
