@@ -184,7 +184,7 @@ impl PlanarInertia {
     }
 
     /// The inertia in the parent frame of `t`: h' = R h + m p, j' = j + 2 (R h)·p + m |p|².
-    pub fn to_parent(&self, t: &PlanarTransform) -> PlanarInertia {
+    pub fn to_parent(self, t: &PlanarTransform) -> PlanarInertia {
         let p = t.translation;
         let h1 = t.rotate(&self.first);
         PlanarInertia {
