@@ -338,3 +338,67 @@ fn efforts_identically_zero_are_left_out_and_change_nothing() {
         assert!(difference <= 1e-12, "{name}: {difference:e}");
     }
 }
+
+/// Two links under gravity, a push and a damping torque declared in a group (`package`): the
+/// efforts a scene's `apply only` and `apply without` choose among.
+const CHOSEN_BASE: &str = "import joints ;\nimport gravity ;\nlet a = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\nlet b = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and a with revolute([1, 0, 0]) as shoulder ;\njoin [0, 0, -1] ++ 1 @ a and b with revolute([1, 0, 0]) as elbow ;\ninitial shoulder.q = 0.3 ;\noutput tip = position([0, 0, -1] ++ 1 @ b) ;\n";
+const WEIGHTS: &str = "apply weight(a) on a.iframe ;\napply weight(b) on b.iframe ;\n";
+const PUSH: &str =
+    "let push = force value = [0, 0.5, 0.2 * elbow.q] end ;\napply push on b.iframe ;\n";
+const DAMPING: &str = "package damping =\n  apply torque value = [-0.2 * shoulder.q', 0, 0] end on a ;\n  apply torque value = [-0.1 * elbow.q', 0, 0] end between a and b ;\nend ;\n";
+
+#[test]
+fn a_scene_applies_the_efforts_it_chooses_by_name_definition_or_group() {
+    let all = format!("{CHOSEN_BASE}{WEIGHTS}{PUSH}{DAMPING}");
+    // Each choice, the `apply` declarations it leaves out, and the program that declares only
+    // the efforts chosen.
+    for (choice, left_out, declared) in [
+        ("apply without push, damping ;", 3, WEIGHTS.to_string()),
+        ("apply only weight ;", 3, WEIGHTS.to_string()),
+        ("apply only push, damping ;", 2, format!("{PUSH}{DAMPING}")),
+        (
+            "apply only weight, damping ;\n  apply without damping ;",
+            3,
+            WEIGHTS.to_string(),
+        ),
+        ("apply without weight ;", 2, format!("{PUSH}{DAMPING}")),
+    ] {
+        let chosen = program(&format!("{all}scene chosen =\n  {choice}\nend ;"), None);
+        let model = scene_model(&chosen);
+        assert_eq!(model.efforts_not_chosen, left_out, "{choice}");
+        let plural = if left_out == 1 { "" } else { "s" };
+        let text = model.describe();
+        let said = format!("left out: {left_out} applied effort{plural} (not chosen by the scene)");
+        assert!(text.ends_with(&said), "{text}");
+        let full = program(&format!("{CHOSEN_BASE}{declared}"), None);
+        assert_eq!(
+            chosen.mechanism().unwrap().applications.len(),
+            full.mechanism().unwrap().applications.len(),
+            "{choice}"
+        );
+        let (chosen_run, full_run) = (run_fixed(&chosen, 1.0), run_fixed(&full, 1.0));
+        let json = serde_json::to_value(&chosen_run.report).expect("the report as JSON");
+        assert_eq!(json["model"]["efforts_not_chosen"], left_out, "{json}");
+        for name in ["tip.x", "tip.y", "tip.z", "shoulder.q", "elbow.q"] {
+            let difference = relative_difference(&chosen_run, &full_run, name);
+            assert!(difference <= 1e-12, "{choice} {name}: {difference:e}");
+        }
+    }
+}
+
+#[test]
+fn a_scene_chooses_the_efforts_of_an_instance_or_of_an_array() {
+    let text = std::fs::read_to_string(CELL).expect("readable");
+    // Each arm applies three weights, the linkage three.
+    for (choice, left_out) in [
+        ("apply only arm[1] ;", 6),
+        ("apply without arm ;", 6),
+        ("apply without arm[2] ;", 3),
+        ("apply only arm[2]:weight ;", 6),
+        ("apply without arm:weight ;", 6),
+    ] {
+        let scene = format!("{text}\nscene chosen =\n  {choice}\nend ;");
+        let model = scene_model(&program(&scene, Some("chosen")));
+        assert_eq!(model.efforts_not_chosen, left_out, "{choice}");
+    }
+}

@@ -57,6 +57,7 @@ pub fn reduce(
         loops_total,
         left_out: Vec::new(),
         zero_efforts: leave_out_zero_efforts(&mut mechanism),
+        efforts_not_chosen: mechanism.applications_not_chosen,
         welded: weld_locks(&mut mechanism),
     };
     if mechanism.outputs.is_empty() {
