@@ -35,6 +35,8 @@ pub struct LeftOut {
 
 /// Why a group is left out.
 pub(super) const NOT_READ: &str = "not read by the scene's outputs";
+/// Why a massless subtree is left out (`elab::scene::massless`).
+pub(super) const MASSLESS: &str = "massless, nothing the scene reads moves with them";
 
 impl SceneModel {
     /// `model of scene `arm`: 3 of 6 bodies, 0 of 0 loops; left out: right:base, right:upper

@@ -7,6 +7,8 @@ use lsdc::api::{Program, SettingsChanges, Simulation};
 use lsdc::load::LoadOptions;
 use lsdc::prepare::Integrator;
 
+use lsdc::simulate::run::run;
+
 use crate::common::programs::simulated;
 
 const CELL: &str = "examples/robot_cell.lsd";
@@ -400,5 +402,68 @@ fn a_scene_chooses_the_efforts_of_an_instance_or_of_an_array() {
         let scene = format!("{text}\nscene chosen =\n  {choice}\nend ;");
         let model = scene_model(&program(&scene, Some("chosen")));
         assert_eq!(model.efforts_not_chosen, left_out, "{choice}");
+    }
+}
+
+/// A double pendulum carrying at its first link a massless subtree: a turntable `s` and a slide
+/// `t` on it, of zero mass and inertia.
+const MASSLESS_BASE: &str = "import joints ;\nimport gravity ;\nlet a = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\nlet b = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and a with revolute([1, 0, 0]) as shoulder ;\njoin [0, 0, -1] ++ 1 @ a and b with revolute([1, 0, 0]) as elbow ;\napply weight(a) on a.iframe ;\napply weight(b) on b.iframe ;\ninitial shoulder.q = 0.5 ;\noutput tip = position([0, 0, -1] ++ 1 @ b) ;\n";
+const MASSLESS_TREE: &str = "let s = body mass = 0, iframe = 0, inertia = [0, 0, 0] end ;\nlet t = body mass = 0, iframe = 0, inertia = [0, 0, 0] end ;\njoin [0, 0, -1] ++ 1 @ a and s with revolute([0, 0, 1]) as spin ;\njoin [0, 0, 0.2] ++ 1 @ s and t with prismatic([1, 0, 0]) as slide ;\napply weight(s) on s.iframe ;\n";
+
+#[test]
+fn a_massless_subtree_nothing_reads_is_left_out_and_changes_nothing() {
+    // Free or driven, the subtree's coordinates carry no inertia: the full model's mass matrix
+    // is singular. The scene runs as the program written without the subtree.
+    let drives = "drive spin.q = 2 * time ;\ndrive slide.q = 0.1 * sin(3 * time) ;\n";
+    let without = run_fixed(&program(MASSLESS_BASE, None), 1.0);
+    for added in ["", drives] {
+        let text = format!("{MASSLESS_BASE}{MASSLESS_TREE}{added}");
+        let full = program(&text, None);
+        let failure = (full.prepare(&[], &Default::default()).ok())
+            .and_then(|prepared| run(&prepared, &mut |_| {}).report.failure)
+            .map(|f| f.message);
+        let failure = failure.unwrap_or_default();
+        assert!(
+            failure.starts_with("the mass matrix is singular"),
+            "{failure}"
+        );
+        let reduced = program(&format!("{text}scene arm =\nend ;"), None);
+        let model = scene_model(&reduced);
+        assert_eq!((model.bodies, model.bodies_total), (2, 4));
+        let said = model.describe();
+        assert!(
+            said.contains("left out: s and t (massless, nothing the scene reads moves with them)"),
+            "{said}"
+        );
+        let reduced_run = run_fixed(&reduced, 1.0);
+        assert_eq!(reduced_run.coordinate_names, ["shoulder.q", "elbow.q"]);
+        for name in ["tip.x", "tip.y", "tip.z", "shoulder.q", "elbow.q"] {
+            let difference = relative_difference(&reduced_run, &without, name);
+            assert!(difference <= 1e-12, "{name}: {difference:e}");
+        }
+        let json = serde_json::to_value(&reduced_run.report).expect("the report as JSON");
+        assert_eq!(json["model"]["bodies"], 2, "{json}");
+        assert_eq!(json["model"]["left_out"][0]["bodies"][1], "t", "{json}");
+    }
+}
+
+#[test]
+fn a_massless_subtree_read_loaded_or_closed_stays() {
+    let drives = "drive spin.q = 2 * time ;\ndrive slide.q = 0.1 * sin(3 * time) ;\n";
+    let text = format!("{MASSLESS_BASE}{MASSLESS_TREE}{drives}");
+    for (scene, bodies) in [
+        // The turntable's angle is read: the slide on it is not, and goes.
+        ("output turn = spin.q ;", 3),
+        ("output where = position(t) ;", 4),
+        ("output rate = slide.q' ;", 4),
+        ("apply force value = [0, 0, 1] end on t ;", 4),
+        // The slide only is read: the turntable carries it and stays.
+        ("output along = slide.q ;", 4),
+        // A loop through the turntable keeps it; the slide on it goes.
+        ("join s and b with spherical as closing ;", 3),
+        ("output far = elbow.q ;", 2),
+    ] {
+        let reduced = program(&format!("{text}scene arm =\n  {scene}\nend ;"), None);
+        assert_eq!(scene_model(&reduced).bodies, bodies, "{scene}");
     }
 }
