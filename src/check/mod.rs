@@ -239,7 +239,13 @@ impl<'w> Checker<'w> {
                     }
                 }
             }
-            // Scenes are selected by the loader (`load::scene`) and never reach the checker.
+            // Scenes are selected by the loader (`load::scene`) and never reach the checker,
+            // nor the effort selections of the selected scene: any other is out of place.
+            DeclKind::SelectEfforts(selection) => self.report(
+                Diagnostic::error("E0717", format!("`apply {}` chooses the efforts of a scene, and is written in one", selection.word.name))
+                    .primary(decl.span, "outside a scene")
+                    .help("move it into a scene (`scene light = apply without weight ; end ;`): the program itself applies what it declares"),
+            ),
             DeclKind::Scene(_) | DeclKind::Error => {}
         }
     }

@@ -77,7 +77,10 @@ impl<'w> Elaborator<'_, 'w> {
             .insert((scope, enclosing), (first, last));
         for k in first..=last {
             let instance = self.instance(scope, k, name.span)?;
-            self.within(instance, |elaborator| elaborator.decls(decls, scope))
+            (self.enclosing_groups).push(format!("{}[{k}]", name.name));
+            let elaborated = self.within(instance, |elaborator| elaborator.decls(decls, scope));
+            self.enclosing_groups.pop();
+            elaborated
                 .map_err(|error| {
                     error.secondary(
                         name.span,

@@ -50,6 +50,11 @@ pub struct Elaborator<'c, 'w> {
     pub(super) own_join: Option<OwnJoin>,
     /// How the numbers written with a decimal point are moved (`lsdc test --perturb`).
     pub(super) perturbation: Option<Perturbation>,
+    /// The applied efforts the selected scene keeps (`None`: all of them).
+    pub(super) effort_filter: Option<super::effort_choice::EffortFilter>,
+    /// The packages and instances of arrays around the declaration being elaborated,
+    /// outermost first (`arm[1]`): the groups an `apply` answers to.
+    pub(super) enclosing_groups: Vec<String>,
 }
 
 /// A round-off probe of a program's own numbers: each number written with a decimal point
@@ -94,6 +99,8 @@ impl<'c, 'w> Elaborator<'c, 'w> {
             resolved: Cursor::default(),
             aliases: FxHashMap::default(),
             warnings: Vec::new(),
+            effort_filter: super::effort_choice::EffortFilter::new(&workspace.scenes.efforts),
+            enclosing_groups: Vec::new(),
         }
     }
 

@@ -274,10 +274,22 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     target,
                     reaction,
                 } = &**apply;
+                let written = effort;
                 let effort = match self.expr(effort, &mut locals)? {
                     Value::Force(id) | Value::Torque(id) => id,
                     _ => return Err(internal("apply without an effort")),
                 };
+                if let Some(filter) = &mut self.effort_filter {
+                    let name = self.mechanism.efforts[effort.0 as usize].name;
+                    let names = super::effort_choice::application_names(
+                        name.map(|n| n.to_string()),
+                        written,
+                        &self.enclosing_groups,
+                    );
+                    if !filter.keeps(names) {
+                        return Ok(());
+                    }
+                }
                 let Some(target) = target else {
                     self.fields.push((effort, decl.span));
                     return Ok(());
@@ -310,7 +322,12 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                     .get(&decl.span)
                     .ok_or_else(|| internal("package not checked"))?;
                 match &package_decl.index {
-                    None => self.decls(&package_decl.decls, package),
+                    None => {
+                        (self.enclosing_groups).push(package_decl.name.name.to_string());
+                        let elaborated = self.decls(&package_decl.decls, package);
+                        self.enclosing_groups.pop();
+                        elaborated
+                    }
                     Some(index) => {
                         self.package_array(&package_decl.name, index, &package_decl.decls, package)
                     }
@@ -321,7 +338,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 None => Err(internal("unresolved import")),
             },
             DeclKind::Error => Err(internal("declaration with a syntax error")),
-            DeclKind::Scene(_) => Err(internal("a scene left after loading (`load::scene`)")),
+            DeclKind::Scene(_) | DeclKind::SelectEfforts(_) => {
+                Err(internal("a scene's declaration left after loading (`load::scene`)"))
+            }
         }
     }
 

@@ -476,6 +476,8 @@ pub struct Mechanism {
     /// The scene the mechanism was reduced for, and what its model holds
     /// (`elab::scene::reduce`); `None` for a program without scenes.
     pub scene: Option<super::scene_model::SceneModel>,
+    /// The `apply` declarations the selected scene's `apply only` or `apply without` left out.
+    pub applications_not_chosen: usize,
 }
 
 /// What an `output` declaration writes at each output of a run.

@@ -7,6 +7,7 @@ mod aim;
 mod arrays;
 mod constants;
 mod decls;
+mod effort_choice;
 mod elaborator;
 mod eval;
 mod fields;
@@ -80,6 +81,12 @@ fn run(
     elaborator.perturbation = numbers;
     for &root in &workspace.roots {
         elaborator.module(root)?;
+    }
+    if let Some(filter) = &elaborator.effort_filter {
+        if let Some(unanswered) = filter.unanswered() {
+            return Err(unanswered);
+        }
+        elaborator.mechanism.applications_not_chosen = filter.left_out;
     }
     elaborator.apply_fields()?;
     for &root in &workspace.roots {

@@ -20,6 +20,8 @@ pub struct SceneModel {
     /// Applications of efforts left out because their value is identically zero (a zero
     /// vector written as numbers, with no potential and no field).
     pub zero_efforts: usize,
+    /// `apply` declarations left out by the scene's `apply only` or `apply without`.
+    pub efforts_not_chosen: usize,
     /// Coordinates the scene locks, welded (their joins' bodies merged when all are locked).
     pub welded: usize,
 }
@@ -33,6 +35,8 @@ pub struct LeftOut {
 
 /// Why a group is left out.
 pub(super) const NOT_READ: &str = "not read by the scene's outputs";
+/// Why a massless subtree is left out (`elab::scene::massless`).
+pub(super) const MASSLESS: &str = "massless, nothing the scene reads moves with them";
 
 impl SceneModel {
     /// `model of scene `arm`: 3 of 6 bodies, 0 of 0 loops; left out: right:base, right:upper
@@ -58,6 +62,13 @@ impl SceneModel {
         if self.zero_efforts > 0 {
             let plural = if self.zero_efforts == 1 { "" } else { "s" };
             parts.push(format!("{} applied effort{plural} identically zero", self.zero_efforts));
+        }
+        if self.efforts_not_chosen > 0 {
+            let plural = if self.efforts_not_chosen == 1 { "" } else { "s" };
+            parts.push(format!(
+                "{} applied effort{plural} (not chosen by the scene)",
+                self.efforts_not_chosen
+            ));
         }
         if !parts.is_empty() {
             text += &format!("; left out: {}", parts.join("; "));

@@ -382,7 +382,10 @@ impl Builder<'_> {
                     }
                     self.declarations(&package.decls)
                 }
-                DeclKind::Import(_) | DeclKind::Scene(_) | DeclKind::Error => {}
+                DeclKind::Import(_)
+                | DeclKind::Scene(_)
+                | DeclKind::SelectEfforts(_)
+                | DeclKind::Error => {}
             }
         }
     }

@@ -22,6 +22,25 @@ pub struct Scenes {
     pub selected: Option<String>,
     /// Where the selected scene is declared (its declarations are inside).
     pub selected_span: Option<Span>,
+    /// The selected scene's `apply only` and `apply without`: the applied efforts it keeps.
+    pub efforts: EffortChoice,
+}
+
+/// The applied efforts a scene keeps (`apply only weight, arm[1] ;`, `apply without damping ;`):
+/// each name as written (`arm[1]:push`) with where it is written. An application is kept when
+/// no `only` is written or one of its names is among them, and none is among the `without`
+/// (`elab::effort_choice` names the applications).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct EffortChoice {
+    pub only: Vec<(String, Span)>,
+    pub without: Vec<(String, Span)>,
+}
+
+impl EffortChoice {
+    /// Whether the scene chooses among the applied efforts at all.
+    pub fn is_empty(&self) -> bool {
+        self.only.is_empty() && self.without.is_empty()
+    }
 }
 
 /// A scene as declared: its name, where the name and the whole declaration are, its
@@ -86,6 +105,7 @@ pub fn select(
     let selected = (chosen.as_ref()).and_then(|name| scenes.into_iter().find(|s| s.name == *name));
     let selected_span = selected.as_ref().map(|s| s.span);
     let mut added = selected.map(|s| s.decls).unwrap_or_default();
+    let efforts = effort_choice(&mut added, diagnostics);
     let is_simulate = |decl: &Decl| matches!(decl.kind, DeclKind::Simulate(_));
     // The scene's settings replace the program's; when the program has two, they stay for the
     // checker's E0418 and the scene's are set aside (one error, where the fault is).
@@ -102,7 +122,34 @@ pub fn select(
         names,
         selected: chosen,
         selected_span,
+        efforts,
     }
+}
+
+/// Takes the effort selections (`apply only ...`, `apply without ...`) out of a scene's
+/// declarations. E0716: another word in their place.
+fn effort_choice(decls: &mut Vec<Decl>, diagnostics: &mut Vec<Diagnostic>) -> EffortChoice {
+    let mut choice = EffortChoice::default();
+    decls.retain(|decl| {
+        let DeclKind::SelectEfforts(selection) = &decl.kind else {
+            return true;
+        };
+        let names = selection.names.iter().map(|n| (n.path.clone(), n.span));
+        match selection.word.name.as_str() {
+            "only" => choice.only.extend(names),
+            "without" => choice.without.extend(names),
+            word => diagnostics.push(
+                Diagnostic::error(
+                    "E0716",
+                    format!("`apply {word}` is not an effort selection"),
+                )
+                .primary(selection.word.span, "`only` or `without` expected here")
+                .help("a scene keeps some applied efforts with `apply only weight, arm[1] ;` or leaves some out with `apply without damping ;`"),
+            ),
+        }
+        false
+    });
+    choice
 }
 
 /// Leaves out the scenes of an imported library: they are the library's own studies.

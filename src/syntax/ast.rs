@@ -70,6 +70,9 @@ pub enum DeclKind {
     /// `apply E on T`; `apply E between R and T`: E on T and its opposite on R (`reaction`);
     /// `apply F` for a force with a `field`: on every body with mass (a uniform field).
     Apply(Node<ApplyDecl>),
+    /// `apply only weight, arm[1]`; `apply without damping`: in a scene, the applied efforts
+    /// its study keeps (`load::scene` takes them out of the program).
+    SelectEfforts(Node<EffortSelection>),
     /// `package P = decls end`
     Package(Node<PackageDecl>),
     /// `scene name = decls end`: a study of the program with its own settings, values, drives,
@@ -162,6 +165,21 @@ pub struct ApplyDecl {
     pub effort: Expr,
     pub target: Option<Expr>,
     pub reaction: Option<Expr>,
+}
+
+/// `apply only names` or `apply without names` (`word`): the applied efforts a scene keeps,
+/// named by an effort's name, the definition that makes it, or a group that declares it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EffortSelection {
+    pub word: Ident,
+    pub names: Vec<SelectedName>,
+}
+
+/// A name of an effort selection as written (`arm[1]:push`), with where it is written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SelectedName {
+    pub path: String,
+    pub span: Span,
 }
 
 /// `import target [as alias]`

@@ -80,7 +80,11 @@ fn decl_exprs<'a>(kind: &'a DeclKind, out: &mut Vec<&'a Expr>) {
             out.push(&apply.effort);
             out.extend(apply.target.iter().chain(&apply.reaction));
         }
-        DeclKind::Package(_) | DeclKind::Scene(_) | DeclKind::Import(_) | DeclKind::Error => {}
+        DeclKind::Package(_)
+        | DeclKind::Scene(_)
+        | DeclKind::SelectEfforts(_)
+        | DeclKind::Import(_)
+        | DeclKind::Error => {}
     }
 }
 
@@ -155,7 +159,7 @@ fn dismantle(kind: DeclKind) {
             DeclKind::Scene(scene) => {
                 decls.extend(scene.into_inner().decls.into_iter().map(|d| d.kind));
             }
-            DeclKind::Import(_) | DeclKind::Error => {}
+            DeclKind::SelectEfforts(_) | DeclKind::Import(_) | DeclKind::Error => {}
         }
         while let Some(mut expr) = exprs.pop() {
             match std::mem::replace(&mut expr.kind, ExprKind::Error) {

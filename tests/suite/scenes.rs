@@ -7,6 +7,8 @@ use lsdc::api::{Program, SettingsChanges, Simulation};
 use lsdc::load::LoadOptions;
 use lsdc::prepare::Integrator;
 
+use lsdc::simulate::run::run;
+
 use crate::common::programs::simulated;
 
 const CELL: &str = "examples/robot_cell.lsd";
@@ -336,5 +338,132 @@ fn efforts_identically_zero_are_left_out_and_change_nothing() {
     for name in ["angle", "swing.q"] {
         let difference = relative_difference(&reduced, &full, name);
         assert!(difference <= 1e-12, "{name}: {difference:e}");
+    }
+}
+
+/// Two links under gravity, a push and a damping torque declared in a group (`package`): the
+/// efforts a scene's `apply only` and `apply without` choose among.
+const CHOSEN_BASE: &str = "import joints ;\nimport gravity ;\nlet a = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\nlet b = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and a with revolute([1, 0, 0]) as shoulder ;\njoin [0, 0, -1] ++ 1 @ a and b with revolute([1, 0, 0]) as elbow ;\ninitial shoulder.q = 0.3 ;\noutput tip = position([0, 0, -1] ++ 1 @ b) ;\n";
+const WEIGHTS: &str = "apply weight(a) on a.iframe ;\napply weight(b) on b.iframe ;\n";
+const PUSH: &str =
+    "let push = force value = [0, 0.5, 0.2 * elbow.q] end ;\napply push on b.iframe ;\n";
+const DAMPING: &str = "package damping =\n  apply torque value = [-0.2 * shoulder.q', 0, 0] end on a ;\n  apply torque value = [-0.1 * elbow.q', 0, 0] end between a and b ;\nend ;\n";
+
+#[test]
+fn a_scene_applies_the_efforts_it_chooses_by_name_definition_or_group() {
+    let all = format!("{CHOSEN_BASE}{WEIGHTS}{PUSH}{DAMPING}");
+    // Each choice, the `apply` declarations it leaves out, and the program that declares only
+    // the efforts chosen.
+    for (choice, left_out, declared) in [
+        ("apply without push, damping ;", 3, WEIGHTS.to_string()),
+        ("apply only weight ;", 3, WEIGHTS.to_string()),
+        ("apply only push, damping ;", 2, format!("{PUSH}{DAMPING}")),
+        (
+            "apply only weight, damping ;\n  apply without damping ;",
+            3,
+            WEIGHTS.to_string(),
+        ),
+        ("apply without weight ;", 2, format!("{PUSH}{DAMPING}")),
+    ] {
+        let chosen = program(&format!("{all}scene chosen =\n  {choice}\nend ;"), None);
+        let model = scene_model(&chosen);
+        assert_eq!(model.efforts_not_chosen, left_out, "{choice}");
+        let plural = if left_out == 1 { "" } else { "s" };
+        let text = model.describe();
+        let said = format!("left out: {left_out} applied effort{plural} (not chosen by the scene)");
+        assert!(text.ends_with(&said), "{text}");
+        let full = program(&format!("{CHOSEN_BASE}{declared}"), None);
+        assert_eq!(
+            chosen.mechanism().unwrap().applications.len(),
+            full.mechanism().unwrap().applications.len(),
+            "{choice}"
+        );
+        let (chosen_run, full_run) = (run_fixed(&chosen, 1.0), run_fixed(&full, 1.0));
+        let json = serde_json::to_value(&chosen_run.report).expect("the report as JSON");
+        assert_eq!(json["model"]["efforts_not_chosen"], left_out, "{json}");
+        for name in ["tip.x", "tip.y", "tip.z", "shoulder.q", "elbow.q"] {
+            let difference = relative_difference(&chosen_run, &full_run, name);
+            assert!(difference <= 1e-12, "{choice} {name}: {difference:e}");
+        }
+    }
+}
+
+#[test]
+fn a_scene_chooses_the_efforts_of_an_instance_or_of_an_array() {
+    let text = std::fs::read_to_string(CELL).expect("readable");
+    // Each arm applies three weights, the linkage three.
+    for (choice, left_out) in [
+        ("apply only arm[1] ;", 6),
+        ("apply without arm ;", 6),
+        ("apply without arm[2] ;", 3),
+        ("apply only arm[2]:weight ;", 6),
+        ("apply without arm:weight ;", 6),
+    ] {
+        let scene = format!("{text}\nscene chosen =\n  {choice}\nend ;");
+        let model = scene_model(&program(&scene, Some("chosen")));
+        assert_eq!(model.efforts_not_chosen, left_out, "{choice}");
+    }
+}
+
+/// A double pendulum carrying at its first link a massless subtree: a turntable `s` and a slide
+/// `t` on it, of zero mass and inertia.
+const MASSLESS_BASE: &str = "import joints ;\nimport gravity ;\nlet a = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\nlet b = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end ;\njoin earth and a with revolute([1, 0, 0]) as shoulder ;\njoin [0, 0, -1] ++ 1 @ a and b with revolute([1, 0, 0]) as elbow ;\napply weight(a) on a.iframe ;\napply weight(b) on b.iframe ;\ninitial shoulder.q = 0.5 ;\noutput tip = position([0, 0, -1] ++ 1 @ b) ;\n";
+const MASSLESS_TREE: &str = "let s = body mass = 0, iframe = 0, inertia = [0, 0, 0] end ;\nlet t = body mass = 0, iframe = 0, inertia = [0, 0, 0] end ;\njoin [0, 0, -1] ++ 1 @ a and s with revolute([0, 0, 1]) as spin ;\njoin [0, 0, 0.2] ++ 1 @ s and t with prismatic([1, 0, 0]) as slide ;\napply weight(s) on s.iframe ;\n";
+
+#[test]
+fn a_massless_subtree_nothing_reads_is_left_out_and_changes_nothing() {
+    // Free or driven, the subtree's coordinates carry no inertia: the full model's mass matrix
+    // is singular. The scene runs as the program written without the subtree.
+    let drives = "drive spin.q = 2 * time ;\ndrive slide.q = 0.1 * sin(3 * time) ;\n";
+    let without = run_fixed(&program(MASSLESS_BASE, None), 1.0);
+    for added in ["", drives] {
+        let text = format!("{MASSLESS_BASE}{MASSLESS_TREE}{added}");
+        let full = program(&text, None);
+        let failure = (full.prepare(&[], &Default::default()).ok())
+            .and_then(|prepared| run(&prepared, &mut |_| {}).report.failure)
+            .map(|f| f.message);
+        let failure = failure.unwrap_or_default();
+        assert!(
+            failure.starts_with("the mass matrix is singular"),
+            "{failure}"
+        );
+        let reduced = program(&format!("{text}scene arm =\nend ;"), None);
+        let model = scene_model(&reduced);
+        assert_eq!((model.bodies, model.bodies_total), (2, 4));
+        let said = model.describe();
+        assert!(
+            said.contains("left out: s and t (massless, nothing the scene reads moves with them)"),
+            "{said}"
+        );
+        let reduced_run = run_fixed(&reduced, 1.0);
+        assert_eq!(reduced_run.coordinate_names, ["shoulder.q", "elbow.q"]);
+        for name in ["tip.x", "tip.y", "tip.z", "shoulder.q", "elbow.q"] {
+            let difference = relative_difference(&reduced_run, &without, name);
+            assert!(difference <= 1e-12, "{name}: {difference:e}");
+        }
+        let json = serde_json::to_value(&reduced_run.report).expect("the report as JSON");
+        assert_eq!(json["model"]["bodies"], 2, "{json}");
+        assert_eq!(json["model"]["left_out"][0]["bodies"][1], "t", "{json}");
+    }
+}
+
+#[test]
+fn a_massless_subtree_read_loaded_or_closed_stays() {
+    let drives = "drive spin.q = 2 * time ;\ndrive slide.q = 0.1 * sin(3 * time) ;\n";
+    let text = format!("{MASSLESS_BASE}{MASSLESS_TREE}{drives}");
+    for (scene, bodies) in [
+        // The turntable's angle is read: the slide on it is not, and goes.
+        ("output turn = spin.q ;", 3),
+        ("output where = position(t) ;", 4),
+        ("output rate = slide.q' ;", 4),
+        ("apply force value = [0, 0, 1] end on t ;", 4),
+        // The slide only is read: the turntable carries it and stays.
+        ("output along = slide.q ;", 4),
+        // A loop through the turntable keeps it; the slide on it goes.
+        ("join s and b with spherical as closing ;", 3),
+        ("output far = elbow.q ;", 2),
+    ] {
+        let reduced = program(&format!("{text}scene arm =\n  {scene}\nend ;"), None);
+        assert_eq!(scene_model(&reduced).bodies, bodies, "{scene}");
     }
 }

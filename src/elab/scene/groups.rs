@@ -202,35 +202,53 @@ impl Reads {
     /// What a scalar reads: the joins whose coordinates it names, the bodies whose frames'
     /// states it reads, the states.
     fn scalar(&mut self, s: &Scalar, groups: &Groups) {
-        if !self.1.insert(Arc::as_ptr(s)) {
-            return;
+        motion_read(s, &mut self.1, &mut |read| match read {
+            MotionRead::Join(join) => self.0.extend(groups.join_anchor(join)),
+            MotionRead::Body(BodyId(id)) => self.0.push(id as usize),
+            MotionRead::State(id) => self.0.push(groups.bodies + id as usize),
+        });
+    }
+}
+
+/// A part of the motion a value reads.
+#[derive(Clone, Copy)]
+pub(super) enum MotionRead {
+    /// A join's coordinate or rate (`crank.q`, `crank.q'`).
+    Join(JoinId),
+    /// The state of a frame of a body (`position(arm.tip)`).
+    Body(BodyId),
+    /// A state (`state i = ...`), by index.
+    State(u32),
+}
+
+/// Calls `found` with what a scalar reads of the motion; the expressions in `seen` are not
+/// read again (a law's subexpressions are shared).
+pub(super) fn motion_read(
+    s: &Scalar,
+    seen: &mut HashSet<*const SExpr>,
+    found: &mut dyn FnMut(MotionRead),
+) {
+    if !seen.insert(Arc::as_ptr(s)) {
+        return;
+    }
+    match &**s {
+        SExpr::JoinCoordinate { join, .. } => found(MotionRead::Join(*join)),
+        SExpr::FrameState(frame, _) => {
+            if let BodyRef::Body(id) = frame.body {
+                found(MotionRead::Body(id));
+            }
+            let mut frame = (**frame).clone();
+            values::frame(&mut frame, &mut |s| motion_read(s, seen, found));
         }
-        match &**s {
-            SExpr::JoinCoordinate { join, .. } => self.join(*join, groups),
-            SExpr::FrameState(frame, _) => {
-                if let BodyRef::Body(BodyId(id)) = frame.body {
-                    self.0.push(id as usize);
-                }
-                let mut frame = (**frame).clone();
-                self.frame(&mut frame, groups);
-            }
-            SExpr::State(id) => self.0.push(groups.bodies + id.0 as usize),
-            SExpr::Neg(a) => self.scalar(a, groups),
-            SExpr::Add(a, b)
-            | SExpr::Sub(a, b)
-            | SExpr::Mul(a, b)
-            | SExpr::Div(a, b)
-            | SExpr::Pow(a, b) => {
-                self.scalar(a, groups);
-                self.scalar(b, groups);
-            }
-            SExpr::Call(_) | SExpr::UnknownFunction(_) => {
-                s.arguments().iter().for_each(|a| self.scalar(a, groups))
-            }
-            SExpr::Num(_)
-            | SExpr::Time
-            | SExpr::Unknown(_)
-            | SExpr::Coordinate { .. } => {}
+        SExpr::State(id) => found(MotionRead::State(id.0)),
+        SExpr::Neg(a) => motion_read(a, seen, found),
+        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+            motion_read(a, seen, found);
+            motion_read(b, seen, found);
         }
+        SExpr::Call(_) | SExpr::UnknownFunction(_) => {
+            s.arguments().iter().for_each(|a| motion_read(a, seen, found))
+        }
+        SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } => {}
     }
 }

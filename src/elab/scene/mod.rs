@@ -14,6 +14,7 @@
 //! left-out parts use stay in the mechanism's tables, unread.
 
 mod groups;
+mod massless;
 mod renumber;
 mod values;
 
@@ -23,7 +24,7 @@ use super::mechanism::Mechanism;
 use super::value::{BodyId, BodyRef, JoinId, LinkId};
 use crate::diag::Diagnostic;
 use crate::source::Span;
-use super::scene_model::{LeftOut, SceneModel, NOT_READ};
+use super::scene_model::{LeftOut, SceneModel, MASSLESS, NOT_READ};
 use groups::{Groups, Staying};
 use renumber::Renumbering;
 
@@ -57,6 +58,7 @@ pub fn reduce(
         loops_total,
         left_out: Vec::new(),
         zero_efforts: leave_out_zero_efforts(&mut mechanism),
+        efforts_not_chosen: mechanism.applications_not_chosen,
         welded: weld_locks(&mut mechanism),
     };
     if mechanism.outputs.is_empty() {
@@ -64,38 +66,52 @@ pub fn reduce(
         return (mechanism, Vec::new());
     }
     let staying = Groups::of(&mut mechanism).staying();
-    let kept_joins: Vec<bool> = (0..mechanism.joins.len())
+    let mut kept_joins: Vec<bool> = (0..mechanism.joins.len())
         .map(|j| staying.join(JoinId(j as u32)))
         .collect();
+    let massless = massless::unread_subtrees(&mut mechanism, &kept_joins);
+    for join in &massless.joins {
+        kept_joins[join.0 as usize] = false;
+    }
     if kept_joins.iter().all(|&k| k) {
         mechanism.scene = Some(model);
         return (mechanism, Vec::new());
     }
     let full = mechanism.clone();
+    let kept = Kept {
+        joins: kept_joins,
+        staying: &staying,
+        massless: &massless.bodies,
+    };
     let mut left_out: BTreeMap<usize, Vec<String>> = BTreeMap::new();
+    let mut massless_left_out = Vec::new();
     let mut seen = BTreeSet::new();
     for join in &mechanism.joins {
         for body in [join.first.body, join.second.body] {
-            if let BodyRef::Body(id) = body {
-                if seen.insert(id) && !staying.body(body) {
-                    let group = staying.roots[id.0 as usize];
-                    left_out.entry(group).or_default().push(mechanism.body_name(body));
-                }
+            let BodyRef::Body(id) = body else { continue };
+            if !seen.insert(id) {
+                continue;
+            }
+            if !staying.body(body) {
+                let group = staying.roots[id.0 as usize];
+                left_out.entry(group).or_default().push(mechanism.body_name(body));
+            } else if massless.bodies.contains(&id) {
+                massless_left_out.push(mechanism.body_name(body));
             }
         }
     }
-    let warnings = scene_declarations_left_out(&mechanism, &staying, scene, scene_span);
-    let mut renumbering = Renumbering::new(&kept_joins);
+    let warnings = scene_declarations_left_out(&mechanism, &kept, scene, scene_span);
+    let mut renumbering = Renumbering::new(&kept.joins);
     let joins = std::mem::take(&mut mechanism.joins);
-    mechanism.joins = (joins.into_iter().zip(&kept_joins))
+    mechanism.joins = (joins.into_iter().zip(&kept.joins))
         .filter_map(|(join, &kept)| kept.then_some(join))
         .collect();
-    mechanism.initial.retain(|v| staying.join(v.join));
-    mechanism.drives.retain(|d| staying.join(d.join));
-    mechanism.actuators.retain(|a| staying.join(a.join));
-    (mechanism.applications).retain(|a| staying.body(a.target.body));
-    (mechanism.position_drives).retain(|d| staying.body(d.frame.body));
-    (mechanism.frames).retain(|f| staying.body(f.frame.body));
+    mechanism.initial.retain(|v| kept.join(v.join));
+    mechanism.drives.retain(|d| kept.join(d.join));
+    mechanism.actuators.retain(|a| kept.join(a.join));
+    (mechanism.applications).retain(|a| kept.body(a.target.body));
+    (mechanism.position_drives).retain(|d| kept.body(d.frame.body));
+    (mechanism.frames).retain(|f| kept.body(f.frame.body));
     rewrite_values(&mut mechanism, &mut renumbering, &BTreeSet::new());
     if renumbering.stale {
         // Not expected (the groups couple whatever reads a join); the full model is exact.
@@ -110,8 +126,33 @@ pub fn reduce(
             reason: NOT_READ.to_string(),
         })
         .collect();
+    if !massless_left_out.is_empty() {
+        model.left_out.push(LeftOut {
+            bodies: massless_left_out,
+            reason: MASSLESS.to_string(),
+        });
+    }
     mechanism.scene = Some(model);
     (mechanism, warnings)
+}
+
+/// What the scene's model keeps: the joins, and the bodies of the groups staying but for the
+/// massless subtrees nothing reads.
+struct Kept<'s> {
+    joins: Vec<bool>,
+    staying: &'s Staying,
+    massless: &'s BTreeSet<BodyId>,
+}
+
+impl Kept<'_> {
+    fn join(&self, join: JoinId) -> bool {
+        self.joins[join.0 as usize]
+    }
+
+    fn body(&self, body: BodyRef) -> bool {
+        let massless = matches!(body, BodyRef::Body(id) if self.massless.contains(&id));
+        self.staying.body(body) && !massless
+    }
 }
 
 /// Leaves out the applications of efforts whose value is identically zero: they change no
@@ -264,7 +305,7 @@ fn leave_out_zero_efforts(mechanism: &mut Mechanism) -> usize {
 /// is said, never silent.
 fn scene_declarations_left_out(
     mechanism: &Mechanism,
-    staying: &Staying,
+    kept: &Kept,
     scene: &str,
     scene_span: Option<Span>,
 ) -> Vec<Diagnostic> {
@@ -277,7 +318,7 @@ fn scene_declarations_left_out(
             && span.end() <= scene_span.end()
     };
     let mut named: Vec<(Span, String)> = Vec::new();
-    let join_left_out = |join: JoinId| !staying.join(join);
+    let join_left_out = |join: JoinId| !kept.join(join);
     for value in mechanism.initial.iter().filter(|v| join_left_out(v.join)) {
         named.push((value.span, format!("gives `{}` an initial value", mechanism.join_name(value.join))));
     }
@@ -289,7 +330,7 @@ fn scene_declarations_left_out(
         named.push((actuator.span, format!("actuates `{}`", mechanism.join_name(actuator.join))));
     }
     for application in &mechanism.applications {
-        if !staying.body(application.target.body) {
+        if !kept.body(application.target.body) {
             let body = mechanism.body_name(application.target.body);
             named.push((application.span, format!("applies an effort on `{body}`")));
         }
