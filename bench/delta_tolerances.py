@@ -2,7 +2,7 @@
 examples/delta_tolerances.lsd read as Parquet by pandas (docs/commands.md, "sweep").
 
     lsdc sweep examples/delta_tolerances.lsd --design latin --sample 1000 --seed 1 \
-        --vary "A1.q=uniform(0.35, 1.05)" ... (the arm angles and the tolerances) -o built.parquet
+        --vary "A1.q=uniform(0.7, 1.0)" ... (the arm angles and the tolerances) -o built.parquet
     python3 bench/delta_tolerances.py built.parquet
 
 The nominal mechanism's nacelle at the same arm angles comes from a second sweep over the

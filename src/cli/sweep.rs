@@ -19,6 +19,7 @@ use lsdc::studies::sweep::design::{self, Design, GridAxis, Sampling};
 use lsdc::studies::sweep::distribution::Distribution;
 use lsdc::studies::sweep::record::{runs_table, samples_table, Status};
 use lsdc::studies::sweep::runs::{PrepareError, Stop, Sweep};
+use lsdc::studies::sweep::table::TableFormat;
 use lsdc::studies::sweep::{self, journal, Execution, Outcome, Shard};
 
 #[derive(clap::Args)]
@@ -153,7 +154,7 @@ fn run_gather(args: &GatherArgs) -> ExitCode {
         Ok(gathered) => gathered,
         Err(why) => return usage_error(&format!("cannot gather: {why}")),
     };
-    if let Err(why) = gathered.table.write(&args.out) {
+    if let Err(why) = gathered.table.write(&args.out, TableFormat::of(&args.out)) {
         return usage_error(&format!("cannot write `{}`: {why}", args.out.display()));
     }
     let what = if gathered.samples { "samples" } else { "runs" };
@@ -376,7 +377,10 @@ fn write_table(table: &sweep::table::Table, path: &std::path::Path) -> Result<()
     partial.push(".partial");
     let partial = PathBuf::from(partial);
     let cannot = |why: String| format!("cannot write `{}`: {why}", path.display());
-    table.write(&partial).map_err(cannot)?;
+    // The format is the final name's: the partial file's name ends in `.partial`.
+    table
+        .write(&partial, TableFormat::of(path))
+        .map_err(cannot)?;
     std::fs::rename(&partial, path).map_err(|e| cannot(e.to_string()))
 }
 

@@ -518,8 +518,8 @@ fn parquet_reads_back_with_the_parquet_crate_as_the_csv_says() {
 #[test]
 fn a_failed_run_is_its_own_row_and_the_others_go_on() {
     let dir = scratch("failures");
-    // The four-bar's crank length: beyond 1.5 (ground 4, coupler 3.5, rocker 3) the loop
-    // cannot close at the crank's initial angle.
+    // The four-bar's crank length: at 11, longer than the three other links together (ground
+    // 4, coupler 3.5, rocker 3), the loop cannot close at any crank angle.
     let program = std::fs::read_to_string("examples/four_bar.lsd").expect("example");
     let program = program.replace("let l1 = 1.0 ;", "let l1 = ?s ; given l1 = 1.0 ;");
     let file = dir.join("four_bar.lsd");
@@ -529,7 +529,7 @@ fn a_failed_run_is_its_own_row_and_the_others_go_on() {
         "sweep",
         &file.display().to_string(),
         "--grid",
-        "l1=0.5:4:3",
+        "l1=0.5:11:3",
         "--duration",
         "0.2",
         "-o",
@@ -545,7 +545,7 @@ fn a_failed_run_is_its_own_row_and_the_others_go_on() {
     let csv = std::fs::read_to_string(&out).expect("written");
     let last = csv.lines().nth(3).expect("third run");
     assert!(
-        last.starts_with("2,4e0,unprepared,,") && last.contains("E08"),
+        last.starts_with("2,1.1e1,unprepared,,") && last.contains("E08"),
         "{last}"
     );
     // A name that is neither a coordinate nor a value of the program is refused before any

@@ -341,9 +341,10 @@ impl Table {
         Ok(Table { columns })
     }
 
-    /// Writes the table to `path` in the format its extension names.
-    pub fn write(&self, path: &Path) -> Result<(), String> {
-        match TableFormat::of(path) {
+    /// Writes the table to `path` in `format` (`TableFormat::of` a path: the format its
+    /// extension names).
+    pub fn write(&self, path: &Path, format: TableFormat) -> Result<(), String> {
+        match format {
             TableFormat::Parquet => self.write_parquet(path),
             TableFormat::Csv => std::fs::write(path, self.to_csv()).map_err(|e| e.to_string()),
         }
