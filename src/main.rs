@@ -37,6 +37,11 @@ enum Command {
     /// Simulate a mechanism (tree or closed loops) from its `initial` values; write the samples
     /// (CSV or JSON) and a run report.
     Simulate(simulate::SimulateArgs),
+    /// Run the program many times in one process on every core: over a grid, a list or a
+    /// sample (Monte Carlo, Latin hypercube, Sobol) of initial values and values of the
+    /// program; a row per run (CSV or Parquet), shards for a job array, `--resume` after an
+    /// interruption. `lsdc sweep gather` merges the shards' files.
+    Sweep(sweep::SweepArgs),
     /// Speed against error: simulate with several integrators and tolerances (or fixed steps),
     /// compare each run with a tight reference at the outputs, and print the work-precision
     /// table (errors, closure, energy drift, steps, evaluations, CPU time).
@@ -104,6 +109,7 @@ fn main() -> ExitCode {
         Command::Tree(args) => tree::run(&args),
         Command::Assemble(args) => assemble::run(&args),
         Command::Simulate(args) => simulate::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
         Command::Precision(args) => precision::run(&args),
         Command::Drag(args) => drag::run(&args),
         Command::View(args) => view::run(&args),

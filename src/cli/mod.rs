@@ -18,6 +18,7 @@ pub mod precision;
 pub mod shared;
 pub mod simulate;
 pub mod statics;
+pub mod sweep;
 pub mod test;
 pub mod tree;
 pub mod view;

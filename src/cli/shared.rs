@@ -27,7 +27,8 @@ pub fn set_modes(quiet: bool, json_asked: bool) {
     JSON_ASKED.store(json_asked, Ordering::Relaxed);
 }
 
-fn quiet() -> bool {
+/// Whether `--quiet` was given.
+pub fn quiet() -> bool {
     QUIET.load(Ordering::Relaxed)
 }
 

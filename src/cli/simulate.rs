@@ -125,6 +125,11 @@ impl IntegratorArg {
         self.0.integrator.clone()
     }
 
+    /// The integrator's name on the command line.
+    pub fn name(self) -> &'static str {
+        self.0.name
+    }
+
     /// Whether the integrator takes a fixed step rather than tolerances.
     pub fn fixed_step(self) -> bool {
         self.0.fixed_step
@@ -306,7 +311,7 @@ fn progress_bar(duration: f64) -> Option<indicatif::ProgressBar> {
 /// A flag that SIGINT and SIGTERM set to their number, for the run to stop between two steps
 /// and its output and report to be finished; a second signal ends the process at once. `None`
 /// where the handlers cannot be installed (the signals then end the process as usual).
-fn interrupt_on_signals() -> Option<lsdc::api::Interrupt> {
+pub fn interrupt_on_signals() -> Option<lsdc::api::Interrupt> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     use std::sync::atomic::{AtomicBool, AtomicUsize};
     use std::sync::Arc;

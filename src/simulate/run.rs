@@ -79,6 +79,16 @@ pub fn run_from(
     simulate_from(prepared, start, &RunOptions::default(), sink)
 }
 
+/// As [`run_from`], with `options` (a sweep keeps no samples and stops on its signals).
+pub fn run_from_with(
+    prepared: &Prepared,
+    start: &Start<'_>,
+    options: &RunOptions,
+    sink: &mut dyn FnMut(&Sample),
+) -> Simulation {
+    simulate_from(prepared, start, options, sink)
+}
+
 /// A run: the steps of a [`Simulator`] to the end of the settings' duration, each sample
 /// handed to `sink` as the steps deliver it, then the report.
 fn simulate_from(

@@ -6,8 +6,9 @@
 //! the velocity and acceleration models and their singularities at configurations
 //! (`kinematic_models`, closed by `configurations`) along runs (`singularities`), the singular points of the inverse geometric model
 //! (`singular_points`), the
-//! workspace of a point (`workspace`), and the linear model about an operating point
-//! (`linearize`).
+//! workspace of a point (`workspace`), the linear model about an operating point
+//! (`linearize`), and many runs of one program over a grid, a list or a sample of values
+//! (`sweep`).
 
 pub mod analysis;
 pub mod batch;
@@ -21,6 +22,7 @@ pub mod precision;
 pub mod singular_points;
 pub mod singularities;
 pub mod statics;
+pub mod sweep;
 pub mod trajectory;
 pub mod workspace;
 pub mod workspace_positions;
