@@ -178,7 +178,7 @@ fn step_case<'a>(prepared: &'a Prepared, start: &'a [Vec<f64>; 2]) -> Case<'a> {
         let started = thread_cpu_seconds();
         let mut untimed = 0.0;
         for _ in 0..calls {
-            if steps % 1000 == 0 {
+            if steps.is_multiple_of(1000) {
                 let before = thread_cpu_seconds();
                 simulator.reset(&start).expect("starts again");
                 untimed += thread_cpu_seconds() - before;
