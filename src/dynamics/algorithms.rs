@@ -3,7 +3,10 @@
 //! forward dynamics (ABA: three passes). Bodies without mass cost nothing. Geared rotors enter
 //! all three (`geared`).
 
+mod crba;
 mod geared;
+
+pub use crba::{crba, crba_after_kinematics, crba_into, mass_rows, mass_times};
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 
@@ -11,7 +14,7 @@ use super::compiled::EffortScratch;
 use super::joint::JointState;
 use super::model::Model;
 use crate::kinematics::eval::EvalError;
-use crate::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
+use crate::spatial::{self, Force, Inertia, Motion, Pose};
 
 /// Scratch space for the algorithms; `Data::new(&model)` once, reuse for every call.
 pub struct Data {
@@ -21,11 +24,8 @@ pub struct Data {
     pub velocity: Vec<Motion>,
     pub acceleration: Vec<Motion>,
     pub force: Vec<Force>,
-    /// CRBA: poses, composite inertias and motion columns in the fixed frame.
-    world_transform: Vec<Transform>,
-    composite_world: Vec<RigidInertia>,
-    /// CRBA: each velocity's motion column in the fixed frame.
-    world_columns: Vec<Motion>,
+    /// CRBA's poses, composite inertias and motion columns in the fixed frame.
+    mass_scratch: crba::MassScratch,
     articulated: Vec<Inertia>,
     bias: Vec<Force>,
     coriolis: Vec<Motion>,
@@ -85,9 +85,7 @@ impl Data {
             velocity: vec![Motion::zeros(); n + 1],
             acceleration: vec![Motion::zeros(); n + 1],
             force: vec![Force::zeros(); n + 1],
-            world_transform: vec![Transform::identity(); n + 1],
-            composite_world: vec![RigidInertia::zeros(); n + 1],
-            world_columns: vec![Motion::zeros(); model.nv],
+            mass_scratch: crba::MassScratch::new(model),
             articulated: vec![Inertia::zeros(); n + 1],
             bias: vec![Force::zeros(); n + 1],
             coriolis: vec![Motion::zeros(); n + 1],
@@ -355,120 +353,6 @@ pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> V
         }
     }
     force
-}
-
-/// The joint-space mass matrix M(q) (composite rigid bodies).
-pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, EvalError> {
-    let mut mass = DMatrix::zeros(model.nv, model.nv);
-    crba_into(model, data, q, &mut mass)?;
-    Ok(mass)
-}
-
-/// The mass matrix written into `mass` (nv × nv). Only the entries between joints on one
-/// branch (a joint and its ancestors) are written: the others are zero in every mass matrix,
-/// so `mass` must be zero there (a zero matrix, or one this function filled before).
-///
-/// Composite rigid bodies in the fixed frame: each body's inertia is moved to the fixed frame
-/// once, composites are then plain sums, and every entry is a dot product of a joint's motion
-/// column (in the fixed frame) with a composite momentum: no force is carried from joint to
-/// joint. Leaves the joint transforms at q in `data` (not the velocities, nor the world poses).
-pub fn crba_into(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    mass: &mut DMatrix<f64>,
-) -> Result<(), EvalError> {
-    // The joints' transforms first: independent of one another, they overlap in the processor.
-    for &k in &model.dynamic_joints {
-        let joint = &model.joints[k];
-        joint.update_transform(slice(q, joint.q_offset, joint.nq()), &mut data.states[k])?;
-    }
-    crba_after_kinematics(model, data, mass);
-    Ok(())
-}
-
-/// `crba_into` when `data` already holds the joints' transforms at q (`forward_kinematics`).
-pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<f64>) {
-    for &k in &model.dynamic_joints {
-        let joint = &model.joints[k];
-        let state = &data.states[k];
-        let (i, parent) = (joint.child, joint.dynamic_parent);
-        let world = data.world_transform[parent] * state.transform;
-        data.world_transform[i] = world;
-        let own = &model.dynamic_bodies[i - 1];
-        data.composite_world[i] = if own.massless {
-            RigidInertia::zeros()
-        } else {
-            own.rigid.to_parent(&world)
-        };
-        for (r, column) in state.subspace.columns().iter().enumerate() {
-            data.world_columns[joint.v_offset + r] = world.motion_to_parent(column);
-        }
-    }
-    for &k in model.dynamic_joints.iter().rev() {
-        let joint = &model.joints[k];
-        if joint.dynamic_parent != 0 {
-            let child = data.composite_world[joint.child];
-            data.composite_world[joint.dynamic_parent] += child;
-        }
-    }
-    let nv = model.nv;
-    let entries = mass.as_mut_slice();
-    write_composite_entries(model, data, entries, nv);
-    add_rotors_to_mass(model, data, mass);
-}
-
-/// The mass matrix's entries from the composite inertias and motion columns in `data`.
-fn write_composite_entries(model: &Model, data: &Data, entries: &mut [f64], nv: usize) {
-    for &k in &model.dynamic_joints {
-        let joint = &model.joints[k];
-        let composite = &data.composite_world[joint.child];
-        for column in joint.v_offset..joint.v_offset + joint.nv() {
-            let force = composite.times(&data.world_columns[column]);
-            // Column-major storage; the joint's branch lists its own and its ancestors' velocities.
-            for &row in &model.branch_velocities[k] {
-                let value = data.world_columns[row].dot(&force);
-                entries[row + column * nv] = value;
-                entries[column + row * nv] = value;
-            }
-        }
-    }
-}
-
-/// The rows of each column of `model`'s mass matrix that the composite-rigid-body algorithm
-/// writes (`crba_after_kinematics`): the others are zero whatever the state.
-pub fn mass_rows(model: &Model) -> Vec<Vec<usize>> {
-    let mut rows = vec![Vec::new(); model.nv];
-    for &k in &model.dynamic_joints {
-        let joint = &model.joints[k];
-        for column in joint.v_offset..joint.v_offset + joint.nv() {
-            for &row in &model.branch_velocities[k] {
-                rows[column].push(row);
-                if row != column {
-                    rows[row].push(column);
-                }
-            }
-        }
-    }
-    rows.iter_mut().for_each(|r| {
-        r.sort_unstable();
-        r.dedup();
-    });
-    rows
-}
-
-/// y = M x over the entries `rows` lists, column after column: the sums of a dense product
-/// in the same order, without its products by zero.
-pub fn mass_times(mass: &DMatrix<f64>, rows: &[Vec<usize>], x: &[f64], y: &mut [f64]) {
-    y.fill(0.0);
-    let nv = mass.nrows();
-    let entries = mass.as_slice();
-    for (column, (rows, &xj)) in rows.iter().zip(x).enumerate() {
-        let entries = &entries[column * nv..(column + 1) * nv];
-        for &row in rows {
-            y[row] += entries[row] * xj;
-        }
-    }
 }
 
 /// The motion of every body (in its own frame, index = body, 0 for earth) when the joints

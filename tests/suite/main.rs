@@ -44,6 +44,7 @@ mod loop_shaping;
 mod loops;
 mod lsp;
 mod mampey;
+mod mass_matrix;
 mod methods;
 mod mimics;
 mod model_laws;

@@ -358,18 +358,7 @@ fn mampey_equals_crba_and_rnea_columns_on_the_urdf_fixtures_and_a_geared_arm() {
         .map(|robot| format!("tests/fixtures/urdf/{robot}.urdf"));
     for path in paths.iter().chain([&"examples/geared_arm.lsd".to_string()]) {
         let robot = path.as_str();
-        let compilation = lsdc::driver::compile_files(
-            &[std::path::PathBuf::from(&path)],
-            &lsdc::load::LoadOptions {
-                library_dirs: Vec::new(),
-                use_environment: false,
-                scene: None,
-            },
-        )
-        .expect("loads");
-        let mechanism = compilation.mechanism.expect("elaborates");
-        let prepared = lsdc::prepare::prepare(&mechanism, &[], &Default::default())
-            .unwrap_or_else(|d| panic!("{robot}: {d:?}"));
+        let prepared = crate::common::programs::prepared_file(robot);
         let model = &prepared.model;
         for seed in 0..3 {
             let q: Vec<f64> = (0..model.nq)

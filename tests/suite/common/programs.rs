@@ -44,6 +44,15 @@ pub fn prepared(name: &str, replacements: &[(&str, &str)]) -> Prepared {
     })
 }
 
+/// A program or URDF file prepared with its own settings, as `lsdc` reads it.
+pub fn prepared_file(path: &str) -> Prepared {
+    let compilation =
+        lsdc::driver::compile_files(&[std::path::PathBuf::from(path)], &no_library_path())
+            .expect("loads");
+    let mechanism = compilation.mechanism.expect("elaborates");
+    prepare(&mechanism, &[], &Settings::default()).unwrap_or_else(|d| panic!("{path}: {d:?}"))
+}
+
 /// A run of the example `name` with `replacements` and `settings`, its own `simulate`
 /// declaration `declaration` removed so that `settings` rule.
 pub fn run_example(
