@@ -1,0 +1,303 @@
+//! The analytical derivatives of RNEA, ABA and CRBA (`rnea_derivatives`, `aba_derivatives`,
+//! `crba_derivatives`) against central differences of the algorithms themselves, on random
+//! trees (revolute, prismatic, spherical, free and welded joints, geared rotors, mimics), on the
+//! examples without loops and on the UR5, Panda and Talos of `tests/fixtures/urdf`; and, exact to
+//! round-off, against an independent algorithm: ½ vᵀ (∂M/∂q_j) v is the derivative of the
+//! kinetic energy that the variational integrator computes on its own (`derivatives`).
+//!
+//! Positions move in the joints' tangent spaces (`Model::retract`: a quaternion along its
+//! rotation), as the derivatives are defined. The measure of a derivative matrix is
+//! max |analytic − differences| / max(1, max |analytic|); central differences of step 1e-6 are
+//! good to about 1e-9 of that, the acceptance is 1e-6.
+
+use std::path::PathBuf;
+
+use lsdc::driver::{compile_files, compile_text};
+use lsdc::dynamics::algorithms::{
+    aba, check_supported, crba, mass_derivatives, rnea, AbaDerivatives, Data, RneaDerivatives,
+};
+use lsdc::dynamics::model::{self, Model};
+use lsdc::kinematics::eval::UnknownValues;
+use lsdc::kinematics::model as kinematic_model;
+use lsdc::load::urdf::{import_urdf, ImportOptions};
+use lsdc::load::LoadOptions;
+use lsdc::prepare::{prepare, Settings};
+use lsdc::spatial::Force;
+use nalgebra::{DMatrix, DVector};
+use proptest::prelude::*;
+
+use crate::common::example_paths;
+use crate::common::trees::featured_tree_program;
+
+const STEP: f64 = 1e-6;
+const TOLERANCE: f64 = 1e-6;
+
+fn options() -> LoadOptions {
+    LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+        scene: None,
+    }
+}
+
+fn model_of(text: &str) -> Model {
+    let compilation = compile_text("tree.lsd", text, None, &options());
+    assert!(
+        !compilation.has_errors(),
+        "{:?}\n{text}",
+        compilation.diagnostics
+    );
+    let mechanism = compilation.mechanism.expect("elaborates");
+    let topology = lsdc::topology::build(&mechanism).expect("connected");
+    let kinematics =
+        kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric");
+    model::build(&mechanism, &kinematics).expect("dynamic model")
+}
+
+/// A state, accelerations, generalised forces and external forces from the numbers `numbers`.
+struct Point {
+    q: Vec<f64>,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    tau: Vec<f64>,
+    external: Vec<Force>,
+}
+
+fn point(model: &Model, numbers: &[f64]) -> Point {
+    let value = |k: usize| numbers[k % numbers.len()];
+    let n = model.declared_count;
+    let coordinates: Vec<f64> = (0..n).map(|i| value(3 * i + 1)).collect();
+    let rates: Vec<f64> = (0..n).map(|i| value(5 * i + 2)).collect();
+    let (q, v) = model
+        .state_from_declared(&coordinates, &rates)
+        .expect("state");
+    Point {
+        q,
+        v,
+        a: (0..model.nv).map(|i| value(11 * i + 4)).collect(),
+        tau: (0..model.nv).map(|i| value(7 * i + 3)).collect(),
+        external: (0..=model.body_count())
+            .map(|i| Force::from_fn(|r, _| value(13 * i + r) * 0.3))
+            .collect(),
+    }
+}
+
+/// Central differences of `f` along each velocity's direction of the positions (in the
+/// joints' tangent spaces) and of the velocities.
+fn differences(
+    model: &Model,
+    p: &Point,
+    mut f: impl FnMut(&[f64], &[f64]) -> DVector<f64>,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let nv = model.nv;
+    let (mut by_q, mut by_v) = (DMatrix::zeros(nv, nv), DMatrix::zeros(nv, nv));
+    for j in 0..nv {
+        let mut step = vec![0.0; nv];
+        let (mut plus, mut minus) = (p.q.clone(), p.q.clone());
+        step[j] = STEP;
+        model.retract(&mut plus, &step);
+        step[j] = -STEP;
+        model.retract(&mut minus, &step);
+        let column = (f(&plus, &p.v) - f(&minus, &p.v)) / (2.0 * STEP);
+        by_q.set_column(j, &column);
+        let (mut faster, mut slower) = (p.v.clone(), p.v.clone());
+        faster[j] += STEP;
+        slower[j] -= STEP;
+        let column = (f(&p.q, &faster) - f(&p.q, &slower)) / (2.0 * STEP);
+        by_v.set_column(j, &column);
+    }
+    (by_q, by_v)
+}
+
+/// max |analytic − reference| / max(1, max |analytic|).
+fn mismatch(analytic: &DMatrix<f64>, reference: &DMatrix<f64>) -> f64 {
+    let scale = analytic.amax().max(1.0);
+    (analytic - reference).amax() / scale
+}
+
+/// The derivatives of RNEA and ABA at `p` against central differences; the worst measure.
+fn check_against_differences(model: &Model, p: &Point, what: &str) -> f64 {
+    let mut data = Data::new(model);
+    let mut inverse = RneaDerivatives::new(model);
+    inverse
+        .compute(model, &mut data, &p.q, &p.v, &p.a, &p.external)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let tau = rnea(model, &mut data, &p.q, &p.v, &p.a, &p.external).expect("rnea");
+    assert!(
+        (&inverse.tau - &tau).amax() <= 1e-12 * tau.amax().max(1.0),
+        "{what}: the derivatives' τ {} is not RNEA's {}",
+        inverse.tau,
+        tau
+    );
+    let (by_q, by_v) = differences(model, p, |q, v| {
+        rnea(model, &mut Data::new(model), q, v, &p.a, &p.external).expect("rnea")
+    });
+    let rnea_q = mismatch(&inverse.dtau_dq, &by_q);
+    let rnea_v = mismatch(&inverse.dtau_dv, &by_v);
+
+    let mut forward = AbaDerivatives::new(model);
+    forward
+        .compute(model, &mut data, &p.q, &p.v, &p.tau, &p.external)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let (by_q, by_v) = differences(model, p, |q, v| {
+        aba(model, &mut Data::new(model), q, v, &p.tau, &p.external).expect("aba")
+    });
+    let aba_q = mismatch(&forward.dacceleration_dq, &by_q);
+    let aba_v = mismatch(&forward.dacceleration_dv, &by_v);
+    let mass = crba(model, &mut data, &p.q).expect("crba");
+    let identity = DMatrix::<f64>::identity(model.nv, model.nv);
+    let aba_tau = mismatch(&(&forward.mass_inverse * &mass), &identity);
+
+    let mass_q = mass_matrix_mismatch(model, p);
+    let worst = [rnea_q, rnea_v, aba_q, aba_v, aba_tau, mass_q]
+        .into_iter()
+        .fold(0.0, f64::max);
+    assert!(
+        worst <= TOLERANCE,
+        "{what}: ∂τ/∂q {rnea_q:e}, ∂τ/∂v {rnea_v:e}, ∂q̈/∂q {aba_q:e}, ∂q̈/∂v {aba_v:e}, \
+         M⁻¹M − 1 {aba_tau:e}, ∂M/∂q {mass_q:e} > {TOLERANCE:e}"
+    );
+    worst
+}
+
+/// ∂M/∂q against central differences of CRBA: the worst measure over the velocities.
+fn mass_matrix_mismatch(model: &Model, p: &Point) -> f64 {
+    let mut data = Data::new(model);
+    let derivatives = mass_derivatives(model, &mut data, &p.q).expect("derivatives");
+    let mut worst = 0.0f64;
+    for (j, derivative) in derivatives.iter().enumerate() {
+        let mut step = vec![0.0; model.nv];
+        let (mut plus, mut minus) = (p.q.clone(), p.q.clone());
+        step[j] = STEP;
+        model.retract(&mut plus, &step);
+        step[j] = -STEP;
+        model.retract(&mut minus, &step);
+        let difference = (crba(model, &mut data, &plus).expect("crba")
+            - crba(model, &mut data, &minus).expect("crba"))
+            / (2.0 * STEP);
+        worst = worst.max(mismatch(derivative, &difference));
+    }
+    worst
+}
+
+/// Joint kinds of `common::trees` the derivatives cover: revolute, prismatic (with the link
+/// features when written as links), spherical, free, weld.
+const COVERED_KINDS: [usize; 5] = [0, 1, 5, 7, 10];
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    #[test]
+    fn derivatives_agree_with_central_differences_on_random_trees(
+        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
+        kinds in prop::collection::vec(prop::sample::select(COVERED_KINDS.to_vec()), 12),
+        features in prop::collection::vec(prop::sample::select(vec![0usize, 1, 4, 5]), 12),
+        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+    ) {
+        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
+        let text = featured_tree_program(&parents, &kinds, &features, &numbers);
+        let model = model_of(&text);
+        let p = point(&model, &numbers);
+        check_against_differences(&model, &p, &text);
+    }
+
+    /// ½ vᵀ (∂M/∂q_j) v against the kinetic energy's gradient of the variational integrator, an
+    /// independent algorithm (without rotors, which it leaves out): exact to round-off.
+    #[test]
+    fn mass_matrix_derivatives_give_the_kinetic_energy_gradient(
+        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
+        kinds in prop::collection::vec(prop::sample::select(COVERED_KINDS.to_vec()), 12),
+        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+    ) {
+        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
+        let text = featured_tree_program(&parents, &kinds, &[0; 12], &numbers);
+        let model = model_of(&text);
+        let p = point(&model, &numbers);
+        let mut data = Data::new(&model);
+        let derivatives = mass_derivatives(&model, &mut data, &p.q).expect("derivatives");
+        let gradient = lsdc::dynamics::derivatives::kinetic_energy_gradient(&model, &mut data, &p.q, &p.v)
+            .expect("gradient");
+        let v = DVector::from_column_slice(&p.v);
+        let scale = gradient.amax().max(1.0);
+        for (j, derivative) in derivatives.iter().enumerate() {
+            let half = 0.5 * v.dot(&(derivative * &v));
+            prop_assert!((half - gradient[j]).abs() <= 1e-12 * scale,
+                "velocity {j}: ½ vᵀ ∂M/∂q v = {half}, ∂T/∂q = {}\n{text}", gradient[j]);
+        }
+    }
+}
+
+/// A covered model prepared from a file, or why it is left out.
+fn example_model(path: &PathBuf) -> Result<Model, String> {
+    let compilation =
+        compile_files(std::slice::from_ref(path), &options()).map_err(|e| e.to_string())?;
+    if compilation.has_errors() {
+        return Err("does not compile".into());
+    }
+    let mechanism = compilation.mechanism.ok_or("does not elaborate")?;
+    let prepared = prepare(&mechanism, &[], &Settings::default())
+        .map_err(|_| "cannot be prepared without values".to_string())?;
+    let model = prepared.model;
+    if model.has_loops() || model.has_contacts() {
+        return Err("has loops or contacts".into());
+    }
+    check_supported(&model).map_err(|e| e.to_string())?;
+    Ok(model)
+}
+
+#[test]
+fn derivatives_agree_with_central_differences_on_the_examples() {
+    let numbers: Vec<f64> = (0..64)
+        .map(|k| ((k * 37 % 61) as f64 / 20.0) - 1.5)
+        .collect();
+    let (mut covered, mut left_out) = (Vec::new(), Vec::new());
+    for path in example_paths() {
+        match example_model(&path) {
+            Ok(model) => {
+                let p = point(&model, &numbers);
+                let worst = check_against_differences(&model, &p, &path.display().to_string());
+                covered.push(format!("{} ({worst:.1e})", path.display()));
+            }
+            Err(reason) => left_out.push(format!("{}: {reason}", path.display())),
+        }
+    }
+    eprintln!("covered: {covered:#?}\nleft out: {left_out:#?}");
+    assert!(
+        covered.len() >= 10,
+        "only {} examples covered: {left_out:#?}",
+        covered.len()
+    );
+}
+
+/// The robots of `tests/fixtures/urdf`: UR5 and Panda on fixed bases, Talos on a free one.
+#[test]
+fn derivatives_agree_with_central_differences_on_ur5_panda_and_talos() {
+    let numbers: Vec<f64> = (0..64)
+        .map(|k| ((k * 29 % 53) as f64 / 18.0) - 1.4)
+        .collect();
+    for (robot, floating) in [("ur5", false), ("panda", false), ("talos_reduced", true)] {
+        let model = robot_model(robot, floating);
+        let p = point(&model, &numbers);
+        let worst = check_against_differences(&model, &p, robot);
+        eprintln!("{robot}: nv = {}, worst {worst:.2e}", model.nv);
+    }
+}
+
+pub fn robot_model(robot: &str, floating: bool) -> Model {
+    let urdf = format!("tests/fixtures/urdf/{robot}.urdf");
+    let compilation = if floating {
+        let xml = std::fs::read_to_string(&urdf).expect("urdf");
+        let import = ImportOptions {
+            floating_base: true,
+            gravity: true,
+        };
+        let imported = import_urdf(&urdf, &xml, &import).expect("imports");
+        compile_text(&format!("{robot}.lsd"), &imported.text, None, &options())
+    } else {
+        compile_files(&[PathBuf::from(&urdf)], &options()).expect("loads")
+    };
+    let mechanism = compilation.mechanism.expect("compiles");
+    prepare(&mechanism, &[], &Settings::default())
+        .expect("prepares")
+        .model
+}
