@@ -301,3 +301,57 @@ pub fn robot_model(robot: &str, floating: bool) -> Model {
         .expect("prepares")
         .model
 }
+
+/// `lsdc eval --derivatives` on the pendulum against the closed forms of τ = m g l sin q + J q̈
+/// (m = 1.2 kg, l = 0.5 m, J = 0.4 kg·m²): ∂τ/∂q = m g l cos q, ∂q̈/∂q = −m g l cos q / J,
+/// ∂q̈/∂τ = 1/J; and a joint the derivatives do not cover, named in the state's errors.
+#[test]
+fn eval_prints_the_derivatives_and_names_a_joint_they_do_not_cover() {
+    let states = std::env::temp_dir().join(format!("derivatives-{}.json", std::process::id()));
+    std::fs::write(&states, r#"[{"q": [0.5], "v": [1], "a": [0], "tau": [0]}]"#).expect("write");
+    let states = states.to_str().expect("path");
+    let (code, out, err) = crate::common::lsdc(&[
+        "eval",
+        "examples/pendulum.lsd",
+        "--states",
+        states,
+        "--derivatives",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).expect("json");
+    let derivatives = &json["states"][0]["derivatives"];
+    let weight = 1.2 * 9.81 * 0.5 * 0.5f64.cos();
+    let close = |value: &serde_json::Value, expected: f64| {
+        let x = value.as_f64().expect("number");
+        assert!((x - expected).abs() < 1e-12, "{x} against {expected}");
+    };
+    close(&derivatives["rnea"]["dq"][0][0], weight);
+    close(&derivatives["aba"]["dq"][0][0], -weight / 0.4);
+    close(&derivatives["aba"]["dtau"][0][0], 1.0 / 0.4);
+    close(&derivatives["crba"][0][0][0], 0.0);
+    assert_eq!(derivatives["efforts_held"], false);
+
+    let program = std::env::temp_dir().join(format!("cylinder-{}.lsd", std::process::id()));
+    let text = "import joints;\n\
+        let b = body mass = 1, iframe = [0.1, 0, 0] ++ 1, inertia = [1, 1, 1] end;\n\
+        join earth and b with cylindrical([0, 0, 1]) as rod;\n";
+    std::fs::write(&program, text).expect("write");
+    std::fs::write(
+        states,
+        r#"[{"q": [0.5, 0.1], "v": [1, 0], "a": [0, 0], "tau": [0, 0]}]"#,
+    )
+    .expect("write");
+    let (code, out, err) = crate::common::lsdc(&[
+        "eval",
+        program.to_str().expect("path"),
+        "--states",
+        states,
+        "--derivatives",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).expect("json");
+    let message = json["states"][0]["errors"]["derivatives"]
+        .as_str()
+        .unwrap_or_else(|| panic!("no error: {out}"));
+    assert!(message.contains("`rod`"), "{message}");
+}

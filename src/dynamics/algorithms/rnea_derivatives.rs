@@ -255,10 +255,10 @@ impl RneaDerivatives {
                 self.dtau_dv[(row, column)] += sensitivity.dot(&self.columns[column])
                     + momentum_of_axis.dot(&self.da_dv[column]);
             }
-            // … and every effort it reaches along its rate.
+            // … and the efforts of the joints that carry it along its rate (its own effort's
+            // part, n eᵀ(B_R n e + I_R (v_R + v_F) × n e), vanishes: I_R is a moment about e).
             let rate_change = coriolis * axis
                 + inertia * spatial::cross_motion(&(velocity + carrier_velocity), &axis);
-            self.dtau_dv[(row, row)] += axis.dot(&rate_change);
             for &carrying in carried {
                 self.dtau_dv[(carrying, row)] += self.columns[carrying].dot(&rate_change);
             }
