@@ -3,7 +3,9 @@
 //! trees (revolute, prismatic, spherical, free and welded joints, geared rotors, mimics), on the
 //! examples without loops and on the UR5, Panda and Talos of `tests/fixtures/urdf`; and, exact to
 //! round-off, against an independent algorithm: ½ vᵀ (∂M/∂q_j) v is the derivative of the
-//! kinetic energy that the variational integrator computes on its own (`derivatives`).
+//! kinetic energy that the variational integrator computes on its own (`derivatives`); and
+//! against an identity of Lagrangian mechanics, ∂τ/∂v + (∂τ/∂v)ᵀ = 2 Ṁ, in coordinates of
+//! the joints' own.
 //!
 //! Positions move in the joints' tangent spaces (`Model::retract`: a quaternion along its
 //! rotation), as the derivatives are defined. The measure of a derivative matrix is
@@ -224,6 +226,39 @@ proptest! {
             prop_assert!((half - gradient[j]).abs() <= 1e-12 * scale,
                 "velocity {j}: ½ vᵀ ∂M/∂q v = {half}, ∂T/∂q = {}\n{text}", gradient[j]);
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    /// In coordinates of their own (revolute and prismatic joints, welds, geared rotors), the
+    /// velocity terms of inverse dynamics are Christoffel's, c(q, v) = Γ(v, v), so that
+    /// ∂τ/∂v + (∂τ/∂v)ᵀ = 2 Ṁ = 2 Σ_j (∂M/∂q_j) v_j: the velocity derivatives against the
+    /// mass matrix's position derivatives, two separate parts of the algorithm, exact to
+    /// round-off.
+    #[test]
+    fn velocity_derivatives_give_the_mass_matrix_rate(
+        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
+        kinds in prop::collection::vec(prop::sample::select(vec![0usize, 1, 10]), 12),
+        features in prop::collection::vec(prop::sample::select(vec![0usize, 1]), 12),
+        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+    ) {
+        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
+        let text = featured_tree_program(&parents, &kinds, &features, &numbers);
+        let model = model_of(&text);
+        let p = point(&model, &numbers);
+        let mut data = Data::new(&model);
+        let mut inverse = RneaDerivatives::new(&model);
+        inverse.compute(&model, &mut data, &p.q, &p.v, &p.a, &p.external).expect("derivatives");
+        let derivatives = mass_derivatives(&model, &mut data, &p.q).expect("derivatives");
+        let rate = derivatives
+            .iter()
+            .zip(&p.v)
+            .fold(DMatrix::zeros(model.nv, model.nv), |sum, (d, vj)| sum + d * *vj);
+        let symmetric = &inverse.dtau_dv + inverse.dtau_dv.transpose();
+        let measure = mismatch(&symmetric, &(rate * 2.0));
+        prop_assert!(measure <= 1e-12, "{measure:e}\n{text}");
     }
 }
 

@@ -6,8 +6,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::rnea_derivatives::{DerivativeError, RneaDerivatives};
-use super::{aba, crba, Data, DynamicsError};
+use super::rnea_derivatives::{check_supported, DerivativeError, RneaDerivatives};
+use super::{aba_into, base_acceleration, crba_after_kinematics, Data, DynamicsError};
 use crate::dynamics::model::Model;
 use crate::spatial::Force;
 
@@ -46,6 +46,8 @@ pub struct AbaDerivatives {
     pub dacceleration_dv: DMatrix<f64>,
     pub mass_inverse: DMatrix<f64>,
     pub inverse: RneaDerivatives,
+    /// The mass matrix at q (zero where CRBA writes nothing, as it needs).
+    mass: DMatrix<f64>,
 }
 
 impl AbaDerivatives {
@@ -57,6 +59,7 @@ impl AbaDerivatives {
             dacceleration_dv: DMatrix::zeros(nv, nv),
             mass_inverse: DMatrix::zeros(nv, nv),
             inverse: RneaDerivatives::new(model),
+            mass: DMatrix::zeros(nv, nv),
         }
     }
 
@@ -71,15 +74,17 @@ impl AbaDerivatives {
         tau: &[f64],
         external: &[Force],
     ) -> Result<(), ForwardDerivativeError> {
-        self.acceleration =
-            aba(model, data, q, v, tau, external).map_err(ForwardDerivativeError::Dynamics)?;
-        let mass = crba(model, data, q).map_err(DerivativeError::from)?;
-        let cholesky = mass
-            .cholesky()
-            .ok_or(ForwardDerivativeError::SingularMass)?;
+        check_supported(model)?;
+        // One evaluation of the joints' motions serves ABA, CRBA and the derivatives.
+        aba_into(model, data, q, v, tau, external, &mut self.acceleration)
+            .map_err(ForwardDerivativeError::Dynamics)?;
+        crba_after_kinematics(model, data, &mut self.mass);
+        let cholesky =
+            (self.mass.clone().cholesky()).ok_or(ForwardDerivativeError::SingularMass)?;
         self.mass_inverse = cholesky.inverse();
         let inverse = &mut self.inverse;
-        inverse.compute(model, data, q, v, self.acceleration.as_slice(), external)?;
+        let state = (v, self.acceleration.as_slice());
+        inverse.after_kinematics(model, data, state, external, base_acceleration(model));
         self.mass_inverse
             .mul_to(&inverse.dtau_dq, &mut self.dacceleration_dq);
         self.mass_inverse

@@ -35,13 +35,13 @@
 //!
 //! External forces are held fixed in the bodies' frames, as RNEA takes them.
 
-use nalgebra::{DMatrix, DVector, Matrix6};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::{base_acceleration, joint_motions, Data};
 use crate::dynamics::joint::{JointType, Kernel};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
-use crate::spatial::{self, Force, Inertia, Motion, Transform};
+use crate::spatial::{self, Force, Motion, RigidInertia, Transform};
 
 /// Why the derivatives cannot be computed for a model.
 #[derive(Clone, Debug, PartialEq)]
@@ -101,8 +101,8 @@ pub struct RneaDerivatives {
     world: Vec<Transform>,
     velocity: Vec<Motion>,
     acceleration: Vec<Motion>,
-    inertia: Vec<Inertia>,
-    coriolis: Vec<Matrix6<f64>>,
+    inertia: Vec<RigidInertia>,
+    coriolis: Vec<CoriolisMatrix>,
     force: Vec<Force>,
     /// Per velocity, in the fixed frame: S, ∂V = v_λ × S, ∂A = a_λ × S + v_λ × ∂V and
     /// ∂A' = (v_j + v_λ) × S.
@@ -122,8 +122,8 @@ impl RneaDerivatives {
             world: vec![Transform::identity(); n + 1],
             velocity: vec![Motion::zeros(); n + 1],
             acceleration: vec![Motion::zeros(); n + 1],
-            inertia: vec![Inertia::zeros(); n + 1],
-            coriolis: vec![Matrix6::zeros(); n + 1],
+            inertia: vec![RigidInertia::zeros(); n + 1],
+            coriolis: vec![CoriolisMatrix::zeros(); n + 1],
             force: vec![Force::zeros(); n + 1],
             columns: vec![Motion::zeros(); nv],
             dv_dq: vec![Motion::zeros(); nv],
@@ -159,6 +159,20 @@ impl RneaDerivatives {
     ) -> Result<(), DerivativeError> {
         check_supported(model)?;
         joint_motions(model, data, q, v)?;
+        self.after_kinematics(model, data, (v, a), external, base);
+        Ok(())
+    }
+
+    /// `compute_with_base` when `data` already holds the joints' motions at (q, v) (after
+    /// `aba_into`, say) and the model's joints are covered (`check_supported`).
+    pub(super) fn after_kinematics(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        (v, a): (&[f64], &[f64]),
+        external: &[Force],
+        base: Motion,
+    ) {
         self.acceleration[0] = base;
         self.pass_out(model, data, v, a, external);
         self.tau.fill(0.0);
@@ -166,7 +180,6 @@ impl RneaDerivatives {
         self.dtau_dv.fill(0.0);
         self.add_rotors(model, v, a);
         self.pass_back(model);
-        Ok(())
     }
 
     /// Poses, velocities, accelerations, inertias, Coriolis matrices and forces of the bodies
@@ -205,15 +218,15 @@ impl RneaDerivatives {
             let body = &model.dynamic_bodies[i - 1];
             let outside = world.force_to_parent(&external[i]);
             if body.massless {
-                self.inertia[i] = Inertia::zeros();
-                self.coriolis[i] = Matrix6::zeros();
+                self.inertia[i] = RigidInertia::zeros();
+                self.coriolis[i] = CoriolisMatrix::zeros();
                 self.force[i] = -outside;
             } else {
-                let inertia = body.rigid.to_parent(&world).matrix();
-                let momentum = inertia * velocity;
+                let inertia = body.rigid.to_parent(&world);
+                let momentum = inertia.times(&velocity);
                 self.inertia[i] = inertia;
-                self.coriolis[i] = coriolis_matrix(&inertia, &velocity, &momentum);
-                self.force[i] = inertia * self.acceleration[i]
+                self.coriolis[i] = CoriolisMatrix::new(&inertia, &velocity, &momentum);
+                self.force[i] = inertia.times(&self.acceleration[i])
                     + spatial::cross_force(&velocity, &momentum)
                     - outside;
             }
@@ -228,12 +241,16 @@ impl RneaDerivatives {
         for rotor in &model.rotors {
             let carrier = rotor.carrier;
             let world = &self.world[carrier];
-            let local_axis = spatial::twist(rotor.axis, nalgebra::Vector3::zeros());
+            let local_axis = spatial::twist(rotor.axis, Vector3::zeros());
             // The axis as a motion (n e: the rotor's motion per unit rate) and as a moment (its
             // inertia J ẽẽᵀ, a pure moment about the axis whatever the point).
             let axis = world.motion_to_parent(&local_axis) * rotor.ratio;
-            let moment_axis = world.force_to_parent(&local_axis);
-            let inertia = moment_axis * moment_axis.transpose() * rotor.inertia;
+            let direction = world.rotation * rotor.axis;
+            let inertia = RigidInertia {
+                mass: 0.0,
+                first: Vector3::zeros(),
+                rotational: direction * direction.transpose() * rotor.inertia,
+            };
             let (carrier_velocity, carrier_acceleration) =
                 (self.velocity[carrier], self.acceleration[carrier]);
             let own = axis * v[rotor.velocity];
@@ -241,13 +258,14 @@ impl RneaDerivatives {
             let acceleration = carrier_acceleration
                 + axis * a[rotor.velocity]
                 + spatial::cross_motion(&carrier_velocity, &own);
-            let momentum = inertia * velocity;
-            let coriolis = coriolis_matrix(&inertia, &velocity, &momentum);
-            let force = inertia * acceleration + spatial::cross_force(&velocity, &momentum);
+            let momentum = inertia.times(&velocity);
+            let coriolis = CoriolisMatrix::new(&inertia, &velocity, &momentum);
+            let force = inertia.times(&acceleration) + spatial::cross_force(&velocity, &momentum);
             let row = rotor.velocity;
             self.tau[row] += axis.dot(&force);
             // Its own effort along the motions of the joints that carry it, …
-            let (sensitivity, momentum_of_axis) = (coriolis.transpose() * axis, inertia * axis);
+            let (sensitivity, momentum_of_axis) =
+                (coriolis.transpose_times(&axis), inertia.times(&axis));
             let carried = self.carrier_branch(model, carrier);
             for &column in carried {
                 self.dtau_dq[(row, column)] += sensitivity.dot(&self.dv_dq[column])
@@ -257,8 +275,11 @@ impl RneaDerivatives {
             }
             // … and the efforts of the joints that carry it along its rate (its own effort's
             // part, n eᵀ(B_R n e + I_R (v_R + v_F) × n e), vanishes: I_R is a moment about e).
-            let rate_change = coriolis * axis
-                + inertia * spatial::cross_motion(&(velocity + carrier_velocity), &axis);
+            let rate_change = coriolis.times(&axis)
+                + inertia.times(&spatial::cross_motion(
+                    &(velocity + carrier_velocity),
+                    &axis,
+                ));
             for &carrying in carried {
                 self.dtau_dv[(carrying, row)] += self.columns[carrying].dot(&rate_change);
             }
@@ -291,7 +312,7 @@ impl RneaDerivatives {
             for row in own.clone() {
                 let s = self.columns[row];
                 self.tau[row] += s.dot(&force);
-                let (sensitivity, momentum) = (coriolis.transpose() * s, inertia * s);
+                let (sensitivity, momentum) = (coriolis.transpose_times(&s), inertia.times(&s));
                 for &column in branch {
                     self.dtau_dq[(row, column)] +=
                         sensitivity.dot(&self.dv_dq[column]) + momentum.dot(&self.da_dq[column]);
@@ -302,9 +323,9 @@ impl RneaDerivatives {
             for column in own.clone() {
                 let s = self.columns[column];
                 let position_change = spatial::cross_force(&s, &force)
-                    + coriolis * self.dv_dq[column]
-                    + inertia * self.da_dq[column];
-                let rate_change = coriolis * s + inertia * self.da_dv[column];
+                    + coriolis.times(&self.dv_dq[column])
+                    + inertia.times(&self.da_dq[column]);
+                let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
                 for &row in branch.iter().filter(|row| !own.contains(row)) {
                     self.dtau_dq[(row, column)] += self.columns[row].dot(&position_change);
                     self.dtau_dv[(row, column)] += self.columns[row].dot(&rate_change);
@@ -319,34 +340,54 @@ impl RneaDerivatives {
     }
 }
 
-/// B m = v ×* (I m) + I (m × v) + m ×* h for a body of inertia I, velocity v and momentum
-/// h = I v, all in one frame: the change of its force v ×* I v + I a when its velocity changes
-/// by m and its acceleration by m × v. With v×* = −(v×)ᵀ and I symmetric, the first two terms
-/// are −(X + Xᵀ) with X = (v×)ᵀ I.
-fn coriolis_matrix(inertia: &Inertia, velocity: &Motion, momentum: &Force) -> Matrix6<f64> {
-    let x = motion_cross_matrix(velocity).transpose() * inertia;
-    let mut b = -(x + x.transpose());
-    // m ×* h = [ω × n + u × f; ω × f] for m = [ω; u], h = [n; f]: [−n̂ −f̂; −f̂ 0] m.
-    let (n, f) = (spatial::angular(momentum), spatial::linear(momentum));
-    let (n_hat, f_hat) = (spatial::skew(&n), spatial::skew(&f));
-    let mut top_left = b.fixed_view_mut::<3, 3>(0, 0);
-    top_left -= n_hat;
-    let mut top_right = b.fixed_view_mut::<3, 3>(0, 3);
-    top_right -= f_hat;
-    let mut bottom_left = b.fixed_view_mut::<3, 3>(3, 0);
-    bottom_left -= f_hat;
-    b
+/// B m = v ×* (I m) + I (m × v) + m ×* h for a body of inertia I, velocity v = [ω; u] and
+/// momentum h = I v = [n; f], all in one frame: the change of its force v ×* I v + I a when its
+/// velocity changes by m and its acceleration by m × v. With I = [J ĉ; ĉᵀ m·1] (c the first
+/// moment) the blocks multiplying m's linear part cancel (f = m u − c × ω), leaving
+/// B = [ω̂J + (ω̂J)ᵀ − c uᵀ − u cᵀ + 2 (u·c) 1 − n̂, 0; −2 ((ω × c)^ + m û), 0]:
+/// two 3 × 3 blocks, sums of which stay of that form for a subtree.
+#[derive(Clone, Copy, Debug)]
+struct CoriolisMatrix {
+    top: Matrix3<f64>,
+    bottom: Matrix3<f64>,
 }
 
-/// The 6 × 6 matrix of m ↦ v × m for motions: [ω̂ 0; û ω̂].
-fn motion_cross_matrix(v: &Motion) -> Matrix6<f64> {
-    let (w, u) = (
-        spatial::skew(&spatial::angular(v)),
-        spatial::skew(&spatial::linear(v)),
-    );
-    let mut x = Matrix6::zeros();
-    x.fixed_view_mut::<3, 3>(0, 0).copy_from(&w);
-    x.fixed_view_mut::<3, 3>(3, 3).copy_from(&w);
-    x.fixed_view_mut::<3, 3>(3, 0).copy_from(&u);
-    x
+impl CoriolisMatrix {
+    fn zeros() -> CoriolisMatrix {
+        CoriolisMatrix {
+            top: Matrix3::zeros(),
+            bottom: Matrix3::zeros(),
+        }
+    }
+
+    fn new(inertia: &RigidInertia, velocity: &Motion, momentum: &Force) -> CoriolisMatrix {
+        let (w, u) = (spatial::angular(velocity), spatial::linear(velocity));
+        let c = inertia.first;
+        let turned = spatial::skew(&w) * inertia.rotational;
+        let top = turned + turned.transpose() - c * u.transpose() - u * c.transpose()
+            + Matrix3::identity() * (2.0 * u.dot(&c))
+            - spatial::skew(&spatial::angular(momentum));
+        let bottom = -2.0 * (spatial::skew(&w.cross(&c)) + spatial::skew(&u) * inertia.mass);
+        CoriolisMatrix { top, bottom }
+    }
+
+    /// B m (a force): only m's angular part counts.
+    fn times(&self, m: &Motion) -> Force {
+        let w = spatial::angular(m);
+        spatial::twist(self.top * w, self.bottom * w)
+    }
+
+    /// Bᵀ s, as a vector to dot with motions: its linear part is zero.
+    fn transpose_times(&self, s: &Motion) -> Motion {
+        let moment =
+            self.top.tr_mul(&spatial::angular(s)) + self.bottom.tr_mul(&spatial::linear(s));
+        spatial::twist(moment, Vector3::zeros())
+    }
+}
+
+impl std::ops::AddAssign for CoriolisMatrix {
+    fn add_assign(&mut self, other: CoriolisMatrix) {
+        self.top += other.top;
+        self.bottom += other.bottom;
+    }
 }
