@@ -7,9 +7,8 @@
 //! subtree rigidly: a vector attached to such a body changes by S_j × x (a motion), S_j ×* x (a
 //! force), an inertia by S_j ×* I − I S_j×. The velocities and accelerations are not attached:
 //! with λ the joint's parent body,
-//! ∂v_i/∂q_j = S_j × v_i + v_λ × S_j and ∂a_i/∂q_j = S_j × a_i + a_λ × S_j + v_λ × (v_λ × S_j)
-//! + (v_λ × S_j) × v_i,
-//! so that the force of body i, f_i = I_i a_i + v_i ×* I_i v_i, changes by
+//! ∂v_i/∂q_j = S_j × v_i + v_λ × S_j and
+//! ∂a_i/∂q_j = S_j × a_i + a_λ × S_j + v_λ × (v_λ × S_j) + (v_λ × S_j) × v_i, so that the force of body i, f_i = I_i a_i + v_i ×* I_i v_i, changes by
 //! S_j ×* f_i + B_i ∂V_j + I_i ∂A_j, where ∂V_j = v_λ × S_j, ∂A_j = a_λ × S_j + v_λ × ∂V_j and
 //! B_i m = v_i ×* (I_i m) + I_i (m × v_i) + m ×* (I_i v_i) (the paper's Coriolis-like matrix).
 //! The rigid part cancels in the generalised force S_kᵀF_k of any joint k of j's subtree, hence:
