@@ -7,53 +7,13 @@
 //! each time is the best of 7 batches of about 20 ms, as on the Pinocchio side.
 
 mod common;
-use common::best_time_per_call;
+use common::{best_time_per_call, load_urdf as load, Random};
 use std::hint::black_box;
 use std::path::PathBuf;
 
-use lsdc::driver::compile_files;
 use lsdc::dynamics::algorithms::{aba_into, crba_into, rnea_into, Data};
-use lsdc::dynamics::model::Model;
-use lsdc::load::LoadOptions;
-use lsdc::prepare::{prepare, Settings};
 use lsdc::spatial::Force;
 use nalgebra::{DMatrix, DVector};
-
-/// A small deterministic generator (xorshift64*), so both runs see the same kind of states.
-struct Random(u64);
-
-impl Random {
-    fn uniform(&mut self, low: f64, high: f64) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let unit = (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
-        low + (high - low) * unit
-    }
-
-    fn vector(&mut self, n: usize, bound: f64) -> Vec<f64> {
-        (0..n).map(|_| self.uniform(-bound, bound)).collect()
-    }
-}
-
-fn load(path: &PathBuf) -> Model {
-    let options = LoadOptions {
-        library_dirs: Vec::new(),
-        use_environment: false,
-        scene: None,
-    };
-    let compilation = compile_files(std::slice::from_ref(path), &options).expect("readable");
-    let mechanism = compilation.mechanism.unwrap_or_else(|| {
-        panic!(
-            "{} does not compile: {:?}",
-            path.display(),
-            compilation.diagnostics
-        )
-    });
-    let prepared = prepare(&mechanism, &[], &Settings::default())
-        .unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message));
-    prepared.model
-}
 
 fn main() {
     let paths: Vec<PathBuf> = std::env::args()

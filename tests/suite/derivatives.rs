@@ -18,9 +18,7 @@ use lsdc::driver::{compile_files, compile_text};
 use lsdc::dynamics::algorithms::{
     aba, check_supported, crba, mass_derivatives, rnea, AbaDerivatives, Data, RneaDerivatives,
 };
-use lsdc::dynamics::model::{self, Model};
-use lsdc::kinematics::eval::UnknownValues;
-use lsdc::kinematics::model as kinematic_model;
+use lsdc::dynamics::model::Model;
 use lsdc::load::urdf::{import_urdf, ImportOptions};
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Settings};
@@ -30,6 +28,7 @@ use proptest::prelude::*;
 
 use crate::common::example_paths;
 use crate::common::trees::featured_tree_program;
+use crate::dynamics::model_of;
 
 const STEP: f64 = 1e-6;
 const TOLERANCE: f64 = 1e-6;
@@ -40,20 +39,6 @@ fn options() -> LoadOptions {
         use_environment: false,
         scene: None,
     }
-}
-
-fn model_of(text: &str) -> Model {
-    let compilation = compile_text("tree.lsd", text, None, &options());
-    assert!(
-        !compilation.has_errors(),
-        "{:?}\n{text}",
-        compilation.diagnostics
-    );
-    let mechanism = compilation.mechanism.expect("elaborates");
-    let topology = lsdc::topology::build(&mechanism).expect("connected");
-    let kinematics =
-        kinematic_model::build(&mechanism, topology, UnknownValues::new()).expect("numeric");
-    model::build(&mechanism, &kinematics).expect("dynamic model")
 }
 
 /// A state, accelerations, generalised forces and external forces from the numbers `numbers`.
