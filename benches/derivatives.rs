@@ -10,7 +10,7 @@
 //! The states are 256 random (q, v, a, τ), q uniform in [−π, π], the rest in [−1, 1], cycled.
 
 mod common;
-use common::{load_urdf as load, thread_cpu_seconds, Random};
+use common::{load_urdf as load, random_states, thread_cpu_seconds};
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -68,17 +68,7 @@ fn main() {
     for path in paths {
         let model = load(&path);
         let external = vec![Force::zeros(); model.body_count() + 1];
-        let mut random = Random(0x9E37_79B9_7F4A_7C15);
-        let states: Vec<[Vec<f64>; 4]> = (0..256)
-            .map(|_| {
-                [
-                    random.vector(model.nq, std::f64::consts::PI),
-                    random.vector(model.nv, 1.0),
-                    random.vector(model.nv, 1.0),
-                    random.vector(model.nv, 1.0),
-                ]
-            })
-            .collect();
+        let states = random_states(&model);
         let mut tau = DVector::zeros(model.nv);
         let mut accelerations = DVector::zeros(model.nv);
         let mut inverse = RneaDerivatives::new(&model);

@@ -7,7 +7,7 @@
 //! each time is the best of 7 batches of about 20 ms, as on the Pinocchio side.
 
 mod common;
-use common::{best_time_per_call, load_urdf as load, Random};
+use common::{best_time_per_call, load_urdf as load, random_states};
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -31,17 +31,7 @@ fn main() {
         );
         let mut data = Data::new(&model);
         let external = vec![Force::zeros(); model.body_count() + 1];
-        let mut random = Random(0x9E37_79B9_7F4A_7C15);
-        let states: Vec<[Vec<f64>; 4]> = (0..256)
-            .map(|_| {
-                [
-                    random.vector(model.nq, std::f64::consts::PI),
-                    random.vector(model.nv, 1.0),
-                    random.vector(model.nv, 1.0),
-                    random.vector(model.nv, 1.0),
-                ]
-            })
-            .collect();
+        let states = random_states(&model);
         let mut tau = DVector::zeros(model.nv);
         let mut mass = DMatrix::zeros(model.nv, model.nv);
         let mut accelerations = DVector::zeros(model.nv);

@@ -94,3 +94,20 @@ pub fn load_urdf(path: &std::path::PathBuf) -> Model {
         .unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message));
     prepared.model
 }
+
+#[allow(dead_code)]
+/// 256 random states (q, v, a, τ) of `model`: q uniform in [−π, π], the rest in [−1, 1], the same
+/// from run to run.
+pub fn random_states(model: &Model) -> Vec<[Vec<f64>; 4]> {
+    let mut random = Random(0x9E37_79B9_7F4A_7C15);
+    (0..256)
+        .map(|_| {
+            [
+                random.vector(model.nq, std::f64::consts::PI),
+                random.vector(model.nv, 1.0),
+                random.vector(model.nv, 1.0),
+                random.vector(model.nv, 1.0),
+            ]
+        })
+        .collect()
+}
