@@ -14,7 +14,9 @@ use common::{load_urdf as load, random_states, thread_cpu_seconds};
 use std::hint::black_box;
 use std::path::PathBuf;
 
-use lsdc::dynamics::algorithms::{aba_into, rnea_into, AbaDerivatives, Data, RneaDerivatives};
+use lsdc::dynamics::algorithms::aba_derivatives::AbaDerivatives;
+use lsdc::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
+use lsdc::dynamics::algorithms::{aba_into, rnea_into, Data};
 use lsdc::spatial::Force;
 use nalgebra::DVector;
 

@@ -3,14 +3,10 @@
 //! forward dynamics (ABA: three passes). Bodies without mass cost nothing. Geared rotors enter
 //! all three (`geared`).
 
-mod aba_derivatives;
-mod crba_derivatives;
+pub mod aba_derivatives;
+pub mod crba_derivatives;
 mod geared;
-mod rnea_derivatives;
-
-pub use aba_derivatives::{AbaDerivatives, ForwardDerivativeError};
-pub use crba_derivatives::mass_derivatives;
-pub use rnea_derivatives::{check_supported, DerivativeError, RneaDerivatives};
+pub mod rnea_derivatives;
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 

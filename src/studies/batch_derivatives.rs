@@ -1,7 +1,7 @@
 //! The analytical derivatives `lsdc eval --derivatives` adds to a state (`batch`): of the inverse
 //! dynamics (∂τ/∂q, ∂τ/∂v, when `a` is given), of the forward dynamics (∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ,
 //! when `tau` is given) and of the mass matrix (∂M/∂q_j, one matrix per velocity j), computed by
-//! `dynamics::algorithms::{RneaDerivatives, AbaDerivatives, mass_derivatives}`. Derivatives along
+//! `dynamics::algorithms::{rnea_derivatives, aba_derivatives, crba_derivatives}`. Derivatives along
 //! q are along the velocities (a spherical or free joint's tangent space, q · exp(ε e_j)).
 //!
 //! The program's efforts other than gravity (its forces, torques and link efforts) are held at
@@ -11,7 +11,10 @@
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use crate::dynamics::algorithms::{mass_derivatives, AbaDerivatives, Data, RneaDerivatives};
+use crate::dynamics::algorithms::aba_derivatives::AbaDerivatives;
+use crate::dynamics::algorithms::crba_derivatives::mass_derivatives;
+use crate::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
+use crate::dynamics::algorithms::Data;
 use crate::dynamics::model::Model;
 use crate::spatial::Force;
 

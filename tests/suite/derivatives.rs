@@ -15,9 +15,10 @@
 use std::path::PathBuf;
 
 use lsdc::driver::{compile_files, compile_text};
-use lsdc::dynamics::algorithms::{
-    aba, check_supported, crba, mass_derivatives, rnea, AbaDerivatives, Data, RneaDerivatives,
-};
+use lsdc::dynamics::algorithms::aba_derivatives::AbaDerivatives;
+use lsdc::dynamics::algorithms::crba_derivatives::mass_derivatives;
+use lsdc::dynamics::algorithms::rnea_derivatives::{check_supported, RneaDerivatives};
+use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
 use lsdc::dynamics::model::Model;
 use lsdc::load::urdf::{import_urdf, ImportOptions};
 use lsdc::load::LoadOptions;
