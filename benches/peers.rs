@@ -37,23 +37,6 @@ use lsdc::simulate::simulator::{Simulator, Start};
 use lsdc::spatial::Force;
 use nalgebra::{DMatrix, DVector};
 
-/// A small deterministic generator (xorshift64*), so every run sees the same states.
-struct Random(u64);
-
-impl Random {
-    fn uniform(&mut self, low: f64, high: f64) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let unit = (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
-        low + (high - low) * unit
-    }
-
-    fn vector(&mut self, n: usize, bound: f64) -> Vec<f64> {
-        (0..n).map(|_| self.uniform(-bound, bound)).collect()
-    }
-}
-
 const OPTIONS: LoadOptions = LoadOptions {
     library_dirs: Vec::new(),
     use_environment: false,
@@ -103,19 +86,7 @@ fn algorithm_cases<'a>(name: &str, prepared: &'a Prepared, cases: &mut Vec<(Stri
         model.applied.is_empty() && model.link_efforts.is_empty(),
         "{name}: efforts other than gravity"
     );
-    let mut random = Random(0x9E37_79B9_7F4A_7C15);
-    let states: std::rc::Rc<Vec<[Vec<f64>; 4]>> = std::rc::Rc::new(
-        (0..256)
-            .map(|_| {
-                [
-                    random.vector(model.nq, std::f64::consts::PI),
-                    random.vector(model.nv, 1.0),
-                    random.vector(model.nv, 1.0),
-                    random.vector(model.nv, 1.0),
-                ]
-            })
-            .collect(),
-    );
+    let states = std::rc::Rc::new(common::random_states(model));
     let external = vec![Force::zeros(); model.body_count() + 1];
     {
         let (states, external) = (states.clone(), external.clone());

@@ -386,3 +386,27 @@ pub fn run_with(
 pub fn evaluate(prepared: &Prepared, states: &[StateInput]) -> Result<Evaluation, Error> {
     crate::studies::batch::evaluate_states(prepared, states).map_err(Error::States)
 }
+
+/// As [`evaluate`], with each state's analytical derivatives (`lsdc eval --derivatives`): of
+/// the inverse dynamics with respect to q and v, of the forward dynamics with respect to q, v
+/// and τ, and of the mass matrix with respect to q (Carpentier & Mansard, RSS 2018).
+///
+/// ```
+/// use lsdc::api::{evaluate_with_derivatives, parse_states, Program};
+///
+/// let program = Program::from_file("examples/pendulum.lsd", &Default::default())?;
+/// let prepared = program.prepare(&[], &Default::default())?;
+/// let states = parse_states(r#"[{"q": [0.5], "v": [0.0], "a": [0.0]}]"#)?;
+/// let evaluation = evaluate_with_derivatives(&prepared, &states)?;
+/// let derivatives = evaluation.states[0].derivatives.as_ref().expect("derivatives");
+/// // Holding the rod (1.2 kg, centre 0.5 m below the axis) takes τ = m g l sin q.
+/// let dtau_dq = derivatives.rnea.as_ref().expect("a was given").dq[0][0];
+/// assert!((dtau_dq - 1.2 * 9.81 * 0.5 * 0.5f64.cos()).abs() < 1e-12);
+/// # Ok::<(), lsdc::api::Error>(())
+/// ```
+pub fn evaluate_with_derivatives(
+    prepared: &Prepared,
+    states: &[StateInput],
+) -> Result<Evaluation, Error> {
+    crate::studies::batch::evaluate_states_with(prepared, states, true).map_err(Error::States)
+}

@@ -2,6 +2,11 @@
 
 use std::time::Instant;
 
+use lsdc::driver::compile_files;
+use lsdc::dynamics::model::Model;
+use lsdc::load::LoadOptions;
+use lsdc::prepare::{prepare, Settings};
+
 #[allow(dead_code)] // each benchmark uses the timer it needs
 /// Best time per call, in seconds, over 7 batches sized to about 20 ms each: the minimum is the
 /// run least disturbed by the rest of the machine.
@@ -49,4 +54,60 @@ pub fn cpu_time_per_call(mut f: impl FnMut()) -> (f64, f64) {
         .collect();
     times.sort_by(f64::total_cmp);
     (times[0], times[times.len() / 2])
+}
+
+#[allow(dead_code)]
+/// A small deterministic generator (xorshift64*), so both runs see the same kind of states.
+pub struct Random(pub u64);
+
+impl Random {
+    pub fn uniform(&mut self, low: f64, high: f64) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let unit = (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
+        low + (high - low) * unit
+    }
+
+    pub fn vector(&mut self, n: usize, bound: f64) -> Vec<f64> {
+        (0..n).map(|_| self.uniform(-bound, bound)).collect()
+    }
+}
+
+#[allow(dead_code)]
+/// A URDF robot's model with a fixed base and gravity, as every command reads a `.urdf` file.
+pub fn load_urdf(path: &std::path::PathBuf) -> Model {
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+        scene: None,
+    };
+    let compilation = compile_files(std::slice::from_ref(path), &options).expect("readable");
+    let mechanism = compilation.mechanism.unwrap_or_else(|| {
+        panic!(
+            "{} does not compile: {:?}",
+            path.display(),
+            compilation.diagnostics
+        )
+    });
+    let prepared = prepare(&mechanism, &[], &Settings::default())
+        .unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message));
+    prepared.model
+}
+
+#[allow(dead_code)]
+/// 256 random states (q, v, a, τ) of `model`: q uniform in [−π, π], the rest in [−1, 1], the same
+/// from run to run.
+pub fn random_states(model: &Model) -> Vec<[Vec<f64>; 4]> {
+    let mut random = Random(0x9E37_79B9_7F4A_7C15);
+    (0..256)
+        .map(|_| {
+            [
+                random.vector(model.nq, std::f64::consts::PI),
+                random.vector(model.nv, 1.0),
+                random.vector(model.nv, 1.0),
+                random.vector(model.nv, 1.0),
+            ]
+        })
+        .collect()
 }

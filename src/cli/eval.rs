@@ -1,5 +1,5 @@
 //! `lsdc eval FILE --states states.json`: inverse dynamics, mass matrix, forward dynamics and
-//! the bodies' poses at a list of states, as JSON.
+//! the bodies' poses at a list of states, as JSON; `--derivatives` adds their derivatives.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use super::shared::{
     err, json, out, prepare_file, refuse_imposed_motion, usage_error, warn, Format, LibraryArgs,
 };
-use lsdc::api::{evaluate, parse_states};
+use lsdc::api::{evaluate, evaluate_with_derivatives, parse_states};
 
 #[derive(clap::Args)]
 pub struct EvalArgs {
@@ -20,6 +20,10 @@ pub struct EvalArgs {
     /// Value of an unknown, as for `simulate`. Repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     sets: Vec<String>,
+    /// Adds the analytical derivatives of RNEA and ABA with respect to q, v and tau, and of the
+    /// mass matrix with respect to q.
+    #[arg(long)]
+    derivatives: bool,
 }
 
 pub fn run(args: &EvalArgs) -> ExitCode {
@@ -44,7 +48,11 @@ pub fn run(args: &EvalArgs) -> ExitCode {
     if let Err(code) = refuse_imposed_motion(&program, "`lsdc eval`", help, Format::Text) {
         return code;
     }
-    match evaluate(&prepared, &inputs) {
+    let evaluation = match args.derivatives {
+        true => evaluate_with_derivatives(&prepared, &inputs),
+        false => evaluate(&prepared, &inputs),
+    };
+    match evaluation {
         Ok(evaluation) => {
             let failed = evaluation.states.iter().enumerate();
             for (index, state) in failed.filter(|(_, s)| !s.errors.is_empty()) {

@@ -3,7 +3,10 @@
 //! forward dynamics (ABA: three passes). Bodies without mass cost nothing. Geared rotors enter
 //! all three (`geared`).
 
+pub mod aba_derivatives;
+pub mod crba_derivatives;
 mod geared;
+pub mod rnea_derivatives;
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 

@@ -23,6 +23,8 @@
 //!              "crba": [[M by rows]],
 //!              "aba": [a] | null,                   (only when `tau` is given)
 //!              "frames": [{"body", "translation", "rotation": [rows]}],
+//!              "derivatives": {"efforts_held", "rnea": {"dq", "dv"}, "aba": {"dq", "dv", "dtau"},
+//!                              "crba": [∂M/∂q_j]} | null,   (only with `--derivatives`)
 //!              "errors": {"aba": "message"}}]}      (only when a quantity failed)
 //! ```
 
@@ -33,6 +35,7 @@ use nalgebra::DVector;
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize, Serializer};
 
+use super::batch_derivatives::{state_derivatives, StateDerivatives};
 use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea};
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
@@ -98,6 +101,9 @@ pub struct StateOutput {
     #[serde(default)]
     pub aba: Option<Vec<f64>>,
     pub frames: Vec<FramePose>,
+    /// The derivatives of RNEA, ABA and CRBA (`--derivatives`).
+    #[serde(default)]
+    pub derivatives: Option<StateDerivatives>,
     /// Why a quantity could not be computed, by its name (`rnea`, `aba`).
     #[serde(default)]
     pub errors: BTreeMap<String, String>,
@@ -121,6 +127,9 @@ impl Serialize for StateOutput {
             map.serialize_entry("aba", &self.aba)?;
         }
         map.serialize_entry("frames", &self.frames)?;
+        if self.derivatives.is_some() || self.errors.contains_key("derivatives") {
+            map.serialize_entry("derivatives", &self.derivatives)?;
+        }
         if !self.errors.is_empty() {
             map.serialize_entry("errors", &self.errors)?;
         }
@@ -170,12 +179,22 @@ pub fn evaluate_states(
     prepared: &Prepared,
     states: &[StateInput],
 ) -> Result<Evaluation, StatesError> {
+    evaluate_states_with(prepared, states, false)
+}
+
+/// `evaluate_states`, with the derivatives of each quantity when `derivatives` is set
+/// (`batch_derivatives`).
+pub fn evaluate_states_with(
+    prepared: &Prepared,
+    states: &[StateInput],
+    derivatives: bool,
+) -> Result<Evaluation, StatesError> {
     let model = &prepared.model;
     let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, Stabilisation::None);
     let mut outputs = Vec::with_capacity(states.len());
     for (index, state) in states.iter().enumerate() {
-        let output = evaluate_state(&mut system, state)
+        let output = evaluate_state(&mut system, state, derivatives)
             .map_err(|error| StatesError::State { index, error })?;
         outputs.push(output);
     }
@@ -228,6 +247,7 @@ fn check_quaternions(model: &Model, q: &[f64]) -> Result<(), StateError> {
 fn evaluate_state(
     system: &mut MechanicalSystem<'_>,
     state: &StateInput,
+    derivatives: bool,
 ) -> Result<StateOutput, StateError> {
     let model = system.model;
     let zero = vec![0.0; model.nv];
@@ -300,11 +320,35 @@ fn evaluate_state(
         .row_iter()
         .map(|row| row.iter().copied().collect())
         .collect();
+    let derivatives = match (derivatives, &efforts) {
+        (false, _) => None,
+        (true, Err(e)) => {
+            errors.insert("derivatives".into(), e.to_string());
+            None
+        }
+        (true, Ok(efforts)) => {
+            let total = state.tau.as_ref().map(|tau| {
+                DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv)
+            });
+            let found = state_derivatives(
+                model,
+                &mut system.scratch.data,
+                (&state.q, v),
+                state.a.as_deref(),
+                total.as_ref().map(|t| t.as_slice()),
+                &efforts.external,
+            );
+            found
+                .map_err(|e| errors.insert("derivatives".into(), e))
+                .ok()
+        }
+    };
     Ok(StateOutput {
         rnea: rnea_tau,
         crba: crba_rows,
         aba: accelerations,
         frames,
+        derivatives,
         errors,
     })
 }

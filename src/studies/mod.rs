@@ -1,5 +1,5 @@
 //! The studies built on the mechanism and its runs: the dynamics at given states (`lsdc eval`,
-//! `batch`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
+//! `batch`, with their derivatives `batch_derivatives`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
 //! precision and cost (`precision`), the `tree` and `assemble` reports (`analysis`), a
 //! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`) or
 //! along a motion read from a file (`motion_file`, made drives by `trajectory`),
@@ -12,6 +12,7 @@
 
 pub mod analysis;
 pub mod batch;
+pub mod batch_derivatives;
 pub mod configurations;
 pub mod drag;
 pub mod inverse;

@@ -15,7 +15,8 @@ use proptest::prelude::*;
 
 use crate::common::trees::{featured_tree_program, tree_program};
 
-fn model_of(text: &str) -> Model {
+/// The dynamic model of a tree program (also `derivatives`).
+pub(crate) fn model_of(text: &str) -> Model {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,

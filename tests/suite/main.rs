@@ -15,6 +15,7 @@ mod closed_loops;
 mod constrained;
 mod contacts;
 mod coupled_loops;
+mod derivatives;
 mod drag;
 mod drives;
 mod dynamics;

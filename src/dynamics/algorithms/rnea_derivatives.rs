@@ -1,0 +1,392 @@
+//! Analytical derivatives of inverse dynamics, ∂τ/∂q and ∂τ/∂v of τ = RNEA(q, v, a, f_ext), in one
+//! pass out and one pass back: Carpentier & Mansard, "Analytical Derivatives of Rigid Body
+//! Dynamics Algorithms", Robotics: Science and Systems, 2018 (the algorithm Pinocchio's
+//! `computeRNEADerivatives` implements).
+//!
+//! Everything is expressed in the fixed frame, where a joint's motion S_j moves every body of its
+//! subtree rigidly: a vector attached to such a body changes by S_j × x (a motion), S_j ×* x (a
+//! force), an inertia by S_j ×* I − I S_j×. The velocities and accelerations are not attached:
+//! with λ the joint's parent body,
+//! ∂v_i/∂q_j = S_j × v_i + v_λ × S_j and
+//! ∂a_i/∂q_j = S_j × a_i + a_λ × S_j + v_λ × (v_λ × S_j) + (v_λ × S_j) × v_i, so that the force of body i, f_i = I_i a_i + v_i ×* I_i v_i, changes by
+//! S_j ×* f_i + B_i ∂V_j + I_i ∂A_j, where ∂V_j = v_λ × S_j, ∂A_j = a_λ × S_j + v_λ × ∂V_j and
+//! B_i m = v_i ×* (I_i m) + I_i (m × v_i) + m ×* (I_i v_i) (the paper's Coriolis-like matrix).
+//! The rigid part cancels in the generalised force S_kᵀF_k of any joint k of j's subtree, hence:
+//!
+//! - k in the subtree of j (k = j included): ∂τ_k/∂q_j = S_kᵀ(B^c_k ∂V_j + I^c_k ∂A_j);
+//! - k an ancestor of j: ∂τ_k/∂q_j = S_kᵀ(S_j ×* F_j + B^c_j ∂V_j + I^c_j ∂A_j);
+//!
+//! with I^c, B^c and F the sums over a subtree (composite inertia, Coriolis matrix and force).
+//! The velocities likewise: ∂v_i/∂q̇_j = S_j, ∂a_i/∂q̇_j = S_j × v_i + (v_j + v_λ) × S_j, and
+//! ∂τ_k/∂q̇_j = S_kᵀ(B^c_m S_j + I^c_m ∂A'_j) with m the deeper of j and k and
+//! ∂A'_j = (v_j + v_λ) × S_j.
+//!
+//! The joints' perturbations are those of their groups: a one-coordinate joint along its
+//! coordinate, a spherical or free joint along q · exp(ε e_c) (its velocity being the body's
+//! twist), so every joint's motion is its subspace column S_c in the child's frame, constant
+//! there. A dof chain evaluated in general (several coordinates, or a law that is not linear)
+//! has a subspace that changes with q and a bias Ṡq̇: it is refused (`Unsupported`).
+//!
+//! A geared rotor R (see `geared`) is a body of the carrier F's subtree (its inertia J ẽẽᵀ is
+//! symmetric about its axis, so it turns with F), moved relative to F by n q̇_k along its axis
+//! e: a joint without position whose rate is q̇_k. It adds B_R and I_R to F's composites, n eᵀ
+//! f_R to τ_k, and a column of velocity derivatives to q̇_k's.
+//!
+//! External forces are held fixed in the bodies' frames, as RNEA takes them.
+
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+use super::{base_acceleration, joint_motions, Data};
+use crate::dynamics::joint::{JointType, Kernel};
+use crate::dynamics::model::Model;
+use crate::kinematics::eval::EvalError;
+use crate::spatial::{self, Force, Motion, RigidInertia, Transform};
+
+/// Why the derivatives cannot be computed for a model.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DerivativeError {
+    Evaluation(EvalError),
+    /// A joint whose dof chain is evaluated in general (its subspace moves with q): its name.
+    Unsupported {
+        joint: String,
+    },
+}
+
+impl From<EvalError> for DerivativeError {
+    fn from(e: EvalError) -> Self {
+        DerivativeError::Evaluation(e)
+    }
+}
+
+impl std::fmt::Display for DerivativeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DerivativeError::Evaluation(e) => write!(f, "the geometry cannot be evaluated: {e:?}"),
+            DerivativeError::Unsupported { joint } => write!(
+                f,
+                "the dof chain of `{joint}` is neither one rotation nor one translation linear in its coordinate, nor a spherical or free joint: its derivatives are not computed"
+            ),
+        }
+    }
+}
+
+/// Whether the derivatives cover joint `k`: its subspace is constant in its child's frame.
+fn has_constant_subspace(model: &Model, k: usize) -> bool {
+    let joint = &model.joints[k];
+    !matches!(
+        (&joint.kernel, &joint.kind),
+        (Kernel::General, JointType::Chain)
+    )
+}
+
+/// The first joint the derivatives do not cover, if any (`DerivativeError::Unsupported`).
+pub fn check_supported(model: &Model) -> Result<(), DerivativeError> {
+    match (model.dynamic_joints.iter()).find(|&&k| !has_constant_subspace(model, k)) {
+        Some(&k) => Err(DerivativeError::Unsupported {
+            joint: model.joints[k].chain.name.clone(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The derivatives of inverse dynamics and the scratch they are computed in; `new(&model)` once.
+pub struct RneaDerivatives {
+    /// τ, ∂τ/∂q and ∂τ/∂v (nv × nv, column j the derivative along velocity j) after `compute`.
+    pub tau: DVector<f64>,
+    pub dtau_dq: DMatrix<f64>,
+    pub dtau_dv: DMatrix<f64>,
+    /// Per body (0 earth), in the fixed frame: pose, velocity, acceleration, then, after the
+    /// pass back, the subtree's inertia, Coriolis matrix B and force.
+    world: Vec<Transform>,
+    velocity: Vec<Motion>,
+    acceleration: Vec<Motion>,
+    inertia: Vec<RigidInertia>,
+    coriolis: Vec<CoriolisMatrix>,
+    force: Vec<Force>,
+    /// Per velocity, in the fixed frame: S, ∂V = v_λ × S, ∂A = a_λ × S + v_λ × ∂V and
+    /// ∂A' = (v_j + v_λ) × S.
+    columns: Vec<Motion>,
+    dv_dq: Vec<Motion>,
+    da_dq: Vec<Motion>,
+    da_dv: Vec<Motion>,
+}
+
+impl RneaDerivatives {
+    pub fn new(model: &Model) -> RneaDerivatives {
+        let (n, nv) = (model.body_count(), model.nv);
+        RneaDerivatives {
+            tau: DVector::zeros(nv),
+            dtau_dq: DMatrix::zeros(nv, nv),
+            dtau_dv: DMatrix::zeros(nv, nv),
+            world: vec![Transform::identity(); n + 1],
+            velocity: vec![Motion::zeros(); n + 1],
+            acceleration: vec![Motion::zeros(); n + 1],
+            inertia: vec![RigidInertia::zeros(); n + 1],
+            coriolis: vec![CoriolisMatrix::zeros(); n + 1],
+            force: vec![Force::zeros(); n + 1],
+            columns: vec![Motion::zeros(); nv],
+            dv_dq: vec![Motion::zeros(); nv],
+            da_dq: vec![Motion::zeros(); nv],
+            da_dv: vec![Motion::zeros(); nv],
+        }
+    }
+
+    /// τ, ∂τ/∂q and ∂τ/∂v at (q, v, a) under the external forces `external` (one per body, in
+    /// its frame; index 0 unused), as `rnea` takes them. Derivatives along q are in the joints'
+    /// tangent spaces (one per velocity).
+    pub fn compute(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        external: &[Force],
+    ) -> Result<(), DerivativeError> {
+        self.compute_with_base(model, data, (q, v, a), external, base_acceleration(model))
+    }
+
+    /// `compute` with the base's acceleration `base` in place of the one that stands for
+    /// gravity (zero for the mass matrix's derivatives).
+    pub(super) fn compute_with_base(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        (q, v, a): (&[f64], &[f64], &[f64]),
+        external: &[Force],
+        base: Motion,
+    ) -> Result<(), DerivativeError> {
+        check_supported(model)?;
+        joint_motions(model, data, q, v)?;
+        self.after_kinematics(model, data, (v, a), external, base);
+        Ok(())
+    }
+
+    /// `compute_with_base` when `data` already holds the joints' motions at (q, v) (after
+    /// `aba_into`, say) and the model's joints are covered (`check_supported`).
+    pub(super) fn after_kinematics(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        (v, a): (&[f64], &[f64]),
+        external: &[Force],
+        base: Motion,
+    ) {
+        self.acceleration[0] = base;
+        self.pass_out(model, data, v, a, external);
+        self.tau.fill(0.0);
+        self.dtau_dq.fill(0.0);
+        self.dtau_dv.fill(0.0);
+        self.add_rotors(model, v, a);
+        self.pass_back(model);
+    }
+
+    /// Poses, velocities, accelerations, inertias, Coriolis matrices and forces of the bodies
+    /// in the fixed frame, and the columns' ∂V, ∂A and ∂A'.
+    fn pass_out(&mut self, model: &Model, data: &Data, v: &[f64], a: &[f64], external: &[Force]) {
+        for &k in &model.dynamic_joints {
+            let joint = &model.joints[k];
+            let (i, parent) = (joint.child, joint.dynamic_parent);
+            let state = &data.states[k];
+            let world = self.world[parent] * state.transform;
+            self.world[i] = world;
+            let (parent_velocity, parent_acceleration) =
+                (self.velocity[parent], self.acceleration[parent]);
+            let mut own_velocity = Motion::zeros();
+            let mut own_acceleration = Motion::zeros();
+            for (c, column) in state.subspace.columns().iter().enumerate() {
+                let index = joint.v_offset + c;
+                let s = world.motion_to_parent(column);
+                self.columns[index] = s;
+                own_velocity += s * v[index];
+                own_acceleration += s * a[index];
+            }
+            let velocity = parent_velocity + own_velocity;
+            self.velocity[i] = velocity;
+            self.acceleration[i] = parent_acceleration
+                + own_acceleration
+                + spatial::cross_motion(&velocity, &own_velocity);
+            for index in joint.v_offset..joint.v_offset + joint.nv() {
+                let s = self.columns[index];
+                let dv = spatial::cross_motion(&parent_velocity, &s);
+                self.dv_dq[index] = dv;
+                self.da_dq[index] = spatial::cross_motion(&parent_acceleration, &s)
+                    + spatial::cross_motion(&parent_velocity, &dv);
+                self.da_dv[index] = spatial::cross_motion(&(velocity + parent_velocity), &s);
+            }
+            let body = &model.dynamic_bodies[i - 1];
+            let outside = world.force_to_parent(&external[i]);
+            if body.massless {
+                self.inertia[i] = RigidInertia::zeros();
+                self.coriolis[i] = CoriolisMatrix::zeros();
+                self.force[i] = -outside;
+            } else {
+                let inertia = body.rigid.to_parent(&world);
+                let momentum = inertia.times(&velocity);
+                self.inertia[i] = inertia;
+                self.coriolis[i] = CoriolisMatrix::new(&inertia, &velocity, &momentum);
+                self.force[i] = inertia.times(&self.acceleration[i])
+                    + spatial::cross_force(&velocity, &momentum)
+                    - outside;
+            }
+        }
+    }
+
+    /// The geared rotors as bodies of their carriers' subtrees (the module's documentation): their
+    /// inertias, Coriolis matrices and forces added to their carriers', their own efforts n eᵀf_R
+    /// on their coordinates with those efforts' derivatives, and the derivatives along their
+    /// rates of their carriers' ancestors' efforts. Before the pass back, which sums them.
+    fn add_rotors(&mut self, model: &Model, v: &[f64], a: &[f64]) {
+        for rotor in &model.rotors {
+            let carrier = rotor.carrier;
+            let world = &self.world[carrier];
+            let local_axis = spatial::twist(rotor.axis, Vector3::zeros());
+            // The axis as a motion (n e: the rotor's motion per unit rate) and as a moment (its
+            // inertia J ẽẽᵀ, a pure moment about the axis whatever the point).
+            let axis = world.motion_to_parent(&local_axis) * rotor.ratio;
+            let direction = world.rotation * rotor.axis;
+            let inertia = RigidInertia {
+                mass: 0.0,
+                first: Vector3::zeros(),
+                rotational: direction * direction.transpose() * rotor.inertia,
+            };
+            let (carrier_velocity, carrier_acceleration) =
+                (self.velocity[carrier], self.acceleration[carrier]);
+            let own = axis * v[rotor.velocity];
+            let velocity = carrier_velocity + own;
+            let acceleration = carrier_acceleration
+                + axis * a[rotor.velocity]
+                + spatial::cross_motion(&carrier_velocity, &own);
+            let momentum = inertia.times(&velocity);
+            let coriolis = CoriolisMatrix::new(&inertia, &velocity, &momentum);
+            let force = inertia.times(&acceleration) + spatial::cross_force(&velocity, &momentum);
+            let row = rotor.velocity;
+            self.tau[row] += axis.dot(&force);
+            // Its own effort along the motions of the joints that carry it, …
+            let (sensitivity, momentum_of_axis) =
+                (coriolis.transpose_times(&axis), inertia.times(&axis));
+            let carried = self.carrier_branch(model, carrier);
+            for &column in carried {
+                self.dtau_dq[(row, column)] += sensitivity.dot(&self.dv_dq[column])
+                    + momentum_of_axis.dot(&self.da_dq[column]);
+                self.dtau_dv[(row, column)] += sensitivity.dot(&self.columns[column])
+                    + momentum_of_axis.dot(&self.da_dv[column]);
+            }
+            // … and the efforts of the joints that carry it along its rate (its own effort's
+            // part, n eᵀ(B_R n e + I_R (v_R + v_F) × n e), vanishes: I_R is a moment about e).
+            let rate_change = coriolis.times(&axis)
+                + inertia.times(&spatial::cross_motion(
+                    &(velocity + carrier_velocity),
+                    &axis,
+                ));
+            for &carrying in carried {
+                self.dtau_dv[(carrying, row)] += self.columns[carrying].dot(&rate_change);
+            }
+            if carrier != 0 {
+                self.inertia[carrier] += inertia;
+                self.coriolis[carrier] += coriolis;
+                self.force[carrier] += force;
+            }
+        }
+    }
+
+    /// The velocities of the joints that move body `carrier` (none for earth).
+    fn carrier_branch<'m>(&self, model: &'m Model, carrier: usize) -> &'m [usize] {
+        match carrier {
+            0 => &[],
+            body => &model.branch_velocities[body - 1],
+        }
+    }
+
+    /// Sums the composites from the leaves and fills τ, ∂τ/∂q and ∂τ/∂v (the module's
+    /// documentation): per joint, its rows along its own and its ancestors' columns, and its
+    /// ancestors' rows along its columns.
+    fn pass_back(&mut self, model: &Model) {
+        for &k in model.dynamic_joints.iter().rev() {
+            let joint = &model.joints[k];
+            let (i, parent) = (joint.child, joint.dynamic_parent);
+            let (inertia, coriolis, force) = (self.inertia[i], self.coriolis[i], self.force[i]);
+            let own = joint.v_offset..joint.v_offset + joint.nv();
+            let branch = &model.branch_velocities[k];
+            for row in own.clone() {
+                let s = self.columns[row];
+                self.tau[row] += s.dot(&force);
+                let (sensitivity, momentum) = (coriolis.transpose_times(&s), inertia.times(&s));
+                for &column in branch {
+                    self.dtau_dq[(row, column)] +=
+                        sensitivity.dot(&self.dv_dq[column]) + momentum.dot(&self.da_dq[column]);
+                    self.dtau_dv[(row, column)] +=
+                        sensitivity.dot(&self.columns[column]) + momentum.dot(&self.da_dv[column]);
+                }
+            }
+            for column in own.clone() {
+                let s = self.columns[column];
+                let position_change = spatial::cross_force(&s, &force)
+                    + coriolis.times(&self.dv_dq[column])
+                    + inertia.times(&self.da_dq[column]);
+                let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
+                for &row in branch.iter().filter(|row| !own.contains(row)) {
+                    self.dtau_dq[(row, column)] += self.columns[row].dot(&position_change);
+                    self.dtau_dv[(row, column)] += self.columns[row].dot(&rate_change);
+                }
+            }
+            if parent != 0 {
+                self.inertia[parent] += inertia;
+                self.coriolis[parent] += coriolis;
+                self.force[parent] += force;
+            }
+        }
+    }
+}
+
+/// B m = v ×* (I m) + I (m × v) + m ×* h for a body of inertia I, velocity v = [ω; u] and
+/// momentum h = I v = [n; f], all in one frame: the change of its force v ×* I v + I a when its
+/// velocity changes by m and its acceleration by m × v. With I = [J ĉ; ĉᵀ m·1] (c the first
+/// moment) the blocks multiplying m's linear part cancel (f = m u − c × ω), leaving
+/// B = [ω̂J + (ω̂J)ᵀ − c uᵀ − u cᵀ + 2 (u·c) 1 − n̂, 0; −2 ((ω × c)^ + m û), 0]:
+/// two 3 × 3 blocks, sums of which stay of that form for a subtree.
+#[derive(Clone, Copy, Debug)]
+struct CoriolisMatrix {
+    top: Matrix3<f64>,
+    bottom: Matrix3<f64>,
+}
+
+impl CoriolisMatrix {
+    fn zeros() -> CoriolisMatrix {
+        CoriolisMatrix {
+            top: Matrix3::zeros(),
+            bottom: Matrix3::zeros(),
+        }
+    }
+
+    fn new(inertia: &RigidInertia, velocity: &Motion, momentum: &Force) -> CoriolisMatrix {
+        let (w, u) = (spatial::angular(velocity), spatial::linear(velocity));
+        let c = inertia.first;
+        let turned = spatial::skew(&w) * inertia.rotational;
+        let top = turned + turned.transpose() - c * u.transpose() - u * c.transpose()
+            + Matrix3::identity() * (2.0 * u.dot(&c))
+            - spatial::skew(&spatial::angular(momentum));
+        let bottom = -2.0 * (spatial::skew(&w.cross(&c)) + spatial::skew(&u) * inertia.mass);
+        CoriolisMatrix { top, bottom }
+    }
+
+    /// B m (a force): only m's angular part counts.
+    fn times(&self, m: &Motion) -> Force {
+        let w = spatial::angular(m);
+        spatial::twist(self.top * w, self.bottom * w)
+    }
+
+    /// Bᵀ s, as a vector to dot with motions: its linear part is zero.
+    fn transpose_times(&self, s: &Motion) -> Motion {
+        let moment =
+            self.top.tr_mul(&spatial::angular(s)) + self.bottom.tr_mul(&spatial::linear(s));
+        spatial::twist(moment, Vector3::zeros())
+    }
+}
+
+impl std::ops::AddAssign for CoriolisMatrix {
+    fn add_assign(&mut self, other: CoriolisMatrix) {
+        self.top += other.top;
+        self.bottom += other.bottom;
+    }
+}
