@@ -69,6 +69,7 @@ mod runs;
 mod sampled;
 mod scenes;
 mod simulation;
+mod singular_passages;
 mod states;
 mod stepping;
 mod stop_loops;
