@@ -190,12 +190,6 @@ impl AdaptiveMarch {
         });
         match attempt {
             Ok(error) if error <= 1.0 => {
-                // A step the system wants shorter (`OdeSystem::cut_step`) is taken again so.
-                if let Some(fraction) = eval.cut_step(self.t + h, &self.y_new)? {
-                    eval.stats.rejected += 1;
-                    self.h = fraction * h;
-                    return Ok(false);
-                }
                 self.advance(eval, problem, h, outputs, observer)?;
                 eval.stats.steps += 1;
                 self.last_step = h;
