@@ -11,7 +11,7 @@ use lsdc::prepare::settings::SettingsChanges;
 use lsdc::prepare::{Integrator, Prepared};
 use lsdc::simulate::run::Simulation;
 
-use crate::common::programs::{column, constraints, prepared, simulated};
+use crate::common::programs::{column, constraints, parallelogram, prepared, simulated};
 
 /// The program in the form asked: the planar form of a planar mechanism, or the spatial one.
 fn in_form(mut prepared: Prepared, planar: bool) -> Prepared {
@@ -67,18 +67,6 @@ fn a_parallelogram_passes_its_flat_configurations_whatever_its_tolerances_last_b
     // `closed_loops::a_parallelogram_runs_through_its_flat_configurations` (dopri5 at 1e-12
     // over 5 s, bound 1e-9 on the drift and on leaving its branch) at 12 tolerances within
     // 1e-6 of 1e-12, in both forms.
-    let parallelogram = || {
-        prepared(
-            "four_bar",
-            &[
-                ("let l0 = 4.0 ;", "let l0 = 3.0 ;"),
-                ("let l2 = 3.5 ;", "let l2 = 3.0 ;"),
-                ("let l3 = 3.0 ;", "let l3 = 1.0 ;"),
-                ("duration = 10, output = 0.05", "duration = 5, output = 0.001"),
-                ("initial crank.q = 1.0, coupler.q = -0.36 guess, rocker.q = 1.79 guess, c.q = 1.15 guess ;", "initial crank.q = 1.0 fixed, coupler.q = -1.0, rocker.q = 1.0, c.q = 1.0, crank.q' = 3 ;"),
-            ],
-        )
-    };
     let mut failures = Vec::new();
     for k in (-6..=6).filter(|&k| k != 0) {
         let tolerance = 1e-12 * (1.0 + f64::from(k) * 1e-7);
