@@ -296,7 +296,7 @@ impl LoopMonitor {
 
     /// Where a step from the last state kept to the rows `jacobian` should end instead, as a
     /// fraction of it, when it crossed a singular configuration of the loops (`APPROACH`).
-    pub fn crossing(&self, jacobian: &ConstraintJacobian) -> Option<f64> {
+    pub fn crossing(&mut self, jacobian: &ConstraintJacobian) -> Option<f64> {
         if !self.watches_crossings() {
             return None;
         }

@@ -25,7 +25,7 @@ use super::jacobian::ConstraintJacobian;
 const DEPENDENT: f64 = 1e-24;
 
 /// The kept firm rows of one loop at the reference state.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 struct LoopReference {
     block: usize,
     /// The rows (0 to 5 in the loop's block) and their scales.
@@ -37,58 +37,64 @@ struct LoopReference {
 }
 
 /// The loops' kept rows at a reference state, to tell on which side of a singular configuration
-/// other states lie (see the module's documentation).
+/// other states lie (see the module's documentation). Its storage is kept from one reference to
+/// the next: a run sets one at every step it keeps, and a step allocates nothing.
 #[derive(Clone, Debug, Default)]
 pub struct Orientation {
+    /// The first `count` hold the reference; the others keep their storage for the next one.
     loops: Vec<LoopReference>,
+    count: usize,
+    /// One loop's rows at the state `relative` is asked about.
+    row: Vec<f64>,
 }
 
 impl Orientation {
     /// Takes the rows of `choice` (the firm ones) of `jacobian` as the reference.
     pub fn set(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
-        self.loops.clear();
+        self.count = 0;
         let firm = &choice.rows[..choice.rows.len() - choice.weak];
         for (block_index, block) in jacobian.blocks.iter().enumerate() {
-            let rows: Vec<(usize, f64)> = (firm.iter().zip(&choice.scales))
-                .filter(|(&row, _)| row / 6 == block_index)
-                .map(|(&row, &scale)| (row % 6, scale))
-                .collect();
-            if rows.is_empty() {
+            if self.loops.len() == self.count {
+                self.loops.push(LoopReference::default());
+            }
+            let reference = &mut self.loops[self.count];
+            reference.block = block_index;
+            reference.rows.clear();
+            reference.rows.extend(
+                (firm.iter().zip(&choice.scales))
+                    .filter(|(&row, _)| row / 6 == block_index)
+                    .map(|(&row, &scale)| (row % 6, scale)),
+            );
+            if reference.rows.is_empty() {
                 continue;
             }
             let columns = block.columns.len();
-            let mut values = Vec::with_capacity(rows.len() * columns);
-            for &(row, scale) in &rows {
-                values.extend((0..columns).map(|c| block.values[(row, c)] * scale));
+            reference.values.clear();
+            for &(row, scale) in &reference.rows {
+                (reference.values).extend((0..columns).map(|c| block.values[(row, c)] * scale));
             }
-            let mut reference = LoopReference {
-                block: block_index,
-                rows,
-                values,
-                determinant: 1.0,
-            };
             let determinant = reference.product_determinant(&reference.values);
             let lengths: f64 = (reference.values.chunks(columns))
                 .map(|row| row.iter().map(|x| x * x).sum::<f64>())
                 .product();
             if determinant > DEPENDENT * lengths {
                 reference.determinant = determinant;
-                self.loops.push(reference);
+                self.count += 1;
             }
         }
     }
 
     /// Forgets the reference (`crossing` then sees nothing).
     pub fn clear(&mut self) {
-        self.loops.clear();
+        self.count = 0;
     }
 
     /// The smallest, over the loops, of det(G G₀ᵀ) / det(G₀ G₀ᵀ) at the rows of `jacobian`
     /// (1 at the reference, negative past a singular configuration), and that loop; None
     /// without a reference.
-    pub fn relative(&self, jacobian: &ConstraintJacobian) -> Option<(f64, usize)> {
-        let mut row = Vec::new();
-        self.loops
+    pub fn relative(&mut self, jacobian: &ConstraintJacobian) -> Option<(f64, usize)> {
+        let Orientation { loops, count, row } = self;
+        loops[..*count]
             .iter()
             .map(|reference| {
                 let block = &jacobian.blocks[reference.block];
@@ -96,7 +102,7 @@ impl Orientation {
                 for &(r, scale) in &reference.rows {
                     row.extend((0..block.columns.len()).map(|c| block.values[(r, c)] * scale));
                 }
-                let ratio = reference.product_determinant(&row) / reference.determinant;
+                let ratio = reference.product_determinant(row) / reference.determinant;
                 (ratio, reference.block)
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))
