@@ -84,6 +84,13 @@ impl<'s> Evaluator<'s> {
         Ok(moved)
     }
 
+    /// Where the step ending at (t, y) should end instead (`OdeSystem::cut_step`).
+    pub(super) fn cut_step(&mut self, t: f64, y: &[f64]) -> Result<Option<f64>, Halt> {
+        self.system
+            .cut_step(t, y)
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))
+    }
+
     pub(super) fn event_count(&self) -> usize {
         self.system.event_count()
     }

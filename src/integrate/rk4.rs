@@ -26,6 +26,10 @@ use super::system::Observer;
 /// A remainder below this fraction of a step joins the last full step instead of making a sliver.
 const SLIVER: f64 = 1e-9;
 
+/// How many times one step may be shortened (`OdeSystem::cut_step`): each cut takes a fraction
+/// of the step, so that a few bring its end as close to what it must see as a step can come.
+const MAX_CUTS: usize = 60;
+
 /// |h λ| at the boundary of the method's stability region: 2.785 on the negative real axis,
 /// 2√2 on the imaginary one.
 pub const STABILITY_LIMIT: f64 = 2.8;
@@ -100,6 +104,17 @@ impl Marching for Rk4March {
             false => grid_point,
         };
         rk4.step(eval, t_new)?;
+        // A step the system wants shorter (`OdeSystem::cut_step`) is taken again so, off the
+        // grid; the next step goes on to the grid point.
+        let mut t_new = t_new;
+        for _ in 0..MAX_CUTS {
+            let Some(fraction) = eval.cut_step(t_new, &rk4.y_new)? else {
+                break;
+            };
+            t_new = rk4.t + fraction * (t_new - rk4.t);
+            rk4.derivative_known = true;
+            rk4.step(eval, t_new)?;
+        }
         // Before the end derivative is evaluated, so that what the next step reuses is taken at
         // the projected state and the interpolant joins the projected ends.
         eval.project(t_new, &mut rk4.y_new)?;

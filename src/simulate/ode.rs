@@ -55,6 +55,10 @@ impl OdeSystem for MechanicalSystem<'_> {
         self.scratch.loops.breaks_trend
     }
 
+    fn cut_step(&mut self, t: f64, y: &[f64]) -> Result<Option<f64>, CallbackError> {
+        Ok(self.cut_at_passage(t, y)?)
+    }
+
     fn event_count(&self) -> usize {
         self.event_total()
     }
@@ -168,6 +172,11 @@ impl OdeSystem for RunOde<'_, '_> {
 
     fn breaks_error_trend(&self) -> bool {
         self.system.scratch.loops.breaks_trend
+    }
+
+    fn cut_step(&mut self, t: f64, y: &[f64]) -> Result<Option<f64>, CallbackError> {
+        let (n, _) = self.load(y);
+        Ok(self.system.cut_at_passage(t, &y[..n])?)
     }
 
     fn event_count(&self) -> usize {

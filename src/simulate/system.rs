@@ -31,7 +31,7 @@ use crate::dynamics::algorithms::{
 use crate::dynamics::contacts;
 use crate::dynamics::driven_points;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
-use crate::dynamics::loops::{self, LoopError, Stabilisation, StructureError, ROW_NAMES};
+use crate::dynamics::loops::{self, Extent, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
 use crate::dynamics::planar::algebra::PlanarForce;
 use crate::dynamics::planar::{self, PlanarData, PlanarModel};
@@ -489,6 +489,30 @@ impl<'m> MechanicalSystem<'m> {
         }
         let stacked = self.keep_stacked(t, y)?;
         Ok(moved || stacked)
+    }
+
+    /// Where a step ending at y, which crossed a singular configuration of the loops since the
+    /// last state kept (`LoopMonitor::crossing`), should end instead, as a fraction of it: the
+    /// passage is met at a step's end, where it is set aside (`LoopMonitor::keep`), rather than
+    /// jumped across by a step whose stages come unseen as near it as round-off allows.
+    pub fn cut_at_passage(&mut self, _t: f64, y: &[f64]) -> Result<Option<f64>, SystemError> {
+        let model = self.model;
+        if !model.has_loops() || !self.scratch.loops.watches_crossings() {
+            return Ok(None);
+        }
+        let mut q = std::mem::take(&mut self.scratch.positions);
+        let v = model.split_state_into(y, &mut q);
+        let scratch = &mut self.scratch;
+        let rows = scratch
+            .crossing_rows
+            .get_or_insert_with(|| loops::Constraints::new(model));
+        let found = forward_kinematics(model, &mut scratch.data, &q, v)
+            .and_then(|()| {
+                loops::constraints_into(model, &mut scratch.data, &q, v, Extent::Rows, rows)
+            })
+            .map(|()| scratch.loops.crossing(&rows.jacobian));
+        self.scratch.positions = q;
+        Ok(found?)
     }
 
     /// Sets the rates of the complementary ball joints' angles in y (for outputs).

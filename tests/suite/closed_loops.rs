@@ -3,7 +3,9 @@
 //! models of one mechanism. The examples carry their own `simulate` settings; a test changes
 //! them on the prepared simulation when it needs another integrator or tolerance.
 
-use crate::common::programs::{column, constraints, example_text, prepared, run_text, simulated};
+use crate::common::programs::{
+    column, constraints, example_text, parallelogram, prepared, run_text, simulated,
+};
 use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{forward_kinematics, Data};
 use lsdc::dynamics::loops::Stabilisation;
@@ -704,16 +706,7 @@ fn a_parallelogram_runs_through_its_flat_configurations() {
     // through on its branch (crank and rocker parallel); the report names each passage that a
     // step's end or an output comes near (conditioning below 1e-3, a few 1e-4 s about each flat
     // configuration at this speed): with outputs every 1e-3 s, all of them, two per turn.
-    let p = prepared(
-        "four_bar",
-        &[
-            ("let l0 = 4.0 ;", "let l0 = 3.0 ;"),
-            ("let l2 = 3.5 ;", "let l2 = 3.0 ;"),
-            ("let l3 = 3.0 ;", "let l3 = 1.0 ;"),
-            ("duration = 10, output = 0.05", "duration = 5, output = 0.001"),
-            ("initial crank.q = 1.0, coupler.q = -0.36 guess, rocker.q = 1.79 guess, c.q = 1.15 guess ;", "initial crank.q = 1.0 fixed, coupler.q = -1.0, rocker.q = 1.0, c.q = 1.0, crank.q' = 3 ;"),
-        ],
-    );
+    let p = parallelogram();
     let simulation = simulated(&p);
     let (crank, rocker) = (
         column(&simulation, "crank.q"),

@@ -71,6 +71,7 @@ mod runs;
 mod sampled;
 mod scenes;
 mod simulation;
+mod singular_passages;
 mod states;
 mod stepping;
 mod stop_loops;

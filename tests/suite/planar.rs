@@ -334,7 +334,9 @@ fn the_spatial_form_is_the_default_and_simulate_planar_takes_the_planar_form() {
 #[test]
 fn planar_and_spatial_right_hand_sides_agree_next_to_singular_configurations() {
     // The states of a run of a parallelogram through its flat configurations, every
-    // millisecond over 1.5 s (RK4 at 1 ms), four flat configurations among them: the two forms'
+    // millisecond over 1.5 s (RK4 at 1 ms), four flat configurations among them (and the one
+    // near 0.139 s that the steps jumped across unseen before they were cut short of it,
+    // `singular_passages.rs`): the two forms'
     // right-hand sides at those states, whose kept rows come within 3.2e-4 of dependent
     // (conditioning), where a difference in the rows is amplified most.
     let with_rk4 = |mut prepared: Prepared| {
@@ -348,7 +350,7 @@ fn planar_and_spatial_right_hand_sides_agree_next_to_singular_configurations() {
     let loops = motion.report.constraints.as_ref().expect("loops");
     let closest = loops.closest.as_ref().expect("a closest approach").ratio;
     assert!(
-        closest < 5e-4 && loops.singular.len() == 4,
+        closest < 5e-4 && loops.singular.len() >= 4,
         "{closest}, {:?}",
         loops.singular
     );

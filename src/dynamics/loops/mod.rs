@@ -6,7 +6,9 @@
 //! mass matrix from `inertia`), and the projection of a state back
 //! onto the loops (`project`), then, near singular configurations, of its velocities by the
 //! constraints' impulse (`momentum`), with an orthonormal basis of the allowed motions from the
-//! sparse factorisation for the outputs (`orthonormal`).
+//! sparse factorisation for the outputs (`orthonormal`). Which side of a singular configuration
+//! a state lies on, seen from the last step's start, tells a step that jumps across one
+//! (`orientation`).
 //! A planar mechanism's right-hand side computes its rows in planar form (`planar_rows`).
 //! A singular value decomposition (`basis`) and dense QR
 //! factorisations serve the decisions taken once, never the equations of motion.
@@ -17,6 +19,7 @@ pub mod factored;
 pub mod inertia;
 pub mod jacobian;
 pub mod momentum;
+pub mod orientation;
 pub mod orthonormal;
 pub mod planar_rows;
 pub mod project;
@@ -28,6 +31,7 @@ pub use basis::{decompose, decompose_with};
 pub use factored::{Factored, RowChoice, Singular, DAMPING};
 pub use jacobian::ConstraintJacobian;
 pub use momentum::{project_momentum, MomentumBasis};
+pub use orientation::Orientation;
 pub use project::{close_configuration, project, project_from, ProjectionScratch, Residuals};
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,

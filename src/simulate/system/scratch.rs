@@ -44,6 +44,9 @@ pub struct Scratch {
     /// Scratch of the projections: the constraints and factorisations, and the velocities.
     pub(in crate::simulate) projection: ProjectionScratch,
     pub(in crate::simulate) velocities: Vec<f64>,
+    /// The loops' rows at a step's end before it is accepted, to tell whether it crossed a
+    /// singular configuration (`MechanicalSystem::cut_at_passage`); made at the first.
+    pub(in crate::simulate) crossing_rows: Option<crate::dynamics::loops::Constraints>,
     /// The state of the last evaluation of a mechanism with loops, while `loop_scratch` holds
     /// its rows (empty otherwise): a projection of that state adopts them.
     pub(in crate::simulate) evaluated: Vec<f64>,
@@ -114,6 +117,7 @@ impl Scratch {
             loop_scratch: LoopScratch::new(model),
             projection: ProjectionScratch::new(model),
             velocities: Vec::new(),
+            crossing_rows: None,
             evaluated: Vec::new(),
             normal_rows: Vec::with_capacity(model.contacts.len()),
             contact_state: ContactRows::new(model),

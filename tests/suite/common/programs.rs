@@ -176,3 +176,18 @@ pub fn assembled_rates(prepared: &Prepared, velocities: &[&str]) -> (Vec<f64>, V
         .collect();
     (accelerations, states)
 }
+
+/// `examples/four_bar.lsd` made a parallelogram (bars 3, 1, 3, 1), its crank at 1 rad turning at
+/// 3 rad/s through its flat configurations, dopri5 at 1e-12 over 5 s, outputs every 1 ms.
+pub fn parallelogram() -> Prepared {
+    prepared(
+        "four_bar",
+        &[
+            ("let l0 = 4.0 ;", "let l0 = 3.0 ;"),
+            ("let l2 = 3.5 ;", "let l2 = 3.0 ;"),
+            ("let l3 = 3.0 ;", "let l3 = 1.0 ;"),
+            ("duration = 10, output = 0.05", "duration = 5, output = 0.001"),
+            ("initial crank.q = 1.0, coupler.q = -0.36 guess, rocker.q = 1.79 guess, c.q = 1.15 guess ;", "initial crank.q = 1.0 fixed, coupler.q = -1.0, rocker.q = 1.0, c.q = 1.0, crank.q' = 3 ;"),
+        ],
+    )
+}
