@@ -157,7 +157,9 @@ fn w0901_never_fires_on_the_examples_that_are_not_stiff() {
         if name == "delta_isir88_path" {
             continue;
         }
-        if name.starts_with("delta") {
+        // (`delta_tolerances` is the Delta with nothing acting on it, at rest where it is
+        // assembled: it goes through the explicit integrators below.)
+        if name.starts_with("delta") && name != "delta_tolerances" {
             prepared.settings.integrator = integrator("dopri5");
             let stiffness = run(&prepared, &mut |_| {}).report.stiffness;
             let element = stiffness.and_then(|s| s.element).unwrap_or_default();
