@@ -17,6 +17,44 @@ use lsdc::api::{
 use lsdc::diag::render;
 use lsdc::output::samples::{self, SampleWriter};
 
+/// The options that change a run's `simulate` declaration, read by `simulate` and `sweep`.
+#[derive(clap::Args)]
+pub struct RunSettingsArgs {
+    /// Overrides the program's `simulate` declaration.
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Time between outputs.
+    #[arg(long = "every")]
+    pub output_interval: Option<f64>,
+    /// Relative and absolute tolerance of the adaptive integrators.
+    #[arg(long)]
+    pub tolerance: Option<f64>,
+    /// Fixed step (rk4, symplectic) or first step (adaptive).
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Most steps of the integrator, rejected ones included, before a run stops with a failure
+    /// (its outputs kept).
+    #[arg(long, value_name = "N", default_value_t = lsdc::prepare::settings::DEFAULT_MAX_STEPS)]
+    pub max_steps: usize,
+}
+
+impl RunSettingsArgs {
+    /// These options as changes to the program's `simulate` declaration.
+    pub fn changes(&self) -> SettingsChanges {
+        SettingsChanges {
+            integrator: self.integrator.map(IntegratorArg::integrator),
+            duration: self.duration,
+            output: self.output_interval,
+            tolerance: self.tolerance,
+            step: self.step,
+            max_steps: Some(self.max_steps),
+            ..Default::default()
+        }
+    }
+}
+
 #[derive(clap::Args)]
 pub struct SimulateArgs {
     file: PathBuf,
@@ -26,20 +64,8 @@ pub struct SimulateArgs {
     /// `lsdc compile --emit notation`) or its generic name (`mass(arm)`). Repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     sets: Vec<String>,
-    /// Overrides the program's `simulate` declaration.
-    #[arg(long, value_enum)]
-    integrator: Option<IntegratorArg>,
-    #[arg(long)]
-    duration: Option<f64>,
-    /// Time between outputs.
-    #[arg(long = "every")]
-    output_interval: Option<f64>,
-    /// Relative and absolute tolerance of the adaptive integrators.
-    #[arg(long)]
-    tolerance: Option<f64>,
-    /// Fixed step (rk4, symplectic) or first step (adaptive).
-    #[arg(long)]
-    step: Option<f64>,
+    #[command(flatten)]
+    run: RunSettingsArgs,
     /// Format of the samples.
     #[arg(long, value_enum, default_value = "csv")]
     format: SampleFormat,
@@ -73,10 +99,6 @@ pub struct SimulateArgs {
     /// body's reference frame (its name) or `earth`. Repeatable.
     #[arg(long = "output-frame", value_name = "NAME")]
     output_frames: Vec<String>,
-    /// Most steps of the integrator, rejected ones included, before the run stops with a
-    /// failure (its outputs kept).
-    #[arg(long, value_name = "N", default_value_t = lsdc::prepare::settings::DEFAULT_MAX_STEPS)]
-    max_steps: usize,
     /// Do not check whether an explicit integrator's steps are held by its stability region
     /// (W0901; the check costs three evaluations every 20 steps).
     #[arg(long)]
@@ -235,19 +257,14 @@ fn sample_format(format: SampleFormat) -> samples::SampleFormat {
 fn settings_changes(args: &SimulateArgs) -> SettingsChanges {
     use lsdc::dynamics::loops::Stabilisation;
     SettingsChanges {
-        integrator: args.integrator.map(IntegratorArg::integrator),
-        duration: args.duration,
-        output: args.output_interval,
-        tolerance: args.tolerance,
-        step: args.step,
         stabilisation: Some(match args.stabilisation {
             StabilisationArg::Projection => Stabilisation::Projection,
             StabilisationArg::Baumgarte => Stabilisation::Baumgarte(args.baumgarte_rate),
             StabilisationArg::None => Stabilisation::None,
         }),
         reactions: args.reactions,
-        max_steps: Some(args.max_steps),
         no_stiffness_check: args.no_stiffness_check,
+        ..args.run.changes()
     }
 }
 

@@ -13,8 +13,8 @@ use clap::ValueEnum;
 use super::shared::{
     err, json, load_program, parse_sets, report_diagnostics, usage_error, warn, Format, LibraryArgs,
 };
-use super::simulate::{interrupt_on_signals, IntegratorArg};
-use lsdc::api::{Program, SettingsChanges};
+use super::simulate::{interrupt_on_signals, RunSettingsArgs};
+use lsdc::api::Program;
 use lsdc::studies::sweep::design::{self, Design, GridAxis, Sampling};
 use lsdc::studies::sweep::distribution::Distribution;
 use lsdc::studies::sweep::record::{runs_table, samples_table, Status};
@@ -81,23 +81,9 @@ struct RunArgs {
     /// The seed of a sample's design: the same seed, the same runs.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Overrides the program's `simulate` declaration, for every run.
-    #[arg(long, value_enum)]
-    integrator: Option<IntegratorArg>,
-    #[arg(long)]
-    duration: Option<f64>,
-    /// Time between samples.
-    #[arg(long = "every")]
-    output_interval: Option<f64>,
-    /// Relative and absolute tolerance of the adaptive integrators.
-    #[arg(long)]
-    tolerance: Option<f64>,
-    /// Fixed step (rk4, symplectic) or first step (adaptive).
-    #[arg(long)]
-    step: Option<f64>,
-    /// Most steps of one run, rejected ones included, before it stops with a failure.
-    #[arg(long, value_name = "N", default_value_t = lsdc::prepare::settings::DEFAULT_MAX_STEPS)]
-    max_steps: usize,
+    /// The program's `simulate` declaration changed for every run, as `lsdc simulate` changes it.
+    #[command(flatten)]
+    run: RunSettingsArgs,
     /// Evaluate a planar mechanism in planar form (as `lsdc simulate --planar`).
     #[arg(long)]
     planar: bool,
@@ -205,18 +191,6 @@ fn read_design(args: &RunArgs) -> Result<Design, String> {
     Err("no runs: give a grid (`--grid NAME=FROM:TO:COUNT`), a list (`--values runs.csv`) or a sample (`--vary NAME=DISTRIBUTION --sample N`)".to_string())
 }
 
-fn settings_changes(args: &RunArgs) -> SettingsChanges {
-    SettingsChanges {
-        integrator: args.integrator.map(IntegratorArg::integrator),
-        duration: args.duration,
-        output: args.output_interval,
-        tolerance: args.tolerance,
-        step: args.step,
-        max_steps: Some(args.max_steps),
-        ..Default::default()
-    }
-}
-
 fn take_planar(prepared: &mut lsdc::api::Prepared) {
     // A mechanism that is not planar keeps its spatial form, as `simulate --planar` does (the
     // warning is said once, before the runs).
@@ -262,7 +236,7 @@ fn run_sweep(args: &RunArgs) -> ExitCode {
     let sweep = Sweep::new(
         mechanism,
         overrides,
-        settings_changes(args),
+        args.run.changes(),
         design,
         args.samples.is_some(),
         adjust,
@@ -343,12 +317,12 @@ fn context(program: &Program, args: &RunArgs) -> String {
         "program {:016x}; set {:?}; integrator {:?}; duration {:?}; every {:?}; tolerance {:?}; step {:?}; max_steps {}; planar {}; scene {:?}",
         journal::digest(&sources),
         args.sets,
-        args.integrator.map(|i| i.name()),
-        args.duration,
-        args.output_interval,
-        args.tolerance,
-        args.step,
-        args.max_steps,
+        args.run.integrator.map(|i| i.name()),
+        args.run.duration,
+        args.run.output_interval,
+        args.run.tolerance,
+        args.run.step,
+        args.run.max_steps,
         args.planar,
         args.libraries.scene(),
     )
