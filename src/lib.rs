@@ -13,17 +13,18 @@
 //!
 //! # The library's boundary
 //!
-//! What the crate offers its users is [`api`], the facade above, and the algorithms it is built
-//! on: the dynamic model and its scratch ([`dynamics::model::Model`],
-//! [`dynamics::algorithms::Data`]), the recursive algorithms on them (RNEA, CRBA, ABA, forward
-//! kinematics, in [`dynamics::algorithms`]) and the spatial algebra they are written in
+//! What the crate offers its users is [`api`], the facade above, and the algorithms it is built on:
+//! the dynamic model and its scratch ([`dynamics::model::Model`], [`dynamics::algorithms::Data`]),
+//! the recursive algorithms on them (RNEA, CRBA, ABA, forward kinematics, in
+//! [`dynamics::algorithms`], and their analytical derivatives in its modules `rnea_derivatives`,
+//! `aba_derivatives` and `crba_derivatives`) and the spatial algebra they are written in
 //! ([`spatial`]). Every other module is the library's own: `pub(crate)`, unless the crate is
-//! compiled with `--cfg lsdc_internals`, which the repository's `.cargo/config.toml` passes to
-//! its own builds (the command line, tests, benchmarks and examples, which reach into them), so
-//! that `cargo build` and `cargo test` build the library once, with the same flags. A crate
-//! that depends on lsdc does not read that file, and rustdoc gets no rustflags: both see the
-//! boundary. The command line's commands (`cli`, not documented) are in the library, so that
-//! the binary needs nothing else of it and builds without the cfg too.
+//! compiled with `--cfg lsdc_internals`, which the repository's `.cargo/config.toml` passes to its
+//! own builds (the command line, tests, benchmarks and examples, which reach into them), so that
+//! `cargo build` and `cargo test` build the library once, with the same flags. A crate that depends
+//! on lsdc does not read that file, and rustdoc gets no rustflags: both see the boundary. The
+//! command line's commands (`cli`, not documented) are in the library, so that the binary needs
+//! nothing else of it and builds without the cfg too.
 
 // The command line's files name the library `lsdc`, as they did when they were the binary's.
 extern crate self as lsdc;
