@@ -10,7 +10,7 @@
 //! The states are 256 random (q, v, a, τ), q uniform in [−π, π], the rest in [−1, 1], cycled.
 
 mod common;
-use common::{load_urdf as load, random_states, thread_cpu_seconds};
+use common::{prepared_file, random_states, thread_cpu_seconds};
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -68,7 +68,7 @@ fn main() {
             .to_vec();
     }
     for path in paths {
-        let model = load(&path);
+        let model = prepared_file(&path).model;
         let external = vec![Force::zeros(); model.body_count() + 1];
         let states = random_states(&model);
         let mut tau = DVector::zeros(model.nv);

@@ -23,13 +23,13 @@ mod common;
 mod loop_costs;
 #[path = "common/rows.rs"]
 mod rows;
-use common::thread_cpu_seconds;
+use common::{prepared_file, thread_cpu_seconds};
 use std::collections::HashMap;
 use std::hint::black_box;
 use std::io::{BufRead, Write};
 use std::path::Path;
 
-use lsdc::driver::{compile_files, compile_text};
+use lsdc::driver::compile_text;
 use lsdc::dynamics::algorithms::{aba_into, crba_into, rnea_into, Data};
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Integrator, Prepared, Settings};
@@ -42,19 +42,6 @@ const OPTIONS: LoadOptions = LoadOptions {
     use_environment: false,
     scene: None,
 };
-
-fn prepared_file(path: &Path) -> Prepared {
-    let compilation = compile_files(&[path.to_path_buf()], &OPTIONS).expect("readable");
-    let mechanism = compilation.mechanism.unwrap_or_else(|| {
-        panic!(
-            "{} does not compile: {:?}",
-            path.display(),
-            compilation.diagnostics
-        )
-    });
-    prepare(&mechanism, &[], &Settings::default())
-        .unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message))
-}
 
 fn prepared_text(text: &str) -> Prepared {
     let compilation = compile_text("row.lsd", text, None, &OPTIONS);

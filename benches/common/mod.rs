@@ -5,7 +5,7 @@ use std::time::Instant;
 use lsdc::driver::compile_files;
 use lsdc::dynamics::model::Model;
 use lsdc::load::LoadOptions;
-use lsdc::prepare::{prepare, Settings};
+use lsdc::prepare::{prepare, Prepared, Settings};
 
 #[allow(dead_code)] // each benchmark uses the timer it needs
 /// Best time per call, in seconds, over 7 batches sized to about 20 ms each: the minimum is the
@@ -75,14 +75,15 @@ impl Random {
 }
 
 #[allow(dead_code)]
-/// A URDF robot's model with a fixed base and gravity, as every command reads a `.urdf` file.
-pub fn load_urdf(path: &std::path::PathBuf) -> Model {
+/// A program or URDF robot prepared with its own values and default settings (a URDF robot: a
+/// fixed base and gravity, as every command reads a `.urdf` file).
+pub fn prepared_file(path: &std::path::Path) -> Prepared {
     let options = LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
         scene: None,
     };
-    let compilation = compile_files(std::slice::from_ref(path), &options).expect("readable");
+    let compilation = compile_files(&[path.to_path_buf()], &options).expect("readable");
     let mechanism = compilation.mechanism.unwrap_or_else(|| {
         panic!(
             "{} does not compile: {:?}",
@@ -90,9 +91,8 @@ pub fn load_urdf(path: &std::path::PathBuf) -> Model {
             compilation.diagnostics
         )
     });
-    let prepared = prepare(&mechanism, &[], &Settings::default())
-        .unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message));
-    prepared.model
+    prepare(&mechanism, &[], &Settings::default())
+        .unwrap_or_else(|d| panic!("{}: {:?}", path.display(), d[0].message))
 }
 
 #[allow(dead_code)]
