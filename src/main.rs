@@ -62,6 +62,10 @@ enum Command {
     /// The linear model (A, B, C, D) of the mechanism about its initial state, a run's state
     /// at a time or an equilibrium, in independent coordinates; eigenvalues and modes.
     Linearize(linearize::LinearizeArgs),
+    /// The derivatives of a run's coordinates, rates, states and outputs with respect to
+    /// initial values and values of the program, along the run, by the forward sensitivity
+    /// equations integrated with it; CSV (`d(swing.q)/d(L)`) or JSON, and a plot.
+    Sensitivity(sensitivity::SensitivityArgs),
     /// The velocity and acceleration models from actuated coordinates to a frame (direct and
     /// inverse), their conditioning and singularities, at configurations or along a run.
     Kinematics(kinematics::KinematicsArgs),
@@ -116,6 +120,7 @@ fn main() -> ExitCode {
         Command::Statics(args) => statics::run(&args),
         Command::Inverse(args) => inverse::run(&args),
         Command::Linearize(args) => linearize::run(&args),
+        Command::Sensitivity(args) => sensitivity::run(&args),
         Command::Kinematics(args) => kinematics::run(&args),
         Command::Workspace(args) => workspace::run(&args),
         Command::Compile(args) => compile::run(&args),

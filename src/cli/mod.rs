@@ -15,6 +15,7 @@ pub mod linearize;
 pub mod lsp;
 pub mod parse;
 pub mod precision;
+pub mod sensitivity;
 pub mod shared;
 pub mod simulate;
 pub mod statics;

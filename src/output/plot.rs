@@ -143,7 +143,51 @@ impl Figure for OverTime<'_> {
             [] => standard_panels(self.0),
             chosen => chosen_panels(self.0, chosen),
         };
-        draw(root, &self.0.samples, &panels, render)
+        let times: Vec<f64> = self.0.samples.iter().map(|s| s.time).collect();
+        draw(root, &times, &panels, render)
+    }
+}
+
+/// Series over time in panels of their own: a caption, and a label and a value per time for
+/// each line (`lsdc sensitivity --plot`).
+pub struct Series {
+    pub caption: String,
+    pub lines: Vec<(String, Vec<f64>)>,
+}
+
+/// Draws `series` at `times` to `path`, an SVG or a PNG as for [`plot`], the panels sharing
+/// the height equally.
+pub fn plot_series(path: &Path, times: &[f64], series: &[Series]) -> Result<(), PlotError> {
+    format_of(path)?;
+    if times.is_empty() {
+        return Err(PlotError::NoOutputs);
+    }
+    write_figure(&SeriesOverTime(times, series), path)
+}
+
+struct SeriesOverTime<'s>(&'s [f64], &'s [Series]);
+
+impl Figure for SeriesOverTime<'_> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        render: Render,
+    ) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static,
+    {
+        let SeriesOverTime(times, series) = *self;
+        let panels: Vec<Panel> = (series.iter())
+            .map(|panel| Panel {
+                caption: panel.caption.clone(),
+                quantity: "derivative",
+                lines: (panel.lines.iter())
+                    .map(|(label, values)| Line::from_points(label, times, values))
+                    .collect(),
+                share: 1.0 / series.len().max(1) as f64,
+            })
+            .collect();
+        draw(root, times, &panels, render)
     }
 }
 
@@ -302,9 +346,16 @@ struct Line {
 
 impl Line {
     fn new(label: &str, samples: &[Sample], value: impl Fn(&Sample) -> Option<f64>) -> Line {
-        let points = samples
-            .iter()
-            .filter_map(|s| value(s).map(|v| (s.time, v)))
+        let times: Vec<f64> = samples.iter().map(|s| s.time).collect();
+        let values: Vec<f64> = (samples.iter())
+            .map(|s| value(s).unwrap_or(f64::NAN))
+            .collect();
+        Line::from_points(label, &times, &values)
+    }
+
+    /// A line through the points (times[k], values[k]), the non-finite ones left out.
+    fn from_points(label: &str, times: &[f64], values: &[f64]) -> Line {
+        let points = (times.iter().copied().zip(values.iter().copied()))
             .filter(|(t, v)| t.is_finite() && v.is_finite())
             .collect();
         Line {
@@ -413,7 +464,7 @@ fn chosen_panels(simulation: &Simulation, groups: &[Vec<Column>]) -> Vec<Panel> 
 
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
-    samples: &[Sample],
+    times: &[f64],
     panels: &[Panel],
     render: Render,
 ) -> Result<(), PlotError>
@@ -465,7 +516,7 @@ where
         needed.min(((width / 2).saturating_sub(render.px(LEGEND_PAD)) / legend_column).max(1));
     let layout = Layout {
         render,
-        time: Axis::new(samples.iter().map(|s| s.time), false),
+        time: Axis::new(times.iter().copied(), false),
         y_label_width,
         legend_width: legend_column * columns + render.px(LEGEND_PAD),
         legend_column,

@@ -544,7 +544,8 @@ fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
     }
 }
 
-fn output_times(duration: f64, interval: f64) -> Vec<f64> {
+/// The times of a run's samples: every `interval` from 0, and the end of its `duration`.
+pub fn output_times(duration: f64, interval: f64) -> Vec<f64> {
     let count = (duration / interval + 1e-9).floor() as usize;
     let mut times: Vec<f64> = (0..=count)
         .map(|k| (k as f64 * interval).min(duration))

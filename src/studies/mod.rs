@@ -7,7 +7,8 @@
 //! (`kinematic_models`, closed by `configurations`) along runs (`singularities`), the singular points of the inverse geometric model
 //! (`singular_points`), the
 //! workspace of a point (`workspace`), the linear model about an operating point
-//! (`linearize`), and many runs of one program over a grid, a list or a sample of values
+//! (`linearize`), the derivatives of a run's quantities with respect to its parameters
+//! (`sensitivity`), and many runs of one program over a grid, a list or a sample of values
 //! (`sweep`).
 
 pub mod analysis;
@@ -20,6 +21,7 @@ pub mod kinematic_models;
 pub mod linearize;
 pub mod motion_file;
 pub mod precision;
+pub mod sensitivity;
 pub mod singular_points;
 pub mod singularities;
 pub mod statics;

@@ -8,7 +8,7 @@
 use nalgebra::DMatrix;
 
 use crate::common::programs::{assembled_rates, example_text, prepared};
-use crate::common::{lsdc, skip};
+use crate::common::{check_command_goldens, lsdc, skip};
 use lsdc::studies::linearize::differences;
 use lsdc::studies::linearize::{linearize, Linearization, OperatingPoint, Request};
 
@@ -420,28 +420,7 @@ fn cart_pole_balanced_by_the_lqr_gain_stays_up() {
 /// Each diagnostic of the command, as its golden file has it.
 #[test]
 fn diagnostics_match_their_golden_files() {
-    let folder = std::path::Path::new("tests/golden/linearize");
-    let mut cases: Vec<_> = std::fs::read_dir(folder)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "args"))
-        .collect();
-    cases.sort();
-    assert!(cases.len() >= 5, "{cases:?}");
-    for case in cases {
-        let arguments = std::fs::read_to_string(&case).unwrap();
-        let mut args = vec!["linearize"];
-        args.extend(arguments.split_whitespace());
-        let (code, _, stderr) = lsdc(&args);
-        assert!(code == 1 || code == 2, "{}: exit {code}", case.display());
-        let expected_path = case.with_extension("stderr");
-        if std::env::var_os("UPDATE_GOLDEN").is_some() {
-            std::fs::write(&expected_path, &stderr).unwrap();
-            continue;
-        }
-        let expected = std::fs::read_to_string(&expected_path).unwrap_or_default();
-        assert_eq!(stderr, expected, "{}", case.display());
-    }
+    check_command_goldens("linearize", "tests/golden/linearize", 5);
 }
 
 /// An input acts on a mechanism whose program applies no effort at all (where the equations

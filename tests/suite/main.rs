@@ -70,6 +70,7 @@ mod rows;
 mod runs;
 mod sampled;
 mod scenes;
+mod sensitivity;
 mod simulation;
 mod singular_passages;
 mod states;

@@ -24,9 +24,9 @@ use crate::topology::{self, notation};
 use super::design::Design;
 use super::record::{RunRecord, Status};
 
-/// What a varied name sets.
+/// What a varied name sets (a sensitivity's parameter names the same).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Target {
+pub enum Target {
     /// The initial value of a declared coordinate (`order` 0) or of its rate (1).
     Initial {
         join: JoinId,
@@ -294,7 +294,7 @@ impl<'m> Sweep<'m> {
 }
 
 /// The initial values `J.c` and `J.c'` of every declared coordinate, by name.
-fn coordinate_targets(mechanism: &Mechanism) -> HashMap<String, Target> {
+pub fn coordinate_targets(mechanism: &Mechanism) -> HashMap<String, Target> {
     let mut targets = HashMap::new();
     for (index, join) in mechanism.joins.iter().enumerate() {
         let id = JoinId(index as u32);

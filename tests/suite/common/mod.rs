@@ -68,3 +68,31 @@ pub fn lsdc_with(args: &[&str], environment: &[(&str, &std::ffi::OsStr)]) -> (i3
         String::from_utf8_lossy(&output.stderr).into_owned(),
     )
 }
+
+/// Checks each diagnostic case of a command against its golden file: in `folder`, `NAME.args`
+/// holds the arguments after `lsdc COMMAND` and `NAME.stderr` what it prints on standard error
+/// (exit code 1 or 2); `UPDATE_GOLDEN=1` rewrites the `.stderr` files. At least `fewest` cases.
+pub fn check_command_goldens(command: &str, folder: &str, fewest: usize) {
+    let folder = std::path::Path::new(folder);
+    let mut cases: Vec<_> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "args"))
+        .collect();
+    cases.sort();
+    assert!(cases.len() >= fewest, "{cases:?}");
+    for case in cases {
+        let arguments = std::fs::read_to_string(&case).unwrap();
+        let mut args = vec![command];
+        args.extend(arguments.split_whitespace());
+        let (code, _, stderr) = lsdc(&args);
+        assert!(code == 1 || code == 2, "{}: exit {code}", case.display());
+        let expected_path = case.with_extension("stderr");
+        if std::env::var_os("UPDATE_GOLDEN").is_some() {
+            std::fs::write(&expected_path, &stderr).unwrap();
+            continue;
+        }
+        let expected = std::fs::read_to_string(&expected_path).unwrap_or_default();
+        assert_eq!(stderr, expected, "{}", case.display());
+    }
+}
