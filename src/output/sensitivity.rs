@@ -60,7 +60,7 @@ pub fn report(sensitivities: &Sensitivities) -> String {
     }
     let _ = writeln!(
         out,
-        "integrator {}: {} steps ({} rejected), {} evaluations of the augmented system (dimension {} = {} × {}){}",
+        "integrator {}: {} steps ({} rejected), {} evaluations of the augmented system (dimension {} = {} × {}; ∂f/∂x S {}){}",
         report.integrator,
         report.steps,
         report.rejected_steps,
@@ -68,6 +68,7 @@ pub fn report(sensitivities: &Sensitivities) -> String {
         report.augmented_dimension,
         report.state_dimension,
         1 + sensitivities.parameters.len(),
+        report.state_derivatives,
         report
             .cpu_seconds
             .map_or(String::new(), |s| format!(", {s:.3} s of CPU")),

@@ -17,7 +17,7 @@ use lsdc::kinematics::unknowns::Override;
 use lsdc::prepare::settings::SettingsChanges;
 use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::simulate::run::{run_from, Sample, Start};
-use lsdc::studies::sensitivity::{sensitivities, Sensitivities};
+use lsdc::studies::sensitivity::{sensitivities, Sensitivities, DIFFERENCED, EXACT};
 
 /// The tolerance of every run here: the differences of whole runs need runs far more accurate
 /// than the agreement asked of them (a run's error, over the step of the difference).
@@ -162,7 +162,11 @@ fn worst_relative(study: &Sensitivities, j: usize, runs: &[Vec<f64>]) -> (f64, S
 
 /// Every parameter's columns agree with the (extrapolated) differences of whole runs within
 /// 1e-6 relative.
-fn check_against_runs(mechanism: &Mechanism, parameters: &[&str], changes: &SettingsChanges) {
+fn check_against_runs(
+    mechanism: &Mechanism,
+    parameters: &[&str],
+    changes: &SettingsChanges,
+) -> Sensitivities {
     let study = sensitivities(mechanism, &[], changes, &names(parameters)).expect("computes");
     assert!(study.report.failure.is_none(), "{:?}", study.report.failure);
     for j in 0..parameters.len() {
@@ -171,6 +175,7 @@ fn check_against_runs(mechanism: &Mechanism, parameters: &[&str], changes: &Sett
         eprintln!("{column}: {error:.2e} relative");
         assert!(error <= 1e-6, "{column}: {error:e} relative");
     }
+    study
 }
 
 const PENDULUM: &str = "import joints ;
@@ -187,7 +192,9 @@ output tip_y = 2 * L * sin(swing.q) ;
 fn pendulum_length_mass_and_angle_agree_with_differences_of_runs() {
     let mechanism = mechanism_of("pendulum", PENDULUM);
     let parameters = ["L", "mass(rod)", "swing.q", "swing.q'"];
-    check_against_runs(&mechanism, &parameters, &changes(3.0, 0.1));
+    let study = check_against_runs(&mechanism, &parameters, &changes(3.0, 0.1));
+    // Gravity alone: the analytical derivatives of ABA are the whole ∂f/∂x.
+    assert_eq!(study.report.state_derivatives, EXACT);
 }
 
 #[test]
@@ -198,14 +205,16 @@ fn double_pendulum_agrees_with_differences_of_runs() {
     );
     let mechanism = mechanism_of("double_pendulum", &text);
     let parameters = ["l1", "shoulder.q", "elbow.q'"];
-    check_against_runs(&mechanism, &parameters, &changes(2.0, 0.05));
+    let study = check_against_runs(&mechanism, &parameters, &changes(2.0, 0.05));
+    assert_eq!(study.report.state_derivatives, EXACT);
 }
 
 /// Geared rotors: reflected inertia and gyroscopic coupling in the equations differentiated.
 #[test]
 fn geared_arm_agrees_with_differences_of_runs() {
     let mechanism = mechanism_of("geared_arm", &example_text("geared_arm", &[]));
-    check_against_runs(&mechanism, &["shoulder.q", "elbow.q'"], &changes(1.0, 0.05));
+    let study = check_against_runs(&mechanism, &["shoulder.q", "elbow.q'"], &changes(1.0, 0.05));
+    assert_eq!(study.report.state_derivatives, EXACT);
 }
 
 const SPRING_DAMPER: &str = "import joints ;
@@ -222,7 +231,9 @@ initial slide.q = 0.1, slide.q' = -0.2 ;
 fn spring_damper_agrees_with_differences_of_runs() {
     let mechanism = mechanism_of("spring_damper", SPRING_DAMPER);
     let parameters = ["k", "c", "mass(block)", "slide.q", "slide.q'"];
-    check_against_runs(&mechanism, &parameters, &changes(5.0, 0.1));
+    let study = check_against_runs(&mechanism, &parameters, &changes(5.0, 0.1));
+    // The spring and the damper are efforts of the tape: ∂f/∂x S is differenced.
+    assert_eq!(study.report.state_derivatives, DIFFERENCED);
 }
 
 /// Efforts from the tape with a state of the program: the PI loop's torque reads the speed
@@ -234,7 +245,8 @@ fn pi_flywheel_agrees_with_differences_of_runs() {
         &[("let k_p = 1 ;", "let k_p = ?s ; given k_p = 1 ;")],
     );
     let mechanism = mechanism_of("control/pi_flywheel", &text);
-    check_against_runs(&mechanism, &["k_p", "spin.q'"], &changes(3.0, 0.05));
+    let study = check_against_runs(&mechanism, &["k_p", "spin.q'"], &changes(3.0, 0.05));
+    assert_eq!(study.report.state_derivatives, DIFFERENCED);
 }
 
 /// x(t) of m x'' + c x' + k x = 0 from (x₀, v₀), underdamped, for complex arguments.

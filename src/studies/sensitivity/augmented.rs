@@ -5,13 +5,16 @@
 //! methods and software for sensitivity analysis of differential-algebraic systems", Appl.
 //! Numer. Math. 20 (1996) 57–79, the *simultaneous corrector* scheme for explicit methods).
 //!
-//! How each term is computed, and why it is the cheapest exact-enough route here:
-//! - ∂f/∂x S_j is a directional derivative of f along S_j, by one central difference (two
-//!   evaluations of f per parameter, CVODES's internal difference quotient): the analytical
-//!   derivatives of the rigid-body algorithms exist, but they hold the applied efforts fixed
-//!   in the bodies' frames and the efforts' tape has no forward mode yet, so every program
-//!   with gravity, springs or dampers would difference the efforts anyway, and a full
-//!   Jacobian costs n columns where m directions suffice.
+//! How each term is computed, and why it is the cheapest exact route at hand:
+//! - ∂f/∂x S_j is exact where the analytical derivatives of the articulated-body algorithm
+//!   are f's whole derivative (Carpentier & Mansard, RSS 2018, `aba_derivatives`): a tree whose
+//!   right-hand side is the rigid-body dynamics under a uniform gravity field (the weights the
+//!   model recognises as one, `Model::gravity`), with no other effort and no state. Elsewhere
+//!   it is a directional derivative of f along S_j, by one central difference (two
+//!   evaluations of f per parameter, CVODES's internal difference quotient): those
+//!   derivatives hold the applied efforts fixed in the bodies' frames and the efforts' tape has
+//!   no forward mode yet, so the efforts would be differenced anyway, and m directions cost
+//!   less than the n columns of a Jacobian of differences.
 //! - ∂f/∂p_j, for a value of the program, is a central difference between the mechanism
 //!   prepared at p_j ± h (two evaluations): the model (lengths, masses, inertias, efforts) is
 //!   compiled with the values in it, and nothing differentiates the compilation. An initial
@@ -21,12 +24,17 @@
 //! The steps are h = ε^(1/3) max(1, |·|), the optimum of a central difference: truncation
 //! h²/6 |f'''| and rounding ε|f|/h balance near 1e-11 relative, far below the tolerances.
 
+use nalgebra::{DMatrix, DVector};
+
 use super::parameters::Parameter;
+use crate::dynamics::algorithms::aba_derivatives::AbaDerivatives;
 use crate::dynamics::algorithms::forward_kinematics;
+use crate::dynamics::algorithms::rnea_derivatives::check_supported;
 use crate::dynamics::compiled::{EffortScratch, EffortState};
 use crate::integrate::{CallbackError, OdeSystem};
 use crate::prepare::Prepared;
 use crate::simulate::system::{MechanicalSystem, SystemError};
+use crate::spatial::Force;
 use crate::studies::sweep::runs::Target;
 
 /// The relative step of a central difference: the cube root of the machine epsilon.
@@ -40,6 +48,8 @@ pub struct Variant<'p> {
     pub prepared: &'p Prepared,
     system: MechanicalSystem<'p>,
     scratch: EffortScratch,
+    /// The analytical derivatives' scratch, where they give ∂f/∂x (`has_exact_jacobian`).
+    derivatives: Option<Box<AbaDerivatives>>,
 }
 
 impl<'p> Variant<'p> {
@@ -50,7 +60,27 @@ impl<'p> Variant<'p> {
             prepared,
             system: MechanicalSystem::new(model, prepared.coordinates.clone(), stabilisation),
             scratch: EffortScratch::default(),
+            derivatives: has_exact_jacobian(prepared).then(|| Box::new(AbaDerivatives::new(model))),
         }
+    }
+
+    /// ∂f/∂x at x from the analytical derivatives of ABA, where they are exact
+    /// ([`has_exact_jacobian`]): [[0, I], [∂q̈/∂q, ∂q̈/∂v]]. `None` elsewhere, or where the mass
+    /// matrix is not positive definite (f's own evaluation says why).
+    fn exact_jacobian(&mut self, x: &[f64]) -> Option<DMatrix<f64>> {
+        let derivatives = self.derivatives.as_mut()?;
+        let model = self.system.model;
+        let nv = model.nv;
+        let (q, v) = x.split_at(model.nq);
+        let tau = vec![0.0; nv];
+        let external = vec![Force::zeros(); model.body_count() + 1];
+        let data = &mut self.system.scratch.data;
+        derivatives.compute(model, data, q, v, &tau, &external).ok()?;
+        let mut jacobian = DMatrix::zeros(2 * nv, 2 * nv);
+        jacobian.view_mut((0, nv), (nv, nv)).fill_with_identity();
+        (jacobian.view_mut((nv, 0), (nv, nv))).copy_from(&derivatives.dacceleration_dq);
+        (jacobian.view_mut((nv, nv), (nv, nv))).copy_from(&derivatives.dacceleration_dv);
+        Some(jacobian)
     }
 
     /// The length of x: positions, velocities, states.
@@ -111,6 +141,19 @@ impl<'p> Variant<'p> {
         values.extend(outputs);
         Ok(values)
     }
+}
+
+/// Whether the analytical derivatives of ABA are the whole ∂f/∂x of `prepared`: a tree of
+/// joints whose motion subspaces they cover, whose coordinates are its positions (no
+/// quaternion), under no effort but a uniform gravity field and with no state of the program.
+pub fn has_exact_jacobian(prepared: &Prepared) -> bool {
+    let model = &prepared.model;
+    !model.has_efforts()
+        && model.states.is_empty()
+        && !model.has_loops()
+        && model.mimics.is_empty()
+        && model.positions() == model.velocities()
+        && check_supported(model).is_ok()
 }
 
 /// The mechanism prepared at p_j + h and p_j − h, for a value of the program, and 2h as
@@ -212,21 +255,26 @@ impl<'p> Augmented<'p> {
     }
 
     /// d(g)/d(p_j) = ∂g/∂x S_j + ∂g/∂p_j for each parameter, parameter after parameter, where
-    /// `evaluate` gives g at (t, x) of a variant.
+    /// `evaluate` gives g at (t, x) of a variant, and ∂g/∂x is `jacobian` when given.
     fn total_derivatives(
         &mut self,
-        t: f64,
-        augmented: &[f64],
+        (t, augmented): (f64, &[f64]),
         length: usize,
         evaluate: fn(&mut Variant<'p>, f64, &[f64]) -> Result<Vec<f64>, SystemError>,
+        jacobian: Option<&DMatrix<f64>>,
     ) -> Result<Vec<Vec<f64>>, SystemError> {
         let n = self.state_dimension();
         let x = &augmented[..n];
         let mut columns = Vec::with_capacity(self.shifted.len());
         for (j, shifted) in self.shifted.iter_mut().enumerate() {
             let direction = &augmented[n * (j + 1)..n * (j + 2)];
-            let mut column = vec![0.0; length];
-            Self::along(&mut self.nominal, (t, x, direction), evaluate, &mut column)?;
+            let mut column = match jacobian {
+                Some(jacobian) => (jacobian * DVector::from_column_slice(direction)).data.into(),
+                None => vec![0.0; length],
+            };
+            if jacobian.is_none() {
+                Self::along(&mut self.nominal, (t, x, direction), evaluate, &mut column)?;
+            }
             if let Some(shifted) = shifted {
                 Self::across(shifted, (t, x), evaluate, &mut column)?;
             }
@@ -255,7 +303,8 @@ impl OdeSystem for Augmented<'_> {
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), CallbackError> {
         let n = self.state_dimension();
         self.nominal.rates(t, &y[..n], &mut dydt[..n])?;
-        let columns = self.total_derivatives(t, y, n, state_rates)?;
+        let jacobian = self.nominal.exact_jacobian(&y[..n]);
+        let columns = self.total_derivatives((t, y), n, state_rates, jacobian.as_ref())?;
         for (j, column) in columns.iter().enumerate() {
             dydt[n * (j + 1)..n * (j + 2)].copy_from_slice(column);
         }
@@ -269,7 +318,7 @@ impl OdeSystem for Augmented<'_> {
     fn observe(&mut self, t: f64, y: &[f64]) -> Result<(), CallbackError> {
         let n = self.state_dimension();
         let values = self.nominal.quantities(t, &y[..n])?;
-        let columns = self.total_derivatives(t, y, values.len(), quantities)?;
+        let columns = self.total_derivatives((t, y), values.len(), quantities, None)?;
         // For each quantity, its derivative with respect to each parameter in turn.
         let derivatives = (0..values.len())
             .flat_map(|k| columns.iter().map(move |column| column[k]))

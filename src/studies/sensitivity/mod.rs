@@ -18,7 +18,7 @@ pub mod parameters;
 
 use serde::Serialize;
 
-use self::augmented::{central_step, Augmented, Row, Variant};
+use self::augmented::{central_step, has_exact_jacobian, Augmented, Row, Variant};
 pub use self::parameters::Parameter;
 use crate::diag::Diagnostic;
 use crate::dynamics::joint::JointType;
@@ -36,9 +36,14 @@ use crate::studies::sweep::runs::Target;
 
 /// How the derivatives are obtained, for people (`method` in the JSON).
 pub const METHOD: &str = "forward sensitivity equations integrated with the run, their error \
-controlled with the state's; ∂f/∂x S by a central difference of f along S, ∂f/∂p by a central \
-difference between the mechanism prepared at p ± h (the outputs' derivatives likewise), steps \
-h = ε^(1/3) max(1, |·|)";
+controlled with the state's; ∂f/∂x S from the analytical derivatives of ABA where the \
+rigid-body dynamics under gravity are the whole right-hand side, else by a central difference \
+of f along S; ∂f/∂p by a central difference between the mechanism prepared at p ± h; the \
+outputs' derivatives by central differences; steps h = ε^(1/3) max(1, |·|)";
+
+/// How ∂f/∂x S is computed (`state_derivatives` in the report).
+pub const EXACT: &str = "analytical (ABA derivatives)";
+pub const DIFFERENCED: &str = "central differences along S";
 
 /// The name of the column of the derivative of `quantity` with respect to `parameter`.
 pub fn column_name(quantity: &str, parameter: &str) -> String {
@@ -70,6 +75,8 @@ pub struct SensitivityReport {
     /// The state's dimension, and the augmented system's (state and sensitivities).
     pub state_dimension: usize,
     pub augmented_dimension: usize,
+    /// How ∂f/∂x S was computed: [`EXACT`] or [`DIFFERENCED`].
+    pub state_derivatives: &'static str,
     pub steps: usize,
     pub rejected_steps: usize,
     pub function_evaluations: usize,
@@ -221,6 +228,10 @@ pub fn sensitivities(
             integrator: settings.integrator.name().to_string(),
             state_dimension: n,
             augmented_dimension: n * (1 + parameters.len()),
+            state_derivatives: match has_exact_jacobian(&nominal) {
+                true => EXACT,
+                false => DIFFERENCED,
+            },
             steps: stats.steps,
             rejected_steps: stats.rejected,
             function_evaluations: stats.rhs_evaluations,
