@@ -40,13 +40,11 @@ mod system;
 
 pub use control::error_norm;
 pub use hermite::HermiteSegment;
-#[cfg(lsdc_internals)]
 pub use outcome::InputError;
 pub use outcome::{Failure, IntegrationError, StabilityBound, Stats, StepError};
 pub use settings::{Interrupt, Method, Settings};
 pub use stability::jacobian_product;
 pub use stepping::Integration;
-#[cfg(lsdc_internals)]
 pub use system::Observer;
 pub use system::{CallbackError, OdeSystem};
 
@@ -86,7 +84,6 @@ pub use system::{CallbackError, OdeSystem};
 /// assert!(stats.steps > 0);
 /// ```
 #[allow(clippy::too_many_arguments)]
-#[cfg(lsdc_internals)]
 pub fn integrate(
     method: &Method,
     system: &mut dyn OdeSystem,
@@ -111,7 +108,6 @@ pub fn integrate(
     Ok((integration.state().to_vec(), integration.stats()))
 }
 
-#[cfg(lsdc_internals)]
 fn check_problem(
     dimension: usize,
     t0: f64,

@@ -161,21 +161,23 @@ fn worst_relative(study: &Sensitivities, j: usize, runs: &[Vec<f64>]) -> (f64, S
 }
 
 /// Every parameter's columns agree with the (extrapolated) differences of whole runs within
-/// 1e-6 relative.
+/// 1e-6 relative, ∂f/∂x S computed by `route` (`EXACT` where gravity alone acts, `DIFFERENCED`
+/// where the tape's efforts do).
 fn check_against_runs(
     mechanism: &Mechanism,
     parameters: &[&str],
     changes: &SettingsChanges,
-) -> Sensitivities {
+    route: &str,
+) {
     let study = sensitivities(mechanism, &[], changes, &names(parameters)).expect("computes");
     assert!(study.report.failure.is_none(), "{:?}", study.report.failure);
+    assert_eq!(study.report.state_derivatives, route);
     for j in 0..parameters.len() {
         let runs = extrapolated_differences(mechanism, changes, &study, j, 1e-4);
         let (error, column) = worst_relative(&study, j, &runs);
         eprintln!("{column}: {error:.2e} relative");
         assert!(error <= 1e-6, "{column}: {error:e} relative");
     }
-    study
 }
 
 const PENDULUM: &str = "import joints ;
@@ -192,9 +194,7 @@ output tip_y = 2 * L * sin(swing.q) ;
 fn pendulum_length_mass_and_angle_agree_with_differences_of_runs() {
     let mechanism = mechanism_of("pendulum", PENDULUM);
     let parameters = ["L", "mass(rod)", "swing.q", "swing.q'"];
-    let study = check_against_runs(&mechanism, &parameters, &changes(3.0, 0.1));
-    // Gravity alone: the analytical derivatives of ABA are the whole ∂f/∂x.
-    assert_eq!(study.report.state_derivatives, EXACT);
+    check_against_runs(&mechanism, &parameters, &changes(3.0, 0.1), EXACT);
 }
 
 #[test]
@@ -205,16 +205,19 @@ fn double_pendulum_agrees_with_differences_of_runs() {
     );
     let mechanism = mechanism_of("double_pendulum", &text);
     let parameters = ["l1", "shoulder.q", "elbow.q'"];
-    let study = check_against_runs(&mechanism, &parameters, &changes(2.0, 0.05));
-    assert_eq!(study.report.state_derivatives, EXACT);
+    check_against_runs(&mechanism, &parameters, &changes(2.0, 0.05), EXACT);
 }
 
 /// Geared rotors: reflected inertia and gyroscopic coupling in the equations differentiated.
 #[test]
 fn geared_arm_agrees_with_differences_of_runs() {
     let mechanism = mechanism_of("geared_arm", &example_text("geared_arm", &[]));
-    let study = check_against_runs(&mechanism, &["shoulder.q", "elbow.q'"], &changes(1.0, 0.05));
-    assert_eq!(study.report.state_derivatives, EXACT);
+    check_against_runs(
+        &mechanism,
+        &["shoulder.q", "elbow.q'"],
+        &changes(1.0, 0.05),
+        EXACT,
+    );
 }
 
 const SPRING_DAMPER: &str = "import joints ;
@@ -231,9 +234,7 @@ initial slide.q = 0.1, slide.q' = -0.2 ;
 fn spring_damper_agrees_with_differences_of_runs() {
     let mechanism = mechanism_of("spring_damper", SPRING_DAMPER);
     let parameters = ["k", "c", "mass(block)", "slide.q", "slide.q'"];
-    let study = check_against_runs(&mechanism, &parameters, &changes(5.0, 0.1));
-    // The spring and the damper are efforts of the tape: ∂f/∂x S is differenced.
-    assert_eq!(study.report.state_derivatives, DIFFERENCED);
+    check_against_runs(&mechanism, &parameters, &changes(5.0, 0.1), DIFFERENCED);
 }
 
 /// Efforts from the tape with a state of the program: the PI loop's torque reads the speed
@@ -245,8 +246,12 @@ fn pi_flywheel_agrees_with_differences_of_runs() {
         &[("let k_p = 1 ;", "let k_p = ?s ; given k_p = 1 ;")],
     );
     let mechanism = mechanism_of("control/pi_flywheel", &text);
-    let study = check_against_runs(&mechanism, &["k_p", "spin.q'"], &changes(3.0, 0.05));
-    assert_eq!(study.report.state_derivatives, DIFFERENCED);
+    check_against_runs(
+        &mechanism,
+        &["k_p", "spin.q'"],
+        &changes(3.0, 0.05),
+        DIFFERENCED,
+    );
 }
 
 /// x(t) of m x'' + c x' + k x = 0 from (x₀, v₀), underdamped, for complex arguments.

@@ -164,6 +164,9 @@ pub struct Shifted<'p> {
     pub width: f64,
 }
 
+/// What a variant evaluates at (t, x): its state derivative, or its quantities.
+type Evaluate<'p> = fn(&mut Variant<'p>, f64, &[f64]) -> Result<Vec<f64>, SystemError>;
+
 /// A sample of the augmented run: the quantities and, for each quantity then each parameter,
 /// its derivative.
 pub struct Row {
@@ -216,7 +219,7 @@ impl<'p> Augmented<'p> {
     fn along(
         variant: &mut Variant<'p>,
         (t, x, direction): (f64, &[f64], &[f64]),
-        evaluate: fn(&mut Variant<'p>, f64, &[f64]) -> Result<Vec<f64>, SystemError>,
+        evaluate: Evaluate<'p>,
         into: &mut [f64],
     ) -> Result<(), SystemError> {
         let size = direction.iter().fold(0.0f64, |m, d| m.max(d.abs()));
@@ -243,7 +246,7 @@ impl<'p> Augmented<'p> {
     fn across(
         shifted: &mut Shifted<'p>,
         (t, x): (f64, &[f64]),
-        evaluate: fn(&mut Variant<'p>, f64, &[f64]) -> Result<Vec<f64>, SystemError>,
+        evaluate: Evaluate<'p>,
         into: &mut [f64],
     ) -> Result<(), SystemError> {
         let plus = evaluate(&mut shifted.plus, t, x)?;
@@ -260,7 +263,7 @@ impl<'p> Augmented<'p> {
         &mut self,
         (t, augmented): (f64, &[f64]),
         length: usize,
-        evaluate: fn(&mut Variant<'p>, f64, &[f64]) -> Result<Vec<f64>, SystemError>,
+        evaluate: Evaluate<'p>,
         jacobian: Option<&DMatrix<f64>>,
     ) -> Result<Vec<Vec<f64>>, SystemError> {
         let n = self.state_dimension();
