@@ -1,13 +1,14 @@
 //! The cost of a sensitivity run against the plain run of the same program
 //! (`cargo bench --bench sensitivity`): for each case, the thread CPU time of `lsdc simulate`'s
 //! run (`api::run`) and of `lsdc sensitivity`'s augmented run (the state and m sensitivities
-//! under one error control), at the program's tolerance, best and median of 7 batches, their
-//! ratio, and the steps and right-hand-side evaluations of each. Prints one line per case:
+//! under one error control), at the program's tolerance, in 7 interleaved rounds (each round
+//! times a batch of the run, then a batch of the study, so that the machine's load falls on
+//! both alike), best and median, their ratio, and the steps and right-hand-side evaluations of each. Prints one line per case:
 //! `NAME m run_ms sensitivity_ms ratio run_steps sensitivity_steps run_evaluations
 //! sensitivity_evaluations` (best times; the medians after them).
 
 mod common;
-use common::cpu_time_per_call;
+use common::thread_cpu_seconds;
 
 use lsdc::driver::compile_text;
 use lsdc::elab::Mechanism;
@@ -35,6 +36,34 @@ fn mechanism(case: &Case) -> Mechanism {
     let folder = std::path::Path::new("examples/control");
     let compilation = compile_text(case.name, &case.text, Some(folder), &Default::default());
     compilation.mechanism.expect("elaborates")
+}
+
+/// Thread CPU time per call of each task, timed in 7 interleaved rounds of batches of about
+/// 20 ms each: (best, median) per task.
+fn interleaved<const N: usize>(mut tasks: [&mut dyn FnMut(); N]) -> [(f64, f64); N] {
+    let calls = tasks.each_mut().map(|task| {
+        let start = thread_cpu_seconds();
+        let mut calls = 0u64;
+        while thread_cpu_seconds() - start < 0.02 {
+            task();
+            calls += 1;
+        }
+        calls
+    });
+    let mut times: [Vec<f64>; N] = std::array::from_fn(|_| Vec::new());
+    for _ in 0..7 {
+        for k in 0..N {
+            let start = thread_cpu_seconds();
+            for _ in 0..calls[k] {
+                tasks[k]();
+            }
+            times[k].push((thread_cpu_seconds() - start) / calls[k] as f64);
+        }
+    }
+    times.map(|mut t| {
+        t.sort_by(f64::total_cmp);
+        (t[0], t[t.len() / 2])
+    })
 }
 
 fn main() {
@@ -82,14 +111,15 @@ fn main() {
         let names: Vec<String> = case.parameters.iter().map(|s| s.to_string()).collect();
         let plain = run(&prepared, &mut |_| {});
         let study = sensitivities(&mechanism, &[], &changes, &names).expect("computes");
-        let run_time = cpu_time_per_call(|| {
-            std::hint::black_box(run(&prepared, &mut |_| {}));
-        });
-        let study_time = cpu_time_per_call(|| {
-            std::hint::black_box(
-                sensitivities(&mechanism, &[], &changes, &names).expect("computes"),
-            );
-        });
+        let [run_time, study_time] = interleaved([
+            &mut || {
+                std::hint::black_box(run(&prepared, &mut |_| {}));
+            },
+            &mut || {
+                let study = sensitivities(&mechanism, &[], &changes, &names);
+                std::hint::black_box(study.expect("computes"));
+            },
+        ]);
         println!(
             "{} {} {:.3} {:.3} {:.1} {} {} {} {}   (medians {:.3} {:.3} {:.1})",
             case.name,
