@@ -156,8 +156,14 @@ pub fn has_exact_jacobian(prepared: &Prepared) -> bool {
         && check_supported(model).is_ok()
 }
 
-/// The mechanism prepared at p_j + h and p_j − h, for a value of the program, and 2h as
-/// represented.
+/// A value of the program's mechanism prepared at p + h and at p − h, and 2h as represented.
+pub struct Preparations {
+    pub plus: Prepared,
+    pub minus: Prepared,
+    pub width: f64,
+}
+
+/// The variants of [`Preparations`], evaluated.
 pub struct Shifted<'p> {
     pub plus: Variant<'p>,
     pub minus: Variant<'p>,
@@ -190,15 +196,15 @@ impl<'p> Augmented<'p> {
     pub fn new(
         nominal: &'p Prepared,
         parameters: &[Parameter],
-        shifted: &'p [(Prepared, Prepared, f64)],
+        shifted: &'p [Preparations],
     ) -> Augmented<'p> {
         let mut models = shifted.iter();
         let shifted = (parameters.iter())
             .map(|p| match p.target {
-                Target::Value => models.next().map(|(plus, minus, width)| Shifted {
-                    plus: Variant::new(plus),
-                    minus: Variant::new(minus),
-                    width: *width,
+                Target::Value => models.next().map(|models| Shifted {
+                    plus: Variant::new(&models.plus),
+                    minus: Variant::new(&models.minus),
+                    width: models.width,
                 }),
                 Target::Initial { .. } => None,
             })

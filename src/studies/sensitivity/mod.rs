@@ -15,16 +15,15 @@
 
 mod augmented;
 pub mod parameters;
+mod refusal;
 
 use serde::Serialize;
 
-use self::augmented::{central_step, has_exact_jacobian, Augmented, Row, Variant};
+use self::augmented::{central_step, has_exact_jacobian, Augmented, Preparations, Row, Variant};
 pub use self::parameters::Parameter;
 use crate::diag::Diagnostic;
-use crate::dynamics::joint::JointType;
 use crate::dynamics::sampled;
 use crate::elab::mechanism::Mechanism;
-use crate::elab::value::JoinId;
 use crate::integrate::{integrate, Method, Settings as IntegratorSettings};
 use crate::kinematics::unknowns::Override;
 use crate::prepare::settings::{Integrator, SettingsChanges};
@@ -152,7 +151,7 @@ pub fn sensitivities(
     };
     let nominal = prepare_with(overrides)?;
     let sampled = "a sampled state is held between its instants and jumps on them: the sensitivities would jump too; write its law as a continuous one";
-    let refused = (refusal(mechanism, &nominal))
+    let refused = (refusal::refusal(mechanism, &nominal))
         .or_else(|| sampled::refusal(&nominal.model, "`lsdc sensitivity`", sampled));
     if let Some(refusal) = refused {
         return Err(SensitivityError::Program(vec![refusal]));
@@ -174,7 +173,11 @@ pub fn sensitivities(
             prepare_with(&moved)
         };
         let (plus, minus) = (parameter.value + h, parameter.value - h);
-        shifted.push((at(plus)?, at(minus)?, plus - minus));
+        shifted.push(Preparations {
+            plus: at(plus)?,
+            minus: at(minus)?,
+            width: plus - minus,
+        });
     }
     let start = starts(&nominal, &mut parameters, &shifted)?;
     let mut system = Augmented::new(&nominal, &parameters, &shifted);
@@ -293,7 +296,7 @@ fn method(settings: &Settings) -> Result<Method, SensitivityError> {
 fn starts(
     nominal: &Prepared,
     parameters: &mut [Parameter],
-    shifted: &[(Prepared, Prepared, f64)],
+    shifted: &[Preparations],
 ) -> Result<Vec<f64>, SensitivityError> {
     let variant = Variant::new(nominal);
     let start_of = |variant: &Variant, coordinates: &[f64], rates: &[f64]| {
@@ -315,34 +318,29 @@ fn starts(
                         parameter.name
                     )));
                 };
-                let (mut coordinates, mut rates) =
-                    (nominal.coordinates.clone(), nominal.rates.clone());
-                let declared = match order {
-                    0 => &mut coordinates,
-                    _ => &mut rates,
+                let start_at = |value: f64| {
+                    let (mut coordinates, mut rates) =
+                        (nominal.coordinates.clone(), nominal.rates.clone());
+                    match order {
+                        0 => coordinates[offset] = value,
+                        _ => rates[offset] = value,
+                    }
+                    start_of(&variant, &coordinates, &rates)
                 };
-                parameter.value = declared[offset];
+                parameter.value = match order {
+                    0 => nominal.coordinates[offset],
+                    _ => nominal.rates[offset],
+                };
                 let h = central_step(parameter.value);
-                declared[offset] = parameter.value + h;
-                let plus = start_of(&variant, &coordinates, &rates)?;
-                let declared = match order {
-                    0 => &mut coordinates,
-                    _ => &mut rates,
-                };
-                declared[offset] = parameter.value - h;
-                let width = (parameter.value + h) - (parameter.value - h);
-                let minus = start_of(&variant, &coordinates, &rates)?;
-                (plus.iter().zip(&minus))
-                    .map(|(a, b)| (a - b) / width)
-                    .collect()
+                let (plus, minus) = (parameter.value + h, parameter.value - h);
+                difference(&start_at(plus)?, &start_at(minus)?, plus - minus)
             }
             Target::Value => {
-                let (plus, minus, width) = models.next().expect("a model per value");
+                let models = models.next().expect("a model per value");
+                let (plus, minus) = (&models.plus, &models.minus);
                 let plus = start_of(&Variant::new(plus), &plus.coordinates, &plus.rates)?;
                 let minus = start_of(&Variant::new(minus), &minus.coordinates, &minus.rates)?;
-                (plus.iter().zip(&minus))
-                    .map(|(a, b)| (a - b) / width)
-                    .collect()
+                difference(&plus, &minus, models.width)
             }
         };
         start.extend(column);
@@ -350,72 +348,11 @@ fn starts(
     Ok(start)
 }
 
+/// (plus − minus) / width, component by component.
+fn difference(plus: &[f64], minus: &[f64], width: f64) -> Vec<f64> {
+    (plus.iter().zip(minus)).map(|(a, b)| (a - b) / width).collect()
+}
+
 fn evaluation_error(message: &str) -> SensitivityError {
     SensitivityError::Settings(format!("the initial state cannot be evaluated: {message}"))
-}
-
-/// What `lsdc sensitivity` does not handle, and why (see the module's documentation).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Refused {
-    Loop,
-    Quaternion,
-    Mimic,
-    Stop,
-    Friction,
-    Contact,
-}
-
-impl Refused {
-    fn what(self) -> &'static str {
-        match self {
-            Refused::Loop => "a closed loop",
-            Refused::Quaternion => "a spherical or free joint",
-            Refused::Mimic => "a coupled (mimic) joint",
-            Refused::Stop => "a stop",
-            Refused::Friction => "joint friction",
-            Refused::Contact => "a contact",
-        }
-    }
-
-    fn help(self) -> &'static str {
-        match self {
-            Refused::Loop | Refused::Mimic => "the run projects the state onto the constraints after each step, and the sensitivities would need that projection's derivative (in the loops' independent coordinates), which is not computed: open the loop, or difference whole runs (`lsdc sweep --grid NAME=...`)",
-            Refused::Quaternion => "its orientation is a quaternion, whose sensitivities would live in the group's tangent space: write the joint as a chain of revolutes (`link(a, b, c) dof = ...`)",
-            Refused::Stop | Refused::Friction => "its events jump the state, and the sensitivities would jump with the event's time (the saltation matrix), which is not computed: leave it out, or difference whole runs (`lsdc sweep --grid NAME=...`)",
-            Refused::Contact => "its rows constrain the velocities, and the sensitivities would need their derivative: difference whole runs instead (`lsdc sweep --grid NAME=...`)",
-        }
-    }
-}
-
-/// E0860 at the first part of the mechanism the study does not handle.
-fn refusal(mechanism: &Mechanism, prepared: &Prepared) -> Option<Diagnostic> {
-    let model = &prepared.model;
-    let join_of = |coordinate: &str| -> String {
-        (coordinate.rsplit_once('.')).map_or(coordinate, |(join, _)| join).to_string()
-    };
-    let found: Option<(String, Refused)> = None
-        .or_else(|| (model.loops.first()).map(|l| (l.name.clone(), Refused::Loop)))
-        .or_else(|| (model.joints.iter().find(|j| j.kind != JointType::Chain))
-            .map(|j| (j.chain.name.clone(), Refused::Quaternion)))
-        .or_else(|| (model.mimics.first()).map(|m| (join_of(&m.coordinate), Refused::Mimic)))
-        .or_else(|| (model.stops.first()).map(|s| (join_of(&s.coordinate), Refused::Stop)))
-        .or_else(|| (model.frictions.first()).map(|f| (join_of(&f.coordinate), Refused::Friction)))
-        .or_else(|| (model.contacts.first()).map(|c| (c.name.clone(), Refused::Contact)));
-    let (name, kind) = found?;
-    let mut joins = (0..mechanism.joins.len() as u32).map(JoinId);
-    let span = match joins.find(|&id| mechanism.join_name(id) == name) {
-        Some(id) => mechanism.join(id).span,
-        None => {
-            let index = (0..mechanism.contacts.len()).find(|&k| mechanism.contact_name(k) == name)?;
-            mechanism.contacts[index].span
-        }
-    };
-    Some(
-        Diagnostic::error(
-            "E0860",
-            format!("`lsdc sensitivity` does not handle `{name}`: {}", kind.what()),
-        )
-        .primary(span, kind.what())
-        .help(kind.help()),
-    )
 }
