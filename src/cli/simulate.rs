@@ -380,5 +380,5 @@ fn not_planar_warning(why: &str) -> Diagnostic {
         "W0906",
         format!("--planar: the mechanism is not planar ({why}); the run keeps the spatial form"),
     )
-    .help("`lsdc tree --format json` says whether a mechanism is planar, and if not, why")
+    .help("`lsdc tree --format json` says whether the joints are planar, and if not, why; the efforts and the gravity field must be written in the plane too")
 }

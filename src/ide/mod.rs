@@ -8,6 +8,7 @@ mod complete;
 pub mod convert;
 pub mod format;
 pub mod line_diff;
+mod manifest;
 mod navigate;
 mod outline;
 pub mod server;

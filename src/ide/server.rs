@@ -25,7 +25,7 @@ use serde_json::Value;
 
 use crate::ide::across::{self, Target};
 use crate::ide::analysis::Analysis;
-use crate::ide::{actions, complete, convert, format, navigate, outline};
+use crate::ide::{actions, complete, convert, format, manifest, navigate, outline};
 use crate::load::LoadOptions;
 
 type Error = Box<dyn std::error::Error + Send + Sync>;
@@ -77,6 +77,7 @@ pub fn serve(connection: &Connection) -> Result<(), Error> {
     let mut server = Server {
         documents: HashMap::new(),
         last_parsed: HashMap::new(),
+        manifests: HashMap::new(),
         options: LoadOptions::default(),
     };
     for message in &connection.receiver {
@@ -105,6 +106,9 @@ struct Server {
     /// For an open file that does not parse at all (the parser reached its end inside a
     /// declaration): its latest analysis that had declarations, for completion's names.
     last_parsed: HashMap<Uri, Analysis>,
+    /// The open test manifests (`lsdtest.toml`), by URI, with their text: not LSD, completed
+    /// with the scenes of their cases' programs (`manifest`).
+    manifests: HashMap<Uri, String>,
     options: LoadOptions,
 }
 
@@ -138,6 +142,7 @@ impl Server {
                 ) {
                     self.documents.remove(&params.text_document.uri);
                     self.last_parsed.remove(&params.text_document.uri);
+                    self.manifests.remove(&params.text_document.uri);
                     return vec![publish(params.text_document.uri, Vec::new())];
                 }
                 return Vec::new();
@@ -148,6 +153,10 @@ impl Server {
             return Vec::new();
         };
         let path = convert::uri_to_path(&uri).unwrap_or_else(|| PathBuf::from(uri.as_str()));
+        if manifest::is_manifest(&path) {
+            self.manifests.insert(uri, text);
+            return Vec::new();
+        }
         let analysis = Analysis::new(&path, &text, &self.options);
         let diagnostics = analysis
             .compilation
@@ -217,6 +226,9 @@ impl Server {
             Completion::METHOD => {
                 let uri: Uri = serde_json::from_value(params["textDocument"]["uri"].clone())
                     .map_err(|e| e.to_string())?;
+                if let Some(text) = self.manifests.get(&uri) {
+                    return json(serde_json::to_value(self.manifest_completions(&uri, text, params)?));
+                }
                 let (analysis, offset) = self.at(params)?;
                 let names = self.last_parsed.get(&uri).unwrap_or(analysis);
                 json(serde_json::to_value(complete::completions(
@@ -261,6 +273,31 @@ impl Server {
             .chain(target.directory())
             .collect();
         across::readable_importers(&directories, &open, target, &self.options)
+    }
+
+    /// The completions in the open manifest `uri` of text `text` at the position `params` name:
+    /// its programs read from the open files, else from disk.
+    fn manifest_completions(
+        &self,
+        uri: &Uri,
+        text: &str,
+        params: Value,
+    ) -> Result<Vec<lsp_types::CompletionItem>, String> {
+        let position: TextDocumentPositionParams =
+            serde_json::from_value(params).map_err(|e| e.to_string())?;
+        let offset = convert::offset(text, position.position);
+        let path = convert::uri_to_path(uri).unwrap_or_else(|| PathBuf::from(uri.as_str()));
+        let canonical = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+        let program_text = |program: &Path| {
+            let open = (self.documents.iter()).find(|(uri, _)| {
+                convert::uri_to_path(uri).is_some_and(|p| canonical(&p) == canonical(program))
+            });
+            match open {
+                Some((_, analysis)) => Some(analysis.text(analysis.root).to_string()),
+                None => std::fs::read_to_string(program).ok(),
+            }
+        };
+        Ok(manifest::completions(&path, text, offset, &program_text, &self.options))
     }
 
     /// The open files' analyses, then `closed`.

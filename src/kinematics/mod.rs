@@ -17,6 +17,7 @@ pub mod joint;
 pub mod mobility;
 pub mod model;
 pub mod penalty;
+pub mod plane;
 pub mod position_drives;
 pub mod rheonomic;
 pub mod sphere_on_disc;

@@ -261,7 +261,7 @@ pub fn prepare(
         }
     }
     Ok(Prepared {
-        planar: planar::decide(&model).map(Box::new),
+        planar: planar::decide(&kinematics, &model).map(Box::new),
         takes_planar: false,
         model,
         topology,

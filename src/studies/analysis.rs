@@ -51,8 +51,9 @@ pub struct TreeReport {
     /// The degrees of freedom in position and in velocity the contacts leave, if there are any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contacts: Option<ContactMobility>,
-    /// Whether a run takes the planar form of the mechanism's equations (`dynamics::planar`),
-    /// and if not, why.
+    /// Whether the mechanism's joints move its bodies in one plane (`kinematics::plane`, decided
+    /// without dynamics; a run's planar form also asks its efforts in the plane), and if not,
+    /// why.
     pub planar: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_planar: Option<String>,
@@ -212,8 +213,10 @@ pub fn tree(mechanism: &Mechanism) -> Result<TreeReport, Vec<Diagnostic>> {
     })
 }
 
-/// Whether the mechanism's dynamic model, with the program's own values, has a planar form;
-/// if not, why (a value it lacks among the reasons).
+/// Whether the mechanism's joints move its bodies in one plane, with the program's own values;
+/// if not, why (a value its kinematics lack among the reasons). Decided from the kinematic
+/// model alone (`kinematics::plane`): `tree` builds no dynamics, so that a mechanism whose
+/// inertias have no values is numbered, analysed and said planar all the same.
 fn planarity(
     mechanism: &Mechanism,
     topology: &Topology,
@@ -221,9 +224,7 @@ fn planarity(
 ) -> Result<(), String> {
     let kinematics = model::build(mechanism, topology.clone(), unknowns)
         .map_err(|d| joined_messages(&d))?;
-    let dynamics = crate::dynamics::model::build(mechanism, &kinematics)
-        .map_err(|d| joined_messages(&d))?;
-    crate::dynamics::planar::decide(&dynamics).map(|_| ())
+    crate::kinematics::plane::motion_plane(&kinematics).map(|_| ())
 }
 
 fn joined_messages(diagnostics: &[Diagnostic]) -> String {

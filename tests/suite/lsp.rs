@@ -504,3 +504,59 @@ fn hover_on_an_instances_join_lists_its_coordinates() {
     assert!(sh.contains("coordinates: `sh.q`"), "{sh}");
     client.stop();
 }
+
+/// Completion of scene names in a test manifest (`lsdtest.toml`), where a case names the scene
+/// its program runs: inside `scene = "`, the scenes of the case's `program`, read from the
+/// editor when it is open there (its text not saved), else from disk; nothing elsewhere in the
+/// manifest, which the server reads without LSD diagnostics.
+#[test]
+fn completion_of_scene_names_in_a_test_manifest() {
+    let folder = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let cell = std::fs::canonicalize("examples/robot_cell.lsd").expect("the example");
+    let program = folder.join("lsp_scenes_unsaved.lsd");
+    let program_text = "import joints ;
+let b = body mass = 1, iframe = 1, inertia = [0.1, 0.1, 0.1] end ;
+join earth and b with revolute([0, 0, 1]) as pivot ;
+scene swing = output angle = pivot.q ; end ;
+scene held = lock pivot.q = 0.2 ; end ;
+";
+    let manifest = format!(
+        "[defaults]\nrelative = 1e-8\n\n[[case]]\nname = \"cell\"\nprogram = \"{}\" # on disk\nscene = \"le\n\n[[case]]\nname = \"unsaved\"\nscene = \"\nprogram = \"lsp_scenes_unsaved.lsd\"\n",
+        cell.display()
+    );
+    let mut client = Client::start();
+    client.initialize();
+    assert_eq!(client.open(&file_uri(&program), program_text), json!([]));
+    let uri = file_uri(&folder.join("lsdtest.toml"));
+    client.notify(
+        "textDocument/didOpen",
+        json!({"textDocument": {"uri": uri, "languageId": "toml", "version": 1, "text": manifest}}),
+    );
+    let complete = |client: &mut Client, needle: &str, skip: usize| {
+        let at = position(&manifest, needle, skip);
+        let items = client.request(
+            "textDocument/completion",
+            json!({"textDocument": {"uri": uri}, "position": at}),
+        );
+        labels(&items)
+            .iter()
+            .map(|l| l.to_string())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        complete(&mut client, "scene = \"le", 11),
+        [
+            "left_trajectory",
+            "right_statics",
+            "linkage_check",
+            "cell",
+            "left_weightless"
+        ]
+    );
+    assert_eq!(complete(&mut client, "scene = \"\n", 9), ["swing", "held"]);
+    // Not in a scene's value: the case's name, the program's path, the defaults.
+    assert!(complete(&mut client, "name = \"cell", 12).is_empty());
+    assert!(complete(&mut client, "# on disk", 0).is_empty());
+    assert!(complete(&mut client, "relative", 3).is_empty());
+    client.stop();
+}

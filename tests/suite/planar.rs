@@ -369,3 +369,28 @@ fn planar_and_spatial_right_hand_sides_agree_next_to_singular_configurations() {
     }
     assert!(largest.0 <= AGREEMENT, "{largest:?}");
 }
+
+/// `lsdc tree` asks only for kinematics, and builds no dynamics: the four-bar with inertias
+/// that have no values (the dynamic model cannot be built, `prepare` says which value it
+/// lacks) is still numbered, assembled, given its mobility and said planar; a spatial loop is
+/// still said not planar, with the joint that leaves the plane.
+#[test]
+fn tree_decides_planarity_without_building_the_dynamics() {
+    use lsdc::studies::analysis;
+    let unknown_inertia = [(
+        "let bar(l) = body mass = l, iframe = [l / 2, 0, 0] ++ 1, inertia = [1e-4 * l, l * l * l / 12, l * l * l / 12] end ;",
+        "let bar(l) = body mass = ?s, iframe = [l / 2, 0, 0] ++ 1, inertia = [?s, ?s, ?s] end ;",
+    )];
+    let mechanism = crate::common::programs::mechanism("four_bar", &unknown_inertia);
+    let missing = lsdc::prepare::prepare(&mechanism, &[], &Default::default()).err();
+    assert!(
+        missing.is_some_and(|d| d.iter().any(|d| d.message.contains("no value"))),
+        "the dynamic model needs the inertias' values"
+    );
+    let report = analysis::tree(&mechanism).expect("tree");
+    assert!(report.planar, "{:?}", report.not_planar);
+    assert_eq!(report.mobility.expect("mobility").mobility, 1);
+    let bennett = analysis::tree(&crate::common::programs::mechanism("hard/bennett", &[]));
+    let why = bennett.expect("tree").not_planar.expect("not planar");
+    assert!(why.contains("out of the plane"), "{why}");
+}

@@ -1,4 +1,5 @@
-// Starts `lsdc lsp` for LSD files and connects VS Code to it over standard input and output.
+// Starts `lsdc lsp` for LSD files and test manifests (`lsdtest.toml`, where it completes scene
+// names) and connects VS Code to it over standard input and output.
 const vscode = require("vscode");
 const { LanguageClient } = require("vscode-languageclient/node");
 
@@ -16,7 +17,12 @@ function activate(context) {
     "lsd",
     "LSD language server",
     { run: server, debug: server },
-    { documentSelector: [{ scheme: "file", language: "lsd" }] }
+    {
+      documentSelector: [
+        { scheme: "file", language: "lsd" },
+        { scheme: "file", pattern: "**/lsdtest.toml" },
+      ],
+    }
   );
   context.subscriptions.push(client);
   return client.start();

@@ -1,9 +1,10 @@
 //! Whether a model is planar, decided once from the model as built (its joints' kernels and
 //! frames, its bodies, its efforts as the program writes them): every joint a turn about axes
 //! parallel to one normal n or a translation perpendicular to it, every loop closed by such a
-//! joint, the gravity field and every applied effort in the plane (a force with no component
-//! along n, a torque along n alone, each by the expression the program wrote being the
-//! constant zero). Then every body moves in a plane perpendicular to n, in every
+//! joint (the kinematic model decides these and n, `kinematics::plane`, with no dynamics, for
+//! `lsdc tree`), the gravity field and every applied effort in the plane (a force with no
+//! component along n, a torque along n alone, each by the expression the program wrote being
+//! the constant zero). Then every body moves in a plane perpendicular to n, in every
 //! configuration: a joint's axis is fixed in its parent, which turns about n only, so checking
 //! the axes at one configuration (every coordinate zero) decides them all.
 //!
@@ -20,17 +21,15 @@ use crate::dynamics::joint::{JointType, Kernel};
 use crate::dynamics::model::Model;
 use crate::elab::mechanism::EffortKind;
 use crate::kinematics::eval::eval;
-use crate::kinematics::model::SingleMotion;
-use crate::spatial::Pose;
+use crate::kinematics::model::{KinematicModel, SingleMotion};
+use crate::kinematics::plane::{motion_plane, ROUND_OFF};
 
-/// How far from parallel (or perpendicular) two unit directions may be and still count as
-/// such: the round-off of the frames' rotations (a turn by π/2 leaves cos(π/2) = 6e-17).
-const ROUND_OFF: f64 = 1e-12;
-
-/// The model's planar form, or why it keeps the spatial form.
-pub fn decide(model: &Model) -> Result<PlanarModel, String> {
+/// The model's planar form, or why it keeps the spatial form: the plane its joints move the
+/// bodies in (`kinematics::plane`, from the kinematic model `kinematics` it was built from),
+/// then what the dynamics add.
+pub fn decide(kinematics: &KinematicModel, model: &Model) -> Result<PlanarModel, String> {
     refuse_elements(model)?;
-    refuse_joint_kinds(model)?;
+    let normal = motion_plane(kinematics)?;
     let mut data = Data::new(model);
     let zeros = vec![0.0; model.nq.max(model.nv)];
     forward_kinematics(model, &mut data, &zeros[..model.nq], &zeros[..model.nv])
@@ -41,7 +40,6 @@ pub fn decide(model: &Model) -> Result<PlanarModel, String> {
             b => *data.world[b].rotation.to_rotation_matrix().matrix(),
         }
     };
-    let normal = normal(model, &data).ok_or("it has no revolute joint to set its plane")?;
     let basis = plane_basis(&normal);
     // A vector of body b, in its planar frame: Wᵀ R_b.
     let to_planar: Vec<Matrix3<f64>> = (0..=model.body_count())
@@ -102,51 +100,6 @@ fn refuse_elements(model: &Model) -> Result<(), String> {
     match refusals.iter().find(|(present, _)| *present) {
         Some((_, what)) => Err(format!("it has {what}")),
         None => Ok(()),
-    }
-}
-
-/// The joints that are not one rotation or translation (or a weld, in the tree).
-fn refuse_joint_kinds(model: &Model) -> Result<(), String> {
-    let tree = model.dynamic_joints.iter().map(|&k| &model.joints[k]);
-    let kinds = tree.map(|joint| {
-        let single = joint.kind == JointType::Chain && joint.kernel != Kernel::General;
-        (single, &joint.chain.name)
-    });
-    let closing = (model.loops.iter()).map(|chain| (chain.single_motion().is_some(), &chain.name));
-    match kinds.chain(closing).find(|(single, _)| !single) {
-        Some((_, name)) => Err(format!("`{name}` is not one rotation or translation")),
-        None => Ok(()),
-    }
-}
-
-/// The plane's normal: the axis of the first revolute joint (tree or loop) in the fixed axes,
-/// its largest component made positive.
-fn normal(model: &Model, data: &Data) -> Option<Vector3<f64>> {
-    let tree = model.joints.iter().find_map(|joint| match &joint.kernel {
-        Kernel::Rotation { column, .. } => {
-            let axis = data.world[joint.child].rotation * column.fixed_rows::<3>(0);
-            Some(axis)
-        }
-        _ => None,
-    });
-    let closing = || {
-        model.loops.iter().find_map(|chain| match chain.single_motion() {
-            Some(SingleMotion::Rotation { axis, .. }) => {
-                Some(world_pose(data, chain.first_body, &chain.first).rotation * axis)
-            }
-            _ => None,
-        })
-    };
-    let axis = tree.or_else(closing)?;
-    let axis = axis.try_normalize(0.0).filter(|a| a.iter().all(|x| x.is_finite()))?;
-    let largest = axis.iamax();
-    Some(axis * axis[largest].signum())
-}
-
-fn world_pose(data: &Data, body: usize, frame: &Pose) -> Pose {
-    match body {
-        0 => *frame,
-        b => data.world[b] * frame,
     }
 }
 
