@@ -100,6 +100,9 @@ fn manifest_errors_give_file_line_and_column() {
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("lsdc-test-command-{name}-{}", std::process::id()));
+    // Emptied first: a folder left by an earlier run whose process had the same id would hand
+    // this test its recorded references.
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temporary folder");
     dir
 }
