@@ -62,6 +62,7 @@ mod reactions;
 mod recovered_angles;
 mod references;
 mod regression;
+mod regressor;
 mod repository;
 mod rheonomic;
 mod robustness;
