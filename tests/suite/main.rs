@@ -28,6 +28,7 @@ mod geared_loops;
 mod generated_code;
 mod golden;
 mod hard_loops;
+mod identify;
 mod imposed_motion_studies;
 mod integrate_projection;
 mod integrator_registry;

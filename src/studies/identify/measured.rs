@@ -52,12 +52,15 @@ pub fn read_measured(
     };
     let end_of_header = header.chars().count() + 1;
     let find = |name: &str| columns.iter().position(|c| *c == name);
+    // A missing column is shown where the closest one is, or at the end of the header.
     let missing = |name: &str| {
-        let suggestion = did_you_mean(name, columns.iter().copied())
+        let closest = did_you_mean(name, columns.iter().copied());
+        let column = closest.and_then(find).map_or(end_of_header, |k| starts[k]);
+        let suggestion = closest
             .map(|s| format!("; did you mean `{s}`?"))
             .unwrap_or_default();
         at_header(
-            end_of_header,
+            column,
             format!("no column `{name}`: the positions of every coordinate are needed{suggestion}"),
         )
     };

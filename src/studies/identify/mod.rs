@@ -82,6 +82,9 @@ pub struct Residual {
     pub relative: f64,
     /// σ = √(Σ r² / (equations − base parameters)), the estimated noise of an effort.
     pub sigma: f64,
+    /// Per measured effort, in the order of the model's coordinates, its own σ, by which its
+    /// equations are weighted (empty when the fit is exact to round-off, and not weighted).
+    pub sigmas: Vec<f64>,
 }
 
 /// What `lsdc identify` finds.
@@ -341,7 +344,7 @@ pub fn identify(
             y[row] = measured.efforts[s][r] - (predicted[velocity] - asked_part[velocity]);
         }
     }
-    let (estimates, condition, residual) = least_squares(&w, &y)?;
+    let (estimates, condition, residual) = weighted_least_squares(&w, &y, rows.len())?;
     let name = |k: usize| parameter_name(model, asked[k]);
     let mut reported = Vec::with_capacity(count);
     for (i, &leading) in base.independent.iter().enumerate() {
@@ -398,6 +401,40 @@ pub fn identify(
     })
 }
 
+/// Least squares weighted by each measured effort's noise (Gautier & Poignet, "Extended Kalman
+/// filtering and weighted least squares dynamic identification of robot", Control Engineering
+/// Practice 9, 2001): the efforts of different joints differ by orders of magnitude, and so
+/// does their noise. A first, unweighted fit gives each effort's σ_j² = |r_j|² / (samples − base
+/// parameters) from its rows (row k belongs to effort k mod `efforts`); the rows divided by
+/// σ_j are fitted again, whose standard deviations are then those of errors of unequal
+/// variances. The residual reported is the unweighted fit's, in the efforts' units.
+#[allow(clippy::type_complexity)]
+fn weighted_least_squares(
+    w: &DMatrix<f64>,
+    y: &DVector<f64>,
+    efforts: usize,
+) -> Result<((Vec<f64>, Vec<f64>), f64, Residual), IdentifyError> {
+    let (first, _, residual) = least_squares(w, y)?;
+    let (equations, count) = w.shape();
+    let samples = equations / efforts;
+    let r = y - w * DVector::from_column_slice(&first.0);
+    let sigmas: Vec<f64> = (0..efforts)
+        .map(|j| {
+            let squares: f64 = (j..equations).step_by(efforts).map(|k| r[k] * r[k]).sum();
+            (squares / samples.saturating_sub(count).max(1) as f64).sqrt()
+        })
+        .collect();
+    // Noise-free data leave residuals of round-off: weights of their ratios mean nothing.
+    if sigmas.iter().any(|&s| s <= 1e-12 * y.amax()) {
+        return Ok((first, least_squares(w, y)?.1, residual));
+    }
+    let weight = |k: usize| 1.0 / sigmas[k % efforts];
+    let weighted_w = DMatrix::from_fn(equations, count, |k, j| w[(k, j)] * weight(k));
+    let weighted_y = DVector::from_fn(equations, |k, _| y[k] * weight(k));
+    let (estimates, condition, _) = least_squares(&weighted_w, &weighted_y)?;
+    Ok((estimates, condition, Residual { sigmas, ..residual }))
+}
+
 /// A coefficient of a combination for people: six significant digits, written shortest.
 fn six_digits(x: f64) -> String {
     let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
@@ -444,6 +481,7 @@ fn least_squares(
         rms: (sum_squares / equations as f64).sqrt(),
         relative: sum_squares.sqrt() / y.norm().max(f64::MIN_POSITIVE),
         sigma: variance.sqrt(),
+        sigmas: Vec::new(),
     };
     Ok(((x, std), condition, residual))
 }
