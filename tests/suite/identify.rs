@@ -214,19 +214,23 @@ fn ur5_data(dir: &Path) -> String {
     let mut text = header.join(",") + "\n";
     for k in 0..=1000 {
         let t = k as f64 * 0.01;
-        let mut values = [[0.0; 6]; 3];
-        for j in 0..6 {
-            for (i, frequency) in [0.1, 0.23, 0.37].iter().enumerate() {
-                let amplitude = 0.5 / (1.0 + i as f64) * (1.0 + 0.1 * j as f64);
-                let w = 2.0 * std::f64::consts::PI * frequency * (1.0 + 0.13 * j as f64);
-                let phase = w * t + 0.7 * j as f64 + 1.3 * i as f64;
-                values[0][j] += amplitude * phase.sin();
-                values[1][j] += amplitude * w * phase.cos();
-                values[2][j] -= amplitude * w * w * phase.sin();
-            }
-        }
+        // Per joint, its position, rate and acceleration.
+        let motion: Vec<[f64; 3]> = (0..6)
+            .map(|j| {
+                let mut sum = [0.0; 3];
+                for (i, frequency) in [0.1, 0.23, 0.37].iter().enumerate() {
+                    let amplitude = 0.5 / (1.0 + i as f64) * (1.0 + 0.1 * j as f64);
+                    let w = 2.0 * std::f64::consts::PI * frequency * (1.0 + 0.13 * j as f64);
+                    let phase = w * t + 0.7 * j as f64 + 1.3 * i as f64;
+                    sum[0] += amplitude * phase.sin();
+                    sum[1] += amplitude * w * phase.cos();
+                    sum[2] -= amplitude * w * w * phase.sin();
+                }
+                sum
+            })
+            .collect();
         let row: Vec<String> = std::iter::once(t)
-            .chain(values.iter().flatten().copied())
+            .chain((0..3).flat_map(|order| motion.iter().map(move |m| m[order])))
             .map(|x| format!("{x:e}"))
             .collect();
         text += &(row.join(",") + "\n");

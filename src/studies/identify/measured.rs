@@ -13,6 +13,9 @@ use crate::kinematics::drives::drive_effort_name;
 use crate::studies::identify::parameters::joint_of_velocity;
 use crate::studies::motion_file::{spline_derivatives, Derivation};
 
+/// A coordinate's positions, rates and accelerations along the samples.
+type Series = (Vec<f64>, Vec<f64>, Vec<f64>);
+
 /// The measurements along the file's times, per velocity of the model.
 #[derive(Clone, Debug)]
 pub struct Measured {
@@ -167,7 +170,7 @@ pub fn read_measured(
         accelerations_from.push(from_accelerations);
         by_coordinate.push((positions, rates, accelerations));
     }
-    let per_sample = |pick: fn(&(Vec<f64>, Vec<f64>, Vec<f64>)) -> &Vec<f64>| {
+    let per_sample = |pick: fn(&Series) -> &Vec<f64>| {
         (0..times.len())
             .map(|s| by_coordinate.iter().map(|c| pick(c)[s]).collect())
             .collect()

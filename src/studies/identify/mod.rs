@@ -457,7 +457,8 @@ fn least_squares(
     let decomposition = svd(scaled, true, true).ok_or(not_excited.clone())?;
     let singular = &decomposition.singular_values;
     let condition = singular.max() / singular.min();
-    if !(condition <= CONDITION_LIMIT) {
+    // A NaN condition (a zero singular value over zero) is refused too.
+    if condition.is_nan() || condition > CONDITION_LIMIT {
         return Err(IdentifyError::NotExcited { condition });
     }
     let (u, v_t) = match (&decomposition.u, &decomposition.v_t) {
