@@ -11,28 +11,20 @@ use lsdc::dynamics::algorithms::{rnea, Data};
 use lsdc::dynamics::model::Model;
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Settings};
-use lsdc::spatial::{Force, Inertia};
+use lsdc::spatial::Inertia;
 use nalgebra::DVector;
 use proptest::prelude::*;
 
 use crate::common::example_paths;
 use crate::common::trees::{featured_tree_program, JOINTS};
-use crate::derivatives::robot_model;
+use crate::derivatives::{point, robot_model, Point};
 use crate::dynamics::model_of;
 
 /// max |Y π − (RNEA(π) − RNEA(0))| / max(1, max |RNEA(π)|) at a state made of `numbers`.
 fn regressor_mismatch(model: &Model, numbers: &[f64]) -> f64 {
-    let value = |k: usize| numbers[k % numbers.len()];
-    let n = model.declared_count;
-    let coordinates: Vec<f64> = (0..n).map(|i| value(3 * i + 1)).collect();
-    let rates: Vec<f64> = (0..n).map(|i| value(5 * i + 2)).collect();
-    let (q, v) = model
-        .state_from_declared(&coordinates, &rates)
-        .expect("state");
-    let a: Vec<f64> = (0..model.nv).map(|i| value(11 * i + 4)).collect();
-    let external: Vec<Force> = (0..=model.body_count())
-        .map(|i| Force::from_fn(|r, _| value(13 * i + r) * 0.3))
-        .collect();
+    let Point {
+        q, v, a, external, ..
+    } = point(model, numbers);
     let mut data = Data::new(model);
     let full = rnea(model, &mut data, &q, &v, &a, &external).expect("rnea");
     let mut without = model.clone();
