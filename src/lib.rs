@@ -17,7 +17,8 @@
 //! the dynamic model and its scratch ([`dynamics::model::Model`], [`dynamics::algorithms::Data`]),
 //! the recursive algorithms on them (RNEA, CRBA, ABA, forward kinematics, in
 //! [`dynamics::algorithms`], and their analytical derivatives in its modules `rnea_derivatives`,
-//! `aba_derivatives` and `crba_derivatives`) and the spatial algebra they are written in
+//! `aba_derivatives` and `crba_derivatives`, and RNEA's regressor in the inertial parameters,
+//! `regressor`) and the spatial algebra they are written in
 //! ([`spatial`]). Every other module is the library's own: `pub(crate)`, unless the crate is
 //! compiled with `--cfg lsdc_internals`, which the repository's `.cargo/config.toml` passes to its
 //! own builds (the command line, tests, benchmarks and examples, which reach into them), so that

@@ -2,7 +2,8 @@
 //! matrix with a NaN or an infinite entry never does (a degenerate joint or an overflowing
 //! configuration can produce one): here such a matrix has no decomposition, and the caller says
 //! why it cannot go on. Beside them, the exact power-of-two scaling that brings rows of different
-//! units to one size before a decomposition.
+//! units to one size before a decomposition, and the QR decomposition with column pivoting that
+//! tells which columns of a matrix are independent.
 
 use nalgebra::{DMatrix, DVector, Dyn, SymmetricEigen, SVD};
 
@@ -74,4 +75,46 @@ pub fn inverse_power_of_two(largest: f64) -> f64 {
     // −1023) is scaled by 2¹⁰²², the largest power of two, and the largest numbers by 2⁻¹⁰²².
     let inverse = (-exponent).clamp(-1022, 1022);
     f64::from_bits(((inverse + 1023) as u64) << 52)
+}
+
+/// The R factor of m P = Q R and the column order P (`order[k]` is the column of m that came
+/// k-th), by Householder reflections with column pivoting: at each step the remaining column
+/// of largest norm comes next (Businger & Golub, "Linear least squares solutions by Householder
+/// transformations", Numer. Math. 7, 1965; Golub & Van Loan, Matrix Computations, §5.4.1). The
+/// magnitudes of R's diagonal then decrease, and the first r columns of the order whose
+/// diagonal stands above a tolerance are independent, the others combinations of them:
+/// R₁⁻¹ R₂ gives the combinations. Norms are recomputed at each step rather than downdated, so
+/// that no cancellation hides a small column.
+pub fn pivoted_qr(m: &DMatrix<f64>) -> (DMatrix<f64>, Vec<usize>) {
+    let (rows, columns) = m.shape();
+    let mut a = m.clone();
+    let mut order: Vec<usize> = (0..columns).collect();
+    for k in 0..rows.min(columns) {
+        let norm_below = |a: &DMatrix<f64>, j: usize| a.view((k, j), (rows - k, 1)).norm();
+        let pivot = (k..columns)
+            .max_by(|&i, &j| norm_below(&a, i).total_cmp(&norm_below(&a, j)))
+            .unwrap_or(k);
+        a.swap_columns(k, pivot);
+        order.swap(k, pivot);
+        let norm = norm_below(&a, k);
+        if norm == 0.0 {
+            break;
+        }
+        // The reflection I − 2 w wᵀ/(wᵀw) that maps the column below k onto ∓norm e_k, its
+        // sign chosen against cancellation.
+        let alpha = if a[(k, k)] > 0.0 { -norm } else { norm };
+        let mut w = a.view((k, k), (rows - k, 1)).into_owned();
+        w[0] -= alpha;
+        let w_norm_squared = w.norm_squared();
+        for j in k..columns {
+            let mut column = a.view_mut((k, j), (rows - k, 1));
+            let projection = 2.0 * w.dot(&column) / w_norm_squared;
+            column -= &w * projection;
+        }
+        for i in k + 1..rows {
+            a[(i, k)] = 0.0;
+        }
+    }
+    let r = a.rows(0, rows.min(columns)).upper_triangle();
+    (r, order)
 }

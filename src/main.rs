@@ -59,6 +59,9 @@ enum Command {
     /// freedom driven): the efforts that impose them, the power and, with `--reactions`, every
     /// join's reaction; CSV or JSON.
     Inverse(inverse::InverseArgs),
+    /// Estimate bodies' inertial parameters and joints' friction from measured coordinates and
+    /// efforts (least squares on the base parameters of the inverse dynamics' regressor).
+    Identify(identify::IdentifyArgs),
     /// The linear model (A, B, C, D) of the mechanism about its initial state, a run's state
     /// at a time or an equilibrium, in independent coordinates; eigenvalues and modes.
     Linearize(linearize::LinearizeArgs),
@@ -119,6 +122,7 @@ fn main() -> ExitCode {
         Command::View(args) => view::run(&args),
         Command::Statics(args) => statics::run(&args),
         Command::Inverse(args) => inverse::run(&args),
+        Command::Identify(args) => identify::run(&args),
         Command::Linearize(args) => linearize::run(&args),
         Command::Sensitivity(args) => sensitivity::run(&args),
         Command::Kinematics(args) => kinematics::run(&args),

@@ -8,6 +8,7 @@ pub mod drag;
 pub mod eval;
 pub mod export_urdf;
 pub mod fmt;
+pub mod identify;
 pub mod import_urdf;
 pub mod inverse;
 pub mod kinematics;

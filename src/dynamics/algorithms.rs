@@ -1,11 +1,13 @@
 //! The recursive algorithms, each `algorithm(&model, &mut data, ...)`: forward kinematics and
 //! velocities, inverse dynamics (RNEA: one pass out, one back), the mass matrix (CRBA) and
 //! forward dynamics (ABA: three passes). Bodies without mass cost nothing. Geared rotors enter
-//! all three (`geared`).
+//! all three (`geared`). RNEA is linear in the bodies' inertial parameters: its regressor is
+//! `regressor`.
 
 pub mod aba_derivatives;
 pub mod crba_derivatives;
 mod geared;
+pub mod regressor;
 pub mod rnea_derivatives;
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};

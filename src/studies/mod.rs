@@ -16,6 +16,7 @@ pub mod batch;
 pub mod batch_derivatives;
 pub mod configurations;
 pub mod drag;
+pub mod identify;
 pub mod inverse;
 pub mod kinematic_models;
 pub mod linearize;

@@ -139,7 +139,7 @@ pub fn read_motion(text: &str, file: &str, variance: f64) -> Result<MotionFile, 
 
 /// The rates and accelerations at `times` of the quintic spline of `positions` (see the
 /// module's documentation).
-fn spline_derivatives(
+pub(crate) fn spline_derivatives(
     times: &[f64],
     positions: &[f64],
     variance: f64,

@@ -43,15 +43,15 @@ fn options() -> LoadOptions {
 }
 
 /// A state, accelerations, generalised forces and external forces from the numbers `numbers`.
-struct Point {
-    q: Vec<f64>,
-    v: Vec<f64>,
-    a: Vec<f64>,
-    tau: Vec<f64>,
-    external: Vec<Force>,
+pub(crate) struct Point {
+    pub q: Vec<f64>,
+    pub v: Vec<f64>,
+    pub a: Vec<f64>,
+    pub tau: Vec<f64>,
+    pub external: Vec<Force>,
 }
 
-fn point(model: &Model, numbers: &[f64]) -> Point {
+pub(crate) fn point(model: &Model, numbers: &[f64]) -> Point {
     let value = |k: usize| numbers[k % numbers.len()];
     let n = model.declared_count;
     let coordinates: Vec<f64> = (0..n).map(|i| value(3 * i + 1)).collect();
