@@ -24,7 +24,11 @@ use loop_costs::call_costs;
 use rows::row_program;
 
 const ROWS: [usize; 8] = [1, 2, 5, 10, 20, 40, 70, 100];
-const CHAINS: [usize; 5] = [10, 30, 100, 300, 1000];
+/// The necklace to N = 1,000; the ladder to N = 100: from 300 loops on, its start (the closure
+/// of its initial configuration and the choice of its kept rows, dense in the loops' rows)
+/// takes minutes, before any evaluation.
+const NECKLACES: [usize; 5] = [10, 30, 100, 300, 1000];
+const LADDERS: [usize; 3] = [10, 30, 100];
 
 /// Where the plots of cost per body against N are written.
 const PLOT: &str = "target/loop_scaling.svg";
@@ -75,32 +79,39 @@ fn rows_against_trees() {
             [tree, loops, projection].map(|c| c / (2 * n + 1) as f64),
         ));
     }
-    let series = [
+    let names = [
         "tree (closing joins removed)",
         "loops: right-hand side",
         "loops: projection",
     ];
+    let series: Vec<Series> = (names.iter().enumerate())
+        .map(|(column, name)| {
+            let line = measured.iter().map(|&(n, c)| (n, c[column])).collect();
+            (name.to_string(), line)
+        })
+        .collect();
     let caption = "A row of N four-bars: cost of one evaluation per body";
-    match plot(PLOT, caption, &series, &measured) {
+    match plot(PLOT, caption, &series) {
         Ok(()) => println!("\nPlot of the cost per body: {PLOT}"),
         Err(e) => println!("\nNo plot: {e}"),
     }
 }
 
-/// The necklace and the ladder at each N of `CHAINS`: cost per call and per body, and the
-/// exponent of the growth of each cost with N.
+/// The necklace and the ladder at each N of `NECKLACES` and `LADDERS`: cost per call and per
+/// body, and the exponent of the growth of each cost with N.
 fn long_chains() {
     println!("\nLong closed chains (release build, CPU time per call, best batch).\n");
     println!("| chain | N | bodies | right-hand side µs | projection µs | RHS µs per body | projection µs per body |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
-    let programs: [(&str, fn(usize) -> String, fn(usize) -> usize); 2] = [
-        ("necklace", necklace_program, |n| n),
-        ("ladder", ladder_program, |n| 2 * n + 2),
+    type Program = fn(usize) -> String;
+    let programs: [(&str, Program, fn(usize) -> usize, &[usize]); 2] = [
+        ("necklace", necklace_program, |n| n, &NECKLACES),
+        ("ladder", ladder_program, |n| 2 * n + 2, &LADDERS),
     ];
-    let mut measured = Vec::new();
-    for (name, program, bodies) in programs {
+    let mut series: Vec<Series> = Vec::new();
+    for (name, program, bodies, sizes) in programs {
         let mut costs = Vec::new();
-        for n in CHAINS {
+        for &n in sizes {
             let (rhs, projection) = call_costs(&prepared(&program(n)));
             let b = bodies(n) as f64;
             println!(
@@ -118,22 +129,11 @@ fn long_chains() {
             growth_exponent(&rhs) + 1.0,
             growth_exponent(&projection) + 1.0
         );
-        measured.push((name, costs));
+        series.push((format!("{name}: right-hand side"), rhs));
+        series.push((format!("{name}: projection"), projection));
     }
-    let joined: Vec<(f64, [f64; 4])> = (0..CHAINS.len())
-        .map(|i| {
-            let (a, b) = (&measured[0].1[i], &measured[1].1[i]);
-            (a.0, [a.1[0], a.1[1], b.1[0], b.1[1]])
-        })
-        .collect();
-    let series = [
-        "necklace: right-hand side",
-        "necklace: projection",
-        "ladder: right-hand side",
-        "ladder: projection",
-    ];
     let caption = "Long closed chains: cost of one evaluation per body";
-    match plot(CHAINS_PLOT, caption, &series, &joined) {
+    match plot(CHAINS_PLOT, caption, &series) {
         Ok(()) => println!("Plot of the cost per body: {CHAINS_PLOT}"),
         Err(e) => println!("No plot: {e}"),
     }
@@ -151,22 +151,19 @@ fn growth_exponent(points: &[(f64, f64)]) -> f64 {
     covariance / variance
 }
 
-/// Cost per body (µs) against N, log-log, one line per series (`measured`: N and the series'
-/// costs per body).
-fn plot<const S: usize>(
-    path: &str,
-    caption: &str,
-    series: &[&str; S],
-    measured: &[(f64, [f64; S])],
-) -> Result<(), Box<dyn std::error::Error>> {
+/// A line of a plot: its name, and its points (N, µs per body).
+type Series = (String, Vec<(f64, f64)>);
+
+/// Cost per body (µs) against N, log-log, one line per series.
+fn plot(path: &str, caption: &str, series: &[Series]) -> Result<(), Box<dyn std::error::Error>> {
     use plotters::prelude::*;
     lsdc::output::plot::register_fonts()?;
     let family = lsdc::output::plot::FONT_FAMILY;
-    let all = || measured.iter().flat_map(|m| m.1);
-    let highest = all().fold(1e-3, f64::max);
-    let lowest = all().fold(highest, f64::min);
-    let largest_n = measured.iter().map(|m| m.0).fold(1.0, f64::max);
-    let smallest_n = measured.iter().map(|m| m.0).fold(largest_n, f64::min);
+    let points = || series.iter().flat_map(|(_, line)| line.iter().copied());
+    let highest = points().map(|p| p.1).fold(1e-3, f64::max);
+    let lowest = points().map(|p| p.1).fold(highest, f64::min);
+    let largest_n = points().map(|p| p.0).fold(1.0, f64::max);
+    let smallest_n = points().map(|p| p.0).fold(largest_n, f64::min);
     let root = SVGBackend::new(path, (720, 440)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
@@ -185,12 +182,14 @@ fn plot<const S: usize>(
         .label_style((family, 13))
         .draw()?;
     let colours = [BLUE, RED, GREEN, MAGENTA];
-    for (column, label) in series.iter().enumerate() {
-        let colour = colours[column % colours.len()];
-        let points = measured.iter().map(|m| (m.0, m.1[column]));
+    for (k, (label, line)) in series.iter().enumerate() {
+        let colour = colours[k % colours.len()];
         chart
-            .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
-            .label(*label)
+            .draw_series(LineSeries::new(
+                line.iter().copied(),
+                colour.stroke_width(2),
+            ))?
+            .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour));
     }
     chart

@@ -142,10 +142,11 @@ fn urdf_chain_peak_bytes(n: usize) -> usize {
     bytes
 }
 
-/// A tree's run holds no matrix of its velocities squared (the mass matrix, the reduced
-/// equations' storage, the rows of each branch): quadrupling a URDF chain's length at most
-/// quadruples, with a fifth for what does not grow with it, the memory its preparation and run
-/// hold at once. They held 52 n² bytes beside the rest before (n = 600: 9.1 times n = 150's).
+/// A tree's run holds no matrix of its velocities squared (the mimic couplings' basis, the mass
+/// matrix, the reduced equations' storage, the rows of each branch): quadrupling a URDF chain's
+/// length at most quadruples, with a fifth for what does not grow with it, the memory its
+/// preparation and run hold at once. `lsdc simulate` of the same chains for 10 ms under
+/// heaptrack peaked at 4.2 MB and 38.4 MB before (9.1 times), 2.4 MB and 9.4 MB after (3.9).
 #[test]
 fn a_long_chain_from_urdf_runs_in_memory_linear_in_its_length() {
     let (short, long) = (urdf_chain_peak_bytes(150), urdf_chain_peak_bytes(600));
