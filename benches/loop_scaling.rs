@@ -103,8 +103,14 @@ fn long_chains() {
     println!("\nLong closed chains (release build, CPU time per call, best batch).\n");
     println!("| chain | N | bodies | right-hand side µs | projection µs | RHS µs per body | projection µs per body |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
-    type Program = fn(usize) -> String;
-    let programs: [(&str, Program, fn(usize) -> usize, &[usize]); 2] = [
+    /// A chain's name, its program for N, its bodies for N, and the N it is timed at.
+    type Chain = (
+        &'static str,
+        fn(usize) -> String,
+        fn(usize) -> usize,
+        &'static [usize],
+    );
+    let programs: [Chain; 2] = [
         ("necklace", necklace_program, |n| n, &NECKLACES),
         ("ladder", ladder_program, |n| 2 * n + 2, &LADDERS),
     ];
