@@ -35,7 +35,8 @@ Usage:
                            [--lsdc-probe EXECUTABLE]
 
 Needs a Python with `pip install pin example-robot-data mujoco cmeel-eigen cmeel-urdfdom-headers`
-(Pinocchio's headers need Eigen's and urdfdom's), g++ and gcc. The Pinocchio probe takes a few
+(Pinocchio's headers need Eigen's and urdfdom's), g++ and gcc; the rows alone (`--only row`)
+need only `pip install mujoco` and gcc. The Pinocchio probe takes a few
 minutes to compile; it is kept in target/peers/ and compiled again when its source or the
 flags change.
 """
@@ -238,29 +239,39 @@ def main():
                         "`cargo bench --no-run --bench peers` names) instead of `cargo bench`")
     args = parser.parse_args()
 
-    pinocchio = require("pinocchio", "pin")
+    # The pairs first, by label: `--only` leaves out the sides (and the packages) they need.
+    labels = [f"{algorithm.upper()} {name}" for algorithm in ("rnea", "crba", "aba") for name in ROBOTS]
+    labels += [f"RK4 step {name}" for name in STEPPED]
+    labels += [f"row of {n}" for n in ROWS] + [f"row of {n}: loops / tree" for n in ROWS]
+    wanted = [label for label in labels if args.only in label]
+    robots = any(not label.startswith("row") for label in wanted)
+    stepped = [name for name in STEPPED if f"RK4 step {name}" in wanted]
+    rows = [n for n in ROWS if any(label.startswith(f"row of {n}") for label in wanted)]
+
     mujoco = require("mujoco", "mujoco")
-    require("cmeel", "pin")
     OUT.mkdir(parents=True, exist_ok=True)
     models = OUT / "models"
     models.mkdir(exist_ok=True)
-    urdfs = {name: urdf_path(stem) for name, stem in ROBOTS.items()}
-    pin_binary = pinocchio_probe()
+    urdfs = {name: urdf_path(stem) for name, stem in ROBOTS.items()} if robots else {}
     mujoco_binary = mujoco_probe(mujoco)
-    for name in STEPPED:
+    for name in stepped:
         mujoco_robot(mujoco, urdfs[name], models / f"{name}.xml")
-    for n in ROWS:
+    for n in rows:
         mujoco_row(n, models / f"row{n}.xml")
 
     robot_arguments = [f"{name}={path}" for name, path in urdfs.items()]
     print("building and starting lsdc's probe (cargo bench --bench peers)...", file=sys.stderr)
     lsdc_command = [args.lsdc_probe] if args.lsdc_probe else \
         ["cargo", "bench", "--locked", "--bench", "peers", "--"]
-    lsdc = Probe("lsdc", [*lsdc_command, *robot_arguments, *[f"row{n}" for n in ROWS]])
-    pin = Probe("Pinocchio", [str(pin_binary), *robot_arguments])
+    lsdc = Probe("lsdc", [*lsdc_command, *robot_arguments, *[f"row{n}" for n in rows]])
+    pin = None
+    if robots:
+        require("pinocchio", "pin")
+        require("cmeel", "pin")
+        pin = Probe("Pinocchio", [str(pinocchio_probe()), *robot_arguments])
     muj = Probe("MuJoCo", [str(mujoco_binary),
-                           *[f"{name}={models / f'{name}.xml'}" for name in STEPPED],
-                           *[f"row{n}={models / f'row{n}.xml'}" for n in ROWS]])
+                           *[f"{name}={models / f'{name}.xml'}" for name in stepped],
+                           *[f"row{n}={models / f'row{n}.xml'}" for n in rows]])
 
     pairs = []  # (label, lsdc case, peer probe, peer case)
     for algorithm in ("rnea", "crba", "aba"):
@@ -272,7 +283,7 @@ def main():
         pairs.append((f"row of {n}", f"row{n}/evaluation", muj, f"row{n}/forward"))
     for n in ROWS:
         pairs.append((f"row of {n}: loops / tree", f"row{n}/evaluation", lsdc, f"row{n}/tree"))
-    pairs = [p for p in pairs if args.only in p[0]]
+    pairs = [p for p in pairs if p[0] in wanted]
 
     started, load_before = datetime.datetime.now(datetime.timezone.utc), loads()
     calls = {}
@@ -291,7 +302,8 @@ def main():
                 times[(probe.name, case)].append(probe.seconds(case, n) / n)
     load_after = loads()
     for probe in (lsdc, pin, muj):
-        probe.close()
+        if probe is not None:
+            probe.close()
 
     def best_median(probe, case):
         values = times[(probe.name, case)]
@@ -305,9 +317,12 @@ def main():
                      "peer_best_ns": pb * 1e9, "peer_median_ns": pm * 1e9,
                      "ratio_best": ob / pb, "ratio_median": om / pm})
 
+    versions = f"MuJoCo {mujoco.__version__}"
+    if pin is not None:
+        versions = f"Pinocchio {sys.modules['pinocchio'].__version__}, {versions}"
     print(f"\n{started:%Y-%m-%d %H:%M} UTC, {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} CPUs; load average {load_before[0]:.1f} before, {load_after[0]:.1f} after; "
-          f"Pinocchio {pinocchio.__version__}, MuJoCo {mujoco.__version__}; {args.rounds} rounds of "
+          f"{versions}; {args.rounds} rounds of "
           f"{args.batch * 1e3:.0f} ms batches per side; thread CPU time per call, ns\n")
     print("| work | peer | lsdc best | lsdc median | peer best | peer median | ratio of bests | ratio of medians |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
@@ -318,7 +333,7 @@ def main():
     if args.json:
         pathlib.Path(args.json).write_text(json.dumps({
             "date": started.isoformat(), "load_before": load_before, "load_after": load_after,
-            "pinocchio": pinocchio.__version__, "mujoco": mujoco.__version__,
+            "pinocchio": pin and sys.modules['pinocchio'].__version__, "mujoco": mujoco.__version__,
             "rounds": args.rounds, "batch": args.batch, "rows": rows}, indent=1) + "\n")
 
 

@@ -2,25 +2,37 @@
 //! `examples/hard/four_bar_row_N.lsd`, generated for any N by `common/rows.rs`) against the same 2N + 1 bodies
 //! with the N closing joins removed (a tree: N + 1 cranks, each of the first N carrying a
 //! coupler). For each N: one right-hand side of each, their ratio, and one projection onto the
-//! loops. Run with `cargo bench --bench loop_scaling`; CPU time per call, best of 7 batches of
-//! about 20 ms.
+//! loops. Then the long closed chains of `common/chains.rs`, the necklace (one loop of N rods)
+//! and the ladder (N loops sharing their rungs), for N from 10 to 1,000: one right-hand side and
+//! one projection, and the exponent of their growth with N (least squares on log cost against
+//! log N). Run with `cargo bench --bench loop_scaling [-- rows|chains]`; CPU time per call,
+//! best of 7 batches of about 20 ms.
 
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Prepared, Settings};
 
+#[path = "common/chains.rs"]
+mod chains;
 mod common;
 #[path = "common/loop_costs.rs"]
 mod loop_costs;
 #[path = "common/rows.rs"]
 mod rows;
+use chains::{ladder_program, necklace_program};
 use loop_costs::call_costs;
 use rows::row_program;
 
 const ROWS: [usize; 8] = [1, 2, 5, 10, 20, 40, 70, 100];
+/// The necklace to N = 1,000; the ladder to N = 100: from 300 loops on, its start (the closure
+/// of its initial configuration and the choice of its kept rows, dense in the loops' rows)
+/// takes minutes, before any evaluation.
+const NECKLACES: [usize; 5] = [10, 30, 100, 300, 1000];
+const LADDERS: [usize; 3] = [10, 30, 100];
 
-/// Where the plot of cost per body against N is written.
+/// Where the plots of cost per body against N are written.
 const PLOT: &str = "target/loop_scaling.svg";
+const CHAINS_PLOT: &str = "target/long_chains.svg";
 
 fn prepared(text: &str) -> Prepared {
     let options = LoadOptions {
@@ -35,6 +47,20 @@ fn prepared(text: &str) -> Prepared {
 }
 
 fn main() {
+    let asked: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let wants = |part: &str| asked.is_empty() || asked.iter().any(|a| a == part);
+    if wants("rows") {
+        rows_against_trees();
+    }
+    if wants("chains") {
+        long_chains();
+    }
+}
+
+fn rows_against_trees() {
     println!("A row of N parallelogram four-bars against the same bodies as a tree (release build, CPU time per call, best batch).\n");
     println!("| N | bodies | tree µs | loops µs | loops / tree | projection µs | projection / loops RHS |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
@@ -48,56 +74,127 @@ fn main() {
             loops / tree,
             projection / loops
         );
-        measured.push((n, tree, loops, projection));
+        measured.push((
+            n as f64,
+            [tree, loops, projection].map(|c| c / (2 * n + 1) as f64),
+        ));
     }
-    match plot(&measured) {
+    let names = [
+        "tree (closing joins removed)",
+        "loops: right-hand side",
+        "loops: projection",
+    ];
+    let series: Vec<Series> = (names.iter().enumerate())
+        .map(|(column, name)| {
+            let line = measured.iter().map(|&(n, c)| (n, c[column])).collect();
+            (name.to_string(), line)
+        })
+        .collect();
+    let caption = "A row of N four-bars: cost of one evaluation per body";
+    match plot(PLOT, caption, &series) {
         Ok(()) => println!("\nPlot of the cost per body: {PLOT}"),
         Err(e) => println!("\nNo plot: {e}"),
     }
 }
 
-/// Cost per body (µs) against N, log-log: the tree, the loops and the projection.
-fn plot(measured: &[(usize, f64, f64, f64)]) -> Result<(), Box<dyn std::error::Error>> {
+/// The necklace and the ladder at each N of `NECKLACES` and `LADDERS`: cost per call and per
+/// body, and the exponent of the growth of each cost with N.
+fn long_chains() {
+    println!("\nLong closed chains (release build, CPU time per call, best batch).\n");
+    println!("| chain | N | bodies | right-hand side µs | projection µs | RHS µs per body | projection µs per body |");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    /// A chain's name, its program for N, its bodies for N, and the N it is timed at.
+    type Chain = (
+        &'static str,
+        fn(usize) -> String,
+        fn(usize) -> usize,
+        &'static [usize],
+    );
+    let programs: [Chain; 2] = [
+        ("necklace", necklace_program, |n| n, &NECKLACES),
+        ("ladder", ladder_program, |n| 2 * n + 2, &LADDERS),
+    ];
+    let mut series: Vec<Series> = Vec::new();
+    for (name, program, bodies, sizes) in programs {
+        let mut costs = Vec::new();
+        for &n in sizes {
+            let (rhs, projection) = call_costs(&prepared(&program(n)));
+            let b = bodies(n) as f64;
+            println!(
+                "| {name} | {n} | {} | {rhs:.1} | {projection:.1} | {:.3} | {:.3} |",
+                bodies(n),
+                rhs / b,
+                projection / b
+            );
+            costs.push((n as f64, [rhs / b, projection / b]));
+        }
+        let rhs: Vec<_> = costs.iter().map(|&(n, c)| (n, c[0])).collect();
+        let projection: Vec<_> = costs.iter().map(|&(n, c)| (n, c[1])).collect();
+        println!(
+            "\n{name}: cost ∝ N^p, p = {:.2} (right-hand side), {:.2} (projection)\n",
+            growth_exponent(&rhs) + 1.0,
+            growth_exponent(&projection) + 1.0
+        );
+        series.push((format!("{name}: right-hand side"), rhs));
+        series.push((format!("{name}: projection"), projection));
+    }
+    let caption = "Long closed chains: cost of one evaluation per body";
+    match plot(CHAINS_PLOT, caption, &series) {
+        Ok(()) => println!("Plot of the cost per body: {CHAINS_PLOT}"),
+        Err(e) => println!("No plot: {e}"),
+    }
+}
+
+/// The slope of log y against log x by least squares.
+fn growth_exponent(points: &[(f64, f64)]) -> f64 {
+    let logs: Vec<(f64, f64)> = points.iter().map(|&(x, y)| (x.ln(), y.ln())).collect();
+    let count = logs.len() as f64;
+    let (mean_x, mean_y) = logs
+        .iter()
+        .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x / count, b + y / count));
+    let covariance: f64 = logs.iter().map(|&(x, y)| (x - mean_x) * (y - mean_y)).sum();
+    let variance: f64 = logs.iter().map(|&(x, _)| (x - mean_x).powi(2)).sum();
+    covariance / variance
+}
+
+/// A line of a plot: its name, and its points (N, µs per body).
+type Series = (String, Vec<(f64, f64)>);
+
+/// Cost per body (µs) against N, log-log, one line per series.
+fn plot(path: &str, caption: &str, series: &[Series]) -> Result<(), Box<dyn std::error::Error>> {
     use plotters::prelude::*;
     lsdc::output::plot::register_fonts()?;
     let family = lsdc::output::plot::FONT_FAMILY;
-    let per_body = |cost: f64, n: usize| cost / (2 * n + 1) as f64;
-    let highest = measured
-        .iter()
-        .map(|&(n, _, loops, projection)| per_body(loops.max(projection), n))
-        .fold(1.0, f64::max);
-    let root = SVGBackend::new(PLOT, (720, 440)).into_drawing_area();
+    let points = || series.iter().flat_map(|(_, line)| line.iter().copied());
+    let highest = points().map(|p| p.1).fold(1e-3, f64::max);
+    let lowest = points().map(|p| p.1).fold(highest, f64::min);
+    let largest_n = points().map(|p| p.0).fold(1.0, f64::max);
+    let smallest_n = points().map(|p| p.0).fold(largest_n, f64::min);
+    let root = SVGBackend::new(path, (720, 440)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "A row of N four-bars: cost of one evaluation per body",
-            (family, 18),
-        )
+        .caption(caption, (family, 18))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
         .build_cartesian_2d(
-            (1f64..100f64).log_scale(),
-            (0.1f64..2.0 * highest).log_scale(),
+            (smallest_n..largest_n).log_scale(),
+            (0.5 * lowest..2.0 * highest).log_scale(),
         )?;
     chart
         .configure_mesh()
-        .x_desc("N (loops)")
+        .x_desc("N")
         .y_desc("µs per body")
         .label_style((family, 13))
         .draw()?;
-    let series = [
-        ("tree (closing joins removed)", BLUE, 1),
-        ("loops: right-hand side", RED, 2),
-        ("loops: projection", GREEN, 3),
-    ];
-    for (label, colour, column) in series {
-        let points = measured.iter().map(|m| {
-            let cost = [m.1, m.2, m.3][column - 1];
-            (m.0 as f64, per_body(cost, m.0))
-        });
+    let colours = [BLUE, RED, GREEN, MAGENTA];
+    for (k, (label, line)) in series.iter().enumerate() {
+        let colour = colours[k % colours.len()];
         chart
-            .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
+            .draw_series(LineSeries::new(
+                line.iter().copied(),
+                colour.stroke_width(2),
+            ))?
             .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour));
     }

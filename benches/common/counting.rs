@@ -17,6 +17,10 @@ struct Counting;
 
 thread_local! {
     static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+    /// Bytes this thread allocated and has not freed (memory freed by another thread counts
+    /// there), and their highest value since `peak_bytes` last reset it.
+    static LIVE: Cell<isize> = const { Cell::new(0) };
+    static PEAK: Cell<isize> = const { Cell::new(0) };
 }
 
 fn count() {
@@ -24,22 +28,33 @@ fn count() {
     let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
 }
 
+/// `bytes` more (or fewer) held by this thread.
+fn hold(bytes: isize) {
+    let _ = LIVE.try_with(|live| {
+        live.set(live.get() + bytes);
+        let _ = PEAK.try_with(|peak| peak.set(peak.get().max(live.get())));
+    });
+}
+
 // SAFETY: every call is forwarded to the system allocator unchanged; the counter is a
 // thread-local cell initialised without allocating.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         count();
+        hold(layout.size() as isize);
         // SAFETY: the caller upholds `GlobalAlloc::alloc`'s contract, passed on as is.
         unsafe { System.alloc(layout) }
     }
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        hold(-(layout.size() as isize));
         // SAFETY: `ptr` was allocated by `System` with `layout` (through `alloc` above).
         unsafe { System.dealloc(ptr, layout) }
     }
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         count();
+        hold(new_size as isize - layout.size() as isize);
         // SAFETY: as for `dealloc`, and `new_size` is the caller's valid request.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
@@ -53,6 +68,15 @@ pub fn allocations(f: impl FnOnce()) -> usize {
     let before = ALLOCATIONS.with(Cell::get);
     f();
     ALLOCATIONS.with(Cell::get) - before
+}
+
+/// The most bytes `f` held at once on this thread, beyond what the thread held before it.
+#[allow(dead_code)] // the allocations benchmark counts calls only
+pub fn peak_bytes(f: impl FnOnce()) -> usize {
+    let before = LIVE.with(Cell::get);
+    PEAK.with(|peak| peak.set(before));
+    f();
+    (PEAK.with(Cell::get) - before).max(0) as usize
 }
 
 /// The example programs (`examples/`, `examples/hard/`), sorted.

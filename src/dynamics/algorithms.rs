@@ -668,10 +668,12 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         let composite = &composite[joint.child];
+        // The joint's branch lists its own and its ancestors' velocities.
+        let branch = model.branch_velocities(k);
         for column in joint.v_offset..joint.v_offset + joint.nv() {
             let force = composite.times(&world_columns[column]);
-            // Column-major storage; the joint's branch lists its own and its ancestors' velocities.
-            for &row in &model.branch_velocities[k] {
+            // Column-major storage.
+            for &row in branch {
                 let value = world_columns[row].dot(&force);
                 entries[row + column * nv] = value;
                 entries[column + row * nv] = value;
@@ -688,7 +690,7 @@ pub fn mass_rows(model: &Model) -> Vec<Vec<usize>> {
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         for column in joint.v_offset..joint.v_offset + joint.nv() {
-            for &row in &model.branch_velocities[k] {
+            for &row in model.branch_velocities(k) {
                 rows[column].push(row);
                 if row != column {
                     rows[row].push(column);

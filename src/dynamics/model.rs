@@ -43,8 +43,10 @@ pub struct Model {
     pub dynamic_bodies: Vec<BodyInertia>,
     pub anchor_offsets: Vec<Transform>,
     /// Per joint, the velocities of the joint and of its ancestors among the dynamic joints:
-    /// the rows of the mass matrix its columns reach.
-    pub branch_velocities: Vec<Vec<usize>>,
+    /// the rows of the mass matrix its columns reach (`branch_velocities`). Made at the first
+    /// use: a chain of n joints has n (n + 1) / 2 of them, and a run by the articulated-body
+    /// algorithm never reads them, so that its memory grows as n.
+    branches: std::sync::OnceLock<Vec<Vec<usize>>>,
     pub nq: usize,
     pub nv: usize,
     pub applied: Vec<AppliedEffort>,
@@ -108,6 +110,14 @@ pub struct Model {
 impl Model {
     pub fn body_count(&self) -> usize {
         self.joints.len()
+    }
+
+    /// The velocities of joint `k` and of its ancestors among the dynamic joints (its own
+    /// first, then up the branch): the rows of the mass matrix its columns reach.
+    pub fn branch_velocities(&self, k: usize) -> &[usize] {
+        &self
+            .branches
+            .get_or_init(|| branch_velocities(&self.joints))[k]
     }
 
     /// The bodies from `body` up to (and excluding) earth; body b is reached by joint b − 1.
@@ -386,9 +396,8 @@ pub fn build_with(
         !loops.is_empty() || !contacts.is_empty(),
     );
     refuse_rotors_on_welds(mechanism, &joints, &merged.dynamic_joints, &rotors)?;
-    let branch_velocities = branch_velocities(&joints);
     let mut model = Model {
-        branch_velocities,
+        branches: std::sync::OnceLock::new(),
         dynamic_joints: merged.dynamic_joints,
         dynamic_bodies: merged.dynamic_bodies,
         anchor_offsets: merged.anchor_offsets,

@@ -37,7 +37,7 @@ use crate::dynamics::planar::algebra::PlanarForce;
 use crate::dynamics::planar::{self, PlanarData, PlanarModel};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
-use scratch::Scratch;
+use scratch::{mass_storage, Scratch};
 
 /// The equations of motion of a run: the model (only read), the run's state (`RunState`, what
 /// every evaluation reads and the events change), and the scratch of the evaluator in use
@@ -220,12 +220,13 @@ impl<'m> MechanicalSystem<'m> {
                 planar_data.set_external(planar, &efforts.external);
                 planar::algorithms::rnea_forward(planar, planar_data, &self.scratch.at_rest);
                 planar::algorithms::rnea_backward(planar, planar_data, bias);
-                let mass = &mut self.scratch.mass;
+                let mass = mass_storage(&mut self.scratch.mass, model.nv);
                 planar::algorithms::crba(model, planar, planar_data, mass);
             }
             _ => {
                 rnea_after_kinematics(model, data, &self.scratch.at_rest, &efforts.external, bias);
-                crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
+                let mass = mass_storage(&mut self.scratch.mass, model.nv);
+                crba_after_kinematics(model, &mut self.scratch.data, mass);
             }
         }
         for (i, a) in accelerations.iter_mut().enumerate() {

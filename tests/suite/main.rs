@@ -41,6 +41,7 @@ mod kinematics_singular_points;
 mod kinematics_workspace;
 mod linearize;
 mod linearize_states;
+mod long_chains;
 mod loop_properties;
 mod loop_shaping;
 mod loops;

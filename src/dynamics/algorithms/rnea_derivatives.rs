@@ -294,7 +294,7 @@ impl RneaDerivatives {
     fn carrier_branch<'m>(&self, model: &'m Model, carrier: usize) -> &'m [usize] {
         match carrier {
             0 => &[],
-            body => &model.branch_velocities[body - 1],
+            body => model.branch_velocities(body - 1),
         }
     }
 
@@ -307,7 +307,7 @@ impl RneaDerivatives {
             let (i, parent) = (joint.child, joint.dynamic_parent);
             let (inertia, coriolis, force) = (self.inertia[i], self.coriolis[i], self.force[i]);
             let own = joint.v_offset..joint.v_offset + joint.nv();
-            let branch = &model.branch_velocities[k];
+            let branch = model.branch_velocities(k);
             for row in own.clone() {
                 let s = self.columns[row];
                 self.tau[row] += s.dot(&force);

@@ -449,6 +449,36 @@ impl Damped<'_> {
         self.factored.transpose_times_into(b, out);
     }
 
+    /// `least_norm_into` of b into `out`, then `allowed_motions_into` of `free` into `basis`
+    /// from its first column, with `rows` as scratch: the first motion's solve is taken beside
+    /// b's (`Envelope::solve_pair`). Each triangular solve is a chain of dependent divisions;
+    /// two taken together fill each other's waits, with the same operations on each, so the
+    /// same results as one after the other.
+    pub fn least_norm_and_allowed_motions_into(
+        &self,
+        b: &mut [f64],
+        out: &mut [f64],
+        free: &[usize],
+        rows: &mut Vec<f64>,
+        basis: &mut DMatrix<f64>,
+    ) {
+        let Some(&first) = free.first() else {
+            return self.least_norm_into(b, out);
+        };
+        self.factored.column_into(first, rows);
+        if rows.iter().all(|&g| g == 0.0) {
+            self.least_norm_into(b, out);
+            return self.allowed_motions_into(free, rows, basis, 0);
+        }
+        self.factor.solve_pair(b, rows);
+        self.factored.transpose_times_into(b, out);
+        let mut column = basis.column_mut(0);
+        self.factored.transpose_times_into(rows, column.as_mut_slice());
+        column.neg_mut();
+        column[first] += 1.0;
+        self.allowed_motions_into(&free[1..], rows, basis, 1);
+    }
+
     /// v − Gₛᵀ(A + μ²E)⁻¹Gₛv into `out`, with `rows` as scratch: v without its part across the
     /// kept rows. Damped, near a singular configuration a velocity off the rows by a small error
     /// is not thrown along the direction they are about to lose (which would kick a
@@ -638,6 +668,37 @@ impl Envelope {
         }
     }
 
+    /// y ← (LLᵀ)⁻¹ y and z ← (LLᵀ)⁻¹ z together (of one length), each by the operations of
+    /// `solve` in the same order: the same results, with the two chains of dependent divisions
+    /// interleaved.
+    fn solve_pair(&self, y: &mut [f64], z: &mut [f64]) {
+        assert_eq!(y.len(), z.len(), "two right-hand sides of one length");
+        let count = y.len();
+        let rows = || self.starts.windows(2).take(count).enumerate();
+        for (k, bound) in rows() {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
+            let (y_done, y_rest) = y.split_at_mut(k);
+            let (z_done, z_rest) = z.split_at_mut(k);
+            let y_dot = in_order_dot(left, &y_done[k - left.len()..]);
+            let z_dot = in_order_dot(left, &z_done[k - left.len()..]);
+            y_rest[0] = (y_rest[0] - y_dot) / diagonal;
+            z_rest[0] = (z_rest[0] - z_dot) / diagonal;
+        }
+        for (k, bound) in rows().rev() {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
+            let (y_done, y_rest) = y.split_at_mut(k);
+            let (z_done, z_rest) = z.split_at_mut(k);
+            y_rest[0] /= diagonal;
+            z_rest[0] /= diagonal;
+            let (y_value, z_value) = (y_rest[0], z_rest[0]);
+            let targets = y_done[k - left.len()..].iter_mut();
+            for ((y_target, z_target), entry) in targets.zip(&mut z_done[k - left.len()..]).zip(left) {
+                *y_target -= entry * y_value;
+                *z_target -= entry * z_value;
+            }
+        }
+    }
+
     /// `other`'s entries in this envelope's storage (a derived `clone_from` would allocate anew).
     fn copy_from(&mut self, other: &Envelope) {
         self.first.clone_from(&other.first);
@@ -649,32 +710,60 @@ impl Envelope {
         self.starts[1..].iter().map(|&end| self.values[end - 1])
     }
 
-    /// The Cholesky factor in place, or the first row whose pivot is not positive.
+    /// The Cholesky factor in place, or the first row whose pivot is not positive. Rows are
+    /// taken two at a time (`cholesky_pair`), the last one alone if their number is odd.
     fn cholesky(&mut self) -> Result<(), usize> {
-        for k in 0..self.len() {
-            let (fk, start) = (self.first[k], self.starts[k]);
-            let (above, below) = self.values.split_at_mut(start);
-            let row = &mut below[..k - fk + 1];
-            // Rows fk..k of the factor, each with its envelope's bounds: zipped, so that the
-            // loop over them slices without looking the bounds up one by one.
-            let bounds = self.starts[fk..=k].windows(2);
-            for (done, bound) in (0..).zip(bounds) {
-                let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
-                // Row k's entries left of column j = fk + done, and row j's: their common
-                // columns are the last `common` of each.
-                let (row_left, rest) = row.split_at_mut(done);
-                let common = done.min(left.len());
-                let dot = in_order_dot(&row_left[done - common..], &left[left.len() - common..]);
-                rest[0] = (rest[0] - dot) / pivot;
-            }
-            let (diagonal, left) = row.split_last_mut().expect("a diagonal");
-            let square = *diagonal - left.iter().map(|x| x * x).sum::<f64>();
-            if !(square > 0.0 && square.is_finite()) {
-                return Err(k);
-            }
-            *diagonal = square.sqrt();
+        let mut k = 0;
+        while k + 1 < self.len() {
+            self.cholesky_pair(k)?;
+            k += 2;
         }
-        Ok(())
+        match k < self.len() {
+            true => self.cholesky_row(k),
+            false => Ok(()),
+        }
+    }
+
+    /// Rows k and k + 1 of the Cholesky factor, rows before them done. Each entry of a row is a
+    /// division waiting on the row's entries before it; row k + 1's entries left of column k do
+    /// not wait on row k, so the two rows' entries are taken column by column together, each
+    /// by the operations of `cholesky_row` in the same order (the same results). Then row k's
+    /// diagonal, row k + 1's entry in column k, and its diagonal.
+    fn cholesky_pair(&mut self, k: usize) -> Result<(), usize> {
+        let (fk, fl) = (self.first[k], self.first[k + 1]);
+        let (above, below) = self.values.split_at_mut(self.starts[k]);
+        let (row_k, rest) = below.split_at_mut(k - fk + 1);
+        let row_l = &mut rest[..k + 2 - fl];
+        for (j, bound) in self.starts.windows(2).enumerate().take(k).skip(fk.min(fl)) {
+            let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
+            if j >= fk {
+                eliminate(row_k, j - fk, left, pivot);
+            }
+            if j >= fl {
+                eliminate(row_l, j - fl, left, pivot);
+            }
+        }
+        finish_diagonal(row_k).map_err(|()| k)?;
+        if fl <= k {
+            let (left, pivot) = split_diagonal(row_k);
+            eliminate(row_l, k - fl, left, pivot);
+        }
+        finish_diagonal(row_l).map_err(|()| k + 1)
+    }
+
+    /// Row k of the Cholesky factor, rows before it done.
+    fn cholesky_row(&mut self, k: usize) -> Result<(), usize> {
+        let (fk, start) = (self.first[k], self.starts[k]);
+        let (above, below) = self.values.split_at_mut(start);
+        let row = &mut below[..k - fk + 1];
+        // Rows fk..k of the factor, each with its envelope's bounds: zipped, so that the loop
+        // over them slices without looking the bounds up one by one.
+        let bounds = self.starts[fk..=k].windows(2);
+        for (done, bound) in (0..).zip(bounds) {
+            let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
+            eliminate(row, done, left, pivot);
+        }
+        finish_diagonal(row).map_err(|()| k)
     }
 
     /// y ← (LLᵀ)⁻¹ y for the factor L held.
@@ -749,6 +838,28 @@ impl NormalPlan {
             start = end;
         }
     }
+}
+
+/// Entry `done` of an envelope row of the Cholesky factor, its entries before it done, from
+/// the factor's row of that column (`left` of its diagonal `pivot`): their common columns are
+/// the last of each.
+fn eliminate(row: &mut [f64], done: usize, left: &[f64], pivot: f64) {
+    let (row_left, rest) = row.split_at_mut(done);
+    let common = done.min(left.len());
+    let dot = in_order_dot(&row_left[done - common..], &left[left.len() - common..]);
+    rest[0] = (rest[0] - dot) / pivot;
+}
+
+/// The diagonal of an envelope row of the Cholesky factor, its entries left of it done; an
+/// error where the pivot is not positive.
+fn finish_diagonal(row: &mut [f64]) -> Result<(), ()> {
+    let (diagonal, left) = row.split_last_mut().expect("a diagonal");
+    let square = *diagonal - left.iter().map(|x| x * x).sum::<f64>();
+    if !(square > 0.0 && square.is_finite()) {
+        return Err(());
+    }
+    *diagonal = square.sqrt();
+    Ok(())
 }
 
 /// An envelope row's entries left of its diagonal, and the diagonal.

@@ -48,12 +48,18 @@ pub struct Reduced<'a> {
 
 impl ReducedInertia {
     pub fn new(model: &Model) -> ReducedInertia {
-        let mass_rows = mass_rows(model);
+        // A tree never forms reduced equations: its scratch holds no mass matrix, whose n²
+        // entries (and the rows of its branches) would be most of a long chain's memory.
+        let nv = if model.has_loops() { model.nv } else { 0 };
+        let mass_rows = match model.has_loops() {
+            true => mass_rows(model),
+            false => Vec::new(),
+        };
         ReducedInertia {
             passes_up_to: passes_up_to(model, &mass_rows),
             motions: Vec::new(),
             momenta: Vec::new(),
-            mass: DMatrix::zeros(model.nv, model.nv),
+            mass: DMatrix::zeros(nv, nv),
             mass_rows,
             mass_null: DMatrix::zeros(model.nv, 0),
             inverse: DVector::zeros(model.nv),

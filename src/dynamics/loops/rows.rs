@@ -69,18 +69,17 @@ impl Constraints {
                     joint.coordinate_count()
                 };
                 let first = model.nv + model.loop_offset(k);
-                LoopBlock::zeros(loop_columns(
-                    model,
-                    [joint.first_body, joint.second_body],
-                    first..first + own,
-                ))
+                let cycle = cycle_signs(model, [joint.first_body, joint.second_body]);
+                let tree = cycle.iter().map(|&(column, _)| column);
+                LoopBlock::zeros(tree.chain(first..first + own).collect())
             })
             .collect::<Vec<LoopBlock>>();
-        let path_signs = model
-            .loops
-            .iter()
-            .zip(&blocks)
-            .map(|(joint, block)| path_signs(model, [joint.first_body, joint.second_body], block))
+        let path_signs = (model.loops.iter())
+            .map(|joint| {
+                let cycle = cycle_signs(model, [joint.first_body, joint.second_body]);
+                let signs = cycle.into_iter().enumerate();
+                signs.map(|(local, (column, sign))| (local, column, sign)).collect()
+            })
             .collect();
         Constraints {
             path_signs,
@@ -97,37 +96,45 @@ impl Constraints {
     }
 }
 
-/// A loop's tree columns with their signs (see `Constraints::path_signs`).
-fn path_signs(
-    model: &Model,
-    [first, second]: [usize; 2],
-    block: &LoopBlock,
-) -> Vec<(usize, usize, f64)> {
-    let mut signs = vec![0.0; block.columns.len()];
+/// A loop's tree columns with the sign they enter its rows with (see
+/// `Constraints::path_signs`), in increasing order: the velocities on the loop's cycle, from
+/// each of its two bodies up to their last common ancestor. A velocity above it moves both
+/// frames alike and is left out, so that the loop's rows, and the products between loops that
+/// fill their normal matrix, cost what the cycle costs however deep in the tree it closes (a
+/// ladder of N loops hanging from a chain: N short cycles, not N paths to earth of up to N
+/// joints each).
+fn cycle_signs(model: &Model, [first, second]: [usize; 2]) -> Vec<(usize, f64)> {
+    let mut signs: Vec<(usize, f64)> = Vec::new();
     for (body, sign) in [(second, 1.0), (first, -1.0)] {
         for on_path in model.path_to_earth(body) {
             let joint = &model.joints[on_path - 1];
-            for column in joint.v_offset..joint.v_offset + joint.nv() {
-                signs[block.local(column)] += sign;
-            }
+            signs.extend((joint.v_offset..joint.v_offset + joint.nv()).map(|c| (c, sign)));
         }
     }
-    block
-        .columns
-        .iter()
-        .zip(signs)
-        .enumerate()
-        .filter(|&(_, (_, sign))| sign != 0.0)
-        .map(|(local, (&column, sign))| (local, column, sign))
-        .collect()
+    signs.sort_unstable_by_key(|&(column, _)| column);
+    let mut merged: Vec<(usize, f64)> = Vec::with_capacity(signs.len());
+    for (column, sign) in signs {
+        match merged.last_mut() {
+            Some(last) if last.0 == column => last.1 += sign,
+            _ => merged.push((column, sign)),
+        }
+    }
+    merged.retain(|&(_, sign)| sign != 0.0);
+    merged
 }
 
-/// The tree joints between the loops' bodies and earth, in increasing order.
+/// The tree joints on the loops' cycles (`cycle_signs`), in increasing order.
 fn path_joints(model: &Model) -> Vec<usize> {
     let mut joints = Vec::new();
     for joint in &model.loops {
+        let cycle = cycle_signs(model, [joint.first_body, joint.second_body]);
+        let columns: Vec<usize> = cycle.into_iter().map(|(column, _)| column).collect();
         for body in [joint.first_body, joint.second_body] {
-            joints.extend(model.path_to_earth(body).map(|b| b - 1));
+            let on_cycle = |j: &usize| {
+                let v = model.joints[*j].v_offset;
+                columns.binary_search(&v).is_ok()
+            };
+            joints.extend(model.path_to_earth(body).map(|b| b - 1).filter(on_cycle));
         }
     }
     joints.sort_unstable();
@@ -433,21 +440,6 @@ fn seat_balls(
     Ok(())
 }
 
-/// The state velocities a loop's rows depend on: those of the joints on the paths from its two
-/// bodies to the root, then its own coordinates, in increasing order.
-fn loop_columns(model: &Model, bodies: [usize; 2], own: std::ops::Range<usize>) -> Vec<usize> {
-    let mut columns = Vec::new();
-    for body in bodies {
-        for on_path in model.path_to_earth(body) {
-            let joint = &model.joints[on_path - 1];
-            columns.extend(joint.v_offset..joint.v_offset + joint.nv());
-        }
-    }
-    columns.sort_unstable();
-    columns.dedup();
-    columns.extend(own);
-    columns
-}
 
 /// The constraint wrenches as forces on the bodies (in their frames, about their origins):
 /// +λ on each loop's second body, −λ on its first.

@@ -45,6 +45,8 @@ pub struct LoopScratch {
     factor: Envelope,
     /// Vectors over the kept rows, over all the rows, over the state's velocities.
     kept: Vec<f64>,
+    /// A free coordinate's column of the kept rows, solved beside the particular acceleration's.
+    motion_rows: Vec<f64>,
     gamma: DVector<f64>,
     particular: DVector<f64>,
     /// The allowed motions N, NᵀMN (and its factor), and Nᵀ(f − Ma₀), then z.
@@ -85,6 +87,7 @@ impl LoopScratch {
             constraints,
             factor: Envelope::default(),
             kept: Vec::new(),
+            motion_rows: Vec::new(),
             gamma: DVector::zeros(rows),
             particular: DVector::zeros(columns),
             null: DMatrix::zeros(columns, 0),
@@ -191,6 +194,7 @@ pub fn allowed_motions(
         kept,
         gamma,
         particular,
+        motion_rows,
         null,
         massive,
         quality_due,
@@ -210,7 +214,6 @@ pub fn allowed_motions(
         .map_err(singular)?;
     factored.kept_into(gamma.as_slice(), kept);
     kept.iter_mut().for_each(|x| *x = -*x);
-    damped.least_norm_into(kept, particular.as_mut_slice());
     // The motions solved on: every free coordinate's, or only the massive ones kept when the
     // others carry no mass (their choice made); those left out are then checked after the
     // solve, once per step (`check_due`).
@@ -221,7 +224,8 @@ pub fn allowed_motions(
         &massive.coordinates
     };
     let m = motions.len();
-    damped.allowed_motions_into(motions, kept, null, 0);
+    let particular = particular.as_mut_slice();
+    damped.least_norm_and_allowed_motions_into(kept, particular, motions, motion_rows, null);
     if checking {
         damped.allowed_motions_into(&massive.dropped_coordinates, kept, null, m);
     }

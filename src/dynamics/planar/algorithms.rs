@@ -172,7 +172,7 @@ pub fn crba(model: &Model, planar: &PlanarModel, data: &mut PlanarData, mass: &m
     for joint in planar.joints.iter().filter(|j| j.nv() == 1) {
         let column = joint.v_offset;
         let force = data.composite[joint.child].times(&data.world_columns[column]);
-        for &row in &model.branch_velocities[joint.index] {
+        for &row in model.branch_velocities(joint.index) {
             let value = data.world_columns[row].dot(&force);
             entries[row + column * nv] = value;
             entries[column + row * nv] = value;

@@ -194,11 +194,7 @@ impl<'a> Importer<'a> {
         } else {
             "an LSD name is letters, digits and `_`, and does not start with a digit".to_string()
         };
-        let element = self
-            .source
-            .named(tag, name)
-            .next()
-            .unwrap_or_else(|| self.source.root());
+        let element = self.source.element(tag, name);
         Diagnostic::warning("W1001", format!("{tag} `{name}` is called `{lsd}` in LSD"))
             .primary(self.source.attribute_span(element, "name"), "renamed")
             .note(reason)

@@ -23,6 +23,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::scratch::mass_storage;
 use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{
     crba_after_kinematics, forward_kinematics, rnea_after_kinematics,
@@ -71,7 +72,8 @@ impl MechanicalSystem<'_> {
         let nv = model.nv;
         let accelerations = &dydt[nv..];
         let at_state = self.residual(t, y, accelerations)?;
-        crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
+        let mass = mass_storage(&mut self.scratch.mass, nv);
+        crba_after_kinematics(model, &mut self.scratch.data, mass);
         let mut differences = DMatrix::zeros(nv, 2 * nv);
         let mut perturbed = y.to_vec();
         for j in 0..2 * nv {

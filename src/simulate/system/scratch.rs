@@ -55,10 +55,12 @@ pub struct Scratch {
     pub(in crate::simulate) contact_state: ContactRows,
     /// The position drives' rows at the last evaluation or projection.
     pub(in crate::simulate) point_state: PointRows,
-    /// Zero velocities or accelerations (tree length), the tree's mass matrix, the basis of
-    /// the velocities a tree's mimic couplings allow (`mimics::basis`), and the response X of
-    /// the accelerations to generalised forces (`response`), with whether it was formed at the
-    /// state of the current evaluation.
+    /// Zero velocities or accelerations (tree length), the tree's mass matrix (sized at its
+    /// first use, `mass_storage`: a run by the articulated-body algorithm never forms it, and
+    /// its n² entries would be most of a long chain's memory), the basis of the velocities a
+    /// tree's mimic couplings allow (`mimics::basis`, empty without them), and the response X
+    /// of the accelerations to generalised forces (`response`), with whether it was formed at
+    /// the state of the current evaluation.
     pub(in crate::simulate) at_rest: Vec<f64>,
     pub(in crate::simulate) mass: DMatrix<f64>,
     pub(in crate::simulate) coupled: DMatrix<f64>,
@@ -123,8 +125,12 @@ impl Scratch {
             contact_state: ContactRows::new(model),
             point_state: PointRows::new(model),
             at_rest: vec![0.0; model.nv],
-            mass: DMatrix::zeros(model.nv, model.nv),
-            coupled: mimics::basis(&model.mimics, model.nv),
+            mass: DMatrix::zeros(0, 0),
+            // Read only with couplings: an identity of n² entries otherwise.
+            coupled: match model.mimics.is_empty() {
+                true => DMatrix::zeros(0, 0),
+                false => mimics::basis(&model.mimics, model.nv),
+            },
             response: Response::default(),
             response_here: false,
             rows: RowStack::new(model),
@@ -145,4 +151,12 @@ impl Scratch {
             planar: None,
         }
     }
+}
+
+/// `mass` sized n × n (zero when it was not), the storage of a mass matrix made at its first use.
+pub(in crate::simulate) fn mass_storage(mass: &mut DMatrix<f64>, n: usize) -> &mut DMatrix<f64> {
+    if mass.nrows() != n {
+        *mass = DMatrix::zeros(n, n);
+    }
+    mass
 }

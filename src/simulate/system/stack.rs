@@ -22,6 +22,7 @@
 
 use nalgebra::DVector;
 
+use super::scratch::mass_storage;
 use super::{MechanicalSystem, SystemError};
 use crate::dynamics::algorithms::{
     crba_after_kinematics, crba_into, forward_kinematics, rnea_after_kinematics, rnea_forward,
@@ -70,7 +71,8 @@ impl MechanicalSystem<'_> {
             forward_kinematics(model, &mut self.scratch.data, q, v)?;
         } else {
             forward_kinematics(model, &mut self.scratch.data, q, v)?;
-            crba_after_kinematics(model, &mut self.scratch.data, &mut self.scratch.mass);
+            let mass = mass_storage(&mut self.scratch.mass, model.nv);
+            crba_after_kinematics(model, &mut self.scratch.data, mass);
             self.form_tree_response()?;
         }
         Ok(())
@@ -87,7 +89,7 @@ impl MechanicalSystem<'_> {
             model,
             &mut self.scratch.data,
             &q[..model.nq],
-            &mut self.scratch.mass,
+            mass_storage(&mut self.scratch.mass, model.nv),
         )?;
         if !model.has_loops() {
             return self.form_tree_response();
