@@ -4,7 +4,8 @@
 use nalgebra::DMatrix;
 
 use super::eval::EvalError;
-use super::model::KinematicModel;
+use super::model::{JointModel, KinematicModel};
+use crate::topology::TreeLink;
 use crate::spatial::{self, Pose, Twist};
 
 pub struct Configuration {
@@ -31,15 +32,8 @@ pub fn forward(model: &KinematicModel, q: &[f64]) -> Result<Configuration, EvalE
         let joint = &model.joints[link.child - 1];
         let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
         let (chain, subspace) = joint.chain(coordinates)?;
-        let parent_pose = poses[link.parent];
         let mut jacobian = jacobians[link.parent].clone();
-        let (base, child_pose) = if link.first_on_parent {
-            let base = parent_pose * joint.first;
-            (base, base * chain * joint.second.inverse())
-        } else {
-            let base = parent_pose * joint.second;
-            (base, base * chain.inverse() * joint.first.inverse())
-        };
+        let (base, child_pose) = placed(link, joint, poses[link.parent], &chain);
         let inverse_chain = chain.inverse();
         for k in 0..joint.coordinate_count() {
             let column = Twist::from_column_slice(subspace.column(k).as_slice());
@@ -59,4 +53,29 @@ pub fn forward(model: &KinematicModel, q: &[f64]) -> Result<Configuration, EvalE
         jacobians[link.child] = jacobian;
     }
     Ok(Configuration { poses, jacobians })
+}
+
+/// The pose of every body alone (index 0 is earth), without the Jacobians, whose 6 × n entries
+/// per body a long chain cannot afford where only the poses are read.
+pub fn poses(model: &KinematicModel, q: &[f64]) -> Result<Vec<Pose>, EvalError> {
+    let mut poses = vec![Pose::identity(); model.topology.body_count() + 1];
+    for link in &model.topology.principal {
+        let joint = &model.joints[link.child - 1];
+        let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
+        let (chain, _) = joint.chain(coordinates)?;
+        poses[link.child] = placed(link, joint, poses[link.parent], &chain).1;
+    }
+    Ok(poses)
+}
+
+/// The frame the joint's motion is expressed in (its frame on the parent) and the child's pose,
+/// for the joint's displacement `chain`, from the parent's pose.
+fn placed(link: &TreeLink, joint: &JointModel, parent_pose: Pose, chain: &Pose) -> (Pose, Pose) {
+    if link.first_on_parent {
+        let base = parent_pose * joint.first;
+        (base, base * chain * joint.second.inverse())
+    } else {
+        let base = parent_pose * joint.second;
+        (base, base * chain.inverse() * joint.first.inverse())
+    }
 }

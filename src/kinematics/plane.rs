@@ -10,7 +10,7 @@
 
 use nalgebra::Vector3;
 
-use super::forward::forward;
+use super::forward::poses;
 use super::model::{JointModel, KinematicModel, SingleMotion};
 
 /// How far from parallel (or perpendicular) two unit directions may be and still count as
@@ -37,9 +37,8 @@ pub fn motion_plane(model: &KinematicModel) -> Result<Vector3<f64>, String> {
         .map(|joint| single(joint).map(|motion| (joint, motion)))
         .collect::<Result<_, _>>()?;
     let zeros = vec![0.0; model.coordinate_count];
-    let poses = forward(model, &zeros)
-        .map_err(|_| "its joints cannot be evaluated at zero".to_string())?
-        .poses;
+    let poses = poses(model, &zeros)
+        .map_err(|_| "its joints cannot be evaluated at zero".to_string())?;
     let fixed: Vec<(&JointModel, FixedMotion)> = (motions.into_iter())
         .filter_map(|(joint, motion)| {
             let rotation = (poses[joint.first_body] * joint.first).rotation;
