@@ -14,7 +14,7 @@
 use nalgebra::Vector3;
 
 use super::eval::EvalError;
-use super::forward::forward;
+use super::forward::poses;
 use super::mobility::{
     constraint_rank, generic_rank, nearby_rank, spread_configurations, spread_start, tree_dof,
 };
@@ -153,10 +153,10 @@ pub(super) fn join_points(
     model: &KinematicModel,
     q: &[f64],
 ) -> Result<Vec<Vector3<f64>>, EvalError> {
-    let configuration = forward(model, q)?;
+    let poses = poses(model, q)?;
     Ok((model.joints.iter())
         .map(|joint| {
-            (configuration.poses[joint.first_body] * joint.first)
+            (poses[joint.first_body] * joint.first)
                 .translation
                 .vector
         })

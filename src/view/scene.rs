@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::eval::EvalError;
-use crate::kinematics::forward::forward;
+use crate::kinematics::forward::poses;
 use crate::kinematics::frames::{self, quaternion, FramePoint};
 use crate::kinematics::model::{KinematicModel, SingleMotion};
 use crate::prepare::Prepared;
@@ -89,8 +89,7 @@ fn array(v: &Vector3<f64>) -> [f64; 3] {
 
 /// The poses of the bodies (1…n) at coordinates `q`.
 pub fn body_poses(model: &KinematicModel, q: &[f64]) -> Result<Vec<[f64; 7]>, EvalError> {
-    let configuration = forward(model, q)?;
-    Ok(configuration.poses[1..].iter().map(pose_array).collect())
+    Ok(poses(model, q)?[1..].iter().map(pose_array).collect())
 }
 
 /// The named frames of the program, resolved (those that are not constant on their body are
