@@ -13,6 +13,13 @@
 //!
 //! Where a slipping joint's rate reaches zero it sticks if the force that holds it there is
 //! within F_c, and slips back the other way otherwise.
+//!
+//! A **driven** joint (`drive slide.q = law`) has no phases: its motion is imposed, so its
+//! friction is −F_c sign q̇ − c q̇ at the rate the law gives, and the drive's effort, the
+//! multiplier of its row, supplies it. A generalised force along a driven coordinate changes
+//! only that multiplier, never the motion, so no event is needed where the rate changes sign.
+//! Where the law holds the joint at rest (q̇ = 0) the static friction is indeterminate (drive
+//! and friction share one load): lsdc takes it as zero, the drive's effort carrying the load.
 
 use serde::Serialize;
 
@@ -35,6 +42,8 @@ pub struct Friction {
     /// F_c ≥ 0 (N or N m) and c ≥ 0 (N s/m or N m s/rad).
     pub dry: f64,
     pub viscous: f64,
+    /// Whether a drive imposes the coordinate's motion (no phases: see the module's notes).
+    pub driven: bool,
 }
 
 /// A change of phase of a joint with friction, as the run report gives it.
@@ -72,6 +81,13 @@ impl Friction {
     /// The friction's effort on the joint while slipping in `direction` at rate `rate`.
     pub fn slipping_effort(&self, direction: f64, rate: f64) -> f64 {
         -direction * self.dry - self.viscous * rate
+    }
+
+    /// The friction's effort on a driven joint at the rate `rate` its law imposes: opposing the
+    /// rate, none at rest (the drive's effort then carries the load alone).
+    pub fn driven_effort(&self, rate: f64) -> f64 {
+        let direction = if rate == 0.0 { 0.0 } else { rate.signum() };
+        self.slipping_effort(direction, rate)
     }
 
     /// The phase at a rate `rate` where the force holding the joint at rest would be `hold`:
@@ -154,6 +170,7 @@ fn joint_friction(
             velocity: joint.v_offset,
             dry,
             viscous,
+            driven: false,
         }),
         _ => Err((
             format!("the friction of `{name}` is not a number ≥ 0"),

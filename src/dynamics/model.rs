@@ -351,8 +351,11 @@ pub fn build_with(
     let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let mimics = mimics::build(mechanism, &joints, &loops, unknowns, &mut errors);
-    let frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
+    let mut frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let drives = drives::build(mechanism, kinematics, &joints, &mut errors);
+    for friction in &mut frictions {
+        friction.driven = drives.iter().any(|d| d.velocity == friction.velocity);
+    }
     let position_drives = match position_drives::resolve(mechanism, kinematics) {
         Ok(resolved) => resolved,
         Err(refused) => {

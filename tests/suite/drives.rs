@@ -166,6 +166,100 @@ drive swing.q = 0.7 * sin(3 * time);
     }
 }
 
+/// The same pendulum with dry and viscous friction in its driven pivot: the drive's torque
+/// gains F_c sign q̇ + c q̇ on either side of every reversal of the law's rate (t = π/6, π/2, …),
+/// the friction never holds the joint (it sticks nowhere, no switch is reported), and the
+/// energy balance counts its work.
+#[test]
+fn a_driven_joint_with_friction_needs_its_friction_on_both_sides_of_each_reversal() {
+    let text = "import joints;
+let rod = body mass = 1.2, iframe = [0, 0, -0.5] ++ 1, inertia = [0.1, 0.1, 0.001] end;
+join earth and rod with friction_revolute([1, 0, 0], 2.5, 0.4) as swing;
+apply force value = [0, 0, -9.81 * rod.mass], body = earth end on rod.iframe;
+drive swing.q = 0.7 * sin(3 * time);
+";
+    for integrator in [Integrator::Rk4, Integrator::DormandPrince] {
+        let name = format!("{integrator:?}");
+        let simulation = run_text(
+            text,
+            Settings {
+                duration: 2.0,
+                ..settings(integrator)
+            },
+        );
+        assert!(simulation.report.failure.is_none());
+        assert!(simulation.report.friction_switches.is_empty());
+        let effort = output(&simulation, "swing.drive_effort");
+        let mut reversed = (false, false);
+        for sample in &simulation.samples {
+            let t = sample.time;
+            let q = 0.7 * (3.0 * t).sin();
+            let (rate, acceleration) = (2.1 * (3.0 * t).cos(), -6.3 * (3.0 * t).sin());
+            let friction = 2.5 * rate.signum() + 0.4 * rate;
+            let expected =
+                (1.2 * 0.25 + 0.1) * acceleration + 1.2 * 9.81 * 0.5 * q.sin() + friction;
+            let error = (sample.outputs[effort] - expected).abs();
+            assert!(error < 1e-11 * (1.0 + expected.abs()), "t = {t}: {error:e}");
+            match rate > 0.0 {
+                true => reversed.0 = true,
+                false => reversed.1 = true,
+            }
+        }
+        assert_eq!(
+            reversed,
+            (true, true),
+            "the run crosses reversals both ways"
+        );
+        let balance = simulation.report.energy_balance.expect("an energy balance");
+        assert!(balance.abs() < 1e-8, "{name}: energy balance {balance:e}");
+    }
+}
+
+/// Friction in a driven joint changes the drive's effort, never the motion: the free link of a
+/// double pendulum whose first joint is driven moves the same with and without it.
+#[test]
+fn friction_in_a_driven_joint_leaves_the_free_joints_motion_unchanged() {
+    let program = |pivot: &str| {
+        format!(
+            "import joints;
+let upper = body mass = 1.0, iframe = [0, 0, -0.5] ++ 1, inertia = [0.08, 0.08, 0.001] end;
+let lower = body mass = 1.0, iframe = [0, 0, -0.5] ++ 1, inertia = [0.08, 0.08, 0.001] end;
+join earth and upper with {pivot} as shoulder;
+join [0, 0, -1] ++ 1 @ upper and lower with revolute([1, 0, 0]) as elbow;
+apply force value = [0, 0, -9.81], body = earth end on upper.iframe;
+apply force value = [0, 0, -9.81], body = earth end on lower.iframe;
+drive shoulder.q = 0.9 * sin(2 * time);
+initial elbow.q = 0.3;
+"
+        )
+    };
+    let plain = run_text(
+        &program("revolute([1, 0, 0])"),
+        settings(Integrator::DormandPrince),
+    );
+    let rubbing = run_text(
+        &program("friction_revolute([1, 0, 0], 3, 0.5)"),
+        settings(Integrator::DormandPrince),
+    );
+    let elbow = column(&plain, "elbow.q");
+    assert_eq!(elbow, column(&rubbing, "elbow.q"));
+    assert_eq!(plain.samples.len(), rubbing.samples.len());
+    let effort = output(&plain, "shoulder.drive_effort");
+    let mut largest_change = 0.0_f64;
+    for (a, b) in plain.samples.iter().zip(&rubbing.samples) {
+        let moved = (a.coordinates[elbow] - b.coordinates[elbow]).abs();
+        assert!(
+            moved < 1e-10,
+            "t = {}: the elbow moved by {moved:e}",
+            a.time
+        );
+        let change = (b.outputs[effort] - a.outputs[effort]).abs();
+        largest_change = largest_change.max(change);
+    }
+    // The shoulder's friction (3 N m dry, up to 0.5 x 1.8 N m viscous) is in its drive's effort.
+    assert!(largest_change > 3.0, "{largest_change}");
+}
+
 #[test]
 fn drives_that_cannot_be_imposed_are_refused() {
     let pendulum = "import joints;

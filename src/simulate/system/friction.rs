@@ -8,17 +8,19 @@ use super::{MechanicalSystem, SystemError};
 use crate::dynamics::friction::{Phase, Switch};
 
 impl MechanicalSystem<'_> {
-    /// Adds the slipping joints' friction efforts at rates `v` to the generalised forces
-    /// `free`; their power.
+    /// Adds the slipping and the driven joints' friction efforts at rates `v` to the
+    /// generalised forces `free`; their power.
     pub(super) fn add_friction(&self, v: &[f64], free: &mut DVector<f64>) -> f64 {
         let mut power = 0.0;
         for (friction, phase) in self.model.frictions.iter().zip(&self.state.phases) {
-            if let Phase::Slipping(direction) = *phase {
-                let rate = v[friction.velocity];
-                let effort = friction.slipping_effort(direction, rate);
-                free[friction.velocity] += effort;
-                power += effort * rate;
-            }
+            let rate = v[friction.velocity];
+            let effort = match *phase {
+                _ if friction.driven => friction.driven_effort(rate),
+                Phase::Slipping(direction) => friction.slipping_effort(direction, rate),
+                Phase::Sticking => continue,
+            };
+            free[friction.velocity] += effort;
+            power += effort * rate;
         }
         power
     }
@@ -30,7 +32,7 @@ impl MechanicalSystem<'_> {
 
     /// Every event function at (t, y): the stops' (`stop_events`), then per joint with
     /// friction, s q̇ while it slips in direction s (its rate reaching zero), F_c − |λ| while it
-    /// sticks held by λ (the holding force reaching F_c).
+    /// sticks held by λ (the holding force reaching F_c); a driven joint's never changes sign.
     pub fn event_values(
         &mut self,
         t: f64,
@@ -47,8 +49,8 @@ impl MechanicalSystem<'_> {
         for (k, value) in frictions.iter_mut().enumerate() {
             let friction = &self.model.frictions[k];
             *value = match self.state.phases[k] {
-                // Without dry friction the phase never changes.
-                _ if friction.dry == 0.0 => 1.0,
+                // Without dry friction, or under a drive, the phase never changes.
+                _ if friction.dry == 0.0 || friction.driven => 1.0,
                 Phase::Slipping(direction) => direction * v[friction.velocity],
                 Phase::Sticking => friction.dry - self.scratch.holding[k].abs(),
             };
@@ -66,12 +68,15 @@ impl MechanicalSystem<'_> {
     }
 
     /// The phase of every joint with friction at the start (t, y): slipping with the sign of a
-    /// non-zero rate, and from rest sticking or slipping as the holding force says.
+    /// non-zero rate, and from rest sticking or slipping as the holding force says. A driven
+    /// joint is never held as sticking (its friction follows its rate, `add_friction`).
     pub fn start_friction(&mut self, t: f64, y: &mut [f64]) -> Result<(), SystemError> {
         let positions = self.model.positions();
         for k in 0..self.model.frictions.len() {
-            let rate = y[positions + self.model.frictions[k].velocity];
+            let friction = &self.model.frictions[k];
+            let rate = y[positions + friction.velocity];
             self.state.phases[k] = match rate {
+                _ if friction.driven => Phase::Slipping(1.0),
                 0.0 => self.phase_from_rest(t, y, k)?,
                 rate => Phase::Slipping(rate.signum()),
             };
