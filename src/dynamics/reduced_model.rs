@@ -13,9 +13,12 @@
 //! seed's Z and M, N in its actuated coordinates (notes on the Delta seed, §4.4); the gravity
 //! efforts Gₐ = Xᵀ h₀ are the bias at rest (v = 0), what `lsdc statics` holds. For a tree
 //! whose every coordinate is actuated, X selects them and c = 0: the mass matrix from CRBA and
-//! the bias from RNEA. X and c come from one singular value decomposition of [G; E]; motions
-//! it leaves free must move no mass (a Delta's rods spinning about their axes): otherwise the
-//! actuated coordinates do not determine the motion, and the model has no value.
+//! the bias from RNEA. X and c are the minimum-norm solutions: at the first state from a
+//! singular value decomposition of [G; E], which also finds the motions it leaves free, and
+//! these must move no mass (a Delta's rods spinning about their axes): otherwise the actuated
+//! coordinates do not determine the motion, and the model has no value. At the later states
+//! from a QR factorisation of [G; E]ᵀ with column pivoting (its independent rows), several
+//! times cheaper, the decomposition taken again where that solve does not hold.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -25,6 +28,7 @@ use super::efforts::{evaluate_into, Declared, Efforts};
 use super::loops::{constraints_into, Constraints, Extent};
 use super::model::Model;
 use crate::kinematics::eval::EvalError;
+use crate::linalg::MinimumNormRows;
 
 /// Why the model has no value in the actuated coordinates at a state.
 #[derive(Clone, Debug, PartialEq)]
@@ -191,8 +195,45 @@ fn generalised(model: &Model, tree: &DVector<f64>, efforts: &Efforts, full: &mut
 }
 
 /// The minimum-norm solution of `stacked` x = `sides`, refused when it does not solve it or
-/// leaves free a motion with mass: the null space of `stacked` must move no mass.
+/// (`check_free`) leaves free a motion with mass: the null space of `stacked` must move no
+/// mass. Once the free motions are checked, the rows' QR factorisation solves; where it
+/// does not hold (a configuration where the rows lose rank) the decomposition decides.
 fn solve_stacked(
+    stacked: DMatrix<f64>,
+    sides: &DMatrix<f64>,
+    mass: &DMatrix<f64>,
+    check_free: bool,
+) -> Result<DMatrix<f64>, ReducedError> {
+    if !check_free {
+        if let Some(solution) = solve_on_independent_rows(&stacked, sides) {
+            return Ok(solution);
+        }
+    }
+    solve_by_decomposition(stacked, sides, mass, check_free)
+}
+
+/// The minimum-norm solution of `stacked` x = `sides` on its independent rows
+/// ([`MinimumNormRows`]: a QR factorisation of `stacked`ᵀ with column pivoting), refined on the
+/// residual of every row as the decomposition's solution is; `None` where the residual stays
+/// above `SOLVED` (a row not a combination of the independent ones) or an entry is not finite.
+fn solve_on_independent_rows(stacked: &DMatrix<f64>, sides: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let factors = MinimumNormRows::new(stacked, RANK_FLOOR)?;
+    let mut solution = factors.solve(sides);
+    let mut residual = sides - stacked * &solution;
+    for _ in 0..REFINEMENTS {
+        let refined = &solution + factors.solve(&residual);
+        let refined_residual = sides - stacked * &refined;
+        if refined_residual.amax() >= residual.amax() {
+            break;
+        }
+        (solution, residual) = (refined, refined_residual);
+    }
+    let solved = residual.amax() <= SOLVED * (1.0 + sides.amax());
+    (solved && solution.iter().all(|x| x.is_finite())).then_some(solution)
+}
+
+/// [`solve_stacked`] by a singular value decomposition of `stacked`.
+fn solve_by_decomposition(
     stacked: DMatrix<f64>,
     sides: &DMatrix<f64>,
     mass: &DMatrix<f64>,

@@ -97,6 +97,7 @@ mod unit_diag;
 mod unit_dynamics;
 mod unit_integrate;
 mod unit_kinematics;
+mod unit_linalg;
 mod unit_line_diff;
 mod unit_load;
 mod unit_output;
