@@ -138,22 +138,53 @@ pub struct MinimumNormRows {
 }
 
 impl MinimumNormRows {
-    /// The factorisation of `a`; `None` where an entry is not finite.
+    /// The factorisation of `a`, its independent rows found by the pivoting; `None` where an
+    /// entry is not finite.
     pub fn new(a: &DMatrix<f64>, relative_floor: f64) -> Option<MinimumNormRows> {
-        if !a.iter().all(|x| x.is_finite()) {
+        let order = (0..a.nrows()).collect();
+        MinimumNormRows::factor(a.transpose(), order, true, relative_floor)
+    }
+
+    /// The factorisation of `a` on the rows `rows` (in that order, without pivoting), as found
+    /// independent by [`MinimumNormRows::new`] at a nearby matrix: the same solutions at the
+    /// cost of the factorisation alone. `None` where an entry is not finite or those rows are
+    /// no longer independent.
+    pub fn on_rows(a: &DMatrix<f64>, rows: &[usize], relative_floor: f64) -> Option<MinimumNormRows> {
+        let transposed = DMatrix::from_fn(a.ncols(), rows.len(), |i, k| a[(rows[k], i)]);
+        let factors =
+            MinimumNormRows::factor(transposed, rows.to_vec(), false, relative_floor)?;
+        (factors.rank() == rows.len()).then_some(factors)
+    }
+
+    /// The rows of a found independent, in the factorisation's order.
+    pub fn independent_rows(&self) -> &[usize] {
+        &self.order[..self.rank()]
+    }
+
+    /// Householder reflections on `t` = aᵀ (columns: the rows `order` of a), each column
+    /// brought next by its size when `pivoting`, stopped at the first diagonal at or below
+    /// `relative_floor` times the first.
+    fn factor(
+        mut t: DMatrix<f64>,
+        mut order: Vec<usize>,
+        pivoting: bool,
+        relative_floor: f64,
+    ) -> Option<MinimumNormRows> {
+        if !t.iter().all(|x| x.is_finite()) {
             return None;
         }
-        let mut t = a.transpose();
         let (n, p) = t.shape();
-        let mut order: Vec<usize> = (0..p).collect();
         let mut reflections = Vec::new();
         let mut first = 0.0;
         for k in 0..n.min(p) {
             let norm_below = |t: &DMatrix<f64>, j: usize| t.view_range(k.., j).norm();
-            let (pivot, norm) = (k..p)
-                .map(|j| (j, norm_below(&t, j)))
-                .max_by(|a, b| a.1.total_cmp(&b.1))
-                .unwrap_or((k, 0.0));
+            let (pivot, norm) = match pivoting {
+                true => (k..p)
+                    .map(|j| (j, norm_below(&t, j)))
+                    .max_by(|a, b| a.1.total_cmp(&b.1))
+                    .unwrap_or((k, 0.0)),
+                false => (k, norm_below(&t, k)),
+            };
             if k == 0 {
                 first = norm;
             }

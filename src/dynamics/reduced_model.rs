@@ -60,6 +60,8 @@ pub struct ReducedScratch {
     zero_rates: Vec<f64>,
     /// Whether the free motions were found massless (at the first state).
     checked_free: bool,
+    /// The rows of [G; E] found independent at the last state solved by them.
+    independent_rows: Vec<usize>,
 }
 
 impl ReducedScratch {
@@ -74,6 +76,7 @@ impl ReducedScratch {
             zero_velocities: vec![0.0; model.velocities()],
             zero_rates: vec![0.0; model.declared_count],
             checked_free: false,
+            independent_rows: Vec::new(),
         }
     }
 }
@@ -127,7 +130,13 @@ pub fn reduced_model(
     // Which motions the actuated coordinates leave free is decided by the structure, once, at
     // the first state (a closed one): an integrator's stages off the loops by their truncation
     // error would give the rods' spins a share of mass.
-    let solution = solve_stacked(stacked, &sides, &scratch.mass, !scratch.checked_free)?;
+    let solution = solve_stacked(
+        stacked,
+        &sides,
+        &scratch.mass,
+        !scratch.checked_free,
+        &mut scratch.independent_rows,
+    )?;
     scratch.checked_free = true;
     let motions = solution.columns(0, m);
     let mass_times = |x: &DVector<f64>| -> DVector<f64> {
@@ -196,16 +205,18 @@ fn generalised(model: &Model, tree: &DVector<f64>, efforts: &Efforts, full: &mut
 
 /// The minimum-norm solution of `stacked` x = `sides`, refused when it does not solve it or
 /// (`check_free`) leaves free a motion with mass: the null space of `stacked` must move no
-/// mass. Once the free motions are checked, the rows' QR factorisation solves; where it
-/// does not hold (a configuration where the rows lose rank) the decomposition decides.
+/// mass. Once the free motions are checked, the rows' QR factorisation solves on the rows
+/// found independent (`rows`, kept from state to state); where it does not hold (a
+/// configuration where the rows lose rank) the decomposition decides.
 fn solve_stacked(
     stacked: DMatrix<f64>,
     sides: &DMatrix<f64>,
     mass: &DMatrix<f64>,
     check_free: bool,
+    rows: &mut Vec<usize>,
 ) -> Result<DMatrix<f64>, ReducedError> {
     if !check_free {
-        if let Some(solution) = solve_on_independent_rows(&stacked, sides) {
+        if let Some(solution) = solve_on_independent_rows(&stacked, sides, rows) {
             return Ok(solution);
         }
     }
@@ -213,23 +224,39 @@ fn solve_stacked(
 }
 
 /// The minimum-norm solution of `stacked` x = `sides` on its independent rows
-/// ([`MinimumNormRows`]: a QR factorisation of `stacked`ᵀ with column pivoting), refined on the
-/// residual of every row as the decomposition's solution is; `None` where the residual stays
-/// above `SOLVED` (a row not a combination of the independent ones) or an entry is not finite.
-fn solve_on_independent_rows(stacked: &DMatrix<f64>, sides: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    let factors = MinimumNormRows::new(stacked, RANK_FLOOR)?;
-    let mut solution = factors.solve(sides);
-    let mut residual = sides - stacked * &solution;
-    for _ in 0..REFINEMENTS {
-        let refined = &solution + factors.solve(&residual);
-        let refined_residual = sides - stacked * &refined;
-        if refined_residual.amax() >= residual.amax() {
-            break;
+/// ([`MinimumNormRows`]: a QR factorisation of `stacked`ᵀ), refined on the residual of every
+/// row as the decomposition's solution is. The rows found independent at the last state
+/// (`rows`) are tried first, without pivoting, then the pivoting finds them again; `None`
+/// where the residual stays above `SOLVED` (a row not a combination of the independent ones)
+/// or an entry is not finite.
+fn solve_on_independent_rows(
+    stacked: &DMatrix<f64>,
+    sides: &DMatrix<f64>,
+    rows: &mut Vec<usize>,
+) -> Option<DMatrix<f64>> {
+    let refined = |factors: MinimumNormRows| {
+        let mut solution = factors.solve(sides);
+        let mut residual = sides - stacked * &solution;
+        for _ in 0..REFINEMENTS {
+            let refined = &solution + factors.solve(&residual);
+            let refined_residual = sides - stacked * &refined;
+            if refined_residual.amax() >= residual.amax() {
+                break;
+            }
+            (solution, residual) = (refined, refined_residual);
         }
-        (solution, residual) = (refined, refined_residual);
+        let solved = residual.amax() <= SOLVED * (1.0 + sides.amax());
+        (solved && solution.iter().all(|x| x.is_finite())).then_some(solution)
+    };
+    let kept = (!rows.is_empty())
+        .then(|| MinimumNormRows::on_rows(stacked, rows, RANK_FLOOR))
+        .flatten();
+    if let Some(solution) = kept.and_then(refined) {
+        return Some(solution);
     }
-    let solved = residual.amax() <= SOLVED * (1.0 + sides.amax());
-    (solved && solution.iter().all(|x| x.is_finite())).then_some(solution)
+    let factors = MinimumNormRows::new(stacked, RANK_FLOOR)?;
+    *rows = factors.independent_rows().to_vec();
+    refined(factors)
 }
 
 /// [`solve_stacked`] by a singular value decomposition of `stacked`.

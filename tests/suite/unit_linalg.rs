@@ -1,6 +1,7 @@
 //! The minimum-norm solutions on a matrix's independent rows (`linalg::MinimumNormRows`)
 //! against the pseudo-inverse from the singular value decomposition, on wide matrices with
-//! rows that are combinations of others (as the loops' redundant rows are).
+//! rows that are combinations of others (as the loops' redundant rows are), and on the rows
+//! found independent kept for a nearby matrix.
 
 use lsdc::linalg::{pseudo_inverse, MinimumNormRows};
 use nalgebra::DMatrix;
@@ -36,7 +37,24 @@ proptest! {
         let scale = 1.0 + expected.amax();
         prop_assert!((&solution - &expected).amax() < 1e-11 * scale);
         prop_assert!((&a * &solution - &b).amax() < 1e-12 * (1.0 + b.amax()));
+        // The rows found independent, kept for a nearby matrix (a's combinations kept): its
+        // solution without pivoting is its own pivoted one.
+        let nearby = with_dependent_rows(&entries.iter().map(|e| e * 1.001).collect::<Vec<_>>(), p, n, dependent);
+        let b = &nearby * &x;
+        let kept = MinimumNormRows::on_rows(&nearby, factors.independent_rows(), 1e-9)
+            .expect("the same rows are independent");
+        let pivoted = MinimumNormRows::new(&nearby, 1e-9).expect("finite");
+        let scale = 1.0 + b.amax();
+        prop_assert!((kept.solve(&b) - pivoted.solve(&b)).amax() < 1e-11 * scale);
     }
+}
+
+#[test]
+fn rows_that_are_no_longer_independent_are_refused() {
+    let a = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 1.0, 1.0, 0.0]);
+    assert!(MinimumNormRows::on_rows(&a, &[0, 1], 1e-9).is_some());
+    let collapsed = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 2.0, 0.0, 0.0]);
+    assert!(MinimumNormRows::on_rows(&collapsed, &[0, 1], 1e-9).is_none());
 }
 
 #[test]
