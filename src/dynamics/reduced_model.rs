@@ -237,7 +237,12 @@ fn solve_on_independent_rows(
     let refined = |factors: MinimumNormRows| {
         let mut solution = factors.solve(sides);
         let mut residual = sides - stacked * &solution;
+        // A residual at round-off already (the usual case) has nothing to refine.
+        let round_off = ROUND_OFF * (1.0 + sides.amax());
         for _ in 0..REFINEMENTS {
+            if residual.amax() <= round_off {
+                break;
+            }
             let refined = &solution + factors.solve(&residual);
             let refined_residual = sides - stacked * &refined;
             if refined_residual.amax() >= residual.amax() {
@@ -320,6 +325,9 @@ fn solve_by_decomposition(
 const RANK_FLOOR: f64 = 1e-9;
 /// How many steps of iterative refinement the solve of [G; E] X = [0; I] takes at most.
 const REFINEMENTS: usize = 3;
+/// A residual of [G; E] X = [0; I] at round-off, relative to the right-hand side: the QR
+/// solve's usual one (a few units of ε times the entries), which refinement cannot lower.
+const ROUND_OFF: f64 = 16.0 * f64::EPSILON;
 /// The largest residual of [G; E] X = [0; I] accepted, relative to the right-hand side.
 const SOLVED: f64 = 1e-8;
 /// The free motions move no mass when their kinetic metric's trace is below this fraction of
