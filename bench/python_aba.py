@@ -1,9 +1,10 @@
 """ABA on a batch of 10,000 states from Python (`Prepared.aba` on NumPy arrays) against the same
-batch in Rust (`examples/aba_batch.rs`, `lsdc::api::StateBatch`), in interleaved rounds: thread
+batch in Rust (`python/examples/aba_batch.rs`, `lsdc::api::StateBatch`, linked with the very build
+of lsdc the extension links), in interleaved rounds: thread
 CPU time of the Python call (argument conversion, the Rust loop, the result array) and of the
 Rust loop alone, best and median, and the accelerations compared bit for bit.
 
-    cargo build --release --example aba_batch
+    (cd python && CARGO_TARGET_DIR=../target/python cargo build --release --locked --example aba_batch)
     python bench/python_aba.py [--rounds 15] [--states 10000] [--program examples/double_pendulum.lsd]
 
 (with the `lsdc` package installed: tools/python-tests, or `pip install .` in python/).
@@ -28,7 +29,7 @@ def main():
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--states", type=int, default=10_000)
     parser.add_argument("--program", default=str(ROOT / "examples" / "double_pendulum.lsd"))
-    parser.add_argument("--rust", default=str(ROOT / "target" / "release" / "examples" / "aba_batch"))
+    parser.add_argument("--rust", default=str(ROOT / "target" / "python" / "release" / "examples" / "aba_batch"))
     args = parser.parse_args()
 
     prepared = lsdc.load(args.program).prepare()

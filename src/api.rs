@@ -117,6 +117,8 @@ pub use crate::studies::batch::{parse_states, Evaluation, StateInput, StatesErro
 pub use crate::studies::linearize::Request as LinearizeRequest;
 pub use crate::studies::linearize::{Linearization, LinearizeError, OperatingPoint};
 pub use crate::studies::state_batch::StateBatch;
+/// Every combination of the axes, the first varying slowest (`lsdc sweep --grid`).
+pub use crate::studies::sweep::design::grid as sweep_grid;
 /// The runs of a CSV text (`lsdc sweep --values`).
 pub use crate::studies::sweep::design::list as sweep_list;
 /// The runs drawn from distributions (`lsdc sweep --vary ... --sample N`).
@@ -124,8 +126,7 @@ pub use crate::studies::sweep::design::sample as sweep_sample;
 /// A sweep's design: the names it varies and a row of values per run, made by [`sweep_grid`],
 /// [`sweep_list`] or [`sweep_sample`].
 pub use crate::studies::sweep::design::Design as SweepDesign;
-/// Every combination of the axes, the first varying slowest (`lsdc sweep --grid`).
-pub use crate::studies::sweep::design::{grid as sweep_grid, GridAxis, ListError, Sampling};
+pub use crate::studies::sweep::design::{GridAxis, ListError, Sampling};
 pub use crate::studies::sweep::distribution::Distribution;
 /// A sweep's table of runs (its columns as `lsdc sweep -o` writes them).
 pub use crate::studies::sweep::table::Table as SweepTable;

@@ -2,7 +2,10 @@
 //! boundary alone (`lsdc::api::StateBatch`): the Rust side of `bench/python_aba.py`, which
 //! times the same batch from Python (`Prepared.aba` on NumPy arrays) in interleaved rounds.
 //!
-//! `cargo run --release --example aba_batch -- PROGRAM STATES OUT`: STATES holds N states as
+//! An example of the package's crate, so that it links the very build of lsdc the extension
+//! links (the same profile and flags, without `lsdc_internals`): from `python/`,
+//! `CARGO_TARGET_DIR=../target/python cargo run --release --example aba_batch -- PROGRAM STATES
+//! OUT`. STATES holds N states as
 //! little-endian f64, the N rows of q (N × nq), then of v and of τ (N × nv each); the
 //! accelerations are written to OUT the same way (N × nv), and the thread CPU time of the
 //! evaluation alone (seconds) is printed on standard output.
