@@ -63,7 +63,10 @@ def test_names_and_shapes(arm, states):
 
 
 def test_equal_to_lsdc_eval(arm, states, example, run_cli, tmp_path):
-    q, v, a, tau = states
+    # The states with 12 decimals: `lsdc eval` reads JSON with serde_json's default parsing,
+    # which may miss the nearest double by an ulp for a number of 17 significant digits, but
+    # reads one of at most 15 exactly (Clinger's fast path); Python reads both exactly.
+    q, v, a, tau = (np.round(x, 12) for x in states)
     rows = [{"q": list(q[k]), "v": list(v[k]), "a": list(a[k]), "tau": list(tau[k])}
             for k in range(len(q))]
     path = tmp_path / "states.json"
@@ -71,17 +74,10 @@ def test_equal_to_lsdc_eval(arm, states, example, run_cli, tmp_path):
     evaluated = json.loads(run_cli("eval", example("double_pendulum.lsd"), "--states", path))
     expected = {key: np.array([s[key] for s in evaluated["states"]]) for key in ("rnea", "crba", "aba")}
     found = {"rnea": arm.rnea(q, v, a), "crba": arm.crba(q), "aba": arm.aba(q, v, tau)}
-    # The extension and the command line run the same functions in the same order, yet are
-    # two builds of them (the release extension inside Python, the test suite's `dev` binary)
-    # and disagree in the last bits of some states: measured on 200 random states, up to
-    # 4.4e-15 of the magnitude on this arm and 1.8e-14 on the UR5 (70 to 90 % of the numbers
-    # bit-identical). Issue #52 asks for 1e-15; the bound here guards against any real
-    # difference (a wrong effort or joint moves the results by far more) until the cause of
-    # the rounding is found.
+    # Issue #52's criterion: to 1e-15. Measured: identical, bit for bit.
     for key in found:
-        scale = np.maximum(1.0, np.abs(expected[key]))
-        worst = np.max(np.abs(found[key] - expected[key]) / scale)
-        assert worst <= 1e-13, f"{key}: {worst}"
+        worst = np.max(np.abs(found[key] - expected[key]))
+        assert worst <= 1e-15, f"{key}: {worst}"
 
 
 def test_closed_form(arm, states):
