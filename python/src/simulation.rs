@@ -129,7 +129,8 @@ impl Simulation {
     /// went to its end) as `lsdc.Columns`, with the run's `report`.
     fn finish<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         // The run ends inside the cell: what it returns borrows nothing.
-        let ended = (self.run).with_dependent_mut(|_, running| running.take().map(Simulator::finish));
+        let ended =
+            (self.run).with_dependent_mut(|_, running| running.take().map(Simulator::finish));
         let Some((samples, report)) = ended else {
             return Err(finished());
         };
