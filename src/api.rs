@@ -11,6 +11,11 @@
 //!    options. [`evaluate`] gives the dynamics at chosen states instead.
 //! 4. [`Simulator`]: the same run owned by its caller and advanced step by step, with efforts
 //!    applied from Rust between steps (see below).
+//! 5. The studies a binding to another language needs (the Python package, `python/`):
+//!    [`StateBatch`], RNEA, CRBA, ABA and the bodies' Jacobians at states given as rows of flat
+//!    arrays; [`Program::linearize`], the linear model about an operating point (`lsdc
+//!    linearize`); [`Program::sweep`], the runs of a sweep's design or of one of its shards
+//!    (`lsdc sweep`), and [`gather`], the shards' tables merged into the whole sweep's.
 //!
 //! Every failure is an [`Error`]; errors in the program are [`Diagnostic`]s, which
 //! [`Program::render`] shows as the command line does.
@@ -87,6 +92,8 @@ use std::path::Path;
 use crate::diag::render;
 pub use crate::diag::Diagnostic;
 use crate::driver::{self, Compilation};
+/// How a run holds a mechanism with loops on its constraints (`lsdc simulate --stabilisation`).
+pub use crate::dynamics::loops::Stabilisation;
 pub use crate::elab::Mechanism;
 /// The flag that stops a [`Simulator`] or a [`run_with`] between two steps (`lsdc simulate`
 /// sets it on SIGINT and SIGTERM), so that a caller can name it.
@@ -96,11 +103,35 @@ pub use crate::load::{LoadError, LoadOptions};
 use crate::prepare::outputs::Outputs;
 pub use crate::prepare::settings::{Integrator, Settings, SettingsChanges, SettingsError};
 pub use crate::prepare::Prepared;
+/// The names of a run's outputs (the program's `output`s, then the frames'), of its columns'
+/// reactions (with `reactions` in the settings): the names of a [`Simulation`]'s columns.
+pub use crate::simulate::run::{
+    output_names_of as output_names, reaction_names_of as reaction_names,
+};
 pub use crate::simulate::run::{
     run_from, Report, RunFailure, RunOptions, Sample, Simulation, Simulator, Start,
 };
 pub use crate::source::SourceMap;
 pub use crate::studies::batch::{parse_states, Evaluation, StateInput, StatesError};
+/// What to linearise: the operating point, the inputs, the independent coordinates.
+pub use crate::studies::linearize::Request as LinearizeRequest;
+pub use crate::studies::linearize::{Linearization, LinearizeError, OperatingPoint};
+pub use crate::studies::state_batch::StateBatch;
+/// Every combination of the axes, the first varying slowest (`lsdc sweep --grid`).
+pub use crate::studies::sweep::design::grid as sweep_grid;
+/// The runs of a CSV text (`lsdc sweep --values`).
+pub use crate::studies::sweep::design::list as sweep_list;
+/// The runs drawn from distributions (`lsdc sweep --vary ... --sample N`).
+pub use crate::studies::sweep::design::sample as sweep_sample;
+/// A sweep's design: the names it varies and a row of values per run, made by [`sweep_grid`],
+/// [`sweep_list`] or [`sweep_sample`].
+pub use crate::studies::sweep::design::Design as SweepDesign;
+pub use crate::studies::sweep::design::{GridAxis, ListError, Sampling};
+pub use crate::studies::sweep::distribution::Distribution;
+/// A sweep's table of runs (its columns as `lsdc sweep -o` writes them).
+pub use crate::studies::sweep::table::Table as SweepTable;
+pub use crate::studies::sweep::table::{Cells, Column, TableFormat};
+pub use crate::studies::sweep::Shard;
 
 /// Why a step of the library's pipeline failed.
 #[derive(Debug)]
@@ -118,6 +149,9 @@ pub enum Error {
     Frame(String),
     /// A [`Simulator`] cannot start, or its run stopped: when and why.
     Run(RunFailure),
+    /// A study cannot be done as asked (a linearisation's inputs, a sweep's settings, shards
+    /// that do not make a sweep): why.
+    Study(String),
 }
 
 impl fmt::Display for Error {
@@ -126,7 +160,7 @@ impl fmt::Display for Error {
             Error::Load(error) => error.fmt(f),
             Error::Settings(error) => error.fmt(f),
             Error::States(error) => error.fmt(f),
-            Error::Frame(message) => f.write_str(message),
+            Error::Frame(message) | Error::Study(message) => f.write_str(message),
             Error::Run(failure) => write!(f, "at t = {}: {}", failure.time, failure.message),
             Error::Program(diagnostics) => {
                 let errors: Vec<String> = diagnostics
@@ -146,7 +180,7 @@ impl std::error::Error for Error {
             Error::Load(error) => Some(error),
             Error::Settings(error) => Some(error),
             Error::States(error) => Some(error),
-            Error::Program(_) | Error::Frame(_) | Error::Run(_) => None,
+            Error::Program(_) | Error::Frame(_) | Error::Run(_) | Error::Study(_) => None,
         }
     }
 }
@@ -338,6 +372,145 @@ impl Program {
             prepared, mechanism,
         ))
     }
+}
+
+/// Where a diagnostic points: the file as the program names it, the line and the column (in
+/// characters) of the start of its primary label, both from 1.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+}
+
+impl Program {
+    /// Where `diagnostic` (one of this program's) points in its sources; `None` for a
+    /// diagnostic about no place (a value missing from the command line, say).
+    pub fn location(&self, diagnostic: &Diagnostic) -> Option<Location> {
+        let span = diagnostic.primary_span()?;
+        let file = self.sources().file(span.file());
+        let (line, column) = file.line_column(span.start() as usize);
+        Some(Location {
+            file: file.name.clone(),
+            line,
+            column,
+        })
+    }
+
+    /// As [`prepare`](Program::prepare), with `initial` values of declared coordinates by
+    /// name, `JOIN.COORD` for a coordinate and `JOIN.COORD'` for its rate, as if the program's
+    /// `initial` declarations said them (a declared one keeps its `fixed` or `guess`): as
+    /// `lsdc sweep` varies initial values. A name that is no declared coordinate is an error
+    /// that names the closest one.
+    pub fn prepare_with_initial(
+        &self,
+        values: &[Override],
+        initial: &[Override],
+        changes: &SettingsChanges,
+    ) -> Result<Prepared, Error> {
+        use crate::studies::sweep::runs::{coordinate_targets, with_initial_values, Target};
+        let mechanism = self.mechanism()?;
+        let targets = coordinate_targets(mechanism);
+        let mut chosen = Vec::with_capacity(initial.len());
+        for value in initial {
+            match targets.get(&value.name) {
+                Some(&Target::Initial {
+                    join,
+                    coordinate,
+                    order,
+                }) => chosen.push((join, coordinate, order, value.value)),
+                _ => {
+                    let names = targets.keys().map(String::as_str);
+                    let closest = crate::diag::suggest::did_you_mean(&value.name, names);
+                    let hint = closest.map_or(String::new(), |c| format!(": did you mean `{c}`?"));
+                    return Err(Error::Study(format!(
+                        "`{}` is not a declared coordinate (`JOIN.COORD`) or its rate (`JOIN.COORD'`){hint}",
+                        value.name
+                    )));
+                }
+            }
+        }
+        let mechanism = with_initial_values(mechanism, &chosen);
+        let mut prepared = crate::prepare::prepare(&mechanism, values, &Settings::default())?;
+        prepared.settings.apply(changes)?;
+        Ok(prepared)
+    }
+
+    /// The linear model of `prepared` (prepared from this program) about the operating point
+    /// `request` names, as `lsdc linearize` computes it. An error in the program (a motion
+    /// imposed in time, say) is located in it.
+    pub fn linearize(
+        &self,
+        prepared: &Prepared,
+        request: &LinearizeRequest,
+    ) -> Result<Linearization, Error> {
+        crate::studies::linearize::linearize(prepared, request).map_err(|error| {
+            match self.mechanism().ok().and_then(|m| error.diagnostic(m)) {
+                Some(diagnostic) => Error::Program(vec![diagnostic]),
+                None => Error::Study(error.to_string()),
+            }
+        })
+    }
+
+    /// Runs the part `shard` of the sweep of `design` over this program, as `lsdc sweep
+    /// --shard K/N` does, on `threads` threads (every core with `None`): its table of runs,
+    /// the rows `lsdc sweep -o` writes for those runs (every run: [`Shard::WHOLE`]). `values`
+    /// are the values every run takes (`--set`), `changes` the settings' changes.
+    pub fn sweep(
+        &self,
+        values: &[Override],
+        changes: &SettingsChanges,
+        design: SweepDesign,
+        shard: Shard,
+        threads: Option<usize>,
+    ) -> Result<SweepTable, Error> {
+        use crate::studies::sweep::{self, record, runs};
+        fn spatial(_: &mut Prepared) {}
+        let mechanism = self.mechanism()?;
+        let sweep = runs::Sweep::new(
+            mechanism,
+            values.to_vec(),
+            changes.clone(),
+            design,
+            false,
+            spatial,
+        )
+        .map_err(|error| match error {
+            runs::PrepareError::Program(diagnostics) => Error::Program(diagnostics),
+            runs::PrepareError::Settings(why) => Error::Study(why),
+        })?;
+        let stop = runs::Stop::new(None, None);
+        let execution = sweep::Execution {
+            shard,
+            journal: None,
+            resume: false,
+            threads,
+            stop: &stop,
+            context: String::new(),
+        };
+        let outcome = sweep::execute(&sweep, &execution, &mut |_, _| {}).map_err(Error::Study)?;
+        let names = (&sweep.design.names, &sweep.quantity_names);
+        Ok(record::runs_table(names.0, names.1, &outcome.records))
+    }
+}
+
+/// Merges the tables of a sweep's shards (in any order) into the whole sweep's table, as
+/// `lsdc sweep gather` merges their files: the rows in the order of the runs, identical to the
+/// table of the sweep run whole. An error when their columns differ, a run is in two parts or
+/// in none.
+pub fn gather(parts: Vec<SweepTable>) -> Result<SweepTable, Error> {
+    let labelled = (parts.into_iter().enumerate())
+        .map(|(k, table)| (format!("part {k}"), table))
+        .collect();
+    crate::studies::sweep::gather_tables(labelled)
+        .map(|gathered| gathered.table)
+        .map_err(Error::Study)
+}
+
+/// Reads a sweep's table of runs from the CSV text `lsdc sweep -o runs.csv` writes (each
+/// column's type by its name): the table that wrote it.
+pub fn sweep_table_from_csv(text: &str) -> Result<SweepTable, String> {
+    SweepTable::from_csv(text, crate::studies::sweep::record::runs_column_kind)
 }
 
 /// Integrates a prepared simulation. `sink` receives every sample as soon as it is computed (to

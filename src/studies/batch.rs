@@ -37,6 +37,7 @@ use serde::{Deserialize, Serialize, Serializer};
 
 use super::batch_derivatives::{state_derivatives, StateDerivatives};
 use crate::dynamics::algorithms::{aba, crba, forward_kinematics, rnea};
+use crate::dynamics::efforts::Efforts;
 use crate::dynamics::joint::JointType;
 use crate::dynamics::loops::Stabilisation;
 use crate::dynamics::model::Model;
@@ -206,7 +207,15 @@ pub fn evaluate_states_with(
     })
 }
 
-fn check_length(quantity: &'static str, values: &[f64], expected: usize) -> Result<(), StateError> {
+/// Checks positions and velocities: their lengths, finite entries, unit quaternions.
+pub fn check_state(model: &Model, q: &[f64], v: &[f64]) -> Result<(), StateError> {
+    check_length("q", q, model.nq)?;
+    check_length("v", v, model.nv)?;
+    check_quaternions(model, q)
+}
+
+/// Checks that `values` has `expected` entries, all finite.
+pub fn check_length(quantity: &'static str, values: &[f64], expected: usize) -> Result<(), StateError> {
     if values.len() != expected {
         return Err(StateError::Length {
             quantity,
@@ -252,15 +261,13 @@ fn evaluate_state(
     let model = system.model;
     let zero = vec![0.0; model.nv];
     let v = state.v.as_deref().unwrap_or(&zero);
-    check_length("q", &state.q, model.nq)?;
-    check_length("v", v, model.nv)?;
+    check_state(model, &state.q, v)?;
     if let Some(a) = &state.a {
         check_length("a", a, model.nv)?;
     }
     if let Some(tau) = &state.tau {
         check_length("tau", tau, model.nv)?;
     }
-    check_quaternions(model, &state.q)?;
     let q_full = [state.q.as_slice(), &vec![0.0; model.nc]].concat();
     let v_full = [v, &vec![0.0; model.nc]].concat();
     let efforts = system.efforts(0.0, &q_full, &v_full);
@@ -276,42 +283,16 @@ fn evaluate_state(
         (None, _) => None,
         (Some(_), Err(e)) => kept(&mut errors, "rnea", Err(e.clone())),
         (Some(a), Ok(efforts)) => {
-            let tau = rnea(
-                model,
-                &mut system.scratch.data,
-                &state.q,
-                v,
-                a,
-                &efforts.external,
-            )
-            .map_err(SystemError::from);
-            kept(
-                &mut errors,
-                "rnea",
-                tau.map(|tau| {
-                    (tau - efforts.tau.rows(0, model.nv))
-                        .iter()
-                        .copied()
-                        .collect()
-                }),
-            )
+            let tau = inverse_dynamics(system, &state.q, v, a, efforts);
+            kept(&mut errors, "rnea", tau)
         }
     };
     let accelerations = match (&state.tau, &efforts) {
         (None, _) => None,
         (Some(_), Err(e)) => kept(&mut errors, "aba", Err(e.clone())),
         (Some(tau), Ok(efforts)) => {
-            let total = DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv);
-            let a = aba(
-                model,
-                &mut system.scratch.data,
-                &state.q,
-                v,
-                total.as_slice(),
-                &efforts.external,
-            )
-            .map_err(|e| system.dynamics_error(&e));
-            kept(&mut errors, "aba", a.map(|a| a.iter().copied().collect()))
+            let a = forward_dynamics(system, &state.q, v, tau, efforts);
+            kept(&mut errors, "aba", a)
         }
     };
     let mass = crba(model, &mut system.scratch.data, &state.q)
@@ -351,6 +332,39 @@ fn evaluate_state(
         derivatives,
         errors,
     })
+}
+
+/// The generalised forces along the velocities that give the accelerations `a` at (q, v)
+/// together with the program's `efforts` (evaluated at the state): τ = RNEA(q, v, a) − τ_f.
+/// The system's data must hold the forward kinematics of (q, v), as `efforts` leaves it.
+pub fn inverse_dynamics(
+    system: &mut MechanicalSystem<'_>,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    efforts: &Efforts,
+) -> Result<Vec<f64>, SystemError> {
+    let model = system.model;
+    let tau = rnea(model, &mut system.scratch.data, q, v, a, &efforts.external)?;
+    let tau = tau - efforts.tau.rows(0, model.nv);
+    Ok(tau.iter().copied().collect())
+}
+
+/// The accelerations at (q, v) under the generalised forces `tau` added to the program's
+/// `efforts` (evaluated at the state): ABA. Fails where the mass matrix is singular.
+pub fn forward_dynamics(
+    system: &mut MechanicalSystem<'_>,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    efforts: &Efforts,
+) -> Result<Vec<f64>, SystemError> {
+    let model = system.model;
+    let total = DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv);
+    let data = &mut system.scratch.data;
+    let a = aba(model, data, q, v, total.as_slice(), &efforts.external)
+        .map_err(|e| system.dynamics_error(&e))?;
+    Ok(a.iter().copied().collect())
 }
 
 /// The value of a quantity, or `None` with its error's message recorded under its name.
@@ -412,6 +426,12 @@ pub enum StateError {
     },
     /// The kinematics or the mass matrix cannot be evaluated at the state.
     Geometry(SystemError),
+    /// A quantity evaluated alone (`state_batch`: RNEA or ABA) cannot be computed at the
+    /// state: the efforts cannot be evaluated, or the mass matrix is singular.
+    Unavailable {
+        quantity: &'static str,
+        error: SystemError,
+    },
 }
 
 impl fmt::Display for StatesError {
@@ -446,6 +466,7 @@ impl fmt::Display for StateError {
                 start + 4
             ),
             StateError::Geometry(error) => write!(f, "{error}"),
+            StateError::Unavailable { quantity, error } => write!(f, "{quantity}: {error}"),
         }
     }
 }
@@ -462,7 +483,7 @@ impl std::error::Error for StatesError {
 impl std::error::Error for StateError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
-            StateError::Geometry(error) => Some(error),
+            StateError::Geometry(error) | StateError::Unavailable { error, .. } => Some(error),
             _ => None,
         }
     }

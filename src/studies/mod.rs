@@ -1,5 +1,6 @@
 //! The studies built on the mechanism and its runs: the dynamics at given states (`lsdc eval`,
-//! `batch`, with their derivatives `batch_derivatives`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
+//! `batch`, with their derivatives `batch_derivatives`; each quantity alone at states given as
+//! rows of arrays, `state_batch`), the efforts holding a mechanism at rest (`statics`), the integrators compared for
 //! precision and cost (`precision`), the `tree` and `assemble` reports (`analysis`), a
 //! point dragged along a path (`drag`), the efforts along the program's drives (`inverse`) or
 //! along a motion read from a file (`motion_file`, made drives by `trajectory`),
@@ -25,6 +26,7 @@ pub mod precision;
 pub mod sensitivity;
 pub mod singular_points;
 pub mod singularities;
+pub mod state_batch;
 pub mod statics;
 pub mod sweep;
 pub mod trajectory;

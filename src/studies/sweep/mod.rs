@@ -169,40 +169,45 @@ pub fn gather(parts: &[PathBuf]) -> Result<Gathered, String> {
             true => Table::read(path, samples_column_kind).map_err(|e| in_file(path, &e))?,
             false => peek,
         };
-        if table.names().first() != Some(&"run") {
-            return Err(in_file(path, "not a sweep's table (its first column is not `run`)"));
-        }
-        tables.push((path, samples, table));
+        tables.push((format!("`{}`", path.display()), table));
     }
-    let Some((first_path, samples, _)) = tables.first() else {
+    gather_tables(tables)
+}
+
+/// Merges the tables of a sweep's parts, each with how errors name it (its file), as
+/// [`gather`] merges their files.
+pub fn gather_tables(tables: Vec<(String, Table)>) -> Result<Gathered, String> {
+    let kind = |table: &Table| !table.names().contains(&"status");
+    for (name, table) in &tables {
+        if table.names().first() != Some(&"run") {
+            return Err(format!("{name}: not a sweep's table (its first column is not `run`)"));
+        }
+    }
+    let Some((first_name, first)) = tables.first() else {
         return Err("no part to gather".to_string());
     };
-    let (first_path, samples) = (first_path.to_path_buf(), *samples);
+    let (first_name, samples) = (first_name.clone(), kind(first));
     // Which part holds each run: a run in two parts is an error.
-    let mut owner: BTreeMap<i64, &Path> = BTreeMap::new();
+    let mut owner: BTreeMap<i64, String> = BTreeMap::new();
     let mut whole: Option<Table> = None;
-    for (path, is_samples, table) in tables {
-        if is_samples != samples {
+    for (name, table) in tables {
+        if kind(&table) != samples {
             return Err(format!(
-                "`{}` and `{}` are not the same kind of table (runs and samples)",
-                first_path.display(),
-                path.display()
+                "{first_name} and {name} are not the same kind of table (runs and samples)"
             ));
         }
         for run in table.runs().into_iter().collect::<std::collections::BTreeSet<_>>() {
-            if let Some(other) = owner.insert(run, path) {
+            if let Some(other) = owner.insert(run, name.clone()) {
                 return Err(format!(
-                    "run {run} is in `{}` and in `{}`: the same shard given twice?",
-                    other.display(),
-                    path.display()
+                    "run {run} is in {other} and in {name}: the same shard given twice?"
                 ));
             }
         }
         match &mut whole {
             None => whole = Some(table),
-            Some(whole) => whole.append(table).map_err(|why| {
-                format!("`{}` cannot join `{}`: {why}", path.display(), first_path.display())
-            })?,
+            Some(whole) => whole
+                .append(table)
+                .map_err(|why| format!("{name} cannot join {first_name}: {why}"))?,
         }
     }
     let whole = whole.unwrap_or(Table { columns: Vec::new() });

@@ -317,7 +317,7 @@ pub fn coordinate_targets(mechanism: &Mechanism) -> HashMap<String, Target> {
 /// A copy of `mechanism` whose `initial` declarations give these values (join, coordinate,
 /// order, value): a declared one keeps its `fixed` and `guess`, a new one is as `initial`
 /// writes it.
-fn with_initial_values(mechanism: &Mechanism, values: &[(JoinId, usize, u32, f64)]) -> Mechanism {
+pub fn with_initial_values(mechanism: &Mechanism, values: &[(JoinId, usize, u32, f64)]) -> Mechanism {
     let mut mechanism = mechanism.clone();
     for &(join, coordinate, order, value) in values {
         let declared = (mechanism.initial.iter_mut())
