@@ -63,10 +63,9 @@ def test_names_and_shapes(arm, states):
 
 
 def test_equal_to_lsdc_eval(arm, states, example, run_cli, tmp_path):
-    # The states with 12 decimals: `lsdc eval` reads JSON with serde_json's default parsing,
-    # which may miss the nearest double by an ulp for a number of 17 significant digits, but
-    # reads one of at most 15 exactly (Clinger's fast path); Python reads both exactly.
-    q, v, a, tau = (np.round(x, 12) for x in states)
+    # The states as Python writes them (shortest round-trip form): `lsdc eval` reads them back
+    # to the bit (serde_json with `float_roundtrip`).
+    q, v, a, tau = states
     rows = [{"q": list(q[k]), "v": list(v[k]), "a": list(a[k]), "tau": list(tau[k])}
             for k in range(len(q))]
     path = tmp_path / "states.json"
