@@ -29,6 +29,7 @@ use super::evaluator::{Evaluator, Halt};
 use super::outcome::Stats;
 use super::radau::Radau5;
 use super::rosenbrock::RosenbrockW;
+use super::held_steps::HeldSteps;
 use super::settings::Settings;
 
 /// The implicit method of the pair.
@@ -95,6 +96,9 @@ const RETURN_RATIO: f64 = 0.67;
 pub(super) struct Switching {
     explicit: DormandPrince,
     implicit: Stiff,
+    /// Whether the explicit method's steps are held by its stability region, from the spectral
+    /// radius of ∂f/∂y (`held_steps.rs`).
+    held: HeldSteps,
     /// Which method takes the next attempt.
     stiff: bool,
     /// Which method took the last accepted step (whose interpolant serves the outputs).
@@ -118,6 +122,7 @@ impl Switching {
         Switching {
             explicit: DormandPrince::new(dimension, settings),
             implicit,
+            held: HeldSteps::new(dimension, settings.controlled_len(dimension)),
             stiff: false,
             last_stiff: false,
             agreeing: 0,
@@ -141,24 +146,34 @@ impl Switching {
     fn watch(&mut self, t: f64, h: f64) {
         let calls_for_other = if self.stiff {
             self.implicit
-                .spectral_radius_below(EXPLICIT_MARGIN * STIFF / h)
+                .spectral_radius_below(EXPLICIT_MARGIN * self.held.boundary(STIFF) / h)
         } else {
-            let returning = h < RETURN_RATIO * self.longest_implicit;
-            self.explicit.stiffness() > NEAR_STIFF && returning
+            self.returning(h) && self.explicit.stiffness() > NEAR_STIFF
         };
         self.agreeing = if calls_for_other {
             self.agreeing + 1
         } else {
             0
         };
-        if self.agreeing < PERSISTENCE {
-            return;
+        if self.agreeing >= PERSISTENCE {
+            self.change(t);
         }
+    }
+
+    /// Whether a step `h` of the explicit method is short enough against the implicit method's
+    /// last stretch for the implicit method to be taken again (`RETURN_RATIO`).
+    fn returning(&self, h: f64) -> bool {
+        h < RETURN_RATIO * self.longest_implicit
+    }
+
+    /// Takes the other method from the point reached at `t`.
+    fn change(&mut self, t: f64) {
         self.agreeing = 0;
         self.switches += 1;
         if self.stiff {
             self.explicit.adopt(self.implicit.derivative());
             self.switched = Some(self.explicit.controller());
+            self.held.forget();
         } else {
             self.stiff_from.get_or_insert(t);
             self.longest_implicit = 0.0;
@@ -225,6 +240,15 @@ impl AdaptiveStepper for Switching {
         match self.last_stiff {
             true => self.implicit.interpolate(t, out),
             false => self.explicit.interpolate(t, out),
+        }
+    }
+
+    fn after_step(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64) {
+        if self.stiff || !self.returning(h) {
+            return;
+        }
+        if (self.held).held_after(eval, (t, y), h, self.explicit.stiffness()) {
+            self.change(t);
         }
     }
 
