@@ -16,11 +16,11 @@
 //!   where |R(iy)| of Dormand–Prince's stability function crosses 1 (it exceeds 1 by 0.3 % at
 //!   y = 1.5, 3 % at 2): the stiff pendulum's steps there were at h ρ = 0.81 on average.
 //!
-//! The steps are held when h ρ is at least `HELD` of that boundary on `PERSISTENCE` checks in a
-//! row (taken at consecutive steps once one says so). A check costs three evaluations of f
-//! (twelve more at the first, to let the iteration settle), taken every `CHECK_EVERY` steps,
-//! and only while Dormand–Prince's free estimate is above `WORTH_CHECKING`: a problem whose
-//! steps are far from any stability boundary (an orbit at 1e-10: h|λ| about 0.03) pays nothing.
+//! The steps are held when h ρ is between `HELD` and `CEILING` times that boundary on
+//! `PERSISTENCE` checks in a row (taken at consecutive steps once one says so). A check costs
+//! three evaluations of f (ten more at the first), taken every `CHECK_EVERY` steps, and only
+//! while Dormand–Prince's free estimate is above `WORTH_CHECKING`: a problem whose steps are far
+//! from any stability boundary (an orbit at 1e-10: h|λ| about 0.03) pays nothing.
 
 use super::evaluator::Evaluator;
 use super::stability::PowerIteration;
@@ -29,13 +29,18 @@ use super::stability::PowerIteration;
 /// on the imaginary axis.
 const REAL_LIMIT: f64 = 3.3;
 const IMAGINARY_LIMIT: f64 = 0.997;
-/// The fraction of the boundary from which h ρ says that the step is held by stability.
+/// The fraction of the boundary from which h ρ says that the step is held by stability, and the
+/// multiple above which it cannot be: an accepted step beyond the boundary means that the
+/// fastest mode is one the solution follows (a motion running away, whose λ² > 0 looks like a
+/// damped mode's), its steps bound by accuracy (as in the stiffness check, `stability.rs`).
 const HELD: f64 = 0.5;
+const CEILING: f64 = 2.0;
 /// Checks in a row that must agree.
 const PERSISTENCE: usize = 3;
 /// Accepted steps between two checks while nothing is found.
 const CHECK_EVERY: usize = 20;
-/// Power iterations at the first check (fewer once two agree); later checks take one.
+/// Power iterations at the first check (fewer once two agree); later checks take one, the
+/// direction converging along the run.
 const WARM_UP: usize = 6;
 /// Dormand–Prince's stage estimate h |λ| below which no check is taken: ‖J v‖ / ‖v‖ along any
 /// direction v, it is below h ρ, and on the stiff pendulum it was above 0.1 on 95 % of the
@@ -98,7 +103,7 @@ impl HeldSteps {
             true => IMAGINARY_LIMIT,
             false => REAL_LIMIT,
         };
-        self.held_checks = match h * rate >= HELD * limit {
+        self.held_checks = match (HELD * limit..=CEILING * limit).contains(&(h * rate)) {
             true => self.held_checks + 1,
             false => 0,
         };
