@@ -25,9 +25,9 @@
 //! is found at the first check that says so: the run diverges within a few steps.
 //! The first such finding is kept ([`StabilityBound`]) and the checks stop. Nothing depends on
 //! the output times. The implicit method's stiffness switching watches its steps with
-//! Dormand–Prince's own stage estimate instead (`switching.rs`), which is free but measures
-//! ‖J v‖ / ‖v‖ along the step's stage difference only; a warning must not depend on what one
-//! step happened to excite.
+//! Dormand–Prince's own stage estimate (`switching.rs`), which is free but measures
+//! ‖J v‖ / ‖v‖ along the step's stage difference only, and with this power iteration
+//! (`held_steps.rs`); a warning must not depend on what one step happened to excite.
 
 use nalgebra::{DMatrix, DVector};
 

@@ -9,11 +9,17 @@
 //!   its stability allows (`STIFF`), so they cannot grow much while a stiff component is there,
 //!   whereas Radau IIA's are bounded by accuracy alone. Waiting for `STIFF` itself, as DOPRI5
 //!   does to report stiffness, kept the governor at 1e-10 on Dormand–Prince's accuracy-bound
-//!   steps (h |λ| between 1 and 3.25) until t = 0.56.
+//!   steps (h |λ| between 1 and 3.25) until t = 0.56. Or, after an accepted step, the
+//!   spectral radius of ∂f/∂y says that the steps are held by stability (`held_steps.rs`):
+//!   the stage estimate measures ∂f/∂y only along what the last stages differ by, and a stiff
+//!   mode the motion does not excite (a stiff spring released on its slow manifold) kept
+//!   Dormand–Prince at its stability limit, or not, by accident.
 //! - **Back to the explicit method**: the spectral radius ρ of the implicit method's Jacobian
-//!   gives h ρ below `EXPLICIT_MARGIN` · `STIFF` on `PERSISTENCE` accepted steps in a row: the
-//!   explicit method would be stable at the steps the implicit one takes, and costs less per
-//!   step at equal accuracy (order 5 against 4, and no Jacobian).
+//!   gives h ρ below `EXPLICIT_MARGIN` times the explicit method's boundary along the stiff
+//!   mode (`STIFF` on the real axis, 0.997 for an undamped oscillation: `HeldSteps::boundary`)
+//!   on `PERSISTENCE` accepted steps in a row: the explicit method would be stable at the
+//!   steps the implicit one takes, and costs less per step at equal accuracy (order 5 against
+//!   4, and no Jacobian).
 //!
 //! Where the implicit method was left for steps ρ allowed, it is taken again only where the
 //! explicit steps fall below `RETURN_RATIO` of the longest step it took in its last stretch, so
