@@ -63,6 +63,10 @@ pub(super) trait AdaptiveStepper {
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]);
     /// The dense output of the last accepted step at `t`.
     fn interpolate(&self, t: f64, out: &mut [f64]);
+    /// Looks at the accepted step of size `h` that ended at (t, y), after its end was projected
+    /// and its outputs delivered: a method that switches between two may evaluate the system
+    /// there to decide (and change [`AdaptiveStepper::switched_controller`]). Nothing for most.
+    fn after_step(&mut self, _eval: &mut Evaluator, _t: f64, _y: &[f64], _h: f64) {}
     /// Adds to `stats` what the method counts itself (a method that switches between two).
     fn count(&self, _stats: &mut Stats) {}
 }
@@ -149,6 +153,10 @@ impl Marching for AdaptiveMarch {
         observer: &mut Observer,
     ) -> Result<(), Halt> {
         while !self.attempt(eval, problem, outputs, observer)? {}
+        (self.stepper).after_step(eval, self.t, &self.y, self.last_step);
+        if let Some(controller) = self.stepper.switched_controller() {
+            self.controller = controller;
+        }
         if let Some(watch) = &mut self.watch {
             watch.after_step(eval, self.t, &self.y, self.last_step);
         }

@@ -24,6 +24,7 @@ pub mod dopri5;
 mod driver;
 mod evaluator;
 mod events;
+mod held_steps;
 mod hermite;
 mod jacobian;
 mod march;

@@ -25,9 +25,9 @@
 //! is found at the first check that says so: the run diverges within a few steps.
 //! The first such finding is kept ([`StabilityBound`]) and the checks stop. Nothing depends on
 //! the output times. The implicit method's stiffness switching watches its steps with
-//! Dormand–Prince's own stage estimate instead (`switching.rs`), which is free but measures
-//! ‖J v‖ / ‖v‖ along the step's stage difference only; a warning must not depend on what one
-//! step happened to excite.
+//! Dormand–Prince's own stage estimate (`switching.rs`), which is free but measures
+//! ‖J v‖ / ‖v‖ along the step's stage difference only, and with this power iteration
+//! (`held_steps.rs`); a warning must not depend on what one step happened to excite.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -64,8 +64,13 @@ pub(super) struct PowerIteration {
     slope: Vec<f64>,
     probe: Vec<f64>,
     perturbed: Vec<f64>,
+    /// The direction before the last iteration.
+    previous: Vec<f64>,
     /// Whether `direction` has been iterated on at all (else it is the starting vector).
     warm: bool,
+    /// Whether the last iteration turned the direction over (⟨v, J² v⟩ < 0): the fastest
+    /// eigenvalues are an oscillation ±iω rather than real (λ² = −ω² against λ² > 0).
+    oscillating: bool,
     /// An orthonormal basis of the system's tangent space at the point of the estimate (over
     /// the controlled components), `None` for a system that moves freely.
     tangent: Option<DMatrix<f64>>,
@@ -79,8 +84,10 @@ impl PowerIteration {
             direction: starting_vector(dimension, controlled),
             slope: zeros.clone(),
             probe: zeros.clone(),
-            perturbed: zeros,
+            perturbed: zeros.clone(),
+            previous: zeros,
             warm: false,
+            oscillating: false,
             tangent: None,
         }
     }
@@ -99,6 +106,16 @@ impl PowerIteration {
 
     pub(super) fn direction(&self) -> &[f64] {
         &self.direction
+    }
+
+    /// Whether the direction has been iterated on (a first estimate needs more iterations).
+    pub(super) fn is_warm(&self) -> bool {
+        self.warm
+    }
+
+    /// Whether the fastest eigenvalues of the last estimate are an oscillation (see the field).
+    pub(super) fn oscillating(&self) -> bool {
+        self.oscillating
     }
 
     /// The estimate of ρ at (t, y) after `iterations` iterations at most (stopping early when
@@ -125,8 +142,13 @@ impl PowerIteration {
         eval.rhs(t, y, &mut self.slope).ok()?;
         let mut rate: Option<f64> = None;
         for _ in 0..iterations {
+            self.previous[..n].copy_from_slice(&self.direction[..n]);
             let first = self.multiply(eval, t, y)?;
             let second = self.multiply(eval, t, y)?;
+            let turned: f64 = (self.direction[..n].iter().zip(&self.previous[..n]))
+                .map(|(a, b)| a * b)
+                .sum();
+            self.oscillating = turned < 0.0;
             let next = (first * second).sqrt();
             let settled = rate.is_some_and(|r| (next - r).abs() <= SETTLED * next);
             rate = Some(next);

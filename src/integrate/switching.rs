@@ -9,11 +9,17 @@
 //!   its stability allows (`STIFF`), so they cannot grow much while a stiff component is there,
 //!   whereas Radau IIA's are bounded by accuracy alone. Waiting for `STIFF` itself, as DOPRI5
 //!   does to report stiffness, kept the governor at 1e-10 on Dormand–Prince's accuracy-bound
-//!   steps (h |λ| between 1 and 3.25) until t = 0.56.
+//!   steps (h |λ| between 1 and 3.25) until t = 0.56. Or, after an accepted step, the
+//!   spectral radius of ∂f/∂y says that the steps are held by stability (`held_steps.rs`):
+//!   the stage estimate measures ∂f/∂y only along what the last stages differ by, and a stiff
+//!   mode the motion does not excite (a stiff spring released on its slow manifold) kept
+//!   Dormand–Prince at its stability limit, or not, by accident.
 //! - **Back to the explicit method**: the spectral radius ρ of the implicit method's Jacobian
-//!   gives h ρ below `EXPLICIT_MARGIN` · `STIFF` on `PERSISTENCE` accepted steps in a row: the
-//!   explicit method would be stable at the steps the implicit one takes, and costs less per
-//!   step at equal accuracy (order 5 against 4, and no Jacobian).
+//!   gives h ρ below `EXPLICIT_MARGIN` times the explicit method's boundary along the stiff
+//!   mode (`STIFF` on the real axis, 0.997 for an undamped oscillation: `HeldSteps::boundary`)
+//!   on `PERSISTENCE` accepted steps in a row: the explicit method would be stable at the
+//!   steps the implicit one takes, and costs less per step at equal accuracy (order 5 against
+//!   4, and no Jacobian).
 //!
 //! Where the implicit method was left for steps ρ allowed, it is taken again only where the
 //! explicit steps fall below `RETURN_RATIO` of the longest step it took in its last stretch, so
@@ -29,6 +35,7 @@ use super::evaluator::{Evaluator, Halt};
 use super::outcome::Stats;
 use super::radau::Radau5;
 use super::rosenbrock::RosenbrockW;
+use super::held_steps::HeldSteps;
 use super::settings::Settings;
 
 /// The implicit method of the pair.
@@ -95,6 +102,9 @@ const RETURN_RATIO: f64 = 0.67;
 pub(super) struct Switching {
     explicit: DormandPrince,
     implicit: Stiff,
+    /// Whether the explicit method's steps are held by its stability region, from the spectral
+    /// radius of ∂f/∂y (`held_steps.rs`).
+    held: HeldSteps,
     /// Which method takes the next attempt.
     stiff: bool,
     /// Which method took the last accepted step (whose interpolant serves the outputs).
@@ -118,6 +128,7 @@ impl Switching {
         Switching {
             explicit: DormandPrince::new(dimension, settings),
             implicit,
+            held: HeldSteps::new(dimension, settings.controlled_len(dimension)),
             stiff: false,
             last_stiff: false,
             agreeing: 0,
@@ -141,24 +152,34 @@ impl Switching {
     fn watch(&mut self, t: f64, h: f64) {
         let calls_for_other = if self.stiff {
             self.implicit
-                .spectral_radius_below(EXPLICIT_MARGIN * STIFF / h)
+                .spectral_radius_below(EXPLICIT_MARGIN * self.held.boundary(STIFF) / h)
         } else {
-            let returning = h < RETURN_RATIO * self.longest_implicit;
-            self.explicit.stiffness() > NEAR_STIFF && returning
+            self.returning(h) && self.explicit.stiffness() > NEAR_STIFF
         };
         self.agreeing = if calls_for_other {
             self.agreeing + 1
         } else {
             0
         };
-        if self.agreeing < PERSISTENCE {
-            return;
+        if self.agreeing >= PERSISTENCE {
+            self.change(t);
         }
+    }
+
+    /// Whether a step `h` of the explicit method is short enough against the implicit method's
+    /// last stretch for the implicit method to be taken again (`RETURN_RATIO`).
+    fn returning(&self, h: f64) -> bool {
+        h < RETURN_RATIO * self.longest_implicit
+    }
+
+    /// Takes the other method from the point reached at `t`.
+    fn change(&mut self, t: f64) {
         self.agreeing = 0;
         self.switches += 1;
         if self.stiff {
             self.explicit.adopt(self.implicit.derivative());
             self.switched = Some(self.explicit.controller());
+            self.held.forget();
         } else {
             self.stiff_from.get_or_insert(t);
             self.longest_implicit = 0.0;
@@ -225,6 +246,15 @@ impl AdaptiveStepper for Switching {
         match self.last_stiff {
             true => self.implicit.interpolate(t, out),
             false => self.explicit.interpolate(t, out),
+        }
+    }
+
+    fn after_step(&mut self, eval: &mut Evaluator, t: f64, y: &[f64], h: f64) {
+        if self.stiff || !self.returning(h) {
+            return;
+        }
+        if (self.held).held_after(eval, (t, y), h, self.explicit.stiffness()) {
+            self.change(t);
         }
     }
 

@@ -78,6 +78,7 @@ mod simulation;
 mod singular_passages;
 mod states;
 mod stepping;
+mod stiff_spring_pendulum;
 mod stop_loops;
 mod stops;
 mod sweep;
