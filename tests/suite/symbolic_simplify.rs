@@ -7,7 +7,7 @@
 use lsdc::driver::compile_text;
 use lsdc::load::LoadOptions;
 use lsdc::symbolic::expr::{ExprId, Pool, Tape};
-use lsdc::symbolic::simplify::{simplify, simplify_equations};
+use lsdc::symbolic::simplify::{simplify, simplify_equations, simplify_groups};
 use lsdc::symbolic::{self, Equations};
 use proptest::prelude::*;
 
@@ -164,4 +164,59 @@ proptest! {
         let worst = worst_difference(&equations, 4, seed);
         prop_assert!(worst < 1e-9, "simplified equations differ by {worst:e}\n{text}");
     }
+}
+
+/// The planar n-link pendulum of `benches/symbolic.rs` and `bench/sympy_simplified_sizes.py`.
+fn pendulum_program(n: usize) -> String {
+    let mut text = String::from("let g = 9.81 ;\n");
+    for i in 1..=n {
+        text += &format!("let l{i} = body mass = 1, iframe = [0, 0, -0.5] ++ 1, inertia = [0.08, 0.08, 0.01] end ;\n");
+        let parent = match i {
+            1 => "earth".to_string(),
+            _ => format!("[0, 0, -1] ++ 1 @ l{}", i - 1),
+        };
+        text += &format!(
+            "join {parent} and l{i}.frame with link(q) dof = q || [0, 1, 0] end as j{i} ;\n"
+        );
+        text += &format!(
+            "apply force value = [0, 0, -g * l{i}.mass], body = earth end on l{i}.iframe ;\n"
+        );
+    }
+    text
+}
+
+/// The equations of a program's text.
+fn equations_of_text(text: &str) -> Equations {
+    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false, scene: None };
+    let compilation = compile_text("program.lsd", text, None, &options);
+    assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
+    let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
+    let topology = lsdc::topology::build(mechanism).expect("a topology");
+    symbolic::generate(mechanism, &topology).expect("equations")
+}
+
+/// The entries SymPy's sizes are taken of: M[i, j] for i ≤ j and S[i] + F[i], simplified; their
+/// distinct operations.
+fn simplified_operations(mut equations: Equations) -> (usize, usize) {
+    let n = equations.dimension();
+    let upper: Vec<ExprId> = (0..n)
+        .flat_map(|i| (i..n).map(move |j| (i, j)))
+        .map(|(i, j)| equations.mass[i * n + j])
+        .collect();
+    let forcing: Vec<ExprId> = (0..n)
+        .map(|i| equations.pool.add(equations.second_member[i], equations.forces[i]))
+        .collect();
+    let before = operations(&equations.pool, &[upper.clone(), forcing.clone()].concat());
+    let (pool, simplified) = simplify_groups(&equations.pool, &[&upper, &forcing]);
+    (before, operations(&pool, &simplified.concat()))
+}
+
+#[test]
+fn simplified_sizes_against_sympy() {
+    for n in 1..=5 {
+        let (before, after) = simplified_operations(equations_of_text(&pendulum_program(n)));
+        println!("pendulum{n}: {before} -> {after}");
+    }
+    let (before, after) = simplified_operations(equations_of("examples/satellite.lsd"));
+    println!("satellite: {before} -> {after}");
 }

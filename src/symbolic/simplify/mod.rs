@@ -9,6 +9,11 @@
 //! simplified nodes, an atom for the nodes that use it. So each node costs a bounded amount and
 //! deep chains (a 100-link pendulum's) are simplified near their leaves and shared above.
 //!
+//! Expanding shares less: a sum read by several nodes, expanded in each, is written in each.
+//! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
+//! result with the fewest operations is kept; the simplified equations are never longer than
+//! the input.
+//!
 //! Values: like computer algebra systems, the simplifier takes x − x = 0, 0 · x = 0 and
 //! x / x = 1 for every x, so the result equals the input wherever the input is finite, and may
 //! be finite where the input divided by zero. Coefficients are floating-point (see
@@ -23,7 +28,7 @@ use polynomial::{Polynomial, Wave};
 use write::Writer;
 
 use super::equations::Equations;
-use super::expr::{topological_order, ExprId, Function, Node, Pool};
+use super::expr::{topological_order, ExprId, Function, Node, Pool, Tape};
 
 /// The most terms a node's normal form may have before the node is kept as an atom.
 const TERMS: usize = 64;
@@ -33,12 +38,62 @@ const WORK: usize = 4096;
 const POWER: i32 = 4;
 
 /// The roots of `pool` simplified, in a new pool with the same symbols in the same order (so
-/// that values of the symbols are given alike to both).
+/// that values of the symbols are given alike to both). Of the forms tried (`Expansion`), the
+/// one with the fewest operations is kept: never more than the input rebuilt.
 pub fn simplify(pool: &Pool, roots: &[ExprId]) -> (Pool, Vec<ExprId>) {
-    let mut pass = Pass::new(pool);
+    let (pool, mut groups) = simplify_groups(pool, &[roots]);
+    (pool, groups.pop().expect("one group"))
+}
+
+/// Each group of roots simplified on its own (its form chosen by its own operations: the mass
+/// matrix's closed form is not traded for a shorter right-hand side), the results gathered in
+/// one pool, where equal nodes of different groups are one node again.
+pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<ExprId>>) {
+    let mut gathered = Pool::new();
+    for i in 0..pool.symbol_count() as u32 {
+        gathered.symbol(pool.symbol_name(i));
+    }
+    let mut simplified = Vec::new();
+    for roots in groups {
+        let candidates = [
+            Expansion::Shared(TERMS),
+            Expansion::Shared(4),
+            Expansion::Shared(1),
+            Expansion::None,
+        ];
+        let (best, best_roots) = candidates
+            .into_iter()
+            .map(|expansion| simplify_with(pool, roots, expansion, Pool::new()))
+            .min_by_key(|(pool, roots)| Tape::new(pool, roots).operation_count())
+            .expect("candidates");
+        let copied;
+        (gathered, copied) = simplify_with(&best, &best_roots, Expansion::None, gathered);
+        simplified.push(copied);
+    }
+    (gathered, simplified)
+}
+
+/// How far the forms of shared nodes are carried into the nodes that read them.
+#[derive(Clone, Copy, Debug)]
+enum Expansion {
+    /// A node read more than once is expanded in its readers up to this many terms, and is an
+    /// atom for them beyond: a larger shared sum is written once rather than in every reader.
+    Shared(usize),
+    /// No expansion: the input rebuilt as it is (the constructors' local folding only).
+    None,
+}
+
+/// The roots simplified as `expansion` says, written into `out`.
+fn simplify_with(
+    pool: &Pool,
+    roots: &[ExprId],
+    expansion: Expansion,
+    out: Pool,
+) -> (Pool, Vec<ExprId>) {
+    let mut pass = Pass::new(pool, out);
     let order = topological_order(roots, |id| pool.operands(id));
-    // How many nodes still to simplify read each node: a form is dropped after its last reader.
     let kept: std::collections::HashSet<ExprId> = roots.iter().copied().collect();
+    // How many nodes still to simplify read each node: a form is dropped after its last reader.
     let mut readers: HashMap<ExprId, usize> = HashMap::new();
     for &id in &order {
         for operand in pool.operands(id) {
@@ -46,7 +101,21 @@ pub fn simplify(pool: &Pool, roots: &[ExprId]) -> (Pool, Vec<ExprId>) {
         }
     }
     for &id in &order {
-        let form = pass.form_of(id);
+        let mut form = match expansion {
+            Expansion::Shared(_) => pass.form_of(id),
+            Expansion::None => {
+                let node = pass.kept(id);
+                pass.atom(node)
+            }
+        };
+        let shared = readers.get(&id).copied().unwrap_or(0) > 1;
+        if let Expansion::Shared(terms) = expansion {
+            if shared && form.len() > terms {
+                let node = pass.writer.write(&mut pass.out, &form);
+                pass.nodes.insert(id, node);
+                form = pass.atom(node);
+            }
+        }
         pass.forms.insert(id, form);
         for operand in pool.operands(id) {
             let left = readers.get_mut(&operand).expect("counted");
@@ -62,23 +131,28 @@ pub fn simplify(pool: &Pool, roots: &[ExprId]) -> (Pool, Vec<ExprId>) {
 
 /// The equations with every expression simplified, in a new pool.
 pub fn simplify_equations(equations: &Equations) -> Equations {
-    let roots = equations.roots();
-    let (pool, simplified) = simplify(&equations.pool, &roots);
-    let mut rest = simplified.as_slice();
-    let mut take = |count: usize| {
-        let (head, tail) = rest.split_at(count);
-        rest = tail;
-        head.to_vec()
-    };
+    let none = Vec::new();
+    let groups: [&[ExprId]; 6] = [
+        &equations.mass,
+        &equations.second_member,
+        &equations.forces,
+        &equations.constraints,
+        &equations.constraint_bias,
+        equations.accelerations.as_ref().unwrap_or(&none),
+    ];
+    let (pool, mut simplified) = simplify_groups(&equations.pool, &groups);
+    let accelerations = simplified.pop().expect("six groups");
+    let mut groups = simplified.into_iter();
+    let mut next = || groups.next().expect("six groups");
     Equations {
         variables: equations.variables.clone(),
-        mass: take(equations.mass.len()),
-        second_member: take(equations.second_member.len()),
-        forces: take(equations.forces.len()),
-        constraints: take(equations.constraints.len()),
-        constraint_bias: take(equations.constraint_bias.len()),
+        mass: next(),
+        second_member: next(),
+        forces: next(),
+        constraints: next(),
+        constraint_bias: next(),
         constraint_names: equations.constraint_names.clone(),
-        accelerations: equations.accelerations.as_ref().map(|a| take(a.len())),
+        accelerations: equations.accelerations.as_ref().map(|_| accelerations),
         pool,
     }
 }
@@ -94,8 +168,8 @@ struct Pass<'a> {
 }
 
 impl Pass<'_> {
-    fn new(input: &Pool) -> Pass<'_> {
-        let mut out = Pool::new();
+    /// A pass from `input` into `out`, where the symbols are created first in `input`'s order.
+    fn new(input: &Pool, mut out: Pool) -> Pass<'_> {
         for i in 0..input.symbol_count() as u32 {
             out.symbol(input.symbol_name(i));
         }
