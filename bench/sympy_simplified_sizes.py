@@ -8,8 +8,8 @@ program as `bench/sympy_pendulum.py`, and `examples/satellite.lsd`), the unsimpl
 are written by `lsdc compile FILE --emit equations --format sympy`; the entries measured are
 M[i, j] for i <= j (M is symmetric) and S[i] + F[i] (SymPy's "forcing"). Each entry is passed
 to `sympy.simplify` (which tries `trigsimp`, `cancel`, `factor`, ... and keeps the shortest by
-`count_ops`). Each mechanism runs in a child process with a time limit (`--limit`, CPU
-seconds of SymPy): where `simplify` does not finish in it, `sympy.trigsimp` (the
+`count_ops`). Each mechanism runs in a child process with a time limit (`--limit`, seconds
+of wall clock): where `simplify` does not finish in it, `sympy.trigsimp` (the
 trigonometric part alone) is measured instead, under the same limit, and the fixture says which
 method each count comes from. Two measures of the simplified entries are recorded:
 

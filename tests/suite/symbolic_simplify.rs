@@ -187,7 +187,11 @@ fn pendulum_program(n: usize) -> String {
 
 /// The equations of a program's text.
 fn equations_of_text(text: &str) -> Equations {
-    let options = LoadOptions { library_dirs: Vec::new(), use_environment: false, scene: None };
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+        scene: None,
+    };
     let compilation = compile_text("program.lsd", text, None, &options);
     assert!(!compilation.has_errors(), "{:?}", compilation.diagnostics);
     let mechanism = compilation.mechanism.as_ref().expect("a mechanism");
@@ -204,19 +208,55 @@ fn simplified_operations(mut equations: Equations) -> (usize, usize) {
         .map(|(i, j)| equations.mass[i * n + j])
         .collect();
     let forcing: Vec<ExprId> = (0..n)
-        .map(|i| equations.pool.add(equations.second_member[i], equations.forces[i]))
+        .map(|i| {
+            equations
+                .pool
+                .add(equations.second_member[i], equations.forces[i])
+        })
         .collect();
     let before = operations(&equations.pool, &[upper.clone(), forcing.clone()].concat());
     let (pool, simplified) = simplify_groups(&equations.pool, &[&upper, &forcing]);
     (before, operations(&pool, &simplified.concat()))
 }
 
+/// The simplified pendulums (n ≤ 5) and satellite against SymPy's simplified forms of the same
+/// entries (fixture written by `bench/sympy_simplified_sizes.py`, with SymPy's version and the
+/// method that finished). The measure is the number of operations: lsdc's distinct operations
+/// of the graph against `count_ops` of SymPy's entries after `cse` (each shared subexpression
+/// once on both sides). The pendulums must be no longer; the satellite is reported.
 #[test]
 fn simplified_sizes_against_sympy() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/sympy_simplified_sizes.json"
+    );
+    let fixture: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).expect("the fixture")).expect("JSON");
+    let sympy = |name: &str| fixture["mechanisms"][name]["cse_ops"].as_u64();
     for n in 1..=5 {
         let (before, after) = simplified_operations(equations_of_text(&pendulum_program(n)));
-        println!("pendulum{n}: {before} -> {after}");
+        println!(
+            "pendulum{n}: {before} -> {after}, SymPy {:?}",
+            sympy(&format!("pendulum{n}"))
+        );
+        assert!(
+            after <= before,
+            "pendulum{n}: {after} operations from {before}"
+        );
+        if let Some(theirs) = sympy(&format!("pendulum{n}")) {
+            assert!(
+                after as u64 <= theirs,
+                "pendulum{n}: {after} operations, SymPy {theirs}"
+            );
+        }
     }
     let (before, after) = simplified_operations(equations_of("examples/satellite.lsd"));
-    println!("satellite: {before} -> {after}");
+    println!(
+        "satellite: {before} -> {after}, SymPy {:?}",
+        sympy("satellite")
+    );
+    assert!(
+        after <= before,
+        "satellite: {after} operations from {before}"
+    );
 }

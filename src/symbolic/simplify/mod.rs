@@ -40,6 +40,7 @@ const POWER: i32 = 4;
 /// The roots of `pool` simplified, in a new pool with the same symbols in the same order (so
 /// that values of the symbols are given alike to both). Of the forms tried (`Expansion`), the
 /// one with the fewest operations is kept: never more than the input rebuilt.
+#[cfg(lsdc_internals)]
 pub fn simplify(pool: &Pool, roots: &[ExprId]) -> (Pool, Vec<ExprId>) {
     let (pool, mut groups) = simplify_groups(pool, &[roots]);
     (pool, groups.pop().expect("one group"))

@@ -127,7 +127,7 @@ fn write_sum(pool: &mut Pool, mut terms: Vec<Term>) -> ExprId {
         1.0
     };
     // Positive terms first, so that the negative ones are subtractions.
-    terms.sort_by(|a, b| (a.coefficient < 0.0).cmp(&(b.coefficient < 0.0)));
+    terms.sort_by_key(|t| t.coefficient < 0.0);
     let mut sum: Option<ExprId> = None;
     for term in terms {
         sum = Some(match sum {
