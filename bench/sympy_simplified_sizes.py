@@ -19,7 +19,8 @@ method each count comes from. Two measures of the simplified entries are recorde
             subexpressions' definitions plus the reduced entries): each shared subexpression
             counted once, as lsdc's distinct operations of the graph are.
 
-Usage: python3 bench/sympy_simplified_sizes.py [--lsdc PATH] [--out PATH] [--limit S]
+Usage: python3 bench/sympy_simplified_sizes.py [--lsdc PATH] [--out PATH] [--limit S] [--only NAME]
+(`--only pendulum4` measures that mechanism again and updates its entry of an existing fixture.)
 Needs sympy (pip install sympy).
 """
 
@@ -106,6 +107,7 @@ def main():
     parser.add_argument("--lsdc", default=str(ROOT / "target" / "debug" / "lsdc"))
     parser.add_argument("--out", default=str(ROOT / "tests" / "fixtures" / "sympy_simplified_sizes.json"))
     parser.add_argument("--limit", type=float, default=300.0)
+    parser.add_argument("--only", help="measure this mechanism again, updating the fixture")
     parser.add_argument("--one", help=argparse.SUPPRESS)
     parser.add_argument("--method", default="simplify", help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -113,6 +115,8 @@ def main():
         print(json.dumps(measure(args.lsdc, Path(args.one), args.method)))
         return
     results = {}
+    if args.only:
+        results = json.loads(Path(args.out).read_text())["mechanisms"]
     fixture = {
         "provenance": "bench/sympy_simplified_sizes.py: sympy.simplify (or sympy.trigsimp where "
         "simplify did not finish in the limit) of each entry of lsdc's unsimplified equations "
@@ -130,6 +134,8 @@ def main():
             mechanisms.append((f"pendulum{n}", path))
         mechanisms.append(("satellite", ROOT / "examples" / "satellite.lsd"))
         for name, path in mechanisms:
+            if args.only and name != args.only:
+                continue
             results[name] = measured_in_child(args, name, path)
             print(name, results[name], file=sys.stderr)
             Path(args.out).write_text(json.dumps(fixture, indent=2) + "\n")
