@@ -96,7 +96,7 @@ def measured_in_child(args, name, path):
         command = [sys.executable, __file__, "--lsdc", args.lsdc, "--one", str(path), "--method", method]
         try:
             done = subprocess.run(command, capture_output=True, text=True, timeout=args.limit, check=True)
-            return json.loads(done.stdout)
+            return {**json.loads(done.stdout), "limit_seconds": args.limit}
         except subprocess.TimeoutExpired:
             print(f"{name}: sympy.{method} did not finish in {args.limit} s", file=sys.stderr)
     return {"method": f"neither sympy.simplify nor sympy.trigsimp finished in {args.limit} s"}
