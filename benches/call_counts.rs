@@ -1,9 +1,10 @@
 //! Calls one program's constrained right-hand side (or its tree's, or a projection, or a
-//! right-hand side followed by the projection of the same state, as after a dopri5 step) a given
-//! number of times at the initial state, for an instruction counter:
+//! right-hand side followed by the projection of the same state, as after a dopri5 step, or the
+//! constrained right-hand side in the planar form of a planar mechanism) a given number of times
+//! at the initial state, for an instruction counter:
 //!
 //! ```text
-//! cargo bench --bench call_counts -- FILE [loops|tree|projection|evaluated] CALLS
+//! cargo bench --bench call_counts -- FILE [loops|planar|tree|projection|evaluated] CALLS
 //! valgrind --tool=callgrind target/release/deps/call_counts-HASH FILE loops 600
 //! ```
 //!
@@ -42,12 +43,23 @@ fn main() {
         .filter(|a| !a.starts_with("--"))
         .collect();
     let [file, what, calls] = &args[..] else {
-        println!("usage: call_counts FILE [loops|tree|projection|evaluated] CALLS");
+        println!("usage: call_counts FILE [loops|planar|tree|projection|evaluated] CALLS");
         return;
     };
     let calls: usize = calls.parse().expect("CALLS is a number");
-    let prepared = load(file);
+    let mut prepared = load(file);
     match what.as_str() {
+        "planar" => {
+            prepared.take_planar().expect("the mechanism is planar");
+            let (mut system, y) = loop_system(&prepared);
+            system.use_planar(prepared.planar_form());
+            let mut dydt = vec![0.0; y.len()];
+            for _ in 0..calls {
+                system
+                    .derivative(0.0, black_box(&y), &mut dydt)
+                    .expect("evaluates");
+            }
+        }
         "loops" => {
             let (mut system, y) = loop_system(&prepared);
             let mut dydt = vec![0.0; y.len()];
@@ -80,6 +92,6 @@ fn main() {
                 call();
             }
         }
-        other => println!("unknown mode {other}: loops, tree, projection or evaluated"),
+        other => println!("unknown mode {other}: loops, planar, tree, projection or evaluated"),
     }
 }

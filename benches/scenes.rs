@@ -3,8 +3,10 @@
 //! its model) against a program of that arm alone with the same output, and against the whole
 //! cell with that output (no scenes: nothing left out). Per right-hand side (the derivative at
 //! the initial state) and per run (1 s with RK4 at a 1 ms step, outputs every 10 ms). Run with
-//! `cargo bench --bench scenes`. Times are CPU times of the timing thread: the best over rounds,
-//! and the median of the last round. The ratios are the result.
+//! `cargo bench --bench scenes`. Times are CPU times of the timing thread, the three programs
+//! timed in turn within each round (interleaved, so that a change of the machine's speed falls
+//! on all three): the best over the rounds, and the median over the rounds (of each round's
+//! median batch for a right-hand side). The ratios are the result.
 
 mod common;
 use common::{cpu_time_per_call, thread_cpu_seconds};
@@ -58,10 +60,31 @@ fn programs() -> [(&'static str, Prepared); 3] {
     ]
 }
 
+/// Per round: a right-hand side's best and median batch (µs), and a run (ms).
 struct Timing {
     name: &'static str,
-    rhs: (f64, f64),
-    run: (f64, f64),
+    rhs: Vec<(f64, f64)>,
+    run: Vec<f64>,
+}
+
+impl Timing {
+    /// The best right-hand side and run over the rounds.
+    fn best(&self) -> (f64, f64) {
+        let rhs = self.rhs.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+        (rhs, self.run.iter().copied().fold(f64::INFINITY, f64::min))
+    }
+
+    /// The median over the rounds of a right-hand side's median batch, and of a run.
+    fn median(&self) -> (f64, f64) {
+        let middle = |mut values: Vec<f64>| {
+            values.sort_by(f64::total_cmp);
+            values[values.len() / 2]
+        };
+        (
+            middle(self.rhs.iter().map(|t| t.1).collect()),
+            middle(self.run.clone()),
+        )
+    }
 }
 
 fn time_rhs(prepared: &Prepared) -> (f64, f64) {
@@ -95,34 +118,45 @@ fn main() {
     let mut timings: Vec<Timing> = (programs.iter())
         .map(|(name, _)| Timing {
             name,
-            rhs: (f64::INFINITY, 0.0),
-            run: (f64::INFINITY, 0.0),
+            rhs: Vec::new(),
+            run: Vec::new(),
         })
         .collect();
     for _ in 0..ROUNDS {
         for ((_, prepared), timing) in programs.iter().zip(&mut timings) {
             let rhs = time_rhs(prepared);
-            let run = time_run(prepared);
-            timing.rhs = (timing.rhs.0.min(rhs.0 * 1e6), rhs.1 * 1e6);
-            timing.run = (timing.run.0.min(run * 1e3), run * 1e3);
+            timing.rhs.push((rhs.0 * 1e6, rhs.1 * 1e6));
+            timing.run.push(time_run(prepared) * 1e3);
         }
     }
     println!(
-        "{:<30} {:>8} {:>8} {:>9} {:>9}  (CPU time; best, last round)",
-        "case", "RHS µs", "last", "run ms", "last"
+        "CPU time over {ROUNDS} interleaved rounds: the best, and the median of the rounds.\n"
     );
+    println!("| case | RHS µs (best) | RHS µs (median) | run ms (best) | run ms (median) |");
+    println!("|---|---:|---:|---:|---:|");
     for t in &timings {
+        let ((rhs, run), (rhs_median, run_median)) = (t.best(), t.median());
         println!(
-            "{:<30} {:>8.2} {:>8.2} {:>9.2} {:>9.2}",
-            t.name, t.rhs.0, t.rhs.1, t.run.0, t.run.1
+            "| {} | {rhs:.3} | {rhs_median:.3} | {run:.2} | {run_median:.2} |",
+            t.name
         );
     }
     let (scene, alone, whole) = (&timings[0], &timings[1], &timings[2]);
+    let ratio = |a: (f64, f64), b: (f64, f64)| (a.0 / b.0, a.1 / b.1);
+    let (best, median) = (
+        ratio(scene.best(), alone.best()),
+        ratio(scene.median(), alone.median()),
+    );
     println!(
-        "scene / arm alone: {:.3} per RHS, {:.3} per run; whole cell / scene: {:.2} per RHS, {:.2} per run",
-        scene.rhs.0 / alone.rhs.0,
-        scene.run.0 / alone.run.0,
-        whole.rhs.0 / scene.rhs.0,
-        whole.run.0 / scene.run.0
+        "\nscene / arm alone: {:.3} per RHS, {:.3} per run (best); {:.3} per RHS, {:.3} per run (median)",
+        best.0, best.1, median.0, median.1
+    );
+    let (best, median) = (
+        ratio(whole.best(), scene.best()),
+        ratio(whole.median(), scene.median()),
+    );
+    println!(
+        "whole cell / scene: {:.2} per RHS, {:.2} per run (best); {:.2} per RHS, {:.2} per run (median)",
+        best.0, best.1, median.0, median.1
     );
 }

@@ -339,6 +339,17 @@ impl Program {
         Ok(prepared)
     }
 
+    /// Prepares what a study of kinematics alone reads (`lsdc kinematics`, `lsdc workspace`):
+    /// the mechanism's joints, loops, stops and drives without the dynamics
+    /// (`prepare::prepare_kinematics`), so that no mass or effort needs a value;
+    /// `prepared.model.dynamics` is false.
+    pub fn prepare_kinematics(&self, values: &[Override]) -> Result<Prepared, Error> {
+        Ok(crate::prepare::prepare_kinematics(
+            self.mechanism()?,
+            values,
+        )?)
+    }
+
     /// Adds the state of each named frame to the outputs of `prepared`, after the program's
     /// own: a frame the program names, a body's name or `earth`, 13 columns `NAME.x`, `NAME.y`,
     /// `NAME.z`, `NAME.qw` … `NAME.qz` (unit quaternion, w ≥ 0), `NAME.vx` … `NAME.wz` in the

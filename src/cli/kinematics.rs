@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::shared::{
-    err, json, out, prepare_file, refuse_imposed_motion, usage_error, Format, LibraryArgs,
+    err, json, out, prepare_kinematics_file, refuse_imposed_motion, usage_error, Format,
+    LibraryArgs,
 };
 use lsdc::prepare::Prepared;
 use lsdc::studies::configurations::{self, Declared};
@@ -61,7 +62,7 @@ pub fn run(args: &KinematicsArgs) -> ExitCode {
         return usage_error("`--tolerance` must be positive");
     }
     let (program, prepared) =
-        match prepare_file(&args.file, &args.libraries, &args.sets, args.format) {
+        match prepare_kinematics_file(&args.file, &args.libraries, &args.sets, args.format) {
             Ok(prepared) => prepared,
             Err(code) => return code,
         };

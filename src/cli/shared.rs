@@ -251,6 +251,30 @@ pub fn prepare_file(
     Ok((program, prepared))
 }
 
+/// As [`prepare_file`] for a study of kinematics alone: the model without the dynamics
+/// (`Program::prepare_kinematics`).
+pub fn prepare_kinematics_file(
+    file: &Path,
+    libraries: &LibraryArgs,
+    sets: &[String],
+    format: Format,
+) -> Result<(Program, Prepared), ExitCode> {
+    let overrides = parse_sets(sets)?;
+    let program = load_program(file, &libraries.options(), format)?;
+    let prepared = match program.prepare_kinematics(&overrides) {
+        Ok(prepared) => prepared,
+        Err(Error::Program(diagnostics)) => {
+            report_diagnostics(&program, &diagnostics, format);
+            return Err(ExitCode::from(1));
+        }
+        Err(error) => return Err(usage_error(&error.to_string())),
+    };
+    if !prepared.warnings.is_empty() {
+        report_diagnostics(&program, &prepared.warnings, format);
+    }
+    Ok((program, prepared))
+}
+
 /// E0491, reported, when the program imposes motions in time, which `subject` (a command,
 /// "`lsdc statics`") does not handle; `help` says what to run instead.
 pub fn refuse_imposed_motion(

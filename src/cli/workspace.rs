@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::shared::{
-    err, json, prepare_file, usage_error, write_output, Format, LibraryArgs, SampleFormat,
+    err, json, prepare_kinematics_file, usage_error, write_output, Format, LibraryArgs,
+    SampleFormat,
 };
 use lsdc::elab::mechanism::Mechanism;
 use lsdc::output::workspace_plot::{plot, Slices};
@@ -235,7 +236,7 @@ pub fn run(args: &WorkspaceArgs) -> ExitCode {
         }
     }
     let (program, prepared) =
-        match prepare_file(&args.file, &args.libraries, &args.sets, Format::Text) {
+        match prepare_kinematics_file(&args.file, &args.libraries, &args.sets, Format::Text) {
             Ok(prepared) => prepared,
             Err(code) => return code,
         };

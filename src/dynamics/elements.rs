@@ -19,6 +19,19 @@ pub struct BodyInertia {
     pub massless: bool,
 }
 
+impl BodyInertia {
+    /// No mass and no inertia.
+    pub fn massless() -> BodyInertia {
+        BodyInertia {
+            mass: 0.0,
+            com: Vector3::zeros(),
+            inertia: Inertia::zeros(),
+            rigid: RigidInertia::zeros(),
+            massless: true,
+        }
+    }
+}
+
 /// A force on a point of a body, or a torque on a body, from `apply`.
 #[derive(Clone, Debug)]
 pub struct AppliedEffort {

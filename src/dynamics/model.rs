@@ -105,6 +105,10 @@ pub struct Model {
     pub states: Vec<StateModel>,
     /// The actuators (`actuate`), whose laws may read the model; `None` without any.
     pub actuation: Option<Actuation>,
+    /// Whether the model carries the dynamics: the bodies' inertias, the efforts, rotors,
+    /// friction and states. False for a study that asks only for kinematics
+    /// (`build_kinematic`): its bodies are all massless and it has no effort.
+    pub dynamics: bool,
 }
 
 impl Model {
@@ -262,6 +266,27 @@ pub fn build_with(
     kinematics: &KinematicModel,
     quaternions: bool,
 ) -> Result<Model, Vec<Diagnostic>> {
+    build_parts(mechanism, kinematics, quaternions, true)
+}
+
+/// The model of a study that asks only for kinematics (`lsdc kinematics`, `lsdc workspace`):
+/// the joints, loops, stops, couplings, contacts and drives, without the dynamics. Every body
+/// is massless and no effort, rotor, friction or state is built, so that neither a mass nor
+/// an effort's value is needed and none is evaluated; `Model::dynamics` says so.
+pub fn build_kinematic(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+) -> Result<Model, Vec<Diagnostic>> {
+    build_parts(mechanism, kinematics, true, false)
+}
+
+/// `build_with`, with the bodies' inertias and the efforts only `with_dynamics`.
+fn build_parts(
+    mechanism: &Mechanism,
+    kinematics: &KinematicModel,
+    quaternions: bool,
+    with_dynamics: bool,
+) -> Result<Model, Vec<Diagnostic>> {
     let unknowns = &kinematics.unknowns;
     let topology = &kinematics.topology;
     let mut errors = Vec::new();
@@ -303,6 +328,11 @@ pub fn build_with(
     let mut body_names = Vec::new();
     for &id in &topology.bodies {
         let name = mechanism.body_name(BodyRef::Body(id));
+        if !with_dynamics {
+            bodies.push(BodyInertia::massless());
+            body_names.push(name);
+            continue;
+        }
         match body_inertia(mechanism, id, unknowns) {
             Ok(b) => {
                 let body = mechanism.body(id);
@@ -335,7 +365,10 @@ pub fn build_with(
         }
         body_names.push(name);
     }
-    let applied = applied_efforts(mechanism, kinematics, &mut errors);
+    let applied = match with_dynamics {
+        true => applied_efforts(mechanism, kinematics, &mut errors),
+        false => Vec::new(),
+    };
     let (gravity, applied) = gravity_field(applied, &bodies, unknowns);
     let loops = kinematics.complementary().to_vec();
     let loop_balls = loops
@@ -347,11 +380,22 @@ pub fn build_with(
         .collect();
     let nc: usize = loops.iter().map(JointModel::coordinate_count).sum();
     let contacts = contact_models(mechanism, kinematics, &mut errors);
-    let link_efforts = link_efforts(mechanism, &joints, &loops);
     let stops = stops::build(mechanism, &joints, &loops, unknowns, &mut errors);
-    let rotors = rotors::build(mechanism, &joints, &loops, unknowns, &mut errors);
     let mimics = mimics::build(mechanism, &joints, &loops, unknowns, &mut errors);
-    let mut frictions = friction::build(mechanism, &joints, &loops, unknowns, &mut errors);
+    // The dynamic elements of the links, the program's states and the frames the efforts
+    // read: none in a kinematic model, whose values need not be known.
+    let (link_efforts, rotors, mut frictions, states) = match with_dynamics {
+        true => {
+            let state_value = |e, what: &str, at| missing(mechanism, e, what, Some(at));
+            (
+                link_efforts(mechanism, &joints, &loops),
+                rotors::build(mechanism, &joints, &loops, unknowns, &mut errors),
+                friction::build(mechanism, &joints, &loops, unknowns, &mut errors),
+                states::build(mechanism, unknowns, &state_value, &mut errors),
+            )
+        }
+        false => (Vec::new(), Vec::new(), Vec::new(), Vec::new()),
+    };
     let drives = drives::build(mechanism, kinematics, &joints, &mut errors);
     for friction in &mut frictions {
         friction.driven = drives.iter().any(|d| d.velocity == friction.velocity);
@@ -363,19 +407,21 @@ pub fn build_with(
             Vec::new()
         }
     };
-    let state_value = |e, what: &str, at| missing(mechanism, e, what, Some(at));
-    let states = states::build(mechanism, unknowns, &state_value, &mut errors);
     let read = EffortsRead {
         applied: &applied,
         links: &link_efforts,
         states: &states,
     };
-    let effort_frames = effort_frames(mechanism, kinematics, read, &mut errors);
+    let effort_frames = match with_dynamics {
+        true => effort_frames(mechanism, kinematics, read, &mut errors),
+        false => Vec::new(),
+    };
     let link_potentials = joints
         .iter()
         .map(|j| &j.chain)
         .chain(&loops)
         .enumerate()
+        .filter(|_| with_dynamics)
         .filter_map(|(k, chain)| {
             mechanism
                 .link(mechanism.join(chain.join).link)
@@ -433,9 +479,12 @@ pub fn build_with(
         applied_groups: Vec::new(),
         declared_read: Vec::new(),
         actuation: None,
+        dynamics: with_dynamics,
     };
-    model.compile_efforts();
-    model.compile_actuators(mechanism)?;
+    if with_dynamics {
+        model.compile_efforts();
+        model.compile_actuators(mechanism)?;
+    }
     Ok(model)
 }
 

@@ -89,9 +89,13 @@ fn collect_displacement(d: &Displacement, into: &mut BTreeSet<UnknownId>) {
     }
 }
 
-/// The unknowns the motion depends on: geometry, the inertia of massive bodies (a body declared
-/// without mass and inertia needs no inertia frame), and the efforts.
-fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<UnknownId> {
+/// The unknowns the motion depends on: geometry, and `with_dynamics` the inertia of massive
+/// bodies (a body declared without mass and inertia needs no inertia frame) and the efforts.
+fn required_unknowns(
+    mechanism: &Mechanism,
+    topology: &Topology,
+    with_dynamics: bool,
+) -> BTreeSet<UnknownId> {
     let mut required = BTreeSet::new();
     for join in &mechanism.joins {
         collect_displacement(&join.first.displacement, &mut required);
@@ -100,10 +104,15 @@ fn required_unknowns(mechanism: &Mechanism, topology: &Topology) -> BTreeSet<Unk
         link.dofs
             .iter()
             .for_each(|d| collect_displacement(d, &mut required));
-        link.forces
-            .iter()
-            .chain(&link.torques)
-            .for_each(|(_, v)| collect_vector(v, &mut required));
+        if with_dynamics {
+            link.forces
+                .iter()
+                .chain(&link.torques)
+                .for_each(|(_, v)| collect_vector(v, &mut required));
+        }
+    }
+    if !with_dynamics {
+        return required;
     }
     for &id in &topology.bodies {
         let body = mechanism.body(id);
@@ -204,12 +213,32 @@ pub fn prepare(
     overrides: &[Override],
     defaults: &Settings,
 ) -> Result<Prepared, Vec<Diagnostic>> {
+    prepare_parts(mechanism, overrides, defaults, true)
+}
+
+/// Builds what a study that asks only for kinematics reads (`lsdc kinematics`, `lsdc
+/// workspace`): the model without the dynamics (`dynamic_model::build_kinematic`: no inertia,
+/// effort, rotor, friction or state, so that none needs a value), the initial state closed on
+/// the loops, no outputs and no planar form.
+pub fn prepare_kinematics(
+    mechanism: &Mechanism,
+    overrides: &[Override],
+) -> Result<Prepared, Vec<Diagnostic>> {
+    prepare_parts(mechanism, overrides, &Settings::default(), false)
+}
+
+fn prepare_parts(
+    mechanism: &Mechanism,
+    overrides: &[Override],
+    defaults: &Settings,
+    with_dynamics: bool,
+) -> Result<Prepared, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
     let generated = notation::unknown_names(mechanism, &topology);
     let values = unknown_values(mechanism, &generated, overrides)?;
     let mut missing = Vec::new();
     let mut frames_reported = BTreeSet::new();
-    for id in required_unknowns(mechanism, &topology)
+    for id in required_unknowns(mechanism, &topology, with_dynamics)
         .into_iter()
         .filter(|id| !values.contains_key(id))
     {
@@ -226,7 +255,10 @@ pub fn prepare(
         return Err(missing);
     }
     let kinematics = kinematic_model::build(mechanism, topology.clone(), values)?;
-    let model = dynamic_model::build(mechanism, &kinematics)?;
+    let model = match with_dynamics {
+        true => dynamic_model::build(mechanism, &kinematics)?,
+        false => dynamic_model::build_kinematic(mechanism, &kinematics)?,
+    };
     let (mut coordinates, mut rates) = initial_state(mechanism, &model)?;
     let mut warnings = Vec::new();
     if model.has_loops() {
@@ -248,7 +280,10 @@ pub fn prepare(
         let refused = crate::dynamics::sampled::refusal(&model, "the symplectic integrator", help);
         refused.map_or(Ok(()), |error| Err(vec![error]))?;
     }
-    let outputs = self::outputs::Outputs::compile(mechanism, &model)?;
+    let outputs = match with_dynamics {
+        true => self::outputs::Outputs::compile(mechanism, &model)?,
+        false => self::outputs::Outputs::none(),
+    };
     let coordinate_names = kinematics.coordinate_names();
     if !model.position_drives.is_empty() {
         let paths = &model.position_drives;
@@ -261,7 +296,10 @@ pub fn prepare(
         }
     }
     Ok(Prepared {
-        planar: planar::decide(&kinematics, &model).map(Box::new),
+        planar: match with_dynamics {
+            true => planar::decide(&kinematics, &model).map(Box::new),
+            false => Err("a study of kinematics alone builds no dynamics".to_string()),
+        },
         takes_planar: false,
         model,
         topology,

@@ -88,6 +88,18 @@ impl Outputs {
         Ok(outputs)
     }
 
+    /// No output: what a study of kinematics alone prepares (`prepare_kinematics`).
+    pub fn none() -> Outputs {
+        Outputs {
+            names: Vec::new(),
+            frame_names: Vec::new(),
+            layouts: Vec::new(),
+            tape: None,
+            frames: Vec::new(),
+            reads_model: false,
+        }
+    }
+
     pub fn is_empty(&self) -> bool {
         self.names.is_empty()
     }

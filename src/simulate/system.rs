@@ -175,6 +175,7 @@ impl<'m> MechanicalSystem<'m> {
             rates: &state.rates,
             states: &self.state.states,
         };
+        self.scratch.external_is_zero = false;
         let efforts = &mut self.scratch.efforts;
         evaluate_into(model, &mut self.scratch.data, &declared, t, efforts)?;
         self.actuate(t, q, v)?;

@@ -35,6 +35,7 @@ mod integrator_registry;
 mod integrators;
 mod isolated_configurations;
 mod joint_friction;
+mod kinematic_studies;
 mod kinematics;
 mod kinematics_models;
 mod kinematics_singular_points;

@@ -117,6 +117,8 @@ impl MechanicalSystem<'_> {
     ) -> Result<StackForces, SystemError> {
         let model = self.model;
         let accelerations = self.solve_every_row(t, q, v)?;
+        // The forces added to the efforts' external forces below are not zero.
+        self.scratch.external_is_zero = false;
         if !model.has_loops() && !model.has_contacts() {
             // A tree's evaluation may skip the efforts (none applied): they are taken here.
             let mut external = self.efforts(t, q, v)?.external;

@@ -33,6 +33,10 @@ pub struct Scratch {
     pub(in crate::simulate) no_efforts: Efforts,
     /// The efforts at the last evaluation, and the declared coordinates and rates they used.
     pub(in crate::simulate) efforts: Efforts,
+    /// Whether `efforts.external` is known to be all zero: a planar block that applies no
+    /// efforts then need not fill its 6-vectors with zeros again (81 bodies: 486 numbers per
+    /// call). Whatever writes them clears it (`evaluate_efforts`, `stack_reactions`).
+    pub(in crate::simulate) external_is_zero: bool,
     pub(in crate::simulate) declared: DeclaredState,
     /// The storage of the run's next reference angles (`follow_reference`).
     pub(in crate::simulate) next_reference: DeclaredState,
@@ -110,6 +114,7 @@ impl Scratch {
             accelerations: DVector::zeros(model.velocities()),
             no_efforts: Efforts::none(model),
             efforts: Efforts::none(model),
+            external_is_zero: false,
             declared: DeclaredState::default(),
             model_laws: None,
             actuator_tape: EffortScratch::default(),

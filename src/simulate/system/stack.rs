@@ -209,7 +209,10 @@ impl MechanicalSystem<'_> {
         } else {
             let efforts = &mut self.scratch.efforts;
             efforts.tau.fill(0.0);
-            efforts.external.fill(Force::zeros());
+            if !self.scratch.external_is_zero {
+                efforts.external.fill(Force::zeros());
+                self.scratch.external_is_zero = true;
+            }
             efforts.power = 0.0;
         }
         let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
