@@ -10,7 +10,7 @@
 //! The states are 256 random (q, v, a, τ), q uniform in [−π, π], the rest in [−1, 1], cycled.
 
 mod common;
-use common::{prepared_file, random_states, thread_cpu_seconds};
+use common::{interleaved, prepared_file, random_states};
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -21,40 +21,6 @@ use lsdc::spatial::Force;
 use nalgebra::DVector;
 
 const ROUNDS: usize = 9;
-
-/// Thread CPU time per call of each of `tasks`, timed in interleaved rounds of batches of about
-/// 10 ms each: (best, median) per task.
-fn interleaved(tasks: &mut [&mut dyn FnMut()]) -> Vec<(f64, f64)> {
-    let calls: Vec<u64> = tasks
-        .iter_mut()
-        .map(|f| {
-            let start = thread_cpu_seconds();
-            let mut calls = 0u64;
-            while thread_cpu_seconds() - start < 0.01 {
-                f();
-                calls += 1;
-            }
-            calls
-        })
-        .collect();
-    let mut times = vec![Vec::new(); tasks.len()];
-    for _ in 0..ROUNDS {
-        for ((f, &n), times) in tasks.iter_mut().zip(&calls).zip(&mut times) {
-            let start = thread_cpu_seconds();
-            for _ in 0..n {
-                f();
-            }
-            times.push((thread_cpu_seconds() - start) / n as f64);
-        }
-    }
-    times
-        .into_iter()
-        .map(|mut t| {
-            t.sort_by(f64::total_cmp);
-            (t[0], t[t.len() / 2])
-        })
-        .collect()
-}
 
 fn main() {
     let mut paths: Vec<PathBuf> = std::env::args()
@@ -84,32 +50,36 @@ fn main() {
             cycle.set((cycle.get() + 1) % states.len());
             &states[cycle.get()]
         };
-        let times = interleaved(&mut [
-            &mut || {
-                let [q, v, a, _] = next();
-                rnea_into(&model, d0, q, v, a, &external, &mut tau).expect("rnea");
-                black_box(&tau);
-            },
-            &mut || {
-                let [q, v, a, _] = next();
-                inverse
-                    .compute(&model, d1, q, v, a, &external)
-                    .expect("derivatives");
-                black_box(&inverse.dtau_dq);
-            },
-            &mut || {
-                let [q, v, _, t] = next();
-                aba_into(&model, d2, q, v, t, &external, &mut accelerations).expect("aba");
-                black_box(&accelerations);
-            },
-            &mut || {
-                let [q, v, _, t] = next();
-                forward
-                    .compute(&model, d3, q, v, t, &external)
-                    .expect("derivatives");
-                black_box(&forward.dacceleration_dq);
-            },
-        ]);
+        let times = interleaved(
+            [
+                &mut || {
+                    let [q, v, a, _] = next();
+                    rnea_into(&model, d0, q, v, a, &external, &mut tau).expect("rnea");
+                    black_box(&tau);
+                },
+                &mut || {
+                    let [q, v, a, _] = next();
+                    inverse
+                        .compute(&model, d1, q, v, a, &external)
+                        .expect("derivatives");
+                    black_box(&inverse.dtau_dq);
+                },
+                &mut || {
+                    let [q, v, _, t] = next();
+                    aba_into(&model, d2, q, v, t, &external, &mut accelerations).expect("aba");
+                    black_box(&accelerations);
+                },
+                &mut || {
+                    let [q, v, _, t] = next();
+                    forward
+                        .compute(&model, d3, q, v, t, &external)
+                        .expect("derivatives");
+                    black_box(&forward.dacceleration_dq);
+                },
+            ],
+            0.01,
+            ROUNDS,
+        );
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
         for (label, pick) in [("best", 0), ("median", 1)] {
             let t = |k: usize| if pick == 0 { times[k].0 } else { times[k].1 };

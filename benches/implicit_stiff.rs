@@ -11,7 +11,7 @@
 //! medians and their ratio after them).
 
 mod common;
-use common::thread_cpu_seconds;
+use common::interleaved;
 
 use lsdc::prepare::{prepare, Integrator, Prepared, Settings};
 use lsdc::simulate::run::{run, Simulation};
@@ -40,34 +40,6 @@ fn coordinate_error(run: &Simulation, reference: &Simulation) -> f64 {
         .flat_map(|(a, b)| a.coordinates.iter().zip(&b.coordinates))
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max)
-}
-
-/// Thread CPU time per call of each task, in 7 interleaved rounds of batches of about 50 ms:
-/// (best, median) per task.
-fn interleaved<const N: usize>(mut tasks: [&mut dyn FnMut(); N]) -> [(f64, f64); N] {
-    let calls = tasks.each_mut().map(|task| {
-        let start = thread_cpu_seconds();
-        let mut calls = 0u64;
-        while thread_cpu_seconds() - start < 0.05 {
-            task();
-            calls += 1;
-        }
-        calls
-    });
-    let mut times: [Vec<f64>; N] = std::array::from_fn(|_| Vec::new());
-    for _ in 0..7 {
-        for k in 0..N {
-            let start = thread_cpu_seconds();
-            for _ in 0..calls[k] {
-                tasks[k]();
-            }
-            times[k].push((thread_cpu_seconds() - start) / calls[k] as f64);
-        }
-    }
-    times.map(|mut t| {
-        t.sort_by(f64::total_cmp);
-        (t[0], t[t.len() / 2])
-    })
 }
 
 fn main() {
@@ -106,14 +78,18 @@ fn main() {
                 continue;
             };
             let implicit = prepared(name, Integrator::Implicit, implicit_tolerance, duration);
-            let [explicit_time, implicit_time] = interleaved([
-                &mut || {
-                    std::hint::black_box(run(&explicit, &mut |_| {}));
-                },
-                &mut || {
-                    std::hint::black_box(run(&implicit, &mut |_| {}));
-                },
-            ]);
+            let [explicit_time, implicit_time] = interleaved(
+                [
+                    &mut || {
+                        std::hint::black_box(run(&explicit, &mut |_| {}));
+                    },
+                    &mut || {
+                        std::hint::black_box(run(&implicit, &mut |_| {}));
+                    },
+                ],
+                0.05,
+                7,
+            );
             println!(
                 "{name} {tolerance:.0e} {target:.1e} {implicit_tolerance:.1e} {error:.1e} {:.3} {:.3} {:.3} {} {} {} {} (medians {:.3} {:.3} {:.3})",
                 1e3 * explicit_time.0,

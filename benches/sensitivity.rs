@@ -8,7 +8,7 @@
 //! sensitivity_evaluations` (best times; the medians after them).
 
 mod common;
-use common::thread_cpu_seconds;
+use common::interleaved;
 
 use lsdc::driver::compile_text;
 use lsdc::elab::Mechanism;
@@ -36,34 +36,6 @@ fn mechanism(case: &Case) -> Mechanism {
     let folder = std::path::Path::new("examples/control");
     let compilation = compile_text(case.name, &case.text, Some(folder), &Default::default());
     compilation.mechanism.expect("elaborates")
-}
-
-/// Thread CPU time per call of each task, timed in 7 interleaved rounds of batches of about
-/// 20 ms each: (best, median) per task.
-fn interleaved<const N: usize>(mut tasks: [&mut dyn FnMut(); N]) -> [(f64, f64); N] {
-    let calls = tasks.each_mut().map(|task| {
-        let start = thread_cpu_seconds();
-        let mut calls = 0u64;
-        while thread_cpu_seconds() - start < 0.02 {
-            task();
-            calls += 1;
-        }
-        calls
-    });
-    let mut times: [Vec<f64>; N] = std::array::from_fn(|_| Vec::new());
-    for _ in 0..7 {
-        for k in 0..N {
-            let start = thread_cpu_seconds();
-            for _ in 0..calls[k] {
-                tasks[k]();
-            }
-            times[k].push((thread_cpu_seconds() - start) / calls[k] as f64);
-        }
-    }
-    times.map(|mut t| {
-        t.sort_by(f64::total_cmp);
-        (t[0], t[t.len() / 2])
-    })
 }
 
 fn main() {
@@ -111,15 +83,19 @@ fn main() {
         let names: Vec<String> = case.parameters.iter().map(|s| s.to_string()).collect();
         let plain = run(&prepared, &mut |_| {});
         let study = sensitivities(&mechanism, &[], &changes, &names).expect("computes");
-        let [run_time, study_time] = interleaved([
-            &mut || {
-                std::hint::black_box(run(&prepared, &mut |_| {}));
-            },
-            &mut || {
-                let study = sensitivities(&mechanism, &[], &changes, &names);
-                std::hint::black_box(study.expect("computes"));
-            },
-        ]);
+        let [run_time, study_time] = interleaved(
+            [
+                &mut || {
+                    std::hint::black_box(run(&prepared, &mut |_| {}));
+                },
+                &mut || {
+                    let study = sensitivities(&mechanism, &[], &changes, &names);
+                    std::hint::black_box(study.expect("computes"));
+                },
+            ],
+            0.02,
+            7,
+        );
         println!(
             "{} {} {:.3} {:.3} {:.1} {} {} {} {}   (medians {:.3} {:.3} {:.1})",
             case.name,

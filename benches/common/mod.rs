@@ -34,6 +34,40 @@ pub fn thread_cpu_seconds() -> f64 {
     lsdc::simulate::clock::thread_cpu_seconds().expect("the thread's CPU clock is readable")
 }
 
+#[allow(dead_code)] // each benchmark uses the timer it needs
+/// Thread CPU time per call of each of `tasks`, in `rounds` rounds that run each task in turn
+/// (so that a change of the machine's load falls on all of them alike), each task's batch sized
+/// to about `batch_seconds`: (best, median) per task.
+pub fn interleaved<const N: usize>(
+    mut tasks: [&mut dyn FnMut(); N],
+    batch_seconds: f64,
+    rounds: usize,
+) -> [(f64, f64); N] {
+    let calls = tasks.each_mut().map(|task| {
+        let start = thread_cpu_seconds();
+        let mut calls = 0u64;
+        while thread_cpu_seconds() - start < batch_seconds {
+            task();
+            calls += 1;
+        }
+        calls
+    });
+    let mut times: [Vec<f64>; N] = std::array::from_fn(|_| Vec::new());
+    for _ in 0..rounds {
+        for k in 0..N {
+            let start = thread_cpu_seconds();
+            for _ in 0..calls[k] {
+                tasks[k]();
+            }
+            times[k].push((thread_cpu_seconds() - start) / calls[k] as f64);
+        }
+    }
+    times.map(|mut t| {
+        t.sort_by(f64::total_cmp);
+        (t[0], t[t.len() / 2])
+    })
+}
+
 #[allow(dead_code)]
 /// CPU time per call, in seconds, over 7 batches sized to about 20 ms each: (best, median).
 pub fn cpu_time_per_call(mut f: impl FnMut()) -> (f64, f64) {
