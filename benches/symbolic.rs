@@ -1,9 +1,11 @@
 //! Symbolic equations of n-link pendulums (n = 5 … 100): generation time, size with shared
-//! subexpressions and without, and evaluation of the generated code against the numeric ABA.
+//! subexpressions and without, their simplification (time per node and the exponent of its
+//! growth, operations before and after), and evaluation of the generated code against the
+//! numeric ABA.
 //! Run with `cargo bench --bench symbolic`.
 
 mod common;
-use common::best_time_per_call;
+use common::{best_time_per_call, cpu_time_per_call};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -16,6 +18,7 @@ use lsdc::kinematics::model as kinematic_model;
 use lsdc::load::LoadOptions;
 use lsdc::spatial::Force;
 use lsdc::symbolic::expr::Tape;
+use lsdc::symbolic::simplify::simplify_equations;
 use lsdc::symbolic::{self, Equations};
 use lsdc::topology::Topology;
 
@@ -82,6 +85,63 @@ fn generation() {
             mass.expanded_size(),
             accelerations.size(),
             accelerations.size() as f64 / n as f64
+        );
+    }
+}
+
+/// The simplifier on the pendulums: thread CPU time (best and median of 7 batches), per node of
+/// the input, the exponent of the time's growth from the previous size (1 is linear), and the
+/// operations of M, S and F and of all the roots (with the accelerations) before and after.
+fn simplification() {
+    println!(
+        "\nSimplification of the pendulums' equations (thread CPU time, best and median of 7):"
+    );
+    println!(
+        "{:>5} {:>10} {:>10} {:>10} {:>9} {:>9} {:>12} {:>12} {:>12} {:>12}",
+        "links",
+        "best ms",
+        "median ms",
+        "nodes",
+        "µs/node",
+        "growth",
+        "M,S,F ops",
+        "simplified",
+        "all ops",
+        "simplified"
+    );
+    let mut previous: Option<(usize, f64)> = None;
+    for n in SIZES {
+        let (mechanism, topology) = mechanism(&pendulum_program(n));
+        let eq = symbolic::generate(&mechanism, &topology).expect("equations");
+        let (best, median) = cpu_time_per_call(|| {
+            black_box(simplify_equations(black_box(&eq)));
+        });
+        let simplified = simplify_equations(&eq);
+        let operations = |eq: &Equations, all: bool| {
+            let mut roots: Vec<_> = [&eq.mass, &eq.second_member, &eq.forces]
+                .into_iter()
+                .flatten()
+                .copied()
+                .collect();
+            if all {
+                roots = eq.roots();
+            }
+            Tape::new(&eq.pool, &roots).operation_count()
+        };
+        let nodes = eq.size();
+        let growth = previous
+            .map(|(m, t)| (best / t).ln() / (n as f64 / m as f64).ln())
+            .unwrap_or(f64::NAN);
+        previous = Some((n, best));
+        println!(
+            "{n:>5} {:>10.2} {:>10.2} {nodes:>10} {:>9.2} {growth:>9.2} {:>12} {:>12} {:>12} {:>12}",
+            best * 1e3,
+            median * 1e3,
+            best * 1e6 / nodes as f64,
+            operations(&eq, false),
+            operations(&simplified, false),
+            operations(&eq, true),
+            operations(&simplified, true)
         );
     }
 }
@@ -230,5 +290,9 @@ fn compare_generated(label: &str, mechanism: &Mechanism, topology: Topology) {
 
 fn main() {
     generation();
+    simplification();
+    if std::env::args().any(|a| a == "simplification") {
+        return;
+    }
     evaluation();
 }

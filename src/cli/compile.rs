@@ -40,6 +40,10 @@ pub struct CompileArgs {
     /// Format of `--emit equations` (default text).
     #[arg(long, value_enum)]
     format: Option<EquationsFormat>,
+    /// Simplify the equations before writing them (`equations`, `rust`, `c`): like terms
+    /// collected, cancellations, sin² + cos² = 1 and the angle sums, common factors taken out.
+    #[arg(long)]
+    simplify: bool,
     /// Write to this file instead of standard output.
     #[arg(short = 'o', long = "out")]
     out: Option<PathBuf>,
@@ -50,6 +54,9 @@ pub fn run(args: &CompileArgs) -> ExitCode {
     if format.is_some() && emit != Emit::Equations {
         return usage_error("`--format` applies to `--emit equations` only");
     }
+    if args.simplify && emit == Emit::Notation {
+        return usage_error("`--simplify` applies to `--emit equations`, `rust` and `c` only");
+    }
     let source = args.file.display().to_string();
     let analyse = |mechanism: &Mechanism| {
         let topology = lsdc::topology::build(mechanism)?;
@@ -59,7 +66,10 @@ pub fn run(args: &CompileArgs) -> ExitCode {
                 Vec::new(),
             ));
         }
-        let equations = lsdc::symbolic::generate(mechanism, &topology)?;
+        let mut equations = lsdc::symbolic::generate(mechanism, &topology)?;
+        if args.simplify {
+            equations = lsdc::symbolic::simplify::simplify_equations(&equations);
+        }
         use lsdc::symbolic::emit;
         let text = match (emit, format.unwrap_or(EquationsFormat::Text)) {
             (Emit::Rust, _) => emit::rust(&equations, &source),

@@ -701,6 +701,15 @@ impl Tape {
         self.order.len()
     }
 
+    /// Number of operations evaluating computes: the nodes that are neither numbers nor
+    /// symbols, a sum with a negated operand one subtraction (the measure SymPy's `count_ops`
+    /// takes of an expression, here with common subexpressions counted once).
+    pub fn operation_count(&self) -> usize {
+        (self.program.iter())
+            .filter(|(_, step)| !matches!(step, Step::Constant(_) | Step::Symbol(_)))
+            .count()
+    }
+
     /// Number of nodes the roots would have written as trees, without sharing (as f64: it grows
     /// exponentially with depth): what common subexpressions save.
     pub fn expanded_size(&self) -> f64 {

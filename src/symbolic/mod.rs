@@ -2,8 +2,8 @@
 //! (`expr`) where equal subexpressions are one node, vectors and matrices of expressions
 //! (`vector`), program scalars lowered to it (`program` for their structure, `lower` for the equations'
 //! variables), frames moving with the mechanism
-//! (`kinematics`), the equations M q̇ = S + F + Δᵀ Λ, Δ q = 0 (`equations`), and their
-//! emitters (`emit`).
+//! (`kinematics`), the equations M q̇ = S + F + Δᵀ Λ, Δ q = 0 (`equations`), their
+//! simplification (`simplify`), and their emitters (`emit`).
 
 pub mod articulated;
 mod closure;
@@ -18,6 +18,7 @@ pub mod kinematics;
 mod loads;
 pub mod lower;
 pub mod program;
+pub mod simplify;
 pub mod vector;
 
 pub use equations::{generate, Equations};

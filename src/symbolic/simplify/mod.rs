@@ -1,0 +1,339 @@
+//! The simplifier of the expression graph: every node, operands first, is put in a normal form
+//! (`polynomial`: a sum of coefficients times products of atoms and of one sine or cosine of a
+//! linear form), so that like terms collect, sums and products cancel, numbers fold and the
+//! trigonometric identities (sin² + cos² = 1, the angle sums) hold by construction; the roots
+//! are then written back with their common factors taken out (`write`).
+//!
+//! The cost stays linear in the graph: a node whose form would pass `TERMS` terms (or take more
+//! than `WORK` products of terms) is not expanded but kept as the operation on its operands'
+//! simplified nodes, an atom for the nodes that use it. So each node costs a bounded amount and
+//! deep chains (a 100-link pendulum's) are simplified near their leaves and shared above.
+//!
+//! Expanding shares less: a sum read by several nodes, expanded in each, is written in each.
+//! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
+//! result with the fewest operations is kept; the simplified equations are never longer than
+//! the input.
+//!
+//! Values: like computer algebra systems, the simplifier takes x − x = 0, 0 · x = 0 and
+//! x / x = 1 for every x, so the result equals the input wherever the input is finite, and may
+//! be finite where the input divided by zero. Coefficients are floating-point (see
+//! `polynomial`): the result equals the input to round-off.
+
+mod polynomial;
+mod write;
+
+use std::collections::HashMap;
+
+use polynomial::{Polynomial, Wave};
+use write::Writer;
+
+use super::equations::Equations;
+use super::expr::{topological_order, ExprId, Function, Node, Pool, Tape};
+
+/// The most terms a node's normal form may have before the node is kept as an atom.
+const TERMS: usize = 64;
+/// The most products of terms forming one product may take.
+const WORK: usize = 4096;
+/// The largest power of a sum expanded.
+const POWER: i32 = 4;
+
+/// The roots of `pool` simplified, in a new pool with the same symbols in the same order (so
+/// that values of the symbols are given alike to both). Of the forms tried (`Expansion`), the
+/// one with the fewest operations is kept: never more than the input rebuilt.
+#[cfg(lsdc_internals)]
+pub fn simplify(pool: &Pool, roots: &[ExprId]) -> (Pool, Vec<ExprId>) {
+    let (pool, mut groups) = simplify_groups(pool, &[roots]);
+    (pool, groups.pop().expect("one group"))
+}
+
+/// Each group of roots simplified on its own (its form chosen by its own operations: the mass
+/// matrix's closed form is not traded for a shorter right-hand side), the results gathered in
+/// one pool, where equal nodes of different groups are one node again.
+pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<ExprId>>) {
+    let mut gathered = Pool::new();
+    for i in 0..pool.symbol_count() as u32 {
+        gathered.symbol(pool.symbol_name(i));
+    }
+    let mut simplified = Vec::new();
+    for roots in groups {
+        let candidates = [
+            Expansion::Shared(TERMS),
+            Expansion::Shared(4),
+            Expansion::Shared(1),
+            Expansion::None,
+        ];
+        let (best, best_roots) = candidates
+            .into_iter()
+            .map(|expansion| simplify_with(pool, roots, expansion, Pool::new()))
+            .min_by_key(|(pool, roots)| Tape::new(pool, roots).operation_count())
+            .expect("candidates");
+        let copied;
+        (gathered, copied) = simplify_with(&best, &best_roots, Expansion::None, gathered);
+        simplified.push(copied);
+    }
+    (gathered, simplified)
+}
+
+/// How far the forms of shared nodes are carried into the nodes that read them.
+#[derive(Clone, Copy, Debug)]
+enum Expansion {
+    /// A node read more than once is expanded in its readers up to this many terms, and is an
+    /// atom for them beyond: a larger shared sum is written once rather than in every reader.
+    Shared(usize),
+    /// No expansion: the input rebuilt as it is (the constructors' local folding only).
+    None,
+}
+
+/// The roots simplified as `expansion` says, written into `out`.
+fn simplify_with(
+    pool: &Pool,
+    roots: &[ExprId],
+    expansion: Expansion,
+    out: Pool,
+) -> (Pool, Vec<ExprId>) {
+    let mut pass = Pass::new(pool, out);
+    let order = topological_order(roots, |id| pool.operands(id));
+    let kept: std::collections::HashSet<ExprId> = roots.iter().copied().collect();
+    // How many nodes still to simplify read each node: a form is dropped after its last reader.
+    let mut readers: HashMap<ExprId, usize> = HashMap::new();
+    for &id in &order {
+        for operand in pool.operands(id) {
+            *readers.entry(operand).or_insert(0) += 1;
+        }
+    }
+    for &id in &order {
+        let mut form = match expansion {
+            Expansion::Shared(_) => pass.form_of(id),
+            Expansion::None => {
+                let node = pass.kept(id);
+                pass.atom(node)
+            }
+        };
+        let shared = readers.get(&id).copied().unwrap_or(0) > 1;
+        if let Expansion::Shared(terms) = expansion {
+            if shared && form.len() > terms {
+                let node = pass.writer.write(&mut pass.out, &form);
+                pass.nodes.insert(id, node);
+                form = pass.atom(node);
+            }
+        }
+        pass.forms.insert(id, form);
+        for operand in pool.operands(id) {
+            let left = readers.get_mut(&operand).expect("counted");
+            *left -= 1;
+            if *left == 0 && !kept.contains(&operand) {
+                pass.forms.remove(&operand);
+            }
+        }
+    }
+    let simplified = roots.iter().map(|&root| pass.written(root)).collect();
+    (pass.out, simplified)
+}
+
+/// The equations with every expression simplified, in a new pool.
+pub fn simplify_equations(equations: &Equations) -> Equations {
+    let none = Vec::new();
+    let groups: [&[ExprId]; 6] = [
+        &equations.mass,
+        &equations.second_member,
+        &equations.forces,
+        &equations.constraints,
+        &equations.constraint_bias,
+        equations.accelerations.as_ref().unwrap_or(&none),
+    ];
+    let (pool, mut simplified) = simplify_groups(&equations.pool, &groups);
+    let accelerations = simplified.pop().expect("six groups");
+    let mut groups = simplified.into_iter();
+    let mut next = || groups.next().expect("six groups");
+    Equations {
+        variables: equations.variables.clone(),
+        mass: next(),
+        second_member: next(),
+        forces: next(),
+        constraints: next(),
+        constraint_bias: next(),
+        constraint_names: equations.constraint_names.clone(),
+        accelerations: equations.accelerations.as_ref().map(|_| accelerations),
+        pool,
+    }
+}
+
+struct Pass<'a> {
+    input: &'a Pool,
+    out: Pool,
+    /// The normal form of each input node simplified and still to be read.
+    forms: HashMap<ExprId, Polynomial>,
+    /// Each input node written in `out`.
+    nodes: HashMap<ExprId, ExprId>,
+    writer: Writer,
+}
+
+impl Pass<'_> {
+    /// A pass from `input` into `out`, where the symbols are created first in `input`'s order.
+    fn new(input: &Pool, mut out: Pool) -> Pass<'_> {
+        for i in 0..input.symbol_count() as u32 {
+            out.symbol(input.symbol_name(i));
+        }
+        Pass {
+            input,
+            out,
+            forms: HashMap::new(),
+            nodes: HashMap::new(),
+            writer: Writer::new(),
+        }
+    }
+
+    fn form(&self, id: ExprId) -> &Polynomial {
+        &self.forms[&id]
+    }
+
+    /// The input node `id` written in `out` from its normal form (once).
+    fn written(&mut self, id: ExprId) -> ExprId {
+        if let Some(&node) = self.nodes.get(&id) {
+            return node;
+        }
+        let form = self.forms.get(&id).expect("formed before it is written");
+        let node = self.writer.write(&mut self.out, form);
+        self.nodes.insert(id, node);
+        node
+    }
+
+    /// A node of `out` as a form: a number, or an atom.
+    fn atom(&self, node: ExprId) -> Polynomial {
+        match self.out.as_constant(node) {
+            Some(c) if c.is_finite() => Polynomial::constant(c),
+            _ => Polynomial::atom(node, 1),
+        }
+    }
+
+    /// The normal form of input node `id`, whose operands have theirs.
+    fn form_of(&mut self, id: ExprId) -> Polynomial {
+        let expanded = match self.input.node(id) {
+            Node::Constant(bits) => {
+                let c = f64::from_bits(bits);
+                let node = self.out.constant(c);
+                Some(self.atom(node))
+            }
+            Node::Symbol(i) => {
+                let node = self.out.symbol(self.input.symbol_name(i));
+                Some(Polynomial::atom(node, 1))
+            }
+            Node::Add(a, b) => {
+                let mut sum = self.form(a).clone();
+                sum.add_scaled(self.form(b), 1.0);
+                (sum.len() <= TERMS).then_some(sum)
+            }
+            Node::Neg(a) => Some(self.form(a).clone().scaled(-1.0)),
+            Node::Mul(a, b) => self.form(a).times(self.form(b), WORK, TERMS),
+            Node::Div(a, b) => self.quotient(a, b),
+            Node::Pow(a, b) => self.power(a, b),
+            Node::Apply(f @ (Function::Sin | Function::Cos), a) => {
+                self.form(a).as_angle().map(|angle| {
+                    let wave = if f == Function::Sin {
+                        Wave::Sin
+                    } else {
+                        Wave::Cos
+                    };
+                    Polynomial::wave(wave, angle)
+                })
+            }
+            Node::Apply(..) | Node::Atan2(..) | Node::Select { .. } => None,
+        };
+        match expanded {
+            Some(form) => form,
+            None => {
+                let node = self.kept(id);
+                self.atom(node)
+            }
+        }
+    }
+
+    /// `a / b`: a product by the inverse of a number or of a monomial; otherwise by the
+    /// divisor written as an atom.
+    fn quotient(&mut self, a: ExprId, b: ExprId) -> Option<Polynomial> {
+        let divisor = self.form(b);
+        if let Some(c) = divisor.as_constant() {
+            return (c != 0.0 && (1.0 / c).is_finite()).then(|| self.form(a).clone().scaled(1.0 / c));
+        }
+        let inverse = match divisor.as_monomial() {
+            Some((factors, c)) => {
+                let mut inverse = Polynomial::constant(1.0 / c);
+                for &(atom, exponent) in factors {
+                    inverse = inverse.times(&Polynomial::atom(atom, -exponent), WORK, TERMS)?;
+                }
+                inverse
+            }
+            None => {
+                let node = self.written(b);
+                Polynomial::atom(node, -1)
+            }
+        };
+        self.form(a).times(&inverse, WORK, TERMS)
+    }
+
+    /// `a ^ b` expanded for a small integer exponent.
+    fn power(&mut self, a: ExprId, b: ExprId) -> Option<Polynomial> {
+        let exponent = self.form(b).as_constant()?;
+        if exponent.fract() != 0.0 || exponent.abs() > f64::from(POWER) {
+            return None;
+        }
+        let exponent = exponent as i32;
+        let base = if exponent >= 0 {
+            self.form(a).clone()
+        } else {
+            let node = self.written(a);
+            Polynomial::atom(node, -1)
+        };
+        let mut product = Polynomial::constant(1.0);
+        for _ in 0..exponent.abs() {
+            product = product.times(&base, WORK, TERMS)?;
+        }
+        Some(product)
+    }
+
+    /// Input node `id` kept as its operation on its operands' simplified nodes.
+    fn kept(&mut self, id: ExprId) -> ExprId {
+        let input = self.input;
+        match input.node(id) {
+            Node::Constant(bits) => self.out.constant(f64::from_bits(bits)),
+            Node::Symbol(i) => self.out.symbol(input.symbol_name(i)),
+            Node::Add(a, b) => {
+                let (a, b) = (self.written(a), self.written(b));
+                self.out.add(a, b)
+            }
+            Node::Mul(a, b) => {
+                let (a, b) = (self.written(a), self.written(b));
+                self.out.mul(a, b)
+            }
+            Node::Neg(a) => {
+                let a = self.written(a);
+                self.out.neg(a)
+            }
+            Node::Div(a, b) => {
+                let (a, b) = (self.written(a), self.written(b));
+                self.out.div(a, b)
+            }
+            Node::Pow(a, b) => {
+                let (a, b) = (self.written(a), self.written(b));
+                self.out.pow(a, b)
+            }
+            Node::Atan2(a, b) => {
+                let (a, b) = (self.written(a), self.written(b));
+                self.out.atan2(a, b)
+            }
+            Node::Apply(f, a) => {
+                let a = self.written(a);
+                self.out.apply(f, a)
+            }
+            Node::Select {
+                test,
+                when_nonnegative,
+                otherwise,
+            } => {
+                let test = self.written(test);
+                let (high, low) = (self.written(when_nonnegative), self.written(otherwise));
+                self.out.select(test, high, low)
+            }
+        }
+    }
+}

@@ -1,0 +1,295 @@
+//! The normal form the simplifier computes per node: a polynomial whose terms are a real
+//! coefficient times a product of atoms (nodes it does not look into, with integer exponents,
+//! negative for divisors) times at most one sine or cosine of a linear form in atoms.
+//!
+//! Products of sines and cosines are turned into sums (sin X sin Y = ½ cos(X − Y) − ½ cos(X + Y),
+//! …), so a term holds one wave and trigonometric polynomials in the coordinates have a single
+//! form, their Fourier series: sin² + cos² = 1, the angle sums and their differences, and every
+//! cancellation between them come out of collecting like terms. The angles are put with a
+//! positive leading coefficient (cos(−X) = cos X, sin(−X) = −sin X) so that each wave has one
+//! name.
+//!
+//! Coefficients are floating-point: products by ½ are exact; sums of coefficients that cancel
+//! to within a few units in the last place of the terms are taken as 0 (a change of the
+//! value at round-off, the same as evaluating the terms in another order).
+
+use std::collections::BTreeMap;
+
+use crate::symbolic::expr::ExprId;
+
+/// A real number as a key of ordered maps: its bits, with −0 stored as +0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Real(u64);
+
+impl Real {
+    pub fn new(x: f64) -> Real {
+        Real(if x == 0.0 { 0.0f64 } else { x }.to_bits())
+    }
+
+    pub fn get(self) -> f64 {
+        f64::from_bits(self.0)
+    }
+}
+
+/// A linear form Σ cₖ aₖ + c₀ over atoms aₖ: the argument of a sine or cosine.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Angle {
+    /// By atom, increasing, without zero coefficients.
+    pub terms: Vec<(ExprId, Real)>,
+    pub offset: Real,
+}
+
+impl Angle {
+    /// `self + sign · other`.
+    fn combined(&self, other: &Angle, sign: f64) -> Angle {
+        let mut merged: BTreeMap<ExprId, f64> = self.terms.iter().map(|&(a, c)| (a, c.get())).collect();
+        for &(atom, c) in &other.terms {
+            *merged.entry(atom).or_insert(0.0) += sign * c.get();
+        }
+        Angle {
+            terms: merged
+                .into_iter()
+                .filter(|&(_, c)| c != 0.0)
+                .map(|(a, c)| (a, Real::new(c)))
+                .collect(),
+            offset: Real::new(self.offset.get() + sign * other.offset.get()),
+        }
+    }
+
+    fn negated(&self) -> Angle {
+        Angle {
+            terms: self.terms.iter().map(|&(a, c)| (a, Real::new(-c.get()))).collect(),
+            offset: Real::new(-self.offset.get()),
+        }
+    }
+
+    /// Whether the first coefficient (or the offset, when there is no atom) is negative.
+    fn is_negative(&self) -> bool {
+        match self.terms.first() {
+            Some(&(_, c)) => c.get() < 0.0,
+            None => self.offset.get() < 0.0,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Wave {
+    Sin,
+    Cos,
+}
+
+impl Wave {
+    fn eval(self, x: f64) -> f64 {
+        match self {
+            Wave::Sin => x.sin(),
+            Wave::Cos => x.cos(),
+        }
+    }
+}
+
+/// A product of atoms to integer powers and at most one wave.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Monomial {
+    /// By atom, increasing, without zero exponents.
+    pub factors: Vec<(ExprId, i32)>,
+    pub wave: Option<(Wave, Angle)>,
+}
+
+impl Monomial {
+    const ONE: Monomial = Monomial {
+        factors: Vec::new(),
+        wave: None,
+    };
+
+    /// The product of the two monomials' atoms, exponents added.
+    fn factors_times(&self, other: &Monomial) -> Vec<(ExprId, i32)> {
+        let mut merged: BTreeMap<ExprId, i32> = self.factors.iter().copied().collect();
+        for &(atom, e) in &other.factors {
+            *merged.entry(atom).or_insert(0) += e;
+        }
+        merged.into_iter().filter(|&(_, e)| e != 0).collect()
+    }
+}
+
+/// `coefficient · wave(angle)` in its one name: a constant angle evaluated, a negative one
+/// turned positive.
+fn named_wave(wave: Wave, angle: Angle, coefficient: f64) -> (f64, Option<(Wave, Angle)>) {
+    if angle.terms.is_empty() {
+        return (coefficient * wave.eval(angle.offset.get()), None);
+    }
+    match (angle.is_negative(), wave) {
+        (false, _) => (coefficient, Some((wave, angle))),
+        (true, Wave::Cos) => (coefficient, Some((Wave::Cos, angle.negated()))),
+        (true, Wave::Sin) => (-coefficient, Some((Wave::Sin, angle.negated()))),
+    }
+}
+
+/// The product of two waves as a sum of two (product-to-sum formulas).
+fn wave_product(
+    (left, x): &(Wave, Angle),
+    (right, y): &(Wave, Angle),
+) -> [(f64, Wave, Angle); 2] {
+    let (sum, difference) = (x.combined(y, 1.0), x.combined(y, -1.0));
+    match (left, right) {
+        (Wave::Sin, Wave::Sin) => [(0.5, Wave::Cos, difference), (-0.5, Wave::Cos, sum)],
+        (Wave::Cos, Wave::Cos) => [(0.5, Wave::Cos, difference), (0.5, Wave::Cos, sum)],
+        (Wave::Sin, Wave::Cos) => [(0.5, Wave::Sin, sum), (0.5, Wave::Sin, difference)],
+        (Wave::Cos, Wave::Sin) => [(0.5, Wave::Sin, sum), (-0.5, Wave::Sin, difference)],
+    }
+}
+
+/// Σ coefficient · monomial, without zero coefficients.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Polynomial {
+    pub terms: BTreeMap<Monomial, f64>,
+}
+
+/// How close to 0, relative to the terms added, a sum of coefficients is taken as 0: a few
+/// units in the last place.
+const CANCELLATION: f64 = 8.0 * f64::EPSILON;
+
+impl Polynomial {
+    pub fn constant(c: f64) -> Polynomial {
+        let mut p = Polynomial::default();
+        p.add_term(Monomial::ONE, c);
+        p
+    }
+
+    /// `atom ^ exponent`.
+    pub fn atom(atom: ExprId, exponent: i32) -> Polynomial {
+        let mut p = Polynomial::default();
+        let monomial = Monomial {
+            factors: vec![(atom, exponent)],
+            wave: None,
+        };
+        p.add_term(monomial, 1.0);
+        p
+    }
+
+    /// `wave(angle)`.
+    pub fn wave(wave: Wave, angle: Angle) -> Polynomial {
+        let mut p = Polynomial::default();
+        let (c, wave) = named_wave(wave, angle, 1.0);
+        p.add_term(
+            Monomial {
+                factors: Vec::new(),
+                wave,
+            },
+            c,
+        );
+        p
+    }
+
+    pub fn len(&self) -> usize {
+        self.terms.len()
+    }
+
+    fn add_term(&mut self, monomial: Monomial, c: f64) {
+        if c == 0.0 {
+            return;
+        }
+        match self.terms.entry(monomial) {
+            std::collections::btree_map::Entry::Vacant(entry) => {
+                entry.insert(c);
+            }
+            std::collections::btree_map::Entry::Occupied(mut entry) => {
+                let old = *entry.get();
+                let sum = old + c;
+                if sum.abs() <= CANCELLATION * old.abs().max(c.abs()) {
+                    entry.remove();
+                } else {
+                    *entry.get_mut() = sum;
+                }
+            }
+        }
+    }
+
+    /// `self + scale · other`.
+    pub fn add_scaled(&mut self, other: &Polynomial, scale: f64) {
+        for (monomial, &c) in &other.terms {
+            self.add_term(monomial.clone(), scale * c);
+        }
+    }
+
+    pub fn scaled(mut self, scale: f64) -> Polynomial {
+        if scale == 0.0 {
+            return Polynomial::default();
+        }
+        for c in self.terms.values_mut() {
+            *c *= scale;
+        }
+        self
+    }
+
+    /// The product, or `None` when forming it would take more than `work` products of terms
+    /// or give more than `limit` terms: the caller then keeps the operation as it is.
+    pub fn times(&self, other: &Polynomial, work: usize, limit: usize) -> Option<Polynomial> {
+        if self.len() * other.len() > work {
+            return None;
+        }
+        let mut product = Polynomial::default();
+        for (a, &ca) in &self.terms {
+            for (b, &cb) in &other.terms {
+                let factors = a.factors_times(b);
+                let c = ca * cb;
+                match (&a.wave, &b.wave) {
+                    (None, None) => product.add_term(Monomial { factors, wave: None }, c),
+                    (Some(w), None) | (None, Some(w)) => product.add_term(
+                        Monomial {
+                            factors,
+                            wave: Some(w.clone()),
+                        },
+                        c,
+                    ),
+                    (Some(x), Some(y)) => {
+                        for (half, wave, angle) in wave_product(x, y) {
+                            let (c, wave) = named_wave(wave, angle, c * half);
+                            let factors = factors.clone();
+                            product.add_term(Monomial { factors, wave }, c);
+                        }
+                    }
+                }
+            }
+            if product.len() > 2 * limit {
+                return None;
+            }
+        }
+        (product.len() <= limit).then_some(product)
+    }
+
+    /// The value when the polynomial is a number.
+    pub fn as_constant(&self) -> Option<f64> {
+        match self.terms.len() {
+            0 => Some(0.0),
+            1 => self.terms.get(&Monomial::ONE).copied(),
+            _ => None,
+        }
+    }
+
+    /// The polynomial as a linear form in atoms, when it is one: an angle.
+    pub fn as_angle(&self) -> Option<Angle> {
+        let mut terms = Vec::new();
+        let mut offset = 0.0;
+        for (monomial, &c) in &self.terms {
+            match (monomial.factors.as_slice(), &monomial.wave) {
+                ([], None) => offset = c,
+                (&[(atom, 1)], None) => terms.push((atom, Real::new(c))),
+                _ => return None,
+            }
+        }
+        Some(Angle {
+            terms,
+            offset: Real::new(offset),
+        })
+    }
+
+    /// The single monomial without a wave and its coefficient, when the polynomial is one.
+    pub fn as_monomial(&self) -> Option<(&[(ExprId, i32)], f64)> {
+        match self.terms.iter().next() {
+            Some((monomial, &c)) if self.terms.len() == 1 && monomial.wave.is_none() => {
+                Some((&monomial.factors, c))
+            }
+            _ => None,
+        }
+    }
+}
