@@ -27,18 +27,16 @@ use super::stability::PowerIteration;
 
 /// |h λ| at the boundary of Dormand–Prince's stability region on the negative real axis, and
 /// on the imaginary axis.
-const REAL_LIMIT: f64 = 3.3;
+const REAL_LIMIT: f64 = super::dopri5::STABILITY_LIMIT;
 const IMAGINARY_LIMIT: f64 = 0.997;
-/// The fraction of the boundary from which h ρ says that the step is held by stability, and the
-/// multiple above which it cannot be: an accepted step beyond the boundary means that the
-/// fastest mode is one the solution follows (a motion running away, whose λ² > 0 looks like a
-/// damped mode's), its steps bound by accuracy (as in the stiffness check, `stability.rs`).
-const HELD: f64 = 0.5;
-const CEILING: f64 = 2.0;
-/// Checks in a row that must agree.
-const PERSISTENCE: usize = 3;
-/// Accepted steps between two checks while nothing is found.
-const CHECK_EVERY: usize = 20;
+/// The fraction of the boundary from which h ρ says that the step is held by stability, the
+/// multiple above which it cannot be (an accepted step beyond the boundary means that the
+/// fastest mode is one the solution follows, a motion running away, whose λ² > 0 looks like a
+/// damped mode's, its steps bound by accuracy), the checks in a row that must agree and the
+/// accepted steps between two checks: the stiffness check's (`stability.rs`), one policy.
+use super::stability::{
+    ADAPTIVE_CEILING as CEILING, CHECK_EVERY, HELD, PERSISTENCE,
+};
 /// Power iterations at the first check (fewer once two agree); later checks take one, the
 /// direction converging along the run.
 const WARM_UP: usize = 6;

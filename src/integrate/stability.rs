@@ -38,7 +38,7 @@ use super::settings::Settings;
 use super::system::OdeSystem;
 
 /// Accepted steps between two checks while nothing is found.
-const CHECK_EVERY: usize = 20;
+pub(super) const CHECK_EVERY: usize = 20;
 /// Power iterations at the first check, from the starting vector (fewer when two in a row
 /// agree within `SETTLED`); later checks take one.
 const WARM_UP: usize = 12;
@@ -46,14 +46,14 @@ const SETTLED: f64 = 0.01;
 /// The fraction of the stability limit from which h ρ says the step is held by stability:
 /// Dormand–Prince's controller keeps a stiff run's steps between about half the limit and the
 /// limit, and accuracy alone keeps them far below on the non-stiff examples.
-const HELD: f64 = 0.5;
+pub(super) const HELD: f64 = 0.5;
 /// Checks in a row that must agree.
-const PERSISTENCE: usize = 3;
+pub(super) const PERSISTENCE: usize = 3;
 /// The multiple of the stability limit above which an adaptive method's accepted steps cannot
 /// be held by stability: its error estimate would have caught a mode that grows at every step.
 /// There the fastest mode is one the solution itself follows (a motion running away), which
 /// the step must resolve for accuracy; λ² cannot tell it from a decaying mode.
-const ADAPTIVE_CEILING: f64 = 2.0;
+pub(super) const ADAPTIVE_CEILING: f64 = 2.0;
 /// Relative size of the finite-difference perturbation (about √ε).
 const PERTURBATION: f64 = 1.5e-8;
 
