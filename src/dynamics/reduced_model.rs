@@ -18,9 +18,13 @@
 //! these must move no mass (a Delta's rods spinning about their axes): otherwise the actuated
 //! coordinates do not determine the motion, and the model has no value. At the later states
 //! from a QR factorisation of [G; E]ᵀ with column pivoting (its independent rows), several
-//! times cheaper, the decomposition taken again where that solve does not hold.
+//! times cheaper, the decomposition taken again where that solve does not hold; or, cheaper
+//! still, from the loops' own solve at the same state when the run has it
+//! ([`LoopSolution`]): with N a basis of the velocities the loops allow and a₀ their least-norm
+//! particular acceleration, X = N (E N)⁺ and c = a₀ − X E a₀ solve the same equations, and any
+//! two solutions differ by free motions, which move no mass, so the model is the same.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use super::algorithms::{crba_after_kinematics, forward_kinematics, rnea_after_kinematics, Data};
 use super::compiled::ModelReads;
@@ -94,50 +98,35 @@ pub struct ReducedState<'a> {
     pub efforts: &'a Efforts,
 }
 
+/// The loops' own solve at the state the model is evaluated at (`dynamics::loops::
+/// allowed_motions`, with the rows' bias alone in γ): a basis N of the velocities they allow,
+/// over the state's velocities, and the least-norm particular acceleration a₀ (G a₀ = −γ).
+pub struct LoopSolution<'a> {
+    pub motions: DMatrixView<'a, f64>,
+    pub particular: &'a [f64],
+}
+
 /// Writes the model in the actuated coordinates (`velocities`, indices of the state's
-/// velocities) into `scratch.values`, the quantities `reads` asks for.
+/// velocities) into `scratch.values`, the quantities `reads` asks for; `loops`, the loops'
+/// solve at the state when the caller has it.
 pub fn reduced_model(
     model: &Model,
     data: &mut Data,
     state: &ReducedState<'_>,
     velocities: &[usize],
     reads: ModelReads,
-    scratch: &mut ReducedScratch,
+    (scratch, loops): (&mut ReducedScratch, Option<LoopSolution<'_>>),
 ) -> Result<(), ReducedError> {
     let m = velocities.len();
     let n = model.velocities();
     crba_after_kinematics(model, data, &mut scratch.mass);
-    // [G; E] and its right-hand sides [0 | −γ; I | 0].
-    let rows = scratch
-        .constraints
-        .as_ref()
-        .map_or(0, |c| c.jacobian.nrows());
-    let mut stacked = DMatrix::zeros(rows + m, n);
-    let mut sides = DMatrix::zeros(rows + m, m + 1);
-    if let Some(constraints) = scratch.constraints.as_mut() {
-        constraints_into(model, data, state.q, state.v, Extent::Motion, constraints)?;
-        stacked
-            .view_mut((0, 0), (rows, n))
-            .copy_from(&constraints.jacobian.dense());
-        sides
-            .view_mut((0, m), (rows, 1))
-            .copy_from(&(-&constraints.bias));
-    }
-    for (k, &velocity) in velocities.iter().enumerate() {
-        stacked[(rows + k, velocity)] = 1.0;
-        sides[(rows + k, k)] = 1.0;
-    }
-    // Which motions the actuated coordinates leave free is decided by the structure, once, at
-    // the first state (a closed one): an integrator's stages off the loops by their truncation
-    // error would give the rods' spins a share of mass.
-    let solution = solve_stacked(
-        stacked,
-        &sides,
-        &scratch.mass,
-        !scratch.checked_free,
-        &mut scratch.independent_rows,
-    )?;
-    scratch.checked_free = true;
+    let known = loops
+        .filter(|_| scratch.checked_free)
+        .and_then(|loops| from_loop_solution(&loops, velocities));
+    let solution = match known {
+        Some(solution) => solution,
+        None => stacked_solution(model, data, state, velocities, scratch)?,
+    };
     let motions = solution.columns(0, m);
     let mass_times = |x: &DVector<f64>| -> DVector<f64> {
         let mut product = DVector::zeros(n);
@@ -194,6 +183,77 @@ pub fn reduced_model(
         }
     }
     Ok(())
+}
+
+/// [X | c] from [G; E] [X | c] = [0 | −γ; I | 0] formed at the state (`solve_stacked`).
+fn stacked_solution(
+    model: &Model,
+    data: &mut Data,
+    state: &ReducedState<'_>,
+    velocities: &[usize],
+    scratch: &mut ReducedScratch,
+) -> Result<DMatrix<f64>, ReducedError> {
+    let (m, n) = (velocities.len(), model.velocities());
+    // [G; E] and its right-hand sides [0 | −γ; I | 0].
+    let rows = scratch
+        .constraints
+        .as_ref()
+        .map_or(0, |c| c.jacobian.nrows());
+    let mut stacked = DMatrix::zeros(rows + m, n);
+    let mut sides = DMatrix::zeros(rows + m, m + 1);
+    if let Some(constraints) = scratch.constraints.as_mut() {
+        constraints_into(model, data, state.q, state.v, Extent::Motion, constraints)?;
+        stacked
+            .view_mut((0, 0), (rows, n))
+            .copy_from(&constraints.jacobian.dense());
+        sides
+            .view_mut((0, m), (rows, 1))
+            .copy_from(&(-&constraints.bias));
+    }
+    for (k, &velocity) in velocities.iter().enumerate() {
+        stacked[(rows + k, velocity)] = 1.0;
+        sides[(rows + k, k)] = 1.0;
+    }
+    // Which motions the actuated coordinates leave free is decided by the structure, once, at
+    // the first state (a closed one): an integrator's stages off the loops by their truncation
+    // error would give the rods' spins a share of mass.
+    let solution = solve_stacked(
+        stacked,
+        &sides,
+        &scratch.mass,
+        !scratch.checked_free,
+        &mut scratch.independent_rows,
+    )?;
+    scratch.checked_free = true;
+    Ok(solution)
+}
+
+/// [X | c] from the loops' solve: X = N (E N)⁺ and c = a₀ − X E a₀, where E N, the actuated
+/// rates of the allowed motions, is m × k with k ≥ m (the allowed motions of the actuated
+/// coordinates alone, or with others that move no mass). `None` where E N does not have rank m
+/// (the loops fix a combination of the actuated coordinates here, or an actuated coordinate's
+/// motion was not among those solved on): [G; E] then decides.
+fn from_loop_solution(loops: &LoopSolution<'_>, velocities: &[usize]) -> Option<DMatrix<f64>> {
+    let (m, k) = (velocities.len(), loops.motions.ncols());
+    if k < m {
+        return None;
+    }
+    let actuated = loops.motions.select_rows(velocities);
+    // (E N)⁺ from the small matrix's singular value decomposition, which also says its rank.
+    let svd = crate::linalg::svd(actuated, true, true)?;
+    let largest = svd.singular_values.max();
+    if svd.singular_values.min() <= RANK_FLOOR * largest {
+        return None;
+    }
+    let inverse = svd.pseudo_inverse(0.0).ok()?;
+    let mut solution = DMatrix::zeros(loops.motions.nrows(), m + 1);
+    let x = loops.motions * inverse;
+    let particular = DVector::from_column_slice(loops.particular);
+    let actuated_particular = DVector::from_iterator(m, velocities.iter().map(|&i| particular[i]));
+    solution.columns_mut(0, m).copy_from(&x);
+    let c = particular - &x * actuated_particular;
+    solution.column_mut(m).copy_from(&c);
+    solution.iter().all(|x| x.is_finite()).then_some(solution)
 }
 
 /// h on the state's velocities: RNEA's on the tree's (`tree`), less the link efforts' τ.

@@ -160,8 +160,21 @@ impl<'m> MechanicalSystem<'m> {
     /// The efforts at (t, q, v) into `self.scratch.efforts`, without allocating once its buffers are
     /// sized; leaves the forward kinematics of (q, v) in `data`.
     fn evaluate_efforts(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+        forward_kinematics(self.model, &mut self.scratch.data, q, v)?;
+        self.efforts_after_kinematics(t, q, v, false)
+    }
+
+    /// `evaluate_efforts` with the forward kinematics of (q, v) already in `data`;
+    /// `loops_solved`: the loops' allowed motions at (q, v) are in `loop_scratch` (the
+    /// actuators' laws that read the model in their coordinates take it from them).
+    fn efforts_after_kinematics(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        loops_solved: bool,
+    ) -> Result<(), SystemError> {
         let model = self.model;
-        forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let state = &mut self.scratch.declared;
         // An input's law reads every declared coordinate.
         let recovered = match self.state.inputs.law {
@@ -178,7 +191,7 @@ impl<'m> MechanicalSystem<'m> {
         self.scratch.external_is_zero = false;
         let efforts = &mut self.scratch.efforts;
         evaluate_into(model, &mut self.scratch.data, &declared, t, efforts)?;
-        self.actuate(t, q, v)?;
+        self.actuate(t, q, v, loops_solved)?;
         let (state, efforts) = (&self.scratch.declared, &mut self.scratch.efforts);
         if self.state.inputs.any() {
             let read = (&state.coordinates[..], &state.rates[..]);

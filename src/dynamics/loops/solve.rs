@@ -63,7 +63,9 @@ pub struct LoopScratch {
     quality_block: DMatrix<f64>,
     free_quality: Option<f64>,
     quality_of: Vec<usize>,
-    /// How many of `null`'s columns the last solve moved along (the massive ones).
+    /// How many of `null`'s columns `allowed_motions` found (every free coordinate's, or the
+    /// massive ones and those checked), and how many the last solve moved along.
+    found_motions: usize,
     solved_motions: usize,
     /// The massive motions of a solve that chose them (`Massive::choose`): `null` is then in
     /// the order of the free coordinates, the massive ones not first, so they are copied here
@@ -99,6 +101,7 @@ impl LoopScratch {
             quality_block: DMatrix::zeros(0, 0),
             free_quality: None,
             quality_of: Vec::new(),
+            found_motions: 0,
             solved_motions: 0,
             chosen_motions: DMatrix::zeros(columns, 0),
             inertia: ReducedInertia::new(model),
@@ -138,6 +141,13 @@ impl LoopScratch {
     /// The particular acceleration a₀ `allowed_motions` found, over the state's velocities.
     pub fn particular(&self) -> &[f64] {
         self.particular.as_slice()
+    }
+
+    /// The allowed motions `allowed_motions` found (one column per free coordinate, or per
+    /// massive one when the others carry no mass, before the solve chooses among them), over
+    /// the state's velocities.
+    pub fn found_motions(&self) -> nalgebra::DMatrixView<'_, f64> {
+        self.null.columns(0, self.found_motions)
     }
 
     /// The allowed motions the last solve moved along (one column per free coordinate that
@@ -201,6 +211,7 @@ pub fn allowed_motions(
         quality_block,
         free_quality,
         quality_of,
+        found_motions,
         ..
     } = scratch;
     gamma.copy_from(&c.bias);
@@ -226,8 +237,10 @@ pub fn allowed_motions(
     let m = motions.len();
     let particular = particular.as_mut_slice();
     damped.least_norm_and_allowed_motions_into(kept, particular, motions, motion_rows, null);
+    *found_motions = m;
     if checking {
         damped.allowed_motions_into(&massive.dropped_coordinates, kept, null, m);
+        *found_motions += massive.dropped_coordinates.len();
     }
     if *quality_due && (every || checking) {
         let columns = if every {

@@ -5,12 +5,21 @@
 
 use super::{MechanicalSystem, SystemError};
 use crate::dynamics::compiled::EffortState;
-use crate::dynamics::reduced_model::{reduced_model, ReducedError, ReducedScratch, ReducedState};
+use crate::dynamics::reduced_model::{
+    reduced_model, LoopSolution, ReducedError, ReducedScratch, ReducedState,
+};
 
 impl MechanicalSystem<'_> {
     /// Adds the actuators' efforts at (t, q, v) to `scratch.efforts`, which holds the other
-    /// efforts there; `data` holds the forward kinematics of (q, v).
-    pub(super) fn actuate(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), SystemError> {
+    /// efforts there; `data` holds the forward kinematics of (q, v), and `loop_scratch` the
+    /// loops' allowed motions there when `loops_solved`.
+    pub(super) fn actuate(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        loops_solved: bool,
+    ) -> Result<(), SystemError> {
         let model = self.model;
         let Some(actuation) = &model.actuation else {
             return Ok(());
@@ -30,13 +39,17 @@ impl MechanicalSystem<'_> {
                 time: t,
                 efforts: &scratch.efforts,
             };
+            let loops = loops_solved.then(|| LoopSolution {
+                motions: scratch.loop_scratch.found_motions(),
+                particular: scratch.loop_scratch.particular(),
+            });
             reduced_model(
                 model,
                 &mut scratch.data,
                 &state,
                 &velocities,
                 actuation.reads,
-                reduced,
+                (reduced, loops),
             )
             .map_err(|error| match error {
                 ReducedError::Evaluation(e) => SystemError::Evaluation(e),

@@ -34,6 +34,17 @@ use crate::dynamics::planar::algebra::PlanarForce;
 use crate::dynamics::planar::PlanarModel;
 use crate::spatial::Force;
 
+/// How the loops' block finds the efforts.
+enum Effort {
+    /// Evaluated with the forward kinematics of the state, which they leave in `data`.
+    Evaluated,
+    /// Evaluated on the forward kinematics already in `data`; `loops`: the loops' allowed
+    /// motions at the state are in `loop_scratch` for the actuators' laws.
+    AfterKinematics { loops: bool },
+    /// None: a planar block whose model applies none needs no spatial kinematics.
+    Zero,
+}
+
 impl MechanicalSystem<'_> {
     /// Solves every constraint row of the run at (t, q, v), block by block (see the module's
     /// documentation), into the accelerations `a`: with loops, their block's (what `a` held is
@@ -121,9 +132,9 @@ impl MechanicalSystem<'_> {
         if let Some(planar) = self.planar_here().filter(|_| !baumgarte) {
             return self.solve_planar_loop_block(planar, t, q, v);
         }
-        // The efforts leave the forward kinematics of (q, v) in `data`, which the rows and the
-        // recursions start from.
-        self.efforts_with_friction(t, (q, v), true)?;
+        // The forward kinematics of (q, v), which the rows, the efforts and the recursions
+        // start from.
+        forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let scratch = &mut self.scratch.loop_scratch;
         // Only Baumgarte's feedback reads the position rows.
         let extent = match baumgarte {
@@ -139,8 +150,12 @@ impl MechanicalSystem<'_> {
             &mut scratch.constraints,
         )?;
         let structure = &self.scratch.loops.structure;
-        loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch)
-            .map_err(|e| self.loop_error(&e))?;
+        let allowed = loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch);
+        allowed.map_err(|e| self.loop_error(&e))?;
+        // The efforts after the allowed motions: the actuators' laws that read the model in
+        // their coordinates take it from them, unless Baumgarte's feedback is in the particular
+        // acceleration.
+        self.efforts_with_friction(t, (q, v), Effort::AfterKinematics { loops: !baumgarte })?;
         // Inverse dynamics' pass out at a₀: the bodies' forces whose power along each allowed
         // motion gives its share of Ma₀ and of the velocity-product forces.
         let scratch = &mut self.scratch.loop_scratch;
@@ -152,7 +167,7 @@ impl MechanicalSystem<'_> {
             &self.scratch.efforts.external,
         );
         let tau = &self.scratch.efforts.tau;
-        let solve = (structure, None);
+        let solve = (&self.scratch.loops.structure, None);
         let solved = loops::solve_reduced(model, &mut self.scratch.data, tau, solve, scratch);
         solved.map_err(|e| self.loop_error(&e))
     }
@@ -170,7 +185,11 @@ impl MechanicalSystem<'_> {
     ) -> Result<(), SystemError> {
         let model = self.model;
         let reads_efforts = self.reads_efforts();
-        self.efforts_with_friction(t, (q, v), reads_efforts)?;
+        let evaluation = match reads_efforts {
+            true => Effort::Evaluated,
+            false => Effort::Zero,
+        };
+        self.efforts_with_friction(t, (q, v), evaluation)?;
         let planar_data = self.scratch.planar.as_deref_mut();
         let planar_data = planar_data.expect("a scratch in planar form has the planar scratch");
         planar_algorithms::kinematics(planar, planar_data, (q, v), true);
@@ -195,25 +214,25 @@ impl MechanicalSystem<'_> {
     }
 
     /// The efforts at (t, q, v) into `efforts`, the slipping joints' friction added to their
-    /// generalised forces: evaluated when `evaluate` (leaving the forward kinematics of (q, v)
-    /// in `data`), zero otherwise (a planar block whose model applies none needs no spatial
-    /// kinematics).
+    /// generalised forces, as `evaluation` says.
     fn efforts_with_friction(
         &mut self,
         t: f64,
         (q, v): (&[f64], &[f64]),
-        evaluate: bool,
+        evaluation: Effort,
     ) -> Result<(), SystemError> {
-        if evaluate {
-            self.evaluate_efforts(t, q, v)?;
-        } else {
-            let efforts = &mut self.scratch.efforts;
-            efforts.tau.fill(0.0);
-            if !self.scratch.external_is_zero {
-                efforts.external.fill(Force::zeros());
-                self.scratch.external_is_zero = true;
+        match evaluation {
+            Effort::Evaluated => self.evaluate_efforts(t, q, v)?,
+            Effort::AfterKinematics { loops } => self.efforts_after_kinematics(t, q, v, loops)?,
+            Effort::Zero => {
+                let efforts = &mut self.scratch.efforts;
+                efforts.tau.fill(0.0);
+                if !self.scratch.external_is_zero {
+                    efforts.external.fill(Force::zeros());
+                    self.scratch.external_is_zero = true;
+                }
+                efforts.power = 0.0;
             }
-            efforts.power = 0.0;
         }
         let mut tau = std::mem::take(&mut self.scratch.efforts.tau);
         self.scratch.friction_power = self.add_friction(v, &mut tau);
