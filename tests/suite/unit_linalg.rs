@@ -1,9 +1,12 @@
-//! The minimum-norm solutions on a matrix's independent rows (`linalg::MinimumNormRows`)
-//! against the pseudo-inverse from the singular value decomposition, on wide matrices with
-//! rows that are combinations of others (as the loops' redundant rows are), and on the rows
-//! found independent kept for a nearby matrix.
+//! The minimum-norm solutions on a matrix's independent rows (`linalg::MinimumNormRows`) and
+//! from the pseudo-inverse of the singular value decomposition (`linalg::svd`), each against
+//! the solution on the rows known independent by construction from nalgebra's QR
+//! decomposition, on wide matrices with rows that are combinations of others (as the loops'
+//! redundant rows are), and on the rows found independent kept for a nearby matrix; the
+//! decomposition on the matrices where nalgebra's own is wrong (its issue #1172), against
+//! closed forms.
 
-use lsdc::linalg::{pseudo_inverse, MinimumNormRows};
+use lsdc::linalg::{jacobi_svd, pseudo_inverse, svd, MinimumNormRows};
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 
@@ -33,9 +36,16 @@ proptest! {
         let factors = MinimumNormRows::new(&a, 1e-9).expect("finite");
         prop_assert_eq!(factors.rank(), p - dependent);
         let solution = factors.solve(&b);
-        let expected = pseudo_inverse(a.clone(), 1e-9 * a.norm()).expect("finite") * &b;
+        // The minimum-norm solution on the first rows, independent by construction: Q R⁻ᵀ b₁
+        // from the QR decomposition of their transpose.
+        let independent = p - dependent;
+        let qr = a.rows(0, independent).transpose().qr();
+        let on_first = qr.r().transpose().solve_lower_triangular(&b.rows(0, independent).into_owned());
+        let expected = qr.q() * on_first.expect("independent rows");
         let scale = 1.0 + expected.amax();
         prop_assert!((&solution - &expected).amax() < 1e-11 * scale);
+        let decomposed = pseudo_inverse(a.clone(), 1e-9 * a.norm()).expect("finite") * &b;
+        prop_assert!((&decomposed - &expected).amax() < 1e-11 * scale);
         prop_assert!((&a * &solution - &b).amax() < 1e-12 * (1.0 + b.amax()));
         // The rows found independent, kept for a nearby matrix (a's combinations kept): its
         // solution without pivoting is its own pivoted one.
@@ -70,4 +80,74 @@ fn a_zero_matrix_has_rank_zero_and_the_zero_solution() {
     let factors = MinimumNormRows::new(&a, 1e-9).expect("finite");
     assert_eq!(factors.rank(), 0);
     assert_eq!(factors.solve(&DMatrix::zeros(3, 1)), DMatrix::zeros(4, 1));
+}
+
+/// A p × q matrix of ones is 1_p 1_qᵀ: one singular value √(pq), the others zero. nalgebra's
+/// own decomposition returns 4.54 for the 3 × 5 one's √15 (its issue #1172).
+#[test]
+fn matrices_of_ones_have_their_one_singular_value() {
+    for (p, q) in [(3, 5), (5, 3), (6, 21), (4, 4), (1, 7)] {
+        let ones = DMatrix::from_element(p, q, 1.0);
+        for decomposition in [
+            svd(ones.clone(), true, true).expect("finite"),
+            jacobi_svd(&ones),
+        ] {
+            let values = &decomposition.singular_values;
+            let exact = ((p * q) as f64).sqrt();
+            assert!(
+                (values[0] - exact).abs() < 1e-14 * exact,
+                "{p} x {q}: {values}"
+            );
+            assert!(
+                values.iter().skip(1).all(|s| s.abs() < 1e-14 * exact),
+                "{p} x {q}"
+            );
+            let (u, v_t) = (decomposition.u.unwrap(), decomposition.v_t.unwrap());
+            let k = p.min(q);
+            assert!((u.transpose() * &u - DMatrix::identity(k, k)).amax() < 1e-14);
+            assert!((&v_t * v_t.transpose() - DMatrix::identity(k, k)).amax() < 1e-14);
+            let rebuilt = u.column(0) * v_t.row(0) * values[0];
+            assert!((rebuilt - &ones).amax() < 1e-14 * exact, "{p} x {q}");
+        }
+    }
+}
+
+/// One-sided Jacobi against a matrix built from its factors: U Σ Vᵀ with U, V from Givens
+/// rotations and Σ spanning 12 decades, rank-deficient too.
+#[test]
+fn jacobi_rotations_find_the_singular_values_of_a_built_matrix() {
+    let rotation = |n: usize, seed: f64| {
+        let mut r = DMatrix::<f64>::identity(n, n);
+        for i in 0..n {
+            for j in i + 1..n {
+                let angle = seed * (1.0 + i as f64) + 0.37 * j as f64;
+                let (c, s) = (angle.cos(), angle.sin());
+                for k in 0..n {
+                    let (x, y) = (r[(k, i)], r[(k, j)]);
+                    r[(k, i)] = c * x - s * y;
+                    r[(k, j)] = s * x + c * y;
+                }
+            }
+        }
+        r
+    };
+    let (p, q) = (5, 8);
+    for values in [[1e3, 10.0, 1.0, 1e-3, 1e-9], [4.0, 3.0, 2.0, 0.0, 0.0]] {
+        let mut sigma = DMatrix::zeros(p, q);
+        for (k, &s) in values.iter().enumerate() {
+            sigma[(k, k)] = s;
+        }
+        let m = rotation(p, 0.3) * sigma * rotation(q, 0.7).transpose();
+        for decomposition in [jacobi_svd(&m), svd(m.clone(), true, true).expect("finite")] {
+            for (k, &s) in values.iter().enumerate() {
+                let found = decomposition.singular_values[k];
+                assert!(
+                    (found - s).abs() < 1e-13 * values[0],
+                    "{k}: {found} against {s}"
+                );
+            }
+            let rebuilt = decomposition.recompose().expect("vectors");
+            assert!((rebuilt - &m).amax() < 1e-13 * values[0]);
+        }
+    }
 }
