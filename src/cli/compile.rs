@@ -23,7 +23,26 @@ enum EquationsFormat {
     Text,
     Latex,
     Sympy,
+    Maple,
     Json,
+}
+
+/// The formalism `--emit equations` derives them by.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum FormArg {
+    Lagrange,
+    Kane,
+    NewtonEuler,
+}
+
+impl FormArg {
+    fn form(self) -> lsdc::symbolic::Form {
+        match self {
+            FormArg::Lagrange => lsdc::symbolic::Form::Lagrange,
+            FormArg::Kane => lsdc::symbolic::Form::Kane,
+            FormArg::NewtonEuler => lsdc::symbolic::Form::NewtonEuler,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -40,6 +59,11 @@ pub struct CompileArgs {
     /// Format of `--emit equations` (default text).
     #[arg(long, value_enum)]
     format: Option<EquationsFormat>,
+    /// The formalism of `--emit equations` (default lagrange): `kane`, Kane's equations from
+    /// partial velocities; `newton-euler`, the recursive Newton–Euler form. The same equations
+    /// by another derivation.
+    #[arg(long, value_enum)]
+    form: Option<FormArg>,
     /// Simplify the equations before writing them (`equations`, `rust`, `c`): like terms
     /// collected, cancellations, sin² + cos² = 1 and the angle sums, common factors taken out.
     #[arg(long)]
@@ -54,6 +78,9 @@ pub fn run(args: &CompileArgs) -> ExitCode {
     if format.is_some() && emit != Emit::Equations {
         return usage_error("`--format` applies to `--emit equations` only");
     }
+    if args.form.is_some() && emit != Emit::Equations {
+        return usage_error("`--form` applies to `--emit equations` only");
+    }
     if args.simplify && emit == Emit::Notation {
         return usage_error("`--simplify` applies to `--emit equations`, `rust` and `c` only");
     }
@@ -66,7 +93,10 @@ pub fn run(args: &CompileArgs) -> ExitCode {
                 Vec::new(),
             ));
         }
-        let mut equations = lsdc::symbolic::generate(mechanism, &topology)?;
+        let form = args
+            .form
+            .map_or(lsdc::symbolic::Form::Lagrange, FormArg::form);
+        let mut equations = lsdc::symbolic::generate_in(mechanism, &topology, form)?;
         if args.simplify {
             equations = lsdc::symbolic::simplify::simplify_equations(&equations);
         }
@@ -77,6 +107,7 @@ pub fn run(args: &CompileArgs) -> ExitCode {
             (_, EquationsFormat::Text) => emit::text(&equations, &source),
             (_, EquationsFormat::Latex) => emit::latex(&equations, &source),
             (_, EquationsFormat::Sympy) => emit::sympy(&equations, &source),
+            (_, EquationsFormat::Maple) => emit::maple(&equations, &source),
             (_, EquationsFormat::Json) => emit::json(&equations, &source),
         };
         Ok((text, Vec::new()))

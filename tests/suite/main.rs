@@ -87,6 +87,7 @@ mod sweep_examples;
 mod sweep_slurm;
 mod symbolic;
 mod symbolic_equations;
+mod symbolic_forms;
 mod symbolic_simplify;
 mod symplectic_groups;
 mod textmate;
