@@ -39,9 +39,9 @@ impl Form {
     /// How the emitted equations say they were derived.
     pub fn description(self) -> &'static str {
         match self {
-            Form::Lagrange => "the thesis's Lagrange form (free bodies' Newton–Euler blocks premultiplied by Psi^T)",
+            Form::Lagrange => "the thesis's Lagrange form (free bodies' Newton-Euler blocks premultiplied by Psi^T)",
             Form::Kane => "Kane's equations (generalised active and inertia forces from partial velocities)",
-            Form::NewtonEuler => "the recursive Newton–Euler form (bodies' equations at their centres of mass, reactions carried to the root)",
+            Form::NewtonEuler => "the recursive Newton-Euler form (bodies' equations at their centres of mass, reactions carried to the root)",
         }
     }
 }

@@ -48,6 +48,7 @@ mod loop_shaping;
 mod loops;
 mod lsp;
 mod mampey;
+mod maple_output;
 mod mass_matrix;
 mod methods;
 mod mimics;

@@ -241,3 +241,23 @@ fn every_form_gives_the_double_pendulums_closed_forms() {
         }
     }
 }
+
+/// `--form` reaches the command: each form's text says how it was derived, and `--form` with
+/// another `--emit` is a usage error.
+#[test]
+fn the_form_is_chosen_on_the_command_line() {
+    let pendulum = "examples/pendulum.lsd";
+    for (form, words) in [
+        ("kane", "Kane's equations"),
+        ("newton-euler", "recursive Newton-Euler form"),
+    ] {
+        let (code, stdout, _) =
+            crate::common::lsdc(&["compile", "--emit", "equations", "--form", form, pendulum]);
+        assert_eq!(code, 0);
+        assert!(stdout.contains(words), "{form}: {stdout}");
+        assert!(stdout.contains("M[1,1] = "), "{stdout}");
+    }
+    let (code, _, stderr) =
+        crate::common::lsdc(&["compile", "--emit", "notation", "--form", "kane", pendulum]);
+    assert_eq!(code, 2, "{stderr}");
+}

@@ -230,7 +230,7 @@ fn declare_variables(out: &mut String, equations: &Equations, names: &MapleNames
             let _ = writeln!(out, "#   {maple}: `{name}`");
         }
     }
-    let _ = writeln!(out, "#   t: the time");
+    let _ = writeln!(out, "\n# Time.\n#   t");
 }
 
 /// The Maple assignment target of an entry (indices from 1); M is declared symmetric, so its
