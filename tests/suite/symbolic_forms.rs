@@ -260,4 +260,30 @@ fn the_form_is_chosen_on_the_command_line() {
     let (code, _, stderr) =
         crate::common::lsdc(&["compile", "--emit", "notation", "--form", "kane", pendulum]);
     assert_eq!(code, 2, "{stderr}");
+    // The level of vectors and matrices: the free bodies' blocks and Ψ, no scalar entry.
+    let (code, stdout, _) = crate::common::lsdc(&[
+        "compile",
+        "--emit",
+        "equations",
+        "--level",
+        "vector",
+        pendulum,
+    ]);
+    assert_eq!(code, 0);
+    assert!(
+        stdout.contains("M(p) = &t(Psi(p)) &* MMassMax &* Psi(p) ;"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("M[1,1]"), "{stdout}");
+    let (code, _, _) = crate::common::lsdc(&[
+        "compile",
+        "--emit",
+        "equations",
+        "--level",
+        "vector",
+        "--format",
+        "maple",
+        pendulum,
+    ]);
+    assert_eq!(code, 2);
 }
