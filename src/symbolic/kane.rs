@@ -19,6 +19,7 @@
 use super::expr::ExprId;
 use super::generator::Generator;
 use super::inertia::Inertia;
+use super::newton_euler::MassSecondMemberForces;
 use super::vector::{self as v, Mat3, Vec3, Wrench};
 
 /// A body's motion as Kane's method reads it, in the body's own axes.
@@ -42,21 +43,21 @@ impl Generator<'_> {
         &mut self,
         tree: usize,
         applied: &[Option<Wrench>],
-    ) -> (Vec<ExprId>, Vec<ExprId>, Vec<ExprId>) {
+    ) -> MassSecondMemberForces {
         let n = self.columns();
         let zero = self.pool.constant(0.0);
         let (mut mass, mut second_member, mut forces) =
             (vec![zero; n * n], vec![zero; n], vec![zero; n]);
-        for b in 1..=self.topology.body_count() {
+        for (b, wrench) in applied.iter().enumerate().skip(1) {
             let inertia = self.local_inertias[b];
-            if inertia.is_none() && applied[b].is_none() {
+            if inertia.is_none() && wrench.is_none() {
                 continue;
             }
             let rates = self.body_rates(b, tree);
             if let Some(inertia) = inertia {
                 self.add_inertia_forces(&inertia, &rates, &mut mass, &mut second_member);
             }
-            if let Some([force, moment]) = applied[b] {
+            if let Some([force, moment]) = *wrench {
                 let pool = &mut self.pool;
                 let force = v::mat_vec(pool, &rates.to_body, &force);
                 let moment = v::mat_vec(pool, &rates.to_body, &moment);

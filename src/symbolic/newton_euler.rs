@@ -22,6 +22,9 @@ use super::generator::Generator;
 use super::lower::LowerError;
 use super::vector::{self as v, Mat3, Vec3, Wrench};
 
+/// M (row-major), S and the applied efforts' part of F.
+pub(super) type MassSecondMemberForces = (Vec<ExprId>, Vec<ExprId>, Vec<ExprId>);
+
 /// A body's mass properties at its centre of mass, in the fixed axes.
 #[derive(Clone, Copy)]
 struct Central {
@@ -39,7 +42,7 @@ impl Generator<'_> {
         &mut self,
         tree: usize,
         applied: &[Option<Wrench>],
-    ) -> Result<(Vec<ExprId>, Vec<ExprId>, Vec<ExprId>), LowerError> {
+    ) -> Result<MassSecondMemberForces, LowerError> {
         let count = self.topology.body_count();
         let mut centrals = vec![None];
         for b in 1..=count {
