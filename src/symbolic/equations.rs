@@ -23,6 +23,7 @@ use nalgebra::{DMatrix, DVector};
 #[cfg(lsdc_internals)]
 use super::expr::Tape;
 use super::expr::{ExprId, Pool};
+use super::form::Form;
 use super::generator::Generator;
 use super::lower::{LowerError, Variables};
 use super::vector as v;
@@ -50,6 +51,8 @@ pub struct Equations {
     /// For trees, the coordinates' second derivatives q̇ = M⁻¹(S + F), written by the
     /// articulated-body recursion (O(n) expressions rather than a solve).
     pub accelerations: Option<Vec<ExprId>>,
+    /// The formalism the equations were derived by.
+    pub form: Form,
 }
 
 impl Equations {
@@ -175,6 +178,15 @@ fn imposed_motion(mechanism: &Mechanism) -> Option<Diagnostic> {
 }
 
 pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations, Vec<Diagnostic>> {
+    generate_in(mechanism, topology, Form::Lagrange)
+}
+
+/// The equations derived by `form`: the same equations, to round-off, by another road (`form`).
+pub fn generate_in(
+    mechanism: &Mechanism,
+    topology: &Topology,
+    form: Form,
+) -> Result<Equations, Vec<Diagnostic>> {
     if let Some(contact) = mechanism.contacts.first() {
         // The equations below are the tree's and its loops'; leaving the contacts' rows out
         // would write the equations of another mechanism.
@@ -218,7 +230,7 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
         return Err(vec![refused]);
     }
     let mut generator = Generator::new(mechanism, topology);
-    generator.run().map_err(|e| {
+    generator.run(form).map_err(|e| {
         let error = Diagnostic::error(
             "E1101",
             format!("the equations of motion cannot be written: {}", e.0),
@@ -231,11 +243,14 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
 }
 
 impl Generator<'_> {
-    fn run(&mut self) -> Result<Equations, LowerError> {
+    fn run(&mut self, form: Form) -> Result<Equations, LowerError> {
         self.place_bodies()?;
         self.anchors = self.anchors();
         (self.local_inertias, self.inertias) = self.merged_inertias()?;
         let tree_coordinates = self.tree_coordinates();
+        if form != Form::Lagrange {
+            return self.run_other(form, tree_coordinates);
+        }
         let mass = self.mass_matrix(tree_coordinates);
         let velocity_terms: Vec<Option<Wrench>> = (0..=self.topology.body_count())
             .map(|i| {
@@ -270,6 +285,38 @@ impl Generator<'_> {
             constraint_bias: closure.bias,
             constraint_names: closure.names,
             accelerations,
+            form,
+        })
+    }
+
+    /// The equations by Kane's or the Newton–Euler form. The constraint rows are the loops'
+    /// kinematics, the same in every form; the accelerations (the articulated-body recursion,
+    /// not a form of the equations) are left out.
+    fn run_other(&mut self, form: Form, tree_coordinates: usize) -> Result<Equations, LowerError> {
+        self.frame_states()?;
+        let applied = self.applied_wrenches()?;
+        let (mass, second_member, mut forces) = match form {
+            Form::Kane => self.kane(tree_coordinates, &applied),
+            _ => self.newton_euler(tree_coordinates, &applied)?,
+        };
+        let zero = self.pool.constant(0.0);
+        let mut link_forces = vec![zero; self.columns()];
+        self.add_link_efforts(&mut link_forces)?;
+        for (f, l) in forces.iter_mut().zip(&link_forces) {
+            *f = self.pool.add(*f, *l);
+        }
+        let closure = self.loops()?;
+        Ok(Equations {
+            pool: std::mem::take(&mut self.pool),
+            variables: self.lowering.variables.clone(),
+            mass,
+            second_member,
+            forces,
+            constraints: closure.rows,
+            constraint_bias: closure.bias,
+            constraint_names: closure.names,
+            accelerations: None,
+            form,
         })
     }
 

@@ -557,6 +557,45 @@ impl Pool {
         }
     }
 
+    /// The node `id` of another pool rebuilt in this one (symbols matched by name), so that
+    /// expressions of two derivations can be subtracted. `memo` keeps the nodes already rebuilt:
+    /// pass the same map for the same `from`.
+    pub fn transplant(
+        &mut self,
+        from: &Pool,
+        id: ExprId,
+        memo: &mut HashMap<ExprId, ExprId>,
+    ) -> ExprId {
+        // Operands first, without recursion: a deep graph would overflow the stack.
+        let mut stack = vec![(id, false)];
+        while let Some((node, expanded)) = stack.pop() {
+            if memo.contains_key(&node) {
+                continue;
+            }
+            let operands = from.operands(node);
+            if !expanded {
+                stack.push((node, true));
+                stack.extend(operands.iter().map(|&o| (o, false)));
+                continue;
+            }
+            let o: Vec<ExprId> = operands.iter().map(|x| memo[x]).collect();
+            let rebuilt = match from.node(node) {
+                Node::Constant(bits) => self.constant(f64::from_bits(bits)),
+                Node::Symbol(i) => self.symbol(from.symbol_name(i)),
+                Node::Add(..) => self.add(o[0], o[1]),
+                Node::Mul(..) => self.mul(o[0], o[1]),
+                Node::Div(..) => self.div(o[0], o[1]),
+                Node::Pow(..) => self.pow(o[0], o[1]),
+                Node::Atan2(..) => self.atan2(o[0], o[1]),
+                Node::Neg(_) => self.neg(o[0]),
+                Node::Apply(f, _) => self.apply(f, o[0]),
+                Node::Select { .. } => self.select(o[0], o[1], o[2]),
+            };
+            memo.insert(node, rebuilt);
+        }
+        memo[&id]
+    }
+
     /// Whether `id` is the constant 0.
     pub fn is_zero(&self, id: ExprId) -> bool {
         self.is(id, 0.0)

@@ -22,6 +22,57 @@ use crate::topology::Topology;
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
+/// How much the table holds (Papegay 1992, §3.1.1, the levels of detail).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Level {
+    /// The table of §3.2.4: structure, variables, assignments, relations.
+    #[default]
+    Table,
+    /// The table and the mass matrix's blocks `MMassMax_i` (§3.3.2, §6.1 of the notes).
+    Vector,
+    /// The above and the scalar assignments: `MOR_0_i` as the Bryant matrix of `pi[4..6](t)`,
+    /// the inertias as matrices.
+    Scalar,
+}
+
+/// The table's options.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Options {
+    pub level: Level,
+    /// The thesis's own indices, concatenated: the inertia frame of body i is `i(n+1)`
+    /// (`V4T_4_45` with n = 4), the frame on body i of the link with body j is `ij`
+    /// (`V1T_1_12`), that of complementary link k on body i is `ik`. Ambiguous from 10 bodies
+    /// on, and `i(n+1)` collides with complementary link n+1's frame (notes §8 #12): the
+    /// default separates and names them (`V4T_4_G`, `V1T_1_2`).
+    pub thesis_indices: bool,
+}
+
+/// Frame names in the table's convention.
+struct FrameNames {
+    thesis: bool,
+    bodies: usize,
+}
+
+impl FrameNames {
+    /// The inertia frame of body i.
+    fn inertia(&self, i: usize) -> String {
+        match self.thesis {
+            true => format!("{i}{}", self.bodies + 1),
+            false => "G".to_string(),
+        }
+    }
+
+    /// The frame on body i of link `number`, whose other body is `other` (for a principal
+    /// link; `None` for a complementary one).
+    fn link(&self, i: usize, number: usize, other: Option<usize>) -> String {
+        match (self.thesis, other) {
+            (true, Some(j)) => format!("{i}{j}"),
+            (true, None) => format!("{i}{number}"),
+            (false, _) => number.to_string(),
+        }
+    }
+}
+
 /// Names given to the written unknowns, assigned in the order the table meets them.
 struct Names<'m> {
     mechanism: &'m Mechanism,
@@ -145,18 +196,24 @@ fn displacement_lines(
 }
 
 pub fn notation(mechanism: &Mechanism, topology: &Topology) -> String {
-    notation_and_names(mechanism, topology).0
+    notation_and_names(mechanism, topology, Options::default()).0
+}
+
+/// The table at a level of detail, with the separated or the thesis's indices.
+pub fn notation_with(mechanism: &Mechanism, topology: &Topology, options: Options) -> String {
+    notation_and_names(mechanism, topology, options).0
 }
 
 /// The names the notation table gives the written unknowns (`v4T_4_G_z`, `cL2_x`, `u1`, …):
 /// the names `--set` accepts for unknowns the program did not name.
 pub fn unknown_names(mechanism: &Mechanism, topology: &Topology) -> HashMap<UnknownId, String> {
-    notation_and_names(mechanism, topology).1
+    notation_and_names(mechanism, topology, Options::default()).1
 }
 
 fn notation_and_names(
     mechanism: &Mechanism,
     topology: &Topology,
+    options: Options,
 ) -> (String, HashMap<UnknownId, String>) {
     let link_numbers = topology
         .principal
@@ -172,6 +229,10 @@ fn notation_and_names(
         link_numbers,
     };
     let n = topology.body_count();
+    let frames = FrameNames {
+        thesis: options.thesis_indices,
+        bodies: n,
+    };
     let mut out = String::new();
     let _ = writeln!(out, "(* structure *)\nN := {n} ;");
     let bodies: Vec<String> = topology
@@ -234,11 +295,14 @@ fn notation_and_names(
     let mut declared = Vec::new();
     let mut deduced = Vec::new();
     let mut relations = Vec::new();
+    let mut blocks = Vec::new();
+    let mut scalars = Vec::new();
     for (k, &id) in topology.bodies.iter().enumerate() {
         let i = k + 1;
+        let g = frames.inertia(i);
         let body = mechanism.body(id);
         if let Quantity::Declared(d) = &body.iframe {
-            displacement_lines(&mut names, i, "G", d, &mut declared);
+            displacement_lines(&mut names, i, &g, d, &mut declared);
         }
         let massless = matches!(&body.mass, Quantity::Declared(m) if is_zero_scalar(m));
         if let Quantity::Declared(m) = &body.mass {
@@ -266,28 +330,47 @@ fn notation_and_names(
             Quantity::Generic(_) => false,
         };
         if centred {
-            deduced.push(format!("VOT_{i}_G = 0"));
+            deduced.push(format!("VOT_{i}_{g} = 0"));
+        }
+        scalars.push(format!("MOR_0_{i} := {}", bryant_matrix(i)));
+        let weighs = !(massless && no_inertia);
+        if weighs && !matches!(&body.inertia, Quantity::Declared(_)) {
+            scalars.push(format!(
+                "MIg_{i} := matrix([[MIg_{i}_xx, 0, 0], [0, MIg_{i}_yy, 0], [0, 0, MIg_{i}_zz]])"
+            ));
+        }
+        if weighs && !matches!(&body.iframe, Quantity::Declared(_)) {
+            scalars.push(format!(
+                "V{i}T_{i}_{g} := [V{i}T_{i}_{g}_x, V{i}T_{i}_{g}_y, V{i}T_{i}_{g}_z]"
+            ));
         }
         if massless && no_inertia {
             deduced.push(format!("MOIo_{i} := 0"));
+            blocks.push(format!("MMassMax_{i} = 0"));
             continue;
         }
+        blocks.push(match centred {
+            true => format!("MMassMax_{i} = [[mu_{i} &s Id, 0], [0, MOIo_{i}]]"),
+            false => format!(
+                "MMassMax_{i} = [[mu_{i} &s Id, - mu_{i} &s ~VOT_{i}_{g}], [mu_{i} &s ~VOT_{i}_{g}, MOIo_{i}]]"
+            ),
+        });
         if centred {
             relations.push(format!("MOIo_{i} = MOIg_{i}"));
         } else {
-            relations.push(format!("VOT_{i}_G = MOR_0_{i} &* V{i}T_{i}_G"));
+            relations.push(format!("VOT_{i}_{g} = MOR_0_{i} &* V{i}T_{i}_{g}"));
             let central = if no_inertia {
                 String::new()
             } else {
                 format!("MOIg_{i} ")
             };
             relations.push(format!(
-                "MOIo_{i} = {central}- mu_{i} &* ~VOT_{i}_G &* ~VOT_{i}_G"
+                "MOIo_{i} = {central}- mu_{i} &* ~VOT_{i}_{g} &* ~VOT_{i}_{g}"
             ));
         }
         if !no_inertia {
             relations.push(format!(
-                "MOIg_{i} = MOR_0_{i} &* M{i}R_{i}_G &* MIg_{i} &* &t(MOR_0_{i} &* M{i}R_{i}_G)"
+                "MOIg_{i} = MOR_0_{i} &* M{i}R_{i}_{g} &* MIg_{i} &* &t(MOR_0_{i} &* M{i}R_{i}_{g})"
             ));
         }
     }
@@ -299,13 +382,20 @@ fn notation_and_names(
     {
         let number = link_number(topology, link);
         let join = mechanism.join(link);
-        for frame in [&join.first, &join.second] {
+        let number_of = |body: BodyRef| match body {
+            BodyRef::Earth => 0,
+            BodyRef::Body(id) => topology.number_of[&id],
+        };
+        let principal = topology.principal.iter().any(|l| l.join == link);
+        let ends = [number_of(join.first.body), number_of(join.second.body)];
+        for (side, frame) in [&join.first, &join.second].into_iter().enumerate() {
             if let BodyRef::Body(id) = frame.body {
                 let i = topology.number_of[&id];
+                let other = principal.then_some(ends[1 - side]);
                 displacement_lines(
                     &mut names,
                     i,
-                    &number.to_string(),
+                    &frames.link(i, number, other),
                     &frame.displacement,
                     &mut declared,
                 );
@@ -338,6 +428,15 @@ fn notation_and_names(
     for line in relations {
         let _ = writeln!(out, "{line} ;");
     }
+    if options.level != Level::Table {
+        out.push_str(&mass_blocks(n, &blocks));
+    }
+    if options.level == Level::Scalar {
+        let _ = writeln!(out, "\n(* scalar assignments *)");
+        for line in scalars {
+            let _ = writeln!(out, "{line} ;");
+        }
+    }
     (out, names.assigned)
 }
 
@@ -355,4 +454,114 @@ fn link_number(topology: &Topology, join: crate::elab::value::JoinId) -> usize {
                 .map(|l| l.number)
         })
         .unwrap_or(0)
+}
+
+/// The generalised mass matrix of the free bodies, block by block (Papegay 1992, §3.3.2, step
+/// 2, and its worked use on the satellite): `&s` is the product by a scalar, `~v` the
+/// cross-product matrix of v, in the fixed basis.
+fn mass_blocks(n: usize, blocks: &[String]) -> String {
+    let mut out = String::new();
+    let all: Vec<String> = (1..=n).map(|i| format!("MMassMax_{i}")).collect();
+    let _ = writeln!(out, "\n(* mass matrix blocks *)");
+    let _ = writeln!(out, "MMassMax = BlockDiagonal({}) ;", all.join(", "));
+    for line in blocks {
+        let _ = writeln!(out, "{line} ;");
+    }
+    out
+}
+
+/// The orientation of body i in the fixed basis as the thesis writes it at the scalar level:
+/// the Bryant matrix of the body's angles `pi[4..6](t)`, whatever its link's parametrisation.
+fn bryant_matrix(i: usize) -> String {
+    let (c, s) = (
+        |k: usize| format!("cos(p{i}[{k}](t))"),
+        |k: usize| format!("sin(p{i}[{k}](t))"),
+    );
+    let rows = [
+        [
+            format!("{} {}", c(5), c(6)),
+            format!("- {} {}", c(5), s(6)),
+            s(5),
+        ],
+        [
+            format!("{} {} {} + {} {}", s(4), s(5), c(6), c(4), s(6)),
+            format!("- {} {} {} + {} {}", s(4), s(5), s(6), c(4), c(6)),
+            format!("- {} {}", s(4), c(5)),
+        ],
+        [
+            format!("- {} {} {} + {} {}", c(4), s(5), c(6), s(4), s(6)),
+            format!("{} {} {} + {} {}", c(4), s(5), s(6), s(4), c(6)),
+            format!("{} {}", c(4), c(5)),
+        ],
+    ];
+    let rows: Vec<String> = rows.iter().map(|r| format!("[{}]", r.join(", "))).collect();
+    format!("[{}]", rows.join(", "))
+}
+
+/// The equations at the level of vectors and matrices (Papegay 1992, §3.1.1, level 2, and
+/// §3.3.1): the free bodies' blocks and the projection on the tree's coordinates, in names that
+/// do not mention the coordinates chosen; `--emit equations --level scalar` writes them out.
+pub fn vector_equations(mechanism: &Mechanism, topology: &Topology, options: Options) -> String {
+    let table = notation_with(
+        mechanism,
+        topology,
+        Options {
+            level: Level::Vector,
+            ..options
+        },
+    );
+    let n = topology.body_count();
+    let frames = FrameNames {
+        thesis: options.thesis_indices,
+        bodies: n,
+    };
+    let mut out = table;
+    let _ = writeln!(out, "\n(* second member and efforts of the free bodies *)");
+    for i in 1..=n {
+        let g = frames.inertia(i);
+        let _ = writeln!(out, "Omega_{i} = [q{i}[4](t), q{i}[5](t), q{i}[6](t)] ;");
+        let _ = writeln!(
+            out,
+            "SSecMax_{i} = [- mu_{i} &s ~Omega_{i} &* ~Omega_{i} &* VOT_{i}_{g}, - ~Omega_{i} &* MOIo_{i} &* Omega_{i}] ;"
+        );
+        let _ = writeln!(out, "FForMax_{i} = [VOFE_{i}, VOCE_{i}] ;");
+    }
+    let all = |name: &str| {
+        (1..=n)
+            .map(|i| format!("{name}_{i}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let _ = writeln!(out, "SSecMax = [{}] ;", all("SSecMax"));
+    let _ = writeln!(out, "FForMax = [{}] ;", all("FForMax"));
+    let _ = writeln!(out, "\n(* free bodies: MMassMax &* qdot = SSecMax + FForMax *)");
+    let _ = writeln!(
+        out,
+        "[{}] = Psi(p) &* q ;",
+        (1..=n)
+            .map(|i| format!("q{i}[1..6](t)"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let _ = writeln!(out, "\n(* the tree's equations, Psi^T eliminating its reactions *)");
+    let _ = writeln!(out, "M(p) = &t(Psi(p)) &* MMassMax &* Psi(p) ;");
+    let _ = writeln!(
+        out,
+        "S(p, q) = &t(Psi(p)) &* (SSecMax - MMassMax &* Psidot(p, q) &* q) ;"
+    );
+    let _ = writeln!(out, "F(p, q, t) = &t(Psi(p)) &* FForMax + FL(p, q, t) ;");
+    let _ = writeln!(out, "M(p) &* q' = S(p, q) + F(p, q, t) ;");
+    if !topology.complementary.is_empty() {
+        let _ = writeln!(
+            out,
+            "\n(* loops: the complementary links' constraints, Psi^T eliminating the tree's reactions only *)"
+        );
+        let _ = writeln!(out, "Delta_V(p) = D_cmp(psi(p)) &* Psi(p) ;");
+        let _ = writeln!(
+            out,
+            "M(p) &* q' = S(p, q) + F(p, q, t) + &t(Delta_V(p)) &* Lambda ;"
+        );
+        let _ = writeln!(out, "Delta_V(p) &* q = 0 ;");
+    }
+    out
 }

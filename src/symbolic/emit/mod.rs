@@ -1,5 +1,5 @@
 //! The equations of motion written out: for people (`text`, `latex`), for computer algebra
-//! (`sympy`), as the expression DAG itself (`json`), and as code that evaluates them and the
+//! (`sympy`, `maple`), as the expression DAG itself (`json`), and as code that evaluates them and the
 //! forward dynamics (`rust`, `c`).
 //!
 //! Every format shares the common subexpressions the same way (`shared`): a node used more than
@@ -10,6 +10,7 @@ mod c;
 mod code;
 mod json;
 mod latex;
+mod maple;
 mod rust;
 mod shared;
 mod sympy;
@@ -18,6 +19,7 @@ mod text;
 pub use c::c;
 pub use json::json;
 pub use latex::latex;
+pub use maple::maple;
 pub use rust::rust;
 pub use sympy::sympy;
 pub use text::text;

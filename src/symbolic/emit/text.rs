@@ -61,6 +61,9 @@ pub fn text(equations: &Equations, source: &str) -> String {
         language: &language,
     };
     let mut out = header(source);
+    if equations.form != crate::symbolic::Form::Lagrange {
+        let _ = writeln!(out, "# Derived by {}.", equations.form.description());
+    }
     variables(&mut out, equations);
     if !listing.temporaries.is_empty() {
         out.push_str("\ntemporaries\n");

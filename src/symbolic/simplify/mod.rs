@@ -154,6 +154,7 @@ pub fn simplify_equations(equations: &Equations) -> Equations {
         constraint_bias: next(),
         constraint_names: equations.constraint_names.clone(),
         accelerations: equations.accelerations.as_ref().map(|_| accelerations),
+        form: equations.form,
         pool,
     }
 }
