@@ -123,7 +123,21 @@ fn from_half_angle(t: &Rational, radicand: u64) -> SymbolValue {
 
 /// An angle read from its double: its cosine and sine must be exact numbers of the field, with
 /// cos² + sin² = 1 exactly.
+/// The half-angle tangent is tried first: its exact form is the shortest (t = 4 + 2√3 where
+/// cos θ = (−15 − 32√3)/73).
 fn read_angle(angle: f64, recogniser: &mut Recogniser) -> Option<SymbolValue> {
+    let t = (angle / 2.0).tan();
+    if t.abs() < 1e3 {
+        if let Some(t) = recogniser.number(t) {
+            let one = Number::integer(1, t.radicand);
+            let square = t.mul(&t);
+            let denominator = one.add(&square).inverse()?;
+            let (cos, sin) = (one.sub(&square).mul(&denominator), t.add(&t).mul(&denominator));
+            if (cos.to_f64() - angle.cos()).abs() < 1e-9 && (sin.to_f64() - angle.sin()).abs() < 1e-9 {
+                return Some(SymbolValue::Angle { cos, sin });
+            }
+        }
+    }
     let cos = recogniser.number(angle.cos())?;
     let sin = recogniser.number(angle.sin())?;
     let one = cos.mul(&cos).add(&sin.mul(&sin));
