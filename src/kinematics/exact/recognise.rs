@@ -146,11 +146,11 @@ fn square_free(mut n: u64) -> (u64, u64) {
     let (mut s, mut d) = (1u64, 1u64);
     let mut p = 2u64;
     while p * p <= n {
-        while n % (p * p) == 0 {
+        while n.is_multiple_of(p * p) {
             n /= p * p;
             s *= p;
         }
-        if n % p == 0 {
+        if n.is_multiple_of(p) {
             n /= p;
             d *= p;
         }
