@@ -8,7 +8,7 @@ use super::evaluate::SymbolValue;
 use super::field::Number;
 use super::rational::Rational;
 use super::recognise::Recogniser;
-use super::ExactFailure;
+use super::failure::ExactFailure;
 use crate::symbolic::expr::{ExprId, Function, Node, Pool};
 use crate::symbolic::lower::Variable;
 
