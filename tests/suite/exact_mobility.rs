@@ -167,3 +167,27 @@ fn near_a_singular_configuration_the_numeric_rank_is_fooled() {
     let off = analyse("examples/hard/parallelogram_near_flat.lsd", &["*=t:1/10"]);
     assert!(off.exact.is_err());
 }
+
+/// The thesis's test matrix for its rank routines (Papegay 1992, L6355–6577, seed notes §4.9)
+/// at (x, y) = (71, 98): rank 3 (its determinant is non-zero); and decimals read exactly.
+#[test]
+fn the_thesis_test_matrix_has_rank_3() {
+    let f = |n: i64, d: i64| Number::rational(Rational::fraction(n, d), 1);
+    let m = vec![
+        vec![f(169, 6958), f(48, 1921), f(-98, 27)],
+        vec![f(-27, 5041), f(142, 4943), f(-71, 9533)],
+        vec![f(-4563, 6958), f(5042, 169), f(98, 71)],
+    ];
+    assert_eq!(rank(&m), 3);
+    let dependent = vec![
+        m[0].clone(),
+        m[1].clone(),
+        m[0].iter().zip(&m[1]).map(|(a, b)| a.add(b)).collect(),
+    ];
+    assert_eq!(rank(&dependent), 2);
+    assert_eq!(
+        Rational::parse("1e-7"),
+        Some(Rational::fraction(1, 10_000_000))
+    );
+    assert_eq!(Rational::parse("0.1"), Some(Rational::fraction(1, 10)));
+}

@@ -164,30 +164,3 @@ impl fmt::Display for Number {
         }
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn n(a: (i64, i64), b: (i64, i64)) -> Number {
-        Number {
-            rational: Rational::fraction(a.0, a.1),
-            surd: Rational::fraction(b.0, b.1),
-            radicand: 3,
-        }
-    }
-
-    #[test]
-    fn the_field_operations_are_exact() {
-        let sine = n((0, 1), (1, 2)); // sin 60° = √3/2
-        let cosine = n((1, 2), (0, 1));
-        let one = sine.mul(&sine).add(&cosine.mul(&cosine));
-        assert_eq!(one, n((1, 1), (0, 1)));
-        let x = n((2, 1), (1, 1)); // 2 + √3, whose inverse is 2 − √3
-        assert_eq!(x.inverse().unwrap(), n((2, 1), (-1, 1)));
-        assert_eq!(x.div(&x).unwrap(), n((1, 1), (0, 1)));
-        assert!(n((0, 1), (0, 1)).inverse().is_none());
-        assert_eq!(sine.to_string(), "√3/2");
-        assert_eq!(n((-1, 2), (-3, 4)).to_string(), "-1/2 - 3/4·√3");
-    }
-}

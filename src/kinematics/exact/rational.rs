@@ -156,28 +156,3 @@ impl fmt::Display for Rational {
         }
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn decimals_are_read_as_the_rationals_they_write() {
-        assert_eq!(Rational::parse("0.1"), Some(Rational::fraction(1, 10)));
-        assert_eq!(Rational::parse("-2.50"), Some(Rational::fraction(-5, 2)));
-        assert_eq!(Rational::parse("1e-7"), Some(Rational::fraction(1, 10_000_000)));
-        assert_eq!(Rational::parse("6/-4"), Some(Rational::fraction(-3, 2)));
-        assert_eq!(Rational::parse("1/0"), None);
-        assert_eq!(Rational::parse("x"), None);
-    }
-
-    #[test]
-    fn arithmetic_stays_in_lowest_terms() {
-        let third = Rational::fraction(1, 3);
-        let sixth = Rational::fraction(1, 6);
-        assert_eq!(third.add(&sixth), Rational::fraction(1, 2));
-        assert_eq!(third.sub(&third), Rational::zero());
-        assert_eq!(third.div(&sixth).to_string(), "2");
-        assert_eq!(third.mul(&sixth).to_string(), "1/18");
-    }
-}

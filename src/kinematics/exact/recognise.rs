@@ -180,33 +180,3 @@ fn mixed(x: f64, d: u64) -> Option<(Rational, Rational)> {
     }
     None
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_program_constants_are_read_exactly() {
-        let mut r = Recogniser::new();
-        assert_eq!(r.number(0.1).unwrap().to_string(), "1/10");
-        assert_eq!(r.number((2.0 * std::f64::consts::PI / 3.0).cos()).unwrap().to_string(), "-1/2");
-        assert_eq!(r.radicand, 1);
-        let sine = (2.0 * std::f64::consts::PI / 3.0).sin();
-        assert_eq!(r.number(sine).unwrap().to_string(), "√3/2");
-        assert_eq!(r.radicand, 3);
-        let a2 = 1.0 / (std::f64::consts::PI / 3.0).sin();
-        assert_eq!(r.number(a2).unwrap().to_string(), "2/3·√3");
-        assert_eq!(r.number(2.0 + 3f64.sqrt()).unwrap().to_string(), "2 + √3");
-        // √2 is in another field.
-        assert!(r.number(2f64.sqrt()).is_none());
-        // A transcendental number is none of them.
-        assert!(Recogniser::new().number(1f64.cos()).is_none());
-    }
-
-    #[test]
-    fn square_free_parts() {
-        assert_eq!(square_free(25 * 89), (5, 89));
-        assert_eq!(square_free(12), (2, 3));
-        assert_eq!(square_free(1), (1, 1));
-    }
-}
