@@ -9,6 +9,7 @@ pub mod contacts;
 pub mod drag;
 pub mod drives;
 pub mod eval;
+pub mod exact;
 pub mod forward;
 pub mod frames;
 pub mod initial;

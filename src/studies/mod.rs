@@ -17,6 +17,7 @@ pub mod batch;
 pub mod batch_derivatives;
 pub mod configurations;
 pub mod drag;
+pub mod exact_mobility;
 pub mod identify;
 pub mod inverse;
 pub mod kinematic_models;

@@ -7,6 +7,7 @@
 
 pub mod articulated;
 mod closure;
+pub mod closure_poses;
 pub mod emit;
 pub mod equations;
 pub mod exponential_profile;

@@ -19,6 +19,7 @@ mod derivatives;
 mod drag;
 mod drives;
 mod dynamics;
+mod exact_mobility;
 mod examples;
 mod force_elements;
 mod format;
