@@ -130,7 +130,9 @@ pub fn rates_along_drives(
     for (i, _) in driven.iter().enumerate().filter(|(_, &d)| d) {
         right -= jacobian.column(i) * rates[i];
     }
-    let svd = free_columns.svd(true, true);
+    let Some(svd) = crate::linalg::svd(free_columns, true, true) else {
+        return Err(EvalError::NotFinite);
+    };
     let largest = svd.singular_values.max();
     let smallest = svd.singular_values.min();
     if !(largest > 0.0 && smallest > RANK_TOLERANCE * largest) {

@@ -8,11 +8,11 @@
 
 use super::clock::thread_cpu_seconds;
 use super::report::{Interruption, Report, RunFailure};
-use super::run::{output_names_of, RunOptions, Simulation};
 use super::sample::Sample;
 use super::simulator::{describe_error, output_times, Start};
 use crate::dynamics::algorithms::{forward_kinematics, Data};
 use crate::dynamics::compiled::{EffortScratch, EffortState};
+use crate::integrate::Interrupt;
 use crate::kinematics::assembly::{assemble, AssemblyOptions};
 use crate::prepare::kinematic_scene::{driven_mask, rates_along_drives};
 use crate::prepare::Prepared;
@@ -24,13 +24,14 @@ pub const ASSEMBLY: &str = "assembly";
 /// equal an integrated run's, closed by projection to round-off.
 const CLOSURE_TOLERANCE: f64 = 1e-14;
 
-/// The run of a kinematic scene from `start`, each sample handed to `sink`.
+/// The run of a kinematic scene from `start`, each sample handed to `sink` (and kept when
+/// `keep_samples`) until the end, a failure or `interrupt`: the samples kept, and the report.
 pub(super) fn run(
     prepared: &Prepared,
     start: &Start<'_>,
-    options: &RunOptions,
+    (keep_samples, interrupt): (bool, Option<&Interrupt>),
     sink: &mut dyn FnMut(&Sample),
-) -> Simulation {
+) -> (Vec<Sample>, Report) {
     let (cpu_start, wall_start) = (thread_cpu_seconds(), std::time::Instant::now());
     let model = &prepared.model;
     let driven = driven_mask(prepared);
@@ -48,7 +49,7 @@ pub(super) fn run(
     let mut failure = None;
     let mut interrupted = None;
     for time in output_times(prepared.settings.duration, prepared.settings.output) {
-        if let Some(signal) = (options.interrupt.as_ref()).and_then(|i| i.requested()) {
+        if let Some(signal) = interrupt.and_then(|i| i.requested()) {
             interrupted = Some(Interruption { time, signal });
             break;
         }
@@ -99,7 +100,7 @@ pub(super) fn run(
         match sample {
             Ok(sample) => {
                 sink(&sample);
-                if options.keep_samples {
+                if keep_samples {
                     samples.push(sample);
                 }
             }
@@ -135,11 +136,5 @@ pub(super) fn run(
         model: prepared.scene.clone(),
         interrupted,
     };
-    Simulation {
-        coordinate_names: prepared.coordinate_names.clone(),
-        reaction_names: Vec::new(),
-        output_names: output_names_of(prepared),
-        samples,
-        report,
-    }
+    (samples, report)
 }

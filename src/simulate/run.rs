@@ -98,7 +98,15 @@ fn simulate_from(
     sink: &mut dyn FnMut(&Sample),
 ) -> Simulation {
     if prepared.kinematics_only {
-        return super::kinematic::run(prepared, start, options, sink);
+        let run_options = (options.keep_samples, options.interrupt.as_ref());
+        let (samples, report) = super::kinematic::run(prepared, start, run_options, sink);
+        return Simulation {
+            coordinate_names: prepared.coordinate_names.clone(),
+            reaction_names: Vec::new(),
+            output_names: output_names_of(prepared),
+            samples,
+            report,
+        };
     }
     let interrupt = options.interrupt.clone();
     let mut simulator = match Simulator::from_start(prepared, start, &[], interrupt) {
