@@ -339,6 +339,28 @@ impl Program {
         Ok(prepared)
     }
 
+    /// Prepares a run (`lsdc simulate`): as [`Program::prepare`], except that a scene that asks
+    /// only for kinematics (every coordinate driven or closed by the loops, nothing read that
+    /// needs a mass or an effort, no reactions asked for) is prepared without its dynamics and
+    /// runs by assembly at each output (`prepare::kinematic_scene`; `prepared.kinematics_only`,
+    /// and the scene's model says so in the report).
+    pub fn prepare_run(
+        &self,
+        values: &[Override],
+        changes: &SettingsChanges,
+    ) -> Result<Prepared, Error> {
+        let mechanism = self.mechanism()?;
+        if !changes.reactions {
+            let defaults = Settings::default();
+            let kinematic = crate::prepare::kinematic_scene::prepare(mechanism, values, &defaults);
+            if let Some(mut prepared) = kinematic {
+                prepared.settings.apply(changes)?;
+                return Ok(prepared);
+            }
+        }
+        self.prepare(values, changes)
+    }
+
     /// Prepares what a study of kinematics alone reads (`lsdc kinematics`, `lsdc workspace`):
     /// the mechanism's joints, loops, stops and drives without the dynamics
     /// (`prepare::prepare_kinematics`), so that no mass or effort needs a value;

@@ -224,9 +224,35 @@ pub fn prepare_program(
     changes: &SettingsChanges,
     format: Format,
 ) -> Result<(Program, Prepared), ExitCode> {
+    prepare_program_with(file, libraries, sets, format, |program, overrides| {
+        program.prepare(overrides, changes)
+    })
+}
+
+/// As [`prepare_program`] for a run (`Program::prepare_run`: a scene that asks only for
+/// kinematics builds no dynamics).
+pub fn prepare_run_program(
+    file: &Path,
+    libraries: &LibraryArgs,
+    sets: &[String],
+    changes: &SettingsChanges,
+    format: Format,
+) -> Result<(Program, Prepared), ExitCode> {
+    prepare_program_with(file, libraries, sets, format, |program, overrides| {
+        program.prepare_run(overrides, changes)
+    })
+}
+
+fn prepare_program_with(
+    file: &Path,
+    libraries: &LibraryArgs,
+    sets: &[String],
+    format: Format,
+    prepare: impl FnOnce(&Program, &[Override]) -> Result<Prepared, Error>,
+) -> Result<(Program, Prepared), ExitCode> {
     let overrides = parse_sets(sets)?;
     let program = load_program(file, &libraries.options(), format)?;
-    match program.prepare(&overrides, changes) {
+    match prepare(&program, &overrides) {
         Ok(prepared) => Ok((program, prepared)),
         Err(Error::Program(diagnostics)) => {
             report_diagnostics(&program, &diagnostics, format);

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 
 use super::shared::{
-    err, json, prepare_program, refuse_sampled, report_diagnostics, usage_error,
+    err, json, prepare_run_program, refuse_sampled, report_diagnostics, usage_error,
     usage_error_after_results, Format, LibraryArgs, SampleFormat,
 };
 use lsdc::api::{
@@ -160,7 +160,7 @@ impl IntegratorArg {
 
 pub fn run(args: &SimulateArgs) -> ExitCode {
     let changes = settings_changes(args);
-    let (program, mut prepared) = match prepare_program(
+    let (program, mut prepared) = match prepare_run_program(
         &args.file,
         &args.libraries,
         &args.sets,

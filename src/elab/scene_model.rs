@@ -24,6 +24,10 @@ pub struct SceneModel {
     pub efforts_not_chosen: usize,
     /// Coordinates the scene locks, welded (their joins' bodies merged when all are locked).
     pub welded: usize,
+    /// Whether the scene's run builds no dynamics: every coordinate follows its drive or the
+    /// loops, and nothing the scene reads needs a mass or an effort (`prepare::kinematic_scene`).
+    /// Decided when the run is prepared, false until then.
+    pub kinematics_only: bool,
 }
 
 /// A group of bodies left out of a scene's model.
@@ -72,6 +76,9 @@ impl SceneModel {
         }
         if !parts.is_empty() {
             text += &format!("; left out: {}", parts.join("; "));
+        }
+        if self.kinematics_only {
+            text += "; kinematics only (every coordinate driven or closed by the loops): no dynamics built";
         }
         text
     }

@@ -61,10 +61,12 @@ pub fn row(sample: &Sample) -> String {
     // as its formatting (a row of 100 four-bars, 606 numbers: 1.47 M instructions a row).
     let mut out = String::new();
     write_exponent(&mut out, sample.time);
+    // A run that models no mass (a scene that asks only for kinematics) knows no energy: its
+    // cells are left empty.
+    let kinetic = Some(sample.kinetic_energy).filter(|x| !x.is_nan());
     let values = (sample.coordinates.iter().chain(&sample.rates))
-        .chain([&sample.kinetic_energy])
         .map(|&x| Some(x))
-        .chain([sample.potential_energy])
+        .chain([kinetic, sample.potential_energy])
         .chain((sample.reactions.iter().chain(&sample.outputs)).map(|&x| Some(x)));
     for value in values {
         out.push(',');

@@ -3,6 +3,7 @@
 //! settings from `simulate` and the command line. Every missing value is reported at once.
 
 pub mod consistent;
+pub mod kinematic_scene;
 pub mod native;
 pub mod outputs;
 pub mod settings;
@@ -53,6 +54,9 @@ pub struct Prepared {
     /// default: through singular configurations of its loops, runs in either form differ at
     /// round-off and the passages amplify that (docs/guarantees.md).
     pub takes_planar: bool,
+    /// Whether the run follows the drives by assembly at each output instead of integrating
+    /// the dynamics: a scene that asks only for kinematics (`kinematic_scene`).
+    pub kinematics_only: bool,
 }
 
 impl Prepared {
@@ -227,7 +231,7 @@ pub fn prepare_kinematics(
     prepare_parts(mechanism, overrides, &Settings::default(), false)
 }
 
-fn prepare_parts(
+pub(crate) fn prepare_parts(
     mechanism: &Mechanism,
     overrides: &[Override],
     defaults: &Settings,
@@ -301,6 +305,7 @@ fn prepare_parts(
             false => Err("a study of kinematics alone builds no dynamics".to_string()),
         },
         takes_planar: false,
+        kinematics_only: false,
         model,
         topology,
         kinematics,

@@ -6,6 +6,7 @@ pub mod clock;
 pub mod compiled;
 pub mod constraints;
 pub mod inputs;
+mod kinematic;
 pub mod lie_group;
 mod ode;
 pub mod report;

@@ -97,6 +97,17 @@ fn simulate_from(
     options: &RunOptions,
     sink: &mut dyn FnMut(&Sample),
 ) -> Simulation {
+    if prepared.kinematics_only {
+        let run_options = (options.keep_samples, options.interrupt.as_ref());
+        let (samples, report) = super::kinematic::run(prepared, start, run_options, sink);
+        return Simulation {
+            coordinate_names: prepared.coordinate_names.clone(),
+            reaction_names: Vec::new(),
+            output_names: output_names_of(prepared),
+            samples,
+            report,
+        };
+    }
     let interrupt = options.interrupt.clone();
     let mut simulator = match Simulator::from_start(prepared, start, &[], interrupt) {
         Ok(simulator) => simulator,
@@ -132,10 +143,11 @@ fn simulate_from(
 /// The joins whose reactions the samples carry: none unless the settings ask for them.
 /// The outputs' columns: the drives' efforts (`crank.drive_effort`), the program's states by
 /// name (`integral`), then the program's outputs and the named frames' states
-/// (`Outputs::names`).
+/// (`Outputs::names`). A scene that asks only for kinematics writes no drive effort.
 pub fn output_names_of(prepared: &Prepared) -> Vec<String> {
     let model = &prepared.model;
-    let drives = model.drives.iter().map(|d| d.effort_name());
+    let efforts = !prepared.kinematics_only;
+    let drives = (model.drives.iter().filter(|_| efforts)).map(|d| d.effort_name());
     let points = (model.position_drives.iter()).flat_map(driven_points::force_names);
     let states = model.states.iter().map(|s| s.name.clone());
     drives

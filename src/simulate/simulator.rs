@@ -535,7 +535,7 @@ fn plain(model: &Model) -> bool {
         && model.states.is_empty()
 }
 
-fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
+pub(super) fn describe_error(e: &crate::kinematics::eval::EvalError) -> String {
     use crate::kinematics::eval::{EvalError, NOT_FINITE};
     match e {
         EvalError::Missing(_) => "a value is missing".to_string(),

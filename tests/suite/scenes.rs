@@ -467,3 +467,96 @@ fn a_massless_subtree_read_loaded_or_closed_stays() {
         assert_eq!(scene_model(&reduced).bodies, bodies, "{scene}");
     }
 }
+
+/// The largest difference of two runs' rates of `name` relative to their largest magnitude.
+fn relative_rate_difference(reduced: &Simulation, full: &Simulation, name: &str) -> f64 {
+    let rates = |run: &Simulation| -> Vec<f64> {
+        let i = (run.coordinate_names.iter().position(|n| n == name)).expect("a coordinate");
+        run.samples.iter().map(|s| s.rates[i]).collect()
+    };
+    let (a, b) = (rates(reduced), rates(full));
+    assert_eq!(a.len(), b.len(), "{name}': as many samples");
+    let scale = (a.iter().chain(&b)).fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = (a.iter().zip(&b)).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    worst / scale
+}
+
+#[test]
+fn a_scene_that_asks_only_for_kinematics_builds_no_dynamics_and_matches_the_full_model() {
+    // The linkage's crank is driven and its loop fixes the three other coordinates; the scene
+    // reads a point and a coordinate: its run assembles the linkage at each output.
+    let text = std::fs::read_to_string(CELL).expect("readable");
+    let scene = program(&text, Some("linkage_check"));
+    let changes = SettingsChanges {
+        integrator: Some(Integrator::Rk4),
+        step: Some(1e-3),
+        duration: Some(0.5),
+        output: Some(0.01),
+        ..Default::default()
+    };
+    let prepared = scene.prepare_run(&[], &changes).expect("prepares");
+    assert!(prepared.kinematics_only && !prepared.model.dynamics);
+    let model = prepared.scene.clone().expect("a scene's model");
+    assert!(model.kinematics_only && (model.bodies, model.loops) == (3, 1));
+    assert!(
+        model.describe().ends_with(
+            "kinematics only (every coordinate driven or closed by the loops): no dynamics built"
+        ),
+        "{}",
+        model.describe()
+    );
+    let kinematic = simulated(&prepared);
+    assert_eq!(kinematic.report.integrator, "assembly");
+    assert_eq!(kinematic.samples.len(), 51);
+    assert!(kinematic
+        .output_names
+        .iter()
+        .all(|n| !n.ends_with("drive_effort")));
+    assert!(lsdc::output::csv::to_csv(&kinematic).contains(",,1.9"));
+    // `lsdc simulate` of the scene asked for its reactions, or of the same declarations
+    // outside any scene, integrates the dynamics.
+    let reactions = SettingsChanges {
+        reactions: true,
+        ..changes.clone()
+    };
+    let with_reactions = scene.prepare_run(&[], &reactions).expect("prepares");
+    assert!(!with_reactions.kinematics_only && with_reactions.model.dynamics);
+    let full = program(
+        &cell_without_scenes(
+            "output coupler_point = position([l2 / 2, 0, 0] ++ 1 @ coupler_bar) ;\noutput rocker_angle = rocker.q ;",
+        ),
+        None,
+    );
+    let full = full.prepare_run(&[], &changes).expect("prepares");
+    assert!(!full.kinematics_only && full.model.dynamics);
+    let full = simulated(&full);
+    assert_eq!(full.report.integrator, "rk4");
+    for name in [
+        "coupler_point.x",
+        "coupler_point.z",
+        "rocker_angle",
+        "crank.q",
+        "coupler.q",
+        "c.q",
+    ] {
+        let difference = relative_difference(&kinematic, &full, name);
+        assert!(difference <= 1e-12, "{name}: {difference:e}");
+    }
+    for name in ["crank.q", "coupler.q", "c.q", "rocker.q"] {
+        let difference = relative_rate_difference(&kinematic, &full, name);
+        assert!(difference <= 1e-12, "{name}': {difference:e}");
+    }
+}
+
+#[test]
+fn the_delta_kinematics_scene_keeps_its_dynamics_for_its_spinning_rods() {
+    // Each rod turns freely about its axis between its two ball joints: the drives do not
+    // determine that motion, the dynamics do.
+    let program = Program::from_file("examples/delta_scenes.lsd", &options(Some("kinematics")))
+        .expect("readable");
+    let prepared = program
+        .prepare_run(&[], &Default::default())
+        .expect("prepares");
+    assert!(!prepared.kinematics_only && prepared.model.dynamics);
+    assert!(!prepared.scene.expect("a scene").kinematics_only);
+}

@@ -60,6 +60,7 @@ pub fn reduce(
         zero_efforts: leave_out_zero_efforts(&mut mechanism),
         efforts_not_chosen: mechanism.applications_not_chosen,
         welded: weld_locks(&mut mechanism),
+        kinematics_only: false,
     };
     if mechanism.outputs.is_empty() {
         mechanism.scene = Some(model);
