@@ -3,6 +3,7 @@
 //! (the reports' JSON comes from their `Serialize` forms).
 
 pub mod csv;
+pub mod fmi;
 pub mod json;
 pub mod linearization;
 pub mod plot;

@@ -20,6 +20,7 @@ mod drag;
 mod drives;
 mod dynamics;
 mod examples;
+mod export_fmu;
 mod force_elements;
 mod format;
 mod frame_efforts;
