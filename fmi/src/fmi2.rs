@@ -39,7 +39,11 @@ fn path_of_uri(uri: &str) -> Option<String> {
     let mut k = 0;
     while k < bytes.len() {
         let hex = |b: u8| (b as char).to_digit(16);
-        match (bytes[k], bytes.get(k + 1).and_then(|&b| hex(b)), bytes.get(k + 2).and_then(|&b| hex(b))) {
+        match (
+            bytes[k],
+            bytes.get(k + 1).and_then(|&b| hex(b)),
+            bytes.get(k + 2).and_then(|&b| hex(b)),
+        ) {
             (b'%', Some(high), Some(low)) => {
                 decoded.push((high * 16 + low) as u8);
                 k += 3;
@@ -87,8 +91,13 @@ pub extern "C" fn fmi2Instantiate(
     logging_on: Fmi2Boolean,
 ) -> Component {
     // SAFETY: the importer passes C strings and its callback functions (FMI 2.0 §2.1.5).
-    let (name, guid, location) =
-        unsafe { (string(instance_name), string(fmu_guid), string(fmu_resource_location)) };
+    let (name, guid, location) = unsafe {
+        (
+            string(instance_name),
+            string(fmu_guid),
+            string(fmu_resource_location),
+        )
+    };
     let (callback, environment) = match unsafe { functions.as_ref() } {
         Some(f) => (f.logger, f.component_environment),
         None => (None, std::ptr::null_mut()),
@@ -134,7 +143,11 @@ pub extern "C" fn fmi2SetupExperiment(
 ) -> Fmi2Status {
     with(c, "fmi2SetupExperiment", |i| {
         let tolerance = (tolerance_defined != 0).then_some(tolerance);
-        i.setup(tolerance, start_time, (stop_time_defined != 0).then_some(stop_time))
+        i.setup(
+            tolerance,
+            start_time,
+            (stop_time_defined != 0).then_some(stop_time),
+        )
     })
 }
 
@@ -148,7 +161,11 @@ pub extern "C" fn fmi2EnterInitializationMode(c: Component) -> Fmi2Status {
 
 #[no_mangle]
 pub extern "C" fn fmi2ExitInitializationMode(c: Component) -> Fmi2Status {
-    with(c, "fmi2ExitInitializationMode", Instance::exit_initialization)
+    with(
+        c,
+        "fmi2ExitInitializationMode",
+        Instance::exit_initialization,
+    )
 }
 
 #[no_mangle]
@@ -225,7 +242,11 @@ pub extern "C" fn fmi2GetRealStatus(c: Component, kind: i32, value: *mut f64) ->
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2GetBooleanStatus(c: Component, kind: i32, value: *mut Fmi2Boolean) -> Fmi2Status {
+pub extern "C" fn fmi2GetBooleanStatus(
+    c: Component,
+    kind: i32,
+    value: *mut Fmi2Boolean,
+) -> Fmi2Status {
     if kind != TERMINATED || value.is_null() {
         return refuse(c, "fmi2GetBooleanStatus");
     }

@@ -15,7 +15,11 @@ type ValueReference = u32;
 
 /// The instance behind a handle (of either version), `action` run on it with a panic caught (reported as
 /// `Fatal`) and a failure logged (`Error`; the instance then accepts only a reset).
-pub(crate) fn with(instance: Fmi3Instance, name: &str, action: impl FnOnce(&mut Instance) -> Result<(), String>) -> Fmi3Status {
+pub(crate) fn with(
+    instance: Fmi3Instance,
+    name: &str,
+    action: impl FnOnce(&mut Instance) -> Result<(), String>,
+) -> Fmi3Status {
     if instance.is_null() {
         return Status::Error as i32;
     }
@@ -23,7 +27,10 @@ pub(crate) fn with(instance: Fmi3Instance, name: &str, action: impl FnOnce(&mut 
     // `fmi3FreeInstance` has not freed (the standard's contract with the importer).
     let instance = unsafe { &mut *(instance as *mut Instance) };
     if instance.mode == Mode::Failed && !name.ends_with("Reset") && !name.ends_with("Terminate") {
-        instance.log(Status::Error, &format!("{name}: the instance failed; reset it or free it"));
+        instance.log(
+            Status::Error,
+            &format!("{name}: the instance failed; reset it or free it"),
+        );
         return Status::Error as i32;
     }
     match catch_unwind(AssertUnwindSafe(|| action(instance))) {
@@ -144,10 +151,16 @@ pub extern "C" fn fmi3InstantiateCoSimulation(
         // SAFETY: the importer passes C strings or null (FMI 3.0 §4.2.1).
         let (token, resources) = unsafe { (string(instantiation_token), string(resource_path)) };
         if event_mode_used {
-            return Err((logger, "event mode is not supported (eventModeUsed must be false)".to_string()));
+            return Err((
+                logger,
+                "event mode is not supported (eventModeUsed must be false)".to_string(),
+            ));
         }
         if resources.is_empty() {
-            return Err((logger, "no resource path: the unit's program is in its resources".to_string()));
+            return Err((
+                logger,
+                "no resource path: the unit's program is in its resources".to_string(),
+            ));
         }
         Instance::new(logger, logging_on, &PathBuf::from(resources), &token)
     }));
@@ -206,7 +219,11 @@ pub extern "C" fn fmi3EnterInitializationMode(
 ) -> Fmi3Status {
     with(instance, "fmi3EnterInitializationMode", |i| {
         let tolerance = tolerance_defined.then_some(tolerance);
-        i.setup(tolerance, start_time, stop_time_defined.then_some(stop_time))?;
+        i.setup(
+            tolerance,
+            start_time,
+            stop_time_defined.then_some(stop_time),
+        )?;
         i.mode = Mode::Initialization;
         Ok(())
     })
@@ -214,7 +231,11 @@ pub extern "C" fn fmi3EnterInitializationMode(
 
 #[no_mangle]
 pub extern "C" fn fmi3ExitInitializationMode(instance: Fmi3Instance) -> Fmi3Status {
-    with(instance, "fmi3ExitInitializationMode", Instance::exit_initialization)
+    with(
+        instance,
+        "fmi3ExitInitializationMode",
+        Instance::exit_initialization,
+    )
 }
 
 #[no_mangle]
@@ -251,11 +272,16 @@ pub extern "C" fn fmi3GetFloat64(
 ) -> Fmi3Status {
     with(instance, "fmi3GetFloat64", |i| {
         if n_values != n_value_references {
-            return Err(format!("{n_values} values for {n_value_references} scalar variables"));
+            return Err(format!(
+                "{n_values} values for {n_value_references} scalar variables"
+            ));
         }
         // SAFETY: arrays of the lengths given (FMI 3.0 §2.2.6.1).
         let (references, values) = unsafe {
-            (slice(value_references, n_value_references), slice_mut(values, n_values))
+            (
+                slice(value_references, n_value_references),
+                slice_mut(values, n_values),
+            )
         };
         i.get(references, values)
     })
@@ -271,11 +297,17 @@ pub extern "C" fn fmi3SetFloat64(
 ) -> Fmi3Status {
     with(instance, "fmi3SetFloat64", |i| {
         if n_values != n_value_references {
-            return Err(format!("{n_values} values for {n_value_references} scalar variables"));
+            return Err(format!(
+                "{n_values} values for {n_value_references} scalar variables"
+            ));
         }
         // SAFETY: arrays of the lengths given (FMI 3.0 §2.2.6.2).
-        let (references, values) =
-            unsafe { (slice(value_references, n_value_references), slice(values, n_values)) };
+        let (references, values) = unsafe {
+            (
+                slice(value_references, n_value_references),
+                slice(values, n_values),
+            )
+        };
         i.set(references, values)
     })
 }

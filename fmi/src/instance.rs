@@ -6,9 +6,7 @@
 use std::mem::ManuallyDrop;
 use std::path::Path;
 
-use lsdc::api::{
-    LoadOptions, Override, Prepared, Program, Sample, SettingsChanges, Simulator,
-};
+use lsdc::api::{LoadOptions, Override, Prepared, Program, Sample, SettingsChanges, Simulator};
 
 use crate::log::{Logger, Status};
 use crate::unit::{Role, Unit};
@@ -93,7 +91,12 @@ pub type Failure = String;
 impl Instance {
     /// Loads the unit's program from its resources folder; `token` must be the model
     /// description's (FMI 3.0 `instantiationToken`, FMI 2.0 `guid`).
-    pub fn new(logger: Logger, logging: bool, resources: &Path, token: &str) -> Result<Instance, (Logger, Failure)> {
+    pub fn new(
+        logger: Logger,
+        logging: bool,
+        resources: &Path,
+        token: &str,
+    ) -> Result<Instance, (Logger, Failure)> {
         let unit = match Unit::read(resources) {
             Ok(unit) => unit,
             Err(message) => return Err((logger, message)),
@@ -149,7 +152,12 @@ impl Instance {
 
     /// The experiment's settings (FMI 3.0 `fmi3EnterInitializationMode`, FMI 2.0
     /// `fmi2SetupExperiment`). The program's time starts at 0, as its laws of time read it.
-    pub fn setup(&mut self, tolerance: Option<f64>, start_time: f64, stop_time: Option<f64>) -> Result<(), Failure> {
+    pub fn setup(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> Result<(), Failure> {
         if start_time != 0.0 {
             return Err(format!(
                 "the start time must be 0 (the program's time starts at 0), not {start_time}"
@@ -189,8 +197,8 @@ impl Instance {
                 max_steps: Some(usize::MAX),
                 ..SettingsChanges::default()
             };
-            let prepared = (self.program.prepare(&overrides, &changes))
-                .map_err(|e| self.describe(e))?;
+            let prepared =
+                (self.program.prepare(&overrides, &changes)).map_err(|e| self.describe(e))?;
             let mut run = Run::start(prepared, &self.unit.inputs)?;
             run.simulator
                 .set_inputs(&self.inputs)
@@ -260,7 +268,9 @@ impl Instance {
             let variable = (self.unit.variable(*reference).cloned())
                 .ok_or_else(|| format!("no variable has value reference {reference}"))?;
             match variable.role {
-                Role::Parameter if matches!(self.mode, Mode::Instantiated | Mode::Initialization) => {
+                Role::Parameter
+                    if matches!(self.mode, Mode::Instantiated | Mode::Initialization) =>
+                {
                     self.parameters[variable.index] = *value;
                     // Prepared again with the new value when next needed.
                     self.run = None;
@@ -274,7 +284,9 @@ impl Instance {
                 Role::Input => {
                     self.inputs[variable.index] = *value;
                     if let Some(run) = &mut self.run {
-                        run.simulator.set_inputs(&self.inputs).map_err(|f| f.message)?;
+                        run.simulator
+                            .set_inputs(&self.inputs)
+                            .map_err(|f| f.message)?;
                         run.sample = None;
                     }
                 }

@@ -6,8 +6,7 @@ use std::ffi::{c_char, c_void, CString};
 
 /// FMI 3.0 §2.3.1: `void (*)(fmi3InstanceEnvironment, fmi3Status, fmi3String category,
 /// fmi3String message)`.
-pub type Fmi3Logger =
-    Option<unsafe extern "C" fn(*mut c_void, i32, *const c_char, *const c_char)>;
+pub type Fmi3Logger = Option<unsafe extern "C" fn(*mut c_void, i32, *const c_char, *const c_char)>;
 
 /// FMI 2.0 §2.1.5: `void (*)(fmi2ComponentEnvironment, fmi2String instanceName, fmi2Status,
 /// fmi2String category, fmi2String message, ...)`.
@@ -52,7 +51,14 @@ impl Logger {
             Logger::Fmi3 {
                 callback: Some(callback),
                 environment,
-            } => unsafe { callback(*environment, status as i32, category.as_ptr(), message.as_ptr()) },
+            } => unsafe {
+                callback(
+                    *environment,
+                    status as i32,
+                    category.as_ptr(),
+                    message.as_ptr(),
+                )
+            },
             Logger::Fmi2 {
                 callback: Some(callback),
                 environment,

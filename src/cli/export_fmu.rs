@@ -31,7 +31,11 @@ pub struct ExportFmuArgs {
     #[arg(long = "fmi", default_value = "3", value_parser = ["2", "3"])]
     fmi: String,
     /// Write the unit to this file.
-    #[arg(short = 'o', long = "out", required_unless_present = "model_description")]
+    #[arg(
+        short = 'o',
+        long = "out",
+        required_unless_present = "model_description"
+    )]
     out: Option<PathBuf>,
     /// Put this shared library in the unit instead of the one built from the repository's
     /// `fmi/` crate (or the one LSDC_FMI_LIBRARY names).
@@ -142,7 +146,12 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
         return ExitCode::from(1);
     };
     let parameters = parameters(mechanism, &overrides);
-    let variables = variables(&prepared, &parameters, &args.inputs, &output_names(&prepared));
+    let variables = variables(
+        &prepared,
+        &parameters,
+        &args.inputs,
+        &output_names(&prepared),
+    );
     let version = if args.fmi == "2" {
         Version::Fmi2
     } else {
@@ -160,7 +169,9 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
             Err(e) => return usage_error(&format!("cannot read `{}`: {e}", path.display())),
         }
     }
-    let stem = file.file_stem().map_or("model".into(), |s| s.to_string_lossy());
+    let stem = file
+        .file_stem()
+        .map_or("model".into(), |s| s.to_string_lossy());
     let identifier = model_identifier(&stem);
     let variables_json = serde_json::to_vec(&variables).unwrap_or_default();
     let mut parts: Vec<&[u8]> = contents.iter().map(Vec::as_slice).collect();
@@ -217,7 +228,10 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
     let unit_json = serde_json::to_vec_pretty(&unit).unwrap_or_default();
     archive.add("resources/lsdc/unit.json", unit_json);
     for (path, bytes) in files.iter().zip(contents) {
-        archive.add(&format!("resources/lsdc/program/{}", relative(path, &root)), bytes);
+        archive.add(
+            &format!("resources/lsdc/program/{}", relative(path, &root)),
+            bytes,
+        );
     }
     let out_path = args.out.as_deref().unwrap_or(Path::new("model.fmu"));
     let bytes = match archive.to_bytes() {

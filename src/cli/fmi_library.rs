@@ -1,7 +1,8 @@
 //! The shared library an FMI unit carries (`lsdc export-fmu`): the one given by `--library`
 //! or LSDC_FMI_LIBRARY, else the repository's `fmi/` crate built by Cargo in the repository's
-//! `target/` (its `dev` profile, lsdc's build flags: the library lsdc's own build compiled is
-//! reused, and only the small crate is compiled and linked; BENCHMARKS.md, "FMI units").
+//! `target/` (its `dev` profile, lsdc's build flags: the dependencies lsdc's own build
+//! compiled are reused; lsdc, a dependency of another workspace there, is compiled once more;
+//! BENCHMARKS.md, "FMI units").
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -36,7 +37,9 @@ pub fn locate(given: Option<&Path>) -> Result<PathBuf, String> {
         .map(PathBuf::from)
         .unwrap_or_else(|| repository.join("target"));
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    super::shared::err("building the unit's shared library (cargo build --manifest-path fmi/Cargo.toml)\n");
+    super::shared::err(
+        "building the unit's shared library (cargo build --manifest-path fmi/Cargo.toml)\n",
+    );
     // From the repository's root, so that its `.cargo/config.toml` gives the build lsdc's flags.
     let status = Command::new(&cargo)
         .args(["build", "--locked", "--quiet", "--lib", "--manifest-path"])

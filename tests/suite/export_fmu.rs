@@ -25,7 +25,12 @@ fn golden_model_description(version: &str, golden: &str) {
         std::fs::write(&path, &stdout).expect("golden file written");
     }
     let expected = std::fs::read_to_string(&path).expect("golden file");
-    assert_eq!(stdout, expected, "the model description changed ({})", path.display());
+    assert_eq!(
+        stdout,
+        expected,
+        "the model description changed ({})",
+        path.display()
+    );
 }
 
 #[test]
@@ -46,10 +51,22 @@ fn the_model_description_lists_parameters_units_and_outputs() {
     assert_eq!(code, 0, "{stderr}");
     // `given l1 = 1.0, l3 = 3.0`: parameters, l1 with the value set at export.
     assert!(xml.contains(r#"name="l1" valueReference="1""#), "{xml}");
-    assert!(xml.contains(r#"causality="parameter" variability="fixed" start="1.5""#), "{xml}");
-    assert!(xml.contains(r#"name="l3""#) && xml.contains(r#"start="3.0""#), "{xml}");
-    assert!(xml.contains(r#"<Unit name="rad">"#) && xml.contains(r#"unit="rad/s""#), "{xml}");
-    assert!(!xml.contains("causality=\"input\""), "no input asked: {xml}");
+    assert!(
+        xml.contains(r#"causality="parameter" variability="fixed" start="1.5""#),
+        "{xml}"
+    );
+    assert!(
+        xml.contains(r#"name="l3""#) && xml.contains(r#"start="3.0""#),
+        "{xml}"
+    );
+    assert!(
+        xml.contains(r#"<Unit name="rad">"#) && xml.contains(r#"unit="rad/s""#),
+        "{xml}"
+    );
+    assert!(
+        !xml.contains("causality=\"input\""),
+        "no input asked: {xml}"
+    );
 }
 
 #[test]
@@ -71,8 +88,11 @@ fn a_program_with_errors_gets_its_diagnostics_and_no_unit() {
     let dir = std::env::temp_dir().join(format!("lsdc-export-fmu-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("folder");
     let program = dir.join("typo.lsd");
-    std::fs::write(&program, "let b = body mass = 1 end;\njoin earth and c with 1;\n")
-        .expect("program");
+    std::fs::write(
+        &program,
+        "let b = body mass = 1 end;\njoin earth and c with 1;\n",
+    )
+    .expect("program");
     let unit = dir.join("typo.fmu");
     let (code, _, stderr) = lsdc(&[
         "export-fmu",
@@ -93,7 +113,12 @@ fn a_program_with_errors_gets_its_diagnostics_and_no_unit() {
 fn entries(archive: &[u8]) -> Vec<(String, Vec<u8>)> {
     let u16_at = |at: usize| u16::from_le_bytes([archive[at], archive[at + 1]]) as usize;
     let u32_at = |at: usize| {
-        u32::from_le_bytes([archive[at], archive[at + 1], archive[at + 2], archive[at + 3]])
+        u32::from_le_bytes([
+            archive[at],
+            archive[at + 1],
+            archive[at + 2],
+            archive[at + 3],
+        ])
     };
     let end = archive.len() - 22;
     assert_eq!(u32_at(end), 0x0605_4b50, "end of central directory");
