@@ -29,9 +29,7 @@ pub fn locate(given: Option<&Path>) -> Result<PathBuf, String> {
     let repository = Path::new(REPOSITORY);
     let manifest = repository.join("fmi").join("Cargo.toml");
     if !manifest.is_file() {
-        return Err(format!(
-            "no FMI shared library: this lsdc was not built in a checkout with `fmi/Cargo.toml`; give one with --library PATH or LSDC_FMI_LIBRARY (built by `cargo build --manifest-path fmi/Cargo.toml` in lsdc's repository)"
-        ));
+        return Err("no FMI shared library: this lsdc was not built in a checkout with `fmi/Cargo.toml`; give one with --library PATH or LSDC_FMI_LIBRARY (built by `cargo build --manifest-path fmi/Cargo.toml` in lsdc's repository)".to_string());
     }
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(PathBuf::from)

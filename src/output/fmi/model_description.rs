@@ -59,8 +59,8 @@ fn number(x: f64) -> String {
     }
 }
 
-/// The unit definitions of the units the variables use.
-fn unit_definitions(out: &mut String, variables: &[Variable]) {
+/// The unit definitions of the units the written variables use.
+fn unit_definitions(out: &mut String, variables: &[&Variable]) {
     let units: BTreeSet<Unit> = variables.iter().filter_map(|v| v.unit).collect();
     if units.is_empty() {
         return;
@@ -81,18 +81,13 @@ fn unit_definitions(out: &mut String, variables: &[Variable]) {
 }
 
 /// The causality, variability and `initial` attributes of a variable's role (`initial`
-/// omitted where the standard allows one value only).
-fn attributes(role: Role, version: Version) -> &'static str {
-    match (role, version) {
-        (Role::Time, _) => "causality=\"independent\" variability=\"continuous\"",
-        (Role::Parameter, _) => "causality=\"parameter\" variability=\"fixed\"",
-        (Role::Input, _) => "causality=\"input\" variability=\"continuous\"",
-        (_, Version::Fmi3) => {
-            "causality=\"output\" variability=\"continuous\" initial=\"calculated\""
-        }
-        (_, Version::Fmi2) => {
-            "causality=\"output\" variability=\"continuous\" initial=\"calculated\""
-        }
+/// omitted where the standard allows one value only), the same in FMI 3.0 and 2.0.
+fn attributes(role: Role) -> &'static str {
+    match role {
+        Role::Time => "causality=\"independent\" variability=\"continuous\"",
+        Role::Parameter => "causality=\"parameter\" variability=\"fixed\"",
+        Role::Input => "causality=\"input\" variability=\"continuous\"",
+        _ => "causality=\"output\" variability=\"continuous\" initial=\"calculated\"",
     }
 }
 
@@ -122,7 +117,12 @@ pub fn model_description(version: Version, identity: &Identity<'_>, variables: &
         "  <CoSimulation modelIdentifier=\"{}\" canHandleVariableCommunicationStepSize=\"true\" canBeInstantiatedOnlyOncePerProcess=\"false\"/>",
         escape(identity.model_identifier)
     );
-    unit_definitions(&mut out, variables);
+    // FMI 2.0 has no time variable.
+    let written: Vec<&Variable> = variables
+        .iter()
+        .filter(|v| version == Version::Fmi3 || v.role != Role::Time)
+        .collect();
+    unit_definitions(&mut out, &written);
     let _ = writeln!(
         out,
         "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" tolerance=\"{}\" stepSize=\"{}\"/>",
@@ -131,10 +131,6 @@ pub fn model_description(version: Version, identity: &Identity<'_>, variables: &
         number(identity.step_size)
     );
     out.push_str("  <ModelVariables>\n");
-    let written: Vec<&Variable> = variables
-        .iter()
-        .filter(|v| version == Version::Fmi3 || v.role != Role::Time)
-        .collect();
     for variable in &written {
         let unit = variable
             .unit
@@ -149,7 +145,7 @@ pub fn model_description(version: Version, identity: &Identity<'_>, variables: &
             escape(&variable.name),
             variable.value_reference,
             escape(&variable.description),
-            attributes(variable.role, version)
+            attributes(variable.role)
         );
         match version {
             Version::Fmi3 => {
