@@ -84,6 +84,9 @@ enum Command {
     Eval(eval::EvalArgs),
     /// Write a tree mechanism as a URDF robot description: a link per body, a joint per join.
     ExportUrdf(export_urdf::ExportUrdfArgs),
+    /// Write the program as an FMI unit for co-simulation (FMI 3.0, or 2.0 with `--fmi 2`):
+    /// lsdc's integrator inside, the coordinates and outputs as outputs, efforts as inputs.
+    ExportFmu(export_fmu::ExportFmuArgs),
     /// Translate a URDF robot description into an LSD program (standard output, or `-o`).
     ImportUrdf(import_urdf::ImportUrdfArgs),
     /// Print the syntax tree of a file (for debugging the parser).
@@ -130,6 +133,7 @@ fn main() -> ExitCode {
         Command::Compile(args) => compile::run(&args),
         Command::Eval(args) => eval::run(&args),
         Command::ExportUrdf(args) => export_urdf::run(&args),
+        Command::ExportFmu(args) => export_fmu::run(&args),
         Command::ImportUrdf(args) => import_urdf::run(&args),
         Command::Parse(args) => parse::run(&args),
         Command::Test(args) => test::run(&args),

@@ -4,6 +4,7 @@
 
 pub mod csv;
 pub mod exact_mobility;
+pub mod fmi;
 pub mod json;
 pub mod linearization;
 pub mod plot;

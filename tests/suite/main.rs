@@ -21,6 +21,7 @@ mod drives;
 mod dynamics;
 mod exact_mobility;
 mod examples;
+mod export_fmu;
 mod force_elements;
 mod format;
 mod frame_efforts;
