@@ -1,7 +1,9 @@
 //! Kane's equations (Kane and Levinson 1985, *Dynamics: Theory and Applications*, ch. 6;
 //! Llibre 2009, §2.3): for each generalised speed r,
 //!
-//!     F_r + F*_r = 0,   F_r = Σᵢ fᵢ·vᵢ,ᵣ + mᵢ·ωᵢ,ᵣ,   F*_r = −Σᵢ (inertia force)·vᵢ,ᵣ + (inertia torque)·ωᵢ,ᵣ
+//! ```text
+//! F_r + F*_r = 0,   F_r = Σᵢ fᵢ·vᵢ,ᵣ + mᵢ·ωᵢ,ᵣ,   F*_r = −Σᵢ (inertia force)·vᵢ,ᵣ + (inertia torque)·ωᵢ,ᵣ
+//! ```
 //!
 //! with vᵢ,ᵣ and ωᵢ,ᵣ the partial velocity of body i's origin and its partial angular velocity.
 //! Nothing here reads the velocities the composition of velocities built (`kinematics`): each
@@ -12,7 +14,9 @@
 //! body's origin in its own axes, where its mass properties are the program's constants:
 //! with h = μ OG and I = I(O),
 //!
-//!     force  = μ a + α ∧ h + ω ∧ (ω ∧ h),   torque = h ∧ a + I α + ω ∧ (I ω).
+//! ```text
+//! force  = μ a + α ∧ h + ω ∧ (ω ∧ h),   torque = h ∧ a + I α + ω ∧ (I ω).
+//! ```
 //!
 //! M[r, s] is the coefficient of q'_s in −F*_r, S[r] the rest of F*_r, F[r] = F_r.
 

@@ -6,7 +6,9 @@
 //!   declared mass and central inertia (a body welded to another keeps its own: nothing is
 //!   merged, unlike the Lagrange form), moved to the body's origin O:
 //!
-//!       f = μ (a + α ∧ OG + ω ∧ (ω ∧ OG)),   n(O) = I(G) α + ω ∧ I(G) ω + OG ∧ f;
+//!   ```text
+//!   f = μ (a + α ∧ OG + ω ∧ (ω ∧ OG)),   n(O) = I(G) α + ω ∧ I(G) ω + OG ∧ f;
+//!   ```
 //!
 //! - backward, children first: the reaction a body receives from its parent is its own inertia
 //!   wrench minus the efforts applied to it plus its children's reactions moved to its origin;

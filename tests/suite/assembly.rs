@@ -249,11 +249,13 @@ fn a_turned_angle_is_reported_within_half_a_turn() {
     // was checked (nalgebra's own was off by 4e-2 on this loop's rows).
     let known = [0.6428324943845091, -5.646802614968304, 2.933434391113532];
     let given = [0.6, -2.7, 0.625];
-    let squared = |values: [f64; 3]| -> f64 {
-        values.iter().zip(given).map(|(v, g)| (v - g).powi(2)).sum()
-    };
+    let squared =
+        |values: [f64; 3]| -> f64 { values.iter().zip(given).map(|(v, g)| (v - g).powi(2)).sum() };
     let found = [q("j0.q"), q("j1.q"), q("j2.q")];
-    assert!(squared(found) <= squared(known), "{found:?} against {known:?}");
+    assert!(
+        squared(found) <= squared(known),
+        "{found:?} against {known:?}"
+    );
     // The tip of b2 from the earth through the three bars, against jn's frame on the earth:
     // both configurations are closed.
     for angles in [found, known] {
