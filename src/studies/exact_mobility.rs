@@ -26,6 +26,7 @@ pub struct ExactReport {
 
 impl ExactReport {
     /// Whether the numeric rank disagrees with the exact one.
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     pub fn numeric_fooled(&self) -> bool {
         matches!((&self.exact, &self.numeric_rank), (Ok(e), Ok(r)) if e.rank != *r)
     }

@@ -25,9 +25,11 @@ pub enum Form {
 }
 
 impl Form {
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     pub const ALL: [Form; 3] = [Form::Lagrange, Form::Kane, Form::NewtonEuler];
 
     /// The name `--form` takes.
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     pub fn name(self) -> &'static str {
         match self {
             Form::Lagrange => "lagrange",

@@ -195,6 +195,7 @@ fn displacement_lines(
     out.push(format!("M{body}R_{body}_{frame} := {r}"));
 }
 
+#[cfg_attr(not(lsdc_internals), allow(dead_code))]
 pub fn notation(mechanism: &Mechanism, topology: &Topology) -> String {
     notation_and_names(mechanism, topology, Options::default()).0
 }

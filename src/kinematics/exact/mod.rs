@@ -26,6 +26,8 @@ mod recognise;
 
 use std::collections::HashMap;
 
+// `GivenValue` is read by the tests alone.
+#[cfg_attr(not(lsdc_internals), allow(unused_imports))]
 pub use configuration::{Given, GivenValue};
 pub use failure::ExactFailure;
 pub use field::Number;

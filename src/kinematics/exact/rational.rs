@@ -35,6 +35,7 @@ impl Rational {
         Rational::new(BigInt::from(value), BigInt::one())
     }
 
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     pub fn fraction(numerator: i64, denominator: i64) -> Rational {
         Rational::new(BigInt::from(numerator), BigInt::from(denominator))
     }
