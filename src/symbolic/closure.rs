@@ -5,6 +5,7 @@ use super::expr::ExprId;
 use super::generator::Generator;
 use super::kinematics::{LinkCoordinates, Moving};
 use super::lower::LowerError;
+use crate::topology::LoopLink;
 
 /// The names of a complementary link's six constraint rows: rotations, then translations.
 pub const ROW_NAMES: [&str; 6] = ["rx", "ry", "rz", "x", "y", "z"];
@@ -17,23 +18,31 @@ pub(super) struct Closure {
 }
 
 impl Generator<'_> {
+    /// A complementary link's two frames, from the bodies placed: its chain's end (the first
+    /// body's frame, the link's first displacement, then the chain at the link's coordinates)
+    /// and its target (the second body's frame and its displacement).
+    pub(super) fn loop_frames(&mut self, link: &LoopLink) -> Result<(Moving, Moving), LowerError> {
+        let join = self.mechanism.join(link.join);
+        self.context = Some(join.span);
+        let to_start = self.steps(&join.first.displacement, None)?;
+        let chain = self.chain(link.join)?;
+        let to_target = self.steps(&join.second.displacement, None)?;
+        let coordinates = self.link_coordinates(link.join);
+        let mut end = self.bodies[link.first].clone();
+        self.walk(&mut end, &to_start, &LinkCoordinates::default());
+        self.walk(&mut end, &chain, &coordinates);
+        let mut target = self.bodies[link.second].clone();
+        self.walk(&mut target, &to_target, &LinkCoordinates::default());
+        Ok((end, target))
+    }
+
     /// Six rows per complementary link: the twist of its target frame minus that of its chain's
     /// end, whose time derivative gives the acceleration rows.
     pub(super) fn loops(&mut self) -> Result<Closure, LowerError> {
         let n = self.columns();
         let (mut rows, mut bias, mut names) = (Vec::new(), Vec::new(), Vec::new());
         for link in &self.topology.complementary {
-            let join = self.mechanism.join(link.join);
-            self.context = Some(join.span);
-            let to_start = self.steps(&join.first.displacement, None)?;
-            let chain = self.chain(link.join)?;
-            let to_target = self.steps(&join.second.displacement, None)?;
-            let coordinates = self.link_coordinates(link.join);
-            let mut end = self.bodies[link.first].clone();
-            self.walk(&mut end, &to_start, &LinkCoordinates::default());
-            self.walk(&mut end, &chain, &coordinates);
-            let mut target = self.bodies[link.second].clone();
-            self.walk(&mut target, &to_target, &LinkCoordinates::default());
+            let (end, target) = self.loop_frames(link)?;
             let name = self.mechanism.join_name(link.join);
             for (r, row) in ROW_NAMES.iter().enumerate() {
                 let (part, i) = (r / 3, r % 3);

@@ -6,7 +6,6 @@
 
 use super::expr::{ExprId, Pool};
 use super::generator::Generator;
-use super::kinematics::LinkCoordinates;
 use super::lower::{LowerError, Variables};
 use super::vector::{Mat3, Vec3};
 use crate::diag::Diagnostic;
@@ -55,17 +54,7 @@ impl Generator<'_> {
         self.place_bodies()?;
         let mut loops = Vec::new();
         for link in &self.topology.complementary {
-            let join = self.mechanism.join(link.join);
-            self.context = Some(join.span);
-            let to_start = self.steps(&join.first.displacement, None)?;
-            let chain = self.chain(link.join)?;
-            let to_target = self.steps(&join.second.displacement, None)?;
-            let coordinates = self.link_coordinates(link.join);
-            let mut end = self.bodies[link.first].clone();
-            self.walk(&mut end, &to_start, &LinkCoordinates::default());
-            self.walk(&mut end, &chain, &coordinates);
-            let mut target = self.bodies[link.second].clone();
-            self.walk(&mut target, &to_target, &LinkCoordinates::default());
+            let (end, target) = self.loop_frames(link)?;
             loops.push(LoopPoses {
                 name: self.mechanism.join_name(link.join),
                 end: (end.rotation, end.origin),
