@@ -13,6 +13,7 @@ internal! {
     mod dense;
     mod derivatives;
     mod driven_points;
+    mod driven_subtrees;
     mod drives;
     mod efforts;
     mod elements;

@@ -119,7 +119,7 @@ const COUPLING_ROUND_OFF: f64 = 1e-13;
 
 /// Relative size of a driven coordinate's distance to its law (to 1 + |d(t)|) below which it
 /// is not corrected.
-const LAW_ROUND_OFF: f64 = 1e-13;
+pub const LAW_ROUND_OFF: f64 = 1e-13;
 
 /// Relative size of a contact's gap (to the largest radius) below which it is not corrected.
 const GAP_ROUND_OFF: f64 = 1e-15;

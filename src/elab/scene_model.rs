@@ -28,6 +28,10 @@ pub struct SceneModel {
     /// loops, and nothing the scene reads needs a mass or an effort (`prepare::kinematic_scene`).
     /// Decided when the run is prepared, false until then.
     pub kinematics_only: bool,
+    /// The bodies of fully driven subtrees, run as kinematics: their drives' laws give their
+    /// motion and their inverse dynamics the drives' efforts, with no row of the constraint
+    /// stack (`dynamics::driven_subtrees`). Decided when the run is prepared, 0 until then.
+    pub driven_kinematics: usize,
 }
 
 /// A group of bodies left out of a scene's model.
@@ -76,6 +80,13 @@ impl SceneModel {
         }
         if !parts.is_empty() {
             text += &format!("; left out: {}", parts.join("; "));
+        }
+        if self.driven_kinematics > 0 {
+            let plural = if self.driven_kinematics == 1 { "y" } else { "ies" };
+            text += &format!(
+                "; {} driven bod{plural} as kinematics",
+                self.driven_kinematics
+            );
         }
         if self.kinematics_only {
             text += "; kinematics only (every coordinate driven or closed by the loops): no dynamics built";

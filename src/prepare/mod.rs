@@ -11,6 +11,7 @@ pub mod settings;
 use std::collections::{BTreeSet, HashMap};
 
 use crate::diag::Diagnostic;
+use crate::dynamics::driven_subtrees::DrivenSubtrees;
 use crate::dynamics::model::{self as dynamic_model, Model};
 use crate::dynamics::planar::{self, PlanarModel};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
@@ -57,6 +58,9 @@ pub struct Prepared {
     /// Whether the run follows the drives by assembly at each output instead of integrating
     /// the dynamics: a scene that asks only for kinematics (`kinematic_scene`).
     pub kinematics_only: bool,
+    /// The fully driven subtrees, whose drives the run takes by hybrid dynamics rather than
+    /// as rows of the constraint stack (`dynamics::driven_subtrees`); otherwise why not.
+    pub driven_subtrees: Result<DrivenSubtrees, String>,
 }
 
 impl Prepared {
@@ -65,6 +69,20 @@ impl Prepared {
     pub fn take_planar(&mut self) -> Result<(), String> {
         self.takes_planar = true;
         self.planar.as_ref().map(|_| ()).map_err(Clone::clone)
+    }
+
+    /// Runs the drives as rows of the constraint stack, as a model without fully driven
+    /// subtrees does: the full model, for comparisons.
+    pub fn keep_drive_rows(&mut self) {
+        self.driven_subtrees = Err("the drives kept as rows".to_string());
+        if let Some(scene) = &mut self.scene {
+            scene.driven_kinematics = 0;
+        }
+    }
+
+    /// The fully driven subtrees the run takes by hybrid dynamics, if any.
+    pub fn driven_subtrees(&self) -> Option<&DrivenSubtrees> {
+        self.driven_subtrees.as_ref().ok()
     }
 
     /// The planar form, when the run takes one.
@@ -299,7 +317,16 @@ pub(crate) fn prepare_parts(
             return Err(vec![over]);
         }
     }
+    let driven_subtrees = match with_dynamics {
+        true => DrivenSubtrees::find(&model),
+        false => Err("a study of kinematics alone builds no dynamics".to_string()),
+    };
+    let mut scene = mechanism.scene.clone();
+    if let (Some(scene), Ok(subtrees)) = (&mut scene, &driven_subtrees) {
+        scene.driven_kinematics = subtrees.bodies;
+    }
     Ok(Prepared {
+        driven_subtrees,
         planar: match with_dynamics {
             true => planar::decide(&kinematics, &model).map(Box::new),
             false => Err("a study of kinematics alone builds no dynamics".to_string()),
@@ -316,7 +343,7 @@ pub(crate) fn prepare_parts(
         warnings,
         native: None,
         outputs,
-        scene: mechanism.scene.clone(),
+        scene,
     })
 }
 

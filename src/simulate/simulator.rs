@@ -508,6 +508,7 @@ fn start_system<'p>(
     let native = prepared.native.as_ref();
     system.use_native(native.filter(|_| plain(model) && !inputs.any()));
     system.use_planar(prepared.planar_form());
+    system.use_driven_subtrees(prepared.driven_subtrees());
     system.state.inputs = inputs;
     // The followers start where their leaders put them, whatever `initial` said (then with
     // loops, the loops and couplings are closed together).

@@ -9,6 +9,7 @@
 use nalgebra::DVector;
 
 mod actuated;
+mod driven_subtrees;
 mod error;
 mod friction;
 mod held_reactions;
@@ -21,6 +22,7 @@ pub use error::{NotFiniteCause, SystemError};
 mod stack;
 mod stacked;
 mod states;
+mod subtree_run;
 mod tangent;
 
 use super::run_state::RunState;
@@ -38,6 +40,7 @@ use crate::dynamics::planar::{self, PlanarData, PlanarModel};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
 use scratch::{mass_storage, Scratch};
+use subtree_run::SubtreeRun;
 
 /// The equations of motion of a run: the model (only read), the run's state (`RunState`, what
 /// every evaluation reads and the events change), and the scratch of the evaluator in use
@@ -54,6 +57,9 @@ pub struct MechanicalSystem<'m> {
     native: Option<&'m NativeDynamics>,
     /// The model's planar form, when the right-hand side takes it (`use_planar`).
     planar: Option<&'m PlanarModel>,
+    /// The fully driven subtrees, when their drives are run by hybrid dynamics rather than as
+    /// rows (`use_driven_subtrees`).
+    driven: Option<Box<SubtreeRun<'m>>>,
 }
 
 impl<'m> MechanicalSystem<'m> {
@@ -71,6 +77,7 @@ impl<'m> MechanicalSystem<'m> {
             sampling: None,
             native: None,
             planar: None,
+            driven: None,
         }
     }
 
@@ -367,6 +374,8 @@ impl<'m> MechanicalSystem<'m> {
             .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
         if native || model.has_loops() {
             // The accelerations are written, or are the loops' block's (`solve_stack`).
+        } else if self.drives_by_subtrees() {
+            self.subtree_accelerations(t, q, v, &mut accelerations)?;
         } else if let Some(planar) = self.planar_here().filter(|_| !self.needs_mass_matrix()) {
             self.planar_tree_accelerations(planar, t, (q, v), &mut accelerations)?;
         } else if self.needs_mass_matrix() {

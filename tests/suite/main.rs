@@ -17,6 +17,7 @@ mod contacts;
 mod coupled_loops;
 mod derivatives;
 mod drag;
+mod driven_subtrees;
 mod drives;
 mod dynamics;
 mod exact_mobility;

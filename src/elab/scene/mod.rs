@@ -61,6 +61,7 @@ pub fn reduce(
         efforts_not_chosen: mechanism.applications_not_chosen,
         welded: weld_locks(&mut mechanism),
         kinematics_only: false,
+        driven_kinematics: 0,
     };
     if mechanism.outputs.is_empty() {
         mechanism.scene = Some(model);

@@ -35,9 +35,11 @@ impl MechanicalSystem<'_> {
     pub fn reactions(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<Vec<f64>, SystemError> {
         let model = self.model;
         // The reactions read the spatial kinematics and inverse dynamics of the stack's solve.
+        // The drives' rows give their forces to the reactions: no hybrid dynamics here.
         let planar = self.scratch.planar.take();
+        let driven = self.driven.take();
         let forces = self.stack_reactions(t, q, v);
-        self.scratch.planar = planar;
+        (self.scratch.planar, self.driven) = (planar, driven);
         let StackForces {
             accelerations,
             mut external,

@@ -28,6 +28,11 @@ impl MechanicalSystem<'_> {
         a: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
         let model = self.model;
+        if self.drives_by_subtrees() {
+            // The drives are the only rows there (`DrivenSubtrees::find`), and the hybrid
+            // dynamics solved them.
+            return Ok(());
+        }
         self.gather_held(t);
         let couplings = self.coupling_count();
         let points = !model.position_drives.is_empty();

@@ -34,6 +34,9 @@ impl MechanicalSystem<'_> {
     /// Keeps the stack's rows beyond the loops' in the state y (see the module's
     /// documentation). Whether y moved; nothing when there are no such rows.
     pub(super) fn keep_stacked(&mut self, t: f64, y: &mut [f64]) -> Result<bool, SystemError> {
+        if self.drives_by_subtrees() {
+            return self.keep_driven_subtrees(t, y);
+        }
         if !self.has_stacked_rows() {
             return Ok(false);
         }
