@@ -26,8 +26,6 @@ pub struct DrivenSubtrees {
     /// Per joint of the model, whether it belongs to a fully driven subtree: its acceleration
     /// is its drives' laws'.
     pub known: Vec<bool>,
-    /// Per velocity of the state, the drive (index into `Model::drives`) that imposes it.
-    pub drive_of_velocity: Vec<Option<usize>>,
     /// The bodies the subtrees move (merged welds included).
     pub bodies: usize,
 }
@@ -50,9 +48,9 @@ impl DrivenSubtrees {
         if let Some((_, why)) = refusal.iter().find(|(present, _)| *present) {
             return Err(format!("the drives stay rows of the constraint stack with {why}"));
         }
-        let mut drive_of_velocity = vec![None; model.velocities()];
-        for (index, drive) in model.drives.iter().enumerate() {
-            drive_of_velocity[drive.velocity] = Some(index);
+        let mut driven = vec![false; model.velocities()];
+        for drive in &model.drives {
+            driven[drive.velocity] = true;
         }
         let joints = &model.joints;
         // From the leaves in: a joint is fully driven when its velocities are and every joint
@@ -61,7 +59,7 @@ impl DrivenSubtrees {
         for k in (0..joints.len()).rev() {
             let joint = &joints[k];
             let own = (joint.v_offset..joint.v_offset + joint.nv())
-                .all(|velocity| drive_of_velocity[velocity].is_some());
+                .all(|velocity| driven[velocity]);
             let below = (k + 1..joints.len())
                 .filter(|&j| joints[j].parent == joint.child)
                 .all(|j| full[j]);
@@ -85,10 +83,6 @@ impl DrivenSubtrees {
             return Err("a driven joint has a free joint below it".to_string());
         }
         let bodies = known.iter().filter(|&&k| k).count();
-        Ok(DrivenSubtrees {
-            known,
-            drive_of_velocity,
-            bodies,
-        })
+        Ok(DrivenSubtrees { known, bodies })
     }
 }
