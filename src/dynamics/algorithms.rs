@@ -7,7 +7,7 @@
 pub mod aba_derivatives;
 pub mod crba_derivatives;
 mod geared;
-pub mod hybrid;
+pub(crate) mod hybrid;
 pub mod regressor;
 pub mod rnea_derivatives;
 
