@@ -89,7 +89,7 @@ fn generation() {
     }
 }
 
-/// The simplifier on the pendulums: thread CPU time (best and median of 7 batches), per node of
+/// The simplifier on the pendulums and the satellite: thread CPU time (best and median of 7 batches), per node of
 /// the input, the exponent of the time's growth from the previous size (1 is linear), and the
 /// operations of M, S and F and of all the roots (with the accelerations) before and after.
 fn simplification() {
@@ -113,37 +113,62 @@ fn simplification() {
     for n in SIZES {
         let (mechanism, topology) = mechanism(&pendulum_program(n));
         let eq = symbolic::generate(&mechanism, &topology).expect("equations");
-        let (best, median) = cpu_time_per_call(|| {
-            black_box(simplify_equations(black_box(&eq)));
-        });
-        let simplified = simplify_equations(&eq);
-        let operations = |eq: &Equations, all: bool| {
-            let mut roots: Vec<_> = [&eq.mass, &eq.second_member, &eq.forces]
-                .into_iter()
-                .flatten()
-                .copied()
-                .collect();
-            if all {
-                roots = eq.roots();
-            }
-            Tape::new(&eq.pool, &roots).operation_count()
-        };
-        let nodes = eq.size();
-        let growth = previous
-            .map(|(m, t)| (best / t).ln() / (n as f64 / m as f64).ln())
-            .unwrap_or(f64::NAN);
-        previous = Some((n, best));
-        println!(
-            "{n:>5} {:>10.2} {:>10.2} {nodes:>10} {:>9.2} {growth:>9.2} {:>12} {:>12} {:>12} {:>12}",
-            best * 1e3,
-            median * 1e3,
-            best * 1e6 / nodes as f64,
-            operations(&eq, false),
-            operations(&simplified, false),
-            operations(&eq, true),
-            operations(&simplified, true)
+        let best = simplification_row(
+            &n.to_string(),
+            &eq,
+            previous.map(|(m, t)| (n as f64 / m as f64, t)),
         );
+        previous = Some((n, best));
     }
+    let path = std::path::PathBuf::from("examples/satellite.lsd");
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+        scene: None,
+    };
+    if let Some(mechanism) = compile_files(&[path], &options)
+        .ok()
+        .and_then(|c| c.mechanism)
+    {
+        let topology = lsdc::topology::build(&mechanism).expect("connected");
+        let eq = symbolic::generate(&mechanism, &topology).expect("equations");
+        simplification_row("sat.", &eq, None);
+    }
+}
+
+/// One row of the simplification table; `previous` is the ratio of the sizes (links) and the
+/// best time of the previous row, for the growth exponent. Returns the best time.
+fn simplification_row(label: &str, eq: &Equations, previous: Option<(f64, f64)>) -> f64 {
+    let (best, median) = cpu_time_per_call(|| {
+        black_box(simplify_equations(black_box(eq)));
+    });
+    let simplified = simplify_equations(eq);
+    let operations = |eq: &Equations, all: bool| {
+        let mut roots: Vec<_> = [&eq.mass, &eq.second_member, &eq.forces]
+            .into_iter()
+            .flatten()
+            .copied()
+            .collect();
+        if all {
+            roots = eq.roots();
+        }
+        Tape::new(&eq.pool, &roots).operation_count()
+    };
+    let nodes = eq.size();
+    let growth = previous
+        .map(|(ratio, t)| (best / t).ln() / ratio.ln())
+        .unwrap_or(f64::NAN);
+    println!(
+        "{label:>5} {:>10.2} {:>10.2} {nodes:>10} {:>9.2} {growth:>9.2} {:>12} {:>12} {:>12} {:>12}",
+        best * 1e3,
+        median * 1e3,
+        best * 1e6 / nodes as f64,
+        operations(eq, false),
+        operations(&simplified, false),
+        operations(eq, true),
+        operations(&simplified, true)
+    );
+    best
 }
 
 /// A program that times the generated functions of one pendulum and prints ns per call, by the

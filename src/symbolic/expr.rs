@@ -126,7 +126,9 @@ pub struct Pool {
     nodes: Vec<Node>,
     /// Per node, whether it is surely finite (`finite_when_interned`).
     finite: Vec<bool>,
-    index: HashMap<Node, ExprId>,
+    /// Each node's id (hash-consing); Fx rather than SipHash: the keys are our own nodes, and
+    /// the lookup is in every constructor.
+    index: rustc_hash::FxHashMap<Node, ExprId>,
     symbols: Vec<String>,
     symbol_ids: HashMap<String, ExprId>,
 }

@@ -22,9 +22,9 @@
 mod polynomial;
 mod write;
 
-use std::collections::HashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
-use polynomial::{Polynomial, Wave};
+use polynomial::{Angles, Polynomial, Wave};
 use write::Writer;
 
 use super::equations::Equations;
@@ -93,9 +93,9 @@ fn simplify_with(
 ) -> (Pool, Vec<ExprId>) {
     let mut pass = Pass::new(pool, out);
     let order = topological_order(roots, |id| pool.operands(id));
-    let kept: std::collections::HashSet<ExprId> = roots.iter().copied().collect();
+    let kept: FxHashSet<ExprId> = roots.iter().copied().collect();
     // How many nodes still to simplify read each node: a form is dropped after its last reader.
-    let mut readers: HashMap<ExprId, usize> = HashMap::new();
+    let mut readers: FxHashMap<ExprId, usize> = FxHashMap::default();
     for &id in &order {
         for operand in pool.operands(id) {
             *readers.entry(operand).or_insert(0) += 1;
@@ -112,7 +112,7 @@ fn simplify_with(
         let shared = readers.get(&id).copied().unwrap_or(0) > 1;
         if let Expansion::Shared(terms) = expansion {
             if shared && form.len() > terms {
-                let node = pass.writer.write(&mut pass.out, &form);
+                let node = pass.writer.write(&mut pass.out, &form, &pass.angles);
                 pass.nodes.insert(id, node);
                 form = pass.atom(node);
             }
@@ -163,9 +163,11 @@ struct Pass<'a> {
     input: &'a Pool,
     out: Pool,
     /// The normal form of each input node simplified and still to be read.
-    forms: HashMap<ExprId, Polynomial>,
+    forms: FxHashMap<ExprId, Polynomial>,
     /// Each input node written in `out`.
-    nodes: HashMap<ExprId, ExprId>,
+    nodes: FxHashMap<ExprId, ExprId>,
+    /// The angles of the forms' waves.
+    angles: Angles,
     writer: Writer,
 }
 
@@ -178,8 +180,9 @@ impl Pass<'_> {
         Pass {
             input,
             out,
-            forms: HashMap::new(),
-            nodes: HashMap::new(),
+            forms: FxHashMap::default(),
+            nodes: FxHashMap::default(),
+            angles: Angles::default(),
             writer: Writer::new(),
         }
     }
@@ -194,7 +197,7 @@ impl Pass<'_> {
             return node;
         }
         let form = self.forms.get(&id).expect("formed before it is written");
-        let node = self.writer.write(&mut self.out, form);
+        let node = self.writer.write(&mut self.out, form, &self.angles);
         self.nodes.insert(id, node);
         node
     }
@@ -225,17 +228,17 @@ impl Pass<'_> {
                 (sum.len() <= TERMS).then_some(sum)
             }
             Node::Neg(a) => Some(self.form(a).clone().scaled(-1.0)),
-            Node::Mul(a, b) => self.form(a).times(self.form(b), WORK, TERMS),
+            Node::Mul(a, b) => self.forms[&a].times(&self.forms[&b], WORK, TERMS, &mut self.angles),
             Node::Div(a, b) => self.quotient(a, b),
             Node::Pow(a, b) => self.power(a, b),
             Node::Apply(f @ (Function::Sin | Function::Cos), a) => {
-                self.form(a).as_angle().map(|angle| {
+                self.forms[&a].as_angle().map(|angle| {
                     let wave = if f == Function::Sin {
                         Wave::Sin
                     } else {
                         Wave::Cos
                     };
-                    Polynomial::wave(wave, angle)
+                    Polynomial::wave(wave, angle, &mut self.angles)
                 })
             }
             Node::Apply(..) | Node::Atan2(..) | Node::Select { .. } => None,
@@ -252,7 +255,7 @@ impl Pass<'_> {
     /// `a / b`: a product by the inverse of a number or of a monomial; otherwise by the
     /// divisor written as an atom.
     fn quotient(&mut self, a: ExprId, b: ExprId) -> Option<Polynomial> {
-        let divisor = self.form(b);
+        let divisor = &self.forms[&b];
         if let Some(c) = divisor.as_constant() {
             return (c != 0.0 && (1.0 / c).is_finite()).then(|| self.form(a).clone().scaled(1.0 / c));
         }
@@ -260,7 +263,8 @@ impl Pass<'_> {
             Some((factors, c)) => {
                 let mut inverse = Polynomial::constant(1.0 / c);
                 for &(atom, exponent) in factors {
-                    inverse = inverse.times(&Polynomial::atom(atom, -exponent), WORK, TERMS)?;
+                    let factor = Polynomial::atom(atom, -exponent);
+                    inverse = inverse.times(&factor, WORK, TERMS, &mut self.angles)?;
                 }
                 inverse
             }
@@ -269,7 +273,7 @@ impl Pass<'_> {
                 Polynomial::atom(node, -1)
             }
         };
-        self.form(a).times(&inverse, WORK, TERMS)
+        self.forms[&a].times(&inverse, WORK, TERMS, &mut self.angles)
     }
 
     /// `a ^ b` expanded for a small integer exponent.
@@ -287,7 +291,7 @@ impl Pass<'_> {
         };
         let mut product = Polynomial::constant(1.0);
         for _ in 0..exponent.abs() {
-            product = product.times(&base, WORK, TERMS)?;
+            product = product.times(&base, WORK, TERMS, &mut self.angles)?;
         }
         Some(product)
     }

@@ -9,11 +9,19 @@
 //! positive leading coefficient (cos(−X) = cos X, sin(−X) = −sin X) so that each wave has one
 //! name.
 //!
+//! The angles are interned (`Angles`): a term's key holds an angle's number, not its linear
+//! form, so that comparing and hashing keys costs the same whatever the angle's length (a
+//! chain's angles are sums of up to n coordinates), and the sums and differences of two angles
+//! the product-to-sum formulas take are formed once per pair.
+//!
 //! Coefficients are floating-point: products by ½ are exact; sums of coefficients that cancel
 //! to within a few units in the last place of the terms are taken as 0 (a change of the
 //! value at round-off, the same as evaluating the terms in another order).
 
+use std::cmp::Ordering;
 use std::collections::BTreeMap;
+
+use rustc_hash::FxHashMap;
 
 use crate::symbolic::expr::ExprId;
 
@@ -40,18 +48,43 @@ pub struct Angle {
 }
 
 impl Angle {
-    /// `self + sign · other`.
+    /// `self + sign · other`, merging the two sorted lists of terms.
     fn combined(&self, other: &Angle, sign: f64) -> Angle {
-        let mut merged: BTreeMap<ExprId, f64> = self.terms.iter().map(|&(a, c)| (a, c.get())).collect();
-        for &(atom, c) in &other.terms {
-            *merged.entry(atom).or_insert(0.0) += sign * c.get();
+        let mut terms = Vec::with_capacity(self.terms.len() + other.terms.len());
+        let (mut left, mut right) = (self.terms.iter().peekable(), other.terms.iter().peekable());
+        loop {
+            let (atom, c) = match (left.peek(), right.peek()) {
+                (None, None) => break,
+                (Some(&&(a, x)), Some(&&(b, y))) => match a.cmp(&b) {
+                    Ordering::Less => {
+                        left.next();
+                        (a, x.get())
+                    }
+                    Ordering::Greater => {
+                        right.next();
+                        (b, sign * y.get())
+                    }
+                    Ordering::Equal => {
+                        left.next();
+                        right.next();
+                        (a, x.get() + sign * y.get())
+                    }
+                },
+                (Some(&&(a, x)), None) => {
+                    left.next();
+                    (a, x.get())
+                }
+                (None, Some(&&(b, y))) => {
+                    right.next();
+                    (b, sign * y.get())
+                }
+            };
+            if c != 0.0 {
+                terms.push((atom, Real::new(c)));
+            }
         }
         Angle {
-            terms: merged
-                .into_iter()
-                .filter(|&(_, c)| c != 0.0)
-                .map(|(a, c)| (a, Real::new(c)))
-                .collect(),
+            terms,
             offset: Real::new(self.offset.get() + sign * other.offset.get()),
         }
     }
@@ -69,6 +102,66 @@ impl Angle {
             Some(&(_, c)) => c.get() < 0.0,
             None => self.offset.get() < 0.0,
         }
+    }
+}
+
+/// An angle's number in its `Angles`: equal angles have one number.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct AngleId(u32);
+
+/// An angle as a wave reads it: a number (the wave is evaluated), or a named angle, itself or
+/// its opposite.
+#[derive(Clone, Copy, Debug)]
+pub enum Named {
+    Constant(f64),
+    Angle { id: AngleId, negated: bool },
+}
+
+/// The angles of one pass, each named once with a positive leading coefficient, and the sums
+/// and differences of pairs already formed.
+#[derive(Default)]
+pub struct Angles {
+    forms: Vec<Angle>,
+    ids: FxHashMap<Angle, AngleId>,
+    /// `x + y` and `x − y` by `(x, y, difference)`.
+    combinations: FxHashMap<(AngleId, AngleId, bool), Named>,
+}
+
+impl Angles {
+    /// The linear form of angle `id`.
+    pub fn get(&self, id: AngleId) -> &Angle {
+        &self.forms[id.0 as usize]
+    }
+
+    /// `angle`'s name: a number when it has no atom, else its number or its opposite's.
+    pub fn name(&mut self, angle: Angle) -> Named {
+        if angle.terms.is_empty() {
+            return Named::Constant(angle.offset.get());
+        }
+        let negated = angle.is_negative();
+        let angle = if negated { angle.negated() } else { angle };
+        let id = match self.ids.get(&angle) {
+            Some(&id) => id,
+            None => {
+                let id = AngleId(self.forms.len() as u32);
+                self.forms.push(angle.clone());
+                self.ids.insert(angle, id);
+                id
+            }
+        };
+        Named::Angle { id, negated }
+    }
+
+    /// `x + y`, or `x − y` when `difference`, named.
+    fn combined(&mut self, x: AngleId, y: AngleId, difference: bool) -> Named {
+        if let Some(&named) = self.combinations.get(&(x, y, difference)) {
+            return named;
+        }
+        let sign = if difference { -1.0 } else { 1.0 };
+        let angle = self.get(x).combined(self.get(y), sign);
+        let named = self.name(angle);
+        self.combinations.insert((x, y, difference), named);
+        named
     }
 }
 
@@ -92,7 +185,7 @@ impl Wave {
 pub struct Monomial {
     /// By atom, increasing, without zero exponents.
     pub factors: Vec<(ExprId, i32)>,
-    pub wave: Option<(Wave, Angle)>,
+    pub wave: Option<(Wave, AngleId)>,
 }
 
 impl Monomial {
@@ -101,35 +194,57 @@ impl Monomial {
         wave: None,
     };
 
-    /// The product of the two monomials' atoms, exponents added.
+    /// The product of the two monomials' atoms, exponents added (a merge of the two sorted
+    /// lists).
     fn factors_times(&self, other: &Monomial) -> Vec<(ExprId, i32)> {
-        let mut merged: BTreeMap<ExprId, i32> = self.factors.iter().copied().collect();
-        for &(atom, e) in &other.factors {
-            *merged.entry(atom).or_insert(0) += e;
+        let (a, b) = (&self.factors, &other.factors);
+        let mut merged = Vec::with_capacity(a.len() + b.len());
+        let (mut i, mut j) = (0, 0);
+        while i < a.len() && j < b.len() {
+            match a[i].0.cmp(&b[j].0) {
+                Ordering::Less => {
+                    merged.push(a[i]);
+                    i += 1;
+                }
+                Ordering::Greater => {
+                    merged.push(b[j]);
+                    j += 1;
+                }
+                Ordering::Equal => {
+                    let exponent = a[i].1 + b[j].1;
+                    if exponent != 0 {
+                        merged.push((a[i].0, exponent));
+                    }
+                    i += 1;
+                    j += 1;
+                }
+            }
         }
-        merged.into_iter().filter(|&(_, e)| e != 0).collect()
+        merged.extend_from_slice(&a[i..]);
+        merged.extend_from_slice(&b[j..]);
+        merged
     }
 }
 
 /// `coefficient · wave(angle)` in its one name: a constant angle evaluated, a negative one
 /// turned positive.
-fn named_wave(wave: Wave, angle: Angle, coefficient: f64) -> (f64, Option<(Wave, Angle)>) {
-    if angle.terms.is_empty() {
-        return (coefficient * wave.eval(angle.offset.get()), None);
-    }
-    match (angle.is_negative(), wave) {
-        (false, _) => (coefficient, Some((wave, angle))),
-        (true, Wave::Cos) => (coefficient, Some((Wave::Cos, angle.negated()))),
-        (true, Wave::Sin) => (-coefficient, Some((Wave::Sin, angle.negated()))),
+fn named_wave(wave: Wave, angle: Named, coefficient: f64) -> (f64, Option<(Wave, AngleId)>) {
+    match (angle, wave) {
+        (Named::Constant(x), _) => (coefficient * wave.eval(x), None),
+        (Named::Angle { id, negated: false }, _) | (Named::Angle { id, .. }, Wave::Cos) => {
+            (coefficient, Some((wave, id)))
+        }
+        (Named::Angle { id, negated: true }, Wave::Sin) => (-coefficient, Some((Wave::Sin, id))),
     }
 }
 
 /// The product of two waves as a sum of two (product-to-sum formulas).
 fn wave_product(
-    (left, x): &(Wave, Angle),
-    (right, y): &(Wave, Angle),
-) -> [(f64, Wave, Angle); 2] {
-    let (sum, difference) = (x.combined(y, 1.0), x.combined(y, -1.0));
+    (left, x): (Wave, AngleId),
+    (right, y): (Wave, AngleId),
+    angles: &mut Angles,
+) -> [(f64, Wave, Named); 2] {
+    let (sum, difference) = (angles.combined(x, y, false), angles.combined(x, y, true));
     match (left, right) {
         (Wave::Sin, Wave::Sin) => [(0.5, Wave::Cos, difference), (-0.5, Wave::Cos, sum)],
         (Wave::Cos, Wave::Cos) => [(0.5, Wave::Cos, difference), (0.5, Wave::Cos, sum)],
@@ -167,9 +282,9 @@ impl Polynomial {
     }
 
     /// `wave(angle)`.
-    pub fn wave(wave: Wave, angle: Angle) -> Polynomial {
+    pub fn wave(wave: Wave, angle: Angle, angles: &mut Angles) -> Polynomial {
         let mut p = Polynomial::default();
-        let (c, wave) = named_wave(wave, angle, 1.0);
+        let (c, wave) = named_wave(wave, angles.name(angle), 1.0);
         p.add_term(
             Monomial {
                 factors: Vec::new(),
@@ -223,7 +338,13 @@ impl Polynomial {
 
     /// The product, or `None` when forming it would take more than `work` products of terms
     /// or give more than `limit` terms: the caller then keeps the operation as it is.
-    pub fn times(&self, other: &Polynomial, work: usize, limit: usize) -> Option<Polynomial> {
+    pub fn times(
+        &self,
+        other: &Polynomial,
+        work: usize,
+        limit: usize,
+        angles: &mut Angles,
+    ) -> Option<Polynomial> {
         if self.len() * other.len() > work {
             return None;
         }
@@ -232,17 +353,17 @@ impl Polynomial {
             for (b, &cb) in &other.terms {
                 let factors = a.factors_times(b);
                 let c = ca * cb;
-                match (&a.wave, &b.wave) {
+                match (a.wave, b.wave) {
                     (None, None) => product.add_term(Monomial { factors, wave: None }, c),
                     (Some(w), None) | (None, Some(w)) => product.add_term(
                         Monomial {
                             factors,
-                            wave: Some(w.clone()),
+                            wave: Some(w),
                         },
                         c,
                     ),
                     (Some(x), Some(y)) => {
-                        for (half, wave, angle) in wave_product(x, y) {
+                        for (half, wave, angle) in wave_product(x, y, angles) {
                             let (c, wave) = named_wave(wave, angle, c * half);
                             let factors = factors.clone();
                             product.add_term(Monomial { factors, wave }, c);

@@ -3,9 +3,11 @@
 //! greedy multivariate Horner scheme), and a coefficient every term of a sum shares up to its
 //! sign multiplies the sum once.
 
-use std::collections::HashMap;
+use std::cmp::Ordering;
 
-use super::polynomial::{Angle, Polynomial, Wave};
+use rustc_hash::FxHashMap;
+
+use super::polynomial::{AngleId, Angles, Polynomial, Wave};
 use crate::symbolic::expr::{ExprId, Function, Pool};
 
 /// One term being written: its coefficient and its factors (the wave among them as a node).
@@ -18,24 +20,36 @@ struct Term {
 
 /// Writes polynomials into `pool`, each wave built once.
 pub struct Writer {
-    waves: HashMap<(Wave, Angle), ExprId>,
+    waves: FxHashMap<(Wave, AngleId), ExprId>,
 }
 
 impl Writer {
     pub fn new() -> Writer {
         Writer {
-            waves: HashMap::new(),
+            waves: FxHashMap::default(),
         }
     }
 
-    pub fn write(&mut self, pool: &mut Pool, polynomial: &Polynomial) -> ExprId {
-        let terms: Vec<Term> = polynomial
-            .terms
-            .iter()
+    /// The polynomial written in `pool`. Its terms are taken in the order of their monomials
+    /// with the angles compared by their linear forms, not by their numbers (which depend on
+    /// the order the pass met them): the greedy factoring breaks ties by this order, so the
+    /// written form does not depend on the interning.
+    pub fn write(&mut self, pool: &mut Pool, polynomial: &Polynomial, angles: &Angles) -> ExprId {
+        let mut monomials: Vec<_> = polynomial.terms.iter().collect();
+        monomials.sort_by(|(a, _), (b, _)| {
+            a.factors.cmp(&b.factors).then_with(|| match (a.wave, b.wave) {
+                (Some((x, i)), Some((y, j))) => x
+                    .cmp(&y)
+                    .then_with(|| if i == j { Ordering::Equal } else { angles.get(i).cmp(angles.get(j)) }),
+                (x, y) => x.cmp(&y),
+            })
+        });
+        let terms: Vec<Term> = monomials
+            .into_iter()
             .map(|(monomial, &coefficient)| {
                 let mut factors = monomial.factors.clone();
-                if let Some((wave, angle)) = &monomial.wave {
-                    let node = self.wave(pool, *wave, angle);
+                if let Some((wave, angle)) = monomial.wave {
+                    let node = self.wave(pool, wave, angle, angles);
                     factors.push((node, 1));
                     factors.sort_unstable();
                 }
@@ -48,10 +62,11 @@ impl Writer {
         write_terms(pool, terms)
     }
 
-    fn wave(&mut self, pool: &mut Pool, wave: Wave, angle: &Angle) -> ExprId {
-        if let Some(&node) = self.waves.get(&(wave, angle.clone())) {
+    fn wave(&mut self, pool: &mut Pool, wave: Wave, id: AngleId, angles: &Angles) -> ExprId {
+        if let Some(&node) = self.waves.get(&(wave, id)) {
             return node;
         }
+        let angle = angles.get(id);
         let terms = angle.terms.iter().map(|&(atom, c)| Term {
             coefficient: c.get(),
             factors: vec![(atom, 1)],
@@ -66,7 +81,7 @@ impl Writer {
             Wave::Cos => Function::Cos,
         };
         let node = pool.apply(function, argument);
-        self.waves.insert((wave, angle.clone()), node);
+        self.waves.insert((wave, id), node);
         node
     }
 }
@@ -77,7 +92,7 @@ fn write_terms(pool: &mut Pool, terms: Vec<Term>) -> ExprId {
         return write_sum(pool, terms);
     }
     // The factor (a node, on the numerator's or the divisor's side) most terms share.
-    let mut shared: HashMap<(ExprId, bool), usize> = HashMap::new();
+    let mut shared: FxHashMap<(ExprId, bool), usize> = FxHashMap::default();
     for term in &terms {
         for &(node, exponent) in &term.factors {
             *shared.entry((node, exponent > 0)).or_insert(0) += 1;
