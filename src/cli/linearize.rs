@@ -89,8 +89,9 @@ pub fn run(args: &LinearizeArgs) -> ExitCode {
         (None, true) => OperatingPoint::Equilibrium,
         (None, false) => OperatingPoint::Initial,
     };
-    // The program's declared inputs (`input swing.q = 0;`) first, then those named here.
-    let mut inputs: Vec<String> = (program.mechanism().ok())
+    // The program's declared inputs (`input swing.q = 0;`) first, then those named here that
+    // are not declared (a name repeated here stays repeated, for the linearisation's error).
+    let declared: Vec<String> = (program.mechanism().ok())
         .map(|m| {
             m.declared_inputs()
                 .into_iter()
@@ -98,11 +99,8 @@ pub fn run(args: &LinearizeArgs) -> ExitCode {
                 .collect()
         })
         .unwrap_or_default();
-    for name in &args.inputs {
-        if !inputs.contains(name) {
-            inputs.push(name.clone());
-        }
-    }
+    let named = args.inputs.iter().filter(|name| !declared.contains(name));
+    let inputs: Vec<String> = declared.iter().chain(named).cloned().collect();
     let request = Request {
         point,
         inputs,

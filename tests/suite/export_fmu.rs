@@ -360,4 +360,9 @@ fn a_declared_input_is_the_units_and_the_linear_models() {
     // to the axis).
     let b = linear["B"][1][0].as_f64().expect("B");
     assert!((b - 1.0 / (0.1 + 1.2 * 0.25)).abs() < 1e-12, "{json}");
+    // `lsdc simulate` sets no input: the pendulum moves as without the declaration.
+    let simulate = |file| lsdc(&["simulate", file, "--duration", "0.3", "--every", "0.1"]);
+    let (declared, plain) = (simulate(program), simulate("examples/pendulum.lsd"));
+    assert_eq!((declared.0, plain.0), (0, 0), "{} {}", declared.2, plain.2);
+    assert_eq!(declared.1, plain.1);
 }

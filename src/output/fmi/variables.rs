@@ -56,7 +56,8 @@ pub struct Variable {
     pub unit: Option<Unit>,
     #[serde(skip)]
     pub description: String,
-    /// The start value of a parameter (its value at export) or of an input (its declared start value, or 0).
+    /// The start value of a parameter (its value at export) or of an input (its declared start
+    /// value, or 0).
     pub start: Option<f64>,
 }
 
