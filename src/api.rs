@@ -103,6 +103,9 @@ pub use crate::load::{LoadError, LoadOptions};
 use crate::prepare::outputs::Outputs;
 pub use crate::prepare::settings::{Integrator, Settings, SettingsChanges, SettingsError};
 pub use crate::prepare::Prepared;
+/// The equations of a tree without events evaluated at states an outside integrator chooses
+/// (FMI model exchange), and why a mechanism's cannot be.
+pub use crate::simulate::model_exchange::{refusal as model_exchange_refusal, Equations};
 /// The names of a run's outputs (the program's `output`s, then the frames'), of its columns'
 /// reactions (with `reactions` in the settings): the names of a [`Simulation`]'s columns.
 pub use crate::simulate::run::{

@@ -1,13 +1,13 @@
 //! The FMI 2.0 functions (the standard's `fmi2Functions.h`, `fmi2FunctionTypes.h`): those of
-//! co-simulation implemented on the same instance as FMI 3.0's, the others (model exchange,
-//! saved states, derivatives, integer, boolean and string variables, asynchronous steps)
-//! present and returning `fmi2Error`.
+//! co-simulation and model exchange implemented on the same instance as FMI 3.0's, the others
+//! (saved states, directional derivatives, integer, boolean and string variables,
+//! asynchronous steps) present and returning `fmi2Error`.
 
 use std::ffi::{c_char, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use crate::fmi3::{refuse, slice, slice_mut, string, with};
-use crate::instance::{Instance, Mode};
+use crate::instance::{Instance, Interface, Mode};
 use crate::log::{Fmi2Logger, Logger, Status};
 
 type Component = *mut c_void;
@@ -27,7 +27,8 @@ pub struct CallbackFunctions {
     component_environment: *mut c_void,
 }
 
-/// `fmi2CoSimulation` in `fmi2Type`.
+/// `fmi2ModelExchange` and `fmi2CoSimulation` in `fmi2Type`.
+const MODEL_EXCHANGE: i32 = 0;
 const CO_SIMULATION: i32 = 1;
 
 /// A file URI's path (RFC 8089: `file:///path` or `file://localhost/path`, percent-encoded).
@@ -108,14 +109,22 @@ pub extern "C" fn fmi2Instantiate(
         instance_name: CString::new(name).unwrap_or_default(),
     };
     let made = catch_unwind(AssertUnwindSafe(|| {
-        if fmu_type != CO_SIMULATION {
-            return Err((logger, "this unit provides co-simulation only".to_string()));
-        }
+        let interface = match fmu_type {
+            CO_SIMULATION => Interface::CoSimulation,
+            MODEL_EXCHANGE => Interface::ModelExchange,
+            _ => return Err((logger, format!("no FMU type {fmu_type} in FMI 2.0"))),
+        };
         let Some(resources) = path_of_uri(&location) else {
             let message = format!("the resource location `{location}` is not a file URI");
             return Err((logger, message));
         };
-        Instance::new(logger, logging_on != 0, resources.as_ref(), &guid)
+        Instance::new(
+            logger,
+            logging_on != 0,
+            resources.as_ref(),
+            &guid,
+            interface,
+        )
     }));
     match made {
         Ok(Ok(instance)) => Box::into_raw(Box::new(instance)) as Component,
@@ -257,6 +266,126 @@ pub extern "C" fn fmi2GetBooleanStatus(
     })
 }
 
+/// `fmi2EventInfo` (FMI 2.0 §3.2.2).
+#[repr(C)]
+pub struct EventInfo {
+    new_discrete_states_needed: Fmi2Boolean,
+    terminate_simulation: Fmi2Boolean,
+    nominals_of_continuous_states_changed: Fmi2Boolean,
+    values_of_continuous_states_changed: Fmi2Boolean,
+    next_event_time_defined: Fmi2Boolean,
+    next_event_time: f64,
+}
+
+/// Model exchange: the unit has no event, so event mode only passes (FMI 2.0 §3.2.2).
+fn exchanging(c: Component, name: &str) -> Fmi2Status {
+    with(c, name, |i| {
+        if i.interface != Interface::ModelExchange {
+            return Err("the unit was instantiated for co-simulation".to_string());
+        }
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2EnterEventMode(c: Component) -> Fmi2Status {
+    exchanging(c, "fmi2EnterEventMode")
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2NewDiscreteStates(c: Component, event_info: *mut EventInfo) -> Fmi2Status {
+    // SAFETY: the importer's structure or null.
+    if let Some(info) = unsafe { event_info.as_mut() } {
+        *info = EventInfo {
+            new_discrete_states_needed: 0,
+            terminate_simulation: 0,
+            nominals_of_continuous_states_changed: 0,
+            values_of_continuous_states_changed: 0,
+            next_event_time_defined: 0,
+            next_event_time: 0.0,
+        };
+    }
+    exchanging(c, "fmi2NewDiscreteStates")
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2EnterContinuousTimeMode(c: Component) -> Fmi2Status {
+    exchanging(c, "fmi2EnterContinuousTimeMode")
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2CompletedIntegratorStep(
+    c: Component,
+    _no_set_state_prior: Fmi2Boolean,
+    enter_event_mode: *mut Fmi2Boolean,
+    terminate_simulation: *mut Fmi2Boolean,
+) -> Fmi2Status {
+    // SAFETY: the importer's variables or null.
+    unsafe {
+        for flag in [enter_event_mode, terminate_simulation] {
+            if !flag.is_null() {
+                *flag = 0;
+            }
+        }
+    }
+    exchanging(c, "fmi2CompletedIntegratorStep")
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2SetTime(c: Component, time: f64) -> Fmi2Status {
+    with(c, "fmi2SetTime", |i| i.set_time(time))
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2SetContinuousStates(c: Component, x: *const f64, nx: usize) -> Fmi2Status {
+    // SAFETY: an array of `nx` values (FMI 2.0 §3.2.1).
+    with(c, "fmi2SetContinuousStates", |i| {
+        i.set_states(unsafe { slice(x, nx) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetContinuousStates(c: Component, x: *mut f64, nx: usize) -> Fmi2Status {
+    // SAFETY: an array of `nx` values (FMI 2.0 §3.2.2).
+    with(c, "fmi2GetContinuousStates", |i| {
+        i.get_states(unsafe { slice_mut(x, nx) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetDerivatives(c: Component, derivatives: *mut f64, nx: usize) -> Fmi2Status {
+    // SAFETY: an array of `nx` values (FMI 2.0 §3.2.2).
+    with(c, "fmi2GetDerivatives", |i| {
+        i.get_derivatives(unsafe { slice_mut(derivatives, nx) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetNominalsOfContinuousStates(
+    c: Component,
+    x_nominal: *mut f64,
+    nx: usize,
+) -> Fmi2Status {
+    // SAFETY: an array of `nx` values (FMI 2.0 §3.2.2).
+    with(c, "fmi2GetNominalsOfContinuousStates", |i| {
+        i.get_nominals(unsafe { slice_mut(x_nominal, nx) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetEventIndicators(
+    c: Component,
+    _indicators: *mut f64,
+    ni: usize,
+) -> Fmi2Status {
+    with(c, "fmi2GetEventIndicators", |_| match ni {
+        0 => Ok(()),
+        _ => Err(format!(
+            "{ni} event indicators asked for; the unit has none"
+        )),
+    })
+}
+
 /// Functions the unit does not provide: each logs why and returns `fmi2Error`, its
 /// arguments those of the standard's declaration.
 macro_rules! not_provided {
@@ -287,16 +416,6 @@ not_provided! {
     fmi2SerializeFMUstate(state: *mut c_void, bytes: *mut c_char, size: usize);
     fmi2DeSerializeFMUstate(bytes: *const c_char, size: usize, state: *mut *mut c_void);
     fmi2GetDirectionalDerivative(unknowns: Refs, n_unknowns: usize, knowns: Refs, n_knowns: usize, dv_known: *const f64, dv_unknown: *mut f64);
-    fmi2EnterEventMode();
-    fmi2NewDiscreteStates(event_info: *mut c_void);
-    fmi2EnterContinuousTimeMode();
-    fmi2CompletedIntegratorStep(no_set_state_prior: Fmi2Boolean, enter_event_mode: *mut Fmi2Boolean, terminate_simulation: *mut Fmi2Boolean);
-    fmi2SetTime(time: f64);
-    fmi2SetContinuousStates(x: *const f64, nx: usize);
-    fmi2GetDerivatives(derivatives: *mut f64, nx: usize);
-    fmi2GetEventIndicators(indicators: *mut f64, ni: usize);
-    fmi2GetContinuousStates(x: *mut f64, nx: usize);
-    fmi2GetNominalsOfContinuousStates(x_nominal: *mut f64, nx: usize);
     fmi2SetRealInputDerivatives(vr: Refs, nvr: usize, order: *const i32, value: *const f64);
     fmi2GetRealOutputDerivatives(vr: Refs, nvr: usize, order: *const i32, value: *mut f64);
     fmi2CancelStep();

@@ -1,12 +1,13 @@
 //! The FMI 3.0 functions (the standard's `fmi3Functions.h`, `fmi3FunctionTypes.h`): those of
-//! co-simulation implemented, the others (model exchange, scheduled execution, saved states,
-//! derivatives, clocks, types other than Float64) present and returning `fmi3Error`.
+//! co-simulation and model exchange implemented, the others (scheduled execution, saved
+//! states, directional derivatives, clocks, types other than Float64) present and returning
+//! `fmi3Error`.
 
 use std::ffi::{c_char, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 
-use crate::instance::{Instance, Mode};
+use crate::instance::{Instance, Interface, Mode};
 use crate::log::{Fmi3Logger, Logger, Status};
 
 type Fmi3Instance = *mut c_void;
@@ -56,7 +57,7 @@ pub(crate) fn refuse(instance: *mut c_void, name: &str) -> i32 {
         let instance = unsafe { &*(instance as *const Instance) };
         instance.log(
             Status::Error,
-            &format!("{name}: not provided by this unit (co-simulation with Float64 variables)"),
+            &format!("{name}: not provided by this unit (co-simulation and model exchange without events, Float64 variables)"),
         );
     }
     Status::Error as i32
@@ -108,10 +109,10 @@ pub extern "C" fn fmi3SetDebugLogging(
 #[no_mangle]
 pub extern "C" fn fmi3InstantiateModelExchange(
     _instance_name: *const c_char,
-    _instantiation_token: *const c_char,
-    _resource_path: *const c_char,
+    instantiation_token: *const c_char,
+    resource_path: *const c_char,
     _visible: bool,
-    _logging_on: bool,
+    logging_on: bool,
     instance_environment: *mut c_void,
     log_message: Fmi3Logger,
 ) -> Fmi3Instance {
@@ -119,12 +120,48 @@ pub extern "C" fn fmi3InstantiateModelExchange(
         callback: log_message,
         environment: instance_environment,
     };
-    logger.log(
-        Status::Error,
-        "logStatusError",
-        "this unit provides co-simulation only (fmi3InstantiateCoSimulation)",
-    );
-    std::ptr::null_mut()
+    // SAFETY: the importer passes C strings or null (FMI 3.0 §3.2.1).
+    let (token, resources) = unsafe { (string(instantiation_token), string(resource_path)) };
+    instantiate(
+        logger,
+        logging_on,
+        &resources,
+        &token,
+        Interface::ModelExchange,
+    )
+}
+
+/// An instance for `interface` from the unit's resources, or null with the reason logged.
+fn instantiate(
+    logger: Logger,
+    logging_on: bool,
+    resources: &str,
+    token: &str,
+    interface: Interface,
+) -> Fmi3Instance {
+    let made = catch_unwind(AssertUnwindSafe(|| {
+        if resources.is_empty() {
+            return Err((
+                logger,
+                "no resource path: the unit's program is in its resources".to_string(),
+            ));
+        }
+        Instance::new(
+            logger,
+            logging_on,
+            &PathBuf::from(resources),
+            token,
+            interface,
+        )
+    }));
+    match made {
+        Ok(Ok(instance)) => Box::into_raw(Box::new(instance)) as Fmi3Instance,
+        Ok(Err((logger, message))) => {
+            logger.log(Status::Error, "logStatusError", &message);
+            std::ptr::null_mut()
+        }
+        Err(_) => std::ptr::null_mut(),
+    }
 }
 
 #[no_mangle]
@@ -147,31 +184,20 @@ pub extern "C" fn fmi3InstantiateCoSimulation(
         callback: log_message,
         environment: instance_environment,
     };
-    let made = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the importer passes C strings or null (FMI 3.0 §4.2.1).
-        let (token, resources) = unsafe { (string(instantiation_token), string(resource_path)) };
-        if event_mode_used {
-            return Err((
-                logger,
-                "event mode is not supported (eventModeUsed must be false)".to_string(),
-            ));
-        }
-        if resources.is_empty() {
-            return Err((
-                logger,
-                "no resource path: the unit's program is in its resources".to_string(),
-            ));
-        }
-        Instance::new(logger, logging_on, &PathBuf::from(resources), &token)
-    }));
-    match made {
-        Ok(Ok(instance)) => Box::into_raw(Box::new(instance)) as Fmi3Instance,
-        Ok(Err((logger, message))) => {
-            logger.log(Status::Error, "logStatusError", &message);
-            std::ptr::null_mut()
-        }
-        Err(_) => std::ptr::null_mut(),
+    if event_mode_used {
+        let message = "event mode is not supported (eventModeUsed must be false)";
+        logger.log(Status::Error, "logStatusError", message);
+        return std::ptr::null_mut();
     }
+    // SAFETY: the importer passes C strings or null (FMI 3.0 §4.2.1).
+    let (token, resources) = unsafe { (string(instantiation_token), string(resource_path)) };
+    instantiate(
+        logger,
+        logging_on,
+        &resources,
+        &token,
+        Interface::CoSimulation,
+    )
 }
 
 #[no_mangle]
@@ -195,7 +221,7 @@ pub extern "C" fn fmi3InstantiateScheduledExecution(
     logger.log(
         Status::Error,
         "logStatusError",
-        "this unit provides co-simulation only (fmi3InstantiateCoSimulation)",
+        "this unit provides co-simulation (fmi3InstantiateCoSimulation) and, for trees without events, model exchange (fmi3InstantiateModelExchange), not scheduled execution",
     );
     std::ptr::null_mut()
 }
@@ -341,6 +367,169 @@ pub extern "C" fn fmi3DoStep(
     status
 }
 
+/// Model exchange: the unit has no event, so event mode only passes (FMI 3.0 §3.2.2).
+fn exchanging(instance: Fmi3Instance, name: &str) -> Fmi3Status {
+    with(instance, name, |i| {
+        if i.interface != Interface::ModelExchange {
+            return Err("the unit was instantiated for co-simulation".to_string());
+        }
+        i.mode = Mode::Stepping;
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3EnterEventMode(instance: Fmi3Instance) -> Fmi3Status {
+    exchanging(instance, "fmi3EnterEventMode")
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3EnterContinuousTimeMode(instance: Fmi3Instance) -> Fmi3Status {
+    exchanging(instance, "fmi3EnterContinuousTimeMode")
+}
+
+/// Writes `value` where `pointer` points, unless it is null.
+unsafe fn put<T>(pointer: *mut T, value: T) {
+    if !pointer.is_null() {
+        *pointer = value;
+    }
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3UpdateDiscreteStates(
+    instance: Fmi3Instance,
+    discrete_states_need_update: *mut bool,
+    terminate_simulation: *mut bool,
+    nominals_changed: *mut bool,
+    values_changed: *mut bool,
+    next_event_time_defined: *mut bool,
+    next_event_time: *mut f64,
+) -> Fmi3Status {
+    // SAFETY: the importer's variables or null (FMI 3.0 §3.2.2).
+    unsafe {
+        for flag in [
+            discrete_states_need_update,
+            terminate_simulation,
+            nominals_changed,
+            values_changed,
+            next_event_time_defined,
+        ] {
+            put(flag, false);
+        }
+        put(next_event_time, 0.0);
+    }
+    exchanging(instance, "fmi3UpdateDiscreteStates")
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3EvaluateDiscreteStates(instance: Fmi3Instance) -> Fmi3Status {
+    with(instance, "fmi3EvaluateDiscreteStates", |_| Ok(()))
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3CompletedIntegratorStep(
+    instance: Fmi3Instance,
+    _no_set_state_prior: bool,
+    enter_event_mode: *mut bool,
+    terminate_simulation: *mut bool,
+) -> Fmi3Status {
+    // SAFETY: the importer's variables or null (FMI 3.0 §3.2.3).
+    unsafe {
+        put(enter_event_mode, false);
+        put(terminate_simulation, false);
+    }
+    exchanging(instance, "fmi3CompletedIntegratorStep")
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3SetTime(instance: Fmi3Instance, time: f64) -> Fmi3Status {
+    with(instance, "fmi3SetTime", |i| i.set_time(time))
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3SetContinuousStates(
+    instance: Fmi3Instance,
+    states: *const f64,
+    n: usize,
+) -> Fmi3Status {
+    // SAFETY: an array of `n` values (FMI 3.0 §3.2.3).
+    with(instance, "fmi3SetContinuousStates", |i| {
+        i.set_states(unsafe { slice(states, n) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3GetContinuousStates(
+    instance: Fmi3Instance,
+    states: *mut f64,
+    n: usize,
+) -> Fmi3Status {
+    // SAFETY: an array of `n` values (FMI 3.0 §3.2.3).
+    with(instance, "fmi3GetContinuousStates", |i| {
+        i.get_states(unsafe { slice_mut(states, n) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3GetContinuousStateDerivatives(
+    instance: Fmi3Instance,
+    derivatives: *mut f64,
+    n: usize,
+) -> Fmi3Status {
+    // SAFETY: an array of `n` values (FMI 3.0 §3.2.3).
+    with(instance, "fmi3GetContinuousStateDerivatives", |i| {
+        i.get_derivatives(unsafe { slice_mut(derivatives, n) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3GetNominalsOfContinuousStates(
+    instance: Fmi3Instance,
+    nominals: *mut f64,
+    n: usize,
+) -> Fmi3Status {
+    // SAFETY: an array of `n` values (FMI 3.0 §3.2.3).
+    with(instance, "fmi3GetNominalsOfContinuousStates", |i| {
+        i.get_nominals(unsafe { slice_mut(nominals, n) })
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3GetEventIndicators(
+    instance: Fmi3Instance,
+    _indicators: *mut f64,
+    n: usize,
+) -> Fmi3Status {
+    with(instance, "fmi3GetEventIndicators", |_| match n {
+        0 => Ok(()),
+        _ => Err(format!("{n} event indicators asked for; the unit has none")),
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3GetNumberOfEventIndicators(
+    instance: Fmi3Instance,
+    n: *mut usize,
+) -> Fmi3Status {
+    // SAFETY: the importer's variable or null.
+    with(instance, "fmi3GetNumberOfEventIndicators", |_| {
+        unsafe { put(n, 0) };
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fmi3GetNumberOfContinuousStates(
+    instance: Fmi3Instance,
+    n: *mut usize,
+) -> Fmi3Status {
+    // SAFETY: the importer's variable or null.
+    with(instance, "fmi3GetNumberOfContinuousStates", |i| {
+        unsafe { put(n, i.state_count()) };
+        Ok(())
+    })
+}
+
 /// Functions the unit does not provide: each logs why and returns `fmi3Error`, its
 /// arguments those of the standard's declaration.
 macro_rules! not_provided {
@@ -359,7 +548,6 @@ macro_rules! not_provided {
 type Refs = *const ValueReference;
 
 not_provided! {
-    fmi3EnterEventMode();
     fmi3GetFloat32(vr: Refs, n: usize, values: *mut f32, nv: usize);
     fmi3GetInt8(vr: Refs, n: usize, values: *mut i8, nv: usize);
     fmi3GetUInt8(vr: Refs, n: usize, values: *mut u8, nv: usize);
@@ -406,18 +594,6 @@ not_provided! {
     fmi3SetIntervalFraction(vr: Refs, n: usize, counters: *const u64, resolutions: *const u64);
     fmi3SetShiftDecimal(vr: Refs, n: usize, shifts: *const f64);
     fmi3SetShiftFraction(vr: Refs, n: usize, counters: *const u64, resolutions: *const u64);
-    fmi3EvaluateDiscreteStates();
-    fmi3UpdateDiscreteStates(discrete_states_need_update: *mut bool, terminate_simulation: *mut bool, nominals_changed: *mut bool, values_changed: *mut bool, next_event_time_defined: *mut bool, next_event_time: *mut f64);
-    fmi3EnterContinuousTimeMode();
-    fmi3CompletedIntegratorStep(no_set_state_prior: bool, enter_event_mode: *mut bool, terminate_simulation: *mut bool);
-    fmi3SetTime(time: f64);
-    fmi3SetContinuousStates(states: *const f64, n: usize);
-    fmi3GetContinuousStateDerivatives(derivatives: *mut f64, n: usize);
-    fmi3GetEventIndicators(indicators: *mut f64, n: usize);
-    fmi3GetContinuousStates(states: *mut f64, n: usize);
-    fmi3GetNominalsOfContinuousStates(nominals: *mut f64, n: usize);
-    fmi3GetNumberOfEventIndicators(n: *mut usize);
-    fmi3GetNumberOfContinuousStates(n: *mut usize);
     fmi3GetOutputDerivatives(vr: Refs, n: usize, orders: *const i32, values: *mut f64, nv: usize);
     fmi3ActivateModelPartition(clock_reference: ValueReference, activation_time: f64);
 }

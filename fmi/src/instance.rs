@@ -1,18 +1,22 @@
 //! One instance of the unit: the program loaded at instantiation, the parameters and inputs the
-//! importer sets, and the run, started at the end of initialisation and advanced one
-//! communication step at a time with the inputs held over the step (a zero-order hold, as
-//! `Simulator::set_inputs` applies them).
+//! importer sets, and the run, started at the end of initialisation. In co-simulation the run is
+//! advanced one communication step at a time with the inputs held over the step (a zero-order
+//! hold, as `Simulator::set_inputs` applies them); in model exchange the importer's integrator
+//! sets the time and the continuous states (the declared coordinates and their rates) and reads
+//! their derivatives from the program's equations (`Equations`).
 
-use std::mem::ManuallyDrop;
 use std::path::Path;
 
-use lsdc::api::{LoadOptions, Override, Prepared, Program, Sample, SettingsChanges, Simulator};
+use lsdc::api::{
+    Equations, LoadOptions, Override, Prepared, Program, Sample, SettingsChanges, Simulator,
+};
 
 use crate::log::{Logger, Status};
 use crate::unit::{Role, Unit};
 
-/// Where the instance is in the standard's state machine (FMI 3.0 §3.2 / §4.2; FMI 2.0 §4.2.4),
-/// as far as co-simulation goes.
+/// Where the instance is in the standard's state machine (FMI 3.0 §3.2 / §4.2; FMI 2.0 §3.2.3,
+/// §4.2.4), as far as the unit goes: model exchange's event and continuous-time modes are one
+/// (the unit has no event).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
     Instantiated,
@@ -23,52 +27,110 @@ pub enum Mode {
     Failed,
 }
 
-/// A prepared program and the run that borrows it, owned together: the prepared program lives
-/// on the heap at a fixed address until the run is dropped, first (see `Drop`).
+/// The interface the importer instantiated the unit for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interface {
+    CoSimulation,
+    ModelExchange,
+}
+
+/// A prepared program and what borrows it, owned together: the prepared program lives on the
+/// heap at a fixed address until its borrowers are dropped, first (see `Drop`).
 struct Run {
-    simulator: ManuallyDrop<Simulator<'static>>,
+    /// The run of co-simulation.
+    simulator: Option<Simulator<'static>>,
+    /// The equations of model exchange (and of the accelerations read in co-simulation).
+    equations: Option<Equations<'static>>,
     prepared: *mut Prepared,
+    /// Model exchange: the time and the continuous states the importer set.
+    time: f64,
+    states: Vec<f64>,
     /// The state's sample, computed when first read after a step.
     sample: Option<Sample>,
 }
 
 impl Run {
-    fn start(prepared: Prepared, inputs: &[String]) -> Result<Run, String> {
+    fn start(prepared: Prepared, inputs: &[String], interface: Interface) -> Result<Run, String> {
         let prepared = Box::into_raw(Box::new(prepared));
-        // SAFETY: `prepared` is not freed nor moved before the simulator that borrows it is
-        // dropped (`Drop for Run`), and nothing else reaches it.
-        let borrowed: &'static Prepared = unsafe { &*prepared };
+        let mut run = Run {
+            simulator: None,
+            equations: None,
+            prepared,
+            time: 0.0,
+            states: Vec::new(),
+            sample: None,
+        };
         let names: Vec<&str> = inputs.iter().map(String::as_str).collect();
-        match Simulator::new(borrowed, &names) {
-            Ok(simulator) => Ok(Run {
-                simulator: ManuallyDrop::new(simulator),
-                prepared,
-                sample: None,
-            }),
-            Err(failure) => {
-                // SAFETY: no simulator was made; the box is ours again.
-                drop(unsafe { Box::from_raw(prepared) });
-                Err(failure.message)
+        match interface {
+            Interface::CoSimulation => {
+                let simulator = Simulator::new(run.prepared(), &names);
+                run.simulator = Some(simulator.map_err(|f| f.message)?);
+            }
+            Interface::ModelExchange => {
+                let equations = Equations::new(run.prepared(), &names)?;
+                run.states = equations.start().to_vec();
+                run.equations = Some(equations);
             }
         }
+        Ok(run)
+    }
+
+    fn prepared(&self) -> &'static Prepared {
+        // SAFETY: `prepared` is not freed nor moved before the simulator and the equations
+        // that borrow it are dropped (`Drop for Run`), and nothing else reaches it.
+        unsafe { &*self.prepared }
+    }
+
+    /// The equations, made when first needed (in co-simulation, for the accelerations).
+    fn equations(&mut self, inputs: &[String]) -> Result<&mut Equations<'static>, String> {
+        if self.equations.is_none() {
+            let names: Vec<&str> = inputs.iter().map(String::as_str).collect();
+            self.equations = Some(Equations::new(self.prepared(), &names)?);
+        }
+        Ok(self.equations.as_mut().expect("made above"))
     }
 
     fn sample(&mut self) -> Result<&Sample, String> {
         if self.sample.is_none() {
-            let sample = self.simulator.sample().map_err(|f| f.message)?;
+            let sample = match (&mut self.simulator, &mut self.equations) {
+                (Some(simulator), _) => simulator.sample().map_err(|f| f.message)?,
+                (None, Some(equations)) => equations.sample(self.time, &self.states)?,
+                (None, None) => return Err("the run has not started".to_string()),
+            };
             self.sample = Some(sample);
         }
         Ok(self.sample.as_ref().expect("set above"))
+    }
+
+    fn time(&self) -> f64 {
+        self.simulator.as_ref().map_or(self.time, Simulator::time)
+    }
+
+    /// The derivatives of the continuous states at the current state: the rates, then the
+    /// accelerations.
+    fn derivatives(&mut self, inputs: &[String], efforts: &[f64]) -> Result<Vec<f64>, String> {
+        let (time, states) = match &self.simulator {
+            Some(simulator) => {
+                let (q, v) = simulator.coordinates().map_err(|f| f.message)?;
+                (simulator.time(), [q, v].concat())
+            }
+            None => (self.time, self.states.clone()),
+        };
+        let equations = self.equations(inputs)?;
+        equations.set_inputs(efforts)?;
+        let mut derivatives = vec![0.0; states.len()];
+        equations.derivatives(time, &states, &mut derivatives)?;
+        Ok(derivatives)
     }
 }
 
 impl Drop for Run {
     fn drop(&mut self) {
-        // SAFETY: the simulator first, then the prepared program it borrowed (`Run::start`).
-        unsafe {
-            ManuallyDrop::drop(&mut self.simulator);
-            drop(Box::from_raw(self.prepared));
-        }
+        // The borrowers first, then the prepared program they borrowed (`Run::start`).
+        self.simulator = None;
+        self.equations = None;
+        // SAFETY: the box is ours again, borrowed by nothing now.
+        drop(unsafe { Box::from_raw(self.prepared) });
     }
 }
 
@@ -76,6 +138,7 @@ pub struct Instance {
     pub logger: Logger,
     pub logging: bool,
     pub mode: Mode,
+    pub interface: Interface,
     unit: Unit,
     program: Program,
     parameters: Vec<f64>,
@@ -96,11 +159,16 @@ impl Instance {
         logging: bool,
         resources: &Path,
         token: &str,
+        interface: Interface,
     ) -> Result<Instance, (Logger, Failure)> {
         let unit = match Unit::read(resources) {
             Ok(unit) => unit,
             Err(message) => return Err((logger, message)),
         };
+        if interface == Interface::ModelExchange && !unit.model_exchange {
+            let message = "this unit provides co-simulation only: its model description says why (its mechanism's equations need lsdc's own run)".to_string();
+            return Err((logger, message));
+        }
         if unit.token != token {
             let message = format!(
                 "the instantiation token {token} is not this unit's {} (a model description of another unit?)",
@@ -128,6 +196,7 @@ impl Instance {
             logger,
             logging,
             mode: Mode::Instantiated,
+            interface,
             unit,
             program,
             parameters,
@@ -199,10 +268,13 @@ impl Instance {
             };
             let prepared =
                 (self.program.prepare(&overrides, &changes)).map_err(|e| self.describe(e))?;
-            let mut run = Run::start(prepared, &self.unit.inputs)?;
-            run.simulator
-                .set_inputs(&self.inputs)
-                .map_err(|f| f.message)?;
+            let mut run = Run::start(prepared, &self.unit.inputs, self.interface)?;
+            if let Some(simulator) = &mut run.simulator {
+                simulator.set_inputs(&self.inputs).map_err(|f| f.message)?;
+            }
+            if let Some(equations) = &mut run.equations {
+                equations.set_inputs(&self.inputs)?;
+            }
             self.run = Some(run);
         }
         Ok(self.run.as_mut().expect("started above"))
@@ -245,7 +317,12 @@ impl Instance {
             *value = match variable.role {
                 Role::Parameter => self.parameters[variable.index],
                 Role::Input => self.inputs[variable.index],
-                Role::Time => self.run.as_ref().map_or(0.0, |r| r.simulator.time()),
+                Role::Time => self.time(),
+                Role::Acceleration => {
+                    let (inputs, efforts) = (self.unit.inputs.clone(), self.inputs.clone());
+                    let derivatives = self.started()?.derivatives(&inputs, &efforts)?;
+                    derivatives[derivatives.len() / 2 + variable.index]
+                }
                 role => {
                     let sample = self.started()?.sample()?;
                     match role {
@@ -284,9 +361,12 @@ impl Instance {
                 Role::Input => {
                     self.inputs[variable.index] = *value;
                     if let Some(run) = &mut self.run {
-                        run.simulator
-                            .set_inputs(&self.inputs)
-                            .map_err(|f| f.message)?;
+                        if let Some(simulator) = &mut run.simulator {
+                            simulator.set_inputs(&self.inputs).map_err(|f| f.message)?;
+                        }
+                        if let Some(equations) = &mut run.equations {
+                            equations.set_inputs(&self.inputs)?;
+                        }
                         run.sample = None;
                     }
                 }
@@ -304,7 +384,10 @@ impl Instance {
     /// Advances the run from `current` by `step`, the inputs held.
     pub fn do_step(&mut self, current: f64, step: f64) -> Result<(), Failure> {
         let run = self.started()?;
-        let now = run.simulator.time();
+        let Some(simulator) = &mut run.simulator else {
+            return Err("the unit was instantiated for model exchange".to_string());
+        };
+        let now = simulator.time();
         // The importer's communication points are sums of steps; the run's time lands on
         // them exactly, so a difference is the importer's rounding or a step skipped.
         if (current - now).abs() > 1e-9 * now.abs().max(1.0) {
@@ -315,15 +398,86 @@ impl Instance {
         if step < 0.0 {
             return Err(format!("a step of {step} s goes back in time"));
         }
-        run.sample = None;
         let target = current + step;
-        let advanced = run.simulator.advance_to(target);
-        drop(run.simulator.take_samples());
+        let advanced = simulator.advance_to(target);
+        drop(simulator.take_samples());
+        run.sample = None;
         advanced.map_err(|f| format!("the run stopped at t = {}: {}", f.time, f.message))
     }
 
     /// The run's time (0 before it starts).
     pub fn time(&self) -> f64 {
-        self.run.as_ref().map_or(0.0, |r| r.simulator.time())
+        self.run.as_ref().map_or(0.0, Run::time)
+    }
+
+    /// Model exchange: the run, started (its equations prepared) if it was not.
+    fn exchanged(&mut self) -> Result<&mut Run, Failure> {
+        if self.interface != Interface::ModelExchange {
+            return Err("the unit was instantiated for co-simulation".to_string());
+        }
+        self.started()
+    }
+
+    /// Model exchange: the number of continuous states (the declared coordinates, then their
+    /// rates).
+    pub fn state_count(&self) -> usize {
+        self.unit.state_count()
+    }
+
+    pub fn set_time(&mut self, time: f64) -> Result<(), Failure> {
+        let run = self.exchanged()?;
+        run.time = time;
+        run.sample = None;
+        Ok(())
+    }
+
+    pub fn set_states(&mut self, states: &[f64]) -> Result<(), Failure> {
+        let run = self.exchanged()?;
+        if states.len() != run.states.len() {
+            return Err(format!(
+                "{} continuous states given for {}",
+                states.len(),
+                run.states.len()
+            ));
+        }
+        run.states.copy_from_slice(states);
+        run.sample = None;
+        Ok(())
+    }
+
+    pub fn get_states(&mut self, states: &mut [f64]) -> Result<(), Failure> {
+        let run = self.exchanged()?;
+        if states.len() != run.states.len() {
+            return Err(format!(
+                "{} continuous states asked for {}",
+                states.len(),
+                run.states.len()
+            ));
+        }
+        states.copy_from_slice(&run.states);
+        Ok(())
+    }
+
+    /// The derivatives of the continuous states at the time and states set.
+    pub fn get_derivatives(&mut self, derivatives: &mut [f64]) -> Result<(), Failure> {
+        let run = self.exchanged()?;
+        let Some(equations) = &mut run.equations else {
+            return Err("the run has no equations".to_string());
+        };
+        equations.derivatives(run.time, &run.states, derivatives)
+    }
+
+    /// The nominal values of the continuous states: 1 (rad, m, rad/s, m/s), the scale of a
+    /// mechanism's coordinates.
+    pub fn get_nominals(&mut self, nominals: &mut [f64]) -> Result<(), Failure> {
+        if nominals.len() != self.state_count() {
+            return Err(format!(
+                "{} nominal values asked for {} continuous states",
+                nominals.len(),
+                self.state_count()
+            ));
+        }
+        nominals.fill(1.0);
+        Ok(())
     }
 }

@@ -17,6 +17,7 @@ pub enum Role {
     KineticEnergy,
     PotentialEnergy,
     Output,
+    Acceleration,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -34,6 +35,10 @@ pub struct Unit {
     pub program: String,
     pub library_dirs: Vec<String>,
     pub scene: Option<String>,
+    /// Whether the unit provides model exchange (units written before it was provided do
+    /// not say, and do not).
+    #[serde(default)]
+    pub model_exchange: bool,
     pub inputs: Vec<String>,
     pub variables: Vec<Variable>,
 }
@@ -50,6 +55,16 @@ impl Unit {
     /// The folder the program's files are in.
     pub fn program_folder(resources: &Path) -> PathBuf {
         resources.join("lsdc").join("program")
+    }
+
+    /// The number of continuous states in model exchange: the declared coordinates and their
+    /// rates.
+    pub fn state_count(&self) -> usize {
+        2 * self
+            .variables
+            .iter()
+            .filter(|v| v.role == Role::Coordinate)
+            .count()
     }
 
     /// The variable of a value reference.

@@ -6,6 +6,7 @@
 mod calls;
 mod checker;
 mod expr;
+mod inputs;
 mod laws;
 mod model_laws;
 mod output;
@@ -497,8 +498,10 @@ impl<'w> Checker<'w> {
             "drive" | "lock" => {}
             "rate" | "update" => return self.rate(drive, ctx),
             "actuate" => return self.actuate(drive, ctx),
+            "input" => return self.input(drive, ctx),
             word => {
-                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "update", "actuate", "lock"]) {
+                let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "update", "actuate", "lock", "input"]) {
+                    Some("input") => "did you mean `input`? `input swing.q = 0;` declares the effort along a coordinate as an input",
                     Some("rate") => "did you mean `rate`? `rate integral = error;` gives the derivative of a state",
                     Some("update") => "did you mean `update`? `update u = -k * arm.q;` gives the next value of a sampled state",
                     Some("actuate") => "did you mean `actuate`? `actuate arm.q = law;` applies an effort along a coordinate",

@@ -1,5 +1,7 @@
-//! `lsdc export-fmu FILE -o model.fmu`: the program as an FMI unit for co-simulation (FMI 3.0,
-//! or 2.0 with `--fmi 2`), run inside by lsdc's own integrator, events and loop projection.
+//! `lsdc export-fmu FILE -o model.fmu`: the program as an FMI unit (FMI 3.0, or 2.0 with
+//! `--fmi 2`) for co-simulation, run inside by lsdc's own integrator, events and loop
+//! projection, and for model exchange where the mechanism is a tree without events (its
+//! equations integrated by the importer), as `--kind` chooses.
 //! The unit holds the model description, the program's files with a description of the
 //! variables (`resources/lsdc/`), and the shared library of `fmi/` under the model's identifier,
 //! which loads the program at instantiation (docs/fmi.md).
@@ -9,9 +11,9 @@ use std::process::ExitCode;
 
 use super::fmi_library;
 use super::shared::{err, out, parse_sets, prepare_file, usage_error, Format, LibraryArgs};
-use lsdc::api::{output_names, Program, Simulator};
+use lsdc::api::{model_exchange_refusal, output_names, Equations, Program, Simulator};
 use lsdc::output::fmi::archive::Archive;
-use lsdc::output::fmi::model_description::{model_description, Identity, Version};
+use lsdc::output::fmi::model_description::{model_description, Identity, Kind, Version};
 use lsdc::output::fmi::variables::{parameters, variables, Variable};
 
 #[derive(clap::Args)]
@@ -23,13 +25,19 @@ pub struct ExportFmuArgs {
     /// Repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     sets: Vec<String>,
-    /// An input of the unit: the generalised effort along this velocity (`swing.q`), held over
-    /// each communication step, named `swing.q.effort`. Repeatable.
+    /// An input of the unit besides the program's `input` declarations: the generalised effort
+    /// along this velocity (`swing.q`), held over each communication step, named
+    /// `swing.q.effort`, starting at 0. Repeatable.
     #[arg(long = "input", value_name = "JOIN.COORD")]
     inputs: Vec<String>,
     /// The FMI version: 3 (FMI 3.0) or 2 (FMI 2.0).
     #[arg(long = "fmi", default_value = "3", value_parser = ["2", "3"])]
     fmi: String,
+    /// The interfaces of the unit: `co-simulation` (lsdc's integrator inside), `model-exchange`
+    /// (the importer integrates the equations: trees without events only) or `both`. By
+    /// default both where the mechanism allows model exchange, else co-simulation.
+    #[arg(long = "kind", value_parser = ["co-simulation", "model-exchange", "both"])]
+    kind: Option<String>,
     /// Write the unit to this file.
     #[arg(
         short = 'o',
@@ -56,6 +64,8 @@ struct UnitFile<'a> {
     /// `-L` directories, relative to the same folder.
     library_dirs: Vec<String>,
     scene: Option<&'a str>,
+    /// Whether the unit provides model exchange (the library then accepts its instantiation).
+    model_exchange: bool,
     /// The velocities the inputs act along, in order.
     inputs: &'a [String],
     variables: &'a [Variable],
@@ -134,23 +144,51 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
         Ok(prepared) => prepared,
         Err(code) => return code,
     };
+    let Ok(mechanism) = program.mechanism() else {
+        return ExitCode::from(1);
+    };
+    // The program's declared inputs (`input swing.q = 0;`, with their start values), then
+    // those named here (starting at 0).
+    let mut declared = mechanism.declared_inputs();
+    for name in &args.inputs {
+        if !declared.iter().any(|(n, _)| n == name) {
+            declared.push((name.clone(), 0.0));
+        }
+    }
+    let input_names: Vec<String> = declared.iter().map(|(n, _)| n.clone()).collect();
     // The inputs are checked as the unit will use them: a simulator starts with them.
-    let inputs: Vec<&str> = args.inputs.iter().map(String::as_str).collect();
+    let inputs: Vec<&str> = input_names.iter().map(String::as_str).collect();
     if let Err(failure) = Simulator::new(&prepared, &inputs) {
         return usage_error(&format!("the unit cannot run: {}", failure.message));
     }
+    let refusal = model_exchange_refusal(&prepared);
+    let kind = match (args.kind.as_deref(), &refusal) {
+        (None, None) => Kind::Both,
+        (None, Some(_)) | (Some("co-simulation"), _) => Kind::CoSimulation,
+        (Some(_), Some(reason)) => {
+            return usage_error(&format!(
+                "`{}` cannot be exported for model exchange: {reason}; export it for co-simulation (`--kind co-simulation`), where lsdc's own run integrates it",
+                file.display()
+            ));
+        }
+        (Some("model-exchange"), None) => Kind::ModelExchange,
+        (Some(_), None) => Kind::Both,
+    };
+    if kind.model_exchange() {
+        if let Err(reason) = Equations::new(&prepared, &inputs) {
+            return usage_error(&format!("the unit cannot run: {reason}"));
+        }
+    }
     let Ok(overrides) = parse_sets(&args.sets) else {
         return ExitCode::from(2);
-    };
-    let Ok(mechanism) = program.mechanism() else {
-        return ExitCode::from(1);
     };
     let parameters = parameters(mechanism, &overrides);
     let variables = variables(
         &prepared,
         &parameters,
-        &args.inputs,
+        &declared,
         &output_names(&prepared),
+        kind.model_exchange(),
     );
     let version = if args.fmi == "2" {
         Version::Fmi2
@@ -177,13 +215,21 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
     let mut parts: Vec<&[u8]> = contents.iter().map(Vec::as_slice).collect();
     parts.push(&variables_json);
     parts.push(args.fmi.as_bytes());
+    parts.push(kind.name().as_bytes());
     let token = token(&parts);
     let settings = &prepared.settings;
     let identity = Identity {
         model_name: &stem,
         model_identifier: &identifier,
         token: &token,
-        description: &format!("the LSD program {}", file.display()),
+        description: &match &refusal {
+            None => format!("the LSD program {}", file.display()),
+            Some(reason) => format!(
+                "the LSD program {} (co-simulation only: {reason})",
+                file.display()
+            ),
+        },
+        kind,
         generation_tool: concat!("lsdc ", env!("CARGO_PKG_VERSION")),
         stop_time: settings.duration,
         tolerance: settings.rtol,
@@ -214,7 +260,8 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
         program: relative(&canonical_file, &root),
         library_dirs,
         scene: program.scene(),
-        inputs: &args.inputs,
+        model_exchange: kind.model_exchange(),
+        inputs: &input_names,
         variables: &variables,
     };
     let mut archive = Archive::default();
@@ -242,9 +289,10 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
         return usage_error(&format!("cannot write `{}`: {e}", out_path.display()));
     }
     err(&format!(
-        "wrote {} (FMI {}.0 co-simulation, {} variables)\n",
+        "wrote {} (FMI {}.0 {}, {} variables)\n",
         out_path.display(),
         if version == Version::Fmi2 { 2 } else { 3 },
+        kind.name(),
         variables.len() - usize::from(version == Version::Fmi2)
     ));
     ExitCode::SUCCESS

@@ -32,9 +32,9 @@ pub struct LinearizeArgs {
     /// Value of an unknown, as for `simulate`. Repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     sets: Vec<String>,
-    /// An input (repeatable; in this order): a coordinate `join.coordinate` along which a
-    /// generalised force is one, or a constant state of the program (`rate voltage = 0;`)
-    /// held at the input's value.
+    /// An input (repeatable; in this order, after the program's `input` declarations): a
+    /// coordinate `join.coordinate` along which a generalised force is one, or a constant
+    /// state of the program (`rate voltage = 0;`) held at the input's value.
     #[arg(long = "input", value_name = "JOIN.COORDINATE|STATE")]
     inputs: Vec<String>,
     /// With closed loops: an independent coordinate (repeatable, as many as the mobility);
@@ -89,9 +89,21 @@ pub fn run(args: &LinearizeArgs) -> ExitCode {
         (None, true) => OperatingPoint::Equilibrium,
         (None, false) => OperatingPoint::Initial,
     };
+    // The program's declared inputs (`input swing.q = 0;`) first, then those named here that
+    // are not declared (a name repeated here stays repeated, for the linearisation's error).
+    let declared: Vec<String> = (program.mechanism().ok())
+        .map(|m| {
+            m.declared_inputs()
+                .into_iter()
+                .map(|(name, _)| name)
+                .collect()
+        })
+        .unwrap_or_default();
+    let named = args.inputs.iter().filter(|name| !declared.contains(name));
+    let inputs: Vec<String> = declared.iter().chain(named).cloned().collect();
     let request = Request {
         point,
-        inputs: args.inputs.clone(),
+        inputs,
         coordinates: args.coordinates.clone(),
     };
     let linearization = match linearize(&prepared, &request) {

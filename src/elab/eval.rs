@@ -223,6 +223,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 }
                 Ok(())
             }
+            DeclKind::Drive(input) if input.word.name.as_str() == "input" => {
+                self.input_decl(input, &mut locals)
+            }
             DeclKind::Drive(rate) if matches!(rate.word.name.as_str(), "rate" | "update") => {
                 self.rate_decl(rate, &mut locals)
             }

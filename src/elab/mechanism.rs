@@ -370,6 +370,17 @@ pub struct Actuator {
     pub law_span: Span,
 }
 
+/// `input swing.q = 0`: the generalised effort along a joint coordinate, declared an input of
+/// the program, which an importer or a study sets; `start` is its value until set.
+#[derive(Clone, Debug)]
+pub struct DeclaredInput {
+    pub join: JoinId,
+    pub coordinate: usize,
+    pub start: f64,
+    /// The coordinate as written.
+    pub span: Span,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EffortKind {
@@ -466,6 +477,8 @@ pub struct Mechanism {
     pub states: Vec<StateVariable>,
     /// The `actuate` declarations, in declaration order: the model's coordinates.
     pub actuators: Vec<Actuator>,
+    /// The `input` declarations, in declaration order.
+    pub inputs: Vec<DeclaredInput>,
     /// `given` values of unknowns.
     pub given: Vec<(UnknownId, Scalar, Span)>,
     pub scenario: Option<Scenario>,
@@ -581,6 +594,22 @@ impl Mechanism {
             .name
             .as_deref()
             .map_or_else(|| format!("contact{}", index + 1), str::to_string)
+    }
+
+    /// The declared inputs (`input swing.q = 0;`): the names of their coordinates
+    /// (`swing.q`), the names of the velocities the efforts act along, with their start
+    /// values.
+    pub fn declared_inputs(&self) -> Vec<(String, f64)> {
+        (self.inputs.iter())
+            .map(|input| (self.coordinate_name(input.join, input.coordinate), input.start))
+            .collect()
+    }
+
+    /// `swing.q`: a join's coordinate by its join's name and its link's parameter.
+    pub fn coordinate_name(&self, join: JoinId, coordinate: usize) -> String {
+        let link = &self.links[self.join(join).link.0 as usize];
+        let name = link.coordinates.get(coordinate).map(|n| n.to_string());
+        format!("{}.{}", self.join_name(join), name.unwrap_or_default())
     }
 
     /// The join's name: `as crank`, or `join3` for the third join declared.

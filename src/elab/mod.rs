@@ -12,6 +12,7 @@ mod elaborator;
 mod eval;
 mod fields;
 pub mod imposed_motion;
+mod inputs;
 mod instances;
 mod laws;
 pub mod mechanism;

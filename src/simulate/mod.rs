@@ -7,6 +7,7 @@ pub mod compiled;
 pub mod constraints;
 pub mod inputs;
 mod kinematic;
+pub mod model_exchange;
 pub mod lie_group;
 mod ode;
 pub mod report;

@@ -431,7 +431,7 @@ fn observe_into<'s, 'p: 's, 'm>(
 }
 
 /// The model's velocities named `names`, or why one is not found (with the name nearest).
-fn input_velocities(model: &Model, names: &[&str]) -> Result<Vec<usize>, String> {
+pub(super) fn input_velocities(model: &Model, names: &[&str]) -> Result<Vec<usize>, String> {
     let known: Vec<String> = (0..model.velocities())
         .map(|v| model.velocity_name(v))
         .collect();
@@ -453,7 +453,7 @@ fn input_velocities(model: &Model, names: &[&str]) -> Result<Vec<usize>, String>
 }
 
 /// The features of `model` that an integrator may not handle (`Integrator::refusal`).
-fn features(model: &Model) -> Vec<Feature> {
+pub(super) fn features(model: &Model) -> Vec<Feature> {
     let present = [
         (Feature::Contacts, model.has_contacts()),
         (Feature::Stops, !model.stops.is_empty()),
@@ -482,7 +482,7 @@ fn features(model: &Model) -> Vec<Feature> {
 /// velocities): the followers where their leaders put them, the loops closed, the friction's
 /// phases decided, the outputs' scratch prepared from the loops as the start found them. Why it
 /// cannot start.
-fn start_system<'p>(
+pub(super) fn start_system<'p>(
     prepared: &'p Prepared,
     start: &Start<'_>,
     inputs: Inputs,

@@ -182,3 +182,187 @@ fn the_unit_holds_the_description_the_library_and_the_program_with_its_imports()
     assert_eq!(unit_json["program"], "delta_isir88.lsd");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The model description of `args`' unit, which must be written.
+fn description_of(args: &[&str]) -> String {
+    let mut all = vec!["export-fmu"];
+    all.extend_from_slice(args);
+    all.push("--model-description");
+    let (code, xml, stderr) = lsdc(&all);
+    assert_eq!(code, 0, "{stderr}");
+    xml
+}
+
+#[test]
+fn a_tree_without_events_is_exported_for_model_exchange_and_co_simulation() {
+    let xml = description_of(&["examples/double_pendulum.lsd", "--fmi", "3"]);
+    assert!(
+        xml.contains("<ModelExchange modelIdentifier=\"double_pendulum\""),
+        "{xml}"
+    );
+    assert!(
+        xml.contains("<CoSimulation modelIdentifier=\"double_pendulum\""),
+        "{xml}"
+    );
+    // The states are the coordinates then the rates; their derivatives the rates then the
+    // accelerations, each naming its state.
+    let reference = |name: &str| {
+        let name = name.replace('\'', "&apos;");
+        let prefix = format!("name=\"{name}\" valueReference=\"");
+        let at = xml.find(&prefix).expect("the variable");
+        let rest = &xml[at + prefix.len()..];
+        rest[..rest.find('"').expect("quote")].to_string()
+    };
+    for coordinate in ["shoulder.q", "elbow.q"] {
+        let (q, rate, acceleration) = (
+            reference(coordinate),
+            reference(&format!("{coordinate}'")),
+            reference(&format!("{coordinate}''")),
+        );
+        let rate_line = xml
+            .lines()
+            .find(|l| l.contains(&format!("valueReference=\"{rate}\"")));
+        assert!(
+            rate_line
+                .expect("rate")
+                .contains(&format!("derivative=\"{q}\"")),
+            "{xml}"
+        );
+        let line = xml
+            .lines()
+            .find(|l| l.contains(&format!("valueReference=\"{acceleration}\"")));
+        let line = line.expect("acceleration");
+        assert!(line.contains(&format!("derivative=\"{rate}\"")), "{line}");
+        assert!(
+            line.contains("causality=\"local\"") && line.contains("unit=\"rad/s2\""),
+            "{line}"
+        );
+        assert!(xml.contains(&format!(
+            "<ContinuousStateDerivative valueReference=\"{rate}\"/>"
+        )));
+        assert!(xml.contains(&format!(
+            "<InitialUnknown valueReference=\"{acceleration}\"/>"
+        )));
+    }
+    let derivatives: Vec<&str> = (xml.lines())
+        .filter(|l| l.contains("<ContinuousStateDerivative"))
+        .collect();
+    assert_eq!(derivatives.len(), 4, "{xml}");
+    // FMI 2.0: the derivatives by their places among the variables, from 1.
+    let xml = description_of(&["examples/double_pendulum.lsd", "--fmi", "2"]);
+    assert!(
+        xml.contains("completedIntegratorStepNotNeeded=\"true\""),
+        "{xml}"
+    );
+    assert!(xml.contains("<Derivatives>"), "{xml}");
+    // Co-simulation only when asked: no accelerations.
+    let xml = description_of(&["examples/double_pendulum.lsd", "--kind", "co-simulation"]);
+    assert!(
+        !xml.contains("<ModelExchange") && !xml.contains("q''"),
+        "{xml}"
+    );
+}
+
+#[test]
+fn a_mechanism_with_loops_is_for_co_simulation_only_and_says_why() {
+    let xml = description_of(&["examples/four_bar.lsd"]);
+    assert!(
+        !xml.contains("<ModelExchange") && xml.contains("<CoSimulation"),
+        "{xml}"
+    );
+    assert!(
+        xml.contains("co-simulation only: its closed loops"),
+        "{xml}"
+    );
+    for kind in ["model-exchange", "both"] {
+        let (code, _, stderr) = lsdc(&[
+            "export-fmu",
+            "examples/four_bar.lsd",
+            "--kind",
+            kind,
+            "--model-description",
+        ]);
+        assert_eq!(code, 2, "{stderr}");
+        assert!(
+            stderr.contains("cannot be exported for model exchange: its closed loops"),
+            "{stderr}"
+        );
+        assert!(stderr.contains("`--kind co-simulation`"), "{stderr}");
+    }
+    // Stops are events.
+    let (code, _, stderr) = lsdc(&[
+        "export-fmu",
+        "examples/limited_pendulum.lsd",
+        "--kind",
+        "model-exchange",
+        "--model-description",
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("stops"), "{stderr}");
+}
+
+/// The derivatives the model-exchange equations give at a state, an input's effort set, are
+/// the rates and `lsdc eval`'s forward dynamics (ABA) with that effort: the run's evaluation
+/// and the batch's, two paths to the same equations.
+#[test]
+fn the_equations_for_model_exchange_are_the_forward_dynamics() {
+    use lsdc::api::{evaluate, parse_states, Equations, Program};
+    let program =
+        Program::from_file("examples/double_pendulum.lsd", &Default::default()).expect("program");
+    let prepared = program.prepare(&[], &Default::default()).expect("prepared");
+    let mut equations = Equations::new(&prepared, &["elbow.q"]).expect("a tree without events");
+    assert_eq!(equations.state_count(), 4);
+    assert_eq!(equations.start(), [2.0, -1.0, 0.5, 1.0]);
+    equations.set_inputs(&[0.7]).expect("one input");
+    let state = [0.3, -1.2, 0.7, 2.5];
+    let mut derivatives = [0.0; 4];
+    equations
+        .derivatives(0.0, &state, &mut derivatives)
+        .expect("derivatives");
+    let states =
+        parse_states(r#"[{"q": [0.3, -1.2], "v": [0.7, 2.5], "tau": [0, 0.7]}]"#).expect("states");
+    let evaluation = evaluate(&prepared, &states).expect("evaluated");
+    assert_eq!(evaluation.positions, ["shoulder.q", "elbow.q"]);
+    let aba = evaluation.states[0].aba.as_ref().expect("aba");
+    assert_eq!(derivatives[..2], state[2..]);
+    for k in 0..2 {
+        assert!(
+            (derivatives[2 + k] - aba[k]).abs() <= 1e-13,
+            "{derivatives:?} {aba:?}"
+        );
+    }
+    let sample = equations.sample(0.0, &state).expect("sample");
+    assert_eq!(sample.coordinates, state[..2]);
+    assert!(sample.kinetic_energy > 0.0);
+}
+
+/// `input swing.q = 0.25;`: the unit's input with that start value, once even when
+/// `--input` names it too; and `lsdc linearize`'s input without `--input`.
+#[test]
+fn a_declared_input_is_the_units_and_the_linear_models() {
+    let program = "tests/fixtures/input_pendulum.lsd";
+    for extra in [&[][..], &["--input", "swing.q"][..]] {
+        let mut args = vec![program];
+        args.extend_from_slice(extra);
+        let xml = description_of(&args);
+        let inputs: Vec<&str> = (xml.lines())
+            .filter(|l| l.contains("causality=\"input\""))
+            .collect();
+        assert_eq!(inputs.len(), 1, "{xml}");
+        assert!(inputs[0].contains("name=\"swing.q.effort\""), "{xml}");
+        assert!(inputs[0].contains("start=\"0.25\""), "{xml}");
+    }
+    let (code, json, stderr) = lsdc(&["linearize", program, "--format", "json"]);
+    assert_eq!(code, 0, "{stderr}");
+    let linear: serde_json::Value = serde_json::from_str(&json).expect("json");
+    assert_eq!(linear["inputs"], serde_json::json!(["swing.q"]), "{json}");
+    // B's row of the rate: 1 / I about the axis (0.1 + 1.2 × 0.5², the rod's inertia moved
+    // to the axis).
+    let b = linear["B"][1][0].as_f64().expect("B");
+    assert!((b - 1.0 / (0.1 + 1.2 * 0.25)).abs() < 1e-12, "{json}");
+    // `lsdc simulate` sets no input: the pendulum moves as without the declaration.
+    let simulate = |file| lsdc(&["simulate", file, "--duration", "0.3", "--every", "0.1"]);
+    let (declared, plain) = (simulate(program), simulate("examples/pendulum.lsd"));
+    assert_eq!((declared.0, plain.0), (0, 0), "{} {}", declared.2, plain.2);
+    assert_eq!(declared.1, plain.1);
+}

@@ -4,7 +4,12 @@
    schema, and its consistency) in FMI 3.0 and 2.0.
 2. FMPy's simulations of the pendulum, the four-bar and the Delta (examples/) agree with
    `lsdc simulate` at every output time.
-3. A PD controller written here drives the pendulum's unit through its input, sampled at each
+3. Model exchange: FMPy's CVode integrates the units of two trees (the pendulum and the double
+   pendulum, FMI 3.0 and 2.0) at a tight relative tolerance, and agrees with `lsdc simulate`;
+   the derivatives a unit returns at chosen states, an input set, are `lsdc eval`'s forward
+   dynamics (ABA) to round-off; a mechanism with loops is refused for model exchange with a
+   message that suggests co-simulation, and its unit says it is co-simulation only.
+4. A PD controller written here drives the pendulum's unit through its input, sampled at each
    communication step h and held over it; the final angle approaches the same PD law written
    in LSD (tools/fmi/pd_pendulum.lsd) at the order of a zero-order hold, h¹; and at h = 0.01
    it is the discrete PD of examples/control/discrete_pd_pendulum.lsd (sampled in LSD at the
@@ -15,15 +20,18 @@ Usage: python check_units.py LSDC_BINARY WORK_DIRECTORY
 
 import csv
 import io
+import json
 import math
 import os
 import shutil
 import subprocess
 import sys
+from ctypes import POINTER, c_double
 
 import numpy as np
 from fmpy import extract, read_model_description, simulate_fmu
-from fmpy.fmi3 import FMU3Slave
+from fmpy.fmi2 import FMU2Model
+from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 
 LSDC, WORK = sys.argv[1], sys.argv[2]
@@ -87,7 +95,102 @@ for program, duration, tolerance in cases:
               f"{stem} (FMI {version}.0): coordinates and rates within {tolerance:g} of `lsdc simulate` "
               f"over {duration} s (largest difference {worst:.2e})")
 
-# 3: the PD loop closed in Python through the unit's input.
+# 3: model exchange.
+me_cases = [
+    ("examples/pendulum.lsd", 5.0, 1e-8),
+    ("examples/double_pendulum.lsd", 2.0, 1e-8),
+]
+for program, duration, tolerance in me_cases:
+    stem = os.path.splitext(os.path.basename(program))[0]
+    reference = simulated(program, duration)
+    coordinates = [n for n in reference if n not in ("time", "kinetic_energy", "potential_energy")]
+    for version in ("3", "2"):
+        unit = export(program, f"{stem}-me-fmi{version}.fmu", "--fmi", version,
+                      "--kind", "model-exchange")
+        problems = validate_fmu(unit)
+        check(not problems, f"{stem} (FMI {version}.0 model exchange) validates: {problems or 'no problem'}")
+        description = read_model_description(unit, validate=True)
+        check(description.modelExchange is not None and description.coSimulation is None,
+              f"{stem} (FMI {version}.0): the unit is for model exchange only, as asked")
+        interval = reference["time"][1] - reference["time"][0]
+        result = simulate_fmu(unit, fmi_type="ModelExchange", solver="CVode",
+                              relative_tolerance=1e-12, stop_time=duration, output_interval=interval,
+                              output=coordinates + ["kinetic_energy"])
+        times = reference["time"]
+        check(len(result) == len(times) and np.allclose(result["time"], times, atol=1e-12, rtol=0),
+              f"{stem} (FMI {version}.0 ME): FMPy's {len(result)} output times are lsdc's {len(times)}")
+        worst = max(np.max(np.abs(result[n] - reference[n])) for n in coordinates)
+        check(worst <= tolerance,
+              f"{stem} (FMI {version}.0 ME): CVode at rtol 1e-12 within {tolerance:g} of `lsdc simulate` "
+              f"over {duration} s (largest difference {worst:.2e})")
+
+# The derivatives at chosen states, an effort along the first coordinate set, against `lsdc eval`.
+program = "examples/double_pendulum.lsd"
+states = [([0.3, -1.2], [0.7, 2.5], 1.5), ([2.0, 0.1], [-3.0, 0.4], -0.8)]
+states_file = os.path.join(WORK, "states.json")
+with open(states_file, "w") as f:
+    json.dump([{"q": q, "v": v, "tau": [u, 0.0]} for q, v, u in states], f)
+evaluated = json.loads(lsdc("eval", program, "--states", states_file))
+for version in ("3", "2"):
+    unit = export(program, f"double_pendulum-input-fmi{version}.fmu", "--fmi", version,
+                  "--input", "shoulder.q")
+    description = read_model_description(unit, validate=True)
+    reference_of = {v.name: v.valueReference for v in description.modelVariables}
+    unzipped = extract(unit)
+    if version == "3":
+        model = FMU3Model(guid=description.instantiationToken, unzipDirectory=unzipped,
+                          modelIdentifier=description.modelExchange.modelIdentifier)
+        model.instantiate()
+        model.enterInitializationMode()
+        model.exitInitializationMode()
+        model.enterContinuousTimeMode()
+        set_inputs, get_values = model.setFloat64, model.getFloat64
+    else:
+        model = FMU2Model(guid=description.guid, unzipDirectory=unzipped,
+                          modelIdentifier=description.modelExchange.modelIdentifier)
+        model.instantiate()
+        model.setupExperiment(startTime=0.0)
+        model.enterInitializationMode()
+        model.exitInitializationMode()
+        model.enterContinuousTimeMode()
+        set_inputs, get_values = model.setReal, model.getReal
+    names = evaluated["positions"]
+    order = [["shoulder.q", "elbow.q"].index(n) for n in names]
+    worst = 0.0
+    for (q, v, u), output in zip(states, evaluated["states"]):
+        model.setTime(0.0)
+        set_inputs([reference_of["shoulder.q.effort"]], [u])
+        state, derivatives = np.array(q + v, dtype=float), np.zeros(4)
+        model.setContinuousStates(state.ctypes.data_as(POINTER(c_double)), 4)
+        pointer = derivatives.ctypes.data_as(POINTER(c_double))
+        if version == "2":
+            model.getDerivatives(pointer, 4)
+        else:
+            model.getContinuousStateDerivatives(pointer, 4)
+        accelerations = [derivatives[2 + order[k]] for k in range(2)]
+        worst = max(worst, np.max(np.abs(derivatives[:2] - np.array(v))),
+                    np.max(np.abs(np.array(accelerations) - np.array(output["aba"]))))
+        read = get_values([reference_of["shoulder.q''"], reference_of["elbow.q''"]])
+        worst = max(worst, np.max(np.abs(np.array(read) - derivatives[2:])))
+    model.terminate()
+    model.freeInstance()
+    shutil.rmtree(unzipped, ignore_errors=True)
+    check(worst <= 1e-13,
+          f"double pendulum (FMI {version}.0 ME): the unit's derivatives are `lsdc eval`'s ABA "
+          f"with the input's effort (largest difference {worst:.1e})")
+
+# A mechanism with loops: co-simulation only, and model exchange refused with the reason.
+refused = subprocess.run([LSDC, "export-fmu", "examples/four_bar.lsd", "--kind", "model-exchange",
+                          "-o", os.path.join(WORK, "refused.fmu")],
+                         cwd=ROOT, capture_output=True, text=True)
+check(refused.returncode == 2 and "closed loops" in refused.stderr
+      and "--kind co-simulation" in refused.stderr,
+      f"the four-bar is refused for model exchange: {refused.stderr.strip()}")
+description = read_model_description(os.path.join(WORK, "four_bar-fmi3.fmu"), validate=True)
+check(description.modelExchange is None and "co-simulation only" in description.description,
+      "the four-bar's default unit is for co-simulation only, and says why")
+
+# 4: the PD loop closed in Python through the unit's input.
 K_P, K_D, Q_REF, T = 20.0, 2.0, 0.5, 2.0
 plant = export("examples/pendulum.lsd", "pendulum_plant.fmu", "--input", "swing.q")
 description = read_model_description(plant, validate=True)

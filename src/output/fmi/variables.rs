@@ -4,9 +4,12 @@
 //!
 //! Value references are numbered in the order below, from 0: `time` (FMI 3.0 declares it; FMI
 //! 2.0 does not), the parameters (the program's unknowns that have a value: `given` or
-//! `--set`), the inputs (efforts along the velocities named by `--input`), then the outputs:
+//! `--set`), the inputs (efforts along the velocities the program's `input` declarations and
+//! `--input` name), then the outputs:
 //! the declared coordinates (`swing.q`), their rates (`swing.q'`), the kinetic and potential
-//! energies and the program's `output`s, the columns of `lsdc simulate`'s CSV.
+//! energies and the program's `output`s, the columns of `lsdc simulate`'s CSV; and in a unit for
+//! model exchange, the coordinates' accelerations (`swing.q''`), the derivatives of the
+//! continuous states (the coordinates and their rates).
 
 use serde::Serialize;
 
@@ -35,6 +38,9 @@ pub enum Role {
     PotentialEnergy,
     /// An `output` of the program (`index` among its outputs' columns).
     Output,
+    /// A declared coordinate's acceleration, the derivative of its rate (units for model
+    /// exchange only).
+    Acceleration,
 }
 
 /// One variable of the unit.
@@ -50,7 +56,8 @@ pub struct Variable {
     pub unit: Option<Unit>,
     #[serde(skip)]
     pub description: String,
-    /// The start value of a parameter (its value at export) or of an input (0).
+    /// The start value of a parameter (its value at export) or of an input (its declared start
+    /// value, or 0).
     pub start: Option<f64>,
 }
 
@@ -63,6 +70,8 @@ pub enum Unit {
     Metre,
     RadianPerSecond,
     MetrePerSecond,
+    RadianPerSecondSquared,
+    MetrePerSecondSquared,
     NewtonMetre,
     Newton,
     Joule,
@@ -77,6 +86,8 @@ impl Unit {
             Unit::Metre => "m",
             Unit::RadianPerSecond => "rad/s",
             Unit::MetrePerSecond => "m/s",
+            Unit::RadianPerSecondSquared => "rad/s2",
+            Unit::MetrePerSecondSquared => "m/s2",
             Unit::NewtonMetre => "N.m",
             Unit::Newton => "N",
             Unit::Joule => "J",
@@ -91,6 +102,8 @@ impl Unit {
             Unit::Metre => [0, 1, 0, 0],
             Unit::RadianPerSecond => [0, 0, -1, 1],
             Unit::MetrePerSecond => [0, 1, -1, 0],
+            Unit::RadianPerSecondSquared => [0, 0, -2, 1],
+            Unit::MetrePerSecondSquared => [0, 1, -2, 0],
             // A torque: N.m, not J, though their base units agree.
             Unit::NewtonMetre | Unit::Joule => [1, 2, -2, 0],
             Unit::Newton => [1, 1, -2, 0],
@@ -107,14 +120,18 @@ enum Dimension {
 }
 
 impl Dimension {
-    fn of(self, order: usize) -> Unit {
+    /// The unit of the coordinate (order 0), of its rate (1), of its acceleration (2), of the
+    /// effort along it (`None`).
+    fn of(self, order: Option<usize>) -> Unit {
         match (self, order) {
-            (Dimension::Angle, 0) => Unit::Radian,
-            (Dimension::Angle, 1) => Unit::RadianPerSecond,
-            (Dimension::Angle, _) => Unit::NewtonMetre,
-            (Dimension::Length, 0) => Unit::Metre,
-            (Dimension::Length, 1) => Unit::MetrePerSecond,
-            (Dimension::Length, _) => Unit::Newton,
+            (Dimension::Angle, Some(0)) => Unit::Radian,
+            (Dimension::Angle, Some(1)) => Unit::RadianPerSecond,
+            (Dimension::Angle, Some(_)) => Unit::RadianPerSecondSquared,
+            (Dimension::Angle, None) => Unit::NewtonMetre,
+            (Dimension::Length, Some(0)) => Unit::Metre,
+            (Dimension::Length, Some(1)) => Unit::MetrePerSecond,
+            (Dimension::Length, Some(_)) => Unit::MetrePerSecondSquared,
+            (Dimension::Length, None) => Unit::Newton,
         }
     }
 }
@@ -175,12 +192,15 @@ pub fn parameters(mechanism: &Mechanism, values: &[Override]) -> Vec<(String, f6
     parameters
 }
 
-/// The unit's variables, in the order of their value references (see the module's comment).
+/// The unit's variables, in the order of their value references (see the module's comment);
+/// with `accelerations` (a unit for model exchange), the declared coordinates' accelerations
+/// last, the derivatives of their rates.
 pub fn variables(
     prepared: &Prepared,
     parameters: &[(String, f64, String)],
-    inputs: &[String],
+    inputs: &[(String, f64)],
     output_names: &[String],
+    accelerations: bool,
 ) -> Vec<Variable> {
     let dimensions = dimensions(&prepared.kinematics);
     let dimension = |name: &str| {
@@ -214,23 +234,23 @@ pub fn variables(
         let description = description.clone();
         push(name.clone(), Role::Parameter, k, None, description, Some(*value));
     }
-    for (k, name) in inputs.iter().enumerate() {
+    for (k, (name, start)) in inputs.iter().enumerate() {
         let unit = match name.rsplit_once('.').map(|(_, last)| last) {
             Some("ω_x" | "ω_y" | "ω_z") => Some(Unit::NewtonMetre),
             Some("v_x" | "v_y" | "v_z") => Some(Unit::Newton),
-            _ => dimension(name).map(|d| d.of(2)),
+            _ => dimension(name).map(|d| d.of(None)),
         };
         let description =
             format!("generalised effort along `{name}`, held over each communication step");
-        push(format!("{name}.effort"), Role::Input, k, unit, description, Some(0.0));
+        push(format!("{name}.effort"), Role::Input, k, unit, description, Some(*start));
     }
     for (k, name) in prepared.coordinate_names.iter().enumerate() {
-        let unit = dimension(name).map(|d| d.of(0));
+        let unit = dimension(name).map(|d| d.of(Some(0)));
         let description = format!("coordinate `{name}`");
         push(name.clone(), Role::Coordinate, k, unit, description, None);
     }
     for (k, name) in prepared.coordinate_names.iter().enumerate() {
-        let unit = dimension(name).map(|d| d.of(1));
+        let unit = dimension(name).map(|d| d.of(Some(1)));
         let description = format!("rate of `{name}`");
         push(format!("{name}'"), Role::Rate, k, unit, description, None);
     }
@@ -254,6 +274,13 @@ pub fn variables(
     for (k, name) in output_names.iter().enumerate() {
         let description = format!("the program's output `{name}`");
         push(name.clone(), Role::Output, k, None, description, None);
+    }
+    if accelerations {
+        for (k, name) in prepared.coordinate_names.iter().enumerate() {
+            let unit = dimension(name).map(|d| d.of(Some(2)));
+            let description = format!("acceleration of `{name}`");
+            push(format!("{name}''"), Role::Acceleration, k, unit, description, None);
+        }
     }
     list
 }
