@@ -13,12 +13,13 @@
 //! residual's variance σ² = |r|² / (equations − base parameters) times (WᵀW)⁻¹ (the errors
 //! taken independent, of equal variance, and the regressor exact).
 //!
-//! Parameters that enter nonlinearly would be fitted by Levenberg–Marquardt on the
-//! sensitivities of a run: the names are refused here (`parameters::NameError`), so that a
-//! second path can take them without changing the first.
+//! Parameters that enter nonlinearly (a length, a stiffness, an initial value) are fitted to
+//! measured quantities of whole runs by Levenberg–Marquardt on the runs' sensitivities
+//! (`nonlinear`): `parameters` refuses their names, and the command takes them there.
 
 pub mod base;
 pub mod measured;
+pub mod nonlinear;
 pub mod parameters;
 
 use nalgebra::{DMatrix, DVector};
