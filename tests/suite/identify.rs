@@ -325,7 +325,10 @@ fn the_delta_nacelle_mass_is_identified_from_its_arms_torques() {
     let (code, efforts, stderr) = lsdc(&["-q", "inverse", program, "--set", "m_nacelle=0.0616"]);
     assert_eq!(code, 0, "{stderr}");
     let header = efforts.lines().next().expect("a header");
-    assert!(!header.contains("C1.a"), "only the arms are measured: {header}");
+    assert!(
+        !header.contains("C1.a"),
+        "only the arms are measured: {header}"
+    );
     let truth = 0.0616;
     for (noise, limit) in [(0.0, None), (0.01, Some(3.0))] {
         let data = dir.join(format!("delta-{noise}.csv"));
@@ -348,6 +351,9 @@ fn the_delta_nacelle_mass_is_identified_from_its_arms_torques() {
                 assert!(std < 0.05 * truth && std > 1e-6 * truth, "std {std}");
             }
         }
-        eprintln!("Delta nacelle mass, noise {noise}: {value} ± {std:.2e} against {truth} ({:.2} std)", error / std);
+        eprintln!(
+            "Delta nacelle mass, noise {noise}: {value} ± {std:.2e} against {truth} ({:.2} std)",
+            error / std
+        );
     }
 }
