@@ -23,6 +23,9 @@ pub enum Derivation {
     Spline,
     /// The program's law, differentiated on its expression (a position drive's path).
     Law,
+    /// The loops' closure at the measured independent coordinates (`lsdc identify` on a
+    /// mechanism with closed loops: the coordinates not measured).
+    Loops,
 }
 
 /// One imposed quantity along the file's times.

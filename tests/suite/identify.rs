@@ -312,3 +312,48 @@ fn parameters_without_effect_are_refused_by_name_or_reported() {
         "{json}"
     );
 }
+
+/// The Delta's nacelle mass (the seed's mass estimator): `lsdc inverse` on the Delta of
+/// `examples/identify_delta.lsd` with a payload (the nacelle at 0.0616 kg, where the program
+/// says 0.0416) writes its arms' angles, rates, accelerations and torques alone; `identify`
+/// closes the loops at the measured angles and projects the regressor on them. Noise-free,
+/// the payload's mass to 1e-8; with 1 % noise on each torque, within 3 deviations.
+#[test]
+fn the_delta_nacelle_mass_is_identified_from_its_arms_torques() {
+    let dir = scratch_dir("delta");
+    let program = "examples/identify_delta.lsd";
+    let (code, efforts, stderr) = lsdc(&["-q", "inverse", program, "--set", "m_nacelle=0.0616"]);
+    assert_eq!(code, 0, "{stderr}");
+    let header = efforts.lines().next().expect("a header");
+    assert!(
+        !header.contains("C1.a"),
+        "only the arms are measured: {header}"
+    );
+    let truth = 0.0616;
+    for (noise, limit) in [(0.0, None), (0.01, Some(3.0))] {
+        let data = dir.join(format!("delta-{noise}.csv"));
+        let text = match noise {
+            0.0 => efforts.clone(),
+            _ => noisy(&efforts, noise),
+        };
+        std::fs::write(&data, text).expect("writable");
+        let parameters = identified(program, &data, &["nacelle.mass"]);
+        let entry = &parameters["nacelle.mass"];
+        let value = entry["value"].as_f64().expect("a value");
+        let std = entry["std"].as_f64().expect("a std");
+        assert_eq!(entry["model"].as_f64(), Some(0.0416));
+        let error = (value - truth).abs();
+        match limit {
+            None => assert!(error <= 1e-8, "{value} against {truth}"),
+            Some(deviations) => {
+                assert!(error <= deviations * std, "{value} ± {std} against {truth}");
+                // The deviation is the noise's: a few percent of the payload at most.
+                assert!(std < 0.05 * truth && std > 1e-6 * truth, "std {std}");
+            }
+        }
+        eprintln!(
+            "Delta nacelle mass, noise {noise}: {value} ± {std:.2e} against {truth} ({:.2} std)",
+            error / std
+        );
+    }
+}

@@ -32,6 +32,7 @@ mod generated_code;
 mod golden;
 mod hard_loops;
 mod identify;
+mod identify_nonlinear;
 mod imposed_motion_studies;
 mod integrate_projection;
 mod integrator_registry;

@@ -33,7 +33,9 @@ pub struct Measured {
 }
 
 /// Reads `text` (named `file` in the errors) for `model`'s coordinates (which must all be
-/// joints' own coordinates: `identify` refuses spherical and free joints before).
+/// joints' own coordinates: `identify` refuses spherical and free joints before). With closed
+/// loops, only the coordinates whose efforts are measured need their positions: the others
+/// follow from the loops' closure (`loops`), and are left NaN here, from `Derivation::Loops`.
 pub fn read_measured(
     text: &str,
     file: &str,
@@ -69,15 +71,21 @@ pub fn read_measured(
     };
     let time = find("time").ok_or_else(|| at_header(1, "no `time` column".to_string()))?;
     let names: Vec<String> = (0..model.nv).map(|i| model.velocity_name(i)).collect();
-    let mut position_columns = Vec::new();
-    for name in &names {
-        position_columns.push(find(name).ok_or_else(|| missing(name))?);
-    }
     let measured_efforts: Vec<usize> = (model.joints.iter())
         .filter(|j| j.is_single_coordinate())
         .filter(|j| find(&drive_effort_name(&j.chain.name)).is_some())
         .map(|j| j.v_offset)
         .collect();
+    // Per coordinate, its positions' column; `None` for one the loops' closure gives.
+    let mut position_columns = Vec::new();
+    for (velocity, name) in names.iter().enumerate() {
+        let closed = model.has_loops() && !measured_efforts.contains(&velocity);
+        match (find(name), closed) {
+            (_, true) => position_columns.push(None),
+            (Some(k), false) => position_columns.push(Some(k)),
+            (None, false) => return Err(missing(name)),
+        }
+    }
     if measured_efforts.is_empty() {
         let expected: Vec<String> = (model.joints.iter())
             .filter(|j| j.is_single_coordinate())
@@ -97,8 +105,8 @@ pub fn read_measured(
     };
     // The columns read: a field elsewhere may hold anything (an empty potential energy).
     let read: Vec<usize> = std::iter::once(time)
-        .chain(position_columns.iter().copied())
-        .chain(names.iter().flat_map(|n| {
+        .chain(position_columns.iter().flatten().copied())
+        .chain((names.iter().zip(&position_columns)).filter(|(_, k)| k.is_some()).flat_map(|(n, _)| {
             [find(&format!("{n}'")), find(&format!("{n}''"))]
                 .into_iter()
                 .flatten()
@@ -152,6 +160,13 @@ pub fn read_measured(
     let mut by_coordinate = Vec::new();
     let (mut rates_from, mut accelerations_from) = (Vec::new(), Vec::new());
     for (name, &k) in names.iter().zip(&position_columns) {
+        let Some(k) = k else {
+            let unknown = vec![f64::NAN; times.len()];
+            rates_from.push(Derivation::Loops);
+            accelerations_from.push(Derivation::Loops);
+            by_coordinate.push((unknown.clone(), unknown.clone(), unknown));
+            continue;
+        };
         let positions = column(k);
         let spline = |values: &[f64], of: &str| {
             spline_derivatives(&times, values, smoothing).map_err(|why| {

@@ -13,12 +13,14 @@
 //! residual's variance σ² = |r|² / (equations − base parameters) times (WᵀW)⁻¹ (the errors
 //! taken independent, of equal variance, and the regressor exact).
 //!
-//! Parameters that enter nonlinearly would be fitted by Levenberg–Marquardt on the
-//! sensitivities of a run: the names are refused here (`parameters::NameError`), so that a
-//! second path can take them without changing the first.
+//! Parameters that enter nonlinearly (a length, a stiffness, an initial value) are fitted to
+//! measured quantities of whole runs by Levenberg–Marquardt on the runs' sensitivities
+//! (`nonlinear`): `parameters` refuses their names, and the command takes them there.
 
 pub mod base;
+pub mod loops;
 pub mod measured;
+pub mod nonlinear;
 pub mod parameters;
 
 use nalgebra::{DMatrix, DVector};
@@ -26,6 +28,7 @@ use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use self::base::{base_parameters, BaseParameters};
+use self::loops::LoopState;
 use self::measured::Measured;
 use self::parameters::{model_value, parameter_name, Asked, Parameter};
 use crate::dynamics::algorithms::regressor::{regressor, PARAMETERS_PER_BODY};
@@ -175,14 +178,9 @@ fn quoted(names: &[String]) -> String {
     quoted.join(", ")
 }
 
-/// Refuses what the regressor does not cover: loops, contacts, spherical and free joints.
+/// Refuses what the regressor does not cover: contacts, spherical and free joints (closed
+/// loops are projected on the measured coordinates, `loops`).
 pub fn check_supported(model: &Model, mechanism: &Mechanism) -> Result<(), IdentifyError> {
-    if let Some(link) = model.loops.first() {
-        return Err(IdentifyError::Unsupported {
-            what: format!("`{}` closes a loop: `identify` builds the regressor of a tree's inverse dynamics, not yet in the independent coordinates of closed loops", link.name),
-            span: mechanism.join(link.join).span,
-        });
-    }
     if let Some(contact) = mechanism.contacts.first() {
         return Err(IdentifyError::Unsupported {
             what: "the mechanism has contacts: `identify` builds the regressor of a tree's inverse dynamics without contacts".to_string(),
@@ -273,6 +271,80 @@ pub fn structural_base(
     Ok(base_parameters(&w))
 }
 
+/// The equations of every sample: per measured effort, the asked parameters' columns (`w`)
+/// and the effort less the prediction of the parameters not asked (`y`); on a mechanism with
+/// closed loops, projected on the measured coordinates (`loops`).
+fn sample_equations(
+    prepared: &Prepared,
+    measured: &Measured,
+    asked: &[Parameter],
+) -> Result<(DMatrix<f64>, DVector<f64>), IdentifyError> {
+    let model = &prepared.model;
+    let rows = &measured.measured_efforts;
+    let samples = measured.times.len();
+    let equations = samples * rows.len();
+    let program_values: Vec<f64> = asked.iter().map(|&p| model_value(model, p)).collect();
+    let mut system = MechanicalSystem::new(model, prepared.coordinates.clone(), Stabilisation::None);
+    let mut closure = match model.has_loops() {
+        true => {
+            let (q, _) = model
+                .state_from_declared(&prepared.coordinates, &prepared.rates)
+                .map_err(|e| IdentifyError::Evaluation {
+                    time: 0.0,
+                    why: SystemError::from(e).to_string(),
+                })?;
+            Some(LoopState::new(model, &q, rows))
+        }
+        false => None,
+    };
+    let mut loop_data = Data::new(model);
+    let mut w = DMatrix::zeros(equations, asked.len());
+    let mut y = DVector::zeros(equations);
+    for s in 0..samples {
+        let time = measured.times[s];
+        let failed = |why: String| IdentifyError::Evaluation { time, why };
+        let measured_state = (
+            measured.positions[s].as_slice(),
+            measured.rates[s].as_slice(),
+            measured.accelerations[s].as_slice(),
+        );
+        let closed = match closure.as_mut() {
+            Some(closure) => Some(closure.close(model, &mut loop_data, measured_state).map_err(failed)?),
+            None => None,
+        };
+        let (q, v, a) = match &closed {
+            Some(c) => (c.q.as_slice(), c.v.as_slice(), c.a.as_slice()),
+            None => measured_state,
+        };
+        let efforts = system.efforts(time, q, v).map_err(|e| failed(e.to_string()))?;
+        let data = &mut system.scratch.data;
+        let (q, v, a) = (&q[..model.nq], &v[..model.nv], &a[..model.nv]);
+        let mut predicted =
+            rnea(model, data, q, v, a, &efforts.external)
+            .map_err(|e| failed(SystemError::from(e).to_string()))?;
+        predicted -= efforts.tau.rows(0, model.nv);
+        for friction in &model.frictions {
+            let rate = v[friction.velocity];
+            predicted[friction.velocity] += friction.viscous * rate + friction.dry * sign(rate);
+        }
+        let mut columns = asked_columns(model, data, (q, v, a), asked).map_err(failed)?;
+        predicted -= &columns * DVector::from_column_slice(&program_values);
+        // On the measured coordinates: Xᵀ of the tree's efforts, or the measured rows.
+        if let Some(c) = &closed {
+            let tree = c.motions.rows(0, model.nv).transpose();
+            columns = &tree * columns;
+            predicted = &tree * predicted;
+        }
+        for (r, &velocity) in rows.iter().enumerate() {
+            let row = s * rows.len() + r;
+            let own = if closed.is_some() { r } else { velocity };
+            w.set_row(row, &columns.row(own));
+            y[row] = measured.efforts[s][r] - predicted[own];
+        }
+    }
+    Ok((w, y))
+}
+
 /// Identifies the parameters `asked` of `prepared` from `measured` (see the module's
 /// documentation).
 pub fn identify(
@@ -282,28 +354,32 @@ pub fn identify(
 ) -> Result<Identification, IdentifyError> {
     let model = &prepared.model;
     let rows = &measured.measured_efforts;
-    let refused: Vec<String> = (asked.parameters.iter().zip(&asked.explicit))
-        .filter(|(_, &explicit)| explicit)
-        .map(|(&p, _)| p)
-        .collect::<Vec<Parameter>>()
-        .iter()
-        .filter(|&&p| {
-            structural_base(model, &[p], rows).is_ok_and(|b| !b.without_effect.is_empty())
-        })
-        .map(|&p| parameter_name(model, p))
-        .collect();
+    let all = &asked.parameters;
+    let samples = measured.times.len();
+    let equations = samples * rows.len();
+    let (w_all, y) = sample_equations(prepared, measured, all)?;
+    // A tree's base parameters are structural, found at random states; the states of a
+    // mechanism with closed loops must close them: its base parameters are the data's.
+    let base_of = |columns: &[Parameter], w: DMatrix<f64>| match model.has_loops() {
+        true => Ok(base_parameters(&w)),
+        false => structural_base(model, columns, rows),
+    };
+    let mut refused = Vec::new();
+    for (k, (&p, &explicit)) in all.iter().zip(&asked.explicit).enumerate() {
+        let alone = base_of(&[p], w_all.columns(k, 1).into_owned());
+        if explicit && alone.is_ok_and(|b| !b.without_effect.is_empty()) {
+            refused.push(parameter_name(model, p));
+        }
+    }
     if !refused.is_empty() {
         return Err(IdentifyError::WithoutEffect(refused));
     }
-    let all = &asked.parameters;
-    let base = structural_base(model, all, rows)
+    let base = base_of(all, w_all.clone())
         .map_err(|why| IdentifyError::Evaluation { time: 0.0, why })?;
     let without_effect: Vec<String> = (base.without_effect.iter())
         .map(|&k| parameter_name(model, all[k]))
         .collect();
     let asked = all.as_slice();
-    let samples = measured.times.len();
-    let equations = samples * rows.len();
     let count = base.independent.len();
     if equations <= count {
         return Err(IdentifyError::TooFewSamples {
@@ -313,37 +389,7 @@ pub fn identify(
         });
     }
     let program_values: Vec<f64> = asked.iter().map(|&p| model_value(model, p)).collect();
-    let mut system = MechanicalSystem::new(model, prepared.coordinates.clone(), Stabilisation::None);
-    let mut w = DMatrix::zeros(equations, count);
-    let mut y = DVector::zeros(equations);
-    for s in 0..samples {
-        let time = measured.times[s];
-        let failed = |why: String| IdentifyError::Evaluation { time, why };
-        let (q, v, a) = (
-            &measured.positions[s],
-            &measured.rates[s],
-            &measured.accelerations[s],
-        );
-        let efforts = system.efforts(time, q, v).map_err(|e| failed(e.to_string()))?;
-        let data = &mut system.scratch.data;
-        let mut predicted =
-            rnea(model, data, q, v, a, &efforts.external)
-            .map_err(|e| failed(SystemError::from(e).to_string()))?;
-        predicted -= efforts.tau.rows(0, model.nv);
-        for friction in &model.frictions {
-            let rate = v[friction.velocity];
-            predicted[friction.velocity] += friction.viscous * rate + friction.dry * sign(rate);
-        }
-        let columns = asked_columns(model, data, (q, v, a), asked).map_err(failed)?;
-        let asked_part = &columns * DVector::from_column_slice(&program_values);
-        for (r, &velocity) in rows.iter().enumerate() {
-            let row = s * rows.len() + r;
-            for (k, &column) in base.independent.iter().enumerate() {
-                w[(row, k)] = columns[(velocity, column)];
-            }
-            y[row] = measured.efforts[s][r] - (predicted[velocity] - asked_part[velocity]);
-        }
-    }
+    let w = w_all.select_columns(&base.independent);
     let (estimates, condition, residual) = weighted_least_squares(&w, &y, rows.len())?;
     let name = |k: usize| parameter_name(model, asked[k]);
     let mut reported = Vec::with_capacity(count);

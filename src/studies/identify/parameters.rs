@@ -5,7 +5,7 @@
 //! the dry force or torque F_c, and `elbow.damping`, the viscous coefficient c, as the link's
 //! fields; `elbow` alone for both). All enter inverse dynamics linearly. What enters it otherwise (a length, a centre of
 //! mass, principal moments and their frame, an unknown of the program) is refused here: its
-//! fit is nonlinear.
+//! fit is nonlinear (`identify::nonlinear`, on the runs' sensitivities).
 
 use serde::Serialize;
 
@@ -59,7 +59,7 @@ impl std::fmt::Display for NameError {
                 }
             }
             NameError::NonlinearBody { name, body } => write!(f, "`--parameters {name}`: the centre of mass, the principal moments and their frame enter the dynamics nonlinearly; identify `{body}` (its mass, first moments `{body}.mx` … and inertia `{body}.Ixx` … about its frame's origin, which enter linearly, and from which they follow)"),
-            NameError::ProgramUnknown { name, .. } => write!(f, "`--parameters {name}`: `{name}` is an unknown of the program, which may enter the dynamics nonlinearly (a length, an angle); `identify` fits the parameters that enter linearly (bodies' inertial parameters, joints' friction); a nonlinear fit (Levenberg–Marquardt on the sensitivities of a run) is not available yet"),
+            NameError::ProgramUnknown { name, .. } => write!(f, "`--parameters {name}`: `{name}` is an unknown of the program, which may enter the dynamics nonlinearly (a length, an angle); `identify` fits the parameters that enter linearly (bodies' inertial parameters, joints' friction); it is fitted to measured motion by the nonlinear fit (`identify::nonlinear`), apart from these"),
             NameError::NotOneCoordinate { name, join } => write!(f, "`--parameters {name}`: `{join}` does not have one coordinate: friction is identified on revolute and prismatic joints"),
         }
     }

@@ -142,6 +142,19 @@ pub fn sensitivities(
     changes: &SettingsChanges,
     names: &[String],
 ) -> Result<Sensitivities, SensitivityError> {
+    sensitivities_at(mechanism, overrides, changes, names, None)
+}
+
+/// [`sensitivities`] at the output times `times` (increasing, from 0 on) when given, instead
+/// of the settings' grid: the run then ends at the last of them (`lsdc identify` compares the
+/// run with measurements at the measurements' times).
+pub fn sensitivities_at(
+    mechanism: &Mechanism,
+    overrides: &[Override],
+    changes: &SettingsChanges,
+    names: &[String],
+    times: Option<&[f64]>,
+) -> Result<Sensitivities, SensitivityError> {
     let mut parameters = parameters::resolve(mechanism, overrides, names)?;
     let prepare_with = |overrides: &[Override]| -> Result<Prepared, SensitivityError> {
         let mut prepared = prepare(mechanism, overrides, &Settings::default())?;
@@ -190,14 +203,20 @@ pub fn sensitivities(
         max_steps: settings.max_steps,
         ..IntegratorSettings::default()
     };
-    let outputs = output_times(settings.duration, settings.output);
+    let (outputs, duration) = match times {
+        Some(times) => (times.to_vec(), times.last().copied().unwrap_or(0.0)),
+        None => (
+            output_times(settings.duration, settings.output),
+            settings.duration,
+        ),
+    };
     let cpu_started = thread_cpu_seconds();
     let integrated = integrate(
         &method,
         &mut system,
         0.0,
         &start,
-        settings.duration,
+        duration,
         &outputs,
         &integrator_settings,
         &mut |_, _| Ok(()),
