@@ -416,6 +416,31 @@ pub fn aba_after_kinematics(
     external: &[Force],
     accelerations: &mut DVector<f64>,
 ) -> Result<(), DynamicsError> {
+    aba_body_terms(model, data, external);
+    for &k in model.dynamic_joints.iter().rev() {
+        let joint = &model.joints[k];
+        match rotor_of(data, k) {
+            Some(r) => data.aba_rotor_step(model, k, r, tau[joint.v_offset])?,
+            None => aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?,
+        }
+    }
+    let base = base_acceleration(model);
+    for &k in &model.dynamic_joints {
+        aba_forward_step(
+            model,
+            data,
+            k,
+            &base,
+            accelerations,
+            JointAcceleration::Solved,
+        );
+    }
+    Ok(())
+}
+
+/// ABA's first pass: each body's own inertia as its articulated inertia, and its bias force
+/// (the velocity product v ×* I v less the external force), before the backward pass.
+fn aba_body_terms(model: &Model, data: &mut Data, external: &[Force]) {
     for &k in &model.dynamic_joints {
         let i = model.joints[k].child;
         let body = &model.dynamic_bodies[i - 1];
@@ -427,26 +452,39 @@ pub fn aba_after_kinematics(
                 - external[i]
         };
     }
-    for &k in model.dynamic_joints.iter().rev() {
-        let joint = &model.joints[k];
-        match rotor_of(data, k) {
-            Some(r) => data.aba_rotor_step(model, k, r, tau[joint.v_offset])?,
-            None => aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?,
-        }
-    }
-    let base = base_acceleration(model);
-    for &k in &model.dynamic_joints {
-        let joint = &model.joints[k];
-        let (i, parent) = (joint.child, joint.dynamic_parent);
-        let state = &data.states[k];
-        let n = joint.nv();
-        let parent_acceleration = if parent == 0 {
-            &base
-        } else {
-            &data.acceleration[parent]
-        };
-        let a = state.transform.motion_to_child(parent_acceleration) + data.coriolis[i];
-        // q̈ = D⁻¹ (u − Uᵀ a)
+}
+
+/// Whether ABA's forward pass solves a joint's accelerations or reads them as given (hybrid
+/// dynamics, `hybrid.rs`).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum JointAcceleration {
+    Solved,
+    Known,
+}
+
+/// One joint of ABA's forward pass: the child's acceleration from its parent's, with the
+/// joint's q̈ = D⁻¹ (u − Uᵀ a) written into `accelerations` (the rotor's term included), or,
+/// for a `Known` joint, read from it.
+fn aba_forward_step(
+    model: &Model,
+    data: &mut Data,
+    k: usize,
+    base: &Motion,
+    accelerations: &mut DVector<f64>,
+    joint_acceleration: JointAcceleration,
+) {
+    let joint = &model.joints[k];
+    let (i, parent) = (joint.child, joint.dynamic_parent);
+    let state = &data.states[k];
+    let n = joint.nv();
+    let parent_acceleration = if parent == 0 {
+        base
+    } else {
+        &data.acceleration[parent]
+    };
+    let a = state.transform.motion_to_child(parent_acceleration) + data.coriolis[i];
+    let out = &mut accelerations.as_mut_slice()[joint.v_offset..joint.v_offset + n];
+    if joint_acceleration == JointAcceleration::Solved {
         let mut rhs = Vector6::zeros();
         for c in 0..n {
             rhs[c] = data.u_vector[i][c] - data.u[i][c].dot(&a);
@@ -454,13 +492,11 @@ pub fn aba_after_kinematics(
         if let Some(r) = rotor_of(data, k) {
             rhs[0] -= data.rotor_acceleration_term(model, k, r, parent_acceleration, &a);
         }
-        let out = &mut accelerations.as_mut_slice()[joint.v_offset..joint.v_offset + n];
         for (r, o) in out.iter_mut().enumerate() {
             *o = (0..n).map(|c| data.d_inverse[i][(r, c)] * rhs[c]).sum();
         }
-        data.acceleration[i] = a + state.subspace.apply(out);
     }
-    Ok(())
+    data.acceleration[i] = a + state.subspace.apply(out);
 }
 
 /// One joint of ABA's backward pass: U, D⁻¹ and u, then the articulated inertia and bias

@@ -10,7 +10,10 @@
 
 use nalgebra::DVector;
 
-use super::{aba_backward_step, base_acceleration, joint_motions, slice, Data, DynamicsError};
+use super::{
+    aba_backward_step, aba_body_terms, aba_forward_step, base_acceleration, joint_motions, slice,
+    Data, DynamicsError, JointAcceleration,
+};
 use crate::dynamics::model::Model;
 use crate::spatial::{Force, Motion};
 
@@ -67,17 +70,7 @@ fn hybrid(
     base: Motion,
     accelerations: &mut DVector<f64>,
 ) -> Result<(), DynamicsError> {
-    for &k in &model.dynamic_joints {
-        let i = model.joints[k].child;
-        let body = &model.dynamic_bodies[i - 1];
-        data.articulated[i] = body.inertia;
-        data.bias[i] = if body.massless {
-            -external[i]
-        } else {
-            crate::spatial::cross_force(&data.velocity[i], &(body.inertia * data.velocity[i]))
-                - external[i]
-        };
-    }
+    aba_body_terms(model, data, external);
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         if !known[k] {
@@ -98,28 +91,12 @@ fn hybrid(
         }
     }
     for &k in &model.dynamic_joints {
-        let joint = &model.joints[k];
-        let (i, parent) = (joint.child, joint.dynamic_parent);
-        let state = &data.states[k];
-        let n = joint.nv();
-        let parent_acceleration = if parent == 0 {
-            &base
+        let joint_acceleration = if known[k] {
+            JointAcceleration::Known
         } else {
-            &data.acceleration[parent]
+            JointAcceleration::Solved
         };
-        let a = state.transform.motion_to_child(parent_acceleration) + data.coriolis[i];
-        let out = &mut accelerations.as_mut_slice()[joint.v_offset..joint.v_offset + n];
-        if !known[k] {
-            // q̈ = D⁻¹ (u − Uᵀ a), as `aba_after_kinematics`.
-            let mut rhs = [0.0; 6];
-            for (c, r) in rhs.iter_mut().enumerate().take(n) {
-                *r = data.u_vector[i][c] - data.u[i][c].dot(&a);
-            }
-            for (r, o) in out.iter_mut().enumerate() {
-                *o = (0..n).map(|c| data.d_inverse[i][(r, c)] * rhs[c]).sum();
-            }
-        }
-        data.acceleration[i] = a + state.subspace.apply(out);
+        aba_forward_step(model, data, k, &base, accelerations, joint_acceleration);
     }
     Ok(())
 }
