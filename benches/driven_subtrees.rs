@@ -10,8 +10,7 @@
 //! rounds (of each round's median batch for a right-hand side).
 
 mod common;
-use common::{cpu_time_per_call, thread_cpu_seconds};
-use std::hint::black_box;
+use common::{best, initial_state, median, rhs_cpu_time, run_cpu_seconds};
 
 use lsdc::api::{Program, SettingsChanges};
 use lsdc::load::LoadOptions;
@@ -72,39 +71,11 @@ fn prepared(links: usize, keep_rows: bool) -> Prepared {
 }
 
 fn time_rhs(prepared: &Prepared) -> (f64, f64) {
-    let model = &prepared.model;
-    let (q, v) = model
-        .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .expect("initial state");
-    let mut y = q;
-    y.extend_from_slice(&v);
     let reference = prepared.coordinates.clone();
-    let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
+    let settings = prepared.settings.stabilisation;
+    let mut system = MechanicalSystem::new(&prepared.model, reference, settings);
     system.use_driven_subtrees(prepared.driven_subtrees());
-    let mut dydt = vec![0.0; y.len()];
-    cpu_time_per_call(|| {
-        system
-            .derivative(0.1, black_box(&y), &mut dydt)
-            .expect("evaluates");
-    })
-}
-
-fn time_run(prepared: &Prepared) -> f64 {
-    let start = thread_cpu_seconds();
-    let simulation = lsdc::api::run(prepared, &mut |s| {
-        black_box(s);
-    });
-    assert!(simulation.report.failure.is_none());
-    thread_cpu_seconds() - start
-}
-
-fn middle(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
-}
-
-fn best(values: &[f64]) -> f64 {
-    values.iter().copied().fold(f64::INFINITY, f64::min)
+    rhs_cpu_time(&mut system, &initial_state(prepared))
 }
 
 fn main() {
@@ -125,24 +96,24 @@ fn main() {
                 let (b, m) = time_rhs(prepared);
                 rhs_best[f].push(b * 1e6);
                 rhs_median[f].push(m * 1e6);
-                runs[f].push(time_run(prepared) * 1e3);
+                runs[f].push(run_cpu_seconds(prepared) * 1e3);
             }
         }
         for (f, name) in ["kinematics (hybrid)", "drives as rows"].iter().enumerate() {
             println!(
                 "| {links} | {name} | {:.3} | {:.3} | {:.2} | {:.2} |",
                 best(&rhs_best[f]),
-                middle(rhs_median[f].clone()),
+                median(rhs_median[f].clone()),
                 best(&runs[f]),
-                middle(runs[f].clone())
+                median(runs[f].clone())
             );
         }
         ratios.push((
             links,
             best(&rhs_best[1]) / best(&rhs_best[0]),
-            middle(rhs_median[1].clone()) / middle(rhs_median[0].clone()),
+            median(rhs_median[1].clone()) / median(rhs_median[0].clone()),
             best(&runs[1]) / best(&runs[0]),
-            middle(runs[1].clone()) / middle(runs[0].clone()),
+            median(runs[1].clone()) / median(runs[0].clone()),
         ));
     }
     println!();

@@ -9,8 +9,7 @@
 //! median batch for a right-hand side). The ratios are the result.
 
 mod common;
-use common::{cpu_time_per_call, thread_cpu_seconds};
-use std::hint::black_box;
+use common::{best, initial_state, median, rhs_cpu_time, run_cpu_seconds};
 
 use lsdc::api::{Program, SettingsChanges};
 use lsdc::load::LoadOptions;
@@ -70,47 +69,24 @@ struct Timing {
 impl Timing {
     /// The best right-hand side and run over the rounds.
     fn best(&self) -> (f64, f64) {
-        let rhs = self.rhs.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
-        (rhs, self.run.iter().copied().fold(f64::INFINITY, f64::min))
+        let rhs: Vec<f64> = self.rhs.iter().map(|t| t.0).collect();
+        (best(&rhs), best(&self.run))
     }
 
     /// The median over the rounds of a right-hand side's median batch, and of a run.
     fn median(&self) -> (f64, f64) {
-        let middle = |mut values: Vec<f64>| {
-            values.sort_by(f64::total_cmp);
-            values[values.len() / 2]
-        };
         (
-            middle(self.rhs.iter().map(|t| t.1).collect()),
-            middle(self.run.clone()),
+            median(self.rhs.iter().map(|t| t.1).collect()),
+            median(self.run.clone()),
         )
     }
 }
 
 fn time_rhs(prepared: &Prepared) -> (f64, f64) {
-    let model = &prepared.model;
-    let (q, v) = model
-        .state_from_declared(&prepared.coordinates, &prepared.rates)
-        .expect("initial state");
-    let mut y = q;
-    y.extend_from_slice(&v);
     let reference = prepared.coordinates.clone();
-    let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
-    let mut dydt = vec![0.0; y.len()];
-    cpu_time_per_call(|| {
-        system
-            .derivative(0.1, black_box(&y), &mut dydt)
-            .expect("evaluates");
-    })
-}
-
-fn time_run(prepared: &Prepared) -> f64 {
-    let start = thread_cpu_seconds();
-    let simulation = lsdc::api::run(prepared, &mut |s| {
-        black_box(s);
-    });
-    assert!(simulation.report.failure.is_none());
-    thread_cpu_seconds() - start
+    let settings = prepared.settings.stabilisation;
+    let mut system = MechanicalSystem::new(&prepared.model, reference, settings);
+    rhs_cpu_time(&mut system, &initial_state(prepared))
 }
 
 fn main() {
@@ -126,7 +102,7 @@ fn main() {
         for ((_, prepared), timing) in programs.iter().zip(&mut timings) {
             let rhs = time_rhs(prepared);
             timing.rhs.push((rhs.0 * 1e6, rhs.1 * 1e6));
-            timing.run.push(time_run(prepared) * 1e3);
+            timing.run.push(run_cpu_seconds(prepared) * 1e3);
         }
     }
     println!(

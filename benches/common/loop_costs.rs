@@ -10,11 +10,8 @@ use lsdc::prepare::Prepared;
 use lsdc::simulate::system::MechanicalSystem;
 use lsdc::spatial::Force;
 
-#[allow(dead_code)] // the loops benchmark takes medians of runs, the scaling one does not
-pub fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
-}
+#[allow(unused_imports)] // the loops benchmark takes medians of runs, the scaling one does not
+pub use crate::common::median;
 
 /// CPU time of one call of `f` (this thread's clock, so that the time the shared machine gives
 /// to others is left out): the best of 7 batches of about 20 ms, the batch least disturbed.

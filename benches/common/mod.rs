@@ -6,6 +6,7 @@ use lsdc::driver::compile_files;
 use lsdc::dynamics::model::Model;
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Prepared, Settings};
+use lsdc::simulate::system::MechanicalSystem;
 
 #[allow(dead_code)] // each benchmark uses the timer it needs
 /// Best time per call, in seconds, over 7 batches sized to about 20 ms each: the minimum is the
@@ -88,6 +89,51 @@ pub fn cpu_time_per_call(mut f: impl FnMut()) -> (f64, f64) {
         .collect();
     times.sort_by(f64::total_cmp);
     (times[0], times[times.len() / 2])
+}
+
+#[allow(dead_code)]
+/// The median of `values` (the upper one of an even count).
+pub fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+#[allow(dead_code)]
+/// The smallest of `values`.
+pub fn best(values: &[f64]) -> f64 {
+    values.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+#[allow(dead_code)]
+/// The state `(q, v)` of `prepared`'s initial positions and rates, as the integrators hold it.
+pub fn initial_state(prepared: &Prepared) -> Vec<f64> {
+    let (mut y, v) = (prepared.model)
+        .state_from_declared(&prepared.coordinates, &prepared.rates)
+        .expect("initial state");
+    y.extend_from_slice(&v);
+    y
+}
+
+#[allow(dead_code)]
+/// The right-hand side of `system` at `y` (t = 0.1), timed by `cpu_time_per_call`.
+pub fn rhs_cpu_time(system: &mut MechanicalSystem<'_>, y: &[f64]) -> (f64, f64) {
+    let mut dydt = vec![0.0; y.len()];
+    cpu_time_per_call(|| {
+        system
+            .derivative(0.1, std::hint::black_box(y), &mut dydt)
+            .expect("evaluates");
+    })
+}
+
+#[allow(dead_code)]
+/// The thread CPU time of a whole run of `prepared`, its samples dropped.
+pub fn run_cpu_seconds(prepared: &Prepared) -> f64 {
+    let start = thread_cpu_seconds();
+    let simulation = lsdc::api::run(prepared, &mut |s| {
+        std::hint::black_box(s);
+    });
+    assert!(simulation.report.failure.is_none());
+    thread_cpu_seconds() - start
 }
 
 #[allow(dead_code)]

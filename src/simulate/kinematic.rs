@@ -112,29 +112,14 @@ pub(super) fn run(
     }
     let cpu_seconds = cpu_start.zip(thread_cpu_seconds()).map(|(a, b)| b - a);
     let report = Report {
-        integrator: ASSEMBLY.to_string(),
-        planar: false,
-        duration: prepared.settings.duration,
         steps: assemblies,
-        rejected_steps: 0,
         function_evaluations: evaluations,
-        stiff_steps: None,
-        method_switches: None,
         cpu_seconds,
         wall_seconds: wall_start.elapsed().as_secs_f64(),
-        energy_drift: None,
-        energy_balance: None,
-        final_energies: None,
-        momentum_drift: None,
-        constraints: None,
-        step_error: None,
-        stiffness: None,
-        impacts: Vec::new(),
-        friction_switches: Vec::new(),
-        sampling: None,
         failure,
         model: prepared.scene.clone(),
         interrupted,
+        ..Report::empty(ASSEMBLY, prepared.settings.duration)
     };
     (samples, report)
 }

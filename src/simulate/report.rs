@@ -179,6 +179,37 @@ pub(super) fn fastest_coordinate(names: &[String], last: Option<&Sample>) -> Str
 }
 
 impl Report {
+    /// The report of a run of `duration` that took no step and found nothing yet: what a run
+    /// that failed before its first step reports, and the start of the report of a run without
+    /// an integrator (a kinematic scene's assembly at each output).
+    pub fn empty(integrator: &str, duration: f64) -> Report {
+        Report {
+            integrator: integrator.to_string(),
+            planar: false,
+            duration,
+            steps: 0,
+            rejected_steps: 0,
+            function_evaluations: 0,
+            stiff_steps: None,
+            method_switches: None,
+            cpu_seconds: Some(0.0),
+            wall_seconds: 0.0,
+            energy_drift: None,
+            energy_balance: None,
+            final_energies: None,
+            momentum_drift: None,
+            constraints: None,
+            step_error: None,
+            stiffness: None,
+            impacts: Vec::new(),
+            friction_switches: Vec::new(),
+            sampling: None,
+            failure: None,
+            model: None,
+            interrupted: None,
+        }
+    }
+
     /// The warnings the run found, in this order: steps held by stability (W0901), fixed steps
     /// too long for their tolerances (W0902), outputs inside a singular passage (W0903).
     pub fn warnings(&self) -> Vec<Diagnostic> {

@@ -177,29 +177,9 @@ fn reaction_names(model: &Model) -> Vec<String> {
 
 fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
     let report = Report {
-        integrator: prepared.settings.integrator.name().to_string(),
-        planar: false,
-        duration: prepared.settings.duration,
-        steps: 0,
-        rejected_steps: 0,
-        function_evaluations: 0,
-        stiff_steps: None,
-        method_switches: None,
-        cpu_seconds: Some(0.0),
-        wall_seconds: 0.0,
-        energy_drift: None,
-        energy_balance: None,
-        final_energies: None,
-        momentum_drift: None,
-        constraints: None,
-        step_error: None,
-        stiffness: None,
-        impacts: Vec::new(),
-        friction_switches: Vec::new(),
-        sampling: None,
         failure: Some(RunFailure { time: 0.0, message }),
         model: prepared.scene.clone(),
-        interrupted: None,
+        ..Report::empty(prepared.settings.integrator.name(), prepared.settings.duration)
     };
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),

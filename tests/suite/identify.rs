@@ -7,38 +7,12 @@
 //! effort's rms, every estimate lies within 3 of its standard deviations of the program's value.
 //! Bad input: golden files `tests/golden/commands/identify_*`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::Value;
 
-use crate::common::lsdc;
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lsdc-identify-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("a temporary directory");
-    dir
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().expect("a path")
-}
-
-/// Gaussian numbers of a fixed seed (xorshift64*, Box–Muller).
-struct Gaussian(u64);
-
-impl Gaussian {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    fn next(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
+use crate::common::noise::Gaussian;
+use crate::common::{lsdc, path_text as path, scratch_dir};
 
 /// The CSV `text` with each effort column (`*.drive_effort`) changed by `change(column name,
 /// row's fields by name, effort)`.
@@ -163,7 +137,7 @@ const ARM_PARAMETERS: [&str; 4] = ["upper.Izz", "fore", "shoulder", "elbow"];
 
 #[test]
 fn the_two_link_arm_is_identified_exactly_from_noise_free_data() {
-    let dir = scratch_dir("arm");
+    let dir = scratch_dir("identify-arm");
     let data = dir.join("arm.csv");
     std::fs::write(&data, arm_data(&dir)).expect("writable");
     let parameters = identified("examples/identify_arm.lsd", &data, &ARM_PARAMETERS);
@@ -179,7 +153,7 @@ fn the_two_link_arm_is_identified_exactly_from_noise_free_data() {
 
 #[test]
 fn the_two_link_arm_is_identified_within_three_deviations_from_noisy_data() {
-    let dir = scratch_dir("arm-noisy");
+    let dir = scratch_dir("identify-arm-noisy");
     let data = dir.join("arm.csv");
     std::fs::write(&data, noisy(&arm_data(&dir), 0.01)).expect("writable");
     let parameters = identified("examples/identify_arm.lsd", &data, &ARM_PARAMETERS);
@@ -245,7 +219,7 @@ fn ur5_data(dir: &Path) -> String {
 
 #[test]
 fn the_ur5_is_identified_exactly_from_noise_free_data_and_within_three_deviations_with_noise() {
-    let dir = scratch_dir("ur5");
+    let dir = scratch_dir("identify-ur5");
     let efforts = ur5_data(&dir);
     let urdf = "tests/fixtures/urdf/ur5.urdf";
     let data = dir.join("ur5.csv");
@@ -269,7 +243,7 @@ fn the_ur5_is_identified_exactly_from_noise_free_data_and_within_three_deviation
 /// its frame's origin: only its inertia about that axis acts on the measured efforts.
 #[test]
 fn parameters_without_effect_are_refused_by_name_or_reported() {
-    let dir = scratch_dir("refusal");
+    let dir = scratch_dir("identify-refusal");
     let data = dir.join("arm.csv");
     std::fs::write(&data, arm_data(&dir)).expect("writable");
     let program = "examples/identify_arm.lsd";
@@ -320,7 +294,7 @@ fn parameters_without_effect_are_refused_by_name_or_reported() {
 /// the payload's mass to 1e-8; with 1 % noise on each torque, within 3 deviations.
 #[test]
 fn the_delta_nacelle_mass_is_identified_from_its_arms_torques() {
-    let dir = scratch_dir("delta");
+    let dir = scratch_dir("identify-delta");
     let program = "examples/identify_delta.lsd";
     let (code, efforts, stderr) = lsdc(&["-q", "inverse", program, "--set", "m_nacelle=0.0616"]);
     assert_eq!(code, 0, "{stderr}");

@@ -7,41 +7,12 @@
 //! deviations the fit reports. Parameters that act only together are refused by name (golden
 //! file `tests/golden/commands/identify_unidentifiable`).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::Value;
 
-use crate::common::lsdc;
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "lsdc-identify-nonlinear-{name}-{}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).expect("a temporary directory");
-    dir
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().expect("a path")
-}
-
-/// Gaussian numbers of a fixed seed (xorshift64*, Box–Muller).
-struct Gaussian(u64);
-
-impl Gaussian {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    fn next(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
+use crate::common::noise::Gaussian;
+use crate::common::{lsdc, path_text as path, scratch_dir};
 
 /// `lsdc simulate` of `program` with `sets`, at a tolerance of 1e-12: the columns `time` and
 /// `measured`, with Gaussian noise of `noise` times the measured column's rms.
@@ -120,7 +91,7 @@ const PENDULUM_VALUES: [(&str, f64); 2] = [("L", 0.8), ("c", 0.05)];
 
 #[test]
 fn the_pendulum_length_and_damping_are_recovered_exactly_from_noise_free_angles() {
-    let dir = scratch_dir("pendulum");
+    let dir = scratch_dir("identify-nonlinear-pendulum");
     let data = dir.join("swing.csv");
     measured(PENDULUM, &["L=0.8", "c=0.05"], "swing.q", 0.0, &data);
     let found = identified(PENDULUM, &data, &["L", "c"], &[]);
@@ -133,7 +104,7 @@ fn the_pendulum_length_and_damping_are_recovered_exactly_from_noise_free_angles(
 
 #[test]
 fn the_pendulum_length_and_damping_are_recovered_within_three_deviations_from_noisy_angles() {
-    let dir = scratch_dir("pendulum-noisy");
+    let dir = scratch_dir("identify-nonlinear-pendulum-noisy");
     let data = dir.join("swing.csv");
     measured(PENDULUM, &["L=0.8", "c=0.05"], "swing.q", 0.01, &data);
     let found = identified(PENDULUM, &data, &["L", "c"], &[]);
@@ -159,7 +130,7 @@ fn the_pendulum_length_and_damping_are_recovered_within_three_deviations_from_no
 #[test]
 fn a_spring_stiffness_and_an_initial_rate_are_recovered_exactly() {
     let program = "tests/golden/commands/identify_spring.lsd";
-    let dir = scratch_dir("spring");
+    let dir = scratch_dir("identify-nonlinear-spring");
     let text = std::fs::read_to_string(program).expect("the program");
     let truth = text.replace("slide.q' = -0.2", "slide.q' = -0.5");
     assert_ne!(truth, text, "the program's initial rate moved");

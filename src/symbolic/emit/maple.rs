@@ -5,12 +5,11 @@
 //! written `_dot` (`hinge.x'` is `hinge_x_dot`); a name Maple protects (`D`, `I`, `Pi`, …) takes
 //! a trailing `_`.
 
-use std::collections::HashSet;
 use std::fmt::Write;
 
 use super::shared::{
-    nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax, Precedence, Printer,
-    Role, Symbols,
+    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role,
+    ScriptNames, Symbols,
 };
 use crate::symbolic::expr::{ExprId, Function};
 use crate::symbolic::lower::Variable;
@@ -23,62 +22,6 @@ const RESERVED: [&str; 36] = [
     "and", "or", "not", "xor", "implies", "in", "to", "by", "do", "od", "if", "fi", "then", "else",
     "end", "local", "global", "M", "S", "F", "Delta", "Delta_bias", "accelerations", "t",
 ];
-
-/// The Maple name of every variable.
-struct MapleNames {
-    positions: Vec<String>,
-    rates: Vec<String>,
-    parameters: Vec<String>,
-    functions: Vec<(String, String)>,
-    temporary_prefix: String,
-}
-
-impl MapleNames {
-    fn new(equations: &Equations) -> MapleNames {
-        let v = &equations.variables;
-        let mut taken: HashSet<String> = RESERVED.iter().map(|s| s.to_string()).collect();
-        let mut unique = |name: &str| {
-            let mut candidate = maple_name(name);
-            while taken.contains(&candidate) {
-                candidate.push('_');
-            }
-            taken.insert(candidate.clone());
-            candidate
-        };
-        let mut names =
-            |list: &[Variable]| list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>();
-        let (positions, rates, parameters) =
-            (names(&v.positions), names(&v.rates), names(&v.parameters));
-        let mut functions: Vec<(String, String)> = Vec::new();
-        for f in &v.functions {
-            if !functions.iter().any(|(name, _)| *name == f.name) {
-                functions.push((f.name.clone(), unique(&f.name)));
-            }
-        }
-        let every: Vec<String> = positions
-            .iter()
-            .chain(&rates)
-            .chain(&parameters)
-            .chain(functions.iter().map(|(_, m)| m))
-            .cloned()
-            .collect();
-        MapleNames {
-            temporary_prefix: temporary_prefix(&every),
-            positions,
-            rates,
-            parameters,
-            functions,
-        }
-    }
-
-    fn function<'a>(&'a self, name: &'a str) -> &'a str {
-        self.functions
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, m)| m.as_str())
-            .unwrap_or(name)
-    }
-}
 
 /// A Maple name for a program's name: letters, digits and `_`, not starting with a digit or `_`
 /// (Maple reserves names starting with `_` for itself).
@@ -98,7 +41,7 @@ fn maple_name(name: &str) -> String {
 }
 
 struct Maple<'a> {
-    names: &'a MapleNames,
+    names: &'a ScriptNames,
 }
 
 impl Language for Maple<'_> {
@@ -109,19 +52,13 @@ impl Language for Maple<'_> {
         "undefined".to_string()
     }
     fn symbol(&self, role: Role, name: &str) -> String {
-        match role {
-            Role::Position(i) => self.names.positions[i].clone(),
-            Role::Rate(i) => self.names.rates[i].clone(),
-            Role::Parameter(i) => self.names.parameters[i].clone(),
-            Role::Time => "t".to_string(),
-            Role::Function(_) => maple_name(name),
-        }
+        self.names.symbol(role, name)
     }
     fn temporary(&self, k: usize) -> String {
-        format!("{}{k}", self.names.temporary_prefix)
+        self.names.temporary(k)
     }
     fn unknown_function(&self, _index: usize, name: &str, arguments: &[String]) -> String {
-        format!("{}({})", self.names.function(name), arguments.join(", "))
+        self.names.unknown_function(name, arguments)
     }
     fn function(&self, f: Function, argument: &str) -> String {
         let name = match f {
@@ -158,7 +95,7 @@ impl Language for Maple<'_> {
 /// The equations of `source` as a Maple worksheet.
 pub fn maple(equations: &Equations, source: &str) -> String {
     let symbols = Symbols::new(equations);
-    let names = MapleNames::new(equations);
+    let names = ScriptNames::new(equations, &RESERVED, maple_name);
     let entries = nonzero_entries(equations);
     let roots: Vec<ExprId> = entries.iter().map(|(_, id)| *id).collect();
     let listing = Listing::new(&symbols, &roots);
@@ -206,7 +143,7 @@ fn header(source: &str, equations: &Equations) -> String {
     )
 }
 
-fn declare_variables(out: &mut String, equations: &Equations, names: &MapleNames) {
+fn declare_variables(out: &mut String, equations: &Equations, names: &ScriptNames) {
     let v = &equations.variables;
     let mut list = |title: &str, list: &[Variable], maple: &[String]| {
         if list.is_empty() {

@@ -6,10 +6,10 @@
 //! generated code then computes the same floating-point operations in the same order as
 //! `Tape::eval`.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use crate::symbolic::expr::{ExponentialProfile, ExprId, Function, Node, Pool};
-use crate::symbolic::lower::Variables;
+use crate::symbolic::lower::{Variable, Variables};
 use crate::symbolic::Equations;
 
 /// What a pool symbol stands for.
@@ -198,6 +198,88 @@ pub fn temporary_prefix(names: &[String]) -> String {
         prefix.push('x');
     }
     prefix
+}
+
+/// The names a script (the Maple worksheet, the SymPy module) gives the variables: each
+/// program name written as an identifier of the language, made unique against the language's
+/// reserved names and the names before it by trailing `_`s, and a prefix for the temporaries
+/// that none of them uses.
+pub struct ScriptNames {
+    pub positions: Vec<String>,
+    pub rates: Vec<String>,
+    pub parameters: Vec<String>,
+    /// One per distinct unknown function name: (the program's name, the script's).
+    pub functions: Vec<(String, String)>,
+    temporary_prefix: String,
+    identifier: fn(&str) -> String,
+}
+
+impl ScriptNames {
+    pub fn new(equations: &Equations, reserved: &[&str], identifier: fn(&str) -> String) -> Self {
+        let v = &equations.variables;
+        let mut taken: HashSet<String> =
+            reserved.iter().map(|s| s.to_string()).collect();
+        let mut unique = |name: &str| {
+            let mut candidate = identifier(name);
+            while taken.contains(&candidate) {
+                candidate.push('_');
+            }
+            taken.insert(candidate.clone());
+            candidate
+        };
+        let mut names = |list: &[Variable]| {
+            list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>()
+        };
+        let (positions, rates, parameters) =
+            (names(&v.positions), names(&v.rates), names(&v.parameters));
+        let mut functions: Vec<(String, String)> = Vec::new();
+        for f in &v.functions {
+            if !functions.iter().any(|(name, _)| *name == f.name) {
+                functions.push((f.name.clone(), unique(&f.name)));
+            }
+        }
+        let every: Vec<String> = (positions.iter().chain(&rates).chain(&parameters))
+            .chain(functions.iter().map(|(_, script)| script))
+            .cloned()
+            .collect();
+        ScriptNames {
+            temporary_prefix: temporary_prefix(&every),
+            positions,
+            rates,
+            parameters,
+            functions,
+            identifier,
+        }
+    }
+
+    /// The script's name of an unknown function, by the program's name.
+    fn function<'a>(&'a self, name: &'a str) -> &'a str {
+        (self.functions.iter())
+            .find(|(n, _)| n == name)
+            .map(|(_, script)| script.as_str())
+            .unwrap_or(name)
+    }
+
+    /// `Language::symbol` for a script.
+    pub fn symbol(&self, role: Role, name: &str) -> String {
+        match role {
+            Role::Position(i) => self.positions[i].clone(),
+            Role::Rate(i) => self.rates[i].clone(),
+            Role::Parameter(i) => self.parameters[i].clone(),
+            Role::Time => "t".to_string(),
+            Role::Function(_) => (self.identifier)(name),
+        }
+    }
+
+    /// `Language::temporary` for a script.
+    pub fn temporary(&self, k: usize) -> String {
+        format!("{}{k}", self.temporary_prefix)
+    }
+
+    /// `Language::unknown_function` for a script: the function's name applied to its arguments.
+    pub fn unknown_function(&self, name: &str, arguments: &[String]) -> String {
+        format!("{}({})", self.function(name), arguments.join(", "))
+    }
 }
 
 /// Binding strength of a printed expression, loosest first.

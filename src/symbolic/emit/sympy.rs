@@ -2,12 +2,11 @@
 //! as in the program, the unknown functions as `sp.Function`s, the temporaries, then the
 //! matrices `M`, `S`, `F`, `Delta`, `Delta_bias`.
 
-use std::collections::HashSet;
 use std::fmt::Write;
 
 use super::shared::{
-    nonzero_entries, temporary_prefix, Entry, Language, Listing, PowerSyntax, Precedence, Printer,
-    Role, Symbols,
+    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role,
+    ScriptNames, Symbols,
 };
 use crate::symbolic::expr::{ExponentialProfile, ExprId, Function};
 use crate::symbolic::lower::Variable;
@@ -39,68 +38,6 @@ const RESERVED: [&str; 15] = [
     "t",
 ];
 
-/// The Python name of every variable.
-struct PythonNames {
-    positions: Vec<String>,
-    rates: Vec<String>,
-    parameters: Vec<String>,
-    /// One per distinct unknown function name, by that name.
-    functions: Vec<(String, String)>,
-    temporary_prefix: String,
-}
-
-impl PythonNames {
-    fn new(equations: &Equations) -> PythonNames {
-        let v = &equations.variables;
-        let mut taken: HashSet<String> = KEYWORDS
-            .iter()
-            .chain(&RESERVED)
-            .map(|s| s.to_string())
-            .collect();
-        let mut unique = |name: &str| {
-            let mut candidate = sanitize(name);
-            while taken.contains(&candidate) {
-                candidate.push('_');
-            }
-            taken.insert(candidate.clone());
-            candidate
-        };
-        let mut names =
-            |list: &[Variable]| list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>();
-        let (positions, rates, parameters) =
-            (names(&v.positions), names(&v.rates), names(&v.parameters));
-        let mut functions: Vec<(String, String)> = Vec::new();
-        for f in &v.functions {
-            if !functions.iter().any(|(name, _)| *name == f.name) {
-                functions.push((f.name.clone(), unique(&f.name)));
-            }
-        }
-        let every: Vec<String> = positions
-            .iter()
-            .chain(&rates)
-            .chain(&parameters)
-            .chain(functions.iter().map(|(_, p)| p))
-            .cloned()
-            .collect();
-        let temporary_prefix = temporary_prefix(&every);
-        PythonNames {
-            positions,
-            rates,
-            parameters,
-            functions,
-            temporary_prefix,
-        }
-    }
-
-    fn function<'a>(&'a self, name: &'a str) -> &'a str {
-        self.functions
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, p)| p.as_str())
-            .unwrap_or(name)
-    }
-}
-
 /// A Python identifier for a name: `hinge.x'` is `hinge_x_dot`.
 fn sanitize(name: &str) -> String {
     let mut out = String::new();
@@ -118,7 +55,7 @@ fn sanitize(name: &str) -> String {
 }
 
 struct Python<'a> {
-    names: &'a PythonNames,
+    names: &'a ScriptNames,
 }
 
 impl Language for Python<'_> {
@@ -129,19 +66,13 @@ impl Language for Python<'_> {
         "sp.nan".to_string()
     }
     fn symbol(&self, role: Role, name: &str) -> String {
-        match role {
-            Role::Position(i) => self.names.positions[i].clone(),
-            Role::Rate(i) => self.names.rates[i].clone(),
-            Role::Parameter(i) => self.names.parameters[i].clone(),
-            Role::Time => "t".to_string(),
-            Role::Function(_) => sanitize(name),
-        }
+        self.names.symbol(role, name)
     }
     fn temporary(&self, k: usize) -> String {
-        format!("{}{k}", self.names.temporary_prefix)
+        self.names.temporary(k)
     }
     fn unknown_function(&self, _index: usize, name: &str, arguments: &[String]) -> String {
-        format!("{}({})", self.names.function(name), arguments.join(", "))
+        self.names.unknown_function(name, arguments)
     }
     fn function(&self, f: Function, argument: &str) -> String {
         let name = if f == Function::Abs { "Abs" } else { f.name() };
@@ -174,7 +105,8 @@ impl Language for Python<'_> {
 /// The equations of `source` as a Python module.
 pub fn sympy(equations: &Equations, source: &str) -> String {
     let symbols = Symbols::new(equations);
-    let names = PythonNames::new(equations);
+    let reserved: Vec<&str> = KEYWORDS.iter().chain(&RESERVED).copied().collect();
+    let names = ScriptNames::new(equations, &reserved, sanitize);
     let entries = nonzero_entries(equations);
     let roots: Vec<ExprId> = entries.iter().map(|(_, id)| *id).collect();
     let listing = Listing::new(&symbols, &roots);
@@ -229,7 +161,7 @@ fn python_string(text: &str) -> String {
     format!("'{}'", text.replace('\\', "\\\\").replace('\'', "\\'"))
 }
 
-fn declare_variables(out: &mut String, equations: &Equations, names: &PythonNames) {
+fn declare_variables(out: &mut String, equations: &Equations, names: &ScriptNames) {
     let v = &equations.variables;
     let mut declare = |title: &str, list: &[Variable], python: &[String]| {
         if list.is_empty() {
@@ -270,7 +202,7 @@ fn target(entry: Entry) -> String {
     }
 }
 
-fn lists(out: &mut String, equations: &Equations, names: &PythonNames, language: &Python) {
+fn lists(out: &mut String, equations: &Equations, names: &ScriptNames, language: &Python) {
     let v = &equations.variables;
     let list = |items: &[String]| format!("[{}]", items.join(", "));
     let _ = writeln!(out, "\npositions = {}", list(&names.positions));

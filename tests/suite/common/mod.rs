@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod contact_rows;
+pub mod noise;
 pub mod programs;
 pub mod symbolic;
 pub mod trees;
@@ -12,6 +13,18 @@ pub fn max_difference(a: &[f64], b: &[f64]) -> f64 {
         .zip(b)
         .map(|(x, y)| (x - y).abs())
         .fold(0.0, f64::max)
+}
+
+/// A directory for a test's files, `lsdc-NAME-PID` under the system's temporary directory.
+pub fn scratch_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("lsdc-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    dir
+}
+
+/// A path as a command line's argument.
+pub fn path_text(p: &std::path::Path) -> &str {
+    p.to_str().expect("a path")
 }
 
 /// The paths of the programs `examples/*.lsd`, sorted.
