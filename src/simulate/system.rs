@@ -135,9 +135,10 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// The planar form the right-hand side takes here: when this scratch has the planar one
-    /// and no native code computes the accelerations instead.
+    /// and neither native code nor the driven subtrees' hybrid dynamics (spatial algebra)
+    /// computes the accelerations instead.
     fn planar_here(&self) -> Option<&'m PlanarModel> {
-        let on = self.scratch.planar.is_some() && self.native.is_none();
+        let on = self.scratch.planar.is_some() && self.native.is_none() && !self.drives_by_subtrees();
         self.planar.filter(|_| on)
     }
 
