@@ -263,30 +263,13 @@ impl Generator<'_> {
         self.frame_states()?;
         let applied = self.applied_wrenches()?;
         let mut forces = self.project(applied.clone());
-        let zero = self.pool.constant(0.0);
-        let mut link_forces = vec![zero; self.columns()];
-        self.add_link_efforts(&mut link_forces)?;
-        for (f, l) in forces.iter_mut().zip(&link_forces) {
-            *f = self.pool.add(*f, *l);
-        }
+        let link_forces = self.add_link_forces(&mut forces)?;
         let accelerations = self
             .topology
             .complementary
             .is_empty()
             .then(|| self.articulated(&applied, &link_forces));
-        let closure = self.loops()?;
-        Ok(Equations {
-            pool: std::mem::take(&mut self.pool),
-            variables: self.lowering.variables.clone(),
-            mass,
-            second_member,
-            forces,
-            constraints: closure.rows,
-            constraint_bias: closure.bias,
-            constraint_names: closure.names,
-            accelerations,
-            form,
-        })
+        self.equations(form, [mass, second_member, forces], accelerations)
     }
 
     /// The equations by Kane's or the Newton–Euler form. The constraint rows are the loops'
@@ -299,12 +282,29 @@ impl Generator<'_> {
             Form::Kane => self.kane(tree_coordinates, &applied),
             _ => self.newton_euler(tree_coordinates, &applied)?,
         };
+        self.add_link_forces(&mut forces)?;
+        self.equations(form, [mass, second_member, forces], None)
+    }
+
+    /// Adds the links' efforts to the generalised forces `forces`; the links' efforts alone.
+    fn add_link_forces(&mut self, forces: &mut [ExprId]) -> Result<Vec<ExprId>, LowerError> {
         let zero = self.pool.constant(0.0);
         let mut link_forces = vec![zero; self.columns()];
         self.add_link_efforts(&mut link_forces)?;
         for (f, l) in forces.iter_mut().zip(&link_forces) {
             *f = self.pool.add(*f, *l);
         }
+        Ok(link_forces)
+    }
+
+    /// The equations of `form` from its M, S and F, with the loops' rows (their kinematics,
+    /// the same in every form).
+    fn equations(
+        &mut self,
+        form: Form,
+        [mass, second_member, forces]: [Vec<ExprId>; 3],
+        accelerations: Option<Vec<ExprId>>,
+    ) -> Result<Equations, LowerError> {
         let closure = self.loops()?;
         Ok(Equations {
             pool: std::mem::take(&mut self.pool),
@@ -315,7 +315,7 @@ impl Generator<'_> {
             constraints: closure.rows,
             constraint_bias: closure.bias,
             constraint_names: closure.names,
-            accelerations: None,
+            accelerations,
             form,
         })
     }
