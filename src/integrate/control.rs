@@ -35,6 +35,20 @@ pub(super) struct Gains {
     pub(super) rise_power: f64,
 }
 
+impl Gains {
+    /// Elementary control (β = 0) with the safety factor 0.9 of Hairer's codes (DOP853,
+    /// RADAU5, RODAS), steps growing at most by `max_factor`, and the predictive limit
+    /// extrapolating the error constant's rise once (Gustafsson).
+    pub(super) fn elementary(max_factor: f64) -> Gains {
+        Gains {
+            beta: 0.0,
+            safety: 0.9,
+            max_factor,
+            rise_power: 1.0,
+        }
+    }
+}
+
 /// Step-size controller: proportional-integral when `beta > 0`, elementary when `beta == 0`.
 /// The integral part remembers the previous error so that the step varies smoothly.
 #[derive(Clone, Debug)]

@@ -324,12 +324,7 @@ impl AdaptiveStepper for Dop853 {
         // extrapolates the rise of the error constant as Gustafsson does.
         StepController::new(
             7,
-            Gains {
-                beta: 0.0,
-                safety: 0.9,
-                max_factor: 6.0,
-                rise_power: 1.0,
-            },
+            Gains::elementary(6.0),
         )
     }
 

@@ -591,12 +591,7 @@ impl AdaptiveStepper for Radau5 {
         // The estimate is of order 3; RADAU5's growth limit of 8.
         StepController::new(
             3,
-            Gains {
-                beta: 0.0,
-                safety: 0.9,
-                max_factor: 8.0,
-                rise_power: 1.0,
-            },
+            Gains::elementary(8.0),
         )
     }
 

@@ -562,12 +562,7 @@ impl AdaptiveStepper for RosenbrockW {
         // Wanner's growth limit for Rosenbrock methods.
         StepController::new(
             self.order() - 1,
-            Gains {
-                beta: 0.0,
-                safety: 0.9,
-                max_factor: 6.0,
-                rise_power: 1.0,
-            },
+            Gains::elementary(6.0),
         )
     }
 
