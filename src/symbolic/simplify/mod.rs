@@ -4,10 +4,12 @@
 //! trigonometric identities (sin² + cos² = 1, the angle sums) hold by construction; the roots
 //! are then written back with their common factors taken out (`write`).
 //!
-//! The cost stays linear in the graph: a node whose form would pass `TERMS` terms (or take more
-//! than `WORK` products of terms) is not expanded but kept as the operation on its operands'
-//! simplified nodes, an atom for the nodes that use it. So each node costs a bounded amount and
-//! deep chains (a 100-link pendulum's) are simplified near their leaves and shared above.
+//! Each node's work is bounded: a node whose form would pass `TERMS` terms (or take more than
+//! `WORK` products of terms) is not expanded but kept as the operation on its operands'
+//! simplified nodes, an atom for the nodes that use it. So deep chains (a 100-link pendulum's)
+//! are simplified near their leaves and shared above. Below the bounds the work grows with the
+//! forms: a chain's are longer as the chain is, so on the pendulums the cost per node still grows
+//! up to n = 100 (docs/equations.md, the simplifier's cost).
 //!
 //! Expanding shares less: a sum read by several nodes, expanded in each, is written in each.
 //! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
