@@ -147,6 +147,55 @@ impl Pool {
         (self.nodes.iter()).any(|n| matches!(n, Node::Apply(Function::ExponentialProfile(_), _)))
     }
 
+    /// The operations evaluating `roots` computes, as `Tape::operation_count` counts them, without
+    /// building the tape: the nodes the roots reach that are neither numbers nor symbols, less
+    /// the negations only subtractions read. One mark per node of the pool instead of the tape's
+    /// hashed positions: the simplifier counts each of its candidate forms.
+    pub fn operation_count(&self, roots: &[ExprId]) -> usize {
+        const REACHED: u8 = 1;
+        const USED: u8 = 2;
+        let mut marks = vec![0u8; self.nodes.len()];
+        let mut stack: Vec<ExprId> = roots.to_vec();
+        let mut reached = Vec::new();
+        while let Some(id) = stack.pop() {
+            if marks[id.index()] & REACHED != 0 {
+                continue;
+            }
+            marks[id.index()] |= REACHED;
+            reached.push(id);
+            stack.extend(self.operands(id));
+        }
+        for &root in roots {
+            marks[root.index()] |= USED;
+        }
+        let negated = |id: ExprId| match self.node(id) {
+            Node::Neg(inner) => Some(inner),
+            _ => None,
+        };
+        for &id in &reached {
+            // The operands a tape's step reads: a sum with a negated operand is a subtraction
+            // of the negation's operand.
+            let read: Vec<ExprId> = match self.node(id) {
+                Node::Add(a, b) => match (negated(a), negated(b)) {
+                    (_, Some(b)) => vec![a, b],
+                    (Some(a), None) => vec![b, a],
+                    (None, None) => vec![a, b],
+                },
+                _ => self.operands(id),
+            };
+            for operand in read {
+                marks[operand.index()] |= USED;
+            }
+        }
+        (reached.iter())
+            .filter(|&&id| match self.node(id) {
+                Node::Constant(_) | Node::Symbol(_) => false,
+                Node::Neg(_) => marks[id.index()] & USED != 0,
+                _ => true,
+            })
+            .count()
+    }
+
     /// Number of distinct nodes in the pool.
     pub fn len(&self) -> usize {
         self.nodes.len()
@@ -656,7 +705,8 @@ pub fn topological_order(
     roots: &[ExprId],
     operands: impl Fn(ExprId) -> Vec<ExprId>,
 ) -> Vec<ExprId> {
-    let mut placed: std::collections::HashSet<ExprId> = std::collections::HashSet::new();
+    // The Fx hash: the nodes' numbers are small integers, hashed once per visit of a large DAG.
+    let mut placed: rustc_hash::FxHashSet<ExprId> = rustc_hash::FxHashSet::default();
     let mut order = Vec::new();
     for &root in roots {
         let mut stack = vec![(root, false)];

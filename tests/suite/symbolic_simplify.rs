@@ -37,6 +37,47 @@ fn like_terms_collect_and_cancel() {
     assert_eq!(out.name_of(roots[2]), Some("x1"));
 }
 
+/// `Pool::operation_count`, which the simplifier compares its candidate forms by, counts what
+/// the tape it does not build would: negations only subtractions read are not operations, one
+/// that something else reads (or a root) is.
+#[test]
+fn the_operation_count_is_the_tapes() {
+    let mut pool = Pool::new();
+    let (x, y) = (pool.symbol("x"), pool.symbol("y"));
+    let (nx, ny) = (pool.neg(x), pool.neg(y));
+    let difference = pool.add(x, ny); // x − y
+    let both = pool.add(nx, ny); // −x − y: −x is read, −y is subtracted
+    let product = pool.mul(ny, x); // −y read by a product too
+    let sine = pool.sin(x);
+    let nsine = pool.neg(sine);
+    for roots in [
+        vec![difference],
+        vec![both],
+        vec![difference, product],
+        vec![nx],
+        vec![both, nsine, nx],
+        vec![x],
+    ] {
+        assert_eq!(
+            pool.operation_count(&roots),
+            Tape::new(&pool, &roots).operation_count(),
+            "{roots:?}"
+        );
+    }
+    for path in ["examples/satellite.lsd", "examples/double_pendulum.lsd"] {
+        let equations = equations_of(path);
+        let roots = equations.roots();
+        let (simplified, simplified_roots) = simplify(&equations.pool, &roots);
+        for (pool, roots) in [(&equations.pool, &roots), (&simplified, &simplified_roots)] {
+            assert_eq!(
+                pool.operation_count(roots),
+                Tape::new(pool, roots).operation_count(),
+                "{path}"
+            );
+        }
+    }
+}
+
 #[test]
 fn pythagoras_and_the_angle_sums_hold() {
     let mut pool = Pool::new();

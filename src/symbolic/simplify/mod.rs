@@ -4,10 +4,12 @@
 //! trigonometric identities (sin² + cos² = 1, the angle sums) hold by construction; the roots
 //! are then written back with their common factors taken out (`write`).
 //!
-//! The cost stays linear in the graph: a node whose form would pass `TERMS` terms (or take more
-//! than `WORK` products of terms) is not expanded but kept as the operation on its operands'
-//! simplified nodes, an atom for the nodes that use it. So each node costs a bounded amount and
-//! deep chains (a 100-link pendulum's) are simplified near their leaves and shared above.
+//! Each node's work is bounded: a node whose form would pass `TERMS` terms (or take more than
+//! `WORK` products of terms) is not expanded but kept as the operation on its operands'
+//! simplified nodes, an atom for the nodes that use it. So deep chains (a 100-link pendulum's)
+//! are simplified near their leaves and shared above. Below the bounds the work grows with the
+//! forms: a chain's are longer as the chain is, so on the pendulums the cost per node still grows
+//! up to n = 100 (docs/equations.md, the simplifier's cost).
 //!
 //! Expanding shares less: a sum read by several nodes, expanded in each, is written in each.
 //! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
@@ -22,13 +24,13 @@
 mod polynomial;
 mod write;
 
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::FxHashMap;
 
 use polynomial::{Angles, Polynomial, Wave};
 use write::Writer;
 
 use super::equations::Equations;
-use super::expr::{topological_order, ExprId, Function, Node, Pool, Tape};
+use super::expr::{topological_order, ExprId, Function, Node, Pool};
 
 /// The most terms a node's normal form may have before the node is kept as an atom.
 const TERMS: usize = 64;
@@ -65,7 +67,7 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
         let (best, best_roots) = candidates
             .into_iter()
             .map(|expansion| simplify_with(pool, roots, expansion, Pool::new()))
-            .min_by_key(|(pool, roots)| Tape::new(pool, roots).operation_count())
+            .min_by_key(|(pool, roots)| pool.operation_count(roots))
             .expect("candidates");
         let copied;
         (gathered, copied) = simplify_with(&best, &best_roots, Expansion::None, gathered);
@@ -93,12 +95,12 @@ fn simplify_with(
 ) -> (Pool, Vec<ExprId>) {
     let mut pass = Pass::new(pool, out);
     let order = topological_order(roots, |id| pool.operands(id));
-    let kept: FxHashSet<ExprId> = roots.iter().copied().collect();
-    // How many nodes still to simplify read each node: a form is dropped after its last reader.
-    let mut readers: FxHashMap<ExprId, usize> = FxHashMap::default();
+    for &root in roots {
+        pass.roots[root.index()] = true;
+    }
     for &id in &order {
         for operand in pool.operands(id) {
-            *readers.entry(operand).or_insert(0) += 1;
+            pass.readers[operand.index()] += 1;
         }
     }
     for &id in &order {
@@ -109,7 +111,7 @@ fn simplify_with(
                 pass.atom(node)
             }
         };
-        let shared = readers.get(&id).copied().unwrap_or(0) > 1;
+        let shared = pass.readers[id.index()] > 1;
         if let Expansion::Shared(terms) = expansion {
             if shared && form.len() > terms {
                 let node = pass.writer.write(&mut pass.out, &form, &pass.angles);
@@ -119,9 +121,9 @@ fn simplify_with(
         }
         pass.forms.insert(id, form);
         for operand in pool.operands(id) {
-            let left = readers.get_mut(&operand).expect("counted");
+            let left = &mut pass.readers[operand.index()];
             *left -= 1;
-            if *left == 0 && !kept.contains(&operand) {
+            if *left == 0 && !pass.roots[operand.index()] {
                 pass.forms.remove(&operand);
             }
         }
@@ -166,6 +168,10 @@ struct Pass<'a> {
     forms: FxHashMap<ExprId, Polynomial>,
     /// Each input node written in `out`.
     nodes: FxHashMap<ExprId, ExprId>,
+    /// By input node: how many nodes still to simplify read it (its form is dropped, or taken
+    /// by its last reader, when none is left), and whether it is a root (its form is kept).
+    readers: Vec<u32>,
+    roots: Vec<bool>,
     /// The angles of the forms' waves.
     angles: Angles,
     writer: Writer,
@@ -182,6 +188,8 @@ impl Pass<'_> {
             out,
             forms: FxHashMap::default(),
             nodes: FxHashMap::default(),
+            readers: vec![0; input.len()],
+            roots: vec![false; input.len()],
             angles: Angles::default(),
             writer: Writer::new(),
         }
@@ -189,6 +197,19 @@ impl Pass<'_> {
 
     fn form(&self, id: ExprId) -> &Polynomial {
         &self.forms[&id]
+    }
+
+    /// The form of `id` to build on: taken when the node being simplified is its last reader
+    /// (it is dropped after it anyway), a copy otherwise. Taking it saves a copy per link of a
+    /// chain of sums, whose copies would cost the square of the chain's length. Only for a form
+    /// the node is sure to be built from: a node kept as an operation writes its operands'
+    /// forms.
+    fn taken(&mut self, id: ExprId) -> Polynomial {
+        if self.readers[id.index()] == 1 && !self.roots[id.index()] {
+            self.forms.remove(&id).expect("formed before it is read")
+        } else {
+            self.form(id).clone()
+        }
     }
 
     /// The input node `id` written in `out` from its normal form (once).
@@ -222,12 +243,25 @@ impl Pass<'_> {
                 let node = self.out.symbol(self.input.symbol_name(i));
                 Some(Polynomial::atom(node, 1))
             }
+            Node::Add(a, b) if a != b && self.form(a).len() + self.form(b).len() <= TERMS => {
+                // The sum cannot pass `TERMS`: the larger form is added to in place (taken
+                // when this is its last reader). Adding is commutative term by term, so the
+                // sum is the same whichever operand it starts from.
+                let (large, small) = if self.form(a).len() >= self.form(b).len() {
+                    (a, b)
+                } else {
+                    (b, a)
+                };
+                let mut sum = self.taken(large);
+                sum.add_scaled(self.form(small), 1.0);
+                Some(sum)
+            }
             Node::Add(a, b) => {
                 let mut sum = self.form(a).clone();
                 sum.add_scaled(self.form(b), 1.0);
                 (sum.len() <= TERMS).then_some(sum)
             }
-            Node::Neg(a) => Some(self.form(a).clone().scaled(-1.0)),
+            Node::Neg(a) => Some(self.taken(a).scaled(-1.0)),
             Node::Mul(a, b) => self.forms[&a].times(&self.forms[&b], WORK, TERMS, &mut self.angles),
             Node::Div(a, b) => self.quotient(a, b),
             Node::Pow(a, b) => self.power(a, b),
@@ -255,10 +289,10 @@ impl Pass<'_> {
     /// `a / b`: a product by the inverse of a number or of a monomial; otherwise by the
     /// divisor written as an atom.
     fn quotient(&mut self, a: ExprId, b: ExprId) -> Option<Polynomial> {
-        let divisor = &self.forms[&b];
-        if let Some(c) = divisor.as_constant() {
-            return (c != 0.0 && (1.0 / c).is_finite()).then(|| self.form(a).clone().scaled(1.0 / c));
+        if let Some(c) = self.form(b).as_constant() {
+            return (c != 0.0 && (1.0 / c).is_finite()).then(|| self.taken(a).scaled(1.0 / c));
         }
+        let divisor = &self.forms[&b];
         let inverse = match divisor.as_monomial() {
             Some((factors, c)) => {
                 let mut inverse = Polynomial::constant(1.0 / c);
