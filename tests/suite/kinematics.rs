@@ -255,6 +255,15 @@ proptest! {
         let m = mechanism(path);
         let model = kinematic_model(&m);
         let q: Vec<f64> = (0..model.coordinate_count).map(|i| seed[i % seed.len()]).collect();
+        // Near a half turn of a loop's relative rotation its error, 2 - |s| along s / |s|
+        // (`kinematics::closure`), takes its direction from a vanishing skew part s: a
+        // round-off of s is magnified by 2 / |s| in the residual, and central differences at
+        // h = 1e-6 measure that, not the Jacobian (|s| = 5e-5 gave 4e-12 of noise in the
+        // residual, 2e-6 in the difference, while h = 1e-4 agreed to 1.4e-8). Such
+        // configurations, far from closed, are left out: |s| below 1e-2.
+        let residual = closure(&model, &q).expect("evaluates").residual;
+        let loops = residual.len() / 6;
+        prop_assume!((0..loops).all(|k| residual.rows(6 * k, 3).norm() < 2.0 - 1e-2));
         check_jacobians(&model, &q);
     }
 
