@@ -89,12 +89,13 @@ pub fn run(args: &LinearizeArgs) -> ExitCode {
         (None, true) => OperatingPoint::Equilibrium,
         (None, false) => OperatingPoint::Initial,
     };
-    // The program's declared inputs (`input swing.q = 0;`) first, then those named here that
-    // are not declared (a name repeated here stays repeated, for the linearisation's error).
+    // The program's declared inputs (`input swing.q = 0;`, then `input voltage = 0;`) first,
+    // then those named here that are not declared (a name repeated here stays repeated, for
+    // the linearisation's error).
     let declared: Vec<String> = (program.mechanism().ok())
         .map(|m| {
-            m.declared_inputs()
-                .into_iter()
+            (m.declared_inputs().into_iter())
+                .chain(m.declared_value_inputs())
                 .map(|(name, _)| name)
                 .collect()
         })

@@ -47,9 +47,11 @@ pub const EQUILIBRIUM: f64 = 1e-8;
 /// Where the mechanism is linearised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OperatingPoint {
-    /// The initial state (closed on the loops), at t = 0, with zero inputs.
+    /// The initial state (closed on the loops), at t = 0, with the inputs at their start
+    /// values (zero for those only named).
     Initial,
-    /// The state where the prepared run ends (its duration), at that time, with zero inputs.
+    /// The state where the prepared run ends (its duration), at that time, with the inputs as
+    /// the run held them (their start values, zero for those only named).
     EndOfRun,
     /// The initial configuration at rest, with the inputs at the efforts that hold it there
     /// (`statics`); refused when they cannot.
@@ -411,6 +413,13 @@ fn free_operating_state(
             .map_err(|e| LinearizeError::System(SystemError::from(e)))
     };
     let starting: Vec<f64> = model.states.iter().map(|s| s.initial).collect();
+    // The efforts a run holds: a declared input's start value, 0 for one only named.
+    let held: Vec<f64> = (inputs.iter())
+        .map(|name| {
+            let declared = model.effort_inputs.iter().find(|(n, _)| n == name);
+            declared.map_or(0.0, |(_, start)| *start)
+        })
+        .collect();
     match point {
         OperatingPoint::Initial => {
             let (q, v) = declared(&prepared.coordinates, &prepared.rates)?;
@@ -418,7 +427,7 @@ fn free_operating_state(
                 time: 0.0,
                 q,
                 v,
-                efforts: vec![0.0; inputs.len()],
+                efforts: held.clone(),
                 states: starting,
             })
         }
@@ -449,7 +458,7 @@ fn free_operating_state(
                 time,
                 q,
                 v,
-                efforts: vec![0.0; inputs.len()],
+                efforts: held.clone(),
                 states,
             })
         }
