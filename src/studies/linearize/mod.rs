@@ -62,7 +62,8 @@ pub enum OperatingPoint {
 #[derive(Clone, Debug)]
 pub struct Request {
     pub point: OperatingPoint,
-    /// Coordinates `join.coordinate` along which a generalised force is an input.
+    /// Inputs besides the program's declared ones (which come first): coordinates
+    /// `join.coordinate` along which a generalised force is an input, constant states.
     pub inputs: Vec<String>,
     /// With loops, the independent coordinates (as many as the mobility); empty for the run's
     /// free coordinates.
@@ -142,7 +143,8 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     let model = &prepared.model;
     refuse_unsupported(prepared)?;
     refuse_imposed_motion(prepared, request.point)?;
-    let named = Inputs::named(prepared, &request.inputs)?;
+    let input_names = with_declared(model, &request.inputs);
+    let named = Inputs::named(prepared, &input_names)?;
     let Operating {
         time,
         q,
@@ -324,7 +326,7 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
             .map(|&k| model.states[k].name.clone())
             .collect(),
         states: states_named,
-        inputs: request.inputs.clone(),
+        inputs: input_names,
         outputs,
         state: x,
         input,
@@ -385,6 +387,17 @@ struct Operating {
 }
 
 /// The operating point `point` asks for, its driven coordinates on their laws at its time.
+/// The program's declared inputs (`input swing.q = 0;`, then `input voltage = 0;`) first,
+/// then those `named` that are not declared (a name repeated there stays repeated, for
+/// `Inputs::named`'s error).
+fn with_declared(model: &crate::dynamics::model::Model, named: &[String]) -> Vec<String> {
+    let efforts = model.effort_inputs.iter().map(|(name, _)| name);
+    let values = (model.states.iter().filter(|state| state.input)).map(|state| &state.name);
+    let declared: Vec<String> = efforts.chain(values).cloned().collect();
+    let named = named.iter().filter(|name| !declared.contains(name)).cloned();
+    declared.iter().cloned().chain(named).collect()
+}
+
 fn operating_state(
     prepared: &Prepared,
     point: OperatingPoint,
