@@ -371,7 +371,12 @@ fn a_declared_input_is_the_units_and_the_linear_models() {
     let declared = simulate(program, &[]);
     let at_zero = simulate(program, &["--set", "swing.q=0"]);
     let plain = simulate("examples/pendulum.lsd", &[]);
-    assert_eq!((declared.0, at_zero.0, plain.0), (0, 0, 0), "{}", declared.2);
+    assert_eq!(
+        (declared.0, at_zero.0, plain.0),
+        (0, 0, 0),
+        "{}",
+        declared.2
+    );
     assert_ne!(declared.1, plain.1);
     assert_eq!(at_zero.1, plain.1);
 }

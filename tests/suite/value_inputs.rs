@@ -41,8 +41,7 @@ fn dc_motor(replacements: &[(&str, &str)], values: &[Override], duration: f64) -
 /// largest rate.
 fn largest_difference(a: &[Sample], b: &[Sample]) -> f64 {
     assert_eq!(a.len(), b.len());
-    let scale = (a.iter().flat_map(|s| s.rates.iter()))
-        .fold(1.0f64, |m, r| m.max(r.abs()));
+    let scale = (a.iter().flat_map(|s| s.rates.iter())).fold(1.0f64, |m, r| m.max(r.abs()));
     let differences = a.iter().zip(b).flat_map(|(x, y)| {
         assert_eq!(x.time, y.time);
         let q = x.coordinates.iter().zip(&y.coordinates);
@@ -167,7 +166,9 @@ fn an_unknown_input_is_refused_with_the_runs_inputs() {
     let prepared = pendulum_with("input swing.q = 0; input gain = 2;");
     let mut simulator = Simulator::new(&prepared, &[]).expect("starts");
     assert_eq!(simulator.input_names(), ["swing.q"]);
-    simulator.set_input("swing.q", 0.5).expect("an effort input");
+    simulator
+        .set_input("swing.q", 0.5)
+        .expect("an effort input");
     simulator.set_input("gain", 3.0).expect("a value input");
     let refused = simulator.set_input("gian", 1.0).expect_err("no such input");
     assert_eq!(
