@@ -249,8 +249,10 @@ K_S, W_REF, T_MOTOR = 1.0, 5.0, 1.0  # V s/rad, rad/s, s
 
 
 def motor_variant(name, voltage):
-    """The example with its voltage declared as `voltage` and Dormand-Prince's settings."""
-    text = MOTOR.replace("input voltage = 12 ; (* U, V *)", voltage).replace(
+    """The example with its voltage declared as `voltage` (after the join: a law may read its
+    rate) and Dormand-Prince's settings."""
+    text = MOTOR.replace("input voltage = 12 ; (* U, V *)\n", "").replace(
+        "rate current =", voltage + "\nrate current =").replace(
         MOTOR_SETTINGS, "simulate duration = 1, output = 0.01, integrator = dopri5, tolerance = 1e-10 end ;")
     path = os.path.join(WORK, name)
     with open(path, "w") as f:
