@@ -120,7 +120,7 @@ def test_value_input_set_between_steps(example):
     samples = simulation.take_samples()
     assert np.all(samples["voltage"][samples["time"] > 0.1] == 0.0)
     assert simulation.coordinates()[1][0] < v
-    with pytest.raises(lsdc.RunError, match="no input `volts`.*did you mean `voltage`"):
+    with pytest.raises(lsdc.RunError, match="no input `volts`: the run.s inputs are voltage"):
         simulation.set_input("volts", 1.0)
 
 
