@@ -143,6 +143,9 @@ pub struct Instance {
     program: Program,
     parameters: Vec<f64>,
     inputs: Vec<f64>,
+    /// The values of the program's value inputs (`input voltage = 0;`), in the order of
+    /// their variables.
+    value_inputs: Vec<f64>,
     tolerance: Option<f64>,
     stop_time: Option<f64>,
     run: Option<Run>,
@@ -192,6 +195,7 @@ impl Instance {
             variables.map(|v| v.start.unwrap_or(0.0)).collect()
         };
         let (parameters, inputs) = (start(Role::Parameter), start(Role::Input));
+        let value_inputs = start(Role::ValueInput);
         Ok(Instance {
             logger,
             logging,
@@ -201,6 +205,7 @@ impl Instance {
             program,
             parameters,
             inputs,
+            value_inputs,
             tolerance: None,
             stop_time: None,
             run: None,
@@ -271,6 +276,11 @@ impl Instance {
             let mut run = Run::start(prepared, &self.unit.inputs, self.interface)?;
             if let Some(simulator) = &mut run.simulator {
                 simulator.set_inputs(&self.inputs).map_err(|f| f.message)?;
+                let values = (self.unit.variables.iter()).filter(|v| v.role == Role::ValueInput);
+                for variable in values {
+                    let value = self.value_inputs[variable.index];
+                    (simulator.set_input(&variable.name, value)).map_err(|f| f.message)?;
+                }
             }
             if let Some(equations) = &mut run.equations {
                 equations.set_inputs(&self.inputs)?;
@@ -302,6 +312,7 @@ impl Instance {
             match variable.role {
                 Role::Parameter => self.parameters[variable.index] = start,
                 Role::Input => self.inputs[variable.index] = start,
+                Role::ValueInput => self.value_inputs[variable.index] = start,
                 _ => {}
             }
         }
@@ -317,6 +328,7 @@ impl Instance {
             *value = match variable.role {
                 Role::Parameter => self.parameters[variable.index],
                 Role::Input => self.inputs[variable.index],
+                Role::ValueInput => self.value_inputs[variable.index],
                 Role::Time => self.time(),
                 Role::Acceleration => {
                     let (inputs, efforts) = (self.unit.inputs.clone(), self.inputs.clone());
@@ -366,6 +378,16 @@ impl Instance {
                         }
                         if let Some(equations) = &mut run.equations {
                             equations.set_inputs(&self.inputs)?;
+                        }
+                        run.sample = None;
+                    }
+                }
+                Role::ValueInput => {
+                    self.value_inputs[variable.index] = *value;
+                    if let Some(run) = &mut self.run {
+                        if let Some(simulator) = &mut run.simulator {
+                            let set = simulator.set_input(&variable.name, *value);
+                            set.map_err(|f| f.message)?;
                         }
                         run.sample = None;
                     }

@@ -12,6 +12,8 @@ pub enum Role {
     Time,
     Parameter,
     Input,
+    /// A value input of the program (`input voltage = 0;`), set by its name.
+    ValueInput,
     Coordinate,
     Rate,
     KineticEnergy,

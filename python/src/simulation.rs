@@ -26,8 +26,9 @@ self_cell::self_cell!(
 
 /// A simulation advanced from Python: `step()` takes one step of the integrator,
 /// `advance_to(t)` steps to t and lands on it; between steps `coordinates()` reads the state
-/// and `set_inputs(efforts)` sets the generalised forces along the inputs, held until set
-/// again. The samples at the settings' output times that the steps pass are kept until
+/// and `set_input(name, value)` sets an input (an effort along a coordinate, `"swing.q"`, or a
+/// value, `"voltage"`), `set_inputs(efforts)` the generalised forces along the effort inputs,
+/// held until set again; every input holds its declared start value until set. The samples at the settings' output times that the steps pass are kept until
 /// `take_samples()`; `finish()` ends the run.
 #[pyclass(module = "lsdc._native", unsendable)]
 pub struct Simulation {
@@ -74,10 +75,26 @@ impl Simulation {
         self.with(|s| Ok(s.time()))
     }
 
-    /// The names of the inputs' velocities, in the order of their efforts.
+    /// The names of the effort inputs' velocities, in the order of their efforts: the
+    /// program's declared ones (`input swing.q = 0;`), then those named to
+    /// `Prepared.simulation(inputs=...)`.
     #[getter]
     fn input_names(&mut self) -> PyResult<Vec<String>> {
         self.with(|s| Ok(s.input_names()))
+    }
+
+    /// The names of the program's value inputs (`input voltage = 0;`).
+    #[getter]
+    fn value_input_names(&mut self) -> PyResult<Vec<String>> {
+        self.with(|s| Ok(s.value_input_names()))
+    }
+
+    /// Sets the input `name` to `value`, held until set again: an effort input by its
+    /// coordinate's name (`"swing.q"`: the torque along it), a value input by its name
+    /// (`"voltage"`). Raises `LsdcError` for a name that is not an input of the run, listing
+    /// them.
+    fn set_input(&mut self, name: &str, value: f64) -> PyResult<()> {
+        self.with(|s| s.set_input(name, value))
     }
 
     /// The declared coordinates and rates at the current state: a tuple (q, v) of arrays, in
@@ -87,7 +104,8 @@ impl Simulation {
         PyTuple::new(py, [PyArray1::from_vec(py, q), PyArray1::from_vec(py, v)])
     }
 
-    /// Sets the generalised forces along the inputs (in their order), held until set again.
+    /// Sets the generalised forces along the effort inputs (in the order of `input_names`),
+    /// held until set again.
     fn set_inputs(&mut self, efforts: Vec<f64>) -> PyResult<()> {
         self.with(|s| s.set_inputs(&efforts))
     }

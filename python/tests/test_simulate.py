@@ -99,3 +99,38 @@ def test_stepping_errors(example):
     simulation.advance_to(0.1)
     with pytest.raises(lsdc.RunError, match="end of its duration"):
         simulation.step()
+
+
+def test_value_input_set_between_steps(example):
+    # examples/control/dc_motor.lsd: `input voltage = 12;`, read by its current's rate.
+    program = lsdc.load(example("control/dc_motor.lsd"))
+    settings = dict(duration=0.2, integrator="rk4", step=1e-4)
+    simulation = program.prepare(**settings).simulation()
+    assert simulation.value_input_names == ["voltage"]
+    assert simulation.input_names == []
+    # Held at its start value, 12 V, until set: the run equals the whole run at 12 V.
+    simulation.advance_to(0.1)
+    whole = program.prepare(**settings).simulation()
+    whole.advance_to(0.1)
+    assert simulation.coordinates()[1][0] == whole.coordinates()[1][0]
+    # Set to 0 V at 0.1 s: held from there on, and the motor brakes.
+    (_,), (v,) = simulation.coordinates()
+    simulation.set_input("voltage", 0.0)
+    simulation.advance_to(0.2)
+    samples = simulation.take_samples()
+    assert np.all(samples["voltage"][samples["time"] > 0.1] == 0.0)
+    assert simulation.coordinates()[1][0] < v
+    with pytest.raises(lsdc.RunError, match="no input `volts`: the run.s inputs are voltage"):
+        simulation.set_input("volts", 1.0)
+
+
+def test_value_input_equals_its_start_value_given(example):
+    # Set at the start, or given as a value (`--set voltage=6`): the same run.
+    program = lsdc.load(example("control/dc_motor.lsd"))
+    settings = dict(duration=0.05, integrator="rk4", step=1e-4)
+    stepped = program.prepare(**settings).simulation()
+    stepped.set_input("voltage", 6.0)
+    stepped.advance_to(0.05)
+    given = program.prepare({"voltage": 6.0}, **settings).simulation()
+    given.advance_to(0.05)
+    assert stepped.coordinates()[1][0] == given.coordinates()[1][0]

@@ -89,6 +89,9 @@ pub struct Checker<'w> {
     pub(super) suggestions_left: std::cell::Cell<usize>,
     /// The (definition, name) pairs W0402 has warned about: once each.
     pub(super) shadow_warned: std::collections::HashSet<(crate::syntax::ast::Name, String)>,
+    /// The names declared by value inputs (`input voltage = 0;`), by their spans: a second
+    /// declaration of one is reported as an input declared twice.
+    pub(super) value_inputs: std::collections::HashSet<Span>,
 }
 
 pub(super) const MAX_INSTANTIATION_DEPTH: usize = 64;

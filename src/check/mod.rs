@@ -53,6 +53,7 @@ pub fn check(workspace: &Workspace) -> (Checked, Diagnostics) {
         outputs: HashMap::new(),
         suggestions_left: std::cell::Cell::new(checker::MAX_SUGGESTIONS),
         shadow_warned: Default::default(),
+        value_inputs: Default::default(),
     };
     for &root in &workspace.roots {
         checker.module(root);
@@ -498,7 +499,7 @@ impl<'w> Checker<'w> {
             "drive" | "lock" => {}
             "rate" | "update" => return self.rate(drive, ctx),
             "actuate" => return self.actuate(drive, ctx),
-            "input" => return self.input(drive, ctx),
+            "input" => return self.input(drive, ctx.scope, ctx),
             word => {
                 let help = match crate::diag::suggest::did_you_mean(word, ["drive", "rate", "update", "actuate", "lock", "input"]) {
                     Some("input") => "did you mean `input`? `input swing.q = 0;` declares the effort along a coordinate as an input",
@@ -729,6 +730,10 @@ fn declared_names(decl: &Decl) -> Vec<(Name, Span, Span)> {
         }
         DeclKind::Import(import) => named(&import.alias, decl.span),
         DeclKind::Join(join) => named(&join.name, decl.span),
+        DeclKind::Drive(drive) => match drive.value_input_name() {
+            Some(name) => vec![(name.name, name.span, decl.span)],
+            None => Vec::new(),
+        },
         _ => Vec::new(),
     }
 }

@@ -187,6 +187,7 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
         &prepared,
         &parameters,
         &declared,
+        &mechanism.declared_value_inputs(),
         &output_names(&prepared),
         kind.model_exchange(),
     );

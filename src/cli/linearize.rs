@@ -89,18 +89,8 @@ pub fn run(args: &LinearizeArgs) -> ExitCode {
         (None, true) => OperatingPoint::Equilibrium,
         (None, false) => OperatingPoint::Initial,
     };
-    // The program's declared inputs (`input swing.q = 0;`) first, then those named here that
-    // are not declared (a name repeated here stays repeated, for the linearisation's error).
-    let declared: Vec<String> = (program.mechanism().ok())
-        .map(|m| {
-            m.declared_inputs()
-                .into_iter()
-                .map(|(name, _)| name)
-                .collect()
-        })
-        .unwrap_or_default();
-    let named = args.inputs.iter().filter(|name| !declared.contains(name));
-    let inputs: Vec<String> = declared.iter().chain(named).cloned().collect();
+    // The program's declared inputs come first (`linearize`), then those named here.
+    let inputs = args.inputs.clone();
     let request = Request {
         point,
         inputs,

@@ -103,6 +103,10 @@ pub struct Model {
     pub position_drives: Vec<ResolvedPositionDrive>,
     /// The program's states (`state(x0)`), integrated with the motion after the velocities.
     pub states: Vec<StateModel>,
+    /// The program's declared effort inputs (`input swing.q = 0;`): the names of the
+    /// velocities they act along and their start values, which every run holds until its
+    /// caller sets them (`Simulator`). Its value inputs are states (`StateModel::input`).
+    pub effort_inputs: Vec<(String, f64)>,
     /// The actuators (`actuate`), whose laws may read the model; `None` without any.
     pub actuation: Option<Actuation>,
     /// Whether the model carries the dynamics: the bodies' inertias, the efforts, rotors,
@@ -475,6 +479,10 @@ fn build_parts(
         drives,
         position_drives,
         states,
+        effort_inputs: match with_dynamics {
+            true => mechanism.declared_inputs(),
+            false => Vec::new(),
+        },
         effort_tape: Err(EvalError::NotGeometric("efforts not compiled")),
         applied_groups: Vec::new(),
         declared_read: Vec::new(),

@@ -34,6 +34,9 @@ pub struct StateModel {
     /// For a sampled state (`sample(period, x0)`), its period and where it was made: its rate
     /// in the run is zero, its update applied at each instant (`simulate::sampling`).
     pub sampling: Option<Sampling>,
+    /// A value input (`input voltage = 0;`): held at its value (its rate zero) until the
+    /// run's caller sets it (`Simulator::set_input`).
+    pub input: bool,
 }
 
 impl StateModel {
@@ -85,6 +88,7 @@ pub fn build(
                 reads_model: reads_model(rate),
                 rate_root: 0,
                 sampling,
+                input: state.input,
             }),
             Err(e) => errors.push(missing(e, &what, state.span)),
         }

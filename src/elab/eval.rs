@@ -224,7 +224,7 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 Ok(())
             }
             DeclKind::Drive(input) if input.word.name.as_str() == "input" => {
-                self.input_decl(input, &mut locals)
+                self.input_decl(input, scope, &mut locals)
             }
             DeclKind::Drive(rate) if matches!(rate.word.name.as_str(), "rate" | "update") => {
                 self.rate_decl(rate, &mut locals)

@@ -343,8 +343,12 @@ pub struct StateVariable {
     /// For a sampled state (`sample(period, x0)`), its period: its value is held between the
     /// sampling instants and changes at each one by its `update`.
     pub period: Option<Scalar>,
-    /// The call `state(x0)` or `sample(period, x0)` that made it.
+    /// The call `state(x0)` or `sample(period, x0)` that made it; for a value input, its name
+    /// in the declaration.
     pub span: Span,
+    /// A value input (`input voltage = 0;`): a state held at its start value until the caller
+    /// of the run sets it (its rate zero), as a sampled state is held between its instants.
+    pub input: bool,
 }
 
 impl StateVariable {
@@ -602,6 +606,18 @@ impl Mechanism {
     pub fn declared_inputs(&self) -> Vec<(String, f64)> {
         (self.inputs.iter())
             .map(|input| (self.coordinate_name(input.join, input.coordinate), input.start))
+            .collect()
+    }
+
+    /// The declared value inputs (`input voltage = 0;`): their names (with their instance,
+    /// `motor[2]:voltage`) and start values.
+    pub fn declared_value_inputs(&self) -> Vec<(String, f64)> {
+        (self.states.iter().enumerate())
+            .filter(|(_, state)| state.input)
+            .map(|(k, state)| {
+                let start = crate::elab::value::constant(&state.initial).unwrap_or(0.0);
+                (state.label(k), start)
+            })
             .collect()
     }
 

@@ -47,6 +47,7 @@ impl Elaborator<'_, '_> {
             rate: None,
             period,
             span,
+            input: false,
         });
         Ok(Value::Scalar(Arc::new(SExpr::State(id))))
     }

@@ -87,7 +87,9 @@ impl Lower for Geometric<'_> {
             SExpr::Coordinate { .. } => Err(EvalError::NotGeometric("a second time derivative")),
             SExpr::JoinCoordinate { .. } => Err(EvalError::NotGeometric("a coordinate of a join")),
             SExpr::Time => Err(EvalError::NotGeometric("the time")),
-            SExpr::State(_) => Err(EvalError::NotGeometric("a state (`state(...)`)")),
+            SExpr::State(_) => Err(EvalError::NotGeometric(
+                "a state or an input (`state(...)`, `input`), whose value changes during a run",
+            )),
             _ => Err(EvalError::NotGeometric(
                 "the state of a frame (position, velocity, …)",
             )),

@@ -230,6 +230,20 @@ fn missing_inertia_frame(mechanism: &Mechanism, body: crate::elab::value::BodyId
 
 /// Builds the model and initial state. `overrides` come from `--set`; `settings` from the
 /// program's `simulate` declaration completed by `defaults`.
+/// Gives the declared inputs named by `--set` (`voltage`, `swing.q`) their start values.
+fn set_input_starts(model: &mut Model, starts: &[Override]) {
+    for start in starts {
+        let states = model.states.iter_mut().filter(|state| state.input);
+        for state in states.filter(|state| state.name == start.name) {
+            state.initial = start.value;
+        }
+        let efforts = model.effort_inputs.iter_mut();
+        for (_, value) in efforts.filter(|(name, _)| *name == start.name) {
+            *value = start.value;
+        }
+    }
+}
+
 pub fn prepare(
     mechanism: &Mechanism,
     overrides: &[Override],
@@ -257,6 +271,15 @@ pub(crate) fn prepare_parts(
 ) -> Result<Prepared, Vec<Diagnostic>> {
     let topology = topology::build(mechanism)?;
     let generated = notation::unknown_names(mechanism, &topology);
+    // `--set voltage=5`, `--set swing.q=0.5`: the start values of declared inputs, not
+    // unknowns.
+    let inputs: Vec<String> = (mechanism.declared_inputs().into_iter())
+        .chain(mechanism.declared_value_inputs())
+        .map(|(name, _)| name)
+        .collect();
+    let (input_starts, overrides): (Vec<Override>, Vec<Override>) = (overrides.iter().cloned())
+        .partition(|o| inputs.contains(&o.name));
+    let overrides = &overrides[..];
     let values = unknown_values(mechanism, &generated, overrides)?;
     let mut missing = Vec::new();
     let mut frames_reported = BTreeSet::new();
@@ -277,10 +300,11 @@ pub(crate) fn prepare_parts(
         return Err(missing);
     }
     let kinematics = kinematic_model::build(mechanism, topology.clone(), values)?;
-    let model = match with_dynamics {
+    let mut model = match with_dynamics {
         true => dynamic_model::build(mechanism, &kinematics)?,
         false => dynamic_model::build_kinematic(mechanism, &kinematics)?,
     };
+    set_input_starts(&mut model, &input_starts);
     let (mut coordinates, mut rates) = initial_state(mechanism, &model)?;
     let mut warnings = Vec::new();
     if model.has_loops() {

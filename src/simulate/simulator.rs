@@ -95,7 +95,20 @@ impl<'p> Simulator<'p> {
         let model = &prepared.model;
         let settings = &prepared.settings;
         let at_start = |message: String| RunFailure { time: 0.0, message };
-        let inputs = Inputs::along(input_velocities(model, inputs).map_err(at_start)?);
+        // The program's declared inputs first, held at their start values, then those the
+        // caller names besides, held at zero.
+        let declared = &model.effort_inputs;
+        let names: Vec<&str> = (declared.iter().map(|(name, _)| name.as_str()))
+            .chain(inputs.iter().copied())
+            .collect();
+        let names: Vec<&str> = (names.iter().enumerate())
+            .filter(|&(k, name)| !names[..k].contains(name))
+            .map(|(_, name)| *name)
+            .collect();
+        let mut inputs = Inputs::along(input_velocities(model, &names).map_err(at_start)?);
+        for (held, (_, start)) in inputs.held.iter_mut().zip(declared) {
+            *held = *start;
+        }
         if inputs.any() && settings.integrator == Integrator::Symplectic {
             return Err(at_start(
                 "the symplectic integrator does not apply inputs (its steps take the program's efforts only): choose `rk4`, `dopri5`, `dop853` or `implicit`".to_string(),
@@ -194,7 +207,9 @@ impl<'p> Simulator<'p> {
         self.state()[n..n + self.system.state_count()].to_vec()
     }
 
-    /// The names of the inputs' velocities, in the order of their efforts.
+    /// The names of the effort inputs' velocities, in the order of their efforts: the
+    /// program's declared inputs (`input swing.q = 0;`), then those named to
+    /// [`Simulator::new`] besides.
     pub fn input_names(&self) -> Vec<String> {
         let inputs = &self.system.state.inputs.velocities;
         inputs
@@ -203,8 +218,60 @@ impl<'p> Simulator<'p> {
             .collect()
     }
 
-    /// Sets the efforts along the inputs (in their order), held until set again (a zero-order
-    /// hold, as a sampled controller applies its commands); they add to the law's.
+    /// The values of the program's value inputs, in the order of
+    /// [`Simulator::value_input_names`].
+    pub fn value_inputs(&self) -> Vec<f64> {
+        let states = &self.system.model.states;
+        let values = self.states();
+        (states.iter().zip(values))
+            .filter(|(state, _)| state.input)
+            .map(|(_, value)| value)
+            .collect()
+    }
+
+    /// The names of the program's value inputs (`input voltage = 0;`), in their order among
+    /// its states.
+    pub fn value_input_names(&self) -> Vec<String> {
+        let states = &self.system.model.states;
+        (states.iter().filter(|state| state.input))
+            .map(|state| state.name.clone())
+            .collect()
+    }
+
+    /// Sets the input `name` to `value`, held until set again (a zero-order hold): an effort
+    /// input by the name of its velocity (`swing.q`: the torque along it), a value input by
+    /// its name (`voltage`). An unknown name is an error that lists the run's inputs.
+    pub fn set_input(&mut self, name: &str, value: f64) -> Result<(), RunFailure> {
+        if let Some(k) = self.input_names().iter().position(|n| n == name) {
+            self.system.state.inputs.held[k] = value;
+            self.restart();
+            return Ok(());
+        }
+        let model = self.system.model;
+        let state = (model.states.iter()).position(|state| state.input && state.name == name);
+        let (Some(k), Stepping::Ode(integration)) = (state, &mut self.stepping) else {
+            let known: Vec<String> = (self.input_names().into_iter())
+                .chain(self.value_input_names())
+                .collect();
+            let listed = match known.is_empty() {
+                true => "the run has none: declare one in the program (`input voltage = 0;`, `input swing.q = 0;`) or name an effort's velocity when the run is made".to_string(),
+                false => format!("the run's inputs are {}", known.join(", ")),
+            };
+            let hint = crate::diag::suggest::did_you_mean(name, known.iter().map(String::as_str))
+                .map_or(String::new(), |n| format!("; did you mean `{n}`?"));
+            return Err(self.failure_now(format!("no input `{name}`: {listed}{hint}")));
+        };
+        // A value input is a state held by a zero rate: set in the integrator's state, from
+        // which it starts again (as a sampled state's update is).
+        let mut y = integration.state().to_vec();
+        y[self.system.dimension() + k] = value;
+        integration.set_state(&y);
+        Ok(())
+    }
+
+    /// Sets the efforts along the effort inputs (in the order of
+    /// [`Simulator::input_names`]), held until set again (a zero-order hold, as a sampled
+    /// controller applies its commands); they add to the law's.
     pub fn set_inputs(&mut self, efforts: &[f64]) -> Result<(), RunFailure> {
         let held = &mut self.system.state.inputs.held;
         if efforts.len() != held.len() {
@@ -274,6 +341,9 @@ impl<'p> Simulator<'p> {
         let (inputs, kept) = (&self.system.state.inputs, &mut fresh.system.state.inputs);
         kept.held.clone_from(&inputs.held);
         kept.law.clone_from(&inputs.law);
+        for (name, value) in self.value_input_names().iter().zip(self.value_inputs()) {
+            fresh.set_input(name, value)?;
+        }
         fresh.samples = std::mem::take(&mut self.samples);
         *self = fresh;
         Ok(())

@@ -141,6 +141,19 @@ impl DriveDecl {
             _ => None,
         }
     }
+
+    /// The name a value input declares, `input voltage = 0` (a bare name after the word
+    /// `input`); `None` for any other declaration, an effort input `input swing.q = 0` among
+    /// them.
+    pub fn value_input_name(&self) -> Option<Ident> {
+        match (&self.target.kind, self.word.name.as_str()) {
+            (ExprKind::Name(name), "input") => Some(Ident {
+                name: *name,
+                span: self.target.span,
+            }),
+            _ => None,
+        }
+    }
 }
 
 /// `join first and second with link [as name]`

@@ -337,7 +337,8 @@ fn the_equations_for_model_exchange_are_the_forward_dynamics() {
 }
 
 /// `input swing.q = 0.25;`: the unit's input with that start value, once even when
-/// `--input` names it too; and `lsdc linearize`'s input without `--input`.
+/// `--input` names it too; `lsdc linearize`'s input without `--input`; and `lsdc simulate`
+/// holds it at its start value, or at the value `--set` gives it.
 #[test]
 fn a_declared_input_is_the_units_and_the_linear_models() {
     let program = "tests/fixtures/input_pendulum.lsd";
@@ -360,9 +361,22 @@ fn a_declared_input_is_the_units_and_the_linear_models() {
     // to the axis).
     let b = linear["B"][1][0].as_f64().expect("B");
     assert!((b - 1.0 / (0.1 + 1.2 * 0.25)).abs() < 1e-12, "{json}");
-    // `lsdc simulate` sets no input: the pendulum moves as without the declaration.
-    let simulate = |file| lsdc(&["simulate", file, "--duration", "0.3", "--every", "0.1"]);
-    let (declared, plain) = (simulate(program), simulate("examples/pendulum.lsd"));
-    assert_eq!((declared.0, plain.0), (0, 0), "{} {}", declared.2, plain.2);
-    assert_eq!(declared.1, plain.1);
+    // `lsdc simulate` holds the input at its start value: the pendulum moves otherwise than
+    // without the declaration, and as without it when `--set` starts the input at 0.
+    let simulate = |file, set: &[&str]| {
+        let mut args = vec!["simulate", file, "--duration", "0.3", "--every", "0.1"];
+        args.extend_from_slice(set);
+        lsdc(&args)
+    };
+    let declared = simulate(program, &[]);
+    let at_zero = simulate(program, &["--set", "swing.q=0"]);
+    let plain = simulate("examples/pendulum.lsd", &[]);
+    assert_eq!(
+        (declared.0, at_zero.0, plain.0),
+        (0, 0, 0),
+        "{}",
+        declared.2
+    );
+    assert_ne!(declared.1, plain.1);
+    assert_eq!(at_zero.1, plain.1);
 }

@@ -117,6 +117,7 @@ mod unit_testing;
 mod unit_topology;
 mod urdf_export;
 mod urdf_import;
+mod value_inputs;
 mod view;
 mod vscode_package;
 mod welds;

@@ -14,6 +14,11 @@
    in LSD (tools/fmi/pd_pendulum.lsd) at the order of a zero-order hold, h¹; and at h = 0.01
    it is the discrete PD of examples/control/discrete_pd_pendulum.lsd (sampled in LSD at the
    same instants) to round-off.
+5. A value input (`input voltage = 12;`, examples/control/dc_motor.lsd): the unit lists
+   `voltage` as an input with its start value (and not among its outputs) in FMI 3.0 and 2.0
+   and validates; a speed loop written here sets the voltage at each communication step h and
+   holds it, and the final speed approaches the same law written in LSD at order h¹; at
+   h = 0.01 it is the law sampled in LSD (`sample`, `update`) to round-off.
 
 Usage: python check_units.py LSDC_BINARY WORK_DIRECTORY
 """
@@ -235,6 +240,77 @@ check(abs(sampled - discrete["swing.q"][-1]) <= 1e-12,
       f"at h = 0.01 the loop is the discrete PD written in LSD to {abs(sampled - discrete['swing.q'][-1]):.1e}")
 
 shutil.rmtree(unzipped, ignore_errors=True)
+
+# 5: a value input, the DC motor's voltage, set by a speed loop written here.
+with open(os.path.join(ROOT, "examples/control/dc_motor.lsd")) as f:
+    MOTOR = f.read()
+MOTOR_SETTINGS = "simulate duration = 10, output = 0.01, integrator = implicit, tolerance = 1e-10 end ;"
+K_S, W_REF, T_MOTOR = 1.0, 5.0, 1.0  # V s/rad, rad/s, s
+
+
+def motor_variant(name, voltage):
+    """The example with its voltage declared as `voltage` (after the join: a law may read its
+    rate) and Dormand-Prince's settings."""
+    text = MOTOR.replace("input voltage = 12 ; (* U, V *)\n", "").replace(
+        "rate current =", voltage + "\nrate current =").replace(
+        MOTOR_SETTINGS, "simulate duration = 1, output = 0.01, integrator = dopri5, tolerance = 1e-10 end ;")
+    path = os.path.join(WORK, name)
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+motor_plant = motor_variant("dc_motor_plant.lsd", "input voltage = 12 ; (* U, V *)")
+for version in ("3", "2"):
+    unit = export(motor_plant, f"dc_motor-fmi{version}.fmu", "--fmi", version)
+    problems = validate_fmu(unit)
+    check(not problems, f"dc_motor FMI {version}.0 validates" + (f": {problems}" if problems else ""))
+    variables = read_model_description(unit).modelVariables
+    voltage = [v for v in variables if v.name == "voltage"]
+    check(len(voltage) == 1 and voltage[0].causality == "input" and float(voltage[0].start) == 12.0,
+          f"dc_motor FMI {version}.0 lists `voltage` once, an input starting at 12")
+motor_unit = os.path.join(WORK, "dc_motor-fmi3.fmu")
+motor_description = read_model_description(motor_unit)
+motor_reference = {v.name: v.valueReference for v in motor_description.modelVariables}
+speed, volts = motor_reference["shoulder.q'"], motor_reference["voltage"]
+motor_unzipped = extract(motor_unit)
+
+
+def speed_loop(h, first_instant=0):
+    """The arm's speed at T_MOTOR with the voltage K_S (W_REF - speed) set every h and held,
+    from step `first_instant` on (the declared 12 V before it)."""
+    unit = FMU3Slave(guid=motor_description.instantiationToken, unzipDirectory=motor_unzipped,
+                     modelIdentifier=motor_description.coSimulation.modelIdentifier)
+    unit.instantiate()
+    unit.enterInitializationMode(startTime=0.0, stopTime=T_MOTOR)
+    unit.exitInitializationMode()
+    for k in range(round(T_MOTOR / h)):
+        (arm_speed,) = unit.getFloat64([speed])
+        if k >= first_instant:
+            unit.setFloat64([volts], [K_S * (W_REF - arm_speed)])
+        unit.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+    (arm_speed,) = unit.getFloat64([speed])
+    unit.terminate()
+    unit.freeInstance()
+    return arm_speed
+
+
+law = f"let voltage = {K_S} * ({W_REF} - shoulder.q') ;"
+continuous = simulated(motor_variant("dc_motor_law.lsd", law), T_MOTOR)["shoulder.q'"][-1]
+errors = [abs(speed_loop(h) - continuous) for h in steps]
+for h, e in zip(steps, errors):
+    print(f"        h = {h:<7g} |w(T) - w_LSD(T)| = {e:.3e}")
+orders = [math.log2(a / b) for a, b in zip(errors, errors[1:])]
+check(all(0.85 <= p <= 1.15 for p in orders),
+      f"the voltage set every h approaches the law in LSD at order 1 in h (observed {', '.join(f'{p:.3f}' for p in orders)})")
+sampled_law = ("let voltage = sample(0.01, 12) ; "
+               f"update voltage = {K_S} * ({W_REF} - shoulder.q') ;")
+discrete = simulated(motor_variant("dc_motor_sampled.lsd", sampled_law), T_MOTOR)["shoulder.q'"][-1]
+difference = abs(speed_loop(0.01, first_instant=1) - discrete)
+check(difference <= 1e-12 * max(1.0, abs(discrete)),
+      f"at h = 0.01 the voltage set from Python is the law sampled in LSD to {difference:.1e}")
+shutil.rmtree(motor_unzipped, ignore_errors=True)
+
 if failures:
     sys.exit(f"{len(failures)} check(s) failed")
 print("all FMI checks passed")

@@ -116,7 +116,7 @@ fn attributes(role: Role) -> &'static str {
     match role {
         Role::Time => "causality=\"independent\" variability=\"continuous\"",
         Role::Parameter => "causality=\"parameter\" variability=\"fixed\"",
-        Role::Input => "causality=\"input\" variability=\"continuous\"",
+        Role::Input | Role::ValueInput => "causality=\"input\" variability=\"continuous\"",
         Role::Acceleration => "causality=\"local\" variability=\"continuous\" initial=\"calculated\"",
         _ => "causality=\"output\" variability=\"continuous\" initial=\"calculated\"",
     }
@@ -125,7 +125,7 @@ fn attributes(role: Role) -> &'static str {
 fn is_output(role: Role) -> bool {
     !matches!(
         role,
-        Role::Time | Role::Parameter | Role::Input | Role::Acceleration
+        Role::Time | Role::Parameter | Role::Input | Role::ValueInput | Role::Acceleration
     )
 }
 

@@ -29,6 +29,9 @@ pub enum Role {
     Parameter,
     /// An effort along a velocity, held over each communication step.
     Input,
+    /// A value input of the program (`input voltage = 0;`, `index` among its value inputs),
+    /// held over each communication step.
+    ValueInput,
     /// A declared coordinate (`index` among `Prepared::coordinate_names`).
     Coordinate,
     /// A declared coordinate's rate.
@@ -199,6 +202,7 @@ pub fn variables(
     prepared: &Prepared,
     parameters: &[(String, f64, String)],
     inputs: &[(String, f64)],
+    value_inputs: &[(String, f64)],
     output_names: &[String],
     accelerations: bool,
 ) -> Vec<Variable> {
@@ -244,6 +248,11 @@ pub fn variables(
             format!("generalised effort along `{name}`, held over each communication step");
         push(format!("{name}.effort"), Role::Input, k, unit, description, Some(*start));
     }
+    for (k, (name, start)) in value_inputs.iter().enumerate() {
+        let description =
+            format!("the program's input `{name}`, held over each communication step");
+        push(name.clone(), Role::ValueInput, k, None, description, Some(*start));
+    }
     for (k, name) in prepared.coordinate_names.iter().enumerate() {
         let unit = dimension(name).map(|d| d.of(Some(0)));
         let description = format!("coordinate `{name}`");
@@ -271,7 +280,9 @@ pub fn variables(
             .to_string(),
         None,
     );
-    for (k, name) in output_names.iter().enumerate() {
+    // A value input is a column of the run (a state) but an input of the unit.
+    let is_input = |name: &String| value_inputs.iter().any(|(n, _)| n == name);
+    for (k, name) in output_names.iter().enumerate().filter(|(_, n)| !is_input(n)) {
         let description = format!("the program's output `{name}`");
         push(name.clone(), Role::Output, k, None, description, None);
     }

@@ -47,9 +47,11 @@ pub const EQUILIBRIUM: f64 = 1e-8;
 /// Where the mechanism is linearised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OperatingPoint {
-    /// The initial state (closed on the loops), at t = 0, with zero inputs.
+    /// The initial state (closed on the loops), at t = 0, with the inputs at their start
+    /// values (zero for those only named).
     Initial,
-    /// The state where the prepared run ends (its duration), at that time, with zero inputs.
+    /// The state where the prepared run ends (its duration), at that time, with the inputs as
+    /// the run held them (their start values, zero for those only named).
     EndOfRun,
     /// The initial configuration at rest, with the inputs at the efforts that hold it there
     /// (`statics`); refused when they cannot.
@@ -60,7 +62,8 @@ pub enum OperatingPoint {
 #[derive(Clone, Debug)]
 pub struct Request {
     pub point: OperatingPoint,
-    /// Coordinates `join.coordinate` along which a generalised force is an input.
+    /// Inputs besides the program's declared ones (which come first): coordinates
+    /// `join.coordinate` along which a generalised force is an input, constant states.
     pub inputs: Vec<String>,
     /// With loops, the independent coordinates (as many as the mobility); empty for the run's
     /// free coordinates.
@@ -140,7 +143,8 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     let model = &prepared.model;
     refuse_unsupported(prepared)?;
     refuse_imposed_motion(prepared, request.point)?;
-    let named = Inputs::named(prepared, &request.inputs)?;
+    let input_names = with_declared(model, &request.inputs);
+    let named = Inputs::named(prepared, &input_names)?;
     let Operating {
         time,
         q,
@@ -322,7 +326,7 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
             .map(|&k| model.states[k].name.clone())
             .collect(),
         states: states_named,
-        inputs: request.inputs.clone(),
+        inputs: input_names,
         outputs,
         state: x,
         input,
@@ -383,6 +387,17 @@ struct Operating {
 }
 
 /// The operating point `point` asks for, its driven coordinates on their laws at its time.
+/// The program's declared inputs (`input swing.q = 0;`, then `input voltage = 0;`) first,
+/// then those `named` that are not declared (a name repeated there stays repeated, for
+/// `Inputs::named`'s error).
+fn with_declared(model: &crate::dynamics::model::Model, named: &[String]) -> Vec<String> {
+    let efforts = model.effort_inputs.iter().map(|(name, _)| name);
+    let values = (model.states.iter().filter(|state| state.input)).map(|state| &state.name);
+    let declared: Vec<String> = efforts.chain(values).cloned().collect();
+    let named = named.iter().filter(|name| !declared.contains(name)).cloned();
+    declared.iter().cloned().chain(named).collect()
+}
+
 fn operating_state(
     prepared: &Prepared,
     point: OperatingPoint,
@@ -411,6 +426,13 @@ fn free_operating_state(
             .map_err(|e| LinearizeError::System(SystemError::from(e)))
     };
     let starting: Vec<f64> = model.states.iter().map(|s| s.initial).collect();
+    // The efforts a run holds: a declared input's start value, 0 for one only named.
+    let held: Vec<f64> = (inputs.iter())
+        .map(|name| {
+            let declared = model.effort_inputs.iter().find(|(n, _)| n == name);
+            declared.map_or(0.0, |(_, start)| *start)
+        })
+        .collect();
     match point {
         OperatingPoint::Initial => {
             let (q, v) = declared(&prepared.coordinates, &prepared.rates)?;
@@ -418,7 +440,7 @@ fn free_operating_state(
                 time: 0.0,
                 q,
                 v,
-                efforts: vec![0.0; inputs.len()],
+                efforts: held.clone(),
                 states: starting,
             })
         }
@@ -449,7 +471,7 @@ fn free_operating_state(
                 time,
                 q,
                 v,
-                efforts: vec![0.0; inputs.len()],
+                efforts: held.clone(),
                 states,
             })
         }

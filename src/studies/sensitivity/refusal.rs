@@ -16,6 +16,7 @@ enum Refused {
     Stop,
     Friction,
     Contact,
+    EffortInput,
 }
 
 impl Refused {
@@ -27,6 +28,7 @@ impl Refused {
             Refused::Stop => "a stop",
             Refused::Friction => "joint friction",
             Refused::Contact => "a contact",
+            Refused::EffortInput => "an effort input (`input JOIN.COORD = START;`)",
         }
     }
 
@@ -36,6 +38,7 @@ impl Refused {
             Refused::Quaternion => "its orientation is a quaternion, whose sensitivities would live in the group's tangent space: write the joint as a chain of revolutes (`link(a, b, c) dof = ...`)",
             Refused::Stop | Refused::Friction => "its events jump the state, and the sensitivities would jump with the event's time (the saltation matrix), which is not computed: leave it out, or difference whole runs (`lsdc sweep --grid NAME=...`)",
             Refused::Contact => "its rows constrain the velocities, and the sensitivities would need their derivative: difference whole runs instead (`lsdc sweep --grid NAME=...`)",
+            Refused::EffortInput => "the sensitivity equations take the program's own efforts, not the inputs' held efforts, which a run adds: apply the start value as an effort of the program (`apply torque ...`), or difference whole runs (`lsdc sweep --grid NAME=...`)",
         }
     }
 }
@@ -53,7 +56,8 @@ pub fn refusal(mechanism: &Mechanism, prepared: &Prepared) -> Option<Diagnostic>
         .or_else(|| (model.mimics.first()).map(|m| (join_of(&m.coordinate), Refused::Mimic)))
         .or_else(|| (model.stops.first()).map(|s| (join_of(&s.coordinate), Refused::Stop)))
         .or_else(|| (model.frictions.first()).map(|f| (join_of(&f.coordinate), Refused::Friction)))
-        .or_else(|| (model.contacts.first()).map(|c| (c.name.clone(), Refused::Contact)));
+        .or_else(|| (model.contacts.first()).map(|c| (c.name.clone(), Refused::Contact)))
+        .or_else(|| (model.effort_inputs.first()).map(|(c, _)| (join_of(c), Refused::EffortInput)));
     let (name, kind) = found?;
     let mut joins = (0..mechanism.joins.len() as u32).map(JoinId);
     let span = match joins.find(|&id| mechanism.join_name(id) == name) {
