@@ -464,9 +464,9 @@ impl Damped<'_> {
 
     /// `least_norm_into` of b into `out`, then `allowed_motions_into` of `free` into `basis`
     /// from its first column, with `rows` as scratch: the first motion's solve is taken beside
-    /// b's (`Envelope::solve_pair`). Each triangular solve is a chain of dependent steps (each
-    /// row waits on the one before); two taken together fill each other's waits, with the same
-    /// operations on each, so the same results as one after the other.
+    /// b's (`Envelope::solve_pair`). Each triangular solve is a chain of dependent divisions;
+    /// two taken together fill each other's waits, with the same operations on each, so the
+    /// same results as one after the other.
     pub fn least_norm_and_allowed_motions_into(
         &self,
         b: &mut [f64],
@@ -644,11 +644,6 @@ pub struct Envelope {
     /// Row k holds columns first[k]..=k at values[starts[k]..starts[k + 1]].
     starts: Vec<usize>,
     values: Vec<f64>,
-    /// Of a factor (`cholesky`), the reciprocals of its diagonal: the factorisation and the
-    /// substitutions multiply by them where they would divide by the diagonal, one division
-    /// per row instead of one per entry (a division costs several multiplications, and each
-    /// row's chain of entries waits on them).
-    inverse_diagonal: Vec<f64>,
 }
 
 impl Envelope {
@@ -677,40 +672,36 @@ impl Envelope {
 
     /// y ← L⁻¹ y for the factor L held.
     fn forward(&self, y: &mut [f64]) {
-        let rows = self.starts.windows(2).zip(&self.inverse_diagonal);
-        for (k, (bound, &inverse)) in rows.enumerate().take(y.len()) {
-            let (left, _) = split_diagonal(&self.values[bound[0]..bound[1]]);
+        for (k, bound) in self.starts.windows(2).enumerate().take(y.len()) {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
             let (done, rest) = y.split_at_mut(k);
             let dot = in_order_dot(left, &done[k - left.len()..]);
-            rest[0] = (rest[0] - dot) * inverse;
+            rest[0] = (rest[0] - dot) / diagonal;
         }
     }
 
     /// y ← (LLᵀ)⁻¹ y and z ← (LLᵀ)⁻¹ z together (of one length), each by the operations of
-    /// `solve` in the same order: the same results, with the two chains of dependent steps
+    /// `solve` in the same order: the same results, with the two chains of dependent divisions
     /// interleaved.
     fn solve_pair(&self, y: &mut [f64], z: &mut [f64]) {
         assert_eq!(y.len(), z.len(), "two right-hand sides of one length");
         let count = y.len();
-        let rows = || {
-            let rows = self.starts.windows(2).zip(&self.inverse_diagonal);
-            rows.take(count).enumerate()
-        };
-        for (k, (bound, &inverse)) in rows() {
-            let (left, _) = split_diagonal(&self.values[bound[0]..bound[1]]);
+        let rows = || self.starts.windows(2).take(count).enumerate();
+        for (k, bound) in rows() {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
             let (y_done, y_rest) = y.split_at_mut(k);
             let (z_done, z_rest) = z.split_at_mut(k);
             let y_dot = in_order_dot(left, &y_done[k - left.len()..]);
             let z_dot = in_order_dot(left, &z_done[k - left.len()..]);
-            y_rest[0] = (y_rest[0] - y_dot) * inverse;
-            z_rest[0] = (z_rest[0] - z_dot) * inverse;
+            y_rest[0] = (y_rest[0] - y_dot) / diagonal;
+            z_rest[0] = (z_rest[0] - z_dot) / diagonal;
         }
-        for (k, (bound, &inverse)) in rows().rev() {
-            let (left, _) = split_diagonal(&self.values[bound[0]..bound[1]]);
+        for (k, bound) in rows().rev() {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
             let (y_done, y_rest) = y.split_at_mut(k);
             let (z_done, z_rest) = z.split_at_mut(k);
-            y_rest[0] *= inverse;
-            z_rest[0] *= inverse;
+            y_rest[0] /= diagonal;
+            z_rest[0] /= diagonal;
             let (y_value, z_value) = (y_rest[0], z_rest[0]);
             let targets = y_done[k - left.len()..].iter_mut();
             for ((y_target, z_target), entry) in targets.zip(&mut z_done[k - left.len()..]).zip(left) {
@@ -755,7 +746,6 @@ impl Envelope {
     /// taken three at a time (`cholesky_triple`: a planar loop's kept rows), the last one or
     /// two as a pair (`cholesky_pair`) or alone.
     fn cholesky(&mut self) -> Result<(), usize> {
-        self.inverse_diagonal.resize(self.len(), 0.0);
         let mut k = 0;
         while k + 2 < self.len() {
             self.cholesky_triple(k)?;
@@ -770,7 +760,7 @@ impl Envelope {
 
     /// Rows k, k + 1 and k + 2 of the Cholesky factor, rows before them done: `cholesky_pair`
     /// with a third row. The three rows' entries left of column k wait on none of the three,
-    /// so they are taken column by column together (three chains of dependent steps
+    /// so they are taken column by column together (three chains of dependent divisions
     /// interleaved), each by the operations of `cholesky_row` in the same order (the same
     /// results); then the entries in columns k and k + 1, each after its row's diagonal.
     fn cholesky_triple(&mut self, k: usize) -> Result<(), usize> {
@@ -780,39 +770,36 @@ impl Envelope {
         let (row_b, rest) = rest.split_at_mut(k + 2 - fb);
         let row_c = &mut rest[..k + 3 - fc];
         let from = fa.min(fb).min(fc);
-        let (done, inverses) = self.inverse_diagonal.split_at_mut(k);
-        let rows = self.starts.windows(2).zip(&*done).enumerate();
-        for (j, (bound, &inverse)) in rows.skip(from) {
-            let (left, _) = split_diagonal(&above[bound[0]..bound[1]]);
+        for (j, bound) in self.starts.windows(2).enumerate().take(k).skip(from) {
+            let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
             if j >= fa {
-                eliminate(row_a, j - fa, left, inverse);
+                eliminate(row_a, j - fa, left, pivot);
             }
             if j >= fb {
-                eliminate(row_b, j - fb, left, inverse);
+                eliminate(row_b, j - fb, left, pivot);
             }
             if j >= fc {
-                eliminate(row_c, j - fc, left, inverse);
+                eliminate(row_c, j - fc, left, pivot);
             }
         }
-        inverses[0] = finish_diagonal(row_a).map_err(|()| k)?;
-        let (left, _) = split_diagonal(row_a);
+        finish_diagonal(row_a).map_err(|()| k)?;
+        let (left, pivot) = split_diagonal(row_a);
         if fb <= k {
-            eliminate(row_b, k - fb, left, inverses[0]);
+            eliminate(row_b, k - fb, left, pivot);
         }
         if fc <= k {
-            eliminate(row_c, k - fc, left, inverses[0]);
+            eliminate(row_c, k - fc, left, pivot);
         }
-        inverses[1] = finish_diagonal(row_b).map_err(|()| k + 1)?;
+        finish_diagonal(row_b).map_err(|()| k + 1)?;
         if fc <= k + 1 {
-            let (left, _) = split_diagonal(row_b);
-            eliminate(row_c, k + 1 - fc, left, inverses[1]);
+            let (left, pivot) = split_diagonal(row_b);
+            eliminate(row_c, k + 1 - fc, left, pivot);
         }
-        inverses[2] = finish_diagonal(row_c).map_err(|()| k + 2)?;
-        Ok(())
+        finish_diagonal(row_c).map_err(|()| k + 2)
     }
 
     /// Rows k and k + 1 of the Cholesky factor, rows before them done. Each entry of a row is a
-    /// step waiting on the row's entries before it; row k + 1's entries left of column k do
+    /// division waiting on the row's entries before it; row k + 1's entries left of column k do
     /// not wait on row k, so the two rows' entries are taken column by column together, each
     /// by the operations of `cholesky_row` in the same order (the same results). Then row k's
     /// diagonal, row k + 1's entry in column k, and its diagonal.
@@ -821,24 +808,21 @@ impl Envelope {
         let (above, below) = self.values.split_at_mut(self.starts[k]);
         let (row_k, rest) = below.split_at_mut(k - fk + 1);
         let row_l = &mut rest[..k + 2 - fl];
-        let (done, inverses) = self.inverse_diagonal.split_at_mut(k);
-        let rows = self.starts.windows(2).zip(&*done).enumerate();
-        for (j, (bound, &inverse)) in rows.skip(fk.min(fl)) {
-            let (left, _) = split_diagonal(&above[bound[0]..bound[1]]);
+        for (j, bound) in self.starts.windows(2).enumerate().take(k).skip(fk.min(fl)) {
+            let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
             if j >= fk {
-                eliminate(row_k, j - fk, left, inverse);
+                eliminate(row_k, j - fk, left, pivot);
             }
             if j >= fl {
-                eliminate(row_l, j - fl, left, inverse);
+                eliminate(row_l, j - fl, left, pivot);
             }
         }
-        inverses[0] = finish_diagonal(row_k).map_err(|()| k)?;
+        finish_diagonal(row_k).map_err(|()| k)?;
         if fl <= k {
-            let (left, _) = split_diagonal(row_k);
-            eliminate(row_l, k - fl, left, inverses[0]);
+            let (left, pivot) = split_diagonal(row_k);
+            eliminate(row_l, k - fl, left, pivot);
         }
-        inverses[1] = finish_diagonal(row_l).map_err(|()| k + 1)?;
-        Ok(())
+        finish_diagonal(row_l).map_err(|()| k + 1)
     }
 
     /// Row k of the Cholesky factor, rows before it done.
@@ -846,26 +830,24 @@ impl Envelope {
         let (fk, start) = (self.first[k], self.starts[k]);
         let (above, below) = self.values.split_at_mut(start);
         let row = &mut below[..k - fk + 1];
-        // Rows fk..k of the factor, each with its envelope's bounds and its diagonal's
-        // reciprocal: zipped, so that the loop over them slices without looking the bounds up
-        // one by one.
-        let bounds = self.starts[fk..=k].windows(2).zip(&self.inverse_diagonal[fk..k]);
-        for (done, (bound, &inverse)) in (0..).zip(bounds) {
-            let (left, _) = split_diagonal(&above[bound[0]..bound[1]]);
-            eliminate(row, done, left, inverse);
+        // Rows fk..k of the factor, each with its envelope's bounds: zipped, so that the loop
+        // over them slices without looking the bounds up one by one.
+        let bounds = self.starts[fk..=k].windows(2);
+        for (done, bound) in (0..).zip(bounds) {
+            let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
+            eliminate(row, done, left, pivot);
         }
-        self.inverse_diagonal[k] = finish_diagonal(row).map_err(|()| k)?;
-        Ok(())
+        finish_diagonal(row).map_err(|()| k)
     }
 
     /// y ← (LLᵀ)⁻¹ y for the factor L held.
     fn solve(&self, y: &mut [f64]) {
         self.forward(y);
-        let rows = self.starts.windows(2).zip(&self.inverse_diagonal);
-        for (k, (bound, &inverse)) in rows.take(y.len()).enumerate().rev() {
-            let (left, _) = split_diagonal(&self.values[bound[0]..bound[1]]);
+        let rows = self.starts.windows(2).take(y.len()).enumerate();
+        for (k, bound) in rows.rev() {
+            let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
             let (done, rest) = y.split_at_mut(k);
-            rest[0] *= inverse;
+            rest[0] /= diagonal;
             let value = rest[0];
             for (target, entry) in done[k - left.len()..].iter_mut().zip(left) {
                 *target -= entry * value;
@@ -933,31 +915,25 @@ impl NormalPlan {
 }
 
 /// Entry `done` of an envelope row of the Cholesky factor, its entries before it done, from
-/// the factor's row of that column (`left` of its diagonal, whose reciprocal is `inverse`):
-/// their common columns are the last of each.
-fn eliminate(row: &mut [f64], done: usize, left: &[f64], inverse: f64) {
+/// the factor's row of that column (`left` of its diagonal `pivot`): their common columns are
+/// the last of each.
+fn eliminate(row: &mut [f64], done: usize, left: &[f64], pivot: f64) {
     let (row_left, rest) = row.split_at_mut(done);
     let common = done.min(left.len());
     let dot = in_order_dot(&row_left[done - common..], &left[left.len() - common..]);
-    rest[0] = (rest[0] - dot) * inverse;
+    rest[0] = (rest[0] - dot) / pivot;
 }
 
-/// The diagonal of an envelope row of the Cholesky factor, its entries left of it done, and
-/// its reciprocal; an error where the pivot is not positive. The reciprocal is √s · (1/s) of
-/// the pivot's square s: the root and the division are taken side by side, where 1/√s would
-/// wait on the root (the next rows wait on the reciprocal); 1/√s where 1/s overflows.
-fn finish_diagonal(row: &mut [f64]) -> Result<f64, ()> {
+/// The diagonal of an envelope row of the Cholesky factor, its entries left of it done; an
+/// error where the pivot is not positive.
+fn finish_diagonal(row: &mut [f64]) -> Result<(), ()> {
     let (diagonal, left) = row.split_last_mut().expect("a diagonal");
     let square = *diagonal - left.iter().map(|x| x * x).sum::<f64>();
     if !(square > 0.0 && square.is_finite()) {
         return Err(());
     }
-    let (root, reciprocal) = (square.sqrt(), 1.0 / square);
-    *diagonal = root;
-    match reciprocal.is_finite() {
-        true => Ok(root * reciprocal),
-        false => Ok(1.0 / root),
-    }
+    *diagonal = square.sqrt();
+    Ok(())
 }
 
 /// An envelope row's entries left of its diagonal, and the diagonal.
