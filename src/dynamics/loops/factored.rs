@@ -326,6 +326,19 @@ impl Factored {
         }
     }
 
+    /// `transpose_times_into` of y into `y_out` and of z into `z_out` in one pass over the
+    /// rows: each output summed in the same order as alone (the same results).
+    fn transpose_times_pair_into(&self, (y, z): (&[f64], &[f64]), (y_out, z_out): (&mut [f64], &mut [f64])) {
+        y_out.fill(0.0);
+        z_out.fill(0.0);
+        for ((row, &y_weight), &z_weight) in self.rows.iter().zip(y).zip(z) {
+            for (c, value) in row {
+                y_out[c] += value * y_weight;
+                z_out[c] += value * z_weight;
+            }
+        }
+    }
+
     /// The factorisation of A + μ²E, with μ = `damping` times the largest diagonal entry of the
     /// undamped factor (the largest row's independent length) and E the identity on the firm
     /// rows, zero on the weak ones: A⁻¹ wherever the rows are independent, bounded where the
@@ -337,7 +350,7 @@ impl Factored {
     /// `damped`, factored in the storage of `factor` (from `Damped::into_storage`): nothing is
     /// allocated once it has held a factor of this size.
     pub fn damped_in(&self, damping: f64, mut factor: Envelope) -> Result<Damped<'_>, Singular> {
-        let largest = self.normal.diagonal().fold(0.0, f64::max).sqrt();
+        let largest = self.normal.largest_diagonal().sqrt();
         let shift = (damping * largest).powi(2);
         factor.copy_from(&self.normal);
         for k in 0..self.firm {
@@ -471,9 +484,8 @@ impl Damped<'_> {
             return self.allowed_motions_into(free, rows, basis, 0);
         }
         self.factor.solve_pair(b, rows);
-        self.factored.transpose_times_into(b, out);
         let mut column = basis.column_mut(0);
-        self.factored.transpose_times_into(rows, column.as_mut_slice());
+        (self.factored).transpose_times_pair_into((b, rows), (out, column.as_mut_slice()));
         column.neg_mut();
         column[first] += 1.0;
         self.allowed_motions_into(&free[1..], rows, basis, 1);
@@ -700,9 +712,13 @@ impl Envelope {
     }
 
     /// `other`'s entries in this envelope's storage (a derived `clone_from` would allocate anew).
+    /// The shape is copied only when it differs: a factor taken again of the same rows has it
+    /// already, and comparing costs less than copying.
     fn copy_from(&mut self, other: &Envelope) {
-        self.first.clone_from(&other.first);
-        self.starts.clone_from(&other.starts);
+        if self.first != other.first {
+            self.first.clone_from(&other.first);
+            self.starts.clone_from(&other.starts);
+        }
         self.values.clone_from(&other.values);
     }
 
@@ -710,18 +726,76 @@ impl Envelope {
         self.starts[1..].iter().map(|&end| self.values[end - 1])
     }
 
+    /// The largest diagonal entry (at least 0): `diagonal`'s largest, taken in four running
+    /// maxima so that each comparison does not wait on the one before (the maximum is the
+    /// same in any order).
+    fn largest_diagonal(&self) -> f64 {
+        let mut largest = [0.0f64; 4];
+        let ends = self.starts[1..].chunks_exact(4);
+        let rest = ends.remainder();
+        for chunk in ends {
+            for (running, &end) in largest.iter_mut().zip(chunk) {
+                *running = running.max(self.values[end - 1]);
+            }
+        }
+        let rest = rest.iter().map(|&end| self.values[end - 1]);
+        rest.fold(largest[0].max(largest[1]).max(largest[2].max(largest[3])), f64::max)
+    }
+
     /// The Cholesky factor in place, or the first row whose pivot is not positive. Rows are
-    /// taken two at a time (`cholesky_pair`), the last one alone if their number is odd.
+    /// taken three at a time (`cholesky_triple`: a planar loop's kept rows), the last one or
+    /// two as a pair (`cholesky_pair`) or alone.
     fn cholesky(&mut self) -> Result<(), usize> {
         let mut k = 0;
-        while k + 1 < self.len() {
-            self.cholesky_pair(k)?;
-            k += 2;
+        while k + 2 < self.len() {
+            self.cholesky_triple(k)?;
+            k += 3;
         }
-        match k < self.len() {
-            true => self.cholesky_row(k),
-            false => Ok(()),
+        match self.len() - k {
+            2 => self.cholesky_pair(k),
+            1 => self.cholesky_row(k),
+            _ => Ok(()),
         }
+    }
+
+    /// Rows k, k + 1 and k + 2 of the Cholesky factor, rows before them done: `cholesky_pair`
+    /// with a third row. The three rows' entries left of column k wait on none of the three,
+    /// so they are taken column by column together (three chains of dependent divisions
+    /// interleaved), each by the operations of `cholesky_row` in the same order (the same
+    /// results); then the entries in columns k and k + 1, each after its row's diagonal.
+    fn cholesky_triple(&mut self, k: usize) -> Result<(), usize> {
+        let (fa, fb, fc) = (self.first[k], self.first[k + 1], self.first[k + 2]);
+        let (above, below) = self.values.split_at_mut(self.starts[k]);
+        let (row_a, rest) = below.split_at_mut(k - fa + 1);
+        let (row_b, rest) = rest.split_at_mut(k + 2 - fb);
+        let row_c = &mut rest[..k + 3 - fc];
+        let from = fa.min(fb).min(fc);
+        for (j, bound) in self.starts.windows(2).enumerate().take(k).skip(from) {
+            let (left, pivot) = split_diagonal(&above[bound[0]..bound[1]]);
+            if j >= fa {
+                eliminate(row_a, j - fa, left, pivot);
+            }
+            if j >= fb {
+                eliminate(row_b, j - fb, left, pivot);
+            }
+            if j >= fc {
+                eliminate(row_c, j - fc, left, pivot);
+            }
+        }
+        finish_diagonal(row_a).map_err(|()| k)?;
+        let (left, pivot) = split_diagonal(row_a);
+        if fb <= k {
+            eliminate(row_b, k - fb, left, pivot);
+        }
+        if fc <= k {
+            eliminate(row_c, k - fc, left, pivot);
+        }
+        finish_diagonal(row_b).map_err(|()| k + 1)?;
+        if fc <= k + 1 {
+            let (left, pivot) = split_diagonal(row_b);
+            eliminate(row_c, k + 1 - fc, left, pivot);
+        }
+        finish_diagonal(row_c).map_err(|()| k + 2)
     }
 
     /// Rows k and k + 1 of the Cholesky factor, rows before them done. Each entry of a row is a
