@@ -24,7 +24,7 @@
 //! particular acceleration, X = N (E N)⁺ and c = a₀ − X E a₀ solve the same equations, and any
 //! two solutions differ by free motions, which move no mass, so the model is the same.
 
-use nalgebra::{DMatrix, DMatrixView, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};
 
 use super::algorithms::{crba_after_kinematics, forward_kinematics, rnea_after_kinematics, Data};
 use super::compiled::ModelReads;
@@ -57,6 +57,8 @@ pub struct ReducedScratch {
     bias: DVector<f64>,
     /// The state's velocities' generalised forces: h, then h₀.
     full: DVector<f64>,
+    /// M x over the state's velocities for a column x of [X | c] (zero off the tree's).
+    product: DVector<f64>,
     constraints: Option<Constraints>,
     /// The gravity efforts' own forward kinematics at rest, and efforts at rest.
     at_rest: Option<(Data, Efforts)>,
@@ -75,6 +77,7 @@ impl ReducedScratch {
             mass: DMatrix::zeros(model.nv, model.nv),
             bias: DVector::zeros(model.nv),
             full: DVector::zeros(model.velocities()),
+            product: DVector::zeros(model.velocities()),
             constraints: model.has_loops().then(|| Constraints::new(model)),
             at_rest: None,
             zero_velocities: vec![0.0; model.velocities()],
@@ -118,7 +121,6 @@ pub fn reduced_model(
     (scratch, loops): (&mut ReducedScratch, Option<LoopSolution<'_>>),
 ) -> Result<(), ReducedError> {
     let m = velocities.len();
-    let n = model.velocities();
     crba_after_kinematics(model, data, &mut scratch.mass);
     let known = loops
         .filter(|_| scratch.checked_free)
@@ -128,34 +130,38 @@ pub fn reduced_model(
         None => stacked_solution(model, data, state, velocities, scratch)?,
     };
     let motions = solution.columns(0, m);
-    let mass_times = |x: &DVector<f64>| -> DVector<f64> {
-        let mut product = DVector::zeros(n);
-        let tree = &scratch.mass * x.rows(0, model.nv);
-        product.rows_mut(0, model.nv).copy_from(&tree);
-        product
+    let nv = model.nv;
+    let ReducedScratch {
+        values,
+        mass,
+        bias,
+        full,
+        product,
+        zero_velocities,
+        ..
+    } = scratch;
+    // M x on the tree's rows, zero on the others (the declared coordinates').
+    let mass_times = |x: DVectorView<'_, f64>, product: &mut DVector<f64>| {
+        mass.mul_to(&x.rows(0, nv), &mut product.rows_mut(0, nv));
+        product.rows_mut(nv, product.nrows() - nv).fill(0.0);
     };
-    let values = &mut scratch.values;
     if reads.mass {
         for i in 0..m {
-            let column = mass_times(&motions.column(i).into_owned());
+            mass_times(motions.column(i), product);
             for j in 0..m {
-                values[j * m + i] = motions.column(j).dot(&column);
+                values[j * m + i] = motions.column(j).dot(product);
             }
         }
     }
     if reads.bias {
-        rnea_after_kinematics(
-            model,
-            data,
-            &vec![0.0; model.nv],
-            &state.efforts.external,
-            &mut scratch.bias,
-        );
-        generalised(model, &scratch.bias, state.efforts, &mut scratch.full);
-        let accelerating = mass_times(&solution.column(m).into_owned());
-        let total = &scratch.full + accelerating;
+        let zero_accelerations = &zero_velocities[..nv];
+        let external = &state.efforts.external;
+        rnea_after_kinematics(model, data, zero_accelerations, external, bias);
+        generalised(model, bias, state.efforts, full);
+        mass_times(solution.column(m), product);
+        *product += &*full;
         for k in 0..m {
-            values[m * m + k] = motions.column(k).dot(&total);
+            values[m * m + k] = motions.column(k).dot(product);
         }
     }
     if reads.gravity {
@@ -173,13 +179,13 @@ pub fn reduced_model(
         rnea_after_kinematics(
             model,
             rest,
-            &vec![0.0; model.nv],
+            &scratch.zero_velocities[..model.nv],
             &efforts.external,
             &mut scratch.bias,
         );
         generalised(model, &scratch.bias, efforts, &mut scratch.full);
         for k in 0..m {
-            values[m * m + m + k] = motions.column(k).dot(&scratch.full);
+            scratch.values[m * m + m + k] = motions.column(k).dot(&scratch.full);
         }
     }
     Ok(())
@@ -239,13 +245,19 @@ fn from_loop_solution(loops: &LoopSolution<'_>, velocities: &[usize]) -> Option<
         return None;
     }
     let actuated = loops.motions.select_rows(velocities);
-    // (E N)⁺ from the small matrix's singular value decomposition, which also says its rank.
-    let svd = crate::linalg::svd(actuated, true, true)?;
-    let largest = svd.singular_values.max();
-    if svd.singular_values.min() <= RANK_FLOOR * largest {
-        return None;
-    }
-    let inverse = svd.pseudo_inverse(0.0).ok()?;
+    let inverse = match clearly_invertible(&actuated) {
+        Some(inverse) => inverse,
+        None => {
+            // (E N)⁺ from the small matrix's singular value decomposition, which also says
+            // its rank.
+            let svd = crate::linalg::svd(actuated, true, true)?;
+            let largest = svd.singular_values.max();
+            if svd.singular_values.min() <= RANK_FLOOR * largest {
+                return None;
+            }
+            svd.pseudo_inverse(0.0).ok()?
+        }
+    };
     let mut solution = DMatrix::zeros(loops.motions.nrows(), m + 1);
     let x = loops.motions * inverse;
     let particular = DVector::from_column_slice(loops.particular);
@@ -254,6 +266,29 @@ fn from_loop_solution(loops: &LoopSolution<'_>, velocities: &[usize]) -> Option<
     let c = particular - &x * actuated_particular;
     solution.column_mut(m).copy_from(&c);
     solution.iter().all(|x| x.is_finite()).then_some(solution)
+}
+
+/// The inverse of a square E N (the actuated rates of as many allowed motions as actuated
+/// coordinates, a run's usual case) from its LU factorisation with partial pivoting, where its
+/// condition number in the 1-norm κ₁ shows its singular values all above `RANK_FLOOR` times the
+/// largest: for an m × m matrix κ₂ ≤ m κ₁ (‖A‖₂ ≤ √m ‖A‖₁; Golub and Van Loan, "Matrix
+/// Computations", 4th ed., §2.3.2), so the decomposition's test passes and its pseudo-inverse
+/// is this inverse, at a fraction of its cost. `None` where that is not shown (a wide E N, a
+/// condition near the floor, a singular one): the decomposition decides, as before.
+fn clearly_invertible(actuated: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let m = actuated.nrows();
+    if actuated.ncols() != m || m == 0 {
+        return None;
+    }
+    let inverse = actuated.clone().lu().try_inverse()?;
+    let norm_1 = |a: &DMatrix<f64>| {
+        (a.column_iter())
+            .map(|column| column.iter().map(|x| x.abs()).sum::<f64>())
+            .fold(0.0, f64::max)
+    };
+    let condition = norm_1(actuated) * norm_1(&inverse);
+    // Half the floor's bound: the decomposition's singular values carry round-off too.
+    (condition.is_finite() && m as f64 * condition < 0.5 / RANK_FLOOR).then_some(inverse)
 }
 
 /// h on the state's velocities: RNEA's on the tree's (`tree`), less the link efforts' τ.

@@ -7,6 +7,8 @@
 
 use std::collections::HashMap;
 
+use super::tape_code::{Apply, Code, TapeCode};
+
 pub use super::exponential_profile::ExponentialProfile;
 
 /// An expression: an index into its `Pool`.
@@ -653,6 +655,12 @@ impl Pool {
     }
 }
 
+impl Apply for Function {
+    fn apply(self, x: f64) -> f64 {
+        self.eval(x)
+    }
+}
+
 /// The nodes that `roots` reach, operands before the nodes that use them: the order in which to
 /// evaluate them, or to emit one assignment each.
 #[derive(Clone, Debug)]
@@ -664,6 +672,8 @@ pub struct Tape {
     /// the positions of its operands. A sum with a negated operand is one subtraction, so a
     /// negation that only such sums use is not computed at all.
     program: Vec<(usize, Step)>,
+    /// The program as the interpreter runs it (`tape_code`).
+    code: TapeCode<Function>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -684,6 +694,24 @@ enum Step {
 }
 
 impl Step {
+    /// The step as an instruction of the tape's code.
+    fn code(self) -> Code<Function> {
+        let p = |k: usize| u32::try_from(k).expect("a tape of fewer than 2^32 nodes");
+        match self {
+            Step::Constant(c) => Code::Constant(c),
+            Step::Symbol(i) => Code::Symbol(p(i)),
+            Step::Add(a, b) => Code::Add(p(a), p(b)),
+            Step::Sub(a, b) => Code::Sub(p(a), p(b)),
+            Step::Mul(a, b) => Code::Mul(p(a), p(b)),
+            Step::Neg(a) => Code::Neg(p(a)),
+            Step::Div(a, b) => Code::Div(p(a), p(b)),
+            Step::Pow(a, b) => Code::Pow(p(a), p(b)),
+            Step::Atan2(a, b) => Code::Atan2(p(a), p(b)),
+            Step::Apply(f, a) => Code::Apply(f, p(a)),
+            Step::Select(a, b, c) => Code::Select(p(a), p(b), p(c)),
+        }
+    }
+
     fn operands(self) -> [Option<usize>; 3] {
         match self {
             Step::Constant(_) | Step::Symbol(_) => [None, None, None],
@@ -775,15 +803,18 @@ impl Tape {
                 used[operand] = true;
             }
         }
-        let program = steps
+        let program: Vec<(usize, Step)> = steps
             .into_iter()
             .enumerate()
             .filter(|&(k, step)| used[k] || !matches!(step, Step::Neg(_)))
             .collect();
+        let steps: Vec<(usize, Code<Function>)> = program.iter().map(|&(k, s)| (k, s.code())).collect();
+        let code = TapeCode::new(&steps, &roots, order.len());
         Tape {
             order,
             roots,
             program,
+            code,
         }
     }
 
@@ -825,7 +856,8 @@ impl Tape {
         self.roots.iter().map(|&r| value[r]).collect()
     }
 
-    /// Evaluates every node into `value` (node k of `order` at index k), reusing its storage.
+    /// Evaluates every node into `value` (node k of `order` at index k, a product that only one
+    /// sum reads computed inside it and not written: read the roots), reusing its storage.
     pub fn eval_into(&self, symbols: &[f64], value: &mut Vec<f64>) {
         self.eval_prefix_into(symbols, value, self.order.len());
     }
@@ -834,24 +866,6 @@ impl Tape {
     /// reach come first: they need no other), reusing its storage.
     pub fn eval_prefix_into(&self, symbols: &[f64], value: &mut Vec<f64>, count: usize) {
         value.resize(self.order.len(), 0.0);
-        let end = self.program.partition_point(|&(k, _)| k < count);
-        for &(k, step) in &self.program[..end] {
-            value[k] = match step {
-                Step::Constant(c) => c,
-                Step::Symbol(i) => symbols[i],
-                Step::Add(a, b) => value[a] + value[b],
-                Step::Sub(a, b) => value[a] - value[b],
-                Step::Mul(a, b) => value[a] * value[b],
-                Step::Neg(a) => -value[a],
-                Step::Div(a, b) => value[a] / value[b],
-                Step::Pow(a, b) => value[a].powf(value[b]),
-                Step::Atan2(a, b) => value[a].atan2(value[b]),
-                Step::Apply(f, a) => f.eval(value[a]),
-                Step::Select(test, high, low) => match value[test] >= 0.0 {
-                    true => value[high],
-                    false => value[low],
-                },
-            };
-        }
+        self.code.eval_prefix(symbols, value, count);
     }
 }

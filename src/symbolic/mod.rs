@@ -23,6 +23,7 @@ pub mod lower;
 mod newton_euler;
 pub mod program;
 pub mod simplify;
+mod tape_code;
 pub mod vector;
 
 pub use equations::{generate, generate_in, Equations};
