@@ -110,6 +110,17 @@ fn prepared(text: &str, changes: &SettingsChanges) -> Prepared {
     program(text).prepare(&[], changes).expect("prepares")
 }
 
+/// RK4 at 2 ms over 0.5 s, outputs every 50 ms: the runs compared at the same steps.
+fn rk4_half_second() -> SettingsChanges {
+    SettingsChanges {
+        integrator: Some(Integrator::Rk4),
+        step: Some(2e-3),
+        duration: Some(0.5),
+        output: Some(0.05),
+        ..Default::default()
+    }
+}
+
 /// The run with the reduction and the run with the drives' rows.
 fn both(text: &str, changes: &SettingsChanges) -> (Simulation, Simulation) {
     let reduced = prepared(text, changes);
@@ -199,13 +210,7 @@ fn a_cart_carrying_a_driven_arm_runs_the_arm_as_kinematics_with_the_full_models_
 
 #[test]
 fn a_robot_whose_wrist_is_driven_matches_its_full_model_at_fixed_steps() {
-    let changes = SettingsChanges {
-        integrator: Some(Integrator::Rk4),
-        step: Some(2e-3),
-        duration: Some(0.5),
-        output: Some(0.05),
-        ..Default::default()
-    };
+    let changes = rk4_half_second();
     let (reduced, full) = both(WRIST, &changes);
     let subtrees = prepared(WRIST, &changes);
     assert_eq!(subtrees.driven_subtrees().map(|s| s.bodies), Some(2));
@@ -253,13 +258,7 @@ fn a_driven_joint_with_a_free_joint_below_or_in_a_loop_keeps_its_row() {
 fn a_planar_chain_whose_tip_is_driven_reports_the_form_its_run_took() {
     // Asked for the planar form, the reduced run takes hybrid dynamics (in spatial algebra):
     // its report says so, while the full model's rows run on the planar mass matrix.
-    let changes = SettingsChanges {
-        integrator: Some(Integrator::Rk4),
-        step: Some(2e-3),
-        duration: Some(0.5),
-        output: Some(0.05),
-        ..Default::default()
-    };
+    let changes = rk4_half_second();
     let mut reduced = prepared(PLANAR_TIP, &changes);
     reduced.take_planar().expect("a planar chain");
     let mut full = prepared(PLANAR_TIP, &changes);
