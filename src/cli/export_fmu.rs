@@ -12,6 +12,7 @@ use std::process::ExitCode;
 use super::fmi_library;
 use super::shared::{err, out, parse_sets, prepare_file, usage_error, Format, LibraryArgs};
 use lsdc::api::{model_exchange_refusal, output_names, Equations, Program, Simulator};
+use lsdc::kinematics::unknowns::Override;
 use lsdc::output::fmi::archive::Archive;
 use lsdc::output::fmi::model_description::{model_description, Identity, Kind, Version};
 use lsdc::output::fmi::variables::{parameters, variables, Variable};
@@ -69,6 +70,17 @@ struct UnitFile<'a> {
     /// The velocities the inputs act along, in order.
     inputs: &'a [String],
     variables: &'a [Variable],
+}
+
+/// Inputs with their start values, each replaced by the last `--set` that names it.
+fn with_sets(inputs: Vec<(String, f64)>, sets: &[Override]) -> Vec<(String, f64)> {
+    (inputs.into_iter())
+        .map(|(name, start)| {
+            let set = sets.iter().rev().find(|set| set.name == name);
+            let start = set.map_or(start, |set| set.value);
+            (name, start)
+        })
+        .collect()
 }
 
 /// The program's files (its imports but the standard library's) under their common folder: the
@@ -147,9 +159,12 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
     let Ok(mechanism) = program.mechanism() else {
         return ExitCode::from(1);
     };
-    // The program's declared inputs (`input swing.q = 0;`, with their start values), then
-    // those named here (starting at 0).
-    let mut declared = mechanism.declared_inputs();
+    let Ok(overrides) = parse_sets(&args.sets) else {
+        return ExitCode::from(2);
+    };
+    // The program's declared inputs (`input swing.q = 0;`, with their start values, or those
+    // `--set` gives them, as every run takes them), then those named here (starting at 0).
+    let mut declared = with_sets(mechanism.declared_inputs(), &overrides);
     for name in &args.inputs {
         if !declared.iter().any(|(n, _)| n == name) {
             declared.push((name.clone(), 0.0));
@@ -179,15 +194,12 @@ pub fn run(args: &ExportFmuArgs) -> ExitCode {
             return usage_error(&format!("the unit cannot run: {reason}"));
         }
     }
-    let Ok(overrides) = parse_sets(&args.sets) else {
-        return ExitCode::from(2);
-    };
     let parameters = parameters(mechanism, &overrides);
     let variables = variables(
         &prepared,
         &parameters,
         &declared,
-        &mechanism.declared_value_inputs(),
+        &with_sets(mechanism.declared_value_inputs(), &overrides),
         &output_names(&prepared),
         kind.model_exchange(),
     );

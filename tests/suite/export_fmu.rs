@@ -338,7 +338,7 @@ fn the_equations_for_model_exchange_are_the_forward_dynamics() {
 
 /// `input swing.q = 0.25;`: the unit's input with that start value, once even when
 /// `--input` names it too; `lsdc linearize`'s input without `--input`; and `lsdc simulate`
-/// holds it at its start value, or at the value `--set` gives it.
+/// holds it at its start value, or at the value `--set` gives it, which the unit starts it at too.
 #[test]
 fn a_declared_input_is_the_units_and_the_linear_models() {
     let program = "tests/fixtures/input_pendulum.lsd";
@@ -353,6 +353,13 @@ fn a_declared_input_is_the_units_and_the_linear_models() {
         assert!(inputs[0].contains("name=\"swing.q.effort\""), "{xml}");
         assert!(inputs[0].contains("start=\"0.25\""), "{xml}");
     }
+    // `--set` starts the unit's input where every run starts it.
+    let xml = description_of(&[program, "--set", "swing.q=0.5"]);
+    let input = (xml.lines()).find(|l| l.contains("name=\"swing.q.effort\""));
+    assert!(input.is_some_and(|l| l.contains("start=\"0.5\"")), "{xml}");
+    let xml = description_of(&["examples/control/dc_motor.lsd", "--set", "voltage=6"]);
+    let input = (xml.lines()).find(|l| l.contains("name=\"voltage\""));
+    assert!(input.is_some_and(|l| l.contains("start=\"6.0\"")), "{xml}");
     let (code, json, stderr) = lsdc(&["linearize", program, "--format", "json"]);
     assert_eq!(code, 0, "{stderr}");
     let linear: serde_json::Value = serde_json::from_str(&json).expect("json");
