@@ -73,6 +73,9 @@ pub enum DefinitionKind {
     Coordinate,
     /// `local a = e in ... end`
     Local,
+    /// `input voltage = 12`: a value set from outside the program (`--set`,
+    /// `Simulator::set_input`, an FMI unit's input), holding its start value until set.
+    Input,
 }
 
 #[derive(Clone, Debug)]
@@ -281,6 +284,11 @@ impl Builder<'_> {
                     self.scope_declarations(&package.decls, file, start);
                 }
                 DeclKind::Import(import) => self.import(decl.span, &import.target),
+                DeclKind::Drive(drive) => {
+                    if let Some(name) = drive.value_input_name() {
+                        declare(self, &name, DefinitionKind::Input);
+                    }
+                }
                 _ => {}
             }
         }
@@ -364,7 +372,10 @@ impl Builder<'_> {
                     }
                 }
                 DeclKind::Drive(drive) => {
-                    self.expr(&drive.target, &mut locals);
+                    // A value input's target is the name it declares, not a use of one.
+                    if drive.value_input_name().is_none() {
+                        self.expr(&drive.target, &mut locals);
+                    }
                     self.expr(&drive.value, &mut locals);
                 }
                 DeclKind::Simulate(fields) => self.fields(fields, &mut locals),

@@ -286,9 +286,10 @@ fn definition_item(definition: &Definition) -> CompletionItem {
     let kind = match definition.kind {
         DefinitionKind::Function { .. } => CompletionItemKind::FUNCTION,
         DefinitionKind::Package(_) | DefinitionKind::Module(_) => CompletionItemKind::MODULE,
-        DefinitionKind::Parameter | DefinitionKind::Coordinate | DefinitionKind::Local => {
-            CompletionItemKind::VARIABLE
-        }
+        DefinitionKind::Parameter
+        | DefinitionKind::Coordinate
+        | DefinitionKind::Local
+        | DefinitionKind::Input => CompletionItemKind::VARIABLE,
         DefinitionKind::Value | DefinitionKind::Join => CompletionItemKind::VALUE,
     };
     let detail = definition

@@ -156,6 +156,10 @@ fn describe(analysis: &Analysis, definition: &Definition) -> String {
         DefinitionKind::Parameter => typed("parameter"),
         DefinitionKind::Coordinate => format!("joint coordinate `{name}` (a scalar of time)"),
         DefinitionKind::Local => typed("local binding"),
+        DefinitionKind::Input => format!(
+            "input `{name}`: a scalar that holds its start value until set from outside the \
+             program (`--set {name}=VALUE`, `Simulator::set_input`, an FMI unit's input)"
+        ),
     }
 }
 

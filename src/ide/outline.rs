@@ -13,7 +13,7 @@ use crate::source::Span;
 use crate::syntax::ast::{Decl, DeclKind, ImportTarget};
 use crate::syntax::lexer::{comments_in_gap, lex, Tok};
 
-/// The bodies, links, joins, definitions, packages and imports of the file.
+/// The bodies, links, joins, definitions, value inputs, packages and imports of the file.
 pub fn document_symbols(analysis: &Analysis) -> Vec<DocumentSymbol> {
     let workspace = &analysis.compilation.workspace;
     let root = workspace.module(workspace.roots[0]);
@@ -101,6 +101,19 @@ fn decl_symbols(analysis: &Analysis, decls: &[Decl]) -> Vec<DocumentSymbol> {
                     span,
                     None,
                 ));
+            }
+            DeclKind::Drive(drive) => {
+                if let Some(name) = drive.value_input_name() {
+                    symbols.push(symbol(
+                        analysis,
+                        &name.name,
+                        Some("input".into()),
+                        SymbolKind::VARIABLE,
+                        decl.span,
+                        name.span,
+                        None,
+                    ));
+                }
             }
             _ => {}
         }
@@ -253,9 +266,10 @@ fn identifier(analysis: &Analysis, start: usize) -> (TokenType, u32) {
                 DefinitionKind::Function { .. } => TokenType::Function,
                 DefinitionKind::Package(_) | DefinitionKind::Module(_) => TokenType::Namespace,
                 DefinitionKind::Parameter | DefinitionKind::Coordinate => TokenType::Parameter,
-                DefinitionKind::Value | DefinitionKind::Join | DefinitionKind::Local => {
-                    TokenType::Variable
-                }
+                DefinitionKind::Value
+                | DefinitionKind::Join
+                | DefinitionKind::Local
+                | DefinitionKind::Input => TokenType::Variable,
             };
             (kind, declaration)
         }

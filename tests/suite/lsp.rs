@@ -560,3 +560,70 @@ scene held = lock pivot.q = 0.2 ; end ;
     assert!(complete(&mut client, "relative", 3).is_empty());
     client.stop();
 }
+
+/// A value input (`input voltage = 12`) is a name like a `let`'s: hover says what it is and how
+/// it is set, go-to-definition and references find its declaration and its reads, completion
+/// offers it, and the outline lists it.
+#[test]
+fn a_value_input_is_a_name_the_editor_knows() {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("lsp_value_input.lsd");
+    let uri = file_uri(&path);
+    let text = "import joints ;
+let arm = body mass = 1, iframe = 1, inertia = [0.1, 0.1, 0.1] end ;
+join earth and arm with revolute([0, 0, 1]) as pivot ;
+input voltage = 12 ;
+apply torque value = [0, 0, 0.1 * voltage], body = earth end on arm ;
+output u = voltage ;
+";
+    let mut client = Client::start();
+    client.initialize();
+    assert_eq!(client.open(&uri, text), json!([]));
+    let document = json!({"uri": uri});
+
+    let hover = client.request(
+        "textDocument/hover",
+        json!({"textDocument": document, "position": position(text, "voltage], body", 2)}),
+    );
+    let hover = hover["contents"]["value"].as_str().expect("a hover");
+    assert!(hover.contains("input `voltage`"), "{hover}");
+    assert!(hover.contains("input voltage = 12"), "{hover}");
+
+    let definition = client.request(
+        "textDocument/definition",
+        json!({"textDocument": document, "position": position(text, "voltage ;\n", 0)}),
+    );
+    assert_eq!(
+        definition["range"]["start"],
+        position(text, "voltage = 12", 0)
+    );
+    let references = client.request("textDocument/references", json!({"textDocument": document, "position": position(text, "voltage = 12", 0), "context": {"includeDeclaration": true}}));
+    assert_eq!(references.as_array().map(Vec::len), Some(3), "{references}");
+
+    let typing = format!("{text}output w = vol");
+    client.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": uri, "version": 2}, "contentChanges": [{"text": typing}]}),
+    );
+    client.diagnostics();
+    let end = json!({"line": 6, "character": "output w = vol".len()});
+    let items = client.request(
+        "textDocument/completion",
+        json!({"textDocument": document, "position": end}),
+    );
+    assert!(labels(&items).contains(&"voltage"), "{items}");
+
+    client.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": uri, "version": 3}, "contentChanges": [{"text": text}]}),
+    );
+    client.diagnostics();
+    let symbols = client.request(
+        "textDocument/documentSymbol",
+        json!({"textDocument": document}),
+    );
+    let names: Vec<&str> = (symbols.as_array().expect("symbols").iter())
+        .filter_map(|s| s["name"].as_str())
+        .collect();
+    assert_eq!(names, ["joints", "arm", "pivot", "voltage"]);
+    client.stop();
+}
