@@ -25,7 +25,12 @@ struct Cli {
     quiet: bool,
 }
 
+// Each command's arguments are built only when it is the one invoked (or its help is asked
+// for): building all of them was most of a start-up's work (`lsdc --version` ran 0.75 M of its
+// 1.31 M instructions building and dropping every command's arguments; BENCHMARKS.md,
+// "Start-up: what `lsdc --version` costs").
 #[derive(Subcommand)]
+#[command(defer = true)]
 enum Command {
     /// Check programs and print a summary of the mechanism each describes.
     Check(check::CheckArgs),

@@ -17,7 +17,9 @@ use lsdc::api::{
 use lsdc::diag::render;
 use lsdc::output::samples::{self, SampleWriter};
 
-/// The options that change a run's `simulate` declaration, read by `simulate` and `sweep`.
+// The options that change a run's `simulate` declaration, read by `simulate` and `sweep`.
+// (A plain comment: clap takes a flattened struct's doc comment for the description of the
+// command it is flattened into.)
 #[derive(clap::Args)]
 pub struct RunSettingsArgs {
     /// Overrides the program's `simulate` declaration.

@@ -42,7 +42,9 @@ pub struct WorkspaceArgs {
     out: Option<PathBuf>,
 }
 
-/// How a workspace is sampled: shared by `lsdc workspace` and `lsdc view --workspace`.
+// How a workspace is sampled: shared by `lsdc workspace` and `lsdc view --workspace`.
+// (A plain comment: clap takes a flattened struct's doc comment for the description of the
+// command it is flattened into.)
 #[derive(clap::Args)]
 pub struct Sampling {
     /// An actuated coordinate, `join.coordinate` (repeatable; for a tree, every coordinate

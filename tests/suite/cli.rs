@@ -689,3 +689,27 @@ fn rk4_in_place_of_a_programs_adaptive_settings_warns_once_per_run() {
         );
     }
 }
+
+/// Each command's arguments are built only when it runs (`#[command(defer = true)]` in
+/// main.rs): its help must still open with the command's own description, the one `lsdc --help`
+/// lists, not the description of an argument struct flattened into it.
+#[test]
+fn every_commands_help_opens_with_its_description() {
+    let (code, listing, _) = lsdc(&["--help"]);
+    assert_eq!(code, 0);
+    let commands: Vec<(&str, &str)> = (listing.lines())
+        .skip_while(|line| !line.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|line| line.starts_with("  "))
+        .filter_map(|line| line.trim().split_once(' '))
+        .filter(|(name, _)| *name != "help")
+        .map(|(name, description)| (name, description.trim()))
+        .collect();
+    assert!(commands.len() > 20, "{listing}");
+    for (name, description) in commands {
+        let (code, help, stderr) = lsdc(&[name, "--help"]);
+        assert_eq!(code, 0, "{name}: {stderr}");
+        let first = help.lines().next().unwrap_or_default();
+        assert_eq!(first, description, "`lsdc {name} --help`");
+    }
+}
