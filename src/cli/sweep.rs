@@ -11,7 +11,8 @@ use std::time::Instant;
 use clap::ValueEnum;
 
 use super::shared::{
-    err, json, load_program, parse_sets, report_diagnostics, usage_error, warn, Format, LibraryArgs,
+    err, json, load_program, parse_sets, refuse_sampled, report_diagnostics, usage_error, warn,
+    Format, LibraryArgs,
 };
 use super::simulate::{interrupt_on_signals, RunSettingsArgs};
 use lsdc::api::Program;
@@ -87,6 +88,12 @@ struct RunArgs {
     /// Evaluate a planar mechanism in planar form (as `lsdc simulate --planar`).
     #[arg(long)]
     planar: bool,
+    /// Evaluate the equations of motion as native code (as `lsdc simulate --compiled`),
+    /// compiled once for every run: where the runs share one prepared mechanism (only initial
+    /// values vary). Elsewhere, or where it cannot serve, a warning says why and the runs go on
+    /// without it.
+    #[arg(long)]
+    compiled: bool,
     /// The results, a row per run: Parquet when the name ends in `.parquet`, else CSV.
     /// Without it, CSV on standard output.
     #[arg(short = 'o', long = "out")]
@@ -241,7 +248,7 @@ fn run_sweep(args: &RunArgs) -> ExitCode {
         args.samples.is_some(),
         adjust,
     );
-    let sweep = match sweep {
+    let mut sweep = match sweep {
         Ok(sweep) => sweep,
         Err(PrepareError::Program(diagnostics)) => {
             report_diagnostics(&program, &diagnostics, args.report);
@@ -249,6 +256,21 @@ fn run_sweep(args: &RunArgs) -> ExitCode {
         }
         Err(PrepareError::Settings(why)) => return usage_error(&why),
     };
+    // Why native code does not serve is said before the runs in text, in the summary in JSON.
+    let mut warnings = Vec::new();
+    if args.compiled {
+        if let Some(shared) = sweep.shared() {
+            let help = "sweep without --compiled: the runs land on every sampling instant";
+            let refused = refuse_sampled(&program, shared, "`sweep --compiled`", help, args.report);
+            if let Err(code) = refused {
+                return code;
+            }
+        }
+        warnings = sweep.attach_native();
+        if matches!(args.report, Format::Text) {
+            report_diagnostics(&program, &warnings, Format::Text);
+        }
+    }
     let stop = Stop::new(interrupt_on_signals(), args.max_runs);
     let execution = Execution {
         shard,
@@ -295,6 +317,8 @@ fn run_sweep(args: &RunArgs) -> ExitCode {
         cpu_seconds: cpu,
         wall_seconds: started.elapsed().as_secs_f64(),
         signal: stop.signal(),
+        warnings: (!warnings.is_empty())
+            .then(|| lsdc::diag::render::to_json_value(program.sources(), &warnings)),
     };
     summary.print(args);
     if let Err(why) = written {
@@ -314,7 +338,7 @@ fn context(program: &Program, args: &RunArgs) -> String {
         .flat_map(|(_, file)| file.name.bytes().chain(file.text.bytes()))
         .collect();
     format!(
-        "program {:016x}; set {:?}; integrator {:?}; duration {:?}; every {:?}; tolerance {:?}; step {:?}; max_steps {}; planar {}; scene {:?}",
+        "program {:016x}; set {:?}; integrator {:?}; duration {:?}; every {:?}; tolerance {:?}; step {:?}; max_steps {}; planar {}; compiled {}; scene {:?}",
         journal::digest(&sources),
         args.sets,
         args.run.integrator.map(|i| i.name()),
@@ -324,6 +348,7 @@ fn context(program: &Program, args: &RunArgs) -> String {
         args.run.step,
         args.run.max_steps,
         args.planar,
+        args.compiled,
         args.libraries.scene(),
     )
 }
@@ -381,6 +406,8 @@ struct Summary<'a> {
     cpu_seconds: Option<f64>,
     wall_seconds: f64,
     signal: Option<usize>,
+    /// The warnings said before the runs, for the JSON summary.
+    warnings: Option<serde_json::Value>,
 }
 
 /// The failures a summary lists.
@@ -401,7 +428,7 @@ impl Summary<'_> {
             .filter(|r| r.status != Status::Ok)
             .take(FAILURES_LISTED)
             .collect();
-        let value = serde_json::json!({
+        let mut value = serde_json::json!({
             "runs": self.total,
             "part": [runs.start, runs.end],
             "finished": self.outcome.records.len(),
@@ -420,6 +447,9 @@ impl Summary<'_> {
             "cpu_seconds": self.cpu_seconds,
             "wall_seconds": self.wall_seconds,
         });
+        if let Some(warnings) = &self.warnings {
+            value["warnings"] = warnings.clone();
+        }
         match args.report {
             Format::Json => err(&json(&value)),
             Format::Text => err(&self.text(&failures)),

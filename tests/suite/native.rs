@@ -147,3 +147,77 @@ fn non_conservative_efforts_are_said_to_leave_the_balance_out() {
     assert!(stderr.contains("W0905"), "{stderr}");
     let _ = std::fs::remove_dir_all(&cache);
 }
+
+/// `lsdc sweep ARGS` with the cache in `cache` and `CC` set to `compiler`: exit code, the rows
+/// (CSV on standard output) and standard error.
+fn sweep(args: &[&str], cache: &Path, compiler: &str) -> (i32, String, String) {
+    let arguments: Vec<&str> = ["sweep"].into_iter().chain(args.iter().copied()).collect();
+    let environment = [
+        ("LSDC_CACHE_DIR", cache.as_os_str()),
+        ("CC", std::ffi::OsStr::new(compiler)),
+    ];
+    lsdc_with(&arguments, &environment)
+}
+
+/// `sweep --compiled`: runs that share one prepared mechanism (only initial values vary) share
+/// one native library, built once, and give the interpreted runs' rows; runs that each prepare
+/// their own mechanism run without it, and a warning says why.
+#[test]
+fn a_sweep_compiles_once_for_the_runs_that_share_a_mechanism() {
+    let Some(compiler) = c_compiler() else {
+        crate::common::skip(
+            "no C compiler found (CC, cc, gcc, clang), `sweep --compiled` is not checked",
+        );
+        return;
+    };
+    let cache = fresh_cache("sweep");
+    let design = [
+        "examples/double_pendulum.lsd",
+        "--grid",
+        "shoulder.q=1:2:4",
+        "--duration",
+        "1",
+        "-j",
+        "2",
+    ];
+    let (code, interpreted, stderr) = sweep(&design, &cache, &compiler);
+    assert_eq!(code, 0, "{stderr}");
+    let compiled_design: Vec<&str> = design.iter().copied().chain(["--compiled"]).collect();
+    let (code, compiled, stderr) = sweep(&compiled_design, &cache, &compiler);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        !stderr.contains("W0904"),
+        "the native code serves: {stderr}"
+    );
+    assert_eq!(libraries_in(&cache).len(), 1, "one library for the 4 runs");
+    // The rows' end values and extremes: the same equations summed otherwise. (The text
+    // columns, `status` and `failure`, are not numbers and are left out: every run is ok.)
+    assert_eq!(compiled.matches(",ok,").count(), 4, "{compiled}");
+    let difference = csv_difference(&compiled, &interpreted);
+    assert!(
+        difference < 1e-8,
+        "compiled and interpreted sweeps differ by {difference:e}"
+    );
+
+    // A value of the program varies: each run prepares its own mechanism.
+    let (code, rows, stderr) = sweep(
+        &[
+            "examples/four_bar_grashof.lsd",
+            "--grid",
+            "l1=0.9:1.1:2",
+            "--duration",
+            "0.1",
+            "--compiled",
+        ],
+        &cache,
+        &compiler,
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("warning[W0904]"), "{stderr}");
+    assert!(
+        stderr.contains("do not share one prepared mechanism"),
+        "{stderr}"
+    );
+    assert_eq!(rows.lines().count(), 3, "a header and two runs: {rows}");
+    let _ = std::fs::remove_dir_all(&cache);
+}

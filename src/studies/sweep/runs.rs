@@ -184,6 +184,27 @@ impl<'m> Sweep<'m> {
         self.shared.is_some()
     }
 
+    /// The prepared mechanism every run starts from, where they share one.
+    pub fn shared(&self) -> Option<&Prepared> {
+        self.shared.as_ref()
+    }
+
+    /// Lets the runs evaluate their equations of motion as native code (`sweep --compiled`):
+    /// compiled once, for the one prepared mechanism they share, with the warnings of
+    /// `simulate --compiled`. Runs that each prepare the mechanism with values of their own
+    /// would each need their own native code (the values are constants in it): W0904 says so,
+    /// and they run without it.
+    pub fn attach_native(&mut self) -> Vec<Diagnostic> {
+        match &mut self.shared {
+            Some(shared) => crate::simulate::compiled::attach_with_warnings(shared, self.mechanism),
+            None => vec![Diagnostic::warning(
+                "W0904",
+                "--compiled: the runs do not share one prepared mechanism (a value of the program varies, or initial values of a mechanism that must be assembled), and native code is made for one; the runs evaluate the equations without it",
+            )
+            .help("vary only initial values of a tree for native code in every run")],
+        }
+    }
+
     /// The number of runs of the design.
     pub fn run_count(&self) -> usize {
         self.design.runs.len()
