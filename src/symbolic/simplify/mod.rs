@@ -38,7 +38,7 @@ const TERMS: usize = 64;
 /// their product past `TERMS`; refusing the product of two forms of more than 8 terms each
 /// (or of 2 by more than 32, …) refuses them before any work, and leaves every output of the
 /// pendulums (n = 1 … 100) and the satellite the same size (BENCHMARKS.md, "The simplifier's
-/// cost: a budget of products").
+/// cost: a budget of products, and the caps' trade-off").
 const WORK: usize = 64;
 /// The largest power of a sum expanded.
 const POWER: i32 = 4;
