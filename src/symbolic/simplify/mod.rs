@@ -4,12 +4,13 @@
 //! trigonometric identities (sin² + cos² = 1, the angle sums) hold by construction; the roots
 //! are then written back with their common factors taken out (`write`).
 //!
-//! Each node's work is bounded: a node whose form would pass `TERMS` terms (or take more than
-//! `WORK` products of terms) is not expanded but kept as the operation on its operands'
-//! simplified nodes, an atom for the nodes that use it. So deep chains (a 100-link pendulum's)
-//! are simplified near their leaves and shared above. Below the bounds the work grows with the
-//! forms: a chain's are longer as the chain is, so on the pendulums the cost per node still grows
-//! up to n = 100 (docs/equations.md, the simplifier's cost).
+//! Each node's work is bounded: a node whose form would pass `TERMS` terms (or whose product
+//! would take more than `WORK` products of terms, refused before forming it) is not expanded but
+//! kept as the operation on its operands' simplified nodes, an atom for the nodes that use it.
+//! So deep chains (a 100-link pendulum's) are simplified near their leaves and shared above.
+//! Below the bounds the work grows with the forms: a chain's are longer as the chain is, so on
+//! the pendulums the cost per node still grows up to n = 100 (docs/equations.md, the
+//! simplifier's cost).
 //!
 //! Expanding shares less: a sum read by several nodes, expanded in each, is written in each.
 //! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
@@ -24,8 +25,6 @@
 mod polynomial;
 mod write;
 
-use rustc_hash::FxHashMap;
-
 use polynomial::{Angles, Polynomial, Wave};
 use write::Writer;
 
@@ -34,8 +33,13 @@ use super::expr::{topological_order, ExprId, Function, Node, Pool};
 
 /// The most terms a node's normal form may have before the node is kept as an atom.
 const TERMS: usize = 64;
-/// The most products of terms forming one product may take.
-const WORK: usize = 4096;
+/// The most products of terms a product of two forms may take (|A| · |B|), checked before
+/// forming it. At n = 100 two thirds of the products of terms formed were thrown away with
+/// their product past `TERMS`; refusing the product of two forms of more than 8 terms each
+/// (or of 2 by more than 32, …) refuses them before any work, and leaves every output of the
+/// pendulums (n = 1 … 100) and the satellite the same size (BENCHMARKS.md, "The simplifier's
+/// cost: a budget of products, and the caps' trade-off").
+const WORK: usize = 64;
 /// The largest power of a sum expanded.
 const POWER: i32 = 4;
 
@@ -115,16 +119,16 @@ fn simplify_with(
         if let Expansion::Shared(terms) = expansion {
             if shared && form.len() > terms {
                 let node = pass.writer.write(&mut pass.out, &form, &pass.angles);
-                pass.nodes.insert(id, node);
+                pass.nodes[id.index()] = Some(node);
                 form = pass.atom(node);
             }
         }
-        pass.forms.insert(id, form);
+        pass.forms[id.index()] = Some(form);
         for operand in pool.operands(id) {
             let left = &mut pass.readers[operand.index()];
             *left -= 1;
             if *left == 0 && !pass.roots[operand.index()] {
-                pass.forms.remove(&operand);
+                pass.forms[operand.index()] = None;
             }
         }
     }
@@ -161,13 +165,21 @@ pub fn simplify_equations(equations: &Equations) -> Equations {
     }
 }
 
+/// The form of input node `id` in a pass's table of forms (a function of the table, not of the
+/// pass, so that the pass's angles may be borrowed beside it).
+fn formed(forms: &[Option<Polynomial>], id: ExprId) -> &Polynomial {
+    forms[id.index()]
+        .as_ref()
+        .expect("formed before it is read")
+}
+
 struct Pass<'a> {
     input: &'a Pool,
     out: Pool,
     /// The normal form of each input node simplified and still to be read.
-    forms: FxHashMap<ExprId, Polynomial>,
+    forms: Vec<Option<Polynomial>>,
     /// Each input node written in `out`.
-    nodes: FxHashMap<ExprId, ExprId>,
+    nodes: Vec<Option<ExprId>>,
     /// By input node: how many nodes still to simplify read it (its form is dropped, or taken
     /// by its last reader, when none is left), and whether it is a root (its form is kept).
     readers: Vec<u32>,
@@ -186,8 +198,8 @@ impl Pass<'_> {
         Pass {
             input,
             out,
-            forms: FxHashMap::default(),
-            nodes: FxHashMap::default(),
+            forms: vec![None; input.len()],
+            nodes: vec![None; input.len()],
             readers: vec![0; input.len()],
             roots: vec![false; input.len()],
             angles: Angles::default(),
@@ -196,7 +208,7 @@ impl Pass<'_> {
     }
 
     fn form(&self, id: ExprId) -> &Polynomial {
-        &self.forms[&id]
+        formed(&self.forms, id)
     }
 
     /// The form of `id` to build on: taken when the node being simplified is its last reader
@@ -206,7 +218,7 @@ impl Pass<'_> {
     /// forms.
     fn taken(&mut self, id: ExprId) -> Polynomial {
         if self.readers[id.index()] == 1 && !self.roots[id.index()] {
-            self.forms.remove(&id).expect("formed before it is read")
+            self.forms[id.index()].take().expect("formed before it is read")
         } else {
             self.form(id).clone()
         }
@@ -214,12 +226,12 @@ impl Pass<'_> {
 
     /// The input node `id` written in `out` from its normal form (once).
     fn written(&mut self, id: ExprId) -> ExprId {
-        if let Some(&node) = self.nodes.get(&id) {
+        if let Some(node) = self.nodes[id.index()] {
             return node;
         }
-        let form = self.forms.get(&id).expect("formed before it is written");
+        let form = self.forms[id.index()].as_ref().expect("formed before it is written");
         let node = self.writer.write(&mut self.out, form, &self.angles);
-        self.nodes.insert(id, node);
+        self.nodes[id.index()] = Some(node);
         node
     }
 
@@ -262,11 +274,11 @@ impl Pass<'_> {
                 (sum.len() <= TERMS).then_some(sum)
             }
             Node::Neg(a) => Some(self.taken(a).scaled(-1.0)),
-            Node::Mul(a, b) => self.forms[&a].times(&self.forms[&b], WORK, TERMS, &mut self.angles),
+            Node::Mul(a, b) => formed(&self.forms, a).times(formed(&self.forms, b), WORK, TERMS, &mut self.angles),
             Node::Div(a, b) => self.quotient(a, b),
             Node::Pow(a, b) => self.power(a, b),
             Node::Apply(f @ (Function::Sin | Function::Cos), a) => {
-                self.forms[&a].as_angle().map(|angle| {
+                formed(&self.forms, a).as_angle().map(|angle| {
                     let wave = if f == Function::Sin {
                         Wave::Sin
                     } else {
@@ -292,7 +304,7 @@ impl Pass<'_> {
         if let Some(c) = self.form(b).as_constant() {
             return (c != 0.0 && (1.0 / c).is_finite()).then(|| self.taken(a).scaled(1.0 / c));
         }
-        let divisor = &self.forms[&b];
+        let divisor = formed(&self.forms, b);
         let inverse = match divisor.as_monomial() {
             Some((factors, c)) => {
                 let mut inverse = Polynomial::constant(1.0 / c);
@@ -307,7 +319,7 @@ impl Pass<'_> {
                 Polynomial::atom(node, -1)
             }
         };
-        self.forms[&a].times(&inverse, WORK, TERMS, &mut self.angles)
+        formed(&self.forms, a).times(&inverse, WORK, TERMS, &mut self.angles)
     }
 
     /// `a ^ b` expanded for a small integer exponent.
