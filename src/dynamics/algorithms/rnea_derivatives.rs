@@ -33,9 +33,18 @@
 //! f_R to τ_k, and a column of velocity derivatives to q̇_k's.
 //!
 //! External forces are held fixed in the bodies' frames, as RNEA takes them.
+//!
+//! Forward dynamics' derivatives need the accelerations first (`forward_dynamics`): the same pass
+//! out at q̈ = 0 gives the bias forces, a pass back the efforts C(q, v) + g − Jᵀf_ext and, from
+//! the composite inertias, the mass matrix M_rc = S_rᵀ I^c S_c (the composite rigid bodies'
+//! entries); q̈ = M⁻¹(τ − C − g + Jᵀf_ext) by M's factor along the tree; q̈ then enters the
+//! accelerations linearly, a_i += Σ_j S_j q̈_j over i's branch, and the pass back of the
+//! derivatives follows. The joints' motions, poses, inertias and Coriolis matrices are formed
+//! once, where articulated-body dynamics would form 6 × 6 articulated inertias of its own.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
+use super::mass_factor::MassFactor;
 use super::{base_acceleration, joint_motions, Data};
 use crate::dynamics::joint::{JointType, Kernel};
 use crate::dynamics::model::Model;
@@ -109,6 +118,11 @@ pub struct RneaDerivatives {
     dv_dq: Vec<Motion>,
     da_dq: Vec<Motion>,
     da_dv: Vec<Motion>,
+    /// `forward_dynamics`: per body, its subtree's inertia and bias force, and the change of its
+    /// acceleration by q̈.
+    composite: Vec<RigidInertia>,
+    composite_force: Vec<Force>,
+    acceleration_change: Vec<Motion>,
 }
 
 impl RneaDerivatives {
@@ -128,6 +142,9 @@ impl RneaDerivatives {
             dv_dq: vec![Motion::zeros(); nv],
             da_dq: vec![Motion::zeros(); nv],
             da_dv: vec![Motion::zeros(); nv],
+            composite: vec![RigidInertia::zeros(); n + 1],
+            composite_force: vec![Force::zeros(); n + 1],
+            acceleration_change: vec![Motion::zeros(); n + 1],
         }
     }
 
@@ -179,6 +196,91 @@ impl RneaDerivatives {
         self.dtau_dv.fill(0.0);
         self.add_rotors(model, v, a);
         self.pass_back(model);
+    }
+
+    /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
+    /// q̈ into `accelerations`, the mass matrix into `mass` (between a velocity and its
+    /// ancestors only) and its factor into `factor`, then τ, ∂τ/∂q and ∂τ/∂v at q̈ (the module's
+    /// documentation). `data` holds the joints' motions at (q, v); the model has no geared
+    /// rotor (their efforts are not linear in the pass out's terms as written here). False if
+    /// the mass matrix is not positive definite.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn forward_dynamics(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        (v, tau): (&[f64], &[f64]),
+        external: &[Force],
+        factor: &mut MassFactor,
+        mass: &mut DMatrix<f64>,
+        accelerations: &mut DVector<f64>,
+    ) -> bool {
+        debug_assert!(model.rotors.is_empty());
+        self.acceleration[0] = base_acceleration(model);
+        accelerations.fill(0.0);
+        self.pass_out(model, data, v, accelerations.as_slice(), external);
+        self.bias_and_mass(model, mass);
+        if !factor.factor(mass) {
+            return false;
+        }
+        for ((a, given), bias) in accelerations.iter_mut().zip(tau).zip(&self.tau) {
+            *a = given - bias;
+        }
+        factor.solve(accelerations.as_mut_slice());
+        self.add_accelerations(model, accelerations.as_slice());
+        self.tau.fill(0.0);
+        self.dtau_dq.fill(0.0);
+        self.dtau_dv.fill(0.0);
+        self.pass_back(model);
+        true
+    }
+
+    /// After the pass out at q̈ = 0: the bias efforts into `tau` and the mass matrix from the
+    /// composite inertias, summed apart (the pass back of the derivatives sums its own).
+    fn bias_and_mass(&mut self, model: &Model, mass: &mut DMatrix<f64>) {
+        self.composite.copy_from_slice(&self.inertia);
+        self.composite_force.copy_from_slice(&self.force);
+        for &k in model.dynamic_joints.iter().rev() {
+            let joint = &model.joints[k];
+            let (i, parent) = (joint.child, joint.dynamic_parent);
+            let (inertia, force) = (self.composite[i], self.composite_force[i]);
+            let branch = model.branch_velocities(k);
+            for row in joint.v_offset..joint.v_offset + joint.nv() {
+                let s = self.columns[row];
+                self.tau[row] = s.dot(&force);
+                let momentum = inertia.times(&s);
+                for &column in branch {
+                    let entry = momentum.dot(&self.columns[column]);
+                    mass[(row, column)] = entry;
+                    mass[(column, row)] = entry;
+                }
+            }
+            if parent != 0 {
+                self.composite[parent] += inertia;
+                self.composite_force[parent] += force;
+            }
+        }
+    }
+
+    /// The accelerations `a` added to a pass out made at q̈ = 0: each body's acceleration by
+    /// Σ S_j a_j over its branch, its force by its inertia times that, and each column's ∂A by
+    /// the change of its parent's acceleration crossed with S.
+    fn add_accelerations(&mut self, model: &Model, a: &[f64]) {
+        self.acceleration_change[0] = Motion::zeros();
+        for &k in &model.dynamic_joints {
+            let joint = &model.joints[k];
+            let (i, parent) = (joint.child, joint.dynamic_parent);
+            let parent_change = self.acceleration_change[parent];
+            let mut change = parent_change;
+            for index in joint.v_offset..joint.v_offset + joint.nv() {
+                let s = self.columns[index];
+                change += s * a[index];
+                self.da_dq[index] += spatial::cross_motion(&parent_change, &s);
+            }
+            self.acceleration_change[i] = change;
+            self.acceleration[i] += change;
+            self.force[i] += self.inertia[i].times(&change);
+        }
     }
 
     /// Poses, velocities, accelerations, inertias, Coriolis matrices and forces of the bodies
