@@ -191,11 +191,16 @@ impl RneaDerivatives {
     ) {
         self.acceleration[0] = base;
         self.pass_out(model, data, v, a, external);
-        self.tau.fill(0.0);
-        self.dtau_dq.fill(0.0);
-        self.dtau_dv.fill(0.0);
+        // Without rotors the pass back writes every entry of the tree's pattern once (the others
+        // stay zero from `new`); the rotors add to some before it.
+        let rotors = !model.rotors.is_empty();
+        self.tau.as_mut_slice().fill(0.0);
+        if rotors {
+            self.dtau_dq.as_mut_slice().fill(0.0);
+            self.dtau_dv.as_mut_slice().fill(0.0);
+        }
         self.add_rotors(model, v, a);
-        self.pass_back(model);
+        self.pass_back(model, rotors);
     }
 
     /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
@@ -217,7 +222,7 @@ impl RneaDerivatives {
     ) -> bool {
         debug_assert!(model.rotors.is_empty());
         self.acceleration[0] = base_acceleration(model);
-        accelerations.fill(0.0);
+        accelerations.as_mut_slice().fill(0.0);
         self.pass_out(model, data, v, accelerations.as_slice(), external);
         self.bias_and_mass(model, mass);
         if !factor.factor(mass) {
@@ -228,10 +233,8 @@ impl RneaDerivatives {
         }
         factor.solve(accelerations.as_mut_slice());
         self.add_accelerations(model, accelerations.as_slice());
-        self.tau.fill(0.0);
-        self.dtau_dq.fill(0.0);
-        self.dtau_dv.fill(0.0);
-        self.pass_back(model);
+        self.tau.as_mut_slice().fill(0.0);
+        self.pass_back(model, false);
         true
     }
 
@@ -402,8 +405,14 @@ impl RneaDerivatives {
 
     /// Sums the composites from the leaves and fills τ, ∂τ/∂q and ∂τ/∂v (the module's
     /// documentation): per joint, its rows along its own and its ancestors' columns, and its
-    /// ancestors' rows along its columns.
-    fn pass_back(&mut self, model: &Model) {
+    /// ancestors' rows along its columns, each entry of the tree's pattern once: written, or
+    /// added to what the rotors gave (`accumulate`).
+    fn pass_back(&mut self, model: &Model, accumulate: bool) {
+        let nv = model.nv;
+        let put = |entries: &mut [f64], row: usize, column: usize, value: f64| {
+            let entry = &mut entries[row + column * nv];
+            *entry = if accumulate { *entry + value } else { value };
+        };
         for &k in model.dynamic_joints.iter().rev() {
             let joint = &model.joints[k];
             let (i, parent) = (joint.child, joint.dynamic_parent);
@@ -415,10 +424,12 @@ impl RneaDerivatives {
                 self.tau[row] += s.dot(&force);
                 let (sensitivity, momentum) = (coriolis.transpose_times(&s), inertia.times(&s));
                 for &column in branch {
-                    self.dtau_dq[(row, column)] +=
+                    let by_position =
                         sensitivity.dot(&self.dv_dq[column]) + momentum.dot(&self.da_dq[column]);
-                    self.dtau_dv[(row, column)] +=
+                    let by_rate =
                         sensitivity.dot(&self.columns[column]) + momentum.dot(&self.da_dv[column]);
+                    put(self.dtau_dq.as_mut_slice(), row, column, by_position);
+                    put(self.dtau_dv.as_mut_slice(), row, column, by_rate);
                 }
             }
             for column in own.clone() {
@@ -428,8 +439,9 @@ impl RneaDerivatives {
                     + inertia.times(&self.da_dq[column]);
                 let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
                 for &row in branch.iter().filter(|row| !own.contains(row)) {
-                    self.dtau_dq[(row, column)] += self.columns[row].dot(&position_change);
-                    self.dtau_dv[(row, column)] += self.columns[row].dot(&rate_change);
+                    let (s_row, dq) = (self.columns[row], self.dtau_dq.as_mut_slice());
+                    put(dq, row, column, s_row.dot(&position_change));
+                    put(self.dtau_dv.as_mut_slice(), row, column, s_row.dot(&rate_change));
                 }
             }
             if parent != 0 {
@@ -464,9 +476,15 @@ impl CoriolisMatrix {
     fn new(inertia: &RigidInertia, velocity: &Motion, momentum: &Force) -> CoriolisMatrix {
         let (w, u) = (spatial::angular(velocity), spatial::linear(velocity));
         let c = inertia.first;
-        let turned = spatial::skew(&w) * inertia.rotational;
-        let top = turned + turned.transpose() - c * u.transpose() - u * c.transpose()
-            + Matrix3::identity() * (2.0 * u.dot(&c))
+        // P = ω̂J − c uᵀ column by column (ω̂ times a column is a cross product: no products
+        // by the skew matrix's zeros), then top = P + Pᵀ + 2 (u·c) 1 − n̂.
+        let j = &inertia.rotational;
+        let half = Matrix3::from_columns(&[
+            w.cross(&j.column(0).into_owned()) - c * u.x,
+            w.cross(&j.column(1).into_owned()) - c * u.y,
+            w.cross(&j.column(2).into_owned()) - c * u.z,
+        ]);
+        let top = half + half.transpose() + Matrix3::identity() * (2.0 * u.dot(&c))
             - spatial::skew(&spatial::angular(momentum));
         let bottom = -2.0 * (spatial::skew(&w.cross(&c)) + spatial::skew(&u) * inertia.mass);
         CoriolisMatrix { top, bottom }
