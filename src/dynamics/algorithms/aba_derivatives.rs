@@ -109,10 +109,8 @@ impl AbaDerivatives {
             inverse.after_kinematics(model, data, state, external, base_acceleration(model));
         }
         self.factor.inverse_into(&mut self.mass_inverse);
-        (self.dacceleration_dq.as_mut_slice()).copy_from_slice(inverse.dtau_dq.as_slice());
-        (self.dacceleration_dv.as_mut_slice()).copy_from_slice(inverse.dtau_dv.as_slice());
-        self.factor.solve_negated(&mut self.dacceleration_dq);
-        self.factor.solve_negated(&mut self.dacceleration_dv);
+        (self.factor).solve_negated(&inverse.dtau_dq, &mut self.dacceleration_dq);
+        (self.factor).solve_negated(&inverse.dtau_dv, &mut self.dacceleration_dv);
         Ok(())
     }
 }

@@ -5,9 +5,8 @@
 //! parent joint's last), numbered parents first, so the factorisation fills nothing in: it costs
 //! Σ dᵢ² and a solve 2 Σ dᵢ + n (dᵢ the depth of velocity i) where a dense Cholesky factor costs
 //! n³/3 and its solve 2 n². The matrices the derivatives solve with (∂τ/∂q, ∂τ/∂v, the identity)
-//! share M's pattern: column j vanishes outside j's ancestors and descendants, so its solve starts
-//! at j's last descendant and ends with the tree below j's root (a fixed base's separate
-//! branches, Talos's legs and upper body, never meet).
+//! share M's pattern, zero between velocities of separate trees (a fixed base's branches, Talos's
+//! legs and upper body, never meet): a row's operations run over its own tree's columns only.
 
 use nalgebra::DMatrix;
 
@@ -23,10 +22,12 @@ pub struct MassFactor {
     lower: Vec<f64>,
     /// 1 / D_ii per velocity.
     inverse_diagonal: Vec<f64>,
-    /// Per velocity, one past the last of its descendants, and its root (the first of the
-    /// root's descendants, which are numbered after it).
+    /// Per velocity, one past the last of its descendants, and its root (the first velocity of
+    /// the root's tree, whose others are numbered after it).
     subtree_end: Vec<usize>,
     root: Vec<usize>,
+    /// A matrix by rows, for `solve_negated`.
+    rows: Vec<f64>,
 }
 
 impl MassFactor {
@@ -76,6 +77,7 @@ impl MassFactor {
             inverse_diagonal: vec![0.0; nv],
             subtree_end,
             root,
+            rows: vec![0.0; nv * nv],
         }
     }
 
@@ -128,15 +130,6 @@ impl MassFactor {
         self.finish_solve(x, 0..x.len());
     }
 
-    /// x ← M⁻¹ x for x zero outside velocity j's ancestors and descendants.
-    fn solve_column(&self, x: &mut [f64], j: usize) {
-        let (root, end) = (self.root[j], self.subtree_end[self.root[j]]);
-        for i in (root..self.subtree_end[j]).rev() {
-            self.carry_up(x, i);
-        }
-        self.finish_solve(x, root..end);
-    }
-
     /// Row i of Lᵀ y = x solved (its descendants' done): L_ij y_i taken from its ancestors'.
     #[inline]
     fn carry_up(&self, x: &mut [f64], i: usize) {
@@ -162,28 +155,79 @@ impl MassFactor {
         }
     }
 
-    /// M⁻¹ into `inverse` (nv × nv): column c solves M x = e_c, whose first solve reaches only
-    /// c and its ancestors.
+    /// M⁻¹ into `inverse` (nv × nv): the solve of the identity (M⁻¹ is symmetric: its rows
+    /// are its columns).
     pub fn inverse_into(&self, inverse: &mut DMatrix<f64>) {
         let nv = self.inverse_diagonal.len();
-        let columns = inverse.as_mut_slice().chunks_exact_mut(nv.max(1));
-        for (c, x) in columns.enumerate() {
-            x.fill(0.0);
-            x[c] = 1.0;
-            for i in std::iter::once(c).chain(self.ancestors[self.range(c)].iter().copied()) {
-                self.carry_up(x, i);
-            }
-            self.finish_solve(x, self.root[c]..self.subtree_end[self.root[c]]);
+        let entries = inverse.as_mut_slice();
+        entries.fill(0.0);
+        for c in 0..nv {
+            entries[c + c * nv] = 1.0;
         }
+        self.solve_rows(entries);
     }
 
-    /// X ← −M⁻¹ X, column by column, for X of M's pattern (column j zero outside j's
-    /// ancestors and descendants, as ∂τ/∂q and ∂τ/∂v are).
-    pub fn solve_negated(&self, matrix: &mut DMatrix<f64>) {
+    /// `into` ← −M⁻¹ `from` (nv × nv each) for `from` of M's pattern (zero between velocities
+    /// of separate trees, as ∂τ/∂q and ∂τ/∂v are), by rows in a transposed copy.
+    pub fn solve_negated(&mut self, from: &DMatrix<f64>, into: &mut DMatrix<f64>) {
         let nv = self.inverse_diagonal.len();
-        for (j, x) in matrix.as_mut_slice().chunks_exact_mut(nv.max(1)).enumerate() {
-            x.iter_mut().for_each(|e| *e = -*e);
-            self.solve_column(x, j);
+        let mut rows = std::mem::take(&mut self.rows);
+        for (c, column) in from.as_slice().chunks_exact(nv.max(1)).enumerate() {
+            for (r, value) in column.iter().enumerate() {
+                rows[c + r * nv] = -value;
+            }
+        }
+        self.solve_rows(&mut rows);
+        for (c, column) in into.as_mut_slice().chunks_exact_mut(nv.max(1)).enumerate() {
+            for (r, value) in column.iter_mut().enumerate() {
+                *value = rows[c + r * nv];
+            }
+        }
+        self.rows = rows;
+    }
+
+    /// X ← M⁻¹ X for X (nv × nv) given by rows (row r at r nv), zero outside the blocks of the
+    /// separate trees (a tree's velocities by the same tree's): each step of Table 6.4 done on
+    /// whole rows, over the columns of the row's tree, contiguous. The columns are independent,
+    /// so the processor overlaps them, where a column's own solve is one chain of dependent
+    /// products.
+    fn solve_rows(&self, x: &mut [f64]) {
+        let nv = self.inverse_diagonal.len();
+        let columns = |i: usize| {
+            let root = self.root[i];
+            root..self.subtree_end[root]
+        };
+        // Rows j < i: row j lies before row i, so the two split apart.
+        fn pair(
+            x: &mut [f64],
+            nv: usize,
+            (j, i): (usize, usize),
+            span: std::ops::Range<usize>,
+        ) -> (&mut [f64], &mut [f64]) {
+            let (before, after) = x.split_at_mut(i * nv);
+            (&mut before[j * nv..][span.clone()], &mut after[span])
+        }
+        for i in (0..nv).rev() {
+            for at in self.range(i) {
+                let (j, l) = (self.ancestors[at], self.lower[at]);
+                let (row_j, row_i) = pair(x, nv, (j, i), columns(i));
+                for (xj, xi) in row_j.iter_mut().zip(row_i.iter()) {
+                    *xj -= l * xi;
+                }
+            }
+        }
+        for i in 0..nv {
+            let d = self.inverse_diagonal[i];
+            x[i * nv..][columns(i)].iter_mut().for_each(|e| *e *= d);
+        }
+        for i in 0..nv {
+            for at in self.range(i) {
+                let (j, l) = (self.ancestors[at], self.lower[at]);
+                let (row_j, row_i) = pair(x, nv, (j, i), columns(i));
+                for (xi, xj) in row_i.iter_mut().zip(row_j.iter()) {
+                    *xi -= l * xj;
+                }
+            }
         }
     }
 }

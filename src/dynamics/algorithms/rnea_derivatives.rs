@@ -441,7 +441,12 @@ impl RneaDerivatives {
                 for &row in branch.iter().filter(|row| !own.contains(row)) {
                     let (s_row, dq) = (self.columns[row], self.dtau_dq.as_mut_slice());
                     put(dq, row, column, s_row.dot(&position_change));
-                    put(self.dtau_dv.as_mut_slice(), row, column, s_row.dot(&rate_change));
+                    put(
+                        self.dtau_dv.as_mut_slice(),
+                        row,
+                        column,
+                        s_row.dot(&rate_change),
+                    );
                 }
             }
             if parent != 0 {
