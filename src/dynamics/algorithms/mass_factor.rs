@@ -198,6 +198,7 @@ impl MassFactor {
             root..self.subtree_end[root]
         };
         // Rows j < i: row j lies before row i, so the two split apart.
+        #[inline(always)]
         fn pair(
             x: &mut [f64],
             nv: usize,
