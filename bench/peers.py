@@ -399,7 +399,7 @@ def main():
     if args.json:
         pathlib.Path(args.json).write_text(json.dumps({
             "date": started.isoformat(), "load_before": load_before, "load_after": load_after,
-            "pinocchio": pin and sys.modules['pinocchio'].__version__, "mujoco": mujoco.__version__,
+            "pinocchio": pin and sys.modules['pinocchio'].__version__, "mujoco": mujoco and mujoco.__version__,
             "rounds": args.rounds, "batch": args.batch, "rows": rows,
             "derivatives": derivatives}, indent=1) + "\n")
 
