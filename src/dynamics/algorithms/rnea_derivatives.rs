@@ -275,10 +275,11 @@ impl RneaDerivatives {
             let (i, parent) = (joint.child, joint.dynamic_parent);
             let parent_change = self.acceleration_change[parent];
             let mut change = parent_change;
-            for index in joint.v_offset..joint.v_offset + joint.nv() {
-                let s = self.columns[index];
-                change += s * a[index];
-                self.da_dq[index] += spatial::cross_motion(&parent_change, &s);
+            let own = joint.v_offset..joint.v_offset + joint.nv();
+            let (columns, rates) = (&self.columns[own.clone()], &a[own.clone()]);
+            for ((s, rate), da) in columns.iter().zip(rates).zip(&mut self.da_dq[own]) {
+                change += s * *rate;
+                *da += spatial::cross_motion(&parent_change, s);
             }
             self.acceleration_change[i] = change;
             self.acceleration[i] += change;
