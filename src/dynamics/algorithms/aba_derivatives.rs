@@ -5,10 +5,11 @@
 //!
 //! q̈ and the mass matrix come from the passes of those derivatives themselves
 //! (`RneaDerivatives::forward_dynamics`: the bias efforts and the composite inertias at q̈ = 0,
-//! then q̈ by the mass matrix's factor); with geared rotors, from ABA and CRBA. Every product by
-//! M⁻¹ is a solve with M's factor along the tree, M = Lᵀ D L (`mass_factor`), column by column:
-//! 2 Σ dᵢ + n products a column (dᵢ the depth of velocity i) where a dense product by M⁻¹ costs
-//! n², nothing crossing between the tree's separate branches.
+//! then q̈ by the mass matrix's factor, ABA's values to round-off); with geared rotors, from ABA
+//! and CRBA. Every product by M⁻¹ is a solve with M's factor along the tree, M = Lᵀ D L
+//! (`mass_factor`), by rows over the columns of each row's tree: 2 Σ dᵢ + n products a column
+//! (dᵢ the depth of velocity i) where a dense product by M⁻¹ costs n², nothing crossing between
+//! the tree's separate branches.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -74,8 +75,8 @@ impl AbaDerivatives {
         }
     }
 
-    /// q̈ = ABA(q, v, τ) under the external forces `external` (per body, in its frame) and its
-    /// derivatives with respect to q, v and τ.
+    /// q̈, forward dynamics at (q, v, τ) under the external forces `external` (per body, in its
+    /// frame), and its derivatives with respect to q, v and τ.
     pub fn compute(
         &mut self,
         model: &Model,
