@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""lsdc beside its peers, timed the same way on a shared machine: Pinocchio (RNEA, CRBA, ABA on
-URDF robots) and MuJoCo (whole RK4 steps of the same robots; one evaluation of rows of N
+"""lsdc beside its peers, timed the same way on a shared machine: Pinocchio (RNEA, CRBA, ABA and
+the analytical derivatives of RNEA and ABA on URDF robots) and MuJoCo (whole RK4 steps of the same robots; one evaluation of rows of N
 parallelogram four-bars, loops closed).
 
 Three probes answer one protocol: each loads its cases, prints `ready CASE...`, then answers a
@@ -17,7 +17,12 @@ clock, CLOCK_THREAD_CPUTIME_ID: time the machine gave to other programs is left 
 Each pair of cases is timed round by round: in each round one batch of about --batch seconds on
 each side, the side that goes first alternating, so that a change of the machine's speed falls
 on both. Per side and case: the best and the median over the rounds of the time per call; the
-ratios lsdc / peer of the bests and of the medians.
+ratios lsdc / peer of the bests and of the medians. Where the derivatives are timed, a second
+table sets each side's derivatives against its own algorithms: per robot and side, RNEA, its
+derivatives (lsdc's `RneaDerivatives`, Pinocchio's `computeRNEADerivatives`: dtau/dq, dtau/dv)
+and their ratio; ABA, its derivatives (`AbaDerivatives`, `computeABADerivatives`: ddq/dq, ddq/dv,
+Minv) and their ratio; and lsdc / Pinocchio of the derivatives (`--only derivatives` times these
+with the algorithms they are set against).
 
 Cases: UR5, Panda and Talos (reduced) from example-robot-data (the URDF files
 bench/pinocchio_fixtures.py copies into tests/fixtures/urdf/), fixed base, gravity 9.80665 along
@@ -36,7 +41,8 @@ Usage:
 
 Needs a Python with `pip install pin example-robot-data mujoco cmeel-eigen cmeel-urdfdom-headers`
 (Pinocchio's headers need Eigen's and urdfdom's), g++ and gcc; the rows alone (`--only row`)
-need only `pip install mujoco` and gcc. The Pinocchio probe takes a few
+need only `pip install mujoco` and gcc; the algorithms and their derivatives alone (`--only
+derivatives`, `--only RNEA`...) need no MuJoCo. The Pinocchio probe takes a few
 minutes to compile; it is kept in target/peers/ and compiled again when its source or the
 flags change.
 """
@@ -56,9 +62,40 @@ import xml.etree.ElementTree as ET
 REPO = pathlib.Path(__file__).resolve().parent.parent
 OUT = REPO / "target" / "peers"
 ROBOTS = {"ur5": "ur5", "panda": "panda", "talos": "talos_reduced"}
+ALGORITHMS = ("rnea", "crba", "aba", "rnea_derivatives", "aba_derivatives")
 STEPPED = ("ur5", "panda")
 ROWS = (10, 40, 100)
 GRAVITY = 9.80665
+
+
+def algorithm_label(algorithm, robot):
+    """`RNEA ur5`, `RNEA derivatives ur5`..."""
+    return f"{algorithm.upper().replace('_', ' ').replace('DERIVATIVES', 'derivatives')} {robot}"
+
+
+def derivative_rows(pairs, best_median, lsdc, pin):
+    """Per robot whose derivatives and algorithms were timed on both sides: each side's times
+    (ns, best and median) of RNEA, ABA and their derivatives, its ratios derivatives /
+    algorithm, and lsdc / Pinocchio of the derivatives."""
+    timed = {ours for _, ours, _, _ in pairs}
+    rows = []
+    for name in ROBOTS:
+        cases = [f"{name}/{algorithm}" for algorithm in
+                 ("rnea", "rnea_derivatives", "aba", "aba_derivatives")]
+        if pin is None or not all(case in timed for case in cases):
+            continue
+        row = {"robot": name}
+        for side, probe in (("lsdc", lsdc), ("Pinocchio", pin)):
+            t = {case.split("/")[1]: [x * 1e9 for x in best_median(probe, case)] for case in cases}
+            for algorithm in ("rnea", "aba"):
+                t[f"{algorithm}_ratio"] = [d / a for d, a in
+                                           zip(t[f"{algorithm}_derivatives"], t[algorithm])]
+            row[side] = t
+        for algorithm in ("rnea_derivatives", "aba_derivatives"):
+            row[f"{algorithm}_ratio"] = [o / p for o, p in
+                                         zip(row["lsdc"][algorithm], row["Pinocchio"][algorithm])]
+        rows.append(row)
+    return rows
 
 
 def fail(message):
@@ -240,20 +277,26 @@ def main():
     args = parser.parse_args()
 
     # The pairs first, by label: `--only` leaves out the sides (and the packages) they need.
-    labels = [f"{algorithm.upper()} {name}" for algorithm in ("rnea", "crba", "aba") for name in ROBOTS]
+    labels = [algorithm_label(algorithm, name) for algorithm in ALGORITHMS for name in ROBOTS]
     labels += [f"RK4 step {name}" for name in STEPPED]
     labels += [f"row of {n}" for n in ROWS] + [f"row of {n}: loops / tree" for n in ROWS]
     wanted = [label for label in labels if args.only in label]
+    # A robot's derivatives are set against its algorithms: time those too.
+    for name in ROBOTS:
+        for algorithm in ("rnea", "aba"):
+            if algorithm_label(f"{algorithm}_derivatives", name) in wanted \
+                    and algorithm_label(algorithm, name) not in wanted:
+                wanted.append(algorithm_label(algorithm, name))
     robots = any(not label.startswith("row") for label in wanted)
     stepped = [name for name in STEPPED if f"RK4 step {name}" in wanted]
     rows = [n for n in ROWS if any(label.startswith(f"row of {n}") for label in wanted)]
 
-    mujoco = require("mujoco", "mujoco")
     OUT.mkdir(parents=True, exist_ok=True)
     models = OUT / "models"
     models.mkdir(exist_ok=True)
     urdfs = {name: urdf_path(stem) for name, stem in ROBOTS.items()} if robots else {}
-    mujoco_binary = mujoco_probe(mujoco)
+    mujoco = require("mujoco", "mujoco") if stepped or rows else None
+    mujoco_binary = mujoco_probe(mujoco) if mujoco else None
     for name in stepped:
         mujoco_robot(mujoco, urdfs[name], models / f"{name}.xml")
     for n in rows:
@@ -269,14 +312,17 @@ def main():
         require("pinocchio", "pin")
         require("cmeel", "pin")
         pin = Probe("Pinocchio", [str(pinocchio_probe()), *robot_arguments])
-    muj = Probe("MuJoCo", [str(mujoco_binary),
-                           *[f"{name}={models / f'{name}.xml'}" for name in stepped],
-                           *[f"row{n}={models / f'row{n}.xml'}" for n in rows]])
+    muj = None
+    if mujoco:
+        muj = Probe("MuJoCo", [str(mujoco_binary),
+                               *[f"{name}={models / f'{name}.xml'}" for name in stepped],
+                               *[f"row{n}={models / f'row{n}.xml'}" for n in rows]])
 
     pairs = []  # (label, lsdc case, peer probe, peer case)
-    for algorithm in ("rnea", "crba", "aba"):
+    for algorithm in ALGORITHMS:
         for name in ROBOTS:
-            pairs.append((f"{algorithm.upper()} {name}", f"{name}/{algorithm}", pin, f"{name}/{algorithm}"))
+            pairs.append((algorithm_label(algorithm, name), f"{name}/{algorithm}", pin,
+                          f"{name}/{algorithm}"))
     for name in STEPPED:
         pairs.append((f"RK4 step {name}", f"{name}/step", muj, f"{name}/step"))
     for n in ROWS:
@@ -317,9 +363,9 @@ def main():
                      "peer_best_ns": pb * 1e9, "peer_median_ns": pm * 1e9,
                      "ratio_best": ob / pb, "ratio_median": om / pm})
 
-    versions = f"MuJoCo {mujoco.__version__}"
-    if pin is not None:
-        versions = f"Pinocchio {sys.modules['pinocchio'].__version__}, {versions}"
+    versions = ", ".join(
+        ([f"Pinocchio {sys.modules['pinocchio'].__version__}"] if pin is not None else [])
+        + ([f"MuJoCo {mujoco.__version__}"] if mujoco else []))
     print(f"\n{started:%Y-%m-%d %H:%M} UTC, {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} CPUs; load average {load_before[0]:.1f} before, {load_after[0]:.1f} after; "
           f"{versions}; {args.rounds} rounds of "
@@ -330,11 +376,32 @@ def main():
         print(f"| {r['pair']} | {r['peer']} | {r['lsdc_best_ns']:,.0f} | {r['lsdc_median_ns']:,.0f} | "
               f"{r['peer_best_ns']:,.0f} | {r['peer_median_ns']:,.0f} | "
               f"**{r['ratio_best']:.2f}** | {r['ratio_median']:.2f} |")
+    derivatives = derivative_rows(pairs, best_median, lsdc, pin)
+    if derivatives:
+        print("\nEach side's derivatives against its own algorithms (ns per call, best / median):\n")
+        print("| robot | side | RNEA | ∂RNEA | ratio | ABA | ∂ABA | ratio |")
+        print("|---|---|---:|---:|---:|---:|---:|---:|")
+        for d in derivatives:
+            for side in ("lsdc", "Pinocchio"):
+                t = d[side]
+                print(f"| {d['robot']} | {side} | {t['rnea'][0]:,.0f} / {t['rnea'][1]:,.0f} | "
+                      f"{t['rnea_derivatives'][0]:,.0f} / {t['rnea_derivatives'][1]:,.0f} | "
+                      f"**{t['rnea_ratio'][0]:.2f}** / {t['rnea_ratio'][1]:.2f} | "
+                      f"{t['aba'][0]:,.0f} / {t['aba'][1]:,.0f} | "
+                      f"{t['aba_derivatives'][0]:,.0f} / {t['aba_derivatives'][1]:,.0f} | "
+                      f"**{t['aba_ratio'][0]:.2f}** / {t['aba_ratio'][1]:.2f} |")
+        print("\n| robot | lsdc / Pinocchio, ∂RNEA | lsdc / Pinocchio, ∂ABA |")
+        print("|---|---:|---:|")
+        for d in derivatives:
+            print(f"| {d['robot']} | {d['rnea_derivatives_ratio'][0]:.2f} / "
+                  f"{d['rnea_derivatives_ratio'][1]:.2f} | {d['aba_derivatives_ratio'][0]:.2f} / "
+                  f"{d['aba_derivatives_ratio'][1]:.2f} |")
     if args.json:
         pathlib.Path(args.json).write_text(json.dumps({
             "date": started.isoformat(), "load_before": load_before, "load_after": load_after,
-            "pinocchio": pin and sys.modules['pinocchio'].__version__, "mujoco": mujoco.__version__,
-            "rounds": args.rounds, "batch": args.batch, "rows": rows}, indent=1) + "\n")
+            "pinocchio": pin and sys.modules['pinocchio'].__version__, "mujoco": mujoco and mujoco.__version__,
+            "rounds": args.rounds, "batch": args.batch, "rows": rows,
+            "derivatives": derivatives}, indent=1) + "\n")
 
 
 if __name__ == "__main__":

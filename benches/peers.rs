@@ -9,7 +9,9 @@
 //!
 //! - `NAME/rnea`, `NAME/crba`, `NAME/aba` on a URDF robot read through lsdc's URDF import
 //!   (fixed base, gravity): 256 random states (q uniform in [−π, π], v, a and τ in [−1, 1])
-//!   cycled, as Pinocchio's side does;
+//!   cycled, as Pinocchio's side does; `NAME/rnea_derivatives` (∂τ/∂q, ∂τ/∂v) and
+//!   `NAME/aba_derivatives` (∂q̈/∂q, ∂q̈/∂v, M⁻¹) on the same states, beside Pinocchio's
+//!   `computeRNEADerivatives` and `computeABADerivatives`;
 //! - `NAME/step`: one step of RK4 at 1 ms of the robot falling under gravity (`Simulator::step`,
 //!   the stiffness check off: the integrator's work alone, as MuJoCo's `mj_step`), started again
 //!   from rest at q = 0 every 1,000 steps, outside the timed steps;
@@ -30,6 +32,8 @@ use std::io::{BufRead, Write};
 use std::path::Path;
 
 use lsdc::driver::compile_text;
+use lsdc::dynamics::algorithms::aba_derivatives::AbaDerivatives;
+use lsdc::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
 use lsdc::dynamics::algorithms::{aba_into, crba_into, rnea_into, Data};
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Integrator, Prepared, Settings};
@@ -65,7 +69,8 @@ fn timed(calls: u64, mut f: impl FnMut()) -> f64 {
     thread_cpu_seconds() - start
 }
 
-/// RNEA, CRBA and ABA on a URDF robot, over cycled random states.
+/// RNEA, CRBA, ABA and the derivatives of RNEA and ABA on a URDF robot, over cycled random
+/// states.
 fn algorithm_cases<'a>(name: &str, prepared: &'a Prepared, cases: &mut Vec<(String, Case<'a>)>) {
     let model = &prepared.model;
     // Gravity is a field of the model (no per-body effort to evaluate), as in Pinocchio.
@@ -104,6 +109,40 @@ fn algorithm_cases<'a>(name: &str, prepared: &'a Prepared, cases: &mut Vec<(Stri
                     k = (k + 1) % states.len();
                     crba_into(model, &mut data, &states[k][0], &mut mass).expect("crba");
                     black_box(&mass);
+                })
+            }),
+        ));
+    }
+    {
+        let (states, external) = (states.clone(), external.clone());
+        let mut data = Data::new(model);
+        let mut inverse = RneaDerivatives::new(model);
+        let mut k = 0;
+        cases.push((
+            format!("{name}/rnea_derivatives"),
+            Box::new(move |calls| {
+                timed(calls, || {
+                    k = (k + 1) % states.len();
+                    let [q, v, a, _] = &states[k];
+                    (inverse.compute(model, &mut data, q, v, a, &external)).expect("derivatives");
+                    black_box(&inverse.dtau_dq);
+                })
+            }),
+        ));
+    }
+    {
+        let (states, external) = (states.clone(), external.clone());
+        let mut data = Data::new(model);
+        let mut forward = AbaDerivatives::new(model);
+        let mut k = 0;
+        cases.push((
+            format!("{name}/aba_derivatives"),
+            Box::new(move |calls| {
+                timed(calls, || {
+                    k = (k + 1) % states.len();
+                    let [q, v, _, t] = &states[k];
+                    (forward.compute(model, &mut data, q, v, t, &external)).expect("derivatives");
+                    black_box(&forward.dacceleration_dq);
                 })
             }),
         ));

@@ -1,19 +1,21 @@
-// Pinocchio's side of bench/peers.py: RNEA, CRBA and ABA on URDF robots, timed on request.
+// Pinocchio's side of bench/peers.py: RNEA, CRBA and ABA on URDF robots, and the analytical
+// derivatives of RNEA and ABA (computeRNEADerivatives, computeABADerivatives), timed on request.
 //
 //   pinocchio_probe NAME=ROBOT.urdf...
 //
 // Loads every robot (fixed base, gravity 9.80665 m/s^2 along -z as in lsdc's URDF import),
 // draws 256 states per robot with a fixed seed (each coordinate uniform within its joint limits
 // when both are finite, else in [-pi, pi]; v, a and tau uniform in [-1, 1]), prints
-//   ready NAME/rnea NAME/crba NAME/aba ...
+//   ready NAME/rnea NAME/crba NAME/aba NAME/rnea_derivatives NAME/aba_derivatives ...
 // then answers each line `CASE CALLS` of its standard input with the CPU time, in seconds, that
 // this thread spent on CALLS calls of CASE cycled over the states (CLOCK_THREAD_CPUTIME_ID: the
 // time the shared machine gave to other programs is left out). The driver alternates these
 // batches with lsdc's, which answers the same protocol (benches/peers.rs).
 //
 // Every call uses Pinocchio's default arguments (Convention::LOCAL for crba and aba; crba fills
-// the upper triangle only, as Pinocchio does). Each result feeds a checksum so no call can be
-// optimised away.
+// the upper triangle only, as Pinocchio does; computeRNEADerivatives gives dtau/dq, dtau/dv and
+// the mass matrix as dtau/da, computeABADerivatives ddq/dq, ddq/dv and Minv = ddq/dtau). Each
+// result feeds a checksum so no call can be optimised away.
 
 #include <time.h>
 
@@ -26,9 +28,11 @@
 #include <string>
 #include <vector>
 
+#include <pinocchio/algorithm/aba-derivatives.hpp>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/rnea-derivatives.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/parsers/urdf.hpp>
@@ -113,7 +117,8 @@ int main(int argc, char **argv) {
       robot.states.push_back(State{random_configuration(model, rng), uniform_vector(model.nv, rng),
                                    uniform_vector(model.nv, rng), uniform_vector(model.nv, rng)});
     robots.emplace(name, std::move(robot));
-    ready += " " + name + "/rnea " + name + "/crba " + name + "/aba";
+    for (const char *algorithm : {"rnea", "crba", "aba", "rnea_derivatives", "aba_derivatives"})
+      ready += " " + name + "/" + algorithm;
   }
   std::printf("%s\n", ready.c_str());
   std::fflush(stdout);
@@ -132,7 +137,8 @@ int main(int argc, char **argv) {
     const auto slash = name_and_case.rfind('/');
     const auto found = robots.find(name_and_case.substr(0, slash));
     const std::string algorithm = slash == std::string::npos ? "" : name_and_case.substr(slash + 1);
-    if (found == robots.end() || (algorithm != "rnea" && algorithm != "crba" && algorithm != "aba")) {
+    if (found == robots.end() || (algorithm != "rnea" && algorithm != "crba" && algorithm != "aba" &&
+                                  algorithm != "rnea_derivatives" && algorithm != "aba_derivatives")) {
       std::printf("error: no case `%s`\n", name_and_case.c_str());
       std::fflush(stdout);
       continue;
@@ -147,10 +153,22 @@ int main(int argc, char **argv) {
       }
     } else if (algorithm == "crba") {
       for (long i = 0; i < calls; ++i) checksum += pinocchio::crba(r.model, r.data, r.states[i % n].q)(0, 0);
-    } else {
+    } else if (algorithm == "aba") {
       for (long i = 0; i < calls; ++i) {
         const State &s = r.states[i % n];
         checksum += pinocchio::aba(r.model, r.data, s.q, s.v, s.tau)[0];
+      }
+    } else if (algorithm == "rnea_derivatives") {
+      for (long i = 0; i < calls; ++i) {
+        const State &s = r.states[i % n];
+        pinocchio::computeRNEADerivatives(r.model, r.data, s.q, s.v, s.a);
+        checksum += r.data.dtau_dq(0, 0) + r.data.dtau_dv(0, 0);
+      }
+    } else {
+      for (long i = 0; i < calls; ++i) {
+        const State &s = r.states[i % n];
+        pinocchio::computeABADerivatives(r.model, r.data, s.q, s.v, s.tau);
+        checksum += r.data.ddq_dq(0, 0) + r.data.ddq_dv(0, 0) + r.data.Minv(0, 0);
       }
     }
     const double seconds = thread_seconds() - start;

@@ -8,6 +8,7 @@ pub mod aba_derivatives;
 pub mod crba_derivatives;
 mod geared;
 pub(crate) mod hybrid;
+mod mass_factor;
 pub mod regressor;
 pub mod rnea_derivatives;
 

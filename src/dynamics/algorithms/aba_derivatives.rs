@@ -1,13 +1,23 @@
 //! Analytical derivatives of forward dynamics, q̈ = ABA(q, v, τ): since RNEA(q, v, ABA(q, v, τ))
 //! = τ, differentiating gives ∂q̈/∂q = −M⁻¹ ∂τ/∂q and ∂q̈/∂v = −M⁻¹ ∂τ/∂v, the derivatives of
 //! inverse dynamics taken at the accelerations q̈, and ∂q̈/∂τ = M⁻¹ (Carpentier & Mansard,
-//! "Analytical Derivatives of Rigid Body Dynamics Algorithms", RSS 2018, §IV). M⁻¹ comes from the
-//! mass matrix (CRBA, geared rotors included) and its Cholesky factor.
+//! "Analytical Derivatives of Rigid Body Dynamics Algorithms", RSS 2018, §IV).
+//!
+//! q̈ and the mass matrix come from the passes of those derivatives themselves
+//! (`RneaDerivatives::forward_dynamics`: the bias efforts and the composite inertias at q̈ = 0,
+//! then q̈ by the mass matrix's factor, ABA's values to round-off); with geared rotors, from ABA
+//! and CRBA. Every product by M⁻¹ is a solve with M's factor along the tree, M = Lᵀ D L
+//! (`mass_factor`), by rows over the columns of each row's tree: 2 Σ dᵢ + n products a column
+//! (dᵢ the depth of velocity i) where a dense product by M⁻¹ costs n², nothing crossing between
+//! the tree's separate branches.
 
 use nalgebra::{DMatrix, DVector};
 
+use super::mass_factor::MassFactor;
 use super::rnea_derivatives::{check_supported, DerivativeError, RneaDerivatives};
-use super::{aba_into, base_acceleration, crba_after_kinematics, Data, DynamicsError};
+use super::{
+    aba_into, base_acceleration, crba_after_kinematics, joint_motions, Data, DynamicsError,
+};
 use crate::dynamics::model::Model;
 use crate::spatial::Force;
 
@@ -46,8 +56,9 @@ pub struct AbaDerivatives {
     pub dacceleration_dv: DMatrix<f64>,
     pub mass_inverse: DMatrix<f64>,
     pub inverse: RneaDerivatives,
-    /// The mass matrix at q (zero where CRBA writes nothing, as it needs).
+    /// The mass matrix at q (zero where CRBA writes nothing, as it needs) and its factor.
     mass: DMatrix<f64>,
+    factor: MassFactor,
 }
 
 impl AbaDerivatives {
@@ -60,11 +71,12 @@ impl AbaDerivatives {
             mass_inverse: DMatrix::zeros(nv, nv),
             inverse: RneaDerivatives::new(model),
             mass: DMatrix::zeros(nv, nv),
+            factor: MassFactor::new(model),
         }
     }
 
-    /// q̈ = ABA(q, v, τ) under the external forces `external` (per body, in its frame) and its
-    /// derivatives with respect to q, v and τ.
+    /// q̈, forward dynamics at (q, v, τ) under the external forces `external` (per body, in its
+    /// frame), and its derivatives with respect to q, v and τ.
     pub fn compute(
         &mut self,
         model: &Model,
@@ -75,22 +87,31 @@ impl AbaDerivatives {
         external: &[Force],
     ) -> Result<(), ForwardDerivativeError> {
         check_supported(model)?;
-        // One evaluation of the joints' motions serves ABA, CRBA and the derivatives.
-        aba_into(model, data, q, v, tau, external, &mut self.acceleration)
-            .map_err(ForwardDerivativeError::Dynamics)?;
-        crba_after_kinematics(model, data, &mut self.mass);
-        let cholesky =
-            (self.mass.clone().cholesky()).ok_or(ForwardDerivativeError::SingularMass)?;
-        self.mass_inverse = cholesky.inverse();
         let inverse = &mut self.inverse;
-        let state = (v, self.acceleration.as_slice());
-        inverse.after_kinematics(model, data, state, external, base_acceleration(model));
-        self.mass_inverse
-            .mul_to(&inverse.dtau_dq, &mut self.dacceleration_dq);
-        self.mass_inverse
-            .mul_to(&inverse.dtau_dv, &mut self.dacceleration_dv);
-        self.dacceleration_dq.neg_mut();
-        self.dacceleration_dv.neg_mut();
+        if model.rotors.is_empty() {
+            joint_motions(model, data, q, v)
+                .map_err(|e| ForwardDerivativeError::Dynamics(DynamicsError::Evaluation(e)))?;
+            let (factor, mass) = (&mut self.factor, &mut self.mass);
+            let accelerations = &mut self.acceleration;
+            let state = (v, tau);
+            if !inverse.forward_dynamics(model, data, state, external, factor, mass, accelerations)
+            {
+                return Err(ForwardDerivativeError::SingularMass);
+            }
+        } else {
+            // One evaluation of the joints' motions serves ABA, CRBA and the derivatives.
+            aba_into(model, data, q, v, tau, external, &mut self.acceleration)
+                .map_err(ForwardDerivativeError::Dynamics)?;
+            crba_after_kinematics(model, data, &mut self.mass);
+            if !self.factor.factor(&self.mass) {
+                return Err(ForwardDerivativeError::SingularMass);
+            }
+            let state = (v, self.acceleration.as_slice());
+            inverse.after_kinematics(model, data, state, external, base_acceleration(model));
+        }
+        self.factor.inverse_into(&mut self.mass_inverse);
+        (self.factor).solve_negated(&inverse.dtau_dq, &mut self.dacceleration_dq);
+        (self.factor).solve_negated(&inverse.dtau_dv, &mut self.dacceleration_dv);
         Ok(())
     }
 }

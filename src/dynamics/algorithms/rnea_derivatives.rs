@@ -33,9 +33,18 @@
 //! f_R to τ_k, and a column of velocity derivatives to q̇_k's.
 //!
 //! External forces are held fixed in the bodies' frames, as RNEA takes them.
+//!
+//! Forward dynamics' derivatives need the accelerations first (`forward_dynamics`): the same pass
+//! out at q̈ = 0 gives the bias forces, a pass back the efforts C(q, v) + g − Jᵀf_ext and, from
+//! the composite inertias, the mass matrix M_rc = S_rᵀ I^c S_c (the composite rigid bodies'
+//! entries); q̈ = M⁻¹(τ − C − g + Jᵀf_ext) by M's factor along the tree; q̈ then enters the
+//! accelerations linearly, a_i += Σ_j S_j q̈_j over i's branch, and the pass back of the
+//! derivatives follows. The joints' motions, poses, inertias and Coriolis matrices are formed
+//! once, where articulated-body dynamics would form 6 × 6 articulated inertias of its own.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
+use super::mass_factor::MassFactor;
 use super::{base_acceleration, joint_motions, Data};
 use crate::dynamics::joint::{JointType, Kernel};
 use crate::dynamics::model::Model;
@@ -109,6 +118,11 @@ pub struct RneaDerivatives {
     dv_dq: Vec<Motion>,
     da_dq: Vec<Motion>,
     da_dv: Vec<Motion>,
+    /// `forward_dynamics`: per body, its subtree's inertia and bias force, and the change of its
+    /// acceleration by q̈.
+    composite: Vec<RigidInertia>,
+    composite_force: Vec<Force>,
+    acceleration_change: Vec<Motion>,
 }
 
 impl RneaDerivatives {
@@ -128,6 +142,9 @@ impl RneaDerivatives {
             dv_dq: vec![Motion::zeros(); nv],
             da_dq: vec![Motion::zeros(); nv],
             da_dv: vec![Motion::zeros(); nv],
+            composite: vec![RigidInertia::zeros(); n + 1],
+            composite_force: vec![Force::zeros(); n + 1],
+            acceleration_change: vec![Motion::zeros(); n + 1],
         }
     }
 
@@ -174,11 +191,100 @@ impl RneaDerivatives {
     ) {
         self.acceleration[0] = base;
         self.pass_out(model, data, v, a, external);
-        self.tau.fill(0.0);
-        self.dtau_dq.fill(0.0);
-        self.dtau_dv.fill(0.0);
+        // Without rotors the pass back writes every entry of the tree's pattern once (the others
+        // stay zero from `new`); the rotors add to some before it.
+        let rotors = !model.rotors.is_empty();
+        self.tau.as_mut_slice().fill(0.0);
+        if rotors {
+            self.dtau_dq.as_mut_slice().fill(0.0);
+            self.dtau_dv.as_mut_slice().fill(0.0);
+        }
         self.add_rotors(model, v, a);
-        self.pass_back(model);
+        self.pass_back(model, rotors);
+    }
+
+    /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
+    /// q̈ into `accelerations`, the mass matrix into `mass` (between a velocity and its
+    /// ancestors only) and its factor into `factor`, then τ, ∂τ/∂q and ∂τ/∂v at q̈ (the module's
+    /// documentation). `data` holds the joints' motions at (q, v); the model has no geared
+    /// rotor (their efforts are not linear in the pass out's terms as written here). False if
+    /// the mass matrix is not positive definite.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn forward_dynamics(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        (v, tau): (&[f64], &[f64]),
+        external: &[Force],
+        factor: &mut MassFactor,
+        mass: &mut DMatrix<f64>,
+        accelerations: &mut DVector<f64>,
+    ) -> bool {
+        debug_assert!(model.rotors.is_empty());
+        self.acceleration[0] = base_acceleration(model);
+        accelerations.as_mut_slice().fill(0.0);
+        self.pass_out(model, data, v, accelerations.as_slice(), external);
+        self.bias_and_mass(model, mass);
+        if !factor.factor(mass) {
+            return false;
+        }
+        for ((a, given), bias) in accelerations.iter_mut().zip(tau).zip(&self.tau) {
+            *a = given - bias;
+        }
+        factor.solve(accelerations.as_mut_slice());
+        self.add_accelerations(model, accelerations.as_slice());
+        self.tau.as_mut_slice().fill(0.0);
+        self.pass_back(model, false);
+        true
+    }
+
+    /// After the pass out at q̈ = 0: the bias efforts into `tau` and the mass matrix from the
+    /// composite inertias, summed apart (the pass back of the derivatives sums its own).
+    fn bias_and_mass(&mut self, model: &Model, mass: &mut DMatrix<f64>) {
+        self.composite.copy_from_slice(&self.inertia);
+        self.composite_force.copy_from_slice(&self.force);
+        for &k in model.dynamic_joints.iter().rev() {
+            let joint = &model.joints[k];
+            let (i, parent) = (joint.child, joint.dynamic_parent);
+            let (inertia, force) = (self.composite[i], self.composite_force[i]);
+            let branch = model.branch_velocities(k);
+            for row in joint.v_offset..joint.v_offset + joint.nv() {
+                let s = self.columns[row];
+                self.tau[row] = s.dot(&force);
+                let momentum = inertia.times(&s);
+                for &column in branch {
+                    let entry = momentum.dot(&self.columns[column]);
+                    mass[(row, column)] = entry;
+                    mass[(column, row)] = entry;
+                }
+            }
+            if parent != 0 {
+                self.composite[parent] += inertia;
+                self.composite_force[parent] += force;
+            }
+        }
+    }
+
+    /// The accelerations `a` added to a pass out made at q̈ = 0: each body's acceleration by
+    /// Σ S_j a_j over its branch, its force by its inertia times that, and each column's ∂A by
+    /// the change of its parent's acceleration crossed with S.
+    fn add_accelerations(&mut self, model: &Model, a: &[f64]) {
+        self.acceleration_change[0] = Motion::zeros();
+        for &k in &model.dynamic_joints {
+            let joint = &model.joints[k];
+            let (i, parent) = (joint.child, joint.dynamic_parent);
+            let parent_change = self.acceleration_change[parent];
+            let mut change = parent_change;
+            let own = joint.v_offset..joint.v_offset + joint.nv();
+            let (columns, rates) = (&self.columns[own.clone()], &a[own.clone()]);
+            for ((s, rate), da) in columns.iter().zip(rates).zip(&mut self.da_dq[own]) {
+                change += s * *rate;
+                *da += spatial::cross_motion(&parent_change, s);
+            }
+            self.acceleration_change[i] = change;
+            self.acceleration[i] += change;
+            self.force[i] += self.inertia[i].times(&change);
+        }
     }
 
     /// Poses, velocities, accelerations, inertias, Coriolis matrices and forces of the bodies
@@ -300,8 +406,14 @@ impl RneaDerivatives {
 
     /// Sums the composites from the leaves and fills τ, ∂τ/∂q and ∂τ/∂v (the module's
     /// documentation): per joint, its rows along its own and its ancestors' columns, and its
-    /// ancestors' rows along its columns.
-    fn pass_back(&mut self, model: &Model) {
+    /// ancestors' rows along its columns, each entry of the tree's pattern once: written, or
+    /// added to what the rotors gave (`accumulate`).
+    fn pass_back(&mut self, model: &Model, accumulate: bool) {
+        let nv = model.nv;
+        let put = |entries: &mut [f64], row: usize, column: usize, value: f64| {
+            let entry = &mut entries[row + column * nv];
+            *entry = if accumulate { *entry + value } else { value };
+        };
         for &k in model.dynamic_joints.iter().rev() {
             let joint = &model.joints[k];
             let (i, parent) = (joint.child, joint.dynamic_parent);
@@ -313,10 +425,12 @@ impl RneaDerivatives {
                 self.tau[row] += s.dot(&force);
                 let (sensitivity, momentum) = (coriolis.transpose_times(&s), inertia.times(&s));
                 for &column in branch {
-                    self.dtau_dq[(row, column)] +=
+                    let by_position =
                         sensitivity.dot(&self.dv_dq[column]) + momentum.dot(&self.da_dq[column]);
-                    self.dtau_dv[(row, column)] +=
+                    let by_rate =
                         sensitivity.dot(&self.columns[column]) + momentum.dot(&self.da_dv[column]);
+                    put(self.dtau_dq.as_mut_slice(), row, column, by_position);
+                    put(self.dtau_dv.as_mut_slice(), row, column, by_rate);
                 }
             }
             for column in own.clone() {
@@ -326,8 +440,14 @@ impl RneaDerivatives {
                     + inertia.times(&self.da_dq[column]);
                 let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
                 for &row in branch.iter().filter(|row| !own.contains(row)) {
-                    self.dtau_dq[(row, column)] += self.columns[row].dot(&position_change);
-                    self.dtau_dv[(row, column)] += self.columns[row].dot(&rate_change);
+                    let (s_row, dq) = (self.columns[row], self.dtau_dq.as_mut_slice());
+                    put(dq, row, column, s_row.dot(&position_change));
+                    put(
+                        self.dtau_dv.as_mut_slice(),
+                        row,
+                        column,
+                        s_row.dot(&rate_change),
+                    );
                 }
             }
             if parent != 0 {
@@ -362,9 +482,15 @@ impl CoriolisMatrix {
     fn new(inertia: &RigidInertia, velocity: &Motion, momentum: &Force) -> CoriolisMatrix {
         let (w, u) = (spatial::angular(velocity), spatial::linear(velocity));
         let c = inertia.first;
-        let turned = spatial::skew(&w) * inertia.rotational;
-        let top = turned + turned.transpose() - c * u.transpose() - u * c.transpose()
-            + Matrix3::identity() * (2.0 * u.dot(&c))
+        // P = ω̂J − c uᵀ column by column (ω̂ times a column is a cross product: no products
+        // by the skew matrix's zeros), then top = P + Pᵀ + 2 (u·c) 1 − n̂.
+        let j = &inertia.rotational;
+        let half = Matrix3::from_columns(&[
+            w.cross(&j.column(0).into_owned()) - c * u.x,
+            w.cross(&j.column(1).into_owned()) - c * u.y,
+            w.cross(&j.column(2).into_owned()) - c * u.z,
+        ]);
+        let top = half + half.transpose() + Matrix3::identity() * (2.0 * u.dot(&c))
             - spatial::skew(&spatial::angular(momentum));
         let bottom = -2.0 * (spatial::skew(&w.cross(&c)) + spatial::skew(&u) * inertia.mass);
         CoriolisMatrix { top, bottom }
