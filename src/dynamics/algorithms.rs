@@ -8,6 +8,7 @@ pub mod aba_derivatives;
 pub mod crba_derivatives;
 mod geared;
 pub(crate) mod hybrid;
+pub mod mass_solve;
 pub mod regressor;
 pub mod rnea_derivatives;
 
