@@ -116,7 +116,7 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// Solves the loops by `method` wherever it applies, or by the rule of
-    /// `loops::method_for` with `None` (`Prepared::loop_method`): for comparisons.
+    /// `loops::range_space::method_for` with `None` (`Prepared::loop_method`): for comparisons.
     pub fn force_loop_method(&mut self, method: Option<loops::Method>) {
         self.scratch.loop_scratch.force_method(method);
         if let Some(sampling) = &mut self.sampling {

@@ -132,8 +132,8 @@ fn range_space_and_null_space_runs_agree() {
 
 #[test]
 fn the_range_space_method_is_taken_where_the_motions_outnumber_the_rows() {
-    // The necklace of N rods: 3 kept rows, N − 2 allowed motions. A row of four-bars: 3 rows
-    // per loop, one motion.
+    // The necklace of N rods: 3 kept rows, N − 2 allowed motions, the range-space method from
+    // N − 2 = 6 on. A row of four-bars: 3 rows per loop, one motion.
     let taken = |prepared: &Prepared| {
         let model = &prepared.model;
         let (mut y, v) = (model.state_from_declared(&prepared.coordinates, &prepared.rates))
@@ -146,13 +146,13 @@ fn the_range_space_method_is_taken_where_the_motions_outnumber_the_rows() {
         system.derivative(0.0, &y, &mut rates).expect("evaluates");
         system.loop_method()
     };
-    for n in [6, 10] {
+    for n in [8, 10] {
         let necklace = prepared_text(&necklace_program(n));
         assert_eq!(taken(&necklace), Method::RangeSpace, "necklace of {n}");
     }
-    // Three rods between two pivots, three motions on three rows, and five: the null-space
-    // method, as on the four-bar and the row.
-    for n in [3, 5] {
+    // Three to seven rods, one to five motions on three rows: the null-space method, as on the
+    // four-bar and the row.
+    for n in [3, 5, 7] {
         let necklace = prepared_text(&necklace_program(n));
         assert_eq!(taken(&necklace), Method::NullSpace, "necklace of {n}");
     }

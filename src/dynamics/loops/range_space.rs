@@ -55,28 +55,41 @@ pub enum Method {
     RangeSpace,
 }
 
-/// The method the loops' block takes for `structure`: the range-space method where the allowed motions outnumber the kept rows and none of
-/// them is without mass, the null-space method otherwise. Per evaluation the null-space method
-/// makes one sparse solve and one pass over the bodies per allowed motion, then forms and
-/// factors their m × m reduced mass matrix (m² products over the bodies, m³); the range-space
-/// method one pass of ABA, then two passes over the bodies per kept row and k² products over
-/// the rows' columns: measured on the necklace (`benches/loop_scaling.rs`, `switch`), the two
-/// cost the same within a few tenths where m is about k.
-///
-/// The range-space method needs the tree's mass matrix to be invertible (ABA divides by every
-/// joint's articulated inertia), so a structure that counts motions without mass, or a model
-/// with a body without inertia, keeps the null-space method; so does a model with geared
-/// rotors (ABA's rotor steps are not among the responses' passes), and one whose actuators'
-/// laws read the model in their coordinates (`dynamics::reduced_model`, which works on the
-/// allowed motions).
-pub fn method_for(model: &Model, structure: &Structure) -> Method {
-    let massive = structure.massless == 0 && !model.dynamic_bodies.iter().any(|b| b.massless);
-    let reads_motions = model.actuation.as_ref().is_some_and(|a| a.reads.any());
-    let applies = massive && model.rotors.is_empty() && !reads_motions;
-    match applies && structure.free.len() > structure.choice.rows.len() {
+/// The method the loops' block takes for `structure`, on a model where the range-space method
+/// applies (`applies_to`): the range-space method where the free coordinates (one per allowed
+/// motion) number at least twice the kept rows, the null-space method otherwise. Per
+/// evaluation the null-space method makes one sparse solve and one pass over the bodies per
+/// allowed motion, then forms and factors their m × m reduced mass matrix (m² products over
+/// the bodies, m³); the range-space method one pass of ABA, then two passes over the bodies per
+/// kept row and k² products over the rows' columns. Measured on the necklace of N rods (k = 3
+/// rows, m = N − 2; `benches/loop_scaling.rs`, `switch`), the null-space right-hand side is the
+/// cheaper up to m = 5 and the range-space one from m = 6 = 2k on.
+pub fn method_for(structure: &Structure, applies: bool) -> Method {
+    match applies && structure.free.len() >= 2 * structure.choice.rows.len() {
         true => Method::RangeSpace,
         false => Method::NullSpace,
     }
+}
+
+/// Whether the range-space method applies to `model`: its tree's mass matrix is positive
+/// definite, since ABA divides by every joint's articulated inertia. So every body has mass
+/// and a rotational inertia of full rank (its spatial inertia positive definite, its smallest
+/// eigenvalue above 1e-12 of its largest: a point-mass rod, whose spin about its own axis
+/// moves no mass, does not qualify). Then the loops allow no motion without mass but of the
+/// complementary coordinates, which the saddle-point system solves for (the structure's
+/// count of such motions, taken on the eigenvalues of the reduced mass matrix relative to the
+/// largest, is not read: on a chain of 1,000 rods the slowest motions' inertias fall below its
+/// 1e-10 of the largest though every rod has its own). Nor does it apply to a model with
+/// geared rotors (ABA's rotor steps are not among the responses' passes), or one whose
+/// actuators' laws read the model in their coordinates (`dynamics::reduced_model`, which works
+/// on the allowed motions). Decided once per model.
+pub fn applies_to(model: &Model) -> bool {
+    let full = |body: &crate::dynamics::elements::BodyInertia| {
+        let values = body.inertia.symmetric_eigenvalues();
+        !body.massless && values.min() > 1e-12 * values.max()
+    };
+    let reads_motions = model.actuation.as_ref().is_some_and(|a| a.reads.any());
+    model.rotors.is_empty() && !reads_motions && model.dynamic_bodies.iter().all(full)
 }
 
 /// The range-space method's storage, sized at the first evaluation and when the rows change:
@@ -222,7 +235,7 @@ fn eliminate(a: &mut DMatrix<f64>, b: &mut [f64]) -> Result<(), usize> {
             .map(|i| a[(i, j)].abs())
             .enumerate()
             .fold((0, -1.0), |best, (i, x)| if x > best.1 { (i, x) } else { best });
-        if !(best > 1e-14 * largest) {
+        if best <= 1e-14 * largest || !largest.is_finite() {
             return Err(j);
         }
         let p = j + offset;

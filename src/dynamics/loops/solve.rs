@@ -11,6 +11,10 @@
 //! the accelerations are a smooth function of the state there; they do not depend on the basis
 //! N of the allowed motions, only on the space it spans. Motions that move no mass
 //! (their number is part of the structure) are left at rest.
+//!
+//! Where the allowed motions outnumber the kept rows, the same equations are solved on the rows
+//! instead (`range_space`, `solve_range_space`): the factorisation is taken as here, the
+//! allowed motions only when a caller asks for them (`LoopScratch::ensure_motions`).
 
 use nalgebra::{Cholesky, DMatrix, DVector};
 
@@ -79,6 +83,8 @@ pub struct LoopScratch {
     /// on demand (`ensure_motions`).
     method: Method,
     forced: Option<Method>,
+    /// Whether the range-space method applies to the model (`range_space::applies_to`).
+    range_applies: bool,
     range: RangeSpace,
     motions_due: bool,
     /// Accelerations of every state velocity.
@@ -115,6 +121,7 @@ impl LoopScratch {
             inertia: ReducedInertia::new(model),
             method: Method::NullSpace,
             forced: None,
+            range_applies: super::range_space::applies_to(model),
             range: RangeSpace::default(),
             motions_due: false,
             accelerations: DVector::zeros(columns),
@@ -151,10 +158,11 @@ impl LoopScratch {
         }
     }
 
-    /// The method of the next evaluations (`range_space::method_for`), or the one forced
-    /// (`force_method`).
-    pub fn set_method(&mut self, method: Method) {
-        self.method = self.forced.unwrap_or(method);
+    /// The method of the next evaluations for `structure` (`range_space::method_for`), or the
+    /// one forced (`force_method`).
+    pub fn choose_method(&mut self, structure: &Structure) {
+        let chosen = super::range_space::method_for(structure, self.range_applies);
+        self.method = self.forced.unwrap_or(chosen);
     }
 
     /// Forces one method wherever it applies (None: the rule of `range_space::method_for`),

@@ -138,7 +138,7 @@ impl MechanicalSystem<'_> {
         // start from.
         forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let scratch = &mut self.scratch.loop_scratch;
-        scratch.set_method(loops::method_for(model, &self.scratch.loops.structure));
+        scratch.choose_method(&self.scratch.loops.structure);
         // Only Baumgarte's feedback reads the position rows.
         let extent = match baumgarte {
             true => Extent::WithBias,
@@ -213,7 +213,7 @@ impl MechanicalSystem<'_> {
         let state = (q, v);
         planar_constraints_into(model, planar, planar_data, state, &mut scratch.constraints);
         let structure = &self.scratch.loops.structure;
-        scratch.set_method(loops::method_for(model, structure));
+        scratch.choose_method(structure);
         let allowed = loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch);
         if let Err(e) = allowed {
             return Err(self.loop_error(&e));
