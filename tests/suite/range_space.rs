@@ -5,11 +5,7 @@
 //! slider-crank and the row of ten four-bars (where it keeps the null-space method), in the
 //! spatial and the planar forms. The rule itself: which mechanisms take which method.
 
-#[path = "../../benches/common/chains.rs"]
-#[allow(dead_code)] // the ladder serves `long_chains`
-mod chains;
-
-use chains::necklace_program;
+use crate::long_chains::chains::necklace_program;
 use lsdc::dynamics::loops::Method;
 use lsdc::prepare::{Integrator, Prepared};
 use lsdc::simulate::run::run;
