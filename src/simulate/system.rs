@@ -125,6 +125,7 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// The method the last evaluation solved the loops by.
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
     pub fn loop_method(&self) -> loops::Method {
         self.scratch.loop_scratch.method()
     }
