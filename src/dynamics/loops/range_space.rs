@@ -29,7 +29,6 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::factored::Factored;
-use super::solve::LoopError;
 use super::structure::Structure;
 use crate::dynamics::algorithms::mass_solve::{mass_solve_after_aba, MassSolveScratch};
 use crate::dynamics::algorithms::{aba_after_kinematics, Data, DynamicsError};
@@ -92,6 +91,14 @@ pub fn applies_to(model: &Model) -> bool {
     model.rotors.is_empty() && !reads_motions && model.dynamic_bodies.iter().all(full)
 }
 
+/// Why the range-space solve failed: a joint whose articulated inertia is singular (the state
+/// velocity it moves), or kept rows dependent here (the row, among the 6 per loop).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Failure {
+    MasslessMotion { velocity: usize },
+    Singular { row: usize },
+}
+
 /// The range-space method's storage, sized at the first evaluation and when the rows change:
 /// an evaluation allocates nothing once sized.
 #[derive(Default)]
@@ -128,7 +135,7 @@ impl RangeSpace {
         minus_gamma: &[f64],
         tau: &DVector<f64>,
         accelerations: &mut DVector<f64>,
-    ) -> Result<(), LoopError> {
+    ) -> Result<(), Failure> {
         let (nv, velocities, k) = (model.nv, accelerations.len(), factored.len());
         self.size_for(factored, nv, velocities);
         accelerations.fill(0.0);
@@ -142,7 +149,7 @@ impl RangeSpace {
             }
         };
         forward.map_err(|e| match e {
-            DynamicsError::Singular { joint, .. } => LoopError::MasslessMotion {
+            DynamicsError::Singular { joint, .. } => Failure::MasslessMotion {
                 velocity: joint_velocity(joint),
             },
             DynamicsError::Evaluation(_) => unreachable!("the planar ABA evaluates no expression"),
@@ -189,7 +196,7 @@ impl RangeSpace {
             .extend(self.complementary.iter().map(|&c| -tau[c]));
         if let Err(pivot) = eliminate(&mut self.system, &mut self.rhs) {
             let row = structure.choice.rows[pivot.min(k.saturating_sub(1))];
-            return Err(LoopError::Singular { row });
+            return Err(Failure::Singular { row });
         }
         for (l, &lambda) in self.rhs[..k].iter().enumerate() {
             accelerations.axpy(lambda, &self.responses.column(l), 1.0);

@@ -21,7 +21,7 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 use super::factored::{projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::inertia::{Reduced, ReducedInertia};
 use super::project::ProjectionScratch;
-use super::range_space::{Method, RangeSpace, Tree};
+use super::range_space::{Failure, Method, RangeSpace, Tree};
 use super::rows::Constraints;
 use super::structure::Structure;
 use crate::dynamics::algorithms::Data;
@@ -354,7 +354,11 @@ pub fn solve_range_space(
         accelerations,
         ..
     } = scratch;
-    range.solve(model, tree, structure, factored, kept, tau, accelerations)
+    let solved = range.solve(model, tree, structure, factored, kept, tau, accelerations);
+    solved.map_err(|failure| match failure {
+        Failure::MasslessMotion { velocity } => LoopError::MasslessMotion { velocity },
+        Failure::Singular { row } => LoopError::Singular { row },
+    })
 }
 
 /// The second half of the solve (after `allowed_motions`): a = a₀ + Nz with
