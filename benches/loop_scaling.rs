@@ -5,12 +5,16 @@
 //! loops. Then the long closed chains of `common/chains.rs`, the necklace (one loop of N rods)
 //! and the ladder (N loops sharing their rungs), for N from 10 to 1,000: one right-hand side and
 //! one projection, and the exponent of their growth with N (least squares on log cost against
-//! log N). Run with `cargo bench --bench loop_scaling [-- rows|chains]`; CPU time per call,
-//! best of 7 batches of about 20 ms.
+//! log N). Where the loops' two methods (`dynamics::loops::range_space`) trade places, the
+//! necklace of N rods for N from 4 to 14 with each method forced (`switch`), and the necklace's
+//! energy and closure over 0.2 s at dopri5 1e-12 for N = 10, 100 and 1,000 (`accuracy`).
+//! Run with `cargo bench --bench loop_scaling [-- rows|chains|switch|accuracy]`; CPU time per
+//! call, best of 7 batches of about 20 ms.
 
 use lsdc::driver::compile_text;
+use lsdc::dynamics::loops::{Method, Stabilisation};
 use lsdc::load::LoadOptions;
-use lsdc::prepare::{prepare, Prepared, Settings};
+use lsdc::prepare::{prepare, Integrator, Prepared, Settings};
 
 #[path = "common/chains.rs"]
 mod chains;
@@ -57,6 +61,78 @@ fn main() {
     }
     if wants("chains") {
         long_chains();
+    }
+    if wants("switch") {
+        methods_switch();
+    }
+    if wants("accuracy") {
+        necklace_accuracy();
+    }
+}
+
+/// The necklace of N rods has 3 kept rows and N − 2 allowed motions: each method's cost of one
+/// right-hand side and one projection on both sides of the rule's switch (range-space where
+/// N − 2 ≥ 2 · 3).
+fn methods_switch() {
+    println!(
+        "\nThe necklace with each method forced (release build, CPU time per call, best batch).\n"
+    );
+    println!("| N | allowed motions | rule's method | null-space RHS µs | range-space RHS µs | null-space projection µs | range-space projection µs |");
+    println!("|---:|---:|---|---:|---:|---:|---:|");
+    for n in [4, 5, 6, 7, 8, 10, 14] {
+        let costs = |method| {
+            let mut prepared = prepared(&necklace_program(n));
+            prepared.loop_method = Some(method);
+            call_costs(&prepared)
+        };
+        let (null, range) = (costs(Method::NullSpace), costs(Method::RangeSpace));
+        let rule = if n - 2 >= 6 {
+            "range-space"
+        } else {
+            "null-space"
+        };
+        println!(
+            "| {n} | {} | {rule} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            n - 2,
+            null.0,
+            range.0,
+            null.1,
+            range.1
+        );
+    }
+}
+
+/// The necklace at N = 10, 100 and 1,000 over 0.2 s with dopri5 at 1e-12, projected after
+/// each step: its energy drift and its loops' largest residuals (the suite's
+/// `long_chains` runs N = 10 and 100).
+fn necklace_accuracy() {
+    println!("\nThe necklace over 0.2 s, dopri5 at 1e-12 (release build).\n");
+    println!("| N | method (the rule's) | steps | energy drift | position residual | velocity residual | run s (CPU) |");
+    println!("|---:|---|---:|---:|---:|---:|---:|");
+    for n in [10, 100, 1000] {
+        let mut prepared = prepared(&necklace_program(n));
+        prepared.settings = Settings {
+            integrator: Integrator::DormandPrince,
+            duration: 0.2,
+            output: 0.02,
+            rtol: 1e-12,
+            atol: 1e-12,
+            stabilisation: Stabilisation::Projection,
+            ..prepared.settings
+        };
+        let start = common::thread_cpu_seconds();
+        let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
+        let seconds = common::thread_cpu_seconds() - start;
+        let report = &simulation.report;
+        assert!(report.failure.is_none(), "{:?}", report.failure);
+        let c = report.constraints.as_ref().expect("loops");
+        println!(
+            "| {n} | range-space | {} | {:.1e} | {:.1e} | {:.1e} | {seconds:.2} |",
+            report.steps,
+            report.energy_drift.expect("conservative"),
+            c.position_residual,
+            c.velocity_residual
+        );
     }
 }
 

@@ -29,6 +29,7 @@ pub fn loop_system(prepared: &Prepared) -> (MechanicalSystem<'_>, Vec<f64>) {
     y.extend_from_slice(&v);
     let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
+    system.force_loop_method(prepared.loop_method);
     system.start_loops(&mut y).expect("loops close");
     (system, y)
 }

@@ -55,6 +55,10 @@ pub struct Prepared {
     /// default: through singular configurations of its loops, runs in either form differ at
     /// round-off and the passages amplify that (docs/guarantees.md).
     pub takes_planar: bool,
+    /// The method the run's loops are solved by, when forced (`dynamics::loops::Method`), to
+    /// compare the two on one mechanism; `None`, the default, takes the cheaper by the rule of
+    /// `loops::range_space::method_for`.
+    pub loop_method: Option<crate::dynamics::loops::Method>,
     /// Whether the run follows the drives by assembly at each output instead of integrating
     /// the dynamics: a scene that asks only for kinematics (`kinematic_scene`).
     pub kinematics_only: bool,
@@ -356,6 +360,7 @@ pub(crate) fn prepare_parts(
             false => Err("a study of kinematics alone builds no dynamics".to_string()),
         },
         takes_planar: false,
+        loop_method: None,
         kinematics_only: false,
         model,
         topology,

@@ -228,6 +228,11 @@ pub struct LoopMonitor {
     /// The kept rows at the last state kept outside a passage, from which a step's end is seen
     /// on one side or the other of a singular configuration (`crossing`).
     orientation: Orientation,
+    /// Whether the free coordinates are watched (`Structure::free_quality`): where the
+    /// equations of motion work on them, the null-space method's allowed motions. The
+    /// range-space method (`loops::range_space`) does not, and measuring them would cost what
+    /// it spares (a factorisation of their block of the projector, cubic in the mobility).
+    pub watches_free: bool,
 }
 
 fn max(a: Residuals, b: Residuals) -> Residuals {
@@ -252,6 +257,7 @@ impl LoopMonitor {
             anchor: None,
             breaks_trend: false,
             orientation: Orientation::default(),
+            watches_free: true,
         }
     }
 
@@ -498,7 +504,10 @@ impl LoopMonitor {
             self.breaks_trend = true;
             return conditioning;
         }
-        let quality = scratch.free_quality(&structure.free);
+        let quality = match self.watches_free {
+            true => scratch.free_quality(&structure.free),
+            false => None,
+        };
         if quality.is_some_and(|q| q < FREE_AGAIN_BELOW * structure.free_quality) {
             structure.choose_free(&scratch.current.jacobian);
             self.breaks_trend = true;

@@ -109,8 +109,25 @@ impl<'m> MechanicalSystem<'m> {
             let loops = &self.scratch.loops;
             let mut scratch = Box::new(Scratch::new(self.model, loops.stabilisation));
             scratch.loops = loops.for_outputs();
+            let forced = self.scratch.loop_scratch.forced_method();
+            scratch.loop_scratch.force_method(forced);
             self.sampling = Some(scratch);
         }
+    }
+
+    /// Solves the loops by `method` wherever it applies, or by the rule of
+    /// `loops::range_space::method_for` with `None` (`Prepared::loop_method`): for comparisons.
+    pub fn force_loop_method(&mut self, method: Option<loops::Method>) {
+        self.scratch.loop_scratch.force_method(method);
+        if let Some(sampling) = &mut self.sampling {
+            sampling.loop_scratch.force_method(method);
+        }
+    }
+
+    /// The method the last evaluation solved the loops by.
+    #[cfg_attr(not(lsdc_internals), allow(dead_code))]
+    pub fn loop_method(&self) -> loops::Method {
+        self.scratch.loop_scratch.method()
     }
 
     /// Evaluates the accelerations with `native` (checked against this system's own evaluation
@@ -479,6 +496,10 @@ impl<'m> MechanicalSystem<'m> {
         }
         let free = &self.scratch.loops.structure.free;
         let quality = self.scratch.loop_scratch.take_free_quality(free);
+        // The range-space method works on the rows, not on the free coordinates: they are
+        // watched only where its motions were found for a caller that works on them.
+        let null_space = self.scratch.loop_scratch.method() == loops::Method::NullSpace;
+        self.scratch.loops.watches_free = null_space || quality.is_some();
         self.scratch.projection.offer_free_quality(quality);
         self.scratch.loop_scratch.refresh();
         let (mut q, mut v) = (

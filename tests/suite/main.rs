@@ -66,6 +66,7 @@ mod pinocchio_fixtures;
 mod planar;
 mod position_drives;
 mod properties;
+mod range_space;
 mod reactions;
 mod recovered_angles;
 mod references;

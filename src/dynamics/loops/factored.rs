@@ -290,6 +290,11 @@ impl Factored {
         );
     }
 
+    /// Kept row k of Gₛ (made dimensionless) as (column, value) pairs, over its loop's columns.
+    pub fn row_entries(&self, k: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.rows.row(k)
+    }
+
     /// Column `column` of Gₛ into `out` (resized to the kept rows).
     fn column_into(&self, column: usize, out: &mut Vec<f64>) {
         out.clear();

@@ -3,9 +3,10 @@
 //! are independent, in units that do not depend on the user's, and which coordinates
 //! parametrise the motions they allow), the sparse factorisation of those rows (`factored`), the
 //! constrained equations of motion solved on them (`solve`, with the allowed motions' reduced
-//! mass matrix from `inertia`), and the projection of a state back
-//! onto the loops (`project`), then, near singular configurations, of its velocities by the
-//! constraints' impulse (`momentum`), with an orthonormal basis of the allowed motions from the
+//! mass matrix from `inertia`; or, where the allowed motions outnumber the rows, on the rows
+//! themselves by the articulated-body algorithm's responses, `range_space`), and the
+//! projection of a state back onto the loops (`project`), then, near singular configurations,
+//! of its velocities by the constraints' impulse (`momentum`), with an orthonormal basis of the allowed motions from the
 //! sparse factorisation for the outputs (`orthonormal`). Which side of a singular configuration
 //! a state lies on, seen from the last step's start, tells a step that jumps across one
 //! (`orientation`).
@@ -23,6 +24,7 @@ pub mod orientation;
 pub mod orthonormal;
 pub mod planar_rows;
 pub mod project;
+pub mod range_space;
 pub mod rows;
 pub mod solve;
 pub mod structure;
@@ -37,7 +39,9 @@ pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
     Extent, ROW_NAMES,
 };
+pub use range_space::{Method, Tree};
 pub use solve::{
-    allowed_motions, multipliers, solve_reduced, LoopError, LoopScratch, Stabilisation,
+    allowed_motions, multipliers, solve_range_space, solve_reduced, LoopError, LoopScratch,
+    Stabilisation,
 };
 pub use structure::{Structure, StructureError};

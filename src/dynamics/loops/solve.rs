@@ -11,12 +11,17 @@
 //! the accelerations are a smooth function of the state there; they do not depend on the basis
 //! N of the allowed motions, only on the space it spans. Motions that move no mass
 //! (their number is part of the structure) are left at rest.
+//!
+//! Where the allowed motions outnumber the kept rows, the same equations are solved on the rows
+//! instead (`range_space`, `solve_range_space`): the factorisation is taken as here, the
+//! allowed motions only when a caller asks for them (`LoopScratch::ensure_motions`).
 
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 use super::factored::{projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::inertia::{Reduced, ReducedInertia};
 use super::project::ProjectionScratch;
+use super::range_space::{Failure, Method, RangeSpace, Tree};
 use super::rows::Constraints;
 use super::structure::Structure;
 use crate::dynamics::algorithms::Data;
@@ -73,6 +78,15 @@ pub struct LoopScratch {
     chosen_motions: DMatrix<f64>,
     /// How the reduced equations are formed, and their scratch.
     inertia: ReducedInertia,
+    /// The method of the next evaluations (`range_space::method_for`), the range-space
+    /// method's storage, and whether its last evaluation left the allowed motions to be found
+    /// on demand (`ensure_motions`).
+    method: Method,
+    forced: Option<Method>,
+    /// Whether the range-space method applies to the model (`range_space::applies_to`).
+    range_applies: bool,
+    range: RangeSpace,
+    motions_due: bool,
     /// Accelerations of every state velocity.
     pub accelerations: DVector<f64>,
     /// Constraint wrench of each loop on its second body, at the loop point in fixed axes:
@@ -105,6 +119,11 @@ impl LoopScratch {
             solved_motions: 0,
             chosen_motions: DMatrix::zeros(columns, 0),
             inertia: ReducedInertia::new(model),
+            method: Method::NullSpace,
+            forced: None,
+            range_applies: super::range_space::applies_to(model),
+            range: RangeSpace::default(),
+            motions_due: false,
             accelerations: DVector::zeros(columns),
             multipliers: DVector::zeros(rows),
         }
@@ -133,8 +152,56 @@ impl LoopScratch {
     /// `DAMPING`) to a projection of the same state (`ProjectionScratch::adopt`), if they are
     /// `choice`'s rows; this scratch fills the projection's storage anew at the next evaluation.
     pub fn hand_over(&mut self, projection: &mut ProjectionScratch, choice: &RowChoice) {
+        self.motions_due = false;
         if self.factored.holds(choice) {
             projection.adopt(&mut self.constraints, &mut self.factored, &mut self.factor);
+        }
+    }
+
+    /// The method of the next evaluations for `structure` (`range_space::method_for`), or the
+    /// one forced (`force_method`).
+    pub fn choose_method(&mut self, structure: &Structure) {
+        let chosen = super::range_space::method_for(structure, self.range_applies);
+        self.method = self.forced.unwrap_or(chosen);
+    }
+
+    /// Forces one method wherever it applies (None: the rule of `range_space::method_for`),
+    /// to compare the two on one mechanism.
+    pub fn force_method(&mut self, method: Option<Method>) {
+        self.forced = method;
+    }
+
+    pub fn forced_method(&self) -> Option<Method> {
+        self.forced
+    }
+
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// After a range-space evaluation, which finds no allowed motions, finds them at the same
+    /// state from its factorisation (one sparse solve per free coordinate, as the null-space
+    /// method does), for the callers that work on them: the response X of the constraint
+    /// stack's other rows, the implicit integrator's tangent space. Nothing after a null-space
+    /// evaluation. Must follow the evaluation, before its rows are handed to a projection
+    /// (`hand_over`).
+    pub fn ensure_motions(&mut self, structure: &Structure) {
+        if !std::mem::take(&mut self.motions_due) {
+            return;
+        }
+        self.size_for(structure.free.len());
+        let damped = self.factored.with_factor(std::mem::take(&mut self.factor));
+        damped.allowed_motions_into(&structure.free, &mut self.motion_rows, &mut self.null, 0);
+        self.factor = damped.into_storage();
+        self.found_motions = structure.free.len();
+        self.solved_motions = structure.free.len();
+        self.chosen_motions = DMatrix::zeros(self.null.nrows(), 0);
+        // The motions are on the free coordinates: how well they parametrise them is measured
+        // as at a null-space evaluation, so that the run chooses them again when they do not.
+        if std::mem::take(&mut self.quality_due) {
+            let quality = free_quality_of(&self.null, &structure.free, None, &mut self.quality_block);
+            self.free_quality = Some(quality);
+            self.quality_of.clone_from(&structure.free);
         }
     }
 
@@ -212,6 +279,9 @@ pub fn allowed_motions(
         free_quality,
         quality_of,
         found_motions,
+        solved_motions,
+        method,
+        motions_due,
         ..
     } = scratch;
     gamma.copy_from(&c.bias);
@@ -225,6 +295,15 @@ pub fn allowed_motions(
         .map_err(singular)?;
     factored.kept_into(gamma.as_slice(), kept);
     kept.iter_mut().for_each(|x| *x = -*x);
+    if *method == Method::RangeSpace {
+        // The factor serves the watch on singular configurations, the multipliers, the
+        // projection that adopts it and the motions found on demand; the solve is on the rows.
+        *factor = damped.into_storage();
+        *found_motions = 0;
+        *solved_motions = 0;
+        *motions_due = true;
+        return Ok(());
+    }
     // The motions solved on: every free coordinate's, or only the massive ones kept when the
     // others carry no mass (their choice made); those left out are then checked after the
     // solve, once per step (`check_due`).
@@ -255,6 +334,31 @@ pub fn allowed_motions(
     }
     *factor = damped.into_storage();
     Ok(())
+}
+
+/// The second half of the solve (after `allowed_motions`) by the range-space method
+/// (`range_space`): the accelerations into `scratch`, from the efforts' generalised forces
+/// `tau` over the state's velocities and the tree's kinematics at the state.
+pub fn solve_range_space(
+    model: &Model,
+    tree: Tree<'_>,
+    tau: &DVector<f64>,
+    structure: &Structure,
+    scratch: &mut LoopScratch,
+) -> Result<(), LoopError> {
+    idle_check(structure, tau)?;
+    let LoopScratch {
+        factored,
+        kept,
+        range,
+        accelerations,
+        ..
+    } = scratch;
+    let solved = range.solve(model, tree, structure, factored, kept, tau, accelerations);
+    solved.map_err(|failure| match failure {
+        Failure::MasslessMotion { velocity } => LoopError::MasslessMotion { velocity },
+        Failure::Singular { row } => LoopError::Singular { row },
+    })
 }
 
 /// The second half of the solve (after `allowed_motions`): a = a₀ + Nz with
@@ -373,6 +477,20 @@ fn free_quality_of(
         }
     }
     projector_block_quality(work, n)
+}
+
+/// An effort on an idle coordinate (a complementary link's own that no kept row touches) acts
+/// on a motion without mass: the run stops above `MASSLESS_FORCE` of the largest effort.
+fn idle_check(structure: &Structure, tau: &DVector<f64>) -> Result<(), LoopError> {
+    let scale = tau.amax().max(f64::MIN_POSITIVE);
+    match structure
+        .idle
+        .iter()
+        .find(|&&c| tau[c].abs() > MASSLESS_FORCE * scale)
+    {
+        Some(&velocity) => Err(LoopError::MasslessMotion { velocity }),
+        None => Ok(()),
+    }
 }
 
 fn singular(lost: Singular) -> LoopError {

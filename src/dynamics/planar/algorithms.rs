@@ -40,6 +40,10 @@ pub struct PlanarData {
     u: Vec<PlanarForce>,
     d_inverse: Vec<f64>,
     u_scalar: Vec<f64>,
+    /// `mass_solve_after_aba`'s passes: the forces handed inward, u, and the accelerations.
+    unit_bias: Vec<PlanarForce>,
+    unit_u: Vec<f64>,
+    unit_acceleration: Vec<PlanarMotion>,
 }
 
 impl PlanarData {
@@ -60,6 +64,9 @@ impl PlanarData {
             u: vec![PlanarForce::zeros(); bodies],
             d_inverse: vec![0.0; bodies],
             u_scalar: vec![0.0; bodies],
+            unit_bias: vec![PlanarForce::zeros(); bodies],
+            unit_u: vec![0.0; bodies],
+            unit_acceleration: vec![PlanarMotion::zeros(); bodies],
         }
     }
 
@@ -264,4 +271,42 @@ pub fn aba(
         };
     }
     Ok(())
+}
+
+/// x = M⁻¹ τ for the generalised forces `tau` (length nv) after `aba` at the same
+/// configuration, into `x`: ABA's passes back and out again on the articulated inertias `aba`
+/// left (its U = I S and D⁻¹), without velocities, gravity or external forces, so that each
+/// solve costs two passes over the joints, not a factorisation of M (Featherstone 2008, §7.3
+/// and §8.x, the constraint forces' responses by ABA).
+pub fn mass_solve_after_aba(planar: &PlanarModel, data: &mut PlanarData, tau: &[f64], x: &mut [f64]) {
+    for joint in &planar.joints {
+        data.unit_bias[joint.child] = PlanarForce::zeros();
+    }
+    for joint in planar.joints.iter().rev() {
+        let (i, parent) = (joint.child, joint.parent);
+        let mut handed = data.unit_bias[i];
+        if joint.nv() == 1 {
+            let u = tau[joint.v_offset] - joint.column.dot(&data.unit_bias[i]);
+            data.unit_u[i] = u;
+            handed += data.u[i] * (data.d_inverse[i] * u);
+        }
+        if parent != 0 {
+            let transmitted = data.transforms[joint.index].force_to_parent(&handed);
+            data.unit_bias[parent] += transmitted;
+        }
+    }
+    for joint in &planar.joints {
+        let (i, parent) = (joint.child, joint.parent);
+        let a = match parent {
+            0 => PlanarMotion::zeros(),
+            _ => data.transforms[joint.index].motion_to_child(&data.unit_acceleration[parent]),
+        };
+        data.unit_acceleration[i] = if joint.nv() == 1 {
+            let q_dd = data.d_inverse[i] * (data.unit_u[i] - data.u[i].dot(&a));
+            x[joint.v_offset] = q_dd;
+            a + joint.column * q_dd
+        } else {
+            a
+        };
+    }
 }

@@ -105,6 +105,8 @@ impl MechanicalSystem<'_> {
         if !model.has_loops() {
             return self.form_tree_response();
         }
+        let structure = &self.scratch.loops.structure;
+        self.scratch.loop_scratch.ensure_motions(structure);
         let motions = self.scratch.loop_scratch.solved_motions();
         self.scratch.response_here = self.scratch.response.on_basis(&self.scratch.mass, motions);
         match self.scratch.response_here {
@@ -136,6 +138,7 @@ impl MechanicalSystem<'_> {
         // start from.
         forward_kinematics(model, &mut self.scratch.data, q, v)?;
         let scratch = &mut self.scratch.loop_scratch;
+        scratch.choose_method(&self.scratch.loops.structure);
         // Only Baumgarte's feedback reads the position rows.
         let extent = match baumgarte {
             true => Extent::WithBias,
@@ -156,6 +159,15 @@ impl MechanicalSystem<'_> {
         // their coordinates take it from them, unless Baumgarte's feedback is in the particular
         // acceleration.
         self.efforts_with_friction(t, (q, v), Effort::AfterKinematics { loops: !baumgarte })?;
+        let scratch = &mut self.scratch.loop_scratch;
+        if scratch.method() == loops::Method::RangeSpace {
+            let external = &self.scratch.efforts.external;
+            let tree = loops::Tree::Spatial(&mut self.scratch.data, external);
+            let tau = &self.scratch.efforts.tau;
+            let structure = &self.scratch.loops.structure;
+            let solved = loops::solve_range_space(model, tree, tau, structure, scratch);
+            return solved.map_err(|e| self.loop_error(&e));
+        }
         // Inverse dynamics' pass out at a₀: the bodies' forces whose power along each allowed
         // motion gives its share of Ma₀ and of the velocity-product forces.
         let scratch = &mut self.scratch.loop_scratch;
@@ -201,9 +213,16 @@ impl MechanicalSystem<'_> {
         let state = (q, v);
         planar_constraints_into(model, planar, planar_data, state, &mut scratch.constraints);
         let structure = &self.scratch.loops.structure;
+        scratch.choose_method(structure);
         let allowed = loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch);
         if let Err(e) = allowed {
             return Err(self.loop_error(&e));
+        }
+        let tau = &self.scratch.efforts.tau;
+        if scratch.method() == loops::Method::RangeSpace {
+            let tree = loops::Tree::Planar(planar, planar_data);
+            let solved = loops::solve_range_space(model, tree, tau, structure, scratch);
+            return solved.map_err(|e| self.loop_error(&e));
         }
         let particular = &scratch.particular()[..model.nv];
         planar_algorithms::rnea_forward(planar, planar_data, particular);

@@ -26,6 +26,8 @@ impl MechanicalSystem<'_> {
         }
         let mut dydt = vec![0.0; self.dimension()];
         self.derivative(t, y, &mut dydt)?;
+        let structure = &self.scratch.loops.structure;
+        self.scratch.loop_scratch.ensure_motions(structure);
         let (q, _) = model.split_state(y);
         let motions =
             self.motions_off_bounds(self.scratch.loop_scratch.solved_motions().into_owned());
