@@ -15,7 +15,8 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::SOLVE_TOLERANCE;
-use super::elimination::{in_order, norm, pivoted, sparse_rows, Elimination, Sparse};
+use super::elimination::sparse_rows;
+use crate::elimination::{in_order, norm, pivoted, Elimination, Sparse};
 use super::factored::{row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
@@ -442,38 +443,6 @@ fn kept_null_space(jacobian: &ConstraintJacobian, choice: &RowChoice) -> DMatrix
         elimination.pick(k);
     }
     elimination.null_space(choice.rows.len())
-}
-
-/// The active rows independent of the earlier ones (in loop order, then row order), and those
-/// that are not: a row is dependent when its part orthogonal to the earlier independent rows is
-/// at most `tolerance` times the largest row.
-pub fn independent_rows(
-    jacobian: &DMatrix<f64>,
-    active: &[bool],
-    tolerance: f64,
-) -> (Vec<usize>, Vec<usize>) {
-    let largest = (0..jacobian.nrows())
-        .map(|r| jacobian.row(r).norm())
-        .fold(0.0, f64::max);
-    let mut basis: Vec<DVector<f64>> = Vec::new();
-    let (mut independent, mut dependent) = (Vec::new(), Vec::new());
-    for r in (0..jacobian.nrows()).filter(|&r| active[r]) {
-        let mut row: DVector<f64> = jacobian.row(r).transpose();
-        // Twice, for orthogonality in floating point.
-        for _ in 0..2 {
-            for b in &basis {
-                row -= b * b.dot(&row);
-            }
-        }
-        let norm = row.norm();
-        if norm <= tolerance * largest || norm == 0.0 {
-            dependent.push(r);
-        } else {
-            basis.push(row / norm);
-            independent.push(r);
-        }
-    }
-    (independent, dependent)
 }
 
 /// How many of the motions the kept rows allow at q move no mass (rod spins, the angles of
