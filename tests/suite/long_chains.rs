@@ -7,7 +7,7 @@
 //! meets only its neighbours in the normal matrix whatever N.
 
 #[path = "../../benches/common/chains.rs"]
-mod chains;
+pub mod chains;
 
 use crate::common::programs::{constraints, prepared_text, simulated};
 use chains::{ladder_program, necklace_program};
