@@ -58,6 +58,7 @@ internal! {
     mod diag;
     mod driver;
     mod elab;
+    mod elimination;
     mod ide;
     mod integrate;
     mod integrators;

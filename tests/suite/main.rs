@@ -105,6 +105,7 @@ mod unit_corrector;
 mod unit_dense;
 mod unit_diag;
 mod unit_dynamics;
+mod unit_elimination;
 mod unit_integrate;
 mod unit_kinematics;
 mod unit_linalg;

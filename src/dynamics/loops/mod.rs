@@ -16,6 +16,7 @@
 //! The method and its references: `docs/loops.md`.
 
 pub mod basis;
+pub mod elimination;
 pub mod factored;
 pub mod inertia;
 pub mod jacobian;

@@ -6,7 +6,6 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::basis::decompose;
 use super::factored::{
     Damped, Envelope, Factored, RowChoice, Singular, DAMPING, PROJECTION_DAMPING,
 };
@@ -502,10 +501,12 @@ pub fn close_configuration(
     Ok(scratch.current.residual.amax())
 }
 
-/// The minimum-norm correction of every row's residual, from a singular value decomposition.
+/// The minimum-norm correction of every row's residual, on the independent rows picked by a
+/// sparse pivoted Gram–Schmidt (`elimination::minimum_norm_step`): what a singular value
+/// decomposition's pseudo-inverse gives, at the cost of the loops' sparsity.
 fn minimum_norm_step(s: &mut ProjectionScratch) -> bool {
     let c = &s.current;
-    let step = -(decompose(&c.jacobian.dense()).pseudo_inverse * &c.residual);
+    let step = super::elimination::minimum_norm_step(&c.jacobian, &c.residual);
     s.correction.copy_from_slice(step.as_slice());
     true
 }
