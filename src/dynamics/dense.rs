@@ -69,32 +69,41 @@ impl Factor {
     }
 }
 
-/// Solves A x = b by Gaussian elimination with partial pivoting, overwriting A and leaving x in
-/// `b`; Err(k) when the k-th unknown is not determined (an exactly zero pivot, as where rows
-/// are dependent), with A and b then spoilt.
-#[cfg(lsdc_internals)]
-pub fn solve_in_place(a: &mut DMatrix<f64>, b: &mut DVector<f64>) -> Result<(), usize> {
-    let n = a.nrows();
-    for k in 0..n {
-        let pivot = (k..n)
-            .max_by(|&i, &j| a[(i, k)].abs().total_cmp(&a[(j, k)].abs()))
-            .unwrap_or(k);
-        if a[(pivot, k)] == 0.0 || !a[(pivot, k)].is_finite() {
-            return Err(k);
+/// Solves `a x = b` in place (x into `b`, `a` overwritten) by Gaussian elimination with
+/// partial pivoting (Golub and Van Loan, *Matrix Computations*, §3.4), for systems that are
+/// not positive definite (the range-space method's saddle-point system is symmetric but
+/// indefinite). The column whose pivot vanished (below 1e-14 of the largest
+/// entry), if any: the rows are dependent there.
+pub fn solve_in_place(a: &mut DMatrix<f64>, b: &mut [f64]) -> Result<(), usize> {
+    let n = b.len();
+    let largest = a.amax();
+    for j in 0..n {
+        let (offset, best) = (j..n)
+            .map(|i| a[(i, j)].abs())
+            .enumerate()
+            .fold((0, -1.0), |best, (i, x)| if x > best.1 { (i, x) } else { best });
+        if best <= 1e-14 * largest || !largest.is_finite() {
+            return Err(j);
         }
-        a.swap_rows(k, pivot);
-        b.swap_rows(k, pivot);
-        for i in k + 1..n {
-            let factor = a[(i, k)] / a[(k, k)];
-            for j in k..n {
-                a[(i, j)] -= factor * a[(k, j)];
+        let p = j + offset;
+        if p != j {
+            a.swap_rows(p, j);
+            b.swap(p, j);
+        }
+        let pivot = a[(j, j)];
+        for i in j + 1..n {
+            let factor = a[(i, j)] / pivot;
+            if factor != 0.0 {
+                for l in j + 1..n {
+                    a[(i, l)] -= factor * a[(j, l)];
+                }
+                b[i] -= factor * b[j];
             }
-            b[i] -= factor * b[k];
         }
     }
-    for k in (0..n).rev() {
-        let known: f64 = (k + 1..n).map(|j| a[(k, j)] * b[j]).sum();
-        b[k] = (b[k] - known) / a[(k, k)];
+    for j in (0..n).rev() {
+        let dot: f64 = (j + 1..n).map(|l| a[(j, l)] * b[l]).sum();
+        b[j] = (b[j] - dot) / a[(j, j)];
     }
     Ok(())
 }

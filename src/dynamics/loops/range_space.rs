@@ -32,6 +32,7 @@ use super::factored::Factored;
 use super::structure::Structure;
 use crate::dynamics::algorithms::mass_solve::{mass_solve_after_aba, MassSolveScratch};
 use crate::dynamics::algorithms::{aba_after_kinematics, Data, DynamicsError};
+use crate::dynamics::dense::solve_in_place;
 use crate::dynamics::model::Model;
 use crate::dynamics::planar::algorithms::{self as planar_algorithms, PlanarData};
 use crate::dynamics::planar::PlanarModel;
@@ -194,7 +195,7 @@ impl RangeSpace {
             .extend(minus_gamma.iter().zip(&self.rows).map(|(g, r)| g - r));
         self.rhs
             .extend(self.complementary.iter().map(|&c| -tau[c]));
-        if let Err(pivot) = eliminate(&mut self.system, &mut self.rhs) {
+        if let Err(pivot) = solve_in_place(&mut self.system, &mut self.rhs) {
             let row = structure.choice.rows[pivot.min(k.saturating_sub(1))];
             return Err(Failure::Singular { row });
         }
@@ -230,40 +231,3 @@ impl RangeSpace {
     }
 }
 
-/// Solves `a x = b` in place (x into `b`, `a` overwritten) by Gaussian elimination with
-/// partial pivoting (Golub and Van Loan, *Matrix Computations*, §3.4): the saddle-point system
-/// is symmetric but indefinite. The column whose pivot vanished (below 1e-14 of the largest
-/// entry), if any: the rows are dependent there.
-fn eliminate(a: &mut DMatrix<f64>, b: &mut [f64]) -> Result<(), usize> {
-    let n = b.len();
-    let largest = a.amax();
-    for j in 0..n {
-        let (offset, best) = (j..n)
-            .map(|i| a[(i, j)].abs())
-            .enumerate()
-            .fold((0, -1.0), |best, (i, x)| if x > best.1 { (i, x) } else { best });
-        if best <= 1e-14 * largest || !largest.is_finite() {
-            return Err(j);
-        }
-        let p = j + offset;
-        if p != j {
-            a.swap_rows(p, j);
-            b.swap(p, j);
-        }
-        let pivot = a[(j, j)];
-        for i in j + 1..n {
-            let factor = a[(i, j)] / pivot;
-            if factor != 0.0 {
-                for l in j + 1..n {
-                    a[(i, l)] -= factor * a[(j, l)];
-                }
-                b[i] -= factor * b[j];
-            }
-        }
-    }
-    for j in (0..n).rev() {
-        let dot: f64 = (j + 1..n).map(|l| a[(j, l)] * b[l]).sum();
-        b[j] = (b[j] - dot) / a[(j, j)];
-    }
-    Ok(())
-}
