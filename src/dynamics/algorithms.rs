@@ -9,7 +9,7 @@ pub mod crba_derivatives;
 mod geared;
 pub(crate) mod hybrid;
 mod mass_factor;
-pub mod mass_solve;
+pub(crate) mod mass_solve;
 pub mod regressor;
 pub mod rnea_derivatives;
 
