@@ -4,18 +4,24 @@
 use crate::common::{c_compiler, lsdc_with};
 use std::path::{Path, PathBuf};
 
-/// Runs `lsdc simulate FILE ARGS` with the cache in `cache` and `CC` set to `compiler`: exit
-/// code, samples (CSV) and standard error.
+/// Runs `lsdc ARGS` with the cache in `cache` and `CC` set to `compiler`: exit code, standard
+/// output and standard error.
+fn lsdc_native(args: &[&str], cache: &Path, compiler: &str) -> (i32, String, String) {
+    let environment = [
+        ("LSDC_CACHE_DIR", cache.as_os_str()),
+        ("CC", std::ffi::OsStr::new(compiler)),
+    ];
+    lsdc_with(args, &environment)
+}
+
+/// `lsdc simulate FILE ARGS` as `lsdc_native` runs it: exit code, samples (CSV) and standard
+/// error.
 fn simulate(file: &str, args: &[&str], cache: &Path, compiler: &str) -> (i32, String, String) {
     let arguments: Vec<&str> = ["simulate", file]
         .into_iter()
         .chain(args.iter().copied())
         .collect();
-    let environment = [
-        ("LSDC_CACHE_DIR", cache.as_os_str()),
-        ("CC", std::ffi::OsStr::new(compiler)),
-    ];
-    lsdc_with(&arguments, &environment)
+    lsdc_native(&arguments, cache, compiler)
 }
 
 fn fresh_cache(name: &str) -> PathBuf {
@@ -148,15 +154,11 @@ fn non_conservative_efforts_are_said_to_leave_the_balance_out() {
     let _ = std::fs::remove_dir_all(&cache);
 }
 
-/// `lsdc sweep ARGS` with the cache in `cache` and `CC` set to `compiler`: exit code, the rows
-/// (CSV on standard output) and standard error.
+/// `lsdc sweep ARGS` as `lsdc_native` runs it: exit code, the rows (CSV on standard output)
+/// and standard error.
 fn sweep(args: &[&str], cache: &Path, compiler: &str) -> (i32, String, String) {
     let arguments: Vec<&str> = ["sweep"].into_iter().chain(args.iter().copied()).collect();
-    let environment = [
-        ("LSDC_CACHE_DIR", cache.as_os_str()),
-        ("CC", std::ffi::OsStr::new(compiler)),
-    ];
-    lsdc_with(&arguments, &environment)
+    lsdc_native(&arguments, cache, compiler)
 }
 
 /// `sweep --compiled`: runs that share one prepared mechanism (only initial values vary) share
