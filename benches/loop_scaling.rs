@@ -55,6 +55,20 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with("--"))
         .collect();
+    // `write ladder|necklace N FILE`: the chain's program to a file, to time the commands on it
+    // (`lsdc check`, `tree`, `simulate`) with the same text the parts below measure.
+    if let [write, chain, n, path] = asked.as_slice() {
+        if write == "write" {
+            let n: usize = n.parse().expect("N, a number of loops or rods");
+            let text = match chain.as_str() {
+                "ladder" => ladder_program(n),
+                "necklace" => necklace_program(n),
+                other => panic!("`{other}`: write `ladder` or `necklace`"),
+            };
+            std::fs::write(path, text).expect("the program is written");
+            return;
+        }
+    }
     let wants = |part: &str| asked.is_empty() || asked.iter().any(|a| a == part);
     if wants("rows") {
         rows_against_trees();
