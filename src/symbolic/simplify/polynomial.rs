@@ -125,12 +125,57 @@ pub struct Angles {
     ids: FxHashMap<Angle, AngleId>,
     /// `x + y` and `x − y` by `(x, y, difference)`.
     combinations: FxHashMap<(AngleId, AngleId, bool), Named>,
+    /// The angles in the order of their linear forms, and by angle a label increasing in that
+    /// order (`rank`).
+    order: BTreeMap<Angle, AngleId>,
+    labels: Vec<u64>,
 }
 
 impl Angles {
     /// The linear form of angle `id`.
     pub fn get(&self, id: AngleId) -> &Angle {
         &self.forms[id.0 as usize]
+    }
+
+    /// The order of two angles' linear forms, in constant time: the writer sorts a form's waves
+    /// by it. Comparing the forms themselves costs their common prefix, and a chain's angles
+    /// share long ones (q₁ + … + qₖ against q₁ + … + qⱼ): at n = 100, 31 coordinates per
+    /// comparison and 250 per input node, against 2 at n = 5.
+    pub fn rank(&self, x: AngleId, y: AngleId) -> Ordering {
+        self.labels[x.0 as usize].cmp(&self.labels[y.0 as usize])
+    }
+
+    /// A label for the new angle `angle`, numbered `id`, between those of the angles before
+    /// and after it in the order of linear forms (list labelling: a label is found once per
+    /// angle, in the middle of its neighbours' or a fixed step past the last or before the
+    /// first, and all are spread evenly again when two neighbours leave no label between
+    /// them; Dietz and Sleator, "Two algorithms for maintaining order in a list", STOC 1987,
+    /// give the bounds of its refinements).
+    fn label(&mut self, angle: &Angle, id: AngleId) {
+        use std::ops::Bound::{Excluded, Unbounded};
+        /// The step past the last label or before the first: angles met in increasing order
+        /// (a chain's, often) take 2³² labels each before the labels are spread again.
+        const STEP: u64 = 1 << 32;
+        let labels = &self.labels;
+        let below = (self.order.range::<Angle, _>((Unbounded, Excluded(angle))).next_back())
+            .map(|(_, &id)| labels[id.0 as usize]);
+        let above = (self.order.range::<Angle, _>((Excluded(angle), Unbounded)).next())
+            .map(|(_, &id)| labels[id.0 as usize]);
+        let label = match (below, above) {
+            (None, None) => u64::MAX / 2,
+            (Some(b), None) => b + STEP.min((u64::MAX - b) / 2),
+            (None, Some(a)) => a - STEP.min(a / 2),
+            (Some(b), Some(a)) => b + (a - b) / 2,
+        };
+        self.order.insert(angle.clone(), id);
+        self.labels.push(label);
+        let fits = below.is_none_or(|b| b < label) && above.is_none_or(|a| label < a);
+        if !fits {
+            let spacing = u64::MAX / (self.order.len() as u64 + 1);
+            for (k, &id) in self.order.values().enumerate() {
+                self.labels[id.0 as usize] = (k as u64 + 1) * spacing;
+            }
+        }
     }
 
     /// `angle`'s name: a number when it has no atom, else its number or its opposite's.
@@ -144,6 +189,7 @@ impl Angles {
             Some(&id) => id,
             None => {
                 let id = AngleId(self.forms.len() as u32);
+                self.label(&angle, id);
                 self.forms.push(angle.clone());
                 self.ids.insert(angle, id);
                 id

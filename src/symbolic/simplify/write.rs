@@ -3,8 +3,6 @@
 //! greedy multivariate Horner scheme), and a coefficient every term of a sum shares up to its
 //! sign multiplies the sum once.
 
-use std::cmp::Ordering;
-
 use rustc_hash::FxHashMap;
 
 use super::polynomial::{AngleId, Angles, Polynomial, Wave};
@@ -31,16 +29,14 @@ impl Writer {
     }
 
     /// The polynomial written in `pool`. Its terms are taken in the order of their monomials
-    /// with the angles compared by their linear forms, not by their numbers (which depend on
-    /// the order the pass met them): the greedy factoring breaks ties by this order, so the
-    /// written form does not depend on the interning.
+    /// with the angles in the order of their linear forms (`Angles::rank`), not of their
+    /// numbers (which depend on the order the pass met them): the greedy factoring breaks ties
+    /// by this order, so the written form does not depend on the interning.
     pub fn write(&mut self, pool: &mut Pool, polynomial: &Polynomial, angles: &Angles) -> ExprId {
         let mut monomials: Vec<_> = polynomial.terms.iter().collect();
         monomials.sort_by(|(a, _), (b, _)| {
             a.factors.cmp(&b.factors).then_with(|| match (a.wave, b.wave) {
-                (Some((x, i)), Some((y, j))) => x
-                    .cmp(&y)
-                    .then_with(|| if i == j { Ordering::Equal } else { angles.get(i).cmp(angles.get(j)) }),
+                (Some((x, i)), Some((y, j))) => x.cmp(&y).then_with(|| angles.rank(i, j)),
                 (x, y) => x.cmp(&y),
             })
         });
