@@ -284,3 +284,21 @@ fn axpy(x: &mut Sparse, a: f64, v: &Sparse) -> Vec<usize> {
     *x = merged;
     added
 }
+
+/// The minimum-norm δ with M δ = −r over the rows of the dense matrix `m` independent at
+/// `tolerance` (pivoted, `pivoted`), on their sparsity: the pseudo-inverse's step −M⁺r where the
+/// rows left out are implied by the others. What an SVD gives, at what the rows' sparsity
+/// costs (the closure Jacobian of a chain of loops: a few columns per row).
+pub fn minimum_norm_solution(m: &DMatrix<f64>, residual: &[f64], tolerance: f64) -> DVector<f64> {
+    let rows: Vec<Sparse> = (0..m.nrows())
+        .map(|r| {
+            (0..m.ncols())
+                .map(|c| (c, m[(r, c)]))
+                .filter(|&(_, value)| value != 0.0)
+                .collect()
+        })
+        .collect();
+    let every: Vec<usize> = (0..m.nrows()).collect();
+    let elimination = pivoted(rows, m.ncols(), &every, tolerance);
+    elimination.minimum_norm_correction(elimination.picked().len(), residual)
+}

@@ -110,7 +110,28 @@ pub fn constraint_rank(model: &KinematicModel, q: &[f64]) -> Result<(usize, usiz
         cut_rank += r;
         rows += 6 - r;
     }
-    Ok((rank(&closure.jacobian).saturating_sub(cut_rank), rows))
+    Ok((rows_rank(&closure.jacobian).saturating_sub(cut_rank), rows))
+}
+
+/// The rank of a closure Jacobian's rows at `RANK_TOLERANCE`: the rows whose part orthogonal
+/// to those taken before is above that fraction of the largest row, by the pivoted sparse
+/// elimination of the rows (`elimination::pivoted`, Gram–Schmidt's parts with the largest part
+/// taken first), the loops' own test of their reported rank (`loops::structure`). An SVD of
+/// the dense 6m × n Jacobian cost the cube of a chain of m loops at every rank taken (the
+/// start, an open configuration and the nearby assemblies of `branch::examine`: 84 % of the
+/// start of a ladder of 100 parallelograms).
+fn rows_rank(m: &DMatrix<f64>) -> usize {
+    let rows: Vec<crate::elimination::Sparse> = (0..m.nrows())
+        .map(|r| {
+            (0..m.ncols())
+                .map(|c| (c, m[(r, c)]))
+                .filter(|&(_, value)| value != 0.0)
+                .collect()
+        })
+        .collect();
+    let every: Vec<usize> = (0..m.nrows()).collect();
+    let elimination = crate::elimination::pivoted(rows, m.ncols(), &every, RANK_TOLERANCE);
+    elimination.picked().len()
 }
 
 pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError> {

@@ -54,6 +54,7 @@ mod lsp;
 mod mampey;
 mod maple_output;
 mod mass_matrix;
+mod massless_motions;
 mod methods;
 mod mimics;
 mod model_laws;

@@ -41,7 +41,12 @@ fn started(prepared: &Prepared, method: Method, planar: bool) -> (MechanicalSyst
 /// The largest difference of the two methods' right-hand sides, relative to the largest rate,
 /// over states along a motion (forward Euler steps of the null-space system, kept on the
 /// loops by its projection).
-fn largest_difference(prepared: &Prepared, planar: bool, steps: usize, step: f64) -> f64 {
+pub(crate) fn largest_difference(
+    prepared: &Prepared,
+    planar: bool,
+    steps: usize,
+    step: f64,
+) -> f64 {
     let (mut null, mut y) = started(prepared, Method::NullSpace, planar);
     let (mut range, _) = started(prepared, Method::RangeSpace, planar);
     let (mut a, mut b) = (vec![0.0; y.len()], vec![0.0; y.len()]);
@@ -158,7 +163,7 @@ fn the_range_space_method_is_taken_where_the_motions_outnumber_the_rows() {
 }
 
 /// The condition number of the tree's mass matrix at the initial configuration.
-fn mass_conditioning(prepared: &Prepared) -> f64 {
+pub(crate) fn mass_conditioning(prepared: &Prepared) -> f64 {
     let model = &prepared.model;
     let (q, _) =
         (model.state_from_declared(&prepared.coordinates, &prepared.rates)).expect("state");

@@ -1,7 +1,8 @@
 //! Closed loops: the complementary links' constraint rows (`rows`), their Jacobian stored by loop
 //! (`jacobian`), the decisions taken once on them at the start of a run (`structure`: which rows
 //! are independent, in units that do not depend on the user's, and which coordinates
-//! parametrise the motions they allow), the sparse factorisation of those rows (`factored`), the
+//! parametrise the motions they allow, and how many of those move no mass, from the bodies'
+//! inertias: `massless`), the sparse factorisation of those rows (`factored`), the
 //! constrained equations of motion solved on them (`solve`, with the allowed motions' reduced
 //! mass matrix from `inertia`; or, where the allowed motions outnumber the rows, on the rows
 //! themselves by the articulated-body algorithm's responses, `range_space`), and the
@@ -20,6 +21,7 @@ pub mod elimination;
 pub mod factored;
 pub mod inertia;
 pub mod jacobian;
+pub mod massless;
 pub mod momentum;
 pub mod orientation;
 pub mod orthonormal;

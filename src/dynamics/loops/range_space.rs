@@ -77,9 +77,7 @@ pub fn method_for(structure: &Structure, applies: bool) -> Method {
 /// eigenvalue above 1e-12 of its largest: a point-mass rod, whose spin about its own axis
 /// moves no mass, does not qualify). Then the loops allow no motion without mass but of the
 /// complementary coordinates, which the saddle-point system solves for (the structure's
-/// count of such motions, taken on the eigenvalues of the reduced mass matrix relative to the
-/// largest, is not read: on a chain of 1,000 rods the slowest motions' inertias fall below its
-/// 1e-10 of the largest though every rod has its own). Nor does it apply to a model with
+/// count of such motions, `massless`, is not read). Nor does it apply to a model with
 /// geared rotors (ABA's rotor steps are not among the responses' passes), or one whose
 /// actuators' laws read the model in their coordinates (`dynamics::reduced_model`, which works
 /// on the allowed motions). Decided once per model.

@@ -16,12 +16,13 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::SOLVE_TOLERANCE;
 use super::elimination::sparse_rows;
-use crate::elimination::{in_order, norm, pivoted, Elimination, Sparse};
+use super::massless::{column_scales, massless_count};
+use crate::elimination::{in_order, norm, pivoted, Sparse};
 use super::factored::{row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints, Extent};
-use crate::dynamics::algorithms::{crba, Data};
+use crate::dynamics::algorithms::Data;
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
@@ -33,11 +34,6 @@ use crate::kinematics::eval::EvalError;
 pub const RANK_TOLERANCE: f64 = crate::kinematics::mobility::RANK_TOLERANCE;
 
 pub use super::factored::KEEP_TOLERANCE;
-
-/// A motion whose inertia is below this fraction of the largest counts as without mass (a point
-/// mass rod spinning about its own axis: 1e-12 relative, not 0, after the null-space basis
-/// mixes it with motions that have mass).
-pub const MASSLESS: f64 = 1e-10;
 
 /// Size of the displacement (dimensionless: radians, or lengths divided by L) along the allowed
 /// motions used to look at the closed configurations next to the start.
@@ -105,8 +101,9 @@ impl Structure {
         let length = characteristic_length(model, data, &c);
         let mut structure = Structure::at(model, &c, length);
         structure.choose_free(&c.jacobian);
-        structure.massless =
-            massless_count(model, data, q, &structure)?.saturating_sub(structure.idle.len());
+        // `data` holds the joint transforms at q still (`gained_nearby` below moves them).
+        structure.massless = massless_count(model, data, &c.jacobian, &structure.choice, length)
+            .saturating_sub(structure.idle.len());
         if let Some(row) = structure.gained_nearby(model, data, q)? {
             return Err(StructureError::SingularStart { row });
         }
@@ -236,7 +233,7 @@ impl Structure {
     /// allowed motions), and records how well they parametrise them.
     pub fn choose_free(&mut self, jacobian: &ConstraintJacobian) {
         let factored = Factored::new(jacobian, &self.choice);
-        // The dense factorisation's basis, not `kept_null_space`'s: the same span, but the
+        // The dense factorisation's basis, not the sparse elimination's: the same span, but the
         // choice between coordinates that parametrise the motions equally well (the row of
         // two four-bars' symmetric cranks) is decided by round-off, and the sparse basis's
         // decided the other way took that row through its flat passages with an energy drift
@@ -407,74 +404,8 @@ pub fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64
     }
 }
 
-/// Per column of G, the factor that makes it dimensionless: L for a sliding motion (no rotation
-/// row moves with it), 1 otherwise.
-fn column_scales(jacobian: &ConstraintJacobian, length: f64) -> Vec<f64> {
-    let mut turns = vec![false; jacobian.ncols()];
-    for r in (0..jacobian.nrows()).filter(|r| r % 6 < 3) {
-        for (c, value) in jacobian.row(r) {
-            turns[c] |= value != 0.0;
-        }
-    }
-    turns
-        .into_iter()
-        .map(|turns| if turns { 1.0 } else { length })
-        .collect()
-}
-
 /// G's rows made dimensionless by the length L, sparse.
 fn dimensionless_rows(jacobian: &ConstraintJacobian, length: f64) -> Vec<Sparse> {
     let columns = column_scales(jacobian, length);
     sparse_rows(jacobian, |r, c| row_scale(r, length) * columns[c])
-}
-
-
-/// An orthonormal basis of the motions the rows of `choice` allow (the same span as
-/// `Factored::dense_null_space`), from their sparse elimination: a few columns per allowed
-/// motion, not a dense factorisation of G's columns.
-fn kept_null_space(jacobian: &ConstraintJacobian, choice: &RowChoice) -> DMatrix<f64> {
-    let rows: Vec<Sparse> = choice
-        .rows
-        .iter()
-        .map(|&r| jacobian.row(r).filter(|&(_, value)| value != 0.0).collect())
-        .collect();
-    let mut elimination = Elimination::new(rows, jacobian.ncols());
-    for k in 0..choice.rows.len() {
-        elimination.pick(k);
-    }
-    elimination.null_space(choice.rows.len())
-}
-
-/// How many of the motions the kept rows allow at q move no mass (rod spins, the angles of
-/// complementary ball joints), counted on the closed configuration. The count is a property of
-/// the mechanism: between projections, in the integrator's trial states slightly off the
-/// closed set, these motions pick up inertias of 1e-9 of the largest or so, and dividing the
-/// residue of forces that balance exactly by such inertias makes a spurious fast motion.
-fn massless_count(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    structure: &Structure,
-) -> Result<usize, EvalError> {
-    let rest = vec![0.0; model.velocities()];
-    let c = constraints(model, data, q, &rest, Extent::Rows)?;
-    let allowed = kept_null_space(&c.jacobian, &structure.choice);
-    if allowed.ncols() == 0 {
-        return Ok(0);
-    }
-    let mass = full_mass(&crba(model, data, q)?, model.velocities());
-    let eigenvalues = (allowed.transpose() * (mass * &allowed)).symmetric_eigenvalues();
-    let largest = eigenvalues.amax();
-    Ok(eigenvalues
-        .iter()
-        .filter(|&&value| value <= MASSLESS * largest)
-        .count())
-}
-
-/// The tree's mass matrix over all n of the state's velocities: the complementary links' own
-/// coordinates carry no inertia.
-pub fn full_mass(tree: &DMatrix<f64>, n: usize) -> DMatrix<f64> {
-    let mut mass = DMatrix::zeros(n, n);
-    mass.view_mut((0, 0), tree.shape()).copy_from(tree);
-    mass
 }
