@@ -123,7 +123,7 @@ impl Function {
     }
 }
 
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Pool {
     nodes: Vec<Node>,
     /// Per node, whether it is surely finite (`finite_when_interned`).
