@@ -51,26 +51,14 @@ impl Gains {
 
 /// Step-size controller: proportional-integral when `beta > 0`, elementary when `beta == 0`.
 /// The integral part remembers the previous error so that the step varies smoothly.
-///
-/// The factors are formed from logarithms: each power of the errors and of the steps' ratio is
-/// a multiple of a logarithm, so a step takes two logarithms (of its error and of its ratio to
-/// the step before) and one exponential, where the powers took five `powf` (about a tenth of a
-/// native run's time on a small mechanism, BENCHMARKS.md, "Sweeps: the simulator's framework
-/// around native code cut"). The factors are the same up to rounding.
 #[derive(Clone, Debug)]
 pub(super) struct StepController {
     /// 1 / (order of the error estimate + 1): the local error behaves like h to that power's inverse.
     exponent: f64,
     gains: Gains,
-    /// ln of the gains' safety factor, of the previous error's floor (1e-4) and of
-    /// `PREDICTION_FLOOR`: formed once.
-    log_safety: f64,
-    log_error_floor: f64,
-    log_prediction_floor: f64,
-    /// ln of the previous error (at least 1e-4), for the integral part.
-    log_previous_error: f64,
-    /// The last accepted step and the logarithm of its error (at least `PREDICTION_FLOOR`),
-    /// for the predictive limit.
+    previous_error: f64,
+    /// The last accepted step and its error (at least `PREDICTION_FLOOR`), for the predictive
+    /// limit.
     previous_step: Option<(f64, f64)>,
     just_rejected: bool,
 }
@@ -78,14 +66,10 @@ pub(super) struct StepController {
 impl StepController {
     /// `estimate_order` is q when the local error estimate behaves like h^(q+1).
     pub(super) fn new(estimate_order: u32, gains: Gains) -> Self {
-        let log_error_floor = 1e-4f64.ln();
         StepController {
             exponent: 1.0 / (estimate_order as f64 + 1.0),
-            log_safety: gains.safety.ln(),
-            log_error_floor,
-            log_prediction_floor: PREDICTION_FLOOR.ln(),
             gains,
-            log_previous_error: log_error_floor,
+            previous_error: 1e-4,
             previous_step: None,
             just_rejected: false,
         }
@@ -93,33 +77,29 @@ impl StepController {
 
     /// The step to try after accepting a step of size `h` with error norm `error` (<= 1).
     pub(super) fn after_accept(&mut self, h: f64, error: f64) -> f64 {
-        let beta = self.gains.beta;
-        let log_error = error.max(1e-10).ln();
+        let Gains { beta, safety, .. } = self.gains;
+        let error = error.max(1e-10);
         let alpha = self.exponent - 0.75 * beta;
-        // ln of the proportional-integral factor safety · error^(−α) · previous^β.
-        let mut log_factor = self.log_safety - alpha * log_error + beta * self.log_previous_error;
-        // Gustafsson's predictive limit (as in Hairer and Wanner's RADAU5): where the error
-        // constant rises from step to step (as when a Bricard linkage speeds up), the
-        // proportional-integral factor lags one step behind and the next step is rejected;
-        // extrapolating the rise takes the smaller step at once. In logarithms,
-        //   rise = (error / previous error) · (previous h / h)^(1/exponent),
-        //   limit = safety · (error · rise^rise_power)^(−exponent).
-        if let Some((previous, log_previous_error)) = self.previous_step {
-            let log_rise = (log_error - log_previous_error) + (previous / h).ln() / self.exponent;
-            let log_predicted = log_error + self.gains.rise_power * log_rise;
-            let log_limit = self.log_safety - self.exponent * log_predicted;
-            // Both are bounded alike below: the smaller of the bounded is the bounded smaller.
-            log_factor = log_factor.min(log_limit);
-        }
+        let factor = safety * error.powf(-alpha) * self.previous_error.powf(beta);
         // Growing right after a rejection tends to be rejected again.
         let max_factor = if self.just_rejected {
             1.0
         } else {
             self.gains.max_factor
         };
-        let factor = log_factor.exp().clamp(MIN_FACTOR, max_factor);
-        self.log_previous_error = log_error.max(self.log_error_floor);
-        self.previous_step = Some((h, log_error.max(self.log_prediction_floor)));
+        let mut factor = factor.clamp(MIN_FACTOR, max_factor);
+        // Gustafsson's predictive limit (as in Hairer and Wanner's RADAU5): where the error
+        // constant rises from step to step (as when a Bricard linkage speeds up), the
+        // proportional-integral factor lags one step behind and the next step is rejected;
+        // extrapolating the rise takes the smaller step at once.
+        if let Some((previous, previous_error)) = self.previous_step {
+            let rise = (error / previous_error) * (previous / h).powf(1.0 / self.exponent);
+            let predicted = error * rise.powf(self.gains.rise_power);
+            let limit = safety * predicted.powf(-self.exponent);
+            factor = factor.min(limit.clamp(MIN_FACTOR, max_factor));
+        }
+        self.previous_error = error.max(1e-4);
+        self.previous_step = Some((h, error.max(PREDICTION_FLOOR)));
         self.just_rejected = false;
         h * factor
     }
