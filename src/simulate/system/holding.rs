@@ -108,8 +108,8 @@ impl MechanicalSystem<'_> {
     pub(super) fn holds_nothing(&self) -> bool {
         let model = self.model;
         model.drives.is_empty()
-            && !self.state.resting.iter().any(|&resting| resting)
-            && !(self.state.phases.iter()).any(|&phase| phase == Phase::Sticking)
+            && !self.state.resting.contains(&true)
+            && !self.state.phases.contains(&Phase::Sticking)
     }
 
     /// The held rows of the stops the run's coordinates rest on.
