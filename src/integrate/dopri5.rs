@@ -73,8 +73,13 @@ pub(super) struct DormandPrince {
     stages: [Vec<f64>; STAGES],
     stage_state: Vec<f64>,
     error: Vec<f64>,
-    /// Coefficients of the interpolating polynomial over the last accepted step.
+    /// Coefficients of the interpolating polynomial over the last accepted step, formed only
+    /// for a step whose interpolant is read (`interpolation_wanted`).
     dense: [Vec<f64>; 5],
+    /// Whether the attempt about to be accepted is interpolated (an output inside it, or
+    /// events to locate: `prepare_interpolation`). Most steps of a run whose outputs are far
+    /// apart are not.
+    interpolation_wanted: bool,
     dense_start: f64,
     dense_step: f64,
     rtol: f64,
@@ -93,6 +98,7 @@ impl DormandPrince {
             stage_state: zeros.clone(),
             error: zeros.clone(),
             dense: std::array::from_fn(|_| zeros.clone()),
+            interpolation_wanted: false,
             dense_start: 0.0,
             dense_step: 0.0,
             rtol: settings.rtol,
@@ -110,18 +116,55 @@ impl DormandPrince {
         self.stiffness
     }
 
+    /// The coefficients of the continuous extension over the step of size `h` from (t, y) to
+    /// `y_new` just attempted (Hairer, Nørsett and Wanner, II.6).
+    fn form_interpolant(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
+        let [first, .., last] = &self.stages;
+        let [r0, r1, r2, r3, r4] = &mut self.dense;
+        for i in 0..y.len() {
+            let change = y_new[i] - y[i];
+            let start_bulge = h * first[i] - change;
+            r0[i] = y[i];
+            r1[i] = change;
+            r2[i] = start_bulge;
+            r3[i] = change - h * last[i] - start_bulge;
+            r4[i] = h * DENSE
+                .iter()
+                .zip(&self.stages)
+                .map(|(d, k)| d * k[i])
+                .sum::<f64>();
+        }
+        self.dense_start = t;
+        self.dense_step = h;
+    }
+
     /// Takes `derivative` as dy/dt at the current point (computed by another method).
     pub(super) fn adopt(&mut self, derivative: &[f64]) {
         self.stages[0].copy_from_slice(derivative);
     }
 }
 
-/// y + h * (the stages before `stage`, weighted by its row of A), into `out`.
+/// y + h * (the stages before `stage`, weighted by its row of A), into `out`. The weighted
+/// sum is gathered in `out` a stage at a time, in the order of the stages (the same sums as
+/// term by term within each component): loops over the components that the compiler
+/// vectorises, where a sum over the stages per component was a loop of a few iterations each.
 fn stage_state_into(stages: &[Vec<f64>], stage: usize, y: &[f64], h: f64, out: &mut [f64]) {
-    let weights = A[stage];
-    for (i, value) in out.iter_mut().enumerate() {
-        let increment: f64 = weights.iter().zip(stages).map(|(a, k)| a * k[i]).sum();
-        *value = y[i] + h * increment;
+    weighted_sum_into(A[stage], stages, out);
+    for (value, y) in out.iter_mut().zip(y) {
+        *value = y + h * *value;
+    }
+}
+
+/// Σ weights[j] · stages[j] into `out`, the terms added in the order of j.
+fn weighted_sum_into(weights: &[f64], stages: &[Vec<f64>], out: &mut [f64]) {
+    let (first, rest) = (weights[0], &weights[1..]);
+    for (value, k) in out.iter_mut().zip(&stages[0]) {
+        *value = first * k;
+    }
+    for (&weight, k) in rest.iter().zip(&stages[1..]) {
+        for (value, k) in out.iter_mut().zip(k) {
+            *value += weight * k;
+        }
     }
 }
 
@@ -186,13 +229,8 @@ impl AdaptiveStepper for DormandPrince {
         } else {
             0.0
         };
-        for (i, error) in self.error.iter_mut().enumerate() {
-            *error = h * ERROR
-                .iter()
-                .zip(&self.stages)
-                .map(|(e, k)| e * k[i])
-                .sum::<f64>();
-        }
+        weighted_sum_into(&ERROR, &self.stages, &mut self.error);
+        self.error.iter_mut().for_each(|error| *error *= h);
         Ok(error_norm(
             &self.error[..self.controlled],
             &y[..self.controlled],
@@ -202,24 +240,22 @@ impl AdaptiveStepper for DormandPrince {
         ))
     }
 
+    /// Nothing to evaluate: says that the step's interpolant is read, so that `accept` forms it.
+    fn prepare_interpolation(
+        &mut self,
+        _eval: &mut Evaluator,
+        _t: f64,
+        _y: &[f64],
+        _h: f64,
+    ) -> Result<(), Halt> {
+        self.interpolation_wanted = true;
+        Ok(())
+    }
+
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
-        let [first, .., last] = &self.stages;
-        let [r0, r1, r2, r3, r4] = &mut self.dense;
-        for i in 0..y.len() {
-            let change = y_new[i] - y[i];
-            let start_bulge = h * first[i] - change;
-            r0[i] = y[i];
-            r1[i] = change;
-            r2[i] = start_bulge;
-            r3[i] = change - h * last[i] - start_bulge;
-            r4[i] = h * DENSE
-                .iter()
-                .zip(&self.stages)
-                .map(|(d, k)| d * k[i])
-                .sum::<f64>();
+        if std::mem::take(&mut self.interpolation_wanted) {
+            self.form_interpolant(t, y, h, y_new);
         }
-        self.dense_start = t;
-        self.dense_step = h;
         // First same as last: dy/dt at the new point starts the next step.
         self.stages.swap(0, STAGES - 1);
     }

@@ -48,8 +48,9 @@ pub(super) trait AdaptiveStepper {
         y_new: &mut [f64],
     ) -> Result<f64, Halt>;
     /// Takes what the dense output over the attempt about to be accepted needs beyond the
-    /// attempt itself, when an output falls inside it (the extra stages of a continuous
-    /// extension); nothing for most methods.
+    /// attempt itself, when an output falls inside it or events are watched (the extra stages
+    /// of a continuous extension); nothing for most methods. Only after this call is the
+    /// accepted step interpolated: a method may leave its interpolant unformed otherwise.
     fn prepare_interpolation(
         &mut self,
         _eval: &mut Evaluator,

@@ -33,7 +33,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::evaluator::Evaluator;
 use super::jacobian::orthonormal;
-use super::outcome::StabilityBound;
+use super::outcome::{StabilityBound, Stats};
 use super::settings::Settings;
 use super::system::OdeSystem;
 
@@ -205,7 +205,8 @@ pub fn jacobian_product(
 ) -> Option<Vec<f64>> {
     let mut iteration = PowerIteration::new(y.len(), controlled.min(y.len()));
     let size = iteration.start_from(direction)?;
-    let mut eval = Evaluator::resume(system, Default::default());
+    let mut stats = Stats::default();
+    let mut eval = Evaluator::resume(system, &mut stats);
     eval.rhs(t, y, &mut iteration.slope).ok()?;
     let norm = iteration.multiply(&mut eval, t, y)?;
     Some(

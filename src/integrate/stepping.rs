@@ -144,7 +144,7 @@ impl Integration {
             let invalid = InputError::TimeSpan { t0: t, t_end };
             return Err(Halt::fatal(t, Failure::InvalidInput(invalid)).into_error(self.stats()));
         }
-        let mut eval = Evaluator::resume(system, std::mem::take(&mut self.stats));
+        let mut eval = Evaluator::resume(system, &mut self.stats);
         let problem = Problem {
             t0: self.t0,
             t_end,
@@ -160,7 +160,6 @@ impl Integration {
         };
         (self.started, self.restart) = (true, false);
         let stepped = started.and_then(|()| march.step(&mut eval, &problem, outputs, observer));
-        self.stats = eval.stats;
         stepped.map_err(|halt| {
             let failure = halt.made_fatal().into_error(self.stats());
             self.failure = Some(failure.clone());
@@ -189,10 +188,9 @@ impl Integration {
         system: &mut dyn OdeSystem,
         observer: &mut Observer,
     ) -> Result<(), IntegrationError> {
-        let mut eval = Evaluator::resume(system, std::mem::take(&mut self.stats));
+        let mut eval = Evaluator::resume(system, &mut self.stats);
         let y = self.march.state();
         let delivered = self.outputs.deliver_rest(y, (&mut eval, observer));
-        self.stats = eval.stats;
         delivered.map_err(|halt| halt.into_error(self.stats()))
     }
 }

@@ -280,6 +280,16 @@ impl AdaptiveStepper for Switching {
         self.current().attempt(eval, t, y, h, y_new)
     }
 
+    fn prepare_interpolation(
+        &mut self,
+        eval: &mut Evaluator,
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> Result<(), Halt> {
+        self.current().prepare_interpolation(eval, t, y, h)
+    }
+
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
         self.current().accept(t, y, h, y_new);
         self.last_stiff = self.stiff;

@@ -45,6 +45,7 @@ impl fmt::Debug for NativeDynamics {
 impl NativeDynamics {
     /// q̈ at (t, p, q) into `accelerations`; false when the native code refused (a singular
     /// mass matrix or a value that is not finite), for the caller to evaluate otherwise.
+    #[inline]
     pub fn accelerations(&self, t: f64, p: &[f64], q: &[f64], accelerations: &mut [f64]) -> bool {
         let n = self.dimension;
         assert!(p.len() == n && q.len() == n && accelerations.len() == n);

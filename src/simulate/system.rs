@@ -358,6 +358,9 @@ impl<'m> MechanicalSystem<'m> {
 
     /// dy/dt at (t, y), or why it cannot be computed.
     pub fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), SystemError> {
+        if self.native_derivative(t, y, dydt) {
+            return Ok(());
+        }
         let mut q = std::mem::take(&mut self.scratch.positions);
         let v = self.model.split_state_into(y, &mut q);
         let result = self.derivative_at(t, &q, v, dydt);
@@ -367,6 +370,34 @@ impl<'m> MechanicalSystem<'m> {
             self.scratch.evaluated.extend_from_slice(y);
         }
         result
+    }
+
+    /// dy/dt at (t, y) from the native code alone, where it is the whole evaluation: a tree
+    /// whose state is its joints' coordinates and rates (`compiled::attach`), with no row to
+    /// solve after it at this state (no coordinate held: `holds_nothing`). Then y splits into
+    /// the coordinates and their rates as they are, the coordinates' rates are the rates, and
+    /// the accelerations are the native code's: what `derivative_at` computes there, without
+    /// the scratch it takes and gives back and the stack it finds empty. False where the native
+    /// code refused (a value not finite: `derivative_at` says why) or does not serve alone.
+    fn native_derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> bool {
+        let model = self.model;
+        let Some(native) = self.native else {
+            return false;
+        };
+        if model.has_loops() || model.has_contacts() || !self.holds_nothing() {
+            return false;
+        }
+        debug_assert!(model.nq == model.nv && model.positions() == model.nq);
+        let (q, v) = y.split_at(model.nq);
+        let (dq, dv) = dydt.split_at_mut(model.nq);
+        if !native.accelerations(t, q, v, dv) {
+            return false;
+        }
+        dq.copy_from_slice(v);
+        let scratch = &mut self.scratch;
+        (scratch.friction_power, scratch.drive_power, scratch.power) = (0.0, 0.0, 0.0);
+        scratch.response_here = false;
+        true
     }
 
     fn derivative_at(

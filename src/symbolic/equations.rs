@@ -33,6 +33,7 @@ use crate::elab::imposed_motion::first_imposed_motion;
 use crate::elab::mechanism::Mechanism;
 use crate::topology::Topology;
 
+#[derive(Clone)]
 pub struct Equations {
     pub pool: Pool,
     pub variables: Variables,

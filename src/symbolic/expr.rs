@@ -129,7 +129,7 @@ fn node_hash(node: &Node) -> u64 {
     rustc_hash::FxBuildHasher.hash_one(node)
 }
 
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Pool {
     nodes: Vec<Node>,
     /// Per node, whether it is surely finite (`finite_when_interned`).

@@ -627,6 +627,38 @@ fn temporaries_are_named_once_and_constants_are_literals_of_every_language() {
     assert!(source.contains("40.0") && !source.contains(" 40 "));
 }
 
+/// The forward dynamics of a tree multiplies by no zero constant: the articulated-body
+/// recursion's products by the zero entries of its spatial quantities are folded (the values
+/// are the unfolded equations' to `TOLERANCE`, by the tests above). On the double pendulum
+/// what the folded products rest on to be finite is the accelerations themselves (the
+/// quotients by its articulated inertias) or quotients by constants: nothing is checked but the
+/// accelerations, in both languages.
+#[test]
+fn generated_forward_dynamics_folds_products_by_zero() {
+    let eq = equations("double_pendulum");
+    let body = |source: &str, start: &str| {
+        let from = source.find(start).expect("forward_dynamics");
+        source[from..].to_string()
+    };
+    let c = body(&emit::c(&eq, "x"), "int forward_dynamics(");
+    let rust = body(&emit::rust(&eq, "x"), "pub fn forward_dynamics(");
+    // A product by the literal 0.0, not by 40.0.
+    let by_zero = |code: &str| {
+        code.match_indices("0.0 * ").any(|(i, _)| {
+            let before = code[..i].chars().next_back();
+            !before.is_some_and(|c| c.is_ascii_digit() || c == '.' || c == 'e')
+        })
+    };
+    for (language, code) in [("C", &c), ("Rust", &rust)] {
+        assert!(!by_zero(code), "{language}:\n{code}");
+    }
+    assert!(c.contains("return all_finite(qdd, N) ? 0 : 1;"), "{c}");
+    assert!(
+        rust.contains("if qdd[..N].iter().any(|x| !x.is_finite()) {"),
+        "{rust}"
+    );
+}
+
 /// The C of every example compiles as a file of its own without a warning under
 /// `-Wall -Wextra -Werror` (unused inputs and names were warnings).
 #[test]

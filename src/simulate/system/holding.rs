@@ -103,6 +103,15 @@ impl MechanicalSystem<'_> {
         self.scratch.held = held;
     }
 
+    /// Whether no coordinate is held at this state: no drive, no stop rested on, no friction
+    /// sticking (`gather_held` would gather no row).
+    pub(super) fn holds_nothing(&self) -> bool {
+        let model = self.model;
+        model.drives.is_empty()
+            && !self.state.resting.contains(&true)
+            && !self.state.phases.contains(&Phase::Sticking)
+    }
+
     /// The held rows of the stops the run's coordinates rest on.
     pub(super) fn resting_stop_rows(&self) -> impl Iterator<Item = HeldRow> + '_ {
         let model = self.model;

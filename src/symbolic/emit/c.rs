@@ -6,6 +6,7 @@ use std::fmt::Write;
 
 use super::code::{array_symbol, comment, Routine, Routines, Statements};
 use super::shared::{described, Language, PowerSyntax, Role, Symbols};
+use super::zero_products;
 use crate::symbolic::expr::Function;
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
@@ -56,8 +57,9 @@ const FUNCTION_ARGUMENT: &str = "double (*f)(int, const double *)";
 
 /// The equations of `source` as C99.
 pub fn c(equations: &Equations, source: &str) -> String {
+    let (equations, guards) = &zero_products::folded(equations);
     let symbols = Symbols::new(equations);
-    let routines = Routines::new(&symbols, equations);
+    let routines = Routines::new(&symbols, equations, guards);
     let mut out = header(equations, source);
     if equations.pool.uses_exponential_profile() {
         out.push_str(&crate::symbolic::exponential_profile::c_definition());
@@ -252,12 +254,17 @@ fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {
                 .map(|a| a.body(symbols, &C, &C, "qdd"))
                 .unwrap_or_default();
             let body = with_unused(&["t", "p", "q", "k"], body);
+            // The values folded out of products by 0 that may not be finite (`zero_products`).
+            let guards: String = (routines.accelerations.iter())
+                .flat_map(|a| a.guard_expressions(symbols, &C))
+                .map(|guard| format!(" && isfinite({guard})"))
+                .collect();
             let _ = write!(
                 out,
                 "\n/* The rates' derivatives q' = M^-1 (S + F), by the articulated-body recursion (no solve). */\n\
                  int forward_dynamics(double t, const double *p, const double *q, const double *k, double *qdd{argument}) {{\n\
                  {body}    \
-                     return all_finite(qdd, N) ? 0 : 1;\n\
+                     return all_finite(qdd, N){guards} ? 0 : 1;\n\
                  }}\n"
             );
         }

@@ -16,12 +16,24 @@ pub struct Routine {
     pub mirrors: Vec<(usize, usize)>,
     /// Length of the output array.
     pub length: usize,
+    /// Values the function checks are finite with its outputs (`zero_products`).
+    pub guards: Vec<ExprId>,
     pub uses_time: bool,
     pub uses_functions: bool,
 }
 
 impl Routine {
     fn new(symbols: &Symbols, length: usize, outputs: Vec<(usize, Vec<ExprId>)>) -> Routine {
+        Routine::guarded(symbols, length, outputs, Vec::new())
+    }
+
+    /// A routine that also computes `guards`, to check them.
+    fn guarded(
+        symbols: &Symbols,
+        length: usize,
+        outputs: Vec<(usize, Vec<ExprId>)>,
+        guards: Vec<ExprId>,
+    ) -> Routine {
         let outputs: Vec<(usize, Vec<ExprId>)> = outputs
             .into_iter()
             .map(|(target, terms)| {
@@ -38,6 +50,7 @@ impl Routine {
         let roots: Vec<ExprId> = outputs
             .iter()
             .flat_map(|(_, terms)| terms.iter().copied())
+            .chain(guards.iter().copied())
             .collect();
         let listing = Listing::new(symbols, &roots);
         let uses_time = listing.uses(symbols, |r| r == Role::Time);
@@ -47,6 +60,7 @@ impl Routine {
             outputs,
             mirrors: Vec::new(),
             length,
+            guards,
             uses_time,
             uses_functions,
         }
@@ -87,6 +101,16 @@ impl Routine {
         }
         out
     }
+
+    /// The guards as expressions of the function's temporaries and inputs.
+    pub fn guard_expressions<L: Language>(&self, symbols: &Symbols, language: &L) -> Vec<String> {
+        let printer = Printer {
+            symbols,
+            listing: &self.listing,
+            language,
+        };
+        self.guards.iter().map(|&id| printer.expression(id)).collect()
+    }
 }
 
 /// The statements that differ between the languages.
@@ -109,7 +133,8 @@ pub struct Routines {
 }
 
 impl Routines {
-    pub fn new(symbols: &Symbols, equations: &Equations) -> Routines {
+    /// The functions of `equations`, the forward dynamics checking `guards` (`zero_products`).
+    pub fn new(symbols: &Symbols, equations: &Equations, guards: &[ExprId]) -> Routines {
         let n = equations.dimension();
         let upper = upper_triangle(equations);
         let mut mass = Routine::new(
@@ -159,10 +184,11 @@ impl Routines {
             .as_ref()
             .filter(|_| loops.is_none())
             .map(|a| {
-                Routine::new(
+                Routine::guarded(
                     symbols,
                     n,
                     a.iter().enumerate().map(|(i, &id)| (i, vec![id])).collect(),
+                    guards.to_vec(),
                 )
             });
         Routines {

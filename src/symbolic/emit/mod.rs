@@ -15,6 +15,7 @@ mod rust;
 mod shared;
 mod sympy;
 mod text;
+mod zero_products;
 
 pub use c::c;
 pub use json::json;

@@ -5,6 +5,7 @@ use std::fmt::Write;
 
 use super::code::{array_symbol, comment, Routine, Routines, Statements};
 use super::shared::{described, Language, PowerSyntax, Role, Symbols};
+use super::zero_products;
 use crate::symbolic::expr::Function;
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
@@ -58,8 +59,9 @@ const FUNCTION_ARGUMENT: &str = "f: &dyn Fn(usize, &[f64]) -> f64";
 
 /// The equations of `source` as Rust.
 pub fn rust(equations: &Equations, source: &str) -> String {
+    let (equations, guards) = &zero_products::folded(equations);
     let symbols = Symbols::new(equations);
-    let routines = Routines::new(&symbols, equations);
+    let routines = Routines::new(&symbols, equations, guards);
     let mut out = header(equations, source);
     if equations.pool.uses_exponential_profile() {
         out.push_str(&crate::symbolic::exponential_profile::rust_definition());
@@ -218,12 +220,17 @@ fn forward_dynamics(symbols: &Symbols, routines: &Routines) -> String {
             ""
         }
     );
+    // The values folded out of products by 0 that may not be finite (`zero_products`).
+    let guards: String = (routines.accelerations.iter())
+        .flat_map(|a| a.guard_expressions(symbols, &Rust))
+        .map(|guard| format!(" || !({guard}).is_finite()"))
+        .collect();
     match &routines.loops {
         None => format!(
             "\n/// The rates' derivatives q' = M⁻¹ (S + F), by the articulated-body recursion (no solve).\n\
              pub fn forward_dynamics(t: f64, p: &[f64], q: &[f64], k: &[f64], qdd: &mut [f64]{argument}) -> Result<(), &'static str> {{\n\
              {}    \
-                 if qdd[..N].iter().any(|x| !x.is_finite()) {{\n        \
+                 if qdd[..N].iter().any(|x| !x.is_finite()){guards} {{\n        \
                      return Err(\"the accelerations are not finite at this state: a joint moves no mass, or a value is not finite\");\n    \
                  }}\n    \
                  Ok(())\n\
