@@ -290,6 +290,13 @@ fn axpy(x: &mut Sparse, a: f64, v: &Sparse) -> Vec<usize> {
 /// rows left out are implied by the others. What an SVD gives, at what the rows' sparsity
 /// costs (the closure Jacobian of a chain of loops: a few columns per row).
 pub fn minimum_norm_solution(m: &DMatrix<f64>, residual: &[f64], tolerance: f64) -> DVector<f64> {
+    let elimination = pivoted_dense(m, tolerance);
+    elimination.minimum_norm_correction(elimination.picked().len(), residual)
+}
+
+/// The pivoted elimination (`pivoted`) of every row of the dense matrix `m`, on the rows'
+/// nonzero entries.
+pub fn pivoted_dense(m: &DMatrix<f64>, tolerance: f64) -> Elimination {
     let rows: Vec<Sparse> = (0..m.nrows())
         .map(|r| {
             (0..m.ncols())
@@ -299,6 +306,5 @@ pub fn minimum_norm_solution(m: &DMatrix<f64>, residual: &[f64], tolerance: f64)
         })
         .collect();
     let every: Vec<usize> = (0..m.nrows()).collect();
-    let elimination = pivoted(rows, m.ncols(), &every, tolerance);
-    elimination.minimum_norm_correction(elimination.picked().len(), residual)
+    pivoted(rows, m.ncols(), &every, tolerance)
 }

@@ -121,17 +121,7 @@ pub fn constraint_rank(model: &KinematicModel, q: &[f64]) -> Result<(usize, usiz
 /// start, an open configuration and the nearby assemblies of `branch::examine`: 84 % of the
 /// start of a ladder of 100 parallelograms).
 fn rows_rank(m: &DMatrix<f64>) -> usize {
-    let rows: Vec<crate::elimination::Sparse> = (0..m.nrows())
-        .map(|r| {
-            (0..m.ncols())
-                .map(|c| (c, m[(r, c)]))
-                .filter(|&(_, value)| value != 0.0)
-                .collect()
-        })
-        .collect();
-    let every: Vec<usize> = (0..m.nrows()).collect();
-    let elimination = crate::elimination::pivoted(rows, m.ncols(), &every, RANK_TOLERANCE);
-    elimination.picked().len()
+    crate::elimination::pivoted_dense(m, RANK_TOLERANCE).picked().len()
 }
 
 pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError> {
