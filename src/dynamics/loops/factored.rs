@@ -17,6 +17,7 @@ use std::cell::OnceCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::jacobian::ConstraintJacobian;
+use super::triples::{self, DiagonalBlock};
 use crate::dynamics::dense::dense_cholesky;
 
 /// Which of the loops' rows (6 per loop) are kept, and the factor making each dimensionless.
@@ -140,6 +141,15 @@ impl KeptRows {
     fn iter(&self) -> impl Iterator<Item = impl Iterator<Item = (usize, f64)> + '_> + '_ {
         (0..self.len()).map(|k| self.row(k))
     }
+}
+
+/// How the normal matrix is factored: row by row (any kept rows), or by blocks of three rows
+/// (`triples`: a planar mechanism's loops, each keeping its three rows in the plane; row by
+/// row where the rows are not laid out by threes). The same factor to round-off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Factorisation {
+    Rows,
+    Triples,
 }
 
 /// The kept rows of G at one state, dimensionless, and their normal matrix.
@@ -354,7 +364,17 @@ impl Factored {
 
     /// `damped`, factored in the storage of `factor` (from `Damped::into_storage`): nothing is
     /// allocated once it has held a factor of this size.
-    pub fn damped_in(&self, damping: f64, mut factor: Envelope) -> Result<Damped<'_>, Singular> {
+    pub fn damped_in(&self, damping: f64, factor: Envelope) -> Result<Damped<'_>, Singular> {
+        self.damped_as(damping, factor, Factorisation::Rows)
+    }
+
+    /// `damped_in`, factored as `how` says.
+    pub fn damped_as(
+        &self,
+        damping: f64,
+        mut factor: Envelope,
+        how: Factorisation,
+    ) -> Result<Damped<'_>, Singular> {
         let largest = self.normal.largest_diagonal().sqrt();
         let shift = (damping * largest).powi(2);
         factor.copy_from(&self.normal);
@@ -362,7 +382,11 @@ impl Factored {
             let at = factor.index(k, k);
             factor.values[at] += shift;
         }
-        factor.cholesky().map_err(|k| Singular {
+        let factored = match how {
+            Factorisation::Rows => factor.cholesky(),
+            Factorisation::Triples => factor.cholesky_by_triples(),
+        };
+        factored.map_err(|k| Singular {
             row: self.indices[k],
         })?;
         Ok(Damped {
@@ -649,6 +673,11 @@ pub struct Envelope {
     /// Row k holds columns first[k]..=k at values[starts[k]..starts[k + 1]].
     starts: Vec<usize>,
     values: Vec<f64>,
+    /// Whether the rows are laid out by blocks of three (`triples::by_triples`).
+    triples: bool,
+    /// The diagonal blocks of a factor taken by blocks of three rows (`cholesky_by_triples`),
+    /// which its substitutions take; empty for a factor taken row by row.
+    blocks: Vec<DiagonalBlock>,
 }
 
 impl Envelope {
@@ -664,6 +693,8 @@ impl Envelope {
         self.values.clear();
         self.values
             .resize(*self.starts.last().expect("a start"), 0.0);
+        self.triples = triples::by_triples(&self.first);
+        self.blocks.clear();
     }
 
     fn len(&self) -> usize {
@@ -677,6 +708,10 @@ impl Envelope {
 
     /// y ← L⁻¹ y for the factor L held.
     fn forward(&self, y: &mut [f64]) {
+        if !self.blocks.is_empty() {
+            let envelope = (&self.first[..], &self.starts[..], &self.values[..]);
+            return triples::forward(envelope, &self.blocks, [y]);
+        }
         for (k, bound) in self.starts.windows(2).enumerate().take(y.len()) {
             let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
             let (done, rest) = y.split_at_mut(k);
@@ -690,6 +725,9 @@ impl Envelope {
     /// interleaved.
     fn solve_pair(&self, y: &mut [f64], z: &mut [f64]) {
         assert_eq!(y.len(), z.len(), "two right-hand sides of one length");
+        if !self.blocks.is_empty() {
+            return self.solve_by_triples([y, z]);
+        }
         let count = y.len();
         let rows = || self.starts.windows(2).take(count).enumerate();
         for (k, bound) in rows() {
@@ -723,8 +761,31 @@ impl Envelope {
         if self.first != other.first {
             self.first.clone_from(&other.first);
             self.starts.clone_from(&other.starts);
+            self.triples = other.triples;
         }
         self.values.clone_from(&other.values);
+        self.blocks.clear();
+    }
+
+    /// The Cholesky factor in place by blocks of three rows (`triples`), where the rows are laid
+    /// out by them, otherwise row by row (`cholesky`); the first row whose pivot is not
+    /// positive.
+    fn cholesky_by_triples(&mut self) -> Result<(), usize> {
+        if !self.triples || self.first.is_empty() {
+            return self.cholesky();
+        }
+        let factored = triples::cholesky(&self.first, &self.starts, &mut self.values, &mut self.blocks);
+        if factored.is_err() {
+            self.blocks.clear();
+        }
+        factored
+    }
+
+    /// (LLᵀ)⁻¹ y for each y of `ys`, for a factor taken by blocks.
+    fn solve_by_triples<const N: usize>(&self, mut ys: [&mut [f64]; N]) {
+        let envelope = (&self.first[..], &self.starts[..], &self.values[..]);
+        triples::forward(envelope, &self.blocks, ys.each_mut().map(|y| &mut **y));
+        triples::backward(envelope, &self.blocks, ys);
     }
 
     fn diagonal(&self) -> impl Iterator<Item = f64> + '_ {
@@ -847,6 +908,9 @@ impl Envelope {
 
     /// y ← (LLᵀ)⁻¹ y for the factor L held.
     fn solve(&self, y: &mut [f64]) {
+        if !self.blocks.is_empty() {
+            return self.solve_by_triples([y]);
+        }
         self.forward(y);
         let rows = self.starts.windows(2).take(y.len()).enumerate();
         for (k, bound) in rows.rev() {
