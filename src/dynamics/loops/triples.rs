@@ -3,22 +3,24 @@
 //! A (`factored::Envelope`) starts every block of three rows at the same block column. The
 //! factor is the same Cholesky factor L as the rows' (A = LLᵀ, stored in the same envelope,
 //! equal to round-off), taken by 3 × 3 blocks (Golub and Van Loan, Matrix Computations, 4th
-//! ed., § 4.2.9, block Cholesky), with the inverse of each diagonal block kept beside it for
-//! the substitutions.
+//! ed., § 4.2.9, block Cholesky), with the reciprocals of its diagonal kept beside it for the
+//! substitutions.
 //!
 //! Why by blocks: the row-by-row factor and its substitutions are each one chain of dependent
 //! square roots and divisions, one link per row (row k + 1 waits on row k's pivot), and that
 //! chain, not the arithmetic, sets their time. By blocks, the chain is carried by the pivots
 //! d of the block's LDLᵀ factor, each waiting on one division (the square roots and the
-//! Cholesky entries are taken beside it, off the chain), and the substitutions multiply each
-//! block by its diagonal block's inverse, one link per block of three rows.
+//! Cholesky entries are taken beside it, off the chain), and the substitutions multiply by the
+//! diagonal's reciprocals where the rows' divide.
 
 /// What a factor by blocks keeps of each diagonal block L_KK = L̃ D^½ (L̃ unit lower
 /// triangular, D the pivots).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DiagonalBlock {
-    /// L_KK⁻¹ (lower triangular) by rows: (0, 0), (1, 0), (1, 1), (2, 0), (2, 1), (2, 2).
-    inverse: [f64; 6],
+    /// L_KK's entries below its diagonal, (1, 0), (2, 0), (2, 1), and the reciprocals of its
+    /// diagonal.
+    lower: [f64; 3],
+    inverse_roots: [f64; 3],
     /// L̃⁻¹'s entries below its unit diagonal: (1, 0), (2, 0), (2, 1).
     unit_inverse: [f64; 3],
     /// D⁻¹.
@@ -93,10 +95,9 @@ pub fn cholesky(
                     *target -= weighted;
                 }
                 let start = at(first, starts, 3 * k + i, 3 * j);
-                let scales = [d.inverse[0], d.inverse[2], d.inverse[5]];
                 for (target, (x, scale)) in values[start..start + 3]
                     .iter_mut()
-                    .zip(v_row.iter().zip(scales))
+                    .zip(v_row.iter().zip(d.inverse_roots))
                 {
                     *target = x * scale;
                 }
@@ -154,16 +155,9 @@ fn diagonal_factor(s: &Block) -> Result<(Block, DiagonalBlock), usize> {
     ];
     let (n10, n21) = (-u10, -u21);
     let n20 = u10 * u21 - u20;
-    let inverse = [
-        inverse_roots[0],
-        n10 * inverse_roots[1],
-        inverse_roots[1],
-        n20 * inverse_roots[2],
-        n21 * inverse_roots[2],
-        inverse_roots[2],
-    ];
     let block = DiagonalBlock {
-        inverse,
+        lower: [factor[1][0], factor[2][0], factor[2][1]],
+        inverse_roots,
         unit_inverse: [n10, n20, n21],
         reciprocals: [r0, r1, r2],
     };
@@ -187,7 +181,9 @@ fn left_of_diagonal<'v>(
 
 /// y ← L⁻¹ y for each y of `ys` (of one length, the rows') for the factor by blocks
 /// (`cholesky`) in `values`: the right-hand sides taken block by block together, so that their
-/// chains of dependent blocks fill each other's waits.
+/// chains of dependent blocks fill each other's waits. Each row as in the rows' substitution
+/// (its entries summed in increasing column order), times its diagonal's reciprocal where
+/// that divides by the diagonal.
 pub fn forward<const N: usize>(
     envelope: (&[usize], &[usize], &[f64]),
     blocks: &[DiagonalBlock],
@@ -197,24 +193,26 @@ pub fn forward<const N: usize>(
     for (k, d) in blocks.iter().enumerate() {
         let from = envelope.0[3 * k];
         let [l0, l1, l2] = left_of_diagonal(envelope, k);
-        let i = &d.inverse;
+        let ([l10, l20, l21], [p0, p1, p2]) = (d.lower, d.inverse_roots);
         for y in ys.iter_mut() {
             let (done, rest) = y[..rows].split_at_mut(3 * k);
-            let (mut r0, mut r1, mut r2) = (rest[0], rest[1], rest[2]);
+            let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
             for (((x, a), b), c) in done[from..].iter().zip(l0).zip(l1).zip(l2) {
-                r0 -= a * x;
-                r1 -= b * x;
-                r2 -= c * x;
+                s0 += a * x;
+                s1 += b * x;
+                s2 += c * x;
             }
-            rest[0] = i[0] * r0;
-            rest[1] = i[1] * r0 + i[2] * r1;
-            rest[2] = i[3] * r0 + i[4] * r1 + i[5] * r2;
+            let y0 = (rest[0] - s0) * p0;
+            let y1 = (rest[1] - (s1 + l10 * y0)) * p1;
+            let y2 = (rest[2] - (s2 + l20 * y0 + l21 * y1)) * p2;
+            (rest[0], rest[1], rest[2]) = (y0, y1, y2);
         }
     }
 }
 
 /// y ← L⁻ᵀ y for each y of `ys` (of one length, the rows') for the factor by blocks
-/// (`cholesky`) in `values`, taken together as in `forward`.
+/// (`cholesky`) in `values`, taken together as in `forward`, each row as in the rows'
+/// substitution (the last row first, its entries subtracted from the rows before it).
 pub fn backward<const N: usize>(
     envelope: (&[usize], &[usize], &[f64]),
     blocks: &[DiagonalBlock],
@@ -224,16 +222,15 @@ pub fn backward<const N: usize>(
     for (k, d) in blocks.iter().enumerate().rev() {
         let from = envelope.0[3 * k];
         let [l0, l1, l2] = left_of_diagonal(envelope, k);
-        let i = &d.inverse;
+        let ([l10, l20, l21], [p0, p1, p2]) = (d.lower, d.inverse_roots);
         for y in ys.iter_mut() {
             let (done, rest) = y[..rows].split_at_mut(3 * k);
-            let (r0, r1, r2) = (rest[0], rest[1], rest[2]);
-            let x0 = i[0] * r0 + i[1] * r1 + i[3] * r2;
-            let x1 = i[2] * r1 + i[4] * r2;
-            let x2 = i[5] * r2;
+            let x2 = rest[2] * p2;
+            let x1 = (rest[1] - l21 * x2) * p1;
+            let x0 = (rest[0] - l20 * x2 - l10 * x1) * p0;
             (rest[0], rest[1], rest[2]) = (x0, x1, x2);
             for (((target, a), b), c) in done[from..].iter_mut().zip(l0).zip(l1).zip(l2) {
-                *target -= a * x0 + b * x1 + c * x2;
+                *target = *target - c * x2 - b * x1 - a * x0;
             }
         }
     }
