@@ -38,10 +38,10 @@ fn at(first: &[usize], starts: &[usize], row: usize, column: usize) -> usize {
 /// Whether an envelope with these rows' first columns is laid out by blocks of three rows:
 /// every block's three rows start at one column, the first of a block.
 pub fn by_triples(first: &[usize]) -> bool {
-    first.len() % 3 == 0
+    first.len().is_multiple_of(3)
         && first
             .chunks_exact(3)
-            .all(|f| f[0] % 3 == 0 && f[1] == f[0] && f[2] == f[0])
+            .all(|f| f[0].is_multiple_of(3) && f[1] == f[0] && f[2] == f[0])
 }
 
 /// Block row K's entries in block column J (J < K, within the envelope).
