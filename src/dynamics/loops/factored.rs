@@ -143,15 +143,6 @@ impl KeptRows {
     }
 }
 
-/// How the normal matrix is factored: row by row (any kept rows), or by blocks of three rows
-/// (`triples`: a planar mechanism's loops, each keeping its three rows in the plane; row by
-/// row where the rows are not laid out by threes). The same factor to round-off.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Factorisation {
-    Rows,
-    Triples,
-}
-
 /// The kept rows of G at one state, dimensionless, and their normal matrix.
 pub struct Factored {
     rows: KeptRows,
@@ -161,6 +152,9 @@ pub struct Factored {
     /// Per row of G (6 per loop), whether it is among `indices`: the rows left out are found
     /// without searching them (`Damped::reproduction`).
     is_kept: Vec<bool>,
+    /// Whether every loop keeps exactly three rows, contiguous in `indices`
+    /// (`triples::kept_by_threes`): A is then factored by 3 × 3 blocks, whatever the form.
+    by_threes: bool,
     scales: Vec<f64>,
     firm: usize,
     /// A = GₛGₛᵀ, undamped, and the products that fill it.
@@ -193,6 +187,7 @@ impl Factored {
             columns: 0,
             indices: Vec::new(),
             is_kept: Vec::new(),
+            by_threes: false,
             scales: Vec::new(),
             firm: 0,
             normal: Envelope::default(),
@@ -235,6 +230,7 @@ impl Factored {
         for &row in &self.indices {
             self.is_kept[row] = true;
         }
+        self.by_threes = triples::kept_by_threes(&self.indices, jacobian.nrows() / 6);
         self.columns = jacobian.ncols();
         self.rows.lay_out(jacobian, &self.indices);
         self.index_columns();
@@ -363,18 +359,10 @@ impl Factored {
     }
 
     /// `damped`, factored in the storage of `factor` (from `Damped::into_storage`): nothing is
-    /// allocated once it has held a factor of this size.
-    pub fn damped_in(&self, damping: f64, factor: Envelope) -> Result<Damped<'_>, Singular> {
-        self.damped_as(damping, factor, Factorisation::Rows)
-    }
-
-    /// `damped_in`, factored as `how` says.
-    pub fn damped_as(
-        &self,
-        damping: f64,
-        mut factor: Envelope,
-        how: Factorisation,
-    ) -> Result<Damped<'_>, Singular> {
+    /// allocated once it has held a factor of this size. Factored by 3 × 3 blocks where every
+    /// loop keeps three contiguous rows (`by_threes`), row by row otherwise: the same factor to
+    /// round-off.
+    pub fn damped_in(&self, damping: f64, mut factor: Envelope) -> Result<Damped<'_>, Singular> {
         let largest = self.normal.largest_diagonal().sqrt();
         let shift = (damping * largest).powi(2);
         factor.copy_from(&self.normal);
@@ -382,9 +370,10 @@ impl Factored {
             let at = factor.index(k, k);
             factor.values[at] += shift;
         }
-        let factored = match how {
-            Factorisation::Rows => factor.cholesky(),
-            Factorisation::Triples => factor.cholesky_by_triples(),
+        let factored = if self.by_threes {
+            factor.cholesky_by_triples()
+        } else {
+            factor.cholesky()
         };
         factored.map_err(|k| Singular {
             row: self.indices[k],
@@ -767,7 +756,7 @@ impl Envelope {
         self.blocks.clear();
     }
 
-    /// The Cholesky factor in place by blocks of three rows (`triples`), where the rows are laid
+    /// The Cholesky factor in place by blocks of three rows (`triples`), where the envelope is laid
     /// out by them, otherwise row by row (`cholesky`); the first row whose pivot is not
     /// positive.
     fn cholesky_by_triples(&mut self) -> Result<(), usize> {

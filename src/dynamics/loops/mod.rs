@@ -32,7 +32,7 @@ pub mod structure;
 pub mod triples;
 
 pub use basis::{decompose, decompose_with};
-pub use factored::{Factored, Factorisation, RowChoice, Singular, DAMPING};
+pub use factored::{Factored, RowChoice, Singular, DAMPING};
 pub use jacobian::ConstraintJacobian;
 pub use momentum::{project_momentum, MomentumBasis};
 pub use orientation::Orientation;

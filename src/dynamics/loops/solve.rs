@@ -18,9 +18,7 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector};
 
-use super::factored::{
-    projector_block_quality, Envelope, Factored, Factorisation, RowChoice, Singular, DAMPING,
-};
+use super::factored::{projector_block_quality, Envelope, Factored, RowChoice, Singular, DAMPING};
 use super::inertia::{Reduced, ReducedInertia};
 use super::project::ProjectionScratch;
 use super::range_space::{Failure, Method, RangeSpace, Tree};
@@ -262,7 +260,7 @@ const MASSLESS_FORCE: f64 = 1e-3;
 /// then takes inverse dynamics' pass out at a₀ (`rnea_forward`) for `solve_reduced`.
 pub fn allowed_motions(
     structure: &Structure,
-    (stabilisation, factorisation): (Stabilisation, Factorisation),
+    stabilisation: Stabilisation,
     scratch: &mut LoopScratch,
 ) -> Result<(), LoopError> {
     scratch.size_for(structure.free.len());
@@ -293,7 +291,7 @@ pub fn allowed_motions(
     }
     factored.refill(&c.jacobian, &structure.choice);
     let damped = factored
-        .damped_as(DAMPING, std::mem::take(factor), factorisation)
+        .damped_in(DAMPING, std::mem::take(factor))
         .map_err(singular)?;
     factored.kept_into(gamma.as_slice(), kept);
     kept.iter_mut().for_each(|x| *x = -*x);

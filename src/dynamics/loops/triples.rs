@@ -1,6 +1,8 @@
-//! The kept rows' normal matrix factored by blocks of three rows: a planar loop's three rows
-//! in its plane (`planar_rows`), which the planar form keeps together, so that the envelope of
-//! A (`factored::Envelope`) starts every block of three rows at the same block column. The
+//! The kept rows' normal matrix factored by blocks of three rows, wherever every loop keeps
+//! exactly three rows, contiguous in the kept order (`kept_by_threes`): a planar loop's three
+//! rows in its plane, in planar form (`planar_rows`) or in spatial form alike. A loop's rows
+//! share its columns, so the envelope of A (`factored::Envelope`) then starts every block of
+//! three rows at the same block column. The
 //! factor is the same Cholesky factor L as the rows' (A = LLᵀ, stored in the same envelope,
 //! equal to round-off), taken by 3 × 3 blocks (Golub and Van Loan, Matrix Computations, 4th
 //! ed., § 4.2.9, block Cholesky), with the reciprocals of its diagonal kept beside it for the
@@ -33,6 +35,22 @@ type Block = [[f64; 3]; 3];
 /// Where the envelope holds row `row`'s entry in column `column`.
 fn at(first: &[usize], starts: &[usize], row: usize, column: usize) -> usize {
     starts[row] + column - first[row]
+}
+
+/// Whether every loop keeps exactly three rows, contiguous in the kept order: `indices` (the
+/// kept rows, each among its loop's 6) by threes, each three of one loop, and no loop in two
+/// threes. The decision rests on the kept rows alone, never on the form that made them.
+pub fn kept_by_threes(indices: &[usize], loops: usize) -> bool {
+    if indices.is_empty() || !indices.len().is_multiple_of(3) {
+        return false;
+    }
+    let mut seen = vec![false; loops];
+    indices.chunks_exact(3).all(|three| {
+        let owner = three[0] / 6;
+        let one_loop = three.iter().all(|&r| r / 6 == owner);
+        let first_time = owner < loops && !std::mem::replace(&mut seen[owner], true);
+        one_loop && first_time
+    })
 }
 
 /// Whether an envelope with these rows' first columns is laid out by blocks of three rows:

@@ -28,7 +28,7 @@ use crate::dynamics::algorithms::{
     crba_after_kinematics, crba_into, forward_kinematics, rnea_after_kinematics, rnea_forward,
 };
 use crate::dynamics::loops::planar_rows::planar_constraints_into;
-use crate::dynamics::loops::{self, Extent, Factored, Factorisation, Stabilisation};
+use crate::dynamics::loops::{self, Extent, Factored, Stabilisation};
 use crate::dynamics::planar::algorithms as planar_algorithms;
 use crate::dynamics::planar::algebra::PlanarForce;
 use crate::dynamics::planar::PlanarModel;
@@ -153,8 +153,7 @@ impl MechanicalSystem<'_> {
             &mut scratch.constraints,
         )?;
         let structure = &self.scratch.loops.structure;
-        let how = (self.scratch.loops.stabilisation, Factorisation::Rows);
-        let allowed = loops::allowed_motions(structure, how, scratch);
+        let allowed = loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch);
         allowed.map_err(|e| self.loop_error(&e))?;
         // The efforts after the allowed motions: the actuators' laws that read the model in
         // their coordinates take it from them, unless Baumgarte's feedback is in the particular
@@ -215,9 +214,7 @@ impl MechanicalSystem<'_> {
         planar_constraints_into(model, planar, planar_data, state, &mut scratch.constraints);
         let structure = &self.scratch.loops.structure;
         scratch.choose_method(structure);
-        // A planar loop's kept rows are its three rows in the plane: the factor by their blocks.
-        let how = (self.scratch.loops.stabilisation, Factorisation::Triples);
-        let allowed = loops::allowed_motions(structure, how, scratch);
+        let allowed = loops::allowed_motions(structure, self.scratch.loops.stabilisation, scratch);
         if let Err(e) = allowed {
             return Err(self.loop_error(&e));
         }
