@@ -394,3 +394,19 @@ fn tree_decides_planarity_without_building_the_dynamics() {
     let why = bennett.expect("tree").not_planar.expect("not planar");
     assert!(why.contains("out of the plane"), "{why}");
 }
+
+/// The factor by blocks of three rows is chosen from the kept rows alone (every loop keeping
+/// exactly three rows, contiguous in the kept order), whatever form made them.
+#[test]
+fn the_factor_by_threes_follows_the_kept_rows() {
+    use lsdc::dynamics::loops::triples::kept_by_threes;
+    // Two loops, three rows each (indices among 6 per loop), as a planar loop keeps them.
+    assert!(kept_by_threes(&[0, 1, 5, 6, 7, 11], 2));
+    assert!(kept_by_threes(&[6, 7, 11, 0, 1, 5], 2));
+    // One loop keeping six rows, or two loops' rows mixed in one three: row by row.
+    assert!(!kept_by_threes(&[0, 1, 2, 3, 4, 5], 1));
+    assert!(!kept_by_threes(&[0, 1, 6, 2, 7, 8], 2));
+    // A loop keeping two rows, or none kept at all.
+    assert!(!kept_by_threes(&[0, 1, 6, 7, 8], 2));
+    assert!(!kept_by_threes(&[], 0));
+}

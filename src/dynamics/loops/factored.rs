@@ -17,6 +17,7 @@ use std::cell::OnceCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::jacobian::ConstraintJacobian;
+use super::triples::{self, DiagonalBlock};
 use crate::dynamics::dense::dense_cholesky;
 
 /// Which of the loops' rows (6 per loop) are kept, and the factor making each dimensionless.
@@ -151,6 +152,9 @@ pub struct Factored {
     /// Per row of G (6 per loop), whether it is among `indices`: the rows left out are found
     /// without searching them (`Damped::reproduction`).
     is_kept: Vec<bool>,
+    /// Whether every loop keeps exactly three rows, contiguous in `indices`
+    /// (`triples::kept_by_threes`): A is then factored by 3 × 3 blocks, whatever the form.
+    by_threes: bool,
     scales: Vec<f64>,
     firm: usize,
     /// A = GₛGₛᵀ, undamped, and the products that fill it.
@@ -183,6 +187,7 @@ impl Factored {
             columns: 0,
             indices: Vec::new(),
             is_kept: Vec::new(),
+            by_threes: false,
             scales: Vec::new(),
             firm: 0,
             normal: Envelope::default(),
@@ -225,6 +230,7 @@ impl Factored {
         for &row in &self.indices {
             self.is_kept[row] = true;
         }
+        self.by_threes = triples::kept_by_threes(&self.indices, jacobian.nrows() / 6);
         self.columns = jacobian.ncols();
         self.rows.lay_out(jacobian, &self.indices);
         self.index_columns();
@@ -353,7 +359,9 @@ impl Factored {
     }
 
     /// `damped`, factored in the storage of `factor` (from `Damped::into_storage`): nothing is
-    /// allocated once it has held a factor of this size.
+    /// allocated once it has held a factor of this size. Factored by 3 × 3 blocks where every
+    /// loop keeps three contiguous rows (`by_threes`), row by row otherwise: the same factor to
+    /// round-off.
     pub fn damped_in(&self, damping: f64, mut factor: Envelope) -> Result<Damped<'_>, Singular> {
         let largest = self.normal.largest_diagonal().sqrt();
         let shift = (damping * largest).powi(2);
@@ -362,7 +370,12 @@ impl Factored {
             let at = factor.index(k, k);
             factor.values[at] += shift;
         }
-        factor.cholesky().map_err(|k| Singular {
+        let factored = if self.by_threes {
+            factor.cholesky_by_triples()
+        } else {
+            factor.cholesky()
+        };
+        factored.map_err(|k| Singular {
             row: self.indices[k],
         })?;
         Ok(Damped {
@@ -649,6 +662,11 @@ pub struct Envelope {
     /// Row k holds columns first[k]..=k at values[starts[k]..starts[k + 1]].
     starts: Vec<usize>,
     values: Vec<f64>,
+    /// Whether the rows are laid out by blocks of three (`triples::by_triples`).
+    triples: bool,
+    /// The diagonal blocks of a factor taken by blocks of three rows (`cholesky_by_triples`),
+    /// which its substitutions take; empty for a factor taken row by row.
+    blocks: Vec<DiagonalBlock>,
 }
 
 impl Envelope {
@@ -664,6 +682,8 @@ impl Envelope {
         self.values.clear();
         self.values
             .resize(*self.starts.last().expect("a start"), 0.0);
+        self.triples = triples::by_triples(&self.first);
+        self.blocks.clear();
     }
 
     fn len(&self) -> usize {
@@ -677,6 +697,10 @@ impl Envelope {
 
     /// y ← L⁻¹ y for the factor L held.
     fn forward(&self, y: &mut [f64]) {
+        if !self.blocks.is_empty() {
+            let envelope = (&self.first[..], &self.starts[..], &self.values[..]);
+            return triples::forward(envelope, &self.blocks, [y]);
+        }
         for (k, bound) in self.starts.windows(2).enumerate().take(y.len()) {
             let (left, diagonal) = split_diagonal(&self.values[bound[0]..bound[1]]);
             let (done, rest) = y.split_at_mut(k);
@@ -690,6 +714,9 @@ impl Envelope {
     /// interleaved.
     fn solve_pair(&self, y: &mut [f64], z: &mut [f64]) {
         assert_eq!(y.len(), z.len(), "two right-hand sides of one length");
+        if !self.blocks.is_empty() {
+            return self.solve_by_triples([y, z]);
+        }
         let count = y.len();
         let rows = || self.starts.windows(2).take(count).enumerate();
         for (k, bound) in rows() {
@@ -723,8 +750,31 @@ impl Envelope {
         if self.first != other.first {
             self.first.clone_from(&other.first);
             self.starts.clone_from(&other.starts);
+            self.triples = other.triples;
         }
         self.values.clone_from(&other.values);
+        self.blocks.clear();
+    }
+
+    /// The Cholesky factor in place by blocks of three rows (`triples`), where the envelope is laid
+    /// out by them, otherwise row by row (`cholesky`); the first row whose pivot is not
+    /// positive.
+    fn cholesky_by_triples(&mut self) -> Result<(), usize> {
+        if !self.triples || self.first.is_empty() {
+            return self.cholesky();
+        }
+        let factored = triples::cholesky(&self.first, &self.starts, &mut self.values, &mut self.blocks);
+        if factored.is_err() {
+            self.blocks.clear();
+        }
+        factored
+    }
+
+    /// (LLᵀ)⁻¹ y for each y of `ys`, for a factor taken by blocks.
+    fn solve_by_triples<const N: usize>(&self, mut ys: [&mut [f64]; N]) {
+        let envelope = (&self.first[..], &self.starts[..], &self.values[..]);
+        triples::forward(envelope, &self.blocks, ys.each_mut().map(|y| &mut **y));
+        triples::backward(envelope, &self.blocks, ys);
     }
 
     fn diagonal(&self) -> impl Iterator<Item = f64> + '_ {
@@ -847,6 +897,9 @@ impl Envelope {
 
     /// y ← (LLᵀ)⁻¹ y for the factor L held.
     fn solve(&self, y: &mut [f64]) {
+        if !self.blocks.is_empty() {
+            return self.solve_by_triples([y]);
+        }
         self.forward(y);
         let rows = self.starts.windows(2).take(y.len()).enumerate();
         for (k, bound) in rows.rev() {

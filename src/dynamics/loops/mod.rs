@@ -31,6 +31,7 @@ pub mod range_space;
 pub mod rows;
 pub mod solve;
 pub mod structure;
+pub mod triples;
 
 pub use basis::{decompose, decompose_with};
 pub use factored::{Factored, RowChoice, Singular, DAMPING};
