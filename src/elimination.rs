@@ -285,15 +285,6 @@ fn axpy(x: &mut Sparse, a: f64, v: &Sparse) -> Vec<usize> {
     added
 }
 
-/// The minimum-norm δ with M δ = −r over the rows of the dense matrix `m` independent at
-/// `tolerance` (pivoted, `pivoted`), on their sparsity: the pseudo-inverse's step −M⁺r where the
-/// rows left out are implied by the others. What an SVD gives, at what the rows' sparsity
-/// costs (the closure Jacobian of a chain of loops: a few columns per row).
-pub fn minimum_norm_solution(m: &DMatrix<f64>, residual: &[f64], tolerance: f64) -> DVector<f64> {
-    let elimination = pivoted_dense(m, tolerance);
-    elimination.minimum_norm_correction(elimination.picked().len(), residual)
-}
-
 /// The pivoted elimination (`pivoted`) of every row of the dense matrix `m`, on the rows'
 /// nonzero entries.
 pub fn pivoted_dense(m: &DMatrix<f64>, tolerance: f64) -> Elimination {

@@ -8,7 +8,6 @@ use nalgebra::{DMatrix, DVector};
 use super::closure::{closure, Closure};
 use super::eval::EvalError;
 use super::model::KinematicModel;
-use crate::elimination::minimum_norm_solution;
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings, Stop};
 
 #[derive(Clone, Debug)]
@@ -555,14 +554,7 @@ const POLISHING: Settings = Settings {
     progress: Progress::Any,
 };
 
-/// The polish's rows: a row is kept when its part independent of the rows kept before it is
-/// above this fraction of the largest row, so that rows acting at second order (parts of 1e-8
-/// at a residual of 1e-15) are still solved for, and only rows dependent to round-off left out.
-const POLISH_TOLERANCE: f64 = 1e-14;
-
-/// The polish's minimum-norm steps (on the rows independent at `POLISH_TOLERANCE`, by the
-/// sparse elimination of the closure Jacobian's rows: `elimination::minimum_norm_solution`),
-/// for the corrector.
+/// The polish's minimum-norm steps (singular values to 1e-14 kept), for the corrector.
 struct PolishingSteps<'a> {
     model: &'a KinematicModel,
     free: &'a [usize],
@@ -587,11 +579,12 @@ impl Correction for PolishingSteps<'_> {
 
     fn step(&mut self, _damping: f64) -> Result<Option<f64>, AssemblyError> {
         let jacobian = free_columns(&self.current.jacobian, self.free);
-        let residual = self.current.residual.as_slice();
-        let step = minimum_norm_solution(&jacobian, residual, POLISH_TOLERANCE);
-        if !step.iter().all(|x| x.is_finite()) {
+        let Some(svd) = crate::linalg::svd(jacobian, true, true) else {
             return Ok(None);
-        }
+        };
+        let Ok(step) = svd.solve(&(-&self.current.residual), 1e-14) else {
+            return Ok(None);
+        };
         let mut trial = self.q.clone();
         for (i, &index) in self.free.iter().enumerate() {
             trial[index] += step[i];

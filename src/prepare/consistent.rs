@@ -8,9 +8,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::diag::Diagnostic;
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::angles::AngleReference;
-use crate::dynamics::loops::basis::SOLVE_TOLERANCE;
-use crate::dynamics::loops::{close_configuration, constraints, Extent};
-use crate::elimination::minimum_norm_solution;
+use crate::dynamics::loops::{close_configuration, constraints, decompose, Extent};
 use crate::dynamics::model::Model;
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::assembly::AssemblyOptions;
@@ -157,11 +155,9 @@ fn complete_rates(
     let error = jacobian * &velocity;
     let free_columns =
         DMatrix::from_fn(jacobian.nrows(), free.len(), |r, c| jacobian[(r, free[c])]);
-    // The minimum-norm correction on the rows independent at the decompositions' tolerance,
-    // by the sparse elimination of their rows (the pseudo-inverse's, without an SVD of G).
-    let correction = minimum_norm_solution(&free_columns, error.as_slice(), SOLVE_TOLERANCE);
+    let correction = decompose(&free_columns).pseudo_inverse * &error;
     for (k, &i) in free.iter().enumerate() {
-        v[i] += correction[k];
+        v[i] -= correction[k];
     }
     let left = (jacobian * DVector::from_column_slice(v)).amax();
     let scale = velocity.amax().max(1e-300) * jacobian.amax().max(1e-300);
