@@ -12,6 +12,7 @@
 use super::control::{Gains, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{Evaluator, Halt};
+use super::hermite::hermite_part_into;
 use super::settings::Settings;
 
 /// Stages of one step.
@@ -376,14 +377,7 @@ impl AdaptiveStepper for Dop853 {
     fn accept(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
         let (first, end) = (&self.stages[0], &self.stages[END]);
         let [r0, r1, r2, r3, high @ ..] = &mut self.dense;
-        for i in 0..y.len() {
-            let change = y_new[i] - y[i];
-            let start_bulge = h * first[i] - change;
-            r0[i] = y[i];
-            r1[i] = change;
-            r2[i] = start_bulge;
-            r3[i] = change - h * end[i] - start_bulge;
-        }
+        hermite_part_into(h, (y, y_new), (first, end), [r0, r1, r2, r3]);
         for (coefficient, weights) in high.iter_mut().zip(DENSE) {
             for (i, value) in coefficient.iter_mut().enumerate() {
                 *value = match self.extension_taken {

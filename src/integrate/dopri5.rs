@@ -6,6 +6,7 @@
 use super::control::{error_norm, Gains, StepController};
 use super::driver::AdaptiveStepper;
 use super::evaluator::{Evaluator, Halt};
+use super::hermite::hermite_part_into;
 use super::settings::Settings;
 
 const STAGES: usize = 7;
@@ -121,13 +122,8 @@ impl DormandPrince {
     fn form_interpolant(&mut self, t: f64, y: &[f64], h: f64, y_new: &[f64]) {
         let [first, .., last] = &self.stages;
         let [r0, r1, r2, r3, r4] = &mut self.dense;
+        hermite_part_into(h, (y, y_new), (first, last), [r0, r1, r2, r3]);
         for i in 0..y.len() {
-            let change = y_new[i] - y[i];
-            let start_bulge = h * first[i] - change;
-            r0[i] = y[i];
-            r1[i] = change;
-            r2[i] = start_bulge;
-            r3[i] = change - h * last[i] - start_bulge;
             r4[i] = h * DENSE
                 .iter()
                 .zip(&self.stages)

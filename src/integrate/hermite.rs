@@ -52,3 +52,24 @@ impl HermiteSegment {
         }
     }
 }
+
+/// The first four coefficients of a Runge–Kutta method's continuous extension in Hairer's form
+/// (its cubic Hermite part: y, Δ, h f₀ − Δ and Δ − h f₁ − (h f₀ − Δ), with Δ = y_new − y), for
+/// the step of size `h` from `y` to `y_new` with slopes `first` and `last` at its ends (Hairer,
+/// Nørsett and Wanner, II.6). Dormand–Prince 5(4) and DOP853 add their higher coefficients.
+pub(super) fn hermite_part_into(
+    h: f64,
+    (y, y_new): (&[f64], &[f64]),
+    (first, last): (&[f64], &[f64]),
+    [r0, r1, r2, r3]: [&mut [f64]; 4],
+) {
+    for i in 0..y.len() {
+        let change = y_new[i] - y[i];
+        let start_bulge = h * first[i] - change;
+        r0[i] = y[i];
+        r1[i] = change;
+        r2[i] = start_bulge;
+        r3[i] = change - h * last[i] - start_bulge;
+    }
+}
+
