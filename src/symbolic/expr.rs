@@ -647,20 +647,32 @@ impl Pool {
             }
             let o: Vec<ExprId> = operands.iter().map(|x| memo[x]).collect();
             let rebuilt = match from.node(node) {
-                Node::Constant(bits) => self.constant(f64::from_bits(bits)),
+                // A symbol's index is its pool's own: matched by name.
                 Node::Symbol(i) => self.symbol(from.symbol_name(i)),
-                Node::Add(..) => self.add(o[0], o[1]),
-                Node::Mul(..) => self.mul(o[0], o[1]),
-                Node::Div(..) => self.div(o[0], o[1]),
-                Node::Pow(..) => self.pow(o[0], o[1]),
-                Node::Atan2(..) => self.atan2(o[0], o[1]),
-                Node::Neg(_) => self.neg(o[0]),
-                Node::Apply(f, _) => self.apply(f, o[0]),
-                Node::Select { .. } => self.select(o[0], o[1], o[2]),
+                shape => self.rebuild(shape, &o),
             };
             memo.insert(node, rebuilt);
         }
         memo[&id]
+    }
+
+    /// The operation of `shape` (a node of this pool; its own operands ignored) over
+    /// `operands`, folded as the constructors fold: how a node is made again once its operands
+    /// have been made again, in this pool or, by `transplant`, in another.
+    pub fn rebuild(&mut self, shape: Node, operands: &[ExprId]) -> ExprId {
+        let o = operands;
+        match shape {
+            Node::Constant(bits) => self.constant(f64::from_bits(bits)),
+            Node::Symbol(_) => self.intern(shape),
+            Node::Add(..) => self.add(o[0], o[1]),
+            Node::Mul(..) => self.mul(o[0], o[1]),
+            Node::Div(..) => self.div(o[0], o[1]),
+            Node::Pow(..) => self.pow(o[0], o[1]),
+            Node::Atan2(..) => self.atan2(o[0], o[1]),
+            Node::Neg(_) => self.neg(o[0]),
+            Node::Apply(f, _) => self.apply(f, o[0]),
+            Node::Select { .. } => self.select(o[0], o[1], o[2]),
+        }
     }
 
     /// Whether `id` is the constant 0.

@@ -83,7 +83,7 @@ impl MechanicalSystem<'_> {
     }
 
     /// The coordinates held at time `t` into `held`: the driven ones' (their laws evaluated at
-    /// t), then the resting stops', then the sticking joints'.
+    /// t), then those the state holds (`rows_the_state_holds`).
     pub(super) fn gather_held(&mut self, t: f64) {
         let model = self.model;
         let mut held = std::mem::take(&mut self.scratch.held);
@@ -93,27 +93,31 @@ impl MechanicalSystem<'_> {
             (model.drives.iter().enumerate())
                 .map(|(index, drive)| HeldRow::driven(index, drive, drive.evaluate(t, values))),
         );
-        held.extend(self.resting_stop_rows());
-        let frictions =
-            (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
-        held.extend(frictions.map(|index| HeldRow {
-            velocity: model.frictions[index].velocity,
-            holder: Holder::Friction { index },
-        }));
+        held.extend(self.rows_the_state_holds());
         self.scratch.held = held;
     }
 
-    /// Whether no coordinate is held at this state: no drive, no stop rested on, no friction
-    /// sticking (`gather_held` would gather no row).
+    /// Whether no coordinate is held at this state: no drive, and none the state holds
+    /// (`gather_held` would gather no row).
     pub(super) fn holds_nothing(&self) -> bool {
+        self.model.drives.is_empty() && self.rows_the_state_holds().next().is_none()
+    }
+
+    /// The rows held by the run's state rather than by a law of time: the stops the
+    /// coordinates rest on, then the joints whose friction sticks.
+    fn rows_the_state_holds(&self) -> impl Iterator<Item = HeldRow> + '_ {
         let model = self.model;
-        model.drives.is_empty()
-            && !self.state.resting.contains(&true)
-            && !self.state.phases.contains(&Phase::Sticking)
+        let frictions =
+            (0..model.frictions.len()).filter(|&k| self.state.phases[k] == Phase::Sticking);
+        let sticking = frictions.map(|index| HeldRow {
+            velocity: model.frictions[index].velocity,
+            holder: Holder::Friction { index },
+        });
+        self.resting_stop_rows().chain(sticking)
     }
 
     /// The held rows of the stops the run's coordinates rest on.
-    pub(super) fn resting_stop_rows(&self) -> impl Iterator<Item = HeldRow> + '_ {
+    fn resting_stop_rows(&self) -> impl Iterator<Item = HeldRow> + '_ {
         let model = self.model;
         let resting = (0..model.stops.len()).filter(|&k| self.state.resting[k]);
         resting.map(|index| HeldRow::on_stop(index, &model.stops[index]))

@@ -50,7 +50,6 @@ fn fold(pool: &mut Pool, roots: &[ExprId]) -> (Vec<ExprId>, Vec<ExprId>) {
     for id in order {
         let o: Vec<ExprId> = pool.operands(id).iter().map(|x| rebuilt[x]).collect();
         let new = match pool.node(id) {
-            Node::Constant(_) | Node::Symbol(_) => id,
             Node::Mul(..) => match (pool.is_zero(o[0]), pool.is_zero(o[1])) {
                 (true, _) => {
                     folded.push(o[1]);
@@ -62,13 +61,7 @@ fn fold(pool: &mut Pool, roots: &[ExprId]) -> (Vec<ExprId>, Vec<ExprId>) {
                 }
                 _ => pool.mul(o[0], o[1]),
             },
-            Node::Add(..) => pool.add(o[0], o[1]),
-            Node::Div(..) => pool.div(o[0], o[1]),
-            Node::Pow(..) => pool.pow(o[0], o[1]),
-            Node::Atan2(..) => pool.atan2(o[0], o[1]),
-            Node::Neg(_) => pool.neg(o[0]),
-            Node::Apply(f, _) => pool.apply(f, o[0]),
-            Node::Select { .. } => pool.select(o[0], o[1], o[2]),
+            shape => pool.rebuild(shape, &o),
         };
         rebuilt.insert(id, new);
     }
