@@ -4,9 +4,11 @@
 //! the hash of its source, loaded, and checked against the simulator's own right-hand side
 //! before the run uses it. Measured 9–35× faster per evaluation than the compiled tape and the
 //! articulated-body algorithm (`cargo bench --bench native`, BENCHMARKS.md); it serves trees
-//! whose state is their declared coordinates and rates. Wherever it cannot serve (no compiler,
-//! loops, quaternion joints, unknown functions, a disagreement), the run goes on without it
-//! and says why.
+//! whose state is their declared coordinates and rates, and such mechanisms with loops, whose
+//! accelerations are then solved on the run's kept rows in the generated code
+//! (`symbolic::kept_rows_solve`). Wherever it cannot serve (no compiler, quaternion joints,
+//! motions without mass, unknown functions, a disagreement), the run goes on without it and
+//! says why.
 
 use std::ffi::c_int;
 use std::fmt;
@@ -209,12 +211,13 @@ fn on_kept_rows(
     Ok(())
 }
 
-/// Whether the emitted forward dynamics is the whole right-hand side: a tree, written by the
-/// articulated-body recursion, with no unknown functions to call back.
+/// Whether the emitted forward dynamics is the whole right-hand side: accelerations written out
+/// (for a tree by the articulated-body recursion, for loops on their kept rows), with no
+/// constraint rows left to solve.
 fn supported(equations: &Equations) -> Result<(), Unavailable> {
     let unsupported = |why: &str| Err(Unavailable::Unsupported(why.into()));
     if equations.constraint_rows() > 0 {
-        return unsupported("the mechanism has loops (the native code serves trees)");
+        return unsupported("the mechanism has loops, and no rows were given to solve them on");
     }
     if equations.accelerations.is_none() {
         return unsupported("its accelerations are not written by the recursion");

@@ -12,7 +12,8 @@ use crate::prepare::Prepared;
 
 /// Compiles `prepared`'s forward dynamics and keeps it for its runs, once it agrees with the
 /// simulator's evaluation at the initial state (to 1e-9 of the largest acceleration); otherwise
-/// says why the runs go on without it.
+/// says why the runs go on without it. With loops, the initial state is the run's start (the
+/// loops closed, their structure decided), and the code solves on the rows kept there.
 pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unavailable> {
     let model = &prepared.model;
     if model.has_contacts() {
