@@ -4,9 +4,11 @@
 //! the hash of its source, loaded, and checked against the simulator's own right-hand side
 //! before the run uses it. Measured 9–35× faster per evaluation than the compiled tape and the
 //! articulated-body algorithm (`cargo bench --bench native`, BENCHMARKS.md); it serves trees
-//! whose state is their declared coordinates and rates. Wherever it cannot serve (no compiler,
-//! loops, quaternion joints, unknown functions, a disagreement), the run goes on without it
-//! and says why.
+//! whose state is their declared coordinates and rates, and such mechanisms with loops, whose
+//! accelerations are then solved on the run's kept rows in the generated code
+//! (`symbolic::kept_rows_solve`). Wherever it cannot serve (no compiler, quaternion joints,
+//! motions without mass, unknown functions, a disagreement), the run goes on without it and
+//! says why.
 
 use std::ffi::c_int;
 use std::fmt;
@@ -15,6 +17,7 @@ use std::process::Command;
 
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::eval::UnknownValues;
+use crate::symbolic::kept_rows_solve::{solve_on_kept_rows, KeptRows};
 use crate::symbolic::{self, Equations};
 use crate::topology::Topology;
 
@@ -30,6 +33,9 @@ pub struct NativeDynamics {
     forward: ForwardDynamics,
     parameters: Vec<f64>,
     pub dimension: usize,
+    /// For a mechanism with loops, the constraint rows its accelerations keep (`KeptRows`):
+    /// the code serves the states at which the run keeps the same rows.
+    pub kept_rows: Option<Vec<usize>>,
     /// Where the library was loaded from (for the run's report).
     pub path: PathBuf,
 }
@@ -103,19 +109,42 @@ impl fmt::Display for Unavailable {
     }
 }
 
+/// What the loops' accelerations are written on (`symbolic::kept_rows_solve`): the rows the run
+/// keeps, the coordinates it leaves at rest, how many coordinates the tree has, and a closed
+/// state (positions, rates) at which the elimination's pivots are chosen.
+pub struct LoopRows<'a> {
+    pub rows: &'a [usize],
+    pub at_rest: &'a [usize],
+    pub tree: usize,
+    pub state: (&'a [f64], &'a [f64]),
+}
+
 /// The program's forward dynamics as native code: generated, compiled (or found in the cache)
-/// and loaded.
+/// and loaded. A mechanism with loops needs `loops`.
 pub fn build(
     mechanism: &Mechanism,
     topology: &Topology,
     values: &UnknownValues,
+    loops: Option<LoopRows>,
 ) -> Result<NativeDynamics, Unavailable> {
-    let equations = symbolic::generate(mechanism, topology).map_err(|refused| {
+    let mut equations = symbolic::generate(mechanism, topology).map_err(|refused| {
         let why = refused.first().map_or("", |d| d.message.as_str());
         Unavailable::Unsupported(format!("the equations of motion cannot be written: {why}"))
     })?;
-    supported(&equations)?;
+    if !equations.variables.functions.is_empty() {
+        return Err(Unavailable::Unsupported(
+            "it applies unknown functions".into(),
+        ));
+    }
     let parameters = parameter_values(&equations, values)?;
+    let kept_rows = match loops {
+        Some(loops) if equations.constraint_rows() > 0 => {
+            on_kept_rows(&mut equations, &loops, &parameters)?;
+            Some(loops.rows.to_vec())
+        }
+        _ => None,
+    };
+    supported(&equations)?;
     let source = symbolic::emit::c(&equations, "simulate --compiled");
     let path = library_for(&source)?;
     // SAFETY: loading runs the library's initialisers; it is the C emitter's code (math.h
@@ -131,22 +160,67 @@ pub fn build(
         forward,
         parameters,
         dimension: equations.dimension(),
+        kept_rows,
         path,
     })
 }
 
-/// Whether the emitted forward dynamics is the whole right-hand side: a tree, written by the
-/// articulated-body recursion, with no unknown functions to call back.
+/// `equations` with their accelerations written on the kept rows of `loops`
+/// (`kept_rows_solve`), and their constraint rows then left out: the accelerations are the
+/// whole forward dynamics.
+fn on_kept_rows(
+    equations: &mut Equations,
+    loops: &LoopRows,
+    parameters: &[f64],
+) -> Result<(), Unavailable> {
+    let variables = &equations.variables;
+    let (positions, rates) = loops.state;
+    if positions.len() != variables.positions.len() || rates.len() != variables.rates.len() {
+        return Err(Unavailable::Unsupported(
+            "its coordinates are not the joints' own".into(),
+        ));
+    }
+    let mut symbols = vec![f64::NAN; equations.pool.symbol_count()];
+    let mut put = |id, value| {
+        if let Some(i) = equations.pool.symbol_index(id) {
+            symbols[i] = value;
+        }
+    };
+    put(variables.time, 0.0);
+    for (v, &x) in variables.positions.iter().zip(positions) {
+        put(v.symbol, x);
+    }
+    for (v, &x) in variables.rates.iter().zip(rates) {
+        put(v.symbol, x);
+    }
+    for (v, &x) in variables.parameters.iter().zip(parameters) {
+        put(v.symbol, x);
+    }
+    let kept = KeptRows {
+        rows: loops.rows,
+        at_rest: loops.at_rest,
+        tree: loops.tree,
+        symbols: &symbols,
+    };
+    solve_on_kept_rows(equations, &kept).map_err(|why| {
+        Unavailable::Unsupported(format!("the loops' accelerations cannot be written: {why}"))
+    })?;
+    equations.constraints.clear();
+    equations.constraint_bias.clear();
+    equations.constraint_names.clear();
+    Ok(())
+}
+
+/// Whether the emitted forward dynamics is the whole right-hand side: accelerations written out
+/// (for a tree by the articulated-body recursion, for loops on their kept rows), with no
+/// constraint rows left to solve.
 fn supported(equations: &Equations) -> Result<(), Unavailable> {
     let unsupported = |why: &str| Err(Unavailable::Unsupported(why.into()));
     if equations.constraint_rows() > 0 {
-        return unsupported("the mechanism has loops (the native code serves trees)");
+        return unsupported("the mechanism has loops, and no rows were given to solve them on");
     }
     if equations.accelerations.is_none() {
         return unsupported("its accelerations are not written by the recursion");
-    }
-    if !equations.variables.functions.is_empty() {
-        return unsupported("it applies unknown functions");
     }
     Ok(())
 }

@@ -6,22 +6,19 @@ use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::energy::conservative_forces;
 use crate::elab::mechanism::Mechanism;
-use crate::prepare::native::{build, disagreement, Unavailable};
+use crate::dynamics::loops::Stabilisation;
+use crate::prepare::native::{build, disagreement, LoopRows, Unavailable};
 use crate::prepare::Prepared;
 
 /// Compiles `prepared`'s forward dynamics and keeps it for its runs, once it agrees with the
 /// simulator's evaluation at the initial state (to 1e-9 of the largest acceleration); otherwise
-/// says why the runs go on without it.
+/// says why the runs go on without it. With loops, the initial state is the run's start (the
+/// loops closed, their structure decided), and the code solves on the rows kept there.
 pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unavailable> {
     let model = &prepared.model;
-    if model.has_loops() {
-        return Err(Unavailable::Unsupported(
-            "the mechanism has loops (the native code serves trees)".into(),
-        ));
-    }
     if model.has_contacts() {
         return Err(Unavailable::Unsupported(
-            "the mechanism has contacts (the native code serves trees without constraints)".into(),
+            "the mechanism has contacts (the native code serves trees and loops without other constraints)".into(),
         ));
     }
     if !model.drives.is_empty() || !model.position_drives.is_empty() {
@@ -35,16 +32,15 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
                 .into(),
         ));
     }
-    if model.nq != model.nv || model.positions() != model.nq {
+    if model.nq != model.nv {
         return Err(Unavailable::Unsupported(
             "its state is not its declared coordinates and rates (a free or spherical joint)"
                 .into(),
         ));
     }
-    let native = build(mechanism, &prepared.topology, &model.unknowns)?;
-    if native.dimension != model.nv || prepared.coordinates.len() != model.nq {
+    if model.has_loops() && prepared.settings.stabilisation != Stabilisation::Projection {
         return Err(Unavailable::Unsupported(
-            "its coordinates are not the joints' own".into(),
+            "the loops are kept by other means than the projection after each step, whose accelerations the native code does not compute".into(),
         ));
     }
     let (q, v) = model
@@ -52,12 +48,37 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
         .map_err(|e| Unavailable::Unsupported(format!("the start cannot be evaluated: {e:?}")))?;
     let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
-    let y: Vec<f64> = q.iter().chain(&v).copied().collect();
+    let mut y: Vec<f64> = q.iter().chain(&v).copied().collect();
+    // With loops, the run's start: the loops closed and their structure decided (the rows the
+    // native code keeps).
+    let unserved = |e: String| Unavailable::Unsupported(format!("the start cannot be evaluated: {e}"));
+    system.start_loops(&mut y).map_err(|e| unserved(e.to_string()))?;
+    let structure = &system.scratch.loops.structure;
+    if model.has_loops() && structure.massless > 0 {
+        return Err(Unavailable::Unsupported(
+            "its loops allow motions without mass, which the native code does not leave at rest"
+                .into(),
+        ));
+    }
+    let (positions, rates) = y.split_at(model.positions());
+    let loops = model.has_loops().then(|| LoopRows {
+        rows: &structure.choice.rows,
+        at_rest: &structure.idle,
+        tree: model.nv,
+        state: (positions, rates),
+    });
+    let native = build(mechanism, &prepared.topology, &model.unknowns, loops)?;
+    if native.dimension != model.velocities() || prepared.coordinates.len() != model.positions() {
+        return Err(Unavailable::Unsupported(
+            "its coordinates are not the joints' own".into(),
+        ));
+    }
     let mut dydt = vec![0.0; y.len()];
     system
         .derivative(0.0, &y, &mut dydt)
-        .map_err(|e| Unavailable::Unsupported(format!("the start cannot be evaluated: {e}")))?;
-    let largest = disagreement(&native, 0.0, &q, &v, &dydt[model.nq..]);
+        .map_err(|e| unserved(e.to_string()))?;
+    let (positions, rates) = y.split_at(model.positions());
+    let largest = disagreement(&native, 0.0, positions, rates, &dydt[model.positions()..]);
     if largest > AGREEMENT {
         return Err(Unavailable::Disagrees { largest });
     }

@@ -384,12 +384,12 @@ impl<'m> MechanicalSystem<'m> {
         let Some(native) = self.native else {
             return false;
         };
-        if model.has_loops() || model.has_contacts() || !self.holds_nothing() {
+        if model.has_contacts() || !self.holds_nothing() || !self.native_keeps_the_rows(native) {
             return false;
         }
-        debug_assert!(model.nq == model.nv && model.positions() == model.nq);
-        let (q, v) = y.split_at(model.nq);
-        let (dq, dv) = dydt.split_at_mut(model.nq);
+        debug_assert!(model.nq == model.nv && model.positions() == model.velocities());
+        let (q, v) = y.split_at(model.positions());
+        let (dq, dv) = dydt.split_at_mut(model.positions());
         if !native.accelerations(t, q, v, dv) {
             return false;
         }
@@ -398,6 +398,22 @@ impl<'m> MechanicalSystem<'m> {
         (scratch.friction_power, scratch.drive_power, scratch.power) = (0.0, 0.0, 0.0);
         scratch.response_here = false;
         true
+    }
+
+    /// Whether `native` solves the loops on the rows this run keeps now (`kept_rows_solve`):
+    /// the rows chosen at the start, not chosen again nor set aside for a passage since, and
+    /// the loops kept by projection (Baumgarte's feedback changes the accelerations). Always
+    /// for a tree.
+    fn native_keeps_the_rows(&self, native: &NativeDynamics) -> bool {
+        if !self.model.has_loops() {
+            return true;
+        }
+        let loops = &self.scratch.loops;
+        loops.stabilisation == Stabilisation::Projection
+            && native
+                .kept_rows
+                .as_ref()
+                .is_some_and(|rows| *rows == loops.structure.choice.rows)
     }
 
     fn derivative_at(
@@ -418,9 +434,12 @@ impl<'m> MechanicalSystem<'m> {
         }
         // Where the native code refuses (a singular mass matrix, a value not finite), the
         // evaluation below says why.
-        let native = self
-            .native
-            .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
+        // With loops, the native code is taken in `native_derivative` or not at all (the
+        // loops' block below would solve them again).
+        let native = !model.has_loops()
+            && self
+                .native
+                .is_some_and(|native| native.accelerations(t, q, v, accelerations.as_mut_slice()));
         if native || model.has_loops() {
             // The accelerations are written, or are the loops' block's (`solve_stack`).
         } else if self.drives_by_subtrees() {

@@ -17,6 +17,7 @@ mod forward;
 mod generator;
 mod inertia;
 mod kane;
+pub mod kept_rows_solve;
 pub mod kinematics;
 mod loads;
 pub mod lower;

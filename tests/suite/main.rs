@@ -61,6 +61,7 @@ mod model_laws;
 mod momentum_basis;
 mod mutants;
 mod native;
+mod native_loops;
 mod nonlinear_delta;
 mod outputs;
 mod pinocchio_fixtures;

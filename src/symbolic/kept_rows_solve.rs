@@ -1,0 +1,283 @@
+//! The constrained accelerations of a mechanism with loops as expressions, for native code
+//! (`simulate --compiled`): the KKT system on the rows the run keeps,
+//!
+//! ```text
+//!     [ M   −Gₛᵀ ] [ q' ]   [ S + F ]
+//!     [ Gₛ    0  ] [ λ  ] = [ −γₛ   ]      (γₛ = Δ̇ₛ q, the kept rows' bias),
+//! ```
+//!
+//! eliminated once, when the code is written, in an order fixed then: the elimination's
+//! structure (which entries are zero, which pivots, which fill) is known before any state is,
+//! so the code does only the arithmetic of the non-zero entries (Duff, Erisman and Reid,
+//! *Direct Methods for Sparse Matrices*, 2nd ed., 2017, ch. 10: the analyse phase before the
+//! factorise phase). The pivots are taken so that none of them is a geometric entry that
+//! vanishes along a regular motion:
+//!
+//! 1. the tree's coordinates on M's diagonal (M is positive definite on them, and so is every
+//!    Schur complement of it: no pivot vanishes), the one with fewest non-zero entries first
+//!    (minimum degree, George and Liu, 1981, ch. 5);
+//! 2. each complementary coordinate (no inertia: its row of M is zero) with a kept row it
+//!    appears in, the one of largest entry at the start: a pair of pivots on that entry (for a
+//!    planar loop of revolutes the closing joint's axis, a constant);
+//! 3. the remaining multipliers on the diagonal of Gₛ M⁻¹ Gₛᵀ as reduced by step 2 (positive
+//!    definite where the kept rows are independent), again by minimum degree.
+//!
+//! This is the range-space method (docs/loops.md) written out over the non-zero entries. The
+//! coordinates the run leaves at rest (a complementary link's own coordinates that no kept row
+//! touches) are taken out with their equations. Each pivot is checked in the code against its
+//! value at the start: where one falls below 1e-3 of it (near a singular configuration) the
+//! accelerations are not-a-number, and the caller evaluates that state otherwise.
+
+use super::expr::{ExprId, Pool, Tape};
+use super::Equations;
+
+/// What the elimination needs besides the equations.
+pub struct KeptRows<'a> {
+    /// The constraint rows kept (indices among the six per loop), in the run's order.
+    pub rows: &'a [usize],
+    /// The coordinates left at rest (their accelerations are 0).
+    pub at_rest: &'a [usize],
+    /// How many coordinates come before the complementary links' own.
+    pub tree: usize,
+    /// A value for every symbol of the pool (a closed state at which to choose the pivots).
+    pub symbols: &'a [f64],
+}
+
+/// Below this fraction of its value at the start, a pivot makes the evaluation fail.
+const PIVOT_FLOOR: f64 = 1e-3;
+
+#[derive(Clone, Copy)]
+struct Entry {
+    expr: ExprId,
+    value: f64,
+}
+
+/// Sets `equations.accelerations` to the solution of the KKT system on `kept`'s rows, or says
+/// why it cannot be written.
+pub fn solve_on_kept_rows(equations: &mut Equations, kept: &KeptRows) -> Result<(), String> {
+    let n = equations.dimension();
+    let values = Tape::new(&equations.pool, &equations.roots()).eval(kept.symbols);
+    let entry = |expr: ExprId, value: f64| Entry { expr, value };
+    let mut offset = 0;
+    let mut take = |count: usize| {
+        let range = offset..offset + count;
+        offset += count;
+        range
+    };
+    let (mass, second, forces) = (take(n * n), take(n), take(n));
+    let rows_total = equations.constraint_rows();
+    let (delta, bias) = (take(rows_total * n), take(rows_total));
+    let pool = &mut equations.pool;
+    // Unknowns: the coordinates not at rest, then the kept rows' multipliers; equations in the
+    // same order (a coordinate's, then a kept row's).
+    let moving: Vec<usize> = (0..n).filter(|c| !kept.at_rest.contains(c)).collect();
+    let (k, m) = (moving.len(), kept.rows.len());
+    let size = k + m;
+    let mut system = Elimination {
+        a: vec![vec![None; size]; size],
+        b: Vec::with_capacity(size),
+        row_done: vec![false; size],
+        column_done: vec![false; size],
+        pivots: Vec::new(),
+    };
+    let set = |pool: &Pool, system: &mut Elimination, i: usize, j: usize, e: Entry| {
+        if !pool.is_zero(e.expr) {
+            system.a[i][j] = Some(e);
+        }
+    };
+    for (i, &ci) in moving.iter().enumerate() {
+        for (j, &cj) in moving.iter().enumerate() {
+            let index = ci.min(cj) * n + ci.max(cj);
+            let e = entry(equations.mass[index], values[mass.start + index]);
+            set(pool, &mut system, i, j, e);
+        }
+        let f = pool.add(equations.second_member[ci], equations.forces[ci]);
+        let value = values[second.start + ci] + values[forces.start + ci];
+        system.b.push(entry(f, value));
+        for (r, &row) in kept.rows.iter().enumerate() {
+            let g = equations.constraints[row * n + ci];
+            let e = entry(pool.neg(g), -values[delta.start + row * n + ci]);
+            set(pool, &mut system, i, k + r, e);
+            let e = entry(g, values[delta.start + row * n + ci]);
+            set(pool, &mut system, k + r, i, e);
+        }
+    }
+    for &row in kept.rows {
+        let value = -values[bias.start + row];
+        system
+            .b
+            .push(entry(pool.neg(equations.constraint_bias[row]), value));
+    }
+    // The coordinates at rest must be touched by no kept row and carry no inertia.
+    for &c in kept.at_rest {
+        let touched = (kept.rows.iter()).any(|&r| !pool.is_zero(equations.constraints[r * n + c]));
+        let massive = (0..n).any(|j| !pool.is_zero(equations.mass[c.min(j) * n + c.max(j)]));
+        if touched || massive {
+            return Err(format!(
+                "the coordinate {} left at rest moves mass or a kept row",
+                equations.variables.positions[c].name
+            ));
+        }
+    }
+    // 1. The tree's coordinates, on M's diagonal.
+    let tree: Vec<usize> = (0..k).filter(|&i| moving[i] < kept.tree).collect();
+    while let Some(i) = system.fewest_entries(tree.iter().map(|&i| (i, i))) {
+        if system.a[i][i].is_none_or(|p| p.value <= 0.0) {
+            return Err(format!(
+                "the mass matrix is not positive definite on the tree (at {})",
+                equations.variables.positions[moving[i]].name
+            ));
+        }
+        system.eliminate(pool, i, i);
+    }
+    // 2. Each complementary coordinate with its largest kept row.
+    for i in (0..k).filter(|&i| moving[i] >= kept.tree) {
+        let largest = (k..size)
+            .filter(|&r| !system.row_done[r])
+            .filter_map(|r| system.a[r][i].map(|e| (r, e.value.abs())))
+            .max_by(|x, y| x.1.total_cmp(&y.1));
+        let Some((r, _)) = largest.filter(|&(_, v)| v > 0.0) else {
+            return Err(format!(
+                "no kept row determines the coordinate {}",
+                equations.variables.positions[moving[i]].name
+            ));
+        };
+        system.eliminate(pool, i, r);
+        system.eliminate(pool, r, i);
+    }
+    // 3. The remaining multipliers.
+    let rest: Vec<usize> = (k..size).filter(|&r| !system.row_done[r]).collect();
+    while let Some(r) = system.fewest_entries(rest.iter().map(|&r| (r, r))) {
+        if system.a[r][r].is_none_or(|p| p.value <= 0.0) {
+            return Err("the kept rows are not independent at the start".into());
+        }
+        system.eliminate(pool, r, r);
+    }
+    let solution = system.substitute(pool);
+    let zero = pool.constant(0.0);
+    let mut accelerations = vec![zero; n];
+    for (i, &c) in moving.iter().enumerate() {
+        accelerations[c] = solution[i];
+    }
+    // The pivots' check, on the first acceleration: not-a-number below the floor.
+    let not_a_number = pool.constant(f64::NAN);
+    let mut checked = accelerations[moving.first().copied().unwrap_or(0)];
+    for &(_, _, pivot) in system.pivots.iter().rev() {
+        let sign = pool.constant(pivot.value.signum());
+        let floor = pool.constant(PIVOT_FLOOR * pivot.value.abs());
+        let signed = pool.mul(pivot.expr, sign);
+        let test = pool.sub(signed, floor);
+        checked = pool.select(test, checked, not_a_number);
+    }
+    if let Some(&first) = moving.first() {
+        accelerations[first] = checked;
+    }
+    equations.accelerations = Some(accelerations);
+    Ok(())
+}
+
+/// A linear system eliminated in an order chosen as it goes, on expressions and on their values
+/// at the start alike.
+struct Elimination {
+    a: Vec<Vec<Option<Entry>>>,
+    b: Vec<Entry>,
+    row_done: Vec<bool>,
+    column_done: Vec<bool>,
+    /// (row, column, pivot), in the order taken.
+    pivots: Vec<(usize, usize, Entry)>,
+}
+
+impl Elimination {
+    /// Of the candidate (row, column) pivots not yet taken, the one whose column has the fewest
+    /// non-zero entries left.
+    fn fewest_entries(&self, candidates: impl Iterator<Item = (usize, usize)>) -> Option<usize> {
+        candidates
+            .filter(|&(r, c)| !self.row_done[r] && !self.column_done[c])
+            .min_by_key(|&(_, c)| {
+                (0..self.a.len())
+                    .filter(|&r| !self.row_done[r] && self.a[r][c].is_some())
+                    .count()
+            })
+            .map(|(r, _)| r)
+    }
+
+    /// Eliminates column `column` from every row not yet taken, by row `row`.
+    fn eliminate(&mut self, pool: &mut Pool, row: usize, column: usize) {
+        let pivot = self.a[row][column].expect("a pivot is a non-zero entry");
+        let one = pool.constant(1.0);
+        let reciprocal = Entry {
+            expr: pool.div(one, pivot.expr),
+            value: 1.0 / pivot.value,
+        };
+        self.row_done[row] = true;
+        self.column_done[column] = true;
+        self.pivots.push((row, column, pivot));
+        let pivot_row: Vec<(usize, Entry)> = (0..self.a.len())
+            .filter(|&j| !self.column_done[j])
+            .filter_map(|j| self.a[row][j].map(|e| (j, e)))
+            .collect();
+        let pivot_b = self.b[row];
+        for i in 0..self.a.len() {
+            if self.row_done[i] {
+                continue;
+            }
+            let Some(below) = self.a[i][column].take() else {
+                continue;
+            };
+            let factor = product(pool, below, reciprocal);
+            for &(j, e) in &pivot_row {
+                let update = product(pool, factor, e);
+                self.a[i][j] = match self.a[i][j] {
+                    None => Some(negated(pool, update)),
+                    Some(old) => {
+                        let new = Entry {
+                            expr: pool.sub(old.expr, update.expr),
+                            value: old.value - update.value,
+                        };
+                        (!pool.is_zero(new.expr)).then_some(new)
+                    }
+                };
+            }
+            let update = product(pool, factor, pivot_b);
+            let old = self.b[i];
+            self.b[i] = Entry {
+                expr: pool.sub(old.expr, update.expr),
+                value: old.value - update.value,
+            };
+        }
+    }
+
+    /// The unknowns by back substitution, in the pivots' reverse order: each pivot's row holds,
+    /// besides the pivot, only the columns eliminated after it.
+    fn substitute(&self, pool: &mut Pool) -> Vec<ExprId> {
+        let zero = pool.constant(0.0);
+        let one = pool.constant(1.0);
+        let mut x = vec![zero; self.a.len()];
+        for &(row, column, pivot) in self.pivots.iter().rev() {
+            let mut sum = self.b[row].expr;
+            for (j, e) in self.a[row].iter().enumerate() {
+                if let Some(e) = e.filter(|_| j != column) {
+                    let term = pool.mul(e.expr, x[j]);
+                    sum = pool.sub(sum, term);
+                }
+            }
+            let reciprocal = pool.div(one, pivot.expr);
+            x[column] = pool.mul(sum, reciprocal);
+        }
+        x
+    }
+}
+
+fn product(pool: &mut Pool, a: Entry, b: Entry) -> Entry {
+    Entry {
+        expr: pool.mul(a.expr, b.expr),
+        value: a.value * b.value,
+    }
+}
+
+fn negated(pool: &mut Pool, a: Entry) -> Entry {
+    Entry {
+        expr: pool.neg(a.expr),
+        value: -a.value,
+    }
+}

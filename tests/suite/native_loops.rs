@@ -1,0 +1,168 @@
+//! `simulate --compiled` on closed loops: the accelerations solved on the run's kept rows in the
+//! generated code (`symbolic::kept_rows_solve`), the projection after each step the simulator's
+//! own. The runs must give the interpreted motion and keep the loops as closed; a native code
+//! that is not the mechanism's is refused by the check at the start.
+
+use crate::common::{c_compiler, lsdc_with};
+use std::path::{Path, PathBuf};
+
+use lsdc::driver::compile_text;
+use lsdc::load::LoadOptions;
+use lsdc::prepare::native::Unavailable;
+use lsdc::prepare::{prepare, Settings};
+use lsdc::simulate::compiled;
+
+fn fresh_cache(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lsdc-native-loops-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// `lsdc simulate FILE ARGS --format json --report json` with the cache and the compiler:
+/// samples (JSON), report (JSON, at the end of standard error) and standard error.
+fn simulate(
+    file: &str,
+    args: &[&str],
+    cache: &Path,
+    compiler: &str,
+) -> (serde_json::Value, serde_json::Value, String) {
+    let arguments: Vec<&str> = ["simulate", file, "--format", "json", "--report", "json"]
+        .into_iter()
+        .chain(args.iter().copied())
+        .collect();
+    let environment = [
+        ("LSDC_CACHE_DIR", cache.as_os_str()),
+        ("CC", std::ffi::OsStr::new(compiler)),
+    ];
+    let (code, stdout, stderr) = lsdc_with(&arguments, &environment);
+    assert_eq!(code, 0, "{file}: {stderr}");
+    let samples = serde_json::from_str(&stdout).expect("JSON samples");
+    // The report is the last object of standard error, after any warning.
+    let start = match stderr.starts_with('{') {
+        true => 0,
+        false => stderr.rfind("\n{").expect("a report") + 1,
+    };
+    let report = serde_json::from_str(&stderr[start..]).expect("JSON report");
+    (samples, report, stderr)
+}
+
+/// Every number of the samples, in order.
+fn numbers(samples: &serde_json::Value) -> Vec<f64> {
+    fn walk(value: &serde_json::Value, out: &mut Vec<f64>) {
+        match value {
+            serde_json::Value::Number(n) => out.extend(n.as_f64()),
+            serde_json::Value::Array(items) => items.iter().for_each(|v| walk(v, out)),
+            serde_json::Value::Object(map) => map.values().for_each(|v| walk(v, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    walk(&samples["samples"], &mut out);
+    out
+}
+
+/// The largest difference of two runs' samples, relative to 1 + |value|.
+fn difference(a: &serde_json::Value, b: &serde_json::Value) -> f64 {
+    let (a, b) = (numbers(a), numbers(b));
+    assert_eq!(a.len(), b.len(), "as many values");
+    assert!(a.len() > 100, "{} values", a.len());
+    (a.iter().zip(&b))
+        .map(|(x, y)| (x - y).abs() / (1.0 + y.abs()))
+        .fold(0.0, f64::max)
+}
+
+/// Runs `file` for 1 s interpreted and with `--compiled` (at the program's tolerance): the
+/// native code must serve, the loops stay as closed, and the samples agree to `agreement`, or,
+/// with `None`, as well as the interpreted run agrees with itself at a tolerance of 1e-13 (the
+/// runs pass singular configurations, where the simulator's step control reads the loops'
+/// conditioning from its own evaluations, so the two runs take other steps).
+fn agrees_with_the_interpreted_run(file: &str, name: &str, agreement: Option<f64>) {
+    let Some(compiler) = c_compiler() else {
+        crate::common::skip("no C compiler found (CC, cc, gcc, clang), --compiled is not checked");
+        return;
+    };
+    let cache = fresh_cache(name);
+    let args = ["--duration", "1", "--every", "0.02"];
+    let (interpreted, interpreted_report, _) = simulate(file, &args, &cache, &compiler);
+    let compiled_args = [&args[..], &["--compiled"]].concat();
+    let (compiled, report, stderr) = simulate(file, &compiled_args, &cache, &compiler);
+    assert!(
+        !stderr.contains("W0904"),
+        "the native code serves: {stderr}"
+    );
+    let apart = difference(&compiled, &interpreted);
+    let bound = agreement.unwrap_or_else(|| {
+        let tight = [&args[..], &["--tolerance", "1e-13"]].concat();
+        let (reference, _, _) = simulate(file, &tight, &cache, &compiler);
+        let own = difference(&interpreted, &reference);
+        let native = difference(&compiled, &reference);
+        assert!(
+            native <= 2.0 * own,
+            "{file}: the native run is {native:e} from the reference, the interpreted {own:e}"
+        );
+        own
+    });
+    assert!(
+        apart <= bound,
+        "{file}: compiled and interpreted samples differ by {apart:e} (bound {bound:e})"
+    );
+    // The projection still closes every state the run goes on from, as interpreted.
+    for key in ["position_residual", "velocity_residual"] {
+        let native = report["constraints"][key].as_f64().expect(key);
+        let own = interpreted_report["constraints"][key].as_f64().expect(key);
+        assert!(
+            native <= 1e-12_f64.max(10.0 * own),
+            "{file}: {key} {native:e} compiled, {own:e} interpreted"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
+#[test]
+fn a_four_bar_runs_natively_as_interpreted() {
+    // No singular configuration on the way: the same equations, to round-off.
+    agrees_with_the_interpreted_run("examples/four_bar.lsd", "four-bar", Some(1e-10));
+}
+
+#[test]
+fn a_row_of_two_four_bars_runs_natively_as_interpreted() {
+    agrees_with_the_interpreted_run("examples/hard/four_bar_row_2.lsd", "row-2", None);
+}
+
+/// The four-bar's program, with the weight of its coupler `factor` times its own.
+fn four_bar(factor: &str) -> lsdc::elab::mechanism::Mechanism {
+    let text = std::fs::read_to_string("examples/four_bar.lsd").expect("example");
+    let weight = format!("apply weight_in(bar2, [0, -9.81 * {factor}, 0])");
+    let text = text.replacen("apply weight_in(bar2, down)", &weight, 1);
+    let options = LoadOptions {
+        library_dirs: Vec::new(),
+        use_environment: false,
+        scene: None,
+    };
+    let directory = Some(Path::new("examples"));
+    let compilation = compile_text("four_bar.lsd", &text, directory, &options);
+    compilation.mechanism.expect("compiles")
+}
+
+#[test]
+fn native_loops_that_are_not_the_mechanisms_are_refused() {
+    let Some(compiler) = c_compiler() else {
+        crate::common::skip("no C compiler found (CC, cc, gcc, clang), --compiled is not checked");
+        return;
+    };
+    // The library's cache and compiler are the process's (`native::build` reads them from the
+    // environment); the cache is left in place, as another test's run may share the variable.
+    let cache = std::env::temp_dir().join("lsdc-native-loops-refused");
+    std::env::set_var("LSDC_CACHE_DIR", &cache);
+    std::env::set_var("CC", &compiler);
+    let (own, other) = (four_bar("1"), four_bar("1.5"));
+    let mut prepared = prepare(&own, &[], &Settings::default()).expect("prepares");
+    compiled::attach(&mut prepared, &own).expect("its own native code serves");
+    // The native code of a four-bar whose coupler is heavier: the check at the start sees it.
+    let mut prepared = prepare(&own, &[], &Settings::default()).expect("prepares");
+    match compiled::attach(&mut prepared, &other) {
+        Err(Unavailable::Disagrees { largest }) => assert!(largest > 1e-6, "{largest:e}"),
+        other => panic!("refused for its disagreement, not {other:?}"),
+    }
+    assert!(prepared.native.is_none());
+}
