@@ -151,10 +151,18 @@ fn native_loops_that_are_not_the_mechanisms_are_refused() {
         return;
     };
     // The library's cache and compiler are the process's (`native::build` reads them from the
-    // environment); the cache is left in place, as another test's run may share the variable.
-    let cache = std::env::temp_dir().join("lsdc-native-loops-refused");
-    std::env::set_var("LSDC_CACHE_DIR", &cache);
-    std::env::set_var("CC", &compiler);
+    // environment), and setting the environment beside other tests' threads is a race: the
+    // work runs in a process of its own, started with them set.
+    let cache = std::env::temp_dir().join(format!("lsdc-native-refused-{}", std::process::id()));
+    let name = "native_loops::native_loops_that_are_not_the_mechanisms_are_refused";
+    let environment = [
+        ("LSDC_CACHE_DIR", cache.as_os_str()),
+        ("CC", std::ffi::OsStr::new(&compiler)),
+    ];
+    if !crate::common::alone(name, &environment) {
+        let _ = std::fs::remove_dir_all(&cache);
+        return;
+    }
     let (own, other) = (four_bar("1"), four_bar("1.5"));
     let mut prepared = prepare(&own, &[], &Settings::default()).expect("prepares");
     compiled::attach(&mut prepared, &own).expect("its own native code serves");

@@ -308,24 +308,12 @@ mod arena {
 
     /// The point of the arena: once a tree is dropped, wherever, its chunks go back to the
     /// system. The count of mapped bytes is the whole process's, and other tests parse and drop
-    /// trees beside this one, so the measure runs in a test process of its own (this test,
-    /// started again with `LSDC_ARENA_ALONE` set), where every byte is this tree's.
+    /// trees beside this one, so the measure runs in a process of its own, where every byte is
+    /// this tree's.
     #[test]
     fn the_chunks_of_a_dropped_tree_are_unmapped() {
-        if std::env::var_os("LSDC_ARENA_ALONE").is_none() {
-            let exe = std::env::current_exe().expect("the test binary");
-            let name = "unit_syntax::arena::the_chunks_of_a_dropped_tree_are_unmapped";
-            let out = std::process::Command::new(exe)
-                .args(["--exact", name, "--test-threads=1", "--nocapture"])
-                .env("LSDC_ARENA_ALONE", "1")
-                .output()
-                .expect("the test binary starts");
-            let printed = String::from_utf8_lossy(&out.stdout);
-            assert!(
-                out.status.success() && printed.contains("1 passed"),
-                "alone, the measure failed:\n{printed}\n{}",
-                String::from_utf8_lossy(&out.stderr)
-            );
+        let name = "unit_syntax::arena::the_chunks_of_a_dropped_tree_are_unmapped";
+        if !crate::common::alone(name, &[]) {
             return;
         }
         let text = "let b = body mass = 1.5, iframe = [0.25,0,0] ++ 1 end;\n".repeat(40_000);

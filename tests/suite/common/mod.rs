@@ -38,6 +38,33 @@ pub fn example_paths() -> Vec<std::path::PathBuf> {
     found
 }
 
+/// Whether this process is the one where test `name` runs alone. The first time (in the suite's
+/// process, beside other tests) it starts the suite's binary again to run that test only, with
+/// `environment` set, waits for it to pass, and answers false: the caller returns. In that
+/// second process it answers true: the caller does its work there. For tests that measure or set
+/// what is the whole process's (its mapped memory, its environment), which tests running beside
+/// them would disturb or be disturbed by.
+pub fn alone(name: &str, environment: &[(&str, &std::ffi::OsStr)]) -> bool {
+    const MARK: &str = "LSDC_TEST_ALONE";
+    if std::env::var_os(MARK).is_some_and(|running| running == name) {
+        return true;
+    }
+    let exe = std::env::current_exe().expect("the suite's binary");
+    let out = std::process::Command::new(exe)
+        .args(["--exact", name, "--test-threads=1", "--nocapture"])
+        .env(MARK, name)
+        .envs(environment.iter().copied())
+        .output()
+        .expect("the suite's binary starts");
+    let printed = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && printed.contains("1 passed"),
+        "{name}, alone, failed:\n{printed}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    false
+}
+
 /// A test whose tool is missing says so and passes (a developer's machine), or fails where the
 /// environment variable `CI` is set: CI installs every tool (`.ci/run`), so a skip there is a
 /// fault, never a silent pass.
