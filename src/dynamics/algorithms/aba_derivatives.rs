@@ -55,7 +55,9 @@ pub struct AbaDerivatives {
     pub dacceleration_dq: DMatrix<f64>,
     pub dacceleration_dv: DMatrix<f64>,
     pub mass_inverse: DMatrix<f64>,
-    pub inverse: RneaDerivatives,
+    /// The inverse dynamics' derivatives at q̈, scratch: without geared rotors they are left
+    /// by rows and solved in place (`RneaDerivatives::forward_dynamics`).
+    inverse: RneaDerivatives,
     /// The mass matrix at q (zero where CRBA writes nothing, as it needs) and its factor.
     mass: DMatrix<f64>,
     factor: MassFactor,
@@ -98,6 +100,16 @@ impl AbaDerivatives {
             {
                 return Err(ForwardDerivativeError::SingularMass);
             }
+            // ∂τ/∂q and ∂τ/∂v by rows, solved where they are.
+            self.factor.inverse_into(&mut self.mass_inverse);
+            (self.factor).solve_rows_negated_into(
+                inverse.dtau_dq.as_mut_slice(),
+                &mut self.dacceleration_dq,
+            );
+            (self.factor).solve_rows_negated_into(
+                inverse.dtau_dv.as_mut_slice(),
+                &mut self.dacceleration_dv,
+            );
         } else {
             // One evaluation of the joints' motions serves ABA, CRBA and the derivatives.
             aba_into(model, data, q, v, tau, external, &mut self.acceleration)
@@ -108,10 +120,10 @@ impl AbaDerivatives {
             }
             let state = (v, self.acceleration.as_slice());
             inverse.after_kinematics(model, data, state, external, base_acceleration(model));
+            self.factor.inverse_into(&mut self.mass_inverse);
+            (self.factor).solve_negated(&inverse.dtau_dq, &mut self.dacceleration_dq);
+            (self.factor).solve_negated(&inverse.dtau_dv, &mut self.dacceleration_dv);
         }
-        self.factor.inverse_into(&mut self.mass_inverse);
-        (self.factor).solve_negated(&inverse.dtau_dq, &mut self.dacceleration_dq);
-        (self.factor).solve_negated(&inverse.dtau_dv, &mut self.dacceleration_dv);
         Ok(())
     }
 }

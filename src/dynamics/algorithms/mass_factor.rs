@@ -155,8 +155,11 @@ impl MassFactor {
         }
     }
 
-    /// M⁻¹ into `inverse` (nv × nv): the solve of the identity (M⁻¹ is symmetric: its rows
-    /// are its columns).
+    /// M⁻¹ into `inverse` (nv × nv): the solve of the identity. Its phase from the leaves
+    /// leaves row i nonzero on i's descendants only (Lᵀ's inverse has the tree's pattern), a
+    /// contiguous span; M⁻¹ is symmetric, so the phase from the roots forms each row from its
+    /// diagonal on (row i's entries right of i need only its ancestors' entries right of
+    /// themselves) and the rest is mirrored.
     pub fn inverse_into(&self, inverse: &mut DMatrix<f64>) {
         let nv = self.inverse_diagonal.len();
         let entries = inverse.as_mut_slice();
@@ -164,7 +167,12 @@ impl MassFactor {
         for c in 0..nv {
             entries[c + c * nv] = 1.0;
         }
-        self.solve_rows(entries);
+        self.solve_rows(entries, Pattern::Identity);
+        for i in 0..nv {
+            for c in i + 1..self.tree_end(i) {
+                entries[c * nv + i] = entries[i * nv + c];
+            }
+        }
     }
 
     /// `into` ← −M⁻¹ `from` (nv × nv each) for `from` of M's pattern (zero between velocities
@@ -174,28 +182,56 @@ impl MassFactor {
         let mut rows = std::mem::take(&mut self.rows);
         for (c, column) in from.as_slice().chunks_exact(nv.max(1)).enumerate() {
             for (r, value) in column.iter().enumerate() {
-                rows[c + r * nv] = -value;
+                rows[c + r * nv] = *value;
             }
         }
-        self.solve_rows(&mut rows);
-        for (c, column) in into.as_mut_slice().chunks_exact_mut(nv.max(1)).enumerate() {
-            for (r, value) in column.iter_mut().enumerate() {
-                *value = rows[c + r * nv];
-            }
-        }
+        self.solve_rows_negated_into(&mut rows, into);
         self.rows = rows;
+    }
+
+    /// `into` ← −M⁻¹ X for X (nv × nv) given by rows (row r at r nv) with the tree's pattern
+    /// (X_rc zero unless r and c are on one branch, as ∂τ/∂q and ∂τ/∂v are), solved in place
+    /// in `rows`, then copied into `into` by columns over the trees' blocks (the entries
+    /// between separate trees stay as they are: zero).
+    pub fn solve_rows_negated_into(&self, rows: &mut [f64], into: &mut DMatrix<f64>) {
+        let nv = self.inverse_diagonal.len();
+        self.solve_rows(rows, Pattern::Branches);
+        let out = into.as_mut_slice();
+        let mut root = 0;
+        while root < nv {
+            let end = self.subtree_end[root];
+            for c in root..end {
+                let column = &mut out[c * nv..][root..end];
+                for (r, value) in (root..end).zip(column) {
+                    *value = -rows[r * nv + c];
+                }
+            }
+            root = end;
+        }
+    }
+
+    /// One past the last velocity of i's tree.
+    fn tree_end(&self, i: usize) -> usize {
+        self.subtree_end[self.root[i]]
     }
 
     /// X ← M⁻¹ X for X (nv × nv) given by rows (row r at r nv), zero outside the blocks of the
     /// separate trees (a tree's velocities by the same tree's): each step of Table 6.4 done on
-    /// whole rows, over the columns of the row's tree, contiguous. The columns are independent,
-    /// so the processor overlaps them, where a column's own solve is one chain of dependent
-    /// products.
-    fn solve_rows(&self, x: &mut [f64]) {
+    /// whole rows, over the columns where the row can be nonzero, contiguous. The columns are
+    /// independent, so the processor overlaps them, where a column's own solve is one chain of
+    /// dependent products. In the phase from the leaves row i, when it is carried up, is
+    /// nonzero only on i's ancestors and descendants (by induction: so is X's row, and its
+    /// descendants' rows add their own ancestors' and descendants'), all of them from its
+    /// tree's root to its last descendant; for the identity, on its descendants only.
+    fn solve_rows(&self, x: &mut [f64], pattern: Pattern) {
         let nv = self.inverse_diagonal.len();
-        let columns = |i: usize| {
-            let root = self.root[i];
-            root..self.subtree_end[root]
+        let carried = |i: usize| match pattern {
+            Pattern::Identity => i..self.subtree_end[i],
+            Pattern::Branches => self.root[i]..self.subtree_end[i],
+        };
+        let formed = |i: usize| match pattern {
+            Pattern::Identity => i..self.tree_end(i),
+            Pattern::Branches => self.root[i]..self.tree_end(i),
         };
         // Rows j < i: row j lies before row i, so the two split apart.
         #[inline(always)]
@@ -209,9 +245,10 @@ impl MassFactor {
             (&mut before[j * nv..][span.clone()], &mut after[span])
         }
         for i in (0..nv).rev() {
+            let span = carried(i);
             for at in self.range(i) {
                 let (j, l) = (self.ancestors[at], self.lower[at]);
-                let (row_j, row_i) = pair(x, nv, (j, i), columns(i));
+                let (row_j, row_i) = pair(x, nv, (j, i), span.clone());
                 for (xj, xi) in row_j.iter_mut().zip(row_i.iter()) {
                     *xj -= l * xi;
                 }
@@ -219,16 +256,24 @@ impl MassFactor {
         }
         for i in 0..nv {
             let d = self.inverse_diagonal[i];
-            x[i * nv..][columns(i)].iter_mut().for_each(|e| *e *= d);
+            x[i * nv..][carried(i)].iter_mut().for_each(|e| *e *= d);
         }
         for i in 0..nv {
+            let span = formed(i);
             for at in self.range(i) {
                 let (j, l) = (self.ancestors[at], self.lower[at]);
-                let (row_j, row_i) = pair(x, nv, (j, i), columns(i));
+                let (row_j, row_i) = pair(x, nv, (j, i), span.clone());
                 for (xi, xj) in row_i.iter_mut().zip(row_j.iter()) {
                     *xi -= l * xj;
                 }
             }
         }
     }
+}
+
+/// What a matrix solved by rows holds: the identity, or a matrix of the tree's pattern.
+#[derive(Clone, Copy)]
+enum Pattern {
+    Identity,
+    Branches,
 }

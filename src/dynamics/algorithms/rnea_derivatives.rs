@@ -200,15 +200,17 @@ impl RneaDerivatives {
             self.dtau_dv.as_mut_slice().fill(0.0);
         }
         self.add_rotors(model, v, a);
-        self.pass_back(model, rotors);
+        self.pass_back(model, rotors, Layout::Columns);
     }
 
     /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
     /// q̈ into `accelerations`, the mass matrix into `mass` (between a velocity and its
     /// ancestors only) and its factor into `factor`, then τ, ∂τ/∂q and ∂τ/∂v at q̈ (the module's
     /// documentation). `data` holds the joints' motions at (q, v); the model has no geared
-    /// rotor (their efforts are not linear in the pass out's terms as written here). False if
-    /// the mass matrix is not positive definite.
+    /// rotor (their efforts are not linear in the pass out's terms as written here). ∂τ/∂q and
+    /// ∂τ/∂v are left by rows (entry (r, c) at c + r nv, their transposes as matrices), as the
+    /// solves with M's factor take them (`MassFactor::solve_rows_negated_into`). False if the
+    /// mass matrix is not positive definite.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn forward_dynamics(
         &mut self,
@@ -234,7 +236,11 @@ impl RneaDerivatives {
         factor.solve(accelerations.as_mut_slice());
         self.add_accelerations(model, accelerations.as_slice());
         self.tau.as_mut_slice().fill(0.0);
-        self.pass_back(model, false);
+        // The solves leave them dense over each tree's block: cleared (as slices, a memset) so
+        // that the pass back's entries of the tree's pattern are the only ones.
+        self.dtau_dq.as_mut_slice().fill(0.0);
+        self.dtau_dv.as_mut_slice().fill(0.0);
+        self.pass_back(model, false, Layout::Rows);
         true
     }
 
@@ -407,11 +413,15 @@ impl RneaDerivatives {
     /// Sums the composites from the leaves and fills τ, ∂τ/∂q and ∂τ/∂v (the module's
     /// documentation): per joint, its rows along its own and its ancestors' columns, and its
     /// ancestors' rows along its columns, each entry of the tree's pattern once: written, or
-    /// added to what the rotors gave (`accumulate`).
-    fn pass_back(&mut self, model: &Model, accumulate: bool) {
+    /// added to what the rotors gave (`accumulate`), at its place in `layout`.
+    fn pass_back(&mut self, model: &Model, accumulate: bool, layout: Layout) {
         let nv = model.nv;
+        let (row_stride, column_stride) = match layout {
+            Layout::Columns => (1, nv),
+            Layout::Rows => (nv, 1),
+        };
         let put = |entries: &mut [f64], row: usize, column: usize, value: f64| {
-            let entry = &mut entries[row + column * nv];
+            let entry = &mut entries[row * row_stride + column * column_stride];
             *entry = if accumulate { *entry + value } else { value };
         };
         for &k in model.dynamic_joints.iter().rev() {
@@ -457,6 +467,14 @@ impl RneaDerivatives {
             }
         }
     }
+}
+
+/// Where the pass back puts entry (r, c) of ∂τ/∂q and ∂τ/∂v: at r + c nv (nalgebra's order,
+/// by columns), or at c + r nv (by rows).
+#[derive(Clone, Copy)]
+enum Layout {
+    Columns,
+    Rows,
 }
 
 /// B m = v ×* (I m) + I (m × v) + m ×* h for a body of inertia I, velocity v = [ω; u] and
