@@ -191,22 +191,18 @@ impl MassFactor {
 
     /// `into` ← −M⁻¹ X for X (nv × nv) given by rows (row r at r nv) with the tree's pattern
     /// (X_rc zero unless r and c are on one branch, as ∂τ/∂q and ∂τ/∂v are), solved in place
-    /// in `rows`, then copied into `into` by columns over the trees' blocks (the entries
-    /// between separate trees stay as they are: zero).
+    /// in `rows`, then copied into `into` row by row over the columns from the row's root to
+    /// its tree's last velocity (the entries outside stay as they are: zero). Trees need not be
+    /// numbered one after the other: a tree's velocities may be interleaved with another's.
     pub fn solve_rows_negated_into(&self, rows: &mut [f64], into: &mut DMatrix<f64>) {
         let nv = self.inverse_diagonal.len();
         self.solve_rows(rows, Pattern::Branches);
         let out = into.as_mut_slice();
-        let mut root = 0;
-        while root < nv {
-            let end = self.subtree_end[root];
-            for c in root..end {
-                let column = &mut out[c * nv..][root..end];
-                for (r, value) in (root..end).zip(column) {
-                    *value = -rows[r * nv + c];
-                }
+        for r in 0..nv {
+            let span = self.root[r]..self.tree_end(r);
+            for (c, value) in span.clone().zip(&rows[r * nv..][span]) {
+                out[c * nv + r] = -value;
             }
-            root = end;
         }
     }
 
