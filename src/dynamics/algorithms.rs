@@ -152,7 +152,18 @@ pub fn forward_kinematics(
 /// joints they visit at (q, v), without the world poses (RNEA and ABA leave `data.world` and the
 /// merged bodies as they were).
 fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
-    // The joints' own states first: independent of one another, they overlap in the processor.
+    joint_states(model, data, q, v)?;
+    for &k in &model.dynamic_joints {
+        body_velocity(model, data, k);
+    }
+    Ok(())
+}
+
+/// The joints' own states (transforms, subspaces, velocities across them) at (q, v), without
+/// the bodies' velocities in their own frames (`joint_motions`): the derivatives form theirs in
+/// the fixed frame.
+fn joint_states(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+    // Independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         joint.update(
@@ -160,9 +171,6 @@ fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result
             slice(v, joint.v_offset, joint.nv()),
             &mut data.states[k],
         )?;
-    }
-    for &k in &model.dynamic_joints {
-        body_velocity(model, data, k);
     }
     Ok(())
 }

@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use super::mass_factor::MassFactor;
 use super::rnea_derivatives::{check_supported, DerivativeError, RneaDerivatives};
 use super::{
-    aba_into, base_acceleration, crba_after_kinematics, joint_motions, Data, DynamicsError,
+    aba_into, base_acceleration, crba_after_kinematics, joint_states, Data, DynamicsError,
 };
 use crate::dynamics::model::Model;
 use crate::spatial::Force;
@@ -55,7 +55,9 @@ pub struct AbaDerivatives {
     pub dacceleration_dq: DMatrix<f64>,
     pub dacceleration_dv: DMatrix<f64>,
     pub mass_inverse: DMatrix<f64>,
-    pub inverse: RneaDerivatives,
+    /// The inverse dynamics' derivatives at q̈, scratch: without geared rotors they are left
+    /// by rows and solved in place (`RneaDerivatives::forward_dynamics`).
+    inverse: RneaDerivatives,
     /// The mass matrix at q (zero where CRBA writes nothing, as it needs) and its factor.
     mass: DMatrix<f64>,
     factor: MassFactor,
@@ -89,7 +91,7 @@ impl AbaDerivatives {
         check_supported(model)?;
         let inverse = &mut self.inverse;
         if model.rotors.is_empty() {
-            joint_motions(model, data, q, v)
+            joint_states(model, data, q, v)
                 .map_err(|e| ForwardDerivativeError::Dynamics(DynamicsError::Evaluation(e)))?;
             let (factor, mass) = (&mut self.factor, &mut self.mass);
             let accelerations = &mut self.acceleration;
@@ -98,6 +100,16 @@ impl AbaDerivatives {
             {
                 return Err(ForwardDerivativeError::SingularMass);
             }
+            // ∂τ/∂q and ∂τ/∂v by rows, solved where they are.
+            self.factor.inverse_into(&mut self.mass_inverse);
+            (self.factor).solve_rows_negated_into(
+                inverse.dtau_dq.as_mut_slice(),
+                &mut self.dacceleration_dq,
+            );
+            (self.factor).solve_rows_negated_into(
+                inverse.dtau_dv.as_mut_slice(),
+                &mut self.dacceleration_dv,
+            );
         } else {
             // One evaluation of the joints' motions serves ABA, CRBA and the derivatives.
             aba_into(model, data, q, v, tau, external, &mut self.acceleration)
@@ -108,10 +120,10 @@ impl AbaDerivatives {
             }
             let state = (v, self.acceleration.as_slice());
             inverse.after_kinematics(model, data, state, external, base_acceleration(model));
+            self.factor.inverse_into(&mut self.mass_inverse);
+            (self.factor).solve_negated(&inverse.dtau_dq, &mut self.dacceleration_dq);
+            (self.factor).solve_negated(&inverse.dtau_dv, &mut self.dacceleration_dv);
         }
-        self.factor.inverse_into(&mut self.mass_inverse);
-        (self.factor).solve_negated(&inverse.dtau_dq, &mut self.dacceleration_dq);
-        (self.factor).solve_negated(&inverse.dtau_dv, &mut self.dacceleration_dv);
         Ok(())
     }
 }

@@ -155,8 +155,11 @@ impl MassFactor {
         }
     }
 
-    /// M⁻¹ into `inverse` (nv × nv): the solve of the identity (M⁻¹ is symmetric: its rows
-    /// are its columns).
+    /// M⁻¹ into `inverse` (nv × nv): the solve of the identity. Its phase from the leaves
+    /// leaves row i nonzero on i's descendants only (Lᵀ's inverse has the tree's pattern), a
+    /// contiguous span; M⁻¹ is symmetric, so the phase from the roots forms each row from its
+    /// diagonal on (row i's entries right of i need only its ancestors' entries right of
+    /// themselves) and the rest is mirrored.
     pub fn inverse_into(&self, inverse: &mut DMatrix<f64>) {
         let nv = self.inverse_diagonal.len();
         let entries = inverse.as_mut_slice();
@@ -164,7 +167,12 @@ impl MassFactor {
         for c in 0..nv {
             entries[c + c * nv] = 1.0;
         }
-        self.solve_rows(entries);
+        self.solve_rows(entries, Pattern::Identity);
+        for i in 0..nv {
+            for c in i + 1..self.tree_end(i) {
+                entries[c * nv + i] = entries[i * nv + c];
+            }
+        }
     }
 
     /// `into` ← −M⁻¹ `from` (nv × nv each) for `from` of M's pattern (zero between velocities
@@ -174,61 +182,120 @@ impl MassFactor {
         let mut rows = std::mem::take(&mut self.rows);
         for (c, column) in from.as_slice().chunks_exact(nv.max(1)).enumerate() {
             for (r, value) in column.iter().enumerate() {
-                rows[c + r * nv] = -value;
+                rows[c + r * nv] = *value;
             }
         }
-        self.solve_rows(&mut rows);
-        for (c, column) in into.as_mut_slice().chunks_exact_mut(nv.max(1)).enumerate() {
-            for (r, value) in column.iter_mut().enumerate() {
-                *value = rows[c + r * nv];
-            }
-        }
+        self.solve_rows_negated_into(&mut rows, into);
         self.rows = rows;
+    }
+
+    /// `into` ← −M⁻¹ X for X (nv × nv) given by rows (row r at r nv) with the tree's pattern
+    /// (X_rc zero unless r and c are on one branch, as ∂τ/∂q and ∂τ/∂v are), solved in place
+    /// in `rows`, then copied into `into` row by row over the columns from the row's root to
+    /// its tree's last velocity (the entries outside stay as they are: zero). Trees need not be
+    /// numbered one after the other: a tree's velocities may be interleaved with another's.
+    pub fn solve_rows_negated_into(&self, rows: &mut [f64], into: &mut DMatrix<f64>) {
+        let nv = self.inverse_diagonal.len();
+        self.solve_rows(rows, Pattern::Branches);
+        let out = into.as_mut_slice();
+        for r in 0..nv {
+            let span = self.root[r]..self.tree_end(r);
+            for (c, value) in span.clone().zip(&rows[r * nv..][span]) {
+                out[c * nv + r] = -value;
+            }
+        }
+    }
+
+    /// One past the last velocity of i's tree.
+    fn tree_end(&self, i: usize) -> usize {
+        self.subtree_end[self.root[i]]
     }
 
     /// X ← M⁻¹ X for X (nv × nv) given by rows (row r at r nv), zero outside the blocks of the
     /// separate trees (a tree's velocities by the same tree's): each step of Table 6.4 done on
-    /// whole rows, over the columns of the row's tree, contiguous. The columns are independent,
-    /// so the processor overlaps them, where a column's own solve is one chain of dependent
-    /// products.
-    fn solve_rows(&self, x: &mut [f64]) {
+    /// whole rows, over the columns where the row can be nonzero, contiguous. The columns are
+    /// independent, so the processor overlaps them, where a column's own solve is one chain of
+    /// dependent products. In the phase from the leaves row i, when it is carried up, is
+    /// nonzero only on i's ancestors and descendants (by induction: so is X's row, and its
+    /// descendants' rows add their own ancestors' and descendants'), all of them from its
+    /// tree's root to its last descendant; for the identity, on its descendants only.
+    fn solve_rows(&self, x: &mut [f64], pattern: Pattern) {
         let nv = self.inverse_diagonal.len();
-        let columns = |i: usize| {
-            let root = self.root[i];
-            root..self.subtree_end[root]
+        let carried = |i: usize| match pattern {
+            Pattern::Identity => i..self.subtree_end[i],
+            Pattern::Branches => self.root[i]..self.subtree_end[i],
         };
-        // Rows j < i: row j lies before row i, so the two split apart.
-        #[inline(always)]
-        fn pair(
-            x: &mut [f64],
-            nv: usize,
-            (j, i): (usize, usize),
-            span: std::ops::Range<usize>,
-        ) -> (&mut [f64], &mut [f64]) {
-            let (before, after) = x.split_at_mut(i * nv);
-            (&mut before[j * nv..][span.clone()], &mut after[span])
-        }
+        let formed = |i: usize| match pattern {
+            Pattern::Identity => i..self.tree_end(i),
+            Pattern::Branches => self.root[i]..self.tree_end(i),
+        };
+        // Row i by chunks of `WIDTH` columns against all its ancestors' rows at once (the
+        // ancestors' rows all lie before row i, so the two split apart): a chunk of row i stays
+        // in registers while its ancestors' are updated (from the leaves) or read (from the
+        // roots), where an update of a whole row per ancestor would store row i's or reload
+        // it each time. The order of the operations on every entry is Table 6.4's.
         for i in (0..nv).rev() {
-            for at in self.range(i) {
-                let (j, l) = (self.ancestors[at], self.lower[at]);
-                let (row_j, row_i) = pair(x, nv, (j, i), columns(i));
-                for (xj, xi) in row_j.iter_mut().zip(row_i.iter()) {
-                    *xj -= l * xi;
+            let (span, ancestors) = (carried(i), self.range(i));
+            let (before, after) = x.split_at_mut(i * nv);
+            let row_i = &after[span.clone()];
+            let mut chunks = row_i.chunks_exact(WIDTH);
+            let mut offset = span.start;
+            for chunk in chunks.by_ref() {
+                let chunk: [f64; WIDTH] = chunk.try_into().expect("a chunk");
+                for at in ancestors.clone() {
+                    let (j, l) = (self.ancestors[at], self.lower[at]);
+                    let row_j = &mut before[j * nv + offset..][..WIDTH];
+                    for (xj, xi) in row_j.iter_mut().zip(chunk) {
+                        *xj -= l * xi;
+                    }
+                }
+                offset += WIDTH;
+            }
+            for (c, xi) in chunks.remainder().iter().enumerate() {
+                for at in ancestors.clone() {
+                    let (j, l) = (self.ancestors[at], self.lower[at]);
+                    before[j * nv + offset + c] -= l * xi;
                 }
             }
         }
         for i in 0..nv {
             let d = self.inverse_diagonal[i];
-            x[i * nv..][columns(i)].iter_mut().for_each(|e| *e *= d);
+            x[i * nv..][carried(i)].iter_mut().for_each(|e| *e *= d);
         }
         for i in 0..nv {
-            for at in self.range(i) {
-                let (j, l) = (self.ancestors[at], self.lower[at]);
-                let (row_j, row_i) = pair(x, nv, (j, i), columns(i));
-                for (xi, xj) in row_i.iter_mut().zip(row_j.iter()) {
-                    *xi -= l * xj;
+            let (span, ancestors) = (formed(i), self.range(i));
+            let (before, after) = x.split_at_mut(i * nv);
+            let row_i = &mut after[span.clone()];
+            let mut chunks = row_i.chunks_exact_mut(WIDTH);
+            let mut offset = span.start;
+            for chunk in chunks.by_ref() {
+                let mut sum: [f64; WIDTH] = (&*chunk).try_into().expect("a chunk");
+                for at in ancestors.clone() {
+                    let (j, l) = (self.ancestors[at], self.lower[at]);
+                    let row_j = &before[j * nv + offset..][..WIDTH];
+                    for (xi, xj) in sum.iter_mut().zip(row_j) {
+                        *xi -= l * xj;
+                    }
+                }
+                chunk.copy_from_slice(&sum);
+                offset += WIDTH;
+            }
+            for (c, xi) in chunks.into_remainder().iter_mut().enumerate() {
+                for at in ancestors.clone() {
+                    let (j, l) = (self.ancestors[at], self.lower[at]);
+                    *xi -= l * before[j * nv + offset + c];
                 }
             }
         }
     }
+}
+
+/// The columns `solve_rows` takes together: two of the portable x86-64 build's 2-wide vectors.
+const WIDTH: usize = 4;
+
+/// What a matrix solved by rows holds: the identity, or a matrix of the tree's pattern.
+#[derive(Clone, Copy)]
+enum Pattern {
+    Identity,
+    Branches,
 }

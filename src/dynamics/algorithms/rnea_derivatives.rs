@@ -45,11 +45,11 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::mass_factor::MassFactor;
-use super::{base_acceleration, joint_motions, Data};
+use super::{base_acceleration, joint_states, Data};
 use crate::dynamics::joint::{JointType, Kernel};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
-use crate::spatial::{self, Force, Motion, RigidInertia, Transform};
+use crate::spatial::{self, angular, Force, Motion, RigidInertia, Transform};
 
 /// Why the derivatives cannot be computed for a model.
 #[derive(Clone, Debug, PartialEq)]
@@ -174,12 +174,12 @@ impl RneaDerivatives {
         base: Motion,
     ) -> Result<(), DerivativeError> {
         check_supported(model)?;
-        joint_motions(model, data, q, v)?;
+        joint_states(model, data, q, v)?;
         self.after_kinematics(model, data, (v, a), external, base);
         Ok(())
     }
 
-    /// `compute_with_base` when `data` already holds the joints' motions at (q, v) (after
+    /// `compute_with_base` when `data` already holds the joints' states at (q, v) (after
     /// `aba_into`, say) and the model's joints are covered (`check_supported`).
     pub(super) fn after_kinematics(
         &mut self,
@@ -200,15 +200,17 @@ impl RneaDerivatives {
             self.dtau_dv.as_mut_slice().fill(0.0);
         }
         self.add_rotors(model, v, a);
-        self.pass_back(model, rotors);
+        self.pass_back(model, rotors, Layout::Columns);
     }
 
     /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
     /// q̈ into `accelerations`, the mass matrix into `mass` (between a velocity and its
     /// ancestors only) and its factor into `factor`, then τ, ∂τ/∂q and ∂τ/∂v at q̈ (the module's
     /// documentation). `data` holds the joints' motions at (q, v); the model has no geared
-    /// rotor (their efforts are not linear in the pass out's terms as written here). False if
-    /// the mass matrix is not positive definite.
+    /// rotor (their efforts are not linear in the pass out's terms as written here). ∂τ/∂q and
+    /// ∂τ/∂v are left by rows (entry (r, c) at c + r nv, their transposes as matrices), as the
+    /// solves with M's factor take them (`MassFactor::solve_rows_negated_into`). False if the
+    /// mass matrix is not positive definite.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn forward_dynamics(
         &mut self,
@@ -234,7 +236,11 @@ impl RneaDerivatives {
         factor.solve(accelerations.as_mut_slice());
         self.add_accelerations(model, accelerations.as_slice());
         self.tau.as_mut_slice().fill(0.0);
-        self.pass_back(model, false);
+        // The solves leave them dense over each tree's block: cleared (as slices, a memset) so
+        // that the pass back's entries of the tree's pattern are the only ones.
+        self.dtau_dq.as_mut_slice().fill(0.0);
+        self.dtau_dv.as_mut_slice().fill(0.0);
+        self.pass_back(model, false, Layout::Rows);
         true
     }
 
@@ -312,28 +318,36 @@ impl RneaDerivatives {
             self.acceleration[i] = parent_acceleration
                 + own_acceleration
                 + spatial::cross_motion(&velocity, &own_velocity);
+            // With one velocity, v_j = v_λ + S q̇ and S × S = 0: ∂A' = 2 v_λ × S = 2 ∂V.
+            let single = joint.nv() == 1;
             for index in joint.v_offset..joint.v_offset + joint.nv() {
                 let s = self.columns[index];
                 let dv = spatial::cross_motion(&parent_velocity, &s);
                 self.dv_dq[index] = dv;
                 self.da_dq[index] = spatial::cross_motion(&parent_acceleration, &s)
                     + spatial::cross_motion(&parent_velocity, &dv);
-                self.da_dv[index] = spatial::cross_motion(&(velocity + parent_velocity), &s);
+                self.da_dv[index] = if single {
+                    dv * 2.0
+                } else {
+                    spatial::cross_motion(&(velocity + parent_velocity), &s)
+                };
             }
             let body = &model.dynamic_bodies[i - 1];
-            let outside = world.force_to_parent(&external[i]);
             if body.massless {
                 self.inertia[i] = RigidInertia::zeros();
                 self.coriolis[i] = CoriolisMatrix::zeros();
-                self.force[i] = -outside;
+                self.force[i] = Force::zeros();
             } else {
                 let inertia = body.rigid.to_parent(&world);
                 let momentum = inertia.times(&velocity);
                 self.inertia[i] = inertia;
                 self.coriolis[i] = CoriolisMatrix::new(&inertia, &velocity, &momentum);
                 self.force[i] = inertia.times(&self.acceleration[i])
-                    + spatial::cross_force(&velocity, &momentum)
-                    - outside;
+                    + spatial::cross_force(&velocity, &momentum);
+            }
+            // Most calls have no external force: none moved to the fixed frame then.
+            if external[i] != Force::zeros() {
+                self.force[i] -= world.force_to_parent(&external[i]);
             }
         }
     }
@@ -373,9 +387,9 @@ impl RneaDerivatives {
                 (coriolis.transpose_times(&axis), inertia.times(&axis));
             let carried = self.carrier_branch(model, carrier);
             for &column in carried {
-                self.dtau_dq[(row, column)] += sensitivity.dot(&self.dv_dq[column])
+                self.dtau_dq[(row, column)] += sensitivity.dot(&angular(&self.dv_dq[column]))
                     + momentum_of_axis.dot(&self.da_dq[column]);
-                self.dtau_dv[(row, column)] += sensitivity.dot(&self.columns[column])
+                self.dtau_dv[(row, column)] += sensitivity.dot(&angular(&self.columns[column]))
                     + momentum_of_axis.dot(&self.da_dv[column]);
             }
             // … and the efforts of the joints that carry it along its rate (its own effort's
@@ -407,11 +421,15 @@ impl RneaDerivatives {
     /// Sums the composites from the leaves and fills τ, ∂τ/∂q and ∂τ/∂v (the module's
     /// documentation): per joint, its rows along its own and its ancestors' columns, and its
     /// ancestors' rows along its columns, each entry of the tree's pattern once: written, or
-    /// added to what the rotors gave (`accumulate`).
-    fn pass_back(&mut self, model: &Model, accumulate: bool) {
+    /// added to what the rotors gave (`accumulate`), at its place in `layout`.
+    fn pass_back(&mut self, model: &Model, accumulate: bool, layout: Layout) {
         let nv = model.nv;
+        let (row_stride, column_stride) = match layout {
+            Layout::Columns => (1, nv),
+            Layout::Rows => (nv, 1),
+        };
         let put = |entries: &mut [f64], row: usize, column: usize, value: f64| {
-            let entry = &mut entries[row + column * nv];
+            let entry = &mut entries[row * row_stride + column * column_stride];
             *entry = if accumulate { *entry + value } else { value };
         };
         for &k in model.dynamic_joints.iter().rev() {
@@ -425,10 +443,10 @@ impl RneaDerivatives {
                 self.tau[row] += s.dot(&force);
                 let (sensitivity, momentum) = (coriolis.transpose_times(&s), inertia.times(&s));
                 for &column in branch {
-                    let by_position =
-                        sensitivity.dot(&self.dv_dq[column]) + momentum.dot(&self.da_dq[column]);
-                    let by_rate =
-                        sensitivity.dot(&self.columns[column]) + momentum.dot(&self.da_dv[column]);
+                    let by_position = sensitivity.dot(&angular(&self.dv_dq[column]))
+                        + momentum.dot(&self.da_dq[column]);
+                    let by_rate = sensitivity.dot(&angular(&self.columns[column]))
+                        + momentum.dot(&self.da_dv[column]);
                     put(self.dtau_dq.as_mut_slice(), row, column, by_position);
                     put(self.dtau_dv.as_mut_slice(), row, column, by_rate);
                 }
@@ -457,6 +475,14 @@ impl RneaDerivatives {
             }
         }
     }
+}
+
+/// Where the pass back puts entry (r, c) of ∂τ/∂q and ∂τ/∂v: at r + c nv (nalgebra's order,
+/// by columns), or at c + r nv (by rows).
+#[derive(Clone, Copy)]
+enum Layout {
+    Columns,
+    Rows,
 }
 
 /// B m = v ×* (I m) + I (m × v) + m ×* h for a body of inertia I, velocity v = [ω; u] and
@@ -502,11 +528,10 @@ impl CoriolisMatrix {
         spatial::twist(self.top * w, self.bottom * w)
     }
 
-    /// Bᵀ s, as a vector to dot with motions: its linear part is zero.
-    fn transpose_times(&self, s: &Motion) -> Motion {
-        let moment =
-            self.top.tr_mul(&spatial::angular(s)) + self.bottom.tr_mul(&spatial::linear(s));
-        spatial::twist(moment, Vector3::zeros())
+    /// Bᵀ s, as a motion's angular part to dot with (its linear part is zero: a dot product
+    /// with a motion m is one with m's angular part).
+    fn transpose_times(&self, s: &Motion) -> Vector3<f64> {
+        self.top.tr_mul(&spatial::angular(s)) + self.bottom.tr_mul(&spatial::linear(s))
     }
 }
 
