@@ -208,13 +208,18 @@ impl Elimination {
 /// Pivoted Gram–Schmidt on sparse rows: at each step the row of `candidates` with the largest
 /// part orthogonal to those taken (the lowest-numbered among equals), until that part is at
 /// most `tolerance` times the largest of the candidates. The candidates are taken in blocks of
-/// `PIVOTED_BLOCK` in their order, each block to its end before the next: within a block the
-/// search is global, so a mechanism of up to a hundred loops (six rows each) is decided as by
-/// one search, and a longer chain costs a block's search per block (see `PIVOTED_BLOCK`). A
+/// `PIVOTED_BLOCK` in their order, each block to its end before the next, where there are more
+/// than `ONE_SEARCH_UP_TO` (a mechanism of up to a hundred loops of six rows is decided by one
+/// search), so that a longer chain costs a block's search per block (see `PIVOTED_BLOCK`). A
 /// part only shrinks as rows are taken, so a row left in its block at the tolerance would not
 /// have been taken later. The elimination, its picks in the order taken.
 pub fn pivoted(rows: Vec<Sparse>, columns: usize, candidates: &[usize], tolerance: f64) -> Elimination {
-    pivoted_in_blocks(rows, columns, candidates, tolerance, PIVOTED_BLOCK)
+    let block = if candidates.len() <= ONE_SEARCH_UP_TO {
+        ONE_SEARCH_UP_TO
+    } else {
+        PIVOTED_BLOCK
+    };
+    pivoted_in_blocks(rows, columns, candidates, tolerance, block)
 }
 
 /// `pivoted` with blocks of `block` candidates.
@@ -253,16 +258,20 @@ pub fn pivoted_in_blocks(
     elimination
 }
 
-/// The candidates `pivoted` searches together. The search by largest part ignores the rows'
-/// structure: on a chain of loops sharing columns (the ladder) it takes every loop's rotation
-/// rows first (a rotation row is about N times a translation row made dimensionless by the
-/// chain's length), and the translation rows' parts orthogonal to all of them fill in: the last
-/// 2N picks of the ladder of N = 100 reflected rows over 202 to 2 of its 302 columns, a dense
-/// block whose cost grows as N³. Taken block by block along the rows (loop after loop), a
-/// block's fill stays within the block and the columns it leaves unpivoted. 600 rows: the
-/// ladder of 100 loops, and every mechanism of the examples and the tests, in one block, so
-/// their decisions and round-off are those of the single search.
-pub const PIVOTED_BLOCK: usize = 600;
+/// The most candidates `pivoted` searches together, in one search: the ladder of 100 loops,
+/// and every mechanism of the examples and the tests, so their decisions and round-off are
+/// those of the single search.
+pub const ONE_SEARCH_UP_TO: usize = 600;
+
+/// The candidates `pivoted` searches together beyond `ONE_SEARCH_UP_TO`. The search by largest
+/// part ignores the rows' structure: on a chain of loops sharing columns (the ladder) it takes
+/// every loop's rotation rows first (a rotation row is about N times a translation row made
+/// dimensionless by the chain's length), and the translation rows' parts orthogonal to all of
+/// them fill in: the last 2N picks of the ladder of N = 100 reflected rows over 202 to 2 of its
+/// 302 columns, a dense block whose cost grows as N³. Taken block by block along the rows
+/// (loop after loop, eight loops of six rows), a block's fill stays within the block and the
+/// few columns it leaves unpivoted.
+pub const PIVOTED_BLOCK: usize = 48;
 
 /// Gram–Schmidt on sparse rows in the order of `candidates`: a row is taken when its part
 /// orthogonal to the rows taken before it is above `tolerance` times `largest`. The rows
