@@ -4,11 +4,11 @@
 //! coupler). For each N: one right-hand side of each, their ratio, and one projection onto the
 //! loops. Then the long closed chains of `common/chains.rs`, the necklace (one loop of N rods)
 //! and the ladder (N loops sharing their rungs), for N from 10 to 1,000: one right-hand side and
-//! one projection, and the exponent of their growth with N (least squares on log cost against
-//! log N). Where the loops' two methods (`dynamics::loops::range_space`) trade places, the
+//! one projection, their start, and the exponent of their growth with N (least squares on log cost
+//! against log N). Where the loops' two methods (`dynamics::loops::range_space`) trade places, the
 //! necklace of N rods for N from 4 to 14 with each method forced (`switch`), and the necklace's
 //! energy and closure over 0.2 s at dopri5 1e-12 for N = 10, 100 and 1,000 (`accuracy`).
-//! Run with `cargo bench --bench loop_scaling [-- rows|chains|switch|accuracy]`; CPU time per
+//! Run with `cargo bench --bench loop_scaling [-- rows|chains|switch|accuracy|ladder-accuracy]`; CPU time per
 //! call, best of 7 batches of about 20 ms.
 
 use lsdc::driver::compile_text;
@@ -28,11 +28,9 @@ use loop_costs::call_costs;
 use rows::row_program;
 
 const ROWS: [usize; 8] = [1, 2, 5, 10, 20, 40, 70, 100];
-/// The necklace to N = 1,000; the ladder to N = 100: from 300 loops on, its start (the closure
-/// of its initial configuration and the choice of its kept rows, dense in the loops' rows)
-/// takes minutes, before any evaluation.
+/// The necklace and the ladder to N = 1,000.
 const NECKLACES: [usize; 5] = [10, 30, 100, 300, 1000];
-const LADDERS: [usize; 3] = [10, 30, 100];
+const LADDERS: [usize; 5] = [10, 30, 100, 300, 1000];
 
 /// Where the plots of cost per body against N are written.
 const PLOT: &str = "target/loop_scaling.svg";
@@ -81,6 +79,9 @@ fn main() {
     }
     if wants("accuracy") {
         necklace_accuracy();
+    }
+    if wants("ladder-accuracy") {
+        ladder_accuracy();
     }
 }
 
@@ -150,6 +151,41 @@ fn necklace_accuracy() {
     }
 }
 
+/// The ladder at N = 100, 300 and 1,000 over 0.05 s with dopri5 at 1e-12, projected after
+/// each step: its energy drift and its loops' largest residuals.
+fn ladder_accuracy() {
+    println!("\nThe ladder over 0.05 s, dopri5 at 1e-12.\n");
+    println!("| N | steps | energy drift | position residual | velocity residual | before projection (position, velocity) | run s (CPU) |");
+    println!("|---:|---:|---:|---:|---:|---|---:|");
+    for n in [100, 300, 1000] {
+        let mut prepared = prepared(&ladder_program(n));
+        prepared.settings = Settings {
+            integrator: Integrator::DormandPrince,
+            duration: 0.05,
+            output: 0.05,
+            rtol: 1e-12,
+            atol: 1e-12,
+            stabilisation: Stabilisation::Projection,
+            ..prepared.settings
+        };
+        let start = common::thread_cpu_seconds();
+        let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
+        let seconds = common::thread_cpu_seconds() - start;
+        let report = &simulation.report;
+        assert!(report.failure.is_none(), "{:?}", report.failure);
+        let c = report.constraints.as_ref().expect("loops");
+        println!(
+            "| {n} | {} | {:.1e} | {:.1e} | {:.1e} | {:.1e}, {:.1e} | {seconds:.2} |",
+            report.steps,
+            report.energy_drift.expect("conservative"),
+            c.position_residual,
+            c.velocity_residual,
+            c.position_residual_before_projection,
+            c.velocity_residual_before_projection
+        );
+    }
+}
+
 fn rows_against_trees() {
     println!("A row of N parallelogram four-bars against the same bodies as a tree (release build, CPU time per call, best batch).\n");
     println!("| N | bodies | tree µs | loops µs | loops / tree | projection µs | projection / loops RHS |");
@@ -191,8 +227,8 @@ fn rows_against_trees() {
 /// body, and the exponent of the growth of each cost with N.
 fn long_chains() {
     println!("\nLong closed chains (release build, CPU time per call, best batch).\n");
-    println!("| chain | N | bodies | right-hand side µs | projection µs | RHS µs per body | projection µs per body |");
-    println!("|---|---:|---:|---:|---:|---:|---:|");
+    println!("| chain | N | bodies | start s | right-hand side µs | projection µs | RHS µs per body | projection µs per body |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     /// A chain's name, its program for N, its bodies for N, and the N it is timed at.
     type Chain = (
         &'static str,
@@ -207,11 +243,19 @@ fn long_chains() {
     let mut series: Vec<Series> = Vec::new();
     for (name, program, bodies, sizes) in programs {
         let mut costs = Vec::new();
+        let mut starts = Vec::new();
         for &n in sizes {
-            let (rhs, projection) = call_costs(&prepared(&program(n)));
+            // The start: compiling the program, assembling and closing its loops, deciding
+            // their structure (`prepare`, the thread's CPU time).
+            let text = program(n);
+            let before = common::thread_cpu_seconds();
+            let chain = prepared(&text);
+            let start = common::thread_cpu_seconds() - before;
+            starts.push((n as f64, start));
+            let (rhs, projection) = call_costs(&chain);
             let b = bodies(n) as f64;
             println!(
-                "| {name} | {n} | {} | {rhs:.1} | {projection:.1} | {:.3} | {:.3} |",
+                "| {name} | {n} | {} | {start:.3} | {rhs:.1} | {projection:.1} | {:.3} | {:.3} |",
                 bodies(n),
                 rhs / b,
                 projection / b
@@ -221,9 +265,10 @@ fn long_chains() {
         let rhs: Vec<_> = costs.iter().map(|&(n, c)| (n, c[0])).collect();
         let projection: Vec<_> = costs.iter().map(|&(n, c)| (n, c[1])).collect();
         println!(
-            "\n{name}: cost ∝ N^p, p = {:.2} (right-hand side), {:.2} (projection)\n",
+            "\n{name}: cost ∝ N^p, p = {:.2} (right-hand side), {:.2} (projection), {:.2} (start)\n",
             growth_exponent(&rhs) + 1.0,
-            growth_exponent(&projection) + 1.0
+            growth_exponent(&projection) + 1.0,
+            growth_exponent(&starts)
         );
         series.push((format!("{name}: right-hand side"), rhs));
         series.push((format!("{name}: projection"), projection));

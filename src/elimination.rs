@@ -144,6 +144,25 @@ impl Elimination {
         }
     }
 
+    /// y's part orthogonal to the first `count` picked rows (y given over the columns), in
+    /// place: Qᵀy with its entries over their pivots zeroed, then Q of that. The projection of
+    /// Gram–Schmidt against the picked rows, each reflection touching only its own columns.
+    pub fn orthogonal_part(&self, count: usize, y: &mut [f64]) {
+        for reflector in &self.reflectors[..count] {
+            let along: f64 = reflector.v.iter().map(|&(c, x)| x * y[c]).sum();
+            if along != 0.0 {
+                let along = reflector.beta * along;
+                for &(c, x) in &reflector.v {
+                    y[c] -= along * x;
+                }
+            }
+        }
+        for reflector in &self.reflectors[..count] {
+            y[reflector.pivot] = 0.0;
+        }
+        self.reflect_back(count, y);
+    }
+
     /// An orthonormal basis of the motions the first `count` picked rows allow: Q eⱼ for each
     /// column j none of them pivoted on.
     pub fn null_space(&self, count: usize) -> DMatrix<f64> {
@@ -188,32 +207,71 @@ impl Elimination {
 
 /// Pivoted Gram–Schmidt on sparse rows: at each step the row of `candidates` with the largest
 /// part orthogonal to those taken (the lowest-numbered among equals), until that part is at
-/// most `tolerance` times the largest of the candidates. The elimination, its picks in the
-/// order taken.
+/// most `tolerance` times the largest of the candidates. The candidates are taken in blocks of
+/// `PIVOTED_BLOCK` in their order, each block to its end before the next, where there are more
+/// than `ONE_SEARCH_UP_TO` (a mechanism of up to a hundred loops of six rows is decided by one
+/// search), so that a longer chain costs a block's search per block (see `PIVOTED_BLOCK`). A
+/// part only shrinks as rows are taken, so a row left in its block at the tolerance would not
+/// have been taken later. The elimination, its picks in the order taken.
 pub fn pivoted(rows: Vec<Sparse>, columns: usize, candidates: &[usize], tolerance: f64) -> Elimination {
+    let block = if candidates.len() <= ONE_SEARCH_UP_TO {
+        ONE_SEARCH_UP_TO
+    } else {
+        PIVOTED_BLOCK
+    };
+    pivoted_in_blocks(rows, columns, candidates, tolerance, block)
+}
+
+/// `pivoted` with blocks of `block` candidates.
+pub fn pivoted_in_blocks(
+    rows: Vec<Sparse>,
+    columns: usize,
+    candidates: &[usize],
+    tolerance: f64,
+    block: usize,
+) -> Elimination {
     let mut elimination = Elimination::new(rows, columns);
+    let largest = (candidates.iter())
+        .map(|&r| elimination.size(r))
+        .fold(0.0, f64::max);
     let key = |size: f64, row: usize| (size.to_bits(), Reverse(row));
     let mut sizes = vec![0.0; elimination.parts.len()];
-    let mut queue = BTreeSet::new();
-    for &r in candidates {
-        sizes[r] = elimination.size(r);
-        queue.insert(key(sizes[r], r));
-    }
-    let largest = candidates.iter().map(|&r| sizes[r]).fold(0.0, f64::max);
-    while let Some((bits, Reverse(row))) = queue.pop_last() {
-        let size = f64::from_bits(bits);
-        if size <= tolerance * largest || size == 0.0 {
-            break;
+    for block in candidates.chunks(block.max(1)) {
+        let mut queue = BTreeSet::new();
+        for &r in block {
+            sizes[r] = elimination.size(r);
+            queue.insert(key(sizes[r], r));
         }
-        for other in elimination.pick(row) {
-            if queue.remove(&key(sizes[other], other)) {
-                sizes[other] = elimination.size(other);
-                queue.insert(key(sizes[other], other));
+        while let Some((bits, Reverse(row))) = queue.pop_last() {
+            let size = f64::from_bits(bits);
+            if size <= tolerance * largest || size == 0.0 {
+                break;
+            }
+            for other in elimination.pick(row) {
+                if queue.remove(&key(sizes[other], other)) {
+                    sizes[other] = elimination.size(other);
+                    queue.insert(key(sizes[other], other));
+                }
             }
         }
     }
     elimination
 }
+
+/// The most candidates `pivoted` searches together, in one search: the ladder of 100 loops,
+/// and every mechanism of the examples and the tests, so their decisions and round-off are
+/// those of the single search.
+pub const ONE_SEARCH_UP_TO: usize = 600;
+
+/// The candidates `pivoted` searches together beyond `ONE_SEARCH_UP_TO`. The search by largest
+/// part ignores the rows' structure: on a chain of loops sharing columns (the ladder) it takes
+/// every loop's rotation rows first (a rotation row is about N times a translation row made
+/// dimensionless by the chain's length), and the translation rows' parts orthogonal to all of
+/// them fill in: the last 2N picks of the ladder of N = 100 reflected rows over 202 to 2 of its
+/// 302 columns, a dense block whose cost grows as N³. Taken block by block along the rows
+/// (loop after loop, eight loops of six rows), a block's fill stays within the block and the
+/// few columns it leaves unpivoted.
+pub const PIVOTED_BLOCK: usize = 48;
 
 /// Gram–Schmidt on sparse rows in the order of `candidates`: a row is taken when its part
 /// orthogonal to the rows taken before it is above `tolerance` times `largest`. The rows

@@ -174,28 +174,6 @@ pub fn pseudo_inverse(m: DMatrix<f64>, floor: f64) -> Option<DMatrix<f64>> {
     svd(m, true, true)?.pseudo_inverse(floor).ok()
 }
 
-/// An orthonormal basis (as columns) of the vectors x with m·x = 0, singular values up to
-/// `relative_floor` times the largest taken as zero (all of them when the largest is zero);
-/// `None` as for [`svd`]. A wide matrix is padded with zero rows first, so that the
-/// decomposition has every right singular vector.
-pub fn null_space(m: &DMatrix<f64>, relative_floor: f64) -> Option<DMatrix<f64>> {
-    let (rows, columns) = m.shape();
-    if columns == 0 {
-        return Some(DMatrix::zeros(0, 0));
-    }
-    let mut padded = DMatrix::zeros(rows.max(columns), columns);
-    padded.rows_mut(0, rows).copy_from(m);
-    let decomposition = svd(padded, false, true)?;
-    let v_t = decomposition.v_t?;
-    let largest = decomposition.singular_values.max();
-    let null: Vec<usize> = (0..columns)
-        .filter(|&k| decomposition.singular_values[k] <= relative_floor * largest)
-        .collect();
-    Some(DMatrix::from_fn(columns, null.len(), |i, k| {
-        v_t[(null[k], i)]
-    }))
-}
-
 /// The smallest eigenvalue of the symmetric matrix `m` (its lower triangle is read) and a unit
 /// eigenvector for it; `None` for an empty matrix, one with an entry that is not finite, or an
 /// iteration that does not converge.

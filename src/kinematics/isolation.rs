@@ -21,6 +21,7 @@ use super::branch::{join_points, size};
 use super::closure::closure;
 use super::eval::EvalError;
 use super::mobility::{rank, RANK_TOLERANCE};
+use crate::elimination::{pivoted_dense, pivoted_in_blocks, Elimination, Sparse};
 use super::model::KinematicModel;
 
 /// A closed configuration the loops hold still, and the certificate.
@@ -56,6 +57,11 @@ impl Isolated {
 /// meshes of `examples/maille*.lsd`, whose one constraint acts at second order only, -8e-9).
 const DEFINITE: f64 = 1e-4;
 
+/// The columns of Φ′ searched together for the self-stresses' elimination: a loop's six rows
+/// meet a few coordinates each, and the columns taken in blocks along the loops keep the fill
+/// within neighbouring loops.
+const COLUMN_BLOCK: usize = 8;
+
 /// The step of the central differences of the closure Jacobian, in the dimensionless
 /// coordinates (radians, lengths per length of the mechanism).
 const STEP: f64 = 1e-5;
@@ -77,18 +83,37 @@ pub fn isolated(model: &KinematicModel, q: &[f64]) -> Result<Option<Isolated>, E
     }
     let units = Units::of(model, q)?;
     let jacobian = units.dimensionless(&closure(model, q)?.jacobian);
-    let Some(motions) = crate::linalg::null_space(&jacobian, RANK_TOLERANCE) else {
-        return Ok(None);
-    };
-    let Some(stresses) = crate::linalg::null_space(&jacobian.transpose(), RANK_TOLERANCE) else {
-        return Ok(None);
-    };
-    if motions.ncols() == 0 || stresses.ncols() == 0 {
+    // The kernel and the self-stresses from sparse eliminations of Φ′'s rows and of its
+    // columns at the rank's tolerance (`mobility::RANK_TOLERANCE`, the loops' own test), not
+    // from singular value decompositions of the dense 6m × n matrix: a chain of loops meets
+    // only neighbours in each, where the decompositions cost the cube of its length.
+    let rows = pivoted_dense(&jacobian, RANK_TOLERANCE);
+    let rank = rows.picked().len();
+    // Φ′'s columns in the order of their first row (loop after loop), searched a loop's worth
+    // at a time: in the coordinates' order (a ladder's rungs, then its rails) each column
+    // taken would fill the next rung's with the rows of every rung before it.
+    let by_first_row = sparse_columns(&jacobian);
+    let mut order: Vec<usize> = (0..jacobian.ncols()).collect();
+    order.sort_by_key(|&c| by_first_row[c].first().map_or(usize::MAX, |e| e.0));
+    let columns = pivoted_in_blocks(
+        by_first_row,
+        jacobian.nrows(),
+        &order,
+        RANK_TOLERANCE,
+        COLUMN_BLOCK,
+    );
+    let column_rank = columns.picked().len();
+    if rank == jacobian.ncols() || column_rank == jacobian.nrows() {
         return Ok(None);
     }
+    let motions = rows.null_space(rank);
     let Some(bending) = second_derivatives(model, q, &units, &motions, jacobian.amax())? else {
         return Ok(None);
     };
+    let stresses = bent_stresses(&bending, &columns, column_rank);
+    if stresses.ncols() == 0 {
+        return Ok(None);
+    }
     let Some((stress, margin)) = definite_stress(&bending, &stresses) else {
         return Ok(None);
     };
@@ -146,6 +171,18 @@ impl Units {
             jacobian[(r, c)] * self.rows[r] * self.columns[c]
         })
     }
+}
+
+/// The columns of the dense matrix `m` as sparse vectors over its rows.
+fn sparse_columns(m: &DMatrix<f64>) -> Vec<Sparse> {
+    (0..m.ncols())
+        .map(|c| {
+            (m.column(c).iter().enumerate())
+                .filter(|&(_, &value)| value != 0.0)
+                .map(|(r, &value)| (r, value))
+                .collect()
+        })
+        .collect()
 }
 
 /// Φ″(q)(m_a, m_b) for every pair of first-order motions (columns of `motions`, dimensionless),
@@ -211,6 +248,37 @@ impl Bending {
         let values = self.pairs.tr_mul(stress) / self.scale;
         DMatrix::from_fn(self.k, self.k, |a, b| values[a * self.k + b])
     }
+}
+
+/// An orthonormal basis of the self-stresses whose forms are not round-off: the parts of the
+/// closure's second derivatives (`bending`'s columns) orthogonal to Φ′'s columns, the first
+/// `rank` of which `columns` has picked. A self-stress λ (λᵀΦ′ = 0) has the form
+/// λᵀΦ″(m_a, m_b) = λᵀΠΦ″(m_a, m_b), Π the projector onto the self-stresses, so λ's part
+/// orthogonal to the span of the ΠΦ″(m_a, m_b) bends nothing: the search for a definite
+/// stress over this span is the search over every self-stress, without a basis of all of them
+/// (a planar chain of N loops has 3N, each out of its plane).
+fn bent_stresses(bending: &Bending, columns: &Elimination, rank: usize) -> DMatrix<f64> {
+    let k = bending.k;
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    for a in 0..k {
+        for b in a..k {
+            let mut part: DVector<f64> = bending.pairs.column(a * k + b).into_owned();
+            columns.orthogonal_part(rank, part.as_mut_slice());
+            // Gram–Schmidt against the directions kept, twice for orthogonality in floating
+            // point; a part at most round-off of the second derivatives' scale bends nothing.
+            for _ in 0..2 {
+                for unit in &basis {
+                    let along = unit.dot(&part);
+                    part -= unit * along;
+                }
+            }
+            let size = part.norm();
+            if size > ROUND_OFF * bending.scale && basis.len() < part.len() {
+                basis.push(part / size);
+            }
+        }
+    }
+    DMatrix::from_fn(bending.pairs.nrows(), basis.len(), |r, j| basis[j][r])
 }
 
 /// A self-stress (a unit combination of the columns of `stresses`) whose form is definite on

@@ -153,6 +153,12 @@ fn complete_rates(
     let free: Vec<usize> = completed_velocities(given, v.len()).collect();
     let velocity = DVector::from_column_slice(v);
     let error = jacobian * &velocity;
+    // Rates that already keep the loops closed (a start at rest) need no correction: the
+    // pseudo-inverse of the free columns (a dense SVD, the cube of a long chain's length: 20 s
+    // of the ladder of 300 loops' start) would multiply zeros.
+    if error.iter().all(|&e| e == 0.0) {
+        return Ok(());
+    }
     let free_columns =
         DMatrix::from_fn(jacobian.nrows(), free.len(), |r, c| jacobian[(r, free[c])]);
     let correction = decompose(&free_columns).pseudo_inverse * &error;

@@ -1,10 +1,11 @@
 //! The sparse orthogonal elimination of rows (`src/elimination.rs`) against a singular value
 //! decomposition of the same dense matrix: the rank it picks, an orthonormal basis of the same
 //! null space, and the same minimum-norm solution of a consistent system, on a matrix with a
-//! dependent row and on the rows of a ladder of 40 loops.
+//! dependent row and on the rows of a ladder of 40 loops; a vector's part orthogonal to the
+//! rows, and the search taken in blocks of rows (as for chains beyond a hundred loops).
 
 use lsdc::dynamics::loops::{decompose, elimination::sparse_rows};
-use lsdc::elimination::{pivoted, Sparse};
+use lsdc::elimination::{pivoted, pivoted_in_blocks, Sparse};
 use nalgebra::{DMatrix, DVector};
 
 use crate::common::programs::prepared_text;
@@ -24,7 +25,7 @@ fn rows_of(m: &DMatrix<f64>) -> Vec<Sparse> {
 /// The elimination of `rows` agrees with the SVD of `dense`.
 fn agrees_with_the_svd(dense: &DMatrix<f64>, rows: Vec<Sparse>) {
     let every: Vec<usize> = (0..dense.nrows()).collect();
-    let elimination = pivoted(rows, dense.ncols(), &every, 1e-9);
+    let elimination = pivoted(rows.clone(), dense.ncols(), &every, 1e-9);
     let svd = decompose(dense);
     let picked = elimination.picked().len();
     assert_eq!(picked, svd.rank, "rank");
@@ -42,6 +43,24 @@ fn agrees_with_the_svd(dense: &DMatrix<f64>, rows: Vec<Sparse>) {
     );
     let gram = null.transpose() * &null - DMatrix::identity(null.ncols(), null.ncols());
     assert!(gram.amax() <= 1e-13, "ZᵀZ − I = {:e}", gram.amax());
+    // A vector's part orthogonal to the rows: its projection onto the SVD's null space.
+    let y = DVector::from_fn(dense.ncols(), |i, _| (0.91 * i as f64 + 0.3).cos());
+    let mut part = y.clone();
+    elimination.orthogonal_part(picked, part.as_mut_slice());
+    let projected = &svd.null_space * (svd.null_space.transpose() * &y);
+    let error = (&part - &projected).amax();
+    assert!(error <= 1e-13, "orthogonal part error {error:e}");
+    // Taken in blocks of 5 rows (each block to its end), the same rank and the same null
+    // space (its projector).
+    let blocks = pivoted_in_blocks(rows.clone(), dense.ncols(), &every, 1e-9, 5);
+    assert_eq!(blocks.picked().len(), svd.rank, "rank in blocks");
+    let by_blocks = blocks.null_space(blocks.picked().len());
+    let projector = |z: &DMatrix<f64>| z * z.transpose();
+    let error = (projector(&by_blocks) - projector(&svd.null_space)).amax();
+    assert!(
+        error <= 1e-12,
+        "null space in blocks: projectors differ by {error:e}"
+    );
     // A consistent right-hand side: the minimum-norm solutions agree.
     let x = DVector::from_fn(dense.ncols(), |i, _| (0.37 * i as f64 + 0.1).sin());
     let b = dense * x;

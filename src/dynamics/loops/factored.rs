@@ -17,6 +17,7 @@ use std::cell::OnceCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::jacobian::ConstraintJacobian;
+use crate::elimination::{pivoted, Sparse};
 use super::triples::{self, DiagonalBlock};
 use crate::dynamics::dense::dense_cholesky;
 
@@ -418,6 +419,19 @@ impl Factored {
     pub fn dense_null_space(&self) -> &DMatrix<f64> {
         self.null_space
             .get_or_init(|| self.orthonormal_null_space())
+    }
+
+    /// An orthonormal basis of the motions the kept rows allow from their sparse elimination
+    /// (`elimination::pivoted`, every kept row picked): the span of `dense_null_space` in
+    /// another basis, at a cost that grows with the rows' entries and their fill, not with the
+    /// cube of the columns.
+    pub fn sparse_null_space(&self) -> DMatrix<f64> {
+        let rows: Vec<Sparse> = (self.rows.iter())
+            .map(|row| row.filter(|&(_, value)| value != 0.0).collect())
+            .collect();
+        let every: Vec<usize> = (0..rows.len()).collect();
+        let elimination = pivoted(rows, self.columns, &every, 0.0);
+        elimination.null_space(elimination.picked().len())
     }
 
     fn orthonormal_null_space(&self) -> DMatrix<f64> {

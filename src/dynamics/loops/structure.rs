@@ -233,12 +233,21 @@ impl Structure {
     /// allowed motions), and records how well they parametrise them.
     pub fn choose_free(&mut self, jacobian: &ConstraintJacobian) {
         let factored = Factored::new(jacobian, &self.choice);
-        // The dense factorisation's basis, not the sparse elimination's: the same span, but the
-        // choice between coordinates that parametrise the motions equally well (the row of
-        // two four-bars' symmetric cranks) is decided by round-off, and the sparse basis's
-        // decided the other way took that row through its flat passages with an energy drift
-        // of 6.1e-9 at 1e-12 (`hard_loops::flat_passages_…`, bound 1e-9).
-        let allowed = factored.dense_null_space();
+        // Up to `DENSE_FREE_CHOICE_UP_TO` columns, the dense factorisation's basis, not the
+        // sparse elimination's: the same span, but the choice between coordinates that
+        // parametrise the motions equally well (the row of two four-bars' symmetric cranks) is
+        // decided by round-off, and the sparse basis's decided the other way took that row
+        // through its flat passages with an energy drift of 6.1e-9 at 1e-12
+        // (`hard_loops::flat_passages_…`, bound 1e-9). Beyond, the dense QR's cost (the
+        // columns squared times the rows) is the start's: the sparse basis, whose rows have
+        // the same lengths and inner products up to round-off, so the same choice but for ties.
+        let sparse;
+        let allowed = if factored.columns() <= DENSE_FREE_CHOICE_UP_TO {
+            factored.dense_null_space()
+        } else {
+            sparse = factored.sparse_null_space();
+            &sparse
+        };
         let every = vec![true; allowed.nrows()];
         let chosen = dense_best_rows(allowed, &every, KEEP_TOLERANCE);
         let idle = |&c: &usize| c >= self.tree_velocities && !factored.touches(c);
@@ -258,6 +267,11 @@ impl Structure {
         damped.free_quality_into(&self.free, &mut Vec::new(), &mut columns, &mut block)
     }
 }
+
+/// The most columns (coordinates of the tree and of the complementary links) for which the
+/// free coordinates are chosen on the dense QR's basis of the allowed motions: about 3 · 10⁷
+/// multiplications (the ladder of 100 loops, 302 columns, takes 0.03 s there).
+const DENSE_FREE_CHOICE_UP_TO: usize = 400;
 
 /// A new choice of rows must reproduce the rows left out better by this factor at least.
 const RECHOOSE: f64 = 1.25;
