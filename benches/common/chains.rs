@@ -13,19 +13,25 @@ const PREAMBLE: &str = "import joints ;\nimport gravity ;\nlet z = [0, 0, 1] ;\n
 /// at rest on a circular arc (rod i at the angle −β + (i − 1)·2β/(n − 1) from the x axis, β = π/3),
 /// which is not its equilibrium: it swings.
 pub fn necklace_program(n: usize) -> String {
+    necklace_of_rods(n, 1.0)
+}
+
+/// `necklace_program` with rods of `length` (metres, a whole number): the same shape scaled,
+/// whose extent brings the round-off of a long chain's closure to small N.
+pub fn necklace_of_rods(n: usize, length: f64) -> String {
     assert!(n >= 3, "a necklace of fewer than 3 rods does not move");
     let beta = std::f64::consts::FRAC_PI_3;
     let turn = 2.0 * beta / (n - 1) as f64;
-    let span: f64 = (0..n).map(|i| (-beta + i as f64 * turn).cos()).sum();
+    let span: f64 = (0..n).map(|i| (-beta + i as f64 * turn).cos()).sum::<f64>() * length;
     let mut text = String::from(PREAMBLE);
     let mut initial = vec![format!("c1.q = {:.17}", -beta)];
     for i in 1..=n {
-        text += &format!("let rod{i} = bar(1.0) ;\n");
+        text += &format!("let rod{i} = bar({length:.1}) ;\n");
         if i == 1 {
             text += "join earth and rod1 with revolute(z) as c1 ;\n";
         } else {
             text += &format!(
-                "join [1.0, 0, 0] ++ 1 @ rod{} and rod{i} with revolute(z) as p{i} ;\n",
+                "join [{length:.1}, 0, 0] ++ 1 @ rod{} and rod{i} with revolute(z) as p{i} ;\n",
                 i - 1
             );
             initial.push(format!("p{i}.q = {turn:.17}"));
@@ -33,7 +39,7 @@ pub fn necklace_program(n: usize) -> String {
         text += &format!("apply weight_in(rod{i}, down) on rod{i}.iframe ;\n");
     }
     text += &format!(
-        "join [1.0, 0, 0] ++ 1 @ rod{n} and [{span:.17}, 0, 0] ++ 1 @ earth with revolute(z) as e ;\n"
+        "join [{length:.1}, 0, 0] ++ 1 @ rod{n} and [{span:.17}, 0, 0] ++ 1 @ earth with revolute(z) as e ;\n"
     );
     initial.push(format!("e.q = {:.17}", -beta));
     text += &format!("initial {} ;\n", initial.join(", "));

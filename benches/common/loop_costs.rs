@@ -30,6 +30,7 @@ pub fn loop_system(prepared: &Prepared) -> (MechanicalSystem<'_>, Vec<f64>) {
     let reference = prepared.coordinates.clone();
     let mut system = MechanicalSystem::new(model, reference, prepared.settings.stabilisation);
     system.force_loop_method(prepared.loop_method);
+    system.close_in_plane(prepared.planar.as_deref().ok());
     system.start_loops(&mut y).expect("loops close");
     (system, y)
 }

@@ -578,6 +578,7 @@ pub(super) fn start_system<'p>(
     let native = prepared.native.as_ref();
     system.use_native(native.filter(|_| plain(model) && !inputs.any()));
     system.use_planar(prepared.planar_form());
+    system.close_in_plane(prepared.planar.as_deref().ok());
     system.force_loop_method(prepared.loop_method);
     system.use_driven_subtrees(prepared.driven_subtrees());
     system.state.inputs = inputs;

@@ -36,6 +36,7 @@ use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::{self, Extent, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
 use crate::dynamics::planar::algebra::PlanarForce;
+use crate::dynamics::loops::planar_closure::PlanarClosure;
 use crate::dynamics::planar::{self, PlanarData, PlanarModel};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
@@ -111,8 +112,22 @@ impl<'m> MechanicalSystem<'m> {
             scratch.loops = loops.for_outputs();
             let forced = self.scratch.loop_scratch.forced_method();
             scratch.loop_scratch.force_method(forced);
+            let closure = self.scratch.projection.plane_closure().cloned();
+            scratch.projection.close_in_plane(closure);
             self.sampling = Some(scratch);
         }
+    }
+
+    /// Evaluates the loops' translation rows in `planar`, the model's planar form, for the
+    /// projections and the residuals they report (`loops::planar_closure`): their round-off
+    /// then does not grow with the chain's extent. The right-hand side's form is another
+    /// matter (`use_planar`).
+    pub fn close_in_plane(&mut self, planar: Option<&PlanarModel>) {
+        let closure = planar.and_then(|planar| PlanarClosure::new(self.model, planar));
+        if let Some(sampling) = &mut self.sampling {
+            sampling.projection.close_in_plane(closure.clone());
+        }
+        self.scratch.projection.close_in_plane(closure);
     }
 
     /// Solves the loops by `method` wherever it applies, or by the rule of

@@ -11,7 +11,9 @@
 //! sparse factorisation for the outputs (`orthonormal`). Which side of a singular configuration
 //! a state lies on, seen from the last step's start, tells a step that jumps across one
 //! (`orientation`).
-//! A planar mechanism's right-hand side computes its rows in planar form (`planar_rows`).
+//! A planar mechanism's right-hand side computes its rows in planar form (`planar_rows`); the
+//! translation rows of its long loops are evaluated in the plane with compensated sums for the
+//! projections and the residuals reported (`planar_closure`).
 //! A singular value decomposition (`basis`) and dense QR
 //! factorisations serve the decisions taken once, never the equations of motion.
 //! The method and its references: `docs/loops.md`.
@@ -25,6 +27,7 @@ pub mod massless;
 pub mod momentum;
 pub mod orientation;
 pub mod orthonormal;
+pub mod planar_closure;
 pub mod planar_rows;
 pub mod project;
 pub mod range_space;
