@@ -34,7 +34,12 @@ use crate::dynamics::planar::model::{PlanarJointKind, PlanarLoopKind, PlanarMode
 fn cycle_length(model: &Model, first: usize, second: usize) -> usize {
     let on_first: Vec<usize> = model.path_to_earth(first).collect();
     let on_second: Vec<usize> = model.path_to_earth(second).collect();
-    let shared = on_first.iter().filter(|b| on_second.contains(b)).count();
+    // The bodies on both paths are the two paths' common end, from where they meet to earth:
+    // counted from earth in a time linear in the paths (a ladder's paths are as long as it is).
+    let shared = (on_first.iter().rev())
+        .zip(on_second.iter().rev())
+        .take_while(|(a, b)| a == b)
+        .count();
     on_first.len() + on_second.len() - 2 * shared
 }
 
