@@ -100,15 +100,14 @@ impl AbaDerivatives {
             {
                 return Err(ForwardDerivativeError::SingularMass);
             }
-            // ∂τ/∂q and ∂τ/∂v by rows, solved where they are.
+            // ∂τ/∂q and ∂τ/∂v by rows, solved side by side where they are.
             self.factor.inverse_into(&mut self.mass_inverse);
             (self.factor).solve_rows_negated_into(
-                inverse.dtau_dq.as_mut_slice(),
-                &mut self.dacceleration_dq,
-            );
-            (self.factor).solve_rows_negated_into(
-                inverse.dtau_dv.as_mut_slice(),
-                &mut self.dacceleration_dv,
+                [
+                    inverse.dtau_dq.as_mut_slice(),
+                    inverse.dtau_dv.as_mut_slice(),
+                ],
+                [&mut self.dacceleration_dq, &mut self.dacceleration_dv],
             );
         } else {
             // One evaluation of the joints' motions serves ABA, CRBA and the derivatives.

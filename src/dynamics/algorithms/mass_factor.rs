@@ -167,7 +167,7 @@ impl MassFactor {
         for c in 0..nv {
             entries[c + c * nv] = 1.0;
         }
-        self.solve_rows(entries, Pattern::Identity);
+        self.solve_rows(&mut [entries], Pattern::Identity);
         for i in 0..nv {
             for c in i + 1..self.tree_end(i) {
                 entries[c * nv + i] = entries[i * nv + c];
@@ -185,23 +185,30 @@ impl MassFactor {
                 rows[c + r * nv] = *value;
             }
         }
-        self.solve_rows_negated_into(&mut rows, into);
+        self.solve_rows_negated_into([&mut rows[..]], [into]);
         self.rows = rows;
     }
 
-    /// `into` ← −M⁻¹ X for X (nv × nv) given by rows (row r at r nv) with the tree's pattern
-    /// (X_rc zero unless r and c are on one branch, as ∂τ/∂q and ∂τ/∂v are), solved in place
-    /// in `rows`, then copied into `into` row by row over the columns from the row's root to
-    /// its tree's last velocity (the entries outside stay as they are: zero). Trees need not be
-    /// numbered one after the other: a tree's velocities may be interleaved with another's.
-    pub fn solve_rows_negated_into(&self, rows: &mut [f64], into: &mut DMatrix<f64>) {
+    /// `into[m]` ← −M⁻¹ `rows[m]` for each of `M` matrices X (nv × nv) given by rows (row r
+    /// at r nv) with the tree's pattern (X_rc zero unless r and c are on one branch, as ∂τ/∂q
+    /// and ∂τ/∂v are), solved side by side in place in `rows`, then copied into `into` row by
+    /// row over the columns from the row's root to its tree's last velocity (the entries
+    /// outside stay as they are: zero). Trees need not be numbered one after the other: a
+    /// tree's velocities may be interleaved with another's.
+    pub fn solve_rows_negated_into<const M: usize>(
+        &self,
+        mut rows: [&mut [f64]; M],
+        into: [&mut DMatrix<f64>; M],
+    ) {
         let nv = self.inverse_diagonal.len();
-        self.solve_rows(rows, Pattern::Branches);
-        let out = into.as_mut_slice();
-        for r in 0..nv {
-            let span = self.root[r]..self.tree_end(r);
-            for (c, value) in span.clone().zip(&rows[r * nv..][span]) {
-                out[c * nv + r] = -value;
+        self.solve_rows(&mut rows, Pattern::Branches);
+        for (rows, into) in rows.iter().zip(into) {
+            let out = into.as_mut_slice();
+            for r in 0..nv {
+                let span = self.root[r]..self.tree_end(r);
+                for (c, value) in span.clone().zip(&rows[r * nv..][span]) {
+                    out[c * nv + r] = -value;
+                }
             }
         }
     }
@@ -211,15 +218,17 @@ impl MassFactor {
         self.subtree_end[self.root[i]]
     }
 
-    /// X ← M⁻¹ X for X (nv × nv) given by rows (row r at r nv), zero outside the blocks of the
-    /// separate trees (a tree's velocities by the same tree's): each step of Table 6.4 done on
-    /// whole rows, over the columns where the row can be nonzero, contiguous. The columns are
-    /// independent, so the processor overlaps them, where a column's own solve is one chain of
-    /// dependent products. In the phase from the leaves row i, when it is carried up, is
-    /// nonzero only on i's ancestors and descendants (by induction: so is X's row, and its
-    /// descendants' rows add their own ancestors' and descendants'), all of them from its
-    /// tree's root to its last descendant; for the identity, on its descendants only.
-    fn solve_rows(&self, x: &mut [f64], pattern: Pattern) {
+    /// X ← M⁻¹ X for each of `M` matrices X (nv × nv) given by rows (row r at r nv), zero
+    /// outside the blocks of the separate trees (a tree's velocities by the same tree's): each
+    /// step of Table 6.4 done on whole rows, over the columns where the row can be nonzero,
+    /// contiguous. The columns are independent, so the processor overlaps them, where a
+    /// column's own solve is one chain of dependent products. In the phase from the leaves row
+    /// i, when it is carried up, is nonzero only on i's ancestors and descendants (by
+    /// induction: so is X's row, and its descendants' rows add their own ancestors' and
+    /// descendants'), all of them from its tree's root to its last descendant; for the
+    /// identity, on its descendants only. The matrices share the pattern, so they are solved
+    /// side by side: each ancestor's entry of L, loaded once, serves the same chunk of all.
+    fn solve_rows<const M: usize>(&self, x: &mut [&mut [f64]; M], pattern: Pattern) {
         let nv = self.inverse_diagonal.len();
         let carried = |i: usize| match pattern {
             Pattern::Identity => i..self.subtree_end[i],
@@ -230,60 +239,81 @@ impl MassFactor {
             Pattern::Branches => self.root[i]..self.tree_end(i),
         };
         // Row i by chunks of `WIDTH` columns against all its ancestors' rows at once (the
-        // ancestors' rows all lie before row i, so the two split apart): a chunk of row i stays
-        // in registers while its ancestors' are updated (from the leaves) or read (from the
-        // roots), where an update of a whole row per ancestor would store row i's or reload
-        // it each time. The order of the operations on every entry is Table 6.4's.
+        // ancestors' rows all lie before row i): a chunk of row i stays in registers while its
+        // ancestors' are updated (from the leaves) or read (from the roots), where an update of
+        // a whole row per ancestor would store row i's or reload it each time. The order of the
+        // operations on every entry is Table 6.4's.
         for i in (0..nv).rev() {
             let (span, ancestors) = (carried(i), self.range(i));
-            let (before, after) = x.split_at_mut(i * nv);
-            let row_i = &after[span.clone()];
-            let mut chunks = row_i.chunks_exact(WIDTH);
             let mut offset = span.start;
-            for chunk in chunks.by_ref() {
-                let chunk: [f64; WIDTH] = chunk.try_into().expect("a chunk");
+            while offset + WIDTH <= span.end {
+                let chunks: [[f64; WIDTH]; M] = std::array::from_fn(|m| {
+                    x[m][i * nv + offset..][..WIDTH]
+                        .try_into()
+                        .expect("a chunk")
+                });
                 for at in ancestors.clone() {
                     let (j, l) = (self.ancestors[at], self.lower[at]);
-                    let row_j = &mut before[j * nv + offset..][..WIDTH];
-                    for (xj, xi) in row_j.iter_mut().zip(chunk) {
-                        *xj -= l * xi;
+                    for (matrix, chunk) in x.iter_mut().zip(&chunks) {
+                        let row_j = &mut matrix[j * nv + offset..][..WIDTH];
+                        for (xj, xi) in row_j.iter_mut().zip(chunk) {
+                            *xj -= l * xi;
+                        }
                     }
                 }
                 offset += WIDTH;
             }
-            for (c, xi) in chunks.remainder().iter().enumerate() {
+            for c in offset..span.end {
+                let xi: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
                 for at in ancestors.clone() {
                     let (j, l) = (self.ancestors[at], self.lower[at]);
-                    before[j * nv + offset + c] -= l * xi;
+                    for (matrix, xi) in x.iter_mut().zip(xi) {
+                        matrix[j * nv + c] -= l * xi;
+                    }
                 }
             }
         }
         for i in 0..nv {
             let d = self.inverse_diagonal[i];
-            x[i * nv..][carried(i)].iter_mut().for_each(|e| *e *= d);
+            for matrix in x.iter_mut() {
+                matrix[i * nv..][carried(i)]
+                    .iter_mut()
+                    .for_each(|e| *e *= d);
+            }
         }
         for i in 0..nv {
             let (span, ancestors) = (formed(i), self.range(i));
-            let (before, after) = x.split_at_mut(i * nv);
-            let row_i = &mut after[span.clone()];
-            let mut chunks = row_i.chunks_exact_mut(WIDTH);
             let mut offset = span.start;
-            for chunk in chunks.by_ref() {
-                let mut sum: [f64; WIDTH] = (&*chunk).try_into().expect("a chunk");
+            while offset + WIDTH <= span.end {
+                let mut sums: [[f64; WIDTH]; M] = std::array::from_fn(|m| {
+                    x[m][i * nv + offset..][..WIDTH]
+                        .try_into()
+                        .expect("a chunk")
+                });
                 for at in ancestors.clone() {
                     let (j, l) = (self.ancestors[at], self.lower[at]);
-                    let row_j = &before[j * nv + offset..][..WIDTH];
-                    for (xi, xj) in sum.iter_mut().zip(row_j) {
-                        *xi -= l * xj;
+                    for (matrix, sum) in x.iter().zip(sums.iter_mut()) {
+                        let row_j = &matrix[j * nv + offset..][..WIDTH];
+                        for (xi, xj) in sum.iter_mut().zip(row_j) {
+                            *xi -= l * xj;
+                        }
                     }
                 }
-                chunk.copy_from_slice(&sum);
+                for (matrix, sum) in x.iter_mut().zip(&sums) {
+                    matrix[i * nv + offset..][..WIDTH].copy_from_slice(sum);
+                }
                 offset += WIDTH;
             }
-            for (c, xi) in chunks.into_remainder().iter_mut().enumerate() {
+            for c in offset..span.end {
+                let mut sums: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
                 for at in ancestors.clone() {
                     let (j, l) = (self.ancestors[at], self.lower[at]);
-                    *xi -= l * before[j * nv + offset + c];
+                    for (matrix, sum) in x.iter().zip(sums.iter_mut()) {
+                        *sum -= l * matrix[j * nv + c];
+                    }
+                }
+                for (matrix, sum) in x.iter_mut().zip(sums) {
+                    matrix[i * nv + c] = sum;
                 }
             }
         }
