@@ -483,6 +483,13 @@ impl ProjectionScratch {
         self.velocity.amax()
     }
 
+    /// The largest velocity row of v at the current rows (G v), as `project_velocities`
+    /// reports it.
+    pub fn velocity_residual(&mut self, v: &[f64]) -> f64 {
+        self.current.jacobian.mul_into(v, &mut self.velocity);
+        self.velocity.amax()
+    }
+
     /// Whether the kept rows are well conditioned and their residual round-off: `ROUND_OFF`
     /// of the mechanism's length, or, for a translation row evaluated in the plane
     /// (`close_in_plane`, loops of long cycles), `PLANAR_ROUND_OFF` times its loop's spread.
