@@ -101,16 +101,15 @@ fn ladder_projection() {
             "| {n} | {projection:.1} | {:.3} |",
             projection / (2 * n + 2) as f64
         );
-        // One projection of the closed state with every velocity moved by 1e-9: the velocity
-        // rows left on the state it returns (the residual reported after a projection is that
-        // of its own velocities' projection, which an impulse may replace).
-        {
+        // One projection of the closed state (at rest) with every velocity moved by 1e-9, then
+        // by 0.1: the rows left on the state it returns.
+        for moved in [1e-9, 0.1] {
             use lsdc::dynamics::algorithms::{forward_kinematics, Data};
             use lsdc::dynamics::loops::{constraints_into, Constraints, Extent};
             let model = &chain.model;
             let (mut system, mut y) = loop_costs::loop_system(&chain);
             let nq = y.len() - model.velocities();
-            y[nq..].iter_mut().for_each(|v| *v += 1e-9);
+            y[nq..].iter_mut().for_each(|v| *v += moved);
             let rows = |y: &[f64]| {
                 let (q, v) = model.split_state(y);
                 let mut data = Data::new(model);
@@ -123,7 +122,7 @@ fn ladder_projection() {
             system.keep_closed(0.0, &mut y).expect("projects");
             let after = rows(&y);
             println!(
-                "|   | rows before: {:.1e}, {:.1e}; after: {:.1e}, {:.1e} |  |",
+                "|   | velocities moved by {moved:e}: rows before {:.1e}, {:.1e}; after {:.1e}, {:.1e} |  |",
                 before.0, before.1, after.0, after.1
             );
         }
