@@ -8,7 +8,7 @@
 //! against log N). Where the loops' two methods (`dynamics::loops::range_space`) trade places, the
 //! necklace of N rods for N from 4 to 14 with each method forced (`switch`), and the necklace's
 //! energy and closure over 0.2 s at dopri5 1e-12 for N = 10, 100 and 1,000 (`accuracy`).
-//! Run with `cargo bench --bench loop_scaling [-- rows|chains|switch|accuracy|ladder-accuracy]`; CPU time per
+//! Run with `cargo bench --bench loop_scaling [-- rows|chains|switch|accuracy|ladder-accuracy|ladder-projection]`; CPU time per
 //! call, best of 7 batches of about 20 ms.
 
 use lsdc::driver::compile_text;
@@ -82,6 +82,58 @@ fn main() {
     }
     if wants("ladder-accuracy") {
         ladder_accuracy();
+    }
+    if asked.iter().any(|a| a == "ladder-projection") {
+        ladder_projection();
+    }
+}
+
+/// The ladder's projection alone at N = 100, 300 and 1,000 (cost per call, as in `chains`),
+/// then 5 s of CPU of projections at 1,000, for a profiler to sample apart from the start.
+fn ladder_projection() {
+    println!("\nThe ladder's projection (CPU time per call, best batch).\n");
+    println!("| N | projection µs | per body µs |");
+    println!("|---:|---:|---:|");
+    for n in [100, 300, 1000] {
+        let chain = prepared(&ladder_program(n));
+        let (_, projection) = call_costs(&chain);
+        println!(
+            "| {n} | {projection:.1} | {:.3} |",
+            projection / (2 * n + 2) as f64
+        );
+        // One projection of the closed state (at rest) with every velocity moved by 1e-9, then
+        // by 0.1: the rows left on the state it returns.
+        for moved in [1e-9, 0.1] {
+            use lsdc::dynamics::algorithms::{forward_kinematics, Data};
+            use lsdc::dynamics::loops::{constraints_into, Constraints, Extent};
+            let model = &chain.model;
+            let (mut system, mut y) = loop_costs::loop_system(&chain);
+            let nq = y.len() - model.velocities();
+            y[nq..].iter_mut().for_each(|v| *v += moved);
+            let rows = |y: &[f64]| {
+                let (q, v) = model.split_state(y);
+                let mut data = Data::new(model);
+                let mut c = Constraints::new(model);
+                forward_kinematics(model, &mut data, &q, v).expect("kinematics");
+                constraints_into(model, &mut data, &q, v, Extent::Rows, &mut c).expect("rows");
+                (c.residual.amax(), c.velocity.amax())
+            };
+            let before = rows(&y);
+            system.keep_closed(0.0, &mut y).expect("projects");
+            let after = rows(&y);
+            println!(
+                "|   | velocities moved by {moved:e}: rows before {:.1e}, {:.1e}; after {:.1e}, {:.1e} |  |",
+                before.0, before.1, after.0, after.1
+            );
+        }
+        if n == 1000 {
+            let (mut system, y) = loop_costs::loop_system(&chain);
+            let start = common::thread_cpu_seconds();
+            while common::thread_cpu_seconds() - start < 5.0 {
+                let mut z = y.clone();
+                std::hint::black_box(system.keep_closed(0.0, &mut z).expect("projects"));
+            }
+        }
     }
 }
 

@@ -4,13 +4,13 @@
 //! rows and the factorisation the projection just ended with (`ProjectionScratch`), not on
 //! rows evaluated again.
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 
 use super::factored::Factored;
 use super::orthonormal::orthonormal_allowed_motions;
 use super::project::ProjectionScratch;
 use super::structure::Structure;
-use crate::dynamics::algorithms::{crba, forward_kinematics, Data};
+use crate::dynamics::algorithms::{crba, crba_into, forward_kinematics, mass_times, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
@@ -20,6 +20,15 @@ use crate::kinematics::eval::EvalError;
 /// the rows' normal matrix, cost ε/σ² of the velocity (on a row of ten four-bars at σ = 1e-4,
 /// 8.7e-8 rad/s between the cranks, which should turn together).
 const DENSE_MOMENTUM_BELOW: f64 = 1e-2;
+
+/// Above this many velocities `project_momentum` multiplies by the mass matrix only over the
+/// entries its joints' branches can fill (`mass_times`), in a matrix kept in the projection's
+/// scratch: a fresh n × n matrix and dense products grow as n², and on the ladder of 1,000
+/// loops (3,002 velocities, projected by impulse at every step since its kept rows' conditioning
+/// falls below `NEAR_SINGULAR` from N = 300 on) they were most of a projection. Below, the
+/// dense products as before, to the last bit (the row of two four-bars' flat passages are
+/// sensitive to it).
+const SPARSE_MASS_ABOVE: usize = 400;
 
 /// How `project_momentum` spans the allowed motions near a singular configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,10 +84,25 @@ pub fn project_momentum(
     let Some(allowed) = allowed else {
         return Ok(());
     };
-    let mass = crba(model, data, &q[..model.nq])?;
     let tree = allowed.rows(0, model.nv);
-    let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
-    let reduced = tree.transpose() * (&mass * tree);
+    let (momentum, mass_tree) = if model.nv > SPARSE_MASS_ABOVE {
+        let (mass, rows) = projection.mass_storage(model);
+        crba_into(model, data, &q[..model.nq], mass)?;
+        let mut momentum = DVector::zeros(model.nv);
+        mass_times(mass, rows, &v[..model.nv], momentum.as_mut_slice());
+        let mut mass_tree = DMatrix::zeros(model.nv, tree.ncols());
+        let mut column = vec![0.0; model.nv];
+        for j in 0..tree.ncols() {
+            column.iter_mut().zip(tree.column(j).iter()).for_each(|(c, t)| *c = *t);
+            mass_times(mass, rows, &column, mass_tree.column_mut(j).as_mut_slice());
+        }
+        (momentum, mass_tree)
+    } else {
+        let mass = crba(model, data, &q[..model.nq])?;
+        let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
+        (momentum, &mass * tree)
+    };
+    let reduced = tree.transpose() * mass_tree;
     let Some(cholesky) = reduced.cholesky() else {
         return Ok(());
     };

@@ -46,6 +46,8 @@ pub struct Orientation {
     count: usize,
     /// One loop's rows at the state `relative` is asked about.
     row: Vec<f64>,
+    /// The firm rows and their scales, by loop (`set`).
+    firm: Vec<(usize, f64)>,
 }
 
 impl Orientation {
@@ -53,6 +55,14 @@ impl Orientation {
     pub fn set(&mut self, jacobian: &ConstraintJacobian, choice: &RowChoice) {
         self.count = 0;
         let firm = &choice.rows[..choice.rows.len() - choice.weak];
+        // The firm rows grouped by loop, each loop's in their order in `choice`, in one pass
+        // over them rather than one per loop (quadratic in the loops: a ladder of 1,000 loops
+        // spent half its projections' time here). The sort is stable, and the rows are sorted
+        // already (`RowChoice::new`).
+        self.firm.clear();
+        self.firm.extend(firm.iter().copied().zip(choice.scales.iter().copied()));
+        self.firm.sort_by_key(|&(row, _)| row / 6);
+        let mut next = 0;
         for (block_index, block) in jacobian.blocks.iter().enumerate() {
             if self.loops.len() == self.count {
                 self.loops.push(LoopReference::default());
@@ -60,10 +70,12 @@ impl Orientation {
             let reference = &mut self.loops[self.count];
             reference.block = block_index;
             reference.rows.clear();
+            let start = next;
+            while next < self.firm.len() && self.firm[next].0 / 6 == block_index {
+                next += 1;
+            }
             reference.rows.extend(
-                (firm.iter().zip(&choice.scales))
-                    .filter(|(&row, _)| row / 6 == block_index)
-                    .map(|(&row, &scale)| (row % 6, scale)),
+                (self.firm[start..next].iter()).map(|&(row, scale)| (row % 6, scale)),
             );
             if reference.rows.is_empty() {
                 continue;
@@ -93,7 +105,9 @@ impl Orientation {
     /// (1 at the reference, negative past a singular configuration), and that loop; None
     /// without a reference.
     pub fn relative(&mut self, jacobian: &ConstraintJacobian) -> Option<(f64, usize)> {
-        let Orientation { loops, count, row } = self;
+        let Orientation {
+            loops, count, row, ..
+        } = self;
         loops[..*count]
             .iter()
             .map(|reference| {

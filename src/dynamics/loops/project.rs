@@ -15,7 +15,7 @@ use super::rows::{
     Extent,
 };
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
-use crate::dynamics::algorithms::{forward_kinematics, Data};
+use crate::dynamics::algorithms::{forward_kinematics, mass_rows, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 use crate::spatial::Pose;
@@ -132,6 +132,10 @@ pub struct ProjectionScratch {
     /// The loops' translation rows of a planar mechanism, evaluated so that their round-off
     /// does not grow with the chain's extent (`close_in_plane`).
     plane: Option<PlanarClosure>,
+    /// The mass matrix and the rows each of its columns can fill (`mass_rows`), for the
+    /// momentum projection of large mechanisms (`project_momentum`); empty until asked for.
+    mass: DMatrix<f64>,
+    mass_rows: Vec<Vec<usize>>,
 }
 
 /// The factor a `ProjectionScratch` holds.
@@ -174,7 +178,19 @@ impl ProjectionScratch {
             row: Vec::new(),
             coefficients: Vec::new(),
             plane: None,
+            mass: DMatrix::zeros(0, 0),
+            mass_rows: Vec::new(),
         }
+    }
+
+    /// The mass matrix's storage (filled by `crba_into` where it writes, zero elsewhere) and
+    /// the rows of each column it can fill, sized for `model` on first use.
+    pub fn mass_storage(&mut self, model: &Model) -> (&mut DMatrix<f64>, &[Vec<usize>]) {
+        if self.mass.nrows() != model.nv {
+            self.mass = DMatrix::zeros(model.nv, model.nv);
+            self.mass_rows = mass_rows(model);
+        }
+        (&mut self.mass, &self.mass_rows)
     }
 
     /// Evaluates the loops' translation rows in the plane from now on (`PlanarClosure`), or
@@ -463,6 +479,13 @@ impl ProjectionScratch {
             self.factor = damped.into_storage();
             v.copy_from_slice(&self.correction);
         }
+        self.current.jacobian.mul_into(v, &mut self.velocity);
+        self.velocity.amax()
+    }
+
+    /// The largest velocity row of v at the current rows (G v), as `project_velocities`
+    /// reports it.
+    pub fn velocity_residual(&mut self, v: &[f64]) -> f64 {
         self.current.jacobian.mul_into(v, &mut self.velocity);
         self.velocity.amax()
     }
