@@ -169,6 +169,31 @@ fn methods_switch() {
     }
 }
 
+/// A run of `program` over `duration` with dopri5 at 1e-12, projected after each step and
+/// sampled every `output`, with its CPU seconds; it must not fail.
+fn projected_run(
+    program: &str,
+    duration: f64,
+    output: f64,
+) -> (lsdc::simulate::run::Simulation, f64) {
+    let mut prepared = prepared(program);
+    prepared.settings = Settings {
+        integrator: Integrator::DormandPrince,
+        duration,
+        output,
+        rtol: 1e-12,
+        atol: 1e-12,
+        stabilisation: Stabilisation::Projection,
+        ..prepared.settings
+    };
+    let start = common::thread_cpu_seconds();
+    let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
+    let seconds = common::thread_cpu_seconds() - start;
+    let failure = &simulation.report.failure;
+    assert!(failure.is_none(), "{failure:?}");
+    (simulation, seconds)
+}
+
 /// The necklace at N = 10, 100 and 1,000 over 0.2 s with dopri5 at 1e-12, projected after
 /// each step: its energy drift and its loops' largest residuals (the suite's
 /// `long_chains` runs N = 10 and 100).
@@ -177,21 +202,8 @@ fn necklace_accuracy() {
     println!("| N | method (the rule's) | steps | energy drift | position residual | velocity residual | run s (CPU) |");
     println!("|---:|---|---:|---:|---:|---:|---:|");
     for n in [10, 100, 1000] {
-        let mut prepared = prepared(&necklace_program(n));
-        prepared.settings = Settings {
-            integrator: Integrator::DormandPrince,
-            duration: 0.2,
-            output: 0.02,
-            rtol: 1e-12,
-            atol: 1e-12,
-            stabilisation: Stabilisation::Projection,
-            ..prepared.settings
-        };
-        let start = common::thread_cpu_seconds();
-        let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
-        let seconds = common::thread_cpu_seconds() - start;
+        let (simulation, seconds) = projected_run(&necklace_program(n), 0.2, 0.02);
         let report = &simulation.report;
-        assert!(report.failure.is_none(), "{:?}", report.failure);
         let c = report.constraints.as_ref().expect("loops");
         println!(
             "| {n} | range-space | {} | {:.1e} | {:.1e} | {:.1e} | {seconds:.2} |",
@@ -210,21 +222,8 @@ fn ladder_accuracy() {
     println!("| N | steps | energy drift | position residual | velocity residual | before projection (position, velocity) | run s (CPU) |");
     println!("|---:|---:|---:|---:|---:|---|---:|");
     for n in [100, 300, 1000] {
-        let mut prepared = prepared(&ladder_program(n));
-        prepared.settings = Settings {
-            integrator: Integrator::DormandPrince,
-            duration: 0.05,
-            output: 0.05,
-            rtol: 1e-12,
-            atol: 1e-12,
-            stabilisation: Stabilisation::Projection,
-            ..prepared.settings
-        };
-        let start = common::thread_cpu_seconds();
-        let simulation = lsdc::simulate::run::run(&prepared, &mut |_| {});
-        let seconds = common::thread_cpu_seconds() - start;
+        let (simulation, seconds) = projected_run(&ladder_program(n), 0.05, 0.05);
         let report = &simulation.report;
-        assert!(report.failure.is_none(), "{:?}", report.failure);
         let c = report.constraints.as_ref().expect("loops");
         println!(
             "| {n} | {} | {:.1e} | {:.1e} | {:.1e} | {:.1e}, {:.1e} | {seconds:.2} |",
