@@ -116,7 +116,7 @@ pub fn run(args: &IdentifyArgs) -> ExitCode {
             what,
             span,
             "not identified",
-            "identify a mechanism of revolute and prismatic joints (joints of their own coordinates)",
+            "identify a tree of joints of their own coordinates (revolute, prismatic), or a mechanism whose ball joints are on closed loops",
         );
     }
     let asked = match resolve(&prepared.model, mechanism, &args.parameters) {

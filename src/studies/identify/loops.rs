@@ -15,11 +15,12 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::dynamics::algorithms::{forward_kinematics, Data};
+use crate::dynamics::algorithms::{crba, forward_kinematics, Data};
 use crate::dynamics::loops::{constraints_into, Constraints, Extent};
 use crate::dynamics::model::Model;
 use crate::linalg::svd;
 use crate::simulate::system::SystemError;
+use crate::studies::identify::parameters::joint_of_velocity;
 
 /// Gauss–Newton on the passive positions stops when the rows' largest residual is at most
 /// this (lengths in the model's units, rotations in radians), or after `NEWTON_STEPS` steps.
@@ -29,6 +30,10 @@ const NEWTON_STEPS: usize = 30;
 /// Singular values of G_p at most this fraction of the largest are zero: the measured
 /// coordinates then do not determine the others.
 const RANK_FLOOR: f64 = 1e-9;
+
+/// A motion is without mass when its kinetic energy at unit rate (nᵀ M n, n of unit length) is
+/// at most this fraction of M's largest diagonal entry: round-off of a zero.
+const MASSLESS: f64 = 1e-12;
 
 /// The loops' state at the samples, and where the last one closed.
 pub struct LoopState {
@@ -74,10 +79,11 @@ impl LoopState {
         let (n, m) = (model.velocities(), self.actuated.len());
         let mut q = self.q.clone();
         for &i in &self.actuated {
-            q[i] = u.0[i];
+            q[position_of(model, i)] = u.0[i];
         }
         let zero = vec![0.0; n];
         let mut residual = f64::INFINITY;
+        let mut step = vec![0.0; n];
         for _ in 0..NEWTON_STEPS {
             forward_kinematics(model, data, &q, &zero).map_err(|e| SystemError::from(e).to_string())?;
             constraints_into(model, data, &q, &zero, Extent::Rows, &mut self.constraints)
@@ -87,11 +93,13 @@ impl LoopState {
                 break;
             }
             let g = self.constraints.jacobian.dense();
-            let inverse = self.passive_inverse(&g)?;
-            let step = -(inverse * &self.constraints.residual);
+            let inverse = self.passive_inverse(model, data, (&q, Closed::No), &g)?;
+            let passive_step = -(inverse * &self.constraints.residual);
             for (k, &i) in self.passive.iter().enumerate() {
-                q[i] += step[k];
+                step[i] = passive_step[k];
             }
+            // A ball joint's step is a rotation: its quaternion moves along it.
+            model.retract(&mut q, &step);
         }
         if residual > 1e3 * CLOSED {
             return Err(format!(
@@ -99,7 +107,7 @@ impl LoopState {
             ));
         }
         let g = self.constraints.jacobian.dense();
-        let inverse = self.passive_inverse(&g)?;
+        let inverse = self.passive_inverse(model, data, (&q, Closed::Yes), &g)?;
         let g_u = g.select_columns(&self.actuated);
         // X = [I; −G_p⁺ G_u], by the velocities' order.
         let coupling = -(&inverse * &g_u);
@@ -128,22 +136,89 @@ impl LoopState {
         Ok(ClosedSample { q, v, a, motions })
     }
 
-    /// G_p⁺, refused where G_p loses rank (the measured coordinates leave a motion free).
-    fn passive_inverse(&self, g: &DMatrix<f64>) -> Result<DMatrix<f64>, String> {
+    /// G_p⁺, refused where G_p loses rank along a motion with mass (the measured coordinates
+    /// leave a motion free). A motion without mass (a rod's spin about its own axis between two
+    /// ball joints, its inertia about the axis zero) is left out: G_p⁺ gives it no rate, and
+    /// whatever its rate, it changes no effort. Whether the free motions have mass is decided
+    /// at the closed configuration: on the way there (Gauss–Newton's steps, minimum-norm) the
+    /// rows' null space mixes them with motions of the closure's error.
+    fn passive_inverse(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        (q, closed): (&[f64], Closed),
+        g: &DMatrix<f64>,
+    ) -> Result<DMatrix<f64>, String> {
         let g_p = g.select_columns(&self.passive);
-        let decomposition = svd(g_p, true, true).ok_or("the loops' rows are not finite")?;
+        let decomposition = svd(g_p.clone(), true, true).ok_or("the loops' rows are not finite")?;
         let values = &decomposition.singular_values;
         let floor = RANK_FLOOR * values.max();
         let rank = values.iter().filter(|&&s| s > floor).count();
-        if rank < self.passive.len() {
+        let free = self.passive.len() - rank;
+        let with_mass = match (free, closed) {
+            (0, _) | (_, Closed::No) => 0,
+            (_, Closed::Yes) => self.free_with_mass(model, data, q, &g_p, floor)?,
+        };
+        if with_mass > 0 {
             return Err(format!(
-                "the measured efforts' coordinates do not determine the others: the loops leave {} motion{} of the mechanism free with them held; measure the efforts of independent coordinates (the actuated ones)",
-                self.passive.len() - rank,
-                if self.passive.len() - rank == 1 { "" } else { "s" }
+                "the measured efforts' coordinates do not determine the others: the loops leave {with_mass} motion{} with mass free with them held; measure the efforts of independent coordinates (the actuated ones)",
+                if with_mass == 1 { "" } else { "s" }
             ));
         }
         decomposition
             .pseudo_inverse(floor)
             .map_err(|e| e.to_string())
+    }
+
+    /// How many of the passive motions G_p leaves free have mass: the rank of M restricted to
+    /// them, Nᵀ M N, N their basis (G_p's right singular vectors of singular values at most
+    /// `floor`, from the SVD of G_p squared with zero rows: a thin SVD of a wide G_p leaves its
+    /// null space out), its eigenvalues above round-off of M's largest diagonal entry.
+    fn free_with_mass(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        g_p: &DMatrix<f64>,
+        floor: f64,
+    ) -> Result<usize, String> {
+        let p = self.passive.len();
+        let mut square = DMatrix::zeros(g_p.nrows().max(p), p);
+        square.rows_mut(0, g_p.nrows()).copy_from(g_p);
+        let decomposition = svd(square, false, true).ok_or("the loops' rows are not finite")?;
+        let v_t = decomposition.v_t.ok_or("the loops' rows have no right singular vectors")?;
+        let free: Vec<usize> = (decomposition.singular_values.iter().enumerate())
+            .filter(|(_, &s)| s <= floor)
+            .map(|(k, _)| k)
+            .collect();
+        // N over the tree's velocities: the complementary links' coordinates carry no mass.
+        let mut basis = DMatrix::zeros(model.nv, free.len());
+        for (column, &k) in free.iter().enumerate() {
+            for (j, &i) in self.passive.iter().enumerate() {
+                if i < model.nv {
+                    basis[(i, column)] = v_t[(k, j)];
+                }
+            }
+        }
+        let mass = crba(model, data, &q[..model.nq]).map_err(|e| SystemError::from(e).to_string())?;
+        let scale = mass.diagonal().amax();
+        let restricted = basis.transpose() * &mass * &basis;
+        let energies = restricted.symmetric_eigenvalues();
+        Ok(energies.iter().filter(|&&e| e > MASSLESS * scale).count())
+    }
+}
+
+/// Whether the loops are closed at the configuration G is taken at.
+#[derive(Clone, Copy, PartialEq)]
+enum Closed {
+    Yes,
+    No,
+}
+
+/// The position of velocity `velocity` (a joint's own coordinate: the measured ones are).
+fn position_of(model: &Model, velocity: usize) -> usize {
+    match joint_of_velocity(model, velocity) {
+        Some(joint) => joint.q_offset + velocity - joint.v_offset,
+        None => model.nq + velocity - model.nv,
     }
 }

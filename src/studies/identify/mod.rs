@@ -33,7 +33,7 @@ use self::measured::Measured;
 use self::parameters::{model_value, parameter_name, Asked, Parameter};
 use crate::dynamics::algorithms::regressor::{regressor, PARAMETERS_PER_BODY};
 use crate::dynamics::algorithms::{rnea, Data};
-use crate::dynamics::joint::JointType;
+use crate::dynamics::joint::{Joint, JointType};
 use crate::dynamics::loops::Stabilisation;
 use crate::dynamics::model::Model;
 use crate::elab::mechanism::Mechanism;
@@ -178,8 +178,10 @@ fn quoted(names: &[String]) -> String {
     quoted.join(", ")
 }
 
-/// Refuses what the regressor does not cover: contacts, spherical and free joints (closed
-/// loops are projected on the measured coordinates, `loops`).
+/// Refuses what the regressor does not cover: contacts, free joints, and spherical joints of
+/// a tree, whose orientations would be measured. On a mechanism with closed loops the measured
+/// coordinates are the actuated ones and the others follow from the loops' closure (`loops`),
+/// so its ball joints are solved, not read.
 pub fn check_supported(model: &Model, mechanism: &Mechanism) -> Result<(), IdentifyError> {
     if let Some(contact) = mechanism.contacts.first() {
         return Err(IdentifyError::Unsupported {
@@ -187,7 +189,12 @@ pub fn check_supported(model: &Model, mechanism: &Mechanism) -> Result<(), Ident
             span: contact.span,
         });
     }
-    if let Some(joint) = model.joints.iter().find(|j| j.kind != JointType::Chain) {
+    let read = |j: &&Joint| match j.kind {
+        JointType::Chain => false,
+        JointType::Spherical { .. } => !model.has_loops(),
+        JointType::Free { .. } => true,
+    };
+    if let Some(joint) = model.joints.iter().find(read) {
         return Err(IdentifyError::Unsupported {
             what: format!("`{}` is a spherical or free joint, whose measured orientation would be a quaternion: `identify` reads joints' own coordinates", joint.chain.name),
             span: mechanism.join(joint.chain.join).span,
