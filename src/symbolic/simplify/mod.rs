@@ -15,7 +15,9 @@
 //! Expanding shares less: a sum read by several nodes, expanded in each, is written in each.
 //! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
 //! result with the fewest operations is kept; the simplified equations are never longer than
-//! the input.
+//! the input. The unexpanded pass runs first, and an expanded one is abandoned once its output
+//! is well past the best so far (`ABANDON`): on long chains the most expanded forms of the
+//! mass matrix end several times longer, and most of their cost was in finishing them.
 //!
 //! Values: like computer algebra systems, the simplifier takes x − x = 0, 0 · x = 0 and
 //! x / x = 1 for every x, so the result equals the input wherever the input is finite, and may
@@ -40,6 +42,15 @@ const TERMS: usize = 64;
 /// pendulums (n = 1 … 100) and the satellite the same size (BENCHMARKS.md, "The simplifier's
 /// cost: a budget of products, and the caps' trade-off").
 const WORK: usize = 64;
+/// A candidate form is abandoned once its output holds more nodes, beside the symbols, than
+/// 3/2 of the operations of the best form before it plus 64. The output's nodes are its
+/// operations with the numbers and any node no root reaches in the end (the 64 leave the
+/// smallest groups, where these weigh most, always finished), so this is not an exact bound;
+/// on the pendulums (n = 1 … 5, 10, 20, 50, 100) and the satellite no form that would have been
+/// kept passes it, and at n = 100 the mass matrix's expansions to 4 and 64 terms, which end 1.7
+/// and 7.4 times longer than the unexpanded form, stop there (BENCHMARKS.md, "The
+/// simplifier's cost: candidates abandoned").
+const ABANDON: (usize, usize, usize) = (3, 2, 64);
 /// The largest power of a sum expanded.
 const POWER: i32 = 4;
 
@@ -62,19 +73,32 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
     }
     let mut simplified = Vec::new();
     for roots in groups {
+        // The unexpanded form first (linear in the group), then the expansions from the least
+        // to the most: each stops once its output holds more nodes than `ABANDON` allows beside
+        // the operations of the best form found before it, which it can then hardly beat. On ties
+        // the more expanded form is kept, as when the candidates were compared all at once.
         let candidates = [
-            Expansion::Shared(TERMS),
-            Expansion::Shared(4),
-            Expansion::Shared(1),
             Expansion::None,
+            Expansion::Shared(1),
+            Expansion::Shared(4),
+            Expansion::Shared(TERMS),
         ];
-        let (best, best_roots) = candidates
-            .into_iter()
-            .map(|expansion| simplify_with(pool, roots, expansion, Pool::new()))
-            .min_by_key(|(pool, roots)| pool.operation_count(roots))
-            .expect("candidates");
+        let mut best: Option<(Pool, Vec<ExprId>, usize)> = None;
+        for expansion in candidates {
+            let limit = best.as_ref().map_or(usize::MAX, |(_, _, operations)| {
+                operations.saturating_mul(ABANDON.0) / ABANDON.1 + ABANDON.2
+            });
+            if let Some((pool, roots)) = simplify_with(pool, roots, expansion, Pool::new(), limit) {
+                let operations = pool.operation_count(&roots);
+                if best.as_ref().is_none_or(|&(_, _, fewest)| operations <= fewest) {
+                    best = Some((pool, roots, operations));
+                }
+            }
+        }
+        let (best, best_roots, _) = best.expect("the unexpanded form is never abandoned");
         let copied;
-        (gathered, copied) = simplify_with(&best, &best_roots, Expansion::None, gathered);
+        (gathered, copied) = simplify_with(&best, &best_roots, Expansion::None, gathered, usize::MAX)
+            .expect("without a limit");
         simplified.push(copied);
     }
     (gathered, simplified)
@@ -90,14 +114,17 @@ enum Expansion {
     None,
 }
 
-/// The roots simplified as `expansion` says, written into `out`.
+/// The roots simplified as `expansion` says, written into `out`; `None` (abandoned) as soon as
+/// `out` holds more than `limit` nodes beyond those it had and the symbols.
 fn simplify_with(
     pool: &Pool,
     roots: &[ExprId],
     expansion: Expansion,
     out: Pool,
-) -> (Pool, Vec<ExprId>) {
+    limit: usize,
+) -> Option<(Pool, Vec<ExprId>)> {
     let mut pass = Pass::new(pool, out);
+    let limit = limit.saturating_add(pass.out.len());
     let order = topological_order(roots, |id| pool.operands(id));
     for &root in roots {
         pass.roots[root.index()] = true;
@@ -123,6 +150,9 @@ fn simplify_with(
                 form = pass.atom(node);
             }
         }
+        if pass.out.len() > limit {
+            return None;
+        }
         pass.forms[id.index()] = Some(form);
         for operand in pool.operands(id) {
             let left = &mut pass.readers[operand.index()];
@@ -132,8 +162,14 @@ fn simplify_with(
             }
         }
     }
-    let simplified = roots.iter().map(|&root| pass.written(root)).collect();
-    (pass.out, simplified)
+    let mut simplified = Vec::with_capacity(roots.len());
+    for &root in roots {
+        simplified.push(pass.written(root));
+        if pass.out.len() > limit {
+            return None;
+        }
+    }
+    Some((pass.out, simplified))
 }
 
 /// The equations with every expression simplified, in a new pool.
