@@ -2,8 +2,10 @@
 //! closed when pose(a)·A·D(q) = pose(b)·B. The residual has 6 rows per loop: the rotation error
 //! of the relative rotation (its skew part, zero when the frames agree, see `RotationError`)
 //! and the position difference, both in the world frame; its Jacobian is exact (not a finite
-//! difference), stored by loop: a loop's six rows move only the coordinates on the paths from
-//! its two bodies to earth and its own (`ClosureJacobian`).
+//! difference) over the coordinates of the loop's cycle, stored by loop (`ClosureJacobian`). The
+//! coordinates above a loop's last common ancestor are left out of its rows: they move the whole
+//! loop rigidly, so that their exact entries are zero in the rotation rows and ω × r in the
+//! position rows, which vanish with the residual r (see `closure`).
 
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};
 
@@ -100,18 +102,23 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
             residual[6 * k + r] = rotation_error[r];
             residual[6 * k + 3 + r] = position_error[r];
         }
-        // The loop's columns: the coordinates moving the chain's end (the first body's path
-        // and the join's own) and those moving the target (the second body's path). Every
-        // other column of its rows is zero.
+        // The loop's columns: its cycle, the coordinates moving the chain's end (the first
+        // body's path to earth up to the last common ancestor, and the join's own) or the
+        // target (the second body's path, as far). A coordinate above the common ancestor
+        // moves both frames alike: it leaves the rotation rows at zero exactly and turns the
+        // position error r, ω × r, without changing its size (so nothing assembly minimises);
+        // it is left out, as the dynamics' rows leave it out (`dynamics::loops::rows`), so
+        // that a loop's rows cost its cycle however deep in the tree it closes.
         let end_path = configuration.path_columns(joint.first_body);
         let target_path = configuration.path_columns(joint.second_body);
         let own = joint.offset..joint.offset + joint.coordinate_count();
-        let mut columns: Vec<usize> = (end_path.iter().copied())
+        let mut columns: Vec<usize> = (end_path.iter())
+            .filter(|c| target_path.binary_search(c).is_err())
+            .chain(target_path.iter().filter(|c| end_path.binary_search(c).is_err()))
+            .copied()
             .chain(own.clone())
-            .chain(target_path.iter().copied())
             .collect();
         columns.sort_unstable();
-        columns.dedup();
         let mut values = DMatrix::zeros(6, columns.len());
         for (local, &c) in columns.iter().enumerate() {
             // Twists of the chain's end and of the target frame for coordinate c.
@@ -168,8 +175,8 @@ pub struct ClosureBlock {
     pub values: DMatrix<f64>,
 }
 
-/// The closure Jacobian Φ′(q), 6 rows per loop, stored by loop: a chain of m loops meeting a few
-/// coordinates each costs what its length costs, where the dense 6m × n matrix costs m n (a
+/// The closure Jacobian Φ′(q), 6 rows per loop, stored by loop over the loop's cycle: a chain of
+/// m loops meeting a few coordinates each costs what its length costs, where the dense 6m × n matrix costs m n (a
 /// ladder of 1,000 loops: 6,000 × 3,002 entries, nearly all zero, at every evaluation).
 #[derive(Clone, Debug)]
 pub struct ClosureJacobian {
