@@ -293,8 +293,14 @@ impl ClosureJacobian {
     pub fn mul_dense(&self, m: &DMatrix<f64>) -> DMatrix<f64> {
         let mut product = DMatrix::zeros(self.nrows(), m.ncols());
         for (k, block) in self.blocks.iter().enumerate() {
-            let rows = m.select_rows(&block.columns);
-            product.rows_mut(6 * k, 6).copy_from(&(&block.values * rows));
+            // A loop over every coordinate (one loop through the whole mechanism, the
+            // necklace) reads m as it is, without a copy of its rows.
+            let rows = if block.columns.len() == m.nrows() {
+                &block.values * m
+            } else {
+                &block.values * m.select_rows(&block.columns)
+            };
+            product.rows_mut(6 * k, 6).copy_from(&rows);
         }
         product
     }
