@@ -342,18 +342,3 @@ fn axpy(x: &mut Sparse, a: f64, v: &Sparse) -> Vec<usize> {
     *x = merged;
     added
 }
-
-/// The pivoted elimination (`pivoted`) of every row of the dense matrix `m`, on the rows'
-/// nonzero entries.
-pub fn pivoted_dense(m: &DMatrix<f64>, tolerance: f64) -> Elimination {
-    let rows: Vec<Sparse> = (0..m.nrows())
-        .map(|r| {
-            (0..m.ncols())
-                .map(|c| (c, m[(r, c)]))
-                .filter(|&(_, value)| value != 0.0)
-                .collect()
-        })
-        .collect();
-    let every: Vec<usize> = (0..m.nrows()).collect();
-    pivoted(rows, m.ncols(), &every, tolerance)
-}

@@ -295,8 +295,8 @@ impl Correction for NearestSteps<'_> {
         let current = self.current.as_ref().expect("linearised");
         let (given, free) = (&self.given, &self.free);
         let (j_given, j_free) = (
-            free_columns(&current.jacobian, given),
-            free_columns(&current.jacobian, free),
+            current.jacobian.select_columns(given),
+            current.jacobian.select_columns(free),
         );
         let away_from_free = |m: &DMatrix<f64>| -> DMatrix<f64> {
             match free_range(&j_free) {
@@ -476,7 +476,7 @@ impl Correction for ClosingSteps<'_> {
     }
 
     fn linearise(&mut self) -> Result<(), AssemblyError> {
-        let jacobian = free_columns(&self.current.jacobian, self.free);
+        let jacobian = self.current.jacobian.select_columns(self.free);
         self.gradient = jacobian.transpose() * &self.current.residual;
         self.normal = jacobian.transpose() * &jacobian;
         Ok(())
@@ -512,11 +512,6 @@ impl Correction for ClosingSteps<'_> {
             (self.q, self.current, self.cost) = (q, current, cost);
         }
     }
-}
-
-/// The columns `free` of `jacobian`.
-fn free_columns(jacobian: &DMatrix<f64>, free: &[usize]) -> DMatrix<f64> {
-    DMatrix::from_fn(jacobian.nrows(), free.len(), |r, c| jacobian[(r, free[c])])
 }
 
 /// A few more minimum-norm Gauss–Newton steps after convergence, while they reduce the residual:
@@ -578,7 +573,7 @@ impl Correction for PolishingSteps<'_> {
     }
 
     fn step(&mut self, _damping: f64) -> Result<Option<f64>, AssemblyError> {
-        let jacobian = free_columns(&self.current.jacobian, self.free);
+        let jacobian = self.current.jacobian.select_columns(self.free);
         let Some(svd) = crate::linalg::svd(jacobian, true, true) else {
             return Ok(None);
         };

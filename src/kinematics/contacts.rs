@@ -272,20 +272,18 @@ fn contact_jacobians(
         let poses = &configuration.poses;
         let touch = contact.touch(&poses[contact.plane_body], &poses[contact.round_body]);
         let (axes, point) = (touch.axes, touch.point);
-        let velocity_at = |body: usize, column: usize| {
-            let twist = spatial::Motion::from_iterator(
-                configuration.jacobians[body].column(column).iter().copied(),
-            );
+        let (round, plane) = (
+            configuration.jacobian(contact.round_body),
+            configuration.jacobian(contact.plane_body),
+        );
+        let velocity_at = |jacobian: &DMatrix<f64>, column: usize| {
+            let twist = spatial::Motion::from_iterator(jacobian.column(column).iter().copied());
             spatial::linear(&spatial::shifted(&point, &twist))
         };
         for &row in contact.rows() {
             let axis = axes.column(row).into_owned();
             let entries: Vec<f64> = (0..columns)
-                .map(|c| {
-                    axis.dot(
-                        &(velocity_at(contact.round_body, c) - velocity_at(contact.plane_body, c)),
-                    )
-                })
+                .map(|c| axis.dot(&(velocity_at(&round, c) - velocity_at(&plane, c))))
                 .collect();
             if row == 2 {
                 normal.push(entries.clone());

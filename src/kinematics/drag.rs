@@ -100,7 +100,7 @@ pub(crate) fn linearise(
 ) -> Result<Linearised, EvalError> {
     let closed = closure(model, q)?;
     let point = frame.pose(&closed.configuration).translation.vector;
-    let twists = &closed.configuration.jacobians[frame.body];
+    let twists = &closed.configuration.jacobian(frame.body);
     let mut point_jacobian = DMatrix::zeros(3, q.len());
     for c in 0..q.len() {
         let twist = spatial::Twist::from_column_slice(twists.column(c).as_slice());
@@ -111,7 +111,7 @@ pub(crate) fn linearise(
         point,
         point_jacobian,
         residual: closed.residual,
-        closure_jacobian: closed.jacobian,
+        closure_jacobian: closed.jacobian.dense(),
     })
 }
 

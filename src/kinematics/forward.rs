@@ -11,15 +11,50 @@ use crate::spatial::{self, Pose, Twist};
 pub struct Configuration {
     /// Pose of body j at index j; index 0 is earth.
     pub poses: Vec<Pose>,
-    /// World-frame twist of body j per unit rate of each coordinate (6 × coordinate count).
-    pub jacobians: Vec<DMatrix<f64>>,
+    /// World-frame twist per unit rate of each coordinate (6 × coordinate count): a coordinate
+    /// moves every body below its joint with this one twist. A body's Jacobian is these columns
+    /// over the coordinates on its path to earth, zero elsewhere (`jacobian`); stored by column
+    /// rather than per body, a chain of N bodies costs N columns instead of N Jacobians of N.
+    pub columns: DMatrix<f64>,
+    /// Per body, its parent body and the range of the coordinates of the joint to it (earth:
+    /// itself and none).
+    links: Vec<(usize, std::ops::Range<usize>)>,
 }
 
 impl Configuration {
-    /// Twist of body j (world frame) for coordinate rates `v`.
+    /// The coordinates that move body j (those on its path to earth), in increasing order.
+    pub fn path_columns(&self, j: usize) -> Vec<usize> {
+        let mut columns = Vec::new();
+        let mut body = j;
+        while body != 0 {
+            let (parent, range) = &self.links[body];
+            columns.extend(range.clone());
+            body = *parent;
+        }
+        columns.sort_unstable();
+        columns
+    }
+
+    /// World-frame twist of body j per unit rate of each coordinate (6 × coordinate count).
+    pub fn jacobian(&self, j: usize) -> DMatrix<f64> {
+        let mut jacobian = DMatrix::zeros(6, self.columns.ncols());
+        for c in self.path_columns(j) {
+            jacobian.set_column(c, &self.columns.column(c));
+        }
+        jacobian
+    }
+
+    /// The world twist of coordinate c's unit rate.
+    pub fn column(&self, c: usize) -> Twist {
+        Twist::from_column_slice(self.columns.column(c).as_slice())
+    }
+
+    /// Twist of body j (world frame) for coordinate rates `v`: the columns on its path, summed
+    /// in the coordinates' order (the dense product's order, its zero terms left out).
     pub fn twist(&self, j: usize, v: &[f64]) -> Twist {
-        let product = &self.jacobians[j] * nalgebra::DVector::from_column_slice(v);
-        Twist::from_column_slice(product.as_slice())
+        self.path_columns(j)
+            .into_iter()
+            .fold(Twist::zeros(), |sum, c| sum + self.column(c) * v[c])
     }
 }
 
@@ -27,12 +62,12 @@ pub fn forward(model: &KinematicModel, q: &[f64]) -> Result<Configuration, EvalE
     let n = model.topology.body_count();
     let nq = model.coordinate_count;
     let mut poses = vec![Pose::identity(); n + 1];
-    let mut jacobians = vec![DMatrix::zeros(6, nq); n + 1];
+    let mut columns = DMatrix::zeros(6, nq);
+    let mut links = vec![(0, 0..0); n + 1];
     for link in &model.topology.principal {
         let joint = &model.joints[link.child - 1];
         let coordinates = &q[joint.offset..joint.offset + joint.coordinate_count()];
         let (chain, subspace) = joint.chain(coordinates)?;
-        let mut jacobian = jacobians[link.parent].clone();
         let (base, child_pose) = placed(link, joint, poses[link.parent], &chain);
         let inverse_chain = chain.inverse();
         for k in 0..joint.coordinate_count() {
@@ -45,14 +80,19 @@ pub fn forward(model: &KinematicModel, q: &[f64]) -> Result<Configuration, EvalE
                 -spatial::motion_to_parent(&inverse_chain, &column)
             };
             let world = spatial::motion_to_parent(&base, &local);
-            for r in 0..6 {
-                jacobian[(r, joint.offset + k)] += world[r];
-            }
+            columns.set_column(joint.offset + k, &world);
         }
         poses[link.child] = child_pose;
-        jacobians[link.child] = jacobian;
+        links[link.child] = (
+            link.parent,
+            joint.offset..joint.offset + joint.coordinate_count(),
+        );
     }
-    Ok(Configuration { poses, jacobians })
+    Ok(Configuration {
+        poses,
+        columns,
+        links,
+    })
 }
 
 /// The pose of every body alone (index 0 is earth), without the Jacobians, whose 6 × n entries

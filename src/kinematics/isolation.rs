@@ -18,10 +18,10 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::branch::{join_points, size};
-use super::closure::closure;
+use super::closure::{closure, ClosureJacobian};
 use super::eval::EvalError;
 use super::mobility::{rank, RANK_TOLERANCE};
-use crate::elimination::{pivoted_dense, pivoted_in_blocks, Elimination, Sparse};
+use crate::elimination::{pivoted, pivoted_in_blocks, Elimination};
 use super::model::KinematicModel;
 
 /// A closed configuration the loops hold still, and the certificate.
@@ -87,12 +87,18 @@ pub fn isolated(model: &KinematicModel, q: &[f64]) -> Result<Option<Isolated>, E
     // columns at the rank's tolerance (`mobility::RANK_TOLERANCE`, the loops' own test), not
     // from singular value decompositions of the dense 6m × n matrix: a chain of loops meets
     // only neighbours in each, where the decompositions cost the cube of its length.
-    let rows = pivoted_dense(&jacobian, RANK_TOLERANCE);
+    let every_row: Vec<usize> = (0..jacobian.nrows()).collect();
+    let rows = pivoted(
+        jacobian.sparse_rows(),
+        jacobian.ncols(),
+        &every_row,
+        RANK_TOLERANCE,
+    );
     let rank = rows.picked().len();
     // Φ′'s columns in the order of their first row (loop after loop), searched a loop's worth
     // at a time: in the coordinates' order (a ladder's rungs, then its rails) each column
     // taken would fill the next rung's with the rows of every rung before it.
-    let by_first_row = sparse_columns(&jacobian);
+    let by_first_row = jacobian.sparse_columns();
     let mut order: Vec<usize> = (0..jacobian.ncols()).collect();
     order.sort_by_key(|&c| by_first_row[c].first().map_or(usize::MAX, |e| e.0));
     let columns = pivoted_in_blocks(
@@ -166,23 +172,9 @@ impl Units {
         Ok(Units { rows, columns })
     }
 
-    fn dimensionless(&self, jacobian: &DMatrix<f64>) -> DMatrix<f64> {
-        DMatrix::from_fn(jacobian.nrows(), jacobian.ncols(), |r, c| {
-            jacobian[(r, c)] * self.rows[r] * self.columns[c]
-        })
+    fn dimensionless(&self, jacobian: &ClosureJacobian) -> ClosureJacobian {
+        jacobian.scaled(&self.rows, &self.columns)
     }
-}
-
-/// The columns of the dense matrix `m` as sparse vectors over its rows.
-fn sparse_columns(m: &DMatrix<f64>) -> Vec<Sparse> {
-    (0..m.ncols())
-        .map(|c| {
-            (m.column(c).iter().enumerate())
-                .filter(|&(_, &value)| value != 0.0)
-                .map(|(r, &value)| (r, value))
-                .collect()
-        })
-        .collect()
 }
 
 /// Φ″(q)(m_a, m_b) for every pair of first-order motions (columns of `motions`, dimensionless),
@@ -210,8 +202,8 @@ fn second_derivatives(
         ) else {
             return Ok(None);
         };
-        let change = (ahead.jacobian - behind.jacobian) / (2.0 * STEP);
-        along.push(units.dimensionless(&change) * motions);
+        let change = ahead.jacobian.difference(&behind.jacobian, 2.0 * STEP);
+        along.push(units.dimensionless(&change).mul_dense(motions));
     }
     let pairs = DMatrix::from_fn(along[0].nrows(), k * k, |r, column| {
         let (a, b) = (column / k, column % k);

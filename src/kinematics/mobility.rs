@@ -12,7 +12,7 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 
 use super::assembly::{assemble, jitter, singular_values, AssemblyError, AssemblyOptions};
-use super::closure::closure;
+use super::closure::{closure, ClosureJacobian};
 use super::eval::EvalError;
 use super::model::KinematicModel;
 
@@ -120,8 +120,11 @@ pub fn constraint_rank(model: &KinematicModel, q: &[f64]) -> Result<(usize, usiz
 /// the dense 6m × n Jacobian cost the cube of a chain of m loops at every rank taken (the
 /// start, an open configuration and the nearby assemblies of `branch::examine`: 84 % of the
 /// start of a ladder of 100 parallelograms).
-fn rows_rank(m: &DMatrix<f64>) -> usize {
-    crate::elimination::pivoted_dense(m, RANK_TOLERANCE).picked().len()
+fn rows_rank(m: &ClosureJacobian) -> usize {
+    let every: Vec<usize> = (0..m.nrows()).collect();
+    crate::elimination::pivoted(m.sparse_rows(), m.ncols(), &every, RANK_TOLERANCE)
+        .picked()
+        .len()
 }
 
 pub fn mobility(model: &KinematicModel, q: &[f64]) -> Result<Mobility, EvalError> {
@@ -310,17 +313,16 @@ fn internal_mobilities(
 ) -> Result<Vec<(usize, usize)>, EvalError> {
     let closure = closure(model, q)?;
     let n = model.topology.body_count();
-    let jacobians = &closure.configuration.jacobians;
+    let configuration = &closure.configuration;
+    let loop_rows = closure.jacobian.dense();
     let stack = |bodies: &[usize]| {
-        let rows = closure.jacobian.nrows() + 6 * bodies.len();
+        let rows = loop_rows.nrows() + 6 * bodies.len();
         let mut stacked = DMatrix::zeros(rows.max(1), model.coordinate_count);
-        stacked
-            .rows_mut(0, closure.jacobian.nrows())
-            .copy_from(&closure.jacobian);
+        stacked.rows_mut(0, loop_rows.nrows()).copy_from(&loop_rows);
         for (i, &b) in bodies.iter().enumerate() {
             stacked
-                .rows_mut(closure.jacobian.nrows() + 6 * i, 6)
-                .copy_from(&jacobians[b]);
+                .rows_mut(loop_rows.nrows() + 6 * i, 6)
+                .copy_from(&configuration.jacobian(b));
         }
         rank(&stacked)
     };

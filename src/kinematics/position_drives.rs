@@ -127,11 +127,11 @@ pub fn over_constrained(
     let loops = closure.jacobian.nrows();
     let imposed = 3 * drives.len() + driven.len();
     let mut stacked = DMatrix::zeros(loops + imposed, model.coordinate_count);
-    stacked.rows_mut(0, loops).copy_from(&closure.jacobian);
+    stacked.rows_mut(0, loops).copy_from(&closure.jacobian.dense());
     for (k, drive) in drives.iter().enumerate() {
         let configuration = &closure.configuration;
         let origin = drive.frame.pose(configuration).translation.vector;
-        let twists = &configuration.jacobians[drive.frame.body];
+        let twists = &configuration.jacobian(drive.frame.body);
         for column in 0..model.coordinate_count {
             let twist = Twist::from_column_slice(twists.column(column).as_slice());
             let velocity = spatial::point_velocity(&twist, &origin);
@@ -143,7 +143,7 @@ pub fn over_constrained(
     for (k, drive) in driven.iter().enumerate() {
         stacked[(loops + 3 * drives.len() + k, drive.coordinate)] = 1.0;
     }
-    let allowed = rank(&stacked) - rank(&closure.jacobian);
+    let allowed = rank(&stacked) - rank(&closure.jacobian.dense());
     (allowed < imposed).then(|| {
         let mut refused = Diagnostic::error(
             "E0494",

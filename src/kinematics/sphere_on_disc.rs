@@ -86,8 +86,8 @@ fn can_tilt(contact: &ContactModel, configuration: &Configuration, axis: &Vector
     }
     let tilting = axis.cross(&normal);
     let (disc, plane) = (
-        &configuration.jacobians[contact.round_body],
-        &configuration.jacobians[contact.plane_body],
+        &configuration.jacobian(contact.round_body),
+        &configuration.jacobian(contact.plane_body),
     );
     (0..disc.ncols()).any(|column| {
         let spin = (disc.column(column) - plane.column(column))

@@ -118,7 +118,7 @@ pub fn rates_along_drives(
         return Ok(Some(rates));
     }
     let closed = closure(kinematics, q)?;
-    let jacobian = &closed.jacobian;
+    let jacobian = &closed.jacobian.dense();
     if jacobian.nrows() < free.len() {
         return Ok(None);
     }

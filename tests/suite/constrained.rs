@@ -44,7 +44,7 @@ fn jacobian_rate_times_velocity(
     let shifted = |sign: f64| -> Result<DMatrix<f64>, String> {
         let moved: Vec<f64> = q.iter().zip(v).map(|(x, r)| x + sign * step * r).collect();
         closure(kinematics, &moved)
-            .map(|c| c.jacobian)
+            .map(|c| c.jacobian.dense())
             .map_err(|e| format!("{e:?}"))
     };
     let derivative = (shifted(1.0)? - shifted(-1.0)?) / (2.0 * step);
@@ -107,7 +107,8 @@ fn constrained_accelerations(
         .copy_from(&(DVector::from_column_slice(tau) - bias));
     let jacobian = closure(kinematics, q)
         .map_err(|e| format!("{e:?}"))?
-        .jacobian;
+        .jacobian
+        .dense();
     let rate = jacobian_rate_times_velocity(kinematics, q, v)?;
     let (null, pseudo_inverse) = null_space_and_pseudo_inverse(&jacobian);
     let particular = -(&pseudo_inverse * &rate);
@@ -213,7 +214,7 @@ fn accelerations_satisfy_the_constraints() {
     let q = assemble(&kinematics, &start, &fixed, &AssemblyOptions::default())
         .expect("assembles")
         .q;
-    let j = closure(&kinematics, &q).expect("closure").jacobian;
+    let j = closure(&kinematics, &q).expect("closure").jacobian.dense();
     // A velocity compatible with the loop.
     let svd = {
         let mut square = nalgebra::DMatrix::zeros(j.ncols().max(j.nrows()), j.ncols());
@@ -292,7 +293,7 @@ fn projected_integration_conserves_the_energy() {
         )
         .expect("stays assembled")
         .q;
-        let j = closure(&kinematics, &q).expect("closure").jacobian;
+        let j = closure(&kinematics, &q).expect("closure").jacobian.dense();
         let v_vector = v_next.clone();
         let correction =
             j.clone().pseudo_inverse(1e-12).expect("pseudo-inverse") * (&j * &v_vector);
@@ -332,7 +333,7 @@ fn the_simulator_agrees_with_the_reference_formulation() {
             .expect("assembles")
             .q;
         // A velocity of the loop: the null space of the closure Jacobian, scaled.
-        let j = closure(&kinematics, &q).expect("closure").jacobian;
+        let j = closure(&kinematics, &q).expect("closure").jacobian.dense();
         let svd = j.clone().svd(false, true);
         let smallest = (0..svd.singular_values.len())
             .min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))

@@ -210,7 +210,7 @@ fn homocinetic_joint_turns_both_shafts_at_the_same_speed() {
     let q = assemble(&model, &start, &fixed, &AssemblyOptions::default())
         .expect("assembles")
         .q;
-    let jacobian = closure(&model, &q).expect("evaluates").jacobian;
+    let jacobian = closure(&model, &q).expect("evaluates").jacobian.dense();
     // The velocity of the mechanism spans the kernel of the closure Jacobian (mobility 1); pad
     // the Jacobian to a square matrix so the SVD returns every right singular vector.
     let n = jacobian.ncols();

@@ -50,9 +50,23 @@ pub struct Neighbour {
 impl ConstraintJacobian {
     /// G over these loop blocks.
     pub fn new(columns: usize, blocks: Vec<LoopBlock>) -> ConstraintJacobian {
+        // The loops over each column, so that a loop's neighbours are searched among the loops
+        // meeting its own columns, not among all of them (a ladder of N loops: N² pairs).
+        let mut by_column = vec![Vec::new(); columns];
+        for (j, block) in blocks.iter().enumerate() {
+            for &c in &block.columns {
+                by_column[c].push(j);
+            }
+        }
         let neighbours = (0..blocks.len())
             .map(|i| {
-                (0..blocks.len())
+                let mut meeting: Vec<usize> = (blocks[i].columns.iter())
+                    .flat_map(|&c| by_column[c].iter().copied())
+                    .collect();
+                meeting.sort_unstable();
+                meeting.dedup();
+                meeting
+                    .into_iter()
                     .filter_map(|j| {
                         let shared = shared_columns(&blocks[i].columns, &blocks[j].columns);
                         (!shared.is_empty()).then_some(Neighbour { other: j, shared })
