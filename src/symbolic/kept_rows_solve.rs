@@ -22,15 +22,16 @@
 //! 3. the remaining multipliers on the diagonal of Gₛ M⁻¹ Gₛᵀ as reduced by step 2 (positive
 //!    definite where the kept rows are independent), again by minimum degree.
 //!
-//! Where M is not positive definite on the tree (a body without inertia about an axis of its
-//! joint: the reduced Delta's point nacelle at its universal joint), step 1 has no pivot; the
-//! system is then eliminated with the augmented Lagrangian's M + ρ GₛᵀGₛ and S + F − ρ Gₛᵀγₛ,
-//! which has the same solution and is positive definite wherever the constrained system is
-//! regular, every coordinate on its diagonal and the multipliers after them (`Weighting`).
-//! Step 2's pivots are geometric entries chosen at the start, which a motion may bring to zero
-//! (then the run falls back to the interpreted solve); the augmented diagonal's vanish only at
-//! a singular configuration. The plain elimination is kept where it serves: its M has no fill
-//! from GₛᵀGₛ (the row of 10 four-bars' code is unchanged).
+//! A tree coordinate whose row of M is zero (a body without inertia about its joint's axis:
+//! the reduced Delta's point nacelle at its universal joint) pivots as the complementary ones
+//! do, in step 2. Where M is otherwise not positive definite on the tree (a body without
+//! inertia about an oblique axis: a pivot of step 1 is round-off), the system is eliminated
+//! again with the augmented Lagrangian's M + ρ GₛᵀGₛ and S + F − ρ Gₛᵀγₛ, which has the same
+//! solution and is positive definite wherever the constrained system is regular, every
+//! coordinate on its diagonal and the multipliers after them (`Weighting`). The plain order
+//! comes first because its M has no fill from GₛᵀGₛ: on the reduced Delta its code is 1,220
+//! lines against 1,677 augmented, and 7.9 times faster per right-hand side than the interpreted
+//! solve where the augmented one is 2.3 times (BENCHMARKS.md).
 //!
 //! This is the range-space method (docs/loops.md) written out over the non-zero entries. The
 //! coordinates the run leaves at rest (a complementary link's own coordinates that no kept row
@@ -53,6 +54,11 @@ pub struct KeptRows<'a> {
     pub symbols: &'a [f64],
 }
 
+/// At or below this fraction of its coordinate's diagonal entry at the start, a pivot of step
+/// 1 is taken for a zero that round-off left (the diagonal is positive definite there only if
+/// each pivot is well above it).
+const ROUND_OFF: f64 = 1e-10;
+
 /// Below this fraction of its value at the start, a pivot makes the evaluation fail.
 const PIVOT_FLOOR: f64 = 1e-3;
 
@@ -63,13 +69,13 @@ struct Entry {
 }
 
 /// Sets `equations.accelerations` to the solution of the KKT system on `kept`'s rows, or says
-/// why it cannot be written. Where M is not positive definite on the tree (a body without
-/// inertia about some axis of its joint, as the Delta's point nacelle at its universal joint),
-/// the system is eliminated again with M augmented (`Weighting::Augmented`).
+/// why it cannot be written. Where the plain order has no pivot (M singular on the tree's
+/// coordinates with inertia), the system is eliminated again with M augmented
+/// (`Weighting::Augmented`).
 pub fn solve_on_kept_rows(equations: &mut Equations, kept: &KeptRows) -> Result<(), String> {
     let pool = equations.pool.clone();
     match solve(equations, kept, Weighting::Plain) {
-        Err(Refusal::NotPositiveOnTree(_)) => {
+        Err(Refusal::Plain(_)) => {
             // The plain attempt's expressions are left out with the pool they were put in.
             equations.pool = pool;
             solve(equations, kept, Weighting::Augmented).map_err(Refusal::into_message)
@@ -96,15 +102,16 @@ enum Weighting {
 
 /// Why the elimination cannot be written.
 enum Refusal {
-    /// M is not positive definite on the tree's coordinates (the augmented system serves).
-    NotPositiveOnTree(String),
+    /// The plain order has no pivot (M not positive definite on the tree's coordinates with
+    /// inertia, or no kept row for a coordinate without): the augmented system may serve.
+    Plain(String),
     Other(String),
 }
 
 impl Refusal {
     fn into_message(self) -> String {
         match self {
-            Refusal::NotPositiveOnTree(why) | Refusal::Other(why) => why,
+            Refusal::Plain(why) | Refusal::Other(why) => why,
         }
     }
 }
@@ -192,16 +199,27 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
             )));
         }
     }
-    // 1. The tree's coordinates, on M's diagonal (augmented: every coordinate).
+    // 1. The tree's coordinates with inertia, on M's diagonal (augmented: every coordinate).
+    // A tree coordinate whose row of M is zero (a body without inertia about its joint's
+    // axis) pivots as the complementary ones do, in step 2.
+    let inert = |system: &Elimination, i: usize| (0..k).all(|j| system.a[i][j].is_none());
     let on_diagonal: Vec<usize> = match weighting {
-        Weighting::Plain => (0..k).filter(|&i| moving[i] < kept.tree).collect(),
+        Weighting::Plain => (0..k)
+            .filter(|&i| moving[i] < kept.tree && !inert(&system, i))
+            .collect(),
         Weighting::Augmented => (0..k).collect(),
     };
+    // A pivot that is round-off of its diagonal entry at the start (M singular on the tree
+    // though no row of it is zero: a body without inertia about an oblique axis) is no pivot.
+    let diagonal: Vec<f64> = (0..k)
+        .map(|i| system.a[i][i].map_or(0.0, |e| e.value.abs()))
+        .collect();
     while let Some(i) = system.fewest_entries(on_diagonal.iter().map(|&i| (i, i))) {
-        if system.a[i][i].is_none_or(|p| p.value <= 0.0) {
+        let floor = ROUND_OFF * diagonal[i];
+        if system.a[i][i].is_none_or(|p| p.value <= floor) {
             let at = &equations.variables.positions[moving[i]].name;
             return Err(match weighting {
-                Weighting::Plain => Refusal::NotPositiveOnTree(format!(
+                Weighting::Plain => Refusal::Plain(format!(
                     "the mass matrix is not positive definite on the tree (at {at})"
                 )),
                 Weighting::Augmented => Refusal::Other(format!(
@@ -220,7 +238,7 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
             .filter_map(|r| system.a[r][i].map(|e| (r, e.value.abs())))
             .max_by(|x, y| x.1.total_cmp(&y.1));
         let Some((r, _)) = largest.filter(|&(_, v)| v > 0.0) else {
-            return Err(Refusal::Other(format!(
+            return Err(Refusal::Plain(format!(
                 "no kept row determines the coordinate {}",
                 equations.variables.positions[moving[i]].name
             )));
@@ -232,9 +250,10 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     let rest: Vec<usize> = (k..size).filter(|&r| !system.row_done[r]).collect();
     while let Some(r) = system.fewest_entries(rest.iter().map(|&r| (r, r))) {
         if system.a[r][r].is_none_or(|p| p.value <= 0.0) {
-            return Err(Refusal::Other(
-                "the kept rows are not independent at the start".into(),
-            ));
+            return Err(match weighting {
+                Weighting::Plain => Refusal::Plain("the kept rows are not independent at the start, by the plain order".into()),
+                Weighting::Augmented => Refusal::Other("the kept rows are not independent at the start".into()),
+            });
         }
         system.eliminate(pool, r, r);
     }
