@@ -8,7 +8,9 @@
 //! native evaluation in interleaved rounds (7), best and median. Beside the trees: the row of 10
 //! four-bars (loops solved on the kept rows in the native code, `kept_rows_solve`), the same row
 //! without its closing joins (the tree alone: what the interpreted right-hand side spends
-//! outside the loops' solve), and the Delta (declined: its ball joints' quaternion states).
+//! outside the loops' solve), the reduced Delta (its universal joints' loops solved with the
+//! augmented mass matrix, M being singular on its tree) and the Delta (declined: its ball
+//! joints' quaternion states).
 
 mod common;
 #[path = "common/rows.rs"]
@@ -122,6 +124,10 @@ fn main() {
         ("four-bar", example("examples/four_bar.lsd")),
         ("row of 10 four-bars", row_program(10, true)),
         ("row of 40 four-bars", row_program(40, true)),
+        (
+            "Delta, reduced",
+            example("examples/delta_isir88_reduced.lsd"),
+        ),
         ("Delta (ISIR88)", example("examples/delta_isir88.lsd")),
     ];
     let cache = std::env::temp_dir().join(format!("lsdc-native-bench-{}", std::process::id()));
