@@ -969,6 +969,18 @@ impl Model {
         v
     }
 
+    /// The position of state velocity `velocity` when it is the rate of a coordinate (a chain's,
+    /// or a complementary link's); `None` for a spherical or free joint's angular or linear
+    /// velocity, whose positions are a quaternion and a point.
+    pub fn position_of(&self, velocity: usize) -> Option<usize> {
+        if velocity >= self.nv {
+            return Some(self.nq + velocity - self.nv);
+        }
+        let joint =
+            (self.joints.iter()).find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&velocity))?;
+        (!joint.is_quaternion()).then(|| joint.q_offset + velocity - joint.v_offset)
+    }
+
     /// Moves the positions `q` (state length) by the small velocity-space step `dv`: the joints'
     /// coordinates by their rates, quaternions along the rotation and back to unit length.
     pub fn retract(&self, q: &mut [f64], dv: &[f64]) {

@@ -20,7 +20,6 @@ use crate::dynamics::loops::{constraints_into, Constraints, Extent};
 use crate::dynamics::model::Model;
 use crate::linalg::svd;
 use crate::simulate::system::SystemError;
-use crate::studies::identify::parameters::joint_of_velocity;
 
 /// Gauss–Newton on the passive positions stops when the rows' largest residual is at most
 /// this (lengths in the model's units, rotations in radians), or after `NEWTON_STEPS` steps.
@@ -79,7 +78,9 @@ impl LoopState {
         let (n, m) = (model.velocities(), self.actuated.len());
         let mut q = self.q.clone();
         for &i in &self.actuated {
-            q[position_of(model, i)] = u.0[i];
+            let position = (model.position_of(i))
+                .ok_or("a measured coordinate is not a coordinate of its own (a ball or free joint's rate)")?;
+            q[position] = u.0[i];
         }
         let zero = vec![0.0; n];
         let mut residual = f64::INFINITY;
@@ -213,12 +214,4 @@ impl LoopState {
 enum Closed {
     Yes,
     No,
-}
-
-/// The position of velocity `velocity` (a joint's own coordinate: the measured ones are).
-fn position_of(model: &Model, velocity: usize) -> usize {
-    match joint_of_velocity(model, velocity) {
-        Some(joint) => joint.q_offset + velocity - joint.v_offset,
-        None => model.nq + velocity - model.nv,
-    }
 }

@@ -75,7 +75,7 @@ impl Chart {
             driven,
             positions: independent
                 .iter()
-                .filter_map(|&i| position_of(model, i))
+                .filter_map(|&i| model.position_of(i))
                 .collect(),
             independent,
             dependent: Vec::new(),
@@ -85,7 +85,7 @@ impl Chart {
         }
     }
 
-    /// The coordinates `independent` (each a coordinate of a chain, see [`position_of`]) of a
+    /// The coordinates `independent` (each a coordinate of a chain, see `Model::position_of`) of a
     /// mechanism with loops closed at `origin`, the velocities `held` where they are.
     pub fn with_loops(
         model: &Model,
@@ -103,7 +103,7 @@ impl Chart {
             held,
             positions: independent
                 .iter()
-                .filter_map(|&i| position_of(model, i))
+                .filter_map(|&i| model.position_of(i))
                 .collect(),
             independent,
             origin: origin.to_vec(),
@@ -195,18 +195,6 @@ impl Chart {
         }
         jacobian
     }
-}
-
-/// The position of state velocity `velocity` when it is the rate of a coordinate (a chain's,
-/// or a complementary link's); `None` for a spherical or free joint's angular or linear
-/// velocity, whose positions are a quaternion and a point.
-pub fn position_of(model: &Model, velocity: usize) -> Option<usize> {
-    if velocity >= model.nv {
-        return Some(model.nq + velocity - model.nv);
-    }
-    let joint =
-        (model.joints.iter()).find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&velocity))?;
-    (!joint.is_quaternion()).then(|| joint.q_offset + velocity - joint.v_offset)
 }
 
 /// Gauss–Newton to round-off: a step is kept while it reduces the largest row.

@@ -513,7 +513,7 @@ fn choose_coordinates(
     let model = &prepared.model;
     let massless = system.scratch.loops.structure.massless;
     let (spins, coordinates): (Vec<usize>, Vec<usize>) =
-        (free.iter()).partition(|&&i| chart::position_of(model, i).is_none());
+        (free.iter()).partition(|&&i| model.position_of(i).is_none());
     let run_choice = || free.iter().map(|&i| model.velocity_name(i)).collect();
     let with_mass = free.len().saturating_sub(massless);
     let (independent, choice) = if named.is_empty() {
