@@ -323,20 +323,27 @@ fn augment(
             product(pool, rho, sum)
         })
     };
+    let add_to = |pool: &mut Pool, entry: &mut Option<Entry>, added: Entry| {
+        *entry = Some(match *entry {
+            None => added,
+            Some(old) => Entry {
+                expr: pool.add(old.expr, added.expr),
+                value: old.value + added.value,
+            },
+        });
+    };
+    let biases: Vec<Option<Entry>> = rows.iter().map(|&r| Some(gamma(r))).collect();
     for i in 0..k {
-        for j in 0..k {
+        // ρ GᵀG is symmetric: each pair's dot product is formed once and added to both entries.
+        for j in i..k {
             let Some(added) = weighted_dot(pool, &columns[i], &columns[j]) else {
                 continue;
             };
-            system.a[i][j] = match system.a[i][j] {
-                None => Some(added),
-                Some(old) => Some(Entry {
-                    expr: pool.add(old.expr, added.expr),
-                    value: old.value + added.value,
-                }),
-            };
+            add_to(pool, &mut system.a[i][j], added);
+            if j != i {
+                add_to(pool, &mut system.a[j][i], added);
+            }
         }
-        let biases: Vec<Option<Entry>> = rows.iter().map(|&r| Some(gamma(r))).collect();
         if let Some(added) = weighted_dot(pool, &columns[i], &biases) {
             let old = system.b[i];
             system.b[i] = Entry {
