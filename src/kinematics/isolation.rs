@@ -92,6 +92,7 @@ pub fn isolated(model: &KinematicModel, q: &[f64]) -> Result<Option<Isolated>, E
 
 /// `isolated` with every closed configuration judged at second order, planar or not: the
 /// second-order test that `moves_in_its_plane` spares, for the tests to compare with it.
+#[cfg_attr(not(lsdc_internals), allow(dead_code))]
 pub fn isolated_at_second_order(
     model: &KinematicModel,
     q: &[f64],
@@ -114,6 +115,7 @@ pub fn isolated_at_second_order(
 /// costs two eliminations of Φ′'s rows, where the second-order test differentiates Φ′ along
 /// each of the n − rank first-order motions: one loop of N rods has N − 2 of them, and its
 /// test costs N³.
+#[cfg_attr(not(lsdc_internals), allow(dead_code))]
 pub fn moves_in_its_plane(model: &KinematicModel, q: &[f64]) -> Result<bool, EvalError> {
     Ok(FirstOrder::at(model, q)?.is_some_and(|first| first.moves_in_plane(model)))
 }
