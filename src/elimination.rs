@@ -171,8 +171,22 @@ impl Elimination {
             pivoted[reflector.pivot] = true;
         }
         let free: Vec<usize> = (0..self.columns).filter(|&c| !pivoted[c]).collect();
-        let mut basis = DMatrix::zeros(self.columns, free.len());
-        for (k, &c) in free.iter().enumerate() {
+        self.reflected_units(count, &free)
+    }
+
+    /// An orthonormal basis of the span of the first `count` picked rows: Q eⱼ for each column
+    /// j they pivoted on (G Q = [L 0]: each row is a combination of those).
+    pub fn row_space(&self, count: usize) -> DMatrix<f64> {
+        let pivots: Vec<usize> = (self.reflectors[..count].iter())
+            .map(|reflector| reflector.pivot)
+            .collect();
+        self.reflected_units(count, &pivots)
+    }
+
+    /// Q eⱼ for each column j of `units`, Q of the first `count` reflections.
+    fn reflected_units(&self, count: usize, units: &[usize]) -> DMatrix<f64> {
+        let mut basis = DMatrix::zeros(self.columns, units.len());
+        for (k, &c) in units.iter().enumerate() {
             let mut column = basis.column_mut(k);
             column[c] = 1.0;
             self.reflect_back(count, column.as_mut_slice());

@@ -671,12 +671,19 @@ pub fn crba_into(
     q: &[f64],
     mass: &mut DMatrix<f64>,
 ) -> Result<(), EvalError> {
-    // The joints' transforms first: independent of one another, they overlap in the processor.
+    joint_transforms(model, data, q)?;
+    crba_after_kinematics(model, data, mass);
+    Ok(())
+}
+
+/// The joints' transforms (and motion subspaces) at q in `data`, without their velocities: what
+/// the mass matrix and the bodies' motions under given rates (`body_motions`) read.
+pub fn joint_transforms(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), EvalError> {
+    // Independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         joint.update_transform(slice(q, joint.q_offset, joint.nq()), &mut data.states[k])?;
     }
-    crba_after_kinematics(model, data, mass);
     Ok(())
 }
 

@@ -23,6 +23,7 @@ use super::eval::EvalError;
 use super::mobility::{rank, RANK_TOLERANCE};
 use crate::elimination::{pivoted, pivoted_in_blocks, Elimination};
 use super::model::KinematicModel;
+use super::plane::motion_plane;
 
 /// A closed configuration the loops hold still, and the certificate.
 #[derive(Clone, Debug)]
@@ -76,62 +77,144 @@ const ITERATIONS: usize = 200;
 const STARTS: usize = 4;
 
 /// The certificate that `q`, a closed configuration of `model`, is isolated, or `None` when
-/// none is found (the loops move, are rigid to first order, or the test cannot judge).
+/// none is found (the loops move, are rigid to first order, or the test cannot judge). A planar
+/// mechanism whose in-plane rows are independent moves (`moves_in_its_plane`), and is not
+/// differentiated at second order.
 pub fn isolated(model: &KinematicModel, q: &[f64]) -> Result<Option<Isolated>, EvalError> {
-    if model.complementary().is_empty() || !coordinates_regular(model, q)? {
-        return Ok(None);
-    }
-    let units = Units::of(model, q)?;
-    let jacobian = units.dimensionless(&closure(model, q)?.jacobian);
-    // The kernel and the self-stresses from sparse eliminations of Φ′'s rows and of its
-    // columns at the rank's tolerance (`mobility::RANK_TOLERANCE`, the loops' own test), not
-    // from singular value decompositions of the dense 6m × n matrix: a chain of loops meets
-    // only neighbours in each, where the decompositions cost the cube of its length.
-    let every_row: Vec<usize> = (0..jacobian.nrows()).collect();
-    let rows = pivoted(
-        jacobian.sparse_rows(),
-        jacobian.ncols(),
-        &every_row,
-        RANK_TOLERANCE,
-    );
-    let rank = rows.picked().len();
-    // Φ′'s columns in the order of their first row (loop after loop), searched a loop's worth
-    // at a time: in the coordinates' order (a ladder's rungs, then its rails) each column
-    // taken would fill the next rung's with the rows of every rung before it.
-    let by_first_row = jacobian.sparse_columns();
-    let mut order: Vec<usize> = (0..jacobian.ncols()).collect();
-    order.sort_by_key(|&c| by_first_row[c].first().map_or(usize::MAX, |e| e.0));
-    let columns = pivoted_in_blocks(
-        by_first_row,
-        jacobian.nrows(),
-        &order,
-        RANK_TOLERANCE,
-        COLUMN_BLOCK,
-    );
-    let column_rank = columns.picked().len();
-    if rank == jacobian.ncols() || column_rank == jacobian.nrows() {
-        return Ok(None);
-    }
-    let motions = rows.null_space(rank);
-    let Some(bending) = second_derivatives(model, q, &units, &motions, jacobian.amax())? else {
+    let Some(first) = FirstOrder::at(model, q)? else {
         return Ok(None);
     };
-    let stresses = bent_stresses(&bending, &columns, column_rank);
-    if stresses.ncols() == 0 {
+    if first.moves_in_plane(model) {
         return Ok(None);
     }
-    let Some((stress, margin)) = definite_stress(&bending, &stresses) else {
-        return Ok(None);
-    };
-    let moving = (0..motions.nrows())
-        .filter(|&i| motions.row(i).norm() > ROUND_OFF)
-        .collect();
-    Ok(Some(Isolated {
-        first_order: motions.ncols(),
-        stress,
-        margin,
-        moving,
-    }))
+    first.second_order(model, q)
+}
+
+/// `isolated` with every closed configuration judged at second order, planar or not: the
+/// second-order test that `moves_in_its_plane` spares, for the tests to compare with it.
+#[cfg_attr(not(lsdc_internals), allow(dead_code))]
+pub fn isolated_at_second_order(
+    model: &KinematicModel,
+    q: &[f64],
+) -> Result<Option<Isolated>, EvalError> {
+    match FirstOrder::at(model, q)? {
+        Some(first) => first.second_order(model, q),
+        None => Ok(None),
+    }
+}
+
+/// Whether `q`, a closed configuration of `model`, is shown to move by its first derivatives
+/// alone, the mechanism being planar: a planar mechanism's loops close in its plane, three
+/// rows each (a rotation about the normal, a position in the plane); the other three vanish at
+/// every configuration, not only at q (`plane::motion_plane`: the joints' axes keep their
+/// directions). Where Φ′(q) has the rank of the in-plane rows, those rows are independent,
+/// and by the implicit function theorem the closed configurations near q are a manifold of
+/// dimension n − rank (Spivak, Calculus on Manifolds, 1965, Theorem 2-13), so q moves when
+/// rank < n. The spatial form of the same
+/// argument, every row independent, is where `isolated` finds no self-stress. The decision
+/// costs two eliminations of Φ′'s rows, where the second-order test differentiates Φ′ along
+/// each of the n − rank first-order motions: one loop of N rods has N − 2 of them, and its
+/// test costs N³.
+#[cfg_attr(not(lsdc_internals), allow(dead_code))]
+pub fn moves_in_its_plane(model: &KinematicModel, q: &[f64]) -> Result<bool, EvalError> {
+    Ok(FirstOrder::at(model, q)?.is_some_and(|first| first.moves_in_plane(model)))
+}
+
+/// Φ′(q), dimensionless, with the elimination of its rows, where the isolation test has to
+/// look further: loops, joints of full rank, and a first-order motion.
+struct FirstOrder {
+    units: Units,
+    jacobian: ClosureJacobian,
+    rows: Elimination,
+    rank: usize,
+}
+
+impl FirstOrder {
+    fn at(model: &KinematicModel, q: &[f64]) -> Result<Option<FirstOrder>, EvalError> {
+        if model.complementary().is_empty() || !coordinates_regular(model, q)? {
+            return Ok(None);
+        }
+        let units = Units::of(model, q)?;
+        let jacobian = units.dimensionless(&closure(model, q)?.jacobian);
+        // The kernel and the self-stresses from sparse eliminations of Φ′'s rows and of its
+        // columns at the rank's tolerance (`mobility::RANK_TOLERANCE`, the loops' own test),
+        // not from singular value decompositions of the dense 6m × n matrix: a chain of loops
+        // meets only neighbours in each, where the decompositions cost the cube of its length.
+        let every_row: Vec<usize> = (0..jacobian.nrows()).collect();
+        let rows = pivoted(
+            jacobian.sparse_rows(),
+            jacobian.ncols(),
+            &every_row,
+            RANK_TOLERANCE,
+        );
+        let rank = rows.picked().len();
+        if rank == jacobian.ncols() {
+            return Ok(None);
+        }
+        Ok(Some(FirstOrder {
+            units,
+            jacobian,
+            rows,
+            rank,
+        }))
+    }
+
+    /// Planar, with Φ′ of the in-plane rows' rank (three per loop): see `moves_in_its_plane`.
+    fn moves_in_plane(&self, model: &KinematicModel) -> bool {
+        self.rank == 3 * model.complementary().len() && motion_plane(model).is_ok()
+    }
+
+    /// The second-order test (prestress stability, above) from the first derivatives.
+    fn second_order(
+        self,
+        model: &KinematicModel,
+        q: &[f64],
+    ) -> Result<Option<Isolated>, EvalError> {
+        let FirstOrder {
+            units,
+            jacobian,
+            rows,
+            rank,
+        } = self;
+        // Φ′'s columns in the order of their first row (loop after loop), searched a loop's
+        // worth at a time: in the coordinates' order (a ladder's rungs, then its rails) each
+        // column taken would fill the next rung's with the rows of every rung before it.
+        let by_first_row = jacobian.sparse_columns();
+        let mut order: Vec<usize> = (0..jacobian.ncols()).collect();
+        order.sort_by_key(|&c| by_first_row[c].first().map_or(usize::MAX, |e| e.0));
+        let columns = pivoted_in_blocks(
+            by_first_row,
+            jacobian.nrows(),
+            &order,
+            RANK_TOLERANCE,
+            COLUMN_BLOCK,
+        );
+        let column_rank = columns.picked().len();
+        if column_rank == jacobian.nrows() {
+            return Ok(None);
+        }
+        let motions = rows.null_space(rank);
+        let Some(bending) = second_derivatives(model, q, &units, &motions, jacobian.amax())?
+        else {
+            return Ok(None);
+        };
+        let stresses = bent_stresses(&bending, &columns, column_rank);
+        if stresses.ncols() == 0 {
+            return Ok(None);
+        }
+        let Some((stress, margin)) = definite_stress(&bending, &stresses) else {
+            return Ok(None);
+        };
+        let moving = (0..motions.nrows())
+            .filter(|&i| motions.row(i).norm() > ROUND_OFF)
+            .collect();
+        Ok(Some(Isolated {
+            first_order: motions.ncols(),
+            stress,
+            margin,
+            moving,
+        }))
+    }
 }
 
 /// Whether every joint's coordinates move its link independently at q (its motion subspace of

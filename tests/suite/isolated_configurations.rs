@@ -11,13 +11,14 @@
 use lsdc::driver::compile_text;
 use lsdc::kinematics::assembly::{assemble, AssemblyOptions};
 use lsdc::kinematics::initial_coordinates;
-use lsdc::kinematics::isolation::isolated;
+use lsdc::kinematics::isolation::{isolated, isolated_at_second_order, moves_in_its_plane};
 use lsdc::kinematics::mobility::mobility;
 use lsdc::kinematics::model::{self, KinematicModel};
 use lsdc::kinematics::unknowns::given_values;
 use lsdc::load::LoadOptions;
 
 use crate::common::programs::{example_text, refusal_codes};
+use crate::long_chains::chains::{ladder_program, necklace_program};
 
 /// A planar chain of bars of `lengths` from the earth's origin to the point `ground` along x,
 /// closed there, written as the `loops` fuzz target writes it: revolutes about z, uniform
@@ -184,5 +185,66 @@ fn mechanisms_that_move_from_singular_configurations_are_not_isolated() {
         );
         let sampled = mobility(&model, &q).expect("evaluates");
         assert!(sampled.mobility > 0, "{what}: {sampled:?}");
+    }
+}
+
+/// A planar mechanism whose in-plane rows are independent at a closed configuration moves
+/// there (`moves_in_its_plane`, the implicit function theorem) and is not differentiated at
+/// second order; the second-order test it is spared (`isolated_at_second_order`) agrees on
+/// each, and where the rows are dependent (a chain stretched to the length it spans, a
+/// four-bar held flat) the shortcut does not apply and both tests are the same one.
+#[test]
+fn the_planar_first_order_decision_agrees_with_the_second_order_test() {
+    // Each with whether to sample its closed set (1 µm from the stretched line, the samples'
+    // steps of 1e-3 would leave the neighbourhood the rank speaks of).
+    let moving = [
+        ("necklace of 4", necklace_program(4), true),
+        ("necklace of 10", necklace_program(10), true),
+        ("necklace of 40", necklace_program(40), false),
+        ("ladder of 5", ladder_program(5), true),
+        ("four-bar with 10 mm to spare", four_bar(1.276), true),
+        ("four-bar with 1 µm to spare", four_bar(1.266001), false),
+        ("four-bar example", example_text("four_bar", &[]), true),
+    ];
+    for (what, text, sample) in &moving {
+        let (model, q) = assembled(text);
+        assert!(moves_in_its_plane(&model, &q).expect("evaluates"), "{what}");
+        assert!(isolated(&model, &q).expect("evaluates").is_none(), "{what}");
+        let judged = isolated_at_second_order(&model, &q).expect("evaluates");
+        assert!(
+            judged.is_none(),
+            "{what}: isolated at second order {judged:?}"
+        );
+        if *sample {
+            // A second algorithm: the closed set sampled near q has the rank's dimension.
+            let sampled = mobility(&model, &q).expect("evaluates");
+            assert!(sampled.mobility > 0, "{what}: {sampled:?}");
+            assert_eq!(
+                sampled.mobility, sampled.first_order_mobility,
+                "{what}: {sampled:?}"
+            );
+        }
+    }
+    let singular = [
+        ("four-bar stretched", four_bar(1.266)),
+        ("six-bar stretched", six_bar()),
+        (
+            "four-bar held flat",
+            std::fs::read_to_string("tests/golden/branch_singular.lsd").expect("readable"),
+        ),
+    ];
+    for (what, text) in &singular {
+        let (model, q) = assembled(text);
+        assert!(
+            !moves_in_its_plane(&model, &q).expect("evaluates"),
+            "{what}"
+        );
+        let (fast, full) = (isolated(&model, &q), isolated_at_second_order(&model, &q));
+        let (fast, full) = (fast.expect("evaluates"), full.expect("evaluates"));
+        assert_eq!(fast.is_some(), full.is_some(), "{what}");
+        if let (Some(fast), Some(full)) = (fast, full) {
+            assert_eq!(fast.first_order, full.first_order, "{what}");
+            assert_eq!(fast.margin, full.margin, "{what}");
+        }
     }
 }

@@ -17,7 +17,7 @@ use std::cell::OnceCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::jacobian::ConstraintJacobian;
-use crate::elimination::{pivoted, Sparse};
+use crate::elimination::{pivoted, Elimination, Sparse};
 use super::triples::{self, DiagonalBlock};
 use crate::dynamics::dense::dense_cholesky;
 
@@ -421,17 +421,15 @@ impl Factored {
             .get_or_init(|| self.orthonormal_null_space())
     }
 
-    /// An orthonormal basis of the motions the kept rows allow from their sparse elimination
-    /// (`elimination::pivoted`, every kept row picked): the span of `dense_null_space` in
-    /// another basis, at a cost that grows with the rows' entries and their fill, not with the
-    /// cube of the columns.
-    pub fn sparse_null_space(&self) -> DMatrix<f64> {
+    /// The sparse elimination of the kept rows, every row of non-zero part picked
+    /// (`elimination::pivoted`): its `null_space` spans the allowed motions, its `row_space`
+    /// the kept rows.
+    pub fn sparse_elimination(&self) -> Elimination {
         let rows: Vec<Sparse> = (self.rows.iter())
             .map(|row| row.filter(|&(_, value)| value != 0.0).collect())
             .collect();
         let every: Vec<usize> = (0..rows.len()).collect();
-        let elimination = pivoted(rows, self.columns, &every, 0.0);
-        elimination.null_space(elimination.picked().len())
+        pivoted(rows, self.columns, &every, 0.0)
     }
 
     fn orthonormal_null_space(&self) -> DMatrix<f64> {

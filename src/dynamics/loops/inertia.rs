@@ -9,25 +9,20 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::dynamics::algorithms::{
-    body_motions, crba_after_kinematics, mass_rows, mass_times, rnea_backward, rotor_spin, Data,
-};
+use super::passes::{passes_up_to, BodyPasses};
+use crate::dynamics::algorithms::{crba_after_kinematics, mass_rows, mass_times, rnea_backward, Data};
 use crate::dynamics::model::Model;
 use crate::dynamics::planar::algebra::{PlanarForce, PlanarMotion};
 use crate::dynamics::planar::algorithms::{self as planar, PlanarData};
 use crate::dynamics::planar::PlanarModel;
-use crate::dynamics::rotors::Rotor;
-use crate::spatial::{Force, Motion};
 
 /// What forming the reduced equations keeps between evaluations, so that it allocates nothing
 /// once sized.
 pub struct ReducedInertia {
     /// Up to how many kept motions the passes are taken (see `passes_up_to`).
     passes_up_to: usize,
-    /// The passes: each motion's body motions and the bodies' momenta under it, one block of
-    /// bodies + 1 per motion.
-    motions: Vec<Motion>,
-    momenta: Vec<Force>,
+    /// The passes: each motion's body motions and the bodies' momenta under it.
+    passes: BodyPasses,
     /// The mass matrix, the rows of each of its columns that can be non-zero, M N, inverse
     /// dynamics' generalised forces and f − Ma₀.
     mass: DMatrix<f64>,
@@ -57,8 +52,7 @@ impl ReducedInertia {
         };
         ReducedInertia {
             passes_up_to: passes_up_to(model, &mass_rows),
-            motions: Vec::new(),
-            momenta: Vec::new(),
+            passes: BodyPasses::default(),
             mass: DMatrix::zeros(nv, nv),
             mass_rows,
             mass_null: DMatrix::zeros(model.nv, 0),
@@ -150,23 +144,13 @@ impl ReducedInertia {
         tau: &DVector<f64>,
         reduced: Reduced<'_>,
     ) {
-        let bodies = model.body_count() + 1;
-        self.motions.resize(bodies * count, Motion::zeros());
-        self.momenta.resize(bodies * count, Force::zeros());
+        self.passes.take(model, data, null, count);
         for k in 0..count {
             let motion = null.column(k);
-            let motions = &mut self.motions[k * bodies..(k + 1) * bodies];
-            body_motions(model, data, &motion.as_slice()[..model.nv], motions);
             let mut power = 0.0;
             for &j in &model.dynamic_joints {
                 let i = model.joints[j].child;
-                let body = &model.dynamic_bodies[i - 1];
-                self.momenta[k * bodies + i] = if body.massless {
-                    Force::zeros()
-                } else {
-                    body.rigid.times(&motions[i])
-                };
-                power += motions[i].dot(&data.force[i]);
+                power += self.passes.motion(model, k, i).dot(&data.force[i]);
             }
             // The rotors' torques on their carriers are in the bodies' forces; their own
             // efforts on their coordinates are not.
@@ -177,27 +161,11 @@ impl ReducedInertia {
         }
         for k in 0..count {
             for l in 0..=k {
-                let value = model.dynamic_joints.iter().fold(0.0, |sum, &j| {
-                    let i = model.joints[j].child;
-                    sum + self.motions[l * bodies + i].dot(&self.momenta[k * bodies + i])
-                }) + self.rotors_energy_form(model, null, k, l);
+                let value = self.passes.form(model, null, k, l);
                 reduced.mass[(k, l)] = value;
                 reduced.mass[(l, k)] = value;
             }
         }
-    }
-
-    /// The geared rotors' share of the kinetic energy's bilinear form between motions k and l
-    /// (after the passes): Σ J s_r(k) s_r(l), s_r the rotor's spin rate under a motion.
-    fn rotors_energy_form(&self, model: &Model, null: &DMatrix<f64>, k: usize, l: usize) -> f64 {
-        let bodies = model.body_count() + 1;
-        let spin = |m: usize, rotor: &Rotor| {
-            let motions = &self.motions[m * bodies..(m + 1) * bodies];
-            rotor_spin(rotor, motions, null[(rotor.velocity, m)])
-        };
-        (model.rotors.iter())
-            .map(|r| r.inertia * spin(k, r) * spin(l, r))
-            .sum()
     }
 
     fn with_mass_matrix(
@@ -249,18 +217,4 @@ impl ReducedInertia {
             }
         }
     }
-}
-
-/// Up to how many motions the passes cost less than the mass matrix: a pass costs about one
-/// motion transform and one momentum per body, the composite-rigid-body algorithm about as
-/// much per body plus one product per entry of M's lower triangle, and each motion's product
-/// with M one per entry again.
-fn passes_up_to(model: &Model, mass_rows: &[Vec<usize>]) -> usize {
-    let bodies = model.dynamic_joints.len().max(1);
-    let entries = mass_rows
-        .iter()
-        .enumerate()
-        .map(|(column, rows)| rows.iter().filter(|&&row| row <= column).count())
-        .sum::<usize>();
-    (bodies + entries) / bodies
 }

@@ -27,6 +27,7 @@ pub mod massless;
 pub mod momentum;
 pub mod orientation;
 pub mod orthonormal;
+pub mod passes;
 pub mod planar_closure;
 pub mod planar_rows;
 pub mod project;

@@ -10,7 +10,9 @@ use super::factored::Factored;
 use super::orthonormal::orthonormal_allowed_motions;
 use super::project::ProjectionScratch;
 use super::structure::Structure;
-use crate::dynamics::algorithms::{crba, crba_into, forward_kinematics, mass_times, Data};
+use crate::dynamics::algorithms::{
+    crba, crba_into, forward_kinematics, joint_transforms, mass_times, Data,
+};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 
@@ -85,28 +87,17 @@ pub fn project_momentum(
         return Ok(());
     };
     let tree = allowed.rows(0, model.nv);
-    let (momentum, mass_tree) = if model.nv > SPARSE_MASS_ABOVE {
-        let (mass, rows) = projection.mass_storage(model);
-        crba_into(model, data, &q[..model.nq], mass)?;
-        let mut momentum = DVector::zeros(model.nv);
-        mass_times(mass, rows, &v[..model.nv], momentum.as_mut_slice());
-        let mut mass_tree = DMatrix::zeros(model.nv, tree.ncols());
-        let mut column = vec![0.0; model.nv];
-        for j in 0..tree.ncols() {
-            column.iter_mut().zip(tree.column(j).iter()).for_each(|(c, t)| *c = *t);
-            mass_times(mass, rows, &column, mass_tree.column_mut(j).as_mut_slice());
-        }
-        (momentum, mass_tree)
+    let (reduced, along) = if model.nv > SPARSE_MASS_ABOVE {
+        large_mechanism_forms(model, data, q, v, &allowed, projection)?
     } else {
         let mass = crba(model, data, &q[..model.nq])?;
         let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
-        (momentum, &mass * tree)
+        (tree.transpose() * (&mass * tree), tree.transpose() * momentum)
     };
-    let reduced = tree.transpose() * mass_tree;
     let Some(cholesky) = reduced.cholesky() else {
         return Ok(());
     };
-    let moved = &allowed * cholesky.solve(&(tree.transpose() * momentum));
+    let moved = &allowed * cholesky.solve(&along);
     // The idle coordinates' unit motions are allowed as they are and carry no momentum: their
     // rates stay.
     for (k, value) in moved.iter().enumerate() {
@@ -121,4 +112,56 @@ pub fn project_momentum(
 /// (so that the free coordinates' allowed motions span the allowed motions).
 fn parametrised(factored: &Factored, structure: &Structure) -> bool {
     structure.free.len() + factored.len() == factored.columns()
+}
+
+/// NᵀMN and NᵀMv for the allowed motions N (`allowed`, over the state's velocities; only the
+/// tree's meet M) above `SPARSE_MASS_ABOVE` velocities. With few allowed motions (up to
+/// `passes_up_to`: the ladder's two), from one pass over the bodies per motion and one for v
+/// (`BodyPasses`), in time linear in the bodies: the mass matrix's storage alone is n² (72 MB
+/// on the ladder of 1,000 loops), and its entries between a rung and the beam, a column apart
+/// in memory, cost a cache miss each. With many, from the mass matrix over the entries its
+/// branches can fill (`mass_times`).
+fn large_mechanism_forms(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    allowed: &DMatrix<f64>,
+    projection: &mut ProjectionScratch,
+) -> Result<(DMatrix<f64>, DVector<f64>), EvalError> {
+    let (nv, count) = (model.nv, allowed.ncols());
+    let (_, passes_up_to) = projection.mass_layout(model);
+    if count < passes_up_to {
+        // The allowed motions and v side by side: the last pass is v's.
+        let mut columns = DMatrix::zeros(nv, count + 1);
+        columns
+            .columns_mut(0, count)
+            .copy_from(&allowed.rows(0, nv));
+        columns.column_mut(count).copy_from_slice(&v[..nv]);
+        joint_transforms(model, data, &q[..model.nq])?;
+        let passes = projection.passes();
+        passes.take(model, data, &columns, count + 1);
+        let mut reduced = DMatrix::zeros(count, count);
+        for k in 0..count {
+            for l in 0..=k {
+                let value = passes.form(model, &columns, k, l);
+                reduced[(k, l)] = value;
+                reduced[(l, k)] = value;
+            }
+        }
+        let along = DVector::from_fn(count, |k, _| passes.form(model, &columns, count, k));
+        return Ok((reduced, along));
+    }
+    let tree = allowed.rows(0, nv);
+    let (mass, rows) = projection.mass_storage(model);
+    crba_into(model, data, &q[..model.nq], mass)?;
+    let mut momentum = DVector::zeros(nv);
+    mass_times(mass, rows, &v[..nv], momentum.as_mut_slice());
+    let mut mass_tree = DMatrix::zeros(nv, count);
+    let mut column = vec![0.0; nv];
+    for j in 0..count {
+        column.iter_mut().zip(tree.column(j).iter()).for_each(|(c, t)| *c = *t);
+        mass_times(mass, rows, &column, mass_tree.column_mut(j).as_mut_slice());
+    }
+    Ok((tree.transpose() * mass_tree, tree.transpose() * momentum))
 }

@@ -15,6 +15,7 @@ use super::rows::{
     Extent,
 };
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
+use super::passes::{passes_up_to, BodyPasses};
 use crate::dynamics::algorithms::{forward_kinematics, mass_rows, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -136,6 +137,11 @@ pub struct ProjectionScratch {
     /// momentum projection of large mechanisms (`project_momentum`); empty until asked for.
     mass: DMatrix<f64>,
     mass_rows: Vec<Vec<usize>>,
+    /// `passes_up_to` of the mass matrix's layout, with `mass_rows`.
+    passes_up_to: usize,
+    /// The bodies' motions under the allowed motions, where they cost less than the mass
+    /// matrix (`project_momentum`).
+    passes: BodyPasses,
 }
 
 /// The factor a `ProjectionScratch` holds.
@@ -180,17 +186,35 @@ impl ProjectionScratch {
             plane: None,
             mass: DMatrix::zeros(0, 0),
             mass_rows: Vec::new(),
+            passes_up_to: 0,
+            passes: BodyPasses::default(),
         }
     }
 
     /// The mass matrix's storage (filled by `crba_into` where it writes, zero elsewhere) and
     /// the rows of each column it can fill, sized for `model` on first use.
     pub fn mass_storage(&mut self, model: &Model) -> (&mut DMatrix<f64>, &[Vec<usize>]) {
+        self.mass_layout(model);
         if self.mass.nrows() != model.nv {
             self.mass = DMatrix::zeros(model.nv, model.nv);
-            self.mass_rows = mass_rows(model);
         }
         (&mut self.mass, &self.mass_rows)
+    }
+
+    /// The rows each column of `model`'s mass matrix can fill (`mass_rows`) and up to how many
+    /// motions the bodies' passes cost less than the matrix (`passes_up_to`), found on first
+    /// use.
+    pub fn mass_layout(&mut self, model: &Model) -> (&[Vec<usize>], usize) {
+        if self.mass_rows.len() != model.nv {
+            self.mass_rows = mass_rows(model);
+            self.passes_up_to = passes_up_to(model, &self.mass_rows);
+        }
+        (&self.mass_rows, self.passes_up_to)
+    }
+
+    /// The bodies' passes' storage (`project_momentum`).
+    pub fn passes(&mut self) -> &mut BodyPasses {
+        &mut self.passes
     }
 
     /// Evaluates the loops' translation rows in the plane from now on (`PlanarClosure`), or

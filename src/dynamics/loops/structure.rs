@@ -239,17 +239,13 @@ impl Structure {
         // decided by round-off, and the sparse basis's decided the other way took that row
         // through its flat passages with an energy drift of 6.1e-9 at 1e-12
         // (`hard_loops::flat_passages_…`, bound 1e-9). Beyond, the dense QR's cost (the
-        // columns squared times the rows) is the start's: the sparse basis, whose rows have
-        // the same lengths and inner products up to round-off, so the same choice but for ties.
-        let sparse;
-        let allowed = if factored.columns() <= DENSE_FREE_CHOICE_UP_TO {
-            factored.dense_null_space()
+        // columns squared times the rows) is the start's: the sparse bases (`sparse_free`).
+        let chosen = if factored.columns() <= DENSE_FREE_CHOICE_UP_TO {
+            let allowed = factored.dense_null_space();
+            dense_best_rows(allowed, &vec![true; allowed.nrows()], KEEP_TOLERANCE)
         } else {
-            sparse = factored.sparse_null_space();
-            &sparse
+            sparse_free(&factored)
         };
-        let every = vec![true; allowed.nrows()];
-        let chosen = dense_best_rows(allowed, &every, KEEP_TOLERANCE);
         let idle = |&c: &usize| c >= self.tree_velocities && !factored.touches(c);
         (self.idle, self.free) = chosen.into_iter().partition(idle);
         self.free_quality = factored
@@ -316,6 +312,32 @@ fn dense_best_rows(jacobian: &DMatrix<f64>, active: &[bool], tolerance: f64) -> 
         chosen.push(row);
     }
     chosen
+}
+
+/// The free coordinates of a large mechanism, on the sparse elimination's bases: pivoted
+/// Gram–Schmidt on the rows of the allowed motions' basis (n × k, `dense_best_rows`), whose
+/// rows have the dense basis's lengths and inner products up to round-off, so the same choice
+/// but for ties; it costs n k². Where the allowed motions outnumber the kept rows' rank r (one
+/// loop of N rods: k = N − 3, r = 3, where n k² was most of the start), the same search on
+/// the rows of the kept rows' orthonormal basis (n × r, n r²) for the r dependent coordinates,
+/// the others free. Of an orthogonal [Q_r Q_k], a k × k minor of Q_k and the complementary
+/// r × r minor of Q_r are equal in size (Jacobi's complementary minors: Horn & Johnson, Matrix
+/// Analysis, 2nd ed., 2013, §0.8.4), so the free coordinates best conditioned together are
+/// the complement of the dependent ones best conditioned together; the two greedy searches
+/// can part between choices of nearly equal volume.
+fn sparse_free(factored: &Factored) -> Vec<usize> {
+    let elimination = factored.sparse_elimination();
+    let (n, rank) = (factored.columns(), elimination.picked().len());
+    let every = vec![true; n];
+    if n - rank > rank {
+        let dependent = dense_best_rows(&elimination.row_space(rank), &every, KEEP_TOLERANCE);
+        if dependent.len() == rank {
+            let mut is_dependent = vec![false; n];
+            dependent.iter().for_each(|&c| is_dependent[c] = true);
+            return (0..n).filter(|&c| !is_dependent[c]).collect();
+        }
+    }
+    dense_best_rows(&elimination.null_space(rank), &every, KEEP_TOLERANCE)
 }
 
 /// The firm rows among `rows` (pivoted Gram–Schmidt on G, the last `weak` of them weak) chosen
