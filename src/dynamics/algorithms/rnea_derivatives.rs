@@ -451,12 +451,13 @@ impl RneaDerivatives {
         };
         for (column, pairs) in self.column_pairs.iter_mut().enumerate() {
             let (dv, s) = (angular(&self.dv_dq[column]), angular(&self.columns[column]));
-            let (da, da_dv) = (&self.da_dq[column], &self.da_dv[column]);
-            for m in 0..3 {
-                pairs[m] = [dv[m], s[m]];
-            }
-            for m in 0..6 {
-                pairs[3 + m] = [da[m], da_dv[m]];
+            let angular_pairs = dv.iter().zip(s.iter());
+            let acceleration_pairs = self.da_dq[column].iter().zip(self.da_dv[column].iter());
+            for (pair, (x, y)) in pairs
+                .iter_mut()
+                .zip(angular_pairs.chain(acceleration_pairs))
+            {
+                *pair = [*x, *y];
             }
         }
         for &k in model.dynamic_joints.iter().rev() {
