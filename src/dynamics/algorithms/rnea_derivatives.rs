@@ -118,6 +118,9 @@ pub struct RneaDerivatives {
     dv_dq: Vec<Motion>,
     da_dq: Vec<Motion>,
     da_dv: Vec<Motion>,
+    /// Per velocity, for the pass back: (ω(∂V), ω(S)) then (∂A, ∂A') entry by entry, the pairs
+    /// a row's Bᵀs and I s weigh.
+    column_pairs: Vec<[[f64; 2]; 9]>,
     /// `forward_dynamics`: per body, its subtree's inertia and bias force, and the change of its
     /// acceleration by q̈.
     composite: Vec<RigidInertia>,
@@ -142,6 +145,7 @@ impl RneaDerivatives {
             dv_dq: vec![Motion::zeros(); nv],
             da_dq: vec![Motion::zeros(); nv],
             da_dv: vec![Motion::zeros(); nv],
+            column_pairs: vec![[[0.0; 2]; 9]; nv],
             composite: vec![RigidInertia::zeros(); n + 1],
             composite_force: vec![Force::zeros(); n + 1],
             acceleration_change: vec![Motion::zeros(); n + 1],
@@ -200,7 +204,11 @@ impl RneaDerivatives {
             self.dtau_dv.as_mut_slice().fill(0.0);
         }
         self.add_rotors(model, v, a);
-        self.pass_back(model, rotors, Layout::Columns);
+        if rotors {
+            self.pass_back::<true>(model, Layout::Columns);
+        } else {
+            self.pass_back::<false>(model, Layout::Columns);
+        }
     }
 
     /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
@@ -240,7 +248,7 @@ impl RneaDerivatives {
         // that the pass back's entries of the tree's pattern are the only ones.
         self.dtau_dq.as_mut_slice().fill(0.0);
         self.dtau_dv.as_mut_slice().fill(0.0);
-        self.pass_back(model, false, Layout::Rows);
+        self.pass_back::<false>(model, Layout::Rows);
         true
     }
 
@@ -312,18 +320,22 @@ impl RneaDerivatives {
                 self.columns[index] = s;
                 own_velocity += s * v[index];
                 own_acceleration += s * a[index];
+                self.dv_dq[index] = spatial::cross_motion(&parent_velocity, &s);
             }
             let velocity = parent_velocity + own_velocity;
             self.velocity[i] = velocity;
-            self.acceleration[i] = parent_acceleration
-                + own_acceleration
-                + spatial::cross_motion(&velocity, &own_velocity);
-            // With one velocity, v_j = v_λ + S q̇ and S × S = 0: ∂A' = 2 v_λ × S = 2 ∂V.
+            let own = joint.v_offset..joint.v_offset + joint.nv();
+            // With one velocity, v_j = v_λ + S q̇ and S × S = 0: v_j × S q̇ = ∂V q̇, and
+            // ∂A' = 2 v_λ × S = 2 ∂V (two cross products of 6-vectors fewer per joint).
             let single = joint.nv() == 1;
-            for index in joint.v_offset..joint.v_offset + joint.nv() {
-                let s = self.columns[index];
-                let dv = spatial::cross_motion(&parent_velocity, &s);
-                self.dv_dq[index] = dv;
+            let velocity_product = if single {
+                self.dv_dq[own.start] * v[own.start]
+            } else {
+                spatial::cross_motion(&velocity, &own_velocity)
+            };
+            self.acceleration[i] = parent_acceleration + own_acceleration + velocity_product;
+            for index in own {
+                let (s, dv) = (self.columns[index], self.dv_dq[index]);
                 self.da_dq[index] = spatial::cross_motion(&parent_acceleration, &s)
                     + spatial::cross_motion(&parent_velocity, &dv);
                 self.da_dv[index] = if single {
@@ -421,17 +433,33 @@ impl RneaDerivatives {
     /// Sums the composites from the leaves and fills τ, ∂τ/∂q and ∂τ/∂v (the module's
     /// documentation): per joint, its rows along its own and its ancestors' columns, and its
     /// ancestors' rows along its columns, each entry of the tree's pattern once: written, or
-    /// added to what the rotors gave (`accumulate`), at its place in `layout`.
-    fn pass_back(&mut self, model: &Model, accumulate: bool, layout: Layout) {
+    /// added to what the rotors gave (`ACCUMULATE`), at its place in `layout`.
+    ///
+    /// Each entry of ∂τ/∂q is computed beside the same entry of ∂τ/∂v, as one pair of dot
+    /// products with the same weights (`paired_dot`): a row's Bᵀs and I s against a column's
+    /// (∂V, ∂A) and (S, ∂A'), an ancestor's S against a column's two changes of force. The
+    /// pairs are stored side by side so that the processor does both at once, two wide.
+    fn pass_back<const ACCUMULATE: bool>(&mut self, model: &Model, layout: Layout) {
         let nv = model.nv;
         let (row_stride, column_stride) = match layout {
             Layout::Columns => (1, nv),
             Layout::Rows => (nv, 1),
         };
-        let put = |entries: &mut [f64], row: usize, column: usize, value: f64| {
-            let entry = &mut entries[row * row_stride + column * column_stride];
-            *entry = if accumulate { *entry + value } else { value };
+        let put = |entries: &mut [f64], at: usize, value: f64| {
+            let entry = &mut entries[at];
+            *entry = if ACCUMULATE { *entry + value } else { value };
         };
+        for (column, pairs) in self.column_pairs.iter_mut().enumerate() {
+            let (dv, s) = (angular(&self.dv_dq[column]), angular(&self.columns[column]));
+            let angular_pairs = dv.iter().zip(s.iter());
+            let acceleration_pairs = self.da_dq[column].iter().zip(self.da_dv[column].iter());
+            for (pair, (x, y)) in pairs
+                .iter_mut()
+                .zip(angular_pairs.chain(acceleration_pairs))
+            {
+                *pair = [*x, *y];
+            }
+        }
         for &k in model.dynamic_joints.iter().rev() {
             let joint = &model.joints[k];
             let (i, parent) = (joint.child, joint.dynamic_parent);
@@ -442,13 +470,22 @@ impl RneaDerivatives {
                 let s = self.columns[row];
                 self.tau[row] += s.dot(&force);
                 let (sensitivity, momentum) = (coriolis.transpose_times(&s), inertia.times(&s));
+                let weights = [
+                    sensitivity.x,
+                    sensitivity.y,
+                    sensitivity.z,
+                    momentum[0],
+                    momentum[1],
+                    momentum[2],
+                    momentum[3],
+                    momentum[4],
+                    momentum[5],
+                ];
                 for &column in branch {
-                    let by_position = sensitivity.dot(&angular(&self.dv_dq[column]))
-                        + momentum.dot(&self.da_dq[column]);
-                    let by_rate = sensitivity.dot(&angular(&self.columns[column]))
-                        + momentum.dot(&self.da_dv[column]);
-                    put(self.dtau_dq.as_mut_slice(), row, column, by_position);
-                    put(self.dtau_dv.as_mut_slice(), row, column, by_rate);
+                    let [by_position, by_rate] = paired_dot(&weights, &self.column_pairs[column]);
+                    let at = row * row_stride + column * column_stride;
+                    put(self.dtau_dq.as_mut_slice(), at, by_position);
+                    put(self.dtau_dv.as_mut_slice(), at, by_rate);
                 }
             }
             for column in own.clone() {
@@ -457,15 +494,14 @@ impl RneaDerivatives {
                     + coriolis.times(&self.dv_dq[column])
                     + inertia.times(&self.da_dq[column]);
                 let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
+                let changes: [[f64; 2]; 6] =
+                    std::array::from_fn(|m| [position_change[m], rate_change[m]]);
                 for &row in branch.iter().filter(|row| !own.contains(row)) {
-                    let (s_row, dq) = (self.columns[row], self.dtau_dq.as_mut_slice());
-                    put(dq, row, column, s_row.dot(&position_change));
-                    put(
-                        self.dtau_dv.as_mut_slice(),
-                        row,
-                        column,
-                        s_row.dot(&rate_change),
-                    );
+                    let s_row: &[f64; 6] = self.columns[row].as_ref();
+                    let [by_position, by_rate] = paired_dot(s_row, &changes);
+                    let at = row * row_stride + column * column_stride;
+                    put(self.dtau_dq.as_mut_slice(), at, by_position);
+                    put(self.dtau_dv.as_mut_slice(), at, by_rate);
                 }
             }
             if parent != 0 {
@@ -475,6 +511,18 @@ impl RneaDerivatives {
             }
         }
     }
+}
+
+/// Σ_m w_m p_m for pairs p_m: two dot products with the same weights, lane by lane, which the
+/// compiler forms as one two-wide product and sum per term.
+#[inline(always)]
+fn paired_dot<const N: usize>(weights: &[f64; N], pairs: &[[f64; 2]; N]) -> [f64; 2] {
+    let mut sum = [0.0; 2];
+    for (w, p) in weights.iter().zip(pairs) {
+        sum[0] += w * p[0];
+        sum[1] += w * p[1];
+    }
+    sum
 }
 
 /// Where the pass back puts entry (r, c) of ∂τ/∂q and ∂τ/∂v: at r + c nv (nalgebra's order,
@@ -490,18 +538,20 @@ enum Layout {
 /// velocity changes by m and its acceleration by m × v. With I = [J ĉ; ĉᵀ m·1] (c the first
 /// moment) the blocks multiplying m's linear part cancel (f = m u − c × ω), leaving
 /// B = [ω̂J + (ω̂J)ᵀ − c uᵀ − u cᵀ + 2 (u·c) 1 − n̂, 0; −2 ((ω × c)^ + m û), 0]:
-/// two 3 × 3 blocks, sums of which stay of that form for a subtree.
+/// a 3 × 3 block above and a skew one below, kept as the vector b = −2 (ω × c + m u) it
+/// crosses with (b̂ w = b × w, b̂ᵀ x = x × b); sums of such matrices stay of that form for a
+/// subtree.
 #[derive(Clone, Copy, Debug)]
 struct CoriolisMatrix {
     top: Matrix3<f64>,
-    bottom: Matrix3<f64>,
+    bottom: Vector3<f64>,
 }
 
 impl CoriolisMatrix {
     fn zeros() -> CoriolisMatrix {
         CoriolisMatrix {
             top: Matrix3::zeros(),
-            bottom: Matrix3::zeros(),
+            bottom: Vector3::zeros(),
         }
     }
 
@@ -518,20 +568,20 @@ impl CoriolisMatrix {
         ]);
         let top = half + half.transpose() + Matrix3::identity() * (2.0 * u.dot(&c))
             - spatial::skew(&spatial::angular(momentum));
-        let bottom = -2.0 * (spatial::skew(&w.cross(&c)) + spatial::skew(&u) * inertia.mass);
+        let bottom = -2.0 * (w.cross(&c) + u * inertia.mass);
         CoriolisMatrix { top, bottom }
     }
 
     /// B m (a force): only m's angular part counts.
     fn times(&self, m: &Motion) -> Force {
         let w = spatial::angular(m);
-        spatial::twist(self.top * w, self.bottom * w)
+        spatial::twist(self.top * w, self.bottom.cross(&w))
     }
 
     /// Bᵀ s, as a motion's angular part to dot with (its linear part is zero: a dot product
     /// with a motion m is one with m's angular part).
     fn transpose_times(&self, s: &Motion) -> Vector3<f64> {
-        self.top.tr_mul(&spatial::angular(s)) + self.bottom.tr_mul(&spatial::linear(s))
+        self.top.tr_mul(&spatial::angular(s)) + spatial::linear(s).cross(&self.bottom)
     }
 }
 
