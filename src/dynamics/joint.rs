@@ -22,7 +22,7 @@ use crate::elab::value::SExpr;
 use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::{linear_in_first, ChainMotion, JointModel, Step};
 use crate::source::Span;
-use super::scalar::DynamicsScalar;
+use super::scalar::{DynamicsScalar, NOT_DIFFERENTIABLE};
 use crate::spatial::{self, constant, Force, Motion, Pose, Real, Transform};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -478,7 +478,10 @@ impl Joint {
             return Ok(());
         }
         if self.kind == JointType::Chain {
-            T::general_chain_state(self, q, v, state)?;
+            match (T::plain(q), T::plain(v)) {
+                (Some(q), Some(v)) => self.chain_state(q, v, state)?,
+                _ => return Err(NOT_DIFFERENTIABLE),
+            }
         } else {
             self.quaternion_state(q, v, state);
         }
@@ -499,11 +502,11 @@ impl Joint {
 
     /// A general dof chain's pose, subspace, velocity and bias, its expressions evaluated at
     /// (q, v) (in `f64`: `DynamicsScalar`).
-    pub(super) fn chain_state(
+    fn chain_state<T: Real>(
         &self,
         q: &[f64],
         v: &[f64],
-        state: &mut JointState,
+        state: &mut JointState<T>,
     ) -> Result<(), EvalError> {
         self.chain.chain_motion_into(q, Some(v), &mut state.chain)?;
         let motion = &state.chain;
@@ -518,14 +521,13 @@ impl Joint {
         state.subspace.clear();
         for k in 0..self.nv() {
             let column = Motion::from_column_slice(motion.subspace.column(k).as_slice());
-            state
-                .subspace
-                .push(sign * spatial::motion_to_parent(&to_child, &column));
+            let column = sign * spatial::motion_to_parent(&to_child, &column);
+            state.subspace.push(column.cast());
         }
         let moving = if self.first_on_parent { d } else { d.inverse() };
-        state.pose = self.on_parent * moving * self.on_child.inverse();
-        state.velocity = sign * spatial::motion_to_parent(&to_child, &motion.velocity);
-        state.bias = sign * spatial::motion_to_parent(&to_child, &motion.bias);
+        state.pose = (self.on_parent * moving * self.on_child.inverse()).cast();
+        state.velocity = (sign * spatial::motion_to_parent(&to_child, &motion.velocity)).cast();
+        state.bias = (sign * spatial::motion_to_parent(&to_child, &motion.bias)).cast();
         Ok(())
     }
 
