@@ -3,30 +3,50 @@
 //! the point at the origin of the frame they are expressed in; forces `[n; f]`, the moment about
 //! the frame's origin then the force; spatial inertias as 6×6 matrices; and rigid transforms
 //! acting on them.
+//!
+//! The motions, forces and transforms are generic over their scalar (`Real`), as Pinocchio
+//! templates its algorithms on the scalar: `f64` everywhere the program computes, and a dual
+//! number where a test differentiates the recursive algorithms by forward-mode automatic
+//! differentiation. The aliases default to `f64`.
 
-use nalgebra::{Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{
+    Isometry3, Matrix3, Matrix6, RealField, Translation3, UnitQuaternion, Vector3, Vector6,
+};
+
+/// A scalar the spatial algebra and the recursive algorithms compute in: `f64`, or a dual
+/// number (`dynamics::dual`) that carries derivatives along with values.
+pub trait Real: RealField + Copy {}
+
+impl<T: RealField + Copy> Real for T {}
+
+/// The model's constant `x` (a length, a mass) as a scalar of the computation.
+#[inline(always)]
+pub fn constant<T: Real>(x: f64) -> T {
+    T::from_subset(&x)
+}
 
 /// A rigid transform with its rotation as a matrix: the form the recursive algorithms use,
 /// where rotating a vector costs 9 products instead of the quaternion's 18.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Transform {
-    pub rotation: Matrix3<f64>,
-    pub translation: Vector3<f64>,
+pub struct Transform<T: Real = f64> {
+    pub rotation: Matrix3<T>,
+    pub translation: Vector3<T>,
 }
 
-pub type Motion = Vector6<f64>;
-pub type Force = Vector6<f64>;
-pub type Inertia = Matrix6<f64>;
-pub type Pose = Isometry3<f64>;
+pub type Motion<T = f64> = Vector6<T>;
+pub type Force<T = f64> = Vector6<T>;
+pub type Inertia<T = f64> = Matrix6<T>;
+pub type Pose<T = f64> = Isometry3<T>;
 /// A motion, as the kinematics names it: `[ω; v]`.
-pub type Twist = Motion;
+pub type Twist<T = f64> = Motion<T>;
 
-pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+pub fn skew<T: Real>(v: &Vector3<T>) -> Matrix3<T> {
+    let zero = T::zero();
+    Matrix3::new(zero, -v.z, v.y, v.z, zero, -v.x, -v.y, v.x, zero)
 }
 
 /// Motion given in the frame of `pose` (a child), expressed in the frame `pose` is relative to.
-pub fn motion_to_parent(pose: &Pose, m: &Motion) -> Motion {
+pub fn motion_to_parent<T: Real>(pose: &Pose<T>, m: &Motion<T>) -> Motion<T> {
     let w = pose.rotation * angular(m);
     twist(
         w,
@@ -36,13 +56,13 @@ pub fn motion_to_parent(pose: &Pose, m: &Motion) -> Motion {
 
 /// A motion given in fixed axes about the origin, taken about the point `point` (same axes):
 /// `motion_to_child` for a pure translation, without its rotations.
-pub fn shifted(point: &Vector3<f64>, m: &Motion) -> Motion {
+pub fn shifted<T: Real>(point: &Vector3<T>, m: &Motion<T>) -> Motion<T> {
     let w = angular(m);
     twist(w, linear(m) - point.cross(&w))
 }
 
 /// Motion given in the parent frame, expressed in the frame of `pose` (the child).
-pub fn motion_to_child(pose: &Pose, m: &Motion) -> Motion {
+pub fn motion_to_child<T: Real>(pose: &Pose<T>, m: &Motion<T>) -> Motion<T> {
     let inverse = pose.rotation.inverse();
     let w = angular(m);
     twist(
@@ -52,7 +72,7 @@ pub fn motion_to_child(pose: &Pose, m: &Motion) -> Motion {
 }
 
 /// Force given in the child frame, expressed in the parent frame.
-pub fn force_to_parent(pose: &Pose, f: &Force) -> Force {
+pub fn force_to_parent<T: Real>(pose: &Pose<T>, f: &Force<T>) -> Force<T> {
     let force = pose.rotation * linear(f);
     twist(
         pose.rotation * angular(f) + pose.translation.vector.cross(&force),
@@ -61,7 +81,7 @@ pub fn force_to_parent(pose: &Pose, f: &Force) -> Force {
 }
 
 /// Force given in the parent frame, expressed in the child frame.
-pub fn force_to_child(pose: &Pose, f: &Force) -> Force {
+pub fn force_to_child<T: Real>(pose: &Pose<T>, f: &Force<T>) -> Force<T> {
     let inverse = pose.rotation.inverse();
     let force = linear(f);
     twist(
@@ -71,7 +91,7 @@ pub fn force_to_child(pose: &Pose, f: &Force) -> Force {
 }
 
 /// `a × b` for two motions.
-pub fn cross_motion(a: &Motion, b: &Motion) -> Motion {
+pub fn cross_motion<T: Real>(a: &Motion<T>, b: &Motion<T>) -> Motion<T> {
     let (w, v) = (angular(a), linear(a));
     twist(
         w.cross(&angular(b)),
@@ -80,7 +100,7 @@ pub fn cross_motion(a: &Motion, b: &Motion) -> Motion {
 }
 
 /// `a ×* f`: a motion acting on a force.
-pub fn cross_force(a: &Motion, f: &Force) -> Force {
+pub fn cross_force<T: Real>(a: &Motion<T>, f: &Force<T>) -> Force<T> {
     let (w, v) = (angular(a), linear(a));
     twist(
         w.cross(&angular(f)) + v.cross(&linear(f)),
@@ -99,15 +119,15 @@ pub fn motion_matrix_to_child(pose: &Pose) -> Matrix6<f64> {
     x
 }
 
-impl Transform {
-    pub fn identity() -> Transform {
+impl<T: Real> Transform<T> {
+    pub fn identity() -> Transform<T> {
         Transform {
             rotation: Matrix3::identity(),
             translation: Vector3::zeros(),
         }
     }
 
-    pub fn inverse(&self) -> Transform {
+    pub fn inverse(&self) -> Transform<T> {
         let rt = self.rotation.transpose();
         Transform {
             rotation: rt,
@@ -115,7 +135,7 @@ impl Transform {
         }
     }
 
-    pub fn from_pose(pose: &Pose) -> Transform {
+    pub fn from_pose(pose: &Pose<T>) -> Transform<T> {
         Transform {
             rotation: *pose.rotation.to_rotation_matrix().matrix(),
             translation: pose.translation.vector,
@@ -124,7 +144,7 @@ impl Transform {
 
     /// Motion given in the parent frame, expressed in this (child) frame.
     #[inline]
-    pub fn motion_to_child(&self, m: &Motion) -> Motion {
+    pub fn motion_to_child(&self, m: &Motion<T>) -> Motion<T> {
         let w = angular(m);
         let rt = self.rotation.transpose();
         twist(rt * w, rt * (linear(m) - self.translation.cross(&w)))
@@ -132,7 +152,7 @@ impl Transform {
 
     /// Force given in this (child) frame, expressed in the parent frame.
     #[inline]
-    pub fn force_to_parent(&self, f: &Force) -> Force {
+    pub fn force_to_parent(&self, f: &Force<T>) -> Force<T> {
         let force = self.rotation * linear(f);
         twist(
             self.rotation * angular(f) + self.translation.cross(&force),
@@ -142,7 +162,7 @@ impl Transform {
 
     /// Motion given in this (child) frame, expressed in the parent frame.
     #[inline]
-    pub fn motion_to_parent(&self, m: &Motion) -> Motion {
+    pub fn motion_to_parent(&self, m: &Motion<T>) -> Motion<T> {
         let w = self.rotation * angular(m);
         twist(w, self.rotation * linear(m) + self.translation.cross(&w))
     }
@@ -151,9 +171,9 @@ impl Transform {
     /// with I = [A B; Bᵀ D], rotating gives A₁ = RARᵀ, B₁ = RBRᵀ, D₁ = RDRᵀ, and moving the
     /// origin by p gives [A₁ − B₁p̂ + p̂B₁ᵀ − p̂D₁p̂, B₁ + p̂D₁; ·, D₁]. About half the products
     /// of X*ᵀ I X with 6 × 6 matrices.
-    pub fn inertia_to_parent(&self, i: &Inertia) -> Inertia {
+    pub fn inertia_to_parent(&self, i: &Inertia<T>) -> Inertia<T> {
         let r = &self.rotation;
-        let rotate = |block: Matrix3<f64>| r * block * r.transpose();
+        let rotate = |block: Matrix3<T>| r * block * r.transpose();
         let a = rotate(i.fixed_view::<3, 3>(0, 0).into_owned());
         let b = rotate(i.fixed_view::<3, 3>(0, 3).into_owned());
         let d = rotate(i.fixed_view::<3, 3>(3, 3).into_owned());
@@ -172,11 +192,11 @@ impl Transform {
     }
 }
 
-impl std::ops::Mul for Transform {
-    type Output = Transform;
+impl<T: Real> std::ops::Mul for Transform<T> {
+    type Output = Transform<T>;
 
     /// Composition: `a * b` maps b's frame through a's.
-    fn mul(self, b: Transform) -> Transform {
+    fn mul(self, b: Transform<T>) -> Transform<T> {
         Transform {
             rotation: self.rotation * b.rotation,
             translation: self.rotation * b.translation + self.translation,
@@ -294,24 +314,24 @@ pub fn inertia_to_parent(pose: &Pose, i: &Inertia) -> Inertia {
 }
 
 /// The spatial vector with angular (upper) part `angular` and linear (lower) part `linear`.
-pub fn twist(angular: Vector3<f64>, linear: Vector3<f64>) -> Twist {
+pub fn twist<T: Real>(angular: Vector3<T>, linear: Vector3<T>) -> Twist<T> {
     Twist::new(
         angular.x, angular.y, angular.z, linear.x, linear.y, linear.z,
     )
 }
 
 /// The upper half of a spatial vector: a motion's angular velocity, a force's moment.
-pub fn angular(t: &Twist) -> Vector3<f64> {
+pub fn angular<T: Real>(t: &Twist<T>) -> Vector3<T> {
     Vector3::new(t[0], t[1], t[2])
 }
 
 /// The lower half of a spatial vector: a motion's linear velocity, a force's force.
-pub fn linear(t: &Twist) -> Vector3<f64> {
+pub fn linear<T: Real>(t: &Twist<T>) -> Vector3<T> {
     Vector3::new(t[3], t[4], t[5])
 }
 
 /// Velocity of the point `p` of a body moving with (spatial) twist `t`.
-pub fn point_velocity(t: &Twist, p: &Vector3<f64>) -> Vector3<f64> {
+pub fn point_velocity<T: Real>(t: &Twist<T>, p: &Vector3<T>) -> Vector3<T> {
     linear(t) + angular(t).cross(p)
 }
 

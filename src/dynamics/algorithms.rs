@@ -18,26 +18,31 @@ use nalgebra::{DMatrix, DVector, Matrix6, Vector3, Vector6};
 use super::compiled::EffortScratch;
 use super::joint::JointState;
 use super::model::Model;
+use super::scalar::DynamicsScalar;
 use crate::kinematics::eval::EvalError;
-use crate::spatial::{self, Force, Inertia, Motion, Pose, RigidInertia, Transform};
+use crate::spatial::{self, constant, Force, Inertia, Motion, Pose, Real, RigidInertia, Transform};
 
 /// Scratch space for the algorithms; `Data::new(&model)` once, reuse for every call.
-pub struct Data {
-    pub states: Vec<JointState>,
+///
+/// RNEA and ABA compute in the scalar `T` (`DynamicsScalar`): `f64`, or dual numbers that
+/// differentiate them (`Data::with_scalar`). The mass matrix, the efforts and the geared
+/// rotors' rows are computed in `f64` only; their scratch is there whatever `T`.
+pub struct Data<T: Real = f64> {
+    pub states: Vec<JointState<T>>,
     /// World pose, velocity and acceleration of body i at index i (0 is earth), in body frame.
-    pub world: Vec<Pose>,
-    pub velocity: Vec<Motion>,
-    pub acceleration: Vec<Motion>,
-    pub force: Vec<Force>,
+    pub world: Vec<Pose<T>>,
+    pub velocity: Vec<Motion<T>>,
+    pub acceleration: Vec<Motion<T>>,
+    pub force: Vec<Force<T>>,
     /// CRBA's poses, composite inertias and motion columns in the fixed frame.
     mass_scratch: MassScratch,
-    articulated: Vec<Inertia>,
-    bias: Vec<Force>,
-    coriolis: Vec<Motion>,
+    articulated: Vec<Inertia<T>>,
+    bias: Vec<Force<T>>,
+    coriolis: Vec<Motion<T>>,
     /// ABA per joint: U = I S (one force per velocity), D⁻¹ = (Sᵀ U)⁻¹ and u = τ − Sᵀ p.
-    u: Vec<[Force; 6]>,
-    d_inverse: Vec<Matrix6<f64>>,
-    u_vector: Vec<Vector6<f64>>,
+    u: Vec<[Force<T>; 6]>,
+    d_inverse: Vec<Matrix6<T>>,
+    u_vector: Vec<Vector6<T>>,
     /// Where the efforts' tape is evaluated.
     pub efforts: EffortScratch,
     /// Geared rotors (empty without any): the bodies' motions for one unit velocity, that unit
@@ -47,14 +52,14 @@ pub struct Data {
     rotor_motions: Vec<Motion>,
     rotor_unit: Vec<f64>,
     rotor_rows: DMatrix<f64>,
-    rotor_own: Vec<f64>,
-    rotor_torques: Vec<Vector3<f64>>,
+    rotor_own: Vec<T>,
+    rotor_torques: Vec<Vector3<T>>,
     /// ABA with geared rotors: per joint, the rotor it drives (empty without any); per rotor,
     /// U_R = I_R S_R and its velocity-product acceleration relative to its carrier's
     /// (`Data::aba_rotor_step` in `geared`).
     rotor_of_joint: Vec<Option<usize>>,
-    rotor_u: Vec<Force>,
-    rotor_coriolis: Vec<Motion>,
+    rotor_u: Vec<Force<T>>,
+    rotor_coriolis: Vec<Motion<T>>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -75,13 +80,20 @@ impl From<EvalError> for DynamicsError {
 }
 
 impl Data {
+    pub fn new(model: &Model) -> Data {
+        Data::with_scalar(model)
+    }
+}
+
+impl<T: Real> Data<T> {
     /// Per geared rotor, its own effort n ε·τ_r on its coordinate at the last pass out of
     /// inverse dynamics (`rnea_forward`).
-    pub fn rotor_efforts(&self) -> &[f64] {
+    pub fn rotor_efforts(&self) -> &[T] {
         &self.rotor_own
     }
 
-    pub fn new(model: &Model) -> Data {
+    /// Scratch for the algorithms in the scalar `T` (`Data::new` for `f64`).
+    pub fn with_scalar(model: &Model) -> Data<T> {
         let n = model.body_count();
         let geared = !model.rotors.is_empty();
         Data {
@@ -101,7 +113,7 @@ impl Data {
             rotor_motions: vec![Motion::zeros(); if geared { n + 1 } else { 0 }],
             rotor_unit: vec![0.0; if geared { model.nv } else { 0 }],
             rotor_rows: DMatrix::zeros(model.rotors.len(), model.nv),
-            rotor_own: vec![0.0; model.rotors.len()],
+            rotor_own: vec![T::zero(); model.rotors.len()],
             rotor_torques: vec![Vector3::zeros(); model.rotors.len()],
             rotor_of_joint: rotors_of_joints(model),
             rotor_u: vec![Force::zeros(); model.rotors.len()],
@@ -123,11 +135,11 @@ fn rotors_of_joints(model: &Model) -> Vec<Option<usize>> {
 }
 
 /// The geared rotor joint `k` drives, if any.
-fn rotor_of(data: &Data, k: usize) -> Option<usize> {
+fn rotor_of<T: Real>(data: &Data<T>, k: usize) -> Option<usize> {
     data.rotor_of_joint.get(k).copied().flatten()
 }
 
-fn slice(values: &[f64], offset: usize, count: usize) -> &[f64] {
+fn slice<T>(values: &[T], offset: usize, count: usize) -> &[T] {
     &values[offset..offset + count]
 }
 
@@ -151,7 +163,12 @@ pub fn forward_kinematics(
 /// What the recursive algorithms need of the kinematics: the states and body velocities of the
 /// joints they visit at (q, v), without the world poses (RNEA and ABA leave `data.world` and the
 /// merged bodies as they were).
-fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+fn joint_motions<T: DynamicsScalar>(
+    model: &Model,
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
+) -> Result<(), EvalError> {
     joint_states(model, data, q, v)?;
     for &k in &model.dynamic_joints {
         body_velocity(model, data, k);
@@ -162,7 +179,12 @@ fn joint_motions(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result
 /// The joints' own states (transforms, subspaces, velocities across them) at (q, v), without
 /// the bodies' velocities in their own frames (`joint_motions`): the derivatives form theirs in
 /// the fixed frame.
-fn joint_states(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<(), EvalError> {
+fn joint_states<T: DynamicsScalar>(
+    model: &Model,
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
+) -> Result<(), EvalError> {
     // Independent of one another, they overlap in the processor.
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
@@ -193,7 +215,7 @@ fn joint_motion(
 }
 
 /// The velocity of joint k's child and its velocity-product acceleration, from its parent's.
-fn body_velocity(model: &Model, data: &mut Data, k: usize) {
+fn body_velocity<T: Real>(model: &Model, data: &mut Data<T>, k: usize) {
     let joint = &model.joints[k];
     let state = &data.states[k];
     let (i, parent) = (joint.child, joint.dynamic_parent);
@@ -216,21 +238,21 @@ pub fn bias_accelerations(model: &Model, data: &mut Data) {
 /// The acceleration given to the base (earth) so that the bodies feel the gravity field: an
 /// upward acceleration g is the same as a downward field −g (Einstein's elevator). The bodies'
 /// accelerations in `Data` after RNEA and ABA include it.
-fn base_acceleration(model: &Model) -> Motion {
+fn base_acceleration<T: Real>(model: &Model) -> Motion<T> {
     let g = model.gravity;
-    Motion::new(0.0, 0.0, 0.0, -g.x, -g.y, -g.z)
+    Motion::new(0.0, 0.0, 0.0, -g.x, -g.y, -g.z).cast()
 }
 
 /// Inverse dynamics: the generalised forces that give accelerations `a` at (q, v) under the
 /// external forces `external` (one per body, in its frame; index 0 unused).
-pub fn rnea(
+pub fn rnea<T: DynamicsScalar>(
     model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    a: &[f64],
-    external: &[Force],
-) -> Result<DVector<f64>, EvalError> {
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
+    a: &[T],
+    external: &[Force<T>],
+) -> Result<DVector<T>, EvalError> {
     let mut tau = DVector::zeros(model.nv);
     rnea_into(model, data, q, v, a, external, &mut tau)?;
     Ok(tau)
@@ -238,14 +260,14 @@ pub fn rnea(
 
 /// RNEA writing the generalised forces into `tau` (length nv).
 #[allow(clippy::too_many_arguments)]
-pub fn rnea_into(
+pub fn rnea_into<T: DynamicsScalar>(
     model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    a: &[f64],
-    external: &[Force],
-    tau: &mut DVector<f64>,
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
+    a: &[T],
+    external: &[Force<T>],
+    tau: &mut DVector<T>,
 ) -> Result<(), EvalError> {
     joint_motions(model, data, q, v)?;
     rnea_after_kinematics(model, data, a, external, tau);
@@ -254,12 +276,12 @@ pub fn rnea_into(
 
 /// `rnea_into` when `data` already holds the forward kinematics of (q, v)
 /// (`forward_kinematics`): the joints' states are not computed again.
-pub fn rnea_after_kinematics(
+pub fn rnea_after_kinematics<T: Real>(
     model: &Model,
-    data: &mut Data,
-    a: &[f64],
-    external: &[Force],
-    tau: &mut DVector<f64>,
+    data: &mut Data<T>,
+    a: &[T],
+    external: &[Force<T>],
+    tau: &mut DVector<T>,
 ) {
     rnea_forward(model, data, a, external);
     rnea_backward(model, data, tau);
@@ -271,7 +293,7 @@ pub fn rnea_after_kinematics(
 /// carriers included (`add_rotor_torques`). Their power along any motion of the joints x is
 /// xᵀ times the generalised forces, less the rotors' own efforts on their coordinates:
 /// Σ vᵢ(x)·Fᵢ = xᵀτ − Σ x_r n ε·τ_r (`body_motions`, `Data::rotor_efforts`).
-pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force]) {
+pub fn rnea_forward<T: Real>(model: &Model, data: &mut Data<T>, a: &[T], external: &[Force<T>]) {
     let base = base_acceleration(model);
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
@@ -290,8 +312,9 @@ pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force
         data.force[i] = if body.massless {
             -external[i]
         } else {
-            let momentum = body.inertia * data.velocity[i];
-            body.inertia * data.acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum)
+            let inertia: Inertia<T> = body.inertia.cast();
+            let momentum = inertia * data.velocity[i];
+            inertia * data.acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum)
                 - external[i]
         };
     }
@@ -301,7 +324,7 @@ pub fn rnea_forward(model: &Model, data: &mut Data, a: &[f64], external: &[Force
 /// RNEA's pass back: the generalised forces `tau` (length nv) from the bodies' forces that
 /// `rnea_forward` left in `data.force` (which it accumulates from child to parent), and the
 /// geared rotors' own efforts on their coordinates.
-pub fn rnea_backward(model: &Model, data: &mut Data, tau: &mut DVector<f64>) {
+pub fn rnea_backward<T: Real>(model: &Model, data: &mut Data<T>, tau: &mut DVector<T>) {
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
@@ -316,7 +339,7 @@ pub fn rnea_backward(model: &Model, data: &mut Data, tau: &mut DVector<f64>) {
         }
     }
     for (rotor, effort) in model.rotors.iter().zip(&data.rotor_own) {
-        tau[rotor.velocity] += effort;
+        tau[rotor.velocity] += *effort;
     }
 }
 
@@ -373,7 +396,7 @@ pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> V
 /// one pass out from the root, v_i = X_i v_parent + S_i x_i. `motions` has one entry per body
 /// and earth. With the bodies' inertias, xᵀMy = Σ v_i(x)ᵀ I_i v_i(y): the mass matrix's
 /// bilinear form, without the mass matrix.
-pub fn body_motions(model: &Model, data: &Data, x: &[f64], motions: &mut [Motion]) {
+pub fn body_motions<T: Real>(model: &Model, data: &Data<T>, x: &[T], motions: &mut [Motion<T>]) {
     motions[0] = Motion::zeros();
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
@@ -389,14 +412,14 @@ pub fn body_motions(model: &Model, data: &Data, x: &[f64], motions: &mut [Motion
 }
 
 /// Forward dynamics: the accelerations under generalised forces `tau` and external forces.
-pub fn aba(
+pub fn aba<T: DynamicsScalar>(
     model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    external: &[Force],
-) -> Result<DVector<f64>, DynamicsError> {
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    external: &[Force<T>],
+) -> Result<DVector<T>, DynamicsError> {
     let mut accelerations = DVector::zeros(model.nv);
     aba_into(model, data, q, v, tau, external, &mut accelerations)?;
     Ok(accelerations)
@@ -404,14 +427,14 @@ pub fn aba(
 
 /// ABA writing the accelerations into `accelerations` (length nv).
 #[allow(clippy::too_many_arguments)]
-pub fn aba_into(
+pub fn aba_into<T: DynamicsScalar>(
     model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    external: &[Force],
-    accelerations: &mut DVector<f64>,
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
+    tau: &[T],
+    external: &[Force<T>],
+    accelerations: &mut DVector<T>,
 ) -> Result<(), DynamicsError> {
     joint_motions(model, data, q, v)?;
     aba_after_kinematics(model, data, tau, external, accelerations)
@@ -419,12 +442,12 @@ pub fn aba_into(
 
 /// ABA when `data` already holds the forward kinematics of the state (`forward_kinematics`,
 /// which the efforts need first): the joints' motions are not computed a second time.
-pub fn aba_after_kinematics(
+pub fn aba_after_kinematics<T: Real>(
     model: &Model,
-    data: &mut Data,
-    tau: &[f64],
-    external: &[Force],
-    accelerations: &mut DVector<f64>,
+    data: &mut Data<T>,
+    tau: &[T],
+    external: &[Force<T>],
+    accelerations: &mut DVector<T>,
 ) -> Result<(), DynamicsError> {
     aba_body_terms(model, data, external);
     for &k in model.dynamic_joints.iter().rev() {
@@ -450,16 +473,16 @@ pub fn aba_after_kinematics(
 
 /// ABA's first pass: each body's own inertia as its articulated inertia, and its bias force
 /// (the velocity product v ×* I v less the external force), before the backward pass.
-fn aba_body_terms(model: &Model, data: &mut Data, external: &[Force]) {
+fn aba_body_terms<T: Real>(model: &Model, data: &mut Data<T>, external: &[Force<T>]) {
     for &k in &model.dynamic_joints {
         let i = model.joints[k].child;
         let body = &model.dynamic_bodies[i - 1];
-        data.articulated[i] = body.inertia;
+        let inertia: Inertia<T> = body.inertia.cast();
+        data.articulated[i] = inertia;
         data.bias[i] = if body.massless {
             -external[i]
         } else {
-            spatial::cross_force(&data.velocity[i], &(body.inertia * data.velocity[i]))
-                - external[i]
+            spatial::cross_force(&data.velocity[i], &(inertia * data.velocity[i])) - external[i]
         };
     }
 }
@@ -475,12 +498,12 @@ enum JointAcceleration {
 /// One joint of ABA's forward pass: the child's acceleration from its parent's, with the
 /// joint's q̈ = D⁻¹ (u − Uᵀ a) written into `accelerations` (the rotor's term included), or,
 /// for a `Known` joint, read from it.
-fn aba_forward_step(
+fn aba_forward_step<T: Real>(
     model: &Model,
-    data: &mut Data,
+    data: &mut Data<T>,
     k: usize,
-    base: &Motion,
-    accelerations: &mut DVector<f64>,
+    base: &Motion<T>,
+    accelerations: &mut DVector<T>,
     joint_acceleration: JointAcceleration,
 ) {
     let joint = &model.joints[k];
@@ -503,7 +526,10 @@ fn aba_forward_step(
             rhs[0] -= data.rotor_acceleration_term(model, k, r, parent_acceleration, &a);
         }
         for (r, o) in out.iter_mut().enumerate() {
-            *o = (0..n).map(|c| data.d_inverse[i][(r, c)] * rhs[c]).sum();
+            // From −0, as `Iterator::sum` of f64 starts.
+            *o = (0..n).fold(-T::zero(), |sum, c| {
+                sum + data.d_inverse[i][(r, c)] * rhs[c]
+            });
         }
     }
     data.acceleration[i] = a + state.subspace.apply(out);
@@ -511,11 +537,11 @@ fn aba_forward_step(
 
 /// One joint of ABA's backward pass: U, D⁻¹ and u, then the articulated inertia and bias
 /// handed to the parent. Works in place in `data` (these blocks are a few hundred bytes each).
-fn aba_backward_step(
+fn aba_backward_step<T: Real>(
     model: &Model,
-    data: &mut Data,
+    data: &mut Data<T>,
     k: usize,
-    tau: &[f64],
+    tau: &[T],
 ) -> Result<(), DynamicsError> {
     let joint = &model.joints[k];
     let (i, parent) = (joint.child, joint.dynamic_parent);
@@ -539,10 +565,10 @@ fn aba_backward_step(
     }
     if n == 1 {
         let d = subspace.column(0).dot(&u[0]);
-        if !(d.abs() > 1e-300 && d.is_finite()) {
+        if !(d.abs() > constant(1e-300) && d.is_finite()) {
             return Err(DynamicsError::Singular { joint: k, body: i });
         }
-        d_inverse[(0, 0)] = 1.0 / d;
+        d_inverse[(0, 0)] = d.recip();
     } else if n > 1 {
         // D padded with the identity beyond n, so the fixed-size inverse serves every joint.
         let mut d = Matrix6::identity();
@@ -551,10 +577,9 @@ fn aba_backward_step(
                 d[(r, c)] = subspace.column(r).dot(&u[c]);
             }
         }
-        match d
-            .try_inverse()
-            .filter(|inv| inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > 1e-300)
-        {
+        match d.try_inverse().filter(|inv| {
+            inv.iter().all(|x| x.is_finite()) && d.determinant().abs() > constant(1e-300)
+        }) {
             Some(inv) => *d_inverse = inv,
             None => return Err(DynamicsError::Singular { joint: k, body: i }),
         }
@@ -567,7 +592,7 @@ fn aba_backward_step(
         let mut reduced = inertia;
         let mut correction = Force::zeros();
         for c in 0..n {
-            let w: Force = (0..n).fold(Force::zeros(), |sum, r| sum + u[r] * d_inverse[(r, c)]);
+            let w: Force<T> = (0..n).fold(Force::zeros(), |sum, r| sum + u[r] * d_inverse[(r, c)]);
             reduced -= w * u[c].transpose();
             correction += w * u_vector[c];
         }
@@ -582,18 +607,18 @@ fn aba_backward_step(
 // spin and its energy.
 
 /// The rate of a one-coordinate joint, from its state's motion S q̇.
-fn joint_rate(data: &Data, joint: usize) -> f64 {
+fn joint_rate<T: Real>(data: &Data<T>, joint: usize) -> T {
     let state = &data.states[joint];
     let column = state.subspace.column(0);
     column.dot(&state.velocity) / column.norm_squared()
 }
 
-fn angular(motion: &Motion) -> Vector3<f64> {
+fn angular<T: Real>(motion: &Motion<T>) -> Vector3<T> {
     motion.fixed_rows::<3>(0).into_owned()
 }
 
 /// The rotor's spin rate ε·ω_B + n q̇ from the body velocities in `data`.
-fn spin(rotor: &super::rotors::Rotor, data: &Data) -> f64 {
+fn spin<T: Real>(rotor: &super::rotors::Rotor, data: &Data<T>) -> T {
     rotor_spin(rotor, &data.velocity, joint_rate(data, rotor.joint))
 }
 
@@ -605,8 +630,8 @@ pub fn rotor_kinetic_energy(model: &Model, data: &Data) -> f64 {
 
 /// A rotor's spin rate ε·ω_B + n q̇ under a motion of the joints whose body motions are
 /// `motions` (`body_motions`) and whose rate of the rotor's coordinate is `rate`.
-pub fn rotor_spin(rotor: &super::rotors::Rotor, motions: &[Motion], rate: f64) -> f64 {
-    rotor.axis.dot(&angular(&motions[rotor.carrier])) + rotor.ratio * rate
+pub fn rotor_spin<T: Real>(rotor: &super::rotors::Rotor, motions: &[Motion<T>], rate: T) -> T {
+    rotor.axis.cast().dot(&angular(&motions[rotor.carrier])) + rate * constant(rotor.ratio)
 }
 
 /// Adds the rotors' J w wᵀ to the mass matrix, `data` holding the joint transforms at q.
@@ -615,8 +640,8 @@ pub fn add_rotors_to_mass(model: &Model, data: &mut Data, mass: &mut DMatrix<f64
 }
 
 /// A force that is a moment alone.
-fn pure_moment(moment: &Vector3<f64>) -> Force {
-    Force::new(moment.x, moment.y, moment.z, 0.0, 0.0, 0.0)
+fn pure_moment<T: Real>(moment: &Vector3<T>) -> Force<T> {
+    spatial::twist(*moment, Vector3::zeros())
 }
 
 // The mass matrix.

@@ -22,7 +22,8 @@ use crate::elab::value::SExpr;
 use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::{linear_in_first, ChainMotion, JointModel, Step};
 use crate::source::Span;
-use crate::spatial::{self, Force, Motion, Pose, Transform};
+use super::scalar::{DynamicsScalar, NOT_DIFFERENTIABLE};
+use crate::spatial::{self, constant, Force, Motion, Pose, Real, Transform};
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum JointType {
@@ -53,13 +54,13 @@ pub struct Joint {
 /// A joint's motion subspace in the child's frame: one column (a motion) per velocity, at most
 /// six, stored inline so the algorithms allocate nothing.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Subspace {
-    columns: [Motion; 6],
+pub struct Subspace<T: Real = f64> {
+    columns: [Motion<T>; 6],
     len: usize,
 }
 
-impl Subspace {
-    pub fn empty() -> Subspace {
+impl<T: Real> Subspace<T> {
+    pub fn empty() -> Subspace<T> {
         Subspace {
             columns: [Motion::zeros(); 6],
             len: 0,
@@ -72,12 +73,12 @@ impl Subspace {
     }
 
     /// Makes the subspace the single column `column`, writing only that column.
-    pub fn set_single(&mut self, column: Motion) {
+    pub fn set_single(&mut self, column: Motion<T>) {
         self.columns[0] = column;
         self.len = 1;
     }
 
-    pub fn push(&mut self, column: Motion) {
+    pub fn push(&mut self, column: Motion<T>) {
         self.columns[self.len] = column;
         self.len += 1;
     }
@@ -90,17 +91,17 @@ impl Subspace {
         self.len == 0
     }
 
-    pub fn column(&self, k: usize) -> &Motion {
+    pub fn column(&self, k: usize) -> &Motion<T> {
         &self.columns[..self.len][k]
     }
 
-    pub fn columns(&self) -> &[Motion] {
+    pub fn columns(&self) -> &[Motion<T>] {
         &self.columns[..self.len]
     }
 
     /// `S x`: the motion of the joint velocities (or accelerations) `x`.
     #[inline]
-    pub fn apply(&self, x: &[f64]) -> Motion {
+    pub fn apply(&self, x: &[T]) -> Motion<T> {
         self.columns()
             .iter()
             .zip(x)
@@ -109,7 +110,7 @@ impl Subspace {
 
     /// `Sᵀ f` into `out`: the generalised forces of a spatial force.
     #[inline]
-    pub fn project(&self, f: &Force, out: &mut [f64]) {
+    pub fn project(&self, f: &Force<T>, out: &mut [T]) {
         for (o, c) in out.iter_mut().zip(self.columns()) {
             *o = c.dot(f);
         }
@@ -154,21 +155,22 @@ pub enum Kernel {
 
 /// A joint at given positions and velocities, in the child's frame.
 #[derive(Clone, Debug)]
-pub struct JointState {
+pub struct JointState<T: Real = f64> {
     /// Pose of the child in the parent, and the same as a matrix transform.
-    pub pose: Pose,
-    pub transform: Transform,
+    pub pose: Pose<T>,
+    pub transform: Transform<T>,
     /// Motion subspace, 6 × nv.
-    pub subspace: Subspace,
+    pub subspace: Subspace<T>,
     /// Joint velocity `S v` and its bias `Ṡ v`.
-    pub velocity: Motion,
-    pub bias: Motion,
-    /// A general dof chain's motion (scratch kept between evaluations).
-    chain: ChainMotion,
+    pub velocity: Motion<T>,
+    pub bias: Motion<T>,
+    /// A general dof chain's motion (scratch kept between evaluations, in `f64` whatever the
+    /// scalar: only `f64` evaluates the chain's expressions, see `DynamicsScalar`).
+    pub(super) chain: ChainMotion,
 }
 
-impl JointState {
-    fn empty() -> JointState {
+impl<T: Real> JointState<T> {
+    fn empty() -> JointState<T> {
         JointState {
             pose: Pose::identity(),
             transform: Transform::identity(),
@@ -224,37 +226,49 @@ pub fn classify(chain: &JointModel) -> JointType {
 }
 
 /// The transform of a one-rotation kernel at angle θ.
-fn rotation_transform(
+fn rotation_transform<T: Real>(
     terms: &[Matrix3<f64>; 3],
     aligned: Option<usize>,
     origin: &Vector3<f64>,
-    angle: f64,
+    angle: T,
     after: &Option<Transform>,
-) -> Transform {
+) -> Transform<T> {
     let (sin, cos) = angle.sin_cos();
     let rotation = match aligned {
-        Some(k) => turn_columns(&terms[0], k, sin, cos),
-        None => terms[0] * cos + terms[1] * sin + terms[2] * (1.0 - cos),
+        Some(k) => turn_columns(&terms[0].cast(), k, sin, cos),
+        None => {
+            terms[0].cast::<T>() * cos
+                + terms[1].cast::<T>() * sin
+                + terms[2].cast::<T>() * (T::one() - cos)
+        }
     };
     with_after(
         Transform {
             rotation,
-            translation: *origin,
+            translation: origin.cast(),
         },
         after,
     )
 }
 
 /// The constant part on the child's side, when there is one.
-fn with_after(transform: Transform, after: &Option<Transform>) -> Transform {
+fn with_after<T: Real>(transform: Transform<T>, after: &Option<Transform>) -> Transform<T> {
     match after {
-        Some(after) => transform * *after,
+        Some(after) => transform * lift_transform(after),
         None => transform,
     }
 }
 
+/// A constant transform of the model in the scalar of a computation.
+fn lift_transform<T: Real>(t: &Transform) -> Transform<T> {
+    Transform {
+        rotation: t.rotation.cast(),
+        translation: t.translation.cast(),
+    }
+}
+
 /// R · Rot(e_k, θ) from sin θ and cos θ: column k stays, the two others turn in their plane.
-fn turn_columns(r: &Matrix3<f64>, k: usize, sin: f64, cos: f64) -> Matrix3<f64> {
+fn turn_columns<T: Real>(r: &Matrix3<T>, k: usize, sin: T, cos: T) -> Matrix3<T> {
     let (i, j) = ((k + 1) % 3, (k + 2) % 3);
     let (ri, rj) = (r.column(i), r.column(j));
     let mut out = *r;
@@ -386,18 +400,19 @@ impl Joint {
 
     /// A state for this joint: the constant subspace of a one-rotation or one-translation
     /// kernel is written here, once, and `update` leaves it alone.
-    pub fn new_state(&self) -> JointState {
+    pub fn new_state<T: Real>(&self) -> JointState<T> {
         let mut state = JointState::empty();
         if let Kernel::Rotation { column, .. } | Kernel::Translation { column, .. } = &self.kernel {
-            state.subspace.set_single(*column);
+            state.subspace.set_single(column.cast());
         }
         state
     }
 
-    /// The transform alone at positions q (for the mass matrix, which needs no velocities).
-    pub fn update_transform(&self, q: &[f64], state: &mut JointState) -> Result<(), EvalError> {
+    /// The transform of a weld, one-rotation or one-translation kernel at positions q; `None`
+    /// for the general kernel, whose transform comes with its whole state (`update`).
+    fn kernel_transform<T: Real>(&self, q: &[T]) -> Option<Transform<T>> {
         match &self.kernel {
-            Kernel::Weld { transform } => state.transform = *transform,
+            Kernel::Weld { transform } => Some(lift_transform(transform)),
             Kernel::Rotation {
                 terms,
                 aligned,
@@ -405,89 +420,77 @@ impl Joint {
                 scale,
                 after,
                 ..
-            } => {
-                state.transform = rotation_transform(terms, *aligned, origin, scale * q[0], after);
-            }
+            } => Some(rotation_transform(
+                terms,
+                *aligned,
+                origin,
+                q[0] * constant(*scale),
+                after,
+            )),
             Kernel::Translation {
                 rotation,
                 origin,
                 direction,
                 after,
                 ..
-            } => {
-                state.transform = with_after(
-                    Transform {
-                        rotation: *rotation,
-                        translation: origin + direction * q[0],
-                    },
-                    after,
-                );
-            }
-            Kernel::General => self.update(q, &[0.0; 6][..self.nv()], state)?,
+            } => Some(with_after(
+                Transform {
+                    rotation: rotation.cast(),
+                    translation: origin.cast() + direction.cast() * q[0],
+                },
+                after,
+            )),
+            Kernel::General => None,
+        }
+    }
+
+    /// The transform alone at positions q (for the mass matrix, which needs no velocities).
+    pub fn update_transform(&self, q: &[f64], state: &mut JointState) -> Result<(), EvalError> {
+        match self.kernel_transform(q) {
+            Some(transform) => state.transform = transform,
+            None => self.update(q, &[0.0; 6][..self.nv()], state)?,
         }
         Ok(())
     }
 
     /// Writes the joint's state at (q, v) into `state` (made by `new_state`), reusing its
-    /// storage: its transform, subspace, velocity and bias. `state.pose` is left as it was for the one-rotation,
-    /// one-translation and weld kernels; `forward_kinematics` sets it (see `fill_pose`).
-    pub fn update(&self, q: &[f64], v: &[f64], state: &mut JointState) -> Result<(), EvalError> {
-        match (&self.kernel, &self.kind) {
-            (Kernel::Weld { transform }, _) => {
-                state.transform = *transform;
-                state.subspace.clear();
-                state.velocity = Motion::zeros();
-                state.bias = Motion::zeros();
+    /// storage: its transform, subspace, velocity and bias. `state.pose` is left as it was for
+    /// the one-rotation, one-translation and weld kernels; `forward_kinematics` sets it (see
+    /// `fill_pose`).
+    pub fn update<T: DynamicsScalar>(
+        &self,
+        q: &[T],
+        v: &[T],
+        state: &mut JointState<T>,
+    ) -> Result<(), EvalError> {
+        if let Some(transform) = self.kernel_transform(q) {
+            state.transform = transform;
+            match &self.kernel {
+                Kernel::Rotation { column, .. } | Kernel::Translation { column, .. } => {
+                    state.velocity = column.cast() * v[0];
+                }
+                _ => {
+                    state.subspace.clear();
+                    state.velocity = Motion::zeros();
+                }
             }
-            (
-                Kernel::Rotation {
-                    terms,
-                    aligned,
-                    origin,
-                    scale,
-                    after,
-                    column,
-                },
-                _,
-            ) => {
-                state.transform = rotation_transform(terms, *aligned, origin, scale * q[0], after);
-                state.velocity = column * v[0];
-                state.bias = Motion::zeros();
-            }
-            (
-                Kernel::Translation {
-                    rotation,
-                    origin,
-                    direction,
-                    after,
-                    column,
-                },
-                _,
-            ) => {
-                state.transform = with_after(
-                    Transform {
-                        rotation: *rotation,
-                        translation: origin + direction * q[0],
-                    },
-                    after,
-                );
-                state.velocity = column * v[0];
-                state.bias = Motion::zeros();
-            }
-            (Kernel::General, JointType::Chain) => {
-                self.chain_state(q, v, state)?;
-                state.transform = Transform::from_pose(&state.pose);
-            }
-            (Kernel::General, _) => {
-                self.quaternion_state(q, v, state);
-                state.transform = Transform::from_pose(&state.pose);
-            }
+            state.bias = Motion::zeros();
+            return Ok(());
         }
+        if self.kind == JointType::Chain {
+            match (T::plain(q), T::plain(v)) {
+                (Some(q), Some(v)) => self.chain_state(q, v, state)?,
+                _ => return Err(NOT_DIFFERENTIABLE),
+            }
+        } else {
+            self.quaternion_state(q, v, state);
+        }
+        state.transform = Transform::from_pose(&state.pose);
         Ok(())
     }
 
     /// Sets `state.pose` from the transform where `update` did not compute it.
-    pub fn fill_pose(&self, state: &mut JointState) {
+    pub fn fill_pose<T: Real>(&self, state: &mut JointState<T>) {
         if !matches!(self.kernel, Kernel::General) {
             let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
                 state.transform.rotation,
@@ -497,7 +500,14 @@ impl Joint {
         }
     }
 
-    fn chain_state(&self, q: &[f64], v: &[f64], state: &mut JointState) -> Result<(), EvalError> {
+    /// A general dof chain's pose, subspace, velocity and bias, its expressions evaluated at
+    /// (q, v) (in `f64`: `DynamicsScalar`).
+    fn chain_state<T: Real>(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        state: &mut JointState<T>,
+    ) -> Result<(), EvalError> {
         self.chain.chain_motion_into(q, Some(v), &mut state.chain)?;
         let motion = &state.chain;
         let d = motion.pose;
@@ -511,20 +521,19 @@ impl Joint {
         state.subspace.clear();
         for k in 0..self.nv() {
             let column = Motion::from_column_slice(motion.subspace.column(k).as_slice());
-            state
-                .subspace
-                .push(sign * spatial::motion_to_parent(&to_child, &column));
+            let column = sign * spatial::motion_to_parent(&to_child, &column);
+            state.subspace.push(column.cast());
         }
         let moving = if self.first_on_parent { d } else { d.inverse() };
-        state.pose = self.on_parent * moving * self.on_child.inverse();
-        state.velocity = sign * spatial::motion_to_parent(&to_child, &motion.velocity);
-        state.bias = sign * spatial::motion_to_parent(&to_child, &motion.bias);
+        state.pose = (self.on_parent * moving * self.on_child.inverse()).cast();
+        state.velocity = (sign * spatial::motion_to_parent(&to_child, &motion.velocity)).cast();
+        state.bias = (sign * spatial::motion_to_parent(&to_child, &motion.bias)).cast();
         Ok(())
     }
 
     /// Spherical and free joints: M = Trans(p)·Rot(Q) with the body twist of M as velocity, so
     /// the subspace is constant in the child frame and the bias vanishes.
-    fn quaternion_state(&self, q: &[f64], v: &[f64], state: &mut JointState) {
+    fn quaternion_state<T: Real>(&self, q: &[T], v: &[T], state: &mut JointState<T>) {
         let (moving, n) = match self.kind {
             JointType::Free { .. } => (
                 Pose::from_parts(Translation3::new(q[0], q[1], q[2]), quaternion(&q[3..7])),
@@ -535,17 +544,18 @@ impl Joint {
                 3,
             ),
         };
+        let (on_parent, on_child): (Pose<T>, Pose<T>) = (self.on_parent.cast(), self.on_child.cast());
         state.subspace.clear();
         for k in 0..n {
             // Velocity layout: angular velocity first, then (free joints) linear velocity.
             let mut unit = Motion::zeros();
-            unit[k] = 1.0;
+            unit[k] = T::one();
             state
                 .subspace
-                .push(spatial::motion_to_parent(&self.on_child, &unit));
+                .push(spatial::motion_to_parent(&on_child, &unit));
         }
         state.velocity = state.subspace.apply(v);
-        state.pose = self.on_parent * moving * self.on_child.inverse();
+        state.pose = on_parent * moving * on_child.inverse();
         state.bias = Motion::zeros();
     }
 
@@ -578,7 +588,7 @@ impl Joint {
 }
 
 /// (w, x, y, z) → unit quaternion.
-pub fn quaternion(q: &[f64]) -> UnitQuaternion<f64> {
+pub fn quaternion<T: Real>(q: &[T]) -> UnitQuaternion<T> {
     UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
 }
 

@@ -28,6 +28,7 @@ internal! {
     mod rotors;
     mod rows;
     mod sampled;
+    mod scalar;
     mod states;
     mod stops;
     mod welds;

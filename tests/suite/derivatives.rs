@@ -98,7 +98,7 @@ fn differences(
 }
 
 /// max |analytic − reference| / max(1, max |analytic|).
-fn mismatch(analytic: &DMatrix<f64>, reference: &DMatrix<f64>) -> f64 {
+pub(crate) fn mismatch(analytic: &DMatrix<f64>, reference: &DMatrix<f64>) -> f64 {
     let scale = analytic.amax().max(1.0);
     (analytic - reference).amax() / scale
 }
@@ -170,7 +170,7 @@ fn mass_matrix_mismatch(model: &Model, p: &Point) -> f64 {
 
 /// Joint kinds of `common::trees` the derivatives cover: revolute, prismatic (with the link
 /// features when written as links), spherical, free, weld.
-const COVERED_KINDS: [usize; 5] = [0, 1, 5, 7, 10];
+pub(crate) const COVERED_KINDS: [usize; 5] = [0, 1, 5, 7, 10];
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
@@ -249,7 +249,7 @@ proptest! {
 }
 
 /// A covered model prepared from a file, or why it is left out.
-fn example_model(path: &PathBuf) -> Result<Model, String> {
+pub(crate) fn example_model(path: &PathBuf) -> Result<Model, String> {
     let compilation =
         compile_files(std::slice::from_ref(path), &options()).map_err(|e| e.to_string())?;
     if compilation.has_errors() {

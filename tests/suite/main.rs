@@ -19,6 +19,7 @@ mod derivatives;
 mod drag;
 mod driven_subtrees;
 mod drives;
+mod dual_numbers;
 mod dynamics;
 mod exact_mobility;
 mod examples;

@@ -21,19 +21,19 @@ use super::{
 };
 use crate::dynamics::model::Model;
 use crate::dynamics::rotors::Rotor;
-use crate::spatial::{self, Inertia, Motion};
+use crate::spatial::{self, constant, Inertia, Motion, Real};
 
 /// The rotor's axis as a motion of its carrier, e = (ε, 0).
-fn axis_motion(rotor: &Rotor) -> Motion {
-    spatial::twist(rotor.axis, Vector3::zeros())
+fn axis_motion<T: Real>(rotor: &Rotor) -> Motion<T> {
+    spatial::twist(rotor.axis.cast(), Vector3::zeros())
 }
 
 /// The rotor's inertia as a spatial inertia of its carrier, I_R = J e eᵀ: the moment of
 /// inertia J about its axis alone (its mass and transverse inertia are the carrier's), the
 /// same about any point of the carrier since it has no mass.
-fn rotor_inertia(rotor: &Rotor) -> Inertia {
-    let e = axis_motion(rotor);
-    e * e.transpose() * rotor.inertia
+fn rotor_inertia<T: Real>(rotor: &Rotor) -> Inertia<T> {
+    let e = axis_motion::<T>(rotor);
+    e * e.transpose() * constant::<T>(rotor.inertia)
 }
 
 impl Data {
@@ -65,12 +65,14 @@ impl Data {
             }
         }
     }
+}
 
+impl<T: Real> Data<T> {
     /// Inverse dynamics of the rotors, at the end of RNEA's pass out: adds each rotor's torque τ_r
     /// to its carrier's force (so the pass back carries it to the joints that turn the carrier) and
     /// leaves, per rotor, n ε·τ_r for the pass back to add to its coordinate's effort in
     /// `data.rotor_own`.
-    pub(super) fn add_rotor_torques(&mut self, model: &Model, a: &[f64]) {
+    pub(super) fn add_rotor_torques(&mut self, model: &Model, a: &[T]) {
         let data = self;
         for (r, rotor) in model.rotors.iter().enumerate() {
             let omega = angular(&data.velocity[rotor.carrier]);
@@ -78,14 +80,15 @@ impl Data {
                 0 => Vector3::zeros(),
                 b => angular(&data.acceleration[b]),
             };
-            let axis = rotor.axis;
-            let spin_rate = rotor.axis.dot(&omega_dot) + rotor.ratio * a[rotor.velocity];
-            let torque =
-                rotor.inertia * (spin_rate * axis + spin(rotor, data) * omega.cross(&axis));
+            let axis: Vector3<T> = rotor.axis.cast();
+            let ratio: T = constant(rotor.ratio);
+            let spin_rate = axis.dot(&omega_dot) + ratio * a[rotor.velocity];
+            let torque = (axis * spin_rate + omega.cross(&axis) * spin(rotor, data))
+                * constant::<T>(rotor.inertia);
             if rotor.carrier != 0 {
                 data.force[rotor.carrier] += pure_moment(&torque);
             }
-            data.rotor_own[r] = rotor.ratio * axis.dot(&torque);
+            data.rotor_own[r] = ratio * axis.dot(&torque);
             data.rotor_torques[r] = torque;
         }
     }
@@ -100,7 +103,7 @@ impl Data {
         model: &Model,
         k: usize,
         r: usize,
-        tau: f64,
+        tau: T,
     ) -> Result<(), DynamicsError> {
         let data = self;
         let joint = &model.joints[k];
@@ -112,12 +115,13 @@ impl Data {
         let (inertia, bias, coriolis) = (data.articulated[i], data.bias[i], data.coriolis[i]);
         let u_child = inertia * s;
 
-        let e = axis_motion(rotor);
-        let rotor_inertia = rotor_inertia(rotor);
-        let geared_rate = rotor.ratio * joint_rate(data, k);
+        let e = axis_motion::<T>(rotor);
+        let rotor_inertia = rotor_inertia::<T>(rotor);
+        let ratio: T = constant(rotor.ratio);
+        let geared_rate = ratio * joint_rate(data, k);
         let (carrier_velocity, rotor_subspace) = match carried_by_child {
-            true => (data.velocity[i], s + e * rotor.ratio),
-            false => (data.velocity[parent], e * rotor.ratio),
+            true => (data.velocity[i], s + e * ratio),
+            false => (data.velocity[parent], e * ratio),
         };
         let rotor_velocity = carrier_velocity + e * geared_rate;
         let rotor_bias = spatial::cross_force(&rotor_velocity, &(rotor_inertia * rotor_velocity));
@@ -125,12 +129,12 @@ impl Data {
         let u_rotor = rotor_inertia * rotor_subspace;
 
         let d = s.dot(&u_child) + rotor_subspace.dot(&u_rotor);
-        if !(d.abs() > 1e-300 && d.is_finite()) {
+        if !(d.abs() > constant(1e-300) && d.is_finite()) {
             return Err(DynamicsError::Singular { joint: k, body: i });
         }
         let u = tau - s.dot(&bias) - rotor_subspace.dot(&rotor_bias);
         data.u[i][0] = u_child;
-        data.d_inverse[i][(0, 0)] = 1.0 / d;
+        data.d_inverse[i][(0, 0)] = d.recip();
         data.u_vector[i][0] = u;
         data.rotor_u[r] = u_rotor;
         data.rotor_coriolis[r] = rotor_coriolis;
@@ -177,9 +181,9 @@ impl Data {
         model: &Model,
         k: usize,
         r: usize,
-        parent_acceleration: &Motion,
-        child_acceleration: &Motion,
-    ) -> f64 {
+        parent_acceleration: &Motion<T>,
+        child_acceleration: &Motion<T>,
+    ) -> T {
         let data = self;
         let carrier_acceleration = match model.rotors[r].carrier == model.joints[k].child {
             true => child_acceleration,

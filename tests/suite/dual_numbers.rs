@@ -1,0 +1,250 @@
+//! The analytical derivatives of RNEA and ABA (`rnea_derivatives`, `aba_derivatives`, after
+//! Carpentier & Mansard, RSS 2018) against forward-mode automatic differentiation of the
+//! algorithms themselves: RNEA and ABA are generic over their scalar, and run in dual numbers
+//! (`num_dual::Dual64`, x + ε ẋ with ε² = 0) they carry the exact derivative along one
+//! direction through every operation, an oracle that shares none of the analytical passes'
+//! algebra and, unlike central differences, no truncation error: the two agree to round-off.
+//!
+//! One direction per velocity: the positions move along the joints' tangent spaces as the
+//! analytical derivatives define them (`Model::retract`: a quaternion along q ⊗ (0, ε e_c)/2,
+//! a free joint's position along its rotated linear velocity), seeded as q + ε ∂q/∂ε; the
+//! velocities and efforts along their unit vectors. On the random trees of the central
+//! differences' test (revolute, prismatic, spherical, free and welded joints, geared rotors,
+//! mimics), on the examples they cover and on the UR5, Panda and Talos.
+//!
+//! The measure is that of the central differences' test, max |analytic − dual| / max(1,
+//! max |analytic|), for each of ∂τ/∂q, ∂τ/∂v, ∂q̈/∂q, ∂q̈/∂v and ∂q̈/∂τ = M⁻¹: relative to the
+//! largest entry, absolute below 1, where a derivative that vanishes (∂τ/∂v of a lone revolute
+//! joint, whose velocity product Sᵀ(S q̇ ×* I S q̇) is zero) is round-off on either side.
+//! Accepted at 1e-12.
+
+use lsdc::dynamics::algorithms::aba_derivatives::AbaDerivatives;
+use lsdc::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
+use lsdc::dynamics::algorithms::{aba, rnea, Data};
+use lsdc::dynamics::model::Model;
+use lsdc::spatial::Force;
+use nalgebra::{DMatrix, DVector};
+use num_dual::Dual64;
+use proptest::prelude::*;
+
+use crate::common::example_paths;
+use crate::common::trees::featured_tree_program;
+use crate::derivatives::{example_model, mismatch, point, robot_model, Point, COVERED_KINDS};
+use crate::dynamics::model_of;
+
+const TOLERANCE: f64 = 1e-12;
+
+/// x + ε dx, entry by entry.
+fn seeded(x: &[f64], dx: &[f64]) -> Vec<Dual64> {
+    x.iter().zip(dx).map(|(&x, &d)| Dual64::new(x, d)).collect()
+}
+
+/// x without derivative.
+fn constant(x: &[f64]) -> Vec<Dual64> {
+    x.iter().map(|&x| Dual64::from_re(x)).collect()
+}
+
+/// The unit vector along velocity j.
+fn unit(n: usize, j: usize) -> Vec<f64> {
+    (0..n).map(|i| if i == j { 1.0 } else { 0.0 }).collect()
+}
+
+/// ∂q/∂ε of the positions moved by ε along velocity j in the joints' tangent spaces: each
+/// joint's position rate at q for that unit velocity (the first-order term of `Model::retract`).
+fn tangent(model: &Model, q: &[f64], j: usize) -> Vec<f64> {
+    let mut rate = vec![0.0; q.len()];
+    let direction = unit(model.velocities(), j);
+    for joint in &model.joints {
+        let (qs, vs) = (
+            joint.q_offset..joint.q_offset + joint.nq(),
+            joint.v_offset..joint.v_offset + joint.nv(),
+        );
+        joint.position_rate(&q[qs.clone()], &direction[vs], &mut rate[qs]);
+    }
+    rate
+}
+
+/// The values and the derivative parts of a dual vector.
+fn parts(x: &DVector<Dual64>) -> (DVector<f64>, DVector<f64>) {
+    (x.map(|x| x.re), x.map(|x| x.eps))
+}
+
+/// The derivatives of RNEA and ABA at `p` by dual numbers, one column per velocity.
+struct DualDerivatives {
+    dtau_dq: DMatrix<f64>,
+    dtau_dv: DMatrix<f64>,
+    dacceleration_dq: DMatrix<f64>,
+    dacceleration_dv: DMatrix<f64>,
+    dacceleration_dtau: DMatrix<f64>,
+}
+
+/// The values of an algorithm run in dual numbers against the same algorithm in `f64`: the
+/// same operations on the values but for divisions, which `num_dual` computes as products by
+/// the reciprocal (a quaternion's normalisation), so equal to round-off: 1e-14 relative.
+fn same_values(dual: &DVector<f64>, plain: &DVector<f64>, what: &str, algorithm: &str) {
+    let difference = (dual - plain).amax();
+    assert!(
+        difference <= 1e-14 * plain.amax(),
+        "{what}: {algorithm} in dual numbers gives {dual}, in f64 {plain}"
+    );
+}
+
+/// Runs RNEA and ABA in dual numbers along every velocity's direction of q, v and τ, checking
+/// on the way that their values are those of the `f64` algorithms (`same_values`).
+fn dual_derivatives(model: &Model, p: &Point, what: &str) -> DualDerivatives {
+    let nv = model.nv;
+    let mut data = Data::<Dual64>::with_scalar(model);
+    let external: Vec<Force<Dual64>> = p.external.iter().map(|f| f.map(Dual64::from_re)).collect();
+    let (q, v, a, tau) = (
+        constant(&p.q),
+        constant(&p.v),
+        constant(&p.a),
+        constant(&p.tau),
+    );
+    let tau_f64 = rnea(model, &mut Data::new(model), &p.q, &p.v, &p.a, &p.external).expect("rnea");
+    let acceleration_f64 = aba(
+        model,
+        &mut Data::new(model),
+        &p.q,
+        &p.v,
+        &p.tau,
+        &p.external,
+    )
+    .expect("aba");
+    let mut inverse = |q: &[Dual64], v: &[Dual64]| {
+        let (value, derivative) =
+            parts(&rnea(model, &mut data, q, v, &a, &external).expect("rnea"));
+        same_values(&value, &tau_f64, what, "RNEA");
+        derivative
+    };
+    let by = |f: &mut dyn FnMut(usize) -> DVector<f64>| {
+        let mut columns = DMatrix::zeros(nv, nv);
+        for j in 0..nv {
+            columns.set_column(j, &f(j));
+        }
+        columns
+    };
+    let dtau_dq = by(&mut |j| inverse(&seeded(&p.q, &tangent(model, &p.q, j)), &v));
+    let dtau_dv = by(&mut |j| inverse(&q, &seeded(&p.v, &unit(p.v.len(), j))));
+    let mut data = Data::<Dual64>::with_scalar(model);
+    let mut forward = |q: &[Dual64], v: &[Dual64], tau: &[Dual64]| {
+        let accelerations = aba(model, &mut data, q, v, tau, &external).expect("aba");
+        let (value, derivative) = parts(&accelerations);
+        same_values(&value, &acceleration_f64, what, "ABA");
+        derivative
+    };
+    DualDerivatives {
+        dtau_dq,
+        dtau_dv,
+        dacceleration_dq: by(&mut |j| forward(&seeded(&p.q, &tangent(model, &p.q, j)), &v, &tau)),
+        dacceleration_dv: by(&mut |j| forward(&q, &seeded(&p.v, &unit(p.v.len(), j)), &tau)),
+        dacceleration_dtau: by(&mut |j| forward(&q, &v, &seeded(&p.tau, &unit(p.tau.len(), j)))),
+    }
+}
+
+/// The analytical derivatives of RNEA and ABA at `p` against the dual numbers'; the worst
+/// measure.
+fn check_against_dual_numbers(model: &Model, p: &Point, what: &str) -> f64 {
+    let mut data = Data::new(model);
+    let mut inverse = RneaDerivatives::new(model);
+    inverse
+        .compute(model, &mut data, &p.q, &p.v, &p.a, &p.external)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let mut forward = AbaDerivatives::new(model);
+    forward
+        .compute(model, &mut data, &p.q, &p.v, &p.tau, &p.external)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let dual = dual_derivatives(model, p, what);
+    let measures = [
+        ("∂τ/∂q", mismatch(&inverse.dtau_dq, &dual.dtau_dq)),
+        ("∂τ/∂v", mismatch(&inverse.dtau_dv, &dual.dtau_dv)),
+        (
+            "∂q̈/∂q",
+            mismatch(&forward.dacceleration_dq, &dual.dacceleration_dq),
+        ),
+        (
+            "∂q̈/∂v",
+            mismatch(&forward.dacceleration_dv, &dual.dacceleration_dv),
+        ),
+        (
+            "∂q̈/∂τ",
+            mismatch(&forward.mass_inverse, &dual.dacceleration_dtau),
+        ),
+    ];
+    let worst = measures.iter().map(|m| m.1).fold(0.0, f64::max);
+    assert!(
+        worst <= TOLERANCE,
+        "{what}: {measures:?} above {TOLERANCE:e}"
+    );
+    worst
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    #[test]
+    fn derivatives_agree_with_dual_numbers_on_random_trees(
+        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
+        kinds in prop::collection::vec(prop::sample::select(COVERED_KINDS.to_vec()), 12),
+        features in prop::collection::vec(prop::sample::select(vec![0usize, 1, 4, 5]), 12),
+        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+    ) {
+        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
+        let text = featured_tree_program(&parents, &kinds, &features, &numbers);
+        let model = model_of(&text);
+        let p = point(&model, &numbers);
+        check_against_dual_numbers(&model, &p, &text);
+    }
+}
+
+#[test]
+fn derivatives_agree_with_dual_numbers_on_the_examples() {
+    let numbers: Vec<f64> = (0..64)
+        .map(|k| ((k * 37 % 61) as f64 / 20.0) - 1.5)
+        .collect();
+    let mut covered = Vec::new();
+    for path in example_paths() {
+        if let Ok(model) = example_model(&path) {
+            let p = point(&model, &numbers);
+            let worst = check_against_dual_numbers(&model, &p, &path.display().to_string());
+            covered.push(format!("{} ({worst:.1e})", path.display()));
+        }
+    }
+    eprintln!("covered: {covered:#?}");
+    assert!(
+        covered.len() >= 10,
+        "only {} examples covered",
+        covered.len()
+    );
+}
+
+#[test]
+fn derivatives_agree_with_dual_numbers_on_ur5_panda_and_talos() {
+    let numbers: Vec<f64> = (0..64)
+        .map(|k| ((k * 29 % 53) as f64 / 18.0) - 1.4)
+        .collect();
+    for (robot, floating) in [("ur5", false), ("panda", false), ("talos_reduced", true)] {
+        let model = robot_model(robot, floating);
+        let p = point(&model, &numbers);
+        let worst = check_against_dual_numbers(&model, &p, robot);
+        eprintln!("{robot}: nv = {}, worst {worst:.2e}", model.nv);
+    }
+}
+
+/// A dof chain evaluated in general (a cylindrical joint: two coordinates) has its geometry
+/// from the program's expressions, evaluated in `f64` only: dual numbers are refused there, with
+/// an error, rather than given derivatives that miss the chain's.
+#[test]
+fn dual_numbers_refuse_a_general_dof_chain() {
+    let model = model_of(
+        "import joints;\n\
+         let b = body mass = 1, iframe = [0.1, 0, 0] ++ 1, inertia = [1, 1, 1] end;\n\
+         join earth and b with cylindrical([0, 0, 1]) as rod;\n",
+    );
+    let zero = constant(&vec![0.0; model.nv]);
+    let q = constant(&vec![0.1; model.positions()]);
+    let external = vec![Force::<Dual64>::zeros(); model.body_count() + 1];
+    let mut data = Data::<Dual64>::with_scalar(&model);
+    assert!(rnea(&model, &mut data, &q, &zero, &zero, &external).is_err());
+    assert!(aba(&model, &mut data, &q, &zero, &zero, &external).is_err());
+}
