@@ -74,6 +74,7 @@ const FREE_AGAIN_BELOW: f64 = 0.1;
 const NO_STRUCTURE: Structure = Structure {
     choice: RowChoice::NONE,
     length: 1.0,
+    lengths: Vec::new(),
     redundant: Vec::new(),
     rank: 0,
     massless: 0,
@@ -486,7 +487,7 @@ impl LoopMonitor {
         }
         let conditioning = scratch.conditioning(&self.structure.choice);
         let structure = &mut self.structure;
-        let reproduction = scratch.reproduction(&structure.active_rows, structure.length);
+        let reproduction = scratch.reproduction(&structure.active_rows, &structure.lengths);
         let jacobian = &scratch.current.jacobian;
         if let Some(now) =
             reproduction.filter(|&now| now < RECHOOSE_BELOW * structure.chosen_reproduction)
