@@ -107,7 +107,7 @@ impl Structure {
     pub fn decide(model: &Model, data: &mut Data, q: &[f64]) -> Result<Structure, StructureError> {
         let rest = vec![0.0; model.velocities()];
         let c = constraints(model, data, q, &rest, Extent::Rows)?;
-        let length = power_of_two_near(characteristic_length(model, data, &c));
+        let length = characteristic_length(model, data, &c);
         let lengths = loop_lengths(model, data, &c, length);
         let mut structure = Structure::at(model, &c, length, lengths);
         structure.choose_free(&c.jacobian);
@@ -415,13 +415,7 @@ pub fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64
         );
     }
     points.extend(c.points.iter().copied());
-    let lowest = points
-        .iter()
-        .fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
-    let highest = points
-        .iter()
-        .fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
-    let diagonal = (highest - lowest).norm();
+    let diagonal = box_diagonal(&points);
     if diagonal.is_finite() && diagonal > 0.0 {
         diagonal
     } else {
@@ -437,7 +431,8 @@ pub fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64
 /// mechanism holds. The bodies' origins are left out: a body's origin can lie far from its
 /// joints (the ladder's beam swings about its end, a thousand rungs away from its last loop).
 /// A loop whose frames all coincide has translation rows by rotation alone that vanish: the
-/// mechanism's length L then.
+/// mechanism's length L then. Each ℓ is taken as L times the power of two nearest the ratio of
+/// that diagonal to L (`power_of_two_near`).
 pub fn loop_lengths(model: &Model, data: &Data, c: &Constraints, length: f64) -> Vec<f64> {
     let mut owner = vec![None; model.nv];
     for joint in &model.joints {
@@ -461,7 +456,7 @@ pub fn loop_lengths(model: &Model, data: &Data, c: &Constraints, length: f64) ->
             }
             let diagonal = box_diagonal(&points);
             if diagonal.is_finite() && diagonal > 0.0 {
-                power_of_two_near(diagonal)
+                length * power_of_two_near(diagonal / length)
             } else {
                 length
             }
@@ -469,14 +464,16 @@ pub fn loop_lengths(model: &Model, data: &Data, c: &Constraints, length: f64) ->
         .collect()
 }
 
-/// The power of two nearest `length` (by ratio): a scale by which rows are multiplied without
-/// rounding, so that two forms of a mechanism whose boxes differ by round-off (the planar and
-/// the spatial form of a four-bar) scale their rows by the same factor and take the same
-/// decisions bit for bit. This is how LAPACK equilibrates (its routine DGEEQUB, LAPACK 3.2,
-/// rounds its row and column scale factors to powers of the radix so that scaling introduces no
-/// rounding error). Within a factor √2 of `length`, which is all a scale needs.
-fn power_of_two_near(length: f64) -> f64 {
-    2.0_f64.powi(length.log2().round() as i32)
+/// The power of two nearest `ratio` (by ratio), within a factor √2 of it, which is all a scale
+/// needs. A loop's length is the mechanism's L times such a power (`loop_lengths`): multiplying
+/// by it is exact, so a loop's rows are scaled as with L alone but for an exponent, and two
+/// forms of a mechanism whose boxes differ by round-off (the planar and the spatial form of a
+/// four-bar) scale their rows alike and take the same decisions bit for bit; and since the
+/// ratio has no unit, a mechanism in millimetres is scaled as in metres. This is how LAPACK
+/// equilibrates (its routine DGEEQUB, LAPACK 3.2, rounds its row and column scale factors to
+/// powers of the radix so that scaling introduces no rounding error).
+fn power_of_two_near(ratio: f64) -> f64 {
+    2.0_f64.powi(ratio.log2().round() as i32)
 }
 
 /// The diagonal of the box holding `points` (−∞ or NaN for none).
