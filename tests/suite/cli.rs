@@ -358,18 +358,20 @@ fn an_rk4_step_too_long_for_the_tolerances_is_warned_not_silent() {
 fn a_run_ending_inside_a_singular_passage_warns_about_its_last_outputs() {
     // The row of ten four-bars sets rows aside at its first flat configuration (t ≈ 0.139);
     // a run ending there cannot interpolate the outputs inside the passage between states on
-    // the branch, and says so (W0903). Ending just after the passage, it says nothing. With
-    // rk4 at 2e-4 a step ends at a conditioning of 3.1e-6, inside the passage (dopri5 at 1e-11,
-    // with each loop's rows scaled by its own length, ends no step below 8.6e-5 there and sets
-    // no row aside); the stretch around it runs from 0.1388 to 0.1394.
+    // the branch, and says so (W0903). Ending just after the passage, it says nothing. (With
+    // each loop's rows scaled by its own length, no step up to t = 0.13905 comes within
+    // `PASSAGE_ENTERED`, the smallest conditioning there 1.4e-5: a run ending at 0.13905 sets
+    // no row aside; ending at 0.1391, at 2.4e-6, it has.)
     let run = |duration: &str| {
         lsdc(&[
             "simulate",
             "examples/hard/four_bar_row_10.lsd",
             "--integrator",
-            "rk4",
+            "dopri5",
+            "--tolerance",
+            "1e-11",
             "--step",
-            "2e-4",
+            "1e-4",
             "--every",
             "1e-5",
             "--duration",
@@ -381,11 +383,7 @@ fn a_run_ending_inside_a_singular_passage_warns_about_its_last_outputs() {
     let (code, _, stderr) = run("0.1391");
     assert_eq!(code, 0, "{stderr}");
     let report: serde_json::Value = serde_json::from_str(&stderr).expect("the report is JSON");
-    let codes = report["warnings"].as_array().unwrap().iter();
-    assert!(
-        codes.map(|w| &w["code"]).any(|code| code == "W0903"),
-        "{stderr}"
-    );
+    assert_eq!(report["warnings"][0]["code"], "W0903", "{stderr}");
     assert!(!report["constraints"]["outputs_off_branch"]
         .as_array()
         .unwrap()
