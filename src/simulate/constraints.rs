@@ -46,10 +46,18 @@ const PASSAGE_LEFT: f64 = 2e-5;
 /// At or above this conditioning a state kept around a passage ends the stretch whose outputs
 /// are interpolated between its ends (see `LoopFindings`). Nearer the passage the step ends' own
 /// velocities drift across the rows about to be lost (on a row of two parallelograms with the
-/// implicit integrator at 1e-8, by 3e-7 rad/s between the cranks at 1e-5): an end taken at 3e-5
-/// or more halved the outputs' error there, and one at 1e-4 or more lay up to 25 ms before the
-/// passage on the row of 40 at 1e-8, too far for the interpolant.
-const STRETCH_ENDS: f64 = 3e-5;
+/// implicit integrator at 1e-8, by 3e-7 rad/s between the cranks at 1e-5). With each loop's
+/// rows scaled by its own length (`structure::loop_lengths`) the conditioning no longer carries
+/// the 1/N of one length for the whole mechanism (the ladder of N loops: 0.195 at every N,
+/// against 1.95e-4 at N = 1,000), and 3e-5, chosen on that scaling, ended stretches too near
+/// the passage. Measured
+/// through the first flat passage (largest spread of the cranks' rates over the outputs; the
+/// stretch's span): the row of ten, rk4 at 2e-4, 2.7e-6 at 3e-5, 8.1e-8 at 1e-4, 5.7e-8 at 3e-4
+/// (0.6 ms) and at 1e-3 (1.2 ms); the row of two, rk4 at 1e-3, 2.5e-7, 2.4e-9, 6.7e-10, 6.7e-10;
+/// the row of 40, rk4 at 1e-3 over 1.5 s, 7.5e-6, 1.2e-6, 5.0e-7, 5.0e-7 (spans at most 2 ms).
+/// 3e-4 is the smallest value at the floor in each; 1e-3 doubles the spans at 2e-4 for nothing
+/// (BENCHMARKS.md, "The ladder of 1,000 loops closed to round-off").
+const STRETCH_ENDS: f64 = 3e-4;
 
 /// A step that crossed a singular configuration of the loops between its ends
 /// (`Orientation`: the sign of its rows' determinant against the last state kept changed), the
@@ -74,6 +82,7 @@ const FREE_AGAIN_BELOW: f64 = 0.1;
 const NO_STRUCTURE: Structure = Structure {
     choice: RowChoice::NONE,
     length: 1.0,
+    lengths: Vec::new(),
     redundant: Vec::new(),
     rank: 0,
     massless: 0,
@@ -486,7 +495,7 @@ impl LoopMonitor {
         }
         let conditioning = scratch.conditioning(&self.structure.choice);
         let structure = &mut self.structure;
-        let reproduction = scratch.reproduction(&structure.active_rows, structure.length);
+        let reproduction = scratch.reproduction(&structure.active_rows, &structure.lengths);
         let jacobian = &scratch.current.jacobian;
         if let Some(now) =
             reproduction.filter(|&now| now < RECHOOSE_BELOW * structure.chosen_reproduction)

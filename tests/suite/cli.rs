@@ -358,7 +358,10 @@ fn an_rk4_step_too_long_for_the_tolerances_is_warned_not_silent() {
 fn a_run_ending_inside_a_singular_passage_warns_about_its_last_outputs() {
     // The row of ten four-bars sets rows aside at its first flat configuration (t ≈ 0.139);
     // a run ending there cannot interpolate the outputs inside the passage between states on
-    // the branch, and says so (W0903). Ending just after the passage, it says nothing.
+    // the branch, and says so (W0903). Ending just after the passage, it says nothing. (With
+    // each loop's rows scaled by its own length, no step up to t = 0.13905 comes within
+    // `PASSAGE_ENTERED`, the smallest conditioning there 1.4e-5: a run ending at 0.13905 sets
+    // no row aside; ending at 0.1391, at 2.4e-6, it has.)
     let run = |duration: &str| {
         lsdc(&[
             "simulate",
@@ -377,7 +380,7 @@ fn a_run_ending_inside_a_singular_passage_warns_about_its_last_outputs() {
             "json",
         ])
     };
-    let (code, _, stderr) = run("0.13905");
+    let (code, _, stderr) = run("0.1391");
     assert_eq!(code, 0, "{stderr}");
     let report: serde_json::Value = serde_json::from_str(&stderr).expect("the report is JSON");
     assert_eq!(report["warnings"][0]["code"], "W0903", "{stderr}");

@@ -34,13 +34,13 @@ pub struct RowChoice {
 }
 
 impl RowChoice {
-    /// The rows given (firm first, then `weak` of them), made dimensionless with the
-    /// characteristic length L (see `row_scale`).
-    pub fn new(mut rows: Vec<usize>, weak: usize, length: f64) -> RowChoice {
+    /// The rows given (firm first, then `weak` of them), made dimensionless with their loop's
+    /// length (`lengths`, one per loop; see `row_scale` and `structure::loop_lengths`).
+    pub fn new(mut rows: Vec<usize>, weak: usize, lengths: &[f64]) -> RowChoice {
         let firm = rows.len() - weak;
         rows[..firm].sort_unstable();
         rows[firm..].sort_unstable();
-        let scales = rows.iter().map(|&r| row_scale(r, length)).collect();
+        let scales = rows.iter().map(|&r| loop_row_scale(r, lengths)).collect();
         RowChoice { rows, scales, weak }
     }
 
@@ -62,6 +62,11 @@ pub fn row_scale(row: usize, length: f64) -> f64 {
     } else {
         1.0 / length
     }
+}
+
+/// `row_scale` with the length of the row's own loop (`lengths`, one per loop, 6 rows each).
+pub fn loop_row_scale(row: usize, lengths: &[f64]) -> f64 {
+    row_scale(row, lengths[row / 6])
 }
 
 /// The damping of the solves on the firm rows, relative to their largest scale: its effect is
@@ -535,7 +540,7 @@ impl Damped<'_> {
 
     /// How well the kept rows reproduce the active rows of G left out (`active`, 6 per loop):
     /// the smallest, over those rows g, of 1/√(1 + |c|²) for the coefficients c of g's
-    /// least-squares combination of the kept rows (all dimensionless, with length L): 1 for a
+    /// least-squares combination of the kept rows (all dimensionless, each with its loop's length): 1 for a
     /// row at round-off, about 1/|c| for one the kept rows reproduce only with large
     /// coefficients, which off the closed set is violated |c| times more than they are. On the
     /// closed set and with one row left out, 1/√(1 + |c|²) is that row's share of the unit
@@ -544,7 +549,7 @@ impl Damped<'_> {
         &self,
         jacobian: &ConstraintJacobian,
         active: &[bool],
-        length: f64,
+        lengths: &[f64],
         row: &mut Vec<f64>,
         coefficients: &mut Vec<f64>,
     ) -> f64 {
@@ -552,7 +557,7 @@ impl Damped<'_> {
         let largest = (factored.rows.values.iter()).fold(0.0_f64, |m, v| m.max(v.abs()));
         let mut smallest = 1.0_f64;
         for r in (0..jacobian.nrows()).filter(|&r| active[r] && !factored.is_kept[r]) {
-            let scale = row_scale(r, length);
+            let scale = loop_row_scale(r, lengths);
             let size = jacobian
                 .row(r)
                 .fold(0.0_f64, |m, (_, v)| m.max((v * scale).abs()));

@@ -210,6 +210,14 @@ fn complementary_nullity(
 /// Per column of G, the factor that makes it dimensionless: L for a sliding motion (no rotation
 /// row moves with it), 1 otherwise.
 pub fn column_scales(jacobian: &ConstraintJacobian, length: f64) -> Vec<f64> {
+    turning_columns(jacobian)
+        .into_iter()
+        .map(|turns| if turns { 1.0 } else { length })
+        .collect()
+}
+
+/// Per column of G, whether a rotation row moves with it (not a sliding motion).
+pub fn turning_columns(jacobian: &ConstraintJacobian) -> Vec<bool> {
     let mut turns = vec![false; jacobian.ncols()];
     for r in (0..jacobian.nrows()).filter(|r| r % 6 < 3) {
         for (c, value) in jacobian.row(r) {
@@ -217,7 +225,4 @@ pub fn column_scales(jacobian: &ConstraintJacobian, length: f64) -> Vec<f64> {
         }
     }
     turns
-        .into_iter()
-        .map(|turns| if turns { 1.0 } else { length })
-        .collect()
 }

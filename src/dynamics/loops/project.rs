@@ -403,7 +403,7 @@ impl ProjectionScratch {
 
     /// How well the rows `conditioning` just factored reproduce the active rows left out
     /// (`Damped::reproduction`); None if they could not be factored.
-    pub fn reproduction(&mut self, active: &[bool], length: f64) -> Option<f64> {
+    pub fn reproduction(&mut self, active: &[bool], lengths: &[f64]) -> Option<f64> {
         if self.held != Held::Conditioning {
             return None;
         }
@@ -412,7 +412,7 @@ impl ProjectionScratch {
         let value = damped.reproduction(
             jacobian,
             active,
-            length,
+            lengths,
             &mut self.row,
             &mut self.coefficients,
         );

@@ -7,18 +7,22 @@
 //!
 //! Units: rotation rows are in radians, translation rows in metres, and the columns of sliding
 //! coordinates in metres per unit of their rate. Every decision is taken on the rows and columns
-//! made dimensionless by the mechanism's characteristic length L (the diagonal of the box
-//! holding its bodies' origins, its joints and its loop points): translation rows are divided by
-//! L and the columns of sliding motions multiplied by it. The four-bar in millimetres and in
-//! metres then take the same decisions.
+//! made dimensionless by each loop's own length ℓ (`loop_lengths`: the diagonal of the box
+//! holding the frames of the joints on its cycle and its closing frames): a loop's translation
+//! rows are divided by its ℓ, and the columns of sliding motions multiplied by the largest ℓ of
+//! the loops they move. The four-bar in millimetres and in metres then take the same decisions,
+//! and so do a loop alone and the same loop among a thousand others: with one length for the
+//! whole mechanism (its box's diagonal, L), a ladder of N loops of 1 m had its translation rows
+//! at 1/N of its rotation rows, its rows' conditioning falling as 1/N (1.95e-4 at N = 1,000),
+//! and its projections' damping (`PROJECTION_DAMPING`) taking the place of their solution.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::SOLVE_TOLERANCE;
 use super::elimination::sparse_rows;
-use super::massless::{column_scales, massless_count};
+use super::massless::{column_scales, massless_count, turning_columns};
 use crate::elimination::{in_order, norm, pivoted, Sparse};
-use super::factored::{row_scale, Damped, Factored, RowChoice, DAMPING};
+use super::factored::{loop_row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints, Extent};
@@ -44,10 +48,15 @@ const NEARBY_STEP: f64 = 1e-3;
 pub struct Structure {
     /// The rows the equations of motion keep (indices among the 6 per loop): independent at the
     /// start up to round-off (`KEEP_TOLERANCE`), in loop order then row order, each with the
-    /// factor that makes it dimensionless (1 for a rotation row, 1/L for a translation row).
+    /// factor that makes it dimensionless (1 for a rotation row, 1/ℓ for a translation row of
+    /// a loop of length ℓ).
     pub choice: RowChoice,
-    /// The characteristic length L, in metres.
+    /// The mechanism's characteristic length L, in metres: the scale of the bodies' velocities
+    /// and of the motions along sliding coordinates in the count of massless motions and the
+    /// look at the closed configurations next to the start.
     pub length: f64,
+    /// Each loop's length ℓ, in metres (`loop_lengths`): the scale of its translation rows.
+    pub lengths: Vec<f64>,
     /// The rows implied by earlier ones at the start, at the reporting tolerance.
     pub redundant: Vec<usize>,
     /// The number of independent rows at the reporting tolerance.
@@ -99,7 +108,8 @@ impl Structure {
         let rest = vec![0.0; model.velocities()];
         let c = constraints(model, data, q, &rest, Extent::Rows)?;
         let length = characteristic_length(model, data, &c);
-        let mut structure = Structure::at(model, &c, length);
+        let lengths = loop_lengths(model, data, &c, length);
+        let mut structure = Structure::at(model, &c, length, lengths);
         structure.choose_free(&c.jacobian);
         // `data` holds the joint transforms at q still (`gained_nearby` below moves them).
         structure.massless = massless_count(model, data, &c.jacobian, &structure.choice, length)
@@ -110,10 +120,10 @@ impl Structure {
         Ok(structure)
     }
 
-    /// The rows' decisions at the constraints `c`, with length L.
-    fn at(model: &Model, c: &Constraints, length: f64) -> Structure {
+    /// The rows' decisions at the constraints `c`, with length L and the loops' lengths.
+    fn at(model: &Model, c: &Constraints, length: f64, lengths: Vec<f64>) -> Structure {
         let active = active_rows(model);
-        let scaled = dimensionless_rows(&c.jacobian, length);
+        let scaled = dimensionless_rows(&c.jacobian, &lengths);
         let columns = c.jacobian.ncols();
         let rows = best_rows(&scaled, columns, &active, KEEP_TOLERANCE);
         let candidates: Vec<usize> = (0..scaled.len()).filter(|&r| active[r]).collect();
@@ -127,11 +137,12 @@ impl Structure {
         );
         let weak = rows.len().saturating_sub(reported.len());
         let rows = reproducing_rows(&scaled, columns, &active, rows, weak);
-        let choice = RowChoice::new(rows, weak, length);
-        let chosen_reproduction = reproduction(&c.jacobian, &choice, &active, length);
+        let choice = RowChoice::new(rows, weak, &lengths);
+        let chosen_reproduction = reproduction(&c.jacobian, &choice, &active, &lengths);
         Structure {
             choice,
             length,
+            lengths,
             redundant,
             rank: reported.len(),
             massless: 0,
@@ -180,7 +191,7 @@ impl Structure {
             let there = constraints(model, data, &nearby, &rest, Extent::Rows)?;
             let active = active_rows(model);
             let rows = best_rows(
-                &dimensionless_rows(&there.jacobian, self.length),
+                &dimensionless_rows(&there.jacobian, &self.lengths),
                 there.jacobian.ncols(),
                 &active,
                 KEEP_TOLERANCE,
@@ -207,7 +218,7 @@ impl Structure {
     /// same accelerations, so the equations of motion do not change; the choice is taken between
     /// steps, never inside an evaluation. Returns whether the rows changed.
     pub fn rechoose(&mut self, jacobian: &ConstraintJacobian, current: f64) -> bool {
-        let scaled = dimensionless_rows(jacobian, self.length);
+        let scaled = dimensionless_rows(jacobian, &self.lengths);
         let rows = reproducing_rows(
             &scaled,
             jacobian.ncols(),
@@ -215,11 +226,11 @@ impl Structure {
             self.choice.rows.clone(),
             self.choice.weak,
         );
-        let candidate = RowChoice::new(rows, self.choice.weak, self.length);
+        let candidate = RowChoice::new(rows, self.choice.weak, &self.lengths);
         if candidate == self.choice {
             return false;
         }
-        let better = reproduction(jacobian, &candidate, &self.active_rows, self.length);
+        let better = reproduction(jacobian, &candidate, &self.active_rows, &self.lengths);
         if better < RECHOOSE * current {
             return false;
         }
@@ -402,11 +413,11 @@ fn reproduction(
     jacobian: &ConstraintJacobian,
     choice: &RowChoice,
     active: &[bool],
-    length: f64,
+    lengths: &[f64],
 ) -> f64 {
     let factored = Factored::new(jacobian, choice);
     factored.damped(DAMPING).map_or(0.0, |damped| {
-        damped.reproduction(jacobian, active, length, &mut Vec::new(), &mut Vec::new())
+        damped.reproduction(jacobian, active, lengths, &mut Vec::new(), &mut Vec::new())
     })
 }
 
@@ -426,13 +437,7 @@ pub fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64
         );
     }
     points.extend(c.points.iter().copied());
-    let lowest = points
-        .iter()
-        .fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
-    let highest = points
-        .iter()
-        .fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
-    let diagonal = (highest - lowest).norm();
+    let diagonal = box_diagonal(&points);
     if diagonal.is_finite() && diagonal > 0.0 {
         diagonal
     } else {
@@ -440,8 +445,81 @@ pub fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64
     }
 }
 
-/// G's rows made dimensionless by the length L, sparse.
-fn dimensionless_rows(jacobian: &ConstraintJacobian, length: f64) -> Vec<Sparse> {
-    let columns = column_scales(jacobian, length);
-    sparse_rows(jacobian, |r, c| row_scale(r, length) * columns[c])
+/// Per loop, its length ℓ: the diagonal of the box holding the frames of the joints on its
+/// cycle (each tree joint whose velocity its rows depend on, on its parent and on its child),
+/// its closing link's two frames and its loop point, where its rows' rates are taken. A
+/// translation row's entry for a turning joint is the lever arm from that joint's axis to the
+/// loop point, at most ℓ, so the loop's rows divided by ℓ are of order 1 whatever else the
+/// mechanism holds. The bodies' origins are left out: a body's origin can lie far from its
+/// joints (the ladder's beam swings about its end, a thousand rungs away from its last loop).
+/// A loop whose frames all coincide has translation rows by rotation alone that vanish: the
+/// mechanism's length L then. Each ℓ is taken as L times the power of two nearest the ratio of
+/// that diagonal to L (`power_of_two_near`).
+pub fn loop_lengths(model: &Model, data: &Data, c: &Constraints, length: f64) -> Vec<f64> {
+    let mut owner = vec![None; model.nv];
+    for joint in &model.joints {
+        let velocities = joint.v_offset..joint.v_offset + joint.nv();
+        owner[velocities].iter_mut().for_each(|o| *o = Some(joint));
+    }
+    let mut points = Vec::new();
+    (model.loops.iter().enumerate())
+        .map(|(k, link)| {
+            points.clear();
+            points.push(c.points[k]);
+            points.push((data.world[link.first_body] * link.first).translation.vector);
+            points.push((data.world[link.second_body] * link.second).translation.vector);
+            for &column in &c.jacobian.blocks[k].columns {
+                if let Some(joint) = owner.get(column).copied().flatten() {
+                    let on_parent = data.world[joint.parent] * joint.on_parent;
+                    let on_child = data.world[joint.child] * joint.on_child;
+                    points.push(on_parent.translation.vector);
+                    points.push(on_child.translation.vector);
+                }
+            }
+            let diagonal = box_diagonal(&points);
+            if diagonal.is_finite() && diagonal > 0.0 {
+                length * power_of_two_near(diagonal / length)
+            } else {
+                length
+            }
+        })
+        .collect()
+}
+
+/// The power of two nearest `ratio` (by ratio), within a factor √2 of it, which is all a scale
+/// needs. A loop's length is the mechanism's L times such a power (`loop_lengths`): multiplying
+/// by it is exact, so a loop's rows are scaled as with L alone but for an exponent, and two
+/// forms of a mechanism whose boxes differ by round-off (the planar and the spatial form of a
+/// four-bar) scale their rows alike and take the same decisions bit for bit; and since the
+/// ratio has no unit, a mechanism in millimetres is scaled as in metres. This is how LAPACK
+/// equilibrates (its routine DGEEQUB, LAPACK 3.2, rounds its row and column scale factors to
+/// powers of the radix so that scaling introduces no rounding error).
+fn power_of_two_near(ratio: f64) -> f64 {
+    2.0_f64.powi(ratio.log2().round() as i32)
+}
+
+/// The diagonal of the box holding `points` (−∞ or NaN for none).
+fn box_diagonal(points: &[Vector3<f64>]) -> f64 {
+    let lowest = points
+        .iter()
+        .fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
+    let highest = points
+        .iter()
+        .fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
+    (highest - lowest).norm()
+}
+
+/// G's rows made dimensionless by their loops' lengths, sparse: a loop's translation rows
+/// divided by its ℓ, a sliding column multiplied by the largest ℓ of the loops it moves.
+fn dimensionless_rows(jacobian: &ConstraintJacobian, lengths: &[f64]) -> Vec<Sparse> {
+    let mut column_length = vec![0.0_f64; jacobian.ncols()];
+    for (block, &length) in jacobian.blocks.iter().zip(lengths) {
+        for &column in &block.columns {
+            column_length[column] = column_length[column].max(length);
+        }
+    }
+    let columns: Vec<f64> = (turning_columns(jacobian).into_iter().zip(column_length))
+        .map(|(turns, length)| if turns { 1.0 } else { length })
+        .collect();
+    sparse_rows(jacobian, |r, c| loop_row_scale(r, lengths) * columns[c])
 }
