@@ -142,7 +142,8 @@ fn ladder_projection() {
 /// N − 2 ≥ 2 · 3).
 fn methods_switch() {
     println!(
-        "\nThe necklace with each method forced (release build, CPU time per call, best batch).\n"
+        "\nThe necklace with each method forced ({}, CPU time per call, best batch).\n",
+        common::build_profile()
     );
     println!("| N | allowed motions | rule's method | null-space RHS µs | range-space RHS µs | null-space projection µs | range-space projection µs |");
     println!("|---:|---:|---|---:|---:|---:|---:|");
@@ -198,7 +199,10 @@ fn projected_run(
 /// each step: its energy drift and its loops' largest residuals (the suite's
 /// `long_chains` runs N = 10 and 100).
 fn necklace_accuracy() {
-    println!("\nThe necklace over 0.2 s, dopri5 at 1e-12 (release build).\n");
+    println!(
+        "\nThe necklace over 0.2 s, dopri5 at 1e-12 ({}).\n",
+        common::build_profile()
+    );
     println!("| N | method (the rule's) | steps | energy drift | position residual | velocity residual | smallest conditioning (passages) | run s (CPU) |");
     println!("|---:|---|---:|---:|---:|---:|---|---:|");
     for n in [10, 100, 300, 1000] {
@@ -247,7 +251,7 @@ fn conditioning(c: &lsdc::simulate::constraints::ConstraintReport) -> String {
 }
 
 fn rows_against_trees() {
-    println!("A row of N parallelogram four-bars against the same bodies as a tree (release build, CPU time per call, best batch).\n");
+    println!("A row of N parallelogram four-bars against the same bodies as a tree ({}, CPU time per call, best batch).\n", common::build_profile());
     println!("| N | bodies | tree µs | loops µs | loops / tree | projection µs | projection / loops RHS |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
     let mut measured = Vec::new();
@@ -286,7 +290,10 @@ fn rows_against_trees() {
 /// The necklace and the ladder at each N of `NECKLACES` and `LADDERS`: cost per call and per
 /// body, and the exponent of the growth of each cost with N.
 fn long_chains() {
-    println!("\nLong closed chains (release build, CPU time per call, best batch).\n");
+    println!(
+        "\nLong closed chains ({}, CPU time per call, best batch).\n",
+        common::build_profile()
+    );
     println!("| chain | N | bodies | start s | right-hand side µs | projection µs | RHS µs per body | projection µs per body |");
     println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     /// A chain's name, its program for N, its bodies for N, and the N it is timed at.

@@ -191,3 +191,15 @@ pub fn random_states(model: &Model) -> Vec<[Vec<f64>; 4]> {
         })
         .collect()
 }
+
+#[allow(dead_code)] // the benchmarks that print their profile
+/// The profile this benchmark was built in, for its headings: `release` (Cargo's `bench`
+/// profile) or `dev` (`cargo bench --profile dev`, the repository's opt-level 1 with lsdc at 2,
+/// and debug assertions, which only it has).
+pub fn build_profile() -> &'static str {
+    if cfg!(debug_assertions) {
+        "dev build"
+    } else {
+        "release build"
+    }
+}
