@@ -74,10 +74,7 @@ impl DrivenSubtrees {
             known[k] = full[k] && (parent_known || joint.nv() > 0);
         }
         let every_drive_known = model.drives.iter().all(|drive| {
-            let joint = joints.iter().position(|j| {
-                (j.v_offset..j.v_offset + j.nv()).contains(&drive.velocity)
-            });
-            joint.is_some_and(|k| known[k])
+            (model.joint_index_of_velocity(drive.velocity)).is_some_and(|k| known[k])
         });
         if !every_drive_known {
             return Err("a driven joint has a free joint below it".to_string());

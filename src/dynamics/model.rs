@@ -47,6 +47,10 @@ pub struct Model {
     /// use: a chain of n joints has n (n + 1) / 2 of them, and a run by the articulated-body
     /// algorithm never reads them, so that its memory grows as n.
     branches: std::sync::OnceLock<Vec<Vec<usize>>>,
+    /// Per velocity of the tree, the joint it belongs to (`joint_of_velocity`). Made at the
+    /// first use, as `branches`: a table instead of a search of the joints, which the loops'
+    /// scaling asks once per column of every loop.
+    velocity_joints: std::sync::OnceLock<Vec<Option<usize>>>,
     pub nq: usize,
     pub nv: usize,
     pub applied: Vec<AppliedEffort>,
@@ -128,6 +132,27 @@ impl Model {
             .get_or_init(|| branch_velocities(&self.joints))[k]
     }
 
+    /// The joint that velocity `velocity` of the tree belongs to; none for a loop's velocity
+    /// (beyond `nv`). A weld, without velocities, shares its offset with the next joint's: it
+    /// is not that joint.
+    pub fn joint_of_velocity(&self, velocity: usize) -> Option<&Joint> {
+        self.joint_index_of_velocity(velocity)
+            .map(|k| &self.joints[k])
+    }
+
+    /// The index in `joints` of the joint `joint_of_velocity` gives.
+    pub fn joint_index_of_velocity(&self, velocity: usize) -> Option<usize> {
+        let table = self.velocity_joints.get_or_init(|| {
+            let mut owner = vec![None; self.nv];
+            for (k, joint) in self.joints.iter().enumerate() {
+                let velocities = joint.v_offset..joint.v_offset + joint.nv();
+                owner[velocities].iter_mut().for_each(|o| *o = Some(k));
+            }
+            owner
+        });
+        table.get(velocity).copied().flatten()
+    }
+
     /// The bodies from `body` up to (and excluding) earth; body b is reached by joint b − 1.
     pub fn path_to_earth(&self, body: usize) -> impl Iterator<Item = usize> + '_ {
         let below_earth = |b: usize| (b != 0).then_some(b);
@@ -194,11 +219,7 @@ impl Model {
                 .collect();
             return names.get(index - self.nv).cloned().unwrap_or_default();
         }
-        let Some(joint) = self
-            .joints
-            .iter()
-            .find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&index))
-        else {
+        let Some(joint) = self.joint_of_velocity(index) else {
             return String::new();
         };
         let k = index - joint.v_offset;
@@ -451,6 +472,7 @@ fn build_parts(
     refuse_rotors_on_welds(mechanism, &joints, &merged.dynamic_joints, &rotors)?;
     let mut model = Model {
         branches: std::sync::OnceLock::new(),
+        velocity_joints: std::sync::OnceLock::new(),
         dynamic_joints: merged.dynamic_joints,
         dynamic_bodies: merged.dynamic_bodies,
         anchor_offsets: merged.anchor_offsets,
@@ -976,8 +998,7 @@ impl Model {
         if velocity >= self.nv {
             return Some(self.nq + velocity - self.nv);
         }
-        let joint =
-            (self.joints.iter()).find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&velocity))?;
+        let joint = self.joint_of_velocity(velocity)?;
         (!joint.is_quaternion()).then(|| joint.q_offset + velocity - joint.v_offset)
     }
 

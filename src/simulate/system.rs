@@ -513,10 +513,7 @@ impl<'m> MechanicalSystem<'m> {
             efforts.power + self.scratch.friction_power + self.scratch.drive_power
         };
         if let Some(k) = accelerations.iter().position(|a| !a.is_finite()) {
-            let joint = model
-                .joints
-                .iter()
-                .find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&k));
+            let joint = model.joint_of_velocity(k);
             let join = joint.map_or("?".to_string(), |j| j.chain.name.clone());
             let efforts_finite = efforts.tau.iter().all(|x| x.is_finite())
                 && efforts

@@ -336,9 +336,7 @@ fn drivable(prepared: &Prepared, name: &str) -> Result<(usize, usize), String> {
     let model = &prepared.model;
     let velocity = velocity_index(prepared, name).map_err(|e| e.to_string())?;
     let refuse = |why: &str| Err(format!("`{name}` cannot be driven: {why}"));
-    let within =
-        |j: &&crate::dynamics::joint::Joint| (j.v_offset..j.v_offset + j.nv()).contains(&velocity);
-    let Some(joint) = model.joints.iter().find(within) else {
+    let Some(joint) = model.joint_of_velocity(velocity) else {
         return refuse("its join closes a loop, and the loop's closure decides it");
     };
     if !joint.is_single_coordinate() {

@@ -456,11 +456,6 @@ pub fn characteristic_length(model: &Model, data: &Data, c: &Constraints) -> f64
 /// mechanism's length L then. Each ℓ is taken as L times the power of two nearest the ratio of
 /// that diagonal to L (`power_of_two_near`).
 pub fn loop_lengths(model: &Model, data: &Data, c: &Constraints, length: f64) -> Vec<f64> {
-    let mut owner = vec![None; model.nv];
-    for joint in &model.joints {
-        let velocities = joint.v_offset..joint.v_offset + joint.nv();
-        owner[velocities].iter_mut().for_each(|o| *o = Some(joint));
-    }
     let mut points = Vec::new();
     (model.loops.iter().enumerate())
         .map(|(k, link)| {
@@ -469,7 +464,7 @@ pub fn loop_lengths(model: &Model, data: &Data, c: &Constraints, length: f64) ->
             points.push((data.world[link.first_body] * link.first).translation.vector);
             points.push((data.world[link.second_body] * link.second).translation.vector);
             for &column in &c.jacobian.blocks[k].columns {
-                if let Some(joint) = owner.get(column).copied().flatten() {
+                if let Some(joint) = model.joint_of_velocity(column) {
                     let on_parent = data.world[joint.parent] * joint.on_parent;
                     let on_child = data.world[joint.child] * joint.on_child;
                     points.push(on_parent.translation.vector);

@@ -10,7 +10,6 @@
 use crate::diag::suggest::did_you_mean;
 use crate::dynamics::model::Model;
 use crate::kinematics::drives::drive_effort_name;
-use crate::studies::identify::parameters::joint_of_velocity;
 use crate::studies::motion_file::{spline_derivatives, Derivation};
 
 /// A coordinate's positions, rates and accelerations along the samples.
@@ -100,7 +99,7 @@ pub fn read_measured(
         ));
     }
     let effort_name = |velocity: usize| {
-        let joint = joint_of_velocity(model, velocity);
+        let joint = model.joint_of_velocity(velocity);
         drive_effort_name(joint.map_or("", |j| j.chain.name.as_str()))
     };
     // The columns read: a field elsewhere may hold anything (an empty potential energy).

@@ -11,7 +11,6 @@ use serde::Serialize;
 
 use crate::diag::suggest::did_you_mean;
 use crate::dynamics::algorithms::regressor::{INERTIAL_PARAMETERS, PARAMETERS_PER_BODY};
-use crate::dynamics::joint::Joint;
 use crate::dynamics::model::Model;
 use crate::elab::mechanism::Mechanism;
 use crate::source::Span;
@@ -79,13 +78,7 @@ pub fn parameter_name(model: &Model, parameter: Parameter) -> String {
 }
 
 fn joint_name(model: &Model, velocity: usize) -> &str {
-    joint_of_velocity(model, velocity).map_or("", |j| j.chain.name.as_str())
-}
-
-/// The joint that velocity `velocity` belongs to (a weld, without velocities, shares its
-/// offset with the next joint's: it is not that joint).
-pub fn joint_of_velocity(model: &Model, velocity: usize) -> Option<&Joint> {
-    (model.joints.iter()).find(|j| (j.v_offset..j.v_offset + j.nv()).contains(&velocity))
+    model.joint_of_velocity(velocity).map_or("", |j| j.chain.name.as_str())
 }
 
 /// The parameters asked for, in order, each once.
