@@ -991,6 +991,21 @@ impl Model {
         v
     }
 
+    /// dq/dt at positions `q` (quaternions of unit length: `split_state_into`) and velocities
+    /// `v`, into `dq` (state lengths): each joint's `position_rate`, the complementary links'
+    /// coordinates by their rates.
+    pub fn position_rates(&self, q: &[f64], v: &[f64], dq: &mut [f64]) {
+        for joint in &self.joints {
+            let range = joint.q_offset..joint.q_offset + joint.nq();
+            joint.position_rate(
+                &q[range.clone()],
+                &v[joint.v_offset..joint.v_offset + joint.nv()],
+                &mut dq[range],
+            );
+        }
+        dq[self.nq..].copy_from_slice(&v[self.nv..]);
+    }
+
     /// The position of state velocity `velocity` when it is the rate of a coordinate (a chain's,
     /// or a complementary link's); `None` for a spherical or free joint's angular or linear
     /// velocity, whose positions are a quaternion and a point.

@@ -18,6 +18,7 @@ use std::process::Command;
 use crate::elab::mechanism::Mechanism;
 use crate::kinematics::eval::UnknownValues;
 use crate::symbolic::kept_rows_solve::{solve_on_kept_rows, KeptRows};
+use crate::symbolic::quaternion_joints::QuaternionJoins;
 use crate::symbolic::{self, Equations};
 use crate::topology::Topology;
 
@@ -32,10 +33,16 @@ pub struct NativeDynamics {
     _library: libloading::Library,
     forward: ForwardDynamics,
     parameters: Vec<f64>,
+    /// How many positions and rates it reads (the simulator's state: a ball joint has four
+    /// positions, a quaternion, and three rates, its angular velocity).
+    pub positions: usize,
     pub dimension: usize,
     /// For a mechanism with loops, the constraint rows its accelerations keep (`KeptRows`):
     /// the code serves the states at which the run keeps the same rows.
     pub kept_rows: Option<Vec<usize>>,
+    /// The coordinates whose motions carry no mass that it holds at rest (`LoopRows::held`):
+    /// the code serves while the run holds the same.
+    pub held: Vec<usize>,
     /// Where the library was loaded from (for the run's report).
     pub path: PathBuf,
 }
@@ -54,9 +61,9 @@ impl NativeDynamics {
     #[inline]
     pub fn accelerations(&self, t: f64, p: &[f64], q: &[f64], accelerations: &mut [f64]) -> bool {
         let n = self.dimension;
-        assert!(p.len() == n && q.len() == n && accelerations.len() == n);
+        assert!(p.len() == self.positions && q.len() == n && accelerations.len() == n);
         // SAFETY: the library was built from the C emitter's source for this program, whose
-        // `forward_dynamics` reads N positions, N rates and the parameters and writes N
+        // `forward_dynamics` reads its positions, N rates and the parameters and writes N
         // accelerations; the slices have those lengths (checked above) and the library is
         // held loaded by `self`.
         let status = unsafe {
@@ -110,24 +117,29 @@ impl fmt::Display for Unavailable {
 }
 
 /// What the loops' accelerations are written on (`symbolic::kept_rows_solve`): the rows the run
-/// keeps, the coordinates it leaves at rest, how many coordinates the tree has, and a closed
-/// state (positions, rates) at which the elimination's pivots are chosen.
+/// keeps, the coordinates it leaves at rest (idle, and held for carrying no mass), how many
+/// coordinates the tree has, and a closed state (positions, rates) at which the elimination's
+/// pivots are chosen.
 pub struct LoopRows<'a> {
     pub rows: &'a [usize],
     pub at_rest: &'a [usize],
+    pub held: &'a [usize],
     pub tree: usize,
     pub state: (&'a [f64], &'a [f64]),
 }
 
 /// The program's forward dynamics as native code: generated, compiled (or found in the cache)
-/// and loaded. A mechanism with loops needs `loops`.
+/// and loaded, in the simulator's state (`quaternion_joins` the joins it integrates as
+/// quaternions). A mechanism with loops needs `loops`.
 pub fn build(
     mechanism: &Mechanism,
     topology: &Topology,
+    quaternion_joins: QuaternionJoins,
     values: &UnknownValues,
     loops: Option<LoopRows>,
 ) -> Result<NativeDynamics, Unavailable> {
-    let mut equations = symbolic::generate(mechanism, topology).map_err(|refused| {
+    let generated = symbolic::generate_in_state(mechanism, topology, quaternion_joins);
+    let mut equations = generated.map_err(|refused| {
         let why = refused.first().map_or("", |d| d.message.as_str());
         Unavailable::Unsupported(format!("the equations of motion cannot be written: {why}"))
     })?;
@@ -137,12 +149,12 @@ pub fn build(
         ));
     }
     let parameters = parameter_values(&equations, values)?;
-    let kept_rows = match loops {
+    let (kept_rows, held) = match loops {
         Some(loops) if equations.constraint_rows() > 0 => {
             on_kept_rows(&mut equations, &loops, &parameters)?;
-            Some(loops.rows.to_vec())
+            (Some(loops.rows.to_vec()), loops.held.to_vec())
         }
-        _ => None,
+        _ => (None, Vec::new()),
     };
     supported(&equations)?;
     let source = symbolic::emit::c(&equations, "simulate --compiled");
@@ -159,8 +171,10 @@ pub fn build(
         _library: library,
         forward,
         parameters,
+        positions: equations.variables.positions.len(),
         dimension: equations.dimension(),
         kept_rows,
+        held,
         path,
     })
 }
@@ -199,6 +213,7 @@ fn on_kept_rows(
     let kept = KeptRows {
         rows: loops.rows,
         at_rest: loops.at_rest,
+        held: loops.held,
         tree: loops.tree,
         symbols: &symbols,
     };

@@ -9,6 +9,9 @@ use crate::elab::mechanism::Mechanism;
 use crate::dynamics::loops::Stabilisation;
 use crate::prepare::native::{build, disagreement, LoopRows, Unavailable};
 use crate::prepare::Prepared;
+use crate::dynamics::joint::{Joint, JointType};
+use crate::dynamics::model::Model;
+use crate::symbolic::quaternion_joints::{BallKind, QuaternionJoins};
 
 /// Compiles `prepared`'s forward dynamics and keeps it for its runs, once it agrees with the
 /// simulator's evaluation at the initial state (to 1e-9 of the largest acceleration); otherwise
@@ -32,12 +35,6 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
                 .into(),
         ));
     }
-    if model.nq != model.nv {
-        return Err(Unavailable::Unsupported(
-            "its state is not its declared coordinates and rates (a free or spherical joint)"
-                .into(),
-        ));
-    }
     if model.has_loops() && prepared.settings.stabilisation != Stabilisation::Projection {
         return Err(Unavailable::Unsupported(
             "the loops are kept by other means than the projection after each step, whose accelerations the native code does not compute".into(),
@@ -53,10 +50,17 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
     // native code keeps).
     let unserved = |e: String| Unavailable::Unsupported(format!("the start cannot be evaluated: {e}"));
     system.start_loops(&mut y).map_err(|e| unserved(e.to_string()))?;
+    // The simulator's own evaluation at the start: the accelerations to agree with, and, where
+    // the loops allow motions without mass, its choice of those it holds at rest.
+    let mut dydt = vec![0.0; y.len()];
+    system
+        .derivative(0.0, &y, &mut dydt)
+        .map_err(|e| unserved(e.to_string()))?;
     let structure = &system.scratch.loops.structure;
-    if model.has_loops() && structure.massless > 0 {
+    let held = system.scratch.loop_scratch.left_at_rest(structure);
+    if model.has_loops() && held.len() != structure.massless {
         return Err(Unavailable::Unsupported(
-            "its loops allow motions without mass, which the native code does not leave at rest"
+            "its loops allow motions without mass, and the run has not chosen which it holds at rest"
                 .into(),
         ));
     }
@@ -64,19 +68,22 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
     let loops = model.has_loops().then(|| LoopRows {
         rows: &structure.choice.rows,
         at_rest: &structure.idle,
+        held,
         tree: model.nv,
         state: (positions, rates),
     });
-    let native = build(mechanism, &prepared.topology, &model.unknowns, loops)?;
-    if native.dimension != model.velocities() || prepared.coordinates.len() != model.positions() {
+    let native = build(
+        mechanism,
+        &prepared.topology,
+        quaternion_joins(model),
+        &model.unknowns,
+        loops,
+    )?;
+    if native.dimension != model.velocities() || native.positions != model.positions() {
         return Err(Unavailable::Unsupported(
             "its coordinates are not the joints' own".into(),
         ));
     }
-    let mut dydt = vec![0.0; y.len()];
-    system
-        .derivative(0.0, &y, &mut dydt)
-        .map_err(|e| unserved(e.to_string()))?;
     let (positions, rates) = y.split_at(model.positions());
     let largest = disagreement(&native, 0.0, positions, rates, &dydt[model.positions()..]);
     if largest > AGREEMENT {
@@ -84,6 +91,17 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
     }
     prepared.native = Some(native);
     Ok(())
+}
+
+/// The joins the simulator integrates as quaternions (`dynamics::joint`), for equations in its
+/// state.
+fn quaternion_joins(model: &Model) -> QuaternionJoins {
+    let ball = |joint: &Joint| match joint.kind {
+        JointType::Chain => None,
+        JointType::Spherical { .. } => Some((joint.chain.join, BallKind::Spherical)),
+        JointType::Free { .. } => Some((joint.chain.join, BallKind::Free)),
+    };
+    model.joints.iter().filter_map(ball).collect()
 }
 
 /// The warnings of `simulate --compiled`: why the native code does not serve (W0904), or what

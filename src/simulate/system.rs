@@ -387,11 +387,11 @@ impl<'m> MechanicalSystem<'m> {
         result
     }
 
-    /// dy/dt at (t, y) from the native code alone, where it is the whole evaluation: a tree
-    /// whose state is its joints' coordinates and rates (`compiled::attach`), with no row to
-    /// solve after it at this state (no coordinate held: `holds_nothing`). Then y splits into
-    /// the coordinates and their rates as they are, the coordinates' rates are the rates, and
-    /// the accelerations are the native code's: what `derivative_at` computes there, without
+    /// dy/dt at (t, y) from the native code alone, where it is the whole evaluation
+    /// (`compiled::attach`), with no row to solve after it at this state (no coordinate held:
+    /// `holds_nothing`). Then y splits into the positions and velocities as they are, the
+    /// positions' rates are the velocities (through the quaternions' kinematics for ball
+    /// joints), and the accelerations are the native code's: what `derivative_at` computes there, without
     /// the scratch it takes and gives back and the stack it finds empty. False where the native
     /// code refused (a value not finite: `derivative_at` says why) or does not serve alone.
     fn native_derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> bool {
@@ -402,13 +402,21 @@ impl<'m> MechanicalSystem<'m> {
         if model.has_contacts() || !self.holds_nothing() || !self.native_keeps_the_rows(native) {
             return false;
         }
-        debug_assert!(model.nq == model.nv && model.positions() == model.velocities());
         let (q, v) = y.split_at(model.positions());
         let (dq, dv) = dydt.split_at_mut(model.positions());
         if !native.accelerations(t, q, v, dv) {
             return false;
         }
-        dq.copy_from_slice(v);
+        if model.nq == model.nv {
+            dq.copy_from_slice(v);
+        } else {
+            // Quaternions move along the rotation, from their unit length as the simulator's
+            // own evaluation takes them.
+            let mut positions = std::mem::take(&mut self.scratch.positions);
+            model.split_state_into(y, &mut positions);
+            model.position_rates(&positions, v, dq);
+            self.scratch.positions = positions;
+        }
         let scratch = &mut self.scratch;
         (scratch.friction_power, scratch.drive_power, scratch.power) = (0.0, 0.0, 0.0);
         scratch.response_here = false;
@@ -416,19 +424,21 @@ impl<'m> MechanicalSystem<'m> {
     }
 
     /// Whether `native` solves the loops on the rows this run keeps now (`kept_rows_solve`):
-    /// the rows chosen at the start, not chosen again nor set aside for a passage since, and
-    /// the loops kept by projection (Baumgarte's feedback changes the accelerations). Always
-    /// for a tree.
+    /// the rows chosen at the start, not chosen again nor set aside for a passage since, the
+    /// same motions without mass held at rest, and the loops kept by projection (Baumgarte's
+    /// feedback changes the accelerations). Always for a tree.
     fn native_keeps_the_rows(&self, native: &NativeDynamics) -> bool {
         if !self.model.has_loops() {
             return true;
         }
         let loops = &self.scratch.loops;
+        let held = self.scratch.loop_scratch.left_at_rest(&loops.structure);
         loops.stabilisation == Stabilisation::Projection
             && native
                 .kept_rows
                 .as_ref()
                 .is_some_and(|rows| *rows == loops.structure.choice.rows)
+            && native.held == held
     }
 
     fn derivative_at(
@@ -528,15 +538,7 @@ impl<'m> MechanicalSystem<'m> {
             return Err(SystemError::AccelerationNotFinite { join, cause });
         }
         let (dq, dv) = dydt.split_at_mut(model.positions());
-        for joint in &model.joints {
-            let range = joint.q_offset..joint.q_offset + joint.nq();
-            joint.position_rate(
-                &q[range.clone()],
-                &v[joint.v_offset..joint.v_offset + joint.nv()],
-                &mut dq[range],
-            );
-        }
-        dq[model.nq..].copy_from_slice(&v[model.nv..]);
+        model.position_rates(q, v, dq);
         dv.copy_from_slice(accelerations.as_slice());
         self.scratch.accelerations = accelerations;
         Ok(())

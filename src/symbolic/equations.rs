@@ -26,6 +26,7 @@ use super::expr::{ExprId, Pool};
 use super::form::Form;
 use super::generator::Generator;
 use super::lower::{LowerError, Variables};
+use super::quaternion_joints::QuaternionJoins;
 use super::vector as v;
 use super::vector::Wrench;
 use crate::diag::Diagnostic;
@@ -57,9 +58,10 @@ pub struct Equations {
 }
 
 impl Equations {
-    /// Number of coordinates (rows of M).
+    /// Number of rates (rows of M): the coordinates' number, but where a join is written in
+    /// the simulator's state (`quaternion_joints`).
     pub fn dimension(&self) -> usize {
-        self.variables.positions.len()
+        self.variables.rates.len()
     }
 
     pub fn constraint_rows(&self) -> usize {
@@ -182,11 +184,32 @@ pub fn generate(mechanism: &Mechanism, topology: &Topology) -> Result<Equations,
     generate_in(mechanism, topology, Form::Lagrange)
 }
 
+/// The equations in the simulator's state: the joins of `quaternion_joins` in their quaternion
+/// and body twist (`quaternion_joints`), the others in their declared coordinates. For native
+/// code that takes the simulator's state as it is.
+pub fn generate_in_state(
+    mechanism: &Mechanism,
+    topology: &Topology,
+    quaternion_joins: QuaternionJoins,
+) -> Result<Equations, Vec<Diagnostic>> {
+    written(mechanism, topology, Form::Lagrange, quaternion_joins)
+}
+
 /// The equations derived by `form`: the same equations, to round-off, by another road (`form`).
 pub fn generate_in(
     mechanism: &Mechanism,
     topology: &Topology,
     form: Form,
+) -> Result<Equations, Vec<Diagnostic>> {
+    written(mechanism, topology, form, QuaternionJoins::new())
+}
+
+/// The equations by `form`, in the state of `quaternion_joins`, or why they are not written.
+fn written(
+    mechanism: &Mechanism,
+    topology: &Topology,
+    form: Form,
+    quaternion_joins: QuaternionJoins,
 ) -> Result<Equations, Vec<Diagnostic>> {
     if let Some(contact) = mechanism.contacts.first() {
         // The equations below are the tree's and its loops'; leaving the contacts' rows out
@@ -230,7 +253,7 @@ pub fn generate_in(
     if let Some(refused) = imposed_motion(mechanism) {
         return Err(vec![refused]);
     }
-    let mut generator = Generator::new(mechanism, topology);
+    let mut generator = Generator::in_state(mechanism, topology, quaternion_joins);
     generator.run(form).map_err(|e| {
         let error = Diagnostic::error(
             "E1101",

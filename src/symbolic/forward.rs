@@ -5,7 +5,8 @@
 //! anchor (`inertia`).
 
 use super::articulated::{self, Spatial};
-use super::expr::ExprId;
+use super::expr::{ExprId, Pool};
+use super::quaternion_joints;
 use super::generator::Generator;
 use super::kinematics::{LinkCoordinates, Step};
 use super::vector::Wrench;
@@ -90,7 +91,8 @@ impl Generator<'_> {
             joint_velocity = articulated::add(pool, &joint_velocity, &scaled);
         }
         let mut joint_bias = [zero; 6];
-        for (&position, &rate) in coordinates.positions.iter().zip(&coordinates.rates) {
+        let position_rates = coordinates.positions.iter().zip(&coordinates.position_rates);
+        for (&position, &rate) in position_rates {
             let derivative = joint_velocity.map(|x| derivatives.of(pool, x, position));
             let scaled = derivative.map(|x| pool.mul(x, rate));
             joint_bias = articulated::add(pool, &joint_bias, &scaled);
@@ -145,31 +147,19 @@ impl Generator<'_> {
     }
 
     /// The columns S of a chain of steps in the axes of its end frame, at its origin (linear
-    /// part first): each step's own motion moved along the steps that follow it.
+    /// part first), one per rate of `link`: each step's own motion moved along the steps that
+    /// follow it.
     fn child_frame_columns(&mut self, steps: &[Step], link: &LinkCoordinates) -> Vec<Spatial> {
         let zero = self.pool.constant(0.0);
-        let mut columns = vec![[zero; 6]; link.positions.len()];
+        let mut columns = vec![[zero; 6]; link.rates.len()];
         // The end frame's pose in the frame after the current step.
         let mut turned = v::identity(&mut self.pool);
         let mut offset = v::zero(&mut self.pool);
         for step in steps.iter().rev() {
-            for (k, &position) in link.positions.iter().enumerate() {
-                let (angular, linear) = match step {
-                    Step::Rotation { axis, angle } => {
-                        let rate = self.derivatives.of(&mut self.pool, *angle, position);
-                        (
-                            v::scale(&mut self.pool, rate, axis),
-                            v::zero(&mut self.pool),
-                        )
-                    }
-                    Step::Translation(t) => {
-                        let rates = t.map(|x| self.derivatives.of(&mut self.pool, x, position));
-                        (v::zero(&mut self.pool), rates)
-                    }
-                };
-                if v::is_zero(&self.pool, &angular) && v::is_zero(&self.pool, &linear) {
+            for (k, motion) in self.own_motions(step, link).into_iter().enumerate() {
+                let Some((angular, linear)) = motion else {
                     continue;
-                }
+                };
                 let pool = &mut self.pool;
                 let back = v::transpose(&turned);
                 let spin = v::cross(pool, &angular, &offset);
@@ -189,9 +179,69 @@ impl Generator<'_> {
                     offset = v::mat_vec(pool, &turn, &offset);
                 }
                 Step::Translation(t) => offset = v::add(pool, t, &offset),
+                Step::Ball {
+                    translation,
+                    quaternion,
+                } => {
+                    let turn = quaternion_joints::rotation(pool, quaternion);
+                    turned = v::mat_mul(pool, &turn, &turned);
+                    offset = v::mat_vec(pool, &turn, &offset);
+                    if let Some(t) = translation {
+                        offset = v::add(pool, t, &offset);
+                    }
+                }
             }
         }
         columns
+    }
+
+    /// Per rate of `link`, the motion (angular, linear) a unit rate gives `step`'s end frame,
+    /// in the axes after the step and at its origin; `None` where it gives none. A declared
+    /// coordinate's rate is its position's: the step's derivative by it. A ball's rates are
+    /// its body twist, in the axes after it: unit motions there.
+    fn own_motions(&mut self, step: &Step, link: &LinkCoordinates) -> Vec<Option<(Vec3, Vec3)>> {
+        let Step::Ball { translation, .. } = step else {
+            return self.declared_motions(step, link);
+        };
+        let unit = |pool: &mut Pool, k: usize| {
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            v::constant(pool, e)
+        };
+        let pool = &mut self.pool;
+        let mut motions: Vec<_> = (0..3).map(|k| Some((unit(pool, k), v::zero(pool)))).collect();
+        if translation.is_some() {
+            motions.extend((0..3).map(|k| Some((v::zero(pool), unit(pool, k)))));
+        }
+        motions
+    }
+
+    /// `own_motions` of a translation or a rotation, by its derivatives by the link's
+    /// positions; none for a ball's link, whose positions only its own step reads.
+    fn declared_motions(&mut self, step: &Step, link: &LinkCoordinates) -> Vec<Option<(Vec3, Vec3)>> {
+        if link.positions.len() != link.rates.len() {
+            return Vec::new();
+        }
+        let mut motions = Vec::with_capacity(link.positions.len());
+        for &position in &link.positions {
+            let (angular, linear) = match step {
+                Step::Rotation { axis, angle } => {
+                    let rate = self.derivatives.of(&mut self.pool, *angle, position);
+                    (
+                        v::scale(&mut self.pool, rate, axis),
+                        v::zero(&mut self.pool),
+                    )
+                }
+                Step::Translation(t) => {
+                    let rates = t.map(|x| self.derivatives.of(&mut self.pool, x, position));
+                    (v::zero(&mut self.pool), rates)
+                }
+                Step::Ball { .. } => return Vec::new(),
+            };
+            let moves = !v::is_zero(&self.pool, &angular) || !v::is_zero(&self.pool, &linear);
+            motions.push(moves.then_some((angular, linear)));
+        }
+        motions
     }
 }
 

@@ -2,10 +2,11 @@
 //! each body's motion and mass properties, and the walks along the links' steps that every part of
 //! the generation (inertia, loads, closure, forward dynamics) shares.
 
-use super::expr::Pool;
+use super::expr::{ExprId, Pool};
 use super::inertia::{Inertia, PerBody};
 use super::kinematics::{Derivatives, LinkCoordinates, Moving, Step};
 use super::lower::{LowerError, Lowering};
+use super::quaternion_joints::{self, BallKind, QuaternionJoins};
 use super::vector::{self as v, Mat3, Vec3};
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId};
@@ -34,8 +35,18 @@ pub(super) struct Generator<'a> {
 
 impl<'a> Generator<'a> {
     pub(super) fn new(mechanism: &'a Mechanism, topology: &'a Topology) -> Generator<'a> {
+        Generator::in_state(mechanism, topology, QuaternionJoins::new())
+    }
+
+    /// The generator of equations whose variables are the simulator's state for the joins of
+    /// `quaternion_joins` (`quaternion_joints`), the declared coordinates for the others.
+    pub(super) fn in_state(
+        mechanism: &'a Mechanism,
+        topology: &'a Topology,
+        quaternion_joins: QuaternionJoins,
+    ) -> Generator<'a> {
         let mut pool = Pool::new();
-        let lowering = Lowering::new(&mut pool, mechanism, topology);
+        let lowering = Lowering::in_state(&mut pool, mechanism, topology, quaternion_joins);
         Generator {
             mechanism,
             topology,
@@ -51,42 +62,38 @@ impl<'a> Generator<'a> {
         }
     }
 
+    /// The number of rates: the columns of Ψ.
     pub(super) fn columns(&self) -> usize {
-        self.lowering.variables.positions.len()
+        self.lowering.variables.rates.len()
     }
 
+    /// The number of the tree's rates (the columns before the complementary links' own).
     pub(super) fn tree_coordinates(&self) -> usize {
         self.topology
             .principal
             .iter()
-            .map(|l| {
-                self.mechanism
-                    .link(self.mechanism.join(l.join).link)
-                    .coordinates
-                    .len()
-            })
+            .map(|l| self.lowering.join_variables(l.join).rates)
             .sum()
     }
 
     /// The coordinates of a join, with their columns.
-    pub(super) fn link_coordinates(&self, join: JoinId) -> LinkCoordinates {
-        let offset = self.lowering.join_offset(join);
-        let count = self
-            .mechanism
-            .link(self.mechanism.join(join).link)
-            .coordinates
-            .len();
+    pub(super) fn link_coordinates(&mut self, join: JoinId) -> LinkCoordinates {
+        let at = self.lowering.join_variables(join);
         let variables = &self.lowering.variables;
+        let symbols = |list: &[super::lower::Variable], start: usize, count: usize| -> Vec<ExprId> {
+            list[start..start + count].iter().map(|p| p.symbol).collect()
+        };
+        let positions = symbols(&variables.positions, at.position, at.positions);
+        let rates = symbols(&variables.rates, at.rate, at.rates);
+        let position_rates = match self.lowering.ball(join) {
+            None => rates.clone(),
+            Some(kind) => ball_position_rates(&mut self.pool, kind, &positions, &rates),
+        };
         LinkCoordinates {
-            positions: variables.positions[offset..offset + count]
-                .iter()
-                .map(|p| p.symbol)
-                .collect(),
-            rates: variables.rates[offset..offset + count]
-                .iter()
-                .map(|p| p.symbol)
-                .collect(),
-            columns: (offset..offset + count).collect(),
+            positions,
+            rates,
+            columns: (at.rate..at.rate + at.rates).collect(),
+            position_rates,
         }
     }
 
@@ -124,8 +131,19 @@ impl<'a> Generator<'a> {
             .collect())
     }
 
-    /// The link's dof chain, in order.
+    /// The link's dof chain, in order; for a join in the simulator's state, its ball's motion.
     pub(super) fn chain(&mut self, join: JoinId) -> Result<Vec<Step>, LowerError> {
+        if let Some(kind) = self.lowering.ball(join) {
+            let at = self.lowering.join_variables(join);
+            let positions = &self.lowering.variables.positions[at.position..];
+            let symbol = |k: usize| positions[k].symbol;
+            let q = kind.quaternion_offset();
+            let translation = (kind == BallKind::Free).then(|| [symbol(0), symbol(1), symbol(2)]);
+            return Ok(vec![Step::Ball {
+                translation,
+                quaternion: [symbol(q), symbol(q + 1), symbol(q + 2), symbol(q + 3)],
+            }]);
+        }
         let link = self.mechanism.link(self.mechanism.join(join).link);
         let chain = Displacement(link.dofs.iter().flat_map(|d| d.0.iter().cloned()).collect());
         self.steps(&chain, Some(join))
@@ -153,7 +171,9 @@ impl<'a> Generator<'a> {
             };
             let to_joint = self.steps(&on_parent.displacement, None)?;
             let mut chain = self.chain(link.join)?;
-            if !link.first_on_parent {
+            // A ball's quaternion is the child's motion M already, whichever side the join's
+            // first frame is on (`dynamics::joint`).
+            if !link.first_on_parent && self.lowering.ball(link.join).is_none() {
                 chain = chain
                     .iter()
                     .rev()
@@ -192,6 +212,17 @@ impl<'a> Generator<'a> {
                     let turn = v::rotation(&mut self.pool, axis, *angle);
                     rotation = v::mat_mul(&mut self.pool, &rotation, &turn);
                 }
+                Step::Ball {
+                    translation,
+                    quaternion,
+                } => {
+                    if let Some(t) = translation {
+                        let moved = v::mat_vec(&mut self.pool, &rotation, t);
+                        origin = v::add(&mut self.pool, &origin, &moved);
+                    }
+                    let turn = quaternion_joints::rotation(&mut self.pool, quaternion);
+                    rotation = v::mat_mul(&mut self.pool, &rotation, &turn);
+                }
             }
         }
         (rotation, origin)
@@ -199,14 +230,8 @@ impl<'a> Generator<'a> {
 
     /// The body that owns each tree column, and its parent.
     pub(super) fn owner(&self, column: usize) -> usize {
-        let mut end = 0;
         for link in &self.topology.principal {
-            end += self
-                .mechanism
-                .link(self.mechanism.join(link.join).link)
-                .coordinates
-                .len();
-            if column < end {
+            if self.own_columns_of(link.join).contains(&column) {
                 return link.child;
             }
         }
@@ -214,15 +239,13 @@ impl<'a> Generator<'a> {
     }
 
     pub(super) fn own_columns(&self, b: usize) -> std::ops::Range<usize> {
-        let link = &self.topology.principal[b - 1];
-        let offset = self.lowering.join_offset(link.join);
-        offset
-            ..offset
-                + self
-                    .mechanism
-                    .link(self.mechanism.join(link.join).link)
-                    .coordinates
-                    .len()
+        self.own_columns_of(self.topology.principal[b - 1].join)
+    }
+
+    /// The columns of a join's rates.
+    fn own_columns_of(&self, join: JoinId) -> std::ops::Range<usize> {
+        let at = self.lowering.join_variables(join);
+        at.rate..at.rate + at.rates
     }
 
     /// Each body's anchor: itself when its link has coordinates, its parent's anchor when it is
@@ -310,6 +333,27 @@ impl<'a> Generator<'a> {
             at_origin: diagonal,
         };
         Ok(Some(central.moved(pool, &principal, &centre)))
+    }
+}
+
+/// The time derivatives of a ball's positions from its rates (`quaternion_joints`): ṗ = R(Q) v_b
+/// for a free joint's translation, Q̇ = ½ Q ⊗ (0, ω_b).
+fn ball_position_rates(
+    pool: &mut Pool,
+    kind: BallKind,
+    positions: &[ExprId],
+    rates: &[ExprId],
+) -> Vec<ExprId> {
+    let q = kind.quaternion_offset();
+    let quaternion = [positions[q], positions[q + 1], positions[q + 2], positions[q + 3]];
+    let turn = quaternion_joints::quaternion_rate(pool, &quaternion, &[rates[0], rates[1], rates[2]]);
+    match kind {
+        BallKind::Spherical => turn.to_vec(),
+        BallKind::Free => {
+            let rotation = quaternion_joints::rotation(pool, &quaternion);
+            let translation = v::mat_vec(pool, &rotation, &[rates[3], rates[4], rates[5]]);
+            translation.into_iter().chain(turn).collect()
+        }
     }
 }
 

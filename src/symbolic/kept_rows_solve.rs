@@ -35,7 +35,8 @@
 //!
 //! This is the range-space method (docs/loops.md) written out over the non-zero entries. The
 //! coordinates the run leaves at rest (a complementary link's own coordinates that no kept row
-//! touches) are taken out with their equations. Each pivot is checked in the code against its
+//! touches, and the ones whose motions carry no mass, held by the run's choice: the rods'
+//! spins of the full Delta) are taken out with their equations. Each pivot is checked in the code against its
 //! value at the start: where one falls below 1e-3 of it (near a singular configuration) the
 //! accelerations are not-a-number, and the caller evaluates that state otherwise.
 
@@ -46,8 +47,15 @@ use super::Equations;
 pub struct KeptRows<'a> {
     /// The constraint rows kept (indices among the six per loop), in the run's order.
     pub rows: &'a [usize],
-    /// The coordinates left at rest (their accelerations are 0).
+    /// The coordinates left at rest (their accelerations are 0): a complementary link's own
+    /// that no kept row touches and no inertia (a ball's angles).
     pub at_rest: &'a [usize],
+    /// The coordinates the run holds at rest by its choice of the motions that carry mass
+    /// (`dynamics::loops::solve`, `Massive`: the rods' spins, body-axis rates about the rods):
+    /// taken out with their equations as the others at rest, though kept rows or inertia may
+    /// touch them. That is the solve with a row a = 0 per coordinate and its multiplier,
+    /// which only coordinate's own equation holds: the force that holds a motion without mass.
+    pub held: &'a [usize],
     /// How many coordinates come before the complementary links' own.
     pub tree: usize,
     /// A value for every symbol of the pool (a closed state at which to choose the pivots).
@@ -144,7 +152,8 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     let pool = &mut equations.pool;
     // Unknowns: the coordinates not at rest, then the kept rows' multipliers; equations in the
     // same order (a coordinate's, then a kept row's).
-    let moving: Vec<usize> = (0..n).filter(|c| !kept.at_rest.contains(c)).collect();
+    let at_rest = |c: &usize| kept.at_rest.contains(c) || kept.held.contains(c);
+    let moving: Vec<usize> = (0..n).filter(|c| !at_rest(c)).collect();
     let (k, m) = (moving.len(), kept.rows.len());
     let size = k + m;
     let mut system = Elimination {
@@ -195,7 +204,7 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
         if touched || massive {
             return Err(Refusal::Other(format!(
                 "the coordinate {} left at rest moves mass or a kept row",
-                equations.variables.positions[c].name
+                coordinate_name(equations, c)
             )));
         }
     }
@@ -217,7 +226,7 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     while let Some(i) = system.fewest_entries(on_diagonal.iter().map(|&i| (i, i))) {
         let floor = ROUND_OFF * diagonal[i];
         if system.a[i][i].is_none_or(|p| p.value <= floor) {
-            let at = &equations.variables.positions[moving[i]].name;
+            let at = coordinate_name(equations, moving[i]);
             return Err(match weighting {
                 Weighting::Plain => Refusal::Plain(format!(
                     "the mass matrix is not positive definite on the tree (at {at})"
@@ -240,7 +249,7 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
         let Some((r, _)) = largest.filter(|&(_, v)| v > 0.0) else {
             return Err(Refusal::Plain(format!(
                 "no kept row determines the coordinate {}",
-                equations.variables.positions[moving[i]].name
+                coordinate_name(equations, moving[i])
             )));
         };
         system.eliminate(pool, i, r);
@@ -278,6 +287,13 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     }
     equations.accelerations = Some(accelerations);
     Ok(())
+}
+
+/// The name of the coordinate of rate `c`: its position's for a declared coordinate, the
+/// rate's itself for a ball's body rate.
+fn coordinate_name(equations: &Equations, c: usize) -> String {
+    let rate = &equations.variables.rates[c].name;
+    rate.strip_suffix('\'').unwrap_or(rate).to_string()
 }
 
 /// Adds ρ Gₛᵀ Gₛ to the coordinates' block of `system` (its first `k` rows and columns) and

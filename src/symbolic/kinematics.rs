@@ -11,6 +11,7 @@
 use std::collections::HashMap;
 
 use super::expr::{ExprId, Pool};
+use super::quaternion_joints;
 use super::vector::{self as v, Mat3, Vec3};
 
 /// One step of a chain, as expressions.
@@ -20,12 +21,22 @@ pub enum Step {
     Translation(Vec3),
     /// A rotation by `angle` about a unit axis of the current frame.
     Rotation { axis: Vec3, angle: ExprId },
+    /// A spherical or free joint in the simulator's state (`quaternion_joints`): a translation
+    /// by `translation` (a free joint), then the rotation of `quaternion`; its link's rates
+    /// are the body twist of that motion, in the axes after it.
+    Ball {
+        translation: Option<Vec3>,
+        quaternion: [ExprId; 4],
+    },
 }
 
 impl Step {
-    /// The inverse step (a chain is inverted by inverting its steps in reverse order).
+    /// The inverse step (a chain is inverted by inverting its steps in reverse order). A ball's
+    /// step is never inverted: its quaternion is the motion of the child already
+    /// (`Generator::place_bodies`), and it stays as it is.
     pub fn inverse(&self, pool: &mut Pool) -> Step {
         match self {
+            Step::Ball { .. } => self.clone(),
             Step::Translation(t) => Step::Translation(v::neg(pool, t)),
             Step::Rotation { axis, angle } => Step::Rotation {
                 axis: *axis,
@@ -35,12 +46,17 @@ impl Step {
     }
 }
 
-/// The coordinates a step may depend on: those of one link, with their column in Ψ.
+/// The coordinates a step may depend on: those of one link, with the columns of its rates in
+/// Ψ. A link in its declared coordinates has one rate per position, each position's time
+/// derivative; a ball in the simulator's state has its body twist as rates, and its
+/// positions' time derivatives are functions of both (`position_rates`).
 #[derive(Clone, Debug, Default)]
 pub struct LinkCoordinates {
     pub positions: Vec<ExprId>,
     pub rates: Vec<ExprId>,
     pub columns: Vec<usize>,
+    /// Each position's time derivative.
+    pub position_rates: Vec<ExprId>,
 }
 
 /// Partial derivatives, remembered per variable so that shared subexpressions are
@@ -56,8 +72,8 @@ impl Derivatives {
         pool.derivative(e, x, memo)
     }
 
-    /// ∂e/∂pₖ for each coordinate, ė = Σ ∂e/∂pₖ qₖ, and ë at zero second derivatives,
-    /// Σₗ ∂ė/∂pₗ qₗ.
+    /// ∂e/∂pₖ for each coordinate, ė = Σ ∂e/∂pₖ ṗₖ, and ë at zero derivatives of the rates,
+    /// Σₗ ∂ė/∂pₗ ṗₗ (ṗ the positions' rates: the link's rates for declared coordinates).
     fn rates(
         &mut self,
         pool: &mut Pool,
@@ -71,14 +87,14 @@ impl Derivatives {
             .collect();
         let terms: Vec<ExprId> = partials
             .iter()
-            .zip(&link.rates)
+            .zip(&link.position_rates)
             .map(|(&d, &q)| pool.mul(d, q))
             .collect();
         let rate = pool.sum(terms);
         let bias_terms: Vec<ExprId> = link
             .positions
             .iter()
-            .zip(&link.rates)
+            .zip(&link.position_rates)
             .map(|(&p, &q)| {
                 let d = self.of(pool, rate, p);
                 pool.mul(d, q)
@@ -131,7 +147,69 @@ impl Moving {
         match step {
             Step::Translation(t) => self.translate(pool, d, t, link),
             Step::Rotation { axis, angle } => self.rotate(pool, d, axis, *angle, link),
+            Step::Ball {
+                translation,
+                quaternion,
+            } => self.ball(pool, translation.as_ref(), quaternion, link),
         }
+    }
+
+    /// Carries the frame along a ball's motion Trans(p)·Rot(Q) (p for a free joint only), whose
+    /// rates are its body twist (ω_b, v_b) in the axes after it, R₁ = R R(Q): the origin moves
+    /// by d = R p at ṗ = R(Q) v_b, so ḋ = ω × d + u with u = R₁ v_b, and ω gains R₁ ω_b. At zero
+    /// derivatives of the rates, d̈ = α × d + ω × (ω × d) + 2 ω × u + (R₁ ω_b) × u and α gains
+    /// ω × R₁ ω_b (R₁'s columns turn with the frame after the step).
+    fn ball(
+        &mut self,
+        pool: &mut Pool,
+        translation: Option<&Vec3>,
+        quaternion: &[ExprId; 4],
+        link: &LinkCoordinates,
+    ) {
+        let turn = quaternion_joints::rotation(pool, quaternion);
+        let after = v::mat_mul(pool, &self.rotation, &turn);
+        let (w, alpha) = (self.angular_velocity, self.angular_bias);
+        let angular_rates = [link.rates[0], link.rates[1], link.rates[2]];
+        let relative = v::mat_vec(pool, &after, &angular_rates);
+        if let Some(p) = translation {
+            let offset = v::mat_vec(pool, &self.rotation, p);
+            let linear_rates = [link.rates[3], link.rates[4], link.rates[5]];
+            let moved_rate = v::mat_vec(pool, &after, &linear_rates);
+            let spin = v::cross(pool, &w, &offset);
+            let tangential = v::cross(pool, &alpha, &offset);
+            let centripetal = v::cross(pool, &w, &spin);
+            let coriolis = v::cross(pool, &w, &moved_rate);
+            let two = pool.constant(2.0);
+            let coriolis = v::scale(pool, two, &coriolis);
+            let turning = v::cross(pool, &relative, &moved_rate);
+            for term in [tangential, centripetal, coriolis, turning] {
+                self.bias = v::add(pool, &self.bias, &term);
+            }
+            for term in [spin, moved_rate] {
+                self.velocity = v::add(pool, &self.velocity, &term);
+            }
+            for column in self.columns.iter_mut().flatten() {
+                let lever = v::cross(pool, &column[0], &offset);
+                column[1] = v::add(pool, &column[1], &lever);
+            }
+            for k in 0..3 {
+                let axis = [after[0][k], after[1][k], after[2][k]];
+                let zero = v::zero(pool);
+                let column = self.columns[link.columns[3 + k]].get_or_insert([zero, zero]);
+                column[1] = v::add(pool, &column[1], &axis);
+            }
+            self.origin = v::add(pool, &self.origin, &offset);
+        }
+        let transport = v::cross(pool, &w, &relative);
+        self.angular_bias = v::add(pool, &alpha, &transport);
+        self.angular_velocity = v::add(pool, &w, &relative);
+        for k in 0..3 {
+            let axis = [after[0][k], after[1][k], after[2][k]];
+            let zero = v::zero(pool);
+            let column = self.columns[link.columns[k]].get_or_insert([zero, zero]);
+            column[0] = v::add(pool, &column[0], &axis);
+        }
+        self.rotation = after;
     }
 
     fn translate(

@@ -123,6 +123,12 @@ impl Generator<'_> {
             let coordinates = self.link_coordinates(join);
             let chain = self.chain(join)?;
             for (kind, step, value) in efforts {
+                if step != 0 && self.lowering.ball(join).is_some() {
+                    return Err(LowerError(format!(
+                        "an effort on step {step} of `{}`, whose chain the simulator's state holds as a quaternion",
+                        self.mechanism.join_name(join)
+                    )));
+                }
                 let value = self.lowering.vector(&mut self.pool, &value, Some(join))?;
                 let twists = self.chain_twists(&chain, step, &coordinates);
                 for (k, [angular, linear]) in twists.into_iter().enumerate() {

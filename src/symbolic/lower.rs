@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use super::expr::{ExprId, Pool};
 use super::program::{Lower, MalformedCall};
+use super::quaternion_joints::{BallKind, QuaternionJoins};
 use crate::elab::mechanism::{Mechanism, Origin, UnknownKind};
 
 use crate::elab::value::{Frame, FrameQuantity, JoinId, SExpr, UnknownId};
@@ -38,14 +39,26 @@ pub struct FunctionUse {
 /// The variables of a mechanism's equations.
 #[derive(Clone, Debug)]
 pub struct Variables {
-    /// Declared coordinates: the principal links' by number, then the complementary links'.
+    /// Declared coordinates: the principal links' by number, then the complementary links'
+    /// (a join written in the simulator's state, `quaternion_joints`, has its quaternion and
+    /// translation there instead).
     pub positions: Vec<Variable>,
-    /// Their first derivatives, in the same order.
+    /// Their first derivatives, in the same order (a join in the simulator's state: its body
+    /// twist, fewer rates than positions).
     pub rates: Vec<Variable>,
     /// Unknown scalars of the program, in order of first use.
     pub parameters: Vec<Variable>,
     pub functions: Vec<FunctionUse>,
     pub time: ExprId,
+}
+
+/// Where one join's variables are: its first position and first rate, and how many of each.
+#[derive(Clone, Copy, Debug)]
+pub struct JoinVariables {
+    pub position: usize,
+    pub rate: usize,
+    pub positions: usize,
+    pub rates: usize,
 }
 
 /// Lowers scalars of one mechanism, creating the variables as they are met.
@@ -54,8 +67,11 @@ pub struct Lowering<'a> {
     generated: HashMap<UnknownId, String>,
     /// Body numbers, for the generic names (`mu_1`).
     body_numbers: HashMap<crate::elab::value::BodyId, usize>,
-    /// Index of each join's first coordinate among `positions`.
-    join_offsets: HashMap<JoinId, usize>,
+    /// Index of each join's first position among `positions` and of its first rate among
+    /// `rates`, and how many of each it has.
+    join_offsets: HashMap<JoinId, JoinVariables>,
+    /// The joins written in the simulator's state.
+    quaternion_joins: QuaternionJoins,
     parameters: HashMap<UnknownId, usize>,
     functions: HashMap<(UnknownId, Vec<ExprId>), usize>,
     pub variables: Variables,
@@ -77,7 +93,18 @@ pub struct FrameState {
 pub struct LowerError(pub String);
 
 impl<'a> Lowering<'a> {
+    /// The lowering of `mechanism`'s scalars, its joins in their declared coordinates.
     pub fn new(pool: &mut Pool, mechanism: &'a Mechanism, topology: &Topology) -> Lowering<'a> {
+        Lowering::in_state(pool, mechanism, topology, QuaternionJoins::new())
+    }
+
+    /// The same, with the joins of `quaternion_joins` in the simulator's state.
+    pub fn in_state(
+        pool: &mut Pool,
+        mechanism: &'a Mechanism,
+        topology: &Topology,
+        quaternion_joins: QuaternionJoins,
+    ) -> Lowering<'a> {
         let generated = crate::topology::notation::unknown_names(mechanism, topology);
         let mut positions = Vec::new();
         let mut rates = Vec::new();
@@ -88,27 +115,45 @@ impl<'a> Lowering<'a> {
             .map(|l| l.join)
             .chain(topology.complementary.iter().map(|l| l.join));
         for join in joins {
-            join_offsets.insert(join, positions.len());
             let name = mechanism.join_name(join);
-            for coordinate in &mechanism.link(mechanism.join(join).link).coordinates {
-                let position = format!("{name}.{coordinate}");
-                let rate = format!("{position}'");
-                let meaning = format!("coordinate `{coordinate}` of join `{name}`");
-                positions.push(Variable {
-                    symbol: pool.symbol(&position),
-                    name: position,
-                    meaning: meaning.clone(),
+            let (position, rate) = (positions.len(), rates.len());
+            let mut variable = |list: &mut Vec<Variable>, name: String, meaning: String| {
+                list.push(Variable {
+                    symbol: pool.symbol(&name),
+                    name,
+                    meaning,
                     given: None,
                     unknown: None,
                 });
-                rates.push(Variable {
-                    symbol: pool.symbol(&rate),
-                    name: rate,
-                    meaning: format!("rate of the {meaning}"),
-                    given: None,
-                    unknown: None,
-                });
+            };
+            if let Some(&kind) = quaternion_joins.get(&join) {
+                for part in kind.position_names() {
+                    let meaning = format!("position `{part}` of the ball of join `{name}`");
+                    variable(&mut positions, format!("{name}.{part}"), meaning);
+                }
+                for part in kind.rate_names() {
+                    let meaning = format!("body rate `{part}` of join `{name}`");
+                    variable(&mut rates, format!("{name}.{part}"), meaning);
+                }
+            } else {
+                for coordinate in &mechanism.link(mechanism.join(join).link).coordinates {
+                    let position = format!("{name}.{coordinate}");
+                    let rate = format!("{position}'");
+                    let meaning = format!("coordinate `{coordinate}` of join `{name}`");
+                    variable(&mut positions, position, meaning.clone());
+                    variable(&mut rates, rate, format!("rate of the {meaning}"));
+                }
             }
+            let counts = (positions.len() - position, rates.len() - rate);
+            join_offsets.insert(
+                join,
+                JoinVariables {
+                    position,
+                    rate,
+                    positions: counts.0,
+                    rates: counts.1,
+                },
+            );
         }
         let time = pool.symbol("t");
         let body_numbers = topology.number_of.clone();
@@ -117,6 +162,7 @@ impl<'a> Lowering<'a> {
             generated,
             body_numbers,
             join_offsets,
+            quaternion_joins,
             parameters: HashMap::new(),
             functions: HashMap::new(),
             frames: Vec::new(),
@@ -130,9 +176,15 @@ impl<'a> Lowering<'a> {
         }
     }
 
-    /// Index among `positions` of a join's first coordinate.
-    pub fn join_offset(&self, join: JoinId) -> usize {
+    /// Where a join's variables are among `positions` and `rates`, and how many it has.
+    pub fn join_variables(&self, join: JoinId) -> JoinVariables {
         self.join_offsets[&join]
+    }
+
+    /// How the simulator integrates a join written in its state; `None` for a join in its
+    /// declared coordinates.
+    pub fn ball(&self, join: JoinId) -> Option<BallKind> {
+        self.quaternion_joins.get(&join).copied()
     }
 
     /// The expression of `s`; `link` is the join whose link encloses it (for `x`, `x'`).
@@ -178,9 +230,15 @@ impl<'a> Lowering<'a> {
     }
 
     fn coordinate(&self, join: JoinId, index: u32, order: u32) -> Result<ExprId, LowerError> {
+        if self.quaternion_joins.contains_key(&join) {
+            return Err(LowerError(format!(
+                "it reads the declared angles of `{}`, which the simulator's state holds as a quaternion",
+                self.mechanism.join_name(join)
+            )));
+        }
         let k = self.join_offsets.get(&join).ok_or_else(|| {
             LowerError("a coordinate of a join outside the mechanism".to_string())
-        })? + index as usize;
+        })?.position + index as usize;
         match order {
             0 => Ok(self.variables.positions[k].symbol),
             1 => Ok(self.variables.rates[k].symbol),

@@ -23,9 +23,10 @@ mod loads;
 pub mod lower;
 mod newton_euler;
 pub mod program;
+pub mod quaternion_joints;
 pub mod simplify;
 mod tape_code;
 pub mod vector;
 
-pub use equations::{generate, generate_in, Equations};
+pub use equations::{generate, generate_in, generate_in_state, Equations};
 pub use form::Form;

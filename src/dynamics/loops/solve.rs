@@ -179,6 +179,16 @@ impl LoopScratch {
         self.method
     }
 
+    /// The free coordinates the solve leaves at rest because their motions carry no mass
+    /// (`Massive`: the rods' spins), once chosen for `structure`'s free coordinates; empty
+    /// before the choice and where every allowed motion carries mass.
+    pub fn left_at_rest(&self, structure: &Structure) -> &[usize] {
+        match structure.massless > 0 && self.massive.holds(structure) {
+            true => &self.massive.dropped_coordinates,
+            false => &[],
+        }
+    }
+
     /// After a range-space evaluation, which finds no allowed motions, finds them at the same
     /// state from its factorisation (one sparse solve per free coordinate, as the null-space
     /// method does), for the callers that work on them: the response X of the constraint
