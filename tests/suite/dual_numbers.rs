@@ -28,8 +28,10 @@ use num_dual::Dual64;
 use proptest::prelude::*;
 
 use crate::common::example_paths;
-use crate::common::trees::featured_tree_program;
-use crate::derivatives::{example_model, mismatch, point, robot_model, Point, COVERED_KINDS};
+use crate::derivatives::{
+    example_model, mismatch, point, random_tree, robot_model, Point, COVERED_FEATURES,
+    COVERED_KINDS,
+};
 use crate::dynamics::model_of;
 
 const TOLERANCE: f64 = 1e-12;
@@ -204,13 +206,8 @@ proptest! {
 
     #[test]
     fn derivatives_agree_with_dual_numbers_on_random_trees(
-        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
-        kinds in prop::collection::vec(prop::sample::select(COVERED_KINDS.to_vec()), 12),
-        features in prop::collection::vec(prop::sample::select(vec![0usize, 1, 4, 5]), 12),
-        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+        (text, numbers) in random_tree(&COVERED_KINDS, &COVERED_FEATURES),
     ) {
-        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
-        let text = featured_tree_program(&parents, &kinds, &features, &numbers);
         let model = model_of(&text);
         let p = point(&model, &numbers);
         check_against_dual_numbers(&model, &p, &text);
