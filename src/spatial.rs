@@ -10,7 +10,8 @@
 //! differentiation. The aliases default to `f64`.
 
 use nalgebra::{
-    Isometry3, Matrix3, Matrix6, RealField, Translation3, UnitQuaternion, Vector3, Vector6,
+    Isometry3, Matrix3, Matrix6, Quaternion, RealField, Translation3, UnitQuaternion, Vector3,
+    Vector6,
 };
 
 /// A scalar the spatial algebra and the recursive algorithms compute in: `f64`, or a dual
@@ -335,15 +336,29 @@ pub fn point_velocity<T: Real>(t: &Twist<T>, p: &Vector3<T>) -> Vector3<T> {
     linear(t) + angular(t).cross(p)
 }
 
-pub fn translation(v: Vector3<f64>) -> Pose {
+pub fn translation<T: Real>(v: Vector3<T>) -> Pose<T> {
     Isometry3::from_parts(Translation3::from(v), UnitQuaternion::identity())
 }
 
 /// Rotation by `angle` about the unit vector `axis`.
-pub fn rotation(axis: &Vector3<f64>, angle: f64) -> Pose {
+pub fn rotation<T: Real>(axis: &Vector3<T>, angle: T) -> Pose<T> {
     Isometry3::from_parts(
         Translation3::identity(),
         UnitQuaternion::from_scaled_axis(axis * angle),
+    )
+}
+
+/// `rotation` by the half-angle formula, (cos ½θ, sin ½θ · n) for θ = |axis| · angle about
+/// n = axis / |axis|: smooth at θ = 0, where nalgebra's exponential (`rotation`) returns the
+/// identity for any |θ| up to 2ε, dropping the derivative part of a dual number there (a joint
+/// at zero). The same rotation as `rotation`, not the same last bits.
+pub fn smooth_rotation<T: Real>(axis: &Vector3<T>, angle: T) -> Pose<T> {
+    let norm = axis.norm();
+    let half = angle * norm * constant::<T>(0.5);
+    let quaternion = Quaternion::from_parts(half.cos(), axis * (half.sin() / norm));
+    Isometry3::from_parts(
+        Translation3::identity(),
+        UnitQuaternion::new_unchecked(quaternion),
     )
 }
 

@@ -144,11 +144,11 @@ fn slice<T>(values: &[T], offset: usize, count: usize) -> &[T] {
 }
 
 /// Joint states, world poses and body velocities at (q, v).
-pub fn forward_kinematics(
+pub fn forward_kinematics<T: DynamicsScalar>(
     model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
 ) -> Result<(), EvalError> {
     for k in 0..model.joints.len() {
         joint_motion(model, data, k, q, v)?;
@@ -197,12 +197,12 @@ fn joint_states<T: DynamicsScalar>(
     Ok(())
 }
 
-fn joint_motion(
+fn joint_motion<T: DynamicsScalar>(
     model: &Model,
-    data: &mut Data,
+    data: &mut Data<T>,
     k: usize,
-    q: &[f64],
-    v: &[f64],
+    q: &[T],
+    v: &[T],
 ) -> Result<(), EvalError> {
     let joint = &model.joints[k];
     joint.update(
@@ -225,7 +225,7 @@ fn body_velocity<T: Real>(model: &Model, data: &mut Data<T>, k: usize) {
 
 /// Fills `data.acceleration` with the bodies' accelerations when every joint acceleration is
 /// zero (the velocity-product terms alone); `data` must hold the forward kinematics of (q, v).
-pub fn bias_accelerations(model: &Model, data: &mut Data) {
+pub fn bias_accelerations<T: Real>(model: &Model, data: &mut Data<T>) {
     for (k, joint) in model.joints.iter().enumerate() {
         let (i, parent) = (joint.child, joint.dynamic_parent);
         data.acceleration[i] = data.states[k]

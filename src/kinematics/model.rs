@@ -11,7 +11,7 @@ use crate::diag::Diagnostic;
 use crate::elab::mechanism::Mechanism;
 use crate::elab::value::{Displacement, Elementary, JoinId, SExpr, Scalar};
 use crate::source::Span;
-use crate::spatial::{self, Pose, Twist};
+use crate::spatial::{self, constant, Pose, Real, Twist};
 use crate::symbolic::expr::{ExprId, Pool};
 use crate::symbolic::program::Lower;
 use crate::topology::Topology;
@@ -115,25 +115,11 @@ impl JointModel {
         rates: Option<&[f64]>,
         out: &mut ChainMotion,
     ) -> Result<(), EvalError> {
-        let n = self.coordinate_count();
-        out.reset(n);
-        if let Some(single) = self.single_motion() {
-            // One rotation or translation along a fixed axis, proportional to the coordinate:
-            // its subspace is that constant twist, its bias zero; nothing to evaluate.
-            let column = match single {
-                SingleMotion::Rotation { axis, scale } => {
-                    out.pose = spatial::rotation(&axis, scale * q[0]);
-                    spatial::twist(axis * scale, Vector3::zeros())
-                }
-                SingleMotion::Translation { direction } => {
-                    out.pose = spatial::translation(direction * q[0]);
-                    spatial::twist(Vector3::zeros(), direction)
-                }
-            };
-            out.subspace.column_mut(0).copy_from(&column);
-            out.velocity = column * rates.map_or(0.0, |r| r[0]);
+        if self.single_motion_into(q, rates, spatial::rotation, out) {
             return Ok(());
         }
+        let n = self.coordinate_count();
+        out.reset(n);
         let chain = self.compiled()?;
         chain.eval(q, rates, &mut out.scratch);
         let ChainMotion {
@@ -167,6 +153,39 @@ impl JointModel {
             first += parameter_count(step);
         }
         Ok(())
+    }
+
+    /// `chain_motion_into` for a chain of one rotation or translation along a fixed axis,
+    /// proportional to its coordinate (`single_motion`), in any scalar, its rotation by
+    /// `rotation` (axis, angle): its subspace is that constant twist, its bias zero; nothing
+    /// to evaluate. False, `out` untouched, for any other chain, whose expressions are
+    /// evaluated in `f64` only.
+    pub fn single_motion_into<T: Real>(
+        &self,
+        q: &[T],
+        rates: Option<&[T]>,
+        rotation: fn(&Vector3<T>, T) -> Pose<T>,
+        out: &mut ChainMotion<T>,
+    ) -> bool {
+        let Some(single) = self.single_motion() else {
+            return false;
+        };
+        out.reset(1);
+        let column = match single {
+            SingleMotion::Rotation { axis, scale } => {
+                let axis: Vector3<T> = axis.cast();
+                out.pose = rotation(&axis, constant::<T>(scale) * q[0]);
+                spatial::twist(axis * constant::<T>(scale), Vector3::zeros())
+            }
+            SingleMotion::Translation { direction } => {
+                let direction: Vector3<T> = direction.cast();
+                out.pose = spatial::translation(direction * q[0]);
+                spatial::twist(Vector3::zeros(), direction)
+            }
+        };
+        out.subspace.column_mut(0).copy_from(&column);
+        out.velocity = column * rates.map_or(T::zero(), |r| r[0]);
+        true
     }
 
     /// The twists of step `index` of the chain per unit rate of each coordinate, in the step's
@@ -260,29 +279,33 @@ pub(crate) enum SingleMotion {
     Translation { direction: Vector3<f64> },
 }
 
-/// A dof chain at given coordinates and rates, in the joint's first frame.
+/// A dof chain at given coordinates and rates, in the joint's first frame, in the scalar `T`
+/// (`f64`, or dual numbers for a chain of one rotation or translation: `single_motion_into`).
 #[derive(Clone, Debug)]
-pub struct ChainMotion {
-    pub pose: Pose,
-    pub subspace: DMatrix<f64>,
+pub struct ChainMotion<T: Real = f64> {
+    pub pose: Pose<T>,
+    pub subspace: DMatrix<T>,
     /// Twist of the chain's end: `subspace · rates`.
-    pub velocity: Twist,
+    pub velocity: Twist<T>,
     /// Its derivative when the coordinates have no acceleration.
-    pub bias: Twist,
+    pub bias: Twist<T>,
     /// Where the compiled chain is evaluated.
     scratch: ChainScratch,
 }
 
-impl ChainMotion {
+impl<T: Real> ChainMotion<T> {
     /// The motion of a chain of `n` coordinates that does not move: identity, zero subspace.
     fn reset(&mut self, n: usize) {
         if self.subspace.ncols() == n {
-            self.subspace.fill(0.0);
+            self.subspace.fill(T::zero());
         } else {
             self.subspace = DMatrix::zeros(6, n);
         }
         (self.pose, self.velocity, self.bias) = (Pose::identity(), Twist::zeros(), Twist::zeros());
     }
+}
+
+impl ChainMotion {
 
     /// The subspace padded with zero columns to 6 × 6 (for chains of at most six coordinates:
     /// a quaternion joint's declared angles), for fixed-size solves that allocate nothing. The
@@ -297,8 +320,8 @@ impl ChainMotion {
     }
 }
 
-impl Default for ChainMotion {
-    fn default() -> ChainMotion {
+impl<T: Real> Default for ChainMotion<T> {
+    fn default() -> ChainMotion<T> {
         ChainMotion {
             pose: Pose::identity(),
             subspace: DMatrix::zeros(6, 0),

@@ -172,18 +172,38 @@ fn mass_matrix_mismatch(model: &Model, p: &Point) -> f64 {
 /// features when written as links), spherical, free, weld.
 pub(crate) const COVERED_KINDS: [usize; 5] = [0, 1, 5, 7, 10];
 
+/// Link features of `common::trees` the derivatives cover: none, a geared rotor, a mimic, both.
+pub(crate) const COVERED_FEATURES: [usize; 4] = [0, 1, 4, 5];
+
+/// A random tree of the derivatives' tests, the program and the numbers its values and its
+/// states are drawn from: up to 12 joints of `kinds` with link features among `features`
+/// (indices of `common::trees::JOINTS` and bits of `featured_tree_program`).
+pub(crate) fn random_tree(
+    kinds: &[usize],
+    features: &[usize],
+) -> impl Strategy<Value = (String, Vec<f64>)> {
+    (
+        prop::collection::vec(any::<prop::sample::Index>(), 1..12),
+        prop::collection::vec(prop::sample::select(kinds.to_vec()), 12),
+        prop::collection::vec(prop::sample::select(features.to_vec()), 12),
+        prop::collection::vec(-1.5f64..1.5, 64),
+    )
+        .prop_map(|(parents, kinds, features, numbers)| {
+            let parents: Vec<usize> = (parents.iter().enumerate())
+                .map(|(i, p)| p.index(i + 1))
+                .collect();
+            let text = featured_tree_program(&parents, &kinds, &features, &numbers);
+            (text, numbers)
+        })
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
 
     #[test]
     fn derivatives_agree_with_central_differences_on_random_trees(
-        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
-        kinds in prop::collection::vec(prop::sample::select(COVERED_KINDS.to_vec()), 12),
-        features in prop::collection::vec(prop::sample::select(vec![0usize, 1, 4, 5]), 12),
-        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+        (text, numbers) in random_tree(&COVERED_KINDS, &COVERED_FEATURES),
     ) {
-        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
-        let text = featured_tree_program(&parents, &kinds, &features, &numbers);
         let model = model_of(&text);
         let p = point(&model, &numbers);
         check_against_differences(&model, &p, &text);
@@ -193,12 +213,8 @@ proptest! {
     /// independent algorithm (without rotors, which it leaves out): exact to round-off.
     #[test]
     fn mass_matrix_derivatives_give_the_kinetic_energy_gradient(
-        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
-        kinds in prop::collection::vec(prop::sample::select(COVERED_KINDS.to_vec()), 12),
-        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+        (text, numbers) in random_tree(&COVERED_KINDS, &[0]),
     ) {
-        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
-        let text = featured_tree_program(&parents, &kinds, &[0; 12], &numbers);
         let model = model_of(&text);
         let p = point(&model, &numbers);
         let mut data = Data::new(&model);
@@ -225,13 +241,8 @@ proptest! {
     /// round-off.
     #[test]
     fn velocity_derivatives_give_the_mass_matrix_rate(
-        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
-        kinds in prop::collection::vec(prop::sample::select(vec![0usize, 1, 10]), 12),
-        features in prop::collection::vec(prop::sample::select(vec![0usize, 1]), 12),
-        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+        (text, numbers) in random_tree(&[0, 1, 10], &[0, 1]),
     ) {
-        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
-        let text = featured_tree_program(&parents, &kinds, &features, &numbers);
         let model = model_of(&text);
         let p = point(&model, &numbers);
         let mut data = Data::new(&model);

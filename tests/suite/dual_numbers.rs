@@ -17,20 +17,32 @@
 //! largest entry, absolute below 1, where a derivative that vanishes (∂τ/∂v of a lone revolute
 //! joint, whose velocity product Sᵀ(S q̇ ×* I S q̇) is zero) is round-off on either side.
 //! Accepted at 1e-12.
+//!
+//! The loops' rows too (`loops::constraints_into`, generic over the scalar like the
+//! recursions): their Jacobian G and their bias γ against the derivative parts of the rows
+//! themselves in dual numbers, on the random four-bars and Bennett linkages of
+//! `loop_properties` and on the examples with loops (`check_loop_rows`).
 
+use lsdc::driver::compile_files;
 use lsdc::dynamics::algorithms::aba_derivatives::AbaDerivatives;
 use lsdc::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
-use lsdc::dynamics::algorithms::{aba, crba, rnea, Data};
+use lsdc::dynamics::algorithms::{aba, crba, forward_kinematics, rnea, Data};
+use lsdc::dynamics::loops::{constraints, constraints_into, Constraints, Extent};
 use lsdc::dynamics::model::Model;
+use lsdc::prepare::{prepare, Prepared, Settings};
 use lsdc::spatial::Force;
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
 use proptest::prelude::*;
 
 use crate::common::example_paths;
-use crate::common::trees::featured_tree_program;
-use crate::derivatives::{example_model, mismatch, point, robot_model, Point, COVERED_KINDS};
+use crate::common::programs::{initial_state, no_library_path};
+use crate::derivatives::{
+    example_model, mismatch, point, random_tree, robot_model, Point, COVERED_FEATURES,
+    COVERED_KINDS,
+};
 use crate::dynamics::model_of;
+use crate::loop_properties::{bennett, four_bar};
 
 const TOLERANCE: f64 = 1e-12;
 
@@ -52,8 +64,14 @@ fn unit(n: usize, j: usize) -> Vec<f64> {
 /// ∂q/∂ε of the positions moved by ε along velocity j in the joints' tangent spaces: each
 /// joint's position rate at q for that unit velocity (the first-order term of `Model::retract`).
 fn tangent(model: &Model, q: &[f64], j: usize) -> Vec<f64> {
+    position_rate(model, q, &unit(model.velocities(), j))
+}
+
+/// The positions' rate at q for the state velocities `direction`: each tree joint's, then the
+/// loops' own coordinates', which move with their rates.
+fn position_rate(model: &Model, q: &[f64], direction: &[f64]) -> Vec<f64> {
     let mut rate = vec![0.0; q.len()];
-    let direction = unit(model.velocities(), j);
+    rate[model.nq..].copy_from_slice(&direction[model.nv..]);
     for joint in &model.joints {
         let (qs, vs) = (
             joint.q_offset..joint.q_offset + joint.nq(),
@@ -204,13 +222,8 @@ proptest! {
 
     #[test]
     fn derivatives_agree_with_dual_numbers_on_random_trees(
-        parents in prop::collection::vec(any::<prop::sample::Index>(), 1..12),
-        kinds in prop::collection::vec(prop::sample::select(COVERED_KINDS.to_vec()), 12),
-        features in prop::collection::vec(prop::sample::select(vec![0usize, 1, 4, 5]), 12),
-        numbers in prop::collection::vec(-1.5f64..1.5, 64),
+        (text, numbers) in random_tree(&COVERED_KINDS, &COVERED_FEATURES),
     ) {
-        let parents: Vec<usize> = parents.iter().enumerate().map(|(i, p)| p.index(i + 1)).collect();
-        let text = featured_tree_program(&parents, &kinds, &features, &numbers);
         let model = model_of(&text);
         let p = point(&model, &numbers);
         check_against_dual_numbers(&model, &p, &text);
@@ -267,4 +280,175 @@ fn dual_numbers_refuse_a_general_dof_chain() {
     let mut data = Data::<Dual64>::with_scalar(&model);
     assert!(rnea(&model, &mut data, &q, &zero, &zero, &external).is_err());
     assert!(aba(&model, &mut data, &q, &zero, &zero, &external).is_err());
+}
+
+/// The loops' rows in dual numbers (`loops::constraints_into` generic over its scalar) against
+/// the derivatives the rows carry in `f64`, at a closed configuration q: the position rows φ
+/// moved along each velocity's direction change by G's column (∂φ/∂ε = G e_j, where φ = 0:
+/// the rows' rotation vector and gap are the frames' relative motion at the loop point only
+/// there), and the velocity rows G v moved along the motion q̇ = v at fixed v change by
+/// γ = Ġ v, for v on the loops, G v = 0 (the loop point's own motion adds (ω_T − ω_E) × ṗ
+/// otherwise): the given velocities less their least-squares part off the loops,
+/// G⁺ G v, which takes the assembly's velocity residual (1e-12 on a random Bennett linkage)
+/// out of the comparison. The measure of `mismatch`; the rows' values in dual numbers are
+/// those in `f64` to 1e-14 of their scale, and the state's closure is checked first.
+fn check_loop_rows(model: &Model, q: &[f64], v: &[f64], what: &str) -> f64 {
+    let at = |v: &[f64]| {
+        constraints(model, &mut Data::new(model), q, v, Extent::WithBias)
+            .unwrap_or_else(|e| panic!("{what}: {e:?}"))
+    };
+    let jacobian = at(v).jacobian.dense();
+    let off = jacobian
+        .clone()
+        .pseudo_inverse(1e-10)
+        .expect("pseudo-inverse")
+        * (&jacobian * DVector::from_column_slice(v));
+    let v = (DVector::from_column_slice(v) - off).as_slice().to_vec();
+    let rows = at(&v);
+    let scale = jacobian.amax().max(1.0);
+    let (closure, velocity) = (rows.residual.amax(), rows.velocity.amax());
+    assert!(
+        closure <= 1e-12 * scale
+            && velocity <= 1e-14 * scale * DVector::from_column_slice(&v).amax().max(1.0),
+        "{what}: not on the loops (position rows {closure:e}, velocity rows {velocity:e})"
+    );
+    let mut data = Data::<Dual64>::with_scalar(model);
+    let mut dual = Constraints::<Dual64>::with_scalar(model);
+    let mut rows_along = |dq: &[f64]| {
+        let (q, v) = (seeded(q, dq), constant(&v));
+        forward_kinematics(model, &mut data, &q, &v).expect("kinematics");
+        constraints_into(model, &mut data, &q, &v, Extent::WithBias, &mut dual)
+            .unwrap_or_else(|e| panic!("{what}: {e:?}"));
+        let (residual, by_position) = parts(&dual.residual);
+        let (_, by_motion) = parts(&dual.velocity);
+        let values = dual.jacobian.dense().map(|x| x.re);
+        let difference = (&values - &jacobian).amax();
+        let residual_difference = (&residual - &rows.residual).amax();
+        assert!(
+            difference <= 1e-14 * scale && residual_difference <= 1e-14 * scale,
+            "{what}: G in dual numbers {difference:e} from f64's, position rows {residual_difference:e}"
+        );
+        (by_position, by_motion)
+    };
+    let n = model.velocities();
+    let mut by_position = DMatrix::zeros(jacobian.nrows(), n);
+    for j in 0..n {
+        by_position.set_column(j, &rows_along(&tangent(model, q, j)).0);
+    }
+    let motion = rows_along(&position_rate(model, q, &v)).1;
+    let bias = DMatrix::from_column_slice(rows.bias.len(), 1, rows.bias.as_slice());
+    let measures = [
+        ("G", mismatch(&jacobian, &by_position)),
+        (
+            "γ",
+            mismatch(
+                &bias,
+                &DMatrix::from_column_slice(motion.len(), 1, motion.as_slice()),
+            ),
+        ),
+    ];
+    let worst = measures.iter().map(|m| m.1).fold(0.0, f64::max);
+    eprintln!("{what}: {measures:?}; position rows {closure:e}, velocity rows {velocity:e}");
+    assert!(
+        worst <= TOLERANCE,
+        "{what}: {measures:?} above {TOLERANCE:e}"
+    );
+    worst
+}
+
+/// The positions and velocities of a prepared mechanism's assembled initial state.
+fn assembled(prepared: &Prepared) -> (Vec<f64>, Vec<f64>) {
+    let model = &prepared.model;
+    let y = initial_state(prepared);
+    let (q, v) = y.split_at(model.positions());
+    (q.to_vec(), v.to_vec())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// The random four-bars and Bennett linkages of `loop_properties`, closed by construction.
+    #[test]
+    fn loop_rows_agree_with_dual_numbers_on_random_four_bars(
+        l in proptest::array::uniform4(0.5f64..3.0),
+        crank in 0.2f64..3.0,
+        rate in -3.0f64..3.0,
+    ) {
+        let Some(p) = four_bar(l, crank, rate) else {
+            return Err(TestCaseError::reject("does not close at this crank angle"));
+        };
+        let (q, v) = assembled(&p);
+        check_loop_rows(&p.model, &q, &v, &format!("four-bar {l:?} at {crank}"));
+    }
+
+    #[test]
+    fn loop_rows_agree_with_dual_numbers_on_random_bennett_linkages(
+        a1 in 0.5f64..2.0,
+        alpha1 in 0.4f64..1.2,
+        gap in 0.3f64..1.2,
+        crank in 0.3f64..2.5,
+        rate in -3.0f64..3.0,
+    ) {
+        let p = bennett(a1, alpha1, alpha1 + gap, crank, rate);
+        let (q, v) = assembled(&p);
+        check_loop_rows(&p.model, &q, &v, &format!("Bennett {a1}, {alpha1}, {gap}, at {crank}"));
+    }
+}
+
+/// The examples with loops, at their assembled initial states: the four-bars, the slider-crank,
+/// the Delta's full model (ball joints), the hard linkages (Bricard's, Bennett's, a row of ten
+/// four-bars). A loop closed by, or a tree joint with, a dof chain evaluated in general is
+/// evaluated in `f64` only and refused in dual numbers (`DynamicsScalar`): left out, named.
+#[test]
+fn loop_rows_agree_with_dual_numbers_on_the_examples() {
+    let hard = [
+        "bennett",
+        "bricard",
+        "four_bar_row_10",
+        "squeezer",
+        "watt_six_bar",
+    ];
+    let paths = example_paths().into_iter().chain(
+        hard.iter()
+            .map(|name| format!("examples/hard/{name}.lsd").into()),
+    );
+    let (mut covered, mut left_out) = (Vec::new(), Vec::new());
+    for path in paths {
+        let name = path.display().to_string();
+        let Ok(compilation) = compile_files(std::slice::from_ref(&path), &no_library_path()) else {
+            continue;
+        };
+        if compilation.has_errors() {
+            continue;
+        }
+        let Some(mechanism) = compilation.mechanism else {
+            continue;
+        };
+        let Ok(prepared) = prepare(&mechanism, &[], &Settings::default()) else {
+            continue;
+        };
+        if !prepared.model.has_loops() {
+            continue;
+        }
+        let (q, v) = assembled(&prepared);
+        let model = &prepared.model;
+        let mut data = Data::<Dual64>::with_scalar(model);
+        let mut dual = Constraints::<Dual64>::with_scalar(model);
+        let (dq, dv) = (constant(&q), constant(&v));
+        let refused = forward_kinematics(model, &mut data, &dq, &dv).and_then(|()| {
+            constraints_into(model, &mut data, &dq, &dv, Extent::WithBias, &mut dual)
+        });
+        if let Err(e) = refused {
+            left_out.push(format!("{name}: {e:?}"));
+            continue;
+        }
+        let worst = check_loop_rows(model, &q, &v, &name);
+        covered.push(format!("{name} ({worst:.1e})"));
+    }
+    eprintln!("covered: {covered:#?}\nleft out: {left_out:#?}");
+    assert!(
+        covered.len() >= 8,
+        "only {} covered: {left_out:#?}",
+        covered.len()
+    );
 }

@@ -13,7 +13,7 @@ use lsdc::simulate::run::run;
 
 /// A four-bar with ground l0, crank l1, coupler l2, rocker l3, assembled with the crank at
 /// `crank` rad (C above the ground line), or None when the loop cannot close there.
-fn four_bar(l: [f64; 4], crank: f64, rate: f64) -> Option<Prepared> {
+pub(crate) fn four_bar(l: [f64; 4], crank: f64, rate: f64) -> Option<Prepared> {
     let b = (l[1] * crank.cos(), l[1] * crank.sin());
     let (dx, dy) = (l[0] - b.0, -b.1);
     let d = (dx * dx + dy * dy).sqrt();
@@ -51,7 +51,7 @@ fn four_bar(l: [f64; 4], crank: f64, rate: f64) -> Option<Prepared> {
 }
 
 /// A Bennett linkage with a1, alpha1, alpha2 (a2 from Bennett's condition), its crank at `crank`.
-fn bennett(a1: f64, alpha1: f64, alpha2: f64, crank: f64, rate: f64) -> Prepared {
+pub(crate) fn bennett(a1: f64, alpha1: f64, alpha2: f64, crank: f64, rate: f64) -> Prepared {
     prepared(
         "hard/bennett",
         &[

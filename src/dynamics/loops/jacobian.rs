@@ -5,19 +5,22 @@
 
 use nalgebra::{DMatrix, DVector, Dyn, OMatrix, U6};
 
-/// The rows of one loop over the columns it touches.
+use crate::spatial::Real;
+
+/// The rows of one loop over the columns it touches, in the scalar `T` (`f64`, or dual
+/// numbers: `DynamicsScalar`).
 #[derive(Clone, Debug)]
-pub struct LoopBlock {
+pub struct LoopBlock<T: Real = f64> {
     /// The state velocities the loop's rows depend on, in increasing order.
     pub columns: Vec<usize>,
     /// 6 × `columns.len()`.
-    pub values: OMatrix<f64, U6, Dyn>,
+    pub values: OMatrix<T, U6, Dyn>,
 }
 
-impl LoopBlock {
+impl<T: Real> LoopBlock<T> {
     /// A block of zeros over these columns (sorted, without repeats).
-    pub fn zeros(columns: Vec<usize>) -> LoopBlock {
-        let values = OMatrix::<f64, U6, Dyn>::zeros(columns.len());
+    pub fn zeros(columns: Vec<usize>) -> LoopBlock<T> {
+        let values = OMatrix::<T, U6, Dyn>::zeros(columns.len());
         LoopBlock { columns, values }
     }
 
@@ -31,9 +34,9 @@ impl LoopBlock {
 
 /// G: 6 rows per loop, one column per state velocity.
 #[derive(Clone, Debug)]
-pub struct ConstraintJacobian {
+pub struct ConstraintJacobian<T: Real = f64> {
     pub columns: usize,
-    pub blocks: Vec<LoopBlock>,
+    pub blocks: Vec<LoopBlock<T>>,
     /// Per loop, the loops (itself included) whose columns meet its own, each with the pairs of
     /// local columns they share (this loop's, the other's), in increasing column order: where
     /// the entries of GGᵀ between their rows come from.
@@ -47,9 +50,9 @@ pub struct Neighbour {
     pub shared: Vec<(usize, usize)>,
 }
 
-impl ConstraintJacobian {
+impl<T: Real> ConstraintJacobian<T> {
     /// G over these loop blocks.
-    pub fn new(columns: usize, blocks: Vec<LoopBlock>) -> ConstraintJacobian {
+    pub fn new(columns: usize, blocks: Vec<LoopBlock<T>>) -> ConstraintJacobian<T> {
         // The loops over each column, so that a loop's neighbours are searched among the loops
         // meeting its own columns, not among all of them (a ladder of N loops: N² pairs).
         let mut by_column = vec![Vec::new(); columns];
@@ -90,7 +93,7 @@ impl ConstraintJacobian {
     }
 
     /// Row `row` (among the 6 per loop) as (column, value) pairs.
-    pub fn row(&self, row: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+    pub fn row(&self, row: usize) -> impl Iterator<Item = (usize, T)> + '_ {
         let block = &self.blocks[row / 6];
         let r = row % 6;
         block
@@ -101,8 +104,8 @@ impl ConstraintJacobian {
     }
 
     /// G v into `out` (of G's rows).
-    pub fn mul_into(&self, v: &[f64], out: &mut DVector<f64>) {
-        out.fill(0.0);
+    pub fn mul_into(&self, v: &[T], out: &mut DVector<T>) {
+        out.fill(T::zero());
         for (k, block) in self.blocks.iter().enumerate() {
             let mut rows = out.fixed_rows_mut::<6>(6 * k);
             for (local, &column) in block.columns.iter().enumerate() {
@@ -113,7 +116,7 @@ impl ConstraintJacobian {
 
     /// G as a dense matrix, for the decisions taken once (the rows kept, the rank, the nearby
     /// configurations), never inside an evaluation.
-    pub fn dense(&self) -> DMatrix<f64> {
+    pub fn dense(&self) -> DMatrix<T> {
         let mut dense = DMatrix::zeros(self.nrows(), self.columns);
         for (k, block) in self.blocks.iter().enumerate() {
             for (local, &column) in block.columns.iter().enumerate() {

@@ -14,9 +14,10 @@ use super::jacobian::{ConstraintJacobian, LoopBlock};
 
 use crate::dynamics::algorithms::{bias_accelerations, forward_kinematics, Data};
 use crate::dynamics::model::Model;
+use crate::dynamics::scalar::{DynamicsScalar, NOT_DIFFERENTIABLE};
 use crate::kinematics::eval::EvalError;
-use crate::kinematics::model::ChainMotion;
-use crate::spatial::{self, Force, Motion};
+use crate::kinematics::model::{ChainMotion, JointModel};
+use crate::spatial::{self, constant, Force, Motion, Real};
 use crate::spatial::{motion_to_parent, translation, Pose};
 
 /// Names of the six rows of a loop.
@@ -29,26 +30,27 @@ pub const ROW_NAMES: [&str; 6] = [
     "translation along z",
 ];
 
-/// The loops' constraint rows at a state.
-pub struct Constraints {
+/// The loops' constraint rows at a state, in the scalar `T`: `f64`, or dual numbers
+/// (`DynamicsScalar`), in which the rows' derivative parts check G and γ.
+pub struct Constraints<T: Real = f64> {
     /// Position rows: 6 per loop.
-    pub residual: DVector<f64>,
+    pub residual: DVector<T>,
     /// ∂(rows' rates)/∂(velocities): 6 per loop, one column per state velocity.
-    pub jacobian: ConstraintJacobian,
+    pub jacobian: ConstraintJacobian<T>,
     /// `G v`: the velocity rows.
-    pub velocity: DVector<f64>,
+    pub velocity: DVector<T>,
     /// γ = Ġ v (zero unless asked for).
-    pub bias: DVector<f64>,
+    pub bias: DVector<T>,
     /// Where each loop closes (origin of its chain's end), fixed axes.
-    pub points: Vec<Vector3<f64>>,
+    pub points: Vec<Vector3<T>>,
     /// Each loop's first frame, pose(a)·A, where its chain starts.
-    bases: Vec<Pose>,
+    bases: Vec<Pose<T>>,
     /// Each loop's dof chain at the state (scratch kept between evaluations).
-    chains: Vec<ChainMotion>,
+    chains: Vec<ChainMotion<T>>,
     /// The tree joints on the loops' paths to earth, and the fixed-frame twist of each of their
     /// velocities (by state velocity), computed once per state for every loop that shares them.
     path_joints: Vec<usize>,
-    world_columns: Vec<Motion>,
+    world_columns: Vec<Motion<T>>,
     /// Per loop, its tree columns (local index, state velocity) with the sign they enter its
     /// rows with: +1 on the second body's path to earth, −1 on the first's (a velocity on both
     /// moves both frames alike and is left out).
@@ -59,6 +61,13 @@ impl Constraints {
     /// Rows of zeros for `model`'s loops, each loop's block already over the columns it touches
     /// (found once here: they depend on the tree alone), to be filled by `constraints_into`.
     pub fn new(model: &Model) -> Constraints {
+        Constraints::with_scalar(model)
+    }
+}
+
+impl<T: Real> Constraints<T> {
+    /// `Constraints::new` in the scalar `T`.
+    pub fn with_scalar(model: &Model) -> Constraints<T> {
         let rows = 6 * model.loops.len();
         let blocks = (0..model.loops.len())
             .map(|k| {
@@ -73,7 +82,7 @@ impl Constraints {
                 let tree = cycle.iter().map(|&(column, _)| column);
                 LoopBlock::zeros(tree.chain(first..first + own).collect())
             })
-            .collect::<Vec<LoopBlock>>();
+            .collect::<Vec<LoopBlock<T>>>();
         let path_signs = (model.loops.iter())
             .map(|joint| {
                 let cycle = cycle_signs(model, [joint.first_body, joint.second_body]);
@@ -175,13 +184,13 @@ pub enum Extent {
 
 /// Writes the constraints at (q, v) into `c` (made by `Constraints::new` for this model) to
 /// `extent`, reusing its storage; `data` must hold the forward kinematics of (q, v).
-pub fn constraints_into(
+pub fn constraints_into<T: DynamicsScalar>(
     model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
+    data: &mut Data<T>,
+    q: &[T],
+    v: &[T],
     extent: Extent,
-    c: &mut Constraints,
+    c: &mut Constraints<T>,
 ) -> Result<(), EvalError> {
     let rotations = extent != Extent::Motion;
     for k in 0..model.loops.len() {
@@ -191,7 +200,7 @@ pub fn constraints_into(
         let with_bias = matches!(extent, Extent::WithBias | Extent::Motion);
         rows_after_residual(model, data, with_bias, c);
         if extent == Extent::Motion {
-            c.velocity.fill(0.0);
+            c.velocity.fill(T::zero());
         } else {
             c.jacobian.mul_into(v, &mut c.velocity);
         }
@@ -201,9 +210,22 @@ pub fn constraints_into(
 
 /// The rotation rows of a loop whose chain ends at `end` and whose second frame is at `target`:
 /// the rotation carrying one onto the other, as a rotation vector in fixed axes.
-fn rotation_residual(end: &Pose, target: &Pose) -> Vector3<f64> {
+fn rotation_residual<T: Real>(end: &Pose<T>, target: &Pose<T>) -> Vector3<T> {
     let relative = end.rotation.inverse() * target.rotation;
-    end.rotation * relative.scaled_axis()
+    end.rotation * rotation_vector(&relative)
+}
+
+/// The rotation vector of a unit quaternion (nalgebra's `scaled_axis`, the same operations),
+/// with its limit 2 v / |w| where the vector part v vanishes, which `scaled_axis` returns as
+/// zero: the same value there, and for dual numbers the derivative at a closed loop, where the
+/// rows' rotation is the identity and the vector part's value is exactly zero.
+fn rotation_vector<T: Real>(rotation: &nalgebra::UnitQuaternion<T>) -> Vector3<T> {
+    let (w, vector) = (rotation.scalar(), rotation.vector());
+    let norm = vector.norm();
+    if norm == T::zero() {
+        return vector * (constant::<T>(2.0) / w);
+    }
+    rotation.scaled_axis()
 }
 
 /// Completes the constraints `constraints_into` left at `Extent::Motion` with the position
@@ -231,11 +253,16 @@ pub fn complete_rows(model: &Model, data: &mut Data, v: &[f64], c: &mut Constrai
 }
 
 /// G and, `with_bias`, γ, from the chains and loop points `loop_residual` left in `c`.
-fn rows_after_residual(model: &Model, data: &mut Data, with_bias: bool, c: &mut Constraints) {
+fn rows_after_residual<T: Real>(
+    model: &Model,
+    data: &mut Data<T>,
+    with_bias: bool,
+    c: &mut Constraints<T>,
+) {
     if with_bias {
         bias_accelerations(model, data);
     } else {
-        c.bias.fill(0.0);
+        c.bias.fill(T::zero());
     }
     for &k in &c.path_joints {
         let (joint, state) = (&model.joints[k], &data.states[k]);
@@ -252,14 +279,14 @@ fn rows_after_residual(model: &Model, data: &mut Data, with_bias: bool, c: &mut 
 
 /// Loop `k`'s chain at (q, v), its position rows (their rotations only when asked for, zero
 /// otherwise) and its closing point, into `c`.
-fn loop_residual(
+fn loop_residual<T: DynamicsScalar>(
     model: &Model,
-    data: &Data,
-    q: &[f64],
-    v: &[f64],
+    data: &Data<T>,
+    q: &[T],
+    v: &[T],
     k: usize,
     rotations: bool,
-    c: &mut Constraints,
+    c: &mut Constraints<T>,
 ) -> Result<(), EvalError> {
     let joint = &model.loops[k];
     let (offset, n) = (model.loop_offset(k), joint.coordinate_count());
@@ -269,20 +296,21 @@ fn loop_residual(
     // kept), so it is not evaluated and stays at the identity, at rest.
     let ball = model.loop_balls[k].is_some();
     if !ball {
-        joint.chain_motion_into(
+        chain_motion_into(
+            joint,
             &q[model.nq + offset..model.nq + offset + n],
-            Some(&v[model.nv + offset..model.nv + offset + n]),
+            &v[model.nv + offset..model.nv + offset + n],
             &mut c.chains[k],
         )?;
     }
-    let base = data.world[joint.first_body] * joint.first;
+    let base = data.world[joint.first_body] * joint.first.cast::<T>();
     let end = base * c.chains[k].pose;
-    let target = data.world[joint.second_body] * joint.second;
+    let target = data.world[joint.second_body] * joint.second.cast::<T>();
     let point = end.translation.vector;
     c.bases[k] = base;
     let row = 6 * k;
     if ball || !rotations {
-        c.residual.rows_mut(row, 3).fill(0.0);
+        c.residual.rows_mut(row, 3).fill(T::zero());
     } else {
         c.residual
             .rows_mut(row, 3)
@@ -295,8 +323,29 @@ fn loop_residual(
     Ok(())
 }
 
+/// A loop's dof chain at its coordinates and rates: evaluated in `f64`, or in dual numbers for
+/// a chain of one rotation or translation (its rotation by the half-angle formula, whose
+/// derivative holds at zero: `spatial::smooth_rotation`), the others refused
+/// (`DynamicsScalar`).
+fn chain_motion_into<T: DynamicsScalar>(
+    joint: &JointModel,
+    q: &[T],
+    rates: &[T],
+    out: &mut ChainMotion<T>,
+) -> Result<(), EvalError> {
+    if let (Some(q), Some(rates)) = (T::plain(q), T::plain(rates)) {
+        if let Some(out) = T::plain_motion(out) {
+            return joint.chain_motion_into(q, Some(rates), out);
+        }
+    }
+    match joint.single_motion_into(q, Some(rates), spatial::smooth_rotation, out) {
+        true => Ok(()),
+        false => Err(NOT_DIFFERENTIABLE),
+    }
+}
+
 /// Loop `k`'s six rows of G and, `with_bias`, of γ, at the chain and point `loop_residual` left.
-fn loop_rows(model: &Model, data: &Data, k: usize, with_bias: bool, c: &mut Constraints) {
+fn loop_rows<T: Real>(model: &Model, data: &Data<T>, k: usize, with_bias: bool, c: &mut Constraints<T>) {
     let joint = &model.loops[k];
     let offset = model.loop_offset(k);
     let ball = model.loop_balls[k].is_some();
@@ -307,10 +356,10 @@ fn loop_rows(model: &Model, data: &Data, k: usize, with_bias: bool, c: &mut Cons
     // Rates are taken at the loop point, in fixed axes.
     let own = if ball { 0 } else { joint.coordinate_count() };
     let block = &mut c.jacobian.blocks[k];
-    block.values.fill(0.0);
+    block.values.fill(T::zero());
     for &(local, column, sign) in &c.path_signs[k] {
         let moved = spatial::shifted(&point, &c.world_columns[column]);
-        block.values.column_mut(local).copy_from(&(sign * moved));
+        block.values.column_mut(local).copy_from(&(moved * constant::<T>(sign)));
     }
     for column in 0..own {
         let twist = motion_to_parent(
@@ -325,7 +374,7 @@ fn loop_rows(model: &Model, data: &Data, k: usize, with_bias: bool, c: &mut Cons
     if with_bias {
         // World-frame spatial accelerations are the derivatives of world-frame spatial twists, so
         // γ is the difference of the two frames' accelerations at zero joint accelerations.
-        let world = |motions: &[Motion], body: usize| {
+        let world = |motions: &[Motion<T>], body: usize| {
             spatial::motion_to_parent(&data.world[body], &motions[body])
         };
         let first_velocity = world(&data.velocity, joint.first_body);
@@ -355,8 +404,8 @@ fn loop_rows(model: &Model, data: &Data, k: usize, with_bias: bool, c: &mut Cons
         }
     }
     if ball {
-        c.jacobian.blocks[k].values.rows_mut(0, 3).fill(0.0);
-        c.bias.rows_mut(row, 3).fill(0.0);
+        c.jacobian.blocks[k].values.rows_mut(0, 3).fill(T::zero());
+        c.bias.rows_mut(row, 3).fill(T::zero());
     }
 }
 

@@ -143,7 +143,7 @@ pub fn refusal_codes(text: &str) -> Vec<String> {
     }
 }
 
-fn no_library_path() -> LoadOptions {
+pub fn no_library_path() -> LoadOptions {
     LoadOptions {
         library_dirs: Vec::new(),
         use_environment: false,
