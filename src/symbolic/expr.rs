@@ -629,7 +629,8 @@ impl Pool {
         self.operand_ids(id).to_vec()
     }
 
-    /// The operands of a node, without allocating: for passes that read every node's.
+    /// The operands of a node, without allocating: for passes that read every node's. The
+    /// places past the operands hold any id; they are never read.
     pub fn operand_ids(&self, id: ExprId) -> Operands {
         let (ids, len) = match self.node(id) {
             Node::Constant(_) | Node::Symbol(_) => ([id; 3], 0),
