@@ -123,10 +123,18 @@ impl Function {
     }
 }
 
-/// A node's hash in its pool's table of ids.
-fn node_hash(node: &Node) -> u64 {
+/// A node's hash in its pool's table of ids: the Fx hash folded to 32 bits, kept in the table
+/// beside the id (`Pool::index`).
+fn node_hash(node: &Node) -> u32 {
     use std::hash::BuildHasher;
-    rustc_hash::FxBuildHasher.hash_one(node)
+    let hash = rustc_hash::FxBuildHasher.hash_one(node);
+    (hash ^ (hash >> 32)) as u32
+}
+
+/// The table's hash of a node's 32-bit one: hashbrown takes a bucket from the low bits and a
+/// 7-bit tag from the top ones, so both halves carry the 32 bits.
+fn table_hash(hash: u32) -> u64 {
+    u64::from(hash) << 32 | u64::from(hash)
 }
 
 #[derive(Clone, Default)]
@@ -135,13 +143,15 @@ pub struct Pool {
     /// Per node, whether it is surely finite (`finite_when_interned`).
     finite: Vec<bool>,
     /// Each node's id (hash-consing), by the node's Fx hash (rather than SipHash: the keys are
-    /// our own nodes, and the lookup is in every constructor). The table holds the ids alone
-    /// and compares a candidate by reading `nodes`: a slot of 4 bytes instead of a copy of the
-    /// node (40 bytes, the profile's parameters within `Function`) and its id, so that the
-    /// table of a simplifier's pass of several hundred thousand nodes is 12 times smaller,
-    /// where its lookups were the profile's first item (BENCHMARKS.md, "The simplifier's cost:
-    /// the pool's table of ids").
-    index: hashbrown::HashTable<ExprId>,
+    /// our own nodes, and the lookup is in every constructor). The table holds the ids and
+    /// their nodes' hashes, not the nodes: a slot of 8 bytes instead of a copy of the node (40
+    /// bytes, the profile's parameters within `Function`) and its id, so that the table of a
+    /// simplifier's pass of several hundred thousand nodes stays small, where its lookups were
+    /// the profile's first item (BENCHMARKS.md, "The simplifier's cost: what each node costs as
+    /// n grows, counted"). A candidate is compared by its hash first and by reading `nodes`
+    /// only when the hashes agree, and growing the table rehashes from the stored hashes: a
+    /// read of the pool (a random one, in a pool of millions of nodes) only for a node found.
+    index: hashbrown::HashTable<(ExprId, u32)>,
     symbols: Vec<String>,
     symbol_ids: HashMap<String, ExprId>,
 }
@@ -176,7 +186,7 @@ impl Pool {
             }
             marks[id.index()] |= REACHED;
             reached.push(id);
-            stack.extend(self.operands(id));
+            stack.extend(self.operand_ids(id));
         }
         for &root in roots {
             marks[root.index()] |= USED;
@@ -226,17 +236,25 @@ impl Pool {
         self.symbols.len()
     }
 
+    /// Room for `additional` more nodes, so that a pool whose size is foreseen (a simplifier's
+    /// output, by its input's) is not grown, and its table of ids not rehashed, on the way.
+    pub fn reserve(&mut self, additional: usize) {
+        self.nodes.reserve(additional);
+        self.finite.reserve(additional);
+        (self.index).reserve(additional, |&(_, hash)| table_hash(hash));
+    }
+
     fn intern(&mut self, node: Node) -> ExprId {
         let hash = node_hash(&node);
         let nodes = &self.nodes;
-        if let Some(&id) = self.index.find(hash, |&id| nodes[id.index()] == node) {
+        let same = |&(id, h): &(ExprId, u32)| h == hash && nodes[id.index()] == node;
+        if let Some(&(id, _)) = self.index.find(table_hash(hash), same) {
             return id;
         }
         let id = ExprId(self.nodes.len() as u32);
         self.finite.push(self.finite_when_interned(node));
         self.nodes.push(node);
-        let nodes = &self.nodes;
-        self.index.insert_unique(hash, id, |&id| node_hash(&nodes[id.index()]));
+        (self.index).insert_unique(table_hash(hash), (id, hash), |&(_, h)| table_hash(h));
         id
     }
 
@@ -608,20 +626,27 @@ impl Pool {
 
     /// The operands of a node.
     pub fn operands(&self, id: ExprId) -> Vec<ExprId> {
-        match self.node(id) {
-            Node::Constant(_) | Node::Symbol(_) => Vec::new(),
+        self.operand_ids(id).to_vec()
+    }
+
+    /// The operands of a node, without allocating: for passes that read every node's. The
+    /// places past the operands hold any id; they are never read.
+    pub fn operand_ids(&self, id: ExprId) -> Operands {
+        let (ids, len) = match self.node(id) {
+            Node::Constant(_) | Node::Symbol(_) => ([id; 3], 0),
             Node::Add(a, b)
             | Node::Mul(a, b)
             | Node::Div(a, b)
             | Node::Pow(a, b)
-            | Node::Atan2(a, b) => vec![a, b],
-            Node::Neg(a) | Node::Apply(_, a) => vec![a],
+            | Node::Atan2(a, b) => ([a, b, b], 2),
+            Node::Neg(a) | Node::Apply(_, a) => ([a; 3], 1),
             Node::Select {
                 test,
                 when_nonnegative,
                 otherwise,
-            } => vec![test, when_nonnegative, otherwise],
-        }
+            } => ([test, when_nonnegative, otherwise], 3),
+        };
+        Operands { ids, len }
     }
 
     /// The node `id` of another pool rebuilt in this one (symbols matched by name), so that
@@ -753,11 +778,35 @@ impl Step {
     }
 }
 
+/// A node's operands (at most three) held in place: `Pool::operand_ids`.
+#[derive(Clone, Copy, Debug)]
+pub struct Operands {
+    ids: [ExprId; 3],
+    len: u8,
+}
+
+impl std::ops::Deref for Operands {
+    type Target = [ExprId];
+
+    fn deref(&self) -> &[ExprId] {
+        &self.ids[..usize::from(self.len)]
+    }
+}
+
+impl IntoIterator for Operands {
+    type Item = ExprId;
+    type IntoIter = std::iter::Take<std::array::IntoIter<ExprId, 3>>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.ids.into_iter().take(usize::from(self.len))
+    }
+}
+
 /// The nodes `roots` reach through `operands`, operands before the nodes that use them, each
 /// once; depth-first with an explicit stack, since expression DAGs can be deep.
-pub fn topological_order(
+pub fn topological_order<I: IntoIterator<Item = ExprId>>(
     roots: &[ExprId],
-    operands: impl Fn(ExprId) -> Vec<ExprId>,
+    operands: impl Fn(ExprId) -> I,
 ) -> Vec<ExprId> {
     // The Fx hash: the nodes' numbers are small integers, hashed once per visit of a large DAG.
     let mut placed: rustc_hash::FxHashSet<ExprId> = rustc_hash::FxHashSet::default();
@@ -787,7 +836,7 @@ pub fn topological_order(
 
 impl Tape {
     pub fn new(pool: &Pool, roots: &[ExprId]) -> Tape {
-        let order = topological_order(roots, |id| pool.operands(id));
+        let order = topological_order(roots, |id| pool.operand_ids(id));
         let position: HashMap<ExprId, usize> =
             order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
         let at = |id: ExprId| position[&id];

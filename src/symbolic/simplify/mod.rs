@@ -73,6 +73,13 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
     }
     let mut simplified = Vec::new();
     for roots in groups {
+        if roots.is_empty() {
+            // A tree's constraints: no pass over the pool for nothing.
+            simplified.push(Vec::new());
+            continue;
+        }
+        // Every candidate reads the same nodes in the same order.
+        let order = topological_order(roots, |id| pool.operand_ids(id));
         // The unexpanded form first (linear in the group), then the expansions from the least
         // to the most: each stops once its output holds more nodes than `ABANDON` allows beside
         // the operations of the best form found before it, which it can then hardly beat. On ties
@@ -88,7 +95,8 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
             let limit = best.as_ref().map_or(usize::MAX, |(_, _, operations)| {
                 operations.saturating_mul(ABANDON.0) / ABANDON.1 + ABANDON.2
             });
-            if let Some((pool, roots)) = simplify_with(pool, roots, expansion, Pool::new(), limit) {
+            let candidate = simplify_with(pool, roots, &order, expansion, Pool::new(), limit);
+            if let Some((pool, roots)) = candidate {
                 let operations = pool.operation_count(&roots);
                 if best.as_ref().is_none_or(|&(_, _, fewest)| operations <= fewest) {
                     best = Some((pool, roots, operations));
@@ -96,9 +104,11 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
             }
         }
         let (best, best_roots, _) = best.expect("the unexpanded form is never abandoned");
+        let order = topological_order(&best_roots, |id| best.operand_ids(id));
         let copied;
-        (gathered, copied) = simplify_with(&best, &best_roots, Expansion::None, gathered, usize::MAX)
-            .expect("without a limit");
+        (gathered, copied) =
+            simplify_with(&best, &best_roots, &order, Expansion::None, gathered, usize::MAX)
+                .expect("without a limit");
         simplified.push(copied);
     }
     (gathered, simplified)
@@ -115,26 +125,30 @@ enum Expansion {
 }
 
 /// The roots simplified as `expansion` says, written into `out`; `None` (abandoned) as soon as
-/// `out` holds more than `limit` nodes beyond those it had and the symbols.
+/// `out` holds more than `limit` nodes beyond those it had and the symbols. `order` is the
+/// nodes the roots reach, operands first (`topological_order`).
 fn simplify_with(
     pool: &Pool,
     roots: &[ExprId],
+    order: &[ExprId],
     expansion: Expansion,
-    out: Pool,
+    mut out: Pool,
     limit: usize,
 ) -> Option<(Pool, Vec<ExprId>)> {
+    // The output's size foreseen by the input's: a pool grown by doubling copies its nodes and
+    // rehashes its table at each step, a pass over memory that grows with the pool.
+    out.reserve(order.len());
     let mut pass = Pass::new(pool, out);
     let limit = limit.saturating_add(pass.out.len());
-    let order = topological_order(roots, |id| pool.operands(id));
     for &root in roots {
         pass.roots[root.index()] = true;
     }
-    for &id in &order {
-        for operand in pool.operands(id) {
+    for &id in order {
+        for operand in pool.operand_ids(id) {
             pass.readers[operand.index()] += 1;
         }
     }
-    for &id in &order {
+    for &id in order {
         let mut form = match expansion {
             Expansion::Shared(_) => pass.form_of(id),
             Expansion::None => {
@@ -154,7 +168,7 @@ fn simplify_with(
             return None;
         }
         pass.forms[id.index()] = Some(form);
-        for operand in pool.operands(id) {
+        for operand in pool.operand_ids(id) {
             let left = &mut pass.readers[operand.index()];
             *left -= 1;
             if *left == 0 && !pass.roots[operand.index()] {

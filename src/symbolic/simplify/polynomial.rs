@@ -48,9 +48,10 @@ pub struct Angle {
 }
 
 impl Angle {
-    /// `self + sign · other`, merging the two sorted lists of terms.
-    fn combined(&self, other: &Angle, sign: f64) -> Angle {
-        let mut terms = Vec::with_capacity(self.terms.len() + other.terms.len());
+    /// The terms of `self + sign · other` into `terms` (cleared first), merging the two sorted
+    /// lists; the offset is returned.
+    fn combined_into(&self, other: &Angle, sign: f64, terms: &mut Vec<(ExprId, Real)>) -> Real {
+        terms.clear();
         let (mut left, mut right) = (self.terms.iter().peekable(), other.terms.iter().peekable());
         loop {
             let (atom, c) = match (left.peek(), right.peek()) {
@@ -83,26 +84,15 @@ impl Angle {
                 terms.push((atom, Real::new(c)));
             }
         }
-        Angle {
-            terms,
-            offset: Real::new(self.offset.get() + sign * other.offset.get()),
-        }
+        Real::new(self.offset.get() + sign * other.offset.get())
     }
+}
 
-    fn negated(&self) -> Angle {
-        Angle {
-            terms: self.terms.iter().map(|&(a, c)| (a, Real::new(-c.get()))).collect(),
-            offset: Real::new(-self.offset.get()),
-        }
-    }
-
-    /// Whether the first coefficient (or the offset, when there is no atom) is negative.
-    fn is_negative(&self) -> bool {
-        match self.terms.first() {
-            Some(&(_, c)) => c.get() < 0.0,
-            None => self.offset.get() < 0.0,
-        }
-    }
+/// The hash of a linear form (its terms and offset): the key angles are found by, and the
+/// writer's order of them.
+fn form_hash(terms: &[(ExprId, Real)], offset: Real) -> u64 {
+    use std::hash::BuildHasher;
+    rustc_hash::FxBuildHasher.hash_one((terms, offset))
 }
 
 /// An angle's number in its `Angles`: equal angles have one number.
@@ -122,13 +112,15 @@ pub enum Named {
 #[derive(Default)]
 pub struct Angles {
     forms: Vec<Angle>,
-    ids: FxHashMap<Angle, AngleId>,
+    /// By angle, the hash of its linear form (`form_hash`).
+    hashes: Vec<u64>,
+    /// Each angle's number, found by its form's hash and compared by its form in `forms`.
+    ids: hashbrown::HashTable<AngleId>,
     /// `x + y` and `x − y` by `(x, y, difference)`.
     combinations: FxHashMap<(AngleId, AngleId, bool), Named>,
-    /// The angles in the order of their linear forms, and by angle a label increasing in that
-    /// order (`rank`).
-    order: BTreeMap<Angle, AngleId>,
-    labels: Vec<u64>,
+    /// The terms of the sum or difference being formed: one buffer for all, so that an angle
+    /// already named costs no allocation.
+    scratch: Vec<(ExprId, Real)>,
 }
 
 impl Angles {
@@ -137,61 +129,56 @@ impl Angles {
         &self.forms[id.0 as usize]
     }
 
-    /// The order of two angles' linear forms, in constant time: the writer sorts a form's waves
-    /// by it. Comparing the forms themselves costs their common prefix, and a chain's angles
-    /// share long ones (q₁ + … + qₖ against q₁ + … + qⱼ): at n = 100, 31 coordinates per
-    /// comparison and 250 per input node, against 2 at n = 5.
+    /// An order of the angles that depends on their linear forms alone, not on the order the
+    /// pass named them (the writer sorts a form's waves by it, so that the written form does
+    /// not depend on the interning): by the forms' hashes, and by the forms themselves on the
+    /// rare equal hashes. Constant time: the forms' own order costs their common prefix, and a
+    /// chain's angles share long ones (q₁ + … + qₖ against q₁ + … + qⱼ; at n = 100, 31
+    /// coordinates per comparison). Ordered by hash, an angle needs no place among the others
+    /// when it is named: no ordered map of the angles (BENCHMARKS.md, "The simplifier beyond
+    /// 100 links").
     pub fn rank(&self, x: AngleId, y: AngleId) -> Ordering {
-        self.labels[x.0 as usize].cmp(&self.labels[y.0 as usize])
-    }
-
-    /// A label for the new angle `angle`, numbered `id`, between those of the angles before
-    /// and after it in the order of linear forms (list labelling: a label is found once per
-    /// angle, in the middle of its neighbours' or a fixed step past the last or before the
-    /// first, and all are spread evenly again when two neighbours leave no label between
-    /// them; Dietz and Sleator, "Two algorithms for maintaining order in a list", STOC 1987,
-    /// give the bounds of its refinements).
-    fn label(&mut self, angle: &Angle, id: AngleId) {
-        use std::ops::Bound::{Excluded, Unbounded};
-        /// The step past the last label or before the first: angles met in increasing order
-        /// (a chain's, often) take 2³² labels each before the labels are spread again.
-        const STEP: u64 = 1 << 32;
-        let labels = &self.labels;
-        let below = (self.order.range::<Angle, _>((Unbounded, Excluded(angle))).next_back())
-            .map(|(_, &id)| labels[id.0 as usize]);
-        let above = (self.order.range::<Angle, _>((Excluded(angle), Unbounded)).next())
-            .map(|(_, &id)| labels[id.0 as usize]);
-        let label = match (below, above) {
-            (None, None) => u64::MAX / 2,
-            (Some(b), None) => b + STEP.min((u64::MAX - b) / 2),
-            (None, Some(a)) => a - STEP.min(a / 2),
-            (Some(b), Some(a)) => b + (a - b) / 2,
-        };
-        self.order.insert(angle.clone(), id);
-        self.labels.push(label);
-        let fits = below.is_none_or(|b| b < label) && above.is_none_or(|a| label < a);
-        if !fits {
-            let spacing = u64::MAX / (self.order.len() as u64 + 1);
-            for (k, &id) in self.order.values().enumerate() {
-                self.labels[id.0 as usize] = (k as u64 + 1) * spacing;
-            }
-        }
+        let (i, j) = (x.0 as usize, y.0 as usize);
+        (self.hashes[i].cmp(&self.hashes[j])).then_with(|| self.forms[i].cmp(&self.forms[j]))
     }
 
     /// `angle`'s name: a number when it has no atom, else its number or its opposite's.
-    pub fn name(&mut self, angle: Angle) -> Named {
-        if angle.terms.is_empty() {
-            return Named::Constant(angle.offset.get());
-        }
-        let negated = angle.is_negative();
-        let angle = if negated { angle.negated() } else { angle };
-        let id = match self.ids.get(&angle) {
+    pub fn name(&mut self, mut angle: Angle) -> Named {
+        self.named(&mut angle.terms, angle.offset)
+    }
+
+    /// The name of the linear form of `terms` and `offset`; `terms` is turned to the positive
+    /// form in place, and copied only when the angle is new.
+    fn named(&mut self, terms: &mut [(ExprId, Real)], offset: Real) -> Named {
+        let Some(&(_, leading)) = terms.first() else {
+            return Named::Constant(offset.get());
+        };
+        let negated = leading.get() < 0.0;
+        let offset = if negated {
+            for (_, c) in terms.iter_mut() {
+                *c = Real::new(-c.get());
+            }
+            Real::new(-offset.get())
+        } else {
+            offset
+        };
+        let hash = form_hash(terms, offset);
+        let forms = &self.forms;
+        let same = |id: &AngleId| {
+            let form = &forms[id.0 as usize];
+            form.offset == offset && form.terms == terms
+        };
+        let id = match self.ids.find(hash, same) {
             Some(&id) => id,
             None => {
                 let id = AngleId(self.forms.len() as u32);
-                self.label(&angle, id);
-                self.forms.push(angle.clone());
-                self.ids.insert(angle, id);
+                self.forms.push(Angle {
+                    terms: terms.to_vec(),
+                    offset,
+                });
+                self.hashes.push(hash);
+                let hashes = &self.hashes;
+                (self.ids).insert_unique(hash, id, |id| hashes[id.0 as usize]);
                 id
             }
         };
@@ -204,8 +191,10 @@ impl Angles {
             return named;
         }
         let sign = if difference { -1.0 } else { 1.0 };
-        let angle = self.get(x).combined(self.get(y), sign);
-        let named = self.name(angle);
+        let mut terms = std::mem::take(&mut self.scratch);
+        let offset = self.get(x).combined_into(self.get(y), sign, &mut terms);
+        let named = self.named(&mut terms, offset);
+        self.scratch = terms;
         self.combinations.insert((x, y, difference), named);
         named
     }
@@ -458,5 +447,68 @@ impl Polynomial {
             }
             _ => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::symbolic::expr::Pool;
+
+    fn angle(terms: &[(ExprId, f64)], offset: f64) -> Angle {
+        Angle {
+            terms: terms.iter().map(|&(a, c)| (a, Real::new(c))).collect(),
+            offset: Real::new(offset),
+        }
+    }
+
+    fn id(named: Named) -> (AngleId, bool) {
+        match named {
+            Named::Angle { id, negated } => (id, negated),
+            Named::Constant(c) => panic!("a constant angle {c}"),
+        }
+    }
+
+    #[test]
+    fn an_angle_has_one_name_whatever_its_road() {
+        let mut pool = Pool::new();
+        let (x, y, z) = (pool.symbol("x"), pool.symbol("y"), pool.symbol("z"));
+        let mut angles = Angles::default();
+        let (xy, _) = id(angles.name(angle(&[(x, 1.0), (y, 1.0)], 0.0)));
+        let (yz, _) = id(angles.name(angle(&[(y, 1.0), (z, 1.0)], 0.5)));
+        // (x + y) − (y + z + ½) formed from the two, then named directly, then its opposite.
+        let formed = id(angles.combined(xy, yz, true));
+        let direct = id(angles.name(angle(&[(x, 1.0), (z, -1.0)], -0.5)));
+        let opposite = id(angles.name(angle(&[(x, -1.0), (z, 1.0)], 0.5)));
+        assert_eq!(formed, direct);
+        assert_eq!(opposite, (direct.0, true));
+        assert_eq!(angles.get(direct.0), &angle(&[(x, 1.0), (z, -1.0)], -0.5));
+        // (y + z + ½) − (y + z + ½) has no atom: a number.
+        assert!(matches!(angles.combined(yz, yz, true), Named::Constant(0.0)));
+    }
+
+    #[test]
+    fn the_angles_order_does_not_depend_on_the_naming_order() {
+        let mut pool = Pool::new();
+        let q: Vec<ExprId> = (0..6).map(|i| pool.symbol(&format!("q{i}"))).collect();
+        // A chain's angles, q₀ + … + qₖ, and some differences.
+        let mut forms: Vec<Angle> = (1..=6)
+            .map(|k| angle(&q[..k].iter().map(|&a| (a, 1.0)).collect::<Vec<_>>(), 0.0))
+            .collect();
+        forms.push(angle(&[(q[1], 1.0), (q[4], -2.0)], 0.0));
+        forms.push(angle(&[(q[2], 3.0)], 1.0));
+        let ranks = |order: &mut dyn Iterator<Item = usize>| {
+            let mut angles = Angles::default();
+            let mut ids = vec![None; forms.len()];
+            for k in order {
+                ids[k] = Some(id(angles.name(forms[k].clone())).0);
+            }
+            let ids: Vec<AngleId> = ids.into_iter().map(|i| i.expect("named")).collect();
+            let pairs = (0..forms.len()).flat_map(|i| (0..forms.len()).map(move |j| (i, j)));
+            pairs.map(|(i, j)| angles.rank(ids[i], ids[j])).collect::<Vec<_>>()
+        };
+        let forward = ranks(&mut (0..forms.len()));
+        let backward = ranks(&mut (0..forms.len()).rev());
+        assert_eq!(forward, backward);
     }
 }

@@ -29,7 +29,7 @@ impl Writer {
     }
 
     /// The polynomial written in `pool`. Its terms are taken in the order of their monomials
-    /// with the angles in the order of their linear forms (`Angles::rank`), not of their
+    /// with the angles in an order of their linear forms (`Angles::rank`), not of their
     /// numbers (which depend on the order the pass met them): the greedy factoring breaks ties
     /// by this order, so the written form does not depend on the interning.
     pub fn write(&mut self, pool: &mut Pool, polynomial: &Polynomial, angles: &Angles) -> ExprId {
