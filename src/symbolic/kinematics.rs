@@ -32,8 +32,9 @@ pub enum Step {
 
 impl Step {
     /// The inverse step (a chain is inverted by inverting its steps in reverse order). A ball's
-    /// step is never inverted: its quaternion is the motion of the child already
-    /// (`Generator::place_bodies`), and it stays as it is.
+    /// step has none here (its body twist would be another's): it is returned as it is, and
+    /// nothing inverts it, its quaternion being the motion of the child already whichever side
+    /// the join's first frame is on (`Generator::place_bodies`).
     pub fn inverse(&self, pool: &mut Pool) -> Step {
         match self {
             Step::Ball { .. } => self.clone(),
