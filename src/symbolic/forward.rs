@@ -162,7 +162,7 @@ impl Generator<'_> {
                 _ if link.positions.len() != link.rates.len() => 0,
                 _ => link.positions.len(),
             };
-            for k in 0..count {
+            for (k, total) in columns.iter_mut().enumerate().take(count) {
                 let Some((angular, linear)) = self.own_motion(step, link, k) else {
                     continue;
                 };
@@ -175,7 +175,7 @@ impl Generator<'_> {
                     v::mat_vec(pool, &back, &moved),
                 );
                 let column = [u[0], u[1], u[2], w[0], w[1], w[2]];
-                columns[k] = articulated::add(pool, &columns[k], &column);
+                *total = articulated::add(pool, total, &column);
             }
             let pool = &mut self.pool;
             match step {

@@ -193,10 +193,10 @@ impl Moving {
                 let lever = v::cross(pool, &column[0], &offset);
                 column[1] = v::add(pool, &column[1], &lever);
             }
-            for k in 0..3 {
+            for (k, &c) in link.columns[3..6].iter().enumerate() {
                 let axis = [after[0][k], after[1][k], after[2][k]];
                 let zero = v::zero(pool);
-                let column = self.columns[link.columns[3 + k]].get_or_insert([zero, zero]);
+                let column = self.columns[c].get_or_insert([zero, zero]);
                 column[1] = v::add(pool, &column[1], &axis);
             }
             self.origin = v::add(pool, &self.origin, &offset);
@@ -204,10 +204,10 @@ impl Moving {
         let transport = v::cross(pool, &w, &relative);
         self.angular_bias = v::add(pool, &alpha, &transport);
         self.angular_velocity = v::add(pool, &w, &relative);
-        for k in 0..3 {
+        for (k, &c) in link.columns[..3].iter().enumerate() {
             let axis = [after[0][k], after[1][k], after[2][k]];
             let zero = v::zero(pool);
-            let column = self.columns[link.columns[k]].get_or_insert([zero, zero]);
+            let column = self.columns[c].get_or_insert([zero, zero]);
             column[0] = v::add(pool, &column[0], &axis);
         }
         self.rotation = after;
