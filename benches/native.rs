@@ -8,9 +8,10 @@
 //! native evaluation in interleaved rounds (7), best and median. Beside the trees: the row of 10
 //! four-bars (loops solved on the kept rows in the native code, `kept_rows_solve`), the same row
 //! without its closing joins (the tree alone: what the interpreted right-hand side spends
-//! outside the loops' solve), the reduced Delta (its universal joints' loops solved with the
-//! augmented mass matrix, M being singular on its tree) and the Delta (declined: its ball
-//! joints' quaternion states).
+//! outside the loops' solve), the reduced Delta (its universal joints' loops solved with P1's
+//! coordinates pivoted on kept rows, M being singular on its tree), the Delta (its ball joints
+//! in the simulator's quaternion state, its rods' spins held at rest as the run holds them),
+//! and two trees of quaternion states: a free body and a heavy top.
 
 mod common;
 #[path = "common/rows.rs"]
@@ -129,6 +130,8 @@ fn main() {
             example("examples/delta_isir88_reduced.lsd"),
         ),
         ("Delta (ISIR88)", example("examples/delta_isir88.lsd")),
+        ("free body", example("examples/free_body.lsd")),
+        ("heavy top", example("examples/heavy_top.lsd")),
     ];
     let cache = std::env::temp_dir().join(format!("lsdc-native-bench-{}", std::process::id()));
     println!(

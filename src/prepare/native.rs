@@ -3,11 +3,12 @@
 //! constants) is compiled by the system's C compiler into a shared library, kept in a cache by
 //! the hash of its source, loaded, and checked against the simulator's own right-hand side
 //! before the run uses it. Measured 9–35× faster per evaluation than the compiled tape and the
-//! articulated-body algorithm (`cargo bench --bench native`, BENCHMARKS.md); it serves trees
-//! whose state is their declared coordinates and rates, and such mechanisms with loops, whose
-//! accelerations are then solved on the run's kept rows in the generated code
-//! (`symbolic::kept_rows_solve`). Wherever it cannot serve (no compiler, quaternion joints,
-//! motions without mass, unknown functions, a disagreement), the run goes on without it and
+//! articulated-body algorithm (`cargo bench --bench native`, BENCHMARKS.md); it serves trees in
+//! the simulator's state (declared coordinates and rates, quaternions and body twists for
+//! spherical and free joints: `symbolic::quaternion_joints`), and such mechanisms with loops,
+//! whose accelerations are then solved on the run's kept rows in the generated code
+//! (`symbolic::kept_rows_solve`). Wherever it cannot serve (no compiler, efforts reading a
+//! ball's declared angles, unknown functions, a disagreement), the run goes on without it and
 //! says why.
 
 use std::ffi::c_int;
@@ -82,7 +83,7 @@ impl NativeDynamics {
 /// Why the native code does not serve a run.
 #[derive(Debug)]
 pub enum Unavailable {
-    /// The mechanism is not a tree of joints whose coordinates are their own rates' integrals.
+    /// The mechanism or its efforts are not what the generated code computes.
     Unsupported(String),
     /// The C compiler could not be started.
     NoCompiler { compiler: String, error: String },

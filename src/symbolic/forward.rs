@@ -5,7 +5,7 @@
 //! anchor (`inertia`).
 
 use super::articulated::{self, Spatial};
-use super::expr::{ExprId, Pool};
+use super::expr::ExprId;
 use super::quaternion_joints;
 use super::generator::Generator;
 use super::kinematics::{LinkCoordinates, Step};
@@ -156,8 +156,14 @@ impl Generator<'_> {
         let mut turned = v::identity(&mut self.pool);
         let mut offset = v::zero(&mut self.pool);
         for step in steps.iter().rev() {
-            for (k, motion) in self.own_motions(step, link).into_iter().enumerate() {
-                let Some((angular, linear)) = motion else {
+            let count = match step {
+                Step::Ball { .. } => link.rates.len(),
+                // A ball's link: its positions only its own step reads.
+                _ if link.positions.len() != link.rates.len() => 0,
+                _ => link.positions.len(),
+            };
+            for (k, total) in columns.iter_mut().enumerate().take(count) {
+                let Some((angular, linear)) = self.own_motion(step, link, k) else {
                     continue;
                 };
                 let pool = &mut self.pool;
@@ -169,7 +175,7 @@ impl Generator<'_> {
                     v::mat_vec(pool, &back, &moved),
                 );
                 let column = [u[0], u[1], u[2], w[0], w[1], w[2]];
-                columns[k] = articulated::add(pool, &columns[k], &column);
+                *total = articulated::add(pool, total, &column);
             }
             let pool = &mut self.pool;
             match step {
@@ -195,53 +201,30 @@ impl Generator<'_> {
         columns
     }
 
-    /// Per rate of `link`, the motion (angular, linear) a unit rate gives `step`'s end frame,
-    /// in the axes after the step and at its origin; `None` where it gives none. A declared
-    /// coordinate's rate is its position's: the step's derivative by it. A ball's rates are
-    /// its body twist, in the axes after it: unit motions there.
-    fn own_motions(&mut self, step: &Step, link: &LinkCoordinates) -> Vec<Option<(Vec3, Vec3)>> {
-        let Step::Ball { translation, .. } = step else {
-            return self.declared_motions(step, link);
-        };
-        let unit = |pool: &mut Pool, k: usize| {
-            let mut e = [0.0; 3];
-            e[k] = 1.0;
-            v::constant(pool, e)
-        };
+    /// The motion (angular, linear) a unit rate k of `link` gives `step`'s end frame, in the
+    /// axes after the step and at its origin; `None` where it gives none. A declared
+    /// coordinate's rate is its position's: the step's derivative by it. A ball's rates are its
+    /// body twist, in the axes after it: unit motions there (angular, then linear).
+    fn own_motion(&mut self, step: &Step, link: &LinkCoordinates, k: usize) -> Option<(Vec3, Vec3)> {
         let pool = &mut self.pool;
-        let mut motions: Vec<_> = (0..3).map(|k| Some((unit(pool, k), v::zero(pool)))).collect();
-        if translation.is_some() {
-            motions.extend((0..3).map(|k| Some((v::zero(pool), unit(pool, k)))));
-        }
-        motions
-    }
-
-    /// `own_motions` of a translation or a rotation, by its derivatives by the link's
-    /// positions; none for a ball's link, whose positions only its own step reads.
-    fn declared_motions(&mut self, step: &Step, link: &LinkCoordinates) -> Vec<Option<(Vec3, Vec3)>> {
-        if link.positions.len() != link.rates.len() {
-            return Vec::new();
-        }
-        let mut motions = Vec::with_capacity(link.positions.len());
-        for &position in &link.positions {
-            let (angular, linear) = match step {
-                Step::Rotation { axis, angle } => {
-                    let rate = self.derivatives.of(&mut self.pool, *angle, position);
-                    (
-                        v::scale(&mut self.pool, rate, axis),
-                        v::zero(&mut self.pool),
-                    )
-                }
-                Step::Translation(t) => {
-                    let rates = t.map(|x| self.derivatives.of(&mut self.pool, x, position));
-                    (v::zero(&mut self.pool), rates)
-                }
-                Step::Ball { .. } => return Vec::new(),
-            };
-            let moves = !v::is_zero(&self.pool, &angular) || !v::is_zero(&self.pool, &linear);
-            motions.push(moves.then_some((angular, linear)));
-        }
-        motions
+        let (angular, linear) = match step {
+            Step::Ball { .. } => {
+                let mut unit = [0.0; 3];
+                unit[k % 3] = 1.0;
+                let (unit, zero) = (v::constant(pool, unit), v::zero(pool));
+                return Some(if k < 3 { (unit, zero) } else { (zero, unit) });
+            }
+            Step::Rotation { axis, angle } => {
+                let rate = self.derivatives.of(pool, *angle, link.positions[k]);
+                (v::scale(pool, rate, axis), v::zero(pool))
+            }
+            Step::Translation(t) => {
+                let rates = t.map(|x| self.derivatives.of(pool, x, link.positions[k]));
+                (v::zero(pool), rates)
+            }
+        };
+        let moves = !v::is_zero(pool, &angular) || !v::is_zero(pool, &linear);
+        moves.then_some((angular, linear))
     }
 }
 

@@ -32,8 +32,9 @@ pub enum Step {
 
 impl Step {
     /// The inverse step (a chain is inverted by inverting its steps in reverse order). A ball's
-    /// step is never inverted: its quaternion is the motion of the child already
-    /// (`Generator::place_bodies`), and it stays as it is.
+    /// step has none here (its body twist would be another's): it is returned as it is, and
+    /// nothing inverts it, its quaternion being the motion of the child already whichever side
+    /// the join's first frame is on (`Generator::place_bodies`).
     pub fn inverse(&self, pool: &mut Pool) -> Step {
         match self {
             Step::Ball { .. } => self.clone(),
@@ -192,10 +193,10 @@ impl Moving {
                 let lever = v::cross(pool, &column[0], &offset);
                 column[1] = v::add(pool, &column[1], &lever);
             }
-            for k in 0..3 {
+            for (k, &c) in link.columns[3..6].iter().enumerate() {
                 let axis = [after[0][k], after[1][k], after[2][k]];
                 let zero = v::zero(pool);
-                let column = self.columns[link.columns[3 + k]].get_or_insert([zero, zero]);
+                let column = self.columns[c].get_or_insert([zero, zero]);
                 column[1] = v::add(pool, &column[1], &axis);
             }
             self.origin = v::add(pool, &self.origin, &offset);
@@ -203,10 +204,10 @@ impl Moving {
         let transport = v::cross(pool, &w, &relative);
         self.angular_bias = v::add(pool, &alpha, &transport);
         self.angular_velocity = v::add(pool, &w, &relative);
-        for k in 0..3 {
+        for (k, &c) in link.columns[..3].iter().enumerate() {
             let axis = [after[0][k], after[1][k], after[2][k]];
             let zero = v::zero(pool);
-            let column = self.columns[link.columns[k]].get_or_insert([zero, zero]);
+            let column = self.columns[c].get_or_insert([zero, zero]);
             column[0] = v::add(pool, &column[0], &axis);
         }
         self.rotation = after;
