@@ -659,7 +659,8 @@ fn pure_moment<T: Real>(moment: &Vector3<T>) -> Force<T> {
 // with the unit axes of URDF joints read as one entry (BENCHMARKS.md, "Peers"). Here the bodies'
 // moves to the fixed frame depend only on their world transforms (a short chain of 3 × 3
 // products), so the processor overlaps them; in the local form each composite waits for all of
-// its children's.
+// its children's. The pass from the leaves both completes the composites and writes the
+// columns (the same sums in the same order as two passes).
 
 /// CRBA's scratch: per body its pose and composite inertia in the fixed frame, per velocity its
 /// motion column in the fixed frame.
@@ -735,28 +736,27 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
             world_columns[joint.v_offset + r] = world.motion_to_parent(column);
         }
     }
-    for &k in model.dynamic_joints.iter().rev() {
-        let joint = &model.joints[k];
-        if joint.dynamic_parent != 0 {
-            let child = composite[joint.child];
-            composite[joint.dynamic_parent] += child;
-        }
-    }
+    // From the leaves: a joint's composite is whole when the pass reaches it (its children come
+    // after it), so its columns are written and it is handed to its parent in one visit.
     let nv = model.nv;
     let entries = mass.as_mut_slice();
-    for &k in &model.dynamic_joints {
+    for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
-        let composite = &composite[joint.child];
+        let (i, parent) = (joint.child, joint.dynamic_parent);
+        let own = composite[i];
         // The joint's branch lists its own and its ancestors' velocities.
         let branch = model.branch_velocities(k);
         for column in joint.v_offset..joint.v_offset + joint.nv() {
-            let force = composite.times(&world_columns[column]);
+            let force = own.times(&world_columns[column]);
             // Column-major storage.
             for &row in branch {
                 let value = world_columns[row].dot(&force);
                 entries[row + column * nv] = value;
                 entries[column + row * nv] = value;
             }
+        }
+        if parent != 0 {
+            composite[parent] += own;
         }
     }
     add_rotors_to_mass(model, data, mass);

@@ -277,6 +277,17 @@ fn turn_columns<T: Real>(r: &Matrix3<T>, k: usize, sin: T, cos: T) -> Matrix3<T>
     out
 }
 
+/// `turn_columns` written into `out`.
+fn turn_columns_into(r: &Matrix3<f64>, k: usize, sin: f64, cos: f64, out: &mut Matrix3<f64>) {
+    let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+    for row in 0..3 {
+        let (ri, rj) = (r[(row, i)], r[(row, j)]);
+        out[(row, k)] = r[(row, k)];
+        out[(row, i)] = ri * cos + rj * sin;
+        out[(row, j)] = rj * cos - ri * sin;
+    }
+}
+
 /// The index of the coordinate axis `axis` lies along, and the sign, if it does.
 fn coordinate_axis(axis: &Vector3<f64>) -> Option<(usize, f64)> {
     (0..3)
@@ -446,6 +457,22 @@ impl Joint {
 
     /// The transform alone at positions q (for the mass matrix, which needs no velocities).
     pub fn update_transform(&self, q: &[f64], state: &mut JointState) -> Result<(), EvalError> {
+        if let Kernel::Rotation {
+            terms,
+            aligned: Some(k),
+            origin,
+            scale,
+            after: None,
+            ..
+        } = &self.kernel
+        {
+            // The commonest joint of imported robots (a revolute about x, y or z with no frame
+            // on the child): `rotation_transform`'s arithmetic, written in place.
+            let (sin, cos) = (q[0] * scale).sin_cos();
+            turn_columns_into(&terms[0], *k, sin, cos, &mut state.transform.rotation);
+            state.transform.translation = *origin;
+            return Ok(());
+        }
         match self.kernel_transform(q) {
             Some(transform) => state.transform = transform,
             None => self.update(q, &[0.0; 6][..self.nv()], state)?,
