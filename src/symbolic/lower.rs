@@ -93,12 +93,8 @@ pub struct FrameState {
 pub struct LowerError(pub String);
 
 impl<'a> Lowering<'a> {
-    /// The lowering of `mechanism`'s scalars, its joins in their declared coordinates.
-    pub fn new(pool: &mut Pool, mechanism: &'a Mechanism, topology: &Topology) -> Lowering<'a> {
-        Lowering::in_state(pool, mechanism, topology, QuaternionJoins::new())
-    }
-
-    /// The same, with the joins of `quaternion_joins` in the simulator's state.
+    /// The lowering of `mechanism`'s scalars: its joins in their declared coordinates, but
+    /// those of `quaternion_joins`, in the simulator's state.
     pub fn in_state(
         pool: &mut Pool,
         mechanism: &'a Mechanism,

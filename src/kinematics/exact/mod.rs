@@ -34,7 +34,7 @@ pub use field::Number;
 
 use crate::elab::mechanism::Mechanism;
 use crate::symbolic::closure_poses::{closure_poses, roots as pose_roots};
-use crate::symbolic::equations::generate;
+use crate::symbolic::generate;
 use crate::topology::Topology;
 use configuration::{exact_configuration, ExactCoordinate};
 use evaluate::{Evaluator, SymbolValue};
