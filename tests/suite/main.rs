@@ -48,6 +48,7 @@ mod kinematics_workspace;
 mod linearize;
 mod linearize_states;
 mod long_chains;
+mod loop_derivatives;
 mod loop_properties;
 mod loop_shaping;
 mod loops;

@@ -10,7 +10,8 @@
 //! of its velocities by the constraints' impulse (`momentum`), with an orthonormal basis of the allowed motions from the
 //! sparse factorisation for the outputs (`orthonormal`). Which side of a singular configuration
 //! a state lies on, seen from the last step's start, tells a step that jumps across one
-//! (`orientation`).
+//! (`orientation`). The derivatives of the constrained accelerations with respect to the state
+//! and the efforts, in all the state's velocities and in independent coordinates: `derivatives`.
 //! A planar mechanism's right-hand side computes its rows in planar form (`planar_rows`); the
 //! translation rows of its long loops are evaluated in the plane with compensated sums for the
 //! projections and the residuals reported (`planar_closure`).
@@ -19,6 +20,7 @@
 //! The method and its references: `docs/loops.md`.
 
 pub mod basis;
+pub mod derivatives;
 pub mod elimination;
 pub mod factored;
 pub mod inertia;
