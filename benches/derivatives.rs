@@ -10,7 +10,7 @@
 //! The states are 256 random (q, v, a, τ), q uniform in [−π, π], the rest in [−1, 1], cycled.
 
 mod common;
-use common::{interleaved, prepared_file, random_states};
+use common::{files_or, interleaved, prepared_file, random_states};
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -23,16 +23,11 @@ use nalgebra::DVector;
 const ROUNDS: usize = 9;
 
 fn main() {
-    let mut paths: Vec<PathBuf> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .map(PathBuf::from)
-        .collect();
-    if paths.is_empty() {
-        paths = ["ur5", "panda", "talos_reduced"]
+    let paths = files_or(
+        ["ur5", "panda", "talos_reduced"]
             .map(|r| PathBuf::from(format!("tests/fixtures/urdf/{r}.urdf")))
-            .to_vec();
-    }
+            .to_vec(),
+    );
     for path in paths {
         let model = prepared_file(&path).model;
         let external = vec![Force::zeros(); model.body_count() + 1];

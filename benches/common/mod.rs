@@ -155,6 +155,20 @@ impl Random {
 }
 
 #[allow(dead_code)]
+/// The files named on the command line (flags left out), or `defaults` when none is.
+pub fn files_or(defaults: Vec<std::path::PathBuf>) -> Vec<std::path::PathBuf> {
+    let named: Vec<std::path::PathBuf> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .map(std::path::PathBuf::from)
+        .collect();
+    match named.is_empty() {
+        true => defaults,
+        false => named,
+    }
+}
+
+#[allow(dead_code)]
 /// A program or URDF robot prepared with its own values and default settings (a URDF robot: a
 /// fixed base and gravity, as every command reads a `.urdf` file).
 pub fn prepared_file(path: &std::path::Path) -> Prepared {
