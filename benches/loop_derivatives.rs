@@ -8,8 +8,10 @@
 //! `NAME best|median n=VELOCITIES rows=KEPT rhs NS, derivatives NS (RATIOx)`.
 
 mod common;
-use common::loop_costs::loop_system;
+#[path = "common/loop_costs.rs"]
+mod loop_costs;
 use common::{files_or, interleaved, prepared_file};
+use loop_costs::loop_system;
 use std::hint::black_box;
 use std::path::PathBuf;
 

@@ -57,6 +57,7 @@ pub fn call_costs(prepared: &Prepared) -> (f64, f64) {
 
 /// The same bodies as a tree: `prepared`'s model with its closing joins removed (and the
 /// efforts on them), and the tree part of the initial state.
+#[allow(dead_code)] // the loop derivatives' benchmark times no tree
 pub fn tree_model(prepared: &Prepared) -> (Model, Vec<f64>) {
     let mut tree = prepared.model.clone();
     tree.link_efforts.retain(|e| e.joint < tree.joints.len());
@@ -79,6 +80,7 @@ pub fn tree_model(prepared: &Prepared) -> (Model, Vec<f64>) {
 /// tree may have motions without inertia (the Delta's rods spinning about their axes), which
 /// its forward dynamics refuses: the call is then the mass matrix and the bias forces, which any
 /// method of solving the loops needs.
+#[allow(dead_code)] // the loop derivatives' benchmark times no tree
 pub fn tree_call<'m>(prepared: &Prepared, tree: &'m Model, y: &'m [f64]) -> Box<dyn FnMut() + 'm> {
     let model = &prepared.model;
     let declared = prepared.coordinates[..prepared.coordinates.len() - model.nc].to_vec();
