@@ -218,16 +218,13 @@ impl Case<'_> {
         by
     }
 
-    /// q̈ by a dense saddle-point solve in dual numbers at the dual state (q, v, τ); the rows'
-    /// G at q come back too (for the chart's rates).
+    /// q̈ by a dense saddle-point solve in dual numbers at the dual state (q, v, τ).
     fn dual_accelerations(&self, q: &[Dual64], v: &[Dual64], tau: &[Dual64]) -> DVector<Dual64> {
         let model = self.model;
         let (n, nv) = (model.velocities(), model.nv);
         let kept = self.kept();
         let r = kept.len();
-        let g = self.dual_rows(q, v);
-        let gamma = g.1;
-        let g = g.0;
+        let (g, gamma) = self.dual_rows(q, v);
         let mut data = Data::<Dual64>::with_scalar(model);
         let none = vec![Force::<Dual64>::zeros(); model.body_count() + 1];
         let external: Vec<Force<Dual64>> = self
