@@ -16,8 +16,9 @@
 //! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
 //! result with the fewest operations is kept; the simplified equations are never longer than
 //! the input. The unexpanded pass runs first, and an expanded one is abandoned once its output
-//! is well past the best so far (`ABANDON`): on long chains the most expanded forms of the
-//! mass matrix end several times longer, and most of their cost was in finishing them.
+//! is well past the best so far (`ABANDON`), or once the roots it has finished, written, are
+//! longer than the same roots of the best form (`CHECKPOINTS`): on long chains the expanded
+//! forms of the mass matrix end longer, and most of their cost was in finishing them.
 //!
 //! Values: like computer algebra systems, the simplifier takes x − x = 0, 0 · x = 0 and
 //! x / x = 1 for every x, so the result equals the input wherever the input is finite, and may
