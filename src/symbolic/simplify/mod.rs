@@ -16,8 +16,9 @@
 //! So the pass is run with shared sums expanded up to a few sizes (and not at all), and the
 //! result with the fewest operations is kept; the simplified equations are never longer than
 //! the input. The unexpanded pass runs first, and an expanded one is abandoned once its output
-//! is well past the best so far (`ABANDON`): on long chains the most expanded forms of the
-//! mass matrix end several times longer, and most of their cost was in finishing them.
+//! is well past the best so far (`ABANDON`), or once the roots it has finished, written, are
+//! longer than the same roots of the best form (`CHECKPOINTS`): on long chains the expanded
+//! forms of the mass matrix end longer, and most of their cost was in finishing them.
 //!
 //! Values: like computer algebra systems, the simplifier takes x − x = 0, 0 · x = 0 and
 //! x / x = 1 for every x, so the result equals the input wherever the input is finite, and may
@@ -51,6 +52,18 @@ const WORK: usize = 64;
 /// and 7.4 times longer than the unexpanded form, stop there (BENCHMARKS.md, "The
 /// simplifier's cost: candidates abandoned").
 const ABANDON: (usize, usize, usize) = (3, 2, 64);
+/// Where a candidate is also compared root by root, as fractions of the pass: the roots it has
+/// finished by then are written in a copy of its output and abandoned when they take more than
+/// `BEHIND` operations beyond the same roots in the best form. A mass matrix's entries finish one
+/// by one along the pass, and on the pendulums its expanded forms fall further behind the
+/// unexpanded one with every entry (at n = 100, the expansion to 1 term 1.05 times its
+/// operations on the entries finished at an eighth, 1.13 at the end), so they are stopped early
+/// instead of at the end (BENCHMARKS.md, "The simplifier's cost: candidates compared by their
+/// finished roots"). The other groups' roots finish at the end: no checkpoint sees them.
+const CHECKPOINTS: [(usize, usize); 5] = [(1, 16), (1, 8), (1, 4), (1, 2), (3, 4)];
+/// How many operations a candidate's finished roots may take beyond the best form's at a
+/// checkpoint.
+const BEHIND: usize = 64;
 /// The largest power of a sum expanded.
 const POWER: i32 = 4;
 
@@ -90,28 +103,88 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
             Expansion::Shared(4),
             Expansion::Shared(TERMS),
         ];
-        let mut best: Option<(Pool, Vec<ExprId>, usize)> = None;
+        let finishing = finishing_order(roots, &order);
+        let mut best: Option<Best> = None;
         for expansion in candidates {
-            let limit = best.as_ref().map_or(usize::MAX, |(_, _, operations)| {
-                operations.saturating_mul(ABANDON.0) / ABANDON.1 + ABANDON.2
+            let yardstick = best.as_ref().map(|best| Yardstick {
+                best,
+                finishing: &finishing,
             });
-            let candidate = simplify_with(pool, roots, &order, expansion, Pool::new(), limit);
+            let candidate =
+                simplify_with(pool, roots, &order, expansion, Pool::new(), yardstick);
             if let Some((pool, roots)) = candidate {
                 let operations = pool.operation_count(&roots);
-                if best.as_ref().is_none_or(|&(_, _, fewest)| operations <= fewest) {
-                    best = Some((pool, roots, operations));
+                if best.as_ref().is_none_or(|best| operations <= best.operations) {
+                    best = Some(Best {
+                        pool,
+                        roots,
+                        operations,
+                    });
                 }
             }
         }
-        let (best, best_roots, _) = best.expect("the unexpanded form is never abandoned");
+        let Best {
+            pool: best,
+            roots: best_roots,
+            ..
+        } = best.expect("the unexpanded form is never abandoned");
         let order = topological_order(&best_roots, |id| best.operand_ids(id));
         let copied;
         (gathered, copied) =
-            simplify_with(&best, &best_roots, &order, Expansion::None, gathered, usize::MAX)
+            simplify_with(&best, &best_roots, &order, Expansion::None, gathered, None)
                 .expect("without a limit");
         simplified.push(copied);
     }
     (gathered, simplified)
+}
+
+/// The best form of a group found so far.
+struct Best {
+    pool: Pool,
+    roots: Vec<ExprId>,
+    operations: usize,
+}
+
+/// What a candidate is measured against as it goes: the best form before it, and the group's
+/// roots by the place in the pass's order where each is finished (`finishing_order`).
+#[derive(Clone, Copy)]
+struct Yardstick<'a> {
+    best: &'a Best,
+    finishing: &'a [(usize, usize)],
+}
+
+impl Yardstick<'_> {
+    /// The whole output's limit: `ABANDON` over the best form's operations.
+    fn limit(&self) -> usize {
+        let operations = self.best.operations;
+        operations.saturating_mul(ABANDON.0) / ABANDON.1 + ABANDON.2
+    }
+
+    /// The roots finished once the pass has formed the node at `place` of its order, by their
+    /// index among the group's roots, increasing.
+    fn finished(&self, place: usize) -> Vec<usize> {
+        let count = self.finishing.partition_point(|&(at, _)| at <= place);
+        let mut finished: Vec<usize> = self.finishing[..count].iter().map(|&(_, i)| i).collect();
+        finished.sort_unstable();
+        finished
+    }
+}
+
+/// Each root's index among `roots` with the place in `order` where the pass forms it, by place:
+/// the roots a pass has finished at a place are a prefix.
+fn finishing_order(roots: &[ExprId], order: &[ExprId]) -> Vec<(usize, usize)> {
+    let mut place: rustc_hash::FxHashMap<ExprId, usize> =
+        roots.iter().map(|&root| (root, 0)).collect();
+    for (k, id) in order.iter().enumerate() {
+        if let Some(at) = place.get_mut(id) {
+            *at = k;
+        }
+    }
+    let mut finishing: Vec<(usize, usize)> = (roots.iter().enumerate())
+        .map(|(i, root)| (place[root], i))
+        .collect();
+    finishing.sort_unstable();
+    finishing
 }
 
 /// How far the forms of shared nodes are carried into the nodes that read them.
@@ -124,17 +197,23 @@ enum Expansion {
     None,
 }
 
-/// The roots simplified as `expansion` says, written into `out`; `None` (abandoned) as soon as
-/// `out` holds more than `limit` nodes beyond those it had and the symbols. `order` is the
-/// nodes the roots reach, operands first (`topological_order`).
+/// The roots simplified as `expansion` says, written into `out`. With a `yardstick`, `None`
+/// (abandoned) as soon as `out` holds more than its `limit` of nodes beyond those it had and the
+/// symbols, or when the roots finished at one of the `CHECKPOINTS` take more than `BEHIND`
+/// operations beyond the best form's. `order` is the nodes the roots reach, operands first
+/// (`topological_order`).
 fn simplify_with(
     pool: &Pool,
     roots: &[ExprId],
     order: &[ExprId],
     expansion: Expansion,
     mut out: Pool,
-    limit: usize,
+    yardstick: Option<Yardstick>,
 ) -> Option<(Pool, Vec<ExprId>)> {
+    let limit = yardstick.map_or(usize::MAX, |yardstick| yardstick.limit());
+    let checkpoints = CHECKPOINTS.map(|(numerator, denominator)| {
+        yardstick.map_or(usize::MAX, |_| order.len() * numerator / denominator)
+    });
     // The output's size foreseen by the input's: a pool grown by doubling copies its nodes and
     // rehashes its table at each step, a pass over memory that grows with the pool.
     out.reserve(order.len());
@@ -148,7 +227,7 @@ fn simplify_with(
             pass.readers[operand.index()] += 1;
         }
     }
-    for &id in order {
+    for (place, &id) in order.iter().enumerate() {
         let mut form = match expansion {
             Expansion::Shared(_) => pass.form_of(id),
             Expansion::None => {
@@ -173,6 +252,17 @@ fn simplify_with(
             *left -= 1;
             if *left == 0 && !pass.roots[operand.index()] {
                 pass.forms[operand.index()] = None;
+            }
+        }
+        if let Some(yardstick) = yardstick.filter(|_| checkpoints.contains(&place)) {
+            let finished = yardstick.finished(place);
+            if !finished.is_empty() {
+                let written = pass.operations_if_written(finished.iter().map(|&i| roots[i]));
+                let best = &yardstick.best;
+                let theirs: Vec<ExprId> = finished.iter().map(|&i| best.roots[i]).collect();
+                if written > best.pool.operation_count(&theirs) + BEHIND {
+                    return None;
+                }
             }
         }
     }
@@ -283,6 +373,20 @@ impl Pass<'_> {
         let node = self.writer.write(&mut self.out, form, &self.angles);
         self.nodes[id.index()] = Some(node);
         node
+    }
+
+    /// The operations of `roots` (formed, and kept as roots are) if they were written now, as
+    /// the pass writes its roots at its end; written in a copy of `out`, which stays as it was.
+    fn operations_if_written(&self, roots: impl Iterator<Item = ExprId>) -> usize {
+        let mut out = self.out.clone();
+        let mut writer = self.writer.clone();
+        let written: Vec<ExprId> = roots
+            .map(|root| match self.nodes[root.index()] {
+                Some(node) => node,
+                None => writer.write(&mut out, formed(&self.forms, root), &self.angles),
+            })
+            .collect();
+        out.operation_count(&written)
     }
 
     /// A node of `out` as a form: a number, or an atom.

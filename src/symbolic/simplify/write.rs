@@ -17,6 +17,7 @@ struct Term {
 }
 
 /// Writes polynomials into `pool`, each wave built once.
+#[derive(Clone)]
 pub struct Writer {
     waves: FxHashMap<(Wave, AngleId), ExprId>,
 }
