@@ -139,7 +139,8 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with("--"))
         .collect();
-    let wanted = |label: &str| asked.is_empty() || asked.iter().any(|word| label.contains(word.as_str()));
+    let wanted =
+        |label: &str| asked.is_empty() || asked.iter().any(|word| label.contains(word.as_str()));
     let cache = std::env::temp_dir().join(format!("lsdc-native-bench-{}", std::process::id()));
     println!(
         "{:<20} {:>19} {:>19} {:>14} {:>9}",
