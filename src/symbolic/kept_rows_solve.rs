@@ -380,9 +380,10 @@ fn augment(
 struct Elimination {
     a: Vec<Vec<Option<Entry>>>,
     b: Vec<Entry>,
-    /// Whether `a` is symmetric, entry for entry (the same expressions): then a pivot on the
-    /// diagonal updates the upper triangle and mirrors it, as an LDLᵀ factorisation does
-    /// (Golub and Van Loan, *Matrix Computations*, 4th ed., 2013, §4.1), half the products.
+    /// Whether `a` is symmetric (in its values: the augmented entries are formed twice, the
+    /// same sums): then a pivot on the diagonal updates the upper triangle and mirrors it, as
+    /// an LDLᵀ factorisation does (Golub and Van Loan, *Matrix Computations*, 4th ed., 2013,
+    /// §4.1), half the products. False between the two pivots of a pair (step 2).
     symmetric: bool,
     row_done: Vec<bool>,
     column_done: Vec<bool>,
