@@ -11,7 +11,8 @@
 //! outside the loops' solve), the reduced Delta (its universal joints' loops solved with P1's
 //! coordinates pivoted on kept rows, M being singular on its tree), the Delta (its ball joints
 //! in the simulator's quaternion state, its rods' spins held at rest as the run holds them),
-//! and two trees of quaternion states: a free body and a heavy top.
+//! and two trees of quaternion states: a free body and a heavy top. Words after `--` keep only
+//! the cases whose label holds one of them (`cargo bench --bench native -- Delta`).
 
 mod common;
 #[path = "common/rows.rs"]
@@ -133,6 +134,13 @@ fn main() {
         ("free body", example("examples/free_body.lsd")),
         ("heavy top", example("examples/heavy_top.lsd")),
     ];
+    // `cargo bench --bench native -- WORD...`: only the cases whose label holds one of the words.
+    let asked: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let wanted =
+        |label: &str| asked.is_empty() || asked.iter().any(|word| label.contains(word.as_str()));
     let cache = std::env::temp_dir().join(format!("lsdc-native-bench-{}", std::process::id()));
     println!(
         "{:<20} {:>19} {:>19} {:>14} {:>9}",
@@ -142,7 +150,7 @@ fn main() {
         "{:<20} {:>9} {:>9} {:>9} {:>9} {:>6} {:>7}",
         "", "best", "median", "best", "median", "best", "median"
     );
-    for (label, text) in &cases {
+    for (label, text) in cases.iter().filter(|(label, _)| wanted(label)) {
         match compare(text, &cache) {
             Ok(([(simulator, simulator_median), (native, native_median)], attach)) => println!(
                 "{label:<20} {simulator:>9.0} {simulator_median:>9.0} {native:>9.0} {native_median:>9.0} {:>6.3} {:>7.3} {attach:>9.2}",
@@ -154,7 +162,10 @@ fn main() {
     }
     // The row without its closing joins: the interpreted tree alone, what a native tree under
     // the loops' interpreted solve could at best save of the row's right-hand side.
-    if let Ok((_, prepared)) = prepared(&row_program(10, false)) {
+    let open_row = wanted("row of 10, open")
+        .then(|| prepared(&row_program(10, false)).ok())
+        .flatten();
+    if let Some((_, prepared)) = open_row {
         let [(open, open_median), _] = derivative_ns(&prepared);
         println!(
             "{:<20} {open:>9.0} {open_median:>9.0}   (interpreted, the tree alone)",

@@ -2,10 +2,12 @@
 //! (`simulate --compiled`): the KKT system on the rows the run keeps,
 //!
 //! ```text
-//!     [ M   −Gₛᵀ ] [ q' ]   [ S + F ]
-//!     [ Gₛ    0  ] [ λ  ] = [ −γₛ   ]      (γₛ = Δ̇ₛ q, the kept rows' bias),
+//!     [ M    −Gₛᵀ ] [ q' ]   [ S + F ]
+//!     [ −Gₛ    0  ] [ λ  ] = [ γₛ    ]      (γₛ = Δ̇ₛ q, the kept rows' bias),
 //! ```
 //!
+//! (the kept rows' equation Gₛ q' = −γₛ negated, so that the matrix is symmetric and each
+//! pivot on its diagonal computes half the updates: an LDLᵀ order),
 //! eliminated once, when the code is written, in an order fixed then: the elimination's
 //! structure (which entries are zero, which pivots, which fill) is known before any state is,
 //! so the code does only the arithmetic of the non-zero entries (Duff, Erisman and Reid,
@@ -19,7 +21,7 @@
 //! 2. each complementary coordinate (no inertia: its row of M is zero) with a kept row it
 //!    appears in, the one of largest entry at the start: a pair of pivots on that entry (for a
 //!    planar loop of revolutes the closing joint's axis, a constant);
-//! 3. the remaining multipliers on the diagonal of Gₛ M⁻¹ Gₛᵀ as reduced by step 2 (positive
+//! 3. the remaining multipliers on the diagonal of −Gₛ M⁻¹ Gₛᵀ as reduced by step 2 (negative
 //!    definite where the kept rows are independent), again by minimum degree.
 //!
 //! A tree coordinate whose row of M is zero (a body without inertia about its joint's axis:
@@ -159,6 +161,7 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     let mut system = Elimination {
         a: vec![vec![None; size]; size],
         b: Vec::with_capacity(size),
+        symmetric: true,
         row_done: vec![false; size],
         column_done: vec![false; size],
         pivots: Vec::new(),
@@ -177,19 +180,17 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
         let f = pool.add(equations.second_member[ci], equations.forces[ci]);
         let value = values[second.start + ci] + values[forces.start + ci];
         system.b.push(entry(f, value));
+        // The kept rows' equations negated (−Gₛ q' = γₛ), so that the matrix is symmetric.
         for (r, &row) in kept.rows.iter().enumerate() {
             let g = equations.constraints[row * n + ci];
             let e = entry(pool.neg(g), -values[delta.start + row * n + ci]);
             set(pool, &mut system, i, k + r, e);
-            let e = entry(g, values[delta.start + row * n + ci]);
             set(pool, &mut system, k + r, i, e);
         }
     }
     for &row in kept.rows {
-        let value = -values[bias.start + row];
-        system
-            .b
-            .push(entry(pool.neg(equations.constraint_bias[row]), value));
+        let value = values[bias.start + row];
+        system.b.push(entry(equations.constraint_bias[row], value));
     }
     if weighting == Weighting::Augmented {
         augment(pool, &mut system, k, (&moving, kept.rows), |c, r| {
@@ -252,13 +253,17 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
                 coordinate_name(equations, moving[i])
             )));
         };
+        system.symmetric = false;
         system.eliminate(pool, i, r);
         system.eliminate(pool, r, i);
+        // The pair is a symmetric block pivot: what it leaves is symmetric again.
+        system.mirror_upper_triangle();
     }
-    // 3. The remaining multipliers.
+    // 3. The remaining multipliers, on −Gₛ M⁻¹ Gₛᵀ (negative definite where the kept rows are
+    // independent).
     let rest: Vec<usize> = (k..size).filter(|&r| !system.row_done[r]).collect();
     while let Some(r) = system.fewest_entries(rest.iter().map(|&r| (r, r))) {
-        if system.a[r][r].is_none_or(|p| p.value <= 0.0) {
+        if system.a[r][r].is_none_or(|p| p.value >= 0.0) {
             return Err(match weighting {
                 Weighting::Plain => Refusal::Plain("the kept rows are not independent at the start, by the plain order".into()),
                 Weighting::Augmented => Refusal::Other("the kept rows are not independent at the start".into()),
@@ -375,6 +380,11 @@ fn augment(
 struct Elimination {
     a: Vec<Vec<Option<Entry>>>,
     b: Vec<Entry>,
+    /// Whether `a` is symmetric (in its values: the augmented entries are formed twice, the
+    /// same sums): then a pivot on the diagonal updates the upper triangle and mirrors it, as
+    /// an LDLᵀ factorisation does (Golub and Van Loan, *Matrix Computations*, 4th ed., 2013,
+    /// §4.1), half the products. False between the two pivots of a pair (step 2).
+    symmetric: bool,
     row_done: Vec<bool>,
     column_done: Vec<bool>,
     /// (row, column, pivot), in the order taken.
@@ -411,6 +421,9 @@ impl Elimination {
             .filter_map(|j| self.a[row][j].map(|e| (j, e)))
             .collect();
         let pivot_b = self.b[row];
+        // On a symmetric matrix's diagonal, entry (i, j) with j < i was written as the mirror
+        // of (j, i), whose row came first.
+        let mirrored = self.symmetric && row == column;
         for i in 0..self.a.len() {
             if self.row_done[i] {
                 continue;
@@ -419,7 +432,7 @@ impl Elimination {
                 continue;
             };
             let factor = product(pool, below, reciprocal);
-            for &(j, e) in &pivot_row {
+            for &(j, e) in pivot_row.iter().filter(|&&(j, _)| !mirrored || j >= i) {
                 let update = product(pool, factor, e);
                 self.a[i][j] = match self.a[i][j] {
                     None => Some(negated(pool, update)),
@@ -431,6 +444,9 @@ impl Elimination {
                         (!pool.is_zero(new.expr)).then_some(new)
                     }
                 };
+                if mirrored {
+                    self.a[j][i] = self.a[i][j];
+                }
             }
             let update = product(pool, factor, pivot_b);
             let old = self.b[i];
@@ -439,6 +455,18 @@ impl Elimination {
                 value: old.value - update.value,
             };
         }
+    }
+
+    /// Makes the rows and columns not yet taken symmetric again by their upper triangle, after
+    /// a pivot that left them symmetric in value but not entry for entry.
+    fn mirror_upper_triangle(&mut self) {
+        let open: Vec<usize> = (0..self.a.len()).filter(|&i| !self.row_done[i]).collect();
+        for (n, &i) in open.iter().enumerate() {
+            for &j in &open[n + 1..] {
+                self.a[j][i] = self.a[i][j];
+            }
+        }
+        self.symmetric = true;
     }
 
     /// The unknowns by back substitution, in the pivots' reverse order: each pivot's row holds,
