@@ -625,6 +625,28 @@ impl<'m> MechanicalSystem<'m> {
         Ok(found?)
     }
 
+    /// Where a step ending at y in a passage, its rows set aside already independent again well
+    /// past `PASSAGE_LEFT` (`LoopMonitor::leaving`), should end instead, as a fraction of it.
+    pub fn leave_passage_soon(&mut self, _t: f64, y: &[f64]) -> Result<Option<f64>, SystemError> {
+        let model = self.model;
+        if !model.has_loops() || !self.scratch.loops.cuts_passage() {
+            return Ok(None);
+        }
+        let mut q = std::mem::take(&mut self.scratch.positions);
+        let v = model.split_state_into(y, &mut q);
+        let scratch = &mut self.scratch;
+        let rows = scratch
+            .crossing_rows
+            .get_or_insert_with(|| loops::Constraints::new(model));
+        let found = forward_kinematics(model, &mut scratch.data, &q, v)
+            .and_then(|()| {
+                loops::constraints_into(model, &mut scratch.data, &q, v, Extent::Rows, rows)
+            })
+            .map(|()| scratch.loops.leaving(&rows.jacobian));
+        self.scratch.positions = q;
+        Ok(found?)
+    }
+
     /// Sets the rates of the complementary ball joints' angles in y (for outputs).
     pub fn ball_rates(&mut self, y: &mut [f64]) -> Result<(), SystemError> {
         let model = self.model;
