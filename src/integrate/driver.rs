@@ -197,8 +197,17 @@ impl AdaptiveMarch {
             true => Ok(error),
             false => Err(Halt::NotFinite { time: self.t + h }),
         });
+        // A step the system wants shorter (`OdeSystem::cut_adaptive_step`) is taken again so.
+        let attempt = attempt.and_then(|error| match error <= 1.0 {
+            true => Ok((error, eval.cut_adaptive_step(self.t + h, &self.y_new)?)),
+            false => Ok((error, None)),
+        });
         match attempt {
-            Ok(error) if error <= 1.0 => {
+            Ok((_, Some(fraction))) => {
+                eval.stats.rejected += 1;
+                self.h = fraction * h;
+            }
+            Ok((error, None)) if error <= 1.0 => {
                 self.advance(eval, problem, h, outputs, observer)?;
                 eval.stats.steps += 1;
                 self.last_step = h;
@@ -211,7 +220,7 @@ impl AdaptiveMarch {
                 }
                 return Ok(true);
             }
-            Ok(error) => {
+            Ok((error, None)) => {
                 eval.stats.rejected += 1;
                 self.h = self.controller.after_reject(h, error);
             }

@@ -92,6 +92,14 @@ impl<'s> Evaluator<'s> {
             .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))
     }
 
+    /// Where the adaptive step ending at (t, y) should end instead
+    /// (`OdeSystem::cut_adaptive_step`).
+    pub(super) fn cut_adaptive_step(&mut self, t: f64, y: &[f64]) -> Result<Option<f64>, Halt> {
+        self.system
+            .cut_adaptive_step(t, y)
+            .map_err(|error| Halt::fatal(t, Failure::System(error.to_string())))
+    }
+
     pub(super) fn event_count(&self) -> usize {
         self.system.event_count()
     }

@@ -77,6 +77,13 @@ pub trait OdeSystem {
         Ok(None)
     }
 
+    /// Where an adaptive method's step ending at (t, y), accepted by its error control, should
+    /// end instead, as a fraction of it, when the system must see something before it: the
+    /// step is then taken again so. `None` (the default) accepts it as it is.
+    fn cut_adaptive_step(&mut self, _t: f64, _y: &[f64]) -> Result<Option<f64>, CallbackError> {
+        Ok(None)
+    }
+
     /// How many event functions the system has (a mechanism's stops): after each step the
     /// integrators locate, on the step's interpolant, the first time one of them crosses from
     /// non-negative to negative, and let [`OdeSystem::handle_event`] act there.

@@ -43,6 +43,10 @@ const RECHOOSE_BELOW: f64 = 0.8;
 const PASSAGE_ENTERED: f64 = 1e-5;
 const PASSAGE_LEFT: f64 = 2e-5;
 
+/// An adaptive step in a passage ending with the rows set aside conditioned above this is taken
+/// again to end halfway (`LoopMonitor::leaving`).
+const PASSAGE_LEFT_BY: f64 = 1.5 * PASSAGE_LEFT;
+
 /// At or above this conditioning a state kept around a passage ends the stretch whose outputs
 /// are interpolated between its ends (see `LoopFindings`). Nearer the passage the step ends' own
 /// velocities drift across the rows about to be lost (on a row of two parallelograms with the
@@ -317,6 +321,22 @@ impl LoopMonitor {
         }
         let (end, _) = self.orientation.relative(jacobian)?;
         (end < 0.0).then(|| APPROACH / (1.0 - end))
+    }
+
+    /// Where an adaptive step in a passage ending at the rows `jacobian` should end instead, as a
+    /// fraction of it: halfway while the rows set aside are conditioned above `PASSAGE_LEFT_BY`.
+    pub fn leaving(&mut self, jacobian: &ConstraintJacobian) -> Option<f64> {
+        let before = self.passage.as_ref().filter(|_| self.cuts_passage())?;
+        let conditioning = Factored::new(jacobian, before).conditioning().0;
+        (conditioning > PASSAGE_LEFT_BY).then_some(0.5)
+    }
+
+    /// Whether a step's end is checked for leaving a passage (`leaving`): by the run's monitor,
+    /// in a passage, when it projects.
+    pub fn cuts_passage(&self) -> bool {
+        self.passage.is_some()
+            && !self.samples_outputs
+            && self.stabilisation == Stabilisation::Projection
     }
 
     /// A monitor for the outputs, from this one's structure as it stands

@@ -59,6 +59,10 @@ impl OdeSystem for MechanicalSystem<'_> {
         Ok(self.cut_at_passage(t, y)?)
     }
 
+    fn cut_adaptive_step(&mut self, t: f64, y: &[f64]) -> Result<Option<f64>, CallbackError> {
+        Ok(self.leave_passage_soon(t, y)?)
+    }
+
     fn event_count(&self) -> usize {
         self.event_total()
     }
@@ -177,6 +181,11 @@ impl OdeSystem for RunOde<'_, '_> {
     fn cut_step(&mut self, t: f64, y: &[f64]) -> Result<Option<f64>, CallbackError> {
         let (n, _) = self.load(y);
         Ok(self.system.cut_at_passage(t, &y[..n])?)
+    }
+
+    fn cut_adaptive_step(&mut self, t: f64, y: &[f64]) -> Result<Option<f64>, CallbackError> {
+        let (n, _) = self.load(y);
+        Ok(self.system.leave_passage_soon(t, &y[..n])?)
     }
 
     fn event_count(&self) -> usize {

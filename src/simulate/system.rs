@@ -25,6 +25,7 @@ mod states;
 mod subtree_run;
 mod tangent;
 
+use super::constraints::LoopMonitor;
 use super::run_state::RunState;
 use crate::dynamics::algorithms::{
     aba_after_kinematics, aba_into, crba_after_kinematics, forward_kinematics,
@@ -606,8 +607,29 @@ impl<'m> MechanicalSystem<'m> {
     /// passage is met at a step's end, where it is set aside (`LoopMonitor::keep`), rather than
     /// jumped across by a step whose stages come unseen as near it as round-off allows.
     pub fn cut_at_passage(&mut self, _t: f64, y: &[f64]) -> Result<Option<f64>, SystemError> {
+        match self.scratch.loops.watches_crossings() {
+            true => self.ask_at_step_end(y, LoopMonitor::crossing),
+            false => Ok(None),
+        }
+    }
+
+    /// Where a step ending at y in a passage, its rows set aside already independent again well
+    /// past `PASSAGE_LEFT` (`LoopMonitor::leaving`), should end instead, as a fraction of it.
+    pub fn leave_passage_soon(&mut self, _t: f64, y: &[f64]) -> Result<Option<f64>, SystemError> {
+        match self.scratch.loops.cuts_passage() {
+            true => self.ask_at_step_end(y, LoopMonitor::leaving),
+            false => Ok(None),
+        }
+    }
+
+    /// What the loops' monitor answers `ask` with the rows at the step's end y.
+    fn ask_at_step_end(
+        &mut self,
+        y: &[f64],
+        ask: fn(&mut LoopMonitor, &loops::ConstraintJacobian) -> Option<f64>,
+    ) -> Result<Option<f64>, SystemError> {
         let model = self.model;
-        if !model.has_loops() || !self.scratch.loops.watches_crossings() {
+        if !model.has_loops() {
             return Ok(None);
         }
         let mut q = std::mem::take(&mut self.scratch.positions);
@@ -620,7 +642,7 @@ impl<'m> MechanicalSystem<'m> {
             .and_then(|()| {
                 loops::constraints_into(model, &mut scratch.data, &q, v, Extent::Rows, rows)
             })
-            .map(|()| scratch.loops.crossing(&rows.jacobian));
+            .map(|()| ask(&mut scratch.loops, &rows.jacobian));
         self.scratch.positions = q;
         Ok(found?)
     }
