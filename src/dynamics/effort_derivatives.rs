@@ -92,6 +92,9 @@ pub struct EffortDerivatives {
     column_parent: Vec<usize>,
     /// Per body (0 earth), its velocity in the fixed frame.
     velocity: Vec<Motion>,
+    /// Whether velocity c moves body b, at c (bodies + 1) + b: the branches as a table, read
+    /// for every direction of every effort.
+    moving: Vec<bool>,
     /// Per declared coordinate, the velocity it is (a tree's joints declare their own).
     declared_velocity: Vec<Option<usize>>,
     symbol_tangents: Vec<f64>,
@@ -113,8 +116,16 @@ impl EffortDerivatives {
                 }
             }
         }
+        let bodies = model.body_count() + 1;
+        let mut moving = vec![false; nv * bodies];
+        for body in 1..bodies {
+            for &c in model.branch_velocities(body - 1) {
+                moving[c * bodies + body] = true;
+            }
+        }
         EffortDerivatives {
             efforts: DMatrix::zeros(nv, 2 * nv),
+            moving,
             power: vec![0.0; 2 * nv],
             columns: vec![Motion::zeros(); nv],
             column_parent: vec![0; nv],
@@ -193,13 +204,13 @@ impl EffortDerivatives {
     }
 
     /// Whether velocity `c` moves body `body`.
-    fn moves(model: &Model, c: usize, body: usize) -> bool {
-        body != 0 && model.branch_velocities(body - 1).contains(&c)
+    fn moves(&self, c: usize, body: usize) -> bool {
+        self.moving[c * self.velocity.len() + body]
     }
 
     /// The rigid displacement of `body` along direction x (a q's; none along the v's).
     fn displacement(&self, model: &Model, body: usize, x: usize) -> Motion {
-        match x < model.nv && Self::moves(model, x, body) {
+        match x < model.nv && self.moves(x, body) {
             true => self.columns[x],
             false => Motion::zeros(),
         }
@@ -210,7 +221,7 @@ impl EffortDerivatives {
     fn velocity_change(&self, model: &Model, body: usize, x: usize) -> Motion {
         let nv = model.nv;
         let c = x % nv;
-        if !Self::moves(model, c, body) {
+        if !self.moves(c, body) {
             return Motion::zeros();
         }
         if x >= nv {

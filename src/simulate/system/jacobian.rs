@@ -110,8 +110,9 @@ impl MechanicalSystem<'_> {
         effort_derivatives::covers(model).is_ok() && !self.state.inputs.any() && !model.has_contacts()
     }
 
-    /// The derivatives of the efforts' generalised forces at (t, q, v), D = ∂τ_links/∂(q, v)
-    /// + Σ_b J_bᵀ ∂f_b/∂(q, v) with the bodies' Jacobians held (nv × 2nv, along q then v), and
+    /// The derivatives of the efforts' generalised forces at (t, q, v),
+    /// D = ∂τ_links/∂(q, v) + Σ_b J_bᵀ ∂f_b/∂(q, v) with the bodies' Jacobians held (nv × 2nv,
+    /// along q then v), and
     /// the gradient of their power, through the efforts' tape (`effort_derivatives`); the
     /// forward kinematics of (q, v) left in `data`. `None` where they do not cover the model
     /// or an input is set.
