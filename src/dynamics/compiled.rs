@@ -18,12 +18,12 @@ use super::elements::EffortFrame;
 use crate::elab::value::{FrameQuantity, SExpr, Scalar, Vector};
 use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::spatial::{Motion, Pose};
-use crate::symbolic::expr::{ExprId, Pool, Tape};
+use crate::symbolic::expr::{ExprId, Pool, Tangents, Tape};
 use crate::symbolic::program::{lower_structure, Lower};
 
 /// What a symbol of the tape stands for.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Source {
+pub enum Source {
     Time,
     /// A declared coordinate of the whole mechanism.
     Coordinate(usize),
@@ -140,6 +140,23 @@ impl EffortTape {
         energy: bool,
         scratch: &mut EffortScratch,
     ) {
+        self.symbols_into(frames, state, scratch);
+        let count = if energy {
+            self.tape.size()
+        } else {
+            self.values_end
+        };
+        self.tape
+            .eval_prefix_into(&scratch.symbols, &mut scratch.values, count);
+    }
+
+    /// The symbols' values at `state` into `scratch.symbols`.
+    fn symbols_into(
+        &self,
+        frames: &[EffortFrame],
+        state: &EffortState<'_>,
+        scratch: &mut EffortScratch,
+    ) {
         scratch.frames.clear();
         scratch.frames.extend(
             frames
@@ -159,18 +176,42 @@ impl EffortTape {
                 // Outputs read by a study that computes no model see NaN.
                 Source::Model(k) => state.model.get(k).copied().unwrap_or(f64::NAN),
             }));
-        let count = if energy {
-            self.tape.size()
-        } else {
-            self.values_end
-        };
-        self.tape
-            .eval_prefix_into(&scratch.symbols, &mut scratch.values, count);
+    }
+
+    /// The efforts' values (not the potentials) and their derivatives along `out.directions`
+    /// directions, symbol i's derivatives being `symbol_tangents[i * d..(i + 1) * d]`
+    /// (forward mode through the tape, `Tape::tangents_prefix_into`); read them with
+    /// [`EffortTape::root_tangent`] and [`EffortTape::root_value`].
+    pub fn eval_tangents(
+        &self,
+        frames: &[EffortFrame],
+        state: &EffortState<'_>,
+        symbol_tangents: &[f64],
+        scratch: &mut EffortScratch,
+        out: &mut Tangents,
+    ) {
+        self.symbols_into(frames, state, scratch);
+        (self.tape).tangents_prefix_into(&scratch.symbols, symbol_tangents, self.values_end, out);
     }
 
     /// The value of root `k` after [`EffortTape::eval`].
     pub fn root(&self, scratch: &EffortScratch, k: usize) -> f64 {
         scratch.values[self.slots[k]]
+    }
+
+    /// The value of root `k` after [`EffortTape::eval_tangents`].
+    pub fn root_value(&self, out: &Tangents, k: usize) -> f64 {
+        out.values[self.slots[k]]
+    }
+
+    /// The derivatives of root `k` after [`EffortTape::eval_tangents`].
+    pub fn root_tangent<'t>(&self, out: &'t Tangents, k: usize) -> &'t [f64] {
+        out.of(self.slots[k])
+    }
+
+    /// What each symbol stands for, in the order of the symbols' indices.
+    pub fn sources(&self) -> &[Source] {
+        &self.sources
     }
 
     /// Whether the tape reads a declared coordinate or rate in `range`.

@@ -15,6 +15,7 @@ internal! {
     mod driven_points;
     mod driven_subtrees;
     mod drives;
+    mod effort_derivatives;
     mod efforts;
     mod elements;
     mod energy;

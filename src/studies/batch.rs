@@ -311,13 +311,20 @@ fn evaluate_state(
             let total = state.tau.as_ref().map(|tau| {
                 DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv)
             });
+            let changes = match system.effort_derivatives(0.0, &q_full, &v_full) {
+                Ok(found) => found.map(|d| d.efforts.clone()),
+                Err(e) => {
+                    errors.insert("derivatives".into(), e.to_string());
+                    None
+                }
+            };
             let found = state_derivatives(
                 model,
                 &mut system.scratch.data,
                 (&state.q, v),
-                state.a.as_deref(),
-                total.as_ref().map(|t| t.as_slice()),
+                (state.a.as_deref(), total.as_ref().map(|t| t.as_slice())),
                 &efforts.external,
+                changes.as_ref(),
             );
             found
                 .map_err(|e| errors.insert("derivatives".into(), e))

@@ -4,9 +4,14 @@
 //! `dynamics::algorithms::{rnea_derivatives, aba_derivatives, crba_derivatives}`. Derivatives along
 //! q are along the velocities (a spherical or free joint's tangent space, q · exp(ε e_j)).
 //!
-//! The program's efforts other than gravity (its forces, torques and link efforts) are held at
-//! their values at the state, in the bodies' frames: their own dependence on the state is not
-//! differentiated (`efforts_held` says whether the program has any).
+//! The program's efforts (its forces, torques and link efforts: springs, dampers, any law of the
+//! frames' states and of the coordinates and rates) are differentiated too, through their
+//! compiled tape in forward mode (`dynamics::effort_derivatives`), on trees whose joints are
+//! one-coordinate dof chains: the inverse dynamics τ = RNEA(q, v, a; f) − τ_links changes by
+//! ∂RNEA/∂x|_f − D and the forward dynamics by ∂ABA/∂x|_f + M⁻¹ D, D the efforts' derivatives.
+//! Where those do not cover the program (actuators' laws, friction, the programs' states,
+//! spherical and free joints, loops) its efforts are held at their values at the state, in the
+//! bodies' frames (`efforts_held` says so).
 
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
@@ -37,7 +42,8 @@ pub struct ForwardDerivatives {
 /// The derivatives at one state; `rnea` and `aba` are present when `a` and `tau` were given.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct StateDerivatives {
-    /// Whether the program has efforts besides gravity, held fixed rather than differentiated.
+    /// Whether the program has efforts besides gravity that are held fixed rather than
+    /// differentiated.
     pub efforts_held: bool,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub rnea: Option<InverseDerivatives>,
@@ -51,7 +57,7 @@ fn rows(m: &DMatrix<f64>) -> Rows {
     m.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
-/// Whether the model has efforts beyond gravity, which the derivatives hold fixed.
+/// Whether the model has efforts beyond gravity.
 fn has_efforts(model: &Model) -> bool {
     !model.applied.is_empty()
         || !model.link_efforts.is_empty()
@@ -60,22 +66,30 @@ fn has_efforts(model: &Model) -> bool {
 }
 
 /// The derivatives at (q, v), of RNEA at `a` and of ABA at `tau` when given, under the external
-/// forces `external` (per body, in its frame).
+/// forces `external` (per body, in its frame), with the efforts' derivatives `efforts` (D, nv ×
+/// 2nv along q then v: `MechanicalSystem::effort_derivatives`) where they are computed.
 pub fn state_derivatives(
     model: &Model,
     data: &mut Data,
     (q, v): (&[f64], &[f64]),
-    a: Option<&[f64]>,
-    tau: Option<&[f64]>,
+    (a, tau): (Option<&[f64]>, Option<&[f64]>),
     external: &[Force],
+    efforts: Option<&DMatrix<f64>>,
 ) -> Result<StateDerivatives, String> {
+    let nv = model.nv;
+    // D's halves, or zeros where the efforts are held.
+    let zero = DMatrix::zeros(nv, nv);
+    let (along_q, along_v) = match efforts {
+        Some(d) => (d.columns(0, nv).into_owned(), d.columns(nv, nv).into_owned()),
+        None => (zero.clone(), zero),
+    };
     let rnea = match a {
         Some(a) => {
             let mut inverse = RneaDerivatives::new(model);
             (inverse.compute(model, data, q, v, a, external)).map_err(|e| e.to_string())?;
             Some(InverseDerivatives {
-                dq: rows(&inverse.dtau_dq),
-                dv: rows(&inverse.dtau_dv),
+                dq: rows(&(&inverse.dtau_dq - &along_q)),
+                dv: rows(&(&inverse.dtau_dv - &along_v)),
             })
         }
         None => None,
@@ -84,17 +98,18 @@ pub fn state_derivatives(
         Some(tau) => {
             let mut forward = AbaDerivatives::new(model);
             (forward.compute(model, data, q, v, tau, external)).map_err(|e| e.to_string())?;
+            let inverse_mass = &forward.mass_inverse;
             Some(ForwardDerivatives {
-                dq: rows(&forward.dacceleration_dq),
-                dv: rows(&forward.dacceleration_dv),
-                dtau: rows(&forward.mass_inverse),
+                dq: rows(&(&forward.dacceleration_dq + inverse_mass * &along_q)),
+                dv: rows(&(&forward.dacceleration_dv + inverse_mass * &along_v)),
+                dtau: rows(inverse_mass),
             })
         }
         None => None,
     };
     let mass = mass_derivatives(model, data, q).map_err(|e| e.to_string())?;
     Ok(StateDerivatives {
-        efforts_held: has_efforts(model),
+        efforts_held: has_efforts(model) && efforts.is_none(),
         rnea,
         aba,
         crba: mass.iter().map(rows).collect(),

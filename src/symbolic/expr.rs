@@ -11,6 +11,9 @@ use super::tape_code::{Apply, Code, TapeCode};
 
 pub use super::exponential_profile::ExponentialProfile;
 
+mod tangents;
+pub use tangents::Tangents;
+
 /// An expression: an index into its `Pool`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ExprId(u32);

@@ -21,6 +21,7 @@ mod driven_subtrees;
 mod drives;
 mod dual_numbers;
 mod dynamics;
+mod effort_derivatives;
 mod exact_mobility;
 mod examples;
 mod export_fmu;

@@ -25,9 +25,13 @@ use nalgebra::{DMatrix, DVector};
 
 use super::scratch::mass_storage;
 use super::{MechanicalSystem, SystemError};
+use crate::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
 use crate::dynamics::algorithms::{
     crba_after_kinematics, forward_kinematics, rnea_after_kinematics,
 };
+use crate::dynamics::effort_derivatives::{self, EffortDerivatives};
+use crate::dynamics::efforts::Declared;
+use std::ops::SubAssign;
 use crate::dynamics::dense::inverse_power_of_two;
 use crate::dynamics::joint::JointType;
 use crate::dynamics::rows::DEPENDENT_ROWS;
@@ -71,22 +75,12 @@ impl MechanicalSystem<'_> {
         let model = self.model;
         let nv = model.nv;
         let accelerations = &dydt[nv..];
-        let at_state = self.residual(t, y, accelerations)?;
+        let mut differences = DMatrix::zeros(nv, 2 * nv);
+        if !self.exact_residual_derivatives(t, y, accelerations, &mut differences, power_gradient)? {
+            self.differenced_residual(t, y, accelerations, &mut differences, power_gradient)?;
+        }
         let mass = mass_storage(&mut self.scratch.mass, nv);
         crba_after_kinematics(model, &mut self.scratch.data, mass);
-        let mut differences = DMatrix::zeros(nv, 2 * nv);
-        let mut perturbed = y.to_vec();
-        for j in 0..2 * nv {
-            perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
-            // The increment actually represented, so that rounding of y + δ does not bias the
-            // quotient.
-            let delta = perturbed[j] - y[j];
-            let moved = self.residual(t, &perturbed, accelerations)?;
-            perturbed[j] = y[j];
-            let column = (moved.values - &at_state.values) / delta;
-            differences.set_column(j, &column);
-            power_gradient[j] = (moved.power - at_state.power) / delta;
-        }
         // X = M⁻¹, or S (SᵀMS)⁻¹Sᵀ with the mimic couplings; formed at y for this Jacobian only.
         let formed = self.form_tree_response().is_ok();
         self.scratch.response_here = false;
@@ -107,6 +101,102 @@ impl MechanicalSystem<'_> {
             .view_mut((nv, 0), (nv, 2 * nv))
             .copy_from(&response);
         Ok(true)
+    }
+
+    /// Whether the analytical derivatives cover the residual's: the efforts' through their
+    /// tape (`effort_derivatives::covers`), no input and no friction, and RNEA's.
+    fn has_exact_residual_derivatives(&self) -> bool {
+        let model = self.model;
+        effort_derivatives::covers(model).is_ok() && !self.state.inputs.any() && !model.has_contacts()
+    }
+
+    /// The derivatives of the efforts' generalised forces at (t, q, v),
+    /// D = ∂τ_links/∂(q, v) + Σ_b J_bᵀ ∂f_b/∂(q, v) with the bodies' Jacobians held (nv × 2nv,
+    /// along q then v), and
+    /// the gradient of their power, through the efforts' tape (`effort_derivatives`); the
+    /// forward kinematics of (q, v) left in `data`. `None` where they do not cover the model
+    /// or an input is set.
+    pub(crate) fn effort_derivatives(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<Option<&EffortDerivatives>, SystemError> {
+        if !self.has_exact_residual_derivatives() {
+            return Ok(None);
+        }
+        let model = self.model;
+        self.evaluate_efforts(t, q, v)?;
+        let scratch = &mut *self.scratch;
+        let exact = scratch.exact_jacobian.get_or_insert_with(|| {
+            Box::new((RneaDerivatives::new(model), EffortDerivatives::new(model)))
+        });
+        let declared = Declared {
+            model,
+            coordinates: &scratch.declared.coordinates,
+            rates: &scratch.declared.rates,
+            states: &self.state.states,
+        };
+        exact.1.compute(model, &mut scratch.data, &declared, t)?;
+        Ok(Some(&exact.1))
+    }
+
+    /// ∂r/∂(q, v) at (y, a*) exactly, D − ∂RNEA/∂(q, v) with D the efforts' derivatives
+    /// ([`MechanicalSystem::effort_derivatives`]), and the gradient of the efforts' power; the
+    /// forward kinematics of y left in `data`. `Ok(false)` where they do not cover the model.
+    fn exact_residual_derivatives(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        a: &[f64],
+        columns: &mut DMatrix<f64>,
+        power_gradient: &mut [f64],
+    ) -> Result<bool, SystemError> {
+        let model = self.model;
+        let nv = model.nv;
+        let (q, v) = y.split_at(model.nq);
+        if self.effort_derivatives(t, q, v)?.is_none() {
+            return Ok(false);
+        }
+        let scratch = &mut *self.scratch;
+        let (inverse, efforts) = &mut **scratch.exact_jacobian.as_mut().expect("made above");
+        let external = &scratch.efforts.external;
+        if inverse.compute(model, &mut scratch.data, q, v, a, external).is_err() {
+            return Ok(false);
+        }
+        columns.copy_from(&efforts.efforts);
+        columns.columns_mut(0, nv).sub_assign(&inverse.dtau_dq);
+        columns.columns_mut(nv, nv).sub_assign(&inverse.dtau_dv);
+        power_gradient[..2 * nv].copy_from_slice(&efforts.power);
+        Ok(true)
+    }
+
+    /// ∂r/∂(q, v) by forward differences of the residual (efforts and RNEA), and the gradient
+    /// of the efforts' power; the forward kinematics of y left in `data`.
+    fn differenced_residual(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        accelerations: &[f64],
+        differences: &mut DMatrix<f64>,
+        power_gradient: &mut [f64],
+    ) -> Result<(), SystemError> {
+        let at_state = self.residual(t, y, accelerations)?;
+        let mut perturbed = y.to_vec();
+        for j in 0..2 * self.model.nv {
+            perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
+            // The increment actually represented, so that rounding of y + δ does not bias the
+            // quotient.
+            let delta = perturbed[j] - y[j];
+            let moved = self.residual(t, &perturbed, accelerations)?;
+            perturbed[j] = y[j];
+            let column = (moved.values - &at_state.values) / delta;
+            differences.set_column(j, &column);
+            power_gradient[j] = (moved.power - at_state.power) / delta;
+        }
+        // The kinematics of y, as the exact derivatives leave them.
+        forward_kinematics(self.model, &mut self.scratch.data, &y[..self.model.nq], &y[self.model.nq..])?;
+        Ok(())
     }
 
     /// The held change of the columns Y = X ∂r/∂x (`held`): Y − X Eᵀ (E X Eᵀ)⁺ E Y, with E the

@@ -7,7 +7,9 @@
 use crate::dynamics::planar::PlanarData;
 use nalgebra::{DMatrix, DVector};
 
+use crate::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
 use crate::dynamics::algorithms::Data;
+use crate::dynamics::effort_derivatives::EffortDerivatives;
 use crate::dynamics::compiled::EffortScratch;
 use crate::dynamics::contacts::ContactRows;
 use crate::dynamics::driven_points::PointRows;
@@ -102,6 +104,9 @@ pub struct Scratch {
     /// where the actuators' laws are evaluated.
     pub model_laws: Option<ReducedScratch>,
     pub(in crate::simulate) actuator_tape: EffortScratch,
+    /// The analytical derivatives of inverse dynamics and of the efforts, for the tree
+    /// Jacobian where they cover the model (`jacobian`); made at its first.
+    pub(in crate::simulate) exact_jacobian: Option<Box<(RneaDerivatives, EffortDerivatives)>>,
 }
 
 impl Scratch {
@@ -118,6 +123,7 @@ impl Scratch {
             declared: DeclaredState::default(),
             model_laws: None,
             actuator_tape: EffortScratch::default(),
+            exact_jacobian: None,
             next_reference: DeclaredState::default(),
             inverse: DVector::zeros(model.nv),
             force: DVector::zeros(model.velocities()),
