@@ -15,7 +15,6 @@ use std::collections::BTreeSet;
 
 use nalgebra::{DMatrix, DVector};
 
-
 /// A sparse vector: (column, value) pairs in increasing column order.
 pub type Sparse = Vec<(usize, f64)>;
 
@@ -227,7 +226,12 @@ impl Elimination {
 /// search), so that a longer chain costs a block's search per block (see `PIVOTED_BLOCK`). A
 /// part only shrinks as rows are taken, so a row left in its block at the tolerance would not
 /// have been taken later. The elimination, its picks in the order taken.
-pub fn pivoted(rows: Vec<Sparse>, columns: usize, candidates: &[usize], tolerance: f64) -> Elimination {
+pub fn pivoted(
+    rows: Vec<Sparse>,
+    columns: usize,
+    candidates: &[usize],
+    tolerance: f64,
+) -> Elimination {
     let block = if candidates.len() <= ONE_SEARCH_UP_TO {
         ONE_SEARCH_UP_TO
     } else {

@@ -275,10 +275,13 @@ impl MinimumNormRows {
     /// independent by [`MinimumNormRows::new`] at a nearby matrix: the same solutions at the
     /// cost of the factorisation alone. `None` where an entry is not finite or those rows are
     /// no longer independent.
-    pub fn on_rows(a: &DMatrix<f64>, rows: &[usize], relative_floor: f64) -> Option<MinimumNormRows> {
+    pub fn on_rows(
+        a: &DMatrix<f64>,
+        rows: &[usize],
+        relative_floor: f64,
+    ) -> Option<MinimumNormRows> {
         let transposed = DMatrix::from_fn(a.ncols(), rows.len(), |i, k| a[(rows[k], i)]);
-        let factors =
-            MinimumNormRows::factor(transposed, rows.to_vec(), false, relative_floor)?;
+        let factors = MinimumNormRows::factor(transposed, rows.to_vec(), false, relative_floor)?;
         (factors.rank() == rows.len()).then_some(factors)
     }
 

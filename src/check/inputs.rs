@@ -47,7 +47,8 @@ impl<'w> Checker<'w> {
         self.expect_value(&input.value, value_ty, Ty::Scalar, "an input's start value");
         let Some(previous) = self.out.scope(scope).names.get(&name.name) else {
             self.value_inputs.insert(name.span);
-            self.scope_mut(scope).insert(name.name, Ty::Scalar, name.span);
+            self.scope_mut(scope)
+                .insert(name.name, Ty::Scalar, name.span);
             return;
         };
         let previous = previous.span;

@@ -78,10 +78,14 @@ pub fn solve_in_place(a: &mut DMatrix<f64>, b: &mut [f64]) -> Result<(), usize> 
     let n = b.len();
     let largest = a.amax();
     for j in 0..n {
-        let (offset, best) = (j..n)
-            .map(|i| a[(i, j)].abs())
-            .enumerate()
-            .fold((0, -1.0), |best, (i, x)| if x > best.1 { (i, x) } else { best });
+        let (offset, best) =
+            (j..n)
+                .map(|i| a[(i, j)].abs())
+                .enumerate()
+                .fold(
+                    (0, -1.0),
+                    |best, (i, x)| if x > best.1 { (i, x) } else { best },
+                );
         if best <= 1e-14 * largest || !largest.is_finite() {
             return Err(j);
         }

@@ -46,7 +46,9 @@ impl DrivenSubtrees {
             (!model.position_drives.is_empty(), "a frame's path"),
         ];
         if let Some((_, why)) = refusal.iter().find(|(present, _)| *present) {
-            return Err(format!("the drives stay rows of the constraint stack with {why}"));
+            return Err(format!(
+                "the drives stay rows of the constraint stack with {why}"
+            ));
         }
         let mut driven = vec![false; model.velocities()];
         for drive in &model.drives {
@@ -58,8 +60,8 @@ impl DrivenSubtrees {
         let mut full = vec![false; joints.len()];
         for k in (0..joints.len()).rev() {
             let joint = &joints[k];
-            let own = (joint.v_offset..joint.v_offset + joint.nv())
-                .all(|velocity| driven[velocity]);
+            let own =
+                (joint.v_offset..joint.v_offset + joint.nv()).all(|velocity| driven[velocity]);
             let below = (k + 1..joints.len())
                 .filter(|&j| joints[j].parent == joint.child)
                 .all(|j| full[j]);
@@ -73,9 +75,10 @@ impl DrivenSubtrees {
             let parent_known = (joint.parent != 0) && known[joint.parent - 1];
             known[k] = full[k] && (parent_known || joint.nv() > 0);
         }
-        let every_drive_known = model.drives.iter().all(|drive| {
-            (model.joint_index_of_velocity(drive.velocity)).is_some_and(|k| known[k])
-        });
+        let every_drive_known = model
+            .drives
+            .iter()
+            .all(|drive| (model.joint_index_of_velocity(drive.velocity)).is_some_and(|k| known[k]));
         if !every_drive_known {
             return Err("a driven joint has a free joint below it".to_string());
         }

@@ -168,7 +168,13 @@ impl EffortDerivatives {
             model: &[],
         };
         let (symbols, out) = (&self.symbol_tangents, &mut self.tangents);
-        tape.eval_tangents(&model.effort_frames, &state, symbols, &mut data.efforts, out);
+        tape.eval_tangents(
+            &model.effort_frames,
+            &state,
+            symbols,
+            &mut data.efforts,
+            out,
+        );
         for group in &model.applied_groups {
             let body_velocity = self.velocity[group.body];
             self.applied(model, data, group, group.value_roots);
@@ -302,8 +308,9 @@ impl EffortDerivatives {
                     row[nv + c] = angular(&s)[i as usize];
                 }
                 FrameQuantity::Orientation(i, j) => {
-                    let rotation: Matrix3<f64> =
-                        *(world.rotation * frame.offset.rotation).to_rotation_matrix().matrix();
+                    let rotation: Matrix3<f64> = *(world.rotation * frame.offset.rotation)
+                        .to_rotation_matrix()
+                        .matrix();
                     row[c] = (skew(&angular(&s)) * rotation)[(i as usize, j as usize)];
                 }
             }
@@ -392,7 +399,8 @@ impl EffortDerivatives {
                 let row = joint.v_offset + k;
                 let on_declared = twist_k.dot(&wrench);
                 for x in 0..2 * nv {
-                    let change = Vector3::from_fn(|i, _| tape.root_tangent(out, effort.value_roots[i])[x]);
+                    let change =
+                        Vector3::from_fn(|i, _| tape.root_tangent(out, effort.value_roots[i])[x]);
                     let along = twist_k.dot(&as_wrench(change));
                     self.efforts[(row, x)] += along;
                     if !effort.conservative {

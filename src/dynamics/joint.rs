@@ -16,13 +16,13 @@
 
 use nalgebra::{Matrix3, Quaternion, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 
+use super::scalar::{DynamicsScalar, NOT_DIFFERENTIABLE};
 use crate::diag::Diagnostic;
 use crate::elab::mechanism::{Link, Mechanism};
 use crate::elab::value::SExpr;
 use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::{linear_in_first, ChainMotion, JointModel, Step};
 use crate::source::Span;
-use super::scalar::{DynamicsScalar, NOT_DIFFERENTIABLE};
 use crate::spatial::{self, constant, Force, Motion, Pose, Real, Transform};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -571,7 +571,8 @@ impl Joint {
                 3,
             ),
         };
-        let (on_parent, on_child): (Pose<T>, Pose<T>) = (self.on_parent.cast(), self.on_child.cast());
+        let (on_parent, on_child): (Pose<T>, Pose<T>) =
+            (self.on_parent.cast(), self.on_child.cast());
         state.subspace.clear();
         for k in 0..n {
             // Velocity layout: angular velocity first, then (free joints) linear velocity.

@@ -80,16 +80,15 @@ impl<'w> Elaborator<'_, 'w> {
             (self.enclosing_groups).push(format!("{}[{k}]", name.name));
             let elaborated = self.within(instance, |elaborator| elaborator.decls(decls, scope));
             self.enclosing_groups.pop();
-            elaborated
-                .map_err(|error| {
-                    error.secondary(
-                        name.span,
-                        format!(
-                            "in the instance `{}[{k}]` ({} = {k})",
-                            name.name, index.variable.name
-                        ),
-                    )
-                })?;
+            elaborated.map_err(|error| {
+                error.secondary(
+                    name.span,
+                    format!(
+                        "in the instance `{}[{k}]` ({} = {k})",
+                        name.name, index.variable.name
+                    ),
+                )
+            })?;
         }
         Ok(())
     }

@@ -65,12 +65,9 @@ impl EffortFilter {
             None => "an applied effort answers to its own name, the definition that makes it (`weight`) and the groups that declare it (`arm[1]`, `arm`)".to_string(),
         };
         Some(
-            Diagnostic::error(
-                "E0715",
-                format!("no applied effort answers to `{name}`"),
-            )
-            .primary(*span, "names no `apply` of the program")
-            .help(help),
+            Diagnostic::error("E0715", format!("no applied effort answers to `{name}`"))
+                .primary(*span, "names no `apply` of the program")
+                .help(help),
         )
     }
 }

@@ -341,9 +341,9 @@ impl<'c, 'w> Elaborator<'c, 'w> {
                 None => Err(internal("unresolved import")),
             },
             DeclKind::Error => Err(internal("declaration with a syntax error")),
-            DeclKind::Scene(_) | DeclKind::SelectEfforts(_) => {
-                Err(internal("a scene's declaration left after loading (`load::scene`)"))
-            }
+            DeclKind::Scene(_) | DeclKind::SelectEfforts(_) => Err(internal(
+                "a scene's declaration left after loading (`load::scene`)",
+            )),
         }
     }
 

@@ -40,15 +40,19 @@ impl Elaborator<'_, '_> {
         };
         let coordinate = index as usize;
         let inputs = &self.mechanism.inputs;
-        if let Some(first) = inputs.iter().find(|i| i.join == join && i.coordinate == coordinate) {
+        if let Some(first) = inputs
+            .iter()
+            .find(|i| i.join == join && i.coordinate == coordinate)
+        {
             let name = self.mechanism.coordinate_name(join, coordinate);
-            return Err(Diagnostic::error(
-                "E0423",
-                format!("`{name}` is declared an input twice"),
-            )
-            .primary(decl.target.span, "second declaration")
-            .secondary(first.span, "first declaration")
-            .help("an effort along a coordinate is one input: keep one `input` declaration"));
+            return Err(
+                Diagnostic::error("E0423", format!("`{name}` is declared an input twice"))
+                    .primary(decl.target.span, "second declaration")
+                    .secondary(first.span, "first declaration")
+                    .help(
+                        "an effort along a coordinate is one input: keep one `input` declaration",
+                    ),
+            );
         }
         self.mechanism.inputs.push(DeclaredInput {
             join,
@@ -95,4 +99,3 @@ impl Elaborator<'_, '_> {
         Ok(())
     }
 }
-

@@ -605,7 +605,12 @@ impl Mechanism {
     /// values.
     pub fn declared_inputs(&self) -> Vec<(String, f64)> {
         (self.inputs.iter())
-            .map(|input| (self.coordinate_name(input.join, input.coordinate), input.start))
+            .map(|input| {
+                (
+                    self.coordinate_name(input.join, input.coordinate),
+                    input.start,
+                )
+            })
             .collect()
     }
 

@@ -94,7 +94,9 @@ impl Replacement {
             }
             // A frame's state is geometric: it cannot hold a join's coordinate (a frame's
             // state has no operands to rewrite).
-            other => (other.with_operands(&mut |a| self.scalar(a))).map_or_else(|| s.clone(), Arc::new),
+            other => {
+                (other.with_operands(&mut |a| self.scalar(a))).map_or_else(|| s.clone(), Arc::new)
+            }
         }
     }
 

@@ -58,7 +58,11 @@ impl SceneModel {
         let mut parts = Vec::new();
         for (i, part) in self.left_out.iter().enumerate() {
             let mut said = listed(&part.bodies);
-            if self.left_out.get(i + 1).is_none_or(|next| next.reason != part.reason) {
+            if self
+                .left_out
+                .get(i + 1)
+                .is_none_or(|next| next.reason != part.reason)
+            {
                 said += &format!(" ({})", part.reason);
             }
             parts.push(said);
@@ -69,10 +73,17 @@ impl SceneModel {
         }
         if self.zero_efforts > 0 {
             let plural = if self.zero_efforts == 1 { "" } else { "s" };
-            parts.push(format!("{} applied effort{plural} identically zero", self.zero_efforts));
+            parts.push(format!(
+                "{} applied effort{plural} identically zero",
+                self.zero_efforts
+            ));
         }
         if self.efforts_not_chosen > 0 {
-            let plural = if self.efforts_not_chosen == 1 { "" } else { "s" };
+            let plural = if self.efforts_not_chosen == 1 {
+                ""
+            } else {
+                "s"
+            };
             parts.push(format!(
                 "{} applied effort{plural} (not chosen by the scene)",
                 self.efforts_not_chosen
@@ -82,7 +93,11 @@ impl SceneModel {
             text += &format!("; left out: {}", parts.join("; "));
         }
         if self.driven_kinematics > 0 {
-            let plural = if self.driven_kinematics == 1 { "y" } else { "ies" };
+            let plural = if self.driven_kinematics == 1 {
+                "y"
+            } else {
+                "ies"
+            };
             text += &format!(
                 "; {} driven bod{plural} as kinematics",
                 self.driven_kinematics
@@ -109,4 +124,3 @@ fn listed(names: &[String]) -> String {
         [] => String::new(),
     }
 }
-

@@ -304,7 +304,9 @@ impl SExpr {
             SExpr::Mul(a, b) => SExpr::Mul(f(a), f(b)),
             SExpr::Div(a, b) => SExpr::Div(f(a), f(b)),
             SExpr::Pow(a, b) => SExpr::Pow(f(a), f(b)),
-            SExpr::Call(call) => SExpr::call(call.function, call.args.iter().map(&mut *f).collect()),
+            SExpr::Call(call) => {
+                SExpr::call(call.function, call.args.iter().map(&mut *f).collect())
+            }
             SExpr::UnknownFunction(call) => {
                 SExpr::unknown_function(call.function, call.args.iter().map(f).collect())
             }

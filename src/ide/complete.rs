@@ -10,8 +10,8 @@ use crate::syntax::names::BUILTIN_NAMES;
 
 const KEYWORDS: &[&str] = &[
     "and", "apply", "as", "between", "body", "end", "force", "given", "import", "fixed", "guess",
-    "in", "initial", "join", "let", "link", "local", "on", "output", "package", "scene", "simulate",
-    "torque", "with",
+    "in", "initial", "join", "let", "link", "local", "on", "output", "package", "scene",
+    "simulate", "torque", "with",
 ];
 
 /// The completions at a byte offset of the root file of `edited`. The names come from `names`:

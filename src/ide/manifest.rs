@@ -12,7 +12,8 @@ use crate::load::LoadOptions;
 
 /// Whether the server reads the file at `path` as a test manifest rather than as LSD.
 pub fn is_manifest(path: &Path) -> bool {
-    path.extension().is_some_and(|extension| extension == "toml")
+    path.extension()
+        .is_some_and(|extension| extension == "toml")
 }
 
 /// The completions at byte `offset` of the manifest `text` at `path`: inside the string of a
@@ -58,7 +59,10 @@ fn value_being_typed<'t>(before: &'t str, key: &str) -> Option<&'t str> {
 /// What follows the opening quote of `key = "...` on `line`.
 fn after_opening_quote<'t>(line: &'t str, key: &str) -> Option<&'t str> {
     let rest = line.trim_start().strip_prefix(key)?;
-    rest.trim_start().strip_prefix('=')?.trim_start().strip_prefix('"')
+    rest.trim_start()
+        .strip_prefix('=')?
+        .trim_start()
+        .strip_prefix('"')
 }
 
 /// The `program` of the `[[case]]` table the line starting at `line_start` belongs to: the

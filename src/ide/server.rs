@@ -227,7 +227,9 @@ impl Server {
                 let uri: Uri = serde_json::from_value(params["textDocument"]["uri"].clone())
                     .map_err(|e| e.to_string())?;
                 if let Some(text) = self.manifests.get(&uri) {
-                    return json(serde_json::to_value(self.manifest_completions(&uri, text, params)?));
+                    return json(serde_json::to_value(
+                        self.manifest_completions(&uri, text, params)?,
+                    ));
                 }
                 let (analysis, offset) = self.at(params)?;
                 let names = self.last_parsed.get(&uri).unwrap_or(analysis);
@@ -297,7 +299,13 @@ impl Server {
                 None => std::fs::read_to_string(program).ok(),
             }
         };
-        Ok(manifest::completions(&path, text, offset, &program_text, &self.options))
+        Ok(manifest::completions(
+            &path,
+            text,
+            offset,
+            &program_text,
+            &self.options,
+        ))
     }
 
     /// The open files' analyses, then `closed`.

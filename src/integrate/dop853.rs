@@ -323,10 +323,7 @@ impl AdaptiveStepper for Dop853 {
         // The error norm behaves like h^8 (an order-7 estimate). Hairer's DOP853 defaults: an
         // elementary controller (β = 0), safety 0.9, growth at most 6; the predictive limit
         // extrapolates the rise of the error constant as Gustafsson does.
-        StepController::new(
-            7,
-            Gains::elementary(6.0),
-        )
+        StepController::new(7, Gains::elementary(6.0))
     }
 
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {

@@ -34,9 +34,7 @@ const IMAGINARY_LIMIT: f64 = 0.997;
 /// fastest mode is one the solution follows, a motion running away, whose λ² > 0 looks like a
 /// damped mode's, its steps bound by accuracy), the checks in a row that must agree and the
 /// accepted steps between two checks: the stiffness check's (`stability.rs`), one policy.
-use super::stability::{
-    ADAPTIVE_CEILING as CEILING, CHECK_EVERY, HELD, PERSISTENCE,
-};
+use super::stability::{ADAPTIVE_CEILING as CEILING, CHECK_EVERY, HELD, PERSISTENCE};
 /// Power iterations at the first check (fewer once two agree); later checks take one, the
 /// direction converging along the run.
 const WARM_UP: usize = 6;

@@ -72,4 +72,3 @@ pub(super) fn hermite_part_into(
         r3[i] = change - h * last[i] - start_bulge;
     }
 }
-

@@ -589,10 +589,7 @@ impl AdaptiveStepper for Radau5 {
 
     fn controller(&self) -> StepController {
         // The estimate is of order 3; RADAU5's growth limit of 8.
-        StepController::new(
-            3,
-            Gains::elementary(8.0),
-        )
+        StepController::new(3, Gains::elementary(8.0))
     }
 
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {

@@ -560,10 +560,7 @@ impl AdaptiveStepper for RosenbrockW {
     fn controller(&self) -> StepController {
         // The estimate is the error of the order-2 solution. Elementary control with Hairer and
         // Wanner's growth limit for Rosenbrock methods.
-        StepController::new(
-            self.order() - 1,
-            Gains::elementary(6.0),
-        )
+        StepController::new(self.order() - 1, Gains::elementary(6.0))
     }
 
     fn start(&mut self, eval: &mut Evaluator, t: f64, y: &[f64]) -> Result<(), Halt> {

@@ -44,10 +44,10 @@ use super::control::StepController;
 use super::dopri5::DormandPrince;
 use super::driver::AdaptiveStepper;
 use super::evaluator::{Evaluator, Halt};
+use super::held_steps::HeldSteps;
 use super::outcome::Stats;
 use super::radau::Radau5;
 use super::rosenbrock::RosenbrockW;
-use super::held_steps::HeldSteps;
 use super::settings::Settings;
 
 /// The implicit method of the pair.
@@ -187,7 +187,10 @@ impl Switching {
     /// How many explicit steps one implicit step costs, as measured on the run (1 before the
     /// implicit method has taken a step).
     fn cost_ratio(&self) -> f64 {
-        let explicit = self.explicit_cost.per_step().unwrap_or(EXPLICIT_EVALUATIONS);
+        let explicit = self
+            .explicit_cost
+            .per_step()
+            .unwrap_or(EXPLICIT_EVALUATIONS);
         match self.implicit_cost.per_step() {
             Some(implicit) => (implicit / explicit).max(1.0),
             None => 1.0,

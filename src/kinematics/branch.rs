@@ -155,11 +155,7 @@ pub(super) fn join_points(
 ) -> Result<Vec<Vector3<f64>>, EvalError> {
     let poses = poses(model, q)?;
     Ok((model.joints.iter())
-        .map(|joint| {
-            (poses[joint.first_body] * joint.first)
-                .translation
-                .vector
-        })
+        .map(|joint| (poses[joint.first_body] * joint.first).translation.vector)
         .collect())
 }
 

@@ -114,7 +114,11 @@ pub fn closure(model: &KinematicModel, q: &[f64]) -> Result<Closure, EvalError> 
         let own = joint.offset..joint.offset + joint.coordinate_count();
         let mut columns: Vec<usize> = (end_path.iter())
             .filter(|c| target_path.binary_search(c).is_err())
-            .chain(target_path.iter().filter(|c| end_path.binary_search(c).is_err()))
+            .chain(
+                target_path
+                    .iter()
+                    .filter(|c| end_path.binary_search(c).is_err()),
+            )
             .copied()
             .chain(own.clone())
             .collect();

@@ -5,8 +5,8 @@ use nalgebra::DMatrix;
 
 use super::eval::EvalError;
 use super::model::{JointModel, KinematicModel};
-use crate::topology::TreeLink;
 use crate::spatial::{self, Pose, Twist};
+use crate::topology::TreeLink;
 
 pub struct Configuration {
     /// Pose of body j at index j; index 0 is earth.

@@ -21,9 +21,9 @@ use super::branch::{join_points, size};
 use super::closure::{closure, ClosureJacobian};
 use super::eval::EvalError;
 use super::mobility::{rank, RANK_TOLERANCE};
-use crate::elimination::{pivoted, pivoted_in_blocks, Elimination};
 use super::model::KinematicModel;
 use super::plane::motion_plane;
+use crate::elimination::{pivoted, pivoted_in_blocks, Elimination};
 
 /// A closed configuration the loops hold still, and the certificate.
 #[derive(Clone, Debug)]
@@ -194,8 +194,7 @@ impl FirstOrder {
             return Ok(None);
         }
         let motions = rows.null_space(rank);
-        let Some(bending) = second_derivatives(model, q, &units, &motions, jacobian.amax())?
-        else {
+        let Some(bending) = second_derivatives(model, q, &units, &motions, jacobian.amax())? else {
             return Ok(None);
         };
         let stresses = bent_stresses(&bending, &columns, column_rank);

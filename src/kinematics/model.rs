@@ -306,7 +306,6 @@ impl<T: Real> ChainMotion<T> {
 }
 
 impl ChainMotion {
-
     /// The subspace padded with zero columns to 6 × 6 (for chains of at most six coordinates:
     /// a quaternion joint's declared angles), for fixed-size solves that allocate nothing. The
     /// padding changes neither a Householder QR factorisation of the first columns (it takes

@@ -30,20 +30,25 @@ pub fn motion_plane(model: &KinematicModel) -> Result<Vector3<f64>, String> {
         0 => Ok(None),
         _ => match joint.single_motion() {
             Some(motion) => Ok(Some(motion)),
-            None => Err(format!("`{}` is not one rotation or translation", joint.name)),
+            None => Err(format!(
+                "`{}` is not one rotation or translation",
+                joint.name
+            )),
         },
     };
     let motions: Vec<(&JointModel, Option<SingleMotion>)> = (model.joints.iter())
         .map(|joint| single(joint).map(|motion| (joint, motion)))
         .collect::<Result<_, _>>()?;
     let zeros = vec![0.0; model.coordinate_count];
-    let poses = poses(model, &zeros)
-        .map_err(|_| "its joints cannot be evaluated at zero".to_string())?;
+    let poses =
+        poses(model, &zeros).map_err(|_| "its joints cannot be evaluated at zero".to_string())?;
     let fixed: Vec<(&JointModel, FixedMotion)> = (motions.into_iter())
         .filter_map(|(joint, motion)| {
             let rotation = (poses[joint.first_body] * joint.first).rotation;
             motion.map(|motion| match motion {
-                SingleMotion::Rotation { axis, .. } => (joint, FixedMotion::Rotation(rotation * axis)),
+                SingleMotion::Rotation { axis, .. } => {
+                    (joint, FixedMotion::Rotation(rotation * axis))
+                }
                 SingleMotion::Translation { direction } => {
                     (joint, FixedMotion::Translation(rotation * direction))
                 }
@@ -67,7 +72,10 @@ pub fn motion_plane(model: &KinematicModel) -> Result<Vector3<f64>, String> {
             }
         };
         if !in_plane {
-            return Err(format!("`{}` moves out of the plane of the others", joint.name));
+            return Err(format!(
+                "`{}` moves out of the plane of the others",
+                joint.name
+            ));
         }
     }
     Ok(normal)

@@ -127,7 +127,9 @@ pub fn over_constrained(
     let loops = closure.jacobian.nrows();
     let imposed = 3 * drives.len() + driven.len();
     let mut stacked = DMatrix::zeros(loops + imposed, model.coordinate_count);
-    stacked.rows_mut(0, loops).copy_from(&closure.jacobian.dense());
+    stacked
+        .rows_mut(0, loops)
+        .copy_from(&closure.jacobian.dense());
     for (k, drive) in drives.iter().enumerate() {
         let configuration = &closure.configuration;
         let origin = drive.frame.pose(configuration).translation.vector;

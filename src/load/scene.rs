@@ -161,10 +161,8 @@ pub fn leave_out(program: &mut Program) {
 
 /// E0714: `--scene NAME` names no scene of the program.
 fn unknown_scene(wanted: &str, names: &[String]) -> Diagnostic {
-    let diagnostic = Diagnostic::error(
-        "E0714",
-        format!("the program declares no scene `{wanted}`"),
-    );
+    let diagnostic =
+        Diagnostic::error("E0714", format!("the program declares no scene `{wanted}`"));
     if names.is_empty() {
         return diagnostic.help("declare one (`scene lifting = ... end;`), or leave out `--scene`");
     }

@@ -56,7 +56,8 @@ pub fn exact_tree(report: &ExactReport) -> String {
         1 => "ℚ".to_string(),
         d => format!("ℚ(√{d})"),
     };
-    let mut out = format!("exact configuration (numbers of {field}; t = tan(θ/2) for an angle θ)\n");
+    let mut out =
+        format!("exact configuration (numbers of {field}; t = tan(θ/2) for an angle θ)\n");
     for c in &exact.configuration {
         let kind = match c.value {
             SymbolValue::Angle { .. } => "angle",
@@ -67,7 +68,11 @@ pub fn exact_tree(report: &ExactReport) -> String {
             c.name,
             kind,
             c.describe(),
-            if c.given { "given" } else { "read from the assembly" }
+            if c.given {
+                "given"
+            } else {
+                "read from the assembly"
+            }
         );
     }
     out += "the loops close exactly there\n";
@@ -106,11 +111,7 @@ pub fn exact_tree(report: &ExactReport) -> String {
         }
         Err(reason) => out += &format!("numeric rank(Δ) not computed: {reason}\n"),
     }
-    let names: Vec<String> = exact
-        .independent
-        .iter()
-        .map(|n| format!("{n}'"))
-        .collect();
+    let names: Vec<String> = exact.independent.iter().map(|n| format!("{n}'")).collect();
     out += &format!(
         "independent velocities ({}): {}\n",
         names.len(),
@@ -122,22 +123,19 @@ pub fn exact_tree(report: &ExactReport) -> String {
     );
     out += "kernel Ψ (every rate in the independent ones, Δ Ψ = 0)\n";
     for (c, row) in exact.configuration.iter().zip(&exact.kernel) {
-        out += &format!("  {:<20} = {}\n", format!("{}'", c.name), combination(row, &names));
+        out += &format!(
+            "  {:<20} = {}\n",
+            format!("{}'", c.name),
+            combination(row, &names)
+        );
     }
     match &exact.reduced {
         Ok(reduced) => {
             out += "reduced equations at rest, M𝒫'' = F with M = Ψᵀ M Ψ, F = Ψᵀ F (velocity terms vanish at rest)\n";
-            let accelerations: Vec<String> = exact
-                .independent
-                .iter()
-                .map(|n| format!("{n}''"))
-                .collect();
+            let accelerations: Vec<String> =
+                exact.independent.iter().map(|n| format!("{n}''")).collect();
             for (row, force) in reduced.mass.iter().zip(&reduced.forces) {
-                out += &format!(
-                    "  {} = {}\n",
-                    combination(row, &accelerations),
-                    force
-                );
+                out += &format!("  {} = {}\n", combination(row, &accelerations), force);
             }
         }
         Err(reason) => out += &format!("reduced equations not computed: {reason}\n"),

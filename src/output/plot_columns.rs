@@ -46,7 +46,11 @@ pub struct UnknownColumn {
 
 impl fmt::Display for UnknownColumn {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "`--plot-columns`: no column `{}` in the samples", self.name)?;
+        write!(
+            f,
+            "`--plot-columns`: no column `{}` in the samples",
+            self.name
+        )?;
         if let Some(suggestion) = &self.suggestion {
             write!(f, "; did you mean `{suggestion}`?")?;
         }

@@ -138,9 +138,7 @@ pub fn rates_along_drives(
     if !(largest > 0.0 && smallest > RANK_TOLERANCE * largest) {
         return Ok(None);
     }
-    let solved = svd
-        .solve(&right, 0.0)
-        .map_err(|_| EvalError::NotFinite)?;
+    let solved = svd.solve(&right, 0.0).map_err(|_| EvalError::NotFinite)?;
     for (k, &i) in free.iter().enumerate() {
         rates[i] = solved[k];
     }

@@ -281,8 +281,8 @@ pub(crate) fn prepare_parts(
         .chain(mechanism.declared_value_inputs())
         .map(|(name, _)| name)
         .collect();
-    let (input_starts, overrides): (Vec<Override>, Vec<Override>) = (overrides.iter().cloned())
-        .partition(|o| inputs.contains(&o.name));
+    let (input_starts, overrides): (Vec<Override>, Vec<Override>) =
+        (overrides.iter().cloned()).partition(|o| inputs.contains(&o.name));
     let overrides = &overrides[..];
     let values = unknown_values(mechanism, &generated, overrides)?;
     let mut missing = Vec::new();

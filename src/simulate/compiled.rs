@@ -5,12 +5,12 @@
 use super::system::MechanicalSystem;
 use crate::diag::Diagnostic;
 use crate::dynamics::energy::conservative_forces;
-use crate::elab::mechanism::Mechanism;
+use crate::dynamics::joint::{Joint, JointType};
 use crate::dynamics::loops::Stabilisation;
+use crate::dynamics::model::Model;
+use crate::elab::mechanism::Mechanism;
 use crate::prepare::native::{build, disagreement, LoopRows, Unavailable};
 use crate::prepare::Prepared;
-use crate::dynamics::joint::{Joint, JointType};
-use crate::dynamics::model::Model;
 use crate::symbolic::quaternion_joints::{BallKind, QuaternionJoins};
 
 /// Compiles `prepared`'s forward dynamics and keeps it for its runs, once it agrees with the
@@ -48,8 +48,11 @@ pub fn attach(prepared: &mut Prepared, mechanism: &Mechanism) -> Result<(), Unav
     let mut y: Vec<f64> = q.iter().chain(&v).copied().collect();
     // With loops, the run's start: the loops closed and their structure decided (the rows the
     // native code keeps).
-    let unserved = |e: String| Unavailable::Unsupported(format!("the start cannot be evaluated: {e}"));
-    system.start_loops(&mut y).map_err(|e| unserved(e.to_string()))?;
+    let unserved =
+        |e: String| Unavailable::Unsupported(format!("the start cannot be evaluated: {e}"));
+    system
+        .start_loops(&mut y)
+        .map_err(|e| unserved(e.to_string()))?;
     // The simulator's own evaluation at the start: the accelerations to agree with, and, where
     // the loops allow motions without mass, its choice of those it holds at rest.
     let mut dydt = vec![0.0; y.len()];

@@ -69,8 +69,8 @@ pub(super) fn run(
             let rates = rates_along_drives(&prepared.kinematics, &q, &driven, &driven_rates)
                 .map_err(|e| describe_error(&e))?
                 .ok_or("the drives no longer determine every coordinate (a singular configuration of the loops)")?;
-            let (positions, velocities) = (model.state_from_declared(&q, &rates))
-                .map_err(|e| describe_error(&e))?;
+            let (positions, velocities) =
+                (model.state_from_declared(&q, &rates)).map_err(|e| describe_error(&e))?;
             forward_kinematics(model, &mut data, &positions, &velocities)
                 .map_err(|e| describe_error(&e))?;
             let state = EffortState {

@@ -162,7 +162,11 @@ impl<'p> Equations<'p> {
         self.load(x)?;
         let n = self.places.len();
         if dxdt.len() != 2 * n {
-            return Err(format!("{} derivatives asked for {} states", dxdt.len(), 2 * n));
+            return Err(format!(
+                "{} derivatives asked for {} states",
+                dxdt.len(),
+                2 * n
+            ));
         }
         (self.system)
             .derivative(t, &self.y, &mut self.dydt)

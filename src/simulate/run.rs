@@ -179,7 +179,10 @@ fn failed_at_start(prepared: &Prepared, message: String) -> Simulation {
     let report = Report {
         failure: Some(RunFailure { time: 0.0, message }),
         model: prepared.scene.clone(),
-        ..Report::empty(prepared.settings.integrator.name(), prepared.settings.duration)
+        ..Report::empty(
+            prepared.settings.integrator.name(),
+            prepared.settings.duration,
+        )
     };
     Simulation {
         coordinate_names: prepared.coordinate_names.clone(),

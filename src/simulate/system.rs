@@ -34,10 +34,10 @@ use crate::dynamics::algorithms::{
 use crate::dynamics::contacts;
 use crate::dynamics::driven_points;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
+use crate::dynamics::loops::planar_closure::PlanarClosure;
 use crate::dynamics::loops::{self, Extent, LoopError, Stabilisation, StructureError, ROW_NAMES};
 use crate::dynamics::model::{Model, Recovered};
 use crate::dynamics::planar::algebra::PlanarForce;
-use crate::dynamics::loops::planar_closure::PlanarClosure;
 use crate::dynamics::planar::{self, PlanarData, PlanarModel};
 use crate::integrate::CallbackError;
 use crate::prepare::native::NativeDynamics;
@@ -171,7 +171,8 @@ impl<'m> MechanicalSystem<'m> {
     /// and neither native code nor the driven subtrees' hybrid dynamics (spatial algebra)
     /// computes the accelerations instead.
     fn planar_here(&self) -> Option<&'m PlanarModel> {
-        let on = self.scratch.planar.is_some() && self.native.is_none() && !self.drives_by_subtrees();
+        let on =
+            self.scratch.planar.is_some() && self.native.is_none() && !self.drives_by_subtrees();
         self.planar.filter(|_| on)
     }
 

@@ -222,8 +222,8 @@ fn planarity(
     topology: &Topology,
     unknowns: UnknownValues,
 ) -> Result<(), String> {
-    let kinematics = model::build(mechanism, topology.clone(), unknowns)
-        .map_err(|d| joined_messages(&d))?;
+    let kinematics =
+        model::build(mechanism, topology.clone(), unknowns).map_err(|d| joined_messages(&d))?;
     crate::kinematics::plane::motion_plane(&kinematics).map(|_| ())
 }
 

@@ -215,7 +215,11 @@ pub fn check_state(model: &Model, q: &[f64], v: &[f64]) -> Result<(), StateError
 }
 
 /// Checks that `values` has `expected` entries, all finite.
-pub fn check_length(quantity: &'static str, values: &[f64], expected: usize) -> Result<(), StateError> {
+pub fn check_length(
+    quantity: &'static str,
+    values: &[f64],
+    expected: usize,
+) -> Result<(), StateError> {
     if values.len() != expected {
         return Err(StateError::Length {
             quantity,
@@ -308,9 +312,10 @@ fn evaluate_state(
             None
         }
         (true, Ok(efforts)) => {
-            let total = state.tau.as_ref().map(|tau| {
-                DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv)
-            });
+            let total = state
+                .tau
+                .as_ref()
+                .map(|tau| DVector::from_column_slice(tau) + efforts.tau.rows(0, model.nv));
             let changes = match system.effort_derivatives(0.0, &q_full, &v_full) {
                 Ok(found) => found.map(|d| d.efforts.clone()),
                 Err(e) => {

@@ -80,7 +80,10 @@ pub fn state_derivatives(
     // D's halves, or zeros where the efforts are held.
     let zero = DMatrix::zeros(nv, nv);
     let (along_q, along_v) = match efforts {
-        Some(d) => (d.columns(0, nv).into_owned(), d.columns(nv, nv).into_owned()),
+        Some(d) => (
+            d.columns(0, nv).into_owned(),
+            d.columns(nv, nv).into_owned(),
+        ),
         None => (zero.clone(), zero),
     };
     let rnea = match a {

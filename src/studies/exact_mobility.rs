@@ -78,7 +78,10 @@ fn holding(mechanism: &Mechanism, given: &[Given]) -> Result<Mechanism, String> 
             Some((join, coordinate))
         });
         let Some((join, coordinate)) = found else {
-            return Err(format!("`--at {}`: no join coordinate of that name", g.name));
+            return Err(format!(
+                "`--at {}`: no join coordinate of that name",
+                g.name
+            ));
         };
         let value = num(g.approximate());
         match (held.initial.iter_mut())

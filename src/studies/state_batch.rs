@@ -192,7 +192,9 @@ impl<'p> StateBatch<'p> {
             let own = state
                 .subspace
                 .apply(&x[joint.v_offset..joint.v_offset + joint.nv()]);
-            let parent = state.transform.motion_to_child(&self.motions[joint.dynamic_parent]);
+            let parent = state
+                .transform
+                .motion_to_child(&self.motions[joint.dynamic_parent]);
             self.motions[joint.child] = parent + own;
         }
     }

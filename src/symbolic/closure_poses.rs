@@ -61,10 +61,7 @@ impl Generator<'_> {
                 target: (target.rotation, target.origin),
             });
         }
-        let body_columns = self.bodies[1..]
-            .iter()
-            .map(|b| b.columns.clone())
-            .collect();
+        let body_columns = self.bodies[1..].iter().map(|b| b.columns.clone()).collect();
         Ok(ClosurePoses {
             pool: std::mem::take(&mut self.pool),
             variables: self.lowering.variables.clone(),

@@ -886,7 +886,8 @@ impl Tape {
             .enumerate()
             .filter(|&(k, step)| used[k] || !matches!(step, Step::Neg(_)))
             .collect();
-        let steps: Vec<(usize, Code<Function>)> = program.iter().map(|&(k, s)| (k, s.code())).collect();
+        let steps: Vec<(usize, Code<Function>)> =
+            program.iter().map(|&(k, s)| (k, s.code())).collect();
         let code = TapeCode::new(&steps, &roots, order.len());
         Tape {
             order,

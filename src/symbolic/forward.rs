@@ -6,9 +6,9 @@
 
 use super::articulated::{self, Spatial};
 use super::expr::ExprId;
-use super::quaternion_joints;
 use super::generator::Generator;
 use super::kinematics::{LinkCoordinates, Step};
+use super::quaternion_joints;
 use super::vector::Wrench;
 use super::vector::{self as v, Vec3};
 
@@ -91,7 +91,10 @@ impl Generator<'_> {
             joint_velocity = articulated::add(pool, &joint_velocity, &scaled);
         }
         let mut joint_bias = [zero; 6];
-        let position_rates = coordinates.positions.iter().zip(&coordinates.position_rates);
+        let position_rates = coordinates
+            .positions
+            .iter()
+            .zip(&coordinates.position_rates);
         for (&position, &rate) in position_rates {
             let derivative = joint_velocity.map(|x| derivatives.of(pool, x, position));
             let scaled = derivative.map(|x| pool.mul(x, rate));
@@ -205,7 +208,12 @@ impl Generator<'_> {
     /// axes after the step and at its origin; `None` where it gives none. A declared
     /// coordinate's rate is its position's: the step's derivative by it. A ball's rates are its
     /// body twist, in the axes after it: unit motions there (angular, then linear).
-    fn own_motion(&mut self, step: &Step, link: &LinkCoordinates, k: usize) -> Option<(Vec3, Vec3)> {
+    fn own_motion(
+        &mut self,
+        step: &Step,
+        link: &LinkCoordinates,
+        k: usize,
+    ) -> Option<(Vec3, Vec3)> {
         let pool = &mut self.pool;
         let (angular, linear) = match step {
             Step::Ball { .. } => {

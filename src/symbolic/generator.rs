@@ -80,9 +80,13 @@ impl<'a> Generator<'a> {
     pub(super) fn link_coordinates(&mut self, join: JoinId) -> LinkCoordinates {
         let at = self.lowering.join_variables(join);
         let variables = &self.lowering.variables;
-        let symbols = |list: &[super::lower::Variable], start: usize, count: usize| -> Vec<ExprId> {
-            list[start..start + count].iter().map(|p| p.symbol).collect()
-        };
+        let symbols =
+            |list: &[super::lower::Variable], start: usize, count: usize| -> Vec<ExprId> {
+                list[start..start + count]
+                    .iter()
+                    .map(|p| p.symbol)
+                    .collect()
+            };
         let positions = symbols(&variables.positions, at.position, at.positions);
         let rates = symbols(&variables.rates, at.rate, at.rates);
         let position_rates = match self.lowering.ball(join) {
@@ -345,8 +349,14 @@ fn ball_position_rates(
     rates: &[ExprId],
 ) -> Vec<ExprId> {
     let q = kind.quaternion_offset();
-    let quaternion = [positions[q], positions[q + 1], positions[q + 2], positions[q + 3]];
-    let turn = quaternion_joints::quaternion_rate(pool, &quaternion, &[rates[0], rates[1], rates[2]]);
+    let quaternion = [
+        positions[q],
+        positions[q + 1],
+        positions[q + 2],
+        positions[q + 3],
+    ];
+    let turn =
+        quaternion_joints::quaternion_rate(pool, &quaternion, &[rates[0], rates[1], rates[2]]);
     match kind {
         BallKind::Spherical => turn.to_vec(),
         BallKind::Free => {

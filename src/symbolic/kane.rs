@@ -66,7 +66,9 @@ impl Generator<'_> {
                 let force = v::mat_vec(pool, &rates.to_body, &force);
                 let moment = v::mat_vec(pool, &rates.to_body, &moment);
                 for (r, partial) in rates.partials.iter().enumerate() {
-                    let Some([angular, linear]) = partial else { continue };
+                    let Some([angular, linear]) = partial else {
+                        continue;
+                    };
                     let along = v::dot(pool, &force, linear);
                     let about = v::dot(pool, &moment, angular);
                     let power = pool.add(along, about);
@@ -97,17 +99,23 @@ impl Generator<'_> {
         let force = v::add(pool, &force, &centripetal);
         let torque = v::add(pool, &torque, &gyroscopic);
         for (r, partial) in rates.partials.iter().enumerate() {
-            let Some([angular, linear]) = partial else { continue };
+            let Some([angular, linear]) = partial else {
+                continue;
+            };
             let along = v::dot(pool, &force, linear);
             let about = v::dot(pool, &torque, angular);
             let power = pool.add(along, about);
             second_member[r] = pool.sub(second_member[r], power);
         }
         for (s, column) in rates.partials.iter().enumerate() {
-            let Some([angular_s, linear_s]) = column else { continue };
+            let Some([angular_s, linear_s]) = column else {
+                continue;
+            };
             let [momentum, moment] = inertia.times(pool, angular_s, linear_s);
             for (r, row) in rates.partials.iter().enumerate().take(s + 1) {
-                let Some([angular_r, linear_r]) = row else { continue };
+                let Some([angular_r, linear_r]) = row else {
+                    continue;
+                };
                 let along = v::dot(pool, &momentum, linear_r);
                 let about = v::dot(pool, &moment, angular_r);
                 let entry = pool.add(along, about);
@@ -121,7 +129,10 @@ impl Generator<'_> {
     /// Body b's velocities from its position and orientation alone, by differentiation.
     fn body_rates(&mut self, b: usize, tree: usize) -> BodyRates {
         let variables = &self.lowering.variables;
-        let positions: Vec<ExprId> = variables.positions[..tree].iter().map(|p| p.symbol).collect();
+        let positions: Vec<ExprId> = variables.positions[..tree]
+            .iter()
+            .map(|p| p.symbol)
+            .collect();
         let rates: Vec<ExprId> = variables.rates[..tree].iter().map(|p| p.symbol).collect();
         let (rotation, origin) = (self.bodies[b].rotation, self.bodies[b].origin);
         let to_body = v::transpose(&rotation);

@@ -193,10 +193,17 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
         system.b.push(entry(equations.constraint_bias[row], value));
     }
     if weighting == Weighting::Augmented {
-        augment(pool, &mut system, k, (&moving, kept.rows), |c, r| {
-            let index = r * n + c;
-            entry(equations.constraints[index], values[delta.start + index])
-        }, |r| entry(equations.constraint_bias[r], values[bias.start + r]));
+        augment(
+            pool,
+            &mut system,
+            k,
+            (&moving, kept.rows),
+            |c, r| {
+                let index = r * n + c;
+                entry(equations.constraints[index], values[delta.start + index])
+            },
+            |r| entry(equations.constraint_bias[r], values[bias.start + r]),
+        );
     }
     // The coordinates at rest must be touched by no kept row and carry no inertia.
     for &c in kept.at_rest {
@@ -265,8 +272,12 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     while let Some(r) = system.fewest_entries(rest.iter().map(|&r| (r, r))) {
         if system.a[r][r].is_none_or(|p| p.value >= 0.0) {
             return Err(match weighting {
-                Weighting::Plain => Refusal::Plain("the kept rows are not independent at the start, by the plain order".into()),
-                Weighting::Augmented => Refusal::Other("the kept rows are not independent at the start".into()),
+                Weighting::Plain => Refusal::Plain(
+                    "the kept rows are not independent at the start, by the plain order".into(),
+                ),
+                Weighting::Augmented => {
+                    Refusal::Other("the kept rows are not independent at the start".into())
+                }
             });
         }
         system.eliminate(pool, r, r);
@@ -314,7 +325,9 @@ fn augment(
 ) {
     let columns: Vec<Vec<Option<Entry>>> = (moving.iter())
         .map(|&c| {
-            let column = rows.iter().map(|&r| Some(g(c, r)).filter(|e| !pool.is_zero(e.expr)));
+            let column = rows
+                .iter()
+                .map(|&r| Some(g(c, r)).filter(|e| !pool.is_zero(e.expr)));
             column.collect()
         })
         .collect();

@@ -232,9 +232,12 @@ impl<'a> Lowering<'a> {
                 self.mechanism.join_name(join)
             )));
         }
-        let k = self.join_offsets.get(&join).ok_or_else(|| {
-            LowerError("a coordinate of a join outside the mechanism".to_string())
-        })?.position + index as usize;
+        let k = self
+            .join_offsets
+            .get(&join)
+            .ok_or_else(|| LowerError("a coordinate of a join outside the mechanism".to_string()))?
+            .position
+            + index as usize;
         match order {
             0 => Ok(self.variables.positions[k].symbol),
             1 => Ok(self.variables.rates[k].symbol),

@@ -132,7 +132,9 @@ impl Generator<'_> {
         let zero = self.pool.constant(0.0);
         let mut generalised = vec![zero; self.columns()];
         for b in (1..=self.topology.body_count()).rev() {
-            let Some([force, moment]) = wrenches[b] else { continue };
+            let Some([force, moment]) = wrenches[b] else {
+                continue;
+            };
             for column in self.own_columns(b) {
                 if let Some([angular, linear]) = self.bodies[b].column(column).copied() {
                     let along = v::dot(&mut self.pool, &linear, &force);

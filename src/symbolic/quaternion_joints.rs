@@ -71,8 +71,16 @@ pub fn rotation(pool: &mut Pool, q: &[ExprId; 4]) -> Mat3 {
     let two = pool.constant(2.0);
     let scale = pool.div(two, norm);
     let product = |pool: &mut Pool, a: ExprId, b: ExprId| pool.mul(a, b);
-    let (xy, xz, yz) = (product(pool, x, y), product(pool, x, z), product(pool, y, z));
-    let (wx, wy, wz) = (product(pool, w, x), product(pool, w, y), product(pool, w, z));
+    let (xy, xz, yz) = (
+        product(pool, x, y),
+        product(pool, x, z),
+        product(pool, y, z),
+    );
+    let (wx, wy, wz) = (
+        product(pool, w, x),
+        product(pool, w, y),
+        product(pool, w, z),
+    );
     // 1 − (2/|Q|²)(b² + c²) on the diagonal, (2/|Q|²)(ab ∓ wc) off it.
     let one = pool.constant(1.0);
     let diagonal = |pool: &mut Pool, a: ExprId, b: ExprId| {

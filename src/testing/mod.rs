@@ -12,9 +12,9 @@ pub mod report;
 
 use rayon::prelude::*;
 
-pub use case::{run_case, Outcome};
 #[cfg(lsdc_internals)]
 pub use case::Status;
+pub use case::{run_case, Outcome};
 pub use manifest::{Case, ManifestError};
 
 /// Every case of the manifests under `paths` (files, or folders searched for `lsdtest.toml`).

@@ -535,7 +535,10 @@ pub fn vector_equations(mechanism: &Mechanism, topology: &Topology, options: Opt
     };
     let _ = writeln!(out, "SSecMax = [{}] ;", all("SSecMax"));
     let _ = writeln!(out, "FForMax = [{}] ;", all("FForMax"));
-    let _ = writeln!(out, "\n(* free bodies: MMassMax &* qdot = SSecMax + FForMax *)");
+    let _ = writeln!(
+        out,
+        "\n(* free bodies: MMassMax &* qdot = SSecMax + FForMax *)"
+    );
     let _ = writeln!(
         out,
         "[{}] = Psi(p) &* q ;",
@@ -544,7 +547,10 @@ pub fn vector_equations(mechanism: &Mechanism, topology: &Topology, options: Opt
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let _ = writeln!(out, "\n(* the tree's equations, Psi^T eliminating its reactions *)");
+    let _ = writeln!(
+        out,
+        "\n(* the tree's equations, Psi^T eliminating its reactions *)"
+    );
     let _ = writeln!(out, "M(p) = &t(Psi(p)) &* MMassMax &* Psi(p) ;");
     let _ = writeln!(
         out,

@@ -45,7 +45,9 @@ use num_dual::Dual64;
 
 use super::rows::{constraints_into, Constraints, Extent};
 use super::structure::Structure;
-use crate::dynamics::algorithms::rnea_derivatives::{check_supported, DerivativeError, RneaDerivatives};
+use crate::dynamics::algorithms::rnea_derivatives::{
+    check_supported, DerivativeError, RneaDerivatives,
+};
 use crate::dynamics::algorithms::{crba_into, forward_kinematics, rnea_into, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
@@ -284,7 +286,9 @@ impl ConstrainedDerivatives {
             (rows_dv, &mut self.dacceleration_dv),
             (rows_dtau, &mut self.dacceleration_dtau),
         ] {
-            let solved = factor.solve(&right).ok_or(ConstrainedDerivativeError::Singular)?;
+            let solved = factor
+                .solve(&right)
+                .ok_or(ConstrainedDerivativeError::Singular)?;
             out.copy_from(&solved.rows(0, n));
         }
         Ok(())

@@ -17,9 +17,9 @@ use std::cell::OnceCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::jacobian::ConstraintJacobian;
-use crate::elimination::{pivoted, Elimination, Sparse};
 use super::triples::{self, DiagonalBlock};
 use crate::dynamics::dense::dense_cholesky;
+use crate::elimination::{pivoted, Elimination, Sparse};
 
 /// Which of the loops' rows (6 per loop) are kept, and the factor making each dimensionless.
 #[derive(Clone, Debug, PartialEq)]
@@ -345,7 +345,11 @@ impl Factored {
 
     /// `transpose_times_into` of y into `y_out` and of z into `z_out` in one pass over the
     /// rows: each output summed in the same order as alone (the same results).
-    fn transpose_times_pair_into(&self, (y, z): (&[f64], &[f64]), (y_out, z_out): (&mut [f64], &mut [f64])) {
+    fn transpose_times_pair_into(
+        &self,
+        (y, z): (&[f64], &[f64]),
+        (y_out, z_out): (&mut [f64], &mut [f64]),
+    ) {
         y_out.fill(0.0);
         z_out.fill(0.0);
         for ((row, &y_weight), &z_weight) in self.rows.iter().zip(y).zip(z) {
@@ -753,7 +757,9 @@ impl Envelope {
             z_rest[0] /= diagonal;
             let (y_value, z_value) = (y_rest[0], z_rest[0]);
             let targets = y_done[k - left.len()..].iter_mut();
-            for ((y_target, z_target), entry) in targets.zip(&mut z_done[k - left.len()..]).zip(left) {
+            for ((y_target, z_target), entry) in
+                targets.zip(&mut z_done[k - left.len()..]).zip(left)
+            {
                 *y_target -= entry * y_value;
                 *z_target -= entry * z_value;
             }
@@ -780,7 +786,12 @@ impl Envelope {
         if !self.triples || self.first.is_empty() {
             return self.cholesky();
         }
-        let factored = triples::cholesky(&self.first, &self.starts, &mut self.values, &mut self.blocks);
+        let factored = triples::cholesky(
+            &self.first,
+            &self.starts,
+            &mut self.values,
+            &mut self.blocks,
+        );
         if factored.is_err() {
             self.blocks.clear();
         }
@@ -811,7 +822,10 @@ impl Envelope {
             }
         }
         let rest = rest.iter().map(|&end| self.values[end - 1]);
-        rest.fold(largest[0].max(largest[1]).max(largest[2].max(largest[3])), f64::max)
+        rest.fold(
+            largest[0].max(largest[1]).max(largest[2].max(largest[3])),
+            f64::max,
+        )
     }
 
     /// The Cholesky factor in place, or the first row whose pivot is not positive. Rows are

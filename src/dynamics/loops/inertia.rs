@@ -10,7 +10,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::passes::{passes_up_to, BodyPasses};
-use crate::dynamics::algorithms::{crba_after_kinematics, mass_rows, mass_times, rnea_backward, Data};
+use crate::dynamics::algorithms::{
+    crba_after_kinematics, mass_rows, mass_times, rnea_backward, Data,
+};
 use crate::dynamics::model::Model;
 use crate::dynamics::planar::algebra::{PlanarForce, PlanarMotion};
 use crate::dynamics::planar::algorithms::{self as planar, PlanarData};

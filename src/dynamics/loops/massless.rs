@@ -67,8 +67,8 @@ fn massive_directions(body: &BodyInertia, length: f64) -> Massive {
     // The kinetic energy's form in (ω, v/L): [J, ĥ L; ĥᵀ L, m L²] for the inertia [J ĥ; ĥᵀ m]
     // about the body's origin, divided by m L².
     let scale = Vector6::new(1.0, 1.0, 1.0, length, length, length);
-    let form: Matrix6<f64> =
-        Matrix6::from_fn(|i, j| body.inertia[(i, j)] * scale[i] * scale[j]) / (body.mass * length * length);
+    let form: Matrix6<f64> = Matrix6::from_fn(|i, j| body.inertia[(i, j)] * scale[i] * scale[j])
+        / (body.mass * length * length);
     let eigen = form.symmetric_eigen();
     let largest = eigen.eigenvalues.max();
     let kept: Vec<Vector6<f64>> = (0..6)
@@ -136,7 +136,14 @@ pub fn massless_count(
         let mut row = 0;
         for (i, massive) in &bodies {
             let m = &motions[*i];
-            let velocity = Vector6::new(m[0], m[1], m[2], m[3] / length, m[4] / length, m[5] / length);
+            let velocity = Vector6::new(
+                m[0],
+                m[1],
+                m[2],
+                m[3] / length,
+                m[4] / length,
+                m[5] / length,
+            );
             match massive {
                 Massive::Every => {
                     for value in velocity.iter() {
@@ -175,7 +182,10 @@ fn nullity(map: DMatrix<f64>) -> usize {
     };
     let values = &svd.singular_values;
     let largest = values.max();
-    let large = values.iter().filter(|&&s| s > MASSLESS_MOTION * largest).count();
+    let large = values
+        .iter()
+        .filter(|&&s| s > MASSLESS_MOTION * largest)
+        .count();
     columns - large
 }
 
@@ -198,7 +208,12 @@ fn complementary_nullity(
         .map(|&r| {
             (jacobian.row(r))
                 .filter(|&(c, value)| c >= tree_velocities && value != 0.0)
-                .map(|(c, value)| (c - tree_velocities, value * row_scale(r, length) * columns[c]))
+                .map(|(c, value)| {
+                    (
+                        c - tree_velocities,
+                        value * row_scale(r, length) * columns[c],
+                    )
+                })
                 .collect()
         })
         .collect();

@@ -20,6 +20,9 @@
 //! The method and its references: `docs/loops.md`.
 
 pub mod basis;
+// No command reads these derivatives yet (the tests and `benches/loop_derivatives` do): only
+// the repository's own builds, with the cfg `lsdc_internals`, compile them.
+#[cfg(lsdc_internals)]
 pub mod derivatives;
 pub mod elimination;
 pub mod factored;
@@ -45,11 +48,11 @@ pub use jacobian::ConstraintJacobian;
 pub use momentum::{project_momentum, MomentumBasis};
 pub use orientation::Orientation;
 pub use project::{close_configuration, project, project_from, ProjectionScratch, Residuals};
+pub use range_space::{Method, Tree};
 pub use rows::{
     active_rows, constraint_forces, constraints, constraints_into, seat_ball_angles, Constraints,
     Extent, ROW_NAMES,
 };
-pub use range_space::{Method, Tree};
 pub use solve::{
     allowed_motions, multipliers, solve_range_space, solve_reduced, LoopError, LoopScratch,
     Stabilisation,

@@ -92,7 +92,10 @@ pub fn project_momentum(
     } else {
         let mass = crba(model, data, &q[..model.nq])?;
         let momentum = &mass * DVector::from_column_slice(&v[..model.nv]);
-        (tree.transpose() * (&mass * tree), tree.transpose() * momentum)
+        (
+            tree.transpose() * (&mass * tree),
+            tree.transpose() * momentum,
+        )
     };
     let Some(cholesky) = reduced.cholesky() else {
         return Ok(());
@@ -160,7 +163,10 @@ fn large_mechanism_forms(
     let mut mass_tree = DMatrix::zeros(nv, count);
     let mut column = vec![0.0; nv];
     for j in 0..count {
-        column.iter_mut().zip(tree.column(j).iter()).for_each(|(c, t)| *c = *t);
+        column
+            .iter_mut()
+            .zip(tree.column(j).iter())
+            .for_each(|(c, t)| *c = *t);
         mass_times(mass, rows, &column, mass_tree.column_mut(j).as_mut_slice());
     }
     Ok((tree.transpose() * mass_tree, tree.transpose() * momentum))

@@ -60,7 +60,8 @@ impl Orientation {
         // spent half its projections' time here). The sort is stable, and the rows are sorted
         // already (`RowChoice::new`).
         self.firm.clear();
-        self.firm.extend(firm.iter().copied().zip(choice.scales.iter().copied()));
+        self.firm
+            .extend(firm.iter().copied().zip(choice.scales.iter().copied()));
         self.firm.sort_by_key(|&(row, _)| row / 6);
         let mut next = 0;
         for (block_index, block) in jacobian.blocks.iter().enumerate() {
@@ -74,9 +75,9 @@ impl Orientation {
             while next < self.firm.len() && self.firm[next].0 / 6 == block_index {
                 next += 1;
             }
-            reference.rows.extend(
-                (self.firm[start..next].iter()).map(|&(row, scale)| (row % 6, scale)),
-            );
+            reference
+                .rows
+                .extend((self.firm[start..next].iter()).map(|&(row, scale)| (row % 6, scale)));
             if reference.rows.is_empty() {
                 continue;
             }

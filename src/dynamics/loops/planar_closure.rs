@@ -133,7 +133,10 @@ impl Turn {
 
     #[inline]
     fn rotate(&self, v: &Vector2<f64>) -> Vector2<f64> {
-        Vector2::new(self.cos * v.x - self.sin * v.y, self.sin * v.x + self.cos * v.y)
+        Vector2::new(
+            self.cos * v.x - self.sin * v.y,
+            self.sin * v.x + self.cos * v.y,
+        )
     }
 }
 
@@ -209,7 +212,9 @@ impl PlanarClosure {
             return None;
         }
         let second: Vec<Vector2<f64>> = (model.loops.iter())
-            .map(|joint| (planar.to_planar[joint.second_body] * joint.second.translation.vector).xy())
+            .map(|joint| {
+                (planar.to_planar[joint.second_body] * joint.second.translation.vector).xy()
+            })
             .collect();
         // Each body's terms: its joint's pivots or origin, and those of the joints above it.
         let mut squares = vec![0.0; model.body_count() + 1];
@@ -260,9 +265,7 @@ impl PlanarClosure {
                 } => {
                     let angle = parent.angle.add_pair(Pair::product(*rate, coordinate));
                     let turn = Turn::of(angle);
-                    let origin = parent
-                        .point(pivot_parent)
-                        .moved(-turn.rotate(pivot_child));
+                    let origin = parent.point(pivot_parent).moved(-turn.rotate(pivot_child));
                     Placed {
                         angle,
                         turn,
@@ -270,7 +273,9 @@ impl PlanarClosure {
                     }
                 }
                 PlanarJointKind::Prismatic { origin, direction } => Placed {
-                    origin: parent.point(origin).moved(parent.turn.rotate(&(direction * coordinate))),
+                    origin: parent
+                        .point(origin)
+                        .moved(parent.turn.rotate(&(direction * coordinate))),
                     ..parent
                 },
                 PlanarJointKind::Weld { origin } => Placed {
@@ -295,8 +300,14 @@ impl PlanarClosure {
                 }
             };
             let target = self.placed[closing.second_body].point(&self.second[k]);
-            let gap_x = target.x.add_pair(Pair { high: -end.x.high, low: -end.x.low });
-            let gap_y = target.y.add_pair(Pair { high: -end.y.high, low: -end.y.low });
+            let gap_x = target.x.add_pair(Pair {
+                high: -end.x.high,
+                low: -end.x.low,
+            });
+            let gap_y = target.y.add_pair(Pair {
+                high: -end.y.high,
+                low: -end.y.low,
+            });
             c.residual[6 * k + x_row] = x_sign * gap_x.value();
             c.residual[6 * k + y_row] = y_sign * gap_y.value();
         }

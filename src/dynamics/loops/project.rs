@@ -9,13 +9,13 @@ use nalgebra::{DMatrix, DVector};
 use super::factored::{
     Damped, Envelope, Factored, RowChoice, Singular, DAMPING, PROJECTION_DAMPING,
 };
+use super::passes::{passes_up_to, BodyPasses};
 use super::planar_closure::PlanarClosure;
 use super::rows::{
     complete_rotations, complete_rows, constraints_into, seat_ball_angles_at_poses, Constraints,
     Extent,
 };
 use crate::corrector::{correct, Acceptance, Correction, Damping, Progress, Settings};
-use super::passes::{passes_up_to, BodyPasses};
 use crate::dynamics::algorithms::{forward_kinematics, mass_rows, Data};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;

@@ -191,8 +191,7 @@ impl RangeSpace {
         self.rhs.clear();
         self.rhs
             .extend(minus_gamma.iter().zip(&self.rows).map(|(g, r)| g - r));
-        self.rhs
-            .extend(self.complementary.iter().map(|&c| -tau[c]));
+        self.rhs.extend(self.complementary.iter().map(|&c| -tau[c]));
         if let Err(pivot) = solve_in_place(&mut self.system, &mut self.rhs) {
             let row = structure.choice.rows[pivot.min(k.saturating_sub(1))];
             return Err(Failure::Singular { row });
@@ -228,4 +227,3 @@ impl RangeSpace {
         self.force.resize(nv, 0.0);
     }
 }
-

@@ -87,7 +87,9 @@ impl<T: Real> Constraints<T> {
             .map(|joint| {
                 let cycle = cycle_signs(model, [joint.first_body, joint.second_body]);
                 let signs = cycle.into_iter().enumerate();
-                signs.map(|(local, (column, sign))| (local, column, sign)).collect()
+                signs
+                    .map(|(local, (column, sign))| (local, column, sign))
+                    .collect()
             })
             .collect();
         Constraints {
@@ -345,7 +347,13 @@ fn chain_motion_into<T: DynamicsScalar>(
 }
 
 /// Loop `k`'s six rows of G and, `with_bias`, of γ, at the chain and point `loop_residual` left.
-fn loop_rows<T: Real>(model: &Model, data: &Data<T>, k: usize, with_bias: bool, c: &mut Constraints<T>) {
+fn loop_rows<T: Real>(
+    model: &Model,
+    data: &Data<T>,
+    k: usize,
+    with_bias: bool,
+    c: &mut Constraints<T>,
+) {
     let joint = &model.loops[k];
     let offset = model.loop_offset(k);
     let ball = model.loop_balls[k].is_some();
@@ -359,7 +367,10 @@ fn loop_rows<T: Real>(model: &Model, data: &Data<T>, k: usize, with_bias: bool, 
     block.values.fill(T::zero());
     for &(local, column, sign) in &c.path_signs[k] {
         let moved = spatial::shifted(&point, &c.world_columns[column]);
-        block.values.column_mut(local).copy_from(&(moved * constant::<T>(sign)));
+        block
+            .values
+            .column_mut(local)
+            .copy_from(&(moved * constant::<T>(sign)));
     }
     for column in 0..own {
         let twist = motion_to_parent(
@@ -488,7 +499,6 @@ fn seat_balls(
     }
     Ok(())
 }
-
 
 /// The constraint wrenches as forces on the bodies (in their frames, about their origins):
 /// +λ on each loop's second body, −λ on its first.

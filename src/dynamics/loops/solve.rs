@@ -209,7 +209,8 @@ impl LoopScratch {
         // The motions are on the free coordinates: how well they parametrise them is measured
         // as at a null-space evaluation, so that the run chooses them again when they do not.
         if std::mem::take(&mut self.quality_due) {
-            let quality = free_quality_of(&self.null, &structure.free, None, &mut self.quality_block);
+            let quality =
+                free_quality_of(&self.null, &structure.free, None, &mut self.quality_block);
             self.free_quality = Some(quality);
             self.quality_of.clone_from(&structure.free);
         }

@@ -20,14 +20,14 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::basis::SOLVE_TOLERANCE;
 use super::elimination::sparse_rows;
-use super::massless::{column_scales, massless_count, turning_columns};
-use crate::elimination::{in_order, norm, pivoted, Sparse};
 use super::factored::{loop_row_scale, Damped, Factored, RowChoice, DAMPING};
 use super::jacobian::ConstraintJacobian;
+use super::massless::{column_scales, massless_count, turning_columns};
 use super::project::close_configuration;
 use super::rows::{active_rows, constraints, Constraints, Extent};
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::model::Model;
+use crate::elimination::{in_order, norm, pivoted, Sparse};
 use crate::kinematics::eval::EvalError;
 
 /// For the rank reported to people (redundant constraints, `lsdc tree`): a row counts as
@@ -461,8 +461,16 @@ pub fn loop_lengths(model: &Model, data: &Data, c: &Constraints, length: f64) ->
         .map(|(k, link)| {
             points.clear();
             points.push(c.points[k]);
-            points.push((data.world[link.first_body] * link.first).translation.vector);
-            points.push((data.world[link.second_body] * link.second).translation.vector);
+            points.push(
+                (data.world[link.first_body] * link.first)
+                    .translation
+                    .vector,
+            );
+            points.push(
+                (data.world[link.second_body] * link.second)
+                    .translation
+                    .vector,
+            );
             for &column in &c.jacobian.blocks[k].columns {
                 if let Some(joint) = model.joint_of_velocity(column) {
                     let on_parent = data.world[joint.parent] * joint.on_parent;

@@ -52,13 +52,19 @@ impl PlanarTransform {
     /// The turn applied to a vector of the child's axes: in the parent's axes.
     #[inline]
     pub fn rotate(&self, v: &Vector2<f64>) -> Vector2<f64> {
-        Vector2::new(self.cos * v.x - self.sin * v.y, self.sin * v.x + self.cos * v.y)
+        Vector2::new(
+            self.cos * v.x - self.sin * v.y,
+            self.sin * v.x + self.cos * v.y,
+        )
     }
 
     /// The inverse turn: a vector of the parent's axes in the child's.
     #[inline]
     pub fn rotate_back(&self, v: &Vector2<f64>) -> Vector2<f64> {
-        Vector2::new(self.cos * v.x + self.sin * v.y, -self.sin * v.x + self.cos * v.y)
+        Vector2::new(
+            self.cos * v.x + self.sin * v.y,
+            -self.sin * v.x + self.cos * v.y,
+        )
     }
 
     /// The angle of the turn.
@@ -102,17 +108,7 @@ impl PlanarTransform {
         let (c, s) = (self.cos, self.sin);
         let (px, py) = (self.translation.x, self.translation.y);
         // v + ω n̂ × p = (vx − ω py, vy + ω px), then turned back.
-        Matrix3::new(
-            1.0,
-            0.0,
-            0.0,
-            s * px - c * py,
-            c,
-            s,
-            s * py + c * px,
-            -s,
-            c,
-        )
+        Matrix3::new(1.0, 0.0, 0.0, s * px - c * py, c, s, s * py + c * px, -s, c)
     }
 
     /// An articulated inertia given in this (child) frame, in the parent frame: Xᵀ I X with X

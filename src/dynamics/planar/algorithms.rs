@@ -260,8 +260,8 @@ pub fn aba(
             0 => planar.base_acceleration,
             _ => data.acceleration[parent],
         };
-        let a = data.transforms[joint.index].motion_to_child(&parent_acceleration)
-            + data.coriolis[i];
+        let a =
+            data.transforms[joint.index].motion_to_child(&parent_acceleration) + data.coriolis[i];
         data.acceleration[i] = if joint.nv() == 1 {
             let q_dd = data.d_inverse[i] * (data.u_scalar[i] - data.u[i].dot(&a));
             accelerations[joint.v_offset] = q_dd;
@@ -278,7 +278,12 @@ pub fn aba(
 /// left (its U = I S and D⁻¹), without velocities, gravity or external forces, so that each
 /// solve costs two passes over the joints, not a factorisation of M (Featherstone 2008, §7.3
 /// and §8.x, the constraint forces' responses by ABA).
-pub fn mass_solve_after_aba(planar: &PlanarModel, data: &mut PlanarData, tau: &[f64], x: &mut [f64]) {
+pub fn mass_solve_after_aba(
+    planar: &PlanarModel,
+    data: &mut PlanarData,
+    tau: &[f64],
+    x: &mut [f64],
+) {
     for joint in &planar.joints {
         data.unit_bias[joint.child] = PlanarForce::zeros();
     }

@@ -128,7 +128,11 @@ fn axis_rows(basis: &Matrix3<f64>) -> Option<[(usize, f64); 3]> {
 
 /// Tree joint `k` in the plane, from its spatial kernel at q = 0: every body's planar frame
 /// then has the plane's axes, so the joint's transform is a translation alone.
-fn planar_joint(model: &Model, to_planar: &[Matrix3<f64>], k: usize) -> Result<PlanarJoint, String> {
+fn planar_joint(
+    model: &Model,
+    to_planar: &[Matrix3<f64>],
+    k: usize,
+) -> Result<PlanarJoint, String> {
     let joint = &model.joints[k];
     let refused = |why: &str| format!("`{}` {why}", joint.chain.name);
     if joint.kind != JointType::Chain {

@@ -164,9 +164,6 @@ impl PlanarModel {
     #[inline]
     pub fn spatial_motion(&self, m: &PlanarMotion) -> crate::spatial::Motion {
         let b = &self.basis;
-        crate::spatial::twist(
-            b.column(2) * m[0],
-            b.column(0) * m[1] + b.column(1) * m[2],
-        )
+        crate::spatial::twist(b.column(2) * m[0], b.column(0) * m[1] + b.column(1) * m[2])
     }
 }

@@ -242,13 +242,18 @@ pub(super) fn motion_read(
         }
         SExpr::State(id) => found(MotionRead::State(id.0)),
         SExpr::Neg(a) => motion_read(a, seen, found),
-        SExpr::Add(a, b) | SExpr::Sub(a, b) | SExpr::Mul(a, b) | SExpr::Div(a, b) | SExpr::Pow(a, b) => {
+        SExpr::Add(a, b)
+        | SExpr::Sub(a, b)
+        | SExpr::Mul(a, b)
+        | SExpr::Div(a, b)
+        | SExpr::Pow(a, b) => {
             motion_read(a, seen, found);
             motion_read(b, seen, found);
         }
-        SExpr::Call(_) | SExpr::UnknownFunction(_) => {
-            s.arguments().iter().for_each(|a| motion_read(a, seen, found))
-        }
+        SExpr::Call(_) | SExpr::UnknownFunction(_) => s
+            .arguments()
+            .iter()
+            .for_each(|a| motion_read(a, seen, found)),
         SExpr::Num(_) | SExpr::Time | SExpr::Unknown(_) | SExpr::Coordinate { .. } => {}
     }
 }

@@ -155,8 +155,7 @@ fn peel(mechanism: &Mechanism, kept: &[bool], held: &Held) -> Massless {
         let [join] = remaining[..] else {
             continue;
         };
-        if held.bodies[body] || held.joins[join] || removed_bodies.contains(&BodyId(body as u32))
-        {
+        if held.bodies[body] || held.joins[join] || removed_bodies.contains(&BodyId(body as u32)) {
             continue;
         }
         removed_joins.insert(JoinId(join as u32));

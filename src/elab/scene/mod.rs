@@ -21,10 +21,10 @@ mod values;
 use std::collections::{BTreeMap, BTreeSet};
 
 use super::mechanism::Mechanism;
+use super::scene_model::{LeftOut, SceneModel, MASSLESS, NOT_READ};
 use super::value::{BodyId, BodyRef, JoinId, LinkId};
 use crate::diag::Diagnostic;
 use crate::source::Span;
-use super::scene_model::{LeftOut, SceneModel, MASSLESS, NOT_READ};
 use groups::{Groups, Staying};
 use renumber::Renumbering;
 
@@ -96,7 +96,10 @@ pub fn reduce(
             }
             if !staying.body(body) {
                 let group = staying.roots[id.0 as usize];
-                left_out.entry(group).or_default().push(mechanism.body_name(body));
+                left_out
+                    .entry(group)
+                    .or_default()
+                    .push(mechanism.body_name(body));
             } else if massless.bodies.contains(&id) {
                 massless_left_out.push(mechanism.body_name(body));
             }
@@ -204,7 +207,9 @@ fn rewrite_values(mechanism: &mut Mechanism, r: &mut Renumbering, done: &BTreeSe
         efforts.insert(application.effort);
     }
     for &id in &efforts {
-        values::effort(&mut mechanism.efforts[id.0 as usize], &mut |s| r.in_place(s));
+        values::effort(&mut mechanism.efforts[id.0 as usize], &mut |s| {
+            r.in_place(s)
+        });
     }
     for drive in &mut mechanism.position_drives {
         r.frame(&mut drive.frame);
@@ -282,7 +287,9 @@ fn weld_locks(mechanism: &mut Mechanism) -> usize {
         welded.insert(id);
     }
     r.own_held(Vec::new());
-    mechanism.drives.retain(|d| !r.is_held(d.join, d.coordinate));
+    mechanism
+        .drives
+        .retain(|d| !r.is_held(d.join, d.coordinate));
     rewrite_values(mechanism, &mut r, &welded);
     welded_count
 }
@@ -322,14 +329,26 @@ fn scene_declarations_left_out(
     let mut named: Vec<(Span, String)> = Vec::new();
     let join_left_out = |join: JoinId| !kept.join(join);
     for value in mechanism.initial.iter().filter(|v| join_left_out(v.join)) {
-        named.push((value.span, format!("gives `{}` an initial value", mechanism.join_name(value.join))));
+        named.push((
+            value.span,
+            format!(
+                "gives `{}` an initial value",
+                mechanism.join_name(value.join)
+            ),
+        ));
     }
     for drive in mechanism.drives.iter().filter(|d| join_left_out(d.join)) {
         let what = if drive.locked { "locks" } else { "drives" };
-        named.push((drive.span, format!("{what} `{}`", mechanism.join_name(drive.join))));
+        named.push((
+            drive.span,
+            format!("{what} `{}`", mechanism.join_name(drive.join)),
+        ));
     }
     for actuator in mechanism.actuators.iter().filter(|a| join_left_out(a.join)) {
-        named.push((actuator.span, format!("actuates `{}`", mechanism.join_name(actuator.join))));
+        named.push((
+            actuator.span,
+            format!("actuates `{}`", mechanism.join_name(actuator.join)),
+        ));
     }
     for application in &mechanism.applications {
         if !kept.body(application.target.body) {

@@ -5,10 +5,10 @@
 use std::collections::{HashMap, HashSet};
 
 use super::evaluate::SymbolValue;
+use super::failure::ExactFailure;
 use super::field::Number;
 use super::rational::Rational;
 use super::recognise::Recogniser;
-use super::failure::ExactFailure;
 use crate::symbolic::expr::{ExprId, Function, Node, Pool};
 use crate::symbolic::lower::Variable;
 
@@ -132,8 +132,13 @@ fn read_angle(angle: f64, recogniser: &mut Recogniser) -> Option<SymbolValue> {
             let one = Number::integer(1, t.radicand);
             let square = t.mul(&t);
             let denominator = one.add(&square).inverse()?;
-            let (cos, sin) = (one.sub(&square).mul(&denominator), t.add(&t).mul(&denominator));
-            if (cos.to_f64() - angle.cos()).abs() < 1e-9 && (sin.to_f64() - angle.sin()).abs() < 1e-9 {
+            let (cos, sin) = (
+                one.sub(&square).mul(&denominator),
+                t.add(&t).mul(&denominator),
+            );
+            if (cos.to_f64() - angle.cos()).abs() < 1e-9
+                && (sin.to_f64() - angle.sin()).abs() < 1e-9
+            {
                 return Some(SymbolValue::Angle { cos, sin });
             }
         }

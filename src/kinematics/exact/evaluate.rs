@@ -131,7 +131,11 @@ impl<'a> Evaluator<'a> {
     }
 
     /// (cos θ, sin θ) of an angle expression.
-    fn angle(&mut self, id: ExprId, recogniser: &mut Recogniser) -> Result<(Number, Number), String> {
+    fn angle(
+        &mut self,
+        id: ExprId,
+        recogniser: &mut Recogniser,
+    ) -> Result<(Number, Number), String> {
         if let Some(known) = self.angles.get(&id) {
             return known.clone();
         }
@@ -173,10 +177,7 @@ impl<'a> Evaluator<'a> {
             Node::Add(a, b) => {
                 let (ca, sa) = self.angle(a, recogniser)?;
                 let (cb, sb) = self.angle(b, recogniser)?;
-                Ok((
-                    ca.mul(&cb).sub(&sa.mul(&sb)),
-                    sa.mul(&cb).add(&ca.mul(&sb)),
-                ))
+                Ok((ca.mul(&cb).sub(&sa.mul(&sb)), sa.mul(&cb).add(&ca.mul(&sb))))
             }
             Node::Mul(a, b) => {
                 let (k, angle) = match (pool.as_constant(a), pool.as_constant(b)) {
@@ -189,7 +190,10 @@ impl<'a> Evaluator<'a> {
                 }
                 let (c, s) = self.angle(angle, recogniser)?;
                 let s = if k < 0.0 { s.neg() } else { s };
-                let (mut cos, mut sin) = (Number::integer(1, c.radicand), Number::integer(0, c.radicand));
+                let (mut cos, mut sin) = (
+                    Number::integer(1, c.radicand),
+                    Number::integer(0, c.radicand),
+                );
                 for _ in 0..k.abs() as u32 {
                     (cos, sin) = (cos.mul(&c).sub(&sin.mul(&s)), sin.mul(&c).add(&cos.mul(&s)));
                 }

@@ -111,10 +111,8 @@ pub fn exact_mobility(
         numeric,
         &mut recogniser,
     )?;
-    let by_name: HashMap<&str, &ExactCoordinate> = configuration
-        .iter()
-        .map(|c| (c.name.as_str(), c))
-        .collect();
+    let by_name: HashMap<&str, &ExactCoordinate> =
+        configuration.iter().map(|c| (c.name.as_str(), c)).collect();
     let symbol_values = |pool: &crate::symbolic::expr::Pool,
                          parameters: &[crate::symbolic::lower::Variable],
                          recogniser: &mut Recogniser| {
@@ -158,7 +156,12 @@ pub fn exact_mobility(
     let tree_coordinates = topology
         .principal
         .iter()
-        .map(|l| mechanism.link(mechanism.join(l.join).link).coordinates.len())
+        .map(|l| {
+            mechanism
+                .link(mechanism.join(l.join).link)
+                .coordinates
+                .len()
+        })
         .sum::<usize>();
     let mut twist_entries = Vec::new();
     for columns in &poses.body_columns {
@@ -194,7 +197,11 @@ pub fn exact_mobility(
 
     // Δ, exactly.
     let n = equations.dimension();
-    let values = symbol_values(&equations.pool, &equations.variables.parameters, &mut recogniser);
+    let values = symbol_values(
+        &equations.pool,
+        &equations.variables.parameters,
+        &mut recogniser,
+    );
     let mut evaluator = Evaluator::new(&equations.pool, values);
     let delta_values = evaluator
         .values(&equations.constraints, &mut recogniser)
@@ -219,7 +226,11 @@ pub fn exact_mobility(
             .iter()
             .map(|row| row[offset..offset + count].to_vec())
             .collect();
-        let r = if count == 0 { 0 } else { elimination::rank(&block) };
+        let r = if count == 0 {
+            0
+        } else {
+            elimination::rank(&block)
+        };
         cut_rank += r;
         constraint_rows += 6 - r;
         cut_columns.extend(offset..offset + count);
@@ -237,8 +248,11 @@ pub fn exact_mobility(
         .collect();
     let echelon = elimination::echelon(&delta, &order);
     // The independent coordinates in the mechanism's order.
-    let mut free_basis: Vec<(usize, Vec<Number>)> =
-        echelon.free_columns().into_iter().zip(echelon.kernel()).collect();
+    let mut free_basis: Vec<(usize, Vec<Number>)> = echelon
+        .free_columns()
+        .into_iter()
+        .zip(echelon.kernel())
+        .collect();
     free_basis.sort_by_key(|(c, _)| *c);
     let (free, basis): (Vec<usize>, Vec<Vec<Number>>) = free_basis.into_iter().unzip();
     let independent = free

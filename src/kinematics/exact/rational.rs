@@ -141,7 +141,9 @@ impl Rational {
             _ => {
                 let shift = self.numerator.bits().max(self.denominator.bits()) - 1000;
                 let n = (&self.numerator >> shift).to_f64().unwrap_or(0.0);
-                let d = (&self.denominator >> shift).to_f64().unwrap_or(f64::INFINITY);
+                let d = (&self.denominator >> shift)
+                    .to_f64()
+                    .unwrap_or(f64::INFINITY);
                 n / d
             }
         }

@@ -137,7 +137,11 @@ fn surd(x: f64) -> Option<(Rational, u64)> {
         return None;
     }
     let coefficient = Rational::new(BigInt::from(s), square.denominator().clone());
-    let coefficient = if x < 0.0 { coefficient.neg() } else { coefficient };
+    let coefficient = if x < 0.0 {
+        coefficient.neg()
+    } else {
+        coefficient
+    };
     close(x, coefficient.to_f64() * (d as f64).sqrt()).then_some((coefficient, d))
 }
 
@@ -167,8 +171,7 @@ fn mixed(x: f64, d: u64) -> Option<(Rational, Rational)> {
         for magnitude in 1..=4 * q {
             for b in [magnitude, -magnitude] {
                 let a = (scaled - b as f64 * root).round();
-                if (scaled - a - b as f64 * root).abs() <= TOLERANCE * q as f64 * x.abs().max(1.0)
-                {
+                if (scaled - a - b as f64 * root).abs() <= TOLERANCE * q as f64 * x.abs().max(1.0) {
                     let q = BigInt::from(q);
                     return Some((
                         Rational::new(BigInt::from(a as i64), q.clone()),

@@ -117,7 +117,9 @@ fn attributes(role: Role) -> &'static str {
         Role::Time => "causality=\"independent\" variability=\"continuous\"",
         Role::Parameter => "causality=\"parameter\" variability=\"fixed\"",
         Role::Input | Role::ValueInput => "causality=\"input\" variability=\"continuous\"",
-        Role::Acceleration => "causality=\"local\" variability=\"continuous\" initial=\"calculated\"",
+        Role::Acceleration => {
+            "causality=\"local\" variability=\"continuous\" initial=\"calculated\""
+        }
         _ => "causality=\"output\" variability=\"continuous\" initial=\"calculated\"",
     }
 }
@@ -133,9 +135,16 @@ fn is_output(role: Role) -> bool {
 /// their rates): the rates, then the accelerations; with the index of the variable each is the
 /// derivative of, among `written`.
 fn derivatives<'v>(written: &[&'v Variable]) -> Vec<(usize, &'v Variable)> {
-    let place = |role, index| written.iter().position(|v| v.role == role && v.index == index);
+    let place = |role, index| {
+        written
+            .iter()
+            .position(|v| v.role == role && v.index == index)
+    };
     let mut found = Vec::new();
-    for (of, role) in [(Role::Coordinate, Role::Rate), (Role::Rate, Role::Acceleration)] {
+    for (of, role) in [
+        (Role::Coordinate, Role::Rate),
+        (Role::Rate, Role::Acceleration),
+    ] {
         for variable in written.iter().filter(|v| v.role == role) {
             if let Some(state) = place(of, variable.index) {
                 found.push((state, *variable));
@@ -146,7 +155,11 @@ fn derivatives<'v>(written: &[&'v Variable]) -> Vec<(usize, &'v Variable)> {
 }
 
 /// The model description's text.
-pub fn model_description(version: Version, identity: &Identity<'_>, variables: &[Variable]) -> String {
+pub fn model_description(
+    version: Version,
+    identity: &Identity<'_>,
+    variables: &[Variable],
+) -> String {
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     let (version_attribute, token_attribute) = match version {
         Version::Fmi3 => ("3.0", "instantiationToken"),

@@ -180,7 +180,9 @@ pub fn parameters(mechanism: &Mechanism, values: &[Override]) -> Vec<(String, f6
         }
         let (Some(value), Some(name)) = (
             known.get(&id),
-            names_of(mechanism, &Default::default(), id).into_iter().next(),
+            names_of(mechanism, &Default::default(), id)
+                .into_iter()
+                .next(),
         ) else {
             continue;
         };
@@ -207,12 +209,7 @@ pub fn variables(
     accelerations: bool,
 ) -> Vec<Variable> {
     let dimensions = dimensions(&prepared.kinematics);
-    let dimension = |name: &str| {
-        dimensions
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, d)| *d)
-    };
+    let dimension = |name: &str| dimensions.iter().find(|(n, _)| n == name).map(|(_, d)| *d);
     let mut list = Vec::new();
     let mut push = |name: String, role, index, unit, description: String, start| {
         let value_reference = list.len() as u32;
@@ -236,7 +233,14 @@ pub fn variables(
     );
     for (k, (name, value, description)) in parameters.iter().enumerate() {
         let description = description.clone();
-        push(name.clone(), Role::Parameter, k, None, description, Some(*value));
+        push(
+            name.clone(),
+            Role::Parameter,
+            k,
+            None,
+            description,
+            Some(*value),
+        );
     }
     for (k, (name, start)) in inputs.iter().enumerate() {
         let unit = match name.rsplit_once('.').map(|(_, last)| last) {
@@ -246,12 +250,26 @@ pub fn variables(
         };
         let description =
             format!("generalised effort along `{name}`, held over each communication step");
-        push(format!("{name}.effort"), Role::Input, k, unit, description, Some(*start));
+        push(
+            format!("{name}.effort"),
+            Role::Input,
+            k,
+            unit,
+            description,
+            Some(*start),
+        );
     }
     for (k, (name, start)) in value_inputs.iter().enumerate() {
         let description =
             format!("the program's input `{name}`, held over each communication step");
-        push(name.clone(), Role::ValueInput, k, None, description, Some(*start));
+        push(
+            name.clone(),
+            Role::ValueInput,
+            k,
+            None,
+            description,
+            Some(*start),
+        );
     }
     for (k, name) in prepared.coordinate_names.iter().enumerate() {
         let unit = dimension(name).map(|d| d.of(Some(0)));
@@ -282,7 +300,11 @@ pub fn variables(
     );
     // A value input is a column of the run (a state) but an input of the unit.
     let is_input = |name: &String| value_inputs.iter().any(|(n, _)| n == name);
-    for (k, name) in output_names.iter().enumerate().filter(|(_, n)| !is_input(n)) {
+    for (k, name) in output_names
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| !is_input(n))
+    {
         let description = format!("the program's output `{name}`");
         push(name.clone(), Role::Output, k, None, description, None);
     }
@@ -290,7 +312,14 @@ pub fn variables(
         for (k, name) in prepared.coordinate_names.iter().enumerate() {
             let unit = dimension(name).map(|d| d.of(Some(2)));
             let description = format!("acceleration of `{name}`");
-            push(format!("{name}''"), Role::Acceleration, k, unit, description, None);
+            push(
+                format!("{name}''"),
+                Role::Acceleration,
+                k,
+                unit,
+                description,
+                None,
+            );
         }
     }
     list

@@ -9,10 +9,10 @@
 
 use nalgebra::DVector;
 
-use super::{MechanicalSystem, SystemError};
-use crate::dynamics::algorithms::hybrid::{hybrid_after_kinematics, least_change};
-use crate::dynamics::algorithms::forward_kinematics;
 use super::subtree_run::SubtreeRun;
+use super::{MechanicalSystem, SystemError};
+use crate::dynamics::algorithms::forward_kinematics;
+use crate::dynamics::algorithms::hybrid::{hybrid_after_kinematics, least_change};
 use crate::dynamics::driven_subtrees::DrivenSubtrees;
 use crate::dynamics::rows::LAW_ROUND_OFF;
 
@@ -53,7 +53,10 @@ impl<'m> MechanicalSystem<'m> {
             true => &scratch.efforts,
             false => &scratch.no_efforts,
         };
-        let run = self.driven.as_deref_mut().expect("a run by driven subtrees");
+        let run = self
+            .driven
+            .as_deref_mut()
+            .expect("a run by driven subtrees");
         let forces = (efforts.tau.as_slice(), &efforts.external[..]);
         let known = &run.subtrees.known;
         let solved = hybrid_after_kinematics(
@@ -106,7 +109,10 @@ impl<'m> MechanicalSystem<'m> {
     ) -> Result<bool, SystemError> {
         let model = self.model;
         let scratch = &mut *self.scratch;
-        let run = self.driven.as_deref_mut().expect("a run by driven subtrees");
+        let run = self
+            .driven
+            .as_deref_mut()
+            .expect("a run by driven subtrees");
         let mut open = false;
         for drive in &model.drives {
             let law = drive.evaluate(t, &mut scratch.law_values);
@@ -125,7 +131,10 @@ impl<'m> MechanicalSystem<'m> {
                 &mut run.change,
             );
             solved.map_err(|e| self.dynamics_error(&e))?;
-            let run = self.driven.as_deref_mut().expect("a run by driven subtrees");
+            let run = self
+                .driven
+                .as_deref_mut()
+                .expect("a run by driven subtrees");
             model.retract(q, run.change.as_slice());
             let positions = model.positions();
             y[..positions].copy_from_slice(q);
@@ -134,7 +143,10 @@ impl<'m> MechanicalSystem<'m> {
             v.extend_from_slice(rates);
         }
         let scratch = &mut *self.scratch;
-        let run = self.driven.as_deref_mut().expect("a run by driven subtrees");
+        let run = self
+            .driven
+            .as_deref_mut()
+            .expect("a run by driven subtrees");
         let mut off = false;
         for drive in &model.drives {
             let law = drive.evaluate(t, &mut scratch.law_values);

@@ -29,12 +29,12 @@ use crate::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
 use crate::dynamics::algorithms::{
     crba_after_kinematics, forward_kinematics, rnea_after_kinematics,
 };
+use crate::dynamics::dense::inverse_power_of_two;
 use crate::dynamics::effort_derivatives::{self, EffortDerivatives};
 use crate::dynamics::efforts::Declared;
-use std::ops::SubAssign;
-use crate::dynamics::dense::inverse_power_of_two;
 use crate::dynamics::joint::JointType;
 use crate::dynamics::rows::DEPENDENT_ROWS;
+use std::ops::SubAssign;
 
 /// The residual of the equations of motion at one state, and the power of the efforts there.
 struct Residual {
@@ -76,7 +76,13 @@ impl MechanicalSystem<'_> {
         let nv = model.nv;
         let accelerations = &dydt[nv..];
         let mut differences = DMatrix::zeros(nv, 2 * nv);
-        if !self.exact_residual_derivatives(t, y, accelerations, &mut differences, power_gradient)? {
+        if !self.exact_residual_derivatives(
+            t,
+            y,
+            accelerations,
+            &mut differences,
+            power_gradient,
+        )? {
             self.differenced_residual(t, y, accelerations, &mut differences, power_gradient)?;
         }
         let mass = mass_storage(&mut self.scratch.mass, nv);
@@ -107,7 +113,9 @@ impl MechanicalSystem<'_> {
     /// tape (`effort_derivatives::covers`), no input and no friction, and RNEA's.
     fn has_exact_residual_derivatives(&self) -> bool {
         let model = self.model;
-        effort_derivatives::covers(model).is_ok() && !self.state.inputs.any() && !model.has_contacts()
+        effort_derivatives::covers(model).is_ok()
+            && !self.state.inputs.any()
+            && !model.has_contacts()
     }
 
     /// The derivatives of the efforts' generalised forces at (t, q, v),
@@ -161,7 +169,10 @@ impl MechanicalSystem<'_> {
         let scratch = &mut *self.scratch;
         let (inverse, efforts) = &mut **scratch.exact_jacobian.as_mut().expect("made above");
         let external = &scratch.efforts.external;
-        if inverse.compute(model, &mut scratch.data, q, v, a, external).is_err() {
+        if inverse
+            .compute(model, &mut scratch.data, q, v, a, external)
+            .is_err()
+        {
             return Ok(false);
         }
         columns.copy_from(&efforts.efforts);
@@ -195,7 +206,12 @@ impl MechanicalSystem<'_> {
             power_gradient[j] = (moved.power - at_state.power) / delta;
         }
         // The kinematics of y, as the exact derivatives leave them.
-        forward_kinematics(self.model, &mut self.scratch.data, &y[..self.model.nq], &y[self.model.nq..])?;
+        forward_kinematics(
+            self.model,
+            &mut self.scratch.data,
+            &y[..self.model.nq],
+            &y[self.model.nq..],
+        )?;
         Ok(())
     }
 

@@ -9,10 +9,10 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
 use crate::dynamics::algorithms::Data;
-use crate::dynamics::effort_derivatives::EffortDerivatives;
 use crate::dynamics::compiled::EffortScratch;
 use crate::dynamics::contacts::ContactRows;
 use crate::dynamics::driven_points::PointRows;
+use crate::dynamics::effort_derivatives::EffortDerivatives;
 use crate::dynamics::efforts::Efforts;
 use crate::dynamics::loops::{LoopScratch, ProjectionScratch, Stabilisation};
 use crate::dynamics::mimics;

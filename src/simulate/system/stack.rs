@@ -29,8 +29,8 @@ use crate::dynamics::algorithms::{
 };
 use crate::dynamics::loops::planar_rows::planar_constraints_into;
 use crate::dynamics::loops::{self, Extent, Factored, Stabilisation};
-use crate::dynamics::planar::algorithms as planar_algorithms;
 use crate::dynamics::planar::algebra::PlanarForce;
+use crate::dynamics::planar::algorithms as planar_algorithms;
 use crate::dynamics::planar::PlanarModel;
 use crate::spatial::Force;
 

@@ -109,7 +109,10 @@ mod tests {
             let base_sum: f64 = (base.independent.iter().zip(&folded))
                 .map(|(&j, p)| w[(row, j)] * p)
                 .sum();
-            assert!((full - base_sum).abs() < 1e-12, "row {row}: {full} {base_sum}");
+            assert!(
+                (full - base_sum).abs() < 1e-12,
+                "row {row}: {full} {base_sum}"
+            );
         }
     }
 }

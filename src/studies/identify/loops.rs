@@ -59,7 +59,9 @@ impl LoopState {
     pub fn new(model: &Model, start: &[f64], actuated: &[usize]) -> LoopState {
         LoopState {
             actuated: actuated.to_vec(),
-            passive: (0..model.velocities()).filter(|v| !actuated.contains(v)).collect(),
+            passive: (0..model.velocities())
+                .filter(|v| !actuated.contains(v))
+                .collect(),
             constraints: Constraints::new(model),
             q: start.to_vec(),
         }
@@ -86,7 +88,8 @@ impl LoopState {
         let mut residual = f64::INFINITY;
         let mut step = vec![0.0; n];
         for _ in 0..NEWTON_STEPS {
-            forward_kinematics(model, data, &q, &zero).map_err(|e| SystemError::from(e).to_string())?;
+            forward_kinematics(model, data, &q, &zero)
+                .map_err(|e| SystemError::from(e).to_string())?;
             constraints_into(model, data, &q, &zero, Extent::Rows, &mut self.constraints)
                 .map_err(|e| SystemError::from(e).to_string())?;
             residual = self.constraints.residual.amax();
@@ -187,7 +190,9 @@ impl LoopState {
         let mut square = DMatrix::zeros(g_p.nrows().max(p), p);
         square.rows_mut(0, g_p.nrows()).copy_from(g_p);
         let decomposition = svd(square, false, true).ok_or("the loops' rows are not finite")?;
-        let v_t = decomposition.v_t.ok_or("the loops' rows have no right singular vectors")?;
+        let v_t = decomposition
+            .v_t
+            .ok_or("the loops' rows have no right singular vectors")?;
         let free: Vec<usize> = (decomposition.singular_values.iter().enumerate())
             .filter(|(_, &s)| s <= floor)
             .map(|(k, _)| k)
@@ -201,7 +206,8 @@ impl LoopState {
                 }
             }
         }
-        let mass = crba(model, data, &q[..model.nq]).map_err(|e| SystemError::from(e).to_string())?;
+        let mass =
+            crba(model, data, &q[..model.nq]).map_err(|e| SystemError::from(e).to_string())?;
         let scale = mass.diagonal().amax();
         let restricted = basis.transpose() * &mass * &basis;
         let energies = restricted.symmetric_eigenvalues();

@@ -49,11 +49,14 @@ pub fn read_measured(
     let columns: Vec<&str> = header.split(',').map(str::trim).collect();
     // The column (1-based, in characters) where each field of the header starts.
     let starts: Vec<usize> = std::iter::once(1)
-        .chain(header.match_indices(',').map(|(i, _)| header[..i].chars().count() + 2))
+        .chain(
+            header
+                .match_indices(',')
+                .map(|(i, _)| header[..i].chars().count() + 2),
+        )
         .collect();
-    let at_header = |column: usize, message: String| {
-        format!("{file}:{}:{column}: {message}", header_index + 1)
-    };
+    let at_header =
+        |column: usize, message: String| format!("{file}:{}:{column}: {message}", header_index + 1);
     let end_of_header = header.chars().count() + 1;
     let find = |name: &str| columns.iter().position(|c| *c == name);
     // A missing column is shown where the closest one is, or at the end of the header.
@@ -105,12 +108,20 @@ pub fn read_measured(
     // The columns read: a field elsewhere may hold anything (an empty potential energy).
     let read: Vec<usize> = std::iter::once(time)
         .chain(position_columns.iter().flatten().copied())
-        .chain((names.iter().zip(&position_columns)).filter(|(_, k)| k.is_some()).flat_map(|(n, _)| {
-            [find(&format!("{n}'")), find(&format!("{n}''"))]
-                .into_iter()
-                .flatten()
-        }))
-        .chain(measured_efforts.iter().filter_map(|&v| find(&effort_name(v))))
+        .chain(
+            (names.iter().zip(&position_columns))
+                .filter(|(_, k)| k.is_some())
+                .flat_map(|(n, _)| {
+                    [find(&format!("{n}'")), find(&format!("{n}''"))]
+                        .into_iter()
+                        .flatten()
+                }),
+        )
+        .chain(
+            measured_efforts
+                .iter()
+                .filter_map(|&v| find(&effort_name(v))),
+        )
         .collect();
     let mut rows: Vec<Vec<f64>> = Vec::new();
     for (index, line) in lines {

@@ -291,7 +291,8 @@ fn sample_equations(
     let samples = measured.times.len();
     let equations = samples * rows.len();
     let program_values: Vec<f64> = asked.iter().map(|&p| model_value(model, p)).collect();
-    let mut system = MechanicalSystem::new(model, prepared.coordinates.clone(), Stabilisation::None);
+    let mut system =
+        MechanicalSystem::new(model, prepared.coordinates.clone(), Stabilisation::None);
     let mut closure = match model.has_loops() {
         true => {
             let (q, _) = model
@@ -316,18 +317,23 @@ fn sample_equations(
             measured.accelerations[s].as_slice(),
         );
         let closed = match closure.as_mut() {
-            Some(closure) => Some(closure.close(model, &mut loop_data, measured_state).map_err(failed)?),
+            Some(closure) => Some(
+                closure
+                    .close(model, &mut loop_data, measured_state)
+                    .map_err(failed)?,
+            ),
             None => None,
         };
         let (q, v, a) = match &closed {
             Some(c) => (c.q.as_slice(), c.v.as_slice(), c.a.as_slice()),
             None => measured_state,
         };
-        let efforts = system.efforts(time, q, v).map_err(|e| failed(e.to_string()))?;
+        let efforts = system
+            .efforts(time, q, v)
+            .map_err(|e| failed(e.to_string()))?;
         let data = &mut system.scratch.data;
         let (q, v, a) = (&q[..model.nq], &v[..model.nv], &a[..model.nv]);
-        let mut predicted =
-            rnea(model, data, q, v, a, &efforts.external)
+        let mut predicted = rnea(model, data, q, v, a, &efforts.external)
             .map_err(|e| failed(SystemError::from(e).to_string()))?;
         predicted -= efforts.tau.rows(0, model.nv);
         for friction in &model.frictions {
@@ -381,8 +387,8 @@ pub fn identify(
     if !refused.is_empty() {
         return Err(IdentifyError::WithoutEffect(refused));
     }
-    let base = base_of(all, w_all.clone())
-        .map_err(|why| IdentifyError::Evaluation { time: 0.0, why })?;
+    let base =
+        base_of(all, w_all.clone()).map_err(|why| IdentifyError::Evaluation { time: 0.0, why })?;
     let without_effect: Vec<String> = (base.without_effect.iter())
         .map(|&k| parameter_name(model, all[k]))
         .collect();
@@ -412,8 +418,11 @@ pub fn identify(
             });
             name(leading) + &folded.collect::<String>()
         });
-        let model_value =
-            program_values[leading] + terms.iter().map(|&(j, b)| b * program_values[j]).sum::<f64>();
+        let model_value = program_values[leading]
+            + terms
+                .iter()
+                .map(|&(j, b)| b * program_values[j])
+                .sum::<f64>();
         reported.push(Estimate {
             name: name(leading),
             combination,
@@ -527,7 +536,9 @@ fn least_squares(
     let variance = sum_squares / (equations - count) as f64;
     let std = (0..count)
         .map(|j| {
-            let spread: f64 = (0..count).map(|k| (v_t[(k, j)] / singular[k]).powi(2)).sum();
+            let spread: f64 = (0..count)
+                .map(|k| (v_t[(k, j)] / singular[k]).powi(2))
+                .sum();
             (variance * spread).sqrt() / norms[j]
         })
         .collect();

@@ -36,7 +36,7 @@ use crate::linalg::svd;
 use crate::prepare::settings::SettingsChanges;
 use crate::simulate::clock::thread_cpu_seconds;
 use crate::studies::sensitivity::parameters::{resolve, Parameter};
-use crate::studies::sensitivity::{sensitivities_at, SensitivityError, Sensitivities};
+use crate::studies::sensitivity::{sensitivities_at, Sensitivities, SensitivityError};
 use crate::studies::sweep::runs::{with_initial_values, Target};
 
 /// How the estimates are found, for people (`method` in the JSON).
@@ -117,10 +117,18 @@ pub enum NonlinearError {
         without_effect: Vec<String>,
         together: Vec<String>,
     },
-    TooFewSamples { equations: usize, parameters: usize },
+    TooFewSamples {
+        equations: usize,
+        parameters: usize,
+    },
     /// The run at the start fails (its time and reason).
-    RunFailed { time: f64, why: String },
-    NotConverged { iterations: usize },
+    RunFailed {
+        time: f64,
+        why: String,
+    },
+    NotConverged {
+        iterations: usize,
+    },
 }
 
 impl std::fmt::Display for NonlinearError {
@@ -180,7 +188,10 @@ pub struct Table {
 /// The first character (1-based) of each field of `line`.
 fn field_starts(line: &str) -> Vec<usize> {
     std::iter::once(1)
-        .chain(line.match_indices(',').map(|(i, _)| line[..i].chars().count() + 2))
+        .chain(
+            line.match_indices(',')
+                .map(|(i, _)| line[..i].chars().count() + 2),
+        )
         .collect()
 }
 
@@ -239,7 +250,9 @@ impl Table {
     /// The times: a `time` column, increasing from 0 on.
     fn times(&self) -> Result<Vec<f64>, String> {
         let at_header = |message: &str| format!("{}:{}:1: {message}", self.file, self.header_line);
-        let k = self.find("time").ok_or_else(|| at_header("no `time` column"))?;
+        let k = self
+            .find("time")
+            .ok_or_else(|| at_header("no `time` column"))?;
         let times = self.column(k)?;
         for (s, pair) in times.windows(2).enumerate() {
             if pair[1] <= pair[0] {
@@ -357,7 +370,11 @@ impl Runs<'_> {
                 }
             }
         }
-        Ok(Point { p: p.to_vec(), r, j })
+        Ok(Point {
+            p: p.to_vec(),
+            r,
+            j,
+        })
     }
 }
 
@@ -407,8 +424,9 @@ pub fn identify_nonlinear(
     }
     let start: Vec<f64> = first.parameters.iter().map(|p| p.value).collect();
     let trial_changes = SettingsChanges {
-        max_steps: (problem.changes.max_steps)
-            .or(Some((TRIAL_STEPS * first.report.steps).max(MIN_TRIAL_STEPS))),
+        max_steps: (problem.changes.max_steps).or(Some(
+            (TRIAL_STEPS * first.report.steps).max(MIN_TRIAL_STEPS),
+        )),
         ..problem.changes.clone()
     };
     let mut runs = Runs {
@@ -432,14 +450,18 @@ pub fn identify_nonlinear(
     let samples = runs.times.len();
     let sigmas: Vec<f64> = (0..c)
         .map(|col| {
-            let squares: f64 = (col..equations).step_by(c).map(|k| point.r[k].powi(2)).sum();
+            let squares: f64 = (col..equations)
+                .step_by(c)
+                .map(|k| point.r[k].powi(2))
+                .sum();
             (squares / samples.saturating_sub(count).max(1) as f64).sqrt()
         })
         .collect();
-    let scale = (0..c).map(|col| {
-        (runs.measured.iter().map(|m| m[col].abs())).fold(0.0, f64::max)
-    });
-    let noise_free = sigmas.iter().zip(scale).any(|(&s, m)| s <= NOISE_FREE * m.max(f64::MIN_POSITIVE));
+    let scale = (0..c).map(|col| (runs.measured.iter().map(|m| m[col].abs())).fold(0.0, f64::max));
+    let noise_free = sigmas
+        .iter()
+        .zip(scale)
+        .any(|(&s, m)| s <= NOISE_FREE * m.max(f64::MIN_POSITIVE));
     let sigmas = match noise_free {
         true => Vec::new(),
         false => {
@@ -451,7 +473,10 @@ pub fn identify_nonlinear(
     let (rw, jw) = point.weighted(&weights);
     let (std, condition) = deviations(&rw, &jw);
     let sum_squares = point.r.norm_squared();
-    let measured_norm = (runs.measured.iter().flatten()).map(|x| x * x).sum::<f64>().sqrt();
+    let measured_norm = (runs.measured.iter().flatten())
+        .map(|x| x * x)
+        .sum::<f64>()
+        .sqrt();
     let residual = Residual {
         rms: (sum_squares / equations as f64).sqrt(),
         relative: sum_squares.sqrt() / measured_norm.max(f64::MIN_POSITIVE),
@@ -476,7 +501,10 @@ pub fn identify_nonlinear(
         residual,
         samples,
         equations,
-        fitted: fitted.iter().map(|&(q, _)| first.quantities[q].clone()).collect(),
+        fitted: fitted
+            .iter()
+            .map(|&(q, _)| first.quantities[q].clone())
+            .collect(),
         method: METHOD,
         iterations,
         runs: runs.runs,
@@ -564,15 +592,23 @@ fn levenberg_marquardt(
             growth *= 2.0;
             continue;
         };
-        let scaled_step: f64 = (0..count).map(|i| (scaling[i] * step[i]).powi(2)).sum::<f64>().sqrt();
-        let scaled_p: f64 = (0..count).map(|i| (scaling[i] * point.p[i]).powi(2)).sum::<f64>().sqrt();
+        let scaled_step: f64 = (0..count)
+            .map(|i| (scaling[i] * step[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let scaled_p: f64 = (0..count)
+            .map(|i| (scaling[i] * point.p[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
         let trial_p: Vec<f64> = (0..count).map(|i| point.p[i] + step[i]).collect();
         // The reduction the linear model predicts: |r|² − |r − J δ|².
         let predicted = cost - (&r - &j * &step).norm_squared();
         let trial = match runs.at(&trial_p) {
             Ok(trial) => Some(trial),
             // A step to values where the program cannot be prepared or run is too long.
-            Err(NonlinearError::RunFailed { .. }) | Err(NonlinearError::Program(_)) | Err(NonlinearError::Usage(_)) => None,
+            Err(NonlinearError::RunFailed { .. })
+            | Err(NonlinearError::Program(_))
+            | Err(NonlinearError::Usage(_)) => None,
             Err(other) => return Err(other),
         };
         let accepted = trial.and_then(|trial| {
@@ -587,7 +623,9 @@ fn levenberg_marquardt(
                 (point, r, j, cost) = (trial, trial_r, trial_j, trial_cost);
                 lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 growth = 2.0;
-                if reduction <= COST_TOLERANCE * cost || scaled_step <= STEP_TOLERANCE * (scaled_p + STEP_TOLERANCE) {
+                if reduction <= COST_TOLERANCE * cost
+                    || scaled_step <= STEP_TOLERANCE * (scaled_p + STEP_TOLERANCE)
+                {
                     return Ok(point);
                 }
             }
@@ -616,7 +654,12 @@ const LAMBDA_START: f64 = 1e-3;
 
 /// δ minimising |J δ − r|² + λ |D δ|², by the SVD of [J; √λ D] (the normal equations would
 /// square the condition).
-fn damped_step(j: &DMatrix<f64>, r: &DVector<f64>, scaling: &[f64], lambda: f64) -> Option<DVector<f64>> {
+fn damped_step(
+    j: &DMatrix<f64>,
+    r: &DVector<f64>,
+    scaling: &[f64],
+    lambda: f64,
+) -> Option<DVector<f64>> {
     let (m, n) = j.shape();
     let mut stacked = DMatrix::zeros(m + n, n);
     stacked.view_mut((0, 0), (m, n)).copy_from(j);
@@ -634,7 +677,10 @@ fn damped_step(j: &DMatrix<f64>, r: &DVector<f64>, scaling: &[f64], lambda: f64)
 /// number of J with its columns scaled to unit norm.
 fn deviations(r: &DVector<f64>, j: &DMatrix<f64>) -> (Vec<f64>, f64) {
     let (m, n) = j.shape();
-    let norms: Vec<f64> = j.column_iter().map(|c| c.norm().max(f64::MIN_POSITIVE)).collect();
+    let norms: Vec<f64> = j
+        .column_iter()
+        .map(|c| c.norm().max(f64::MIN_POSITIVE))
+        .collect();
     let scaled = DMatrix::from_fn(m, n, |k, i| j[(k, i)] / norms[i]);
     let Some(decomposition) = svd(scaled, false, true) else {
         return (vec![f64::NAN; n], f64::INFINITY);

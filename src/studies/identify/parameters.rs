@@ -70,7 +70,11 @@ impl std::error::Error for NameError {}
 pub fn parameter_name(model: &Model, parameter: Parameter) -> String {
     match parameter {
         Parameter::Inertial { body, index } => {
-            format!("{}.{}", model.body_names[body - 1], INERTIAL_PARAMETERS[index])
+            format!(
+                "{}.{}",
+                model.body_names[body - 1],
+                INERTIAL_PARAMETERS[index]
+            )
         }
         Parameter::Dry { velocity } => format!("{}.friction", joint_name(model, velocity)),
         Parameter::Viscous { velocity } => format!("{}.damping", joint_name(model, velocity)),
@@ -78,7 +82,9 @@ pub fn parameter_name(model: &Model, parameter: Parameter) -> String {
 }
 
 fn joint_name(model: &Model, velocity: usize) -> &str {
-    model.joint_of_velocity(velocity).map_or("", |j| j.chain.name.as_str())
+    model
+        .joint_of_velocity(velocity)
+        .map_or("", |j| j.chain.name.as_str())
 }
 
 /// The parameters asked for, in order, each once.
@@ -126,7 +132,10 @@ fn resolve_one(
     let joint = |j: &str| model.joints.iter().find(|joint| joint.chain.name == j);
     if let Some(joint) = joint(name).filter(|j| j.is_single_coordinate()) {
         let velocity = joint.v_offset;
-        return Ok(vec![Parameter::Dry { velocity }, Parameter::Viscous { velocity }]);
+        return Ok(vec![
+            Parameter::Dry { velocity },
+            Parameter::Viscous { velocity },
+        ]);
     }
     if let Some((owner, field)) = name.rsplit_once('.') {
         if let Some(b) = body(owner) {
@@ -157,8 +166,8 @@ fn resolve_one(
             }]);
         }
     }
-    let unknown = (mechanism.unknowns.iter())
-        .find(|u| u.name.as_ref().is_some_and(|n| n.as_str() == name));
+    let unknown =
+        (mechanism.unknowns.iter()).find(|u| u.name.as_ref().is_some_and(|n| n.as_str() == name));
     if let Some(unknown) = unknown {
         return Err(NameError::ProgramUnknown {
             name: name.to_string(),

@@ -394,7 +394,10 @@ fn with_declared(model: &crate::dynamics::model::Model, named: &[String]) -> Vec
     let efforts = model.effort_inputs.iter().map(|(name, _)| name);
     let values = (model.states.iter().filter(|state| state.input)).map(|state| &state.name);
     let declared: Vec<String> = efforts.chain(values).cloned().collect();
-    let named = named.iter().filter(|name| !declared.contains(name)).cloned();
+    let named = named
+        .iter()
+        .filter(|name| !declared.contains(name))
+        .cloned();
     declared.iter().cloned().chain(named).collect()
 }
 

@@ -75,7 +75,9 @@ impl<'p> Variant<'p> {
         let tau = vec![0.0; nv];
         let external = vec![Force::zeros(); model.body_count() + 1];
         let data = &mut self.system.scratch.data;
-        derivatives.compute(model, data, q, v, &tau, &external).ok()?;
+        derivatives
+            .compute(model, data, q, v, &tau, &external)
+            .ok()?;
         let mut jacobian = DMatrix::zeros(2 * nv, 2 * nv);
         jacobian.view_mut((0, nv), (nv, nv)).fill_with_identity();
         (jacobian.view_mut((nv, 0), (nv, nv))).copy_from(&derivatives.dacceleration_dq);
@@ -278,7 +280,9 @@ impl<'p> Augmented<'p> {
         for (j, shifted) in self.shifted.iter_mut().enumerate() {
             let direction = &augmented[n * (j + 1)..n * (j + 2)];
             let mut column = match jacobian {
-                Some(jacobian) => (jacobian * DVector::from_column_slice(direction)).data.into(),
+                Some(jacobian) => (jacobian * DVector::from_column_slice(direction))
+                    .data
+                    .into(),
                 None => vec![0.0; length],
             };
             if jacobian.is_none() {

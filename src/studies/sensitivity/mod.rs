@@ -287,7 +287,10 @@ fn sample(row: Row) -> SensitivitySample {
 fn quantity_names(prepared: &Prepared) -> Vec<String> {
     let coordinates = prepared.coordinate_names.iter().cloned();
     let rates = prepared.coordinate_names.iter().map(|n| format!("{n}'"));
-    coordinates.chain(rates).chain(output_names_of(prepared)).collect()
+    coordinates
+        .chain(rates)
+        .chain(output_names_of(prepared))
+        .collect()
 }
 
 /// The integration method of the run's settings; the variational integrator's steps are its
@@ -369,7 +372,9 @@ fn starts(
 
 /// (plus − minus) / width, component by component.
 fn difference(plus: &[f64], minus: &[f64], width: f64) -> Vec<f64> {
-    (plus.iter().zip(minus)).map(|(a, b)| (a - b) / width).collect()
+    (plus.iter().zip(minus))
+        .map(|(a, b)| (a - b) / width)
+        .collect()
 }
 
 fn evaluation_error(message: &str) -> SensitivityError {

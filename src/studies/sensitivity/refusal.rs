@@ -47,12 +47,16 @@ impl Refused {
 pub fn refusal(mechanism: &Mechanism, prepared: &Prepared) -> Option<Diagnostic> {
     let model = &prepared.model;
     let join_of = |coordinate: &str| -> String {
-        (coordinate.rsplit_once('.')).map_or(coordinate, |(join, _)| join).to_string()
+        (coordinate.rsplit_once('.'))
+            .map_or(coordinate, |(join, _)| join)
+            .to_string()
     };
     let found: Option<(String, Refused)> = None
         .or_else(|| (model.loops.first()).map(|l| (l.name.clone(), Refused::Loop)))
-        .or_else(|| (model.joints.iter().find(|j| j.kind != JointType::Chain))
-            .map(|j| (j.chain.name.clone(), Refused::Quaternion)))
+        .or_else(|| {
+            (model.joints.iter().find(|j| j.kind != JointType::Chain))
+                .map(|j| (j.chain.name.clone(), Refused::Quaternion))
+        })
         .or_else(|| (model.mimics.first()).map(|m| (join_of(&m.coordinate), Refused::Mimic)))
         .or_else(|| (model.stops.first()).map(|s| (join_of(&s.coordinate), Refused::Stop)))
         .or_else(|| (model.frictions.first()).map(|f| (join_of(&f.coordinate), Refused::Friction)))
@@ -63,14 +67,18 @@ pub fn refusal(mechanism: &Mechanism, prepared: &Prepared) -> Option<Diagnostic>
     let span = match joins.find(|&id| mechanism.join_name(id) == name) {
         Some(id) => mechanism.join(id).span,
         None => {
-            let index = (0..mechanism.contacts.len()).find(|&k| mechanism.contact_name(k) == name)?;
+            let index =
+                (0..mechanism.contacts.len()).find(|&k| mechanism.contact_name(k) == name)?;
             mechanism.contacts[index].span
         }
     };
     Some(
         Diagnostic::error(
             "E0860",
-            format!("`lsdc sensitivity` does not handle `{name}`: {}", kind.what()),
+            format!(
+                "`lsdc sensitivity` does not handle `{name}`: {}",
+                kind.what()
+            ),
         )
         .primary(span, kind.what())
         .help(kind.help()),

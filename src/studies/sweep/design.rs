@@ -43,7 +43,8 @@ pub struct GridAxis {
 impl GridAxis {
     /// Reads `NAME=a:b:n`.
     pub fn parse(text: &str) -> Result<GridAxis, String> {
-        let form = || format!("`--grid {text}`: write NAME=FROM:TO:COUNT, for example `arm.q=0:1.5:16`");
+        let form =
+            || format!("`--grid {text}`: write NAME=FROM:TO:COUNT, for example `arm.q=0:1.5:16`");
         let (name, range) = text.rsplit_once('=').ok_or_else(form)?;
         let parts: Vec<&str> = range.split(':').collect();
         let [from, to, count] = parts[..] else {
@@ -58,7 +59,9 @@ impl GridAxis {
             .parse()
             .ok()
             .filter(|&n| n >= 1)
-            .ok_or_else(|| format!("`--grid {text}`: `{count}` is not a count of values (1 or more)"))?;
+            .ok_or_else(|| {
+                format!("`--grid {text}`: `{count}` is not a count of values (1 or more)")
+            })?;
         if name.trim().is_empty() {
             return Err(form());
         }
@@ -176,7 +179,9 @@ pub fn list(text: &str) -> Result<Design, ListError> {
 
 /// The column (from 1, in characters) where the `index`-th comma-separated field starts.
 fn field_column(line: &str, index: usize) -> usize {
-    let before: usize = (line.split(',').take(index)).map(|f| f.chars().count() + 1).sum();
+    let before: usize = (line.split(',').take(index))
+        .map(|f| f.chars().count() + 1)
+        .sum();
     let field = line.split(',').nth(index).unwrap_or("");
     before + (field.chars().count() - field.trim_start().chars().count()) + 1
 }

@@ -9,9 +9,20 @@ use std::fmt;
 /// `truncnormal(mean, sd, low, high)` (the normal conditioned on [low, high]).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Distribution {
-    Uniform { low: f64, high: f64 },
-    Normal { mean: f64, sd: f64 },
-    TruncatedNormal { mean: f64, sd: f64, low: f64, high: f64 },
+    Uniform {
+        low: f64,
+        high: f64,
+    },
+    Normal {
+        mean: f64,
+        sd: f64,
+    },
+    TruncatedNormal {
+        mean: f64,
+        sd: f64,
+        low: f64,
+        high: f64,
+    },
 }
 
 impl Distribution {
@@ -20,7 +31,12 @@ impl Distribution {
         match *self {
             Distribution::Uniform { low, high } => low + (high - low) * u,
             Distribution::Normal { mean, sd } => mean + sd * standard_normal_quantile(u),
-            Distribution::TruncatedNormal { mean, sd, low, high } => {
+            Distribution::TruncatedNormal {
+                mean,
+                sd,
+                low,
+                high,
+            } => {
                 let below = standard_normal_cdf((low - mean) / sd);
                 let above = standard_normal_cdf((high - mean) / sd);
                 let z = standard_normal_quantile(below + u * (above - below));
@@ -82,7 +98,10 @@ impl Distribution {
             ))
             }
         };
-        distribution.check().map(|()| distribution).map_err(|why| format!("`{text}`: {why}"))
+        distribution
+            .check()
+            .map(|()| distribution)
+            .map_err(|why| format!("`{text}`: {why}"))
     }
 
     fn check(&self) -> Result<(), String> {

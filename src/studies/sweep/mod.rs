@@ -130,13 +130,19 @@ pub fn execute(
     let pending: Vec<usize> = runs.clone().filter(|r| !finished.contains_key(r)).collect();
     progress(finished.len(), runs.len());
     let mut written = Ok(());
-    run_all(sweep, &pending, execution.threads, execution.stop, &mut |record| {
-        if let (Some(journal), Ok(())) = (&mut journal, &written) {
-            written = journal.append(&record);
-        }
-        finished.insert(record.run, record);
-        progress(finished.len(), runs.len());
-    })?;
+    run_all(
+        sweep,
+        &pending,
+        execution.threads,
+        execution.stop,
+        &mut |record| {
+            if let (Some(journal), Ok(())) = (&mut journal, &written) {
+                written = journal.append(&record);
+            }
+            finished.insert(record.run, record);
+            progress(finished.len(), runs.len());
+        },
+    )?;
     written?;
     let outcome = Outcome {
         records: finished.into_values().collect(),
@@ -180,7 +186,9 @@ pub fn gather_tables(tables: Vec<(String, Table)>) -> Result<Gathered, String> {
     let kind = |table: &Table| !table.names().contains(&"status");
     for (name, table) in &tables {
         if table.names().first() != Some(&"run") {
-            return Err(format!("{name}: not a sweep's table (its first column is not `run`)"));
+            return Err(format!(
+                "{name}: not a sweep's table (its first column is not `run`)"
+            ));
         }
     }
     let Some((first_name, first)) = tables.first() else {
@@ -196,7 +204,11 @@ pub fn gather_tables(tables: Vec<(String, Table)>) -> Result<Gathered, String> {
                 "{first_name} and {name} are not the same kind of table (runs and samples)"
             ));
         }
-        for run in table.runs().into_iter().collect::<std::collections::BTreeSet<_>>() {
+        for run in table
+            .runs()
+            .into_iter()
+            .collect::<std::collections::BTreeSet<_>>()
+        {
             if let Some(other) = owner.insert(run, name.clone()) {
                 return Err(format!(
                     "run {run} is in {other} and in {name}: the same shard given twice?"
@@ -210,7 +222,9 @@ pub fn gather_tables(tables: Vec<(String, Table)>) -> Result<Gathered, String> {
                 .map_err(|why| format!("{name} cannot join {first_name}: {why}"))?,
         }
     }
-    let whole = whole.unwrap_or(Table { columns: Vec::new() });
+    let whole = whole.unwrap_or(Table {
+        columns: Vec::new(),
+    });
     if !samples {
         if let Some(missing) = (0..owner.len() as i64).find(|r| !owner.contains_key(r)) {
             return Err(format!(

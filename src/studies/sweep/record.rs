@@ -36,9 +36,14 @@ impl Status {
     }
 
     pub fn from_name(name: &str) -> Option<Status> {
-        [Status::Ok, Status::Failed, Status::Unprepared, Status::Interrupted]
-            .into_iter()
-            .find(|s| s.name() == name)
+        [
+            Status::Ok,
+            Status::Failed,
+            Status::Unprepared,
+            Status::Interrupted,
+        ]
+        .into_iter()
+        .find(|s| s.name() == name)
     }
 }
 
@@ -113,7 +118,11 @@ pub fn runs_table(names: &[String], quantities: &[String], records: &[RunRecord]
         columns.push(numbers(name.clone(), &|r| r.values.get(k).copied()));
     }
     let statuses = records.iter().map(|r| Some(r.status.name().to_string()));
-    columns.push(Column::texts("status".into(), Kind::Label, statuses.collect()));
+    columns.push(Column::texts(
+        "status".into(),
+        Kind::Label,
+        statuses.collect(),
+    ));
     columns.push(numbers("failure_time".into(), &|r| r.failure_time));
     let failures = records.iter().map(|r| r.failure.clone()).collect();
     columns.push(Column::texts("failure".into(), Kind::Text, failures));
@@ -121,16 +130,26 @@ pub fn runs_table(names: &[String], quantities: &[String], records: &[RunRecord]
     columns.push(Column::integers("steps".into(), Kind::Count, steps));
     columns.push(numbers("end_time".into(), &|r| r.end_time));
     for (k, quantity) in quantities.iter().enumerate() {
-        columns.push(numbers(format!("end({quantity})"), &|r| r.end.get(k).copied().flatten()));
-        columns.push(numbers(format!("min({quantity})"), &|r| r.min.get(k).copied().flatten()));
-        columns.push(numbers(format!("max({quantity})"), &|r| r.max.get(k).copied().flatten()));
+        columns.push(numbers(format!("end({quantity})"), &|r| {
+            r.end.get(k).copied().flatten()
+        }));
+        columns.push(numbers(format!("min({quantity})"), &|r| {
+            r.min.get(k).copied().flatten()
+        }));
+        columns.push(numbers(format!("max({quantity})"), &|r| {
+            r.max.get(k).copied().flatten()
+        }));
     }
     Table { columns }
 }
 
 /// The samples' table of `records`: a row per sample, the runs in the order given.
 pub fn samples_table(quantities: &[String], records: &[RunRecord]) -> Table {
-    let rows = || records.iter().flat_map(|r| r.samples.iter().map(move |s| (r.run, s)));
+    let rows = || {
+        records
+            .iter()
+            .flat_map(|r| r.samples.iter().map(move |s| (r.run, s)))
+    };
     let runs = rows().map(|(run, _)| Some(run as i64)).collect();
     let mut columns = vec![Column::integers("run".into(), Kind::Index, runs)];
     let names = std::iter::once("time".to_string()).chain(quantities.iter().cloned());

@@ -245,12 +245,17 @@ impl<'m> Sweep<'m> {
     /// Runs the `index`-th run to its end, a failure or `interrupt`; a panic inside the run is
     /// its failure, not the sweep's.
     pub fn run(&self, index: usize, interrupt: Option<&Interrupt>) -> RunRecord {
-        let outcome = panic::catch_unwind(AssertUnwindSafe(|| self.run_unguarded(index, interrupt)));
+        let outcome =
+            panic::catch_unwind(AssertUnwindSafe(|| self.run_unguarded(index, interrupt)));
         outcome.unwrap_or_else(|payload| {
             let why = (payload.downcast_ref::<&str>().map(|s| s.to_string()))
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_default();
-            RunRecord::failed_to_prepare(index, &self.design.runs[index], format!("internal error (please report it): {why}"))
+            RunRecord::failed_to_prepare(
+                index,
+                &self.design.runs[index],
+                format!("internal error (please report it): {why}"),
+            )
         })
     }
 
@@ -259,9 +264,15 @@ impl<'m> Sweep<'m> {
         let own;
         let (prepared, start) = match &self.shared {
             Some(shared) => {
-                let (mut coordinates, mut rates) = (shared.coordinates.clone(), shared.rates.clone());
+                let (mut coordinates, mut rates) =
+                    (shared.coordinates.clone(), shared.rates.clone());
                 for (target, &value) in self.targets.iter().zip(values) {
-                    if let Target::Initial { join, coordinate, order } = *target {
+                    if let Target::Initial {
+                        join,
+                        coordinate,
+                        order,
+                    } = *target
+                    {
                         let Some(offset) = shared.model.declared_offset(join) else {
                             continue;
                         };
@@ -291,7 +302,9 @@ impl<'m> Sweep<'m> {
             coordinates: &start.0,
             rates: &start.1,
         };
-        let simulation = run_from_with(prepared, &start, &options, &mut |sample| summary.add(sample));
+        let simulation = run_from_with(prepared, &start, &options, &mut |sample| {
+            summary.add(sample)
+        });
         let report = &simulation.report;
         let status = match (&report.interrupted, &report.failure) {
             (Some(_), _) => Status::Interrupted,
@@ -338,7 +351,10 @@ pub fn coordinate_targets(mechanism: &Mechanism) -> HashMap<String, Target> {
 /// A copy of `mechanism` whose `initial` declarations give these values (join, coordinate,
 /// order, value): a declared one keeps its `fixed` and `guess`, a new one is as `initial`
 /// writes it.
-pub fn with_initial_values(mechanism: &Mechanism, values: &[(JoinId, usize, u32, f64)]) -> Mechanism {
+pub fn with_initial_values(
+    mechanism: &Mechanism,
+    values: &[(JoinId, usize, u32, f64)],
+) -> Mechanism {
     let mut mechanism = mechanism.clone();
     for &(join, coordinate, order, value) in values {
         let declared = (mechanism.initial.iter_mut())
@@ -396,7 +412,11 @@ impl Summary {
             }
         }
         if self.keep_samples {
-            self.samples.push(std::iter::once(sample.time).chain(quantities(sample)).collect());
+            self.samples.push(
+                std::iter::once(sample.time)
+                    .chain(quantities(sample))
+                    .collect(),
+            );
         }
     }
 }
@@ -446,21 +466,25 @@ pub fn run_all(
     if let Some(threads) = threads {
         builder = builder.num_threads(threads);
     }
-    let pool = builder.build().map_err(|e| format!("cannot start the threads: {e}"))?;
+    let pool = builder
+        .build()
+        .map_err(|e| format!("cannot start the threads: {e}"))?;
     let (sender, receiver) = std::sync::mpsc::channel();
     std::thread::scope(|scope| {
         scope.spawn(move || {
             pool.install(|| {
                 // One run at a time per task: runs take very different times.
-                runs.par_iter().with_max_len(1).for_each_with(sender, |sender, &index| {
-                    if !stop.may_start() {
-                        return;
-                    }
-                    let record = sweep.run(index, stop.interrupt.as_ref());
-                    if record.status != Status::Interrupted {
-                        let _ = sender.send(record);
-                    }
-                });
+                runs.par_iter()
+                    .with_max_len(1)
+                    .for_each_with(sender, |sender, &index| {
+                        if !stop.may_start() {
+                            return;
+                        }
+                        let record = sweep.run(index, stop.interrupt.as_ref());
+                        if record.status != Status::Interrupted {
+                            let _ = sender.send(record);
+                        }
+                    });
             });
         });
         for record in receiver {

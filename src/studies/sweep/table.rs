@@ -226,14 +226,25 @@ impl Table {
         for (row, fields) in records.enumerate() {
             let line = row + 2;
             if fields.len() != columns.len() {
-                return Err(format!("line {line}: {} fields for {} columns", fields.len(), columns.len()));
+                return Err(format!(
+                    "line {line}: {} fields for {} columns",
+                    fields.len(),
+                    columns.len()
+                ));
             }
             for (column, field) in columns.iter_mut().zip(fields) {
                 let missing = field.is_empty() && column.kind != Kind::Text;
-                let bad = |what: &str| format!("line {line}, column `{}`: `{field}` is not {what}", column.name);
+                let bad = |what: &str| {
+                    format!(
+                        "line {line}, column `{}`: `{field}` is not {what}",
+                        column.name
+                    )
+                };
                 match &mut column.cells {
                     Cells::Integers(v) if missing => v.push(None),
-                    Cells::Integers(v) => v.push(Some(field.parse().map_err(|_| bad("an integer"))?)),
+                    Cells::Integers(v) => {
+                        v.push(Some(field.parse().map_err(|_| bad("an integer"))?))
+                    }
                     Cells::Numbers(v) if missing => v.push(None),
                     Cells::Numbers(v) => v.push(Some(field.parse().map_err(|_| bad("a number"))?)),
                     Cells::Texts(v) if field.is_empty() => v.push(None),
@@ -266,16 +277,23 @@ impl Table {
             })
             .collect::<Result<Vec<_>, _>>()
             .map_err(error)?;
-        let schema = SchemaType::group_type_builder("sweep").with_fields(fields).build().map_err(error)?;
+        let schema = SchemaType::group_type_builder("sweep")
+            .with_fields(fields)
+            .build()
+            .map_err(error)?;
         let file = File::create(path).map_err(|e| e.to_string())?;
         let properties = Arc::new(WriterProperties::builder().build());
-        let mut writer = SerializedFileWriter::new(file, Arc::new(schema), properties).map_err(error)?;
+        let mut writer =
+            SerializedFileWriter::new(file, Arc::new(schema), properties).map_err(error)?;
         let mut group = writer.next_row_group().map_err(error)?;
         let mut columns = self.columns.iter();
         while let Some(mut column_writer) = group.next_column().map_err(error)? {
-            let column = columns.next().ok_or("more columns in the schema than in the table")?;
+            let column = columns
+                .next()
+                .ok_or("more columns in the schema than in the table")?;
             // Definition levels: 1 where a value is, 0 where it is missing.
-            let levels = |present: Vec<bool>| present.into_iter().map(i16::from).collect::<Vec<i16>>();
+            let levels =
+                |present: Vec<bool>| present.into_iter().map(i16::from).collect::<Vec<i16>>();
             match &column.cells {
                 Cells::Integers(v) => {
                     let values: Vec<i64> = v.iter().flatten().copied().collect();
@@ -292,7 +310,9 @@ impl Table {
                         .map_err(error)?;
                 }
                 Cells::Texts(v) => {
-                    let values: Vec<ByteArray> = (v.iter().flatten()).map(|s| ByteArray::from(s.as_str())).collect();
+                    let values: Vec<ByteArray> = (v.iter().flatten())
+                        .map(|s| ByteArray::from(s.as_str()))
+                        .collect();
                     let defined = levels(v.iter().map(Option::is_some).collect());
                     (column_writer.typed::<ByteArrayType>())
                         .write_batch(&values, Some(&defined), None)

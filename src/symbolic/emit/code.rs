@@ -109,7 +109,10 @@ impl Routine {
             listing: &self.listing,
             language,
         };
-        self.guards.iter().map(|&id| printer.expression(id)).collect()
+        self.guards
+            .iter()
+            .map(|&id| printer.expression(id))
+            .collect()
     }
 }
 

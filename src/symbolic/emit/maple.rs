@@ -8,8 +8,8 @@
 use std::fmt::Write;
 
 use super::shared::{
-    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role,
-    ScriptNames, Symbols,
+    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role, ScriptNames,
+    Symbols,
 };
 use crate::symbolic::expr::{ExprId, Function};
 use crate::symbolic::lower::Variable;
@@ -18,9 +18,42 @@ use crate::symbolic::Equations;
 /// Names Maple protects or gives a meaning that would change the equations', and the names the
 /// worksheet assigns itself.
 const RESERVED: [&str; 36] = [
-    "D", "I", "O", "Pi", "E", "gamma", "Catalan", "infinity", "undefined", "true", "false", "FAIL",
-    "and", "or", "not", "xor", "implies", "in", "to", "by", "do", "od", "if", "fi", "then", "else",
-    "end", "local", "global", "M", "S", "F", "Delta", "Delta_bias", "accelerations", "t",
+    "D",
+    "I",
+    "O",
+    "Pi",
+    "E",
+    "gamma",
+    "Catalan",
+    "infinity",
+    "undefined",
+    "true",
+    "false",
+    "FAIL",
+    "and",
+    "or",
+    "not",
+    "xor",
+    "implies",
+    "in",
+    "to",
+    "by",
+    "do",
+    "od",
+    "if",
+    "fi",
+    "then",
+    "else",
+    "end",
+    "local",
+    "global",
+    "M",
+    "S",
+    "F",
+    "Delta",
+    "Delta_bias",
+    "accelerations",
+    "t",
 ];
 
 /// A Maple name for a program's name: letters, digits and `_`, not starting with a digit or `_`
@@ -162,7 +195,10 @@ fn declare_variables(out: &mut String, equations: &Equations, names: &ScriptName
     list("Rates.", &v.rates, &names.rates);
     list("Parameters.", &v.parameters, &names.parameters);
     if !names.functions.is_empty() {
-        let _ = writeln!(out, "\n# Unknown functions of the program (left unassigned).");
+        let _ = writeln!(
+            out,
+            "\n# Unknown functions of the program (left unassigned)."
+        );
         for (name, maple) in &names.functions {
             let _ = writeln!(out, "#   {maple}: `{name}`");
         }

@@ -217,8 +217,7 @@ pub struct ScriptNames {
 impl ScriptNames {
     pub fn new(equations: &Equations, reserved: &[&str], identifier: fn(&str) -> String) -> Self {
         let v = &equations.variables;
-        let mut taken: HashSet<String> =
-            reserved.iter().map(|s| s.to_string()).collect();
+        let mut taken: HashSet<String> = reserved.iter().map(|s| s.to_string()).collect();
         let mut unique = |name: &str| {
             let mut candidate = identifier(name);
             while taken.contains(&candidate) {
@@ -227,9 +226,8 @@ impl ScriptNames {
             taken.insert(candidate.clone());
             candidate
         };
-        let mut names = |list: &[Variable]| {
-            list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>()
-        };
+        let mut names =
+            |list: &[Variable]| list.iter().map(|x| unique(&x.name)).collect::<Vec<_>>();
         let (positions, rates, parameters) =
             (names(&v.positions), names(&v.rates), names(&v.parameters));
         let mut functions: Vec<(String, String)> = Vec::new();

@@ -5,8 +5,8 @@
 use std::fmt::Write;
 
 use super::shared::{
-    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role,
-    ScriptNames, Symbols,
+    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role, ScriptNames,
+    Symbols,
 };
 use crate::symbolic::expr::{ExponentialProfile, ExprId, Function};
 use crate::symbolic::lower::Variable;

@@ -100,7 +100,11 @@ fn sources(pool: &Pool, values: &[ExprId]) -> Vec<ExprId> {
                 otherwise,
                 ..
             } => vec![when_nonnegative, otherwise],
-            Node::Div(a, b) if pool.as_constant(b).is_some_and(|c| c != 0.0 && c.is_finite()) => {
+            Node::Div(a, b)
+                if pool
+                    .as_constant(b)
+                    .is_some_and(|c| c != 0.0 && c.is_finite()) =>
+            {
                 vec![a]
             }
             _ => {

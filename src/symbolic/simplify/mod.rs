@@ -110,11 +110,13 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
                 best,
                 finishing: &finishing,
             });
-            let candidate =
-                simplify_with(pool, roots, &order, expansion, Pool::new(), yardstick);
+            let candidate = simplify_with(pool, roots, &order, expansion, Pool::new(), yardstick);
             if let Some((pool, roots)) = candidate {
                 let operations = pool.operation_count(&roots);
-                if best.as_ref().is_none_or(|best| operations <= best.operations) {
+                if best
+                    .as_ref()
+                    .is_none_or(|best| operations <= best.operations)
+                {
                     best = Some(Best {
                         pool,
                         roots,
@@ -358,7 +360,9 @@ impl Pass<'_> {
     /// forms.
     fn taken(&mut self, id: ExprId) -> Polynomial {
         if self.readers[id.index()] == 1 && !self.roots[id.index()] {
-            self.forms[id.index()].take().expect("formed before it is read")
+            self.forms[id.index()]
+                .take()
+                .expect("formed before it is read")
         } else {
             self.form(id).clone()
         }
@@ -369,7 +373,9 @@ impl Pass<'_> {
         if let Some(node) = self.nodes[id.index()] {
             return node;
         }
-        let form = self.forms[id.index()].as_ref().expect("formed before it is written");
+        let form = self.forms[id.index()]
+            .as_ref()
+            .expect("formed before it is written");
         let node = self.writer.write(&mut self.out, form, &self.angles);
         self.nodes[id.index()] = Some(node);
         node
@@ -428,7 +434,9 @@ impl Pass<'_> {
                 (sum.len() <= TERMS).then_some(sum)
             }
             Node::Neg(a) => Some(self.taken(a).scaled(-1.0)),
-            Node::Mul(a, b) => formed(&self.forms, a).times(formed(&self.forms, b), WORK, TERMS, &mut self.angles),
+            Node::Mul(a, b) => {
+                formed(&self.forms, a).times(formed(&self.forms, b), WORK, TERMS, &mut self.angles)
+            }
             Node::Div(a, b) => self.quotient(a, b),
             Node::Pow(a, b) => self.power(a, b),
             Node::Apply(f @ (Function::Sin | Function::Cos), a) => {

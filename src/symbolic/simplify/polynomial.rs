@@ -389,7 +389,13 @@ impl Polynomial {
                 let factors = a.factors_times(b);
                 let c = ca * cb;
                 match (a.wave, b.wave) {
-                    (None, None) => product.add_term(Monomial { factors, wave: None }, c),
+                    (None, None) => product.add_term(
+                        Monomial {
+                            factors,
+                            wave: None,
+                        },
+                        c,
+                    ),
                     (Some(w), None) | (None, Some(w)) => product.add_term(
                         Monomial {
                             factors,
@@ -484,7 +490,10 @@ mod tests {
         assert_eq!(opposite, (direct.0, true));
         assert_eq!(angles.get(direct.0), &angle(&[(x, 1.0), (z, -1.0)], -0.5));
         // (y + z + ½) − (y + z + ½) has no atom: a number.
-        assert!(matches!(angles.combined(yz, yz, true), Named::Constant(0.0)));
+        assert!(matches!(
+            angles.combined(yz, yz, true),
+            Named::Constant(0.0)
+        ));
     }
 
     #[test]
@@ -505,7 +514,9 @@ mod tests {
             }
             let ids: Vec<AngleId> = ids.into_iter().map(|i| i.expect("named")).collect();
             let pairs = (0..forms.len()).flat_map(|i| (0..forms.len()).map(move |j| (i, j)));
-            pairs.map(|(i, j)| angles.rank(ids[i], ids[j])).collect::<Vec<_>>()
+            pairs
+                .map(|(i, j)| angles.rank(ids[i], ids[j]))
+                .collect::<Vec<_>>()
         };
         let forward = ranks(&mut (0..forms.len()));
         let backward = ranks(&mut (0..forms.len()).rev());

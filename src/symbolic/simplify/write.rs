@@ -36,10 +36,12 @@ impl Writer {
     pub fn write(&mut self, pool: &mut Pool, polynomial: &Polynomial, angles: &Angles) -> ExprId {
         let mut monomials: Vec<_> = polynomial.terms.iter().collect();
         monomials.sort_by(|(a, _), (b, _)| {
-            a.factors.cmp(&b.factors).then_with(|| match (a.wave, b.wave) {
-                (Some((x, i)), Some((y, j))) => x.cmp(&y).then_with(|| angles.rank(i, j)),
-                (x, y) => x.cmp(&y),
-            })
+            a.factors
+                .cmp(&b.factors)
+                .then_with(|| match (a.wave, b.wave) {
+                    (Some((x, i)), Some((y, j))) => x.cmp(&y).then_with(|| angles.rank(i, j)),
+                    (x, y) => x.cmp(&y),
+                })
         });
         let terms: Vec<Term> = monomials
             .into_iter()
@@ -102,9 +104,9 @@ fn write_terms(pool: &mut Pool, terms: Vec<Term>) -> ExprId {
     let Some(((factor, numerator), _)) = best else {
         return write_sum(pool, terms);
     };
-    let (mut with, without): (Vec<Term>, Vec<Term>) = terms.into_iter().partition(|t| {
-        (t.factors.iter()).any(|&(node, e)| node == factor && (e > 0) == numerator)
-    });
+    let (mut with, without): (Vec<Term>, Vec<Term>) = terms
+        .into_iter()
+        .partition(|t| (t.factors.iter()).any(|&(node, e)| node == factor && (e > 0) == numerator));
     for term in &mut with {
         for (node, exponent) in &mut term.factors {
             if *node == factor {
