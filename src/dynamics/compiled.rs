@@ -18,7 +18,8 @@ use super::elements::EffortFrame;
 use crate::elab::value::{FrameQuantity, SExpr, Scalar, Vector};
 use crate::kinematics::eval::{EvalError, UnknownValues};
 use crate::spatial::{Motion, Pose};
-use crate::symbolic::expr::{ExprId, Pool, Tangents, Tape};
+use crate::symbolic::expr::tangents::Tangents;
+use crate::symbolic::expr::{ExprId, Pool, Tape};
 use crate::symbolic::program::{lower_structure, Lower};
 
 /// What a symbol of the tape stands for.

@@ -44,7 +44,7 @@ use crate::kinematics::model::ChainMotion;
 use crate::spatial::{
     angular, cross_force, cross_motion, linear, motion_to_parent, skew, twist, Force, Motion,
 };
-use crate::symbolic::expr::Tangents;
+use crate::symbolic::expr::tangents::Tangents;
 
 /// Why the efforts' derivatives are not computed for a model: the first effort or structure
 /// they do not cover.

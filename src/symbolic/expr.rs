@@ -11,8 +11,7 @@ use super::tape_code::{Apply, Code, TapeCode};
 
 pub use super::exponential_profile::ExponentialProfile;
 
-mod tangents;
-pub use tangents::Tangents;
+pub mod tangents;
 
 /// An expression: an index into its `Pool`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
