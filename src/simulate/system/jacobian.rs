@@ -192,26 +192,27 @@ impl MechanicalSystem<'_> {
         differences: &mut DMatrix<f64>,
         power_gradient: &mut [f64],
     ) -> Result<(), SystemError> {
-        let at_state = self.residual(t, y, accelerations)?;
+        let columns = 2 * self.model.nv;
         let mut perturbed = y.to_vec();
-        for j in 0..2 * self.model.nv {
+        let mut deltas = Vec::with_capacity(columns);
+        for j in 0..columns {
             perturbed[j] = y[j] + (f64::EPSILON * y[j].abs().max(1e-5)).sqrt();
             // The increment actually represented, so that rounding of y + δ does not bias the
             // quotient.
-            let delta = perturbed[j] - y[j];
+            deltas.push(perturbed[j] - y[j]);
             let moved = self.residual(t, &perturbed, accelerations)?;
             perturbed[j] = y[j];
-            let column = (moved.values - &at_state.values) / delta;
-            differences.set_column(j, &column);
-            power_gradient[j] = (moved.power - at_state.power) / delta;
+            differences.set_column(j, &moved.values);
+            power_gradient[j] = moved.power;
         }
-        // The kinematics of y, as the exact derivatives leave them.
-        forward_kinematics(
-            self.model,
-            &mut self.scratch.data,
-            &y[..self.model.nq],
-            &y[self.model.nq..],
-        )?;
+        // The state's own residual last, so that the kinematics left in `data` are y's.
+        let at_state = self.residual(t, y, accelerations)?;
+        for (j, delta) in deltas.into_iter().enumerate() {
+            let mut column = differences.column_mut(j);
+            column -= &at_state.values;
+            column /= delta;
+            power_gradient[j] = (power_gradient[j] - at_state.power) / delta;
+        }
         Ok(())
     }
 
