@@ -110,7 +110,12 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
                 best,
                 finishing: &finishing,
             });
-            let candidate = simplify_with(pool, roots, &order, expansion, Pool::new(), yardstick);
+            let candidate = match expansion {
+                Expansion::None => Some(rebuilt(pool, roots, &order, Pool::new())),
+                Expansion::Shared(terms) => {
+                    simplify_with(pool, roots, &order, terms, Pool::new(), yardstick)
+                }
+            };
             if let Some((pool, roots)) = candidate {
                 let operations = pool.operation_count(&roots);
                 if best
@@ -132,9 +137,7 @@ pub fn simplify_groups(pool: &Pool, groups: &[&[ExprId]]) -> (Pool, Vec<Vec<Expr
         } = best.expect("the unexpanded form is never abandoned");
         let order = topological_order(&best_roots, |id| best.operand_ids(id));
         let copied;
-        (gathered, copied) =
-            simplify_with(&best, &best_roots, &order, Expansion::None, gathered, None)
-                .expect("without a limit");
+        (gathered, copied) = rebuilt(&best, &best_roots, &order, gathered);
         simplified.push(copied);
     }
     (gathered, simplified)
@@ -199,16 +202,62 @@ enum Expansion {
     None,
 }
 
-/// The roots simplified as `expansion` says, written into `out`. With a `yardstick`, `None`
-/// (abandoned) as soon as `out` holds more than its `limit` of nodes beyond those it had and the
-/// symbols, or when the roots finished at one of the `CHECKPOINTS` take more than `BEHIND`
-/// operations beyond the best form's. `order` is the nodes the roots reach, operands first
-/// (`topological_order`).
+/// The roots rebuilt in `out` node by node by its constructors (their local folding only): the
+/// form without expansion (`Expansion::None`), and the copy of a group's best form into the
+/// gathered pool. Each node is made from its operands' nodes, in `order` (the nodes the roots
+/// reach, operands first, `topological_order`), as the expanding pass makes a node it keeps
+/// (`Pass::kept`) but without a normal form per node: that pass would form each node as a
+/// one-term polynomial and write it back for its readers, which makes the node itself, the
+/// number 1 (the written coefficient) the first time, and nothing else. So the same nodes are
+/// made in the same order (operands are ordered by their ids in sums and products), with no
+/// allocation per node (BENCHMARKS.md, "The simplifier's cost: the unexpanded form without
+/// forms").
+fn rebuilt(pool: &Pool, roots: &[ExprId], order: &[ExprId], mut out: Pool) -> (Pool, Vec<ExprId>) {
+    out.reserve(order.len());
+    for i in 0..pool.symbol_count() as u32 {
+        out.symbol(pool.symbol_name(i));
+    }
+    let mut nodes: Vec<Option<ExprId>> = vec![None; pool.len()];
+    let made =
+        |nodes: &[Option<ExprId>], id: ExprId| nodes[id.index()].expect("made before it is read");
+    // Where the expanding pass would write its first one-term form: before the first
+    // operation's node, or at the roots.
+    let mut one_written = false;
+    for &id in order {
+        let node = match pool.node(id) {
+            Node::Symbol(i) => out.symbol(pool.symbol_name(i)),
+            shape @ Node::Constant(_) => out.rebuild(shape, &[]),
+            shape => {
+                if !one_written {
+                    out.constant(1.0);
+                    one_written = true;
+                }
+                let mut operands = [id; 3];
+                for (k, operand) in pool.operand_ids(id).into_iter().enumerate() {
+                    operands[k] = made(&nodes, operand);
+                }
+                out.rebuild(shape, &operands)
+            }
+        };
+        nodes[id.index()] = Some(node);
+    }
+    if !one_written && !roots.is_empty() {
+        out.constant(1.0);
+    }
+    let roots = roots.iter().map(|&root| made(&nodes, root)).collect();
+    (out, roots)
+}
+
+/// The roots simplified with shared nodes expanded in their readers up to `terms` terms
+/// (`Expansion::Shared`), written into `out`. With a `yardstick`, `None` (abandoned) as soon as
+/// `out` holds more than its `limit` of nodes beyond those it had and the symbols, or when the
+/// roots finished at one of the `CHECKPOINTS` take more than `BEHIND` operations beyond the
+/// best form's. `order` is the nodes the roots reach, operands first (`topological_order`).
 fn simplify_with(
     pool: &Pool,
     roots: &[ExprId],
     order: &[ExprId],
-    expansion: Expansion,
+    terms: usize,
     mut out: Pool,
     yardstick: Option<Yardstick>,
 ) -> Option<(Pool, Vec<ExprId>)> {
@@ -230,20 +279,12 @@ fn simplify_with(
         }
     }
     for (place, &id) in order.iter().enumerate() {
-        let mut form = match expansion {
-            Expansion::Shared(_) => pass.form_of(id),
-            Expansion::None => {
-                let node = pass.kept(id);
-                pass.atom(node)
-            }
-        };
+        let mut form = pass.form_of(id);
         let shared = pass.readers[id.index()] > 1;
-        if let Expansion::Shared(terms) = expansion {
-            if shared && form.len() > terms {
-                let node = pass.writer.write(&mut pass.out, &form, &pass.angles);
-                pass.nodes[id.index()] = Some(node);
-                form = pass.atom(node);
-            }
+        if shared && form.len() > terms {
+            let node = pass.writer.write(&mut pass.out, &form, &pass.angles);
+            pass.nodes[id.index()] = Some(node);
+            form = pass.atom(node);
         }
         if pass.out.len() > limit {
             return None;
@@ -508,44 +549,13 @@ impl Pass<'_> {
     fn kept(&mut self, id: ExprId) -> ExprId {
         let input = self.input;
         match input.node(id) {
-            Node::Constant(bits) => self.out.constant(f64::from_bits(bits)),
             Node::Symbol(i) => self.out.symbol(input.symbol_name(i)),
-            Node::Add(a, b) => {
-                let (a, b) = (self.written(a), self.written(b));
-                self.out.add(a, b)
-            }
-            Node::Mul(a, b) => {
-                let (a, b) = (self.written(a), self.written(b));
-                self.out.mul(a, b)
-            }
-            Node::Neg(a) => {
-                let a = self.written(a);
-                self.out.neg(a)
-            }
-            Node::Div(a, b) => {
-                let (a, b) = (self.written(a), self.written(b));
-                self.out.div(a, b)
-            }
-            Node::Pow(a, b) => {
-                let (a, b) = (self.written(a), self.written(b));
-                self.out.pow(a, b)
-            }
-            Node::Atan2(a, b) => {
-                let (a, b) = (self.written(a), self.written(b));
-                self.out.atan2(a, b)
-            }
-            Node::Apply(f, a) => {
-                let a = self.written(a);
-                self.out.apply(f, a)
-            }
-            Node::Select {
-                test,
-                when_nonnegative,
-                otherwise,
-            } => {
-                let test = self.written(test);
-                let (high, low) = (self.written(when_nonnegative), self.written(otherwise));
-                self.out.select(test, high, low)
+            shape => {
+                let mut operands = [id; 3];
+                for (k, operand) in input.operand_ids(id).into_iter().enumerate() {
+                    operands[k] = self.written(operand);
+                }
+                self.out.rebuild(shape, &operands)
             }
         }
     }
