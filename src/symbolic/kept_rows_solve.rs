@@ -24,6 +24,13 @@
 //! 3. the remaining multipliers on the diagonal of −Gₛ M⁻¹ Gₛᵀ as reduced by step 2 (negative
 //!    definite where the kept rows are independent), again by minimum degree.
 //!
+//! Where step 1 finds M singular on the tree's coordinates with inertia (the full Delta, with
+//! the rods' spins held, at a rate of rod 1p), every kept row is paired with a tree coordinate instead, as step 2 pairs the
+//! complementary ones, and only the independent coordinates are left on the diagonal, of the
+//! reduced mass matrix (`Order::Paired`): the null-space method. Where the loops share a branch
+//! it also writes fewer operations (the full Delta: 8,477 against 13,917 augmented), since the
+//! multipliers' block is never formed.
+//!
 //! A tree coordinate whose row of M is zero (a body without inertia about its joint's axis:
 //! the reduced Delta's point nacelle at its universal joint) pivots as the complementary ones
 //! do, in step 2. Where M is otherwise not positive definite on the tree (a body without
@@ -43,6 +50,7 @@
 //! accelerations are not-a-number, and the caller evaluates that state otherwise.
 
 use super::expr::{ExprId, Pool, Tape};
+use super::lower::Variables;
 use super::Equations;
 
 /// What the elimination needs besides the equations.
@@ -69,6 +77,10 @@ pub struct KeptRows<'a> {
 /// each pivot is well above it).
 const ROUND_OFF: f64 = 1e-10;
 
+/// A kept row is paired with a tree coordinate whose entry is at least this fraction of the
+/// row's largest at the start (`Order::Paired`).
+const PAIR_THRESHOLD: f64 = 0.5;
+
 /// Below this fraction of its value at the start, a pivot makes the evaluation fail.
 const PIVOT_FLOOR: f64 = 1e-3;
 
@@ -80,18 +92,51 @@ struct Entry {
 
 /// Sets `equations.accelerations` to the solution of the KKT system on `kept`'s rows, or says
 /// why it cannot be written. Where the plain order has no pivot (M singular on the tree's
-/// coordinates with inertia), the system is eliminated again with M augmented
+/// coordinates with inertia), the system is eliminated again with each kept row paired with a
+/// tree coordinate (`Order::Paired`), and where that has none either, with M augmented
 /// (`Weighting::Augmented`).
 pub fn solve_on_kept_rows(equations: &mut Equations, kept: &KeptRows) -> Result<(), String> {
     let pool = equations.pool.clone();
-    match solve(equations, kept, Weighting::Plain) {
-        Err(Refusal::Plain(_)) => {
-            // The plain attempt's expressions are left out with the pool they were put in.
-            equations.pool = pool;
-            solve(equations, kept, Weighting::Augmented).map_err(Refusal::into_message)
+    let attempts = [
+        (Weighting::Plain, Order::TreeFirst),
+        (Weighting::Plain, Order::Paired),
+        (Weighting::Augmented, Order::TreeFirst),
+    ];
+    let mut refused = String::new();
+    for (weighting, order) in attempts {
+        match solve(equations, kept, weighting, order) {
+            // A refused attempt's expressions are left out with the pool they were put in.
+            Err(Refusal::Plain(why)) => {
+                equations.pool = pool.clone();
+                refused = why;
+            }
+            result => return result.map_err(Refusal::into_message),
         }
-        result => result.map_err(Refusal::into_message),
     }
+    Err(refused)
+}
+
+/// In which order the plain elimination takes its pivots.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Order {
+    /// Steps 1, 2 and 3 above: the tree's coordinates on M's diagonal first, then the
+    /// complementary ones paired with kept rows, then the multipliers left: the range-space
+    /// method. Where the loops share a branch of the tree, eliminating its coordinates fills
+    /// the multipliers' block, factored dense in step 3.
+    TreeFirst,
+    /// Where `TreeFirst` has no pivot: the complementary coordinates paired with kept rows
+    /// (step 2), then each kept row left paired with a tree coordinate, a large entry at the
+    /// start (`pair_with_largest_entries`; these pivots are those of an LU factorisation of
+    /// the dependent coordinates' columns of Gₛ), and then the tree's coordinates left (the
+    /// independent ones) on the diagonal of what remains of M, which is the reduced mass
+    /// matrix Tᵀ M T with T the basis of the null space of Gₛ these pairs give: the
+    /// null-space method (Wehage and Haug, *J. Mech. Des.* 104, 1982, generalised coordinate
+    /// partitioning; Nocedal and Wright, *Numerical Optimization*, 2nd ed., 2006, §16.2).
+    /// The multipliers' block is never formed: each pair's block pivot [mᵢᵢ g; g 0] adds
+    /// nothing to it. It is not the first choice because a tree coordinate's pivot is a
+    /// geometric entry, which large motions can take to zero (a four-bar's coupler angle
+    /// against a translation row); the pivots' check then hands those states back.
+    Paired,
 }
 
 /// Which matrix the coordinates' equations carry.
@@ -138,7 +183,12 @@ fn penalty(mass_diagonal: impl Iterator<Item = f64>, rows: impl Iterator<Item = 
     }
 }
 
-fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Result<(), Refusal> {
+fn solve(
+    equations: &mut Equations,
+    kept: &KeptRows,
+    weighting: Weighting,
+    order: Order,
+) -> Result<(), Refusal> {
     let n = equations.dimension();
     let values = Tape::new(&equations.pool, &equations.roots()).eval(kept.symbols);
     let entry = |expr: ExprId, value: f64| Entry { expr, value };
@@ -212,13 +262,13 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
         if touched || massive {
             return Err(Refusal::Other(format!(
                 "the coordinate {} left at rest moves mass or a kept row",
-                coordinate_name(equations, c)
+                coordinate_name(&equations.variables, c)
             )));
         }
     }
-    // 1. The tree's coordinates with inertia, on M's diagonal (augmented: every coordinate).
-    // A tree coordinate whose row of M is zero (a body without inertia about its joint's
-    // axis) pivots as the complementary ones do, in step 2.
+    // The tree's coordinates with inertia pivot on M's diagonal (augmented: every
+    // coordinate). A tree coordinate whose row of M is zero (a body without inertia about its
+    // joint's axis) pivots as the complementary ones do, in step 2.
     let inert = |system: &Elimination, i: usize| (0..k).all(|j| system.a[i][j].is_none());
     let on_diagonal: Vec<usize> = match weighting {
         Weighting::Plain => (0..k)
@@ -231,10 +281,20 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     let diagonal: Vec<f64> = (0..k)
         .map(|i| system.a[i][i].map_or(0.0, |e| e.value.abs()))
         .collect();
+    let variables = &equations.variables;
+    let name = |i: usize| coordinate_name(variables, moving[i]);
+    // The coordinates without inertia, paired with kept rows in either order (step 2).
+    let unpaired: Vec<usize> = (0..k).filter(|i| !on_diagonal.contains(i)).collect();
+    if order == Order::Paired {
+        pair_with_kept_rows(&mut system, pool, k, &unpaired, name)?;
+        pair_with_largest_entries(&mut system, pool, k, &on_diagonal);
+    }
+    // 1. The tree's coordinates with inertia left, on M's diagonal (augmented: every
+    // coordinate), by minimum degree.
     while let Some(i) = system.fewest_entries(on_diagonal.iter().map(|&i| (i, i))) {
         let floor = ROUND_OFF * diagonal[i];
         if system.a[i][i].is_none_or(|p| p.value <= floor) {
-            let at = coordinate_name(equations, moving[i]);
+            let at = name(i);
             return Err(match weighting {
                 Weighting::Plain => Refusal::Plain(format!(
                     "the mass matrix is not positive definite on the tree (at {at})"
@@ -248,24 +308,7 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
         system.eliminate(pool, i, i);
     }
     // 2. Each complementary coordinate with its largest kept row (plain only).
-    let complementary: Vec<usize> = (0..k).filter(|&i| !system.column_done[i]).collect();
-    for i in complementary {
-        let largest = (k..size)
-            .filter(|&r| !system.row_done[r])
-            .filter_map(|r| system.a[r][i].map(|e| (r, e.value.abs())))
-            .max_by(|x, y| x.1.total_cmp(&y.1));
-        let Some((r, _)) = largest.filter(|&(_, v)| v > 0.0) else {
-            return Err(Refusal::Plain(format!(
-                "no kept row determines the coordinate {}",
-                coordinate_name(equations, moving[i])
-            )));
-        };
-        system.symmetric = false;
-        system.eliminate(pool, i, r);
-        system.eliminate(pool, r, i);
-        // The pair is a symmetric block pivot: what it leaves is symmetric again.
-        system.mirror_upper_triangle();
-    }
+    pair_with_kept_rows(&mut system, pool, k, &unpaired, name)?;
     // 3. The remaining multipliers, on −Gₛ M⁻¹ Gₛᵀ (negative definite where the kept rows are
     // independent).
     let rest: Vec<usize> = (k..size).filter(|&r| !system.row_done[r]).collect();
@@ -305,10 +348,79 @@ fn solve(equations: &mut Equations, kept: &KeptRows, weighting: Weighting) -> Re
     Ok(())
 }
 
+/// Pairs each of `columns` not yet eliminated (coordinates without inertia) with the kept row
+/// of largest entry in its column among those left (steps 2): a symmetric block pivot on that
+/// entry, which leaves the rest symmetric. The kept rows are the rows after the first `k`.
+fn pair_with_kept_rows(
+    system: &mut Elimination,
+    pool: &mut Pool,
+    k: usize,
+    columns: &[usize],
+    name: impl Fn(usize) -> String,
+) -> Result<(), Refusal> {
+    for &i in columns {
+        if system.column_done[i] {
+            continue;
+        }
+        let largest = (k..system.a.len())
+            .filter(|&r| !system.row_done[r])
+            .filter_map(|r| system.a[r][i].map(|e| (r, e.value.abs())))
+            .max_by(|x, y| x.1.total_cmp(&y.1));
+        let Some((r, _)) = largest.filter(|&(_, v)| v > 0.0) else {
+            return Err(Refusal::Plain(format!(
+                "no kept row determines the coordinate {}",
+                name(i)
+            )));
+        };
+        system.pair(pool, i, r);
+    }
+    Ok(())
+}
+
+/// Pairs each kept row left with one of `columns` (tree coordinates with inertia)
+/// (`Order::Paired`), until no kept row is left or none of them has an entry in the columns
+/// left: each time, of the entries within `PAIR_THRESHOLD` of their row's largest at the
+/// start, the one whose pair has the fewest entries in its two rows (threshold pivoting with
+/// Markowitz's count: Duff, Erisman and Reid, 2017, §5.4 and §9.2), the larger entry on a tie.
+fn pair_with_largest_entries(
+    system: &mut Elimination,
+    pool: &mut Pool,
+    k: usize,
+    columns: &[usize],
+) {
+    loop {
+        let open = &*system;
+        let degree = |row: usize| {
+            let open_columns = (0..open.a.len()).filter(|&j| !open.column_done[j]);
+            open_columns.filter(|&j| open.a[row][j].is_some()).count()
+        };
+        let mut best: Option<(usize, usize, usize, f64)> = None;
+        for r in (k..open.a.len()).filter(|&r| !open.row_done[r]) {
+            let entries: Vec<(usize, f64)> = (columns.iter())
+                .filter(|&&i| !open.column_done[i])
+                .filter_map(|&i| open.a[r][i].map(|e| (i, e.value.abs())))
+                .collect();
+            let largest = entries.iter().map(|e| e.1).fold(0.0, f64::max);
+            let large = |&(_, v): &(usize, f64)| v > 0.0 && v >= PAIR_THRESHOLD * largest;
+            for (i, v) in entries.into_iter().filter(large) {
+                let count = degree(r) + degree(i);
+                let better = best.is_none_or(|(.., c, w)| count < c || (count == c && v > w));
+                if better {
+                    best = Some((r, i, count, v));
+                }
+            }
+        }
+        match best {
+            Some((r, i, ..)) => system.pair(pool, i, r),
+            None => return,
+        }
+    }
+}
+
 /// The name of the coordinate of rate `c`: its position's for a declared coordinate, the
 /// rate's itself for a ball's body rate.
-fn coordinate_name(equations: &Equations, c: usize) -> String {
-    let rate = &equations.variables.rates[c].name;
+fn coordinate_name(variables: &Variables, c: usize) -> String {
+    let rate = &variables.rates[c].name;
     rate.strip_suffix('\'').unwrap_or(rate).to_string()
 }
 
@@ -468,6 +580,16 @@ impl Elimination {
                 value: old.value - update.value,
             };
         }
+    }
+
+    /// Eliminates coordinate `column` by kept row `row` and the row's multiplier by the
+    /// coordinate's equation: the symmetric block pivot [mᵢᵢ g; g 0] on their entry g, after
+    /// which what is left is symmetric again.
+    fn pair(&mut self, pool: &mut Pool, column: usize, row: usize) {
+        self.symmetric = false;
+        self.eliminate(pool, column, row);
+        self.eliminate(pool, row, column);
+        self.mirror_upper_triangle();
     }
 
     /// Makes the rows and columns not yet taken symmetric again by their upper triangle, after
