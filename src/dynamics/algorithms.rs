@@ -735,8 +735,18 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
         } else {
             own.rigid.to_parent_by_split(&world)
         };
-        for (r, column) in state.subspace.columns().iter().enumerate() {
-            world_columns[joint.v_offset + r] = world.motion_to_parent(column);
+        match joint.axis_rotation() {
+            // [s e_k; 0] in the fixed frame is [s r_k; p × s r_k], r_k the k-th column of the
+            // body's rotation: `motion_to_parent`'s numbers without its products by zeros.
+            Some((k, scale)) => {
+                let w = world.rotation.column(k) * scale;
+                world_columns[joint.v_offset] = spatial::twist(w, world.translation.cross(&w));
+            }
+            None => {
+                for (r, column) in state.subspace.columns().iter().enumerate() {
+                    world_columns[joint.v_offset + r] = world.motion_to_parent(column);
+                }
+            }
         }
     }
     // From the leaves: a joint's composite is whole when the pass reaches it (its children come
