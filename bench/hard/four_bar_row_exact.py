@@ -9,7 +9,11 @@ the measure of tests/suite/native_loops.rs: max |x - exact| / (1 + |exact|).
 
 Usage:
   bench/hard/four_bar_row_exact.py N RUN.json [RUN.json ...]
-where RUN.json is `lsdc simulate examples/hard/four_bar_row_N.lsd --format json ...` output.
+where RUN.json is `lsdc simulate examples/hard/four_bar_row_N.lsd --format json ...` output, or
+  bench/hard/four_bar_row_exact.py N --fixture DURATION EVERY > FIXTURE.json
+to write the exact samples at 0, EVERY, ..., DURATION in the shape of lsdc's JSON samples (each
+number the double nearest its 30-digit value), with their provenance: the fixture the tests
+compare runs with (tests/fixtures/hard/four_bar_row_2_exact.json).
 """
 
 import json
@@ -55,8 +59,30 @@ def numbers(value):
     return [mp.mpf(value)]
 
 
+def fixture(n, duration, every):
+    count = round(mp.mpf(duration) / mp.mpf(every))
+    times = [k * mp.mpf(every) for k in range(count + 1)]
+    samples = [
+        {key: [float(x) for x in value] if isinstance(value, list) else float(value)
+         for key, value in sample.items()}
+        for sample in exact_samples(n, times)
+    ]
+    provenance = (
+        f"The row of {n} parallelogram four-bars (examples/hard/four_bar_row_{n}.lsd), its exact "
+        "motion: phi'' = -K cos(phi) / J from phi = -pi/2, phi' = 12 rad/s, integrated by "
+        f"mpmath {mp.__version__}'s Taylor method (mpmath.odefun) at {mp.mp.dps} digits; each "
+        "number the double nearest its 30-digit value. Written by "
+        f"`bench/hard/four_bar_row_exact.py {n} --fixture {duration} {every}`."
+    )
+    json.dump({"provenance": provenance, "samples": samples}, sys.stdout, indent=1)
+    print()
+
+
 def main():
     n = int(sys.argv[1])
+    if sys.argv[2] == "--fixture":
+        fixture(n, sys.argv[3], sys.argv[4])
+        return
     runs = [json.load(open(path))["samples"] for path in sys.argv[2:]]
     exact = list(exact_samples(n, [s["time"] for s in runs[0]]))
     for path, samples in zip(sys.argv[2:], runs):

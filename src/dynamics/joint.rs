@@ -455,21 +455,29 @@ impl Joint {
         }
     }
 
+    /// For the commonest joint of imported robots, a revolute about x, y or z with no frame on
+    /// the child: the axis's index k and the factor s of its coordinate (θ = s q). Its motion
+    /// subspace is the constant column [s e_k; 0] in the child's frame.
+    pub fn axis_rotation(&self) -> Option<(usize, f64)> {
+        match &self.kernel {
+            Kernel::Rotation {
+                aligned: Some(k),
+                scale,
+                after: None,
+                ..
+            } => Some((*k, *scale)),
+            _ => None,
+        }
+    }
+
     /// The transform alone at positions q (for the mass matrix, which needs no velocities).
     pub fn update_transform(&self, q: &[f64], state: &mut JointState) -> Result<(), EvalError> {
-        if let Kernel::Rotation {
-            terms,
-            aligned: Some(k),
-            origin,
-            scale,
-            after: None,
-            ..
-        } = &self.kernel
+        if let (Some((k, scale)), Kernel::Rotation { terms, origin, .. }) =
+            (self.axis_rotation(), &self.kernel)
         {
-            // The commonest joint of imported robots (a revolute about x, y or z with no frame
-            // on the child): `rotation_transform`'s arithmetic, written in place.
+            // `rotation_transform`'s arithmetic, written in place.
             let (sin, cos) = (q[0] * scale).sin_cos();
-            turn_columns_into(&terms[0], *k, sin, cos, &mut state.transform.rotation);
+            turn_columns_into(&terms[0], k, sin, cos, &mut state.transform.rotation);
             state.transform.translation = *origin;
             return Ok(());
         }

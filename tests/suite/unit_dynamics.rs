@@ -90,6 +90,10 @@ mod spatial {
         assert!((compact.matrix() - i).amax() < 1e-15);
         let moved = compact.to_parent(&t);
         assert!((moved.times(&m) - t.inertia_to_parent(&i) * m).amax() < 1e-13);
+        // The split form against X*ᵀ I X with 6 × 6 matrices (scale of the entries: about 2).
+        let split = compact.to_parent_by_split(&t);
+        assert!((split.matrix() - inertia_to_parent(&pose(), &i)).amax() < 1e-14);
+        assert!((split.matrix() - moved.matrix()).amax() < 1e-14);
         let composed = t * t;
         let twice = t.motion_to_parent(&t.motion_to_parent(&m));
         assert!((composed.motion_to_parent(&m) - twice).amax() < 1e-13);
