@@ -100,16 +100,6 @@ pub fn complex_eigenvalue() -> Complex<f64> {
 
 /// Newton iterations per attempt before it counts as failed (RADAU5's default).
 const NEWTON_ITERATIONS: usize = 7;
-/// The iteration stops where the error left in the stage increments, estimated as
-/// θ / (1 − θ) times the last correction, is below this factor times √rtol of the tolerances'
-/// scale (RADAU5 takes the factor 1, on tolerances it tightens first). What is left adds up
-/// from step to step, and on the governor it made most of the error: at 1e-8 the factor 1
-/// gave 6.8e-11 (348 steps, 4,566 evaluations), 0.3 2.8e-11 (349, 4,986), 0.1 2.3e-11 (352,
-/// 5,262), 0.003 1.3e-11 (its truncation error). So the implicit integrator reaches dopri5's
-/// error at 1e-6 there (3.0e-11, `benches/implicit_stiff.rs`) at 1e-8 instead of 3e-9 (459
-/// steps, 5,841 evaluations at the factor 1): a tolerance tighter for the same error costs
-/// more steps than the iterations saved.
-const NEWTON_TOLERANCE_FACTOR: f64 = 0.3;
 /// The rate of convergence θ of the last step's iteration above which the Jacobian is formed
 /// again at the next step. Measured on the governor at 3e-10 (instructions of the whole run,
 /// Newton iterations, Jacobians): 0.001 (RADAU5's default for small systems) 245 M, 2,511,
@@ -243,8 +233,7 @@ impl Radau5 {
             rtol: settings.rtol,
             atol: settings.atol,
             controlled: settings.controlled_len(dimension),
-            newton_tolerance: (10.0 * f64::EPSILON / rtol)
-                .max(0.03f64.min(NEWTON_TOLERANCE_FACTOR * rtol.sqrt())),
+            newton_tolerance: (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt())),
             derivative: zeros.clone(),
             end_derivative: zeros.clone(),
             derivative_evaluated: false,
