@@ -13,6 +13,7 @@
 use std::collections::HashMap;
 
 use nalgebra::{Matrix3, Vector3};
+use num_dual::Dual64;
 
 use super::elements::EffortFrame;
 use crate::elab::value::{FrameQuantity, SExpr, Scalar, Vector};
@@ -193,6 +194,24 @@ impl EffortTape {
     ) {
         self.symbols_into(frames, state, scratch);
         (self.tape).tangents_prefix_into(&scratch.symbols, symbol_tangents, self.values_end, out);
+    }
+
+    /// The efforts' values and derivatives along direction `direction` of `symbol_tangents`
+    /// (`directions` per symbol, as [`EffortTape::eval_tangents`] reads them), from the symbols
+    /// of the last evaluation into `scratch`, by the tape in dual numbers
+    /// (`Tape::eval_dual_prefix`): the oracle of the tangent mode, a root per effort component
+    /// as [`EffortTape::root`] numbers them (the potentials' zero).
+    pub fn eval_dual(
+        &self,
+        scratch: &EffortScratch,
+        symbol_tangents: &[f64],
+        (directions, direction): (usize, usize),
+    ) -> Vec<Dual64> {
+        let symbols: Vec<Dual64> = (scratch.symbols.iter().enumerate())
+            .map(|(i, &x)| Dual64::new(x, symbol_tangents[i * directions + direction]))
+            .collect();
+        let values = self.tape.eval_dual_prefix(&symbols, self.values_end);
+        self.slots.iter().map(|&slot| values[slot]).collect()
     }
 
     /// The value of root `k` after [`EffortTape::eval`].

@@ -194,6 +194,13 @@ impl EffortDerivatives {
         Ok(())
     }
 
+    /// The tape's tangents at the last [`EffortDerivatives::compute`] (read a root's with
+    /// `EffortTape::root_tangent`), and the symbols' derivatives they started from (symbol
+    /// i's along the 2 nv directions at `[2 nv i..2 nv (i + 1)]`).
+    pub fn tape_tangents(&self) -> (&Tangents, &[f64]) {
+        (&self.tangents, &self.symbol_tangents)
+    }
+
     /// The joints' motions S_c and the bodies' velocities, in the fixed frame.
     fn motions(&mut self, model: &Model, data: &Data) {
         self.velocity[0] = Motion::zeros();

@@ -11,6 +11,7 @@ use super::tape_code::{Apply, Code, TapeCode};
 
 pub use super::exponential_profile::ExponentialProfile;
 
+pub mod dual_evaluation;
 pub mod tangents;
 
 /// An expression: an index into its `Pool`.

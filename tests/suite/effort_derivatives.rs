@@ -13,6 +13,10 @@
 //! step of 1e-6 relative to the coordinate (central differences' truncation error is O(δ²)
 //! relative).
 
+use lsdc::dynamics::algorithms::{forward_kinematics, Data};
+use lsdc::dynamics::angles::AngleReference;
+use lsdc::dynamics::effort_derivatives::{self, EffortDerivatives};
+use lsdc::dynamics::efforts::Declared;
 use nalgebra::DMatrix;
 use serde_json::{json, Value};
 
@@ -132,5 +136,71 @@ fn eval_differentiates_the_efforts_as_differences_of_the_whole_dynamics() {
             names.contains(example),
             "{example} is not covered: {held:#?}"
         );
+    }
+}
+
+/// The efforts' derivatives through the tape (`Tape::tangents_prefix_into`, the forward mode
+/// behind `eval --derivatives` and the implicit integrator's tree Jacobian) against the same
+/// tape evaluated in dual numbers (`EffortTape::eval_dual`, num-dual's own rule for each
+/// operation), from the same symbols and the same seeds (the frames' states' derivatives along
+/// (q, v) that `EffortDerivatives::compute` forms): every effort component along each of the
+/// 2 nv directions, on every example whose efforts the derivatives cover, at the state of the
+/// test above. The measure: max |tangent − dual| / max(1, max |dual|) per example, accepted at
+/// 1e-12.
+#[test]
+fn the_tapes_tangents_agree_with_dual_numbers_on_the_examples() {
+    let mut covered = Vec::new();
+    for path in example_paths() {
+        let Ok(model) = example_model(&path) else {
+            continue;
+        };
+        if !model.has_efforts() || effort_derivatives::covers(&model).is_err() {
+            continue;
+        }
+        let tape = model.effort_tape.as_ref().expect("covered");
+        let prepared = prepared_file(path.to_str().expect("path"));
+        let y = initial_state(&prepared);
+        let (q, mut v) = (y[..model.nq].to_vec(), y[model.nq..].to_vec());
+        for (k, rate) in v.iter_mut().enumerate() {
+            *rate += 0.3 + 0.2 * k as f64;
+        }
+        let reference = AngleReference::at_rest(prepared.coordinates.clone());
+        let (coordinates, rates) = (model.declared((0.0, &q, &v), &reference)).expect("declared");
+        let mut data = Data::new(&model);
+        forward_kinematics(&model, &mut data, &q, &v).expect("kinematics");
+        let declared = Declared {
+            model: &model,
+            coordinates: &coordinates,
+            rates: &rates,
+            states: &[],
+        };
+        let mut derivatives = EffortDerivatives::new(&model);
+        (derivatives.compute(&model, &mut data, &declared, 0.0)).expect("derivatives");
+        let (tangents, seeds) = derivatives.tape_tangents();
+        let directions = 2 * model.nv;
+        let (mut largest, mut worst, mut components) = (0.0f64, 0.0f64, 0);
+        for x in 0..directions {
+            let duals = tape.eval_dual(&data.efforts, seeds, (directions, x));
+            components = duals.len();
+            for (k, dual) in duals.iter().enumerate() {
+                let found = tape.root_tangent(tangents, k)[x];
+                assert!(dual.eps.is_finite(), "{}: root {k}", path.display());
+                largest = largest.max(dual.eps.abs());
+                worst = worst.max((found - dual.eps).abs());
+            }
+        }
+        // Derivatives that all vanish would agree whatever the tangent sweep did.
+        assert!(largest > 0.0, "{}: no derivative", path.display());
+        let measure = worst / largest.max(1.0);
+        assert!(measure <= 1e-12, "{}: {measure:e}", path.display());
+        covered.push(format!(
+            "{} ({components} components, largest derivative {largest:.1e}, {measure:.1e})",
+            path.display()
+        ));
+    }
+    eprintln!("covered: {covered:#?}");
+    let names = covered.join(" ");
+    for example in ["governor", "elastic_pendulum", "stiff_spring_pendulum"] {
+        assert!(names.contains(example), "{example} is not covered");
     }
 }

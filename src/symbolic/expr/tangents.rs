@@ -151,15 +151,13 @@ impl Tape {
 mod tests {
     use std::collections::HashMap;
 
-    use super::super::{ExponentialProfile, Function, Pool, Tape};
+    use num_dual::Dual64;
+
+    use super::super::{ExponentialProfile, ExprId, Function, Pool, Tape};
     use super::Tangents;
 
-    /// Every instruction's tangent against the symbolic derivative of the same DAG
-    /// (`Pool::derivative`, a different algorithm: a new expression per derivative, evaluated
-    /// by the tape's interpreter), along two directions (x, y) and a mixed one.
-    #[test]
-    fn tangents_agree_with_symbolic_derivatives() {
-        let mut pool = Pool::new();
+    /// A root per instruction and function of the tape, of the symbols x and y.
+    fn every_operation(pool: &mut Pool) -> (ExprId, ExprId, Vec<ExprId>) {
         let (x, y) = (pool.symbol("x"), pool.symbol("y"));
         let mut roots = vec![];
         let xy = pool.mul(x, y);
@@ -193,18 +191,35 @@ mod tests {
         let test = pool.sub(x, y);
         let square = pool.mul(x, x);
         roots.push(pool.select(test, square, xy));
-        let (vx, vy) = (0.7, 0.45);
-        // Along x, along y, along x + 2y.
-        let directions = [[1.0, 0.0], [0.0, 1.0], [1.0, 2.0]];
+        (x, y, roots)
+    }
+
+    /// Along x, along y, along x + 2y.
+    const DIRECTIONS: [[f64; 2]; 3] = [[1.0, 0.0], [0.0, 1.0], [1.0, 2.0]];
+
+    /// The tangents of `tape` at (vx, vy) along [`DIRECTIONS`].
+    fn tangents_at(tape: &Tape, (vx, vy): (f64, f64)) -> Tangents {
         let symbol_tangents: Vec<f64> = (0..2)
-            .flat_map(|s| directions.iter().map(move |d| d[s]))
+            .flat_map(|s| DIRECTIONS.iter().map(move |d| d[s]))
             .collect();
-        let tape = Tape::new(&pool, &roots);
         let mut out = Tangents {
-            directions: 3,
+            directions: DIRECTIONS.len(),
             ..Tangents::default()
         };
         tape.tangents_prefix_into(&[vx, vy], &symbol_tangents, tape.size(), &mut out);
+        out
+    }
+
+    /// Every instruction's tangent against the symbolic derivative of the same DAG
+    /// (`Pool::derivative`, a different algorithm: a new expression per derivative, evaluated
+    /// by the tape's interpreter), along two directions (x, y) and a mixed one.
+    #[test]
+    fn tangents_agree_with_symbolic_derivatives() {
+        let mut pool = Pool::new();
+        let (x, y, roots) = every_operation(&mut pool);
+        let (vx, vy) = (0.7, 0.45);
+        let tape = Tape::new(&pool, &roots);
+        let out = tangents_at(&tape, (vx, vy));
         let values = tape.eval(&[vx, vy]);
         for (r, &root) in roots.iter().enumerate() {
             let slot = tape.roots[r];
@@ -212,13 +227,46 @@ mod tests {
             let by_x = pool.derivative(root, x, &mut HashMap::new());
             let by_y = pool.derivative(root, y, &mut HashMap::new());
             let exact = Tape::new(&pool, &[by_x, by_y]).eval(&[vx, vy]);
-            for (k, d) in directions.iter().enumerate() {
+            for (k, d) in DIRECTIONS.iter().enumerate() {
                 let expected = d[0] * exact[0] + d[1] * exact[1];
                 let found = out.of(slot)[k];
                 assert!(
                     (found - expected).abs() <= 1e-14 * expected.abs().max(1.0),
                     "root {r} direction {k}: {found} against {expected}"
                 );
+            }
+        }
+    }
+
+    /// Every instruction's tangent against the tape evaluated in dual numbers
+    /// (`dual_evaluation`: num-dual's own rule for each operation), at two points (the second
+    /// takes the other branch of the `Select` and of `Abs`), to 1e-12 of the derivative's size
+    /// (absolute below 1).
+    #[test]
+    fn tangents_agree_with_dual_numbers() {
+        let mut pool = Pool::new();
+        let (_, _, roots) = every_operation(&mut pool);
+        let tape = Tape::new(&pool, &roots);
+        for (vx, vy) in [(0.7, 0.45), (-0.35, 0.6)] {
+            let out = tangents_at(&tape, (vx, vy));
+            for (k, d) in DIRECTIONS.iter().enumerate() {
+                let symbols = [Dual64::new(vx, d[0]), Dual64::new(vy, d[1])];
+                let duals = tape.eval_dual_prefix(&symbols, tape.size());
+                for (r, &slot) in tape.roots.iter().enumerate() {
+                    let (value, dual) = (out.values[slot], duals[slot]);
+                    let (found, expected) = (out.of(slot)[k], dual.eps);
+                    // Outside a function's domain (a root or logarithm of a negative number at
+                    // the second point) both values are NaN, and the derivatives mean nothing.
+                    assert_eq!(value.is_nan(), dual.re.is_nan(), "root {r}");
+                    if value.is_nan() {
+                        continue;
+                    }
+                    assert!(
+                        (found - expected).abs() <= 1e-12 * expected.abs().max(1.0),
+                        "root {r} at ({vx}, {vy}) direction {k}: {found} against {expected}"
+                    );
+                    assert!((value - dual.re).abs() <= 1e-14 * value.abs().max(1.0));
+                }
             }
         }
     }
