@@ -196,7 +196,9 @@ impl EffortDerivatives {
 
     /// The tape's tangents at the last [`EffortDerivatives::compute`] (read a root's with
     /// `EffortTape::root_tangent`), and the symbols' derivatives they started from (symbol
-    /// i's along the 2 nv directions at `[2 nv i..2 nv (i + 1)]`).
+    /// i's along the 2 nv directions at `[2 nv i..2 nv (i + 1)]`). Read only by the tests'
+    /// dual-number oracle, so built only where the library's internals are public.
+    #[cfg(lsdc_internals)]
     pub fn tape_tangents(&self) -> (&Tangents, &[f64]) {
         (&self.tangents, &self.symbol_tangents)
     }
