@@ -10,7 +10,7 @@
 //! analytical derivatives cover (welds, one rotation or one translation linear in the
 //! coordinate, spherical and free joints) need no expression.
 
-use num_dual::{Dual64, DualSVec64};
+use num_dual::Dual64;
 
 use crate::kinematics::eval::EvalError;
 use crate::kinematics::model::ChainMotion;
@@ -38,17 +38,6 @@ impl DynamicsScalar for f64 {
 }
 
 impl DynamicsScalar for Dual64 {
-    fn plain(_: &[Self]) -> Option<&[f64]> {
-        None
-    }
-
-    fn plain_motion(_: &mut ChainMotion<Self>) -> Option<&mut ChainMotion> {
-        None
-    }
-}
-
-/// Vector dual numbers, several directions at once (the constrained dynamics' derivatives).
-impl<const N: usize> DynamicsScalar for DualSVec64<N> {
     fn plain(_: &[Self]) -> Option<&[f64]> {
         None
     }

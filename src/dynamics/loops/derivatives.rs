@@ -21,9 +21,9 @@
 //! - ∂τ_ID/∂q, ∂τ_ID/∂v: the analytical derivatives of inverse dynamics at (q, v, q̈)
 //!   (`RneaDerivatives`), the external forces held in the bodies' frames;
 //! - ∂(Gᵀλ)/∂q, ∂(G q̈ + γ)/∂q and ∂γ/∂v: the loops' rows evaluated in dual numbers
-//!   (`rows::constraints_into` is generic over its scalar), `BLOCK` directions of the state
-//!   velocities per pass (vector dual numbers: the values computed once for all of them);
-//!   forward mode carries the exact derivative, not a difference. Each direction's products
+//!   (`rows::constraints_into` is generic over its scalar), one direction per state velocity
+//!   (several directions per pass in vector dual numbers, `DualSVec64<4>`, measured slower:
+//!   BENCHMARKS.md); forward mode carries the exact derivative, not a difference. Each direction's products
 //!   with λ, q̈ and v are read off the rows' sparse blocks, without a dense copy of ∂G;
 //! - one LU factorisation of the saddle-point matrix serves the accelerations, the multipliers
 //!   and every right-hand side.
@@ -42,8 +42,8 @@
 //! angles make the saddle-point matrix singular, rows that close only at second order nearly
 //! so: such mechanisms are refused (`WithoutMass`, `WeakRows`), with an error.
 
-use nalgebra::{DMatrix, DVector, SVector};
-use num_dual::{Derivative, DualSVec64};
+use nalgebra::{DMatrix, DVector};
+use num_dual::Dual64;
 
 use super::rows::{constraints_into, Constraints, Extent};
 use super::structure::Structure;
@@ -125,18 +125,6 @@ impl std::fmt::Display for ConstrainedDerivativeError {
     }
 }
 
-/// How many directions one pass of the rows in dual numbers carries. Measured on the row of
-/// ten four-bars (`benches/loop_derivatives`): see BENCHMARKS.md.
-pub const BLOCK: usize = 4;
-
-/// The scalar of those passes: a value and its derivatives along `BLOCK` directions.
-type Tangents = DualSVec64<BLOCK>;
-
-/// The derivative along direction `k` of a value computed in `Tangents`.
-fn along(x: &Tangents, k: usize) -> f64 {
-    x.eps.0.as_ref().map_or(0.0, |e| e[k])
-}
-
 /// The derivatives in independent coordinates z (as many as the motions the loops allow).
 #[derive(Clone, Debug)]
 pub struct IndependentDerivatives {
@@ -166,8 +154,8 @@ pub struct ConstrainedDerivatives {
     mass: DMatrix<f64>,
     bias: DVector<f64>,
     rows: Constraints,
-    dual_data: Data<Tangents>,
-    dual_rows: Constraints<Tangents>,
+    dual_data: Data<Dual64>,
+    dual_rows: Constraints<Dual64>,
 }
 
 impl ConstrainedDerivatives {
@@ -250,73 +238,51 @@ impl ConstrainedDerivatives {
         let accelerations = &self.acceleration.as_slice()[..nv];
         (self.inverse).compute(model, data, q, v, accelerations, external)?;
 
-        // The rows' derivatives in dual numbers, `BLOCK` directions of q, then of v, per pass.
+        // The rows' derivatives in dual numbers, one direction of q, then of v, per velocity.
         let mut rows_dq = DMatrix::zeros(n + r, n);
         let mut rows_dv = DMatrix::zeros(n + r, n);
         self.velocity_rows_dq = DMatrix::zeros(r, n);
         let (mut unit, mut direction) = (vec![0.0; n], vec![0.0; q.len()]);
-        let mut seeds = vec![SVector::<f64, BLOCK>::zeros(); q.len().max(n)];
-        let plain = |x: &[f64]| x.iter().map(|&x| Tangents::from_re(x)).collect::<Vec<_>>();
-        let seeded = |x: &[f64], seeds: &[SVector<f64, BLOCK>]| {
-            (x.iter().zip(seeds))
-                .map(|(&x, &d)| Tangents::new(x, Derivative::some(d)))
+        let plain = |x: &[f64]| x.iter().map(|&x| Dual64::from_re(x)).collect::<Vec<_>>();
+        let seeded = |x: &[f64], d: &[f64]| {
+            (x.iter().zip(d))
+                .map(|(&x, &d)| Dual64::new(x, d))
                 .collect::<Vec<_>>()
         };
         let (q_plain, v_plain) = (plain(q), plain(v));
-        for start in (0..n).step_by(BLOCK) {
-            let count = BLOCK.min(n - start);
-            // Along each velocity's tangent direction of q.
-            seeds.fill(SVector::zeros());
-            for k in 0..count {
-                unit[start + k] = 1.0;
-                model.position_rates(q, &unit, &mut direction);
-                unit[start + k] = 0.0;
-                for (seed, &d) in seeds.iter_mut().zip(&direction) {
-                    seed[k] = d;
+        for j in 0..n {
+            unit[j] = 1.0;
+            model.position_rates(q, &unit, &mut direction);
+            self.dual_pass(model, &seeded(q, &direction), &v_plain)?;
+            // (∂Gₛ/∂q_j)ᵀλ − ∂τ_ID/∂q_j over the velocities (the complementary links'
+            // coordinates carry no inertia: τ_ID depends on the tree's), and
+            // −(∂Gₛ/∂q_j q̈ + ∂γ/∂q_j) below; (∂Gₛ/∂q_j) v for the chart.
+            let mut column = rows_dq.column_mut(j);
+            for (i, &row) in kept.iter().enumerate() {
+                let (mut times_acceleration, mut times_velocity) = (0.0, 0.0);
+                for (c, value) in self.dual_rows.jacobian.row(row) {
+                    column[c] += value.eps * self.multipliers[i];
+                    times_acceleration += value.eps * self.acceleration[c];
+                    times_velocity += value.eps * v[c];
                 }
+                column[n + i] = -(times_acceleration + self.dual_rows.bias[row].eps);
+                self.velocity_rows_dq[(i, j)] = times_velocity;
             }
-            self.dual_pass(model, &seeded(q, &seeds), &v_plain)?;
-            for k in 0..count {
-                let j = start + k;
-                // (∂Gₛ/∂q_j)ᵀλ − ∂τ_ID/∂q_j over the velocities (the complementary links'
-                // coordinates carry no inertia: τ_ID depends on the tree's), and
-                // −(∂Gₛ/∂q_j q̈ + ∂γ/∂q_j) below; (∂Gₛ/∂q_j) v for the chart.
-                let mut column = rows_dq.column_mut(j);
-                for (i, &row) in kept.iter().enumerate() {
-                    let (mut times_acceleration, mut times_velocity) = (0.0, 0.0);
-                    for (c, value) in self.dual_rows.jacobian.row(row) {
-                        let d = along(&value, k);
-                        column[c] += d * self.multipliers[i];
-                        times_acceleration += d * self.acceleration[c];
-                        times_velocity += d * v[c];
-                    }
-                    let bias = along(&self.dual_rows.bias[row], k);
-                    column[n + i] = -(times_acceleration + bias);
-                    self.velocity_rows_dq[(i, j)] = times_velocity;
-                }
-                if j < nv {
-                    let mut tree = column.rows_mut(0, nv);
-                    tree -= self.inverse.dtau_dq.column(j);
-                }
+            if j < nv {
+                let mut tree = column.rows_mut(0, nv);
+                tree -= self.inverse.dtau_dq.column(j);
             }
-            // Along each velocity.
-            seeds.fill(SVector::zeros());
-            for k in 0..count {
-                seeds[start + k][k] = 1.0;
+            self.dual_pass(model, &q_plain, &seeded(v, &unit))?;
+            let mut column = rows_dv.column_mut(j);
+            if j < nv {
+                column
+                    .rows_mut(0, nv)
+                    .copy_from(&(-self.inverse.dtau_dv.column(j)));
             }
-            self.dual_pass(model, &q_plain, &seeded(v, &seeds))?;
-            for k in 0..count {
-                let j = start + k;
-                let mut column = rows_dv.column_mut(j);
-                if j < nv {
-                    column
-                        .rows_mut(0, nv)
-                        .copy_from(&(-self.inverse.dtau_dv.column(j)));
-                }
-                for (i, &row) in kept.iter().enumerate() {
-                    column[n + i] = -along(&self.dual_rows.bias[row], k);
-                }
+            for (i, &row) in kept.iter().enumerate() {
+                column[n + i] = -self.dual_rows.bias[row].eps;
             }
+            unit[j] = 0.0;
         }
         let mut rows_dtau = DMatrix::zeros(n + r, n);
         rows_dtau.view_mut((0, 0), (n, n)).fill_with_identity();
@@ -334,12 +300,7 @@ impl ConstrainedDerivatives {
     }
 
     /// The loops' rows and their bias at the dual state (q, v), into `dual_rows`.
-    fn dual_pass(
-        &mut self,
-        model: &Model,
-        q: &[Tangents],
-        v: &[Tangents],
-    ) -> Result<(), EvalError> {
+    fn dual_pass(&mut self, model: &Model, q: &[Dual64], v: &[Dual64]) -> Result<(), EvalError> {
         forward_kinematics(model, &mut self.dual_data, q, v)?;
         let (data, rows) = (&mut self.dual_data, &mut self.dual_rows);
         constraints_into(model, data, q, v, Extent::Motion, rows)
