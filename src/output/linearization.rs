@@ -67,6 +67,9 @@ pub fn text(l: &Linearization, modes: bool) -> String {
         l.b_error.amax(),
         l.c_error.amax()
     );
+    if let Some(why) = &l.differenced_because {
+        out += &format!("differenced because {why}\n");
+    }
     if modes {
         out += "\nmodes (eigenvalues of A):\n";
         out += &format!(

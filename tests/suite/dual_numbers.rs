@@ -393,35 +393,8 @@ proptest! {
 /// evaluated in `f64` only and refused in dual numbers (`DynamicsScalar`): left out, named
 /// with the reason (the second list).
 pub(crate) fn loop_examples() -> (Vec<(String, Prepared)>, Vec<String>) {
-    let hard = [
-        "bennett",
-        "bricard",
-        "four_bar_row_10",
-        "squeezer",
-        "watt_six_bar",
-    ];
-    let paths = example_paths().into_iter().chain(
-        hard.iter()
-            .map(|name| format!("examples/hard/{name}.lsd").into()),
-    );
     let (mut covered, mut left_out) = (Vec::new(), Vec::new());
-    for path in paths {
-        let name = path.display().to_string();
-        let Ok(compilation) = compile_files(std::slice::from_ref(&path), &no_library_path()) else {
-            continue;
-        };
-        if compilation.has_errors() {
-            continue;
-        }
-        let Some(mechanism) = compilation.mechanism else {
-            continue;
-        };
-        let Ok(prepared) = prepare(&mechanism, &[], &Settings::default()) else {
-            continue;
-        };
-        if !prepared.model.has_loops() {
-            continue;
-        }
+    for (name, prepared) in loop_programs() {
         let (q, v) = assembled(&prepared);
         let model = &prepared.model;
         let mut data = Data::<Dual64>::with_scalar(model);
@@ -436,6 +409,42 @@ pub(crate) fn loop_examples() -> (Vec<(String, Prepared)>, Vec<String>) {
         }
     }
     (covered, left_out)
+}
+
+/// Every example with loops that compiles and prepares (the examples' folder and the hard
+/// linkages), named by its path.
+pub(crate) fn loop_programs() -> Vec<(String, Prepared)> {
+    let hard = [
+        "bennett",
+        "bricard",
+        "four_bar_row_10",
+        "squeezer",
+        "watt_six_bar",
+    ];
+    let paths = example_paths().into_iter().chain(
+        hard.iter()
+            .map(|name| format!("examples/hard/{name}.lsd").into()),
+    );
+    let mut programs = Vec::new();
+    for path in paths {
+        let name = path.display().to_string();
+        let Ok(compilation) = compile_files(std::slice::from_ref(&path), &no_library_path()) else {
+            continue;
+        };
+        if compilation.has_errors() {
+            continue;
+        }
+        let Some(mechanism) = compilation.mechanism else {
+            continue;
+        };
+        let Ok(prepared) = prepare(&mechanism, &[], &Settings::default()) else {
+            continue;
+        };
+        if prepared.model.has_loops() {
+            programs.push((name, prepared));
+        }
+    }
+    programs
 }
 
 #[test]

@@ -21,8 +21,10 @@
 //! - ∂τ_ID/∂q, ∂τ_ID/∂v: the analytical derivatives of inverse dynamics at (q, v, q̈)
 //!   (`RneaDerivatives`), the external forces held in the bodies' frames;
 //! - ∂(Gᵀλ)/∂q, ∂(G q̈ + γ)/∂q and ∂γ/∂v: the loops' rows evaluated in dual numbers
-//!   (`rows::constraints_into` is generic over its scalar), one direction per state velocity:
-//!   forward mode carries the exact derivative, not a difference;
+//!   (`rows::constraints_into` is generic over its scalar), one direction per state velocity
+//!   (several directions per pass in vector dual numbers, `DualSVec64<4>`, measured slower:
+//!   BENCHMARKS.md); forward mode carries the exact derivative, not a difference. Each direction's products
+//!   with λ, q̈ and v are read off the rows' sparse blocks, without a dense copy of ∂G;
 //! - one LU factorisation of the saddle-point matrix serves the accelerations, the multipliers
 //!   and every right-hand side.
 //!
@@ -241,42 +243,45 @@ impl ConstrainedDerivatives {
         let mut rows_dv = DMatrix::zeros(n + r, n);
         self.velocity_rows_dq = DMatrix::zeros(r, n);
         let (mut unit, mut direction) = (vec![0.0; n], vec![0.0; q.len()]);
-        let constant = |x: &[f64]| x.iter().map(|&x| Dual64::from_re(x)).collect::<Vec<_>>();
-        let (q_plain, v_plain) = (constant(q), constant(v));
+        let plain = |x: &[f64]| x.iter().map(|&x| Dual64::from_re(x)).collect::<Vec<_>>();
+        let seeded = |x: &[f64], d: &[f64]| {
+            (x.iter().zip(d))
+                .map(|(&x, &d)| Dual64::new(x, d))
+                .collect::<Vec<_>>()
+        };
+        let (q_plain, v_plain) = (plain(q), plain(v));
         for j in 0..n {
             unit[j] = 1.0;
             model.position_rates(q, &unit, &mut direction);
-            let q_dual: Vec<Dual64> = (q.iter().zip(&direction))
-                .map(|(&x, &d)| Dual64::new(x, d))
-                .collect();
-            let (turned, bias) = self.dual_rows_along(model, kept, &q_dual, &v_plain)?;
-            // −∂τ_ID/∂q_j + (∂Gₛ/∂q_j)ᵀλ over the velocities, −(∂Gₛ/∂q_j q̈ + ∂γ/∂q_j) below.
+            self.dual_pass(model, &seeded(q, &direction), &v_plain)?;
+            // (∂Gₛ/∂q_j)ᵀλ − ∂τ_ID/∂q_j over the velocities (the complementary links'
+            // coordinates carry no inertia: τ_ID depends on the tree's), and
+            // −(∂Gₛ/∂q_j q̈ + ∂γ/∂q_j) below; (∂Gₛ/∂q_j) v for the chart.
             let mut column = rows_dq.column_mut(j);
-            column
-                .rows_mut(0, n)
-                .copy_from(&(turned.transpose() * &self.multipliers));
-            // The complementary links' coordinates carry no inertia: τ_ID depends on the tree's.
+            for (i, &row) in kept.iter().enumerate() {
+                let (mut times_acceleration, mut times_velocity) = (0.0, 0.0);
+                for (c, value) in self.dual_rows.jacobian.row(row) {
+                    column[c] += value.eps * self.multipliers[i];
+                    times_acceleration += value.eps * self.acceleration[c];
+                    times_velocity += value.eps * v[c];
+                }
+                column[n + i] = -(times_acceleration + self.dual_rows.bias[row].eps);
+                self.velocity_rows_dq[(i, j)] = times_velocity;
+            }
             if j < nv {
                 let mut tree = column.rows_mut(0, nv);
                 tree -= self.inverse.dtau_dq.column(j);
             }
-            column
-                .rows_mut(n, r)
-                .copy_from(&(-(&turned * &self.acceleration + bias)));
-            let v_column = &turned * DVector::from_column_slice(v);
-            self.velocity_rows_dq.set_column(j, &v_column);
-
-            let v_dual: Vec<Dual64> = (v.iter().enumerate())
-                .map(|(i, &x)| Dual64::new(x, unit[i]))
-                .collect();
-            let (_, bias) = self.dual_rows_along(model, kept, &q_plain, &v_dual)?;
+            self.dual_pass(model, &q_plain, &seeded(v, &unit))?;
             let mut column = rows_dv.column_mut(j);
             if j < nv {
                 column
                     .rows_mut(0, nv)
                     .copy_from(&(-self.inverse.dtau_dv.column(j)));
             }
-            column.rows_mut(n, r).copy_from(&(-bias));
+            for (i, &row) in kept.iter().enumerate() {
+                column[n + i] = -self.dual_rows.bias[row].eps;
+            }
             unit[j] = 0.0;
         }
         let mut rows_dtau = DMatrix::zeros(n + r, n);
@@ -294,25 +299,11 @@ impl ConstrainedDerivatives {
         Ok(())
     }
 
-    /// The derivative parts of the kept rows of G and of γ at the dual state (q, v).
-    fn dual_rows_along(
-        &mut self,
-        model: &Model,
-        kept: &[usize],
-        q: &[Dual64],
-        v: &[Dual64],
-    ) -> Result<(DMatrix<f64>, DVector<f64>), EvalError> {
+    /// The loops' rows and their bias at the dual state (q, v), into `dual_rows`.
+    fn dual_pass(&mut self, model: &Model, q: &[Dual64], v: &[Dual64]) -> Result<(), EvalError> {
         forward_kinematics(model, &mut self.dual_data, q, v)?;
         let (data, rows) = (&mut self.dual_data, &mut self.dual_rows);
-        constraints_into(model, data, q, v, Extent::Motion, rows)?;
-        let mut turned = DMatrix::zeros(kept.len(), model.velocities());
-        for (i, &row) in kept.iter().enumerate() {
-            for (column, value) in rows.jacobian.row(row) {
-                turned[(i, column)] = value.eps;
-            }
-        }
-        let bias = DVector::from_iterator(kept.len(), kept.iter().map(|&row| rows.bias[row].eps));
-        Ok((turned, bias))
+        constraints_into(model, data, q, v, Extent::Motion, rows)
     }
 
     /// The derivatives of the last `compute` in the independent coordinates `independent`

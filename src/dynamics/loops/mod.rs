@@ -20,9 +20,6 @@
 //! The method and its references: `docs/loops.md`.
 
 pub mod basis;
-// No command reads these derivatives yet (the tests and `benches/loop_derivatives` do): only
-// the repository's own builds, with the cfg `lsdc_internals`, compile them.
-#[cfg(lsdc_internals)]
 pub mod derivatives;
 pub mod elimination;
 pub mod factored;

@@ -28,7 +28,11 @@ impl Evaluator<'_> {
     }
 
     /// The mechanism's state at x, the program's states set from x and `held`.
-    fn state(&mut self, x: &[f64], held: &[f64]) -> Result<(Vec<f64>, Vec<f64>), LinearizeError> {
+    pub fn state(
+        &mut self,
+        x: &[f64],
+        held: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), LinearizeError> {
         let n = self.independent();
         let mut states = std::mem::take(&mut self.system.state.states);
         self.inputs.fill_states(&x[2 * n..], held, &mut states);

@@ -10,9 +10,13 @@
 //!   with loops, is linear in τ), so a unit input's change of the accelerations is B's column
 //!   to rounding;
 //! - D = 0: outputs read the state and the time, never the efforts;
-//! - the accelerations' rows of A and the outputs' C are central differences refined by
-//!   Richardson extrapolation (`differences`), each entry with its error estimate: the model
-//!   has no analytic derivatives of its efforts and dynamics yet.
+//! - with loops, where nothing but gravity and the inputs acts, the accelerations' rows of A
+//!   and B are exact: the constrained dynamics' derivatives in the chart's coordinates
+//!   (`exact`); where those derivatives refuse (motions without mass, rows closing at second
+//!   order, efforts that depend on the state), the linearisation says why and differences;
+//! - elsewhere the accelerations' rows of A, and the outputs' C always, are central
+//!   differences refined by Richardson extrapolation (`differences`), each entry with its
+//!   error estimate.
 //!
 //! Compare Drake's `Linearize`, PyDy's `Linearizer` (which also reduces constrained systems to
 //! independent coordinates) and MuJoCo's `mjd_transitionFD`.
@@ -21,6 +25,7 @@ pub mod chart;
 pub mod differences;
 mod error;
 mod evaluator;
+mod exact;
 pub mod inputs;
 pub mod modes;
 
@@ -119,6 +124,10 @@ pub struct Linearization {
     pub c_error: DMatrix<f64>,
     /// How the derivatives were obtained, for people.
     pub method: &'static str,
+    /// With loops, why the accelerations' rows are differenced rather than exact (the
+    /// constrained dynamics' derivatives refused them); `None` where they are exact, in a
+    /// tree, or where differences were asked for.
+    pub differenced_because: Option<String>,
     pub eigenvalues: Vec<Eigenvalue>,
     pub modes: Vec<Mode>,
 }
@@ -138,8 +147,36 @@ exact; accelerations' and states' rows of A, B's and D's columns of states held 
 C by central differences with Richardson extrapolation (steps h, h/2, h/4, h/8 with h = 1e-2 \
 max(1, |x|)), each entry with Ridders' estimate of its truncation error plus a bound on rounding";
 
-/// Linearises the prepared mechanism as `request` asks.
+/// How the entries are computed where the constrained dynamics' derivatives give A's
+/// accelerations' rows and B exactly.
+pub const LOOP_METHOD: &str = "rows of the coordinates, D's, and A's and B's accelerations' rows \
+exact (the constrained dynamics' derivatives in the independent coordinates: the saddle point \
+differentiated, the loops' rows in dual numbers); C by central differences with Richardson \
+extrapolation (steps h, h/2, h/4, h/8 with h = 1e-2 max(1, |x|)), each entry with Ridders' \
+estimate of its truncation error plus a bound on rounding";
+
+/// How A's accelerations' rows are found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Derivatives {
+    /// Exact where the constrained dynamics' derivatives cover the mechanism (loops, nothing
+    /// but gravity and the inputs acting), differenced elsewhere.
+    ExactWhereCovered,
+    /// Central differences everywhere (to compare with the exact ones).
+    Differenced,
+}
+
+/// Linearises the prepared mechanism as `request` asks, exact where it can be.
 pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization, LinearizeError> {
+    linearize_by(prepared, request, Derivatives::ExactWhereCovered)
+}
+
+/// Linearises the prepared mechanism as `request` asks, its derivatives found as `derivatives`
+/// says.
+pub fn linearize_by(
+    prepared: &Prepared,
+    request: &Request,
+    derivatives: Derivatives,
+) -> Result<Linearization, LinearizeError> {
     let model = &prepared.model;
     refuse_unsupported(prepared)?;
     refuse_imposed_motion(prepared, request.point)?;
@@ -215,25 +252,55 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
     }
     let every: Vec<usize> = (0..with_held.len()).collect();
     let split = |z: &[f64]| (z[..size].to_vec(), z[size..].to_vec());
-    let lower = differences::jacobian(&with_held, &every, rates.len(), |z| {
-        let (x, held) = split(z);
-        evaluator.rates(&x, &efforts, &held)
-    })?;
+    let exact = match (model.has_loops(), derivatives) {
+        (true, Derivatives::ExactWhereCovered) => {
+            Some(exact::loop_rows(&mut evaluator, &x, &efforts, &rates))
+        }
+        _ => None,
+    };
+    let (exact, differenced_because) = match exact {
+        Some(Ok(rows)) => (Some(rows), None),
+        Some(Err(refusal)) => (None, Some(refusal)),
+        None => (None, None),
+    };
     let mut a = DMatrix::zeros(size, size);
     let mut a_error = DMatrix::zeros(size, size);
     a.view_mut((0, n), (n, n)).fill_with_identity();
     let below = size - n;
-    a.view_mut((n, 0), (below, size))
-        .copy_from(&lower.value.columns(0, size));
-    a_error
-        .view_mut((n, 0), (below, size))
-        .copy_from(&lower.error.columns(0, size));
+    // The differenced rows (none where exact: no program state, so none held, when exact).
+    let lower = match &exact {
+        Some(rows) => {
+            a.view_mut((n, 0), (n, size)).copy_from(&rows.by_state);
+            differences::Estimated {
+                value: DMatrix::zeros(below, with_held.len()),
+                error: DMatrix::zeros(below, with_held.len()),
+            }
+        }
+        None => {
+            let lower = differences::jacobian(&with_held, &every, rates.len(), |z| {
+                let (x, held) = split(z);
+                evaluator.rates(&x, &efforts, &held)
+            })?;
+            a.view_mut((n, 0), (below, size))
+                .copy_from(&lower.value.columns(0, size));
+            a_error
+                .view_mut((n, 0), (below, size))
+                .copy_from(&lower.error.columns(0, size));
+            lower
+        }
+    };
     let inputs = &evaluator.inputs.inputs.clone();
     let mut b = DMatrix::zeros(size, inputs.len());
     let mut b_error = DMatrix::zeros(size, inputs.len());
     let (mut effort_column, mut held_column) = (0, 0);
     for (k, input) in inputs.iter().enumerate() {
         match input {
+            Input::Effort(_) if exact.is_some() => {
+                let rows = &exact.as_ref().expect("matched").by_effort;
+                b.view_mut((n, k), (n, 1))
+                    .copy_from(&rows.column(effort_column));
+                effort_column += 1;
+            }
             Input::Effort(_) => {
                 // The accelerations are affine in a generalised force, the states' rates
                 // independent of it: a unit's worth of change (scaled to the operating input,
@@ -339,7 +406,11 @@ pub fn linearize(prepared: &Prepared, request: &Request) -> Result<Linearization
         a_error,
         b_error,
         c_error,
-        method: METHOD,
+        method: match exact {
+            Some(_) => LOOP_METHOD,
+            None => METHOD,
+        },
+        differenced_because,
         modes: modes::modes(&eigenvalues),
         eigenvalues,
     })
