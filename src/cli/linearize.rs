@@ -13,7 +13,7 @@ use super::shared::{
 };
 use lsdc::api::SettingsChanges;
 use lsdc::output::linearization;
-use lsdc::studies::linearize::{linearize, OperatingPoint, Request};
+use lsdc::studies::linearize::{linearize_by, Derivatives, OperatingPoint, Request};
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum LinearizationFormat {
@@ -48,6 +48,10 @@ pub struct LinearizeArgs {
     /// there (as `lsdc statics` finds them).
     #[arg(long)]
     equilibrium: bool,
+    /// With closed loops: A's and B's accelerations' rows by central differences even where
+    /// the constrained dynamics' exact derivatives cover the mechanism (to compare the two).
+    #[arg(long)]
+    differenced: bool,
     /// Add the natural frequencies and damping ratios of the eigenvalues.
     #[arg(long)]
     modes: bool,
@@ -96,7 +100,11 @@ pub fn run(args: &LinearizeArgs) -> ExitCode {
         inputs,
         coordinates: args.coordinates.clone(),
     };
-    let linearization = match linearize(&prepared, &request) {
+    let derivatives = match args.differenced {
+        true => Derivatives::Differenced,
+        false => Derivatives::ExactWhereCovered,
+    };
+    let linearization = match linearize_by(&prepared, &request, derivatives) {
         Ok(l) => l,
         Err(error) => {
             let located = program.mechanism().ok().and_then(|m| error.diagnostic(m));

@@ -430,6 +430,48 @@ fn command_writes_json_and_matlab() {
     assert!(stdout.contains("sys = ss(A, B, C, D,"), "{stdout}");
 }
 
+/// `--differenced` on a four-bar: the command's A is the exact one by default (its `method`
+/// saying so, no reason to difference) and the differenced one with the flag, the two within
+/// the differences' accuracy.
+#[test]
+fn command_differences_a_loop_on_request() {
+    let args = [
+        "linearize",
+        "examples/four_bar.lsd",
+        "--equilibrium",
+        "--input",
+        "crank.q",
+        "--coordinate",
+        "crank.q",
+        "--format",
+        "json",
+    ];
+    let run = |extra: &[&str]| {
+        let (code, stdout, stderr) = lsdc(&[&args[..], extra].concat());
+        assert_eq!(code, 0, "{stderr}");
+        serde_json::from_str::<serde_json::Value>(&stdout).unwrap()
+    };
+    let (exact, differenced) = (run(&[]), run(&["--differenced"]));
+    assert_eq!(exact["method"], LOOP_METHOD, "{exact}");
+    assert!(exact["differenced_because"].is_null(), "{exact}");
+    assert_ne!(differenced["method"], LOOP_METHOD, "{differenced}");
+    let entries = |v: &serde_json::Value| -> Vec<f64> {
+        (v["A"].as_array().unwrap().iter())
+            .flat_map(|row| row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+            .collect()
+    };
+    let (a, b) = (entries(&exact), entries(&differenced));
+    let largest = a.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let apart = a
+        .iter()
+        .zip(&b)
+        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+    assert!(
+        largest > 0.0 && apart <= 1e-6 * largest,
+        "{a:?} against {b:?}"
+    );
+}
+
 /// The LQR gain of examples/control/lqr_cart_pole.py is the one cart_pole_lqr.lsd applies,
 /// its closed loop is stable (lsdc's own linearisation of it) and brings the pole up.
 #[test]

@@ -134,6 +134,9 @@ pub struct IndependentDerivatives {
     /// ∂z̈/∂τ, m × (state velocities): a generalised force along any state velocity.
     pub dacceleration_dtau: DMatrix<f64>,
     /// ∂q/∂z = T: the allowed motions whose independent coordinates' rows are the identity.
+    /// Read by the tests (z's derivatives carried back to q's); built only where the
+    /// library's internals are public.
+    #[cfg(lsdc_internals)]
     pub tangent: DMatrix<f64>,
 }
 
@@ -346,6 +349,7 @@ impl ConstrainedDerivatives {
             dacceleration_dz: select(&dq),
             dacceleration_drates: select(&(&self.dacceleration_dv * &tangent)),
             dacceleration_dtau: select(&self.dacceleration_dtau),
+            #[cfg(lsdc_internals)]
             tangent,
         })
     }
