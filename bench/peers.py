@@ -303,9 +303,13 @@ def main():
         mujoco_row(n, models / f"row{n}.xml")
 
     robot_arguments = [f"{name}={path}" for name, path in urdfs.items()]
-    print("building and starting lsdc's probe (cargo bench --bench peers)...", file=sys.stderr)
-    lsdc_command = [args.lsdc_probe] if args.lsdc_probe else \
-        ["cargo", "bench", "--locked", "--bench", "peers", "--"]
+    if args.lsdc_probe:
+        print(f"starting lsdc's probe ({args.lsdc_probe})...", file=sys.stderr)
+        lsdc_command = [args.lsdc_probe]
+    else:
+        print("building and starting lsdc's probe (cargo bench --bench peers)...",
+              file=sys.stderr)
+        lsdc_command = ["cargo", "bench", "--locked", "--bench", "peers", "--"]
     lsdc = Probe("lsdc", [*lsdc_command, *robot_arguments, *[f"row{n}" for n in rows]])
     pin = None
     if robots:
