@@ -8,16 +8,16 @@
 use std::fmt::Write;
 
 use super::shared::{
-    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role, ScriptNames,
-    Symbols,
+    identifier_characters, nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence,
+    Printer, Role, ScriptNames, Symbols,
 };
 use crate::symbolic::expr::{ExprId, Function};
 use crate::symbolic::lower::Variable;
 use crate::symbolic::Equations;
 
-/// Names Maple protects or gives a meaning that would change the equations', and the names the
-/// worksheet assigns itself.
-const RESERVED: [&str; 36] = [
+/// Names Maple protects or gives a meaning that would change the equations' (the names every
+/// script assigns itself are added by `ScriptNames`).
+const RESERVED: [&str; 29] = [
     "D",
     "I",
     "O",
@@ -47,26 +47,12 @@ const RESERVED: [&str; 36] = [
     "end",
     "local",
     "global",
-    "M",
-    "S",
-    "F",
-    "Delta",
-    "Delta_bias",
-    "accelerations",
-    "t",
 ];
 
 /// A Maple name for a program's name: letters, digits and `_`, not starting with a digit or `_`
 /// (Maple reserves names starting with `_` for itself).
 fn maple_name(name: &str) -> String {
-    let mut out = String::new();
-    for c in name.chars() {
-        match c {
-            '\'' => out.push_str("_dot"),
-            c if c.is_ascii_alphanumeric() || c == '_' => out.push(c),
-            _ => out.push('_'),
-        }
-    }
+    let mut out = identifier_characters(name);
     if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit() || c == '_') {
         out.insert(0, 'v');
     }

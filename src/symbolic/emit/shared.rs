@@ -200,9 +200,28 @@ pub fn temporary_prefix(names: &[String]) -> String {
     prefix
 }
 
+/// The names every script defines itself: its matrices, the accelerations' solve and time.
+const SCRIPT_DEFINED: [&str; 7] = ["M", "S", "F", "Delta", "Delta_bias", "accelerations", "t"];
+
+/// A program name in the characters every script language accepts in an identifier: `.` and
+/// any other punctuation written `_`, a rate's `'` written `_dot` (`hinge.x'` is `hinge_x_dot`).
+/// Each language then mends a start it does not accept.
+pub fn identifier_characters(name: &str) -> String {
+    let mut out = String::new();
+    for c in name.chars() {
+        match c {
+            '\'' => out.push_str("_dot"),
+            c if c.is_ascii_alphanumeric() || c == '_' => out.push(c),
+            _ => out.push('_'),
+        }
+    }
+    out
+}
+
 /// The names a script (the Maple worksheet, the SymPy module) gives the variables: each
 /// program name written as an identifier of the language, made unique against the language's
-/// reserved names and the names before it by trailing `_`s, and a prefix for the temporaries
+/// reserved names (and the names every script defines, `SCRIPT_DEFINED`) and the names before it
+/// by trailing `_`s, and a prefix for the temporaries
 /// that none of them uses.
 pub struct ScriptNames {
     pub positions: Vec<String>,
@@ -217,7 +236,9 @@ pub struct ScriptNames {
 impl ScriptNames {
     pub fn new(equations: &Equations, reserved: &[&str], identifier: fn(&str) -> String) -> Self {
         let v = &equations.variables;
-        let mut taken: HashSet<String> = reserved.iter().map(|s| s.to_string()).collect();
+        let mut taken: HashSet<String> = (reserved.iter().chain(&SCRIPT_DEFINED))
+            .map(|s| s.to_string())
+            .collect();
         let mut unique = |name: &str| {
             let mut candidate = identifier(name);
             while taken.contains(&candidate) {

@@ -5,8 +5,8 @@
 use std::fmt::Write;
 
 use super::shared::{
-    nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence, Printer, Role, ScriptNames,
-    Symbols,
+    identifier_characters, nonzero_entries, Entry, Language, Listing, PowerSyntax, Precedence,
+    Printer, Role, ScriptNames, Symbols,
 };
 use crate::symbolic::expr::{ExponentialProfile, ExprId, Function};
 use crate::symbolic::lower::Variable;
@@ -19,15 +19,9 @@ const KEYWORDS: [&str; 35] = [
     "with", "yield",
 ];
 
-/// Names the module defines itself.
-const RESERVED: [&str; 15] = [
+/// Names the module defines itself beside those every script defines (`ScriptNames` adds those).
+const RESERVED: [&str; 8] = [
     "sp",
-    "M",
-    "S",
-    "F",
-    "Delta",
-    "Delta_bias",
-    "accelerations",
     "positions",
     "rates",
     "parameters",
@@ -35,19 +29,11 @@ const RESERVED: [&str; 15] = [
     "functions",
     "constraint_names",
     "source",
-    "t",
 ];
 
 /// A Python identifier for a name: `hinge.x'` is `hinge_x_dot`.
 fn sanitize(name: &str) -> String {
-    let mut out = String::new();
-    for c in name.chars() {
-        match c {
-            '\'' => out.push_str("_dot"),
-            c if c.is_ascii_alphanumeric() || c == '_' => out.push(c),
-            _ => out.push('_'),
-        }
-    }
+    let mut out = identifier_characters(name);
     if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
         out.insert(0, '_');
     }
