@@ -312,9 +312,9 @@ pub fn rnea_forward<T: Real>(model: &Model, data: &mut Data<T>, a: &[T], externa
         data.force[i] = if body.massless {
             -external[i]
         } else {
-            let inertia: Inertia<T> = body.inertia.cast();
-            let momentum = inertia * data.velocity[i];
-            inertia * data.acceleration[i] + spatial::cross_force(&data.velocity[i], &momentum)
+            let momentum = body.rigid.times(&data.velocity[i]);
+            body.rigid.times(&data.acceleration[i])
+                + spatial::cross_force(&data.velocity[i], &momentum)
                 - external[i]
         };
     }
@@ -452,9 +452,14 @@ pub fn aba_after_kinematics<T: Real>(
     aba_body_terms(model, data, external);
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
-        match rotor_of(data, k) {
-            Some(r) => data.aba_rotor_step(model, k, r, tau[joint.v_offset])?,
-            None => aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?,
+        match (rotor_of(data, k), joint.axis_rotation()) {
+            (Some(r), _) => data.aba_rotor_step(model, k, r, tau[joint.v_offset])?,
+            (None, Some(axis)) => {
+                aba_backward_axis_step(model, data, k, axis, tau[joint.v_offset])?
+            }
+            (None, None) => {
+                aba_backward_step(model, data, k, slice(tau, joint.v_offset, joint.nv()))?
+            }
         }
     }
     let base = base_acceleration(model);
@@ -477,12 +482,12 @@ fn aba_body_terms<T: Real>(model: &Model, data: &mut Data<T>, external: &[Force<
     for &k in &model.dynamic_joints {
         let i = model.joints[k].child;
         let body = &model.dynamic_bodies[i - 1];
-        let inertia: Inertia<T> = body.inertia.cast();
-        data.articulated[i] = inertia;
+        data.articulated[i] = body.inertia.cast();
         data.bias[i] = if body.massless {
             -external[i]
         } else {
-            spatial::cross_force(&data.velocity[i], &(inertia * data.velocity[i])) - external[i]
+            let momentum = body.rigid.times(&data.velocity[i]);
+            spatial::cross_force(&data.velocity[i], &momentum) - external[i]
         };
     }
 }
@@ -599,6 +604,52 @@ fn aba_backward_step<T: Real>(
         let handed = bias[i] + reduced * coriolis[i] + correction;
         articulated[parent] += state.transform.inertia_to_parent(&reduced);
         bias[parent] += state.transform.force_to_parent(&handed);
+    }
+    Ok(())
+}
+
+/// `aba_backward_step` for a joint whose subspace is one axis column [s e_k; 0] (a revolute
+/// about x, y or z with no frame on the child, as URDF's: `Joint::axis_rotation`), without the
+/// products by the column's zeros (as CRBA's axis columns): U = I S is column k of I times s,
+/// D = s² I_kk and u = τ − s p_k. The reduced inertia Ia − U Uᵀ/D is symmetric: its entries
+/// on and above the diagonal are computed and mirrored. Equal to the general step to
+/// round-off.
+fn aba_backward_axis_step<T: Real>(
+    model: &Model,
+    data: &mut Data<T>,
+    k: usize,
+    (axis, scale): (usize, f64),
+    tau: T,
+) -> Result<(), DynamicsError> {
+    let joint = &model.joints[k];
+    let (i, parent) = (joint.child, joint.dynamic_parent);
+    let s: T = constant(scale);
+    let inertia = data.articulated[i];
+    let u: Force<T> = inertia.column(axis) * s;
+    let d = u[axis] * s;
+    if !(d.abs() > constant(1e-300) && d.is_finite()) {
+        return Err(DynamicsError::Singular { joint: k, body: i });
+    }
+    let d_inverse = d.recip();
+    let u_scalar = tau - data.bias[i][axis] * s;
+    data.u[i][0] = u;
+    data.d_inverse[i][(0, 0)] = d_inverse;
+    data.u_vector[i][0] = u_scalar;
+    if parent != 0 {
+        // Ia − W Uᵀ and pa + Ia c + W u, with W = U D⁻¹.
+        let w = u * d_inverse;
+        let mut reduced = inertia;
+        for column in 0..6 {
+            for row in 0..=column {
+                let value = inertia[(row, column)] - w[row] * u[column];
+                reduced[(row, column)] = value;
+                reduced[(column, row)] = value;
+            }
+        }
+        let transform = &data.states[k].transform;
+        let handed = data.bias[i] + reduced * data.coriolis[i] + w * u_scalar;
+        data.articulated[parent] += transform.inertia_to_parent(&reduced);
+        data.bias[parent] += transform.force_to_parent(&handed);
     }
     Ok(())
 }

@@ -12,7 +12,9 @@ pub struct BodyInertia {
     pub mass: f64,
     /// Centre of mass in the body frame.
     pub com: Vector3<f64>,
-    /// Spatial inertia about the body frame's origin, and the same in compact form.
+    /// Spatial inertia about the body frame's origin, and the same in compact form: the two
+    /// must agree (RNEA and ABA take the bodies' momenta from the compact form, ABA starts its
+    /// articulated inertias from the matrix).
     pub inertia: Inertia,
     pub rigid: RigidInertia,
     /// Zero mass and inertia: skipped by the algorithms.

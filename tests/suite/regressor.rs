@@ -11,7 +11,7 @@ use lsdc::dynamics::algorithms::{rnea, Data};
 use lsdc::dynamics::model::Model;
 use lsdc::load::LoadOptions;
 use lsdc::prepare::{prepare, Settings};
-use lsdc::spatial::Inertia;
+use lsdc::spatial::{Inertia, RigidInertia};
 use nalgebra::DVector;
 use proptest::prelude::*;
 
@@ -29,7 +29,9 @@ fn regressor_mismatch(model: &Model, numbers: &[f64]) -> f64 {
     let full = rnea(model, &mut data, &q, &v, &a, &external).expect("rnea");
     let mut without = model.clone();
     for body in &mut without.dynamic_bodies {
+        // Both forms of the body's inertia: RNEA reads the compact one.
         body.inertia = Inertia::zeros();
+        body.rigid = RigidInertia::zeros();
     }
     let rest = rnea(&without, &mut Data::new(&without), &q, &v, &a, &external).expect("rnea");
     let y = regressor(model, &mut data, &q, &v, &a).expect("regressor");

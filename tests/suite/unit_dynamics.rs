@@ -80,6 +80,22 @@ mod spatial {
     }
 
     #[test]
+    fn articulated_inertias_move_as_with_matrices() {
+        // An articulated inertia (a body's less U D⁻¹ Uᵀ for one joint column S, U = I S):
+        // symmetric, with a block B that is no longer skew, as ABA hands it to the parent.
+        let p = pose();
+        let central = Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.5, 0.03, -0.02, 0.03, 0.4);
+        let i = inertia(2.5, &Vector3::new(0.1, -0.4, 0.8), &central);
+        let s = Motion::new(0.6, 0.0, -0.8, 0.2, 0.1, 0.0);
+        let u = i * s;
+        let articulated = i - u * u.transpose() / s.dot(&u);
+        let moved = Transform::from_pose(&p).inertia_to_parent(&articulated);
+        // X*ᵀ I X with 6 × 6 matrices (entries of about 2).
+        assert!((moved - inertia_to_parent(&p, &articulated)).amax() < 1e-13);
+        assert_eq!(moved, moved.transpose());
+    }
+
+    #[test]
     fn compact_inertias_agree_with_matrices() {
         let t = Transform::from_pose(&pose());
         let central = Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.5, 0.03, -0.02, 0.03, 0.4);
