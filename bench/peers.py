@@ -29,7 +29,7 @@ bench/pinocchio_fixtures.py copies into tests/fixtures/urdf/), fixed base, gravi
 -z, 256 random states cycled (Pinocchio: coordinates within the joint limits; lsdc: in [-pi, pi]);
 steps of RK4 at 1 ms from rest at q = 0, started again every 1,000 steps outside the timing
 (MuJoCo: the URDF without visual or collision geometry, joint limits off, so there are no
-contacts nor limit rows; lsdc: the stiffness check off); the rows of N = 10, 40, 100 four-bars of
+contacts nor limit rows; lsdc: the stiffness check off); the rows of N = 10, 20, 40, 70, 100 four-bars of
 benches/common/rows.rs at their initial state (cranks hanging, turning at 12 rad/s): MuJoCo's
 `mj_forward` with each closing revolute as a `connect` equality (the three rows of a point
 joint; the hinges' axes are all z), lsdc's right-hand side (`MechanicalSystem::derivative`);
@@ -64,7 +64,7 @@ OUT = REPO / "target" / "peers"
 ROBOTS = {"ur5": "ur5", "panda": "panda", "talos": "talos_reduced"}
 ALGORITHMS = ("rnea", "crba", "aba", "rnea_derivatives", "aba_derivatives")
 STEPPED = ("ur5", "panda")
-ROWS = (10, 40, 100)
+ROWS = (10, 20, 40, 70, 100)
 GRAVITY = 9.80665
 
 

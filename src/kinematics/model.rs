@@ -170,21 +170,7 @@ impl JointModel {
         let Some(single) = self.single_motion() else {
             return false;
         };
-        out.reset(1);
-        let column = match single {
-            SingleMotion::Rotation { axis, scale } => {
-                let axis: Vector3<T> = axis.cast();
-                out.pose = rotation(&axis, constant::<T>(scale) * q[0]);
-                spatial::twist(axis * constant::<T>(scale), Vector3::zeros())
-            }
-            SingleMotion::Translation { direction } => {
-                let direction: Vector3<T> = direction.cast();
-                out.pose = spatial::translation(direction * q[0]);
-                spatial::twist(Vector3::zeros(), direction)
-            }
-        };
-        out.subspace.column_mut(0).copy_from(&column);
-        out.velocity = column * rates.map_or(T::zero(), |r| r[0]);
+        single.motion_into(q, rates, rotation, out);
         true
     }
 
@@ -274,9 +260,40 @@ fn add_moved(subspace: &mut DMatrix<f64>, k: usize, pose: &Pose, column: &Twist)
 
 /// A one-coordinate chain of one step: a rotation by `scale` · q about `axis`, or a translation
 /// by q · `direction`.
+#[derive(Clone, Copy, Debug)]
 pub(crate) enum SingleMotion {
     Rotation { axis: Vector3<f64>, scale: f64 },
     Translation { direction: Vector3<f64> },
+}
+
+impl SingleMotion {
+    /// The chain's motion at its coordinate `q[0]` (and rate, when given) into `out`, its
+    /// rotation by `rotation` (axis, angle): its subspace is the constant twist, its bias zero.
+    /// Callers that evaluate one chain many times find it once (`JointModel::single_motion`
+    /// reads the chain's expressions) and call this.
+    pub(crate) fn motion_into<T: Real>(
+        self,
+        q: &[T],
+        rates: Option<&[T]>,
+        rotation: fn(&Vector3<T>, T) -> Pose<T>,
+        out: &mut ChainMotion<T>,
+    ) {
+        out.reset(1);
+        let column = match self {
+            SingleMotion::Rotation { axis, scale } => {
+                let axis: Vector3<T> = axis.cast();
+                out.pose = rotation(&axis, constant::<T>(scale) * q[0]);
+                spatial::twist(axis * constant::<T>(scale), Vector3::zeros())
+            }
+            SingleMotion::Translation { direction } => {
+                let direction: Vector3<T> = direction.cast();
+                out.pose = spatial::translation(direction * q[0]);
+                spatial::twist(Vector3::zeros(), direction)
+            }
+        };
+        out.subspace.column_mut(0).copy_from(&column);
+        out.velocity = column * rates.map_or(T::zero(), |r| r[0]);
+    }
 }
 
 /// A dof chain at given coordinates and rates, in the joint's first frame, in the scalar `T`
@@ -297,7 +314,8 @@ impl<T: Real> ChainMotion<T> {
     /// The motion of a chain of `n` coordinates that does not move: identity, zero subspace.
     fn reset(&mut self, n: usize) {
         if self.subspace.ncols() == n {
-            self.subspace.fill(T::zero());
+            // As a slice: nalgebra's `fill` steps a strided iterator element by element.
+            self.subspace.as_mut_slice().fill(T::zero());
         } else {
             self.subspace = DMatrix::zeros(6, n);
         }

@@ -16,7 +16,7 @@ use crate::dynamics::algorithms::{bias_accelerations, forward_kinematics, Data};
 use crate::dynamics::model::Model;
 use crate::dynamics::scalar::{DynamicsScalar, NOT_DIFFERENTIABLE};
 use crate::kinematics::eval::EvalError;
-use crate::kinematics::model::{ChainMotion, JointModel};
+use crate::kinematics::model::{ChainMotion, JointModel, SingleMotion};
 use crate::spatial::{self, constant, Force, Motion, Real};
 use crate::spatial::{motion_to_parent, translation, Pose};
 
@@ -47,6 +47,10 @@ pub struct Constraints<T: Real = f64> {
     bases: Vec<Pose<T>>,
     /// Each loop's dof chain at the state (scratch kept between evaluations).
     chains: Vec<ChainMotion<T>>,
+    /// Each loop's chain when it is one rotation or translation linear in its coordinate
+    /// (`JointModel::single_motion`), found once here: reading the chain's expressions at
+    /// every evaluation followed pointers scattered over the model, one loop after another.
+    singles: Vec<Option<SingleMotion>>,
     /// The tree joints on the loops' paths to earth, and the fixed-frame twist of each of their
     /// velocities (by state velocity), computed once per state for every loop that shares them.
     path_joints: Vec<usize>,
@@ -101,6 +105,7 @@ impl<T: Real> Constraints<T> {
             points: vec![Vector3::zeros(); model.loops.len()],
             bases: vec![Pose::identity(); model.loops.len()],
             chains: vec![ChainMotion::default(); model.loops.len()],
+            singles: model.loops.iter().map(JointModel::single_motion).collect(),
             path_joints: path_joints(model),
             world_columns: vec![Motion::zeros(); model.nv],
         }
@@ -202,7 +207,8 @@ pub fn constraints_into<T: DynamicsScalar>(
         let with_bias = matches!(extent, Extent::WithBias | Extent::Motion);
         rows_after_residual(model, data, with_bias, c);
         if extent == Extent::Motion {
-            c.velocity.fill(T::zero());
+            // As slices: nalgebra's `fill` steps a strided iterator element by element.
+            c.velocity.as_mut_slice().fill(T::zero());
         } else {
             c.jacobian.mul_into(v, &mut c.velocity);
         }
@@ -300,6 +306,7 @@ fn loop_residual<T: DynamicsScalar>(
     if !ball {
         chain_motion_into(
             joint,
+            c.singles[k],
             &q[model.nq + offset..model.nq + offset + n],
             &v[model.nv + offset..model.nv + offset + n],
             &mut c.chains[k],
@@ -328,22 +335,27 @@ fn loop_residual<T: DynamicsScalar>(
 /// A loop's dof chain at its coordinates and rates: evaluated in `f64`, or in dual numbers for
 /// a chain of one rotation or translation (its rotation by the half-angle formula, whose
 /// derivative holds at zero: `spatial::smooth_rotation`), the others refused
-/// (`DynamicsScalar`).
+/// (`DynamicsScalar`). `single` is the chain's single motion, if it is one (`Constraints::singles`).
 fn chain_motion_into<T: DynamicsScalar>(
     joint: &JointModel,
+    single: Option<SingleMotion>,
     q: &[T],
     rates: &[T],
     out: &mut ChainMotion<T>,
 ) -> Result<(), EvalError> {
     if let (Some(q), Some(rates)) = (T::plain(q), T::plain(rates)) {
         if let Some(out) = T::plain_motion(out) {
-            return joint.chain_motion_into(q, Some(rates), out);
+            // The rotation `JointModel::chain_motion_into` takes for a single motion.
+            let Some(single) = single else {
+                return joint.chain_motion_into(q, Some(rates), out);
+            };
+            single.motion_into(q, Some(rates), spatial::rotation, out);
+            return Ok(());
         }
     }
-    match joint.single_motion_into(q, Some(rates), spatial::smooth_rotation, out) {
-        true => Ok(()),
-        false => Err(NOT_DIFFERENTIABLE),
-    }
+    let single = single.ok_or(NOT_DIFFERENTIABLE)?;
+    single.motion_into(q, Some(rates), spatial::smooth_rotation, out);
+    Ok(())
 }
 
 /// Loop `k`'s six rows of G and, `with_bias`, of γ, at the chain and point `loop_residual` left.
@@ -364,7 +376,7 @@ fn loop_rows<T: Real>(
     // Rates are taken at the loop point, in fixed axes.
     let own = if ball { 0 } else { joint.coordinate_count() };
     let block = &mut c.jacobian.blocks[k];
-    block.values.fill(T::zero());
+    block.values.as_mut_slice().fill(T::zero());
     for &(local, column, sign) in &c.path_signs[k] {
         let moved = spatial::shifted(&point, &c.world_columns[column]);
         block
