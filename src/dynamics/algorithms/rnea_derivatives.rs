@@ -389,8 +389,7 @@ impl RneaDerivatives {
                 self.coriolis[i] = CoriolisMatrix::zeros();
                 self.force[i] = Force::zeros();
             } else {
-                // The split form: about 70 products where `to_parent` takes about 85.
-                let inertia = body.rigid.to_parent_by_split(&world);
+                let inertia = body.rigid.to_parent(&world);
                 let momentum = inertia.times(&velocity);
                 self.inertia[i] = inertia;
                 self.coriolis[i] = CoriolisMatrix::new(&inertia, &velocity, &momentum);
