@@ -268,7 +268,7 @@ fn lift_transform<T: Real>(t: &Transform) -> Transform<T> {
 }
 
 /// R · Rot(e_k, θ) from sin θ and cos θ: column k stays, the two others turn in their plane.
-fn turn_columns<T: Real>(r: &Matrix3<T>, k: usize, sin: T, cos: T) -> Matrix3<T> {
+pub(crate) fn turn_columns<T: Real>(r: &Matrix3<T>, k: usize, sin: T, cos: T) -> Matrix3<T> {
     let (i, j) = ((k + 1) % 3, (k + 2) % 3);
     let (ri, rj) = (r.column(i), r.column(j));
     let mut out = *r;

@@ -14,10 +14,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::mass_factor::MassFactor;
-use super::rnea_derivatives::{check_supported, DerivativeError, RneaDerivatives};
-use super::{
-    aba_into, base_acceleration, crba_after_kinematics, joint_states, Data, DynamicsError,
-};
+use super::rnea_derivatives::{check_supported, joint_frames, DerivativeError, RneaDerivatives};
+use super::{aba_into, base_acceleration, crba_after_kinematics, Data, DynamicsError};
 use crate::dynamics::model::Model;
 use crate::spatial::Force;
 
@@ -91,7 +89,7 @@ impl AbaDerivatives {
         check_supported(model)?;
         let inverse = &mut self.inverse;
         if model.rotors.is_empty() {
-            joint_states(model, data, q, v)
+            joint_frames(model, data, q, v)
                 .map_err(|e| ForwardDerivativeError::Dynamics(DynamicsError::Evaluation(e)))?;
             let (factor, mass) = (&mut self.factor, &mut self.mass);
             let accelerations = &mut self.acceleration;

@@ -45,8 +45,8 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::mass_factor::MassFactor;
-use super::{base_acceleration, joint_states, Data};
-use crate::dynamics::joint::{JointType, Kernel};
+use super::{base_acceleration, Data};
+use crate::dynamics::joint::{turn_columns, Joint, JointType, Kernel};
 use crate::dynamics::model::Model;
 use crate::kinematics::eval::EvalError;
 use crate::spatial::{self, angular, Force, Motion, RigidInertia, Transform};
@@ -98,12 +98,37 @@ pub fn check_supported(model: &Model) -> Result<(), DerivativeError> {
     }
 }
 
+/// What the passes read of the joints at (q, v): their transforms and subspaces in `data`. A
+/// weld's, one rotation's or one translation's transform alone (`Joint::update_transform`:
+/// their subspaces are constant, and the velocities across them are formed in the fixed frame
+/// from the columns), a spherical or free joint's whole state at (q, v) (its transform comes
+/// with it). The velocities across the one-coordinate joints in `data` are left as they were.
+pub(super) fn joint_frames(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<(), EvalError> {
+    for &k in &model.dynamic_joints {
+        let joint = &model.joints[k];
+        let (q, state) = (&q[joint.q_offset..][..joint.nq()], &mut data.states[k]);
+        match joint.kernel {
+            Kernel::General => joint.update(q, &v[joint.v_offset..][..joint.nv()], state)?,
+            _ => joint.update_transform(q, state)?,
+        }
+    }
+    Ok(())
+}
+
 /// The derivatives of inverse dynamics and the scratch they are computed in; `new(&model)` once.
 pub struct RneaDerivatives {
     /// τ, ∂τ/∂q and ∂τ/∂v (nv × nv, column j the derivative along velocity j) after `compute`.
     pub tau: DVector<f64>,
     pub dtau_dq: DMatrix<f64>,
     pub dtau_dv: DMatrix<f64>,
+    /// Per joint, the axis k it turns about when its rotation is the turn about e_k alone
+    /// (`turning_axis`).
+    turning_axes: Vec<Option<usize>>,
     /// Per body (0 earth), in the fixed frame: pose, velocity, acceleration, then, after the
     /// pass back, the subtree's inertia, Coriolis matrix B and force.
     world: Vec<Transform>,
@@ -135,6 +160,7 @@ impl RneaDerivatives {
             tau: DVector::zeros(nv),
             dtau_dq: DMatrix::zeros(nv, nv),
             dtau_dv: DMatrix::zeros(nv, nv),
+            turning_axes: model.joints.iter().map(turning_axis).collect(),
             world: vec![Transform::identity(); n + 1],
             velocity: vec![Motion::zeros(); n + 1],
             acceleration: vec![Motion::zeros(); n + 1],
@@ -178,13 +204,14 @@ impl RneaDerivatives {
         base: Motion,
     ) -> Result<(), DerivativeError> {
         check_supported(model)?;
-        joint_states(model, data, q, v)?;
+        joint_frames(model, data, q, v)?;
         self.after_kinematics(model, data, (v, a), external, base);
         Ok(())
     }
 
-    /// `compute_with_base` when `data` already holds the joints' states at (q, v) (after
-    /// `aba_into`, say) and the model's joints are covered (`check_supported`).
+    /// `compute_with_base` when `data` already holds the joints' transforms and subspaces at q
+    /// (after `joint_frames` or `aba_into`, say) and the model's joints are covered
+    /// (`check_supported`).
     pub(super) fn after_kinematics(
         &mut self,
         model: &Model,
@@ -214,7 +241,7 @@ impl RneaDerivatives {
     /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
     /// q̈ into `accelerations`, the mass matrix into `mass` (between a velocity and its
     /// ancestors only) and its factor into `factor`, then τ, ∂τ/∂q and ∂τ/∂v at q̈ (the module's
-    /// documentation). `data` holds the joints' motions at (q, v); the model has no geared
+    /// documentation). `data` holds the joints' transforms at q; the model has no geared
     /// rotor (their efforts are not linear in the pass out's terms as written here). ∂τ/∂q and
     /// ∂τ/∂v are left by rows (entry (r, c) at c + r nv, their transposes as matrices), as the
     /// solves with M's factor take them (`MassFactor::solve_rows_negated_into`). False if the
@@ -308,7 +335,10 @@ impl RneaDerivatives {
             let joint = &model.joints[k];
             let (i, parent) = (joint.child, joint.dynamic_parent);
             let state = &data.states[k];
-            let world = self.world[parent] * state.transform;
+            let world = match self.turning_axes[k] {
+                Some(axis) => turned(&self.world[parent], &state.transform, axis),
+                None => self.world[parent] * state.transform,
+            };
             self.world[i] = world;
             let (parent_velocity, parent_acceleration) =
                 (self.velocity[parent], self.acceleration[parent]);
@@ -316,7 +346,16 @@ impl RneaDerivatives {
             let mut own_acceleration = Motion::zeros();
             for (c, column) in state.subspace.columns().iter().enumerate() {
                 let index = joint.v_offset + c;
-                let s = world.motion_to_parent(column);
+                let s = match joint.axis_rotation() {
+                    // [s e_k; 0] in the fixed frame is [s r_k; p × s r_k], r_k the k-th column
+                    // of the body's rotation: `motion_to_parent`'s numbers without its
+                    // products by zeros (9 products instead of 24).
+                    Some((axis, scale)) => {
+                        let w = world.rotation.column(axis) * scale;
+                        spatial::twist(w, world.translation.cross(&w))
+                    }
+                    None => world.motion_to_parent(column),
+                };
                 self.columns[index] = s;
                 own_velocity += s * v[index];
                 own_acceleration += s * a[index];
@@ -496,7 +535,8 @@ impl RneaDerivatives {
                 let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
                 let changes: [[f64; 2]; 6] =
                     std::array::from_fn(|m| [position_change[m], rate_change[m]]);
-                for &row in branch.iter().filter(|row| !own.contains(row)) {
+                // The branch lists the joint's own velocities first, then its ancestors'.
+                for &row in &branch[joint.nv()..] {
                     let s_row: &[f64; 6] = self.columns[row].as_ref();
                     let [by_position, by_rate] = paired_dot(s_row, &changes);
                     let at = row * row_stride + column * column_stride;
@@ -510,6 +550,34 @@ impl RneaDerivatives {
                 self.force[parent] += force;
             }
         }
+    }
+}
+
+/// The axis e_k a joint turns about when its transform's rotation is that turn alone: a
+/// rotation about x, y or z from a join frame parallel to its parent's (R_P = 1, as every
+/// joint of Talos's URDF), none on the child (see `Kernel::Rotation`).
+fn turning_axis(joint: &Joint) -> Option<usize> {
+    match &joint.kernel {
+        Kernel::Rotation {
+            terms,
+            aligned: Some(k),
+            after: None,
+            ..
+        } if terms[0] == Matrix3::identity() => Some(*k),
+        _ => None,
+    }
+}
+
+/// `parent * joint` for a joint whose rotation is a turn about e_k (`turning_axis`): the
+/// parent's rotation with its two other columns turned by the angle whose cosine and sine the
+/// joint's rotation holds (12 products instead of the product's 27; the same sums, the
+/// product's other terms being products by exact zeros and ones).
+fn turned(parent: &Transform, joint: &Transform, k: usize) -> Transform {
+    let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+    let (cos, sin) = (joint.rotation[(i, i)], joint.rotation[(j, i)]);
+    Transform {
+        rotation: turn_columns(&parent.rotation, k, sin, cos),
+        translation: parent.rotation * joint.translation + parent.translation,
     }
 }
 
