@@ -666,16 +666,11 @@ fn pure_moment<T: Real>(moment: &Vector3<T>) -> Force<T> {
 // UR5 and Talos (BENCHMARKS.md, "CRBA: the inertias' split").
 
 /// CRBA's scratch: per body its pose and composite inertia in the fixed frame, per velocity its
-/// motion column S and its composite momentum F = I_c S in the fixed frame.
+/// motion column in the fixed frame.
 pub struct MassScratch {
     world_transform: Vec<Transform>,
     composite: Vec<RigidInertia>,
     world_columns: Vec<Motion>,
-    momenta: Vec<Force>,
-    /// Per joint (index into `joints`), where the velocities of its subtree end, when every
-    /// joint's subtree owns the velocities from its own first one to there (a depth-first
-    /// numbering, as URDF's and most trees'); `None` otherwise.
-    subtree_ends: Option<Vec<usize>>,
 }
 
 impl MassScratch {
@@ -684,31 +679,8 @@ impl MassScratch {
             world_transform: vec![Transform::identity(); model.body_count() + 1],
             composite: vec![RigidInertia::zeros(); model.body_count() + 1],
             world_columns: vec![Motion::zeros(); model.nv],
-            momenta: vec![Force::zeros(); model.nv],
-            subtree_ends: contiguous_subtree_ends(model),
         }
     }
-}
-
-/// Per joint, the end of its subtree's velocities when they are the contiguous range from the
-/// joint's first velocity (see `MassScratch::subtree_ends`): from the leaves, each subtree's
-/// first and last velocities and their count, contiguous when the count spans the range.
-fn contiguous_subtree_ends(model: &Model) -> Option<Vec<usize>> {
-    let joints = &model.joints;
-    let mut first: Vec<usize> = joints.iter().map(|j| j.v_offset).collect();
-    let mut end: Vec<usize> = joints.iter().map(|j| j.v_offset + j.nv()).collect();
-    let mut count: Vec<usize> = joints.iter().map(|j| j.nv()).collect();
-    for &k in model.dynamic_joints.iter().rev() {
-        if count[k] != end[k] - first[k] || first[k] != joints[k].v_offset {
-            return None;
-        }
-        if let Some(p) = joints[k].dynamic_parent.checked_sub(1) {
-            first[p] = first[p].min(first[k]);
-            end[p] = end[p].max(end[k]);
-            count[p] += count[k];
-        }
-    }
-    Some(end)
 }
 
 /// The joint-space mass matrix M(q) (composite rigid bodies).
@@ -750,18 +722,12 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
         world_transform,
         composite,
         world_columns,
-        momenta,
-        subtree_ends,
     } = &mut data.mass_scratch;
     for &k in &model.dynamic_joints {
         let joint = &model.joints[k];
         let state = &data.states[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
-        let world = if parent == 0 {
-            state.transform
-        } else {
-            world_transform[parent] * state.transform
-        };
+        let world = world_transform[parent] * state.transform;
         world_transform[i] = world;
         let own = &model.dynamic_bodies[i - 1];
         composite[i] = if own.massless {
@@ -784,51 +750,26 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
         }
     }
     // From the leaves: a joint's composite is whole when the pass reaches it (its children come
-    // after it), so its momenta F = I_c S are formed and it is handed to its parent in one visit.
-    // Entry (a, c) for a velocity a of a joint and c of it or of a descendant is S_a · F_c.
+    // after it), so its columns are written and it is handed to its parent in one visit.
     let nv = model.nv;
     let entries = mass.as_mut_slice();
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
-        let own_velocities = joint.v_offset..joint.v_offset + joint.nv();
-        for column in own_velocities.clone() {
-            momenta[column] = composite[i].times(&world_columns[column]);
-        }
-        match subtree_ends {
-            // The subtree's momenta are contiguous, and so is the lower triangle's part of
-            // column a (column-major storage): one pass over each, without indices to check.
-            Some(ends) => {
-                for row in own_velocities {
-                    let s = &world_columns[row];
-                    let (head, tail) = entries.split_at_mut((row + 1) * nv);
-                    let lower = &mut head[row * nv + row..row * nv + ends[k]];
-                    for (entry, force) in lower.iter_mut().zip(&momenta[row..ends[k]]) {
-                        *entry = s.dot(force);
-                    }
-                    // The upper triangle's row a, past the diagonal, from the column.
-                    let upper = tail.iter_mut().skip(row).step_by(nv);
-                    for (entry, &value) in upper.zip(&lower[1..]) {
-                        *entry = value;
-                    }
-                }
-            }
-            // The joint's branch lists its own and its ancestors' velocities.
-            None => {
-                let branch = model.branch_velocities(k);
-                for column in own_velocities {
-                    let force = &momenta[column];
-                    for &row in branch {
-                        let value = world_columns[row].dot(force);
-                        entries[row + column * nv] = value;
-                        entries[column + row * nv] = value;
-                    }
-                }
+        let own = composite[i];
+        // The joint's branch lists its own and its ancestors' velocities.
+        let branch = model.branch_velocities(k);
+        for column in joint.v_offset..joint.v_offset + joint.nv() {
+            let force = own.times(&world_columns[column]);
+            // Column-major storage.
+            for &row in branch {
+                let value = world_columns[row].dot(&force);
+                entries[row + column * nv] = value;
+                entries[column + row * nv] = value;
             }
         }
         if parent != 0 {
-            let (before, after) = composite.split_at_mut(i);
-            before[parent] += after[0];
+            composite[parent] += own;
         }
     }
     add_rotors_to_mass(model, data, mass);
