@@ -778,7 +778,12 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
         let joint = &model.joints[k];
         let state = &data.states[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
-        let world = world_transform[parent] * state.transform;
+        // The fixed frame's own pose is the identity: no product at the root.
+        let world = if parent == 0 {
+            state.transform
+        } else {
+            world_transform[parent] * state.transform
+        };
         world_transform[i] = world;
         let own = &model.dynamic_bodies[i - 1];
         composite[i] = if own.massless {
@@ -807,7 +812,7 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
     for &k in model.dynamic_joints.iter().rev() {
         let joint = &model.joints[k];
         let (i, parent) = (joint.child, joint.dynamic_parent);
-        let own = composite[i];
+        let own = &composite[i];
         // The joint's branch lists its own and its ancestors' velocities.
         let branch = model.branch_velocities(k);
         for column in joint.v_offset..joint.v_offset + joint.nv() {
@@ -820,7 +825,8 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
             }
         }
         if parent != 0 {
-            composite[parent] += own;
+            let (before, after) = composite.split_at_mut(i);
+            before[parent] += after[0];
         }
     }
     add_rotors_to_mass(model, data, mass);
