@@ -168,6 +168,15 @@ impl<T: Real> Transform<T> {
         twist(w, self.rotation * linear(m) + self.translation.cross(&w))
     }
 
+    /// `motion_to_parent` of a turn about the child's axis e_k at rate `scale`, [s e_k; 0]:
+    /// [s r_k; p × s r_k] with r_k the k-th column of the rotation, without the products by the
+    /// column's zeros (9 products instead of 24).
+    #[inline]
+    pub fn axis_motion_to_parent(&self, axis: usize, scale: T) -> Motion<T> {
+        let w = self.rotation.column(axis) * scale;
+        twist(w, self.translation.cross(&w))
+    }
+
     /// Inertia given in this (child) frame, expressed in the parent frame, by 3 × 3 blocks:
     /// with I = [A B; Bᵀ D], rotating gives A₁ = RARᵀ, B₁ = RBRᵀ, D₁ = RDRᵀ, and moving the
     /// origin by p gives B' = B₁ + p̂D₁ and A' = A₁ − B₁p̂ − (B'p̂)ᵀ (= A₁ − B₁p̂ + p̂B₁ᵀ − p̂D₁p̂),

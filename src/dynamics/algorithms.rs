@@ -792,11 +792,8 @@ pub fn crba_after_kinematics(model: &Model, data: &mut Data, mass: &mut DMatrix<
             own.rigid.to_parent_by_split(&world)
         };
         match joint.axis_rotation() {
-            // [s e_k; 0] in the fixed frame is [s r_k; p × s r_k], r_k the k-th column of the
-            // body's rotation: `motion_to_parent`'s numbers without its products by zeros.
             Some((k, scale)) => {
-                let w = world.rotation.column(k) * scale;
-                world_columns[joint.v_offset] = spatial::twist(w, world.translation.cross(&w));
+                world_columns[joint.v_offset] = world.axis_motion_to_parent(k, scale)
             }
             None => {
                 for (r, column) in state.subspace.columns().iter().enumerate() {

@@ -347,13 +347,7 @@ impl RneaDerivatives {
             for (c, column) in state.subspace.columns().iter().enumerate() {
                 let index = joint.v_offset + c;
                 let s = match joint.axis_rotation() {
-                    // [s e_k; 0] in the fixed frame is [s r_k; p × s r_k], r_k the k-th column
-                    // of the body's rotation: `motion_to_parent`'s numbers without its
-                    // products by zeros (9 products instead of 24).
-                    Some((axis, scale)) => {
-                        let w = world.rotation.column(axis) * scale;
-                        spatial::twist(w, world.translation.cross(&w))
-                    }
+                    Some((axis, scale)) => world.axis_motion_to_parent(axis, scale),
                     None => world.motion_to_parent(column),
                 };
                 self.columns[index] = s;
