@@ -29,7 +29,8 @@ bench/pinocchio_fixtures.py copies into tests/fixtures/urdf/), fixed base, gravi
 -z, 256 random states cycled (Pinocchio: coordinates within the joint limits; lsdc: in [-pi, pi]);
 steps of RK4 at 1 ms from rest at q = 0, started again every 1,000 steps outside the timing
 (MuJoCo: the URDF without visual or collision geometry, joint limits off, so there are no
-contacts nor limit rows; lsdc: the stiffness check off); the rows of N = 10, 20, 40, 70, 100 four-bars of
+contacts nor limit rows; lsdc: the stiffness check off and the joints' limits off, so no
+stops); the rows of N = 10, 20, 40, 70, 100 four-bars of
 benches/common/rows.rs at their initial state (cranks hanging, turning at 12 rad/s): MuJoCo's
 `mj_forward` with each closing revolute as a `connect` equality (the three rows of a point
 joint; the hinges' axes are all z), lsdc's right-hand side (`MechanicalSystem::derivative`);

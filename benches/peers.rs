@@ -13,7 +13,8 @@
 //!   `NAME/aba_derivatives` (∂q̈/∂q, ∂q̈/∂v, M⁻¹) on the same states, beside Pinocchio's
 //!   `computeRNEADerivatives` and `computeABADerivatives`;
 //! - `NAME/step`: one step of RK4 at 1 ms of the robot falling under gravity (`Simulator::step`,
-//!   the stiffness check off: the integrator's work alone, as MuJoCo's `mj_step`), started again
+//!   the stiffness check off and the joints' limits off: the integrator's work alone on the
+//!   problem MuJoCo's `mj_step` solves), started again
 //!   from rest at q = 0 every 1,000 steps, outside the timed steps;
 //! - `rowN/evaluation`: one right-hand side of the row of N parallelogram four-bars at its
 //!   initial state (`MechanicalSystem::derivative`: the tree, the loops' rows and their solve),
@@ -189,8 +190,12 @@ fn step_case<'a>(prepared: &'a Prepared, start: &'a [Vec<f64>; 2]) -> Case<'a> {
 }
 
 /// The settings of a step case: RK4 at 1 ms, no stiffness check, outputs and steps enough for
-/// any batch.
+/// any batch; and the joints' limits off, as MuJoCo's side has them (`bench/peers.py`): the
+/// URDF's limits are stops in lsdc, and Panda's fingers start on theirs (lower limit 0), so
+/// with them lsdc would hold the fingers at rest (rows solved at every evaluation) where MuJoCo
+/// lets them move.
 fn stepping(mut prepared: Prepared) -> Prepared {
+    prepared.model.stops.clear();
     let settings = &mut prepared.settings;
     settings.integrator = Integrator::Rk4;
     settings.step = Some(1e-3);
