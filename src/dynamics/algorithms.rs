@@ -357,10 +357,13 @@ pub fn transmitted_wrenches(model: &Model, data: &Data, external: &[Force]) -> V
     for &k in &model.dynamic_joints {
         merged[k] = false;
     }
+    // Earth's acceleration as the recursions have it: −g, the weights' field.
+    acceleration[0] = base_acceleration(model);
     for (k, joint) in model.joints.iter().enumerate() {
         let i = joint.child;
         if merged[k] {
-            // A merged body moves with its anchor: its transform is its pose there.
+            // A merged body moves with its anchor (earth for a base welded to it): its
+            // transform is its pose there.
             acceleration[i] = data.states[k]
                 .transform
                 .motion_to_child(&acceleration[joint.dynamic_parent]);

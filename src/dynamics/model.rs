@@ -462,11 +462,13 @@ fn build_parts(
     if !errors.is_empty() {
         return Err(errors);
     }
+    let rotor_carriers: Vec<usize> = rotors.iter().map(|r| r.carrier).collect();
     let merged = welds::merge(
         &mut joints,
         &bodies,
         &applied,
         &link_efforts,
+        &rotor_carriers,
         !loops.is_empty() || !contacts.is_empty(),
     );
     refuse_rotors_on_welds(mechanism, &joints, &merged.dynamic_joints, &rotors)?;

@@ -7,6 +7,12 @@
 //! applied to it, no loop closes on it, and every joint below it is a one-rotation,
 //! one-translation or weld kernel (so the anchor's offset folds into their constant terms).
 //!
+//! The anchor may be earth: a fixed-base robot's URDF welds its base link to the world, and that
+//! body, at rest whatever the state, would otherwise cost a joint's transform, a world pose and
+//! a composite inertia in every pass (one joint in seven on UR5). Its inertia then counts
+//! nowhere in the algorithms, as it takes no part in the motion; a body that carries a rotor is
+//! kept (the rotor's spin is the algorithms' business, and earth carries nothing).
+//!
 //! Every joint's transform is then relative to its `dynamic_parent` (the anchor of its parent):
 //! for a merged body, its constant pose in its anchor. The merged bodies keep their world poses,
 //! velocities and names; only the algorithms' passes skip them.
@@ -32,12 +38,13 @@ fn mergeable(
     joints: &[Joint],
     applied: &[AppliedEffort],
     link_efforts: &[LinkEffort],
+    rotor_carriers: &[usize],
     has_loops: bool,
 ) -> bool {
     let joint = &joints[k];
     let child = joint.child;
     !has_loops
-        && joint.parent != 0
+        && (joint.parent != 0 || !rotor_carriers.contains(&child))
         && matches!(joint.kernel, Kernel::Weld { .. })
         && !applied.iter().any(|e| e.body == child)
         && !link_efforts.iter().any(|e| e.joint == k)
@@ -53,6 +60,7 @@ pub fn merge(
     bodies: &[BodyInertia],
     applied: &[AppliedEffort],
     link_efforts: &[LinkEffort],
+    rotor_carriers: &[usize],
     has_loops: bool,
 ) -> Merged {
     let n = joints.len();
@@ -62,7 +70,7 @@ pub fn merge(
     for k in 0..n {
         let (parent, child) = (joints[k].parent, joints[k].child);
         let parent_offset = offsets[parent];
-        if mergeable(k, joints, applied, link_efforts, has_loops) {
+        if mergeable(k, joints, applied, link_efforts, rotor_carriers, has_loops) {
             let Kernel::Weld { transform } = joints[k].kernel else {
                 unreachable!("mergeable welds only")
             };
@@ -80,10 +88,10 @@ pub fn merge(
     let mut dynamic_bodies: Vec<BodyInertia> = bodies.to_vec();
     for k in (0..n).filter(|&k| merged[k]).rev() {
         let child = joints[k].child;
-        let moved = bodies[child - 1].rigid.to_parent(&offsets[child]);
-        let target = &mut dynamic_bodies[anchor[child] - 1];
-        if !bodies[child - 1].massless {
-            add_inertia(target, moved);
+        // Earth (anchor 0) takes no inertia: it does not move.
+        if anchor[child] != 0 && !bodies[child - 1].massless {
+            let moved = bodies[child - 1].rigid.to_parent(&offsets[child]);
+            add_inertia(&mut dynamic_bodies[anchor[child] - 1], moved);
         }
         dynamic_bodies[child - 1] = BodyInertia {
             mass: 0.0,
