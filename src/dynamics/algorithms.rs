@@ -627,7 +627,10 @@ fn aba_backward_axis_step<T: Real>(
     let joint = &model.joints[k];
     let (i, parent) = (joint.child, joint.dynamic_parent);
     let s: T = constant(scale);
-    let inertia = data.articulated[i];
+    // The child's articulated inertia is read in place (the parent's, before it, is written):
+    // no copy of its 36 entries.
+    let (before, after) = data.articulated.split_at_mut(i);
+    let inertia = &after[0];
     let u: Force<T> = inertia.column(axis) * s;
     let d = u[axis] * s;
     if !(d.abs() > constant(1e-300) && d.is_finite()) {
@@ -639,9 +642,9 @@ fn aba_backward_axis_step<T: Real>(
     data.d_inverse[i][(0, 0)] = d_inverse;
     data.u_vector[i][0] = u_scalar;
     if parent != 0 {
-        // Ia − W Uᵀ and pa + Ia c + W u, with W = U D⁻¹.
+        // Ia − W Uᵀ and pa + Ia c + W u, with W = U D⁻¹: every entry of `reduced` is written.
         let w = u * d_inverse;
-        let mut reduced = inertia;
+        let mut reduced = Inertia::<T>::zeros();
         for column in 0..6 {
             for row in 0..=column {
                 let value = inertia[(row, column)] - w[row] * u[column];
@@ -651,7 +654,7 @@ fn aba_backward_axis_step<T: Real>(
         }
         let transform = &data.states[k].transform;
         let handed = data.bias[i] + reduced * data.coriolis[i] + w * u_scalar;
-        data.articulated[parent] += transform.inertia_to_parent(&reduced);
+        before[parent] += transform.inertia_to_parent(&reduced);
         data.bias[parent] += transform.force_to_parent(&handed);
     }
     Ok(())

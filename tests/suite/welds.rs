@@ -129,8 +129,8 @@ join [0, 0, 0.2] ++ 1 @ base and upper with geared_revolute",
     };
     let simulate = |text: &str| {
         let compilation = compile_text("geared_arm.lsd", text, None, &options);
-        let mechanism = (compilation.mechanism)
-            .unwrap_or_else(|| panic!("{:?}", compilation.diagnostics));
+        let mechanism =
+            (compilation.mechanism).unwrap_or_else(|| panic!("{:?}", compilation.diagnostics));
         let prepared = prepare(&mechanism, &[], &Settings::default())
             .unwrap_or_else(|d| panic!("{:?}", d[0].message));
         let simulation = run(&prepared, &mut |_| {});
