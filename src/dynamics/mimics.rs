@@ -7,7 +7,9 @@
 //! follower's row m times its leader's, so the equations of motion reduce to
 //! (Sᵀ M S) u̇ = Sᵀ (τ − b), exact and symmetric positive definite on a tree, and the
 //! accelerations are S u̇: the response X = S (SᵀMS)⁻¹ Sᵀ (`response`), on which the contacts'
-//! rows and the coordinates held at rest are solved. The state keeps every coordinate, so outputs, energy and the
+//! rows and the coordinates held at rest are solved. Where nothing else needs the mass matrix,
+//! the same accelerations come from the articulated-body algorithm and the couplings' forces
+//! on its articulated inertias (`coupled_aba`), the followers' set from their leaders'. The state keeps every coordinate, so outputs, energy and the
 //! algorithms see the follower as any other joint; since the accelerations satisfy the coupling
 //! exactly, q_f − m q_l − o is a linear invariant of the equations of motion, which every
 //! Runge–Kutta and Rosenbrock method preserves: it stays at round-off over a run once the start

@@ -24,6 +24,10 @@ pub mod contacts;
 #[cfg(not(lsdc_internals))]
 pub(crate) mod contacts;
 #[cfg(lsdc_internals)]
+pub mod coupled_aba;
+#[cfg(not(lsdc_internals))]
+pub(crate) mod coupled_aba;
+#[cfg(lsdc_internals)]
 pub mod dense;
 #[cfg(not(lsdc_internals))]
 pub(crate) mod dense;

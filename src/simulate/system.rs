@@ -32,6 +32,7 @@ use crate::dynamics::algorithms::{
     rnea_after_kinematics, DynamicsError,
 };
 use crate::dynamics::contacts;
+use crate::dynamics::coupled_aba;
 use crate::dynamics::driven_points;
 use crate::dynamics::efforts::{evaluate_into, Declared, Efforts};
 use crate::dynamics::loops::planar_closure::PlanarClosure;
@@ -242,9 +243,12 @@ impl<'m> MechanicalSystem<'m> {
         Ok(())
     }
 
-    /// Whether this tree's accelerations come from its mass matrix ([`needs_mass_matrix`]).
+    /// Whether this tree's accelerations come from its mass matrix ([`needs_mass_matrix`]), or
+    /// from it in the planar form when the tree has mimic couplings (the planar ABA leaves no
+    /// articulated inertias to solve their forces on).
     fn needs_mass_matrix(&self) -> bool {
-        needs_mass_matrix(self.model)
+        let model = self.model;
+        needs_mass_matrix(model) || (!model.mimics.is_empty() && self.planar_here().is_some())
     }
 
     /// The accelerations of a tree from its mass matrix, before the rows (`solve_rows`): M from
@@ -509,6 +513,17 @@ impl<'m> MechanicalSystem<'m> {
                 return Err(self.dynamics_error(&e));
             }
         }
+        let by_aba = !(native || model.has_loops())
+            && !self.drives_by_subtrees()
+            && !self.needs_mass_matrix()
+            && self.planar_here().is_none();
+        if by_aba && !model.mimics.is_empty() {
+            let scratch = &mut self.scratch;
+            let (data, coupling) = (&scratch.data, &mut scratch.coupling);
+            if !coupled_aba::couple_after_aba(model, data, accelerations.as_mut_slice(), coupling) {
+                return Err(SystemError::SingularMassMatrix);
+            }
+        }
         // The constraint stack (`stack`): the loops' block by its sparse factorisation, then
         // the rows of the contacts, the couplings with loops and the coordinates held or
         // driven, on the response of the loops' block or of the tree's base solve above: the
@@ -753,12 +768,10 @@ pub type RunObserver<'o, 'm> =
 
 /// Whether the accelerations of a tree need the mass matrix rather than the articulated-body
 /// algorithm: geared rotors (which ABA counts as well; runs have taken them through M, whose
-/// results the examples' expected outputs hold), mimic couplings (eliminated through M),
-/// joint friction (held through M while sticking) or contacts (whose rows are solved on M⁻¹).
+/// results the examples' expected outputs hold), joint friction (held through M while
+/// sticking) or contacts (whose rows are solved on M⁻¹). Mimic couplings alone take ABA and
+/// their forces on its articulated inertias (`coupled_aba`).
 fn needs_mass_matrix(model: &Model) -> bool {
-    let extended = !model.rotors.is_empty()
-        || !model.mimics.is_empty()
-        || !model.frictions.is_empty()
-        || model.has_contacts();
+    let extended = !model.rotors.is_empty() || !model.frictions.is_empty() || model.has_contacts();
     !model.has_loops() && extended
 }

@@ -11,6 +11,7 @@ use crate::dynamics::algorithms::rnea_derivatives::RneaDerivatives;
 use crate::dynamics::algorithms::Data;
 use crate::dynamics::compiled::EffortScratch;
 use crate::dynamics::contacts::ContactRows;
+use crate::dynamics::coupled_aba::CouplingScratch;
 use crate::dynamics::driven_points::PointRows;
 use crate::dynamics::effort_derivatives::EffortDerivatives;
 use crate::dynamics::efforts::Efforts;
@@ -72,6 +73,8 @@ pub struct Scratch {
     pub(in crate::simulate) coupled: DMatrix<f64>,
     pub(in crate::simulate) response: Response,
     pub(in crate::simulate) response_here: bool,
+    /// The mimic couplings' forces after ABA (`coupled_aba`).
+    pub(in crate::simulate) coupling: CouplingScratch,
     /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
     /// loops, coordinates held or driven), and in the projections onto the velocity rows and
     /// onto the position rows; the coordinates held at the evaluation (the drives' first), and
@@ -144,6 +147,7 @@ impl Scratch {
             },
             response: Response::default(),
             response_here: false,
+            coupling: CouplingScratch::new(model),
             rows: RowStack::new(model),
             velocity_stack: RowStack::new(model),
             position_stack: RowStack::new(model),

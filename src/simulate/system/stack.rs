@@ -9,7 +9,8 @@
 //!    accelerations under the efforts, the allowed motions N that give X = N (NᵀMN)⁻¹Nᵀ and,
 //!    for the reactions, the loops' multipliers from M a − f ([`MechanicalSystem::
 //!    loop_block_multipliers`]). A tree has no such block: its X is M⁻¹, or the mimic
-//!    couplings' basis S in S (SᵀMS)⁻¹Sᵀ (formed by its base solve, `mass_accelerations`);
+//!    couplings' basis S in S (SᵀMS)⁻¹Sᵀ (formed by its base solve where that takes the
+//!    mass matrix, `mass_accelerations`, otherwise when rows need it, `form_response_at`);
 //! 2. to 4. the contacts' kept rows, the mimic couplings with loops and the coordinates held
 //!    (driven, resting on a stop, stuck by friction), solved together on X
 //!    (`holding::solve_rows`, `rows::RowStack::solve`).
