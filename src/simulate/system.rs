@@ -251,6 +251,78 @@ impl<'m> MechanicalSystem<'m> {
         needs_mass_matrix(model) || (!model.mimics.is_empty() && self.planar_here().is_some())
     }
 
+    /// The accelerations of a tree by the articulated-body algorithm under the efforts (on the
+    /// kinematics they were evaluated on; without efforts, on the joints' motions alone), the
+    /// joints' viscous friction −c q̇ among the generalised forces (joints without dry friction
+    /// have no phases: `needs_mass_matrix`), then the mimic couplings' forces (`coupled_aba`).
+    fn articulated_accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        accelerations: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let model = self.model;
+        let reads_efforts = self.reads_efforts();
+        if reads_efforts {
+            self.evaluate_efforts(t, q, v)?;
+        }
+        // The efforts' generalised forces, with the friction's when there is any.
+        let mut with_friction = std::mem::take(&mut self.scratch.tau_with_friction);
+        if !model.frictions.is_empty() {
+            with_friction.copy_from(match reads_efforts {
+                true => &self.scratch.efforts.tau,
+                false => &self.scratch.no_efforts.tau,
+            });
+            self.scratch.friction_power = self.add_friction(v, &mut with_friction);
+        }
+        let scratch = &mut self.scratch;
+        let efforts = match reads_efforts {
+            true => &scratch.efforts,
+            false => &scratch.no_efforts,
+        };
+        let tau = match model.frictions.is_empty() {
+            true => efforts.tau.as_slice(),
+            false => with_friction.as_slice(),
+        };
+        let solved = match reads_efforts {
+            // ABA goes on from the kinematics the efforts were computed from.
+            true => aba_after_kinematics(
+                model,
+                &mut scratch.data,
+                tau,
+                &efforts.external,
+                accelerations,
+            ),
+            // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
+            false => aba_into(
+                model,
+                &mut scratch.data,
+                q,
+                v,
+                tau,
+                &efforts.external,
+                accelerations,
+            ),
+        };
+        self.scratch.tau_with_friction = with_friction;
+        if let Err(e) = solved {
+            return Err(self.dynamics_error(&e));
+        }
+        let scratch = &mut self.scratch;
+        if !model.mimics.is_empty()
+            && !coupled_aba::couple_after_aba(
+                model,
+                &scratch.data,
+                accelerations.as_mut_slice(),
+                &mut scratch.coupling,
+            )
+        {
+            return Err(SystemError::SingularMassMatrix);
+        }
+        Ok(())
+    }
+
     /// The accelerations of a tree from its mass matrix, before the rows (`solve_rows`): M from
     /// CRBA and the bias b from RNEA (both count the rotors), the slipping joints' friction
     /// added to the efforts τ, a₀ = X (τ − b) with X the response (M⁻¹, or with the mimic
@@ -479,50 +551,8 @@ impl<'m> MechanicalSystem<'m> {
             self.planar_tree_accelerations(planar, t, (q, v), &mut accelerations)?;
         } else if self.needs_mass_matrix() {
             self.mass_accelerations(t, q, v, &mut accelerations)?;
-        } else if self.reads_efforts() {
-            // ABA goes on from the kinematics the efforts were computed from.
-            self.evaluate_efforts(t, q, v)?;
-            let (tau, external) = (
-                self.scratch.efforts.tau.as_slice(),
-                &self.scratch.efforts.external,
-            );
-            if let Err(e) = aba_after_kinematics(
-                model,
-                &mut self.scratch.data,
-                tau,
-                external,
-                &mut accelerations,
-            ) {
-                return Err(self.dynamics_error(&e));
-            }
         } else {
-            // Without efforts to evaluate, ABA needs no world poses: skip the kinematics.
-            let (tau, external) = (
-                self.scratch.no_efforts.tau.as_slice(),
-                &self.scratch.no_efforts.external,
-            );
-            if let Err(e) = aba_into(
-                model,
-                &mut self.scratch.data,
-                q,
-                v,
-                tau,
-                external,
-                &mut accelerations,
-            ) {
-                return Err(self.dynamics_error(&e));
-            }
-        }
-        let by_aba = !(native || model.has_loops())
-            && !self.drives_by_subtrees()
-            && !self.needs_mass_matrix()
-            && self.planar_here().is_none();
-        if by_aba && !model.mimics.is_empty() {
-            let scratch = &mut self.scratch;
-            let (data, coupling) = (&scratch.data, &mut scratch.coupling);
-            if !coupled_aba::couple_after_aba(model, data, accelerations.as_mut_slice(), coupling) {
-                return Err(SystemError::SingularMassMatrix);
-            }
+            self.articulated_accelerations(t, q, v, &mut accelerations)?;
         }
         // The constraint stack (`stack`): the loops' block by its sparse factorisation, then
         // the rows of the contacts, the couplings with loops and the coordinates held or
@@ -768,10 +798,13 @@ pub type RunObserver<'o, 'm> =
 
 /// Whether the accelerations of a tree need the mass matrix rather than the articulated-body
 /// algorithm: geared rotors (which ABA counts as well; runs have taken them through M, whose
-/// results the examples' expected outputs hold), joint friction (held through M while
-/// sticking) or contacts (whose rows are solved on M⁻¹). Mimic couplings alone take ABA and
-/// their forces on its articulated inertias (`coupled_aba`).
+/// results the examples' expected outputs hold), dry friction or a driven joint's friction
+/// (held through M while sticking, or by the drive's row) or contacts (whose rows are solved
+/// on M⁻¹). Viscous friction alone is a generalised force, and mimic couplings take their
+/// forces on ABA's articulated inertias (`coupled_aba`).
 fn needs_mass_matrix(model: &Model) -> bool {
-    let extended = !model.rotors.is_empty() || !model.frictions.is_empty() || model.has_contacts();
+    let phased = |f: &crate::dynamics::friction::Friction| f.dry != 0.0 || f.driven;
+    let extended =
+        !model.rotors.is_empty() || model.frictions.iter().any(phased) || model.has_contacts();
     !model.has_loops() && extended
 }

@@ -73,8 +73,10 @@ pub struct Scratch {
     pub(in crate::simulate) coupled: DMatrix<f64>,
     pub(in crate::simulate) response: Response,
     pub(in crate::simulate) response_here: bool,
-    /// The mimic couplings' forces after ABA (`coupled_aba`).
+    /// The mimic couplings' forces after ABA (`coupled_aba`), and the generalised forces with
+    /// the joints' viscous friction that ABA takes.
     pub(in crate::simulate) coupling: CouplingScratch,
+    pub(in crate::simulate) tau_with_friction: DVector<f64>,
     /// The rows solved on the response (`rows`): at each evaluation (contacts, couplings with
     /// loops, coordinates held or driven), and in the projections onto the velocity rows and
     /// onto the position rows; the coordinates held at the evaluation (the drives' first), and
@@ -148,6 +150,7 @@ impl Scratch {
             response: Response::default(),
             response_here: false,
             coupling: CouplingScratch::new(model),
+            tau_with_friction: DVector::zeros(model.velocities()),
             rows: RowStack::new(model),
             velocity_stack: RowStack::new(model),
             position_stack: RowStack::new(model),
