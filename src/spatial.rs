@@ -289,14 +289,13 @@ impl RigidInertia {
         let p = t.translation;
         let h1 = r * self.first;
         let m = self.mass;
-        let rj = r * self.rotational;
+        let rotated = rotate_symmetric(r, &self.rotational);
         let diagonal = 2.0 * h1.dot(&p) + m * p.norm_squared();
-        // (R J) Rᵀ is symmetric: compute the upper triangle only.
+        // Symmetric: the upper triangle only, mirrored.
         let mut rotational = Matrix3::zeros();
         for i in 0..3 {
             for j in i..3 {
-                let rotated = rj.row(i).dot(&r.row(j));
-                let value = rotated - p[i] * h1[j] - h1[i] * p[j] - m * p[i] * p[j]
+                let value = rotated[(i, j)] - p[i] * h1[j] - h1[i] * p[j] - m * p[i] * p[j]
                     + if i == j { diagonal } else { 0.0 };
                 rotational[(i, j)] = value;
                 rotational[(j, i)] = value;
