@@ -7,27 +7,42 @@
 //! n³/3 and its solve 2 n². The matrices the derivatives solve with (∂τ/∂q, ∂τ/∂v, the identity)
 //! share M's pattern, zero between velocities of separate trees (a fixed base's branches, Talos's
 //! legs and upper body, never meet): a row's operations run over its own tree's columns only.
+//!
+//! The factor numbers the velocities depth first (its *order*), whatever the model's numbering:
+//! the bodies are numbered breadth first, which interleaves separate branches (Talos's legs and
+//! upper body take turns), so that a subtree's or a tree's velocities would span almost all
+//! columns. Depth first, each subtree and each tree is one contiguous span, and the solves by
+//! rows run over it alone.
 
 use nalgebra::DMatrix;
 
 use crate::dynamics::model::Model;
 
 /// The factor and the tree of velocities it follows; `new(&model)` once, `factor` per mass
-/// matrix.
+/// matrix. Its fields are indexed by places in its depth-first order (the module's
+/// documentation), not by velocities.
 pub struct MassFactor {
-    /// Per velocity i, `ancestors[start[i]..start[i + 1]]` its ancestors from its parent up, and
-    /// `lower` at the same places L_ij along them.
+    /// The velocity at each place, and each velocity's place; whether every velocity is at its
+    /// own place (a chain, or a model numbered depth first), where the copies between the two
+    /// orders are skipped.
+    order: Vec<usize>,
+    place: Vec<usize>,
+    in_order: bool,
+    /// Per place i, `ancestors[start[i]..start[i + 1]]` its ancestors' places from its parent
+    /// up, and `lower` at the same places L_ij along them.
     start: Vec<usize>,
     ancestors: Vec<usize>,
     lower: Vec<f64>,
-    /// 1 / D_ii per velocity.
+    /// 1 / D_ii per place.
     inverse_diagonal: Vec<f64>,
-    /// Per velocity, one past the last of its descendants, and its root (the first velocity of
-    /// the root's tree, whose others are numbered after it).
+    /// Per place, one past the last of its descendants, and its root (the first place of its
+    /// tree, whose others follow it).
     subtree_end: Vec<usize>,
     root: Vec<usize>,
-    /// A matrix by rows, for `solve_negated`.
+    /// A matrix by rows in the factor's order, for `solve_negated` and `inverse_into`, and a
+    /// vector in that order, for `solve`.
     rows: Vec<f64>,
+    vector: Vec<f64>,
 }
 
 impl MassFactor {
@@ -51,13 +66,21 @@ impl MassFactor {
                 };
             }
         }
+        let order = depth_first(&parent);
+        let mut place = vec![0; nv];
+        for (at, &velocity) in order.iter().enumerate() {
+            place[velocity] = at;
+        }
+        let parent: Vec<Option<usize>> = (order.iter())
+            .map(|&velocity| parent[velocity].map(|p| place[p]))
+            .collect();
         let mut start = vec![0];
         let mut ancestors = Vec::new();
         let mut root: Vec<usize> = (0..nv).collect();
         for (i, &above) in parent.iter().enumerate() {
             let mut next = above;
             while let Some(j) = next {
-                debug_assert!(j < i, "velocities are numbered parents first");
+                debug_assert!(j < i, "places are numbered parents first");
                 ancestors.push(j);
                 root[i] = j;
                 next = parent[j];
@@ -70,7 +93,14 @@ impl MassFactor {
                 subtree_end[j] = subtree_end[j].max(subtree_end[i]);
             }
         }
+        let in_order = order
+            .iter()
+            .enumerate()
+            .all(|(at, &velocity)| at == velocity);
         MassFactor {
+            order,
+            place,
+            in_order,
             start,
             lower: vec![0.0; ancestors.len()],
             ancestors,
@@ -78,7 +108,15 @@ impl MassFactor {
             subtree_end,
             root,
             rows: vec![0.0; nv * nv],
+            vector: vec![0.0; nv],
         }
+    }
+
+    /// Each velocity's place in the factor's order: row r of a matrix given to
+    /// `solve_rows_negated_into` is at `place[r]` nv, its entry along velocity c at `place[c]`
+    /// in that row.
+    pub fn places(&self) -> &[usize] {
+        &self.place
     }
 
     fn range(&self, i: usize) -> std::ops::Range<usize> {
@@ -90,10 +128,10 @@ impl MassFactor {
     pub fn factor(&mut self, mass: &DMatrix<f64>) -> bool {
         let nv = self.inverse_diagonal.len();
         let mut diagonal = std::mem::take(&mut self.inverse_diagonal);
-        for i in 0..nv {
-            diagonal[i] = mass[(i, i)];
+        for (i, (d, &velocity)) in diagonal.iter_mut().zip(&self.order).enumerate() {
+            *d = mass[(velocity, velocity)];
             for at in self.range(i) {
-                self.lower[at] = mass[(i, self.ancestors[at])];
+                self.lower[at] = mass[(velocity, self.order[self.ancestors[at]])];
             }
         }
         // Table 6.3 from the leaves: row k's entries scaled by D_kk, its outer product taken
@@ -122,12 +160,28 @@ impl MassFactor {
         positive
     }
 
-    /// x ← M⁻¹ x (Table 6.4): Lᵀ y = x from the leaves, D, then L x = y from the roots.
-    pub fn solve(&self, x: &mut [f64]) {
-        for i in (0..x.len()).rev() {
-            self.carry_up(x, i);
+    /// x ← M⁻¹ x (Table 6.4): Lᵀ y = x from the leaves, D, then L x = y from the roots, in the
+    /// factor's order.
+    pub fn solve(&mut self, x: &mut [f64]) {
+        if self.in_order {
+            for i in (0..x.len()).rev() {
+                self.carry_up(x, i);
+            }
+            self.finish_solve(x, 0..x.len());
+            return;
         }
-        self.finish_solve(x, 0..x.len());
+        let mut y = std::mem::take(&mut self.vector);
+        for (y, &velocity) in y.iter_mut().zip(&self.order) {
+            *y = x[velocity];
+        }
+        for i in (0..y.len()).rev() {
+            self.carry_up(&mut y, i);
+        }
+        self.finish_solve(&mut y, 0..x.len());
+        for (y, &velocity) in y.iter().zip(&self.order) {
+            x[velocity] = *y;
+        }
+        self.vector = y;
     }
 
     /// Row i of Lᵀ y = x solved (its descendants' done): L_ij y_i taken from its ancestors'.
@@ -159,42 +213,56 @@ impl MassFactor {
     /// leaves row i nonzero on i's descendants only (Lᵀ's inverse has the tree's pattern), a
     /// contiguous span; M⁻¹ is symmetric, so the phase from the roots forms each row from its
     /// diagonal on (row i's entries right of i need only its ancestors' entries right of
-    /// themselves) and the rest is mirrored.
-    pub fn inverse_into(&self, inverse: &mut DMatrix<f64>) {
+    /// themselves) and the rest is mirrored. Out of order, solved by rows in the factor's order,
+    /// then copied into `inverse` over each tree's block.
+    pub fn inverse_into(&mut self, inverse: &mut DMatrix<f64>) {
         let nv = self.inverse_diagonal.len();
-        let entries = inverse.as_mut_slice();
+        let mut rows = std::mem::take(&mut self.rows);
+        // In order, the rows are `inverse`'s own entries (M⁻¹ is symmetric).
+        let entries = match self.in_order {
+            true => inverse.as_mut_slice(),
+            false => &mut rows[..],
+        };
         entries.fill(0.0);
         for c in 0..nv {
             entries[c + c * nv] = 1.0;
         }
         self.solve_rows(&mut [entries], Pattern::Identity);
         for i in 0..nv {
-            for c in i + 1..self.tree_end(i) {
-                entries[c * nv + i] = entries[i * nv + c];
+            let r = self.order[i];
+            for c in i + usize::from(self.in_order)..self.tree_end(i) {
+                let column = self.order[c];
+                // Row i of the solve by rows is column i of `inverse`.
+                let value = match self.in_order {
+                    true => inverse[(column, r)],
+                    false => rows[i * nv + c],
+                };
+                inverse[(r, column)] = value;
+                inverse[(column, r)] = value;
             }
         }
+        self.rows = rows;
     }
 
     /// `into` ← −M⁻¹ `from` (nv × nv each) for `from` of M's pattern (zero between velocities
-    /// of separate trees, as ∂τ/∂q and ∂τ/∂v are), by rows in a transposed copy.
+    /// of separate trees, as ∂τ/∂q and ∂τ/∂v are), by rows in a copy in the factor's order.
     pub fn solve_negated(&mut self, from: &DMatrix<f64>, into: &mut DMatrix<f64>) {
         let nv = self.inverse_diagonal.len();
         let mut rows = std::mem::take(&mut self.rows);
         for (c, column) in from.as_slice().chunks_exact(nv.max(1)).enumerate() {
             for (r, value) in column.iter().enumerate() {
-                rows[c + r * nv] = *value;
+                rows[self.place[c] + self.place[r] * nv] = *value;
             }
         }
         self.solve_rows_negated_into([&mut rows[..]], [into]);
         self.rows = rows;
     }
 
-    /// `into[m]` ← −M⁻¹ `rows[m]` for each of `M` matrices X (nv × nv) given by rows (row r
-    /// at r nv) with the tree's pattern (X_rc zero unless r and c are on one branch, as ∂τ/∂q
-    /// and ∂τ/∂v are), solved side by side in place in `rows`, then copied into `into` row by
-    /// row over the columns from the row's root to its tree's last velocity (the entries
-    /// outside stay as they are: zero). Trees need not be numbered one after the other: a
-    /// tree's velocities may be interleaved with another's.
+    /// `into[m]` ← −M⁻¹ `rows[m]` for each of `M` matrices X (nv × nv) given by rows in the
+    /// factor's order (`places`) with the tree's pattern (X_rc zero unless r and c are on one
+    /// branch, as ∂τ/∂q and ∂τ/∂v are), solved side by side in place in `rows`, then copied
+    /// into `into`, in the model's order, row by row over its tree's columns (the entries
+    /// outside stay as they are: zero).
     pub fn solve_rows_negated_into<const M: usize>(
         &self,
         mut rows: [&mut [f64]; M],
@@ -204,22 +272,23 @@ impl MassFactor {
         self.solve_rows(&mut rows, Pattern::Branches);
         for (rows, into) in rows.iter().zip(into) {
             let out = into.as_mut_slice();
-            for r in 0..nv {
-                let span = self.root[r]..self.tree_end(r);
-                for (c, value) in span.clone().zip(&rows[r * nv..][span]) {
+            for i in 0..nv {
+                let (r, span) = (self.order[i], self.root[i]..self.tree_end(i));
+                for (&c, value) in self.order[span.clone()].iter().zip(&rows[i * nv..][span]) {
                     out[c * nv + r] = -value;
                 }
             }
         }
     }
 
-    /// One past the last velocity of i's tree.
+    /// One past the last place of i's tree.
     fn tree_end(&self, i: usize) -> usize {
         self.subtree_end[self.root[i]]
     }
 
-    /// X ← M⁻¹ X for each of `M` matrices X (nv × nv) given by rows (row r at r nv), zero
-    /// outside the blocks of the separate trees (a tree's velocities by the same tree's): each
+    /// X ← M⁻¹ X for each of `M` matrices X (nv × nv) given by rows in the factor's order (the
+    /// row at place i at i nv, its entries by places), zero outside the blocks of the separate
+    /// trees (a tree's velocities by the same tree's): each
     /// step of Table 6.4 done on whole rows, over the columns where the row can be nonzero,
     /// contiguous. The columns are independent, so the processor overlaps them, where a
     /// column's own solve is one chain of dependent products. In the phase from the leaves row
@@ -328,4 +397,25 @@ const WIDTH: usize = 4;
 enum Pattern {
     Identity,
     Branches,
+}
+
+/// The velocities depth first: each root (a velocity without parent) in increasing order, then
+/// its children's subtrees, each in increasing order of the child. Parents come before their
+/// children, and a subtree's velocities follow one another.
+fn depth_first(parent: &[Option<usize>]) -> Vec<usize> {
+    let mut children = vec![Vec::new(); parent.len()];
+    let mut stack = Vec::new();
+    for (velocity, above) in parent.iter().enumerate().rev() {
+        match above {
+            Some(p) => children[*p].push(velocity),
+            None => stack.push(velocity),
+        }
+    }
+    // Pushed in decreasing order, so that the smallest is taken first.
+    let mut order = Vec::with_capacity(parent.len());
+    while let Some(velocity) = stack.pop() {
+        order.push(velocity);
+        stack.extend(children[velocity].iter().copied());
+    }
+    order
 }

@@ -146,6 +146,10 @@ pub struct RneaDerivatives {
     /// Per velocity, for the pass back: (ω(∂V), ω(S)) then (∂A, ∂A') entry by entry, the pairs
     /// a row's Bᵀs and I s weigh.
     column_pairs: Vec<[[f64; 2]; 9]>,
+    /// Per velocity, where its row and its column start in ∂τ/∂q's and ∂τ/∂v's entries
+    /// (`Layout`), for the pass back: entry (r, c) at `row_offsets[r] + column_offsets[c]`.
+    row_offsets: Vec<usize>,
+    column_offsets: Vec<usize>,
     /// `forward_dynamics`: per body, its subtree's inertia and bias force, and the change of its
     /// acceleration by q̈.
     composite: Vec<RigidInertia>,
@@ -172,6 +176,8 @@ impl RneaDerivatives {
             da_dq: vec![Motion::zeros(); nv],
             da_dv: vec![Motion::zeros(); nv],
             column_pairs: vec![[[0.0; 2]; 9]; nv],
+            row_offsets: vec![0; nv],
+            column_offsets: vec![0; nv],
             composite: vec![RigidInertia::zeros(); n + 1],
             composite_force: vec![Force::zeros(); n + 1],
             acceleration_change: vec![Motion::zeros(); n + 1],
@@ -243,8 +249,9 @@ impl RneaDerivatives {
     /// ancestors only) and its factor into `factor`, then τ, ∂τ/∂q and ∂τ/∂v at q̈ (the module's
     /// documentation). `data` holds the joints' transforms at q; the model has no geared
     /// rotor (their efforts are not linear in the pass out's terms as written here). ∂τ/∂q and
-    /// ∂τ/∂v are left by rows (entry (r, c) at c + r nv, their transposes as matrices), as the
-    /// solves with M's factor take them (`MassFactor::solve_rows_negated_into`). False if the
+    /// ∂τ/∂v are left by rows in the factor's order (entry (r, c) at place(c) + place(r) nv,
+    /// `MassFactor::places`), as the solves with M's factor take them
+    /// (`MassFactor::solve_rows_negated_into`). False if the
     /// mass matrix is not positive definite.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn forward_dynamics(
@@ -275,7 +282,7 @@ impl RneaDerivatives {
         // that the pass back's entries of the tree's pattern are the only ones.
         self.dtau_dq.as_mut_slice().fill(0.0);
         self.dtau_dv.as_mut_slice().fill(0.0);
-        self.pass_back::<false>(model, Layout::Rows);
+        self.pass_back::<false>(model, Layout::Rows(factor.places()));
         true
     }
 
@@ -474,10 +481,14 @@ impl RneaDerivatives {
     /// pairs are stored side by side so that the processor does both at once, two wide.
     fn pass_back<const ACCUMULATE: bool>(&mut self, model: &Model, layout: Layout) {
         let nv = model.nv;
-        let (row_stride, column_stride) = match layout {
-            Layout::Columns => (1, nv),
-            Layout::Rows => (nv, 1),
-        };
+        for velocity in 0..nv {
+            let (row, column) = match layout {
+                Layout::Columns => (velocity, velocity * nv),
+                Layout::Rows(places) => (places[velocity] * nv, places[velocity]),
+            };
+            self.row_offsets[velocity] = row;
+            self.column_offsets[velocity] = column;
+        }
         let put = |entries: &mut [f64], at: usize, value: f64| {
             let entry = &mut entries[at];
             *entry = if ACCUMULATE { *entry + value } else { value };
@@ -514,9 +525,10 @@ impl RneaDerivatives {
                     momentum[4],
                     momentum[5],
                 ];
+                let row_at = self.row_offsets[row];
                 for &column in branch {
                     let [by_position, by_rate] = paired_dot(&weights, &self.column_pairs[column]);
-                    let at = row * row_stride + column * column_stride;
+                    let at = row_at + self.column_offsets[column];
                     put(self.dtau_dq.as_mut_slice(), at, by_position);
                     put(self.dtau_dv.as_mut_slice(), at, by_rate);
                 }
@@ -530,10 +542,11 @@ impl RneaDerivatives {
                 let changes: [[f64; 2]; 6] =
                     std::array::from_fn(|m| [position_change[m], rate_change[m]]);
                 // The branch lists the joint's own velocities first, then its ancestors'.
+                let column_at = self.column_offsets[column];
                 for &row in &branch[joint.nv()..] {
                     let s_row: &[f64; 6] = self.columns[row].as_ref();
                     let [by_position, by_rate] = paired_dot(s_row, &changes);
-                    let at = row * row_stride + column * column_stride;
+                    let at = self.row_offsets[row] + column_at;
                     put(self.dtau_dq.as_mut_slice(), at, by_position);
                     put(self.dtau_dv.as_mut_slice(), at, by_rate);
                 }
@@ -588,11 +601,12 @@ fn paired_dot<const N: usize>(weights: &[f64; N], pairs: &[[f64; 2]; N]) -> [f64
 }
 
 /// Where the pass back puts entry (r, c) of ∂τ/∂q and ∂τ/∂v: at r + c nv (nalgebra's order,
-/// by columns), or at c + r nv (by rows).
+/// by columns), or by rows in the order of a mass matrix's factor (`MassFactor::places`), at
+/// place(c) + place(r) nv.
 #[derive(Clone, Copy)]
-enum Layout {
+enum Layout<'a> {
     Columns,
-    Rows,
+    Rows(&'a [usize]),
 }
 
 /// B m = v ×* (I m) + I (m × v) + m ×* h for a body of inertia I, velocity v = [ω; u] and
