@@ -43,6 +43,7 @@
 //! once, where articulated-body dynamics would form 6 × 6 articulated inertias of its own.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use wide::f64x2;
 
 use super::mass_factor::MassFactor;
 use super::{base_acceleration, Data};
@@ -145,7 +146,7 @@ pub struct RneaDerivatives {
     da_dv: Vec<Motion>,
     /// Per velocity, for the pass back: (ω(∂V), ω(S)) then (∂A, ∂A') entry by entry, the pairs
     /// a row's Bᵀs and I s weigh.
-    column_pairs: Vec<[[f64; 2]; 9]>,
+    column_pairs: Vec<[f64x2; 9]>,
     /// Per velocity, where its row and its column start in ∂τ/∂q's and ∂τ/∂v's entries
     /// (`Layout`), for the pass back: entry (r, c) at `row_offsets[r] + column_offsets[c]`.
     row_offsets: Vec<usize>,
@@ -175,7 +176,7 @@ impl RneaDerivatives {
             dv_dq: vec![Motion::zeros(); nv],
             da_dq: vec![Motion::zeros(); nv],
             da_dv: vec![Motion::zeros(); nv],
-            column_pairs: vec![[[0.0; 2]; 9]; nv],
+            column_pairs: vec![[f64x2::ZERO; 9]; nv],
             row_offsets: vec![0; nv],
             column_offsets: vec![0; nv],
             composite: vec![RigidInertia::zeros(); n + 1],
@@ -501,7 +502,7 @@ impl RneaDerivatives {
                 .iter_mut()
                 .zip(angular_pairs.chain(acceleration_pairs))
             {
-                *pair = [*x, *y];
+                *pair = f64x2::new([*x, *y]);
             }
         }
         for &k in model.dynamic_joints.iter().rev() {
@@ -524,7 +525,8 @@ impl RneaDerivatives {
                     momentum[3],
                     momentum[4],
                     momentum[5],
-                ];
+                ]
+                .map(f64x2::splat);
                 let row_at = self.row_offsets[row];
                 for &column in branch {
                     let [by_position, by_rate] = paired_dot(&weights, &self.column_pairs[column]);
@@ -539,13 +541,13 @@ impl RneaDerivatives {
                     + coriolis.times(&self.dv_dq[column])
                     + inertia.times(&self.da_dq[column]);
                 let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
-                let changes: [[f64; 2]; 6] =
-                    std::array::from_fn(|m| [position_change[m], rate_change[m]]);
+                let changes: [f64x2; 6] =
+                    std::array::from_fn(|m| f64x2::new([position_change[m], rate_change[m]]));
                 // The branch lists the joint's own velocities first, then its ancestors'.
                 let column_at = self.column_offsets[column];
                 for &row in &branch[joint.nv()..] {
                     let s_row: &[f64; 6] = self.columns[row].as_ref();
-                    let [by_position, by_rate] = paired_dot(s_row, &changes);
+                    let [by_position, by_rate] = paired_dot(&s_row.map(f64x2::splat), &changes);
                     let at = self.row_offsets[row] + column_at;
                     put(self.dtau_dq.as_mut_slice(), at, by_position);
                     put(self.dtau_dv.as_mut_slice(), at, by_rate);
@@ -588,16 +590,17 @@ fn turned(parent: &Transform, joint: &Transform, k: usize) -> Transform {
     }
 }
 
-/// Σ_m w_m p_m for pairs p_m: two dot products with the same weights, lane by lane, which the
-/// compiler forms as one two-wide product and sum per term.
+/// Σ_m w_m p_m for pairs p_m: two dot products with the same weights (each w_m in both lanes),
+/// as one two-wide product and sum per term. Written out with `f64x2`: the compiler had left
+/// the plain-array form as two scalar chains. Each lane's sums are the scalar ones, in the
+/// same order.
 #[inline(always)]
-fn paired_dot<const N: usize>(weights: &[f64; N], pairs: &[[f64; 2]; N]) -> [f64; 2] {
-    let mut sum = [0.0; 2];
+fn paired_dot<const N: usize>(weights: &[f64x2; N], pairs: &[f64x2; N]) -> [f64; 2] {
+    let mut sum = f64x2::ZERO;
     for (w, p) in weights.iter().zip(pairs) {
-        sum[0] += w * p[0];
-        sum[1] += w * p[1];
+        sum += *w * *p;
     }
-    sum
+    sum.to_array()
 }
 
 /// Where the pass back puts entry (r, c) of ∂τ/∂q and ∂τ/∂v: at r + c nv (nalgebra's order,
