@@ -392,11 +392,11 @@ impl RneaDerivatives {
                 self.force[i] = Force::zeros();
             } else {
                 let inertia = body.rigid.to_parent(&world);
-                let momentum = inertia.times(&velocity);
+                let motions = spatial::paired(&velocity, &self.acceleration[i]);
+                let [momentum, inertial] = spatial::unpaired(&inertia.times_paired(&motions));
                 self.inertia[i] = inertia;
                 self.coriolis[i] = CoriolisMatrix::new(&inertia, &velocity, &momentum);
-                self.force[i] = inertia.times(&self.acceleration[i])
-                    + spatial::cross_force(&velocity, &momentum);
+                self.force[i] = inertial + spatial::cross_force(&velocity, &momentum);
             }
             // Most calls have no external force: none moved to the fixed frame then.
             if external[i] != Force::zeros() {
@@ -536,13 +536,16 @@ impl RneaDerivatives {
                 }
             }
             for column in own.clone() {
+                // The two changes of force side by side (lane 0 along the position, lane 1
+                // along the rate): S ×* F + B ∂V + I ∂A and B S + I ∂A'.
                 let s = self.columns[column];
-                let position_change = spatial::cross_force(&s, &force)
-                    + coriolis.times(&self.dv_dq[column])
-                    + inertia.times(&self.da_dq[column]);
-                let rate_change = coriolis.times(&s) + inertia.times(&self.da_dv[column]);
-                let changes: [f64x2; 6] =
-                    std::array::from_fn(|m| f64x2::new([position_change[m], rate_change[m]]));
+                let turning = spatial::cross_force(&s, &force);
+                let by_coriolis = coriolis.times_paired(&spatial::paired(&self.dv_dq[column], &s));
+                let accelerations = spatial::paired(&self.da_dq[column], &self.da_dv[column]);
+                let by_inertia = inertia.times_paired(&accelerations);
+                let changes: [f64x2; 6] = std::array::from_fn(|m| {
+                    f64x2::new([turning[m], 0.0]) + by_coriolis[m] + by_inertia[m]
+                });
                 // The branch lists the joint's own velocities first, then its ancestors'.
                 let column_at = self.column_offsets[column];
                 for &row in &branch[joint.nv()..] {
@@ -655,6 +658,28 @@ impl CoriolisMatrix {
     fn times(&self, m: &Motion) -> Force {
         let w = spatial::angular(m);
         spatial::twist(self.top * w, self.bottom.cross(&w))
+    }
+
+    /// `times` for two motions at once, side by side in two lanes (`spatial::paired`):
+    /// only their angular parts count.
+    fn times_paired(&self, m: &spatial::Paired) -> spatial::Paired {
+        let splat = f64x2::splat;
+        let [w0, w1, w2, ..] = *m;
+        let t = &self.top;
+        let row = |i: usize| splat(t[(i, 0)]) * w0 + splat(t[(i, 1)]) * w1 + splat(t[(i, 2)]) * w2;
+        let (b0, b1, b2) = (
+            splat(self.bottom.x),
+            splat(self.bottom.y),
+            splat(self.bottom.z),
+        );
+        [
+            row(0),
+            row(1),
+            row(2),
+            b1 * w2 - b2 * w1,
+            b2 * w0 - b0 * w2,
+            b0 * w1 - b1 * w0,
+        ]
     }
 
     /// Bᵀ s, as a motion's angular part to dot with (its linear part is zero: a dot product
