@@ -435,8 +435,11 @@ pub fn paired(a: &Twist, b: &Twist) -> Paired {
 /// The two vectors of a pair.
 #[inline]
 pub fn unpaired(pair: &Paired) -> [Twist; 2] {
-    let lanes = pair.map(f64x2::to_array);
-    [0, 1].map(|lane| Twist::from_fn(|k, _| lanes[k][lane]))
+    let lanes: [[f64; 2]; 6] = std::array::from_fn(|k| pair[k].to_array());
+    [
+        Twist::from_fn(|k, _| lanes[k][0]),
+        Twist::from_fn(|k, _| lanes[k][1]),
+    ]
 }
 
 pub fn twist<T: Real>(angular: Vector3<T>, linear: Vector3<T>) -> Twist<T> {

@@ -525,8 +525,7 @@ impl RneaDerivatives {
                     momentum[3],
                     momentum[4],
                     momentum[5],
-                ]
-                .map(f64x2::splat);
+                ];
                 let row_at = self.row_offsets[row];
                 for &column in branch {
                     let [by_position, by_rate] = paired_dot(&weights, &self.column_pairs[column]);
@@ -550,7 +549,7 @@ impl RneaDerivatives {
                 let column_at = self.column_offsets[column];
                 for &row in &branch[joint.nv()..] {
                     let s_row: &[f64; 6] = self.columns[row].as_ref();
-                    let [by_position, by_rate] = paired_dot(&s_row.map(f64x2::splat), &changes);
+                    let [by_position, by_rate] = paired_dot(s_row, &changes);
                     let at = self.row_offsets[row] + column_at;
                     put(self.dtau_dq.as_mut_slice(), at, by_position);
                     put(self.dtau_dv.as_mut_slice(), at, by_rate);
@@ -598,10 +597,10 @@ fn turned(parent: &Transform, joint: &Transform, k: usize) -> Transform {
 /// the plain-array form as two scalar chains. Each lane's sums are the scalar ones, in the
 /// same order.
 #[inline(always)]
-fn paired_dot<const N: usize>(weights: &[f64x2; N], pairs: &[f64x2; N]) -> [f64; 2] {
+fn paired_dot<const N: usize>(weights: &[f64; N], pairs: &[f64x2; N]) -> [f64; 2] {
     let mut sum = f64x2::ZERO;
     for (w, p) in weights.iter().zip(pairs) {
-        sum += *w * *p;
+        sum += f64x2::splat(*w) * *p;
     }
     sum.to_array()
 }
