@@ -278,7 +278,13 @@ pub(crate) fn turn_columns<T: Real>(r: &Matrix3<T>, k: usize, sin: T, cos: T) ->
 }
 
 /// `turn_columns` written into `out`.
-fn turn_columns_into(r: &Matrix3<f64>, k: usize, sin: f64, cos: f64, out: &mut Matrix3<f64>) {
+pub(crate) fn turn_columns_into(
+    r: &Matrix3<f64>,
+    k: usize,
+    sin: f64,
+    cos: f64,
+    out: &mut Matrix3<f64>,
+) {
     let (i, j) = ((k + 1) % 3, (k + 2) % 3);
     for row in 0..3 {
         let (ri, rj) = (r[(row, i)], r[(row, j)]);
