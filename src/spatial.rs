@@ -359,24 +359,18 @@ impl RigidInertia {
     /// and sums, each lane's in `times`'s order, done two wide.
     #[inline]
     pub fn times_paired(&self, m: &Paired) -> Paired {
-        let splat = f64x2::splat;
         let [w0, w1, w2, v0, v1, v2] = *m;
-        let r = &self.rotational;
-        let turned =
-            |i: usize| splat(r[(i, 0)]) * w0 + splat(r[(i, 1)]) * w1 + splat(r[(i, 2)]) * w2;
-        let (c0, c1, c2) = (
-            splat(self.first.x),
-            splat(self.first.y),
-            splat(self.first.z),
-        );
-        let mass = splat(self.mass);
+        let (w, v) = ([w0, w1, w2], [v0, v1, v2]);
+        let turned = matrix_times_paired(&self.rotational, &w);
+        let (first_v, first_w) = (cross_paired(&self.first, &v), cross_paired(&self.first, &w));
+        let mass = f64x2::splat(self.mass);
         [
-            turned(0) + (c1 * v2 - c2 * v1),
-            turned(1) + (c2 * v0 - c0 * v2),
-            turned(2) + (c0 * v1 - c1 * v0),
-            v0 * mass - (c1 * w2 - c2 * w1),
-            v1 * mass - (c2 * w0 - c0 * w2),
-            v2 * mass - (c0 * w1 - c1 * w0),
+            turned[0] + first_v[0],
+            turned[1] + first_v[1],
+            turned[2] + first_v[2],
+            v0 * mass - first_w[0],
+            v1 * mass - first_w[1],
+            v2 * mass - first_w[2],
         ]
     }
 
@@ -421,10 +415,30 @@ pub fn inertia_to_parent(pose: &Pose, i: &Inertia) -> Inertia {
     x.transpose() * i * x
 }
 
-/// The spatial vector with angular (upper) part `angular` and linear (lower) part `linear`.
 /// Two spatial vectors side by side, the first in lane 0 and the second in lane 1 of each
 /// entry, for products of one operator with both at once (`RigidInertia::times_paired`).
 pub type Paired = [f64x2; 6];
+
+/// m x for a pair of 3-vectors x (lane by lane), each row's sum in nalgebra's order, (m₀ x₀ +
+/// m₁ x₁) + m₂ x₂, as `m * x` forms it.
+#[inline]
+pub fn matrix_times_paired(m: &Matrix3<f64>, x: &[f64x2; 3]) -> [f64x2; 3] {
+    let splat = f64x2::splat;
+    std::array::from_fn(|i| {
+        splat(m[(i, 0)]) * x[0] + splat(m[(i, 1)]) * x[1] + splat(m[(i, 2)]) * x[2]
+    })
+}
+
+/// c × x for a pair of 3-vectors x (lane by lane), in `Vector3::cross`'s products.
+#[inline]
+pub fn cross_paired(c: &Vector3<f64>, x: &[f64x2; 3]) -> [f64x2; 3] {
+    let (c0, c1, c2) = (f64x2::splat(c.x), f64x2::splat(c.y), f64x2::splat(c.z));
+    [
+        c1 * x[2] - c2 * x[1],
+        c2 * x[0] - c0 * x[2],
+        c0 * x[1] - c1 * x[0],
+    ]
+}
 
 /// `a` and `b` side by side.
 #[inline]
@@ -442,6 +456,7 @@ pub fn unpaired(pair: &Paired) -> [Twist; 2] {
     ]
 }
 
+/// The spatial vector with angular (upper) part `angular` and linear (lower) part `linear`.
 pub fn twist<T: Real>(angular: Vector3<T>, linear: Vector3<T>) -> Twist<T> {
     Twist::new(
         angular.x, angular.y, angular.z, linear.x, linear.y, linear.z,

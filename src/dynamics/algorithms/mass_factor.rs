@@ -164,24 +164,26 @@ impl MassFactor {
     /// factor's order.
     pub fn solve(&mut self, x: &mut [f64]) {
         if self.in_order {
-            for i in (0..x.len()).rev() {
-                self.carry_up(x, i);
-            }
-            self.finish_solve(x, 0..x.len());
+            self.solve_in_order(x);
             return;
         }
         let mut y = std::mem::take(&mut self.vector);
         for (y, &velocity) in y.iter_mut().zip(&self.order) {
             *y = x[velocity];
         }
-        for i in (0..y.len()).rev() {
-            self.carry_up(&mut y, i);
-        }
-        self.finish_solve(&mut y, 0..x.len());
+        self.solve_in_order(&mut y);
         for (y, &velocity) in y.iter().zip(&self.order) {
             x[velocity] = *y;
         }
         self.vector = y;
+    }
+
+    /// `solve` of a vector given in the factor's order.
+    fn solve_in_order(&self, y: &mut [f64]) {
+        for i in (0..y.len()).rev() {
+            self.carry_up(y, i);
+        }
+        self.finish_solve(y, 0..y.len());
     }
 
     /// Row i of Lᵀ y = x solved (its descendants' done): L_ij y_i taken from its ancestors'.

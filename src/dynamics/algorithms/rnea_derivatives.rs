@@ -670,23 +670,10 @@ impl CoriolisMatrix {
     /// `times` for two motions at once, side by side in two lanes (`spatial::paired`):
     /// only their angular parts count.
     fn times_paired(&self, m: &spatial::Paired) -> spatial::Paired {
-        let splat = f64x2::splat;
-        let [w0, w1, w2, ..] = *m;
-        let t = &self.top;
-        let row = |i: usize| splat(t[(i, 0)]) * w0 + splat(t[(i, 1)]) * w1 + splat(t[(i, 2)]) * w2;
-        let (b0, b1, b2) = (
-            splat(self.bottom.x),
-            splat(self.bottom.y),
-            splat(self.bottom.z),
-        );
-        [
-            row(0),
-            row(1),
-            row(2),
-            b1 * w2 - b2 * w1,
-            b2 * w0 - b0 * w2,
-            b0 * w1 - b1 * w0,
-        ]
+        let w = [m[0], m[1], m[2]];
+        let [t0, t1, t2] = spatial::matrix_times_paired(&self.top, &w);
+        let [b0, b1, b2] = spatial::cross_paired(&self.bottom, &w);
+        [t0, t1, t2, b0, b1, b2]
     }
 
     /// Bᵀ s, as a motion's angular part to dot with (its linear part is zero: a dot product
