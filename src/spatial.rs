@@ -122,6 +122,13 @@ pub fn motion_matrix_to_child(pose: &Pose) -> Matrix6<f64> {
 }
 
 impl<T: Real> Transform<T> {
+    /// `self * b` into `out`, formed where it stays: a product returned from a call and copied
+    /// to where it stays is read back before its stores have landed.
+    pub fn compose_into(&self, b: &Transform<T>, out: &mut Transform<T>) {
+        out.rotation = self.rotation * b.rotation;
+        out.translation = self.rotation * b.translation + self.translation;
+    }
+
     pub fn identity() -> Transform<T> {
         Transform {
             rotation: Matrix3::identity(),
@@ -245,10 +252,12 @@ impl<T: Real> std::ops::Mul for Transform<T> {
 
     /// Composition: `a * b` maps b's frame through a's.
     fn mul(self, b: Transform<T>) -> Transform<T> {
-        Transform {
-            rotation: self.rotation * b.rotation,
-            translation: self.rotation * b.translation + self.translation,
-        }
+        let mut out = Transform {
+            rotation: Matrix3::zeros(),
+            translation: Vector3::zeros(),
+        };
+        self.compose_into(&b, &mut out);
+        out
     }
 }
 

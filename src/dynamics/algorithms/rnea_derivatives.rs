@@ -144,13 +144,8 @@ pub struct RneaDerivatives {
     dv_dq: Vec<Motion>,
     da_dq: Vec<Motion>,
     da_dv: Vec<Motion>,
-    /// Per velocity, for the pass back: (ω(∂V), ω(S)) then (∂A, ∂A') entry by entry, the pairs
-    /// a row's Bᵀs and I s weigh.
-    column_pairs: Vec<[f64x2; 9]>,
-    /// Per velocity, where its row and its column start in ∂τ/∂q's and ∂τ/∂v's entries
-    /// (`Layout`), for the pass back: entry (r, c) at `row_offsets[r] + column_offsets[c]`.
-    row_offsets: Vec<usize>,
-    column_offsets: Vec<usize>,
+    /// Per velocity, what the pass back reads of it (`BackTerms`).
+    back_terms: Vec<BackTerms>,
     /// `forward_dynamics`: per body, its subtree's inertia and bias force, and the change of its
     /// acceleration by q̈.
     composite: Vec<RigidInertia>,
@@ -176,9 +171,7 @@ impl RneaDerivatives {
             dv_dq: vec![Motion::zeros(); nv],
             da_dq: vec![Motion::zeros(); nv],
             da_dv: vec![Motion::zeros(); nv],
-            column_pairs: vec![[f64x2::ZERO; 9]; nv],
-            row_offsets: vec![0; nv],
-            column_offsets: vec![0; nv],
+            back_terms: vec![BackTerms::default(); nv],
             composite: vec![RigidInertia::zeros(); n + 1],
             composite_force: vec![Force::zeros(); n + 1],
             acceleration_change: vec![Motion::zeros(); n + 1],
@@ -344,20 +337,14 @@ impl RneaDerivatives {
             let (i, parent) = (joint.child, joint.dynamic_parent);
             let state = &data.states[k];
             // A turn formed in place: built apart and then copied in, it was read back before
-            // its stores had landed (9 % of the pass out). A general product stays in registers.
+            // its stores had landed (9 % of the pass out); a general product likewise (5 % of
+            // Panda's derivatives).
             let (before, after) = self.world.split_at_mut(i);
-            let product;
-            let world: &Transform = match self.turning_axes[k] {
-                Some(axis) => {
-                    turned_into(&before[parent], &state.transform, axis, &mut after[0]);
-                    &after[0]
-                }
-                None => {
-                    product = before[parent] * state.transform;
-                    after[0] = product;
-                    &product
-                }
-            };
+            match self.turning_axes[k] {
+                Some(axis) => turned_into(&before[parent], &state.transform, axis, &mut after[0]),
+                None => before[parent].compose_into(&state.transform, &mut after[0]),
+            }
+            let world = &after[0];
             let (parent_velocity, parent_acceleration) =
                 (self.velocity[parent], self.acceleration[parent]);
             let mut own_velocity = Motion::zeros();
@@ -405,7 +392,9 @@ impl RneaDerivatives {
                 let motions = spatial::paired(&velocity, &self.acceleration[i]);
                 let [momentum, inertial] = spatial::unpaired(&inertia.times_paired(&motions));
                 self.inertia[i] = inertia;
-                self.coriolis[i] = CoriolisMatrix::new(&inertia, &velocity, &momentum);
+                // Formed where it stays: returned through the stack, it was read back before
+                // its stores had landed (8 % of the pass out on Talos).
+                self.coriolis[i].form(&inertia, &velocity, &momentum);
                 self.force[i] = inertial + spatial::cross_force(&velocity, &momentum);
             }
             // Most calls have no external force: none moved to the fixed frame then.
@@ -492,38 +481,36 @@ impl RneaDerivatives {
     /// pairs are stored side by side so that the processor does both at once, two wide.
     fn pass_back<const ACCUMULATE: bool>(&mut self, model: &Model, layout: Layout) {
         let nv = model.nv;
-        for velocity in 0..nv {
-            let (row, column) = match layout {
-                Layout::Columns => (velocity, velocity * nv),
-                Layout::Rows(places) => (places[velocity] * nv, places[velocity]),
-            };
-            self.row_offsets[velocity] = row;
-            self.column_offsets[velocity] = column;
-        }
         let put = |entries: &mut [f64], at: usize, value: f64| {
             let entry = &mut entries[at];
             *entry = if ACCUMULATE { *entry + value } else { value };
         };
-        for (column, pairs) in self.column_pairs.iter_mut().enumerate() {
-            let (dv, s) = (angular(&self.dv_dq[column]), angular(&self.columns[column]));
-            let angular_pairs = dv.iter().zip(s.iter());
-            let acceleration_pairs = self.da_dq[column].iter().zip(self.da_dv[column].iter());
-            for (pair, (x, y)) in pairs
-                .iter_mut()
-                .zip(angular_pairs.chain(acceleration_pairs))
-            {
-                *pair = f64x2::new([*x, *y]);
+        for (velocity, terms) in self.back_terms.iter_mut().enumerate() {
+            (terms.row_at, terms.column_at) = match layout {
+                Layout::Columns => (velocity, velocity * nv),
+                Layout::Rows(places) => (places[velocity] * nv, places[velocity]),
+            };
+            let (s, dv) = (&self.columns[velocity], &self.dv_dq[velocity]);
+            let (da, da_dv) = (&self.da_dq[velocity], &self.da_dv[velocity]);
+            terms.s = *s.as_ref();
+            for m in 0..3 {
+                terms.pairs[m] = f64x2::new([dv[m], s[m]]);
+            }
+            for m in 0..6 {
+                terms.pairs[3 + m] = f64x2::new([da[m], da_dv[m]]);
             }
         }
         for &k in model.dynamic_joints.iter().rev() {
             let joint = &model.joints[k];
             let (i, parent) = (joint.child, joint.dynamic_parent);
-            let (inertia, coriolis, force) = (self.inertia[i], self.coriolis[i], self.force[i]);
+            // Read where they are: copied out whole, they were read back before the stores of
+            // the child's sums into them had landed.
+            let (inertia, coriolis, force) = (&self.inertia[i], &self.coriolis[i], &self.force[i]);
             let own = joint.v_offset..joint.v_offset + joint.nv();
             let branch = model.branch_velocities(k);
             for row in own.clone() {
                 let s = self.columns[row];
-                self.tau[row] += s.dot(&force);
+                self.tau[row] += s.dot(force);
                 let (sensitivity, momentum) = (coriolis.transpose_times(&s), inertia.times(&s));
                 let weights = [
                     sensitivity.x,
@@ -536,10 +523,11 @@ impl RneaDerivatives {
                     momentum[4],
                     momentum[5],
                 ];
-                let row_at = self.row_offsets[row];
+                let row_at = self.back_terms[row].row_at;
                 for &column in branch {
-                    let [by_position, by_rate] = paired_dot(&weights, &self.column_pairs[column]);
-                    let at = row_at + self.column_offsets[column];
+                    let terms = &self.back_terms[column];
+                    let [by_position, by_rate] = paired_dot(&weights, &terms.pairs);
+                    let at = row_at + terms.column_at;
                     put(self.dtau_dq.as_mut_slice(), at, by_position);
                     put(self.dtau_dv.as_mut_slice(), at, by_rate);
                 }
@@ -548,7 +536,7 @@ impl RneaDerivatives {
                 // The two changes of force side by side (lane 0 along the position, lane 1
                 // along the rate): S ×* F + B ∂V + I ∂A and B S + I ∂A'.
                 let s = self.columns[column];
-                let turning = spatial::cross_force(&s, &force);
+                let turning = spatial::cross_force(&s, force);
                 let by_coriolis = coriolis.times_paired(&spatial::paired(&self.dv_dq[column], &s));
                 let accelerations = spatial::paired(&self.da_dq[column], &self.da_dv[column]);
                 let by_inertia = inertia.times_paired(&accelerations);
@@ -556,16 +544,17 @@ impl RneaDerivatives {
                     f64x2::new([turning[m], 0.0]) + by_coriolis[m] + by_inertia[m]
                 });
                 // The branch lists the joint's own velocities first, then its ancestors'.
-                let column_at = self.column_offsets[column];
+                let column_at = self.back_terms[column].column_at;
                 for &row in &branch[joint.nv()..] {
-                    let s_row: &[f64; 6] = self.columns[row].as_ref();
-                    let [by_position, by_rate] = paired_dot(s_row, &changes);
-                    let at = self.row_offsets[row] + column_at;
+                    let terms = &self.back_terms[row];
+                    let [by_position, by_rate] = paired_dot(&terms.s, &changes);
+                    let at = terms.row_at + column_at;
                     put(self.dtau_dq.as_mut_slice(), at, by_position);
                     put(self.dtau_dv.as_mut_slice(), at, by_rate);
                 }
             }
             if parent != 0 {
+                let (inertia, coriolis, force) = (self.inertia[i], self.coriolis[i], self.force[i]);
                 self.inertia[parent] += inertia;
                 self.coriolis[parent] += coriolis;
                 self.force[parent] += force;
@@ -602,15 +591,32 @@ fn turned_into(parent: &Transform, joint: &Transform, k: usize, out: &mut Transf
 
 /// Σ_m w_m p_m for pairs p_m: two dot products with the same weights (each w_m in both lanes),
 /// as one two-wide product and sum per term. Written out with `f64x2`: the compiler had left
-/// the plain-array form as two scalar chains. Each lane's sums are the scalar ones, in the
-/// same order.
+/// the plain-array form as two scalar chains. The terms are summed in two chains, the even
+/// ones and the odd ones, added at the end: one chain of N dependent sums kept the processor
+/// waiting on it, where two of half the length let it overlap more entries.
 #[inline(always)]
 fn paired_dot<const N: usize>(weights: &[f64; N], pairs: &[f64x2; N]) -> [f64; 2] {
-    let mut sum = f64x2::ZERO;
-    for (w, p) in weights.iter().zip(pairs) {
-        sum += f64x2::splat(*w) * *p;
+    let mut even = f64x2::splat(weights[0]) * pairs[0];
+    let mut odd = f64x2::splat(weights[1]) * pairs[1];
+    for m in (2..N).step_by(2) {
+        even += f64x2::splat(weights[m]) * pairs[m];
+        if m + 1 < N {
+            odd += f64x2::splat(weights[m + 1]) * pairs[m + 1];
+        }
     }
-    sum.to_array()
+    (even + odd).to_array()
+}
+
+/// What the pass back reads of a velocity, together so that an entry's terms are one lookup:
+/// as a column, (ω(∂V), ω(S)) then (∂A, ∂A') entry by entry, the pairs a row's Bᵀs and I s
+/// weigh, and where its column starts in ∂τ/∂q's and ∂τ/∂v's entries; as a row, its S and
+/// where its row starts (`Layout`): entry (r, c) at `row_at` of r + `column_at` of c.
+#[derive(Clone, Copy, Default)]
+struct BackTerms {
+    pairs: [f64x2; 9],
+    s: [f64; 6],
+    row_at: usize,
+    column_at: usize,
 }
 
 /// Where the pass back puts entry (r, c) of ∂τ/∂q and ∂τ/∂v: at r + c nv (nalgebra's order,
@@ -645,6 +651,13 @@ impl CoriolisMatrix {
     }
 
     fn new(inertia: &RigidInertia, velocity: &Motion, momentum: &Force) -> CoriolisMatrix {
+        let mut matrix = CoriolisMatrix::zeros();
+        matrix.form(inertia, velocity, momentum);
+        matrix
+    }
+
+    /// `new` in place.
+    fn form(&mut self, inertia: &RigidInertia, velocity: &Motion, momentum: &Force) {
         let (w, u) = (spatial::angular(velocity), spatial::linear(velocity));
         let c = inertia.first;
         // P = ω̂J − c uᵀ column by column (ω̂ times a column is a cross product: no products
@@ -655,10 +668,9 @@ impl CoriolisMatrix {
             w.cross(&j.column(1).into_owned()) - c * u.y,
             w.cross(&j.column(2).into_owned()) - c * u.z,
         ]);
-        let top = half + half.transpose() + Matrix3::identity() * (2.0 * u.dot(&c))
+        self.top = half + half.transpose() + Matrix3::identity() * (2.0 * u.dot(&c))
             - spatial::skew(&spatial::angular(momentum));
-        let bottom = -2.0 * (w.cross(&c) + u * inertia.mass);
-        CoriolisMatrix { top, bottom }
+        self.bottom = -2.0 * (w.cross(&c) + u * inertia.mass);
     }
 
     /// B m (a force): only m's angular part counts.
