@@ -492,7 +492,6 @@ impl RneaDerivatives {
             };
             let (s, dv) = (&self.columns[velocity], &self.dv_dq[velocity]);
             let (da, da_dv) = (&self.da_dq[velocity], &self.da_dv[velocity]);
-            terms.s = *s.as_ref();
             for m in 0..3 {
                 terms.pairs[m] = f64x2::new([dv[m], s[m]]);
             }
@@ -546,9 +545,9 @@ impl RneaDerivatives {
                 // The branch lists the joint's own velocities first, then its ancestors'.
                 let column_at = self.back_terms[column].column_at;
                 for &row in &branch[joint.nv()..] {
-                    let terms = &self.back_terms[row];
-                    let [by_position, by_rate] = paired_dot(&terms.s, &changes);
-                    let at = terms.row_at + column_at;
+                    let s_row: &[f64; 6] = self.columns[row].as_ref();
+                    let [by_position, by_rate] = paired_dot(s_row, &changes);
+                    let at = self.back_terms[row].row_at + column_at;
                     put(self.dtau_dq.as_mut_slice(), at, by_position);
                     put(self.dtau_dv.as_mut_slice(), at, by_rate);
                 }
@@ -593,9 +592,15 @@ fn turned_into(parent: &Transform, joint: &Transform, k: usize, out: &mut Transf
 /// as one two-wide product and sum per term. Written out with `f64x2`: the compiler had left
 /// the plain-array form as two scalar chains. The terms are summed in two chains, the even
 /// ones and the odd ones, added at the end: one chain of N dependent sums kept the processor
-/// waiting on it, where two of half the length let it overlap more entries.
+/// waiting on it, where two of half the length let it overlap more entries. N ≥ 2.
 #[inline(always)]
 fn paired_dot<const N: usize>(weights: &[f64; N], pairs: &[f64x2; N]) -> [f64; 2] {
+    const {
+        assert!(
+            N >= 2,
+            "paired_dot starts a chain at each of the first two terms"
+        )
+    };
     let mut even = f64x2::splat(weights[0]) * pairs[0];
     let mut odd = f64x2::splat(weights[1]) * pairs[1];
     for m in (2..N).step_by(2) {
@@ -607,14 +612,13 @@ fn paired_dot<const N: usize>(weights: &[f64; N], pairs: &[f64x2; N]) -> [f64; 2
     (even + odd).to_array()
 }
 
-/// What the pass back reads of a velocity, together so that an entry's terms are one lookup:
-/// as a column, (ω(∂V), ω(S)) then (∂A, ∂A') entry by entry, the pairs a row's Bᵀs and I s
-/// weigh, and where its column starts in ∂τ/∂q's and ∂τ/∂v's entries; as a row, its S and
-/// where its row starts (`Layout`): entry (r, c) at `row_at` of r + `column_at` of c.
+/// What the pass back reads of a velocity besides its S (`columns`): as a column,
+/// (ω(∂V), ω(S)) then (∂A, ∂A') entry by entry, the pairs a row's Bᵀs and I s weigh, and where
+/// its column starts in ∂τ/∂q's and ∂τ/∂v's entries; as a row, where its row starts (`Layout`):
+/// entry (r, c) at `row_at` of r + `column_at` of c.
 #[derive(Clone, Copy, Default)]
 struct BackTerms {
     pairs: [f64x2; 9],
-    s: [f64; 6],
     row_at: usize,
     column_at: usize,
 }
