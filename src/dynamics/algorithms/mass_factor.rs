@@ -40,6 +40,13 @@ pub struct MassFactor {
     /// tree, whose others follow it).
     subtree_end: Vec<usize>,
     root: Vec<usize>,
+    /// Per place i, `lineage[lineage_start[i]..lineage_start[i + 1]]` the places of its
+    /// ancestors, itself and its descendants as contiguous runs in increasing order: where a
+    /// row of the tree's pattern can be nonzero when the solve from the leaves carries it up.
+    /// Between the runs lie earlier siblings' subtrees (Talos's left arm, for a row of its
+    /// right arm), zero there.
+    lineage_start: Vec<usize>,
+    lineage: Vec<std::ops::Range<usize>>,
     /// A matrix by rows in the factor's order, for `solve_negated` and `inverse_into`, and a
     /// vector in that order, for `solve`.
     rows: Vec<f64>,
@@ -94,6 +101,20 @@ impl MassFactor {
                 subtree_end[j] = subtree_end[j].max(subtree_end[i]);
             }
         }
+        let mut lineage_start = vec![0];
+        let mut lineage: Vec<std::ops::Range<usize>> = Vec::new();
+        for i in 0..nv {
+            let first = lineage.len();
+            let places = ancestors[start[i]..start[i + 1]].iter().rev();
+            for &j in places.chain([&i]) {
+                match lineage[first..].last_mut() {
+                    Some(run) if run.end == j => run.end = j + 1,
+                    _ => lineage.push(j..j + 1),
+                }
+            }
+            lineage.last_mut().expect("i's own run").end = subtree_end[i];
+            lineage_start.push(lineage.len());
+        }
         let in_order = order
             .iter()
             .enumerate()
@@ -108,6 +129,8 @@ impl MassFactor {
             inverse_diagonal: vec![0.0; nv],
             subtree_end,
             root,
+            lineage_start,
+            lineage,
             rows: vec![0.0; nv * nv],
             vector: vec![0.0; nv],
         }
@@ -138,11 +161,19 @@ impl MassFactor {
         // Table 6.3 from the leaves: row k's entries scaled by D_kk, its outer product taken
         // from the rows above. Velocity k's ancestors past i are i's ancestors, in order, so the
         // entries H_kj for j above i are the tail of k's row.
+        let mut positive = true;
         for k in (0..nv).rev() {
+            // D_kk is final once the rows below k are taken: its reciprocal scales the row by
+            // products (one division per velocity instead of one per entry, whose latency the
+            // row's updates waited on).
+            let d = diagonal[k];
+            positive &= d > 0.0 && d.is_finite();
+            let reciprocal = 1.0 / d;
+            diagonal[k] = reciprocal;
             let row = self.range(k);
             for at in row.clone() {
                 let i = self.ancestors[at];
-                let ratio = self.lower[at] / diagonal[k];
+                let ratio = self.lower[at] * reciprocal;
                 diagonal[i] -= self.lower[at] * ratio;
                 let tail = at + 1..row.end;
                 let above = self.range(i);
@@ -151,11 +182,6 @@ impl MassFactor {
                 }
                 self.lower[at] = ratio;
             }
-        }
-        let mut positive = true;
-        for d in diagonal.iter_mut() {
-            positive &= *d > 0.0 && d.is_finite();
-            *d = 1.0 / *d;
         }
         self.inverse_diagonal = diagonal;
         positive
@@ -226,7 +252,10 @@ impl MassFactor {
             true => inverse.as_mut_slice(),
             false => &mut rows[..],
         };
-        entries.fill(0.0);
+        match self.in_order {
+            true => entries.fill(0.0),
+            false => self.clear_blocks(entries),
+        }
         for c in 0..nv {
             entries[c + c * nv] = 1.0;
         }
@@ -284,28 +313,74 @@ impl MassFactor {
         }
     }
 
+    /// Zeroes each tree's block of a matrix given by rows in the factor's order (row i over
+    /// i's tree's places): the entries the solves by rows and their copies read. Entries between
+    /// separate trees are never read, so on a fixed base's branches (Talos's legs and upper
+    /// body: 472 entries of 1,024) they are not written either.
+    pub fn clear_blocks(&self, rows: &mut [f64]) {
+        let nv = self.inverse_diagonal.len();
+        for i in 0..nv {
+            rows[i * nv..][self.root[i]..self.tree_end(i)].fill(0.0);
+        }
+    }
+
     /// One past the last place of i's tree.
     fn tree_end(&self, i: usize) -> usize {
         self.subtree_end[self.root[i]]
+    }
+
+    /// Row i's entries over `span` carried up into its ancestors' rows (Lᵀ's step of the
+    /// solve from the leaves), in chunks of `WIDTH` held in registers, then one by one.
+    #[inline(always)]
+    fn carry_up_rows<const M: usize>(
+        &self,
+        x: &mut [&mut [f64]; M],
+        i: usize,
+        span: std::ops::Range<usize>,
+    ) {
+        let nv = self.inverse_diagonal.len();
+        let ancestors = self.range(i);
+        let mut offset = span.start;
+        while offset + WIDTH <= span.end {
+            let mut chunks = [[f64x2::ZERO; 2]; M];
+            for (chunk, matrix) in chunks.iter_mut().zip(x.iter()) {
+                *chunk = load_chunk(&matrix[i * nv + offset..]);
+            }
+            for at in ancestors.clone() {
+                let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
+                for (matrix, chunk) in x.iter_mut().zip(&chunks) {
+                    let row_j = &mut matrix[j * nv + offset..];
+                    let [low, high] = load_chunk(row_j);
+                    store_chunk(row_j, [low - l * chunk[0], high - l * chunk[1]]);
+                }
+            }
+            offset += WIDTH;
+        }
+        for c in offset..span.end {
+            let xi: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
+            for at in ancestors.clone() {
+                let (j, l) = (self.ancestors[at], self.lower[at]);
+                for (matrix, xi) in x.iter_mut().zip(xi) {
+                    matrix[j * nv + c] -= l * xi;
+                }
+            }
+        }
     }
 
     /// X ← M⁻¹ X for each of `M` matrices X (nv × nv) given by rows in the factor's order (the
     /// row at place i at i nv, its entries by places), zero outside the blocks of the separate
     /// trees (a tree's velocities by the same tree's): each
     /// step of Table 6.4 done on whole rows, over the columns where the row can be nonzero,
-    /// contiguous. The columns are independent, so the processor overlaps them, where a
+    /// in contiguous runs. The columns are independent, so the processor overlaps them, where a
     /// column's own solve is one chain of dependent products. In the phase from the leaves row
     /// i, when it is carried up, is nonzero only on i's ancestors and descendants (by
     /// induction: so is X's row, and its descendants' rows add their own ancestors' and
-    /// descendants'), all of them from its tree's root to its last descendant; for the
-    /// identity, on its descendants only. The matrices share the pattern, so they are solved
-    /// side by side: each ancestor's entry of L, loaded once, serves the same chunk of all.
+    /// descendants'), its `lineage`; for the identity, on its descendants only. Row i is final
+    /// once carried up (only its descendants change it), so D⁻¹ scales it then, while it is at
+    /// hand. The matrices share the pattern, so they are solved side by side: each ancestor's
+    /// entry of L, loaded once, serves the same chunk of all.
     fn solve_rows<const M: usize>(&self, x: &mut [&mut [f64]; M], pattern: Pattern) {
         let nv = self.inverse_diagonal.len();
-        let carried = |i: usize| match pattern {
-            Pattern::Identity => i..self.subtree_end[i],
-            Pattern::Branches => self.root[i]..self.subtree_end[i],
-        };
         let formed = |i: usize| match pattern {
             Pattern::Identity => i..self.tree_end(i),
             Pattern::Branches => self.root[i]..self.tree_end(i),
@@ -316,39 +391,22 @@ impl MassFactor {
         // a whole row per ancestor would store row i's or reload it each time. The order of the
         // operations on every entry is Table 6.4's.
         for i in (0..nv).rev() {
-            let (span, ancestors) = (carried(i), self.range(i));
-            let mut offset = span.start;
-            while offset + WIDTH <= span.end {
-                let mut chunks = [[f64x2::ZERO; 2]; M];
-                for (chunk, matrix) in chunks.iter_mut().zip(x.iter()) {
-                    *chunk = load_chunk(&matrix[i * nv + offset..]);
+            let descendants = i..self.subtree_end[i];
+            let carried = match pattern {
+                Pattern::Identity => std::slice::from_ref(&descendants),
+                Pattern::Branches => {
+                    &self.lineage[self.lineage_start[i]..self.lineage_start[i + 1]]
                 }
-                for at in ancestors.clone() {
-                    let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
-                    for (matrix, chunk) in x.iter_mut().zip(&chunks) {
-                        let row_j = &mut matrix[j * nv + offset..];
-                        let [low, high] = load_chunk(row_j);
-                        store_chunk(row_j, [low - l * chunk[0], high - l * chunk[1]]);
-                    }
-                }
-                offset += WIDTH;
+            };
+            for span in carried {
+                self.carry_up_rows(x, i, span.clone());
             }
-            for c in offset..span.end {
-                let xi: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
-                for at in ancestors.clone() {
-                    let (j, l) = (self.ancestors[at], self.lower[at]);
-                    for (matrix, xi) in x.iter_mut().zip(xi) {
-                        matrix[j * nv + c] -= l * xi;
-                    }
-                }
-            }
-        }
-        for i in 0..nv {
-            let d = self.inverse_diagonal[i];
             for matrix in x.iter_mut() {
-                matrix[i * nv..][carried(i)]
-                    .iter_mut()
-                    .for_each(|e| *e *= d);
+                for span in carried {
+                    matrix[i * nv..][span.clone()]
+                        .iter_mut()
+                        .for_each(|e| *e *= self.inverse_diagonal[i]);
+                }
             }
         }
         for i in 0..nv {
