@@ -302,12 +302,14 @@ impl MassFactor {
     ) {
         let nv = self.inverse_diagonal.len();
         self.solve_rows(&mut rows, Pattern::Branches);
-        for (rows, into) in rows.iter().zip(into) {
-            let out = into.as_mut_slice();
-            for i in 0..nv {
-                let (r, span) = (self.order[i], self.root[i]..self.tree_end(i));
-                for (&c, value) in self.order[span.clone()].iter().zip(&rows[i * nv..][span]) {
-                    out[c * nv + r] = -value;
+        // All matrices at once: an entry's place in `into` is found once for all of them.
+        let mut out = into.map(|matrix| matrix.as_mut_slice());
+        for i in 0..nv {
+            let (r, span) = (self.order[i], self.root[i]..self.tree_end(i));
+            for (&c, k) in self.order[span.clone()].iter().zip(span) {
+                let to = c * nv + r;
+                for (out, rows) in out.iter_mut().zip(&rows) {
+                    out[to] = -rows[i * nv + k];
                 }
             }
         }
@@ -355,6 +357,20 @@ impl MassFactor {
                 }
             }
             offset += WIDTH;
+        }
+        if offset + 2 <= span.end {
+            let mut pairs = [f64x2::ZERO; M];
+            for (pair, matrix) in pairs.iter_mut().zip(x.iter()) {
+                *pair = load_pair(&matrix[i * nv + offset..]);
+            }
+            for at in ancestors.clone() {
+                let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
+                for (matrix, pair) in x.iter_mut().zip(&pairs) {
+                    let row_j = &mut matrix[j * nv + offset..];
+                    store_pair(row_j, load_pair(row_j) - l * *pair);
+                }
+            }
+            offset += 2;
         }
         for c in offset..span.end {
             let xi: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
@@ -429,6 +445,22 @@ impl MassFactor {
                 }
                 offset += WIDTH;
             }
+            if offset + 2 <= span.end {
+                let mut sums = [f64x2::ZERO; M];
+                for (sum, matrix) in sums.iter_mut().zip(x.iter()) {
+                    *sum = load_pair(&matrix[i * nv + offset..]);
+                }
+                for at in ancestors.clone() {
+                    let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
+                    for (matrix, sum) in x.iter().zip(sums.iter_mut()) {
+                        *sum -= l * load_pair(&matrix[j * nv + offset..]);
+                    }
+                }
+                for (matrix, sum) in x.iter_mut().zip(&sums) {
+                    store_pair(&mut matrix[i * nv + offset..], *sum);
+                }
+                offset += 2;
+            }
             for c in offset..span.end {
                 let mut sums: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
                 for at in ancestors.clone() {
@@ -459,6 +491,18 @@ fn load_chunk(row: &[f64]) -> [f64x2; 2] {
         f64x2::new([chunk[0], chunk[1]]),
         f64x2::new([chunk[2], chunk[3]]),
     ]
+}
+
+/// Two entries a row's remainder starts with, as a pair (the same operations as the scalar
+/// ones on each), and written back.
+#[inline(always)]
+fn load_pair(row: &[f64]) -> f64x2 {
+    f64x2::new([row[0], row[1]])
+}
+
+#[inline(always)]
+fn store_pair(row: &mut [f64], pair: f64x2) {
+    row[..2].copy_from_slice(&pair.to_array());
 }
 
 /// `load_chunk`'s pairs written back.
