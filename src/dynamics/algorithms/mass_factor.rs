@@ -150,7 +150,6 @@ impl MassFactor {
     /// Factors `mass` (read only between a velocity and its ancestors, as the composite rigid
     /// bodies write it); false if it is not positive definite.
     pub fn factor(&mut self, mass: &DMatrix<f64>) -> bool {
-        let nv = self.inverse_diagonal.len();
         let mut diagonal = std::mem::take(&mut self.inverse_diagonal);
         for (i, (d, &velocity)) in diagonal.iter_mut().zip(&self.order).enumerate() {
             *d = mass[(velocity, velocity)];
@@ -160,9 +159,13 @@ impl MassFactor {
         }
         // Table 6.3 from the leaves: row k's entries scaled by D_kk, its outer product taken
         // from the rows above. Velocity k's ancestors past i are i's ancestors, in order, so the
-        // entries H_kj for j above i are the tail of k's row.
+        // entries H_kj for j above i are the tail of k's row. Any order that takes a row after
+        // its descendants will do: the model's breadth-first one (places of velocities from the
+        // last) alternates between separate branches, whose rows do not wait on each other,
+        // where depth first each row waits on the one before it (its child's update, then a
+        // division), and the processor overlaps the branches' chains.
         let mut positive = true;
-        for k in (0..nv).rev() {
+        for &k in self.place.iter().rev() {
             // D_kk is final once the rows below k are taken: its reciprocal scales the row by
             // products (one division per velocity instead of one per entry, whose latency the
             // row's updates waited on).
@@ -205,36 +208,25 @@ impl MassFactor {
         self.vector = y;
     }
 
-    /// `solve` of a vector given in the factor's order.
+    /// `solve` of a vector given in the factor's order, its rows taken in the model's
+    /// breadth-first order (`factor` says why).
     fn solve_in_order(&self, y: &mut [f64]) {
-        for i in (0..y.len()).rev() {
-            self.carry_up(y, i);
+        for &i in self.place.iter().rev() {
+            let yi = y[i];
+            for at in self.range(i) {
+                y[self.ancestors[at]] -= self.lower[at] * yi;
+            }
         }
-        self.finish_solve(y, 0..y.len());
-    }
-
-    /// Row i of Lᵀ y = x solved (its descendants' done): L_ij y_i taken from its ancestors'.
-    #[inline]
-    fn carry_up(&self, x: &mut [f64], i: usize) {
-        let xi = x[i];
-        for at in self.range(i) {
-            x[self.ancestors[at]] -= self.lower[at] * xi;
+        for (yi, d) in y.iter_mut().zip(&self.inverse_diagonal) {
+            *yi *= d;
         }
-    }
-
-    /// D⁻¹ and the solve from the root over `span`, after Lᵀ y = x, x zero outside `span`
-    /// (whole trees below roots).
-    fn finish_solve(&self, x: &mut [f64], span: std::ops::Range<usize>) {
-        for i in span.clone() {
-            x[i] *= self.inverse_diagonal[i];
-        }
-        for i in span {
+        for &i in &self.place {
             let range = self.range(i);
             let sum: f64 = (self.lower[range.clone()].iter())
                 .zip(&self.ancestors[range])
-                .map(|(l, &j)| l * x[j])
+                .map(|(l, &j)| l * y[j])
                 .sum();
-            x[i] -= sum;
+            y[i] -= sum;
         }
     }
 
