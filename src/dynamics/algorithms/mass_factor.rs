@@ -147,6 +147,15 @@ impl MassFactor {
         self.start[i]..self.start[i + 1]
     }
 
+    /// Place i's ancestors' places with L_ij along them, from its parent up.
+    fn ancestry(
+        &self,
+        i: usize,
+    ) -> std::iter::Zip<std::slice::Iter<'_, usize>, std::slice::Iter<'_, f64>> {
+        let range = self.range(i);
+        self.ancestors[range.clone()].iter().zip(&self.lower[range])
+    }
+
     /// Factors `mass` (read only between a velocity and its ancestors, as the composite rigid
     /// bodies write it); false if it is not positive definite.
     pub fn factor(&mut self, mass: &DMatrix<f64>) -> bool {
@@ -333,17 +342,17 @@ impl MassFactor {
         span: std::ops::Range<usize>,
     ) {
         let nv = self.inverse_diagonal.len();
-        let ancestors = self.range(i);
+        let ancestry = self.ancestry(i);
         let mut offset = span.start;
         while offset + WIDTH <= span.end {
             let mut chunks = [[f64x2::ZERO; 2]; M];
             for (chunk, matrix) in chunks.iter_mut().zip(x.iter()) {
                 *chunk = load_chunk(&matrix[i * nv + offset..]);
             }
-            for at in ancestors.clone() {
-                let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
+            for (&j, &l) in ancestry.clone() {
+                let (at, l) = (j * nv + offset, f64x2::splat(l));
                 for (matrix, chunk) in x.iter_mut().zip(&chunks) {
-                    let row_j = &mut matrix[j * nv + offset..];
+                    let row_j = &mut matrix[at..at + WIDTH];
                     let [low, high] = load_chunk(row_j);
                     store_chunk(row_j, [low - l * chunk[0], high - l * chunk[1]]);
                 }
@@ -355,10 +364,10 @@ impl MassFactor {
             for (pair, matrix) in pairs.iter_mut().zip(x.iter()) {
                 *pair = load_pair(&matrix[i * nv + offset..]);
             }
-            for at in ancestors.clone() {
-                let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
+            for (&j, &l) in ancestry.clone() {
+                let (at, l) = (j * nv + offset, f64x2::splat(l));
                 for (matrix, pair) in x.iter_mut().zip(&pairs) {
-                    let row_j = &mut matrix[j * nv + offset..];
+                    let row_j = &mut matrix[at..at + 2];
                     store_pair(row_j, load_pair(row_j) - l * *pair);
                 }
             }
@@ -366,8 +375,7 @@ impl MassFactor {
         }
         for c in offset..span.end {
             let xi: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
-            for at in ancestors.clone() {
-                let (j, l) = (self.ancestors[at], self.lower[at]);
+            for (&j, &l) in ancestry.clone() {
                 for (matrix, xi) in x.iter_mut().zip(xi) {
                     matrix[j * nv + c] -= l * xi;
                 }
@@ -418,17 +426,17 @@ impl MassFactor {
             }
         }
         for i in 0..nv {
-            let (span, ancestors) = (formed(i), self.range(i));
+            let (span, ancestry) = (formed(i), self.ancestry(i));
             let mut offset = span.start;
             while offset + WIDTH <= span.end {
                 let mut sums = [[f64x2::ZERO; 2]; M];
                 for (sum, matrix) in sums.iter_mut().zip(x.iter()) {
                     *sum = load_chunk(&matrix[i * nv + offset..]);
                 }
-                for at in ancestors.clone() {
-                    let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
+                for (&j, &l) in ancestry.clone() {
+                    let (at, l) = (j * nv + offset, f64x2::splat(l));
                     for (matrix, sum) in x.iter().zip(sums.iter_mut()) {
-                        let [low, high] = load_chunk(&matrix[j * nv + offset..]);
+                        let [low, high] = load_chunk(&matrix[at..at + WIDTH]);
                         *sum = [sum[0] - l * low, sum[1] - l * high];
                     }
                 }
@@ -442,10 +450,10 @@ impl MassFactor {
                 for (sum, matrix) in sums.iter_mut().zip(x.iter()) {
                     *sum = load_pair(&matrix[i * nv + offset..]);
                 }
-                for at in ancestors.clone() {
-                    let (j, l) = (self.ancestors[at], f64x2::splat(self.lower[at]));
+                for (&j, &l) in ancestry.clone() {
+                    let (at, l) = (j * nv + offset, f64x2::splat(l));
                     for (matrix, sum) in x.iter().zip(sums.iter_mut()) {
-                        *sum -= l * load_pair(&matrix[j * nv + offset..]);
+                        *sum -= l * load_pair(&matrix[at..at + 2]);
                     }
                 }
                 for (matrix, sum) in x.iter_mut().zip(&sums) {
@@ -455,8 +463,7 @@ impl MassFactor {
             }
             for c in offset..span.end {
                 let mut sums: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
-                for at in ancestors.clone() {
-                    let (j, l) = (self.ancestors[at], self.lower[at]);
+                for (&j, &l) in ancestry.clone() {
                     for (matrix, sum) in x.iter().zip(sums.iter_mut()) {
                         *sum -= l * matrix[j * nv + c];
                     }
