@@ -148,6 +148,7 @@ impl MassFactor {
     }
 
     /// Place i's ancestors' places with L_ij along them, from its parent up.
+    #[inline]
     fn ancestry(
         &self,
         i: usize,
