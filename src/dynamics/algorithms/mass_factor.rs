@@ -294,7 +294,8 @@ impl MassFactor {
 
     /// `into[m]` ← −M⁻¹ `rows[m]` for each of `M` matrices X (nv × nv) given by rows in the
     /// factor's order (`places`) with the tree's pattern (X_rc zero unless r and c are on one
-    /// branch, as ∂τ/∂q and ∂τ/∂v are), solved side by side in place in `rows`, then copied
+    /// branch, as ∂τ/∂q and ∂τ/∂v are; only those entries are read, the others in each tree's
+    /// block may hold anything), solved side by side in place in `rows`, then copied
     /// into `into`, in the model's order, row by row over its tree's columns (the entries
     /// outside stay as they are: zero).
     pub fn solve_rows_negated_into<const M: usize>(
@@ -318,10 +319,10 @@ impl MassFactor {
     }
 
     /// Zeroes each tree's block of a matrix given by rows in the factor's order (row i over
-    /// i's tree's places): the entries the solves by rows and their copies read. Entries between
-    /// separate trees are never read, so on a fixed base's branches (Talos's legs and upper
-    /// body: 472 entries of 1,024) they are not written either.
-    pub fn clear_blocks(&self, rows: &mut [f64]) {
+    /// i's tree's places): the entries the identity's solve by rows and its copy read. Entries
+    /// between separate trees are never read, so on a fixed base's branches (Talos's legs and
+    /// upper body: 472 entries of 1,024) they are not written either.
+    fn clear_blocks(&self, rows: &mut [f64]) {
         let nv = self.inverse_diagonal.len();
         for i in 0..nv {
             rows[i * nv..][self.root[i]..self.tree_end(i)].fill(0.0);
@@ -386,8 +387,9 @@ impl MassFactor {
 
     /// X ← M⁻¹ X for each of `M` matrices X (nv × nv) given by rows in the factor's order (the
     /// row at place i at i nv, its entries by places), zero outside the blocks of the separate
-    /// trees (a tree's velocities by the same tree's): each
-    /// step of Table 6.4 done on whole rows, over the columns where the row can be nonzero,
+    /// trees (a tree's velocities by the same tree's), read only where X's pattern can be
+    /// nonzero (the tree's pattern, or the identity's diagonal) and written over each tree's
+    /// block: each step of Table 6.4 done on whole rows, over the columns where the row can be nonzero,
     /// in contiguous runs. The columns are independent, so the processor overlaps them, where a
     /// column's own solve is one chain of dependent products. In the phase from the leaves row
     /// i, when it is carried up, is nonzero only on i's ancestors and descendants (by
@@ -418,12 +420,20 @@ impl MassFactor {
             for span in carried {
                 self.carry_up_rows(x, i, span.clone());
             }
+            // Row i is final here: D⁻¹ scales its runs, and the gaps between them that the
+            // phase from the roots reads (up to its tree's end) are zeroed, whatever they held.
+            let mut gap_start = formed(i).start;
             for matrix in x.iter_mut() {
+                let row = &mut matrix[i * nv..(i + 1) * nv];
                 for span in carried {
-                    matrix[i * nv..][span.clone()]
+                    row[gap_start..span.start].fill(0.0);
+                    row[span.clone()]
                         .iter_mut()
                         .for_each(|e| *e *= self.inverse_diagonal[i]);
+                    gap_start = span.end;
                 }
+                row[gap_start..formed(i).end].fill(0.0);
+                gap_start = formed(i).start;
             }
         }
         for i in 0..nv {

@@ -272,10 +272,8 @@ impl RneaDerivatives {
         factor.solve(accelerations.as_mut_slice());
         self.add_accelerations(model, accelerations.as_slice());
         self.tau.as_mut_slice().fill(0.0);
-        // The solves leave them dense over each tree's block: cleared so that the pass back's
-        // entries of the tree's pattern are the only ones there (nothing reads the others).
-        factor.clear_blocks(self.dtau_dq.as_mut_slice());
-        factor.clear_blocks(self.dtau_dv.as_mut_slice());
+        // The pass back writes every entry of the tree's pattern, the only ones the solves read
+        // (the last call's solves left the others of each tree's block dense: not cleared).
         self.pass_back::<false>(model, Layout::Rows(factor.places()));
         true
     }
