@@ -343,22 +343,31 @@ fn forward_derivatives_do_not_depend_on_the_states_before() {
                 (derivatives.compute(&model, &mut data, &p.q, &p.v, &p.tau, &p.external))
                     .unwrap_or_else(|e| panic!("{robot}: {e}"));
             }
-            assert_eq!(
-                reused.acceleration, fresh.acceleration,
-                "{robot}, state {shift}"
-            );
-            assert_eq!(
-                reused.dacceleration_dq, fresh.dacceleration_dq,
-                "{robot}, state {shift}"
-            );
-            assert_eq!(
-                reused.dacceleration_dv, fresh.dacceleration_dv,
-                "{robot}, state {shift}"
-            );
-            assert_eq!(
-                reused.mass_inverse, fresh.mass_inverse,
-                "{robot}, state {shift}"
-            );
+            let outputs = [
+                (
+                    "q̈",
+                    reused.acceleration.as_slice(),
+                    fresh.acceleration.as_slice(),
+                ),
+                (
+                    "∂q̈/∂q",
+                    reused.dacceleration_dq.as_slice(),
+                    fresh.dacceleration_dq.as_slice(),
+                ),
+                (
+                    "∂q̈/∂v",
+                    reused.dacceleration_dv.as_slice(),
+                    fresh.dacceleration_dv.as_slice(),
+                ),
+                (
+                    "M⁻¹",
+                    reused.mass_inverse.as_slice(),
+                    fresh.mass_inverse.as_slice(),
+                ),
+            ];
+            for (what, after_others, alone) in outputs {
+                assert_eq!(after_others, alone, "{robot}, state {shift}: {what}");
+            }
         }
     }
 }
