@@ -389,15 +389,15 @@ impl MassFactor {
     /// row at place i at i nv, its entries by places), zero outside the blocks of the separate
     /// trees (a tree's velocities by the same tree's), read only where X's pattern can be
     /// nonzero (the tree's pattern, or the identity's diagonal) and written over each tree's
-    /// block: each step of Table 6.4 done on whole rows, over the columns where the row can be nonzero,
-    /// in contiguous runs. The columns are independent, so the processor overlaps them, where a
-    /// column's own solve is one chain of dependent products. In the phase from the leaves row
-    /// i, when it is carried up, is nonzero only on i's ancestors and descendants (by
-    /// induction: so is X's row, and its descendants' rows add their own ancestors' and
-    /// descendants'), its `lineage`; for the identity, on its descendants only. Row i is final
-    /// once carried up (only its descendants change it), so D⁻¹ scales it then, while it is at
-    /// hand. The matrices share the pattern, so they are solved side by side: each ancestor's
-    /// entry of L, loaded once, serves the same chunk of all.
+    /// block: each step of Table 6.4 done on whole rows, over the columns where the row can be
+    /// nonzero, in contiguous runs. The columns are independent, so the processor overlaps
+    /// them, where a column's own solve is one chain of dependent products. In the phase from
+    /// the leaves row i, when it is carried up, is nonzero only on i's ancestors and
+    /// descendants (by induction: so is X's row, and its descendants' rows add their own
+    /// ancestors' and descendants'), its `lineage`; for the identity, on its descendants only.
+    /// Row i is final once carried up (only its descendants change it), so D⁻¹ scales it then,
+    /// while it is at hand. The matrices share the pattern, so they are solved side by side:
+    /// each ancestor's entry of L, loaded once, serves the same chunk of all.
     fn solve_rows<const M: usize>(&self, x: &mut [&mut [f64]; M], pattern: Pattern) {
         let nv = self.inverse_diagonal.len();
         let formed = |i: usize| match pattern {
@@ -422,9 +422,10 @@ impl MassFactor {
             }
             // Row i is final here: D⁻¹ scales its runs, and the gaps between them that the
             // phase from the roots reads (up to its tree's end) are zeroed, whatever they held.
-            let mut gap_start = formed(i).start;
+            let read = formed(i);
             for matrix in x.iter_mut() {
                 let row = &mut matrix[i * nv..(i + 1) * nv];
+                let mut gap_start = read.start;
                 for span in carried {
                     row[gap_start..span.start].fill(0.0);
                     row[span.clone()]
@@ -432,8 +433,7 @@ impl MassFactor {
                         .for_each(|e| *e *= self.inverse_diagonal[i]);
                     gap_start = span.end;
                 }
-                row[gap_start..formed(i).end].fill(0.0);
-                gap_start = formed(i).start;
+                row[gap_start..read.end].fill(0.0);
             }
         }
         for i in 0..nv {
