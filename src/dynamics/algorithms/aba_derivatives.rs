@@ -5,11 +5,11 @@
 //!
 //! q̈ and the mass matrix come from the passes of those derivatives themselves
 //! (`RneaDerivatives::forward_dynamics`: the bias efforts and the composite inertias at q̈ = 0,
-//! then q̈ by the mass matrix's factor, ABA's values to round-off); with geared rotors, from ABA
-//! and CRBA. Every product by M⁻¹ is a solve with M's factor along the tree, M = Lᵀ D L
-//! (`mass_factor`), by rows over the columns of each row's tree: 2 Σ dᵢ + n products a column
-//! (dᵢ the depth of velocity i) where a dense product by M⁻¹ costs n², nothing crossing between
-//! the tree's separate branches.
+//! then M⁻¹ from the mass matrix's factor and q̈ by its product, ABA's values to round-off);
+//! with geared rotors, from ABA and CRBA. M⁻¹ and the products −M⁻¹ ∂τ are solves with M's
+//! factor along the tree, M = Lᵀ D L (`mass_factor`), by rows over the columns of each row's
+//! tree: 2 Σ dᵢ + n products a column (dᵢ the depth of velocity i) where a dense product by
+//! M⁻¹ costs n², nothing crossing between the tree's separate branches.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -56,7 +56,8 @@ pub struct AbaDerivatives {
     /// The inverse dynamics' derivatives at q̈, scratch: without geared rotors they are left
     /// by rows and solved in place (`RneaDerivatives::forward_dynamics`).
     inverse: RneaDerivatives,
-    /// The mass matrix at q (zero where CRBA writes nothing, as it needs) and its factor.
+    /// The mass matrix at q (zero where CRBA writes nothing, as it needs with geared rotors;
+    /// without, the scratch M⁻¹ is solved in once it is factored) and its factor.
     mass: DMatrix<f64>,
     factor: MassFactor,
 }
@@ -94,12 +95,20 @@ impl AbaDerivatives {
             let (factor, mass) = (&mut self.factor, &mut self.mass);
             let accelerations = &mut self.acceleration;
             let state = (v, tau);
-            if !inverse.forward_dynamics(model, data, state, external, factor, mass, accelerations)
-            {
+            let mass_inverse = &mut self.mass_inverse;
+            if !inverse.forward_dynamics(
+                model,
+                data,
+                state,
+                external,
+                factor,
+                mass,
+                mass_inverse,
+                accelerations,
+            ) {
                 return Err(ForwardDerivativeError::SingularMass);
             }
             // ∂τ/∂q and ∂τ/∂v by rows, solved side by side where they are.
-            self.factor.inverse_into(&mut self.mass_inverse);
             (self.factor).solve_rows_negated_into(
                 [
                     inverse.dtau_dq.as_mut_slice(),

@@ -47,10 +47,8 @@ pub struct MassFactor {
     /// right arm), zero there.
     lineage_start: Vec<usize>,
     lineage: Vec<std::ops::Range<usize>>,
-    /// A matrix by rows in the factor's order, for `solve_negated` and `inverse_into`, and a
-    /// vector in that order, for `solve`.
+    /// A matrix by rows in the factor's order, for `solve_negated` and `inverse_into`.
     rows: Vec<f64>,
-    vector: Vec<f64>,
 }
 
 impl MassFactor {
@@ -132,7 +130,6 @@ impl MassFactor {
             lineage_start,
             lineage,
             rows: vec![0.0; nv * nv],
-            vector: vec![0.0; nv],
         }
     }
 
@@ -184,60 +181,21 @@ impl MassFactor {
             let reciprocal = 1.0 / d;
             diagonal[k] = reciprocal;
             let row = self.range(k);
-            for at in row.clone() {
-                let i = self.ancestors[at];
-                let ratio = self.lower[at] * reciprocal;
-                diagonal[i] -= self.lower[at] * ratio;
-                let tail = at + 1..row.end;
-                let above = self.range(i);
-                for (target, source) in above.zip(tail) {
-                    self.lower[target] -= self.lower[source] * ratio;
+            // Row k's entries lie after its ancestors' rows, which its updates write.
+            let (above_rows, own) = self.lower.split_at_mut(row.start);
+            let own = &mut own[..row.len()];
+            for (offset, &i) in self.ancestors[row].iter().enumerate() {
+                let ratio = own[offset] * reciprocal;
+                diagonal[i] -= own[offset] * ratio;
+                let above = &mut above_rows[self.start[i]..self.start[i + 1]];
+                for (target, source) in above.iter_mut().zip(&own[offset + 1..]) {
+                    *target -= source * ratio;
                 }
-                self.lower[at] = ratio;
+                own[offset] = ratio;
             }
         }
         self.inverse_diagonal = diagonal;
         positive
-    }
-
-    /// x ← M⁻¹ x (Table 6.4): Lᵀ y = x from the leaves, D, then L x = y from the roots, in the
-    /// factor's order.
-    pub fn solve(&mut self, x: &mut [f64]) {
-        if self.in_order {
-            self.solve_in_order(x);
-            return;
-        }
-        let mut y = std::mem::take(&mut self.vector);
-        for (y, &velocity) in y.iter_mut().zip(&self.order) {
-            *y = x[velocity];
-        }
-        self.solve_in_order(&mut y);
-        for (y, &velocity) in y.iter().zip(&self.order) {
-            x[velocity] = *y;
-        }
-        self.vector = y;
-    }
-
-    /// `solve` of a vector given in the factor's order, its rows taken in the model's
-    /// breadth-first order (`factor` says why).
-    fn solve_in_order(&self, y: &mut [f64]) {
-        for &i in self.place.iter().rev() {
-            let yi = y[i];
-            for at in self.range(i) {
-                y[self.ancestors[at]] -= self.lower[at] * yi;
-            }
-        }
-        for (yi, d) in y.iter_mut().zip(&self.inverse_diagonal) {
-            *yi *= d;
-        }
-        for &i in &self.place {
-            let range = self.range(i);
-            let sum: f64 = (self.lower[range.clone()].iter())
-                .zip(&self.ancestors[range])
-                .map(|(l, &j)| l * y[j])
-                .sum();
-            y[i] -= sum;
-        }
     }
 
     /// M⁻¹ into `inverse` (nv × nv): the solve of the identity. Its phase from the leaves
@@ -247,16 +205,24 @@ impl MassFactor {
     /// themselves) and the rest is mirrored. Out of order, solved by rows in the factor's order,
     /// then copied into `inverse` over each tree's block.
     pub fn inverse_into(&mut self, inverse: &mut DMatrix<f64>) {
-        let nv = self.inverse_diagonal.len();
         let mut rows = std::mem::take(&mut self.rows);
+        self.inverse_into_using(inverse, &mut rows);
+        self.rows = rows;
+    }
+
+    /// `inverse_into` solving in `scratch` (nv × nv entries, whatever they hold): a matrix the
+    /// caller is done with and has just touched (the mass matrix once factored), where the
+    /// factor's own copy would be one more matrix in the cache.
+    pub fn inverse_into_using(&self, inverse: &mut DMatrix<f64>, scratch: &mut [f64]) {
+        let nv = self.inverse_diagonal.len();
         // In order, the rows are `inverse`'s own entries (M⁻¹ is symmetric).
         let entries = match self.in_order {
             true => inverse.as_mut_slice(),
-            false => &mut rows[..],
+            false => scratch,
         };
         match self.in_order {
             true => entries.fill(0.0),
-            false => self.clear_blocks(entries),
+            false => self.clear_subtrees(entries),
         }
         for c in 0..nv {
             entries[c + c * nv] = 1.0;
@@ -269,13 +235,12 @@ impl MassFactor {
                 // Row i of the solve by rows is column i of `inverse`.
                 let value = match self.in_order {
                     true => inverse[(column, r)],
-                    false => rows[i * nv + c],
+                    false => scratch[i * nv + c],
                 };
                 inverse[(r, column)] = value;
                 inverse[(column, r)] = value;
             }
         }
-        self.rows = rows;
     }
 
     /// `into` ← −M⁻¹ `from` (nv × nv each) for `from` of M's pattern (zero between velocities
@@ -318,14 +283,14 @@ impl MassFactor {
         }
     }
 
-    /// Zeroes each tree's block of a matrix given by rows in the factor's order (row i over
-    /// i's tree's places): the entries the identity's solve by rows and its copy read. Entries
-    /// between separate trees are never read, so on a fixed base's branches (Talos's legs and
-    /// upper body: 472 entries of 1,024) they are not written either.
-    fn clear_blocks(&self, rows: &mut [f64]) {
+    /// Zeroes each row of a matrix given by rows in the factor's order over its own subtree's
+    /// places: the entries the identity's solve by rows reads before it writes them (its phase
+    /// from the leaves carries a row into its ancestors' over its subtree, and writes the rest
+    /// of the row up to its tree's end itself).
+    fn clear_subtrees(&self, rows: &mut [f64]) {
         let nv = self.inverse_diagonal.len();
         for i in 0..nv {
-            rows[i * nv..][self.root[i]..self.tree_end(i)].fill(0.0);
+            rows[i * nv..][i..self.subtree_end[i]].fill(0.0);
         }
     }
 

@@ -239,14 +239,16 @@ impl RneaDerivatives {
     }
 
     /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
-    /// q̈ into `accelerations`, the mass matrix into `mass` (between a velocity and its
-    /// ancestors only) and its factor into `factor`, then τ, ∂τ/∂q and ∂τ/∂v at q̈ (the module's
-    /// documentation). `data` holds the joints' transforms at q; the model has no geared
-    /// rotor (their efforts are not linear in the pass out's terms as written here). ∂τ/∂q and
-    /// ∂τ/∂v are left by rows in the factor's order (entry (r, c) at place(c) + place(r) nv,
-    /// `MassFactor::places`), as the solves with M's factor take them
-    /// (`MassFactor::solve_rows_negated_into`). False if the
-    /// mass matrix is not positive definite.
+    /// the mass matrix into `mass` (between a velocity and its ancestors only), its factor into
+    /// `factor` and M⁻¹ into `mass_inverse` (solved in `mass`'s storage, which then holds
+    /// scratch), q̈ = M⁻¹ (τ − bias) into `accelerations` (a product by the M⁻¹ the derivatives
+    /// need anyway, where a solve with the factor is a chain of dependent steps), then τ,
+    /// ∂τ/∂q and ∂τ/∂v at q̈ (the module's documentation). `data` holds the joints' transforms
+    /// at q; the model has no geared rotor (their efforts are not linear in the pass out's
+    /// terms as written here). ∂τ/∂q and ∂τ/∂v are left by rows in the factor's order (entry
+    /// (r, c) at place(c) + place(r) nv, `MassFactor::places`), as the solves with M's factor
+    /// take them (`MassFactor::solve_rows_negated_into`). False if the mass matrix is not
+    /// positive definite.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn forward_dynamics(
         &mut self,
@@ -256,6 +258,7 @@ impl RneaDerivatives {
         external: &[Force],
         factor: &mut MassFactor,
         mass: &mut DMatrix<f64>,
+        mass_inverse: &mut DMatrix<f64>,
         accelerations: &mut DVector<f64>,
     ) -> bool {
         debug_assert!(model.rotors.is_empty());
@@ -266,10 +269,11 @@ impl RneaDerivatives {
         if !factor.factor(mass) {
             return false;
         }
-        for ((a, given), bias) in accelerations.iter_mut().zip(tau).zip(&self.tau) {
-            *a = given - bias;
+        factor.inverse_into_using(mass_inverse, mass.as_mut_slice());
+        for (bias, given) in self.tau.iter_mut().zip(tau) {
+            *bias = given - *bias;
         }
-        factor.solve(accelerations.as_mut_slice());
+        accelerations.gemv(1.0, mass_inverse, &self.tau, 0.0);
         self.add_accelerations(model, accelerations.as_slice());
         self.tau.as_mut_slice().fill(0.0);
         // The pass back writes every entry of the tree's pattern, the only ones the solves read
@@ -293,9 +297,7 @@ impl RneaDerivatives {
                 self.tau[row] = s.dot(&force);
                 let momentum = inertia.times(&s);
                 for &column in branch {
-                    let entry = momentum.dot(&self.columns[column]);
-                    mass[(row, column)] = entry;
-                    mass[(column, row)] = entry;
+                    mass[(row, column)] = momentum.dot(&self.columns[column]);
                 }
             }
             if parent != 0 {
