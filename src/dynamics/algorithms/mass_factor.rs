@@ -360,8 +360,8 @@ impl MassFactor {
     /// the leaves row i, when it is carried up, is nonzero only on i's ancestors and
     /// descendants (by induction: so is X's row, and its descendants' rows add their own
     /// ancestors' and descendants'), its `lineage`; for the identity, on its descendants only.
-    /// Row i is final once carried up (only its descendants change it), so D⁻¹ scales it then,
-    /// while it is at hand. The matrices share the pattern, so they are solved side by side:
+    /// Row i is final once carried up (only its descendants change it); D⁻¹ scales it as the
+    /// phase from the roots loads it. The matrices share the pattern, so they are solved side by side:
     /// each ancestor's entry of L, loaded once, serves the same chunk of all.
     fn solve_rows<const M: usize>(&self, x: &mut [&mut [f64]; M], pattern: Pattern) {
         let nv = self.inverse_diagonal.len();
@@ -385,29 +385,30 @@ impl MassFactor {
             for span in carried {
                 self.carry_up_rows(x, i, span.clone());
             }
-            // Row i is final here: D⁻¹ scales its runs, and the gaps between them that the
-            // phase from the roots reads (up to its tree's end) are zeroed, whatever they held.
+            // Row i is final here: the gaps between its runs that the phase from the roots
+            // reads (up to its tree's end) are zeroed, whatever they held.
             let read = formed(i);
             for matrix in x.iter_mut() {
                 let row = &mut matrix[i * nv..(i + 1) * nv];
                 let mut gap_start = read.start;
                 for span in carried {
                     row[gap_start..span.start].fill(0.0);
-                    row[span.clone()]
-                        .iter_mut()
-                        .for_each(|e| *e *= self.inverse_diagonal[i]);
                     gap_start = span.end;
                 }
                 row[gap_start..read.end].fill(0.0);
             }
         }
+        // D⁻¹ scales each row as the phase from the roots loads it.
         for i in 0..nv {
             let (span, ancestry) = (formed(i), self.ancestry(i));
+            let d = self.inverse_diagonal[i];
+            let d2 = f64x2::splat(d);
             let mut offset = span.start;
             while offset + WIDTH <= span.end {
                 let mut sums = [[f64x2::ZERO; 2]; M];
                 for (sum, matrix) in sums.iter_mut().zip(x.iter()) {
-                    *sum = load_chunk(&matrix[i * nv + offset..]);
+                    let [low, high] = load_chunk(&matrix[i * nv + offset..]);
+                    *sum = [low * d2, high * d2];
                 }
                 for (&j, &l) in ancestry.clone() {
                     let (at, l) = (j * nv + offset, f64x2::splat(l));
@@ -424,7 +425,7 @@ impl MassFactor {
             if offset + 2 <= span.end {
                 let mut sums = [f64x2::ZERO; M];
                 for (sum, matrix) in sums.iter_mut().zip(x.iter()) {
-                    *sum = load_pair(&matrix[i * nv + offset..]);
+                    *sum = load_pair(&matrix[i * nv + offset..]) * d2;
                 }
                 for (&j, &l) in ancestry.clone() {
                     let (at, l) = (j * nv + offset, f64x2::splat(l));
@@ -438,7 +439,7 @@ impl MassFactor {
                 offset += 2;
             }
             for c in offset..span.end {
-                let mut sums: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c]);
+                let mut sums: [f64; M] = std::array::from_fn(|m| x[m][i * nv + c] * d);
                 for (&j, &l) in ancestry.clone() {
                     for (matrix, sum) in x.iter().zip(sums.iter_mut()) {
                         *sum -= l * matrix[j * nv + c];
