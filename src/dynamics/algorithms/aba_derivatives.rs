@@ -5,11 +5,11 @@
 //!
 //! q̈ and the mass matrix come from the passes of those derivatives themselves
 //! (`RneaDerivatives::forward_dynamics`: the bias efforts and the composite inertias at q̈ = 0,
-//! then M⁻¹ from the mass matrix's factor and q̈ by its product, ABA's values to round-off);
-//! with geared rotors, from ABA and CRBA. M⁻¹ and the products −M⁻¹ ∂τ are solves with M's
-//! factor along the tree, M = Lᵀ D L (`mass_factor`), by rows over the columns of each row's
-//! tree: 2 Σ dᵢ + n products a column (dᵢ the depth of velocity i) where a dense product by
-//! M⁻¹ costs n², nothing crossing between the tree's separate branches.
+//! then q̈ by the mass matrix's factor, ABA's values to round-off); with geared rotors, from
+//! ABA and CRBA. q̈, M⁻¹ and the products −M⁻¹ ∂τ are solves with M's factor along the tree,
+//! M = Lᵀ D L (`mass_factor`), by rows over the columns of each row's tree: 2 Σ dᵢ + n
+//! products a column (dᵢ the depth of velocity i) where a dense product by M⁻¹ costs n²,
+//! nothing crossing between the tree's separate branches.
 
 use nalgebra::{DMatrix, DVector};
 

@@ -47,8 +47,10 @@ pub struct MassFactor {
     /// right arm), zero there.
     lineage_start: Vec<usize>,
     lineage: Vec<std::ops::Range<usize>>,
-    /// A matrix by rows in the factor's order, for `solve_negated` and `inverse_into`.
+    /// A matrix by rows in the factor's order, for `solve_negated` and `inverse_into`, and a
+    /// vector in that order, for `solve`.
     rows: Vec<f64>,
+    vector: Vec<f64>,
 }
 
 impl MassFactor {
@@ -130,6 +132,7 @@ impl MassFactor {
             lineage_start,
             lineage,
             rows: vec![0.0; nv * nv],
+            vector: vec![0.0; nv],
         }
     }
 
@@ -196,6 +199,46 @@ impl MassFactor {
         }
         self.inverse_diagonal = diagonal;
         positive
+    }
+
+    /// x ← M⁻¹ x (Table 6.4): Lᵀ y = x from the leaves, D, then L x = y from the roots, in the
+    /// factor's order.
+    pub fn solve(&mut self, x: &mut [f64]) {
+        if self.in_order {
+            self.solve_in_order(x);
+            return;
+        }
+        let mut y = std::mem::take(&mut self.vector);
+        for (y, &velocity) in y.iter_mut().zip(&self.order) {
+            *y = x[velocity];
+        }
+        self.solve_in_order(&mut y);
+        for (y, &velocity) in y.iter().zip(&self.order) {
+            x[velocity] = *y;
+        }
+        self.vector = y;
+    }
+
+    /// `solve` of a vector given in the factor's order, its rows taken in the model's
+    /// breadth-first order (`factor` says why).
+    fn solve_in_order(&self, y: &mut [f64]) {
+        for &i in self.place.iter().rev() {
+            let yi = y[i];
+            for at in self.range(i) {
+                y[self.ancestors[at]] -= self.lower[at] * yi;
+            }
+        }
+        for (yi, d) in y.iter_mut().zip(&self.inverse_diagonal) {
+            *yi *= d;
+        }
+        for &i in &self.place {
+            let range = self.range(i);
+            let sum: f64 = (self.lower[range.clone()].iter())
+                .zip(&self.ancestors[range])
+                .map(|(l, &j)| l * y[j])
+                .sum();
+            y[i] -= sum;
+        }
     }
 
     /// M⁻¹ into `inverse` (nv × nv): the solve of the identity. Its phase from the leaves
