@@ -271,17 +271,27 @@ impl MassFactor {
             entries[c + c * nv] = 1.0;
         }
         self.solve_rows(&mut [entries], Pattern::Identity);
-        for i in 0..nv {
-            let r = self.order[i];
-            for c in i + usize::from(self.in_order)..self.tree_end(i) {
-                let column = self.order[c];
-                // Row i of the solve by rows is column i of `inverse`.
-                let value = match self.in_order {
-                    true => inverse[(column, r)],
-                    false => scratch[i * nv + c],
-                };
-                inverse[(r, column)] = value;
-                inverse[(column, r)] = value;
+        if self.in_order {
+            // Row i of the solve by rows is column i of `inverse`: its upper part mirrored.
+            for i in 0..nv {
+                for c in i + 1..self.tree_end(i) {
+                    inverse[(i, c)] = inverse[(c, i)];
+                }
+            }
+            return;
+        }
+        // By `inverse`'s columns, whose entries lie together: entry (r, c) is the solve's row
+        // min(place r, place c) at the other place.
+        let entries = inverse.as_mut_slice();
+        for (c, &k) in self.place.iter().enumerate() {
+            let column = &mut entries[c * nv..(c + 1) * nv];
+            let (above, below) = (self.root[k]..k + 1, k + 1..self.tree_end(k));
+            for (&r, i) in self.order[above.clone()].iter().zip(above) {
+                column[r] = scratch[i * nv + k];
+            }
+            let row = &scratch[k * nv..][below.clone()];
+            for (&r, value) in self.order[below].iter().zip(row) {
+                column[r] = *value;
             }
         }
     }
