@@ -190,6 +190,7 @@ impl MassFactor {
             for (offset, &i) in self.ancestors[row].iter().enumerate() {
                 let ratio = own[offset] * reciprocal;
                 diagonal[i] -= own[offset] * ratio;
+                // `range(i)`, written out: a call would borrow all of `self`.
                 let above = &mut above_rows[self.start[i]..self.start[i + 1]];
                 for (target, source) in above.iter_mut().zip(&own[offset + 1..]) {
                     *target -= source * ratio;
@@ -416,8 +417,8 @@ impl MassFactor {
     /// descendants (by induction: so is X's row, and its descendants' rows add their own
     /// ancestors' and descendants'), its `lineage`; for the identity, on its descendants only.
     /// Row i is final once carried up (only its descendants change it); D⁻¹ scales it as the
-    /// phase from the roots loads it. The matrices share the pattern, so they are solved side by side:
-    /// each ancestor's entry of L, loaded once, serves the same chunk of all.
+    /// phase from the roots loads it. The matrices share the pattern, so they are solved side
+    /// by side: each ancestor's entry of L, loaded once, serves the same chunk of all.
     fn solve_rows<const M: usize>(&self, x: &mut [&mut [f64]; M], pattern: Pattern) {
         let nv = self.inverse_diagonal.len();
         let formed = |i: usize| match pattern {

@@ -240,8 +240,8 @@ impl RneaDerivatives {
 
     /// Forward dynamics at (v, τ) with its inverse dynamics' derivatives at the accelerations:
     /// the mass matrix into `mass` (between a velocity and its ancestors only), its factor into
-    /// `factor`, q̈ into `accelerations` by a solve with the factor (a product by M⁻¹, cheaper,
-    /// lost up to 1e-12 of ∂q̈/∂q on random trees against dual numbers) and M⁻¹ into
+    /// `factor`, q̈ into `accelerations` by a solve with the factor (a product by M⁻¹ is cheaper
+    /// but put ∂q̈/∂q 1.1e-12 from the dual numbers' on a random tree) and M⁻¹ into
     /// `mass_inverse` (solved in `mass`'s storage, which then holds scratch), then τ, ∂τ/∂q and
     /// ∂τ/∂v at q̈ (the module's documentation). `data` holds the joints' transforms
     /// at q; the model has no geared rotor (their efforts are not linear in the pass out's
